@@ -1,0 +1,79 @@
+"""The ``roomba-bt`` command line.
+
+Each subcommand lives in its own module of this package, which exposes
+``register(subparsers)``; :data:`SUBCOMMAND_MODULES` lists them in help order. A module that
+is missing (a feature not built yet) is skipped, never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import logging
+import sys
+from typing import Sequence
+
+from roomba_bt import __version__
+from roomba_bt.cli.exit_codes import ExitCode
+
+SUBCOMMAND_MODULES: tuple[str, ...] = (
+    "roomba_bt.cli.run_cmd",
+    "roomba_bt.cli.mission_cmds",
+    "roomba_bt.cli.sim_cmd",
+    "roomba_bt.cli.sensors_cmd",
+    "roomba_bt.cli.eval_cmd",
+)
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse exits with 2 on usage errors, which is our INVALID code too."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(
+        prog="roomba-bt",
+        description="Behaviour-tree missions for iRobot Open Interface robots.",
+    )
+    parser.add_argument("--version", action="version", version=f"roomba-bt {__version__}")
+    parser.add_argument("-v", "--verbose", action="count", default=0, help="more logging")
+    parser.add_argument("-q", "--quiet", action="count", default=0, help="less logging")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name in SUBCOMMAND_MODULES:
+        try:
+            module = importlib.import_module(name)
+        except ModuleNotFoundError as exc:
+            if exc.name == name:
+                continue
+            raise
+        module.register(sub)
+    return parser
+
+
+def setup_logging(verbose: int, quiet: int) -> None:
+    level = logging.INFO + 10 * (quiet - verbose)
+    logging.basicConfig(
+        level=max(logging.DEBUG, min(level, logging.CRITICAL)),
+        format="%(asctime)s %(levelname)s %(name)s: %(message)s",
+        stream=sys.stderr,
+    )
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    setup_logging(args.verbose, args.quiet)
+    func = getattr(args, "func", None)
+    if func is None:
+        parser.print_help(sys.stderr)
+        return ExitCode.INVALID
+    try:
+        return int(func(args))
+    except KeyboardInterrupt:
+        print("roomba-bt: interrupted", file=sys.stderr)
+        return ExitCode.INTERRUPTED
+    except BrokenPipeError:
+        return ExitCode.OK
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,5 @@
+import sys
+
+from roomba_bt.cli import main
+
+sys.exit(main())

@@ -1,0 +1,75 @@
+"""The Open Interface protocol: tables, encoder, decoder, stream parser. Pure: no I/O.
+
+Standard library only. Everything above (transport, robot, simulator, missions) reads the
+tables defined here: :mod:`~roomba_bt.oi.opcodes` and :mod:`~roomba_bt.oi.packets`.
+"""
+
+from roomba_bt.oi import encode as commands
+from roomba_bt.oi.bits import (
+    Buttons,
+    BumpsWheelDrops,
+    ChargingSources,
+    ChargingState,
+    LightBumper,
+    Overcurrents,
+    Stasis,
+)
+from roomba_bt.oi.encode import Command, Note, Radius, encode
+from roomba_bt.oi.errors import BandwidthError, EncodeError, OIError, UnsupportedCommandError
+from roomba_bt.oi.frames import FrameLayout, SensorFrame, layout_for, stream_frame_size
+from roomba_bt.oi.ir import IRCharacter, IRSource, LighthouseBeam
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME, ArgSpec, CommandSpec
+from roomba_bt.oi.packets import GROUP_SIZES, GROUPS, PACKETS, PACKETS_BY_NAME, PacketSpec
+from roomba_bt.oi.profiles import PROFILES, RobotProfile, get_profile
+from roomba_bt.oi.stream import (
+    ReplyParser,
+    StreamParser,
+    check_bandwidth,
+    decode_reply,
+    stream_budget,
+)
+
+__all__ = [
+    "COMMANDS",
+    "COMMANDS_BY_NAME",
+    "GROUPS",
+    "GROUP_SIZES",
+    "PACKETS",
+    "PACKETS_BY_NAME",
+    "PROFILES",
+    "ArgSpec",
+    "BandwidthError",
+    "BumpsWheelDrops",
+    "Buttons",
+    "ChargingSources",
+    "ChargingState",
+    "Command",
+    "CommandSpec",
+    "EncodeError",
+    "FrameLayout",
+    "IRCharacter",
+    "IRSource",
+    "LightBumper",
+    "LighthouseBeam",
+    "Note",
+    "OIError",
+    "OIMode",
+    "Overcurrents",
+    "PacketSpec",
+    "Radius",
+    "ReplyParser",
+    "RobotProfile",
+    "SensorFrame",
+    "Stasis",
+    "StreamParser",
+    "UnsupportedCommandError",
+    "check_bandwidth",
+    "commands",
+    "decode_reply",
+    "encode",
+    "get_profile",
+    "layout_for",
+    "stream_budget",
+    "stream_frame_size",
+]

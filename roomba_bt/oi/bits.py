@@ -1,0 +1,260 @@
+"""Bit fields, both ways: sensor bytes decoded into named booleans, and readable command
+arguments (LEDs, motors, days, buttons, digits) encoded into data bytes.
+
+Decoded values are frozen and precomputed for every byte value, so decoding a bit field is a
+tuple lookup, not an allocation.
+
+Layouts (bit 7 left, bit 0 right)::
+
+    packet 7   bumps/wheel drops  [ - - - - | drop L | drop R | bump L | bump R ]
+    packet 14  overcurrents       [ - - - | wheel L | wheel R | main brush | - | side brush ]
+    packet 18  buttons            [ clock | schedule | day | hour | minute | dock | spot | clean ]
+    packet 34  charging sources   [ - - - - - - | home base | internal charger ]
+    packet 45  light bumper       [ - - | R | FR | CR | CL | FL | L ]
+    opcode 138 motors             [ - - - | main dir | side CW | main | vacuum | side ]
+    opcode 139 LEDs               [ - - - - | check robot | dock | spot | debris ]
+    opcode 162 weekday LEDs, opcode 167 days
+                                  [ - | sat | fri | thu | wed | tue | mon | sun ]
+    opcode 162 scheduling LEDs    [ - - - | schedule | clock | AM | PM | colon ]
+    opcode 163 digit segments     [ - | G | F | E | D | C | B | A ]
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import IntEnum
+from typing import Iterable
+
+from roomba_bt.oi.errors import EncodeError
+
+
+def _bit(value: int, n: int) -> bool:
+    return bool(value >> n & 1)
+
+
+@dataclass(frozen=True, slots=True)
+class BumpsWheelDrops:
+    """Packet 7. Bit 0 is bump RIGHT, bit 1 bump LEFT (a peer driver has them swapped)."""
+
+    raw: int
+    bump_right: bool
+    bump_left: bool
+    wheel_drop_right: bool
+    wheel_drop_left: bool
+
+    @property
+    def any_bump(self) -> bool:
+        return self.bump_left or self.bump_right
+
+    @property
+    def any_wheel_drop(self) -> bool:
+        return self.wheel_drop_left or self.wheel_drop_right
+
+    @classmethod
+    def from_byte(cls, value: int) -> BumpsWheelDrops:
+        return _BUMPS[value & 0xFF]
+
+
+_BUMPS = tuple(
+    BumpsWheelDrops(v, _bit(v, 0), _bit(v, 1), _bit(v, 2), _bit(v, 3)) for v in range(256)
+)
+
+
+@dataclass(frozen=True, slots=True)
+class Overcurrents:
+    """Packet 14: bit 0 side brush, bit 2 main brush, bit 3 right wheel, bit 4 left wheel."""
+
+    raw: int
+    side_brush: bool
+    main_brush: bool
+    right_wheel: bool
+    left_wheel: bool
+
+    @property
+    def any(self) -> bool:
+        return self.raw & 0b11101 != 0
+
+    @classmethod
+    def from_byte(cls, value: int) -> Overcurrents:
+        return _OVERCURRENTS[value & 0xFF]
+
+
+_OVERCURRENTS = tuple(
+    Overcurrents(v, _bit(v, 0), _bit(v, 2), _bit(v, 3), _bit(v, 4)) for v in range(256)
+)
+
+
+@dataclass(frozen=True, slots=True)
+class Buttons:
+    """Packet 18 (and the data byte of opcode 165)."""
+
+    raw: int
+    clean: bool
+    spot: bool
+    dock: bool
+    minute: bool
+    hour: bool
+    day: bool
+    schedule: bool
+    clock: bool
+
+    @property
+    def any(self) -> bool:
+        return self.raw != 0
+
+    @classmethod
+    def from_byte(cls, value: int) -> Buttons:
+        return _BUTTONS[value & 0xFF]
+
+
+BUTTON_NAMES: tuple[str, ...] = (
+    "clean", "spot", "dock", "minute", "hour", "day", "schedule", "clock"
+)  # fmt: skip
+_BUTTONS = tuple(Buttons(v, *(_bit(v, n) for n in range(8))) for v in range(256))
+
+
+@dataclass(frozen=True, slots=True)
+class ChargingSources:
+    """Packet 34: 1 = charging source present and powered."""
+
+    raw: int
+    internal_charger: bool
+    home_base: bool
+
+    @property
+    def any(self) -> bool:
+        return self.internal_charger or self.home_base
+
+    @classmethod
+    def from_byte(cls, value: int) -> ChargingSources:
+        return _SOURCES[value & 0xFF]
+
+
+_SOURCES = tuple(ChargingSources(v, _bit(v, 0), _bit(v, 1)) for v in range(256))
+
+
+@dataclass(frozen=True, slots=True)
+class LightBumper:
+    """Packet 45: which of the six light-bumper sensors sees an obstacle."""
+
+    raw: int
+    left: bool
+    front_left: bool
+    center_left: bool
+    center_right: bool
+    front_right: bool
+    right: bool
+
+    @property
+    def any(self) -> bool:
+        return self.raw & 0x3F != 0
+
+    @classmethod
+    def from_byte(cls, value: int) -> LightBumper:
+        return _LIGHT[value & 0xFF]
+
+
+LIGHT_BUMPER_NAMES: tuple[str, ...] = (
+    "left", "front_left", "center_left", "center_right", "front_right", "right"
+)  # fmt: skip
+_LIGHT = tuple(LightBumper(v, *(_bit(v, n) for n in range(6))) for v in range(256))
+
+
+class ChargingState(IntEnum):
+    """Packet 21."""
+
+    NOT_CHARGING = 0
+    RECONDITIONING = 1
+    FULL_CHARGING = 2
+    TRICKLE_CHARGING = 3
+    WAITING = 4
+    FAULT = 5
+
+    @property
+    def is_charging(self) -> bool:
+        return self in (
+            ChargingState.RECONDITIONING,
+            ChargingState.FULL_CHARGING,
+            ChargingState.TRICKLE_CHARGING,
+            ChargingState.WAITING,
+        )
+
+
+class Stasis(IntEnum):
+    """Packet 58. The 600 spec adds 2 = the stasis wheel is too dirty to read."""
+
+    NO_PROGRESS = 0
+    FORWARD_PROGRESS = 1
+    DIRTY = 2
+    RESERVED = 3
+
+
+# ----------------------------------------------------------------- encoding side
+
+
+def _flags(command: str, argument: str, names: Iterable[str], known: tuple[str, ...]) -> int:
+    value = 0
+    for name in names:
+        try:
+            value |= 1 << known.index(name)
+        except ValueError:
+            raise EncodeError(command, argument, f"made of {', '.join(known)}", name) from None
+    return value
+
+
+LED_NAMES: tuple[str, ...] = ("debris", "spot", "dock", "check_robot")
+
+
+def led_bits(*leds: str) -> int:
+    """LEDs by name: ``led_bits("dock") == 4`` (the spec's Home LED example)."""
+    return _flags("leds", "led_bits", leds, LED_NAMES)
+
+
+WEEKDAYS: tuple[str, ...] = ("sun", "mon", "tue", "wed", "thu", "fri", "sat")
+
+
+def day_bits(*days: str) -> int:
+    """Days by three-letter name: ``day_bits("wed", "fri") == 40`` (the Schedule example)."""
+    return _flags("schedule", "day_bits", (d.lower()[:3] for d in days), WEEKDAYS)
+
+
+SCHEDULING_LED_NAMES: tuple[str, ...] = ("colon", "pm", "am", "clock", "schedule")
+
+
+def scheduling_led_bits(*leds: str) -> int:
+    return _flags("scheduling_leds", "scheduling_bits", leds, SCHEDULING_LED_NAMES)
+
+
+def button_bits(*buttons: str) -> int:
+    return _flags("buttons", "button_bits", buttons, BUTTON_NAMES)
+
+
+def motor_bits(
+    *,
+    side_brush: bool = False,
+    vacuum: bool = False,
+    main_brush: bool = False,
+    side_brush_clockwise: bool = False,
+    main_brush_outward: bool = False,
+) -> int:
+    """Motors (138): ``motor_bits(main_brush=True, side_brush=True,
+    side_brush_clockwise=True) == 13`` (the spec's example)."""
+    return (
+        side_brush
+        | vacuum << 1
+        | main_brush << 2
+        | side_brush_clockwise << 3
+        | main_brush_outward << 4
+    )
+
+
+SEGMENT_NAMES: tuple[str, ...] = ("a", "b", "c", "d", "e", "f", "g")
+
+
+def segment_bits(*segments: str) -> int:
+    return _flags("digit_leds_raw", "digit bits", (s.lower() for s in segments), SEGMENT_NAMES)
+
+
+#: Characters the 7-segment display implements (Digit LEDs ASCII table). 42 '*', 43 '+' and
+#: 64 '@' are in the byte range 32-126 but absent from the table: they would show nothing.
+DIGIT_ASCII: frozenset[int] = frozenset(range(32, 127)) - {42, 43, 64}

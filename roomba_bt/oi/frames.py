@@ -1,0 +1,405 @@
+"""Sensor frames: the layout of a requested packet list, and the immutable decoded frame.
+
+A :class:`FrameLayout` is computed once per packet list (and cached): one precompiled
+``struct.Struct`` for the whole payload, so decoding a frame is one ``unpack_from`` and one
+small object. Typed views (bit fields, enums, IR characters) are looked up on access from
+precomputed tables; nothing is decoded that nobody reads.
+
+Two payload shapes::
+
+    stream (148) frame   [19][n][id1][data1...][id2][data2...]...[checksum]
+    reply to 142 / 149                [data1...]    [data2...]...        (no ids, no checksum)
+
+A group id (e.g. 100) in a stream frame is followed by the data of all its members.
+"""
+
+from __future__ import annotations
+
+import struct
+from functools import lru_cache
+from typing import Iterable, Iterator, Mapping
+
+from roomba_bt.oi.bits import (
+    Buttons,
+    BumpsWheelDrops,
+    ChargingSources,
+    ChargingState,
+    LightBumper,
+    Overcurrents,
+    Stasis,
+)
+from roomba_bt.oi.errors import EncodeError
+from roomba_bt.oi.ir import IR_CHARACTERS, IRCharacter
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.packets import PACKETS, VALID_PACKET_IDS, expand
+from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
+
+STREAM_HEADER = 19
+
+
+class FrameLayout:
+    """Where each packet sits in a payload for one requested packet list."""
+
+    __slots__ = (
+        "packet_ids",
+        "members",
+        "with_ids",
+        "profile",
+        "struct",
+        "index",
+        "payload_size",
+        "id_offsets",
+    )
+
+    def __init__(
+        self, packet_ids: tuple[int, ...], profile: RobotProfile, with_ids: bool
+    ) -> None:
+        for pid in packet_ids:
+            if pid not in VALID_PACKET_IDS:
+                raise EncodeError(
+                    "sensors", "packet id", "one of 0-58, 100, 101, 106, 107", pid
+                )
+        self.packet_ids = packet_ids
+        self.with_ids = with_ids
+        self.profile = profile
+        codes: list[str] = []
+        index: dict[int, int] = {}
+        members: list[int] = []
+        id_offsets: list[int] = []
+        offset = 0
+        for pid in packet_ids:
+            if with_ids:
+                id_offsets.append(offset)
+                codes.append("x")
+                offset += 1
+            for member in expand(pid):
+                spec = profile.packet(member)
+                if member not in index:
+                    index[member] = len(members)
+                    members.append(member)
+                    codes.append(spec.struct_code)
+                else:  # a packet asked for twice: keep the first, skip the bytes
+                    codes.append(f"{spec.size}x")
+                offset += spec.size
+        self.members = tuple(members)
+        self.index: Mapping[int, int] = index
+        self.struct = struct.Struct(">" + "".join(codes))
+        self.payload_size = offset
+        self.id_offsets = tuple(id_offsets)
+
+    @property
+    def frame_size(self) -> int:
+        """Bytes of one stream frame on the wire: header, n-bytes, payload, checksum."""
+        return self.payload_size + 3
+
+    def decode(self, buffer: bytes | bytearray | memoryview, offset: int = 0) -> SensorFrame:
+        """Decode a payload starting at ``offset`` (ids, if any, are not checked here)."""
+        return SensorFrame(self, self.struct.unpack_from(buffer, offset))
+
+    def ids_match(self, buffer: bytes | bytearray, offset: int) -> bool:
+        """True if every packet-id byte of a stream payload at ``offset`` is the one asked."""
+        for pos, pid in zip(self.id_offsets, self.packet_ids):
+            if buffer[offset + pos] != pid:
+                return False
+        return True
+
+    def pack(self, values: Mapping[int, int]) -> bytes:
+        """The payload for ``values`` (packet id -> raw value); the simulator's encoder.
+        Missing packets are sent as 0."""
+        out = bytearray()
+        for pid in self.packet_ids:
+            if self.with_ids:
+                out.append(pid)
+            for member in expand(pid):
+                spec = self.profile.packet(member)
+                raw = int(values.get(member, 0))
+                if spec.size == 2:
+                    out += (raw & 0xFFFF).to_bytes(2, "big")
+                else:
+                    out.append(raw & 0xFF)
+        return bytes(out)
+
+    def stream_frame(self, values: Mapping[int, int], include_header: bool = True) -> bytes:
+        """A whole stream frame ``[19][n][payload][checksum]`` for ``values``."""
+        payload = self.pack(values)
+        body = bytes((STREAM_HEADER, len(payload))) + payload
+        total = sum(body) if include_header else sum(body) - STREAM_HEADER
+        return body + bytes(((-total) & 0xFF,))
+
+
+@lru_cache(maxsize=256)
+def layout_for(
+    packet_ids: tuple[int, ...], profile: RobotProfile = DEFAULT_PROFILE, with_ids: bool = True
+) -> FrameLayout:
+    """The (cached) layout of ``packet_ids`` as a stream frame (``with_ids``) or a reply."""
+    return FrameLayout(tuple(packet_ids), profile, with_ids)
+
+
+def stream_frame_size(packet_ids: Iterable[int]) -> int:
+    """Bytes one stream frame of ``packet_ids`` takes on the wire."""
+    return 3 + sum(1 + sum(PACKETS[m].size for m in expand(pid)) for pid in packet_ids)
+
+
+class SensorFrame:
+    """One decoded, immutable set of sensor values (a stream frame or a reply).
+
+    ``frame[packet_id]`` is the raw integer the robot sent (signed where the packet is signed);
+    the properties give typed views. Asking for a packet the frame does not carry raises
+    ``KeyError`` naming it.
+    """
+
+    __slots__ = ("_layout", "_values")
+
+    _layout: FrameLayout
+    _values: tuple[int, ...]
+
+    def __init__(self, layout: FrameLayout, values: tuple[int, ...]) -> None:
+        object.__setattr__(self, "_layout", layout)
+        object.__setattr__(self, "_values", values)
+
+    def __setattr__(self, name: str, value: object) -> None:
+        raise AttributeError("SensorFrame is immutable")
+
+    @property
+    def layout(self) -> FrameLayout:
+        return self._layout
+
+    @property
+    def packet_ids(self) -> tuple[int, ...]:
+        return self._layout.members
+
+    def __contains__(self, packet_id: object) -> bool:
+        return packet_id in self._layout.index
+
+    def __getitem__(self, packet_id: int) -> int:
+        try:
+            return self._values[self._layout.index[packet_id]]
+        except KeyError:
+            name = PACKETS[packet_id].name if packet_id in PACKETS else "unknown"
+            raise KeyError(
+                f"packet {packet_id} ({name}) is not in this frame; it carries "
+                f"{list(self._layout.members)}"
+            ) from None
+
+    def get(self, packet_id: int, default: int | None = None) -> int | None:
+        i = self._layout.index.get(packet_id)
+        return default if i is None else self._values[i]
+
+    def __iter__(self) -> Iterator[tuple[int, int]]:
+        return zip(self._layout.members, self._values)
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, SensorFrame):
+            return NotImplemented
+        return dict(self) == dict(other)
+
+    def __hash__(self) -> int:
+        return hash(tuple(sorted(dict(self).items())))
+
+    def __repr__(self) -> str:
+        body = ", ".join(f"{PACKETS[p].name}={v}" for p, v in self)
+        return f"SensorFrame({body})"
+
+    def value(self, name: str) -> int:
+        """Raw value by packet name (``frame.value("voltage")``)."""
+        from roomba_bt.oi.packets import PACKETS_BY_NAME
+
+        return self[PACKETS_BY_NAME[name].id]
+
+    def as_dict(self) -> dict[str, object]:
+        """Every packet by name, decoded to its typed view where one exists."""
+        out: dict[str, object] = {}
+        for pid, raw in self:
+            name = PACKETS[pid].name
+            view = _VIEWS.get(pid)
+            out[name] = view(raw) if view is not None else raw
+        return out
+
+    # typed views -------------------------------------------------------------
+    @property
+    def bumps(self) -> BumpsWheelDrops:
+        return BumpsWheelDrops.from_byte(self[7])
+
+    @property
+    def wall(self) -> bool:
+        return bool(self[8])
+
+    @property
+    def cliff_left(self) -> bool:
+        return bool(self[9])
+
+    @property
+    def cliff_front_left(self) -> bool:
+        return bool(self[10])
+
+    @property
+    def cliff_front_right(self) -> bool:
+        return bool(self[11])
+
+    @property
+    def cliff_right(self) -> bool:
+        return bool(self[12])
+
+    @property
+    def any_cliff(self) -> bool:
+        return bool(self[9] or self[10] or self[11] or self[12])
+
+    @property
+    def virtual_wall(self) -> bool:
+        return bool(self[13])
+
+    @property
+    def overcurrents(self) -> Overcurrents:
+        return Overcurrents.from_byte(self[14])
+
+    @property
+    def dirt_detect(self) -> int:
+        return self[15]
+
+    @property
+    def ir_omni(self) -> IRCharacter:
+        return IR_CHARACTERS[self[17]]
+
+    @property
+    def ir_left(self) -> IRCharacter:
+        return IR_CHARACTERS[self[52]]
+
+    @property
+    def ir_right(self) -> IRCharacter:
+        return IR_CHARACTERS[self[53]]
+
+    @property
+    def buttons(self) -> Buttons:
+        return Buttons.from_byte(self[18])
+
+    @property
+    def distance_mm(self) -> int:
+        return self[19]
+
+    @property
+    def angle_deg(self) -> int:
+        return self[20]
+
+    @property
+    def charging_state(self) -> ChargingState:
+        raw = self[21]
+        return ChargingState(raw) if raw <= 5 else ChargingState.FAULT
+
+    @property
+    def voltage_mv(self) -> int:
+        return self[22]
+
+    @property
+    def current_ma(self) -> int:
+        return self[23]
+
+    @property
+    def temperature_c(self) -> int:
+        return self[24]
+
+    @property
+    def battery_charge_mah(self) -> int:
+        return self[25]
+
+    @property
+    def battery_capacity_mah(self) -> int:
+        return self[26]
+
+    @property
+    def battery_percent(self) -> float:
+        capacity = self[26]
+        return 100.0 * self[25] / capacity if capacity else 0.0
+
+    @property
+    def wall_signal(self) -> int:
+        return self[27]
+
+    @property
+    def cliff_signals(self) -> tuple[int, int, int, int]:
+        return (self[28], self[29], self[30], self[31])
+
+    @property
+    def charging_sources(self) -> ChargingSources:
+        return ChargingSources.from_byte(self[34])
+
+    @property
+    def oi_mode_raw(self) -> int:
+        """Packet 35 as sent (see the robot layer for the 600-series "mode + 1" fix)."""
+        return self[35]
+
+    @property
+    def oi_mode(self) -> OIMode:
+        raw = self[35]
+        return OIMode(raw) if raw <= 3 else OIMode.FULL
+
+    @property
+    def song_number(self) -> int:
+        return self[36]
+
+    @property
+    def song_playing(self) -> bool:
+        return bool(self[37])
+
+    @property
+    def stream_packet_count(self) -> int:
+        return self[38]
+
+    @property
+    def requested_velocity(self) -> int:
+        return self[39]
+
+    @property
+    def requested_radius(self) -> int:
+        return self[40]
+
+    @property
+    def requested_right_velocity(self) -> int:
+        return self[41]
+
+    @property
+    def requested_left_velocity(self) -> int:
+        return self[42]
+
+    @property
+    def left_encoder_counts(self) -> int:
+        return self[43]
+
+    @property
+    def right_encoder_counts(self) -> int:
+        return self[44]
+
+    @property
+    def light_bumper(self) -> LightBumper:
+        return LightBumper.from_byte(self[45])
+
+    @property
+    def light_bump_signals(self) -> tuple[int, int, int, int, int, int]:
+        return (self[46], self[47], self[48], self[49], self[50], self[51])
+
+    @property
+    def motor_currents_ma(self) -> tuple[int, int, int, int]:
+        """Left wheel, right wheel, main brush, side brush."""
+        return (self[54], self[55], self[56], self[57])
+
+    @property
+    def stasis(self) -> Stasis:
+        return Stasis(self[58] & 3)
+
+
+def _charging_state(raw: int) -> ChargingState:
+    return ChargingState(raw) if raw <= 5 else ChargingState.FAULT
+
+
+_VIEWS = {
+    7: BumpsWheelDrops.from_byte,
+    14: Overcurrents.from_byte,
+    17: IRCharacter.decode,
+    18: Buttons.from_byte,
+    21: _charging_state,
+    34: ChargingSources.from_byte,
+    35: lambda raw: OIMode(raw) if raw <= 3 else raw,
+    45: LightBumper.from_byte,
+    52: IRCharacter.decode,
+    53: IRCharacter.decode,
+    58: lambda raw: Stasis(raw & 3),
+}

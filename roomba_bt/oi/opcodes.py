@@ -1,0 +1,173 @@
+"""The opcode table: every command of both OI specifications, defined once.
+
+Each entry names the command's data bytes (fixed arguments with their wire type and range, or
+a variable tail), the OI modes that accept it, the mode it leads to, the robot profiles that
+have it and the actuator "channel" it drives (two commands on one channel in one tick: the
+last wins). The encoder, the mode model, the mission validator and the simulator read it.
+
+Wire types (all big-endian)::
+
+    B  unsigned byte      [0..255]
+    b  signed byte        [-128..127], two's complement
+    H  unsigned 16 bit    [high][low]
+    h  signed 16 bit      [high][low], two's complement
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Mapping
+
+from roomba_bt.oi.modes import ALL_MODES, DRIVING_MODES, OPEN_MODES, OIMode
+
+ALL_PROFILES: frozenset[str] = frozenset({"create2", "roomba600", "roomba500"})
+NEW_PROFILES: frozenset[str] = frozenset({"create2", "roomba600"})
+
+
+@dataclass(frozen=True, slots=True)
+class ArgSpec:
+    """One fixed data argument of a command."""
+
+    name: str
+    code: str  # struct code: B, b, H, h
+    minimum: int
+    maximum: int
+    unit: str = ""
+    doc: str = ""
+
+    @property
+    def size(self) -> int:
+        return 2 if self.code in "Hh" else 1
+
+
+@dataclass(frozen=True, slots=True)
+class CommandSpec:
+    """One OI command (opcode)."""
+
+    opcode: int
+    name: str
+    title: str
+    args: tuple[ArgSpec, ...]
+    modes: frozenset[OIMode]
+    leads_to: OIMode | None
+    profiles: frozenset[str]
+    channel: str | None = None
+    variable: str | None = None  # description of a variable-length tail, if any
+    doc: str = ""
+
+    @property
+    def fixed_data_bytes(self) -> int:
+        return sum(a.size for a in self.args)
+
+    @property
+    def is_actuator(self) -> bool:
+        """Actuator commands are the ones only Safe and Full accept."""
+        return self.modes == DRIVING_MODES
+
+    @property
+    def changes_mode(self) -> bool:
+        return self.leads_to is not None
+
+
+def _c(
+    opcode: int,
+    name: str,
+    title: str,
+    args: tuple[ArgSpec, ...] = (),
+    *,
+    modes: frozenset[OIMode] = OPEN_MODES,
+    leads_to: OIMode | None = None,
+    profiles: frozenset[str] = ALL_PROFILES,
+    channel: str | None = None,
+    variable: str | None = None,
+    doc: str = "",
+) -> CommandSpec:
+    return CommandSpec(opcode, name, title, args, modes, leads_to, profiles, channel, variable, doc)
+
+
+def _u8(name: str, lo: int = 0, hi: int = 255, unit: str = "", doc: str = "") -> ArgSpec:
+    return ArgSpec(name, "B", lo, hi, unit, doc)
+
+
+VELOCITY = ArgSpec("velocity", "h", -500, 500, "mm/s", "average wheel velocity")
+RADIUS = ArgSpec(
+    "radius", "h", -2000, 2000, "mm", "turn radius; 0x8000/0x7FFF straight, -1/1 spin"
+)
+
+_COMMAND_LIST: tuple[CommandSpec, ...] = (
+    _c(7, "reset", "Reset", modes=ALL_MODES, leads_to=OIMode.OFF, profiles=NEW_PROFILES,
+       doc="Resets the robot as if the battery were reinserted; it prints a banner."),
+    _c(128, "start", "Start", modes=ALL_MODES, leads_to=OIMode.PASSIVE,
+       doc="Starts the OI; the only way out of Off. Also the way back to Passive."),
+    _c(129, "baud", "Baud", (_u8("baud_code", 0, 11),),
+       doc="Changes the baud rate; wait 100 ms before sending at the new rate."),
+    _c(130, "control", "Control", leads_to=OIMode.SAFE, doc="Identical to Safe (131)."),
+    _c(131, "safe", "Safe", leads_to=OIMode.SAFE),
+    _c(132, "full", "Full", leads_to=OIMode.FULL),
+    _c(133, "power", "Power", leads_to=OIMode.PASSIVE, doc="Powers the robot down."),
+    _c(134, "spot", "Spot", leads_to=OIMode.PASSIVE, channel="wheels"),
+    _c(135, "clean", "Clean", leads_to=OIMode.PASSIVE, channel="wheels"),
+    _c(136, "max", "Max", leads_to=OIMode.PASSIVE, channel="wheels"),
+    _c(137, "drive", "Drive", (VELOCITY, RADIUS), modes=DRIVING_MODES, channel="wheels"),
+    _c(138, "motors", "Motors", (_u8("motor_bits", 0, 31, "bits"),),
+       modes=DRIVING_MODES, channel="motors"),
+    _c(139, "leds", "LEDs",
+       (_u8("led_bits", 0, 255, "bits"), _u8("power_color"), _u8("power_intensity")),
+       modes=DRIVING_MODES, channel="leds"),
+    _c(140, "song", "Song", (_u8("song_number", 0, 4), _u8("song_length", 1, 16)),
+       variable="song_length x (note 0-255, duration 0-255 in 1/64 s)",
+       doc="Defines a song; notes outside 31-127 are rests."),
+    _c(141, "play", "Play", (_u8("song_number", 0, 4),), modes=DRIVING_MODES,
+       channel="speaker"),
+    _c(142, "sensors", "Sensors", (_u8("packet_id"),),
+       doc="Asks for one packet or group; the reply has no header and no checksum."),
+    _c(143, "seek_dock", "Seek Dock", leads_to=OIMode.PASSIVE, channel="wheels"),
+    _c(144, "pwm_motors", "PWM Motors",
+       (ArgSpec("main_brush_pwm", "b", -127, 127), ArgSpec("side_brush_pwm", "b", -127, 127),
+        ArgSpec("vacuum_pwm", "b", 0, 127)),
+       modes=DRIVING_MODES, channel="motors"),
+    _c(145, "drive_direct", "Drive Direct",
+       (ArgSpec("right_velocity", "h", -500, 500, "mm/s"),
+        ArgSpec("left_velocity", "h", -500, 500, "mm/s")),
+       modes=DRIVING_MODES, channel="wheels"),
+    _c(146, "drive_pwm", "Drive PWM",
+       (ArgSpec("right_pwm", "h", -255, 255), ArgSpec("left_pwm", "h", -255, 255)),
+       modes=DRIVING_MODES, channel="wheels"),
+    _c(148, "stream", "Stream", (_u8("packet_count", 0, 255),),
+       variable="packet_count packet ids", channel="stream",
+       doc="Starts a stream of the listed packets every 15 ms; a count of 0 stops it."),
+    _c(149, "query_list", "Query List", (_u8("packet_count", 1, 255),),
+       variable="packet_count packet ids"),
+    _c(150, "pause_resume_stream", "Pause/Resume Stream", (_u8("stream_state", 0, 1),),
+       channel="stream"),
+    _c(162, "scheduling_leds", "Scheduling LEDs",
+       (_u8("weekday_bits", 0, 127, "bits"), _u8("scheduling_bits", 0, 31, "bits")),
+       modes=DRIVING_MODES, channel="scheduling_leds"),
+    _c(163, "digit_leds_raw", "Digit LEDs Raw",
+       tuple(_u8(f"digit_{n}_bits", 0, 127, "bits") for n in (3, 2, 1, 0)),
+       modes=DRIVING_MODES, channel="digits",
+       doc="Does not work on Create 2 / Roomba 600 firmware (Appendix B)."),
+    _c(164, "digit_leds_ascii", "Digit LEDs ASCII",
+       tuple(_u8(f"digit_{n}_ascii", 32, 126, "ASCII") for n in (3, 2, 1, 0)),
+       modes=DRIVING_MODES, channel="digits"),
+    _c(165, "buttons", "Buttons", (_u8("button_bits", 0, 255, "bits"),), channel="buttons",
+       doc="Presses buttons; they release after 1/6 s."),
+    _c(167, "schedule", "Schedule",
+       (_u8("day_bits", 0, 127, "bits"),)
+       + tuple(
+           arg
+           for day in ("sun", "mon", "tue", "wed", "thu", "fri", "sat")
+           for arg in (_u8(f"{day}_hour", 0, 23, "h"), _u8(f"{day}_minute", 0, 59, "min"))
+       )),
+    _c(168, "set_day_time", "Set Day/Time",
+       (_u8("day", 0, 6), _u8("hour", 0, 23, "h"), _u8("minute", 0, 59, "min"))),
+    _c(173, "stop", "Stop", leads_to=OIMode.OFF, profiles=NEW_PROFILES,
+       doc="Stops the OI: streams stop and the robot answers nothing until Start."),
+)  # fmt: skip
+
+COMMANDS: Mapping[int, CommandSpec] = MappingProxyType({c.opcode: c for c in _COMMAND_LIST})
+COMMANDS_BY_NAME: Mapping[str, CommandSpec] = MappingProxyType({c.name: c for c in _COMMAND_LIST})
+
+#: Commands that change the OI mode, by the mode they lead to (the mode model's triggers).
+MODE_COMMANDS: tuple[CommandSpec, ...] = tuple(c for c in _COMMAND_LIST if c.leads_to is not None)

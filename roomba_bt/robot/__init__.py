@@ -1,0 +1,1 @@
+"""The robot connection: mode model, guarded command path, safety on every exit."""

@@ -1,0 +1,221 @@
+"""What a behaviour sees of the robot during one tick, and how it asks for commands.
+
+This is the contract between the behaviours (above) and the runtime (which fills it once per
+stream frame). A behaviour never touches the port:
+
+* it reads :attr:`RobotHandle.snapshot`: one immutable :class:`Snapshot` per tick (the sensor
+  frame, the mission clock counted in 15 ms stream slots, the reconciled OI mode and the
+  odometry integrated from the wheel encoders);
+* it hands commands to :attr:`RobotHandle.outbox`. After the tick the runtime checks each one
+  against the mode model and writes them once: per actuator channel the last one wins, and
+  mode changes keep their order relative to the actuator commands that follow them.
+
+Time in a mission is ``snapshot.time`` (``tick * 0.015`` s), never ``time.time()``, so a replay
+or a simulation on a virtual clock makes the same decisions as the live run.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Iterator, Protocol
+
+from roomba_bt.oi.encode import Command
+from roomba_bt.oi.frames import SensorFrame
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.odometry import arc_from_wheels, counts_to_mm, encoder_delta
+from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
+
+#: One stream slot: the robot updates its sensors and sends a frame every 15 ms.
+SLOT_SECONDS = 0.015
+
+
+@dataclass(frozen=True, slots=True)
+class Odometry:
+    """Pose and path integrated from the encoders since the run started.
+
+    ``x_mm``/``y_mm``/``theta_rad`` are in the start frame (x forward, theta CCW positive);
+    ``distance_mm`` is the signed path length of the centre, ``angle_rad`` the signed total
+    rotation (not wrapped), both cumulative so that "since a mark" is a subtraction.
+    """
+
+    x_mm: float = 0.0
+    y_mm: float = 0.0
+    theta_rad: float = 0.0
+    distance_mm: float = 0.0
+    angle_rad: float = 0.0
+    left_counts: int | None = None
+    right_counts: int | None = None
+
+    def advance(self, left_counts: int, right_counts: int, wheel_base_mm: float) -> Odometry:
+        """The odometry after a frame carrying these raw encoder counts."""
+        if self.left_counts is None or self.right_counts is None:
+            return Odometry(
+                self.x_mm, self.y_mm, self.theta_rad, self.distance_mm, self.angle_rad,
+                left_counts, right_counts,
+            )  # fmt: skip
+        left = counts_to_mm(encoder_delta(self.left_counts, left_counts))
+        right = counts_to_mm(encoder_delta(self.right_counts, right_counts))
+        if left == 0.0 and right == 0.0:
+            return Odometry(
+                self.x_mm, self.y_mm, self.theta_rad, self.distance_mm, self.angle_rad,
+                left_counts, right_counts,
+            )  # fmt: skip
+        dist, dtheta = arc_from_wheels(left, right, wheel_base_mm)
+        mid = self.theta_rad + dtheta / 2.0
+        return Odometry(
+            self.x_mm + dist * math.cos(mid),
+            self.y_mm + dist * math.sin(mid),
+            self.theta_rad + dtheta,
+            self.distance_mm + dist,
+            self.angle_rad + dtheta,
+            left_counts,
+            right_counts,
+        )
+
+
+@dataclass(frozen=True, slots=True)
+class ModeChange:
+    """A mode change the robot made by itself (seen in packet 35), with its likely cause."""
+
+    previous: OIMode
+    current: OIMode
+    tick: int
+    time: float
+    cause: str  # "cliff", "wheel drop", "charger", "unknown", ...
+    wall_time: float = 0.0  # time.time() when seen, for messages only
+
+
+@dataclass(frozen=True, slots=True)
+class Snapshot:
+    """Everything a tick may read, immutable. One blackboard key holds it."""
+
+    frame: SensorFrame
+    tick: int
+    time: float
+    mode: OIMode
+    odometry: Odometry = field(default_factory=Odometry)
+    last_fallback: ModeChange | None = None
+    profile: RobotProfile = DEFAULT_PROFILE
+    frames_lost: int = 0
+
+
+class Outbox:
+    """Commands produced during one tick, flushed by the runtime after it.
+
+    Per channel (``CommandSpec.channel``, e.g. ``"wheels"``) the last command wins; commands
+    without a channel (mode changes, songs, queries) are all kept, in order. The order of the
+    flush is the order in which each surviving command was first queued in this tick, so a
+    ``safe`` queued before a ``drive`` is written before it.
+    """
+
+    __slots__ = ("_queue",)
+
+    def __init__(self) -> None:
+        self._queue: dict[object, Command] = {}
+
+    def send(self, command: Command) -> None:
+        channel = command.spec.channel
+        key: object = channel if channel is not None else (command.spec.opcode, len(self._queue))
+        self._queue[key] = command
+
+    def drain(self) -> list[Command]:
+        """The commands to write, in order; empties the outbox."""
+        out = list(self._queue.values())
+        self._queue.clear()
+        return out
+
+    def pending(self) -> list[Command]:
+        return list(self._queue.values())
+
+    def __len__(self) -> int:
+        return len(self._queue)
+
+    def __iter__(self) -> Iterator[Command]:
+        return iter(list(self._queue.values()))
+
+    def clear(self) -> None:
+        self._queue.clear()
+
+
+class RobotHandle(Protocol):
+    """What ``tree.setup(robot=handle)`` hands to every behaviour."""
+
+    @property
+    def snapshot(self) -> Snapshot: ...
+
+    @property
+    def outbox(self) -> Outbox: ...
+
+    @property
+    def profile(self) -> RobotProfile: ...
+
+
+class StubRobot:
+    """A :class:`RobotHandle` whose frames a test sets by hand: tick behaviours with no robot.
+
+    ``stub.set_frame({7: 1, 35: 2})`` builds a frame of exactly those packets (ids -> raw
+    values) and advances the clock by one slot.
+    """
+
+    def __init__(self, profile: RobotProfile = DEFAULT_PROFILE, mode: OIMode = OIMode.SAFE):
+        from roomba_bt.oi.frames import layout_for
+
+        self._profile = profile
+        self._outbox = Outbox()
+        self._tick = -1
+        self._mode = mode
+        self._odometry = Odometry()
+        self._layout_for = layout_for
+        self._snapshot = Snapshot(
+            frame=layout_for((35,), profile, False).decode(bytes((int(mode),))),
+            tick=0,
+            time=0.0,
+            mode=mode,
+            profile=profile,
+        )
+        self.sent: list[Command] = []
+
+    @property
+    def snapshot(self) -> Snapshot:
+        return self._snapshot
+
+    @property
+    def outbox(self) -> Outbox:
+        return self._outbox
+
+    @property
+    def profile(self) -> RobotProfile:
+        return self._profile
+
+    def set_frame(
+        self, values: dict[int, int], *, mode: OIMode | None = None, ticks: int = 1
+    ) -> Snapshot:
+        """Advance ``ticks`` slots and make a frame of ``values`` the current snapshot."""
+        ids = tuple(sorted(values))
+        layout = self._layout_for(ids, self._profile, False)
+        frame = layout.decode(layout.pack(values))
+        if mode is not None:
+            self._mode = mode
+        elif 35 in values:
+            self._mode = OIMode(values[35])
+        if 43 in values and 44 in values:
+            self._odometry = self._odometry.advance(
+                values[43], values[44], self._profile.wheel_base_mm
+            )
+        self._tick += ticks
+        self._snapshot = Snapshot(
+            frame=frame,
+            tick=self._tick,
+            time=self._tick * SLOT_SECONDS,
+            mode=self._mode,
+            odometry=self._odometry,
+            profile=self._profile,
+        )
+        return self._snapshot
+
+    def flush(self) -> list[Command]:
+        """What the runtime would write after this tick (no guard): recorded in ``sent``."""
+        out = self._outbox.drain()
+        self.sent.extend(out)
+        return out
