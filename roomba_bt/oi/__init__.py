@@ -6,8 +6,8 @@ tables defined here: :mod:`~roomba_bt.oi.opcodes` and :mod:`~roomba_bt.oi.packet
 
 from roomba_bt.oi import encode as commands
 from roomba_bt.oi.bits import (
-    Buttons,
     BumpsWheelDrops,
+    Buttons,
     ChargingSources,
     ChargingState,
     LightBumper,

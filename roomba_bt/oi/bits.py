@@ -21,9 +21,9 @@ Layouts (bit 7 left, bit 0 right)::
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 from enum import IntEnum
-from typing import Iterable
 
 from roomba_bt.oi.errors import EncodeError
 

@@ -13,14 +13,13 @@ Drive (137), velocity -200 mm/s, radius 500 mm (the spec's example)::
 from __future__ import annotations
 
 import struct
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from enum import IntEnum
-from typing import Iterable, Sequence
 
 from roomba_bt.oi.bits import DIGIT_ASCII, day_bits
 from roomba_bt.oi.errors import EncodeError
 from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME, ArgSpec, CommandSpec
-from roomba_bt.oi.packets import GROUPS, VALID_PACKET_IDS
 
 
 class Radius(IntEnum):
@@ -32,7 +31,10 @@ class Radius(IntEnum):
     TURN_COUNTER_CLOCKWISE = 1
 
 
+#: Radius values that mean "straight": 0x8000 (also written -32768, its signed reading) and
+#: 0x7FFF. They lie outside -2000..2000 and are sent unchanged.
 _STRAIGHT_VALUES = frozenset({0x8000, 0x7FFF, -0x8000})
+_RADIUS_ALLOWED = "in -2000..2000 mm, or 32768/32767 (straight) or -1/1 (spin in place)"
 
 
 @dataclass(frozen=True, slots=True)
@@ -55,14 +57,16 @@ class Command:
         return f"Command({self.spec.name}, {list(self.data)})"
 
 
+def _is_int(value: object) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
 def _check(spec: CommandSpec, arg: ArgSpec, value: object) -> int:
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise EncodeError(
-            spec.name, arg.name, f"an integer in {arg.minimum}..{arg.maximum}", value
-        )
-    if not arg.minimum <= value <= arg.maximum:
-        unit = f" {arg.unit}" if arg.unit and arg.unit != "bits" else ""
-        raise EncodeError(spec.name, arg.name, f"in {arg.minimum}..{arg.maximum}{unit}", value)
+    if not _is_int(value):
+        raise EncodeError(spec.name, arg.name, f"an integer {arg.allowed}", value)
+    assert isinstance(value, int)
+    if not arg.accepts(value):
+        raise EncodeError(spec.name, arg.name, arg.allowed, value)
     return value
 
 
@@ -71,42 +75,79 @@ def _spec(command: int | str | CommandSpec) -> CommandSpec:
         return command
     try:
         return COMMANDS[command] if isinstance(command, int) else COMMANDS_BY_NAME[command]
-    except KeyError:
+    except (KeyError, TypeError):
         raise EncodeError("encode", "command", "a known opcode or command name", command) from None
 
 
 def encode(command: int | str | CommandSpec, *args: int, tail: Sequence[int] = ()) -> Command:
-    """Encode ``command`` with its fixed arguments (in table order) and, for variable-length
-    commands, the checked ``tail`` bytes. Prefer the named helpers below."""
+    """Encode ``command`` with its fixed arguments (in table order) and, for Song, Stream and
+    Query List, the ``tail`` items whose count the fixed arguments give. Every value is
+    checked before a byte is built; prefer the named helpers below."""
     spec = _spec(command)
     if len(args) != len(spec.args):
-        raise EncodeError(
-            spec.name, "arguments", f"{len(spec.args)} values ({', '.join(a.name for a in spec.args)})",
-            len(args),
-        )  # fmt: skip
-    if is_drive := (spec.opcode == 137):
+        names = ", ".join(a.name for a in spec.args)
+        raise EncodeError(spec.name, "arguments", f"{len(spec.args)} values ({names})", len(args))
+    if spec.opcode == 137:
         checked = [_check(spec, spec.args[0], args[0]), _radius(spec, args[1])]
+        wire = [checked[0], checked[1] - 0x10000 if checked[1] > 0x7FFF else checked[1]]
     else:
-        checked = [_check(spec, a, v) for a, v in zip(spec.args, args)]
-    if spec.variable is None and tail:
-        raise EncodeError(spec.name, "data bytes", "none beyond the fixed arguments", list(tail))
-    fmt = ">B" + "".join(a.code for a in spec.args)
-    values = list(checked)
-    if is_drive:
-        values[1] = values[1] - 0x10000 if values[1] > 0x7FFF else values[1]
-    data = struct.pack(fmt, spec.opcode, *values)
-    for b in tail:
-        if isinstance(b, bool) or not isinstance(b, int) or not 0 <= b <= 255:
-            raise EncodeError(spec.name, "data byte", "an integer in 0..255", b)
-    return Command(spec, tuple(checked) + tuple(tail), data + bytes(tail))
+        checked = [_check(spec, a, v) for a, v in zip(spec.args, args, strict=True)]
+        wire = checked
+    data = struct.pack(">B" + "".join(a.code for a in spec.args), spec.opcode, *wire)
+    tail_values = _check_tail(spec, checked, tail)
+    return Command(spec, tuple(checked) + tail_values, data + bytes(tail_values))
+
+
+def _check_tail(spec: CommandSpec, checked: list[int], tail: Sequence[int]) -> tuple[int, ...]:
+    if isinstance(tail, (str, bytes)) or not isinstance(tail, Sequence):
+        raise EncodeError(spec.name, "data bytes", "a sequence of integers", tail)
+    if spec.tail is None:
+        if tail:
+            raise EncodeError(spec.name, "data bytes", "none after the fixed arguments", list(tail))
+        return ()
+    expected = spec.tail_bytes(checked)
+    if len(tail) != expected:
+        items = " + ".join(a.name for a in spec.tail.item)
+        raise EncodeError(
+            spec.name, "data bytes", f"{expected} ({spec.tail.count_arg} x {items})", len(tail)
+        )
+    item = spec.tail.item
+    return tuple(_check(spec, item[i % len(item)], v) for i, v in enumerate(tail))
 
 
 def _radius(spec: CommandSpec, value: object) -> int:
-    if isinstance(value, Radius):
-        return int(value) if value is not Radius.STRAIGHT_ALT else 0x7FFF
-    if isinstance(value, int) and not isinstance(value, bool) and value in _STRAIGHT_VALUES:
-        return 0x8000 if value != 0x7FFF else 0x7FFF
-    return _check(spec, spec.args[1], value)
+    if not isinstance(value, int) or isinstance(value, bool):
+        raise EncodeError(spec.name, "radius", f"an integer {_RADIUS_ALLOWED}", value)
+    if value in _STRAIGHT_VALUES:
+        return 0x7FFF if value == 0x7FFF else 0x8000
+    if not spec.args[1].accepts(value):
+        raise EncodeError(spec.name, "radius", _RADIUS_ALLOWED, value)
+    return int(value)
+
+
+def decode_command(data: bytes | bytearray) -> tuple[Command, int] | None:
+    """The first command in ``data`` and the number of bytes it takes, or ``None`` while it is
+    incomplete (the robot, too, waits for the missing data bytes).
+
+    The robot's side of :func:`encode`: the opcode table says how many data bytes follow, and
+    for Song / Stream / Query List the count byte says how many more. Raises
+    :class:`EncodeError` for an unknown opcode or a value out of range."""
+    if not data:
+        return None
+    spec = _spec(data[0])
+    fixed = spec.fixed_data_bytes
+    if len(data) < 1 + fixed:
+        return None
+    values = list(struct.unpack_from(">" + "".join(a.code for a in spec.args), data, 1))
+    if spec.opcode == 137 and values[1] == -0x8000:
+        values[1] = 0x8000
+    if spec.tail is not None:  # the count must be valid before it says how much to wait for
+        index = [a.name for a in spec.args].index(spec.tail.count_arg)
+        _check(spec, spec.args[index], values[index])
+    size = 1 + fixed + spec.tail_bytes(values)
+    if len(data) < size:
+        return None
+    return encode(spec, *values, tail=list(data[1 + fixed : size])), size
 
 
 # ----------------------------------------------------------------- named helpers
@@ -135,9 +176,9 @@ BAUD_CODES: dict[int, int] = {
 
 
 def baud_rate(rate: int) -> Command:
-    """Baud (129) by rate in bps rather than code."""
-    if rate not in BAUD_CODES:
-        raise EncodeError("baud", "rate", f"one of {sorted(BAUD_CODES)}", rate)
+    """Baud (129) by rate in bps rather than code: ``baud_rate(57600) -> [129][10]``."""
+    if not _is_int(rate) or rate not in BAUD_CODES:
+        raise EncodeError("baud", "rate", f"one of {sorted(BAUD_CODES)} bps", rate)
     return baud(BAUD_CODES[rate])
 
 
@@ -174,7 +215,10 @@ def seek_dock() -> Command:
 
 
 def drive(velocity: int, radius: int | Radius) -> Command:
-    """Drive (137). ``radius`` in -2000..2000 mm, or a :class:`Radius` special value."""
+    """Drive (137). ``radius`` in -2000..2000 mm, or a :class:`Radius` special value.
+
+    ``drive(-200, 500) -> [137][255][56][1][244]``;
+    ``drive(200, Radius.STRAIGHT) -> [137][0][200][128][0]`` (never ``[7][208]``, 2000 mm)."""
     return encode(137, velocity, radius)
 
 
@@ -184,10 +228,15 @@ def drive_straight(velocity: int) -> Command:
 
 def spin(velocity: int, clockwise: bool) -> Command:
     """Turn in place; ``velocity`` is the wheel speed (its sign flips the direction)."""
-    return encode(137, velocity, Radius.TURN_CLOCKWISE if clockwise else Radius.TURN_COUNTER_CLOCKWISE)
+    if not isinstance(clockwise, bool):
+        raise EncodeError("drive", "clockwise", "True or False", clockwise)
+    radius = Radius.TURN_CLOCKWISE if clockwise else Radius.TURN_COUNTER_CLOCKWISE
+    return encode(137, velocity, radius)
 
 
 def drive_direct(right_velocity: int, left_velocity: int) -> Command:
+    """Drive Direct (145), right wheel first:
+    ``drive_direct(100, -100) -> [145][0][100][255][156]``."""
     return encode(145, right_velocity, left_velocity)
 
 
@@ -201,6 +250,7 @@ def halt() -> Command:
 
 
 def motors(motor_bits: int) -> Command:
+    """Motors (138) from raw bits; see :func:`roomba_bt.oi.bits.motor_bits` for names."""
     return encode(138, motor_bits)
 
 
@@ -213,6 +263,7 @@ def pwm_motors(main_brush_pwm: int, side_brush_pwm: int, vacuum_pwm: int) -> Com
 
 
 def leds(led_bits: int, power_color: int, power_intensity: int) -> Command:
+    """LEDs (139): ``leds(led_bits("dock"), 0, 128) -> [139][4][0][128]``."""
     return encode(139, led_bits, power_color, power_intensity)
 
 
@@ -220,27 +271,34 @@ def scheduling_leds(weekday_bits: int, scheduling_bits: int) -> Command:
     return encode(162, weekday_bits, scheduling_bits)
 
 
+def _int_sequence(command: str, argument: str, values: object, length: int) -> list[int]:
+    if isinstance(values, (str, bytes)) or not isinstance(values, Sequence):
+        raise EncodeError(command, argument, f"a sequence of {length} integers", values)
+    if len(values) != length:
+        raise EncodeError(command, argument, f"{length} values", list(values))
+    return list(values)
+
+
 def digit_leds_raw(digits: Sequence[int]) -> Command:
-    """Digit LEDs Raw (163): four segment masks, digit 3 (left) first."""
-    if len(digits) != 4:
-        raise EncodeError("digit_leds_raw", "digits", "4 segment masks", list(digits))
-    return encode(163, *digits)
+    """Digit LEDs Raw (163): four segment masks, digit 3 (left) first. Broken on Create 2 /
+    Roomba 600 firmware: see :func:`roomba_bt.oi.profiles.command_warning`."""
+    return encode(163, *_int_sequence("digit_leds_raw", "digits", digits, 4))
 
 
 def digit_leds_ascii(text: str) -> Command:
     """Digit LEDs ASCII (164): ``digit_leds_ascii("ABCD") -> [164][65][66][67][68]``.
 
     Shorter text is padded with spaces on the right; characters the display does not
-    implement are refused rather than shown as blanks."""
+    implement (``*``, ``+``, ``@`` and anything outside 32-126) are refused rather than shown
+    as blanks."""
     if not isinstance(text, str) or len(text) > 4:
         raise EncodeError("digit_leds_ascii", "text", "a string of at most 4 characters", text)
-    padded = text.ljust(4)
-    for ch in padded:
+    for ch in text:
         if ord(ch) not in DIGIT_ASCII:
             raise EncodeError(
                 "digit_leds_ascii", "character", "printable ASCII 32-126 except * + @", ch
             )
-    return encode(164, *(ord(c) for c in padded))
+    return encode(164, *(ord(c) for c in text.ljust(4)))
 
 
 def buttons(button_bits: int) -> Command:
@@ -260,26 +318,33 @@ NOTE_NAMES = ("C", "C#", "D", "D#", "E", "F", "F#", "G", "G#", "A", "A#", "B")
 
 
 def note_number(name: str) -> int:
-    """MIDI number of a note written like ``"A4"``, ``"C#5"`` or ``"rest"`` (0)."""
+    """MIDI number of a note written like ``"A4"`` (69), ``"C#5"`` or ``"rest"`` (0)."""
+    if not isinstance(name, str) or len(name) < 2:
+        raise EncodeError("song", "note", "a name like A4, C#5 or rest", name)
     if name.lower() == "rest":
         return 0
-    pitch, octave = name[:-1].upper().replace("B#", "C"), name[-1]
+    pitch, octave = name[:-1].upper(), name[-1]
     if pitch not in NOTE_NAMES or not octave.isdigit():
         raise EncodeError("song", "note", "a name like A4, C#5 or rest", name)
     return 12 * (int(octave) + 1) + NOTE_NAMES.index(pitch)
 
 
 def song(song_number: int, notes: Sequence[Note | tuple[int, int]]) -> Command:
-    """Song (140): ``[140][number][length][note1][dur1]...``; 1-16 notes."""
+    """Song (140): ``[140][number][length][note 1][duration 1]...``; 1-16 notes.
+
+    ``song(0, [(60, 32)]) -> [140][0][1][60][32]`` (middle C for half a second)."""
+    if isinstance(notes, (str, bytes)) or not isinstance(notes, Sequence):
+        raise EncodeError("song", "notes", "a sequence of 1 to 16 (note, duration) pairs", notes)
     if not 1 <= len(notes) <= 16:
         raise EncodeError("song", "notes", "1 to 16 notes", len(notes))
     tail: list[int] = []
     for note in notes:
-        number, duration = (note.number, note.duration) if isinstance(note, Note) else note
-        for label, v in (("note number", number), ("note duration", duration)):
-            if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v <= 255:
-                raise EncodeError("song", label, "an integer in 0..255", v)
-        tail += (number, duration)
+        if isinstance(note, Note):
+            tail += (note.number, note.duration)
+        elif isinstance(note, tuple) and len(note) == 2:
+            tail += note
+        else:
+            raise EncodeError("song", "note", "a Note or a (number, duration) pair", note)
     return encode(140, song_number, len(notes), tail=tail)
 
 
@@ -287,33 +352,30 @@ def play(song_number: int) -> Command:
     return encode(141, song_number)
 
 
-def _packet_list(command: str, packet_ids: Iterable[int], minimum: int) -> list[int]:
+def _packet_ids(command: str, packet_ids: Iterable[int]) -> list[int]:
+    if isinstance(packet_ids, (str, bytes)) or not isinstance(packet_ids, Iterable):
+        raise EncodeError(command, "packet ids", "a list of packet ids", packet_ids)
     ids = list(packet_ids)
-    if len(ids) < minimum or len(ids) > 255:
-        raise EncodeError(command, "packet ids", f"{minimum} to 255 ids", len(ids))
-    for pid in ids:
-        if pid not in VALID_PACKET_IDS:
-            raise EncodeError(
-                command, "packet id", f"one of 7-58 or groups {sorted(GROUPS)}", pid
-            )
+    if len(ids) > 255:
+        raise EncodeError(command, "packet ids", "at most 255 ids", len(ids))
     return ids
 
 
 def sensors(packet_id: int) -> Command:
-    _packet_list("sensors", [packet_id], 1)
+    """Sensors (142): ``sensors(100) -> [142][100]``; the reply has no header or checksum."""
     return encode(142, packet_id)
 
 
 def query_list(packet_ids: Iterable[int]) -> Command:
     """Query List (149): ``query_list([7, 13]) -> [149][2][7][13]``."""
-    ids = _packet_list("query_list", packet_ids, 1)
+    ids = _packet_ids("query_list", packet_ids)
     return encode(149, len(ids), tail=ids)
 
 
 def stream(packet_ids: Iterable[int]) -> Command:
     """Stream (148): ``stream([29, 13]) -> [148][2][29][13]``. See
     :func:`roomba_bt.oi.stream.check_bandwidth` for the 15 ms budget."""
-    ids = _packet_list("stream", packet_ids, 0)
+    ids = _packet_ids("stream", packet_ids)
     return encode(148, len(ids), tail=ids)
 
 
@@ -325,27 +387,37 @@ def resume_stream() -> Command:
     return encode(150, 1)
 
 
-def schedule(times: dict[str, tuple[int, int]]) -> Command:
+_DAYS = ("sun", "mon", "tue", "wed", "thu", "fri", "sat")
+
+
+def _day_name(command: str, day: object) -> str:
+    if not isinstance(day, str) or day.lower()[:3] not in _DAYS:
+        raise EncodeError(command, "day", f"one of {', '.join(_DAYS)}", day)
+    return day.lower()[:3]
+
+
+def schedule(times: Mapping[str, tuple[int, int]]) -> Command:
     """Schedule (167) from ``{"wed": (15, 0), "fri": (10, 36)}``; ``{}`` disables it.
 
     The spec's example, Wednesday 15:00 and Friday 10:36, is
     ``[167][40][0][0][0][0][0][0][15][0][0][0][10][36][0][0]``."""
-    days = ("sun", "mon", "tue", "wed", "thu", "fri", "sat")
-    unknown = [d for d in times if d.lower()[:3] not in days]
-    if unknown:
-        raise EncodeError("schedule", "day", f"one of {', '.join(days)}", unknown[0])
-    normal = {d.lower()[:3]: t for d, t in times.items()}
+    if not isinstance(times, Mapping):
+        raise EncodeError("schedule", "times", "a mapping of day -> (hour, minute)", times)
+    normal: dict[str, tuple[int, int]] = {}
+    for day, at in times.items():
+        name = _day_name("schedule", day)
+        if not (isinstance(at, tuple) and len(at) == 2):
+            raise EncodeError("schedule", f"{name} time", "an (hour, minute) pair", at)
+        normal[name] = at
     args: list[int] = [day_bits(*normal)]
-    for day in days:
+    for day in _DAYS:
         hour, minute = normal.get(day, (0, 0))
         args += (hour, minute)
     return encode(167, *args)
 
 
 def set_day_time(day: int | str, hour: int, minute: int) -> Command:
-    days = ("sun", "mon", "tue", "wed", "thu", "fri", "sat")
+    """Set Day/Time (168): ``set_day_time("wed", 15, 0) -> [168][3][15][0]``."""
     if isinstance(day, str):
-        if day.lower()[:3] not in days:
-            raise EncodeError("set_day_time", "day", f"one of {', '.join(days)}", day)
-        day = days.index(day.lower()[:3])
+        day = _DAYS.index(_day_name("set_day_time", day))
     return encode(168, day, hour, minute)

@@ -16,12 +16,12 @@ A group id (e.g. 100) in a stream frame is followed by the data of all its membe
 from __future__ import annotations
 
 import struct
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from functools import lru_cache
-from typing import Iterable, Iterator, Mapping
 
 from roomba_bt.oi.bits import (
-    Buttons,
     BumpsWheelDrops,
+    Buttons,
     ChargingSources,
     ChargingState,
     LightBumper,
@@ -31,34 +31,30 @@ from roomba_bt.oi.bits import (
 from roomba_bt.oi.errors import EncodeError
 from roomba_bt.oi.ir import IR_CHARACTERS, IRCharacter
 from roomba_bt.oi.modes import OIMode
-from roomba_bt.oi.packets import PACKETS, VALID_PACKET_IDS, expand
+from roomba_bt.oi.opcodes import COMMANDS
+from roomba_bt.oi.packets import PACKETS, PACKETS_BY_NAME, VALID_PACKET_IDS, expand
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
 
 STREAM_HEADER = 19
+PACKET_ID_ARG = COMMANDS[142].args[0]
 
 
 class FrameLayout:
     """Where each packet sits in a payload for one requested packet list."""
 
     __slots__ = (
-        "packet_ids",
+        "id_offsets",
+        "index",
         "members",
-        "with_ids",
+        "packet_ids",
+        "payload_size",
         "profile",
         "struct",
-        "index",
-        "payload_size",
-        "id_offsets",
+        "with_ids",
     )
 
-    def __init__(
-        self, packet_ids: tuple[int, ...], profile: RobotProfile, with_ids: bool
-    ) -> None:
-        for pid in packet_ids:
-            if pid not in VALID_PACKET_IDS:
-                raise EncodeError(
-                    "sensors", "packet id", "one of 0-58, 100, 101, 106, 107", pid
-                )
+    def __init__(self, packet_ids: tuple[int, ...], profile: RobotProfile, with_ids: bool) -> None:
+        _check_ids("sensors", packet_ids)
         self.packet_ids = packet_ids
         self.with_ids = with_ids
         self.profile = profile
@@ -98,7 +94,7 @@ class FrameLayout:
 
     def ids_match(self, buffer: bytes | bytearray, offset: int) -> bool:
         """True if every packet-id byte of a stream payload at ``offset`` is the one asked."""
-        for pos, pid in zip(self.id_offsets, self.packet_ids):
+        for pos, pid in zip(self.id_offsets, self.packet_ids, strict=True):
             if buffer[offset + pos] != pid:
                 return False
         return True
@@ -135,9 +131,18 @@ def layout_for(
     return FrameLayout(tuple(packet_ids), profile, with_ids)
 
 
+def _check_ids(command: str, packet_ids: Iterable[int]) -> None:
+    for pid in packet_ids:
+        if isinstance(pid, bool) or not isinstance(pid, int) or pid not in VALID_PACKET_IDS:
+            raise EncodeError(command, "packet id", PACKET_ID_ARG.allowed, pid)
+
+
 def stream_frame_size(packet_ids: Iterable[int]) -> int:
-    """Bytes one stream frame of ``packet_ids`` takes on the wire."""
-    return 3 + sum(1 + sum(PACKETS[m].size for m in expand(pid)) for pid in packet_ids)
+    """Bytes one stream frame of ``packet_ids`` takes on the wire: header, n-bytes, an id byte
+    and the data of each packet, checksum. ``[29, 13]`` -> 8."""
+    ids = tuple(packet_ids)
+    _check_ids("stream", ids)
+    return 3 + sum(1 + sum(PACKETS[m].size for m in expand(pid)) for pid in ids)
 
 
 class SensorFrame:
@@ -186,7 +191,7 @@ class SensorFrame:
         return default if i is None else self._values[i]
 
     def __iter__(self) -> Iterator[tuple[int, int]]:
-        return zip(self._layout.members, self._values)
+        return zip(self._layout.members, self._values, strict=True)
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, SensorFrame):
@@ -202,9 +207,10 @@ class SensorFrame:
 
     def value(self, name: str) -> int:
         """Raw value by packet name (``frame.value("voltage")``)."""
-        from roomba_bt.oi.packets import PACKETS_BY_NAME
-
-        return self[PACKETS_BY_NAME[name].id]
+        spec = PACKETS_BY_NAME.get(name)
+        if spec is None:
+            raise KeyError(f"no sensor packet is called {name!r}")
+        return self[spec.id]
 
     def as_dict(self) -> dict[str, object]:
         """Every packet by name, decoded to its typed view where one exists."""
@@ -390,16 +396,25 @@ def _charging_state(raw: int) -> ChargingState:
     return ChargingState(raw) if raw <= 5 else ChargingState.FAULT
 
 
-_VIEWS = {
+def _oi_mode(raw: int) -> OIMode | int:
+    return OIMode(raw) if raw <= 3 else raw
+
+
+def _stasis(raw: int) -> Stasis:
+    return Stasis(raw & 3)
+
+
+#: Packet id -> its typed view, for :meth:`SensorFrame.as_dict`.
+_VIEWS: dict[int, Callable[[int], object]] = {
     7: BumpsWheelDrops.from_byte,
     14: Overcurrents.from_byte,
     17: IRCharacter.decode,
     18: Buttons.from_byte,
     21: _charging_state,
     34: ChargingSources.from_byte,
-    35: lambda raw: OIMode(raw) if raw <= 3 else raw,
+    35: _oi_mode,
     45: LightBumper.from_byte,
     52: IRCharacter.decode,
     53: IRCharacter.decode,
-    58: lambda raw: Stasis(raw & 3),
+    58: _stasis,
 }

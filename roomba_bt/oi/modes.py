@@ -21,3 +21,13 @@ class OIMode(IntEnum):
 ALL_MODES: frozenset[OIMode] = frozenset(OIMode)
 OPEN_MODES: frozenset[OIMode] = frozenset({OIMode.PASSIVE, OIMode.SAFE, OIMode.FULL})
 DRIVING_MODES: frozenset[OIMode] = frozenset({OIMode.SAFE, OIMode.FULL})
+
+
+def mode_from_packet(raw: int, plus_one: bool = False) -> OIMode | None:
+    """The mode packet 35 reports, or ``None`` if ``raw`` cannot be a mode.
+
+    ``plus_one`` undoes the firmware bug of some Roomba 600s, which report mode + 1
+    (1 = Off ... 4 = Full); deciding *whether* a robot has the bug is the robot layer's job
+    (``RobotProfile.reports_mode_plus_one`` and what it observes). Never raises."""
+    value = raw - 1 if plus_one else raw
+    return OIMode(value) if 0 <= value <= 3 else None

@@ -15,9 +15,9 @@ Wire types (all big-endian)::
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import Mapping
 
 from roomba_bt.oi.modes import ALL_MODES, DRIVING_MODES, OPEN_MODES, OIMode
 
@@ -27,7 +27,10 @@ NEW_PROFILES: frozenset[str] = frozenset({"create2", "roomba600"})
 
 @dataclass(frozen=True, slots=True)
 class ArgSpec:
-    """One fixed data argument of a command."""
+    """One fixed data argument of a command.
+
+    ``choices``, when set, narrows ``minimum..maximum`` to the listed values (a packet id must
+    be one the robot knows, not any byte)."""
 
     name: str
     code: str  # struct code: B, b, H, h
@@ -35,10 +38,56 @@ class ArgSpec:
     maximum: int
     unit: str = ""
     doc: str = ""
+    choices: frozenset[int] | None = None
 
     @property
     def size(self) -> int:
         return 2 if self.code in "Hh" else 1
+
+    def accepts(self, value: int) -> bool:
+        if not self.minimum <= value <= self.maximum:
+            return False
+        return self.choices is None or value in self.choices
+
+    @property
+    def allowed(self) -> str:
+        """What is allowed, in words, for error messages."""
+        if self.choices is not None:
+            return f"one of {_ranges(self.choices)}"
+        unit = f" {self.unit}" if self.unit and self.unit not in ("bits", "ASCII") else ""
+        return f"in {self.minimum}..{self.maximum}{unit}"
+
+
+def _ranges(values: frozenset[int]) -> str:
+    """``{0, 1, 2, 3, 7, 100}`` -> ``"0-3, 7, 100"``."""
+    runs: list[list[int]] = []
+    for v in sorted(values):
+        if runs and v == runs[-1][1] + 1:
+            runs[-1][1] = v
+        else:
+            runs.append([v, v])
+    return ", ".join(str(a) if a == b else f"{a}-{b}" for a, b in runs)
+
+
+@dataclass(frozen=True, slots=True)
+class TailSpec:
+    """The variable-length tail of Song (140), Stream (148) and Query List (149).
+
+    ``count_arg`` names the fixed argument that says how many items follow; each item is
+    ``item`` (one or more byte arguments). The robot waits for exactly
+    ``count x len(item)`` bytes, so the encoder and the simulator both read it from here::
+
+        Song        [140][number][length=N][note 1][duration 1]...[note N][duration N]
+        Stream      [148][N][id 1]...[id N]
+        Query List  [149][N][id 1]...[id N]
+    """
+
+    count_arg: str
+    item: tuple[ArgSpec, ...]
+
+    @property
+    def bytes_per_item(self) -> int:
+        return sum(a.size for a in self.item)
 
 
 @dataclass(frozen=True, slots=True)
@@ -55,10 +104,22 @@ class CommandSpec:
     channel: str | None = None
     variable: str | None = None  # description of a variable-length tail, if any
     doc: str = ""
+    tail: TailSpec | None = None
 
     @property
     def fixed_data_bytes(self) -> int:
         return sum(a.size for a in self.args)
+
+    def tail_bytes(self, args: tuple[int, ...] | list[int]) -> int:
+        """Bytes that must follow the fixed arguments ``args`` (0 for fixed-size commands)."""
+        if self.tail is None:
+            return 0
+        index = [a.name for a in self.args].index(self.tail.count_arg)
+        return args[index] * self.tail.bytes_per_item
+
+    def data_bytes(self, args: tuple[int, ...] | list[int]) -> int:
+        """All data bytes after the opcode, given the fixed arguments."""
+        return self.fixed_data_bytes + self.tail_bytes(args)
 
     @property
     def is_actuator(self) -> bool:
@@ -82,17 +143,33 @@ def _c(
     channel: str | None = None,
     variable: str | None = None,
     doc: str = "",
+    tail: TailSpec | None = None,
 ) -> CommandSpec:
-    return CommandSpec(opcode, name, title, args, modes, leads_to, profiles, channel, variable, doc)
+    return CommandSpec(
+        opcode, name, title, args, modes, leads_to, profiles, channel, variable, doc, tail
+    )
 
 
 def _u8(name: str, lo: int = 0, hi: int = 255, unit: str = "", doc: str = "") -> ArgSpec:
     return ArgSpec(name, "B", lo, hi, unit, doc)
 
 
+def _packet_id() -> ArgSpec:
+    return ArgSpec("packet_id", "B", 0, 107, "", "sensor packet or group id", PACKET_ID_CHOICES)
+
+
+#: Every id Sensors (142), Query List (149) and Stream (148) accept: single packets 7-58 and
+#: the groups 0-6, 100, 101, 106, 107. 102-105 are named by neither spec: refused.
+PACKET_ID_CHOICES: frozenset[int] = frozenset(range(0, 59)) | frozenset({100, 101, 106, 107})
+
 VELOCITY = ArgSpec("velocity", "h", -500, 500, "mm/s", "average wheel velocity")
-RADIUS = ArgSpec(
-    "radius", "h", -2000, 2000, "mm", "turn radius; 0x8000/0x7FFF straight, -1/1 spin"
+RADIUS = ArgSpec("radius", "h", -2000, 2000, "mm", "turn radius; 0x8000/0x7FFF straight, -1/1 spin")
+
+#: Schedule (167)'s 14 time bytes: hour then minute, Sunday first.
+_SCHEDULE_TIMES: tuple[ArgSpec, ...] = tuple(
+    arg
+    for day in ("sun", "mon", "tue", "wed", "thu", "fri", "sat")
+    for arg in (_u8(f"{day}_hour", 0, 23, "h"), _u8(f"{day}_minute", 0, 59, "min"))
 )
 
 _COMMAND_LIST: tuple[CommandSpec, ...] = (
@@ -117,10 +194,12 @@ _COMMAND_LIST: tuple[CommandSpec, ...] = (
        modes=DRIVING_MODES, channel="leds"),
     _c(140, "song", "Song", (_u8("song_number", 0, 4), _u8("song_length", 1, 16)),
        variable="song_length x (note 0-255, duration 0-255 in 1/64 s)",
-       doc="Defines a song; notes outside 31-127 are rests."),
+       doc="Defines a song; notes outside 31-127 are rests.",
+       tail=TailSpec("song_length", (_u8("note_number", 0, 255, "MIDI"),
+                                     _u8("note_duration", 0, 255, "1/64 s")))),
     _c(141, "play", "Play", (_u8("song_number", 0, 4),), modes=DRIVING_MODES,
        channel="speaker"),
-    _c(142, "sensors", "Sensors", (_u8("packet_id"),),
+    _c(142, "sensors", "Sensors", (_packet_id(),),
        doc="Asks for one packet or group; the reply has no header and no checksum."),
     _c(143, "seek_dock", "Seek Dock", leads_to=OIMode.PASSIVE, channel="wheels"),
     _c(144, "pwm_motors", "PWM Motors",
@@ -136,16 +215,18 @@ _COMMAND_LIST: tuple[CommandSpec, ...] = (
        modes=DRIVING_MODES, channel="wheels"),
     _c(148, "stream", "Stream", (_u8("packet_count", 0, 255),),
        variable="packet_count packet ids", channel="stream",
-       doc="Starts a stream of the listed packets every 15 ms; a count of 0 stops it."),
+       doc="Starts a stream of the listed packets every 15 ms. A count of 0 is not described "
+           "by either spec (peers send it to stop); prefer Pause/Resume Stream (150).",
+       tail=TailSpec("packet_count", (_packet_id(),))),
     _c(149, "query_list", "Query List", (_u8("packet_count", 1, 255),),
-       variable="packet_count packet ids"),
+       variable="packet_count packet ids", tail=TailSpec("packet_count", (_packet_id(),))),
     _c(150, "pause_resume_stream", "Pause/Resume Stream", (_u8("stream_state", 0, 1),),
        channel="stream"),
     _c(162, "scheduling_leds", "Scheduling LEDs",
-       (_u8("weekday_bits", 0, 127, "bits"), _u8("scheduling_bits", 0, 31, "bits")),
+       (_u8("weekday_bits", 0, 255, "bits"), _u8("scheduling_bits", 0, 255, "bits")),
        modes=DRIVING_MODES, channel="scheduling_leds"),
     _c(163, "digit_leds_raw", "Digit LEDs Raw",
-       tuple(_u8(f"digit_{n}_bits", 0, 127, "bits") for n in (3, 2, 1, 0)),
+       tuple(_u8(f"digit_{n}_bits", 0, 255, "bits") for n in (3, 2, 1, 0)),
        modes=DRIVING_MODES, channel="digits",
        doc="Does not work on Create 2 / Roomba 600 firmware (Appendix B)."),
     _c(164, "digit_leds_ascii", "Digit LEDs ASCII",
@@ -154,12 +235,7 @@ _COMMAND_LIST: tuple[CommandSpec, ...] = (
     _c(165, "buttons", "Buttons", (_u8("button_bits", 0, 255, "bits"),), channel="buttons",
        doc="Presses buttons; they release after 1/6 s."),
     _c(167, "schedule", "Schedule",
-       (_u8("day_bits", 0, 127, "bits"),)
-       + tuple(
-           arg
-           for day in ("sun", "mon", "tue", "wed", "thu", "fri", "sat")
-           for arg in (_u8(f"{day}_hour", 0, 23, "h"), _u8(f"{day}_minute", 0, 59, "min"))
-       )),
+       (_u8("day_bits", 0, 127, "bits"), *_SCHEDULE_TIMES)),
     _c(168, "set_day_time", "Set Day/Time",
        (_u8("day", 0, 6), _u8("hour", 0, 23, "h"), _u8("minute", 0, 59, "min"))),
     _c(173, "stop", "Stop", leads_to=OIMode.OFF, profiles=NEW_PROFILES,

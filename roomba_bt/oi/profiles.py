@@ -17,10 +17,11 @@ A difference is a field here, never an ``if`` elsewhere. Each decision is explai
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from types import MappingProxyType
-from typing import Mapping
 
+from roomba_bt.oi.errors import UnsupportedCommandError
 from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME, CommandSpec
 from roomba_bt.oi.packets import PACKETS, PacketSpec
 
@@ -56,6 +57,28 @@ class RobotProfile:
         spec = _lookup(command)
         return self.name in spec.profiles
 
+    def check_supported(self, command: CommandSpec | int | str) -> None:
+        """Raise :class:`UnsupportedCommandError` if this robot does not have ``command``
+        (Reset 7 and Stop 173 exist only on the 600 / Create 2)."""
+        spec = _lookup(command)
+        if self.name not in spec.profiles:
+            raise UnsupportedCommandError(spec.name, self.name, tuple(sorted(spec.profiles)))
+
+    def command_warning(self, command: CommandSpec | int | str) -> str | None:
+        """A sentence to log before sending ``command`` to this robot, or ``None``.
+
+        Only Digit LEDs Raw (163) has one: the 600 spec (Appendix B) says it does not work on
+        current Create 2 / Roomba 600 firmware. It is still sent (a user may have firmware
+        where it works); the robot layer logs this so that a blank display is explained."""
+        spec = _lookup(command)
+        if spec.opcode == 163 and not self.digit_leds_raw_works:
+            return (
+                f"digit_leds_raw (163) does not work on {self.title} firmware (OI spec "
+                "Appendix B, 'LEDs Raw: open'); the display may stay blank. "
+                "Use digit_leds_ascii (164) instead."
+            )
+        return None
+
     @property
     def commands(self) -> tuple[CommandSpec, ...]:
         return tuple(c for c in COMMANDS.values() if self.name in c.profiles)
@@ -72,9 +95,15 @@ class RobotProfile:
 def _lookup(command: CommandSpec | int | str) -> CommandSpec:
     if isinstance(command, CommandSpec):
         return command
-    if isinstance(command, int):
-        return COMMANDS[command]
-    return COMMANDS_BY_NAME[command]
+    try:
+        return COMMANDS[command] if isinstance(command, int) else COMMANDS_BY_NAME[command]
+    except KeyError:
+        raise KeyError(f"no OI command is called {command!r}") from None
+
+
+def command_warning(command: CommandSpec | int | str, profile: RobotProfile) -> str | None:
+    """Module-level spelling of :meth:`RobotProfile.command_warning`."""
+    return profile.command_warning(command)
 
 
 CREATE2 = RobotProfile(

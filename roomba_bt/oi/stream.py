@@ -21,8 +21,8 @@ How garbage is handled (the parser never raises on bad bytes):
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Iterable
 
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.frames import STREAM_HEADER, FrameLayout, SensorFrame, layout_for
@@ -60,7 +60,7 @@ class ParserCounters:
 class StreamParser:
     """Feed it chunks of bytes; it returns the checked frames they complete, in order."""
 
-    __slots__ = ("layout", "counters", "_buffer", "_n", "_size", "_ok_sums")
+    __slots__ = ("_buffer", "_n", "_ok_sums", "_size", "counters", "layout")
 
     def __init__(
         self,
@@ -138,7 +138,7 @@ class ReplyParser:
     """Replies to Sensors (142) and Query List (149): no header, no checksum, so they are
     cut by the expected length of the packets asked for."""
 
-    __slots__ = ("layout", "_buffer")
+    __slots__ = ("_buffer", "layout")
 
     def __init__(self, packet_ids: Iterable[int], profile: RobotProfile = DEFAULT_PROFILE):
         self.layout = layout_for(tuple(packet_ids), profile, False)
