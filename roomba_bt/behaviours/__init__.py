@@ -1,0 +1,76 @@
+"""The behaviour library: py_trees leaves that read the snapshot and fill the outbox.
+
+Every behaviour declares itself once (:func:`declare`): parameters with types, units, ranges
+and defaults; the sensor packets it reads; the opcodes it sends (so the OI modes it needs);
+the mode it leads to. The :class:`Registry` holds the built-ins and the plugins alike.
+"""
+
+from roomba_bt.behaviours.declare import (
+    MISSION_NAMESPACE,
+    SNAPSHOT_KEY,
+    Action,
+    BlackboardRef,
+    Condition,
+    Declaration,
+    DeclarationError,
+    Param,
+    RobotBehaviour,
+    declare,
+    read_key,
+    write_key,
+)
+from roomba_bt.behaviours.registry import (
+    ENTRY_POINT_GROUP,
+    PluginError,
+    Registry,
+    builtin_registry,
+    default_registry,
+)
+from roomba_bt.behaviours.units import (
+    ANGLE,
+    ANY,
+    BOOL,
+    DISTANCE,
+    DURATION,
+    FLOAT,
+    INT,
+    PERCENT,
+    SPEED,
+    STR,
+    UnitError,
+    ValueType,
+    enum,
+)
+
+__all__ = [
+    "ANGLE",
+    "ANY",
+    "BOOL",
+    "DISTANCE",
+    "DURATION",
+    "ENTRY_POINT_GROUP",
+    "FLOAT",
+    "INT",
+    "MISSION_NAMESPACE",
+    "PERCENT",
+    "SNAPSHOT_KEY",
+    "SPEED",
+    "STR",
+    "Action",
+    "BlackboardRef",
+    "Condition",
+    "Declaration",
+    "DeclarationError",
+    "Param",
+    "PluginError",
+    "Registry",
+    "RobotBehaviour",
+    "UnitError",
+    "ValueType",
+    "builtin_registry",
+    "declare",
+    "default_registry",
+    "enum",
+    "read_key",
+    "write_key",
+]

@@ -1,0 +1,539 @@
+"""The action library: mode changes, driving, the robot's own cleaning modes, actuators.
+
+Every action hands :class:`~roomba_bt.oi.encode.Command` objects to the outbox; the runtime
+checks them against the mode model and writes them after the tick. Durations, timeouts and
+distances count the mission clock (``snapshot.time``) and the odometry of the snapshot, so a
+replay decides exactly as the live run did. An action that starts the wheels stops them when
+it ends, however it ends (success, failure, or preempted by a guard or a higher branch):
+:meth:`~roomba_bt.behaviours.declare.Action.terminate` queues ``[137][0][0][0][0]``.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Mapping
+from typing import Any
+
+from py_trees.common import Status
+
+from roomba_bt.behaviours.declare import Action, Param, declare, write_key
+from roomba_bt.behaviours.units import (
+    ANGLE,
+    ANY,
+    BOOL,
+    DISTANCE,
+    DURATION,
+    INT,
+    PERCENT,
+    SPEED,
+    STR,
+    UnitError,
+    ValueType,
+    enum,
+    parse_quantity,
+)
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.bits import led_bits, motor_bits
+from roomba_bt.oi.encode import Note, Radius, note_number
+from roomba_bt.oi.modes import DRIVING_MODES, OIMode
+from roomba_bt.oi.opcodes import COMMANDS_BY_NAME
+
+log = logging.getLogger("roomba_bt.mission")
+
+# Ranges read from the opcode table, never retyped.
+_VELOCITY = COMMANDS_BY_NAME["drive"].args[0]
+_RADIUS = COMMANDS_BY_NAME["drive"].args[1]
+_WHEEL = COMMANDS_BY_NAME["drive_direct"].args[0]
+_SONG_NUMBER = COMMANDS_BY_NAME["song"].args[0]
+_SONG_LENGTH = COMMANDS_BY_NAME["song"].args[1]
+_LED_COLOR = COMMANDS_BY_NAME["leds"].args[1]
+
+_RADIUS_WORDS: dict[str, int] = {
+    "straight": int(Radius.STRAIGHT),
+    "spin_left": int(Radius.TURN_COUNTER_CLOCKWISE),
+    "spin_right": int(Radius.TURN_CLOCKWISE),
+}
+
+
+def _parse_radius(value: object) -> object:
+    if isinstance(value, str) and value in _RADIUS_WORDS:
+        return value
+    try:
+        return parse_quantity("distance", value)
+    except UnitError as exc:
+        raise UnitError(f"{exc}; or one of {', '.join(_RADIUS_WORDS)}") from None
+
+
+RADIUS = ValueType(
+    "radius",
+    _parse_radius,
+    "mm",
+    (("anyOf", [{"enum": list(_RADIUS_WORDS)}, dict(DISTANCE.schema())]),),
+)
+
+
+def _parse_notes(value: object) -> tuple[tuple[int, int], ...]:
+    """``["C4 250ms", "rest 125ms", "A#4 1s"]`` -> ((60, 16), (0, 8), (70, 64))."""
+    if not isinstance(value, list) or not value:
+        raise UnitError('expected a list of notes such as ["C4 250ms", "rest 125ms"]')
+    notes: list[tuple[int, int]] = []
+    for item in value:
+        parts = item.split() if isinstance(item, str) else []
+        if len(parts) != 2:
+            raise UnitError(f'expected a note such as "C4 250ms" or "rest 125ms", got {item!r}')
+        try:
+            number = note_number(parts[0])
+        except ValueError:
+            raise UnitError(f"unknown note {parts[0]!r}: write A4, C#5 or rest") from None
+        sixty_fourths = round(parse_quantity("duration", parts[1]) * 64)
+        if not 1 <= sixty_fourths <= 255:
+            raise UnitError(
+                f"note duration {parts[1]!r} is out of range: 16ms..3.98s (1..255 of 1/64 s)"
+            )
+        notes.append((number, sixty_fourths))
+    if len(notes) > _SONG_LENGTH.maximum:
+        raise UnitError(f"a song has at most {_SONG_LENGTH.maximum} notes, got {len(notes)}")
+    return tuple(notes)
+
+
+NOTES = ValueType(
+    "notes",
+    _parse_notes,
+    json_schema=(("type", "array"), ("items", {"type": "string"}), ("minItems", 1),
+                 ("maxItems", _SONG_LENGTH.maximum)),
+)  # fmt: skip
+
+_OK, _RUN, _FAIL = Status.SUCCESS, Status.RUNNING, Status.FAILURE
+
+
+# --------------------------------------------------------------------------- modes
+
+
+def _mode_target(params: Mapping[str, Any]) -> OIMode:
+    return OIMode[str(params.get("to", "safe")).upper()]
+
+
+@declare(
+    "mode",
+    kind="action",
+    params=(
+        Param("to", enum("passive", "safe", "full"), required=True, from_blackboard=False,
+              doc="the OI mode to enter"),
+        Param("timeout", DURATION, default="2s", minimum=0.1, maximum=60,
+              doc="FAILURE if packet 35 does not show the mode by then"),
+    ),
+    sends=(128, 131, 132),
+    leads_to=_mode_target,
+    primary="to",
+)  # fmt: skip
+class Mode(Action):
+    """Enter an OI mode (Start 128 for passive, Safe 131, Full 132) and wait for packet 35.
+
+    Succeeds once the robot reports the mode; re-sends every 0.5 s; fails after ``timeout``.
+    """
+
+    def start(self) -> None:
+        self._target = _mode_target(self.params)
+        self._started = self.snapshot.time
+        self._last_sent = -math.inf
+
+    def update(self) -> Status:
+        snap = self.snapshot
+        if snap.mode == self._target:
+            return _OK
+        if snap.time - self._started >= float(self.value("timeout")):
+            self.feedback_message = f"robot did not enter {self._target.label}"
+            return _FAIL
+        if snap.time - self._last_sent >= 0.5:
+            command = {OIMode.PASSIVE: oi.start, OIMode.SAFE: oi.safe, OIMode.FULL: oi.full}
+            self.send(command[self._target]())
+            self._last_sent = snap.time
+        return _RUN
+
+
+# --------------------------------------------------------------------------- driving
+
+
+def _drive_constraints(params: Mapping[str, Any]) -> list[str]:
+    errors = []
+    ends = [k for k in ("distance", "angle", "duration") if k in params]
+    if len(ends) > 1:
+        errors.append(f"give at most one of distance, angle, duration (got {', '.join(ends)})")
+    wheels = [k for k in ("left", "right") if k in params]
+    if wheels and len(wheels) != 2:
+        errors.append("give both left and right wheel speeds, or neither")
+    if wheels and ("radius" in params or "velocity" in params):
+        errors.append("give either velocity/radius or left/right wheel speeds, not both")
+    return errors
+
+
+def _drive_reads(params: Mapping[str, Any]) -> tuple[int, ...]:
+    return (43, 44) if ("distance" in params or "angle" in params) else ()
+
+
+@declare(
+    "drive",
+    kind="action",
+    params=(
+        Param("velocity", SPEED, default="200 mm/s", minimum=_VELOCITY.minimum,
+              maximum=_VELOCITY.maximum, doc="average wheel speed; negative backs up"),
+        Param("radius", RADIUS, default="straight", minimum=_RADIUS.minimum,
+              maximum=_RADIUS.maximum,
+              doc="turn radius (positive turns left), straight, spin_left or spin_right"),
+        Param("left", SPEED, minimum=_WHEEL.minimum, maximum=_WHEEL.maximum,
+              doc="left wheel speed (Drive Direct 145), with right"),
+        Param("right", SPEED, minimum=_WHEEL.minimum, maximum=_WHEEL.maximum,
+              doc="right wheel speed (Drive Direct 145), with left"),
+        Param("distance", DISTANCE, minimum=0, doc="stop after this path length (odometry)"),
+        Param("angle", ANGLE, minimum=0, doc="stop after this heading change (odometry)"),
+        Param("duration", DURATION, minimum=0, doc="stop after this mission time"),
+    ),
+    reads=_drive_reads,
+    sends=(137, 145),
+    constraints=_drive_constraints,
+)  # fmt: skip
+class Drive(Action):
+    """Drive with a velocity and radius, or wheel speeds, for a distance, an angle, a
+    duration, or until a guard stops it (no end given: RUNNING until preempted).
+
+    Sends Drive (137) ``[137][vel hi][vel lo][rad hi][rad lo]`` or Drive Direct (145)
+    ``[145][right hi][right lo][left hi][left lo]`` when it starts (and again if the robot fell
+    back to Passive and came back), then a halt when it ends.
+    """
+
+    moves = True
+
+    def start(self) -> None:
+        snap = self.snapshot
+        self._start_time = snap.time
+        self._start_distance = snap.odometry.distance_mm
+        self._start_angle = snap.odometry.angle_rad
+        self._last_mode: OIMode | None = None
+
+    def command(self) -> oi.Command:
+        left, right = self.value("left"), self.value("right")
+        if left is not None and right is not None:
+            return oi.drive_direct(round(right), round(left))
+        radius = self.value("radius")
+        wire_radius = _RADIUS_WORDS[radius] if isinstance(radius, str) else round(radius)
+        return oi.drive(round(self.value("velocity")), wire_radius)
+
+    def finished(self) -> bool:
+        snap = self.snapshot
+        distance, angle, duration = (
+            self.value("distance"),
+            self.value("angle"),
+            self.value("duration"),
+        )
+        if distance is not None:
+            return abs(snap.odometry.distance_mm - self._start_distance) >= float(distance)
+        if angle is not None:
+            turned = abs(math.degrees(snap.odometry.angle_rad - self._start_angle))
+            return turned >= float(angle)
+        if duration is not None:
+            return snap.time - self._start_time >= float(duration) - 1e-9
+        return False
+
+    def update(self) -> Status:
+        if self.finished():
+            self.send(oi.halt())
+            self._started_motion = False
+            return _OK
+        mode = self.snapshot.mode
+        if mode in DRIVING_MODES and self._last_mode not in DRIVING_MODES:
+            self.send(self.command())
+            self._started_motion = True
+        self._last_mode = mode
+        return _RUN
+
+
+@declare(
+    "turn",
+    kind="action",
+    params=(
+        Param("angle", ANGLE, required=True, minimum=-3600, maximum=3600,
+              doc="heading change; positive turns left (counter-clockwise)"),
+        Param("speed", SPEED, default="100 mm/s", minimum=1, maximum=_VELOCITY.maximum,
+              doc="wheel speed while spinning in place"),
+    ),
+    reads=(43, 44),
+    sends=(137,),
+    primary="angle",
+)  # fmt: skip
+class Turn(Drive):
+    """Turn in place by an angle measured by the wheel encoders, then halt."""
+
+    def command(self) -> oi.Command:
+        return oi.spin(round(self.value("speed")), clockwise=self.value("angle") < 0)
+
+    def finished(self) -> bool:
+        turned = abs(math.degrees(self.snapshot.odometry.angle_rad - self._start_angle))
+        return turned >= abs(self.number("angle"))
+
+
+@declare(
+    "stop",
+    kind="action",
+    params=(Param("motors", BOOL, default=False, doc="also switch the brushes and vacuum off"),),
+    sends=(137, 138),
+)
+class Stop(Action):
+    """Stop the wheels (Drive 0: ``[137][0][0][0][0]``), and the motors if asked."""
+
+    def update(self) -> Status:
+        self.send(oi.halt())
+        if self.value("motors"):
+            self.send(oi.motors_off())
+        return _OK
+
+
+# --------------------------------------------------------------------------- built-in modes
+
+
+class _BuiltIn(Action):
+    opcode_helper = staticmethod(oi.clean)
+
+    def update(self) -> Status:
+        self.send(type(self).opcode_helper())
+        return _OK
+
+
+@declare("clean", kind="action", sends=(135,), leads_to=OIMode.PASSIVE)
+class Clean(_BuiltIn):
+    """Start the robot's own cleaning cycle (Clean 135); the OI drops to Passive."""
+
+    opcode_helper = staticmethod(oi.clean)
+
+
+@declare("spot", kind="action", sends=(134,), leads_to=OIMode.PASSIVE)
+class Spot(_BuiltIn):
+    """Start spot cleaning (Spot 134); the OI drops to Passive."""
+
+    opcode_helper = staticmethod(oi.spot)
+
+
+@declare("max", kind="action", sends=(136,), leads_to=OIMode.PASSIVE)
+class MaxClean(_BuiltIn):
+    """Start a Max cleaning cycle (Max 136), until the battery runs out; Passive."""
+
+    opcode_helper = staticmethod(oi.max_clean)
+
+
+@declare(
+    "seek_dock",
+    kind="action",
+    params=(
+        Param("wait", BOOL, default=True, doc="RUNNING until packet 34 shows the home base"),
+        Param("timeout", DURATION, minimum=0, doc="FAILURE if not docked by then"),
+    ),
+    reads=(34,),
+    sends=(143,),
+    leads_to=OIMode.PASSIVE,
+)  # fmt: skip
+class SeekDock(Action):
+    """Send Seek Dock (143) and, by default, wait until the home base powers the robot."""
+
+    def start(self) -> None:
+        self._start_time = self.snapshot.time
+        self._sent = False
+
+    def update(self) -> Status:
+        if not self._sent:
+            self.send(oi.seek_dock())
+            self._sent = True
+            if not self.value("wait"):
+                return _OK
+        snap = self.snapshot
+        if snap.frame.get(34, 0) and snap.frame.charging_sources.home_base:
+            return _OK
+        timeout = self.value("timeout")
+        if timeout is not None and snap.time - self._start_time >= timeout:
+            self.feedback_message = "did not reach the home base"
+            return _FAIL
+        return _RUN
+
+
+# --------------------------------------------------------------------------- actuators
+
+
+@declare(
+    "motors",
+    kind="action",
+    params=(
+        Param("main_brush", BOOL, default=False),
+        Param("side_brush", BOOL, default=False),
+        Param("vacuum", BOOL, default=False),
+        Param("side_brush_clockwise", BOOL, default=False),
+        Param("main_brush_outward", BOOL, default=False),
+    ),
+    sends=(138,),
+)
+class Motors(Action):
+    """Switch the cleaning motors (Motors 138 ``[138][bits]``); unnamed ones go off."""
+
+    def update(self) -> Status:
+        bits = motor_bits(
+            side_brush=bool(self.value("side_brush")),
+            vacuum=bool(self.value("vacuum")),
+            main_brush=bool(self.value("main_brush")),
+            side_brush_clockwise=bool(self.value("side_brush_clockwise")),
+            main_brush_outward=bool(self.value("main_brush_outward")),
+        )
+        self.send(oi.motors(bits))
+        return _OK
+
+
+@declare(
+    "vacuum",
+    kind="action",
+    params=(Param("on", BOOL, required=True, doc="vacuum on or off (other motors go off)"),),
+    sends=(138,),
+    primary="on",
+)
+class Vacuum(Action):
+    """Vacuum alone on or off (Motors 138, bit 1)."""
+
+    def update(self) -> Status:
+        self.send(oi.motors(motor_bits(vacuum=bool(self.value("on")))))
+        return _OK
+
+
+@declare(
+    "leds",
+    kind="action",
+    params=(
+        Param("debris", BOOL, default=False),
+        Param("spot", BOOL, default=False),
+        Param("dock", BOOL, default=False),
+        Param("check_robot", BOOL, default=False),
+        Param("power_color", INT, default=0, minimum=_LED_COLOR.minimum,
+              maximum=_LED_COLOR.maximum, doc="0 green .. 255 red"),
+        Param("power_intensity", PERCENT, default="0%", minimum=0, maximum=100),
+    ),
+    sends=(139,),
+)  # fmt: skip
+class Leds(Action):
+    """Set the LEDs (LEDs 139 ``[139][led bits][power colour][power intensity]``)."""
+
+    def update(self) -> Status:
+        names = [n for n in ("debris", "spot", "dock", "check_robot") if self.value(n)]
+        intensity = round(float(self.value("power_intensity")) * 255 / 100)
+        self.send(oi.leds(led_bits(*names), int(self.value("power_color")), intensity))
+        return _OK
+
+
+@declare(
+    "song",
+    kind="action",
+    params=(
+        Param("number", INT, default=0, minimum=_SONG_NUMBER.minimum,
+              maximum=_SONG_NUMBER.maximum, doc="song slot"),
+        Param("notes", NOTES, required=True, doc='e.g. ["C4 250ms", "rest 125ms", "G4 500ms"]'),
+    ),
+    sends=(140,),
+)  # fmt: skip
+class Song(Action):
+    """Define a song (Song 140 ``[140][number][length][note][64ths]...``)."""
+
+    def update(self) -> Status:
+        notes = [Note(n, d) for n, d in self.value("notes")]
+        self.send(oi.song(int(self.value("number")), notes))
+        return _OK
+
+
+@declare(
+    "play",
+    kind="action",
+    params=(
+        Param("number", INT, default=0, minimum=_SONG_NUMBER.minimum,
+              maximum=_SONG_NUMBER.maximum),
+    ),
+    sends=(141,),
+    primary="number",
+)  # fmt: skip
+class Play(Action):
+    """Play a defined song (Play 141 ``[141][number]``)."""
+
+    def update(self) -> Status:
+        self.send(oi.play(int(self.value("number"))))
+        return _OK
+
+
+# --------------------------------------------------------------------------- time, log, data
+
+
+@declare(
+    "wait",
+    kind="action",
+    params=(Param("duration", DURATION, required=True, minimum=0),),
+    primary="duration",
+)
+class Wait(Action):
+    """RUNNING for a duration of mission time, then SUCCESS."""
+
+    def start(self) -> None:
+        self._start_time = self.snapshot.time
+
+    def update(self) -> Status:
+        elapsed = self.snapshot.time - self._start_time
+        return _OK if elapsed >= float(self.value("duration")) - 1e-9 else _RUN
+
+
+@declare(
+    "log",
+    kind="action",
+    params=(
+        Param("message", STR, required=True),
+        Param("level", enum("debug", "info", "warning", "error"), default="info"),
+    ),
+    primary="message",
+)
+class Log(Action):
+    """Write a message to the mission log (logger ``roomba_bt.mission``)."""
+
+    def update(self) -> Status:
+        level = getattr(logging, str(self.value("level")).upper())
+        log.log(level, "%s", self.value("message"))
+        self.feedback_message = str(self.value("message"))
+        return _OK
+
+
+@declare(
+    "set",
+    kind="action",
+    params=(
+        Param("key", STR, required=True, from_blackboard=False, doc="a declared key"),
+        Param("value", ANY, required=True, doc="typed by the key's declaration"),
+    ),
+    writes_keys=("key",),
+)
+class SetKey(Action):
+    """Write a value to a blackboard key."""
+
+    def update(self) -> Status:
+        write_key(str(self.value("key")), self.value("value"))
+        return _OK
+
+
+@declare(
+    "mark",
+    kind="action",
+    params=(Param("key", STR, required=True, from_blackboard=False,
+                  doc="a key declared with type mark"),),
+    reads=(43, 44),
+    writes_keys=("key",),
+    primary="key",
+)  # fmt: skip
+class Mark(Action):
+    """Remember the odometry now, for ``odometry: {since: key, ...}``."""
+
+    def update(self) -> Status:
+        write_key(str(self.value("key")), self.snapshot.odometry)
+        return _OK
+
+
+ACTIONS: tuple[type[Action], ...] = (
+    Mode, Drive, Turn, Stop, Clean, Spot, MaxClean, SeekDock, Motors, Vacuum, Leds, Song,
+    Play, Wait, Log, SetKey, Mark,
+)  # fmt: skip

@@ -1,0 +1,388 @@
+"""The condition library: SUCCESS or FAILURE from this tick's sensor frame, never RUNNING.
+
+Each condition reads only the packets it declares (so the stream asks for exactly those) and
+decodes them through the typed views of :class:`~roomba_bt.oi.frames.SensorFrame` (packet 7
+bit 0 is bump RIGHT, bit 1 bump LEFT; packet 14 bit 3 right wheel, bit 4 left wheel, ...).
+"""
+
+from __future__ import annotations
+
+import math
+import operator
+import re
+from collections.abc import Callable, Mapping
+from typing import Any
+
+from roomba_bt.behaviours.declare import Condition, Param, declare, read_key
+from roomba_bt.behaviours.units import (
+    ANGLE,
+    ANY,
+    DISTANCE,
+    INT,
+    PERCENT,
+    STR,
+    UnitError,
+    ValueType,
+    enum,
+)
+from roomba_bt.oi.bits import BUTTON_NAMES, LIGHT_BUMPER_NAMES, ChargingState, Stasis
+from roomba_bt.oi.ir import REMOTE_BUTTONS
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.packets import PACKETS, PACKETS_BY_NAME
+from roomba_bt.robot.interface import Odometry, Snapshot
+
+OPERATORS: dict[str, Callable[[Any, Any], bool]] = {
+    "<": operator.lt,
+    "<=": operator.le,
+    "==": operator.eq,
+    "!=": operator.ne,
+    ">=": operator.ge,
+    ">": operator.gt,
+}
+_SIDES = enum("left", "right", "any")
+
+
+@declare("bump", kind="condition", params=(Param("side", _SIDES, default="any"),), reads=(7,),
+         primary="side")  # fmt: skip
+class Bump(Condition):
+    """A bumper is pressed (packet 7: bit 0 right, bit 1 left)."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        bumps = snapshot.frame.bumps
+        side = self.value("side")
+        return bumps.any_bump if side == "any" else getattr(bumps, f"bump_{side}")
+
+
+@declare("wheel_drop", kind="condition", params=(Param("side", _SIDES, default="any"),),
+         reads=(7,), primary="side")  # fmt: skip
+class WheelDrop(Condition):
+    """A wheel has dropped (packet 7: bit 2 right, bit 3 left)."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        bumps = snapshot.frame.bumps
+        side = self.value("side")
+        return bumps.any_wheel_drop if side == "any" else getattr(bumps, f"wheel_drop_{side}")
+
+
+_CLIFFS = {"left": 9, "front_left": 10, "front_right": 11, "right": 12}
+
+
+def _cliff_reads(params: Mapping[str, Any]) -> tuple[int, ...]:
+    sensor = params.get("sensor", "any")
+    return tuple(_CLIFFS.values()) if sensor == "any" else (_CLIFFS[sensor],)
+
+
+@declare(
+    "cliff",
+    kind="condition",
+    params=(Param("sensor", enum(*_CLIFFS, "any"), default="any", from_blackboard=False),),
+    reads=_cliff_reads,
+    primary="sensor",
+)
+class Cliff(Condition):
+    """A cliff sensor sees a drop (packets 9-12), one sensor or any."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        sensor = self.value("sensor")
+        if sensor == "any":
+            return snapshot.frame.any_cliff
+        return bool(snapshot.frame[_CLIFFS[sensor]])
+
+
+@declare("wall", kind="condition", reads=(8,))
+class Wall(Condition):
+    """The right-side wall sensor sees a wall (packet 8)."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        return snapshot.frame.wall
+
+
+@declare("virtual_wall", kind="condition", reads=(13,))
+class VirtualWall(Condition):
+    """A virtual wall beam is detected (packet 13)."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        return snapshot.frame.virtual_wall
+
+
+_LIGHT_SIGNALS = dict(zip(LIGHT_BUMPER_NAMES, range(46, 52), strict=True))
+
+
+def _light_reads(params: Mapping[str, Any]) -> tuple[int, ...]:
+    sensor = params.get("sensor", "any")
+    if params.get("threshold") is None:
+        return (45,)
+    return tuple(_LIGHT_SIGNALS.values()) if sensor == "any" else (_LIGHT_SIGNALS[sensor],)
+
+
+@declare(
+    "light_bumper",
+    kind="condition",
+    params=(
+        Param("sensor", enum(*LIGHT_BUMPER_NAMES, "any"), default="any", from_blackboard=False),
+        Param("threshold", INT, minimum=0, maximum=PACKETS[46].maximum, from_blackboard=False,
+              doc="compare the signal (46-51) instead of the robot's own detection bit (45)"),
+    ),
+    reads=_light_reads,
+    primary="sensor",
+)  # fmt: skip
+class LightBumper(Condition):
+    """An obstacle near a light-bumper sensor: its bit (packet 45), or its signal (46-51)
+    at or above a threshold."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        sensor, threshold = self.value("sensor"), self.value("threshold")
+        frame = snapshot.frame
+        if threshold is None:
+            bumper = frame.light_bumper
+            return bumper.any if sensor == "any" else bool(getattr(bumper, sensor))
+        ids = _light_reads(self.params)
+        return any(frame[pid] >= threshold for pid in ids)
+
+
+_RECEIVERS = {"omni": 17, "left": 52, "right": 53}
+_IR_WHAT = ("red_buoy", "green_buoy", "force_field", "virtual_wall", "any_buoy", "dock",
+            "remote", "anything")  # fmt: skip
+
+
+@declare(
+    "ir",
+    kind="condition",
+    params=(
+        Param("sees", enum(*_IR_WHAT), default="anything"),
+        Param("receiver", enum(*_RECEIVERS), default="omni", from_blackboard=False),
+        Param("button", enum(*sorted(set(REMOTE_BUTTONS.values()))),
+              doc="with sees: remote, this button only"),
+    ),
+    reads=lambda p: (_RECEIVERS[p.get("receiver", "omni")],),
+    primary="sees",
+)  # fmt: skip
+class InfraRed(Condition):
+    """An IR character on the omni (17), left (52) or right (53) receiver: a dock buoy, the
+    force field, a virtual wall, a remote button."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        from roomba_bt.oi.ir import IR_CHARACTERS
+
+        char = IR_CHARACTERS[snapshot.frame[_RECEIVERS[self.value("receiver")]] & 0xFF]
+        sees = self.value("sees")
+        if sees == "anything":
+            return char.code != 0
+        if sees == "dock":
+            return char.from_dock
+        if sees == "remote":
+            button = self.value("button")
+            return char.remote_button is not None and button in (None, char.remote_button)
+        return bool(getattr(char, sees))
+
+
+_CHARGING: dict[str, Callable[[ChargingState], bool]] = {
+    "charging": lambda s: s.is_charging,
+    "not_charging": lambda s: s is ChargingState.NOT_CHARGING,
+    "reconditioning": lambda s: s is ChargingState.RECONDITIONING,
+    "full_charging": lambda s: s is ChargingState.FULL_CHARGING,
+    "trickle_charging": lambda s: s is ChargingState.TRICKLE_CHARGING,
+    "waiting": lambda s: s is ChargingState.WAITING,
+    "fault": lambda s: s is ChargingState.FAULT,
+}
+
+
+@declare("charging", kind="condition",
+         params=(Param("state", enum(*_CHARGING), default="charging"),), reads=(21,),
+         primary="state")  # fmt: skip
+class Charging(Condition):
+    """The charging state (packet 21) is the one named (``charging``: any charging state)."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        return bool(_CHARGING[self.value("state")](snapshot.frame.charging_state))
+
+
+@declare("on_home_base", kind="condition", reads=(34,))
+class OnHomeBase(Condition):
+    """The home base powers the robot (packet 34, bit 1)."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        return snapshot.frame.charging_sources.home_base
+
+
+def _battery_constraints(params: Mapping[str, Any]) -> list[str]:
+    if ("above" in params) == ("below" in params):
+        return ["give exactly one of above, below"]
+    return []
+
+
+@declare(
+    "battery",
+    kind="condition",
+    params=(
+        Param("above", PERCENT, minimum=0, maximum=100),
+        Param("below", PERCENT, minimum=0, maximum=100),
+    ),
+    reads=(25, 26),
+    constraints=_battery_constraints,
+)
+class Battery(Condition):
+    """Battery charge (25) as a percent of capacity (26) above or below a level."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        percent = snapshot.frame.battery_percent
+        above = self.value("above")
+        if above is not None:
+            return percent > float(above)
+        return percent < self.number("below")
+
+
+@declare("oi_mode", kind="condition",
+         params=(Param("is", enum("off", "passive", "safe", "full"), required=True),),
+         reads=(35,), primary="is")  # fmt: skip
+class OIModeIs(Condition):
+    """The OI mode (packet 35, as reconciled by the robot layer) is the one named."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        return snapshot.mode is OIMode[str(self.value("is")).upper()]
+
+
+def _odometry_constraints(params: Mapping[str, Any]) -> list[str]:
+    if ("distance" in params) == ("angle" in params):
+        return ["give exactly one of distance, angle"]
+    return []
+
+
+@declare(
+    "odometry",
+    kind="condition",
+    params=(
+        Param("since", STR, from_blackboard=False, doc="a mark key; default: the start"),
+        Param("distance", DISTANCE, minimum=0, doc="at least this path length"),
+        Param("angle", ANGLE, minimum=0, doc="at least this heading change"),
+    ),
+    reads=(43, 44),
+    reads_keys=("since",),
+    constraints=_odometry_constraints,
+)  # fmt: skip
+class OdometrySince(Condition):
+    """The robot has travelled a distance, or turned an angle, since a mark (or the start)."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        since = self.value("since")
+        mark = read_key(since) if since else None
+        base = mark if isinstance(mark, Odometry) else Odometry()
+        now = snapshot.odometry
+        distance = self.value("distance")
+        if distance is not None:
+            return abs(now.distance_mm - base.distance_mm) >= float(distance)
+        return abs(math.degrees(now.angle_rad - base.angle_rad)) >= self.number("angle")
+
+
+_STASIS = {"moving": Stasis.FORWARD_PROGRESS, "stuck": Stasis.NO_PROGRESS, "dirty": Stasis.DIRTY}
+
+
+@declare("stasis", kind="condition",
+         params=(Param("state", enum(*_STASIS), default="stuck"),), reads=(58,),
+         primary="state")  # fmt: skip
+class StasisIs(Condition):
+    """The stasis caster (58) reports forward progress, none, or (600 series) too dirty."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        return snapshot.frame.stasis is _STASIS[self.value("state")]
+
+
+_MOTORS = ("left_wheel", "right_wheel", "main_brush", "side_brush", "any")
+
+
+@declare("overcurrent", kind="condition",
+         params=(Param("motor", enum(*_MOTORS), default="any"),), reads=(14,),
+         primary="motor")  # fmt: skip
+class Overcurrent(Condition):
+    """A motor draws too much current (packet 14: 0 side brush, 2 main, 3 right, 4 left)."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        over = snapshot.frame.overcurrents
+        motor = self.value("motor")
+        return over.any if motor == "any" else bool(getattr(over, motor))
+
+
+@declare("button", kind="condition",
+         params=(Param("name", enum(*BUTTON_NAMES, "any"), default="any"),), reads=(18,),
+         primary="name")  # fmt: skip
+class Button(Condition):
+    """A button on the robot is pressed (packet 18)."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        buttons = snapshot.frame.buttons
+        name = self.value("name")
+        return buttons.any if name == "any" else bool(getattr(buttons, name))
+
+
+_COMPARISON = re.compile(r"^\s*([a-z_][a-z0-9_]*)\s*(<=|>=|==|!=|<|>)\s*(-?\d+(?:\.\d+)?)\s*$")
+
+
+def _parse_comparison(value: object) -> tuple[int, str, float]:
+    """The whole expression grammar: ``packet_name op number``; never ``eval``."""
+    match = _COMPARISON.match(value) if isinstance(value, str) else None
+    if match is None:
+        raise UnitError(
+            f"expected a comparison such as 'wall_signal > 100' (packet op number), got {value!r}"
+        )
+    name, op, number = match.groups()
+    spec = PACKETS_BY_NAME.get(name)
+    if spec is None:
+        from roomba_bt.behaviours.units import closest
+
+        raise UnitError(f"unknown sensor packet {name!r}{closest(name, list(PACKETS_BY_NAME))}")
+    return spec.id, op, float(number)
+
+
+COMPARISON = ValueType(
+    "comparison",
+    _parse_comparison,
+    json_schema=(("type", "string"), ("description", "packet_name op number")),
+)
+
+
+def _sensor_reads(params: Mapping[str, Any]) -> tuple[int, ...]:
+    test = params.get("test")
+    return (test[0],) if isinstance(test, tuple) else ()
+
+
+@declare(
+    "sensor",
+    kind="condition",
+    params=(Param("test", COMPARISON, required=True, from_blackboard=False,
+                  doc="'packet_name op number', e.g. 'wall_signal > 100'"),),
+    reads=_sensor_reads,
+    primary="test",
+)  # fmt: skip
+class Sensor(Condition):
+    """Compare any sensor packet's raw value, by name: ``sensor: wall_signal > 100``."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        pid, op, number = self.value("test")
+        return OPERATORS[op](snapshot.frame[pid], number)
+
+
+@declare(
+    "check",
+    kind="condition",
+    params=(
+        Param("key", STR, required=True, from_blackboard=False),
+        Param("op", enum(*OPERATORS), default="=="),
+        Param("value", ANY, required=True, doc="typed by the key's declaration"),
+    ),
+    reads_keys=("key",),
+)
+class CheckKey(Condition):
+    """Compare a blackboard key with a value."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        current = read_key(str(self.value("key")))
+        try:
+            return bool(OPERATORS[self.value("op")](current, self.value("value")))
+        except TypeError:
+            return False
+
+
+CONDITIONS: tuple[type[Condition], ...] = (
+    Bump, WheelDrop, Cliff, Wall, VirtualWall, LightBumper, InfraRed, Charging, OnHomeBase,
+    Battery, OIModeIs, OdometrySince, StasisIs, Overcurrent, Button, Sensor, CheckKey,
+)  # fmt: skip

@@ -1,0 +1,331 @@
+"""How a behaviour declares itself, once: parameters, packets read, commands sent, mode.
+
+One :class:`Declaration` per behaviour feeds everything else: the mission validator (names,
+types, units, ranges, required parameters, the static mode check), ``roomba-bt behaviours``,
+the JSON Schema, and the stream request (``CompiledMission.packets``)::
+
+    @declare(
+        "bump",
+        kind="condition",
+        params=(Param("side", enum("left", "right", "any"), default="any"),),
+        reads=(7,),
+    )
+    class Bump(Condition):
+        def check(self, snapshot: Snapshot) -> bool: ...
+
+The modes a behaviour needs are not written by hand: they are the intersection of the
+``modes`` of the opcodes it declares in ``sends`` (read from :mod:`roomba_bt.oi.opcodes`), so
+Drive (137) needs Safe or Full because the table says so.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any, Literal, TypeVar
+
+import py_trees
+
+from roomba_bt.behaviours.units import UnitError, ValueType
+from roomba_bt.oi.encode import Command
+from roomba_bt.oi.modes import ALL_MODES, OIMode
+from roomba_bt.oi.opcodes import COMMANDS
+from roomba_bt.oi.packets import PACKETS
+from roomba_bt.robot.interface import RobotHandle, Snapshot
+
+#: The blackboard key the runtime mirrors the snapshot under (for plugins that prefer it).
+SNAPSHOT_KEY = "/roomba/snapshot"
+#: Mission blackboard keys live under this namespace: ``leg`` is ``/mission/leg``.
+MISSION_NAMESPACE = "/mission/"
+
+Kind = Literal["action", "condition"]
+_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
+
+
+class DeclarationError(ValueError):
+    """A behaviour that declares itself wrongly (a plugin author's mistake)."""
+
+
+@dataclass(frozen=True, slots=True)
+class Param:
+    """One parameter: its type (and so its unit), range in that unit, default, and doc."""
+
+    name: str
+    type: ValueType
+    default: Any = None
+    required: bool = False
+    minimum: float | None = None
+    maximum: float | None = None
+    doc: str = ""
+    #: may the value be ``@key`` (read from the blackboard at run time)?
+    from_blackboard: bool = True
+
+    def check_range(self, value: Any) -> str | None:
+        """An error message if ``value`` is outside the range, else None."""
+        if not isinstance(value, int | float) or isinstance(value, bool):
+            return None
+        lo, hi = self.minimum, self.maximum
+        if (lo is not None and value < lo) or (hi is not None and value > hi):
+            unit = f" {self.type.unit}" if self.type.unit else ""
+            shown = f"{value:g}{unit}"
+            return f"{self.name} {shown} is out of range: allowed {_bound(lo)}..{_bound(hi)}{unit}"
+        return None
+
+    def describe(self) -> str:
+        parts = [self.type.describe()]
+        if self.minimum is not None or self.maximum is not None:
+            parts.append(f"{_bound(self.minimum)}..{_bound(self.maximum)}")
+        if self.required:
+            parts.append("required")
+        elif self.default is not None:
+            parts.append(f"default {self.default}")
+        return ", ".join(parts)
+
+
+def _bound(value: float | None) -> str:
+    return "" if value is None else f"{value:g}"
+
+
+@dataclass(frozen=True, slots=True)
+class BlackboardRef:
+    """A parameter value read from the blackboard when the behaviour starts: ``@leg`` or
+    ``@waypoint.x`` (a field of a record)."""
+
+    key: str
+    field: str | None = None
+
+    def __str__(self) -> str:
+        return f"@{self.key}" + (f".{self.field}" if self.field else "")
+
+
+PacketsOf = Callable[[Mapping[str, Any]], tuple[int, ...]]
+ModeOf = Callable[[Mapping[str, Any]], "OIMode | None"]
+
+
+@dataclass(frozen=True, slots=True)
+class Declaration:
+    """Everything the rest of the system knows about a behaviour without running it."""
+
+    name: str
+    kind: Kind
+    cls: type[RobotBehaviour]
+    params: tuple[Param, ...] = ()
+    reads: tuple[int, ...] | PacketsOf = ()
+    sends: tuple[int, ...] = ()
+    leads_to: OIMode | ModeOf | None = None
+    doc: str = ""
+    #: the parameter a scalar value stands for: ``wait: 2s`` is ``wait: {duration: 2s}``
+    primary: str | None = None
+    #: where it came from: "builtin", an entry point, or a file path
+    origin: str = "builtin"
+    #: cross-parameter rules: returns error messages for a set of given parameters
+    constraints: Callable[[Mapping[str, Any]], list[str]] | None = None
+    writes_keys: tuple[str, ...] = field(default=())  # params naming keys it writes
+    reads_keys: tuple[str, ...] = field(default=())  # params naming keys it reads
+
+    @property
+    def defaults(self) -> dict[str, Any]:
+        """Default values parsed into canonical units."""
+        return {
+            p.name: p.type.parse(p.default)
+            for p in self.params
+            if p.default is not None and not isinstance(p.default, BlackboardRef)
+        }
+
+    @property
+    def modes(self) -> frozenset[OIMode]:
+        """Modes in which every command it sends is accepted (all modes if it sends none)."""
+        modes = ALL_MODES
+        for opcode in self.sends:
+            modes = modes & COMMANDS[opcode].modes
+        return modes
+
+    @property
+    def is_actuator(self) -> bool:
+        return any(COMMANDS[op].is_actuator for op in self.sends)
+
+    def packets(self, params: Mapping[str, Any]) -> tuple[int, ...]:
+        return self.reads(params) if callable(self.reads) else self.reads
+
+    def mode_after(self, params: Mapping[str, Any]) -> OIMode | None:
+        return self.leads_to(params) if callable(self.leads_to) else self.leads_to
+
+    def param(self, name: str) -> Param | None:
+        for p in self.params:
+            if p.name == name:
+                return p
+        return None
+
+    def validate(self) -> None:
+        """Raise :class:`DeclarationError` naming what is wrong."""
+        if not _NAME.match(self.name):
+            raise DeclarationError(f"name {self.name!r} is not snake_case ([a-z][a-z0-9_]*)")
+        if self.kind not in ("action", "condition"):
+            raise DeclarationError(f"kind must be 'action' or 'condition', got {self.kind!r}")
+        if not (isinstance(self.cls, type) and issubclass(self.cls, RobotBehaviour)):
+            raise DeclarationError(f"{self.cls!r} is not a RobotBehaviour subclass")
+        seen: set[str] = set()
+        for p in self.params:
+            if not isinstance(p, Param):
+                raise DeclarationError(f"params must be Param(...) objects, got {p!r}")
+            if not isinstance(p.type, ValueType):
+                raise DeclarationError(f"parameter {p.name!r}: type must be a ValueType")
+            if p.name in seen:
+                raise DeclarationError(f"parameter {p.name!r} declared twice")
+            seen.add(p.name)
+            if p.default is not None and not isinstance(p.default, BlackboardRef):
+                try:
+                    p.type.parse(p.default)
+                except UnitError as exc:
+                    raise DeclarationError(f"default of {p.name!r}: {exc}") from None
+        if not callable(self.reads):
+            bad = [pid for pid in self.reads if pid not in PACKETS]
+            if bad:
+                raise DeclarationError(f"reads unknown sensor packets {bad} (single ids 7-58)")
+        bad = [op for op in self.sends if op not in COMMANDS]
+        if bad:
+            raise DeclarationError(f"sends unknown opcodes {bad}")
+        if self.primary is not None and self.primary not in seen:
+            raise DeclarationError(f"primary parameter {self.primary!r} is not declared")
+
+
+B = TypeVar("B", bound="type[RobotBehaviour]")
+
+
+def declare(
+    name: str,
+    *,
+    kind: Kind,
+    params: tuple[Param, ...] = (),
+    reads: tuple[int, ...] | PacketsOf = (),
+    sends: tuple[int, ...] = (),
+    leads_to: OIMode | ModeOf | None = None,
+    primary: str | None = None,
+    writes_keys: tuple[str, ...] = (),
+    reads_keys: tuple[str, ...] = (),
+    constraints: Callable[[Mapping[str, Any]], list[str]] | None = None,
+) -> Callable[[B], B]:
+    """Class decorator: attach the :class:`Declaration` as ``cls.declaration``; the doc is
+    the class docstring's first paragraph."""
+
+    def attach(cls: B) -> B:
+        doc = (cls.__doc__ or "").strip().split("\n\n")[0].replace("\n", " ")
+        cls.declaration = Declaration(
+            name, kind, cls, params, reads, sends, leads_to, doc, primary,
+            constraints=constraints, writes_keys=writes_keys, reads_keys=reads_keys,
+        )  # fmt: skip
+        return cls
+
+    return attach
+
+
+class RobotBehaviour(py_trees.behaviour.Behaviour):
+    """Base of every leaf: configuration in ``__init__``, the robot in ``setup(robot=...)``.
+
+    ``params`` are the validated values in canonical units (``velocity`` in mm/s, ``duration``
+    in s), or :class:`BlackboardRef` for ``@key`` values, resolved by :meth:`value` when the
+    behaviour starts. Subclasses override :meth:`update` (and :meth:`start` for what must
+    happen once when the behaviour starts), never block and never touch a port.
+    """
+
+    declaration: Declaration
+    _defaults: dict[str, Any]
+
+    def __init__(self, name: str, params: Mapping[str, Any] | None = None) -> None:
+        super().__init__(name=name)
+        cls = type(self)
+        defaults = cls.__dict__.get("_defaults")
+        if defaults is None:  # parsed once per class, not once per node
+            defaults = cls.declaration.defaults
+            cls._defaults = defaults
+        values = dict(defaults)
+        values.update(params or {})
+        self.params: dict[str, Any] = values
+        self.robot: RobotHandle | None = None
+        self._resolved: dict[str, Any] = values
+
+    def setup(self, **kwargs: Any) -> None:
+        robot = kwargs.get("robot")
+        if robot is not None:
+            self.robot = robot
+
+    @property
+    def snapshot(self) -> Snapshot:
+        robot = self.robot
+        if robot is None:
+            raise RuntimeError(
+                f"behaviour {self.name!r} was ticked before setup(robot=...): call "
+                "CompiledMission.setup(robot) first"
+            )
+        return robot.snapshot
+
+    def send(self, command: Command) -> None:
+        robot = self.robot
+        if robot is None:
+            raise RuntimeError(f"behaviour {self.name!r} has no robot: call setup(robot=...)")
+        robot.outbox.send(command)
+
+    def value(self, name: str) -> Any:
+        """The parameter ``name`` for this run (blackboard references resolved at start)."""
+        return self._resolved.get(name)
+
+    def number(self, name: str) -> float:
+        """A numeric parameter as a float (for comparisons)."""
+        return float(self._resolved[name])
+
+    def initialise(self) -> None:
+        refs = {k: v for k, v in self.params.items() if isinstance(v, BlackboardRef)}
+        if refs:
+            resolved = dict(self.params)
+            decl = type(self).declaration
+            for pname, ref in refs.items():
+                raw = read_key(ref.key)
+                if ref.field is not None:
+                    raw = raw.get(ref.field) if isinstance(raw, Mapping) else None
+                param = decl.param(pname)
+                if param is not None and isinstance(raw, str):
+                    raw = param.type.parse(raw)
+                resolved[pname] = raw
+            self._resolved = resolved
+        self.start()
+
+    def start(self) -> None:
+        """Called once each time the behaviour starts (after ``@key`` values are read)."""
+
+
+def read_key(key: str) -> Any:
+    """A mission blackboard key's value (None if never written)."""
+    storage = py_trees.blackboard.Blackboard.storage
+    return storage.get(MISSION_NAMESPACE + key)
+
+
+def write_key(key: str, value: Any) -> None:
+    py_trees.blackboard.Blackboard.storage[MISSION_NAMESPACE + key] = value
+
+
+class Action(RobotBehaviour):
+    """An action: puts commands in the outbox. Motion started must stop on every ending."""
+
+    #: True for actions that start motion: :meth:`terminate` then queues a halt.
+    moves = False
+
+    def terminate(self, new_status: py_trees.common.Status) -> None:
+        if self.moves and self.robot is not None and self._started_motion:
+            from roomba_bt.oi.encode import halt
+
+            self.robot.outbox.send(halt())
+        self._started_motion = False
+
+    _started_motion = False
+
+
+class Condition(RobotBehaviour):
+    """A condition: SUCCESS or FAILURE from this tick's frame, never RUNNING."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        raise NotImplementedError
+
+    def update(self) -> py_trees.common.Status:
+        ok = self.check(self.snapshot)
+        return py_trees.common.Status.SUCCESS if ok else py_trees.common.Status.FAILURE

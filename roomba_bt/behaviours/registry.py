@@ -1,0 +1,228 @@
+"""One registry of behaviours: the built-ins and the plugins go through the same door.
+
+Plugins are distributions that declare an entry point in the group ``roomba_bt.behaviours``::
+
+    [project.entry-points."roomba_bt.behaviours"]
+    wall_follow = "roomba_bt_wallfollow:WallFollow"
+
+The value may name a behaviour class, a sequence of them, or a module (every declared
+behaviour class defined in it). Entry points are read with :mod:`importlib.metadata` and
+imported lazily: the first time a mission, ``validate``, ``behaviours`` or ``schema`` asks
+the registry for its contents, never at ``import roomba_bt``. A plugin that fails to import,
+or declares itself wrongly, becomes a :class:`PluginError` naming the plugin and the cause;
+every other behaviour still loads. A mission may also name a module by path
+(``plugins: [./my_behaviour.py]``): :meth:`Registry.with_file` loads it into a copy.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import inspect
+import sys
+import types
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, replace
+from importlib.metadata import EntryPoint, entry_points
+from pathlib import Path
+
+from roomba_bt.behaviours.declare import Declaration, DeclarationError, RobotBehaviour
+
+ENTRY_POINT_GROUP = "roomba_bt.behaviours"
+
+#: Words of the language itself; a behaviour may not take them.
+RESERVED: frozenset[str] = frozenset(
+    {
+        "sequence", "reactive_sequence", "selector", "fallback", "reactive_fallback",
+        "reactive_selector", "parallel", "retry", "repeat", "timeout", "inverter",
+        "force_success", "force_failure", "oneshot", "delay", "for_each", "subtree",
+        "while", "until", "name", "include", "tree",
+    }
+)  # fmt: skip
+
+
+@dataclass(frozen=True, slots=True)
+class PluginError:
+    """A plugin that could not be loaded: which one, and why."""
+
+    plugin: str
+    cause: str
+
+    def __str__(self) -> str:
+        return f"plugin {self.plugin}: {self.cause}"
+
+
+class Registry:
+    """Behaviour name -> :class:`Declaration`."""
+
+    def __init__(self, *, entry_point_group: str | None = ENTRY_POINT_GROUP) -> None:
+        self._declarations: dict[str, Declaration] = {}
+        self._errors: list[PluginError] = []
+        self._group = entry_point_group
+        self._loaded = entry_point_group is None
+
+    # ------------------------------------------------------------------ registration
+    def register(self, cls: type[RobotBehaviour], origin: str = "builtin") -> Declaration:
+        """Register one behaviour class; raises :class:`DeclarationError` if it declares
+        itself wrongly or takes a name already taken."""
+        declaration = getattr(cls, "declaration", None)
+        if not isinstance(declaration, Declaration) or declaration.cls is not cls:
+            raise DeclarationError(
+                f"{_qualname(cls)} has no declaration of its own: decorate it with "
+                "@declare(name, kind=..., params=...)"
+            )
+        declaration.validate()
+        if declaration.name in RESERVED:
+            raise DeclarationError(f"name {declaration.name!r} is a word of the mission language")
+        existing = self._declarations.get(declaration.name)
+        if existing is not None and existing.cls is not cls:
+            raise DeclarationError(
+                f"name {declaration.name!r} is already taken by {_qualname(existing.cls)} "
+                f"({existing.origin})"
+            )
+        declaration = replace(declaration, origin=origin)
+        self._declarations[declaration.name] = declaration
+        return declaration
+
+    def register_provider(self, provider: object, origin: str) -> list[Declaration]:
+        """Register what an entry point or a plugin file provides (class, sequence of
+        classes, or module); a wrong declaration becomes a recorded :class:`PluginError`."""
+        try:
+            classes = list(_classes_of(provider))
+            if not classes:
+                raise DeclarationError("it provides no behaviour class (decorated with @declare)")
+            return [self.register(cls, origin) for cls in classes]
+        except DeclarationError as exc:
+            self._errors.append(PluginError(origin, f"declares itself wrongly: {exc}"))
+            return []
+
+    # ------------------------------------------------------------------ lazy plugin loading
+    def _ensure_loaded(self) -> None:
+        if self._loaded:
+            return
+        self._loaded = True
+        for ep in sorted(entry_points(group=self._group or ""), key=lambda e: e.name):
+            self.load_entry_point(ep)
+
+    def load_entry_point(self, ep: EntryPoint) -> list[Declaration]:
+        origin = f"{ep.name!r} ({ep.value}" + (f", from {ep.dist.name}" if ep.dist else "") + ")"
+        try:
+            provider = ep.load()
+        except Exception as exc:  # any import-time failure of third-party code
+            self._errors.append(PluginError(origin, f"failed to import: {_cause(exc)}"))
+            return []
+        return self.register_provider(provider, origin)
+
+    def with_file(self, path: Path) -> tuple[Registry, PluginError | None]:
+        """A copy of this registry plus the behaviours of the module at ``path``."""
+        copy = self.copy()
+        origin = str(path)
+        module_name = "roomba_bt_mission_plugin_" + "".join(
+            c if c.isalnum() else "_" for c in str(path.resolve())
+        )
+        module = sys.modules.get(module_name)
+        if module is None:
+            try:
+                spec = importlib.util.spec_from_file_location(module_name, path)
+                if spec is None or spec.loader is None:
+                    raise ImportError(f"cannot load {path} as a Python module")
+                module = importlib.util.module_from_spec(spec)
+                sys.modules[module_name] = module
+                spec.loader.exec_module(module)
+            except Exception as exc:
+                sys.modules.pop(module_name, None)
+                return copy, PluginError(origin, f"failed to import: {_cause(exc)}")
+        before = len(copy._errors)
+        copy.register_provider(module, origin)
+        error = copy._errors[before] if len(copy._errors) > before else None
+        return copy, error
+
+    def copy(self) -> Registry:
+        self._ensure_loaded()
+        other = Registry(entry_point_group=None)
+        other._declarations = dict(self._declarations)
+        other._errors = list(self._errors)
+        return other
+
+    # ------------------------------------------------------------------ queries
+    def get(self, name: str) -> Declaration | None:
+        found = self._declarations.get(name)
+        if found is None:
+            self._ensure_loaded()
+            found = self._declarations.get(name)
+        return found
+
+    def __contains__(self, name: object) -> bool:
+        return isinstance(name, str) and self.get(name) is not None
+
+    def names(self) -> list[str]:
+        self._ensure_loaded()
+        return sorted(self._declarations)
+
+    def __iter__(self) -> Iterator[Declaration]:
+        self._ensure_loaded()
+        return iter([self._declarations[n] for n in sorted(self._declarations)])
+
+    @property
+    def errors(self) -> list[PluginError]:
+        self._ensure_loaded()
+        return list(self._errors)
+
+
+def _qualname(cls: object) -> str:
+    return f"{getattr(cls, '__module__', '?')}.{getattr(cls, '__qualname__', repr(cls))}"
+
+
+def _cause(exc: BaseException) -> str:
+    return f"{type(exc).__name__}: {exc}"
+
+
+def _classes_of(provider: object) -> Iterable[type[RobotBehaviour]]:
+    if isinstance(provider, types.ModuleType):
+        return [
+            obj
+            for _, obj in inspect.getmembers(provider, inspect.isclass)
+            if issubclass(obj, RobotBehaviour)
+            and obj.__module__ == provider.__name__
+            and "declaration" in obj.__dict__
+        ]
+    if isinstance(provider, type):
+        if not issubclass(provider, RobotBehaviour):
+            raise DeclarationError(f"{_qualname(provider)} is not a RobotBehaviour subclass")
+        return [provider]
+    if isinstance(provider, list | tuple):
+        out = []
+        for item in provider:
+            if not (isinstance(item, type) and issubclass(item, RobotBehaviour)):
+                raise DeclarationError(f"{item!r} is not a RobotBehaviour subclass")
+            out.append(item)
+        return out
+    raise DeclarationError(
+        f"the entry point names {provider!r}: expected a behaviour class, a list of them, "
+        "or a module"
+    )
+
+
+def builtin_registry() -> Registry:
+    """A registry with only the built-in behaviours (no entry points)."""
+    from roomba_bt.behaviours.actions import ACTIONS
+    from roomba_bt.behaviours.conditions import CONDITIONS
+
+    registry = Registry(entry_point_group=None)
+    for cls in (*ACTIONS, *CONDITIONS):
+        registry.register(cls, "builtin")
+    return registry
+
+
+_DEFAULT: Registry | None = None
+
+
+def default_registry() -> Registry:
+    """The process-wide registry: built-ins now, entry-point plugins on first use."""
+    global _DEFAULT
+    if _DEFAULT is None:
+        registry = builtin_registry()
+        registry._group = ENTRY_POINT_GROUP
+        registry._loaded = False
+        _DEFAULT = registry
+    return _DEFAULT

@@ -1,0 +1,247 @@
+"""Values written as people say them: ``500ms``, ``30s``, ``200 mm/s``, ``1.5 m``, ``90deg``.
+
+Each value type parses a YAML scalar into one canonical unit, so every behaviour computes in
+the same units and every error names what was allowed::
+
+    duration  -> seconds   500ms, 30s, 2min, 1h, 0
+    speed     -> mm/s      200 mm/s, 0.2 m/s, 20cm/s, 0
+    distance  -> mm        300 mm, 30cm, 1.5 m, 0
+    angle     -> degrees   90deg, 90°, 1.57rad, 0.25turn, 0
+    percent   -> percent   20%, 20 %
+
+A bare number is refused for a dimensioned type (except 0): ``speed: 200`` could be mm/s or
+m/s, and a robot that drives 1000 times too fast is the error this module exists to prevent.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+_NUMBER = r"[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?"
+_QUANTITY = re.compile(rf"^\s*({_NUMBER})\s*([A-Za-z°%/]*)\s*$")
+
+#: unit -> factor to the canonical unit, per dimension.
+UNITS: dict[str, dict[str, float]] = {
+    "duration": {"ms": 0.001, "s": 1.0, "sec": 1.0, "min": 60.0, "h": 3600.0},
+    "speed": {"mm/s": 1.0, "cm/s": 10.0, "m/s": 1000.0},
+    "distance": {"mm": 1.0, "cm": 10.0, "m": 1000.0},
+    "angle": {"deg": 1.0, "°": 1.0, "rad": 180.0 / math.pi, "turn": 360.0, "turns": 360.0},
+    "percent": {"%": 1.0},
+}
+CANONICAL: dict[str, str] = {
+    "duration": "s",
+    "speed": "mm/s",
+    "distance": "mm",
+    "angle": "deg",
+    "percent": "%",
+}
+EXAMPLES: dict[str, str] = {
+    "duration": "500ms, 30s or 2min",
+    "speed": "200 mm/s or 0.2 m/s",
+    "distance": "300 mm, 30cm or 1.5 m",
+    "angle": "90deg or 1.57rad",
+    "percent": "20%",
+}
+
+
+class UnitError(ValueError):
+    """A value that does not parse; the message says what was expected."""
+
+
+def _is_number(value: object) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def parse_quantity(dimension: str, value: object) -> float:
+    """``parse_quantity("speed", "0.2 m/s") == 200.0``; raises :class:`UnitError`."""
+    units = UNITS[dimension]
+    if _is_number(value):
+        if value == 0:
+            return 0.0
+        raise UnitError(
+            f"expected a {dimension} with a unit such as {EXAMPLES[dimension]}, got {value!r}"
+            f" (write the unit: {value}{CANONICAL[dimension]})"
+        )
+    if not isinstance(value, str):
+        raise UnitError(
+            f"expected a {dimension} such as {EXAMPLES[dimension]}, got {_describe(value)}"
+        )
+    match = _QUANTITY.match(value)
+    if match is None:
+        raise UnitError(f"expected a {dimension} such as {EXAMPLES[dimension]}, got {value!r}")
+    number, unit = float(match.group(1)), match.group(2)
+    if unit not in units:
+        known = ", ".join(units)
+        if unit == "":
+            if number == 0:
+                return 0.0
+            raise UnitError(
+                f"{value!r} has no unit; a {dimension} needs one of: {known}"
+                f" (e.g. {EXAMPLES[dimension]})"
+            )
+        raise UnitError(f"unknown {dimension} unit {unit!r} in {value!r}; use one of: {known}")
+    return number * units[unit]
+
+
+def _describe(value: object) -> str:
+    if value is None:
+        return "nothing (null)"
+    if isinstance(value, bool):
+        return f"a boolean ({str(value).lower()})"
+    if isinstance(value, list):
+        return "a list"
+    if isinstance(value, dict):
+        return "a mapping"
+    return repr(value)
+
+
+def format_quantity(dimension: str, value: float) -> str:
+    """The canonical spelling: ``format_quantity("speed", 200.0) == "200 mm/s"``."""
+    text = f"{value:g}"
+    return (
+        f"{text}{CANONICAL[dimension]}"
+        if dimension == "percent"
+        else (f"{text} {CANONICAL[dimension]}")
+    )
+
+
+@dataclass(frozen=True, slots=True)
+class ValueType:
+    """One parameter type: its name in missions and schema, how to parse a YAML value into
+    the canonical unit, and the JSON Schema fragment editors get."""
+
+    name: str
+    parse: Callable[[object], Any]
+    unit: str = ""
+    json_schema: tuple[tuple[str, Any], ...] = ()
+    choices: tuple[str, ...] = ()
+
+    def describe(self) -> str:
+        if self.choices:
+            return "one of " + ", ".join(self.choices)
+        return f"{self.name} ({self.unit})" if self.unit else self.name
+
+    def schema(self) -> dict[str, Any]:
+        if self.choices:
+            return {"enum": list(self.choices)}
+        return dict(self.json_schema)
+
+
+def _quantity_type(dimension: str) -> ValueType:
+    pattern = rf"^\s*{_NUMBER}\s*({'|'.join(re.escape(u) for u in UNITS[dimension])})\s*$"
+    return ValueType(
+        dimension,
+        lambda v: parse_quantity(dimension, v),
+        CANONICAL[dimension],
+        (("anyOf", [{"type": "string", "pattern": pattern}, {"const": 0}]),
+         ("description", f"a {dimension}, e.g. {EXAMPLES[dimension]}")),
+    )  # fmt: skip
+
+
+def _parse_int(value: object) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise UnitError(f"expected an integer, got {_describe(value)}")
+    return value
+
+
+def _parse_float(value: object) -> float:
+    if not _is_number(value):
+        raise UnitError(f"expected a number, got {_describe(value)}")
+    return float(value)  # type: ignore[arg-type]
+
+
+def _parse_bool(value: object) -> bool:
+    if not isinstance(value, bool):
+        raise UnitError(f"expected true or false, got {_describe(value)}")
+    return value
+
+
+def _parse_str(value: object) -> str:
+    if isinstance(value, bool) or not isinstance(value, str | int | float):
+        raise UnitError(f"expected a text, got {_describe(value)}")
+    return str(value)
+
+
+def _parse_str_list(value: object) -> tuple[str, ...]:
+    if isinstance(value, str):
+        return (value,)
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        raise UnitError(f"expected a list of texts, got {_describe(value)}")
+    return tuple(value)
+
+
+DURATION = _quantity_type("duration")
+SPEED = _quantity_type("speed")
+DISTANCE = _quantity_type("distance")
+ANGLE = _quantity_type("angle")
+PERCENT = _quantity_type("percent")
+INT = ValueType("int", _parse_int, json_schema=(("type", "integer"),))
+FLOAT = ValueType("float", _parse_float, json_schema=(("type", "number"),))
+BOOL = ValueType("bool", _parse_bool, json_schema=(("type", "boolean"),))
+STR = ValueType("str", _parse_str, json_schema=(("type", "string"),))
+STR_LIST = ValueType(
+    "str_list",
+    _parse_str_list,
+    json_schema=(("anyOf", [{"type": "string"}, {"type": "array", "items": {"type": "string"}}]),),
+)
+
+#: Types a mission parameter or a blackboard key may be declared with.
+VALUE_TYPES: dict[str, ValueType] = {
+    t.name: t for t in (DURATION, SPEED, DISTANCE, ANGLE, PERCENT, INT, FLOAT, BOOL, STR)
+}
+
+
+def enum(*choices: str) -> ValueType:
+    """A closed set of words: ``enum("left", "right", "any")``."""
+
+    def parse(value: object) -> str:
+        if not isinstance(value, str) or value not in choices:
+            raise UnitError(f"expected one of {', '.join(choices)}, got {_describe(value)}")
+        return value
+
+    return ValueType("enum", parse, choices=tuple(choices))
+
+
+def compatible(source: ValueType, target: ValueType) -> bool:
+    """May a value of ``source`` type fill a slot of ``target`` type?"""
+    if source.name == target.name and source.choices == target.choices:
+        return True
+    if target.choices and source.name == "str":
+        return True
+    return (source.name, target.name) in {("int", "float")}
+
+
+def convert(source: ValueType, target: ValueType, value: Any) -> Any:
+    """``value`` (already of ``source`` type) as ``target`` wants it."""
+    if target.choices:
+        return target.parse(value)
+    return float(value) if target.name == "float" else value
+
+
+def closest(word: str, candidates: Sequence[str]) -> str:
+    """ " (did you mean 'x'?)" or ""; the difflib suggestion every unknown name gets."""
+    import difflib
+
+    found = difflib.get_close_matches(word, list(candidates), n=1, cutoff=0.6)
+    return f" (did you mean {found[0]!r}?)" if found else ""
+
+
+def _parse_any(value: object) -> object:
+    return value
+
+
+#: Any YAML value; the compiler types it from context (``set``'s value by its key).
+ANY = ValueType("any", _parse_any, json_schema=())
+
+
+def _parse_mark(value: object) -> object:
+    raise UnitError("a mark has no written form: the `mark` action writes it")
+
+
+#: An odometry mark on the blackboard (written by ``mark``, read by ``odometry``).
+MARK = ValueType("mark", _parse_mark, json_schema=(("type", "null"),))
+VALUE_TYPES["mark"] = MARK
