@@ -195,6 +195,8 @@ class Stasis(IntEnum):
 def _flags(command: str, argument: str, names: Iterable[str], known: tuple[str, ...]) -> int:
     value = 0
     for name in names:
+        if not isinstance(name, str):
+            raise EncodeError(command, argument, f"made of {', '.join(known)}", name)
         try:
             value |= 1 << known.index(name)
         except ValueError:
@@ -215,7 +217,8 @@ WEEKDAYS: tuple[str, ...] = ("sun", "mon", "tue", "wed", "thu", "fri", "sat")
 
 def day_bits(*days: str) -> int:
     """Days by three-letter name: ``day_bits("wed", "fri") == 40`` (the Schedule example)."""
-    return _flags("schedule", "day_bits", (d.lower()[:3] for d in days), WEEKDAYS)
+    names = (d.lower()[:3] if isinstance(d, str) else d for d in days)
+    return _flags("schedule", "day_bits", names, WEEKDAYS)
 
 
 SCHEDULING_LED_NAMES: tuple[str, ...] = ("colon", "pm", "am", "clock", "schedule")
@@ -239,6 +242,16 @@ def motor_bits(
 ) -> int:
     """Motors (138): ``motor_bits(main_brush=True, side_brush=True,
     side_brush_clockwise=True) == 13`` (the spec's example)."""
+    flags = {
+        "side_brush": side_brush,
+        "vacuum": vacuum,
+        "main_brush": main_brush,
+        "side_brush_clockwise": side_brush_clockwise,
+        "main_brush_outward": main_brush_outward,
+    }
+    for name, flag in flags.items():
+        if not isinstance(flag, bool):
+            raise EncodeError("motors", name, "True or False", flag)
     return (
         side_brush
         | vacuum << 1
@@ -252,7 +265,8 @@ SEGMENT_NAMES: tuple[str, ...] = ("a", "b", "c", "d", "e", "f", "g")
 
 
 def segment_bits(*segments: str) -> int:
-    return _flags("digit_leds_raw", "digit bits", (s.lower() for s in segments), SEGMENT_NAMES)
+    names = (s.lower() if isinstance(s, str) else s for s in segments)
+    return _flags("digit_leds_raw", "digit bits", names, SEGMENT_NAMES)
 
 
 #: Characters the 7-segment display implements (Digit LEDs ASCII table). 42 '*', 43 '+' and

@@ -134,7 +134,7 @@ def layout_for(
 def _check_ids(command: str, packet_ids: Iterable[int]) -> None:
     for pid in packet_ids:
         if isinstance(pid, bool) or not isinstance(pid, int) or pid not in VALID_PACKET_IDS:
-            raise EncodeError(command, "packet id", PACKET_ID_ARG.allowed, pid)
+            raise EncodeError(command, PACKET_ID_ARG.name, PACKET_ID_ARG.allowed, pid)
 
 
 def stream_frame_size(packet_ids: Iterable[int]) -> int:

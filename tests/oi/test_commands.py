@@ -1,0 +1,218 @@
+"""Every opcode, byte for byte: the specs' worked examples first, then one or more cases for
+each remaining command. ``EXPECTED`` is keyed by opcode and compared against the table, so a
+command added to ``COMMANDS`` without a case here fails ``test_every_opcode_has_a_case``."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pytest
+
+from roomba_bt.oi import commands as c
+from roomba_bt.oi.bits import (
+    button_bits,
+    day_bits,
+    led_bits,
+    motor_bits,
+    scheduling_led_bits,
+    segment_bits,
+)
+from roomba_bt.oi.encode import Command, Note, Radius, decode_command, encode, note_number
+from roomba_bt.oi.opcodes import COMMANDS
+
+Case = tuple[str, Callable[[], Command], list[int]]
+
+#: opcode -> (label, how to build it, the bytes on the wire). "spec" labels quote an example
+#: printed in both specifications.
+EXPECTED: dict[int, list[Case]] = {
+    7: [("reset", c.reset, [7])],
+    128: [("start", c.start, [128])],
+    129: [
+        ("baud code 11", lambda: c.baud(11), [129, 11]),
+        ("baud 57600 by rate", lambda: c.baud_rate(57600), [129, 10]),
+        ("baud 19200 by rate", lambda: c.baud_rate(19200), [129, 7]),
+    ],
+    130: [("control", c.control, [130])],
+    131: [("safe", c.safe, [131])],
+    132: [("full", c.full, [132])],
+    133: [("power", c.power, [133])],
+    134: [("spot", c.spot, [134])],
+    135: [("clean", c.clean, [135])],
+    136: [("max", c.max_clean, [136])],
+    137: [
+        ("spec: reverse -200 mm/s, radius 500", lambda: c.drive(-200, 500), [137, 255, 56, 1, 244]),
+        ("straight 0x8000", lambda: c.drive_straight(200), [137, 0, 200, 128, 0]),
+        ("straight 0x8000 by enum", lambda: c.drive(200, Radius.STRAIGHT), [137, 0, 200, 128, 0]),
+        ("straight 0x7FFF", lambda: c.drive(200, Radius.STRAIGHT_ALT), [137, 0, 200, 127, 255]),
+        ("straight as 32767", lambda: c.drive(200, 32767), [137, 0, 200, 127, 255]),
+        ("straight as -32768", lambda: c.drive(200, -32768), [137, 0, 200, 128, 0]),
+        ("spin clockwise = -1", lambda: c.spin(100, clockwise=True), [137, 0, 100, 255, 255]),
+        ("spin counter-clockwise = 1", lambda: c.spin(100, clockwise=False), [137, 0, 100, 0, 1]),
+        ("radius -2000", lambda: c.drive(500, -2000), [137, 1, 244, 248, 48]),
+        ("halt", c.halt, [137, 0, 0, 0, 0]),
+    ],
+    138: [
+        (
+            "spec: main brush inward + side brush clockwise",
+            lambda: c.motors(
+                motor_bits(main_brush=True, side_brush=True, side_brush_clockwise=True)
+            ),
+            [138, 13],
+        ),
+        ("off", c.motors_off, [138, 0]),
+        ("vacuum", lambda: c.motors(motor_bits(vacuum=True)), [138, 2]),
+        ("main brush outward", lambda: c.motors(motor_bits(main_brush_outward=True)), [138, 16]),
+    ],
+    139: [
+        (
+            "spec: Home LED, power green half",
+            lambda: c.leds(led_bits("dock"), 0, 128),
+            [139, 4, 0, 128],
+        ),
+        (
+            "all four LEDs, red full",
+            lambda: c.leds(led_bits("debris", "spot", "dock", "check_robot"), 255, 255),
+            [139, 15, 255, 255],
+        ),
+    ],
+    140: [
+        ("one note: 4 data bytes", lambda: c.song(0, [(60, 32)]), [140, 0, 1, 60, 32]),
+        (
+            "notes by name",
+            lambda: c.song(
+                4,
+                [
+                    Note(note_number("G1"), 16),
+                    Note(note_number("A4"), 64),
+                    Note(note_number("rest"), 8),
+                ],
+            ),
+            [140, 4, 3, 31, 16, 69, 64, 0, 8],
+        ),
+    ],
+    141: [("play 0", lambda: c.play(0), [141, 0]), ("play 4", lambda: c.play(4), [141, 4])],
+    142: [
+        ("all sensors", lambda: c.sensors(100), [142, 100]),
+        ("group 6", lambda: c.sensors(6), [142, 6]),
+    ],
+    143: [("seek dock", c.seek_dock, [143])],
+    144: [
+        ("25% = 32; side brush reversed", lambda: c.pwm_motors(32, -32, 127), [144, 32, 224, 127])
+    ],
+    145: [("right first", lambda: c.drive_direct(100, -100), [145, 0, 100, 255, 156])],
+    146: [("right first", lambda: c.drive_pwm(255, -255), [146, 0, 255, 255, 1])],
+    148: [
+        (
+            "spec: cliff front left signal + virtual wall",
+            lambda: c.stream([29, 13]),
+            [148, 2, 29, 13],
+        ),
+        ("group 100", lambda: c.stream([100]), [148, 1, 100]),
+    ],
+    149: [("spec: bumps + virtual wall", lambda: c.query_list([7, 13]), [149, 2, 7, 13])],
+    150: [("pause", c.pause_stream, [150, 0]), ("resume", c.resume_stream, [150, 1])],
+    162: [
+        (
+            "Mon + Fri, colon + PM",
+            lambda: c.scheduling_leds(day_bits("mon", "fri"), scheduling_led_bits("colon", "pm")),
+            [162, 34, 3],
+        )
+    ],
+    163: [
+        (
+            "digits 1, 7, blank, 0",
+            lambda: c.digit_leds_raw(
+                [segment_bits("b", "c"), segment_bits("a", "b", "c"), 0, segment_bits(*"abcdef")]
+            ),
+            [163, 6, 7, 0, 63],
+        )
+    ],
+    164: [
+        ("spec: ABCD", lambda: c.digit_leds_ascii("ABCD"), [164, 65, 66, 67, 68]),
+        ("padded with spaces", lambda: c.digit_leds_ascii("Hi"), [164, 72, 105, 32, 32]),
+    ],
+    165: [("press clean + dock", lambda: c.buttons(button_bits("clean", "dock")), [165, 5])],
+    167: [
+        (
+            "spec: Wed 15:00 and Fri 10:36",
+            lambda: c.schedule({"wed": (15, 0), "fri": (10, 36)}),
+            [167, 40, 0, 0, 0, 0, 0, 0, 15, 0, 0, 0, 10, 36, 0, 0],
+        ),
+        ("spec: disable", lambda: c.schedule({}), [167] + [0] * 15),
+    ],
+    168: [
+        ("Wednesday 15:00 by name", lambda: c.set_day_time("wednesday", 15, 0), [168, 3, 15, 0]),
+        ("Saturday 23:59 by code", lambda: c.set_day_time(6, 23, 59), [168, 6, 23, 59]),
+    ],
+    173: [("stop", c.stop, [173])],
+}
+
+CASES = [
+    pytest.param(opcode, build, wire, id=f"{opcode}-{label}")
+    for opcode, cases in EXPECTED.items()
+    for label, build, wire in cases
+]
+
+
+def test_every_opcode_has_a_case() -> None:
+    assert set(EXPECTED) == set(COMMANDS), (
+        f"untested opcodes: {sorted(set(COMMANDS) - set(EXPECTED))}; "
+        f"cases for opcodes not in the table: {sorted(set(EXPECTED) - set(COMMANDS))}"
+    )
+
+
+@pytest.mark.parametrize(("opcode", "build", "wire"), CASES)
+def test_bytes_on_the_wire(opcode: int, build: Callable[[], Command], wire: list[int]) -> None:
+    command = build()
+    assert command.opcode == opcode
+    assert list(command.data) == wire
+
+
+@pytest.mark.parametrize(("opcode", "build", "wire"), CASES)
+def test_length_matches_the_table(
+    opcode: int, build: Callable[[], Command], wire: list[int]
+) -> None:
+    command = build()
+    fixed = command.args[: len(command.spec.args)]
+    assert len(command.data) == 1 + command.spec.data_bytes(fixed)
+
+
+@pytest.mark.parametrize(("opcode", "build", "wire"), CASES)
+def test_the_robot_reads_back_what_was_sent(
+    opcode: int, build: Callable[[], Command], wire: list[int]
+) -> None:
+    decoded = decode_command(bytes(wire) + b"\x80\x83")  # followed by more commands
+    assert decoded is not None
+    command, size = decoded
+    assert size == len(wire)
+    assert command == build()
+
+
+@pytest.mark.parametrize(("opcode", "build", "wire"), CASES)
+def test_an_incomplete_command_waits(
+    opcode: int, build: Callable[[], Command], wire: list[int]
+) -> None:
+    for cut in range(len(wire)):
+        assert decode_command(bytes(wire[:cut])) is None
+
+
+def test_generic_encode_by_name_and_opcode_agree() -> None:
+    assert encode("drive", -200, 500) == encode(137, -200, 500) == c.drive(-200, 500)
+    assert encode(148, 2, tail=[29, 13]).data == bytes([148, 2, 29, 13])
+
+
+def test_special_radii_are_never_clamped() -> None:
+    # GUIDE §4: a peer sends [137,0,200,7,208] (radius 2000) for "straight".
+    for command in (c.drive_straight(200), c.drive(200, Radius.STRAIGHT)):
+        assert command.data[3:] != bytes([7, 208])
+        assert command.data[3:] == bytes([0x80, 0x00])
+    assert c.drive(200, Radius.TURN_CLOCKWISE).data[3:] == bytes([0xFF, 0xFF])
+    assert c.drive(200, Radius.TURN_COUNTER_CLOCKWISE).data[3:] == bytes([0x00, 0x01])
+
+
+def test_note_names_follow_midi_and_the_spec_table() -> None:
+    assert note_number("G1") == 31  # the lowest note the robot plays
+    assert note_number("A4") == 69  # 440 Hz in the spec's table
+    assert note_number("C#5") == 73
+    assert note_number("B7") == 107  # the highest in the table
+    assert note_number("REST") == 0

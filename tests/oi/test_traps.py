@@ -1,0 +1,254 @@
+"""The traps of GUIDE.md §4 and the bit layouts of both specs, one test each."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from roomba_bt.oi.bits import (
+    DIGIT_ASCII,
+    BumpsWheelDrops,
+    Buttons,
+    ChargingSources,
+    LightBumper,
+    Overcurrents,
+)
+from roomba_bt.oi.ir import (
+    IR_CHARACTERS,
+    REMOTE_BUTTONS,
+    IRCharacter,
+    IRSource,
+    LighthouseBeam,
+    dock_character,
+    lighthouse_character,
+)
+from roomba_bt.oi.modes import OIMode, mode_from_packet
+from roomba_bt.oi.odometry import (
+    MM_PER_COUNT,
+    arc_from_wheels,
+    corrected_old_angle,
+    counts_to_mm,
+    encoder_delta,
+    mm_to_counts,
+)
+from roomba_bt.oi.profiles import (
+    CREATE2,
+    PROFILES,
+    ROOMBA500,
+    ROOMBA600,
+    WHEEL_BASE_MM,
+    command_warning,
+    get_profile,
+)
+
+# -- packet 7 and packet 14: peers have both wrong ----------------------------------------
+
+
+def test_packet_7_bit_0_is_bump_right() -> None:
+    assert BumpsWheelDrops.from_byte(0b0001).bump_right
+    assert not BumpsWheelDrops.from_byte(0b0001).bump_left
+    assert BumpsWheelDrops.from_byte(0b0010).bump_left
+    assert BumpsWheelDrops.from_byte(0b0100).wheel_drop_right
+    assert BumpsWheelDrops.from_byte(0b1000).wheel_drop_left
+    assert BumpsWheelDrops.from_byte(0b0011).any_bump
+    assert not BumpsWheelDrops.from_byte(0b1100).any_bump
+    assert BumpsWheelDrops.from_byte(0b1100).any_wheel_drop
+
+
+@pytest.mark.parametrize(
+    ("bit", "field"),
+    [(0, "side_brush"), (2, "main_brush"), (3, "right_wheel"), (4, "left_wheel")],
+)
+def test_packet_14_bits(bit: int, field: str) -> None:
+    oc = Overcurrents.from_byte(1 << bit)
+    flags = {f: getattr(oc, f) for f in ("side_brush", "main_brush", "right_wheel", "left_wheel")}
+    assert flags == {f: f == field for f in flags}
+    assert oc.any
+
+
+def test_packet_14_bit_1_is_reserved() -> None:
+    assert not Overcurrents.from_byte(0b10).any
+
+
+def test_other_bit_fields() -> None:
+    assert Buttons.from_byte(0b1000_0000).clock and Buttons.from_byte(0b100).dock
+    assert ChargingSources.from_byte(1).internal_charger
+    assert ChargingSources.from_byte(2).home_base
+    assert LightBumper.from_byte(1 << 5).right and LightBumper.from_byte(1).left
+    assert not LightBumper.from_byte(0b1100_0000).any  # reserved bits
+
+
+# -- encoders: deltas modulo 2**16 --------------------------------------------------------
+
+
+def test_encoder_rollover_forward() -> None:
+    assert encoder_delta(65530, 5) == 11  # a well-known driver gets +12
+
+
+def test_encoder_rollover_backward() -> None:
+    assert encoder_delta(5, 65530) == -11  # ... and +65526
+
+
+def test_encoder_deltas_agree_for_signed_and_unsigned_readings() -> None:
+    # The 600 reports -6 where the 500 reports 65530: the same bits.
+    assert encoder_delta(-6, 5) == encoder_delta(65530, 5) == 11
+    assert encoder_delta(32767, -32768) == 1
+    assert encoder_delta(100, 100) == 0
+
+
+def test_counts_to_mm_uses_the_spec_formula() -> None:
+    assert MM_PER_COUNT == pytest.approx(math.pi * 72.0 / 508.8)
+    assert counts_to_mm(508.8) == pytest.approx(math.pi * 72.0)  # one wheel revolution
+    assert mm_to_counts(counts_to_mm(1234)) == pytest.approx(1234)
+
+
+def test_angle_from_wheel_distances_and_the_wheel_base() -> None:
+    assert WHEEL_BASE_MM == 235.0
+    quarter = math.pi / 2 * WHEEL_BASE_MM / 2
+    distance, heading = arc_from_wheels(-quarter, quarter)
+    assert distance == pytest.approx(0.0)
+    assert heading == pytest.approx(math.pi / 2)  # counter-clockwise positive
+    assert arc_from_wheels(100.0, 100.0) == (100.0, 0.0)
+
+
+def test_old_firmware_angle_correction() -> None:
+    assert corrected_old_angle(29) == pytest.approx(29 / 0.324056)
+
+
+# -- OI mode + 1 ----------------------------------------------------------------------------
+
+
+def test_the_mode_plus_one_flag_exists_per_profile() -> None:
+    assert ROOMBA600.reports_mode_plus_one
+    assert not CREATE2.reports_mode_plus_one
+    assert not ROOMBA500.reports_mode_plus_one
+
+
+def test_mode_from_packet() -> None:
+    assert [mode_from_packet(r) for r in range(4)] == list(OIMode)
+    assert [mode_from_packet(r, plus_one=True) for r in range(1, 5)] == list(OIMode)
+    assert mode_from_packet(4) is None
+    assert mode_from_packet(0, plus_one=True) is None
+    assert mode_from_packet(255) is None
+
+
+# -- IR characters ---------------------------------------------------------------------------
+
+DOCK_600 = {  # both specs' table for the Roomba 500/600 drive-on charger
+    161: (False, False, True),
+    164: (False, True, False),
+    165: (False, True, True),
+    168: (True, False, False),
+    169: (True, False, True),
+    172: (True, True, False),
+    173: (True, True, True),
+}
+DOCK_DISCOVERY = {  # the Roomba Discovery drive-on charger
+    248: (True, False, False),
+    244: (False, True, False),
+    242: (False, False, True),
+    252: (True, True, False),
+    250: (True, False, True),
+    246: (False, True, True),
+    254: (True, True, True),
+}
+
+
+@pytest.mark.parametrize(("code", "beams"), sorted(DOCK_600.items()))
+def test_600_dock_characters(code: int, beams: tuple[bool, bool, bool]) -> None:
+    ch = IRCharacter.decode(code)
+    assert ch.source is IRSource.DOCK and ch.from_dock
+    assert (ch.red_buoy, ch.green_buoy, ch.force_field) == beams
+    assert dock_character(red=beams[0], green=beams[1], force_field=beams[2]) == code
+
+
+@pytest.mark.parametrize(("code", "beams"), sorted(DOCK_DISCOVERY.items()))
+def test_discovery_dock_characters(code: int, beams: tuple[bool, bool, bool]) -> None:
+    ch = IRCharacter.decode(code)
+    assert ch.source is IRSource.DISCOVERY_DOCK and ch.from_dock
+    assert (ch.red_buoy, ch.green_buoy, ch.force_field) == beams
+    assert (
+        dock_character(red=beams[0], green=beams[1], force_field=beams[2], discovery=True) == code
+    )
+
+
+def test_no_beam_is_no_character() -> None:
+    assert dock_character(red=False, green=False, force_field=False) == 0
+    assert IRCharacter.decode(0).source is IRSource.NONE
+
+
+def test_162_is_the_virtual_wall_not_a_dock() -> None:
+    ch = IRCharacter.decode(162)
+    assert ch.source is IRSource.VIRTUAL_WALL and ch.virtual_wall and not ch.from_dock
+
+
+def test_remote_buttons() -> None:
+    assert set(REMOTE_BUTTONS) == set(range(129, 144))
+    assert IRCharacter.decode(130).remote_button == "forward"
+    assert IRCharacter.decode(143).remote_button == "seek_dock"
+    assert IRCharacter.decode(136).remote_button == "clean"
+    assert all(IR_CHARACTERS[c].source is IRSource.REMOTE for c in range(129, 144))
+
+
+@pytest.mark.parametrize("lighthouse_id", range(1, 12))
+@pytest.mark.parametrize("beam", list(LighthouseBeam))
+def test_lighthouse_0LLLL0BB(lighthouse_id: int, beam: LighthouseBeam) -> None:  # noqa: N802
+    code = lighthouse_character(lighthouse_id, beam)
+    assert code == lighthouse_id << 3 | beam.value and code < 128 and not code & 0b100
+    ch = IRCharacter.decode(code)
+    assert ch.source is IRSource.LIGHTHOUSE
+    assert (ch.lighthouse_id, ch.lighthouse_beam) == (lighthouse_id, beam)
+    assert ch.red_buoy == (beam is LighthouseBeam.RED_BUOY)
+    assert ch.green_buoy == (beam is LighthouseBeam.GREEN_BUOY)
+    assert ch.force_field == (beam is LighthouseBeam.FORCE_FIELD)
+    assert ch.virtual_wall == (beam is LighthouseBeam.FENCE)
+
+
+def test_reserved_and_unknown_characters_do_not_crash() -> None:
+    for code in (0b0110_0000 | 1, 0b0000_0100 | 8, 163, 166, 200, 255, 128):
+        assert IRCharacter.decode(code).source is IRSource.UNKNOWN
+    assert len(IR_CHARACTERS) == 256
+    assert IRCharacter.decode(0x1A8).code == 0xA8  # only the low byte is a character
+
+
+# -- profiles ----------------------------------------------------------------------------------
+
+
+def test_reset_and_stop_exist_only_on_600_and_create2() -> None:
+    from roomba_bt.oi.errors import UnsupportedCommandError
+
+    for opcode in (7, 173):
+        assert CREATE2.has_command(opcode) and ROOMBA600.has_command(opcode)
+        assert not ROOMBA500.has_command(opcode)
+        CREATE2.check_supported(opcode)
+        with pytest.raises(UnsupportedCommandError, match="not available on roomba500"):
+            ROOMBA500.check_supported(opcode)
+    assert 7 not in {c.opcode for c in ROOMBA500.commands}
+    assert len(CREATE2.commands) == len(ROOMBA500.commands) + 2
+
+
+def test_digit_leds_raw_warning_text() -> None:
+    for profile in (CREATE2, ROOMBA600):
+        text = command_warning(163, profile)
+        assert text is not None and "163" in text and "164" in text
+        assert profile.command_warning("digit_leds_raw") == text
+    assert command_warning(163, ROOMBA500) is None
+    assert all(command_warning(op, CREATE2) is None for op in (137, 164, 128))
+
+
+def test_unknown_profile_lists_the_known_ones() -> None:
+    assert get_profile("roomba500") is ROOMBA500
+    with pytest.raises(ValueError, match="unknown robot profile 'roomba700'; known profiles: "):
+        get_profile("roomba700")
+    assert set(PROFILES) == {"create2", "roomba600", "roomba500"}
+
+
+def test_profile_packet_ranges() -> None:
+    assert CREATE2.packet(58).maximum == 3 and ROOMBA500.packet(58).maximum == 1
+    assert CREATE2.packet(27).maximum == 1023 and ROOMBA500.packet(27).maximum == 4095
+    assert CREATE2.packet(43).signed and not ROOMBA500.packet(43).signed
+
+
+def test_digit_ascii_table_omits_star_plus_at() -> None:
+    assert DIGIT_ASCII == frozenset(range(32, 127)) - {42, 43, 64}
