@@ -98,7 +98,7 @@ def test_encoder_deltas_agree_for_signed_and_unsigned_readings() -> None:
 
 
 def test_counts_to_mm_uses_the_spec_formula() -> None:
-    assert MM_PER_COUNT == pytest.approx(math.pi * 72.0 / 508.8)
+    assert counts_to_mm(1) == MM_PER_COUNT == pytest.approx(math.pi * 72.0 / 508.8)
     assert counts_to_mm(508.8) == pytest.approx(math.pi * 72.0)  # one wheel revolution
     assert mm_to_counts(counts_to_mm(1234)) == pytest.approx(1234)
 
@@ -193,7 +193,7 @@ def test_remote_buttons() -> None:
 
 @pytest.mark.parametrize("lighthouse_id", range(1, 12))
 @pytest.mark.parametrize("beam", list(LighthouseBeam))
-def test_lighthouse_0LLLL0BB(lighthouse_id: int, beam: LighthouseBeam) -> None:  # noqa: N802
+def test_lighthouse_0LLLL0BB(lighthouse_id: int, beam: LighthouseBeam) -> None:
     code = lighthouse_character(lighthouse_id, beam)
     assert code == lighthouse_id << 3 | beam.value and code < 128 and not code & 0b100
     ch = IRCharacter.decode(code)
@@ -251,4 +251,5 @@ def test_profile_packet_ranges() -> None:
 
 
 def test_digit_ascii_table_omits_star_plus_at() -> None:
-    assert DIGIT_ASCII == frozenset(range(32, 127)) - {42, 43, 64}
+    missing = set(range(32, 127)) - set(DIGIT_ASCII)
+    assert missing == {ord("*"), ord("+"), ord("@")}
