@@ -1,0 +1,123 @@
+"""The robot layer's errors: one type per thing a caller handles differently.
+
+* :class:`ModeError`: a command the robot's current OI mode would not accept; nothing was sent.
+* :class:`ConnectionFailed`: the robot could not be reached at start-up (or on a reconnect).
+* :class:`LinkDown` and its two kinds, :class:`PortLost` (the port raised) and
+  :class:`StreamStalled` (no valid frame within the watchdog): the link failed while running.
+
+The link errors subclass :class:`ConnectionError`, like
+:class:`~roomba_bt.transport.TransportError`, so "the robot is unreachable" is one ``except``.
+"""
+
+from __future__ import annotations
+
+import time
+
+from roomba_bt.oi.errors import OIError
+from roomba_bt.oi.modes import OIMode
+
+
+class RobotError(Exception):
+    """Base of every error raised by :mod:`roomba_bt.robot`."""
+
+
+def format_wall_time(wall_time: float) -> str:
+    """``12:01:03.120``: local time of day with milliseconds, for messages."""
+    seconds = int(wall_time)
+    millis = round((wall_time - seconds) * 1000)
+    if millis == 1000:
+        seconds, millis = seconds + 1, 0
+    return time.strftime("%H:%M:%S", time.localtime(seconds)) + f".{millis:03d}"
+
+
+#: How a fall-back cause reads after "after ...".
+CAUSE_PHRASES = {
+    "wheel drop": "a wheel drop",
+    "cliff": "a cliff",
+    "charger": "a powered charger",
+    "unknown": "an unknown cause",
+}
+
+
+def describe_cause(cause: str) -> str:
+    parts = [CAUSE_PHRASES.get(p, p) for p in cause.split(" and ")]
+    return " and ".join(parts)
+
+
+def _mode_list(modes: frozenset[OIMode]) -> str:
+    labels = [m.label for m in sorted(modes)]
+    if len(labels) <= 1:
+        return "".join(labels) or "no mode"
+    return ", ".join(labels[:-1]) + " or " + labels[-1]
+
+
+class ModeError(RobotError, OIError, ValueError):
+    """A command the current OI mode does not accept; it never reached the wire.
+
+    ``str(error)`` reads like ``drive needs Safe or Full; the robot is in Passive since
+    12:01:03.120, after a wheel drop``.
+    """
+
+    def __init__(
+        self,
+        command: str,
+        needs: frozenset[OIMode],
+        mode: OIMode,
+        since_wall: float,
+        cause: str | None = None,
+        hint: str = "",
+    ) -> None:
+        self.command = command
+        self.needs = needs
+        self.mode = mode
+        self.since_wall = since_wall
+        self.cause = cause
+        message = (
+            f"{command} needs {_mode_list(needs)}; the robot is in {mode.label} since "
+            f"{format_wall_time(since_wall)}"
+        )
+        if cause is not None:
+            message += f", after {describe_cause(cause)}"
+        if hint:
+            message += f" ({hint})"
+        super().__init__(message)
+
+
+class ConnectionFailed(RobotError, ConnectionError):
+    """The robot did not answer, or the port could not be used; names the port and why."""
+
+    def __init__(self, port: str, reason: str, likely_causes: tuple[str, ...] = ()) -> None:
+        self.port = port
+        self.reason = reason
+        self.likely_causes = likely_causes
+        message = f"{port}: {reason}"
+        if likely_causes:
+            message += "; likely causes: " + ", ".join(likely_causes)
+        super().__init__(message)
+
+
+class LinkDown(RobotError, ConnectionError):
+    """The link failed while running: the port is gone or the stream stopped."""
+
+    def __init__(self, port: str, message: str) -> None:
+        self.port = port
+        super().__init__(f"{port}: {message}")
+
+
+class PortLost(LinkDown):
+    """Reading or writing the port raised (cable unplugged, bridge closed, robot reset)."""
+
+
+class StreamStalled(LinkDown):
+    """No valid stream frame within the watchdog time; drive 0 was sent (if allowed)."""
+
+    def __init__(self, port: str, silent_for: float, watchdog: float, halted: bool) -> None:
+        self.silent_for = silent_for
+        self.watchdog = watchdog
+        self.halted = halted
+        action = "drive 0 sent" if halted else "the robot was not driving (drive 0 not needed)"
+        super().__init__(
+            port,
+            f"no valid sensor frame for {silent_for * 1000:.0f} ms (watchdog "
+            f"{watchdog * 1000:.0f} ms); {action}",
+        )

@@ -1,0 +1,446 @@
+"""The OI mode model: a ``transitions`` state machine built from the opcode table.
+
+States are the four OI modes. Each mode-changing command of the profile (``CommandSpec``
+with ``leads_to``) is a trigger whose sources are the command's ``modes`` and whose
+destination is its ``leads_to``; nothing is typed out again here, and ``auto_transitions`` is
+off, so the model cannot jump where the robot cannot. Two kinds of internal trigger follow
+what the robot does by itself, seen in packet 35:
+
+* ``fall_back`` (Safe/Full -> Passive): a cliff while driving forward, a wheel drop or a
+  powered charger; the cause is inferred from the same frame (packet 7 wheel-drop bits,
+  packets 9-12 cliffs, packet 34 charging sources, else the frame before, else "unknown");
+* ``resync_<mode>``: the robot reports a mode no rule leads to (another client on the port, a
+  command the robot did not take); the model follows the robot and logs a warning.
+
+The guard, :meth:`ModeModel.check`, refuses (before any byte is built) a command the current
+mode does not accept, or one the profile does not have.
+
+Packet 35 and the "mode + 1" bug
+--------------------------------
+Some 600-series firmware reports OI mode + 1 (Passive reads 2, Safe 3, Full 4). The model
+learns the offset (0 or 1) from readings that admit one reading only, and until then ignores
+readings that admit two. The rule rests on two facts: a robot in Off neither streams nor
+answers, so a packet 35 that arrived never means Off; and a robot changes mode by itself only
+by falling back to Passive. So the modes the robot may be in are the model's mode, the mode a
+command just sent leads to (for ``settle`` seconds after it was sent), and Passive if either
+is Safe or Full. A raw value fits offset ``o`` if ``raw - o`` is one of those modes:
+
+* fits one offset only: that offset is learned, the mode is ``raw - o``. Right after Start a
+  reading of 2 can only be Passive + 1, a reading of 1 only Passive; 4 is always Full + 1;
+* fits both (in Safe, 2 may be Safe or Passive + 1): ignored until the offset is known;
+* fits none while the offset is known: taken as ``raw - offset`` (a resync) if that is a mode,
+  otherwise ignored and counted in :attr:`ModeModel.invalid_readings`; never an exception.
+
+:class:`~roomba_bt.robot.connection.Connection` queries packet 35 right after Start, so the
+offset is known before the first mode command on every robot. The profile's
+``reports_mode_plus_one`` only decides whether finding the bug is expected (info) or a
+surprise (warning).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable, Iterable
+from typing import Any
+
+from transitions import Machine
+
+from roomba_bt.oi.encode import Command
+from roomba_bt.oi.errors import UnsupportedCommandError
+from roomba_bt.oi.frames import SensorFrame
+from roomba_bt.oi.modes import DRIVING_MODES, OIMode
+from roomba_bt.oi.opcodes import MODE_COMMANDS, CommandSpec
+from roomba_bt.oi.profiles import DEFAULT_PROFILE, PROFILES, RobotProfile
+from roomba_bt.robot.errors import ModeError
+from roomba_bt.robot.interface import ModeChange
+
+log = logging.getLogger(__name__)
+
+FALL_BACK = "fall_back"
+RESYNC_PREFIX = "resync_"
+#: Seconds after a mode command during which packet 35 may still show the old mode.
+DEFAULT_SETTLE = 0.1
+#: Modes the robot can fall into by itself from each mode (Full never falls in the spec, but a
+#: robot that reports it is followed rather than argued with).
+FALLS: dict[OIMode, frozenset[OIMode]] = {
+    OIMode.OFF: frozenset(),
+    OIMode.PASSIVE: frozenset(),
+    OIMode.SAFE: frozenset({OIMode.PASSIVE}),
+    OIMode.FULL: frozenset({OIMode.PASSIVE}),
+}
+CLIFF_PACKETS = (9, 10, 11, 12)
+WHEEL_DROP_BITS = 0b1100  # packet 7: bit 3 drop left, bit 2 drop right
+STATE_NAMES = tuple(m.label for m in OIMode)
+
+
+def _label(mode: OIMode) -> str:
+    return mode.label
+
+
+def mode_transitions(profile: RobotProfile = DEFAULT_PROFILE) -> list[dict[str, Any]]:
+    """The machine's transitions for ``profile``, read from the opcode table.
+
+    One entry per mode-changing command the profile has (trigger = command name), then the
+    internal ``fall_back`` and ``resync_<mode>`` triggers.
+    """
+    table: list[dict[str, Any]] = []
+    for spec in MODE_COMMANDS:
+        if profile.name not in spec.profiles or spec.leads_to is None:
+            continue
+        table.append(
+            {
+                "trigger": spec.name,
+                "source": [_label(m) for m in sorted(spec.modes)],
+                "dest": _label(spec.leads_to),
+            }
+        )
+    fall_sources = [_label(m) for m in sorted(FALLS) if OIMode.PASSIVE in FALLS[m]]
+    table.append({"trigger": FALL_BACK, "source": fall_sources, "dest": "Passive"})
+    for mode in (OIMode.PASSIVE, OIMode.SAFE, OIMode.FULL):
+        table.append(
+            {"trigger": RESYNC_PREFIX + mode.name.lower(), "source": "*", "dest": _label(mode)}
+        )
+    return table
+
+
+class _MachineModel:
+    """The object ``transitions`` drives; its ``state`` is the mode label."""
+
+    state: str
+
+
+def build_machine(
+    profile: RobotProfile = DEFAULT_PROFILE, initial: OIMode = OIMode.OFF
+) -> tuple[Machine, _MachineModel]:
+    model = _MachineModel()
+    machine = Machine(
+        model=model,
+        states=list(STATE_NAMES),
+        transitions=mode_transitions(profile),
+        initial=_label(initial),
+        auto_transitions=False,
+        ignore_invalid_triggers=False,
+    )
+    return machine, model
+
+
+class OffsetDetector:
+    """Learns whether packet 35 reads mode + 1 (see the module docstring for the rule)."""
+
+    __slots__ = ("expected_plus_one", "offset")
+
+    def __init__(self, profile: RobotProfile = DEFAULT_PROFILE) -> None:
+        self.offset: int | None = None
+        self.expected_plus_one = profile.reports_mode_plus_one
+
+    def interpret(self, raw: int, possible: Iterable[OIMode]) -> OIMode | None:
+        """The mode ``raw`` means given the modes the robot may be in, or None (ignore)."""
+        allowed = set(possible) - {OIMode.OFF}
+        offsets = (0, 1) if self.offset is None else (self.offset,)
+        fits = [(o, OIMode(raw - o)) for o in offsets if 1 <= raw - o <= 3]
+        fitting = [(o, m) for o, m in fits if m in allowed]
+        if raw == 4 and self.offset != 1:
+            self._learn(1, raw)
+            return OIMode.FULL
+        if fitting and len({o for o, _ in fitting}) == 1:
+            offset, mode = fitting[0]
+            if self.offset is None:
+                self._learn(offset, raw)
+            return mode
+        if self.offset is not None and fits:
+            return fits[0][1]
+        return None
+
+    def _learn(self, offset: int, raw: int) -> None:
+        previous, self.offset = self.offset, offset
+        if offset == 1:
+            level = logging.INFO if self.expected_plus_one and previous is None else logging.WARNING
+            log.log(
+                level,
+                "packet 35 reports the OI mode + 1 (read %d); correcting every reading by -1",
+                raw,
+            )
+
+
+def infer_cause(frame: SensorFrame, previous: SensorFrame | None = None) -> str:
+    """Why the robot left Safe by itself, from the packets the frame carries."""
+    for candidate in (frame, previous):
+        if candidate is None:
+            continue
+        causes: list[str] = []
+        bumps = candidate.get(7)
+        if bumps is not None and bumps & WHEEL_DROP_BITS:
+            causes.append("wheel drop")
+        if any(candidate.get(pid) for pid in CLIFF_PACKETS):
+            causes.append("cliff")
+        if candidate.get(34):
+            causes.append("charger")
+        if causes:
+            return " and ".join(causes)
+    return "unknown"
+
+
+class ModeModel:
+    """What OI mode the robot is in, why, and since when; the guard of every command.
+
+    ``time`` arguments are the link's clock (``Transport.now()``); ``wall_clock`` (default
+    :func:`time.time`) only stamps messages such as "since 12:01:03.120".
+    """
+
+    def __init__(
+        self,
+        profile: RobotProfile = DEFAULT_PROFILE,
+        *,
+        initial: OIMode = OIMode.OFF,
+        settle: float = DEFAULT_SETTLE,
+        wall_clock: Callable[[], float] = time.time,
+    ) -> None:
+        self.profile = profile
+        self.settle = settle
+        self._wall_clock = wall_clock
+        self.machine, self._model = build_machine(profile, initial)
+        self._mode = initial
+        self.since: float = 0.0
+        self.since_wall: float = wall_clock()
+        self.cause: str | None = None  # set while the current mode is a fall-back's
+        self.last_fallback: ModeChange | None = None
+        self.detector = OffsetDetector(profile)
+        self.invalid_readings = 0
+        self._pending: tuple[OIMode, OIMode, float] | None = None  # (from, to, sent at)
+        self._previous_frame: SensorFrame | None = None
+        self._allowed = self._allowed_table()
+
+    # ------------------------------------------------------------------ state
+    @property
+    def mode(self) -> OIMode:
+        return self._mode
+
+    @property
+    def state(self) -> str:
+        """The machine's state name (``"Passive"``...)."""
+        return self._model.state
+
+    @property
+    def plus_one(self) -> bool | None:
+        """True once the "mode + 1" bug is detected, False once ruled out, None unknown."""
+        return None if self.detector.offset is None else self.detector.offset == 1
+
+    def _allowed_table(self) -> dict[OIMode, frozenset[int]]:
+        """Opcodes each mode accepts: mode commands from the machine, others from the table."""
+        table: dict[OIMode, frozenset[int]] = {}
+        for mode in OIMode:
+            triggers = set(self.machine.get_triggers(_label(mode)))
+            allowed = {
+                spec.opcode
+                for spec in self.profile.commands
+                if (spec.name in triggers if spec.changes_mode else mode in spec.modes)
+            }
+            table[mode] = frozenset(allowed)
+        return table
+
+    def allows(self, command: Command | CommandSpec, mode: OIMode | None = None) -> bool:
+        spec = command.spec if isinstance(command, Command) else command
+        return spec.opcode in self._allowed[self._mode if mode is None else mode]
+
+    # ------------------------------------------------------------------ guard
+    def check(self, command: Command | CommandSpec) -> None:
+        """Raise if ``command`` may not be sent now; return None if it may.
+
+        :class:`~roomba_bt.oi.errors.UnsupportedCommandError` for a command the profile does
+        not have, :class:`~roomba_bt.robot.errors.ModeError` for one the mode refuses.
+        """
+        spec = command.spec if isinstance(command, Command) else command
+        if spec.opcode in self._allowed[self._mode]:
+            return
+        if self.profile.name not in spec.profiles:
+            raise UnsupportedCommandError(
+                spec.name, self.profile.name, tuple(sorted(spec.profiles))
+            )
+        raise self.refusal(spec)
+
+    def refusal(self, spec: CommandSpec) -> ModeError:
+        needs = frozenset(m for m in OIMode if spec.opcode in self._allowed[m])
+        hint = ""
+        if self._mode is OIMode.OFF:
+            hint = "send start first"
+        elif self.cause is None and needs <= DRIVING_MODES:
+            hint = "send safe or full first"
+        return ModeError(spec.name, needs, self._mode, self.since_wall, self.cause, hint)
+
+    # ------------------------------------------------------------------ commands
+    def apply(self, command: Command | CommandSpec, time: float) -> None:
+        """Record that ``command`` was written at link time ``time``: fire its trigger."""
+        spec = command.spec if isinstance(command, Command) else command
+        if spec.leads_to is None:
+            return
+        previous = self._mode
+        self._fire(spec.name, spec.leads_to, time, cause=None)
+        self._pending = (previous, spec.leads_to, time)
+
+    def _fire(self, trigger: str, dest: OIMode, time: float, cause: str | None) -> None:
+        self._model.trigger(trigger)  # type: ignore[attr-defined]
+        if self._mode is not dest or cause is not None:
+            self.since = time
+            self.since_wall = self._wall_clock()
+        self._mode = dest
+        self.cause = cause
+
+    def force(self, mode: OIMode, time: float = 0.0) -> None:
+        """Set the mode without a command (a robot known to be in ``mode``: tests, replays)."""
+        if mode is OIMode.OFF:
+            self._reset_off(time)
+        else:
+            self._fire(RESYNC_PREFIX + mode.name.lower(), mode, time, None)
+        self._pending = None
+
+    def _reset_off(self, time: float) -> None:
+        self.machine.set_state("Off", model=self._model)
+        self._mode = OIMode.OFF
+        self.since, self.since_wall, self.cause = time, self._wall_clock(), None
+
+    def robot_off(self, time: float) -> None:
+        """The link is gone or the robot stopped talking: assume nothing is allowed."""
+        self._reset_off(time)
+        self._pending = None
+
+    # ------------------------------------------------------------------ packet 35
+    def possible_modes(self, time: float) -> set[OIMode]:
+        """Modes the robot may be in at ``time`` (see the module docstring)."""
+        modes = {self._mode} | FALLS[self._mode]
+        if self._pending is not None and time - self._pending[2] < self.settle:
+            before = self._pending[0]
+            modes |= {before} | FALLS[before]
+        return modes
+
+    def reconcile(self, frame: SensorFrame, tick: int, time: float) -> ModeChange | None:
+        """Follow packet 35 of ``frame``; return the change the robot made by itself, if any."""
+        previous_frame, self._previous_frame = self._previous_frame, frame
+        raw = frame.get(35)
+        if raw is None:
+            return None
+        reported = self.detector.interpret(raw, self.possible_modes(time))
+        if reported is None:
+            self.invalid_readings += 1
+            return None
+        if self._pending is not None:
+            if reported is self._pending[1]:
+                self._pending = None
+                return None
+            if time - self._pending[2] < self.settle:
+                return None
+            self._pending = None
+        if reported is self._mode:
+            return None
+        before = self._mode
+        if reported is OIMode.PASSIVE and before in (OIMode.SAFE, OIMode.FULL):
+            cause = infer_cause(frame, previous_frame)
+            trigger = FALL_BACK
+        else:
+            cause = "unexpected report"
+            trigger = RESYNC_PREFIX + reported.name.lower()
+            log.warning(
+                "packet 35 reports %s while the model expected %s; following the robot",
+                reported.label,
+                before.label,
+            )
+        self._fire(trigger, reported, time, cause)
+        change = ModeChange(before, reported, tick, time, cause, self.since_wall)
+        self.last_fallback = change
+        return change
+
+
+# ---------------------------------------------------------------------- diagram
+
+
+def mermaid(profile: RobotProfile = DEFAULT_PROFILE) -> str:
+    """A mermaid ``stateDiagram-v2`` of the machine's command and fall-back transitions."""
+    machine, _ = build_machine(profile)
+    edges: dict[tuple[str, str], list[str]] = {}
+    for event_name, event in machine.events.items():
+        if event_name.startswith(RESYNC_PREFIX):
+            continue
+        for source, transitions in event.transitions.items():
+            for transition in transitions:
+                label = (
+                    "fall_back (cliff, wheel drop, charger)" if event_name == FALL_BACK
+                    else event_name
+                )  # fmt: skip
+                edges.setdefault((source, str(transition.dest)), []).append(label)
+    lines = ["stateDiagram-v2", "    [*] --> Off"]
+    order = {name: i for i, name in enumerate(STATE_NAMES)}
+    for (source, dest), labels in sorted(
+        edges.items(), key=lambda item: (order[item[0][0]], order[item[0][1]])
+    ):
+        lines.append(f"    {source} --> {dest} : {', '.join(labels)}")
+    return "\n".join(lines) + "\n"
+
+
+def guard_table(profile: RobotProfile = DEFAULT_PROFILE) -> str:
+    """A markdown table: each command of the profile and the modes that accept it."""
+    model = ModeModel(profile)
+    rows = [
+        "| opcode | command | Off | Passive | Safe | Full | leads to |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for spec in profile.commands:
+        marks = ["yes" if model.allows(spec, mode) else "-" for mode in OIMode]
+        dest = spec.leads_to.label if spec.leads_to is not None else ""
+        rows.append(f"| {spec.opcode} | {spec.name} | {' | '.join(marks)} | {dest} |")
+    return "\n".join(rows) + "\n"
+
+
+_DOC_HEAD = """\
+# OI modes: the mode model and its guard
+
+<!-- Generated by `python -m roomba_bt.robot.modes > docs/modes.md` from the machine in
+roomba_bt/robot/modes.py, which is built from the opcode table; a test fails if this file and
+the generated text differ. Do not edit by hand. -->
+
+The robot's Open Interface is always in one of four modes. The model is a `transitions`
+machine (`auto_transitions=False`): each mode-changing command is a trigger from the modes
+that accept it to the mode it leads to; `fall_back` is the robot leaving Safe by itself (seen
+in packet 35, with a cause inferred from the same frame); `resync_passive`, `resync_safe`,
+`resync_full` (from any state, not drawn) follow a robot that reports a mode no rule leads to.
+Every outgoing command passes the guard below before a byte is built.
+"""
+
+_DOC_PLUS_ONE = """\
+## Packet 35 and the "mode + 1" bug
+
+Some 600-series firmware reports the mode + 1 (Passive reads 2, Safe 3, Full 4). The model
+learns the offset from readings that fit one offset only and ignores readings that fit two
+until it knows:
+
+- a robot in Off neither streams nor answers, so a reading never means Off;
+- the robot changes mode by itself only by falling back to Passive, so it may be in the
+  model's mode, the mode of a command sent less than `settle` (0.1 s) ago, or Passive;
+- a reading that fits exactly one offset teaches it: after Start, 2 can only be Passive + 1
+  and 1 only Passive; 4 is always Full + 1; in Safe, 3 can only be Safe + 1;
+- in Safe with the offset unknown, 2 fits both (Safe, or Passive + 1): ignored;
+- once known, `raw - offset` is the mode; a value that is no mode is ignored and counted.
+
+The connection queries packet 35 right after Start, so the offset is known before the first
+mode command on every robot.
+"""
+
+
+def render_modes_doc() -> str:
+    """The whole text of ``docs/modes.md``."""
+    sections = [_DOC_HEAD]
+    groups: dict[tuple[str, ...], list[RobotProfile]] = {}
+    for profile in PROFILES.values():
+        key = tuple(spec.name for spec in profile.commands)
+        groups.setdefault(key, []).append(profile)
+    for profiles in groups.values():
+        titles = " / ".join(p.title for p in profiles)
+        profile = profiles[0]
+        sections.append(f"## {titles} (`{'`, `'.join(p.name for p in profiles)}`)\n")
+        sections.append("```mermaid\n" + mermaid(profile) + "```\n")
+        sections.append(guard_table(profile))
+    sections.append(_DOC_PLUS_ONE)
+    return "\n".join(sections)
+
+
+if __name__ == "__main__":
+    print(render_modes_doc(), end="")

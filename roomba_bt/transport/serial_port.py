@@ -1,0 +1,134 @@
+"""A :class:`~roomba_bt.transport.base.Transport` over any pyserial URL.
+
+``serial.serial_for_url`` gives one object for every kind of port, so one class covers them:
+
+    /dev/ttyUSB0, COM3          a USB serial cable (device path)
+    socket://host:port          a raw TCP bridge (Wi-Fi serial adapters, ``roomba-bt sim``)
+    rfc2217://host:port         a Telnet COM-port server (baud rate changes reach the far end)
+    loop://                     a loopback: what is written is read back (tests, benchmarks)
+
+Reads never block longer than asked: the port's own timeout stays 0 (take what is there) and
+waiting for the first byte is a ``select`` on the port's descriptor where it has one, or a
+read of one byte with the caller's timeout where it does not (``loop://``). Writes are bounded
+by ``write_timeout`` so that a stop sent to a port whose far end stopped reading fails instead
+of hanging.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import select
+import time
+from typing import Any
+
+import serial
+
+from roomba_bt.transport.base import TransportError
+
+#: Bytes taken from the port in one read; a 115200 baud link carries 172 bytes per 15 ms.
+READ_CHUNK = 4096
+DEFAULT_BAUD = 115200
+#: A stop sequence is 12 bytes; anything slower than this means the far end is gone.
+DEFAULT_WRITE_TIMEOUT = 0.5
+
+
+class SerialTransport:
+    """Bytes over a pyserial port, with errors wrapped in :class:`TransportError`."""
+
+    def __init__(self, port: serial.SerialBase, name: str | None = None) -> None:
+        self._port = port
+        self.name: str = name if name is not None else str(port.port)
+        port.timeout = 0
+        self._port_timeout: float = 0.0
+        self._wait_handle: Any = getattr(port, "fd", None) or getattr(port, "_socket", None)
+
+    @classmethod
+    def open(
+        cls,
+        url: str,
+        baud: int = DEFAULT_BAUD,
+        *,
+        write_timeout: float = DEFAULT_WRITE_TIMEOUT,
+    ) -> SerialTransport:
+        """Open ``url`` (device path or pyserial URL) at ``baud``, 8N1, no flow control."""
+        try:
+            port = serial.serial_for_url(url, baudrate=baud, timeout=0, write_timeout=write_timeout)
+        except (serial.SerialException, OSError, ValueError) as exc:
+            raise TransportError(url, "open the port", exc) from exc
+        return cls(port, url)
+
+    @property
+    def port(self) -> serial.SerialBase:
+        """The underlying pyserial object (for diagnostics; do not read from it)."""
+        return self._port
+
+    @property
+    def is_open(self) -> bool:
+        return bool(self._port.is_open)
+
+    @property
+    def baud(self) -> int:
+        return int(self._port.baudrate)
+
+    def now(self) -> float:
+        return time.monotonic()
+
+    def write(self, data: bytes) -> None:
+        try:
+            written = self._port.write(data)
+            if written is not None and written != len(data):
+                raise TransportError(
+                    self.name, "write", f"only {written} of {len(data)} bytes were written"
+                )
+        except TransportError:
+            raise
+        except serial.SerialTimeoutException as exc:
+            raise TransportError(
+                self.name, "write", "timed out: the far end is not reading"
+            ) from exc
+        except (serial.SerialException, OSError, ValueError, TypeError) as exc:
+            raise TransportError(self.name, "write", exc) from exc
+
+    def read(self, timeout: float) -> bytes:
+        try:
+            data: bytes = self._port.read(READ_CHUNK)
+            if data or timeout <= 0:
+                return data
+            if self._wait_handle is not None:
+                ready, _, _ = select.select([self._wait_handle], [], [], timeout)
+                return self._port.read(READ_CHUNK) if ready else b""
+            self._set_timeout(timeout)
+            try:
+                first: bytes = self._port.read(1)
+            finally:
+                self._set_timeout(0.0)
+            return first + self._port.read(READ_CHUNK) if first else b""
+        except (serial.SerialException, OSError, ValueError, TypeError) as exc:
+            raise TransportError(self.name, "read", exc) from exc
+
+    def _set_timeout(self, timeout: float) -> None:
+        if timeout != self._port_timeout:
+            self._port.timeout = timeout
+            self._port_timeout = timeout
+
+    def set_baud(self, baud: int) -> None:
+        try:
+            self._port.baudrate = baud
+        except (serial.SerialException, OSError, ValueError) as exc:
+            raise TransportError(self.name, f"set the baud rate to {baud}", exc) from exc
+
+    def close(self) -> None:
+        # closing a port that is already gone: nothing left to release
+        with contextlib.suppress(serial.SerialException, OSError):
+            self._port.close()
+
+    def __repr__(self) -> str:
+        state = "open" if self.is_open else "closed"
+        return f"SerialTransport({self.name!r}, {state})"
+
+
+def open_transport(
+    url: str, baud: int = DEFAULT_BAUD, *, write_timeout: float = DEFAULT_WRITE_TIMEOUT
+) -> SerialTransport:
+    """Open any pyserial URL or device path; see :class:`SerialTransport`."""
+    return SerialTransport.open(url, baud, write_timeout=write_timeout)
