@@ -11,7 +11,7 @@ import argparse
 import importlib
 import logging
 import sys
-from typing import Sequence
+from collections.abc import Sequence
 
 from roomba_bt import __version__
 from roomba_bt.cli.exit_codes import ExitCode

@@ -17,8 +17,9 @@ or a simulation on a virtual clock makes the same decisions as the live run.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass, field
-from typing import Iterator, Protocol
+from typing import Protocol
 
 from roomba_bt.oi.encode import Command
 from roomba_bt.oi.frames import SensorFrame
@@ -46,20 +47,21 @@ class Odometry:
     angle_rad: float = 0.0
     left_counts: int | None = None
     right_counts: int | None = None
+    path_mm: float = 0.0  # unsigned path length: "distance driven"
 
     def advance(self, left_counts: int, right_counts: int, wheel_base_mm: float) -> Odometry:
         """The odometry after a frame carrying these raw encoder counts."""
         if self.left_counts is None or self.right_counts is None:
             return Odometry(
                 self.x_mm, self.y_mm, self.theta_rad, self.distance_mm, self.angle_rad,
-                left_counts, right_counts,
+                left_counts, right_counts, self.path_mm,
             )  # fmt: skip
         left = counts_to_mm(encoder_delta(self.left_counts, left_counts))
         right = counts_to_mm(encoder_delta(self.right_counts, right_counts))
         if left == 0.0 and right == 0.0:
             return Odometry(
                 self.x_mm, self.y_mm, self.theta_rad, self.distance_mm, self.angle_rad,
-                left_counts, right_counts,
+                left_counts, right_counts, self.path_mm,
             )  # fmt: skip
         dist, dtheta = arc_from_wheels(left, right, wheel_base_mm)
         mid = self.theta_rad + dtheta / 2.0
@@ -71,6 +73,7 @@ class Odometry:
             self.angle_rad + dtheta,
             left_counts,
             right_counts,
+            self.path_mm + abs(dist),
         )
 
 

@@ -1,0 +1,286 @@
+"""``roomba-bt run`` and ``roomba-bt replay``."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+from roomba_bt.cli.exit_codes import ExitCode
+from roomba_bt.oi.errors import BandwidthError
+from roomba_bt.oi.profiles import PROFILES, RobotProfile, get_profile
+
+
+def register(sub: Any) -> None:
+    run = sub.add_parser(
+        "run",
+        help="run a mission on a robot (--port) or on the built-in simulator",
+        description="Run MISSION. Without --port it runs on the built-in simulator (real time; "
+        "--fast on the virtual clock). Exit codes: 0 succeeded, 1 failed or timed out, "
+        "2 invalid mission or usage, 3 connection or stream failure, 130 interrupted.",
+    )
+    run.add_argument("mission", help="mission YAML file")
+    run.add_argument(
+        "--port", help="serial device or URL (socket://host:port, rfc2217://, loop://)"
+    )
+    run.add_argument("--profile", choices=sorted(PROFILES), default="create2")
+    run.add_argument("--baud", type=int, default=115200, help="baud rate (default 115200)")
+    run.add_argument("--world", help="simulator world: a shipped name or a YAML path")
+    run.add_argument("--seed", type=int, default=0, help="simulator seed (default 0)")
+    run.add_argument(
+        "--random-start", action="store_true", help="start in the world's start region"
+    )
+    run.add_argument(
+        "-p", "--param", action="append", default=[], metavar="NAME=VALUE",
+        help="set a mission parameter, e.g. -p speed=250mm/s (repeatable)",
+    )  # fmt: skip
+    run.add_argument("--timeout", help="give up after this much mission time, e.g. 90s or 5min")
+    run.add_argument("--record", metavar="FILE", help="write every byte in and out, timestamped")
+    run.add_argument("--plot", metavar="FILE.png", help="simulator only: plot the trajectory")
+    run.add_argument("--fast", action="store_true", help="simulator on the virtual clock")
+    run.add_argument(
+        "--end-in", choices=("passive", "stop"), default="passive",
+        help="leave the robot in Passive (Start) or, where the profile has it, Stop (173)",
+    )  # fmt: skip
+    run.add_argument("--watchdog", type=float, default=0.1, help="stream watchdog, seconds")
+    run.add_argument(
+        "--display", choices=("auto", "tree", "log", "none"), default="auto",
+        help="live tree on a terminal (auto), one line per status change (log), or nothing",
+    )  # fmt: skip
+    run.set_defaults(func=run_command)
+
+    replay = sub.add_parser(
+        "replay",
+        help="play a --record file back through the parser, mode model and tree",
+        description="Feed the recorded sensor bytes back through the same parser and tree and "
+        "compare the commands the tree writes with the recorded ones.",
+    )
+    replay.add_argument("record", help="a file written by run --record")
+    replay.add_argument("--mission", help="mission to replay against (default: the recorded one)")
+    replay.add_argument("-p", "--param", action="append", default=[], metavar="NAME=VALUE")
+    replay.set_defaults(func=replay_command)
+
+
+def parse_params(items: list[str]) -> dict[str, str] | str:
+    """``["speed=250mm/s"]`` -> ``{"speed": "250mm/s"}``; a message string on error."""
+    params: dict[str, str] = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip():
+            return f"-p {item!r}: expected NAME=VALUE, e.g. -p speed=250mm/s"
+        params[name.strip()] = value.strip()
+    return params
+
+
+def parse_timeout(text: str | None) -> float | str | None:
+    if text is None:
+        return None
+    from roomba_bt.behaviours.units import UnitError, parse_quantity
+
+    try:
+        seconds = float(text)
+    except ValueError:
+        try:
+            seconds = parse_quantity("duration", text)
+        except UnitError as exc:
+            return f"--timeout {text!r}: {exc}"
+    if seconds <= 0:
+        return f"--timeout {text!r}: must be more than 0 s"
+    return seconds
+
+
+def _error(message: str) -> int:
+    print(f"roomba-bt: {message}", file=sys.stderr)
+    return ExitCode.INVALID
+
+
+def load(path: str, params: dict[str, str], profile: RobotProfile, baud: int) -> Any:
+    """The compiled mission, or an int exit code after printing every diagnostic."""
+    from roomba_bt.mission import MissionError, load_mission
+
+    try:
+        return load_mission(path, params, profile=profile, baud=baud)
+    except MissionError as exc:
+        for diagnostic in exc.diagnostics:
+            print(str(diagnostic), file=sys.stderr)
+        return ExitCode.INVALID
+
+
+def stream_packets(mission: Any, baud: int) -> tuple[int, ...]:
+    """The mission's packets plus what the runtime needs, checked against the baud rate."""
+    from roomba_bt.mission import RUNTIME_PACKETS
+    from roomba_bt.oi.stream import check_bandwidth
+
+    packets = tuple(sorted(set(mission.packets) | set(RUNTIME_PACKETS)))
+    check_bandwidth(packets, baud)
+    return packets
+
+
+def run_command(args: argparse.Namespace) -> int:
+    from roomba_bt.robot.connection import Connection
+    from roomba_bt.robot.errors import ConnectionFailed
+    from roomba_bt.runtime.display import StatusChangeLogger, TerminalDisplay
+    from roomba_bt.runtime.loop import MissionRunner
+    from roomba_bt.runtime.recording import RecordingTransport
+
+    profile = get_profile(args.profile)
+    params = parse_params(args.param)
+    if isinstance(params, str):
+        return _error(params)
+    timeout = parse_timeout(args.timeout)
+    if isinstance(timeout, str):
+        return _error(timeout)
+    if args.port and (args.world or args.plot or args.fast):
+        return _error("--world, --plot and --fast are for the simulator: drop them or --port")
+    if not Path(args.mission).is_file():
+        return _error(f"{args.mission}: no such mission file")
+    mission = load(args.mission, params, profile, args.baud)
+    if isinstance(mission, int):
+        return mission
+    try:
+        packets = stream_packets(mission, args.baud)
+    except BandwidthError as exc:
+        return _error(f"{args.mission}: {exc}")
+
+    simulator = None
+    try:
+        if args.port:
+            connection = Connection.open(
+                args.port, args.baud, profile, watchdog=args.watchdog, end_in=args.end_in
+            )
+            transport: Any = connection.transport
+        else:
+            from roomba_bt.cli.simulated import make_link, make_simulator
+            from roomba_bt.sim import WorldError
+
+            try:
+                simulator = make_simulator(
+                    args.world, profile, args.seed, random_start=args.random_start
+                )
+            except WorldError as exc:
+                return _error(str(exc))
+            transport = make_link(simulator, args.fast)
+            connection = None
+    except ConnectionFailed as exc:
+        print(f"roomba-bt: {exc}", file=sys.stderr)
+        return ExitCode.CONNECTION
+    if args.record:
+        header = {
+            "profile": profile.name,
+            "baud": args.baud,
+            "mission": str(Path(args.mission).resolve()),
+            "parameters": params,
+            "packets": list(packets),
+        }
+        try:
+            transport = RecordingTransport(transport, args.record, header)
+        except OSError as exc:
+            return _error(f"--record {args.record}: {exc.strerror or exc}")
+    if connection is None or args.record:
+        connection = Connection(
+            transport, profile, watchdog=args.watchdog, end_in=args.end_in, baud=args.baud
+        )
+
+    observer: Any = None
+    if args.display == "tree" or (args.display == "auto" and sys.stdout.isatty()):
+        observer = TerminalDisplay(sys.stdout)
+    elif args.display in ("log", "auto"):
+        observer = StatusChangeLogger()
+    print(_render_tree(mission), flush=True)
+    runner = MissionRunner(
+        connection, mission, profile=profile, packets=packets, timeout_s=timeout, observer=observer
+    )
+    summary = runner.run()
+    with _suppress():
+        connection.close()
+    if isinstance(observer, TerminalDisplay) and runner.has_snapshot:
+        observer.render(runner)
+    print(_render_tree(mission, status=True))
+    print(summary)
+    for refusal in runner.refusals[:5]:
+        print(f"refused: {refusal}", file=sys.stderr)
+    if args.plot and simulator is not None:
+        plotted = _plot(simulator, args.plot)
+        if plotted:
+            print(plotted, file=sys.stderr)
+    return summary.exit_code
+
+
+def _render_tree(mission: Any, status: bool = False) -> str:
+    import py_trees
+
+    return str(py_trees.display.unicode_tree(mission.root, show_status=status))
+
+
+def _plot(simulator: Any, path: str) -> str:
+    try:
+        from roomba_bt.sim.plot import plot_run
+    except ImportError as exc:
+        return f"--plot: {exc}"
+    try:
+        plot_run(simulator, path)
+    except ImportError as exc:
+        return f"--plot needs matplotlib (pip install 'roomba-bt[plot]'): {exc}"
+    return f"trajectory written to {path}"
+
+
+class _suppress:
+    def __enter__(self) -> None:
+        return None
+
+    def __exit__(self, *exc: object) -> bool:
+        return True
+
+
+def replay_command(args: argparse.Namespace) -> int:
+    from roomba_bt.robot.connection import Connection
+    from roomba_bt.runtime.loop import MissionRunner
+    from roomba_bt.runtime.recording import RecordError, ReplayTransport, load_record
+
+    try:
+        record = load_record(args.record)
+    except RecordError as exc:
+        return _error(str(exc))
+    header = record.header
+    try:
+        profile = get_profile(str(header.get("profile", "create2")))
+    except ValueError as exc:
+        return _error(f"{args.record}:1: {exc}")
+    mission_path = args.mission or header.get("mission")
+    if not mission_path or not Path(mission_path).is_file():
+        return _error(f"{args.record}: mission {mission_path!r} not found; pass --mission FILE")
+    params = dict(header.get("parameters") or {})
+    extra = parse_params(args.param)
+    if isinstance(extra, str):
+        return _error(extra)
+    params.update(extra)
+    baud = int(header.get("baud", 115200))
+    mission = load(mission_path, params, profile, baud)
+    if isinstance(mission, int):
+        return mission
+    packets = tuple(header.get("packets") or stream_packets(mission, baud))
+    transport = ReplayTransport(record, name=f"replay:{args.record}")
+    connection = Connection(transport, profile, watchdog=0.0, baud=baud)
+    runner = MissionRunner(
+        connection,
+        mission,
+        profile=profile,
+        packets=packets,
+        input_ended=lambda: "end of the record" if transport.exhausted else None,
+    )
+    summary = runner.run()
+    print(summary)
+    recorded, replayed = record.outbound, bytes(transport.written)
+    if recorded == replayed:
+        print(f"replay: the tree wrote the same {len(replayed)} bytes as the recorded run")
+    else:
+        at = next(
+            (i for i, (a, b) in enumerate(zip(recorded, replayed, strict=False)) if a != b),
+            min(len(recorded), len(replayed)),
+        )
+        print(
+            f"replay: the tree's bytes differ from the record at byte {at} "
+            f"(recorded {len(recorded)} bytes, replayed {len(replayed)})"
+        )
+    return summary.exit_code

@@ -1,0 +1,292 @@
+"""The tick loop: one tick per stream frame, commands guarded and flushed once.
+
+Per batch of frames read from the connection::
+
+    frames --(newest only; older ones are stale: dropped and counted)--> Snapshot
+      Snapshot -> blackboard "/roomba/snapshot" (one write) and the RobotHandle
+      root.tick_once()
+      outbox.drain() -> mode guard -> written once, right after the tick
+
+The stream is the clock. Each frame is one 15 ms slot; the tick index advances by the number of
+frames read, or by the slots the arrival times span when frames were lost in transit (a gap is
+measured, not ignored). Mission time is ``tick * 0.015`` s: the same bytes replayed at any
+speed, or a simulation on the virtual clock, make the same decisions. See ``docs/runtime.md``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import threading
+import time
+from collections.abc import Callable, Iterator, Sequence
+from types import FrameType
+from typing import Any, Protocol
+
+import py_trees
+
+from roomba_bt.oi.frames import SensorFrame
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.profiles import RobotProfile
+from roomba_bt.robot.connection import Connection, TimedFrame
+from roomba_bt.robot.errors import ConnectionFailed, LinkDown, ModeError
+from roomba_bt.robot.interface import SLOT_SECONDS, ModeChange, Odometry, Outbox, Snapshot
+from roomba_bt.runtime.summary import Outcome, RunSummary
+
+SNAPSHOT_KEY = "/roomba/snapshot"
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, turned into an exception so that the safe stop runs as for Ctrl-C."""
+
+
+@contextlib.contextmanager
+def terminate_as_interrupt() -> Iterator[None]:
+    """Within the block, SIGTERM raises :class:`Terminated` (main thread only)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum: int, frame: FrameType | None) -> None:
+        raise Terminated()
+
+    previous = signal.signal(signal.SIGTERM, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+class MissionLike(Protocol):
+    name: str
+
+    @property
+    def root(self) -> py_trees.behaviour.Behaviour: ...
+    @property
+    def packets(self) -> tuple[int, ...]: ...
+    def setup(self, robot: Any) -> None: ...
+
+
+TickObserver = Callable[["MissionRunner"], None]
+
+
+class MissionRunner:
+    """Runs one compiled mission on one connection; is the behaviours' ``RobotHandle``."""
+
+    def __init__(
+        self,
+        connection: Connection,
+        mission: MissionLike,
+        *,
+        profile: RobotProfile,
+        packets: Sequence[int],
+        timeout_s: float | None = None,
+        observer: TickObserver | None = None,
+        poll_timeout: float = 0.05,
+        input_ended: Callable[[], str | None] | None = None,
+    ) -> None:
+        self.connection = connection
+        self.mission = mission
+        self._profile = profile
+        self.packets = tuple(packets)
+        self.timeout_s = timeout_s
+        self.observer = observer
+        self.poll_timeout = poll_timeout
+        self.input_ended = input_ended
+        self._outbox = Outbox()
+        self._snapshot: Snapshot | None = None
+        self._odometry = Odometry()
+        self._tick = -1
+        self._last_arrival: float | None = None
+        self.summary = RunSummary(mission.name)
+        self.refusals: list[str] = []
+        self._blackboard: py_trees.blackboard.Client | None = None
+
+    # ---------------------------------------------------------------- RobotHandle
+    @property
+    def snapshot(self) -> Snapshot:
+        if self._snapshot is None:
+            raise RuntimeError("no sensor frame yet: the tree is ticked only after the first")
+        return self._snapshot
+
+    @property
+    def outbox(self) -> Outbox:
+        return self._outbox
+
+    @property
+    def profile(self) -> RobotProfile:
+        return self._profile
+
+    @property
+    def has_snapshot(self) -> bool:
+        return self._snapshot is not None
+
+    # ---------------------------------------------------------------- running
+    def run(self) -> RunSummary:
+        summary = self.summary
+        wall_start = time.perf_counter()
+        root = self.mission.root
+        try:
+            with terminate_as_interrupt():
+                self.connection.start(OIMode.PASSIVE, self.packets)
+                self._blackboard = py_trees.blackboard.Client(name="roomba-bt runtime")
+                self._blackboard.register_key(key=SNAPSHOT_KEY, access=py_trees.common.Access.WRITE)
+                self.mission.setup(self)
+                self._loop(root, summary)
+        except Terminated:
+            summary.outcome, summary.reason = Outcome.INTERRUPTED, "SIGTERM"
+        except KeyboardInterrupt:
+            summary.outcome, summary.reason = Outcome.INTERRUPTED, "Ctrl-C"
+        except ConnectionFailed as exc:
+            summary.outcome, summary.reason = Outcome.CONNECTION_LOST, str(exc)
+        except LinkDown as exc:
+            summary.outcome, summary.reason = Outcome.CONNECTION_LOST, str(exc)
+        except (OSError, ConnectionError) as exc:
+            summary.outcome, summary.reason = (
+                Outcome.CONNECTION_LOST,
+                f"{type(exc).__name__}: {exc}",
+            )
+        except Exception as exc:  # a bug in a behaviour must still end in a safe stop
+            summary.outcome, summary.reason = Outcome.ERROR, f"{type(exc).__name__}: {exc}"
+        finally:
+            self._finish(root, summary, wall_start)
+        return summary
+
+    def _finish(
+        self, root: py_trees.behaviour.Behaviour, summary: RunSummary, wall_start: float
+    ) -> None:
+        with contextlib.suppress(Exception):
+            if root.status == py_trees.common.Status.RUNNING:
+                root.stop(py_trees.common.Status.INVALID)
+        self._outbox.clear()  # whatever a terminating leaf queued: the safe stop supersedes it
+        try:
+            with terminate_as_interrupt():
+                report = self.connection.safe_stop()
+            if report is False:
+                summary.safe_stop = "FAILED: the stop sequence could not be written (port gone?)"
+            else:
+                summary.safe_stop = "drive 0, motors off, stream paused, " + (
+                    "Stop (173)"
+                    if getattr(self.connection, "end_in", "") == "stop"
+                    else "Passive (Start)"
+                )
+        except KeyboardInterrupt:
+            summary.safe_stop = "interrupted during the safe stop"
+        except Exception as exc:
+            summary.safe_stop = f"FAILED: {type(exc).__name__}: {exc}"
+        if self._blackboard is not None:
+            with contextlib.suppress(Exception):
+                self._blackboard.unregister(clear=True)
+        summary.wall_time_s = time.perf_counter() - wall_start
+        snap = self._snapshot
+        if snap is not None:
+            summary.mission_time_s = snap.time
+            summary.distance_mm = snap.odometry.path_mm
+            if 25 in snap.frame and 26 in snap.frame:
+                summary.battery_percent = snap.frame.battery_percent
+        summary.final_mode = self._current_mode()
+        counters = getattr(self.connection, "counters", None)
+        if counters is not None:
+            summary.checksum_failures = int(getattr(counters, "checksum_failures", 0))
+            summary.skipped_bytes = int(getattr(counters, "skipped_bytes", 0))
+
+    def _current_mode(self) -> OIMode | None:
+        mode = getattr(self.connection, "mode", None)
+        return mode if isinstance(mode, OIMode) else None
+
+    def _loop(self, root: py_trees.behaviour.Behaviour, summary: RunSummary) -> None:
+        success, failure = py_trees.common.Status.SUCCESS, py_trees.common.Status.FAILURE
+        perf = time.perf_counter
+        while True:
+            batch = self.connection.poll(self.poll_timeout)
+            if not batch:
+                if self.input_ended is not None and (why := self.input_ended()):
+                    summary.outcome, summary.reason = Outcome.CONNECTION_LOST, why
+                    return
+                continue
+            started = perf()
+            snapshot = self._advance(batch)
+            root.tick_once()
+            self._flush()
+            elapsed = perf() - started
+            summary.ticks += 1
+            if elapsed > SLOT_SECONDS:
+                summary.overruns += 1
+            if elapsed > summary.max_tick_s:
+                summary.max_tick_s = elapsed
+            if self.observer is not None:
+                self.observer(self)
+            status = root.status
+            if status is success:
+                summary.outcome = Outcome.SUCCESS
+                return
+            if status is failure:
+                summary.outcome = Outcome.FAILURE
+                summary.reason = _failure_reason(root)
+                return
+            if self.timeout_s is not None and snapshot.time >= self.timeout_s:
+                summary.outcome = Outcome.TIMEOUT
+                summary.reason = f"--timeout {self.timeout_s:g} s of mission time ran out"
+                return
+
+    def _advance(self, batch: Sequence[TimedFrame]) -> Snapshot:
+        """Newest frame of the batch -> the tick's snapshot; stale frames and gaps counted."""
+        newest = batch[-1]
+        frame: SensorFrame = newest.frame
+        arrival: float = newest.time
+        count = len(batch)
+        self.summary.stale_frames_dropped += count - 1
+        if self._last_arrival is None:
+            slots = 1
+        else:
+            spanned = round((arrival - self._last_arrival) / SLOT_SECONDS)
+            slots = max(count, spanned)
+            self.summary.frames_lost += slots - count
+        self._last_arrival = arrival
+        self._tick += slots
+        if 43 in frame and 44 in frame:
+            self._odometry = self._odometry.advance(
+                frame[43], frame[44], self._profile.wheel_base_mm
+            )
+        connection = self.connection
+        mode = connection.mode
+        fallback = connection.last_fallback
+        snapshot = Snapshot(
+            frame=frame,
+            tick=self._tick,
+            time=self._tick * SLOT_SECONDS,
+            mode=mode,
+            odometry=self._odometry,
+            last_fallback=fallback if isinstance(fallback, ModeChange) else None,
+            profile=self._profile,
+            frames_lost=self.summary.frames_lost,
+        )
+        self._snapshot = snapshot
+        if self._blackboard is not None:
+            self._blackboard.set(SNAPSHOT_KEY, snapshot, overwrite=True)
+        return snapshot
+
+    def _flush(self) -> None:
+        if not len(self._outbox):
+            return
+        for command in self._outbox.drain():
+            try:
+                self.connection.send(command)
+                self.summary.commands_written += 1
+            except ModeError as exc:
+                self.summary.refused_commands += 1
+                if len(self.refusals) < 100:
+                    self.refusals.append(str(exc))
+
+
+def _failure_reason(root: py_trees.behaviour.Behaviour) -> str:
+    """The deepest failed leaf's name and feedback: what a user needs to read first."""
+    failed = [
+        node
+        for node in root.iterate()
+        if node.status == py_trees.common.Status.FAILURE and not node.children
+    ]
+    if not failed:
+        return root.feedback_message or root.name
+    leaf = failed[-1]
+    return f"{leaf.name}: {leaf.feedback_message}" if leaf.feedback_message else leaf.name

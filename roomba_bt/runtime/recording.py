@@ -1,0 +1,192 @@
+"""``--record`` and ``replay``: every byte in and out, with its time, and playing it back.
+
+A record is JSON Lines, one object a line::
+
+    {"format": "roomba-bt-record", "version": 1, "profile": "create2", "baud": 115200,
+     "mission": "missions/dock.yaml", "parameters": {...}, "packets": [7, 9, ...]}
+    {"t": 0.000000, "d": "out", "b": "80"}          <- host -> robot, hex
+    {"t": 0.015012, "d": "in",  "b": "1305..."}     <- robot -> host, hex
+
+``t`` is the link's own clock (``transport.now()``) relative to the first byte, so a record
+made on the virtual clock replays identically, and one made on a robot replays with the
+robot's timing. Replay feeds the recorded "in" bytes, at their recorded times, through the same
+parser, mode model and tree; the bytes the tree writes are compared with the recorded "out"
+bytes to show where a changed mission decides differently.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import IO, Any, Protocol
+
+RECORD_FORMAT = "roomba-bt-record"
+RECORD_VERSION = 1
+
+
+class TransportLike(Protocol):
+    name: str
+
+    def write(self, data: bytes) -> None: ...
+    def read(self, timeout: float) -> bytes: ...
+    def set_baud(self, baud: int) -> None: ...
+    def close(self) -> None: ...
+    @property
+    def is_open(self) -> bool: ...
+    def now(self) -> float: ...
+
+
+class RecordingTransport:
+    """Wraps a transport; writes every chunk in and out to a JSON Lines record."""
+
+    def __init__(self, inner: TransportLike, path: str | Path, header: dict[str, Any]) -> None:
+        self._inner = inner
+        self.name = inner.name
+        self._file: IO[str] = open(path, "w", encoding="utf-8")  # noqa: SIM115
+        self._t0: float | None = None
+        head = {"format": RECORD_FORMAT, "version": RECORD_VERSION, **header}
+        self._file.write(json.dumps(head) + "\n")
+
+    def _log(self, direction: str, data: bytes) -> None:
+        now = self._inner.now()
+        if self._t0 is None:
+            self._t0 = now
+        self._file.write(
+            f'{{"t": {now - self._t0:.6f}, "d": "{direction}", "b": "{data.hex()}"}}\n'
+        )
+
+    def write(self, data: bytes) -> None:
+        self._inner.write(data)
+        if not self._file.closed:
+            self._log("out", data)
+
+    def read(self, timeout: float) -> bytes:
+        data = self._inner.read(timeout)
+        if data and not self._file.closed:
+            self._log("in", data)
+        return data
+
+    def set_baud(self, baud: int) -> None:
+        self._inner.set_baud(baud)
+
+    def close(self) -> None:
+        try:
+            self._inner.close()
+        finally:
+            if not self._file.closed:
+                self._file.close()
+
+    @property
+    def is_open(self) -> bool:
+        return self._inner.is_open
+
+    def now(self) -> float:
+        return self._inner.now()
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._inner, name)
+
+
+class RecordError(ValueError):
+    """A record file that cannot be replayed; names the file and line."""
+
+
+@dataclass
+class Record:
+    header: dict[str, Any]
+    chunks: list[tuple[float, str, bytes]] = field(default_factory=list)
+
+    @property
+    def inbound(self) -> list[tuple[float, bytes]]:
+        return [(t, b) for t, d, b in self.chunks if d == "in"]
+
+    @property
+    def outbound(self) -> bytes:
+        return b"".join(b for _, d, b in self.chunks if d == "out")
+
+
+def load_record(path: str | Path) -> Record:
+    """Read a record; :class:`RecordError` names the file and line of anything malformed."""
+    path = Path(path)
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+    except OSError as exc:
+        raise RecordError(f"{path}: cannot read record: {exc.strerror or exc}") from None
+    if not lines:
+        raise RecordError(f"{path}:1: empty file; expected a {RECORD_FORMAT} header line")
+    try:
+        header = json.loads(lines[0])
+    except json.JSONDecodeError as exc:
+        raise RecordError(f"{path}:1:{exc.colno}: header is not JSON: {exc.msg}") from None
+    if not isinstance(header, dict) or header.get("format") != RECORD_FORMAT:
+        raise RecordError(f"{path}:1: not a {RECORD_FORMAT} file (header format field)")
+    if header.get("version") != RECORD_VERSION:
+        raise RecordError(
+            f"{path}:1: record version {header.get('version')!r}; this roomba-bt reads "
+            f"version {RECORD_VERSION}"
+        )
+    record = Record(header)
+    for number, line in enumerate(lines[1:], start=2):
+        if not line.strip():
+            continue
+        try:
+            item = json.loads(line)
+            t, d, b = float(item["t"]), str(item["d"]), bytes.fromhex(item["b"])
+        except (json.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
+            raise RecordError(
+                f"{path}:{number}: malformed chunk ({type(exc).__name__}: {exc}); expected "
+                '{"t": seconds, "d": "in"|"out", "b": hex}'
+            ) from None
+        if d not in ("in", "out"):
+            raise RecordError(f"{path}:{number}: direction {d!r}; allowed: in, out")
+        record.chunks.append((t, d, b))
+    return record
+
+
+class ReplayTransport:
+    """A transport that plays back the "in" side of a record on the recorded clock.
+
+    ``read`` returns the next recorded chunk and sets the clock to its time; ``write`` keeps
+    what the host sends, for comparison with the record's "out" side.
+    """
+
+    def __init__(self, record: Record, name: str = "replay") -> None:
+        self.name = name
+        self._inbound = record.inbound
+        self._next = 0
+        self._now = 0.0
+        self._open = True
+        self.written = bytearray()
+
+    def write(self, data: bytes) -> None:
+        self.written += data
+
+    def read(self, timeout: float) -> bytes:
+        if self._next >= len(self._inbound):
+            self._now += timeout
+            return b""
+        t, data = self._inbound[self._next]
+        if t > self._now + timeout:
+            self._now += timeout
+            return b""
+        self._next += 1
+        self._now = max(self._now, t)
+        return data
+
+    @property
+    def exhausted(self) -> bool:
+        return self._next >= len(self._inbound)
+
+    def set_baud(self, baud: int) -> None:
+        pass
+
+    def close(self) -> None:
+        self._open = False
+
+    @property
+    def is_open(self) -> bool:
+        return self._open
+
+    def now(self) -> float:
+        return self._now

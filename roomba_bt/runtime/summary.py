@@ -1,0 +1,83 @@
+"""How a run ended, and the figures printed at the end of every run."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import Enum
+
+from roomba_bt.oi.modes import OIMode
+
+
+class Outcome(Enum):
+    SUCCESS = "success"
+    FAILURE = "failure"
+    TIMEOUT = "timeout"
+    INTERRUPTED = "interrupted"
+    CONNECTION_LOST = "connection lost"
+    ERROR = "error"
+
+    @property
+    def exit_code(self) -> int:
+        """The documented ``roomba-bt run`` exit code (see ``docs/runtime.md``)."""
+        return _EXIT[self]
+
+
+_EXIT = {
+    Outcome.SUCCESS: 0,
+    Outcome.FAILURE: 1,
+    Outcome.TIMEOUT: 1,
+    Outcome.INTERRUPTED: 130,
+    Outcome.CONNECTION_LOST: 3,
+    Outcome.ERROR: 1,
+}
+
+
+@dataclass
+class RunSummary:
+    """The end-of-run report; every field is measured, none is assumed."""
+
+    mission: str
+    outcome: Outcome = Outcome.ERROR
+    reason: str = ""
+    mission_time_s: float = 0.0
+    wall_time_s: float = 0.0
+    ticks: int = 0
+    overruns: int = 0
+    stale_frames_dropped: int = 0
+    frames_lost: int = 0
+    checksum_failures: int = 0
+    skipped_bytes: int = 0
+    refused_commands: int = 0
+    commands_written: int = 0
+    distance_mm: float = 0.0
+    final_mode: OIMode | None = None
+    battery_percent: float | None = None
+    safe_stop: str = "not attempted"
+    max_tick_s: float = 0.0
+
+    @property
+    def exit_code(self) -> int:
+        return self.outcome.exit_code
+
+    def lines(self) -> list[str]:
+        mode = self.final_mode.label if self.final_mode is not None else "unknown"
+        battery = f"{self.battery_percent:.0f}%" if self.battery_percent is not None else "n/a"
+        reason = f" ({self.reason})" if self.reason else ""
+        return [
+            f"mission      {self.mission}",
+            f"outcome      {self.outcome.value.upper()}{reason}",
+            f"duration     {self.mission_time_s:.2f} s mission time, {self.wall_time_s:.2f} s wall",
+            f"ticks        {self.ticks} ({self.overruns} overruns > 15 ms, "
+            f"slowest {self.max_tick_s * 1000:.2f} ms)",
+            f"frames       {self.stale_frames_dropped} stale dropped, {self.frames_lost} lost, "
+            f"{self.checksum_failures} checksum failures, {self.skipped_bytes} bytes skipped",
+            f"commands     {self.commands_written} written, "
+            f"{self.refused_commands} refused by the mode guard",
+            f"distance     {self.distance_mm / 1000:.2f} m",
+            f"final mode   {mode}",
+            f"battery      {battery}",
+            f"safe stop    {self.safe_stop}",
+        ]
+
+    def __str__(self) -> str:
+        return "\n".join(self.lines())
