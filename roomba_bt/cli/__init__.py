@@ -56,6 +56,8 @@ def setup_logging(verbose: int, quiet: int) -> None:
         format="%(asctime)s %(levelname)s %(name)s: %(message)s",
         stream=sys.stderr,
     )
+    # transitions logs every state callback at INFO: only worth seeing at -vv.
+    logging.getLogger("transitions").setLevel(logging.DEBUG if verbose >= 2 else logging.WARNING)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
