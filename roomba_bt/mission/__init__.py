@@ -1,0 +1,142 @@
+"""Missions: YAML compiled into py_trees behaviour trees, checked before anything moves.
+
+    mission = load_mission("missions/examples/square.yaml", {"side": "50cm"})
+    mission.setup(robot)              # the robot handle reaches every leaf
+    mission.root.tick_once()          # once per 15 ms stream frame (the runtime does this)
+
+:func:`load_mission` raises :class:`MissionError` with every :class:`Diagnostic` at once;
+:func:`validate_files` returns them. Never opens a port.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+
+from roomba_bt.behaviours.registry import Registry, default_registry
+from roomba_bt.mission.build import CompiledMission, build
+from roomba_bt.mission.checks import RUNTIME_PACKETS, KeyCheck, ModeCheck, check_stream
+from roomba_bt.mission.compiler import Compiler, Context
+from roomba_bt.mission.diagnostics import Diagnostic, MissionError
+from roomba_bt.oi.modes import ALL_MODES, OIMode
+from roomba_bt.oi.profiles import CREATE2, RobotProfile
+
+__all__ = [
+    "RUNTIME_PACKETS",
+    "CompiledMission",
+    "Diagnostic",
+    "MissionError",
+    "compile_mission",
+    "load_mission",
+    "validate_files",
+]
+
+
+def _display(path: Path) -> str:
+    try:
+        return str(path.resolve().relative_to(Path.cwd()))
+    except ValueError:
+        return str(path)
+
+
+def compile_mission(
+    path: str | Path,
+    params: Mapping[str, str] | None = None,
+    *,
+    profile: RobotProfile = CREATE2,
+    baud: int | None = None,
+    registry: Registry | None = None,
+    require_tree: bool = True,
+) -> tuple[CompiledMission | None, list[Diagnostic]]:
+    """Compile and check; ``(mission or None, diagnostics)``. Never raises for bad input."""
+    path = Path(path)
+    ctx = Context(registry=registry or default_registry())
+    compiler = Compiler(ctx, _display)
+    parsed = compiler.compile_file(path, dict(params or {}), require_tree=require_tree)
+    if parsed is None or parsed.tree is None:
+        return None, sorted(ctx.diagnostics)
+    tree = parsed.tree
+    modes = ModeCheck()
+    modes.run(tree)
+    keys = KeyCheck()
+    keys.run(tree, frozenset(k for k, d in ctx.keys.items() if d.has_initial))
+    packets: set[int] = set()
+    needed: set[OIMode] = set()
+    for node in tree.walk():
+        if node.decl is not None:
+            packets.update(node.decl.packets(node.params))
+            if node.decl.modes != ALL_MODES and node.decl.is_actuator:
+                needed.update(node.decl.modes)
+            after = node.decl.mode_after(node.params)
+            if after is not None:
+                needed.add(after)
+    diagnostics = ctx.diagnostics + modes.errors + keys.errors
+    problem = check_stream(tuple(sorted(packets)), baud or profile.default_baud)
+    if problem is not None:
+        assert parsed.tree_loc is not None
+        diagnostics.append(parsed.tree_loc.at(problem))
+    if diagnostics:
+        return None, sorted(set(diagnostics))
+    mission = CompiledMission(
+        name=parsed.name,
+        description=parsed.description,
+        root=build(tree),
+        packets=tuple(sorted(packets)),
+        modes_needed=frozenset(needed),
+        parameters={name: bound.value for name, bound in parsed.params.items()},
+        source=path,
+        blackboard_initial={k: d.initial for k, d in ctx.keys.items() if d.has_initial},
+        blackboard_keys={k: d.type.describe() for k, d in ctx.keys.items()},
+    )
+    return mission, []
+
+
+def load_mission(
+    path: str | Path,
+    params: Mapping[str, str] | None = None,
+    *,
+    profile: RobotProfile = CREATE2,
+    baud: int = 115200,
+    registry: Registry | None = None,
+) -> CompiledMission:
+    """Compile the mission at ``path`` with ``params`` (``-p name=value`` strings); raises
+    :class:`MissionError` carrying every diagnostic."""
+    mission, diagnostics = compile_mission(
+        path, params, profile=profile, baud=baud, registry=registry
+    )
+    if mission is None:
+        raise MissionError(diagnostics)
+    return mission
+
+
+def validate_files(
+    paths: Iterable[str | Path],
+    params: Mapping[str, str] | None = None,
+    *,
+    profile: RobotProfile = CREATE2,
+    baud: int = 115200,
+    registry: Registry | None = None,
+) -> list[Diagnostic]:
+    """Every diagnostic of every file. A file without ``tree:`` is checked as a library of
+    subtrees (what ``include`` brings in)."""
+    out: list[Diagnostic] = []
+    for path in paths:
+        path = Path(path)
+        require_tree = _has_tree(path)
+        _, diagnostics = compile_mission(
+            path, params, profile=profile, baud=baud, registry=registry,
+            require_tree=require_tree,
+        )  # fmt: skip
+        out.extend(diagnostics)
+    return out
+
+
+def _has_tree(path: Path) -> bool:
+    """A library file (no top-level ``tree:`` and some ``subtrees:``) needs no tree."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return True
+    lines = [line for line in text.splitlines() if line and not line[0].isspace()]
+    has_subtrees = any(line.startswith("subtrees:") for line in lines)
+    return not has_subtrees or any(line.startswith("tree:") for line in lines)

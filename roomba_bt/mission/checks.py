@@ -1,0 +1,242 @@
+"""Static checks over the whole tree, before anything moves.
+
+* **Modes.** Each actuator leaf (Drive 137, Motors 138, LEDs 139, Play 141, ...) is accepted
+  only in Safe or Full (the opcode table's ``modes``). Starting from Passive (the runtime's
+  Start 128), the set of modes the robot may be in is carried through the tree: a sequence
+  threads it child to child; a fallback hands each alternative the modes its predecessor may
+  have *failed* in; a parallel branch also sees the modes its sibling branches may set; loops
+  (retry, repeat, for_each, reactive composites) iterate to a fixed point; a preempting
+  decorator (timeout, while/until) may end its child anywhere. An actuator reached with any
+  mode outside its allowed set is an error: some path lacks the mode change.
+  (At run time the mode model guards every command again: a cliff in Safe drops the robot
+  to Passive whatever this proof said.)
+* **Blackboard.** Every key read (``@key`` values, ``check``, ``odometry.since``) must be
+  written on every path before it: by an ``initial`` value, a ``set``/``mark`` earlier in a
+  sequence, or the ``for_each`` that owns it. Fallback alternatives and parallel branches
+  guarantee only what all of them write.
+* **Bandwidth.** The packets the leaves read, plus the runtime's own
+  (:data:`RUNTIME_PACKETS`), must fit one 15 ms stream frame at the chosen baud.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from roomba_bt.mission.diagnostics import Diagnostic
+from roomba_bt.mission.ir import Node
+from roomba_bt.oi.errors import BandwidthError
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.opcodes import COMMANDS
+from roomba_bt.oi.stream import check_bandwidth
+
+#: Packets the runtime always streams, whatever the mission reads: bumps and wheel drops (7),
+#: the four cliffs (9-12) for its safety stop, charging sources (34), OI mode (35) for the
+#: mode model, and the encoders (43, 44) for odometry. The runtime and the validator both
+#: use this one constant.
+RUNTIME_PACKETS: tuple[int, ...] = (7, 9, 10, 11, 12, 34, 35, 43, 44)
+
+Modes = frozenset[OIMode]
+_EMPTY: Modes = frozenset()
+
+
+def _label(modes: frozenset[OIMode]) -> str:
+    return " or ".join(m.label for m in sorted(modes))
+
+
+class ModeCheck:
+    """The static mode pass; ``errors`` after :meth:`run`."""
+
+    def __init__(self) -> None:
+        self.errors: list[Diagnostic] = []
+        self._reported: set[int] = set()
+
+    def run(self, root: Node, start: Modes = frozenset({OIMode.PASSIVE})) -> None:
+        self.visit(root, start)
+
+    def visit(self, node: Node, entry: Modes) -> tuple[Modes, Modes]:
+        """(modes on SUCCESS, modes on FAILURE) after ``node`` entered in ``entry``."""
+        if not entry:
+            return _EMPTY, _EMPTY
+        kind = node.kind
+        handler: Callable[[Node, Modes], tuple[Modes, Modes]] = getattr(
+            self, f"_{kind}", self._decorator
+        )
+        return handler(node, entry)
+
+    def _leaf(self, node: Node, entry: Modes) -> tuple[Modes, Modes]:
+        decl = node.decl
+        assert decl is not None
+        allowed = decl.modes
+        bad = entry - allowed
+        if bad and id(node) not in self._reported:
+            self._reported.add(id(node))
+            refused = [COMMANDS[op] for op in decl.sends if bad - COMMANDS[op].modes]
+            sends = ", ".join(f"{c.title} ({c.opcode})" for c in refused)
+            self.errors.append(
+                node.loc.at(
+                    f"{decl.name} sends {sends}, accepted only in {_label(allowed)} mode, "
+                    f"but it can be reached in {_label(bad)} mode: put a mode change "
+                    "(mode: safe or mode: full) before it on every path"
+                )
+            )
+        after = decl.mode_after(node.params)
+        success = frozenset({after}) if after is not None else entry
+        return success, entry
+
+    def _sequence(self, node: Node, entry: Modes) -> tuple[Modes, Modes]:
+        def once(start: Modes) -> tuple[Modes, Modes, Modes]:
+            current, failed, seen = start, _EMPTY, start
+            for child in node.children:
+                ok, ko = self.visit(child, current)
+                failed |= ko
+                seen |= ok | ko
+                current = ok
+            return current, failed, seen
+
+        success, failure, seen = once(entry)
+        if not node.options.get("memory", True):  # reactive: earlier children run again
+            success, failure, _ = once(entry | seen)
+        return success, failure
+
+    def _selector(self, node: Node, entry: Modes) -> tuple[Modes, Modes]:
+        def once(start: Modes) -> tuple[Modes, Modes, Modes]:
+            current, succeeded, seen = start, _EMPTY, start
+            for child in node.children:
+                ok, ko = self.visit(child, current)
+                succeeded |= ok
+                seen |= ok | ko
+                current = ko
+            return succeeded, current, seen
+
+        success, failure, seen = once(entry)
+        if not node.options.get("memory", True):
+            success, failure, _ = once(entry | seen)
+        return success, failure
+
+    _reactive_sequence = _sequence
+    _fallback = _selector
+    _reactive_fallback = _selector
+    _reactive_selector = _selector
+
+    def _parallel(self, node: Node, entry: Modes) -> tuple[Modes, Modes]:
+        produced = entry
+        for child in node.children:
+            ok, ko = self.visit(child, entry)
+            produced |= ok | ko
+        success, failure = _EMPTY, _EMPTY
+        for child in node.children:
+            ok, ko = self.visit(child, produced)
+            success |= ok
+            failure |= ko
+        return success | failure, failure | success
+
+    def _loop(self, node: Node, entry: Modes, on: str) -> tuple[Modes, Modes]:
+        child = node.children[0]
+        current = entry
+        for _ in range(4):
+            ok, ko = self.visit(child, current)
+            again = entry | (ok if on == "success" else ko)
+            if again == current:
+                break
+            current = again
+        return ok, ko
+
+    def _decorator(self, node: Node, entry: Modes) -> tuple[Modes, Modes]:
+        kind = node.kind
+        if kind == "guard":
+            self.visit(node.children[0], entry)
+            ok, ko = self.visit(node.children[1], entry)
+            anywhere = entry | ok | ko | _leads_to_within(node.children[1])
+            return (ok | anywhere, ko) if node.options["until"] else (ok, ko | anywhere)
+        if kind in ("repeat", "for_each"):
+            ok, ko = self._loop(node, entry, "success")
+            return (ok | entry if kind == "for_each" else ok), ko
+        if kind == "retry":
+            return self._loop(node, entry, "failure")
+        ok, ko = self.visit(node.children[0], entry)
+        if kind == "inverter":
+            return ko, ok
+        if kind == "force_success":
+            return ok | ko, _EMPTY
+        if kind == "force_failure":
+            return _EMPTY, ok | ko
+        if kind == "timeout":
+            return ok, ko | ok | entry | _leads_to_within(node.children[0])
+        if kind == "oneshot":
+            return ok | entry, ko | entry
+        return ok, ko  # delay
+
+
+def _leads_to_within(node: Node) -> Modes:
+    out: set[OIMode] = set()
+    for n in node.walk():
+        if n.decl is not None:
+            after = n.decl.mode_after(n.params)
+            if after is not None:
+                out.add(after)
+    return frozenset(out)
+
+
+class KeyCheck:
+    """The static read-before-write pass over blackboard keys."""
+
+    def __init__(self) -> None:
+        self.errors: list[Diagnostic] = []
+        self._reported: set[tuple[int, str]] = set()
+
+    def run(self, root: Node, initial: frozenset[str]) -> None:
+        self.visit(root, initial)
+
+    def visit(self, node: Node, written: frozenset[str]) -> frozenset[str]:
+        """Keys certainly written after ``node`` succeeds."""
+        kind = node.kind
+        if kind == "leaf":
+            for key, loc in node.keys_read():
+                if key not in written and (id(node), key) not in self._reported:
+                    self._reported.add((id(node), key))
+                    self.errors.append(
+                        loc.at(
+                            f"{node.name} reads blackboard key {key!r} before anything writes "
+                            "it on some path: give it an initial value under blackboard:, "
+                            "or write it first (set, mark, for_each)"
+                        )
+                    )
+            return written | frozenset(node.keys_written())
+        if kind in ("sequence", "reactive_sequence"):
+            current = written
+            for child in node.children:
+                current = self.visit(child, current)
+            return current
+        if kind in ("fallback", "selector", "reactive_fallback", "reactive_selector"):
+            outs = [self.visit(child, written) for child in node.children]
+            return frozenset.intersection(*outs) if outs else written
+        if kind == "parallel":
+            outs = [self.visit(child, written) for child in node.children]
+            if node.options.get("policy") == "all":
+                return frozenset().union(*outs)
+            return frozenset.intersection(*outs) if outs else written
+        if kind == "for_each":
+            self.visit(node.children[0], written | {node.options["key"]})
+            return written | ({node.options["key"]} if node.options.get("items") else set())
+        if kind == "guard":
+            self.visit(node.children[0], written)
+            inner = self.visit(node.children[1], written)
+            return written if node.options["until"] else inner
+        inner = self.visit(node.children[0], written)
+        if kind in ("inverter", "force_success", "force_failure", "oneshot"):
+            return written
+        return inner
+
+
+def check_stream(packets: tuple[int, ...], baud: int) -> str | None:
+    """The bandwidth error message for a mission reading ``packets``, or None."""
+    ids = tuple(sorted(set(packets) | set(RUNTIME_PACKETS)))
+    try:
+        check_bandwidth(ids, baud)
+    except BandwidthError as exc:
+        extra = sorted(set(packets) - set(RUNTIME_PACKETS))
+        return (
+            f"the sensor packets this mission reads ({extra} plus the runtime's "
+            f"{list(RUNTIME_PACKETS)}) do not fit the stream: {exc}"
+        )
+    return None

@@ -1,0 +1,37 @@
+"""Diagnostics: every error a mission has, at once, each with its place in the file.
+
+``str(diagnostic)`` is the format compilers and editors understand::
+
+    square.yaml:12:18: drive: velocity 600 mm/s is out of range: allowed -500..500 mm/s
+                       [tree.sequence[2].drive.velocity]   (on the same line)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True, slots=True, order=True)
+class Diagnostic:
+    """One error: file, 1-based line and column, the message, and the YAML path."""
+
+    file: str
+    line: int
+    column: int
+    message: str
+    yaml_path: str = ""
+
+    def __str__(self) -> str:
+        where = f" [{self.yaml_path}]" if self.yaml_path else ""
+        return f"{self.file}:{self.line}:{self.column}: {self.message}{where}"
+
+
+class MissionError(Exception):
+    """A mission that cannot be compiled; ``diagnostics`` holds every error found."""
+
+    def __init__(self, diagnostics: Iterable[Diagnostic]) -> None:
+        self.diagnostics: list[Diagnostic] = list(diagnostics)
+        count = len(self.diagnostics)
+        head = f"{count} error{'s' if count != 1 else ''} in mission"
+        super().__init__("\n".join([head, *(str(d) for d in self.diagnostics)]))

@@ -1,0 +1,88 @@
+"""The compiler's intermediate tree: what the YAML said, checked, with its place in the file.
+
+The parser builds it, the static checks (:mod:`roomba_bt.mission.checks`) walk it, and the
+builder turns it into py_trees objects. Keeping it apart from py_trees means a mission is
+fully checked before a single behaviour object exists.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from typing import Any
+
+from roomba_bt.behaviours.declare import BlackboardRef, Declaration
+from roomba_bt.behaviours.units import ValueType
+from roomba_bt.mission.source import Loc
+
+#: Composite words -> (py_trees class name, default memory).
+COMPOSITES: dict[str, tuple[str, bool]] = {
+    "sequence": ("Sequence", True),
+    "reactive_sequence": ("Sequence", False),
+    "fallback": ("Selector", True),
+    "selector": ("Selector", True),
+    "reactive_fallback": ("Selector", False),
+    "reactive_selector": ("Selector", False),
+    "parallel": ("Parallel", False),
+}
+#: Decorators whose value is the child itself (``inverter: {bump: {}}``) or ``{do: child}``.
+SIMPLE_DECORATORS = ("inverter", "force_success", "force_failure")
+#: Decorators with options and a ``do:`` child.
+DECORATORS = ("retry", "repeat", "timeout", "delay", "oneshot", "for_each")
+MODIFIERS = ("name", "while", "until")
+LANGUAGE_WORDS: tuple[str, ...] = (
+    *COMPOSITES, *SIMPLE_DECORATORS, *DECORATORS, "subtree",
+)  # fmt: skip
+
+
+@dataclass(eq=False)
+class Node:
+    """One node of the checked tree."""
+
+    kind: str  # "leaf", a composite or decorator word, or "guard"
+    loc: Loc
+    name: str
+    children: list[Node] = field(default_factory=list)
+    decl: Declaration | None = None
+    params: dict[str, Any] = field(default_factory=dict)
+    options: dict[str, Any] = field(default_factory=dict)
+
+    def walk(self) -> Iterator[Node]:
+        yield self
+        for child in self.children:
+            yield from child.walk()
+
+    def keys_read(self) -> list[tuple[str, Loc]]:
+        """Blackboard keys this leaf reads (``@key`` values and key-naming parameters)."""
+        out: list[tuple[str, Loc]] = []
+        if self.decl is None:
+            return out
+        for pname in self.decl.reads_keys:
+            value = self.params.get(pname)
+            if isinstance(value, str):
+                out.append((value, self.options.get(f"loc:{pname}", self.loc)))
+        for pname, value in self.params.items():
+            if isinstance(value, BlackboardRef):
+                out.append((value.key, self.options.get(f"loc:{pname}", self.loc)))
+        return out
+
+    def keys_written(self) -> list[str]:
+        if self.decl is None:
+            return []
+        return [
+            str(self.params[p])
+            for p in self.decl.writes_keys
+            if isinstance(self.params.get(p), str)
+        ]
+
+
+@dataclass(frozen=True, slots=True)
+class KeyDecl:
+    """A declared blackboard key."""
+
+    name: str
+    type: ValueType
+    loc: Loc
+    initial: Any = None
+    has_initial: bool = False
+    doc: str = ""

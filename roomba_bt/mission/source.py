@@ -1,0 +1,168 @@
+"""Safe YAML with positions: composed nodes (never constructed Python objects) and marks.
+
+Only the YAML core types are built (str, int, float, bool, null, lists, mappings); a tag that
+would build a Python object (``!!python/object``) or any custom tag is an error, never
+executed. Every value keeps its line and column so that each error can point at it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from roomba_bt.mission.diagnostics import Diagnostic
+
+_Loader: type[Any] = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+_CONSTRUCTOR = yaml.constructor.SafeConstructor()
+_CORE = "tag:yaml.org,2002:"
+_SCALAR_TAGS = {_CORE + t for t in ("str", "int", "float", "bool", "null")}
+
+
+@dataclass(frozen=True, slots=True)
+class Loc:
+    """Where a value is: file, 1-based line and column, YAML path."""
+
+    file: str
+    line: int
+    column: int
+    path: str
+
+    def at(self, message: str) -> Diagnostic:
+        return Diagnostic(self.file, self.line, self.column, message, self.path)
+
+    def child(self, node: yaml.Node, segment: str) -> Loc:
+        return loc_of(node, self.file, join(self.path, segment))
+
+
+def join(path: str, segment: str) -> str:
+    if not path:
+        return segment
+    return f"{path}{segment}" if segment.startswith("[") else f"{path}.{segment}"
+
+
+def loc_of(node: yaml.Node, file: str, path: str) -> Loc:
+    mark = node.start_mark
+    return Loc(file, mark.line + 1, mark.column + 1, path)
+
+
+def compose(path: Path, display: str) -> tuple[yaml.Node | None, list[Diagnostic]]:
+    """The document's root node, or the syntax error as a diagnostic."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        return None, [Diagnostic(display, 1, 1, f"cannot read mission file: {exc.strerror}")]
+    except UnicodeDecodeError as exc:
+        return None, [Diagnostic(display, 1, 1, f"mission file is not UTF-8 text: {exc.reason}")]
+    return compose_text(text, display)
+
+
+def compose_text(text: str, display: str) -> tuple[yaml.Node | None, list[Diagnostic]]:
+    try:
+        node = yaml.compose(text, Loader=_Loader)
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        line, column = (mark.line + 1, mark.column + 1) if mark else (1, 1)
+        problem = exc.problem or exc.context or "invalid YAML"
+        return None, [Diagnostic(display, line, column, f"YAML syntax error: {problem}")]
+    except yaml.YAMLError as exc:
+        return None, [Diagnostic(display, 1, 1, f"YAML error: {exc}")]
+    if node is None:
+        return None, [Diagnostic(display, 1, 1, "the mission file is empty")]
+    return node, []
+
+
+class Bad(Exception):
+    """A value that cannot be used; carries its diagnostic."""
+
+    def __init__(self, diagnostic: Diagnostic) -> None:
+        super().__init__(str(diagnostic))
+        self.diagnostic = diagnostic
+
+
+def check_tag(node: yaml.Node, loc: Loc) -> None:
+    tag = node.tag or ""
+    if isinstance(node, yaml.ScalarNode):
+        if tag in _SCALAR_TAGS or (
+            tag.startswith(_CORE)
+            and tag[len(_CORE) :]
+            in (
+                "timestamp",
+                "binary",
+            )
+        ):
+            return
+    elif (isinstance(node, yaml.SequenceNode) and tag == _CORE + "seq") or (
+        isinstance(node, yaml.MappingNode) and tag == _CORE + "map"
+    ):
+        return
+    raise Bad(loc.at(f"YAML tag {tag!r} is not allowed: missions use plain values only"))
+
+
+def plain(node: yaml.Node, loc: Loc) -> Any:
+    """The node as plain Python data (scalars, lists, dicts), tags checked."""
+    check_tag(node, loc)
+    if isinstance(node, yaml.ScalarNode):
+        if node.tag in (_CORE + "timestamp", _CORE + "binary"):
+            return str(node.value)
+        return _CONSTRUCTOR.construct_object(node, deep=True)
+    if isinstance(node, yaml.SequenceNode):
+        return [plain(item, loc.child(item, f"[{i}]")) for i, item in enumerate(node.value)]
+    out: dict[Any, Any] = {}
+    for key, value in node.value:
+        out[plain(key, loc.child(key, str(key.value)))] = plain(
+            value, loc.child(value, str(key.value))
+        )
+    return out
+
+
+def mapping(node: yaml.Node, loc: Loc, what: str) -> list[tuple[str, yaml.Node, Loc, Loc]]:
+    """``(key, value node, key loc, value loc)`` of a mapping; duplicate or non-text keys are
+    errors."""
+    check_tag(node, loc)
+    if not isinstance(node, yaml.MappingNode):
+        raise Bad(loc.at(f"{what} must be a mapping (key: value), got {kind_of(node)}"))
+    seen: dict[str, int] = {}
+    out = []
+    for key_node, value_node in node.value:
+        key_loc = loc_of(key_node, loc.file, loc.path)
+        if not isinstance(key_node, yaml.ScalarNode) or key_node.tag != _CORE + "str":
+            raise Bad(key_loc.at(f"keys of {what} must be names, got {kind_of(key_node)}"))
+        key = str(key_node.value)
+        key_loc = loc_of(key_node, loc.file, join(loc.path, key))
+        if key in seen:
+            raise Bad(key_loc.at(f"duplicate key {key!r} (first at line {seen[key]})"))
+        seen[key] = key_loc.line
+        out.append((key, value_node, key_loc, loc_of(value_node, loc.file, join(loc.path, key))))
+    return out
+
+
+def sequence(node: yaml.Node, loc: Loc, what: str) -> list[tuple[yaml.Node, Loc]]:
+    check_tag(node, loc)
+    if not isinstance(node, yaml.SequenceNode):
+        raise Bad(loc.at(f"{what} must be a list, got {kind_of(node)}"))
+    return [(item, loc.child(item, f"[{i}]")) for i, item in enumerate(node.value)]
+
+
+def scalar_text(node: yaml.Node, loc: Loc, what: str) -> str:
+    value = plain(node, loc)
+    if not isinstance(value, str):
+        raise Bad(loc.at(f"{what} must be a text, got {kind_of(node)}"))
+    return value
+
+
+def kind_of(node: yaml.Node) -> str:
+    if isinstance(node, yaml.MappingNode):
+        return "a mapping"
+    if isinstance(node, yaml.SequenceNode):
+        return "a list"
+    tag = (node.tag or "").removeprefix(_CORE)
+    if tag == "null":
+        return "nothing (null)"
+    if tag == "str":
+        return f"the text {node.value!r}"
+    if tag == "bool":
+        return f"a boolean ({node.value})"
+    return f"{tag} {node.value}"
