@@ -1,0 +1,43 @@
+"""The byte-exact simulator: a virtual Roomba / Create 2 that speaks the Open Interface.
+
+Imports only :mod:`roomba_bt.oi` (plus the standard library, PyYAML, and matplotlib lazily
+for plots). Nothing in the main stack imports it; the CLI and the tests do.
+"""
+
+from roomba_bt.sim.faults import Faults
+from roomba_bt.sim.link import SimLink
+from roomba_bt.sim.robot import (
+    STEP_SECONDS,
+    SimEvent,
+    Simulator,
+    TracePoint,
+    Violation,
+    drive_wheel_speeds,
+)
+from roomba_bt.sim.world import (
+    DockSpec,
+    Pose,
+    World,
+    WorldError,
+    load_world,
+    parse_world,
+    shipped_worlds,
+)
+
+__all__ = [
+    "STEP_SECONDS",
+    "DockSpec",
+    "Faults",
+    "Pose",
+    "SimEvent",
+    "SimLink",
+    "Simulator",
+    "TracePoint",
+    "Violation",
+    "World",
+    "WorldError",
+    "drive_wheel_speeds",
+    "load_world",
+    "parse_world",
+    "shipped_worlds",
+]

@@ -1,0 +1,66 @@
+"""Faults the simulator injects on request, so the robot connection is tested against the
+failures a serial link and a real robot produce.
+
+All draws come from a random generator seeded from the simulator's seed, so a faulty run is
+as repeatable as a clean one.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+
+
+@dataclass(frozen=True, slots=True)
+class Faults:
+    """What goes wrong, and how often.
+
+    ``corrupt_rate``   probability that a robot->host byte is replaced by a random byte
+    ``drop_rate``      probability that a stream frame is never sent (its distance/angle lost)
+    ``latency``        seconds added before robot->host bytes become readable
+    ``inject_text``    ASCII the "firmware" prints into the stream, every ``inject_every`` s
+    ``disconnect_at``  simulated time (s) at which the link goes away for good
+    ``noise``          standard deviation, in raw units, added to analog sensor signals
+                       (cliff, light-bump and wall signals, voltage, currents)
+    """
+
+    corrupt_rate: float = 0.0
+    drop_rate: float = 0.0
+    latency: float = 0.0
+    inject_text: str = ""
+    inject_every: float = 1.0
+    disconnect_at: float | None = None
+    noise: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name, lo, hi in (
+            ("corrupt_rate", 0.0, 1.0),
+            ("drop_rate", 0.0, 1.0),
+            ("latency", 0.0, 10.0),
+            ("inject_every", 0.015, 3600.0),
+            ("noise", 0.0, 4095.0),
+        ):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise ValueError(f"faults.{name}: found {value!r}; allowed: a number {lo}..{hi}")
+            if not lo <= value <= hi or math.isnan(value):
+                raise ValueError(f"faults.{name}: found {value!r}; allowed: {lo}..{hi}")
+        if self.disconnect_at is not None and not (
+            isinstance(self.disconnect_at, int | float) and self.disconnect_at >= 0
+        ):
+            raise ValueError(
+                f"faults.disconnect_at: found {self.disconnect_at!r}; allowed: seconds >= 0"
+            )
+        if not self.inject_text.isascii():
+            raise ValueError(
+                f"faults.inject_text: found {self.inject_text!r}; allowed: ASCII text only"
+            )
+
+    @property
+    def any(self) -> bool:
+        return any(
+            getattr(self, f.name) != f.default for f in fields(self) if f.name != "inject_every"
+        )
+
+
+NO_FAULTS = Faults()

@@ -1,0 +1,740 @@
+"""Worlds: the floor the simulated robot drives on, read from YAML and validated.
+
+A world file is written in metres and degrees (people measure rooms that way); everything is
+converted once, on load, to the simulator's millimetres and radians. The schema, with every
+default, is in ``docs/simulator.md``; in short::
+
+    name: empty-room
+    rooms: [[[0, 0], [4, 0], [4, 3], [0, 3]]]   # floor polygons; their edges are walls
+    walls: [[1.0, 0.0, 1.0, 1.2]]                # extra wall segments (x0, y0, x1, y1)
+    obstacles: [{name: sofa, rect: [0.2, 2.0, 2.0, 2.8]}]   # or {polygon: [[x, y], ...]}
+    drops: [{name: stairs, rect: [3.0, 0.0, 4.0, 1.0]}]      # cliff zones
+    virtual_walls: [{from: [2, 0], to: [2, 3], halo: 0.3}]
+    lighthouses: [{id: 1, at: [2, 1.5], heading: 90, fence: 2.0, halo: 0.4}]
+    dock: {at: [2, 0], facing: 90, red: [-5, 25], green: [-25, 5], buoy_range: 1.0,
+           force_field: 0.6, contact_tolerance: 0.075, angle_tolerance: 6, family: drive-on}
+    robot: {start: {at: [2, 1], heading: -90}, battery: 0.8,
+            start_region: {near_dock: 1.5}}          # or {rect: [...], heading: [lo, hi]}
+    events: [{at: 5.0, kind: bump, side: left, duration: 0.2}]
+
+Every problem is reported at once, each as ``file:line:col: field: found ...; allowed ...``,
+with the line and column of the offending YAML node (a :class:`yaml.SafeLoader` subclass keeps
+the marks of every node). Loading never shows a traceback to a user: it raises
+:class:`WorldError`, which the CLI prints.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import pathlib
+import random
+from dataclasses import dataclass, field
+from typing import Any
+
+import yaml
+
+from roomba_bt.sim.geometry import (
+    Point,
+    Polygon,
+    Segment,
+    distance_sq_to_segment,
+    point_in_polygon,
+    polygon_edges,
+    wrap_angle,
+)
+
+#: Radius of the round Roomba / Create 2 body (340 mm across).
+ROBOT_RADIUS_MM = 170.0
+
+WORLDS_DIR = pathlib.Path(__file__).resolve().parents[2] / "worlds"
+
+EVENT_KINDS = ("bump", "lift", "charger_step")
+SIDES = ("left", "right", "both")
+DOCK_FAMILIES = ("drive-on", "discovery")
+
+
+# ----------------------------------------------------------------------------- the model
+
+
+@dataclass(frozen=True, slots=True)
+class Pose:
+    """A robot pose: ``x``, ``y`` in mm, ``theta`` in radians (CCW from +x)."""
+
+    x: float
+    y: float
+    theta: float
+
+
+@dataclass(frozen=True, slots=True)
+class DockSpec:
+    """The charging dock and its IR beams (defaults: ``GUIDE.md`` section 5).
+
+    ``x, y`` is the middle of the dock's back plate, where the robot's bumper touches it and
+    where the beams come from; ``facing`` points from the dock into the room. Beam angles are
+    measured from ``facing``, positive toward the dock's own left (counter-clockwise)::
+
+                    red   -5 .. +25 deg   (dock's left)
+        dock  ===>  both  -5 .. +5  deg   on the axis
+                    green -25 .. +5 deg   (dock's right)
+    """
+
+    x: float
+    y: float
+    facing: float
+    red: tuple[float, float] = (math.radians(-5.0), math.radians(25.0))
+    green: tuple[float, float] = (math.radians(-25.0), math.radians(5.0))
+    buoy_range: float = 1000.0
+    force_field: float = 600.0
+    contact_tolerance: float = 75.0
+    angle_tolerance: float = math.radians(6.0)
+    family: str = "drive-on"
+    plate_width: float = 300.0
+
+    @property
+    def docked_pose(self) -> Pose:
+        """Where the robot's centre is when its bumper rests on the plate, facing the dock."""
+        return Pose(
+            self.x + ROBOT_RADIUS_MM * math.cos(self.facing),
+            self.y + ROBOT_RADIUS_MM * math.sin(self.facing),
+            wrap_angle(self.facing + math.pi),
+        )
+
+    @property
+    def plate(self) -> Segment:
+        half = self.plate_width / 2.0
+        px, py = -math.sin(self.facing) * half, math.cos(self.facing) * half
+        return (self.x - px, self.y - py, self.x + px, self.y + py)
+
+
+@dataclass(frozen=True, slots=True)
+class VirtualWallSpec:
+    """A virtual wall: an IR beam from its emitter ``(ax, ay)`` to ``(bx, by)``; the robot's
+    omni receiver sees it within ``half_width`` of the beam or ``halo`` of the emitter."""
+
+    ax: float
+    ay: float
+    bx: float
+    by: float
+    half_width: float = 60.0
+    halo: float = 0.0
+
+    @property
+    def segment(self) -> Segment:
+        return (self.ax, self.ay, self.bx, self.by)
+
+
+@dataclass(frozen=True, slots=True)
+class LighthouseSpec:
+    """A virtual-wall lighthouse: a fence beam along ``heading`` and a force-field halo."""
+
+    id: int
+    x: float
+    y: float
+    heading: float
+    fence: float = 2000.0
+    halo: float = 400.0
+    half_width: float = 60.0
+
+    @property
+    def fence_segment(self) -> Segment:
+        return (
+            self.x,
+            self.y,
+            self.x + self.fence * math.cos(self.heading),
+            self.y + self.fence * math.sin(self.heading),
+        )
+
+
+@dataclass(frozen=True, slots=True)
+class TimelineEvent:
+    """Something the world does to the robot at ``time`` seconds, for ``duration`` seconds.
+
+    ``bump``: the bumper is pressed (``side``); ``lift``: the robot is picked up (both wheel
+    drops, cliffs, no traction); ``charger_step``: someone steps on the charger, which loses
+    power for the duration."""
+
+    time: float
+    kind: str
+    duration: float
+    side: str = "both"
+
+
+@dataclass(frozen=True, slots=True)
+class StartRegion:
+    """Random start poses for evaluation: within ``near_dock`` mm of the docked pose, or in
+    ``rect`` (x0, y0, x1, y1 mm); heading anywhere or in ``heading`` (radians, lo..hi)."""
+
+    near_dock: float | None = None
+    rect: tuple[float, float, float, float] | None = None
+    heading: tuple[float, float] | None = None
+
+
+@dataclass(frozen=True)
+class World:
+    """A validated world, in millimetres and radians."""
+
+    name: str
+    rooms: tuple[Polygon, ...]
+    start: Pose
+    walls: tuple[Segment, ...] = ()
+    obstacles: tuple[Polygon, ...] = ()
+    drops: tuple[Polygon, ...] = ()
+    virtual_walls: tuple[VirtualWallSpec, ...] = ()
+    lighthouses: tuple[LighthouseSpec, ...] = ()
+    dock: DockSpec | None = None
+    start_region: StartRegion | None = None
+    events: tuple[TimelineEvent, ...] = ()
+    battery: float = 0.8
+    source: str = "<world>"
+    description: str = ""
+    solid: tuple[Segment, ...] = field(init=False)
+
+    def __post_init__(self) -> None:
+        solid: list[Segment] = []
+        for room in self.rooms:
+            solid += polygon_edges(room)
+        solid += self.walls
+        for obstacle in self.obstacles:
+            solid += polygon_edges(obstacle)
+        if self.dock is not None:
+            solid.append(self.dock.plate)
+        object.__setattr__(self, "solid", tuple(solid))
+
+    # ------------------------------------------------------------------ queries
+    def on_floor(self, x: float, y: float) -> bool:
+        """Inside a room and not inside an obstacle."""
+        if not any(point_in_polygon(x, y, room) for room in self.rooms):
+            return False
+        return not any(point_in_polygon(x, y, ob) for ob in self.obstacles)
+
+    def over_drop(self, x: float, y: float) -> bool:
+        return any(point_in_polygon(x, y, drop) for drop in self.drops)
+
+    def pose_is_free(self, pose: Pose, clearance: float = ROBOT_RADIUS_MM) -> bool:
+        """The robot fits here: on the floor, no wall within its radius, not over a drop."""
+        if not self.on_floor(pose.x, pose.y) or self.over_drop(pose.x, pose.y):
+            return False
+        limit = clearance * clearance
+        return all(distance_sq_to_segment(pose.x, pose.y, s) > limit for s in self.solid)
+
+    def sample_start(self, seed: int) -> Pose:
+        """A free pose drawn from the start region (or the start pose if there is none),
+        the same for the same seed."""
+        region = self.start_region
+        if region is None:
+            return self.start
+        rng = random.Random(f"start:{seed}")
+        for _ in range(10_000):
+            if region.near_dock is not None and self.dock is not None:
+                centre = self.dock.docked_pose
+                r = region.near_dock * math.sqrt(rng.random())
+                a = rng.uniform(-math.pi, math.pi)
+                x, y = centre.x + r * math.cos(a), centre.y + r * math.sin(a)
+            elif region.rect is not None:
+                x0, y0, x1, y1 = region.rect
+                x, y = rng.uniform(x0, x1), rng.uniform(y0, y1)
+            else:
+                return self.start
+            lo, hi = region.heading if region.heading is not None else (-math.pi, math.pi)
+            pose = Pose(x, y, wrap_angle(rng.uniform(lo, hi)))
+            if self.pose_is_free(pose, ROBOT_RADIUS_MM + 20.0):
+                return pose
+        raise WorldError(
+            [WorldProblem(self.source, 0, 0, "robot.start_region", "no free pose", "a region "
+                          "with room for the robot (340 mm across)")]
+        )  # fmt: skip
+
+
+# ----------------------------------------------------------------------------- errors
+
+
+@dataclass(frozen=True, slots=True)
+class WorldProblem:
+    source: str
+    line: int
+    column: int
+    field: str
+    found: str
+    allowed: str
+
+    def __str__(self) -> str:
+        where = f"{self.source}:{self.line}:{self.column}" if self.line else self.source
+        return f"{where}: {self.field}: found {self.found}; allowed: {self.allowed}"
+
+
+class WorldError(ValueError):
+    """A world that cannot be loaded; ``problems`` lists every one found."""
+
+    def __init__(self, problems: list[WorldProblem]) -> None:
+        self.problems = problems
+        super().__init__("\n".join(str(p) for p in problems))
+
+
+# ----------------------------------------------------------------------------- loading
+
+PathKey = tuple[str | int, ...]
+
+
+class _MarkingLoader(yaml.SafeLoader):
+    """A SafeLoader that also returns the (line, column) of every node, by path."""
+
+    def load_with_marks(self) -> tuple[Any, dict[PathKey, tuple[int, int]]]:
+        marks: dict[PathKey, tuple[int, int]] = {}
+        node = self.get_single_node()
+        if node is None:
+            return None, marks
+        return self._build(node, (), marks), marks
+
+    def _build(self, node: yaml.Node, path: PathKey, marks: dict[PathKey, tuple[int, int]]) -> Any:
+        marks[path] = (node.start_mark.line + 1, node.start_mark.column + 1)
+        if isinstance(node, yaml.MappingNode):
+            self.flatten_mapping(node)
+            out: dict[Any, Any] = {}
+            for key_node, value_node in node.value:
+                key = self.construct_object(key_node, deep=True)
+                if not isinstance(key, str | int | float | bool):
+                    key = str(key)
+                if key in out:
+                    mark = key_node.start_mark
+                    raise _DuplicateKey(str(key), (*path, str(key)), mark.line + 1, mark.column + 1)
+                out[key] = self._build(value_node, (*path, str(key)), marks)
+            return out
+        if isinstance(node, yaml.SequenceNode):
+            return [self._build(item, (*path, i), marks) for i, item in enumerate(node.value)]
+        return self.construct_object(node, deep=True)
+
+
+class _DuplicateKey(Exception):
+    def __init__(self, key: str, path: PathKey, line: int, column: int) -> None:
+        self.key = key
+        self.path = path
+        self.line = line
+        self.column = column
+
+
+def _dotted(path: PathKey) -> str:
+    out = ""
+    for part in path:
+        if isinstance(part, int):
+            out += f"[{part}]"
+        else:
+            out += f".{part}" if out else part
+    return out or "(document)"
+
+
+def _show(value: object) -> str:
+    if isinstance(value, dict):
+        return "a mapping"
+    if isinstance(value, list):
+        return f"a list of {len(value)}"
+    return repr(value)
+
+
+class _Checker:
+    """Collects every problem of one world file."""
+
+    def __init__(self, source: str, marks: dict[PathKey, tuple[int, int]]) -> None:
+        self.source = source
+        self.marks = marks
+        self.problems: list[WorldProblem] = []
+
+    def error(self, path: PathKey, found: str, allowed: str) -> None:
+        probe = path
+        while probe not in self.marks and probe:
+            probe = probe[:-1]
+        line, col = self.marks.get(probe, (0, 0))
+        self.problems.append(WorldProblem(self.source, line, col, _dotted(path), found, allowed))
+
+    def mapping(
+        self, value: object, path: PathKey, keys: tuple[str, ...], required: tuple[str, ...] = ()
+    ) -> dict[str, Any] | None:
+        if not isinstance(value, dict):
+            self.error(path, _show(value), f"a mapping with keys {', '.join(keys)}")
+            return None
+        for key in value:
+            if key not in keys:
+                close = difflib.get_close_matches(str(key), keys, n=1)
+                hint = f" (did you mean {close[0]!r}?)" if close else ""
+                self.error((*path, str(key)), f"unknown key {key!r}", f"{', '.join(keys)}{hint}")
+        for key in required:
+            if key not in value:
+                self.error(path, f"no {key!r}", f"a mapping with {key!r}")
+        return value
+
+    def number(self, value: object, path: PathKey, lo: float, hi: float, unit: str) -> float | None:
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            self.error(path, _show(value), f"a number in {lo:g}..{hi:g} {unit}")
+            return None
+        if not lo <= value <= hi or math.isnan(value):
+            self.error(path, _show(value), f"a number in {lo:g}..{hi:g} {unit}")
+            return None
+        return float(value)
+
+    def choice(self, value: object, path: PathKey, choices: tuple[str, ...]) -> str | None:
+        if not isinstance(value, str) or value not in choices:
+            close = difflib.get_close_matches(str(value), choices, n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            self.error(path, _show(value), f"one of {', '.join(choices)}{hint}")
+            return None
+        return value
+
+    def point(self, value: object, path: PathKey) -> Point | None:
+        """``[x, y]`` in metres -> mm."""
+        if not isinstance(value, list) or len(value) != 2:
+            self.error(path, _show(value), "a point [x, y] in metres")
+            return None
+        x = self.number(value[0], (*path, 0), -1000, 1000, "m")
+        y = self.number(value[1], (*path, 1), -1000, 1000, "m")
+        if x is None or y is None:
+            return None
+        return (x * 1000.0, y * 1000.0)
+
+    def polygon(self, value: object, path: PathKey) -> Polygon | None:
+        if not isinstance(value, list) or len(value) < 3:
+            self.error(path, _show(value), "a polygon: a list of at least 3 points [x, y] (m)")
+            return None
+        points = [self.point(p, (*path, i)) for i, p in enumerate(value)]
+        if any(p is None for p in points):
+            return None
+        poly = tuple(p for p in points if p is not None)
+        if abs(_area(poly)) < 1.0:
+            self.error(path, "a polygon of zero area", "a polygon enclosing some floor")
+            return None
+        return poly
+
+    def rect(self, value: object, path: PathKey) -> tuple[float, float, float, float] | None:
+        if not isinstance(value, list) or len(value) != 4:
+            self.error(path, _show(value), "a rectangle [x0, y0, x1, y1] in metres")
+            return None
+        nums = [self.number(v, (*path, i), -1000, 1000, "m") for i, v in enumerate(value)]
+        if any(n is None for n in nums):
+            return None
+        x0, y0, x1, y1 = (float(n or 0.0) * 1000.0 for n in nums)
+        if x1 <= x0 or y1 <= y0:
+            self.error(path, _show(value), "x0 < x1 and y0 < y1")
+            return None
+        return (x0, y0, x1, y1)
+
+    def shape(self, value: object, path: PathKey) -> Polygon | None:
+        """``{rect: [...]}`` or ``{polygon: [...]}``, with an optional ``name``."""
+        spec = self.mapping(value, path, ("name", "rect", "polygon"))
+        if spec is None:
+            return None
+        if ("rect" in spec) == ("polygon" in spec):
+            self.error(path, "neither or both of rect/polygon", "exactly one of rect, polygon")
+            return None
+        if "rect" in spec:
+            r = self.rect(spec["rect"], (*path, "rect"))
+            if r is None:
+                return None
+            x0, y0, x1, y1 = r
+            return ((x0, y0), (x1, y0), (x1, y1), (x0, y1))
+        return self.polygon(spec["polygon"], (*path, "polygon"))
+
+    def items(self, value: object, path: PathKey) -> list[Any]:
+        if value is None:
+            return []
+        if not isinstance(value, list):
+            self.error(path, _show(value), "a list")
+            return []
+        return value
+
+
+def _area(poly: Polygon) -> float:
+    return 0.5 * sum(
+        poly[i][0] * poly[(i + 1) % len(poly)][1] - poly[(i + 1) % len(poly)][0] * poly[i][1]
+        for i in range(len(poly))
+    )
+
+
+_TOP_KEYS = (
+    "name", "description", "rooms", "walls", "obstacles", "drops", "virtual_walls",
+    "lighthouses", "dock", "robot", "events",
+)  # fmt: skip
+_DOCK_KEYS = (
+    "at", "facing", "red", "green", "buoy_range", "force_field", "contact_tolerance",
+    "angle_tolerance", "family", "plate_width",
+)  # fmt: skip
+
+
+def _angle_range(c: _Checker, value: object, path: PathKey) -> tuple[float, float] | None:
+    if not isinstance(value, list) or len(value) != 2:
+        c.error(path, _show(value), "[from, to] in degrees, -90..90, from < to")
+        return None
+    lo = c.number(value[0], (*path, 0), -90, 90, "deg")
+    hi = c.number(value[1], (*path, 1), -90, 90, "deg")
+    if lo is None or hi is None:
+        return None
+    if lo >= hi:
+        c.error(path, _show(value), "[from, to] with from < to")
+        return None
+    return (math.radians(lo), math.radians(hi))
+
+
+def _dock(c: _Checker, value: object) -> DockSpec | None:
+    path: PathKey = ("dock",)
+    spec = c.mapping(value, path, _DOCK_KEYS, ("at", "facing"))
+    if spec is None or "at" not in spec or "facing" not in spec:
+        return None
+    at = c.point(spec["at"], (*path, "at"))
+    facing = c.number(spec["facing"], (*path, "facing"), -360, 360, "deg")
+    kwargs: dict[str, Any] = {}
+    for key in ("red", "green"):
+        if key in spec:
+            kwargs[key] = _angle_range(c, spec[key], (*path, key))
+    limits = {
+        "buoy_range": (0.2, 5.0, "m", 1000.0),
+        "force_field": (0.1, 2.0, "m", 1000.0),
+        "contact_tolerance": (0.01, 0.3, "m", 1000.0),
+        "plate_width": (0.1, 1.0, "m", 1000.0),
+        "angle_tolerance": (1.0, 45.0, "deg", math.pi / 180.0),
+    }
+    for key, (lo, hi, unit, scale) in limits.items():
+        if key in spec:
+            n = c.number(spec[key], (*path, key), lo, hi, unit)
+            kwargs[key] = None if n is None else n * scale
+    if "family" in spec:
+        kwargs["family"] = c.choice(spec["family"], (*path, "family"), DOCK_FAMILIES)
+    if at is None or facing is None or any(v is None for v in kwargs.values()):
+        return None
+    return DockSpec(at[0], at[1], math.radians(facing), **kwargs)
+
+
+def _pose(c: _Checker, value: object, path: PathKey) -> Pose | None:
+    spec = c.mapping(value, path, ("at", "heading"), ("at",))
+    if spec is None or "at" not in spec:
+        return None
+    at = c.point(spec["at"], (*path, "at"))
+    heading = c.number(spec.get("heading", 0), (*path, "heading"), -360, 360, "deg")
+    if at is None or heading is None:
+        return None
+    return Pose(at[0], at[1], wrap_angle(math.radians(heading)))
+
+
+def _start_region(c: _Checker, value: object, path: PathKey) -> StartRegion | None:
+    spec = c.mapping(value, path, ("near_dock", "rect", "heading"))
+    if spec is None:
+        return None
+    if ("near_dock" in spec) == ("rect" in spec):
+        c.error(path, "neither or both of near_dock/rect", "exactly one of near_dock, rect")
+        return None
+    near: float | None = None
+    rect: tuple[float, float, float, float] | None = None
+    heading: tuple[float, float] | None = None
+    if "near_dock" in spec:
+        n = c.number(spec["near_dock"], (*path, "near_dock"), 0.05, 20.0, "m")
+        if n is None:
+            return None
+        near = n * 1000.0
+    else:
+        rect = c.rect(spec["rect"], (*path, "rect"))
+        if rect is None:
+            return None
+    if "heading" in spec and spec["heading"] != "any":
+        raw = spec["heading"]
+        if not isinstance(raw, list) or len(raw) != 2:
+            c.error((*path, "heading"), _show(raw), "'any' or [from, to] in degrees")
+            return None
+        lo = c.number(raw[0], (*path, "heading", 0), -360, 360, "deg")
+        hi = c.number(raw[1], (*path, "heading", 1), -360, 360, "deg")
+        if lo is None or hi is None:
+            return None
+        heading = (math.radians(lo), math.radians(hi))
+    return StartRegion(near, rect, heading)
+
+
+def _event(c: _Checker, value: object, path: PathKey) -> TimelineEvent | None:
+    spec = c.mapping(value, path, ("at", "kind", "side", "duration"), ("at", "kind"))
+    if spec is None or "at" not in spec or "kind" not in spec:
+        return None
+    at = c.number(spec["at"], (*path, "at"), 0, 1e6, "s")
+    kind = c.choice(spec["kind"], (*path, "kind"), EVENT_KINDS)
+    duration = c.number(spec.get("duration", 0.5), (*path, "duration"), 0.015, 1e6, "s")
+    side = c.choice(spec.get("side", "both"), (*path, "side"), SIDES)
+    if at is None or kind is None or duration is None or side is None:
+        return None
+    return TimelineEvent(at, kind, duration, side)
+
+
+def parse_world(text: str, source: str = "<world>") -> World:
+    """Validate a world given as YAML text; :class:`WorldError` lists every problem."""
+    loader = _MarkingLoader(text)
+    try:
+        data, marks = loader.load_with_marks()
+    except _DuplicateKey as dup:
+        raise WorldError(
+            [WorldProblem(source, dup.line, dup.column, _dotted(dup.path),
+                          f"the key {dup.key!r} twice", "each key once")]
+        ) from None  # fmt: skip
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        line, col = (mark.line + 1, mark.column + 1) if mark is not None else (0, 0)
+        problem = getattr(exc, "problem", None) or str(exc)
+        raise WorldError(
+            [WorldProblem(source, line, col, "(YAML)", str(problem), "valid YAML")]
+        ) from None
+    finally:
+        loader.dispose()
+    c = _Checker(source, marks)
+    return _build_world(c, data, source)
+
+
+def _build_world(c: _Checker, data: object, source: str) -> World:
+    top = c.mapping(data, (), _TOP_KEYS, ("rooms",))
+    if top is None:
+        raise WorldError(c.problems)
+    name = top.get("name", pathlib.Path(source).stem)
+    if not isinstance(name, str):
+        c.error(("name",), _show(name), "a string")
+        name = str(name)
+    description = top.get("description", "")
+    if not isinstance(description, str):
+        c.error(("description",), _show(description), "a string")
+        description = ""
+    rooms = [
+        c.polygon(r, ("rooms", i)) for i, r in enumerate(c.items(top.get("rooms"), ("rooms",)))
+    ]
+    if "rooms" in top and not rooms:
+        c.error(("rooms",), "no room", "at least one room polygon")
+    walls: list[Segment] = []
+    for i, w in enumerate(c.items(top.get("walls"), ("walls",))):
+        r = None
+        if isinstance(w, list) and len(w) == 4:
+            nums = [c.number(v, ("walls", i, j), -1000, 1000, "m") for j, v in enumerate(w)]
+            if all(n is not None for n in nums):
+                r = tuple(float(n or 0.0) * 1000.0 for n in nums)
+        else:
+            c.error(("walls", i), _show(w), "a segment [x0, y0, x1, y1] in metres")
+        if r is not None:
+            walls.append((r[0], r[1], r[2], r[3]))
+    obstacles = [
+        c.shape(o, ("obstacles", i))
+        for i, o in enumerate(c.items(top.get("obstacles"), ("obstacles",)))
+    ]
+    drops = [c.shape(o, ("drops", i)) for i, o in enumerate(c.items(top.get("drops"), ("drops",)))]
+    vwalls: list[VirtualWallSpec] = []
+    for i, v in enumerate(c.items(top.get("virtual_walls"), ("virtual_walls",))):
+        path: PathKey = ("virtual_walls", i)
+        spec = c.mapping(v, path, ("name", "from", "to", "halo", "width"), ("from", "to"))
+        if spec is None or "from" not in spec or "to" not in spec:
+            continue
+        a = c.point(spec["from"], (*path, "from"))
+        b = c.point(spec["to"], (*path, "to"))
+        halo = c.number(spec.get("halo", 0.0), (*path, "halo"), 0.0, 2.0, "m")
+        width = c.number(spec.get("width", 0.12), (*path, "width"), 0.02, 1.0, "m")
+        if a and b and halo is not None and width is not None:
+            vwalls.append(VirtualWallSpec(a[0], a[1], b[0], b[1], width * 500.0, halo * 1000.0))
+    lighthouses: list[LighthouseSpec] = []
+    for i, v in enumerate(c.items(top.get("lighthouses"), ("lighthouses",))):
+        path = ("lighthouses", i)
+        spec = c.mapping(v, path, ("id", "at", "heading", "fence", "halo"), ("id", "at"))
+        if spec is None or "id" not in spec or "at" not in spec:
+            continue
+        lid = spec["id"]
+        if isinstance(lid, bool) or not isinstance(lid, int) or not 1 <= lid <= 10:
+            c.error((*path, "id"), _show(lid), "an integer lighthouse id 1..10")
+            continue
+        at = c.point(spec["at"], (*path, "at"))
+        heading = c.number(spec.get("heading", 0), (*path, "heading"), -360, 360, "deg")
+        fence = c.number(spec.get("fence", 2.0), (*path, "fence"), 0.1, 10.0, "m")
+        halo = c.number(spec.get("halo", 0.4), (*path, "halo"), 0.0, 2.0, "m")
+        if at and heading is not None and fence is not None and halo is not None:
+            lighthouses.append(
+                LighthouseSpec(lid, at[0], at[1], math.radians(heading), fence * 1000.0,
+                               halo * 1000.0)
+            )  # fmt: skip
+    dock = _dock(c, top["dock"]) if "dock" in top else None
+    start: Pose | None = None
+    region: StartRegion | None = None
+    battery = 0.8
+    if "robot" in top:
+        robot = c.mapping(top["robot"], ("robot",), ("start", "start_region", "battery"))
+        if robot is not None:
+            if "start" in robot:
+                start = _pose(c, robot["start"], ("robot", "start"))
+            if "start_region" in robot:
+                region = _start_region(c, robot["start_region"], ("robot", "start_region"))
+                if region is not None and region.near_dock is not None and "dock" not in top:
+                    c.error(("robot", "start_region", "near_dock"), "no dock in this world",
+                            "near_dock only in a world with a dock")  # fmt: skip
+            if "battery" in robot:
+                level = c.number(robot["battery"], ("robot", "battery"), 0.0, 1.0, "(fraction)")
+                battery = 0.8 if level is None else level
+    events = [
+        e for i, v in enumerate(c.items(top.get("events"), ("events",)))
+        if (e := _event(c, v, ("events", i))) is not None
+    ]  # fmt: skip
+    if c.problems:
+        raise WorldError(c.problems)
+    room_polys = tuple(r for r in rooms if r is not None)
+    if start is None:
+        if dock is not None:
+            d = dock.docked_pose
+            start = Pose(
+                d.x + 800.0 * math.cos(dock.facing), d.y + 800.0 * math.sin(dock.facing), d.theta
+            )
+        else:
+            xs = [p[0] for p in room_polys[0]]
+            ys = [p[1] for p in room_polys[0]]
+            start = Pose(sum(xs) / len(xs), sum(ys) / len(ys), 0.0)
+    world = World(
+        name=name,
+        rooms=room_polys,
+        start=start,
+        walls=tuple(walls),
+        obstacles=tuple(o for o in obstacles if o is not None),
+        drops=tuple(d for d in drops if d is not None),
+        virtual_walls=tuple(vwalls),
+        lighthouses=tuple(lighthouses),
+        dock=dock,
+        start_region=region,
+        events=tuple(sorted(events, key=lambda e: e.time)),
+        battery=battery,
+        source=source,
+        description=description,
+    )
+    if dock is not None and not world.on_floor(
+        dock.x + 10 * math.cos(dock.facing), dock.y + 10 * math.sin(dock.facing)
+    ):
+        c.error(("dock", "at"), "a dock off the floor", "a point inside a room, facing into it")
+    if not world.pose_is_free(world.start):
+        where = f"({world.start.x / 1000:.2f}, {world.start.y / 1000:.2f}) m"
+        c.error(
+            ("robot", "start") if "robot" in top else ("rooms",),
+            f"a start pose {where} where the robot does not fit",
+            "a pose on the floor with 0.17 m clear of every wall, obstacle and drop",
+        )
+    if c.problems:
+        raise WorldError(c.problems)
+    return world
+
+
+def shipped_worlds() -> tuple[str, ...]:
+    """Names of the worlds shipped in ``worlds/``."""
+    return tuple(sorted(p.stem for p in WORLDS_DIR.glob("*.yaml")))
+
+
+def load_world(path_or_name: str | pathlib.Path) -> World:
+    """A shipped world by name (``"empty-room"``) or a world file by path."""
+    path = pathlib.Path(path_or_name)
+    if not path.is_file():
+        shipped = WORLDS_DIR / f"{path_or_name}.yaml"
+        if isinstance(path_or_name, str) and "/" not in path_or_name and shipped.is_file():
+            path = shipped
+        else:
+            raise WorldError(
+                [WorldProblem(str(path_or_name), 0, 0, "world", "no such file or shipped world",
+                              f"a YAML file or one of {', '.join(shipped_worlds())}")]
+            )  # fmt: skip
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise WorldError(
+            [
+                WorldProblem(
+                    str(path), 0, 0, "world", f"an unreadable file ({exc})", "a UTF-8 YAML file"
+                )
+            ]
+        ) from None
+    return parse_world(text, str(path))
