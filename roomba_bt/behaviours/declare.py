@@ -210,7 +210,7 @@ def declare(
     the class docstring's first paragraph."""
 
     def attach(cls: B) -> B:
-        doc = (cls.__doc__ or "").strip().split("\n\n")[0].replace("\n", " ")
+        doc = " ".join((cls.__doc__ or "").strip().split("\n\n")[0].split())
         cls.declaration = Declaration(
             name, kind, cls, params, reads, sends, leads_to, doc, primary,
             constraints=constraints, writes_keys=writes_keys, reads_keys=reads_keys,

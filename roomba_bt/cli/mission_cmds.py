@@ -1,0 +1,257 @@
+"""``roomba-bt validate``, ``show``, ``behaviours`` and ``schema``: the mission tools.
+
+None of them opens a port. ``validate`` prints every error of every file as
+``file:line:col: message [yaml.path]`` and exits 0 if all are valid, 2 if not.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+from roomba_bt.cli.exit_codes import ExitCode
+from roomba_bt.oi.profiles import PROFILES, get_profile
+
+
+def register(sub: Any) -> None:
+    validate = sub.add_parser(
+        "validate",
+        help="check mission files before anything moves",
+        description="Check each FILE: names, parameters, units, ranges, subtrees, includes, "
+        "blackboard keys, OI modes of every actuator, and the sensor stream budget. Every "
+        "error is printed as file:line:col: message. Exit 0 if all are valid, 2 if not.",
+    )
+    validate.add_argument("files", nargs="+", metavar="FILE")
+    _common(validate)
+    validate.set_defaults(func=validate_command)
+
+    show = sub.add_parser(
+        "show", help="print a mission's tree", description="Print the compiled tree of FILE."
+    )
+    show.add_argument("file", metavar="FILE")
+    _common(show)
+    show.add_argument("--dot", metavar="OUT.dot", help="also write the tree as Graphviz dot")
+    show.add_argument("--svg", metavar="OUT.svg", help="also write the tree as SVG (needs dot)")
+    show.set_defaults(func=show_command)
+
+    behaviours = sub.add_parser(
+        "behaviours",
+        help="list every behaviour with its parameters",
+        description="List the built-in and plugin behaviours: parameters (type, unit, range, "
+        "default), sensor packets read, OI modes needed.",
+    )
+    behaviours.add_argument("names", nargs="*", help="only these behaviours")
+    behaviours.add_argument("--json", action="store_true", help="machine-readable output")
+    behaviours.set_defaults(func=behaviours_command)
+
+    schema = sub.add_parser(
+        "schema",
+        help="print the JSON Schema of mission files",
+        description="Print the JSON Schema of mission files (roomba-bt schema > "
+        "mission.schema.json), generated from the behaviour declarations.",
+    )
+    schema.set_defaults(func=schema_command)
+
+
+def _common(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "-p", "--param", action="append", default=[], metavar="NAME=VALUE",
+        help="set a mission parameter, e.g. -p speed=250mm/s (repeatable)",
+    )  # fmt: skip
+    parser.add_argument("--profile", choices=sorted(PROFILES), default="create2")
+    parser.add_argument("--baud", type=int, default=115200, help="baud rate (default 115200)")
+
+
+def _params(items: list[str]) -> dict[str, str] | None:
+    params: dict[str, str] = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip():
+            print(f"roomba-bt: -p {item!r}: expected NAME=VALUE, e.g. -p speed=250mm/s",
+                  file=sys.stderr)  # fmt: skip
+            return None
+        params[name.strip()] = value.strip()
+    return params
+
+
+def validate_command(args: argparse.Namespace) -> int:
+    from roomba_bt.mission import validate_files
+
+    params = _params(args.param)
+    if params is None:
+        return ExitCode.INVALID
+    status = ExitCode.OK
+    for file in args.files:
+        diagnostics = validate_files(
+            [file], params, profile=get_profile(args.profile), baud=args.baud
+        )
+        for d in diagnostics:
+            print(d)
+        if diagnostics:
+            status = ExitCode.INVALID
+        else:
+            print(f"{file}: ok", file=sys.stderr)
+    return status
+
+
+def show_command(args: argparse.Namespace) -> int:
+    import py_trees
+
+    from roomba_bt.mission import compile_mission
+
+    params = _params(args.param)
+    if params is None:
+        return ExitCode.INVALID
+    mission, diagnostics = compile_mission(
+        args.file, params, profile=get_profile(args.profile), baud=args.baud
+    )
+    if mission is None:
+        for d in diagnostics:
+            print(d)
+        return ExitCode.INVALID
+    print(f"{mission.name}: {mission.description}".rstrip(": "))
+    print(py_trees.display.unicode_tree(mission.root))
+    print(f"sensor packets: {list(mission.packets)}")
+    if mission.parameters:
+        shown = ", ".join(f"{k}={v!r}" for k, v in mission.parameters.items())
+        print(f"parameters: {shown}")
+    for option, fmt in (("dot", "dot"), ("svg", "svg")):
+        target = getattr(args, option)
+        if target is None:
+            continue
+        problem = write_graph(mission.root, Path(target), fmt)
+        if problem is not None:
+            print(f"roomba-bt show: {problem}", file=sys.stderr)
+            return ExitCode.INVALID
+    return ExitCode.OK
+
+
+def write_graph(root: Any, target: Path, fmt: str) -> str | None:
+    """Write the tree as dot or svg; an error message (never a traceback) if impossible."""
+    try:
+        import pydot  # noqa: F401
+    except ImportError:
+        return "--dot/--svg need pydot: pip install pydot (and Graphviz for --svg)"
+    import py_trees
+
+    graph = py_trees.display.dot_tree(root)
+    try:
+        if fmt == "dot":
+            target.write_text(graph.to_string(), encoding="utf-8")
+        else:
+            svg = graph.create(format="svg")
+            target.write_bytes(svg if isinstance(svg, bytes) else str(svg).encode())
+    except FileNotFoundError as exc:
+        return f"cannot write {target}: {exc} (is Graphviz's dot installed?)"
+    except OSError as exc:
+        return f"cannot write {target}: {exc}"
+    except Exception as exc:  # pydot raises plain Exception when Graphviz is missing
+        return f"cannot render {fmt}: {exc} (is Graphviz's dot installed?)"
+    print(f"wrote {target}", file=sys.stderr)
+    return None
+
+
+def describe_behaviours(names: list[str] | None = None) -> list[dict[str, Any]]:
+    """The registry as data: what ``behaviours --json`` prints."""
+    from roomba_bt.behaviours import default_registry
+
+    out = []
+    for decl in default_registry():
+        if names and decl.name not in names:
+            continue
+        out.append(
+            {
+                "name": decl.name,
+                "kind": decl.kind,
+                "doc": decl.doc,
+                "origin": decl.origin,
+                "parameters": [
+                    {
+                        "name": p.name,
+                        "type": p.type.name,
+                        "unit": p.type.unit,
+                        "choices": list(p.type.choices),
+                        "minimum": p.minimum,
+                        "maximum": p.maximum,
+                        "default": p.default,
+                        "required": p.required,
+                        "doc": p.doc,
+                    }
+                    for p in decl.params
+                ],
+                "reads": "depends on parameters" if callable(decl.reads) else list(decl.reads),
+                "sends": list(decl.sends),
+                "modes": [m.label for m in sorted(decl.modes)],
+                "leads_to": _leads_to(decl),
+            }
+        )
+    return out
+
+
+def _leads_to(decl: Any) -> str | None:
+    if callable(decl.leads_to):
+        return "depends on parameters"
+    return decl.leads_to.label if decl.leads_to is not None else None
+
+
+def behaviours_command(args: argparse.Namespace) -> int:
+    from roomba_bt.behaviours import default_registry
+
+    registry = default_registry()
+    unknown = [n for n in args.names if n not in registry]
+    if unknown:
+        from roomba_bt.behaviours.units import closest
+
+        for name in unknown:
+            hint = closest(name, registry.names())
+            print(f"roomba-bt behaviours: unknown behaviour {name!r}{hint}", file=sys.stderr)
+        return ExitCode.INVALID
+    for error in registry.errors:
+        print(f"roomba-bt: warning: {error}", file=sys.stderr)
+    data = describe_behaviours(args.names)
+    if args.json:
+        print(json.dumps(data, indent=2, default=str))
+        return ExitCode.OK
+    for entry in data:
+        modes = " or ".join(entry["modes"])
+        head = f"{entry['name']}  ({entry['kind']}"
+        if len(entry["modes"]) < 4:
+            head += f"; needs {modes}"
+        if entry["leads_to"]:
+            head += f"; leads to {entry['leads_to']}"
+        if entry["origin"] != "builtin":
+            head += f"; from {entry['origin']}"
+        print(head + ")")
+        if entry["doc"]:
+            print(f"    {entry['doc']}")
+        for p in entry["parameters"]:
+            parts = [p["type"] if not p["choices"] else "|".join(p["choices"])]
+            if p["unit"]:
+                parts[0] += f" [{p['unit']}]"
+            if p["minimum"] is not None or p["maximum"] is not None:
+                lo = "" if p["minimum"] is None else f"{p['minimum']:g}"
+                hi = "" if p["maximum"] is None else f"{p['maximum']:g}"
+                parts.append(f"range {lo}..{hi}")
+            if p["required"]:
+                parts.append("required")
+            elif p["default"] is not None:
+                parts.append(f"default {p['default']}")
+            else:
+                parts.append("optional")
+            doc = f"  {p['doc']}" if p["doc"] else ""
+            print(f"    {p['name']}: {', '.join(parts)}{doc}")
+        reads = entry["reads"]
+        if reads:
+            print(f"    reads packets: {reads}")
+        print()
+    return ExitCode.OK
+
+
+def schema_command(args: argparse.Namespace) -> int:
+    from roomba_bt.mission.schema import mission_schema
+
+    print(json.dumps(mission_schema(), indent=2))
+    return ExitCode.OK
