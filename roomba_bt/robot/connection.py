@@ -471,7 +471,6 @@ class Connection:
     def _lost(self, action: str, exc: BaseException) -> PortLost:
         self._status = LinkStatus.LOST
         self._streaming = False
-        self.modes.robot_off(self.transport.now() if self.transport.is_open else 0.0)
         cause = exc.cause if isinstance(exc, TransportError) else exc
         return PortLost(self.name, f"the port failed on {action} ({cause}); the link is lost")
 
@@ -655,13 +654,9 @@ class Connection:
             raise
         if spec.opcode == 148:
             check_bandwidth(command.args[1:], self.baud)
-        if spec.opcode == 163 and not self.profile.digit_leds_raw_works:
-            log.warning(
-                "%s: Digit LEDs Raw (163) does not work on %s firmware (Appendix B); "
-                "use digit_leds_ascii (164)",
-                self.name,
-                self.profile.title,
-            )
+        warning = self.profile.command_warning(spec)
+        if warning is not None:
+            log.warning("%s: %s", self.name, warning)
         if batch is None or spec.opcode == 129:
             if batch:
                 self._write(bytes(batch))
@@ -762,9 +757,12 @@ class Connection:
             log.error("%s: the port is closed; could not stop the robot", self.name)
             self.safe_stopped = False
             return False
+        lost = self._status is LinkStatus.LOST
         try:
             with _signals_deferred():
                 self.send_many(self.stop_sequence())
+            if lost:
+                raise PortLost(self.name, "the link was lost before the stop: it is unconfirmed")
         except _RECOVERABLE as exc:
             log.error(
                 "%s: could not stop the robot (%s); it may still be in %s mode",

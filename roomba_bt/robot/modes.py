@@ -47,7 +47,6 @@ from typing import Any
 from transitions import Machine
 
 from roomba_bt.oi.encode import Command
-from roomba_bt.oi.errors import UnsupportedCommandError
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import MODE_COMMANDS, CommandSpec
@@ -253,10 +252,7 @@ class ModeModel:
         spec = command.spec if isinstance(command, Command) else command
         if spec.opcode in self._allowed[self._mode]:
             return
-        if self.profile.name not in spec.profiles:
-            raise UnsupportedCommandError(
-                spec.name, self.profile.name, tuple(sorted(spec.profiles))
-            )
+        self.profile.check_supported(spec)
         raise self.refusal(spec)
 
     def refusal(self, spec: CommandSpec) -> ModeError:

@@ -118,9 +118,14 @@ class SerialTransport:
             raise TransportError(self.name, f"set the baud rate to {baud}", exc) from exc
 
     def close(self) -> None:
-        # closing a port that is already gone: nothing left to release
+        # pyserial's socket:// close skips socket.close() when shutdown() fails (the peer
+        # already hung up), which leaks the socket: close it ourselves.
+        sock = getattr(self._port, "_socket", None)
         with contextlib.suppress(serial.SerialException, OSError):
             self._port.close()
+        if sock is not None:
+            with contextlib.suppress(OSError):
+                sock.close()
 
     def __repr__(self) -> str:
         state = "open" if self.is_open else "closed"

@@ -1,0 +1,322 @@
+"""A minimal robot that speaks OI bytes on the far end of a pty or a TCP socket.
+
+Not the simulator: no world, no physics. It decodes the commands it receives with the
+protocol layer's own table (``decode_command``), records every byte and, for every command,
+the mode it was in when the command arrived; applies mode commands the way the spec says;
+answers Sensors (142) and Query List (149) from :attr:`FakeRobot.values`; streams frames every
+15 ms while asked to; and can be scripted: fall back to Passive with a cause, stop streaming,
+go silent, hang up.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import select
+import socket
+import threading
+import time
+import tty
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from roomba_bt.oi.encode import Command, decode_command
+from roomba_bt.oi.errors import OIError
+from roomba_bt.oi.frames import layout_for
+from roomba_bt.oi.modes import DRIVING_MODES, OIMode
+from roomba_bt.oi.profiles import CREATE2, RobotProfile
+
+SLOT = 0.015
+
+
+class Endpoint:
+    """The robot's side of a link: a file descriptor it can select on, read and write."""
+
+    name = "endpoint"
+
+    def fileno(self) -> int:
+        raise NotImplementedError
+
+    def recv(self) -> bytes:
+        raise NotImplementedError
+
+    def send(self, data: bytes) -> None:
+        raise NotImplementedError
+
+    def close(self) -> None:
+        raise NotImplementedError
+
+    def ready(self) -> bool:
+        """Block until the link is usable (a TCP client connected); False if closed."""
+        return True
+
+
+class PtyEndpoint(Endpoint):
+    """The master side of ``os.openpty()``; :attr:`url` is the slave device path."""
+
+    name = "pty"
+
+    def __init__(self) -> None:
+        self.master, self.slave = os.openpty()
+        tty.setraw(self.slave)
+        self.url = os.ttyname(self.slave)
+        self._closed = False
+
+    def fileno(self) -> int:
+        return self.master
+
+    def recv(self) -> bytes:
+        try:
+            return os.read(self.master, 4096)
+        except OSError:  # EIO: every slave handle closed
+            return b""
+
+    def send(self, data: bytes) -> None:
+        os.write(self.master, data)
+
+    def close(self) -> None:
+        if not self._closed:
+            self._closed = True
+            os.close(self.master)
+
+    def close_slave(self) -> None:
+        with contextlib.suppress(OSError):
+            os.close(self.slave)
+
+
+class TcpEndpoint(Endpoint):
+    """A listener on 127.0.0.1; :attr:`url` is ``socket://127.0.0.1:port``."""
+
+    name = "tcp"
+
+    def __init__(self) -> None:
+        self.listener = socket.create_server(("127.0.0.1", 0))
+        self.url = f"socket://127.0.0.1:{self.listener.getsockname()[1]}"
+        self.conn: socket.socket | None = None
+        self._closed = False
+
+    def ready(self) -> bool:
+        self.listener.settimeout(0.1)
+        while not self._closed:
+            try:
+                self.conn, _ = self.listener.accept()
+            except TimeoutError:
+                continue
+            except OSError:
+                return False
+            self.conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            return True
+        return False
+
+    def fileno(self) -> int:
+        assert self.conn is not None
+        return self.conn.fileno()
+
+    def recv(self) -> bytes:
+        assert self.conn is not None
+        try:
+            return self.conn.recv(4096)
+        except OSError:
+            return b""
+
+    def send(self, data: bytes) -> None:
+        assert self.conn is not None
+        self.conn.sendall(data)
+
+    def close(self) -> None:
+        if self._closed:
+            return
+        self._closed = True
+        if self.conn is not None:
+            with contextlib.suppress(OSError):
+                self.conn.shutdown(socket.SHUT_RDWR)
+            self.conn.close()
+        self.listener.close()
+
+
+@dataclass(frozen=True)
+class Received:
+    """One command as the fake robot took it, and the mode it was in at that moment."""
+
+    mode: OIMode
+    command: Command
+    time: float
+
+
+class FakeRobot:
+    """See the module docstring. Use as a context manager (starts and stops its thread)."""
+
+    def __init__(
+        self,
+        endpoint: Endpoint,
+        profile: RobotProfile = CREATE2,
+        *,
+        plus_one: bool = False,
+        silent: bool = False,
+    ) -> None:
+        self.endpoint = endpoint
+        self.profile = profile
+        self.plus_one = plus_one
+        self.silent = silent
+        self.mode = OIMode.OFF
+        self.values: dict[int, int] = {}
+        self.received = bytearray()
+        self.commands: list[Received] = []
+        self.unknown_bytes = 0
+        self.streaming = False
+        self.stream_ids: tuple[int, ...] = ()
+        self.muted = False  # True: keep the link, send no frames ("the stream stopped")
+        self.frames_sent = 0
+        self.closed = threading.Event()
+        self._pending = bytearray()
+        self._lock = threading.Lock()
+        self._changed = threading.Condition(self._lock)
+        self._running = True
+        self._thread = threading.Thread(target=self._run, name="fake robot", daemon=True)
+
+    # ---------------------------------------------------------------- lifecycle
+    def __enter__(self) -> FakeRobot:
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    def stop(self) -> None:
+        self._running = False
+        self.endpoint.close()
+        if self._thread.is_alive() and self._thread is not threading.current_thread():
+            self._thread.join(2.0)
+
+    # ---------------------------------------------------------------- scripting
+    def fall_to_passive(self, values: dict[int, int]) -> None:
+        """Safe -> Passive by itself, with the sensor values that caused it (once the robot
+        has taken the mode and stream commands already on their way)."""
+        assert self.wait_until(lambda r: r.streaming and r.mode in DRIVING_MODES)
+        with self._lock:
+            self.values.update(values)
+            self.mode = OIMode.PASSIVE
+
+    def set_values(self, values: dict[int, int]) -> None:
+        with self._lock:
+            self.values.update(values)
+
+    def hang_up(self) -> None:
+        """The cable is pulled: the link closes under the connection."""
+        self._running = False
+        self.endpoint.close()
+
+    def wait_until(self, predicate: Callable[[FakeRobot], bool], timeout: float = 5.0) -> bool:
+        deadline = time.monotonic() + timeout
+        with self._changed:
+            while not predicate(self):
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    return False
+                self._changed.wait(left)
+        return True
+
+    def opcodes(self) -> list[int]:
+        with self._lock:
+            return [r.command.opcode for r in self.commands]
+
+    def actuator_commands_outside_safe_or_full(self) -> list[Received]:
+        with self._lock:
+            return [
+                r
+                for r in self.commands
+                if r.command.spec.modes <= DRIVING_MODES and r.mode not in DRIVING_MODES
+            ]
+
+    # ---------------------------------------------------------------- the robot
+    def _reported_mode(self) -> int:
+        return int(self.mode) + (1 if self.plus_one else 0)
+
+    def _sensor_values(self) -> dict[int, int]:
+        values = dict(self.values)
+        values[35] = self._reported_mode()
+        return values
+
+    def _run(self) -> None:
+        if not self.endpoint.ready():
+            self.closed.set()
+            return
+        next_frame = time.monotonic() + SLOT
+        try:
+            while self._running:
+                wait = max(0.0, next_frame - time.monotonic())
+                try:
+                    ready, _, _ = select.select([self.endpoint], [], [], wait)
+                except (OSError, ValueError):
+                    break
+                if ready:
+                    data = self.endpoint.recv()
+                    if not data:
+                        break
+                    self._take(data)
+                now = time.monotonic()
+                if now >= next_frame:
+                    self._send_frame()
+                    next_frame += SLOT
+                    if next_frame < now:
+                        next_frame = now + SLOT
+        except OSError:
+            pass
+        finally:
+            self.closed.set()
+            with self._changed:
+                self._changed.notify_all()
+
+    def _send_frame(self) -> None:
+        with self._lock:
+            if not (self.streaming and self.stream_ids) or self.muted or self.mode is OIMode.OFF:
+                return
+            layout = layout_for(self.stream_ids, self.profile, True)
+            frame = layout.stream_frame(
+                self._sensor_values(), include_header=self.profile.checksum_includes_header
+            )
+            self.frames_sent += 1
+        self.endpoint.send(frame)
+
+    def _take(self, data: bytes) -> None:
+        replies = bytearray()
+        with self._changed:
+            self.received += data
+            self._pending += data
+            while self._pending:
+                try:
+                    decoded = decode_command(self._pending)
+                except OIError:
+                    self.unknown_bytes += 1
+                    del self._pending[:1]
+                    continue
+                if decoded is None:
+                    break
+                command, size = decoded
+                del self._pending[:size]
+                self.commands.append(Received(self.mode, command, time.monotonic()))
+                replies += self._apply(command)
+            self._changed.notify_all()
+        if replies and not self.silent:
+            self.endpoint.send(bytes(replies))
+
+    def _apply(self, command: Command) -> bytes:
+        """Change state for ``command``; return the reply bytes, if any."""
+        opcode = command.opcode
+        if self.mode is OIMode.OFF and opcode != 128:
+            return b""  # the OI listens for Start only
+        spec = command.spec
+        if spec.leads_to is not None:
+            self.mode = spec.leads_to
+            if self.mode is OIMode.OFF:
+                self.streaming = False
+            return b""
+        if opcode == 148:
+            self.stream_ids = tuple(command.args[1:])
+            self.streaming = bool(self.stream_ids)
+        elif opcode == 150:
+            self.streaming = bool(command.args[0])
+        elif opcode in (142, 149):
+            ids = (command.args[0],) if opcode == 142 else tuple(command.args[1:])
+            return layout_for(ids, self.profile, False).pack(self._sensor_values())
+        return b""

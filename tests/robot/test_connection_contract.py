@@ -1,0 +1,277 @@
+"""The connection contract, run on every backend (see ``conftest.py``): start-up, stream,
+guarded commands, and what is on the wire after every kind of ending."""
+
+from __future__ import annotations
+
+import logging
+import time
+
+import pytest
+
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.encode import Radius
+from roomba_bt.oi.errors import BandwidthError, UnsupportedCommandError
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.profiles import ROOMBA500
+from roomba_bt.robot.connection import Connection, LinkStatus
+from roomba_bt.robot.errors import ConnectionFailed, ModeError, PortLost, StreamStalled
+
+from .conftest import Link
+from .fake_robot import FakeRobot
+
+PACKETS = (7, 9, 10, 11, 12, 34, 35, 43, 44)
+#: drive 0, motors off, pause stream, Start: the end of every ending from Safe or Full.
+STOP_TO_PASSIVE = bytes([137, 0, 0, 0, 0, 138, 0, 150, 0, 128])
+STOP_TO_OFF = bytes([137, 0, 0, 0, 0, 138, 0, 150, 0, 173])
+
+
+def frames_until(connection: Connection, predicate: object, timeout: float = 5.0) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        connection.poll(0.05)
+        if callable(predicate) and predicate():
+            return
+    raise AssertionError("condition not reached while polling")
+
+
+def no_actuator_outside_safe(robot: FakeRobot) -> None:
+    bad = robot.actuator_commands_outside_safe_or_full()
+    assert bad == [], f"actuator commands reached the robot in Passive/Off: {bad}"
+
+
+def test_start_confirms_enters_mode_and_streams(link: Link) -> None:
+    with link.connect() as connection:
+        connection.start("safe", PACKETS)
+        first = connection.wait_for_frame(2.0)
+        assert first is not None
+        assert first.frame.packet_ids == PACKETS
+        frames_until(connection, lambda: connection.counters.frames >= 5)
+        assert connection.mode is OIMode.SAFE
+        assert connection.status is LinkStatus.STREAMING
+        assert connection.latest is not None and connection.latest_time is not None
+        assert connection.counters.checksum_failures == 0
+    if link.robot is not None:
+        assert link.robot.wait_until(lambda r: r.received.endswith(STOP_TO_PASSIVE))
+        assert link.robot.opcodes()[:5] == [128, 150, 149, 131, 148]
+        assert link.robot.mode is OIMode.PASSIVE
+        no_actuator_outside_safe(link.robot)
+
+
+def test_normal_exit_ends_with_drive_0_motors_off_pause_and_start(link: Link) -> None:
+    with link.connect() as connection:
+        connection.start("safe", PACKETS)
+        connection.send(oi.drive(100, Radius.STRAIGHT))
+        connection.poll(0.05)
+    assert connection.status is LinkStatus.CLOSED
+    assert connection.safe_stopped is True
+    robot = link.scripted()
+    assert robot.wait_until(lambda r: r.received.endswith(STOP_TO_PASSIVE))
+    assert robot.wait_until(lambda r: r.mode is OIMode.PASSIVE)
+
+
+def test_exception_inside_the_block_still_stops_the_robot(link: Link) -> None:
+    robot = link.scripted()
+    with pytest.raises(RuntimeError, match="mission crashed"), link.connect() as connection:
+        connection.start("full", PACKETS)
+        connection.send(oi.drive_direct(200, 200))
+        raise RuntimeError("mission crashed")
+    assert robot.wait_until(lambda r: r.received.endswith(STOP_TO_PASSIVE))
+
+
+def test_end_in_stop_sends_stop_on_profiles_that_have_it(link: Link) -> None:
+    robot = link.scripted()
+    with link.connect(end_in="stop") as connection:
+        connection.start("safe", PACKETS)
+    assert robot.wait_until(lambda r: r.received.endswith(STOP_TO_OFF) and r.mode is OIMode.OFF)
+
+
+def test_end_in_stop_falls_back_to_start_on_the_500(
+    fake_links: object, caplog: pytest.LogCaptureFixture
+) -> None:
+    link: Link = fake_links("pty", ROOMBA500)  # type: ignore[operator]
+    robot = link.scripted()
+    with caplog.at_level(logging.WARNING), link.connect(end_in="stop") as connection:
+        connection.start("safe", PACKETS)
+        with pytest.raises(UnsupportedCommandError, match="stop is not available on roomba500"):
+            connection.send(oi.stop())
+    assert "has no Stop (173)" in caplog.text
+    assert robot.wait_until(lambda r: r.received.endswith(STOP_TO_PASSIVE))
+
+
+def test_fall_to_passive_refuses_the_next_drive_and_names_the_cause(link: Link) -> None:
+    robot = link.scripted()
+    with link.connect() as connection:
+        connection.start("safe", PACKETS)
+        connection.send(oi.drive(150, Radius.STRAIGHT))
+        robot.fall_to_passive({7: 0b0100})  # right wheel dropped
+        frames_until(connection, lambda: connection.mode is OIMode.PASSIVE)
+        fallback = connection.last_fallback
+        assert fallback is not None and fallback.cause == "wheel drop"
+        assert fallback.previous is OIMode.SAFE
+        sent_before = len(robot.received)
+        with pytest.raises(ModeError) as refused:
+            connection.send(oi.drive(150, Radius.STRAIGHT))
+        message = str(refused.value)
+        assert message.startswith("drive needs Safe or Full; the robot is in Passive since ")
+        assert message.endswith(", after a wheel drop")
+        connection.poll(0.05)
+        assert len(robot.received) == sent_before  # nothing of it reached the wire
+        assert connection.counters.commands_refused == 1
+    # from Passive the ending sends no actuator byte: pause the stream, then Start
+    assert robot.wait_until(lambda r: r.received.endswith(bytes([150, 0, 128])))
+    no_actuator_outside_safe(robot)
+
+
+def test_cliff_and_charger_causes_are_reported(link: Link) -> None:
+    robot = link.scripted()
+    with link.connect() as connection:
+        connection.start("safe", PACKETS)
+        robot.fall_to_passive({10: 1})
+        frames_until(connection, lambda: connection.mode is OIMode.PASSIVE)
+        assert connection.last_fallback is not None
+        assert connection.last_fallback.cause == "cliff"
+        robot.set_values({10: 0, 34: 0b10})
+        connection.send(oi.safe())
+        frames_until(connection, lambda: connection.counters.frames > 3)
+        robot.fall_to_passive({})
+        frames_until(connection, lambda: connection.mode is OIMode.PASSIVE)
+        assert connection.last_fallback.cause == "charger"
+
+
+def test_no_actuator_byte_ever_leaves_in_passive_or_off(link: Link) -> None:
+    connection = link.connect()
+    for actuator in (oi.drive(100, 0), oi.motors(1), oi.leds(0, 0, 0), oi.play(0)):
+        with pytest.raises(ModeError, match="the robot is in Off .*send start first"):
+            connection.send(actuator)
+    with connection:
+        connection.start("passive", PACKETS)
+        for actuator in (oi.drive_direct(100, 100), oi.drive_pwm(0, 0), oi.pwm_motors(0, 0, 0)):
+            with pytest.raises(ModeError, match="send safe or full first"):
+                connection.send(actuator)
+        # one tick's outbox: the mode change comes first, so the drive behind it passes
+        connection.send_many([oi.safe(), oi.drive(100, Radius.STRAIGHT)])
+        assert connection.mode is OIMode.SAFE
+        connection.send(oi.start())  # back to Passive
+        with pytest.raises(ModeError):
+            connection.send_many([oi.drive(50, 0), oi.sensors(7)])
+        connection.poll(0.05)
+    robot = link.scripted()
+    robot.wait_until(lambda r: r.received.endswith(bytes([150, 0, 128])))
+    no_actuator_outside_safe(robot)
+    opcodes = robot.opcodes()
+    assert opcodes.count(137) == 1  # the one drive sent after safe in the batch
+    assert 142 in opcodes  # the allowed command of the refused batch still left
+
+
+def test_watchdog_sends_drive_0_and_reports_a_stalled_stream(link: Link) -> None:
+    robot = link.scripted()
+    with link.connect(watchdog=0.1) as connection:
+        connection.start("safe", PACKETS)
+        connection.send(oi.drive(100, Radius.STRAIGHT))
+        frames_until(connection, lambda: connection.counters.frames >= 3)
+        robot.muted = True
+        with pytest.raises(StreamStalled, match="no valid sensor frame .*drive 0 sent"):
+            for _ in range(200):
+                connection.poll(0.02)
+        assert connection.status is LinkStatus.STALLED
+        assert connection.counters.watchdog_trips == 1
+        assert robot.wait_until(lambda r: r.received.endswith(bytes([137, 0, 0, 0, 0])))
+        robot.muted = False
+        frames_until(connection, lambda: connection.status is LinkStatus.STREAMING)
+    assert robot.wait_until(lambda r: r.received.endswith(STOP_TO_PASSIVE))
+
+
+def test_robot_that_does_not_answer_fails_with_the_port_and_likely_causes(
+    fake_links: object,
+) -> None:
+    link: Link = fake_links("pty", silent=True)  # type: ignore[operator]
+    connection = link.connect()
+    with pytest.raises(ConnectionFailed) as failed:
+        connection.start("safe", PACKETS, confirm_timeout=0.2)
+    message = str(failed.value)
+    assert message.startswith(link.url + ": the robot did not answer")
+    assert "wrong baud rate" in message and "no power" in message and "wrong cable" in message
+    connection.close()
+
+
+def test_a_stream_that_does_not_fit_is_refused_before_any_byte(link: Link) -> None:
+    connection = link.connect(baud=19200)
+    with pytest.raises(BandwidthError, match="does not fit in 15 ms at 19200 baud"):
+        connection.start("safe", (100,))
+    connection.close()
+    if link.robot is not None:
+        time.sleep(0.05)
+        assert bytes(link.robot.received) == b""
+
+
+def test_lost_port_is_reported_at_once_and_close_does_not_hang(link: Link) -> None:
+    robot = link.scripted()
+    connection = link.connect()
+    connection.start("safe", PACKETS)
+    frames_until(connection, lambda: connection.counters.frames >= 2)
+    robot.hang_up()
+    assert robot.closed.wait(2.0)
+    with pytest.raises(PortLost, match="the link is lost"):
+        for _ in range(100):
+            connection.poll(0.02)
+            connection.send(oi.drive(0, 0))
+    assert connection.status is LinkStatus.LOST
+    started = time.monotonic()
+    assert connection.close() is False
+    assert time.monotonic() - started < 2.0
+    assert connection.safe_stopped is False
+
+
+def test_background_reader_queues_frames_and_wakes_waiters(link: Link) -> None:
+    with link.connect() as connection:
+        connection.start("safe", PACKETS)
+        connection.start_reader()
+        frame = connection.wait_for_frame(2.0)
+        assert frame is not None
+        later = connection.wait_for_frame(2.0)
+        assert later is not None and later.index > frame.index
+        queued = connection.poll(0.5)
+        assert queued and all(a.index < b.index for a, b in zip(queued, queued[1:]))
+    assert connection.status is LinkStatus.CLOSED
+
+
+def test_background_reader_runs_the_watchdog(link: Link) -> None:
+    robot = link.scripted()
+    with link.connect(watchdog=0.1) as connection:
+        connection.start("safe", PACKETS)
+        connection.start_reader()
+        assert connection.wait_for_frame(2.0) is not None
+        connection.send(oi.drive(100, Radius.STRAIGHT))
+        robot.muted = True
+        # nobody polls: the reader thread alone must halt the robot
+        assert robot.wait_until(lambda r: r.received.endswith(bytes([137, 0, 0, 0, 0])))
+        with pytest.raises(StreamStalled):
+            connection.poll(2.0)
+    assert robot.wait_until(lambda r: r.received.endswith(STOP_TO_PASSIVE))
+
+
+def test_baud_command_changes_the_port_rate_after_the_wait(link: Link) -> None:
+    robot = link.scripted()
+    with link.connect() as connection:
+        connection.start("passive", (7, 35))
+        connection.set_baud(57600)
+        assert connection.baud == 57600
+        assert connection.transport.baud == 57600  # type: ignore[attr-defined]
+        with pytest.raises(BandwidthError):
+            connection.set_baud(9600 // 8)
+    assert [r.command.args for r in robot.commands if r.command.opcode == 129] == [(10,)]
+
+
+def test_digit_leds_raw_warns_on_600_firmware(link: Link, caplog: pytest.LogCaptureFixture) -> None:
+    with link.connect() as connection:
+        connection.start("safe", (35,))
+        with caplog.at_level(logging.WARNING):
+            connection.send(oi.digit_leds_raw([1, 2, 3, 4]))
+    assert "does not work on" in caplog.text
+
+
+def test_query_is_refused_while_streaming(link: Link) -> None:
+    with link.connect() as connection:
+        connection.start("safe", (35,))
+        with pytest.raises(Exception, match="stream paused"):
+            connection.query((7,))
