@@ -1,0 +1,126 @@
+"""A picture of a simulated run: walls, drops, the dock and its beams, the path coloured by
+time, bumps and mode changes marked. PNG via matplotlib, an optional extra, imported only
+here and only when a plot is asked for.
+"""
+
+from __future__ import annotations
+
+import math
+import pathlib
+from typing import Any
+
+from roomba_bt.sim.robot import Simulator
+
+
+class PlotUnavailableError(ImportError):
+    """matplotlib is not installed."""
+
+
+def _matplotlib() -> Any:
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError as exc:
+        raise PlotUnavailableError(
+            f"plotting needs matplotlib, an optional extra: pip install 'roomba-bt[plot]' ({exc})"
+        ) from None
+    return plt
+
+
+_EVENT_STYLE = {
+    "bump": ("x", "tab:red", "bump"),
+    "cliff": ("v", "tab:purple", "cliff"),
+    "wheel_drop": ("^", "tab:brown", "wheel drop"),
+    "mode": ("s", "tab:blue", "mode change"),
+    "docked": ("*", "tab:green", "docked"),
+    "fell": ("X", "black", "fell"),
+    "disconnect": ("D", "tab:gray", "disconnect"),
+}
+
+
+def plot_run(simulator: Simulator, path: str | pathlib.Path, title: str | None = None) -> None:
+    """Write the trajectory of ``simulator`` so far to ``path`` (PNG)."""
+    plt = _matplotlib()
+    from matplotlib.collections import LineCollection
+    from matplotlib.patches import Polygon as PolygonPatch
+    from matplotlib.patches import Wedge
+
+    world = simulator.world
+    fig, ax = plt.subplots(figsize=(8, 7), dpi=110)
+    try:
+        for room in world.rooms:
+            ax.add_patch(PolygonPatch([(x / 1000, y / 1000) for x, y in room], closed=True,
+                                      facecolor="#f7f7f2", edgecolor="black", lw=2))  # fmt: skip
+        for ax0, ay0, ax1, ay1 in world.walls:
+            ax.plot([ax0 / 1000, ax1 / 1000], [ay0 / 1000, ay1 / 1000], color="black", lw=2)
+        for obstacle in world.obstacles:
+            ax.add_patch(PolygonPatch([(x / 1000, y / 1000) for x, y in obstacle], closed=True,
+                                      facecolor="#b8a88a", edgecolor="#6b5a3a"))  # fmt: skip
+        for drop in world.drops:
+            ax.add_patch(PolygonPatch([(x / 1000, y / 1000) for x, y in drop], closed=True,
+                                      facecolor="#333333", alpha=0.55, hatch="//",
+                                      edgecolor="black", label="drop"))  # fmt: skip
+        for vw in world.virtual_walls:
+            ax.plot([vw.ax / 1000, vw.bx / 1000], [vw.ay / 1000, vw.by / 1000],
+                    color="tab:orange", lw=2, ls="--", label="virtual wall")  # fmt: skip
+        for lh in world.lighthouses:
+            x0, y0, x1, y1 = lh.fence_segment
+            ax.plot([x0 / 1000, x1 / 1000], [y0 / 1000, y1 / 1000], color="tab:orange", ls=":")
+            ax.plot(lh.x / 1000, lh.y / 1000, "o", color="tab:orange")
+        dock = world.dock
+        if dock is not None:
+            cx, cy = dock.x / 1000, dock.y / 1000
+            facing = math.degrees(dock.facing)
+            r = dock.buoy_range / 1000
+            ax.add_patch(Wedge((cx, cy), r, facing + math.degrees(dock.red[0]),
+                               facing + math.degrees(dock.red[1]), color="red", alpha=0.15,
+                               label="red buoy"))  # fmt: skip
+            ax.add_patch(Wedge((cx, cy), r, facing + math.degrees(dock.green[0]),
+                               facing + math.degrees(dock.green[1]), color="green", alpha=0.15,
+                               label="green buoy"))  # fmt: skip
+            ax.add_patch(Wedge((cx, cy), dock.force_field / 1000, 0, 360, fill=False,
+                               ls=":", color="tab:blue", label="force field"))  # fmt: skip
+            x0, y0, x1, y1 = dock.plate
+            ax.plot([x0 / 1000, x1 / 1000], [y0 / 1000, y1 / 1000], color="tab:green", lw=5)
+        trace = simulator.trace
+        points = [(p.x / 1000, p.y / 1000) for p in trace]
+        points.append((simulator.x / 1000, simulator.y / 1000))
+        times = [p.time for p in trace] + [simulator.time]
+        if len(points) > 1:
+            segments = [[points[i], points[i + 1]] for i in range(len(points) - 1)]
+            lines = LineCollection(segments, cmap="viridis", lw=2)
+            lines.set_array(times[:-1])
+            ax.add_collection(lines)
+            fig.colorbar(lines, ax=ax, label="time (s)", shrink=0.8)
+        ax.plot(points[0][0], points[0][1], "o", color="black", label="start")
+        heading = simulator.theta
+        ax.arrow(simulator.x / 1000, simulator.y / 1000, 0.2 * math.cos(heading),
+                 0.2 * math.sin(heading), width=0.02, color="black")  # fmt: skip
+        ax.add_patch(Wedge((simulator.x / 1000, simulator.y / 1000), 0.17, 0, 360,
+                           fill=False, color="black"))  # fmt: skip
+        seen: set[str] = set()
+        for event in simulator.events:
+            style = _EVENT_STYLE.get(event.kind)
+            if style is None:
+                continue
+            marker, colour, label = style
+            ax.plot(event.x / 1000, event.y / 1000, marker, color=colour, ms=8,
+                    label=None if label in seen else label)  # fmt: skip
+            seen.add(label)
+        handles, labels = ax.get_legend_handles_labels()
+        unique = dict(zip(labels, handles, strict=True))
+        ax.legend(unique.values(), unique.keys(), loc="upper right", fontsize=7)
+        ax.set_aspect("equal")
+        ax.autoscale_view()
+        ax.set_xlabel("x (m)")
+        ax.set_ylabel("y (m)")
+        ax.set_title(
+            title
+            or f"{world.name}: {simulator.time:.1f} s, {len(simulator.violations)} "
+            f"ignored commands, final mode {simulator.mode.label}"
+        )
+        fig.savefig(str(path))
+    finally:
+        plt.close(fig)
