@@ -3,6 +3,7 @@ guarded commands, and what is on the wire after every kind of ending."""
 
 from __future__ import annotations
 
+import itertools
 import logging
 import time
 
@@ -141,7 +142,7 @@ def test_cliff_and_charger_causes_are_reported(link: Link) -> None:
 def test_no_actuator_byte_ever_leaves_in_passive_or_off(link: Link) -> None:
     connection = link.connect()
     for actuator in (oi.drive(100, 0), oi.motors(1), oi.leds(0, 0, 0), oi.play(0)):
-        with pytest.raises(ModeError, match="the robot is in Off .*send start first"):
+        with pytest.raises(ModeError, match=r"the robot is in Off .*send start first"):
             connection.send(actuator)
     with connection:
         connection.start("passive", PACKETS)
@@ -170,7 +171,7 @@ def test_watchdog_sends_drive_0_and_reports_a_stalled_stream(link: Link) -> None
         connection.send(oi.drive(100, Radius.STRAIGHT))
         frames_until(connection, lambda: connection.counters.frames >= 3)
         robot.muted = True
-        with pytest.raises(StreamStalled, match="no valid sensor frame .*drive 0 sent"):
+        with pytest.raises(StreamStalled, match=r"no valid sensor frame .*drive 0 sent"):
             for _ in range(200):
                 connection.poll(0.02)
         assert connection.status is LinkStatus.STALLED
@@ -231,7 +232,7 @@ def test_background_reader_queues_frames_and_wakes_waiters(link: Link) -> None:
         later = connection.wait_for_frame(2.0)
         assert later is not None and later.index > frame.index
         queued = connection.poll(0.5)
-        assert queued and all(a.index < b.index for a, b in zip(queued, queued[1:]))
+        assert queued and all(a.index < b.index for a, b in itertools.pairwise(queued))
     assert connection.status is LinkStatus.CLOSED
 
 

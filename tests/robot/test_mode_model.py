@@ -1,0 +1,259 @@
+"""The mode model: built from the opcode table, the guard, packet 35 reconciliation, the
+"mode + 1" rule, and the generated diagram in docs/modes.md."""
+
+from __future__ import annotations
+
+import pathlib
+import time
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.errors import UnsupportedCommandError
+from roomba_bt.oi.frames import layout_for
+from roomba_bt.oi.modes import DRIVING_MODES, OIMode
+from roomba_bt.oi.opcodes import COMMANDS, MODE_COMMANDS
+from roomba_bt.oi.profiles import CREATE2, PROFILES, ROOMBA500, ROOMBA600
+from roomba_bt.robot.errors import ModeError, format_wall_time
+from roomba_bt.robot.modes import ModeModel, infer_cause, mermaid, render_modes_doc
+
+DOCS = pathlib.Path(__file__).resolve().parents[2] / "docs" / "modes.md"
+NOON = time.mktime((2026, 11, 22, 12, 1, 3, 0, 0, -1)) + 0.120
+
+
+def frame(values: dict[int, int]):  # type: ignore[no-untyped-def]
+    ids = tuple(sorted(values))
+    layout = layout_for(ids, CREATE2, False)
+    return layout.decode(layout.pack(values))
+
+
+def model_in(mode: OIMode, profile=CREATE2, **kwargs):  # type: ignore[no-untyped-def]
+    model = ModeModel(profile, wall_clock=lambda: NOON, **kwargs)
+    model.apply(oi.start(), 0.0)
+    model.reconcile(frame({35: 1}), 0, 0.0)  # calibrates: no "mode + 1"
+    if mode is OIMode.SAFE:
+        model.apply(oi.safe(), 0.0)
+    elif mode is OIMode.FULL:
+        model.apply(oi.full(), 0.0)
+    model.reconcile(frame({35: int(mode)}), 1, 0.015)
+    assert model.mode is mode
+    return model
+
+
+# ------------------------------------------------------------------ the machine
+
+
+@pytest.mark.parametrize("profile", list(PROFILES.values()), ids=list(PROFILES))
+def test_every_mode_command_of_the_profile_is_a_trigger_from_the_table(profile) -> None:  # type: ignore[no-untyped-def]
+    machine = ModeModel(profile).machine
+    for spec in MODE_COMMANDS:
+        if profile.name not in spec.profiles:
+            assert spec.name not in machine.events
+            continue
+        transitions = machine.events[spec.name].transitions
+        assert set(transitions) == {m.label for m in spec.modes}
+        assert {t.dest for ts in transitions.values() for t in ts} == {spec.leads_to.label}
+
+
+def test_no_automatic_transitions_exist() -> None:
+    machine = ModeModel().machine
+    assert not [name for name in machine.events if name.startswith("to_")]
+
+
+def test_off_accepts_start_and_reset_only() -> None:
+    model = ModeModel(CREATE2)
+    accepted = {spec.name for spec in CREATE2.commands if model.allows(spec)}
+    assert accepted == {"start", "reset"}
+    with pytest.raises(ModeError, match="safe needs Passive, Safe or Full; the robot is in Off"):
+        model.check(oi.safe())
+
+
+@pytest.mark.parametrize("spec", [s for s in COMMANDS.values() if s.modes == DRIVING_MODES])
+def test_every_actuator_is_refused_in_passive_and_accepted_in_safe_and_full(spec) -> None:  # type: ignore[no-untyped-def]
+    if not CREATE2.has_command(spec):
+        pytest.skip("not on create2")
+    refusal = f"^{spec.name} needs Safe or Full; the robot is in Passive"
+    with pytest.raises(ModeError, match=refusal):
+        model_in(OIMode.PASSIVE).check(spec)
+    model_in(OIMode.SAFE).check(spec)
+    model_in(OIMode.FULL).check(spec)
+
+
+def test_commands_the_profile_lacks_raise_unsupported() -> None:
+    model = model_in(OIMode.SAFE, ROOMBA500)
+    with pytest.raises(UnsupportedCommandError, match="stop is not available on roomba500"):
+        model.check(oi.stop())
+    with pytest.raises(UnsupportedCommandError):
+        model.check(oi.reset())
+
+
+def test_mode_commands_move_the_model() -> None:
+    model = model_in(OIMode.PASSIVE)
+    model.apply(oi.full(), 1.0)
+    assert model.mode is OIMode.FULL and model.state == "Full"
+    model.apply(oi.seek_dock(), 2.0)
+    assert model.mode is OIMode.PASSIVE
+    model.apply(oi.stop(), 3.0)
+    assert model.mode is OIMode.OFF
+
+
+# ------------------------------------------------------------------ reconciliation
+
+
+def test_fall_back_with_wheel_drop_is_a_transition_with_cause_and_message() -> None:
+    model = model_in(OIMode.SAFE)
+    change = model.reconcile(frame({7: 0b1000, 35: 1}), 40, 0.6)
+    assert change is not None
+    assert (change.previous, change.current, change.cause) == (
+        OIMode.SAFE,
+        OIMode.PASSIVE,
+        "wheel drop",
+    )
+    assert (change.tick, change.time) == (40, 0.6)
+    assert model.last_fallback == change
+    assert model.state == "Passive"
+    with pytest.raises(ModeError) as refused:
+        model.check(oi.drive(100, 0))
+    assert str(refused.value) == (
+        "drive needs Safe or Full; the robot is in Passive since 12:01:03.120, after a wheel drop"
+    )
+
+
+@pytest.mark.parametrize(
+    ("values", "cause"),
+    [
+        ({9: 1}, "cliff"),
+        ({12: 1}, "cliff"),
+        ({34: 0b10}, "charger"),
+        ({34: 0b01}, "charger"),
+        ({7: 0b0011}, "unknown"),  # bumps are no reason to leave Safe
+        ({}, "unknown"),
+        ({7: 0b0100, 11: 1}, "wheel drop and cliff"),
+    ],
+)
+def test_cause_inferred_from_the_same_frame(values: dict[int, int], cause: str) -> None:
+    full = {7: 0, 9: 0, 10: 0, 11: 0, 12: 0, 34: 0, **values, 35: 1}
+    change = model_in(OIMode.SAFE).reconcile(frame(full), 5, 0.5)
+    assert change is not None and change.cause == cause
+
+
+def test_cause_taken_from_the_frame_before_when_the_fall_frame_shows_none() -> None:
+    model = model_in(OIMode.SAFE)
+    model.reconcile(frame({10: 1, 35: 2}), 5, 0.5)
+    change = model.reconcile(frame({10: 0, 35: 1}), 6, 0.515)
+    assert change is not None and change.cause == "cliff"
+    assert infer_cause(frame({10: 0})) == "unknown"
+
+
+def test_old_mode_seen_just_after_a_mode_command_is_not_a_fall() -> None:
+    model = model_in(OIMode.PASSIVE)
+    model.apply(oi.safe(), 1.0)
+    assert model.reconcile(frame({35: 1}), 2, 1.03) is None  # the robot had not taken it yet
+    assert model.mode is OIMode.SAFE
+    change = model.reconcile(frame({35: 1}), 20, 1.3)  # still Passive after settling: a fall
+    assert change is not None and change.current is OIMode.PASSIVE
+
+
+def test_unexpected_report_is_followed_and_logged(caplog: pytest.LogCaptureFixture) -> None:
+    model = model_in(OIMode.SAFE)
+    change = model.reconcile(frame({35: 3}), 9, 1.0)  # Full without a command: another client
+    assert change is not None and change.current is OIMode.FULL
+    assert change.cause == "unexpected report"
+    assert "packet 35 reports Full" in caplog.text
+
+
+# ------------------------------------------------------------------ "mode + 1"
+
+
+def started(profile=ROOMBA600, raw: int = 2):  # type: ignore[no-untyped-def]
+    model = ModeModel(profile)
+    model.apply(oi.start(), 0.0)
+    model.reconcile(frame({35: raw}), 0, 0.01)
+    return model
+
+
+def test_two_right_after_start_means_passive_plus_one() -> None:
+    model = started(raw=2)
+    assert model.plus_one is True and model.mode is OIMode.PASSIVE
+    model.apply(oi.safe(), 0.1)
+    assert model.reconcile(frame({35: 3}), 1, 0.12) is None
+    assert model.mode is OIMode.SAFE
+    change = model.reconcile(frame({35: 2, 9: 1}), 2, 0.5)
+    assert change is not None and change.current is OIMode.PASSIVE and change.cause == "cliff"
+
+
+def test_one_right_after_start_rules_the_bug_out() -> None:
+    model = started(raw=1)
+    assert model.plus_one is False and model.mode is OIMode.PASSIVE
+    model.apply(oi.safe(), 0.1)
+    model.reconcile(frame({35: 2}), 1, 0.12)
+    assert model.mode is OIMode.SAFE and model.last_fallback is None
+
+
+def test_four_is_always_full_plus_one() -> None:
+    model = ModeModel(CREATE2)
+    model.apply(oi.start(), 0.0)
+    model.apply(oi.full(), 0.0)
+    assert model.reconcile(frame({35: 4}), 1, 0.01) is None
+    assert model.plus_one is True and model.mode is OIMode.FULL
+
+
+def test_ambiguous_reading_is_ignored_until_the_offset_is_known() -> None:
+    model = ModeModel(ROOMBA600)
+    model.force(OIMode.SAFE)
+    assert model.reconcile(frame({35: 2}), 1, 1.0) is None  # Safe, or Passive + 1?
+    assert model.mode is OIMode.SAFE and model.plus_one is None
+    assert model.invalid_readings == 1
+    model.reconcile(frame({35: 3}), 2, 1.015)  # only Safe + 1 fits
+    assert model.plus_one is True and model.mode is OIMode.SAFE
+
+
+@pytest.mark.parametrize("raw", [0, 5, 17, 255])
+def test_values_that_are_no_mode_are_counted_never_raised(raw: int) -> None:
+    model = started(raw=1)
+    model.apply(oi.safe(), 0.1)
+    assert model.reconcile(frame({35: raw}), 1, 1.0) is None
+    assert model.mode is OIMode.SAFE
+    assert model.invalid_readings == 1
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    raws=st.lists(st.integers(0, 255), max_size=30),
+    commands=st.lists(st.sampled_from(["safe", "full", "start", "clean"]), max_size=5),
+    profile=st.sampled_from(list(PROFILES.values())),
+)
+def test_any_packet_35_sequence_keeps_a_valid_mode(raws, commands, profile) -> None:  # type: ignore[no-untyped-def]
+    model = ModeModel(profile)
+    model.apply(oi.start(), 0.0)
+    t = 0.0
+    for i, raw in enumerate(raws):
+        if commands and i % 5 == 0:
+            model.apply(getattr(oi, commands[i % len(commands)])(), t)
+        t += 0.015
+        model.reconcile(frame({35: raw}), i, t)
+        assert model.mode in (OIMode.PASSIVE, OIMode.SAFE, OIMode.FULL)
+        assert model.state == model.mode.label
+
+
+# ------------------------------------------------------------------ docs
+
+
+def test_docs_modes_md_is_the_generated_text() -> None:
+    assert DOCS.read_text(encoding="utf-8") == render_modes_doc(), (
+        "docs/modes.md is stale: run `python -m roomba_bt.robot.docgen docs/modes.md`"
+    )
+
+
+def test_diagram_draws_every_command_transition() -> None:
+    text = mermaid(CREATE2)
+    assert "Passive --> Safe : control, safe" in text
+    assert "Safe --> Passive : start, power, spot, clean, max, seek_dock, fall_back" in text
+    assert "Safe --> Off : reset, stop" in text
+    assert "stop" not in mermaid(ROOMBA500)
+
+
+def test_wall_time_format() -> None:
+    assert format_wall_time(NOON) == "12:01:03.120"
