@@ -1,0 +1,298 @@
+"""Every action ticked against a stub robot whose frames the test sets."""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable
+from typing import Any
+
+import pytest
+from py_trees.behaviour import Behaviour
+from py_trees.common import Status
+
+from roomba_bt.behaviours import actions as a
+from roomba_bt.behaviours.declare import BlackboardRef, read_key, write_key
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.odometry import mm_to_counts
+from roomba_bt.robot.interface import Odometry, StubRobot
+
+
+def tick(behaviour: Behaviour) -> Status:
+    behaviour.tick_once()
+    return behaviour.status
+
+
+HALT = [137, 0, 0, 0, 0]
+Make = Callable[..., Any]
+
+
+def data(robot: StubRobot) -> list[list[int]]:
+    return [list(c.data) for c in robot.flush()]
+
+
+def encoders(mm_left: float, mm_right: float) -> dict[int, int]:
+    return {
+        43: round(mm_to_counts(mm_left)),
+        44: round(mm_to_counts(mm_right)),
+    }
+
+
+# ------------------------------------------------------------------ mode
+
+
+@pytest.mark.parametrize(
+    ("target", "opcode", "mode"),
+    [("safe", 131, OIMode.SAFE), ("full", 132, OIMode.FULL), ("passive", 128, OIMode.PASSIVE)],
+)
+def test_mode_sends_its_opcode_and_waits_for_packet_35(
+    target: str, opcode: int, mode: OIMode, make: Make
+) -> None:
+    robot = StubRobot(mode=OIMode.OFF if target == "passive" else OIMode.PASSIVE)
+    behaviour = make(a.Mode, robot=robot, to=target, timeout=2.0)
+    robot.set_frame({35: int(robot.snapshot.mode)})
+    assert tick(behaviour) is Status.RUNNING
+    assert data(robot) == [[opcode]]
+    robot.set_frame({35: int(mode)})
+    assert tick(behaviour) is Status.SUCCESS
+
+
+def test_mode_resends_and_then_fails_after_its_timeout(make: Make) -> None:
+    robot = StubRobot(mode=OIMode.PASSIVE)
+    behaviour = make(a.Mode, robot=robot, to="safe", timeout=1.0)
+    robot.set_frame({35: 1})
+    statuses = [tick(behaviour)]
+    while statuses[-1] is Status.RUNNING and len(statuses) < 200:
+        robot.set_frame({35: 1})
+        statuses.append(tick(behaviour))
+        robot.flush()
+    assert statuses[-1] is Status.FAILURE
+    assert robot.snapshot.time == pytest.approx(1.005)  # first slot at or after 1 s
+    assert sum(1 for c in robot.sent if c.opcode == 131) == 2  # at 0 s and 0.51 s
+
+
+# ------------------------------------------------------------------ drive
+
+
+def test_drive_sends_drive_once_and_runs_until_preempted(robot: StubRobot, make: Make) -> None:
+    behaviour = make(a.Drive, velocity=-200.0, radius=500.0)
+    robot.set_frame({35: 2})
+    assert tick(behaviour) is Status.RUNNING
+    assert data(robot) == [[137, 0xFF, 0x38, 0x01, 0xF4]]  # the spec's example
+    robot.set_frame({35: 2})
+    assert tick(behaviour) is Status.RUNNING
+    assert data(robot) == []
+    behaviour.stop(Status.INVALID)  # preempted by a guard or a higher branch
+    assert data(robot) == [HALT]
+
+
+def test_drive_straight_uses_the_special_radius_not_a_clamped_one(
+    robot: StubRobot, make: Make
+) -> None:
+    behaviour = make(a.Drive, velocity=200.0, radius="straight")
+    robot.set_frame({35: 2})
+    tick(behaviour)
+    assert data(robot) == [[137, 0, 200, 0x80, 0x00]]
+
+
+def test_drive_with_wheel_speeds_uses_drive_direct(robot: StubRobot, make: Make) -> None:
+    behaviour = make(a.Drive, left=100.0, right=-100.0)
+    robot.set_frame({35: 2})
+    tick(behaviour)
+    assert data(robot) == [[145, 0xFF, 0x9C, 0x00, 0x64]]
+
+
+def test_drive_for_a_distance_stops_by_odometry(robot: StubRobot, make: Make) -> None:
+    robot.set_frame({35: 2, **encoders(0, 0)})
+    behaviour = make(a.Drive, velocity=200.0, distance=100.0)
+    assert tick(behaviour) is Status.RUNNING
+    robot.set_frame({35: 2, **encoders(60, 60)})
+    assert tick(behaviour) is Status.RUNNING
+    robot.set_frame({35: 2, **encoders(101, 101)})
+    assert tick(behaviour) is Status.SUCCESS
+    assert data(robot)[-1] == HALT
+
+
+def test_drive_for_an_angle_stops_by_odometry(robot: StubRobot, make: Make) -> None:
+    robot.set_frame({35: 2, **encoders(0, 0)})
+    behaviour = make(a.Drive, velocity=100.0, radius=200.0, angle=45.0)
+    tick(behaviour)
+    quarter = math.radians(46) * 235.0 / 2
+    robot.set_frame({35: 2, **encoders(-quarter, quarter)})
+    assert tick(behaviour) is Status.SUCCESS
+
+
+def test_drive_for_a_duration_counts_mission_time(robot: StubRobot, make: Make) -> None:
+    robot.set_frame({35: 2})
+    behaviour = make(a.Drive, velocity=100.0, duration=0.15)
+    statuses = [tick(behaviour)]
+    for _ in range(10):
+        robot.set_frame({35: 2})
+        statuses.append(tick(behaviour))
+    assert statuses[:10] == [Status.RUNNING] * 10
+    assert statuses[10] is Status.SUCCESS  # 10 slots of 15 ms
+
+
+def test_drive_resends_after_a_fall_back_to_passive(robot: StubRobot, make: Make) -> None:
+    robot.set_frame({35: 2})
+    behaviour = make(a.Drive, velocity=100.0)
+    tick(behaviour)
+    robot.flush()
+    robot.set_frame({35: 1})
+    tick(behaviour)
+    robot.set_frame({35: 2})
+    tick(behaviour)
+    robot.flush()
+    assert [c.opcode for c in robot.sent] == [137, 137]
+
+
+def test_drive_reads_a_blackboard_value_when_it_starts(robot: StubRobot, make: Make) -> None:
+    write_key("leg", 50.0)
+    robot.set_frame({35: 2, **encoders(0, 0)})
+    behaviour = make(a.Drive, velocity=100.0, distance=BlackboardRef("leg"))
+    tick(behaviour)
+    robot.set_frame({35: 2, **encoders(51, 51)})
+    assert tick(behaviour) is Status.SUCCESS
+
+
+def test_turn_spins_the_right_way_and_stops_at_the_angle(robot: StubRobot, make: Make) -> None:
+    robot.set_frame({35: 2, **encoders(0, 0)})
+    behaviour = make(a.Turn, angle=-90.0, speed=100.0)
+    assert tick(behaviour) is Status.RUNNING
+    assert data(robot) == [[137, 0, 100, 0xFF, 0xFF]]  # clockwise: radius -1
+    arc = math.radians(91) * 235.0 / 2
+    robot.set_frame({35: 2, **encoders(arc, -arc)})
+    assert tick(behaviour) is Status.SUCCESS
+    assert data(robot) == [HALT]
+
+
+def test_stop_halts_and_optionally_stops_motors(robot: StubRobot, make: Make) -> None:
+    assert tick(make(a.Stop)) is Status.SUCCESS
+    assert data(robot) == [HALT]
+    tick(make(a.Stop, motors=True))
+    assert data(robot) == [HALT, [138, 0]]
+
+
+# ------------------------------------------------------------------ built-in modes
+
+
+@pytest.mark.parametrize(("cls", "opcode"), [(a.Clean, 135), (a.Spot, 134), (a.MaxClean, 136)])
+def test_cleaning_modes_send_their_opcode(
+    robot: StubRobot, cls: type[a.Action], opcode: int, make: Make
+) -> None:
+    assert tick(make(cls)) is Status.SUCCESS
+    assert data(robot) == [[opcode]]
+    assert cls.declaration.leads_to is OIMode.PASSIVE
+
+
+def test_seek_dock_waits_for_the_home_base(robot: StubRobot, make: Make) -> None:
+    behaviour = make(a.SeekDock, wait=True, timeout=1.0)
+    robot.set_frame({34: 0})
+    assert tick(behaviour) is Status.RUNNING
+    assert data(robot) == [[143]]
+    robot.set_frame({34: 1})  # internal charger only: not docked
+    assert tick(behaviour) is Status.RUNNING
+    robot.set_frame({34: 2})
+    assert tick(behaviour) is Status.SUCCESS
+
+
+def test_seek_dock_times_out(robot: StubRobot, make: Make) -> None:
+    behaviour = make(a.SeekDock, wait=True, timeout=0.03)
+    robot.set_frame({34: 0})
+    tick(behaviour)
+    robot.set_frame({34: 0}, ticks=2)
+    assert tick(behaviour) is Status.FAILURE
+
+
+def test_seek_dock_without_waiting(robot: StubRobot, make: Make) -> None:
+    assert tick(make(a.SeekDock, wait=False)) is Status.SUCCESS
+
+
+# ------------------------------------------------------------------ actuators
+
+
+def test_motors_bits_follow_the_spec_example(robot: StubRobot, make: Make) -> None:
+    tick(make(a.Motors, main_brush=True, side_brush=True, side_brush_clockwise=True))
+    assert data(robot) == [[138, 13]]
+
+
+def test_vacuum_alone(robot: StubRobot, make: Make) -> None:
+    tick(make(a.Vacuum, on=True))
+    tick(make(a.Vacuum, on=False))
+    assert data(robot) == [[138, 0]]  # same channel, same tick: the last wins
+    assert a.Vacuum.declaration.is_actuator
+
+
+def test_leds(robot: StubRobot, make: Make) -> None:
+    tick(make(a.Leds, dock=True, power_color=255, power_intensity=100.0))
+    assert data(robot) == [[139, 4, 255, 255]]
+
+
+def test_song_and_play(robot: StubRobot, make: Make) -> None:
+    tick(make(a.Song, number=1, notes=((60, 16), (0, 8))))
+    tick(make(a.Play, number=1))
+    assert data(robot) == [[140, 1, 2, 60, 16, 0, 8], [141, 1]]
+
+
+def test_notes_parse_names_and_durations() -> None:
+    assert a.NOTES.parse(["C4 250ms", "rest 125ms", "A#4 1s"]) == ((60, 16), (0, 8), (70, 64))
+    with pytest.raises(a.UnitError, match="unknown note 'H4'"):
+        a.NOTES.parse(["H4 1s"])
+    with pytest.raises(a.UnitError, match="out of range"):
+        a.NOTES.parse(["C4 5s"])
+    with pytest.raises(a.UnitError, match="at most 16 notes"):
+        a.NOTES.parse(["C4 100ms"] * 17)
+
+
+def test_radius_type() -> None:
+    assert a.RADIUS.parse("straight") == "straight"
+    assert a.RADIUS.parse("50cm") == 500.0
+    with pytest.raises(a.UnitError, match="spin_left"):
+        a.RADIUS.parse("curvy")
+
+
+# ------------------------------------------------------------------ time, log, data
+
+
+def test_wait_counts_mission_time(robot: StubRobot, make: Make) -> None:
+    robot.set_frame({})
+    behaviour = make(a.Wait, duration=0.03)
+    assert tick(behaviour) is Status.RUNNING
+    robot.set_frame({})
+    assert tick(behaviour) is Status.RUNNING
+    robot.set_frame({})
+    assert tick(behaviour) is Status.SUCCESS
+
+
+def test_log_writes_to_the_mission_logger(
+    robot: StubRobot, caplog: pytest.LogCaptureFixture, make: Make
+) -> None:
+    with caplog.at_level(logging.INFO, logger="roomba_bt.mission"):
+        assert tick(make(a.Log, message="hello", level="warning")) is Status.SUCCESS
+    assert [(r.levelname, r.message) for r in caplog.records] == [("WARNING", "hello")]
+
+
+def test_set_and_mark_write_the_blackboard(robot: StubRobot, make: Make) -> None:
+    tick(make(a.SetKey, key="count", value=3))
+    assert read_key("count") == 3
+    robot.set_frame({43: 0, 44: 0})
+    robot.set_frame(encoders(100, 100))
+    tick(make(a.Mark, key="here"))
+    mark = read_key("here")
+    assert isinstance(mark, Odometry)
+    assert mark.distance_mm == pytest.approx(100, abs=0.5)
+
+
+def test_every_action_declares_modes_from_the_opcode_table() -> None:
+    assert a.Drive.declaration.modes == {OIMode.SAFE, OIMode.FULL}
+    assert a.Leds.declaration.is_actuator
+    assert not a.SeekDock.declaration.is_actuator
+    assert OIMode.PASSIVE in a.SeekDock.declaration.modes
+    assert a.Wait.declaration.modes == frozenset(OIMode)
+    assert a.Mode.declaration.mode_after({"to": "full"}) is OIMode.FULL
+
+
+def test_a_behaviour_ticked_without_a_robot_says_so() -> None:
+    behaviour = a.Wait("wait", {"duration": 1.0})
+    with pytest.raises(RuntimeError, match="before setup"):
+        behaviour.tick_once()

@@ -1,0 +1,214 @@
+"""Every condition ticked against frames set by hand: SUCCESS or FAILURE, never RUNNING."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+import pytest
+from py_trees.behaviour import Behaviour
+from py_trees.common import Status
+
+from roomba_bt.behaviours import conditions as c
+from roomba_bt.behaviours.declare import write_key
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.odometry import mm_to_counts
+from roomba_bt.robot.interface import Odometry, StubRobot
+
+Make = Callable[..., Any]
+
+
+def holds(behaviour: Behaviour) -> bool:
+    behaviour.tick_once()
+    assert behaviour.status in (Status.SUCCESS, Status.FAILURE)
+    return bool(behaviour.status is Status.SUCCESS)
+
+
+@pytest.mark.parametrize(
+    ("side", "raw", "expected"),
+    [
+        ("right", 0b01, True),  # bit 0 is bump RIGHT
+        ("left", 0b01, False),
+        ("left", 0b10, True),
+        ("any", 0b10, True),
+        ("any", 0b1100, False),  # wheel drops are not bumps
+    ],
+)
+def test_bump(robot: StubRobot, make: Make, side: str, raw: int, expected: bool) -> None:
+    robot.set_frame({7: raw})
+    assert holds(make(c.Bump, side=side)) is expected
+
+
+@pytest.mark.parametrize(
+    ("side", "raw", "expected"),
+    [
+        ("right", 0b0100, True),
+        ("left", 0b0100, False),
+        ("left", 0b1000, True),
+        ("any", 0b11, False),
+    ],
+)
+def test_wheel_drop(robot: StubRobot, make: Make, side: str, raw: int, expected: bool) -> None:
+    robot.set_frame({7: raw})
+    assert holds(make(c.WheelDrop, side=side)) is expected
+
+
+def test_cliff_each_sensor_and_any(robot: StubRobot, make: Make) -> None:
+    robot.set_frame({9: 0, 10: 0, 11: 1, 12: 0})
+    assert holds(make(c.Cliff, sensor="front_right"))
+    assert not holds(make(c.Cliff, sensor="left"))
+    assert holds(make(c.Cliff, sensor="any"))
+    robot.set_frame({9: 0, 10: 0, 11: 0, 12: 0})
+    assert not holds(make(c.Cliff, sensor="any"))
+    assert c.Cliff.declaration.packets({"sensor": "left"}) == (9,)
+    assert c.Cliff.declaration.packets({}) == (9, 10, 11, 12)
+
+
+def test_wall_and_virtual_wall(robot: StubRobot, make: Make) -> None:
+    robot.set_frame({8: 1, 13: 0})
+    assert holds(make(c.Wall))
+    assert not holds(make(c.VirtualWall))
+
+
+def test_light_bumper_bits_and_signals(robot: StubRobot, make: Make) -> None:
+    robot.set_frame({45: 0b100000, 51: 900, 46: 10})
+    assert holds(make(c.LightBumper, sensor="right"))
+    assert not holds(make(c.LightBumper, sensor="left"))
+    assert holds(make(c.LightBumper, sensor="right", threshold=800))
+    assert not holds(make(c.LightBumper, sensor="right", threshold=1000))
+    assert c.LightBumper.declaration.packets({"threshold": 5}) == (46, 47, 48, 49, 50, 51)
+    assert c.LightBumper.declaration.packets({"sensor": "right", "threshold": 5}) == (51,)
+    assert c.LightBumper.declaration.packets({}) == (45,)
+
+
+@pytest.mark.parametrize(
+    ("code", "sees", "expected"),
+    [
+        (168, "red_buoy", True),  # 600 dock: red = bit 3
+        (164, "green_buoy", True),
+        (161, "force_field", True),
+        (164, "red_buoy", False),
+        (162, "virtual_wall", True),
+        (172, "any_buoy", True),
+        (248, "red_buoy", True),  # 500 / Discovery dock
+        (242, "force_field", True),
+        (168, "dock", True),
+        (136, "remote", True),
+        (0, "anything", False),
+        (136, "anything", True),
+    ],
+)
+def test_ir_characters(robot: StubRobot, make: Make, code: int, sees: str, expected: bool) -> None:
+    robot.set_frame({17: code})
+    assert holds(make(c.InfraRed, sees=sees)) is expected
+
+
+def test_ir_left_and_right_receivers_and_remote_buttons(robot: StubRobot, make: Make) -> None:
+    robot.set_frame({17: 0, 52: 168, 53: 136})
+    assert holds(make(c.InfraRed, sees="red_buoy", receiver="left"))
+    assert not holds(make(c.InfraRed, sees="red_buoy", receiver="right"))
+    assert holds(make(c.InfraRed, sees="remote", receiver="right", button="clean"))
+    assert not holds(make(c.InfraRed, sees="remote", receiver="right", button="spot"))
+    assert c.InfraRed.declaration.packets({"receiver": "left"}) == (52,)
+
+
+def test_charging_states(robot: StubRobot, make: Make) -> None:
+    robot.set_frame({21: 3})
+    assert holds(make(c.Charging, state="charging"))
+    assert holds(make(c.Charging, state="trickle_charging"))
+    assert not holds(make(c.Charging, state="not_charging"))
+    robot.set_frame({21: 0})
+    assert not holds(make(c.Charging, state="charging"))
+
+
+def test_on_home_base(robot: StubRobot, make: Make) -> None:
+    robot.set_frame({34: 2})
+    assert holds(make(c.OnHomeBase))
+    robot.set_frame({34: 1})
+    assert not holds(make(c.OnHomeBase))
+
+
+def test_battery_percent(robot: StubRobot, make: Make) -> None:
+    robot.set_frame({25: 1500, 26: 3000})
+    assert holds(make(c.Battery, below=60.0))
+    assert not holds(make(c.Battery, below=40.0))
+    assert holds(make(c.Battery, above=40.0))
+    assert c.Battery.declaration.constraints is not None
+    assert c.Battery.declaration.constraints({}) == ["give exactly one of above, below"]
+
+
+def test_oi_mode(robot: StubRobot, make: Make) -> None:
+    robot.set_frame({35: 1})
+    assert holds(make(c.OIModeIs, **{"is": "passive"}))
+    assert not holds(make(c.OIModeIs, **{"is": "safe"}))
+    robot.set_frame({35: 3}, mode=OIMode.FULL)
+    assert holds(make(c.OIModeIs, **{"is": "full"}))
+
+
+def test_odometry_since_a_mark(robot: StubRobot, make: Make) -> None:
+    robot.set_frame({43: 0, 44: 0})
+    robot.set_frame({43: round(mm_to_counts(100)), 44: round(mm_to_counts(100))})
+    write_key("here", robot.snapshot.odometry)
+    robot.set_frame({43: round(mm_to_counts(250)), 44: round(mm_to_counts(250))})
+    assert holds(make(c.OdometrySince, since="here", distance=140.0))
+    assert not holds(make(c.OdometrySince, since="here", distance=160.0))
+    assert holds(make(c.OdometrySince, distance=240.0))  # since the start
+
+
+def test_odometry_angle(robot: StubRobot, make: Make) -> None:
+    write_key("start", Odometry())
+    arc = math.radians(30) * 235.0 / 2
+    robot.set_frame({43: 0, 44: 0})
+    robot.set_frame({43: round(mm_to_counts(-arc)), 44: round(mm_to_counts(arc))})
+    assert holds(make(c.OdometrySince, since="start", angle=29.0))
+    assert not holds(make(c.OdometrySince, since="start", angle=31.0))
+
+
+@pytest.mark.parametrize(("raw", "state"), [(0, "stuck"), (1, "moving"), (2, "dirty")])
+def test_stasis(robot: StubRobot, make: Make, raw: int, state: str) -> None:
+    robot.set_frame({58: raw})
+    assert holds(make(c.StasisIs, state=state))
+    other = "moving" if state != "moving" else "stuck"
+    assert not holds(make(c.StasisIs, state=other))
+
+
+def test_overcurrent_bits(robot: StubRobot, make: Make) -> None:
+    robot.set_frame({14: 0b10000})  # bit 4: left wheel
+    assert holds(make(c.Overcurrent, motor="left_wheel"))
+    assert not holds(make(c.Overcurrent, motor="right_wheel"))
+    assert holds(make(c.Overcurrent, motor="any"))
+    robot.set_frame({14: 0b00010})  # bit 1 is unused
+    assert not holds(make(c.Overcurrent, motor="any"))
+
+
+def test_buttons(robot: StubRobot, make: Make) -> None:
+    robot.set_frame({18: 0b100})
+    assert holds(make(c.Button, name="dock"))
+    assert not holds(make(c.Button, name="clean"))
+    assert holds(make(c.Button, name="any"))
+
+
+def test_sensor_comparison_by_packet_name(robot: StubRobot, make: Make) -> None:
+    test = c.COMPARISON.parse("wall_signal > 100")
+    assert test == (27, ">", 100.0)
+    robot.set_frame({27: 150})
+    assert holds(make(c.Sensor, test=test))
+    robot.set_frame({27: 50})
+    assert not holds(make(c.Sensor, test=test))
+    assert c.Sensor.declaration.packets({"test": test}) == (27,)
+
+
+def test_sensor_comparison_grammar_refuses_anything_else() -> None:
+    with pytest.raises(c.UnitError, match="did you mean 'wall_signal'"):
+        c.COMPARISON.parse("wal_signal > 1")
+    with pytest.raises(c.UnitError, match="expected a comparison"):
+        c.COMPARISON.parse("__import__('os').system('x')")
+
+
+def test_check_blackboard_key(robot: StubRobot, make: Make) -> None:
+    write_key("count", 2)
+    assert holds(make(c.CheckKey, key="count", op="<", value=3))
+    assert not holds(make(c.CheckKey, key="count", op=">=", value=3))
+    write_key("count", "text")
+    assert not holds(make(c.CheckKey, key="count", op="<", value=3))  # incomparable: false

@@ -1,0 +1,114 @@
+"""Mission-time decorators and the while/until guard, on py_trees' own test behaviours."""
+
+from __future__ import annotations
+
+import py_trees
+from py_trees.behaviours import Failure, Running, StatusQueue, Success
+from py_trees.common import Status
+
+from roomba_bt.behaviours import decorators as d
+from roomba_bt.behaviours.declare import read_key
+from roomba_bt.robot.interface import StubRobot
+
+
+def ready(node: py_trees.behaviour.Behaviour, robot: StubRobot) -> py_trees.behaviour.Behaviour:
+    for n in node.iterate():
+        n.setup(robot=robot)
+    return node
+
+
+def run(node: py_trees.behaviour.Behaviour, robot: StubRobot, ticks: int) -> list[Status]:
+    out = []
+    for _ in range(ticks):
+        robot.set_frame({})
+        node.tick_once()
+        out.append(node.status)
+    return out
+
+
+def test_timeout_counts_mission_time_not_wall_time(robot: StubRobot) -> None:
+    child = Running("forever")
+    node = ready(d.Timeout("timeout", child, 0.045), robot)
+    assert run(node, robot, 4) == [Status.RUNNING] * 3 + [Status.FAILURE]
+    assert child.status is Status.INVALID  # stopped
+
+
+def test_timeout_passes_a_finished_child_through(robot: StubRobot) -> None:
+    node = ready(d.Timeout("timeout", Success("ok"), 1.0), robot)
+    assert run(node, robot, 1) == [Status.SUCCESS]
+
+
+def test_delay_waits_then_ticks_the_child(robot: StubRobot) -> None:
+    child = Success("ok")
+    node = ready(d.Delay("delay", child, 0.03), robot)
+    assert run(node, robot, 3) == [Status.RUNNING, Status.RUNNING, Status.SUCCESS]
+
+
+def test_repeat_times(robot: StubRobot) -> None:
+    node = ready(d.Repeat("repeat", Success("ok"), times=3), robot)
+    assert run(node, robot, 3) == [Status.RUNNING, Status.RUNNING, Status.SUCCESS]
+
+
+def test_repeat_for_a_duration(robot: StubRobot) -> None:
+    node = ready(d.Repeat("repeat", Success("ok"), duration=0.045), robot)
+    assert run(node, robot, 4) == [Status.RUNNING] * 3 + [Status.SUCCESS]
+
+
+def test_repeat_forever_and_failure_ends_it(robot: StubRobot) -> None:
+    queue = StatusQueue("q", [Status.SUCCESS] * 5 + [Status.FAILURE], eventually=None)
+    node = ready(d.Repeat("repeat", queue), robot)
+    assert run(node, robot, 6) == [Status.RUNNING] * 5 + [Status.FAILURE]
+
+
+def test_for_each_writes_each_item_before_the_child(robot: StubRobot) -> None:
+    seen: list[object] = []
+
+    class Record(py_trees.behaviour.Behaviour):
+        def update(self) -> Status:
+            seen.append(read_key("leg"))
+            return Status.SUCCESS
+
+    node = ready(d.ForEach("for_each", Record("record"), "leg", [1.0, 2.0, 3.0]), robot)
+    assert run(node, robot, 3) == [Status.RUNNING, Status.RUNNING, Status.SUCCESS]
+    assert seen == [1.0, 2.0, 3.0]
+
+
+def test_for_each_over_nothing_succeeds(robot: StubRobot) -> None:
+    node = ready(d.ForEach("for_each", Failure("never"), "leg", []), robot)
+    assert run(node, robot, 1) == [Status.SUCCESS]
+
+
+def test_for_each_fails_with_its_child(robot: StubRobot) -> None:
+    node = ready(d.ForEach("for_each", Failure("no"), "leg", [1, 2]), robot)
+    assert run(node, robot, 1) == [Status.FAILURE]
+
+
+def test_until_stops_the_child_when_the_condition_holds(robot: StubRobot) -> None:
+    condition = StatusQueue("bump", [Status.FAILURE, Status.FAILURE, Status.SUCCESS], None)
+    child = Running("drive")
+    node = ready(d.Guard("until bump", condition, child, until=True), robot)
+    assert run(node, robot, 3) == [Status.RUNNING, Status.RUNNING, Status.SUCCESS]
+    assert child.status is Status.INVALID
+
+
+def test_while_fails_when_the_condition_stops_holding(robot: StubRobot) -> None:
+    condition = StatusQueue("ok", [Status.SUCCESS, Status.FAILURE], None)
+    child = Running("drive")
+    node = ready(d.Guard("while ok", condition, child, until=False), robot)
+    assert run(node, robot, 2) == [Status.RUNNING, Status.FAILURE]
+    assert child.status is Status.INVALID
+
+
+def test_guard_passes_the_child_result_through(robot: StubRobot) -> None:
+    node = ready(d.Guard("while ok", Success("ok"), Failure("child"), until=False), robot)
+    assert run(node, robot, 1) == [Status.FAILURE]
+    node = ready(d.Guard("until never", Failure("no"), Success("child"), until=True), robot)
+    assert run(node, robot, 1) == [Status.SUCCESS]
+
+
+def test_guard_preempted_from_above_stops_its_child(robot: StubRobot) -> None:
+    child = Running("drive")
+    node = ready(d.Guard("while ok", Success("ok"), child, until=False), robot)
+    run(node, robot, 1)
+    node.stop(Status.INVALID)
+    assert child.status is Status.INVALID

@@ -1,0 +1,150 @@
+"""One registry for built-ins and plugins; broken plugins are named, the rest still load."""
+
+from __future__ import annotations
+
+from importlib.metadata import EntryPoint
+from pathlib import Path
+
+import pytest
+from py_trees.common import Status
+
+from roomba_bt.behaviours import (
+    INT,
+    Condition,
+    DeclarationError,
+    Param,
+    Registry,
+    builtin_registry,
+    declare,
+    default_registry,
+)
+from roomba_bt.behaviours.actions import ACTIONS
+from roomba_bt.behaviours.conditions import CONDITIONS
+from roomba_bt.robot.interface import Snapshot
+
+
+@declare("always", kind="condition", params=(Param("n", INT, default=1),))
+class Always(Condition):
+    """Always true."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        return True
+
+
+class Undeclared(Condition):
+    def check(self, snapshot: Snapshot) -> bool:
+        return True
+
+
+def test_every_builtin_is_registered_with_a_valid_declaration() -> None:
+    registry = builtin_registry()
+    assert {cls.declaration.name for cls in (*ACTIONS, *CONDITIONS)} == set(registry.names())
+    for decl in registry:
+        decl.validate()
+        assert decl.doc, f"{decl.name} has no docstring"
+        assert decl.origin == "builtin"
+
+
+def test_default_registry_holds_builtins_and_the_installed_wallfollow_plugin() -> None:
+    registry = default_registry()
+    assert "drive" in registry
+    assert "wall_follow" in registry  # plugins/roomba-bt-wallfollow, installed in the venv
+    assert registry.get("wall_follow") is not None
+    assert "roomba_bt_wallfollow" in registry.get("wall_follow").origin  # type: ignore[union-attr]
+
+
+def test_a_plugin_that_fails_to_import_is_named_and_others_still_load() -> None:
+    registry = Registry(entry_point_group=None)
+    registry.load_entry_point(
+        EntryPoint("broken", "no_such_module_xyz:Thing", "roomba_bt.behaviours")
+    )
+    registry.load_entry_point(EntryPoint("always", f"{__name__}:Always", "roomba_bt.behaviours"))
+    assert registry.names() == ["always"]
+    [error] = registry.errors
+    assert "'broken' (no_such_module_xyz:Thing)" in str(error)
+    assert "failed to import: ModuleNotFoundError" in str(error)
+
+
+def test_a_plugin_that_declares_itself_wrongly_is_named() -> None:
+    registry = Registry(entry_point_group=None)
+    registry.load_entry_point(EntryPoint("bad", f"{__name__}:Undeclared", "roomba_bt.behaviours"))
+    [error] = registry.errors
+    assert "plugin 'bad'" in str(error)
+    assert "declares itself wrongly" in str(error)
+    assert "decorate it with @declare" in str(error)
+
+
+def test_declaration_errors() -> None:
+    registry = builtin_registry()
+
+    @declare("drive", kind="condition")
+    class Clash(Condition):
+        def check(self, snapshot: Snapshot) -> bool:
+            return True
+
+    with pytest.raises(DeclarationError, match="already taken"):
+        registry.register(Clash)
+
+    @declare("sequence", kind="condition")
+    class Reserved(Condition):
+        def check(self, snapshot: Snapshot) -> bool:
+            return True
+
+    with pytest.raises(DeclarationError, match="word of the mission language"):
+        registry.register(Reserved)
+
+    @declare("BadName", kind="condition")
+    class Camel(Condition):
+        def check(self, snapshot: Snapshot) -> bool:
+            return True
+
+    with pytest.raises(DeclarationError, match="snake_case"):
+        registry.register(Camel)
+
+    @declare("reads_junk", kind="condition", reads=(999,))
+    class Junk(Condition):
+        def check(self, snapshot: Snapshot) -> bool:
+            return True
+
+    with pytest.raises(DeclarationError, match=r"unknown sensor packets \[999\]"):
+        registry.register(Junk)
+
+    @declare("bad_default", kind="condition", params=(Param("n", INT, default="x"),))
+    class BadDefault(Condition):
+        def check(self, snapshot: Snapshot) -> bool:
+            return True
+
+    with pytest.raises(DeclarationError, match="default of 'n'"):
+        registry.register(BadDefault)
+
+
+def test_a_plugin_file_loads_into_a_copy(tmp_path: Path) -> None:
+    plugin = tmp_path / "mine.py"
+    plugin.write_text(
+        "from roomba_bt.behaviours import Condition, declare\n"
+        "@declare('mine', kind='condition')\n"
+        "class Mine(Condition):\n"
+        "    '''Mine.'''\n"
+        "    def check(self, snapshot):\n"
+        "        return True\n"
+    )
+    base = builtin_registry()
+    copy, error = base.with_file(plugin)
+    assert error is None
+    assert "mine" in copy
+    assert "mine" not in base
+    broken = tmp_path / "broken.py"
+    broken.write_text("raise RuntimeError('boom')\n")
+    _, error = base.with_file(broken)
+    assert error is not None
+    assert "failed to import: RuntimeError: boom" in str(error)
+
+
+def test_a_registered_plugin_behaviour_ticks() -> None:
+    from roomba_bt.robot.interface import StubRobot
+
+    node = Always("always", {})
+    node.setup(robot=StubRobot())
+    node.tick_once()
+    assert node.status is Status.SUCCESS
+    assert node.value("n") == 1

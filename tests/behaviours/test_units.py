@@ -1,0 +1,96 @@
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from roomba_bt.behaviours.units import (
+    ANGLE,
+    BOOL,
+    DISTANCE,
+    DURATION,
+    INT,
+    PERCENT,
+    SPEED,
+    STR,
+    UnitError,
+    closest,
+    compatible,
+    enum,
+    format_quantity,
+    parse_quantity,
+)
+
+
+@pytest.mark.parametrize(
+    ("dimension", "text", "value"),
+    [
+        ("duration", "500ms", 0.5),
+        ("duration", "30s", 30.0),
+        ("duration", "2min", 120.0),
+        ("duration", "1.5 s", 1.5),
+        ("duration", "1h", 3600.0),
+        ("speed", "200 mm/s", 200.0),
+        ("speed", "0.2 m/s", 200.0),
+        ("speed", "-20cm/s", -200.0),
+        ("distance", "1.5 m", 1500.0),
+        ("distance", "300 mm", 300.0),
+        ("distance", "30cm", 300.0),
+        ("angle", "90deg", 90.0),
+        ("angle", "90°", 90.0),
+        ("angle", "0.5turn", 180.0),
+        ("percent", "20%", 20.0),
+        ("distance", 0, 0.0),
+        ("distance", "0", 0.0),
+    ],
+)
+def test_quantities_parse_into_canonical_units(dimension: str, text: object, value: float) -> None:
+    assert parse_quantity(dimension, text) == pytest.approx(value)
+
+
+def test_radians_convert_to_degrees() -> None:
+    assert parse_quantity("angle", f"{math.pi}rad") == pytest.approx(180.0)
+
+
+def test_a_bare_number_is_refused_with_the_unit_to_write() -> None:
+    with pytest.raises(UnitError, match=r"write the unit: 200mm/s"):
+        SPEED.parse(200)
+
+
+def test_an_unknown_unit_lists_the_known_ones() -> None:
+    with pytest.raises(UnitError, match=r"unknown speed unit 'km/h' in '3 km/h'; use one of"):
+        SPEED.parse("3 km/h")
+
+
+def test_a_unitless_text_says_which_units_exist() -> None:
+    with pytest.raises(UnitError, match=r"'5' has no unit; a duration needs one of: ms, s"):
+        DURATION.parse("5")
+
+
+def test_wrong_shapes_are_described() -> None:
+    with pytest.raises(UnitError, match="a list"):
+        DISTANCE.parse([1])
+    with pytest.raises(UnitError, match="expected an integer, got a boolean"):
+        INT.parse(True)
+    with pytest.raises(UnitError, match="expected true or false"):
+        BOOL.parse("yes please")
+    with pytest.raises(UnitError, match="expected a text"):
+        STR.parse({"a": 1})
+    with pytest.raises(UnitError, match="expected one of left, right, got 'up'"):
+        enum("left", "right").parse("up")
+
+
+def test_compatibility_between_types() -> None:
+    assert compatible(INT, INT)
+    assert not compatible(SPEED, DISTANCE)
+    assert not compatible(ANGLE, PERCENT)
+
+
+def test_closest_suggests_a_near_name_only() -> None:
+    assert closest("velocty", ["velocity", "radius"]) == " (did you mean 'velocity'?)"
+    assert closest("zzz", ["velocity"]) == ""
+
+
+def test_format_quantity() -> None:
+    assert format_quantity("speed", 200.0) == "200 mm/s"
+    assert format_quantity("percent", 20.0) == "20%"
