@@ -1,0 +1,48 @@
+"""Fixtures for the runtime tests."""
+
+from __future__ import annotations
+
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.mission import RUNTIME_PACKETS, load_mission
+from roomba_bt.oi.profiles import CREATE2, RobotProfile
+from roomba_bt.robot.connection import Connection
+from roomba_bt.runtime.loop import MissionRunner
+from roomba_bt.sim import Faults, Simulator, load_world
+
+from .simrun import Run, RunMission, TapLink
+
+
+@pytest.fixture
+def run_mission(tmp_path: Path) -> RunMission:
+    def run(
+        text: str,
+        *,
+        world: str = "empty-room",
+        faults: Faults | None = None,
+        timeout: float | None = 60.0,
+        profile: RobotProfile = CREATE2,
+        end_in: str = "passive",
+        params: dict[str, str] | None = None,
+        watchdog: float = 0.1,
+        seed: int = 0,
+        stall_after: float | None = None,
+        burst: int = 1,
+    ) -> Run:
+        path = tmp_path / "mission.yaml"
+        path.write_text(textwrap.dedent(text))
+        mission = load_mission(path, params or {}, profile=profile)
+        simulator = Simulator(load_world(world), profile, seed, faults)
+        link = TapLink(simulator, stall_after, burst)
+        connection = Connection(link, profile, watchdog=watchdog, end_in=end_in)  # type: ignore[arg-type]
+        packets = tuple(sorted(set(mission.packets) | set(RUNTIME_PACKETS)))
+        runner = MissionRunner(
+            connection, mission, profile=profile, packets=packets, timeout_s=timeout
+        )
+        summary = runner.run()
+        return Run(summary, link, simulator, runner)
+
+    return run

@@ -1,0 +1,57 @@
+"""Helpers for in-process runtime tests: missions on the simulator's virtual clock, every
+byte tapped."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from roomba_bt.runtime.loop import MissionRunner
+from roomba_bt.runtime.summary import RunSummary
+from roomba_bt.sim import SimLink, Simulator
+
+
+class TapLink(SimLink):
+    """A SimLink that keeps every chunk written and read, with the simulated time."""
+
+    def __init__(
+        self, simulator: Simulator, stall_after: float | None = None, burst: int = 1
+    ) -> None:
+        super().__init__(simulator)
+        self.stall_after = stall_after
+        self.burst = burst  # frames delivered per read, as a busy host or USB latency would
+        self.writes: list[tuple[float, bytes]] = []
+        self.reads: list[tuple[float, bytes]] = []
+
+    def write(self, data: bytes) -> None:
+        self.writes.append((self.simulator.time, bytes(data)))
+        super().write(data)
+
+    def read(self, timeout: float) -> bytes:
+        data = super().read(timeout)
+        if data and self.burst > 1:
+            for _ in range(self.burst - 1):
+                self.simulator.step()
+            data += self.simulator.read()
+        if self.stall_after is not None and self.simulator.time > self.stall_after:
+            return b""  # the stream stalls; the port stays open
+        if data:
+            self.reads.append((self.simulator.time, data))
+        return data
+
+    @property
+    def written(self) -> bytes:
+        return b"".join(b for _, b in self.writes)
+
+
+@dataclass
+class Run:
+    summary: RunSummary
+    link: TapLink
+    simulator: Simulator
+    runner: MissionRunner
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+RunMission = Callable[..., Run]

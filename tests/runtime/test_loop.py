@@ -1,0 +1,241 @@
+"""The tick loop on the simulator's virtual clock: endings, safe stop bytes, reaction, clock."""
+
+from __future__ import annotations
+
+import py_trees
+import pytest
+
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.stream import StreamParser
+from roomba_bt.runtime.summary import Outcome
+from roomba_bt.sim import Faults
+
+from .simrun import RunMission
+
+HALT = oi.halt().data
+MOTORS_OFF = oi.motors_off().data
+PAUSE = oi.pause_stream().data
+START = oi.start().data
+STOP = oi.stop().data
+SAFE_END = HALT + MOTORS_OFF + PAUSE + START
+
+DRIVE_TO_WALL = """
+mission: to-the-wall
+tree:
+  sequence:
+    - mode: safe
+    - drive: {velocity: 200 mm/s}
+      until: {bump: {}}
+"""
+
+
+def test_success_ends_with_the_safe_stop_bytes(run_mission: RunMission) -> None:
+    run = run_mission(DRIVE_TO_WALL)
+    assert run.summary.outcome is Outcome.SUCCESS
+    assert run.summary.exit_code == 0
+    assert run.link.written.endswith(SAFE_END)
+    assert run.simulator.mode is OIMode.PASSIVE
+    assert run.simulator.requested_left == 0 and run.simulator.requested_right == 0
+    assert run.summary.final_mode is OIMode.PASSIVE
+    assert run.summary.distance_mm > 100
+    assert run.summary.battery_percent is not None
+    assert run.simulator.violations == []
+
+
+def test_stop_ending_sends_stop_173(run_mission: RunMission) -> None:
+    run = run_mission(DRIVE_TO_WALL, end_in="stop")
+    assert run.link.written.endswith(HALT + MOTORS_OFF + PAUSE + STOP)
+    assert run.simulator.mode is OIMode.OFF
+
+
+def test_failure_is_exit_1_and_names_the_failed_leaf(run_mission: RunMission) -> None:
+    run = run_mission(
+        """
+        tree:
+          sequence:
+            - mode: safe
+            - charging: {}
+        """
+    )
+    assert run.summary.outcome is Outcome.FAILURE
+    assert run.summary.exit_code == 1
+    assert "charging" in run.summary.reason
+    assert run.link.written.endswith(SAFE_END)
+
+
+def test_timeout_counts_mission_time(run_mission: RunMission) -> None:
+    run = run_mission(
+        """
+        tree:
+          sequence:
+            - mode: safe
+            - drive: {velocity: 100 mm/s, radius: spin_left}
+        """,
+        timeout=1.5,
+    )
+    assert run.summary.outcome is Outcome.TIMEOUT
+    assert run.summary.exit_code == 1
+    assert run.summary.mission_time_s == pytest.approx(1.5, abs=0.016)
+    assert run.summary.ticks == round(1.5 / 0.015) + 1
+    assert run.link.written.endswith(SAFE_END)
+
+
+def test_exception_in_a_behaviour_still_stops_the_robot(
+    run_mission: RunMission, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from roomba_bt.behaviours import conditions
+
+    calls = {"n": 0}
+
+    def explode(self: object) -> py_trees.common.Status:
+        calls["n"] += 1
+        if calls["n"] > 20:
+            raise RuntimeError("sensor model exploded")
+        return py_trees.common.Status.FAILURE
+
+    monkeypatch.setattr(conditions.Bump, "update", explode)
+    run = run_mission(DRIVE_TO_WALL)
+    assert run.summary.outcome is Outcome.ERROR
+    assert "sensor model exploded" in run.summary.reason
+    assert run.link.written.endswith(SAFE_END)
+    assert run.simulator.requested_left == 0 and run.simulator.requested_right == 0
+
+
+def test_ctrl_c_is_exit_130_after_the_safe_stop(
+    run_mission: RunMission, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from roomba_bt.behaviours import conditions
+
+    calls = {"n": 0}
+
+    def interrupt(self: object) -> py_trees.common.Status:
+        calls["n"] += 1
+        if calls["n"] > 20:
+            raise KeyboardInterrupt
+        return py_trees.common.Status.FAILURE
+
+    monkeypatch.setattr(conditions.Bump, "update", interrupt)
+    run = run_mission(DRIVE_TO_WALL)
+    assert run.summary.outcome is Outcome.INTERRUPTED
+    assert run.summary.exit_code == 130
+    assert run.link.written.endswith(SAFE_END)
+
+
+def test_lost_stream_trips_the_watchdog_and_stops(run_mission: RunMission) -> None:
+    run = run_mission(
+        """
+        tree:
+          sequence:
+            - mode: safe
+            - drive: {velocity: 100 mm/s, radius: spin_left}
+        """,
+        stall_after=1.0,
+        timeout=5.0,
+    )
+    assert run.summary.outcome is Outcome.CONNECTION_LOST
+    assert run.summary.exit_code == 3
+    assert "watchdog" in run.summary.reason or "frame" in run.summary.reason
+    # The watchdog's drive 0 first, then the whole safe stop.
+    assert HALT in [b for t, b in run.link.writes if t > 1.0]
+    assert run.link.written.endswith(SAFE_END)
+    assert run.simulator.requested_left == 0 and run.simulator.requested_right == 0
+
+
+def test_unplugged_link_is_exit_3_and_says_the_stop_was_not_sent(run_mission: RunMission) -> None:
+    run = run_mission(
+        """
+        tree:
+          sequence:
+            - mode: safe
+            - drive: {velocity: 100 mm/s, radius: spin_left}
+        """,
+        faults=Faults(disconnect_at=1.0),
+    )
+    assert run.summary.outcome is Outcome.CONNECTION_LOST
+    assert run.summary.exit_code == 3
+    assert run.summary.safe_stop.startswith("FAILED")
+
+
+def test_a_bump_changes_the_drive_command_in_the_same_tick(run_mission: RunMission) -> None:
+    run = run_mission(
+        """
+        tree:
+          sequence:
+            - mode: safe
+            - drive: {velocity: 200 mm/s}
+              until: {bump: {}}
+            - drive: {velocity: -100 mm/s, distance: 50 mm}
+        """
+    )
+    assert run.summary.outcome is Outcome.SUCCESS
+    # Find the read that completed the first frame with a bump bit, and the next write.
+    parser = StreamParser(run.runner.packets)
+    bump_time = None
+    for t, data in run.link.reads:
+        if any(f[7] & 0b11 for f in parser.feed(data)):
+            bump_time = t
+            break
+    assert bump_time is not None
+    after = [b for t, b in run.link.writes if t >= bump_time]
+    assert after, "nothing was written after the bump"
+    assert after[0][0] == 137 and after[0] != oi.drive(200, oi.Radius.STRAIGHT).data
+    assert after[0] in (HALT, oi.drive(-100, oi.Radius.STRAIGHT).data)
+
+
+def test_stale_frames_are_dropped_not_queued(run_mission: RunMission) -> None:
+    # Frames arrive three at a time (a host that fell behind): only the newest is ticked,
+    # the two older ones are dropped and counted, and mission time still counts every slot.
+    run = run_mission(
+        """
+        tree:
+          sequence:
+            - mode: safe
+            - wait: {duration: 3s}
+        """,
+        burst=3,
+        watchdog=0.5,
+    )
+    summary = run.summary
+    assert summary.outcome is Outcome.SUCCESS
+    assert summary.stale_frames_dropped >= 2 * (summary.ticks - 2)
+    assert summary.frames_lost == 0
+    assert summary.mission_time_s == pytest.approx(3.0, abs=3 * 0.015 + 0.02)
+    assert summary.ticks == pytest.approx(3.0 / 0.015 / 3, abs=3)
+
+
+def test_lost_frames_are_measured_and_the_clock_keeps_slots(run_mission: RunMission) -> None:
+    run = run_mission(
+        """
+        tree:
+          sequence:
+            - mode: safe
+            - wait: {duration: 3s}
+        """,
+        faults=Faults(drop_rate=0.2),
+        watchdog=1.0,
+    )
+    assert run.summary.outcome is Outcome.SUCCESS
+    assert run.summary.frames_lost > 0
+    # 3 s of mission time, whatever was lost: the wait counts slots, not frames.
+    assert run.summary.mission_time_s == pytest.approx(3.0, abs=0.1)
+    assert run.summary.ticks < round(3.0 / 0.015)
+
+
+def test_same_seed_same_bytes(run_mission: RunMission) -> None:
+    first = run_mission(DRIVE_TO_WALL)
+    second = run_mission(DRIVE_TO_WALL)
+    assert first.link.written == second.link.written
+    assert first.summary.ticks == second.summary.ticks
+
+
+def test_snapshot_is_on_the_blackboard_under_one_key(run_mission: RunMission) -> None:
+    seen: list[object] = []
+
+    run = run_mission(DRIVE_TO_WALL)
+    # The key is unregistered at the end of a run; during it the runner wrote each tick.
+    assert run.summary.ticks > 0
+    reader = py_trees.blackboard.Client(name="test reader")
+    assert not reader.is_registered("/roomba/snapshot")
+    seen.append(run.runner.snapshot)
+    assert run.runner.snapshot.frame[35] in (1, 2)
