@@ -784,7 +784,9 @@ class Connection:
             return bool(self.safe_stopped)
         self._closed = True
         stopped = True
-        if self.transport.is_open and self.modes.mode is not OIMode.OFF:
+        if self.safe_stopped is True:
+            pass  # already stopped: a second stop sequence would only add bytes
+        elif self.transport.is_open and self.modes.mode is not OIMode.OFF:
             stopped = self.safe_stop()
         self.stop_reader()
         self.transport.close()
