@@ -272,3 +272,11 @@ def segment_bits(*segments: str) -> int:
 #: Characters the 7-segment display implements (Digit LEDs ASCII table). 42 '*', 43 '+' and
 #: 64 '@' are in the byte range 32-126 but absent from the table: they would show nothing.
 DIGIT_ASCII: frozenset[int] = frozenset(range(32, 127)) - {42, 43, 64}
+
+
+#: Every byte value decoded once, for the frame's typed views (a lookup, no allocation).
+BUMPS_BY_BYTE: tuple[BumpsWheelDrops, ...] = _BUMPS
+OVERCURRENTS_BY_BYTE: tuple[Overcurrents, ...] = _OVERCURRENTS
+BUTTONS_BY_BYTE: tuple[Buttons, ...] = _BUTTONS
+CHARGING_SOURCES_BY_BYTE: tuple[ChargingSources, ...] = _SOURCES
+LIGHT_BUMPER_BY_BYTE: tuple[LightBumper, ...] = _LIGHT

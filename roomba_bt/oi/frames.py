@@ -20,6 +20,11 @@ from collections.abc import Callable, Iterable, Iterator, Mapping
 from functools import lru_cache
 
 from roomba_bt.oi.bits import (
+    BUMPS_BY_BYTE,
+    BUTTONS_BY_BYTE,
+    CHARGING_SOURCES_BY_BYTE,
+    LIGHT_BUMPER_BY_BYTE,
+    OVERCURRENTS_BY_BYTE,
     BumpsWheelDrops,
     Buttons,
     ChargingSources,
@@ -159,8 +164,8 @@ class SensorFrame:
     _values: tuple[int, ...]
 
     def __init__(self, layout: FrameLayout, values: tuple[int, ...]) -> None:
-        object.__setattr__(self, "_layout", layout)
-        object.__setattr__(self, "_values", values)
+        _set_layout(self, layout)
+        _set_values(self, values)
 
     def __setattr__(self, name: str, value: object) -> None:
         raise AttributeError("SensorFrame is immutable")
@@ -179,7 +184,7 @@ class SensorFrame:
     def __getitem__(self, packet_id: int) -> int:
         try:
             return self._values[self._layout.index[packet_id]]
-        except KeyError:
+        except (KeyError, TypeError):
             name = PACKETS[packet_id].name if packet_id in PACKETS else "unknown"
             raise KeyError(
                 f"packet {packet_id} ({name}) is not in this frame; it carries "
@@ -224,7 +229,7 @@ class SensorFrame:
     # typed views -------------------------------------------------------------
     @property
     def bumps(self) -> BumpsWheelDrops:
-        return BumpsWheelDrops.from_byte(self[7])
+        return BUMPS_BY_BYTE[self[7] & 0xFF]
 
     @property
     def wall(self) -> bool:
@@ -256,7 +261,7 @@ class SensorFrame:
 
     @property
     def overcurrents(self) -> Overcurrents:
-        return Overcurrents.from_byte(self[14])
+        return OVERCURRENTS_BY_BYTE[self[14] & 0xFF]
 
     @property
     def dirt_detect(self) -> int:
@@ -276,7 +281,7 @@ class SensorFrame:
 
     @property
     def buttons(self) -> Buttons:
-        return Buttons.from_byte(self[18])
+        return BUTTONS_BY_BYTE[self[18] & 0xFF]
 
     @property
     def distance_mm(self) -> int:
@@ -326,7 +331,7 @@ class SensorFrame:
 
     @property
     def charging_sources(self) -> ChargingSources:
-        return ChargingSources.from_byte(self[34])
+        return CHARGING_SOURCES_BY_BYTE[self[34] & 0xFF]
 
     @property
     def oi_mode_raw(self) -> int:
@@ -376,7 +381,7 @@ class SensorFrame:
 
     @property
     def light_bumper(self) -> LightBumper:
-        return LightBumper.from_byte(self[45])
+        return LIGHT_BUMPER_BY_BYTE[self[45] & 0xFF]
 
     @property
     def light_bump_signals(self) -> tuple[int, int, int, int, int, int]:
@@ -389,7 +394,16 @@ class SensorFrame:
 
     @property
     def stasis(self) -> Stasis:
-        return Stasis(self[58] & 3)
+        return _STASIS[self[58] & 3]
+
+
+# Slot setters: a frame is immutable (``__setattr__`` refuses), so its constructor sets its two
+# slots through their descriptors; faster than ``object.__setattr__`` on the decode hot path.
+_set_layout: Callable[[SensorFrame, FrameLayout], None] = SensorFrame.__dict__["_layout"].__set__
+_set_values: Callable[[SensorFrame, tuple[int, ...]], None] = SensorFrame.__dict__[
+    "_values"
+].__set__
+_STASIS = tuple(Stasis)
 
 
 def _charging_state(raw: int) -> ChargingState:

@@ -21,7 +21,8 @@ How garbage is handled (the parser never raises on bad bytes):
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+import zlib
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
 from roomba_bt.oi.errors import BandwidthError
@@ -57,10 +58,32 @@ class ParserCounters:
     bytes_fed: int = 0
 
 
-class StreamParser:
-    """Feed it chunks of bytes; it returns the checked frames they complete, in order."""
+def _adler_sum(data: bytearray) -> int:
+    return zlib.adler32(data, 0) & 0xFFFF
 
-    __slots__ = ("_buffer", "_n", "_ok_sums", "_size", "counters", "layout")
+
+class StreamParser:
+    """Feed it chunks of bytes; it returns the checked frames they complete, in order.
+
+    A candidate at a ``19`` becomes a frame only if four things agree: the n-bytes byte is the
+    payload size of the requested list, every packet-id byte is the requested id at its
+    place, and the low byte of the sum of the whole frame is right for the profile (0 when
+    the checksum covers the header, 19 when it does not; ``roomba500`` takes either).
+    Counters always balance: ``bytes_fed == skipped_bytes + frames x frame size + pending``.
+    """
+
+    __slots__ = (
+        "_buffer",
+        "_byte_sum",
+        "_mask",
+        "_n",
+        "_ok_sums",
+        "_size",
+        "_template",
+        "_unpack",
+        "counters",
+        "layout",
+    )
 
     def __init__(
         self,
@@ -72,14 +95,28 @@ class StreamParser:
         self._buffer = bytearray()
         self._n = self.layout.payload_size
         self._size = self._n + 3
-        # Low byte of the sum of the whole frame, header included: 0 when the checksum covers
-        # the header, 19 when it does not (the 500 spec's example).
         if profile.checksum_accepts_both:
             self._ok_sums: frozenset[int] = frozenset({0, STREAM_HEADER})
         elif profile.checksum_includes_header:
             self._ok_sums = frozenset({0})
         else:
             self._ok_sums = frozenset({STREAM_HEADER})
+        # Header, n-bytes and every id byte checked at once: the frame read as one big-endian
+        # integer, masked to those byte positions, must equal the same bytes of a template.
+        mask = bytearray(self._size)
+        template = bytearray(self._size)
+        for position, value in [(0, STREAM_HEADER), (1, self._n)] + [
+            (2 + off, pid)
+            for off, pid in zip(self.layout.id_offsets, self.layout.packet_ids, strict=True)
+        ]:
+            mask[position], template[position] = 0xFF, value
+        self._mask = int.from_bytes(mask, "big")
+        self._template = int.from_bytes(template, "big")
+        self._unpack = self.layout.struct.unpack_from
+        # The checksum test needs the sum of the frame's bytes. zlib.adler32 started at 0 keeps
+        # that sum modulo 65521 in its low 16 bits, computed in C: exact while the sum cannot
+        # reach 65521, i.e. for frames up to 256 bytes (every frame that fits a 15 ms slot).
+        self._byte_sum: Callable[[bytearray], int] = _adler_sum if self._size * 255 < 65521 else sum
 
     @property
     def pending(self) -> int:
@@ -97,40 +134,42 @@ class StreamParser:
         frames: list[SensorFrame] = []
         layout = self.layout
         ok_sums = self._ok_sums
+        mask, template, unpack, byte_sum = self._mask, self._template, self._unpack, self._byte_sum
+        from_bytes = int.from_bytes
         n = self._n
         size = self._size
         pos = 0
         end = len(buf)
+        skipped = 0
         while True:
             start = buf.find(STREAM_HEADER, pos)
             if start < 0:
-                counters.skipped_bytes += end - pos
+                skipped += end - pos
                 pos = end
                 break
-            counters.skipped_bytes += start - pos
+            skipped += start - pos
             pos = start
-            if end - pos < 2:
-                break
-            if buf[pos + 1] != n:
-                counters.skipped_bytes += 1
-                pos += 1
-                continue
             if end - pos < size:
+                if end - pos >= 2 and buf[pos + 1] != n:
+                    skipped += 1
+                    pos += 1
+                    continue
                 break
-            if not layout.ids_match(buf, pos + 2):
-                counters.skipped_bytes += 1
+            window = buf[pos : pos + size]
+            if from_bytes(window, "big") & mask != template:
+                skipped += 1
                 pos += 1
-                continue
-            if sum(buf[pos : pos + size]) & 0xFF in ok_sums:
-                frames.append(layout.decode(buf, pos + 2))
-                counters.frames += 1
+            elif byte_sum(window) & 0xFF in ok_sums:
+                frames.append(SensorFrame(layout, unpack(window, 2)))
                 pos += size
             else:
                 counters.checksum_failures += 1
-                counters.skipped_bytes += 1
+                skipped += 1
                 pos += 1
         if pos:
             del buf[:pos]
+        counters.frames += len(frames)
+        counters.skipped_bytes += skipped
         return frames
 
 
