@@ -169,7 +169,7 @@ class FakeRobot:
         self.frames_sent = 0
         self.closed = threading.Event()
         self._pending = bytearray()
-        self._lock = threading.Lock()
+        self._lock = threading.RLock()
         self._changed = threading.Condition(self._lock)
         self._running = True
         self._thread = threading.Thread(target=self._run, name="fake robot", daemon=True)

@@ -104,6 +104,7 @@ def test_fall_to_passive_refuses_the_next_drive_and_names_the_cause(link: Link) 
     with link.connect() as connection:
         connection.start("safe", PACKETS)
         connection.send(oi.drive(150, Radius.STRAIGHT))
+        assert robot.wait_until(lambda r: 137 in r.opcodes())  # taken before the fall
         robot.fall_to_passive({7: 0b0100})  # right wheel dropped
         frames_until(connection, lambda: connection.mode is OIMode.PASSIVE)
         fallback = connection.last_fallback

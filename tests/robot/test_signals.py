@@ -1,0 +1,66 @@
+"""Endings by signal: SIGINT and SIGTERM to a child process driving the fake robot over a
+pty; and the SIGTERM helper restoring the previous handler."""
+
+from __future__ import annotations
+
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from roomba_bt.robot.safety import Terminated, sigterm_raises
+
+from .fake_robot import FakeRobot, PtyEndpoint
+
+CHILD = pathlib.Path(__file__).with_name("child_connection.py")
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+STOP_TO_PASSIVE = bytes([137, 0, 0, 0, 0, 138, 0, 150, 0, 128])
+
+
+@pytest.mark.parametrize(
+    ("signum", "raised"),
+    [(signal.SIGINT, "KeyboardInterrupt"), (signal.SIGTERM, "Terminated")],
+    ids=["SIGINT", "SIGTERM"],
+)
+def test_signal_to_a_child_leaves_the_robot_stopped_in_passive(signum: int, raised: str) -> None:
+    endpoint = PtyEndpoint()
+    with FakeRobot(endpoint) as robot:
+        env = {**os.environ, "PYTHONPATH": str(ROOT)}
+        child = subprocess.Popen(
+            [sys.executable, str(CHILD), endpoint.url],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=env,
+        )
+        try:
+            assert child.stdout is not None
+            assert child.stdout.readline().strip() == "ready", child.stderr
+            driving = bytes([137, 0, 120, 0x80, 0x00])
+            assert robot.wait_until(lambda r: r.received.count(driving) >= 3)
+            child.send_signal(signum)
+            out, err = child.communicate(timeout=10)
+        finally:
+            if child.poll() is None:
+                child.kill()
+                child.wait()
+        assert child.returncode == 130, err
+        assert out.strip() == raised
+        assert robot.wait_until(lambda r: r.received.endswith(STOP_TO_PASSIVE))
+        assert robot.wait_until(lambda r: r.mode.label == "Passive")
+        assert robot.actuator_commands_outside_safe_or_full() == []
+    endpoint.close_slave()
+
+
+def test_sigterm_raises_terminated_and_restores_the_old_handler() -> None:
+    before = signal.getsignal(signal.SIGTERM)
+    with pytest.raises(Terminated) as ended, sigterm_raises():
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(5)  # the handler raises inside the sleep
+    assert isinstance(ended.value, KeyboardInterrupt)
+    assert ended.value.signum == signal.SIGTERM
+    assert signal.getsignal(signal.SIGTERM) is before

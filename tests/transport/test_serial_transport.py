@@ -1,0 +1,174 @@
+"""SerialTransport over every kind of URL it is used with: loop://, a pty, a TCP socket."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import socket
+import threading
+import tty
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+
+import pytest
+
+from roomba_bt.transport import SerialTransport, Transport, TransportError, open_transport
+
+
+@dataclass
+class FarEnd:
+    """The other side of the link, as raw bytes: ``send`` to the transport, ``recv`` from it."""
+
+    url: str
+    send: Callable[[bytes], None]
+    recv: Callable[[int], bytes]
+    hang_up: Callable[[], None]
+    echoes: bool = False  # loop://: what the transport writes comes back to it
+
+
+@contextlib.contextmanager
+def pty_far_end() -> Iterator[FarEnd]:
+    master, slave = os.openpty()
+    tty.setraw(slave)
+
+    def recv(size: int) -> bytes:
+        return os.read(master, size)
+
+    closed = threading.Event()
+
+    def hang_up() -> None:
+        if not closed.is_set():
+            closed.set()
+            os.close(master)
+            os.close(slave)
+
+    try:
+        yield FarEnd(os.ttyname(slave), lambda data: os.write(master, data) and None, recv, hang_up)
+    finally:
+        hang_up()
+
+
+@contextlib.contextmanager
+def tcp_far_end() -> Iterator[FarEnd]:
+    listener = socket.create_server(("127.0.0.1", 0))
+    accepted: list[socket.socket] = []
+
+    def accept() -> socket.socket:
+        if not accepted:
+            listener.settimeout(5)
+            accepted.append(listener.accept()[0])
+        return accepted[0]
+
+    def hang_up() -> None:
+        for conn in accepted:
+            conn.close()
+        listener.close()
+
+    try:
+        yield FarEnd(
+            f"socket://127.0.0.1:{listener.getsockname()[1]}",
+            lambda data: accept().sendall(data),
+            lambda size: accept().recv(size),
+            hang_up,
+        )
+    finally:
+        hang_up()
+
+
+@contextlib.contextmanager
+def loop_far_end() -> Iterator[FarEnd]:
+    yield FarEnd("loop://", lambda data: None, lambda size: b"", lambda: None, echoes=True)
+
+
+FAR_ENDS = {"loop": loop_far_end, "pty": pty_far_end, "tcp": tcp_far_end}
+
+
+@pytest.fixture(params=list(FAR_ENDS))
+def far_end(request: pytest.FixtureRequest) -> Iterator[FarEnd]:
+    with FAR_ENDS[request.param]() as end:
+        yield end
+
+
+def read_until(transport: Transport, size: int, timeout: float = 2.0) -> bytes:
+    data = b""
+    for _ in range(int(timeout / 0.05)):
+        data += transport.read(0.05)
+        if len(data) >= size:
+            break
+    return data
+
+
+def test_is_a_transport_and_round_trips_bytes(far_end: FarEnd) -> None:
+    transport = open_transport(far_end.url)
+    try:
+        assert isinstance(transport, Transport)
+        assert transport.is_open and transport.name == far_end.url
+        transport.write(bytes([128, 131]))
+        if far_end.echoes:
+            assert read_until(transport, 2) == bytes([128, 131])
+        else:
+            got = b""
+            while len(got) < 2:
+                got += far_end.recv(16)
+            assert got == bytes([128, 131])
+            far_end.send(bytes(range(200)))
+            assert read_until(transport, 200) == bytes(range(200))
+    finally:
+        transport.close()
+    assert not transport.is_open
+
+
+def test_read_returns_nothing_after_the_timeout(far_end: FarEnd) -> None:
+    transport = open_transport(far_end.url)
+    try:
+        before = transport.now()
+        assert transport.read(0.05) == b""
+        assert transport.now() >= before + 0.04
+        assert transport.read(0) == b""
+    finally:
+        transport.close()
+
+
+def test_set_baud_changes_the_port_rate(far_end: FarEnd) -> None:
+    transport = SerialTransport.open(far_end.url, 115200)
+    try:
+        assert transport.baud == 115200
+        transport.set_baud(19200)
+        assert transport.baud == 19200
+        with pytest.raises(TransportError, match="could not set the baud rate to -5"):
+            transport.set_baud(-5)
+    finally:
+        transport.close()
+
+
+@pytest.mark.parametrize("kind", ["pty", "tcp"])
+def test_a_vanished_far_end_raises_transport_error_naming_the_port(kind: str) -> None:
+    with FAR_ENDS[kind]() as end:
+        transport = open_transport(end.url)
+        try:
+            transport.write(b"\x80")
+            end.recv(1)
+            end.hang_up()
+            with pytest.raises(TransportError) as failed:
+                for _ in range(50):
+                    transport.read(0.02)
+                    transport.write(bytes([137, 0, 0, 0, 0]))
+            assert str(failed.value).startswith(end.url + ": could not ")
+            assert isinstance(failed.value, ConnectionError)
+        finally:
+            transport.close()
+
+
+def test_opening_a_missing_port_names_it() -> None:
+    with pytest.raises(TransportError, match=r"^/dev/no-such-roomba: could not open the port"):
+        open_transport("/dev/no-such-roomba")
+    with pytest.raises(TransportError, match="could not open the port"):
+        open_transport("nosuchscheme://x")
+
+
+def test_write_to_a_closed_transport_is_a_transport_error() -> None:
+    transport = open_transport("loop://")
+    transport.close()
+    transport.close()  # twice is fine
+    with pytest.raises(TransportError, match="loop://: could not write"):
+        transport.write(b"\x80")
