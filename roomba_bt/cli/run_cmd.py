@@ -198,6 +198,11 @@ def run_command(args: argparse.Namespace) -> int:
         observer.render(runner)
     print(_render_tree(mission, status=True))
     print(summary)
+    if (
+        summary.outcome.exit_code in (ExitCode.CONNECTION, ExitCode.MISSION_FAILED)
+        and summary.reason
+    ):
+        print(f"roomba-bt: {summary.outcome.value}: {summary.reason}", file=sys.stderr)
     for refusal in runner.refusals[:5]:
         print(f"refused: {refusal}", file=sys.stderr)
     if args.plot and simulator is not None:

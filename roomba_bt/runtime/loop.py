@@ -160,16 +160,13 @@ class MissionRunner:
                 root.stop(py_trees.common.Status.INVALID)
         self._outbox.clear()  # whatever a terminating leaf queued: the safe stop supersedes it
         try:
+            sequence = [c.name for c in self.connection.stop_sequence()]
             with terminate_as_interrupt():
-                report = self.connection.safe_stop()
-            if report is False:
+                stopped = self.connection.safe_stop()
+            if not stopped:
                 summary.safe_stop = "FAILED: the stop sequence could not be written (port gone?)"
             else:
-                summary.safe_stop = "drive 0, motors off, stream paused, " + (
-                    "Stop (173)"
-                    if getattr(self.connection, "end_in", "") == "stop"
-                    else "Passive (Start)"
-                )
+                summary.safe_stop = "sent " + ", ".join(sequence) if sequence else "nothing to send"
         except KeyboardInterrupt:
             summary.safe_stop = "interrupted during the safe stop"
         except Exception as exc:

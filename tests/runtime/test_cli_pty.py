@@ -1,0 +1,153 @@
+"""End to end over a real pty: `roomba-bt sim --pty` in one process, `roomba-bt run --port` in
+another, every ending checked on the bytes the run wrote (its --record)."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.oi import commands as oi
+from roomba_bt.runtime.recording import load_record
+
+SAFE_END = oi.halt().data + oi.motors_off().data + oi.pause_stream().data + oi.start().data
+CLI = [sys.executable, "-m", "roomba_bt.cli"]
+
+pytestmark = pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs a pty")
+
+
+@pytest.fixture
+def sim_port() -> Iterator[str]:
+    proc = subprocess.Popen(
+        [*CLI, "sim", "--pty"], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True
+    )
+    assert proc.stdout is not None
+    port = proc.stdout.readline().strip()
+    assert port.startswith("/dev/"), port
+    yield port
+    proc.send_signal(signal.SIGINT)
+    try:
+        proc.wait(timeout=5)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+    proc.stdout.close()
+
+
+def _mission(tmp_path: Path, text: str) -> Path:
+    path = tmp_path / "mission.yaml"
+    path.write_text(textwrap.dedent(text))
+    return path
+
+
+FOREVER = """
+mission: spin-forever
+tree:
+  sequence:
+    - mode: safe
+    - drive: {velocity: 100 mm/s, radius: spin_left}
+"""
+
+
+def _start_run(port: str, mission: Path, record: Path, *extra: str) -> subprocess.Popen[str]:
+    return subprocess.Popen(
+        [*CLI, "run", str(mission), "--port", port, "--record", str(record), "--display", "log",
+         *extra],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )  # fmt: skip
+
+
+def _wait_for_driving(record: Path, timeout: float = 10.0) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if record.exists() and '"out", "b": "89' in record.read_text():
+            time.sleep(0.3)
+            return
+        time.sleep(0.05)
+    raise AssertionError("the run never started driving")
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_signal_ends_with_the_safe_stop_and_exit_130(
+    sim_port: str, tmp_path: Path, signum: int
+) -> None:
+    record = tmp_path / "run.jsonl"
+    proc = _start_run(sim_port, _mission(tmp_path, FOREVER), record)
+    _wait_for_driving(record)
+    proc.send_signal(signum)
+    out, err = proc.communicate(timeout=10)
+    assert proc.returncode == 130, err
+    assert "INTERRUPTED" in out
+    assert load_record(record).outbound.endswith(SAFE_END)
+
+
+def test_success_over_the_pty(sim_port: str, tmp_path: Path) -> None:
+    record = tmp_path / "run.jsonl"
+    mission = _mission(
+        tmp_path,
+        """
+        tree:
+          sequence:
+            - mode: safe
+            - drive: {velocity: 200 mm/s, distance: 20 cm}
+        """,
+    )
+    proc = _start_run(sim_port, mission, record)
+    out, err = proc.communicate(timeout=30)
+    assert proc.returncode == 0, err
+    assert "SUCCESS" in out
+    outbound = load_record(record).outbound
+    assert outbound.endswith(SAFE_END)
+    # The replay of that record decides the same, byte for byte.
+    replay = subprocess.run(
+        [*CLI, "replay", str(record)], capture_output=True, text=True, timeout=30
+    )
+    assert replay.returncode == 0, replay.stderr
+    assert "the tree wrote the same" in replay.stdout
+
+
+def test_timeout_over_the_pty_is_exit_1(sim_port: str, tmp_path: Path) -> None:
+    record = tmp_path / "run.jsonl"
+    proc = _start_run(sim_port, _mission(tmp_path, FOREVER), record, "--timeout", "1s")
+    out, err = proc.communicate(timeout=30)
+    assert proc.returncode == 1, err
+    assert "TIMEOUT" in out
+    assert load_record(record).outbound.endswith(SAFE_END)
+
+
+def test_no_robot_on_the_port_is_exit_3(tmp_path: Path) -> None:
+    master, slave = os.openpty()
+    try:
+        result = subprocess.run(
+            [*CLI, "run", str(_mission(tmp_path, FOREVER)), "--port", os.ttyname(slave)],
+            capture_output=True,
+            text=True,
+            timeout=30,
+        )
+    finally:
+        os.close(master)
+        os.close(slave)
+    assert result.returncode == 3
+    assert "did not answer" in result.stderr
+    assert "Traceback" not in result.stderr
+
+
+def test_missing_port_is_exit_3(tmp_path: Path) -> None:
+    result = subprocess.run(
+        [*CLI, "run", str(_mission(tmp_path, FOREVER)), "--port", "/dev/does-not-exist"],
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
+    assert result.returncode == 3
+    assert "/dev/does-not-exist" in result.stderr
+    assert "Traceback" not in result.stderr
