@@ -86,6 +86,10 @@ class FrameLayout:
         self.index: Mapping[int, int] = index
         self.struct = struct.Struct(">" + "".join(codes))
         self.payload_size = offset
+        if with_ids and offset > 255:  # n-bytes is one byte: such a stream cannot be framed
+            raise EncodeError(
+                "stream", "packet ids", "at most 255 bytes of ids and data per frame", offset
+            )
         self.id_offsets = tuple(id_offsets)
 
     @property

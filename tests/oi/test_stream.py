@@ -192,3 +192,29 @@ def test_two_group_100s_do_not_fit_at_115200() -> None:
 def test_bandwidth_check_names_unknown_ids() -> None:
     with pytest.raises(EncodeError, match="stream: packet_id must be one of"):
         check_bandwidth([7, 104], 115200)
+
+
+LONGEST = (100, 100, 100, 19, 22, 25, 7)  # 254 payload bytes: a 257-byte frame
+
+
+def test_the_longest_frames_use_the_exact_byte_sum() -> None:
+    layout = layout_for(LONGEST, CREATE2)
+    assert layout.payload_size == 254
+    frame = layout.stream_frame({22: 0xFFFF, 25: 0xFFFF, 19: -1, 43: -1, 44: -1})
+    broken = bytearray(frame)
+    broken[100] ^= 0x01
+    parser = StreamParser(LONGEST)
+    assert len(parser.feed(frame + bytes(broken) + frame)) == 2
+    assert parser.counters.checksum_failures >= 1
+
+
+def test_a_stream_too_long_for_its_n_byte_is_refused() -> None:
+    with pytest.raises(EncodeError, match="at most 255 bytes of ids and data per frame, got 257"):
+        StreamParser((*LONGEST, 22))
+
+
+def test_adler_sum_is_the_byte_sum_up_to_256_bytes() -> None:
+    from roomba_bt.oi.stream import _adler_sum
+
+    for data in (bytes(256), b"\xff" * 256, bytes(range(256)), b"\x13\x05" * 100):
+        assert _adler_sum(bytearray(data)) == sum(data)
