@@ -212,6 +212,20 @@ def resolve(
 ) -> Any:
     """One value of type ``vtype``: ``${param}`` substituted, ``@key`` resolved to a
     :class:`BlackboardRef` (where allowed), units parsed, range checked. Raises :class:`Bad`."""
+    fields = record_fields(vtype)
+    if fields is not None and isinstance(node, yaml.MappingNode):
+        given = {k: (v, vl) for k, v, _, vl in mapping(node, loc, what)}
+        unknown_fields = [k for k in given if k not in fields]
+        if unknown_fields:
+            name = unknown_fields[0]
+            raise Bad(loc.at(f"{what}: " + unknown("field", name, list(fields))))
+        missing = [k for k in fields if k not in given]
+        if missing:
+            raise Bad(loc.at(f"{what}: missing field {missing[0]!r}"))
+        return {
+            k: resolve(ctx, given[k][0], given[k][1], t, env, f"{what}.{k}")
+            for k, t in fields.items()
+        }
     raw = plain(node, loc)
     if isinstance(raw, str):
         full = _FULL_SUBSTITUTION.match(raw)
@@ -359,6 +373,9 @@ class Compiler:
                     description = text
         params = self._parameters(sections.get("parameters"), overrides, root_loc)
         self.global_env = params
+        description = _SUBSTITUTION.sub(
+            lambda m: params[m.group(1)].text if m.group(1) in params else m.group(0), description
+        )
         tree: Node | None = None
         tree_loc: Loc | None = None
         if "tree" in sections:
@@ -758,7 +775,7 @@ class Compiler:
         children_node: yaml.Node | None = value
         children_loc = loc
         if isinstance(value, yaml.MappingNode):
-            allowed = ["children", "memory"] + (
+            allowed = ["children", "memory", "name"] + (
                 ["policy", "synchronise", "selected"] if word == "parallel" else []
             )
             fields = {}
@@ -767,6 +784,8 @@ class Compiler:
                     self.ctx.error(kl.at(f"{word}: " + unknown("option", k, allowed)))
                     continue
                 fields[k] = (v, vl)
+            if "name" in fields:
+                options["name"] = scalar_text(fields["name"][0], fields["name"][1], "name")
             if "memory" in fields:
                 options["memory"] = resolve(
                     self.ctx, *fields["memory"], BOOL, env, f"{word}.memory"
@@ -818,7 +837,7 @@ class Compiler:
             child = self.node(child_node, child_loc, env)
             if child is not None:
                 children.append(child)
-        result = Node(word, key_loc, word, children, options=options)
+        result = Node(word, key_loc, options.pop("name", word), children, options=options)
         if word == "parallel" and "selected" in options:
             names = [c.name for c in children]
             for sel in options["selected"]:
@@ -1061,7 +1080,8 @@ class Compiler:
                 ok = False
         if not ok:
             return None
-        return Node("leaf", key_loc, decl.name, decl=decl, params=params, options=options)
+        return Node("leaf", key_loc, _leaf_name(decl.name, given), decl=decl, params=params,
+                    options=options)  # fmt: skip
 
     def _key_params(
         self,
@@ -1116,6 +1136,17 @@ class Compiler:
                 self.ctx.error(bad.diagnostic)
                 ok = False
         return ok
+
+
+def _leaf_name(behaviour: str, given: list[tuple[str, yaml.Node, Loc, Loc]]) -> str:
+    """``drive(velocity=100 mm/s, radius=-500 mm)``: what ``show`` prints for a leaf."""
+    if not given:
+        return behaviour
+    parts = []
+    for pname, node, key_loc, value_loc in given:
+        text = str(node.value) if isinstance(node, yaml.ScalarNode) else "..."
+        parts.append(text if key_loc is value_loc else f"{pname}={text}")
+    return f"{behaviour}({', '.join(parts)})"
 
 
 def _text(node: yaml.Node, loc: Loc, default: Any) -> str:

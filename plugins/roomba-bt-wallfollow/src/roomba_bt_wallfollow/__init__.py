@@ -1,0 +1,101 @@
+"""``wall_follow``: keep a wall on the right at a steady light-bumper signal.
+
+The right light-bumper signal (packet 51) grows as the wall comes closer (0-4095). A PD
+controller turns the error ``target - signal`` into a difference of wheel speeds::
+
+    error  = target - signal              (> 0: too far from the wall)
+    turn   = kp * error + kd * d(error)/dt   (mm/s, clamped to +-speed)
+    left   = speed + turn                 (too far: the left wheel speeds up,
+    right  = speed - turn                  the robot steers right, toward the wall)
+
+and sends them as Drive Direct (145) ``[145][right hi][right lo][left hi][left lo]``. An
+obstacle ahead (the centre signals 48 / 49 above ``front_threshold``) turns it left in
+place, so it follows an inside corner. Time is the mission clock (``snapshot.time``); the
+behaviour never blocks and halts the wheels when it ends or is preempted.
+"""
+
+from __future__ import annotations
+
+from py_trees.common import Status
+
+from roomba_bt.behaviours import DURATION, FLOAT, INT, SPEED, Action, Param, declare
+from roomba_bt.oi import commands
+from roomba_bt.oi.modes import DRIVING_MODES
+from roomba_bt.oi.opcodes import COMMANDS_BY_NAME
+from roomba_bt.oi.packets import PACKETS
+
+__all__ = ["WallFollow"]
+__version__ = "0.1.0"
+
+_WHEEL = COMMANDS_BY_NAME["drive_direct"].args[0]  # -500..500 mm/s, from the opcode table
+_SIGNAL_MAX = PACKETS[51].maximum
+RIGHT, FRONT_RIGHT, CENTER_LEFT, CENTER_RIGHT = 51, 50, 48, 49
+
+
+@declare(
+    "wall_follow",
+    kind="action",
+    params=(
+        Param("speed", SPEED, default="150 mm/s", minimum=20, maximum=_WHEEL.maximum,
+              doc="forward wheel speed"),
+        Param("target", INT, default=600, minimum=1, maximum=_SIGNAL_MAX,
+              doc="right light-bumper signal (51) to hold"),
+        Param("kp", FLOAT, default=0.15, minimum=0, maximum=10,
+              doc="mm/s of wheel-speed difference per unit of signal error"),
+        Param("kd", FLOAT, default=0.01, minimum=0, maximum=10,
+              doc="mm/s per unit of signal error change per second"),
+        Param("front_threshold", INT, default=800, minimum=1, maximum=_SIGNAL_MAX,
+              doc="centre signal (48/49) above which it turns away from a wall ahead"),
+        Param("duration", DURATION, minimum=0, doc="SUCCESS after this long; default: never"),
+    ),
+    reads=(CENTER_LEFT, CENTER_RIGHT, FRONT_RIGHT, RIGHT),
+    sends=(145,),
+)  # fmt: skip
+class WallFollow(Action):
+    """Follow a wall on the right at a steady light-bumper signal (PD on wheel speeds).
+
+    RUNNING until ``duration`` (SUCCESS) or until a guard or a higher branch preempts it;
+    the wheels are halted in both cases.
+    """
+
+    moves = True
+
+    def start(self) -> None:
+        self._start_time = self.snapshot.time
+        self._previous_error: float | None = None
+        self._previous_time = self._start_time
+
+    def wheel_speeds(self, signal: int, front: int, now: float) -> tuple[int, int]:
+        """(left, right) in mm/s for this tick's signals: the controller, testable alone."""
+        speed = self.number("speed")
+        if front >= self.number("front_threshold"):
+            self._previous_error = None
+            return -round(speed), round(speed)  # wall ahead: spin left in place
+        error = self.number("target") - signal
+        derivative = 0.0
+        dt = now - self._previous_time
+        if self._previous_error is not None and dt > 0:
+            derivative = (error - self._previous_error) / dt
+        self._previous_error, self._previous_time = error, now
+        turn = self.number("kp") * error + self.number("kd") * derivative
+        turn = max(-speed, min(speed, turn))
+        limit = _WHEEL.maximum
+        left = max(-limit, min(limit, round(speed + turn)))
+        right = max(-limit, min(limit, round(speed - turn)))
+        return left, right
+
+    def update(self) -> Status:
+        snap = self.snapshot
+        duration = self.value("duration")
+        if duration is not None and snap.time - self._start_time >= float(duration) - 1e-9:
+            self.send(commands.halt())
+            self._started_motion = False
+            return Status.SUCCESS
+        if snap.mode not in DRIVING_MODES:
+            return Status.RUNNING  # the mode model would refuse it; wait for Safe/Full
+        frame = snap.frame
+        front = max(frame[CENTER_LEFT], frame[CENTER_RIGHT])
+        left, right = self.wheel_speeds(frame[RIGHT], front, snap.time)
+        self.send(commands.drive_direct(right, left))
+        self._started_motion = True
+        return Status.RUNNING

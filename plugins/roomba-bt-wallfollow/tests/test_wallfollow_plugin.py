@@ -1,0 +1,114 @@
+"""The wall-following plugin: its declaration, its controller, and a mission that uses it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import py_trees
+import pytest
+from py_trees.common import Status
+
+from roomba_bt.behaviours import default_registry
+from roomba_bt.mission import load_mission
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.robot.interface import StubRobot
+from roomba_bt_wallfollow import WallFollow
+
+EXAMPLE = Path(__file__).resolve().parents[3] / "missions" / "examples" / "wall_follow.yaml"
+
+
+@pytest.fixture
+def robot() -> StubRobot:
+    py_trees.blackboard.Blackboard.clear()
+    return StubRobot(mode=OIMode.SAFE)
+
+
+def follow(robot: StubRobot, **params: float) -> WallFollow:
+    defaults = {"speed": 150.0, "target": 600, "kp": 0.15, "kd": 0.0, "front_threshold": 800}
+    node = WallFollow("wall_follow", {**defaults, **params})
+    node.setup(robot=robot)
+    return node
+
+
+def wheels(robot: StubRobot) -> tuple[int, int]:
+    [command] = robot.flush()
+    assert command.opcode == 145
+    right, left = command.args
+    return left, right
+
+
+def frame(right: int, front: int = 0) -> dict[int, int]:
+    return {48: front, 49: 0, 50: 0, 51: right, 35: 2}
+
+
+def test_it_is_registered_through_the_entry_point_group() -> None:
+    decl = default_registry().get("wall_follow")
+    assert decl is not None and decl.cls is WallFollow
+    assert decl.modes == {OIMode.SAFE, OIMode.FULL}
+    assert decl.packets({}) == (48, 49, 50, 51)
+
+
+def test_too_far_from_the_wall_steers_right(robot: StubRobot) -> None:
+    node = follow(robot)
+    robot.set_frame(frame(right=200))
+    node.tick_once()
+    left, right = wheels(robot)
+    assert left > right  # turning clockwise, toward the wall on the right
+    assert (left, right) == (210, 90)  # 150 +- 0.15 * 400
+
+
+def test_too_close_steers_left_and_on_target_goes_straight(robot: StubRobot) -> None:
+    node = follow(robot)
+    robot.set_frame(frame(right=1000))
+    node.tick_once()
+    left, right = wheels(robot)
+    assert left < right
+    robot.set_frame(frame(right=600))
+    node.tick_once()
+    assert wheels(robot) == (150, 150)
+
+
+def test_the_turn_is_clamped_to_the_speed(robot: StubRobot) -> None:
+    node = follow(robot, kp=5.0)
+    robot.set_frame(frame(right=0))
+    node.tick_once()
+    assert wheels(robot) == (300, 0)
+
+
+def test_derivative_term_damps_an_approach(robot: StubRobot) -> None:
+    node = follow(robot, kd=0.01)
+    robot.set_frame(frame(right=300))
+    node.tick_once()
+    first = wheels(robot)
+    robot.set_frame(frame(right=400))  # approaching: error shrinks fast
+    node.tick_once()
+    left, right = wheels(robot)
+    assert left - right < first[0] - first[1] - 2 * 0.15 * 100  # less than P alone
+
+
+def test_a_wall_ahead_spins_left(robot: StubRobot) -> None:
+    node = follow(robot)
+    robot.set_frame(frame(right=600, front=900))
+    node.tick_once()
+    assert wheels(robot) == (-150, 150)
+
+
+def test_duration_ends_with_a_halt_and_preemption_halts_too(robot: StubRobot) -> None:
+    node = follow(robot, duration=0.03)
+    for _ in range(3):
+        robot.set_frame(frame(right=600))
+        node.tick_once()
+    assert node.status is Status.SUCCESS
+    assert [list(c.data) for c in robot.flush()][-1] == [137, 0, 0, 0, 0]
+    other = follow(robot)
+    robot.set_frame(frame(right=600))
+    other.tick_once()
+    robot.flush()
+    other.stop(Status.INVALID)
+    assert [list(c.data) for c in robot.flush()] == [[137, 0, 0, 0, 0]]
+
+
+def test_the_shipped_example_mission_uses_it() -> None:
+    mission = load_mission(EXAMPLE)
+    assert any(isinstance(n, WallFollow) for n in mission.root.iterate())
+    assert {48, 49, 50, 51} <= set(mission.packets)
