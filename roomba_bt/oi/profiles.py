@@ -25,9 +25,10 @@ from roomba_bt.oi.errors import UnsupportedCommandError
 from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME, CommandSpec
 from roomba_bt.oi.packets import PACKETS, PacketSpec
 
-#: Wheel base of the Create 2 / Roomba 500/600 chassis, in mm. Source: iRobot Create 2
-#: "Open Interface" drawing and manual (235 mm between wheel contact points), the figure used
-#: by libcreate and the Create 2 ROS drivers.
+#: Distance between the drive wheels, in mm: 235, the figure of AutonomyLab's libcreate
+#: (``RobotModel::CREATE_2(V_3, 0.235, 115200, 0.5, 0.072)`` in ``src/types.cpp``), used by the
+#: Create 2 ROS drivers, and PyRoombaAdapter's default ``wheel_span_mm=235.0``. Neither spec
+#: text states it (the 600 spec's dimension drawing did not survive the text extraction).
 WHEEL_BASE_MM = 235.0
 #: Wheel diameter (mm) and encoder counts per revolution, from the 600 spec's packet 43 note.
 WHEEL_DIAMETER_MM = 72.0

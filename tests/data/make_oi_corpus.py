@@ -46,6 +46,7 @@ def _entry(
         "packets": packets,
         "profile": profile,
         "frames": [{str(k): v for k, v in f.items()} for f in frames],
+        "generated": True,
     }
 
 
@@ -174,8 +175,12 @@ def main() -> None:
         )
     )
 
-    manifest = {"about": __doc__.strip().splitlines()[0], "streams": entries}
-    (HERE / "manifest.json").write_text(json.dumps(manifest, indent=1) + "\n")
+    path = HERE / "manifest.json"
+    by_hand = []  # entries added by hand (real captures) are kept as they are
+    if path.exists():
+        by_hand = [e for e in json.loads(path.read_text())["streams"] if not e.get("generated")]
+    manifest = {"about": (__doc__ or "").strip().splitlines()[0], "streams": entries + by_hand}
+    path.write_text(json.dumps(manifest, indent=1) + "\n")
     print(f"wrote {len(entries)} streams to {HERE}")
 
 

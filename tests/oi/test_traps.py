@@ -253,3 +253,27 @@ def test_profile_packet_ranges() -> None:
 def test_digit_ascii_table_omits_star_plus_at() -> None:
     missing = set(range(32, 127)) - set(DIGIT_ASCII)
     assert missing == {ord("*"), ord("+"), ord("@")}
+
+
+# -- the mode table ----------------------------------------------------------------------------
+
+
+def test_mode_rules_in_the_opcode_table() -> None:
+    from roomba_bt.oi.opcodes import COMMANDS
+
+    assert OIMode.OFF in COMMANDS[128].modes  # Start is the way out of Off
+    assert COMMANDS[128].leads_to is OIMode.PASSIVE
+    assert COMMANDS[7].modes == frozenset(OIMode)  # Reset: "always available"
+    assert COMMANDS[7].leads_to is COMMANDS[173].leads_to is OIMode.OFF
+    for opcode in (130, 131):
+        assert COMMANDS[opcode].leads_to is OIMode.SAFE
+    assert COMMANDS[132].leads_to is OIMode.FULL
+    for opcode in (133, 134, 135, 136, 143):
+        assert COMMANDS[opcode].leads_to is OIMode.PASSIVE
+    actuators = {137, 138, 139, 141, 144, 145, 146, 162, 163, 164}
+    assert {op for op, spec in COMMANDS.items() if spec.is_actuator} == actuators
+    for opcode in actuators:
+        assert COMMANDS[opcode].modes == {OIMode.SAFE, OIMode.FULL}
+    for spec in COMMANDS.values():
+        if spec.opcode not in (7, 128):
+            assert OIMode.OFF not in spec.modes, spec.name
