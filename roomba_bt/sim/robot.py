@@ -83,6 +83,9 @@ RECEIVER_SIDE_MM = 40.0
 #: right -90..+5 deg, so both see the dock only when it is within 5 deg of straight ahead.
 RECEIVER_INNER = math.radians(5.0)
 RECEIVER_OUTER = math.radians(90.0)
+#: Pushed against the dock within this angle of the contacts, its guides align the robot.
+DOCK_GUIDE_ANGLE = math.radians(20.0)
+_GUIDE_STEP = math.radians(1.0)
 _NEAR_MARGIN_MM = 300.0
 _NEAR_RADIUS_MM = ROBOT_RADIUS_MM + LIGHT_BUMP_RANGE_MM + 40.0 + _NEAR_MARGIN_MM
 
@@ -689,9 +692,12 @@ class Simulator:
             self.x += ux * fraction
             self.y += uy * fraction
         self.blocked = fraction < 1.0 and dist != 0.0 and not (self.lifted or self.fallen)
+        guided = 0.0
+        if self.blocked and dist > 0.0 and self._dock_target is not None:
+            guided = self._dock_guides()  # the body turns, the wheels slip: no encoder counts
         travelled = dist * fraction if not (self.lifted or self.fallen) else dist
         if not (self.lifted or self.fallen):
-            self.theta = wrap_angle(self.theta + dtheta)
+            self.theta = wrap_angle(self.theta + dtheta + guided)
             self._distance_acc += dist * fraction
             self._angle_acc += dtheta
         # Encoders count wheel turns: a blocked robot's wheels stall, a lifted one's spin.
@@ -707,10 +713,28 @@ class Simulator:
         v[44] = rc
         v[58] = 1 if dist > 0.0 and fraction > 0.5 and not self.lifted else 0
         self._stall_steps = self._stall_steps + 1 if self.blocked else 0
-        if fraction or dtheta:
+        if fraction or dtheta or guided:
             self._geometry_dirty = True
         if not self.ticks & 3:
             self.trace.append(TracePoint(self.time, self.x, self.y, self.theta, self.mode))
+
+    def _dock_guides(self) -> float:
+        """The dock's guides: pushed forward against the dock close to the contacts, the
+        robot slides onto them (up to 2 mm and 1 deg a step); returns the extra rotation."""
+        target = self._dock_target
+        dock = self.world.dock
+        assert target is not None and dock is not None
+        ex, ey = target.x - self.x, target.y - self.y
+        err = wrap_angle(target.theta - self.theta)
+        if ex * ex + ey * ey > (dock.contact_tolerance + 25.0) ** 2 or abs(err) > DOCK_GUIDE_ANGLE:
+            return 0.0
+        off = math.hypot(ex, ey)
+        if off > 0.0:
+            step = min(off, 2.0)
+            self.x += ex / off * step
+            self.y += ey / off * step
+        self._geometry_dirty = True
+        return max(-_GUIDE_STEP, min(_GUIDE_STEP, err))
 
     def _near_segments(self) -> tuple[Segment, ...]:
         nx, ny = self._near_at
@@ -872,9 +896,12 @@ class Simulator:
                 fy = y + RECEIVER_FORWARD_MM * s
                 lx, ly = fx - RECEIVER_SIDE_MM * s, fy + RECEIVER_SIDE_MM * c
                 rx, ry = fx + RECEIVER_SIDE_MM * s, fy - RECEIVER_SIDE_MM * c
-                if self._receiver_sees(lx, ly, dock.x, dock.y, RECEIVER_INNER, RECEIVER_OUTER):
+                # Fields of view are cones from the robot's centre (the receivers sit close
+                # together on the bumper); which beams each sees depends on where it is.
+                bearing = wrap_angle(math.atan2(dock.y - y, dock.x - x) - theta)
+                if -RECEIVER_INNER <= bearing <= RECEIVER_OUTER:
                     left = self._dock_char(lx, ly, discovery)
-                if self._receiver_sees(rx, ry, dock.x, dock.y, -RECEIVER_OUTER, -RECEIVER_INNER):
+                if -RECEIVER_OUTER <= bearing <= RECEIVER_INNER:
                     right = self._dock_char(rx, ry, discovery)
         wall = 0
         for vw in self.world.virtual_walls:
@@ -911,13 +938,6 @@ class Simulator:
         if not self.dock_powered:
             return 0
         return dock_character(red=red, green=green, force_field=ff, discovery=discovery)
-
-    def _receiver_sees(
-        self, px: float, py: float, ex: float, ey: float, lo: float, hi: float
-    ) -> bool:
-        """A directional receiver sees the emitter within its field of view (lo..hi)."""
-        a = wrap_angle(math.atan2(ey - py, ex - px) - self.theta)
-        return lo <= a <= hi
 
     @staticmethod
     def _in_beam(px: float, py: float, seg: Segment, half_width: float, halo: float) -> bool:
@@ -1074,8 +1094,10 @@ class Simulator:
         return speed, speed
 
     def _seek_dock(self, b: _Builtin) -> tuple[float, float]:
-        """Simple homing: wander until the omni receiver sees the dock, then go to a point
-        0.45 m out on the dock's axis, turn to face the dock and drive on slowly."""
+        """Simple homing. The real firmware's algorithm is not specified, so this one uses the
+        world's geometry once the dock is in sight: head for where the dock was (bouncing
+        off obstacles) until the omni receiver sees a dock beam, then go to a point 0.45 m
+        out on the dock's axis, turn to face the dock and drive on slowly."""
         dock = self.world.dock
         if self.docked:
             self._end_builtin(b, "docked")
@@ -1084,10 +1106,14 @@ class Simulator:
             self._end_builtin(b, "seek dock gave up")
             return 0.0, 0.0
         sees = self.values[17] and self.values[17] != 162
-        if b.phase in ("forward", "back", "turn") and not sees:
-            return self._bounce(b, 200.0)
         target = dock.docked_pose
         fx, fy = math.cos(dock.facing), math.sin(dock.facing)
+        if b.phase in ("forward", "back", "turn") and not sees:
+            # search: head for where the firmware remembers the dock, bouncing off obstacles
+            if b.phase == "forward" and not (self.values[7] & 3 or self.blocked):
+                sx, sy = target.x + 700.0 * fx, target.y + 700.0 * fy
+                return _steer_to(self.x, self.y, self.theta, sx, sy, 200.0)
+            return self._bounce(b, 200.0)
         ax, ay = target.x + 450.0 * fx, target.y + 450.0 * fy
         if b.phase in ("forward", "back", "turn"):
             b.phase = "approach"

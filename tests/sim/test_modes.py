@@ -1,0 +1,202 @@
+"""Mode rules from the opcode table, as the robot applies them (packet 35 shows them)."""
+
+from __future__ import annotations
+
+import pytest
+
+from roomba_bt.oi import commands as C
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.opcodes import COMMANDS
+from roomba_bt.oi.profiles import CREATE2, ROOMBA500, ROOMBA600
+
+from .helpers import DOCK_WORLD, docked_start, make, pose
+
+
+def mode_of(host) -> int:  # type: ignore[no-untyped-def]
+    return host.query([35])[35]
+
+
+def test_robot_powers_up_in_off_and_answers_nothing_but_start() -> None:
+    host = make(mode=None)
+    assert host.sim.mode is OIMode.OFF
+    host.send(C.sensors(35), C.safe(), C.drive_direct(200, 200), C.stream([7]))
+    host.run(0.3)
+    assert host.sim.read() == b""
+    assert host.sim.mode is OIMode.OFF
+    assert host.sim.x == 2000.0
+    host.send(C.start())
+    assert host.sim.mode is OIMode.PASSIVE
+    assert mode_of(host) == OIMode.PASSIVE
+
+
+@pytest.mark.parametrize("opcode", sorted(op for op, c in COMMANDS.items() if c.leads_to))
+def test_every_mode_command_leads_where_the_table_says(opcode: int) -> None:
+    spec = COMMANDS[opcode]
+    host = make(mode="full")
+    host.sim.receive(bytes([opcode]))
+    expected = spec.leads_to
+    assert host.sim.mode is expected
+    if expected is not OIMode.OFF and opcode != 133:
+        assert mode_of(host) == expected
+
+
+def test_safe_and_full_are_reachable_from_each_other_and_from_passive() -> None:
+    host = make(mode="passive")
+    for command, expected in ((C.safe(), 2), (C.full(), 3), (C.safe(), 2), (C.control(), 2)):
+        host.send(command)
+        assert mode_of(host) == expected
+
+
+def test_actuators_are_ignored_in_passive_and_counted_as_violations() -> None:
+    host = make(mode="passive")
+    host.send(C.drive_direct(300, 300), C.motors_off(), C.leds(4, 0, 255), C.play(0))
+    host.run(1.0)
+    assert host.sim.x == 2000.0
+    assert [v.name for v in host.sim.violations] == ["drive_direct", "motors", "leds", "play"]
+    assert all(v.mode is OIMode.PASSIVE for v in host.sim.violations)
+    assert host.sim.leds == (0, 0, 0)
+
+
+def test_actuators_move_the_robot_in_safe_and_full() -> None:
+    for mode in ("safe", "full"):
+        host = make(mode=mode)
+        host.send(C.drive_direct(200, 200))
+        host.run(1.0)
+        assert host.sim.x > 2150.0
+        assert host.sim.violations == []
+
+
+def test_start_from_safe_stops_the_wheels() -> None:
+    host = make()
+    host.send(C.drive_direct(200, 200))
+    host.run(0.5)
+    host.send(C.start())
+    x = host.sim.x
+    host.run(0.5)
+    assert host.sim.x == x
+
+
+def test_stop_173_goes_to_off_and_stops_the_stream() -> None:
+    host = make()
+    host.stream([7])
+    assert len(host.frames(0.15)) == 10
+    host.send(C.stop())
+    assert host.sim.mode is OIMode.OFF
+    assert host.frames(0.3) == []
+
+
+def test_reset_prints_the_banner_and_goes_to_off() -> None:
+    host = make()
+    host.sim.read()
+    host.send(C.reset())
+    text = host.sim.read()
+    assert text.startswith(b"bl-start") and text.isascii()
+    assert host.sim.mode is OIMode.OFF
+
+
+def test_reset_and_stop_do_not_exist_on_the_500() -> None:
+    host = make(profile=ROOMBA500)
+    host.send(bytes([7]), bytes([173]))
+    assert host.sim.mode is OIMode.SAFE
+    assert host.sim.ignored_bytes == 2
+
+
+def test_roomba600_reports_mode_plus_one_as_its_profile_says() -> None:
+    assert ROOMBA600.reports_mode_plus_one and not CREATE2.reports_mode_plus_one
+    host = make(profile=ROOMBA600, mode="passive")
+    assert mode_of(host) == 2
+    host.send(C.full())
+    assert mode_of(host) == 4
+
+
+def test_safe_mode_cliff_while_driving_forward_drops_to_passive() -> None:
+    text = """
+rooms: [[[0, 0], [4, 0], [4, 4], [0, 4]]]
+drops: [{rect: [3.0, 0, 4, 4]}]
+robot: {start: {at: [2, 2], heading: 0}}
+"""
+    host = make(text)
+    host.stream([9, 10, 11, 12, 35, 41, 42])
+    host.send(C.drive_direct(200, 200))
+    frames = host.frames(5.0)
+    last = frames[-1]
+    assert last.oi_mode is OIMode.PASSIVE
+    assert last.cliff_front_left and last.cliff_front_right
+    assert host.sim.x < 3000.0  # stopped before the centre reached the edge
+    assert any("cliff while driving forward" in e.detail for e in host.sim.events)
+
+
+def test_full_mode_has_no_cliff_safety_and_the_robot_falls() -> None:
+    text = """
+rooms: [[[0, 0], [4, 0], [4, 4], [0, 4]]]
+drops: [{rect: [3.0, 0, 4, 4]}]
+robot: {start: {at: [2, 2], heading: 0}}
+"""
+    host = make(text, mode="full")
+    host.send(C.drive_direct(200, 200))
+    host.run(8.0)
+    assert host.sim.mode is OIMode.FULL
+    assert host.sim.fallen
+    assert host.query([7])[7] & 0b1100 == 0b1100
+
+
+def test_safe_mode_wheel_drop_drops_to_passive() -> None:
+    text = """
+rooms: [[[0, 0], [4, 0], [4, 4], [0, 4]]]
+robot: {start: {at: [2, 2], heading: 0}}
+events: [{at: 0.5, kind: lift, duration: 1.0}]
+"""
+    host = make(text)
+    host.run(0.6)
+    assert host.sim.mode is OIMode.PASSIVE
+    reply = host.query([7, 9, 10, 11, 12])
+    assert reply.bumps.wheel_drop_left and reply.bumps.wheel_drop_right
+    assert reply.any_cliff
+
+
+def test_safe_mode_powered_charger_drops_to_passive_but_full_does_not() -> None:
+    host = make(DOCK_WORLD, start=docked_start())
+    host.run(0.1)
+    assert host.sim.mode is OIMode.PASSIVE
+    host = make(DOCK_WORLD, start=docked_start(), mode="full")
+    host.run(0.1)
+    assert host.sim.mode is OIMode.FULL
+
+
+def test_passive_sleeps_after_five_minutes_idle_and_start_wakes_it() -> None:
+    host = make(mode="passive")
+    host.stream([35])
+    host.run(299.0)
+    assert host.frames(0.3)
+    host.run(1.0)
+    assert host.sim.asleep
+    assert host.frames(0.3) == []
+    host.send(C.sensors(35))
+    assert host.sim.read() == b""
+    host.send(C.start())
+    assert not host.sim.asleep
+    assert mode_of(host) == OIMode.PASSIVE
+
+
+def test_safe_mode_never_sleeps() -> None:
+    host = make()
+    host.run(400.0)
+    assert not host.sim.asleep
+
+
+def test_clean_spot_max_seek_dock_lead_to_passive_with_a_builtin_motion() -> None:
+    for command in (C.clean(), C.spot(), C.max_clean()):
+        host = make()
+        host.send(command)
+        assert host.sim.mode is OIMode.PASSIVE
+        host.run(2.0)
+        assert host.sim.pose != pose(2, 2, 0)
+        assert host.sim.violations == []
+
+
+def test_power_puts_the_robot_to_sleep() -> None:
+    host = make()
+    host.send(C.power())
+    assert host.sim.asleep
+    host.send(C.sensors(35))
+    assert host.sim.read() == b""
