@@ -58,7 +58,7 @@ def build(node: Node) -> Behaviour:
     if kind == "oneshot":
         policy = (
             py_trees.common.OneShotPolicy.ON_COMPLETION
-            if options.get("on") == "completion"
+            if options.get("policy") == "on_completion"
             else py_trees.common.OneShotPolicy.ON_SUCCESSFUL_COMPLETION
         )
         return py_trees.decorators.OneShot(name, child, policy)

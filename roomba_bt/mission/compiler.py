@@ -858,7 +858,7 @@ class Compiler:
             "repeat": {"times": (INT, False), "for": (DURATION, False)},
             "timeout": {"after": (DURATION, True)},
             "delay": {"for": (DURATION, True)},
-            "oneshot": {"on": (enum("success", "completion"), False)},
+            "oneshot": {"policy": (enum("on_success", "on_completion"), False)},
             "for_each": {"key": (STR, True), "in": (VALUE_TYPES["str"], True)},
         }.get(word, {})
         options: dict[str, Any] = {}

@@ -98,7 +98,7 @@ def mission_schema(registry: Registry | None = None) -> dict[str, Any]:
         },
         "timeout": {"after": VALUE_TYPES["duration"].schema()},
         "delay": {"for": VALUE_TYPES["duration"].schema()},
-        "oneshot": {"on": {"enum": ["success", "completion"]}},
+        "oneshot": {"policy": {"enum": ["on_success", "on_completion"]}},
         "for_each": {"key": {"type": "string"}, "in": {"type": "array"}},
     }
     required_options = {"retry": ["times"], "timeout": ["after"], "delay": ["for"],

@@ -7,12 +7,12 @@ from pathlib import Path
 import py_trees
 import pytest
 from py_trees.common import Status
+from roomba_bt_wallfollow import WallFollow
 
 from roomba_bt.behaviours import default_registry
 from roomba_bt.mission import load_mission
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.robot.interface import StubRobot
-from roomba_bt_wallfollow import WallFollow
 
 EXAMPLE = Path(__file__).resolve().parents[3] / "missions" / "examples" / "wall_follow.yaml"
 

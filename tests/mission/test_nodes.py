@@ -1,0 +1,318 @@
+"""Every node kind of the language, compiled from YAML and ticked against a stub robot."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import py_trees
+import pytest
+from py_trees.common import Status
+
+from roomba_bt.behaviours.declare import read_key
+from roomba_bt.mission import CompiledMission
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.robot.interface import StubRobot
+
+Compile = Callable[..., CompiledMission]
+R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
+
+
+class Run:
+    """A compiled mission on a stub robot: ``run.tick(bump=1)`` sets packet 7 and ticks."""
+
+    def __init__(self, mission: CompiledMission) -> None:
+        self.mission = mission
+        self.robot = StubRobot(mode=OIMode.SAFE)
+        mission.setup(self.robot)
+
+    def tick(self, **packets: int) -> Status:
+        values = {7: packets.get("bump", 0), 8: packets.get("wall", 0), 35: 2, 43: 0, 44: 0}
+        self.robot.set_frame(values)
+        self.mission.root.tick_once()
+        return self.mission.root.status
+
+    def ticks(self, n: int, **packets: int) -> list[Status]:
+        return [self.tick(**packets) for _ in range(n)]
+
+    def sent(self) -> list[list[int]]:
+        return [list(c.data) for c in self.robot.flush()]
+
+
+def run(compile_text: Compile, text: str, params: dict[str, str] | None = None) -> Run:
+    return Run(compile_text(text, params))
+
+
+def test_sequence_with_memory_does_not_recheck_finished_children(compile_text: Compile) -> None:
+    r = run(compile_text, "tree: {sequence: [{bump: left}, {wait: 30ms}]}")
+    assert r.tick(bump=2) is R
+    assert r.tick(bump=0) is R  # the bump is not checked again
+    assert r.tick(bump=0) is S
+    assert isinstance(r.mission.root, py_trees.composites.Sequence)
+    assert r.mission.root.memory is True
+
+
+def test_reactive_sequence_rechecks_every_tick(compile_text: Compile) -> None:
+    r = run(compile_text, "tree: {reactive_sequence: [{bump: left}, {wait: 1s}]}")
+    assert r.tick(bump=2) is R
+    assert r.tick(bump=0) is F
+    assert r.mission.root.memory is False
+
+
+def test_memory_can_be_chosen_explicitly(compile_text: Compile) -> None:
+    r = run(compile_text, "tree: {sequence: {memory: false, children: [wall, {wait: 1s}]}}")
+    assert r.mission.root.memory is False
+    assert r.tick(wall=1) is R
+    assert r.tick(wall=0) is F
+
+
+def test_fallback_tries_alternatives(compile_text: Compile) -> None:
+    r = run(compile_text, "tree: {fallback: [{bump: left}, {bump: right}]}")
+    assert r.tick(bump=1) is S
+    assert r.tick(bump=0) is F
+    assert isinstance(r.mission.root, py_trees.composites.Selector)
+
+
+def test_selector_is_a_synonym_and_reactive_fallback_preempts(compile_text: Compile) -> None:
+    r = run(compile_text, "tree: {reactive_fallback: [{bump: any}, {wait: 1s}]}")
+    assert r.tick() is R
+    assert r.tick(bump=1) is S  # the higher-priority condition took over
+    r = run(compile_text, "tree: {selector: [{bump: any}, {wait: 1s}]}")
+    assert r.mission.root.memory is True
+
+
+@pytest.mark.parametrize(("policy", "expected"), [("all", [R, R, S]), ("one", [S])])
+def test_parallel_policies(compile_text: Compile, policy: str, expected: list[Status]) -> None:
+    r = run(
+        compile_text, f"tree: {{parallel: {{policy: {policy}, children: [{{wait: 30ms}}, wall]}}}}"
+    )
+    assert r.ticks(len(expected), wall=1) == expected
+
+
+def test_parallel_selected_names_its_children(compile_text: Compile) -> None:
+    r = run(
+        compile_text,
+        """
+        tree:
+          parallel:
+            policy: selected
+            selected: [quick]
+            children:
+              - {wait: 1s, name: slow}
+              - {wait: 30ms, name: quick}
+        """,
+    )
+    assert r.ticks(3) == [R, R, S]
+
+
+def test_parallel_short_form_is_policy_all(compile_text: Compile) -> None:
+    r = run(compile_text, "tree: {parallel: [{wait: 15ms}, wall]}")
+    assert r.ticks(2, wall=1) == [R, S]
+
+
+def test_retry(compile_text: Compile) -> None:
+    r = run(compile_text, "tree: {retry: {times: 2, do: wall}}")
+    assert r.tick(wall=0) is R
+    assert r.tick(wall=0) is F
+    r = run(compile_text, "tree: {retry: {times: 2, do: wall}}")
+    assert r.ticks(2, wall=1) == [S, S]
+
+
+def test_repeat_times_and_for_a_duration(compile_text: Compile) -> None:
+    r = run(compile_text, "tree: {repeat: {times: 2, do: wall}}")
+    assert r.ticks(2, wall=1) == [R, S]
+    r = run(compile_text, "tree: {repeat: {for: 45ms, do: wall}}")
+    assert r.ticks(4, wall=1) == [R, R, R, S]
+    r = run(compile_text, "tree: {repeat: {do: wall}}")
+    assert r.ticks(5, wall=1) == [R] * 5
+    assert r.tick(wall=0) is F
+
+
+def test_timeout_counts_mission_time(compile_text: Compile) -> None:
+    r = run(compile_text, "tree: {timeout: {after: 30ms, do: {wait: 1s}}}")
+    assert r.ticks(3) == [R, R, F]
+
+
+def test_delay(compile_text: Compile) -> None:
+    r = run(compile_text, "tree: {delay: {for: 30ms, do: wall}}")
+    assert r.ticks(3, wall=1) == [R, R, S]
+
+
+def test_inverter_and_forced_results(compile_text: Compile) -> None:
+    assert run(compile_text, "tree: {inverter: wall}").tick(wall=1) is F
+    assert run(compile_text, "tree: {inverter: {do: wall}}").tick(wall=0) is S
+    assert run(compile_text, "tree: {force_success: wall}").tick(wall=0) is S
+    assert run(compile_text, "tree: {force_failure: {bump: any}}").tick(bump=1) is F
+
+
+def test_oneshot_runs_its_child_once(compile_text: Compile) -> None:
+    r = run(compile_text, "tree: {oneshot: {policy: on_completion, do: {log: hello}}}")
+    assert r.tick() is S
+    assert r.tick() is S
+    r = run(compile_text, "tree: {oneshot: wall}")
+    assert isinstance(r.mission.root, py_trees.decorators.OneShot)
+    assert r.tick(wall=0) is F
+    assert r.tick(wall=1) is S
+
+
+def test_for_each_walks_waypoints_through_the_blackboard(compile_text: Compile) -> None:
+    r = run(
+        compile_text,
+        """
+        blackboard:
+          leg: {fields: {distance: distance, turn: angle}}
+          last: distance
+        tree:
+          for_each:
+            key: leg
+            in: [{distance: 1 m, turn: 90deg}, {distance: 50cm, turn: -90deg}]
+            do: {set: {key: last, value: 0 mm}}
+        """,
+    )
+    assert r.ticks(2) == [R, S]
+    assert read_key("leg") == {"distance": 500.0, "turn": -90.0}
+
+
+def test_until_guard_on_any_node_halts_a_drive(compile_text: Compile) -> None:
+    r = run(
+        compile_text,
+        "tree: {sequence: [{mode: safe}, {drive: {velocity: 100 mm/s}, until: {bump: any}}]}",
+    )
+    assert r.tick() is R
+    assert r.sent() == [[137, 0, 100, 0x80, 0]]
+    assert r.tick(bump=1) is S
+    assert r.sent() == [[137, 0, 0, 0, 0]]
+
+
+def test_while_guard_fails_when_its_condition_stops_holding(compile_text: Compile) -> None:
+    r = run(compile_text, "tree: {wait: 1s, while: {inverter: {bump: any}}}")
+    assert r.tick() is R
+    assert r.tick(bump=2) is F
+
+
+def test_guard_may_be_a_subtree_of_conditions(compile_text: Compile) -> None:
+    r = run(compile_text, "tree: {wait: 1s, until: {fallback: [{bump: left}, wall]}}")
+    assert r.tick() is R
+    assert r.tick(wall=1) is S
+
+
+def test_name_modifier_names_the_node(compile_text: Compile) -> None:
+    r = run(compile_text, "tree: {sequence: [wall], name: main}")
+    assert r.mission.root.name == "main"
+
+
+def test_subtrees_with_parameters(compile_text: Compile) -> None:
+    mission = compile_text(
+        """
+        subtrees:
+          back_off:
+            parameters: {speed: {type: speed, default: 100 mm/s}}
+            tree: {drive: {velocity: "-${speed}", duration: 15ms}}
+        tree:
+          sequence:
+            - mode: safe
+            - subtree: back_off
+            - subtree: {id: back_off, speed: 200 mm/s}
+        """
+    )
+    r = Run(mission)
+    r.tick()
+    assert r.sent() == [[137, 0xFF, 0x9C, 0x80, 0x00]]  # -100 mm/s
+    r.tick()  # the first back-off ends (halt) and the second starts: the last one wins
+    assert r.sent() == [[137, 0xFF, 0x38, 0x80, 0x00]]  # -200 mm/s
+
+
+def test_include_brings_subtrees(mission_file: Callable[..., Path]) -> None:
+    from roomba_bt.mission import load_mission
+
+    mission_file("subtrees:\n  touch: {tree: {bump: any}}\n", "lib/common.yaml")
+    path = mission_file("include: [lib/common.yaml]\ntree: {subtree: touch}\n")
+    r = Run(load_mission(path))
+    assert r.tick(bump=1) is S
+
+
+def test_plugin_by_path(mission_file: Callable[..., Path]) -> None:
+    from roomba_bt.mission import load_mission
+
+    mission_file(
+        "from roomba_bt.behaviours import Condition, declare\n"
+        "@declare('always_true', kind='condition', reads=(8,))\n"
+        "class AlwaysTrue(Condition):\n"
+        "    '''Always.'''\n"
+        "    def check(self, snapshot):\n"
+        "        return True\n",
+        "my_behaviour.py",
+    )
+    mission = load_mission(mission_file("plugins: [./my_behaviour.py]\ntree: always_true\n"))
+    assert Run(mission).tick() is S
+    assert 8 in mission.packets
+
+
+def test_parameters_defaults_and_overrides(compile_text: Compile) -> None:
+    text = """
+        parameters:
+          speed: {type: speed, default: 200 mm/s}
+          laps: {type: int, default: 1}
+          loud: {type: bool, default: false}
+          side: {type: enum, choices: [left, right], default: left}
+        tree: {sequence: [{mode: safe}, {drive: {velocity: "${speed}"}}]}
+    """
+    assert compile_text(text).parameters == {
+        "speed": 200.0,
+        "laps": 1,
+        "loud": False,
+        "side": "left",
+    }
+    overridden = compile_text(
+        text, {"speed": "0.25 m/s", "laps": "3", "loud": "true", "side": "right"}
+    )
+    assert overridden.parameters == {"speed": 250.0, "laps": 3, "loud": True, "side": "right"}
+    r = Run(compile_text(text, {"speed": "150mm/s"}))
+    r.tick()
+    assert r.sent() == [[137, 0, 150, 0x80, 0]]
+
+
+def test_blackboard_initial_values_set_and_check(compile_text: Compile) -> None:
+    mission = compile_text(
+        """
+        blackboard:
+          count: {type: int, initial: 1}
+        tree:
+          sequence:
+            - check: {key: count, op: "==", value: 1}
+            - set: {key: count, value: 2}
+            - check: {key: count, value: 2}
+        """
+    )
+    assert mission.blackboard_initial == {"count": 1}
+    assert Run(mission).tick() is S
+    assert read_key("count") == 2
+
+
+def test_compiled_mission_reports_packets_modes_and_source(compile_text: Compile) -> None:
+    mission = compile_text(
+        """
+        mission: demo
+        description: a demo
+        tree:
+          sequence:
+            - mode: full
+            - drive: {distance: 1m}
+              until: {cliff: front_left}
+            - light_bumper: {sensor: right, threshold: 100}
+        """
+    )
+    assert mission.name == "demo"
+    assert mission.description == "a demo"
+    assert mission.packets == (10, 43, 44, 51)
+    assert mission.modes_needed == {OIMode.SAFE, OIMode.FULL}
+    assert mission.source.name == "m.yaml"
+
+
+def test_every_leaf_receives_the_robot_in_setup(compile_text: Compile) -> None:
+    mission = compile_text("tree: {sequence: [wall, {mode: safe}, {drive: {duration: 1s}}]}")
+    robot = StubRobot()
+    mission.setup(robot)
+    leaves: list[Any] = [n for n in mission.root.iterate() if hasattr(n, "robot")]
+    assert leaves and all(n.robot is robot for n in leaves)
