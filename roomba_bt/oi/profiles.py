@@ -5,8 +5,8 @@ A difference is a field here, never an ``if`` elsewhere. Each decision is explai
 
 * ``checksum_includes_header``: the 600/Create 2 spec sums the header 19 into the stream
   checksum (``19+5+29+2+25+13+0+163 = 256``); the 500 spec's worked example leaves it out
-  (``5+29+2+25+13+0+182 = 256``). The parser of the ``roomba500`` profile accepts both (its own
-  document contradicts itself and the firmware is shared with the 600); the others are strict.
+  (``5+29+2+25+13+0+182 = 256``) and so does its prose. The ``roomba500`` parser accepts both
+  (its firmware is shared with the 600, whose spec says the opposite); the others are strict.
   What a simulated robot sends follows ``checksum_includes_header``.
 * ``encoders_signed``: packets 43/44 are signed on the 600 / Create 2, unsigned on the 500.
   Odometry takes deltas modulo 2**16, so either gives the same distance.
