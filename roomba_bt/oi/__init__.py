@@ -14,14 +14,14 @@ from roomba_bt.oi.bits import (
     Overcurrents,
     Stasis,
 )
-from roomba_bt.oi.encode import Command, Note, Radius, encode
+from roomba_bt.oi.encode import Command, Note, Radius, decode_command, encode
 from roomba_bt.oi.errors import BandwidthError, EncodeError, OIError, UnsupportedCommandError
 from roomba_bt.oi.frames import FrameLayout, SensorFrame, layout_for, stream_frame_size
 from roomba_bt.oi.ir import IRCharacter, IRSource, LighthouseBeam
-from roomba_bt.oi.modes import OIMode
-from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME, ArgSpec, CommandSpec
+from roomba_bt.oi.modes import OIMode, mode_from_packet
+from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME, ArgSpec, CommandSpec, TailSpec
 from roomba_bt.oi.packets import GROUP_SIZES, GROUPS, PACKETS, PACKETS_BY_NAME, PacketSpec
-from roomba_bt.oi.profiles import PROFILES, RobotProfile, get_profile
+from roomba_bt.oi.profiles import PROFILES, RobotProfile, command_warning, get_profile
 from roomba_bt.oi.stream import (
     ReplyParser,
     StreamParser,
@@ -63,13 +63,17 @@ __all__ = [
     "SensorFrame",
     "Stasis",
     "StreamParser",
+    "TailSpec",
     "UnsupportedCommandError",
     "check_bandwidth",
+    "command_warning",
     "commands",
+    "decode_command",
     "decode_reply",
     "encode",
     "get_profile",
     "layout_for",
+    "mode_from_packet",
     "stream_budget",
     "stream_frame_size",
 ]
