@@ -786,7 +786,7 @@ class Connection:
         stopped = True
         if self.safe_stopped is True:
             pass  # already stopped: a second stop sequence would only add bytes
-        elif self.transport.is_open and self.modes.mode is not OIMode.OFF:
+        elif self.modes.mode is not OIMode.OFF:  # safe_stop reports a port already gone
             stopped = self.safe_stop()
         self.stop_reader()
         self.transport.close()

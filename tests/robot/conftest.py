@@ -19,6 +19,7 @@ from roomba_bt.oi.profiles import CREATE2, RobotProfile, get_profile
 from roomba_bt.robot.connection import Connection
 
 from .fake_robot import FakeRobot, PtyEndpoint, TcpEndpoint
+from .sim_backend import SimRobot, make_sim_link, sim_pty_server, simulator_missing
 
 REAL_PORT_ENV = "ROOMBA_BT_PORT"
 
@@ -27,21 +28,30 @@ REAL_PORT_ENV = "ROOMBA_BT_PORT"
 class Link:
     name: str
     url: str
-    robot: FakeRobot | None
+    robot: FakeRobot | SimRobot | None
     profile: RobotProfile = CREATE2
     opened: list[Connection] = field(default_factory=list)
+    in_process: bool = False  # the simulator's virtual clock: reads belong to the caller
 
     def connect(self, **kwargs: Any) -> Connection:
         kwargs.setdefault("profile", self.profile)
-        connection = Connection.open(self.url, **kwargs)
+        if isinstance(self.robot, SimRobot):
+            kwargs.pop("write_timeout", None)
+            connection = Connection(self.robot.link, **kwargs)
+        else:
+            connection = Connection.open(self.url, **kwargs)
         self.opened.append(connection)
         return connection
 
-    def scripted(self) -> FakeRobot:
-        """The fake robot, or skip: this test scripts the far end."""
+    def scripted(self) -> Any:
+        """The robot at the far end (FakeRobot interface), or skip: this test scripts it."""
         if self.robot is None:
             pytest.skip(f"the {self.name} backend has no scriptable far end")
         return self.robot
+
+    def needs_threads(self) -> None:
+        if self.in_process:
+            pytest.skip("in-process simulator: its reads drive the virtual clock (no reader)")
 
 
 def make_fake_link(kind: str, profile: RobotProfile = CREATE2, **robot_kwargs: Any) -> Link:
@@ -55,7 +65,7 @@ def _close(link: Link) -> None:
         connection.close()
     if link.robot is not None:
         link.robot.stop()
-        endpoint = link.robot.endpoint
+        endpoint = getattr(link.robot, "endpoint", None)
         if isinstance(endpoint, PtyEndpoint):
             endpoint.close_slave()
 
@@ -78,7 +88,7 @@ def fake_links() -> Iterator[Any]:
         _close(link)
 
 
-BACKENDS = ["pty", "tcp", "real"]
+BACKENDS = ["pty", "tcp", "sim", "sim-pty", "real"]
 
 
 @pytest.fixture(params=BACKENDS)
@@ -93,5 +103,20 @@ def link(request: pytest.FixtureRequest, fake_links: Any) -> Iterator[Link]:
         real = Link("real", port, None, profile)
         yield real
         _close(real)
+        return
+    if kind in ("sim", "sim-pty"):
+        missing = simulator_missing()
+        if missing is not None:
+            pytest.skip(f"simulator backend: {missing}")
+        if kind == "sim":
+            transport, robot = make_sim_link(CREATE2)
+            sim = Link("sim", transport.name, robot, CREATE2, in_process=True)
+            yield sim
+            _close(sim)
+            return
+        with sim_pty_server(CREATE2) as address:
+            served = Link("sim-pty", address, None, CREATE2)
+            yield served
+            _close(served)
         return
     yield fake_links(kind)

@@ -108,14 +108,14 @@ def test_fall_to_passive_refuses_the_next_drive_and_names_the_cause(link: Link) 
         robot.fall_to_passive({7: 0b0100})  # right wheel dropped
         frames_until(connection, lambda: connection.mode is OIMode.PASSIVE)
         fallback = connection.last_fallback
-        assert fallback is not None and fallback.cause == "wheel drop"
+        assert fallback is not None and fallback.cause.startswith("wheel drop")
         assert fallback.previous is OIMode.SAFE
         sent_before = len(robot.received)
         with pytest.raises(ModeError) as refused:
             connection.send(oi.drive(150, Radius.STRAIGHT))
         message = str(refused.value)
         assert message.startswith("drive needs Safe or Full; the robot is in Passive since ")
-        assert message.endswith(", after a wheel drop")
+        assert ", after a wheel drop" in message
         connection.poll(0.05)
         assert len(robot.received) == sent_before  # nothing of it reached the wire
         assert connection.counters.commands_refused == 1
@@ -225,6 +225,7 @@ def test_lost_port_is_reported_at_once_and_close_does_not_hang(link: Link) -> No
 
 
 def test_background_reader_queues_frames_and_wakes_waiters(link: Link) -> None:
+    link.needs_threads()
     with link.connect() as connection:
         connection.start("safe", PACKETS)
         connection.start_reader()
@@ -238,6 +239,7 @@ def test_background_reader_queues_frames_and_wakes_waiters(link: Link) -> None:
 
 
 def test_background_reader_runs_the_watchdog(link: Link) -> None:
+    link.needs_threads()
     robot = link.scripted()
     with link.connect(watchdog=0.1) as connection:
         connection.start("safe", PACKETS)
