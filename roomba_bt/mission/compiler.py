@@ -413,7 +413,11 @@ class Compiler:
                 continue
             target = (path.parent / text).resolve()
             if not target.is_file():
-                self.ctx.error(iloc.at(f"plugin file {text!r} not found (looked at {target})"))
+                self.ctx.error(
+                    iloc.at(
+                        f"plugin file {text!r} not found (paths are relative to the file naming it)"
+                    )
+                )
                 continue
             registry, error = self.ctx.registry.with_file(target)
             if error is not None:
@@ -438,7 +442,11 @@ class Compiler:
                 self.ctx.error(iloc.at(f"include cycle: {' -> '.join([*chain, target.name])}"))
                 continue
             if not target.is_file():
-                self.ctx.error(iloc.at(f"included file {text!r} not found (looked at {target})"))
+                self.ctx.error(
+                    iloc.at(
+                        f"included file {text!r} not found (paths are relative to the file naming it)"
+                    )
+                )
                 continue
             self._include(target, iloc)
 
