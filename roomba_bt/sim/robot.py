@@ -276,7 +276,6 @@ class Simulator:
         self._half_base = profile.wheel_base_mm / 2.0
         self._current = 0.0
         self._clearance = 0.0
-        self._quantised = (0.0, 0.0, 0.0, 0.0)
         self._power_key: tuple[object, ...] | None = None
         self._disconnect_at = (
             math.inf if self.faults.disconnect_at is None else self.faults.disconnect_at
@@ -406,19 +405,22 @@ class Simulator:
 
     def _on_drive(self, args: bytes) -> None:
         velocity, radius = struct.unpack(">hh", args)
-        left, right = drive_wheel_speeds(velocity, radius, self.profile.wheel_base_mm)
+        # The speed controller steps the commanded velocity; the radius sets the wheel ratio.
+        speed = _quantise(velocity)
+        left, right = drive_wheel_speeds(speed, radius, self.profile.wheel_base_mm)
         self.requested_left, self.requested_right = left, right
         v = self.values
         v[39] = max(-500, min(500, velocity))
         v[40] = radius
-        v[41] = round(right)
-        v[42] = round(left)
+        asked_left, asked_right = drive_wheel_speeds(velocity, radius, self._half_base * 2.0)
+        v[41] = round(asked_right)
+        v[42] = round(asked_left)
 
     def _on_drive_direct(self, args: bytes) -> None:
         right, left = struct.unpack(">hh", args)
         right = max(-500, min(500, right))
         left = max(-500, min(500, left))
-        self.requested_left, self.requested_right = float(left), float(right)
+        self.requested_left, self.requested_right = _quantise(left), _quantise(right)
         v = self.values
         v[39] = (left + right) // 2
         v[40] = -32768 if left == right else 0
@@ -428,8 +430,8 @@ class Simulator:
     def _on_drive_pwm(self, args: bytes) -> None:
         right, left = struct.unpack(">hh", args)
         scale = MAX_WHEEL_SPEED_MM_S / 255.0
-        self.requested_right = max(-255, min(255, right)) * scale
-        self.requested_left = max(-255, min(255, left)) * scale
+        self.requested_right = _quantise(max(-255, min(255, right)) * scale)
+        self.requested_left = _quantise(max(-255, min(255, left)) * scale)
         v = self.values
         v[41] = round(self.requested_right)
         v[42] = round(self.requested_left)
@@ -607,10 +609,7 @@ class Simulator:
         else:
             left = right = 0.0
         if left or right or self.left_speed or self.right_speed:
-            q = self._quantised
-            if left != q[0] or right != q[1]:
-                q = self._quantised = (left, right, _quantise(left), _quantise(right))
-            self._move(q[2], q[3], dt)
+            self._move(left, right, dt)
         if self._geometry_dirty:
             self._sense()
         if mode is OIMode.SAFE:
@@ -1165,14 +1164,14 @@ def _quantise(speed: float) -> float:
     return max(-MAX_WHEEL_SPEED_MM_S, min(MAX_WHEEL_SPEED_MM_S, q))
 
 
-def drive_wheel_speeds(velocity: int, radius: int, wheel_base_mm: float) -> tuple[float, float]:
+def drive_wheel_speeds(velocity: float, radius: int, wheel_base_mm: float) -> tuple[float, float]:
     """(left, right) wheel speeds in mm/s for Drive (137).
 
     Radius semantics from the spec: positive turns left (counter-clockwise), ``-32768``
     (0x8000) and ``32767`` (0x7FFF) drive straight, ``-1`` spins clockwise and ``1``
     counter-clockwise in place. Radii outside -2000..2000 are treated as straight (the
     spec's range), and radius 0 as straight too. Each wheel is limited to 500 mm/s."""
-    velocity = max(-500, min(500, velocity))
+    velocity = float(max(-500.0, min(500.0, velocity)))
     if radius in (-32768, 32767, 0) or not -2000 <= radius <= 2000:
         return float(velocity), float(velocity)
     if radius == -1:

@@ -1,0 +1,193 @@
+"""Differential drive on 15 ms steps: radius semantics, speed steps, encoders, odometry
+packets, requested-velocity echo, stasis, currents and the battery."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from roomba_bt.oi import commands as C
+from roomba_bt.oi.bits import motor_bits
+from roomba_bt.oi.encode import Radius
+from roomba_bt.oi.odometry import MM_PER_COUNT, OLD_FIRMWARE_ANGLE_FACTOR, encoder_delta
+from roomba_bt.oi.profiles import CREATE2, ROOMBA500, ROOMBA600
+from roomba_bt.sim import drive_wheel_speeds
+from roomba_bt.sim.robot import WHEEL_SPEED_STEP_MM_S
+
+from .helpers import make
+
+BIG = """
+rooms: [[[-50, -50], [50, -50], [50, 50], [-50, 50]]]
+robot: {start: {at: [0, 0], heading: 0}}
+"""
+
+
+def heading_change(command: bytes, seconds: float = 1.0) -> tuple[float, float, float]:
+    host = make(BIG, mode="full")
+    host.send(command)
+    host.run(seconds)
+    return host.sim.x, host.sim.y, math.degrees(host.sim.theta)
+
+
+def test_positive_radius_turns_left_negative_right() -> None:
+    x, y, theta = heading_change(C.drive(200, 500).data)
+    assert theta > 15 and y > 0
+    x, y, theta = heading_change(C.drive(200, -500).data)
+    assert theta < -15 and y < 0
+
+
+@pytest.mark.parametrize("radius", [Radius.STRAIGHT, Radius.STRAIGHT_ALT])
+def test_special_radii_drive_straight(radius: Radius) -> None:
+    x, y, theta = heading_change(C.drive(200, radius).data)
+    assert theta == 0.0 and y == 0.0 and x > 150
+
+
+def test_radius_2000_is_an_arc_not_straight() -> None:
+    # [137, 0, 200, 7, 208]: a peer sends this for "straight" and drives a 2 m arc
+    x, y, theta = heading_change(bytes([137, 0, 200, 7, 208]), 3.0)
+    assert theta > 10
+
+
+def test_spin_radii_turn_in_place() -> None:
+    x, y, theta = heading_change(C.spin(200, clockwise=True).data)
+    assert abs(x) < 1e-9 and abs(y) < 1e-9 and theta < -40
+    x, y, theta = heading_change(C.spin(200, clockwise=False).data)
+    assert abs(x) < 1e-9 and theta > 40
+
+
+def test_drive_radius_geometry() -> None:
+    left, right = drive_wheel_speeds(200, 500, 235.0)
+    assert (left + right) / 2 == pytest.approx(200)
+    assert (right - left) / 235.0 == pytest.approx(200 / 500)
+    assert drive_wheel_speeds(-200, -1, 235.0) == (-200.0, 200.0)
+    assert drive_wheel_speeds(600, 32767, 235.0) == (500.0, 500.0)
+
+
+def test_drive_direct_right_faster_turns_left() -> None:
+    x, y, theta = heading_change(C.drive_direct(300, 100).data)
+    assert theta > 20
+
+
+def test_drive_pwm_full_scale_is_about_500_mm_s() -> None:
+    x, y, theta = heading_change(C.drive_pwm(255, 255).data)
+    assert x == pytest.approx(500 * 67 * 0.015)  # 1 s is 67 steps of 15 ms
+
+
+def test_wheel_speeds_move_in_steps_of_28_5_mm_s() -> None:
+    host = make(BIG, mode="full")
+    host.send(C.drive_direct(10, 10))
+    host.run(1.0)
+    assert host.sim.x == 0.0  # below half a step: the wheels do not turn
+    host.send(C.drive_direct(100, 100))
+    host.run(1.0)
+    assert host.sim.x == pytest.approx(4 * WHEEL_SPEED_STEP_MM_S * 67 * 0.015)
+
+
+def test_encoders_count_mm_over_pi_72_over_508_8_and_odometry_agrees() -> None:
+    host = make(BIG, mode="full")
+    host.stream([43, 44, 19])
+    host.send(C.drive_direct(200, 200))
+    frames = host.frames(2.0)
+    counts = sum(encoder_delta(a[43], b[43]) for a, b in zip(frames, frames[1:], strict=False))
+    travelled = host.sim.x
+    before_first_frame = 7 * WHEEL_SPEED_STEP_MM_S * 0.015  # 199.5 mm/s for one step
+    assert counts * MM_PER_COUNT == pytest.approx(
+        travelled - before_first_frame, abs=2 * MM_PER_COUNT
+    )
+    assert sum(f[19] for f in frames) == pytest.approx(travelled, abs=1.0)
+
+
+@pytest.mark.parametrize("profile", [CREATE2, ROOMBA600, ROOMBA500], ids=lambda p: p.name)
+def test_encoders_roll_over_signed_on_600_unsigned_on_500(profile) -> None:  # type: ignore[no-untyped-def]
+    host = make(BIG, profile=profile, mode="full")
+    host.stream([43, 44])
+    host.send(C.drive_direct(-500, -500))
+    frames = host.frames(30.0)  # 15 m backwards: more than 32768 counts
+    values = [f[43] for f in frames]
+    if profile.encoders_signed:
+        assert min(values) < 0 and max(values) > 0 and max(values) <= 32767
+    else:
+        assert min(values) >= 0 and max(values) <= 65535
+    deltas = [encoder_delta(a, b) for a, b in zip(values, values[1:], strict=False)]
+    assert all(-20 <= d <= 0 for d in deltas)
+    assert sum(deltas) * MM_PER_COUNT == pytest.approx(-15000 + 500 * 0.015, abs=20)
+
+
+def test_distance_and_angle_are_since_last_read() -> None:
+    host = make(BIG, mode="full")
+    host.send(C.spin(100, clockwise=False))
+    host.run(2.0)
+    angle = host.query([20])[20]
+    assert angle == pytest.approx(math.degrees(host.sim.theta), abs=1)
+    assert host.query([20])[20] == 0  # read: reset
+    host.send(C.drive_direct(200, 200))
+    host.run(1.0)
+    assert host.query([19])[19] == pytest.approx(199.5 - 2 * 0.0, abs=4)
+    assert host.query([19])[19] == 0
+
+
+def test_old_firmware_angle_is_scaled_by_0_324056() -> None:
+    host = make(BIG, mode="full", old_firmware_angle=True)
+    host.send(C.spin(100, clockwise=False))
+    host.run(2.0)
+    degrees = math.degrees(host.sim.theta)
+    raw = host.query([20])[20]
+    assert raw == pytest.approx(degrees * OLD_FIRMWARE_ANGLE_FACTOR, abs=1)
+
+
+def test_requested_velocities_are_echoed_in_39_to_42() -> None:
+    host = make(BIG, mode="full")
+    host.send(C.drive(-200, 500))
+    reply = host.query([39, 40, 41, 42])
+    assert reply[39] == -200 and reply[40] == 500
+    assert reply[41] < reply[42] < 0  # backwards, turning: the right wheel is faster
+    host.send(C.drive(100, Radius.STRAIGHT))
+    assert host.query([40])[40] == -32768
+    host.send(C.drive_direct(150, -50))
+    reply = host.query([39, 41, 42])
+    assert (reply[41], reply[42], reply[39]) == (150, -50, 50)
+
+
+def test_stasis_shows_forward_progress_only_when_moving_freely() -> None:
+    text = """
+rooms: [[[0, 0], [1, 0], [1, 1], [0, 1]]]
+robot: {start: {at: [0.5, 0.5], heading: 0}}
+"""
+    host = make(text, mode="full")
+    assert host.query([58])[58] == 0
+    host.send(C.drive_direct(200, 200))
+    host.run(0.3)
+    assert host.query([58])[58] == 1
+    host.run(3.0)  # pushed against the wall
+    assert host.query([58, 7])[58] == 0
+
+
+def test_currents_wheels_brushes_and_overcurrent_when_stalled() -> None:
+    text = """
+rooms: [[[0, 0], [1, 0], [1, 1], [0, 1]]]
+robot: {start: {at: [0.5, 0.5], heading: 0}}
+"""
+    host = make(text, mode="full")
+    idle = host.query([23, 54, 55, 56, 57])
+    assert idle[54] == idle[55] == idle[56] == idle[57] == 0
+    host.send(C.drive_direct(200, 200), C.motors(motor_bits(main_brush=True, side_brush=True)))
+    host.run(0.2)
+    moving = host.query([23, 54, 55, 56, 57, 14])
+    assert moving[54] > 0 and moving[55] > 0 and moving[56] > 0 and moving[57] > 0
+    assert moving[23] < idle[23] < 0
+    host.run(3.0)
+    stalled = host.query([54, 14])
+    assert stalled[54] > moving[54]
+    assert stalled.overcurrents.left_wheel and stalled.overcurrents.right_wheel
+
+
+def test_battery_drains_faster_while_moving() -> None:
+    still = make(BIG, mode="full")
+    moving = make(BIG, mode="full")
+    moving.send(C.drive_direct(400, 400))
+    still.run(60.0)
+    moving.run(60.0)
+    start = still.sim.world.battery * 2696
+    assert start - moving.sim.battery_charge > start - still.sim.battery_charge > 0
+    assert moving.query([25])[25] < still.query([25])[25]

@@ -1,0 +1,164 @@
+"""Bytes in, bytes out: framing, checksums, replies, incomplete commands, the small commands."""
+
+from __future__ import annotations
+
+import pytest
+
+from roomba_bt.oi import commands as C
+from roomba_bt.oi.bits import led_bits
+from roomba_bt.oi.encode import Note
+from roomba_bt.oi.frames import layout_for
+from roomba_bt.oi.packets import GROUPS, PACKETS, VALID_PACKET_IDS, data_size
+from roomba_bt.oi.profiles import PROFILES, RobotProfile
+from roomba_bt.oi.stream import StreamParser
+
+from .helpers import Host, make
+
+PACKET_LISTS = [[100], [6], [0, 1, 2, 3, 4, 5], [101, 106, 107], [7, 19, 20, 35, 43, 44], [22]]
+
+
+def expected_frame(host: Host, ids: list[int]) -> bytes:
+    values = {pid: host.sim.values[pid] for pid in PACKETS}
+    layout = layout_for(tuple(ids), host.sim.profile, True)
+    return layout.stream_frame(values, include_header=host.sim.profile.checksum_includes_header)
+
+
+@pytest.mark.parametrize("profile", list(PROFILES.values()), ids=list(PROFILES))
+@pytest.mark.parametrize("ids", PACKET_LISTS, ids=str)
+def test_every_frame_is_the_table_layout_with_a_valid_checksum(
+    profile: RobotProfile, ids: list[int]
+) -> None:
+    host = make(profile=profile, mode="full")
+    host.stream(ids)
+    host.send(C.drive(300, 400))
+    parser = StreamParser(ids, profile)
+    bias = 0 if profile.checksum_includes_header else 19
+    for _ in range(400):  # 6 s of driving: the values change every frame
+        host.sim.step()
+        frame = host.sim.read()
+        assert frame == expected_frame(host, ids)
+        assert frame[0] == 19 and frame[1] == len(frame) - 3
+        assert (sum(frame) - bias) % 256 == 0
+        assert len(parser.feed(frame)) == 1
+    assert parser.counters.checksum_failures == 0 and parser.counters.skipped_bytes == 0
+
+
+@pytest.mark.parametrize("packet_id", sorted(VALID_PACKET_IDS))
+def test_sensors_142_replies_with_the_table_size_and_layout(packet_id: int) -> None:
+    host = make()
+    host.run(0.1)
+    host.sim.read()
+    host.send(C.sensors(packet_id))
+    reply = host.sim.read()
+    assert len(reply) == data_size(packet_id)
+    values = {pid: host.sim.values[pid] for pid in PACKETS}
+    assert reply == layout_for((packet_id,), host.sim.profile, False).pack(values)
+
+
+def test_group_sizes_match_the_spec() -> None:
+    host = make()
+    sizes = {}
+    for group in GROUPS:
+        host.send(C.sensors(group))
+        sizes[group] = len(host.sim.read())
+    assert sizes == {0: 26, 1: 10, 2: 6, 3: 10, 4: 14, 5: 12, 6: 52, 100: 80, 101: 28,
+                     106: 12, 107: 9}  # fmt: skip
+
+
+def test_query_list_149_replies_in_order_without_header_or_checksum() -> None:
+    host = make()
+    reply = host.query([35, 7, 22])
+    assert reply.oi_mode == 2 and reply[7] == 0 and reply[22] > 12000
+
+
+def test_an_invalid_packet_id_gets_no_reply() -> None:
+    host = make()
+    host.send(bytes([142, 99]))
+    assert host.sim.read() == b""
+
+
+def test_an_incomplete_command_waits_for_its_data_bytes() -> None:
+    host = make()
+    data = C.drive_direct(200, 200).data
+    for byte in data[:-1]:
+        host.send(bytes([byte]))
+        host.run(0.3)
+        assert host.sim.x == 2000.0
+    host.send(data[-1:])
+    host.run(0.3)
+    assert host.sim.x > 2030.0
+
+
+def test_variable_length_commands_wait_for_their_tails() -> None:
+    host = make()
+    song = C.song(1, [Note(60, 16), Note(62, 16), Note(64, 32)]).data
+    stream = C.stream([7, 35]).data
+    wire = song + stream
+    for i in range(len(wire)):
+        host.send(wire[i : i + 1])
+    assert host.sim.songs[1] == ((60, 16), (62, 16), (64, 32))
+    assert host.sim.stream_ids == (7, 35)
+
+
+def test_unknown_opcodes_are_skipped_byte_by_byte() -> None:
+    host = make()
+    host.send(bytes([0, 200, 255]), C.sensors(35))
+    assert host.sim.read() == bytes([2])
+    assert host.sim.ignored_bytes == 3
+
+
+def test_pause_and_resume_150() -> None:
+    host = make()
+    host.stream([35])
+    assert len(host.frames(0.3)) == 20
+    host.send(C.pause_stream())
+    assert host.frames(0.3) == []
+    host.send(C.resume_stream())
+    assert len(host.frames(0.3)) == 20
+    host.send(C.stream([]))
+    assert host.frames(0.3) == []
+
+
+def test_stream_packet_count_38() -> None:
+    host = make()
+    host.stream([38, 7, 35])
+    assert host.frame()[38] == 3
+
+
+def test_song_and_play_show_in_packets_36_and_37_for_the_songs_length() -> None:
+    host = make()
+    host.stream([36, 37])
+    host.send(C.song(2, [Note(69, 32), Note(71, 32)]), C.play(2))  # 1 s
+    frames = host.frames(1.2)
+    assert frames[0][36] == 2 and frames[0][37] == 1
+    assert frames[60][37] == 1 and frames[-1][37] == 0
+
+
+def test_leds_digits_scheduling_leds_schedule_and_clock_are_kept() -> None:
+    host = make()
+    host.send(
+        C.leds(led_bits("dock"), 0, 255),
+        C.digit_leds_ascii("ABCD"),
+        C.scheduling_leds(3, 1),
+        C.set_day_time("wed", 15, 30),
+        C.schedule({"wed": (15, 0)}),
+    )
+    assert host.sim.leds == (4, 0, 255)
+    assert host.sim.digits == tuple(b"ABCD")
+    assert host.sim.scheduling_leds == (3, 1)
+    assert host.sim.day_time == (3, 15, 30)
+    assert host.sim.schedule[0] == 8
+
+
+def test_buttons_165_press_for_a_sixth_of_a_second() -> None:
+    host = make()
+    host.stream([18])
+    host.send(C.buttons(1))
+    frames = host.frames(0.5)
+    assert frames[0][18] == 1 and frames[5][18] == 1 and frames[-1][18] == 0
+
+
+def test_baud_129_changes_the_rate() -> None:
+    host = make()
+    host.send(C.baud_rate(57600))
+    assert host.sim.baud == 57600
