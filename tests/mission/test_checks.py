@@ -1,0 +1,125 @@
+"""The static passes accept what is right, not only reject what is wrong."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pytest
+
+from roomba_bt.mission import RUNTIME_PACKETS
+from roomba_bt.mission.checks import check_stream
+
+Errors = Callable[..., list[str]]
+
+
+@pytest.mark.parametrize(
+    "tree",
+    [
+        "{sequence: [{mode: safe}, {drive: {duration: 1s}}]}",
+        "{sequence: [{fallback: [{mode: safe}, {mode: full}]}, {leds: {dock: true}}]}",
+        "{sequence: [{mode: full}, {seek_dock: {wait: false}}, {mode: safe}, {play: 0}]}",
+        "{sequence: [{mode: safe},"
+        " {retry: {times: 3, do: {sequence: [{drive: {duration: 1s}}, wall]}}}]}",
+        "{sequence: [{mode: safe}, {parallel: [{drive: {duration: 1s}}, {leds: {spot: true}}]}]}",
+        "{sequence: [{mode: safe}, {wait: 1s, until: {bump: any}}, {stop: {}}]}",
+        "{sequence: [{mode: safe}, {oneshot: {motors: {vacuum: true}}}, {vacuum: off}]}",
+    ],
+)
+def test_actuators_after_a_mode_change_on_every_path(errors_of: Errors, tree: str) -> None:
+    assert errors_of(f"tree: {tree}") == []
+
+
+@pytest.mark.parametrize(
+    "tree",
+    [
+        # the alternative taken when 'mode: safe' is never reached
+        "{sequence: [{fallback: [wall, {mode: safe}]}, {stop: {}}]}",
+        # a repeat loops back to its start after seek_dock left the robot in Passive
+        "{sequence: [{mode: safe},"
+        " {repeat: {times: 2, do: {sequence: [{stop: {}}, {seek_dock: {wait: false}}]}}}]}",
+        # a parallel branch may change the mode under its sibling
+        "{sequence: [{mode: safe}, {parallel: [{clean: {}}, {drive: {duration: 1s}}]}]}",
+        # a timeout may cut a sequence after clean and before safe
+        "{sequence: [{mode: safe},"
+        " {force_success: {timeout: {after: 1s, do: {sequence: [clean, {mode: safe}]}}}}, stop]}",
+    ],
+)
+def test_paths_without_the_mode_change_are_found(errors_of: Errors, tree: str) -> None:
+    [error] = errors_of(f"tree: {tree}")
+    assert "accepted only in Safe or Full mode, but it can be reached in Passive mode" in error
+
+
+def test_keys_written_on_every_path_may_be_read(errors_of: Errors) -> None:
+    ok = """
+        blackboard: {n: int}
+        tree:
+          sequence:
+            - fallback: [{sequence: [wall, {set: {key: n, value: 1}}]}, {set: {key: n, value: 2}}]
+            - check: {key: n, value: 1}
+    """
+    assert errors_of(ok) == []
+    bad = """
+        blackboard: {n: int}
+        tree:
+          sequence:
+            - fallback: [{sequence: [wall, {set: {key: n, value: 1}}]}, bump]
+            - check: {key: n, value: 1}
+    """
+    [error] = errors_of(bad)
+    assert "reads blackboard key 'n' before anything writes it on some path" in error
+
+
+def test_for_each_key_is_written_inside_its_loop_only(errors_of: Errors) -> None:
+    text = """
+        blackboard: {leg: distance}
+        tree:
+          sequence:
+            - mode: safe
+            - for_each: {key: leg, in: [1 m], do: {drive: {distance: "@leg"}}}
+            - drive: {distance: "@leg"}
+    """
+    assert errors_of(text) == []  # after a non-empty for_each the key holds its last item
+
+
+def test_mark_then_odometry(errors_of: Errors) -> None:
+    text = """
+        blackboard: {start: mark}
+        tree: {sequence: [{mark: start}, {odometry: {since: start, distance: 1 m}}]}
+    """
+    assert errors_of(text) == []
+
+
+def test_set_value_is_typed_by_its_key(errors_of: Errors) -> None:
+    text = """
+        blackboard: {leg: distance}
+        tree: {set: {key: leg, value: 90deg}}
+    """
+    [error] = errors_of(text)
+    assert error.endswith(
+        "set.value: unknown distance unit 'deg' in '90deg'; use one of: mm, cm, m"
+    )
+
+
+def test_blackboard_value_of_another_type_is_refused(errors_of: Errors) -> None:
+    text = """
+        blackboard: {turn: angle}
+        tree: {sequence: [{mode: safe}, {drive: {distance: "@turn"}}]}
+    """
+    [error] = errors_of(text)
+    assert (
+        "blackboard key 'turn' holds angle (deg), but drive.distance needs distance (mm)" in error
+    )
+
+
+def test_runtime_packets_and_stream_budget() -> None:
+    assert {7, 9, 10, 11, 12, 34, 35, 43, 44} <= set(RUNTIME_PACKETS)
+    assert check_stream((8,), 115200) is None
+    problem = check_stream(tuple(range(46, 52)), 19200)
+    assert problem is not None and "at 19200 baud" in problem
+
+
+def test_baud_is_checked_per_mission(errors_of: Errors) -> None:
+    text = "tree: {light_bumper: {threshold: 100}}"
+    assert errors_of(text) == []
+    [error] = errors_of(text, baud=19200)
+    assert "do not fit the stream" in error

@@ -1,0 +1,105 @@
+"""``roomba-bt validate / show / behaviours / schema``: exit codes and output, no traceback."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.cli import main
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "missions" / "examples"
+Capsys = pytest.CaptureFixture[str]
+
+
+def test_validate_valid_files_exits_0(capsys: Capsys) -> None:
+    files = [str(p) for p in sorted(EXAMPLES.glob("*.yaml"))]
+    assert main(["validate", *files, str(EXAMPLES / "lib" / "escapes.yaml")]) == 0
+    out, err = capsys.readouterr()
+    assert out == ""
+    assert err.count(": ok") == len(files) + 1
+
+
+def test_validate_reports_every_file(mission_file: Callable[..., Path], capsys: Capsys) -> None:
+    good = mission_file("tree: wall\n", "good.yaml")
+    bad = mission_file("tree: {wal: {}}\n", "bad.yaml")
+    assert main(["validate", str(bad), str(good)]) == 2
+    out, _ = capsys.readouterr()
+    assert out.strip().endswith(
+        "bad.yaml:1:8: unknown node 'wal' (did you mean 'wall'?) [tree.wal]"
+    )
+
+
+def test_validate_takes_parameters(mission_file: Callable[..., Path], capsys: Capsys) -> None:
+    path = mission_file("parameters: {t: {type: duration}}\ntree: {wait: '${t}'}\n")
+    assert main(["validate", str(path)]) == 2
+    assert "parameter 't' has no default: give it with -p t=VALUE" in capsys.readouterr().out
+    assert main(["validate", str(path), "-p", "t=2s"]) == 0
+    assert main(["validate", str(path), "-p", "t"]) == 2
+
+
+def test_validate_a_missing_file(capsys: Capsys, tmp_path: Path) -> None:
+    assert main(["validate", str(tmp_path / "nope.yaml")]) == 2
+    assert "cannot read mission file" in capsys.readouterr().out
+
+
+def test_show_prints_the_tree(capsys: Capsys) -> None:
+    assert main(["show", str(EXAMPLES / "square.yaml"), "-p", "side=2m"]) == 0
+    out, _ = capsys.readouterr()
+    assert "square: Drive a square of side 2m" in out
+    assert "-^- for_each" in out
+    assert "until bump(any)" in out
+    assert "sensor packets: [7, 43, 44]" in out
+
+
+def test_show_writes_dot(capsys: Capsys, tmp_path: Path) -> None:
+    target = tmp_path / "tree.dot"
+    assert main(["show", str(EXAMPLES / "dock.yaml"), "--dot", str(target)]) == 0
+    assert target.read_text().startswith("digraph")
+
+
+def test_show_svg_without_graphviz_is_a_clear_error(
+    capsys: Capsys, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("PATH", str(tmp_path))  # no 'dot' executable
+    assert main(["show", str(EXAMPLES / "dock.yaml"), "--svg", str(tmp_path / "t.svg")]) == 2
+    _, err = capsys.readouterr()
+    assert "Graphviz" in err
+    assert "Traceback" not in err
+
+
+def test_show_an_invalid_mission(mission_file: Callable[..., Path], capsys: Capsys) -> None:
+    assert main(["show", str(mission_file("tree: []\n"))]) == 2
+    assert "expected a node" in capsys.readouterr().out
+
+
+def test_behaviours_lists_every_behaviour_with_parameters(capsys: Capsys) -> None:
+    assert main(["behaviours"]) == 0
+    out, _ = capsys.readouterr()
+    for name in ("drive", "turn", "seek_dock", "bump", "ir", "sensor", "wall_follow"):
+        assert f"\n{name}  (" in f"\n{out}"
+    assert "velocity: speed [mm/s], range -500..500, default 200 mm/s" in out
+
+
+def test_behaviours_json_and_unknown_names(capsys: Capsys) -> None:
+    assert main(["behaviours", "drive", "--json"]) == 0
+    [drive] = json.loads(capsys.readouterr().out)
+    assert drive["modes"] == ["Safe", "Full"]
+    assert drive["sends"] == [137, 145]
+    assert main(["behaviours", "drvie"]) == 2
+    assert "did you mean 'drive'" in capsys.readouterr().err
+
+
+def test_schema_is_json_with_every_behaviour(capsys: Capsys) -> None:
+    assert main(["schema"]) == 0
+    schema = json.loads(capsys.readouterr().out)
+    defs = schema["$defs"]
+    for word in ("sequence", "parallel", "retry", "for_each", "subtree", "drive", "wall_follow"):
+        assert word in defs
+    drive = defs["drive"]["properties"]["drive"]["anyOf"][0]
+    assert set(drive["properties"]) >= {"velocity", "radius", "distance"}
+    assert drive["additionalProperties"] is False
+    assert defs["turn"]["properties"]["turn"]["anyOf"][0]["required"] == ["angle"]
+    assert set(defs["drive"]["properties"]) == {"drive", "name", "while", "until"}
