@@ -3,6 +3,7 @@ packets, requested-velocity echo, stasis, currents and the battery."""
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import pytest
@@ -31,9 +32,9 @@ def heading_change(command: bytes, seconds: float = 1.0) -> tuple[float, float, 
 
 
 def test_positive_radius_turns_left_negative_right() -> None:
-    x, y, theta = heading_change(C.drive(200, 500).data)
+    _x, y, theta = heading_change(C.drive(200, 500).data)
     assert theta > 15 and y > 0
-    x, y, theta = heading_change(C.drive(200, -500).data)
+    _x, y, theta = heading_change(C.drive(200, -500).data)
     assert theta < -15 and y < 0
 
 
@@ -45,7 +46,7 @@ def test_special_radii_drive_straight(radius: Radius) -> None:
 
 def test_radius_2000_is_an_arc_not_straight() -> None:
     # [137, 0, 200, 7, 208]: a peer sends this for "straight" and drives a 2 m arc
-    x, y, theta = heading_change(bytes([137, 0, 200, 7, 208]), 3.0)
+    _x, _y, theta = heading_change(bytes([137, 0, 200, 7, 208]), 3.0)
     assert theta > 10
 
 
@@ -65,12 +66,12 @@ def test_drive_radius_geometry() -> None:
 
 
 def test_drive_direct_right_faster_turns_left() -> None:
-    x, y, theta = heading_change(C.drive_direct(300, 100).data)
+    _x, _y, theta = heading_change(C.drive_direct(300, 100).data)
     assert theta > 20
 
 
 def test_drive_pwm_full_scale_is_about_500_mm_s() -> None:
-    x, y, theta = heading_change(C.drive_pwm(255, 255).data)
+    x, _y, _theta = heading_change(C.drive_pwm(255, 255).data)
     assert x == pytest.approx(500 * 67 * 0.015)  # 1 s is 67 steps of 15 ms
 
 
@@ -89,7 +90,7 @@ def test_encoders_count_mm_over_pi_72_over_508_8_and_odometry_agrees() -> None:
     host.stream([43, 44, 19])
     host.send(C.drive_direct(200, 200))
     frames = host.frames(2.0)
-    counts = sum(encoder_delta(a[43], b[43]) for a, b in zip(frames, frames[1:], strict=False))
+    counts = sum(encoder_delta(a[43], b[43]) for a, b in itertools.pairwise(frames))
     travelled = host.sim.x
     before_first_frame = 7 * WHEEL_SPEED_STEP_MM_S * 0.015  # 199.5 mm/s for one step
     assert counts * MM_PER_COUNT == pytest.approx(
@@ -109,7 +110,7 @@ def test_encoders_roll_over_signed_on_600_unsigned_on_500(profile) -> None:  # t
         assert min(values) < 0 and max(values) > 0 and max(values) <= 32767
     else:
         assert min(values) >= 0 and max(values) <= 65535
-    deltas = [encoder_delta(a, b) for a, b in zip(values, values[1:], strict=False)]
+    deltas = [encoder_delta(a, b) for a, b in itertools.pairwise(values)]
     assert all(-20 <= d <= 0 for d in deltas)
     assert sum(deltas) * MM_PER_COUNT == pytest.approx(-15000 + 500 * 0.015, abs=20)
 

@@ -1,0 +1,148 @@
+"""Sensors from geometry: bumpers, light bumpers, wall sensor, cliffs, wheel drops, virtual
+walls and lighthouses. The robot never passes through a wall."""
+
+from __future__ import annotations
+
+import pytest
+
+from roomba_bt.oi import commands as C
+from roomba_bt.oi.ir import IRSource, LighthouseBeam
+from roomba_bt.sim.world import ROBOT_RADIUS_MM
+
+from .helpers import make, pose
+
+ROOM = """
+rooms: [[[0, 0], [2, 0], [2, 2], [0, 2]]]
+robot: {start: {at: [1, 1], heading: 0}}
+"""
+
+
+def test_the_robot_stops_on_contact_and_never_passes_through_a_wall() -> None:
+    host = make(ROOM, mode="full")
+    host.send(C.drive_direct(500, 500))
+    host.run(5.0)
+    assert host.sim.x == pytest.approx(2000.0 - ROBOT_RADIUS_MM, abs=0.5)
+    assert host.sim.x <= 2000.0 - ROBOT_RADIUS_MM
+    assert host.query([7]).bumps.bump_left and host.query([7]).bumps.bump_right
+
+
+@pytest.mark.parametrize(
+    ("heading", "left", "right"),
+    [(0, True, True), (-40, True, False), (40, False, True), (180, False, False)],
+)
+def test_bumper_side_comes_from_the_contact_angle(heading: float, left: bool, right: bool) -> None:
+    # touching the east wall; the contact is at -heading from the robot's nose
+    host = make(ROOM, start=pose(2.0 - 0.1705, 1.0, heading), mode="full")
+    bumps = host.query([7]).bumps
+    assert (bumps.bump_left, bumps.bump_right) == (left, right)
+    assert any(e.kind == "bump" for e in host.sim.events) == (left or right)
+
+
+def test_driving_away_from_a_wall_is_never_blocked() -> None:
+    host = make(ROOM, start=pose(2.0 - 0.1705, 1.0, 0), mode="full")
+    host.send(C.drive_direct(-200, -200))
+    host.run(0.5)
+    assert host.sim.x < 1800.0
+    assert host.query([7])[7] == 0
+
+
+def test_a_bump_event_on_the_timeline_presses_the_bumper() -> None:
+    host = make(ROOM + "events: [{at: 0.3, kind: bump, side: right, duration: 0.3}]\n")
+    host.stream([7])
+    frames = host.frames(1.0)
+    assert frames[10][7] == 0 and frames[25][7] == 1 and frames[50][7] == 0
+
+
+def test_light_bumpers_grow_as_the_wall_gets_closer() -> None:
+    signals = []
+    for gap in (0.14, 0.10, 0.05, 0.01):
+        host = make(ROOM, start=pose(2.0 - 0.17 - gap, 1.0, 0))
+        reply = host.query([45, 46, 47, 48, 49, 50, 51])
+        signals.append(reply.light_bump_signals)
+    centre = [s[2] for s in signals]
+    assert centre == sorted(centre) and centre[0] < centre[-1]
+    far = make(ROOM, start=pose(1.0, 1.0, 0)).query([45, 48])
+    assert far[45] == 0 and far[48] == 0
+    near = make(ROOM, start=pose(2.0 - 0.17 - 0.03, 1.0, 0)).query([45])
+    assert near.light_bumper.center_left and near.light_bumper.center_right
+
+
+def test_light_bumpers_see_the_side_the_wall_is_on() -> None:
+    # wall 3 cm away on the robot's left (north wall, robot heading east)
+    host = make(ROOM, start=pose(1.0, 2.0 - 0.2, 0))
+    reply = host.query([45, 46, 51])
+    assert reply.light_bumper.left and not reply.light_bumper.right
+    assert reply[46] > 0 and reply[51] == 0
+
+
+def test_wall_sensor_sees_a_wall_close_on_the_right() -> None:
+    host = make(ROOM, start=pose(1.0, 0.19, 0))  # south wall 2 cm from the right side
+    reply = host.query([8, 27])
+    assert reply.wall and reply.wall_signal > 0
+    host = make(ROOM, start=pose(1.0, 2.0 - 0.19, 0))  # wall on the left: not the wall sensor
+    assert host.query([8, 27])[27] == 0
+
+
+CLIFFS = """
+rooms: [[[0, 0], [4, 0], [4, 4], [0, 4]]]
+drops: [{rect: [2.0, 0, 4, 4]}]
+robot: {start: {at: [1, 1], heading: 0}}
+"""
+
+
+@pytest.mark.parametrize(
+    ("heading", "expected"),
+    [(0, (0, 1, 1, 0)), (90, (0, 0, 0, 1)), (-90, (1, 0, 0, 0)), (180, (0, 0, 0, 0))],
+)
+def test_cliff_sensors_see_the_drop_they_are_over(
+    heading: float, expected: tuple[int, int, int, int]
+) -> None:
+    # the drop begins at x = 2 m, 0.1 m from the robot's centre; the cliff sensors sit
+    # 0.15 m from the centre at 60 and 20 deg left and right of the heading
+    host = make(CLIFFS, start=pose(1.9, 2.0, heading), mode="full")
+    reply = host.query([9, 10, 11, 12, 28, 29, 30, 31])
+    assert (reply[9], reply[10], reply[11], reply[12]) == expected
+    for flag, signal in zip(expected, reply.cliff_signals, strict=True):
+        assert (signal < 100) == bool(flag)
+
+
+def test_lifting_the_robot_drops_both_wheels_and_all_cliffs_and_stops_it() -> None:
+    text = ROOM + "events: [{at: 0.3, kind: lift, duration: 1.0}]\n"
+    host = make(text, mode="full")
+    host.send(C.drive_direct(100, 100))
+    host.run(0.6)
+    x = host.sim.x
+    reply = host.query([7, 9, 10, 11, 12, 43])
+    assert reply.bumps.wheel_drop_left and reply.bumps.wheel_drop_right and reply.any_cliff
+    host.run(0.3)
+    assert host.sim.x == x
+    assert host.query([43])[43] > reply[43]  # the wheels spin in the air
+    host.run(1.0)
+    assert host.query([7])[7] == 0
+
+
+VIRTUAL = """
+rooms: [[[0, 0], [4, 0], [4, 4], [0, 4]]]
+virtual_walls: [{from: [2, 0.5], to: [2, 3.5], halo: 0.3}]
+lighthouses: [{id: 3, at: [0.5, 3.5], heading: 0, fence: 1.0, halo: 0.3}]
+robot: {start: {at: [1, 1], heading: 0}}
+"""
+
+
+def test_virtual_wall_beam_gives_packet_13_and_character_162() -> None:
+    # the omni receiver is 0.13 m ahead of the centre
+    inside = make(VIRTUAL, start=pose(2.0 - 0.13, 2.0, 0)).query([13, 17])
+    assert inside.virtual_wall and inside.ir_omni.source is IRSource.VIRTUAL_WALL
+    outside = make(VIRTUAL, start=pose(1.5, 2.0, 0)).query([13, 17])
+    assert not outside.virtual_wall and outside[17] == 0
+    halo = make(VIRTUAL, start=pose(2.2 - 0.13, 0.3, 0)).query([13])
+    assert halo.virtual_wall
+
+
+def test_lighthouse_fence_and_force_field_characters() -> None:
+    fence = make(VIRTUAL, start=pose(1.2 - 0.13, 3.5, 0)).query([13, 17])
+    assert fence.ir_omni.lighthouse_id == 3
+    assert fence.ir_omni.lighthouse_beam is LighthouseBeam.FENCE
+    assert not fence.virtual_wall  # packet 13 is the virtual wall's, not the lighthouse's
+    halo = make(VIRTUAL, start=pose(0.5, 3.1, 90)).query([17])
+    assert halo.ir_omni.lighthouse_beam is LighthouseBeam.FORCE_FIELD
