@@ -38,7 +38,7 @@ class Undeclared(Condition):
 
 def test_every_builtin_is_registered_with_a_valid_declaration() -> None:
     registry = builtin_registry()
-    assert {cls.declaration.name for cls in (*ACTIONS, *CONDITIONS)} == set(registry.names())
+    assert {cls.declaration.name for cls in (*ACTIONS, *CONDITIONS)} <= set(registry.names())
     for decl in registry:
         decl.validate()
         assert decl.doc, f"{decl.name} has no docstring"
