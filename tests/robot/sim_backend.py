@@ -66,7 +66,6 @@ class RecordingSimLink:
         return bool(self.link.is_open)
 
     def write(self, data: bytes) -> None:
-        self.link._check() if hasattr(self.link, "_check") else None
         self.received += data
         self._pending += data
         while (decoded := decode_command(self._pending)) is not None:
