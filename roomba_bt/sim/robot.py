@@ -581,7 +581,7 @@ class Simulator:
     def step(self, dt: float = STEP_SECONDS) -> None:
         """Advance one 15 ms slot and send one stream frame if a stream is on."""
         self.ticks += 1
-        self.time += dt
+        self.time = round(self.time + dt, 9)  # no drift: 200 steps are exactly 3.0 s
         if self.disconnected:
             return
         faults = self.faults

@@ -1,0 +1,102 @@
+"""Each fault on request, and that the parser side survives it."""
+
+from __future__ import annotations
+
+import pytest
+
+from roomba_bt.oi import commands as C
+from roomba_bt.oi.stream import StreamParser
+from roomba_bt.sim import Faults, SimLink, Simulator
+
+from .helpers import BOX, make, world
+
+IDS = [7, 22, 35, 43, 44, 46, 48]
+
+
+def stream_bytes(faults: Faults, seconds: float = 3.0, seed: int = 0) -> tuple[bytes, Simulator]:
+    sim = Simulator(world(BOX), seed=seed, faults=faults)
+    sim.receive(C.start().data + C.full().data + C.stream(IDS).data + C.drive(200, 500).data)
+    return sim.run(seconds), sim
+
+
+def test_corrupted_bytes_fail_the_checksum_and_the_parser_resynchronises() -> None:
+    data, sim = stream_bytes(Faults(corrupt_rate=0.01))
+    clean, _ = stream_bytes(Faults())
+    assert len(data) == len(clean) and data != clean
+    differing = sum(a != b for a, b in zip(data, clean, strict=True))
+    assert 0.003 * len(data) < differing < 0.03 * len(data)
+    parser = StreamParser(IDS)
+    frames = parser.feed(data)
+    assert parser.counters.checksum_failures > 0
+    assert 0.6 * sim.frames_sent < len(frames) < sim.frames_sent
+
+
+def test_dropped_frames_are_never_sent() -> None:
+    data, sim = stream_bytes(Faults(drop_rate=0.5))
+    frames = StreamParser(IDS).feed(data)
+    assert len(frames) == sim.frames_sent
+    assert 0.35 * 200 < sim.frames_sent < 0.65 * 200
+
+
+def test_latency_delays_every_robot_byte() -> None:
+    sim = Simulator(world(BOX), faults=Faults(latency=0.3))
+    sim.receive(C.start().data + C.sensors(35).data)
+    assert sim.read() == b""
+    for _ in range(19):
+        sim.step()
+        assert sim.read() == b""
+    sim.step()
+    assert sim.read() == bytes([1])
+
+
+def test_injected_text_is_skipped_by_the_parser() -> None:
+    text = "battery-current-zero 252\r\n"
+    data, sim = stream_bytes(Faults(inject_text=text, inject_every=0.5))
+    assert data.count(text.encode()) == 6  # at 0.5, 1.0, ... 3.0 s
+    parser = StreamParser(IDS)
+    assert len(parser.feed(data)) == sim.frames_sent == 200
+    assert parser.counters.skipped_bytes == 6 * len(text)
+
+
+def test_disconnect_at_t_ends_the_link() -> None:
+    sim = Simulator(world(BOX), faults=Faults(disconnect_at=1.0))
+    link = SimLink(sim)
+    link.write(C.start().data + C.stream([35]).data)
+    received = b""
+    with pytest.raises(ConnectionError, match="simulated disconnect"):
+        while True:
+            received += link.read(0.1)
+    assert len(received) == 66 * 5  # frames of [19][2][35][mode][checksum] until t = 1.0 s
+    assert not link.is_open
+    with pytest.raises(ConnectionError):
+        link.write(C.start().data)
+
+
+def test_sensor_noise_moves_analog_signals_not_bits() -> None:
+    host = make(BOX, start=None, faults=Faults(noise=30.0))
+    host.stream([7, 22, 28, 29, 45, 46, 48])
+    frames = host.frames(1.0)
+    assert len({f[28] for f in frames}) > 10 and len({f[22] for f in frames}) > 10
+    assert {f[7] for f in frames} == {0} and {f[45] for f in frames} == {0}
+    assert all(0 <= f[28] <= 4095 and 0 <= f[46] <= 4095 for f in frames)
+
+
+def test_faults_are_repeatable_for_a_seed() -> None:
+    faults = Faults(corrupt_rate=0.02, drop_rate=0.1, noise=5.0, inject_text="hi", inject_every=0.2)
+    assert stream_bytes(faults, seed=3)[0] == stream_bytes(faults, seed=3)[0]
+    assert stream_bytes(faults, seed=3)[0] != stream_bytes(faults, seed=4)[0]
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "field"),
+    [
+        ({"corrupt_rate": 1.5}, "corrupt_rate"),
+        ({"drop_rate": -0.1}, "drop_rate"),
+        ({"latency": "slow"}, "latency"),
+        ({"inject_text": "caf\u00e9"}, "inject_text"),
+        ({"disconnect_at": -1}, "disconnect_at"),
+    ],
+)
+def test_bad_faults_name_the_field(kwargs: dict[str, object], field: str) -> None:
+    with pytest.raises(ValueError, match=f"faults.{field}: found"):
+        Faults(**kwargs)  # type: ignore[arg-type]
