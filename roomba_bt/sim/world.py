@@ -288,6 +288,10 @@ class _MarkingLoader(yaml.SafeLoader):
 
     def _build(self, node: yaml.Node, path: PathKey, marks: dict[PathKey, tuple[int, int]]) -> Any:
         marks[path] = (node.start_mark.line + 1, node.start_mark.column + 1)
+        if isinstance(node, yaml.MappingNode | yaml.SequenceNode) and node.tag not in _PLAIN_TAGS:
+            raise yaml.constructor.ConstructorError(
+                None, None, f"the tag {node.tag!r} is not allowed in a world", node.start_mark
+            )
         if isinstance(node, yaml.MappingNode):
             self.flatten_mapping(node)
             out: dict[Any, Any] = {}
@@ -295,6 +299,9 @@ class _MarkingLoader(yaml.SafeLoader):
                 key = self.construct_object(key_node, deep=True)
                 if not isinstance(key, str | int | float | bool):
                     key = str(key)
+                marks[(*path, str(key), _KEY)] = (
+                    key_node.start_mark.line + 1, key_node.start_mark.column + 1,
+                )  # fmt: skip
                 if key in out:
                     mark = key_node.start_mark
                     raise _DuplicateKey(str(key), (*path, str(key)), mark.line + 1, mark.column + 1)
@@ -303,6 +310,10 @@ class _MarkingLoader(yaml.SafeLoader):
         if isinstance(node, yaml.SequenceNode):
             return [self._build(item, (*path, i), marks) for i, item in enumerate(node.value)]
         return self.construct_object(node, deep=True)
+
+
+_PLAIN_TAGS = frozenset({"tag:yaml.org,2002:map", "tag:yaml.org,2002:seq"})
+_KEY = "<key>"  # marks[(*path, key, _KEY)]: where a mapping key itself is written
 
 
 class _DuplicateKey(Exception):
@@ -339,8 +350,8 @@ class _Checker:
         self.marks = marks
         self.problems: list[WorldProblem] = []
 
-    def error(self, path: PathKey, found: str, allowed: str) -> None:
-        probe = path
+    def error(self, path: PathKey, found: str, allowed: str, at: PathKey | None = None) -> None:
+        probe = at if at is not None and at in self.marks else path
         while probe not in self.marks and probe:
             probe = probe[:-1]
         line, col = self.marks.get(probe, (0, 0))
@@ -356,7 +367,12 @@ class _Checker:
             if key not in keys:
                 close = difflib.get_close_matches(str(key), keys, n=1)
                 hint = f" (did you mean {close[0]!r}?)" if close else ""
-                self.error((*path, str(key)), f"unknown key {key!r}", f"{', '.join(keys)}{hint}")
+                self.error(
+                    (*path, str(key)),
+                    f"unknown key {key!r}",
+                    f"{', '.join(keys)}{hint}",
+                    at=(*path, str(key), _KEY),
+                )
         for key in required:
             if key not in value:
                 self.error(path, f"no {key!r}", f"a mapping with {key!r}")
@@ -595,7 +611,7 @@ def _build_world(c: _Checker, data: object, source: str) -> World:
     rooms = [
         c.polygon(r, ("rooms", i)) for i, r in enumerate(c.items(top.get("rooms"), ("rooms",)))
     ]
-    if "rooms" in top and not rooms:
+    if isinstance(top.get("rooms"), list) and not rooms:
         c.error(("rooms",), "no room", "at least one room polygon")
     walls: list[Segment] = []
     for i, w in enumerate(c.items(top.get("walls"), ("walls",))):

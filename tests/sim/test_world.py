@@ -1,0 +1,134 @@
+"""Worlds: the shipped ones, and errors that name file:line:col, the field, what was found
+and what is allowed, all at once, never a traceback."""
+
+from __future__ import annotations
+
+import math
+import pathlib
+
+import pytest
+
+from roomba_bt.sim import WorldError, load_world, parse_world, shipped_worlds
+from roomba_bt.sim.world import ROBOT_RADIUS_MM
+
+
+def problems(text: str) -> list[str]:
+    with pytest.raises(WorldError) as info:
+        parse_world(text, "w.yaml")
+    return [str(p) for p in info.value.problems]
+
+
+def test_three_worlds_are_shipped_and_load() -> None:
+    assert {"empty-room", "apartment", "corridor"} <= set(shipped_worlds())
+    for name in shipped_worlds():
+        world = load_world(name)
+        assert world.pose_is_free(world.start)
+
+
+def test_empty_room_starts_within_1_5_m_of_the_dock_and_samples_starts_there() -> None:
+    world = load_world("empty-room")
+    assert world.dock is not None
+    docked = world.dock.docked_pose
+    assert math.hypot(world.start.x - docked.x, world.start.y - docked.y) <= 1500.0
+    headings = []
+    for seed in range(40):
+        start = world.sample_start(seed)
+        assert math.hypot(start.x - docked.x, start.y - docked.y) <= 1500.0
+        assert world.pose_is_free(start)
+        headings.append(start.theta)
+        assert world.sample_start(seed) == start
+    assert max(headings) - min(headings) > math.pi  # any heading
+
+
+def test_apartment_has_furniture_a_staircase_and_a_virtual_wall() -> None:
+    world = load_world("apartment")
+    assert len(world.obstacles) >= 5 and world.drops and world.virtual_walls
+    stairs = world.drops[0]
+    x = sum(p[0] for p in stairs) / len(stairs)
+    y = sum(p[1] for p in stairs) / len(stairs)
+    assert world.on_floor(x, y) and world.over_drop(x, y)
+
+
+def test_corridor_is_a_loop() -> None:
+    world = load_world("corridor")
+    # free poses on all four sides of the central block
+    for x, y in ((4500, 600), (8400, 3000), (4500, 5400), (600, 3000)):
+        assert world.on_floor(x, y)
+    assert not world.on_floor(4500, 3000)
+
+
+def test_load_world_by_path(tmp_path: pathlib.Path) -> None:
+    path = tmp_path / "mine.yaml"
+    path.write_text("rooms: [[[0, 0], [3, 0], [3, 3], [0, 3]]]\n")
+    world = load_world(path)
+    assert world.name == "mine" and world.start.x == 1500.0
+
+
+def test_unknown_world_lists_the_shipped_ones() -> None:
+    with pytest.raises(WorldError, match="empty-room"):
+        load_world("nowhere")
+
+
+def test_unknown_key_with_line_column_and_did_you_mean() -> None:
+    text = "rooms: [[[0, 0], [3, 0], [3, 3], [0, 3]]]\ndock:\n  at: [1.5, 0]\n  facing: 90\n  buoy_rang: 2\n"
+    [problem] = problems(text)
+    assert problem.startswith("w.yaml:5:3: dock.buoy_rang: found unknown key 'buoy_rang'")
+    assert "did you mean 'buoy_range'?" in problem
+
+
+def test_out_of_range_values_say_what_is_allowed() -> None:
+    text = (
+        "rooms: [[[0, 0], [3, 0], [3, 3], [0, 3]]]\n"
+        "dock: {at: [1.5, 0], facing: 90, buoy_range: 9, red: [30, 10]}\n"
+        "robot: {battery: 1.5}\n"
+    )
+    found = problems(text)
+    assert "w.yaml:2:46: dock.buoy_range: found 9; allowed: a number in 0.2..5 m" in found
+    assert any(
+        "dock.red: found a list of 2; allowed: [from, to] with from < to" in p for p in found
+    )
+    assert any("w.yaml:3:18: robot.battery: found 1.5" in p for p in found)
+    assert len(found) == 3  # all at once
+
+
+def test_wrong_types_and_missing_fields() -> None:
+    found = problems("name: 3\nrooms: [[[0, 0], [1, 'x']]]\nevents: [{kind: lift}]\n")
+    assert any("w.yaml:1:7: name: found 3; allowed: a string" in p for p in found)
+    assert any("rooms[0]: found a list of 2; allowed: a polygon" in p for p in found)
+    assert any("events[0]: found no 'at'" in p for p in found)
+    assert problems("walls: []\n") == [
+        "w.yaml:1:1: (document): found no 'rooms'; allowed: a mapping with 'rooms'"
+    ]
+
+
+def test_bad_event_kind_suggests_the_right_one() -> None:
+    [problem] = problems(
+        "rooms: [[[0, 0], [3, 0], [3, 3], [0, 3]]]\nevents: [{at: 1, kind: lifted}]\n"
+    )
+    assert "events[0].kind: found 'lifted'; allowed: one of bump, lift, charger_step" in problem
+    assert "did you mean 'lift'?" in problem
+
+
+def test_duplicate_keys_and_yaml_syntax_errors_have_positions() -> None:
+    [dup] = problems("rooms: []\nrooms: []\n")
+    assert dup.startswith("w.yaml:2:1: rooms: found the key 'rooms' twice")
+    [syntax] = problems("rooms: [[[0, 0]\n")
+    assert syntax.startswith("w.yaml:") and "(YAML)" in syntax
+
+
+def test_a_start_pose_inside_a_wall_is_refused() -> None:
+    text = "rooms: [[[0, 0], [3, 0], [3, 3], [0, 3]]]\nrobot: {start: {at: [0.1, 1], heading: 0}}\n"
+    [problem] = problems(text)
+    assert problem.startswith("w.yaml:2:")
+    assert "robot.start: found a start pose (0.10, 1.00) m where the robot does not fit" in problem
+    assert f"{ROBOT_RADIUS_MM / 1000:.2f} m clear" in problem
+
+
+def test_near_dock_start_region_needs_a_dock() -> None:
+    text = "rooms: [[[0, 0], [3, 0], [3, 3], [0, 3]]]\nrobot: {start_region: {near_dock: 1}}\n"
+    assert any("near_dock only in a world with a dock" in p for p in problems(text))
+
+
+def test_yaml_tags_that_build_objects_are_refused() -> None:
+    [problem] = problems("rooms: !!python/object:os.system {}\n")
+    assert problem.startswith("w.yaml:1:8: (YAML): found the tag")
