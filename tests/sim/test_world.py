@@ -70,7 +70,10 @@ def test_unknown_world_lists_the_shipped_ones() -> None:
 
 
 def test_unknown_key_with_line_column_and_did_you_mean() -> None:
-    text = "rooms: [[[0, 0], [3, 0], [3, 3], [0, 3]]]\ndock:\n  at: [1.5, 0]\n  facing: 90\n  buoy_rang: 2\n"
+    text = (
+        "rooms: [[[0, 0], [3, 0], [3, 3], [0, 3]]]\n"
+        "dock:\n  at: [1.5, 0]\n  facing: 90\n  buoy_rang: 2\n"
+    )
     [problem] = problems(text)
     assert problem.startswith("w.yaml:5:3: dock.buoy_rang: found unknown key 'buoy_rang'")
     assert "did you mean 'buoy_range'?" in problem
