@@ -315,6 +315,9 @@ class ModeModel:
         raw = frame.get(35)
         if raw is None:
             return None
+        offset = self.detector.offset
+        if self._pending is None and offset is not None and raw - offset == self._mode:
+            return None  # the common case, once per frame: the robot is where we think
         reported = self.detector.interpret(raw, self.possible_modes(time))
         if reported is None:
             self.invalid_readings += 1
