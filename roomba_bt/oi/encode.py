@@ -99,7 +99,7 @@ def encode(command: int | str | CommandSpec, *args: int, tail: Sequence[int] = (
 
 
 def _check_tail(spec: CommandSpec, checked: list[int], tail: Sequence[int]) -> tuple[int, ...]:
-    if isinstance(tail, (str, bytes)) or not isinstance(tail, Sequence):
+    if isinstance(tail, str) or not isinstance(tail, Sequence):
         raise EncodeError(spec.name, "data bytes", "a sequence of integers", tail)
     if spec.tail is None:
         if tail:
@@ -353,7 +353,7 @@ def play(song_number: int) -> Command:
 
 
 def _packet_ids(command: str, packet_ids: Iterable[int]) -> list[int]:
-    if isinstance(packet_ids, (str, bytes)) or not isinstance(packet_ids, Iterable):
+    if isinstance(packet_ids, str) or not isinstance(packet_ids, Iterable):
         raise EncodeError(command, "packet ids", "a list of packet ids", packet_ids)
     ids = list(packet_ids)
     if len(ids) > 255:

@@ -110,7 +110,10 @@ class FrameLayout:
 
     def pack(self, values: Mapping[int, int]) -> bytes:
         """The payload for ``values`` (packet id -> raw value); the simulator's encoder.
-        Missing packets are sent as 0."""
+
+        Missing packets are sent as 0. Each value is taken modulo 2**(8 x size), as the robot's
+        own counters wrap: an ever-growing encoder count, or -1 for a signed packet, packs to
+        the bytes the robot would send."""
         out = bytearray()
         for pid in self.packet_ids:
             if self.with_ids:

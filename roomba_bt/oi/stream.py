@@ -179,7 +179,7 @@ class ReplyParser:
 
     __slots__ = ("_buffer", "layout")
 
-    def __init__(self, packet_ids: Iterable[int], profile: RobotProfile = DEFAULT_PROFILE):
+    def __init__(self, packet_ids: Iterable[int], profile: RobotProfile = DEFAULT_PROFILE) -> None:
         self.layout = layout_for(tuple(packet_ids), profile, False)
         self._buffer = bytearray()
 

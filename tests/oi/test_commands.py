@@ -216,3 +216,16 @@ def test_note_names_follow_midi_and_the_spec_table() -> None:
     assert note_number("C#5") == 73
     assert note_number("B7") == 107  # the highest in the table
     assert note_number("REST") == 0
+
+
+def test_tails_and_id_lists_may_be_bytes() -> None:
+    assert encode(148, 2, tail=b"\x1d\x0d").data == bytes([148, 2, 29, 13])
+    assert c.query_list(b"\x07\x0d").data == bytes([149, 2, 7, 13])
+
+
+def test_pack_wraps_values_as_the_robot_counters_do() -> None:
+    from roomba_bt.oi.frames import layout_for
+
+    layout = layout_for((43, 7), with_ids=False)
+    assert layout.pack({43: 65_536 + 5, 7: 257}) == bytes([0, 5, 1])
+    assert layout.pack({43: -1}) == bytes([0xFF, 0xFF, 0])
