@@ -246,8 +246,10 @@ class Connection:
                 "%s has no Stop (173); the connection will end in Passive (Start)",
                 self.profile.title,
             )
+        # One lock for the mode model and the stream state: the reader thread reconciles
+        # frames while the caller sends; neither may see the other's half-done update.
         self._write_lock = threading.RLock()
-        self._state = threading.Condition(threading.RLock())
+        self._state = threading.Condition(self._write_lock)
         self.modes = ModeModel(self.profile, settle=settle)
         self._parser: StreamParser | None = None
         self._stream_ids: tuple[int, ...] = ()
