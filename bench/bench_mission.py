@@ -107,7 +107,8 @@ def main() -> None:
         n_compiled = sum(1 for _ in compiled.root.iterate())
         n_hand = sum(1 for _ in hand.iterate())
         assert n_compiled == n_hand, (n_compiled, n_hand)
-        compiled_times, hand_times = [], []
+        compiled_times: list[float] = []
+        hand_times: list[float] = []
         for i in range(12):  # interleaved, alternating order: both see the same machine
             pair = [(compiled.root, compiled_times), (hand, hand_times)]
             for root, times in pair if i % 2 else pair[::-1]:
