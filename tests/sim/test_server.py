@@ -1,0 +1,144 @@
+"""The real-time server behind a real pty and a TCP socket, driven by clients we did not
+write (pycreate2, pyserial), through the ``roomba-bt sim`` command."""
+
+from __future__ import annotations
+
+import gc
+import select
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+import serial
+
+from roomba_bt.oi import commands as C
+from roomba_bt.oi.profiles import ROOMBA500
+from roomba_bt.oi.stream import StreamParser
+
+
+class Server:
+    def __init__(self, *args: str) -> None:
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "roomba_bt.cli", "sim", *args],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        assert self.proc.stdout is not None
+        ready, _, _ = select.select([self.proc.stdout], [], [], 20.0)
+        assert ready, "the simulator printed no address"
+        self.address = self.proc.stdout.readline().strip()
+
+    def stop(self, sig: int = signal.SIGTERM) -> tuple[int, str]:
+        self.proc.send_signal(sig)
+        _, err = self.proc.communicate(timeout=10)
+        return self.proc.returncode, err
+
+
+@pytest.fixture
+def pty_server() -> Iterator[Server]:
+    server = Server("--pty", "--world", "empty-room")
+    yield server
+    if server.proc.poll() is None:
+        server.stop()
+
+
+def test_pycreate2_reads_sensors_that_make_sense_drives_and_the_encoders_move(
+    pty_server: Server,
+) -> None:
+    pycreate2 = pytest.importorskip("pycreate2")
+    assert pty_server.address.startswith("/dev/")
+    bot = pycreate2.Create2(pty_server.address)
+    bot.start()
+    bot.safe()
+    before = bot.get_sensors()
+    assert before.open_interface_mode == 2  # Safe
+    assert 12000 < before.voltage < 17500 and before.battery_capacity == 2696
+    assert 0 < before.battery_charge <= before.battery_capacity
+    assert before.cliff_left_signal > 1000 and not before.cliff_front_left  # on the floor
+    assert not before.bumps_wheeldrops.bump_left and not before.bumps_wheeldrops.bump_right
+    bot.drive_direct(150, 150)
+    time.sleep(1.0)
+    after = bot.get_sensors()
+    assert after.velocity_left == after.velocity_right == 150
+    moved = (after.encoder_counts_left - before.encoder_counts_left) & 0xFFFF
+    assert 150 < moved < 700  # about 1 s at 142.5 mm/s, 2.25 counts per mm
+    bot.drive_stop()
+    stopped = bot.get_sensors().encoder_counts_left
+    time.sleep(0.3)
+    assert bot.get_sensors().encoder_counts_left == stopped
+    del bot  # pycreate2's destructor stops the motors and sends Stop (173)
+    gc.collect()
+    code, err = pty_server.stop()
+    assert code == 0
+    assert "mode Off" in err and "0 ignored actuator commands" in err
+
+
+def test_tcp_serves_a_stream_to_pyserial_and_exits_cleanly_on_sigint() -> None:
+    server = Server("--tcp", "127.0.0.1:0", "--profile", "roomba500")
+    assert server.address.startswith("socket://127.0.0.1:")
+    port = serial.serial_for_url(server.address, timeout=0.2)
+    try:
+        port.write(C.start().data + C.stream([7, 35, 43]).data)
+        parser = StreamParser([7, 35, 43], ROOMBA500)  # its checksum leaves the header out
+        frames = []
+        deadline = time.monotonic() + 0.6
+        while time.monotonic() < deadline:
+            frames += parser.feed(port.read(256))
+        assert len(frames) > 5
+        assert parser.counters.checksum_failures == 0
+        assert {f.oi_mode_raw for f in frames} == {1}
+    finally:
+        port.close()
+        code, err = server.stop(signal.SIGINT)
+    assert code == 0 and "simulated" in err
+
+
+def test_disconnect_fault_hangs_up_the_line() -> None:
+    server = Server("--tcp", "127.0.0.1:0", "--disconnect-at", "0.3")
+    port = serial.serial_for_url(server.address, timeout=0.2)
+    try:
+        port.write(C.start().data + C.stream([35]).data)
+        with pytest.raises(serial.SerialException):
+            deadline = time.monotonic() + 5.0
+            while time.monotonic() < deadline:
+                port.read(64)
+    finally:
+        port.close()
+        code, _ = server.stop()
+    assert code == 0
+
+
+def test_duration_stops_the_server_by_itself() -> None:
+    proc = subprocess.run(
+        [sys.executable, "-m", "roomba_bt.cli", "sim", "--pty", "--duration", "0.2"],
+        capture_output=True, text=True, timeout=20, check=False,
+    )  # fmt: skip
+    assert proc.returncode == 0 and proc.stdout.startswith("/dev/")
+
+
+def test_an_invalid_world_exits_2_with_the_position(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("rooms: [[[0, 0], [3, 0], [3, 3], [0, 3]]]\ndock: {at: [1, 0], facing: up}\n")
+    proc = subprocess.run(
+        [sys.executable, "-m", "roomba_bt.cli", "sim", "--pty", "--world", str(bad)],
+        capture_output=True, text=True, timeout=20, check=False,
+    )  # fmt: skip
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert f"{bad}:2:28: dock.facing: found 'up'" in proc.stderr
+    assert "Traceback" not in proc.stderr
+
+
+@pytest.mark.parametrize(
+    "args", [["--tcp", "localhost"], ["--pty", "--drop-rate", "2"], ["--pty", "--profile", "x"]]
+)
+def test_bad_options_exit_2(args: list[str]) -> None:
+    proc = subprocess.run(
+        [sys.executable, "-m", "roomba_bt.cli", "sim", *args],
+        capture_output=True, text=True, timeout=20, check=False,
+    )  # fmt: skip
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
