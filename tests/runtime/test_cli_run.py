@@ -1,0 +1,105 @@
+"""`roomba-bt run` in-process on the virtual clock: exit codes and messages, never a traceback."""
+
+from __future__ import annotations
+
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.cli import main
+from roomba_bt.runtime.recording import load_record
+
+MISSION = """
+mission: short-drive
+parameters:
+  speed: {type: speed, default: 200 mm/s}
+tree:
+  sequence:
+    - mode: safe
+    - drive: {velocity: "${speed}", distance: 20 cm}
+"""
+
+
+@pytest.fixture
+def mission(tmp_path: Path) -> Path:
+    path = tmp_path / "short.yaml"
+    path.write_text(textwrap.dedent(MISSION))
+    return path
+
+
+def test_run_fast_succeeds(mission: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["run", str(mission), "--fast", "--display", "none"]) == 0
+    out = capsys.readouterr().out
+    assert "outcome      SUCCESS" in out
+    assert "safe stop    sent drive, motors, pause_resume_stream, start" in out
+
+
+def test_parameter_from_the_command_line(
+    mission: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    record = tmp_path / "r.jsonl"
+    code = main(["run", str(mission), "--fast", "--display", "none", "-p", "speed=150mm/s",
+                 "--record", str(record)])  # fmt: skip
+    assert code == 0
+    assert load_record(record).header["parameters"] == {"speed": "150mm/s"}
+    assert bytes([137, 0, 150]) in load_record(record).outbound
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["-p", "speed"], "expected NAME=VALUE"),
+        (["-p", "speed=900mm/s"], "900 mm/s"),
+        (["--timeout", "soon"], "--timeout 'soon'"),
+        (["--world", "no-such-world"], "no-such-world"),
+        (["--baud", "19200", "-p", "speed=100mm/s"], None),
+    ],
+)
+def test_bad_input_is_exit_2_with_a_message(
+    mission: Path, capsys: pytest.CaptureFixture[str], args: list[str], message: str | None
+) -> None:
+    code = main(["run", str(mission), "--fast", "--display", "none", *args])
+    err = capsys.readouterr().err
+    if message is None:  # 19200 baud: the runtime's packets alone still fit (28 bytes)
+        assert code in (0, 2)
+        return
+    assert code == 2, err
+    assert message in err
+    assert "Traceback" not in err
+
+
+def test_invalid_mission_reports_file_line_col(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("tree:\n  sequence:\n    - drive: {velocity: 600 mm/s}\n")
+    assert main(["run", str(bad), "--fast"]) == 2
+    err = capsys.readouterr().err
+    assert f"{bad.name}:3:" in err or "bad.yaml:3:" in err
+    assert "600" in err
+
+
+def test_missing_mission_file_is_exit_2(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["run", "/no/such/mission.yaml", "--fast"]) == 2
+    assert "no such mission file" in capsys.readouterr().err
+
+
+def test_timeout_is_exit_1(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    spin = tmp_path / "spin.yaml"
+    spin.write_text(
+        "tree:\n  sequence:\n    - mode: safe\n"
+        "    - drive: {velocity: 100 mm/s, radius: spin_left}\n"
+    )
+    assert main(["run", str(spin), "--fast", "--display", "none", "--timeout", "2s"]) == 1
+    assert "TIMEOUT" in capsys.readouterr().out
+
+
+def test_replay_of_a_malformed_record_is_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    record = tmp_path / "bad.jsonl"
+    record.write_text('{"format": "roomba-bt-record", "version": 1}\n{"t": "x"}\n')
+    assert main(["replay", str(record)]) == 2
+    err = capsys.readouterr().err
+    assert "bad.jsonl:2:" in err

@@ -1,0 +1,63 @@
+"""What a user sees: the sensor line, the live tree, one log line per status change."""
+
+from __future__ import annotations
+
+import io
+import logging
+
+import pytest
+
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.robot.interface import StubRobot
+from roomba_bt.runtime.display import StatusChangeLogger, TerminalDisplay, sensor_line
+
+from .simrun import RunMission
+
+DRIVE = """
+tree:
+  sequence:
+    - mode: safe
+    - drive: {velocity: 200 mm/s, distance: 10 cm}
+"""
+
+
+def test_sensor_line_names_bumps_cliffs_ir_and_charger() -> None:
+    stub = StubRobot()
+    snap = stub.set_frame(
+        {7: 0b0110, 9: 1, 10: 0, 11: 0, 12: 1, 17: 172, 52: 0, 53: 0, 34: 2, 25: 1000,
+         26: 2000, 35: 2},
+    )  # fmt: skip
+    line = sensor_line(snap)
+    assert "mode=Safe" in line
+    assert "bump=L" in line  # bit 1: bump left
+    assert "drop=R" in line  # bit 2: wheel drop right
+    assert "cliff=LR" in line
+    assert "ir=172(RG)" in line
+    assert "charger=home" in line
+    assert "battery=50%" in line
+
+
+def test_status_changes_are_logged_once_each(
+    run_mission: RunMission, caplog: pytest.LogCaptureFixture
+) -> None:
+    caplog.set_level(logging.INFO, logger="roomba_bt.run")
+    logger = StatusChangeLogger()
+    run = run_mission(DRIVE)
+    # Replay the statuses the finished run left: a fresh logger reports each node once.
+    logger(run.runner)
+    lines = [r.getMessage() for r in caplog.records if r.name == "roomba_bt.run"]
+    assert any("sequence -> SUCCESS" in line for line in lines)
+    assert any("drive" in line and line.endswith("-> SUCCESS") for line in lines), lines
+    logger(run.runner)  # nothing changed: nothing more is logged
+    assert len([r for r in caplog.records if r.name == "roomba_bt.run"]) == len(lines)
+
+
+def test_terminal_display_draws_the_tree_with_statuses(run_mission: RunMission) -> None:
+    run = run_mission(DRIVE)
+    out = io.StringIO()
+    TerminalDisplay(out).render(run.runner)
+    text = out.getvalue()
+    assert text.startswith("\x1b[H\x1b[J")
+    assert "sequence" in text and "drive" in text
+    assert "✓" in text
+    assert f"mode={OIMode.PASSIVE.label}" in text or "mode=Safe" in text
