@@ -48,6 +48,8 @@ class FrameLayout:
     """Where each packet sits in a payload for one requested packet list."""
 
     __slots__ = (
+        "frame_mask",
+        "frame_template",
         "id_offsets",
         "index",
         "members",
@@ -91,6 +93,17 @@ class FrameLayout:
                 "stream", "packet ids", "at most 255 bytes of ids and data per frame", offset
             )
         self.id_offsets = tuple(id_offsets)
+        # For the stream parser: header, n-bytes and every id byte of a whole frame, as a mask
+        # and the values under it, each one big-endian integer (one test per candidate).
+        mask = bytearray(offset + 3)
+        template = bytearray(offset + 3)
+        if with_ids:
+            fixed = [(0, STREAM_HEADER), (1, offset & 0xFF)]
+            fixed += [(2 + off, pid) for off, pid in zip(id_offsets, packet_ids, strict=True)]
+            for position, value in fixed:
+                mask[position], template[position] = 0xFF, value
+        self.frame_mask = int.from_bytes(mask, "big")
+        self.frame_template = int.from_bytes(template, "big")
 
     @property
     def frame_size(self) -> int:

@@ -101,17 +101,10 @@ class StreamParser:
             self._ok_sums = frozenset({0})
         else:
             self._ok_sums = frozenset({STREAM_HEADER})
-        # Header, n-bytes and every id byte checked at once: the frame read as one big-endian
-        # integer, masked to those byte positions, must equal the same bytes of a template.
-        mask = bytearray(self._size)
-        template = bytearray(self._size)
-        for position, value in [(0, STREAM_HEADER), (1, self._n)] + [
-            (2 + off, pid)
-            for off, pid in zip(self.layout.id_offsets, self.layout.packet_ids, strict=True)
-        ]:
-            mask[position], template[position] = 0xFF, value
-        self._mask = int.from_bytes(mask, "big")
-        self._template = int.from_bytes(template, "big")
+        # Header, n-bytes and every id byte checked at once: the candidate read as one
+        # big-endian integer, masked to those positions, must equal the layout's template.
+        self._mask = self.layout.frame_mask
+        self._template = self.layout.frame_template
         self._unpack = self.layout.struct.unpack_from
         # The checksum test needs the sum of the frame's bytes. zlib.adler32 started at 0 keeps
         # that sum modulo 65521 in its low 16 bits, computed in C: exact while the sum cannot
