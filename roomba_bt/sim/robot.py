@@ -41,7 +41,6 @@ from roomba_bt.sim.geometry import (
     Segment,
     closest_point,
     point_in_polygon,
-    ray_hit,
     wrap_angle,
 )
 from roomba_bt.sim.world import ROBOT_RADIUS_MM, Pose, TimelineEvent, World
@@ -69,6 +68,7 @@ CLIFF_SENSOR_RADIUS_MM = 150.0
 CLIFF_FLOOR_SIGNAL = 2600
 CLIFF_DROP_SIGNAL = 20
 _WALL_SENSOR_ANGLE = math.radians(-60.0)
+_WALL_SENSOR_COS, _WALL_SENSOR_SIN = math.cos(_WALL_SENSOR_ANGLE), math.sin(_WALL_SENSOR_ANGLE)
 WALL_SENSOR_RANGE_MM = 120.0
 WALL_SENSOR_TRIGGER_MM = 50.0
 #: Bumper: contacts within this angle of the heading press both switches.
@@ -805,26 +805,42 @@ class Simulator:
         light_bits = 0
         if close:
             ct, st = math.cos(theta), math.sin(theta)
-            only = close[0] if len(close) == 1 else None
-            for i, (ca, sa) in enumerate(_LIGHT_BUMP_DIRECTIONS):
-                c, s = ct * ca - st * sa, st * ca + ct * sa
-                ox, oy = x + ROBOT_RADIUS_MM * c, y + ROBOT_RADIUS_MM * s
-                if only is not None:
-                    d = ray_hit(ox, oy, c, s, only)
-                else:
-                    d = min([ray_hit(ox, oy, c, s, seg) for seg in close])
+            rays = [
+                (x + ROBOT_RADIUS_MM * c, y + ROBOT_RADIUS_MM * s, c, s)
+                for c, s in (
+                    (ct * ca - st * sa, st * ca + ct * sa) for ca, sa in _LIGHT_BUMP_DIRECTIONS
+                )
+            ]
+            # the wall sensor: on the bumper at -60 deg, looking right of the heading
+            wc, ws = (
+                ct * _WALL_SENSOR_COS - st * _WALL_SENSOR_SIN,
+                st * _WALL_SENSOR_COS + ct * _WALL_SENSOR_SIN,
+            )
+            rays.append((x + ROBOT_RADIUS_MM * wc, y + ROBOT_RADIUS_MM * ws, st, -ct))
+            hits = [math.inf] * 7
+            for ax, ay, bx, by in close:  # ray_hit, inlined: 7 rays x the close walls
+                ex, ey = bx - ax, by - ay
+                for i, (ox, oy, c, s) in enumerate(rays):
+                    denom = c * ey - s * ex
+                    if denom == 0.0:
+                        continue
+                    wx, wy = ax - ox, ay - oy
+                    t = (wx * ey - wy * ex) / denom
+                    if t < 0.0 or t >= hits[i]:
+                        continue
+                    u = (wx * s - wy * c) / denom
+                    if 0.0 <= u <= 1.0:
+                        hits[i] = t
+            for i in range(6):
+                d = hits[i]
                 if d < LIGHT_BUMP_RANGE_MM:
                     signal = int(4095 * (1.0 - d / LIGHT_BUMP_RANGE_MM) ** 2)
+                    if signal >= LIGHT_BUMP_THRESHOLD:
+                        light_bits |= 1 << i
                 else:
                     signal = 0
                 v[46 + i] = signal
-                if signal >= LIGHT_BUMP_THRESHOLD:
-                    light_bits |= 1 << i
-            wa = theta + _WALL_SENSOR_ANGLE
-            ox = x + ROBOT_RADIUS_MM * math.cos(wa)
-            oy = y + ROBOT_RADIUS_MM * math.sin(wa)
-            c, s = math.sin(theta), -math.cos(theta)  # pointing right of the heading
-            d = min([ray_hit(ox, oy, c, s, seg) for seg in close])
+            d = hits[6]
             if d < WALL_SENSOR_RANGE_MM:
                 top = self.profile.wall_signal_maximum
                 v[27] = int(top * (1.0 - d / WALL_SENSOR_RANGE_MM) ** 2)

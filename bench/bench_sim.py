@@ -1,0 +1,103 @@
+"""Simulator speed as a multiple of real time, on one core (the simulator is single-threaded).
+
+Real time is the baseline: one step is 15 ms of robot time, so ``15 ms / (host time per
+step)`` is how many times faster than real time the simulator runs. Three cases, each the
+best of several runs (the machine may be shared):
+
+* stream and physics only, all sensors (group 100, 80 data bytes a frame), robot driving an
+  arc in the empty room (walls, dock beams and light bumpers in play);
+* the same with a typical mission's packet list (bumps, IR, charging, mode, encoders);
+* with a trivial client ticking: every frame is parsed by ``oi.StreamParser`` and answered
+  with one Drive command, through :class:`~roomba_bt.sim.link.SimLink` (no behaviour tree).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+from roomba_bt.oi import commands
+from roomba_bt.oi.stream import StreamParser
+from roomba_bt.sim import SimLink, Simulator, load_world
+from roomba_bt.sim.robot import STEP_SECONDS
+
+MISSION_PACKETS = [7, 17, 21, 34, 35, 43, 44, 45, 52, 53]
+STEPS = 4000
+REPEATS = 5
+
+
+def _setup(packets: list[int]) -> Simulator:
+    sim = Simulator(load_world("empty-room"))
+    sim.receive(
+        commands.start().data
+        + commands.full().data
+        + commands.stream(packets).data
+        + commands.drive(300, 500).data
+    )
+    return sim
+
+
+def _physics_only(packets: list[int]) -> Callable[[], int]:
+    sim = _setup(packets)
+
+    def run() -> int:
+        step, read = sim.step, sim.read
+        for _ in range(STEPS):
+            step()
+            read()
+        return STEPS
+
+    return run
+
+
+def _with_client() -> Callable[[], int]:
+    sim = _setup(MISSION_PACKETS)
+    link = SimLink(sim)
+    parser = StreamParser(MISSION_PACKETS, sim.profile)
+    spin = commands.spin(200, clockwise=True).data
+    arc = commands.drive(250, -300).data
+    straight = commands.drive(250, commands.Radius.STRAIGHT).data
+
+    def run() -> int:
+        frames = 0
+        while frames < STEPS:
+            for frame in parser.feed(link.read(0.1)):
+                frames += 1
+                if frame.bumps.any_bump:
+                    link.write(spin)
+                elif frame.light_bumper.raw:
+                    link.write(arc)
+                else:
+                    link.write(straight)
+        return frames
+
+    return run
+
+
+def _best(run: Callable[[], int]) -> float:
+    """Best host seconds per step over REPEATS runs."""
+    best = float("inf")
+    for _ in range(REPEATS):
+        started = time.perf_counter()
+        steps = run()
+        best = min(best, (time.perf_counter() - started) / steps)
+    return best
+
+
+def main() -> None:
+    cases = [
+        ("stream+physics, group 100 (80 B/frame)", _physics_only([100])),
+        ("stream+physics, mission packets (27 B/frame)", _physics_only(MISSION_PACKETS)),
+        ("with a trivial client (StreamParser + Drive/frame)", _with_client()),
+    ]
+    for label, run in cases:
+        per_step = _best(run)
+        print(
+            f"   {label:<52} {per_step * 1e6:7.1f} us/step  "
+            f"{STEP_SECONDS / per_step:7.0f}x real time",
+            flush=True,
+        )
+
+
+if __name__ == "__main__":
+    main()
