@@ -50,6 +50,21 @@ def compile_mission(
 ) -> tuple[CompiledMission | None, list[Diagnostic]]:
     """Compile and check; ``(mission or None, diagnostics)``. Never raises for bad input."""
     path = Path(path)
+    try:
+        return _compile(path, params, profile, baud, registry, require_tree)
+    except Exception as exc:  # a compiler bug must still not be a traceback at a user
+        message = f"internal error while compiling ({type(exc).__name__}: {exc}); please report it"
+        return None, [Diagnostic(_display(path), 1, 1, message)]
+
+
+def _compile(
+    path: Path,
+    params: Mapping[str, str] | None,
+    profile: RobotProfile,
+    baud: int | None,
+    registry: Registry | None,
+    require_tree: bool,
+) -> tuple[CompiledMission | None, list[Diagnostic]]:
     ctx = Context(registry=registry or default_registry())
     compiler = Compiler(ctx, _display)
     parsed = compiler.compile_file(path, dict(params or {}), require_tree=require_tree)

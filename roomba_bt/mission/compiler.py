@@ -444,7 +444,8 @@ class Compiler:
             if not target.is_file():
                 self.ctx.error(
                     iloc.at(
-                        f"included file {text!r} not found (paths are relative to the file naming it)"
+                        f"included file {text!r} not found"
+                        " (paths are relative to the including file)"
                     )
                 )
                 continue
@@ -915,11 +916,13 @@ class Compiler:
                 continue
             onode, oloc = fields[oname]
             options[oname] = resolve(self.ctx, onode, oloc, otype, env, f"{word}.{oname}")
-        if word == "retry" and options["times"] < 1:
+        if any(v is UNKNOWN for v in options.values()):
+            pass  # an unused subtree's parameter: checked where the subtree is used
+        elif word == "retry" and options["times"] < 1:
             raise Bad(
                 fields["times"][1].at(f"retry.times must be at least 1, got {options['times']}")
             )
-        if word == "repeat":
+        if word == "repeat" and UNKNOWN not in options.values():
             if "times" in options and "for" in options:
                 raise Bad(key_loc.at("repeat takes times: or for:, not both"))
             if options.get("times", 1) < 1:
