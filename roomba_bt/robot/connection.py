@@ -315,6 +315,8 @@ class Connection:
         is sent. Raises :class:`ConnectionFailed` if the robot does not answer in
         ``confirm_timeout`` seconds.
         """
+        if self._reader is not None:
+            raise RobotError("start() reads the robot's reply itself: call it before start_reader")
         target = _as_mode(mode)
         if target is OIMode.OFF:
             raise ValueError("start() enters Passive, Safe or Full; use close() to end in Off")
