@@ -41,6 +41,22 @@ def frame(right: int, front: int = 0) -> dict[int, int]:
     return {48: front, 49: 0, 50: 0, 51: right, 35: 2}
 
 
+def installed() -> bool:
+    from importlib.metadata import PackageNotFoundError, distribution
+
+    try:
+        distribution("roomba-bt-wallfollow")
+    except PackageNotFoundError:
+        return False
+    return True
+
+
+needs_install = pytest.mark.skipif(
+    not installed(), reason="pip install -e plugins/roomba-bt-wallfollow to test its entry point"
+)
+
+
+@needs_install
 def test_it_is_registered_through_the_entry_point_group() -> None:
     decl = default_registry().get("wall_follow")
     assert decl is not None and decl.cls is WallFollow
@@ -108,6 +124,7 @@ def test_duration_ends_with_a_halt_and_preemption_halts_too(robot: StubRobot) ->
     assert [list(c.data) for c in robot.flush()] == [[137, 0, 0, 0, 0]]
 
 
+@needs_install
 def test_the_shipped_example_mission_uses_it() -> None:
     mission = load_mission(EXAMPLE)
     assert any(isinstance(n, WallFollow) for n in mission.root.iterate())
