@@ -313,14 +313,6 @@ class Simulator:
         sizes = self._data_sizes
         while buf:
             op = buf[0]
-            if self.asleep or self.mode is OIMode.OFF:
-                # Off (and asleep) answers nothing but Start, and Reset where it exists.
-                del buf[0]
-                if op == 128 or (op == 7 and 7 in commands):
-                    self._execute(commands[op], b"")
-                else:
-                    self.ignored_bytes += 1
-                continue
             spec = commands.get(op)
             if spec is None:
                 del buf[0]
@@ -339,11 +331,15 @@ class Simulator:
 
     def _execute(self, spec: CommandSpec, args: bytes) -> None:
         op = spec.opcode
-        if self.mode not in spec.modes:
+        if self.asleep or self.mode is OIMode.OFF:
+            # Off (and asleep) answers nothing but Start, and Reset where it exists.
+            if op != 128 and op != 7:
+                if spec.is_actuator:
+                    self.violations.append(Violation(self.time, op, spec.name, OIMode.OFF))
+                return
+        elif self.mode not in spec.modes:
             if spec.is_actuator:
                 self.violations.append(Violation(self.time, op, spec.name, self.mode))
-            return
-        if self.asleep and op != 128:
             return
         if spec.leads_to is not None:
             self._command_mode(spec)

@@ -24,6 +24,8 @@ def test_robot_powers_up_in_off_and_answers_nothing_but_start() -> None:
     assert host.sim.read() == b""
     assert host.sim.mode is OIMode.OFF
     assert host.sim.x == 2000.0
+    assert [v.name for v in host.sim.violations] == ["drive_direct"]
+    assert host.sim.violations[0].mode is OIMode.OFF
     host.send(C.start())
     assert host.sim.mode is OIMode.PASSIVE
     assert mode_of(host) == OIMode.PASSIVE
