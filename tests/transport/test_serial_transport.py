@@ -172,3 +172,15 @@ def test_write_to_a_closed_transport_is_a_transport_error() -> None:
     transport.close()  # twice is fine
     with pytest.raises(TransportError, match="loop://: could not write"):
         transport.write(b"\x80")
+
+
+def test_a_far_end_that_stops_reading_times_the_write_out_instead_of_hanging() -> None:
+    with pty_far_end() as end:
+        transport = SerialTransport.open(end.url, write_timeout=0.2)
+        try:
+            chunk = bytes(4096)
+            with pytest.raises(TransportError, match="timed out: the far end is not reading"):
+                for _ in range(10_000):  # the pty's buffer fills: then the bounded write fails
+                    transport.write(chunk)
+        finally:
+            transport.close()
