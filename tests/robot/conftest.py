@@ -91,6 +91,14 @@ def fake_links() -> Iterator[Any]:
 BACKENDS = ["pty", "tcp", "sim", "sim-pty", "real"]
 
 
+@pytest.fixture(scope="session")
+def sim_pty_address() -> Iterator[str]:
+    """One ``roomba-bt sim --pty`` for the session: every test's start() resets the robot
+    (Start, pause the stream), and its pty survives a client closing it."""
+    with sim_pty_server(CREATE2) as address:
+        yield address
+
+
 @pytest.fixture(params=BACKENDS)
 def link(request: pytest.FixtureRequest, fake_links: Any) -> Iterator[Link]:
     """One robot link per backend; the contract tests run once on each."""
@@ -114,9 +122,9 @@ def link(request: pytest.FixtureRequest, fake_links: Any) -> Iterator[Link]:
             yield sim
             _close(sim)
             return
-        with sim_pty_server(CREATE2) as address:
-            served = Link("sim-pty", address, None, CREATE2)
-            yield served
-            _close(served)
+        address = request.getfixturevalue("sim_pty_address")
+        served = Link("sim-pty", address, None, CREATE2)
+        yield served
+        _close(served)
         return
     yield fake_links(kind)
