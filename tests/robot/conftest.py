@@ -35,6 +35,9 @@ class Link:
 
     def connect(self, **kwargs: Any) -> Connection:
         kwargs.setdefault("profile", self.profile)
+        # 2 cores shared by every test run: a 100 ms hiccup is not what these tests are about
+        # (the watchdog tests pass their own 0.1 s)
+        kwargs.setdefault("watchdog", 1.0)
         if isinstance(self.robot, SimRobot):
             kwargs.pop("write_timeout", None)
             connection = Connection(self.robot.link, **kwargs)
