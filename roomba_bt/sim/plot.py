@@ -94,7 +94,7 @@ def plot_run(simulator: Simulator, path: str | pathlib.Path, title: str | None =
             lines.set_array(times[:-1])
             ax.add_collection(lines)
             fig.colorbar(lines, ax=ax, label="time (s)", shrink=0.8)
-        ax.plot(points[0][0], points[0][1], "o", color="black", label="start")
+        ax.plot(points[0][0], points[0][1], "o", color="black", label="start", zorder=6)
         heading = simulator.theta
         ax.arrow(simulator.x / 1000, simulator.y / 1000, 0.2 * math.cos(heading),
                  0.2 * math.sin(heading), width=0.02, color="black")  # fmt: skip
@@ -106,7 +106,7 @@ def plot_run(simulator: Simulator, path: str | pathlib.Path, title: str | None =
             if style is None:
                 continue
             marker, colour, label = style
-            ax.plot(event.x / 1000, event.y / 1000, marker, color=colour, ms=8,
+            ax.plot(event.x / 1000, event.y / 1000, marker, color=colour, ms=8, zorder=5,
                     label=None if label in seen else label)  # fmt: skip
             seen.add(label)
         handles, labels = ax.get_legend_handles_labels()

@@ -271,6 +271,7 @@ class Simulator:
         self._ir_stale = True
         self._dock_target = world.dock.docked_pose if world.dock is not None else None
         self._drops = world.drops
+        self._last_drive = b""
         self._checksum_bias = 0 if profile.checksum_includes_header else 19
         self._plain_output = not (self.faults.corrupt_rate or self.faults.latency)
         self._half_base = profile.wheel_base_mm / 2.0
@@ -308,9 +309,14 @@ class Simulator:
             return
         self._last_activity = self.time
         buf = self._inbuf
-        buf += data
         commands = self._commands
         sizes = self._data_sizes
+        if not buf:  # the common case: exactly one whole fixed-size command
+            spec = commands.get(data[0])
+            if spec is not None and spec.variable is None and len(data) == 1 + sizes[data[0]]:
+                self._execute(spec, bytes(data[1:]))
+                return
+        buf += data
         while buf:
             op = buf[0]
             spec = commands.get(op)
@@ -370,6 +376,7 @@ class Simulator:
         self.values[35] = int(mode) + (1 if self.profile.reports_mode_plus_one else 0)
 
     def _stop_wheels(self) -> None:
+        self._last_drive = b""
         self.requested_left = self.requested_right = 0.0
         v = self.values
         v[39] = v[41] = v[42] = 0
@@ -400,6 +407,9 @@ class Simulator:
         self.baud = _BAUD_BY_CODE.get(args[0], self.baud)
 
     def _on_drive(self, args: bytes) -> None:
+        if args == self._last_drive:
+            return  # the same Drive again: nothing changes
+        self._last_drive = args
         velocity, radius = struct.unpack(">hh", args)
         # The speed controller steps the commanded velocity; the radius sets the wheel ratio.
         speed = _quantise(velocity)
@@ -413,6 +423,7 @@ class Simulator:
         v[42] = round(asked_left)
 
     def _on_drive_direct(self, args: bytes) -> None:
+        self._last_drive = b""
         right, left = struct.unpack(">hh", args)
         right = max(-500, min(500, right))
         left = max(-500, min(500, left))
@@ -424,6 +435,7 @@ class Simulator:
         v[42] = left
 
     def _on_drive_pwm(self, args: bytes) -> None:
+        self._last_drive = b""
         right, left = struct.unpack(">hh", args)
         scale = MAX_WHEEL_SPEED_MM_S / 255.0
         self.requested_right = _quantise(max(-255, min(255, right)) * scale)

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import os
 import pathlib
 import random
 from dataclasses import dataclass, field
@@ -47,7 +48,10 @@ from roomba_bt.sim.geometry import (
 #: Radius of the round Roomba / Create 2 body (340 mm across).
 ROBOT_RADIUS_MM = 170.0
 
-WORLDS_DIR = pathlib.Path(__file__).resolve().parents[2] / "worlds"
+#: The shipped worlds: ``worlds/`` of the source tree, or ``$ROOMBA_BT_WORLDS`` if set.
+WORLDS_DIR = pathlib.Path(
+    os.environ.get("ROOMBA_BT_WORLDS", pathlib.Path(__file__).resolve().parents[2] / "worlds")
+)
 
 EVENT_KINDS = ("bump", "lift", "charger_step")
 SIDES = ("left", "right", "both")
