@@ -265,10 +265,9 @@ def resolve(
                     )
                 return bound.text
 
+            names = _SUBSTITUTION.findall(raw)
             raw = _SUBSTITUTION.sub(substitute, raw)
-            if UNKNOWN in [
-                env.get(m) and env[m].value for m in _SUBSTITUTION.findall(str(plain(node, loc)))
-            ]:
+            if any(env[name].value is UNKNOWN for name in names):
                 return UNKNOWN
         if raw.startswith("@"):
             if not allow_ref:
@@ -1176,6 +1175,3 @@ def _cli_value(text: str, vtype: ValueType) -> object:
         except yaml.YAMLError:
             return text
     return text
-
-
-_ = field
