@@ -75,6 +75,7 @@ def mission_schema(registry: Registry | None = None) -> dict[str, Any]:
         options: dict[str, Any] = {
             "children": children,
             "memory": {"type": "boolean", "default": memory},
+            "name": {"type": "string"},
         }
         if word == "parallel":
             options |= {
@@ -104,6 +105,7 @@ def mission_schema(registry: Registry | None = None) -> dict[str, Any]:
     required_options = {"retry": ["times"], "timeout": ["after"], "delay": ["for"],
                         "for_each": ["key", "in"]}  # fmt: skip
     for word, opts in decorator_options.items():
+        opts = {k: {"anyOf": [v, _SUBSTITUTION]} for k, v in opts.items()}
         long_form = {
             "type": "object",
             "properties": {**opts, "do": _NODE},
