@@ -200,7 +200,8 @@ def enum(*choices: str) -> ValueType:
 
     def parse(value: object) -> str:
         if not isinstance(value, str) or value not in choices:
-            raise UnitError(f"expected one of {', '.join(choices)}, got {_describe(value)}")
+            hint = closest(value, choices) if isinstance(value, str) else ""
+            raise UnitError(f"expected one of {', '.join(choices)}, got {_describe(value)}{hint}")
         return value
 
     return ValueType("enum", parse, choices=tuple(choices))
