@@ -67,8 +67,6 @@ _CLIFF_ANGLES = tuple(math.radians(a) for a in (60.0, 20.0, -20.0, -60.0))
 CLIFF_SENSOR_RADIUS_MM = 150.0
 CLIFF_FLOOR_SIGNAL = 2600
 CLIFF_DROP_SIGNAL = 20
-_WALL_SENSOR_ANGLE = math.radians(-60.0)
-_WALL_SENSOR_COS, _WALL_SENSOR_SIN = math.cos(_WALL_SENSOR_ANGLE), math.sin(_WALL_SENSOR_ANGLE)
 WALL_SENSOR_RANGE_MM = 120.0
 WALL_SENSOR_TRIGGER_MM = 50.0
 #: Bumper: contacts within this angle of the heading press both switches.
@@ -87,6 +85,19 @@ RECEIVER_OUTER = math.radians(90.0)
 DOCK_GUIDE_ANGLE = math.radians(20.0)
 _GUIDE_STEP = math.radians(1.0)
 _NEAR_MARGIN_MM = 300.0
+_RAY_RANGES = (LIGHT_BUMP_RANGE_MM,) * 6 + (WALL_SENSOR_RANGE_MM,)
+_Line = tuple[float, float, float, float, float, float, float]
+
+
+def _line(seg: Segment) -> _Line:
+    """(nx, ny, n.a, tx, ty, t.a, length) of a wall segment from a to b."""
+    ax, ay, bx, by = seg
+    length = math.hypot(bx - ax, by - ay)
+    tx, ty = ((bx - ax) / length, (by - ay) / length) if length else (1.0, 0.0)
+    nx, ny = -ty, tx
+    return (nx, ny, nx * ax + ny * ay, tx, ty, tx * ax + ty * ay, length)
+
+
 _NEAR_RADIUS_MM = ROBOT_RADIUS_MM + LIGHT_BUMP_RANGE_MM + 40.0 + _NEAR_MARGIN_MM
 
 _DEGREES_PER_RADIAN = 180.0 / math.pi
@@ -271,6 +282,7 @@ class Simulator:
         self._ir_stale = True
         self._dock_target = world.dock.docked_pose if world.dock is not None else None
         self._drops = world.drops
+        self._lines = {seg: _line(seg) for seg in world.solid}
         self._last_drive = b""
         self._checksum_bias = 0 if profile.checksum_includes_header else 19
         self._plain_output = not (self.faults.corrupt_rate or self.faults.latency)
@@ -773,7 +785,8 @@ class Simulator:
         # bumpers: contact angle of each touching wall
         bumps = 0
         reach2 = (ROBOT_RADIUS_MM + LIGHT_BUMP_RANGE_MM + 5.0) ** 2
-        close: list[Segment] = []
+        close_lines: list[_Line] = []
+        lines = self._lines
         contact2 = (ROBOT_RADIUS_MM + CONTACT_MM) ** 2
         nearest2 = (_NEAR_RADIUS_MM - _NEAR_MARGIN_MM) ** 2
         for seg in near:
@@ -786,7 +799,7 @@ class Simulator:
             if d2 < nearest2:
                 nearest2 = d2
             if d2 < reach2:
-                close.append(seg)
+                close_lines.append(lines[seg])
                 if d2 < contact2:
                     a = wrap_angle(math.atan2(cy - y, cx - x) - theta)
                     if -BUMP_HALF_SPAN < a < BUMP_HALF_SPAN:
@@ -811,33 +824,30 @@ class Simulator:
             self._prev_bumps = bumps
         # light bumpers and the wall sensor (rays from the bumper against close walls)
         light_bits = 0
-        if close:
+        if close_lines:
             ct, st = math.cos(theta), math.sin(theta)
-            rays = [
-                (x + ROBOT_RADIUS_MM * c, y + ROBOT_RADIUS_MM * s, c, s)
-                for c, s in (
-                    (ct * ca - st * sa, st * ca + ct * sa) for ca, sa in _LIGHT_BUMP_DIRECTIONS
-                )
-            ]
-            # the wall sensor: on the bumper at -60 deg, looking right of the heading
-            wc, ws = (
-                ct * _WALL_SENSOR_COS - st * _WALL_SENSOR_SIN,
-                st * _WALL_SENSOR_COS + ct * _WALL_SENSOR_SIN,
-            )
-            rays.append((x + ROBOT_RADIUS_MM * wc, y + ROBOT_RADIUS_MM * ws, st, -ct))
-            hits = [math.inf] * 7
-            for ax, ay, bx, by in close:  # ray_hit, inlined: 7 rays x the close walls
-                ex, ey = bx - ax, by - ay
-                for i, (ox, oy, c, s) in enumerate(rays):
-                    denom = c * ey - s * ex
-                    if denom == 0.0:
-                        continue
-                    wx, wy = ax - ox, ay - oy
-                    t = (wx * ey - wy * ex) / denom
+            rays = [(ct * ca - st * sa, st * ca + ct * sa) for ca, sa in _LIGHT_BUMP_DIRECTIONS]
+            # the wall sensor looks right of the heading (a ray through the centre, started
+            # on the bumper: near enough to the real sensor at -60 deg, looking right)
+            rays.append((st, -ct))
+            # Each close wall as a line: unit normal n, unit tangent t, n.a, t.a, length. A ray
+            # from the centre c in direction d meets it at c + k d, k = (n.a - n.c) / (n.d);
+            # the ray starts on the bumper (k = R), the hit's place along the wall is t.(c+kd).
+            hits = list(_RAY_RANGES)
+            for nx, ny, w, tx, ty, ta, length in close_lines:
+                p = w - (nx * x + ny * y)
+                q = tx * x + ty * y - ta
+                for i in range(7):
+                    c, s = rays[i]
+                    dn = nx * c + ny * s
+                    if dn * p <= 0.0:
+                        continue  # pointing away from (or along) this wall
+                    k = p / dn
+                    t = k - ROBOT_RADIUS_MM
                     if t < 0.0 or t >= hits[i]:
                         continue
-                    u = (wx * s - wy * c) / denom
-                    if 0.0 <= u <= 1.0:
+                    along = q + k * (tx * c + ty * s)
+                    if 0.0 <= along <= length:
                         hits[i] = t
             for i in range(6):
                 d = hits[i]
