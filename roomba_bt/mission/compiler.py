@@ -38,6 +38,7 @@ from roomba_bt.behaviours.declare import BlackboardRef, Declaration, Param
 from roomba_bt.behaviours.registry import Registry
 from roomba_bt.behaviours.units import (
     BOOL,
+    CANONICAL,
     DURATION,
     INT,
     MARK,
@@ -49,6 +50,7 @@ from roomba_bt.behaviours.units import (
     compatible,
     convert,
     enum,
+    format_quantity,
 )
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.ir import (
@@ -1011,7 +1013,7 @@ class Compiler:
                 self.ctx.error(key_loc.at(f"subtree {name!r} needs parameter {pname!r}"))
                 sub_env[pname] = Bound(vtype, UNKNOWN, "?")
             else:
-                sub_env[pname] = Bound(vtype, default, str(default))
+                sub_env[pname] = Bound(vtype, default, shown(vtype, default))
         if sub.body is None:
             return None
         self._use_stack.append(name)
@@ -1090,7 +1092,7 @@ class Compiler:
                 ok = False
         if not ok:
             return None
-        return Node("leaf", key_loc, _leaf_name(decl.name, given), decl=decl, params=params,
+        return Node("leaf", key_loc, _leaf_name(decl.name, given, env), decl=decl, params=params,
                     options=options)  # fmt: skip
 
     def _key_params(
@@ -1148,13 +1150,29 @@ class Compiler:
         return ok
 
 
-def _leaf_name(behaviour: str, given: list[tuple[str, yaml.Node, Loc, Loc]]) -> str:
-    """``drive(velocity=100 mm/s, radius=-500 mm)``: what ``show`` prints for a leaf."""
+def shown(vtype: ValueType, value: Any) -> str:
+    """A value as a mission would write it: ``150 mm/s`` rather than ``150.0``."""
+    if vtype.name in CANONICAL and isinstance(value, int | float):
+        return format_quantity(vtype.name, value)
+    return str(value)
+
+
+def _leaf_name(
+    behaviour: str, given: list[tuple[str, yaml.Node, Loc, Loc]], env: Mapping[str, Bound]
+) -> str:
+    """``drive(velocity=100 mm/s, radius=-500 mm)``: what ``show`` prints for a leaf, with
+    ``${parameters}`` shown as their values."""
     if not given:
         return behaviour
+
+    def value_of(match: re.Match[str]) -> str:
+        bound = env.get(match.group(1))
+        return bound.text if bound is not None and bound.value is not UNKNOWN else match.group(0)
+
     parts = []
     for pname, node, key_loc, value_loc in given:
         text = str(node.value) if isinstance(node, yaml.ScalarNode) else "..."
+        text = _SUBSTITUTION.sub(value_of, text)
         parts.append(text if key_loc is value_loc else f"{pname}={text}")
     return f"{behaviour}({', '.join(parts)})"
 
