@@ -129,3 +129,19 @@ def test_the_shipped_example_mission_uses_it() -> None:
     mission = load_mission(EXAMPLE)
     assert any(isinstance(n, WallFollow) for n in mission.root.iterate())
     assert {48, 49, 50, 51} <= set(mission.packets)
+
+
+@needs_install
+def test_it_follows_the_corridor_wall_in_the_simulator(capsys: pytest.CaptureFixture[str]) -> None:
+    """60 s of wall following in the corridor world: it keeps moving along the walls (round
+    the corners) instead of stopping against one."""
+    import re
+
+    from roomba_bt.cli import main
+
+    argv = ["run", str(EXAMPLE), "--world", "corridor", "--fast", "--display", "none"]
+    assert main([*argv, "-p", "how_long=60s"]) == 0
+    out, err = capsys.readouterr()
+    found = re.search(r"distance\s+([\d.]+) m", out + err)
+    assert found is not None, out + err
+    assert float(found.group(1)) > 7.0  # 150 mm/s for 60 s is 9 m
