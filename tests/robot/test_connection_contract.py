@@ -167,7 +167,7 @@ def test_no_actuator_byte_ever_leaves_in_passive_or_off(link: Link) -> None:
 
 def test_watchdog_sends_drive_0_and_reports_a_stalled_stream(link: Link) -> None:
     robot = link.scripted()
-    with link.connect(watchdog=0.1) as connection:
+    with link.connect(watchdog=0.3) as connection:
         connection.start("safe", PACKETS)
         connection.send(oi.drive(100, Radius.STRAIGHT))
         frames_until(connection, lambda: connection.counters.frames >= 3)
@@ -241,7 +241,7 @@ def test_background_reader_queues_frames_and_wakes_waiters(link: Link) -> None:
 def test_background_reader_runs_the_watchdog(link: Link) -> None:
     link.needs_threads()
     robot = link.scripted()
-    with link.connect(watchdog=0.1) as connection:
+    with link.connect(watchdog=0.3) as connection:
         connection.start("safe", PACKETS)
         connection.start_reader()
         assert connection.wait_for_frame(2.0) is not None
