@@ -119,6 +119,8 @@ class ValueType:
     unit: str = ""
     json_schema: tuple[tuple[str, Any], ...] = ()
     choices: tuple[str, ...] = ()
+    #: a record's fields (blackboard keys declared with ``fields:``), in order
+    fields: tuple[tuple[str, ValueType], ...] = ()
 
     def describe(self) -> str:
         if self.choices:
@@ -210,9 +212,9 @@ def enum(*choices: str) -> ValueType:
 def compatible(source: ValueType, target: ValueType) -> bool:
     """May a value of ``source`` type fill a slot of ``target`` type?"""
     if source.name == target.name and source.choices == target.choices:
-        return True
-    if target.choices and source.name == "str":
-        return True
+        return source.fields == target.fields
+    if source.choices and target.choices:  # an enum whose every word the slot accepts
+        return set(source.choices) <= set(target.choices)
     return (source.name, target.name) in {("int", "float")}
 
 

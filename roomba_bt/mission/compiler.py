@@ -128,7 +128,6 @@ class Context:
     diagnostics: list[Diagnostic] = field(default_factory=list)
     keys: dict[str, KeyDecl] = field(default_factory=dict)
     subtrees: dict[str, SubtreeDef] = field(default_factory=dict)
-    plugin_notes: list[str] = field(default_factory=list)
 
     def error(self, diagnostic: Diagnostic) -> None:
         if diagnostic not in self.diagnostics:
@@ -182,17 +181,13 @@ def record_type(fields: dict[str, ValueType]) -> ValueType:
                 raise UnitError(f"field {k}: {exc}") from None
         return out
 
-    vtype = ValueType("record", parse, json_schema=(("type", "object"),))
-    object.__setattr__(vtype, "choices", ())
-    _RECORD_FIELDS[id(vtype)] = fields
-    return vtype
-
-
-_RECORD_FIELDS: dict[int, dict[str, ValueType]] = {}
+    return ValueType(
+        "record", parse, json_schema=(("type", "object"),), fields=tuple(fields.items())
+    )
 
 
 def record_fields(vtype: ValueType) -> dict[str, ValueType] | None:
-    return _RECORD_FIELDS.get(id(vtype))
+    return dict(vtype.fields) if vtype.name == "record" else None
 
 
 def _negate(value: Any) -> Any:

@@ -84,6 +84,9 @@ def test_compatibility_between_types() -> None:
     assert compatible(INT, INT)
     assert not compatible(SPEED, DISTANCE)
     assert not compatible(ANGLE, PERCENT)
+    assert compatible(enum("left", "right"), enum("left", "right", "any"))
+    assert not compatible(enum("left", "up"), enum("left", "right", "any"))
+    assert not compatible(STR, enum("left", "right"))  # a text key could hold any word
 
 
 def test_closest_suggests_a_near_name_only() -> None:
