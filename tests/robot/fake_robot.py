@@ -169,6 +169,7 @@ class FakeRobot:
         self.frames_sent = 0
         self.closed = threading.Event()
         self._pending = bytearray()
+        self._inject = bytearray()
         self._lock = threading.RLock()
         self._changed = threading.Condition(self._lock)
         self._running = True
@@ -200,6 +201,11 @@ class FakeRobot:
     def set_values(self, values: dict[int, int]) -> None:
         with self._lock:
             self.values.update(values)
+
+    def inject(self, data: bytes) -> None:
+        """Bytes the "firmware" prints into the stream before the next frame (a banner)."""
+        with self._lock:
+            self._inject += data
 
     def hang_up(self) -> None:
         """The cable is pulled: the link closes under the connection."""
@@ -268,6 +274,10 @@ class FakeRobot:
                 self._changed.notify_all()
 
     def _send_frame(self) -> None:
+        with self._lock:
+            text, self._inject = bytes(self._inject), bytearray()
+        if text:
+            self.endpoint.send(text)
         with self._lock:
             if not (self.streaming and self.stream_ids) or self.muted or self.mode is OIMode.OFF:
                 return

@@ -159,3 +159,18 @@ def test_loop_back_is_no_robot() -> None:
 def test_open_failure_names_the_port_and_causes() -> None:
     with pytest.raises(ConnectionFailed, match=r"^/dev/no-such-roomba: could not open the port"):
         Connection.open("/dev/no-such-roomba")
+
+
+def test_firmware_text_in_the_stream_is_skipped_and_frames_go_on(fake_links: Any) -> None:
+    link: Link = fake_links("pty")
+    robot = link.scripted()
+    with link.connect() as connection:
+        connection.start("safe", PACKETS)
+        frames_until(connection, lambda: connection.counters.frames >= 3)
+        robot.inject(b"bl-start\r\nRoomba by iRobot!\r\n\x13\x05garbage")
+        before = connection.counters.frames
+        frames_until(connection, lambda: connection.counters.frames >= before + 10)
+        counters = connection.counters
+        assert counters.skipped_bytes >= len(b"bl-start\r\nRoomba by iRobot!\r\n")
+        assert connection.mode is OIMode.SAFE and connection.status is LinkStatus.STREAMING
+    assert robot.wait_until(lambda r: r.received.endswith(STOP_TO_PASSIVE))
