@@ -28,7 +28,7 @@ from typing import Any, Literal, TypeVar
 import py_trees
 
 from roomba_bt.behaviours.units import UnitError, ValueType
-from roomba_bt.oi.encode import Command
+from roomba_bt.oi.encode import Command, halt
 from roomba_bt.oi.modes import ALL_MODES, OIMode
 from roomba_bt.oi.opcodes import COMMANDS
 from roomba_bt.oi.packets import PACKETS
@@ -278,14 +278,12 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
         refs = {k: v for k, v in self.params.items() if isinstance(v, BlackboardRef)}
         if refs:
             resolved = dict(self.params)
-            decl = type(self).declaration
             for pname, ref in refs.items():
+                # typed when written (initial, set, for_each items): the validator proved the
+                # key's type fits this parameter, so no parsing happens during a tick
                 raw = read_key(ref.key)
                 if ref.field is not None:
                     raw = raw.get(ref.field) if isinstance(raw, Mapping) else None
-                param = decl.param(pname)
-                if param is not None and isinstance(raw, str):
-                    raw = param.type.parse(raw)
                 resolved[pname] = raw
             self._resolved = resolved
         self.start()
@@ -309,15 +307,15 @@ class Action(RobotBehaviour):
 
     #: True for actions that start motion: :meth:`terminate` then queues a halt.
     moves = False
+    #: set by the action when it sends a motion command, cleared when it halts itself
+    _started_motion = False
 
     def terminate(self, new_status: py_trees.common.Status) -> None:
+        """However the action ends (success, failure, or preempted: INVALID), wheels it
+        set turning are stopped: ``[137][0][0][0][0]`` queued in this tick's outbox."""
         if self.moves and self.robot is not None and self._started_motion:
-            from roomba_bt.oi.encode import halt
-
             self.robot.outbox.send(halt())
         self._started_motion = False
-
-    _started_motion = False
 
 
 class Condition(RobotBehaviour):
