@@ -179,6 +179,7 @@ class _Builtin:
         self.phase_until = 0.0
         self.turn_sign = 1.0
         self.done = False
+        self.wander_until = 0.0  # after a bounce, go straight a while before aiming again
 
 
 class Simulator:
@@ -1124,6 +1125,7 @@ class Simulator:
             if now < b.phase_until:
                 return -150.0 * b.turn_sign, 150.0 * b.turn_sign
             b.phase = "forward"
+            b.wander_until = now + self._rng.uniform(1.5, 3.0)
         return speed, speed
 
     def _seek_dock(self, b: _Builtin) -> tuple[float, float]:
@@ -1143,7 +1145,11 @@ class Simulator:
         fx, fy = math.cos(dock.facing), math.sin(dock.facing)
         if b.phase in ("forward", "back", "turn") and not sees:
             # search: head for where the firmware remembers the dock, bouncing off obstacles
-            if b.phase == "forward" and not (self.values[7] & 3 or self.blocked):
+            if (
+                b.phase == "forward"
+                and self.time >= b.wander_until
+                and not (self.values[7] & 3 or self.blocked)
+            ):
                 sx, sy = target.x + 700.0 * fx, target.y + 700.0 * fy
                 return _steer_to(self.x, self.y, self.theta, sx, sy, 200.0)
             return self._bounce(b, 200.0)
