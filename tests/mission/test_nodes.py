@@ -316,3 +316,37 @@ def test_every_leaf_receives_the_robot_in_setup(compile_text: Compile) -> None:
     mission.setup(robot)
     leaves: list[Any] = [n for n in mission.root.iterate() if hasattr(n, "robot")]
     assert leaves and all(n.robot is robot for n in leaves)
+
+
+MINIMAL = {
+    "sequence": ("{sequence: [wall]}", py_trees.composites.Sequence),
+    "reactive_sequence": ("{reactive_sequence: [wall]}", py_trees.composites.Sequence),
+    "fallback": ("{fallback: [wall]}", py_trees.composites.Selector),
+    "selector": ("{selector: [wall]}", py_trees.composites.Selector),
+    "reactive_fallback": ("{reactive_fallback: [wall]}", py_trees.composites.Selector),
+    "reactive_selector": ("{reactive_selector: [wall]}", py_trees.composites.Selector),
+    "parallel": ("{parallel: [wall]}", py_trees.composites.Parallel),
+    "inverter": ("{inverter: wall}", py_trees.decorators.Inverter),
+    "force_success": ("{force_success: wall}", py_trees.decorators.FailureIsSuccess),
+    "force_failure": ("{force_failure: wall}", py_trees.decorators.SuccessIsFailure),
+    "retry": ("{retry: {times: 2, do: wall}}", py_trees.decorators.Retry),
+    "repeat": ("{repeat: {times: 2, do: wall}}", py_trees.decorators.Decorator),
+    "timeout": ("{timeout: {after: 1s, do: wall}}", py_trees.decorators.Decorator),
+    "delay": ("{delay: {for: 1s, do: wall}}", py_trees.decorators.Decorator),
+    "oneshot": ("{oneshot: wall}", py_trees.decorators.OneShot),
+    "for_each": ("{for_each: {key: n, in: [1], do: wall}}", py_trees.decorators.Decorator),
+    "subtree": ("{subtree: s}", py_trees.composites.Sequence),
+}
+
+
+@pytest.mark.parametrize("word", sorted(MINIMAL))
+def test_every_language_word_compiles_onto_py_trees(compile_text: Compile, word: str) -> None:
+    from roomba_bt.mission.ir import LANGUAGE_WORDS
+
+    assert set(MINIMAL) == set(LANGUAGE_WORDS)
+    text, cls = MINIMAL[word]
+    mission = compile_text(
+        f"blackboard: {{n: int}}\nsubtrees: {{s: {{tree: {{sequence: [wall]}}}}}}\ntree: {text}\n"
+    )
+    assert isinstance(mission.root, cls)
+    Run(mission).tick(wall=1)  # ticks without error
