@@ -8,7 +8,10 @@ For each port kind (``loop://`` and a pty whose far end a thread drains), per co
 * full path  ``Connection.send(drive(v, r))``: encode (argument checks) + guard + write, what a
              behaviour's command costs from the outbox to the wire;
 * outbox     ``Connection.send_many`` of one tick's outbox (drive + LEDs + song play) in
-             one write, against one bare write of the same 12 bytes.
+             one write, against one bare write of the same 11 bytes.
+
+And with no port at all: the guard alone, the encoder alone, and ``Connection.poll`` of one
+stream frame against the protocol layer's ``StreamParser.feed`` of the same bytes.
 
 Ratios only mean something within one run: both sides run here, on the same port.
 """
@@ -26,6 +29,9 @@ import serial
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import Radius
+from roomba_bt.oi.frames import layout_for
+from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.oi.stream import StreamParser
 from roomba_bt.robot.connection import Connection
 from roomba_bt.transport.serial_port import SerialTransport
 
@@ -164,8 +170,47 @@ def _guard_alone() -> None:
     print(f"   no port  encode (oi layer)          {encode * 1e6:7.2f} us/command")
 
 
+class _StreamTransport(_NullTransport):
+    """Hands out the same chunk of stream frames on every read, like a port that always has
+    one frame waiting."""
+
+    def __init__(self, chunk: bytes) -> None:
+        self.chunk = chunk
+        self.clock = 0.0
+
+    def read(self, timeout: float) -> bytes:
+        self.clock += 0.015
+        return self.chunk
+
+    def now(self) -> float:
+        return self.clock
+
+
+def _poll_against_parser() -> None:
+    """What ``Connection.poll`` adds per frame (mode reconcile, arrival times, gaps,
+    watchdog) to the protocol layer's :class:`StreamParser` alone."""
+    ids = (7, 8, 9, 10, 11, 12, 13, 17, 19, 20, 21, 22, 25, 26, 34, 35, 43, 44, 45, 52, 53, 58)
+    layout = layout_for(ids, CREATE2, True)
+    frame = layout.stream_frame({35: 2})
+    parser = StreamParser(ids, CREATE2)
+    connection = Connection(_StreamTransport(frame), watchdog=0.1)
+    connection.send_many([oi.start(), oi.safe(), oi.stream(ids)])
+    connection.modes.detector.offset = 0  # what start()'s query learns on a real robot
+    times = _best_per_call(
+        {"parser": lambda: parser.feed(frame), "poll": lambda: connection.poll(0.0)},
+        CALLS * 4,
+        lambda: None,
+    )
+    print(f"   no port  StreamParser.feed, 1 frame  {times['parser'] * 1e6:7.2f} us/frame")
+    print(
+        f"   no port  Connection.poll, 1 frame    {times['poll'] * 1e6:7.2f} us/frame  "
+        f"({times['poll'] / times['parser']:.2f}x)"
+    )
+
+
 def main() -> None:
     _guard_alone()
+    _poll_against_parser()
     for kind, opener in (("loop://", _loop_port), ("pty", _pty_port)):
         with opener() as port:
             _measure(kind, port)

@@ -486,20 +486,23 @@ class Connection:
             if not frames:
                 return []
             out: list[TimedFrame] = []
+            reconcile = self.modes.reconcile
+            index = self._index
             for frame in frames:
-                self._index += 1
-                timed = TimedFrame(frame, arrival, self._index)
-                change = self.modes.reconcile(frame, self._index, arrival)
+                index += 1
+                change = reconcile(frame, index, arrival)
                 if change is not None:
                     self._report_change(change)
-                out.append(timed)
+                out.append(TimedFrame(frame, arrival, index))
+            self._index = index
             self._latest = out[-1]
             self._last_frame_time = arrival
             self._gaps.observe(arrival, len(out))
             if self._status is LinkStatus.STALLED:
                 log.warning("%s: the sensor stream is back", self.name)
                 self._status = LinkStatus.STREAMING
-            self._state.notify_all()
+            if self._reader is not None:  # only the reader's consumers wait on it
+                self._state.notify_all()
             return out
 
     def _report_change(self, change: ModeChange) -> None:
