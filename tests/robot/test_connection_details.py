@@ -10,7 +10,7 @@ import pytest
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
-from roomba_bt.oi.profiles import ROOMBA600
+from roomba_bt.oi.profiles import ROOMBA600, get_profile
 from roomba_bt.robot.connection import (
     Connection,
     GapCounter,
@@ -21,6 +21,7 @@ from roomba_bt.robot.errors import ConnectionFailed, ModeError, PortLost, RobotE
 from roomba_bt.transport import SerialTransport
 
 from .conftest import Link
+from .sim_backend import make_sim_link, simulator_missing
 from .test_connection_contract import PACKETS, STOP_TO_PASSIVE, frames_until
 
 
@@ -174,3 +175,25 @@ def test_firmware_text_in_the_stream_is_skipped_and_frames_go_on(fake_links: Any
         assert counters.skipped_bytes >= len(b"bl-start\r\nRoomba by iRobot!\r\n")
         assert connection.mode is OIMode.SAFE and connection.status is LinkStatus.STREAMING
     assert robot.wait_until(lambda r: r.received.endswith(STOP_TO_PASSIVE))
+
+
+@pytest.mark.parametrize("profile_name", ["create2", "roomba600", "roomba500"])
+def test_the_simulator_in_process_for_every_profile(profile_name: str) -> None:
+    missing = simulator_missing()
+    if missing is not None:
+        pytest.skip(missing)
+    profile = get_profile(profile_name)
+    link, robot = make_sim_link(profile)
+    with Connection(link, profile) as connection:
+        connection.start("full", PACKETS)
+        assert connection.modes.plus_one is profile.reports_mode_plus_one
+        frames = []
+        while len(frames) < 20:
+            frames += connection.poll(0.1)
+        assert connection.mode is OIMode.FULL and connection.last_fallback is None
+        assert connection.counters.checksum_failures == 0 and connection.counters.gaps == 0
+        assert frames[-1].time - frames[0].time == pytest.approx(19 * 0.015)
+        connection.send(oi.drive_direct(100, 100))
+    assert bytes(robot.received).endswith(STOP_TO_PASSIVE)
+    assert robot.mode is OIMode.PASSIVE
+    assert robot.actuator_commands_outside_safe_or_full() == []
