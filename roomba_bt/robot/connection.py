@@ -814,7 +814,9 @@ class Connection:
     ) -> int:
         """Reopen the port and repeat :meth:`start` with the same arguments, backing off
         between attempts; return the attempt that worked. Needs a connection made by
-        :meth:`open` (or given ``reopen``) and started once."""
+        :meth:`open` (or given ``reopen``) and started once. The mode model starts afresh
+        (the robot is in whatever mode Start leaves it); a background reader is stopped and
+        must be started again."""
         if self._reopen is None or self._start_args is None:
             raise RobotError("reconnect() needs Connection.open(...) (or reopen=) and a start()")
         policy = policy or ReconnectPolicy()
