@@ -4,8 +4,9 @@ Real time is the baseline: one step is 15 ms of robot time, so ``15 ms / (host t
 step)`` is how many times faster than real time the simulator runs. Three cases, each the
 best of several runs (the machine may be shared):
 
-* stream and physics only, all sensors (group 100, 80 data bytes a frame), robot driving an
-  arc in the empty room (walls, dock beams and light bumpers in play);
+* stream and physics only, all sensors (group 100, 80 data bytes a frame): on the open floor
+  (a circle in the middle of the empty room), and driving an arc from the default start, where
+  the walls, the dock's plate and beams and the light bumpers are all in play;
 * the same with a typical mission's packet list (bumps, IR, charging, mode, encoders);
 * with a trivial client ticking: every frame is parsed by ``oi.StreamParser`` and answered
   with one Drive command, through :class:`~roomba_bt.sim.link.SimLink` (no behaviour tree).
@@ -21,7 +22,7 @@ from collections.abc import Callable
 
 from roomba_bt.oi import commands
 from roomba_bt.oi.stream import StreamParser
-from roomba_bt.sim import SimLink, Simulator, load_world
+from roomba_bt.sim import Pose, SimLink, Simulator, load_world
 from roomba_bt.sim.robot import STEP_SECONDS
 
 MISSION_PACKETS = [7, 17, 21, 34, 35, 43, 44, 45, 52, 53]
@@ -29,21 +30,24 @@ STEPS = 4000
 REPEATS = 5
 
 
-def _setup(packets: list[int]) -> Simulator:
-    sim = Simulator(load_world("empty-room"))
+def _setup(packets: list[int], open_floor: bool = False) -> Simulator:
+    world = load_world("empty-room")
+    # open floor: a 0.6 m circle in the middle of the room, away from walls and beams;
+    # otherwise from the default start, 0.8 m from the dock: walls, dock plate and beams
+    start = Pose(2000.0, 1750.0, 0.0) if open_floor else None
+    sim = Simulator(world, start=start)
     sim.receive(
         commands.start().data
         + commands.full().data
         + commands.stream(packets).data
-        + commands.drive(300, 500).data
+        + commands.drive(300, 600 if open_floor else 500).data
     )
     return sim
 
 
-def _physics_only(packets: list[int]) -> Callable[[], int]:
-    sim = _setup(packets)
-
+def _physics_only(packets: list[int], open_floor: bool = False) -> Callable[[], int]:
     def run() -> int:
+        sim = _setup(packets, open_floor)  # a fresh robot each run: the same path each time
         step, read = sim.step, sim.read
         for _ in range(STEPS):
             step()
@@ -54,14 +58,14 @@ def _physics_only(packets: list[int]) -> Callable[[], int]:
 
 
 def _with_client() -> Callable[[], int]:
-    sim = _setup(MISSION_PACKETS)
-    link = SimLink(sim)
-    parser = StreamParser(MISSION_PACKETS, sim.profile)
     spin = commands.spin(200, clockwise=True).data
     arc = commands.drive(250, -300).data
     straight = commands.drive(250, commands.Radius.STRAIGHT).data
 
     def run() -> int:
+        sim = _setup(MISSION_PACKETS)
+        link = SimLink(sim)
+        parser = StreamParser(MISSION_PACKETS, sim.profile)
         frames = 0
         while frames < STEPS:
             for frame in parser.feed(link.read(0.1)):
@@ -90,6 +94,7 @@ def _best(run: Callable[[], int]) -> float:
 
 def main() -> None:
     cases = [
+        ("stream+physics, group 100, open floor", _physics_only([100], open_floor=True)),
         ("stream+physics, group 100 (80 B/frame)", _physics_only([100])),
         ("stream+physics, mission packets (27 B/frame)", _physics_only(MISSION_PACKETS)),
         ("with a trivial client (StreamParser + Drive/frame)", _with_client()),
@@ -97,7 +102,7 @@ def main() -> None:
     for label, run in cases:
         per_step = _best(run)
         print(
-            f"   {label:<52} {per_step * 1e6:7.1f} us/step  "
+            f"   {label:<50} {per_step * 1e6:7.1f} us/step  "
             f"{STEP_SECONDS / per_step:7.0f}x real time",
             flush=True,
         )

@@ -104,6 +104,8 @@ _DEGREES_PER_RADIAN = 180.0 / math.pi
 _OLD_ANGLE_PER_RADIAN = _DEGREES_PER_RADIAN * OLD_FIRMWARE_ANGLE_FACTOR
 #: The checksum byte that brings a frame's sum to 0 mod 256, for every partial sum.
 _CHECKSUM_BYTE = tuple(bytes(((-total) & 0xFF,)) for total in range(256))
+_TWO_PI = 2.0 * math.pi
+_PASSIVE, _SAFE, _FULL = OIMode.PASSIVE, OIMode.SAFE, OIMode.FULL
 _CONST = 59  # values[_CONST + k] == k: constant bytes (header, ids) packed with the values
 _ANALOG = (22, 23, 27, 28, 29, 30, 31, 46, 47, 48, 49, 50, 51, 54, 55, 56, 57)
 _BAUD_BY_CODE = {code: rate for rate, code in BAUD_CODES.items()}
@@ -623,9 +625,9 @@ class Simulator:
             if v[18] and self.time >= self._buttons_until:
                 v[18] = 0
         mode = self.mode
-        if self.builtin is not None and mode is OIMode.PASSIVE:
+        if self.builtin is not None and mode is _PASSIVE:
             left, right = self._builtin_wheels(self.builtin)
-        elif mode is OIMode.SAFE or mode is OIMode.FULL:
+        elif mode is _SAFE or mode is _FULL:
             left, right = self.requested_left, self.requested_right
         else:
             left = right = 0.0
@@ -633,19 +635,14 @@ class Simulator:
             self._move(left, right, dt)
         if self._geometry_dirty:
             self._sense()
-        if mode is OIMode.SAFE:
+        if mode is _SAFE:
             if v[7] & 12 or v[9] or v[10] or v[11] or v[12] or self.docked:
                 self._safety()
-        elif (
-            mode is OIMode.FULL
-            and self._drops
-            and not self.fallen
-            and self._over_drop(self.x, self.y)
-        ):
+        elif mode is _FULL and self._drops and not self.fallen and self._over_drop(self.x, self.y):
             self._fall()
         self._battery(dt)
         if (
-            mode is OIMode.PASSIVE
+            mode is _PASSIVE
             and self.time - self._last_activity >= PASSIVE_SLEEP_SECONDS
             and not self.charging
             and self.builtin is None
@@ -692,7 +689,8 @@ class Simulator:
         dist = (dl + dr) / 2.0
         dtheta = (dr - dl) / (2.0 * half_base)
         fraction = 1.0
-        if self.lifted or self.fallen:
+        stuck = self.lifted or self.fallen
+        if stuck:
             fraction = 0.0
         elif dist:
             heading = self.theta + dtheta / 2.0
@@ -711,14 +709,21 @@ class Simulator:
                 fraction = lo
             self.x += ux * fraction
             self.y += uy * fraction
-        self.blocked = fraction < 1.0 and dist != 0.0 and not (self.lifted or self.fallen)
+        self.blocked = fraction < 1.0 and dist != 0.0 and not stuck
         guided = 0.0
         if self.blocked and dist > 0.0 and self._dock_target is not None:
             guided = self._dock_guides()  # the body turns, the wheels slip: no encoder counts
-        travelled = dist * fraction if not (self.lifted or self.fallen) else dist
-        if not (self.lifted or self.fallen):
-            self.theta = wrap_angle(self.theta + dtheta + guided)
-            self._distance_acc += dist * fraction
+        if stuck:
+            travelled = dist
+        else:
+            travelled = dist * fraction
+            theta = self.theta + dtheta + guided
+            if theta > math.pi:
+                theta -= _TWO_PI
+            elif theta < -math.pi:
+                theta += _TWO_PI
+            self.theta = theta
+            self._distance_acc += travelled
             self._angle_acc += dtheta
         # Encoders count wheel turns: a blocked robot's wheels stall, a lifted one's spin.
         self._left_counts += (travelled - dtheta * half_base) / MM_PER_COUNT
@@ -731,7 +736,7 @@ class Simulator:
             rc = rc - 0x10000 if rc > 0x7FFF else rc
         v[43] = lc
         v[44] = rc
-        v[58] = 1 if dist > 0.0 and fraction > 0.5 and not self.lifted else 0
+        v[58] = 1 if dist > 0.0 and fraction > 0.5 and not stuck else 0
         self._stall_steps = self._stall_steps + 1 if self.blocked else 0
         if fraction or dtheta or guided:
             self._geometry_dirty = True
