@@ -116,6 +116,8 @@ def run_sim(args: argparse.Namespace) -> int:
 
     try:
         serve(simulator, endpoint, should_stop)
+    except OSError as exc:
+        return _fail(f"the {endpoint.address} endpoint failed: {exc}", ExitCode.CONNECTION)
     finally:
         endpoint.close()
         for sig, handler in previous.items():
