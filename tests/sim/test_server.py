@@ -142,3 +142,35 @@ def test_bad_options_exit_2(args: list[str]) -> None:
         capture_output=True, text=True, timeout=20, check=False,
     )  # fmt: skip
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
+
+
+def test_pyroombaadapter_streams_queries_and_drives(pty_server: Server) -> None:
+    pra = pytest.importorskip("pyroombaadapter")
+    adapter = pra.PyRoombaAdapter(pty_server.address)  # Start + Safe, then 1 s
+    try:
+        assert adapter.request_oi_mode() == 2
+        assert adapter.request_capacity() == 2696
+        assert adapter.request_charging_state() == 0  # not on the dock
+        left0, right0 = adapter.request_encoder_counts()
+        adapter.data_stream_start(["OI Mode", "Voltage"])
+        readings = []
+        deadline = time.monotonic() + 5.0
+        while len(readings) < 10 and time.monotonic() < deadline:
+            values = adapter.data_stream_read()  # checks the checksum itself
+            if values:
+                readings.append(values)
+        assert len(readings) == 10
+        assert all(mode == 2 and 12000 < volts < 17500 for mode, volts in readings)
+        adapter.data_stream_stop()
+        time.sleep(0.1)
+        adapter.serial_con.reset_input_buffer()
+        adapter.send_drive_direct(100, 100)
+        time.sleep(0.5)
+        adapter.send_drive_direct(0, 0)
+        left1, right1 = adapter.request_encoder_counts()
+        assert left1 > left0 and right1 > right0
+    finally:
+        del adapter  # its destructor sends Start (Passive) and closes the port
+        gc.collect()
+    code, err = pty_server.stop()
+    assert code == 0 and "mode Passive" in err
