@@ -10,11 +10,18 @@ import the transport layer). :class:`SimLink` is that, with the simulator behind
   have passed. A caller that keeps reading therefore drives the clock, and the stream
   arrives every 15 ms of virtual time, as fast as the host can compute it;
 * ``now()`` is the simulated time, so frame timestamps and watchdogs run on the same clock.
+
+The link has a baud rate, like a port: after Baud (129) the robot talks at its new rate, and
+until ``set_baud`` follows, what the host reads is garbage (each byte mapped to another) and
+what it writes never reaches the robot, as on a serial line at mismatched rates.
 """
 
 from __future__ import annotations
 
 from roomba_bt.sim.robot import STEP_SECONDS, Simulator
+
+#: What a byte looks like when read at the wrong baud rate (a fixed, reversible scramble).
+_GARBLE = bytes.maketrans(bytes(range(256)), bytes((b * 37 + 11) & 0xFF for b in range(256)))
 
 
 class SimLink:
@@ -40,6 +47,9 @@ class SimLink:
 
     def write(self, data: bytes) -> None:
         self._check()
+        if self.baud != self.simulator.baud:
+            self.simulator.ignored_bytes += len(data)  # framing errors: nothing gets through
+            return
         self.simulator.receive(data)
 
     def read(self, timeout: float) -> bytes:
@@ -47,7 +57,7 @@ class SimLink:
         sim = self.simulator
         data = sim.read()
         if data:
-            return data
+            return data if self.baud == sim.baud else data.translate(_GARBLE)
         deadline = sim.time + max(timeout, 0.0) - 1e-9
         while True:
             sim.step()
@@ -55,7 +65,7 @@ class SimLink:
                 raise ConnectionError(f"{self.name}: simulated disconnect at t={sim.time:.3f} s")
             data = sim.read()
             if data or sim.time >= deadline:
-                return data
+                return data if self.baud == sim.baud else data.translate(_GARBLE)
 
     def set_baud(self, baud: int) -> None:
         self._check()

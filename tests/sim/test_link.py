@@ -40,13 +40,29 @@ def test_read_times_out_on_the_virtual_clock_with_nothing_to_say() -> None:
     assert ln.now() == pytest.approx(0.3)
 
 
-def test_close_and_set_baud() -> None:
+def test_close() -> None:
     ln = link()
-    ln.set_baud(57600)
-    assert ln.baud == 57600
     ln.close()
     assert not ln.is_open
     with pytest.raises(ConnectionError, match="closed"):
         ln.write(b"\x80")
     with pytest.raises(ConnectionError):
         ln.read(0.1)
+
+
+def test_after_baud_129_the_link_must_follow_or_it_reads_garbage() -> None:
+    ln = link()
+    ln.write(C.start().data + C.stream([35, 7]).data)
+    parser = StreamParser([35, 7])
+    assert parser.feed(ln.read(0.1))
+    ln.write(C.baud_rate(57600).data)
+    garbled = b"".join(ln.read(0.1) for _ in range(20))
+    assert len(garbled) == 20 * 7 and parser.feed(garbled) == []
+    ln.write(C.full().data)  # at the wrong rate: never arrives
+    assert ln.simulator.mode.name == "PASSIVE"
+    ln.set_baud(57600)
+    parser.reset()
+    frames = parser.feed(b"".join(ln.read(0.1) for _ in range(10)))
+    assert len(frames) >= 9 and frames[-1].oi_mode_raw == 1
+    ln.write(C.full().data)
+    assert ln.simulator.mode.name == "FULL"
