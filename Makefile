@@ -21,7 +21,7 @@ run: $(STAMP)
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
-	$(BIN)/ruff format --check roomba_bt tests bench
+	$(BIN)/ruff format --check roomba_bt tests bench plugins
 
 typecheck: $(STAMP)
 	$(BIN)/mypy

@@ -221,6 +221,7 @@ def fixed_cost(ticks: int = 20000) -> tuple[float, float]:
     transport = InstantFrames(packets, ticks)
     connection = Connection(transport, CREATE2, watchdog=0.0)  # type: ignore[arg-type]
     mission = _OneLeaf()
+
     def ended() -> str | None:
         return "done" if transport.sent >= ticks else None
 
