@@ -174,3 +174,30 @@ def test_pyroombaadapter_streams_queries_and_drives(pty_server: Server) -> None:
         gc.collect()
     code, err = pty_server.stop()
     assert code == 0 and "mode Passive" in err
+
+
+def test_plot_on_exit(tmp_path: Path) -> None:
+    pytest.importorskip("matplotlib")
+    out = tmp_path / "run.png"
+    proc = subprocess.run(
+        [sys.executable, "-m", "roomba_bt.cli", "sim", "--pty", "--duration", "0.2",
+         "--world", "corridor", "--plot", str(out)],
+        capture_output=True, text=True, timeout=60, check=False,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    assert out.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_a_port_in_use_exits_3() -> None:
+    import socket
+
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen(1)
+        port = taken.getsockname()[1]
+        proc = subprocess.run(
+            [sys.executable, "-m", "roomba_bt.cli", "sim", "--tcp", f"127.0.0.1:{port}"],
+            capture_output=True, text=True, timeout=20, check=False,
+        )  # fmt: skip
+    assert proc.returncode == 3 and "cannot serve" in proc.stderr
+    assert "Traceback" not in proc.stderr
