@@ -61,7 +61,7 @@ def _show(value: object) -> str:
 def sensors_command(args: argparse.Namespace) -> int:
     from roomba_bt.robot.connection import Connection
     from roomba_bt.robot.errors import ConnectionFailed, LinkDown
-    from roomba_bt.runtime.loop import terminate_as_interrupt
+    from roomba_bt.robot.safety import sigterm_raises
 
     profile = get_profile(args.profile)
     group = ALL_PACKETS_GROUP if args.baud >= 57600 else SMALL_GROUP
@@ -80,7 +80,7 @@ def sensors_command(args: argparse.Namespace) -> int:
             connection = Connection(make_link(simulator, fast=False), profile, baud=args.baud)
         interactive = sys.stdout.isatty()
         shown = 0
-        with terminate_as_interrupt(), connection:
+        with sigterm_raises(), connection:
             connection.start("passive", (group,))
             last = 0.0
             while args.count == 0 or shown < args.count:

@@ -16,11 +16,8 @@ speed, or a simulation on the virtual clock, make the same decisions. See ``docs
 from __future__ import annotations
 
 import contextlib
-import signal
-import threading
 import time
-from collections.abc import Callable, Iterator, Sequence
-from types import FrameType
+from collections.abc import Callable, Sequence
 from typing import Any, Protocol
 
 import py_trees
@@ -31,30 +28,10 @@ from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.robot.connection import Connection, TimedFrame
 from roomba_bt.robot.errors import ConnectionFailed, LinkDown, ModeError
 from roomba_bt.robot.interface import SLOT_SECONDS, ModeChange, Odometry, Outbox, Snapshot
+from roomba_bt.robot.safety import Terminated, sigterm_raises
 from roomba_bt.runtime.summary import Outcome, RunSummary
 
 SNAPSHOT_KEY = "/roomba/snapshot"
-
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM, turned into an exception so that the safe stop runs as for Ctrl-C."""
-
-
-@contextlib.contextmanager
-def terminate_as_interrupt() -> Iterator[None]:
-    """Within the block, SIGTERM raises :class:`Terminated` (main thread only)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-
-    def handler(signum: int, frame: FrameType | None) -> None:
-        raise Terminated()
-
-    previous = signal.signal(signal.SIGTERM, handler)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
 
 
 class MissionLike(Protocol):
@@ -127,7 +104,7 @@ class MissionRunner:
         wall_start = time.perf_counter()
         root = self.mission.root
         try:
-            with terminate_as_interrupt():
+            with sigterm_raises():
                 self.connection.start(OIMode.PASSIVE, self.packets)
                 self._blackboard = py_trees.blackboard.Client(name="roomba-bt runtime")
                 self._blackboard.register_key(key=SNAPSHOT_KEY, access=py_trees.common.Access.WRITE)
@@ -161,7 +138,7 @@ class MissionRunner:
         self._outbox.clear()  # whatever a terminating leaf queued: the safe stop supersedes it
         try:
             sequence = [c.name for c in self.connection.stop_sequence()]
-            with terminate_as_interrupt():
+            with sigterm_raises():
                 stopped = self.connection.safe_stop()
             if not stopped:
                 summary.safe_stop = "FAILED: the stop sequence could not be written (port gone?)"
