@@ -8,7 +8,7 @@ as repeatable as a clean one.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 
 @dataclass(frozen=True, slots=True)
@@ -55,12 +55,6 @@ class Faults:
             raise ValueError(
                 f"faults.inject_text: found {self.inject_text!r}; allowed: ASCII text only"
             )
-
-    @property
-    def any(self) -> bool:
-        return any(
-            getattr(self, f.name) != f.default for f in fields(self) if f.name != "inject_every"
-        )
 
 
 NO_FAULTS = Faults()

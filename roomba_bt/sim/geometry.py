@@ -15,8 +15,6 @@ Point = tuple[float, float]
 Segment = tuple[float, float, float, float]
 Polygon = tuple[Point, ...]
 
-INFINITY = math.inf
-
 
 def polygon_edges(polygon: Polygon) -> tuple[Segment, ...]:
     """The edges of a closed polygon."""
@@ -52,25 +50,6 @@ def distance_sq_to_segment(px: float, py: float, seg: Segment) -> float:
     return closest_point(px, py, seg)[2]
 
 
-def ray_hit(ox: float, oy: float, dx: float, dy: float, seg: Segment) -> float:
-    """Distance along the unit ray ``(ox, oy) + t (dx, dy)`` to ``seg``; infinity if none."""
-    ax, ay, bx, by = seg
-    ex = bx - ax
-    ey = by - ay
-    denom = dx * ey - dy * ex
-    if denom == 0.0:
-        return INFINITY
-    wx = ax - ox
-    wy = ay - oy
-    t = (wx * ey - wy * ex) / denom
-    if t < 0.0:
-        return INFINITY
-    u = (wx * dy - wy * dx) / denom
-    if u < 0.0 or u > 1.0:
-        return INFINITY
-    return t
-
-
 def point_in_polygon(px: float, py: float, polygon: Polygon) -> bool:
     """Even-odd rule; points on an edge may fall either way."""
     inside = False
@@ -81,27 +60,6 @@ def point_in_polygon(px: float, py: float, polygon: Polygon) -> bool:
             inside = not inside
         jx, jy = ix, iy
     return inside
-
-
-def bounding_box(polygon: Polygon) -> tuple[float, float, float, float]:
-    xs = [p[0] for p in polygon]
-    ys = [p[1] for p in polygon]
-    return min(xs), min(ys), max(xs), max(ys)
-
-
-def segments_intersect(a: Segment, b: Segment) -> bool:
-    """True if the two segments cross or touch."""
-
-    def orient(px: float, py: float, qx: float, qy: float, rx: float, ry: float) -> float:
-        return (qx - px) * (ry - py) - (qy - py) * (rx - px)
-
-    ax, ay, bx, by = a
-    cx, cy, dx, dy = b
-    d1 = orient(cx, cy, dx, dy, ax, ay)
-    d2 = orient(cx, cy, dx, dy, bx, by)
-    d3 = orient(ax, ay, bx, by, cx, cy)
-    d4 = orient(ax, ay, bx, by, dx, dy)
-    return (d1 * d2 <= 0.0) and (d3 * d4 <= 0.0)
 
 
 def wrap_angle(angle: float) -> float:

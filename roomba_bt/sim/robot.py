@@ -180,7 +180,6 @@ class _Builtin:
         self.phase = "forward"
         self.phase_until = 0.0
         self.turn_sign = 1.0
-        self.done = False
         self.wander_until = 0.0  # after a bounce, go straight a while before aiming again
 
 
@@ -538,10 +537,6 @@ class Simulator:
         data = bytes(self._out)
         self._out.clear()
         return data
-
-    @property
-    def pending_output(self) -> int:
-        return len(self._out)
 
     def _emit(self, data: bytes) -> None:
         if self.disconnected:
@@ -1188,7 +1183,6 @@ class Simulator:
         return 0.0, 0.0
 
     def _end_builtin(self, b: _Builtin, why: str) -> None:
-        b.done = True
         self.builtin = None
         self.events.append(SimEvent(self.time, "builtin", why, self.x, self.y))
 
