@@ -144,9 +144,11 @@ class Violation:
 class _Packer:
     """Packs a list of packet ids from the flat value list in one ``struct`` call."""
 
-    __slots__ = ("getter", "has_angle", "has_distance", "size", "struct")
+    __slots__ = ("getter", "has_angle", "has_distance", "size", "snapshot", "struct")
 
-    def __init__(self, ids: tuple[int, ...], profile: RobotProfile, stream: bool) -> None:
+    def __init__(
+        self, ids: tuple[int, ...], profile: RobotProfile, stream: bool, noise: bool = False
+    ) -> None:
         codes = [">"]
         idx: list[int] = []
         if stream:
@@ -168,6 +170,8 @@ class _Packer:
         members = {m for p in ids for m in expand(p)}
         self.has_distance = 19 in members
         self.has_angle = 20 in members
+        #: the values need preparing before a frame: distance/angle since last read, noise
+        self.snapshot = self.has_distance or self.has_angle or noise
         self.size = self.struct.size
 
 
@@ -508,7 +512,7 @@ class Simulator:
     def _on_stream(self, args: bytes) -> None:
         ids = tuple(p for p in args[1:] if p in VALID_PACKET_IDS)
         self._stream_ids = ids
-        self._stream = _Packer(ids, self.profile, True) if ids else None
+        self._stream = _Packer(ids, self.profile, True, bool(self.faults.noise)) if ids else None
         self._stream_paused = False
         self.values[38] = min(len(ids), 108)
 
@@ -652,7 +656,8 @@ class Simulator:
             if self.time >= self._next_inject:
                 self._emit(faults.inject_text.encode("ascii"))
                 self._next_inject += faults.inject_every
-            body = stream.struct.pack(*stream.getter(self._snapshot_values(stream)))
+            values = self._snapshot_values(stream) if stream.snapshot else self.values
+            body = stream.struct.pack(*stream.getter(values))
             frame = body + _CHECKSUM_BYTE[(sum(body) - self._checksum_bias) & 0xFF]
             if faults.drop_rate and self._fault_rng.random() < faults.drop_rate:
                 return
