@@ -339,6 +339,8 @@ def _dotted(path: PathKey) -> str:
 
 
 def _show(value: object) -> str:
+    if value is None:
+        return "nothing"
     if isinstance(value, dict):
         return "a mapping"
     if isinstance(value, list):
