@@ -16,8 +16,10 @@ $(STAMP): pyproject.toml
 
 venv: $(STAMP)
 
+# The dock mission on the built-in simulator, on the virtual clock (drop --fast for real time).
+RUN_ARGS ?= --fast
 run: $(STAMP)
-	$(BIN)/python -m roomba_bt.demo
+	$(BIN)/roomba-bt run missions/dock.yaml $(RUN_ARGS)
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
