@@ -998,7 +998,7 @@ class Compiler:
                 self.ctx.error(bad.diagnostic)
                 resolved = UNKNOWN
             sub_env[pname] = Bound(
-                vtype, resolved, str(plain(pvalue, pvloc)) if resolved is not UNKNOWN else "?"
+                vtype, resolved, shown(vtype, resolved) if resolved is not UNKNOWN else "?"
             )
         given = {a[0] for a in args}
         for pname, (vtype, default, _) in sub.params.items():
