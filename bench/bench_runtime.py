@@ -124,7 +124,7 @@ def reaction_latency(tmp: Path, seconds: float = 15.0) -> list[float]:
         port = sim.stdout.readline().strip()
         connection = Connection.open(port, 115200, CREATE2)
         tap = TimingTransport(connection.transport)
-        connection.transport = tap  # type: ignore[assignment]
+        connection.transport = tap
         packets = tuple(sorted(set(mission.packets) | set(RUNTIME_PACKETS)))
         runner = MissionRunner(connection, mission, profile=CREATE2, packets=packets,
                                timeout_s=seconds)  # fmt: skip
@@ -219,7 +219,7 @@ def fixed_cost(ticks: int = 20000) -> tuple[float, float]:
     """(runner cost per tick, one-leaf tick alone), seconds."""
     packets = tuple(sorted(RUNTIME_PACKETS))
     transport = InstantFrames(packets, ticks)
-    connection = Connection(transport, CREATE2, watchdog=0.0)  # type: ignore[arg-type]
+    connection = Connection(transport, CREATE2, watchdog=0.0)
     mission = _OneLeaf()
 
     def ended() -> str | None:
@@ -317,7 +317,7 @@ def memory_run(tmp: Path, ticks: int = 1_000_000) -> list[tuple[int, float]]:
         """))  # fmt: skip
     sim = Simulator(load_world("empty-room"), CREATE2, 0)
     link = SimLink(sim)
-    connection = Connection(link, CREATE2, watchdog=0.0)  # type: ignore[arg-type]
+    connection = Connection(link, CREATE2, watchdog=0.0)
     samples: list[tuple[int, float]] = []
 
     def observe(runner: MissionRunner) -> None:

@@ -48,9 +48,10 @@ from roomba_bt.sim.geometry import (
 #: Radius of the round Roomba / Create 2 body (340 mm across).
 ROBOT_RADIUS_MM = 170.0
 
-#: The shipped worlds: ``worlds/`` of the source tree, or ``$ROOMBA_BT_WORLDS`` if set.
+#: The shipped worlds: package data (``roomba_bt/sim/worlds/``, also linked as ``worlds/`` at
+#: the top of the source tree), or ``$ROOMBA_BT_WORLDS`` if set.
 WORLDS_DIR = pathlib.Path(
-    os.environ.get("ROOMBA_BT_WORLDS", pathlib.Path(__file__).resolve().parents[2] / "worlds")
+    os.environ.get("ROOMBA_BT_WORLDS", pathlib.Path(__file__).resolve().parent / "worlds")
 )
 
 EVENT_KINDS = ("bump", "lift", "charger_step")
