@@ -40,7 +40,7 @@ from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.oi.stream import StreamParser
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.interface import StubRobot
-from roomba_bt.runtime.loop import MissionRunner
+from roomba_bt.runtime.loop import MissionRunner, stream_request
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -127,7 +127,7 @@ def reaction_latency(tmp: Path, seconds: float = 15.0) -> list[float]:
         connection = Connection.open(port, 115200, CREATE2)
         tap = TimingTransport(connection.transport)
         connection.transport = tap
-        packets = tuple(sorted(set(mission.packets) | set(RUNTIME_PACKETS)))
+        packets = stream_request(mission.packets, 115200)
         runner = MissionRunner(connection, mission, profile=CREATE2, packets=packets,
                                timeout_s=seconds)  # fmt: skip
         runner.run()
@@ -330,7 +330,7 @@ def memory_run(tmp: Path, ticks: int = 1_000_000) -> list[tuple[int, float]]:
         if ticks_done % 100_000 == 0:
             samples.append((ticks_done, _rss_mb()))
 
-    packets = tuple(sorted(set(mission.packets) | set(RUNTIME_PACKETS)))
+    packets = stream_request(mission.packets, 115200)
     runner = MissionRunner(connection, mission, profile=CREATE2, packets=packets,
                            timeout_s=ticks * 0.015, observer=observe)  # fmt: skip
     summary = runner.run()

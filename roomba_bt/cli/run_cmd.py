@@ -109,12 +109,9 @@ def load(path: str, params: dict[str, str], profile: RobotProfile, baud: int) ->
 
 def stream_packets(mission: Any, baud: int) -> tuple[int, ...]:
     """The mission's packets plus what the runtime needs, checked against the baud rate."""
-    from roomba_bt.mission import RUNTIME_PACKETS
-    from roomba_bt.oi.stream import check_bandwidth
+    from roomba_bt.runtime.loop import stream_request
 
-    packets = tuple(sorted(set(mission.packets) | set(RUNTIME_PACKETS)))
-    check_bandwidth(packets, baud)
-    return packets
+    return stream_request(mission.packets, baud)
 
 
 def run_command(args: argparse.Namespace) -> int:

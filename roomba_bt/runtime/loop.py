@@ -17,14 +17,17 @@ from __future__ import annotations
 
 import contextlib
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from typing import Any, Protocol
 
 import py_trees
 
+from roomba_bt.mission import RUNTIME_PACKETS
+from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import RobotProfile
+from roomba_bt.oi.stream import check_bandwidth
 from roomba_bt.robot.connection import Connection, TimedFrame
 from roomba_bt.robot.errors import ConnectionFailed, LinkDown, ModeError
 from roomba_bt.robot.interface import SLOT_SECONDS, ModeChange, Odometry, Outbox, Snapshot
@@ -32,6 +35,23 @@ from roomba_bt.robot.safety import Terminated, sigterm_raises
 from roomba_bt.runtime.summary import Outcome, RunSummary
 
 SNAPSHOT_KEY = "/roomba/snapshot"
+#: Battery charge and capacity, for the run summary: streamed when the budget allows.
+SUMMARY_PACKETS: tuple[int, ...] = (25, 26)
+
+
+def stream_request(mission_packets: Iterable[int], baud: int) -> tuple[int, ...]:
+    """The packets to stream: what the mission reads, what the runtime needs
+    (:data:`~roomba_bt.mission.RUNTIME_PACKETS`) and, if they still fit in the 15 ms budget
+    at ``baud``, :data:`SUMMARY_PACKETS`. Raises :class:`~roomba_bt.oi.BandwidthError` if the
+    required set does not fit (the validator reports the same before a run)."""
+    required = set(mission_packets) | set(RUNTIME_PACKETS)
+    check_bandwidth(sorted(required), baud)
+    wanted = tuple(sorted(required | set(SUMMARY_PACKETS)))
+    try:
+        check_bandwidth(wanted, baud)
+    except BandwidthError:
+        return tuple(sorted(required))
+    return wanted
 
 
 class MissionLike(Protocol):

@@ -7,10 +7,10 @@ from pathlib import Path
 
 import pytest
 
-from roomba_bt.mission import RUNTIME_PACKETS, load_mission
+from roomba_bt.mission import load_mission
 from roomba_bt.oi.profiles import CREATE2, RobotProfile
 from roomba_bt.robot.connection import Connection
-from roomba_bt.runtime.loop import MissionRunner
+from roomba_bt.runtime.loop import MissionRunner, stream_request
 from roomba_bt.sim import Faults, Simulator, load_world
 
 from .simrun import Run, RunMission, TapLink
@@ -38,7 +38,7 @@ def run_mission(tmp_path: Path) -> RunMission:
         simulator = Simulator(load_world(world), profile, seed, faults)
         link = TapLink(simulator, stall_after, burst)
         connection = Connection(link, profile, watchdog=watchdog, end_in=end_in)  # type: ignore[arg-type]
-        packets = tuple(sorted(set(mission.packets) | set(RUNTIME_PACKETS)))
+        packets = stream_request(mission.packets, 115200)
         runner = MissionRunner(
             connection, mission, profile=profile, packets=packets, timeout_s=timeout
         )

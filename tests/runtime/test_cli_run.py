@@ -103,3 +103,12 @@ def test_replay_of_a_malformed_record_is_exit_2(
     assert main(["replay", str(record)]) == 2
     err = capsys.readouterr().err
     assert "bad.jsonl:2:" in err
+
+
+def test_summary_packets_are_dropped_when_they_do_not_fit_the_baud() -> None:
+    from roomba_bt.runtime.loop import SUMMARY_PACKETS, stream_request
+
+    assert set(SUMMARY_PACKETS) <= set(stream_request((7,), 115200))
+    at_19200 = stream_request((7,), 19200)
+    assert not set(SUMMARY_PACKETS) & set(at_19200)
+    assert {7, 35, 43, 44} <= set(at_19200)
