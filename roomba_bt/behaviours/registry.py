@@ -207,9 +207,10 @@ def builtin_registry() -> Registry:
     """A registry with only the built-in behaviours (no entry points)."""
     from roomba_bt.behaviours.actions import ACTIONS
     from roomba_bt.behaviours.conditions import CONDITIONS
+    from roomba_bt.behaviours.docking import DOCKING
 
     registry = Registry(entry_point_group=None)
-    for cls in (*ACTIONS, *CONDITIONS):
+    for cls in (*ACTIONS, *CONDITIONS, *DOCKING):
         registry.register(cls, "builtin")
     return registry
 

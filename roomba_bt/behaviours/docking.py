@@ -1,0 +1,804 @@
+"""Docking from the home base's IR beams, in the stages of Nav2's docking server.
+
+The home base sends IR characters (decoded by :mod:`roomba_bt.oi.ir`, both dock families:
+160-173 and 240-254) in three beams::
+
+                 red buoy  (dock's left,  about -5 .. +25 deg of its axis)
+      dock ==>   both      (on the axis, about +-5 deg)      up to about 1 m
+                 green buoy(dock's right, about -25 .. +5 deg)
+                 force field: all around, about 0.6 m
+
+The robot has three receivers: the omni (packet 17) on top of the bumper, and the left (52)
+and right (53) directional ones, which see the dock only when it is within about 5 deg of the
+other side of the heading: both of them see it when the robot faces the dock. So the robot
+reads two things from every frame: *where the dock is* relative to its heading (left receiver
+only: turn left; right only: turn right; both: facing it) and *which side of the dock's axis
+it is on* (red only: the dock's left; green only: its right; both: on the axis).
+
+The stages, each a leaf whose failure message names the stage (``search: ...``,
+``approach: ...``, ``final alignment: ...``, ``wait for charge: ...``):
+
+``dock_search``
+    spin once in place, then wander toward the least visited space (a coarse visit grid in
+    the odometry frame), backing away from bumps, cliffs and light-bumper obstacles, until a
+    dock character is seen.
+``dock_approach``
+    face the dock; if off its axis, turn toward the axis and drive until both buoys are
+    seen, then face the dock again. SUCCESS facing the dock on its axis.
+``dock_drive_on``
+    drive in along the axis, slower inside the force field, steering to keep both the left
+    and right receivers on the dock; on contact without charge, wiggle in place to seat the
+    contacts. SUCCESS when packet 34 shows the home base.
+``dock_wait_charge``
+    SUCCESS when packet 34's home-base bit and a charging state in packet 21 are both seen.
+``dock_time_limit``
+    RUNNING until the time limit, then FAILURE naming the stage that was running: put it in
+    a ``parallel`` (policy ``one``) beside the stages.
+
+None of them sends Seek Dock (143). They drive with Drive Direct (145)
+``[145][right hi][right lo][left hi][left lo]`` and halt ``[137][0][0][0][0]`` when they end.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+
+import py_trees
+from py_trees.common import Status
+
+from roomba_bt.behaviours.declare import Action, Param, declare
+from roomba_bt.behaviours.units import ANGLE, BOOL, DISTANCE, DURATION, SPEED
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.frames import SensorFrame
+from roomba_bt.oi.ir import IR_CHARACTERS, IRCharacter
+from roomba_bt.oi.modes import DRIVING_MODES
+from roomba_bt.oi.opcodes import COMMANDS_BY_NAME
+
+_WHEEL = COMMANDS_BY_NAME["drive_direct"].args[0]
+_OK, _RUN, _FAIL = Status.SUCCESS, Status.RUNNING, Status.FAILURE
+
+#: Where the stages note which one is running, for ``dock_time_limit``'s message.
+STAGE_KEY = "/roomba/docking/stage"
+
+IR_PACKETS = (17, 52, 53)
+HAZARD_PACKETS = (7, 9, 10, 11, 12, 13, 45)
+ODOMETRY_PACKETS = (43, 44)
+#: How far the omni receiver is ahead of the wheels' axle (Roomba / Create 2: about 13 cm).
+OMNI_AHEAD_MM = 120.0
+#: Light-bumper bits 1..4 (front-left, centre-left, centre-right, front-right): something ahead.
+_LIGHT_AHEAD = 0b011110
+
+
+def _note_stage(stage: str) -> None:
+    py_trees.blackboard.Blackboard.storage[STAGE_KEY] = stage
+
+
+def current_stage() -> str | None:
+    """The docking stage that ran last (None before any)."""
+    stage = py_trees.blackboard.Blackboard.storage.get(STAGE_KEY)
+    return stage if isinstance(stage, str) else None
+
+
+@dataclass(frozen=True, slots=True)
+class DockView:
+    """What one frame says about the dock."""
+
+    omni: IRCharacter
+    left: IRCharacter
+    right: IRCharacter
+
+    @classmethod
+    def of(cls, frame: SensorFrame) -> DockView:
+        return cls(
+            IR_CHARACTERS[frame[17] & 0xFF],
+            IR_CHARACTERS[frame[52] & 0xFF],
+            IR_CHARACTERS[frame[53] & 0xFF],
+        )
+
+    @property
+    def seen(self) -> bool:
+        return self.omni.from_dock or self.left.from_dock or self.right.from_dock
+
+    @property
+    def on_left(self) -> bool:
+        """Only the left receiver sees the dock: it is more than ~5 deg to the left."""
+        return self.left.from_dock and not self.right.from_dock
+
+    @property
+    def on_right(self) -> bool:
+        return self.right.from_dock and not self.left.from_dock
+
+    @property
+    def facing(self) -> bool:
+        return self.left.from_dock and self.right.from_dock
+
+    def _chars(self) -> tuple[IRCharacter, ...]:
+        # The omni receiver sits on the robot's axis: where it is, the robot is. The side
+        # receivers are 4 cm off it and answer only when the omni sees nothing.
+        if self.omni.from_dock:
+            return (self.omni,)
+        return tuple(c for c in (self.left, self.right) if c.from_dock)
+
+    @property
+    def red(self) -> bool:
+        return any(c.red_buoy for c in self._chars())
+
+    @property
+    def green(self) -> bool:
+        return any(c.green_buoy for c in self._chars())
+
+    @property
+    def force_field(self) -> bool:
+        return any(c.force_field for c in self._chars())
+
+    @property
+    def side(self) -> int:
+        """+1 on the dock's left (red only), -1 on its right (green only), 0 on the axis or
+        unknown."""
+        red, green = self.red, self.green
+        if red and not green:
+            return 1
+        if green and not red:
+            return -1
+        return 0
+
+    @property
+    def on_axis(self) -> bool:
+        return self.red and self.green
+
+
+class _DockingAction(Action):
+    """Shared helpers: wheel commands, hazards, stage notes and messages."""
+
+    moves = True
+    stage = ""
+
+    def wheels(self, left: float, right: float) -> None:
+        """Drive Direct, sent only when the wheel speeds change (the robot keeps them)."""
+        limit = _WHEEL.maximum
+        lo = max(-limit, min(limit, round(left)))
+        ro = max(-limit, min(limit, round(right)))
+        if (lo, ro) != self._last_wheels or not self._started_motion:
+            self.send(oi.drive_direct(ro, lo))
+        self._last_wheels = (lo, ro)
+        self._started_motion = True
+
+    def halt(self) -> None:
+        if self._started_motion and not self.not_driving():
+            self.send(oi.halt())
+        self._started_motion = False
+        self._last_wheels = (0, 0)
+
+    _last_wheels = (0, 0)
+
+    def fail(self, message: str) -> Status:
+        self.halt()
+        self.feedback_message = f"{self.stage}: {message}"
+        return _FAIL
+
+    def succeed(self) -> Status:
+        self.halt()
+        return _OK
+
+    def begin(self) -> None:
+        _note_stage(self.stage)
+        self._t0 = self.snapshot.time
+
+    def elapsed(self) -> float:
+        return self.snapshot.time - self._t0
+
+    def not_driving(self) -> bool:
+        return self.snapshot.mode not in DRIVING_MODES
+
+    def fallback_message(self) -> str:
+        change = self.snapshot.last_fallback
+        cause = f" ({change.cause})" if change is not None else ""
+        return f"the robot left Safe/Full mode{cause}"
+
+    def heading(self) -> float:
+        return self.snapshot.odometry.theta_rad
+
+    def turned(self) -> float:
+        """Signed rotation since :meth:`mark_turn`, radians."""
+        return self.snapshot.odometry.angle_rad - self._turn_mark
+
+    def mark_turn(self) -> None:
+        self._turn_mark = self.snapshot.odometry.angle_rad
+
+    def travelled(self) -> float:
+        return abs(self.snapshot.odometry.distance_mm - self._distance_mark)
+
+    def mark_distance(self) -> None:
+        self._distance_mark = self.snapshot.odometry.distance_mm
+
+    _turn_mark = 0.0
+    _distance_mark = 0.0
+    _t0 = 0.0
+
+
+def _hazard(frame: SensorFrame) -> str | None:
+    if frame[7] & 12:
+        return "wheel drop"
+    if frame[9] or frame[10] or frame[11] or frame[12]:
+        return "cliff"
+    if frame[7] & 3:
+        return "bump"
+    if frame[13]:
+        return "cliff"  # a virtual wall: a line not to cross, like a drop
+    if frame[45] & _LIGHT_AHEAD:
+        return "obstacle"
+    return None
+
+
+# --------------------------------------------------------------------------- search
+
+_CELL_MM = 400.0
+_DIRECTIONS = 12
+
+
+@declare(
+    "dock_search",
+    kind="action",
+    params=(
+        Param("speed", SPEED, default="200 mm/s", minimum=50, maximum=_WHEEL.maximum,
+              doc="forward speed while wandering"),
+        Param("spin_first", BOOL, default=True, doc="turn once in place before wandering"),
+        Param("leg", DISTANCE, default="2 m", minimum=200,
+              doc="longest straight leg before choosing a new heading"),
+        Param("follow", DISTANCE, default="4 m", minimum=0,
+              doc="how far it follows a wall (on its right) before crossing the room"),
+        Param("timeout", DURATION, default="5min", minimum=1,
+              doc="FAILURE if no dock beam is seen by then"),
+    ),
+    reads=(*IR_PACKETS, *HAZARD_PACKETS, 48, 49, 50, 51, *ODOMETRY_PACKETS),
+    sends=(137, 145),
+)  # fmt: skip
+class DockSearch(_DockingAction):
+    """Search for the dock's beams: spin once, then wander toward unexplored space.
+
+    SUCCESS (wheels halted) as soon as any receiver sees a dock character. Wandering drives
+    straight legs; on a bump, cliff or light-bumper obstacle it backs off and picks the
+    heading whose next 1.6 m crosses the least visited cells of a 0.4 m grid kept in the
+    odometry frame (cells where it met an obstacle count as heavily visited).
+    """
+
+    stage = "search"
+
+    def __init__(self, name: str, params: dict[str, object] | None = None) -> None:
+        super().__init__(name, params)
+        self._visits: dict[tuple[int, int], float] = {}
+        self._hazards: deque[tuple[float, float]] = deque(maxlen=200)
+
+    def start(self) -> None:
+        self.begin()
+        # spin once per search, not again on every retry after a cliff
+        spin = self.value("spin_first") and not self._spun
+        self._spun = True
+        self._phase = "spin" if spin else "forward"
+        self.mark_turn()
+        self.mark_distance()
+        self._target = self.heading()
+        self._back_until = 0.0
+        self._want_wall = True
+
+    def _cell(self, x: float, y: float) -> tuple[int, int]:
+        return (math.floor(x / _CELL_MM), math.floor(y / _CELL_MM))
+
+    def _visit(self, x: float, y: float, weight: float) -> None:
+        cell = self._cell(x, y)
+        self._visits[cell] = self._visits.get(cell, 0.0) + weight
+
+    def _choose_heading(self, avoid: float | None) -> float:
+        """The heading toward the least visited space that does not lead straight back into
+        an obstacle met before (``avoid``: the heading it was met at)."""
+        odo = self.snapshot.odometry
+        best, best_score = odo.theta_rad, math.inf
+        for i in range(_DIRECTIONS):
+            angle = odo.theta_rad + math.pi * 2 * i / _DIRECTIONS
+            turn = math.remainder(angle - odo.theta_rad, math.tau)
+            if avoid is not None and abs(math.remainder(angle - avoid, math.tau)) < 1.4:
+                continue
+            ca, sa = math.cos(angle), math.sin(angle)
+            score = 0.0
+            for step in range(1, 5):
+                d = step * _CELL_MM
+                score += (
+                    self._visits.get(self._cell(odo.x_mm + d * ca, odo.y_mm + d * sa), 0.0) / step
+                )
+            for hx, hy in self._hazards:
+                dx, dy = hx - odo.x_mm, hy - odo.y_mm
+                along = dx * ca + dy * sa
+                if 0.0 < along < 900.0 and abs(dy * ca - dx * sa) < 300.0:
+                    score += 500.0 / (1.0 + along / 300.0)
+            score += 0.05 * abs(turn)  # prefer small turns among equals
+            if score < best_score:
+                best, best_score = angle, score
+        return best
+
+    def update(self) -> Status:
+        snap = self.snapshot
+        frame = snap.frame
+        if DockView.of(frame).seen:
+            return self.succeed()
+        if self.elapsed() >= self.number("timeout") - 1e-9:
+            return self.fail(f"no dock beam seen in {self.number('timeout'):g} s")
+        odo = snap.odometry
+        self._visit(odo.x_mm, odo.y_mm, 1.0)
+        hazard = _hazard(frame)
+        moving_on = self._phase in ("forward", "follow")
+        if hazard is not None and moving_on and not (self._phase == "follow" and
+                                                      hazard == "obstacle"):  # fmt: skip
+            ahead = 250.0
+            hx = odo.x_mm + ahead * math.cos(odo.theta_rad)
+            hy = odo.y_mm + ahead * math.sin(odo.theta_rad)
+            self._visit(hx, hy, 400.0 if hazard == "cliff" else 150.0)
+            self._hazards.append((hx, hy))
+            if hazard == "obstacle" and self._phase == "forward" and self._want_wall:
+                self._start_follow()  # found a wall to follow
+            else:
+                self._phase = "back"
+                self._back_until = snap.time + (0.8 if hazard == "cliff" else 0.4)
+                self._avoid = odo.theta_rad
+                if hazard == "cliff":
+                    self._want_wall = False  # a drop is no wall: wander away from it
+        if self.not_driving():
+            # a cliff or wheel drop in Safe mode: remembered above, so the retry avoids it
+            return self.fail(self.fallback_message())
+        if self._phase == "spin":
+            if abs(self.turned()) < math.tau:
+                self.wheels(-180, 180)
+                return _RUN
+            self._target = self._choose_heading(None)
+            self._phase = "turn"
+        if self._phase == "follow":
+            if self.travelled() < self.number("follow") and not self._follow_lost:
+                self._follow(frame)
+                return _RUN
+            self._want_wall = False  # followed far enough: cross the room
+            self._target = self._choose_heading(odo.theta_rad - math.pi / 2)
+            self._phase = "turn"
+        if self._phase == "back":
+            if snap.time < self._back_until:
+                self.wheels(-150, -150)
+                return _RUN
+            if self._want_wall and frame[45] and not frame[7] & 3:
+                self._start_follow()
+                return _RUN
+            self._target = self._choose_heading(self._avoid)
+            self._phase = "turn"
+        if self._phase == "turn":
+            err = math.remainder(self._target - odo.theta_rad, math.tau)
+            if abs(err) < math.radians(4) and frame[45] & _LIGHT_AHEAD:
+                self._target += math.copysign(math.radians(20), err or 1.0)  # still blocked
+            elif abs(err) < math.radians(4):
+                self._phase = "forward"
+                self.mark_distance()
+            else:
+                w = 160.0 if abs(err) > math.radians(20) else 60.0
+                self.wheels(-w if err > 0 else w, w if err > 0 else -w)
+                return _RUN
+        # forward: a straight leg toward unexplored space, then look for a wall again
+        if self.travelled() >= self.number("leg"):
+            self._want_wall = True
+            self._target = self._choose_heading(None)
+            self._phase = "turn"
+            self.mark_distance()
+            return _RUN
+        speed = self.number("speed")
+        err = math.remainder(self._target - odo.theta_rad, math.tau)
+        turn = max(-40.0, min(40.0, 200.0 * err))
+        self.wheels(speed - turn, speed + turn)
+        return _RUN
+
+    def _start_follow(self) -> None:
+        self._phase = "follow"
+        self._wall_seen_at = None
+        self._follow_lost = False
+        self.mark_distance()
+
+    _wall_seen_at: float | None = None
+    _follow_lost = False
+
+    def _follow(self, frame: SensorFrame) -> None:
+        """Keep a wall on the right at a steady light-bumper signal (packets 48-51)."""
+        speed = min(self.number("speed"), 200.0)
+        front = max(frame[48], frame[49])
+        side, front_side = frame[51], frame[50]
+        if front > 300 or frame[7] & 3:
+            self.wheels(-120, 120)  # wall ahead: turn left in place
+        elif side == 0 and front_side == 0:
+            self.wheels(speed, speed * 0.35)  # lost it (an outside corner): arc right
+            if self._wall_seen_at is None:
+                self._wall_seen_at = self.snapshot.odometry.path_mm
+            elif self.snapshot.odometry.path_mm - self._wall_seen_at > 600.0:
+                self._follow_lost = True  # no wall there after all
+        else:
+            self._wall_seen_at = None
+            error = 500 - max(side, front_side // 2)
+            turn = max(-speed * 0.6, min(speed * 0.6, 0.12 * error))
+            self.wheels(speed + turn, speed - turn)
+
+    _spun = False
+    _want_wall = True
+    _avoid = 0.0
+    _phase = "spin"
+    _target = 0.0
+    _back_until = 0.0
+
+
+# --------------------------------------------------------------------------- approach
+
+
+@declare(
+    "dock_approach",
+    kind="action",
+    params=(
+        Param("speed", SPEED, default="150 mm/s", minimum=30, maximum=_WHEEL.maximum,
+              doc="speed toward the axis"),
+        Param("cross_angle", ANGLE, default="80deg", minimum=20, maximum=90,
+              doc="how far it turns away from the dock to move toward its axis"),
+        Param("lost_after", DURATION, default="4s", minimum=0.1,
+              doc="FAILURE when no beam has been seen for this long"),
+        Param("timeout", DURATION, default="90s", minimum=1,
+              doc="FAILURE if not facing the dock on its axis by then"),
+    ),
+    reads=(*IR_PACKETS, *HAZARD_PACKETS, 34, *ODOMETRY_PACKETS),
+    sends=(137, 145),
+)  # fmt: skip
+class DockApproach(_DockingAction):
+    """Get onto the dock's axis, facing it (SUCCESS), from anywhere its beams are seen.
+
+    Face the dock (turn toward the receiver that sees it); red only means the robot is on
+    the dock's left, so the axis is on the robot's left: turn ``cross_angle`` left and drive
+    until both buoys are seen (green only: the mirror image); then face the dock again. In
+    the force field with no buoy, the side is the last one seen, or a guess that is flipped
+    when the robot leaves the field or meets an obstacle.
+    """
+
+    stage = "approach"
+
+    def start(self) -> None:
+        self.begin()
+        self._last_seen = self.snapshot.time
+        self._side_guess = 0
+        self._last_side = 0
+        self._crossings = 0
+        view = DockView.of(self.snapshot.frame)
+        self._start_facing(-1.0 if view.on_right else 1.0)
+
+    def update(self) -> Status:
+        snap = self.snapshot
+        frame = snap.frame
+        view = DockView.of(frame)
+        if frame.charging_sources.home_base:
+            return self.succeed()
+        if self.elapsed() >= self.number("timeout") - 1e-9:
+            return self.fail(f"not on the dock's axis after {self.number('timeout'):g} s")
+        if self.not_driving():
+            return self.fail(self.fallback_message())
+        if view.seen:
+            self._last_seen = snap.time
+            if view.side:
+                self._last_side = view.side
+        elif snap.time - self._last_seen >= self.number("lost_after"):
+            return self.fail(f"lost the dock's beams for {self.number('lost_after'):g} s")
+        speed = self.number("speed")
+        hazard = _hazard(frame)
+        if hazard == "obstacle":
+            hazard = None  # near the dock its wall is always in sight of the light bumper
+        if self._phase == "face":
+            if not self._face(view):
+                return _RUN
+            side = view.side
+            if view.on_axis or (self._crossings >= 3 and view.force_field):
+                return self.succeed()  # on the axis (or as near as repeated tries get)
+            if not (view.omni.from_dock and view.omni.force_field):
+                self._phase = "closer"  # along the beams, into the force field first
+                self.mark_distance()
+            elif side == 0:
+                side = self._last_side or self._side_guess or 1
+                self._side_guess = side
+            if self._phase == "face":
+                self._cross_side = side or 1
+                self._crossings += 1
+                self._phase = "turn_away"
+                self.mark_turn()
+        if self._phase == "closer":
+            if view.omni.from_dock and (view.omni.force_field or view.on_axis):
+                self._start_facing(1.0)
+                if view.on_axis and view.facing:
+                    return self.succeed()
+                return _RUN
+            if hazard is not None or self.travelled() > 1500.0:
+                self._phase = "back"
+                self._back_until = snap.time + 0.5
+            else:
+                slow = speed * 0.8
+                if view.on_left:
+                    self.wheels(slow * 0.3, slow * 0.3 + 60)
+                elif view.on_right:
+                    self.wheels(slow * 0.3 + 60, slow * 0.3)
+                else:
+                    self.wheels(slow, slow)
+                return _RUN
+        if self._phase == "turn_away":
+            goal = math.radians(self.number("cross_angle"))
+            if abs(self.turned()) >= goal:
+                self._phase = "cross"
+                self._axis_at = None
+                self.mark_distance()
+            else:
+                w = 90.0 * self._cross_side
+                self.wheels(-w, w)
+                return _RUN
+        if self._phase == "cross":
+            blocked = hazard is not None
+            left_field = not view.seen and snap.time - self._last_seen > 1.0
+            wrong = view.side == -self._cross_side and not view.on_axis
+            if (view.on_axis or wrong) and self._axis_at is None:
+                self._axis_at = self.snapshot.odometry.distance_mm
+            if (
+                self._axis_at is not None
+                and abs(self.snapshot.odometry.distance_mm - self._axis_at) >= OMNI_AHEAD_MM
+            ):
+                # the omni receiver is ahead of the centre: go on until the centre is there
+                self._start_facing(-float(self._cross_side))
+                self.halt()
+                return _RUN
+            if blocked or left_field or self.travelled() > 1500.0:
+                if view.side == 0 and self._side_guess:
+                    self._side_guess = -self._side_guess  # the guess was wrong: other way
+                    self._last_side = self._side_guess
+                self._start_facing(-float(self._cross_side))
+                if blocked:
+                    self._phase = "back"
+                    self._back_until = snap.time + 0.5
+                else:
+                    self.halt()
+                    return _RUN
+            else:
+                slow = 0.6 if view.force_field else 1.0
+                self.wheels(speed * slow, speed * slow)
+                return _RUN
+        if self._phase == "back":
+            if snap.time < self._back_until:
+                self.wheels(-120, -120)
+                return _RUN
+            self._start_facing(self._spin_dir)
+            self.halt()
+        return _RUN
+
+    def _start_facing(self, spin_dir: float) -> None:
+        self._phase = "face"
+        self._spin_dir = spin_dir
+        self._lead_theta: float | None = None
+        self._face_target: float | None = None
+        self.mark_turn()
+
+    def _face(self, view: DockView) -> bool:
+        """Turn to face the dock; True once facing it.
+
+        Spinning counter-clockwise, the dock passes from the left receiver to the right one
+        (clockwise: the other way round). Both at once: facing. At the edge of a beam the
+        two may never see it together: then the heading half-way between the last one seen
+        by the leading receiver and the first one by the trailing receiver is the dock's."""
+        theta = self.heading()
+        if self._face_target is not None:
+            err = math.remainder(self._face_target - theta, math.tau)
+            if abs(err) < math.radians(2.0) or view.facing:
+                self.halt()
+                return True
+            w = 60.0 if abs(err) > math.radians(8.0) else 35.0
+            self.wheels(-w if err > 0 else w, w if err > 0 else -w)
+            return False
+        if view.facing:
+            self.halt()
+            return True
+        left, right = view.left.from_dock, view.right.from_dock
+        lead, trail = (left, right) if self._spin_dir > 0 else (right, left)
+        if lead:
+            self._lead_theta = theta
+        if trail and not lead:
+            if self._lead_theta is None:
+                self._spin_dir = -self._spin_dir  # the dock is on the trailing side: go back
+                self.mark_turn()
+            else:
+                gap = math.remainder(theta - self._lead_theta, math.tau)
+                self._face_target = self._lead_theta + gap / 2.0
+                return False
+        if (
+            self._lead_theta is not None
+            and not (left or right)
+            and abs(math.remainder(theta - self._lead_theta, math.tau)) > math.radians(60.0)
+        ):
+            # seen at one heading only (the fringe of a beam): face that way and go closer
+            self._face_target = self._lead_theta
+            return False
+        if abs(self.turned()) > math.radians(540.0):
+            self._lead_theta = None
+            self.mark_turn()
+        w = 70.0 if (left or right) else 110.0
+        self.wheels(-w * self._spin_dir, w * self._spin_dir)
+        return False
+
+    _crossings = 0
+    _axis_at: float | None = None
+    _lead_theta: float | None = None
+    _face_target: float | None = None
+    _phase = "face"
+    _cross_side = 1
+    _side_guess = 0
+    _last_side = 0
+    _spin_dir = 1.0
+    _last_seen = 0.0
+    _back_until = 0.0
+
+
+# --------------------------------------------------------------------------- final alignment
+
+
+@declare(
+    "dock_drive_on",
+    kind="action",
+    params=(
+        Param("speed", SPEED, default="120 mm/s", minimum=20, maximum=_WHEEL.maximum,
+              doc="speed along the axis outside the force field"),
+        Param("slow", SPEED, default="60 mm/s", minimum=10, maximum=_WHEEL.maximum,
+              doc="speed inside the force field"),
+        Param("wiggle", ANGLE, default="12deg", minimum=0, maximum=45,
+              doc="how far it turns each way on contact to seat the charging contacts"),
+        Param("timeout", DURATION, default="45s", minimum=1,
+              doc="FAILURE if the home base is not reached by then"),
+    ),
+    reads=(*IR_PACKETS, 7, 34, *ODOMETRY_PACKETS),
+    sends=(137, 145),
+)  # fmt: skip
+class DockDriveOn(_DockingAction):
+    """Final alignment: drive onto the contacts along the axis (SUCCESS: packet 34 shows
+    the home base).
+
+    Steers to keep both directional receivers on the dock (one alone: turn toward it), nudges
+    toward the axis when only one buoy is seen, slows down in the force field. On contact
+    without the home-base bit it wiggles in place (``wiggle`` each way) to seat the
+    contacts; FAILURE if that does not make contact, so a recovery can back off and retry.
+    """
+
+    stage = "final alignment"
+
+    def start(self) -> None:
+        self.begin()
+        self._phase = "drive"
+        self._last_seen = self.snapshot.time
+        self.mark_turn()
+
+    def update(self) -> Status:
+        snap = self.snapshot
+        frame = snap.frame
+        if frame.charging_sources.home_base:
+            return self.succeed()
+        if self.elapsed() >= self.number("timeout") - 1e-9:
+            return self.fail(f"did not reach the contacts in {self.number('timeout'):g} s")
+        if self.not_driving():
+            return self.fail(self.fallback_message())
+        view = DockView.of(frame)
+        if view.seen:
+            self._last_seen = snap.time
+        elif snap.time - self._last_seen > 1.5:
+            return self.fail("lost the dock's beams")
+        bumped = bool(frame[7] & 3)
+        if self._phase == "drive":
+            if bumped:
+                if not view.force_field:
+                    return self.fail("bumped into something that is not the dock")
+                self._phase = "wiggle"
+                self._wiggle_step = 0
+                self.mark_turn()
+            else:
+                speed = self.number("slow") if view.force_field else self.number("speed")
+                if view.on_left:
+                    self.wheels(speed * 0.3, speed * 0.3 + 50)
+                elif view.on_right:
+                    self.wheels(speed * 0.3 + 50, speed * 0.3)
+                elif not view.facing:
+                    self.wheels(speed * 0.5, speed * 0.5)
+                else:
+                    nudge = 0.15 * speed * view.side  # red only: axis on the left
+                    self.wheels(speed - nudge, speed + nudge)
+                return _RUN
+        # wiggle in place: +w, back through 0 to -w, back to 0
+        w = math.radians(self.number("wiggle"))
+        targets = (w, -w, 0.0)
+        if self._wiggle_step >= len(targets):
+            return self.fail("touched the dock but the contacts did not engage")
+        goal = targets[self._wiggle_step]
+        err = goal - self.turned()
+        if abs(err) < math.radians(1.0):
+            self._wiggle_step += 1
+            self.halt()
+            return _RUN
+        spin = 30.0 if err > 0 else -30.0
+        self.wheels(-spin + 8.0, spin + 8.0)  # keep a little forward push on the plate
+        return _RUN
+
+    _phase = "drive"
+    _wiggle_step = 0
+    _last_seen = 0.0
+
+
+# --------------------------------------------------------------------------- wait for charge
+
+
+@declare(
+    "dock_wait_charge",
+    kind="action",
+    params=(
+        Param("timeout", DURATION, default="10s", minimum=0.1,
+              doc="FAILURE if charging is not confirmed by then"),
+    ),
+    reads=(21, 34),
+)  # fmt: skip
+class DockWaitCharge(Action):
+    """SUCCESS when charging is confirmed: packet 34's home-base bit AND a charging state
+    (reconditioning, full, trickle) in packet 21. The robot charges only in Passive: put a
+    ``mode: passive`` before this leaf."""
+
+    stage = "wait for charge"
+
+    def start(self) -> None:
+        _note_stage(self.stage)
+        self._t0 = self.snapshot.time
+
+    def update(self) -> Status:
+        frame = self.snapshot.frame
+        home = frame.charging_sources.home_base
+        if home and frame.charging_state.is_charging:
+            return _OK
+        if self.snapshot.time - self._t0 >= self.number("timeout") - 1e-9:
+            why = "charging state stays" if home else "the home base is not powering the robot;"
+            state = frame.charging_state.name.lower().replace("_", " ")
+            self.feedback_message = (
+                f"{self.stage}: {why} {state} after {self.number('timeout'):g} s"
+                if home
+                else f"{self.stage}: {why} charging state {state}"
+            )
+            return _FAIL
+        return _RUN
+
+    _t0 = 0.0
+
+
+# --------------------------------------------------------------------------- time limit
+
+
+@declare(
+    "dock_time_limit",
+    kind="action",
+    params=(Param("limit", DURATION, required=True, minimum=1,
+                  doc="give up after this much mission time"),),
+    primary="limit",
+)  # fmt: skip
+class DockTimeLimit(Action):
+    """RUNNING until ``limit`` has passed, then FAILURE: ``gave up after 300 s in stage
+    approach``. Run it in a ``parallel`` (policy ``one``) beside the docking stages."""
+
+    def start(self) -> None:
+        self._t0 = self.snapshot.time
+
+    def update(self) -> Status:
+        if self.snapshot.time - self._t0 >= self.number("limit") - 1e-9:
+            stage = current_stage() or "search"
+            self.feedback_message = (
+                f"{stage}: gave up after the time limit of {self.number('limit'):g} s "
+                f"(stage {stage} was running)"
+            )
+            return _FAIL
+        return _RUN
+
+    _t0 = 0.0
+
+
+DOCKING: tuple[type[Action], ...] = (
+    DockSearch, DockApproach, DockDriveOn, DockWaitCharge, DockTimeLimit,
+)  # fmt: skip

@@ -1,0 +1,230 @@
+"""One evaluation episode: a mission run on the simulator's virtual clock from a seeded pose.
+
+An episode is the same stack as ``roomba-bt run --fast``: the compiled mission, the robot
+:class:`~roomba_bt.robot.connection.Connection` (mode model, guard, watchdog, safe stop), the
+:class:`~roomba_bt.runtime.loop.MissionRunner`, and the simulator behind a
+:class:`~roomba_bt.sim.SimLink`. Nothing is mocked: the mission sees the bytes a robot sends.
+
+What is measured comes from the simulator itself, per 15 ms step (never from the mission's
+own idea of what happened): the trajectory, bump onsets and how many steps the bumper stayed
+in contact after each, whether the robot ended on the dock's contacts, the progress around
+the world's loop (for patrols). Episodes are plain data (picklable) so that
+:mod:`roomba_bt.evaluate.parallel` can run them in worker processes; the same
+:class:`EpisodeSpec` gives the same :class:`EpisodeResult` in any process.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+from roomba_bt.mission import RUNTIME_PACKETS, MissionError, load_mission
+from roomba_bt.oi.profiles import get_profile
+from roomba_bt.robot.connection import Connection
+from roomba_bt.runtime.loop import MissionRunner
+from roomba_bt.sim import SimLink, Simulator, World, load_world
+from roomba_bt.sim.world import DockSpec
+
+#: Dock fields an evaluation may override (``--dock buoy_range=0.5``), with their units:
+#: lengths in metres, angles in degrees, as in a world file.
+DOCK_OVERRIDES: dict[str, str] = {
+    "buoy_range": "m",
+    "force_field": "m",
+    "contact_tolerance": "m",
+    "angle_tolerance": "deg",
+    "red": "deg",
+    "green": "deg",
+}
+
+
+class EvaluationError(ValueError):
+    """Bad input to an evaluation (mission, world, override): a message for the user."""
+
+
+@dataclass(frozen=True)
+class EpisodeSpec:
+    """Everything that decides one episode. Same spec, same result."""
+
+    mission: str
+    world: str = "empty-room"
+    seed: int = 0
+    params: tuple[tuple[str, str], ...] = ()
+    profile: str = "create2"
+    timeout_s: float = 600.0
+    random_start: bool = True
+    #: start no further than this from the docked pose (m); None: the world's start region
+    within_m: float | None = None
+    dock: tuple[tuple[str, Any], ...] = ()
+    battery: float | None = None
+    #: keep every n-th trace point in the result (trajectory plots)
+    trace_every: int = 2
+
+
+@dataclass(frozen=True)
+class EpisodeResult:
+    """What happened in one episode, measured on the simulator."""
+
+    seed: int
+    outcome: str  # "success", "failure", "timeout", "error", ...
+    reason: str
+    time_s: float
+    wall_s: float
+    ticks: int
+    start: tuple[float, float, float]  # x, y (m), heading (deg)
+    end: tuple[float, float, float]
+    bumps: int
+    #: longest run of steps the bumper stayed pressed right after a bump onset, per onset
+    contact_steps: tuple[int, ...]
+    docked: bool
+    charging: bool
+    cliffs: int
+    fell: bool
+    violations: int
+    #: full turns around the world's centre (signed; patrols) and the longest time (s)
+    #: with less than 0.3 m of progress around it
+    loops: float
+    longest_stall_s: float
+    trajectory: tuple[tuple[float, float], ...] = field(repr=False, default=())
+
+    @property
+    def succeeded(self) -> bool:
+        return self.outcome == "success"
+
+
+class _MeasuredSimulator(Simulator):
+    """A simulator that also records, per step, what the evaluation measures."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.contact_steps: list[int] = []
+        self._in_contact = False
+        self._centre = _world_centre(self.world)
+        self._loop_angle = 0.0
+        self._last_bearing = math.atan2(self.y - self._centre[1], self.x - self._centre[0])
+        self._progress_mark = (0.0, 0.0)  # (loop angle, time)
+        self.longest_stall = 0.0
+        self._radius = max(1.0, math.hypot(self.x - self._centre[0], self.y - self._centre[1]))
+
+    def step(self, dt: float = 0.015) -> None:
+        super().step(dt)
+        pressed = bool(self.values[7] & 3)
+        if pressed:
+            if not self._in_contact:
+                self.contact_steps.append(0)
+            else:
+                self.contact_steps[-1] += 1
+        self._in_contact = pressed
+        bearing = math.atan2(self.y - self._centre[1], self.x - self._centre[0])
+        self._loop_angle += math.remainder(bearing - self._last_bearing, math.tau)
+        self._last_bearing = bearing
+        angle, since = self._progress_mark
+        if abs(self._loop_angle - angle) * self._radius >= 300.0:
+            self._progress_mark = (self._loop_angle, self.time)
+        else:
+            self.longest_stall = max(self.longest_stall, self.time - since)
+
+    @property
+    def loops(self) -> float:
+        return self._loop_angle / math.tau
+
+
+def _world_centre(world: World) -> tuple[float, float]:
+    xs = [x for room in world.rooms for x, _ in room]
+    ys = [y for room in world.rooms for _, y in room]
+    return ((min(xs) + max(xs)) / 2.0, (min(ys) + max(ys)) / 2.0)
+
+
+def build_world(spec: EpisodeSpec) -> World:
+    """The spec's world with its dock and battery overrides applied."""
+    try:
+        world = load_world(spec.world)
+    except Exception as exc:  # WorldError: every problem, already worded for the user
+        raise EvaluationError(str(exc)) from None
+    if spec.dock:
+        if world.dock is None:
+            raise EvaluationError(f"--dock: world {world.name!r} has no dock")
+        world = replace(world, dock=_override_dock(world.dock, dict(spec.dock)))
+    if spec.battery is not None:
+        world = replace(world, battery=spec.battery)
+    return world
+
+
+def _override_dock(dock: DockSpec, overrides: dict[str, Any]) -> DockSpec:
+    values: dict[str, Any] = {}
+    for key, value in overrides.items():
+        if key not in DOCK_OVERRIDES:
+            raise EvaluationError(
+                f"--dock {key}: unknown dock field; allowed: {', '.join(DOCK_OVERRIDES)}"
+            )
+        if key in ("red", "green"):
+            lo, hi = value
+            values[key] = (math.radians(float(lo)), math.radians(float(hi)))
+        elif DOCK_OVERRIDES[key] == "deg":
+            values[key] = math.radians(float(value))
+        else:
+            values[key] = float(value) * 1000.0
+    return replace(dock, **values)
+
+
+def start_pose(world: World, spec: EpisodeSpec) -> Any:
+    """The seeded start pose: the world's start region, or within ``within_m`` of the dock."""
+    if not spec.random_start:
+        return world.start
+    if spec.within_m is not None:
+        from roomba_bt.sim.world import StartRegion
+
+        if world.dock is None:
+            raise EvaluationError(f"--within: world {world.name!r} has no dock")
+        world = replace(world, start_region=StartRegion(near_dock=spec.within_m * 1000.0))
+    try:
+        return world.sample_start(spec.seed)
+    except Exception as exc:
+        raise EvaluationError(str(exc)) from None
+
+
+def run_episode(spec: EpisodeSpec) -> EpisodeResult:
+    """Run one episode to its end (success, failure, or the spec's timeout)."""
+    profile = get_profile(spec.profile)
+    try:
+        mission = load_mission(spec.mission, dict(spec.params), profile=profile)
+    except MissionError as exc:
+        raise EvaluationError("\n".join(str(d) for d in exc.diagnostics)) from None
+    world = build_world(spec)
+    pose = start_pose(world, spec)
+    simulator = _MeasuredSimulator(world, profile, spec.seed, start=pose)
+    link = SimLink(simulator)
+    connection = Connection(link, profile, watchdog=0.1, end_in="passive")  # type: ignore[arg-type]
+    packets = tuple(sorted(set(mission.packets) | set(RUNTIME_PACKETS)))
+    runner = MissionRunner(
+        connection, mission, profile=profile, packets=packets, timeout_s=spec.timeout_s
+    )
+    summary = runner.run()
+    trace = simulator.trace[:: max(1, spec.trace_every)]
+    events = simulator.events
+    return EpisodeResult(
+        seed=spec.seed,
+        outcome=summary.outcome.value,
+        reason=summary.reason,
+        time_s=summary.mission_time_s,
+        wall_s=summary.wall_time_s,
+        ticks=summary.ticks,
+        start=(pose.x / 1000.0, pose.y / 1000.0, math.degrees(pose.theta)),
+        end=(simulator.x / 1000.0, simulator.y / 1000.0, math.degrees(simulator.theta)),
+        bumps=sum(1 for e in events if e.kind == "bump"),
+        contact_steps=tuple(simulator.contact_steps),
+        docked=simulator.docked,
+        charging=simulator.charging,
+        cliffs=sum(1 for e in events if e.kind == "cliff"),
+        fell=simulator.fallen,
+        violations=len(simulator.violations),
+        loops=simulator.loops,
+        longest_stall_s=simulator.longest_stall,
+        trajectory=tuple((p.x / 1000.0, p.y / 1000.0) for p in trace)
+        + ((simulator.x / 1000.0, simulator.y / 1000.0),),
+    )
+
+
+def mission_name(path: str) -> str:
+    return Path(path).stem
