@@ -1,0 +1,56 @@
+"""Evaluate missions on the simulator: seeded episodes, statistics, parallel runs, plots.
+
+``roomba-bt eval`` (:mod:`roomba_bt.cli.eval_cmd`) and the pytest helper
+(:func:`roomba_bt.evaluate.testing.assert_success_rate`) are built from these parts:
+
+* :mod:`~roomba_bt.evaluate.episode`: one mission run on the virtual clock from a seeded pose,
+  measured on the simulator (:class:`EpisodeSpec` -> :class:`EpisodeResult`);
+* :mod:`~roomba_bt.evaluate.parallel`: many episodes in worker processes, same results for
+  any number of jobs;
+* :mod:`~roomba_bt.evaluate.stats`: success rate with a Wilson interval, percentiles, grouped
+  failure reasons;
+* :mod:`~roomba_bt.evaluate.plot`: every trajectory on one picture (matplotlib, optional);
+* :mod:`~roomba_bt.evaluate.report`: the figures of ``docs/routines.md``, by one command.
+
+This package sits at the top of the stack beside the CLI: it imports the runtime, the mission
+compiler and the simulator; nothing below imports it.
+"""
+
+from roomba_bt.evaluate.episode import (
+    EpisodeResult,
+    EpisodeSpec,
+    EvaluationError,
+    run_episode,
+)
+from roomba_bt.evaluate.parallel import ProgressBar, run_episodes
+from roomba_bt.evaluate.stats import Summary, percentile, summarize, wilson_interval
+
+
+def episode_specs(
+    mission: str,
+    *,
+    world: str = "empty-room",
+    runs: int = 20,
+    seed: int = 0,
+    **fields: object,
+) -> list[EpisodeSpec]:
+    """``runs`` specs with seeds ``seed``, ``seed + 1``, ...; other fields as given."""
+    return [
+        EpisodeSpec(mission, world, seed + i, **fields)  # type: ignore[arg-type]
+        for i in range(runs)
+    ]
+
+
+__all__ = [
+    "EpisodeResult",
+    "EpisodeSpec",
+    "EvaluationError",
+    "ProgressBar",
+    "Summary",
+    "episode_specs",
+    "percentile",
+    "run_episode",
+    "run_episodes",
+    "summarize",
+    "wilson_interval",
+]

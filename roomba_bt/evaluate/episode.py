@@ -15,6 +15,7 @@ the world's loop (for patrols). Episodes are plain data (picklable) so that
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -185,7 +186,18 @@ def start_pose(world: World, spec: EpisodeSpec) -> Any:
 
 
 def run_episode(spec: EpisodeSpec) -> EpisodeResult:
-    """Run one episode to its end (success, failure, or the spec's timeout)."""
+    """Run one episode to its end (success, failure, or the spec's timeout). The robot
+    layer's log lines (stream started, mode fell back) are silenced: the result has them."""
+    logger = logging.getLogger("roomba_bt")
+    level = logger.level
+    logger.setLevel(logging.ERROR)
+    try:
+        return _run_episode(spec)
+    finally:
+        logger.setLevel(level)
+
+
+def _run_episode(spec: EpisodeSpec) -> EpisodeResult:
     profile = get_profile(spec.profile)
     try:
         mission = load_mission(spec.mission, dict(spec.params), profile=profile)
@@ -195,7 +207,7 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
     pose = start_pose(world, spec)
     simulator = _MeasuredSimulator(world, profile, spec.seed, start=pose)
     link = SimLink(simulator)
-    connection = Connection(link, profile, watchdog=0.1, end_in="passive")  # type: ignore[arg-type]
+    connection = Connection(link, profile, watchdog=0.1, end_in="passive")
     packets = tuple(sorted(set(mission.packets) | set(RUNTIME_PACKETS)))
     runner = MissionRunner(
         connection, mission, profile=profile, packets=packets, timeout_s=spec.timeout_s
@@ -221,8 +233,10 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
         violations=len(simulator.violations),
         loops=simulator.loops,
         longest_stall_s=simulator.longest_stall,
-        trajectory=tuple((p.x / 1000.0, p.y / 1000.0) for p in trace)
-        + ((simulator.x / 1000.0, simulator.y / 1000.0),),
+        trajectory=(
+            *((p.x / 1000.0, p.y / 1000.0) for p in trace),
+            (simulator.x / 1000.0, simulator.y / 1000.0),
+        ),
     )
 
 
