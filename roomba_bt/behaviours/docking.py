@@ -785,6 +785,7 @@ class DockTimeLimit(Action):
 
     def start(self) -> None:
         self._t0 = self.snapshot.time
+        py_trees.blackboard.Blackboard.storage.pop(STAGE_KEY, None)  # a new docking run
 
     def update(self) -> Status:
         if self.snapshot.time - self._t0 >= self.number("limit") - 1e-9:

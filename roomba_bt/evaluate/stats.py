@@ -66,6 +66,8 @@ class Summary:
     median_time_s: float | None
     p90_time_s: float | None
     mean_bumps: float
+    #: episodes that ended on the dock's contacts (measured by the simulator)
+    docked: int
     failures: tuple[tuple[str, int], ...]
     wall_s: float
     simulated_s: float
@@ -85,6 +87,7 @@ class Summary:
             f"(95 % Wilson interval {100 * lo:.1f} %..{100 * hi:.1f} %)",
             f"time         median {med}, p90 {p90} (successful episodes, mission time)",
             f"bumps        {self.mean_bumps:.1f} per episode (bumper onsets in the simulator)",
+            f"docked       {self.docked} of {self.runs} episodes ended on the dock's contacts",
             f"simulated    {self.simulated_s:.0f} s of mission time in {self.wall_s:.1f} s of "
             f"CPU time ({speed:.0f}x real time per process)",
         ]
@@ -112,6 +115,7 @@ def summarize(mission: str, world: str, results: Sequence[EpisodeResult]) -> Sum
         median_time_s=percentile(times, 50),
         p90_time_s=percentile(times, 90),
         mean_bumps=sum(r.bumps for r in results) / runs if runs else 0.0,
+        docked=sum(r.docked for r in results),
         failures=tuple(sorted(groups.items(), key=lambda kv: (-kv[1], kv[0]))),
         wall_s=sum(r.wall_s for r in results),
         simulated_s=sum(r.time_s for r in results),

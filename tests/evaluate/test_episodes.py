@@ -1,0 +1,79 @@
+"""Episodes: seeded, measured on the simulator, the same in any number of processes."""
+
+from __future__ import annotations
+
+import dataclasses
+import io
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.evaluate import EpisodeSpec, EvaluationError, episode_specs, run_episode
+from roomba_bt.evaluate.episode import build_world, start_pose
+from roomba_bt.evaluate.parallel import ProgressBar, run_episodes
+from roomba_bt.evaluate.testing import assert_success_rate
+
+MISSIONS = Path(__file__).resolve().parents[2] / "missions"
+BUMP = str(MISSIONS / "bump-and-turn.yaml")
+
+
+def _without_wall_time(results: list) -> list:  # type: ignore[type-arg]
+    return [dataclasses.replace(r, wall_s=0.0) for r in results]
+
+
+def test_same_results_with_one_or_two_jobs() -> None:
+    specs = episode_specs(BUMP, world="apartment", runs=4, seed=7,
+                          params=(("duration", "6s"),), timeout_s=30)  # fmt: skip
+    one = run_episodes(specs, jobs=1)
+    two = run_episodes(specs, jobs=2)
+    assert _without_wall_time(one) == _without_wall_time(two)
+    assert [r.seed for r in two] == [7, 8, 9, 10]
+    assert len({r.start for r in one}) == 4, "each seed starts somewhere else"
+
+
+def test_start_poses_within_a_distance_of_the_dock() -> None:
+    for seed in range(20):
+        spec = EpisodeSpec(BUMP, "empty-room", seed=seed, within_m=0.5)
+        world = build_world(spec)
+        pose = start_pose(world, spec)
+        assert world.dock is not None
+        docked = world.dock.docked_pose
+        assert (pose.x - docked.x) ** 2 + (pose.y - docked.y) ** 2 <= 500.0**2
+
+
+def test_dock_overrides_reach_the_world() -> None:
+    spec = EpisodeSpec(BUMP, "empty-room", dock=(("buoy_range", 0.5), ("red", (-3, 15))))
+    dock = build_world(spec).dock
+    assert dock is not None
+    assert dock.buoy_range == 500.0
+    assert dock.red[1] == pytest.approx(0.2618, abs=1e-4)
+
+
+@pytest.mark.parametrize(
+    ("spec", "message"),
+    [
+        (EpisodeSpec(BUMP, "no-such-world"), "no such file or shipped world"),
+        (EpisodeSpec(BUMP, "corridor", dock=(("colour", 1.0),)), "unknown dock field"),
+        (EpisodeSpec("missions/none.yaml", "empty-room"), "none.yaml"),
+    ],
+)
+def test_bad_input_is_an_evaluation_error(spec: EpisodeSpec, message: str) -> None:
+    with pytest.raises(EvaluationError, match=message):
+        run_episode(spec)
+
+
+def test_progress_bar_counts_successes() -> None:
+    stream = io.StringIO()
+    bar = ProgressBar(stream, width=10)
+    specs = episode_specs(BUMP, runs=2, params=(("duration", "2s"),), timeout_s=10)
+    run_episodes(specs, jobs=1, progress=bar)
+    text = stream.getvalue()
+    assert "2/2 ok 2" in text and text.endswith("\n")
+
+
+def test_assert_success_rate_passes_and_fails_with_the_report() -> None:
+    summary = assert_success_rate(BUMP, runs=2, within_s=20, rate=1.0,
+                                  params={"duration": "3s"})  # fmt: skip
+    assert summary.successes == 2
+    with pytest.raises(AssertionError, match=r"0 of 2 runs within 2 s .*\n.*mission"):
+        assert_success_rate(str(MISSIONS / "dock.yaml"), runs=2, within_s=2, rate=0.5)

@@ -1,0 +1,73 @@
+"""Statistics of a batch of episodes."""
+
+from __future__ import annotations
+
+import pytest
+
+from roomba_bt.evaluate.episode import EpisodeResult
+from roomba_bt.evaluate.stats import percentile, reason_group, summarize, wilson_interval
+
+
+def result(seed: int, outcome: str = "success", time_s: float = 10.0, reason: str = "",
+           bumps: int = 0, docked: bool = False) -> EpisodeResult:  # fmt: skip
+    return EpisodeResult(
+        seed=seed, outcome=outcome, reason=reason, time_s=time_s, wall_s=0.1, ticks=1,
+        start=(0.0, 0.0, 0.0), end=(0.0, 0.0, 0.0), bumps=bumps, contact_steps=(),
+        docked=docked, charging=docked, cliffs=0, fell=False, violations=0, loops=0.0,
+        longest_stall_s=0.0,
+    )  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("successes", "runs", "lo", "hi"),
+    [
+        (0, 10, 0.0, 0.2775),
+        (10, 10, 0.7225, 1.0),
+        (200, 200, 0.9812, 1.0),
+        (196, 200, 0.9497, 0.9922),
+        (5, 10, 0.2366, 0.7634),
+    ],
+)
+def test_wilson_interval_matches_published_values(
+    successes: int, runs: int, lo: float, hi: float
+) -> None:
+    got_lo, got_hi = wilson_interval(successes, runs)
+    assert got_lo == pytest.approx(lo, abs=5e-4)
+    assert got_hi == pytest.approx(hi, abs=5e-4)
+
+
+def test_wilson_interval_refuses_impossible_counts() -> None:
+    with pytest.raises(ValueError, match=r"0\.\.10"):
+        wilson_interval(11, 10)
+    assert wilson_interval(0, 0) == (0.0, 1.0)
+
+
+def test_percentiles_interpolate_between_ranks() -> None:
+    values = [10.0, 20.0, 30.0, 40.0]
+    assert percentile(values, 50) == 25.0
+    assert percentile(values, 90) == pytest.approx(37.0)
+    assert percentile(values, 0) == 10.0
+    assert percentile(values, 100) == 40.0
+    assert percentile([], 50) is None
+
+
+def test_reasons_group_without_leaf_parameters() -> None:
+    a = result(1, "failure", reason="dock_time_limit(300 s): search: gave up")
+    b = result(2, "failure", reason="dock_time_limit(600 s): search: gave up")
+    c = result(3, "timeout", reason="--timeout 60 s of mission time ran out")
+    assert reason_group(a) == reason_group(b) == "search: gave up"
+    assert reason_group(c).startswith("timeout: ")
+
+
+def test_summary_counts_rates_times_and_failures() -> None:
+    results = [result(i, time_s=float(i), bumps=2, docked=True) for i in range(1, 9)]
+    results += [result(9, "failure", reason="x(1): approach: lost"),
+                result(10, "failure", reason="x(2): approach: lost")]  # fmt: skip
+    summary = summarize("m.yaml", "room", results)
+    assert (summary.successes, summary.runs, summary.docked) == (8, 10, 8)
+    assert summary.rate == 0.8
+    assert summary.median_time_s == 4.5
+    assert summary.failures == (("approach: lost", 2),)
+    assert summary.mean_bumps == pytest.approx(1.6)  # 8 episodes with 2, 2 with none
+    text = str(summary)
+    assert "8/10 = 80.0 %" in text and "Wilson" in text and "approach: lost" in text

@@ -1,0 +1,169 @@
+"""Every shipped mission is loaded, validated and run on the simulator."""
+
+from __future__ import annotations
+
+import itertools
+import math
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.behaviours.declare import RobotBehaviour
+from roomba_bt.evaluate import EpisodeSpec, run_episode
+from roomba_bt.mission import load_mission
+
+from .conftest import MISSIONS, SHIPPED
+
+NAMES = ("dock", "dock-builtin", "patrol", "bump-and-turn", "wall-follow")
+
+
+def test_the_five_routines_are_shipped() -> None:
+    assert {p.stem for p in SHIPPED} >= set(NAMES)
+
+
+@pytest.mark.parametrize("path", SHIPPED, ids=lambda p: p.stem)
+def test_mission_loads_and_is_documented_at_its_top(path: Path) -> None:
+    mission = load_mission(path)
+    assert mission.packets, "a mission that reads no sensor"
+    head = path.read_text().splitlines()[0]
+    assert head.startswith(f"# {path.stem}:"), "the first line says what the mission is"
+
+
+@pytest.mark.parametrize("path", SHIPPED, ids=lambda p: p.stem)
+def test_every_mission_runs_on_the_default_world(path: Path) -> None:
+    """``roomba-bt run missions/NAME.yaml`` on the default simulator world succeeds (short
+    durations where the mission has them)."""
+    short = {"bump-and-turn": (("duration", "20s"),), "wall-follow": (("duration", "20s"),),
+             "patrol": (("laps", "1"),)}  # fmt: skip
+    result = run_episode(
+        EpisodeSpec(str(path), "empty-room", seed=0, random_start=False,
+                    params=short.get(path.stem, ()), timeout_s=400)
+    )  # fmt: skip
+    assert result.outcome == "success", result.reason
+    assert result.violations == 0, "the robot ignored commands sent in the wrong mode"
+
+
+def _leaf_opcodes(path: Path) -> set[int]:
+    mission = load_mission(path)
+    return {
+        op
+        for node in mission.root.iterate()
+        if isinstance(node, RobotBehaviour)
+        for op in type(node).declaration.sends
+    }
+
+
+def test_dock_never_sends_seek_dock_and_the_builtin_one_does() -> None:
+    assert 143 not in _leaf_opcodes(MISSIONS / "dock.yaml")
+    assert 143 not in _leaf_opcodes(MISSIONS / "patrol.yaml")
+    assert 143 in _leaf_opcodes(MISSIONS / "dock-builtin.yaml")
+
+
+def test_dock_reads_all_three_receivers_and_the_charging_packets() -> None:
+    packets = set(load_mission(MISSIONS / "dock.yaml").packets)
+    assert {17, 52, 53, 21, 34} <= packets
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_dock_from_ten_random_poses_near_the_dock(seed: int) -> None:
+    """Within 1.5 m of the docked pose, any heading: every one of 10 seeds docks and
+    charges (the 200-pose figure is in docs/routines.md)."""
+    result = run_episode(
+        EpisodeSpec(str(MISSIONS / "dock.yaml"), "empty-room", seed=seed, within_m=1.5,
+                    timeout_s=360)
+    )  # fmt: skip
+    assert result.outcome == "success", result.reason
+    assert result.docked and result.charging
+
+
+@pytest.mark.parametrize(
+    "dock",
+    [
+        (("buoy_range", 0.5), ("force_field", 0.3)),
+        (("buoy_range", 2.0), ("force_field", 1.0), ("red", (-10, 35)), ("green", (-35, 10))),
+        (("red", (-3, 15)), ("green", (-15, 3)), ("angle_tolerance", 4.0)),
+    ],
+    ids=["short-beams", "long-wide-beams", "narrow-beams"],
+)
+def test_dock_with_other_beams(dock: tuple[tuple[str, object], ...]) -> None:
+    for seed in range(3):
+        result = run_episode(
+            EpisodeSpec(str(MISSIONS / "dock.yaml"), "empty-room", seed=seed, within_m=1.5,
+                        dock=dock, timeout_s=360)
+        )  # fmt: skip
+        assert result.outcome == "success", (seed, result.reason)
+        assert result.docked
+
+
+def test_dock_gives_up_naming_the_stage(cliff_world: str) -> None:
+    """No dock in the world: the time limit fails with the stage that was running."""
+    result = run_episode(
+        EpisodeSpec(str(MISSIONS / "dock.yaml"), cliff_world, seed=0, random_start=False,
+                    params=(("time_limit", "20s"),), timeout_s=60)
+    )  # fmt: skip
+    assert result.outcome == "failure"
+    assert "search:" in result.reason and "20 s" in result.reason
+    assert not result.fell
+
+
+def test_dock_builtin_docks() -> None:
+    result = run_episode(
+        EpisodeSpec(str(MISSIONS / "dock-builtin.yaml"), "empty-room", seed=1, within_m=1.0)
+    )
+    assert result.outcome == "success", result.reason
+    assert result.docked
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_patrol_does_its_laps_in_the_corridor(seed: int) -> None:
+    result = run_episode(
+        EpisodeSpec(str(MISSIONS / "patrol.yaml"), "corridor", seed=seed, timeout_s=600)
+    )
+    assert result.outcome == "success", result.reason
+    # two laps by odometry (360 deg of heading each) are most of two loops around the block
+    assert result.loops > 1.5
+    assert result.longest_stall_s < 30.0
+    assert not result.docked
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_patrol_docks_when_the_battery_runs_low(seed: int) -> None:
+    result = run_episode(
+        EpisodeSpec(str(MISSIONS / "patrol.yaml"), "corridor", seed=seed, battery=0.152,
+                    timeout_s=600)
+    )  # fmt: skip
+    assert result.outcome == "success", result.reason
+    assert result.docked and result.charging
+
+
+def test_bump_and_turn_leaves_every_wall_within_two_ticks() -> None:
+    result = run_episode(
+        EpisodeSpec(str(MISSIONS / "bump-and-turn.yaml"), "apartment", seed=5,
+                    params=(("duration", "45s"),), timeout_s=60)
+    )  # fmt: skip
+    assert result.bumps >= 3, "the scenario must actually bump into things"
+    assert max(result.contact_steps) <= 2, result.contact_steps
+
+
+def test_bump_and_turn_stops_and_fails_on_a_cliff(cliff_world: str) -> None:
+    result = run_episode(
+        EpisodeSpec(str(MISSIONS / "bump-and-turn.yaml"), cliff_world, random_start=False,
+                    timeout_s=60)
+    )  # fmt: skip
+    assert result.outcome == "failure"
+    assert "stopped: cliff" in result.reason
+    assert not result.fell
+    assert result.cliffs >= 1
+
+
+def test_wall_follow_keeps_near_the_walls() -> None:
+    result = run_episode(
+        EpisodeSpec(str(MISSIONS / "wall-follow.yaml"), "empty-room", seed=0,
+                    random_start=False, params=(("duration", "40s"),), timeout_s=60)
+    )  # fmt: skip
+    assert result.outcome == "success", result.reason
+    late = result.trajectory[len(result.trajectory) // 3 :]
+    near = [p for p in late if min(p[0], 4.0 - p[0], p[1], 3.5 - p[1]) < 0.45]
+    assert len(near) >= 0.9 * len(late)
+    travelled = sum(math.dist(a, b) for a, b in itertools.pairwise(late))
+    assert travelled > 2.0
