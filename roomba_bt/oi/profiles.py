@@ -118,16 +118,9 @@ CREATE2 = RobotProfile(
     digit_leds_raw_works=False,
     reports_mode_plus_one=False,
 )
-ROOMBA600 = RobotProfile(
-    name="roomba600",
-    title="Roomba 600 series",
-    checksum_includes_header=True,
-    checksum_accepts_both=False,
-    encoders_signed=True,
-    stasis_maximum=3,
-    wall_signal_maximum=1023,
-    digit_leds_raw_works=False,
-    reports_mode_plus_one=True,
+#: The Roomba 600 speaks the Create 2's OI; the one difference is the mode + 1 firmware bug.
+ROOMBA600 = replace(
+    CREATE2, name="roomba600", title="Roomba 600 series", reports_mode_plus_one=True
 )
 ROOMBA500 = RobotProfile(
     name="roomba500",
