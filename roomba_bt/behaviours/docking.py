@@ -252,7 +252,7 @@ _DIRECTIONS = 12
         Param("timeout", DURATION, default="5min", minimum=1,
               doc="FAILURE if no dock beam is seen by then"),
     ),
-    reads=(*IR_PACKETS, *HAZARD_PACKETS, 48, 49, 50, 51, *ODOMETRY_PACKETS),
+    reads=(*IR_PACKETS, *HAZARD_PACKETS, 46, 47, 48, 49, 50, 51, *ODOMETRY_PACKETS),
     sends=(137, 145),
 )  # fmt: skip
 class DockSearch(_DockingAction):
@@ -335,8 +335,12 @@ class DockSearch(_DockingAction):
             hy = odo.y_mm + ahead * math.sin(odo.theta_rad)
             self._visit(hx, hy, 400.0 if hazard == "cliff" else 150.0)
             self._hazards.append((hx, hy))
-            if hazard == "obstacle" and self._phase == "forward" and self._want_wall:
-                self._start_follow()  # found a wall to follow
+            if (
+                hazard == "obstacle"
+                and self._phase == "forward"
+                and (self._want_wall or self.travelled() > 500.0)
+            ):
+                self._start_follow()  # found a wall to follow (after crossing some floor)
             else:
                 self._phase = "back"
                 self._back_until = snap.time + (0.8 if hazard == "cliff" else 0.4)
@@ -353,11 +357,15 @@ class DockSearch(_DockingAction):
             self._target = self._choose_heading(None)
             self._phase = "turn"
         if self._phase == "follow":
-            if self.travelled() < self.number("follow") and not self._follow_lost:
+            if (
+                self.travelled() < self.number("follow")
+                and not self._follow_lost
+                and self._follow_is_new()
+            ):
                 self._follow(frame)
                 return _RUN
             self._want_wall = False  # followed far enough: cross the room
-            self._target = self._choose_heading(odo.theta_rad - math.pi / 2)
+            self._target = self._choose_heading(odo.theta_rad - self._follow_side * math.pi / 2)
             self._phase = "turn"
         if self._phase == "back":
             if snap.time < self._back_until:
@@ -396,20 +404,43 @@ class DockSearch(_DockingAction):
         self._phase = "follow"
         self._wall_seen_at = None
         self._follow_lost = False
+        self._follow_side = -self._follow_side  # right-hand, then left-hand, ...
+        self._follow_cells: set[tuple[int, int]] = set()
+        self._old_cells = 0
         self.mark_distance()
 
     _wall_seen_at: float | None = None
     _follow_lost = False
+    _follow_side = -1
+    _old_cells = 0
+
+    def _follow_is_new(self) -> bool:
+        """False once the wall leads through cells visited before this follow (it has been
+        followed already): time to cross the room instead."""
+        odo = self.snapshot.odometry
+        cell = self._cell(odo.x_mm, odo.y_mm)
+        if cell not in self._follow_cells:
+            self._follow_cells.add(cell)
+            seen_before = self._visits.get(cell, 0.0) > 40.0
+            self._old_cells = self._old_cells + 1 if seen_before else 0
+        return self._old_cells < 4 or self.travelled() < 1000.0
 
     def _follow(self, frame: SensorFrame) -> None:
-        """Keep a wall on the right at a steady light-bumper signal (packets 48-51)."""
-        speed = min(self.number("speed"), 200.0)
+        """Keep a wall on one side (``_follow_side``: +1 right, -1 left) at a steady
+        light-bumper signal: right 51 / front-right 50, left 46 / front-left 47, centre
+        48-49 for a wall ahead (turn away from it in place)."""
+        speed = min(self.number("speed"), 300.0)
+        hand = self._follow_side
         front = max(frame[48], frame[49])
-        side, front_side = frame[51], frame[50]
+        side, front_side = (frame[51], frame[50]) if hand > 0 else (frame[46], frame[47])
         if front > 300 or frame[7] & 3:
-            self.wheels(-120, 120)  # wall ahead: turn left in place
+            self.wheels(-120 * hand, 120 * hand)  # wall ahead: turn away from the wall side
         elif side == 0 and front_side == 0:
-            self.wheels(speed, speed * 0.35)  # lost it (an outside corner): arc right
+            # lost it (an outside corner): arc toward the wall side
+            if hand > 0:
+                self.wheels(speed, speed * 0.35)
+            else:
+                self.wheels(speed * 0.35, speed)
             if self._wall_seen_at is None:
                 self._wall_seen_at = self.snapshot.odometry.path_mm
             elif self.snapshot.odometry.path_mm - self._wall_seen_at > 600.0:
@@ -417,7 +448,7 @@ class DockSearch(_DockingAction):
         else:
             self._wall_seen_at = None
             error = 500 - max(side, front_side // 2)
-            turn = max(-speed * 0.6, min(speed * 0.6, 0.12 * error))
+            turn = hand * max(-speed * 0.6, min(speed * 0.6, 0.12 * error))
             self.wheels(speed + turn, speed - turn)
 
     _spun = False
@@ -492,7 +523,7 @@ class DockApproach(_DockingAction):
             if not self._face(view):
                 return _RUN
             side = view.side
-            if view.on_axis or (self._crossings >= 3 and view.force_field):
+            if view.on_axis or (self._crossings >= 3 and view.force_field and view.side):
                 return self.succeed()  # on the axis (or as near as repeated tries get)
             if not (view.omni.from_dock and view.omni.force_field):
                 self._phase = "closer"  # along the beams, into the force field first
@@ -528,6 +559,7 @@ class DockApproach(_DockingAction):
             if abs(self.turned()) >= goal:
                 self._phase = "cross"
                 self._axis_at = None
+                self._last_seen = snap.time  # turning away may hide the beams for a while
                 self.mark_distance()
             else:
                 w = 90.0 * self._cross_side
@@ -690,7 +722,8 @@ class DockDriveOn(_DockingAction):
         bumped = bool(frame[7] & 3)
         if self._phase == "drive":
             if bumped:
-                if not view.force_field:
+                if not (view.red or view.green):
+                    # the plate is in the buoys' beams: outside them, it is something else
                     return self.fail("bumped into something that is not the dock")
                 self._phase = "wiggle"
                 self._wiggle_step = 0
