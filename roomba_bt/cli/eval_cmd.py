@@ -50,7 +50,8 @@ def register(sub: Any) -> None:
         default=[],
         metavar="FIELD=VALUE",
         help="override a dock beam parameter: buoy_range=0.5 (m), force_field=0.3 (m), "
-        "red=-5,25 (deg), green=-25,5, contact_tolerance=0.05 (m), angle_tolerance=6 (deg)",
+        "red=-5,25 (deg), green=-25,5, contact_tolerance=0.05 (m), angle_tolerance=6 (deg), "
+        "family=discovery (characters 240-254)",
     )
     ev.add_argument("--battery", type=float, metavar="FRACTION", help="initial charge 0..1")
     ev.add_argument("--timeout", default="10min", help="mission time per episode (default 10min)")
@@ -80,7 +81,11 @@ def parse_dock(items: list[str]) -> tuple[tuple[str, Any], ...] | str:
                 f"{', '.join(DOCK_OVERRIDES)}"
             )
         try:
-            if name in ("red", "green"):
+            if name == "family":
+                if text not in ("drive-on", "discovery"):
+                    return f"--dock {item!r}: family is drive-on or discovery"
+                out.append((name, text))
+            elif name in ("red", "green"):
                 lo, hi = (float(v) for v in text.split(","))
                 if not -90 <= lo < hi <= 90:
                     return f"--dock {item!r}: expected FROM,TO in degrees, -90 <= FROM < TO <= 90"

@@ -37,6 +37,7 @@ DOCK_OVERRIDES: dict[str, str] = {
     "angle_tolerance": "deg",
     "red": "deg",
     "green": "deg",
+    "family": "drive-on or discovery",
 }
 
 
@@ -159,7 +160,11 @@ def _override_dock(dock: DockSpec, overrides: dict[str, Any]) -> DockSpec:
             raise EvaluationError(
                 f"--dock {key}: unknown dock field; allowed: {', '.join(DOCK_OVERRIDES)}"
             )
-        if key in ("red", "green"):
+        if key == "family":
+            if value not in ("drive-on", "discovery"):
+                raise EvaluationError(f"--dock family={value}: allowed: drive-on, discovery")
+            values[key] = value
+        elif key in ("red", "green"):
             lo, hi = value
             values[key] = (math.radians(float(lo)), math.radians(float(hi)))
         elif DOCK_OVERRIDES[key] == "deg":
