@@ -1,0 +1,67 @@
+"""Routine benchmarks (issue 7): how fast the simulator + a mission run on the virtual clock,
+and how ``roomba-bt eval`` scales from 1 to 2 worker processes.
+
+Every figure is measured in this process, beside its baseline:
+
+* virtual-clock speed: seconds of mission time per second of CPU for whole episodes (mission
+  compiled, connection, runtime, simulator), one process: the dock mission from 8 seeded
+  poses near the dock, and bump-and-turn for 60 s in the corridor. Baseline: the simulator
+  stepping alone for the same number of 15 ms steps, so the ratio shows what the mission and
+  the runtime cost on top of the physics. Target: >= 100x real time.
+* eval scaling: the same 8 dock episodes with ``jobs=1`` and ``jobs=2``; wall-time ratio.
+  Target: >= 1.8x on 2 cores (the results are identical, which is tested, not benchmarked).
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from roomba_bt.evaluate import episode_specs, run_episodes
+from roomba_bt.sim import Simulator, load_world
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCK = str(ROOT / "missions" / "dock.yaml")
+BUMP = str(ROOT / "missions" / "bump-and-turn.yaml")
+
+
+def _speed(label: str, mission: str, world: str, **fields: object) -> float:
+    specs = episode_specs(mission, world=world, runs=8, seed=100, **fields)
+    started = time.perf_counter()
+    results = run_episodes(specs, jobs=1)
+    wall = time.perf_counter() - started
+    simulated = sum(r.time_s for r in results)
+    ticks = sum(r.ticks for r in results)
+    sim = Simulator(load_world(world))
+    started = time.perf_counter()
+    for _ in range(ticks):
+        sim.step()
+    bare = time.perf_counter() - started
+    print(
+        f"   {label:34s} {simulated:7.0f} s mission time in {wall:5.2f} s = "
+        f"{simulated / wall:5.0f}x real time (simulator alone: {simulated / bare:5.0f}x; "
+        f"mission + runtime cost {wall / bare:4.1f}x the physics)"
+    )
+    return simulated / wall
+
+
+def main() -> None:
+    print("virtual-clock speed, one process (target >= 100x real time)")
+    _speed("dock, empty room, 8 poses", DOCK, "empty-room", within_m=1.5)
+    _speed("bump-and-turn, corridor, 8 x 60 s", BUMP, "corridor", timeout_s=90.0)
+    specs = episode_specs(DOCK, world="empty-room", runs=8, seed=200, within_m=1.5)
+    started = time.perf_counter()
+    one = run_episodes(specs, jobs=1)
+    wall_one = time.perf_counter() - started
+    started = time.perf_counter()
+    two = run_episodes(specs, jobs=2)
+    wall_two = time.perf_counter() - started
+    same = [r.time_s for r in one] == [r.time_s for r in two]
+    print(
+        f"eval scaling: 8 dock episodes, jobs=1 {wall_one:.2f} s, jobs=2 {wall_two:.2f} s = "
+        f"{wall_one / wall_two:.2f}x (target >= 1.8x; identical results: {same})"
+    )
+
+
+if __name__ == "__main__":
+    main()
