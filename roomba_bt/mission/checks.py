@@ -31,9 +31,9 @@ from roomba_bt.oi.stream import check_bandwidth
 
 #: Packets the runtime always streams, whatever the mission reads: bumps and wheel drops (7),
 #: the four cliffs (9-12) for its safety stop, charging sources (34), OI mode (35) for the
-#: mode model, and the encoders (43, 44) for odometry. (The runtime adds battery charge and
-#: capacity, 25 and 26, for its summary only when they fit the baud rate's budget.) The runtime and the validator both
-#: use this one constant.
+#: mode model, and the encoders (43, 44) for odometry. The runtime and the validator both
+#: use this one constant. (The runtime adds battery charge and capacity, 25 and 26, for its
+#: summary, only when they fit the baud rate's budget.)
 RUNTIME_PACKETS: tuple[int, ...] = (7, 9, 10, 11, 12, 34, 35, 43, 44)
 
 Modes = frozenset[OIMode]
