@@ -248,7 +248,8 @@ _DIRECTIONS = 12
         Param("leg", DISTANCE, default="2 m", minimum=200,
               doc="longest straight leg before choosing a new heading"),
         Param("follow", DISTANCE, default="4 m", minimum=0,
-              doc="how far it follows a wall (on its right) before crossing the room"),
+              doc="how far it follows a wall (right-hand, then left-hand) before crossing "
+                  "the room"),
         Param("timeout", DURATION, default="5min", minimum=1,
               doc="FAILURE if no dock beam is seen by then"),
     ),
@@ -259,9 +260,12 @@ class DockSearch(_DockingAction):
     """Search for the dock's beams: spin once, then wander toward unexplored space.
 
     SUCCESS (wheels halted) as soon as any receiver sees a dock character. Wandering drives
-    straight legs; on a bump, cliff or light-bumper obstacle it backs off and picks the
-    heading whose next 1.6 m crosses the least visited cells of a 0.4 m grid kept in the
-    odometry frame (cells where it met an obstacle count as heavily visited).
+    straight legs toward the heading whose next 1.6 m crosses the least visited cells of a
+    0.4 m grid kept in the odometry frame (headings toward obstacles met before are
+    penalised). A wall met on the way is followed (docks stand against walls), right-hand
+    then left-hand on the next one, for up to ``follow`` or until it leads through cells
+    visited before. Bumps, cliffs and virtual walls make it back off and choose again; the
+    spin happens once per leaf, not again when a retry restarts it after a cliff.
     """
 
     stage = "search"

@@ -54,7 +54,7 @@ def register(sub: Any) -> None:
         "family=discovery (characters 240-254)",
     )
     ev.add_argument("--battery", type=float, metavar="FRACTION", help="initial charge 0..1")
-    ev.add_argument("--timeout", default="10min", help="mission time per episode (default 10min)")
+    ev.add_argument("--timeout", default="15min", help="mission time per episode (default 15min)")
     ev.add_argument("--profile", choices=sorted(PROFILES), default="create2")
     ev.add_argument("--min-rate", type=float, metavar="FRACTION",
                     help="exit 1 if the success rate is below this (for CI)")  # fmt: skip

@@ -54,7 +54,7 @@ class EpisodeSpec:
     seed: int = 0
     params: tuple[tuple[str, str], ...] = ()
     profile: str = "create2"
-    timeout_s: float = 600.0
+    timeout_s: float = 900.0
     random_start: bool = True
     #: start no further than this from the docked pose (m); None: the world's start region
     within_m: float | None = None
