@@ -167,3 +167,16 @@ def test_wall_follow_keeps_near_the_walls() -> None:
     assert len(near) >= 0.9 * len(late)
     travelled = sum(math.dist(a, b) for a, b in itertools.pairwise(late))
     assert travelled > 2.0
+
+
+@pytest.mark.parametrize("name", ["dock", "bump-and-turn"])
+def test_roomba_bt_run_fast_on_the_default_world(
+    name: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from roomba_bt.cli import main
+
+    params = ["-p", "duration=10s"] if name == "bump-and-turn" else []
+    code = main(["run", str(MISSIONS / f"{name}.yaml"), "--fast", "--display", "none", *params])
+    out = capsys.readouterr().out
+    assert code == 0, out
+    assert "outcome      SUCCESS" in out
