@@ -273,6 +273,7 @@ class DockSearch(_DockingAction):
     def __init__(self, name: str, params: dict[str, object] | None = None) -> None:
         super().__init__(name, params)
         self._visits: dict[tuple[int, int], float] = {}
+        self._followed: set[tuple[int, int]] = set()  # cells passed while following walls
         self._hazards: deque[tuple[float, float]] = deque(maxlen=200)
 
     def start(self) -> None:
@@ -425,7 +426,9 @@ class DockSearch(_DockingAction):
         cell = self._cell(odo.x_mm, odo.y_mm)
         if cell not in self._follow_cells:
             self._follow_cells.add(cell)
-            seen_before = self._visits.get(cell, 0.0) > 40.0
+            # followed before (not merely crossed): this wall, or this island, is done
+            seen_before = cell in self._followed
+            self._followed.add(cell)
             self._old_cells = self._old_cells + 1 if seen_before else 0
         return self._old_cells < 4 or self.travelled() < 1000.0
 
@@ -499,6 +502,7 @@ class DockApproach(_DockingAction):
         self._last_seen = self.snapshot.time
         self._side_guess = 0
         self._last_side = 0
+        self._guesses = 0
         self._crossings = 0
         view = DockView.of(self.snapshot.frame)
         self._start_facing(-1.0 if view.on_right else 1.0)
@@ -517,6 +521,7 @@ class DockApproach(_DockingAction):
             self._last_seen = snap.time
             if view.side:
                 self._last_side = view.side
+                self._last_side_time = snap.time
         elif snap.time - self._last_seen >= self.number("lost_after"):
             return self.fail(f"lost the dock's beams for {self.number('lost_after'):g} s")
         speed = self.number("speed")
@@ -533,7 +538,13 @@ class DockApproach(_DockingAction):
                 self._phase = "closer"  # along the beams, into the force field first
                 self.mark_distance()
             elif side == 0:
-                side = self._last_side or self._side_guess or 1
+                # force field only: the side last seen, if recent; else guesses that
+                # alternate (+1, -1, ...) until one leads into the buoys
+                if self._last_side and snap.time - self._last_side_time < 5.0:
+                    side = self._last_side
+                else:
+                    self._guesses += 1
+                    side = 1 if self._guesses % 2 else -1
                 self._side_guess = side
             if self._phase == "face":
                 self._cross_side = side or 1
@@ -584,9 +595,8 @@ class DockApproach(_DockingAction):
                 self.halt()
                 return _RUN
             if blocked or left_field or self.travelled() > 1500.0:
-                if view.side == 0 and self._side_guess:
-                    self._side_guess = -self._side_guess  # the guess was wrong: other way
-                    self._last_side = self._side_guess
+                if view.side == 0:
+                    self._last_side = 0  # whatever side was believed, it did not work
                 self._start_facing(-float(self._cross_side))
                 if blocked:
                     self._phase = "back"
@@ -667,6 +677,8 @@ class DockApproach(_DockingAction):
     _cross_side = 1
     _side_guess = 0
     _last_side = 0
+    _last_side_time = 0.0
+    _guesses = 0
     _spin_dir = 1.0
     _last_seen = 0.0
     _back_until = 0.0
