@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 EXTRAS ?= test,plot,bench
 
-.PHONY: run test lint typecheck bench venv clean
+.PHONY: run test lint typecheck bench routines venv clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -34,6 +34,10 @@ test: $(STAMP) lint typecheck
 
 bench: $(STAMP)
 	$(BIN)/python -m bench
+
+# The routines' success rates and speed into docs/routines.md (about 15-20 min on 2 cores).
+routines: $(STAMP)
+	$(BIN)/python -m roomba_bt.evaluate.report
 
 clean:
 	rm -rf $(VENV) build *.egg-info

@@ -27,7 +27,7 @@ def register(sub: Any) -> None:
         "eval",
         help="run a mission many times on the simulator and report its success rate",
         description="Run MISSION in N seeded episodes on the simulator's virtual clock and "
-        "report the success rate (95%% Wilson interval), median and p90 time, bumps and the "
+        "report the success rate (95% Wilson interval), median and p90 time, bumps and the "
         "failure reasons. Exit codes: 0 done, 1 --min-rate not reached, 2 invalid input.",
     )
     ev.add_argument("mission", help="mission YAML file")

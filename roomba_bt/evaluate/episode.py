@@ -21,10 +21,10 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from roomba_bt.mission import RUNTIME_PACKETS, MissionError, load_mission
+from roomba_bt.mission import MissionError, load_mission
 from roomba_bt.oi.profiles import get_profile
 from roomba_bt.robot.connection import Connection
-from roomba_bt.runtime.loop import MissionRunner
+from roomba_bt.runtime.loop import MissionRunner, stream_request
 from roomba_bt.sim import SimLink, Simulator, World, load_world
 from roomba_bt.sim.world import DockSpec
 
@@ -213,7 +213,7 @@ def _run_episode(spec: EpisodeSpec) -> EpisodeResult:
     simulator = _MeasuredSimulator(world, profile, spec.seed, start=pose)
     link = SimLink(simulator)
     connection = Connection(link, profile, watchdog=0.1, end_in="passive")
-    packets = tuple(sorted(set(mission.packets) | set(RUNTIME_PACKETS)))
+    packets = stream_request(mission.packets, 115200)
     runner = MissionRunner(
         connection, mission, profile=profile, packets=packets, timeout_s=spec.timeout_s
     )

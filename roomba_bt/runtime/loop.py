@@ -274,13 +274,16 @@ class MissionRunner:
 
 
 def _failure_reason(root: py_trees.behaviour.Behaviour) -> str:
-    """The deepest failed leaf's name and feedback: what a user needs to read first."""
-    failed = [
-        node
-        for node in root.iterate()
-        if node.status == py_trees.common.Status.FAILURE and not node.children
-    ]
-    if not failed:
-        return root.feedback_message or root.name
-    leaf = failed[-1]
-    return f"{leaf.name}: {leaf.feedback_message}" if leaf.feedback_message else leaf.name
+    """The deepest failed node's name and message: what a user needs to read first.
+
+    A failed leaf is best; a decorator such as ``retry`` resets its child when it gives up,
+    so then the deepest failed node that left a message, then the root."""
+    failed = [node for node in root.iterate() if node.status == py_trees.common.Status.FAILURE]
+    leaves = [node for node in failed if not node.children]
+    with_message = [node for node in failed if node.feedback_message]
+    for candidates in (leaves, with_message):
+        if candidates:
+            node = candidates[-1] if candidates is leaves else candidates[0]
+            message = node.feedback_message
+            return f"{node.name}: {message}" if message else node.name
+    return root.name
