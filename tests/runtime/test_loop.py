@@ -81,20 +81,25 @@ def test_timeout_counts_mission_time(run_mission: RunMission) -> None:
     assert run.link.written.endswith(SAFE_END)
 
 
-def test_exception_in_a_behaviour_still_stops_the_robot(
-    run_mission: RunMission, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def _bump_raises_after(monkeypatch: pytest.MonkeyPatch, error: BaseException, ticks: int) -> None:
+    """The bump condition returns FAILURE for ``ticks`` ticks, then raises ``error``."""
     from roomba_bt.behaviours import conditions
 
     calls = {"n": 0}
 
-    def explode(self: object) -> py_trees.common.Status:
+    def update(self: object) -> py_trees.common.Status:
         calls["n"] += 1
-        if calls["n"] > 20:
-            raise RuntimeError("sensor model exploded")
+        if calls["n"] > ticks:
+            raise error
         return py_trees.common.Status.FAILURE
 
-    monkeypatch.setattr(conditions.Bump, "update", explode)
+    monkeypatch.setattr(conditions.Bump, "update", update)
+
+
+def test_exception_in_a_behaviour_still_stops_the_robot(
+    run_mission: RunMission, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    _bump_raises_after(monkeypatch, RuntimeError("sensor model exploded"), 20)
     run = run_mission(DRIVE_TO_WALL)
     assert run.summary.outcome is Outcome.ERROR
     assert "sensor model exploded" in run.summary.reason
@@ -105,17 +110,7 @@ def test_exception_in_a_behaviour_still_stops_the_robot(
 def test_ctrl_c_is_exit_130_after_the_safe_stop(
     run_mission: RunMission, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    from roomba_bt.behaviours import conditions
-
-    calls = {"n": 0}
-
-    def interrupt(self: object) -> py_trees.common.Status:
-        calls["n"] += 1
-        if calls["n"] > 20:
-            raise KeyboardInterrupt
-        return py_trees.common.Status.FAILURE
-
-    monkeypatch.setattr(conditions.Bump, "update", interrupt)
+    _bump_raises_after(monkeypatch, KeyboardInterrupt(), 20)
     run = run_mission(DRIVE_TO_WALL)
     assert run.summary.outcome is Outcome.INTERRUPTED
     assert run.summary.exit_code == 130
