@@ -85,6 +85,11 @@ OPEN_CAUSES = ("wrong device path or URL", "the port in use by another program",
 EndMode = Literal["passive", "stop"]
 
 
+#: The robot's own cycles (Spot, Clean, Max, Seek Dock): they drive it while the OI is in
+#: Passive, so the safe stop enters Safe first to end them.
+BUILTIN_CYCLES = frozenset({134, 135, 136, 143})
+
+
 class LinkStatus(enum.Enum):
     """Where the link stands; :attr:`Connection.status`."""
 
@@ -268,6 +273,7 @@ class Connection:
         self._status = LinkStatus.OPEN if transport.is_open else LinkStatus.CLOSED
         self._closed = False
         self.safe_stopped: bool | None = None
+        self._builtin_may_run = False  # a Clean/Spot/Max/Seek Dock cycle may be driving
         self._start_args: tuple[OIMode, tuple[int, ...], float] | None = None
         self._reader: threading.Thread | None = None
         self._reader_stop = threading.Event()
@@ -696,6 +702,11 @@ class Connection:
                 self._status = LinkStatus.STREAMING
         elif opcode in (7, 173):  # Reset, Stop: the robot stops talking
             self._streaming = False
+            self._builtin_may_run = False
+        if opcode in BUILTIN_CYCLES:
+            self._builtin_may_run = True
+        elif opcode in (130, 131, 132):
+            self._builtin_may_run = False
         elif opcode == 129:
             self._change_baud(oi_baud_rate(command.args[0]))
 
@@ -747,6 +758,11 @@ class Connection:
         if mode is OIMode.OFF:
             return []
         commands: list[Command] = []
+        if mode is OIMode.PASSIVE and self._builtin_may_run:
+            # Clean, Spot, Max or Seek Dock drive the robot in Passive, where drive 0 is not
+            # accepted; Safe (131) ends the cycle and makes drive 0 and motors off possible.
+            commands.append(oi.safe())
+            mode = OIMode.SAFE
         if mode in DRIVING_MODES:
             commands += [oi.halt(), oi.motors_off()]
         commands.append(oi.pause_stream())

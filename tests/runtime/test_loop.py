@@ -234,3 +234,37 @@ def test_snapshot_is_on_the_blackboard_under_one_key(run_mission: RunMission) ->
     assert not reader.is_registered("/roomba/snapshot")
     seen.append(run.runner.snapshot)
     assert run.runner.snapshot.frame[35] in (1, 2)
+
+
+def test_a_builtin_cycle_is_ended_by_the_safe_stop(run_mission: RunMission) -> None:
+    # Clean drives the robot in Passive, where drive 0 is refused: the stop enters Safe first.
+    run = run_mission(
+        """
+        tree:
+          sequence:
+            - mode: safe
+            - clean: {}
+            - wait: 1s
+        """
+    )
+    assert run.summary.outcome is Outcome.SUCCESS
+    assert run.link.written.endswith(oi.safe().data + SAFE_END)
+    assert run.simulator.builtin is None
+    assert run.simulator.requested_left == 0 and run.simulator.requested_right == 0
+    assert run.simulator.violations == []
+
+
+def test_without_a_builtin_cycle_passive_ends_with_pause_and_start(
+    run_mission: RunMission,
+) -> None:
+    run = run_mission(
+        """
+        tree:
+          sequence:
+            - mode: safe
+            - mode: passive
+            - wait: 100ms
+        """
+    )
+    assert run.link.written.endswith(PAUSE + START)
+    assert not run.link.written.endswith(oi.safe().data + SAFE_END)
