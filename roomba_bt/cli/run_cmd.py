@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 from pathlib import Path
 from typing import Any
@@ -189,7 +190,7 @@ def run_command(args: argparse.Namespace) -> int:
         connection, mission, profile=profile, packets=packets, timeout_s=timeout, observer=observer
     )
     summary = runner.run()
-    with _suppress():
+    with contextlib.suppress(Exception):
         connection.close()
     if isinstance(observer, TerminalDisplay) and runner.has_snapshot:
         observer.render(runner)
@@ -225,14 +226,6 @@ def _plot(simulator: Any, path: str) -> str:
     except ImportError as exc:
         return f"--plot needs matplotlib (pip install 'roomba-bt[plot]'): {exc}"
     return f"trajectory written to {path}"
-
-
-class _suppress:
-    def __enter__(self) -> None:
-        return None
-
-    def __exit__(self, *exc: object) -> bool:
-        return True
 
 
 def replay_command(args: argparse.Namespace) -> int:

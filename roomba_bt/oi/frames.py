@@ -313,8 +313,7 @@ class SensorFrame:
 
     @property
     def charging_state(self) -> ChargingState:
-        raw = self[21]
-        return ChargingState(raw) if raw <= 5 else ChargingState.FAULT
+        return _charging_state(self[21])
 
     @property
     def voltage_mv(self) -> int:

@@ -14,6 +14,8 @@ from typing import TYPE_CHECKING, TextIO
 
 import py_trees
 
+from roomba_bt.oi.ir import IRCharacter
+
 if TYPE_CHECKING:
     from roomba_bt.robot.interface import Snapshot
     from roomba_bt.runtime.loop import MissionRunner
@@ -35,7 +37,7 @@ def sensor_line(snapshot: Snapshot) -> str:
         parts.append(f"cliff={cliffs or '-'}")
     for pid, label in ((17, "ir"), (52, "irL"), (53, "irR")):
         if frame.get(pid):
-            ir = frame.ir_omni if pid == 17 else frame.ir_left if pid == 52 else frame.ir_right
+            ir = IRCharacter.decode(frame[pid])
             beams = "".join(
                 c
                 for c, on in (("R", ir.red_buoy), ("G", ir.green_buoy), ("F", ir.force_field))
