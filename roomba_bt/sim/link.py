@@ -53,19 +53,23 @@ class SimLink:
         self.simulator.receive(data)
 
     def read(self, timeout: float) -> bytes:
-        self._check()
         sim = self.simulator
+        if not self._open or sim.disconnected:
+            self._check()
         data = sim.read()
-        if data:
-            return data if self.baud == sim.baud else data.translate(_GARBLE)
-        deadline = sim.time + max(timeout, 0.0) - 1e-9
-        while True:
-            sim.step()
-            if sim.disconnected:
-                raise ConnectionError(f"{self.name}: simulated disconnect at t={sim.time:.3f} s")
-            data = sim.read()
-            if data or sim.time >= deadline:
-                return data if self.baud == sim.baud else data.translate(_GARBLE)
+        if not data:
+            deadline = sim.time + (timeout if timeout > 0.0 else 0.0) - 1e-9
+            step, read = sim.step, sim.read
+            while True:
+                step()
+                if sim.disconnected:
+                    raise ConnectionError(
+                        f"{self.name}: simulated disconnect at t={sim.time:.3f} s"
+                    )
+                data = read()
+                if data or sim.time >= deadline:
+                    break
+        return data if self.baud == sim.baud else data.translate(_GARBLE)
 
     def set_baud(self, baud: int) -> None:
         self._check()

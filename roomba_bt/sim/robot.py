@@ -28,6 +28,7 @@ from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 from operator import itemgetter
+from typing import NamedTuple
 
 from roomba_bt.oi.encode import BAUD_CODES
 from roomba_bt.oi.ir import LighthouseBeam, dock_character, lighthouse_character
@@ -43,9 +44,11 @@ from roomba_bt.sim.geometry import (
     point_in_polygon,
     wrap_angle,
 )
-from roomba_bt.sim.world import ROBOT_RADIUS_MM, Pose, TimelineEvent, World
+from roomba_bt.sim.world import ROBOT_RADIUS_MM, DockSpec, Pose, TimelineEvent, World
 
 STEP_SECONDS = 0.015
+_STEP_NS = 15_000_000
+_DRIVE = bytes((137,))
 #: The robot's wheel speed controller moves in steps of about 28.5 mm/s.
 WHEEL_SPEED_STEP_MM_S = 28.5
 MAX_WHEEL_SPEED_MM_S = 500.0
@@ -99,11 +102,19 @@ def _line(seg: Segment) -> _Line:
 
 
 _NEAR_RADIUS_MM = ROBOT_RADIUS_MM + LIGHT_BUMP_RANGE_MM + 40.0 + _NEAR_MARGIN_MM
+_NEAR_MARGIN2 = _NEAR_MARGIN_MM**2
+_REACH2 = (ROBOT_RADIUS_MM + LIGHT_BUMP_RANGE_MM + 5.0) ** 2  # walls the rays may hit
+_CONTACT2 = (ROBOT_RADIUS_MM + CONTACT_MM) ** 2  # walls touching the bumper
+_NEAREST2 = (_NEAR_RADIUS_MM - _NEAR_MARGIN_MM) ** 2  # the clearance the near set guarantees
+_REACH = math.sqrt(_REACH2)
+#: a lower bound of the clearance while no wall is within reach (the real one is larger)
+_OPEN_CLEARANCE = _REACH - ROBOT_RADIUS_MM - 1.0
 
 _DEGREES_PER_RADIAN = 180.0 / math.pi
 _OLD_ANGLE_PER_RADIAN = _DEGREES_PER_RADIAN * OLD_FIRMWARE_ANGLE_FACTOR
 #: The checksum byte that brings a frame's sum to 0 mod 256, for every partial sum.
 _CHECKSUM_BYTE = tuple(bytes(((-total) & 0xFF,)) for total in range(256))
+_PI = math.pi
 _TWO_PI = 2.0 * math.pi
 _PASSIVE, _SAFE, _FULL = OIMode.PASSIVE, OIMode.SAFE, OIMode.FULL
 _CONST = 59  # values[_CONST + k] == k: constant bytes (header, ids) packed with the values
@@ -111,8 +122,10 @@ _ANALOG = (22, 23, 27, 28, 29, 30, 31, 46, 47, 48, 49, 50, 51, 54, 55, 56, 57)
 _BAUD_BY_CODE = {code: rate for rate, code in BAUD_CODES.items()}
 
 
-@dataclass(frozen=True, slots=True)
-class TracePoint:
+class TracePoint(NamedTuple):
+    """One point of the trajectory (every 4th step, and at each mode change). A tuple, not a
+    frozen dataclass: one is made every 60 ms of robot time, and tuples are built in C."""
+
     time: float
     x: float
     y: float
@@ -187,6 +200,51 @@ class _Builtin:
         self.wander_until = 0.0  # after a bounce, go straight a while before aiming again
 
 
+class _DockBeams:
+    """The dock's beams and contacts as plain numbers, computed once per robot: the IR
+    receivers ask for a character three times every 30 ms, so no attribute chains, no
+    function calls for the angle wrap, one table lookup for the character."""
+
+    __slots__ = (
+        "angle_tolerance", "buoy2", "characters", "contact2", "facing", "field2", "green_from",
+        "green_to", "reach2", "red_from", "red_to", "target_theta", "target_x", "target_y",
+        "x", "y",
+    )  # fmt: skip
+
+    def __init__(self, dock: DockSpec) -> None:
+        self.x, self.y, self.facing = dock.x, dock.y, dock.facing
+        self.field2 = dock.force_field * dock.force_field
+        self.buoy2 = dock.buoy_range * dock.buoy_range
+        reach = max(dock.buoy_range, dock.force_field) + 200.0
+        self.reach2 = reach * reach
+        self.red_from, self.red_to = dock.red
+        self.green_from, self.green_to = dock.green
+        discovery = dock.family == "discovery"
+        #: index: red << 2 | green << 1 | force field
+        self.characters = tuple(
+            dock_character(red=bool(i & 4), green=bool(i & 2), force_field=bool(i & 1),
+                           discovery=discovery)
+            for i in range(8)
+        )  # fmt: skip
+        target = dock.docked_pose
+        self.target_x, self.target_y, self.target_theta = target.x, target.y, target.theta
+        self.contact2 = dock.contact_tolerance**2
+        self.angle_tolerance = dock.angle_tolerance
+
+    def character(self, px: float, py: float) -> int:
+        """What a receiver at (px, py) sees of a powered dock (0: nothing)."""
+        dx, dy = px - self.x, py - self.y
+        dist2 = dx * dx + dy * dy
+        index = 1 if dist2 <= self.field2 else 0
+        if dist2 <= self.buoy2:
+            bearing = (math.atan2(dy, dx) - self.facing + _PI) % _TWO_PI - _PI
+            if self.red_from <= bearing <= self.red_to:
+                index |= 4
+            if self.green_from <= bearing <= self.green_to:
+                index |= 2
+        return self.characters[index]
+
+
 class Simulator:
     """A virtual Roomba / Create 2 in a :class:`~roomba_bt.sim.world.World`.
 
@@ -221,6 +279,7 @@ class Simulator:
         self.baud = profile.default_baud
         self.ticks = 0
         self.time = 0.0
+        self._time_ns = 0
         # actuators
         self.requested_left = 0.0  # mm/s, from Drive / Drive Direct / Drive PWM
         self.requested_right = 0.0
@@ -287,14 +346,19 @@ class Simulator:
         self._rays_on = True
         self._ir_stale = True
         self._dock_target = world.dock.docked_pose if world.dock is not None else None
+        self._beams = _DockBeams(world.dock) if world.dock is not None else None
         self._drops = world.drops
         self._lines = {seg: _line(seg) for seg in world.solid}
+        #: the last Drive (137) command, whole: the same bytes again change nothing
         self._last_drive = b""
+        self._drive_modes = self._commands[137].modes
         self._checksum_bias = 0 if profile.checksum_includes_header else 19
         self._plain_output = not (self.faults.corrupt_rate or self.faults.latency)
         self._half_base = profile.wheel_base_mm / 2.0
         self._current = 0.0
         self._clearance = 0.0
+        self._free_at = (math.inf, math.inf)
+        self._free2 = 0.0
         self._power_key: tuple[object, ...] | None = None
         self._disconnect_at = (
             math.inf if self.faults.disconnect_at is None else self.faults.disconnect_at
@@ -330,6 +394,8 @@ class Simulator:
         commands = self._commands
         sizes = self._data_sizes
         if not buf:  # the common case: exactly one whole fixed-size command
+            if data == self._last_drive and not self.asleep and self.mode in self._drive_modes:
+                return  # the same Drive again (a client sends one a frame): nothing changes
             spec = commands.get(data[0])
             if spec is not None and spec.variable is None and len(data) == 1 + sizes[data[0]]:
                 self._execute(spec, bytes(data[1:]))
@@ -425,9 +491,10 @@ class Simulator:
         self.baud = _BAUD_BY_CODE.get(args[0], self.baud)
 
     def _on_drive(self, args: bytes) -> None:
-        if args == self._last_drive:
+        command = _DRIVE + args
+        if command == self._last_drive:
             return  # the same Drive again: nothing changes
-        self._last_drive = args
+        self._last_drive = command
         velocity, radius = struct.unpack(">hh", args)
         # The speed controller steps the commanded velocity; the radius sets the wheel ratio.
         speed = _quantise(velocity)
@@ -603,7 +670,10 @@ class Simulator:
     def step(self, dt: float = STEP_SECONDS) -> None:
         """Advance one 15 ms slot and send one stream frame if a stream is on."""
         self.ticks += 1
-        self.time = round(self.time + dt, 9)  # no drift: 200 steps are exactly 3.0 s
+        # Whole nanoseconds, no drift: 200 steps are exactly 3.0 s (round(t, 9) costs more
+        # than a third of a microsecond, the integer sum a tenth of that).
+        self._time_ns += _STEP_NS if dt == STEP_SECONDS else round(dt * 1e9)
+        self.time = self._time_ns / 1e9
         if self.disconnected:
             return
         faults = self.faults
@@ -690,54 +760,59 @@ class Simulator:
         dtheta = (dr - dl) / (2.0 * half_base)
         fraction = 1.0
         stuck = self.lifted or self.fallen
+        x, y, theta = self.x, self.y, self.theta
         if stuck:
             fraction = 0.0
         elif dist:
-            heading = self.theta + dtheta / 2.0
+            heading = theta + dtheta / 2.0
             ux = dist * math.cos(heading)
             uy = dist * math.sin(heading)
-            if abs(dist) >= self._clearance and self._blocked(self.x + ux, self.y + uy):
+            if abs(dist) >= self._clearance and self._blocked(x + ux, y + uy):
                 lo, hi = 0.0, 1.0
-                if self._clearance < 0.5 and self._blocked(self.x + ux / 64, self.y + uy / 64):
+                if self._clearance < 0.5 and self._blocked(x + ux / 64, y + uy / 64):
                     hi = 0.0  # pressed against the wall already: no room at all
                 while hi - lo > 0.01:
                     mid = (lo + hi) / 2.0
-                    if self._blocked(self.x + ux * mid, self.y + uy * mid):
+                    if self._blocked(x + ux * mid, y + uy * mid):
                         hi = mid
                     else:
                         lo = mid
                 fraction = lo
-            self.x += ux * fraction
-            self.y += uy * fraction
-        self.blocked = fraction < 1.0 and dist != 0.0 and not stuck
+            self.x = x = x + ux * fraction
+            self.y = y = y + uy * fraction
+        blocked = self.blocked = fraction < 1.0 and dist != 0.0 and not stuck
         guided = 0.0
-        if self.blocked and dist > 0.0 and self._dock_target is not None:
+        if blocked and dist > 0.0 and self._dock_target is not None:
             guided = self._dock_guides()  # the body turns, the wheels slip: no encoder counts
         if stuck:
             travelled = dist
         else:
             travelled = dist * fraction
-            theta = self.theta + dtheta + guided
-            if theta > math.pi:
+            theta = theta + dtheta + guided
+            if theta > _PI:
                 theta -= _TWO_PI
-            elif theta < -math.pi:
+            elif theta < -_PI:
                 theta += _TWO_PI
             self.theta = theta
             self._distance_acc += travelled
             self._angle_acc += dtheta
         # Encoders count wheel turns: a blocked robot's wheels stall, a lifted one's spin.
-        self._left_counts += (travelled - dtheta * half_base) / MM_PER_COUNT
-        self._right_counts += (travelled + dtheta * half_base) / MM_PER_COUNT
+        left_counts = self._left_counts = (
+            self._left_counts + (travelled - dtheta * half_base) / MM_PER_COUNT
+        )
+        right_counts = self._right_counts = (
+            self._right_counts + (travelled + dtheta * half_base) / MM_PER_COUNT
+        )
         v = self.values
-        lc = int(self._left_counts) & 0xFFFF
-        rc = int(self._right_counts) & 0xFFFF
+        lc = int(left_counts) & 0xFFFF
+        rc = int(right_counts) & 0xFFFF
         if self._encoder_signed:
             lc = lc - 0x10000 if lc > 0x7FFF else lc
             rc = rc - 0x10000 if rc > 0x7FFF else rc
         v[43] = lc
         v[44] = rc
         v[58] = 1 if dist > 0.0 and fraction > 0.5 and not stuck else 0
-        self._stall_steps = self._stall_steps + 1 if self.blocked else 0
+        self._stall_steps = self._stall_steps + 1 if blocked else 0
         if fraction or dtheta or guided:
             self._geometry_dirty = True
         if not self.ticks & 3:
@@ -762,8 +837,9 @@ class Simulator:
         return max(-_GUIDE_STEP, min(_GUIDE_STEP, err))
 
     def _near_segments(self) -> tuple[Segment, ...]:
+        """The walls within reach of any sensor, kept until the robot has moved 0.3 m."""
         nx, ny = self._near_at
-        if (self.x - nx) ** 2 + (self.y - ny) ** 2 > _NEAR_MARGIN_MM**2:
+        if (self.x - nx) ** 2 + (self.y - ny) ** 2 > _NEAR_MARGIN2:
             limit = _NEAR_RADIUS_MM**2
             x, y = self.x, self.y
             self._near = tuple(s for s in self.world.solid if closest_point(x, y, s)[2] < limit)
@@ -787,36 +863,15 @@ class Simulator:
         self._geometry_dirty = False
         v = self.values
         x, y, theta = self.x, self.y, self.theta
-        near = self._near_segments()
-        # bumpers: contact angle of each touching wall
-        bumps = 0
-        reach2 = (ROBOT_RADIUS_MM + LIGHT_BUMP_RANGE_MM + 5.0) ** 2
         close_lines: list[_Line] = []
-        lines = self._lines
-        contact2 = (ROBOT_RADIUS_MM + CONTACT_MM) ** 2
-        nearest2 = (_NEAR_RADIUS_MM - _NEAR_MARGIN_MM) ** 2
-        for seg in near:
-            ax, ay, bx, by = seg
-            ex, ey = bx - ax, by - ay
-            t = ((x - ax) * ex + (y - ay) * ey) / (ex * ex + ey * ey or 1.0)
-            t = 0.0 if t < 0.0 else 1.0 if t > 1.0 else t
-            cx, cy = ax + t * ex, ay + t * ey
-            d2 = (x - cx) ** 2 + (y - cy) ** 2
-            if d2 < nearest2:
-                nearest2 = d2
-            if d2 < reach2:
-                close_lines.append(lines[seg])
-                if d2 < contact2:
-                    a = wrap_angle(math.atan2(cy - y, cx - x) - theta)
-                    if -BUMP_HALF_SPAN < a < BUMP_HALF_SPAN:
-                        if a > BUMP_CENTRE_ANGLE:
-                            bumps |= 2
-                        elif a < -BUMP_CENTRE_ANGLE:
-                            bumps |= 1
-                        else:
-                            bumps |= 3
-        # how far the robot can move before a wall could stop it (the _move fast path)
-        self._clearance = math.sqrt(nearest2) - ROBOT_RADIUS_MM - 1.0
+        fx, fy = self._free_at
+        if (x - fx) ** 2 + (y - fy) ** 2 < self._free2:
+            # Still in the open: no wall was within reach of a sensor plus the distance moved
+            # since the walls were last measured, so none touches or shows now either.
+            bumps = 0
+            self._clearance = _OPEN_CLEARANCE
+        else:
+            bumps = self._sense_walls(x, y, theta, close_lines)
         bumps |= self._event_bump
         if self.lifted or self.fallen:
             bumps |= 12
@@ -840,16 +895,18 @@ class Simulator:
             # from the centre c in direction d meets it at c + k d, k = (n.a - n.c) / (n.d);
             # the ray starts on the bumper (k = R), the hit's place along the wall is t.(c+kd).
             hits = list(_RAY_RANGES)
+            radius = ROBOT_RADIUS_MM
             for nx, ny, w, tx, ty, ta, length in close_lines:
                 p = w - (nx * x + ny * y)
                 q = tx * x + ty * y - ta
-                for i in range(7):
-                    c, s = rays[i]
+                i = -1
+                for c, s in rays:
+                    i += 1
                     dn = nx * c + ny * s
                     if dn * p <= 0.0:
                         continue  # pointing away from (or along) this wall
                     k = p / dn
-                    t = k - ROBOT_RADIUS_MM
+                    t = k - radius
                     if t < 0.0 or t >= hits[i]:
                         continue
                     along = q + k * (tx * c + ty * s)
@@ -898,16 +955,57 @@ class Simulator:
             self._sense_ir()
         self._check_docked()
 
+    def _sense_walls(self, x: float, y: float, theta: float, close_lines: list[_Line]) -> int:
+        """The bumper bits from walls touching the robot; the walls close enough for the light
+        bumper's rays go into ``close_lines``; how far the robot is from every wall."""
+        nx, ny = self._near_at
+        near = (
+            self._near if (x - nx) ** 2 + (y - ny) ** 2 <= _NEAR_MARGIN2 else self._near_segments()
+        )
+        bumps = 0
+        reach2 = _REACH2
+        lines = self._lines
+        contact2 = _CONTACT2
+        nearest2 = _NEAREST2
+        for seg in near:
+            ax, ay, bx, by = seg
+            ex, ey = bx - ax, by - ay
+            t = ((x - ax) * ex + (y - ay) * ey) / (ex * ex + ey * ey or 1.0)
+            t = 0.0 if t < 0.0 else 1.0 if t > 1.0 else t
+            cx, cy = ax + t * ex, ay + t * ey
+            d2 = (x - cx) ** 2 + (y - cy) ** 2
+            if d2 < nearest2:
+                nearest2 = d2
+            if d2 < reach2:
+                close_lines.append(lines[seg])
+                if d2 < contact2:
+                    a = wrap_angle(math.atan2(cy - y, cx - x) - theta)
+                    if -BUMP_HALF_SPAN < a < BUMP_HALF_SPAN:
+                        if a > BUMP_CENTRE_ANGLE:
+                            bumps |= 2
+                        elif a < -BUMP_CENTRE_ANGLE:
+                            bumps |= 1
+                        else:
+                            bumps |= 3
+        nearest = math.sqrt(nearest2)
+        # how far the robot can move before a wall could stop it (the _move fast path)
+        self._clearance = nearest - ROBOT_RADIUS_MM - 1.0
+        # how far it can move before any wall could come within reach of a sensor
+        free = nearest - _REACH
+        self._free_at = (x, y)
+        self._free2 = free * free if free > 0.0 else 0.0
+        return bumps
+
     def _check_docked(self) -> None:
-        dock = self.world.dock
-        target = self._dock_target
-        was_docked = self.docked
-        if dock is None or target is None:
+        beams = self._beams
+        if beams is None:
             return
-        ex, ey = self.x - target.x, self.y - target.y
+        was_docked = self.docked
+        ex, ey = self.x - beams.target_x, self.y - beams.target_y
         self.docked = (
-            ex * ex + ey * ey <= dock.contact_tolerance**2
-            and abs(wrap_angle(self.theta - target.theta)) <= dock.angle_tolerance
+            ex * ex + ey * ey <= beams.contact2
+            and abs((self.theta - beams.target_theta + _PI) % _TWO_PI - _PI)
+            <= beams.angle_tolerance
             and not self.lifted
         )
         if self.docked != was_docked:
@@ -924,59 +1022,43 @@ class Simulator:
         c, s = math.cos(theta), math.sin(theta)
         omni_x, omni_y = x + OMNI_FORWARD_MM * c, y + OMNI_FORWARD_MM * s
         omni = left = right = 0
-        dock = self.world.dock
-        if dock is not None:
-            dx, dy = omni_x - dock.x, omni_y - dock.y
-            reach = max(dock.buoy_range, dock.force_field) + 200.0
-            if dx * dx + dy * dy < reach * reach:
-                discovery = dock.family == "discovery"
-                omni = self._dock_char(omni_x, omni_y, discovery)
+        beams = self._beams
+        if beams is not None:
+            dx, dy = omni_x - beams.x, omni_y - beams.y
+            if dx * dx + dy * dy < beams.reach2 and self.dock_powered:
+                character = beams.character
+                omni = character(omni_x, omni_y)
                 fx = x + RECEIVER_FORWARD_MM * c
                 fy = y + RECEIVER_FORWARD_MM * s
-                lx, ly = fx - RECEIVER_SIDE_MM * s, fy + RECEIVER_SIDE_MM * c
-                rx, ry = fx + RECEIVER_SIDE_MM * s, fy - RECEIVER_SIDE_MM * c
                 # Fields of view are cones from the robot's centre (the receivers sit close
                 # together on the bumper); which beams each sees depends on where it is.
-                bearing = wrap_angle(math.atan2(dock.y - y, dock.x - x) - theta)
+                bearing = (math.atan2(beams.y - y, beams.x - x) - theta + _PI) % _TWO_PI - _PI
                 if -RECEIVER_INNER <= bearing <= RECEIVER_OUTER:
-                    left = self._dock_char(lx, ly, discovery)
+                    left = character(fx - RECEIVER_SIDE_MM * s, fy + RECEIVER_SIDE_MM * c)
                 if -RECEIVER_OUTER <= bearing <= RECEIVER_INNER:
-                    right = self._dock_char(rx, ry, discovery)
+                    right = character(fx + RECEIVER_SIDE_MM * s, fy - RECEIVER_SIDE_MM * c)
         wall = 0
-        for vw in self.world.virtual_walls:
-            if self._in_beam(omni_x, omni_y, vw.segment, vw.half_width, vw.halo):
-                wall = 162
-                break
-        if not wall:
-            for lh in self.world.lighthouses:
-                if self._in_beam(omni_x, omni_y, lh.fence_segment, lh.half_width, 0.0):
-                    wall = lighthouse_character(lh.id, LighthouseBeam.FENCE)
+        world = self.world
+        if world.virtual_walls or world.lighthouses:
+            for vw in world.virtual_walls:
+                if self._in_beam(omni_x, omni_y, vw.segment, vw.half_width, vw.halo):
+                    wall = 162
                     break
-                ddx, ddy = omni_x - lh.x, omni_y - lh.y
-                if ddx * ddx + ddy * ddy <= lh.halo * lh.halo:
-                    wall = lighthouse_character(lh.id, LighthouseBeam.FORCE_FIELD)
-                    break
+            if not wall:
+                for lh in world.lighthouses:
+                    if self._in_beam(omni_x, omni_y, lh.fence_segment, lh.half_width, 0.0):
+                        wall = lighthouse_character(lh.id, LighthouseBeam.FENCE)
+                        break
+                    ddx, ddy = omni_x - lh.x, omni_y - lh.y
+                    if ddx * ddx + ddy * ddy <= lh.halo * lh.halo:
+                        wall = lighthouse_character(lh.id, LighthouseBeam.FORCE_FIELD)
+                        break
         v[13] = 1 if wall == 162 else 0
         if wall and (not omni or self.ticks & 2):  # both seen: they alternate
             omni = wall
         v[17] = omni
         v[52] = left
         v[53] = right
-
-    def _dock_char(self, px: float, py: float, discovery: bool) -> int:
-        dock = self.world.dock
-        assert dock is not None
-        dx, dy = px - dock.x, py - dock.y
-        dist2 = dx * dx + dy * dy
-        ff = dist2 <= dock.force_field * dock.force_field
-        red = green = False
-        if dist2 <= dock.buoy_range * dock.buoy_range:
-            bearing = wrap_angle(math.atan2(dy, dx) - dock.facing)
-            red = dock.red[0] <= bearing <= dock.red[1]
-            green = dock.green[0] <= bearing <= dock.green[1]
-        if not self.dock_powered:
-            return 0
-        return dock_character(red=red, green=green, force_field=ff, discovery=discovery)
 
     @staticmethod
     def _in_beam(px: float, py: float, seg: Segment, half_width: float, halo: float) -> bool:
@@ -1023,7 +1105,11 @@ class Simulator:
         charge = self.battery_charge + self._current * dt / 3600.0
         if charge >= BATTERY_CAPACITY_MAH * 0.98 and self._current > 200.0:
             self._power_key = None  # switch to trickle charging
-        self.battery_charge = max(0.0, min(BATTERY_CAPACITY_MAH, charge))
+        if charge < 0.0:
+            charge = 0.0
+        elif charge > BATTERY_CAPACITY_MAH:
+            charge = BATTERY_CAPACITY_MAH
+        self.battery_charge = charge
         if not self.ticks & 31:
             self._update_battery_values()
 

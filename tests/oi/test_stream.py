@@ -218,3 +218,20 @@ def test_adler_sum_is_the_byte_sum_up_to_256_bytes() -> None:
 
     for data in (bytes(256), b"\xff" * 256, bytes(range(256)), b"\x13\x05" * 100):
         assert _adler_sum(bytearray(data)) == sum(data)
+
+
+def test_one_whole_frame_per_feed_and_a_frame_sized_non_frame() -> None:
+    """One frame per read is the common case (it has a shortcut); a chunk of exactly a
+    frame's size that is not a frame must still go through the search."""
+    layout = layout_for((7, 35), CREATE2)
+    good = layout.stream_frame({7: 3, 35: 2})
+    parser = StreamParser([7, 35])
+    assert [f[7] for f in parser.feed(good)] == [3]
+    bad_sum = good[:-1] + bytes([(good[-1] + 1) & 0xFF])
+    assert parser.feed(bad_sum) == []
+    assert parser.counters.checksum_failures == 1
+    shifted = good[3:] + good[:3]  # the tail of one frame, the head of the next
+    assert parser.feed(shifted) == []
+    assert [f[7] for f in parser.feed(good[3:])] == [3]
+    assert parser.counters.frames == 2
+    _counters_balance(parser)

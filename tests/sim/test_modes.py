@@ -202,3 +202,29 @@ def test_power_puts_the_robot_to_sleep() -> None:
     assert host.sim.asleep
     host.send(C.sensors(35))
     assert host.sim.read() == b""
+
+
+def test_the_same_drive_again_is_still_refused_in_passive() -> None:
+    """A client re-sends its Drive every frame; the simulator's shortcut for an unchanged
+    Drive must not hide the violation when the robot has fallen to Passive meanwhile."""
+    host = make(mode="safe")
+    drive = C.drive(200, C.Radius.STRAIGHT)
+    host.send(drive)
+    host.run(0.3)
+    host.send(C.start())  # Passive: the wheels stop
+    host.send(drive)
+    host.send(drive)
+    x = host.sim.x
+    host.run(0.3)
+    assert host.sim.x == x
+    assert [v.name for v in host.sim.violations] == ["drive", "drive"]
+    host.send(C.safe(), drive)  # Safe again: the same bytes drive again
+    host.run(0.3)
+    assert host.sim.x > x + 40.0
+
+
+def test_the_same_drive_after_a_drive_direct_applies_again() -> None:
+    host = make(mode="full")
+    host.send(C.drive(200, C.Radius.STRAIGHT), C.drive_direct(-100, -100))
+    host.send(C.drive(200, C.Radius.STRAIGHT))
+    assert host.sim.requested_left == host.sim.requested_right > 0.0
