@@ -16,6 +16,7 @@ from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
 from roomba_bt.behaviours.declare import write_key
+from roomba_bt.behaviours.lean import DecoratorStop, DecoratorTick
 from roomba_bt.robot.interface import RobotHandle
 
 
@@ -36,7 +37,7 @@ class _MissionClock:
         return self.robot.snapshot.time
 
 
-class Timeout(_MissionClock, py_trees.decorators.Decorator):
+class Timeout(_MissionClock, DecoratorTick, py_trees.decorators.Decorator):
     """FAILURE (and the child stopped) if the child is still RUNNING after ``duration``
     seconds of mission time; otherwise the child's status."""
 
@@ -56,7 +57,7 @@ class Timeout(_MissionClock, py_trees.decorators.Decorator):
         return status
 
 
-class Delay(_MissionClock, py_trees.decorators.Decorator):
+class Delay(_MissionClock, DecoratorStop, py_trees.decorators.Decorator):
     """RUNNING for ``duration`` seconds of mission time, then ticks the child (BT.CPP's
     ``Delay``)."""
 
@@ -86,7 +87,7 @@ class Delay(_MissionClock, py_trees.decorators.Decorator):
         return self.decorated.status
 
 
-class Repeat(_MissionClock, py_trees.decorators.Decorator):
+class Repeat(_MissionClock, DecoratorTick, py_trees.decorators.Decorator):
     """Restart the child on each SUCCESS: ``times`` times, for ``duration`` seconds of mission
     time, or forever (neither given). FAILURE as soon as the child fails."""
 
@@ -117,7 +118,7 @@ class Repeat(_MissionClock, py_trees.decorators.Decorator):
         return Status.RUNNING
 
 
-class ForEach(py_trees.decorators.Decorator):
+class ForEach(DecoratorStop, py_trees.decorators.Decorator):
     """Run the child once per item, writing the item to a blackboard key first (waypoints).
 
     SUCCESS when every item succeeded; FAILURE when the child fails for one of them.

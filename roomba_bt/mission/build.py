@@ -17,6 +17,7 @@ import py_trees
 from py_trees.behaviour import Behaviour
 
 from roomba_bt.behaviours import decorators as ours
+from roomba_bt.behaviours import lean
 from roomba_bt.behaviours.declare import write_key
 from roomba_bt.mission.ir import COMPOSITES, Node
 from roomba_bt.oi.modes import OIMode
@@ -33,8 +34,8 @@ def build(node: Node) -> Behaviour:
     if kind in COMPOSITES:
         memory = bool(node.options.get("memory", True))
         if kind == "parallel":
-            return py_trees.composites.Parallel(name, _policy(node, children), children)
-        cls = py_trees.composites.Sequence if "sequence" in kind else py_trees.composites.Selector
+            return lean.Parallel(name, _policy(node, children), children)
+        cls = lean.Sequence if "sequence" in kind else lean.Selector
         return cls(name, memory, children)
     child = children[0] if children else None
     options = node.options
@@ -42,7 +43,7 @@ def build(node: Node) -> Behaviour:
         return ours.Guard(name, children[0], children[1], until=bool(options["until"]))
     assert child is not None
     if kind == "retry":
-        return py_trees.decorators.Retry(name, child, int(options["times"]))
+        return lean.Retry(name, child, int(options["times"]))
     if kind == "repeat":
         return ours.Repeat(name, child, options.get("times"), options.get("for"))
     if kind == "timeout":
@@ -50,18 +51,18 @@ def build(node: Node) -> Behaviour:
     if kind == "delay":
         return ours.Delay(name, child, float(options["for"]))
     if kind == "inverter":
-        return py_trees.decorators.Inverter(name, child)
+        return lean.Inverter(name, child)
     if kind == "force_success":
-        return py_trees.decorators.FailureIsSuccess(name, child)
+        return lean.FailureIsSuccess(name, child)
     if kind == "force_failure":
-        return py_trees.decorators.SuccessIsFailure(name, child)
+        return lean.SuccessIsFailure(name, child)
     if kind == "oneshot":
         policy = (
             py_trees.common.OneShotPolicy.ON_COMPLETION
             if options.get("policy") == "on_completion"
             else py_trees.common.OneShotPolicy.ON_SUCCESSFUL_COMPLETION
         )
-        return py_trees.decorators.OneShot(name, child, policy)
+        return lean.OneShot(name, child, policy)
     if kind == "for_each":
         return ours.ForEach(name, child, str(options["key"]), options.get("items", ()))
     raise AssertionError(f"no builder for node kind {kind!r}")

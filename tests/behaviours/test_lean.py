@@ -1,0 +1,188 @@
+"""The lean composites, decorators and leaf tick behave exactly as py_trees' own.
+
+Random trees are built twice, once from py_trees' classes and once from
+``roomba_bt.behaviours.lean`` (leaves with :class:`RobotBehaviour`'s ``tick``/``stop``), and
+ticked side by side: every node's status after every tick, and the order of every leaf's
+initialise/update/terminate calls, must be the same.
+"""
+
+from __future__ import annotations
+
+import typing
+from collections.abc import Callable
+from typing import Any
+
+import py_trees
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from py_trees.behaviour import Behaviour
+from py_trees.common import OneShotPolicy, ParallelPolicy, Status
+
+from roomba_bt.behaviours import lean
+from roomba_bt.behaviours.declare import RobotBehaviour
+
+STATUSES = (Status.SUCCESS, Status.FAILURE, Status.RUNNING)
+Spec = tuple[Any, ...]
+
+
+class ScriptLeaf(Behaviour):
+    """Returns the statuses of its script in turn (cycling); logs every call."""
+
+    def __init__(self, name: str, script: tuple[Status, ...], log: list[str]) -> None:
+        super().__init__(name=name)
+        self.script = script
+        self.calls = 0
+        self.log = log
+
+    def initialise(self) -> None:
+        self.log.append(f"{self.name}.initialise")
+
+    def update(self) -> Status:
+        status = self.script[self.calls % len(self.script)]
+        self.calls += 1
+        self.log.append(f"{self.name}.update={status.name}")
+        return status
+
+    def terminate(self, new_status: Status) -> None:
+        self.log.append(f"{self.name}.terminate={new_status.name}")
+
+
+class LeanLeaf(ScriptLeaf):
+    tick = RobotBehaviour.tick  # type: ignore[assignment]
+    stop = RobotBehaviour.stop  # type: ignore[assignment]
+
+
+class GiveUpAfter(py_trees.decorators.Decorator):
+    """FAILURE after ``ticks`` ticks even while the child runs (as a timeout does): the
+    decorator must then stop its running child."""
+
+    def __init__(self, name: str, child: Behaviour, ticks: int) -> None:
+        super().__init__(name=name, child=child)
+        self.limit = ticks
+        self.count = 0
+
+    def initialise(self) -> None:
+        self.count = 0
+
+    def update(self) -> Status:
+        self.count += 1
+        return Status.FAILURE if self.count >= self.limit else self.decorated.status
+
+
+class LeanGiveUpAfter(lean.DecoratorTick, GiveUpAfter):
+    pass
+
+
+def _leaves() -> st.SearchStrategy[Spec]:
+    return st.tuples(st.just("leaf"), st.lists(st.sampled_from(STATUSES), min_size=1, max_size=4))
+
+
+def _trees() -> st.SearchStrategy[Spec]:
+    def extend(children: st.SearchStrategy[Spec]) -> st.SearchStrategy[Spec]:
+        many = st.lists(children, min_size=1, max_size=3)
+        return st.one_of(
+            st.tuples(st.sampled_from(["sequence", "selector"]), st.booleans(), many),
+            st.tuples(st.just("parallel"), st.sampled_from(["all", "one"]), many),
+            st.tuples(st.just("retry"), st.integers(1, 3), children),
+            st.tuples(st.just("give_up"), st.integers(1, 4), children),
+            st.tuples(
+                st.sampled_from(["inverter", "force_success", "force_failure"]),
+                st.none(),
+                children,
+            ),
+            st.tuples(st.just("oneshot"), st.booleans(), children),
+        )
+
+    return st.recursive(_leaves(), extend, max_leaves=8)
+
+
+def build(spec: Spec, stock: bool, log: list[str], counter: list[int]) -> Behaviour:
+    kind = spec[0]
+    if kind == "leaf":
+        counter[0] += 1
+        cls = ScriptLeaf if stock else LeanLeaf
+        return cls(f"leaf{counter[0]}", tuple(spec[1]), log)
+    option, body = spec[1], spec[2]
+    if kind in ("sequence", "selector", "parallel"):
+        children = [build(child, stock, log, counter) for child in body]
+        if kind == "parallel":
+            all_or_one: ParallelPolicy.Base = (
+                ParallelPolicy.SuccessOnAll() if option == "all" else ParallelPolicy.SuccessOnOne()
+            )
+            cls_p = py_trees.composites.Parallel if stock else lean.Parallel
+            return cls_p(kind, all_or_one, children)
+        if kind == "sequence":
+            cls_s = py_trees.composites.Sequence if stock else lean.Sequence
+        else:
+            cls_s = py_trees.composites.Selector if stock else lean.Selector
+        return cls_s(kind, bool(option), children)
+    child = build(body, stock, log, counter)
+    decorators = py_trees.decorators
+    if kind == "retry":
+        return (decorators.Retry if stock else lean.Retry)(kind, child, int(option))
+    if kind == "give_up":
+        return (GiveUpAfter if stock else LeanGiveUpAfter)(kind, child, int(option))
+    if kind == "oneshot":
+        policy = OneShotPolicy.ON_COMPLETION if option else OneShotPolicy.ON_SUCCESSFUL_COMPLETION
+        return (decorators.OneShot if stock else lean.OneShot)(kind, child, policy)
+    simple: dict[str, tuple[Callable[..., Behaviour], Callable[..., Behaviour]]] = {
+        "inverter": (decorators.Inverter, lean.Inverter),
+        "force_success": (decorators.FailureIsSuccess, lean.FailureIsSuccess),
+        "force_failure": (decorators.SuccessIsFailure, lean.SuccessIsFailure),
+    }
+    return simple[kind][0 if stock else 1](kind, child)
+
+
+def _run(spec: Spec, stock: bool, ticks: int) -> tuple[list[list[str]], list[str]]:
+    log: list[str] = []
+    root = build(spec, stock, log, [0])
+    statuses = []
+    for _ in range(ticks):
+        root.tick_once()
+        statuses.append([f"{node.name}={node.status.name}" for node in root.iterate()])
+    root.stop(Status.INVALID)
+    statuses.append([f"{node.name}={node.status.name}" for node in root.iterate()])
+    return statuses, log
+
+
+@settings(max_examples=300, deadline=None)
+@given(_trees(), st.integers(1, 12))
+def test_lean_trees_tick_exactly_as_py_trees(spec: Spec, ticks: int) -> None:
+    assert _run(spec, True, ticks) == _run(spec, False, ticks)
+
+
+def test_the_decorators_made_lean_do_not_define_their_own_tick_or_stop() -> None:
+    """The lean classes replace py_trees' ``Decorator.tick``/``stop``; if a py_trees release
+    gives one of these decorators its own, the replacement would hide it."""
+    base = py_trees.decorators.Decorator
+    for cls in (lean.Retry, lean.Inverter, lean.FailureIsSuccess, lean.SuccessIsFailure):
+        stock = cls.__bases__[-1]
+        assert stock.tick is base.tick and stock.stop is base.stop, stock
+    assert lean.OneShot.__bases__[-1].stop is base.stop
+    for composite in (py_trees.composites.Sequence, py_trees.composites.Selector):
+        assert "stop" in vars(composite)  # only logs, then Composite.stop (replicated)
+
+
+@pytest.mark.parametrize("make", [lambda: LeanLeaf("leaf", (Status.SUCCESS,), [])])
+def test_debug_logging_still_logs(make: Callable[[], Behaviour], capsys: Any) -> None:
+    previous = py_trees.logging.level
+    py_trees.logging.level = py_trees.logging.Level.DEBUG
+    try:
+        root = lean.Sequence("root", True, [make()])
+        root.tick_once()
+    finally:
+        py_trees.logging.level = previous
+    out = capsys.readouterr()
+    text = out.out + out.err
+    assert "LeanLeaf.tick()" in text and "LeanLeaf.stop(" in text and "Sequence.stop()" in text
+
+
+def test_an_invalid_status_becomes_invalid_as_in_py_trees() -> None:
+    class Broken(LeanLeaf):
+        def update(self) -> Status:
+            return typing.cast(Status, ["not", "a", "status"])
+
+    leaf = Broken("broken", (Status.SUCCESS,), [])
+    leaf.tick_once()
+    assert leaf.status is Status.INVALID
