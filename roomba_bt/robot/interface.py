@@ -50,6 +50,8 @@ class Odometry(NamedTuple):
 
     def advance(self, left_counts: int, right_counts: int, wheel_base_mm: float) -> Odometry:
         """The odometry after a frame carrying these raw encoder counts."""
+        if left_counts == self.left_counts and right_counts == self.right_counts:
+            return self  # standing still (most frames of a docked or waiting robot)
         if self.left_counts is None or self.right_counts is None:
             return Odometry(
                 self.x_mm, self.y_mm, self.theta_rad, self.distance_mm, self.angle_rad,

@@ -98,6 +98,8 @@ class MissionRunner:
         self.summary = RunSummary(mission.name)
         self.refusals: list[str] = []
         self._blackboard: py_trees.blackboard.Client | None = None
+        self._layout: object = None
+        self._has_encoders = False
 
     # ---------------------------------------------------------------- RobotHandle
     @property
@@ -238,7 +240,11 @@ class MissionRunner:
             self.summary.frames_lost += slots - count
         self._last_arrival = arrival
         self._tick += slots
-        if 43 in frame and 44 in frame:
+        layout = frame.layout
+        if layout is not self._layout:  # the same for every frame of a stream
+            self._layout = layout
+            self._has_encoders = 43 in frame and 44 in frame
+        if self._has_encoders:
             self._odometry = self._odometry.advance(
                 frame[43], frame[44], self._profile.wheel_base_mm
             )
@@ -257,7 +263,12 @@ class MissionRunner:
         )
         self._snapshot = snapshot
         if self._blackboard is not None:
-            self._blackboard.set(SNAPSHOT_KEY, snapshot, overwrite=True)
+            if py_trees.blackboard.Blackboard.activity_stream is None:
+                # the client's own key, registered for writing: its permission checks and
+                # name parsing cost more than the rest of this method
+                py_trees.blackboard.Blackboard.storage[SNAPSHOT_KEY] = snapshot
+            else:  # someone is watching the blackboard's activity: tell it
+                self._blackboard.set(SNAPSHOT_KEY, snapshot, overwrite=True)
         return snapshot
 
     def _flush(self) -> None:

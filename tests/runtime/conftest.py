@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import textwrap
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -31,6 +32,7 @@ def run_mission(tmp_path: Path) -> RunMission:
         seed: int = 0,
         stall_after: float | None = None,
         burst: int = 1,
+        observer: Callable[[MissionRunner], None] | None = None,
     ) -> Run:
         path = tmp_path / "mission.yaml"
         path.write_text(textwrap.dedent(text))
@@ -42,6 +44,7 @@ def run_mission(tmp_path: Path) -> RunMission:
         runner = MissionRunner(
             connection, mission, profile=profile, packets=packets, timeout_s=timeout
         )
+        runner.observer = observer
         summary = runner.run()
         return Run(summary, link, simulator, runner)
 

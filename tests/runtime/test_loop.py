@@ -242,6 +242,35 @@ def test_snapshot_is_on_the_blackboard_under_one_key(run_mission: RunMission) ->
     assert run.runner.snapshot.frame[35] in (1, 2)
 
 
+@pytest.mark.parametrize("activity_stream", [False, True])
+def test_every_tick_the_blackboard_holds_that_ticks_snapshot(
+    run_mission: RunMission, activity_stream: bool
+) -> None:
+    """Read through a py_trees client after every tick; with py_trees' activity stream on
+    (someone watching the blackboard), the runtime's writes show up in it."""
+    reader = py_trees.blackboard.Client(name="test reader")
+    reader.register_key(key="/roomba/snapshot", access=py_trees.common.Access.READ)
+    seen: list[bool] = []
+    if activity_stream:
+        py_trees.blackboard.Blackboard.enable_activity_stream()
+    try:
+        run = run_mission(
+            "tree:\n  sequence:\n    - mode: safe\n    - wait: 300ms\n",
+            observer=lambda runner: seen.append(reader.get("/roomba/snapshot") is runner.snapshot),
+        )
+        stream = py_trees.blackboard.Blackboard.activity_stream
+        writes = (
+            [item for item in stream.data if item.key == "/roomba/snapshot"]
+            if stream is not None
+            else []
+        )
+    finally:
+        py_trees.blackboard.Blackboard.disable_activity_stream()
+        reader.unregister(clear=False)
+    assert len(seen) == run.summary.ticks > 10 and all(seen)
+    assert (len(writes) >= run.summary.ticks) is activity_stream
+
+
 def test_a_builtin_cycle_is_ended_by_the_safe_stop(run_mission: RunMission) -> None:
     # Clean drives the robot in Passive, where drive 0 is refused: the stop enters Safe first.
     run = run_mission(
