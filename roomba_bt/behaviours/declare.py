@@ -248,6 +248,7 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
         self.params: dict[str, Any] = values
         self.robot: RobotHandle | None = None
         self._resolved: dict[str, Any] = values
+        self._refs: dict[str, BlackboardRef] | None = None
 
     def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
         """py_trees' leaf tick, step for step, without its per-tick costs: it rebuilds
@@ -310,7 +311,11 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
         return float(self._resolved[name])
 
     def initialise(self) -> None:
-        refs = {k: v for k, v in self.params.items() if isinstance(v, BlackboardRef)}
+        refs = self._refs
+        if refs is None:  # the parameters never change: look for @key values once
+            refs = self._refs = {
+                k: v for k, v in self.params.items() if isinstance(v, BlackboardRef)
+            }
         if refs:
             resolved = dict(self.params)
             for pname, ref in refs.items():
