@@ -200,6 +200,17 @@ class _Builtin:
         self.wander_until = 0.0  # after a bounce, go straight a while before aiming again
 
 
+def _count_offset(spec: CommandSpec) -> int:
+    """Data bytes before the argument that counts a command's variable tail."""
+    assert spec.tail is not None
+    offset = 0
+    for arg in spec.args:
+        if arg.name == spec.tail.count_arg:
+            return offset
+        offset += arg.size
+    raise ValueError(f"{spec.name}: no argument {spec.tail.count_arg!r}")
+
+
 class _DockBeams:
     """The dock's beams and contacts as plain numbers, computed once per robot: the IR
     receivers ask for a character three times every 30 ms, so no attribute chains, no
@@ -324,6 +335,12 @@ class Simulator:
         self._near_at = (math.inf, math.inf)
         self._commands: dict[int, CommandSpec] = {c.opcode: c for c in profile.commands}
         self._data_sizes = {c.opcode: c.fixed_data_bytes for c in profile.commands}
+        #: variable tails from the opcode table: (offset of the count byte, bytes per item)
+        self._tails = {
+            c.opcode: (1 + _count_offset(c), c.tail.bytes_per_item)
+            for c in profile.commands
+            if c.tail is not None
+        }
         self._reply_packers: dict[tuple[int, ...], _Packer] = {}
         self._encoder_signed = profile.encoders_signed
         self.violations: list[Violation] = []
@@ -393,11 +410,12 @@ class Simulator:
         buf = self._inbuf
         commands = self._commands
         sizes = self._data_sizes
+        tails = self._tails
         if not buf:  # the common case: exactly one whole fixed-size command
             if data == self._last_drive and not self.asleep and self.mode in self._drive_modes:
                 return  # the same Drive again (a client sends one a frame): nothing changes
             spec = commands.get(data[0])
-            if spec is not None and spec.variable is None and len(data) == 1 + sizes[data[0]]:
+            if spec is not None and spec.tail is None and len(data) == 1 + sizes[data[0]]:
                 self._execute(spec, bytes(data[1:]))
                 return
         buf += data
@@ -411,8 +429,10 @@ class Simulator:
             need = 1 + sizes[op]
             if len(buf) < need:
                 return
-            if spec.variable is not None:
-                need += 2 * buf[2] if op == 140 else buf[1]
+            tail = tails.get(op)
+            if tail is not None:
+                count_at, per_item = tail
+                need += buf[count_at] * per_item
                 if len(buf) < need:
                     return
             args = bytes(buf[1:need])
