@@ -23,8 +23,10 @@ The stages, each a leaf whose failure message names the stage (``search: ...``,
     the odometry frame), backing away from bumps, cliffs and light-bumper obstacles, until a
     dock character is seen.
 ``dock_approach``
-    face the dock; if off its axis, turn toward the axis and drive until both buoys are
-    seen, then face the dock again. SUCCESS facing the dock on its axis.
+    face the dock; if off its axis, turn toward the axis and move until the centre is on it
+    (the omni receiver finds both edges of the band where it sees both buoys), then face the
+    dock again; with no buoy in sight, circle the dock until one is seen. SUCCESS facing
+    the dock on its axis.
 ``dock_drive_on``
     drive in along the axis, slower inside the force field, steering to keep both the left
     and right receivers on the dock; on contact without charge, wiggle in place to seat the
@@ -61,12 +63,18 @@ _OK, _RUN, _FAIL = Status.SUCCESS, Status.RUNNING, Status.FAILURE
 
 #: Where the stages note which one is running, for ``dock_time_limit``'s message.
 STAGE_KEY = "/roomba/docking/stage"
+#: When the current docking run began (``dock_time_limit`` notes it): the approach counts
+#: its attempts per run.
+RUN_KEY = "/roomba/docking/run"
+#: Turns toward the axis (crossings, circles) in one approach before it backs away from the
+#: dock and starts over from the edge of the force field; three are usually enough.
+_MAX_CROSSINGS = 6
 
 IR_PACKETS = (17, 52, 53)
 HAZARD_PACKETS = (7, 9, 10, 11, 12, 13, 45)
 ODOMETRY_PACKETS = (43, 44)
 #: How far the omni receiver is ahead of the wheels' axle (Roomba / Create 2: about 13 cm).
-OMNI_AHEAD_MM = 120.0
+OMNI_AHEAD_MM = 130.0
 #: Light-bumper bits 1..4 (front-left, centre-left, centre-right, front-right): something ahead.
 _LIGHT_AHEAD = 0b011110
 
@@ -489,10 +497,15 @@ class DockApproach(_DockingAction):
     """Get onto the dock's axis, facing it (SUCCESS), from anywhere its beams are seen.
 
     Face the dock (turn toward the receiver that sees it); red only means the robot is on
-    the dock's left, so the axis is on the robot's left: turn ``cross_angle`` left and drive
-    until both buoys are seen (green only: the mirror image); then face the dock again. In
-    the force field with no buoy, the side is the last one seen, or a guess that is flipped
-    when the robot leaves the field or meets an obstacle.
+    the dock's left, so the axis is on the robot's left: turn ``cross_angle`` left and move
+    along that line until the centre is on the axis (the omni receiver, ahead of the centre,
+    measures both edges of the band where it sees both buoys; see :meth:`_cross`); green
+    only: the mirror image; then face the dock again. In the force field with no buoy, the
+    side is the last one seen, or a guess: circle the dock along the field's edge that way
+    until a buoy is seen, the other way after a bump. No progress (``_MAX_CROSSINGS`` turns
+    toward the axis, or a third attempt in one docking run): back away from the dock out of
+    the force field and come in again, rather than repeat the same moves until the time
+    limit.
     """
 
     stage = "approach"
@@ -504,6 +517,14 @@ class DockApproach(_DockingAction):
         self._last_side = 0
         self._guesses = 0
         self._crossings = 0
+        self._centred = False
+        run = py_trees.blackboard.Blackboard.storage.get(RUN_KEY)
+        if run != self._run:
+            self._run, self._starts = run, 0
+        self._starts += 1
+        # two attempts of this run already ended in a failure after or during the approach:
+        # do not repeat the same moves from the same place; back away and start over
+        self._retreat = self._starts >= 3
         view = DockView.of(self.snapshot.frame)
         self._start_facing(-1.0 if view.on_right else 1.0)
 
@@ -531,9 +552,16 @@ class DockApproach(_DockingAction):
         if self._phase == "face":
             if not self._face(view):
                 return _RUN
+            if self._retreat:
+                return self._start_retreat()
             side = view.side
-            if view.on_axis or (self._crossings >= 3 and view.force_field and view.side):
-                return self.succeed()  # on the axis (or as near as repeated tries get)
+            if view.on_axis or self._centred:
+                # on the axis: the omni sees both buoys, or the last crossing measured both
+                # edges of the band and stopped the centre half-way (close to the dock the
+                # band at the omni is narrower than what a few degrees of heading move it)
+                return self.succeed()
+            if self._crossings >= _MAX_CROSSINGS:
+                return self._start_retreat()
             if not (view.omni.from_dock and view.omni.force_field):
                 self._phase = "closer"  # along the beams, into the force field first
                 self.mark_distance()
@@ -545,11 +573,14 @@ class DockApproach(_DockingAction):
                 else:
                     self._guesses += 1
                     side = 1 if self._guesses % 2 else -1
+                    self._orbit = True  # a guess: circle the dock until a buoy is seen
                 self._side_guess = side
             if self._phase == "face":
                 self._cross_side = side or 1
                 self._crossings += 1
                 self._phase = "turn_away"
+                self._sweep = 1
+                self._centred = False
                 self.mark_turn()
         if self._phase == "closer":
             if view.omni.from_dock and (view.omni.force_field or view.on_axis):
@@ -571,49 +602,157 @@ class DockApproach(_DockingAction):
                 return _RUN
         if self._phase == "turn_away":
             goal = math.radians(self.number("cross_angle"))
+            state = self._omni_state(view)
+            if state is not None:
+                self._sweep = state  # where the omni was last seen relative to the axis
             if abs(self.turned()) >= goal:
-                self._phase = "cross"
-                self._axis_at = None
+                self._phase = "orbit" if self._orbit else "cross"
+                self._orbit = False
+                self._before_at = self._past_at = None
+                # turning swings the omni sideways: it may have swept over the axis already
+                self._band_seen = self._sweep <= 0
+                self._cross_path = snap.odometry.path_mm
                 self._last_seen = snap.time  # turning away may hide the beams for a while
                 self.mark_distance()
             else:
                 w = 90.0 * self._cross_side
                 self.wheels(-w, w)
                 return _RUN
-        if self._phase == "cross":
-            blocked = hazard is not None
-            left_field = not view.seen and snap.time - self._last_seen > 1.0
-            wrong = view.side == -self._cross_side and not view.on_axis
-            if (view.on_axis or wrong) and self._axis_at is None:
-                self._axis_at = self.snapshot.odometry.distance_mm
-            if (
-                self._axis_at is not None
-                and abs(self.snapshot.odometry.distance_mm - self._axis_at) >= OMNI_AHEAD_MM
-            ):
-                # the omni receiver is ahead of the centre: go on until the centre is there
-                self._start_facing(-float(self._cross_side))
+        if self._phase == "retreat":
+            # out of the force field while a buoy is still in sight, but never out of
+            # every beam: that would leave the search to find the dock again
+            if hazard is not None or not view.omni.from_dock or self.travelled() > 600.0:
+                self._centred = False
+                self._start_facing(self._spin_dir)
                 self.halt()
                 return _RUN
-            if blocked or left_field or self.travelled() > 1500.0:
-                if view.side == 0:
-                    self._last_side = 0  # whatever side was believed, it did not work
-                self._start_facing(-float(self._cross_side))
-                if blocked:
-                    self._phase = "back"
-                    self._back_until = snap.time + 0.5
-                else:
-                    self.halt()
-                    return _RUN
-            else:
-                slow = 0.6 if view.force_field else 1.0
-                self.wheels(speed * slow, speed * slow)
-                return _RUN
+            self.wheels(-120, -120)
+            return _RUN
+        if self._phase == "orbit":
+            status = self._circle(view, hazard, speed)
+            if status is not None:
+                return status
+        if self._phase == "cross":
+            status = self._cross(view, hazard, speed)
+            if status is not None:
+                return status
         if self._phase == "back":
             if snap.time < self._back_until:
                 self.wheels(-120, -120)
                 return _RUN
             self._start_facing(self._spin_dir)
             self.halt()
+        return _RUN
+
+    def _start_retreat(self) -> Status:
+        """No progress: back straight away from the dock (it is ahead), then come in again
+        along the beams, so that the next crossing starts from the edge of the force field,
+        where the band around the axis is wider, instead of repeating the same moves."""
+        self._retreat = False
+        self._crossings = 0
+        self._phase = "retreat"
+        self.mark_distance()
+        return _RUN
+
+    def _omni_state(self, view: DockView) -> int | None:
+        """Where the omni receiver is relative to the axis, seen from the side the robot
+        set out from (``_cross_side``): 1 before it (the near buoy alone), 0 in the band
+        (both buoys), -1 past it (the far buoy alone), None when it sees no buoy."""
+        omni = view.omni
+        if not omni.from_dock or not (omni.red_buoy or omni.green_buoy):
+            return None
+        if omni.red_buoy and omni.green_buoy:
+            return 0
+        return 1 if (1 if omni.red_buoy else -1) == self._cross_side else -1
+
+    def _circle(self, view: DockView, hazard: str | None, speed: float) -> Status | None:
+        """Circle the dock along the edge of its force field until the omni sees a buoy.
+
+        In the force field with no buoy in sight (outside the buoys' wedges) the side of
+        the axis is unknown. A straight line toward a guessed side is nearly a tangent
+        there: it left the field after a few tens of degrees around the dock, the next
+        guess went back the other way, and the robot shuttled between two points
+        without ever reaching a buoy. Keeping the omni on the field's edge (turn away
+        from the dock inside it, toward it outside) sweeps every bearing in the guessed
+        direction; a bump (the wall beside the dock) or a half circle without a buoy
+        ends it, and the next guess circles the other way. None: go on this tick."""
+        snap = self.snapshot
+        if self._omni_state(view) is not None:
+            self._start_facing(-float(self._cross_side))  # a buoy: the side is known now
+            self.halt()
+            return _RUN
+        if hazard is not None or snap.odometry.path_mm - self._cross_path > 3500.0:
+            self._start_facing(-float(self._cross_side))
+            if hazard is not None:
+                self._phase = "back"
+                self._back_until = snap.time + 0.5
+                return None
+            self.halt()
+            return _RUN
+        v = 0.8 * speed
+        # the dock is on the side opposite to the turn away (_cross_side +1: on the right);
+        # the wheel on the side to turn to runs slow
+        near, far = (v, 0.2 * v) if view.omni.force_field else (0.2 * v, v)
+        if self._cross_side > 0:
+            self.wheels(far, near)
+        else:
+            self.wheels(near, far)
+        return _RUN
+
+    def _cross(self, view: DockView, hazard: str | None, speed: float) -> Status | None:
+        """Move along the crossing line until the centre is on the dock's axis, then face it.
+
+        Only the omni receiver is read: it sits on the crossing line, ``OMNI_AHEAD_MM``
+        ahead of the centre. Along that line (``s``, the signed odometry distance) it sees
+        the near buoy alone ("before" the axis), both (the band around the axis), then the
+        far buoy alone ("past"). The axis is half-way between the last "before" and the
+        first "past", and the centre is there when the omni is ``OMNI_AHEAD_MM`` beyond it.
+        Close to the dock the band is a few centimetres wide and the omni is often past the
+        axis as soon as the robot has turned: then it backs up to find the near edge
+        instead of driving on (driving a fixed distance from wherever the omni first saw
+        the band overshot the axis by up to 12 cm, and the robot crossed back and forth
+        without ever landing in the band). None: go on with the next phase this tick.
+        """
+        snap = self.snapshot
+        s = snap.odometry.distance_mm - self._distance_mark
+        state = self._omni_state(view)
+        if state == 0:
+            self._band_seen = True
+        elif state == 1:
+            self._before_at = s if self._before_at is None else max(self._before_at, s)
+        elif state == -1:
+            self._past_at = s if self._past_at is None else min(self._past_at, s)
+        path = snap.odometry.path_mm - self._cross_path
+        left_field = not view.seen and snap.time - self._last_seen > 1.0
+        if hazard is not None or left_field or path > 1500.0:
+            if view.side == 0:
+                self._last_side = 0  # whatever side was believed, it did not work
+            self._start_facing(-float(self._cross_side))
+            if hazard is not None and self._last_wheels[0] + self._last_wheels[1] > 0:
+                self._phase = "back"
+                self._back_until = snap.time + 0.5
+                return None
+            self.halt()
+            return _RUN
+        slow = 0.6 if view.force_field else 1.0
+        before, past = self._before_at, self._past_at
+        if before is not None and past is not None:
+            err = (before + past) / 2.0 + OMNI_AHEAD_MM - s
+            if abs(err) < 4.0:
+                self._centred = True
+                self._start_facing(-float(self._cross_side))
+                self.halt()
+                return _RUN
+            v = math.copysign(max(30.0, min(speed * slow, 1.5 * abs(err))), err)
+        elif before is None and (past is not None or self._band_seen):
+            if s < -400.0:  # no near buoy behind: give up this crossing, face again
+                self._start_facing(-float(self._cross_side))
+                self.halt()
+                return _RUN
+            v = -0.6 * speed * slow  # the omni is already over the axis: back to its near edge
+        else:
+            v = speed * slow
+        self.wheels(v, v)
         return _RUN
 
     def _start_facing(self, spin_dir: float) -> None:
@@ -670,7 +809,16 @@ class DockApproach(_DockingAction):
         return False
 
     _crossings = 0
-    _axis_at: float | None = None
+    _before_at: float | None = None
+    _past_at: float | None = None
+    _band_seen = False
+    _cross_path = 0.0
+    _orbit = False
+    _sweep = 1
+    _centred = False
+    _retreat = False
+    _run: object = None
+    _starts = 0
     _lead_theta: float | None = None
     _face_target: float | None = None
     _phase = "face"
@@ -834,7 +982,9 @@ class DockTimeLimit(Action):
 
     def start(self) -> None:
         self._t0 = self.snapshot.time
-        py_trees.blackboard.Blackboard.storage.pop(STAGE_KEY, None)  # a new docking run
+        storage = py_trees.blackboard.Blackboard.storage
+        storage.pop(STAGE_KEY, None)  # a new docking run
+        storage[RUN_KEY] = (id(self), self._t0)
 
     def update(self) -> Status:
         if self.snapshot.time - self._t0 >= self.number("limit") - 1e-9:

@@ -95,6 +95,54 @@ def test_dock_with_other_beams(dock: tuple[tuple[str, object], ...]) -> None:
         assert result.docked
 
 
+SHORT_BEAMS = (("buoy_range", 0.5), ("force_field", 0.3))
+NARROW_BUOYS = (("red", (-3, 15)), ("green", (-15, 3)))
+
+
+@pytest.mark.parametrize(
+    ("dock", "seed"),
+    [(SHORT_BEAMS, 32), (SHORT_BEAMS, 59), (NARROW_BUOYS, 37), (NARROW_BUOYS, 95)],
+    ids=["short-32", "short-59", "narrow-37", "narrow-95"],
+)
+def test_dock_approach_does_not_shuttle_until_the_time_limit(
+    dock: tuple[tuple[str, object], ...], seed: int
+) -> None:
+    """Seeds whose approach used to go back and forth until the 600 s limit: short beams
+    (crossing the axis close to the dock overshot it by up to 12 cm, every time) and narrow
+    buoys (in the force field outside both buoys, straight lines toward a guessed side left
+    the field and the guesses alternated). Each now docks in well under two minutes."""
+    result = run_episode(
+        EpisodeSpec(str(MISSIONS / "dock.yaml"), "empty-room", seed=seed, within_m=1.5,
+                    dock=dock, timeout_s=150)
+    )  # fmt: skip
+    assert result.outcome == "success", result.reason
+    assert result.docked
+
+
+def test_dock_approach_starting_over_keeps_the_beams(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The no-progress fallback (back out of the force field, come in again), forced after
+    every turn toward the axis: it never backs out of every beam, and the robot docks."""
+    from roomba_bt.behaviours import docking
+
+    retreats: list[int] = []
+    start_retreat = docking.DockApproach._start_retreat
+
+    def counted(self: docking.DockApproach) -> object:
+        retreats.append(1)
+        return start_retreat(self)
+
+    monkeypatch.setattr(docking, "_MAX_CROSSINGS", 1)
+    monkeypatch.setattr(docking.DockApproach, "_start_retreat", counted)
+    for seed in (6, 32):
+        retreats.clear()
+        result = run_episode(
+            EpisodeSpec(str(MISSIONS / "dock.yaml"), "empty-room", seed=seed, within_m=1.5,
+                        dock=SHORT_BEAMS, timeout_s=300)
+        )  # fmt: skip
+        assert result.outcome == "success", (seed, result.reason)
+        assert retreats, "the fallback did not run: pick a seed whose approach crosses"
+
+
 def test_dock_gives_up_naming_the_stage(cliff_world: str) -> None:
     """No dock in the world: the time limit fails with the stage that was running."""
     result = run_episode(
