@@ -674,8 +674,9 @@ class DockApproach(_DockingAction):
         guess went back the other way, and the robot shuttled between two points
         without ever reaching a buoy. Keeping the omni on the field's edge (turn away
         from the dock inside it, toward it outside) sweeps every bearing in the guessed
-        direction; a bump (the wall beside the dock) or a half circle without a buoy
-        ends it, and the next guess circles the other way. None: go on this tick."""
+        direction; a bump (the wall beside the dock) or 3.5 m without a buoy (half a circle
+        around a 1 m field) ends it, and the next guess circles the other way. None: go on
+        this tick."""
         snap = self.snapshot
         if self._omni_state(view) is not None:
             self._start_facing(-float(self._cross_side))  # a buoy: the side is known now
