@@ -27,7 +27,7 @@ from typing import Any, Literal, TypeVar
 
 import py_trees
 
-from roomba_bt.behaviours.lean import debugging, valid_status
+from roomba_bt.behaviours.lean import checked_status, debugging
 from roomba_bt.behaviours.units import UnitError, ValueType
 from roomba_bt.oi.encode import Command, halt
 from roomba_bt.oi.modes import ALL_MODES, OIMode
@@ -259,13 +259,7 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
             self.logger.debug(f"{self.__class__.__name__}.tick()")
         if self.status is not _RUNNING:
             self.initialise()
-        new_status = self.update()
-        if not valid_status(new_status):
-            self.logger.error(
-                f"A behaviour returned an invalid status, setting to INVALID [{new_status}]"
-                f"[{self.name}]"
-            )
-            new_status = py_trees.common.Status.INVALID
+        new_status = checked_status(self, self.update())
         if new_status is not _RUNNING:
             self.stop(new_status)
         self.status = new_status

@@ -30,11 +30,17 @@ def debugging() -> bool:
     return py_trees.logging.level is _DEBUG
 
 
-def valid_status(status: object) -> bool:
+def checked_status(node: Behaviour, status: object) -> Status:
+    """``status`` if it is a Status; otherwise INVALID, logged as py_trees does."""
     try:
-        return status in _STATUSES
+        if status in _STATUSES:
+            return status
     except TypeError:  # unhashable: not a Status either
-        return False
+        pass
+    node.logger.error(
+        f"A behaviour returned an invalid status, setting to INVALID [{status}][{node.name}]"
+    )
+    return Status.INVALID
 
 
 class _CompositeStop:
@@ -90,13 +96,7 @@ class DecoratorTick(DecoratorStop):
         if node.status != Status.RUNNING:
             node.initialise()
         yield from node.decorated.tick()
-        new_status = node.update()
-        if not valid_status(new_status):
-            node.logger.error(
-                f"A behaviour returned an invalid status, setting to INVALID [{new_status}]"
-                f"[{node.name}]"
-            )
-            new_status = Status.INVALID
+        new_status = checked_status(node, node.update())
         if new_status != Status.RUNNING:
             node.stop(new_status)
         node.status = new_status
