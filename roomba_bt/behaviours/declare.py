@@ -21,13 +21,13 @@ Drive (137) needs Safe or Full because the table says so.
 from __future__ import annotations
 
 import re
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal, TypeVar
 
 import py_trees
 
-from roomba_bt.behaviours.lean import checked_status, debugging
+from roomba_bt.behaviours.lean import DirectLeaf
 from roomba_bt.behaviours.units import UnitError, ValueType
 from roomba_bt.oi.encode import Command, halt
 from roomba_bt.oi.modes import ALL_MODES, OIMode
@@ -221,11 +221,11 @@ def declare(
     return attach
 
 
-_RUNNING = py_trees.common.Status.RUNNING
-
-
-class RobotBehaviour(py_trees.behaviour.Behaviour):
+class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
     """Base of every leaf: configuration in ``__init__``, the robot in ``setup(robot=...)``.
+
+    Ticked by :class:`~roomba_bt.behaviours.lean.DirectLeaf` (py_trees' leaf tick without
+    its per-tick debug formatting, and without a generator when ticked by ``tick_once``).
 
     ``params`` are the validated values in canonical units (``velocity`` in mm/s, ``duration``
     in s), or :class:`BlackboardRef` for ``@key`` values, resolved by :meth:`value` when the
@@ -249,31 +249,6 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
         self.robot: RobotHandle | None = None
         self._resolved: dict[str, Any] = values
         self._refs: dict[str, BlackboardRef] | None = None
-
-    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
-        """py_trees' leaf tick, step for step, without its per-tick costs: it rebuilds
-        ``list(Status)`` to validate the status and formats a debug message even when debug
-        logging is off. Every leaf ticks every 15 ms, so those were a tenth of a mission's
-        tick; the order of initialise, update, stop and the status is py_trees' own."""
-        if debugging():
-            self.logger.debug(f"{self.__class__.__name__}.tick()")
-        if self.status is not _RUNNING:
-            self.initialise()
-        new_status = checked_status(self, self.update())
-        if new_status is not _RUNNING:
-            self.stop(new_status)
-        self.status = new_status
-        yield self
-
-    def stop(self, new_status: py_trees.common.Status) -> None:
-        """py_trees' stop, without formatting its debug message (two enum ``__format__``
-        calls) when debug logging is off: every condition stops on every tick."""
-        if debugging():
-            change = f"{self.status}->{new_status}" if self.status != new_status else new_status
-            self.logger.debug(f"{self.__class__.__name__}.stop({change})")
-        self.terminate(new_status)
-        self.status = new_status
-        self.iterator = self.tick()
 
     def setup(self, **kwargs: Any) -> None:
         robot = kwargs.get("robot")

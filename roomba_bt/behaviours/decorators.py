@@ -16,7 +16,13 @@ from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
 from roomba_bt.behaviours.declare import write_key
-from roomba_bt.behaviours.lean import DecoratorStop, DecoratorTick
+from roomba_bt.behaviours.lean import (
+    DecoratorStop,
+    DecoratorTick,
+    Direct,
+    decorator_tick_direct,
+    tick_child,
+)
 from roomba_bt.robot.interface import RobotHandle
 
 
@@ -57,7 +63,7 @@ class Timeout(_MissionClock, DecoratorTick, py_trees.decorators.Decorator):
         return status
 
 
-class Delay(_MissionClock, DecoratorStop, py_trees.decorators.Decorator):
+class Delay(_MissionClock, Direct, DecoratorStop, py_trees.decorators.Decorator):
     """RUNNING for ``duration`` seconds of mission time, then ticks the child (BT.CPP's
     ``Delay``)."""
 
@@ -82,6 +88,18 @@ class Delay(_MissionClock, DecoratorStop, py_trees.decorators.Decorator):
             self.stop(new_status)
         self.status = new_status
         yield self
+
+    def tick_direct(self) -> None:
+        if self.status is not Status.RUNNING:
+            self.initialise()
+        if self.now() - self._started < self.duration - 1e-9:
+            self.status = Status.RUNNING
+            return
+        tick_child(self.decorated)
+        new_status: Status = self.decorated.status
+        if new_status is not Status.RUNNING:
+            self.stop(new_status)
+        self.status = new_status
 
     def update(self) -> Status:
         return self.decorated.status
@@ -118,7 +136,7 @@ class Repeat(_MissionClock, DecoratorTick, py_trees.decorators.Decorator):
         return Status.RUNNING
 
 
-class ForEach(DecoratorStop, py_trees.decorators.Decorator):
+class ForEach(Direct, DecoratorStop, py_trees.decorators.Decorator):
     """Run the child once per item, writing the item to a blackboard key first (waypoints).
 
     SUCCESS when every item succeeded; FAILURE when the child fails for one of them.
@@ -142,6 +160,12 @@ class ForEach(DecoratorStop, py_trees.decorators.Decorator):
             return
         yield from super().tick()
 
+    def tick_direct(self) -> None:
+        if not self.items:
+            self.status = Status.SUCCESS
+            return
+        decorator_tick_direct(self)
+
     def update(self) -> Status:
         status: Status = self.decorated.status
         if status is not Status.SUCCESS:
@@ -154,7 +178,7 @@ class ForEach(DecoratorStop, py_trees.decorators.Decorator):
         return Status.RUNNING
 
 
-class Guard(py_trees.composites.Composite):
+class Guard(Direct, py_trees.composites.Composite):
     """``while:`` / ``until:`` on any node: the condition subtree is ticked before the child
     on every tick (BT.CPP's ``_while``, py_trees' EternalGuard, with a subtree as condition).
 
@@ -192,6 +216,26 @@ class Guard(py_trees.composites.Composite):
             self.stop(status)
         self.status = status
         yield self
+
+    def tick_direct(self) -> None:
+        """``tick`` as calls (see :mod:`roomba_bt.behaviours.lean`)."""
+        if self.status is not Status.RUNNING:
+            self.initialise()
+        tick_child(self.condition)
+        holds = self.condition.status is Status.SUCCESS
+        if holds == self.until:
+            new_status = Status.SUCCESS if self.until else Status.FAILURE
+            if self.child.status is Status.RUNNING:
+                self.child.stop(Status.INVALID)
+            self.feedback_message = "condition met" if self.until else "condition no longer holds"
+            self.stop(new_status)
+            return
+        self.current_child = self.child
+        tick_child(self.child)
+        status: Status = self.child.status
+        if status is not Status.RUNNING:
+            self.stop(status)
+        self.status = status
 
     def stop(self, new_status: Status = Status.INVALID) -> None:
         if self.child.status is Status.RUNNING:

@@ -1,21 +1,35 @@
-"""py_trees' composites and decorators, without the per-tick costs of debug logging.
+"""py_trees' composites, decorators and leaf tick, without their per-tick overheads.
 
-py_trees formats its debug messages before it knows whether debug logging is on: every
-``stop`` renders two ``Status`` enums through ``Enum.__format__``, and every decorator tick
-rebuilds ``list(Status)`` to check the status its ``update`` returned. A mission ticks every
-15 ms and conditions stop on every tick, so on the virtual clock those formatted-and-dropped
-strings were a large share of the tree's time.
+Two costs of py_trees that a tree ticked every 15 ms pays on every tick, removed here with the
+same steps in the same order:
 
-The classes here are py_trees' own (subclasses: ``isinstance`` checks, ``roomba-bt show``,
-py_trees' display and visitors see no difference) with ``stop`` (and, for decorators that do
-not define their own, ``tick``) replaced by the same steps in the same order, logging only
-when ``py_trees.logging.level`` is DEBUG. A test runs the same trees with the stock classes
-and with these and compares every node's status after every tick.
+* debug messages formatted before anyone knows whether debug logging is on (every ``stop``
+  renders two ``Status`` enums through ``Enum.__format__``, every tick formats its class
+  name, and every leaf and decorator rebuilds ``list(Status)`` to check what ``update``
+  returned). Here they are formatted only when ``py_trees.logging.level`` is DEBUG.
+* ticking through generators. py_trees' ``tick()`` yields every ticked node up through every
+  ancestor's ``yield from``, so a leaf ten levels down is passed up ten times, a generator
+  frame is created per node per tick, and ``tick_once()`` consumes it all only to discard
+  it. :meth:`Direct.tick_once` runs the same steps as plain calls (``tick_direct``): a
+  parent acts when its child's ``tick`` has yielded the child itself, which is the child's
+  last step, so calling the child and then reading its status is the same sequence of
+  ``initialise``/``update``/``terminate``/``stop`` calls and the same statuses.
+
+``tick()`` is still there (the py_trees generator, for visitors and for stepping through a
+tree); ``tick_once()`` takes the direct path. A node that is not :class:`Direct` (a plugin's
+py_trees behaviour), or a subclass that overrides ``tick`` without its own
+``tick_direct``, is ticked by running its generator, as ``tick_once`` always did. The
+classes are py_trees' own (subclasses: ``isinstance`` checks, ``roomba-bt show``, py_trees'
+display and visitors see no difference). A test builds random trees from the stock classes
+and from these and compares every node's status after every tick and the order of every
+leaf's calls.
 """
 
 from __future__ import annotations
 
 import typing
+from itertools import islice
+from typing import Any
 
 import py_trees
 from py_trees.behaviour import Behaviour
@@ -23,6 +37,9 @@ from py_trees.common import Status
 
 _DEBUG = py_trees.logging.Level.DEBUG
 _STATUSES = frozenset(Status)
+_RUNNING, _SUCCESS, _FAILURE, _INVALID = (
+    Status.RUNNING, Status.SUCCESS, Status.FAILURE, Status.INVALID
+)  # fmt: skip
 
 
 def debugging() -> bool:
@@ -43,6 +60,72 @@ def checked_status(node: Behaviour, status: object) -> Status:
     return Status.INVALID
 
 
+def tick_generator(node: Behaviour) -> None:
+    """py_trees' ``tick_once``: run the node's ``tick`` generator to its end."""
+    for _ in node.tick():
+        pass
+
+
+def tick_child(node: Behaviour) -> None:
+    """Tick ``node`` once by the direct path when it has one, by its generator if not."""
+    if isinstance(node, Direct):
+        node.tick_direct()
+    else:
+        tick_generator(node)
+
+
+class Direct:
+    """Mixin: ``tick_once`` by plain calls (``tick_direct``), the same steps as ``tick``.
+
+    A subclass that overrides ``tick`` but not ``tick_direct`` gets the generator path, so
+    its own ``tick`` is what runs."""
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "tick" in vars(cls) and "tick_direct" not in vars(cls):
+            cls.tick_direct = _tick_direct_by_generator  # type: ignore[method-assign]
+
+    def tick_direct(self) -> None:
+        raise NotImplementedError
+
+    def tick_once(self) -> None:
+        self.tick_direct()
+
+
+def _tick_direct_by_generator(self: Direct) -> None:
+    tick_generator(typing.cast(Behaviour, self))
+
+
+class DirectLeaf(Direct):
+    """py_trees' leaf ``tick``/``stop``, logging only when debugging; ``tick_direct`` too."""
+
+    def tick(self) -> typing.Iterator[Behaviour]:
+        self.tick_direct()
+        yield typing.cast(Behaviour, self)
+
+    def tick_direct(self) -> None:
+        node = typing.cast(Behaviour, self)
+        if debugging():
+            node.logger.debug(f"{type(self).__name__}.tick()")
+        if node.status is not _RUNNING:
+            node.initialise()
+        new_status = checked_status(node, node.update())
+        if new_status is not _RUNNING:
+            node.stop(new_status)
+        node.status = new_status
+
+    def stop(self, new_status: Status) -> None:
+        """py_trees' stop, without formatting its debug message (two enum ``__format__``
+        calls) when debug logging is off: every condition stops on every tick."""
+        node = typing.cast(Behaviour, self)
+        if debugging():
+            change = f"{node.status}->{new_status}" if node.status != new_status else new_status
+            node.logger.debug(f"{type(self).__name__}.stop({change})")
+        node.terminate(new_status)
+        node.status = new_status
+        node.iterator = node.tick()
+
+
 class _CompositeStop:
     """``Sequence.stop`` / ``Selector.stop``: the debug line, then ``Composite.stop``."""
 
@@ -53,15 +136,91 @@ class _CompositeStop:
         py_trees.composites.Composite.stop(node, new_status)
 
 
-class Sequence(_CompositeStop, py_trees.composites.Sequence):
-    pass
+class Sequence(Direct, _CompositeStop, py_trees.composites.Sequence):
+    def tick_direct(self) -> None:
+        """py_trees 2.6's ``Sequence.tick``, step for step."""
+        if debugging():
+            self.logger.debug(f"{type(self).__name__}.tick()")
+        children = self.children
+        index = 0
+        if self.status is not _RUNNING:
+            self.current_child = children[0] if children else None
+            for child in children:
+                if child.status is not _INVALID:
+                    child.stop(_INVALID)
+            self.initialise()
+        elif self.memory and self.current_child is not None:
+            index = children.index(self.current_child)
+        else:
+            self.current_child = children[0] if children else None
+        if not children:
+            self.current_child = None
+            self.stop(_SUCCESS)
+            return
+        for child in islice(children, index, None):
+            tick_child(child)
+            status = child.status
+            if status is not _SUCCESS:
+                if not self.memory:  # invalidate the rest: kill dangling runners
+                    for later in islice(children, index + 1, None):
+                        if later.status is not _INVALID:
+                            later.stop(_INVALID)
+                if status is not _RUNNING:
+                    self.stop(status)
+                else:
+                    self.status = status
+                return
+            if index + 1 < len(children):
+                self.current_child = children[index + 1]
+                index += 1
+        self.stop(_SUCCESS)
 
 
-class Selector(_CompositeStop, py_trees.composites.Selector):
-    pass
+class Selector(Direct, _CompositeStop, py_trees.composites.Selector):
+    def tick_direct(self) -> None:
+        """py_trees 2.6's ``Selector.tick``, step for step."""
+        if debugging():
+            self.logger.debug(f"{type(self).__name__}.tick()")
+        children = self.children
+        if self.status is not _RUNNING:
+            self.current_child = children[0] if children else None
+            self.initialise()
+        if not children:
+            self.current_child = None
+            self.stop(_FAILURE)
+            return
+        if self.memory:
+            assert self.current_child is not None
+            index = children.index(self.current_child)
+            for child in islice(children, None, index):
+                if child.status is not _INVALID:
+                    child.stop(_INVALID)
+        else:
+            index = 0
+        previous = self.current_child
+        for child in islice(children, index, None):
+            tick_child(child)
+            status = child.status
+            if status is _RUNNING or status is _SUCCESS:
+                self.current_child = child
+                if previous is None or previous != child:
+                    # it interrupted: invalidate everything at a lower priority
+                    passed = False
+                    for other in children:
+                        if passed and other.status is not _INVALID:
+                            other.stop(_INVALID)
+                        if other == child:
+                            passed = True
+                if child.status is _SUCCESS:
+                    self.stop(child.status)
+                else:
+                    self.status = child.status
+                return
+        self.stop(_FAILURE)
+        self.current_child = children[-1]
 
 
-class Parallel(py_trees.composites.Parallel):
+class Parallel(Direct, py_trees.composites.Parallel):
     def stop(self, new_status: Status = Status.INVALID) -> None:
         if debugging():
             self.logger.debug(f"{type(self).__name__}.stop()[{self.status}->{new_status}]")
@@ -69,6 +228,59 @@ class Parallel(py_trees.composites.Parallel):
             if child.status == Status.RUNNING:
                 child.stop(Status.INVALID)
         py_trees.composites.Composite.stop(self, new_status)
+
+    def tick_direct(self) -> None:
+        """py_trees 2.6's ``Parallel.tick``, step for step."""
+        if debugging():
+            self.logger.debug(f"{type(self).__name__}.tick()")
+        self.validate_policy_configuration()
+        children = self.children
+        if self.status is not _RUNNING:
+            for child in children:
+                if child.status is not _INVALID:
+                    child.stop(_INVALID)
+            self.current_child = None
+            self.initialise()
+        if not children:
+            self.current_child = None
+            self.stop(_SUCCESS)
+            return
+        synchronise = self.policy.synchronise
+        for child in children:
+            if synchronise and child.status is _SUCCESS:
+                continue
+            tick_child(child)
+        new_status = _RUNNING
+        self.current_child = children[-1]
+        policy = self.policy
+        for child in children:
+            if child.status is _FAILURE:
+                self.current_child = child
+                new_status = _FAILURE
+                break
+        else:
+            if isinstance(policy, py_trees.common.ParallelPolicy.SuccessOnAll):
+                if all(c.status is _SUCCESS for c in children):
+                    new_status = _SUCCESS
+                    self.current_child = children[-1]
+            elif isinstance(policy, py_trees.common.ParallelPolicy.SuccessOnOne):
+                for child in reversed(children):
+                    if child.status is _SUCCESS:
+                        new_status = _SUCCESS
+                        self.current_child = child
+                        break
+            elif isinstance(policy, py_trees.common.ParallelPolicy.SuccessOnSelected):
+                if all(c.status is _SUCCESS for c in policy.children):
+                    new_status = _SUCCESS
+                    self.current_child = policy.children[-1]
+            else:
+                raise RuntimeError(
+                    f"this parallel has been configured with an unrecognised policy "
+                    f"[{type(policy)}]"
+                )
+        if new_status is not _RUNNING:
+            self.stop(new_status)
+        self.status = new_status
 
 
 class DecoratorStop:
@@ -86,8 +298,9 @@ class DecoratorStop:
         node.status = new_status
 
 
-class DecoratorTick(DecoratorStop):
-    """``Decorator.tick`` too (for decorators that do not define their own)."""
+class DecoratorTick(Direct, DecoratorStop):
+    """``Decorator.tick`` too (for decorators that do not define their own), and its direct
+    twin."""
 
     def tick(self) -> typing.Iterator[Behaviour]:
         node = typing.cast(py_trees.decorators.Decorator, self)
@@ -101,6 +314,22 @@ class DecoratorTick(DecoratorStop):
             node.stop(new_status)
         node.status = new_status
         yield node
+
+    def tick_direct(self) -> None:
+        decorator_tick_direct(typing.cast(py_trees.decorators.Decorator, self))
+
+
+def decorator_tick_direct(node: py_trees.decorators.Decorator) -> None:
+    """py_trees' ``Decorator.tick`` as calls."""
+    if debugging():
+        node.logger.debug(f"{type(node).__name__}.tick()")
+    if node.status is not _RUNNING:
+        node.initialise()
+    tick_child(node.decorated)
+    new_status = checked_status(node, node.update())
+    if new_status is not _RUNNING:
+        node.stop(new_status)
+    node.status = new_status
 
 
 class Retry(DecoratorTick, py_trees.decorators.Retry):
@@ -119,5 +348,21 @@ class SuccessIsFailure(DecoratorTick, py_trees.decorators.SuccessIsFailure):
     pass
 
 
-class OneShot(DecoratorStop, py_trees.decorators.OneShot):
-    """OneShot keeps its own ``tick`` (it bounces after completion); only ``stop`` is lean."""
+class OneShot(Direct, DecoratorStop, py_trees.decorators.OneShot):
+    """OneShot keeps its own ``tick`` (it bounces after completion); ``stop`` is lean and
+    ``tick_direct`` is that ``tick`` as calls."""
+
+    tick = py_trees.decorators.OneShot.tick
+
+    def tick_direct(self) -> None:
+        if self.final_status:  # completed: py_trees' leaf tick of the decorator itself
+            if debugging():
+                self.logger.debug(f"{type(self).__name__}.tick()")
+            if self.status is not _RUNNING:
+                self.initialise()
+            new_status = checked_status(self, self.update())
+            if new_status is not _RUNNING:
+                self.stop(new_status)
+            self.status = new_status
+        else:
+            decorator_tick_direct(self)

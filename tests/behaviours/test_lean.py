@@ -48,9 +48,11 @@ class ScriptLeaf(Behaviour):
         self.log.append(f"{self.name}.terminate={new_status.name}")
 
 
-class LeanLeaf(ScriptLeaf):
-    tick = RobotBehaviour.tick  # type: ignore[assignment]
-    stop = RobotBehaviour.stop  # type: ignore[assignment]
+class LeanLeaf(lean.DirectLeaf, ScriptLeaf):
+    """A script leaf with :class:`RobotBehaviour`'s tick and stop."""
+
+
+assert issubclass(RobotBehaviour, lean.DirectLeaf)
 
 
 class GiveUpAfter(py_trees.decorators.Decorator):
@@ -75,7 +77,10 @@ class LeanGiveUpAfter(lean.DecoratorTick, GiveUpAfter):
 
 
 def _leaves() -> st.SearchStrategy[Spec]:
-    return st.tuples(st.just("leaf"), st.lists(st.sampled_from(STATUSES), min_size=1, max_size=4))
+    """A leaf: its script, and whether the lean tree gets py_trees' own leaf there (a
+    plugin's behaviour, ticked through its generator inside a direct-ticked tree)."""
+    script = st.lists(st.sampled_from(STATUSES), min_size=1, max_size=4)
+    return st.tuples(st.just("leaf"), script, st.booleans())
 
 
 def _trees() -> st.SearchStrategy[Spec]:
@@ -101,7 +106,7 @@ def build(spec: Spec, stock: bool, log: list[str], counter: list[int]) -> Behavi
     kind = spec[0]
     if kind == "leaf":
         counter[0] += 1
-        cls = ScriptLeaf if stock else LeanLeaf
+        cls = ScriptLeaf if stock or spec[2] else LeanLeaf
         return cls(f"leaf{counter[0]}", tuple(spec[1]), log)
     option, body = spec[1], spec[2]
     if kind in ("sequence", "selector", "parallel"):
@@ -134,12 +139,17 @@ def build(spec: Spec, stock: bool, log: list[str], counter: list[int]) -> Behavi
     return simple[kind][0 if stock else 1](kind, child)
 
 
-def _run(spec: Spec, stock: bool, ticks: int) -> tuple[list[list[str]], list[str]]:
+def _run(
+    spec: Spec, stock: bool, ticks: int, by_generator: bool = False
+) -> tuple[list[list[str]], list[str]]:
     log: list[str] = []
     root = build(spec, stock, log, [0])
     statuses = []
     for _ in range(ticks):
-        root.tick_once()
+        if by_generator:
+            lean.tick_generator(root)  # the lean classes' py_trees generators
+        else:
+            root.tick_once()  # the direct path for the lean classes
         statuses.append([f"{node.name}={node.status.name}" for node in root.iterate()])
     root.stop(Status.INVALID)
     statuses.append([f"{node.name}={node.status.name}" for node in root.iterate()])
@@ -149,7 +159,54 @@ def _run(spec: Spec, stock: bool, ticks: int) -> tuple[list[list[str]], list[str
 @settings(max_examples=300, deadline=None)
 @given(_trees(), st.integers(1, 12))
 def test_lean_trees_tick_exactly_as_py_trees(spec: Spec, ticks: int) -> None:
-    assert _run(spec, True, ticks) == _run(spec, False, ticks)
+    stock = _run(spec, True, ticks)
+    assert _run(spec, False, ticks) == stock
+    assert _run(spec, False, ticks, by_generator=True) == stock
+
+
+def test_a_lean_tree_is_ticked_without_generators() -> None:
+    """``tick_once`` on a lean tree never calls a ``tick`` generator of a lean node."""
+    log: list[str] = []
+    spec: Spec = ("sequence", True, [
+        ("selector", False, [("leaf", [Status.FAILURE], False), ("leaf", [Status.RUNNING], False)]),
+        ("parallel", "all", [("retry", 2, ("leaf", [Status.SUCCESS], False))]),
+        ("oneshot", True, ("inverter", None, ("leaf", [Status.FAILURE], False))),
+    ])  # fmt: skip
+    root = build(spec, False, log, [0])
+    generators: list[str] = []
+    for node in root.iterate():
+
+        def spy(node: Behaviour = node) -> typing.Iterator[Behaviour]:
+            generators.append(node.name)
+            yield node
+
+        node.tick = spy  # type: ignore[method-assign]
+    root.tick_once()
+    assert generators == []
+    assert [n.status for n in root.children] == [Status.RUNNING, Status.INVALID, Status.INVALID]
+
+
+def test_a_subclass_that_overrides_tick_is_ticked_by_its_own_tick() -> None:
+    """A plugin that overrides ``tick`` (py_trees warns against it, but it may) must not be
+    bypassed by the inherited direct path."""
+    calls: list[str] = []
+
+    class Custom(LeanLeaf):
+        def tick(self) -> typing.Iterator[Behaviour]:
+            calls.append("custom tick")
+            self.status = Status.SUCCESS
+            yield self
+
+    class CustomSequence(lean.Sequence):
+        def tick(self) -> typing.Iterator[Behaviour]:
+            calls.append("custom sequence tick")
+            yield from super().tick()
+
+    leaf = Custom("custom", (Status.FAILURE,), [])
+    root = CustomSequence("root", False, [leaf])
+    root.tick_once()
+    assert calls == ["custom sequence tick", "custom tick"]
+    assert leaf.status is Status.SUCCESS and root.status is Status.SUCCESS
 
 
 def test_the_decorators_made_lean_do_not_define_their_own_tick_or_stop() -> None:
