@@ -49,6 +49,8 @@ def debugging() -> bool:
 
 def checked_status(node: Behaviour, status: object) -> Status:
     """``status`` if it is a Status; otherwise INVALID, logged as py_trees does."""
+    if type(status) is Status:  # members only: an Enum with members cannot be subclassed
+        return status
     try:
         if status in _STATUSES:
             return status

@@ -58,10 +58,6 @@ class ParserCounters:
     bytes_fed: int = 0
 
 
-def _adler_sum(data: bytes | bytearray | memoryview) -> int:
-    return zlib.adler32(data, 0) & 0xFFFF
-
-
 class StreamParser:
     """Feed it chunks of bytes; it returns the checked frames they complete, in order.
 
@@ -96,22 +92,26 @@ class StreamParser:
         self._n = self.layout.payload_size
         self._size = self._n + 3
         if profile.checksum_accepts_both:
-            self._ok_sums: frozenset[int] = frozenset({0, STREAM_HEADER})
+            sums = {0, STREAM_HEADER}
         elif profile.checksum_includes_header:
-            self._ok_sums = frozenset({0})
+            sums = {0}
         else:
-            self._ok_sums = frozenset({STREAM_HEADER})
+            sums = {STREAM_HEADER}
         # Header, n-bytes and every id byte checked at once: the candidate read as one
         # big-endian integer, masked to those positions, must equal the layout's template.
         self._mask = self.layout.frame_mask
         self._template = self.layout.frame_template
         self._unpack = self.layout.struct.unpack_from
-        # The checksum test needs the sum of the frame's bytes. zlib.adler32 started at 0 keeps
-        # that sum modulo 65521 in its low 16 bits, computed in C: exact while the sum cannot
-        # reach 65521, i.e. for frames up to 256 bytes (every frame that fits a 15 ms slot).
+        # The checksum test needs the low byte of the sum of the frame's bytes. zlib.adler32
+        # keeps 1 + that sum, modulo 65521, in its low 16 bits, computed in C: exact while the
+        # sum cannot reach 65521, i.e. for frames up to 256 bytes (every frame that fits a
+        # 15 ms slot); the accepted low bytes are shifted by that 1.
+        small = self._size * 255 < 65521
         self._byte_sum: Callable[[bytes | bytearray | memoryview], int] = (
-            _adler_sum if self._size * 255 < 65521 else sum
+            zlib.adler32 if small else sum
         )
+        shift = 1 if small else 0
+        self._ok_sums: frozenset[int] = frozenset((total + shift) & 0xFF for total in sums)
 
     @property
     def pending(self) -> int:

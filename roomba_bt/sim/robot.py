@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 import random
 import struct
+import zlib
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -157,7 +158,9 @@ class Violation:
 class _Packer:
     """Packs a list of packet ids from the flat value list in one ``struct`` call."""
 
-    __slots__ = ("getter", "has_angle", "has_distance", "size", "snapshot", "struct")
+    __slots__ = (
+        "byte_sum", "getter", "has_angle", "has_distance", "size", "snapshot", "struct", "sum_bias",
+    )  # fmt: skip
 
     def __init__(
         self, ids: tuple[int, ...], profile: RobotProfile, stream: bool, noise: bool = False
@@ -186,6 +189,12 @@ class _Packer:
         #: the values need preparing before a frame: distance/angle since last read, noise
         self.snapshot = self.has_distance or self.has_angle or noise
         self.size = self.struct.size
+        # The checksum byte is -(sum of the frame's bytes, less the header's 19 where the
+        # profile's checksum leaves it out) & 0xFF. zlib.adler32 keeps 1 + that sum in its low
+        # 16 bits (modulo 65521: exact for frames up to 256 bytes) and runs in C.
+        small = self.size * 255 < 65521
+        self.byte_sum: Callable[[bytes], int] = zlib.adler32 if small else sum
+        self.sum_bias = (1 if small else 0) + (0 if profile.checksum_includes_header else 19)
 
 
 class _Builtin:
@@ -209,6 +218,29 @@ def _count_offset(spec: CommandSpec) -> int:
             return offset
         offset += arg.size
     raise ValueError(f"{spec.name}: no argument {spec.tail.count_arg!r}")
+
+
+#: What one step of steady wheel speeds does, computed once per (left, right, dt): a plain
+#: tuple (indexed on the step path, where a tuple subscript is the cheapest access)::
+#:
+#:     0 left   1 right   2 dt          the key: wheel speeds (mm/s) and step (s)
+#:     3 dist   4 dtheta  5 dtheta / 2  travel of the centre (mm), turn (rad)
+#:     6 left counts  7 right counts    encoder counts of an unhindered step
+#:     8 packet 58 (stasis) of an unhindered step
+_Motion = tuple[float, float, float, float, float, float, float, float, int]
+
+
+def _motion_of(left: float, right: float, dt: float, half_base: float) -> _Motion:
+    dl = left * dt
+    dr = right * dt
+    dist = (dl + dr) / 2.0
+    dtheta = (dr - dl) / (2.0 * half_base)
+    return (
+        left, right, dt, dist, dtheta, dtheta / 2.0,
+        (dist - dtheta * half_base) / MM_PER_COUNT,
+        (dist + dtheta * half_base) / MM_PER_COUNT,
+        1 if dist > 0.0 else 0,
+    )  # fmt: skip
 
 
 class _DockBeams:
@@ -369,9 +401,9 @@ class Simulator:
         #: the last Drive (137) command, whole: the same bytes again change nothing
         self._last_drive = b""
         self._drive_modes = self._commands[137].modes
-        self._checksum_bias = 0 if profile.checksum_includes_header else 19
         self._plain_output = not (self.faults.corrupt_rate or self.faults.latency)
         self._half_base = profile.wheel_base_mm / 2.0
+        self._motion: _Motion = _motion_of(0.0, 0.0, STEP_SECONDS, self._half_base)
         self._current = 0.0
         self._clearance = 0.0
         self._free_at = (math.inf, math.inf)
@@ -748,7 +780,7 @@ class Simulator:
                 self._next_inject += faults.inject_every
             values = self._snapshot_values(stream) if stream.snapshot else self.values
             body = stream.struct.pack(*stream.getter(values))
-            frame = body + _CHECKSUM_BYTE[(sum(body) - self._checksum_bias) & 0xFF]
+            frame = body + _CHECKSUM_BYTE[(stream.byte_sum(body) - stream.sum_bias) & 0xFF]
             if faults.drop_rate and self._fault_rng.random() < faults.drop_rate:
                 return
             self.frames_sent += 1
@@ -773,18 +805,17 @@ class Simulator:
             self.values[58] = 0
             self._stall_steps = 0
             return
-        half_base = self._half_base
-        dl = left * dt
-        dr = right * dt
-        dist = (dl + dr) / 2.0
-        dtheta = (dr - dl) / (2.0 * half_base)
+        motion = self._motion
+        if motion[0] != left or motion[1] != right or motion[2] != dt:
+            motion = self._motion = _motion_of(left, right, dt, self._half_base)
+        dist, dtheta, half_turn = motion[3], motion[4], motion[5]
         fraction = 1.0
         stuck = self.lifted or self.fallen
         x, y, theta = self.x, self.y, self.theta
         if stuck:
             fraction = 0.0
         elif dist:
-            heading = theta + dtheta / 2.0
+            heading = theta + half_turn
             ux = dist * math.cos(heading)
             uy = dist * math.sin(heading)
             if abs(dist) >= self._clearance and self._blocked(x + ux, y + uy):
@@ -800,6 +831,39 @@ class Simulator:
                 fraction = lo
             self.x = x = x + ux * fraction
             self.y = y = y + uy * fraction
+        v = self.values
+        if fraction == 1.0:
+            # free motion (the usual step): what the wheels did is the same every step
+            self.blocked = False
+            theta = theta + dtheta
+            if theta > _PI:
+                theta -= _TWO_PI
+            elif theta < -_PI:
+                theta += _TWO_PI
+            self.theta = theta
+            self._distance_acc += dist
+            self._angle_acc += dtheta
+            left_counts = self._left_counts = self._left_counts + motion[6]
+            right_counts = self._right_counts = self._right_counts + motion[7]
+            v[58] = motion[8]
+            self._stall_steps = 0
+            self._geometry_dirty = True
+        else:
+            self._move_hindered(dist, dtheta, fraction, stuck)
+            left_counts, right_counts = self._left_counts, self._right_counts
+        lc = int(left_counts) & 0xFFFF
+        rc = int(right_counts) & 0xFFFF
+        if self._encoder_signed:
+            lc = lc - 0x10000 if lc > 0x7FFF else lc
+            rc = rc - 0x10000 if rc > 0x7FFF else rc
+        v[43] = lc
+        v[44] = rc
+        if not self.ticks & 3:
+            self.trace.append(TracePoint(self.time, self.x, self.y, self.theta, self.mode))
+
+    def _move_hindered(self, dist: float, dtheta: float, fraction: float, stuck: bool) -> None:
+        """The rest of a step that a wall cut short, or a lifted or fallen robot's."""
+        half_base = self._half_base
         blocked = self.blocked = fraction < 1.0 and dist != 0.0 and not stuck
         guided = 0.0
         if blocked and dist > 0.0 and self._dock_target is not None:
@@ -808,7 +872,7 @@ class Simulator:
             travelled = dist
         else:
             travelled = dist * fraction
-            theta = theta + dtheta + guided
+            theta = self.theta + dtheta + guided
             if theta > _PI:
                 theta -= _TWO_PI
             elif theta < -_PI:
@@ -817,26 +881,12 @@ class Simulator:
             self._distance_acc += travelled
             self._angle_acc += dtheta
         # Encoders count wheel turns: a blocked robot's wheels stall, a lifted one's spin.
-        left_counts = self._left_counts = (
-            self._left_counts + (travelled - dtheta * half_base) / MM_PER_COUNT
-        )
-        right_counts = self._right_counts = (
-            self._right_counts + (travelled + dtheta * half_base) / MM_PER_COUNT
-        )
-        v = self.values
-        lc = int(left_counts) & 0xFFFF
-        rc = int(right_counts) & 0xFFFF
-        if self._encoder_signed:
-            lc = lc - 0x10000 if lc > 0x7FFF else lc
-            rc = rc - 0x10000 if rc > 0x7FFF else rc
-        v[43] = lc
-        v[44] = rc
-        v[58] = 1 if dist > 0.0 and fraction > 0.5 and not stuck else 0
+        self._left_counts = self._left_counts + (travelled - dtheta * half_base) / MM_PER_COUNT
+        self._right_counts = self._right_counts + (travelled + dtheta * half_base) / MM_PER_COUNT
+        self.values[58] = 1 if dist > 0.0 and fraction > 0.5 and not stuck else 0
         self._stall_steps = self._stall_steps + 1 if blocked else 0
         if fraction or dtheta or guided:
             self._geometry_dirty = True
-        if not self.ticks & 3:
-            self.trace.append(TracePoint(self.time, self.x, self.y, self.theta, self.mode))
 
     def _dock_guides(self) -> float:
         """The dock's guides: pushed forward against the dock close to the contacts, the
@@ -859,7 +909,8 @@ class Simulator:
     def _near_segments(self) -> tuple[Segment, ...]:
         """The walls within reach of any sensor, kept until the robot has moved 0.3 m."""
         nx, ny = self._near_at
-        if (self.x - nx) ** 2 + (self.y - ny) ** 2 > _NEAR_MARGIN2:
+        dx, dy = self.x - nx, self.y - ny
+        if dx * dx + dy * dy > _NEAR_MARGIN2:
             limit = _NEAR_RADIUS_MM**2
             x, y = self.x, self.y
             self._near = tuple(s for s in self.world.solid if closest_point(x, y, s)[2] < limit)
@@ -885,7 +936,8 @@ class Simulator:
         x, y, theta = self.x, self.y, self.theta
         close_lines: list[_Line] = []
         fx, fy = self._free_at
-        if (x - fx) ** 2 + (y - fy) ** 2 < self._free2:
+        dx, dy = x - fx, y - fy
+        if dx * dx + dy * dy < self._free2:
             # Still in the open: no wall was within reach of a sensor plus the distance moved
             # since the walls were last measured, so none touches or shows now either.
             bumps = 0
@@ -979,9 +1031,8 @@ class Simulator:
         """The bumper bits from walls touching the robot; the walls close enough for the light
         bumper's rays go into ``close_lines``; how far the robot is from every wall."""
         nx, ny = self._near_at
-        near = (
-            self._near if (x - nx) ** 2 + (y - ny) ** 2 <= _NEAR_MARGIN2 else self._near_segments()
-        )
+        dx, dy = x - nx, y - ny
+        near = self._near if dx * dx + dy * dy <= _NEAR_MARGIN2 else self._near_segments()
         bumps = 0
         reach2 = _REACH2
         lines = self._lines
@@ -993,7 +1044,8 @@ class Simulator:
             t = ((x - ax) * ex + (y - ay) * ey) / (ex * ex + ey * ey or 1.0)
             t = 0.0 if t < 0.0 else 1.0 if t > 1.0 else t
             cx, cy = ax + t * ex, ay + t * ey
-            d2 = (x - cx) ** 2 + (y - cy) ** 2
+            dx, dy = x - cx, y - cy
+            d2 = dx * dx + dy * dy
             if d2 < nearest2:
                 nearest2 = d2
             if d2 < reach2:

@@ -3,6 +3,8 @@ the reply parser; the bandwidth check."""
 
 from __future__ import annotations
 
+import zlib
+
 import pytest
 
 from roomba_bt.oi import commands as c
@@ -213,11 +215,22 @@ def test_a_stream_too_long_for_its_n_byte_is_refused() -> None:
         StreamParser((*LONGEST, 22))
 
 
-def test_adler_sum_is_the_byte_sum_up_to_256_bytes() -> None:
-    from roomba_bt.oi.stream import _adler_sum
-
+def test_adler32_holds_one_plus_the_byte_sum_up_to_256_bytes() -> None:
+    """The parser and the simulator take a frame's byte sum from ``zlib.adler32``."""
     for data in (bytes(256), b"\xff" * 256, bytes(range(256)), b"\x13\x05" * 100):
-        assert _adler_sum(bytearray(data)) == sum(data)
+        assert zlib.adler32(bytearray(data)) & 0xFFFF == 1 + sum(data)
+
+
+@pytest.mark.parametrize("profile", [CREATE2, ROOMBA500, ROOMBA600])
+@pytest.mark.parametrize("ids", [(100,), LONGEST], ids=["adler32", "sum"])
+def test_frames_checked_on_both_sum_paths(profile: RobotProfile, ids: tuple[int, ...]) -> None:
+    """A right frame passes and a wrong checksum does not, whether the byte sum comes from
+    adler32 (frames up to 256 bytes) or from ``sum`` (the 257-byte longest frame)."""
+    layout = layout_for(ids, profile)
+    frame = layout.stream_frame({pid: 0 for pid in layout.members})
+    parser = StreamParser(ids, profile)
+    assert len(parser.feed(frame)) == 1
+    assert parser.feed(frame[:-1] + bytes([(frame[-1] + 1) & 0xFF])) == []
 
 
 def test_one_whole_frame_per_feed_and_a_frame_sized_non_frame() -> None:
