@@ -107,11 +107,13 @@ class DirectLeaf(Direct):
 
     def tick_direct(self) -> None:
         node = typing.cast(Behaviour, self)
-        if debugging():
+        if py_trees.logging.level is _DEBUG:
             node.logger.debug(f"{type(self).__name__}.tick()")
         if node.status is not _RUNNING:
             node.initialise()
-        new_status = checked_status(node, node.update())
+        new_status = node.update()
+        if type(new_status) is not Status:
+            new_status = checked_status(node, new_status)
         if new_status is not _RUNNING:
             node.stop(new_status)
         node.status = new_status
@@ -120,7 +122,7 @@ class DirectLeaf(Direct):
         """py_trees' stop, without formatting its debug message (two enum ``__format__``
         calls) when debug logging is off: every condition stops on every tick."""
         node = typing.cast(Behaviour, self)
-        if debugging():
+        if py_trees.logging.level is _DEBUG:
             change = f"{node.status}->{new_status}" if node.status != new_status else new_status
             node.logger.debug(f"{type(self).__name__}.stop({change})")
         node.terminate(new_status)
@@ -133,7 +135,7 @@ class _CompositeStop:
 
     def stop(self, new_status: Status = Status.INVALID) -> None:
         node = typing.cast(py_trees.composites.Composite, self)
-        if debugging():
+        if py_trees.logging.level is _DEBUG:
             node.logger.debug(f"{type(self).__name__}.stop()[{node.status}->{new_status}]")
         py_trees.composites.Composite.stop(node, new_status)
 
@@ -141,7 +143,7 @@ class _CompositeStop:
 class Sequence(Direct, _CompositeStop, py_trees.composites.Sequence):
     def tick_direct(self) -> None:
         """py_trees 2.6's ``Sequence.tick``, step for step."""
-        if debugging():
+        if py_trees.logging.level is _DEBUG:
             self.logger.debug(f"{type(self).__name__}.tick()")
         children = self.children
         index = 0
@@ -160,7 +162,10 @@ class Sequence(Direct, _CompositeStop, py_trees.composites.Sequence):
             self.stop(_SUCCESS)
             return
         for child in islice(children, index, None):
-            tick_child(child)
+            if isinstance(child, Direct):  # tick_child, inlined: once per child per tick
+                child.tick_direct()
+            else:
+                tick_generator(child)
             status = child.status
             if status is not _SUCCESS:
                 if not self.memory:  # invalidate the rest: kill dangling runners
@@ -181,7 +186,7 @@ class Sequence(Direct, _CompositeStop, py_trees.composites.Sequence):
 class Selector(Direct, _CompositeStop, py_trees.composites.Selector):
     def tick_direct(self) -> None:
         """py_trees 2.6's ``Selector.tick``, step for step."""
-        if debugging():
+        if py_trees.logging.level is _DEBUG:
             self.logger.debug(f"{type(self).__name__}.tick()")
         children = self.children
         if self.status is not _RUNNING:
@@ -201,7 +206,10 @@ class Selector(Direct, _CompositeStop, py_trees.composites.Selector):
             index = 0
         previous = self.current_child
         for child in islice(children, index, None):
-            tick_child(child)
+            if isinstance(child, Direct):  # tick_child, inlined: once per child per tick
+                child.tick_direct()
+            else:
+                tick_generator(child)
             status = child.status
             if status is _RUNNING or status is _SUCCESS:
                 self.current_child = child
@@ -224,7 +232,7 @@ class Selector(Direct, _CompositeStop, py_trees.composites.Selector):
 
 class Parallel(Direct, py_trees.composites.Parallel):
     def stop(self, new_status: Status = Status.INVALID) -> None:
-        if debugging():
+        if py_trees.logging.level is _DEBUG:
             self.logger.debug(f"{type(self).__name__}.stop()[{self.status}->{new_status}]")
         for child in self.children:
             if child.status == Status.RUNNING:
@@ -233,7 +241,7 @@ class Parallel(Direct, py_trees.composites.Parallel):
 
     def tick_direct(self) -> None:
         """py_trees 2.6's ``Parallel.tick``, step for step."""
-        if debugging():
+        if py_trees.logging.level is _DEBUG:
             self.logger.debug(f"{type(self).__name__}.tick()")
         self.validate_policy_configuration()
         children = self.children
@@ -251,7 +259,10 @@ class Parallel(Direct, py_trees.composites.Parallel):
         for child in children:
             if synchronise and child.status is _SUCCESS:
                 continue
-            tick_child(child)
+            if isinstance(child, Direct):  # tick_child, inlined: once per child per tick
+                child.tick_direct()
+            else:
+                tick_generator(child)
         new_status = _RUNNING
         self.current_child = children[-1]
         policy = self.policy
@@ -290,7 +301,7 @@ class DecoratorStop:
 
     def stop(self, new_status: Status) -> None:
         node = typing.cast(py_trees.decorators.Decorator, self)
-        if debugging():
+        if py_trees.logging.level is _DEBUG:
             node.logger.debug(f"{type(self).__name__}.stop({new_status})")
         node.terminate(new_status)
         if new_status == Status.INVALID:
@@ -306,7 +317,7 @@ class DecoratorTick(Direct, DecoratorStop):
 
     def tick(self) -> typing.Iterator[Behaviour]:
         node = typing.cast(py_trees.decorators.Decorator, self)
-        if debugging():
+        if py_trees.logging.level is _DEBUG:
             node.logger.debug(f"{type(self).__name__}.tick()")
         if node.status != Status.RUNNING:
             node.initialise()
@@ -323,12 +334,18 @@ class DecoratorTick(Direct, DecoratorStop):
 
 def decorator_tick_direct(node: py_trees.decorators.Decorator) -> None:
     """py_trees' ``Decorator.tick`` as calls."""
-    if debugging():
+    if py_trees.logging.level is _DEBUG:
         node.logger.debug(f"{type(node).__name__}.tick()")
     if node.status is not _RUNNING:
         node.initialise()
-    tick_child(node.decorated)
-    new_status = checked_status(node, node.update())
+    child = node.decorated
+    if isinstance(child, Direct):
+        child.tick_direct()
+    else:
+        tick_generator(child)
+    new_status = node.update()
+    if type(new_status) is not Status:
+        new_status = checked_status(node, new_status)
     if new_status is not _RUNNING:
         node.stop(new_status)
     node.status = new_status
@@ -358,7 +375,7 @@ class OneShot(Direct, DecoratorStop, py_trees.decorators.OneShot):
 
     def tick_direct(self) -> None:
         if self.final_status:  # completed: py_trees' leaf tick of the decorator itself
-            if debugging():
+            if py_trees.logging.level is _DEBUG:
                 self.logger.debug(f"{type(self).__name__}.tick()")
             if self.status is not _RUNNING:
                 self.initialise()
