@@ -945,7 +945,8 @@ class Simulator:
         else:
             bumps = self._sense_walls(x, y, theta, close_lines)
         bumps |= self._event_bump
-        if self.lifted or self.fallen:
+        down = self.lifted or self.fallen
+        if down:
             bumps |= 12
         v[7] = bumps
         if bumps != self._prev_bumps:
@@ -1007,7 +1008,7 @@ class Simulator:
         v[45] = light_bits
         # cliffs
         cliffs = 0
-        if self.lifted or self.fallen:
+        if down:
             cliffs = 15
         elif self.world.drops:
             for i, a in enumerate(_CLIFF_ANGLES):
@@ -1025,7 +1026,20 @@ class Simulator:
             self._prev_cliffs = cliffs
         if not self.ticks & 1 or self._ir_stale:
             self._sense_ir()
-        self._check_docked()
+        # on the contacts: within the dock's tolerances of the docked pose, not lifted
+        beams = self._beams
+        if beams is not None:
+            ex, ey = x - beams.target_x, y - beams.target_y
+            docked = (
+                ex * ex + ey * ey <= beams.contact2
+                and abs((theta - beams.target_theta + _PI) % _TWO_PI - _PI) <= beams.angle_tolerance
+                and not self.lifted
+            )
+            if docked != self.docked:
+                self.docked = docked
+                self.events.append(
+                    SimEvent(self.time, "docked" if docked else "undocked", "", x, y)
+                )
 
     def _sense_walls(self, x: float, y: float, theta: float, close_lines: list[_Line]) -> int:
         """The bumper bits from walls touching the robot; the walls close enough for the light
@@ -1067,23 +1081,6 @@ class Simulator:
         self._free_at = (x, y)
         self._free2 = free * free if free > 0.0 else 0.0
         return bumps
-
-    def _check_docked(self) -> None:
-        beams = self._beams
-        if beams is None:
-            return
-        was_docked = self.docked
-        ex, ey = self.x - beams.target_x, self.y - beams.target_y
-        self.docked = (
-            ex * ex + ey * ey <= beams.contact2
-            and abs((self.theta - beams.target_theta + _PI) % _TWO_PI - _PI)
-            <= beams.angle_tolerance
-            and not self.lifted
-        )
-        if self.docked != was_docked:
-            self.events.append(
-                SimEvent(self.time, "docked" if self.docked else "undocked", "", self.x, self.y)
-            )
 
     def _sense_ir(self) -> None:
         """The IR receivers. A character takes tens of milliseconds to send, so they are
