@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from roomba_bt.evaluate.report import _two_worker_makespan
+from roomba_bt.evaluate.report import two_worker_makespan
 
 
 @pytest.mark.parametrize(
@@ -18,4 +18,4 @@ from roomba_bt.evaluate.report import _two_worker_makespan
     ],
 )
 def test_two_workers_taking_episodes_in_order(durations: list[float], makespan: float) -> None:
-    assert _two_worker_makespan(durations) == makespan
+    assert two_worker_makespan(durations) == makespan
