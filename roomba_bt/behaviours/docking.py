@@ -45,7 +45,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import py_trees
 from py_trees.common import Status
@@ -89,9 +89,8 @@ def current_stage() -> str | None:
     return stage if isinstance(stage, str) else None
 
 
-@dataclass(frozen=True, slots=True)
-class DockView:
-    """What one frame says about the dock."""
+class DockView(NamedTuple):
+    """What one frame says about the dock (a named tuple: one is built every tick)."""
 
     omni: IRCharacter
     left: IRCharacter
@@ -122,24 +121,31 @@ class DockView:
     def facing(self) -> bool:
         return self.left.from_dock and self.right.from_dock
 
-    def _chars(self) -> tuple[IRCharacter, ...]:
-        # The omni receiver sits on the robot's axis: where it is, the robot is. The side
-        # receivers are 4 cm off it and answer only when the omni sees nothing.
-        if self.omni.from_dock:
-            return (self.omni,)
-        return tuple(c for c in (self.left, self.right) if c.from_dock)
+    def _beams(self) -> tuple[bool, bool, bool]:
+        """(red buoy, green buoy, force field) seen. The omni receiver sits on the robot's
+        axis: where it is, the robot is. The side receivers are 4 cm off it and count only
+        when the omni sees nothing of the dock."""
+        omni, left, right = self
+        if omni.from_dock:
+            return omni.red_buoy, omni.green_buoy, omni.force_field
+        by_left, by_right = left.from_dock, right.from_dock
+        return (
+            (by_left and left.red_buoy) or (by_right and right.red_buoy),
+            (by_left and left.green_buoy) or (by_right and right.green_buoy),
+            (by_left and left.force_field) or (by_right and right.force_field),
+        )
 
     @property
     def red(self) -> bool:
-        return any(c.red_buoy for c in self._chars())
+        return self._beams()[0]
 
     @property
     def green(self) -> bool:
-        return any(c.green_buoy for c in self._chars())
+        return self._beams()[1]
 
     @property
     def force_field(self) -> bool:
-        return any(c.force_field for c in self._chars())
+        return self._beams()[2]
 
     @property
     def side(self) -> int:

@@ -16,7 +16,7 @@ since any robot may meet either dock. All 256 values are decoded once at import.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from enum import Enum
 
 
@@ -69,10 +69,13 @@ class IRCharacter:
     lighthouse_id: int | None = None
     lighthouse_beam: LighthouseBeam | None = None
     remote_button: str | None = None
+    #: sent by a home base (500/600 series or Discovery); stored, not computed: docking
+    #: reads it for three receivers on every tick
+    from_dock: bool = field(init=False, repr=False, compare=False)
 
-    @property
-    def from_dock(self) -> bool:
-        return self.source in (IRSource.DOCK, IRSource.DISCOVERY_DOCK)
+    def __post_init__(self) -> None:
+        dock = self.source is IRSource.DOCK or self.source is IRSource.DISCOVERY_DOCK
+        object.__setattr__(self, "from_dock", dock)
 
     @property
     def any_buoy(self) -> bool:
