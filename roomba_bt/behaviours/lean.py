@@ -85,17 +85,15 @@ class Direct:
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
         if "tick" in vars(cls) and "tick_direct" not in vars(cls):
-            cls.tick_direct = _tick_direct_by_generator  # type: ignore[method-assign]
+            cls.tick_direct = Direct.tick_direct  # type: ignore[method-assign]
 
     def tick_direct(self) -> None:
-        raise NotImplementedError
+        """Overridden by each class with the calls its ``tick`` makes; by default the
+        generator itself."""
+        tick_generator(typing.cast(Behaviour, self))
 
     def tick_once(self) -> None:
         self.tick_direct()
-
-
-def _tick_direct_by_generator(self: Direct) -> None:
-    tick_generator(typing.cast(Behaviour, self))
 
 
 class DirectLeaf(Direct):

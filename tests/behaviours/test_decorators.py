@@ -1,12 +1,20 @@
-"""Mission-time decorators and the while/until guard, on py_trees' own test behaviours."""
+"""Mission-time decorators and the while/until guard, on py_trees' own test behaviours.
+
+Every test runs twice: ticked by ``tick_once`` (the direct path the runtime takes) and through
+the py_trees generator ``tick`` (what visitors and stepping see); both must agree.
+"""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import py_trees
+import pytest
 from py_trees.behaviours import Failure, Running, StatusQueue, Success
 from py_trees.common import Status
 
 from roomba_bt.behaviours import decorators as d
+from roomba_bt.behaviours import lean
 from roomba_bt.behaviours.declare import read_key
 from roomba_bt.robot.interface import StubRobot
 
@@ -17,11 +25,24 @@ def ready(node: py_trees.behaviour.Behaviour, robot: StubRobot) -> py_trees.beha
     return node
 
 
+Tick = Callable[[py_trees.behaviour.Behaviour], None]
+TICK: dict[str, Tick] = {"tick": lean.tick_child}
+
+
+@pytest.fixture(autouse=True, params=["direct", "generator"])
+def tick_path(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> None:
+    def direct(node: py_trees.behaviour.Behaviour) -> None:
+        assert isinstance(node, lean.Direct)  # our decorators all have the direct path
+        node.tick_once()
+
+    monkeypatch.setitem(TICK, "tick", direct if request.param == "direct" else lean.tick_generator)
+
+
 def run(node: py_trees.behaviour.Behaviour, robot: StubRobot, ticks: int) -> list[Status]:
     out = []
     for _ in range(ticks):
         robot.set_frame({})
-        node.tick_once()
+        TICK["tick"](node)
         out.append(node.status)
     return out
 
