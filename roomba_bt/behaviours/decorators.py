@@ -20,7 +20,7 @@ from roomba_bt.behaviours.lean import (
     DecoratorStop,
     DecoratorTick,
     Direct,
-    decorator_tick_direct,
+    behaviour_tick_direct,
     tick_child,
 )
 from roomba_bt.robot.interface import RobotHandle
@@ -164,7 +164,7 @@ class ForEach(Direct, DecoratorStop, py_trees.decorators.Decorator):
         if not self.items:
             self.status = Status.SUCCESS
             return
-        decorator_tick_direct(self)
+        behaviour_tick_direct(self, self.decorated)
 
     def update(self) -> Status:
         status: Status = self.decorated.status

@@ -104,17 +104,7 @@ class DirectLeaf(Direct):
         yield typing.cast(Behaviour, self)
 
     def tick_direct(self) -> None:
-        node = typing.cast(Behaviour, self)
-        if py_trees.logging.level is _DEBUG:
-            node.logger.debug(f"{type(self).__name__}.tick()")
-        if node.status is not _RUNNING:
-            node.initialise()
-        new_status = node.update()
-        if type(new_status) is not Status:
-            new_status = checked_status(node, new_status)
-        if new_status is not _RUNNING:
-            node.stop(new_status)
-        node.status = new_status
+        behaviour_tick_direct(typing.cast(Behaviour, self))
 
     def stop(self, new_status: Status) -> None:
         """py_trees' stop, without formatting its debug message (two enum ``__format__``
@@ -327,20 +317,22 @@ class DecoratorTick(Direct, DecoratorStop):
         yield node
 
     def tick_direct(self) -> None:
-        decorator_tick_direct(typing.cast(py_trees.decorators.Decorator, self))
+        node = typing.cast(py_trees.decorators.Decorator, self)
+        behaviour_tick_direct(node, node.decorated)
 
 
-def decorator_tick_direct(node: py_trees.decorators.Decorator) -> None:
-    """py_trees' ``Decorator.tick`` as calls."""
+def behaviour_tick_direct(node: Behaviour, decorated: Behaviour | None = None) -> None:
+    """py_trees' ``Behaviour.tick`` as calls, or ``Decorator.tick`` when ``decorated`` is
+    given (the child is ticked between ``initialise`` and ``update``)."""
     if py_trees.logging.level is _DEBUG:
         node.logger.debug(f"{type(node).__name__}.tick()")
     if node.status is not _RUNNING:
         node.initialise()
-    child = node.decorated
-    if isinstance(child, Direct):
-        child.tick_direct()
-    else:
-        tick_generator(child)
+    if decorated is not None:
+        if isinstance(decorated, Direct):
+            decorated.tick_direct()
+        else:
+            tick_generator(decorated)
     new_status = node.update()
     if type(new_status) is not Status:
         new_status = checked_status(node, new_status)
@@ -373,13 +365,6 @@ class OneShot(Direct, DecoratorStop, py_trees.decorators.OneShot):
 
     def tick_direct(self) -> None:
         if self.final_status:  # completed: py_trees' leaf tick of the decorator itself
-            if py_trees.logging.level is _DEBUG:
-                self.logger.debug(f"{type(self).__name__}.tick()")
-            if self.status is not _RUNNING:
-                self.initialise()
-            new_status = checked_status(self, self.update())
-            if new_status is not _RUNNING:
-                self.stop(new_status)
-            self.status = new_status
+            behaviour_tick_direct(self)
         else:
-            decorator_tick_direct(self)
+            behaviour_tick_direct(self, self.decorated)
