@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 EXTRAS ?= test,plot,bench
 
-.PHONY: run test lint typecheck bench routines venv clean
+.PHONY: run test lint typecheck bench icount routines venv clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -34,6 +34,11 @@ test: $(STAMP) lint typecheck
 
 bench: $(STAMP)
 	$(BIN)/python -m bench
+
+# Instructions per simulator step and per mission tick (callgrind; the machine-independent
+# companion of the timings in docs/performance.md; about 3 min).
+icount: $(STAMP)
+	$(BIN)/python -m bench.icount
 
 # The routines' success rates and speed into docs/routines.md (about 15-20 min on 2 cores).
 routines: $(STAMP)
