@@ -42,11 +42,6 @@ _RUNNING, _SUCCESS, _FAILURE, _INVALID = (
 )  # fmt: skip
 
 
-def debugging() -> bool:
-    """True when py_trees debug logging is on (its ``Logger.debug`` would print)."""
-    return py_trees.logging.level is _DEBUG
-
-
 def checked_status(node: Behaviour, status: object) -> Status:
     """``status`` if it is a Status; otherwise INVALID, logged as py_trees does."""
     if type(status) is Status:  # members only: an Enum with members cannot be subclassed

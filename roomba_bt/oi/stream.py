@@ -50,6 +50,21 @@ def check_bandwidth(packet_ids: Iterable[int], baud: int) -> int:
     return size
 
 
+ByteSum = Callable[[bytes | bytearray | memoryview], int]
+
+
+def byte_sum_for(frame_size: int) -> tuple[ByteSum, int]:
+    """How to sum a frame's bytes for its checksum, and what that way adds to the sum.
+
+    A checksum needs only the low byte of the sum. ``zlib.adler32`` keeps 1 + the sum,
+    modulo 65521, in its low 16 bits and runs in C: exact while the sum cannot reach 65521,
+    i.e. for frames up to 256 bytes (every frame that fits a 15 ms slot). Longer frames are
+    summed by ``sum``. The parser and the simulator both take their sums from here."""
+    if frame_size * 255 < 65521:
+        return zlib.adler32, 1
+    return sum, 0
+
+
 @dataclass(slots=True)
 class ParserCounters:
     frames: int = 0
@@ -102,15 +117,8 @@ class StreamParser:
         self._mask = self.layout.frame_mask
         self._template = self.layout.frame_template
         self._unpack = self.layout.struct.unpack_from
-        # The checksum test needs the low byte of the sum of the frame's bytes. zlib.adler32
-        # keeps 1 + that sum, modulo 65521, in its low 16 bits, computed in C: exact while the
-        # sum cannot reach 65521, i.e. for frames up to 256 bytes (every frame that fits a
-        # 15 ms slot); the accepted low bytes are shifted by that 1.
-        small = self._size * 255 < 65521
-        self._byte_sum: Callable[[bytes | bytearray | memoryview], int] = (
-            zlib.adler32 if small else sum
-        )
-        shift = 1 if small else 0
+        # the accepted low bytes, shifted by what the byte-sum function adds
+        self._byte_sum, shift = byte_sum_for(self._size)
         self._ok_sums: frozenset[int] = frozenset((total + shift) & 0xFF for total in sums)
 
     @property

@@ -24,7 +24,6 @@ from __future__ import annotations
 import math
 import random
 import struct
-import zlib
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -38,6 +37,7 @@ from roomba_bt.oi.odometry import MM_PER_COUNT, OLD_FIRMWARE_ANGLE_FACTOR
 from roomba_bt.oi.opcodes import COMMANDS, CommandSpec
 from roomba_bt.oi.packets import GROUPS, VALID_PACKET_IDS, expand
 from roomba_bt.oi.profiles import CREATE2, RobotProfile
+from roomba_bt.oi.stream import byte_sum_for
 from roomba_bt.sim.faults import NO_FAULTS, Faults
 from roomba_bt.sim.geometry import (
     Segment,
@@ -190,11 +190,9 @@ class _Packer:
         self.snapshot = self.has_distance or self.has_angle or noise
         self.size = self.struct.size
         # The checksum byte is -(sum of the frame's bytes, less the header's 19 where the
-        # profile's checksum leaves it out) & 0xFF. zlib.adler32 keeps 1 + that sum in its low
-        # 16 bits (modulo 65521: exact for frames up to 256 bytes) and runs in C.
-        small = self.size * 255 < 65521
-        self.byte_sum: Callable[[bytes], int] = zlib.adler32 if small else sum
-        self.sum_bias = (1 if small else 0) + (0 if profile.checksum_includes_header else 19)
+        # profile's checksum leaves it out) & 0xFF; the sum taken as the parser takes it.
+        self.byte_sum, added = byte_sum_for(self.size)
+        self.sum_bias = added + (0 if profile.checksum_includes_header else 19)
 
 
 class _Builtin:

@@ -11,7 +11,13 @@ from roomba_bt.oi import commands as c
 from roomba_bt.oi.errors import BandwidthError, EncodeError
 from roomba_bt.oi.frames import layout_for, stream_frame_size
 from roomba_bt.oi.profiles import CREATE2, ROOMBA500, ROOMBA600, RobotProfile
-from roomba_bt.oi.stream import ReplyParser, StreamParser, check_bandwidth, stream_budget
+from roomba_bt.oi.stream import (
+    ReplyParser,
+    StreamParser,
+    byte_sum_for,
+    check_bandwidth,
+    stream_budget,
+)
 
 SPEC_600 = bytes([19, 5, 29, 2, 25, 13, 0, 163])  # checksum covers the header
 SPEC_500 = bytes([19, 5, 29, 2, 25, 13, 0, 182])  # checksum leaves the header out
@@ -219,6 +225,16 @@ def test_adler32_holds_one_plus_the_byte_sum_up_to_256_bytes() -> None:
     """The parser and the simulator take a frame's byte sum from ``zlib.adler32``."""
     for data in (bytes(256), b"\xff" * 256, bytes(range(256)), b"\x13\x05" * 100):
         assert zlib.adler32(bytearray(data)) & 0xFFFF == 1 + sum(data)
+
+
+@pytest.mark.parametrize("size", [1, 80, 256, 257, 300])
+def test_byte_sum_for_gives_the_low_byte_of_the_sum(size: int) -> None:
+    """What the parser and the simulator sum frames with: exact in the low byte at every
+    size, adler32 up to 256 bytes, ``sum`` beyond."""
+    summer, added = byte_sum_for(size)
+    assert (summer is zlib.adler32) == (size <= 256)
+    for data in (b"\xff" * size, bytes(i * 7 & 0xFF for i in range(size))):
+        assert (summer(data) - added) & 0xFF == sum(data) & 0xFF
 
 
 @pytest.mark.parametrize("profile", [CREATE2, ROOMBA500, ROOMBA600])
