@@ -51,7 +51,7 @@ import py_trees
 from py_trees.common import Status
 
 from roomba_bt.behaviours.declare import Action, Param, declare
-from roomba_bt.behaviours.units import ANGLE, BOOL, DISTANCE, DURATION, SPEED
+from roomba_bt.behaviours.units import ANGLE, BOOL, DISTANCE, DURATION, SPEED, enum
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.ir import IR_CHARACTERS, IRCharacter
@@ -250,6 +250,13 @@ def _hazard(frame: SensorFrame) -> str | None:
 
 _CELL_MM = 400.0
 _DIRECTIONS = 12
+#: wall following: the wall counts as lost after this much path without a signal (more
+#: than the arc around the end of a wall at a door)
+_WALL_LOST_MM = 1100.0
+#: a bump while following: back off, turn this far away from the wall, follow on; after
+#: this many bumps on one wall it is left for a crossing of the room
+_UNWEDGE_TURN = math.radians(30)
+_FOLLOW_BUMPS = 6
 
 
 @declare(
@@ -262,8 +269,10 @@ _DIRECTIONS = 12
         Param("leg", DISTANCE, default="2 m", minimum=200,
               doc="longest straight leg before choosing a new heading"),
         Param("follow", DISTANCE, default="4 m", minimum=0,
-              doc="how far it follows a wall (right-hand, then left-hand) before crossing "
-                  "the room"),
+              doc="how far it follows a wall before crossing the room"),
+        Param("wall_side", enum("right", "left"), default="right", from_blackboard=False,
+              doc="which side walls are kept on while following them (always the same: "
+                  "a one-handed follower goes round a room and through its doors)"),
         Param("timeout", DURATION, default="5min", minimum=1,
               doc="FAILURE if no dock beam is seen by then"),
     ),
@@ -276,10 +285,14 @@ class DockSearch(_DockingAction):
     SUCCESS (wheels halted) as soon as any receiver sees a dock character. Wandering drives
     straight legs toward the heading whose next 1.6 m crosses the least visited cells of a
     0.4 m grid kept in the odometry frame (headings toward obstacles met before are
-    penalised). A wall met on the way is followed (docks stand against walls), right-hand
-    then left-hand on the next one, for up to ``follow`` or until it leads through cells
-    visited before. Bumps, cliffs and virtual walls make it back off and choose again; the
-    spin happens once per leaf, not again when a retry restarts it after a cliff.
+    penalised). A wall met on the way is followed (docks stand against walls), always on
+    the same side (``wall_side``): a one-handed follower goes round a room and, at a door,
+    round the end of the wall into the next room, where alternating hands sent it back the
+    way it came. It follows for up to ``follow`` or until the wall leads through cells followed
+    before (an island: a bed, a table). A bump while following backs off, turns 30 deg away
+    from the wall and follows on; after six bumps on one wall it crosses the room instead.
+    Bumps, cliffs and virtual walls met while crossing make it back off and choose again;
+    the spin happens once per leaf, not again when a retry restarts it after a cliff.
     """
 
     stage = "search"
@@ -361,6 +374,9 @@ class DockSearch(_DockingAction):
             ):
                 self._start_follow()  # found a wall to follow (after crossing some floor)
             else:
+                # a bump while following (a door jamb, a chair leg) is part of the same wall:
+                # back off and follow on with the same hand
+                self._resume_follow = self._phase == "follow" and hazard == "bump"
                 self._phase = "back"
                 self._back_until = snap.time + (0.8 if hazard == "cliff" else 0.4)
                 self._avoid = odo.theta_rad
@@ -390,6 +406,25 @@ class DockSearch(_DockingAction):
             if snap.time < self._back_until:
                 self.wheels(-150, -150)
                 return _RUN
+            if self._resume_follow:
+                # turn away from the wall side, then follow on with the same hand; a wall
+                # that keeps bumping (a corner too tight for the robot) is given up
+                self._resume_follow = False
+                self._follow_bumps += 1
+                if self._follow_bumps <= _FOLLOW_BUMPS:
+                    self._phase = "unwedge"
+                    self.mark_turn()
+                    self._wall_seen_at = None
+                else:
+                    self._want_wall = False  # cross the room instead
+        if self._phase == "unwedge":
+            if abs(self.turned()) < _UNWEDGE_TURN:
+                hand = self._follow_side
+                self.wheels(-120 * hand, 120 * hand)
+                return _RUN
+            self._phase = "follow"
+            return _RUN
+        if self._phase == "back":
             if self._want_wall and frame[45] and not frame[7] & 3:
                 self._start_follow()
                 return _RUN
@@ -423,14 +458,17 @@ class DockSearch(_DockingAction):
         self._phase = "follow"
         self._wall_seen_at = None
         self._follow_lost = False
-        self._follow_side = -self._follow_side  # right-hand, then left-hand, ...
+        self._follow_side = 1 if self.value("wall_side") == "right" else -1
         self._follow_cells: set[tuple[int, int]] = set()
         self._old_cells = 0
+        self._follow_bumps = 0
         self.mark_distance()
 
     _wall_seen_at: float | None = None
     _follow_lost = False
-    _follow_side = -1
+    _resume_follow = False
+    _follow_bumps = 0
+    _follow_side = 1  # +1: the wall on the right
     _old_cells = 0
 
     def _follow_is_new(self) -> bool:
@@ -457,14 +495,16 @@ class DockSearch(_DockingAction):
         if front > 300 or frame[7] & 3:
             self.wheels(-120 * hand, 120 * hand)  # wall ahead: turn away from the wall side
         elif side == 0 and front_side == 0:
-            # lost it (an outside corner): arc toward the wall side
+            # lost it (an outside corner, or the end of a wall at a door): arc toward the
+            # wall side; rounding a jamb takes about 0.9 m of path without a signal
             if hand > 0:
                 self.wheels(speed, speed * 0.35)
             else:
                 self.wheels(speed * 0.35, speed)
+            path = self.snapshot.odometry.path_mm
             if self._wall_seen_at is None:
-                self._wall_seen_at = self.snapshot.odometry.path_mm
-            elif self.snapshot.odometry.path_mm - self._wall_seen_at > 600.0:
+                self._wall_seen_at = path
+            elif path - self._wall_seen_at > _WALL_LOST_MM:
                 self._follow_lost = True  # no wall there after all
         else:
             self._wall_seen_at = None

@@ -65,7 +65,7 @@ def experiments(scale: float) -> list[Experiment]:
     out = [
         Experiment("dock-empty", "dock, empty room, within 1.5 m, any heading", dock,
                    "empty-room", n(200), {"within_m": 1.5}, "dock-empty-room.png"),
-        Experiment("dock-apartment", "dock, apartment, anywhere in the start region", dock,
+        Experiment("dock-apartment", "dock, apartment, anywhere (every room, any heading)", dock,
                    "apartment", n(100), {}, "dock-apartment.png"),
     ]  # fmt: skip
     for i, (label, overrides) in enumerate(BEAM_VARIANTS.items()):

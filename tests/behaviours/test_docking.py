@@ -79,6 +79,97 @@ def test_search_gives_up_naming_its_stage(robot: StubRobot, make: Make) -> None:
     assert search.feedback_message == "search: no dock beam seen in 1 s"
 
 
+LIGHT_AHEAD = 0b000100  # packet 45: centre-left light bumper
+#: encoder counts for a 30 deg turn in place: 30 deg x 117.5 mm / 0.4446 mm per count, + margin
+TURN_30_COUNTS = 140
+
+
+def follow_a_wall(robot: StubRobot, make: Make, **params: object) -> RobotBehaviour:
+    """A search that has met a wall ahead and started following it."""
+    search = make(DockSearch, spin_first=False, **params)
+    robot.set_frame(frame())
+    search.tick_once()
+    ahead = frame()
+    ahead.update({45: LIGHT_AHEAD, 48: 1000})
+    robot.set_frame(ahead)
+    search.tick_once()
+    return search
+
+
+def last_wheels(robot: StubRobot) -> tuple[int, int]:
+    """(left, right) mm/s of the last Drive Direct this tick (its bytes are right, left)."""
+    sent = [c for c in robot.flush() if c.spec.name == "drive_direct"]
+    assert sent, "no Drive Direct this tick"
+    right, left = sent[-1].args
+    return left, right
+
+
+@pytest.mark.parametrize(
+    ("side", "side_packet", "spin"), [("right", 51, (-120, 120)), ("left", 46, (120, -120))]
+)
+def test_search_follows_every_wall_on_the_same_side(
+    robot: StubRobot, make: Make, side: str, side_packet: int, spin: tuple[int, int]
+) -> None:
+    """A wall ahead: turn away from the chosen side (keep the wall there). The next wall is
+    kept on the same side too: a one-handed follower goes round a room and out of its door;
+    changing hands at every wall sent it back the way it came."""
+    search = follow_a_wall(robot, make, wall_side=side)
+    assert last_wheels(robot) == spin
+    for _ in range(2):
+        search._start_follow()  # type: ignore[attr-defined]
+        robot.set_frame({**frame(), side_packet: 600})  # along the wall
+        search.tick_once()
+        robot.flush()
+        robot.set_frame({**frame(), 45: LIGHT_AHEAD, 48: 1000})  # the next wall ahead
+        search.tick_once()
+        assert last_wheels(robot) == spin
+
+
+def bump_and_back_off(robot: StubRobot, search: RobotBehaviour) -> None:
+    bumped = frame()
+    bumped[7] = 1
+    robot.set_frame(bumped)
+    search.tick_once()
+    assert last_wheels(robot) == (-150, -150)  # backing off
+    robot.set_frame(frame(), ticks=30)  # 0.45 s later: backed off
+    search.tick_once()
+
+
+def test_a_bump_while_following_turns_away_and_follows_on(robot: StubRobot, make: Make) -> None:
+    """A door jamb, a chair leg: back off, turn 30 deg away from the wall, follow on with
+    the same hand (it used to start over with the other hand, and at a jamb bumped back and
+    forth between the two)."""
+    search = follow_a_wall(robot, make)
+    robot.flush()
+    bump_and_back_off(robot, search)
+    assert last_wheels(robot) == (-120, 120)  # turning left, away from a wall on the right
+    turned = frame()
+    turned.update({43: -TURN_30_COUNTS & 0xFFFF, 44: TURN_30_COUNTS})
+    robot.set_frame(turned)
+    search.tick_once()
+    robot.set_frame({**turned, 51: 600})  # the wall on the right again
+    search.tick_once()
+    left, right = last_wheels(robot)
+    assert left > 0 and right > 0  # following on, forward
+    assert search._follow_side == 1  # type: ignore[attr-defined]
+
+
+def test_a_wall_that_keeps_bumping_is_left_for_the_open_floor(robot: StubRobot, make: Make) -> None:
+    """Six bumps on one wall are followed on; the seventh sends the robot across the room
+    (a corner too tight for it must not hold the search until the time limit)."""
+    search = follow_a_wall(robot, make)
+    counts = 0
+    for bump in range(7):
+        bump_and_back_off(robot, search)
+        if bump < 6:
+            assert last_wheels(robot) == (-120, 120), bump
+            counts += TURN_30_COUNTS
+            robot.set_frame({**frame(), 43: -counts & 0xFFFF, 44: counts})
+            search.tick_once()
+    assert search._phase == "turn"  # type: ignore[attr-defined]
+    assert not search._want_wall  # type: ignore[attr-defined]
+
+
 def test_drive_on_fails_on_a_bump_outside_the_buoys(robot: StubRobot, make: Make) -> None:
     drive_on = make(DockDriveOn)
     ff = dock_character(red=False, green=False, force_field=True)
