@@ -36,11 +36,11 @@ bench: $(STAMP)
 	$(BIN)/python -m bench
 
 # Instructions per simulator step and per mission tick (callgrind; the machine-independent
-# companion of the timings in docs/performance.md; about 3 min).
+# companion of the timings in docs/performance.md; 1 to 3 min on 2 cores).
 icount: $(STAMP)
 	$(BIN)/python -m bench.icount
 
-# The routines' success rates and speed into docs/routines.md (about 15-20 min on 2 cores).
+# The routines' success rates and speed into docs/routines.md (2 to 7 min on 2 cores).
 routines: $(STAMP)
 	$(BIN)/python -m roomba_bt.evaluate.report
 

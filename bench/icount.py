@@ -10,7 +10,7 @@ in fresh interpreters, with and without the work, so start-up and imports cancel
 * whole episodes of a shipped mission (``roomba_bt.evaluate``, simulator included):
   (count for the episodes - count for none) / ticks.
 
-Slow (valgrind runs Python about 50x slower): about 3 minutes on 2 cores. Not part of
+Slow (valgrind runs Python about 50x slower): 1 to 3 minutes on 2 cores. Not part of
 ``make bench``; the figures go into ``docs/performance.md`` beside the timings.
 """
 
