@@ -417,6 +417,12 @@ class DockSearch(_DockingAction):
                     self._wall_seen_at = None
                 else:
                     self._want_wall = False  # cross the room instead
+            if self._phase == "back":
+                if self._want_wall and frame[45] and not frame[7] & 3:
+                    self._start_follow()
+                    return _RUN
+                self._target = self._choose_heading(self._avoid)
+                self._phase = "turn"
         if self._phase == "unwedge":
             if abs(self.turned()) < _UNWEDGE_TURN:
                 hand = self._follow_side
@@ -424,12 +430,6 @@ class DockSearch(_DockingAction):
                 return _RUN
             self._phase = "follow"
             return _RUN
-        if self._phase == "back":
-            if self._want_wall and frame[45] and not frame[7] & 3:
-                self._start_follow()
-                return _RUN
-            self._target = self._choose_heading(self._avoid)
-            self._phase = "turn"
         if self._phase == "turn":
             err = math.remainder(self._target - odo.theta_rad, math.tau)
             if abs(err) < math.radians(4) and frame[45] & _LIGHT_AHEAD:
