@@ -499,6 +499,7 @@ class Compiler:
                             f"parameter {name!r} has no default: give it with -p {name}=VALUE"
                         )
                     )
+                    env[name] = Bound(vtype, UNKNOWN, "?")  # reported once, not at every use
                     continue
                 env[name] = Bound(vtype, default, _text(value, vloc, default))
         for name, text in overrides.items():
@@ -515,6 +516,7 @@ class Compiler:
                 value = vtype.parse(_cli_value(text, vtype))
             except UnitError as exc:
                 self.ctx.error(key_loc.at(f"parameter {name}={text} (from -p): {exc}"))
+                env[name] = Bound(vtype, UNKNOWN, "?")  # reported once, not at every use
                 continue
             env[name] = Bound(vtype, value, text)
         return env

@@ -123,3 +123,36 @@ def test_baud_is_checked_per_mission(errors_of: Errors) -> None:
     assert errors_of(text) == []
     [error] = errors_of(text, baud=19200)
     assert "do not fit the stream" in error
+
+
+@pytest.mark.parametrize(
+    ("params", "first"),
+    [
+        ({}, "2:3: parameter 't' has no default: give it with -p t=VALUE"),
+        ({"t": "soon"}, "2:3: parameter t=soon (from -p): expected a duration"),
+    ],
+    ids=["no-default", "bad-override"],
+)
+def test_a_parameter_without_a_value_is_reported_once(
+    errors_of: Errors, params: dict[str, str], first: str
+) -> None:
+    """Its uses (a leaf, a subtree argument, a substitution in a text) are not reported
+    again as unknown parameters: one mistake, one message."""
+    errors = errors_of(
+        """
+        parameters:
+          t: {type: duration}
+        subtrees:
+          pause:
+            parameters: {d: {type: duration}}
+            tree: {wait: "${d}"}
+        tree:
+          sequence:
+            - wait: "${t}"
+            - subtree: {id: pause, d: "${t}"}
+            - log: "waited ${t}"
+        """,
+        params,
+    )
+    assert len(errors) == 1, errors
+    assert errors[0].startswith(first)
