@@ -126,6 +126,12 @@ def eval_command(args: argparse.Namespace) -> int:
     dock = parse_dock(args.dock)
     if isinstance(dock, str):
         return _error(dock)
+    if args.plot:
+        from roomba_bt.evaluate.plot import check_plot_target
+
+        problem = check_plot_target(args.plot)
+        if problem is not None:
+            return _error(f"--plot {args.plot}: {problem}")
     specs = episode_specs(
         args.mission,
         world=args.world,

@@ -59,5 +59,19 @@ def test_plot_without_matplotlib_is_a_clear_error(
     code = main(["eval", BUMP, "--runs", "1", "-p", "duration=1s", "--no-progress",
                  "--plot", str(tmp_path / "x.png")])  # fmt: skip
     assert code == 2
-    assert "needs matplotlib" in capsys.readouterr().err
+    out, err = capsys.readouterr()
+    assert "needs matplotlib" in err
+    assert "success" not in out  # said before any episode ran
     assert not (tmp_path / "x.png").exists()
+
+
+def test_plot_into_a_missing_directory_is_refused_before_running(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    target = tmp_path / "no" / "such" / "x.png"
+    code = main(["eval", BUMP, "--runs", "1", "-p", "duration=1s", "--no-progress",
+                 "--plot", str(target)])  # fmt: skip
+    assert code == 2
+    out, err = capsys.readouterr()
+    assert f"--plot {target}: no such directory: {target.parent}" in err
+    assert "success" not in out
