@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from roomba_bt.cli.arguments import baud_rate
 from roomba_bt.cli.exit_codes import ExitCode
 from roomba_bt.oi.profiles import PROFILES, get_profile
 
@@ -62,7 +63,7 @@ def _common(parser: argparse.ArgumentParser) -> None:
         help="set a mission parameter, e.g. -p speed=250mm/s (repeatable)",
     )  # fmt: skip
     parser.add_argument("--profile", choices=sorted(PROFILES), default="create2")
-    parser.add_argument("--baud", type=int, default=115200, help="baud rate (default 115200)")
+    parser.add_argument("--baud", type=baud_rate, default=115200, help="baud rate (default 115200)")
 
 
 def _params(items: list[str]) -> dict[str, str] | None:

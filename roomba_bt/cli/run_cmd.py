@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from roomba_bt.cli.arguments import baud_rate, seconds
 from roomba_bt.cli.exit_codes import ExitCode
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.profiles import PROFILES, RobotProfile, get_profile
@@ -26,7 +27,7 @@ def register(sub: Any) -> None:
         "--port", help="serial device or URL (socket://host:port, rfc2217://, loop://)"
     )
     run.add_argument("--profile", choices=sorted(PROFILES), default="create2")
-    run.add_argument("--baud", type=int, default=115200, help="baud rate (default 115200)")
+    run.add_argument("--baud", type=baud_rate, default=115200, help="baud rate (default 115200)")
     run.add_argument("--world", help="simulator world: a shipped name or a YAML path")
     run.add_argument("--seed", type=int, default=0, help="simulator seed (default 0)")
     run.add_argument(
@@ -44,7 +45,7 @@ def register(sub: Any) -> None:
         "--end-in", choices=("passive", "stop"), default="passive",
         help="leave the robot in Passive (Start) or, where the profile has it, Stop (173)",
     )  # fmt: skip
-    run.add_argument("--watchdog", type=float, default=0.1, help="stream watchdog, seconds")
+    run.add_argument("--watchdog", type=seconds, default=0.1, help="stream watchdog, seconds")
     run.add_argument(
         "--display", choices=("auto", "tree", "log", "none"), default="auto",
         help="live tree on a terminal (auto), one line per status change (log), or nothing",

@@ -7,14 +7,26 @@ import sys
 import time
 from typing import Any
 
+from roomba_bt.cli.arguments import baud_rate
 from roomba_bt.cli.exit_codes import ExitCode
+from roomba_bt.oi.frames import stream_frame_size
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import PROFILES, get_profile
+from roomba_bt.oi.stream import stream_budget
 
-#: Group 100 carries every packet (80 bytes, 7-58): one frame is 83 bytes, within the 172-byte
-#: budget at 115200 baud but not at 19200, where group 6 (52 bytes, 7-42) is asked instead.
-ALL_PACKETS_GROUP = 100
-SMALL_GROUP = 6
+#: The groups tried, most packets first: the first whose stream frame fits the baud rate's
+#: 15 ms budget is shown. Group 100 (every packet, 80 data bytes, an 84-byte frame) fits at
+#: 57600 and 115200; group 6 (7-42) at 38400; group 1 (7-16: bumps, cliffs, walls, buttons,
+#: a 14-byte frame) down to 9600. Below that no stream fits.
+GROUPS = (100, 6, 1)
+
+
+def group_for(baud: int) -> int | None:
+    """The largest sensor group a stream can carry at ``baud``, or None."""
+    for group in GROUPS:
+        if stream_frame_size((group,)) <= stream_budget(baud):
+            return group
+    return None
 
 
 def register(sub: Any) -> None:
@@ -24,7 +36,7 @@ def register(sub: Any) -> None:
     )
     parser.add_argument("--port", help="serial device or URL; default: the built-in simulator")
     parser.add_argument("--profile", choices=sorted(PROFILES), default="create2")
-    parser.add_argument("--baud", type=int, default=115200)
+    parser.add_argument("--baud", type=baud_rate, default=115200)
     parser.add_argument("--world", help="simulator world (without --port)")
     parser.add_argument("--count", type=int, default=0, help="stop after N refreshes (0: run)")
     parser.add_argument("--rate", type=float, default=5.0, help="refreshes per second")
@@ -64,7 +76,14 @@ def sensors_command(args: argparse.Namespace) -> int:
     from roomba_bt.robot.safety import sigterm_raises
 
     profile = get_profile(args.profile)
-    group = ALL_PACKETS_GROUP if args.baud >= 57600 else SMALL_GROUP
+    group = group_for(args.baud)
+    if group is None:
+        print(
+            f"roomba-bt sensors: --baud {args.baud}: no sensor stream fits in 15 ms at this "
+            f"rate (at most {stream_budget(args.baud)} bytes a frame); allowed: 9600 or more",
+            file=sys.stderr,
+        )
+        return ExitCode.INVALID
     try:
         if args.port:
             connection = Connection.open(args.port, args.baud, profile)
