@@ -18,6 +18,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from roomba_bt.cli.arguments import plot_file
 from roomba_bt.cli.exit_codes import ExitCode
 from roomba_bt.oi.profiles import PROFILES
 
@@ -35,7 +36,8 @@ def register(sub: Any) -> None:
     ev.add_argument("--runs", type=int, default=20, help="number of episodes (default 20)")
     ev.add_argument("--seed", type=int, default=0, help="first seed (default 0)")
     ev.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
-    ev.add_argument("--plot", metavar="FILE.png", help="draw every trajectory (matplotlib)")
+    ev.add_argument("--plot", metavar="FILE.png", type=plot_file,
+                    help="draw every trajectory (matplotlib)")  # fmt: skip
     ev.add_argument(
         "--within", type=float, metavar="METRES",
         help="start within this distance of the docked pose (default: the world's region)",
@@ -126,12 +128,6 @@ def eval_command(args: argparse.Namespace) -> int:
     dock = parse_dock(args.dock)
     if isinstance(dock, str):
         return _error(dock)
-    if args.plot:
-        from roomba_bt.evaluate.plot import check_plot_target
-
-        problem = check_plot_target(args.plot)
-        if problem is not None:
-            return _error(f"--plot {args.plot}: {problem}")
     specs = episode_specs(
         args.mission,
         world=args.world,

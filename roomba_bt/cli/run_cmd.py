@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from roomba_bt.cli.arguments import baud_rate, seconds
+from roomba_bt.cli.arguments import baud_rate, output_file, plot_file, seconds
 from roomba_bt.cli.exit_codes import ExitCode
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.profiles import PROFILES, RobotProfile, get_profile
@@ -38,8 +38,15 @@ def register(sub: Any) -> None:
         help="set a mission parameter, e.g. -p speed=250mm/s (repeatable)",
     )  # fmt: skip
     run.add_argument("--timeout", help="give up after this much mission time, e.g. 90s or 5min")
-    run.add_argument("--record", metavar="FILE", help="write every byte in and out, timestamped")
-    run.add_argument("--plot", metavar="FILE.png", help="simulator only: plot the trajectory")
+    run.add_argument(
+        "--record",
+        metavar="FILE",
+        type=output_file,
+        help="write every byte in and out, timestamped",
+    )
+    run.add_argument(
+        "--plot", metavar="FILE.png", type=plot_file, help="simulator only: plot the trajectory"
+    )
     run.add_argument("--fast", action="store_true", help="simulator on the virtual clock")
     run.add_argument(
         "--end-in", choices=("passive", "stop"), default="passive",
@@ -226,6 +233,8 @@ def _plot(simulator: Any, path: str) -> str:
         plot_run(simulator, path)
     except ImportError as exc:
         return f"--plot needs matplotlib (pip install 'roomba-bt[plot]'): {exc}"
+    except OSError as exc:
+        return f"--plot {path}: {exc.strerror or exc}"
     return f"trajectory written to {path}"
 
 

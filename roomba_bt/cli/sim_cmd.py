@@ -16,6 +16,7 @@ import time
 from types import FrameType
 from typing import Any
 
+from roomba_bt.cli.arguments import plot_file, seconds
 from roomba_bt.cli.exit_codes import ExitCode
 
 
@@ -36,8 +37,10 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--old-firmware-angle", action="store_true", help="Angle (20) as firmware <= 3.4.0"
     )
-    parser.add_argument("--duration", type=float, help="stop after this many seconds")
-    parser.add_argument("--plot", metavar="FILE.png", help="write the trajectory on exit")
+    parser.add_argument("--duration", type=seconds, help="stop after this many seconds")
+    parser.add_argument(
+        "--plot", metavar="FILE.png", type=plot_file, help="write the trajectory on exit"
+    )
     faults = parser.add_argument_group("faults")
     faults.add_argument("--corrupt-rate", type=float, default=0.0, help="per-byte probability")
     faults.add_argument("--drop-rate", type=float, default=0.0, help="per-frame probability")
@@ -134,5 +137,7 @@ def run_sim(args: argparse.Namespace) -> int:
             plot_run(simulator, args.plot)
         except ImportError as exc:
             return _fail(str(exc), ExitCode.INVALID)
+        except OSError as exc:
+            return _fail(f"--plot {args.plot}: {exc.strerror or exc}", ExitCode.INVALID)
         print(f"roomba-bt sim: trajectory written to {args.plot}", file=sys.stderr)
     return ExitCode.OK

@@ -9,7 +9,6 @@ which the CLI turns into a clear message.
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -33,21 +32,6 @@ def _pyplot() -> Any:
             f"--plot needs matplotlib, an optional extra: pip install 'roomba-bt[plot]' ({exc})"
         ) from None
     return plt
-
-
-def check_plot_target(path: str | Path) -> str | None:
-    """Why a plot could not be written to ``path`` (checked before an evaluation starts, so
-    that a long run does not end in this error), or None."""
-    try:
-        _pyplot()
-    except PlotUnavailable as exc:
-        return str(exc)
-    folder = Path(path).resolve().parent
-    if not folder.is_dir():
-        return f"no such directory: {folder}"
-    if not os.access(folder, os.W_OK):
-        return f"directory {folder} is not writable"
-    return None
 
 
 def plot_trajectories(

@@ -40,6 +40,8 @@ def test_bad_seconds(text: str) -> None:
         (["run", "missions/dock.yaml", "--baud", "12"], "--baud: found 12"),
         (["validate", "missions/dock.yaml", "--baud", "0"], "--baud: found 0"),
         (["sensors", "--baud", "-1"], "--baud: found -1"),
+        (["run", "missions/dock.yaml", "--record", "/no/such/dir/run.log"], "no directory"),
+        (["sim", "--pty", "--duration", "-1"], "--duration: found -1"),
     ],
 )
 def test_commands_refuse_them_with_exit_2(

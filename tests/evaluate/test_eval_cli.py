@@ -55,23 +55,27 @@ def test_bad_input_exits_2_with_a_message(
 def test_plot_without_matplotlib_is_a_clear_error(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
+    """Said when the arguments are read, before any episode runs."""
     monkeypatch.setitem(sys.modules, "matplotlib", None)
-    code = main(["eval", BUMP, "--runs", "1", "-p", "duration=1s", "--no-progress",
-                 "--plot", str(tmp_path / "x.png")])  # fmt: skip
-    assert code == 2
+    with pytest.raises(SystemExit) as exit_:
+        main(["eval", BUMP, "--runs", "1", "-p", "duration=1s", "--no-progress",
+              "--plot", str(tmp_path / "x.png")])  # fmt: skip
+    assert exit_.value.code == 2
     out, err = capsys.readouterr()
     assert "needs matplotlib" in err
-    assert "success" not in out  # said before any episode ran
+    assert "success" not in out
     assert not (tmp_path / "x.png").exists()
 
 
+@pytest.mark.parametrize("command", [["eval", BUMP, "--runs", "1"], ["run", BUMP, "--fast"],
+                                     ["sim", "--pty", "--duration", "0"]])  # fmt: skip
 def test_plot_into_a_missing_directory_is_refused_before_running(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], command: list[str]
 ) -> None:
     target = tmp_path / "no" / "such" / "x.png"
-    code = main(["eval", BUMP, "--runs", "1", "-p", "duration=1s", "--no-progress",
-                 "--plot", str(target)])  # fmt: skip
-    assert code == 2
+    with pytest.raises(SystemExit) as exit_:
+        main([*command, "--plot", str(target)])
+    assert exit_.value.code == 2
     out, err = capsys.readouterr()
-    assert f"--plot {target}: no such directory: {target.parent}" in err
-    assert "success" not in out
+    assert f"--plot: found '{target}': there is no directory {target.parent}" in err
+    assert out == ""
