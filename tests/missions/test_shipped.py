@@ -209,6 +209,26 @@ def test_patrol_docks_when_the_battery_runs_low(seed: int) -> None:
     assert result.docked and result.charging
 
 
+def test_patrol_in_the_apartment_keeps_moving_and_out_of_the_kitchen_door() -> None:
+    """The apartment has a gap narrower than the robot (sofa and wall), a virtual wall across
+    the kitchen door and a staircase. The patrol used to push into the gap for 3.8 hours
+    (wall_follow ignored bumps), and to drive through the virtual wall; the stairs' edge
+    needs more than 10 cliff retries a lap."""
+    result = run_episode(
+        EpisodeSpec(str(MISSIONS / "patrol.yaml"), "apartment", random_start=False,
+                    timeout_s=900, trace_every=1)
+    )  # fmt: skip
+    assert result.outcome == "success", result.reason
+    assert result.longest_stall_s < 60.0
+    assert result.cliffs > 0 and not result.fell
+    path = result.trajectory
+    crossings = [
+        (a, b) for a, b in itertools.pairwise(path)
+        if (a[0] - 5.5) * (b[0] - 5.5) < 0 and 4.0 < (a[1] + b[1]) / 2 < 4.9
+    ]  # fmt: skip
+    assert not crossings, crossings[:3]
+
+
 def test_bump_and_turn_leaves_every_wall_within_two_ticks() -> None:
     result = run_episode(
         # seed 2 starts in the kitchen: 15 bumps in 45 s (table, counter, walls)

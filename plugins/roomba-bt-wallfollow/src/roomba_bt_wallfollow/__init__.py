@@ -10,15 +10,20 @@ controller turns the error ``target - signal`` into a difference of wheel speeds
 
 and sends them as Drive Direct (145) ``[145][right hi][right lo][left hi][left lo]``. An
 obstacle ahead (the centre signals 48 / 49 above ``front_threshold``) turns it left in
-place, so it follows an inside corner. Time is the mission clock (``snapshot.time``); the
+place, so it follows an inside corner. A bump (packet 7) that the light bumper did not see
+coming (a gap narrower than the robot, a chair leg) backs it off 5 cm and turns it left by
+``bump_turn`` before the controller takes over again: without that, it pushed into the
+wedge for as long as the mission ran. Time is the mission clock (``snapshot.time``); the
 behaviour never blocks and halts the wheels when it ends or is preempted.
 """
 
 from __future__ import annotations
 
+import math
+
 from py_trees.common import Status
 
-from roomba_bt.behaviours import DURATION, FLOAT, INT, SPEED, Action, Param, declare
+from roomba_bt.behaviours import ANGLE, DURATION, FLOAT, INT, SPEED, Action, Param, declare
 from roomba_bt.oi import commands
 from roomba_bt.oi.modes import DRIVING_MODES
 from roomba_bt.oi.opcodes import COMMANDS_BY_NAME
@@ -30,6 +35,11 @@ __version__ = "0.1.0"
 _WHEEL = COMMANDS_BY_NAME["drive_direct"].args[0]  # -500..500 mm/s, from the opcode table
 _SIGNAL_MAX = PACKETS[51].maximum
 RIGHT, FRONT_RIGHT, CENTER_LEFT, CENTER_RIGHT = 51, 50, 48, 49
+BUMPS = 7  # bits 0 right, 1 left
+#: after a bump: back off this far (mm), giving up after this long (s) if something is behind
+_BACK_MM, _BACK_S = 50.0, 1.0
+#: and the turn gives up after this long (s): a robot held in place must not spin forever
+_TURN_S = 4.0
 
 
 @declare(
@@ -46,9 +56,11 @@ RIGHT, FRONT_RIGHT, CENTER_LEFT, CENTER_RIGHT = 51, 50, 48, 49
               doc="mm/s per unit of signal error change per second"),
         Param("front_threshold", INT, default=800, minimum=1, maximum=_SIGNAL_MAX,
               doc="centre signal (48/49) above which it turns away from a wall ahead"),
+        Param("bump_turn", ANGLE, default="45deg", minimum=0, maximum=180,
+              doc="on a bump: back off 5 cm, then turn left (away from the wall) this far"),
         Param("duration", DURATION, minimum=0, doc="SUCCESS after this long; default: never"),
     ),
-    reads=(CENTER_LEFT, CENTER_RIGHT, FRONT_RIGHT, RIGHT),
+    reads=(BUMPS, CENTER_LEFT, CENTER_RIGHT, FRONT_RIGHT, RIGHT),
     sends=(145,),
 )  # fmt: skip
 class WallFollow(Action):
@@ -64,6 +76,29 @@ class WallFollow(Action):
         self._start_time = self.snapshot.time
         self._previous_error: float | None = None
         self._previous_time = self._start_time
+        self._recovery: tuple[str, float, float] | None = None  # phase, odometry mark, time
+
+    def recovery_speeds(self, bumped: bool) -> tuple[int, int] | None:
+        """(left, right) while getting away from a bump (back off, then turn left), or
+        None when the controller drives."""
+        snap = self.snapshot
+        odo = snap.odometry
+        speed = round(self.number("speed"))
+        if bumped and self._recovery is None:
+            self._recovery = ("back", odo.distance_mm, snap.time)
+        if self._recovery is None:
+            return None
+        phase, mark, since = self._recovery
+        if phase == "back":
+            if mark - odo.distance_mm < _BACK_MM and snap.time - since < _BACK_S:
+                return -speed, -speed
+            self._recovery = phase, mark, since = ("turn", odo.angle_rad, snap.time)
+        turned = odo.angle_rad - mark
+        if turned < math.radians(self.number("bump_turn")) and snap.time - since < _TURN_S:
+            return -speed, speed
+        self._recovery = None
+        self._previous_error = None  # the controller starts afresh
+        return None
 
     def wheel_speeds(self, signal: int, front: int, now: float) -> tuple[int, int]:
         """(left, right) in mm/s for this tick's signals: the controller, testable alone."""
@@ -94,8 +129,12 @@ class WallFollow(Action):
         if snap.mode not in DRIVING_MODES:
             return Status.RUNNING  # the mode model would refuse it; wait for Safe/Full
         frame = snap.frame
-        front = max(frame[CENTER_LEFT], frame[CENTER_RIGHT])
-        left, right = self.wheel_speeds(frame[RIGHT], front, snap.time)
+        recovering = self.recovery_speeds(bool(frame[BUMPS] & 3))
+        if recovering is not None:
+            left, right = recovering
+        else:
+            front = max(frame[CENTER_LEFT], frame[CENTER_RIGHT])
+            left, right = self.wheel_speeds(frame[RIGHT], front, snap.time)
         self.send(commands.drive_direct(right, left))
         self._started_motion = True
         return Status.RUNNING
