@@ -269,7 +269,7 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
         robot = self.robot
         if robot is None:
             raise RuntimeError(f"behaviour {self.name!r} has no robot: call setup(robot=...)")
-        robot.outbox.send(command)
+        robot.outbox.send(command, self)
 
     def value(self, name: str) -> Any:
         """The parameter ``name`` for this run (blackboard references resolved at start)."""
@@ -321,9 +321,11 @@ class Action(RobotBehaviour):
 
     def terminate(self, new_status: py_trees.common.Status) -> None:
         """However the action ends (success, failure, or preempted: INVALID), wheels it
-        set turning are stopped: ``[137][0][0][0][0]`` queued in this tick's outbox."""
+        set turning are stopped: ``[137][0][0][0][0]`` queued in this tick's outbox, unless
+        another behaviour already queued a wheel command in this tick (the branch that
+        preempted this one: its Drive stands)."""
         if self.moves and self.robot is not None and self._started_motion:
-            self.robot.outbox.send(halt())
+            self.robot.outbox.send_stop(halt(), self)
         self._started_motion = False
 
 

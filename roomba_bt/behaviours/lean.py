@@ -337,7 +337,12 @@ def behaviour_tick_direct(node: Behaviour, decorated: Behaviour | None = None) -
 
 
 class Retry(DecoratorTick, py_trees.decorators.Retry):
-    pass
+    def update(self) -> Status:
+        status = super().update()
+        if status is Status.FAILURE:  # py_trees: "final failure [status: 3 failure from 3]"
+            attempts = "attempt" if self.failures == 1 else "attempts"
+            self.feedback_message = f"gave up after {self.failures} failed {attempts}"
+        return status
 
 
 class Inverter(DecoratorTick, py_trees.decorators.Inverter):

@@ -113,22 +113,42 @@ class Outbox:
     without a channel (mode changes, songs, queries) are all kept, in order. The order of the
     flush is the order in which each surviving command was first queued in this tick, so a
     ``safe`` queued before a ``drive`` is written before it.
+
+    A behaviour that ends stops what it set moving with :meth:`send_stop`, which yields to a
+    command another behaviour queued on that channel in this tick. A fallback that switches
+    to a higher-priority branch ticks the new branch first and stops the old one after it:
+    the old one's halt must not replace the new one's first Drive (it did, and the robot
+    stood still while the new branch believed it was turning).
     """
 
-    __slots__ = ("_queue",)
+    __slots__ = ("_queue", "_senders")
 
     def __init__(self) -> None:
         self._queue: dict[object, Command] = {}
+        self._senders: dict[object, object] = {}
 
-    def send(self, command: Command) -> None:
+    def send(self, command: Command, sender: object = None) -> None:
         channel = command.spec.channel
         key: object = channel if channel is not None else (command.spec.opcode, len(self._queue))
         self._queue[key] = command
+        if channel is not None:
+            self._senders[channel] = sender
+
+    def send_stop(self, command: Command, sender: object) -> None:
+        """Queue ``command`` (a halt) from ``sender``, which is ending, unless another sender
+        already queued a command on its channel in this tick."""
+        channel = command.spec.channel
+        if channel is not None and channel in self._queue:
+            other = self._senders.get(channel)
+            if other is not None and other is not sender:
+                return
+        self.send(command, sender)
 
     def drain(self) -> list[Command]:
         """The commands to write, in order; empties the outbox."""
         out = list(self._queue.values())
         self._queue.clear()
+        self._senders.clear()
         return out
 
     def pending(self) -> list[Command]:
@@ -142,6 +162,7 @@ class Outbox:
 
     def clear(self) -> None:
         self._queue.clear()
+        self._senders.clear()
 
 
 class RobotHandle(Protocol):

@@ -67,6 +67,40 @@ def test_memory_can_be_chosen_explicitly(compile_text: Compile) -> None:
     assert r.tick(wall=0) is F
 
 
+def test_a_preempting_branch_keeps_its_first_drive(compile_text: Compile) -> None:
+    """A reactive fallback ticks the higher-priority branch first and stops the running one
+    after it: the stopped branch's halt must not replace the new branch's Drive in that
+    tick's outbox. It did: the new branch's drive was lost and, sending only on change, it
+    never sent it again (a patrol's dock stood still at a low battery)."""
+    r = run(
+        compile_text,
+        """
+        tree:
+          sequence:
+            - mode: safe
+            - reactive_fallback:
+                - sequence: [{bump: any}, {drive: {velocity: -100 mm/s}}]
+                - drive: {velocity: 200 mm/s}
+        """,
+    )
+    assert r.tick() is R
+    assert r.sent()[-1] == [137, 0, 200, 0x80, 0]  # the lower branch drives
+    assert r.tick() is R
+    assert r.sent() == []  # and keeps driving
+    assert r.tick(bump=1) is R
+    assert r.sent() == [[137, 0xFF, 0x9C, 0x80, 0]]  # the new branch's drive, not a halt
+
+
+def test_an_ending_drive_is_still_halted(compile_text: Compile) -> None:
+    """Its own command in the same tick does not keep it moving: the halt replaces it."""
+    r = run(compile_text, "tree: {sequence: [{mode: safe}, {drive: {velocity: 200 mm/s, "
+                          "duration: 30ms}}, {wait: 1s}]}")  # fmt: skip
+    statuses = r.ticks(4)
+    assert statuses[-1] is R
+    sent = [c for c in r.sent() if c[0] == 137]
+    assert sent[-1] == [137, 0, 0, 0, 0]
+
+
 def test_fallback_tries_alternatives(compile_text: Compile) -> None:
     r = run(compile_text, "tree: {fallback: [{bump: left}, {bump: right}]}")
     assert r.tick(bump=1) is S

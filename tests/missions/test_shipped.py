@@ -229,6 +229,19 @@ def test_patrol_in_the_apartment_keeps_moving_and_out_of_the_kitchen_door() -> N
     assert not crossings, crossings[:3]
 
 
+def test_a_patrol_that_gives_up_says_why() -> None:
+    """Two cliff retries a lap are not enough for the apartment's stairs: the failure is the
+    patrol's retry giving up, not the low-battery check beside it (which the report named
+    while that branch was tried last)."""
+    result = run_episode(
+        EpisodeSpec(str(MISSIONS / "patrol.yaml"), "apartment", random_start=False,
+                    params=(("cliff_retries", "2"),), timeout_s=300)
+    )  # fmt: skip
+    assert result.outcome == "failure"
+    assert "retry: gave up after 2 failed attempts" in result.reason
+    assert "battery" not in result.reason
+
+
 def test_bump_and_turn_leaves_every_wall_within_two_ticks() -> None:
     result = run_episode(
         # seed 2 starts in the kitchen: 15 bumps in 45 s (table, counter, walls)

@@ -1,9 +1,11 @@
-"""The failure a user reads first: the failed leaf, else the deepest failed node's message."""
+"""The failure a user reads first: down the path of failed children from the root, the
+failed leaf on it, else the deepest message on it."""
 
 from __future__ import annotations
 
 import py_trees
 
+from roomba_bt.behaviours.lean import Retry
 from roomba_bt.runtime.loop import _failure_reason
 
 FAILURE = py_trees.common.Status.FAILURE
@@ -27,3 +29,32 @@ def test_when_the_leaves_were_reset_the_deepest_message_is_used() -> None:
     leaf.stop(py_trees.common.Status.INVALID)  # what a parallel or guard does to its children
     attempt.stop(py_trees.common.Status.INVALID)
     assert _failure_reason(root).startswith("retry: final failure")
+
+
+def test_the_path_of_the_failure_is_followed_not_the_last_failed_leaf() -> None:
+    """A patrol (second branch) gives up after its retries; the low-battery check (first
+    branch) also failed, and was the only failed leaf left: it used to be the reason."""
+    low = py_trees.composites.Sequence(
+        "low battery", memory=True, children=[py_trees.behaviours.Failure(name="battery")]
+    )
+    leaf = py_trees.behaviours.Failure(name="cliff")
+    attempt = py_trees.composites.Sequence("attempt", memory=True, children=[leaf])
+    retry = Retry("retry", child=attempt, num_failures=2)
+    patrol = py_trees.composites.Sequence("patrol", memory=True, children=[retry])
+    root = py_trees.composites.Selector("mission", memory=False, children=[low, patrol])
+    root.tick_once()
+    root.tick_once()
+    assert root.status == FAILURE
+    leaf.stop(py_trees.common.Status.INVALID)  # reset by a parent, as a retry or guard does
+    attempt.stop(py_trees.common.Status.INVALID)
+    assert _failure_reason(root) == "retry: gave up after 2 failed attempts"
+
+
+def test_a_flipped_status_is_named_without_its_canned_message() -> None:
+    inverter = py_trees.decorators.Inverter(
+        "nothing may be ahead", child=py_trees.behaviours.Success(name="wall")
+    )
+    root = py_trees.composites.Sequence("mission", memory=True, children=[inverter])
+    root.tick_once()
+    assert root.status == FAILURE
+    assert _failure_reason(root) == "nothing may be ahead"

@@ -1,0 +1,50 @@
+"""The outbox of one tick: last command per channel wins; an ending behaviour's halt yields
+to another behaviour's command on that channel."""
+
+from __future__ import annotations
+
+from roomba_bt.oi import commands
+from roomba_bt.robot.interface import Outbox
+
+OLD, NEW = object(), object()  # two behaviours
+
+
+def test_last_command_per_channel_wins_in_first_queued_order() -> None:
+    box = Outbox()
+    box.send(commands.safe(), NEW)
+    box.send(commands.drive(100, 0), NEW)
+    box.send(commands.drive(200, 0), NEW)
+    assert [c.name for c in box.drain()] == ["safe", "drive"]
+    assert len(box) == 0
+
+
+def test_a_stop_yields_to_another_senders_command() -> None:
+    box = Outbox()
+    box.send(commands.drive(-100, 0), NEW)  # the branch that took over
+    box.send_stop(commands.halt(), OLD)  # the branch it stopped
+    assert [list(c.data) for c in box.drain()] == [list(commands.drive(-100, 0).data)]
+
+
+def test_a_stop_replaces_the_senders_own_command_and_fills_an_empty_channel() -> None:
+    box = Outbox()
+    box.send(commands.drive(200, 0), OLD)
+    box.send_stop(commands.halt(), OLD)
+    assert [list(c.data) for c in box.drain()] == [[137, 0, 0, 0, 0]]
+    box.send_stop(commands.halt(), OLD)
+    assert [list(c.data) for c in box.drain()] == [[137, 0, 0, 0, 0]]
+
+
+def test_a_command_after_a_stop_replaces_it() -> None:
+    """A sequence: one drive ends (its halt), the next starts in the same tick."""
+    box = Outbox()
+    box.send_stop(commands.halt(), OLD)
+    box.send(commands.drive_direct(-120, 120), NEW)
+    assert [c.name for c in box.drain()] == ["drive_direct"]
+
+
+def test_the_senders_are_forgotten_with_the_tick() -> None:
+    box = Outbox()
+    box.send(commands.drive(200, 0), NEW)
+    box.drain()
+    box.send_stop(commands.halt(), OLD)
+    assert [c.name for c in box.drain()] == ["drive"]
