@@ -168,7 +168,7 @@ class _Packer:
         codes = [">"]
         idx: list[int] = []
         if stream:
-            size = sum(1 + sum(profile.packet(m).size for m in expand(p)) for p in ids)
+            size = stream_payload(ids, profile)
             codes.append("BB")
             idx += [_CONST + 19, _CONST + size]
         for pid in ids:
@@ -193,6 +193,15 @@ class _Packer:
         # profile's checksum leaves it out) & 0xFF; the sum taken as the parser takes it.
         self.byte_sum, added = byte_sum_for(self.size)
         self.sum_bias = added + (0 if profile.checksum_includes_header else 19)
+
+
+def stream_payload(ids: tuple[int, ...], profile: RobotProfile) -> int:
+    """The n-bytes of a stream frame of ``ids``: an id byte and the data of each packet."""
+    return sum(1 + sum(profile.packet(m).size for m in expand(p)) for p in ids)
+
+
+#: n-bytes is one byte: a longer stream cannot be framed
+MAX_STREAM_PAYLOAD = 255
 
 
 class _Builtin:
@@ -628,6 +637,13 @@ class Simulator:
 
     def _on_stream(self, args: bytes) -> None:
         ids = tuple(p for p in args[1:] if p in VALID_PACKET_IDS)
+        payload = stream_payload(ids, self.profile)
+        if payload > MAX_STREAM_PAYLOAD:
+            # Neither spec says what the robot does with a list whose frame cannot be
+            # framed (n-bytes is one byte); the simulator refuses it and keeps what it had.
+            why = f"stream of {payload} bytes (n-bytes is one byte: at most 255)"
+            self.events.append(SimEvent(self.time, "refused", why, self.x, self.y))
+            return
         self._stream_ids = ids
         self._stream = _Packer(ids, self.profile, True, bool(self.faults.noise)) if ids else None
         self._stream_paused = False
