@@ -102,6 +102,18 @@ class Record:
         return [(t, b) for t, d, b in self.chunks if d == "in"]
 
     @property
+    def inbound_after_writes(self) -> list[tuple[float, bytes, int]]:
+        """Each "in" chunk with how many bytes the host had written before it was read."""
+        out: list[tuple[float, bytes, int]] = []
+        written = 0
+        for t, d, b in self.chunks:
+            if d == "out":
+                written += len(b)
+            else:
+                out.append((t, b, written))
+        return out
+
+    @property
     def outbound(self) -> bytes:
         return b"".join(b for _, d, b in self.chunks if d == "out")
 
@@ -148,12 +160,16 @@ class ReplayTransport:
     """A transport that plays back the "in" side of a record on the recorded clock.
 
     ``read`` returns the next recorded chunk and sets the clock to its time; ``write`` keeps
-    what the host sends, for comparison with the record's "out" side.
+    what the host sends, for comparison with the record's "out" side. A chunk is not given
+    before the host has written what it had written when the chunk was recorded: a reply
+    comes after its request. On the virtual clock (``run --fast --record``) a reply and its
+    request share a time stamp, and a read that drains the line before the request (as the
+    start-up does) took the reply away.
     """
 
     def __init__(self, record: Record, name: str = "replay") -> None:
         self.name = name
-        self._inbound = record.inbound
+        self._inbound = record.inbound_after_writes
         self._next = 0
         self._now = 0.0
         self._open = True
@@ -166,8 +182,8 @@ class ReplayTransport:
         if self._next >= len(self._inbound):
             self._now += timeout
             return b""
-        t, data = self._inbound[self._next]
-        if t > self._now + timeout:
+        t, data, written_before = self._inbound[self._next]
+        if t > self._now + timeout or len(self.written) < written_before:
             self._now += timeout
             return b""
         self._next += 1

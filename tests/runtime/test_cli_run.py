@@ -95,6 +95,24 @@ def test_timeout_is_exit_1(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     assert "TIMEOUT" in capsys.readouterr().out
 
 
+@pytest.mark.parametrize("name", ["dock.yaml", "bump-and-turn.yaml"])
+def test_a_run_recorded_on_the_virtual_clock_replays_byte_for_byte(
+    name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """On the virtual clock a reply and its request share a time stamp; the replay gave the
+    start-up's mode reply to the read that drains the line before the query, and then
+    failed ("answered 19 for its OI mode"). A reply now waits for its request."""
+    mission = Path(__file__).resolve().parents[2] / "missions" / name
+    record = tmp_path / "run.jsonl"
+    argv = ["run", str(mission), "--fast", "--display", "none", "--record", str(record)]
+    assert main([*argv, "-p", "duration=3s"] if name.startswith("bump") else argv) == 0
+    capsys.readouterr()
+    assert main(["replay", str(record)]) == 0
+    out = capsys.readouterr().out
+    assert "outcome      SUCCESS" in out
+    assert "the tree wrote the same" in out
+
+
 def test_replay_of_a_malformed_record_is_exit_2(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
