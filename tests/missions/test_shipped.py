@@ -229,6 +229,19 @@ def test_patrol_in_the_apartment_keeps_moving_and_out_of_the_kitchen_door() -> N
     assert not crossings, crossings[:3]
 
 
+@pytest.mark.parametrize("seed", [3, 16])
+def test_a_patrol_whose_first_arc_meets_the_stairs_backs_off(seed: int) -> None:
+    """Apartment starts whose first arc (looking for a wall) reaches the staircase: Safe
+    mode stopped the robot in Passive, the arc waited there for Safe, and after 5 minutes
+    the robot slept and the run ended as a lost connection. Now the arc ends on a cliff,
+    backs off and arcs again."""
+    result = run_episode(
+        EpisodeSpec(str(MISSIONS / "patrol.yaml"), "apartment", seed=seed, timeout_s=1200)
+    )
+    assert result.outcome == "success", result.reason
+    assert result.cliffs >= 1 and not result.fell
+
+
 def test_a_patrol_that_gives_up_says_why() -> None:
     """Two cliff retries a lap are not enough for the apartment's stairs: the failure is the
     patrol's retry giving up, not the low-battery check beside it (which the report named
