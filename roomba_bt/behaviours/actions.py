@@ -199,7 +199,8 @@ class Drive(Action):
 
     Sends Drive (137) ``[137][vel hi][vel lo][rad hi][rad lo]`` or Drive Direct (145)
     ``[145][right hi][right lo][left hi][left lo]`` when it starts (and again if the robot fell
-    back to Passive and came back), then a halt when it ends.
+    back to Passive and came back), then a halt when it ends. FAILURE if the robot stays out
+    of Safe/Full for more than a second while it drives (see ``Action.stranded``).
     """
 
     moves = True
@@ -241,6 +242,12 @@ class Drive(Action):
             self._started_motion = False
             return _OK
         mode = self.snapshot.mode
+        if self._started_motion:
+            stranded = self.stranded()
+            if stranded is not None:
+                self._started_motion = False  # the firmware stopped the wheels already
+                self.feedback_message = stranded
+                return _FAIL
         if mode in DRIVING_MODES and self._last_mode not in DRIVING_MODES:
             self.send(self.command())
             self._started_motion = True

@@ -30,7 +30,7 @@ import py_trees
 from roomba_bt.behaviours.lean import DirectLeaf
 from roomba_bt.behaviours.units import UnitError, ValueType
 from roomba_bt.oi.encode import Command, halt
-from roomba_bt.oi.modes import ALL_MODES, OIMode
+from roomba_bt.oi.modes import ALL_MODES, DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import COMMANDS
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.robot.interface import RobotHandle, Snapshot
@@ -319,6 +319,33 @@ class Action(RobotBehaviour):
     #: set by the action when it sends a motion command, cleared when it halts itself
     _started_motion = False
 
+    #: how long an action that set the wheels moving waits, once the robot has left Safe and
+    #: Full by itself (a cliff, a wheel drop, the charger), for something to bring it back
+    PASSIVE_GRACE_S = 1.0
+    _out_of_driving_since: float | None = None
+
+    def stranded(self) -> str | None:
+        """A failure message once the robot has been out of Safe/Full for longer than
+        :attr:`PASSIVE_GRACE_S` while this action was driving it, else None. Waiting on
+        silently left the robot in Passive until it slept (5 minutes) and the run ended as a
+        lost connection; failing lets the tree recover (``retry`` with ``mode: safe``) or
+        end with the cause."""
+        snap = self.snapshot
+        if snap.mode in DRIVING_MODES:
+            self._out_of_driving_since = None
+            return None
+        if self._out_of_driving_since is None:
+            self._out_of_driving_since = snap.time
+            return None
+        if snap.time - self._out_of_driving_since < self.PASSIVE_GRACE_S - 1e-9:
+            return None
+        change = snap.last_fallback
+        cause = f" ({change.cause})" if change is not None else ""
+        return (
+            f"the robot left Safe/Full mode{cause} and was not brought back within "
+            f"{self.PASSIVE_GRACE_S:g} s"
+        )
+
     def terminate(self, new_status: py_trees.common.Status) -> None:
         """However the action ends (success, failure, or preempted: INVALID), wheels it
         set turning are stopped: ``[137][0][0][0][0]`` queued in this tick's outbox, unless
@@ -327,6 +354,7 @@ class Action(RobotBehaviour):
         if self.moves and self.robot is not None and self._started_motion:
             self.robot.outbox.send_stop(halt(), self)
         self._started_motion = False
+        self._out_of_driving_since = None
 
 
 class Condition(RobotBehaviour):

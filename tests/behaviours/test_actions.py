@@ -146,6 +146,24 @@ def test_drive_resends_after_a_fall_back_to_passive(robot: StubRobot, make: Make
     assert [c.opcode for c in robot.sent] == [137, 137]
 
 
+def test_drive_fails_when_the_robot_stays_out_of_safe(robot: StubRobot, make: Make) -> None:
+    """A cliff dropped the robot to Passive and nothing brings it back: after a second the
+    drive fails with the cause, instead of waiting until the robot sleeps (5 minutes) and
+    the run ends as a lost connection."""
+    robot.set_frame({35: 2})
+    behaviour = make(a.Drive, velocity=100.0)
+    tick(behaviour)
+    robot.flush()
+    statuses = []
+    while Status.FAILURE not in statuses and len(statuses) < 100:
+        robot.set_frame({35: 1})
+        statuses.append(tick(behaviour))
+    assert statuses[:-1] == [Status.RUNNING] * 67  # a second of grace (67 slots of 15 ms)
+    assert statuses[-1] is Status.FAILURE
+    assert behaviour.feedback_message.startswith("the robot left Safe/Full mode")
+    assert robot.flush() == []  # no halt: the firmware stopped the wheels already
+
+
 def test_drive_reads_a_blackboard_value_when_it_starts(robot: StubRobot, make: Make) -> None:
     write_key("leg", 50.0)
     robot.set_frame({35: 2, **encoders(0, 0)})

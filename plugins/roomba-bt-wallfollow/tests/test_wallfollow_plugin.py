@@ -154,6 +154,20 @@ def test_a_robot_held_in_place_does_not_back_or_turn_forever(robot: StubRobot) -
     assert wheels(robot) == (150, 150)
 
 
+def test_out_of_safe_for_a_second_it_fails(robot: StubRobot) -> None:
+    node = follow(robot)
+    robot.set_frame(frame(right=600))
+    node.tick_once()
+    robot.flush()
+    ticks = 0
+    while node.status is not Status.FAILURE and ticks < 100:
+        robot.set_frame({**frame(right=600), 35: 1})
+        node.tick_once()
+        ticks += 1
+    assert node.status is Status.FAILURE and ticks == 68  # after a second out of Safe
+    assert node.feedback_message.startswith("the robot left Safe/Full mode")
+
+
 def test_duration_ends_with_a_halt_and_preemption_halts_too(robot: StubRobot) -> None:
     node = follow(robot, duration=0.03)
     for _ in range(3):

@@ -127,7 +127,14 @@ class WallFollow(Action):
             self._started_motion = False
             return Status.SUCCESS
         if snap.mode not in DRIVING_MODES:
-            return Status.RUNNING  # the mode model would refuse it; wait for Safe/Full
+            # the mode model would refuse a command: wait for Safe/Full, a second at most
+            stranded = self.stranded() if self._started_motion else None
+            if stranded is not None:
+                self._started_motion = False
+                self.feedback_message = stranded
+                return Status.FAILURE
+            return Status.RUNNING
+        self.stranded()  # back in Safe/Full: the wait is over
         frame = snap.frame
         recovering = self.recovery_speeds(bool(frame[BUMPS] & 3))
         if recovering is not None:
