@@ -21,6 +21,7 @@ from roomba_bt.behaviours.lean import (
     DecoratorTick,
     Direct,
     behaviour_tick_direct,
+    failure_reason,
     tick_child,
 )
 from roomba_bt.robot.interface import RobotHandle
@@ -205,7 +206,7 @@ class Guard(Direct, py_trees.composites.Composite):
             new_status = Status.SUCCESS if self.until else Status.FAILURE
             if self.child.status is Status.RUNNING:
                 self.child.stop(Status.INVALID)
-            self.feedback_message = "condition met" if self.until else "condition no longer holds"
+            self.feedback_message = self._why()
             self.stop(new_status)
             yield self
             return
@@ -227,7 +228,7 @@ class Guard(Direct, py_trees.composites.Composite):
             new_status = Status.SUCCESS if self.until else Status.FAILURE
             if self.child.status is Status.RUNNING:
                 self.child.stop(Status.INVALID)
-            self.feedback_message = "condition met" if self.until else "condition no longer holds"
+            self.feedback_message = self._why()
             self.stop(new_status)
             return
         self.current_child = self.child
@@ -236,6 +237,13 @@ class Guard(Direct, py_trees.composites.Composite):
         if status is not Status.RUNNING:
             self.stop(status)
         self.status = status
+
+    def _why(self) -> str:
+        """The guard's message, read before its children are reset: for ``while``, which
+        part of the condition failed (``condition no longer holds: oi_mode(safe)``)."""
+        if self.until:
+            return "condition met"
+        return f"condition no longer holds: {failure_reason(self.condition)}"
 
     def stop(self, new_status: Status = Status.INVALID) -> None:
         if self.child.status is Status.RUNNING:
