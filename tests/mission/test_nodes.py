@@ -384,3 +384,23 @@ def test_every_language_word_compiles_onto_py_trees(compile_text: Compile, word:
     )
     assert isinstance(mission.root, cls)
     Run(mission).tick(wall=1)  # ticks without error
+
+
+def test_a_while_guard_says_which_condition_failed(compile_text: Compile) -> None:
+    from roomba_bt.runtime.loop import _failure_reason
+
+    r = run(
+        compile_text,
+        """
+        tree:
+          sequence:
+            - mode: safe
+            - wait: 1s
+              while:
+                reactive_sequence: [{inverter: {wall: {}}}, {inverter: {bump: any}}]
+        """,
+    )
+    assert r.tick() is R
+    assert r.tick(bump=1) is F
+    reason = _failure_reason(r.mission.root)
+    assert reason.startswith("while reactive_sequence: condition no longer holds: "), reason
