@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 EXTRAS ?= test,plot,bench
 
-.PHONY: run test lint typecheck bench icount routines venv clean
+.PHONY: run test lint typecheck bench icount routines golden venv clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -46,3 +46,8 @@ routines: $(STAMP)
 
 clean:
 	rm -rf $(VENV) build *.egg-info
+
+# Renew the golden recordings of the simulator's bytes (tests/golden): only when a change of
+# bytes is intended, and say why in the commit.
+golden: $(STAMP)
+	$(BIN)/python tests/golden/scenarios.py --renew
