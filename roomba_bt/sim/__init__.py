@@ -5,7 +5,7 @@ for plots). Nothing in the main stack imports it; the CLI and the tests do.
 """
 
 from roomba_bt.sim.faults import Faults
-from roomba_bt.sim.link import SimLink
+from roomba_bt.sim.link import RealtimeSimLink, SimLink
 from roomba_bt.sim.robot import (
     STEP_SECONDS,
     SimEvent,
@@ -29,6 +29,7 @@ __all__ = [
     "DockSpec",
     "Faults",
     "Pose",
+    "RealtimeSimLink",
     "SimEvent",
     "SimLink",
     "Simulator",

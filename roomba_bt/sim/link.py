@@ -14,9 +14,14 @@ import the transport layer). :class:`SimLink` is that, with the simulator behind
 The link has a baud rate, like a port: after Baud (129) the robot talks at its new rate, and
 until ``set_baud`` follows, what the host reads is garbage (each byte mapped to another) and
 what it writes never reaches the robot, as on a serial line at mismatched rates.
+
+:class:`RealtimeSimLink` paces the same simulator to the wall clock (one 15 ms step per 15 ms
+of wall time), so a run without ``--fast`` looks and feels like a robot.
 """
 
 from __future__ import annotations
+
+import time
 
 from roomba_bt.sim.robot import STEP_SECONDS, Simulator
 
@@ -85,3 +90,35 @@ class SimLink:
         """Let ``seconds`` of simulated time pass without reading (bytes stay buffered)."""
         for _ in range(round(seconds / STEP_SECONDS)):
             self.simulator.step()
+
+
+class RealtimeSimLink(SimLink):
+    """A :class:`SimLink` whose simulated time never runs ahead of the wall clock."""
+
+    def __init__(self, simulator: Simulator, name: str = "sim://") -> None:
+        super().__init__(simulator, name)
+        self._wall0 = time.monotonic()
+        self._sim0 = simulator.time
+
+    def read(self, timeout: float) -> bytes:
+        self._check()
+        sim = self.simulator
+        data = sim.read()
+        if data:
+            return data
+        deadline = time.monotonic() + max(timeout, 0.0)
+        while True:
+            due = self._wall0 + (sim.time + STEP_SECONDS - self._sim0)
+            now = time.monotonic()
+            if due > deadline:
+                if deadline > now:
+                    time.sleep(deadline - now)
+                return b""
+            if due > now:
+                time.sleep(due - now)
+            sim.step()
+            if sim.disconnected:
+                raise ConnectionError(f"{self.name}: simulated disconnect at t={sim.time:.3f} s")
+            data = sim.read()
+            if data:
+                return data
