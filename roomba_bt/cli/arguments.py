@@ -1,5 +1,6 @@
-"""Argument types shared by the commands: bad values become argparse's usage error (exit 2)
-with what was found and what is allowed, never a traceback from deep inside."""
+"""Arguments shared by the commands: bad values become argparse's usage error (exit 2)
+with what was found and what is allowed, never a traceback from deep inside; the mission's
+``-p NAME=VALUE`` and ``--timeout``, read once for every command that takes them."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import argparse
 import math
 import os
 from pathlib import Path
+from typing import Any
 
 from roomba_bt.oi.encode import BAUD_CODES
 
@@ -55,3 +57,44 @@ def plot_file(text: str) -> str:
             "--plot needs matplotlib, an optional extra: pip install 'roomba-bt[plot]'"
         ) from None
     return output_file(text)
+
+
+def add_param_option(parser: Any, help: str | None = None) -> None:
+    """``-p/--param NAME=VALUE`` (repeatable), read by :func:`parse_params`."""
+    parser.add_argument(
+        "-p", "--param", action="append", default=[], metavar="NAME=VALUE", help=help
+    )
+
+
+def parse_params(items: list[str]) -> dict[str, str] | str:
+    """``["speed=250mm/s"]`` -> ``{"speed": "250mm/s"}``; a message string on error.
+
+    The values stay text: the mission compiler reads them against each parameter's type and
+    unit, and names the file and line where a value does not fit.
+    """
+    params: dict[str, str] = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip():
+            return f"-p {item!r}: expected NAME=VALUE, e.g. -p speed=250mm/s"
+        params[name.strip()] = value.strip()
+    return params
+
+
+def parse_timeout(text: str | None) -> float | str | None:
+    """``--timeout``: seconds (``90``) or a duration (``5min``), above 0; a message string on
+    error, None if not given."""
+    if text is None:
+        return None
+    from roomba_bt.behaviours.units import UnitError, parse_quantity
+
+    try:
+        value = float(text)
+    except ValueError:
+        try:
+            value = parse_quantity("duration", text)
+        except UnitError as exc:
+            return f"--timeout {text!r}: {exc}"
+    if value <= 0:
+        return f"--timeout {text!r}: must be more than 0 s"
+    return value

@@ -18,7 +18,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from roomba_bt.cli.arguments import plot_file
+from roomba_bt.cli.arguments import add_param_option, parse_params, parse_timeout, plot_file
 from roomba_bt.cli.exit_codes import ExitCode
 from roomba_bt.oi.profiles import PROFILES
 
@@ -42,10 +42,7 @@ def register(sub: Any) -> None:
         "--within", type=float, metavar="METRES",
         help="start within this distance of the docked pose (default: the world's region)",
     )  # fmt: skip
-    ev.add_argument(
-        "-p", "--param", action="append", default=[], metavar="NAME=VALUE",
-        help="set a mission parameter (repeatable)",
-    )  # fmt: skip
+    add_param_option(ev, "set a mission parameter (repeatable)")
     ev.add_argument(
         "--dock",
         action="append",
@@ -103,7 +100,6 @@ def parse_dock(items: list[str]) -> tuple[tuple[str, Any], ...] | str:
 
 
 def eval_command(args: argparse.Namespace) -> int:
-    from roomba_bt.cli.run_cmd import parse_params, parse_timeout
     from roomba_bt.evaluate import EvaluationError, episode_specs, summarize
     from roomba_bt.evaluate.parallel import ProgressBar, run_episodes
 
@@ -161,12 +157,12 @@ def eval_command(args: argparse.Namespace) -> int:
     summary = summarize(args.mission, world.name, results)
     print(summary)
     if args.plot:
-        from roomba_bt.evaluate.plot import PlotUnavailable, plot_trajectories
+        from roomba_bt.evaluate.plot import PlotUnavailableError, plot_trajectories
 
         try:
             plot_trajectories(world, results, args.plot, f"{Path(args.mission).stem} in "
                               f"{world.name}: {summary.successes}/{summary.runs}")  # fmt: skip
-        except PlotUnavailable as exc:
+        except PlotUnavailableError as exc:
             print(f"roomba-bt eval: {exc}", file=sys.stderr)
             return ExitCode.INVALID
         except OSError as exc:

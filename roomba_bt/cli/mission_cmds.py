@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from roomba_bt.cli.arguments import baud_rate
+from roomba_bt.cli.arguments import add_param_option, baud_rate, parse_params
 from roomba_bt.cli.exit_codes import ExitCode
 from roomba_bt.oi.profiles import PROFILES, get_profile
 
@@ -58,23 +58,17 @@ def register(sub: Any) -> None:
 
 
 def _common(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "-p", "--param", action="append", default=[], metavar="NAME=VALUE",
-        help="set a mission parameter, e.g. -p speed=250mm/s (repeatable)",
-    )  # fmt: skip
+    add_param_option(parser, "set a mission parameter, e.g. -p speed=250mm/s (repeatable)")
     parser.add_argument("--profile", choices=sorted(PROFILES), default="create2")
     parser.add_argument("--baud", type=baud_rate, default=115200, help="baud rate (default 115200)")
 
 
 def _params(items: list[str]) -> dict[str, str] | None:
-    params: dict[str, str] = {}
-    for item in items:
-        name, sep, value = item.partition("=")
-        if not sep or not name.strip():
-            print(f"roomba-bt: -p {item!r}: expected NAME=VALUE, e.g. -p speed=250mm/s",
-                  file=sys.stderr)  # fmt: skip
-            return None
-        params[name.strip()] = value.strip()
+    """The ``-p`` values, or None after printing what is wrong with one."""
+    params = parse_params(items)
+    if isinstance(params, str):
+        print(f"roomba-bt: {params}", file=sys.stderr)
+        return None
     return params
 
 

@@ -8,7 +8,15 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from roomba_bt.cli.arguments import baud_rate, output_file, plot_file, seconds
+from roomba_bt.cli.arguments import (
+    add_param_option,
+    baud_rate,
+    output_file,
+    parse_params,
+    parse_timeout,
+    plot_file,
+    seconds,
+)
 from roomba_bt.cli.exit_codes import ExitCode
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.profiles import PROFILES, RobotProfile, get_profile
@@ -33,10 +41,7 @@ def register(sub: Any) -> None:
     run.add_argument(
         "--random-start", action="store_true", help="start in the world's start region"
     )
-    run.add_argument(
-        "-p", "--param", action="append", default=[], metavar="NAME=VALUE",
-        help="set a mission parameter, e.g. -p speed=250mm/s (repeatable)",
-    )  # fmt: skip
+    add_param_option(run, "set a mission parameter, e.g. -p speed=250mm/s (repeatable)")
     run.add_argument("--timeout", help="give up after this much mission time, e.g. 90s or 5min")
     run.add_argument(
         "--record",
@@ -67,36 +72,8 @@ def register(sub: Any) -> None:
     )
     replay.add_argument("record", help="a file written by run --record")
     replay.add_argument("--mission", help="mission to replay against (default: the recorded one)")
-    replay.add_argument("-p", "--param", action="append", default=[], metavar="NAME=VALUE")
+    add_param_option(replay)
     replay.set_defaults(func=replay_command)
-
-
-def parse_params(items: list[str]) -> dict[str, str] | str:
-    """``["speed=250mm/s"]`` -> ``{"speed": "250mm/s"}``; a message string on error."""
-    params: dict[str, str] = {}
-    for item in items:
-        name, sep, value = item.partition("=")
-        if not sep or not name.strip():
-            return f"-p {item!r}: expected NAME=VALUE, e.g. -p speed=250mm/s"
-        params[name.strip()] = value.strip()
-    return params
-
-
-def parse_timeout(text: str | None) -> float | str | None:
-    if text is None:
-        return None
-    from roomba_bt.behaviours.units import UnitError, parse_quantity
-
-    try:
-        seconds = float(text)
-    except ValueError:
-        try:
-            seconds = parse_quantity("duration", text)
-        except UnitError as exc:
-            return f"--timeout {text!r}: {exc}"
-    if seconds <= 0:
-        return f"--timeout {text!r}: must be more than 0 s"
-    return seconds
 
 
 def _error(message: str) -> int:
