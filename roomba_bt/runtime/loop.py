@@ -22,6 +22,7 @@ from typing import Any, Protocol
 
 import py_trees
 
+from roomba_bt.behaviours import SNAPSHOT_KEY
 from roomba_bt.behaviours.lean import failure_reason
 from roomba_bt.mission import RUNTIME_PACKETS
 from roomba_bt.oi.errors import BandwidthError
@@ -35,7 +36,6 @@ from roomba_bt.robot.interface import SLOT_SECONDS, ModeChange, Odometry, Outbox
 from roomba_bt.robot.safety import Terminated, sigterm_raises
 from roomba_bt.runtime.summary import Outcome, RunSummary
 
-SNAPSHOT_KEY = "/roomba/snapshot"
 #: Battery charge and capacity, for the run summary: streamed when the budget allows.
 SUMMARY_PACKETS: tuple[int, ...] = (25, 26)
 

@@ -19,28 +19,18 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, Any, Protocol
+from typing import IO, Any
+
+from roomba_bt.transport.base import Transport
 
 RECORD_FORMAT = "roomba-bt-record"
 RECORD_VERSION = 1
 
 
-class TransportLike(Protocol):
-    name: str
-
-    def write(self, data: bytes) -> None: ...
-    def read(self, timeout: float) -> bytes: ...
-    def set_baud(self, baud: int) -> None: ...
-    def close(self) -> None: ...
-    @property
-    def is_open(self) -> bool: ...
-    def now(self) -> float: ...
-
-
 class RecordingTransport:
     """Wraps a transport; writes every chunk in and out to a JSON Lines record."""
 
-    def __init__(self, inner: TransportLike, path: str | Path, header: dict[str, Any]) -> None:
+    def __init__(self, inner: Transport, path: str | Path, header: dict[str, Any]) -> None:
         self._inner = inner
         self.name = inner.name
         self._file: IO[str] = open(path, "w", encoding="utf-8")  # noqa: SIM115
