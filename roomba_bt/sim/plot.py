@@ -1,6 +1,9 @@
 """A picture of a simulated run: walls, drops, the dock and its beams, the path coloured by
 time, bumps and mode changes marked. PNG via matplotlib, an optional extra, imported only
 here and only when a plot is asked for.
+
+:func:`draw_world` is the one drawing of a world; ``roomba-bt eval --plot``
+(:mod:`roomba_bt.evaluate.plot`) draws its trajectories over it too.
 """
 
 from __future__ import annotations
@@ -10,13 +13,16 @@ import pathlib
 from typing import Any
 
 from roomba_bt.sim.robot import Simulator
+from roomba_bt.sim.world import World
 
 
 class PlotUnavailableError(ImportError):
     """matplotlib is not installed."""
 
 
-def _matplotlib() -> Any:
+def pyplot() -> Any:
+    """``matplotlib.pyplot`` on the file-only Agg backend; :class:`PlotUnavailableError` if
+    matplotlib is not installed."""
     try:
         import matplotlib
 
@@ -40,50 +46,61 @@ _EVENT_STYLE = {
 }
 
 
+def draw_world(ax: Any, world: World, *, labels: bool = True) -> None:
+    """Rooms, walls, obstacles, drops, virtual walls, lighthouses and the dock with its beams,
+    in metres, on the matplotlib axes ``ax`` (legend labels unless ``labels`` is False)."""
+    from matplotlib.patches import Polygon as PolygonPatch
+    from matplotlib.patches import Wedge
+
+    def label(text: str) -> str | None:
+        return text if labels else None
+
+    for room in world.rooms:
+        ax.add_patch(PolygonPatch([(x / 1000, y / 1000) for x, y in room], closed=True,
+                                  facecolor="#f7f7f2", edgecolor="black", lw=2))  # fmt: skip
+    for ax0, ay0, ax1, ay1 in world.walls:
+        ax.plot([ax0 / 1000, ax1 / 1000], [ay0 / 1000, ay1 / 1000], color="black", lw=2)
+    for obstacle in world.obstacles:
+        ax.add_patch(PolygonPatch([(x / 1000, y / 1000) for x, y in obstacle], closed=True,
+                                  facecolor="#b8a88a", edgecolor="#6b5a3a"))  # fmt: skip
+    for drop in world.drops:
+        ax.add_patch(PolygonPatch([(x / 1000, y / 1000) for x, y in drop], closed=True,
+                                  facecolor="#333333", alpha=0.55, hatch="//",
+                                  edgecolor="black", label=label("drop")))  # fmt: skip
+    for vw in world.virtual_walls:
+        ax.plot([vw.ax / 1000, vw.bx / 1000], [vw.ay / 1000, vw.by / 1000],
+                color="tab:orange", lw=2, ls="--", label=label("virtual wall"))  # fmt: skip
+    for lh in world.lighthouses:
+        x0, y0, x1, y1 = lh.fence_segment
+        ax.plot([x0 / 1000, x1 / 1000], [y0 / 1000, y1 / 1000], color="tab:orange", ls=":")
+        ax.plot(lh.x / 1000, lh.y / 1000, "o", color="tab:orange")
+    dock = world.dock
+    if dock is not None:
+        cx, cy = dock.x / 1000, dock.y / 1000
+        facing = math.degrees(dock.facing)
+        r = dock.buoy_range / 1000
+        ax.add_patch(Wedge((cx, cy), r, facing + math.degrees(dock.red[0]),
+                           facing + math.degrees(dock.red[1]), color="red", alpha=0.15,
+                           label=label("red buoy")))  # fmt: skip
+        ax.add_patch(Wedge((cx, cy), r, facing + math.degrees(dock.green[0]),
+                           facing + math.degrees(dock.green[1]), color="green", alpha=0.15,
+                           label=label("green buoy")))  # fmt: skip
+        ax.add_patch(Wedge((cx, cy), dock.force_field / 1000, 0, 360, fill=False,
+                           ls=":", color="tab:blue", label=label("force field")))  # fmt: skip
+        x0, y0, x1, y1 = dock.plate
+        ax.plot([x0 / 1000, x1 / 1000], [y0 / 1000, y1 / 1000], color="tab:green", lw=5)
+
+
 def plot_run(simulator: Simulator, path: str | pathlib.Path, title: str | None = None) -> None:
     """Write the trajectory of ``simulator`` so far to ``path`` (PNG)."""
-    plt = _matplotlib()
+    plt = pyplot()
     from matplotlib.collections import LineCollection
-    from matplotlib.patches import Polygon as PolygonPatch
     from matplotlib.patches import Wedge
 
     world = simulator.world
     fig, ax = plt.subplots(figsize=(8, 7), dpi=110)
     try:
-        for room in world.rooms:
-            ax.add_patch(PolygonPatch([(x / 1000, y / 1000) for x, y in room], closed=True,
-                                      facecolor="#f7f7f2", edgecolor="black", lw=2))  # fmt: skip
-        for ax0, ay0, ax1, ay1 in world.walls:
-            ax.plot([ax0 / 1000, ax1 / 1000], [ay0 / 1000, ay1 / 1000], color="black", lw=2)
-        for obstacle in world.obstacles:
-            ax.add_patch(PolygonPatch([(x / 1000, y / 1000) for x, y in obstacle], closed=True,
-                                      facecolor="#b8a88a", edgecolor="#6b5a3a"))  # fmt: skip
-        for drop in world.drops:
-            ax.add_patch(PolygonPatch([(x / 1000, y / 1000) for x, y in drop], closed=True,
-                                      facecolor="#333333", alpha=0.55, hatch="//",
-                                      edgecolor="black", label="drop"))  # fmt: skip
-        for vw in world.virtual_walls:
-            ax.plot([vw.ax / 1000, vw.bx / 1000], [vw.ay / 1000, vw.by / 1000],
-                    color="tab:orange", lw=2, ls="--", label="virtual wall")  # fmt: skip
-        for lh in world.lighthouses:
-            x0, y0, x1, y1 = lh.fence_segment
-            ax.plot([x0 / 1000, x1 / 1000], [y0 / 1000, y1 / 1000], color="tab:orange", ls=":")
-            ax.plot(lh.x / 1000, lh.y / 1000, "o", color="tab:orange")
-        dock = world.dock
-        if dock is not None:
-            cx, cy = dock.x / 1000, dock.y / 1000
-            facing = math.degrees(dock.facing)
-            r = dock.buoy_range / 1000
-            ax.add_patch(Wedge((cx, cy), r, facing + math.degrees(dock.red[0]),
-                               facing + math.degrees(dock.red[1]), color="red", alpha=0.15,
-                               label="red buoy"))  # fmt: skip
-            ax.add_patch(Wedge((cx, cy), r, facing + math.degrees(dock.green[0]),
-                               facing + math.degrees(dock.green[1]), color="green", alpha=0.15,
-                               label="green buoy"))  # fmt: skip
-            ax.add_patch(Wedge((cx, cy), dock.force_field / 1000, 0, 360, fill=False,
-                               ls=":", color="tab:blue", label="force field"))  # fmt: skip
-            x0, y0, x1, y1 = dock.plate
-            ax.plot([x0 / 1000, x1 / 1000], [y0 / 1000, y1 / 1000], color="tab:green", lw=5)
+        draw_world(ax, world)
         trace = simulator.trace
         points = [(p.x / 1000, p.y / 1000) for p in trace]
         points.append((simulator.x / 1000, simulator.y / 1000))
