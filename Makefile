@@ -42,7 +42,7 @@ icount: $(STAMP)
 
 # The routines' success rates and speed into docs/routines.md (2 to 7 min on 2 cores).
 routines: $(STAMP)
-	$(BIN)/python -m roomba_bt.evaluate.report
+	$(BIN)/python -m roomba_bt.evaluate.report --docs docs --missions missions
 
 clean:
 	rm -rf $(VENV) build *.egg-info

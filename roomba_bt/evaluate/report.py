@@ -1,13 +1,14 @@
-"""The figures of ``docs/routines.md``, measured by one command::
+"""The figures of ``docs/routines.md``, measured by one command (``make routines``)::
 
-    python -m roomba_bt.evaluate.report             # every experiment, 2 worker processes
+    python -m roomba_bt.evaluate.report --docs docs   # every experiment, 2 worker processes
     python -m roomba_bt.evaluate.report --scale 0.1 --jobs 1 --no-write   # a quick look
 
-Every experiment is a batch of seeded episodes (:mod:`roomba_bt.evaluate.episode`); the
-tables it prints are written between the ``<!-- figures:begin -->`` and
-``<!-- figures:end -->`` markers of ``docs/routines.md`` (the rest of the page is prose that
-this command never touches), and the trajectory plots next to it in ``docs/routines/``.
-Nothing here is hard-coded: run it again and the page shows what the code does now.
+Every experiment is a batch of seeded episodes (:mod:`roomba_bt.evaluate.episode`) of the
+missions in ``--missions`` (default ``missions``); the tables it prints are written between
+the ``<!-- figures:begin -->`` and ``<!-- figures:end -->`` markers of ``DOCS/routines.md``
+(the rest of the page is prose that this command never touches), and the trajectory plots
+next to it in ``DOCS/routines/``. Nothing here is hard-coded: run it again and the page shows
+what the code does now.
 """
 
 from __future__ import annotations
@@ -27,10 +28,9 @@ from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec, build_world
 from roomba_bt.evaluate.parallel import ProgressBar, run_episodes
 from roomba_bt.evaluate.stats import Summary, summarize
 
-ROOT = Path(__file__).resolve().parents[2]
-MISSIONS = ROOT / "missions"
-DOC = ROOT / "docs" / "routines.md"
-FIGURES = ROOT / "docs" / "routines"
+#: The page (in the ``--docs`` folder) and the folder of its plots, which it links to.
+PAGE = "routines.md"
+FIGURES = "routines"
 BEGIN, END = "<!-- figures:begin -->", "<!-- figures:end -->"
 
 #: The dock's beam parameters at the ends of the ranges the dock mission is meant to handle
@@ -57,11 +57,11 @@ class Experiment:
     plot: str | None = None
 
 
-def experiments(scale: float) -> list[Experiment]:
+def experiments(scale: float, missions: Path) -> list[Experiment]:
     def n(runs: int) -> int:
         return max(2, math.ceil(runs * scale))
 
-    dock, builtin = str(MISSIONS / "dock.yaml"), str(MISSIONS / "dock-builtin.yaml")
+    dock, builtin = str(missions / "dock.yaml"), str(missions / "dock-builtin.yaml")
     out = [
         Experiment("dock-empty", "dock, empty room, within 1.5 m, any heading", dock,
                    "empty-room", n(200), {"within_m": 1.5}, "dock-empty-room.png"),
@@ -78,16 +78,16 @@ def experiments(scale: float) -> list[Experiment]:
                    "empty-room", n(200), {"within_m": 1.5}),
         Experiment("builtin-apartment", "dock-builtin (143), apartment", builtin, "apartment",
                    n(100), {}),
-        Experiment("patrol", "patrol, corridor, 2 laps", str(MISSIONS / "patrol.yaml"),
+        Experiment("patrol", "patrol, corridor, 2 laps", str(missions / "patrol.yaml"),
                    "corridor", n(50), {"timeout_s": 900.0}, "patrol-corridor.png"),
         Experiment("patrol-low", "patrol, corridor, battery 15.2 % (threshold 15 %)",
-                   str(MISSIONS / "patrol.yaml"), "corridor", n(50),
+                   str(missions / "patrol.yaml"), "corridor", n(50),
                    {"battery": 0.152, "timeout_s": 900.0}, "patrol-low-battery.png"),
         Experiment("bump", "bump-and-turn, corridor, 60 s",
-                   str(MISSIONS / "bump-and-turn.yaml"), "corridor", n(50),
+                   str(missions / "bump-and-turn.yaml"), "corridor", n(50),
                    {"timeout_s": 90.0}, "bump-and-turn-corridor.png"),
         Experiment("bump-apartment", "bump-and-turn, apartment (stairs), 60 s",
-                   str(MISSIONS / "bump-and-turn.yaml"), "apartment", n(20),
+                   str(missions / "bump-and-turn.yaml"), "apartment", n(20),
                    {"timeout_s": 90.0}),
     ]  # fmt: skip
     return out
@@ -167,9 +167,9 @@ SPEED_EPISODES = 48
 REPEATS = 3
 
 
-def speed_lines(jobs_seed: int = 100, episodes: int = SPEED_EPISODES) -> list[str]:
+def speed_lines(missions: Path, jobs_seed: int = 100, episodes: int = SPEED_EPISODES) -> list[str]:
     """Virtual-clock speed on one core, and the 1 -> 2 jobs scaling of ``eval``."""
-    specs = episode_specs(str(MISSIONS / "dock.yaml"), world="empty-room", runs=episodes,
+    specs = episode_specs(str(missions / "dock.yaml"), world="empty-room", runs=episodes,
                           seed=jobs_seed, within_m=1.5)  # fmt: skip
     wall_one, wall_two, one, two = measure_scaling(specs)
     simulated = sum(r.time_s for r in one)
@@ -222,21 +222,24 @@ def two_worker_makespan(durations: Sequence[float]) -> float:
     return max(free) or 1.0
 
 
-def build(scale: float, jobs: int, seed: int, quiet: bool, plots: bool) -> str:
+def build(
+    scale: float, jobs: int, seed: int, quiet: bool, missions: Path, figures: Path | None
+) -> str:
+    """The figures section of the page; the plots into ``figures`` unless it is None."""
     results: dict[str, tuple[Experiment, Summary, list[EpisodeResult]]] = {}
     started = time.perf_counter()
-    for exp in experiments(scale):
+    for exp in experiments(scale, missions):
         summary, episodes = run_experiment(exp, jobs, seed, quiet)
         results[exp.key] = (exp, summary, episodes)
-        if plots and exp.plot:
-            from roomba_bt.evaluate.plot import PlotUnavailable, plot_trajectories
+        if figures is not None and exp.plot:
+            from roomba_bt.evaluate.plot import PlotUnavailableError, plot_trajectories
 
-            FIGURES.mkdir(parents=True, exist_ok=True)
+            figures.mkdir(parents=True, exist_ok=True)
             spec = episode_specs(exp.mission, world=exp.world, runs=1, **exp.fields)[0]
             try:
-                plot_trajectories(build_world(spec), episodes, FIGURES / exp.plot,
+                plot_trajectories(build_world(spec), episodes, figures / exp.plot,
                                   f"{exp.label}: {summary.successes}/{summary.runs}")  # fmt: skip
-            except PlotUnavailable as exc:
+            except PlotUnavailableError as exc:
                 print(f"report: {exc}", file=sys.stderr)
     took = time.perf_counter() - started
     out = [BEGIN, "", f"Measured by `python -m roomba_bt.evaluate.report` (seeds {seed}.., "
@@ -268,12 +271,12 @@ def build(scale: float, jobs: int, seed: int, quiet: bool, plots: bool) -> str:
         out.append("")
     out += ["![bump-and-turn](routines/bump-and-turn-corridor.png)"]
     out += ["", "### Speed", ""]
-    out += speed_lines()
+    out += speed_lines(missions)
     out += ["", END]
     return "\n".join(out)
 
 
-def write(section: str, doc: Path = DOC) -> None:
+def write(section: str, doc: Path) -> None:
     """Replace the text between the markers of ``doc`` (appending them if absent)."""
     text = doc.read_text(encoding="utf-8") if doc.exists() else ""
     pattern = re.compile(re.escape(BEGIN) + r".*?" + re.escape(END), re.S)
@@ -295,16 +298,38 @@ def main(argv: Sequence[str] | None = None) -> int:
         default=1.0,
         help="multiply every experiment's number of runs (quick looks)",
     )
+    parser.add_argument(
+        "--docs",
+        type=Path,
+        metavar="DIR",
+        help=f"write the figures into DIR/{PAGE} and the plots into DIR/{FIGURES}/",
+    )
+    parser.add_argument(
+        "--missions",
+        type=Path,
+        default=Path("missions"),
+        metavar="DIR",
+        help="the folder of the shipped missions (default: missions)",
+    )
     parser.add_argument("--no-write", action="store_true", help="print, do not edit the doc")
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
     args = parser.parse_args(argv)
     if args.scale <= 0 or args.jobs < 1:
         parser.error("--scale must be above 0 and --jobs at least 1")
-    section = build(args.scale, args.jobs, args.seed, args.quiet, plots=not args.no_write)
+    if not args.no_write and args.docs is None:
+        parser.error("--docs DIR: where to write the figures (or --no-write to print them)")
+    if not args.no_write and not args.docs.is_dir():
+        parser.error(f"--docs {args.docs}: no such directory")
+    if not args.missions.is_dir():
+        parser.error(f"--missions {args.missions}: no such directory")
+    figures = None if args.no_write else args.docs / FIGURES
+    missions = args.missions.resolve()
+    section = build(args.scale, args.jobs, args.seed, args.quiet, missions, figures)
     print(section)
     if not args.no_write:
-        write(section)
-        print(f"written to {DOC}", file=sys.stderr)
+        doc = args.docs / PAGE
+        write(section, doc)
+        print(f"written to {doc}", file=sys.stderr)
     return 0
 
 

@@ -1,10 +1,13 @@
-"""The figures report's own arithmetic (the report itself takes minutes: `make routines`)."""
+"""The figures report: its own arithmetic, and where it reads and writes (the report itself
+takes minutes: `make routines`)."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
-from roomba_bt.evaluate.report import two_worker_makespan
+from roomba_bt.evaluate.report import experiments, main, two_worker_makespan
 
 
 @pytest.mark.parametrize(
@@ -19,3 +22,26 @@ from roomba_bt.evaluate.report import two_worker_makespan
 )
 def test_two_workers_taking_episodes_in_order(durations: list[float], makespan: float) -> None:
     assert two_worker_makespan(durations) == makespan
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        ([], "--docs DIR: where to write the figures"),
+        (["--docs", "no/such/dir"], "--docs no/such/dir: no such directory"),
+        (["--no-write", "--missions", "no/such/dir"], "--missions no/such/dir: no such"),
+    ],
+)
+def test_the_page_and_the_missions_come_from_the_command_line(
+    argv: list[str], message: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    assert exit_.value.code == 2
+    assert message in capsys.readouterr().err
+
+
+def test_experiments_read_the_missions_folder_given() -> None:
+    missions = Path("elsewhere/missions")
+    paths = {Path(exp.mission).parent for exp in experiments(0.1, missions)}
+    assert paths == {missions}
