@@ -7,10 +7,12 @@ tuple lookup, not an allocation.
 Layouts (bit 7 left, bit 0 right)::
 
     packet 7   bumps/wheel drops  [ - - - - | drop L | drop R | bump L | bump R ]
+                                  (WHEEL_DROP_BITS 0b1100, BUMP_BITS 0b0011)
     packet 14  overcurrents       [ - - - | wheel L | wheel R | main brush | - | side brush ]
     packet 18  buttons            [ clock | schedule | day | hour | minute | dock | spot | clean ]
     packet 34  charging sources   [ - - - - - - | home base | internal charger ]
     packet 45  light bumper       [ - - | R | FR | CR | CL | FL | L ]
+                                  (LIGHT_BUMPER_AHEAD_BITS 0b011110: FR CR CL FL)
     opcode 138 motors             [ - - - | main dir | side CW | main | vacuum | side ]
     opcode 139 LEDs               [ - - - - | check robot | dock | spot | debris ]
     opcode 162 weekday LEDs, opcode 167 days
@@ -22,7 +24,7 @@ Layouts (bit 7 left, bit 0 right)::
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from enum import IntEnum
 
 from roomba_bt.oi.errors import EncodeError
@@ -30,6 +32,12 @@ from roomba_bt.oi.errors import EncodeError
 
 def _bit(value: int, n: int) -> bool:
     return bool(value >> n & 1)
+
+
+#: Packet 7's two bump bits (bit 1 left, bit 0 right) and two wheel-drop bits (bit 3 left,
+#: bit 2 right); bits 4-7 are not used.
+BUMP_BITS = 0b0011
+WHEEL_DROP_BITS = 0b1100
 
 
 @dataclass(frozen=True, slots=True)
@@ -41,14 +49,13 @@ class BumpsWheelDrops:
     bump_left: bool
     wheel_drop_right: bool
     wheel_drop_left: bool
+    #: either bump / either wheel drop; stored, not computed: read on every tick
+    any_bump: bool = field(init=False, repr=False, compare=False)
+    any_wheel_drop: bool = field(init=False, repr=False, compare=False)
 
-    @property
-    def any_bump(self) -> bool:
-        return self.bump_left or self.bump_right
-
-    @property
-    def any_wheel_drop(self) -> bool:
-        return self.wheel_drop_left or self.wheel_drop_right
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "any_bump", self.bump_left or self.bump_right)
+        object.__setattr__(self, "any_wheel_drop", self.wheel_drop_left or self.wheel_drop_right)
 
     @classmethod
     def from_byte(cls, value: int) -> BumpsWheelDrops:
@@ -133,6 +140,13 @@ class ChargingSources:
 _SOURCES = tuple(ChargingSources(v, _bit(v, 0), _bit(v, 1)) for v in range(256))
 
 
+#: Packet 45's four front sensors (front-left, centre-left, centre-right, front-right, bits
+#: 1-4): something ahead of the robot rather than beside it.
+LIGHT_BUMPER_AHEAD_BITS = 0b011110
+#: Packet 45's six sensors (bits 0-5).
+LIGHT_BUMPER_BITS = 0b111111
+
+
 @dataclass(frozen=True, slots=True)
 class LightBumper:
     """Packet 45: which of the six light-bumper sensors sees an obstacle."""
@@ -144,10 +158,13 @@ class LightBumper:
     center_right: bool
     front_right: bool
     right: bool
+    #: any of the six / any of the four front ones; stored, not computed: read every tick
+    any: bool = field(init=False, repr=False, compare=False)
+    ahead: bool = field(init=False, repr=False, compare=False)
 
-    @property
-    def any(self) -> bool:
-        return self.raw & 0x3F != 0
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "any", self.raw & LIGHT_BUMPER_BITS != 0)
+        object.__setattr__(self, "ahead", self.raw & LIGHT_BUMPER_AHEAD_BITS != 0)
 
     @classmethod
     def from_byte(cls, value: int) -> LightBumper:

@@ -20,11 +20,14 @@ from collections.abc import Callable, Iterable, Iterator, Mapping
 from functools import lru_cache
 
 from roomba_bt.oi.bits import (
+    BUMP_BITS,
     BUMPS_BY_BYTE,
     BUTTONS_BY_BYTE,
     CHARGING_SOURCES_BY_BYTE,
+    LIGHT_BUMPER_AHEAD_BITS,
     LIGHT_BUMPER_BY_BYTE,
     OVERCURRENTS_BY_BYTE,
+    WHEEL_DROP_BITS,
     BumpsWheelDrops,
     Buttons,
     ChargingSources,
@@ -42,6 +45,29 @@ from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
 
 STREAM_HEADER = 19
 PACKET_ID_ARG = COMMANDS[142].args[0]
+
+# Which packets each group of :class:`SensorFrame` accessors reads: for a behaviour's
+# ``reads=`` (the packets its mission must stream), so no layer above names them by number.
+#: :attr:`SensorFrame.any_bump`, :attr:`~SensorFrame.any_wheel_drop`, :attr:`~SensorFrame.bumps`
+BUMPS_PACKETS: tuple[int, ...] = (7,)
+#: :attr:`SensorFrame.any_cliff` and the four ``cliff_*`` accessors (left, front left,
+#: front right, right)
+CLIFF_PACKETS: tuple[int, ...] = (9, 10, 11, 12)
+#: :attr:`SensorFrame.any_hazard`: bumps, wheel drops, cliffs
+HAZARD_PACKETS: tuple[int, ...] = BUMPS_PACKETS + CLIFF_PACKETS
+VIRTUAL_WALL_PACKETS: tuple[int, ...] = (13,)
+#: :attr:`SensorFrame.light_bumper` (the robot's own detection bits)
+LIGHT_BUMPER_PACKETS: tuple[int, ...] = (45,)
+#: the six ``light_bump_*_signal`` accessors, left to right
+LIGHT_BUMP_SIGNAL_PACKETS: tuple[int, ...] = (46, 47, 48, 49, 50, 51)
+#: :attr:`SensorFrame.ir_omni`, :attr:`~SensorFrame.ir_left`, :attr:`~SensorFrame.ir_right`
+IR_PACKETS: tuple[int, ...] = (17, 52, 53)
+#: :attr:`SensorFrame.charging_sources`
+CHARGING_SOURCES_PACKETS: tuple[int, ...] = (34,)
+#: :attr:`SensorFrame.charging_state`
+CHARGING_STATE_PACKETS: tuple[int, ...] = (21,)
+#: :attr:`SensorFrame.left_encoder_counts`, :attr:`~SensorFrame.right_encoder_counts`
+ENCODER_PACKETS: tuple[int, ...] = (43, 44)
 
 
 class FrameLayout:
@@ -205,11 +231,14 @@ class SensorFrame:
         try:
             return self._values[self._layout.index[packet_id]]
         except (KeyError, TypeError):
-            name = PACKETS[packet_id].name if packet_id in PACKETS else "unknown"
-            raise KeyError(
-                f"packet {packet_id} ({name}) is not in this frame; it carries "
-                f"{list(self._layout.members)}"
-            ) from None
+            raise self._missing(packet_id) from None
+
+    def _missing(self, packet_id: object) -> KeyError:
+        name = PACKETS[packet_id].name if packet_id in PACKETS else "unknown"  # type: ignore[index]
+        return KeyError(
+            f"packet {packet_id} ({name}) is not in this frame; it carries "
+            f"{list(self._layout.members)}"
+        )
 
     def get(self, packet_id: int, default: int | None = None) -> int | None:
         i = self._layout.index.get(packet_id)
@@ -251,6 +280,24 @@ class SensorFrame:
     def bumps(self) -> BumpsWheelDrops:
         return BUMPS_BY_BYTE[self[7] & 0xFF]
 
+    # Hazards: read on every tick by the behaviours, so each reads its values straight from
+    # the slots (no ``__getitem__`` call); a missing packet raises the same KeyError.
+    @property
+    def any_bump(self) -> bool:
+        """Either bumper pressed (packet 7, bits 0-1)."""
+        try:
+            return self._values[self._layout.index[7]] & BUMP_BITS != 0
+        except KeyError:
+            raise self._missing(7) from None
+
+    @property
+    def any_wheel_drop(self) -> bool:
+        """Either wheel dropped (packet 7, bits 2-3 only; the unused bits 4-7 are not read)."""
+        try:
+            return self._values[self._layout.index[7]] & WHEEL_DROP_BITS != 0
+        except KeyError:
+            raise self._missing(7) from None
+
     @property
     def wall(self) -> bool:
         return bool(self[8])
@@ -273,7 +320,23 @@ class SensorFrame:
 
     @property
     def any_cliff(self) -> bool:
-        return bool(self[9] or self[10] or self[11] or self[12])
+        """One of the four cliff sensors (packets 9-12) sees a drop."""
+        values, index = self._values, self._layout.index
+        try:
+            return bool(values[index[9]] or values[index[10]] or values[index[11]]
+                        or values[index[12]])  # fmt: skip
+        except KeyError as exc:
+            raise self._missing(exc.args[0]) from None
+
+    @property
+    def any_hazard(self) -> bool:
+        """A bump, a wheel drop or a cliff (packets 7, 9-12): the union of the three."""
+        values, index = self._values, self._layout.index
+        try:
+            return bool(values[index[7]] & (BUMP_BITS | WHEEL_DROP_BITS) or values[index[9]]
+                        or values[index[10]] or values[index[11]] or values[index[12]])  # fmt: skip
+        except KeyError as exc:
+            raise self._missing(exc.args[0]) from None
 
     @property
     def virtual_wall(self) -> bool:
@@ -289,15 +352,24 @@ class SensorFrame:
 
     @property
     def ir_omni(self) -> IRCharacter:
-        return IR_CHARACTERS[self[17]]
+        try:
+            return IR_CHARACTERS[self._values[self._layout.index[17]] & 0xFF]
+        except KeyError:
+            raise self._missing(17) from None
 
     @property
     def ir_left(self) -> IRCharacter:
-        return IR_CHARACTERS[self[52]]
+        try:
+            return IR_CHARACTERS[self._values[self._layout.index[52]] & 0xFF]
+        except KeyError:
+            raise self._missing(52) from None
 
     @property
     def ir_right(self) -> IRCharacter:
-        return IR_CHARACTERS[self[53]]
+        try:
+            return IR_CHARACTERS[self._values[self._layout.index[53]] & 0xFF]
+        except KeyError:
+            raise self._missing(53) from None
 
     @property
     def buttons(self) -> Buttons:
@@ -403,8 +475,59 @@ class SensorFrame:
         return LIGHT_BUMPER_BY_BYTE[self[45] & 0xFF]
 
     @property
+    def light_bumper_ahead(self) -> bool:
+        """One of the four front light-bumper sensors (packet 45 bits 1-4) sees something."""
+        try:
+            return self._values[self._layout.index[45]] & LIGHT_BUMPER_AHEAD_BITS != 0
+        except KeyError:
+            raise self._missing(45) from None
+
+    @property
     def light_bump_signals(self) -> tuple[int, int, int, int, int, int]:
+        """Left, front left, centre left, centre right, front right, right (packets 46-51)."""
         return (self[46], self[47], self[48], self[49], self[50], self[51])
+
+    @property
+    def light_bump_left_signal(self) -> int:
+        try:
+            return self._values[self._layout.index[46]]
+        except KeyError:
+            raise self._missing(46) from None
+
+    @property
+    def light_bump_front_left_signal(self) -> int:
+        try:
+            return self._values[self._layout.index[47]]
+        except KeyError:
+            raise self._missing(47) from None
+
+    @property
+    def light_bump_center_left_signal(self) -> int:
+        try:
+            return self._values[self._layout.index[48]]
+        except KeyError:
+            raise self._missing(48) from None
+
+    @property
+    def light_bump_center_right_signal(self) -> int:
+        try:
+            return self._values[self._layout.index[49]]
+        except KeyError:
+            raise self._missing(49) from None
+
+    @property
+    def light_bump_front_right_signal(self) -> int:
+        try:
+            return self._values[self._layout.index[50]]
+        except KeyError:
+            raise self._missing(50) from None
+
+    @property
+    def light_bump_right_signal(self) -> int:
+        try:
+            return self._values[self._layout.index[51]]
+        except KeyError:
+            raise self._missing(51) from None
 
     @property
     def motor_currents_ma(self) -> tuple[int, int, int, int]:
