@@ -173,6 +173,8 @@ BAUD_CODES: dict[int, int] = {
     300: 0, 600: 1, 1200: 2, 2400: 3, 4800: 4, 9600: 5, 14400: 6, 19200: 7, 28800: 8,
     38400: 9, 57600: 10, 115200: 11,
 }  # fmt: skip
+#: The same table the other way round: the rate in bps each Baud (129) code sets.
+BAUD_RATES: Mapping[int, int] = {code: rate for rate, code in BAUD_CODES.items()}
 
 
 def baud_rate(rate: int) -> Command:

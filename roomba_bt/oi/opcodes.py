@@ -1,9 +1,12 @@
 """The opcode table: every command of both OI specifications, defined once.
 
 Each entry names the command's data bytes (fixed arguments with their wire type and range, or
-a variable tail), the OI modes that accept it, the mode it leads to, the robot profiles that
-have it and the actuator "channel" it drives (two commands on one channel in one tick: the
-last wins). The encoder, the mode model, the mission validator and the simulator read it.
+a variable tail), the OI modes that accept it, the mode it leads to, what else it does to the
+link (its :class:`Effect`: a built-in cycle, stream control, a sensor reply, a baud change, the
+OI going quiet), the robot profiles that have it and the actuator "channel" it drives (two
+commands on one channel in one tick: the last wins). The encoder, the mode model, the
+connection, the mission validator and the simulator read it; none of them names an opcode by
+number for what it does.
 
 Wire types (all big-endian)::
 
@@ -15,11 +18,13 @@ Wire types (all big-endian)::
 
 from __future__ import annotations
 
+import enum
 from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
 
 from roomba_bt.oi.modes import ALL_MODES, DRIVING_MODES, OPEN_MODES, OIMode
+from roomba_bt.oi.packets import VALID_PACKET_IDS
 
 ALL_PROFILES: frozenset[str] = frozenset({"create2", "roomba600", "roomba500"})
 NEW_PROFILES: frozenset[str] = frozenset({"create2", "roomba600"})
@@ -90,6 +95,32 @@ class TailSpec:
         return sum(a.size for a in self.item)
 
 
+class Effect(enum.Enum):
+    """What a command does besides its mode change (``leads_to``) and its actuator channel.
+
+    The connection and the simulator act on these; a command has at most one."""
+
+    #: Spot (134), Clean (135), Max (136), Seek Dock (143): the robot's own cycle drives it
+    #: while the OI stays in Passive (where Drive is refused) until the cycle ends there, or
+    #: until a command that takes the OI out of Passive (:attr:`CommandSpec.ends_cycle`).
+    BUILTIN_CYCLE = "builtin_cycle"
+    #: Stream (148) ``[148][n][id 1]...[id n]``: a frame of these packets every 15 ms from
+    #: now on, replacing the stream before; n = 0 stops it.
+    STREAM = "stream"
+    #: Pause/Resume Stream (150) ``[150][0]`` pauses, ``[150][1]`` resumes the last list.
+    PAUSE_RESUME = "pause_resume"
+    #: Sensors (142), Query List (149): one reply of the packets' data, no header, no checksum
+    #: (while a stream runs it cannot be told apart from the stream).
+    QUERY = "query"
+    #: Baud (129): the robot changes its rate; the host waits 100 ms and follows.
+    BAUD = "baud"
+    #: Reset (7), Stop (173): the OI stops; streams end and the robot answers nothing but
+    #: Start (and Reset).
+    SILENCES = "silences"
+    #: Power (133): the robot powers down (sleeps) until a button or the BRC pin wakes it.
+    POWER_DOWN = "power_down"
+
+
 @dataclass(frozen=True, slots=True)
 class CommandSpec:
     """One OI command (opcode)."""
@@ -105,6 +136,7 @@ class CommandSpec:
     variable: str | None = None  # description of a variable-length tail, if any
     doc: str = ""
     tail: TailSpec | None = None
+    effect: Effect | None = None
 
     @property
     def fixed_data_bytes(self) -> int:
@@ -130,6 +162,13 @@ class CommandSpec:
     def changes_mode(self) -> bool:
         return self.leads_to is not None
 
+    @property
+    def ends_cycle(self) -> bool:
+        """A built-in cycle has certainly ended after this command: it takes the OI to Safe or
+        Full (the host takes the wheels) or to Off (the OI stops). Start (128) and the cycles
+        themselves lead to Passive, where a cycle may still drive."""
+        return self.leads_to is not None and self.leads_to is not OIMode.PASSIVE
+
 
 def _c(
     opcode: int,
@@ -144,9 +183,10 @@ def _c(
     variable: str | None = None,
     doc: str = "",
     tail: TailSpec | None = None,
+    effect: Effect | None = None,
 ) -> CommandSpec:
     return CommandSpec(
-        opcode, name, title, args, modes, leads_to, profiles, channel, variable, doc, tail
+        opcode, name, title, args, modes, leads_to, profiles, channel, variable, doc, tail, effect
     )
 
 
@@ -155,12 +195,14 @@ def _u8(name: str, lo: int = 0, hi: int = 255, unit: str = "", doc: str = "") ->
 
 
 def _packet_id() -> ArgSpec:
-    return ArgSpec("packet_id", "B", 0, 107, "", "sensor packet or group id", PACKET_ID_CHOICES)
+    """A packet id of Sensors (142), Query List (149) and Stream (148): single packets 7-58
+    and the groups 0-6, 100, 101, 106, 107 (the packet table's ids). 102-105 are named by
+    neither spec: refused."""
+    return ArgSpec(
+        "packet_id", "B", 0, max(VALID_PACKET_IDS), "", "sensor packet or group id",
+        VALID_PACKET_IDS,
+    )  # fmt: skip
 
-
-#: Every id Sensors (142), Query List (149) and Stream (148) accept: single packets 7-58 and
-#: the groups 0-6, 100, 101, 106, 107. 102-105 are named by neither spec: refused.
-PACKET_ID_CHOICES: frozenset[int] = frozenset(range(0, 59)) | frozenset({100, 101, 106, 107})
 
 VELOCITY = ArgSpec("velocity", "h", -500, 500, "mm/s", "average wheel velocity")
 RADIUS = ArgSpec("radius", "h", -2000, 2000, "mm", "turn radius; 0x8000/0x7FFF straight, -1/1 spin")
@@ -174,18 +216,23 @@ _SCHEDULE_TIMES: tuple[ArgSpec, ...] = tuple(
 
 _COMMAND_LIST: tuple[CommandSpec, ...] = (
     _c(7, "reset", "Reset", modes=ALL_MODES, leads_to=OIMode.OFF, profiles=NEW_PROFILES,
+       effect=Effect.SILENCES,
        doc="Resets the robot as if the battery were reinserted; it prints a banner."),
     _c(128, "start", "Start", modes=ALL_MODES, leads_to=OIMode.PASSIVE,
        doc="Starts the OI; the only way out of Off. Also the way back to Passive."),
-    _c(129, "baud", "Baud", (_u8("baud_code", 0, 11),),
+    _c(129, "baud", "Baud", (_u8("baud_code", 0, 11),), effect=Effect.BAUD,
        doc="Changes the baud rate; wait 100 ms before sending at the new rate."),
     _c(130, "control", "Control", leads_to=OIMode.SAFE, doc="Identical to Safe (131)."),
     _c(131, "safe", "Safe", leads_to=OIMode.SAFE),
     _c(132, "full", "Full", leads_to=OIMode.FULL),
-    _c(133, "power", "Power", leads_to=OIMode.PASSIVE, doc="Powers the robot down."),
-    _c(134, "spot", "Spot", leads_to=OIMode.PASSIVE, channel="wheels"),
-    _c(135, "clean", "Clean", leads_to=OIMode.PASSIVE, channel="wheels"),
-    _c(136, "max", "Max", leads_to=OIMode.PASSIVE, channel="wheels"),
+    _c(133, "power", "Power", leads_to=OIMode.PASSIVE, effect=Effect.POWER_DOWN,
+       doc="Powers the robot down."),
+    _c(134, "spot", "Spot", leads_to=OIMode.PASSIVE, channel="wheels",
+       effect=Effect.BUILTIN_CYCLE),
+    _c(135, "clean", "Clean", leads_to=OIMode.PASSIVE, channel="wheels",
+       effect=Effect.BUILTIN_CYCLE),
+    _c(136, "max", "Max", leads_to=OIMode.PASSIVE, channel="wheels",
+       effect=Effect.BUILTIN_CYCLE),
     _c(137, "drive", "Drive", (VELOCITY, RADIUS), modes=DRIVING_MODES, channel="wheels"),
     _c(138, "motors", "Motors", (_u8("motor_bits", 0, 31, "bits"),),
        modes=DRIVING_MODES, channel="motors"),
@@ -199,9 +246,10 @@ _COMMAND_LIST: tuple[CommandSpec, ...] = (
                                      _u8("note_duration", 0, 255, "1/64 s")))),
     _c(141, "play", "Play", (_u8("song_number", 0, 4),), modes=DRIVING_MODES,
        channel="speaker"),
-    _c(142, "sensors", "Sensors", (_packet_id(),),
+    _c(142, "sensors", "Sensors", (_packet_id(),), effect=Effect.QUERY,
        doc="Asks for one packet or group; the reply has no header and no checksum."),
-    _c(143, "seek_dock", "Seek Dock", leads_to=OIMode.PASSIVE, channel="wheels"),
+    _c(143, "seek_dock", "Seek Dock", leads_to=OIMode.PASSIVE, channel="wheels",
+       effect=Effect.BUILTIN_CYCLE),
     _c(144, "pwm_motors", "PWM Motors",
        (ArgSpec("main_brush_pwm", "b", -127, 127), ArgSpec("side_brush_pwm", "b", -127, 127),
         ArgSpec("vacuum_pwm", "b", 0, 127)),
@@ -214,14 +262,15 @@ _COMMAND_LIST: tuple[CommandSpec, ...] = (
        (ArgSpec("right_pwm", "h", -255, 255), ArgSpec("left_pwm", "h", -255, 255)),
        modes=DRIVING_MODES, channel="wheels"),
     _c(148, "stream", "Stream", (_u8("packet_count", 0, 255),),
-       variable="packet_count packet ids", channel="stream",
+       variable="packet_count packet ids", channel="stream", effect=Effect.STREAM,
        doc="Starts a stream of the listed packets every 15 ms. A count of 0 is not described "
            "by either spec (peers send it to stop); prefer Pause/Resume Stream (150).",
        tail=TailSpec("packet_count", (_packet_id(),))),
     _c(149, "query_list", "Query List", (_u8("packet_count", 1, 255),),
-       variable="packet_count packet ids", tail=TailSpec("packet_count", (_packet_id(),))),
+       variable="packet_count packet ids", tail=TailSpec("packet_count", (_packet_id(),)),
+       effect=Effect.QUERY),
     _c(150, "pause_resume_stream", "Pause/Resume Stream", (_u8("stream_state", 0, 1),),
-       channel="stream"),
+       channel="stream", effect=Effect.PAUSE_RESUME),
     _c(162, "scheduling_leds", "Scheduling LEDs",
        (_u8("weekday_bits", 0, 255, "bits"), _u8("scheduling_bits", 0, 255, "bits")),
        modes=DRIVING_MODES, channel="scheduling_leds"),
@@ -239,6 +288,7 @@ _COMMAND_LIST: tuple[CommandSpec, ...] = (
     _c(168, "set_day_time", "Set Day/Time",
        (_u8("day", 0, 6), _u8("hour", 0, 23, "h"), _u8("minute", 0, 59, "min"))),
     _c(173, "stop", "Stop", leads_to=OIMode.OFF, profiles=NEW_PROFILES,
+       effect=Effect.SILENCES,
        doc="Stops the OI: streams stop and the robot answers nothing until Start."),
 )  # fmt: skip
 

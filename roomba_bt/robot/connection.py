@@ -46,10 +46,11 @@ from typing import Literal, NamedTuple
 import serial
 
 from roomba_bt.oi import commands as oi
-from roomba_bt.oi.encode import Command
+from roomba_bt.oi.encode import BAUD_RATES, Command
 from roomba_bt.oi.errors import UnsupportedCommandError
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
+from roomba_bt.oi.opcodes import Effect
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile, get_profile
 from roomba_bt.oi.stream import ReplyParser, StreamParser, check_bandwidth
 from roomba_bt.robot.errors import (
@@ -83,11 +84,6 @@ NO_ANSWER_CAUSES = (
 OPEN_CAUSES = ("wrong device path or URL", "the port in use by another program", "permissions")
 
 EndMode = Literal["passive", "stop"]
-
-
-#: The robot's own cycles (Spot, Clean, Max, Seek Dock): they drive it while the OI is in
-#: Passive, so the safe stop enters Safe first to end them.
-BUILTIN_CYCLES = frozenset({134, 135, 136, 143})
 
 
 class LinkStatus(enum.Enum):
@@ -249,7 +245,7 @@ class Connection:
         self.settle = settle
         self.baud = baud if baud is not None else int(getattr(transport, "baud", DEFAULT_BAUD))
         self._reopen = reopen
-        if end_in == "stop" and not self.profile.has_command(173):
+        if end_in == "stop" and not self.profile.has_command("stop"):
             log.warning(
                 "%s has no Stop (173); the connection will end in Passive (Start)",
                 self.profile.title,
@@ -668,12 +664,12 @@ class Connection:
         except (ModeError, UnsupportedCommandError):
             self._refused += 1
             raise
-        if spec.opcode == 148:
+        if spec.effect is Effect.STREAM:
             check_bandwidth(command.args[1:], self.baud)
         warning = self.profile.command_warning(spec)
         if warning is not None:
             log.warning("%s: %s", self.name, warning)
-        if batch is None or spec.opcode == 129:
+        if batch is None or spec.effect is Effect.BAUD:  # the rest goes at the new rate
             if batch:
                 self._write(bytes(batch))
                 batch.clear()
@@ -693,25 +689,26 @@ class Connection:
         self._bytes_written += len(data)
 
     def _after(self, command: Command, now: float) -> None:
-        """What a written command changes on our side of the link."""
-        opcode = command.spec.opcode
-        if opcode == 148:
+        """What a written command changes on our side of the link (the opcode table's
+        :class:`~roomba_bt.oi.opcodes.Effect` and mode)."""
+        spec = command.spec
+        effect = spec.effect
+        if effect is Effect.STREAM:
             self._new_stream(tuple(command.args[1:]), now)
-        elif opcode == 150:
+        elif effect is Effect.PAUSE_RESUME:
             self._streaming = bool(command.args[0]) and bool(self._stream_ids)
             self._stream_started = now
             self._last_frame_time = None
             if self._streaming:
                 self._status = LinkStatus.STREAMING
-        elif opcode in (7, 173):  # Reset, Stop: the robot stops talking
+        elif effect is Effect.SILENCES:
             self._streaming = False
-            self._builtin_may_run = False
-        if opcode in BUILTIN_CYCLES:
+        if effect is Effect.BUILTIN_CYCLE:
             self._builtin_may_run = True
-        elif opcode in (130, 131, 132):
+        elif spec.ends_cycle:
             self._builtin_may_run = False
-        elif opcode == 129:
-            self._change_baud(oi_baud_rate(command.args[0]))
+        elif effect is Effect.BAUD:
+            self._change_baud(BAUD_RATES[command.args[0]])
 
     def _new_stream(self, ids: tuple[int, ...], now: float) -> None:
         with self._state:
@@ -769,7 +766,7 @@ class Connection:
         if mode in DRIVING_MODES:
             commands += [oi.halt(), oi.motors_off()]
         commands.append(oi.pause_stream())
-        use_stop = self.end_in == "stop" and self.profile.has_command(173)
+        use_stop = self.end_in == "stop" and self.profile.has_command("stop")
         commands.append(oi.stop() if use_stop else oi.start())
         return commands
 
@@ -869,11 +866,3 @@ class Connection:
         self._gaps.reset()
         self._status = LinkStatus.OPEN
         self._closed = False
-
-
-def oi_baud_rate(code: int) -> int:
-    """The rate in bps of a Baud (129) code, from the encoder's table."""
-    for rate, rate_code in oi.BAUD_CODES.items():
-        if rate_code == code:
-            return rate
-    raise ValueError(f"unknown baud code {code}")

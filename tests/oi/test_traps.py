@@ -277,3 +277,38 @@ def test_mode_rules_in_the_opcode_table() -> None:
     for spec in COMMANDS.values():
         if spec.opcode not in (7, 128):
             assert OIMode.OFF not in spec.modes, spec.name
+
+
+def test_effects_in_the_opcode_table() -> None:
+    """What each command does to the link besides its mode, as the specs describe it."""
+    from roomba_bt.oi.opcodes import COMMANDS, Effect
+
+    effects = {op: spec.effect for op, spec in COMMANDS.items() if spec.effect is not None}
+    assert effects == {
+        7: Effect.SILENCES,
+        129: Effect.BAUD,
+        133: Effect.POWER_DOWN,
+        134: Effect.BUILTIN_CYCLE,
+        135: Effect.BUILTIN_CYCLE,
+        136: Effect.BUILTIN_CYCLE,
+        142: Effect.QUERY,
+        143: Effect.BUILTIN_CYCLE,
+        148: Effect.STREAM,
+        149: Effect.QUERY,
+        150: Effect.PAUSE_RESUME,
+        173: Effect.SILENCES,
+    }
+    # Safe, Full (and Control) take the wheels from a cycle; Reset and Stop end the OI. Start
+    # and the cycles themselves lead to Passive, where a cycle may still drive.
+    assert {op for op, spec in COMMANDS.items() if spec.ends_cycle} == {7, 130, 131, 132, 173}
+
+
+def test_packet_id_arguments_accept_exactly_the_packet_table_ids() -> None:
+    from roomba_bt.oi.opcodes import COMMANDS
+    from roomba_bt.oi.packets import GROUPS, PACKETS
+
+    known = set(PACKETS) | set(GROUPS)
+    for opcode in (142, 148, 149):
+        spec = COMMANDS[opcode]
+        arg = spec.args[0] if spec.tail is None else spec.tail.item[0]
+        assert {v for v in range(256) if arg.accepts(v)} == known, spec.name
