@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
 import sys
 from pathlib import Path
 from typing import Any
@@ -101,11 +100,10 @@ def stream_packets(mission: Any, baud: int) -> tuple[int, ...]:
 
 
 def run_command(args: argparse.Namespace) -> int:
-    from roomba_bt.robot.connection import Connection
     from roomba_bt.robot.errors import ConnectionFailed
-    from roomba_bt.runtime.display import StatusChangeLogger, TerminalDisplay
-    from roomba_bt.runtime.loop import MissionRunner
-    from roomba_bt.runtime.recording import RecordingTransport
+    from roomba_bt.runtime.display import TerminalDisplay, observer_for
+    from roomba_bt.runtime.stack import Recording, RunStack
+    from roomba_bt.transport import Transport
 
     profile = get_profile(args.profile)
     params = parse_params(args.param)
@@ -129,12 +127,11 @@ def run_command(args: argparse.Namespace) -> int:
     simulator = None
     try:
         if args.port:
-            connection = Connection.open(
-                args.port, args.baud, profile, watchdog=args.watchdog, end_in=args.end_in
-            )
-            transport: Any = connection.transport
+            from roomba_bt.cli.links import open_port
+
+            link: Transport = open_port(args.port, args.baud)
         else:
-            from roomba_bt.cli.simulated import make_link, make_simulator
+            from roomba_bt.cli.links import make_link, make_simulator
             from roomba_bt.sim import WorldError
 
             try:
@@ -143,42 +140,35 @@ def run_command(args: argparse.Namespace) -> int:
                 )
             except WorldError as exc:
                 return _error(str(exc))
-            transport = make_link(simulator, args.fast)
-            connection = None
+            link = make_link(simulator, args.fast)
     except ConnectionFailed as exc:
         print(f"roomba-bt: {exc}", file=sys.stderr)
         return ExitCode.CONNECTION
+    record = None
     if args.record:
-        header = {
-            "profile": profile.name,
-            "baud": args.baud,
-            "mission": str(Path(args.mission).resolve()),
-            "parameters": params,
-            "packets": list(packets),
-        }
-        try:
-            transport = RecordingTransport(transport, args.record, header)
-        except OSError as exc:
-            return _error(f"--record {args.record}: {exc.strerror or exc}")
-    if connection is None or args.record:
-        connection = Connection(
-            transport, profile, watchdog=args.watchdog, end_in=args.end_in, baud=args.baud
+        record = Recording(args.record, str(Path(args.mission).resolve()), params)
+    observer = observer_for(args.display, sys.stdout)
+    try:
+        stack = RunStack(
+            mission,
+            link,
+            profile=profile,
+            baud=args.baud,
+            packets=packets,
+            watchdog=args.watchdog,
+            end_in=args.end_in,
+            timeout_s=timeout,
+            observer=observer,
+            record=record,
         )
+    except OSError as exc:
+        return _error(f"--record {args.record}: {exc.strerror or exc}")
 
-    observer: Any = None
-    if args.display == "tree" or (args.display == "auto" and sys.stdout.isatty()):
-        observer = TerminalDisplay(sys.stdout)
-    elif args.display in ("log", "auto"):
-        observer = StatusChangeLogger()
     print(_render_tree(mission), flush=True)
-    runner = MissionRunner(
-        connection, mission, profile=profile, packets=packets, timeout_s=timeout, observer=observer
-    )
-    summary = runner.run()
-    with contextlib.suppress(Exception):
-        connection.close()
-    if isinstance(observer, TerminalDisplay) and runner.has_snapshot:
-        observer.render(runner)
+    summary = stack.run()
+    stack.close()
+    if isinstance(observer, TerminalDisplay) and stack.runner.has_snapshot:
+        observer.render(stack.runner)
     print(_render_tree(mission, status=True))
     print(summary)
     if (
@@ -186,7 +176,7 @@ def run_command(args: argparse.Namespace) -> int:
         and summary.reason
     ):
         print(f"roomba-bt: {summary.outcome.value}: {summary.reason}", file=sys.stderr)
-    for refusal in runner.refusals[:5]:
+    for refusal in stack.runner.refusals[:5]:
         print(f"refused: {refusal}", file=sys.stderr)
     if args.plot and simulator is not None:
         plotted = _plot(simulator, args.plot)
@@ -216,9 +206,8 @@ def _plot(simulator: Any, path: str) -> str:
 
 
 def replay_command(args: argparse.Namespace) -> int:
-    from roomba_bt.robot.connection import Connection
-    from roomba_bt.runtime.loop import MissionRunner
     from roomba_bt.runtime.recording import RecordError, ReplayTransport, load_record
+    from roomba_bt.runtime.stack import RunStack
 
     try:
         record = load_record(args.record)
@@ -243,15 +232,16 @@ def replay_command(args: argparse.Namespace) -> int:
         return mission
     packets = tuple(header.get("packets") or stream_packets(mission, baud))
     transport = ReplayTransport(record, name=f"replay:{args.record}")
-    connection = Connection(transport, profile, watchdog=0.0, baud=baud)
-    runner = MissionRunner(
-        connection,
+    stack = RunStack(
         mission,
+        transport,
         profile=profile,
+        baud=baud,
         packets=packets,
+        watchdog=0.0,
         input_ended=lambda: "end of the record" if transport.exhausted else None,
     )
-    summary = runner.run()
+    summary = stack.run()
     print(summary)
     recorded, replayed = record.outbound, bytes(transport.written)
     if recorded == replayed:

@@ -74,6 +74,7 @@ def sensors_command(args: argparse.Namespace) -> int:
     from roomba_bt.robot.connection import Connection
     from roomba_bt.robot.errors import ConnectionFailed, LinkDown
     from roomba_bt.robot.safety import sigterm_raises
+    from roomba_bt.transport import Transport
 
     profile = get_profile(args.profile)
     group = group_for(args.baud)
@@ -86,9 +87,11 @@ def sensors_command(args: argparse.Namespace) -> int:
         return ExitCode.INVALID
     try:
         if args.port:
-            connection = Connection.open(args.port, args.baud, profile)
+            from roomba_bt.cli.links import open_port
+
+            link: Transport = open_port(args.port, args.baud)
         else:
-            from roomba_bt.cli.simulated import make_link, make_simulator
+            from roomba_bt.cli.links import make_link, make_simulator
             from roomba_bt.sim import WorldError
 
             try:
@@ -96,7 +99,8 @@ def sensors_command(args: argparse.Namespace) -> int:
             except WorldError as exc:
                 print(f"roomba-bt: {exc}", file=sys.stderr)
                 return ExitCode.INVALID
-            connection = Connection(make_link(simulator, fast=False), profile, baud=args.baud)
+            link = make_link(simulator, fast=False)
+        connection = Connection(link, profile, baud=args.baud)
         interactive = sys.stdout.isatty()
         shown = 0
         with sigterm_raises(), connection:

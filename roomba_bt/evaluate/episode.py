@@ -1,6 +1,7 @@
 """One evaluation episode: a mission run on the simulator's virtual clock from a seeded pose.
 
-An episode is the same stack as ``roomba-bt run --fast``: the compiled mission, the robot
+An episode is the same stack as ``roomba-bt run --fast``, built by the same
+:class:`~roomba_bt.runtime.stack.RunStack`: the compiled mission, the robot
 :class:`~roomba_bt.robot.connection.Connection` (mode model, guard, watchdog, safe stop), the
 :class:`~roomba_bt.runtime.loop.MissionRunner`, and the simulator behind a
 :class:`~roomba_bt.sim.SimLink`. Nothing is mocked: the mission sees the bytes a robot sends.
@@ -23,8 +24,7 @@ from typing import Any
 
 from roomba_bt.mission import MissionError, load_mission
 from roomba_bt.oi.profiles import get_profile
-from roomba_bt.robot.connection import Connection
-from roomba_bt.runtime.loop import MissionRunner, stream_request
+from roomba_bt.runtime.stack import RunStack
 from roomba_bt.sim import SimLink, Simulator, World, load_world
 from roomba_bt.sim.world import DockSpec
 
@@ -211,13 +211,8 @@ def _run_episode(spec: EpisodeSpec) -> EpisodeResult:
     world = build_world(spec)
     pose = start_pose(world, spec)
     simulator = _MeasuredSimulator(world, profile, spec.seed, start=pose)
-    link = SimLink(simulator)
-    connection = Connection(link, profile, watchdog=0.1, end_in="passive")
-    packets = stream_request(mission.packets, 115200)
-    runner = MissionRunner(
-        connection, mission, profile=profile, packets=packets, timeout_s=spec.timeout_s
-    )
-    summary = runner.run()
+    stack = RunStack(mission, SimLink(simulator), profile=profile, timeout_s=spec.timeout_s)
+    summary = stack.run()
     trace = simulator.trace[:: max(1, spec.trace_every)]
     events = simulator.events
     return EpisodeResult(

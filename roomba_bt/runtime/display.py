@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import logging
 import time
-from typing import TYPE_CHECKING, TextIO
+from typing import TYPE_CHECKING, Literal, TextIO
 
 import py_trees
 
@@ -21,6 +21,10 @@ if TYPE_CHECKING:
     from roomba_bt.runtime.loop import MissionRunner
 
 log = logging.getLogger("roomba_bt.run")
+
+#: ``run --display``: the live tree, one log line per status change, or nothing; ``auto`` is
+#: the tree on a terminal and the log elsewhere.
+Display = Literal["auto", "tree", "log", "none"]
 
 
 def sensor_line(snapshot: Snapshot) -> str:
@@ -93,3 +97,12 @@ class StatusChangeLogger:
                 if status is not py_trees.common.Status.INVALID or node.id in last:
                     self.logger.info("t=%.3fs %s -> %s", t, node.name, status.value)
                 last[node.id] = status
+
+
+def observer_for(display: Display, stream: TextIO) -> TerminalDisplay | StatusChangeLogger | None:
+    """The observer ``--display`` asks for, the tree drawn on ``stream``."""
+    if display == "tree" or (display == "auto" and stream.isatty()):
+        return TerminalDisplay(stream)
+    if display in ("log", "auto"):
+        return StatusChangeLogger()
+    return None

@@ -174,24 +174,19 @@ def episode(
     profile: str = "create2",
 ) -> Transcript:
     from roomba_bt.mission import load_mission
-    from roomba_bt.robot.connection import Connection
-    from roomba_bt.runtime.loop import MissionRunner, stream_request
+    from roomba_bt.runtime.stack import RunStack
 
     robot = get_profile(profile)
     compiled = load_mission(str(MISSIONS / mission), params or {}, profile=robot)
     sim = Simulator(load_world(world), robot, seed, random_start=True)
     transcript = Transcript()
     link = RecordingLink(sim, transcript)
-    connection = Connection(link, robot, watchdog=0.1, end_in="passive")
-    packets = stream_request(compiled.packets, 115200)
-    runner = MissionRunner(
-        connection, compiled, profile=robot, packets=packets, timeout_s=timeout_s
-    )
+    stack = RunStack(compiled, link, profile=robot, timeout_s=timeout_s)
     logger = logging.getLogger("roomba_bt")
     level = logger.level
     logger.setLevel(logging.ERROR)  # the mode drops it would log are in the bytes
     try:
-        summary = runner.run()
+        summary = stack.run()
     finally:
         logger.setLevel(level)
     outcome = f"outcome={summary.outcome.value} reason={summary.reason} ticks={summary.ticks}"

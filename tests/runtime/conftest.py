@@ -10,8 +10,8 @@ import pytest
 
 from roomba_bt.mission import load_mission
 from roomba_bt.oi.profiles import CREATE2, RobotProfile
-from roomba_bt.robot.connection import Connection
-from roomba_bt.runtime.loop import MissionRunner, stream_request
+from roomba_bt.runtime.loop import MissionRunner
+from roomba_bt.runtime.stack import RunStack
 from roomba_bt.sim import Faults, Simulator, load_world
 
 from .simrun import Run, RunMission, TapLink
@@ -39,13 +39,16 @@ def run_mission(tmp_path: Path) -> RunMission:
         mission = load_mission(path, params or {}, profile=profile)
         simulator = Simulator(load_world(world), profile, seed, faults)
         link = TapLink(simulator, stall_after, burst)
-        connection = Connection(link, profile, watchdog=watchdog, end_in=end_in)  # type: ignore[arg-type]
-        packets = stream_request(mission.packets, 115200)
-        runner = MissionRunner(
-            connection, mission, profile=profile, packets=packets, timeout_s=timeout
+        stack = RunStack(
+            mission,
+            link,
+            profile=profile,
+            watchdog=watchdog,
+            end_in=end_in,  # type: ignore[arg-type]
+            timeout_s=timeout,
+            observer=observer,
         )
-        runner.observer = observer
-        summary = runner.run()
-        return Run(summary, link, simulator, runner)
+        summary = stack.run()
+        return Run(summary, link, simulator, stack.runner)
 
     return run

@@ -1,0 +1,103 @@
+"""The run stack, assembled in one place for ``run``, ``replay``, ``eval`` and the tests.
+
+A run is the same five parts whatever the far end is::
+
+    link (a Transport: serial port, simulator link, recorded bytes)
+      └─ RecordingTransport        with --record: every chunk in and out, timed
+          └─ Connection             parser, mode model and guard, watchdog, safe stop
+              └─ MissionRunner      one tick per stream frame; the behaviours' RobotHandle
+                  └─ observer       live tree, status-change log, or nothing
+
+The link is given, not made here: this layer may not import the simulator (it sits below
+the CLI and the evaluation, which choose between a robot's port and the simulator), and the
+link's clock (wall or virtual) is the link's business. Everything above the link is the same
+code on a robot, on the simulator and in a replay.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from roomba_bt.oi.profiles import RobotProfile
+from roomba_bt.robot.connection import Connection, EndMode
+from roomba_bt.runtime.loop import MissionLike, MissionRunner, TickObserver, stream_request
+from roomba_bt.runtime.recording import RecordingTransport
+from roomba_bt.runtime.summary import RunSummary
+from roomba_bt.transport.base import Transport
+
+
+@dataclass(frozen=True)
+class Recording:
+    """Where ``--record`` writes, and what its header says the run was."""
+
+    path: str | Path
+    #: the mission file, as ``replay`` will look for it
+    mission: str
+    #: the ``-p`` values as given (text), replayed with the same mission
+    parameters: Mapping[str, str] = field(default_factory=dict)
+
+
+class RunStack:
+    """One mission on one link: the connection, the runner and, if asked, the record.
+
+    ``packets`` defaults to :func:`~roomba_bt.runtime.loop.stream_request` at ``baud`` (a
+    replay passes the recorded ones). Building it writes nothing to the link (a record's
+    header aside); :meth:`run` does the start-up, the ticks and the safe stop.
+    """
+
+    def __init__(
+        self,
+        mission: MissionLike,
+        link: Transport,
+        *,
+        profile: RobotProfile,
+        baud: int = 115200,
+        packets: Sequence[int] | None = None,
+        watchdog: float = 0.1,
+        end_in: EndMode = "passive",
+        timeout_s: float | None = None,
+        observer: TickObserver | None = None,
+        input_ended: Callable[[], str | None] | None = None,
+        record: Recording | None = None,
+    ) -> None:
+        self.mission = mission
+        self.packets = tuple(
+            packets if packets is not None else stream_request(mission.packets, baud)
+        )
+        transport: Transport = link
+        if record is not None:
+            header = {
+                "profile": profile.name,
+                "baud": baud,
+                "mission": record.mission,
+                "parameters": dict(record.parameters),
+                "packets": list(self.packets),
+            }
+            transport = RecordingTransport(link, record.path, header)  # OSError: the file
+        self.link = link
+        self.transport = transport
+        self.connection = Connection(
+            transport, profile, watchdog=watchdog, end_in=end_in, baud=baud
+        )
+        self.runner = MissionRunner(
+            self.connection,
+            mission,
+            profile=profile,
+            packets=self.packets,
+            timeout_s=timeout_s,
+            observer=observer,
+            input_ended=input_ended,
+        )
+
+    def run(self) -> RunSummary:
+        """The mission to its end; the robot is left stopped (see :meth:`MissionRunner.run`)."""
+        return self.runner.run()
+
+    def close(self) -> None:
+        """Close the connection (and the record); a link already gone is no error here: the
+        run's summary has said what happened to it."""
+        with contextlib.suppress(Exception):
+            self.connection.close()

@@ -1,0 +1,87 @@
+"""The one run-stack assembly: a record made through it replays through it, byte for byte;
+``--display`` picks its observer."""
+
+from __future__ import annotations
+
+import io
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.mission import load_mission
+from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.runtime.display import StatusChangeLogger, TerminalDisplay, observer_for
+from roomba_bt.runtime.loop import stream_request
+from roomba_bt.runtime.recording import ReplayTransport, load_record
+from roomba_bt.runtime.stack import Recording, RunStack
+from roomba_bt.runtime.summary import Outcome
+from roomba_bt.sim import SimLink, Simulator, load_world
+
+DRIVE_TO_WALL = """
+mission: to-the-wall
+parameters:
+  speed: {type: speed, default: 200 mm/s}
+tree:
+  sequence:
+    - mode: safe
+    - drive: {velocity: "${speed}"}
+      until: {bump: {}}
+"""
+
+
+def test_a_record_made_by_the_stack_replays_through_it_byte_for_byte(tmp_path: Path) -> None:
+    path = tmp_path / "to-the-wall.yaml"
+    path.write_text(textwrap.dedent(DRIVE_TO_WALL))
+    params = {"speed": "300 mm/s"}
+    mission = load_mission(path, params, profile=CREATE2)
+    record_path = tmp_path / "run.jsonl"
+    simulator = Simulator(load_world("empty-room"), CREATE2, 0)
+    stack = RunStack(
+        mission,
+        SimLink(simulator),
+        profile=CREATE2,
+        timeout_s=30.0,
+        record=Recording(record_path, str(path), params),
+    )
+    assert stack.packets == stream_request(mission.packets, 115200)
+    summary = stack.run()
+    stack.close()
+    assert summary.outcome is Outcome.SUCCESS
+
+    record = load_record(record_path)
+    assert record.header["mission"] == str(path)
+    assert record.header["parameters"] == params
+    assert record.header["packets"] == list(stack.packets)
+    assert record.header["profile"] == "create2" and record.header["baud"] == 115200
+    replay = ReplayTransport(record)
+    again = RunStack(
+        load_mission(path, params, profile=CREATE2),
+        replay,
+        profile=CREATE2,
+        packets=record.header["packets"],
+        watchdog=0.0,
+        input_ended=lambda: "end of the record" if replay.exhausted else None,
+    )
+    assert again.run().outcome is Outcome.SUCCESS
+    assert bytes(replay.written) == record.outbound
+
+
+class _Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+@pytest.mark.parametrize(
+    ("display", "terminal", "kind"),
+    [
+        ("auto", True, TerminalDisplay),
+        ("auto", False, StatusChangeLogger),
+        ("tree", False, TerminalDisplay),
+        ("log", True, StatusChangeLogger),
+        ("none", True, type(None)),
+    ],
+)
+def test_display_picks_the_observer(display: str, terminal: bool, kind: type) -> None:
+    stream = _Terminal() if terminal else io.StringIO()
+    assert isinstance(observer_for(display, stream), kind)  # type: ignore[arg-type]
