@@ -27,18 +27,9 @@ from importlib.metadata import EntryPoint, entry_points
 from pathlib import Path
 
 from roomba_bt.behaviours.declare import Declaration, DeclarationError, RobotBehaviour
+from roomba_bt.behaviours.language import RESERVED
 
 ENTRY_POINT_GROUP = "roomba_bt.behaviours"
-
-#: Words of the language itself; a behaviour may not take them.
-RESERVED: frozenset[str] = frozenset(
-    {
-        "sequence", "reactive_sequence", "selector", "fallback", "reactive_fallback",
-        "reactive_selector", "parallel", "retry", "repeat", "timeout", "inverter",
-        "force_success", "force_failure", "oneshot", "delay", "for_each", "subtree",
-        "while", "until", "name", "include", "tree",
-    }
-)  # fmt: skip
 
 
 @dataclass(frozen=True, slots=True)

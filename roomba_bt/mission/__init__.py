@@ -16,8 +16,9 @@ from pathlib import Path
 from roomba_bt.behaviours.registry import Registry, default_registry
 from roomba_bt.mission.build import CompiledMission, build
 from roomba_bt.mission.checks import RUNTIME_PACKETS, KeyCheck, ModeCheck, check_stream
-from roomba_bt.mission.compiler import Compiler, Context
 from roomba_bt.mission.diagnostics import Diagnostic, MissionError
+from roomba_bt.mission.loader import Loader
+from roomba_bt.mission.values import Context
 from roomba_bt.oi.modes import ALL_MODES, OIMode
 from roomba_bt.oi.profiles import CREATE2, RobotProfile
 
@@ -66,8 +67,7 @@ def _compile(
     require_tree: bool,
 ) -> tuple[CompiledMission | None, list[Diagnostic]]:
     ctx = Context(registry=registry or default_registry())
-    compiler = Compiler(ctx, _display)
-    parsed = compiler.compile_file(path, dict(params or {}), require_tree=require_tree)
+    parsed = Loader(ctx, _display).compile_file(path, dict(params or {}), require_tree=require_tree)
     if parsed is None or parsed.tree is None:
         return None, sorted(ctx.diagnostics)
     tree = parsed.tree

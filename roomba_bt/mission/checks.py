@@ -84,35 +84,30 @@ class ModeCheck:
         success = frozenset({after}) if after is not None else entry
         return success, entry
 
-    def _sequence(self, node: Node, entry: Modes) -> tuple[Modes, Modes]:
+    def _chain(self, node: Node, entry: Modes, *, on_success: bool) -> tuple[Modes, Modes]:
+        """Children in order: a sequence goes on after a success, a selector after a
+        failure, so each child starts in the modes the previous one ended in that way."""
+
         def once(start: Modes) -> tuple[Modes, Modes, Modes]:
-            current, failed, seen = start, _EMPTY, start
+            current, stopped, seen = start, _EMPTY, start
             for child in node.children:
                 ok, ko = self.visit(child, current)
-                failed |= ko
+                go_on, stop = (ok, ko) if on_success else (ko, ok)
+                stopped |= stop
                 seen |= ok | ko
-                current = ok
-            return current, failed, seen
+                current = go_on
+            return current, stopped, seen
 
-        success, failure, seen = once(entry)
+        finished, stopped, seen = once(entry)
         if not node.options.get("memory", True):  # reactive: earlier children run again
-            success, failure, _ = once(entry | seen)
-        return success, failure
+            finished, stopped, _ = once(entry | seen)
+        return (finished, stopped) if on_success else (stopped, finished)
+
+    def _sequence(self, node: Node, entry: Modes) -> tuple[Modes, Modes]:
+        return self._chain(node, entry, on_success=True)
 
     def _selector(self, node: Node, entry: Modes) -> tuple[Modes, Modes]:
-        def once(start: Modes) -> tuple[Modes, Modes, Modes]:
-            current, succeeded, seen = start, _EMPTY, start
-            for child in node.children:
-                ok, ko = self.visit(child, current)
-                succeeded |= ok
-                seen |= ok | ko
-                current = ko
-            return succeeded, current, seen
-
-        success, failure, seen = once(entry)
-        if not node.options.get("memory", True):
-            success, failure, _ = once(entry | seen)
-        return success, failure
+        return self._chain(node, entry, on_success=False)
 
     _reactive_sequence = _sequence
     _fallback = _selector

@@ -15,31 +15,12 @@ from roomba_bt.behaviours.declare import BlackboardRef, Declaration
 from roomba_bt.behaviours.units import ValueType
 from roomba_bt.mission.source import Loc
 
-#: Composite words -> (py_trees class name, default memory).
-COMPOSITES: dict[str, tuple[str, bool]] = {
-    "sequence": ("Sequence", True),
-    "reactive_sequence": ("Sequence", False),
-    "fallback": ("Selector", True),
-    "selector": ("Selector", True),
-    "reactive_fallback": ("Selector", False),
-    "reactive_selector": ("Selector", False),
-    "parallel": ("Parallel", False),
-}
-#: Decorators whose value is the child itself (``inverter: {bump: {}}``) or ``{do: child}``.
-SIMPLE_DECORATORS = ("inverter", "force_success", "force_failure")
-#: Decorators with options and a ``do:`` child.
-DECORATORS = ("retry", "repeat", "timeout", "delay", "oneshot", "for_each")
-MODIFIERS = ("name", "while", "until")
-LANGUAGE_WORDS: tuple[str, ...] = (
-    *COMPOSITES, *SIMPLE_DECORATORS, *DECORATORS, "subtree",
-)  # fmt: skip
-
 
 @dataclass(eq=False)
 class Node:
     """One node of the checked tree."""
 
-    kind: str  # "leaf", a composite or decorator word, or "guard"
+    kind: str  # "leaf", a word of behaviours.language.WORDS, or "guard"
     loc: Loc
     name: str
     children: list[Node] = field(default_factory=list)

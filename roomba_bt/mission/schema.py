@@ -1,19 +1,20 @@
 """The JSON Schema of mission files, generated from the same declarations the validator
 reads (``roomba-bt schema > mission.schema.json``), for editor completion and CI.
 
-The schema knows every node word, every behaviour's parameters with their types and units,
-and the modifiers (``name``, ``while``, ``until``). What it cannot express (units in range,
-modes, blackboard order, the stream budget) ``roomba-bt validate`` checks.
+The schema knows every word of the language with its options (from
+:data:`roomba_bt.behaviours.language.WORDS`), every behaviour's parameters with their types
+and units, and the modifiers (``name``, ``while``, ``until``). What it cannot express (units
+in range, modes, blackboard order, the stream budget) ``roomba-bt validate`` checks.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-from roomba_bt.behaviours.declare import Declaration
+from roomba_bt.behaviours.declare import Declaration, Param
+from roomba_bt.behaviours.language import MODIFIERS, STRUCTURAL, WORDS, NodeKind, Shape
 from roomba_bt.behaviours.registry import Registry, default_registry
 from roomba_bt.behaviours.units import VALUE_TYPES
-from roomba_bt.mission.ir import COMPOSITES, SIMPLE_DECORATORS
 
 SCHEMA_ID = "https://roomba-bt.example/mission.schema.json"
 _NODE = {"$ref": "#/$defs/node"}
@@ -23,9 +24,8 @@ _SUBSTITUTION = {
     "description": "${parameter} or @blackboard_key",
 }
 _MODIFIERS: dict[str, Any] = {
-    "name": {"type": "string", "description": "the node's name in displays"},
-    "while": {**_NODE, "description": "run while this condition succeeds, else FAILURE"},
-    "until": {**_NODE, "description": "run until this condition succeeds, then SUCCESS"},
+    word: {**({"type": "string"} if word == "name" else _NODE), "description": doc}
+    for word, doc in MODIFIERS.items()
 }
 
 
@@ -37,6 +37,38 @@ def _with_modifiers(word: str, value: dict[str, Any], doc: str) -> dict[str, Any
         "required": [word],
         "additionalProperties": False,
     }
+
+
+def _option_schema(option: Param) -> dict[str, Any]:
+    """A language option: its type (a ``${parameter}`` too, unless the compiler takes it as
+    written), minimum and default."""
+    schema = option.type.schema()
+    if option.minimum is not None:
+        schema["minimum"] = option.minimum
+    if option.type not in STRUCTURAL:
+        schema = {"anyOf": [schema, _SUBSTITUTION]}
+    if option.default is not None:
+        schema["default"] = option.default
+    if option.doc:
+        schema["description"] = option.doc
+    return schema
+
+
+def _word_schema(kind: NodeKind) -> dict[str, Any]:
+    """What may follow a word of the language, from its :class:`NodeKind`."""
+    options = {p.name: _option_schema(p) for p in kind.options}
+    required = [p.name for p in kind.options if p.required]
+    if kind.shape is Shape.SUBTREE:
+        by_id = {"type": "object", "properties": options, "required": required}
+        return {"anyOf": [{"type": "string"}, by_id]}
+    if kind.shape is Shape.CHILDREN:
+        children = {"type": "array", "items": _NODE, "minItems": 1}
+        long_form = {"type": "object", "properties": {"children": children, **options},
+                     "required": ["children"], "additionalProperties": False}  # fmt: skip
+        return {"anyOf": [children, long_form]}
+    long_form = {"type": "object", "properties": {**options, "do": _NODE},
+                 "required": ["do", *required], "additionalProperties": False}  # fmt: skip
+    return {"anyOf": [long_form, _NODE]} if kind.shape is Shape.CHILD_OR_DO else long_form
 
 
 def _param_schema(decl: Declaration) -> dict[str, Any]:
@@ -70,93 +102,15 @@ def mission_schema(registry: Registry | None = None) -> dict[str, Any]:
     defs: dict[str, Any] = {}
     node_forms: list[dict[str, Any]] = []
     bare: list[str] = []
-    children = {"type": "array", "items": _NODE, "minItems": 1}
-    for word, (cls, memory) in COMPOSITES.items():
-        options: dict[str, Any] = {
-            "children": children,
-            "memory": {"type": "boolean", "default": memory},
-            "name": {"type": "string"},
-        }
-        if word == "parallel":
-            options |= {
-                "policy": {"enum": ["all", "one", "selected"], "default": "all"},
-                "synchronise": {"type": "boolean", "default": True},
-                "selected": {"type": "array", "items": {"type": "string"}},
-            }
-        long_form = {
-            "type": "object",
-            "properties": options,
-            "required": ["children"],
-            "additionalProperties": False,
-        }
-        doc = f"py_trees {cls} (memory {str(memory).lower()} by default)"
-        defs[word] = _with_modifiers(word, {"anyOf": [children, long_form]}, doc)
-    decorator_options: dict[str, dict[str, Any]] = {
-        "retry": {"times": {"type": "integer", "minimum": 1}},
-        "repeat": {
-            "times": {"type": "integer", "minimum": 1},
-            "for": VALUE_TYPES["duration"].schema(),
-        },
-        "timeout": {"after": VALUE_TYPES["duration"].schema()},
-        "delay": {"for": VALUE_TYPES["duration"].schema()},
-        "oneshot": {"policy": {"enum": ["on_success", "on_completion"]}},
-        "for_each": {"key": {"type": "string"}, "in": {"type": "array"}},
-    }
-    required_options = {"retry": ["times"], "timeout": ["after"], "delay": ["for"],
-                        "for_each": ["key", "in"]}  # fmt: skip
-    for word, opts in decorator_options.items():
-        opts = {k: {"anyOf": [v, _SUBSTITUTION]} for k, v in opts.items()}
-        long_form = {
-            "type": "object",
-            "properties": {**opts, "do": _NODE},
-            "required": ["do", *required_options.get(word, [])],
-            "additionalProperties": False,
-        }
-        value = {"anyOf": [long_form, _NODE]} if word == "oneshot" else long_form
-        defs[word] = _with_modifiers(word, value, f"decorator {word}")
-    for word in SIMPLE_DECORATORS:
-        value = {"anyOf": [_NODE, {"type": "object", "properties": {"do": _NODE}}]}
-        defs[word] = _with_modifiers(word, value, f"decorator {word}")
-    subtree_use = {
-        "anyOf": [
-            {"type": "string"},
-            {"type": "object", "properties": {"id": {"type": "string"}}, "required": ["id"]},
-        ]
-    }
-    defs["subtree"] = _with_modifiers("subtree", subtree_use, "use a subtree by name")
+    for kind in WORDS.values():
+        defs[kind.word] = _with_modifiers(kind.word, _word_schema(kind), kind.doc)
     for decl in registry:
         defs[decl.name] = _with_modifiers(decl.name, _param_schema(decl), decl.doc)
         if not any(p.required for p in decl.params):
             bare.append(decl.name)
     node_forms = [{"$ref": f"#/$defs/{word}"} for word in defs]
     defs["node"] = {"anyOf": [*node_forms, {"enum": bare}]}
-    type_names = [n for n in VALUE_TYPES if n != "mark"]
-    parameter = {
-        "type": "object",
-        "properties": {
-            "type": {"enum": [*type_names, "enum"]},
-            "default": {},
-            "doc": {"type": "string"},
-            "choices": {"type": "array", "items": {"type": "string"}},
-        },
-        "required": ["type"],
-        "additionalProperties": False,
-    }
-    key = {
-        "anyOf": [
-            {"enum": [*type_names, "mark"]},
-            {
-                "type": "object",
-                "properties": {
-                    "type": {"enum": [*type_names, "mark"]},
-                    "fields": {"type": "object", "additionalProperties": {"enum": type_names}},
-                    "initial": {},
-                    "doc": {"type": "string"},
-                },
-                "additionalProperties": False,
-            },
-        ]
-    }
+    parameter, key = _declarations()
     return {
         "$schema": "https://json-schema.org/draft/2020-12/schema",
         "$id": SCHEMA_ID,
@@ -187,3 +141,35 @@ def mission_schema(registry: Registry | None = None) -> dict[str, Any]:
         "additionalProperties": False,
         "$defs": defs,
     }
+
+
+def _declarations() -> tuple[dict[str, Any], dict[str, Any]]:
+    """A parameter declaration and a blackboard key declaration."""
+    type_names = [n for n in VALUE_TYPES if n != "mark"]
+    parameter = {
+        "type": "object",
+        "properties": {
+            "type": {"enum": [*type_names, "enum"]},
+            "default": {},
+            "doc": {"type": "string"},
+            "choices": {"type": "array", "items": {"type": "string"}},
+        },
+        "required": ["type"],
+        "additionalProperties": False,
+    }
+    key = {
+        "anyOf": [
+            {"enum": [*type_names, "mark"]},
+            {
+                "type": "object",
+                "properties": {
+                    "type": {"enum": [*type_names, "mark"]},
+                    "fields": {"type": "object", "additionalProperties": {"enum": type_names}},
+                    "initial": {},
+                    "doc": {"type": "string"},
+                },
+                "additionalProperties": False,
+            },
+        ]
+    }
+    return parameter, key

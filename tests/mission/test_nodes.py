@@ -375,9 +375,9 @@ MINIMAL = {
 
 @pytest.mark.parametrize("word", sorted(MINIMAL))
 def test_every_language_word_compiles_onto_py_trees(compile_text: Compile, word: str) -> None:
-    from roomba_bt.mission.ir import LANGUAGE_WORDS
+    from roomba_bt.behaviours.language import WORDS
 
-    assert set(MINIMAL) == set(LANGUAGE_WORDS)
+    assert set(MINIMAL) == set(WORDS)
     text, cls = MINIMAL[word]
     mission = compile_text(
         f"blackboard: {{n: int}}\nsubtrees: {{s: {{tree: {{sequence: [wall]}}}}}}\ntree: {text}\n"

@@ -1,0 +1,241 @@
+"""The mission language's own node kinds, declared once as data: the words, their options,
+the shape of their value and the py_trees class each becomes.
+
+Behaviours declare themselves with :func:`~roomba_bt.behaviours.declare.declare`; the words
+of the language (composites, decorators, ``subtree``) and the modifiers are declared here,
+with the same :class:`~roomba_bt.behaviours.declare.Param` for each option. Everything else
+reads this table: the mission compiler (which options a word takes, their types, which are
+required, ranges), the JSON Schema (``roomba-bt schema``), the tree builder, the registry's
+reserved words and the documentation test. ``mode``, ``set`` and ``mark`` are behaviours
+(declared with ``@declare`` in :mod:`roomba_bt.behaviours.actions`), not words of this table.
+
+Adding a decorator is one :class:`NodeKind` in :data:`WORDS` and one class::
+
+    NodeKind("delay", Shape.DO, lambda name, kids, o: Delay(name, kids[0], o["for"]),
+             (Param("for", DURATION, required=True),), doc="RUNNING for a while, then ...")
+
+It lives in the behaviours layer because the registry (which may not import the mission
+layer) must know the reserved words, and because it names the node classes.
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import py_trees
+from py_trees.behaviour import Behaviour
+
+from roomba_bt.behaviours import decorators as ours
+from roomba_bt.behaviours import lean
+from roomba_bt.behaviours.declare import Param
+from roomba_bt.behaviours.units import BOOL, DURATION, INT, STR, UnitError, ValueType
+from roomba_bt.behaviours.units import enum as enum_type
+
+
+class Shape(enum.Enum):
+    """How a word's value is written."""
+
+    #: ``word: [child, ...]`` or ``word: {children: [...], option: value, ...}``
+    CHILDREN = "children"
+    #: ``word: {option: value, ..., do: child}``
+    DO = "do"
+    #: as DO, or the child itself: ``inverter: {bump: any}``
+    CHILD_OR_DO = "child or do"
+    #: ``subtree: NAME`` or ``subtree: {id: NAME, parameter: value, ...}``
+    SUBTREE = "subtree"
+
+
+def _text(value: object) -> str:
+    if not isinstance(value, str):
+        raise UnitError(f"expected a text, got {value!r}")
+    return value
+
+
+def _list(value: object) -> list[Any]:
+    if not isinstance(value, list):
+        raise UnitError(f"expected a list, got {value!r}")
+    return value
+
+
+#: An option taken as written (no ``${parameter}``): a node's name.
+TEXT = ValueType("text", _text, json_schema=(("type", "string"),))
+#: An option naming some of the node's own children (by their ``name:``).
+CHILD_NAMES = ValueType(
+    "child names", _list, json_schema=(("type", "array"), ("items", {"type": "string"}))
+)
+#: A list of values of the type of the blackboard key the node writes (``for_each.in``).
+KEY_ITEMS = ValueType("items", _list, json_schema=(("type", "array"),))
+#: Option types the compiler reads itself rather than as a ``${parameter}``-able value.
+STRUCTURAL = (TEXT, CHILD_NAMES, KEY_ITEMS)
+
+Build = Callable[[str, Sequence[Behaviour], Mapping[str, Any]], Behaviour]
+
+
+@dataclass(frozen=True, slots=True)
+class NodeKind:
+    """One word of the language: its value's shape, options, and the class it builds."""
+
+    word: str
+    shape: Shape
+    #: ``(name, children, options) -> py_trees node``; None for ``subtree`` (its body is
+    #: compiled in its place)
+    build: Build | None
+    options: tuple[Param, ...] = ()
+    doc: str = ""
+    #: options of which at most one may be given (``repeat``: ``times`` or ``for``)
+    exclusive: tuple[str, ...] = ()
+    #: the option naming the blackboard key this node writes (``for_each.key``)
+    writes_key: str | None = None
+    #: ``(option, other, value)``: the option is required when ``other`` is ``value``
+    required_if: tuple[tuple[str, str, str], ...] = ()
+
+    def option(self, name: str) -> Param | None:
+        for p in self.options:
+            if p.name == name:
+                return p
+        return None
+
+    @property
+    def defaults(self) -> dict[str, Any]:
+        """Options with a default, parsed: what a node has when they are not written."""
+        return {p.name: p.type.parse(p.default) for p in self.options if p.default is not None}
+
+
+# ----------------------------------------------------------------------------- composites
+
+
+def _sequence(name: str, kids: Sequence[Behaviour], o: Mapping[str, Any]) -> Behaviour:
+    return lean.Sequence(name, bool(o["memory"]), list(kids))
+
+
+def _selector(name: str, kids: Sequence[Behaviour], o: Mapping[str, Any]) -> Behaviour:
+    return lean.Selector(name, bool(o["memory"]), list(kids))
+
+
+def _parallel(name: str, kids: Sequence[Behaviour], o: Mapping[str, Any]) -> Behaviour:
+    policy: py_trees.common.ParallelPolicy.Base
+    synchronise = bool(o["synchronise"])
+    if o["policy"] == "one":
+        policy = py_trees.common.ParallelPolicy.SuccessOnOne()
+    elif o["policy"] == "selected":
+        wanted = set(o.get("selected", ()))
+        chosen = [c for c in kids if c.name in wanted]
+        policy = py_trees.common.ParallelPolicy.SuccessOnSelected(chosen, synchronise)
+    else:
+        policy = py_trees.common.ParallelPolicy.SuccessOnAll(synchronise)
+    return lean.Parallel(name, policy, list(kids))
+
+
+_NAME = Param("name", TEXT, doc="the node's name (same as the name modifier)")
+
+
+def _composite(word: str, build: Build, memory: bool, doc: str) -> NodeKind:
+    remembers = Param("memory", BOOL, default=memory, doc="resume a RUNNING child")
+    return NodeKind(word, Shape.CHILDREN, build, (remembers, _NAME), doc)
+
+
+_PARALLEL = NodeKind(
+    "parallel",
+    Shape.CHILDREN,
+    _parallel,
+    (
+        Param("memory", BOOL, default=False, doc="unused by parallel"),
+        _NAME,
+        Param(
+            "policy",
+            enum_type("all", "one", "selected"),
+            default="all",
+            doc="SUCCESS when all children succeed, any one does, or the selected ones do",
+        ),
+        Param(
+            "synchronise", BOOL, default=True, doc="do not re-tick children that already succeeded"
+        ),
+        Param("selected", CHILD_NAMES, doc="child names, for policy: selected"),
+    ),
+    "py_trees Parallel: ticks every child each tick",
+    required_if=(("selected", "policy", "selected"),),
+)
+
+# ----------------------------------------------------------------------------- decorators
+
+
+def _oneshot(name: str, kids: Sequence[Behaviour], o: Mapping[str, Any]) -> Behaviour:
+    policy = (
+        py_trees.common.OneShotPolicy.ON_COMPLETION
+        if o.get("policy") == "on_completion"
+        else py_trees.common.OneShotPolicy.ON_SUCCESSFUL_COMPLETION
+    )
+    return lean.OneShot(name, kids[0], policy)
+
+
+_KINDS: tuple[NodeKind, ...] = (
+    _composite("sequence", _sequence, True, "py_trees Sequence: children in order"),
+    _composite("reactive_sequence", _sequence, False,
+               "py_trees Sequence without memory: re-ticks every child from the first"),
+    _composite("fallback", _selector, True, "py_trees Selector: children until one succeeds"),
+    _composite("selector", _selector, True, "py_trees Selector (same as fallback)"),
+    _composite("reactive_fallback", _selector, False,
+               "py_trees Selector without memory: a higher child preempts a running one"),
+    _composite("reactive_selector", _selector, False,
+               "py_trees Selector without memory (same as reactive_fallback)"),
+    _PARALLEL,
+    NodeKind("inverter", Shape.CHILD_OR_DO, lambda n, k, o: lean.Inverter(n, k[0]),
+             doc="SUCCESS <-> FAILURE"),
+    NodeKind("force_success", Shape.CHILD_OR_DO, lambda n, k, o: lean.FailureIsSuccess(n, k[0]),
+             doc="FAILURE becomes SUCCESS"),
+    NodeKind("force_failure", Shape.CHILD_OR_DO, lambda n, k, o: lean.SuccessIsFailure(n, k[0]),
+             doc="SUCCESS becomes FAILURE"),
+    NodeKind("retry", Shape.DO, lambda n, k, o: lean.Retry(n, k[0], int(o["times"])),
+             (Param("times", INT, required=True, minimum=1, doc="attempts in all"),),
+             doc="re-run the child after a failure"),
+    NodeKind("repeat", Shape.DO,
+             lambda n, k, o: ours.Repeat(n, k[0], o.get("times"), o.get("for")),
+             (Param("times", INT, minimum=1, doc="successes in all"),
+              Param("for", DURATION, doc="mission time to repeat for")),
+             doc="re-run the child after each success (forever without times or for)",
+             exclusive=("times", "for")),
+    NodeKind("timeout", Shape.DO, lambda n, k, o: ours.Timeout(n, k[0], float(o["after"])),
+             (Param("after", DURATION, required=True, doc="mission time"),),
+             doc="FAILURE, and the child stopped, if it still runs after a while"),
+    NodeKind("delay", Shape.DO, lambda n, k, o: ours.Delay(n, k[0], float(o["for"])),
+             (Param("for", DURATION, required=True, doc="mission time"),),
+             doc="RUNNING for a while, then ticks the child"),
+    NodeKind("oneshot", Shape.CHILD_OR_DO, _oneshot,
+             (Param("policy", enum_type("on_success", "on_completion"),
+                    doc="on_success (the default) or on_completion"),),
+             doc="runs the child until it succeeds (or completes), then returns that result"),
+    NodeKind("for_each", Shape.DO,
+             lambda n, k, o: ours.ForEach(n, k[0], str(o["key"]), o.get("items", ())),
+             (Param("key", STR, required=True, doc="a declared blackboard key"),
+              Param("in", KEY_ITEMS, required=True, doc="values of the key's type")),
+             doc="for each item: write it to the key and run the child", writes_key="key"),
+    NodeKind("subtree", Shape.SUBTREE, None,
+             (Param("id", TEXT, required=True, doc="the subtree's name"),),
+             doc="use a subtree by name"),
+)  # fmt: skip
+
+#: Every word of the language, in the order the documentation lists them.
+WORDS: dict[str, NodeKind] = {kind.word: kind for kind in _KINDS}
+
+#: The node ``while:`` and ``until:`` become (not a word: written as a modifier).
+GUARD = NodeKind(
+    "guard",
+    Shape.CHILDREN,
+    lambda n, k, o: ours.Guard(n, k[0], k[1], until=bool(o["until"])),
+    (Param("until", BOOL, required=True),),
+    doc="run the node while (or until) a condition succeeds",
+)
+
+#: Keys any node may carry beside its word, with what they mean.
+MODIFIERS: dict[str, str] = {
+    "name": "the node's name in displays",
+    "while": "run while this condition succeeds, else FAILURE",
+    "until": "run until this condition succeeds, then SUCCESS",
+}
+
+#: Words a behaviour may not take: the language's, the modifiers, and the file sections a
+#: node could be mistaken for.
+RESERVED: frozenset[str] = frozenset({*WORDS, *MODIFIERS, "include", "tree"})

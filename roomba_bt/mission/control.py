@@ -1,0 +1,218 @@
+"""Composites and decorators: their options read from the language table
+(:data:`roomba_bt.behaviours.language.WORDS`), never listed here.
+
+What a word takes (which options, their types, which are required, ranges, options that
+exclude each other) is the table's; this module only knows the two shapes a value has:
+children (``sequence: [...]``) or one child under ``do:``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
+
+import yaml
+
+from roomba_bt.behaviours.declare import Param
+from roomba_bt.behaviours.language import CHILD_NAMES, KEY_ITEMS, TEXT, NodeKind, Shape
+from roomba_bt.mission.ir import Node
+from roomba_bt.mission.source import Bad, Loc, kind_of, mapping, plain, scalar_text, sequence
+from roomba_bt.mission.values import UNKNOWN, Bound, Context, Written, resolve, unknown
+
+if TYPE_CHECKING:
+    from roomba_bt.mission.nodes import NodeParser
+
+#: the options as written: name -> (value node, value loc)
+Fields = dict[str, tuple[yaml.Node, Loc]]
+
+
+def option_value(
+    ctx: Context,
+    kind: NodeKind,
+    param: Param,
+    node: yaml.Node,
+    loc: Loc,
+    env: Mapping[str, Bound],
+    options: dict[str, Any],
+) -> Any:
+    """One option's value; names and child names are taken as written, everything else
+    through :func:`resolve` (``${parameter}``, units)."""
+    if param.type is TEXT:
+        return scalar_text(node, loc, param.name)
+    if param.type is CHILD_NAMES:
+        names = plain(node, loc)
+        if not isinstance(names, list) or not all(isinstance(s, str) for s in names):
+            raise Bad(loc.at(f"{kind.word}.{param.name} must be a list of child names"))
+        options[f"{param.name}_loc"] = loc
+        return names
+    return resolve(ctx, node, loc, param.type, env, f"{kind.word}.{param.name}")
+
+
+def _null(node: yaml.Node) -> bool:
+    return isinstance(node, yaml.ScalarNode) and node.tag.endswith(":null")
+
+
+def parse_composite(parser: NodeParser, kind: NodeKind, at: Written) -> Node | None:
+    """``word: [children]`` or ``word: {children: [...], option: value, ...}``."""
+    value, key_loc, loc, env = at.value, at.key_loc, at.loc, at.env
+    word, ctx = kind.word, parser.ctx
+    options: dict[str, Any] = kind.defaults
+    children_node: yaml.Node | None = value
+    children_loc = loc
+    if isinstance(value, yaml.MappingNode):
+        allowed = ["children", *(p.name for p in kind.options)]
+        fields = {}
+        for k, v, kl, vl in mapping(value, loc, word):
+            if k not in allowed:
+                ctx.error(kl.at(f"{word}: " + unknown("option", k, allowed)))
+                continue
+            fields[k] = (v, vl)
+        for param in kind.options:
+            if param.name in fields:
+                options[param.name] = option_value(ctx, kind, param, *fields[param.name], env,
+                                                   options)  # fmt: skip
+        _required_if(kind, options, key_loc)
+        if "children" not in fields:
+            raise Bad(key_loc.at(f"{word} needs children: [...]"))
+        children_node, children_loc = fields["children"]
+    if children_node is None or _null(children_node):
+        raise Bad(key_loc.at(f"{word} needs at least one child; it has none"))
+    if not isinstance(children_node, yaml.SequenceNode):
+        raise Bad(children_loc.at(f"{word} takes a list of children, got {kind_of(children_node)}"))
+    children = []
+    entries = sequence(children_node, children_loc, f"{word} children")
+    if not entries:
+        raise Bad(key_loc.at(f"{word} needs at least one child; it has none"))
+    for child_node, child_loc in entries:
+        child = parser.node(child_node, child_loc, env)
+        if child is not None:
+            children.append(child)
+    result = Node(word, key_loc, options.pop("name", word), children, options=options)
+    names = [c.name for c in children]
+    for param in kind.options:
+        if param.type is CHILD_NAMES and param.name in options:
+            for chosen in options[param.name]:
+                if chosen not in names:
+                    ctx.error(
+                        options[f"{param.name}_loc"].at(
+                            f"{word}.{param.name}: " + unknown("child name", chosen, names)
+                        )
+                    )
+    return result
+
+
+def _required_if(kind: NodeKind, options: dict[str, Any], key_loc: Loc) -> None:
+    """``parallel`` with ``policy: selected`` needs ``selected:``."""
+    for name, other, value in kind.required_if:
+        if name not in options and options.get(other) == value:
+            param = kind.option(name)
+            assert param is not None
+            raise Bad(key_loc.at(f"{kind.word} with {other} {value} needs {name}: "
+                                 f"[{param.type.name}]"))  # fmt: skip
+
+
+def parse_decorator(parser: NodeParser, kind: NodeKind, at: Written) -> Node | None:
+    """``word: {option: value, ..., do: child}``, or the child itself for the words that
+    take it directly (``inverter: {bump: any}``)."""
+    value, key_loc, loc, env = at.value, at.key_loc, at.loc, at.env
+    word, spec = kind.word, [p.name for p in kind.options]
+    child_node: yaml.Node | None
+    child_loc = loc
+    takes_child_directly = kind.shape is Shape.CHILD_OR_DO
+    if value is None:
+        raise Bad(key_loc.at(f"{word} needs a child under do:"))
+    fields: Fields = {}
+    if isinstance(value, yaml.MappingNode):
+        items = mapping(value, loc, word)
+        if takes_child_directly and "do" not in [k for k, *_ in items]:
+            child_node = value
+        else:
+            for k, v, kl, vl in items:
+                if k != "do" and k not in spec:
+                    raise Bad(kl.at(f"{word}: " + unknown("option", k, ["do", *spec])))
+                fields[k] = (v, vl)
+            if "do" not in fields:
+                raise Bad(key_loc.at(f"{word} needs a child under do:"))
+            child_node, child_loc = fields.pop("do")
+    elif takes_child_directly:
+        child_node = value
+    else:
+        raise Bad(
+            loc.at(f"{word} takes options and a child: {word}: {{{', '.join([*spec, 'do'])}: ...}}")
+        )
+    if isinstance(child_node, yaml.SequenceNode):
+        raise Bad(
+            child_loc.at(
+                f"{word} takes exactly one child, got a list of {len(child_node.value)} "
+                "(wrap them in a sequence)"
+            )
+        )
+    options = _decorator_options(parser.ctx, kind, fields, key_loc, env)
+    if kind.writes_key is not None:
+        _key_items(parser.ctx, kind, options, fields, env)
+    child = parser.node(child_node, child_loc, env)
+    if child is None:
+        return None
+    return Node(word, key_loc, word, [child], options=options)
+
+
+def _decorator_options(
+    ctx: Context,
+    kind: NodeKind,
+    fields: Fields,
+    key_loc: Loc,
+    env: Mapping[str, Bound],
+) -> dict[str, Any]:
+    """Required options present, values resolved, then (unless a value is an unused
+    subtree's unknown parameter) exclusive options and minimums checked."""
+    word = kind.word
+    options = kind.defaults
+    for param in kind.options:
+        if param.name not in fields:
+            if param.required:
+                raise Bad(key_loc.at(f"{word} needs {param.name}:"))
+            continue
+        if param.type is KEY_ITEMS:
+            continue
+        options[param.name] = option_value(ctx, kind, param, *fields[param.name], env, options)
+    if any(v is UNKNOWN for v in options.values()):
+        return options  # an unused subtree's parameter: checked where the subtree is used
+    if kind.exclusive and all(name in options for name in kind.exclusive):
+        given = " or ".join(f"{name}:" for name in kind.exclusive)
+        raise Bad(key_loc.at(f"{word} takes {given}, not both"))
+    for param in kind.options:
+        value = options.get(param.name)
+        if param.minimum is not None and value is not None and value < param.minimum:
+            raise Bad(
+                fields[param.name][1].at(
+                    f"{word}.{param.name} must be at least {param.minimum:g}, got {value}"
+                )
+            )
+    return options
+
+
+def _key_items(ctx: Context, kind: NodeKind, options: dict[str, Any], fields: Fields,
+               env: Mapping[str, Bound]) -> None:  # fmt: skip
+    """``for_each.in``: every item a value of the type of the key the node writes."""
+    assert kind.writes_key is not None
+    key_option = kind.writes_key
+    key, (_, key_value_loc) = options[key_option], fields[key_option]
+    decl = ctx.keys.get(key)
+    if decl is None:
+        raise Bad(
+            key_value_loc.at(
+                f"{kind.word}.{key_option}: " + unknown("blackboard key", key, list(ctx.keys))
+            )
+        )
+    for param in kind.options:
+        if param.type is not KEY_ITEMS:
+            continue
+        what = f"{kind.word}.{param.name}"
+        inode, iloc = fields[param.name]
+        items = []
+        for item, item_loc in sequence(inode, iloc, what):
+            try:
+                items.append(resolve(ctx, item, item_loc, decl.type, env, what))
+            except Bad as bad:
+                ctx.error(bad.diagnostic)
+        options["items"] = items

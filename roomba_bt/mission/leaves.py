@@ -1,0 +1,166 @@
+"""Behaviour leaves: a word of the registry with its declared parameters.
+
+``drive: {velocity: 100 mm/s, distance: ${side}}``: each parameter checked against the
+behaviour's :class:`~roomba_bt.behaviours.declare.Declaration` (name, type, unit, range,
+required), blackboard keys against the declared keys, then the cross-parameter rules.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from typing import Any
+
+import yaml
+
+from roomba_bt.behaviours.declare import Declaration
+from roomba_bt.behaviours.units import MARK
+from roomba_bt.mission.ir import KeyDecl, Node
+from roomba_bt.mission.source import Bad, Loc, mapping
+from roomba_bt.mission.values import (
+    SUBSTITUTION,
+    UNKNOWN,
+    Bound,
+    Context,
+    Written,
+    resolve,
+    unknown,
+)
+
+
+def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node | None:
+    """The leaf, or None with every problem recorded in ``ctx``."""
+    key_loc, env = at.key_loc, at.env
+    given = _given(decl, at.value, at.loc)
+    params: dict[str, Any] = {}
+    options: dict[str, Any] = {}
+    ok = True
+    key_typed: dict[str, tuple[yaml.Node, Loc]] = {}
+    for pname, pnode, pkloc, pvloc in given:
+        param = decl.param(pname)
+        if param is None:
+            pnames = [p.name for p in decl.params]
+            ctx.error(pkloc.at(f"{decl.name}: " + unknown("parameter", pname, pnames)))
+            ok = False
+            continue
+        options[f"loc:{pname}"] = pvloc
+        if param.type.name == "any":
+            key_typed[pname] = (pnode, pvloc)
+            continue
+        try:
+            params[pname] = resolve(
+                ctx, pnode, pvloc, param.type, env, f"{decl.name}.{pname}",
+                param=param, allow_ref=param.from_blackboard,
+            )  # fmt: skip
+        except Bad as bad:
+            ctx.error(bad.diagnostic)
+            ok = False
+    for p in decl.params:
+        if (
+            p.required
+            and p.name not in params
+            and p.name not in key_typed
+            and p.name not in {g[0] for g in given}
+        ):
+            ctx.error(
+                key_loc.at(f"{decl.name}: missing required parameter {p.name!r} ({p.describe()})")
+            )
+            ok = False
+    ok = _key_params(ctx, decl, params, key_typed, options, env) and ok
+    if ok and decl.constraints is not None and UNKNOWN not in params.values():
+        for problem in decl.constraints(params):
+            ctx.error(key_loc.at(f"{decl.name}: {problem}"))
+            ok = False
+    if not ok:
+        return None
+    return Node("leaf", key_loc, leaf_name(decl.name, given, env), decl=decl, params=params,
+                options=options)  # fmt: skip
+
+
+def _given(
+    decl: Declaration, value: yaml.Node | None, loc: Loc
+) -> list[tuple[str, yaml.Node, Loc, Loc]]:
+    """``(parameter, value node, key loc, value loc)`` as written: none (``- stop``), a
+    mapping, or the short form's scalar (``wait: 2s``)."""
+    if value is None or (isinstance(value, yaml.ScalarNode) and value.tag.endswith(":null")):
+        return []
+    if isinstance(value, yaml.MappingNode):
+        return mapping(value, loc, decl.name)
+    if decl.primary is not None:
+        return [(decl.primary, value, loc, loc)]
+    names = ", ".join(p.name for p in decl.params) or "none"
+    raise Bad(
+        loc.at(
+            f"{decl.name} takes parameters as a mapping ({decl.name}: {{...}}); parameters: {names}"
+        )
+    )
+
+
+def _key_params(
+    ctx: Context,
+    decl: Declaration,
+    params: dict[str, Any],
+    key_typed: dict[str, tuple[yaml.Node, Loc]],
+    options: dict[str, Any],
+    env: Mapping[str, Bound],
+) -> bool:
+    """Parameters that name blackboard keys must name declared keys; ``any`` values take
+    the type of the key (``set: {key: leg, value: 2 m}``)."""
+    ok = True
+    key_decl: KeyDecl | None = None
+    for pname in (*decl.reads_keys, *decl.writes_keys):
+        key = params.get(pname)
+        if not isinstance(key, str):
+            continue
+        found = ctx.keys.get(key)
+        where = options.get(f"loc:{pname}")
+        if found is None:
+            assert isinstance(where, Loc)
+            ctx.error(
+                where.at(f"{decl.name}.{pname}: " + unknown("blackboard key", key, list(ctx.keys)))
+            )
+            ok = False
+            continue
+        wants_mark = decl.name in ("mark", "odometry")
+        if wants_mark != (found.type is MARK):
+            assert isinstance(where, Loc)
+            need = "a key of type mark" if wants_mark else "a key holding a value (not a mark)"
+            ctx.error(
+                where.at(
+                    f"{decl.name}.{pname}: blackboard key {key!r} is {found.type.describe()}; "
+                    f"{decl.name} needs {need}"
+                )
+            )
+            ok = False
+            continue
+        key_decl = found
+    for pname, (pnode, pvloc) in key_typed.items():
+        if key_decl is None:
+            ok = False
+            continue
+        try:
+            params[pname] = resolve(ctx, pnode, pvloc, key_decl.type, env, f"{decl.name}.{pname}")
+        except Bad as bad:
+            ctx.error(bad.diagnostic)
+            ok = False
+    return ok
+
+
+def leaf_name(
+    behaviour: str, given: list[tuple[str, yaml.Node, Loc, Loc]], env: Mapping[str, Bound]
+) -> str:
+    """``drive(velocity=100 mm/s, radius=-500 mm)``: what ``show`` prints for a leaf, with
+    ``${parameters}`` shown as their values."""
+    if not given:
+        return behaviour
+
+    def value_of(match: re.Match[str]) -> str:
+        bound = env.get(match.group(1))
+        return bound.text if bound is not None and bound.value is not UNKNOWN else match.group(0)
+
+    parts = []
+    for pname, node, key_loc, value_loc in given:
+        text = str(node.value) if isinstance(node, yaml.ScalarNode) else "..."
+        text = SUBSTITUTION.sub(value_of, text)
+        parts.append(text if key_loc is value_loc else f"{pname}={text}")
+    return f"{behaviour}({', '.join(parts)})"

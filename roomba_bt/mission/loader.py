@@ -1,0 +1,440 @@
+"""The loader: YAML mission file (and its includes) -> checked tree, every error collected.
+
+A mission file::
+
+    mission: square                      # name (default: the file name)
+    description: drive a square
+    parameters:                          # settable with -p side=50cm
+      side: {type: distance, default: 1 m}
+    blackboard:                          # declared keys, with types
+      leg: distance
+    plugins: [./my_behaviour.py]         # behaviour modules by path
+    include: [lib/common.yaml]           # subtrees (and keys) of other files
+    subtrees:
+      back_off:
+        parameters: {speed: {type: speed, default: 100 mm/s}}
+        tree: {drive: {velocity: -${speed}, distance: 10cm}}
+    tree:
+      sequence:
+        - mode: safe
+        - drive: {distance: ${side}}
+
+The loader reads the file-level sections (plugins, includes, parameters, the blackboard,
+subtree definitions); :class:`~roomba_bt.mission.nodes.NodeParser` parses the trees. Neither
+stops at the first error: each problem becomes a
+:class:`~roomba_bt.mission.diagnostics.Diagnostic` and parsing goes on with the next node.
+``docs/missions.md`` documents every word.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from roomba_bt.behaviours.language import WORDS
+from roomba_bt.behaviours.units import VALUE_TYPES, UnitError, ValueType, closest, enum
+from roomba_bt.mission.ir import KeyDecl, Node
+from roomba_bt.mission.nodes import NodeParser
+from roomba_bt.mission.source import (
+    Bad,
+    Loc,
+    compose,
+    loc_of,
+    mapping,
+    plain,
+    scalar_text,
+    sequence,
+)
+from roomba_bt.mission.values import (
+    SUBSTITUTION,
+    UNKNOWN,
+    Bound,
+    Context,
+    SubtreeDef,
+    parse_type_name,
+    record_type,
+    resolve,
+    unknown,
+)
+
+TOP_LEVEL = ("mission", "description", "parameters", "blackboard", "plugins", "include",
+             "subtrees", "tree")  # fmt: skip
+_IDENT = re.compile(r"^[a-z_][a-z0-9_]*$")
+_PARAM_TYPES = [n for n in VALUE_TYPES if n != "mark"]
+
+
+@dataclass
+class ParsedFile:
+    name: str
+    description: str
+    params: dict[str, Bound]
+    tree: Node | None
+    tree_loc: Loc | None
+    root_loc: Loc
+
+
+class Loader:
+    """Reads one mission file and what it includes: sections, plugins, parameters, the
+    blackboard and subtree definitions; the trees go to the :class:`NodeParser`."""
+
+    def __init__(self, ctx: Context, display: Callable[[Path], str] | None = None) -> None:
+        self.ctx = ctx
+        self.display: Callable[[Path], str] = display or (lambda p: str(p))
+        self.nodes = NodeParser(ctx)
+        self._include_stack: list[Path] = []
+
+    def compile_file(
+        self, path: Path, overrides: Mapping[str, str], *, require_tree: bool = True
+    ) -> ParsedFile | None:
+        display = self.display(path)
+        root, errors = compose(path, display)
+        for e in errors:
+            self.ctx.error(e)
+        if root is None:
+            return None
+        root_loc = loc_of(root, display, "")
+        try:
+            items = mapping(root, root_loc, "a mission file")
+        except Bad as bad:
+            self.ctx.error(bad.diagnostic)
+            return None
+        self._include_stack.append(path.resolve())
+        sections = {k: (v, kl, vl) for k, v, kl, vl in items}
+        for key, _, key_loc, _ in items:
+            if key not in TOP_LEVEL:
+                self.ctx.error(
+                    key_loc.at(
+                        f"unknown top-level key {key!r}{closest(key, TOP_LEVEL)}; "
+                        f"known: {', '.join(TOP_LEVEL)}"
+                    )
+                )
+        self._file_sections(path, sections)
+        name = path.stem
+        description = ""
+        for key in ("mission", "description"):
+            if key in sections:
+                node, _, vloc = sections[key]
+                try:
+                    text = scalar_text(node, vloc, key)
+                except Bad as bad:
+                    self.ctx.error(bad.diagnostic)
+                    continue
+                if key == "mission":
+                    name = text
+                else:
+                    description = text
+        params = self._parameters(sections.get("parameters"), overrides, root_loc)
+        self.nodes.global_env = params
+        description = SUBSTITUTION.sub(
+            lambda m: params[m.group(1)].text if m.group(1) in params else m.group(0), description
+        )
+        tree: Node | None = None
+        tree_loc: Loc | None = None
+        if "tree" in sections:
+            node, _, vloc = sections["tree"]
+            tree_loc = vloc
+            tree = self.nodes.node(node, vloc, params)
+        elif require_tree:
+            self.ctx.error(root_loc.at("a mission needs a tree: (the root node); found none"))
+        self.nodes.check_unused_subtrees()
+        self._include_stack.pop()
+        return ParsedFile(name, description, params, tree, tree_loc, root_loc)
+
+    def _file_sections(self, path: Path, sections: dict[str, tuple[yaml.Node, Loc, Loc]]) -> None:
+        """plugins, include, blackboard, subtrees: what an included file contributes too."""
+        if "plugins" in sections:
+            self._plugins(path, *sections["plugins"][::2])
+        if "include" in sections:
+            self._includes(path, *sections["include"][::2])
+        if "blackboard" in sections:
+            self._each(*sections["blackboard"][::2], "blackboard", self._key_decl)
+        if "subtrees" in sections:
+            self._each(*sections["subtrees"][::2], "subtrees", self._subtree_def)
+
+    def _files(
+        self, path: Path, node: yaml.Node, loc: Loc, what: str, each: str
+    ) -> list[tuple[str, Path, Loc]]:
+        """``(text, resolved path, loc)`` of each entry of a list of paths relative to the
+        file naming them; a bad entry is reported and skipped."""
+        try:
+            entries = sequence(node, loc, what)
+        except Bad as bad:
+            self.ctx.error(bad.diagnostic)
+            return []
+        out = []
+        for item, iloc in entries:
+            try:
+                text = scalar_text(item, iloc, each)
+            except Bad as bad:
+                self.ctx.error(bad.diagnostic)
+                continue
+            out.append((text, (path.parent / text).resolve(), iloc))
+        return out
+
+    def _plugins(self, path: Path, node: yaml.Node, loc: Loc) -> None:
+        for text, target, iloc in self._files(path, node, loc, "plugins", "a plugin"):
+            if not target.is_file():
+                self.ctx.error(
+                    iloc.at(
+                        f"plugin file {text!r} not found (paths are relative to the file naming it)"
+                    )
+                )
+                continue
+            registry, error = self.ctx.registry.with_file(target)
+            if error is not None:
+                self.ctx.error(iloc.at(str(error)))
+            self.ctx.registry = registry
+
+    def _includes(self, path: Path, node: yaml.Node, loc: Loc) -> None:
+        for text, target, iloc in self._files(path, node, loc, "include", "an include"):
+            if target in self._include_stack:
+                chain = [p.name for p in self._include_stack[self._include_stack.index(target) :]]
+                self.ctx.error(iloc.at(f"include cycle: {' -> '.join([*chain, target.name])}"))
+                continue
+            if not target.is_file():
+                self.ctx.error(
+                    iloc.at(
+                        f"included file {text!r} not found"
+                        " (paths are relative to the including file)"
+                    )
+                )
+                continue
+            self._include(target, iloc)
+
+    def _include(self, target: Path, iloc: Loc) -> None:
+        display = self.display(target)
+        root, errors = compose(target, display)
+        for e in errors:
+            self.ctx.error(e)
+        if root is None:
+            return
+        root_loc = loc_of(root, display, "")
+        try:
+            items = mapping(root, root_loc, "an included file")
+        except Bad as bad:
+            self.ctx.error(bad.diagnostic)
+            return
+        allowed = ("description", "plugins", "include", "blackboard", "subtrees")
+        for key, _, key_loc, _ in items:
+            if key not in allowed:
+                self.ctx.error(
+                    key_loc.at(
+                        f"an included file may only hold {', '.join(allowed)}; found {key!r}"
+                    )
+                )
+        self._include_stack.append(target)
+        self._file_sections(target, {k: (v, kl, vl) for k, v, kl, vl in items})
+        self._include_stack.pop()
+
+    def _parameters(
+        self, section: tuple[yaml.Node, Loc, Loc] | None, overrides: Mapping[str, str], root: Loc
+    ) -> dict[str, Bound]:
+        env: dict[str, Bound] = {}
+        declared: dict[str, tuple[ValueType, Loc]] = {}
+        if section is not None:
+            node, _, loc = section
+            try:
+                items = mapping(node, loc, "parameters")
+            except Bad as bad:
+                self.ctx.error(bad.diagnostic)
+                items = []
+            for name, value, key_loc, vloc in items:
+                try:
+                    vtype, default, has_default, _ = self._param_decl(value, vloc, name)
+                except Bad as bad:
+                    self.ctx.error(bad.diagnostic)
+                    continue
+                declared[name] = (vtype, key_loc)
+                if name in overrides:
+                    continue
+                if not has_default:
+                    self.ctx.error(
+                        key_loc.at(
+                            f"parameter {name!r} has no default: give it with -p {name}=VALUE"
+                        )
+                    )
+                    env[name] = Bound(vtype, UNKNOWN, "?")  # reported once, not at every use
+                    continue
+                env[name] = Bound(vtype, default, _text(value, vloc, default))
+        for name, text in overrides.items():
+            if name not in declared:
+                self.ctx.error(
+                    root.at(
+                        f"unknown parameter {name!r} given with -p{closest(name, list(declared))}; "
+                        f"the mission declares: {', '.join(declared) or 'none'}"
+                    )
+                )
+                continue
+            vtype, key_loc = declared[name]
+            try:
+                value = vtype.parse(_cli_value(text, vtype))
+            except UnitError as exc:
+                self.ctx.error(key_loc.at(f"parameter {name}={text} (from -p): {exc}"))
+                env[name] = Bound(vtype, UNKNOWN, "?")  # reported once, not at every use
+                continue
+            env[name] = Bound(vtype, value, text)
+        return env
+
+    def _param_decl(self, node: yaml.Node, loc: Loc, name: str) -> tuple[ValueType, Any, bool, str]:
+        if not _IDENT.match(name):
+            raise Bad(loc.at(f"parameter name {name!r} must be snake_case"))
+        fields = {k: (v, kl, vl) for k, v, kl, vl in mapping(node, loc, f"parameter {name!r}")}
+        for key, (_, kl, _) in fields.items():
+            if key not in ("type", "default", "doc", "choices"):
+                raise Bad(
+                    kl.at(
+                        unknown(
+                            f"key in parameter {name!r}", key, ["type", "default", "doc", "choices"]
+                        )
+                    )
+                )
+        if "type" not in fields:
+            raise Bad(loc.at(f"parameter {name!r} needs a type (one of {', '.join(_PARAM_TYPES)})"))
+        tnode, _, tloc = fields["type"]
+        if plain(tnode, tloc) == "enum":
+            if "choices" not in fields:
+                raise Bad(tloc.at(f"parameter {name!r} of type enum needs choices: [...]"))
+            cnode, _, cloc = fields["choices"]
+            choices = plain(cnode, cloc)
+            if not isinstance(choices, list) or not all(isinstance(c, str) for c in choices):
+                raise Bad(cloc.at("choices must be a list of words"))
+            vtype = enum(*choices)
+        else:
+            vtype = parse_type_name(tnode, tloc)
+        doc = ""
+        if "doc" in fields:
+            doc = scalar_text(fields["doc"][0], fields["doc"][2], "doc")
+        if "default" not in fields:
+            return vtype, None, False, doc
+        dnode, _, dloc = fields["default"]
+        default = resolve(self.ctx, dnode, dloc, vtype, {}, f"parameter {name}")
+        return vtype, default, True, doc
+
+    def _each(
+        self,
+        node: yaml.Node,
+        loc: Loc,
+        what: str,
+        declare: Callable[[str, yaml.Node, Loc, Loc], None],
+    ) -> None:
+        """Each entry of a section (``blackboard``, ``subtrees``): a bad entry is reported
+        and the others go on."""
+        try:
+            items = mapping(node, loc, what)
+        except Bad as bad:
+            self.ctx.error(bad.diagnostic)
+            return
+        for name, value, key_loc, vloc in items:
+            try:
+                declare(name, value, key_loc, vloc)
+            except Bad as bad:
+                self.ctx.error(bad.diagnostic)
+
+    def _key_decl(self, name: str, node: yaml.Node, key_loc: Loc, loc: Loc) -> None:
+        _new_name(name, key_loc, "blackboard key", "blackboard key", self.ctx.keys, "declared")
+        initial: Any = None
+        has_initial = False
+        doc = ""
+        if isinstance(node, yaml.ScalarNode):
+            vtype = parse_type_name(node, loc, allow_mark=True)
+        else:
+            fields = {
+                k: (v, kl, vl) for k, v, kl, vl in mapping(node, loc, f"blackboard key {name!r}")
+            }
+            for key, (_, kl, _) in fields.items():
+                if key not in ("type", "fields", "initial", "doc"):
+                    raise Bad(
+                        kl.at(
+                            unknown(
+                                f"key in blackboard key {name!r}",
+                                key,
+                                ["type", "fields", "initial", "doc"],
+                            )
+                        )
+                    )
+            if "fields" in fields:
+                fnode, _, floc = fields["fields"]
+                ftypes = {
+                    fname: parse_type_name(fvalue, fvloc)
+                    for fname, fvalue, _, fvloc in mapping(fnode, floc, "fields")
+                }
+                vtype = record_type(ftypes)
+            elif "type" in fields:
+                vtype = parse_type_name(fields["type"][0], fields["type"][2], allow_mark=True)
+            else:
+                raise Bad(loc.at(f"blackboard key {name!r} needs a type (or fields)"))
+            if "initial" in fields:
+                inode, _, iloc = fields["initial"]
+                initial = resolve(
+                    self.ctx, inode, iloc, vtype, self.nodes.global_env, f"initial value of {name}"
+                )
+                has_initial = True
+            if "doc" in fields:
+                doc = scalar_text(fields["doc"][0], fields["doc"][2], "doc")
+        self.ctx.keys[name] = KeyDecl(name, vtype, key_loc, initial, has_initial, doc)
+
+    def _subtree_def(self, name: str, node: yaml.Node, key_loc: Loc, loc: Loc) -> None:
+        _new_name(name, key_loc, "subtree name", "subtree", self.ctx.subtrees, "defined")
+        if name in WORDS or name in self.ctx.registry:
+            raise Bad(key_loc.at(f"subtree name {name!r} is already a node name"))
+        fields = {k: (v, kl, vl) for k, v, kl, vl in mapping(node, loc, f"subtree {name!r}")}
+        for key, (_, kl, _) in fields.items():
+            if key not in ("parameters", "tree", "doc"):
+                raise Bad(
+                    kl.at(unknown(f"key in subtree {name!r}", key, ["parameters", "tree", "doc"]))
+                )
+        params: dict[str, tuple[ValueType, Any, Loc]] = {}
+        if "parameters" in fields:
+            pnode, _, ploc = fields["parameters"]
+            for pname, pvalue, pkloc, pvloc in mapping(pnode, ploc, "parameters"):
+                try:
+                    vtype, default, has_default, _ = self._param_decl(pvalue, pvloc, pname)
+                except Bad as bad:
+                    self.ctx.error(bad.diagnostic)
+                    continue
+                params[pname] = (vtype, default if has_default else None, pkloc)
+        if "tree" not in fields:
+            self.ctx.error(loc.at(f"subtree {name!r} needs a tree:"))
+            body, body_loc = None, loc
+        else:
+            body, _, body_loc = fields["tree"]
+        self.ctx.subtrees[name] = SubtreeDef(name, key_loc, params, body, body_loc)
+
+
+def _new_name(
+    name: str,
+    key_loc: Loc,
+    called: str,
+    what: str,
+    taken: Mapping[str, KeyDecl] | Mapping[str, SubtreeDef],
+    verb: str,
+) -> None:
+    """A name a file declares: snake_case, and not declared before (here or in an include)."""
+    if not _IDENT.match(name):
+        raise Bad(key_loc.at(f"{called} {name!r} must be snake_case"))
+    if name in taken:
+        first = taken[name].loc
+        raise Bad(key_loc.at(f"{what} {name!r} {verb} twice (first at {first.file}:{first.line})"))
+
+
+def _text(node: yaml.Node, loc: Loc, default: Any) -> str:
+    for key, value in getattr(node, "value", []):
+        if getattr(key, "value", None) == "default" and isinstance(value, yaml.ScalarNode):
+            return str(value.value)
+    return str(default)
+
+
+def _cli_value(text: str, vtype: ValueType) -> object:
+    """A ``-p name=value`` string as the type wants it: numbers and booleans as YAML reads
+    them, everything else as written."""
+    if vtype.name in ("int", "float", "bool"):
+        try:
+            return yaml.safe_load(text)
+        except yaml.YAMLError:
+            return text
+    return text

@@ -1,0 +1,217 @@
+"""The node parser: one YAML node -> a checked :class:`~roomba_bt.mission.ir.Node`.
+
+A node is a mapping with one word (a word of the language table, ``subtree``, or a
+behaviour) plus modifiers (``name``, ``while``, ``until``). Composites and decorators are
+parsed by :mod:`roomba_bt.mission.control`, behaviour leaves by
+:mod:`roomba_bt.mission.leaves`; this module dispatches, wraps guards and expands subtrees.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import yaml
+
+from roomba_bt.behaviours.language import MODIFIERS, WORDS, Shape
+from roomba_bt.behaviours.units import closest
+from roomba_bt.mission.control import parse_composite, parse_decorator
+from roomba_bt.mission.ir import Node
+from roomba_bt.mission.leaves import parse_leaf
+from roomba_bt.mission.source import Bad, Loc, kind_of, mapping, plain, scalar_text
+from roomba_bt.mission.values import (
+    UNKNOWN,
+    Bound,
+    Context,
+    SubtreeDef,
+    Written,
+    resolve,
+    shown,
+    unknown,
+)
+
+
+class NodeParser:
+    """Parses trees (the mission's, each subtree's at each use) within one :class:`Context`."""
+
+    def __init__(self, ctx: Context) -> None:
+        self.ctx = ctx
+        #: the mission's parameters: what ``${name}`` sees outside (and under) subtrees
+        self.global_env: dict[str, Bound] = {}
+        self._use_stack: list[str] = []
+
+    def node(self, ynode: yaml.Node, loc: Loc, env: Mapping[str, Bound]) -> Node | None:
+        """Parse one node; errors are recorded and None returned for a node that cannot be
+        built (its parent goes on with the other children)."""
+        try:
+            return self._node(ynode, loc, env)
+        except Bad as bad:
+            self.ctx.error(bad.diagnostic)
+            return None
+
+    def _node(self, ynode: yaml.Node, loc: Loc, env: Mapping[str, Bound]) -> Node | None:
+        if isinstance(ynode, yaml.ScalarNode):
+            word = plain(ynode, loc)
+            if not isinstance(word, str):
+                raise Bad(loc.at(f"expected a node, got {kind_of(ynode)}"))
+            return self._word(word, Written(None, loc, loc.child(ynode, word), env))
+        if not isinstance(ynode, yaml.MappingNode):
+            raise Bad(
+                loc.at(f"expected a node (a mapping such as drive: {{...}}), got {kind_of(ynode)}")
+            )
+        items = mapping(ynode, loc, "a node")
+        words = [(k, v, kl, vl) for k, v, kl, vl in items if k not in MODIFIERS]
+        mods = {k: (v, kl, vl) for k, v, kl, vl in items if k in MODIFIERS}
+        if not words:
+            raise Bad(
+                loc.at(
+                    f"a node needs a kind (such as sequence, drive, bump); found only "
+                    f"{', '.join(mods)}"
+                )
+            )
+        if len(words) > 1:
+            names = [w[0] for w in words]
+            known = [n for n in names if n in WORDS or n in self.ctx.registry]
+            if len(known) == 1:
+                other = next(w for w in words if w[0] not in known)
+                raise Bad(other[2].at(self._unknown_word(other[0], f" next to {known[0]!r}")))
+            raise Bad(
+                words[1][2].at(
+                    f"a node has exactly one kind; found {', '.join(names)} "
+                    "(put several nodes in a sequence)"
+                )
+            )
+        word, value, key_loc, value_loc = words[0]
+        built = self._word(word, Written(value, key_loc, value_loc, env))
+        if built is None:
+            return None
+        if "name" in mods:
+            built.name = scalar_text(mods["name"][0], mods["name"][2], "name")
+        for guard in ("until", "while"):
+            if guard in mods:
+                gnode, gkloc, gvloc = mods[guard]
+                condition = self.node(gnode, gvloc, env)
+                if condition is None:
+                    continue
+                self._check_guard(condition, guard)
+                built = Node("guard", gkloc, f"{guard} {condition.name}", [condition, built],
+                             options={"until": guard == "until"})  # fmt: skip
+        return built
+
+    def _unknown_word(self, word: str, where: str = "") -> str:
+        names = [*WORDS, *self.ctx.registry.names(), *MODIFIERS]
+        message = f"unknown node {word!r}{where}{closest(word, names)}"
+        if self.ctx.registry.errors:
+            failed = "; ".join(str(e) for e in self.ctx.registry.errors)
+            message += f" (note: {failed})"
+        return message
+
+    def _check_guard(self, condition: Node, guard: str) -> None:
+        for n in condition.walk():
+            if n.decl is not None and n.decl.kind == "action":
+                self.ctx.error(
+                    n.loc.at(
+                        f"{guard}: a guard is made of conditions; {n.decl.name!r} is an action"
+                    )
+                )
+
+    def _word(self, word: str, at: Written) -> Node | None:
+        kind = WORDS.get(word)
+        if kind is None:
+            decl = self.ctx.registry.get(word)
+            if decl is None:
+                raise Bad(at.key_loc.at(self._unknown_word(word)))
+            return parse_leaf(self.ctx, decl, at)
+        if kind.shape is Shape.CHILDREN:
+            return parse_composite(self, kind, at)
+        if kind.shape is Shape.SUBTREE:
+            return self._use_subtree(at)
+        return parse_decorator(self, kind, at)
+
+    def _use_subtree(self, at: Written) -> Node | None:
+        """``subtree: NAME`` or ``subtree: {id: NAME, parameter: value}``: the subtree's
+        body compiled here, with its parameters bound."""
+        value, key_loc, loc, env = at.value, at.key_loc, at.loc, at.env
+        if value is None:
+            raise Bad(key_loc.at("subtree needs a name: subtree: NAME or subtree: {id: NAME, ...}"))
+        args: list[tuple[str, yaml.Node, Loc, Loc]] = []
+        if isinstance(value, yaml.MappingNode):
+            items = mapping(value, loc, "subtree")
+            ids = [i for i in items if i[0] == "id"]
+            if not ids:
+                raise Bad(key_loc.at("subtree needs id: NAME"))
+            name = scalar_text(ids[0][1], ids[0][3], "subtree id")
+            id_loc = ids[0][3]
+            args = [i for i in items if i[0] != "id"]
+        else:
+            name = scalar_text(value, loc, "subtree")
+            id_loc = loc
+        sub = self.ctx.subtrees.get(name)
+        if sub is None:
+            raise Bad(
+                id_loc.at(f"unknown subtree {name!r}{closest(name, list(self.ctx.subtrees))}")
+            )
+        if name in self._use_stack:
+            chain = self._use_stack[self._use_stack.index(name) :]
+            raise Bad(id_loc.at(f"recursive subtree: {' -> '.join([*chain, name])}"))
+        sub.used = True
+        sub_env = self._subtree_env(sub, args, key_loc, env)
+        if sub.body is None:
+            return None
+        self._use_stack.append(name)
+        try:
+            body = self.node(sub.body, sub.body_loc, sub_env)
+        finally:
+            self._use_stack.pop()
+        if body is not None and body.name == body.kind and body.kind != "leaf":
+            body.name = name
+        return body
+
+    def _subtree_env(
+        self,
+        sub: SubtreeDef,
+        args: list[tuple[str, yaml.Node, Loc, Loc]],
+        key_loc: Loc,
+        env: Mapping[str, Bound],
+    ) -> dict[str, Bound]:
+        """The mission's parameters, then the subtree's: given at the use or by default."""
+        name = sub.name
+        sub_env = dict(self.global_env)
+        for pname, pvalue, pkloc, pvloc in args:
+            if pname not in sub.params:
+                self.ctx.error(
+                    pkloc.at(f"subtree {name!r}: " + unknown("parameter", pname, list(sub.params)))
+                )
+                continue
+            vtype = sub.params[pname][0]
+            try:
+                resolved = resolve(self.ctx, pvalue, pvloc, vtype, env, f"{name}.{pname}")
+            except Bad as bad:
+                self.ctx.error(bad.diagnostic)
+                resolved = UNKNOWN
+            sub_env[pname] = Bound(
+                vtype, resolved, shown(vtype, resolved) if resolved is not UNKNOWN else "?"
+            )
+        given = {a[0] for a in args}
+        for pname, (vtype, default, _) in sub.params.items():
+            if pname in given:
+                continue
+            if default is None:
+                self.ctx.error(key_loc.at(f"subtree {name!r} needs parameter {pname!r}"))
+                sub_env[pname] = Bound(vtype, UNKNOWN, "?")
+            else:
+                sub_env[pname] = Bound(vtype, default, shown(vtype, default))
+        return sub_env
+
+    def check_unused_subtrees(self) -> None:
+        """Check subtrees no tree uses (library files), with unknown values for parameters
+        that have no default, so their errors are found before someone uses them."""
+        for sub in list(self.ctx.subtrees.values()):
+            if sub.used or sub.body is None:
+                continue
+            sub.used = True
+            env = dict(self.global_env)
+            for pname, (vtype, default, _) in sub.params.items():
+                env[pname] = Bound(vtype, UNKNOWN if default is None else default, "?")
+            self._use_stack.append(sub.name)
+            self.node(sub.body, sub.body_loc, env)
+            self._use_stack.pop()

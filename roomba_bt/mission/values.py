@@ -1,0 +1,287 @@
+"""Values in a mission: ``${parameter}`` substitution, ``@key`` references, units and ranges,
+and what one compilation shares (:class:`Context`).
+
+Every value a mission writes goes through :func:`resolve`: the loader for parameter
+defaults and initial blackboard values, the node parser for options and behaviour
+parameters.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import yaml
+
+from roomba_bt.behaviours.declare import BlackboardRef, Param
+from roomba_bt.behaviours.registry import Registry
+from roomba_bt.behaviours.units import (
+    CANONICAL,
+    MARK,
+    VALUE_TYPES,
+    UnitError,
+    ValueType,
+    closest,
+    compatible,
+    convert,
+    format_quantity,
+)
+from roomba_bt.mission.diagnostics import Diagnostic
+from roomba_bt.mission.ir import KeyDecl
+from roomba_bt.mission.source import Bad, Loc, mapping, plain, scalar_text
+
+SUBSTITUTION = re.compile(r"\$\{([A-Za-z_][A-Za-z0-9_]*)\}")
+_FULL_SUBSTITUTION = re.compile(r"^\s*(-?)\$\{([A-Za-z_][A-Za-z0-9_]*)\}\s*$")
+_REF = re.compile(r"^@([a-z_][a-z0-9_]*)(?:\.([a-z_][a-z0-9_]*))?$")
+
+
+def unknown(what: str, name: str, known: list[str]) -> str:
+    """``unknown parameter 'velocty' (did you mean 'velocity'?); known: ...``"""
+    listing = ", ".join(known) if known else "none"
+    return f"unknown {what} {name!r}{closest(name, known)}; known: {listing}"
+
+
+class _Unknown:
+    """The value of a subtree parameter with no default, when an unused subtree is checked."""
+
+    def __repr__(self) -> str:
+        return "<unknown>"
+
+
+UNKNOWN: Any = _Unknown()
+
+
+@dataclass(frozen=True, slots=True)
+class Bound:
+    """A parameter in scope: its type, canonical value and the text it was written as."""
+
+    type: ValueType
+    value: Any
+    text: str
+
+
+@dataclass(frozen=True, slots=True)
+class Written:
+    """A word as the file writes it: its value, where the word and the value are, and the
+    parameters in scope there."""
+
+    value: yaml.Node | None
+    key_loc: Loc
+    loc: Loc
+    env: Mapping[str, Bound]
+
+
+@dataclass(slots=True)
+class SubtreeDef:
+    name: str
+    loc: Loc
+    params: dict[str, tuple[ValueType, Any, Loc]]  # name -> (type, default or None, loc)
+    body: yaml.Node | None
+    body_loc: Loc
+    used: bool = False
+
+
+@dataclass
+class Context:
+    """Everything one compilation shares."""
+
+    registry: Registry
+    diagnostics: list[Diagnostic] = field(default_factory=list)
+    keys: dict[str, KeyDecl] = field(default_factory=dict)
+    subtrees: dict[str, SubtreeDef] = field(default_factory=dict)
+
+    def error(self, diagnostic: Diagnostic) -> None:
+        if diagnostic not in self.diagnostics:
+            self.diagnostics.append(diagnostic)
+
+
+def parse_type_name(node: yaml.Node, loc: Loc, *, allow_mark: bool = False) -> ValueType:
+    text = scalar_text(node, loc, "type")
+    vtype = VALUE_TYPES.get(text)
+    if vtype is None or (vtype is MARK and not allow_mark):
+        names = [n for n in VALUE_TYPES if allow_mark or n != "mark"]
+        raise Bad(
+            loc.at(f"unknown type {text!r}{closest(text, names)}; known types: {', '.join(names)}")
+        )
+    return vtype
+
+
+def record_type(fields: dict[str, ValueType]) -> ValueType:
+    """A mapping with typed fields: a waypoint ``{distance: 1 m, turn: 90deg}``."""
+
+    def parse(value: object) -> dict[str, Any]:
+        if not isinstance(value, dict):
+            raise UnitError(f"expected a mapping with {', '.join(fields)}")
+        unknown = [k for k in value if k not in fields]
+        if unknown:
+            raise UnitError(
+                f"unknown field {unknown[0]!r}{closest(str(unknown[0]), list(fields))}; "
+                f"fields: {', '.join(fields)}"
+            )
+        missing = [k for k in fields if k not in value]
+        if missing:
+            raise UnitError(f"missing field {missing[0]!r}")
+        out = {}
+        for k, t in fields.items():
+            try:
+                out[k] = t.parse(value[k])
+            except UnitError as exc:
+                raise UnitError(f"field {k}: {exc}") from None
+        return out
+
+    return ValueType(
+        "record", parse, json_schema=(("type", "object"),), fields=tuple(fields.items())
+    )
+
+
+def record_fields(vtype: ValueType) -> dict[str, ValueType] | None:
+    return dict(vtype.fields) if vtype.name == "record" else None
+
+
+def _negate(value: Any) -> Any:
+    if isinstance(value, int | float) and not isinstance(value, bool):
+        return -value
+    raise UnitError("only a number can be negated")
+
+
+def resolve(
+    ctx: Context,
+    node: yaml.Node,
+    loc: Loc,
+    vtype: ValueType,
+    env: Mapping[str, Bound],
+    what: str,
+    *,
+    param: Param | None = None,
+    allow_ref: bool = False,
+) -> Any:
+    """One value of type ``vtype``: ``${param}`` substituted, ``@key`` resolved to a
+    :class:`BlackboardRef` (where allowed), units parsed, range checked. Raises :class:`Bad`."""
+    fields = record_fields(vtype)
+    if fields is not None and isinstance(node, yaml.MappingNode):
+        return _record(ctx, node, loc, fields, env, what)
+    raw = plain(node, loc)
+    if isinstance(raw, str):
+        full = _FULL_SUBSTITUTION.match(raw)
+        if full is not None:
+            negative, pname = full.groups()
+            bound = env.get(pname)
+            if bound is None:
+                raise Bad(
+                    loc.at(f"{what}: unknown parameter ${{{pname}}}{closest(pname, list(env))}")
+                )
+            if bound.value is UNKNOWN:
+                return UNKNOWN
+            if compatible(bound.type, vtype):
+                value = convert(bound.type, vtype, bound.value)
+                if negative:
+                    try:
+                        value = _negate(value)
+                    except UnitError as exc:
+                        raise Bad(loc.at(f"{what}: {exc}")) from None
+                return _check_range(value, loc, what, param)
+            if bound.type.name != "str":
+                raise Bad(
+                    loc.at(
+                        f"{what}: parameter ${{{pname}}} is a {bound.type.describe()}, "
+                        f"but {what} needs {vtype.describe()}"
+                    )
+                )
+            raw = ("-" if negative else "") + str(bound.value)
+        elif "${" in raw:
+            raw = _substitute(raw, loc, env, what)
+            if raw is UNKNOWN:
+                return UNKNOWN
+        if raw.startswith("@"):
+            if not allow_ref:
+                raise Bad(loc.at(f"{what}: a blackboard value (@key) is not allowed here"))
+            return _reference(ctx, raw, loc, vtype, what)
+    try:
+        value = vtype.parse(raw)
+    except UnitError as exc:
+        raise Bad(loc.at(f"{what}: {exc}")) from None
+    return _check_range(value, loc, what, param)
+
+
+def _record(
+    ctx: Context,
+    node: yaml.Node,
+    loc: Loc,
+    fields: dict[str, ValueType],
+    env: Mapping[str, Bound],
+    what: str,
+) -> dict[str, Any]:
+    """A record written as a mapping: every field, each resolved with its own type."""
+    given = {k: (v, vl) for k, v, _, vl in mapping(node, loc, what)}
+    unknown_fields = [k for k in given if k not in fields]
+    if unknown_fields:
+        name = unknown_fields[0]
+        raise Bad(loc.at(f"{what}: " + unknown("field", name, list(fields))))
+    missing = [k for k in fields if k not in given]
+    if missing:
+        raise Bad(loc.at(f"{what}: missing field {missing[0]!r}"))
+    return {
+        k: resolve(ctx, given[k][0], given[k][1], t, env, f"{what}.{k}") for k, t in fields.items()
+    }
+
+
+def _substitute(raw: str, loc: Loc, env: Mapping[str, Bound], what: str) -> Any:
+    """``"${a} mm/s"``: each parameter replaced by its text; UNKNOWN if one is unknown."""
+
+    def substitute(match: re.Match[str]) -> str:
+        bound = env.get(match.group(1))
+        if bound is None:
+            name = match.group(1)
+            raise Bad(loc.at(f"{what}: unknown parameter ${{{name}}}{closest(name, list(env))}"))
+        return bound.text
+
+    names = SUBSTITUTION.findall(raw)
+    text = SUBSTITUTION.sub(substitute, raw)
+    if any(env[name].value is UNKNOWN for name in names):
+        return UNKNOWN
+    return text
+
+
+def _check_range(value: Any, loc: Loc, what: str, param: Param | None) -> Any:
+    if param is not None:
+        problem = param.check_range(value)
+        if problem is not None:
+            owner = what.rsplit(".", 1)[0] if "." in what else what
+            raise Bad(loc.at(f"{owner}: {problem}"))
+    return value
+
+
+def _reference(ctx: Context, raw: str, loc: Loc, vtype: ValueType, what: str) -> BlackboardRef:
+    match = _REF.match(raw)
+    if match is None:
+        raise Bad(loc.at(f"{what}: {raw!r} is not a blackboard reference (@key or @key.field)"))
+    key, fname = match.groups()
+    decl = ctx.keys.get(key)
+    if decl is None:
+        raise Bad(loc.at(f"{what}: unknown blackboard key {key!r}{closest(key, list(ctx.keys))}"))
+    ktype = decl.type
+    if fname is not None:
+        fields = record_fields(ktype)
+        if fields is None or fname not in fields:
+            known = ", ".join(fields) if fields else "none: it is not a record"
+            raise Bad(
+                loc.at(f"{what}: blackboard key {key!r} has no field {fname!r} (fields: {known})")
+            )
+        ktype = fields[fname]
+    if not compatible(ktype, vtype):
+        raise Bad(
+            loc.at(
+                f"{what}: blackboard key {str(BlackboardRef(key, fname))[1:]!r} holds "
+                f"{ktype.describe()}, but {what} needs {vtype.describe()}"
+            )
+        )
+    return BlackboardRef(key, fname)
+
+
+def shown(vtype: ValueType, value: Any) -> str:
+    """A value as a mission would write it: ``150 mm/s`` rather than ``150.0``."""
+    if vtype.name in CANONICAL and isinstance(value, int | float):
+        return format_quantity(vtype.name, value)
+    return str(value)
