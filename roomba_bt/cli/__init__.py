@@ -14,7 +14,7 @@ import sys
 from collections.abc import Sequence
 
 from roomba_bt import __version__
-from roomba_bt.cli.exit_codes import ExitCode
+from roomba_bt.runtime.summary import ExitCode
 
 SUBCOMMAND_MODULES: tuple[str, ...] = (
     "roomba_bt.cli.run_cmd",

@@ -19,8 +19,8 @@ from pathlib import Path
 from typing import Any
 
 from roomba_bt.cli.arguments import add_param_option, parse_params, parse_timeout, plot_file
-from roomba_bt.cli.exit_codes import ExitCode
 from roomba_bt.oi.profiles import PROFILES
+from roomba_bt.runtime.summary import ExitCode
 
 
 def register(sub: Any) -> None:

@@ -13,8 +13,8 @@ from pathlib import Path
 from typing import Any
 
 from roomba_bt.cli.arguments import add_param_option, baud_rate, parse_params
-from roomba_bt.cli.exit_codes import ExitCode
 from roomba_bt.oi.profiles import PROFILES, get_profile
+from roomba_bt.runtime.summary import ExitCode
 
 
 def register(sub: Any) -> None:

@@ -16,9 +16,9 @@ from roomba_bt.cli.arguments import (
     plot_file,
     seconds,
 )
-from roomba_bt.cli.exit_codes import ExitCode
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.profiles import PROFILES, RobotProfile, get_profile
+from roomba_bt.runtime.summary import ExitCode
 
 
 def register(sub: Any) -> None:

@@ -8,11 +8,11 @@ import time
 from typing import Any
 
 from roomba_bt.cli.arguments import baud_rate
-from roomba_bt.cli.exit_codes import ExitCode
 from roomba_bt.oi.frames import stream_frame_size
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import PROFILES, get_profile
 from roomba_bt.oi.stream import stream_budget
+from roomba_bt.runtime.summary import ExitCode
 
 #: The groups tried, most packets first: the first whose stream frame fits the baud rate's
 #: 15 ms budget is shown. Group 100 (every packet, 80 data bytes, an 84-byte frame) fits at

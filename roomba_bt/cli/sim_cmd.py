@@ -17,7 +17,7 @@ from types import FrameType
 from typing import Any
 
 from roomba_bt.cli.arguments import plot_file, seconds
-from roomba_bt.cli.exit_codes import ExitCode
+from roomba_bt.runtime.summary import ExitCode
 
 
 def register(sub: Any) -> None:

@@ -1,11 +1,22 @@
-"""How a run ended, and the figures printed at the end of every run."""
+"""How a run ended, the exit code that says so, and the figures printed at the end of every
+run."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import Enum
+from enum import Enum, IntEnum
 
 from roomba_bt.oi.modes import OIMode
+
+
+class ExitCode(IntEnum):
+    """Exit codes of ``roomba-bt``, documented in the README and ``docs/runtime.md``."""
+
+    OK = 0  # mission succeeded / command did what was asked
+    MISSION_FAILED = 1  # the tree ended in FAILURE (or the timeout ran out)
+    INVALID = 2  # invalid mission, world or command-line usage
+    CONNECTION = 3  # port could not be opened, robot did not answer, stream lost
+    INTERRUPTED = 130  # Ctrl-C or SIGTERM, after the safe stop
 
 
 class Outcome(Enum):
@@ -17,18 +28,18 @@ class Outcome(Enum):
     ERROR = "error"
 
     @property
-    def exit_code(self) -> int:
+    def exit_code(self) -> ExitCode:
         """The documented ``roomba-bt run`` exit code (see ``docs/runtime.md``)."""
         return _EXIT[self]
 
 
 _EXIT = {
-    Outcome.SUCCESS: 0,
-    Outcome.FAILURE: 1,
-    Outcome.TIMEOUT: 1,
-    Outcome.INTERRUPTED: 130,
-    Outcome.CONNECTION_LOST: 3,
-    Outcome.ERROR: 1,
+    Outcome.SUCCESS: ExitCode.OK,
+    Outcome.FAILURE: ExitCode.MISSION_FAILED,
+    Outcome.TIMEOUT: ExitCode.MISSION_FAILED,
+    Outcome.INTERRUPTED: ExitCode.INTERRUPTED,
+    Outcome.CONNECTION_LOST: ExitCode.CONNECTION,
+    Outcome.ERROR: ExitCode.MISSION_FAILED,
 }
 
 
