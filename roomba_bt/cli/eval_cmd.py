@@ -137,16 +137,12 @@ def eval_command(args: argparse.Namespace) -> int:
         battery=args.battery,
     )
     # Check the mission and the world once, here, before any worker starts.
+    from roomba_bt.cli.run_cmd import load
     from roomba_bt.evaluate.episode import build_world, start_pose
-    from roomba_bt.mission import MissionError, load_mission
     from roomba_bt.oi.profiles import get_profile
 
-    try:
-        load_mission(args.mission, params, profile=get_profile(args.profile))
-    except MissionError as exc:
-        for diagnostic in exc.diagnostics:
-            print(str(diagnostic), file=sys.stderr)
-        return ExitCode.INVALID
+    if isinstance(loaded := load(args.mission, params, get_profile(args.profile)), int):
+        return loaded
     try:
         world = build_world(specs[0])
         start_pose(world, specs[0])

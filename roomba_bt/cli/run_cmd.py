@@ -80,8 +80,9 @@ def _error(message: str) -> int:
     return ExitCode.INVALID
 
 
-def load(path: str, params: dict[str, str], profile: RobotProfile, baud: int) -> Any:
-    """The compiled mission, or an int exit code after printing every diagnostic."""
+def load(path: str, params: dict[str, str], profile: RobotProfile, baud: int = 115200) -> Any:
+    """The compiled mission, or an int exit code after printing every diagnostic (``run``,
+    ``replay``, and ``eval`` before its workers start)."""
     from roomba_bt.mission import MissionError, load_mission
 
     try:
