@@ -36,8 +36,9 @@ from roomba_bt.behaviours.units import (
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.bits import led_bits, motor_bits
 from roomba_bt.oi.encode import Note, Radius, note_number
+from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS, ENCODER_PACKETS
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
-from roomba_bt.oi.opcodes import COMMANDS_BY_NAME
+from roomba_bt.oi.opcodes import COMMANDS_BY_NAME, opcodes
 
 log = logging.getLogger("roomba_bt.mission")
 
@@ -123,7 +124,7 @@ def _mode_target(params: Mapping[str, Any]) -> OIMode:
         Param("timeout", DURATION, default="2s", minimum=0.1, maximum=60,
               doc="FAILURE if packet 35 does not show the mode by then"),
     ),
-    sends=(128, 131, 132),
+    sends=opcodes("start", "safe", "full"),
     leads_to=_mode_target,
     primary="to",
 )  # fmt: skip
@@ -169,7 +170,7 @@ def _drive_constraints(params: Mapping[str, Any]) -> list[str]:
 
 
 def _drive_reads(params: Mapping[str, Any]) -> tuple[int, ...]:
-    return (43, 44) if ("distance" in params or "angle" in params) else ()
+    return ENCODER_PACKETS if ("distance" in params or "angle" in params) else ()
 
 
 @declare(
@@ -190,7 +191,7 @@ def _drive_reads(params: Mapping[str, Any]) -> tuple[int, ...]:
         Param("duration", DURATION, minimum=0, doc="stop after this mission time"),
     ),
     reads=_drive_reads,
-    sends=(137, 145),
+    sends=opcodes("drive", "drive_direct"),
     constraints=_drive_constraints,
 )  # fmt: skip
 class Drive(Action):
@@ -264,8 +265,8 @@ class Drive(Action):
         Param("speed", SPEED, default="100 mm/s", minimum=1, maximum=_VELOCITY.maximum,
               doc="wheel speed while spinning in place"),
     ),
-    reads=(43, 44),
-    sends=(137,),
+    reads=ENCODER_PACKETS,
+    sends=opcodes("drive"),
     primary="angle",
 )  # fmt: skip
 class Turn(Drive):
@@ -283,7 +284,7 @@ class Turn(Drive):
     "stop",
     kind="action",
     params=(Param("motors", BOOL, default=False, doc="also switch the brushes and vacuum off"),),
-    sends=(137, 138),
+    sends=opcodes("drive", "motors"),
 )
 class Stop(Action):
     """Stop the wheels (Drive 0: ``[137][0][0][0][0]``), and the motors if asked."""
@@ -306,21 +307,21 @@ class _BuiltIn(Action):
         return _OK
 
 
-@declare("clean", kind="action", sends=(135,), leads_to=OIMode.PASSIVE)
+@declare("clean", kind="action", sends=opcodes("clean"), leads_to=OIMode.PASSIVE)
 class Clean(_BuiltIn):
     """Start the robot's own cleaning cycle (Clean 135); the OI drops to Passive."""
 
     opcode_helper = staticmethod(oi.clean)
 
 
-@declare("spot", kind="action", sends=(134,), leads_to=OIMode.PASSIVE)
+@declare("spot", kind="action", sends=opcodes("spot"), leads_to=OIMode.PASSIVE)
 class Spot(_BuiltIn):
     """Start spot cleaning (Spot 134); the OI drops to Passive."""
 
     opcode_helper = staticmethod(oi.spot)
 
 
-@declare("max", kind="action", sends=(136,), leads_to=OIMode.PASSIVE)
+@declare("max", kind="action", sends=opcodes("max"), leads_to=OIMode.PASSIVE)
 class MaxClean(_BuiltIn):
     """Start a Max cleaning cycle (Max 136), until the battery runs out; Passive."""
 
@@ -334,8 +335,8 @@ class MaxClean(_BuiltIn):
         Param("wait", BOOL, default=True, doc="RUNNING until packet 34 shows the home base"),
         Param("timeout", DURATION, minimum=0, doc="FAILURE if not docked by then"),
     ),
-    reads=(34,),
-    sends=(143,),
+    reads=CHARGING_SOURCES_PACKETS,
+    sends=opcodes("seek_dock"),
     leads_to=OIMode.PASSIVE,
 )  # fmt: skip
 class SeekDock(Action):
@@ -352,7 +353,10 @@ class SeekDock(Action):
             if not self.value("wait"):
                 return _OK
         snap = self.snapshot
-        if snap.frame.get(34, 0) and snap.frame.charging_sources.home_base:
+        frame = snap.frame
+        if all(pid in frame for pid in CHARGING_SOURCES_PACKETS) and (
+            frame.charging_sources.home_base
+        ):
             return _OK
         timeout = self.value("timeout")
         if timeout is not None and snap.time - self._start_time >= timeout:
@@ -374,7 +378,7 @@ class SeekDock(Action):
         Param("side_brush_clockwise", BOOL, default=False),
         Param("main_brush_outward", BOOL, default=False),
     ),
-    sends=(138,),
+    sends=opcodes("motors"),
 )
 class Motors(Action):
     """Switch the cleaning motors (Motors 138 ``[138][bits]``); unnamed ones go off."""
@@ -395,7 +399,7 @@ class Motors(Action):
     "vacuum",
     kind="action",
     params=(Param("on", BOOL, required=True, doc="vacuum on or off (other motors go off)"),),
-    sends=(138,),
+    sends=opcodes("motors"),
     primary="on",
 )
 class Vacuum(Action):
@@ -418,7 +422,7 @@ class Vacuum(Action):
               maximum=_LED_COLOR.maximum, doc="0 green .. 255 red"),
         Param("power_intensity", PERCENT, default="0%", minimum=0, maximum=100),
     ),
-    sends=(139,),
+    sends=opcodes("leds"),
 )  # fmt: skip
 class Leds(Action):
     """Set the LEDs (LEDs 139 ``[139][led bits][power colour][power intensity]``)."""
@@ -438,7 +442,7 @@ class Leds(Action):
               maximum=_SONG_NUMBER.maximum, doc="song slot"),
         Param("notes", NOTES, required=True, doc='e.g. ["C4 250ms", "rest 125ms", "G4 500ms"]'),
     ),
-    sends=(140,),
+    sends=opcodes("song"),
 )  # fmt: skip
 class Song(Action):
     """Define a song (Song 140 ``[140][number][length][note][64ths]...``)."""
@@ -456,7 +460,7 @@ class Song(Action):
         Param("number", INT, default=0, minimum=_SONG_NUMBER.minimum,
               maximum=_SONG_NUMBER.maximum),
     ),
-    sends=(141,),
+    sends=opcodes("play"),
     primary="number",
 )  # fmt: skip
 class Play(Action):
@@ -528,7 +532,7 @@ class SetKey(Action):
     kind="action",
     params=(Param("key", STR, required=True, from_blackboard=False,
                   doc="a key declared with type mark"),),
-    reads=(43, 44),
+    reads=ENCODER_PACKETS,
     writes_keys=("key",),
     primary="key",
 )  # fmt: skip

@@ -26,9 +26,20 @@ from roomba_bt.behaviours.units import (
     enum,
 )
 from roomba_bt.oi.bits import BUTTON_NAMES, LIGHT_BUMPER_NAMES, ChargingState, Stasis
-from roomba_bt.oi.ir import REMOTE_BUTTONS
-from roomba_bt.oi.modes import OIMode
-from roomba_bt.oi.packets import PACKETS, PACKETS_BY_NAME
+from roomba_bt.oi.frames import (
+    BUMPS_PACKETS,
+    CHARGING_SOURCES_PACKETS,
+    CHARGING_STATE_PACKETS,
+    CLIFF_PACKETS,
+    ENCODER_PACKETS,
+    IR_PACKETS,
+    LIGHT_BUMP_SIGNAL_PACKETS,
+    LIGHT_BUMPER_PACKETS,
+    VIRTUAL_WALL_PACKETS,
+)
+from roomba_bt.oi.ir import REMOTE_BUTTONS, IRCharacter
+from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
+from roomba_bt.oi.packets import PACKETS, PACKETS_BY_NAME, packet_ids
 from roomba_bt.robot.interface import Odometry, Snapshot
 
 OPERATORS: dict[str, Callable[[Any, Any], bool]] = {
@@ -42,8 +53,8 @@ OPERATORS: dict[str, Callable[[Any, Any], bool]] = {
 _SIDES = enum("left", "right", "any")
 
 
-@declare("bump", kind="condition", params=(Param("side", _SIDES, default="any"),), reads=(7,),
-         primary="side")  # fmt: skip
+@declare("bump", kind="condition", params=(Param("side", _SIDES, default="any"),),
+         reads=BUMPS_PACKETS, primary="side")  # fmt: skip
 class Bump(Condition):
     """A bumper is pressed (packet 7: bit 0 right, bit 1 left)."""
 
@@ -54,7 +65,7 @@ class Bump(Condition):
 
 
 @declare("wheel_drop", kind="condition", params=(Param("side", _SIDES, default="any"),),
-         reads=(7,), primary="side")  # fmt: skip
+         reads=BUMPS_PACKETS, primary="side")  # fmt: skip
 class WheelDrop(Condition):
     """A wheel has dropped (packet 7: bit 2 right, bit 3 left)."""
 
@@ -64,7 +75,7 @@ class WheelDrop(Condition):
         return bumps.any_wheel_drop if side == "any" else getattr(bumps, f"wheel_drop_{side}")
 
 
-_CLIFFS = {"left": 9, "front_left": 10, "front_right": 11, "right": 12}
+_CLIFFS = dict(zip(("left", "front_left", "front_right", "right"), CLIFF_PACKETS, strict=True))
 
 
 def _cliff_reads(params: Mapping[str, Any]) -> tuple[int, ...]:
@@ -89,7 +100,7 @@ class Cliff(Condition):
         return bool(snapshot.frame[_CLIFFS[sensor]])
 
 
-@declare("wall", kind="condition", reads=(8,))
+@declare("wall", kind="condition", reads=packet_ids("wall"))
 class Wall(Condition):
     """The right-side wall sensor sees a wall (packet 8)."""
 
@@ -97,7 +108,7 @@ class Wall(Condition):
         return snapshot.frame.wall
 
 
-@declare("virtual_wall", kind="condition", reads=(13,))
+@declare("virtual_wall", kind="condition", reads=VIRTUAL_WALL_PACKETS)
 class VirtualWall(Condition):
     """A virtual wall beam is detected (packet 13)."""
 
@@ -105,13 +116,14 @@ class VirtualWall(Condition):
         return snapshot.frame.virtual_wall
 
 
-_LIGHT_SIGNALS = dict(zip(LIGHT_BUMPER_NAMES, range(46, 52), strict=True))
+_LIGHT_SIGNALS = dict(zip(LIGHT_BUMPER_NAMES, LIGHT_BUMP_SIGNAL_PACKETS, strict=True))
+_SIGNAL_MAXIMUM = max(PACKETS[pid].maximum for pid in LIGHT_BUMP_SIGNAL_PACKETS)
 
 
 def _light_reads(params: Mapping[str, Any]) -> tuple[int, ...]:
     sensor = params.get("sensor", "any")
     if params.get("threshold") is None:
-        return (45,)
+        return LIGHT_BUMPER_PACKETS
     return tuple(_LIGHT_SIGNALS.values()) if sensor == "any" else (_LIGHT_SIGNALS[sensor],)
 
 
@@ -120,7 +132,7 @@ def _light_reads(params: Mapping[str, Any]) -> tuple[int, ...]:
     kind="condition",
     params=(
         Param("sensor", enum(*LIGHT_BUMPER_NAMES, "any"), default="any", from_blackboard=False),
-        Param("threshold", INT, minimum=0, maximum=PACKETS[46].maximum, from_blackboard=False,
+        Param("threshold", INT, minimum=0, maximum=_SIGNAL_MAXIMUM, from_blackboard=False,
               doc="compare the signal (46-51) instead of the robot's own detection bit (45)"),
     ),
     reads=_light_reads,
@@ -140,7 +152,7 @@ class LightBumper(Condition):
         return any(frame[pid] >= threshold for pid in ids)
 
 
-_RECEIVERS = {"omni": 17, "left": 52, "right": 53}
+_RECEIVERS = dict(zip(("omni", "left", "right"), IR_PACKETS, strict=True))
 _IR_WHAT = ("red_buoy", "green_buoy", "force_field", "virtual_wall", "any_buoy", "dock",
             "remote", "anything")  # fmt: skip
 
@@ -162,9 +174,7 @@ class InfraRed(Condition):
     force field, a virtual wall, a remote button."""
 
     def check(self, snapshot: Snapshot) -> bool:
-        from roomba_bt.oi.ir import IR_CHARACTERS
-
-        char = IR_CHARACTERS[snapshot.frame[_RECEIVERS[self.value("receiver")]] & 0xFF]
+        char: IRCharacter = getattr(snapshot.frame, f"ir_{self.value('receiver')}")
         sees = self.value("sees")
         if sees == "anything":
             return char.code != 0
@@ -188,8 +198,8 @@ _CHARGING: dict[str, Callable[[ChargingState], bool]] = {
 
 
 @declare("charging", kind="condition",
-         params=(Param("state", enum(*_CHARGING), default="charging"),), reads=(21,),
-         primary="state")  # fmt: skip
+         params=(Param("state", enum(*_CHARGING), default="charging"),),
+         reads=CHARGING_STATE_PACKETS, primary="state")  # fmt: skip
 class Charging(Condition):
     """The charging state (packet 21) is the one named (``charging``: any charging state)."""
 
@@ -197,7 +207,7 @@ class Charging(Condition):
         return bool(_CHARGING[self.value("state")](snapshot.frame.charging_state))
 
 
-@declare("on_home_base", kind="condition", reads=(34,))
+@declare("on_home_base", kind="condition", reads=CHARGING_SOURCES_PACKETS)
 class OnHomeBase(Condition):
     """The home base powers the robot (packet 34, bit 1)."""
 
@@ -218,7 +228,7 @@ def _battery_constraints(params: Mapping[str, Any]) -> list[str]:
         Param("above", PERCENT, minimum=0, maximum=100),
         Param("below", PERCENT, minimum=0, maximum=100),
     ),
-    reads=(25, 26),
+    reads=packet_ids("battery_charge", "battery_capacity"),
     constraints=_battery_constraints,
 )
 class Battery(Condition):
@@ -234,7 +244,7 @@ class Battery(Condition):
 
 @declare("oi_mode", kind="condition",
          params=(Param("is", enum("off", "passive", "safe", "full"), required=True),),
-         reads=(35,), primary="is")  # fmt: skip
+         reads=(OI_MODE_PACKET,), primary="is")  # fmt: skip
 class OIModeIs(Condition):
     """The OI mode (packet 35, as reconciled by the robot layer) is the one named."""
 
@@ -256,7 +266,7 @@ def _odometry_constraints(params: Mapping[str, Any]) -> list[str]:
         Param("distance", DISTANCE, minimum=0, doc="at least this path length"),
         Param("angle", ANGLE, minimum=0, doc="at least this heading change"),
     ),
-    reads=(43, 44),
+    reads=ENCODER_PACKETS,
     reads_keys=("since",),
     constraints=_odometry_constraints,
 )  # fmt: skip
@@ -278,8 +288,8 @@ _STASIS = {"moving": Stasis.FORWARD_PROGRESS, "stuck": Stasis.NO_PROGRESS, "dirt
 
 
 @declare("stasis", kind="condition",
-         params=(Param("state", enum(*_STASIS), default="stuck"),), reads=(58,),
-         primary="state")  # fmt: skip
+         params=(Param("state", enum(*_STASIS), default="stuck"),),
+         reads=packet_ids("stasis"), primary="state")  # fmt: skip
 class StasisIs(Condition):
     """The stasis caster (58) reports forward progress, none, or (600 series) too dirty."""
 
@@ -291,8 +301,8 @@ _MOTORS = ("left_wheel", "right_wheel", "main_brush", "side_brush", "any")
 
 
 @declare("overcurrent", kind="condition",
-         params=(Param("motor", enum(*_MOTORS), default="any"),), reads=(14,),
-         primary="motor")  # fmt: skip
+         params=(Param("motor", enum(*_MOTORS), default="any"),),
+         reads=packet_ids("overcurrents"), primary="motor")  # fmt: skip
 class Overcurrent(Condition):
     """A motor draws too much current (packet 14: 0 side brush, 2 main, 3 right, 4 left)."""
 
@@ -303,8 +313,8 @@ class Overcurrent(Condition):
 
 
 @declare("button", kind="condition",
-         params=(Param("name", enum(*BUTTON_NAMES, "any"), default="any"),), reads=(18,),
-         primary="name")  # fmt: skip
+         params=(Param("name", enum(*BUTTON_NAMES, "any"), default="any"),),
+         reads=packet_ids("buttons"), primary="name")  # fmt: skip
 class Button(Condition):
     """A button on the robot is pressed (packet 18)."""
 

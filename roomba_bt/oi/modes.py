@@ -4,6 +4,11 @@ from __future__ import annotations
 
 from enum import IntEnum
 
+from roomba_bt.oi.packets import PACKETS_BY_NAME
+
+#: The sensor packet that carries the mode: 35, ``oi_mode`` in the packet table.
+OI_MODE_PACKET: int = PACKETS_BY_NAME["oi_mode"].id
+
 
 class OIMode(IntEnum):
     """The four Open Interface modes; the value is what packet 35 carries."""

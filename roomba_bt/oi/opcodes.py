@@ -297,3 +297,10 @@ COMMANDS_BY_NAME: Mapping[str, CommandSpec] = MappingProxyType({c.name: c for c 
 
 #: Commands that change the OI mode, by the mode they lead to (the mode model's triggers).
 MODE_COMMANDS: tuple[CommandSpec, ...] = tuple(c for c in _COMMAND_LIST if c.leads_to is not None)
+
+
+def opcodes(*names: str) -> tuple[int, ...]:
+    """The opcodes of the commands named (``opcodes("drive", "drive_direct")`` -> ``(137,
+    145)``): for a reader's list of what it sends, without the numbers. A name the table does
+    not have raises KeyError when the reader is defined."""
+    return tuple(COMMANDS_BY_NAME[name].opcode for name in names)

@@ -101,6 +101,14 @@ _PACKET_LIST: tuple[PacketSpec, ...] = (
 PACKETS: Mapping[int, PacketSpec] = MappingProxyType({p.id: p for p in _PACKET_LIST})
 PACKETS_BY_NAME: Mapping[str, PacketSpec] = MappingProxyType({p.name: p for p in _PACKET_LIST})
 
+
+def packet_ids(*names: str) -> tuple[int, ...]:
+    """The ids of the packets named (``packet_ids("battery_charge", "battery_capacity")`` ->
+    ``(25, 26)``): for a reader's list of what it reads, without the numbers. A name the table
+    does not have raises KeyError when the reader is defined."""
+    return tuple(PACKETS_BY_NAME[name].id for name in names)
+
+
 #: Group id -> member packet ids, in the order the robot sends them.
 GROUPS: Mapping[int, tuple[int, ...]] = MappingProxyType(
     {

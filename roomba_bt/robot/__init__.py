@@ -22,7 +22,7 @@ from roomba_bt.robot.errors import (
     StreamStalled,
 )
 from roomba_bt.robot.interface import ModeChange, Odometry, Outbox, RobotHandle, Snapshot, StubRobot
-from roomba_bt.robot.modes import ModeModel, infer_cause, mermaid, render_modes_doc
+from roomba_bt.robot.modes import ModeModel, infer_cause
 from roomba_bt.robot.safety import Terminated, sigterm_raises
 
 __all__ = [
@@ -47,7 +47,5 @@ __all__ = [
     "Terminated",
     "TimedFrame",
     "infer_cause",
-    "mermaid",
-    "render_modes_doc",
     "sigterm_raises",
 ]

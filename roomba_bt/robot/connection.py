@@ -49,7 +49,7 @@ from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import BAUD_RATES, Command
 from roomba_bt.oi.errors import UnsupportedCommandError
 from roomba_bt.oi.frames import SensorFrame
-from roomba_bt.oi.modes import DRIVING_MODES, OIMode
+from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
 from roomba_bt.oi.opcodes import Effect
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile, get_profile
 from roomba_bt.oi.stream import ReplyParser, StreamParser, check_bandwidth
@@ -336,7 +336,7 @@ class Connection:
         self.send(oi.pause_stream())
         self._streaming = False
         self._drain()
-        reply = self.query((35,), confirm_timeout)
+        reply = self.query((OI_MODE_PACKET,), confirm_timeout)
         if reply is None:
             raise ConnectionFailed(
                 self.name,
@@ -347,8 +347,8 @@ class Connection:
         if self.modes.mode is not OIMode.PASSIVE or self.modes.plus_one is None:
             raise ConnectionFailed(
                 self.name,
-                f"the robot answered {reply[35]} for its OI mode right after Start, which is "
-                f"no mode (Passive reads 1, or 2 on firmware that reports mode + 1)",
+                f"the robot answered {reply[OI_MODE_PACKET]} for its OI mode right after Start, "
+                f"which is no mode (Passive reads 1, or 2 on firmware that reports mode + 1)",
                 (*NO_ANSWER_CAUSES[:1], "another program talking to the robot"),
             )
         if target is OIMode.SAFE:

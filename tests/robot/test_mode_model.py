@@ -16,8 +16,9 @@ from roomba_bt.oi.frames import layout_for
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import COMMANDS, MODE_COMMANDS
 from roomba_bt.oi.profiles import CREATE2, PROFILES, ROOMBA500, ROOMBA600
+from roomba_bt.robot.docgen import mermaid, render_modes_doc
 from roomba_bt.robot.errors import ModeError, format_wall_time
-from roomba_bt.robot.modes import ModeModel, infer_cause, mermaid, render_modes_doc
+from roomba_bt.robot.modes import ModeModel, infer_cause
 
 DOCS = pathlib.Path(__file__).resolve().parents[2] / "docs" / "modes.md"
 NOON = time.mktime((2026, 11, 22, 12, 1, 3, 0, 0, -1)) + 0.120
