@@ -19,7 +19,7 @@ from py_trees.behaviour import Behaviour
 from roomba_bt.behaviours.actions import Wait
 from roomba_bt.behaviours.conditions import COMPARISON, Bump, Cliff, Sensor, Wall
 from roomba_bt.mission import load_mission
-from roomba_bt.robot.interface import StubRobot
+from roomba_bt.robot.testing import StubRobot
 
 GROUP = """\
       - reactive_fallback:

@@ -39,7 +39,7 @@ from roomba_bt.oi.frames import layout_for
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.oi.stream import StreamParser
 from roomba_bt.robot.connection import Connection
-from roomba_bt.robot.interface import StubRobot
+from roomba_bt.robot.testing import StubRobot
 from roomba_bt.runtime.loop import MissionRunner, stream_request
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -1,7 +1,7 @@
 """The robot layer's errors: one type per thing a caller handles differently.
 
 * :class:`ModeError`: a command the robot's current OI mode would not accept; nothing was sent.
-* :class:`ConnectionFailed`: the robot could not be reached at start-up (or on a reconnect).
+* :class:`ConnectionFailed`: the robot could not be reached at start-up.
 * :class:`LinkDown` and its two kinds, :class:`PortLost` (the port raised) and
   :class:`StreamStalled` (no valid frame within the watchdog): the link failed while running.
 

@@ -8,7 +8,7 @@ import pytest
 
 from roomba_bt.behaviours.declare import RobotBehaviour
 from roomba_bt.oi.modes import OIMode
-from roomba_bt.robot.interface import StubRobot
+from roomba_bt.robot.testing import StubRobot
 
 
 @pytest.fixture(autouse=True)

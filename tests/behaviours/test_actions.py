@@ -15,7 +15,8 @@ from roomba_bt.behaviours import actions as a
 from roomba_bt.behaviours.declare import BlackboardRef, read_key, write_key
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.odometry import mm_to_counts
-from roomba_bt.robot.interface import Odometry, StubRobot
+from roomba_bt.robot.interface import Odometry
+from roomba_bt.robot.testing import StubRobot
 
 
 def tick(behaviour: Behaviour) -> Status:

@@ -14,7 +14,8 @@ from roomba_bt.behaviours import conditions as c
 from roomba_bt.behaviours.declare import write_key
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.odometry import mm_to_counts
-from roomba_bt.robot.interface import Odometry, StubRobot
+from roomba_bt.robot.interface import Odometry
+from roomba_bt.robot.testing import StubRobot
 
 Make = Callable[..., Any]
 

@@ -16,7 +16,7 @@ from py_trees.common import Status
 from roomba_bt.behaviours import decorators as d
 from roomba_bt.behaviours import lean
 from roomba_bt.behaviours.declare import read_key
-from roomba_bt.robot.interface import StubRobot
+from roomba_bt.robot.testing import StubRobot
 
 
 def ready(node: py_trees.behaviour.Behaviour, robot: StubRobot) -> py_trees.behaviour.Behaviour:

@@ -17,7 +17,7 @@ from roomba_bt.behaviours.docking import (
 )
 from roomba_bt.oi.ir import dock_character
 from roomba_bt.oi.modes import OIMode
-from roomba_bt.robot.interface import StubRobot
+from roomba_bt.robot.testing import StubRobot
 
 Make = Callable[..., RobotBehaviour]
 

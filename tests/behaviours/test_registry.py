@@ -147,7 +147,7 @@ def test_a_plugin_file_loads_into_a_copy(tmp_path: Path) -> None:
 
 
 def test_a_registered_plugin_behaviour_ticks() -> None:
-    from roomba_bt.robot.interface import StubRobot
+    from roomba_bt.robot.testing import StubRobot
 
     node = Always("always", {})
     node.setup(robot=StubRobot())

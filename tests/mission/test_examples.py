@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from roomba_bt.mission import load_mission, validate_files
-from roomba_bt.robot.interface import StubRobot
+from roomba_bt.robot.testing import StubRobot
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "missions" / "examples"
 MISSIONS = sorted(EXAMPLES.glob("*.yaml"))

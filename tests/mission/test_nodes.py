@@ -13,7 +13,7 @@ from py_trees.common import Status
 from roomba_bt.behaviours.declare import read_key
 from roomba_bt.mission import CompiledMission
 from roomba_bt.oi.modes import OIMode
-from roomba_bt.robot.interface import StubRobot
+from roomba_bt.robot.testing import StubRobot
 
 Compile = Callable[..., CompiledMission]
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE

@@ -31,7 +31,6 @@ class Link:
     robot: FakeRobot | SimRobot | None
     profile: RobotProfile = CREATE2
     opened: list[Connection] = field(default_factory=list)
-    in_process: bool = False  # the simulator's virtual clock: reads belong to the caller
 
     def connect(self, **kwargs: Any) -> Connection:
         kwargs.setdefault("profile", self.profile)
@@ -51,10 +50,6 @@ class Link:
         if self.robot is None:
             pytest.skip(f"the {self.name} backend has no scriptable far end")
         return self.robot
-
-    def needs_threads(self) -> None:
-        if self.in_process:
-            pytest.skip("in-process simulator: its reads drive the virtual clock (no reader)")
 
 
 def make_fake_link(kind: str, profile: RobotProfile = CREATE2, **robot_kwargs: Any) -> Link:
@@ -121,7 +116,7 @@ def link(request: pytest.FixtureRequest, fake_links: Any) -> Iterator[Link]:
             pytest.skip(f"simulator backend: {missing}")
         if kind == "sim":
             transport, robot = make_sim_link(CREATE2)
-            sim = Link("sim", transport.name, robot, CREATE2, in_process=True)
+            sim = Link("sim", transport.name, robot, CREATE2)
             yield sim
             _close(sim)
             return

@@ -1,9 +1,8 @@
-"""Connection behaviour that needs one backend only: the "mode + 1" robot end to end, gap
-counting, reconnect with backoff, batches."""
+"""Connection behaviour that needs one backend only: the "mode + 1" robot end to end,
+batches, start-up refusals, firmware text in the stream, the simulator for every profile."""
 
 from __future__ import annotations
 
-import time
 from typing import Any
 
 import pytest
@@ -11,13 +10,8 @@ import pytest
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import ROOMBA600, get_profile
-from roomba_bt.robot.connection import (
-    Connection,
-    GapCounter,
-    LinkStatus,
-    ReconnectPolicy,
-)
-from roomba_bt.robot.errors import ConnectionFailed, ModeError, PortLost, RobotError
+from roomba_bt.robot.connection import Connection, LinkStatus
+from roomba_bt.robot.errors import ConnectionFailed, ModeError
 from roomba_bt.transport import SerialTransport
 
 from .conftest import Link
@@ -41,90 +35,6 @@ def test_a_600_that_reports_mode_plus_one_is_corrected_end_to_end(fake_links: An
         frames_until(connection, lambda: connection.counters.frames >= 40)
         assert connection.mode is OIMode.FULL  # reads 4: no crash, no false report
     assert robot.wait_until(lambda r: r.received.endswith(STOP_TO_PASSIVE))
-
-
-def test_gap_counter_counts_missing_slots_not_bursts() -> None:
-    gaps = GapCounter()
-    gaps.observe(0.0, 1)
-    for k in range(1, 10):
-        gaps.observe(k * 0.015, 1)
-    assert gaps.gaps == 0
-    gaps.observe(0.3, 2)  # the caller was busy: slots 10..20 due, 2 frames so far...
-    assert gaps.gaps == 9
-    gaps.observe(0.3, 9)  # ...the rest of the burst: all 11 were only late, none lost
-    assert gaps.gaps == 0
-    gaps.observe(0.345, 1)  # slot 23: slots 21 and 22 never came
-    assert gaps.gaps == 2
-
-
-def test_gap_counter_keeps_gaps_across_windows_without_drift() -> None:
-    gaps = GapCounter(window=0.3)
-    t = 0.0
-    for _ in range(200):  # a robot clock 0.5 % slow: never a whole slot behind per window
-        gaps.observe(t, 1)
-        last, t = t, t + 0.015 * 1.005
-    assert gaps.gaps == 0
-    gaps.observe(last + 0.045, 1)  # three slots after the last frame: two missing
-    assert gaps.gaps == 2
-
-
-def test_gaps_are_counted_on_a_live_stream(fake_links: Any) -> None:
-    link: Link = fake_links("pty")
-    robot = link.scripted()
-    with link.connect(watchdog=0) as connection:
-        connection.start("safe", PACKETS)
-        frames_until(connection, lambda: connection.counters.frames >= 5)
-        robot.muted = True
-        time.sleep(0.2)
-        robot.muted = False
-        frames_until(connection, lambda: connection.counters.frames >= 15)
-        assert connection.counters.gaps >= 5
-
-
-def test_reconnect_backs_off_and_restarts_the_same_stream(fake_links: Any) -> None:
-    first: Link = fake_links("pty")
-    second: Link = fake_links("pty")
-    attempts: list[float] = []
-    urls = iter([second.url, "/dev/no-such-roomba", second.url])
-    reopened = [first.url]
-
-    def reopen() -> SerialTransport:
-        url = next(urls)
-        reopened.append(url)
-        return SerialTransport.open(url)
-
-    connection = Connection(SerialTransport.open(first.url), reopen=reopen)
-    first.opened.append(connection)
-    connection.start("safe", PACKETS)
-    frames_until(connection, lambda: connection.counters.frames >= 2)
-    first.scripted().hang_up()
-    with pytest.raises(PortLost):
-        frames_until(connection, lambda: False)
-    attempt = connection.reconnect(ReconnectPolicy(initial=0.01, factor=3), sleep=attempts.append)
-    assert attempt == 1 and attempts == [0.01]
-    assert connection.status is LinkStatus.STREAMING and connection.mode is OIMode.SAFE
-    frames_until(connection, lambda: connection.latest is not None)
-    assert second.scripted().opcodes()[:5] == [128, 150, 149, 131, 148]
-    # a second loss, and the port does not come back at once
-    second.scripted().hang_up()
-    with pytest.raises(PortLost):
-        frames_until(connection, lambda: False)
-    with pytest.raises(ConnectionFailed, match="could not reconnect after 2 attempts"):
-        connection.reconnect(ReconnectPolicy(initial=0.01, factor=3, attempts=2), attempts.append)
-    assert attempts == [0.01, 0.01, 0.03]
-    connection.close()
-
-
-def test_reconnect_needs_a_way_to_reopen() -> None:
-    connection = Connection(SerialTransport.open("loop://"))
-    with pytest.raises(RobotError, match="reconnect"):
-        connection.reconnect()
-    connection.close()
-
-
-def test_backoff_delays_grow_to_the_cap() -> None:
-    policy = ReconnectPolicy(initial=0.1, factor=2, maximum=0.5, attempts=5)
-    assert list(policy.delays()) == [0.1, 0.2, 0.4, 0.5, 0.5]
 
 
 def test_send_many_writes_allowed_commands_in_one_batch_and_reports_refusals() -> None:
@@ -191,7 +101,7 @@ def test_the_simulator_in_process_for_every_profile(profile_name: str) -> None:
         while len(frames) < 20:
             frames += connection.poll(0.1)
         assert connection.mode is OIMode.FULL and connection.last_fallback is None
-        assert connection.counters.checksum_failures == 0 and connection.counters.gaps == 0
+        assert connection.counters.checksum_failures == 0
         assert frames[-1].time - frames[0].time == pytest.approx(19 * 0.015)
         connection.send(oi.drive_direct(100, 100))
     assert bytes(robot.received).endswith(STOP_TO_PASSIVE)

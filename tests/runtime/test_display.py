@@ -8,7 +8,7 @@ import logging
 import pytest
 
 from roomba_bt.oi.modes import OIMode
-from roomba_bt.robot.interface import StubRobot
+from roomba_bt.robot.testing import StubRobot
 from roomba_bt.runtime.display import StatusChangeLogger, TerminalDisplay, sensor_line
 
 from .simrun import RunMission

@@ -12,7 +12,7 @@ from roomba_bt_wallfollow import WallFollow
 from roomba_bt.behaviours import default_registry
 from roomba_bt.mission import load_mission
 from roomba_bt.oi.modes import OIMode
-from roomba_bt.robot.interface import StubRobot
+from roomba_bt.robot.testing import StubRobot
 
 EXAMPLE = Path(__file__).resolve().parents[3] / "missions" / "examples" / "wall_follow.yaml"
 

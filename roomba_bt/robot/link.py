@@ -1,0 +1,228 @@
+"""The link: bytes to and from one transport, the sensor stream cut into frames, the watchdog.
+
+The half of a :class:`~roomba_bt.robot.connection.Connection` that knows bytes and frames but
+not what a command means (the session, the other half, decides what is sent and keeps the
+mode model). Reading happens in the caller's thread, which is what the runtime wants: no
+thread hop between a frame's arrival and the tick that reads it, and on the simulator's
+virtual clock the caller's reads are what move time::
+
+    transport.read ──► StreamParser.feed ──► reconcile(frame, index, arrival) ──► TimedFrame
+     (OSError: PortLost)  (checksum, resync)    (the session's mode model)
+
+    no valid frame for ``watchdog`` s while a stream runs ──► halt() ──► StreamStalled
+"""
+
+from __future__ import annotations
+
+import enum
+import logging
+from collections.abc import Callable
+from typing import NamedTuple
+
+import serial
+
+from roomba_bt.oi.frames import SensorFrame
+from roomba_bt.oi.profiles import RobotProfile
+from roomba_bt.oi.stream import StreamParser
+from roomba_bt.robot.errors import PortLost, StreamStalled
+from roomba_bt.robot.interface import ModeChange
+from roomba_bt.transport.base import Transport, TransportError
+
+log = logging.getLogger(__name__)
+
+#: What breaking a link raises, from our transport, pyserial, sockets or the simulator.
+LINK_ERRORS = (OSError, serial.SerialException)
+
+#: The session's mode model, told of every frame: the change the robot made by itself, if any.
+Reconcile = Callable[[SensorFrame, int, float], ModeChange | None]
+
+
+class LinkStatus(enum.Enum):
+    """Where the link stands; :attr:`Connection.status`."""
+
+    OPEN = "open"  # port open, no stream running
+    STREAMING = "streaming"
+    STALLED = "stalled"  # the watchdog tripped; frames may come back
+    LOST = "lost"  # the port raised: the link is gone
+    STOPPED = "stopped"  # safe stop sent
+    CLOSED = "closed"
+
+
+class TimedFrame(NamedTuple):
+    """A checked stream frame, when it arrived (link clock) and its number in the stream.
+
+    A named tuple (immutable, built once per frame on the tick path, several times faster
+    than a frozen dataclass). ``index`` is the frame's number, not ``tuple.index``: the
+    field's name predates the tuple and is kept."""
+
+    frame: SensorFrame
+    time: float
+    index: int  # type: ignore[assignment]
+
+
+class StreamLink:
+    """One transport, its stream parser and its watchdog.
+
+    ``reconcile`` is called with every checked frame (the session's mode model) and
+    ``report`` with what it returns when the robot changed mode by itself; ``halt`` is what
+    the watchdog does when it trips (the session sends drive 0 if the robot may be driving,
+    and says whether it did). ``watchdog``: seconds without a valid frame while a stream runs;
+    0 disables it.
+    """
+
+    def __init__(
+        self,
+        transport: Transport,
+        profile: RobotProfile,
+        *,
+        watchdog: float,
+        reconcile: Reconcile,
+        report: Callable[[ModeChange], None],
+        halt: Callable[[], bool],
+    ) -> None:
+        self.transport = transport
+        self.profile = profile
+        self.watchdog = watchdog
+        self._reconcile = reconcile
+        self._report = report
+        self._halt = halt
+        self.status = LinkStatus.OPEN if transport.is_open else LinkStatus.CLOSED
+        self.stream_ids: tuple[int, ...] = ()
+        self.streaming = False
+        self.latest: TimedFrame | None = None
+        self.index = 0  # the number of the last checked frame
+        self.bytes_read = 0
+        self.bytes_written = 0
+        self.watchdog_trips = 0
+        self._parser: StreamParser | None = None
+        self._parsed_before = (0, 0, 0)  # frames, checksum failures, skipped: older parsers
+        self._stream_started = 0.0
+        self._last_frame_time: float | None = None
+
+    @property
+    def name(self) -> str:
+        return self.transport.name
+
+    # ------------------------------------------------------------------ bytes
+    def read(self, timeout: float) -> bytes:
+        try:
+            data = self.transport.read(timeout)
+        except LINK_ERRORS as exc:
+            raise self.lost("read", exc) from exc
+        self.bytes_read += len(data)
+        return data
+
+    def write(self, data: bytes) -> None:
+        try:
+            self.transport.write(data)
+        except LINK_ERRORS as exc:
+            raise self.lost("write", exc) from exc
+        self.bytes_written += len(data)
+
+    def set_baud(self, rate: int) -> None:
+        """The port follows the robot to ``rate``; a running stream starts a new parser."""
+        try:
+            self.transport.set_baud(rate)
+        except LINK_ERRORS as exc:
+            raise self.lost("baud change", exc) from exc
+        if self._parser is not None:
+            self.new_stream(self.stream_ids, self.transport.now())
+
+    def lost(self, action: str, exc: BaseException) -> PortLost:
+        """Mark the link lost; the error to raise."""
+        self.status = LinkStatus.LOST
+        self.streaming = False
+        cause = exc.cause if isinstance(exc, TransportError) else exc
+        return PortLost(self.name, f"the port failed on {action} ({cause}); the link is lost")
+
+    # ------------------------------------------------------------------ the stream
+    def new_stream(self, ids: tuple[int, ...], now: float) -> None:
+        """Stream (148) was written: frames of ``ids`` from now on (none: no stream)."""
+        if self._parser is not None:
+            c = self._parser.counters
+            frames, checksums, skipped = self._parsed_before
+            self._parsed_before = (
+                frames + c.frames,
+                checksums + c.checksum_failures,
+                skipped + c.skipped_bytes,
+            )
+        self.stream_ids = ids
+        self._parser = StreamParser(ids, self.profile) if ids else None
+        self.streaming = bool(ids)
+        self._stream_started = now
+        self._last_frame_time = None
+        self.status = LinkStatus.STREAMING if ids else LinkStatus.OPEN
+
+    def pause_resume(self, resume: bool, now: float) -> None:
+        """Pause/Resume Stream (150) was written."""
+        self.streaming = resume and bool(self.stream_ids)
+        self._stream_started = now
+        self._last_frame_time = None
+        if self.streaming:
+            self.status = LinkStatus.STREAMING
+
+    def parsed(self) -> tuple[int, int, int]:
+        """Frames, checksum failures and skipped bytes since the link was made."""
+        frames, checksums, skipped = self._parsed_before
+        if self._parser is not None:
+            c = self._parser.counters
+            frames += c.frames
+            checksums += c.checksum_failures
+            skipped += c.skipped_bytes
+        return frames, checksums, skipped
+
+    def read_frames(self, timeout: float) -> list[TimedFrame]:
+        """What is there now, or wait up to ``timeout`` s for at least one frame; then the
+        watchdog."""
+        clock = self.transport.now
+        deadline = clock() + timeout
+        out: list[TimedFrame] = []
+        while True:
+            remaining = deadline - clock()
+            data = self.read(max(0.0, remaining))
+            if data:
+                out += self.ingest(data, clock())
+            if out or remaining <= 0:
+                break
+        self._check_watchdog(clock())
+        return out
+
+    def ingest(self, data: bytes, arrival: float) -> list[TimedFrame]:
+        """Feed ``data`` that arrived at ``arrival`` to the parser; the frames it completed."""
+        if self._parser is None:
+            return []
+        frames = self._parser.feed(data)
+        if not frames:
+            return []
+        out: list[TimedFrame] = []
+        reconcile = self._reconcile
+        index = self.index
+        for frame in frames:
+            index += 1
+            change = reconcile(frame, index, arrival)
+            if change is not None:
+                self._report(change)
+            out.append(TimedFrame(frame, arrival, index))
+        self.index = index
+        self.latest = out[-1]
+        self._last_frame_time = arrival
+        if self.status is LinkStatus.STALLED:
+            log.warning("%s: the sensor stream is back", self.name)
+            self.status = LinkStatus.STREAMING
+        return out
+
+    def _check_watchdog(self, now: float) -> None:
+        if not self.streaming or self.watchdog <= 0 or self.status is not LinkStatus.STREAMING:
+            return
+        reference = self._last_frame_time
+        if reference is None:
+            reference = self._stream_started
+        silent = now - reference
+        if silent <= self.watchdog:
+            return
+        self.status = LinkStatus.STALLED
+        self.watchdog_trips += 1
+        halted = self._halt()
+        error = StreamStalled(self.name, silent, self.watchdog, halted)
+        log.error("%s", error)
+        raise error

@@ -1,0 +1,89 @@
+"""A robot handle for tests: behaviours ticked with no robot, frames set by hand.
+
+:class:`StubRobot` is what the behaviour, mission and plugin tests hand to
+``tree.setup(robot=...)`` in place of the runtime's handle (:class:`RobotHandle`): no port,
+no simulator, no mode model; the test says what each frame holds and reads back what the
+behaviours queued::
+
+    robot = StubRobot()
+    node.setup(robot=robot)
+    robot.set_frame({7: 1, 35: 2})   # bump right, in Safe
+    node.tick_once()
+    robot.flush()                    # [Command(drive ...)], also kept in robot.sent
+"""
+
+from __future__ import annotations
+
+from roomba_bt.oi.encode import Command
+from roomba_bt.oi.frames import ENCODER_PACKETS, layout_for
+from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
+from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
+from roomba_bt.robot.interface import SLOT_SECONDS, Odometry, Outbox, Snapshot
+
+__all__ = ["StubRobot"]
+
+
+class StubRobot:
+    """A :class:`RobotHandle` whose frames a test sets by hand: tick behaviours with no robot.
+
+    ``stub.set_frame({7: 1, 35: 2})`` builds a frame of exactly those packets (ids -> raw
+    values) and advances the clock by one slot.
+    """
+
+    def __init__(self, profile: RobotProfile = DEFAULT_PROFILE, mode: OIMode = OIMode.SAFE) -> None:
+        self._profile = profile
+        self._outbox = Outbox()
+        self._tick = -1
+        self._mode = mode
+        self._odometry = Odometry()
+        self._snapshot = Snapshot(
+            frame=layout_for((OI_MODE_PACKET,), profile, False).decode(bytes((int(mode),))),
+            tick=0,
+            time=0.0,
+            mode=mode,
+            profile=profile,
+        )
+        self.sent: list[Command] = []
+
+    @property
+    def snapshot(self) -> Snapshot:
+        return self._snapshot
+
+    @property
+    def outbox(self) -> Outbox:
+        return self._outbox
+
+    @property
+    def profile(self) -> RobotProfile:
+        return self._profile
+
+    def set_frame(
+        self, values: dict[int, int], *, mode: OIMode | None = None, ticks: int = 1
+    ) -> Snapshot:
+        """Advance ``ticks`` slots and make a frame of ``values`` the current snapshot."""
+        ids = tuple(sorted(values))
+        layout = layout_for(ids, self._profile, False)
+        frame = layout.decode(layout.pack(values))
+        if mode is not None:
+            self._mode = mode
+        elif OI_MODE_PACKET in values:
+            self._mode = OIMode(values[OI_MODE_PACKET])
+        if all(pid in values for pid in ENCODER_PACKETS):
+            left, right = (values[pid] for pid in ENCODER_PACKETS)
+            self._odometry = self._odometry.advance(left, right, self._profile.wheel_base_mm)
+        self._tick += ticks
+        self._snapshot = Snapshot(
+            frame=frame,
+            tick=self._tick,
+            time=self._tick * SLOT_SECONDS,
+            mode=self._mode,
+            odometry=self._odometry,
+            profile=self._profile,
+        )
+        return self._snapshot
+
+    def flush(self) -> list[Command]:
+        """What the runtime would write after this tick (no guard): recorded in ``sent``."""
+        out = self._outbox.drain()
+        self.sent.extend(out)
+        return out
