@@ -1,4 +1,5 @@
-"""Shared argument types: a bad --baud or --watchdog is a usage error, never a traceback."""
+"""Shared arguments: a bad --baud or --watchdog is a usage error, never a traceback; -p and
+--timeout read once for every command."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import argparse
 import pytest
 
 from roomba_bt.cli import main
-from roomba_bt.cli.arguments import baud_rate, seconds
+from roomba_bt.cli.arguments import baud_rate, parse_params, parse_timeout, seconds
 from roomba_bt.oi.encode import BAUD_CODES
 
 
@@ -51,3 +52,31 @@ def test_commands_refuse_them_with_exit_2(
         main(argv)
     assert exit_.value.code == 2
     assert message in capsys.readouterr().err
+
+
+def test_params_are_read_as_text_name_to_value() -> None:
+    assert parse_params(["speed=250mm/s", " laps = 2 ", "empty="]) == {
+        "speed": "250mm/s",
+        "laps": "2",
+        "empty": "",
+    }
+
+
+@pytest.mark.parametrize("item", ["speed", "=250mm/s", " =1"])
+def test_a_param_without_a_name_or_value_sign_is_a_message(item: str) -> None:
+    message = parse_params(["laps=2", item])
+    assert message == f"-p {item!r}: expected NAME=VALUE, e.g. -p speed=250mm/s"
+
+
+@pytest.mark.parametrize(
+    ("text", "value"), [(None, None), ("90", 90.0), ("90s", 90.0), ("5min", 300.0)]
+)
+def test_timeout(text: str | None, value: float | None) -> None:
+    assert parse_timeout(text) == value
+
+
+@pytest.mark.parametrize(("text", "message"), [("0", "more than 0 s"), ("soon", "'soon'")])
+def test_bad_timeout_is_a_message(text: str, message: str) -> None:
+    result = parse_timeout(text)
+    assert isinstance(result, str) and result.startswith(f"--timeout {text!r}: ")
+    assert message in result
