@@ -126,22 +126,6 @@ GROUPS: Mapping[int, tuple[int, ...]] = MappingProxyType(
     }
 )
 
-GROUP_NAMES: Mapping[int, str] = MappingProxyType(
-    {
-        0: "group_0",
-        1: "group_1",
-        2: "group_2",
-        3: "group_3",
-        4: "group_4",
-        5: "group_5",
-        6: "group_6",
-        100: "group_100",
-        101: "group_101",
-        106: "group_106",
-        107: "group_107",
-    }
-)
-
 #: Every id that Sensors (142), Query List (149) and Stream (148) accept.
 VALID_PACKET_IDS: frozenset[int] = frozenset(PACKETS) | frozenset(GROUPS)
 
