@@ -21,9 +21,9 @@ from roomba_bt.behaviours.lean import (
     DecoratorTick,
     Direct,
     behaviour_tick_direct,
-    failure_reason,
     tick_child,
 )
+from roomba_bt.behaviours.reasons import failure_reason
 from roomba_bt.robot.interface import RobotHandle
 
 

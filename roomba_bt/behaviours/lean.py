@@ -368,39 +368,3 @@ class OneShot(Direct, DecoratorStop, py_trees.decorators.OneShot):
             behaviour_tick_direct(self)
         else:
             behaviour_tick_direct(self, self.decorated)
-
-
-#: decorators whose message only restates the status they flipped ("success -> failure")
-_FLIPS = (
-    py_trees.decorators.Inverter,
-    py_trees.decorators.SuccessIsFailure,
-    py_trees.decorators.FailureIsSuccess,
-)
-
-
-def failure_reason(root: Behaviour) -> str:
-    """Why the mission failed, as a user should read it first. Follow the failure down from
-    the root, each time into the child whose failure decided its parent's (a sequence's
-    failed child; a fallback's last, after the others failed; a parallel's failed one), and
-    report the deepest failed leaf on that path, or else the deepest node on it that left a
-    message (a ``retry`` may have reset its child), or else the path's last node.
-
-    Following the path matters where a tree fails in one branch and other branches hold
-    failed leaves too: a patrol that gave up at a staircase is not explained by the
-    low-battery check tried beside it."""
-    failure = py_trees.common.Status.FAILURE
-    node = root
-    leaf: Behaviour | None = None
-    with_message: Behaviour | None = None
-    while True:
-        failed = [child for child in node.children if child.status == failure]
-        if not failed:
-            break
-        node = failed[-1]
-        if not node.children:
-            leaf = node
-        elif node.feedback_message and not isinstance(node, _FLIPS):
-            with_message = node
-    best = leaf or with_message or node
-    message = "" if isinstance(best, _FLIPS) else best.feedback_message
-    return f"{best.name}: {message}" if message else best.name

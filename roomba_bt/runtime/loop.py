@@ -23,7 +23,7 @@ from typing import Any, Protocol
 import py_trees
 
 from roomba_bt.behaviours import SNAPSHOT_KEY
-from roomba_bt.behaviours.lean import failure_reason
+from roomba_bt.behaviours.reasons import failure_reason
 from roomba_bt.mission import RUNTIME_PACKETS
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.frames import SensorFrame
@@ -219,7 +219,7 @@ class MissionRunner:
                 return
             if status is failure:
                 summary.outcome = Outcome.FAILURE
-                summary.reason = _failure_reason(root)
+                summary.reason = failure_reason(root)
                 return
             if self.timeout_s is not None and snapshot.time >= self.timeout_s:
                 summary.outcome = Outcome.TIMEOUT
@@ -283,8 +283,3 @@ class MissionRunner:
                 self.summary.refused_commands += 1
                 if len(self.refusals) < 100:
                     self.refusals.append(str(exc))
-
-
-def _failure_reason(root: py_trees.behaviour.Behaviour) -> str:
-    """Why the mission failed: :func:`roomba_bt.behaviours.lean.failure_reason` of the root."""
-    return failure_reason(root)

@@ -387,7 +387,7 @@ def test_every_language_word_compiles_onto_py_trees(compile_text: Compile, word:
 
 
 def test_a_while_guard_says_which_condition_failed(compile_text: Compile) -> None:
-    from roomba_bt.runtime.loop import _failure_reason
+    from roomba_bt.behaviours.reasons import failure_reason
 
     r = run(
         compile_text,
@@ -402,5 +402,5 @@ def test_a_while_guard_says_which_condition_failed(compile_text: Compile) -> Non
     )
     assert r.tick() is R
     assert r.tick(bump=1) is F
-    reason = _failure_reason(r.mission.root)
+    reason = failure_reason(r.mission.root)
     assert reason.startswith("while reactive_sequence: condition no longer holds: "), reason

@@ -6,7 +6,7 @@ from __future__ import annotations
 import py_trees
 
 from roomba_bt.behaviours.lean import Retry
-from roomba_bt.runtime.loop import _failure_reason
+from roomba_bt.behaviours.reasons import failure_reason
 
 FAILURE = py_trees.common.Status.FAILURE
 
@@ -16,7 +16,7 @@ def test_the_failed_leaf_and_its_message_come_first() -> None:
     root = py_trees.composites.Sequence("mission", memory=True, children=[leaf])
     root.tick_once()
     leaf.feedback_message = "no charging state in packet 21"
-    assert _failure_reason(root) == "charging: no charging state in packet 21"
+    assert failure_reason(root) == "charging: no charging state in packet 21"
 
 
 def test_when_the_leaves_were_reset_the_deepest_message_is_used() -> None:
@@ -28,7 +28,7 @@ def test_when_the_leaves_were_reset_the_deepest_message_is_used() -> None:
     assert root.status == FAILURE
     leaf.stop(py_trees.common.Status.INVALID)  # what a parallel or guard does to its children
     attempt.stop(py_trees.common.Status.INVALID)
-    assert _failure_reason(root).startswith("retry: final failure")
+    assert failure_reason(root).startswith("retry: final failure")
 
 
 def test_the_path_of_the_failure_is_followed_not_the_last_failed_leaf() -> None:
@@ -47,7 +47,7 @@ def test_the_path_of_the_failure_is_followed_not_the_last_failed_leaf() -> None:
     assert root.status == FAILURE
     leaf.stop(py_trees.common.Status.INVALID)  # reset by a parent, as a retry or guard does
     attempt.stop(py_trees.common.Status.INVALID)
-    assert _failure_reason(root) == "retry: gave up after 2 failed attempts"
+    assert failure_reason(root) == "retry: gave up after 2 failed attempts"
 
 
 def test_a_flipped_status_is_named_without_its_canned_message() -> None:
@@ -57,4 +57,4 @@ def test_a_flipped_status_is_named_without_its_canned_message() -> None:
     root = py_trees.composites.Sequence("mission", memory=True, children=[inverter])
     root.tick_once()
     assert root.status == FAILURE
-    assert _failure_reason(root) == "nothing may be ahead"
+    assert failure_reason(root) == "nothing may be ahead"

@@ -1,0 +1,46 @@
+"""Why a tree failed, in the words a user should read first.
+
+The runtime puts it in the run's summary when the mission ends in FAILURE, and the
+``while`` guard in its message when its condition stops holding; both follow the failure down
+the tree the same way.
+"""
+
+from __future__ import annotations
+
+import py_trees
+from py_trees.behaviour import Behaviour
+
+#: decorators whose message only restates the status they flipped ("success -> failure")
+_FLIPS = (
+    py_trees.decorators.Inverter,
+    py_trees.decorators.SuccessIsFailure,
+    py_trees.decorators.FailureIsSuccess,
+)
+
+
+def failure_reason(root: Behaviour) -> str:
+    """Why the mission failed, as a user should read it first. Follow the failure down from
+    the root, each time into the child whose failure decided its parent's (a sequence's
+    failed child; a fallback's last, after the others failed; a parallel's failed one), and
+    report the deepest failed leaf on that path, or else the deepest node on it that left a
+    message (a ``retry`` may have reset its child), or else the path's last node.
+
+    Following the path matters where a tree fails in one branch and other branches hold
+    failed leaves too: a patrol that gave up at a staircase is not explained by the
+    low-battery check tried beside it."""
+    failure = py_trees.common.Status.FAILURE
+    node = root
+    leaf: Behaviour | None = None
+    with_message: Behaviour | None = None
+    while True:
+        failed = [child for child in node.children if child.status == failure]
+        if not failed:
+            break
+        node = failed[-1]
+        if not node.children:
+            leaf = node
+        elif node.feedback_message and not isinstance(node, _FLIPS):
+            with_message = node
+    best = leaf or with_message or node
+    message = "" if isinstance(best, _FLIPS) else best.feedback_message
+    return f"{best.name}: {message}" if message else best.name
