@@ -35,6 +35,31 @@ import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
+#: The py_trees releases whose ticks these classes are proven to repeat (by the property tests
+#: in tests/behaviours/test_lean.py); ``pyproject.toml`` pins the same. A release may change a
+#: composite's tick, which the classes here would then silently not follow.
+PROVEN_PY_TREES = ("2.6.0",)
+
+
+class UnsupportedPyTrees(ImportError):
+    """The installed py_trees is not one the lean tree is proven against."""
+
+
+def check_py_trees(installed: str | None = None) -> None:
+    """Refuse a py_trees release the lean tree is not proven against (checked at import)."""
+    if installed is None:
+        installed = py_trees.version.__version__
+    if installed not in PROVEN_PY_TREES:
+        proven = ", ".join(PROVEN_PY_TREES)
+        raise UnsupportedPyTrees(
+            f"py_trees {installed} is installed, but roomba-bt's tree is proven against py_trees "
+            f"{proven} only (roomba_bt/behaviours/lean.py repeats its composite and decorator "
+            f"ticks): install it with  pip install 'py-trees=={PROVEN_PY_TREES[-1]}'"
+        )
+
+
+check_py_trees()
+
 _DEBUG = py_trees.logging.Level.DEBUG
 _STATUSES = frozenset(Status)
 _RUNNING, _SUCCESS, _FAILURE, _INVALID = (

@@ -8,14 +8,17 @@ initialise/update/terminate calls, must be the same.
 
 from __future__ import annotations
 
+import tomllib
 import typing
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import py_trees
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from packaging.requirements import Requirement
 from py_trees.behaviour import Behaviour
 from py_trees.common import OneShotPolicy, ParallelPolicy, Status
 
@@ -243,3 +246,33 @@ def test_an_invalid_status_becomes_invalid_as_in_py_trees() -> None:
     leaf = Broken("broken", (Status.SUCCESS,), [])
     leaf.tick_once()
     assert leaf.status is Status.INVALID
+
+
+def test_a_py_trees_release_not_proven_is_refused_naming_both_versions() -> None:
+    with pytest.raises(lean.UnsupportedPyTrees) as refused:
+        lean.check_py_trees("2.7.0")
+    message = str(refused.value)
+    assert "py_trees 2.7.0 is installed" in message
+    assert "proven against py_trees 2.6.0 only" in message
+    assert "pip install 'py-trees==2.6.0'" in message
+    assert isinstance(refused.value, ImportError)  # raised while importing roomba_bt
+
+
+def test_the_installed_py_trees_is_one_the_tree_is_proven_against() -> None:
+    lean.check_py_trees()  # what the import did
+    assert py_trees.version.__version__ in lean.PROVEN_PY_TREES
+
+
+def test_pyproject_pins_exactly_the_proven_py_trees_releases() -> None:
+    """The pin and the check at import say the same: pip installs only what the check lets
+    through."""
+    project = tomllib.loads((Path(__file__).parents[2] / "pyproject.toml").read_text())
+    pins = [
+        Requirement(line)
+        for line in project["project"]["dependencies"]
+        if Requirement(line).name == "py-trees"
+    ]
+    assert len(pins) == 1
+    neighbours = ("2.5.0", "2.6.1", "2.7.0", "3.0.0")
+    for version in (*lean.PROVEN_PY_TREES, *neighbours):
+        assert pins[0].specifier.contains(version) == (version in lean.PROVEN_PY_TREES), version
