@@ -7,7 +7,6 @@ same decisions. These decorators receive the robot in ``setup(robot=...)`` like 
 
 from __future__ import annotations
 
-import typing
 from collections.abc import Sequence
 from typing import Any
 
@@ -16,22 +15,18 @@ from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
 from roomba_bt.behaviours.declare import write_key
-from roomba_bt.behaviours.lean import (
-    DecoratorStop,
-    DecoratorTick,
-    Direct,
-    behaviour_tick_direct,
-    tick_child,
-)
+from roomba_bt.behaviours.lean import DONE, DecoratorTick, Stepped
 from roomba_bt.behaviours.reasons import failure_reason
 from roomba_bt.robot.interface import RobotHandle
 
 
 class _MissionClock:
-    """Mixin: ``now()`` is the mission time of the current snapshot."""
+    """Mixin: ``now()`` is the mission time of the current snapshot; ``lasted(duration)``
+    whether that much of it has passed since ``start_clock()``."""
 
     robot: RobotHandle | None = None
     name: str
+    _started = 0.0
 
     def setup(self, **kwargs: Any) -> None:
         robot = kwargs.get("robot")
@@ -43,64 +38,49 @@ class _MissionClock:
             raise RuntimeError(f"{self.name!r} was ticked before setup(robot=...)")
         return self.robot.snapshot.time
 
+    def start_clock(self) -> None:
+        self._started = self.now()
 
-class Timeout(_MissionClock, DecoratorTick, py_trees.decorators.Decorator):
-    """FAILURE (and the child stopped) if the child is still RUNNING after ``duration``
-    seconds of mission time; otherwise the child's status."""
+    def lasted(self, duration: float) -> bool:
+        """``duration`` seconds have passed since ``start_clock`` (1 ns of slack: sums of
+        15 ms slots are not exact in floating point)."""
+        return self.now() - self._started >= duration - 1e-9
+
+
+class _Lasting(_MissionClock, DecoratorTick, py_trees.decorators.Decorator):
+    """A decorator that lasts ``duration`` seconds of mission time from its first tick."""
 
     def __init__(self, name: str, child: Behaviour, duration: float) -> None:
         super().__init__(name=name, child=child)
         self.duration = duration
-        self._started = 0.0
 
     def initialise(self) -> None:
-        self._started = self.now()
+        self.start_clock()
+
+
+class Timeout(_Lasting):
+    """FAILURE (and the child stopped) if the child is still RUNNING after ``duration``
+    seconds of mission time; otherwise the child's status."""
 
     def update(self) -> Status:
         status: Status = self.decorated.status
-        if status is Status.RUNNING and self.now() - self._started >= self.duration - 1e-9:
+        if status is Status.RUNNING and self.lasted(self.duration):
             self.feedback_message = f"timed out after {self.duration:g} s"
             return Status.FAILURE
         return status
 
 
-class Delay(_MissionClock, Direct, DecoratorStop, py_trees.decorators.Decorator):
+class Delay(_Lasting):
     """RUNNING for ``duration`` seconds of mission time, then ticks the child (BT.CPP's
     ``Delay``)."""
 
-    def __init__(self, name: str, child: Behaviour, duration: float) -> None:
-        super().__init__(name=name, child=child)
-        self.duration = duration
-        self._started = 0.0
-
-    def initialise(self) -> None:
-        self._started = self.now()
-
-    def tick(self) -> typing.Iterator[Behaviour]:
-        if self.status is not Status.RUNNING:
-            self.initialise()
-        if self.now() - self._started < self.duration - 1e-9:
+    def tick_start(self) -> int:
+        """Waiting: RUNNING without ticking the child; then a decorator's tick."""
+        first = super().tick_start()
+        if not self.lasted(self.duration):
             self.status = Status.RUNNING
-            yield self
-            return
-        yield from self.decorated.tick()
-        new_status: Status = self.decorated.status
-        if new_status is not Status.RUNNING:
-            self.stop(new_status)
-        self.status = new_status
-        yield self
-
-    def tick_direct(self) -> None:
-        if self.status is not Status.RUNNING:
-            self.initialise()
-        if self.now() - self._started < self.duration - 1e-9:
-            self.status = Status.RUNNING
-            return
-        tick_child(self.decorated)
-        new_status: Status = self.decorated.status
-        if new_status is not Status.RUNNING:
-            self.stop(new_status)
-        self.status = new_status
+            return DONE
+        return first
 
     def update(self) -> Status:
         return self.decorated.status
@@ -117,12 +97,11 @@ class Repeat(_MissionClock, DecoratorTick, py_trees.decorators.Decorator):
         self.times = times
         self.duration = duration
         self.count = 0
-        self._started = 0.0
 
     def initialise(self) -> None:
         self.count = 0
         if self.duration is not None:
-            self._started = self.now()
+            self.start_clock()
 
     def update(self) -> Status:
         status: Status = self.decorated.status
@@ -131,13 +110,13 @@ class Repeat(_MissionClock, DecoratorTick, py_trees.decorators.Decorator):
         self.count += 1
         if self.times is not None and self.count >= self.times:
             return Status.SUCCESS
-        if self.duration is not None and self.now() - self._started >= self.duration - 1e-9:
+        if self.duration is not None and self.lasted(self.duration):
             return Status.SUCCESS
         self.feedback_message = f"{self.count} done"
         return Status.RUNNING
 
 
-class ForEach(Direct, DecoratorStop, py_trees.decorators.Decorator):
+class ForEach(DecoratorTick, py_trees.decorators.Decorator):
     """Run the child once per item, writing the item to a blackboard key first (waypoints).
 
     SUCCESS when every item succeeded; FAILURE when the child fails for one of them.
@@ -154,18 +133,12 @@ class ForEach(Direct, DecoratorStop, py_trees.decorators.Decorator):
         if self.items:
             write_key(self.key, self.items[0])
 
-    def tick(self) -> typing.Iterator[Behaviour]:
+    def tick_start(self) -> int:
+        """No items: SUCCESS at once, the child never ticked."""
         if not self.items:
             self.status = Status.SUCCESS
-            yield self
-            return
-        yield from super().tick()
-
-    def tick_direct(self) -> None:
-        if not self.items:
-            self.status = Status.SUCCESS
-            return
-        behaviour_tick_direct(self, self.decorated)
+            return DONE
+        return super().tick_start()
 
     def update(self) -> Status:
         status: Status = self.decorated.status
@@ -179,7 +152,7 @@ class ForEach(Direct, DecoratorStop, py_trees.decorators.Decorator):
         return Status.RUNNING
 
 
-class Guard(Direct, py_trees.composites.Composite):
+class Guard(Stepped, py_trees.composites.Composite):
     """``while:`` / ``until:`` on any node: the condition subtree is ticked before the child
     on every tick (BT.CPP's ``_while``, py_trees' EternalGuard, with a subtree as condition).
 
@@ -197,46 +170,31 @@ class Guard(Direct, py_trees.composites.Composite):
         self.child = child
         self.until = until
 
-    def tick(self) -> typing.Iterator[Behaviour]:
+    def tick_start(self) -> int:
+        """The condition first (child 0)."""
         if self.status is not Status.RUNNING:
             self.initialise()
-        yield from self.condition.tick()
-        holds = self.condition.status is Status.SUCCESS
-        if holds == self.until:
-            new_status = Status.SUCCESS if self.until else Status.FAILURE
-            if self.child.status is Status.RUNNING:
-                self.child.stop(Status.INVALID)
-            self.feedback_message = self._why()
-            self.stop(new_status)
-            yield self
-            return
-        self.current_child = self.child
-        yield from self.child.tick()
-        status: Status = self.child.status
-        if status is not Status.RUNNING:
-            self.stop(status)
-        self.status = status
-        yield self
+        return 0
 
-    def tick_direct(self) -> None:
-        """``tick`` as calls (see :mod:`roomba_bt.behaviours.lean`)."""
-        if self.status is not Status.RUNNING:
-            self.initialise()
-        tick_child(self.condition)
-        holds = self.condition.status is Status.SUCCESS
-        if holds == self.until:
-            new_status = Status.SUCCESS if self.until else Status.FAILURE
-            if self.child.status is Status.RUNNING:
-                self.child.stop(Status.INVALID)
-            self.feedback_message = self._why()
-            self.stop(new_status)
-            return
-        self.current_child = self.child
-        tick_child(self.child)
+    def tick_next(self, index: int) -> int:
+        """After the condition: stop here, or tick the child (child 1); after the child: its
+        status."""
+        if index == 0:
+            holds = self.condition.status is Status.SUCCESS
+            if holds == self.until:
+                new_status = Status.SUCCESS if self.until else Status.FAILURE
+                if self.child.status is Status.RUNNING:
+                    self.child.stop(Status.INVALID)
+                self.feedback_message = self._why()
+                self.stop(new_status)
+                return DONE
+            self.current_child = self.child
+            return 1
         status: Status = self.child.status
         if status is not Status.RUNNING:
             self.stop(status)
         self.status = status
+        return DONE
 
     def _why(self) -> str:
         """The guard's message, read before its children are reset: for ``while``, which

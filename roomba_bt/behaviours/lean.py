@@ -10,19 +10,29 @@ same steps in the same order:
 * ticking through generators. py_trees' ``tick()`` yields every ticked node up through every
   ancestor's ``yield from``, so a leaf ten levels down is passed up ten times, a generator
   frame is created per node per tick, and ``tick_once()`` consumes it all only to discard
-  it. :meth:`Direct.tick_once` runs the same steps as plain calls (``tick_direct``): a
-  parent acts when its child's ``tick`` has yielded the child itself, which is the child's
-  last step, so calling the child and then reading its status is the same sequence of
-  ``initialise``/``update``/``terminate``/``stop`` calls and the same statuses.
+  it. :meth:`Direct.tick_once` runs the same steps as plain calls (``tick_direct``).
 
-``tick()`` is still there (the py_trees generator, for visitors and for stepping through a
-tree); ``tick_once()`` takes the direct path. A node that is not :class:`Direct` (a plugin's
-py_trees behaviour), or a subclass that overrides ``tick`` without its own
-``tick_direct``, is ticked by running its generator, as ``tick_once`` always did. The
-classes are py_trees' own (subclasses: ``isinstance`` checks, ``roomba-bt show``, py_trees'
-display and visitors see no difference). A test builds random trees from the stock classes
-and from these and compares every node's status after every tick and the order of every
-leaf's calls.
+Each class writes its tick once. A node with children (:class:`Stepped`: the composites, the
+decorators) writes it as the steps between its children's ticks: ``tick_start`` begins the
+tick and names the first child to tick, ``tick_next`` reacts to the child that has just
+ticked and names the next; py_trees' generator ``tick`` and ``tick_direct`` both run those
+steps and differ only in how they tick a child (``yield from child.tick()``, or
+``child.tick_direct()``). A py_trees parent acts when its child's ``tick`` has yielded the
+child itself, which is the child's last step, so calling the child and then reading its status
+is the same sequence of ``initialise``/``update``/``terminate``/``stop`` calls and the same
+statuses. A leaf (:class:`DirectLeaf`) has no child: its generator is its direct tick and then
+``yield self``.
+
+``tick()`` stays py_trees' generator (for visitors and for stepping through a tree: it yields
+the same nodes at the same moments); ``tick_once()`` takes the direct path. A node that is
+not :class:`Direct` (a plugin's py_trees behaviour), or a subclass that overrides ``tick``
+without its own ``tick_direct``, is ticked by running its generator, as ``tick_once`` always
+did. The classes are py_trees' own (subclasses: ``isinstance`` checks, ``roomba-bt show``,
+py_trees' display and visitors see no difference). They repeat py_trees 2.6.0's ticks, the
+release pinned in ``pyproject.toml`` and checked at import (:data:`PROVEN_PY_TREES`). A test
+builds random trees from the stock classes and from these and compares, on both paths, every
+node's status after every tick, every node the generator yields, and the order of every leaf's
+calls.
 """
 
 from __future__ import annotations
@@ -108,7 +118,7 @@ class Direct:
             cls.tick_direct = Direct.tick_direct  # type: ignore[method-assign]
 
     def tick_direct(self) -> None:
-        """Overridden by each class with the calls its ``tick`` makes; by default the
+        """The calls ``tick`` makes (:class:`DirectLeaf`, :class:`Stepped`); by default the
         generator itself."""
         tick_generator(typing.cast(Behaviour, self))
 
@@ -116,15 +126,36 @@ class Direct:
         self.tick_direct()
 
 
+def settle(node: Behaviour) -> None:
+    """The end of py_trees' ``Behaviour.tick`` and ``Decorator.tick``: ``update``, then
+    ``stop`` on a final status."""
+    new_status = node.update()
+    if type(new_status) is not Status:
+        new_status = checked_status(node, new_status)
+    if new_status is not _RUNNING:
+        node.stop(new_status)
+    node.status = new_status
+
+
+def leaf_tick(node: Behaviour) -> None:
+    """py_trees' ``Behaviour.tick`` as calls: a leaf's tick (and a completed OneShot's)."""
+    if py_trees.logging.level is _DEBUG:
+        node.logger.debug(f"{type(node).__name__}.tick()")
+    if node.status is not _RUNNING:
+        node.initialise()
+    settle(node)
+
+
 class DirectLeaf(Direct):
-    """py_trees' leaf ``tick``/``stop``, logging only when debugging; ``tick_direct`` too."""
+    """py_trees' leaf ``tick``/``stop``, logging only when debugging. A leaf ticks no child,
+    so its generator is its direct tick and then ``yield self``."""
+
+    tick_direct = leaf_tick  # a plain function as the method: one call less per leaf
 
     def tick(self) -> typing.Iterator[Behaviour]:
-        self.tick_direct()
-        yield typing.cast(Behaviour, self)
-
-    def tick_direct(self) -> None:
-        behaviour_tick_direct(typing.cast(Behaviour, self))
+        node = typing.cast(Behaviour, self)
+        leaf_tick(node)
+        yield node
 
     def stop(self, new_status: Status) -> None:
         """py_trees' stop, without formatting its debug message (two enum ``__format__``
@@ -138,6 +169,49 @@ class DirectLeaf(Direct):
         node.iterator = node.tick()
 
 
+#: what a step returns when the node's tick is over (no further child to tick)
+DONE = -1
+
+
+class Stepped(Direct):
+    """A node with children, its tick written once as the steps between its children's ticks.
+
+    ``tick_start()`` begins the tick and returns the index of the first child to tick (or
+    :data:`DONE`); ``tick_next(index)``, called once the child at ``index`` has ticked, reads
+    its status and returns the index of the next child to tick (or DONE). py_trees' generator
+    ``tick`` and the direct ``tick_direct`` both run these steps, and differ only in how they
+    tick a child: ``yield from child.tick()`` (every node ticked below is yielded up, as
+    py_trees does; a visitor sees each as soon as it has ticked), or ``child.tick_direct()``.
+    """
+
+    children: list[Behaviour]
+
+    def tick_start(self) -> int:
+        raise NotImplementedError
+
+    def tick_next(self, index: int) -> int:
+        raise NotImplementedError
+
+    def tick(self) -> typing.Iterator[Behaviour]:
+        index = self.tick_start()
+        children = self.children
+        while index != DONE:
+            yield from children[index].tick()
+            index = self.tick_next(index)
+        yield typing.cast(Behaviour, self)
+
+    def tick_direct(self) -> None:
+        index = self.tick_start()
+        children = self.children
+        while index != DONE:
+            child = children[index]
+            if isinstance(child, Direct):  # tick_child, inlined: once per child per tick
+                child.tick_direct()
+            else:
+                tick_generator(child)
+            index = self.tick_next(index)
+
+
 class _CompositeStop:
     """``Sequence.stop`` / ``Selector.stop``: the debug line, then ``Composite.stop``."""
 
@@ -148,9 +222,10 @@ class _CompositeStop:
         py_trees.composites.Composite.stop(node, new_status)
 
 
-class Sequence(Direct, _CompositeStop, py_trees.composites.Sequence):
-    def tick_direct(self) -> None:
-        """py_trees 2.6's ``Sequence.tick``, step for step."""
+class Sequence(Stepped, _CompositeStop, py_trees.composites.Sequence):
+    """py_trees 2.6's ``Sequence.tick``, step for step."""
+
+    def tick_start(self) -> int:
         if py_trees.logging.level is _DEBUG:
             self.logger.debug(f"{type(self).__name__}.tick()")
         children = self.children
@@ -168,32 +243,33 @@ class Sequence(Direct, _CompositeStop, py_trees.composites.Sequence):
         if not children:
             self.current_child = None
             self.stop(_SUCCESS)
-            return
-        for child in islice(children, index, None):
-            if isinstance(child, Direct):  # tick_child, inlined: once per child per tick
-                child.tick_direct()
+            return DONE
+        return index
+
+    def tick_next(self, index: int) -> int:
+        children = self.children
+        status = children[index].status
+        if status is not _SUCCESS:
+            if not self.memory:  # invalidate the rest: kill dangling runners
+                for later in islice(children, index + 1, None):
+                    if later.status is not _INVALID:
+                        later.stop(_INVALID)
+            if status is not _RUNNING:
+                self.stop(status)
             else:
-                tick_generator(child)
-            status = child.status
-            if status is not _SUCCESS:
-                if not self.memory:  # invalidate the rest: kill dangling runners
-                    for later in islice(children, index + 1, None):
-                        if later.status is not _INVALID:
-                            later.stop(_INVALID)
-                if status is not _RUNNING:
-                    self.stop(status)
-                else:
-                    self.status = status
-                return
-            if index + 1 < len(children):
-                self.current_child = children[index + 1]
-                index += 1
+                self.status = status
+            return DONE
+        if index + 1 < len(children):
+            self.current_child = children[index + 1]
+            return index + 1
         self.stop(_SUCCESS)
+        return DONE
 
 
-class Selector(Direct, _CompositeStop, py_trees.composites.Selector):
-    def tick_direct(self) -> None:
-        """py_trees 2.6's ``Selector.tick``, step for step."""
+class Selector(Stepped, _CompositeStop, py_trees.composites.Selector):
+    """py_trees 2.6's ``Selector.tick``, step for step."""
+
+    def tick_start(self) -> int:
         if py_trees.logging.level is _DEBUG:
             self.logger.debug(f"{type(self).__name__}.tick()")
         children = self.children
@@ -203,42 +279,47 @@ class Selector(Direct, _CompositeStop, py_trees.composites.Selector):
         if not children:
             self.current_child = None
             self.stop(_FAILURE)
-            return
-        if self.memory:
-            assert self.current_child is not None
-            index = children.index(self.current_child)
-            for child in islice(children, None, index):
-                if child.status is not _INVALID:
-                    child.stop(_INVALID)
-        else:
-            index = 0
-        previous = self.current_child
-        for child in islice(children, index, None):
-            if isinstance(child, Direct):  # tick_child, inlined: once per child per tick
-                child.tick_direct()
+            return DONE
+        if not self.memory:
+            return 0
+        assert self.current_child is not None
+        index = children.index(self.current_child)
+        for child in islice(children, None, index):
+            if child.status is not _INVALID:
+                child.stop(_INVALID)
+        return index
+
+    def tick_next(self, index: int) -> int:
+        children = self.children
+        child = children[index]
+        status = child.status
+        if status is _RUNNING or status is _SUCCESS:
+            # the current child is still the one this tick started from (py_trees' previous)
+            previous = self.current_child
+            self.current_child = child
+            if previous is None or previous != child:
+                # it interrupted: invalidate everything at a lower priority
+                passed = False
+                for other in children:
+                    if passed and other.status is not _INVALID:
+                        other.stop(_INVALID)
+                    if other == child:
+                        passed = True
+            if status is _SUCCESS:
+                self.stop(status)
             else:
-                tick_generator(child)
-            status = child.status
-            if status is _RUNNING or status is _SUCCESS:
-                self.current_child = child
-                if previous is None or previous != child:
-                    # it interrupted: invalidate everything at a lower priority
-                    passed = False
-                    for other in children:
-                        if passed and other.status is not _INVALID:
-                            other.stop(_INVALID)
-                        if other == child:
-                            passed = True
-                if child.status is _SUCCESS:
-                    self.stop(child.status)
-                else:
-                    self.status = child.status
-                return
+                self.status = status
+            return DONE
+        if index + 1 < len(children):
+            return index + 1
         self.stop(_FAILURE)
         self.current_child = children[-1]
+        return DONE
 
 
-class Parallel(Direct, py_trees.composites.Parallel):
+class Parallel(Stepped, py_trees.composites.Parallel):
+    """py_trees 2.6's ``Parallel.tick``, step for step."""
+
     def stop(self, new_status: Status = Status.INVALID) -> None:
         if py_trees.logging.level is _DEBUG:
             self.logger.debug(f"{type(self).__name__}.stop()[{self.status}->{new_status}]")
@@ -247,8 +328,7 @@ class Parallel(Direct, py_trees.composites.Parallel):
                 child.stop(Status.INVALID)
         py_trees.composites.Composite.stop(self, new_status)
 
-    def tick_direct(self) -> None:
-        """py_trees 2.6's ``Parallel.tick``, step for step."""
+    def tick_start(self) -> int:
         if py_trees.logging.level is _DEBUG:
             self.logger.debug(f"{type(self).__name__}.tick()")
         self.validate_policy_configuration()
@@ -262,18 +342,27 @@ class Parallel(Direct, py_trees.composites.Parallel):
         if not children:
             self.current_child = None
             self.stop(_SUCCESS)
-            return
-        synchronise = self.policy.synchronise
-        for child in children:
-            if synchronise and child.status is _SUCCESS:
-                continue
-            if isinstance(child, Direct):  # tick_child, inlined: once per child per tick
-                child.tick_direct()
-            else:
-                tick_generator(child)
+            return DONE
+        return self.tick_next(-1)
+
+    def tick_next(self, index: int) -> int:
+        """The next child to tick (one that has not succeeded, when synchronised); after
+        the last, the parallel's own status."""
+        children = self.children
+        following = index + 1
+        if self.policy.synchronise:
+            while following < len(children) and children[following].status is _SUCCESS:
+                following += 1
+        if following < len(children):
+            return following
+        self._conclude()
+        return DONE
+
+    def _conclude(self) -> None:
+        children = self.children
+        policy = self.policy
         new_status = _RUNNING
         self.current_child = children[-1]
-        policy = self.policy
         for child in children:
             if child.status is _FAILURE:
                 self.current_child = child
@@ -304,61 +393,31 @@ class Parallel(Direct, py_trees.composites.Parallel):
         self.status = new_status
 
 
-class DecoratorStop:
-    """``Decorator.stop``, step for step, logging only when debugging."""
+class DecoratorTick(Stepped, py_trees.decorators.Decorator):
+    """py_trees' ``Decorator.tick`` in its two steps (``initialise`` unless running; after
+    the child, ``update`` and ``stop`` on a final status) and its ``stop``, logging only when
+    debugging. A decorator with its own tick overrides a step."""
+
+    def tick_start(self) -> int:
+        if py_trees.logging.level is _DEBUG:
+            self.logger.debug(f"{type(self).__name__}.tick()")
+        if self.status is not _RUNNING:
+            self.initialise()
+        return 0
+
+    def tick_next(self, index: int) -> int:
+        settle(self)
+        return DONE
 
     def stop(self, new_status: Status) -> None:
-        node = typing.cast(py_trees.decorators.Decorator, self)
         if py_trees.logging.level is _DEBUG:
-            node.logger.debug(f"{type(self).__name__}.stop({new_status})")
-        node.terminate(new_status)
+            self.logger.debug(f"{type(self).__name__}.stop({new_status})")
+        self.terminate(new_status)
         if new_status == Status.INVALID:
-            node.decorated.stop(new_status)
-        if node.decorated.status == Status.RUNNING:
-            node.decorated.stop(Status.INVALID)
-        node.status = new_status
-
-
-class DecoratorTick(Direct, DecoratorStop):
-    """``Decorator.tick`` too (for decorators that do not define their own), and its direct
-    twin."""
-
-    def tick(self) -> typing.Iterator[Behaviour]:
-        node = typing.cast(py_trees.decorators.Decorator, self)
-        if py_trees.logging.level is _DEBUG:
-            node.logger.debug(f"{type(self).__name__}.tick()")
-        if node.status != Status.RUNNING:
-            node.initialise()
-        yield from node.decorated.tick()
-        new_status = checked_status(node, node.update())
-        if new_status != Status.RUNNING:
-            node.stop(new_status)
-        node.status = new_status
-        yield node
-
-    def tick_direct(self) -> None:
-        node = typing.cast(py_trees.decorators.Decorator, self)
-        behaviour_tick_direct(node, node.decorated)
-
-
-def behaviour_tick_direct(node: Behaviour, decorated: Behaviour | None = None) -> None:
-    """py_trees' ``Behaviour.tick`` as calls, or ``Decorator.tick`` when ``decorated`` is
-    given (the child is ticked between ``initialise`` and ``update``)."""
-    if py_trees.logging.level is _DEBUG:
-        node.logger.debug(f"{type(node).__name__}.tick()")
-    if node.status is not _RUNNING:
-        node.initialise()
-    if decorated is not None:
-        if isinstance(decorated, Direct):
-            decorated.tick_direct()
-        else:
-            tick_generator(decorated)
-    new_status = node.update()
-    if type(new_status) is not Status:
-        new_status = checked_status(node, new_status)
-    if new_status is not _RUNNING:
-        node.stop(new_status)
-    node.status = new_status
+            self.decorated.stop(new_status)
+        if self.decorated.status == Status.RUNNING:
+            self.decorated.stop(Status.INVALID)
+        self.status = new_status
 
 
 class Retry(DecoratorTick, py_trees.decorators.Retry):
@@ -382,14 +441,13 @@ class SuccessIsFailure(DecoratorTick, py_trees.decorators.SuccessIsFailure):
     pass
 
 
-class OneShot(Direct, DecoratorStop, py_trees.decorators.OneShot):
-    """OneShot keeps its own ``tick`` (it bounces after completion); ``stop`` is lean and
-    ``tick_direct`` is that ``tick`` as calls."""
+class OneShot(DecoratorTick, py_trees.decorators.OneShot):
+    """py_trees' ``OneShot.tick`` (which the steps replace: they come first in the MRO): once
+    completed it bounces, ticked as a leaf (its ``update`` returns the final status) without
+    ticking its child."""
 
-    tick = py_trees.decorators.OneShot.tick
-
-    def tick_direct(self) -> None:
-        if self.final_status:  # completed: py_trees' leaf tick of the decorator itself
-            behaviour_tick_direct(self)
-        else:
-            behaviour_tick_direct(self, self.decorated)
+    def tick_start(self) -> int:
+        if self.final_status:
+            leaf_tick(self)
+            return DONE
+        return super().tick_start()
