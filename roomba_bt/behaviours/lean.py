@@ -126,9 +126,17 @@ class Direct:
         self.tick_direct()
 
 
-def settle(node: Behaviour) -> None:
-    """The end of py_trees' ``Behaviour.tick`` and ``Decorator.tick``: ``update``, then
-    ``stop`` on a final status."""
+def behaviour_tick(node: Behaviour, started: bool = False) -> None:
+    """py_trees' ``Behaviour.tick`` as calls: a leaf's tick (and a completed OneShot's).
+
+    ``started``: its first half (``initialise`` unless running) is done, and a child has
+    ticked since: the rest is the end of py_trees' ``Decorator.tick`` (``update``, ``stop``
+    on a final status), which is that of ``Behaviour.tick``."""
+    if not started:
+        if py_trees.logging.level is _DEBUG:
+            node.logger.debug(f"{type(node).__name__}.tick()")
+        if node.status is not _RUNNING:
+            node.initialise()
     new_status = node.update()
     if type(new_status) is not Status:
         new_status = checked_status(node, new_status)
@@ -137,24 +145,15 @@ def settle(node: Behaviour) -> None:
     node.status = new_status
 
 
-def leaf_tick(node: Behaviour) -> None:
-    """py_trees' ``Behaviour.tick`` as calls: a leaf's tick (and a completed OneShot's)."""
-    if py_trees.logging.level is _DEBUG:
-        node.logger.debug(f"{type(node).__name__}.tick()")
-    if node.status is not _RUNNING:
-        node.initialise()
-    settle(node)
-
-
 class DirectLeaf(Direct):
     """py_trees' leaf ``tick``/``stop``, logging only when debugging. A leaf ticks no child,
     so its generator is its direct tick and then ``yield self``."""
 
-    tick_direct = leaf_tick  # a plain function as the method: one call less per leaf
+    tick_direct = behaviour_tick  # a plain function as the method: one call less per leaf
 
     def tick(self) -> typing.Iterator[Behaviour]:
         node = typing.cast(Behaviour, self)
-        leaf_tick(node)
+        behaviour_tick(node)
         yield node
 
     def stop(self, new_status: Status) -> None:
@@ -406,7 +405,7 @@ class DecoratorTick(Stepped, py_trees.decorators.Decorator):
         return 0
 
     def tick_next(self, index: int) -> int:
-        settle(self)
+        behaviour_tick(self, started=True)
         return DONE
 
     def stop(self, new_status: Status) -> None:
@@ -448,6 +447,6 @@ class OneShot(DecoratorTick, py_trees.decorators.OneShot):
 
     def tick_start(self) -> int:
         if self.final_status:
-            leaf_tick(self)
+            behaviour_tick(self)
             return DONE
         return super().tick_start()
