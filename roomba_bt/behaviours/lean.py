@@ -98,14 +98,6 @@ def tick_generator(node: Behaviour) -> None:
         pass
 
 
-def tick_child(node: Behaviour) -> None:
-    """Tick ``node`` once by the direct path when it has one, by its generator if not."""
-    if isinstance(node, Direct):
-        node.tick_direct()
-    else:
-        tick_generator(node)
-
-
 class Direct:
     """Mixin: ``tick_once`` by plain calls (``tick_direct``), the same steps as ``tick``.
 
@@ -204,7 +196,7 @@ class Stepped(Direct):
         children = self.children
         while index != DONE:
             child = children[index]
-            if isinstance(child, Direct):  # tick_child, inlined: once per child per tick
+            if isinstance(child, Direct):  # by its direct path when it has one
                 child.tick_direct()
             else:
                 tick_generator(child)

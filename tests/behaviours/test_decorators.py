@@ -26,7 +26,7 @@ def ready(node: py_trees.behaviour.Behaviour, robot: StubRobot) -> py_trees.beha
 
 
 Tick = Callable[[py_trees.behaviour.Behaviour], None]
-TICK: dict[str, Tick] = {"tick": lean.tick_child}
+TICK: dict[str, Tick] = {"tick": lean.tick_generator}  # set by tick_path
 
 
 @pytest.fixture(autouse=True, params=["direct", "generator"])
