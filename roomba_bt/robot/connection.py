@@ -376,12 +376,13 @@ class Connection:
         except (ModeError, UnsupportedCommandError):
             self._refused += 1
             raise
-        if spec.effect is Effect.STREAM:
+        effect = spec.effect
+        if effect is Effect.STREAM:
             check_bandwidth(command.args[1:], self.baud)
         warning = self.profile.command_warning(spec)
         if warning is not None:
             log.warning("%s: %s", self.name, warning)
-        if batch is None or spec.effect is Effect.BAUD:  # the rest goes at the new rate
+        if batch is None or effect is Effect.BAUD:  # the rest goes at the new rate
             if batch:
                 self.link.write(bytes(batch))
                 batch.clear()
@@ -391,7 +392,8 @@ class Connection:
         now = self.link.transport.now()
         self.modes.apply(command, now)
         self._sent += 1
-        self._after(command, now)
+        if effect is not None or spec.leads_to is not None:  # not a plain actuator command
+            self._after(command, now)
 
     def _after(self, command: Command, now: float) -> None:
         """What a written command changes on our side of the link (the opcode table's
