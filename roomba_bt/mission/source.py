@@ -1,8 +1,10 @@
-"""Safe YAML with positions: composed nodes (never constructed Python objects) and marks.
+"""Mission YAML with positions: :class:`Loc` (file, line, column, YAML path) for every value,
+and the checked accessors the loader and the parser read a file with.
 
-Only the YAML core types are built (str, int, float, bool, null, lists, mappings); a tag that
-would build a Python object (``!!python/object``) or any custom tag is an error, never
-executed. Every value keeps its line and column so that each error can point at it.
+Composing, tags, positions and duplicate keys are the shared reader's
+(:mod:`roomba_bt.yamlsource`): only the YAML core types are built (str, int, float, bool,
+null, lists, mappings); a tag that would build a Python object (``!!python/object``) or any
+custom tag is an error, never executed.
 """
 
 from __future__ import annotations
@@ -13,12 +15,10 @@ from typing import Any
 
 import yaml
 
+from roomba_bt import yamlsource
 from roomba_bt.mission.diagnostics import Diagnostic
 
-_Loader: type[Any] = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
-_CONSTRUCTOR = yaml.constructor.SafeConstructor()
-_CORE = "tag:yaml.org,2002:"
-_SCALAR_TAGS = {_CORE + t for t in ("str", "int", "float", "bool", "null")}
+_CORE = yamlsource.CORE
 
 
 @dataclass(frozen=True, slots=True)
@@ -44,8 +44,7 @@ def join(path: str, segment: str) -> str:
 
 
 def loc_of(node: yaml.Node, file: str, path: str) -> Loc:
-    mark = node.start_mark
-    return Loc(file, mark.line + 1, mark.column + 1, path)
+    return Loc(file, *yamlsource.position(node), path)
 
 
 def compose(path: Path, display: str) -> tuple[yaml.Node | None, list[Diagnostic]]:
@@ -61,10 +60,9 @@ def compose(path: Path, display: str) -> tuple[yaml.Node | None, list[Diagnostic
 
 def compose_text(text: str, display: str) -> tuple[yaml.Node | None, list[Diagnostic]]:
     try:
-        node = yaml.compose(text, Loader=_Loader)
+        node = yamlsource.compose(text)
     except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
-        line, column = (mark.line + 1, mark.column + 1) if mark else (1, 1)
+        line, column = yamlsource.error_position(exc) or (1, 1)
         problem = exc.problem or exc.context or "invalid YAML"
         return None, [Diagnostic(display, line, column, f"YAML syntax error: {problem}")]
     except yaml.YAMLError as exc:
@@ -83,31 +81,18 @@ class Bad(Exception):
 
 
 def check_tag(node: yaml.Node, loc: Loc) -> None:
-    tag = node.tag or ""
-    if isinstance(node, yaml.ScalarNode):
-        if tag in _SCALAR_TAGS or (
-            tag.startswith(_CORE)
-            and tag[len(_CORE) :]
-            in (
-                "timestamp",
-                "binary",
-            )
-        ):
-            return
-    elif (isinstance(node, yaml.SequenceNode) and tag == _CORE + "seq") or (
-        isinstance(node, yaml.MappingNode) and tag == _CORE + "map"
-    ):
-        return
-    raise Bad(loc.at(f"YAML tag {tag!r} is not allowed: missions use plain values only"))
+    if not yamlsource.is_plain(node):
+        tag = node.tag or ""
+        raise Bad(loc.at(f"YAML tag {tag!r} is not allowed: missions use plain values only"))
 
 
 def plain(node: yaml.Node, loc: Loc) -> Any:
     """The node as plain Python data (scalars, lists, dicts), tags checked."""
     check_tag(node, loc)
     if isinstance(node, yaml.ScalarNode):
-        if node.tag in (_CORE + "timestamp", _CORE + "binary"):
+        if node.tag in yamlsource.TEXT_SCALARS:
             return str(node.value)
-        return _CONSTRUCTOR.construct_object(node, deep=True)
+        return yamlsource.scalar(node)
     if isinstance(node, yaml.SequenceNode):
         return [plain(item, loc.child(item, f"[{i}]")) for i, item in enumerate(node.value)]
     out: dict[Any, Any] = {}
@@ -124,18 +109,20 @@ def mapping(node: yaml.Node, loc: Loc, what: str) -> list[tuple[str, yaml.Node, 
     check_tag(node, loc)
     if not isinstance(node, yaml.MappingNode):
         raise Bad(loc.at(f"{what} must be a mapping (key: value), got {kind_of(node)}"))
-    seen: dict[str, int] = {}
     out = []
-    for key_node, value_node in node.value:
-        key_loc = loc_of(key_node, loc.file, loc.path)
-        if not isinstance(key_node, yaml.ScalarNode) or key_node.tag != _CORE + "str":
-            raise Bad(key_loc.at(f"keys of {what} must be names, got {kind_of(key_node)}"))
-        key = str(key_node.value)
-        key_loc = loc_of(key_node, loc.file, join(loc.path, key))
-        if key in seen:
-            raise Bad(key_loc.at(f"duplicate key {key!r} (first at line {seen[key]})"))
-        seen[key] = key_loc.line
-        out.append((key, value_node, key_loc, loc_of(value_node, loc.file, join(loc.path, key))))
+    try:
+        for _, key_node, value_node in yamlsource.pairs(node):
+            if not isinstance(key_node, yaml.ScalarNode) or key_node.tag != _CORE + "str":
+                key_loc = loc_of(key_node, loc.file, loc.path)
+                raise Bad(key_loc.at(f"keys of {what} must be names, got {kind_of(key_node)}"))
+            key = str(key_node.value)
+            key_loc = loc_of(key_node, loc.file, join(loc.path, key))
+            out.append((key, value_node, key_loc, loc_of(value_node, loc.file, key_loc.path)))
+    except yamlsource.DuplicateKey as dup:
+        key = str(dup.key)
+        first = yamlsource.position(dup.first)[0]
+        where = loc_of(dup.node, loc.file, join(loc.path, key))
+        raise Bad(where.at(f"duplicate key {key!r} (first at line {first})")) from None
     return out
 
 

@@ -18,9 +18,9 @@ default, is in ``docs/simulator.md``; in short::
     events: [{at: 5.0, kind: bump, side: left, duration: 0.2}]
 
 Every problem is reported at once, each as ``file:line:col: field: found ...; allowed ...``,
-with the line and column of the offending YAML node (a :class:`yaml.SafeLoader` subclass keeps
-the marks of every node). Loading never shows a traceback to a user: it raises
-:class:`WorldError`, which the CLI prints.
+with the line and column of the offending YAML node (the shared reader,
+:mod:`roomba_bt.yamlsource`, keeps the position of every node). Loading never shows a
+traceback to a user: it raises :class:`WorldError`, which the CLI prints.
 """
 
 from __future__ import annotations
@@ -35,6 +35,7 @@ from typing import Any
 
 import yaml
 
+from roomba_bt import yamlsource
 from roomba_bt.sim.geometry import (
     Point,
     Polygon,
@@ -278,55 +279,10 @@ class WorldError(ValueError):
 
 # ----------------------------------------------------------------------------- loading
 
-PathKey = tuple[str | int, ...]
+PathKey = yamlsource.PathKey
 
 
-class _MarkingLoader(yaml.SafeLoader):
-    """A SafeLoader that also returns the (line, column) of every node, by path."""
-
-    def load_with_marks(self) -> tuple[Any, dict[PathKey, tuple[int, int]]]:
-        marks: dict[PathKey, tuple[int, int]] = {}
-        node = self.get_single_node()
-        if node is None:
-            return None, marks
-        return self._build(node, (), marks), marks
-
-    def _build(self, node: yaml.Node, path: PathKey, marks: dict[PathKey, tuple[int, int]]) -> Any:
-        marks[path] = (node.start_mark.line + 1, node.start_mark.column + 1)
-        if isinstance(node, yaml.MappingNode | yaml.SequenceNode) and node.tag not in _PLAIN_TAGS:
-            raise yaml.constructor.ConstructorError(
-                None, None, f"the tag {node.tag!r} is not allowed in a world", node.start_mark
-            )
-        if isinstance(node, yaml.MappingNode):
-            self.flatten_mapping(node)
-            out: dict[Any, Any] = {}
-            for key_node, value_node in node.value:
-                key = self.construct_object(key_node, deep=True)
-                if not isinstance(key, str | int | float | bool):
-                    key = str(key)
-                marks[(*path, str(key), _KEY)] = (
-                    key_node.start_mark.line + 1, key_node.start_mark.column + 1,
-                )  # fmt: skip
-                if key in out:
-                    mark = key_node.start_mark
-                    raise _DuplicateKey(str(key), (*path, str(key)), mark.line + 1, mark.column + 1)
-                out[key] = self._build(value_node, (*path, str(key)), marks)
-            return out
-        if isinstance(node, yaml.SequenceNode):
-            return [self._build(item, (*path, i), marks) for i, item in enumerate(node.value)]
-        return self.construct_object(node, deep=True)
-
-
-_PLAIN_TAGS = frozenset({"tag:yaml.org,2002:map", "tag:yaml.org,2002:seq"})
-_KEY = "<key>"  # marks[(*path, key, _KEY)]: where a mapping key itself is written
-
-
-class _DuplicateKey(Exception):
-    def __init__(self, key: str, path: PathKey, line: int, column: int) -> None:
-        self.key = key
-        self.path = path
-        self.line = line
-        self.column = column
+_KEY = yamlsource.KEY  # marks[(*path, key, _KEY)]: where a mapping key itself is written
 
 
 def _dotted(path: PathKey) -> str:
@@ -580,25 +536,26 @@ def _event(c: _Checker, value: object, path: PathKey) -> TimelineEvent | None:
     return TimelineEvent(at, kind, duration, side)
 
 
+_REFUSED_TAG = "the tag {tag!r} is not allowed in a world"
+
+
 def parse_world(text: str, source: str = "<world>") -> World:
     """Validate a world given as YAML text; :class:`WorldError` lists every problem."""
-    loader = _MarkingLoader(text)
     try:
-        data, marks = loader.load_with_marks()
-    except _DuplicateKey as dup:
+        root = yamlsource.compose(text, yamlsource.PURE_LOADER)
+        data, marks = (None, {}) if root is None else yamlsource.to_data(root, _REFUSED_TAG)
+    except yamlsource.DuplicateKey as dup:
+        line, col = yamlsource.position(dup.node)
         raise WorldError(
-            [WorldProblem(source, dup.line, dup.column, _dotted(dup.path),
-                          f"the key {dup.key!r} twice", "each key once")]
+            [WorldProblem(source, line, col, _dotted(dup.path or ()),
+                          f"the key {str(dup.key)!r} twice", "each key once")]
         ) from None  # fmt: skip
     except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        line, col = (mark.line + 1, mark.column + 1) if mark is not None else (0, 0)
+        line, col = yamlsource.error_position(exc) or (0, 0)
         problem = getattr(exc, "problem", None) or str(exc)
         raise WorldError(
             [WorldProblem(source, line, col, "(YAML)", str(problem), "valid YAML")]
         ) from None
-    finally:
-        loader.dispose()
     c = _Checker(source, marks)
     return _build_world(c, data, source)
 

@@ -1,0 +1,141 @@
+"""YAML with positions: the one reader for every YAML file roomba-bt reads (missions, worlds).
+
+It composes nodes and never lets a tag build a Python object (``!!python/object`` and any
+custom tag are refused, not executed); every value keeps its line and column so an error
+can point at it; a key written twice in one mapping is an error, never a silent overwrite.
+It imports nothing of roomba-bt, so every layer, the simulator included, may use it.
+
+Missions walk the composed nodes (:func:`compose`, :func:`position`, :func:`is_plain`,
+:func:`pairs`, :func:`scalar`); worlds take plain data with a position for every path
+(:func:`to_data`)::
+
+    data, marks = to_data(compose("rooms: [[0, 0]]\\n"), refuse="the tag {tag!r} ...")
+    marks[("rooms", 0)] == (1, 9)       # 1-based line and column
+    marks[("rooms", KEY)] == (1, 1)     # where the key itself is written
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from typing import Any
+
+import yaml
+
+#: libyaml's parser where installed (much faster on large missions), else PyYAML's own
+FAST_LOADER: type[Any] = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+#: PyYAML's own parser: its syntax messages do not depend on libyaml being installed
+PURE_LOADER: type[Any] = yaml.SafeLoader
+
+CORE = "tag:yaml.org,2002:"
+_PLAIN_SCALARS = frozenset(CORE + t for t in ("str", "int", "float", "bool", "null"))
+#: scalars YAML resolves implicitly that a mission takes as text
+TEXT_SCALARS = frozenset(CORE + t for t in ("timestamp", "binary"))
+_PLAIN_COLLECTIONS = frozenset({CORE + "seq", CORE + "map"})
+#: ``marks[(*path, key, KEY)]``: where a mapping key itself is written
+KEY = "<key>"
+
+_CONSTRUCTOR = yaml.constructor.SafeConstructor()
+
+PathKey = tuple[str | int, ...]
+Marks = dict[PathKey, tuple[int, int]]
+
+
+def compose(text: str, loader: type[Any] = FAST_LOADER) -> yaml.Node | None:
+    """The document's root node (None for an empty document); raises :class:`yaml.YAMLError`
+    (see :func:`error_position`) for a syntax error."""
+    return yaml.compose(text, Loader=loader)
+
+
+def position(node: yaml.Node) -> tuple[int, int]:
+    """1-based line and column where ``node`` starts."""
+    mark = node.start_mark
+    return mark.line + 1, mark.column + 1
+
+
+def error_position(exc: yaml.YAMLError) -> tuple[int, int] | None:
+    """1-based line and column of a YAML error (of the problem, else of its context)."""
+    mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
+    return (mark.line + 1, mark.column + 1) if mark is not None else None
+
+
+def is_plain(node: yaml.Node) -> bool:
+    """A core-schema value (str, int, float, bool, null, timestamp, binary, list, mapping):
+    nothing a tag could turn into a Python object."""
+    tag = node.tag or ""
+    if isinstance(node, yaml.ScalarNode):
+        return tag in _PLAIN_SCALARS or tag in TEXT_SCALARS
+    return isinstance(node, yaml.SequenceNode | yaml.MappingNode) and tag in _PLAIN_COLLECTIONS
+
+
+def scalar(node: yaml.Node) -> Any:
+    """A node as Python data by the safe constructor (``3`` -> 3, ``true`` -> True,
+    ``2s`` -> "2s"); a tag it has no constructor for raises
+    :class:`yaml.constructor.ConstructorError`."""
+    try:
+        return _CONSTRUCTOR.construct_object(node, deep=True)
+    finally:  # its caches would keep every node alive and remember a failed one
+        _CONSTRUCTOR.constructed_objects.clear()
+        _CONSTRUCTOR.recursive_objects.clear()
+
+
+class DuplicateKey(Exception):
+    """A key written twice in one mapping."""
+
+    def __init__(self, key: Any, node: yaml.Node, first: yaml.Node) -> None:
+        super().__init__(f"duplicate key {key!r}")
+        self.key = key
+        self.node = node
+        self.first = first
+        #: the key's path, when read by :func:`to_data`
+        self.path: PathKey | None = None
+
+
+def pairs(node: yaml.MappingNode) -> Iterator[tuple[Any, yaml.Node, yaml.Node]]:
+    """``(key, key node, value node)`` in written order; raises :class:`DuplicateKey` when a
+    key comes again (keys compared as Python values: ``1`` and ``1.0`` are one key)."""
+    seen: dict[Any, yaml.Node] = {}
+    for key_node, value_node in node.value:
+        if key_node.tag == CORE + "str":
+            key: Any = key_node.value
+        else:  # a tagged key stays a node, for the caller to refuse
+            key = scalar(key_node) if is_plain(key_node) else key_node
+        if not isinstance(key, str | int | float | bool):
+            key = str(key)
+        if key in seen:
+            raise DuplicateKey(key, key_node, seen[key])
+        seen[key] = key_node
+        yield key, key_node, value_node
+
+
+def to_data(node: yaml.Node, refuse: str) -> tuple[Any, Marks]:
+    """The document as plain Python data, and the position of every value by its path
+    (``("rooms", 0, 1)``) and of every key (``(..., key, KEY)``). A list or mapping with a
+    tag raises :class:`yaml.constructor.ConstructorError` with ``refuse.format(tag=...)``;
+    merge keys (``<<: *base``) are merged."""
+    marks: Marks = {}
+    return _data(node, (), marks, refuse), marks
+
+
+def _data(node: yaml.Node, path: PathKey, marks: Marks, refuse: str) -> Any:
+    marks[path] = position(node)
+    if isinstance(node, yaml.MappingNode | yaml.SequenceNode) and not is_plain(node):
+        raise yaml.constructor.ConstructorError(
+            None, None, refuse.format(tag=node.tag), node.start_mark
+        )
+    if isinstance(node, yaml.MappingNode):
+        _CONSTRUCTOR.flatten_mapping(node)
+        out: dict[Any, Any] = {}
+        try:
+            for key, key_node, value_node in pairs(node):
+                if not is_plain(key_node):
+                    scalar(key_node)  # raises: no safe constructor for its tag
+                marks[(*path, str(key), KEY)] = position(key_node)
+                out[key] = _data(value_node, (*path, str(key)), marks, refuse)
+        except DuplicateKey as dup:
+            if dup.path is None:
+                dup.path = (*path, str(dup.key))
+            raise
+        return out
+    if isinstance(node, yaml.SequenceNode):
+        return [_data(item, (*path, i), marks, refuse) for i, item in enumerate(node.value)]
+    return scalar(node)

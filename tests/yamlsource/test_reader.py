@@ -1,0 +1,75 @@
+"""The shared YAML reader: positions, refused tags, duplicate keys, plain data."""
+
+from __future__ import annotations
+
+import pytest
+import yaml
+
+from roomba_bt import yamlsource
+from roomba_bt.yamlsource import KEY
+
+
+def root(text: str) -> yaml.Node:
+    node = yamlsource.compose(text)
+    assert node is not None
+    return node
+
+
+def test_every_value_and_key_has_its_line_and_column() -> None:
+    data, marks = yamlsource.to_data(root("name: room\nrooms:\n  - [[0, 0], [1, 2]]\n"), "{tag}")
+    assert data == {"name": "room", "rooms": [[[0, 0], [1, 2]]]}
+    assert marks[("name",)] == (1, 7)
+    assert marks[("name", KEY)] == (1, 1)
+    assert marks[("rooms", KEY)] == (2, 1)
+    assert marks[("rooms", 0, 1, 1)] == (3, 18)
+
+
+def test_a_key_written_twice_names_both_places_and_its_path() -> None:
+    with pytest.raises(yamlsource.DuplicateKey) as caught:
+        yamlsource.to_data(root("dock:\n  at: [1, 1]\n  at: [2, 2]\n"), "{tag}")
+    dup = caught.value
+    assert (dup.key, dup.path) == ("at", ("dock", "at"))
+    assert yamlsource.position(dup.node) == (3, 3)
+    assert yamlsource.position(dup.first) == (2, 3)
+
+
+def test_keys_compare_as_values_one_and_true_are_one_key() -> None:
+    node = root("1: a\ntrue: b\n")
+    assert isinstance(node, yaml.MappingNode)
+    with pytest.raises(yamlsource.DuplicateKey):
+        list(yamlsource.pairs(node))
+
+
+def test_a_tagged_collection_is_refused_with_the_callers_words_never_built() -> None:
+    with pytest.raises(yaml.constructor.ConstructorError) as caught:
+        yamlsource.to_data(root("x: !!python/object:os.system {}\n"), "no {tag!r} here")
+    assert caught.value.problem == "no 'tag:yaml.org,2002:python/object:os.system' here"
+    assert yamlsource.error_position(caught.value) == (1, 4)
+
+
+def test_a_scalar_tag_without_a_safe_constructor_is_an_error_not_an_object() -> None:
+    node = root("!!python/name:os.system x\n")
+    assert not yamlsource.is_plain(node)
+    with pytest.raises(yaml.constructor.ConstructorError):
+        yamlsource.scalar(node)
+    assert yamlsource.scalar(root("42\n")) == 42  # the failure left nothing behind
+
+
+@pytest.mark.parametrize(
+    ("text", "plain"),
+    [("3\n", True), ("2020-01-01\n", True), ("!foo x\n", False), ("!!set {a}\n", False)],
+)
+def test_only_core_schema_values_are_plain(text: str, plain: bool) -> None:
+    assert yamlsource.is_plain(root(text)) is plain
+
+
+def test_syntax_errors_have_a_position_and_an_empty_document_is_none() -> None:
+    with pytest.raises(yaml.YAMLError) as caught:
+        yamlsource.compose("rooms: [[[0, 0]\n", yamlsource.PURE_LOADER)
+    assert yamlsource.error_position(caught.value) == (2, 1)
+    assert yamlsource.compose("") is None
+
+
+def test_merge_keys_are_merged() -> None:
+    data, _ = yamlsource.to_data(root("a: &b {x: 1}\nc: {<<: *b, y: 2}\n"), "{tag}")
+    assert data["c"] == {"x": 1, "y": 2}
