@@ -14,7 +14,7 @@ from roomba_bt.oi.encode import Radius
 from roomba_bt.oi.odometry import MM_PER_COUNT, OLD_FIRMWARE_ANGLE_FACTOR, encoder_delta
 from roomba_bt.oi.profiles import CREATE2, ROOMBA500, ROOMBA600
 from roomba_bt.sim import drive_wheel_speeds
-from roomba_bt.sim.robot import WHEEL_SPEED_STEP_MM_S
+from roomba_bt.sim.motion import WHEEL_SPEED_STEP_MM_S
 
 from .helpers import make
 

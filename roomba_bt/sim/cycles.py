@@ -1,0 +1,185 @@
+"""The firmware's own behaviours, which run in Passive: Spot (134), Clean (135), Max (136) and
+Seek Dock (143). The robot stays in Passive (packet 35 says 1) while one runs; a cycle ends by
+itself (its time is up, the battery is low, the dock is reached) or when a mode command comes.
+
+The real firmware's algorithms are not specified; these behave the way a client sees them:
+
+* Spot: an outward spiral at 200 mm/s for 30 s, ended early by a bump or a cliff;
+* Clean (10 min, 300 mm/s) and Max (60 min, 400 mm/s): forward until a bump, cliff, virtual
+  wall, close light bump or stall, back up 0.3 s, turn a random 0.4-1.4 s, go on;
+* Seek Dock: head for where the dock is (bouncing off obstacles) until the omni receiver sees
+  a dock beam, then a point 0.45 m out on the dock's axis, turn to face it, drive on slowly.
+
+Components, not a layer: each cycle is an object with its own state (phase and timers), asked
+for wheel speeds once a step while it runs. Nothing here is on the step path otherwise.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from abc import ABC, abstractmethod
+
+from roomba_bt.sim.geometry import wrap_angle
+from roomba_bt.sim.motion import drive_wheel_speeds
+from roomba_bt.sim.power import BATTERY_CAPACITY_MAH, Power
+from roomba_bt.sim.sensing import VIRTUAL_WALL_CHARACTER
+from roomba_bt.sim.world import Pose
+
+Wheels = tuple[float, float]
+_STOP: Wheels = (0.0, 0.0)
+
+
+class BuiltinCycle(ABC):
+    """A built-in behaviour the firmware runs in Passive. :meth:`wheels` gives the wheel
+    speeds for this step; once the cycle is over, :attr:`ended` says why."""
+
+    def __init__(self, name: str, started: float, rng: random.Random) -> None:
+        self.name = name
+        self.started = started
+        self.rng = rng  # the robot's: the draws follow one another across cycles
+        self.phase = "forward"
+        self.phase_until = 0.0
+        self.turn_sign = 1.0
+        self.wander_until = 0.0  # after a bounce, go straight a while before aiming again
+        self.ended: str | None = None
+
+    @abstractmethod
+    def wheels(self, robot: Power) -> Wheels:
+        """The wheel speeds (left, right, mm/s) for this step."""
+
+    def _end(self, why: str) -> Wheels:
+        self.ended = why
+        return _STOP
+
+    def _bounce(self, robot: Power, speed: float) -> Wheels:
+        """Forward until a bump, cliff, virtual wall or close light-bump; back up, turn a
+        random amount, go on."""
+        v = robot.values
+        now = robot.time
+        if self.phase == "forward":
+            if v[7] & 3 or any(v[9:13]) or v[13] or v[45] & 0b001100 or robot.blocked:
+                self.phase, self.phase_until = "back", now + 0.3
+            else:
+                return speed, speed
+        if self.phase == "back":
+            if now < self.phase_until:
+                return -150.0, -150.0
+            self.phase = "turn"
+            self.turn_sign = self.rng.choice((-1.0, 1.0))
+            self.phase_until = now + self.rng.uniform(0.4, 1.4)
+        if self.phase == "turn":
+            if now < self.phase_until:
+                return -150.0 * self.turn_sign, 150.0 * self.turn_sign
+            self.phase = "forward"
+            self.wander_until = now + self.rng.uniform(1.5, 3.0)
+        return speed, speed
+
+
+class Spot(BuiltinCycle):
+    """An outward spiral for 30 s, until a bump or a cliff."""
+
+    def wheels(self, robot: Power) -> Wheels:
+        elapsed = robot.time - self.started
+        v = robot.values
+        if elapsed > 30.0 or v[7] & 3 or any(v[9:13]):
+            return self._end("spot done")
+        radius = 60.0 + 12.0 * elapsed
+        return drive_wheel_speeds(200, int(radius), robot.profile.wheel_base_mm)
+
+
+class Clean(BuiltinCycle):
+    """Bounce around the room: Clean for 10 min at 300 mm/s, Max for 60 min at 400 mm/s;
+    either ends early below 5 % of the battery."""
+
+    def __init__(self, name: str, started: float, rng: random.Random) -> None:
+        super().__init__(name, started, rng)
+        self.limit = 600.0 if name == "clean" else 3600.0
+        self.speed = 300.0 if name == "clean" else 400.0
+
+    def wheels(self, robot: Power) -> Wheels:
+        if (
+            robot.time - self.started > self.limit
+            or robot.battery_charge < 0.05 * BATTERY_CAPACITY_MAH
+        ):
+            return self._end(f"{self.name} done")
+        return self._bounce(robot, self.speed)
+
+
+class SeekDock(BuiltinCycle):
+    """Simple homing. The real firmware's algorithm is not specified, so this one uses the
+    world's geometry once the dock is in sight: head for where the dock was (bouncing off
+    obstacles) until the omni receiver sees a dock beam, then go to a point 0.45 m out on the
+    dock's axis, turn to face the dock and drive on slowly."""
+
+    def wheels(self, robot: Power) -> Wheels:
+        dock = robot.world.dock
+        if robot.docked:
+            return self._end("docked")
+        if dock is None or robot.time - self.started > 600.0:
+            return self._end("seek dock gave up")
+        omni = robot.values[17]
+        sees = omni and omni != VIRTUAL_WALL_CHARACTER
+        target = dock.docked_pose
+        fx, fy = math.cos(dock.facing), math.sin(dock.facing)
+        if self.phase in ("forward", "back", "turn") and not sees:
+            # search: head for where the firmware remembers the dock, bouncing off obstacles
+            if (
+                self.phase == "forward"
+                and robot.time >= self.wander_until
+                and not (robot.values[7] & 3 or robot.blocked)
+            ):
+                sx, sy = target.x + 700.0 * fx, target.y + 700.0 * fy
+                return _steer_to(robot, sx, sy, 200.0)
+            return self._bounce(robot, 200.0)
+        if self.phase in ("forward", "back", "turn"):
+            self.phase = "approach"
+        return self._home(robot, target, target.x + 450.0 * fx, target.y + 450.0 * fy)
+
+    def _home(self, robot: Power, target: Pose, ax: float, ay: float) -> Wheels:
+        """In sight of the dock: to (ax, ay) on its axis, turn to face the docked pose
+        ``target``, drive on; back off and try again after a bump."""
+        if self.phase == "approach":
+            if (robot.x - ax) ** 2 + (robot.y - ay) ** 2 < 30.0**2:
+                self.phase = "align"
+            else:
+                return _steer_to(robot, ax, ay, 200.0)
+        if self.phase == "align":
+            err = wrap_angle(target.theta - robot.theta)
+            if abs(err) < math.radians(1.5):
+                self.phase = "dock"
+            else:
+                w = 60.0 if err > 0 else -60.0
+                return -w, w
+        if self.phase == "dock":
+            if robot.values[7] & 3:
+                self.phase, self.phase_until = "retreat", robot.time + 1.5
+            else:
+                err = wrap_angle(math.atan2(target.y - robot.y, target.x - robot.x) - robot.theta)
+                # aim at the contacts; off-axis corrections are small
+                turn = max(-20.0, min(20.0, 200.0 * err))
+                return 80.0 - turn, 80.0 + turn
+        if self.phase == "retreat":
+            if robot.time < self.phase_until:
+                return -100.0, -100.0
+            self.phase = "approach"
+        return _STOP
+
+
+def _steer_to(robot: Power, tx: float, ty: float, speed: float) -> Wheels:
+    """Turn on the spot towards (tx, ty) while more than 20 deg off, else arc towards it."""
+    err = wrap_angle(math.atan2(ty - robot.y, tx - robot.x) - robot.theta)
+    if abs(err) > math.radians(20.0):
+        w = 120.0 if err > 0 else -120.0
+        return -w, w
+    turn = 2.0 * speed * err
+    return speed - turn, speed + turn
+
+
+#: the cycle each command starts, by the name it is marked with in the events
+CYCLES: dict[str, type[BuiltinCycle]] = {
+    "spot": Spot,
+    "clean": Clean,
+    "max": Clean,
+    "seek_dock": SeekDock,
+}

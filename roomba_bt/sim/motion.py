@@ -1,0 +1,292 @@
+"""Motion: the wheels. Drive commands to wheel speeds, a step's travel, collisions with walls,
+the dock's guides, and a fall off a drop in Full mode.
+
+Drive (137) sets a velocity and a radius, Drive Direct (145) and Drive PWM (146) each wheel;
+the speed controller steps every wheel speed to multiples of about 28.5 mm/s (at most 500).
+What the robot asked for is reported in packets 39-42 (velocity, radius, right, left)::
+
+    [137][vel hi][vel lo][rad hi][rad lo]     velocity mm/s, radius mm (0x8000: straight)
+    [145][right hi][right lo][left hi][left lo]
+    [146][right pwm hi][lo][left pwm hi][lo]  -255..255 of full speed
+
+A step moves the centre by the mean of the wheels' travel along the mean heading; a step that
+would bring the body into a wall is cut short by bisection (the wheels stall, packet 58
+stasis drops, the encoders stop counting). Encoder counts (43, 44), distance and angle (19,
+20, via the accumulators) follow what the wheels did.
+
+A layer of the simulator (see state.py): :meth:`Motion._move` runs on every step the wheels
+turn, so the pose and speeds are attributes of the robot itself, and a steady motion's
+travel is computed once per (left, right, dt) (:func:`_motion_of`).
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+
+from roomba_bt.oi.odometry import MM_PER_COUNT
+from roomba_bt.sim.geometry import closest_point, wrap_angle
+from roomba_bt.sim.sensing import Sensing
+from roomba_bt.sim.state import STEP_SECONDS, TracePoint
+from roomba_bt.sim.world import ROBOT_RADIUS_MM
+
+#: The robot's wheel speed controller moves in steps of about 28.5 mm/s.
+WHEEL_SPEED_STEP_MM_S = 28.5
+MAX_WHEEL_SPEED_MM_S = 500.0
+#: Pushed against the dock within this angle of the contacts, its guides align the robot.
+DOCK_GUIDE_ANGLE = math.radians(20.0)
+_GUIDE_STEP = math.radians(1.0)
+_DRIVE = bytes((137,))
+_PI = math.pi
+_TWO_PI = 2.0 * math.pi
+
+#: What one step of steady wheel speeds does, computed once per (left, right, dt): a plain
+#: tuple (indexed on the step path, where a tuple subscript is the cheapest access)::
+#:
+#:     0 left   1 right   2 dt          the key: wheel speeds (mm/s) and step (s)
+#:     3 dist   4 dtheta  5 dtheta / 2  travel of the centre (mm), turn (rad)
+#:     6 left counts  7 right counts    encoder counts of an unhindered step
+#:     8 packet 58 (stasis) of an unhindered step
+_Motion = tuple[float, float, float, float, float, float, float, float, int]
+
+
+def _motion_of(left: float, right: float, dt: float, half_base: float) -> _Motion:
+    dl = left * dt
+    dr = right * dt
+    dist = (dl + dr) / 2.0
+    dtheta = (dr - dl) / (2.0 * half_base)
+    return (
+        left, right, dt, dist, dtheta, dtheta / 2.0,
+        (dist - dtheta * half_base) / MM_PER_COUNT,
+        (dist + dtheta * half_base) / MM_PER_COUNT,
+        1 if dist > 0.0 else 0,
+    )  # fmt: skip
+
+
+def _quantise(speed: float) -> float:
+    q = round(speed / WHEEL_SPEED_STEP_MM_S) * WHEEL_SPEED_STEP_MM_S
+    return max(-MAX_WHEEL_SPEED_MM_S, min(MAX_WHEEL_SPEED_MM_S, q))
+
+
+def drive_wheel_speeds(velocity: float, radius: int, wheel_base_mm: float) -> tuple[float, float]:
+    """(left, right) wheel speeds in mm/s for Drive (137).
+
+    Radius semantics from the spec: positive turns left (counter-clockwise), ``-32768``
+    (0x8000) and ``32767`` (0x7FFF) drive straight, ``-1`` spins clockwise and ``1``
+    counter-clockwise in place. Radii outside -2000..2000 are treated as straight (the
+    spec's range), and radius 0 as straight too. Each wheel is limited to 500 mm/s."""
+    velocity = float(max(-500.0, min(500.0, velocity)))
+    if radius in (-32768, 32767, 0) or not -2000 <= radius <= 2000:
+        return float(velocity), float(velocity)
+    if radius == -1:
+        return float(velocity), float(-velocity)
+    if radius == 1:
+        return float(-velocity), float(velocity)
+    half = wheel_base_mm / 2.0
+    left = velocity * (radius - half) / radius
+    right = velocity * (radius + half) / radius
+    top = max(abs(left), abs(right))
+    if top > MAX_WHEEL_SPEED_MM_S:
+        left *= MAX_WHEEL_SPEED_MM_S / top
+        right *= MAX_WHEEL_SPEED_MM_S / top
+    return left, right
+
+
+class Motion(Sensing):
+    """Wheel speeds asked for and done, the pose's change, odometry, collisions."""
+
+    def _init_motion(self) -> None:
+        self.requested_left = 0.0  # mm/s, from Drive / Drive Direct / Drive PWM
+        self.requested_right = 0.0
+        self.left_speed = 0.0  # actual (quantised) wheel speeds
+        self.right_speed = 0.0
+        self.blocked = False
+        self._stall_steps = 0
+        self._left_counts = 0.0
+        self._right_counts = 0.0
+        #: travel and turn not yet reported in packets 19 and 20 (replies.py reads them)
+        self._distance_acc = 0.0
+        self._angle_acc = 0.0
+        #: the last Drive (137) command, whole: the same bytes again change nothing
+        self._last_drive = b""
+        self._half_base = self.profile.wheel_base_mm / 2.0
+        self._motion: _Motion = _motion_of(0.0, 0.0, STEP_SECONDS, self._half_base)
+        self._encoder_signed = self.profile.encoders_signed
+        dock = self.world.dock
+        self._dock_target = dock.docked_pose if dock is not None else None
+        self.values[40] = -32768
+        self.values[58] = 0
+
+    def _stop_wheels(self) -> None:
+        self._last_drive = b""
+        self.requested_left = self.requested_right = 0.0
+        v = self.values
+        v[39] = v[41] = v[42] = 0
+        v[40] = -32768
+
+    def _on_drive(self, args: bytes) -> None:
+        command = _DRIVE + args
+        if command == self._last_drive:
+            return  # the same Drive again: nothing changes
+        self._last_drive = command
+        velocity, radius = struct.unpack(">hh", args)
+        # The speed controller steps the commanded velocity; the radius sets the wheel ratio.
+        speed = _quantise(velocity)
+        left, right = drive_wheel_speeds(speed, radius, self.profile.wheel_base_mm)
+        self.requested_left, self.requested_right = left, right
+        v = self.values
+        v[39] = max(-500, min(500, velocity))
+        v[40] = radius
+        asked_left, asked_right = drive_wheel_speeds(velocity, radius, self._half_base * 2.0)
+        v[41] = round(asked_right)
+        v[42] = round(asked_left)
+
+    def _on_drive_direct(self, args: bytes) -> None:
+        self._last_drive = b""
+        right, left = struct.unpack(">hh", args)
+        right = max(-500, min(500, right))
+        left = max(-500, min(500, left))
+        self.requested_left, self.requested_right = _quantise(left), _quantise(right)
+        v = self.values
+        v[39] = (left + right) // 2
+        v[40] = -32768 if left == right else 0
+        v[41] = right
+        v[42] = left
+
+    def _on_drive_pwm(self, args: bytes) -> None:
+        self._last_drive = b""
+        right, left = struct.unpack(">hh", args)
+        scale = MAX_WHEEL_SPEED_MM_S / 255.0
+        self.requested_right = _quantise(max(-255, min(255, right)) * scale)
+        self.requested_left = _quantise(max(-255, min(255, left)) * scale)
+        v = self.values
+        v[41] = round(self.requested_right)
+        v[42] = round(self.requested_left)
+        v[39] = (v[41] + v[42]) // 2
+
+    # One function for the usual step (over 60 lines on purpose): it runs on every step the
+    # wheels turn; only a step cut short by a wall, a lift or a fall calls out.
+    def _move(self, left: float, right: float, dt: float) -> None:
+        """Turn the wheels at ``left``, ``right`` mm/s for ``dt`` seconds."""
+        self.left_speed, self.right_speed = left, right
+        if not left and not right:
+            self.values[58] = 0
+            self._stall_steps = 0
+            return
+        motion = self._motion
+        if motion[0] != left or motion[1] != right or motion[2] != dt:
+            motion = self._motion = _motion_of(left, right, dt, self._half_base)
+        dist, dtheta, half_turn = motion[3], motion[4], motion[5]
+        fraction = 1.0
+        stuck = self.lifted or self.fallen
+        x, y, theta = self.x, self.y, self.theta
+        if stuck:
+            fraction = 0.0
+        elif dist:
+            heading = theta + half_turn
+            ux = dist * math.cos(heading)
+            uy = dist * math.sin(heading)
+            if abs(dist) >= self._clearance and self._blocked(x + ux, y + uy):
+                lo, hi = 0.0, 1.0
+                if self._clearance < 0.5 and self._blocked(x + ux / 64, y + uy / 64):
+                    hi = 0.0  # pressed against the wall already: no room at all
+                while hi - lo > 0.01:
+                    mid = (lo + hi) / 2.0
+                    if self._blocked(x + ux * mid, y + uy * mid):
+                        hi = mid
+                    else:
+                        lo = mid
+                fraction = lo
+            self.x = x = x + ux * fraction
+            self.y = y = y + uy * fraction
+        v = self.values
+        if fraction == 1.0:
+            # free motion (the usual step): what the wheels did is the same every step
+            self.blocked = False
+            theta = theta + dtheta
+            if theta > _PI:
+                theta -= _TWO_PI
+            elif theta < -_PI:
+                theta += _TWO_PI
+            self.theta = theta
+            self._distance_acc += dist
+            self._angle_acc += dtheta
+            left_counts = self._left_counts = self._left_counts + motion[6]
+            right_counts = self._right_counts = self._right_counts + motion[7]
+            v[58] = motion[8]
+            self._stall_steps = 0
+            self._geometry_dirty = True
+        else:
+            self._move_hindered(dist, dtheta, fraction, stuck)
+            left_counts, right_counts = self._left_counts, self._right_counts
+        lc = int(left_counts) & 0xFFFF
+        rc = int(right_counts) & 0xFFFF
+        if self._encoder_signed:
+            lc = lc - 0x10000 if lc > 0x7FFF else lc
+            rc = rc - 0x10000 if rc > 0x7FFF else rc
+        v[43] = lc
+        v[44] = rc
+        if not self.ticks & 3:
+            self.trace.append(TracePoint(self.time, self.x, self.y, self.theta, self.mode))
+
+    def _move_hindered(self, dist: float, dtheta: float, fraction: float, stuck: bool) -> None:
+        """The rest of a step that a wall cut short, or a lifted or fallen robot's."""
+        half_base = self._half_base
+        blocked = self.blocked = fraction < 1.0 and dist != 0.0 and not stuck
+        guided = 0.0
+        if blocked and dist > 0.0 and self._dock_target is not None:
+            guided = self._dock_guides()  # the body turns, the wheels slip: no encoder counts
+        if stuck:
+            travelled = dist
+        else:
+            travelled = dist * fraction
+            theta = self.theta + dtheta + guided
+            if theta > _PI:
+                theta -= _TWO_PI
+            elif theta < -_PI:
+                theta += _TWO_PI
+            self.theta = theta
+            self._distance_acc += travelled
+            self._angle_acc += dtheta
+        # Encoders count wheel turns: a blocked robot's wheels stall, a lifted one's spin.
+        self._left_counts = self._left_counts + (travelled - dtheta * half_base) / MM_PER_COUNT
+        self._right_counts = self._right_counts + (travelled + dtheta * half_base) / MM_PER_COUNT
+        self.values[58] = 1 if dist > 0.0 and fraction > 0.5 and not stuck else 0
+        self._stall_steps = self._stall_steps + 1 if blocked else 0
+        if fraction or dtheta or guided:
+            self._geometry_dirty = True
+
+    def _dock_guides(self) -> float:
+        """The dock's guides: pushed forward against the dock close to the contacts, the
+        robot slides onto them (up to 2 mm and 1 deg a step); returns the extra rotation."""
+        target = self._dock_target
+        dock = self.world.dock
+        assert target is not None and dock is not None
+        ex, ey = target.x - self.x, target.y - self.y
+        err = wrap_angle(target.theta - self.theta)
+        if ex * ex + ey * ey > (dock.contact_tolerance + 25.0) ** 2 or abs(err) > DOCK_GUIDE_ANGLE:
+            return 0.0
+        off = math.hypot(ex, ey)
+        if off > 0.0:
+            step = min(off, 2.0)
+            self.x += ex / off * step
+            self.y += ey / off * step
+        self._geometry_dirty = True
+        return max(-_GUIDE_STEP, min(_GUIDE_STEP, err))
+
+    def _blocked(self, x: float, y: float) -> bool:
+        """Would the body at (x, y) overlap a wall it does not overlap now?"""
+        r2 = ROBOT_RADIUS_MM * ROBOT_RADIUS_MM
+        for seg in self._near_segments():
+            d_new = closest_point(x, y, seg)[2]
+            if d_new < r2 and d_new < closest_point(self.x, self.y, seg)[2] - 1e-9:
+                return True
+        return False
+
+    def _fall(self) -> None:
+        """Off a drop (Full mode has no cliff safety): wheel drops, all cliffs, stuck."""
+        self.fallen = True
+        self.left_speed = self.right_speed = 0.0
+        self._event("fell", "drove off a drop")
+        self._geometry_dirty = True
+        self._sense()

@@ -1,0 +1,283 @@
+"""The Open Interface as the robot speaks it: commands cut from the host's bytes, dispatched by
+opcode, the mode rules, and the commands that only set state (LEDs, songs, schedule, baud).
+
+Commands are cut by the opcode table (:mod:`roomba_bt.oi.opcodes`): the opcode, the fixed
+data bytes of ``CommandSpec.args``, then a variable tail counted by one of them::
+
+    [137][vel hi][vel lo][rad hi][rad lo]          Drive: 4 fixed data bytes
+    [148][n][id 1]...[id n]                        Stream: n ids after the count
+    [140][song][length][note][dur]...              Song: 2 bytes a note
+
+An incomplete command waits for its bytes; an unknown opcode is skipped one byte at a time.
+The mode rules are the table's too: ``CommandSpec.modes`` (where a command is accepted; an
+actuator command elsewhere is ignored and recorded in ``violations``) and ``leads_to`` (the
+mode it changes to). Off and sleep answer only Start and Reset. In Safe, a wheel drop, a cliff
+while driving forward or a powered charger drops the robot to Passive (:meth:`_safety`).
+
+A layer of the simulator (see state.py): the top one, it reads every other.
+"""
+
+from __future__ import annotations
+
+import random
+from collections.abc import Callable
+
+from roomba_bt.oi.encode import BAUD_CODES
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME, CommandSpec
+from roomba_bt.sim.cycles import CYCLES, BuiltinCycle
+from roomba_bt.sim.replies import StreamOutput
+from roomba_bt.sim.state import TracePoint, Violation
+
+#: Passive without a byte from the host for this long: the robot sleeps.
+PASSIVE_SLEEP_SECONDS = 300.0
+#: Bytes the firmware prints on Reset (7), as captured by pycreate2's author on a Create 2.
+RESET_BANNER = (
+    b"bl-start\r\nSTR730\r\nbootloader id: #x47186549 82ECCFFF\r\n"
+    b"bootloader info rev: #xF000\r\nbootloader rev: #x0001\r\n2007-05-14-1715-L   \r\n"
+    b"Roomba by iRobot!\r\nstr730\r\n2012-03-22-1549-L\r\nbattery-current-zero 252\r\n"
+)
+_BAUD_BY_CODE = {code: rate for rate, code in BAUD_CODES.items()}
+#: what Off (and a sleeping robot) answers
+_WAKERS = frozenset(COMMANDS_BY_NAME[name].opcode for name in ("start", "reset"))
+_DRIVE = COMMANDS_BY_NAME["drive"].opcode
+
+
+def _count_offset(spec: CommandSpec) -> int:
+    """Data bytes before the argument that counts a command's variable tail."""
+    assert spec.tail is not None
+    offset = 0
+    for arg in spec.args:
+        if arg.name == spec.tail.count_arg:
+            return offset
+        offset += arg.size
+    raise ValueError(f"{spec.name}: no argument {spec.tail.count_arg!r}")
+
+
+class OIProtocol(StreamOutput):
+    """Host bytes to commands, commands to state; the mode rules."""
+
+    def _init_protocol(self) -> None:
+        profile = self.profile
+        self.baud = profile.default_baud
+        self.leds: tuple[int, int, int] = (0, 0, 0)
+        self.scheduling_leds: tuple[int, int] = (0, 0)
+        self.digits: tuple[int, int, int, int] = (32, 32, 32, 32)
+        self.songs: dict[int, tuple[tuple[int, int], ...]] = {}
+        self.schedule: bytes = bytes(15)
+        self.day_time: tuple[int, int, int] = (0, 0, 0)
+        self._song_until = 0.0
+        self._buttons_until = 0.0
+        self.builtin: BuiltinCycle | None = None
+        self._rng = random.Random(f"robot:{self.seed}")  # the built-in cycles' choices
+        self._last_activity = 0.0
+        self.ignored_bytes = 0
+        self._inbuf = bytearray()
+        self._commands: dict[int, CommandSpec] = {c.opcode: c for c in profile.commands}
+        self._data_sizes = {c.opcode: c.fixed_data_bytes for c in profile.commands}
+        #: variable tails from the opcode table: (offset of the count byte, bytes per item)
+        self._tails = {
+            c.opcode: (1 + _count_offset(c), c.tail.bytes_per_item)
+            for c in profile.commands
+            if c.tail is not None
+        }
+        self._drive_modes = self._commands[_DRIVE].modes
+
+    # ------------------------------------------------------------------ host -> robot
+    def receive(self, data: bytes | bytearray) -> None:
+        """Take bytes from the host. A command whose data bytes have not all arrived waits
+        for them, as the robot does; unknown opcodes are skipped one byte at a time."""
+        if self.disconnected or not data:
+            return
+        self._last_activity = self.time
+        buf = self._inbuf
+        commands = self._commands
+        sizes = self._data_sizes
+        tails = self._tails
+        if not buf:  # the common case: exactly one whole fixed-size command
+            if data == self._last_drive and not self.asleep and self.mode in self._drive_modes:
+                return  # the same Drive again (a client sends one a frame): nothing changes
+            spec = commands.get(data[0])
+            if spec is not None and spec.tail is None and len(data) == 1 + sizes[data[0]]:
+                self._execute(spec, bytes(data[1:]))
+                return
+        buf += data
+        while buf:
+            op = buf[0]
+            spec = commands.get(op)
+            if spec is None:
+                del buf[0]
+                self.ignored_bytes += 1
+                continue
+            need = 1 + sizes[op]
+            if len(buf) < need:
+                return
+            tail = tails.get(op)
+            if tail is not None:
+                count_at, per_item = tail
+                need += buf[count_at] * per_item
+                if len(buf) < need:
+                    return
+            args = bytes(buf[1:need])
+            del buf[:need]
+            self._execute(spec, args)
+
+    def _execute(self, spec: CommandSpec, args: bytes) -> None:
+        op = spec.opcode
+        if self.asleep or self.mode is OIMode.OFF:
+            # Off (and asleep) answers nothing but Start, and Reset where it exists.
+            if op not in _WAKERS:
+                if spec.is_actuator:
+                    self.violations.append(Violation(self.time, op, spec.name, OIMode.OFF))
+                return
+        elif self.mode not in spec.modes:
+            if spec.is_actuator:
+                self.violations.append(Violation(self.time, op, spec.name, self.mode))
+            return
+        if spec.leads_to is not None:
+            self._command_mode(spec)
+        handler = _HANDLERS.get(op)
+        if handler is not None:
+            handler(self, args)
+
+    # ------------------------------------------------------------------ modes
+    def _command_mode(self, spec: CommandSpec) -> None:
+        target = spec.leads_to
+        assert target is not None
+        self.asleep = False
+        self.builtin = None
+        self._stop_wheels()
+        if target is not OIMode.SAFE and target is not OIMode.FULL:
+            self.motor_bits = 0
+            self.brush_pwm = (0, 0, 0)
+        self._set_mode(target, spec.name)
+
+    def _set_mode(self, mode: OIMode, cause: str) -> None:
+        if mode is not self.mode:
+            self._event("mode", f"{self.mode.label}->{mode.label} ({cause})")
+            self.mode = mode
+            self.trace.append(TracePoint(self.time, self.x, self.y, self.theta, mode))
+        # Some 600-series firmware reports mode + 1 in packet 35 (the profile says which).
+        self.values[35] = int(mode) + (1 if self.profile.reports_mode_plus_one else 0)
+
+    def _safety(self) -> None:
+        """Safe mode's own rules, checked when a wheel drop, cliff or dock shows: stop the
+        motors and drop to Passive (the event says which cause)."""
+        v = self.values
+        cause = ""
+        if v[7] & 12:
+            cause = "wheel drop"
+        elif (v[9] or v[10] or v[11] or v[12]) and self.left_speed + self.right_speed > 0:
+            cause = "cliff while driving forward"
+        elif self.docked and self.dock_powered:
+            cause = "powered charger"
+        if cause:
+            self._stop_wheels()
+            self.left_speed = self.right_speed = 0.0
+            self.motor_bits = 0
+            self.brush_pwm = (0, 0, 0)
+            self._set_mode(OIMode.PASSIVE, f"safety: {cause}")
+
+    def _fall_asleep(self, cause: str) -> None:
+        """Sleep: nothing but Start (or Reset) wakes the robot; the stream ends."""
+        self.asleep = True
+        self._end_stream()
+        self._event("sleep", cause)
+
+    # ------------------------------------------------------------------ command handlers
+    def _on_reset(self, args: bytes) -> None:
+        self._end_stream()
+        self.songs.clear()
+        self._inbuf.clear()
+        self._emit(RESET_BANNER)
+
+    def _on_start(self, args: bytes) -> None:
+        return None  # the mode change (leads_to) is all Start does
+
+    def _on_stop(self, args: bytes) -> None:
+        self._end_stream()
+
+    def _on_power(self, args: bytes) -> None:
+        self._fall_asleep("power (133)")
+
+    def _on_baud(self, args: bytes) -> None:
+        self.baud = _BAUD_BY_CODE.get(args[0], self.baud)
+
+    def _on_leds(self, args: bytes) -> None:
+        self.leds = (args[0], args[1], args[2])
+
+    def _on_scheduling_leds(self, args: bytes) -> None:
+        self.scheduling_leds = (args[0], args[1])
+
+    def _on_digits(self, args: bytes) -> None:
+        self.digits = (args[0], args[1], args[2], args[3])
+
+    def _on_song(self, args: bytes) -> None:
+        number, length = args[0], args[1]
+        if number > 4:
+            return
+        notes = args[2 : 2 + 2 * length]
+        self.songs[number] = tuple((notes[i], notes[i + 1]) for i in range(0, len(notes), 2))
+
+    def _on_play(self, args: bytes) -> None:
+        song = self.songs.get(args[0])
+        if song is None:
+            return
+        self.values[36] = args[0]
+        self.values[37] = 1
+        self._song_until = self.time + sum(d for _, d in song) / 64.0
+
+    def _on_buttons(self, args: bytes) -> None:
+        self.values[18] = args[0]
+        self._buttons_until = self.time + 1.0 / 6.0
+
+    def _on_schedule(self, args: bytes) -> None:
+        self.schedule = bytes(args)
+
+    def _on_day_time(self, args: bytes) -> None:
+        self.day_time = (args[0], args[1], args[2])
+
+
+def _cycle_starter(name: str) -> Callable[[OIProtocol, bytes], None]:
+    cycle = CYCLES[name]
+
+    def start(robot: OIProtocol, args: bytes) -> None:
+        robot.builtin = cycle(name, robot.time, robot._rng)
+        robot._event("builtin", name)
+
+    return start
+
+
+#: what each command does beyond its mode change, by the opcode table's names
+_HANDLERS_BY_NAME: dict[str, Callable[[OIProtocol, bytes], None]] = {
+    "reset": OIProtocol._on_reset,
+    "start": OIProtocol._on_start,
+    "baud": OIProtocol._on_baud,
+    "power": OIProtocol._on_power,
+    "spot": _cycle_starter("spot"),
+    "clean": _cycle_starter("clean"),
+    "max": _cycle_starter("max"),
+    "drive": OIProtocol._on_drive,
+    "motors": OIProtocol._on_motors,
+    "leds": OIProtocol._on_leds,
+    "song": OIProtocol._on_song,
+    "play": OIProtocol._on_play,
+    "sensors": OIProtocol._on_sensors,
+    "seek_dock": _cycle_starter("seek_dock"),
+    "pwm_motors": OIProtocol._on_pwm_motors,
+    "drive_direct": OIProtocol._on_drive_direct,
+    "drive_pwm": OIProtocol._on_drive_pwm,
+    "stream": OIProtocol._on_stream,
+    "query_list": OIProtocol._on_query_list,
+    "pause_resume_stream": OIProtocol._on_pause_resume,
+    "scheduling_leds": OIProtocol._on_scheduling_leds,
+    "digit_leds_raw": OIProtocol._on_digits,
+    "digit_leds_ascii": OIProtocol._on_digits,
+    "buttons": OIProtocol._on_buttons,
+    "schedule": OIProtocol._on_schedule,
+    "set_day_time": OIProtocol._on_day_time,
+    "stop": OIProtocol._on_stop,
+}
+_HANDLERS = {COMMANDS_BY_NAME[name].opcode: h for name, h in _HANDLERS_BY_NAME.items()}
+
+assert set(_HANDLERS) <= set(COMMANDS), "a handler for an opcode the table does not have"

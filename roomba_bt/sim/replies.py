@@ -1,0 +1,211 @@
+"""Robot -> host bytes: replies to Sensors (142) and Query List (149), stream frames (148),
+and the faults a serial link adds to them (corruption, latency).
+
+A reply is the packets' data bytes in the order asked; a stream frame adds a header, the
+n-bytes count, each packet's id, and a checksum that brings the frame's sum to 0::
+
+    reply to [149][2][7][35]      [b7][b35]
+    stream of [148][2][7][35]     [19][4][7][b7][35][b35][chk]      every 15 ms
+
+Both are packed from the flat value list (state.py) by one precompiled :class:`struct.Struct`
+per packet list (:class:`_Packer`); the header and ids come from the constants after the
+packets in the same list. Distance (19) and angle (20) report what accumulated since the last
+read. The stream frame itself is packed in ``Simulator.step`` (the hot path).
+
+A layer of the simulator (see state.py).
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+from collections import deque
+from collections.abc import Callable
+from operator import itemgetter
+
+from roomba_bt.oi.odometry import OLD_FIRMWARE_ANGLE_FACTOR
+from roomba_bt.oi.packets import VALID_PACKET_IDS, expand
+from roomba_bt.oi.profiles import RobotProfile
+from roomba_bt.oi.stream import byte_sum_for
+from roomba_bt.sim.power import Power
+from roomba_bt.sim.state import CONSTANTS
+
+#: n-bytes is one byte: a longer stream cannot be framed
+MAX_STREAM_PAYLOAD = 255
+#: The checksum byte that brings a frame's sum to 0 mod 256, for every partial sum.
+CHECKSUM_BYTE = tuple(bytes(((-total) & 0xFF,)) for total in range(256))
+_DEGREES_PER_RADIAN = 180.0 / math.pi
+_OLD_ANGLE_PER_RADIAN = _DEGREES_PER_RADIAN * OLD_FIRMWARE_ANGLE_FACTOR
+#: the analog signals the noise fault disturbs
+_ANALOG = (22, 23, 27, 28, 29, 30, 31, 46, 47, 48, 49, 50, 51, 54, 55, 56, 57)
+
+
+class _Packer:
+    """Packs a list of packet ids from the flat value list in one ``struct`` call."""
+
+    __slots__ = (
+        "byte_sum", "getter", "has_angle", "has_distance", "size", "snapshot", "struct", "sum_bias",
+    )  # fmt: skip
+
+    def __init__(
+        self, ids: tuple[int, ...], profile: RobotProfile, stream: bool, noise: bool = False
+    ) -> None:
+        codes = [">"]
+        idx: list[int] = []
+        if stream:
+            size = stream_payload(ids, profile)
+            codes.append("BB")
+            idx += [CONSTANTS + 19, CONSTANTS + size]
+        for pid in ids:
+            if stream:
+                codes.append("B")
+                idx.append(CONSTANTS + pid)
+            for member in expand(pid):
+                codes.append(profile.packet(member).struct_code)
+                idx.append(member)
+        self.struct = struct.Struct("".join(codes))
+        getter = itemgetter(*idx)
+        self.getter: Callable[[list[int]], tuple[int, ...]] = (
+            getter if len(idx) > 1 else (lambda v: (getter(v),))
+        )
+        members = {m for p in ids for m in expand(p)}
+        self.has_distance = 19 in members
+        self.has_angle = 20 in members
+        #: the values need preparing before a frame: distance/angle since last read, noise
+        self.snapshot = self.has_distance or self.has_angle or noise
+        self.size = self.struct.size
+        # The checksum byte is -(sum of the frame's bytes, less the header's 19 where the
+        # profile's checksum leaves it out) & 0xFF; the sum taken as the parser takes it.
+        self.byte_sum, added = byte_sum_for(self.size)
+        self.sum_bias = added + (0 if profile.checksum_includes_header else 19)
+
+
+def stream_payload(ids: tuple[int, ...], profile: RobotProfile) -> int:
+    """The n-bytes of a stream frame of ``ids``: an id byte and the data of each packet."""
+    return sum(1 + sum(profile.packet(m).size for m in expand(p)) for p in ids)
+
+
+class StreamOutput(Power):
+    """What the robot has sent and the host has not read; the stream it sends every step."""
+
+    def _init_output(self) -> None:
+        faults = self.faults
+        self._stream: _Packer | None = None
+        self._stream_ids: tuple[int, ...] = ()
+        self._stream_paused = False
+        self._next_inject = faults.inject_every if faults.inject_text else math.inf
+        self._out = bytearray()
+        self._delayed: deque[tuple[float, bytes]] = deque()
+        self._reply_packers: dict[tuple[int, ...], _Packer] = {}
+        #: no fault touches the bytes on their way out: a frame goes straight into _out
+        self._plain_output = not (faults.corrupt_rate or faults.latency)
+        self.bytes_sent = 0
+        self.frames_sent = 0
+
+    @property
+    def streaming(self) -> bool:
+        return self._stream is not None and not self._stream_paused
+
+    @property
+    def stream_ids(self) -> tuple[int, ...]:
+        return self._stream_ids
+
+    def _end_stream(self) -> None:
+        self._stream = None
+        self._stream_ids = ()
+
+    def _on_sensors(self, args: bytes) -> None:
+        if args[0] in VALID_PACKET_IDS:
+            self._emit(self._pack_reply((args[0],)))
+
+    def _on_query_list(self, args: bytes) -> None:
+        ids = tuple(p for p in args[1:] if p in VALID_PACKET_IDS)
+        if ids:
+            self._emit(self._pack_reply(ids))
+
+    def _on_stream(self, args: bytes) -> None:
+        ids = tuple(p for p in args[1:] if p in VALID_PACKET_IDS)
+        payload = stream_payload(ids, self.profile)
+        if payload > MAX_STREAM_PAYLOAD:
+            # Neither spec says what the robot does with a list whose frame cannot be
+            # framed (n-bytes is one byte); the simulator refuses it and keeps what it had.
+            why = f"stream of {payload} bytes (n-bytes is one byte: at most 255)"
+            self._event("refused", why)
+            return
+        self._stream_ids = ids
+        self._stream = _Packer(ids, self.profile, True, bool(self.faults.noise)) if ids else None
+        self._stream_paused = False
+        self.values[38] = min(len(ids), 108)
+
+    def _on_pause_resume(self, args: bytes) -> None:
+        self._stream_paused = args[0] == 0
+
+    # ------------------------------------------------------------------ robot -> host
+    def read(self) -> bytes:
+        """Everything the robot has sent and the host has not read yet."""
+        if self._delayed:
+            now = self.time
+            while self._delayed and self._delayed[0][0] <= now + 1e-9:
+                self._out += self._delayed.popleft()[1]
+        if not self._out:
+            return b""
+        data = bytes(self._out)
+        self._out.clear()
+        return data
+
+    def _emit(self, data: bytes) -> None:
+        if self.disconnected:
+            return
+        faults = self.faults
+        if faults.corrupt_rate:
+            rng = self._fault_rng
+            rate = faults.corrupt_rate
+            buf = bytearray(data)
+            for i in range(len(buf)):
+                if rng.random() < rate:
+                    buf[i] = (buf[i] + rng.randrange(1, 256)) & 0xFF
+            data = bytes(buf)
+        self.bytes_sent += len(data)
+        if faults.latency:
+            self._delayed.append((self.time + faults.latency, data))
+        else:
+            self._out += data
+
+    def _pack_reply(self, ids: tuple[int, ...]) -> bytes:
+        packer = self._reply_packers.get(ids)
+        if packer is None:
+            packer = self._reply_packers[ids] = _Packer(ids, self.profile, False)
+        return packer.struct.pack(*packer.getter(self._snapshot_values(packer)))
+
+    def _snapshot_values(self, packer: _Packer) -> list[int]:
+        """The value list to send now: distance/angle since last read, noise if asked."""
+        v = self.values
+        if packer.has_distance:
+            d = round(self._distance_acc)
+            if d:
+                d = -32768 if d < -32768 else 32767 if d > 32767 else d
+                self._distance_acc -= d
+            v[19] = d
+        if packer.has_angle:
+            acc = self._angle_acc
+            if self.old_firmware_angle:
+                a = round(acc * _OLD_ANGLE_PER_RADIAN)
+                self._angle_acc -= a / _OLD_ANGLE_PER_RADIAN
+            else:
+                a = round(acc * _DEGREES_PER_RADIAN)
+                self._angle_acc -= a / _DEGREES_PER_RADIAN
+            v[20] = -32768 if a < -32768 else 32767 if a > 32767 else a
+        if self.faults.noise:
+            noisy = list(v)
+            rng = self._fault_rng
+            sigma = self.faults.noise
+            for pid in _ANALOG:
+                value = round(noisy[pid] + rng.gauss(0.0, sigma))
+                if pid in (23, 54, 55, 56, 57):
+                    noisy[pid] = max(-32768, min(32767, value))
+                elif pid == 22:
+                    noisy[pid] = max(0, min(65535, value))
+                else:
+                    noisy[pid] = max(0, min(4095, value))
+            return noisy
+        return v

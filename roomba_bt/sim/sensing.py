@@ -1,0 +1,379 @@
+"""Sensing: what the robot's sensors report, from its pose and the world's geometry.
+
+The bumper (packet 7), the cliff sensors (9-12, 28-31), the wall sensor (8, 27), the light
+bumper's six rays (45, 46-51), the IR receivers (13, 17, 52, 53) and the dock's contacts
+(34, via :attr:`docked`)::
+
+    packet           sensor                 computed from
+    7                bumper, wheel drops    walls within 1.5 mm of the body; lifted, fallen
+    8, 27            wall sensor            a ray to the right, walls within 120 mm
+    9-12, 28-31      cliff sensors          4 points 150 mm out at +60 +20 -20 -60 deg, drops
+    45, 46-51        light bumper           6 rays at +65 +38 +12 -12 -38 -65 deg, 150 mm
+    13, 17, 52, 53   IR receivers           dock beams, virtual walls, lighthouses (30 ms)
+
+A layer of the simulator (see state.py): :meth:`Sensing._sense` runs on most steps, so it
+reads the pose and writes the value list through ``self`` directly, and geometry is measured
+again only when the pose or the world changed (``_geometry_dirty``), walls only once the robot
+may have come within reach of one (``_free_at``, ``_free2``).
+"""
+
+from __future__ import annotations
+
+import math
+
+from roomba_bt.oi.ir import LighthouseBeam, dock_character, lighthouse_character
+from roomba_bt.sim.geometry import Segment, closest_point, point_in_polygon, wrap_angle
+from roomba_bt.sim.state import RobotState
+from roomba_bt.sim.world import ROBOT_RADIUS_MM, DockSpec
+
+# Sensor geometry (robot frame: angle from the heading, CCW positive).
+_LIGHT_BUMP_ANGLES = tuple(math.radians(a) for a in (65.0, 38.0, 12.0, -12.0, -38.0, -65.0))
+_LIGHT_BUMP_DIRECTIONS = tuple((math.cos(a), math.sin(a)) for a in _LIGHT_BUMP_ANGLES)
+LIGHT_BUMP_RANGE_MM = 150.0
+LIGHT_BUMP_THRESHOLD = 100
+_CLIFF_ANGLES = tuple(math.radians(a) for a in (60.0, 20.0, -20.0, -60.0))
+CLIFF_SENSOR_RADIUS_MM = 150.0
+CLIFF_FLOOR_SIGNAL = 2600
+CLIFF_DROP_SIGNAL = 20
+WALL_SENSOR_RANGE_MM = 120.0
+WALL_SENSOR_TRIGGER_MM = 50.0
+#: Bumper: contacts within this angle of the heading press both switches.
+BUMP_CENTRE_ANGLE = math.radians(12.0)
+BUMP_HALF_SPAN = math.radians(85.0)
+CONTACT_MM = 1.5
+#: IR receivers: the omni on top of the bumper, the directional ones left and right of it.
+OMNI_FORWARD_MM = 130.0
+RECEIVER_FORWARD_MM = 150.0
+RECEIVER_SIDE_MM = 40.0
+#: Field of view of the directional receivers, from the heading: left sees -5..+90 deg,
+#: right -90..+5 deg, so both see the dock only when it is within 5 deg of straight ahead.
+RECEIVER_INNER = math.radians(5.0)
+RECEIVER_OUTER = math.radians(90.0)
+#: The virtual wall's character on the omni receiver (it also sets packet 13).
+VIRTUAL_WALL_CHARACTER = 162
+_NEAR_MARGIN_MM = 300.0
+_RAY_RANGES = (LIGHT_BUMP_RANGE_MM,) * 6 + (WALL_SENSOR_RANGE_MM,)
+_Line = tuple[float, float, float, float, float, float, float]
+_BUMP_SIDES = {1: "right", 2: "left", 3: "both"}
+
+
+def _line(seg: Segment) -> _Line:
+    """(nx, ny, n.a, tx, ty, t.a, length) of a wall segment from a to b."""
+    ax, ay, bx, by = seg
+    length = math.hypot(bx - ax, by - ay)
+    tx, ty = ((bx - ax) / length, (by - ay) / length) if length else (1.0, 0.0)
+    nx, ny = -ty, tx
+    return (nx, ny, nx * ax + ny * ay, tx, ty, tx * ax + ty * ay, length)
+
+
+_NEAR_RADIUS_MM = ROBOT_RADIUS_MM + LIGHT_BUMP_RANGE_MM + 40.0 + _NEAR_MARGIN_MM
+_NEAR_MARGIN2 = _NEAR_MARGIN_MM**2
+_REACH2 = (ROBOT_RADIUS_MM + LIGHT_BUMP_RANGE_MM + 5.0) ** 2  # walls the rays may hit
+_CONTACT2 = (ROBOT_RADIUS_MM + CONTACT_MM) ** 2  # walls touching the bumper
+_NEAREST2 = (_NEAR_RADIUS_MM - _NEAR_MARGIN_MM) ** 2  # the clearance the near set guarantees
+_REACH = math.sqrt(_REACH2)
+#: a lower bound of the clearance while no wall is within reach (the real one is larger)
+_OPEN_CLEARANCE = _REACH - ROBOT_RADIUS_MM - 1.0
+_PI = math.pi
+_TWO_PI = 2.0 * math.pi
+
+
+class _DockBeams:
+    """The dock's beams and contacts as plain numbers, computed once per robot: the IR
+    receivers ask for a character three times every 30 ms, so no attribute chains, no
+    function calls for the angle wrap, one table lookup for the character."""
+
+    __slots__ = (
+        "angle_tolerance", "buoy2", "characters", "contact2", "facing", "field2", "green_from",
+        "green_to", "reach2", "red_from", "red_to", "target_theta", "target_x", "target_y",
+        "x", "y",
+    )  # fmt: skip
+
+    def __init__(self, dock: DockSpec) -> None:
+        self.x, self.y, self.facing = dock.x, dock.y, dock.facing
+        self.field2 = dock.force_field * dock.force_field
+        self.buoy2 = dock.buoy_range * dock.buoy_range
+        reach = max(dock.buoy_range, dock.force_field) + 200.0
+        self.reach2 = reach * reach
+        self.red_from, self.red_to = dock.red
+        self.green_from, self.green_to = dock.green
+        discovery = dock.family == "discovery"
+        #: index: red << 2 | green << 1 | force field
+        self.characters = tuple(
+            dock_character(red=bool(i & 4), green=bool(i & 2), force_field=bool(i & 1),
+                           discovery=discovery)
+            for i in range(8)
+        )  # fmt: skip
+        target = dock.docked_pose
+        self.target_x, self.target_y, self.target_theta = target.x, target.y, target.theta
+        self.contact2 = dock.contact_tolerance**2
+        self.angle_tolerance = dock.angle_tolerance
+
+    def character(self, px: float, py: float) -> int:
+        """What a receiver at (px, py) sees of a powered dock (0: nothing)."""
+        dx, dy = px - self.x, py - self.y
+        dist2 = dx * dx + dy * dy
+        index = 1 if dist2 <= self.field2 else 0
+        if dist2 <= self.buoy2:
+            bearing = (math.atan2(dy, dx) - self.facing + _PI) % _TWO_PI - _PI
+            if self.red_from <= bearing <= self.red_to:
+                index |= 4
+            if self.green_from <= bearing <= self.green_to:
+                index |= 2
+        return self.characters[index]
+
+
+class Sensing(RobotState):
+    """The sensors' packets in :attr:`values`, measured again when the pose or world changed."""
+
+    def _init_sensing(self) -> None:
+        world = self.world
+        v = self.values
+        v[28] = v[29] = v[30] = v[31] = CLIFF_FLOOR_SIGNAL
+        self._geometry_dirty = True
+        self._near: tuple[Segment, ...] = ()
+        self._near_at = (math.inf, math.inf)
+        self._lines = {seg: _line(seg) for seg in world.solid}
+        self._drops = world.drops
+        self._beams = _DockBeams(world.dock) if world.dock is not None else None
+        self._prev_bumps = 0
+        self._prev_cliffs = 0
+        self._rays_on = True
+        self._ir_stale = True
+        #: how far the robot can move before a wall could stop it (motion's fast path)
+        self._clearance = 0.0
+        #: where walls were last measured, and the squared distance it may move from there
+        #: before any wall could come within reach of a sensor
+        self._free_at = (math.inf, math.inf)
+        self._free2 = 0.0
+
+    # One function, not one per sensor (over 60 lines on purpose): it runs on every step the
+    # robot moves, and a call costs about a tenth of a microsecond, 3 % of a whole step.
+    def _sense(self) -> None:
+        """Every geometric sensor, from the pose and the world (only when either changed)."""
+        self._geometry_dirty = False
+        v = self.values
+        x, y, theta = self.x, self.y, self.theta
+        close_lines: list[_Line] = []
+        fx, fy = self._free_at
+        dx, dy = x - fx, y - fy
+        if dx * dx + dy * dy < self._free2:
+            # Still in the open: no wall was within reach of a sensor plus the distance moved
+            # since the walls were last measured, so none touches or shows now either.
+            bumps = 0
+            self._clearance = _OPEN_CLEARANCE
+        else:
+            bumps = self._sense_walls(x, y, theta, close_lines)
+        bumps |= self._event_bump
+        down = self.lifted or self.fallen
+        if down:
+            bumps |= 12
+        v[7] = bumps
+        if bumps != self._prev_bumps:
+            self._bumps_changed(bumps)
+        # light bumpers and the wall sensor (rays from the bumper against close walls)
+        light_bits = 0
+        if close_lines:
+            ct, st = math.cos(theta), math.sin(theta)
+            rays = [(ct * ca - st * sa, st * ca + ct * sa) for ca, sa in _LIGHT_BUMP_DIRECTIONS]
+            # the wall sensor looks right of the heading (a ray through the centre, started
+            # on the bumper: near enough to the real sensor at -60 deg, looking right)
+            rays.append((st, -ct))
+            # Each close wall as a line: unit normal n, unit tangent t, n.a, t.a, length. A ray
+            # from the centre c in direction d meets it at c + k d, k = (n.a - n.c) / (n.d);
+            # the ray starts on the bumper (k = R), the hit's place along the wall is t.(c+kd).
+            hits = list(_RAY_RANGES)
+            radius = ROBOT_RADIUS_MM
+            for nx, ny, w, tx, ty, ta, length in close_lines:
+                p = w - (nx * x + ny * y)
+                q = tx * x + ty * y - ta
+                i = -1
+                for c, s in rays:
+                    i += 1
+                    dn = nx * c + ny * s
+                    if dn * p <= 0.0:
+                        continue  # pointing away from (or along) this wall
+                    k = p / dn
+                    t = k - radius
+                    if t < 0.0 or t >= hits[i]:
+                        continue
+                    along = q + k * (tx * c + ty * s)
+                    if 0.0 <= along <= length:
+                        hits[i] = t
+            for i in range(6):
+                d = hits[i]
+                if d < LIGHT_BUMP_RANGE_MM:
+                    signal = int(4095 * (1.0 - d / LIGHT_BUMP_RANGE_MM) ** 2)
+                    if signal >= LIGHT_BUMP_THRESHOLD:
+                        light_bits |= 1 << i
+                else:
+                    signal = 0
+                v[46 + i] = signal
+            d = hits[6]
+            if d < WALL_SENSOR_RANGE_MM:
+                top = self.profile.wall_signal_maximum
+                v[27] = int(top * (1.0 - d / WALL_SENSOR_RANGE_MM) ** 2)
+                v[8] = 1 if d < WALL_SENSOR_TRIGGER_MM else 0
+            else:
+                v[27] = v[8] = 0
+            self._rays_on = True
+        elif self._rays_on:
+            v[46] = v[47] = v[48] = v[49] = v[50] = v[51] = v[27] = v[8] = 0
+            self._rays_on = False
+        v[45] = light_bits
+        cliffs = 15 if down else self._cliffs_over_drops(x, y, theta) if self._drops else 0
+        if cliffs != self._prev_cliffs:
+            self._cliffs_changed(cliffs)
+        if not self.ticks & 1 or self._ir_stale:
+            self._sense_ir()
+        # on the contacts: within the dock's tolerances of the docked pose, not lifted
+        beams = self._beams
+        if beams is not None:
+            ex, ey = x - beams.target_x, y - beams.target_y
+            docked = (
+                ex * ex + ey * ey <= beams.contact2
+                and abs((theta - beams.target_theta + _PI) % _TWO_PI - _PI) <= beams.angle_tolerance
+                and not self.lifted
+            )
+            if docked != self.docked:
+                self.docked = docked
+                self._event("docked" if docked else "undocked", "")
+
+    def _bumps_changed(self, bumps: int) -> None:
+        """Packet 7 changed: mark a new bump and a new wheel drop."""
+        if bumps & 3 and not self._prev_bumps & 3:
+            self._event("bump", _BUMP_SIDES[bumps & 3])
+        if bumps & 12 and not self._prev_bumps & 12:
+            self._event("wheel_drop", "")
+        self._prev_bumps = bumps
+
+    def _cliffs_over_drops(self, x: float, y: float, theta: float) -> int:
+        """Bits of the cliff sensors over a drop (left 1, front left 2, front right 4, right 8)."""
+        cliffs = 0
+        for i, a in enumerate(_CLIFF_ANGLES):
+            px = x + CLIFF_SENSOR_RADIUS_MM * math.cos(theta + a)
+            py = y + CLIFF_SENSOR_RADIUS_MM * math.sin(theta + a)
+            if self._over_drop(px, py):
+                cliffs |= 1 << i
+        return cliffs
+
+    def _cliffs_changed(self, cliffs: int) -> None:
+        """The cliff bits (9-12) and signals (28-31); a new cliff is marked."""
+        v = self.values
+        for i in range(4):
+            hit = cliffs >> i & 1
+            v[9 + i] = hit
+            v[28 + i] = CLIFF_DROP_SIGNAL if hit else CLIFF_FLOOR_SIGNAL
+        if cliffs and not self._prev_cliffs:
+            self._event("cliff", f"{cliffs:04b}")
+        self._prev_cliffs = cliffs
+
+    def _sense_walls(self, x: float, y: float, theta: float, close_lines: list[_Line]) -> int:
+        """The bumper bits from walls touching the robot; the walls close enough for the light
+        bumper's rays go into ``close_lines``; how far the robot is from every wall."""
+        nx, ny = self._near_at
+        dx, dy = x - nx, y - ny
+        near = self._near if dx * dx + dy * dy <= _NEAR_MARGIN2 else self._near_segments()
+        bumps = 0
+        reach2 = _REACH2
+        lines = self._lines
+        contact2 = _CONTACT2
+        nearest2 = _NEAREST2
+        for seg in near:
+            ax, ay, bx, by = seg
+            ex, ey = bx - ax, by - ay
+            t = ((x - ax) * ex + (y - ay) * ey) / (ex * ex + ey * ey or 1.0)
+            t = 0.0 if t < 0.0 else 1.0 if t > 1.0 else t
+            cx, cy = ax + t * ex, ay + t * ey
+            dx, dy = x - cx, y - cy
+            d2 = dx * dx + dy * dy
+            if d2 < nearest2:
+                nearest2 = d2
+            if d2 < reach2:
+                close_lines.append(lines[seg])
+                if d2 < contact2:
+                    a = wrap_angle(math.atan2(cy - y, cx - x) - theta)
+                    if -BUMP_HALF_SPAN < a < BUMP_HALF_SPAN:
+                        if a > BUMP_CENTRE_ANGLE:
+                            bumps |= 2
+                        elif a < -BUMP_CENTRE_ANGLE:
+                            bumps |= 1
+                        else:
+                            bumps |= 3
+        nearest = math.sqrt(nearest2)
+        # how far the robot can move before a wall could stop it (the _move fast path)
+        self._clearance = nearest - ROBOT_RADIUS_MM - 1.0
+        # how far it can move before any wall could come within reach of a sensor
+        free = nearest - _REACH
+        self._free_at = (x, y)
+        self._free2 = free * free if free > 0.0 else 0.0
+        return bumps
+
+    def _near_segments(self) -> tuple[Segment, ...]:
+        """The walls within reach of any sensor, kept until the robot has moved 0.3 m."""
+        nx, ny = self._near_at
+        dx, dy = self.x - nx, self.y - ny
+        if dx * dx + dy * dy > _NEAR_MARGIN2:
+            limit = _NEAR_RADIUS_MM**2
+            x, y = self.x, self.y
+            self._near = tuple(s for s in self.world.solid if closest_point(x, y, s)[2] < limit)
+            self._near_at = (x, y)
+        return self._near
+
+    def _over_drop(self, x: float, y: float) -> bool:
+        return any(point_in_polygon(x, y, drop) for drop in self._drops)
+
+    def _sense_ir(self) -> None:
+        """The IR receivers. A character takes tens of milliseconds to send, so they are
+        updated every other step (30 ms), and at once when the world changes."""
+        self._ir_stale = False
+        v = self.values
+        x, y, theta = self.x, self.y, self.theta
+        c, s = math.cos(theta), math.sin(theta)
+        omni_x, omni_y = x + OMNI_FORWARD_MM * c, y + OMNI_FORWARD_MM * s
+        omni = left = right = 0
+        beams = self._beams
+        if beams is not None:
+            dx, dy = omni_x - beams.x, omni_y - beams.y
+            if dx * dx + dy * dy < beams.reach2 and self.dock_powered:
+                character = beams.character
+                omni = character(omni_x, omni_y)
+                fx = x + RECEIVER_FORWARD_MM * c
+                fy = y + RECEIVER_FORWARD_MM * s
+                # Fields of view are cones from the robot's centre (the receivers sit close
+                # together on the bumper); which beams each sees depends on where it is.
+                bearing = (math.atan2(beams.y - y, beams.x - x) - theta + _PI) % _TWO_PI - _PI
+                if -RECEIVER_INNER <= bearing <= RECEIVER_OUTER:
+                    left = character(fx - RECEIVER_SIDE_MM * s, fy + RECEIVER_SIDE_MM * c)
+                if -RECEIVER_OUTER <= bearing <= RECEIVER_INNER:
+                    right = character(fx + RECEIVER_SIDE_MM * s, fy - RECEIVER_SIDE_MM * c)
+        wall = 0
+        world = self.world
+        if world.virtual_walls or world.lighthouses:
+            for vw in world.virtual_walls:
+                if self._in_beam(omni_x, omni_y, vw.segment, vw.half_width, vw.halo):
+                    wall = VIRTUAL_WALL_CHARACTER
+                    break
+            if not wall:
+                for lh in world.lighthouses:
+                    if self._in_beam(omni_x, omni_y, lh.fence_segment, lh.half_width, 0.0):
+                        wall = lighthouse_character(lh.id, LighthouseBeam.FENCE)
+                        break
+                    ddx, ddy = omni_x - lh.x, omni_y - lh.y
+                    if ddx * ddx + ddy * ddy <= lh.halo * lh.halo:
+                        wall = lighthouse_character(lh.id, LighthouseBeam.FORCE_FIELD)
+                        break
+        v[13] = 1 if wall == VIRTUAL_WALL_CHARACTER else 0
+        if wall and (not omni or self.ticks & 2):  # both seen: they alternate
+            omni = wall
+        v[17] = omni
+        v[52] = left
+        v[53] = right
+
+    @staticmethod
+    def _in_beam(px: float, py: float, seg: Segment, half_width: float, halo: float) -> bool:
+        if halo:
+            dx, dy = px - seg[0], py - seg[1]
+            if dx * dx + dy * dy <= halo * halo:
+                return True
+        return closest_point(px, py, seg)[2] <= half_width * half_width

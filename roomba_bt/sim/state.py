@@ -1,0 +1,123 @@
+"""What every part of the simulated robot reads: its world, pose, mode, clock, sensor values and
+the records of a run (events, trajectory, ignored commands).
+
+The simulator is built in layers, one module per seam, each a class that adds its own state
+and methods on top of the ones below it::
+
+    RobotState   (state.py)     world, pose, mode, clock, the flat sensor value list, records
+    Sensing      (sensing.py)   bumper, cliffs, wall sensor, light bumper, IR receivers, dock
+    Motion       (motion.py)    wheels, Drive commands, collisions, dock guides, falls
+    Power        (power.py)     battery, currents, charging on the dock's contacts
+    StreamOutput (replies.py)   replies, stream frames, faults on the robot -> host bytes
+    OIProtocol   (protocol.py)  command parsing and dispatch, mode rules, Safe-mode safety
+    Simulator    (robot.py)     the facade: constructor, one 15 ms step, the timeline
+
+Layers, not components: the step path reads the pose, the speeds and the value list about a
+hundred times a step, and ``self.x`` on one object is one lookup where ``self.motion.x`` is two.
+The parts that are not on every step's path are objects with their own state: the built-in
+cycles (cycles.py) and the world's timeline (timeline.py).
+"""
+
+from __future__ import annotations
+
+import random
+from dataclasses import dataclass
+from typing import NamedTuple
+
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.profiles import RobotProfile
+from roomba_bt.sim.faults import NO_FAULTS, Faults
+from roomba_bt.sim.world import Pose, World
+
+STEP_SECONDS = 0.015
+#: values[CONSTANTS + k] == k: constant bytes (a frame's header and ids) packed with the values
+CONSTANTS = 59
+
+
+class TracePoint(NamedTuple):
+    """One point of the trajectory (every 4th step, and at each mode change). A tuple, not a
+    frozen dataclass: one is made every 60 ms of robot time, and tuples are built in C."""
+
+    time: float
+    x: float
+    y: float
+    theta: float
+    mode: OIMode
+
+
+@dataclass(frozen=True, slots=True)
+class SimEvent:
+    """Something worth marking on a plot: a bump, a cliff, a mode change, docking..."""
+
+    time: float
+    kind: str
+    detail: str
+    x: float
+    y: float
+
+
+@dataclass(frozen=True, slots=True)
+class Violation:
+    """A command the robot ignored because its mode does not accept it."""
+
+    time: float
+    opcode: int
+    name: str
+    mode: OIMode
+
+
+class RobotState:
+    """The state every layer reads: set once here, changed by the layer that owns each part.
+
+    ``values`` is the robot's sensor state as the OI reports it, one flat list indexed by
+    packet id (0..58), followed by the constants 0..255 so that a stream frame's header and
+    packet ids are packed by the same ``struct`` call as the values (see replies.py)::
+
+        values[7]   bumps and wheel drops      values[35]        OI mode (packet 35)
+        values[19]  distance since last read   values[46..51]    light bump signals
+        values[59 + k] == k                    (k = 0..255)
+    """
+
+    def __init__(
+        self,
+        world: World,
+        profile: RobotProfile,
+        seed: int,
+        faults: Faults | None,
+        start: Pose | None,
+        random_start: bool,
+        old_firmware_angle: bool,
+        mode: OIMode,
+    ) -> None:
+        self.world = world
+        self.profile = profile
+        self.seed = seed
+        self.faults = faults or NO_FAULTS
+        self.old_firmware_angle = old_firmware_angle
+        self._fault_rng = random.Random(f"faults:{seed}")
+        pose = start or (world.sample_start(seed) if random_start else world.start)
+        self.x, self.y, self.theta = pose.x, pose.y, pose.theta
+        self.mode = mode
+        self.asleep = False
+        self.disconnected = False
+        self.ticks = 0
+        self.time = 0.0
+        #: the timeline's effects on the body (timeline.py): held down, lifted, charger off
+        self._event_bump = 0
+        self.lifted = False
+        self.fallen = False
+        self.docked = False
+        self.dock_powered = True
+        self.values: list[int] = [0] * CONSTANTS + list(range(256))
+        self.values[35] = int(mode) + (1 if profile.reports_mode_plus_one else 0)
+        self.events: list[SimEvent] = []
+        self.trace: list[TracePoint] = [TracePoint(0.0, self.x, self.y, self.theta, self.mode)]
+        self.violations: list[Violation] = []
+
+    @property
+    def pose(self) -> Pose:
+        return Pose(self.x, self.y, self.theta)
+
+    def _event(self, kind: str, detail: str) -> None:
+        """Mark ``kind`` at the robot's place now (events are rare: not for the hot path)."""
+        self.events.append(SimEvent(self.time, kind, detail, self.x, self.y))

@@ -1,0 +1,60 @@
+"""The world's timeline: what happens to the robot at set times (a world file's ``events``).
+
+``bump`` holds the bumper pressed on one side or both, ``lift`` picks the robot up (both wheel
+drops, every cliff, no traction), ``charger_step`` takes the dock's power away; each for its
+``duration`` seconds. Every start and end is marked in the run's events.
+
+A component with its own state (the events still to come and those under way): the simulator
+asks it only while it has any, and drops it after the last one ends.
+"""
+
+from __future__ import annotations
+
+from roomba_bt.sim.world import TimelineEvent
+
+#: the bumper bits (packet 7) of a ``bump`` event's side
+BUMP_BITS = {"right": 1, "left": 2, "both": 3}
+
+
+class Timeline:
+    """The world's timeline events, started and ended as the clock passes them."""
+
+    def __init__(self, events: tuple[TimelineEvent, ...]) -> None:
+        self.pending: list[TimelineEvent] = list(events)
+        self.active: list[TimelineEvent] = []
+
+    @property
+    def over(self) -> bool:
+        return not self.pending and not self.active
+
+    def advance(self, now: float) -> list[tuple[str, str]]:
+        """Start the events due by ``now``, end those past their duration; returns the
+        (kind, detail) marks of what started and ended."""
+        marks: list[tuple[str, str]] = []
+        pending = self.pending
+        while pending and pending[0].time <= now:
+            event = pending.pop(0)
+            self.active.append(event)
+            marks.append((event.kind, f"{event.side} start"))
+        still = []
+        for event in self.active:
+            if now < event.time + event.duration:
+                still.append(event)
+            else:
+                marks.append((event.kind, "end"))
+        self.active = still
+        return marks
+
+    def effects(self) -> tuple[int, bool, bool]:
+        """What the events under way do: (bumper bits held, lifted, dock powered)."""
+        bump = 0
+        lifted = False
+        powered = True
+        for event in self.active:
+            if event.kind == "bump":
+                bump |= BUMP_BITS[event.side]
+            elif event.kind == "lift":
+                lifted = True
+            elif event.kind == "charger_step":
+                powered = False
+        return bump, lifted, powered
