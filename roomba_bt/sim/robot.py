@@ -79,7 +79,6 @@ class Simulator(OIProtocol):
         self._init_power()
         self._init_output()
         self._init_protocol()
-        self._time_ns = 0
         self._timeline = Timeline(world.events) if world.events else None
         self._disconnect_at = (
             math.inf if self.faults.disconnect_at is None else self.faults.disconnect_at
