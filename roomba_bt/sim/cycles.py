@@ -20,6 +20,7 @@ import math
 import random
 from abc import ABC, abstractmethod
 
+from roomba_bt.oi.bits import BUMP_BITS
 from roomba_bt.sim.geometry import wrap_angle
 from roomba_bt.sim.motion import drive_wheel_speeds
 from roomba_bt.sim.power import BATTERY_CAPACITY_MAH, Power
@@ -28,6 +29,8 @@ from roomba_bt.sim.world import Pose
 
 Wheels = tuple[float, float]
 _STOP: Wheels = (0.0, 0.0)
+#: packet 45: the centre left and centre right light bumps (a wall straight ahead)
+_LIGHT_BUMPS_CENTRE = 0b001100
 
 
 class BuiltinCycle(ABC):
@@ -58,7 +61,13 @@ class BuiltinCycle(ABC):
         v = robot.values
         now = robot.time
         if self.phase == "forward":
-            if v[7] & 3 or any(v[9:13]) or v[13] or v[45] & 0b001100 or robot.blocked:
+            if (
+                v[7] & BUMP_BITS
+                or any(v[9:13])
+                or v[13]
+                or v[45] & _LIGHT_BUMPS_CENTRE
+                or robot.blocked
+            ):
                 self.phase, self.phase_until = "back", now + 0.3
             else:
                 return speed, speed
@@ -82,7 +91,7 @@ class Spot(BuiltinCycle):
     def wheels(self, robot: Power) -> Wheels:
         elapsed = robot.time - self.started
         v = robot.values
-        if elapsed > 30.0 or v[7] & 3 or any(v[9:13]):
+        if elapsed > 30.0 or v[7] & BUMP_BITS or any(v[9:13]):
             return self._end("spot done")
         radius = 60.0 + 12.0 * elapsed
         return drive_wheel_speeds(200, int(radius), robot.profile.wheel_base_mm)
@@ -127,7 +136,7 @@ class SeekDock(BuiltinCycle):
             if (
                 self.phase == "forward"
                 and robot.time >= self.wander_until
-                and not (robot.values[7] & 3 or robot.blocked)
+                and not (robot.values[7] & BUMP_BITS or robot.blocked)
             ):
                 sx, sy = target.x + 700.0 * fx, target.y + 700.0 * fy
                 return _steer_to(robot, sx, sy, 200.0)
@@ -152,7 +161,7 @@ class SeekDock(BuiltinCycle):
                 w = 60.0 if err > 0 else -60.0
                 return -w, w
         if self.phase == "dock":
-            if robot.values[7] & 3:
+            if robot.values[7] & BUMP_BITS:
                 self.phase, self.phase_until = "retreat", robot.time + 1.5
             else:
                 err = wrap_angle(math.atan2(target.y - robot.y, target.x - robot.x) - robot.theta)

@@ -22,9 +22,10 @@ from __future__ import annotations
 import random
 from collections.abc import Callable
 
-from roomba_bt.oi.encode import BAUD_CODES
+from roomba_bt.oi.bits import WHEEL_DROP_BITS
+from roomba_bt.oi.encode import BAUD_RATES
 from roomba_bt.oi.modes import OIMode
-from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME, CommandSpec
+from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME, CommandSpec, Effect
 from roomba_bt.sim.cycles import CYCLES, BuiltinCycle
 from roomba_bt.sim.replies import StreamOutput
 from roomba_bt.sim.state import TracePoint, Violation
@@ -37,9 +38,8 @@ RESET_BANNER = (
     b"bootloader info rev: #xF000\r\nbootloader rev: #x0001\r\n2007-05-14-1715-L   \r\n"
     b"Roomba by iRobot!\r\nstr730\r\n2012-03-22-1549-L\r\nbattery-current-zero 252\r\n"
 )
-_BAUD_BY_CODE = {code: rate for rate, code in BAUD_CODES.items()}
-#: what Off (and a sleeping robot) answers
-_WAKERS = frozenset(COMMANDS_BY_NAME[name].opcode for name in ("start", "reset"))
+#: what Off (and a sleeping robot) answers: the commands the table accepts in Off (Start, Reset)
+_WAKERS = frozenset(c.opcode for c in COMMANDS.values() if OIMode.OFF in c.modes)
 _DRIVE = COMMANDS_BY_NAME["drive"].opcode
 
 
@@ -165,7 +165,7 @@ class OIProtocol(StreamOutput):
         motors and drop to Passive (the event says which cause)."""
         v = self.values
         cause = ""
-        if v[7] & 12:
+        if v[7] & WHEEL_DROP_BITS:
             cause = "wheel drop"
         elif (v[9] or v[10] or v[11] or v[12]) and self.left_speed + self.right_speed > 0:
             cause = "cliff while driving forward"
@@ -201,7 +201,7 @@ class OIProtocol(StreamOutput):
         self._fall_asleep("power (133)")
 
     def _on_baud(self, args: bytes) -> None:
-        self.baud = _BAUD_BY_CODE.get(args[0], self.baud)
+        self.baud = BAUD_RATES.get(args[0], self.baud)
 
     def _on_leds(self, args: bytes) -> None:
         self.leds = (args[0], args[1], args[2])
@@ -254,16 +254,12 @@ _HANDLERS_BY_NAME: dict[str, Callable[[OIProtocol, bytes], None]] = {
     "start": OIProtocol._on_start,
     "baud": OIProtocol._on_baud,
     "power": OIProtocol._on_power,
-    "spot": _cycle_starter("spot"),
-    "clean": _cycle_starter("clean"),
-    "max": _cycle_starter("max"),
     "drive": OIProtocol._on_drive,
     "motors": OIProtocol._on_motors,
     "leds": OIProtocol._on_leds,
     "song": OIProtocol._on_song,
     "play": OIProtocol._on_play,
     "sensors": OIProtocol._on_sensors,
-    "seek_dock": _cycle_starter("seek_dock"),
     "pwm_motors": OIProtocol._on_pwm_motors,
     "drive_direct": OIProtocol._on_drive_direct,
     "drive_pwm": OIProtocol._on_drive_pwm,
@@ -279,5 +275,9 @@ _HANDLERS_BY_NAME: dict[str, Callable[[OIProtocol, bytes], None]] = {
     "stop": OIProtocol._on_stop,
 }
 _HANDLERS = {COMMANDS_BY_NAME[name].opcode: h for name, h in _HANDLERS_BY_NAME.items()}
+# Spot, Clean, Max, Seek Dock: each starts the cycle of its name
+_HANDLERS |= {
+    c.opcode: _cycle_starter(c.name) for c in COMMANDS.values() if c.effect is Effect.BUILTIN_CYCLE
+}
 
 assert set(_HANDLERS) <= set(COMMANDS), "a handler for an opcode the table does not have"

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 
+from roomba_bt.oi.bits import WHEEL_DROP_BITS
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2, RobotProfile
 from roomba_bt.sim.cycles import BuiltinCycle
@@ -130,7 +131,7 @@ class Simulator(OIProtocol):
         if self._geometry_dirty:
             self._sense()
         if mode is _SAFE:
-            if v[7] & 12 or v[9] or v[10] or v[11] or v[12] or self.docked:
+            if v[7] & WHEEL_DROP_BITS or v[9] or v[10] or v[11] or v[12] or self.docked:
                 self._safety()
         elif mode is _FULL and self._drops and not self.fallen and self._over_drop(self.x, self.y):
             self._fall()

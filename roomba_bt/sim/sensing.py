@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 
+from roomba_bt.oi.bits import BUMP_BITS, WHEEL_DROP_BITS
 from roomba_bt.oi.ir import LighthouseBeam, dock_character, lighthouse_character
 from roomba_bt.sim.geometry import Segment, closest_point, point_in_polygon, wrap_angle
 from roomba_bt.sim.state import RobotState
@@ -54,7 +55,9 @@ VIRTUAL_WALL_CHARACTER = 162
 _NEAR_MARGIN_MM = 300.0
 _RAY_RANGES = (LIGHT_BUMP_RANGE_MM,) * 6 + (WALL_SENSOR_RANGE_MM,)
 _Line = tuple[float, float, float, float, float, float, float]
-_BUMP_SIDES = {1: "right", 2: "left", 3: "both"}
+#: packet 7's bump bits of each side of the bumper (the timeline's ``bump`` events say sides)
+BUMP_SIDE_BITS = {"right": 1, "left": 2, "both": 3}
+_BUMP_SIDES = {bits: side for side, bits in BUMP_SIDE_BITS.items()}
 
 
 def _line(seg: Segment) -> _Line:
@@ -167,7 +170,7 @@ class Sensing(RobotState):
         bumps |= self._event_bump
         down = self.lifted or self.fallen
         if down:
-            bumps |= 12
+            bumps |= WHEEL_DROP_BITS
         v[7] = bumps
         if bumps != self._prev_bumps:
             self._bumps_changed(bumps)
@@ -241,9 +244,9 @@ class Sensing(RobotState):
 
     def _bumps_changed(self, bumps: int) -> None:
         """Packet 7 changed: mark a new bump and a new wheel drop."""
-        if bumps & 3 and not self._prev_bumps & 3:
-            self._event("bump", _BUMP_SIDES[bumps & 3])
-        if bumps & 12 and not self._prev_bumps & 12:
+        if bumps & BUMP_BITS and not self._prev_bumps & BUMP_BITS:
+            self._event("bump", _BUMP_SIDES[bumps & BUMP_BITS])
+        if bumps & WHEEL_DROP_BITS and not self._prev_bumps & WHEEL_DROP_BITS:
             self._event("wheel_drop", "")
         self._prev_bumps = bumps
 

@@ -10,10 +10,8 @@ asks it only while it has any, and drops it after the last one ends.
 
 from __future__ import annotations
 
+from roomba_bt.sim.sensing import BUMP_SIDE_BITS
 from roomba_bt.sim.world import TimelineEvent
-
-#: the bumper bits (packet 7) of a ``bump`` event's side
-BUMP_BITS = {"right": 1, "left": 2, "both": 3}
 
 
 class Timeline:
@@ -52,7 +50,7 @@ class Timeline:
         powered = True
         for event in self.active:
             if event.kind == "bump":
-                bump |= BUMP_BITS[event.side]
+                bump |= BUMP_SIDE_BITS[event.side]
             elif event.kind == "lift":
                 lifted = True
             elif event.kind == "charger_step":
