@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
-EXTRAS ?= test,plot,bench
+EXTRAS ?= test,plot,bench,cluster
 
 .PHONY: run test lint typecheck bench icount routines golden venv clean
 

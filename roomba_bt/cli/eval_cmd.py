@@ -1,20 +1,28 @@
-"""``roomba-bt eval``: how often does a mission succeed, and how fast?
+"""``roomba-bt eval``: how often does a mission succeed, and how fast? Did my change help?
 
     roomba-bt eval missions/dock.yaml --world empty-room --runs 200 --seed 1 --within 1.5 \
-        --jobs 2 --plot dock.png
+        --jobs 2 --plot dock.png --out results.jsonl
+    roomba-bt eval A.yaml B.yaml --runs 100 --scheduler tcp://HOST:8786     # A/B, on Dask
+    roomba-bt eval dock.yaml --sweep speed=150mm/s,200mm/s,250mm/s          # a sweep
 
 Runs N seeded episodes of the mission on the simulator's virtual clock, from random start
 poses in the world's start region (or within ``--within`` metres of the dock), in ``--jobs``
 worker processes, with a progress bar on stderr; then prints the success rate with its 95 %
 Wilson interval, the median and p90 time, bumps, and the failure reasons grouped. The same
-``--seed`` gives the same episodes whatever ``--jobs``. Exit codes: 0 (and 1 when
-``--min-rate`` is given and not reached), 2 for invalid input.
+``--seed`` gives the same episodes whatever ``--jobs`` or engine (``--engine dask``: a local
+Dask cluster of ``--jobs`` workers; ``--scheduler``: an existing one). With two missions, a
+``--sweep`` or ``--variant`` sets, every variant runs on the same seeds and start poses and
+each is compared with the first (A): paired successes, the exact McNemar p-value, the median
+time difference with its interval. ``--out`` writes one record per episode (JSON Lines or
+CSV), ``--json`` prints the summary as JSON. Ctrl-C prints what finished (exit 130). Exit
+codes: 0 (and 1 when ``--min-rate`` is given and not reached), 2 for invalid input.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -31,11 +39,48 @@ def register(sub: Any) -> None:
         "report the success rate (95% Wilson interval), median and p90 time, bumps and the "
         "failure reasons. Exit codes: 0 done, 1 --min-rate not reached, 2 invalid input.",
     )
-    ev.add_argument("mission", help="mission YAML file")
+    ev.add_argument(
+        "missions",
+        nargs="+",
+        metavar="MISSION",
+        help="mission YAML file; two or more: compare them (A/B) on the same seeds",
+    )
     ev.add_argument("--world", default="empty-room", help="a shipped world name or a YAML path")
     ev.add_argument("--runs", type=int, default=20, help="number of episodes (default 20)")
     ev.add_argument("--seed", type=int, default=0, help="first seed (default 0)")
-    ev.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
+    ev.add_argument(
+        "--jobs",
+        type=int,
+        default=1,
+        help="worker processes, or the local Dask cluster's workers (default 1)",
+    )
+    ev.add_argument(
+        "--engine",
+        choices=("local", "dask"),
+        default="local",
+        help="local processes (default) or Dask distributed (the cluster extra)",
+    )
+    ev.add_argument(
+        "--scheduler",
+        metavar="tcp://HOST:8786",
+        help="run on this Dask scheduler's cluster (implies --engine dask)",
+    )
+    ev.add_argument(
+        "--out", metavar="FILE", help="one record per episode: .jsonl (JSON Lines) or .csv"
+    )
+    ev.add_argument("--json", action="store_true", help="print the summary as JSON")
+    ev.add_argument(
+        "--sweep",
+        metavar="NAME=V1,V2,...",
+        help="one variant per value of a mission parameter, compared with the first",
+    )
+    ev.add_argument(
+        "--variant",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE[;NAME=VALUE]",
+        help="a variant: these parameters on top of -p (repeatable; compared with the first)",
+    )
     ev.add_argument("--plot", metavar="FILE.png", type=plot_file,
                     help="draw every trajectory (matplotlib)")  # fmt: skip
     ev.add_argument(
@@ -99,12 +144,51 @@ def parse_dock(items: list[str]) -> tuple[tuple[str, Any], ...] | str:
     return tuple(out)
 
 
+@dataclass(frozen=True)
+class Variant:
+    """One thing evaluated: a mission with its parameters, labelled for the report."""
+
+    label: str
+    mission: str
+    params: tuple[tuple[str, str], ...]
+
+
+def variants(args: argparse.Namespace, params: dict[str, str]) -> list[Variant] | str:
+    """The missions x (sweep values or variant sets); a message on error."""
+    sets: list[dict[str, str]] = [{}]
+    if args.sweep and args.variant:
+        return "--sweep and --variant: give one or the other"
+    if args.sweep:
+        name, sep, values = args.sweep.partition("=")
+        if not sep or not name.strip() or not values.strip():
+            return f"--sweep {args.sweep!r}: expected NAME=V1,V2,..., e.g. speed=150mm/s,200mm/s"
+        sets = [{name.strip(): v.strip()} for v in values.split(",") if v.strip()]
+    elif args.variant:
+        sets = []
+        for item in args.variant:
+            parsed = parse_params([p for p in item.split(";") if p.strip()])
+            if isinstance(parsed, str):
+                return parsed.replace("-p", "--variant", 1)
+            sets.append(parsed)
+    out = []
+    for mission in args.missions:
+        for extra in sets:
+            merged = {**params, **extra}
+            text = " ".join(f"-p {k}={v}" for k, v in extra.items())
+            label = f"{mission} {text}".strip()
+            out.append(Variant(label, mission, tuple(sorted(merged.items()))))
+    if len({v.label for v in out}) < len(out):
+        return "the same variant twice: give each mission or value once"
+    return out
+
+
 def eval_command(args: argparse.Namespace) -> int:
     from roomba_bt.evaluate import EvaluationError, episode_specs, summarize
-    from roomba_bt.evaluate.parallel import ProgressBar, run_episodes
+    from roomba_bt.evaluate.parallel import Engine, ProgressBar, evaluate
 
-    if not Path(args.mission).is_file():
-        return _error(f"{args.mission}: no such mission file")
+    for mission in args.missions:
+        if not Path(mission).is_file():
+            return _error(f"{mission}: no such mission file")
     if args.runs < 1:
         return _error(f"--runs {args.runs}: expected at least 1")
     if args.jobs < 1:
@@ -115,6 +199,13 @@ def eval_command(args: argparse.Namespace) -> int:
         return _error(f"--battery {args.battery}: expected a fraction in 0..1")
     if args.min_rate is not None and not 0.0 <= args.min_rate <= 1.0:
         return _error(f"--min-rate {args.min_rate}: expected a fraction in 0..1")
+    if args.out is not None:
+        from roomba_bt.evaluate.records import results_format
+
+        try:
+            results_format(args.out)
+        except ValueError as exc:
+            return _error(f"--out {exc}")
     params = parse_params(args.param)
     if isinstance(params, str):
         return _error(params)
@@ -124,51 +215,115 @@ def eval_command(args: argparse.Namespace) -> int:
     dock = parse_dock(args.dock)
     if isinstance(dock, str):
         return _error(dock)
-    specs = episode_specs(
-        args.mission,
-        world=args.world,
-        runs=args.runs,
-        seed=args.seed,
-        params=tuple(sorted(params.items())),
-        profile=args.profile,
-        timeout_s=timeout,
-        within_m=args.within,
-        dock=dock,
-        battery=args.battery,
-    )
-    # Check the mission and the world once, here, before any worker starts.
+    chosen = variants(args, params)
+    if isinstance(chosen, str):
+        return _error(chosen)
+    batches = [
+        episode_specs(
+            v.mission,
+            world=args.world,
+            runs=args.runs,
+            seed=args.seed,
+            params=v.params,
+            profile=args.profile,
+            timeout_s=timeout,
+            within_m=args.within,
+            dock=dock,
+            battery=args.battery,
+        )
+        for v in chosen
+    ]
+    # Check each mission and the world once, here, before any worker starts.
     from roomba_bt.cli.run_cmd import load
     from roomba_bt.evaluate.episode import build_world, start_pose
     from roomba_bt.oi.profiles import get_profile
 
-    if isinstance(loaded := load(args.mission, params, get_profile(args.profile)), int):
-        return loaded
+    for v in chosen:
+        if isinstance(loaded := load(v.mission, dict(v.params), get_profile(args.profile)), int):
+            return loaded
     try:
-        world = build_world(specs[0])
-        start_pose(world, specs[0])
+        world = build_world(batches[0][0])
+        start_pose(world, batches[0][0])
     except EvaluationError as exc:
         return _error(str(exc))
-    progress = None if args.no_progress else ProgressBar(label=f"{Path(args.mission).stem} ")
-    results = run_episodes(specs, jobs=args.jobs, progress=progress)
-    summary = summarize(args.mission, world.name, results)
-    print(summary)
+    engine = Engine("dask" if args.scheduler or args.engine == "dask" else "local", args.jobs,
+                    args.scheduler)  # fmt: skip
+    bars = [
+        None if args.no_progress else ProgressBar(label=f"{Path(v.mission).stem} "
+                                                  f"{' '.join(f'{k}={x}' for k, x in v.params)} ")
+        for v in chosen
+    ]  # fmt: skip
+    from roomba_bt.evaluate.cluster import ClusterUnavailableError
+
+    try:
+        done = evaluate(batches, engine, bars)
+    except ClusterUnavailableError as exc:
+        return _error(str(exc))
+    summaries = [
+        summarize(v.mission, world.name, e.results) for v, e in zip(chosen, done, strict=True)
+    ]
+    retried = sum(e.retried for e in done)
+    interrupted = any(e.interrupted for e in done)
+    comparisons = []
+    if len(chosen) > 1 and not interrupted:
+        from roomba_bt.evaluate.stats import compare
+
+        comparisons = [compare(chosen[0].label, v.label, done[0].results, e.results)
+                       for v, e in zip(chosen[1:], done[1:], strict=True)]  # fmt: skip
+    if args.out is not None:
+        from roomba_bt.evaluate.records import write_results
+
+        try:
+            write_results(args.out, [r for e in done for r in e.results])
+        except OSError as exc:
+            return _error(f"--out {args.out}: {exc.strerror or exc}")
+    if args.json:
+        import json
+
+        print(json.dumps({
+            "engine": engine.describe(),
+            "retried": retried,
+            "interrupted": interrupted,
+            "variants": [{"label": v.label, "params": dict(v.params), **s.to_dict()}
+                         for v, s in zip(chosen, summaries, strict=True)],
+            "comparisons": [c.to_dict() for c in comparisons],
+        }, indent=2))  # fmt: skip
+    else:
+        for v, s in zip(chosen, summaries, strict=True):
+            if len(chosen) > 1:
+                print(f"variant      {v.label}")
+            print(s)
+            print()
+        for c in comparisons:
+            print(c)
+            print()
+        print(f"engine       {engine.describe()}; {retried} episode(s) run again after a "
+              f"worker was lost")  # fmt: skip
+    if args.out is not None:
+        print(f"results written to {args.out}", file=sys.stderr)
+    if interrupted:
+        finished = sum(len(e.results) for e in done)
+        print(f"roomba-bt eval: interrupted; {finished} episode(s) finished, summarised above",
+              file=sys.stderr)  # fmt: skip
+        return ExitCode.INTERRUPTED
+    summary = summaries[0]
     if args.plot:
         from roomba_bt.evaluate.plot import PlotUnavailableError, plot_trajectories
 
         try:
-            plot_trajectories(world, results, args.plot, f"{Path(args.mission).stem} in "
-                              f"{world.name}: {summary.successes}/{summary.runs}")  # fmt: skip
+            plot_trajectories(world, done[0].results, args.plot, f"{Path(chosen[0].mission).stem}"
+                              f" in {world.name}: {summary.successes}/{summary.runs}")  # fmt: skip
         except PlotUnavailableError as exc:
             print(f"roomba-bt eval: {exc}", file=sys.stderr)
             return ExitCode.INVALID
         except OSError as exc:
             return _error(f"--plot {args.plot}: {exc.strerror or exc}")
         print(f"trajectories written to {args.plot}", file=sys.stderr)
-    if args.min_rate is not None and summary.rate < args.min_rate:
+    low = [s for s in summaries if args.min_rate is not None and s.rate < args.min_rate]
+    for s in low:
         print(
-            f"roomba-bt eval: success rate {100 * summary.rate:.1f} % is below --min-rate "
-            f"{100 * args.min_rate:.1f} %",
+            f"roomba-bt eval: {s.mission}: success rate {100 * s.rate:.1f} % is below "
+            f"--min-rate {100 * args.min_rate:.1f} %",
             file=sys.stderr,
         )
-        return ExitCode.MISSION_FAILED
-    return ExitCode.OK
+    return ExitCode.MISSION_FAILED if low else ExitCode.OK

@@ -5,10 +5,13 @@
 
 * :mod:`~roomba_bt.evaluate.episode`: one mission run on the virtual clock from a seeded pose,
   measured on the simulator (:class:`EpisodeSpec` -> :class:`EpisodeResult`);
+* :mod:`~roomba_bt.evaluate.sources`: a mission and its includes as texts, so an episode spec
+  is self-contained (no shared file system);
 * :mod:`~roomba_bt.evaluate.parallel`: many episodes in worker processes, same results for
-  any number of jobs;
+  any number of jobs; :mod:`~roomba_bt.evaluate.cluster`: the same on a Dask cluster;
+* :mod:`~roomba_bt.evaluate.records`: one record per episode as JSON Lines or CSV, and back;
 * :mod:`~roomba_bt.evaluate.stats`: success rate with a Wilson interval, percentiles, grouped
-  failure reasons;
+  failure reasons; paired A/B comparison (exact McNemar, median time difference);
 * :mod:`~roomba_bt.evaluate.plot`: every trajectory on one picture (matplotlib, optional);
 * :mod:`~roomba_bt.evaluate.report`: the figures of ``docs/routines.md``, by one command.
 

@@ -18,15 +18,20 @@ from __future__ import annotations
 
 import logging
 import math
+import os
+import re
+import socket
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from roomba_bt.evaluate.sources import MissionSources, bundle_mission, bundle_world
 from roomba_bt.mission import MissionError, load_mission
 from roomba_bt.oi.profiles import get_profile
 from roomba_bt.runtime.stack import RunStack
+from roomba_bt.runtime.summary import Outcome
 from roomba_bt.sim import SimLink, Simulator, World, load_world
-from roomba_bt.sim.world import DockSpec
+from roomba_bt.sim.world import DockSpec, parse_world
 
 #: Dock fields an evaluation may override (``--dock buoy_range=0.5``), with their units:
 #: lengths in metres, angles in degrees, as in a world file.
@@ -62,6 +67,19 @@ class EpisodeSpec:
     battery: float | None = None
     #: keep every n-th trace point in the result (trajectory plots)
     trace_every: int = 2
+    #: the mission's texts (and its includes'): set, the episode reads no file
+    #: (:func:`self_contained`); None, it reads ``mission`` from this machine's disk
+    sources: MissionSources | None = field(default=None, repr=False)
+    #: (file name, text) of a world given by path, for the same reason
+    world_file: tuple[str, str] | None = field(default=None, repr=False)
+
+
+def self_contained(spec: EpisodeSpec) -> EpisodeSpec:
+    """``spec`` carrying the texts it needs, so that any machine can run it (a Dask worker
+    with no shared file system); the episode is the same one."""
+    sources = spec.sources if spec.sources is not None else bundle_mission(spec.mission)
+    world_file = spec.world_file if spec.world_file is not None else bundle_world(spec.world)
+    return replace(spec, sources=sources, world_file=world_file)
 
 
 @dataclass(frozen=True)
@@ -89,6 +107,17 @@ class EpisodeResult:
     loops: float
     longest_stall_s: float
     trajectory: tuple[tuple[float, float], ...] = field(repr=False, default=())
+    #: what ran: the mission (as given), the world's name, the parameters
+    mission: str = ""
+    world: str = ""
+    params: tuple[tuple[str, str], ...] = ()
+    #: the leaf (or node) the failure reason names, "" when none
+    stage: str = ""
+    distance_m: float = 0.0
+    commands_sent: int = 0
+    commands_refused: int = 0
+    #: where it ran (host:pid, or the Dask worker's address); not part of the episode
+    worker: str = field(default="", compare=False)
 
     @property
     def succeeded(self) -> bool:
@@ -141,7 +170,11 @@ def _world_centre(world: World) -> tuple[float, float]:
 def build_world(spec: EpisodeSpec) -> World:
     """The spec's world with its dock and battery overrides applied."""
     try:
-        world = load_world(spec.world)
+        if spec.world_file is not None:
+            name, text = spec.world_file
+            world = parse_world(text, name)
+        else:
+            world = load_world(spec.world)
     except Exception as exc:  # WorldError: every problem, already worded for the user
         raise EvaluationError(str(exc)) from None
     if spec.dock:
@@ -204,8 +237,9 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
 
 def _run_episode(spec: EpisodeSpec) -> EpisodeResult:
     profile = get_profile(spec.profile)
+    path = spec.sources.materialise() if spec.sources is not None else spec.mission
     try:
-        mission = load_mission(spec.mission, dict(spec.params), profile=profile)
+        mission = load_mission(path, dict(spec.params), profile=profile)
     except MissionError as exc:
         raise EvaluationError("\n".join(str(d) for d in exc.diagnostics)) from None
     world = build_world(spec)
@@ -213,6 +247,8 @@ def _run_episode(spec: EpisodeSpec) -> EpisodeResult:
     simulator = _MeasuredSimulator(world, profile, spec.seed, start=pose)
     stack = RunStack(mission, SimLink(simulator), profile=profile, timeout_s=spec.timeout_s)
     summary = stack.run()
+    if summary.outcome is Outcome.INTERRUPTED:  # Ctrl-C (or SIGTERM) stops the evaluation,
+        raise KeyboardInterrupt(summary.reason)  # not just this episode
     trace = simulator.trace[:: max(1, spec.trace_every)]
     events = simulator.events
     return EpisodeResult(
@@ -237,7 +273,25 @@ def _run_episode(spec: EpisodeSpec) -> EpisodeResult:
             *((p.x / 1000.0, p.y / 1000.0) for p in trace),
             (simulator.x / 1000.0, simulator.y / 1000.0),
         ),
+        mission=spec.mission,
+        world=world.name,
+        params=spec.params,
+        stage=failure_stage(summary.reason),
+        distance_m=summary.distance_mm / 1000.0,
+        commands_sent=summary.commands_written,
+        commands_refused=summary.refused_commands,
+        worker=f"{socket.gethostname()}:{os.getpid()}",
     )
+
+
+_STAGE = re.compile(r"^([a-z_][a-z0-9_]*)\(")
+
+
+def failure_stage(reason: str) -> str:
+    """The leaf a failure reason starts with (``find_dock(...): lost the beam`` ->
+    ``find_dock``); "" when the reason names none."""
+    match = _STAGE.match(reason)
+    return match.group(1) if match else ""
 
 
 def mission_name(path: str) -> str:

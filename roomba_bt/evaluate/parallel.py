@@ -1,4 +1,5 @@
-"""Episodes in parallel worker processes, results in spec order whatever the number of jobs.
+"""Episodes in parallel, results in spec order whatever ran them: local worker processes
+(``--jobs``) or a Dask cluster (:mod:`roomba_bt.evaluate.cluster`).
 
 Every episode is decided by its :class:`~roomba_bt.evaluate.episode.EpisodeSpec` alone (the
 seed picks the start pose and the simulator's random draws), so ``--jobs 1`` and ``--jobs 2``
@@ -13,6 +14,7 @@ import os
 import sys
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import TextIO
 
 from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec, run_episode
@@ -45,6 +47,78 @@ def run_episodes(
             if progress is not None:
                 progress(len(results), total, result)
     return results
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """What a batch of episodes gave: results in spec order (only those that finished when
+    ``interrupted``), how many were run again after a worker died, and where they ran."""
+
+    results: list[EpisodeResult]
+    retried: int = 0
+    interrupted: bool = False
+    engine: str = "local"
+
+
+@dataclass(frozen=True)
+class Engine:
+    """Where episodes run: ``local`` processes (``jobs``), or ``dask`` (a local cluster of
+    ``jobs`` workers, or the cluster at ``scheduler``)."""
+
+    kind: str = "local"
+    jobs: int = 1
+    scheduler: str | None = None
+
+    def describe(self) -> str:
+        if self.kind == "local":
+            return f"{self.jobs} local process{'es' if self.jobs > 1 else ''}"
+        if self.scheduler is not None:
+            return f"Dask cluster at {self.scheduler}"
+        return f"local Dask cluster of {self.jobs} workers"
+
+
+def evaluate(
+    batches: Sequence[Sequence[EpisodeSpec]],
+    engine: Engine = Engine(),
+    progress: Sequence[Progress | None] | None = None,
+) -> list[Evaluation]:
+    """Run each batch on ``engine`` (one Dask client for all of them); ``progress[i]`` for
+    batch ``i``. A Ctrl-C stops the batch running and skips the rest (each ``interrupted``)."""
+    bars: Sequence[Progress | None] = progress or [None] * len(batches)
+    out: list[Evaluation] = []
+    if engine.kind == "local":
+        for specs, bar in zip(batches, bars, strict=True):
+            if out and out[-1].interrupted:
+                out.append(Evaluation([], 0, True, "local"))
+                continue
+            done: list[EpisodeResult] = []
+            try:
+                run_episodes(specs, engine.jobs, _collect(done, bar))
+            except KeyboardInterrupt:
+                out.append(Evaluation(done, 0, True, "local"))
+                continue
+            out.append(Evaluation(done, 0, False, "local"))
+        return out
+    from roomba_bt.evaluate.cluster import dask_client, run_on_client
+
+    with dask_client(engine.scheduler, engine.jobs) as client:
+        for specs, bar in zip(batches, bars, strict=True):
+            if out and out[-1].interrupted:
+                out.append(Evaluation([], 0, True, "dask"))
+                continue
+            results, retried, interrupted = run_on_client(client, specs, bar)
+            finished = [r for r in results if r is not None]
+            out.append(Evaluation(finished, retried, interrupted, "dask"))
+    return out
+
+
+def _collect(into: list[EpisodeResult], bar: Progress | None) -> Progress:
+    def progress(done: int, total: int, result: EpisodeResult) -> None:
+        into.append(result)
+        if bar is not None:
+            bar(done, total, result)
+
+    return progress
 
 
 class ProgressBar:

@@ -99,6 +99,24 @@ class Summary:
     def __str__(self) -> str:
         return "\n".join(self.lines())
 
+    def to_dict(self) -> dict[str, object]:
+        """The summary for scripts (``eval --json``): rates as fractions, times in seconds."""
+        return {
+            "mission": self.mission,
+            "world": self.world,
+            "runs": self.runs,
+            "successes": self.successes,
+            "rate": self.rate,
+            "interval": list(self.interval),
+            "median_time": self.median_time_s,
+            "p90_time": self.p90_time_s,
+            "mean_bumps": self.mean_bumps,
+            "docked": self.docked,
+            "failures": {reason: count for reason, count in self.failures},
+            "wall_time": self.wall_s,
+            "mission_time": self.simulated_s,
+        }
+
 
 def summarize(mission: str, world: str, results: Sequence[EpisodeResult]) -> Summary:
     """Aggregate episodes into a :class:`Summary`."""
@@ -119,4 +137,118 @@ def summarize(mission: str, world: str, results: Sequence[EpisodeResult]) -> Sum
         failures=tuple(sorted(groups.items(), key=lambda kv: (-kv[1], kv[0]))),
         wall_s=sum(r.wall_s for r in results),
         simulated_s=sum(r.time_s for r in results),
+    )
+
+
+def mcnemar_exact(only_a: int, only_b: int) -> float:
+    """The two-sided exact McNemar p-value: under "the change makes no difference" each
+    discordant pair (success with one variant only) is a fair coin, so it is the binomial
+    test of ``only_a`` out of ``only_a + only_b`` at 1/2 (1.0 when there is no discordant
+    pair). Exact at any size, hence no normal or chi-square approximation (those are poor
+    for the few discordant pairs a 98 % mission leaves)."""
+    n = only_a + only_b
+    if n == 0:
+        return 1.0
+    k = min(only_a, only_b)
+    tail = sum(math.comb(n, i) for i in range(k + 1)) / float(2**n)
+    return min(1.0, 2.0 * tail)
+
+
+def median_interval(values: Sequence[float]) -> tuple[float, float] | None:
+    """A distribution-free interval for the median (at least 95 % coverage): the order
+    statistics ``(k, n + 1 - k)`` with ``k`` the largest rank whose binomial tail
+    ``2 P(Bin(n, 1/2) <= k - 1)`` stays within 5 %. None when fewer than 6 values (no such
+    ``k``: even the extremes cover the median with less than 95 %)."""
+    n = len(values)
+    ordered = sorted(values)
+    k = 0
+    cumulative = 0
+    for rank in range(1, n + 1):
+        cumulative += math.comb(n, rank - 1)  # P(Bin <= rank - 1) * 2**n
+        if 2 * cumulative > 0.05 * float(2**n):
+            break
+        k = rank
+    if k == 0:
+        return None
+    return (ordered[k - 1], ordered[n - k])
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """Two variants on the same seeds and start poses, episode by episode."""
+
+    a: str
+    b: str
+    pairs: int
+    both: int
+    only_a: int
+    only_b: int
+    neither: int
+    p_value: float
+    #: B's time minus A's over the episodes both succeeded: median and its 95 % interval
+    median_difference_s: float | None
+    difference_interval: tuple[float, float] | None
+
+    def lines(self) -> list[str]:
+        med = self.median_difference_s
+        if med is None:
+            time = "no episode succeeded with both"
+        else:
+            ci = self.difference_interval
+            within = (
+                f"95 % interval {ci[0]:+.1f}..{ci[1]:+.1f} s" if ci else "too few for an interval"
+            )
+            time = f"median {med:+.1f} s ({within}) over the {self.both} episodes both succeeded"
+        return [
+            f"A/B          A = {self.a}",
+            f"             B = {self.b}",
+            f"paired       {self.pairs} episodes, same seeds and start poses",
+            f"success      both {self.both}, only A {self.only_a}, only B {self.only_b}, "
+            f"neither {self.neither}; exact McNemar p = {self.p_value:.3g}",
+            f"time B - A   {time}",
+        ]
+
+    def __str__(self) -> str:
+        return "\n".join(self.lines())
+
+    def to_dict(self) -> dict[str, object]:
+        return {
+            "a": self.a,
+            "b": self.b,
+            "pairs": self.pairs,
+            "both": self.both,
+            "only_a": self.only_a,
+            "only_b": self.only_b,
+            "neither": self.neither,
+            "mcnemar_p": self.p_value,
+            "median_time_difference": self.median_difference_s,
+            "time_difference_interval": (
+                None if self.difference_interval is None else list(self.difference_interval)
+            ),
+        }
+
+
+def compare(
+    a: str, b: str, results_a: Sequence[EpisodeResult], results_b: Sequence[EpisodeResult]
+) -> Comparison:
+    """Pair the episodes by seed (both lists from the same seeds); ValueError otherwise."""
+    by_seed = {r.seed: r for r in results_b}
+    if sorted(by_seed) != sorted(r.seed for r in results_a):
+        raise ValueError("A and B must be run on the same seeds")
+    pairs = [(ra, by_seed[ra.seed]) for ra in results_a]
+    both = [(ra, rb) for ra, rb in pairs if ra.succeeded and rb.succeeded]
+    only_a = sum(1 for ra, rb in pairs if ra.succeeded and not rb.succeeded)
+    only_b = sum(1 for ra, rb in pairs if rb.succeeded and not ra.succeeded)
+    differences = [rb.time_s - ra.time_s for ra, rb in both]
+    return Comparison(
+        a=a,
+        b=b,
+        pairs=len(pairs),
+        both=len(both),
+        only_a=only_a,
+        only_b=only_b,
+        neither=len(pairs) - len(both) - only_a - only_b,
+        p_value=mcnemar_exact(only_a, only_b),
+        median_difference_s=percentile(differences, 50),
+        difference_interval=median_interval(differences),
     )

@@ -79,3 +79,94 @@ def test_plot_into_a_missing_directory_is_refused_before_running(
     out, err = capsys.readouterr()
     assert f"--plot: found '{target}': there is no directory {target.parent}" in err
     assert out == ""
+
+
+def test_ab_report_on_two_variants_is_reproduced_from_its_records(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """bump-and-turn at two speeds on the same seeds and start poses (apartment, 6 s): the
+    paired counts, McNemar's p and the median time difference in the --json report are what
+    the per-episode records give, and a second run prints the same report."""
+    import json
+
+    from roomba_bt.evaluate.records import read_results
+    from roomba_bt.evaluate.stats import compare, mcnemar_exact
+
+    argv = ["eval", BUMP, "--world", "apartment", "--runs", "6", "--seed", "20",
+            "-p", "duration=6s", "--timeout", "5s", "--sweep", "speed=200mm/s,400mm/s",
+            "--no-progress", "--json"]  # fmt: skip
+    out_file = tmp_path / "ab.jsonl"
+    assert main([*argv, "--out", str(out_file)]) == 0
+    report = json.loads(capsys.readouterr().out)
+    (cmp,) = report["comparisons"]
+    records = read_results(out_file)
+    a = [r for r in records if r.params == (("duration", "6s"), ("speed", "200mm/s"))]
+    b = [r for r in records if r.params == (("duration", "6s"), ("speed", "400mm/s"))]
+    assert [r.seed for r in a] == [r.seed for r in b] == list(range(20, 26))
+    assert [r.start for r in a] == [r.start for r in b], "same start poses"
+    again = compare(cmp["a"], cmp["b"], a, b)
+    assert again.to_dict() == cmp
+    assert cmp["pairs"] == cmp["both"] + cmp["only_a"] + cmp["only_b"] + cmp["neither"] == 6
+    assert cmp["mcnemar_p"] == mcnemar_exact(cmp["only_a"], cmp["only_b"])
+    assert [v["label"] for v in report["variants"]] == [cmp["a"], cmp["b"]]
+    assert cmp["b"].endswith("-p speed=400mm/s")
+    assert main(argv) == 0
+    rerun = json.loads(capsys.readouterr().out)
+    assert rerun["comparisons"] == report["comparisons"]
+
+
+def test_two_missions_are_compared_and_the_text_report_says_so(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    dock = str(MISSIONS / "dock.yaml")
+    builtin = str(MISSIONS / "dock-builtin.yaml")
+    code = main(["eval", dock, builtin, "--runs", "2", "--within", "1", "--seed", "5",
+                 "--no-progress"])  # fmt: skip
+    out = capsys.readouterr().out
+    assert code == 0
+    assert f"A = {dock}" in out and f"B = {builtin}" in out
+    assert "exact McNemar p = " in out and "time B - A   median" in out
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--out", "results.txt"], "allowed: .jsonl, .csv"),
+        (["--sweep", "speed"], "expected NAME=V1,V2"),
+        (["--sweep", "speed=1,2", "--variant", "speed=3"], "one or the other"),
+        (["--variant", "speed"], "--variant 'speed': expected NAME=VALUE"),
+    ],
+)
+def test_bad_comparison_and_output_options_exit_2(
+    extra: list[str], message: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["eval", BUMP, *extra]) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_ctrl_c_prints_what_finished_and_exits_130(tmp_path: Path) -> None:
+    """SIGINT after the first episode has reported (read from the progress bar, not a
+    clock): the summary of the finished episodes, and exit code 130."""
+    import os
+    import signal
+    import subprocess
+
+    out = tmp_path / "partial.jsonl"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "roomba_bt.cli", "eval", str(MISSIONS / "dock.yaml"),
+         "--runs", "200", "--within", "1.5", "--out", str(out)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+    )  # fmt: skip
+    assert proc.stderr is not None and proc.stdout is not None
+    seen = b""
+    while b" 1/200 " not in seen:
+        chunk = os.read(proc.stderr.fileno(), 4096)
+        assert chunk, f"eval ended before its first episode: {seen!r}"
+        seen += chunk
+    proc.send_signal(signal.SIGINT)
+    stdout, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 130, stderr
+    finished = len(out.read_text(encoding="utf-8").splitlines())
+    assert 1 <= finished < 200
+    assert f"/{finished} = " in stdout.decode()
+    assert f"interrupted; {finished} episode(s) finished" in (seen + stderr).decode()

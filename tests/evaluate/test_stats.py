@@ -71,3 +71,39 @@ def test_summary_counts_rates_times_and_failures() -> None:
     assert summary.mean_bumps == pytest.approx(1.6)  # 8 episodes with 2, 2 with none
     text = str(summary)
     assert "8/10 = 80.0 %" in text and "Wilson" in text and "approach: lost" in text
+
+
+def test_exact_mcnemar_is_the_binomial_test_of_the_discordant_pairs() -> None:
+    from roomba_bt.evaluate.stats import mcnemar_exact
+
+    assert mcnemar_exact(0, 0) == 1.0
+    assert mcnemar_exact(3, 3) == 1.0
+    # 0 of 6 discordant pairs for A: 2 * (1/2)^6
+    assert mcnemar_exact(0, 6) == pytest.approx(2 / 64)
+    # 1 of 10: 2 * (1 + 10) / 1024 (scipy.stats.binomtest(1, 10).pvalue)
+    assert mcnemar_exact(1, 10 - 1) == pytest.approx(0.021484375)
+    assert mcnemar_exact(9, 1) == mcnemar_exact(1, 9)
+
+
+def test_median_interval_uses_the_binomial_order_statistics() -> None:
+    from roomba_bt.evaluate.stats import median_interval
+
+    assert median_interval([1.0, 2.0, 3.0, 4.0, 5.0]) is None  # 2/32 > 5 %
+    assert median_interval([float(v) for v in range(6)]) == (0.0, 5.0)  # 2/64 <= 5 %
+    # n = 20: k = 6 (2 P(Bin(20, 1/2) <= 5) = 0.041; k = 7 gives 0.115)
+    assert median_interval([float(v) for v in range(20)]) == (5.0, 14.0)
+
+
+def test_compare_pairs_episodes_by_seed() -> None:
+    from roomba_bt.evaluate.stats import compare
+
+    a = [result(s, "success" if s != 3 else "failure", 10.0 + s) for s in range(8)]
+    b = [result(s, "success" if s != 5 else "timeout", 8.0 + s) for s in reversed(range(8))]
+    c = compare("A", "B", a, b)
+    assert (c.pairs, c.both, c.only_a, c.only_b, c.neither) == (8, 6, 1, 1, 0)
+    assert c.p_value == 1.0
+    assert c.median_difference_s == pytest.approx(-2.0)
+    assert c.difference_interval == (pytest.approx(-2.0), pytest.approx(-2.0))
+    assert "only A 1, only B 1" in str(c) and "median -2.0 s" in str(c)
+    with pytest.raises(ValueError, match="same seeds"):
+        compare("A", "B", a, b[:-1])

@@ -1,0 +1,133 @@
+"""Episodes on a Dask distributed cluster: an existing one (``--scheduler tcp://HOST:8786``) or
+a local one started for the evaluation (``--engine dask``).
+
+Nothing here schedules, retries or balances by itself: Dask does. Each episode is one future
+of :func:`run_on_worker` on a :func:`~roomba_bt.evaluate.episode.self_contained` spec (the
+mission's texts travel with it, so workers need only ``pip install roomba-bt[cluster]``, no
+shared file system). A worker that dies mid-episode loses nothing: the scheduler hands its
+episodes to another worker (Dask's own resubmission, up to its ``allowed-failures``), and
+since an episode is decided by its spec alone the rerun gives the same result. How many
+episodes were run again is read from the scheduler (each task's ``suspicious`` count: the
+times a worker died while holding it) before the futures are released.
+
+Results come back in spec order; progress is reported as futures complete, in completion
+order. Ctrl-C (KeyboardInterrupt) cancels the futures still pending and returns what
+finished, marked ``interrupted``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import uuid
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any
+
+from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec, run_episode, self_contained
+
+
+class ClusterUnavailableError(RuntimeError):
+    """Dask distributed is not installed, or the scheduler cannot be reached."""
+
+
+def run_on_worker(spec: EpisodeSpec) -> EpisodeResult:
+    """One episode on a Dask worker; the result names the worker."""
+    from dataclasses import replace
+
+    from distributed import get_worker
+
+    result = run_episode(spec)
+    with contextlib.suppress(ValueError):
+        return replace(result, worker=get_worker().address)
+    return result
+
+
+def _import_distributed() -> Any:
+    try:
+        import distributed
+    except ImportError:
+        raise ClusterUnavailableError(
+            "the Dask engine needs the cluster extra: pip install 'roomba-bt[cluster]'"
+        ) from None
+    return distributed
+
+
+@contextlib.contextmanager
+def dask_client(scheduler: str | None = None, workers: int = 2) -> Iterator[Any]:
+    """A client of the scheduler at ``scheduler``, or of a local cluster of ``workers``
+    single-threaded worker processes (closed on exit)."""
+    distributed = _import_distributed()
+    # the scheduler's and nannies' INFO lines would scroll over the progress bar
+    logging.getLogger("distributed").setLevel(logging.WARNING)
+    if scheduler is not None:
+        try:
+            client = distributed.Client(scheduler, timeout="10s")
+        except (OSError, TimeoutError) as exc:
+            raise ClusterUnavailableError(
+                f"--scheduler {scheduler}: cannot connect ({exc})"
+            ) from None
+        with client:
+            yield client
+        return
+    with (
+        distributed.LocalCluster(
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=40,  # logging.ERROR: no worker chatter over the progress bar
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        yield client
+
+
+def run_on_client(
+    client: Any,
+    specs: Sequence[EpisodeSpec],
+    progress: Callable[[int, int, EpisodeResult], None] | None = None,
+) -> tuple[list[EpisodeResult | None], int, bool]:
+    """``(results in spec order (None where cancelled), episodes retried, interrupted)``."""
+    distributed = _import_distributed()
+    total = len(specs)
+    batch = uuid.uuid4().hex[:12]  # keys unique on a cluster shared by many evaluations
+    futures = [
+        client.submit(run_on_worker, self_contained(spec), key=f"episode-{batch}-{i}",
+                      pure=False)
+        for i, spec in enumerate(specs)
+    ]  # fmt: skip
+    index = {future.key: i for i, future in enumerate(futures)}
+    results: list[EpisodeResult | None] = [None] * total
+    done = 0
+    interrupted = False
+    try:
+        for future in distributed.as_completed(futures):
+            result = future.result()
+            results[index[future.key]] = result
+            done += 1
+            if progress is not None:
+                progress(done, total, result)
+    except KeyboardInterrupt:
+        interrupted = True
+        client.cancel([f for f in futures if not f.done()])
+    retried = 0
+    with contextlib.suppress(Exception):  # the count is a report, never a reason to fail
+        retried = int(client.run_on_scheduler(_retried, keys=list(index)))
+    return results, retried, interrupted
+
+
+def warm_up(client: Any) -> None:
+    """Import the episode's modules on every worker (what a worker's first episode would
+    otherwise pay), so timings measure episodes."""
+    client.run(_import_episode_modules)
+
+
+def _import_episode_modules() -> None:
+    import roomba_bt.evaluate.episode
+    import roomba_bt.mission  # noqa: F401
+
+
+def _retried(dask_scheduler: Any, keys: list[str]) -> int:
+    """Runs on the scheduler: how many of ``keys`` were held by a worker that died."""
+    tasks = dask_scheduler.tasks
+    return sum(1 for k in keys if k in tasks and tasks[k].suspicious > 0)

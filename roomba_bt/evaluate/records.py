@@ -1,0 +1,176 @@
+"""Results as data: one flat record per episode, written as JSON Lines or CSV and read back.
+
+``roomba-bt eval ... --out results.jsonl`` (or ``.csv``, chosen by the suffix) writes one
+record per episode in spec order; :func:`read_results` reads either back into
+:class:`~roomba_bt.evaluate.episode.EpisodeResult` values that summarise to the same
+:class:`~roomba_bt.evaluate.stats.Summary` (floats are written with ``repr``, which reads back
+exactly). In pandas::
+
+    import pandas as pd
+    df = pd.read_json("results.jsonl", lines=True)
+    df.groupby("outcome").mission_time.median()
+
+Columns (:data:`COLUMNS`): ``outcome`` is the word the run summary prints (``SUCCESS``,
+``FAILURE``, ``TIMEOUT``, ...); times in seconds, positions and distances in metres, headings
+in degrees. ``params`` is an object in JSON Lines and ``name=value;name=value`` in CSV. The
+trajectory (plots) and the per-bump contact steps are not written: they are for figures, not
+tables. Readers should ignore columns they do not know: later versions add columns (coverage,
+for instance), never rename or drop one.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+from collections.abc import Iterable
+from dataclasses import fields
+from pathlib import Path
+from typing import Any
+
+from roomba_bt.evaluate.episode import EpisodeResult
+
+FORMATS = (".jsonl", ".csv")
+
+#: record column -> (EpisodeResult field, kind); start/end are split into x, y, heading
+COLUMNS: dict[str, tuple[str, str]] = {
+    "mission": ("mission", "str"),
+    "world": ("world", "str"),
+    "seed": ("seed", "int"),
+    "outcome": ("outcome", "outcome"),
+    "reason": ("reason", "str"),
+    "stage": ("stage", "str"),
+    "mission_time": ("time_s", "float"),
+    "wall_time": ("wall_s", "float"),
+    "ticks": ("ticks", "int"),
+    "start_x": ("start", "0"),
+    "start_y": ("start", "1"),
+    "start_heading": ("start", "2"),
+    "end_x": ("end", "0"),
+    "end_y": ("end", "1"),
+    "end_heading": ("end", "2"),
+    "params": ("params", "params"),
+    "distance": ("distance_m", "float"),
+    "bumps": ("bumps", "int"),
+    "cliffs": ("cliffs", "int"),
+    "fell": ("fell", "bool"),
+    "docked": ("docked", "bool"),
+    "charging": ("charging", "bool"),
+    "violations": ("violations", "int"),
+    "commands_sent": ("commands_sent", "int"),
+    "commands_refused": ("commands_refused", "int"),
+    "loops": ("loops", "float"),
+    "longest_stall": ("longest_stall_s", "float"),
+    "worker": ("worker", "str"),
+}
+
+
+class ResultsFileError(ValueError):
+    """A results file that cannot be read back: the message names the file and line."""
+
+
+def results_format(path: str | Path) -> str:
+    """The format a path's suffix chooses; ValueError naming the allowed ones otherwise."""
+    suffix = Path(path).suffix.lower()
+    if suffix not in FORMATS:
+        raise ValueError(f"{path}: unknown results format {suffix or '(no suffix)'!r}; "
+                         f"allowed: {', '.join(FORMATS)}")  # fmt: skip
+    return suffix
+
+
+def to_record(result: EpisodeResult) -> dict[str, Any]:
+    """One episode as a flat mapping of :data:`COLUMNS` (params as a mapping)."""
+    out: dict[str, Any] = {}
+    for column, (name, kind) in COLUMNS.items():
+        value = getattr(result, name)
+        if kind == "outcome":
+            value = value.upper()
+        elif kind in ("0", "1", "2"):
+            value = value[int(kind)]
+        elif kind == "params":
+            value = dict(value)
+        out[column] = value
+    return out
+
+
+def from_record(record: dict[str, Any]) -> EpisodeResult:
+    """The inverse of :func:`to_record` (trajectory and contact steps empty); values may be
+    strings (CSV). KeyError/ValueError on a missing column or a bad value."""
+    values: dict[str, Any] = {"start": [0.0] * 3, "end": [0.0] * 3}
+    for column, (name, kind) in COLUMNS.items():
+        raw = record[column]
+        if kind == "str":
+            values[name] = "" if raw is None else str(raw)
+        elif kind == "int":
+            values[name] = int(raw)
+        elif kind == "float":
+            values[name] = float(raw)
+        elif kind == "bool":
+            values[name] = raw if isinstance(raw, bool) else str(raw) == "True"
+        elif kind == "outcome":
+            values[name] = str(raw).lower()
+        elif kind == "params":
+            values[name] = _params(raw)
+        else:
+            values[name][int(kind)] = float(raw)
+    values["start"], values["end"] = tuple(values["start"]), tuple(values["end"])
+    known = {f.name for f in fields(EpisodeResult)}
+    defaults = {"contact_steps": (), "trajectory": ()}
+    return EpisodeResult(**{**defaults, **{k: v for k, v in values.items() if k in known}})
+
+
+def _params(raw: Any) -> tuple[tuple[str, str], ...]:
+    if isinstance(raw, dict):
+        return tuple((str(k), str(v)) for k, v in raw.items())
+    text = str(raw or "")
+    pairs = [item.partition("=") for item in text.split(";") if item]
+    return tuple((name, value) for name, _, value in pairs)
+
+
+def write_results(path: str | Path, results: Iterable[EpisodeResult]) -> int:
+    """Write the records to ``path`` (format by suffix); the number written."""
+    fmt = results_format(path)
+    records = [to_record(r) for r in results]
+    with open(path, "w", encoding="utf-8", newline="") as out:
+        if fmt == ".jsonl":
+            for record in records:
+                out.write(json.dumps(record) + "\n")
+        else:
+            writer = csv.DictWriter(out, fieldnames=list(COLUMNS))
+            writer.writeheader()
+            for record in records:
+                params = ";".join(f"{k}={v}" for k, v in record["params"].items())
+                writer.writerow({**record, "params": params})  # str(float) is its repr
+    return len(records)
+
+
+def read_results(path: str | Path) -> list[EpisodeResult]:
+    """Read a file :func:`write_results` wrote; ResultsFileError naming file:line otherwise."""
+    fmt = results_format(path)
+    rows: list[tuple[int, dict[str, Any]]] = []
+    try:
+        with open(path, encoding="utf-8", newline="") as src:
+            if fmt == ".csv":
+                rows = [(n, row) for n, row in enumerate(csv.DictReader(src), 2)]
+            for n, text in enumerate(src if fmt == ".jsonl" else (), 1):
+                if not text.strip():
+                    continue
+                try:
+                    record = json.loads(text)
+                except json.JSONDecodeError as exc:
+                    raise ResultsFileError(
+                        f"{path}:{n}:{exc.colno}: not JSON ({exc.msg})"
+                    ) from None
+                if not isinstance(record, dict):
+                    raise ResultsFileError(f"{path}:{n}: expected an object per line")
+                rows.append((n, record))
+    except OSError as exc:
+        raise ResultsFileError(f"{path}: {exc.strerror or exc}") from None
+    out = []
+    for line, row in rows:
+        try:
+            out.append(from_record(row))
+        except KeyError as exc:
+            raise ResultsFileError(f"{path}:{line}: missing column {exc.args[0]!r}") from None
+        except (TypeError, ValueError) as exc:
+            raise ResultsFileError(f"{path}:{line}: bad value ({exc})") from None
+    return out

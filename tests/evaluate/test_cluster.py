@@ -1,0 +1,118 @@
+"""Episodes on Dask: a LocalCluster of worker processes, and a scheduler and workers started as
+separate processes on 127.0.0.1 (`dask scheduler`, `dask worker`), give the same results,
+episode by episode, as ``--jobs 1``; a worker killed mid-evaluation loses no episode."""
+
+from __future__ import annotations
+
+import dataclasses
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.evaluate import EpisodeResult, episode_specs, run_episodes
+from roomba_bt.evaluate.cluster import dask_client, run_on_client
+from roomba_bt.evaluate.parallel import Engine, evaluate
+
+MISSIONS = Path(__file__).resolve().parents[2] / "missions"
+SPECS = episode_specs(str(MISSIONS / "dock.yaml"), world="empty-room", runs=8, seed=11,
+                      within_m=1.5)  # fmt: skip
+DASK = str(Path(sys.executable).parent / "dask")
+
+
+def _episodes(results: list[EpisodeResult]) -> list[EpisodeResult]:
+    """The episode itself: without where and how long it ran."""
+    return [dataclasses.replace(r, wall_s=0.0, worker="") for r in results]
+
+
+@pytest.fixture(scope="module")
+def one_job() -> list[EpisodeResult]:
+    return _episodes(run_episodes(SPECS, jobs=1))
+
+
+def test_a_local_dask_cluster_gives_the_results_of_one_job(
+    one_job: list[EpisodeResult],
+) -> None:
+    (done,) = evaluate([SPECS], Engine("dask", jobs=2))
+    assert not done.interrupted and done.retried == 0
+    assert _episodes(done.results) == one_job
+    assert len({r.worker for r in done.results}) == 2, "both workers ran episodes"
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+@pytest.fixture
+def scheduler(tmp_path: Path) -> Iterator[tuple[str, list[subprocess.Popen[bytes]]]]:
+    """A scheduler and two single-threaded workers without nannies (a killed worker stays
+    dead), each its own process, run from another folder (no shared files with the test)."""
+    port = _free_port()
+    address = f"tcp://127.0.0.1:{port}"
+    log = open(tmp_path / "dask.log", "wb")  # noqa: SIM115 (closed below)
+    processes = [subprocess.Popen([DASK, "scheduler", "--host", "127.0.0.1", "--port",
+                                   str(port), "--no-dashboard"], cwd=tmp_path,
+                                  stdout=log, stderr=log)]  # fmt: skip
+    workers = [
+        subprocess.Popen([DASK, "worker", address, "--nthreads", "1", "--no-nanny",
+                          "--no-dashboard", "--host", "127.0.0.1"], cwd=tmp_path,
+                         stdout=log, stderr=log)
+        for _ in range(2)
+    ]  # fmt: skip
+    processes += workers
+    try:
+        yield address, workers
+    finally:
+        for p in processes:
+            p.kill()
+        for p in processes:
+            p.wait(timeout=30)
+        log.close()
+
+
+def _connect_when_ready(address: str) -> object:
+    from distributed import Client
+
+    deadline = time.monotonic() + 60
+    while True:
+        try:
+            return Client(address, timeout="2s")
+        except OSError:
+            if time.monotonic() > deadline:
+                raise
+            time.sleep(0.2)
+
+
+def test_separate_scheduler_and_workers_give_the_results_of_one_job_even_if_one_dies(
+    one_job: list[EpisodeResult],
+    scheduler: tuple[str, list[subprocess.Popen[bytes]]],
+) -> None:
+    address, workers = scheduler
+    client = _connect_when_ready(address)
+    with client:  # type: ignore[attr-defined]
+        client.wait_for_workers(2, timeout=60)  # type: ignore[attr-defined]
+    (done,) = evaluate([SPECS], Engine("dask", scheduler=address))
+    assert _episodes(done.results) == one_job
+    assert done.retried == 0
+
+    reported: list[int] = []
+
+    def kill_a_worker_after_the_first(done: int, total: int, result: EpisodeResult) -> None:
+        reported.append(result.seed)
+        if done == 1:
+            workers[0].kill()
+
+    with dask_client(address) as client:
+        results, retried, interrupted = run_on_client(client, SPECS, kill_a_worker_after_the_first)
+    assert workers[0].wait(timeout=30) != 0, "the worker was killed"
+    assert not interrupted
+    assert sorted(reported) == [s.seed for s in SPECS], "every episode reported once"
+    assert all(r is not None for r in results)
+    assert _episodes([r for r in results if r is not None]) == one_job
+    assert retried >= 1, "the killed worker's episode ran again elsewhere"

@@ -1,0 +1,68 @@
+"""Results as data: records written as JSON Lines or CSV read back to the same summary."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.evaluate import EpisodeResult, episode_specs, run_episodes, summarize
+from roomba_bt.evaluate.records import (
+    COLUMNS,
+    ResultsFileError,
+    read_results,
+    results_format,
+    to_record,
+    write_results,
+)
+
+MISSIONS = Path(__file__).resolve().parents[2] / "missions"
+BUMP = str(MISSIONS / "bump-and-turn.yaml")
+
+
+@pytest.fixture(scope="module")
+def results() -> list[EpisodeResult]:
+    specs = episode_specs(BUMP, world="apartment", runs=3, seed=4,
+                          params=(("duration", "4s"),), timeout_s=3.0)  # fmt: skip
+    return run_episodes(specs)
+
+
+@pytest.mark.parametrize("suffix", [".jsonl", ".csv"])
+def test_a_results_file_reloads_to_the_same_summary(
+    tmp_path: Path, results: list[EpisodeResult], suffix: str
+) -> None:
+    path = tmp_path / f"results{suffix}"
+    assert write_results(path, results) == 3
+    again = read_results(path)
+    assert summarize(BUMP, "apartment", again) == summarize(BUMP, "apartment", results)
+    assert [to_record(r) for r in again] == [to_record(r) for r in results]
+
+
+def test_a_record_has_the_columns_a_script_needs(results: list[EpisodeResult]) -> None:
+    record = to_record(results[0])
+    assert list(record) == list(COLUMNS)
+    assert record["seed"] == 4 and record["world"] == "apartment"
+    assert record["outcome"] in ("SUCCESS", "FAILURE", "TIMEOUT")
+    assert record["params"] == {"duration": "4s"}
+    assert record["commands_sent"] > 0 and record["worker"]
+    json.dumps(record)  # plain data
+
+
+def test_a_failure_names_its_stage() -> None:
+    from roomba_bt.evaluate.episode import failure_stage
+
+    assert failure_stage("find_dock(timeout=3s): no beam") == "find_dock"
+    assert failure_stage("deadline of 10 s reached") == ""
+
+
+def test_bad_results_files_say_where(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match=r"allowed: \.jsonl, \.csv"):
+        results_format("out.txt")
+    bad = tmp_path / "bad.jsonl"
+    bad.write_text('{"seed": 1}\nnot json\n', encoding="utf-8")
+    with pytest.raises(ResultsFileError, match=r"bad.jsonl:2:1: not JSON"):
+        read_results(bad)
+    bad.write_text('{"seed": 1}\n', encoding="utf-8")
+    with pytest.raises(ResultsFileError, match=r"bad.jsonl:1: missing column 'mission'"):
+        read_results(bad)
