@@ -13,6 +13,9 @@ Every figure is measured in this process, beside its baseline:
   episodes last 10 s to 2 min, so with only a few the longest bounds the ratio; 48 is the
   size of a small evaluation (50-200). Also printed: the best two in-order workers could
   do with those episodes, and how much slower each episode ran beside the other worker.
+* eval on Dask: the same 48 episodes on a local Dask cluster of 1 and of 2 worker processes
+  (each cluster started and its workers' imports warmed before the clock starts: what a
+  long-running cluster costs per evaluation). Target: >= 1.8x.
 """
 
 from __future__ import annotations
@@ -64,6 +67,41 @@ def main() -> None:
         f"jobs=2 {wall_two:.2f} s = {wall_one / wall_two:.2f}x (target >= 1.8x; in-order "
         f"bound {bound:.2f}x; an episode beside the other worker took {beside:.2f}x its time "
         f"alone; identical results: {same})"
+    )
+    dask_scaling()
+
+
+def dask_scaling(repeats: int = 2) -> None:
+    """Wall seconds of the 48 episodes on 1 and 2 Dask workers, each the best of ``repeats``."""
+    from roomba_bt.evaluate.cluster import (
+        ClusterUnavailableError,
+        dask_client,
+        run_on_client,
+        warm_up,
+    )
+
+    specs = episode_specs(DOCK, world="empty-room", runs=SPEED_EPISODES, seed=200, within_m=1.5)
+    walls: dict[int, float] = {}
+    retried = 0
+    try:
+        for workers in (1, 2):
+            with dask_client(None, workers) as client:
+                warm_up(client)
+                best = float("inf")
+                for _ in range(repeats):
+                    started = time.perf_counter()
+                    results, again, _ = run_on_client(client, specs)
+                    best = min(best, time.perf_counter() - started)
+                    retried += again
+                    assert all(r is not None for r in results)
+                walls[workers] = best
+    except ClusterUnavailableError as exc:
+        print(f"eval on Dask: skipped ({exc})")
+        return
+    print(
+        f"eval on Dask: {SPEED_EPISODES} dock episodes, best of {repeats}, 1 worker "
+        f"{walls[1]:.2f} s, 2 workers {walls[2]:.2f} s = {walls[1] / walls[2]:.2f}x "
+        f"(target >= 1.8x; {retried} retried)"
     )
 
 
