@@ -16,10 +16,11 @@ $(STAMP): pyproject.toml
 
 venv: $(STAMP)
 
-# The dock mission on the built-in simulator, on the virtual clock (drop --fast for real time).
+# The shipped dock mission, by name, on the built-in simulator, on the virtual clock
+# (drop --fast for real time).
 RUN_ARGS ?= --fast
 run: $(STAMP)
-	$(BIN)/roomba-bt run missions/dock.yaml $(RUN_ARGS)
+	$(BIN)/roomba-bt run dock $(RUN_ARGS)
 
 lint: $(STAMP)
 	$(BIN)/ruff check .

@@ -10,6 +10,7 @@ import os
 from pathlib import Path
 from typing import Any
 
+from roomba_bt.mission.shipped import find_mission
 from roomba_bt.oi.encode import BAUD_CODES
 
 
@@ -98,3 +99,10 @@ def parse_timeout(text: str | None) -> float | str | None:
     if value <= 0:
         return f"--timeout {text!r}: must be more than 0 s"
     return value
+
+
+def mission_file(text: str) -> str | tuple[str]:
+    """A mission argument as a path: an existing file, else the shipped mission of that name
+    (``roomba-bt run dock``); ``(problem,)`` when neither exists."""
+    found = find_mission(text)
+    return str(found.path) if found.path is not None else (found.problem,)

@@ -26,7 +26,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from roomba_bt.cli.arguments import add_param_option, parse_params, parse_timeout, plot_file
+from roomba_bt.cli.arguments import (
+    add_param_option,
+    mission_file,
+    parse_params,
+    parse_timeout,
+    plot_file,
+)
 from roomba_bt.oi.profiles import PROFILES
 from roomba_bt.runtime.summary import ExitCode
 
@@ -43,7 +49,8 @@ def register(sub: Any) -> None:
         "missions",
         nargs="+",
         metavar="MISSION",
-        help="mission YAML file; two or more: compare them (A/B) on the same seeds",
+        help="mission YAML file or a shipped mission's name (dock); two or more: compare them "
+        "(A/B) on the same seeds",
     )
     ev.add_argument("--world", default="empty-room", help="a shipped world name or a YAML path")
     ev.add_argument("--runs", type=int, default=20, help="number of episodes (default 20)")
@@ -176,7 +183,8 @@ def variants(args: argparse.Namespace, params: dict[str, str]) -> list[Variant] 
             merged = {**params, **extra}
             text = " ".join(f"-p {k}={v}" for k, v in extra.items())
             label = f"{mission} {text}".strip()
-            out.append(Variant(label, mission, tuple(sorted(merged.items()))))
+            path = getattr(args, "mission_paths", {}).get(mission, mission)
+            out.append(Variant(label, path, tuple(sorted(merged.items()))))
     if len({v.label for v in out}) < len(out):
         return "the same variant twice: give each mission or value once"
     return out
@@ -186,9 +194,12 @@ def eval_command(args: argparse.Namespace) -> int:
     from roomba_bt.evaluate import EvaluationError, episode_specs, summarize
     from roomba_bt.evaluate.parallel import Engine, ProgressBar, evaluate
 
+    args.mission_paths = {}
     for mission in args.missions:
-        if not Path(mission).is_file():
-            return _error(f"{mission}: no such mission file")
+        found = mission_file(mission)
+        if isinstance(found, tuple):
+            return _error(found[0])
+        args.mission_paths[mission] = found
     if args.runs < 1:
         return _error(f"--runs {args.runs}: expected at least 1")
     if args.jobs < 1:

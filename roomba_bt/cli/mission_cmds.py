@@ -1,4 +1,5 @@
-"""``roomba-bt validate``, ``show``, ``behaviours`` and ``schema``: the mission tools.
+"""``roomba-bt validate``, ``show``, ``missions``, ``behaviours`` and ``schema``: the mission
+tools.
 
 None of them opens a port. ``validate`` prints every error of every file as
 ``file:line:col: message [yaml.path]`` and exits 0 if all are valid, 2 if not.
@@ -12,7 +13,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from roomba_bt.cli.arguments import add_param_option, baud_rate, parse_params
+from roomba_bt.cli.arguments import add_param_option, baud_rate, mission_file, parse_params
 from roomba_bt.oi.profiles import PROFILES, get_profile
 from roomba_bt.runtime.summary import ExitCode
 
@@ -25,18 +26,29 @@ def register(sub: Any) -> None:
         "blackboard keys, OI modes of every actuator, and the sensor stream budget. Every "
         "error is printed as file:line:col: message. Exit 0 if all are valid, 2 if not.",
     )
-    validate.add_argument("files", nargs="+", metavar="FILE")
+    validate.add_argument(
+        "files", nargs="+", metavar="FILE", help="a mission file, or a shipped mission's name"
+    )
     _common(validate)
     validate.set_defaults(func=validate_command)
 
     show = sub.add_parser(
         "show", help="print a mission's tree", description="Print the compiled tree of FILE."
     )
-    show.add_argument("file", metavar="FILE")
+    show.add_argument("file", metavar="FILE", help="a mission file, or a shipped mission's name")
     _common(show)
     show.add_argument("--dot", metavar="OUT.dot", help="also write the tree as Graphviz dot")
     show.add_argument("--svg", metavar="OUT.svg", help="also write the tree as SVG (needs dot)")
     show.set_defaults(func=show_command)
+
+    missions = sub.add_parser(
+        "missions",
+        help="list the shipped missions with their parameters",
+        description="List the missions shipped with roomba-bt (run one by name: roomba-bt run "
+        "dock), each with its description and parameters (type, default, doc), and the "
+        "shipped library a mission can include (include: [roomba-bt:lib/docking.yaml]).",
+    )
+    missions.set_defaults(func=missions_command)
 
     behaviours = sub.add_parser(
         "behaviours",
@@ -80,8 +92,13 @@ def validate_command(args: argparse.Namespace) -> int:
         return ExitCode.INVALID
     status = ExitCode.OK
     for file in args.files:
+        found = mission_file(file)
+        if isinstance(found, tuple):
+            print(found[0])
+            status = ExitCode.INVALID
+            continue
         diagnostics = validate_files(
-            [file], params, profile=get_profile(args.profile), baud=args.baud
+            [found], params, profile=get_profile(args.profile), baud=args.baud
         )
         for d in diagnostics:
             print(d)
@@ -100,8 +117,12 @@ def show_command(args: argparse.Namespace) -> int:
     params = _params(args.param)
     if params is None:
         return ExitCode.INVALID
+    found = mission_file(args.file)
+    if isinstance(found, tuple):
+        print(f"roomba-bt show: {found[0]}", file=sys.stderr)
+        return ExitCode.INVALID
     mission, diagnostics = compile_mission(
-        args.file, params, profile=get_profile(args.profile), baud=args.baud
+        found, params, profile=get_profile(args.profile), baud=args.baud
     )
     if mission is None:
         for d in diagnostics:
@@ -121,6 +142,19 @@ def show_command(args: argparse.Namespace) -> int:
         if problem is not None:
             print(f"roomba-bt show: {problem}", file=sys.stderr)
             return ExitCode.INVALID
+    return ExitCode.OK
+
+
+def missions_command(args: argparse.Namespace) -> int:
+    from roomba_bt.mission.shipped import describe_shipped, shipped_library_files
+
+    for entry in describe_shipped():
+        print(f"{entry.name}  {entry.description}")
+        for param in entry.parameters:
+            doc = f"  {param.doc}" if param.doc else ""
+            print(f"    {param.name}: {param.type}, default {param.default}{doc}")
+        print()
+    print("library (include by name): " + ", ".join(shipped_library_files()))
     return ExitCode.OK
 
 

@@ -10,6 +10,7 @@ from typing import Any
 from roomba_bt.cli.arguments import (
     add_param_option,
     baud_rate,
+    mission_file,
     output_file,
     parse_params,
     parse_timeout,
@@ -29,7 +30,7 @@ def register(sub: Any) -> None:
         "--fast on the virtual clock). Exit codes: 0 succeeded, 1 failed or timed out, "
         "2 invalid mission or usage, 3 connection or stream failure, 130 interrupted.",
     )
-    run.add_argument("mission", help="mission YAML file")
+    run.add_argument("mission", help="mission YAML file, or a shipped mission's name (dock)")
     run.add_argument(
         "--port", help="serial device or URL (socket://host:port, rfc2217://, loop://)"
     )
@@ -115,8 +116,10 @@ def run_command(args: argparse.Namespace) -> int:
         return _error(timeout)
     if args.port and (args.world or args.plot or args.fast):
         return _error("--world, --plot and --fast are for the simulator: drop them or --port")
-    if not Path(args.mission).is_file():
-        return _error(f"{args.mission}: no such mission file")
+    found = mission_file(args.mission)
+    if isinstance(found, tuple):
+        return _error(found[0])
+    args.mission = found
     mission = load(args.mission, params, profile, args.baud)
     if isinstance(mission, int):
         return mission
@@ -220,8 +223,10 @@ def replay_command(args: argparse.Namespace) -> int:
     except ValueError as exc:
         return _error(f"{args.record}:1: {exc}")
     mission_path = args.mission or header.get("mission")
-    if not mission_path or not Path(mission_path).is_file():
+    found = mission_file(str(mission_path)) if mission_path else None
+    if not isinstance(found, str):
         return _error(f"{args.record}: mission {mission_path!r} not found; pass --mission FILE")
+    mission_path = found
     params = dict(header.get("parameters") or {})
     extra = parse_params(args.param)
     if isinstance(extra, str):

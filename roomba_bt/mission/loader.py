@@ -9,7 +9,8 @@ A mission file::
     blackboard:                          # declared keys, with types
       leg: distance
     plugins: [./my_behaviour.py]         # behaviour modules by path
-    include: [lib/common.yaml]           # subtrees (and keys) of other files
+    include: [lib/common.yaml]           # subtrees (and keys) of other files; the shipped
+                                         # library: roomba-bt:lib/docking.yaml
     subtrees:
       back_off:
         parameters: {speed: {type: speed, default: 100 mm/s}}
@@ -40,6 +41,13 @@ from roomba_bt.behaviours.language import WORDS
 from roomba_bt.behaviours.units import VALUE_TYPES, UnitError, ValueType, closest, enum
 from roomba_bt.mission.ir import KeyDecl, Node
 from roomba_bt.mission.nodes import NodeParser
+from roomba_bt.mission.shipped import (
+    DOCKING_LIBRARY,
+    SHIPPED_DIR,
+    SHIPPED_PREFIX,
+    shipped_file,
+    shipped_library_files,
+)
 from roomba_bt.mission.source import (
     Bad,
     Loc,
@@ -173,7 +181,10 @@ class Loader:
             except Bad as bad:
                 self.ctx.error(bad.diagnostic)
                 continue
-            out.append((text, (path.parent / text).resolve(), iloc))
+            if text.startswith(SHIPPED_PREFIX):
+                out.append((text, (SHIPPED_DIR / text[len(SHIPPED_PREFIX) :]).resolve(), iloc))
+            else:
+                out.append((text, (path.parent / text).resolve(), iloc))
         return out
 
     def _plugins(self, path: Path, node: yaml.Node, loc: Loc) -> None:
@@ -196,11 +207,19 @@ class Loader:
                 chain = [p.name for p in self._include_stack[self._include_stack.index(target) :]]
                 self.ctx.error(iloc.at(f"include cycle: {' -> '.join([*chain, target.name])}"))
                 continue
+            if text.startswith(SHIPPED_PREFIX) and shipped_file(text) is None:
+                self.ctx.error(
+                    iloc.at(
+                        f"included file {text!r} is not in the shipped library; "
+                        f"it holds {', '.join(shipped_library_files()) or 'nothing'}"
+                    )
+                )
+                continue
             if not target.is_file():
                 self.ctx.error(
                     iloc.at(
-                        f"included file {text!r} not found"
-                        " (paths are relative to the including file)"
+                        f"included file {text!r} not found (paths are relative to the "
+                        f"including file; the shipped docking library is {DOCKING_LIBRARY})"
                     )
                 )
                 continue

@@ -42,7 +42,7 @@ def test_validate_takes_parameters(mission_file: Callable[..., Path], capsys: Ca
 
 def test_validate_a_missing_file(capsys: Capsys, tmp_path: Path) -> None:
     assert main(["validate", str(tmp_path / "nope.yaml")]) == 2
-    assert "cannot read mission file" in capsys.readouterr().out
+    assert "nope.yaml: no such mission file, and no shipped mission" in capsys.readouterr().out
 
 
 def test_show_prints_the_tree(capsys: Capsys) -> None:

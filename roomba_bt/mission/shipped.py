@@ -1,0 +1,135 @@
+"""The missions shipped inside the package, and how a name reaches them.
+
+The shipped missions are package data (``roomba_bt/missions/``, also linked from the
+repository's ``missions/``), so an installed wheel has them wherever it was installed:
+
+    roomba-bt run dock --fast                  # no file called "dock": the shipped mission
+    roomba-bt run ./dock.yaml                  # a file always wins over a shipped name
+
+A user's mission reaches the shipped library with a name that does not depend on where the
+package is installed: an include starting with :data:`SHIPPED_PREFIX` is a path inside the
+shipped missions' directory.
+
+    include: [roomba-bt:lib/docking.yaml]      # the shipped docking subtree
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+#: Where the shipped missions live: the package's data directory (a sibling of ``mission/``).
+SHIPPED_DIR = Path(__file__).resolve().parent.parent / "missions"
+
+#: An include (or a mission argument) starting with this names a file of the shipped missions'
+#: directory, e.g. ``roomba-bt:lib/docking.yaml``.
+SHIPPED_PREFIX = "roomba-bt:"
+
+#: The shipped docking library's include name (what ``dock`` and ``patrol`` include).
+DOCKING_LIBRARY = f"{SHIPPED_PREFIX}lib/docking.yaml"
+
+
+@dataclass(frozen=True)
+class ShippedLookup:
+    """What a mission argument names: ``path`` when found, else ``problem`` (one sentence
+    naming what was given and what exists)."""
+
+    path: Path | None
+    problem: str = ""
+
+
+@dataclass(frozen=True)
+class ShippedParameter:
+    name: str
+    type: str
+    default: str
+    doc: str
+
+
+@dataclass(frozen=True)
+class ShippedMission:
+    """What ``roomba-bt missions`` prints of one: the description with the defaults put in."""
+
+    name: str
+    path: Path
+    description: str
+    parameters: tuple[ShippedParameter, ...]
+
+
+def shipped_missions() -> dict[str, Path]:
+    """Name (the file's stem) -> path of every shipped mission, sorted by name."""
+    return {p.stem: p for p in sorted(SHIPPED_DIR.glob("*.yaml"))}
+
+
+def shipped_library_files() -> tuple[str, ...]:
+    """The include names of the shipped library files, e.g. ``roomba-bt:lib/docking.yaml``."""
+    return tuple(
+        SHIPPED_PREFIX + p.relative_to(SHIPPED_DIR).as_posix()
+        for p in sorted((SHIPPED_DIR / "lib").glob("*.yaml"))
+    )
+
+
+def shipped_file(text: str) -> Path | None:
+    """The file a ``roomba-bt:PATH`` name designates, or None if ``text`` is no such name or
+    the file does not exist (a name may not climb out of the shipped directory)."""
+    if not text.startswith(SHIPPED_PREFIX):
+        return None
+    relative = text[len(SHIPPED_PREFIX) :]
+    target = (SHIPPED_DIR / relative).resolve()
+    if not target.is_relative_to(SHIPPED_DIR) or not target.is_file():
+        return None
+    return target
+
+
+def find_mission(text: str) -> ShippedLookup:
+    """A mission argument as the command line takes it: an existing file; else a shipped
+    mission's name (``dock``, ``dock.yaml`` or ``roomba-bt:dock.yaml``)."""
+    given = Path(text)
+    if given.is_file():
+        return ShippedLookup(given)
+    named = shipped_file(text)
+    if named is not None:
+        return ShippedLookup(named)
+    shipped = shipped_missions()
+    stem = text[: -len(".yaml")] if text.endswith(".yaml") else text
+    if "/" not in text and stem in shipped:
+        return ShippedLookup(shipped[stem])
+    names = ", ".join(shipped) or "none"
+    return ShippedLookup(
+        None,
+        f"{text}: no such mission file, and no shipped mission of that name "
+        f"(shipped: {names}; `roomba-bt missions` lists them)",
+    )
+
+
+_SUBSTITUTION = re.compile(r"\$\{(\w+)\}")
+
+
+def _with_defaults(text: str, params: tuple[ShippedParameter, ...]) -> str:
+    defaults = {p.name: p.default for p in params}
+    return _SUBSTITUTION.sub(lambda m: defaults.get(m.group(1), m.group(0)), text)
+
+
+def describe_shipped() -> list[ShippedMission]:
+    """Each shipped mission's name, description and parameter declarations, read as plain
+    data (the files are checked by the tests; listing them compiles nothing)."""
+    out = []
+    for name, path in shipped_missions().items():
+        data: Any = yaml.safe_load(path.read_text(encoding="utf-8")) or {}
+        declared = data.get("parameters") or {}
+        params = tuple(
+            ShippedParameter(
+                pname,
+                str(decl.get("type", "")),
+                "none" if decl.get("default") is None else str(decl.get("default")),
+                str(decl.get("doc", "")),
+            )
+            for pname, decl in declared.items()
+        )
+        description = _with_defaults(str(data.get("description", "")), params)
+        out.append(ShippedMission(name, path, description, params))
+    return out

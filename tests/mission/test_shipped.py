@@ -1,0 +1,132 @@
+"""Shipped missions by name, the shipped library's include name, ``roomba-bt missions``."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.cli import main
+from roomba_bt.mission import compile_mission
+from roomba_bt.mission.shipped import (
+    DOCKING_LIBRARY,
+    SHIPPED_DIR,
+    describe_shipped,
+    find_mission,
+    shipped_file,
+    shipped_missions,
+)
+
+ROOT = Path(__file__).resolve().parents[2]
+FIVE = {"dock", "dock-builtin", "patrol", "bump-and-turn", "wall-follow"}
+Capsys = pytest.CaptureFixture[str]
+
+
+def test_the_shipped_missions_are_package_data() -> None:
+    assert SHIPPED_DIR == ROOT / "roomba_bt" / "missions"
+    assert set(shipped_missions()) >= FIVE
+    assert shipped_file(DOCKING_LIBRARY) == SHIPPED_DIR / "lib" / "docking.yaml"
+    pyproject = (ROOT / "pyproject.toml").read_text()
+    assert '"missions/*.yaml", "missions/lib/*.yaml"' in pyproject
+
+
+def test_the_repository_paths_link_to_the_one_copy() -> None:
+    """``missions/dock.yaml`` (docs, tests, the Makefile's history) is a link, not a copy."""
+    for name in shipped_missions():
+        link = ROOT / "missions" / f"{name}.yaml"
+        assert link.is_symlink() and link.resolve() == SHIPPED_DIR / f"{name}.yaml"
+    assert (ROOT / "missions" / "lib").resolve() == SHIPPED_DIR / "lib"
+
+
+def test_a_name_finds_the_shipped_mission_and_a_file_wins(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    assert find_mission("dock").path == SHIPPED_DIR / "dock.yaml"
+    assert find_mission("dock.yaml").path == SHIPPED_DIR / "dock.yaml"
+    assert find_mission("roomba-bt:patrol.yaml").path == SHIPPED_DIR / "patrol.yaml"
+    (tmp_path / "dock.yaml").write_text("tree: wall\n")
+    assert find_mission("dock.yaml").path == Path("dock.yaml")
+    missing = find_mission("dok")
+    assert missing.path is None
+    assert missing.problem.startswith("dok: no such mission file, and no shipped mission")
+    assert "dock-builtin" in missing.problem
+    assert find_mission("sub/dock").path is None, "a path is never taken for a name"
+
+
+def test_a_shipped_name_cannot_climb_out_of_the_package() -> None:
+    assert shipped_file("roomba-bt:../mission/shipped.py") is None
+    assert shipped_file("roomba-bt:lib/nope.yaml") is None
+    assert shipped_file("lib/docking.yaml") is None
+
+
+def test_a_users_mission_includes_the_shipped_library_by_name(
+    mission_file: Callable[..., Path],
+) -> None:
+    path = mission_file(
+        """
+        include: [roomba-bt:lib/docking.yaml]
+        tree:
+          subtree: {id: dock, time_limit: 2min}
+        """,
+        "far/away/mine.yaml",
+    )
+    mission, diagnostics = compile_mission(path)
+    assert diagnostics == []
+    assert mission is not None and 34 in mission.packets
+
+
+def test_an_unknown_library_name_says_what_the_library_holds(
+    mission_file: Callable[..., Path],
+) -> None:
+    path = mission_file("include: [roomba-bt:lib/dockin.yaml]\ntree: wall\n")
+    _, diagnostics = compile_mission(path)
+    assert [d.message for d in diagnostics] == [
+        "included file 'roomba-bt:lib/dockin.yaml' is not in the shipped library; "
+        "it holds roomba-bt:lib/docking.yaml"
+    ]
+
+
+def test_a_missing_relative_include_names_the_library(mission_file: Callable[..., Path]) -> None:
+    path = mission_file("include: [lib/docking.yaml]\ntree: wall\n")
+    _, diagnostics = compile_mission(path)
+    assert "the shipped docking library is roomba-bt:lib/docking.yaml" in diagnostics[0].message
+
+
+def test_missions_lists_each_with_description_and_parameters(capsys: Capsys) -> None:
+    assert main(["missions"]) == 0
+    out = capsys.readouterr().out
+    for name in FIVE:
+        assert f"\n{name}  " in f"\n{out}"
+    assert "dock  Dock on the home base from its beams within 10min; succeed when charging." in out
+    assert "    laps: int, default 2" in out
+    assert "    time_limit: duration, default 10min  give up after this long" in out
+    assert out.rstrip().endswith("library (include by name): roomba-bt:lib/docking.yaml")
+
+
+def test_describe_shipped_matches_the_compiled_missions() -> None:
+    for entry in describe_shipped():
+        mission, diagnostics = compile_mission(entry.path)
+        assert mission is not None, diagnostics
+        assert entry.description == mission.description
+        assert [p.name for p in entry.parameters] == list(mission.parameters)
+
+
+def test_validate_and_show_take_names(
+    capsys: Capsys, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    assert main(["validate", "dock", "dock-builtin", "bump-and-turn"]) == 0
+    assert capsys.readouterr().err.count(": ok") == 3
+    assert main(["show", "dock-builtin"]) == 0
+    assert capsys.readouterr().out.startswith("dock-builtin: Seek Dock (143)")
+    assert main(["validate", "nothing-like-it"]) == 2
+    assert "nothing-like-it: no such mission file" in capsys.readouterr().out
+
+
+def test_run_takes_a_name(capsys: Capsys, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", "dock-builtin", "--fast", "--display", "none"]) == 0
+    assert main(["run", "dok", "--fast"]) == 2
+    assert "dok: no such mission file, and no shipped mission" in capsys.readouterr().err
