@@ -285,11 +285,16 @@ def _run_episode(spec: EpisodeSpec) -> EpisodeResult:
 
 
 _STAGE = re.compile(r"^([a-z_][a-z0-9_]*)\(")
+_RUNNING_STAGE = re.compile(r"\(stage ([^)]+) was running\)")
 
 
 def failure_stage(reason: str) -> str:
-    """The leaf a failure reason starts with (``find_dock(...): lost the beam`` ->
-    ``find_dock``); "" when the reason names none."""
+    """The stage a failure reason names: the one it says was running (``... (stage search
+    was running)`` -> ``search``), else the leaf it starts with (``find_dock(...): lost the
+    beam`` -> ``find_dock``); "" when it names none."""
+    running = _RUNNING_STAGE.search(reason)
+    if running:
+        return running.group(1)
     match = _STAGE.match(reason)
     return match.group(1) if match else ""
 

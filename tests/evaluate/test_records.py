@@ -54,6 +54,8 @@ def test_a_failure_names_its_stage() -> None:
 
     assert failure_stage("find_dock(timeout=3s): no beam") == "find_dock"
     assert failure_stage("deadline of 10 s reached") == ""
+    reason = "dock_time_limit(600 s): search: gave up after 600 s (stage search was running)"
+    assert failure_stage(reason) == "search"
 
 
 def test_bad_results_files_say_where(tmp_path: Path) -> None:
