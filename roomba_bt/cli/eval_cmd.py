@@ -15,7 +15,8 @@ Dask cluster of ``--jobs`` workers; ``--scheduler``: an existing one). With two 
 each is compared with the first (A): paired successes, the exact McNemar p-value, the median
 time difference with its interval. ``--out`` writes one record per episode (JSON Lines or
 CSV), ``--json`` prints the summary as JSON. Ctrl-C prints what finished (exit 130). Exit
-codes: 0 (and 1 when ``--min-rate`` is given and not reached), 2 for invalid input.
+codes: 0 (and 1 when ``--min-rate`` is given and not reached), 2 for invalid input, 3 when
+the ``--scheduler`` does not answer.
 """
 
 from __future__ import annotations
@@ -43,7 +44,8 @@ def register(sub: Any) -> None:
         help="run a mission many times on the simulator and report its success rate",
         description="Run MISSION in N seeded episodes on the simulator's virtual clock and "
         "report the success rate (95% Wilson interval), median and p90 time, bumps and the "
-        "failure reasons. Exit codes: 0 done, 1 --min-rate not reached, 2 invalid input.",
+        "failure reasons. Exit codes: 0 done, 1 --min-rate not reached, 2 invalid input, "
+        "3 --scheduler unreachable, 130 interrupted (what finished is summarised).",
     )
     ev.add_argument(
         "missions",
@@ -264,10 +266,13 @@ def eval_command(args: argparse.Namespace) -> int:
                                                   f"{' '.join(f'{k}={x}' for k, x in v.params)} ")
         for v in chosen
     ]  # fmt: skip
-    from roomba_bt.evaluate.cluster import ClusterUnavailableError
+    from roomba_bt.evaluate.cluster import ClusterUnavailableError, SchedulerUnreachableError
 
     try:
         done = evaluate(batches, engine, bars)
+    except SchedulerUnreachableError as exc:
+        print(f"roomba-bt eval: {exc}", file=sys.stderr)
+        return ExitCode.CONNECTION
     except ClusterUnavailableError as exc:
         return _error(str(exc))
     summaries = [

@@ -27,7 +27,11 @@ from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec, run_episode, 
 
 
 class ClusterUnavailableError(RuntimeError):
-    """Dask distributed is not installed, or the scheduler cannot be reached."""
+    """Dask distributed is not installed (the cluster extra): a usage problem."""
+
+
+class SchedulerUnreachableError(ClusterUnavailableError):
+    """The scheduler at ``--scheduler`` did not answer: a connection problem."""
 
 
 def run_on_worker(spec: EpisodeSpec) -> EpisodeResult:
@@ -63,7 +67,7 @@ def dask_client(scheduler: str | None = None, workers: int = 2) -> Iterator[Any]
         try:
             client = distributed.Client(scheduler, timeout="10s")
         except (OSError, TimeoutError) as exc:
-            raise ClusterUnavailableError(
+            raise SchedulerUnreachableError(
                 f"--scheduler {scheduler}: cannot connect ({exc})"
             ) from None
         with client:

@@ -116,3 +116,13 @@ def test_separate_scheduler_and_workers_give_the_results_of_one_job_even_if_one_
     assert all(r is not None for r in results)
     assert _episodes([r for r in results if r is not None]) == one_job
     assert retried >= 1, "the killed worker's episode ran again elsewhere"
+
+
+def test_an_unreachable_scheduler_exits_3(capsys: pytest.CaptureFixture[str]) -> None:
+    from roomba_bt.cli import main
+
+    port = _free_port()  # nothing listens there
+    code = main(["eval", str(MISSIONS / "dock.yaml"), "--runs", "1", "--no-progress",
+                 "--scheduler", f"tcp://127.0.0.1:{port}"])  # fmt: skip
+    assert code == 3
+    assert f"--scheduler tcp://127.0.0.1:{port}: cannot connect" in capsys.readouterr().err
