@@ -9,6 +9,10 @@ process into a private temporary folder with the same layout and returns the mis
 there, so the loader reads exactly the bytes the submitting machine read and reports the same
 diagnostics. A world given by path travels the same way (:func:`bundle_world`).
 
+An include of the shipped library (``roomba-bt:lib/docking.yaml``) is not copied: the loader
+reads it from the installed package, like the code itself, so workers must run the same
+roomba-bt release as the submitting machine (they must anyway, for the same results).
+
 The bundle is plain data (tuples of strings): small (the dock mission and its library are a
 few kB), picklable, hashable; its digest names the folder, so many episodes of one bundle
 share one copy.
@@ -25,6 +29,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import yaml
+
+from roomba_bt.mission.shipped import SHIPPED_PREFIX
 
 #: The sections of a mission (or included) file that name other files to bring along.
 FILE_LISTS = ("include", "plugins")
@@ -82,7 +88,8 @@ def _named_files(path: Path) -> list[Path]:
     for key in FILE_LISTS:
         entries = data.get(key)
         if isinstance(entries, list):
-            out += [(path.parent / str(e)).resolve() for e in entries if isinstance(e, str)]
+            out += [(path.parent / e).resolve() for e in entries
+                    if isinstance(e, str) and not e.startswith(SHIPPED_PREFIX)]  # fmt: skip
     return out
 
 

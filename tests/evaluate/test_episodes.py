@@ -77,3 +77,29 @@ def test_assert_success_rate_passes_and_fails_with_the_report() -> None:
     assert summary.successes == 2
     with pytest.raises(AssertionError, match=r"0 of 2 runs within 2 s .*\n.*mission"):
         assert_success_rate(str(MISSIONS / "dock.yaml"), runs=2, within_s=2, rate=0.5)
+
+
+@pytest.mark.parametrize(
+    ("mission", "named"),
+    [("bounce.yaml", "lib/escapes.yaml"), ("custom_condition.yaml", "plugins/near_wall.py")],
+)
+def test_a_self_contained_spec_needs_none_of_its_files(
+    tmp_path: Path, mission: str, named: str
+) -> None:
+    """The mission and the file it includes (or the plugin it loads) travel as texts: the
+    episode runs the same after the files are gone (a worker without a shared disk)."""
+    import shutil
+
+    from roomba_bt.evaluate.episode import self_contained
+
+    folder = tmp_path / "examples"
+    for name in (mission, named):
+        (folder / name).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy(MISSIONS / "examples" / name, folder / name)
+    spec = EpisodeSpec(str(folder / mission), "empty-room", seed=3, timeout_s=3.0)
+    from_files = run_episode(spec)
+    travelling = self_contained(spec)
+    assert travelling.sources is not None
+    assert sorted(n for n, _ in travelling.sources.files) == sorted([mission, named])
+    shutil.rmtree(folder)
+    assert _without_wall_time([run_episode(travelling)]) == _without_wall_time([from_files])
