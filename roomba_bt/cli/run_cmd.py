@@ -59,6 +59,13 @@ def register(sub: Any) -> None:
     )  # fmt: skip
     run.add_argument("--watchdog", type=seconds, default=0.1, help="stream watchdog, seconds")
     run.add_argument(
+        "--no-keep-awake",
+        dest="keep_awake",
+        action="store_false",
+        help="do not pulse BRC (RTS/DTR) once a minute; a robot left in Passive then sleeps "
+        "after 5 minutes",
+    )
+    run.add_argument(
         "--display", choices=("auto", "tree", "log", "none"), default="auto",
         help="live tree on a terminal (auto), one line per status change (log), or nothing",
     )  # fmt: skip
@@ -160,6 +167,7 @@ def run_command(args: argparse.Namespace) -> int:
             baud=args.baud,
             packets=packets,
             watchdog=args.watchdog,
+            keep_awake=None if args.keep_awake else False,
             end_in=args.end_in,
             timeout_s=timeout,
             observer=observer,

@@ -13,6 +13,7 @@ A difference is a field here, never an ``if`` elsewhere. Each decision is explai
 * ``stasis_maximum``: 0-3 on the 600 (2 = stasis wheel too dirty), 0-1 on the 500.
 * ``digit_leds_raw_works``: opcode 163 is broken on 600 / Create 2 firmware (Appendix B).
 * ``reports_mode_plus_one``: some 600-series firmware reports OI mode + 1 in packet 35.
+* ``sleeps_in_passive``: the robot sleeps after 5 minutes in Passive (keep-awake's default).
 """
 
 from __future__ import annotations
@@ -48,6 +49,9 @@ class RobotProfile:
     wall_signal_maximum: int
     digit_leds_raw_works: bool
     reports_mode_plus_one: bool
+    #: Passive sleeps after 5 minutes of inactivity (600 spec, "Passive Mode"); the 500 spec
+    #: does not say, and is assumed to (a BRC pulse is harmless): the runtime keeps it awake.
+    sleeps_in_passive: bool = True
     default_baud: int = 115200
     wheel_base_mm: float = WHEEL_BASE_MM
     max_velocity_mm_s: int = 500

@@ -45,10 +45,18 @@ from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
 from roomba_bt.oi.opcodes import Effect
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile, get_profile
 from roomba_bt.oi.stream import ReplyParser, check_bandwidth
-from roomba_bt.robot.errors import ConnectionFailed, ModeError, PortLost, RobotError
+from roomba_bt.robot.errors import (
+    ConnectionFailed,
+    ModeError,
+    PortLost,
+    RobotAsleep,
+    RobotError,
+    StreamStalled,
+)
 from roomba_bt.robot.interface import SLOT_SECONDS, ModeChange
 from roomba_bt.robot.link import LINK_ERRORS, LinkStatus, StreamLink, TimedFrame
 from roomba_bt.robot.modes import DEFAULT_SETTLE, ModeModel
+from roomba_bt.robot.wake import SLEEP_AFTER_S, keep_awake_for
 from roomba_bt.transport.base import Transport, TransportError
 from roomba_bt.transport.serial_port import DEFAULT_BAUD, SerialTransport
 
@@ -129,6 +137,7 @@ class Connection:
         end_in: EndMode = "passive",
         settle: float = DEFAULT_SETTLE,
         baud: int | None = None,
+        keep_awake: bool | None = None,
     ) -> None:
         if end_in not in ("passive", "stop"):
             raise ValueError(f"end_in must be 'passive' or 'stop', got {end_in!r}")
@@ -153,6 +162,10 @@ class Connection:
         self._closed = False
         self.safe_stopped: bool | None = None
         self._builtin_may_run = False  # a Clean/Spot/Max/Seek Dock cycle may be driving
+        # Keep-awake (robot/wake.py): on by default where the profile sleeps in Passive.
+        self.keep_awake = self.profile.sleeps_in_passive if keep_awake is None else keep_awake
+        self.wake = keep_awake_for(transport, self.link.name, self.keep_awake)
+        self._last_command_at = float("-inf")
 
     # ------------------------------------------------------------------ opening
     @classmethod
@@ -320,7 +333,31 @@ class Connection:
         the watchdog. Raises :class:`PortLost` if the port fails and :class:`StreamStalled`
         once when the watchdog trips (frames coming back clear the stall).
         """
-        return self.link.read_frames(timeout)
+        wake = self.wake
+        if wake is not None:
+            wake.tick(self.link.transport.now())
+        try:
+            return self.link.read_frames(timeout)
+        except StreamStalled as exc:
+            asleep = self._asleep(exc)
+            if asleep is None:
+                raise
+            log.error("%s", asleep)
+            raise asleep from exc
+
+    def _asleep(self, stalled: StreamStalled) -> RobotAsleep | None:
+        """The stall explained as sleep: Passive, a profile that sleeps, and nothing from us
+        (no command, no BRC pulse) for the five minutes the OI waits before sleeping."""
+        if not self.profile.sleeps_in_passive or self.modes.mode is not OIMode.PASSIVE:
+            return None
+        last = self._last_command_at
+        if self.wake is not None and self.wake.last_pulse is not None:
+            last = max(last, self.wake.last_pulse)
+        idle = self.link.transport.now() - last
+        if idle < SLEEP_AFTER_S:
+            return None
+        pulses = self.wake is not None and self.wake.unavailable is None
+        return RobotAsleep(self.name, idle, keep_awake=self.keep_awake, pulses=pulses)
 
     def _report_change(self, change: ModeChange) -> None:
         log.warning(
@@ -390,6 +427,7 @@ class Connection:
         else:
             batch += command.data
         now = self.link.transport.now()
+        self._last_command_at = now
         self.modes.apply(command, now)
         self._sent += 1
         if effect is not None or spec.leads_to is not None:  # not a plain actuator command
@@ -492,6 +530,9 @@ class Connection:
             pass  # already stopped: a second stop sequence would only add bytes
         elif self.modes.mode is not OIMode.OFF:  # safe_stop reports a port already gone
             stopped = self.safe_stop()
+        if self.wake is not None:
+            with contextlib.suppress(*LINK_ERRORS):
+                self.wake.release()
         self.link.transport.close()
         self.link.status = LinkStatus.CLOSED
         if self.safe_stopped is None:

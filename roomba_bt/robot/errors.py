@@ -121,3 +121,27 @@ class StreamStalled(LinkDown):
             f"no valid sensor frame for {silent_for * 1000:.0f} ms (watchdog "
             f"{watchdog * 1000:.0f} ms); {action}",
         )
+
+
+class RobotAsleep(LinkDown):
+    """The stream stopped because the robot slept: it sat in Passive five minutes with
+    nothing from us (no command, no BRC pulse). Says how to keep it awake."""
+
+    def __init__(self, port: str, idle_s: float, *, keep_awake: bool, pulses: bool) -> None:
+        self.idle_s = idle_s
+        if not keep_awake:
+            fix = "leave keep-awake on (drop --no-keep-awake): it pulses BRC once a minute"
+        elif not pulses:
+            fix = (
+                "this link has no modem line to pulse BRC: use a USB cable with BRC on RTS or "
+                "DTR, or an rfc2217:// bridge"
+            )
+        else:
+            fix = "check that the cable wires BRC to RTS or DTR"
+        super().__init__(
+            port,
+            f"the robot fell asleep: {idle_s:.0f} s in Passive without a command or a BRC "
+            f"pulse (the OI sleeps after 5 minutes); {fix}. Firmware older than "
+            "release-3.8.2 / release-stm32-3.7.7 does not wake by BRC on the dock "
+            "(roomba-bt doctor --allow-reset reads the version)",
+        )

@@ -57,6 +57,12 @@ class RecordingTransport:
             self._log("in", data)
         return data
 
+    def set_wake_line(self, low: bool) -> None:
+        """Keep-awake's BRC pulses reach the port when it has modem lines (not recorded)."""
+        inner = getattr(self._inner, "set_wake_line", None)
+        if inner is not None:
+            inner(low)
+
     def set_baud(self, baud: int) -> None:
         self._inner.set_baud(baud)
 

@@ -62,6 +62,7 @@ class RunStack:
         observer: TickObserver | None = None,
         input_ended: Callable[[], str | None] | None = None,
         record: Recording | None = None,
+        keep_awake: bool | None = None,
     ) -> None:
         self.mission = mission
         self.packets = tuple(
@@ -80,7 +81,7 @@ class RunStack:
         self.link = link
         self.transport = transport
         self.connection = Connection(
-            transport, profile, watchdog=watchdog, end_in=end_in, baud=baud
+            transport, profile, watchdog=watchdog, end_in=end_in, baud=baud, keep_awake=keep_awake
         )
         self.runner = MissionRunner(
             self.connection,

@@ -80,6 +80,11 @@ class SimLink:
         self._check()
         self.baud = baud
 
+    def set_wake_line(self, low: bool) -> None:
+        """The modem line wired to BRC (asserted = low): see ``Simulator.set_brc``."""
+        self._check()
+        self.simulator.set_brc(low)
+
     def close(self) -> None:
         self._open = False
 

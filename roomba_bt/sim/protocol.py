@@ -71,6 +71,8 @@ class OIProtocol(StreamOutput):
         self.builtin: BuiltinCycle | None = None
         self._rng = random.Random(f"robot:{self.seed}")  # the built-in cycles' choices
         self._last_activity = 0.0
+        self.brc_low = False
+        self.brc_pulses = 0
         self.ignored_bytes = 0
         self._inbuf = bytearray()
         self._commands: dict[int, CommandSpec] = {c.opcode: c for c in profile.commands}
@@ -177,6 +179,23 @@ class OIProtocol(StreamOutput):
             self.motor_bits = 0
             self.brush_pwm = (0, 0, 0)
             self._set_mode(OIMode.PASSIVE, f"safety: {cause}")
+
+    def set_brc(self, low: bool) -> None:
+        """The BRC pin (wired to a modem line on the USB cables). Its falling edge resets the
+        five-minute Passive sleep counter and wakes a sleeping robot, into Passive with no
+        stream (the 600 spec, "Passive Mode")::
+
+            BRC  ────┐       ┌────      falling edge: counter reset / wake
+                     └───────┘
+        """
+        if low and not self.brc_low:
+            self.brc_pulses += 1
+            self._last_activity = self.time
+            if self.asleep:
+                self.asleep = False
+                self._set_mode(OIMode.PASSIVE, "BRC pulse")
+                self._event("wake", "BRC pulse")
+        self.brc_low = low
 
     def _fall_asleep(self, cause: str) -> None:
         """Sleep: nothing but Start (or Reset) wakes the robot; the stream ends."""

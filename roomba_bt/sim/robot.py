@@ -109,6 +109,8 @@ class Simulator(OIProtocol):
         if timeline is not None:
             self._world_events(timeline)
         if self.asleep:
+            if self.docked and self.dock_powered:
+                self._battery(dt)  # asleep on the dock, the battery still charges
             return
         v = self.values
         if v[37] or v[18]:
@@ -139,7 +141,6 @@ class Simulator(OIProtocol):
         if (
             mode is _PASSIVE
             and self.time - self._last_activity >= PASSIVE_SLEEP_SECONDS
-            and not self.charging
             and self.builtin is None
         ):
             self._fall_asleep("5 min idle")

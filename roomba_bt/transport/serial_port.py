@@ -117,6 +117,16 @@ class SerialTransport:
         except (serial.SerialException, OSError, ValueError) as exc:
             raise TransportError(self.name, f"set the baud rate to {baud}", exc) from exc
 
+    def set_wake_line(self, low: bool) -> None:
+        """Drive the robot's BRC pin through the modem lines: RTS and DTR together (cables
+        wire one or the other), asserted = BRC low. ``rfc2217://`` carries them to the far
+        end; a raw ``socket://`` bridge ignores them; ``loop://`` keeps them."""
+        try:
+            self._port.rts = low
+            self._port.dtr = low
+        except (serial.SerialException, OSError, ValueError) as exc:
+            raise TransportError(self.name, "set the modem lines (BRC)", exc) from exc
+
     def close(self) -> None:
         # pyserial's socket:// close skips socket.close() when shutdown() fails (the peer
         # already hung up), which leaks the socket: close it ourselves.

@@ -1,0 +1,107 @@
+"""Keep-awake: pulse the BRC pin low once a minute so a robot in Passive never sleeps.
+
+The Roomba 600 / Create 2 OI spec ("Passive Mode"): in Passive the robot sleeps after five
+minutes of inactivity; "to disable sleep, pulse the BRC pin low periodically before these
+five minutes expire. Each pulse resets this five minute counter", e.g. low for one second
+every minute, which does not change the baud rate. A sleeping robot answers nothing and its
+stream stops, so a mission waiting on the dock for a charge would end as a lost stream.
+
+The USB cables wire BRC to a modem line (RTS on most, DTR on some): a transport that can
+drive it has ``set_wake_line(low)`` (``SerialTransport`` drives RTS and DTR together, the
+simulator's links model the pin). Asserted means BRC low::
+
+    BRC  ──────┐     ┌──────────── ... ──────┐     ┌────
+               └─────┘                       └─────┘
+               t     t+1 s                   t+60 s
+
+A transport without the method (a TCP bridge without RFC 2217, a replay) gets no pulses; the
+connection says so once.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Protocol, runtime_checkable
+
+log = logging.getLogger(__name__)
+
+#: Passive without activity for this long: the robot sleeps (600 spec, "Passive Mode").
+SLEEP_AFTER_S = 300.0
+#: Seconds between the starts of two pulses (well inside the five minutes).
+PULSE_PERIOD_S = 60.0
+#: Seconds BRC is held low: short enough not to be read as the baud-change gesture.
+PULSE_LENGTH_S = 1.0
+
+
+@runtime_checkable
+class WakeLine(Protocol):
+    """A transport that can drive the robot's BRC pin (asserted = low)."""
+
+    def set_wake_line(self, low: bool) -> None: ...
+
+
+class KeepAwake:
+    """Pulses BRC low for :data:`PULSE_LENGTH_S` every :data:`PULSE_PERIOD_S`, driven by
+    :meth:`tick` with the link's clock (so it runs on the virtual clock too)."""
+
+    def __init__(
+        self,
+        line: WakeLine,
+        *,
+        period: float = PULSE_PERIOD_S,
+        length: float = PULSE_LENGTH_S,
+    ) -> None:
+        if not 0.0 < length < period:
+            raise ValueError(f"pulse length {length} s must be in 0..period ({period} s)")
+        self.line = line
+        self.period = period
+        self.length = length
+        self.pulses = 0
+        self.last_pulse: float | None = None
+        #: why the line cannot be driven (then no more pulses), or None
+        self.unavailable: str | None = None
+        self._low_until: float | None = None
+        self._next: float | None = None
+
+    def tick(self, now: float) -> None:
+        """Start or end a pulse if it is time; the first pulse starts at the first tick. A
+        port that cannot drive the lines (a pty has none) turns keep-awake off, said once."""
+        if self.unavailable is not None:
+            return
+        try:
+            if self._low_until is not None:
+                if now >= self._low_until:
+                    self.line.set_wake_line(False)
+                    self._low_until = None
+                return
+            if self._next is None or now >= self._next:
+                self.line.set_wake_line(True)
+                self.pulses += 1
+                self.last_pulse = now
+                self._low_until = now + self.length
+                self._next = now + self.period
+        except OSError as exc:
+            self.unavailable = str(exc)
+            self._low_until = None
+            log.warning("keep-awake off: %s; a robot left in Passive sleeps after 5 minutes", exc)
+
+    def release(self) -> None:
+        """Leave BRC high (end of a run)."""
+        if self._low_until is not None and self.unavailable is None:
+            self.line.set_wake_line(False)
+            self._low_until = None
+
+
+def keep_awake_for(transport: object, name: str, enabled: bool) -> KeepAwake | None:
+    """A :class:`KeepAwake` on ``transport`` when enabled and the transport has the line;
+    None (with one log line saying why the robot may sleep) otherwise."""
+    if not enabled:
+        return None
+    if not isinstance(transport, WakeLine):
+        log.info(
+            "%s: no modem line to pulse BRC on this link: a robot left in Passive sleeps "
+            "after 5 minutes",
+            name,
+        )
+        return None
+    return KeepAwake(transport)

@@ -1,0 +1,123 @@
+"""Hours on a robot: a mission waiting in Passive keeps the robot awake (BRC pulses once a
+minute); with keep-awake off the robot sleeps, and the run says so, with the fix."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.mission import load_mission
+from roomba_bt.oi.profiles import CREATE2, ROOMBA500, ROOMBA600
+from roomba_bt.robot.wake import PULSE_PERIOD_S, KeepAwake
+from roomba_bt.runtime.stack import RunStack
+from roomba_bt.runtime.summary import Outcome, RunSummary
+from roomba_bt.sim import Simulator, load_world
+from roomba_bt.sim.link import SimLink
+
+#: 15 min in Safe, dock from the beams, 10 min charging in Passive, 5 min more in Passive:
+#: half an hour on the virtual clock, 15 min of it in Passive (sleep is due at 5).
+MISSION = """\
+include: [roomba-bt:lib/docking.yaml]
+tree:
+  sequence:
+    - mode: safe
+    - wait: 15min
+    - subtree: {id: dock, time_limit: 5min}
+    - wait: 10min
+    - charging
+    - wait: 5min
+"""
+
+
+def _run(tmp_path: Path, keep_awake: bool | None) -> tuple[RunSummary, Simulator]:
+    path = tmp_path / "hours.yaml"
+    path.write_text(MISSION)
+    mission = load_mission(path)
+    simulator = Simulator(load_world("empty-room"), CREATE2, 0)
+    stack = RunStack(
+        mission, SimLink(simulator), profile=CREATE2, timeout_s=3600.0, keep_awake=keep_awake
+    )
+    summary = stack.run()
+    stack.close()
+    return summary, simulator
+
+
+def test_half_an_hour_with_a_charge_wait_never_sleeps_with_keep_awake(tmp_path: Path) -> None:
+    summary, simulator = _run(tmp_path, None)  # the default: on (Create 2 sleeps)
+    assert summary.outcome is Outcome.SUCCESS, summary.reason
+    assert simulator.time >= 30 * 60 - 60
+    assert [e for e in simulator.events if e.kind == "sleep"] == []
+    assert simulator.brc_pulses >= (simulator.time - 60) // PULSE_PERIOD_S
+    assert not simulator.brc_low, "BRC is left high at the end"
+
+
+def test_without_keep_awake_it_sleeps_and_is_reported_asleep(tmp_path: Path) -> None:
+    summary, simulator = _run(tmp_path, False)
+    sleeps = [e for e in simulator.events if e.kind == "sleep"]
+    assert [e.detail for e in sleeps] == ["5 min idle"]
+    assert simulator.brc_pulses == 0
+    assert summary.outcome is Outcome.CONNECTION_LOST
+    assert "the robot fell asleep" in summary.reason
+    assert "drop --no-keep-awake" in summary.reason
+    assert "release-3.8.2 / release-stm32-3.7.7" in summary.reason
+    assert "no valid sensor frame" not in summary.reason
+
+
+class _Line:
+    def __init__(self) -> None:
+        self.changes: list[tuple[float, bool]] = []
+        self.now = 0.0
+
+    def set_wake_line(self, low: bool) -> None:
+        self.changes.append((self.now, low))
+
+
+def test_the_pulse_is_one_second_low_every_minute() -> None:
+    line = _Line()
+    wake = KeepAwake(line)
+    for step in range(int(150 / 0.015)):
+        line.now = step * 0.015
+        wake.tick(line.now)
+    starts = [t for t, low in line.changes if low]
+    ends = [t for t, low in line.changes if not low]
+    assert starts == pytest.approx([0.0, 60.0, 120.0], abs=0.02)
+    assert [e - s for s, e in zip(starts, ends, strict=False)] == pytest.approx([1.0] * 3, abs=0.02)
+    wake.release()
+    assert line.changes[-1][1] is False
+
+
+def test_keep_awake_is_on_by_default_for_the_profiles_that_sleep() -> None:
+    assert CREATE2.sleeps_in_passive and ROOMBA600.sleeps_in_passive
+    assert ROOMBA500.sleeps_in_passive  # the 500 spec is silent: assumed, the pulse is harmless
+
+
+def test_a_brc_pulse_wakes_a_sleeping_simulator_and_resets_its_counter() -> None:
+    simulator = Simulator(load_world("empty-room"), CREATE2, 0)
+    link = SimLink(simulator)
+    link.write(bytes([128]))  # Start: Passive
+    link.advance(301.0)
+    assert simulator.asleep
+    link.set_wake_line(True)
+    link.set_wake_line(False)
+    assert not simulator.asleep
+    assert [e.detail for e in simulator.events if e.kind == "wake"] == ["BRC pulse"]
+    link.advance(240.0)
+    link.set_wake_line(True)
+    link.set_wake_line(False)
+    link.advance(240.0)
+    assert not simulator.asleep, "the pulse at 240 s reset the five-minute counter"
+
+
+class _NoLines:
+    def set_wake_line(self, low: bool) -> None:
+        raise OSError(25, "Inappropriate ioctl for device")
+
+
+def test_a_port_without_modem_lines_turns_keep_awake_off_once() -> None:
+    wake = KeepAwake(_NoLines())
+    wake.tick(0.0)
+    wake.tick(61.0)
+    wake.release()
+    assert wake.unavailable is not None and "Inappropriate ioctl" in wake.unavailable
+    assert wake.pulses == 0
