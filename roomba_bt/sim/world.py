@@ -16,6 +16,7 @@ default, is in ``docs/simulator.md``; in short::
     robot: {start: {at: [2, 1], heading: -90}, battery: 0.8,
             start_region: {near_dock: 1.5}}          # or {rect: [...], heading: [lo, hi]}
     events: [{at: 5.0, kind: bump, side: left, duration: 0.2}]
+    areas: [{name: living-room, rect: [0, 0, 4, 1.5]}]   # named parts of the floor (no walls)
 
 Every problem is reported at once, each as ``file:line:col: field: found ...; allowed ...``,
 with the line and column of the offending YAML node (the shared reader,
@@ -168,12 +169,23 @@ class TimelineEvent:
 
 @dataclass(frozen=True, slots=True)
 class StartRegion:
-    """Random start poses for evaluation: within ``near_dock`` mm of the docked pose, or in
-    ``rect`` (x0, y0, x1, y1 mm); heading anywhere or in ``heading`` (radians, lo..hi)."""
+    """Random start poses for evaluation: within ``near_dock`` mm of the docked pose, in
+    ``rect`` (x0, y0, x1, y1 mm) or in the named ``area``; heading anywhere or in ``heading``
+    (radians, lo..hi)."""
 
     near_dock: float | None = None
     rect: tuple[float, float, float, float] | None = None
     heading: tuple[float, float] | None = None
+    area: str | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class AreaSpec:
+    """A named part of the floor (a room of an open-plan flat, say): for reports such as the
+    coverage per room, and start regions. Not a wall: the robot drives across its edges."""
+
+    name: str
+    polygon: Polygon
 
 
 @dataclass(frozen=True)
@@ -192,6 +204,7 @@ class World:
     start_region: StartRegion | None = None
     events: tuple[TimelineEvent, ...] = ()
     battery: float = 0.8
+    areas: tuple[AreaSpec, ...] = ()
     source: str = "<world>"
     description: str = ""
     solid: tuple[Segment, ...] = field(init=False)
@@ -224,6 +237,10 @@ class World:
         limit = clearance * clearance
         return all(distance_sq_to_segment(pose.x, pose.y, s) > limit for s in self.solid)
 
+    def area(self, name: str) -> AreaSpec | None:
+        """The named area, or None."""
+        return next((a for a in self.areas if a.name == name), None)
+
     def sample_start(self, seed: int) -> Pose:
         """A free pose drawn from the start region (or the start pose if there is none),
         the same for the same seed."""
@@ -231,6 +248,7 @@ class World:
         if region is None:
             return self.start
         rng = random.Random(f"start:{seed}")
+        area = self.area(region.area) if region.area is not None else None
         for _ in range(10_000):
             if region.near_dock is not None and self.dock is not None:
                 centre = self.dock.docked_pose
@@ -240,6 +258,11 @@ class World:
             elif region.rect is not None:
                 x0, y0, x1, y1 = region.rect
                 x, y = rng.uniform(x0, x1), rng.uniform(y0, y1)
+            elif area is not None:
+                x = rng.uniform(min(p[0] for p in area.polygon), max(p[0] for p in area.polygon))
+                y = rng.uniform(min(p[1] for p in area.polygon), max(p[1] for p in area.polygon))
+                if not point_in_polygon(x, y, area.polygon):
+                    continue
             else:
                 return self.start
             lo, hi = region.heading if region.heading is not None else (-math.pi, math.pi)
@@ -429,7 +452,7 @@ def _area(poly: Polygon) -> float:
 
 _TOP_KEYS = (
     "name", "description", "rooms", "walls", "obstacles", "drops", "virtual_walls",
-    "lighthouses", "dock", "robot", "events",
+    "lighthouses", "dock", "robot", "events", "areas",
 )  # fmt: skip
 _DOCK_KEYS = (
     "at", "facing", "red", "green", "buoy_range", "force_field", "contact_tolerance",
@@ -492,20 +515,28 @@ def _pose(c: _Checker, value: object, path: PathKey) -> Pose | None:
 
 
 def _start_region(c: _Checker, value: object, path: PathKey) -> StartRegion | None:
-    spec = c.mapping(value, path, ("near_dock", "rect", "heading"))
+    spec = c.mapping(value, path, ("near_dock", "rect", "area", "heading"))
     if spec is None:
         return None
-    if ("near_dock" in spec) == ("rect" in spec):
-        c.error(path, "neither or both of near_dock/rect", "exactly one of near_dock, rect")
+    given = [key for key in ("near_dock", "rect", "area") if key in spec]
+    if len(given) != 1:
+        c.error(path, f"{' and '.join(given) or 'none'} of near_dock/rect/area",
+                "exactly one of near_dock, rect, area")  # fmt: skip
         return None
     near: float | None = None
     rect: tuple[float, float, float, float] | None = None
     heading: tuple[float, float] | None = None
+    area: str | None = None
     if "near_dock" in spec:
         n = c.number(spec["near_dock"], (*path, "near_dock"), 0.05, 20.0, "m")
         if n is None:
             return None
         near = n * 1000.0
+    elif "area" in spec:
+        if not isinstance(spec["area"], str):
+            c.error((*path, "area"), _show(spec["area"]), "the name of one of the world's areas")
+            return None
+        area = spec["area"]
     else:
         rect = c.rect(spec["rect"], (*path, "rect"))
         if rect is None:
@@ -520,7 +551,7 @@ def _start_region(c: _Checker, value: object, path: PathKey) -> StartRegion | No
         if lo is None or hi is None:
             return None
         heading = (math.radians(lo), math.radians(hi))
-    return StartRegion(near, rect, heading)
+    return StartRegion(near, rect, heading, area)
 
 
 def _event(c: _Checker, value: object, path: PathKey) -> TimelineEvent | None:
@@ -534,6 +565,25 @@ def _event(c: _Checker, value: object, path: PathKey) -> TimelineEvent | None:
     if at is None or kind is None or duration is None or side is None:
         return None
     return TimelineEvent(at, kind, duration, side)
+
+
+def _areas(c: _Checker, value: object) -> tuple[AreaSpec, ...]:
+    """``areas: [{name: kitchen, rect: [...]}, {name: hall, polygon: [...]}]``: named, each
+    name once."""
+    areas: list[AreaSpec] = []
+    for i, a in enumerate(c.items(value, ("areas",))):
+        path: PathKey = ("areas", i)
+        shape = c.shape(a, path)
+        name = a.get("name") if isinstance(a, dict) else None
+        if isinstance(a, dict) and not isinstance(name, str):
+            c.error((*path, "name"), _show(name), "a name for the area (a string)")
+            continue
+        if name in {x.name for x in areas}:
+            c.error((*path, "name"), repr(name), "each area's name once")
+            continue
+        if shape is not None and isinstance(name, str):
+            areas.append(AreaSpec(name, shape))
+    return tuple(areas)
 
 
 _REFUSED_TAG = "the tag {tag!r} is not allowed in a world"
@@ -645,6 +695,11 @@ def _build_world(c: _Checker, data: object, source: str) -> World:
         e for i, v in enumerate(c.items(top.get("events"), ("events",)))
         if (e := _event(c, v, ("events", i))) is not None
     ]  # fmt: skip
+    areas = _areas(c, top.get("areas"))
+    names = [a.name for a in areas]
+    if region is not None and region.area is not None and region.area not in names:
+        allowed = f"one of the world's areas ({', '.join(names) or 'none'})"
+        c.error(("robot", "start_region", "area"), repr(region.area), allowed)
     if c.problems:
         raise WorldError(c.problems)
     room_polys = tuple(r for r in rooms if r is not None)
@@ -673,6 +728,7 @@ def _build_world(c: _Checker, data: object, source: str) -> World:
         battery=battery,
         source=source,
         description=description,
+        areas=areas,
     )
     if dock is not None and not world.on_floor(
         dock.x + 10 * math.cos(dock.facing), dock.y + 10 * math.sin(dock.facing)
