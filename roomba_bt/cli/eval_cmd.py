@@ -14,9 +14,12 @@ Dask cluster of ``--jobs`` workers; ``--scheduler``: an existing one). With two 
 ``--sweep`` or ``--variant`` sets, every variant runs on the same seeds and start poses and
 each is compared with the first (A): paired successes, the exact McNemar p-value, the median
 time difference with its interval. ``--out`` writes one record per episode (JSON Lines or
-CSV), ``--json`` prints the summary as JSON. Ctrl-C prints what finished (exit 130). Exit
-codes: 0 (and 1 when ``--min-rate`` is given and not reached), 2 for invalid input, 3 when
-the ``--scheduler`` does not answer.
+CSV), ``--json`` prints the summary as JSON. For a mission that runs the brushes, the
+floor covered at 5, 10 and 20 minutes and at the end (mean, sd, min..max; of ``--start-area``
+if given; per area at the end) and how many episodes went a minute of brush time without
+new floor. Ctrl-C prints what finished (exit 130). Exit codes: 0 (and 1 when
+``--min-rate`` is given and not reached), 2 for invalid input, 3 when the ``--scheduler``
+does not answer.
 """
 
 from __future__ import annotations
@@ -95,6 +98,11 @@ def register(sub: Any) -> None:
     ev.add_argument(
         "--within", type=float, metavar="METRES",
         help="start within this distance of the docked pose (default: the world's region)",
+    )  # fmt: skip
+    ev.add_argument(
+        "--start-area", metavar="NAME",
+        help="start in this named area of the world (the apartment's living-room, bedroom, "
+        "kitchen); its coverage is the one reported",
     )  # fmt: skip
     add_param_option(ev, "set a mission parameter (repeatable)")
     ev.add_argument(
@@ -243,6 +251,7 @@ def eval_command(args: argparse.Namespace) -> int:
             within_m=args.within,
             dock=dock,
             battery=args.battery,
+            start_area=args.start_area,
         )
         for v in chosen
     ]
@@ -305,10 +314,15 @@ def eval_command(args: argparse.Namespace) -> int:
             "comparisons": [c.to_dict() for c in comparisons],
         }, indent=2))  # fmt: skip
     else:
-        for v, s in zip(chosen, summaries, strict=True):
+        from roomba_bt.evaluate.coverage import summarize_coverage
+
+        for v, s, e in zip(chosen, summaries, done, strict=True):
             if len(chosen) > 1:
                 print(f"variant      {v.label}")
             print(s)
+            coverage = summarize_coverage(e.results)
+            if coverage is not None and not args.json:
+                print(coverage)
             print()
         for c in comparisons:
             print(c)

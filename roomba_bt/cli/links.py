@@ -35,10 +35,12 @@ def make_simulator(
     *,
     random_start: bool = False,
     faults: Faults | None = None,
+    coverage: bool = False,
 ) -> Simulator:
-    """A simulator in ``world`` (a shipped name or a path); raises WorldError if invalid."""
+    """A simulator in ``world`` (a shipped name or a path); raises WorldError if invalid.
+    ``coverage``: it tracks the floor cleaned (:mod:`roomba_bt.sim.coverage`)."""
     loaded = load_world(world or DEFAULT_WORLD)
-    return Simulator(loaded, profile, seed, faults, random_start=random_start)
+    return Simulator(loaded, profile, seed, faults, random_start=random_start, coverage=coverage)
 
 
 def make_link(simulator: Simulator, fast: bool) -> SimLink:

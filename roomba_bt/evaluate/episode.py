@@ -72,6 +72,8 @@ class EpisodeSpec:
     sources: MissionSources | None = field(default=None, repr=False)
     #: (file name, text) of a world given by path, for the same reason
     world_file: tuple[str, str] | None = field(default=None, repr=False)
+    #: start in this named area of the world (``areas:``); its coverage is the headline
+    start_area: str | None = None
 
 
 def self_contained(spec: EpisodeSpec) -> EpisodeSpec:
@@ -80,6 +82,32 @@ def self_contained(spec: EpisodeSpec) -> EpisodeSpec:
     sources = spec.sources if spec.sources is not None else bundle_mission(spec.mission)
     world_file = spec.world_file if spec.world_file is not None else bundle_world(spec.world)
     return replace(spec, sources=sources, world_file=world_file)
+
+
+@dataclass(frozen=True)
+class Coverage:
+    """The floor cleaned in an episode (:mod:`roomba_bt.sim.coverage`), as fractions 0..1.
+
+    ``area`` is what ``curve`` and ``final`` measure: the episode's start area, or ``""`` for
+    all the reachable floor. ``curve`` samples it every 30 s of mission time from 0."""
+
+    area: str
+    final: float
+    curve: tuple[tuple[float, float], ...]
+    overall: float
+    by_area: tuple[tuple[str, float], ...]
+    #: the longest brush time without a new cell cleaned (s): a robot stuck
+    longest_idle_s: float
+    cleaning_s: float
+
+    def at(self, seconds: float) -> float:
+        """Coverage at ``seconds`` of mission time (the last sample at or before it)."""
+        value = 0.0
+        for t, c in self.curve:
+            if t > seconds + 1e-6:
+                break
+            value = c
+        return value
 
 
 @dataclass(frozen=True)
@@ -118,6 +146,7 @@ class EpisodeResult:
     commands_refused: int = 0
     #: where it ran (host:pid, or the Dask worker's address); not part of the episode
     worker: str = field(default="", compare=False)
+    coverage: Coverage | None = field(repr=False, default=None)
 
     @property
     def succeeded(self) -> bool:
@@ -211,9 +240,17 @@ def start_pose(world: World, spec: EpisodeSpec) -> Any:
     """The seeded start pose: the world's start region, or within ``within_m`` of the dock."""
     if not spec.random_start:
         return world.start
-    if spec.within_m is not None:
-        from roomba_bt.sim.world import StartRegion
+    from roomba_bt.sim.world import StartRegion
 
+    if spec.start_area is not None:
+        if world.area(spec.start_area) is None:
+            names = ", ".join(a.name for a in world.areas) or "none"
+            raise EvaluationError(
+                f"--start-area {spec.start_area}: world {world.name!r} has no such area; "
+                f"allowed: {names}"
+            )
+        world = replace(world, start_region=StartRegion(area=spec.start_area))
+    elif spec.within_m is not None:
         if world.dock is None:
             raise EvaluationError(f"--within: world {world.name!r} has no dock")
         world = replace(world, start_region=StartRegion(near_dock=spec.within_m * 1000.0))
@@ -244,7 +281,7 @@ def _run_episode(spec: EpisodeSpec) -> EpisodeResult:
         raise EvaluationError("\n".join(str(d) for d in exc.diagnostics)) from None
     world = build_world(spec)
     pose = start_pose(world, spec)
-    simulator = _MeasuredSimulator(world, profile, spec.seed, start=pose)
+    simulator = _MeasuredSimulator(world, profile, spec.seed, start=pose, coverage=True)
     stack = RunStack(mission, SimLink(simulator), profile=profile, timeout_s=spec.timeout_s)
     summary = stack.run()
     if summary.outcome is Outcome.INTERRUPTED:  # Ctrl-C (or SIGTERM) stops the evaluation,
@@ -281,6 +318,37 @@ def _run_episode(spec: EpisodeSpec) -> EpisodeResult:
         commands_sent=summary.commands_written,
         commands_refused=summary.refused_commands,
         worker=f"{socket.gethostname()}:{os.getpid()}",
+        coverage=_coverage(simulator, spec.start_area or ""),
+    )
+
+
+#: how often an episode's coverage curve is sampled (s)
+COVERAGE_SAMPLE_S = 30.0
+
+
+def _coverage(simulator: Simulator, area: str) -> Coverage | None:
+    """The episode's coverage, or None if the brushes never ran."""
+    swept = simulator.swept
+    if swept is None or not swept.cleaning_time:
+        return None
+    swept.finish(simulator.time, simulator.x, simulator.y, simulator.theta)
+    index = swept.area_names.index(area) + 1 if area in swept.area_names else None
+    total = swept.reachable_cells[index] if index is not None else swept.reachable_total
+    curve: list[tuple[float, float]] = []
+    for t, cells in swept.curve:
+        if not curve or t >= curve[-1][0] + COVERAGE_SAMPLE_S - 1e-6:
+            cleaned = cells[index] if index is not None else sum(cells)
+            curve.append((round(t, 3), cleaned / total if total else 0.0))
+    by_area = swept.coverage_by_area()
+    final = by_area.get(area, 0.0) if index is not None else swept.coverage()
+    return Coverage(
+        area=area,
+        final=final,
+        curve=tuple(curve),
+        overall=swept.coverage(),
+        by_area=tuple(by_area.items()),
+        longest_idle_s=swept.longest_idle(),
+        cleaning_s=swept.cleaning_time,
     )
 
 

@@ -1,6 +1,6 @@
 """A picture of a simulated run: walls, drops, the dock and its beams, the path coloured by
-time, bumps and mode changes marked. PNG via matplotlib, an optional extra, imported only
-here and only when a plot is asked for.
+time, bumps and mode changes marked, the floor cleaned shaded (when the simulator tracks it).
+PNG via matplotlib, an optional extra, imported only here and only when a plot is asked for.
 
 :func:`draw_world` is the one drawing of a world; ``roomba-bt eval --plot``
 (:mod:`roomba_bt.evaluate.plot`) draws its trajectories over it too.
@@ -12,6 +12,7 @@ import math
 import pathlib
 from typing import Any
 
+from roomba_bt.sim.coverage import SweptArea
 from roomba_bt.sim.robot import Simulator
 from roomba_bt.sim.world import World
 
@@ -91,6 +92,24 @@ def draw_world(ax: Any, world: World, *, labels: bool = True) -> None:
         ax.plot([x0 / 1000, x1 / 1000], [y0 / 1000, y1 / 1000], color="tab:green", lw=5)
 
 
+def draw_swept(ax: Any, swept: SweptArea) -> None:
+    """Shade the floor: reachable in light grey, cleaned in green (one image of the grid)."""
+    from matplotlib.colors import ListedColormap
+
+    grid = swept.grid
+    rows = [list(swept.cells[j * grid.columns : (j + 1) * grid.columns]) for j in range(grid.rows)]
+    extent = (
+        grid.x0 / 1000, (grid.x0 + grid.columns * grid.cell) / 1000,
+        grid.y0 / 1000, (grid.y0 + grid.rows * grid.cell) / 1000,
+    )  # fmt: skip
+    colours = ListedColormap([(1, 1, 1, 0), (0.85, 0.85, 0.85, 0.7), (0.3, 0.75, 0.35, 0.6)])
+    ax.imshow(rows, origin="lower", extent=extent, cmap=colours, vmin=0, vmax=2,
+              interpolation="nearest", zorder=1)  # fmt: skip
+    cleaned = swept.area_m2(swept.cleaned_total)
+    ax.plot([], [], "s", color=(0.3, 0.75, 0.35), label=f"cleaned {cleaned:.1f} m² "
+            f"({100 * swept.coverage():.0f} %)")  # fmt: skip
+
+
 def plot_run(simulator: Simulator, path: str | pathlib.Path, title: str | None = None) -> None:
     """Write the trajectory of ``simulator`` so far to ``path`` (PNG)."""
     plt = pyplot()
@@ -101,6 +120,9 @@ def plot_run(simulator: Simulator, path: str | pathlib.Path, title: str | None =
     fig, ax = plt.subplots(figsize=(8, 7), dpi=110)
     try:
         draw_world(ax, world)
+        swept = simulator.swept
+        if swept is not None and swept.cleaning_time:
+            draw_swept(ax, swept)
         trace = simulator.trace
         points = [(p.x / 1000, p.y / 1000) for p in trace]
         points.append((simulator.x / 1000, simulator.y / 1000))

@@ -30,6 +30,7 @@ import math
 from roomba_bt.oi.bits import WHEEL_DROP_BITS
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2, RobotProfile
+from roomba_bt.sim.coverage import ALL_BRUSHES, SweptArea
 from roomba_bt.sim.cycles import BuiltinCycle
 from roomba_bt.sim.faults import Faults
 from roomba_bt.sim.motion import WHEEL_SPEED_STEP_MM_S, drive_wheel_speeds
@@ -71,6 +72,7 @@ class Simulator(OIProtocol):
         random_start: bool = False,
         old_firmware_angle: bool = False,
         mode: OIMode = OIMode.OFF,
+        coverage: bool = False,
     ) -> None:
         super().__init__(
             world, profile, seed, faults, start, random_start, old_firmware_angle, mode
@@ -86,6 +88,8 @@ class Simulator(OIProtocol):
         )
         self._sense()
         self._battery(0.0)
+        #: the floor cleaned so far (``coverage=True``; it reads the pose, never the bytes)
+        self.swept: SweptArea | None = SweptArea(world, self.pose) if coverage else None
 
     # One function, the whole 15 ms (over 60 lines on purpose): it is the hot path, and each
     # call it made instead of running inline would cost a tenth of a microsecond, 3 % of it.
@@ -138,6 +142,11 @@ class Simulator(OIProtocol):
         elif mode is _FULL and self._drops and not self.fallen and self._over_drop(self.x, self.y):
             self._fall()
         self._battery(dt)
+        if self.swept is not None:
+            cycle = self.builtin  # the firmware's Clean, Spot and Max run every motor
+            cleaning = cycle is not None and cycle.name != "seek_dock"
+            motors = ALL_BRUSHES if cleaning else self.motor_bits
+            self.swept.update(self.time, self.x, self.y, self.theta, motors)
         if (
             mode is _PASSIVE
             and self.time - self._last_activity >= PASSIVE_SLEEP_SECONDS

@@ -199,3 +199,32 @@ def test_coverage_curve_idle_time_and_marks_follow_the_time() -> None:
     assert swept.curve[1][1][0] > 0
     assert swept.longest_idle() == pytest.approx(12.0 - 6.0, abs=0.1)
     assert swept.cleaning_time == pytest.approx(12.0, abs=0.02)
+
+
+def test_the_simulator_tracks_coverage_when_asked_and_sends_the_same_bytes() -> None:
+    w = world()
+    start = Pose(1000.0, 2003.0, 0.0)
+    host = (
+        C.start().data + C.full().data + C.stream([7, 35, 43, 44]).data
+        + C.motors(ALL).data + C.drive(250, 800).data
+    )  # fmt: skip
+    outputs = []
+    for coverage in (False, True):
+        sim = Simulator(w, start=start, coverage=coverage)
+        sim.receive(host)
+        outputs.append(sim.run(10.0))
+        assert (sim.swept is not None) == coverage
+    assert outputs[0] == outputs[1]
+    assert sim.swept is not None and sim.swept.cleaned_total > 0
+
+
+def test_the_firmware_clean_cycle_counts_as_cleaning_seek_dock_does_not() -> None:
+    w = world()
+    sim = Simulator(w, start=Pose(2000.0, 2000.0, 0.0), coverage=True)
+    sim.receive(C.start().data + C.clean().data)
+    sim.run(5.0)
+    assert sim.swept is not None and sim.swept.cleaned_total > 0
+    cleaned = sim.swept.cleaned_total
+    sim.receive(C.seek_dock().data)
+    sim.run(5.0)
+    assert sim.swept.cleaned_total == cleaned

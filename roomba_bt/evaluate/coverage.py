@@ -1,0 +1,97 @@
+"""Coverage across a batch of episodes: mean and spread at fixed times and at the end, per
+area, and the longest a robot went without new floor (stuck).
+
+Each episode's :class:`~roomba_bt.evaluate.episode.Coverage` comes from the simulator's swept
+area (:mod:`roomba_bt.sim.coverage`); episodes whose brushes never ran have none and are left
+out. ``roomba-bt eval`` prints :meth:`CoverageSummary.lines` under the success rate.
+"""
+
+from __future__ import annotations
+
+import statistics
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from roomba_bt.evaluate.episode import EpisodeResult
+
+#: the fixed times coverage is reported at (s of mission time)
+REPORT_TIMES_S = (300.0, 600.0, 1200.0)
+#: a robot that cleans no new floor for this long (s of brush time) is stuck
+STUCK_S = 60.0
+
+
+@dataclass(frozen=True)
+class Spread:
+    """Mean, standard deviation, minimum and maximum of a sample (fractions 0..1)."""
+
+    mean: float
+    sd: float
+    low: float
+    high: float
+
+    @classmethod
+    def of(cls, values: Sequence[float]) -> Spread:
+        sd = statistics.stdev(values) if len(values) > 1 else 0.0
+        return cls(statistics.fmean(values), sd, min(values), max(values))
+
+    def __str__(self) -> str:
+        return (
+            f"{100 * self.mean:5.1f} % (sd {100 * self.sd:4.1f}, "
+            f"{100 * self.low:.1f}..{100 * self.high:.1f})"
+        )
+
+
+@dataclass(frozen=True)
+class CoverageSummary:
+    """Coverage of one mission's episodes."""
+
+    area: str  # "" for all the reachable floor
+    episodes: int
+    #: (time s, spread) for each report time that every episode reached
+    at: tuple[tuple[float, Spread], ...]
+    final: Spread
+    by_area: tuple[tuple[str, Spread], ...]
+    longest_idle_s: float
+    stuck: int  # episodes with STUCK_S of brush time without new floor
+
+    def lines(self) -> list[str]:
+        what = f"the {self.area}" if self.area else "the reachable floor"
+        out = [f"coverage     of {what}, {self.episodes} episodes: mean (sd, min..max)"]
+        out += [f"  at {t / 60:4.0f} min {spread}" for t, spread in self.at]
+        out.append(f"  at the end {self.final}")
+        out += [f"  {name:<12s} {spread} at the end" for name, spread in self.by_area]
+        out.append(
+            f"  stuck      {self.stuck} of {self.episodes} episodes went {STUCK_S:.0f} s of "
+            f"brush time without new floor (longest {self.longest_idle_s:.0f} s)"
+        )
+        return out
+
+    def __str__(self) -> str:
+        return "\n".join(self.lines())
+
+
+def summarize_coverage(
+    results: Sequence[EpisodeResult], times: Sequence[float] = REPORT_TIMES_S
+) -> CoverageSummary | None:
+    """The coverage of the episodes that cleaned, or None if none did."""
+    covered = [r.coverage for r in results if r.coverage is not None]
+    if not covered:
+        return None
+    last = min(r.time_s for r in results if r.coverage is not None)
+    names = [name for name, _ in covered[0].by_area]
+    by_area = []
+    for name in names:
+        values = [dict(c.by_area).get(name) for c in covered]
+        present = [v for v in values if v is not None]
+        if present:
+            by_area.append((name, Spread.of(present)))
+    idle = [c.longest_idle_s for c in covered]
+    return CoverageSummary(
+        area=covered[0].area,
+        episodes=len(covered),
+        at=tuple((t, Spread.of([c.at(t) for c in covered])) for t in times if t <= last + 1e-6),
+        final=Spread.of([c.final for c in covered]),
+        by_area=tuple(by_area),
+        longest_idle_s=max(idle),
+        stuck=sum(1 for i in idle if i >= STUCK_S),
+    )

@@ -1,0 +1,55 @@
+"""Coverage across episodes: spreads at fixed times, per area, stuck runs; eval's options."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.cli import main
+from roomba_bt.evaluate import EpisodeSpec, run_episode
+from roomba_bt.evaluate.coverage import STUCK_S, summarize_coverage
+from roomba_bt.evaluate.episode import Coverage
+
+MISSIONS = Path(__file__).resolve().parents[2] / "missions"
+SWEEP = """
+mission: sweep
+tree:
+  sequence:
+    - mode: full
+    - motors: {main_brush: true, side_brush: true, vacuum: true}
+    - drive: {velocity: 200 mm/s, radius: 400 mm, duration: 40s}
+    - mode: passive
+"""
+
+
+def coverage(final: float, idle: float) -> Coverage:
+    curve = tuple((t * 30.0, final * min(1.0, t / 20)) for t in range(41))
+    return Coverage("living-room", final, curve, final / 2, (("living-room", final),), idle, 1200)
+
+
+def test_spreads_at_fixed_times_per_area_and_stuck_runs(tmp_path: Path) -> None:
+    mission = tmp_path / "sweep.yaml"
+    mission.write_text(SWEEP)
+    result = run_episode(
+        EpisodeSpec(str(mission), "apartment", seed=1, timeout_s=90, start_area="living-room")
+    )
+    assert result.coverage is not None and result.coverage.area == "living-room"
+    assert 0.0 < result.coverage.at(30.0) <= result.coverage.final <= 1.0
+    a = replace(result, time_s=1200.0, coverage=coverage(0.8, 10.0))
+    b = replace(result, time_s=1200.0, coverage=coverage(0.6, STUCK_S + 5))
+    summary = summarize_coverage([a, b])
+    assert summary is not None
+    at = dict(summary.at)
+    assert at[600.0].mean == pytest.approx(0.7) and at[1200.0].low == pytest.approx(0.6)
+    assert summary.stuck == 1 and summary.longest_idle_s == STUCK_S + 5
+    assert "living-room" in str(summary)
+    assert summarize_coverage([replace(a, coverage=None)]) is None
+
+
+def test_eval_refuses_an_unknown_start_area(capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(["eval", str(MISSIONS / "dock.yaml"), "--world", "apartment", "--runs", "1",
+                 "--start-area", "attic", "--no-progress"])  # fmt: skip
+    assert code == 2
+    assert "living-room, bedroom, kitchen" in capsys.readouterr().err
