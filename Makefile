@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 EXTRAS ?= test,plot,bench,cluster
 
-.PHONY: run test lint typecheck bench icount routines golden venv clean
+.PHONY: run test lint typecheck bench icount routines coverage golden venv clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -44,6 +44,10 @@ icount: $(STAMP)
 # The routines' success rates and speed into docs/routines.md (2 to 7 min on 2 cores).
 routines: $(STAMP)
 	$(BIN)/python -m roomba_bt.evaluate.report --docs docs --missions missions
+
+# clean.yaml against the firmware's Clean into docs/routines.md (about 25 min of CPU).
+coverage: $(STAMP)
+	$(BIN)/python -m roomba_bt.evaluate.coverage_report --docs docs --missions missions --jobs 2
 
 clean:
 	rm -rf $(VENV) build *.egg-info

@@ -197,11 +197,12 @@ def _classes_of(provider: object) -> Iterable[type[RobotBehaviour]]:
 def builtin_registry() -> Registry:
     """A registry with only the built-in behaviours (no entry points)."""
     from roomba_bt.behaviours.actions import ACTIONS
+    from roomba_bt.behaviours.cleaning import CLEANING
     from roomba_bt.behaviours.conditions import CONDITIONS
     from roomba_bt.behaviours.docking import DOCKING
 
     registry = Registry(entry_point_group=None)
-    for cls in (*ACTIONS, *CONDITIONS, *DOCKING):
+    for cls in (*ACTIONS, *CONDITIONS, *DOCKING, *CLEANING):
         registry.register(cls, "builtin")
     return registry
 

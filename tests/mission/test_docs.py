@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from roomba_bt.behaviours.actions import ACTIONS
+from roomba_bt.behaviours.cleaning import CLEANING
 from roomba_bt.behaviours.conditions import CONDITIONS
 from roomba_bt.behaviours.language import MODIFIERS, WORDS, Shape
 from roomba_bt.mission.loader import TOP_LEVEL
@@ -18,7 +19,7 @@ def test_every_language_word_is_documented() -> None:
 
 
 def test_every_builtin_behaviour_and_parameter_is_documented() -> None:
-    for cls in (*ACTIONS, *CONDITIONS):
+    for cls in (*ACTIONS, *CONDITIONS, *CLEANING):
         decl = cls.declaration
         assert f"**`{decl.name}`**" in DOC, decl.name
         for param in decl.params:

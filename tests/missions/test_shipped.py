@@ -34,7 +34,8 @@ def test_every_mission_runs_on_the_default_world(path: Path) -> None:
     """``roomba-bt run missions/NAME.yaml`` on the default simulator world succeeds (short
     durations where the mission has them)."""
     short = {"bump-and-turn": (("duration", "20s"),), "wall-follow": (("duration", "20s"),),
-             "patrol": (("laps", "1"),)}  # fmt: skip
+             "patrol": (("laps", "1"),), "clean": (("duration", "1min"),),
+             "clean-builtin": (("duration", "1min"),)}  # fmt: skip
     result = run_episode(
         EpisodeSpec(str(path), "empty-room", seed=0, random_start=False,
                     params=short.get(path.stem, ()), timeout_s=400)

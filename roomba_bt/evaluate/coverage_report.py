@@ -1,0 +1,197 @@
+"""The cleaning figures of ``docs/routines.md``: clean.yaml against the firmware's Clean.
+
+    python -m roomba_bt.evaluate.coverage_report --docs docs --missions missions --jobs 2
+
+Runs, on the same seeds (so the same start poses) for both missions:
+
+* the apartment's living room: ``--runs`` starts in the living room, 20 minutes each,
+  coverage of the living room at 5, 10 and 20 minutes; the coverage-over-time curves of both
+  in one figure (``docs/routines/coverage-living-room.png``);
+* the whole apartment: ``--apartment-runs`` starts anywhere, 60 minutes each, coverage per
+  room, the longest brush time without new floor;
+* the whole apartment with a low battery (30 %): the runs that reach the missions' 15 %
+  threshold, and how many of them end docked.
+
+and writes the tables between the ``<!-- coverage -->`` markers of ``routines.md``. About 25
+minutes of CPU time with the default counts (``--runs 50``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from roomba_bt.evaluate import EpisodeSpec, run_episodes
+from roomba_bt.evaluate.coverage import CoverageSummary, summarize_coverage
+from roomba_bt.evaluate.episode import EpisodeResult
+from roomba_bt.evaluate.parallel import ProgressBar
+
+BEGIN, END = "<!-- coverage -->", "<!-- /coverage -->"
+MISSIONS = ("clean", "clean-builtin")
+LOW_BATTERY = 0.3
+
+
+def _specs(mission: Path, runs: int, minutes: int, **fields: object) -> list[EpisodeSpec]:
+    return [
+        EpisodeSpec(
+            str(mission), "apartment", seed, params=(("duration", f"{minutes}min"),),
+            timeout_s=minutes * 60.0 + 60.0, **fields,  # type: ignore[arg-type]
+        )
+        for seed in range(runs)
+    ]  # fmt: skip
+
+
+def _run(label: str, specs: list[EpisodeSpec], jobs: int) -> list[EpisodeResult]:
+    return run_episodes(specs, jobs=jobs, progress=ProgressBar(label=f"{label} "))
+
+
+def _pct(value: float) -> str:
+    return f"{100 * value:.1f} %"
+
+
+def _living_room_table(summaries: dict[str, CoverageSummary]) -> list[str]:
+    lines = [
+        "| mission | 5 min | 10 min | 20 min | min at 20 min | 60 s without new floor |",
+        "|---|---|---|---|---|---|",
+    ]
+    for name, s in summaries.items():
+        at = dict(s.at)
+        cells = [f"{_pct(at[t].mean)} (sd {100 * at[t].sd:.1f})" for t in (300.0, 600.0, 1200.0)]
+        lines.append(
+            f"| `{name}.yaml` | {' | '.join(cells)} | {_pct(at[1200.0].low)} | "
+            f"{s.stuck} of {s.episodes} (longest {s.longest_idle_s:.0f} s) |"
+        )
+    return lines
+
+
+def _apartment_table(summaries: dict[str, CoverageSummary]) -> list[str]:
+    names = [name for name, _ in next(iter(summaries.values())).by_area]
+    lines = [
+        f"| mission | all rooms | {' | '.join(names)} | 60 s without new floor |",
+        "|---|---|" + "---|" * len(names) + "---|",
+    ]
+    for mission, s in summaries.items():
+        areas = dict(s.by_area)
+        cells = [f"{_pct(areas[n].mean)} (min {_pct(areas[n].low)})" for n in names]
+        lines.append(
+            f"| `{mission}.yaml` | {_pct(s.final.mean)} (min {_pct(s.final.low)}) | "
+            f"{' | '.join(cells)} | {s.stuck} of {s.episodes} "
+            f"(longest {s.longest_idle_s:.0f} s) |"
+        )
+    return lines
+
+
+def _curves_figure(results: dict[str, list[EpisodeResult]], path: Path) -> None:
+    from roomba_bt.sim.plot import pyplot
+
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(7, 4.5), dpi=110)
+    try:
+        for name, episodes in results.items():
+            curves = [r.coverage.curve for r in episodes if r.coverage is not None]
+            times = [t for t, _ in min(curves, key=len)]
+            means, lows, highs = [], [], []
+            for k in range(len(times)):
+                values = sorted(c[k][1] for c in curves)
+                means.append(100 * sum(values) / len(values))
+                lows.append(100 * values[len(values) // 10])
+                highs.append(100 * values[(9 * len(values)) // 10])
+            minutes = [t / 60 for t in times]
+            (line,) = ax.plot(minutes, means, label=f"{name}.yaml (mean)")
+            ax.fill_between(minutes, lows, highs, color=line.get_color(), alpha=0.2,
+                            label=f"{name}.yaml (10th..90th percentile)")  # fmt: skip
+        ax.set_xlabel("time (min)")
+        ax.set_ylabel("living room covered (%)")
+        ax.set_ylim(0, 100)
+        ax.grid(alpha=0.3)
+        ax.legend(loc="lower right", fontsize=8)
+        ax.set_title(f"Apartment living room, {len(next(iter(results.values())))} seeded starts")
+        fig.tight_layout()
+        fig.savefig(str(path))
+    finally:
+        plt.close(fig)
+
+
+def _battery_lines(results: dict[str, list[EpisodeResult]]) -> list[str]:
+    lines = []
+    for name, episodes in results.items():
+        docked = sum(1 for r in episodes if r.docked and r.charging)
+        lines.append(
+            f"* `{name}.yaml`: {docked} of {len(episodes)} runs ended docked and charging "
+            f"(outcomes: {', '.join(sorted({r.outcome for r in episodes}))}; "
+            f"fell: {sum(r.fell for r in episodes)})"
+        )
+    return lines
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else "")
+    parser.add_argument("--docs", type=Path, required=True, help="the docs folder")
+    parser.add_argument("--missions", type=Path, required=True, help="the missions folder")
+    parser.add_argument("--runs", type=int, default=50, help="living-room starts (50)")
+    parser.add_argument("--apartment-runs", type=int, default=10, help="apartment starts (10)")
+    parser.add_argument("--jobs", type=int, default=2)
+    args = parser.parse_args(argv)
+    page = args.docs / "routines.md"
+    text = page.read_text(encoding="utf-8")
+    if BEGIN not in text or END not in text:
+        print(f"{page}: no {BEGIN} ... {END} section to fill", file=sys.stderr)
+        return 2
+    figures = args.docs / "routines"
+    figures.mkdir(exist_ok=True)
+    living: dict[str, list[EpisodeResult]] = {}
+    apartment: dict[str, list[EpisodeResult]] = {}
+    battery: dict[str, list[EpisodeResult]] = {}
+    for name in MISSIONS:
+        mission = args.missions / f"{name}.yaml"
+        living[name] = _run(f"{name} living room", _specs(mission, args.runs, 20,
+                            start_area="living-room"), args.jobs)  # fmt: skip
+        apartment[name] = _run(f"{name} apartment", _specs(mission, args.apartment_runs, 60),
+                               args.jobs)  # fmt: skip
+        battery[name] = _run(f"{name} low battery", _specs(mission, args.apartment_runs, 60,
+                             battery=LOW_BATTERY), args.jobs)  # fmt: skip
+    living_cov = {n: summarize_coverage(r) for n, r in living.items()}
+    apartment_cov = {n: summarize_coverage(r) for n, r in apartment.items()}
+    if any(s is None for s in (*living_cov.values(), *apartment_cov.values())):
+        print("a mission ran no brushes", file=sys.stderr)
+        return 1
+    living_ok = {n: s for n, s in living_cov.items() if s is not None}
+    apartment_ok = {n: s for n, s in apartment_cov.items() if s is not None}
+    _curves_figure(living, figures / "coverage-living-room.png")
+    ten = {n: dict(s.at)[600.0].mean for n, s in living_ok.items()}
+    section = [
+        BEGIN,
+        f"Living room of the apartment, {args.runs} seeded starts in the living room (the same "
+        "for both), 20 minutes each; coverage of the living room's reachable floor, mean (sd):",
+        "",
+        *_living_room_table(living_ok),
+        "",
+        f"At 10 minutes `clean.yaml` is {100 * (ten['clean'] - ten['clean-builtin']):+.1f} "
+        "points from `clean-builtin.yaml`.",
+        "",
+        "![coverage over time](routines/coverage-living-room.png)",
+        "",
+        f"Whole apartment, {args.apartment_runs} seeded starts anywhere, 60 minutes each; "
+        "coverage per room at the end, mean (min):",
+        "",
+        *_apartment_table(apartment_ok),
+        "",
+        f"Whole apartment from {100 * LOW_BATTERY:.0f} % of charge (the 15 % threshold comes "
+        f"after about 20 minutes of cleaning), {args.apartment_runs} starts, 60 minutes:",
+        "",
+        *_battery_lines(battery),
+        "",
+        "Produced by `make coverage` (`python -m roomba_bt.evaluate.coverage_report`).",
+        END,
+    ]
+    before, _, rest = text.partition(BEGIN)
+    _, _, after = rest.partition(END)
+    page.write_text(before + "\n".join(section) + after, encoding="utf-8")
+    print(f"{page}: coverage section written", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
