@@ -3,7 +3,7 @@
 Plugins are distributions that declare an entry point in the group ``roomba_bt.behaviours``::
 
     [project.entry-points."roomba_bt.behaviours"]
-    wall_follow = "roomba_bt_wallfollow:WallFollow"
+    dirt_detect = "roomba_bt_dirt:DirtDetect"
 
 The value may name a behaviour class, a sequence of them, or a module (every declared
 behaviour class defined in it). Entry points are read with :mod:`importlib.metadata` and
@@ -200,9 +200,10 @@ def builtin_registry() -> Registry:
     from roomba_bt.behaviours.cleaning import CLEANING
     from roomba_bt.behaviours.conditions import CONDITIONS
     from roomba_bt.behaviours.docking import DOCKING
+    from roomba_bt.behaviours.wall import WALL_FOLLOWING
 
     registry = Registry(entry_point_group=None)
-    for cls in (*ACTIONS, *CONDITIONS, *DOCKING, *CLEANING):
+    for cls in (*ACTIONS, *WALL_FOLLOWING, *CONDITIONS, *DOCKING, *CLEANING):
         registry.register(cls, "builtin")
     return registry
 

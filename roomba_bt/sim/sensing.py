@@ -138,6 +138,7 @@ class Sensing(RobotState):
         self._near_at = (math.inf, math.inf)
         self._lines = {seg: _line(seg) for seg in world.solid}
         self._drops = world.drops
+        self._dirt = world.dirt
         self._beams = _DockBeams(world.dock) if world.dock is not None else None
         self._prev_bumps = 0
         self._prev_cliffs = 0
@@ -225,6 +226,8 @@ class Sensing(RobotState):
             self._rays_on = False
         v[45] = light_bits
         cliffs = 15 if down else self._cliffs_over_drops(x, y, theta) if self._drops else 0
+        if self._dirt:
+            v[15] = 0 if down else self.world.dirt_at(x, y)
         if cliffs != self._prev_cliffs:
             self._cliffs_changed(cliffs)
         if not self.ticks & 1 or self._ir_stale:

@@ -9,6 +9,7 @@ default, is in ``docs/simulator.md``; in short::
     walls: [[1.0, 0.0, 1.0, 1.2]]                # extra wall segments (x0, y0, x1, y1)
     obstacles: [{name: sofa, rect: [0.2, 2.0, 2.0, 2.8]}]   # or {polygon: [[x, y], ...]}
     drops: [{name: stairs, rect: [3.0, 0.0, 4.0, 1.0]}]      # cliff zones
+    dirt: [{name: crumbs, rect: [1.0, 1.0, 1.5, 1.5], level: 40}]  # packet 15 over it
     virtual_walls: [{from: [2, 0], to: [2, 3], halo: 0.3}]
     lighthouses: [{id: 1, at: [2, 1.5], heading: 90, fence: 2.0, halo: 0.4}]
     dock: {at: [2, 0], facing: 90, red: [-5, 25], green: [-25, 5], buoy_range: 1.0,
@@ -188,6 +189,14 @@ class AreaSpec:
     polygon: Polygon
 
 
+@dataclass(frozen=True, slots=True)
+class DirtSpec:
+    """A dirty patch of floor: over it, the robot's dirt detector (packet 15) reads ``level``."""
+
+    area: Polygon
+    level: int
+
+
 @dataclass(frozen=True)
 class World:
     """A validated world, in millimetres and radians."""
@@ -198,6 +207,8 @@ class World:
     walls: tuple[Segment, ...] = ()
     obstacles: tuple[Polygon, ...] = ()
     drops: tuple[Polygon, ...] = ()
+    #: dirty patches and the dirt-detect level (packet 15, 0-255) the robot reads over each
+    dirt: tuple[DirtSpec, ...] = ()
     virtual_walls: tuple[VirtualWallSpec, ...] = ()
     lighthouses: tuple[LighthouseSpec, ...] = ()
     dock: DockSpec | None = None
@@ -229,6 +240,10 @@ class World:
 
     def over_drop(self, x: float, y: float) -> bool:
         return any(point_in_polygon(x, y, drop) for drop in self.drops)
+
+    def dirt_at(self, x: float, y: float) -> int:
+        """The dirt-detect level (packet 15) at a point: the highest patch under it, else 0."""
+        return max((d.level for d in self.dirt if point_in_polygon(x, y, d.area)), default=0)
 
     def pose_is_free(self, pose: Pose, clearance: float = ROBOT_RADIUS_MM) -> bool:
         """The robot fits here: on the floor, no wall within its radius, not over a drop."""
@@ -418,9 +433,10 @@ class _Checker:
             return None
         return (x0, y0, x1, y1)
 
-    def shape(self, value: object, path: PathKey) -> Polygon | None:
-        """``{rect: [...]}`` or ``{polygon: [...]}``, with an optional ``name``."""
-        spec = self.mapping(value, path, ("name", "rect", "polygon"))
+    def shape(self, value: object, path: PathKey, extra: tuple[str, ...] = ()) -> Polygon | None:
+        """``{rect: [...]}`` or ``{polygon: [...]}``, with an optional ``name`` (and the
+        ``extra`` keys the caller reads itself)."""
+        spec = self.mapping(value, path, ("name", "rect", "polygon", *extra))
         if spec is None:
             return None
         if ("rect" in spec) == ("polygon" in spec):
@@ -451,7 +467,7 @@ def _area(poly: Polygon) -> float:
 
 
 _TOP_KEYS = (
-    "name", "description", "rooms", "walls", "obstacles", "drops", "virtual_walls",
+    "name", "description", "rooms", "walls", "obstacles", "drops", "dirt", "virtual_walls",
     "lighthouses", "dock", "robot", "events", "areas",
 )  # fmt: skip
 _DOCK_KEYS = (
@@ -643,6 +659,16 @@ def _build_world(c: _Checker, data: object, source: str) -> World:
         for i, o in enumerate(c.items(top.get("obstacles"), ("obstacles",)))
     ]
     drops = [c.shape(o, ("drops", i)) for i, o in enumerate(c.items(top.get("drops"), ("drops",)))]
+    dirt: list[DirtSpec] = []
+    for i, patch in enumerate(c.items(top.get("dirt"), ("dirt",))):
+        area = c.shape(patch, ("dirt", i), extra=("level",))
+        dirt_level = patch.get("level") if isinstance(patch, dict) else None
+        if not isinstance(patch, dict):
+            continue
+        if type(dirt_level) is not int or not 1 <= dirt_level <= 255:
+            c.error(("dirt", i, "level"), _show(dirt_level), "an integer dirt-detect level 1..255")
+        elif area is not None:
+            dirt.append(DirtSpec(area, dirt_level))
     vwalls: list[VirtualWallSpec] = []
     for i, v in enumerate(c.items(top.get("virtual_walls"), ("virtual_walls",))):
         path: PathKey = ("virtual_walls", i)
@@ -720,6 +746,7 @@ def _build_world(c: _Checker, data: object, source: str) -> World:
         walls=tuple(walls),
         obstacles=tuple(o for o in obstacles if o is not None),
         drops=tuple(d for d in drops if d is not None),
+        dirt=tuple(dirt),
         virtual_walls=tuple(vwalls),
         lighthouses=tuple(lighthouses),
         dock=dock,

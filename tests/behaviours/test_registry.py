@@ -45,18 +45,18 @@ def test_every_builtin_is_registered_with_a_valid_declaration() -> None:
         assert decl.origin == "builtin"
 
 
-def test_default_registry_holds_builtins_and_the_installed_wallfollow_plugin() -> None:
+def test_default_registry_holds_builtins_and_the_installed_example_plugin() -> None:
     from importlib.metadata import PackageNotFoundError, distribution
 
     try:
-        distribution("roomba-bt-wallfollow")
+        distribution("roomba-bt-dirt")
     except PackageNotFoundError:
-        pytest.skip("pip install -e plugins/roomba-bt-wallfollow")
+        pytest.skip("pip install -e plugins/roomba-bt-dirt")
     registry = default_registry()
     assert "drive" in registry
-    assert "wall_follow" in registry  # plugins/roomba-bt-wallfollow, installed in the venv
-    assert registry.get("wall_follow") is not None
-    assert "roomba_bt_wallfollow" in registry.get("wall_follow").origin  # type: ignore[union-attr]
+    assert registry.get("wall_follow").origin == "builtin"  # type: ignore[union-attr]
+    assert "dirt_detect" in registry  # plugins/roomba-bt-dirt, installed in the venv
+    assert "roomba_bt_dirt" in registry.get("dirt_detect").origin  # type: ignore[union-attr]
 
 
 def test_a_plugin_that_fails_to_import_is_named_and_others_still_load() -> None:

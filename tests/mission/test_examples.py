@@ -19,17 +19,8 @@ def test_there_are_examples() -> None:
     assert LIBRARIES
 
 
-def plugin_missing(path: Path) -> bool:
-    """wall_follow.yaml needs plugins/roomba-bt-wallfollow installed (``make`` does it)."""
-    from roomba_bt.behaviours import default_registry
-
-    return "wall_follow:" in path.read_text() and "wall_follow" not in default_registry()
-
-
 @pytest.mark.parametrize("path", MISSIONS, ids=lambda p: p.name)
 def test_example_compiles_and_ticks(path: Path) -> None:
-    if plugin_missing(path):
-        pytest.skip("pip install -e plugins/roomba-bt-wallfollow")
     mission = load_mission(path)
     assert mission.name
     assert mission.packets

@@ -8,8 +8,11 @@ import pathlib
 
 import pytest
 
+from roomba_bt.oi import commands as C
 from roomba_bt.sim import WorldError, load_world, parse_world, shipped_worlds
 from roomba_bt.sim.world import ROBOT_RADIUS_MM
+
+from .helpers import make, pose
 
 
 def problems(text: str) -> list[str]:
@@ -135,3 +138,39 @@ def test_near_dock_start_region_needs_a_dock() -> None:
 def test_yaml_tags_that_build_objects_are_refused() -> None:
     [problem] = problems("rooms: !!python/object:os.system {}\n")
     assert problem.startswith("w.yaml:1:8: (YAML): found the tag")
+
+
+DIRTY = """
+name: dirty
+rooms: [[[0, 0], [4, 0], [4, 4], [0, 4]]]
+dirt:
+  - {name: crumbs, rect: [2.5, 1.5, 3.0, 2.5], level: 40}
+  - {polygon: [[2.8, 1.5], [3.5, 1.5], [3.5, 2.5]], level: 90}
+robot: {start: {at: [2, 2], heading: 0}}
+"""
+
+
+def test_dirt_patches_set_packet_15_where_the_robot_is() -> None:
+    world = parse_world(DIRTY, "w.yaml")
+    assert [d.level for d in world.dirt] == [40, 90]
+    assert (world.dirt_at(2000, 2000), world.dirt_at(2600, 2000)) == (0, 40)
+    assert world.dirt_at(3200, 1600) == 90  # the higher of two overlapping patches
+    host = make(DIRTY, start=pose(2.0, 2.0, 0))
+    host.stream([15])
+    assert host.frame().dirt_detect == 0  # clean floor
+    host.send(C.drive(200, 32768))
+    levels = [f.dirt_detect for f in host.frames(4.0)]
+    assert levels[0] == 0 and 40 in levels  # drove onto the crumbs
+    assert make(DIRTY, start=pose(2.7, 2.0, 0)).query([15]).dirt_detect == 40
+
+
+def test_a_world_without_dirt_reads_0_and_bad_dirt_is_named() -> None:
+    assert load_world("empty-room").dirt == ()
+    found = problems(
+        "rooms: [[[0, 0], [4, 0], [4, 4], [0, 4]]]\n"
+        "dirt: [{rect: [1, 1, 2, 2], level: 0}, {rect: [1, 1, 2, 2]},\n"
+        "       {rect: [1, 1, 2, 2], level: x}]\n"
+    )
+    assert len(found) == 3, found
+    assert all("dirt" in p and "level" in p and "1..255" in p for p in found)
+    assert found[0].startswith("w.yaml:2:")

@@ -1,4 +1,5 @@
-"""The wall-following plugin: its declaration, its controller, and a mission that uses it."""
+"""wall_follow (a core behaviour since issue 14; it was the example plugin): its declaration,
+its controller, and the missions that use it."""
 
 from __future__ import annotations
 
@@ -7,14 +8,14 @@ from pathlib import Path
 import py_trees
 import pytest
 from py_trees.common import Status
-from roomba_bt_wallfollow import WallFollow
 
-from roomba_bt.behaviours import default_registry
+from roomba_bt.behaviours import builtin_registry, default_registry
+from roomba_bt.behaviours.wall import WallFollow
 from roomba_bt.mission import load_mission
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.robot.testing import StubRobot
 
-EXAMPLE = Path(__file__).resolve().parents[3] / "missions" / "examples" / "wall_follow.yaml"
+EXAMPLE = Path(__file__).resolve().parents[2] / "missions" / "examples" / "wall_follow.yaml"
 
 
 @pytest.fixture
@@ -52,25 +53,10 @@ def frame(
             43: left_counts & 0xFFFF, 44: right_counts & 0xFFFF}  # fmt: skip
 
 
-def installed() -> bool:
-    from importlib.metadata import PackageNotFoundError, distribution
-
-    try:
-        distribution("roomba-bt-wallfollow")
-    except PackageNotFoundError:
-        return False
-    return True
-
-
-needs_install = pytest.mark.skipif(
-    not installed(), reason="pip install -e plugins/roomba-bt-wallfollow to test its entry point"
-)
-
-
-@needs_install
-def test_it_is_registered_through_the_entry_point_group() -> None:
+def test_it_is_a_builtin() -> None:
     decl = default_registry().get("wall_follow")
-    assert decl is not None and decl.cls is WallFollow
+    assert decl is not None and decl.cls is WallFollow and decl.origin == "builtin"
+    assert "wall_follow" in builtin_registry()
     assert decl.modes == {OIMode.SAFE, OIMode.FULL}
     assert decl.packets({}) == (7, 48, 49, 50, 51)
 
@@ -183,14 +169,12 @@ def test_duration_ends_with_a_halt_and_preemption_halts_too(robot: StubRobot) ->
     assert [list(c.data) for c in robot.flush()] == [[137, 0, 0, 0, 0]]
 
 
-@needs_install
 def test_the_shipped_example_mission_uses_it() -> None:
     mission = load_mission(EXAMPLE)
     assert any(isinstance(n, WallFollow) for n in mission.root.iterate())
     assert {48, 49, 50, 51} <= set(mission.packets)
 
 
-@needs_install
 def test_it_follows_the_corridor_wall_in_the_simulator(capsys: pytest.CaptureFixture[str]) -> None:
     """60 s of wall following in the corridor world: it keeps moving along the walls (round
     the corners) instead of stopping against one."""

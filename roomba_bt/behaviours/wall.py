@@ -23,19 +23,20 @@ import math
 
 from py_trees.common import Status
 
-from roomba_bt.behaviours import ANGLE, DURATION, FLOAT, INT, SPEED, Action, Param, declare
+from roomba_bt.behaviours.declare import Action, Param, declare
+from roomba_bt.behaviours.units import ANGLE, DURATION, FLOAT, INT, SPEED
 from roomba_bt.oi import commands
+from roomba_bt.oi.frames import BUMPS_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS
 from roomba_bt.oi.modes import DRIVING_MODES
-from roomba_bt.oi.opcodes import COMMANDS_BY_NAME
+from roomba_bt.oi.opcodes import COMMANDS_BY_NAME, opcodes
 from roomba_bt.oi.packets import PACKETS
 
-__all__ = ["WallFollow"]
-__version__ = "0.1.0"
+__all__ = ["WALL_FOLLOWING", "WallFollow"]
 
 _WHEEL = COMMANDS_BY_NAME["drive_direct"].args[0]  # -500..500 mm/s, from the opcode table
-_SIGNAL_MAX = PACKETS[51].maximum
-RIGHT, FRONT_RIGHT, CENTER_LEFT, CENTER_RIGHT = 51, 50, 48, 49
-BUMPS = 7  # bits 0 right, 1 left
+#: the light-bumper signals it reads: centre left, centre right, front right, right
+_SIGNALS = LIGHT_BUMP_SIGNAL_PACKETS[2:]
+_SIGNAL_MAX = PACKETS[_SIGNALS[-1]].maximum
 #: after a bump: back off this far (mm), giving up after this long (s) if something is behind
 _BACK_MM, _BACK_S = 50.0, 1.0
 #: and the turn gives up after this long (s): a robot held in place must not spin forever
@@ -60,8 +61,8 @@ _TURN_S = 4.0
               doc="on a bump: back off 5 cm, then turn left (away from the wall) this far"),
         Param("duration", DURATION, minimum=0, doc="SUCCESS after this long; default: never"),
     ),
-    reads=(BUMPS, CENTER_LEFT, CENTER_RIGHT, FRONT_RIGHT, RIGHT),
-    sends=(145,),
+    reads=(*BUMPS_PACKETS, *_SIGNALS),
+    sends=opcodes("drive_direct"),
 )  # fmt: skip
 class WallFollow(Action):
     """Follow a wall on the right at a steady light-bumper signal (PD on wheel speeds).
@@ -136,12 +137,15 @@ class WallFollow(Action):
             return Status.RUNNING
         self.stranded()  # back in Safe/Full: the wait is over
         frame = snap.frame
-        recovering = self.recovery_speeds(bool(frame[BUMPS] & 3))
+        recovering = self.recovery_speeds(frame.any_bump)
         if recovering is not None:
             left, right = recovering
         else:
-            front = max(frame[CENTER_LEFT], frame[CENTER_RIGHT])
-            left, right = self.wheel_speeds(frame[RIGHT], front, snap.time)
+            front = max(frame.light_bump_center_left_signal, frame.light_bump_center_right_signal)
+            left, right = self.wheel_speeds(frame.light_bump_right_signal, front, snap.time)
         self.send(commands.drive_direct(right, left))
         self._started_motion = True
         return Status.RUNNING
+
+
+WALL_FOLLOWING: tuple[type[Action], ...] = (WallFollow,)
