@@ -9,7 +9,9 @@ flush, outside the measured tick time.
 from __future__ import annotations
 
 import logging
+import shutil
 import time
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Literal, TextIO
 
 import py_trees
@@ -21,6 +23,39 @@ if TYPE_CHECKING:
     from roomba_bt.runtime.loop import MissionRunner
 
 log = logging.getLogger("roomba_bt.run")
+
+
+class MissionClockFormatter(logging.Formatter):
+    """Log lines stamped with mission time (``t=12.345``), not wall-clock time.
+
+    What happened when, in a mission, is a question about mission time: on the virtual clock
+    (``--fast``) the wall clock says nothing, and a refusal or a warning is compared with the
+    tree's status lines (``t=12.345s ...``) and a recording's timestamps. Before a mission has
+    a clock (or outside one: ``validate``, ``sim``) a line has no time at all."""
+
+    clock: Callable[[], float | None] | None = None
+
+    def format(self, record: logging.LogRecord) -> str:
+        """``t=12.345 LEVEL logger: message``: the record's own ``mission_time`` (passed as
+        ``extra``) if it has one, else the mission clock's now."""
+        line = f"{record.levelname} {record.name}: {record.getMessage()}"
+        if record.exc_info and not record.exc_text:
+            record.exc_text = self.formatException(record.exc_info)
+        if record.exc_text:
+            line += "\n" + record.exc_text
+        now: float | None = getattr(record, "mission_time", None)
+        clock = type(self).clock
+        if now is None and clock is not None:
+            now = clock()
+        return line if now is None else f"t={now:.3f} {line}"
+
+
+def use_mission_clock(runner: MissionRunner | None) -> None:
+    """Stamp log lines with ``runner``'s mission time from now on (None: stop stamping)."""
+    MissionClockFormatter.clock = (
+        None if runner is None else lambda: runner.snapshot.time if runner.has_snapshot else None
+    )
+
 
 #: ``run --display``: the live tree, one log line per status change, or nothing; ``auto`` is
 #: the tree on a terminal and the log elsewhere.
@@ -57,13 +92,72 @@ def sensor_line(snapshot: Snapshot) -> str:
     return "  ".join(parts)
 
 
-class TerminalDisplay:
-    """Redraws the tree and the sensor line at most ``refresh_hz`` times a second."""
+_MARKS = {
+    py_trees.common.Status.RUNNING: "*",
+    py_trees.common.Status.SUCCESS: "✓",
+    py_trees.common.Status.FAILURE: "✕",
+    py_trees.common.Status.INVALID: "-",
+}
 
-    def __init__(self, stream: TextIO, refresh_hz: float = 5.0) -> None:
+
+def fitted_tree(root: py_trees.behaviour.Behaviour, rows: int, columns: int) -> list[str]:
+    """The tree as at most ``rows`` lines of at most ``columns`` characters.
+
+    Only a running node shows its children: a finished or not yet started subtree is one
+    line (``[✓] +3`` says it hides three nodes), so the running path stays in view however
+    large the tree. If that is still too tall, the lines off the running path go first, from
+    the bottom, and one line says how many were left out."""
+    lines: list[tuple[str, bool]] = []  # (text, on the running path)
+
+    def walk(node: py_trees.behaviour.Behaviour, depth: int) -> None:
+        running = node.status is py_trees.common.Status.RUNNING
+        children = list(node.children)
+        folded = not running and children and depth > 0
+        hidden = sum(1 for _ in node.iterate()) - 1 if folded else 0
+        more = f" +{hidden}" if hidden else ""
+        lines.append((f"{'  ' * depth}{node.name} [{_MARKS[node.status]}]{more}", running))
+        if running or depth == 0:
+            for child in children:
+                walk(child, depth + 1)
+
+    walk(root, 0)
+    rows = max(rows, 2)
+    if len(lines) > rows:
+        keep = [True] * len(lines)
+        excess = len(lines) - (rows - 1)  # one row says how many are hidden
+        for i in range(len(lines) - 1, 0, -1):
+            if excess == 0:
+                break
+            if not lines[i][1]:
+                keep[i] = False
+                excess -= 1
+        for i in range(len(lines) - 1, 0, -1):  # still too tall: the deepest running lines
+            if excess == 0:
+                break
+            if keep[i]:
+                keep[i] = False
+                excess -= 1
+        left_out = keep.count(False)
+        lines = [line for line, kept in zip(lines, keep, strict=True) if kept]
+        lines.append((f"... {left_out} more lines (a larger terminal shows them)", False))
+    return [text[: max(columns, 10)] for text, _ in lines]
+
+
+class TerminalDisplay:
+    """Redraws the tree and the sensor line at most ``refresh_hz`` times a second, within the
+    terminal's size: the screen is cleared and rewritten in place, never scrolled (a tree
+    taller than the terminal flooded the scrollback with a copy on every redraw)."""
+
+    def __init__(
+        self,
+        stream: TextIO,
+        refresh_hz: float = 5.0,
+        size: Callable[[], tuple[int, int]] | None = None,
+    ) -> None:
         self.stream = stream
         self.period = 1.0 / refresh_hz
         self._last = 0.0
+        self._size = size or _terminal_size
 
     def __call__(self, runner: MissionRunner) -> None:
         now = time.monotonic()
@@ -73,14 +167,22 @@ class TerminalDisplay:
         self.render(runner)
 
     def render(self, runner: MissionRunner) -> None:
-        tree = py_trees.display.unicode_tree(runner.mission.root, show_status=True)
-        text = f"{sensor_line(runner.snapshot)}\n\n{tree}\n"
-        self.stream.write("\x1b[H\x1b[J" + text)
+        columns, rows = self._size()
+        status = sensor_line(runner.snapshot)[:columns]
+        # the status line, a blank line, the tree, and the cursor's line left free
+        tree = fitted_tree(runner.mission.root, rows - 3, columns)
+        self.stream.write("\x1b[H\x1b[J" + status + "\n\n" + "\n".join(tree) + "\n")
         self.stream.flush()
 
 
+def _terminal_size() -> tuple[int, int]:
+    size = shutil.get_terminal_size((80, 24))
+    return size.columns, size.lines
+
+
 class StatusChangeLogger:
-    """Logs one line per node whose status changed during the tick."""
+    """Logs one line per node whose status changed during the tick, the tick's mission time
+    in the record (``mission_time``: :class:`MissionClockFormatter` prints it)."""
 
     def __init__(self, logger: logging.Logger = log) -> None:
         self.logger = logger
@@ -95,7 +197,7 @@ class StatusChangeLogger:
             status = node.status
             if last.get(node.id) is not status:
                 if status is not py_trees.common.Status.INVALID or node.id in last:
-                    self.logger.info("t=%.3fs %s -> %s", t, node.name, status.value)
+                    self.logger.info("%s -> %s", node.name, status.value, extra={"mission_time": t})
                 last[node.id] = status
 
 

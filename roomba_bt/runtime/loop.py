@@ -282,4 +282,5 @@ class MissionRunner:
             except ModeError as exc:
                 self.summary.refused_commands += 1
                 if len(self.refusals) < 100:
-                    self.refusals.append(str(exc))
+                    when = self._snapshot.time if self._snapshot is not None else 0.0
+                    self.refusals.append(f"t={when:.3f} {exc}")

@@ -9,7 +9,13 @@ import pytest
 
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.robot.testing import StubRobot
-from roomba_bt.runtime.display import StatusChangeLogger, TerminalDisplay, sensor_line
+from roomba_bt.runtime.display import (
+    StatusChangeLogger,
+    TerminalDisplay,
+    fitted_tree,
+    sensor_line,
+)
+from roomba_bt.runtime.loop import MissionRunner
 
 from .simrun import RunMission
 
@@ -61,3 +67,55 @@ def test_terminal_display_draws_the_tree_with_statuses(run_mission: RunMission) 
     assert "sequence" in text and "drive" in text
     assert "✓" in text
     assert f"mode={OIMode.PASSIVE.label}" in text or "mode=Safe" in text
+
+
+LONG = """
+tree:
+  sequence:
+    - mode: safe
+""" + "".join(
+    f"""    - sequence:
+        - wait: 0.05s
+        - drive: {{velocity: 100 mm/s, distance: {i + 1} mm}}
+"""
+    for i in range(30)
+)
+
+
+def test_the_live_tree_fits_the_terminal_and_keeps_the_running_path(
+    run_mission: RunMission,
+) -> None:
+    """A 90-node tree on a 60x12 terminal: each redraw is the status line and at most 9 tree
+    lines, finished subtrees folded, and the running leaf is always among them."""
+    out = io.StringIO()
+    display = TerminalDisplay(out, size=lambda: (60, 12))
+    screens: list[str] = []
+
+    def observe(runner: MissionRunner) -> None:
+        out.seek(0)
+        out.truncate()
+        display.render(runner)
+        screens.append(out.getvalue())
+
+    run_mission(LONG, observer=observe)
+    assert len(screens) > 30
+    running_seen = 0
+    for screen in screens:
+        assert screen.startswith("\x1b[H\x1b[J")  # redrawn in place, never scrolled
+        lines = screen[len("\x1b[H\x1b[J") :].rstrip("\n").split("\n")
+        assert len(lines) <= 11 and all(len(line) <= 60 for line in lines), screen
+        assert lines[0].startswith("t=")  # the status line stays on top
+        running = [line for line in lines if line.endswith("[*]")]
+        if "drive" in screen and running:
+            running_seen += 1
+            assert any("drive" in line or "wait" in line for line in running), screen
+    assert running_seen > 30
+    assert any("[✓] +2" in screen for screen in screens)  # a finished sequence folded
+
+
+def test_fitted_tree_says_how_many_lines_it_left_out(run_mission: RunMission) -> None:
+    run = run_mission(LONG)
+    lines = fitted_tree(run.runner.mission.root, rows=8, columns=80)
+    assert len(lines) == 8
+    assert lines[-1].startswith("... ") and "more lines" in lines[-1]
+    assert lines[0].startswith("sequence [✓]")
