@@ -51,17 +51,30 @@ def build_parser() -> argparse.ArgumentParser:
 
 def setup_logging(verbose: int, quiet: int) -> None:
     level = logging.INFO + 10 * (quiet - verbose)
-    logging.basicConfig(
-        level=max(logging.DEBUG, min(level, logging.CRITICAL)),
-        format="%(asctime)s %(levelname)s %(name)s: %(message)s",
-        stream=sys.stderr,
-    )
+    from roomba_bt.runtime.display import MissionClockFormatter
+
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(MissionClockFormatter())
+    logging.basicConfig(level=max(logging.DEBUG, min(level, logging.CRITICAL)), handlers=[handler])
     # transitions logs every state callback at INFO: only worth seeing at -vv.
     logging.getLogger("transitions").setLevel(logging.DEBUG if verbose >= 2 else logging.WARNING)
+    # matplotlib logs its first font-cache build (a first --plot) at INFO: not ours to show.
+    logging.getLogger("matplotlib").setLevel(logging.DEBUG if verbose >= 2 else logging.WARNING)
+
+
+def _cannot_run(exc: ImportError) -> int:
+    """An installation roomba-bt cannot run on: a py_trees release the tree is not proven
+    against (``UnsupportedPyTrees``, an ImportError, says which to install) or a dependency
+    missing. A message and exit 2, never a traceback."""
+    print(f"roomba-bt: {exc}", file=sys.stderr)
+    return ExitCode.INVALID
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
+    try:
+        parser = build_parser()
+    except ImportError as exc:
+        return _cannot_run(exc)
     args = parser.parse_args(argv)
     setup_logging(args.verbose, args.quiet)
     func = getattr(args, "func", None)
@@ -70,6 +83,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return ExitCode.INVALID
     try:
         return int(func(args))
+    except ImportError as exc:  # the subcommands import the tree and the robot lazily
+        return _cannot_run(exc)
     except KeyboardInterrupt:
         print("roomba-bt: interrupted", file=sys.stderr)
         return ExitCode.INTERRUPTED

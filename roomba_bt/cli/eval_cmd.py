@@ -44,7 +44,7 @@ from roomba_bt.runtime.summary import ExitCode
 def register(sub: Any) -> None:
     ev = sub.add_parser(
         "eval",
-        help="run a mission many times on the simulator and report its success rate",
+        help="run missions many times on the simulator: success rates",
         description="Run MISSION in N seeded episodes on the simulator's virtual clock and "
         "report the success rate (95% Wilson interval), median and p90 time, bumps and the "
         "failure reasons. Exit codes: 0 done, 1 --min-rate not reached, 2 invalid input, "

@@ -10,6 +10,8 @@ the wall clock.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.robot.connection import OPEN_CAUSES
 from roomba_bt.robot.errors import ConnectionFailed
@@ -36,10 +38,14 @@ def make_simulator(
     random_start: bool = False,
     faults: Faults | None = None,
     coverage: bool = False,
+    battery: float | None = None,
 ) -> Simulator:
-    """A simulator in ``world`` (a shipped name or a path); raises WorldError if invalid.
+    """A simulator in ``world`` (a shipped name or a path), its battery at ``battery`` (a
+    fraction) instead of the world's if given; raises WorldError if invalid.
     ``coverage``: it tracks the floor cleaned (:mod:`roomba_bt.sim.coverage`)."""
     loaded = load_world(world or DEFAULT_WORLD)
+    if battery is not None:
+        loaded = replace(loaded, battery=battery)
     return Simulator(loaded, profile, seed, faults, random_start=random_start, coverage=coverage)
 
 

@@ -105,7 +105,7 @@ def validate_command(args: argparse.Namespace) -> int:
         if diagnostics:
             status = ExitCode.INVALID
         else:
-            print(f"{file}: ok", file=sys.stderr)
+            print(f"{file}: ok")
     return status
 
 
@@ -131,8 +131,8 @@ def show_command(args: argparse.Namespace) -> int:
     print(f"{mission.name}: {mission.description}".rstrip(": "))
     print(py_trees.display.unicode_tree(mission.root))
     print(f"sensor packets: {list(mission.packets)}")
-    if mission.parameters:
-        shown = ", ".join(f"{k}={v!r}" for k, v in mission.parameters.items())
+    if mission.parameters_shown:
+        shown = ", ".join(f"{k}={v}" for k, v in mission.parameters_shown.items())
         print(f"parameters: {shown}")
     for option, fmt in (("dot", "dot"), ("svg", "svg")):
         target = getattr(args, option)

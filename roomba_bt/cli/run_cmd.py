@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
 from pathlib import Path
 from typing import Any
@@ -25,7 +26,7 @@ from roomba_bt.runtime.summary import ExitCode
 def register(sub: Any) -> None:
     run = sub.add_parser(
         "run",
-        help="run a mission on a robot (--port) or on the built-in simulator",
+        help="run a mission on a robot (--port) or the simulator",
         description="Run MISSION. Without --port it runs on the built-in simulator (real time; "
         "--fast on the virtual clock). Exit codes: 0 succeeded, 1 failed or timed out, "
         "2 invalid mission or usage, 3 connection or stream failure, 130 interrupted.",
@@ -38,6 +39,10 @@ def register(sub: Any) -> None:
     run.add_argument("--baud", type=baud_rate, default=115200, help="baud rate (default 115200)")
     run.add_argument("--world", help="simulator world: a shipped name or a YAML path")
     run.add_argument("--seed", type=int, default=0, help="simulator seed (default 0)")
+    run.add_argument(
+        "--battery", type=float, metavar="FRACTION",
+        help="simulator only: initial charge 0..1 (default: the world's)",
+    )  # fmt: skip
     run.add_argument(
         "--random-start", action="store_true", help="start in the world's start region"
     )
@@ -67,13 +72,14 @@ def register(sub: Any) -> None:
     )
     run.add_argument(
         "--display", choices=("auto", "tree", "log", "none"), default="auto",
-        help="live tree on a terminal (auto), one line per status change (log), or nothing",
+        help="live tree on a terminal (auto), one line per status change (log), or only the "
+        "summary (none)",
     )  # fmt: skip
     run.set_defaults(func=run_command)
 
     replay = sub.add_parser(
         "replay",
-        help="play a --record file back through the parser, mode model and tree",
+        help="play a --record file back through the tree",
         description="Feed the recorded sensor bytes back through the same parser and tree and "
         "compare the commands the tree writes with the recorded ones.",
     )
@@ -110,7 +116,7 @@ def stream_packets(mission: Any, baud: int) -> tuple[int, ...]:
 
 def run_command(args: argparse.Namespace) -> int:
     from roomba_bt.robot.errors import ConnectionFailed
-    from roomba_bt.runtime.display import TerminalDisplay, observer_for
+    from roomba_bt.runtime.display import TerminalDisplay, observer_for, use_mission_clock
     from roomba_bt.runtime.stack import Recording, RunStack
     from roomba_bt.transport import Transport
 
@@ -121,8 +127,12 @@ def run_command(args: argparse.Namespace) -> int:
     timeout = parse_timeout(args.timeout)
     if isinstance(timeout, str):
         return _error(timeout)
-    if args.port and (args.world or args.plot or args.fast):
-        return _error("--world, --plot and --fast are for the simulator: drop them or --port")
+    if args.port and (args.world or args.plot or args.fast or args.battery is not None):
+        return _error(
+            "--world, --plot, --fast and --battery are for the simulator: drop them or --port"
+        )
+    if args.battery is not None and not 0.0 <= args.battery <= 1.0:
+        return _error(f"--battery {args.battery}: expected a fraction in 0..1")
     found = mission_file(args.mission)
     if isinstance(found, tuple):
         return _error(found[0])
@@ -147,7 +157,12 @@ def run_command(args: argparse.Namespace) -> int:
 
             try:
                 simulator = make_simulator(
-                    args.world, profile, args.seed, random_start=args.random_start, coverage=True
+                    args.world,
+                    profile,
+                    args.seed,
+                    random_start=args.random_start,
+                    coverage=True,
+                    battery=args.battery,
                 )
             except WorldError as exc:
                 return _error(str(exc))
@@ -176,12 +191,21 @@ def run_command(args: argparse.Namespace) -> int:
     except OSError as exc:
         return _error(f"--record {args.record}: {exc.strerror or exc}")
 
-    print(_render_tree(mission), flush=True)
-    summary = stack.run()
+    quiet = args.display == "none"
+    if quiet and not args.verbose:  # nothing but the summary (and what went wrong)
+        logging.getLogger().setLevel(max(logging.getLogger().level, logging.WARNING))
+    if not quiet:
+        print(_render_tree(mission), flush=True)
+    use_mission_clock(stack.runner)
+    try:
+        summary = stack.run()
+    finally:
+        use_mission_clock(None)
     stack.close()
     if isinstance(observer, TerminalDisplay) and stack.runner.has_snapshot:
         observer.render(stack.runner)
-    print(_render_tree(mission, status=True))
+    if not quiet:
+        print(_render_tree(mission, status=True))
     print(summary)
     if simulator is not None and simulator.swept is not None and simulator.swept.cleaning_time:
         print(_coverage_line(simulator))

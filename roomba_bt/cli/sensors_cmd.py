@@ -32,7 +32,7 @@ def group_for(baud: int) -> int | None:
 def register(sub: Any) -> None:
     parser = sub.add_parser(
         "sensors",
-        help="show every decoded sensor, live (robot with --port, else the simulator)",
+        help="show every decoded sensor, live",
     )
     parser.add_argument("--port", help="serial device or URL; default: the built-in simulator")
     parser.add_argument("--profile", choices=sorted(PROFILES), default="create2")

@@ -18,7 +18,7 @@ from roomba_bt.mission.build import CompiledMission, build
 from roomba_bt.mission.checks import RUNTIME_PACKETS, KeyCheck, ModeCheck, check_stream
 from roomba_bt.mission.diagnostics import Diagnostic, MissionError
 from roomba_bt.mission.loader import Loader
-from roomba_bt.mission.values import Context
+from roomba_bt.mission.values import Context, shown
 from roomba_bt.oi.modes import ALL_MODES, OIMode
 from roomba_bt.oi.profiles import CREATE2, RobotProfile
 
@@ -99,6 +99,9 @@ def _compile(
         packets=tuple(sorted(packets)),
         modes_needed=frozenset(needed),
         parameters={name: bound.value for name, bound in parsed.params.items()},
+        parameters_shown={
+            name: shown(bound.type, bound.value) for name, bound in parsed.params.items()
+        },
         source=path,
         blackboard_initial={k: d.initial for k, d in ctx.keys.items() if d.has_initial},
         blackboard_keys={k: d.type.describe() for k, d in ctx.keys.items()},

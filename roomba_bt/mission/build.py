@@ -48,6 +48,8 @@ class CompiledMission:
     source: Path
     blackboard_initial: Mapping[str, Any] = field(default_factory=dict)
     blackboard_keys: Mapping[str, str] = field(default_factory=dict)
+    #: each parameter's value as a mission writes it, with its unit (``side: 50 cm``)
+    parameters_shown: Mapping[str, str] = field(default_factory=dict)
 
     def setup(self, robot: RobotHandle, **kwargs: Any) -> None:
         """Hand the robot to every node (py_trees idiom: hardware arrives in ``setup``) and

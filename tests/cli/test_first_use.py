@@ -1,0 +1,178 @@
+"""What a new user tripped on, from the command line: each a test.
+
+A py_trees release the tree is not proven against, the help's one line per subcommand,
+``validate``'s "ok" on stdout, ``--display none``, ``run --battery``, log lines stamped with
+mission time, and matplotlib's INFO lines on a first ``--plot``."""
+
+from __future__ import annotations
+
+import logging
+import os
+import re
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.cli import build_parser, main, setup_logging
+from roomba_bt.runtime.display import MissionClockFormatter, use_mission_clock
+
+MISSION = """
+mission: short-drive
+tree:
+  sequence:
+    - mode: safe
+    - drive: {velocity: 200 mm/s, distance: 20 cm}
+"""
+
+
+@pytest.fixture
+def mission(tmp_path: Path) -> Path:
+    path = tmp_path / "short.yaml"
+    path.write_text(textwrap.dedent(MISSION))
+    return path
+
+
+def test_an_unsupported_py_trees_is_a_message_and_exit_2_not_a_traceback(
+    mission: Path,
+) -> None:
+    """``UnsupportedPyTrees`` is an ImportError raised while the subcommands import the tree;
+    the CLI caught only ModuleNotFoundError, so the user saw a traceback."""
+    script = (
+        "import sys, py_trees.version\n"
+        "py_trees.version.__version__ = '2.7.0'  # as if pip had installed a later release\n"
+        "from roomba_bt.cli import main\n"
+        f"sys.exit(main(['validate', {str(mission)!r}]))\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=60,
+        env={**os.environ, "PYTHONWARNINGS": "ignore"},
+    )  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    assert "Traceback" not in done.stderr
+    assert done.stderr.startswith("roomba-bt: py_trees 2.7.0 is installed")
+    assert "pip install 'py-trees==2.6.0'" in done.stderr
+    assert done.stdout == ""
+
+
+def test_every_subcommand_has_a_one_line_description_in_the_help(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setenv("COLUMNS", "80")
+    text = build_parser().format_help()
+    listing = text.split("  COMMAND\n", 1)[1].split("\noptions:")[0]
+    rows = [line for line in listing.splitlines() if line.strip()]
+    commands = [row.split()[0] for row in rows]
+    assert {"run", "validate", "show", "sim", "sensors", "eval"} <= set(commands)
+    for row in rows:  # "    name   description": no continuation lines, none empty
+        assert re.match(r"^    [a-z][a-z-]* +\S", row), f"not one line per subcommand:\n{listing}"
+
+
+def test_validate_says_ok_on_stdout(mission: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["validate", str(mission)]) == 0
+    out, err = capsys.readouterr()
+    assert out == f"{mission}: ok\n" and err == ""
+
+
+def test_display_none_prints_nothing_but_the_summary(
+    mission: Path, capfd: pytest.CaptureFixture[str]
+) -> None:
+    """Run as a user would (a new process: logging set up by the CLI itself)."""
+    done = subprocess.run(
+        [sys.executable, "-m", "roomba_bt.cli", "run", str(mission), "--fast", "--display",
+         "none"],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert done.stderr == ""  # no INFO line about the connection
+    lines = done.stdout.splitlines()
+    assert lines[0].startswith("mission ") and "short-drive" in lines[0]
+    assert not any("-->" in line or "{-}" in line for line in lines)  # no tree
+
+
+def test_run_takes_battery_like_eval(mission: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["run", str(mission), "--fast", "--display", "none", "--battery", "0.3"]) == 0
+    assert re.search(r"battery\s+30%", capsys.readouterr().out)
+    assert main(["run", str(mission), "--fast", "--battery", "1.5"]) == 2
+    assert "--battery 1.5: expected a fraction in 0..1" in capsys.readouterr().err
+    assert main(["run", str(mission), "--port", "loop://", "--battery", "0.5"]) == 2
+    assert "for the simulator" in capsys.readouterr().err
+
+
+class _Runner:
+    def __init__(self, time: float | None) -> None:
+        self.has_snapshot = time is not None
+        self.snapshot = type("Snap", (), {"time": time})()
+
+
+def test_log_lines_show_mission_time_not_the_wall_clock() -> None:
+    record = logging.LogRecord("roomba_bt.run", logging.WARNING, __file__, 1, "late", (), None)
+    formatter = MissionClockFormatter()
+    try:
+        use_mission_clock(_Runner(12.3456))  # type: ignore[arg-type]
+        assert formatter.format(record) == "t=12.346 WARNING roomba_bt.run: late"
+        use_mission_clock(_Runner(None))  # type: ignore[arg-type]
+        assert formatter.format(record) == "WARNING roomba_bt.run: late"
+    finally:
+        use_mission_clock(None)
+    assert formatter.format(record) == "WARNING roomba_bt.run: late"  # no date, no clock
+
+
+ROGUE = '''
+from py_trees.common import Status
+
+from roomba_bt.behaviours import Action, declare
+from roomba_bt.oi import commands
+
+
+@declare("rogue", kind="action")
+class Rogue(Action):
+    """Sends Drive without declaring it: the mode guard refuses it in Passive."""
+
+    def update(self) -> Status:
+        self.send(commands.drive(100, 0))
+        return Status.SUCCESS
+'''
+
+
+def test_refusals_are_stamped_with_mission_time(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    (tmp_path / "rogue.py").write_text(ROGUE)
+    path = tmp_path / "refused.yaml"
+    path.write_text("plugins: [./rogue.py]\ntree:\n  sequence: [{wait: 0.3s}, rogue]\n")
+    main(["run", str(path), "--fast", "--display", "none"])
+    err = capsys.readouterr().err
+    assert re.search(r"^refused: t=0\.3\d\d ", err, re.M), err
+
+
+def test_matplotlib_info_lines_are_not_shown() -> None:
+    setup_logging(0, 0)
+    assert not logging.getLogger("matplotlib.font_manager").isEnabledFor(logging.INFO)
+    assert logging.getLogger("roomba_bt.run").isEnabledFor(logging.INFO) or (
+        logging.getLogger().level > logging.INFO  # a test runner's own level
+    )
+
+
+def test_a_status_change_line_carries_its_own_mission_time() -> None:
+    record = logging.LogRecord("roomba_bt.run", logging.INFO, __file__, 1, "drive -> SUCCESS",
+                               (), None)  # fmt: skip
+    record.mission_time = 1.5
+    assert MissionClockFormatter().format(record) == "t=1.500 INFO roomba_bt.run: drive -> SUCCESS"
+
+
+def test_show_prints_parameter_values_with_their_units(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "p.yaml"
+    path.write_text(
+        "parameters:\n  side: {type: distance, default: 1 m}\n"
+        "  speed: {type: speed, default: 200 mm/s}\n  laps: {type: int, default: 2}\n"
+        "tree:\n  sequence:\n    - mode: safe\n"
+        "    - drive: {velocity: '${speed}', distance: '${side}'}\n"
+    )
+    assert main(["show", str(path), "-p", "side=50cm"]) == 0
+    out = capsys.readouterr().out
+    assert "parameters: speed=200 mm/s, laps=2, side=500 mm" in out
