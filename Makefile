@@ -1,17 +1,26 @@
 # Two commands on a fresh machine: `make run` and `make test`. Both create .venv first.
+# `make run` installs the package alone (what running needs); `make test` adds the test,
+# plot and benchmark extras and the example plugins under plugins/.
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
+PIP := $(BIN)/python -m pip --quiet --disable-pip-version-check
+RUN_STAMP := $(VENV)/.installed-run
 STAMP := $(VENV)/.installed
 EXTRAS ?= test,plot,bench,cluster
 
 .PHONY: run test lint typecheck bench icount routines coverage golden venv clean
 
-$(STAMP): pyproject.toml
+$(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e ".[$(EXTRAS)]"
-	@for p in plugins/*/; do [ -f "$$p/pyproject.toml" ] && $(BIN)/python -m pip install --quiet -e "$$p" || true; done
+
+$(RUN_STAMP): pyproject.toml | $(BIN)/python
+	$(PIP) install -e .
+	touch $(RUN_STAMP)
+
+$(STAMP): pyproject.toml $(RUN_STAMP)
+	$(PIP) install -e ".[$(EXTRAS)]"
+	@for p in plugins/*/; do [ -f "$$p/pyproject.toml" ] && $(PIP) install -e "$$p" || true; done
 	touch $(STAMP)
 
 venv: $(STAMP)
@@ -19,7 +28,7 @@ venv: $(STAMP)
 # The shipped dock mission, by name, on the built-in simulator, on the virtual clock
 # (drop --fast for real time).
 RUN_ARGS ?= --fast
-run: $(STAMP)
+run: $(RUN_STAMP)
 	$(BIN)/roomba-bt run dock $(RUN_ARGS)
 
 lint: $(STAMP)

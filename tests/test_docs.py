@@ -1,0 +1,242 @@
+"""The docs run as written: every shell command and every mission in README.md and docs/.
+
+Fenced blocks are read from the Markdown. A *command* is a line of a ``sh``/``console``/plain
+block that starts with one of :data:`PROGRAMS` (a leading ``$ `` and a trailing ``# comment``
+are dropped, ``\\`` continues a line, ``&&`` chains); other lines of plain blocks are output,
+diagrams or byte layouts. A *mission* is a ``yaml`` block with a ``tree:`` or ``subtrees:``
+key; it is written to ``<its mission name>.yaml`` (``mission:``, else ``doc-N``) in the
+directory the commands run in, so ``roomba-bt run square.yaml`` runs the block above it. A
+block that names ``plugins:`` by a path relative to itself is the text of a shipped mission
+(``missions/examples/custom_condition.yaml``): it is written over a copy of that file, so
+its paths resolve where the docs say.
+
+Every command is run, in a scratch directory holding the missions written from the docs and
+a copy of ``missions/`` and links to ``plugins/`` and ``worlds/``, with exit code 0
+expected, after the rewrites of :func:`fast_variant`:
+
+* no robot: ``--port URL`` becomes the built-in simulator on the virtual clock (``--fast``);
+  ``sensors`` stops after one refresh (``--count 1``);
+* no real time: ``run`` gets ``--fast`` (the same tree, the virtual clock);
+* short: ``eval`` runs 2 episodes (``--runs N`` -> 2), one job; ``sim`` serves for 0.5 s
+  (``--duration 0.5``) on a free TCP port (``--tcp HOST:0``);
+* placeholders get a value: ``[NAME...]`` -> ``drive``, ``A.yaml``/``B.yaml`` ->
+  ``missions/dock.yaml``/``missions/dock-builtin.yaml``;
+* ``make run`` runs the command its Makefile recipe runs.
+
+A command that cannot run here is listed in :data:`NOT_RUN` with the reason; a listed
+command the docs no longer hold fails the test too (the list cannot go stale), and so does a
+command that is neither run nor listed.
+"""
+
+from __future__ import annotations
+
+import glob
+import os
+import re
+import shlex
+import shutil
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+import yaml
+
+from roomba_bt.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+PROGRAMS = ("roomba-bt", "make", "pip", "pytest", "dask", ". .venv")
+SHELL_LANGS = ("", "sh", "console", "shell", "bash")
+
+#: Commands the test does not run, and why (exact text as in the docs, comment dropped).
+NOT_RUN: dict[str, str] = {
+    "make test": "this test suite is what it runs",
+    ". .venv/bin/activate": "changes the calling shell; the tests already run in that venv",
+    "pip install 'roomba-bt[cluster]'": "an install from the package index; `make test` "
+    "installs the cluster extra into the venv these tests run in",
+    "dask scheduler": "a server that runs until stopped (a Dask cluster's scheduler)",
+    "dask worker tcp://HOST:8786 --nthreads 1": "a server that runs until stopped, and "
+    "HOST is the user's machine",
+    "roomba-bt eval missions/dock.yaml --world apartment --runs 2000 "
+    "--scheduler tcp://HOST:8786 --out apartment.jsonl": "needs the Dask cluster the two "
+    "commands above start (HOST is the user's); the Dask engine itself is tested in "
+    "tests/evaluate",
+    "roomba-bt eval MISSION --world W --runs N --seed S [--jobs J] [--plot FILE.png]": (
+        "a synopsis (every word a placeholder), not a command; the eval commands above it are run"
+    ),
+    "pip install roomba-bt": "an install from the package index (network, and a new venv); "
+    "the two roomba-bt commands after it are run",
+    "pip install -e plugins/roomba-bt-dirt": "`make venv` / `make test` installed it into "
+    "the venv these tests run in; the plugin's entry point is tested in "
+    "plugins/roomba-bt-dirt/tests",
+    "pytest plugins/roomba-bt-dirt": "the suite collects plugins/ itself (testpaths), "
+    "so those tests run beside this one",
+}
+
+
+@dataclass(frozen=True)
+class Block:
+    doc: str
+    line: int
+    lang: str
+    text: str
+
+
+def blocks() -> list[Block]:
+    found = []
+    for path in DOCS:
+        text = path.read_text(encoding="utf-8")
+        for match in re.finditer(r"^```(\w*)\n(.*?)^```", text, re.M | re.S):
+            line = text.count("\n", 0, match.start()) + 1
+            found.append(Block(path.relative_to(ROOT).as_posix(), line, match[1], match[2]))
+    return found
+
+
+def commands() -> list[tuple[str, str]]:
+    """(where, command) for every command line of every shell block."""
+    found = []
+    for block in blocks():
+        if block.lang not in SHELL_LANGS:
+            continue
+        text = re.sub(r"\\\n\s*", " ", block.text)  # continued lines
+        for offset, raw in enumerate(text.splitlines()):
+            line = raw.strip().removeprefix("$ ")
+            if not line.startswith(PROGRAMS):
+                continue
+            line = re.sub(r"\s+#.*$", "", line)
+            line = re.sub(r"\s+", " ", line).strip()
+            found.append((f"{block.doc}:{block.line + 1 + offset}", line))
+    return found
+
+
+def missions() -> list[tuple[str, str, str]]:
+    """(where, file name, text) of every mission block."""
+    found = []
+    for i, block in enumerate(blocks()):
+        if block.lang != "yaml" or not re.search(r"^(tree|subtrees):", block.text, re.M):
+            continue
+        data = yaml.safe_load(block.text)
+        name = data.get("mission") or f"doc-{i}"
+        file = f"{name}.yaml"
+        if "plugins" in data:
+            [shipped] = sorted((ROOT / "missions").rglob(file))
+            file = shipped.relative_to(ROOT).as_posix()
+        found.append((f"{block.doc}:{block.line}", file, block.text))
+    return found
+
+
+def make_run_command() -> str:
+    """What ``make run`` runs: the recipe's command with its RUN_ARGS."""
+    makefile = (ROOT / "Makefile").read_text()
+    args = re.search(r"^RUN_ARGS \?= (.*)$", makefile, re.M)
+    recipe = re.search(r"^run: .*\n\t\$\(BIN\)/(.*)$", makefile, re.M)
+    assert args is not None and recipe is not None
+    return recipe[1].replace("$(RUN_ARGS)", args[1])
+
+
+PLACEHOLDERS = {"[NAME...]": "drive", "A.yaml": "missions/dock.yaml",
+                "B.yaml": "missions/dock-builtin.yaml"}  # fmt: skip
+
+
+def fast_variant(command: str) -> list[str]:
+    """The command as run here (see the module's docstring), as argv."""
+    if command == "make run":
+        command = make_run_command()
+    argv = shlex.split(command)
+    argv = [PLACEHOLDERS.get(word, word) for word in argv]
+    sub = argv[1] if len(argv) > 1 else ""
+    if "--port" in argv:
+        i = argv.index("--port")
+        del argv[i : i + 2]
+        if sub == "run":
+            argv.append("--fast")
+        if sub == "sensors":
+            argv += ["--count", "1"]
+    if sub == "run" and "--fast" not in argv:
+        argv.append("--fast")
+    if sub == "eval":
+        if "--runs" in argv:
+            argv[argv.index("--runs") + 1] = "2"
+        else:
+            argv += ["--runs", "2"]
+        if "--jobs" in argv:
+            argv[argv.index("--jobs") + 1] = "1"
+    if sub == "sim":
+        if "--tcp" in argv:
+            i = argv.index("--tcp")
+            argv[i + 1] = argv[i + 1].rsplit(":", 1)[0] + ":0"
+        argv += ["--duration", "0.5"]
+    return argv
+
+
+COMMANDS = commands()
+MISSIONS = missions()
+
+
+@pytest.fixture
+def workdir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    shutil.copytree(ROOT / "missions", tmp_path / "missions")
+    for name in ("plugins", "worlds"):
+        (tmp_path / name).symlink_to(ROOT / name)
+    for _, file, text in MISSIONS:
+        (tmp_path / file).write_text(text)
+    monkeypatch.chdir(tmp_path)
+    return tmp_path
+
+
+def test_the_docs_hold_commands_and_missions() -> None:
+    assert len(COMMANDS) > 30 and len(MISSIONS) >= 4
+    assert ("docs/missions.md:31", "roomba-bt validate square.yaml") in COMMANDS
+
+
+def test_every_listed_command_is_still_in_the_docs() -> None:
+    documented = {command for _, command in COMMANDS}
+    stale = [command for command in NOT_RUN if command not in documented]
+    assert not stale, f"NOT_RUN lists commands the docs no longer hold: {stale}"
+
+
+def test_every_command_is_run_or_listed_with_a_reason() -> None:
+    for where, command in COMMANDS:
+        for part in command.split(" && "):
+            program = part.split()[0]
+            assert program == "roomba-bt" or part in NOT_RUN or part == "make run", (
+                f"{where}: {part!r} is neither run by this test nor listed in NOT_RUN"
+            )
+
+
+@pytest.mark.parametrize(("where", "file", "text"), MISSIONS, ids=[m[0] for m in MISSIONS])
+def test_every_mission_in_the_docs_validates(
+    where: str, file: str, text: str, workdir: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["validate", file]) == 0, f"{where}: {capsys.readouterr()}"
+
+
+RUN = [(w, c) for w, c in COMMANDS if c not in NOT_RUN and not c.startswith("make test")]
+
+
+@pytest.mark.parametrize(("where", "command"), RUN, ids=[w for w, _ in RUN])
+def test_every_command_in_the_docs_runs(
+    where: str, command: str, workdir: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    for part in command.split(" && "):
+        redirect = None
+        if " > " in part:
+            part, redirect = part.split(" > ")
+        argv = fast_variant(part)
+        expanded = [w for word in argv for w in (sorted(glob.glob(word)) or [word])]
+        assert expanded[0] == "roomba-bt", f"{where}: {part}"
+        if expanded[1] == "sim":  # serves until stopped: its own process
+            done = subprocess.run(
+                [sys.executable, "-m", "roomba_bt.cli", *expanded[1:]],
+                capture_output=True, text=True, timeout=60, env=dict(os.environ),
+            )  # fmt: skip
+            code, out, err = done.returncode, done.stdout, done.stderr
+        else:
+            code = main(expanded[1:])
+            out, err = capsys.readouterr()
+        assert code == 0, f"{where}: {' '.join(expanded)} exited {code}\n{out}\n{err}"
+        if redirect is not None:
+            (workdir / redirect).write_text(out)
+            assert out.strip(), f"{where}: {part} wrote nothing to {redirect}"
