@@ -26,6 +26,8 @@ from roomba_bt.behaviours.units import (
     DURATION,
     INT,
     PERCENT,
+    RADIUS,
+    RADIUS_WORDS,
     SPEED,
     STR,
     UnitError,
@@ -55,23 +57,7 @@ _RADIUS_WORDS: dict[str, int] = {
     "spin_left": int(Radius.TURN_COUNTER_CLOCKWISE),
     "spin_right": int(Radius.TURN_CLOCKWISE),
 }
-
-
-def _parse_radius(value: object) -> object:
-    if isinstance(value, str) and value in _RADIUS_WORDS:
-        return value
-    try:
-        return parse_quantity("distance", value)
-    except UnitError as exc:
-        raise UnitError(f"{exc}; or one of {', '.join(_RADIUS_WORDS)}") from None
-
-
-RADIUS = ValueType(
-    "radius",
-    _parse_radius,
-    "mm",
-    (("anyOf", [{"enum": list(_RADIUS_WORDS)}, dict(DISTANCE.schema())]),),
-)
+assert tuple(_RADIUS_WORDS) == RADIUS_WORDS
 
 
 def _parse_notes(value: object) -> tuple[tuple[int, int], ...]:

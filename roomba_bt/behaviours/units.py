@@ -191,9 +191,31 @@ STR_LIST = ValueType(
     json_schema=(("anyOf", [{"type": "string"}, {"type": "array", "items": {"type": "string"}}]),),
 )
 
+#: The words a drive radius may be instead of a distance (``drive``'s special radii).
+RADIUS_WORDS: tuple[str, ...] = ("straight", "spin_left", "spin_right")
+
+
+def _parse_radius(value: object) -> object:
+    if isinstance(value, str) and value in RADIUS_WORDS:
+        return value
+    try:
+        return parse_quantity("distance", value)
+    except UnitError as exc:
+        raise UnitError(f"{exc}; or one of {', '.join(RADIUS_WORDS)}") from None
+
+
+#: A turn radius: a distance (positive turns left) or one of :data:`RADIUS_WORDS`.
+RADIUS = ValueType(
+    "radius",
+    _parse_radius,
+    "mm",
+    (("anyOf", [{"enum": list(RADIUS_WORDS)}, dict(DISTANCE.schema())]),),
+)
+
 #: Types a mission parameter or a blackboard key may be declared with.
 VALUE_TYPES: dict[str, ValueType] = {
-    t.name: t for t in (DURATION, SPEED, DISTANCE, ANGLE, PERCENT, INT, FLOAT, BOOL, STR)
+    t.name: t
+    for t in (DURATION, SPEED, DISTANCE, ANGLE, PERCENT, INT, FLOAT, BOOL, STR, RADIUS)
 }
 
 
@@ -215,7 +237,7 @@ def compatible(source: ValueType, target: ValueType) -> bool:
         return source.fields == target.fields
     if source.choices and target.choices:  # an enum whose every word the slot accepts
         return set(source.choices) <= set(target.choices)
-    return (source.name, target.name) in {("int", "float")}
+    return (source.name, target.name) in {("int", "float"), ("distance", "radius")}
 
 
 def convert(source: ValueType, target: ValueType, value: Any) -> Any:

@@ -176,3 +176,34 @@ def test_show_prints_parameter_values_with_their_units(
     assert main(["show", str(path), "-p", "side=50cm"]) == 0
     out = capsys.readouterr().out
     assert "parameters: speed=200 mm/s, laps=2, side=500 mm" in out
+
+
+RADII = """
+parameters:
+  r: {type: radius, default: spin_left}
+  d: {type: distance, default: 50 cm}
+blackboard:
+  k: {type: radius, initial: -1 m}
+  kd: {type: distance, initial: 30 cm}
+tree:
+  sequence:
+    - mode: safe
+    - drive: {velocity: 100 mm/s, radius: "${r}", angle: 10deg}
+    - drive: {velocity: 100 mm/s, radius: "${d}", distance: 5 cm}
+    - drive: {velocity: 100 mm/s, radius: "@k", distance: 5 cm}
+    - drive: {velocity: 100 mm/s, radius: "@kd", distance: 5 cm}
+"""
+
+
+def test_drive_radius_from_a_parameter_or_a_blackboard_key(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A ``radius`` type (a distance or straight/spin_left/spin_right), and a distance fits
+    a radius: both were refused ("is a distance (mm), but drive.radius needs radius")."""
+    path = tmp_path / "radii.yaml"
+    path.write_text(RADII)
+    assert main(["validate", str(path)]) == 0, capsys.readouterr().out
+    assert main(["run", str(path), "--fast", "--display", "none", "-p", "r=spin_right"]) == 0
+    assert re.search(r"outcome\s+SUCCESS", capsys.readouterr().out)
+    assert main(["validate", str(path), "-p", "r=sideways"]) == 2
+    assert "or one of straight, spin_left, spin_right" in capsys.readouterr().out
