@@ -214,8 +214,7 @@ RADIUS = ValueType(
 
 #: Types a mission parameter or a blackboard key may be declared with.
 VALUE_TYPES: dict[str, ValueType] = {
-    t.name: t
-    for t in (DURATION, SPEED, DISTANCE, ANGLE, PERCENT, INT, FLOAT, BOOL, STR, RADIUS)
+    t.name: t for t in (DURATION, SPEED, DISTANCE, ANGLE, PERCENT, INT, FLOAT, BOOL, STR, RADIUS)
 }
 
 

@@ -353,16 +353,17 @@ def _coverage(simulator: Simulator, area: str) -> Coverage | None:
 
 
 _STAGE = re.compile(r"^([a-z_][a-z0-9_]*)\(")
-_RUNNING_STAGE = re.compile(r"\(stage ([^)]+) was running\)")
+_RUNNING_STAGE = re.compile(r"\(stage ([^)]+) was running\)|ran out in ([a-z_][a-z0-9_]*)$")
 
 
 def failure_stage(reason: str) -> str:
     """The stage a failure reason names: the one it says was running (``... (stage search
-    was running)`` -> ``search``), else the leaf it starts with (``find_dock(...): lost the
-    beam`` -> ``find_dock``); "" when it names none."""
+    was running)`` -> ``search``; a --timeout that ``... ran out in dock_approach`` ->
+    ``dock_approach``), else the leaf it starts with (``find_dock(...): lost the beam`` ->
+    ``find_dock``); "" when it names none."""
     running = _RUNNING_STAGE.search(reason)
     if running:
-        return running.group(1)
+        return running.group(1) or running.group(2)
     match = _STAGE.match(reason)
     return match.group(1) if match else ""
 

@@ -223,7 +223,9 @@ class MissionRunner:
                 return
             if self.timeout_s is not None and snapshot.time >= self.timeout_s:
                 summary.outcome = Outcome.TIMEOUT
-                summary.reason = f"--timeout {self.timeout_s:g} s of mission time ran out"
+                summary.reason = (
+                    f"--timeout {self.timeout_s:g} s of mission time ran out{running_in(root)}"
+                )
                 return
 
     def _advance(self, batch: Sequence[TimedFrame]) -> Snapshot:
@@ -284,3 +286,12 @@ class MissionRunner:
                 if len(self.refusals) < 100:
                     when = self._snapshot.time if self._snapshot is not None else 0.0
                     self.refusals.append(f"t={when:.3f} {exc}")
+
+
+def running_in(root: py_trees.behaviour.Behaviour) -> str:
+    """`` in dock_approach`` when a mission's time runs out: the leaf still running (the
+    stage it was in, without its parameters, so equal stages group together), or ""."""
+    for node in root.iterate():
+        if node.status is py_trees.common.Status.RUNNING and not node.children:
+            return " in " + node.name.split("(", 1)[0]
+    return ""

@@ -207,3 +207,19 @@ def test_drive_radius_from_a_parameter_or_a_blackboard_key(
     assert re.search(r"outcome\s+SUCCESS", capsys.readouterr().out)
     assert main(["validate", str(path), "-p", "r=sideways"]) == 2
     assert "or one of straight, spin_left, spin_right" in capsys.readouterr().out
+
+
+def test_eval_names_the_stage_that_was_running_when_time_ran_out(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from roomba_bt.evaluate.episode import failure_stage
+
+    path = tmp_path / "slow.yaml"
+    path.write_text("tree:\n  sequence:\n    - mode: safe\n    - wait: 10s\n")
+    main(["eval", str(path), "--runs", "1", "--jobs", "1", "--timeout", "2s"])
+    out = capsys.readouterr().out
+    assert "--timeout 2 s of mission time ran out in wait" in out, out
+    assert failure_stage("--timeout 2 s of mission time ran out in dock_approach") == (
+        "dock_approach"
+    )
+    assert failure_stage("find_dock(speed=1): lost the beam") == "find_dock"
