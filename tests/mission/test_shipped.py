@@ -118,7 +118,7 @@ def test_validate_and_show_take_names(
 ) -> None:
     monkeypatch.chdir(tmp_path)
     assert main(["validate", "dock", "dock-builtin", "bump-and-turn"]) == 0
-    assert capsys.readouterr().err.count(": ok") == 3
+    assert capsys.readouterr().out.count(": ok") == 3
     assert main(["show", "dock-builtin"]) == 0
     assert capsys.readouterr().out.startswith("dock-builtin: Seek Dock (143)")
     assert main(["validate", "nothing-like-it"]) == 2
