@@ -7,7 +7,7 @@ BIN := $(VENV)/bin
 PIP := $(BIN)/python -m pip --quiet --disable-pip-version-check
 RUN_STAMP := $(VENV)/.installed-run
 STAMP := $(VENV)/.installed
-EXTRAS ?= test,plot,bench,cluster
+EXTRAS ?= test,plot,bench,cluster,monitor,browser-test
 
 .PHONY: run test lint typecheck bench icount routines coverage golden venv clean
 

@@ -1,8 +1,9 @@
 """The layering contract, checked on every module's imports (no import-linter needed).
 
 Lowest first: oi -> transport -> robot -> behaviours -> mission -> runtime -> cli; sim imports
-only oi; evaluate sits at the top beside cli. Nothing in the main stack imports sim. Below
-them all, yamlsource (the shared YAML reader) imports nothing of ours and any layer may use it.
+only oi; evaluate sits at the top beside cli; monitor (the live page) below cli, beside sim.
+Nothing in the main stack imports sim. Below them all, yamlsource (the shared YAML reader)
+imports nothing of ours and any layer may use it.
 """
 
 from __future__ import annotations
@@ -27,7 +28,8 @@ ALLOWED: dict[str, set[str]] = {
     "mission": {"oi", "transport", "robot", "behaviours", "mission", BOTTOM},
     "runtime": {"oi", "transport", "robot", "behaviours", "mission", "runtime", BOTTOM},
     "sim": {"oi", "sim", BOTTOM},
-    "cli": {*MAIN_STACK, "sim", "cli", "evaluate", BOTTOM},
+    "monitor": {*MAIN_STACK, "sim", "monitor", BOTTOM},
+    "cli": {*MAIN_STACK, "sim", "cli", "evaluate", "monitor", BOTTOM},
     "evaluate": {*MAIN_STACK, "sim", "cli", "evaluate", BOTTOM},
 }
 

@@ -22,6 +22,7 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "roomba_bt.cli.sim_cmd",
     "roomba_bt.cli.sensors_cmd",
     "roomba_bt.cli.eval_cmd",
+    "roomba_bt.cli.monitor_cmd",
 )
 
 

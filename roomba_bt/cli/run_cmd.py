@@ -18,6 +18,8 @@ from roomba_bt.cli.arguments import (
     plot_file,
     seconds,
 )
+from roomba_bt.cli.monitor_cmd import LiveMonitor
+from roomba_bt.cli.monitor_cmd import add_run_arguments as add_monitor_arguments
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.profiles import PROFILES, RobotProfile, get_profile
 from roomba_bt.runtime.summary import ExitCode
@@ -75,6 +77,7 @@ def register(sub: Any) -> None:
         help="live tree on a terminal (auto), one line per status change (log), or only the "
         "summary (none)",
     )  # fmt: skip
+    add_monitor_arguments(run)
     run.set_defaults(func=run_command)
 
     replay = sub.add_parser(
@@ -146,28 +149,45 @@ def run_command(args: argparse.Namespace) -> int:
         return _error(f"{args.mission}: {exc}")
 
     simulator = None
+    if args.port is None:
+        from roomba_bt.cli.links import make_simulator
+        from roomba_bt.sim import WorldError
+
+        try:
+            simulator = make_simulator(
+                args.world,
+                profile,
+                args.seed,
+                random_start=args.random_start,
+                coverage=True,
+                battery=args.battery,
+            )
+        except WorldError as exc:
+            return _error(str(exc))
+    monitor = None
+    if args.monitor is not None or args.watch:
+        from roomba_bt.mission import load_mission
+
+        monitor = LiveMonitor(
+            args, mission, simulator=simulator, packets=packets,
+            loader=lambda path: load_mission(path, params, profile=profile, baud=args.baud),
+        )  # fmt: skip
+        failed = monitor.start()
+        if failed is not None:
+            return failed
     try:
         if args.port:
             from roomba_bt.cli.links import open_port
 
             link: Transport = open_port(args.port, args.baud)
         else:
-            from roomba_bt.cli.links import make_link, make_simulator
-            from roomba_bt.sim import WorldError
+            from roomba_bt.cli.links import make_link
 
-            try:
-                simulator = make_simulator(
-                    args.world,
-                    profile,
-                    args.seed,
-                    random_start=args.random_start,
-                    coverage=True,
-                    battery=args.battery,
-                )
-            except WorldError as exc:
-                return _error(str(exc))
+            assert simulator is not None  # made above when there is no --port
             link = make_link(simulator, args.fast)
     except ConnectionFailed as exc:
+        if monitor is not None:
+            monitor.finish(None)
         print(f"roomba-bt: {exc}", file=sys.stderr)
         return ExitCode.CONNECTION
     record = None
@@ -189,6 +209,8 @@ def run_command(args: argparse.Namespace) -> int:
             record=record,
         )
     except OSError as exc:
+        if monitor is not None:
+            monitor.finish(None)
         return _error(f"--record {args.record}: {exc.strerror or exc}")
 
     quiet = args.display == "none"
@@ -196,11 +218,14 @@ def run_command(args: argparse.Namespace) -> int:
         logging.getLogger().setLevel(max(logging.getLogger().level, logging.WARNING))
     if not quiet:
         print(_render_tree(mission), flush=True)
+    stack.runner.gate = monitor.session if monitor is not None else None
     use_mission_clock(stack.runner)
     try:
         summary = stack.run()
     finally:
         use_mission_clock(None)
+        if monitor is not None:
+            monitor.finish(stack.runner.summary)
     stack.close()
     if isinstance(observer, TerminalDisplay) and stack.runner.has_snapshot:
         observer.render(stack.runner)

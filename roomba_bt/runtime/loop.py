@@ -25,6 +25,7 @@ import py_trees
 from roomba_bt.behaviours import SNAPSHOT_KEY
 from roomba_bt.behaviours.reasons import failure_reason
 from roomba_bt.mission import RUNTIME_PACKETS
+from roomba_bt.oi.encode import Command
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import OIMode
@@ -68,6 +69,22 @@ class MissionLike(Protocol):
 TickObserver = Callable[["MissionRunner"], None]
 
 
+class TickGate(Protocol):
+    """An operator's hold on the run (the live monitor): called around every tick."""
+
+    def before_tick(self, runner: MissionRunner) -> bool:
+        """After the frame's snapshot, before the tick; False: do not tick this frame."""
+        ...
+
+    def after_tick(self, runner: MissionRunner) -> None:
+        """After the tick, its flush and the observer."""
+        ...
+
+
+class StopRequested(Exception):
+    """An operator ended the run (the monitor's stop): it ends as on Ctrl-C, exit 130."""
+
+
 class MissionRunner:
     """Runs one compiled mission on one connection; is the behaviours' ``RobotHandle``."""
 
@@ -82,6 +99,7 @@ class MissionRunner:
         observer: TickObserver | None = None,
         poll_timeout: float = 0.05,
         input_ended: Callable[[], str | None] | None = None,
+        gate: TickGate | None = None,
     ) -> None:
         self.connection = connection
         self.mission = mission
@@ -91,6 +109,7 @@ class MissionRunner:
         self.observer = observer
         self.poll_timeout = poll_timeout
         self.input_ended = input_ended
+        self.gate = gate
         self._outbox = Outbox()
         self._snapshot: Snapshot | None = None
         self._odometry = Odometry()
@@ -98,6 +117,9 @@ class MissionRunner:
         self._last_arrival: float | None = None
         self.summary = RunSummary(mission.name)
         self.refusals: list[str] = []
+        #: the last command written on each actuator channel ("wheels", "motors", ...): what
+        #: a resume after the monitor's pause sends again
+        self.last_sent: dict[str, Command] = {}
         self._blackboard: py_trees.blackboard.Client | None = None
         self._layout: object = None
         self._has_encoders = False
@@ -137,6 +159,8 @@ class MissionRunner:
             summary.outcome, summary.reason = Outcome.INTERRUPTED, "SIGTERM"
         except KeyboardInterrupt:
             summary.outcome, summary.reason = Outcome.INTERRUPTED, "Ctrl-C"
+        except StopRequested as exc:
+            summary.outcome, summary.reason = Outcome.INTERRUPTED, str(exc)
         except ConnectionFailed as exc:
             summary.outcome, summary.reason = Outcome.CONNECTION_LOST, str(exc)
         except LinkDown as exc:
@@ -149,7 +173,7 @@ class MissionRunner:
         except Exception as exc:  # a bug in a behaviour must still end in a safe stop
             summary.outcome, summary.reason = Outcome.ERROR, f"{type(exc).__name__}: {exc}"
         finally:
-            self._finish(root, summary, wall_start)
+            self._finish(self.mission.root, summary, wall_start)
         return summary
 
     def _finish(
@@ -203,6 +227,11 @@ class MissionRunner:
                 continue
             started = perf()
             snapshot = self._advance(batch)
+            gate = self.gate
+            if gate is not None:
+                if not gate.before_tick(self):
+                    continue
+                root = self.mission.root  # a reload may have replaced it
             root.tick_once()
             self._flush()
             elapsed = perf() - started
@@ -213,6 +242,8 @@ class MissionRunner:
                 summary.max_tick_s = elapsed
             if self.observer is not None:
                 self.observer(self)
+            if gate is not None:
+                gate.after_tick(self)
             status = root.status
             if status is success:
                 summary.outcome = Outcome.SUCCESS
@@ -281,6 +312,9 @@ class MissionRunner:
             try:
                 self.connection.send(command)
                 self.summary.commands_written += 1
+                channel = command.spec.channel
+                if channel is not None:
+                    self.last_sent[channel] = command
             except ModeError as exc:
                 self.summary.refused_commands += 1
                 if len(self.refusals) < 100:

@@ -6,6 +6,7 @@ A record is JSON Lines, one object a line::
      "mission": "missions/dock.yaml", "parameters": {...}, "packets": [7, 9, ...]}
     {"t": 0.000000, "d": "out", "b": "80"}          <- host -> robot, hex
     {"t": 0.015012, "d": "in",  "b": "1305..."}     <- robot -> host, hex
+    {"t": 3.120000, "d": "note", "note": {...}}     <- an operator's act (the monitor's force)
 
 ``t`` is the link's own clock (``transport.now()``) relative to the first byte, so a record
 made on the virtual clock replays identically, and one made on a robot replays with the
@@ -45,6 +46,14 @@ class RecordingTransport:
         self._file.write(
             f'{{"t": {now - self._t0:.6f}, "d": "{direction}", "b": "{data.hex()}"}}\n'
         )
+
+    def note(self, payload: dict[str, Any]) -> None:
+        """Mark an operator's act in the record (replay skips it; the monitor shows it)."""
+        if self._file.closed:
+            return
+        now = self._inner.now()
+        t = now - (self._t0 if self._t0 is not None else now)
+        self._file.write(json.dumps({"t": round(t, 6), "d": "note", "note": payload}) + "\n")
 
     def write(self, data: bytes) -> None:
         self._inner.write(data)
@@ -92,6 +101,7 @@ class RecordError(ValueError):
 class Record:
     header: dict[str, Any]
     chunks: list[tuple[float, str, bytes]] = field(default_factory=list)
+    notes: list[tuple[float, dict[str, Any]]] = field(default_factory=list)
 
     @property
     def inbound(self) -> list[tuple[float, bytes]]:
@@ -140,6 +150,11 @@ def load_record(path: str | Path) -> Record:
             continue
         try:
             item = json.loads(line)
+            if isinstance(item, dict) and item.get("d") == "note":
+                if isinstance(item.get("note"), dict):
+                    record.notes.append((float(item["t"]), item["note"]))
+                    continue
+                raise TypeError("a note's 'note' must be an object")
             t, d, b = float(item["t"]), str(item["d"]), bytes.fromhex(item["b"])
         except (json.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
             raise RecordError(
@@ -147,7 +162,7 @@ def load_record(path: str | Path) -> Record:
                 '{"t": seconds, "d": "in"|"out", "b": hex}'
             ) from None
         if d not in ("in", "out"):
-            raise RecordError(f"{path}:{number}: direction {d!r}; allowed: in, out")
+            raise RecordError(f"{path}:{number}: direction {d!r}; allowed: in, out, note")
         record.chunks.append((t, d, b))
     return record
 

@@ -1,0 +1,294 @@
+"""The live monitor on the command line: ``run --monitor``/``--watch`` and
+``roomba-bt monitor RECORD.jsonl``.
+
+``run`` calls :func:`add_run_arguments` for its options and :class:`LiveMonitor` around its
+runner; everything else about the monitor lives in :mod:`roomba_bt.monitor`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import logging
+import os
+import select
+import sys
+import threading
+from pathlib import Path
+from typing import Any
+
+from roomba_bt.cli.arguments import add_param_option
+from roomba_bt.cli.exit_codes import ExitCode
+from roomba_bt.monitor import INSTALL_HINT, server_available
+from roomba_bt.monitor.address import parse_address
+
+log = logging.getLogger("roomba_bt.monitor")
+KEYS_HELP = "keys: p pause, r resume, n step, q stop"
+
+
+def monitor_address(text: str) -> tuple[str, int]:
+    """``--monitor [HOST:]PORT``: checked when the arguments are read, the web library too,
+    so a run without it ends with exit 2 before anything moves."""
+    if not server_available():
+        raise argparse.ArgumentTypeError(INSTALL_HINT)
+    try:
+        return parse_address(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def add_run_arguments(run: argparse.ArgumentParser) -> None:
+    run.add_argument(
+        "--monitor", nargs="?", const="", type=monitor_address, metavar="[HOST:]PORT",
+        help="serve the live monitor page (default 127.0.0.1:8765; another address needs the "
+        "token printed in the URL)",
+    )  # fmt: skip
+    run.add_argument(
+        "--monitor-readonly", action="store_true", help="the monitor page has no controls"
+    )
+    run.add_argument(
+        "--monitor-force", action="store_true",
+        help="allow forcing conditions from the page on a real robot (always on the simulator)",
+    )  # fmt: skip
+    run.add_argument(
+        "--watch", action="store_true",
+        help="reload the mission when its file changes: valid, the new tree starts at the next "
+        "safe point; invalid, the run goes on and the errors are shown",
+    )  # fmt: skip
+
+
+class LiveMonitor:
+    """The feed, session, server, file watcher and terminal keys of one ``run``."""
+
+    def __init__(
+        self,
+        args: argparse.Namespace,
+        mission: Any,
+        *,
+        simulator: Any,
+        packets: tuple[int, ...],
+        loader: Any,
+    ) -> None:
+        from roomba_bt.monitor.feed import EventLogHandler, RunFeed
+        from roomba_bt.monitor.session import MonitorSession
+        from roomba_bt.monitor.views import world_view
+
+        self.args = args
+        self.loader = loader
+        truth = None
+        world = None
+        if simulator is not None:
+
+            def truth() -> tuple[float, float, float]:
+                pose = simulator.pose
+                return (pose.x, pose.y, pose.theta)
+
+            world = world_view(simulator)
+        self.feed = RunFeed(
+            source="simulator" if simulator is not None else "robot",
+            truth=truth,
+            world=world,
+            mission_name=mission.name,
+        )
+        self.feed.set_tree(mission.root)
+        self.session = MonitorSession(
+            self.feed,
+            simulator=simulator is not None,
+            allow_force=bool(args.monitor_force),
+            paced=bool(getattr(args, "fast", False)),
+            stream_packets=packets,
+        )
+        if args.watch:
+            self.session.state.watching = str(args.mission)
+        self.server: Any = None
+        self._handler = EventLogHandler(self.feed)
+        self._done = threading.Event()
+        self._threads: list[threading.Thread] = []
+        self._terminal: Any = None
+
+    def start(self) -> int | None:
+        """Serve the page (when asked); an exit code if the address cannot be used."""
+        if self.args.monitor is not None:
+            from roomba_bt.monitor.server import MonitorServer
+
+            host, port = self.args.monitor
+            self.server = MonitorServer(
+                self.feed, self.session, host=host, port=port, readonly=self.args.monitor_readonly
+            )
+            try:
+                url = self.server.start()
+            except OSError as exc:
+                print(f"roomba-bt: --monitor {host}:{port}: {exc.strerror or exc}", file=sys.stderr)
+                return ExitCode.INVALID
+            print(f"monitor: {url}", flush=True)
+        logging.getLogger("roomba_bt").addHandler(self._handler)
+        if self.args.watch:
+            self._spawn(self._watch, "roomba-bt watch")
+        if sys.stdin.isatty() and not self.args.monitor_readonly:
+            print(KEYS_HELP, flush=True)
+            self._spawn(self._keys, "roomba-bt keys")
+        return None
+
+    def _spawn(self, target: Any, name: str) -> None:
+        thread = threading.Thread(target=target, name=name, daemon=True)
+        thread.start()
+        self._threads.append(thread)
+
+    def finish(self, summary: Any) -> None:
+        """After the run (``summary``), or when it could not start (None)."""
+        if summary is None:
+            self.feed.finished = "the run did not start"
+        else:
+            reason = f": {summary.reason}" if summary.reason else ""
+            self.feed.finished = f"{summary.outcome.value}{reason}"
+        self._done.set()
+        logging.getLogger("roomba_bt").removeHandler(self._handler)
+        for thread in self._threads:
+            thread.join(1.0)
+        if self.server is not None:
+            self.server.close(grace_s=0.3)
+
+    # ---------------------------------------------------------------- --watch
+    def _watch(self) -> None:
+        path = Path(self.args.mission)
+        last = _stamp(path)
+        while not self._done.wait(0.25):
+            now = _stamp(path)
+            if now == last:
+                continue
+            last = now
+            self._reload(path)
+
+    def _reload(self, path: Path) -> None:
+        from roomba_bt.mission import MissionError
+
+        try:
+            mission = self.loader(path)
+        except MissionError as exc:
+            lines = [str(d) for d in exc.diagnostics]
+            for line in lines:
+                print(f"reload refused: {line}", file=sys.stderr, flush=True)
+            self.feed.event("error", "reload refused, the run goes on: " + "; ".join(lines))
+            return
+        except OSError as exc:
+            self.feed.event("error", f"reload refused: {path}: {exc.strerror or exc}")
+            return
+        why = self.session.check_reloadable(mission)
+        if why is not None:
+            print(f"reload refused: {path}: {why}", file=sys.stderr, flush=True)
+            self.feed.event("error", f"reload refused, the run goes on: {path}: {why}")
+            return
+        print(f"reload: {path} is valid; the new tree starts at the next safe point", flush=True)
+        self.session.reload(mission)
+
+    # ---------------------------------------------------------------- terminal keys
+    def _keys(self) -> None:
+        import termios
+        import tty
+
+        fd = sys.stdin.fileno()
+        try:
+            saved = termios.tcgetattr(fd)
+            tty.setcbreak(fd)
+        except termios.error:
+            return
+        actions = {"p": "pause", "r": "resume", "n": "step", "q": "stop"}
+        try:
+            while not self._done.is_set():
+                ready, _, _ = select.select([fd], [], [], 0.2)
+                if not ready:
+                    continue
+                key = os.read(fd, 1).decode(errors="replace").lower()
+                action = actions.get(key)
+                if action is None:
+                    continue
+                with contextlib.suppress(ValueError):  # e.g. resume when not paused
+                    self.session.request(action)
+        finally:
+            termios.tcsetattr(fd, termios.TCSADRAIN, saved)
+
+
+def _stamp(path: Path) -> tuple[float, int] | None:
+    try:
+        st = path.stat()
+    except OSError:
+        return None
+    return (st.st_mtime, st.st_size)
+
+
+# -------------------------------------------------------------------- roomba-bt monitor
+def register(sub: Any) -> None:
+    monitor = sub.add_parser(
+        "monitor",
+        help="the live monitor's page for a recorded run (run --record)",
+        description="Replay RECORD (written by run --record) through its mission and serve the "
+        "monitor page for it: scrub the timeline, play at any speed. Ctrl-C ends it.",
+    )
+    monitor.add_argument("record", help="a file written by run --record")
+    monitor.add_argument(
+        "--monitor", type=monitor_address, default=None, metavar="[HOST:]PORT",
+        help="where to serve the page (default 127.0.0.1:8765)",
+    )  # fmt: skip
+    monitor.add_argument("--mission", help="mission to replay against (default: the recorded one)")
+    add_param_option(monitor, "set a mission parameter for the replay (repeatable)")
+    monitor.set_defaults(func=monitor_command)
+
+
+def monitor_command(args: argparse.Namespace) -> int:
+    from roomba_bt.cli.arguments import parse_params
+    from roomba_bt.cli.run_cmd import load, stream_packets
+    from roomba_bt.oi.profiles import get_profile
+    from roomba_bt.runtime.recording import RecordError, load_record
+
+    if not server_available():
+        print(f"roomba-bt: {INSTALL_HINT}", file=sys.stderr)
+        return ExitCode.INVALID
+    from roomba_bt.monitor.recorded import replay_into_feed
+    from roomba_bt.monitor.server import MonitorServer
+
+    try:
+        record = load_record(args.record)
+    except RecordError as exc:
+        print(f"roomba-bt: {exc}", file=sys.stderr)
+        return ExitCode.INVALID
+    header = record.header
+    try:
+        profile = get_profile(str(header.get("profile", "create2")))
+    except ValueError as exc:
+        print(f"roomba-bt: {args.record}:1: {exc}", file=sys.stderr)
+        return ExitCode.INVALID
+    mission_path = args.mission or header.get("mission")
+    if not mission_path or not Path(mission_path).is_file():
+        print(
+            f"roomba-bt: {args.record}: mission {mission_path!r} not found; pass --mission FILE",
+            file=sys.stderr,
+        )
+        return ExitCode.INVALID
+    params = dict(header.get("parameters") or {})
+    extra = parse_params(args.param)
+    if isinstance(extra, str):
+        print(f"roomba-bt: {extra}", file=sys.stderr)
+        return ExitCode.INVALID
+    params.update(extra)
+    baud = int(header.get("baud", 115200))
+    mission = load(mission_path, params, profile, baud)
+    if isinstance(mission, int):
+        return mission
+    packets = tuple(header.get("packets") or stream_packets(mission, baud))
+    feed, summary = replay_into_feed(record, mission, profile, packets, baud, args.record)
+    host, port = args.monitor or parse_address(None)
+    server = MonitorServer(feed, None, host=host, port=port, readonly=True)
+    try:
+        url = server.start()
+    except OSError as exc:
+        print(f"roomba-bt: --monitor {host}:{port}: {exc.strerror or exc}", file=sys.stderr)
+        return ExitCode.INVALID
+    print(f"{args.record}: {summary.ticks} ticks, {summary.outcome.value}")
+    print(f"monitor: {url}  (Ctrl-C ends)", flush=True)
+    try:
+        threading.Event().wait()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        server.close()
+    return ExitCode.OK

@@ -1,0 +1,316 @@
+"""The monitor's web server: the page, its live updates and the operator's controls.
+
+aiohttp (the ``monitor`` extra) in a thread of its own with its own event loop: the tick loop
+stays the main thread's, and the server reads the feed's ring when it chooses. Per page, a
+pump wakes every 50 ms (at most 20 updates a second), takes what the ring gained since it last
+sent, merges it (the newest statuses, every node that flipped in between, the new events) and
+sends one message. A page whose socket is slow holds up only its own pump; when it catches up,
+it is sent the newest state and the ticks in between are lost to it, never to the robot.
+
+Routes (all behind the token when one is set)::
+
+    GET  /                the page (static/index.html)
+    GET  /static/NAME     its script and style, from the package
+    GET  /ws              WebSocket: {"type": "hello", ...} then {"type": "update", ...}
+    GET  /api/state?tick=T  the run at tick T (timeline), with the path up to it
+    POST /api/control     {"action": "pause"|"resume"|"step"|"stop"|"break"|"force",
+                           "node": INDEX, "value": ...}  -> 202, or 400/401/403/409
+
+Safety: on a loopback address no token is needed; on any other, every request must carry the
+token printed in the URL at start (``?token=``, the ``X-Monitor-Token`` header, or the cookie
+the page is given), else 401 (none given) or 403 (wrong). A control whose ``Origin`` is not
+this server is refused (403), so another site open in the same browser cannot drive the robot.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import hmac
+import json
+import secrets
+import threading
+from collections.abc import Awaitable, Callable
+from importlib import resources
+from typing import Any
+from urllib.parse import urlsplit
+
+from aiohttp import WSMsgType, web
+
+from roomba_bt.monitor.address import DEFAULT_PORT, is_loopback
+from roomba_bt.monitor.feed import RunFeed
+from roomba_bt.monitor.session import ControlRefused, MonitorSession
+from roomba_bt.monitor.views import header_view, path_view, state_view, tree_view
+
+UPDATE_PERIOD_S = 0.05  # at most 20 updates a second per page
+COOKIE = "roomba_bt_monitor"
+STATIC_TYPES = {".js": "text/javascript", ".css": "text/css", ".svg": "image/svg+xml"}
+Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
+
+
+def _error(status: int, message: str) -> web.Response:
+    return web.json_response({"error": message}, status=status)
+
+
+class MonitorServer:
+    """Serves one feed (a live run with its session, or a recorded run without one)."""
+
+    def __init__(
+        self,
+        feed: RunFeed,
+        session: MonitorSession | None = None,
+        *,
+        host: str = "127.0.0.1",
+        port: int = DEFAULT_PORT,
+        readonly: bool = False,
+        token: str | None = None,
+    ) -> None:
+        self.feed = feed
+        self.session = session
+        self.host = host
+        self.port = port
+        self.readonly = readonly or session is None
+        self.token = (
+            token
+            if token is not None
+            else (None if is_loopback(host) else secrets.token_urlsafe(18))
+        )
+        self.pages = 0
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._stopped: asyncio.Event | None = None
+        self._thread: threading.Thread | None = None
+        self._ready = threading.Event()
+        self._error: BaseException | None = None
+
+    # ---------------------------------------------------------------- lifecycle
+    @property
+    def url(self) -> str:
+        host = f"[{self.host}]" if ":" in self.host else self.host
+        query = f"/?token={self.token}" if self.token else "/"
+        return f"http://{host}:{self.port}{query}"
+
+    def start(self) -> str:
+        """Bind and serve in a background thread; returns the page's URL. Raises OSError when
+        the address cannot be bound."""
+        self._thread = threading.Thread(target=self._serve, name="roomba-bt monitor", daemon=True)
+        self._thread.start()
+        self._ready.wait(10)
+        if self._error is not None:
+            raise self._error
+        return self.url
+
+    def close(self, grace_s: float = 0.0) -> None:
+        """Stop serving (after ``grace_s``, so pages get the last update)."""
+        loop, stopped = self._loop, self._stopped
+        if loop is None or stopped is None or self._thread is None:
+            return
+        if grace_s > 0:
+            threading.Event().wait(grace_s)
+        with contextlib.suppress(RuntimeError):
+            loop.call_soon_threadsafe(stopped.set)
+        self._thread.join(5)
+
+    def _serve(self) -> None:
+        loop = asyncio.new_event_loop()
+        asyncio.set_event_loop(loop)
+        self._loop = loop
+        self._stopped = asyncio.Event()
+        runner = web.AppRunner(self.app(), handle_signals=False, access_log=None)
+        try:
+            loop.run_until_complete(runner.setup())
+            site = web.TCPSite(runner, self.host, self.port)
+            loop.run_until_complete(site.start())
+            address = runner.addresses[0]
+            self.port = int(address[1])
+        except BaseException as exc:
+            self._error = exc
+            self._ready.set()
+            loop.run_until_complete(runner.cleanup())
+            loop.close()
+            return
+        self._ready.set()
+        try:
+            loop.run_until_complete(self._stopped.wait())
+        finally:
+            loop.run_until_complete(runner.cleanup())
+            loop.close()
+
+    # ---------------------------------------------------------------- app
+    def app(self) -> web.Application:
+        app = web.Application(middlewares=[self._guard], client_max_size=64 * 1024)
+        app.router.add_get("/", self._page)
+        app.router.add_get("/static/{name}", self._static)
+        app.router.add_get("/ws", self._socket)
+        app.router.add_get("/api/state", self._state)
+        app.router.add_post("/api/control", self._control)
+        return app
+
+    @web.middleware
+    async def _guard(self, request: web.Request, handler: Handler) -> web.StreamResponse:
+        if self.token is not None:
+            given = (
+                request.query.get("token")
+                or request.headers.get("X-Monitor-Token")
+                or request.cookies.get(COOKIE)
+            )
+            if not given:
+                return _error(
+                    401,
+                    "this monitor is on a non-local address and needs its token: open the URL "
+                    "printed when the run started (it ends in ?token=...)",
+                )
+            if not hmac.compare_digest(given.encode(), self.token.encode()):
+                return _error(403, "wrong token: open the URL printed when the run started")
+        return await handler(request)
+
+    async def _page(self, request: web.Request) -> web.StreamResponse:
+        html = resources.files("roomba_bt.monitor").joinpath("static/index.html").read_text("utf-8")
+        response = web.Response(text=html, content_type="text/html")
+        response.headers["Cache-Control"] = "no-store"
+        if self.token is not None:
+            response.set_cookie(COOKIE, self.token, httponly=True, samesite="Strict")
+        return response
+
+    async def _static(self, request: web.Request) -> web.StreamResponse:
+        name = request.match_info["name"]
+        suffix = name[name.rfind(".") :] if "." in name else ""
+        if (
+            "/" in name
+            or name.startswith(".")
+            or suffix not in STATIC_TYPES
+            or name == "index.html"
+        ):
+            return _error(404, f"no asset {name!r}")
+        asset = resources.files("roomba_bt.monitor").joinpath("static", name)
+        if not asset.is_file():
+            return _error(404, f"no asset {name!r}")
+        return web.Response(body=asset.read_bytes(), content_type=STATIC_TYPES[suffix])
+
+    def _header(self) -> dict[str, Any]:
+        session = self.session
+        return header_view(
+            self.feed,
+            {
+                "readonly": self.readonly,
+                "controls": not self.readonly,
+                "can_force": bool(session and session.allow_force and not self.readonly),
+                "watching": session.state.watching if session else None,
+            },
+        )
+
+    def _session_view(self) -> dict[str, Any]:
+        session = self.session
+        if session is None:
+            return {"paused": False, "pause_reason": "", "breakpoints": {}, "forced": {}}
+        state = session.state
+        return {
+            "paused": state.paused,
+            "pause_reason": state.pause_reason,
+            "breakpoints": {str(k): v for k, v in state.breakpoints.items()},
+            "forced": {str(k): v for k, v in state.forced.items()},
+        }
+
+    async def _state(self, request: web.Request) -> web.StreamResponse:
+        text = request.query.get("tick")
+        try:
+            tick = int(text) if text is not None else None
+        except ValueError:
+            return _error(400, f"tick {text!r}: allowed a whole number of ticks (15 ms each)")
+        if tick is None:
+            latest = self.feed.latest()
+            tick = latest.tick if latest else 0
+        record, earlier = self.feed.at(tick)
+        if record is None:
+            return _error(409, "no tick recorded yet")
+        body = {
+            "header": self._header(),
+            "state": state_view(record, earlier),
+            "tree": tree_view(self.feed, record.tree),
+            "path": path_view(self.feed.path(record.seq)),
+            "events": [e._asdict() for e in self.feed.since(0)[1]],
+            "session": self._session_view(),
+        }
+        return web.json_response(body)
+
+    async def _control(self, request: web.Request) -> web.StreamResponse:
+        origin = request.headers.get("Origin")
+        if origin and urlsplit(origin).netloc != request.host:
+            return _error(403, f"a control from another site ({origin}) is refused")
+        if self.session is None:
+            return _error(409, "a recorded run has no controls: it can only be watched")
+        if self.readonly:
+            return _error(403, "this monitor is read-only (--monitor-readonly): no controls")
+        try:
+            body = await request.json()
+        except (json.JSONDecodeError, UnicodeDecodeError):
+            return _error(400, 'the body is not JSON; expected {"action": "pause"} or similar')
+        if not isinstance(body, dict) or not isinstance(body.get("action"), str):
+            return _error(400, 'expected a JSON object with "action" (a string)')
+        node = body.get("node")
+        if node is not None and (not isinstance(node, int) or isinstance(node, bool)):
+            return _error(400, f"node {node!r}: allowed a node index (a whole number)")
+        value = body.get("value")
+        if value is not None and not isinstance(value, str):
+            return _error(400, f"value {value!r}: allowed a string")
+        try:
+            self.session.request(body["action"], node, value)
+        except ControlRefused as exc:
+            return _error(409, str(exc))
+        except ValueError as exc:
+            return _error(400, str(exc))
+        return web.json_response({"accepted": body["action"]}, status=202)
+
+    async def _socket(self, request: web.Request) -> web.StreamResponse:
+        ws = web.WebSocketResponse(heartbeat=20)
+        await ws.prepare(request)
+        self.pages += 1
+        pump = asyncio.get_running_loop().create_task(self._pump(ws))
+        try:
+            async for message in ws:  # the page sends nothing we need; read to see it close
+                if message.type is WSMsgType.ERROR:
+                    break
+        finally:
+            pump.cancel()
+            self.pages -= 1
+        return ws
+
+    async def _pump(self, ws: web.WebSocketResponse) -> None:
+        feed = self.feed
+        latest = feed.latest()
+        seq = latest.seq if latest else 0
+        event_seq = -1
+        generation = -1
+        session_view: dict[str, Any] | None = None
+        finished: str | None = None
+        await ws.send_str(json.dumps({"type": "hello", "header": self._header()}))
+        while not ws.closed:
+            records, events = feed.since(seq)
+            new_events = [e._asdict() for e in events if e.seq > event_seq]
+            now_session = self._session_view()
+            if records or new_events or now_session != session_view or feed.finished != finished:
+                message: dict[str, Any] = {"type": "update", "session": now_session}
+                if records:
+                    last = records[-1]
+                    _, earlier = feed.at(last.tick)
+                    state = state_view(last, earlier)
+                    flipped = {i for r in records if r.tree == last.tree for i in r.changed}
+                    state["changed"] = sorted(flipped)
+                    message["state"] = state
+                    stride = max(1, len(records) // 8)
+                    message["path"] = path_view([*records[:-1:stride], last])
+                    if last.tree != generation:
+                        generation = last.tree
+                        message["tree"] = tree_view(feed, last.tree)
+                    seq = last.seq + 1
+                first, newest = feed.window()
+                message["window"] = [first.tick if first else 0, newest.tick if newest else 0]
+                if new_events:
+                    message["events"] = new_events
+                    event_seq = new_events[-1]["seq"]
+                message["finished"] = finished = feed.finished
+                session_view = now_session
+                try:
+                    await ws.send_str(json.dumps(message))
+                except (ConnectionResetError, RuntimeError):
+                    return
+            await asyncio.sleep(UPDATE_PERIOD_S)

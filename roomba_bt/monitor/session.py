@@ -1,0 +1,322 @@
+"""The operator's hold on a running mission: the runtime's tick gate.
+
+Requests (from the page, from the terminal's keys, from ``--watch``) are put on a queue by any
+thread and applied by the tick thread between two ticks, in :meth:`MonitorSession.before_tick`;
+nothing touches the tree or the connection from another thread. Per frame::
+
+    before_tick: apply requests -> stop? (raise StopRequested) -> reload? -> paused? (record
+                 the frame, tree frozen, no tick) -> tick
+    after_tick:  record the tick in the feed -> a breakpoint hit? pause -> a step done? pause
+
+Pausing is the safe stop without ending the run: drive 0 and motors off where the mode takes
+them, then Start (Passive); the stream goes on, so the page still shows the robot. Resuming
+re-enters the mode the robot was in before the pause (Safe or Full) through the connection,
+whose mode guard checks it like any other command, and the tree goes on from where it was.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import queue
+import threading
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+from py_trees.common import Status
+
+from roomba_bt.monitor.feed import RunFeed
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.encode import Command
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.robot.interface import SLOT_SECONDS
+from roomba_bt.runtime.loop import StopRequested
+
+if TYPE_CHECKING:
+    from roomba_bt.runtime.loop import MissionRunner
+
+#: What a breakpoint may wait for: a node's start, or its end with a given status.
+BREAK_ON = ("start", "success", "failure", "end")
+FORCEABLE = {"success": Status.SUCCESS, "failure": Status.FAILURE}
+
+
+class ControlRefused(ValueError):
+    """A request that cannot be carried out as asked (the page gets HTTP 409 with this text)."""
+
+
+@dataclass
+class Request:
+    action: str
+    node: int | None = None
+    value: str | None = None
+    payload: Any = None
+
+
+@dataclass
+class SessionState:
+    """What the page shows of the operator's controls; written by the tick thread only."""
+
+    paused: bool = False
+    pause_reason: str = ""
+    breakpoints: dict[int, str] = field(default_factory=dict)
+    forced: dict[int, str] = field(default_factory=dict)
+    watching: str | None = None  # the mission file under --watch
+
+
+def pause_sequence(connection: Any) -> list[Command]:
+    """The safe stop's commands for the current mode, ending in Start (Passive) and keeping
+    the stream: :meth:`Connection.stop_sequence` without Pause Stream, Start in place of Stop."""
+    stop_name, pause = oi.stop().name, oi.pause_stream()
+    out: list[Command] = []
+    for command in connection.stop_sequence():
+        if command.name == pause.name and command.data == pause.data:
+            continue
+        out.append(oi.start() if command.name == stop_name else command)
+    return out
+
+
+class MonitorSession:
+    """The tick gate the runner calls around each tick (see the module docstring)."""
+
+    def __init__(
+        self,
+        feed: RunFeed,
+        *,
+        simulator: bool,
+        allow_force: bool = False,
+        paced: bool = False,
+        loader: Callable[[], Any] | None = None,
+        stream_packets: Iterable[int] = (),
+    ) -> None:
+        self.feed = feed
+        self.simulator = simulator
+        self.allow_force = allow_force or simulator
+        self.paced = paced  # on the virtual clock: a paused run waits a frame's wall time
+        self.loader = loader
+        self.stream_packets = frozenset(stream_packets)
+        self.state = SessionState()
+        self._requests: queue.SimpleQueue[Request] = queue.SimpleQueue()
+        self._wake = threading.Event()
+        self._mode_before_pause: OIMode | None = None
+        self._steps_left: int | None = None  # ticks left before a step pauses again
+        self._skip_tick = False
+        self._stop: str | None = None
+        self._pending_mission: Any = None
+        self.listeners: list[Callable[[str], None]] = []  # told of pauses (the terminal)
+
+    # ---------------------------------------------------------------- any thread
+    def request(self, action: str, node: int | None = None, value: str | None = None) -> None:
+        """Queue an operator request after checking it; raises :class:`ControlRefused` or
+        ValueError (bad request) without changing anything."""
+        infos = self.feed.infos
+        if action in ("pause", "resume", "step", "stop"):
+            if action == "resume" and not self.state.paused:
+                raise ControlRefused("the run is not paused")
+            if action == "step" and not self.state.paused:
+                raise ControlRefused("step needs a paused run: pause first")
+        elif action in ("break", "force"):
+            if node is None or not 0 <= node < len(infos):
+                raise ValueError(f"node {node!r}: allowed 0..{len(infos) - 1}")
+            if action == "break":
+                if value not in (*BREAK_ON, "none"):
+                    raise ValueError(f"break on {value!r}: allowed {', '.join(BREAK_ON)}, none")
+            else:
+                if value not in (*FORCEABLE, "none"):
+                    raise ValueError(f"force to {value!r}: allowed success, failure, none")
+                if not infos[node].condition:
+                    raise ControlRefused(f"{infos[node].name} is not a condition: only "
+                                         "conditions can be forced")  # fmt: skip
+                if not self.allow_force:
+                    raise ControlRefused(
+                        "forcing a condition on a real robot is off; run with --monitor-force"
+                    )
+        else:
+            raise ValueError(f"action {action!r}: allowed pause, resume, step, stop, break, force")
+        self._requests.put(Request(action, node, value))
+        self._wake.set()
+
+    def reload(self, mission: Any) -> None:
+        """A new, valid mission to run from its root at the next safe point."""
+        self._requests.put(Request("reload", payload=mission))
+        self._wake.set()
+
+    # ---------------------------------------------------------------- tick thread
+    def before_tick(self, runner: MissionRunner) -> bool:
+        """Apply requests; False when the tree must not tick this frame (paused)."""
+        if not self._requests.empty():
+            self._apply(runner)
+        if self._stop is not None:
+            raise StopRequested(self._stop)
+        if self._pending_mission is not None:
+            self._replace_tree(runner, self._pending_mission)
+            self._pending_mission = None
+        if self._skip_tick:  # this frame's snapshot predates a mode change just sent
+            self._skip_tick = False
+            self.feed.observe(runner, ticked=False)
+            return False
+        if self._steps_left is not None and not self.state.paused:
+            if self._steps_left == 0:
+                self._steps_left = None
+                self._pause(runner, "stepped one tick")
+            else:
+                self._steps_left -= 1
+                return True
+        if self.state.paused:
+            self.feed.observe(runner, ticked=False)
+            if self.paced:
+                self._wake.wait(SLOT_SECONDS)
+                self._wake.clear()
+            return False
+        return True
+
+    def after_tick(self, runner: MissionRunner) -> None:
+        changed = self.feed.observe(runner)
+        if changed and self.state.breakpoints:
+            self._check_breakpoints(runner, changed)
+
+    def _apply(self, runner: MissionRunner) -> None:
+        while True:
+            try:
+                req = self._requests.get_nowait()
+            except queue.Empty:
+                return
+            state = self.state
+            if req.action == "pause" and not state.paused:
+                self._pause(runner, "paused by the operator")
+            elif req.action == "resume" and state.paused:
+                self._resume(runner, "resumed by the operator")
+            elif req.action == "step" and state.paused:
+                self._resume(runner, "one step")
+                self._steps_left = 1  # the next frame's tick, then pause before the one after
+            elif req.action == "stop":
+                self._stop = "stopped by the operator"
+                self.feed.event("control", "stop: the run ends (as on Ctrl-C)")
+            elif req.action == "break" and req.node is not None:
+                name = self.feed.infos[req.node].name
+                if req.value == "none":
+                    state.breakpoints.pop(req.node, None)
+                    self.feed.event("breakpoint", f"breakpoint on {name} cleared")
+                else:
+                    state.breakpoints[req.node] = str(req.value)
+                    self.feed.event("breakpoint", f"break when {name} {_on(req.value)}")
+            elif req.action == "force" and req.node is not None:
+                self._force(runner, req.node, str(req.value))
+            elif req.action == "reload":
+                self._pending_mission = req.payload
+
+    def _pause(self, runner: MissionRunner, why: str) -> None:
+        connection = runner.connection
+        mode = connection.mode
+        self._mode_before_pause = mode if mode in (OIMode.SAFE, OIMode.FULL) else None
+        commands = pause_sequence(connection)
+        connection.send_many(commands)
+        runner.summary.commands_written += len(commands)
+        self.state.paused, self.state.pause_reason = True, why
+        sent = ", ".join(c.name for c in commands) or "nothing to send"
+        self.feed.event("control", f"pause ({why}): safe stop sent {sent}; tree frozen")
+        for listener in self.listeners:
+            with contextlib.suppress(Exception):
+                listener(why)
+
+    def _resume(self, runner: MissionRunner, why: str) -> None:
+        mode = self._mode_before_pause
+        again: list[Command] = []
+        if mode in (OIMode.SAFE, OIMode.FULL):
+            again.append(oi.safe() if mode is OIMode.SAFE else oi.full())
+            # the actuators as the tree left them: its actions sent their commands once
+            again += [c for c in runner.last_sent.values() if c.spec.leads_to is None]
+            runner.connection.send_many(again)
+            runner.summary.commands_written += len(again)
+        self.state.paused, self.state.pause_reason = False, ""
+        self._skip_tick = True  # the tree next ticks on a frame that shows the new mode
+        back = f"back to {mode.label}" if mode is not None else "mode unchanged"
+        if len(again) > 1:
+            back += ", " + ", ".join(c.name for c in again[1:]) + " sent again"
+        self.feed.event("control", f"resume ({why}): {back}; the tree goes on")
+
+    def _force(self, runner: MissionRunner, index: int, value: str) -> None:
+        node = self.feed.nodes[index]
+        name = self.feed.infos[index].name
+        if value == "none":
+            node.__dict__.pop("update", None)
+            self.state.forced.pop(index, None)
+            text = f"{name} no longer forced"
+        else:
+            status = FORCEABLE[value]
+            # an instance attribute: found before the class's update, removed to release
+            node.__dict__["update"] = lambda: status
+            self.state.forced[index] = value
+            text = f"{name} forced to {status.value}"
+        self.feed.event("force", text)
+        note = getattr(runner.connection.transport, "note", None)
+        if callable(note):
+            note({"force": name, "node": index, "to": value})
+
+    def _check_breakpoints(self, runner: MissionRunner, changed: tuple[int, ...]) -> None:
+        record = self.feed.latest()
+        if record is None or self.state.paused:
+            return
+        statuses = record.statuses
+        previous = self._previous_statuses(record)
+        for index in changed:
+            on = self.state.breakpoints.get(index)
+            if on is None:
+                continue
+            now, before = statuses[index], previous[index] if previous else "I"
+            started = (now == "R" and before != "R") or (before == "I" and now in "SF")
+            hit = (
+                (on == "start" and started)
+                or (on == "success" and now == "S")
+                or (on == "failure" and now == "F")
+                or (on == "end" and now in "SF")
+            )
+            if hit:
+                name = self.feed.infos[index].name
+                self.feed.event("breakpoint", f"breakpoint: {name} {_on(on)} at tick {record.tick}")
+                self._steps_left = None
+                self._pause(runner, f"breakpoint: {name} {_on(on)}")
+                return
+
+    def _previous_statuses(self, record: Any) -> str | None:
+        with self.feed.lock:
+            records = self.feed.records
+            if len(records) < 2:
+                return None
+            previous = records[-2]
+            return previous.statuses if previous.tree == record.tree else None
+
+    def _replace_tree(self, runner: MissionRunner, mission: Any) -> None:
+        """Reload at a safe point: safe stop, the old tree stopped, the new one from its root."""
+        was_paused = self.state.paused
+        if not was_paused:
+            self._pause(runner, "reload")
+        old = runner.mission.root
+        with contextlib.suppress(Exception):
+            if old.status is Status.RUNNING:
+                old.stop(Status.INVALID)
+        runner.mission = mission
+        mission.setup(runner)
+        self.state.forced.clear()
+        self.state.breakpoints.clear()
+        self.feed.set_tree(mission.root)
+        self.feed.event("reload", f"reloaded {mission.name}: the new tree starts from its root")
+        self.state.paused = was_paused
+        self._skip_tick = True
+        if not was_paused:
+            self.state.pause_reason = ""
+            self._mode_before_pause = None  # the new tree sets its own modes, from Passive
+
+    def check_reloadable(self, mission: Any) -> str | None:
+        """Why ``mission`` cannot replace the running one, or None."""
+        missing = sorted(set(mission.packets) - self.stream_packets)
+        if self.stream_packets and missing:
+            return (
+                f"it reads packets {missing} that this run does not stream; restart the run "
+                "to use it"
+            )
+        return None
+
+
+def _on(value: object) -> str:
+    return {"start": "starts", "success": "ends in SUCCESS", "failure": "ends in FAILURE",
+            "end": "ends"}.get(str(value), str(value))  # fmt: skip

@@ -1,0 +1,409 @@
+// roomba-bt monitor page: no framework, no external assets (the laptop may be offline).
+// Live: a WebSocket brings at most ~20 updates a second. Timeline: GET /api/state?tick=T.
+// Controls: POST /api/control, answered 202 or with an HTTP error the page shows.
+"use strict";
+
+const SYMBOL = {
+  sequence_with_memory: "{-}", sequence_without_memory: "[-]",
+  selector_with_memory: "{o}", selector_without_memory: "[o]",
+  parallel: "/_/", decorator: "-^-", behaviour: "-->",
+};
+const STATUS_SYMBOL = { S: "✓", F: "✕", R: "*", I: "-" };
+const STATUS_NAME = { S: "SUCCESS", F: "FAILURE", R: "RUNNING", I: "INVALID" };
+const SLOT = 0.015;
+
+const token = new URLSearchParams(location.search).get("token");
+const $ = (id) => document.getElementById(id);
+
+const view = {
+  header: null, tree: [], rows: [], shown: "", collapsed: new Set(),
+  live: true, liveState: null, session: { paused: false, breakpoints: {}, forced: {} },
+  events: [], path: { odometry: [], truth: [] }, pathLive: { odometry: [], truth: [] },
+  world: null, fontSize: 13, shownTick: 0, window: [0, 0], playing: null, menuNode: null,
+  finished: null,
+};
+
+function headers() {
+  const h = { "Content-Type": "application/json" };
+  if (token) h["X-Monitor-Token"] = token;
+  return h;
+}
+
+async function control(action, node, value) {
+  const body = { action };
+  if (node !== undefined) body.node = node;
+  if (value !== undefined) body.value = value;
+  const reply = await fetch("api/control", { method: "POST", headers: headers(), body: JSON.stringify(body) });
+  if (!reply.ok) {
+    let text = `${reply.status}`;
+    try { text += ": " + (await reply.json()).error; } catch (e) { /* not JSON */ }
+    showBanner(`${action} refused (${text})`, true);
+  }
+  return reply.ok;
+}
+
+function showBanner(text, error) {
+  const b = $("banner");
+  if (!text) { b.hidden = true; return; }
+  b.hidden = false; b.textContent = text; b.className = error ? "error" : "";
+}
+
+// ------------------------------------------------------------------ the tree
+function buildTree(nodes) {
+  view.tree = nodes; view.shown = ""; view.rows = [];
+  const inner = $("tree-inner");
+  inner.textContent = "";
+  for (const n of nodes) {
+    const row = document.createElement("div");
+    row.className = "node";
+    row.dataset.node = n.i; row.dataset.name = n.name; row.dataset.status = "I";
+    row.style.paddingLeft = (n.depth * 2.2) + "em";
+    const toggle = document.createElement("span");
+    toggle.className = "toggle";
+    toggle.textContent = n.children.length ? "▾" : "";
+    toggle.addEventListener("click", (ev) => { ev.stopPropagation(); toggleNode(n.i); });
+    const kind = document.createElement("span"); kind.className = "kind"; kind.textContent = SYMBOL[n.kind] || "-->";
+    const name = document.createElement("span"); name.className = "name"; name.textContent = n.name;
+    const st = document.createElement("span"); st.className = "st st-I"; st.textContent = "[-]";
+    const marks = document.createElement("span"); marks.className = "marks";
+    const reason = document.createElement("span"); reason.className = "reason";
+    row.append(toggle, kind, name, st, marks, reason);
+    row.addEventListener("click", (ev) => openMenu(n.i, ev));
+    inner.appendChild(row);
+    view.rows.push({ row, st, reason, marks, toggle });
+  }
+  applyCollapse();
+  fitTree();
+}
+
+function descendants(i, out) {
+  for (const c of view.tree[i].children) { out.push(c); descendants(c, out); }
+  return out;
+}
+
+function toggleNode(i) {
+  if (view.collapsed.has(i)) view.collapsed.delete(i); else view.collapsed.add(i);
+  applyCollapse();
+}
+
+function applyCollapse() {
+  const hidden = new Set();
+  for (const i of view.collapsed) if (view.tree[i]) for (const d of descendants(i, [])) hidden.add(d);
+  view.rows.forEach((r, i) => {
+    r.row.hidden = hidden.has(i);
+    if (view.tree[i].children.length) r.toggle.textContent = view.collapsed.has(i) ? "▸" : "▾";
+  });
+}
+
+function fitTree() {
+  const box = $("tree"), inner = $("tree-inner");
+  let size = 16;
+  inner.style.fontSize = size + "px";
+  while (size > 6 && (inner.scrollHeight > box.clientHeight || inner.scrollWidth > box.clientWidth)) {
+    size -= 0.5; inner.style.fontSize = size + "px";
+  }
+  view.fontSize = size;
+}
+
+function zoom(by) { view.fontSize = Math.max(5, Math.min(28, view.fontSize + by)); $("tree-inner").style.fontSize = view.fontSize + "px"; }
+
+function renderStatuses(state) {
+  const statuses = state.statuses || "";
+  const changed = new Set(state.changed || []);
+  const reasons = state.reasons || {};
+  const bps = view.session.breakpoints || {}, forced = view.session.forced || {};
+  view.rows.forEach((r, i) => {
+    const s = statuses[i] || "I";
+    if (r.row.dataset.status !== s || view.shown === "") {
+      r.row.dataset.status = s;
+      r.st.className = "st st-" + s;
+      r.st.textContent = "[" + STATUS_SYMBOL[s] + "]";
+      r.row.title = STATUS_NAME[s];
+    }
+    r.row.classList.toggle("running", s === "R");
+    if (changed.has(i)) { r.row.classList.remove("flash"); void r.row.offsetWidth; r.row.classList.add("flash"); }
+    const why = s === "F" && reasons[String(i)] ? "-- " + reasons[String(i)] : "";
+    if (r.reason.textContent !== why) r.reason.textContent = why;
+    let marks = "";
+    if (bps[String(i)]) marks += "●";
+    if (forced[String(i)]) marks += "⚑" + (forced[String(i)] === "success" ? "✓" : "✕");
+    if (r.marks.textContent !== marks) { r.marks.textContent = marks; r.marks.className = "marks " + (bps[String(i)] ? "bp" : "forced-mark"); }
+  });
+  view.shown = statuses;
+}
+
+// ------------------------------------------------------------------ menu (breakpoints, force)
+function openMenu(i, ev) {
+  const menu = $("node-menu"), n = view.tree[i];
+  view.menuNode = i;
+  $("node-menu-title").textContent = n.name + (n.condition ? " (condition)" : "");
+  const reason = (view.liveState && view.liveState.reasons || {})[String(i)];
+  $("node-menu-reason").textContent = reason ? "failed: " + reason : "";
+  const canControl = view.header && view.header.controls;
+  for (const b of menu.querySelectorAll("button")) b.disabled = !canControl;
+  $("force-row").hidden = !(n.condition && view.header && view.header.can_force);
+  menu.hidden = false;
+  menu.style.left = Math.min(ev.clientX, window.innerWidth - 360) + "px";
+  menu.style.top = Math.min(ev.clientY + 8, window.innerHeight - 120) + "px";
+  ev.stopPropagation();
+}
+document.addEventListener("click", (ev) => { if (!$("node-menu").contains(ev.target)) $("node-menu").hidden = true; });
+for (const b of document.querySelectorAll("[data-break]")) b.addEventListener("click", () => { control("break", view.menuNode, b.dataset.break); $("node-menu").hidden = true; });
+for (const b of document.querySelectorAll("[data-force]")) b.addEventListener("click", () => { control("force", view.menuNode, b.dataset.force); $("node-menu").hidden = true; });
+
+// ------------------------------------------------------------------ robot panel
+const lamp = (on, label) => `<span class="lamp ${on ? "on" : ""}">${on ? label : "·"}</span> `;
+const degrees = (rad) => { let d = (rad * 180 / Math.PI) % 360; if (d > 180) d -= 360; if (d <= -180) d += 360; return d.toFixed(0); };
+function irText(ir) {
+  if (!ir) return "—";
+  const parts = [];
+  if (ir.red_buoy) parts.push("red buoy"); if (ir.green_buoy) parts.push("green buoy");
+  if (ir.force_field) parts.push("force field"); if (ir.virtual_wall) parts.push("virtual wall");
+  return `${ir.code}${parts.length ? " (" + parts.join(", ") + ")" : ""}`;
+}
+function renderRobot(state) {
+  const r = state.robot;
+  const rows = [];
+  if (!r) { $("robot").innerHTML = "<tr><td>no frame yet</td></tr>"; return; }
+  rows.push(["OI mode", `<b id="mode">${r.mode}</b>`]);
+  if (r.bumps) rows.push(["bumps", `<span id="bumps">${lamp(r.bumps.left, "L")} ${lamp(r.bumps.right, "R")}</span>`]);
+  if (r.wheel_drops) rows.push(["wheel drops", `${lamp(r.wheel_drops.left, "L")} ${lamp(r.wheel_drops.right, "R")}`]);
+  if (r.cliffs) rows.push(["cliffs", `<span id="cliffs">${lamp(r.cliffs.left, "L")} ${lamp(r.cliffs.front_left, "FL")} ${lamp(r.cliffs.front_right, "FR")} ${lamp(r.cliffs.right, "R")}</span>`]);
+  if (r.ir) rows.push(["IR omni / left / right", `<span id="ir">${irText(r.ir.omni)} / ${irText(r.ir.left)} / ${irText(r.ir.right)}</span>`]);
+  if (r.light_bumper) {
+    const lb = r.light_bumper, sig = r.light_bump_signals || [];
+    rows.push(["light bumper", `${lamp(lb.left, "L")}${lamp(lb.front_left, "FL")}${lamp(lb.center_left, "CL")}${lamp(lb.center_right, "CR")}${lamp(lb.front_right, "FR")}${lamp(lb.right, "R")} ${sig.length ? "[" + sig.join(" ") + "]" : ""}`]);
+  }
+  if (r.battery_percent !== undefined) rows.push(["battery", `<span id="battery">${r.battery_percent.toFixed(1)} %</span>`]);
+  if (r.charging !== undefined) rows.push(["charging", `<span id="charging">${r.charging}</span>${r.charging_sources && r.charging_sources.home_base ? " (home base)" : ""}`]);
+  if (r.wheels) rows.push([`wheels (mm/s, ${r.wheels.source})`, `<span id="wheels">${r.wheels.left !== undefined ? `L ${r.wheels.left} R ${r.wheels.right}` : `v ${r.wheels.velocity} r ${r.wheels.radius}`}</span>`]);
+  if (r.commands_per_s !== undefined) rows.push(["commands / refused per s", `<span id="rates">${r.commands_per_s} / ${r.refused_per_s}</span>`]);
+  const o = r.odometry;
+  rows.push(["odometry", `(${(o.x / 1000).toFixed(2)}, ${(o.y / 1000).toFixed(2)}) m, ${degrees(o.theta)}°, ${(o.path / 1000).toFixed(2)} m driven`]);
+  if (state.truth) rows.push(["true pose (simulator)", `(${(state.truth[0] / 1000).toFixed(2)}, ${(state.truth[1] / 1000).toFixed(2)}) m, ${degrees(state.truth[2])}°`]);
+  if (r.frames_lost) rows.push(["frames lost", String(r.frames_lost)]);
+  $("robot").innerHTML = rows.map(([k, v]) => `<tr><td>${k}</td><td>${v}</td></tr>`).join("");
+}
+
+function renderBlackboard(state) {
+  const bb = state.blackboard || {};
+  const keys = Object.keys(bb);
+  $("blackboard").innerHTML = keys.length
+    ? keys.map((k) => `<tr><td>${esc(k)}</td><td>${esc(bb[k])}</td></tr>`).join("")
+    : "<tr><td>(no keys)</td></tr>";
+}
+function esc(s) { return String(s).replace(/[&<>"]/g, (c) => ({ "&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;" })[c]); }
+
+// ------------------------------------------------------------------ events
+function addEvents(events) {
+  for (const e of events) view.events.push(e);
+  if (view.events.length > 2000) view.events.splice(0, view.events.length - 2000);
+  renderEvents();
+}
+function renderEvents() {
+  const list = $("events"), t = view.live ? Infinity : view.shownTick * SLOT + 1e-9;
+  list.innerHTML = view.events.slice(-400).map((e) =>
+    `<li class="kind-${e.kind}${e.time > t ? " future" : ""}"><span class="k">${e.time.toFixed(3)}s ${e.kind}</span> ${esc(e.text)}</li>`).join("");
+  if (view.live) list.parentElement.scrollTop = list.parentElement.scrollHeight;
+}
+
+// ------------------------------------------------------------------ path
+function toWorld(p, start) {
+  if (!start) return p;
+  const c = Math.cos(start[2]), s = Math.sin(start[2]);
+  return [start[0] + c * p[0] - s * p[1], start[1] + s * p[0] + c * p[1]];
+}
+function drawPath(state, path) {
+  const canvas = $("path"), g = canvas.getContext("2d");
+  g.clearRect(0, 0, canvas.width, canvas.height);
+  const w = view.world, start = path.truthStart || null;
+  const pts = [];
+  if (w) { for (const room of w.rooms) pts.push(...room); for (const wall of w.walls) pts.push([wall[0], wall[1]], [wall[2], wall[3]]); }
+  const odo = path.odometry.map((p) => toWorld(p, start));
+  pts.push(...path.truth, ...odo);
+  if (!pts.length) return;
+  let x0 = Infinity, y0 = Infinity, x1 = -Infinity, y1 = -Infinity;
+  for (const [x, y] of pts) { x0 = Math.min(x0, x); y0 = Math.min(y0, y); x1 = Math.max(x1, x); y1 = Math.max(y1, y); }
+  const pad = 300; x0 -= pad; y0 -= pad; x1 += pad; y1 += pad;
+  const k = Math.min(canvas.width / (x1 - x0), canvas.height / (y1 - y0));
+  const X = (x) => (x - x0) * k, Y = (y) => canvas.height - (y - y0) * k;
+  const poly = (points, fill, stroke) => {
+    g.beginPath(); points.forEach(([x, y], j) => (j ? g.lineTo(X(x), Y(y)) : g.moveTo(X(x), Y(y)))); g.closePath();
+    if (fill) { g.fillStyle = fill; g.fill(); } if (stroke) { g.strokeStyle = stroke; g.stroke(); }
+  };
+  const line = (a, b, c, d, stroke, width, dash) => {
+    g.beginPath(); g.setLineDash(dash || []); g.strokeStyle = stroke; g.lineWidth = width;
+    g.moveTo(X(a), Y(b)); g.lineTo(X(c), Y(d)); g.stroke(); g.setLineDash([]); g.lineWidth = 1;
+  };
+  if (w) {
+    for (const room of w.rooms) poly(room, "#f4f4ee", "#222");
+    for (const o of w.obstacles) poly(o, "#b8a88a", "#6b5a3a");
+    for (const d of w.drops) poly(d, "rgba(40,40,40,.45)", "#000");
+    for (const wall of w.walls) line(...wall, "#111", 2);
+    for (const v of w.virtual_walls) line(...v, "orange", 2, [6, 4]);
+    for (const l of w.lighthouses) line(l[2], l[3], l[4], l[5], "orange", 1, [2, 3]);
+    if (w.dock) {
+      const d = w.dock, r = d.range * k;
+      const wedge = (range, colour) => {
+        g.beginPath(); g.moveTo(X(d.x), Y(d.y));
+        g.arc(X(d.x), Y(d.y), r, -(d.facing + range[1]), -(d.facing + range[0]));
+        g.closePath(); g.fillStyle = colour; g.fill();
+      };
+      wedge(d.red, "rgba(255,0,0,.13)"); wedge(d.green, "rgba(0,160,0,.13)");
+      g.beginPath(); g.setLineDash([3, 3]); g.strokeStyle = "#2a6fdb";
+      g.arc(X(d.x), Y(d.y), d.force_field * k, 0, 2 * Math.PI); g.stroke(); g.setLineDash([]);
+      line(...d.plate, "green", 5);
+    }
+  }
+  const trace = (points, colour) => {
+    if (points.length < 2) return;
+    g.beginPath(); g.strokeStyle = colour; g.lineWidth = 1.6;
+    points.forEach(([x, y], j) => (j ? g.lineTo(X(x), Y(y)) : g.moveTo(X(x), Y(y)))); g.stroke(); g.lineWidth = 1;
+  };
+  trace(path.truth, "#222"); trace(odo, "#2a6fdb");
+  const robot = (x, y, th, colour, fill) => {
+    g.beginPath(); g.arc(X(x), Y(y), Math.max(3, 170 * k), 0, 2 * Math.PI);
+    if (fill) { g.fillStyle = fill; g.fill(); } g.strokeStyle = colour; g.stroke();
+    line(x, y, x + 220 * Math.cos(th), y + 220 * Math.sin(th), colour, 2);
+  };
+  if (state.robot) {
+    const o = state.robot.odometry, p = toWorld([o.x, o.y], start);
+    robot(p[0], p[1], o.theta + (start ? start[2] : 0), "#2a6fdb", null);
+  }
+  if (state.truth) robot(state.truth[0], state.truth[1], state.truth[2], "#222", "rgba(120,120,120,.35)");
+}
+
+function setPath(path) {
+  view.path = { odometry: path.odometry, truth: path.truth, truthStart: path.truthStart || view.pathLive.truthStart };
+}
+function appendLivePath(p) {
+  const L = view.pathLive;
+  L.odometry.push(...p.odometry); L.truth.push(...p.truth);
+  if (L.odometry.length > 20000) L.odometry.splice(0, 5000);
+  if (L.truth.length > 20000) L.truth.splice(0, 5000);
+}
+
+// ------------------------------------------------------------------ state
+function render(state) {
+  $("time").textContent = state.time.toFixed(3);
+  $("tick").textContent = state.tick;
+  view.shownTick = state.tick;
+  renderStatuses(state); renderRobot(state); renderBlackboard(state);
+  drawPath(state, view.live ? view.pathLive : view.path);
+  renderEvents();
+  updateTimeline();
+}
+
+function updateControls() {
+  const h = view.header || {}, s = view.session, c = h.controls && !view.finished;
+  $("controls").hidden = !h.controls;
+  $("pause").disabled = !c || s.paused;
+  $("resume").disabled = !c || !s.paused;
+  $("step").disabled = !c || !s.paused;
+  $("stop").disabled = !c;
+  if (view.finished) showBanner("the run ended: " + view.finished, false);
+  else if (s.paused) showBanner("PAUSED — " + (s.pause_reason || "") + " (robot stopped, in Passive; resume goes back to the mission's mode)", false);
+  else if (!$("banner").classList.contains("error")) showBanner("");
+}
+
+function updateTimeline() {
+  const t = $("timeline");
+  t.min = view.window[0]; t.max = view.window[1];
+  if (view.live) t.value = view.window[1];
+  $("timeline-label").textContent = view.live ? `live · ${(view.window[1] * SLOT).toFixed(2)} s`
+    : `tick ${view.shownTick} · ${(view.shownTick * SLOT).toFixed(3)} s`;
+  $("live").disabled = view.live || (view.header && view.header.source === "record");
+}
+
+async function showTick(tick) {
+  const reply = await fetch(`api/state?tick=${tick}`, { headers: headers() });
+  if (!reply.ok) return;
+  const body = await reply.json();
+  if (body.header) { view.window = [body.header.first_tick, body.header.last_tick]; }
+  if (JSON.stringify(body.tree) !== JSON.stringify(view.tree)) buildTree(body.tree);
+  view.events = body.events; view.session = body.session || view.session;
+  setPath({ odometry: body.path.odometry, truth: body.path.truth, truthStart: firstTruth(body.path) });
+  render(body.state);
+}
+function firstTruth() {
+  // odometry starts at (0, 0, 0) where the true pose started
+  return view.header && view.header.truth_start ? view.header.truth_start : null;
+}
+
+async function loadLivePath() {
+  // the path so far (a page opened mid-run); live updates append to it
+  const reply = await fetch("api/state", { headers: headers() });
+  if (!reply.ok) return;
+  const body = await reply.json();
+  const L = view.pathLive;
+  L.odometry = body.path.odometry.concat(L.odometry);
+  L.truth = body.path.truth.concat(L.truth);
+}
+
+// ------------------------------------------------------------------ live socket
+function connect() {
+  const proto = location.protocol === "https:" ? "wss:" : "ws:";
+  const ws = new WebSocket(`${proto}//${location.host}/ws${token ? "?token=" + encodeURIComponent(token) : ""}`);
+  ws.onopen = () => { $("link").textContent = "connected"; $("link").className = "badge on"; };
+  ws.onclose = () => { $("link").textContent = view.finished ? "ended" : "disconnected"; $("link").className = "badge off"; };
+  ws.onmessage = (ev) => {
+    const msg = JSON.parse(ev.data);
+    if (msg.type === "hello") {
+      view.header = msg.header; view.world = msg.header.world;
+      $("mission").textContent = msg.header.mission;
+      $("source").textContent = msg.header.source;
+      view.window = [msg.header.first_tick, msg.header.last_tick];
+      buildTree(msg.header.tree);
+      view.pathLive.truthStart = msg.header.truth_start || null;
+      const isRecord = msg.header.source === "record";
+      $("play").hidden = $("speed").hidden = !isRecord;
+      if (isRecord) { view.live = false; showTick(msg.header.first_tick); } else loadLivePath();
+      updateControls();
+      return;
+    }
+    if (msg.tree) { buildTree(msg.tree); view.pathLive = { odometry: [], truth: [], truthStart: view.pathLive.truthStart }; }
+    if (msg.session) view.session = msg.session;
+    if (msg.window) view.window = msg.window;
+    if (msg.events) addEvents(msg.events);
+    if (msg.finished !== undefined) view.finished = msg.finished;
+    if (msg.path) appendLivePath(msg.path);
+    if (msg.state) { view.liveState = msg.state; if (view.live) render(msg.state); else updateTimeline(); }
+    else if (view.live && view.liveState) renderStatuses(view.liveState);
+    updateControls();
+  };
+}
+
+// ------------------------------------------------------------------ wiring
+$("pause").onclick = () => control("pause");
+$("resume").onclick = () => control("resume");
+$("step").onclick = () => control("step");
+$("stop").onclick = () => control("stop");
+$("fit").onclick = fitTree;
+$("zoom-in").onclick = () => zoom(1);
+$("zoom-out").onclick = () => zoom(-1);
+$("expand").onclick = () => { view.collapsed.clear(); applyCollapse(); };
+$("collapse").onclick = () => { view.collapsed = new Set(view.tree.filter((n) => n.depth === 2 && n.children.length).map((n) => n.i)); applyCollapse(); };
+$("timeline").addEventListener("input", (ev) => { view.live = false; stopPlay(); showTick(Number(ev.target.value)); });
+$("live").onclick = () => { view.live = true; stopPlay(); if (view.liveState) render(view.liveState); };
+$("play").onclick = () => { if (view.playing) stopPlay(); else startPlay(); };
+function startPlay() {
+  $("play").textContent = "⏸";
+  let last = performance.now(), busy = false;
+  view.playing = setInterval(async () => {
+    if (busy) return;
+    const now = performance.now(), speed = Number($("speed").value);
+    const ticks = Math.max(1, Math.round((now - last) / 1000 * speed / SLOT));
+    last = now;
+    const next = Math.min(view.shownTick + ticks, view.window[1]);
+    busy = true; await showTick(next); busy = false;
+    if (next >= view.window[1]) stopPlay();
+  }, 50);
+}
+function stopPlay() { if (view.playing) clearInterval(view.playing); view.playing = null; $("play").textContent = "▶"; }
+document.addEventListener("keydown", (ev) => {
+  if (ev.target.tagName === "INPUT" || ev.target.tagName === "SELECT" || !(view.header && view.header.controls)) return;
+  const key = { p: "pause", r: "resume", n: "step" }[ev.key];
+  if (key) control(key);
+});
+window.addEventListener("resize", fitTree);
+connect();

@@ -1,0 +1,195 @@
+"""What the page is sent: plain JSON built from the feed's records, in the server's thread.
+
+Nothing here runs on the tick path; a record's snapshot is immutable, so reading it later is
+safe. Lengths are millimetres, angles radians, times seconds of mission time.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from roomba_bt.monitor.feed import RunFeed, TickRecord
+from roomba_bt.oi.bits import ChargingState
+from roomba_bt.oi.ir import IRCharacter
+from roomba_bt.oi.odometry import counts_to_mm, encoder_delta
+from roomba_bt.robot.interface import Snapshot
+
+
+def _ir(code: int) -> dict[str, Any]:
+    ir = IRCharacter.decode(code)
+    return {
+        "code": code,
+        "red_buoy": ir.red_buoy,
+        "green_buoy": ir.green_buoy,
+        "force_field": ir.force_field,
+        "virtual_wall": ir.virtual_wall,
+    }
+
+
+def robot_view(snapshot: Snapshot, rates: tuple[float, float] | None) -> dict[str, Any]:
+    """The robot panel: whatever the streamed frame carries, and the command rates."""
+    frame = snapshot.frame
+    out: dict[str, Any] = {"mode": snapshot.mode.label, "frames_lost": snapshot.frames_lost}
+    if 7 in frame:
+        b = frame.bumps
+        out["bumps"] = {"left": b.bump_left, "right": b.bump_right}
+        out["wheel_drops"] = {"left": b.wheel_drop_left, "right": b.wheel_drop_right}
+    if all(p in frame for p in (9, 10, 11, 12)):
+        out["cliffs"] = {
+            "left": frame.cliff_left,
+            "front_left": frame.cliff_front_left,
+            "front_right": frame.cliff_front_right,
+            "right": frame.cliff_right,
+        }
+    for pid, label in ((17, "omni"), (52, "left"), (53, "right")):
+        if pid in frame:
+            out.setdefault("ir", {})[label] = _ir(int(frame[pid]))
+    if 45 in frame:
+        lb = frame.light_bumper
+        out["light_bumper"] = {
+            "left": lb.left, "front_left": lb.front_left, "center_left": lb.center_left,
+            "center_right": lb.center_right, "front_right": lb.front_right, "right": lb.right,
+        }  # fmt: skip
+    if all(p in frame for p in range(46, 52)):
+        out["light_bump_signals"] = list(frame.light_bump_signals)
+    if 25 in frame and 26 in frame:
+        out["battery_percent"] = round(frame.battery_percent, 1)
+    if 21 in frame:
+        state = frame[21]
+        out["charging"] = (
+            ChargingState(state).name.lower().replace("_", " ")
+            if state in ChargingState._value2member_map_
+            else f"unknown ({state})"
+        )
+    if 34 in frame:
+        sources = frame.charging_sources
+        out["charging_sources"] = {
+            "home_base": sources.home_base,
+            "internal": sources.internal_charger,
+        }
+    if 41 in frame and 42 in frame:
+        out["wheels"] = {"left": frame[42], "right": frame[41], "source": "requested (41, 42)"}
+    elif 39 in frame:
+        out["wheels"] = {"velocity": frame[39], "radius": frame.get(40), "source": "requested (39)"}
+    odo = snapshot.odometry
+    out["odometry"] = {"x": odo.x_mm, "y": odo.y_mm, "theta": odo.theta_rad, "path": odo.path_mm}
+    if rates is not None:
+        out["commands_per_s"], out["refused_per_s"] = rates
+    return out
+
+
+def _rates(record: TickRecord, earlier: list[TickRecord]) -> tuple[float, float] | None:
+    if not earlier or earlier[0].time >= record.time:
+        return None
+    dt = record.time - earlier[0].time
+    return (
+        round((record.sent - earlier[0].sent) / dt, 1),
+        round((record.refused - earlier[0].refused) / dt, 1),
+    )
+
+
+def _value(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 200 else text[:197] + "..."
+
+
+def state_view(record: TickRecord, earlier: list[TickRecord]) -> dict[str, Any]:
+    """One tick: statuses, failure reasons, robot, poses, blackboard."""
+    snapshot = record.snapshot
+    out: dict[str, Any] = {
+        "seq": record.seq,
+        "tick": record.tick,
+        "time": round(record.time, 3),
+        "tree": record.tree,
+        "statuses": record.statuses,
+        "changed": list(record.changed),
+        "reasons": {str(k): v for k, v in record.reasons.items()},
+        "ticked": record.ticked,
+        "truth": list(record.truth) if record.truth is not None else None,
+        "blackboard": {k: _value(v) for k, v in sorted(record.blackboard.items())},
+    }
+    if snapshot is not None:
+        robot = out["robot"] = robot_view(snapshot, _rates(record, earlier))
+        if "wheels" not in robot and len(earlier) > 1:
+            measured = _measured_wheels(record, earlier[1])
+            if measured is not None:
+                robot["wheels"] = measured
+    return out
+
+
+def _measured_wheels(record: TickRecord, previous: TickRecord) -> dict[str, Any] | None:
+    """Wheel speeds from the encoders (43, 44) between the previous record and this one."""
+    now, before = record.snapshot, previous.snapshot
+    if now is None or before is None or record.time <= previous.time:
+        return None
+    a, b = before.odometry, now.odometry
+    if a.left_counts is None or a.right_counts is None:
+        return None
+    if b.left_counts is None or b.right_counts is None:
+        return None
+    dt = record.time - previous.time
+    left = counts_to_mm(encoder_delta(a.left_counts, b.left_counts)) / dt
+    right = counts_to_mm(encoder_delta(a.right_counts, b.right_counts)) / dt
+    return {"left": round(left), "right": round(right), "source": "encoders (43, 44)"}
+
+
+def path_view(records: list[TickRecord]) -> dict[str, list[list[float]]]:
+    odometry: list[list[float]] = []
+    truth: list[list[float]] = []
+    for r in records:
+        if r.snapshot is not None:
+            odo = r.snapshot.odometry
+            odometry.append([round(odo.x_mm, 1), round(odo.y_mm, 1)])
+        if r.truth is not None:
+            truth.append([round(r.truth[0], 1), round(r.truth[1], 1)])
+    return {"odometry": odometry, "truth": truth}
+
+
+def tree_view(feed: RunFeed, generation: int | None = None) -> list[dict[str, Any]]:
+    infos = feed.trees.get(feed.generation if generation is None else generation, [])
+    return [info.as_json() for info in infos]
+
+
+def world_view(simulator: Any) -> dict[str, Any]:
+    """The simulator's world as the page draws it (the shapes ``sim/plot.py`` draws)."""
+    world = simulator.world
+    out: dict[str, Any] = {
+        "name": getattr(world, "name", ""),
+        "rooms": [[list(p) for p in room] for room in world.rooms],
+        "walls": [list(w) for w in world.walls],
+        "obstacles": [[list(p) for p in o] for o in world.obstacles],
+        "drops": [[list(p) for p in d] for d in world.drops],
+        "virtual_walls": [[vw.ax, vw.ay, vw.bx, vw.by] for vw in world.virtual_walls],
+        "lighthouses": [[lh.x, lh.y, *lh.fence_segment] for lh in world.lighthouses],
+        "dock": None,
+    }
+    dock = world.dock
+    if dock is not None:
+        out["dock"] = {
+            "x": dock.x,
+            "y": dock.y,
+            "facing": dock.facing,
+            "range": dock.buoy_range,
+            "red": list(dock.red),
+            "green": list(dock.green),
+            "force_field": dock.force_field,
+            "plate": list(dock.plate),
+        }
+    return out
+
+
+def header_view(feed: RunFeed, extra: Mapping[str, Any]) -> dict[str, Any]:
+    first, last = feed.window()
+    return {
+        "mission": feed.mission_name,
+        "source": feed.source,
+        "generation": feed.generation,
+        "tree": tree_view(feed),
+        "world": feed.world,
+        "first_tick": first.tick if first else 0,
+        "last_tick": last.tick if last else 0,
+        "finished": feed.finished,
+        "truth_start": list(feed.truth_start) if feed.truth_start is not None else None,
+        **extra,
+    }

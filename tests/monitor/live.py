@@ -1,0 +1,122 @@
+"""A mission on the simulator with the monitor attached, run in a background thread, every
+simulator step and every byte written logged with the simulated time."""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from roomba_bt.cli.simulated import RealtimeSimLink
+from roomba_bt.mission import load_mission
+from roomba_bt.monitor.feed import RunFeed
+from roomba_bt.monitor.server import MonitorServer
+from roomba_bt.monitor.session import MonitorSession
+from roomba_bt.monitor.views import world_view
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.robot.connection import Connection
+from roomba_bt.runtime.loop import MissionRunner, stream_request
+from roomba_bt.runtime.summary import RunSummary
+from roomba_bt.sim import SimLink, Simulator, load_world
+
+ROOT = Path(__file__).resolve().parents[2]
+MISSIONS = ROOT / "missions"
+
+
+@dataclass
+class Step:
+    time: float
+    left: float
+    right: float
+    mode: OIMode
+
+
+@dataclass
+class LiveRun:
+    simulator: Simulator
+    runner: MissionRunner
+    feed: RunFeed
+    session: MonitorSession
+    server: MonitorServer
+    thread: threading.Thread
+    steps: list[Step] = field(default_factory=list)
+    writes: list[tuple[float, bytes]] = field(default_factory=list)
+    result: list[RunSummary] = field(default_factory=list)
+
+    @property
+    def url(self) -> str:
+        return self.server.url
+
+    def finish(self, timeout: float = 10.0) -> RunSummary:
+        if self.thread.is_alive():
+            self.session.request("stop")
+        self.thread.join(timeout)
+        assert not self.thread.is_alive(), "the run did not end after stop"
+        self.server.close()
+        return self.result[0]
+
+
+def start_live_run(
+    mission: Path | str,
+    *,
+    world: str = "empty-room",
+    params: dict[str, str] | None = None,
+    host: str = "127.0.0.1",
+    readonly: bool = False,
+    realtime: bool = True,
+    history: int | None = 20_000,
+) -> LiveRun:
+    compiled = load_mission(mission, params or {}, profile=CREATE2)
+    simulator = Simulator(load_world(world), CREATE2, 0)
+    steps: list[Step] = []
+    writes: list[tuple[float, bytes]] = []
+    step = simulator.step
+
+    def logged_step(*args: Any, **kwargs: Any) -> None:
+        step(*args, **kwargs)
+        steps.append(
+            Step(simulator.time, simulator.left_speed, simulator.right_speed, simulator.mode)
+        )
+
+    simulator.step = logged_step  # type: ignore[method-assign]
+    link: SimLink = RealtimeSimLink(simulator) if realtime else SimLink(simulator)
+    write = link.write
+
+    def logged_write(data: bytes) -> None:
+        writes.append((simulator.time, bytes(data)))
+        write(data)
+
+    link.write = logged_write  # type: ignore[method-assign]
+    connection = Connection(link, CREATE2, watchdog=0.5)  # type: ignore[arg-type]
+    packets = stream_request(compiled.packets, 115200)
+
+    def truth() -> tuple[float, float, float]:
+        pose = simulator.pose
+        return (pose.x, pose.y, pose.theta)
+
+    feed = RunFeed(
+        history=history,
+        source="simulator",
+        truth=truth,
+        world=world_view(simulator),
+        mission_name=compiled.name,
+    )
+    feed.set_tree(compiled.root)
+    session = MonitorSession(feed, simulator=True, stream_packets=packets)
+    server = MonitorServer(feed, session, host=host, port=0, readonly=readonly)
+    server.start()
+    runner = MissionRunner(
+        connection, compiled, profile=CREATE2, packets=packets, timeout_s=600.0, gate=session
+    )
+    result: list[RunSummary] = []
+
+    def run() -> None:
+        result.append(runner.run())
+        feed.finished = result[0].outcome.value
+
+    thread = threading.Thread(target=run, name="mission", daemon=True)
+    run_ = LiveRun(simulator, runner, feed, session, server, thread, steps, writes, result)
+    thread.start()
+    return run_

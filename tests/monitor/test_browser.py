@@ -1,0 +1,263 @@
+"""The monitor page in a real headless Chromium: a simulated run watched and driven from it.
+
+In-process runs (tests/monitor/live.py) let a test read the simulator itself: every step's
+wheel speeds and OI mode, every byte written, with the simulated time. Runs that must end
+with the command's own exit code are ``roomba-bt run`` subprocesses.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from roomba_bt.cli import main
+from roomba_bt.mission import load_mission
+from roomba_bt.monitor.recorded import replay_into_feed
+from roomba_bt.monitor.server import MonitorServer
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.runtime.loop import stream_request
+from roomba_bt.runtime.recording import load_record
+
+from .live import LiveRun, start_live_run
+
+HERE = Path(__file__).resolve().parent
+SHUTTLE = HERE / "missions" / "shuttle.yaml"
+WAIT_MS = 15_000
+
+
+@pytest.fixture
+def live() -> Iterator[LiveRun]:
+    run = start_live_run(SHUTTLE)
+    try:
+        yield run
+    finally:
+        if run.thread.is_alive():
+            run.finish()
+        else:
+            run.server.close()
+
+
+def statuses_on_page(page: Any) -> str:
+    return str(page.eval_on_selector_all(".node", "els => els.map(e => e.dataset.status).join('')"))
+
+
+def test_the_page_shows_the_tree_its_statuses_the_mode_and_the_sensors(
+    live: LiveRun, page: Any
+) -> None:
+    page.goto(live.url)
+    page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+    names = page.eval_on_selector_all(".node", "els => els.map(e => e.dataset.name)")
+    assert names == [info.name for info in live.feed.infos]
+    assert "there and back" in names
+    seen = {statuses_on_page(page)}
+    for _ in range(100):  # the shuttle's drives flip every 0.3 s
+        page.wait_for_timeout(100)
+        seen.add(statuses_on_page(page))
+        if len(seen) >= 3:
+            break
+    assert len(seen) >= 3, seen
+    assert page.inner_text("#bumps").split() == ["·", "·"]  # no bump, no wheel drop lamps
+    assert "%" in page.inner_text("#battery")
+    running = page.eval_on_selector_all(".node.running", "els => els.map(e => e.dataset.name)")
+    assert "sequence" in running  # the running path is highlighted from the root
+
+
+def _pause_write(run: LiveRun) -> float:
+    """Simulated time of the write carrying the pause's safe stop (from Safe mode)."""
+    expected = b"".join(c.data for c in (oi.halt(), oi.motors_off(), oi.start()))
+    for t, data in run.writes:
+        if expected in data:
+            return t
+    raise AssertionError(f"no pause sequence {expected.hex()} among the writes")
+
+
+def test_pause_stops_the_wheels_within_two_frames_in_passive_and_resume_drives_again(
+    live: LiveRun, page: Any
+) -> None:
+    page.goto(live.url)
+    page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+    page.wait_for_function(
+        "document.querySelector('#wheels') && !/L 0 R 0/.test("
+        "document.querySelector('#wheels').textContent)",
+        timeout=WAIT_MS,
+    )
+    page.click("#pause")
+    page.wait_for_selector('#mode:text("Passive")', timeout=WAIT_MS)
+    page.wait_for_selector('#wheels:text("L 0 R 0")', timeout=WAIT_MS)
+    assert "PAUSED" in page.inner_text("#banner")
+    written = _pause_write(live)
+    after = [s for s in live.steps if s.time > written + 1e-9]
+    stopped = next(
+        i for i, s in enumerate(after) if s.left == 0 and s.right == 0 and s.mode is OIMode.PASSIVE
+    )
+    assert stopped < 2, after[:3]  # at 0 and Passive within 2 frames of the pause
+    frozen = live.feed.latest()
+    assert frozen is not None and not frozen.ticked
+    page.click("#resume")
+    page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+    resumed_at = len(live.steps)
+    page.wait_for_timeout(500)
+    assert any(s.left or s.right for s in live.steps[resumed_at:]), "it does not drive again"
+    events = page.inner_text("#events")
+    assert "pause (paused by the operator)" in events
+    assert "resume (resumed by the operator): back to Safe" in events
+
+
+def test_a_breakpoint_pauses_the_run_where_the_node_starts_and_step_ticks_once(
+    live: LiveRun, page: Any
+) -> None:
+    page.goto(live.url)
+    page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+    back = "drive(velocity=-100 mm/s, distance=3 cm)"
+    index = [i.name for i in live.feed.infos].index(back)
+    page.click(f'.node[data-node="{index}"] .name')
+    page.click('[data-break="start"]')
+    page.wait_for_selector('#banner:has-text("breakpoint")', timeout=WAIT_MS)
+    assert f"breakpoint: {back} starts" in page.inner_text("#banner")
+    row = page.locator(f'.node[data-node="{index}"]')
+    assert row.get_attribute("data-status") == "R"
+    assert "●" in row.inner_text()
+    ticked_before = sum(1 for r in live.feed.since(0)[0] if r.ticked)
+    page.click("#step")
+    page.wait_for_selector('#banner:has-text("stepped one tick")', timeout=WAIT_MS)
+    ticked_after = sum(1 for r in live.feed.since(0)[0] if r.ticked)
+    assert ticked_after - ticked_before == 1
+    assert live.session.state.paused
+
+
+def test_stop_ends_the_run_as_ctrl_c_with_the_safe_stop(page: Any, tmp_path: Path) -> None:
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "roomba_bt.cli", "run", str(SHUTTLE), "--monitor", "0",
+         "--display", "none"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        url = _url_from(proc)
+        page.goto(url)
+        page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+        page.click("#stop")
+        out, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 130, err
+    assert "outcome      INTERRUPTED (stopped by the operator)" in out
+    assert re.search(r"safe stop    sent drive, motors, pause_resume_stream, start", out), out
+    assert "Traceback" not in err
+
+
+def _url_from(proc: subprocess.Popen[str]) -> str:
+    assert proc.stdout is not None
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        line = proc.stdout.readline()
+        if not line:
+            break
+        if line.startswith("monitor: "):
+            return line.split()[1]
+    raise AssertionError("no 'monitor: URL' line from roomba-bt run")
+
+
+def test_a_recorded_run_on_the_timeline_shows_that_ticks_statuses(
+    page: Any, tmp_path: Path
+) -> None:
+    record_path = tmp_path / "shuttle.jsonl"
+    assert main(["run", str(SHUTTLE), "--fast", "--timeout", "4s", "--display", "none",
+                 "--record", str(record_path)]) == 1  # fmt: skip
+    record = load_record(record_path)
+    mission = load_mission(SHUTTLE, {}, profile=CREATE2)
+    packets = tuple(record.header["packets"])
+    feed, summary = replay_into_feed(record, mission, CREATE2, packets, 115200, "shuttle")
+    assert summary.ticks > 200
+    records = feed.since(0)[0]
+    final = records[-1].statuses
+    chosen = next(r for r in records[100:] if r.statuses != final and r.changed)
+    server = MonitorServer(feed, None, port=0)
+    server.start()
+    try:
+        page.goto(server.url)
+        page.wait_for_selector('#source:text("record")', timeout=WAIT_MS)
+        assert page.is_hidden("#controls")
+        page.eval_on_selector(
+            "#timeline",
+            "(el, v) => { el.value = v; el.dispatchEvent(new Event('input')); }",
+            chosen.tick,
+        )
+        page.wait_for_selector(f'#tick:text-is("{chosen.tick}")', timeout=WAIT_MS)
+        page.wait_for_function(
+            f"Array.from(document.querySelectorAll('.node')).map(e => e.dataset.status)"
+            f".join('') === {json.dumps(chosen.statuses)}",
+            timeout=WAIT_MS,
+        )
+        assert f"{chosen.tick * 0.015:.3f}" in page.inner_text("#time")
+    finally:
+        server.close()
+
+
+def test_watch_reloads_a_valid_change_and_refuses_an_invalid_one(page: Any, tmp_path: Path) -> None:
+    mission = tmp_path / "shuttle.yaml"
+    mission.write_text(SHUTTLE.read_text())
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "roomba_bt.cli", "run", str(mission), "--monitor", "0",
+         "--watch", "--display", "none"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        page.goto(_url_from(proc))
+        page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+        mission.write_text(SHUTTLE.read_text().replace("there and back", "out and home"))
+        page.wait_for_selector('.node[data-name="out and home"]', timeout=WAIT_MS)
+        page.wait_for_selector('#events li:has-text("reloaded shuttle")', timeout=WAIT_MS)
+        page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)  # the new tree drives
+        broken = SHUTTLE.read_text().replace("velocity: 100 mm/s", "velocity: fast")
+        mission.write_text(broken)
+        refused = page.wait_for_selector('#events li:has-text("reload refused")', timeout=WAIT_MS)
+        assert re.search(rf"{re.escape(str(mission))}:\d+:\d+", refused.inner_text())
+        tick = int(page.inner_text("#tick"))
+        page.wait_for_function(
+            f"Number(document.getElementById('tick').textContent) > {tick + 20}",
+            timeout=WAIT_MS,
+        )  # the run goes on
+        assert page.query_selector('.node[data-name="out and home"]') is not None
+        page.click("#stop")
+        out, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 130
+    assert re.search(rf"reload refused: {re.escape(str(mission))}:\d+:\d+", err), err
+    assert "new tree starts at the next safe point" in out
+
+
+def test_a_non_local_address_refuses_a_page_without_the_token(page: Any) -> None:
+    run = start_live_run(SHUTTLE, host="0.0.0.0")
+    try:
+        token = run.server.token
+        assert token and run.url.endswith(f"/?token={token}")
+        port = run.server.port
+        response = page.goto(f"http://127.0.0.1:{port}/")
+        assert response is not None and response.status == 401
+        assert "needs its token" in page.content()
+        response = page.goto(f"http://127.0.0.1:{port}/?token=wrong")
+        assert response is not None and response.status == 403
+        control = page.request.post(
+            f"http://127.0.0.1:{port}/api/control", data=json.dumps({"action": "pause"})
+        )
+        assert control.status == 401  # no token given: refused, nothing changes
+        assert not run.session.state.paused
+        page.goto(f"http://127.0.0.1:{port}/?token={token}")
+        page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+    finally:
+        run.finish()
