@@ -25,7 +25,6 @@ from roomba_bt.monitor.server import MonitorServer
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
-from roomba_bt.runtime.loop import stream_request
 from roomba_bt.runtime.recording import load_record
 
 from .live import LiveRun, start_live_run

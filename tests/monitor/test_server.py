@@ -1,0 +1,189 @@
+"""The monitor's HTTP side without a browser: bad or unauthenticated requests get a clear
+HTTP error and change nothing; a stalled page never holds up a tick."""
+
+from __future__ import annotations
+
+import json
+import socket
+import threading
+import urllib.error
+import urllib.request
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from roomba_bt.mission import load_mission
+from roomba_bt.monitor.feed import RunFeed
+from roomba_bt.monitor.server import MonitorServer
+from roomba_bt.monitor.session import MonitorSession
+from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.robot.connection import Connection
+from roomba_bt.runtime.loop import MissionRunner, stream_request
+from roomba_bt.sim import SimLink, Simulator, load_world
+
+SHUTTLE = Path(__file__).resolve().parent / "missions" / "shuttle.yaml"
+
+
+def _serve(host: str = "127.0.0.1", readonly: bool = False, live: bool = True) -> MonitorServer:
+    mission = load_mission(SHUTTLE, {}, profile=CREATE2)
+    feed = RunFeed(mission_name=mission.name)
+    feed.set_tree(mission.root)
+    session = MonitorSession(feed, simulator=True) if live else None
+    server = MonitorServer(feed, session, host=host, port=0, readonly=readonly)
+    server.start()
+    return server
+
+
+@pytest.fixture
+def server() -> Iterator[MonitorServer]:
+    served = _serve()
+    yield served
+    served.close()
+
+
+def _call(
+    url: str, body: bytes | None = None, headers: dict[str, str] | None = None
+) -> tuple[int, Any]:
+    request = urllib.request.Request(url, data=body, headers=headers or {})
+    try:
+        with urllib.request.urlopen(request, timeout=10) as reply:
+            raw = reply.read()
+            status = reply.status
+    except urllib.error.HTTPError as exc:
+        raw, status = exc.read(), exc.code
+    try:
+        return status, json.loads(raw)
+    except json.JSONDecodeError:
+        return status, raw.decode()
+
+
+def _control(server: MonitorServer, payload: object, **headers: str) -> tuple[int, Any]:
+    base = f"http://127.0.0.1:{server.port}/api/control"
+    body = payload if isinstance(payload, bytes) else json.dumps(payload).encode()
+    return _call(base, body, {"Content-Type": "application/json", **headers})
+
+
+@pytest.mark.parametrize(
+    ("payload", "status", "message"),
+    [
+        (b"{not json", 400, "not JSON"),
+        ([1, 2], 400, '"action"'),
+        ({"action": "explode"}, 400, "allowed pause, resume, step, stop, break, force"),
+        ({"action": "break", "node": "x", "value": "start"}, 400, "node index"),
+        ({"action": "break", "node": 999, "value": "start"}, 400, "node 999"),
+        ({"action": "force", "node": 0, "value": "success"}, 409, "not a condition"),
+        ({"action": "resume"}, 409, "not paused"),
+    ],
+)
+def test_a_bad_control_gets_a_clear_error_and_changes_nothing(
+    server: MonitorServer, payload: object, status: int, message: str
+) -> None:
+    got, body = _control(server, payload)
+    assert got == status
+    assert message in body["error"]
+    assert server.session is not None and server.session._requests.empty()
+
+
+def test_a_good_control_is_accepted(server: MonitorServer) -> None:
+    assert _control(server, {"action": "pause"}) == (202, {"accepted": "pause"})
+
+
+def test_a_control_from_another_site_is_refused(server: MonitorServer) -> None:
+    got, body = _control(server, {"action": "pause"}, Origin="http://evil.example")
+    assert got == 403 and "another site" in body["error"]
+    assert server.session is not None and server.session._requests.empty()
+
+
+def test_readonly_and_recorded_runs_have_no_controls() -> None:
+    readonly = _serve(readonly=True)
+    recorded = _serve(live=False)
+    try:
+        got, body = _control(readonly, {"action": "pause"})
+        assert got == 403 and "read-only" in body["error"]
+        got, body = _control(recorded, {"action": "pause"})
+        assert got == 409 and "recorded run" in body["error"]
+    finally:
+        readonly.close()
+        recorded.close()
+
+
+def test_assets_come_from_the_package_and_nothing_else(server: MonitorServer) -> None:
+    base = f"http://127.0.0.1:{server.port}"
+    status, text = _call(f"{base}/static/monitor.js")
+    assert status == 200 and "WebSocket" in text
+    assert _call(f"{base}/static/..%2fserver.py")[0] == 404
+    assert _call(f"{base}/static/nothing.js")[0] == 404
+    status, body = _call(f"{base}/api/state?tick=abc")
+    assert status == 400 and "whole number" in body["error"]
+    status, text = _call(f"{base}/")
+    assert status == 200 and '<script src="static/monitor.js">' in text
+    assert "http" not in text.split("<body>")[1].split("</body>")[0].replace("http-equiv", "")
+
+
+def test_a_non_local_address_needs_the_token_for_everything() -> None:
+    served = _serve(host="0.0.0.0")
+    try:
+        token = served.token
+        assert token is not None and len(token) >= 20
+        base = f"http://127.0.0.1:{served.port}"
+        for path in ("/", "/static/monitor.js", "/api/state", "/ws"):
+            status, body = _call(base + path)
+            assert status == 401 and "token" in body["error"], path
+        assert _call(f"{base}/?token=wrong")[0] == 403
+        got, _ = _control(served, {"action": "pause"})
+        assert got == 401
+        got, _ = _control(served, {"action": "pause"}, **{"X-Monitor-Token": "wrong"})
+        assert got == 403
+        assert served.session is not None and served.session._requests.empty()
+        assert _call(f"{base}/?token={token}")[0] == 200
+        assert _control(served, {"action": "pause"}, **{"X-Monitor-Token": token})[0] == 202
+    finally:
+        served.close()
+
+
+def test_the_loopback_address_needs_no_token(server: MonitorServer) -> None:
+    assert server.token is None
+    assert server.url == f"http://127.0.0.1:{server.port}/"
+
+
+def test_a_stalled_page_loses_updates_never_a_tick() -> None:
+    """A WebSocket client that never reads, with a tiny receive buffer: the server's pump for
+    it blocks on its full socket; the run goes on on the virtual clock, every tick kept."""
+    mission = load_mission(SHUTTLE, {}, profile=CREATE2)
+    simulator = Simulator(load_world("empty-room"), CREATE2, 0)
+    packets = stream_request(mission.packets, 115200)
+    connection = Connection(SimLink(simulator), CREATE2, watchdog=0.5)  # type: ignore[arg-type]
+    feed = RunFeed(history=None, mission_name=mission.name)
+    feed.set_tree(mission.root)
+    session = MonitorSession(feed, simulator=True)
+    server = MonitorServer(feed, session, port=0)
+    server.start()
+    stalled = socket.socket()
+    stalled.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1024)
+    stalled.connect(("127.0.0.1", server.port))
+    stalled.sendall(
+        b"GET /ws HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+        b"Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n"
+    )
+    runner = MissionRunner(
+        connection, mission, profile=CREATE2, packets=packets, timeout_s=120.0, gate=session
+    )
+    try:
+        finished = threading.Event()
+        result: list[Any] = []
+
+        def run() -> None:
+            result.append(runner.run())
+            finished.set()
+
+        threading.Thread(target=run, daemon=True).start()
+        assert finished.wait(120), "the run was held up"
+        summary = result[0]
+        assert summary.reason.startswith("--timeout")
+        assert len(feed.since(0)[0]) == summary.ticks  # every tick recorded
+        assert server.pages == 1
+    finally:
+        stalled.close()
+        server.close()

@@ -1,0 +1,208 @@
+"""The monitor's feed and tick gate on the simulator's virtual clock (no browser)."""
+
+from __future__ import annotations
+
+import itertools
+import threading
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.mission import load_mission
+from roomba_bt.monitor.feed import RunFeed
+from roomba_bt.monitor.recorded import replay_into_feed
+from roomba_bt.monitor.session import ControlRefused, MonitorSession
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.robot.connection import Connection
+from roomba_bt.runtime.loop import MissionRunner, stream_request
+from roomba_bt.runtime.recording import RecordingTransport, load_record
+from roomba_bt.runtime.summary import Outcome, RunSummary
+from roomba_bt.sim import SimLink, Simulator, load_world
+
+HERE = Path(__file__).resolve().parent
+SHUTTLE = HERE / "missions" / "shuttle.yaml"
+
+
+class Rig:
+    """A shuttle run on the virtual clock with the monitor's session as its gate."""
+
+    def __init__(self, *, simulator: bool = True, record: Path | None = None) -> None:
+        self.mission = load_mission(SHUTTLE, {}, profile=CREATE2)
+        self.sim = Simulator(load_world("empty-room"), CREATE2, 0)
+        link: object = SimLink(self.sim)
+        self.packets = stream_request(self.mission.packets, 115200)
+        if record is not None:
+            link = RecordingTransport(
+                link,  # type: ignore[arg-type]
+                record,
+                {"profile": "create2", "baud": 115200, "mission": str(SHUTTLE),
+                 "parameters": {}, "packets": list(self.packets)},
+            )  # fmt: skip
+        self.connection = Connection(link, CREATE2, watchdog=0.5)  # type: ignore[arg-type]
+        self.feed = RunFeed(history=5000, mission_name=self.mission.name)
+        self.feed.set_tree(self.mission.root)
+        self.session = MonitorSession(self.feed, simulator=simulator, stream_packets=self.packets)
+        self.ended = threading.Event()
+        self.runner = MissionRunner(
+            self.connection,
+            self.mission,
+            profile=CREATE2,
+            packets=self.packets,
+            timeout_s=60.0,
+            gate=self.session,
+        )
+
+    def run_with(self, operator: Callable[[Rig], None]) -> RunSummary:
+        """Run; ``operator`` acts from another thread, as the page would."""
+        result: list[RunSummary] = []
+
+        def run() -> None:
+            result.append(self.runner.run())
+            self.ended.set()
+
+        thread = threading.Thread(target=run)
+        thread.start()
+        try:
+            operator(self)
+        finally:
+            if not self.ended.wait(10):
+                self.session.request("stop")
+            thread.join(30)
+        self.connection.close()
+        return result[0]
+
+    def wait(self, predicate: Callable[[], bool]) -> None:
+        done = threading.Event()
+        for _ in range(20_000):
+            if predicate():
+                return
+            done.wait(0.001)
+        raise AssertionError("the condition never held")
+
+    def ticks(self, *, ticked: bool) -> int:
+        return sum(1 for r in self.feed.since(0)[0] if r.ticked is ticked)
+
+
+def test_pause_freezes_the_tree_in_passive_resume_drives_again_stop_ends_as_ctrl_c() -> None:
+    rig = Rig()
+    seen: dict[str, object] = {}
+
+    def operator(rig: Rig) -> None:
+        rig.wait(lambda: rig.ticks(ticked=True) > 100)
+        rig.session.request("pause")
+        rig.wait(lambda: rig.ticks(ticked=False) > 50)
+        seen["mode"] = rig.sim.mode
+        seen["wheels"] = (rig.sim.left_speed, rig.sim.right_speed)
+        seen["ticked while paused"] = rig.ticks(ticked=True)
+        rig.wait(lambda: rig.ticks(ticked=False) > 60)
+        seen["ticked later"] = rig.ticks(ticked=True)
+        rig.session.request("resume")
+        rig.wait(lambda: rig.ticks(ticked=True) > seen["ticked later"] + 50)  # type: ignore[operator]
+        seen["resumed"] = (rig.sim.mode, rig.sim.left_speed, rig.sim.right_speed)
+        rig.session.request("stop")
+
+    summary = rig.run_with(operator)
+    assert seen["mode"] is OIMode.PASSIVE
+    assert seen["wheels"] == (0.0, 0.0)
+    assert seen["ticked while paused"] == seen["ticked later"]  # the tree was frozen
+    mode, left, right = seen["resumed"]  # type: ignore[misc]
+    assert mode is OIMode.SAFE and (left or right)
+    assert summary.outcome is Outcome.INTERRUPTED
+    assert summary.reason == "stopped by the operator"
+    assert summary.exit_code == 130
+    assert summary.safe_stop.startswith("sent ")
+    kinds = [e.text.split(" ")[0] for e in rig.feed.events if e.kind == "control"]
+    assert kinds == ["pause", "resume", "stop:"]
+
+
+def test_resume_and_step_are_refused_unless_paused_and_bad_requests_change_nothing() -> None:
+    rig = Rig()
+    with pytest.raises(ControlRefused, match="not paused"):
+        rig.session.request("resume")
+    with pytest.raises(ControlRefused, match="pause first"):
+        rig.session.request("step")
+    with pytest.raises(ValueError, match="allowed pause, resume"):
+        rig.session.request("explode")
+    with pytest.raises(ValueError, match="node 99"):
+        rig.session.request("break", 99, "start")
+    with pytest.raises(ValueError, match="allowed start, success, failure, end, none"):
+        rig.session.request("break", 0, "sometimes")
+    with pytest.raises(ControlRefused, match="not a condition"):
+        rig.session.request("force", 0, "success")
+    assert rig.session._requests.empty()
+
+
+def test_forcing_is_refused_on_a_real_robot_unless_allowed() -> None:
+    rig = Rig(simulator=False)
+    no_bump = [i.name for i in rig.feed.infos].index("no bump")
+    with pytest.raises(ControlRefused, match="--monitor-force"):
+        rig.session.request("force", no_bump, "failure")
+    allowed = MonitorSession(rig.feed, simulator=False, allow_force=True)
+    allowed.request("force", no_bump, "failure")
+
+
+def test_a_forced_condition_decides_the_branch_and_is_marked_in_the_events_and_the_record(
+    tmp_path: Path,
+) -> None:
+    record_path = tmp_path / "forced.jsonl"
+    rig = Rig(record=record_path)
+    no_bump = [i.name for i in rig.feed.infos].index("no bump")
+
+    def operator(rig: Rig) -> None:
+        rig.wait(lambda: rig.ticks(ticked=True) > 50)
+        rig.session.request("force", no_bump, "failure")
+        rig.ended.wait(30)
+
+    summary = rig.run_with(operator)
+    assert summary.outcome is Outcome.FAILURE
+    assert "no bump" in summary.reason
+    assert any(e.kind == "force" and "no bump forced to FAILURE" in e.text for e in rig.feed.events)
+    record = load_record(record_path)
+    assert record.notes
+    assert record.notes[0][1] == {"force": "no bump", "node": no_bump, "to": "failure"}
+    replayed, _ = replay_into_feed(
+        record, load_mission(SHUTTLE, {}, profile=CREATE2), CREATE2, rig.packets, 115200, "x"
+    )
+    assert any(e.kind == "force" and "no bump forced to failure" in e.text for e in replayed.events)
+
+
+def test_a_breakpoint_on_an_ending_pauses_after_that_tick_and_step_ticks_once() -> None:
+    rig = Rig()
+    names = [i.name for i in rig.feed.infos]
+    forth = names.index("drive(velocity=100 mm/s, distance=3 cm)")
+    seen: dict[str, int] = {}
+
+    def operator(rig: Rig) -> None:
+        rig.session.request("break", forth, "success")
+        rig.wait(lambda: rig.session.state.paused)
+        hit = [r for r in rig.feed.since(0)[0] if r.ticked][-1]
+        assert hit.statuses[forth] == "S" and forth in hit.changed
+        seen["ticked"] = rig.ticks(ticked=True)
+        rig.session.request("step")
+        rig.wait(lambda: rig.session.state.pause_reason == "stepped one tick")
+        seen["after step"] = rig.ticks(ticked=True)
+
+    rig.run_with(operator)
+    assert seen["after step"] - seen["ticked"] == 1
+    texts = [e.text for e in rig.feed.events if e.kind == "breakpoint"]
+    assert texts[0].startswith("break when drive(velocity=100 mm/s, distance=3 cm) ends in SUCCESS")
+    assert "breakpoint: drive(velocity=100 mm/s, distance=3 cm) ends in SUCCESS at tick" in texts[1]
+
+
+def test_the_feed_is_bounded_and_shares_what_did_not_change() -> None:
+    rig = Rig()
+    rig.feed.records = type(rig.feed.records)(maxlen=300)
+
+    def operator(rig: Rig) -> None:
+        rig.wait(lambda: rig.ticks(ticked=True) >= 300 and rig.feed.latest().seq > 1000)  # type: ignore[union-attr]
+
+    rig.run_with(operator)
+    records = rig.feed.since(0)[0]
+    assert len(records) == 300
+    assert records[0].seq > 0  # the oldest fell out
+    unchanged = [b for a, b in itertools.pairwise(records) if not b.changed]
+    assert unchanged
+    pairs = itertools.pairwise(records)
+    assert all(b.statuses is a.statuses for a, b in pairs if not b.changed and a.tree == b.tree)
