@@ -80,8 +80,7 @@ class LiveMonitor:
         if simulator is not None:
 
             def truth() -> tuple[float, float, float]:
-                pose = simulator.pose
-                return (pose.x, pose.y, pose.theta)
+                return (simulator.x, simulator.y, simulator.theta)
 
             world = world_view(simulator)
         self.feed = RunFeed(

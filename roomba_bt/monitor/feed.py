@@ -21,6 +21,7 @@ Statuses are one character per node, in the order ``roomba-bt show`` draws the t
 from __future__ import annotations
 
 import logging
+import operator
 import threading
 from collections import deque
 from collections.abc import Callable, Mapping
@@ -48,6 +49,9 @@ SNAPSHOT_KEY = "/roomba/snapshot"
 #: A node still called by its kind's word (``sequence``, ``retry``) was not named by the
 #: mission's author: its flips are not worth an event.
 UNNAMED = frozenset(LANGUAGE_WORDS) | {"root"}
+
+
+_STATUS = operator.attrgetter("status")
 
 
 @dataclass(frozen=True)
@@ -205,7 +209,7 @@ class RunFeed:
     # ---------------------------------------------------------------- tick thread
     def observe(self, runner: MissionRunner, ticked: bool = True) -> tuple[int, ...]:
         """Record this tick; returns the indices of the nodes whose status flipped."""
-        statuses = [node.status for node in self._nodes]
+        statuses = list(map(_STATUS, self._nodes))
         changed: tuple[int, ...] = ()
         if statuses != self._last:
             changed = self._flipped(statuses, runner)

@@ -93,8 +93,7 @@ def start_live_run(
     packets = stream_request(compiled.packets, 115200)
 
     def truth() -> tuple[float, float, float]:
-        pose = simulator.pose
-        return (pose.x, pose.y, pose.theta)
+        return (simulator.x, simulator.y, simulator.theta)
 
     feed = RunFeed(
         history=history,

@@ -255,12 +255,12 @@ function drawPath(state, path) {
       line(...d.plate, "green", 5);
     }
   }
-  const trace = (points, colour) => {
+  const trace = (points, colour, width) => {
     if (points.length < 2) return;
-    g.beginPath(); g.strokeStyle = colour; g.lineWidth = 1.6;
+    g.beginPath(); g.strokeStyle = colour; g.lineWidth = width; g.lineJoin = "round";
     points.forEach(([x, y], j) => (j ? g.lineTo(X(x), Y(y)) : g.moveTo(X(x), Y(y)))); g.stroke(); g.lineWidth = 1;
   };
-  trace(path.truth, "#222"); trace(odo, "#2a6fdb");
+  trace(path.truth, "rgba(0,0,0,.35)", 5); trace(odo, "#2a6fdb", 1.6);
   const robot = (x, y, th, colour, fill) => {
     g.beginPath(); g.arc(X(x), Y(y), Math.max(3, 170 * k), 0, 2 * Math.PI);
     if (fill) { g.fillStyle = fill; g.fill(); } g.strokeStyle = colour; g.stroke();
@@ -338,6 +338,7 @@ async function loadLivePath() {
   const L = view.pathLive;
   L.odometry = body.path.odometry.concat(L.odometry);
   L.truth = body.path.truth.concat(L.truth);
+  if (view.live && view.liveState) render(view.liveState);
 }
 
 // ------------------------------------------------------------------ live socket
