@@ -9,7 +9,7 @@ RUN_STAMP := $(VENV)/.installed-run
 STAMP := $(VENV)/.installed
 EXTRAS ?= test,plot,bench,cluster,monitor,browser-test
 
-.PHONY: run test lint typecheck bench icount routines coverage golden venv clean
+.PHONY: run test lint typecheck bench icount routines coverage golden venv clean monitor-screenshots
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -57,6 +57,11 @@ routines: $(STAMP)
 # clean.yaml against the firmware's Clean into docs/routines.md (about 25 min of CPU).
 coverage: $(STAMP)
 	$(BIN)/python -m roomba_bt.evaluate.coverage_report --docs docs --missions missions --jobs 2
+
+# The monitor page's pictures in docs/monitor.md (a dock run in the apartment, mid-approach;
+# needs the OS's chromium: apt-get install chromium).
+monitor-screenshots: $(STAMP)
+	$(BIN)/python -m bench.monitor_screenshots
 
 clean:
 	rm -rf $(VENV) build *.egg-info
