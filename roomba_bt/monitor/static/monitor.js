@@ -362,7 +362,10 @@ function connect() {
       updateControls();
       return;
     }
-    if (msg.tree) { buildTree(msg.tree); view.pathLive = { odometry: [], truth: [], truthStart: view.pathLive.truthStart }; }
+    if (msg.tree && JSON.stringify(msg.tree) !== JSON.stringify(view.tree)) {
+      buildTree(msg.tree);  // a reload: a new tree from its root
+      if (!view.live) showTick(view.shownTick);
+    }
     if (msg.session) view.session = msg.session;
     if (msg.window) view.window = msg.window;
     if (msg.events) addEvents(msg.events);
