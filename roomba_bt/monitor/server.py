@@ -35,7 +35,7 @@ from importlib import resources
 from typing import Any
 from urllib.parse import urlsplit
 
-from aiohttp import WSMsgType, web
+from aiohttp import WSCloseCode, WSMsgType, web
 
 from roomba_bt.monitor.address import DEFAULT_PORT, is_loopback
 from roomba_bt.monitor.feed import RunFeed
@@ -76,6 +76,7 @@ class MonitorServer:
             else (None if is_loopback(host) else secrets.token_urlsafe(18))
         )
         self.pages = 0
+        self._sockets: set[web.WebSocketResponse] = set()
         self._loop: asyncio.AbstractEventLoop | None = None
         self._stopped: asyncio.Event | None = None
         self._thread: threading.Thread | None = None
@@ -131,9 +132,18 @@ class MonitorServer:
         self._ready.set()
         try:
             loop.run_until_complete(self._stopped.wait())
+            loop.run_until_complete(self._close_sockets())
         finally:
             loop.run_until_complete(runner.cleanup())
             loop.close()
+
+    async def _close_sockets(self) -> None:
+        """Tell each page the run is over (it keeps what it shows) instead of waiting on it."""
+        for ws in list(self._sockets):
+            with contextlib.suppress(Exception):
+                await asyncio.wait_for(
+                    ws.close(code=WSCloseCode.GOING_AWAY, message=b"the run ended"), 1.0
+                )
 
     # ---------------------------------------------------------------- app
     def app(self) -> web.Application:
@@ -264,6 +274,7 @@ class MonitorServer:
         ws = web.WebSocketResponse(heartbeat=20)
         await ws.prepare(request)
         self.pages += 1
+        self._sockets.add(ws)
         pump = asyncio.get_running_loop().create_task(self._pump(ws))
         try:
             async for message in ws:  # the page sends nothing we need; read to see it close
@@ -272,6 +283,7 @@ class MonitorServer:
         finally:
             pump.cancel()
             self.pages -= 1
+            self._sockets.discard(ws)
         return ws
 
     async def _pump(self, ws: web.WebSocketResponse) -> None:
