@@ -27,7 +27,6 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-from roomba_bt.cli.simulated import RealtimeSimLink
 from roomba_bt.mission import load_mission
 from roomba_bt.monitor.feed import RunFeed
 from roomba_bt.monitor.server import MonitorServer
@@ -36,7 +35,7 @@ from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.connection import Connection, TimedFrame
 from roomba_bt.robot.interface import Snapshot
 from roomba_bt.runtime.loop import MissionRunner, stream_request
-from roomba_bt.sim import SimLink, Simulator, load_world
+from roomba_bt.sim import RealtimeSimLink, SimLink, Simulator, load_world
 
 from . import bench_runtime
 

@@ -23,8 +23,8 @@ from roomba_bt.monitor.server import MonitorServer
 from roomba_bt.monitor.session import MonitorSession
 from roomba_bt.monitor.views import world_view
 from roomba_bt.oi.profiles import CREATE2
-from roomba_bt.robot.connection import Connection
-from roomba_bt.runtime.loop import MissionRunner, stream_request
+from roomba_bt.runtime.loop import MissionRunner
+from roomba_bt.runtime.stack import RunStack
 from roomba_bt.sim import SimLink, Simulator, load_world
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -66,8 +66,8 @@ def main() -> int:
         return 2
     mission = load_mission(ROOT / "missions" / "dock.yaml", {}, profile=CREATE2)
     simulator = Simulator(load_world("apartment"), CREATE2, 3)
-    packets = stream_request(mission.packets, 115200)
-    connection = Connection(SimLink(simulator), CREATE2)
+    stack = RunStack(mission, SimLink(simulator), profile=CREATE2, timeout_s=900.0)
+    packets = stack.packets
 
     def truth() -> tuple[float, float, float]:
         return (simulator.x, simulator.y, simulator.theta)
@@ -77,10 +77,8 @@ def main() -> int:
     session = HoldMidApproach(feed, simulator=True, stream_packets=packets)
     server = MonitorServer(feed, session, port=0)
     url = server.start()
-    runner = MissionRunner(
-        connection, mission, profile=CREATE2, packets=packets, timeout_s=900.0, gate=session
-    )
-    thread = threading.Thread(target=runner.run, daemon=True)
+    stack.runner.gate = session
+    thread = threading.Thread(target=stack.run, daemon=True)
     thread.start()
     if not session.held.wait(300):
         print("the dock run never reached two seconds of approach", file=sys.stderr)

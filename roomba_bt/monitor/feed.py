@@ -31,9 +31,9 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import py_trees
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import Condition
+from roomba_bt.behaviours.declare import SNAPSHOT_KEY, Condition
+from roomba_bt.behaviours.language import WORDS
 from roomba_bt.behaviours.lean import failure_reason
-from roomba_bt.mission.ir import LANGUAGE_WORDS
 from roomba_bt.robot.interface import SLOT_SECONDS, Snapshot
 
 if TYPE_CHECKING:
@@ -45,10 +45,9 @@ STATUS_CODE: dict[Status, str] = {
     Status.RUNNING: "R",
     Status.INVALID: "I",
 }
-SNAPSHOT_KEY = "/roomba/snapshot"
 #: A node still called by its kind's word (``sequence``, ``retry``) was not named by the
 #: mission's author: its flips are not worth an event.
-UNNAMED = frozenset(LANGUAGE_WORDS) | {"root"}
+UNNAMED = frozenset(WORDS) | {"root"}
 
 
 _STATUS = operator.attrgetter("status")

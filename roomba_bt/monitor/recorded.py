@@ -11,9 +11,8 @@ from __future__ import annotations
 from typing import Any
 
 from roomba_bt.monitor.feed import RunFeed
-from roomba_bt.robot.connection import Connection
-from roomba_bt.runtime.loop import MissionRunner
 from roomba_bt.runtime.recording import Record, ReplayTransport
+from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import RunSummary
 
 #: Ticks kept of a recorded run (about 100 min): the whole run, within a bound.
@@ -27,16 +26,17 @@ def replay_into_feed(
     feed = RunFeed(history=RECORD_HISTORY, source="record", mission_name=mission.name)
     feed.set_tree(mission.root)
     transport = ReplayTransport(record, name=f"replay:{name}")
-    connection = Connection(transport, profile, watchdog=0.0, baud=baud)
-    runner = MissionRunner(
-        connection,
+    stack = RunStack(
         mission,
+        transport,
         profile=profile,
+        baud=baud,
         packets=packets,
+        watchdog=0.0,
         observer=lambda r: _ignore(feed.observe(r)),
         input_ended=lambda: "end of the record" if transport.exhausted else None,
     )
-    summary = runner.run()
+    summary = stack.run()
     for t, note in record.notes:
         feed.event("force" if "force" in note else "note", _note_text(note), t)
     feed.finished = f"{summary.outcome.value} (recorded run, {summary.ticks} ticks)"

@@ -8,7 +8,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from roomba_bt.cli.simulated import RealtimeSimLink
 from roomba_bt.mission import load_mission
 from roomba_bt.monitor.feed import RunFeed
 from roomba_bt.monitor.server import MonitorServer
@@ -16,10 +15,10 @@ from roomba_bt.monitor.session import MonitorSession
 from roomba_bt.monitor.views import world_view
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
-from roomba_bt.robot.connection import Connection
-from roomba_bt.runtime.loop import MissionRunner, stream_request
+from roomba_bt.runtime.loop import MissionRunner
+from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import RunSummary
-from roomba_bt.sim import SimLink, Simulator, load_world
+from roomba_bt.sim import RealtimeSimLink, SimLink, Simulator, load_world
 
 ROOT = Path(__file__).resolve().parents[2]
 MISSIONS = ROOT / "missions"
@@ -89,8 +88,8 @@ def start_live_run(
         write(data)
 
     link.write = logged_write  # type: ignore[method-assign]
-    connection = Connection(link, CREATE2, watchdog=0.5)  # type: ignore[arg-type]
-    packets = stream_request(compiled.packets, 115200)
+    stack = RunStack(compiled, link, profile=CREATE2, watchdog=0.5, timeout_s=600.0)
+    packets = stack.packets
 
     def truth() -> tuple[float, float, float]:
         return (simulator.x, simulator.y, simulator.theta)
@@ -106,9 +105,8 @@ def start_live_run(
     session = MonitorSession(feed, simulator=True, stream_packets=packets)
     server = MonitorServer(feed, session, host=host, port=0, readonly=readonly)
     server.start()
-    runner = MissionRunner(
-        connection, compiled, profile=CREATE2, packets=packets, timeout_s=600.0, gate=session
-    )
+    runner = stack.runner
+    runner.gate = session
     result: list[RunSummary] = []
 
     def run() -> None:

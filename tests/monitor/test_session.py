@@ -15,9 +15,8 @@ from roomba_bt.monitor.recorded import replay_into_feed
 from roomba_bt.monitor.session import ControlRefused, MonitorSession
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
-from roomba_bt.robot.connection import Connection
-from roomba_bt.runtime.loop import MissionRunner, stream_request
-from roomba_bt.runtime.recording import RecordingTransport, load_record
+from roomba_bt.runtime.recording import load_record
+from roomba_bt.runtime.stack import Recording, RunStack
 from roomba_bt.runtime.summary import Outcome, RunSummary
 from roomba_bt.sim import SimLink, Simulator, load_world
 
@@ -31,28 +30,23 @@ class Rig:
     def __init__(self, *, simulator: bool = True, record: Path | None = None) -> None:
         self.mission = load_mission(SHUTTLE, {}, profile=CREATE2)
         self.sim = Simulator(load_world("empty-room"), CREATE2, 0)
-        link: object = SimLink(self.sim)
-        self.packets = stream_request(self.mission.packets, 115200)
-        if record is not None:
-            link = RecordingTransport(
-                link,  # type: ignore[arg-type]
-                record,
-                {"profile": "create2", "baud": 115200, "mission": str(SHUTTLE),
-                 "parameters": {}, "packets": list(self.packets)},
-            )  # fmt: skip
-        self.connection = Connection(link, CREATE2, watchdog=0.5)  # type: ignore[arg-type]
+        recording = Recording(record, str(SHUTTLE)) if record is not None else None
+        self.stack = RunStack(
+            self.mission,
+            SimLink(self.sim),
+            profile=CREATE2,
+            watchdog=0.5,
+            timeout_s=60.0,
+            record=recording,
+        )
+        self.packets = self.stack.packets
+        self.connection = self.stack.connection
         self.feed = RunFeed(history=5000, mission_name=self.mission.name)
         self.feed.set_tree(self.mission.root)
         self.session = MonitorSession(self.feed, simulator=simulator, stream_packets=self.packets)
         self.ended = threading.Event()
-        self.runner = MissionRunner(
-            self.connection,
-            self.mission,
-            profile=CREATE2,
-            packets=self.packets,
-            timeout_s=60.0,
-            gate=self.session,
-        )
+        self.runner = self.stack.runner
+        self.runner.gate = self.session
 
     def run_with(self, operator: Callable[[Rig], None]) -> RunSummary:
         """Run; ``operator`` acts from another thread, as the page would."""
