@@ -187,3 +187,57 @@ def test_a_stalled_page_loses_updates_never_a_tick() -> None:
     finally:
         stalled.close()
         server.close()
+
+
+def test_several_pages_watch_one_run() -> None:
+    """Two pages connected to one run both get its hello and its updates."""
+    import asyncio
+
+    import aiohttp
+
+    mission = load_mission(SHUTTLE, {}, profile=CREATE2)
+    simulator = Simulator(load_world("empty-room"), CREATE2, 0)
+    connection = Connection(SimLink(simulator), CREATE2, watchdog=0.5)  # type: ignore[arg-type]
+    packets = stream_request(mission.packets, 115200)
+    feed = RunFeed(mission_name=mission.name)
+    feed.set_tree(mission.root)
+    session = MonitorSession(feed, simulator=True)
+    server = MonitorServer(feed, session, port=0)
+    server.start()
+    runner = MissionRunner(
+        connection, mission, profile=CREATE2, packets=packets, timeout_s=20.0, gate=session
+    )
+
+    async def page(received: list[dict[str, Any]]) -> None:
+        async with (
+            aiohttp.ClientSession() as client,
+            client.ws_connect(f"ws://127.0.0.1:{server.port}/ws") as ws,
+        ):
+            async for message in ws:
+                received.append(json.loads(message.data))
+                if any("state" in m for m in received) and len(received) >= 3:
+                    return
+
+    async def two_pages() -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+        first: list[dict[str, Any]] = []
+        second: list[dict[str, Any]] = []
+        await asyncio.wait_for(asyncio.gather(page(first), page(second)), 60)
+        return first, second
+
+    thread = threading.Thread(target=runner.run, daemon=True)
+    pages: list[tuple[list[dict[str, Any]], list[dict[str, Any]]]] = []
+    # the pages' event loop in a thread of its own: the browser tests' driver may own this one
+    watcher = threading.Thread(target=lambda: pages.append(asyncio.run(two_pages())))
+    try:
+        thread.start()
+        watcher.start()
+        watcher.join(90)
+        first, second = pages[0]
+    finally:
+        session.request("stop")
+        thread.join(30)
+        server.close()
+    for received in (first, second):
+        assert received[0]["type"] == "hello"
+        assert [n["name"] for n in received[0]["header"]["tree"]][:2] == ["sequence", "mode(safe)"]
+        assert any(m.get("state", {}).get("robot", {}).get("mode") for m in received[1:])
