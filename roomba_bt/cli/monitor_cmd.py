@@ -18,9 +18,9 @@ from pathlib import Path
 from typing import Any
 
 from roomba_bt.cli.arguments import add_param_option
-from roomba_bt.cli.exit_codes import ExitCode
 from roomba_bt.monitor import INSTALL_HINT, server_available
 from roomba_bt.monitor.address import parse_address
+from roomba_bt.runtime.summary import ExitCode
 
 log = logging.getLogger("roomba_bt.monitor")
 KEYS_HELP = "keys: p pause, r resume, n step, q stop"
