@@ -33,7 +33,7 @@ from py_trees.common import Status
 
 from roomba_bt.behaviours.declare import SNAPSHOT_KEY, Condition
 from roomba_bt.behaviours.language import WORDS
-from roomba_bt.behaviours.lean import failure_reason
+from roomba_bt.behaviours.reasons import failure_reason
 from roomba_bt.robot.interface import SLOT_SECONDS, Snapshot
 
 if TYPE_CHECKING:
