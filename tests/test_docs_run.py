@@ -73,6 +73,17 @@ NOT_RUN: dict[str, str] = {
     "plugins/roomba-bt-dirt/tests",
     "pytest plugins/roomba-bt-dirt": "the suite collects plugins/ itself (testpaths), "
     "so those tests run beside this one",
+    "pip install 'roomba-bt[monitor]'": "an install from the package index; `make test` "
+    "installs the monitor extra into the venv these tests run in",
+    "roomba-bt run missions/dock.yaml --world apartment --monitor": "serves the page until "
+    "the run ends in real time; tests/monitor runs the monitor in a real browser",
+    "roomba-bt run missions/dock.yaml --port /dev/ttyUSB0 --monitor 9000": "needs a robot",
+    "roomba-bt run missions/dock.yaml --monitor 0.0.0.0:8765": "serves on every address "
+    "until stopped; the token rule is tested in tests/monitor",
+    "roomba-bt run mymission.yaml --monitor --watch": "watches a file until stopped; "
+    "tests/monitor changes a mission under --watch",
+    "roomba-bt monitor dock.jsonl": "serves the page until stopped; tests/monitor opens "
+    "a recorded run in a browser",
 }
 
 
