@@ -9,7 +9,7 @@ RUN_STAMP := $(VENV)/.installed-run
 STAMP := $(VENV)/.installed
 EXTRAS ?= test,plot,bench,cluster,monitor,browser-test
 
-.PHONY: run test lint typecheck bench icount routines coverage golden venv clean monitor-screenshots
+.PHONY: run test wheel-check lint typecheck bench icount routines coverage golden venv clean monitor-screenshots
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -41,6 +41,12 @@ typecheck: $(STAMP)
 test: $(STAMP) lint typecheck
 	$(BIN)/python -m pytest -q -p no:cacheprovider; rc=$$?; \
 	if [ $$rc -eq 5 ]; then echo "pytest collected no tests: failing"; exit 1; fi; exit $$rc
+	PYTHON=$(PYTHON) .ci/wheel-check
+
+# What `pip install roomba-bt` gives a new user: the wheel in a fresh venv, in an empty
+# directory, lists, validates and runs the shipped missions by name (about a minute).
+wheel-check:
+	PYTHON=$(PYTHON) .ci/wheel-check
 
 bench: $(STAMP)
 	$(BIN)/python -m bench
