@@ -9,11 +9,16 @@ from py_trees.common import Status
 
 from roomba_bt.behaviours.declare import RobotBehaviour
 from roomba_bt.behaviours.docking import (
+    ApproachState,
+    DockApproach,
     DockDriveOn,
     DockSearch,
     DockTimeLimit,
     DockView,
     DockWaitCharge,
+    Hazard,
+    SearchState,
+    hazard_in,
 )
 from roomba_bt.oi.ir import dock_character
 from roomba_bt.oi.modes import OIMode
@@ -166,8 +171,67 @@ def test_a_wall_that_keeps_bumping_is_left_for_the_open_floor(robot: StubRobot, 
             counts += TURN_30_COUNTS
             robot.set_frame({**frame(), 43: -counts & 0xFFFF, 44: counts})
             search.tick_once()
-    assert search._phase == "turn"  # type: ignore[attr-defined]
+    assert search.state is SearchState.TURN  # type: ignore[attr-defined]
     assert not search._want_wall  # type: ignore[attr-defined]
+
+
+@pytest.mark.parametrize(
+    ("packets", "expected"),
+    [
+        ({}, None),
+        ({7: 0b0100, 9: 1, 45: LIGHT_AHEAD}, Hazard.WHEEL_DROP),  # the most serious first
+        ({11: 1, 7: 0b0001}, Hazard.CLIFF),
+        ({7: 0b0010, 13: 1}, Hazard.BUMP),
+        ({13: 1, 45: LIGHT_AHEAD}, Hazard.CLIFF),  # a virtual wall: a line not to cross
+        ({45: LIGHT_AHEAD}, Hazard.OBSTACLE),
+        ({45: 0b100001}, None),  # the side light-bumper sensors: beside, not ahead
+        ({7: 0b1111_0000}, None),  # packet 7's unused bits
+    ],
+)
+def test_hazards_in_order_of_seriousness(
+    robot: StubRobot, packets: dict[int, int], expected: Hazard | None
+) -> None:
+    snap = robot.set_frame({**frame(), **packets})
+    assert hazard_in(snap.frame) is expected
+
+
+def state(approach: DockApproach) -> ApproachState:
+    """The state now (a call, so that a type checker does not narrow it across ticks)."""
+    return approach.state
+
+
+def test_the_approach_reads_no_obstacles(robot: StubRobot) -> None:
+    """Near the dock its wall is always in sight of the light bumper: the approach asks
+    for hazards without obstacles, and still sees a bump."""
+    snap = robot.set_frame({**frame(), 45: LIGHT_AHEAD})
+    assert hazard_in(snap.frame, obstacles=False) is None
+    snap = robot.set_frame({**frame(), 45: LIGHT_AHEAD, 7: 0b0001})
+    assert hazard_in(snap.frame, obstacles=False) is Hazard.BUMP
+
+
+#: encoder counts for an 80+ deg turn in place (the approach's default cross angle)
+TURN_80_COUNTS = 400
+
+
+def test_approach_on_the_docks_left_turns_to_the_axis_then_crosses(
+    robot: StubRobot, make: Make
+) -> None:
+    """Facing the dock in its force field, red only (its left): turn left toward the axis,
+    then, turned far enough, cross toward it in the same tick (slowed in the force field)."""
+    approach = make(DockApproach)
+    assert isinstance(approach, DockApproach)
+    red = dock_character(red=True, green=False, force_field=True)
+    robot.set_frame(frame(omni=red, left=red, right=red))
+    approach.tick_once()
+    assert state(approach) is ApproachState.TURN_AWAY
+    assert last_wheels(robot) == (-90, 90)
+    turned = frame(omni=red, left=red, right=red)
+    turned.update({43: -TURN_80_COUNTS & 0xFFFF, 44: TURN_80_COUNTS})
+    robot.set_frame(turned)
+    approach.tick_once()
+    assert status(approach) is Status.RUNNING
+    assert state(approach) is ApproachState.CROSS
+    assert last_wheels(robot) == (90, 90)  # 150 mm/s x 0.6 in the force field
 
 
 def test_drive_on_fails_on_a_bump_outside_the_buoys(robot: StubRobot, make: Make) -> None:

@@ -132,7 +132,7 @@ def test_dock_approach_starting_over_keeps_the_beams(monkeypatch: pytest.MonkeyP
         retreats.append(1)
         return start_retreat(self)
 
-    monkeypatch.setattr(docking, "_MAX_CROSSINGS", 1)
+    monkeypatch.setattr(docking.DockApproach, "MAX_CROSSINGS", 1)
     monkeypatch.setattr(docking.DockApproach, "_start_retreat", counted)
     for seed in (6, 32):
         retreats.clear()

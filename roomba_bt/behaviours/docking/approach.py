@@ -1,0 +1,497 @@
+"""``dock_approach``: from anywhere the dock's beams are seen, onto its axis, facing it.
+
+The approach is a state machine (:class:`ApproachState`)::
+
+    FACE ──(in the force field, side known or guessed)──> TURN_AWAY ──> CROSS ──> FACE
+      │                                                       └──(guess)──> ORBIT ──> FACE
+      ├──(outside the force field)──> CLOSER ──(in it)──> FACE
+      └──(no progress)──> RETREAT ──> FACE
+    CLOSER, CROSS, ORBIT ──(bump, cliff)──> BACK ──> FACE
+
+SUCCESS in FACE, facing the dock on its axis. A state's method returns the tick's status, or
+None after handing over to a later state of the list FACE, CLOSER, TURN_AWAY, RETREAT,
+ORBIT, CROSS, BACK, which then acts in the same tick.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import py_trees
+from py_trees.common import Status
+
+from roomba_bt.behaviours.declare import Param, declare
+from roomba_bt.behaviours.docking.common import (
+    DRIVE_SENDS,
+    OMNI_AHEAD_MM,
+    RUN_KEY,
+    RUNNING,
+    WHEEL_ARG,
+    DockingAction,
+    DockView,
+    Hazard,
+    StateEnum,
+    hazard_in,
+)
+from roomba_bt.behaviours.units import ANGLE, DURATION, SPEED
+from roomba_bt.oi.frames import (
+    CHARGING_SOURCES_PACKETS,
+    ENCODER_PACKETS,
+    HAZARD_PACKETS,
+    IR_PACKETS,
+    LIGHT_BUMPER_PACKETS,
+    VIRTUAL_WALL_PACKETS,
+)
+
+#: Attempts (starts of this leaf) in one docking run before the approach first backs away
+#: from the dock and comes in again.
+ATTEMPTS_BEFORE_RETREAT = 3
+#: The last side of the axis seen counts for this long (s) when only the force field is seen.
+SIDE_REMEMBERED_S = 5.0
+#: CLOSER: along the beams into the force field, at this share of the speed, steering with
+#: the slow wheel at CLOSER_INNER_SHARE plus CLOSER_STEER_MM_S; at most CLOSER_MAX_MM.
+CLOSER_SHARE = 0.8
+CLOSER_INNER_SHARE = 0.3
+CLOSER_STEER_MM_S = 60
+CLOSER_MAX_MM = 1500.0
+#: BACK: straight back (mm/s) for BACK_S after a bump or a cliff.
+BACK_MM_S = 120
+BACK_S = 0.5
+#: TURN_AWAY: wheel speed (mm/s) of the turn in place toward the crossing line.
+TURN_AWAY_MM_S = 90.0
+#: RETREAT: straight back (mm/s), out of the force field, at most RETREAT_MAX_MM.
+RETREAT_MM_S = 120
+RETREAT_MAX_MM = 600.0
+#: ORBIT: along the edge of the force field at this share of the speed, the inner wheel at
+#: ORBIT_INNER_SHARE of that; given up after ORBIT_MAX_MM (half a circle round a 1 m field).
+ORBIT_SHARE = 0.8
+ORBIT_INNER_SHARE = 0.2
+ORBIT_MAX_MM = 3500.0
+#: CROSS: given up after CROSS_MAX_MM of path, or LEFT_BEAMS_S without any beam; inside the
+#: force field at FORCE_FIELD_SHARE of the speed. Centred when the centre is within
+#: CENTRED_MM of the axis; toward it at CENTRE_GAIN_PER_S mm/s per mm off, at least
+#: CENTRE_MIN_MM_S. Back to the near edge of the band at NEAR_EDGE_SHARE of the speed, at
+#: most NEAR_EDGE_MAX_MM behind where the crossing began.
+CROSS_MAX_MM = 1500.0
+LEFT_BEAMS_S = 1.0
+FORCE_FIELD_SHARE = 0.6
+CENTRED_MM = 4.0
+CENTRE_GAIN_PER_S = 1.5
+CENTRE_MIN_MM_S = 30.0
+NEAR_EDGE_SHARE = 0.6
+NEAR_EDGE_MAX_MM = 400.0
+#: FACE: spinning in place (mm/s) while a receiver sees the dock, and while none does; turning
+#: to a computed heading fast, slow within FACE_SLOW_WITHIN_RAD, done within FACE_DONE_RAD.
+FACE_SEEN_MM_S = 70.0
+FACE_SEARCH_MM_S = 110.0
+FACE_FAST_MM_S = 60.0
+FACE_SLOW_MM_S = 35.0
+FACE_SLOW_WITHIN_RAD = math.radians(8.0)
+FACE_DONE_RAD = math.radians(2.0)
+#: seen at one heading only, then nothing for this much turn: face that heading
+FRINGE_RAD = math.radians(60.0)
+#: spun this far without facing: forget the heading where the dock was seen, start again
+FACE_RESTART_RAD = math.radians(540.0)
+
+
+class ApproachState(StateEnum):
+    FACE = "face"
+    CLOSER = "closer"
+    TURN_AWAY = "turn_away"
+    RETREAT = "retreat"
+    ORBIT = "orbit"
+    CROSS = "cross"
+    BACK = "back"
+
+
+@declare(
+    "dock_approach",
+    kind="action",
+    params=(
+        Param("speed", SPEED, default="150 mm/s", minimum=30, maximum=WHEEL_ARG.maximum,
+              doc="speed toward the axis"),
+        Param("cross_angle", ANGLE, default="80deg", minimum=20, maximum=90,
+              doc="how far it turns away from the dock to move toward its axis"),
+        Param("lost_after", DURATION, default="4s", minimum=0.1,
+              doc="FAILURE when no beam has been seen for this long"),
+        Param("timeout", DURATION, default="90s", minimum=1,
+              doc="FAILURE if not facing the dock on its axis by then"),
+    ),
+    reads=(*IR_PACKETS, *HAZARD_PACKETS, *VIRTUAL_WALL_PACKETS, *LIGHT_BUMPER_PACKETS,
+           *CHARGING_SOURCES_PACKETS, *ENCODER_PACKETS),
+    sends=DRIVE_SENDS,
+)  # fmt: skip
+class DockApproach(DockingAction):
+    """Get onto the dock's axis, facing it (SUCCESS), from anywhere its beams are seen.
+
+    Face the dock (turn toward the receiver that sees it); red only means the robot is on
+    the dock's left, so the axis is on the robot's left: turn ``cross_angle`` left and move
+    along that line until the centre is on the axis (the omni receiver, ahead of the centre,
+    measures both edges of the band where it sees both buoys; see :meth:`_cross`); green
+    only: the mirror image; then face the dock again. In the force field with no buoy, the
+    side is the last one seen, or a guess: circle the dock along the field's edge that way
+    until a buoy is seen, the other way after a bump. No progress (:attr:`MAX_CROSSINGS`
+    turns toward the axis, or a third attempt in one docking run): back away from the dock
+    out of the force field and come in again, rather than repeat the same moves until the
+    time limit.
+    """
+
+    stage = "approach"
+    #: Turns toward the axis (crossings, circles) in one approach before it backs away from
+    #: the dock and starts over from the edge of the force field; three are usually enough.
+    MAX_CROSSINGS = 6
+
+    def start(self) -> None:
+        self.begin()
+        self._last_seen = self.snapshot.time
+        self._side_guess = 0
+        self._last_side = 0
+        self._guesses = 0
+        self._crossings = 0
+        self._centred = False
+        run = py_trees.blackboard.Blackboard.storage.get(RUN_KEY)
+        if run != self._run:
+            self._run, self._starts = run, 0
+        self._starts += 1
+        # two attempts of this run already ended in a failure after or during the approach:
+        # do not repeat the same moves from the same place; back away and start over
+        self._retreat = self._starts >= ATTEMPTS_BEFORE_RETREAT
+        view = DockView.of(self.snapshot.frame)
+        self._start_facing(-1.0 if view.on_right else 1.0)
+
+    def update(self) -> Status:
+        snap = self.snapshot
+        frame = snap.frame
+        view = DockView.of(frame)
+        if frame.charging_sources.home_base:
+            return self.succeed()
+        if self.timed_out():
+            return self.fail(f"not on the dock's axis after {self.number('timeout'):g} s")
+        if self.not_driving():
+            return self.fail(self.fallback_message())
+        if view.seen:
+            self._last_seen = snap.time
+            if view.side:
+                self._last_side = view.side
+                self._last_side_time = snap.time
+        elif snap.time - self._last_seen >= self.number("lost_after"):
+            return self.fail(f"lost the dock's beams for {self.number('lost_after'):g} s")
+        # near the dock its wall is always in sight of the light bumper: not a hazard here
+        hazard = hazard_in(frame, obstacles=False)
+        act = _ACTS
+        while True:
+            status = act[self.state](self, view, hazard)
+            if status is not None:
+                return status
+
+    # states ------------------------------------------------------------------------
+    def _face_state(self, view: DockView, hazard: Hazard | None) -> Status | None:
+        """Face the dock; then done (on the axis), or on toward it: closer, or across."""
+        if not self._face(view):
+            return RUNNING
+        if self._retreat:
+            return self._start_retreat()
+        if view.on_axis or self._centred:
+            # on the axis: the omni sees both buoys, or the last crossing measured both
+            # edges of the band and stopped the centre half-way (close to the dock the
+            # band at the omni is narrower than what a few degrees of heading move it)
+            return self.succeed()
+        if self._crossings >= self.MAX_CROSSINGS:
+            return self._start_retreat()
+        if not (view.omni.from_dock and view.omni.force_field):
+            self.state = ApproachState.CLOSER  # along the beams, into the force field first
+            self.mark_distance()
+            return None
+        side = view.side
+        if side == 0:
+            # force field only: the side last seen, if recent; else guesses that
+            # alternate (+1, -1, ...) until one leads into the buoys
+            now = self.snapshot.time
+            if self._last_side and now - self._last_side_time < SIDE_REMEMBERED_S:
+                side = self._last_side
+            else:
+                self._guesses += 1
+                side = 1 if self._guesses % 2 else -1
+                self._orbit = True  # a guess: circle the dock until a buoy is seen
+            self._side_guess = side
+        self._cross_side = side or 1
+        self._crossings += 1
+        self.state = ApproachState.TURN_AWAY
+        self._sweep = 1
+        self._centred = False
+        self.mark_turn()
+        return None
+
+    def _closer(self, view: DockView, hazard: Hazard | None) -> Status | None:
+        """Along the beams until the omni is in the force field (or on the axis)."""
+        if view.omni.from_dock and (view.omni.force_field or view.on_axis):
+            self._start_facing(1.0)
+            if view.on_axis and view.facing:
+                return self.succeed()
+            return RUNNING
+        if hazard is not None or self.travelled() > CLOSER_MAX_MM:
+            self._start_back()
+            return None
+        slow = self.number("speed") * CLOSER_SHARE
+        inner = slow * CLOSER_INNER_SHARE
+        if view.on_left:
+            self.wheels(inner, inner + CLOSER_STEER_MM_S)
+        elif view.on_right:
+            self.wheels(inner + CLOSER_STEER_MM_S, inner)
+        else:
+            self.wheels(slow, slow)
+        return RUNNING
+
+    def _turn_away(self, view: DockView, hazard: Hazard | None) -> Status | None:
+        """Turn ``cross_angle`` away from the dock, toward the axis; then cross (or orbit)."""
+        state = self._omni_state(view)
+        if state is not None:
+            self._sweep = state  # where the omni was last seen relative to the axis
+        if abs(self.turned()) < math.radians(self.number("cross_angle")):
+            w = TURN_AWAY_MM_S * self._cross_side
+            self.wheels(-w, w)
+            return RUNNING
+        snap = self.snapshot
+        self.state = ApproachState.ORBIT if self._orbit else ApproachState.CROSS
+        self._orbit = False
+        self._before_at = self._past_at = None
+        # turning swings the omni sideways: it may have swept over the axis already
+        self._band_seen = self._sweep <= 0
+        self._cross_path = snap.odometry.path_mm
+        self._last_seen = snap.time  # turning away may hide the beams for a while
+        self.mark_distance()
+        return None
+
+    def _retreat_state(self, view: DockView, hazard: Hazard | None) -> Status | None:
+        """Out of the force field while a buoy is still in sight, but never out of every
+        beam: that would leave the search to find the dock again."""
+        if hazard is not None or not view.omni.from_dock or self.travelled() > RETREAT_MAX_MM:
+            self._centred = False
+            self._start_facing(self._spin_dir)
+            self.halt()
+            return RUNNING
+        self.wheels(-RETREAT_MM_S, -RETREAT_MM_S)
+        return RUNNING
+
+    def _back(self, view: DockView, hazard: Hazard | None) -> Status | None:
+        if self.snapshot.time < self._back_until:
+            self.wheels(-BACK_MM_S, -BACK_MM_S)
+            return RUNNING
+        self._start_facing(self._spin_dir)
+        self.halt()
+        return RUNNING
+
+    def _start_back(self) -> None:
+        self.state = ApproachState.BACK
+        self._back_until = self.snapshot.time + BACK_S
+
+    def _start_retreat(self) -> Status:
+        """No progress: back straight away from the dock (it is ahead), then come in again
+        along the beams, so that the next crossing starts from the edge of the force field,
+        where the band around the axis is wider, instead of repeating the same moves."""
+        self._retreat = False
+        self._crossings = 0
+        self.state = ApproachState.RETREAT
+        self.mark_distance()
+        return RUNNING
+
+    def _omni_state(self, view: DockView) -> int | None:
+        """Where the omni receiver is relative to the axis, seen from the side the robot
+        set out from (``_cross_side``): 1 before it (the near buoy alone), 0 in the band
+        (both buoys), -1 past it (the far buoy alone), None when it sees no buoy."""
+        omni = view.omni
+        if not omni.from_dock or not (omni.red_buoy or omni.green_buoy):
+            return None
+        if omni.red_buoy and omni.green_buoy:
+            return 0
+        return 1 if (1 if omni.red_buoy else -1) == self._cross_side else -1
+
+    def _orbit_state(self, view: DockView, hazard: Hazard | None) -> Status | None:
+        """Circle the dock along the edge of its force field until the omni sees a buoy.
+
+        In the force field with no buoy in sight (outside the buoys' wedges) the side of
+        the axis is unknown. A straight line toward a guessed side is nearly a tangent
+        there: it left the field after a few tens of degrees around the dock, the next
+        guess went back the other way, and the robot shuttled between two points
+        without ever reaching a buoy. Keeping the omni on the field's edge (turn away
+        from the dock inside it, toward it outside) sweeps every bearing in the guessed
+        direction; a bump (the wall beside the dock) or 3.5 m without a buoy (half a circle
+        around a 1 m field) ends it, and the next guess circles the other way."""
+        if self._omni_state(view) is not None:
+            self._start_facing(-float(self._cross_side))  # a buoy: the side is known now
+            self.halt()
+            return RUNNING
+        if hazard is not None or self.snapshot.odometry.path_mm - self._cross_path > ORBIT_MAX_MM:
+            self._start_facing(-float(self._cross_side))
+            if hazard is not None:
+                self._start_back()
+                return None
+            self.halt()
+            return RUNNING
+        v = ORBIT_SHARE * self.number("speed")
+        # the dock is on the side opposite to the turn away (_cross_side +1: on the right);
+        # the wheel on the side to turn to runs slow
+        slow = ORBIT_INNER_SHARE * v
+        near, far = (v, slow) if view.omni.force_field else (slow, v)
+        if self._cross_side > 0:
+            self.wheels(far, near)
+        else:
+            self.wheels(near, far)
+        return RUNNING
+
+    def _cross(self, view: DockView, hazard: Hazard | None) -> Status | None:
+        """Move along the crossing line until the centre is on the dock's axis, then face it.
+
+        Only the omni receiver is read: it sits on the crossing line, ``OMNI_AHEAD_MM``
+        ahead of the centre. Along that line (``s``, the signed odometry distance) it sees
+        the near buoy alone ("before" the axis), both (the band around the axis), then the
+        far buoy alone ("past"). The axis is half-way between the last "before" and the
+        first "past", and the centre is there when the omni is ``OMNI_AHEAD_MM`` beyond it.
+        Close to the dock the band is a few centimetres wide and the omni is often past the
+        axis as soon as the robot has turned: then it backs up to find the near edge
+        instead of driving on (driving a fixed distance from wherever the omni first saw
+        the band overshot the axis by up to 12 cm, and the robot crossed back and forth
+        without ever landing in the band).
+        """
+        snap = self.snapshot
+        s = snap.odometry.distance_mm - self._distance_mark
+        self._note_band(self._omni_state(view), s)
+        path = snap.odometry.path_mm - self._cross_path
+        left_beams = not view.seen and snap.time - self._last_seen > LEFT_BEAMS_S
+        if hazard is not None or left_beams or path > CROSS_MAX_MM:
+            if view.side == 0:
+                self._last_side = 0  # whatever side was believed, it did not work
+            self._start_facing(-float(self._cross_side))
+            if hazard is not None and self._last_wheels[0] + self._last_wheels[1] > 0:
+                self._start_back()
+                return None
+            self.halt()
+            return RUNNING
+        speed = self.number("speed")
+        slow = FORCE_FIELD_SHARE if view.force_field else 1.0
+        before, past = self._before_at, self._past_at
+        if before is not None and past is not None:
+            err = (before + past) / 2.0 + OMNI_AHEAD_MM - s
+            if abs(err) < CENTRED_MM:
+                self._centred = True
+                self._start_facing(-float(self._cross_side))
+                self.halt()
+                return RUNNING
+            v = math.copysign(
+                max(CENTRE_MIN_MM_S, min(speed * slow, CENTRE_GAIN_PER_S * abs(err))), err
+            )
+        elif before is None and (past is not None or self._band_seen):
+            if s < -NEAR_EDGE_MAX_MM:  # no near buoy behind: give up this crossing, face again
+                self._start_facing(-float(self._cross_side))
+                self.halt()
+                return RUNNING
+            # the omni is already over the axis: back to its near edge
+            v = -NEAR_EDGE_SHARE * speed * slow
+        else:
+            v = speed * slow
+        self.wheels(v, v)
+        return RUNNING
+
+    def _note_band(self, state: int | None, s: float) -> None:
+        """Where (``s``, mm along the crossing) the omni saw the band and its two edges."""
+        if state == 0:
+            self._band_seen = True
+        elif state == 1:
+            self._before_at = s if self._before_at is None else max(self._before_at, s)
+        elif state == -1:
+            self._past_at = s if self._past_at is None else min(self._past_at, s)
+
+    # facing the dock ---------------------------------------------------------------
+    def _start_facing(self, spin_dir: float) -> None:
+        self.state = ApproachState.FACE
+        self._spin_dir = spin_dir
+        self._lead_theta: float | None = None
+        self._face_target: float | None = None
+        self.mark_turn()
+
+    def _face(self, view: DockView) -> bool:
+        """Turn to face the dock; True once facing it.
+
+        Spinning counter-clockwise, the dock passes from the left receiver to the right one
+        (clockwise: the other way round). Both at once: facing. At the edge of a beam the
+        two may never see it together: then the heading half-way between the last one seen
+        by the leading receiver and the first one by the trailing receiver is the dock's."""
+        theta = self.heading()
+        if self._face_target is not None:
+            return self._turn_to_target(view, theta, self._face_target)
+        if view.facing:
+            self.halt()
+            return True
+        left, right = view.left.from_dock, view.right.from_dock
+        lead, trail = (left, right) if self._spin_dir > 0 else (right, left)
+        if lead:
+            self._lead_theta = theta
+        if trail and not lead:
+            if self._lead_theta is None:
+                self._spin_dir = -self._spin_dir  # the dock is on the trailing side: go back
+                self.mark_turn()
+            else:
+                gap = math.remainder(theta - self._lead_theta, math.tau)
+                self._face_target = self._lead_theta + gap / 2.0
+                return False
+        if (
+            self._lead_theta is not None
+            and not (left or right)
+            and abs(math.remainder(theta - self._lead_theta, math.tau)) > FRINGE_RAD
+        ):
+            # seen at one heading only (the fringe of a beam): face that way and go closer
+            self._face_target = self._lead_theta
+            return False
+        if abs(self.turned()) > FACE_RESTART_RAD:
+            self._lead_theta = None
+            self.mark_turn()
+        w = FACE_SEEN_MM_S if (left or right) else FACE_SEARCH_MM_S
+        self.wheels(-w * self._spin_dir, w * self._spin_dir)
+        return False
+
+    def _turn_to_target(self, view: DockView, theta: float, target: float) -> bool:
+        """Turn in place to the computed heading ``target``; True once there (or facing
+        the dock on the way)."""
+        err = math.remainder(target - theta, math.tau)
+        if abs(err) < FACE_DONE_RAD or view.facing:
+            self.halt()
+            return True
+        w = FACE_FAST_MM_S if abs(err) > FACE_SLOW_WITHIN_RAD else FACE_SLOW_MM_S
+        self.spin_toward(err, w)
+        return False
+
+    state = ApproachState.FACE
+    _crossings = 0
+    _before_at: float | None = None
+    _past_at: float | None = None
+    _band_seen = False
+    _cross_path = 0.0
+    _orbit = False
+    _sweep = 1
+    _centred = False
+    _retreat = False
+    _run: object = None
+    _starts = 0
+    _lead_theta: float | None = None
+    _face_target: float | None = None
+    _cross_side = 1
+    _side_guess = 0
+    _last_side = 0
+    _last_side_time = 0.0
+    _guesses = 0
+    _spin_dir = 1.0
+    _last_seen = 0.0
+    _back_until = 0.0
+
+
+#: Each state's method (see the module's drawing).
+_ACTS: dict[ApproachState, Callable[[DockApproach, DockView, Hazard | None], Status | None]] = {
+    ApproachState.FACE: DockApproach._face_state,
+    ApproachState.CLOSER: DockApproach._closer,
+    ApproachState.TURN_AWAY: DockApproach._turn_away,
+    ApproachState.RETREAT: DockApproach._retreat_state,
+    ApproachState.ORBIT: DockApproach._orbit_state,
+    ApproachState.CROSS: DockApproach._cross,
+    ApproachState.BACK: DockApproach._back,
+}

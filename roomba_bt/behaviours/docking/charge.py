@@ -1,0 +1,89 @@
+"""``dock_wait_charge`` (charging confirmed) and ``dock_time_limit`` (the bound on a whole
+docking run, naming the stage that was running)."""
+
+from __future__ import annotations
+
+import py_trees
+from py_trees.common import Status
+
+from roomba_bt.behaviours.declare import Action, Param, declare
+from roomba_bt.behaviours.docking.common import (
+    FAILED,
+    OK,
+    RUN_KEY,
+    RUNNING,
+    STAGE_KEY,
+    current_stage,
+    note_stage,
+)
+from roomba_bt.behaviours.units import DURATION
+from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS, CHARGING_STATE_PACKETS
+
+
+@declare(
+    "dock_wait_charge",
+    kind="action",
+    params=(
+        Param("timeout", DURATION, default="10s", minimum=0.1,
+              doc="FAILURE if charging is not confirmed by then"),
+    ),
+    reads=(*CHARGING_STATE_PACKETS, *CHARGING_SOURCES_PACKETS),
+)  # fmt: skip
+class DockWaitCharge(Action):
+    """SUCCESS when charging is confirmed: packet 34's home-base bit AND a charging state
+    (reconditioning, full, trickle) in packet 21. The robot charges only in Passive: put a
+    ``mode: passive`` before this leaf."""
+
+    stage = "wait for charge"
+
+    def start(self) -> None:
+        note_stage(self.stage)
+        self._t0 = self.snapshot.time
+
+    def update(self) -> Status:
+        frame = self.snapshot.frame
+        home = frame.charging_sources.home_base
+        if home and frame.charging_state.is_charging:
+            return OK
+        if self.snapshot.time - self._t0 >= self.number("timeout") - 1e-9:
+            why = "charging state stays" if home else "the home base is not powering the robot;"
+            state = frame.charging_state.name.lower().replace("_", " ")
+            self.feedback_message = (
+                f"{self.stage}: {why} {state} after {self.number('timeout'):g} s"
+                if home
+                else f"{self.stage}: {why} charging state {state}"
+            )
+            return FAILED
+        return RUNNING
+
+    _t0 = 0.0
+
+
+@declare(
+    "dock_time_limit",
+    kind="action",
+    params=(Param("limit", DURATION, required=True, minimum=1,
+                  doc="give up after this much mission time"),),
+    primary="limit",
+)  # fmt: skip
+class DockTimeLimit(Action):
+    """RUNNING until ``limit`` has passed, then FAILURE: ``gave up after 300 s in stage
+    approach``. Run it in a ``parallel`` (policy ``one``) beside the docking stages."""
+
+    def start(self) -> None:
+        self._t0 = self.snapshot.time
+        storage = py_trees.blackboard.Blackboard.storage
+        storage.pop(STAGE_KEY, None)  # a new docking run
+        storage[RUN_KEY] = (id(self), self._t0)
+
+    def update(self) -> Status:
+        if self.snapshot.time - self._t0 >= self.number("limit") - 1e-9:
+            stage = current_stage() or "search"
+            self.feedback_message = (
+                f"{stage}: gave up after the time limit of {self.number('limit'):g} s "
+                f"(stage {stage} was running)"
+            )
+            return FAILED
+        return RUNNING
+
+    _t0 = 0.0

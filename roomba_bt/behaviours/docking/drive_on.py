@@ -1,0 +1,162 @@
+"""``dock_drive_on`` (final alignment): along the axis onto the charging contacts.
+
+Two states (:class:`DriveOnState`): DRIVE in along the axis until the bumper touches the
+dock's plate, then WIGGLE in place to seat the contacts. SUCCESS as soon as packet 34 shows
+the home base, in either.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+from py_trees.common import Status
+
+from roomba_bt.behaviours.declare import Param, declare
+from roomba_bt.behaviours.docking.common import (
+    DRIVE_SENDS,
+    RUNNING,
+    WHEEL_ARG,
+    DockingAction,
+    DockView,
+    StateEnum,
+)
+from roomba_bt.behaviours.units import ANGLE, DURATION, SPEED
+from roomba_bt.oi.frames import (
+    BUMPS_PACKETS,
+    CHARGING_SOURCES_PACKETS,
+    ENCODER_PACKETS,
+    IR_PACKETS,
+    SensorFrame,
+)
+
+#: FAILURE once no receiver has seen the dock for this long (s).
+LOST_BEAMS_S = 1.5
+#: One receiver alone sees the dock: the near wheel at STEER_SHARE of the speed, the far one
+#: STEER_MM_S faster; neither: both at SEARCH_SHARE.
+STEER_SHARE = 0.3
+STEER_MM_S = 50
+SEARCH_SHARE = 0.5
+#: Facing the dock with one buoy only: this share of the speed moves from wheel to wheel
+#: toward the axis.
+NUDGE_SHARE = 0.15
+#: WIGGLE: each turn ends within WIGGLE_DONE_RAD of its goal, at WIGGLE_MM_S, with
+#: WIGGLE_PUSH_MM_S forward on both wheels to keep the bumper on the plate.
+WIGGLE_DONE_RAD = math.radians(1.0)
+WIGGLE_MM_S = 30.0
+WIGGLE_PUSH_MM_S = 8.0
+
+
+class DriveOnState(StateEnum):
+    DRIVE = "drive"
+    WIGGLE = "wiggle"
+
+
+@declare(
+    "dock_drive_on",
+    kind="action",
+    params=(
+        Param("speed", SPEED, default="120 mm/s", minimum=20, maximum=WHEEL_ARG.maximum,
+              doc="speed along the axis outside the force field"),
+        Param("slow", SPEED, default="60 mm/s", minimum=10, maximum=WHEEL_ARG.maximum,
+              doc="speed inside the force field"),
+        Param("wiggle", ANGLE, default="12deg", minimum=0, maximum=45,
+              doc="how far it turns each way on contact to seat the charging contacts"),
+        Param("timeout", DURATION, default="45s", minimum=1,
+              doc="FAILURE if the home base is not reached by then"),
+    ),
+    reads=(*IR_PACKETS, *BUMPS_PACKETS, *CHARGING_SOURCES_PACKETS, *ENCODER_PACKETS),
+    sends=DRIVE_SENDS,
+)  # fmt: skip
+class DockDriveOn(DockingAction):
+    """Final alignment: drive onto the contacts along the axis (SUCCESS: packet 34 shows
+    the home base).
+
+    Steers to keep both directional receivers on the dock (one alone: turn toward it), nudges
+    toward the axis when only one buoy is seen, slows down in the force field. On contact
+    without the home-base bit it wiggles in place (``wiggle`` each way) to seat the
+    contacts; FAILURE if that does not make contact, so a recovery can back off and retry.
+    """
+
+    stage = "final alignment"
+
+    def start(self) -> None:
+        self.begin()
+        self.state = DriveOnState.DRIVE
+        self._last_seen = self.snapshot.time
+        self.mark_turn()
+
+    def update(self) -> Status:
+        snap = self.snapshot
+        frame = snap.frame
+        if frame.charging_sources.home_base:
+            return self.succeed()
+        if self.timed_out():
+            return self.fail(f"did not reach the contacts in {self.number('timeout'):g} s")
+        if self.not_driving():
+            return self.fail(self.fallback_message())
+        view = DockView.of(frame)
+        if view.seen:
+            self._last_seen = snap.time
+        elif snap.time - self._last_seen > LOST_BEAMS_S:
+            return self.fail("lost the dock's beams")
+        act = _ACTS
+        while True:
+            status = act[self.state](self, frame, view)
+            if status is not None:
+                return status
+
+    # states ------------------------------------------------------------------------
+    def _drive_state(self, frame: SensorFrame, view: DockView) -> Status | None:
+        """In along the axis until the bumper touches the plate; then wiggle."""
+        if not frame.any_bump:
+            return self._drive(view)
+        if not (view.red or view.green):
+            # the plate is in the buoys' beams: outside them, it is something else
+            return self.fail("bumped into something that is not the dock")
+        self.state = DriveOnState.WIGGLE
+        self._wiggle_step = 0
+        self.mark_turn()
+        return None
+
+    def _drive(self, view: DockView) -> Status:
+        """In along the axis, slow in the force field, steering toward the receiver that
+        sees the dock, nudging toward the axis when one buoy is seen."""
+        speed = self.number("slow") if view.force_field else self.number("speed")
+        if view.on_left:
+            self.wheels(speed * STEER_SHARE, speed * STEER_SHARE + STEER_MM_S)
+        elif view.on_right:
+            self.wheels(speed * STEER_SHARE + STEER_MM_S, speed * STEER_SHARE)
+        elif not view.facing:
+            self.wheels(speed * SEARCH_SHARE, speed * SEARCH_SHARE)
+        else:
+            nudge = NUDGE_SHARE * speed * view.side  # red only: axis on the left
+            self.wheels(speed - nudge, speed + nudge)
+        return RUNNING
+
+    def _wiggle(self, frame: SensorFrame, view: DockView) -> Status | None:
+        """In place: +wiggle, back through 0 to -wiggle, back to 0; FAILURE after that."""
+        w = math.radians(self.number("wiggle"))
+        targets = (w, -w, 0.0)
+        if self._wiggle_step >= len(targets):
+            return self.fail("touched the dock but the contacts did not engage")
+        goal = targets[self._wiggle_step]
+        err = goal - self.turned()
+        if abs(err) < WIGGLE_DONE_RAD:
+            self._wiggle_step += 1
+            self.halt()
+            return RUNNING
+        spin = WIGGLE_MM_S if err > 0 else -WIGGLE_MM_S
+        self.wheels(-spin + WIGGLE_PUSH_MM_S, spin + WIGGLE_PUSH_MM_S)
+        return RUNNING
+
+    state = DriveOnState.DRIVE
+    _wiggle_step = 0
+    _last_seen = 0.0
+
+
+#: Each state's method.
+_ACTS: dict[DriveOnState, Callable[[DockDriveOn, SensorFrame, DockView], Status | None]] = {
+    DriveOnState.DRIVE: DockDriveOn._drive_state,
+    DriveOnState.WIGGLE: DockDriveOn._wiggle,
+}

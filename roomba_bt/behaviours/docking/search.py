@@ -1,0 +1,451 @@
+"""``dock_search``: spin once, then wander toward unexplored space and follow walls until a
+dock beam is seen.
+
+The search is a state machine (:class:`SearchState`)::
+
+    SPIN ──> TURN ──> FORWARD ──(leg done)──> TURN
+               ^         │ obstacle ahead (wanting a wall)
+               │         v
+               ├───── FOLLOW ──(bump)──> BACK ──> UNWEDGE ──> FOLLOW
+               │                          │
+               └────── (bump, cliff) ─────┘
+
+A state's method returns the tick's status, or None after handing over to the next state,
+which then acts in the same tick (every such hand-over goes down the list above:
+SPIN, FOLLOW, BACK, UNWEDGE, TURN, FORWARD).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from collections.abc import Callable
+
+from py_trees.common import Status
+
+from roomba_bt.behaviours.declare import Param, declare
+from roomba_bt.behaviours.docking.common import (
+    DRIVE_SENDS,
+    RUNNING,
+    WHEEL_ARG,
+    DockingAction,
+    DockView,
+    Hazard,
+    StateEnum,
+    hazard_in,
+)
+from roomba_bt.behaviours.units import BOOL, DISTANCE, DURATION, SPEED, enum
+from roomba_bt.oi.frames import (
+    ENCODER_PACKETS,
+    HAZARD_PACKETS,
+    IR_PACKETS,
+    LIGHT_BUMP_SIGNAL_PACKETS,
+    LIGHT_BUMPER_PACKETS,
+    VIRTUAL_WALL_PACKETS,
+    SensorFrame,
+)
+from roomba_bt.robot.interface import Odometry
+
+# The visit grid (odometry frame) and how a heading is chosen on it.
+#: side of a grid cell (mm)
+CELL_MM = 400.0
+#: headings tried, evenly round the circle
+HEADINGS = 12
+#: cells scored along a heading (the next 1.6 m)
+LOOKAHEAD_CELLS = 4
+#: weight a cell gains per tick the robot is in it, and where a hazard was met ahead of it
+TICK_VISIT_WEIGHT = 1.0
+CLIFF_VISIT_WEIGHT = 400.0
+HAZARD_VISIT_WEIGHT = 150.0
+#: where a hazard is marked: this far ahead of the centre (mm)
+HAZARD_AHEAD_MM = 250.0
+#: hazards remembered (the oldest are forgotten)
+HAZARDS_KEPT = 200
+#: a hazard counts against a heading it lies along, up to this far ahead (mm) and this close
+#: to the line (mm); its penalty fades with the distance ahead (halved at HAZARD_FADE_MM)
+HAZARD_SCORE_AHEAD_MM = 900.0
+HAZARD_SCORE_BESIDE_MM = 300.0
+HAZARD_PENALTY = 500.0
+HAZARD_FADE_MM = 300.0
+#: headings closer than this (rad) to the one an obstacle was just met at are not taken
+AVOID_WITHIN_RAD = 1.4
+#: among equal scores, a smaller turn wins (score per radian of turn)
+TURN_PENALTY_PER_RAD = 0.05
+
+# Moving.
+#: turning in place: the first full turn, toward a chosen heading (fast, then slow within
+#: TURN_SLOW_WITHIN_RAD), done within TURN_DONE_RAD; wheel speeds in mm/s
+SPIN_MM_S = 180
+TURN_FAST_MM_S = 160.0
+TURN_SLOW_MM_S = 60.0
+TURN_SLOW_WITHIN_RAD = math.radians(20)
+TURN_DONE_RAD = math.radians(4)
+#: facing the chosen heading with something still ahead: try this much further round
+BLOCKED_NUDGE_RAD = math.radians(20)
+#: holding the heading on a leg: mm/s of wheel difference per radian off, and at most
+STEER_MM_S_PER_RAD = 200.0
+STEER_LIMIT_MM_S = 40.0
+#: backing off a hazard (mm/s), for BACK_OFF_CLIFF_S after a cliff, else BACK_OFF_S
+BACK_MM_S = 150
+BACK_OFF_CLIFF_S = 0.8
+BACK_OFF_S = 0.4
+#: an obstacle ahead is taken as a wall to follow after this much floor crossed (mm)
+CROSSED_BEFORE_WALL_MM = 500.0
+
+# Following a wall (light-bumper signals 0..4095).
+#: speed cap while following (mm/s)
+FOLLOW_MAX_MM_S = 300.0
+#: the wall is kept at this signal on the side sensor (half of it on the front-side one)
+WALL_SIGNAL = 500
+#: mm/s of wheel difference per unit of signal error, at most this share of the speed
+WALL_GAIN_MM_S = 0.12
+WALL_STEER_SHARE = 0.6
+#: a centre signal above this is a wall ahead: turn in place away from the wall side
+WALL_AHEAD_SIGNAL = 300
+FOLLOW_TURN_MM_S = 120
+#: no signal: arc toward the wall side, the inner wheel at this share of the speed
+CORNER_INNER_SHARE = 0.35
+#: the wall counts as lost after this much path without a signal (more than the arc around
+#: the end of a wall at a door)
+WALL_LOST_MM = 1100.0
+#: a follow ends once this many cells in a row were followed before (an island), after at
+#: least FOLLOW_MIN_MM of it
+OLD_CELLS_LIMIT = 4
+FOLLOW_MIN_MM = 1000.0
+#: a bump while following: back off, turn this far away from the wall (at UNWEDGE_MM_S),
+#: follow on; after FOLLOW_BUMPS bumps on one wall it is left for a crossing of the room
+UNWEDGE_TURN_RAD = math.radians(30)
+UNWEDGE_MM_S = 120
+FOLLOW_BUMPS = 6
+
+Cell = tuple[int, int]
+
+
+class SearchState(StateEnum):
+    SPIN = "spin"
+    FOLLOW = "follow"
+    BACK = "back"
+    UNWEDGE = "unwedge"
+    TURN = "turn"
+    FORWARD = "forward"
+
+
+class VisitGrid:
+    """Where the search has been (a coarse grid in the odometry frame), where it met hazards,
+    and which cells it passed while following walls; kept for the leaf's life, so a retry
+    after a cliff goes on where the last attempt left off."""
+
+    def __init__(self) -> None:
+        self.visits: dict[Cell, float] = {}
+        self.followed: set[Cell] = set()
+        self.hazards: deque[tuple[float, float]] = deque(maxlen=HAZARDS_KEPT)
+
+    @staticmethod
+    def cell(x: float, y: float) -> Cell:
+        return (math.floor(x / CELL_MM), math.floor(y / CELL_MM))
+
+    def visit(self, x: float, y: float, weight: float) -> None:
+        cell = self.cell(x, y)
+        self.visits[cell] = self.visits.get(cell, 0.0) + weight
+
+    def choose_heading(self, odo: Odometry, avoid: float | None) -> float:
+        """The heading toward the least visited space that does not lead straight back into
+        an obstacle met before (``avoid``: the heading it was met at)."""
+        best, best_score = odo.theta_rad, math.inf
+        for i in range(HEADINGS):
+            angle = odo.theta_rad + math.pi * 2 * i / HEADINGS
+            turn = math.remainder(angle - odo.theta_rad, math.tau)
+            if (
+                avoid is not None
+                and abs(math.remainder(angle - avoid, math.tau)) < AVOID_WITHIN_RAD
+            ):
+                continue
+            ca, sa = math.cos(angle), math.sin(angle)
+            score = 0.0
+            for step in range(1, LOOKAHEAD_CELLS + 1):
+                d = step * CELL_MM
+                score += (
+                    self.visits.get(self.cell(odo.x_mm + d * ca, odo.y_mm + d * sa), 0.0) / step
+                )
+            for hx, hy in self.hazards:
+                dx, dy = hx - odo.x_mm, hy - odo.y_mm
+                along = dx * ca + dy * sa
+                if (
+                    0.0 < along < HAZARD_SCORE_AHEAD_MM
+                    and abs(dy * ca - dx * sa) < HAZARD_SCORE_BESIDE_MM
+                ):
+                    score += HAZARD_PENALTY / (1.0 + along / HAZARD_FADE_MM)
+            score += TURN_PENALTY_PER_RAD * abs(turn)
+            if score < best_score:
+                best, best_score = angle, score
+        return best
+
+
+@declare(
+    "dock_search",
+    kind="action",
+    params=(
+        Param("speed", SPEED, default="200 mm/s", minimum=50, maximum=WHEEL_ARG.maximum,
+              doc="forward speed while wandering"),
+        Param("spin_first", BOOL, default=True, doc="turn once in place before wandering"),
+        Param("leg", DISTANCE, default="2 m", minimum=200,
+              doc="longest straight leg before choosing a new heading"),
+        Param("follow", DISTANCE, default="4 m", minimum=0,
+              doc="how far it follows a wall before crossing the room"),
+        Param("wall_side", enum("right", "left"), default="right", from_blackboard=False,
+              doc="which side walls are kept on while following them (always the same: "
+                  "a one-handed follower goes round a room and through its doors)"),
+        Param("timeout", DURATION, default="5min", minimum=1,
+              doc="FAILURE if no dock beam is seen by then"),
+    ),
+    reads=(*IR_PACKETS, *HAZARD_PACKETS, *VIRTUAL_WALL_PACKETS, *LIGHT_BUMPER_PACKETS,
+           *LIGHT_BUMP_SIGNAL_PACKETS, *ENCODER_PACKETS),
+    sends=DRIVE_SENDS,
+)  # fmt: skip
+class DockSearch(DockingAction):
+    """Search for the dock's beams: spin once, then wander toward unexplored space.
+
+    SUCCESS (wheels halted) as soon as any receiver sees a dock character. Wandering drives
+    straight legs toward the heading whose next 1.6 m crosses the least visited cells of a
+    0.4 m grid kept in the odometry frame (headings toward obstacles met before are
+    penalised). A wall met on the way is followed (docks stand against walls), always on
+    the same side (``wall_side``): a one-handed follower goes round a room and, at a door,
+    round the end of the wall into the next room, where alternating hands sent it back the
+    way it came. It follows for up to ``follow`` or until the wall leads through cells followed
+    before (an island: a bed, a table). A bump while following backs off, turns 30 deg away
+    from the wall and follows on; after six bumps on one wall it crosses the room instead.
+    Bumps, cliffs and virtual walls met while crossing make it back off and choose again;
+    the spin happens once per leaf, not again when a retry restarts it after a cliff.
+    """
+
+    stage = "search"
+
+    def __init__(self, name: str, params: dict[str, object] | None = None) -> None:
+        super().__init__(name, params)
+        self.grid = VisitGrid()
+
+    def start(self) -> None:
+        self.begin()
+        # spin once per search, not again on every retry after a cliff
+        spin = self.value("spin_first") and not self._spun
+        self._spun = True
+        self.state = SearchState.SPIN if spin else SearchState.FORWARD
+        self.mark_turn()
+        self.mark_distance()
+        self._target = self.heading()
+        self._back_until = 0.0
+        self._want_wall = True
+
+    def update(self) -> Status:
+        snap = self.snapshot
+        frame = snap.frame
+        if DockView.of(frame).seen:
+            return self.succeed()
+        if self.timed_out():
+            return self.fail(f"no dock beam seen in {self.number('timeout'):g} s")
+        odo = snap.odometry
+        self.grid.visit(odo.x_mm, odo.y_mm, TICK_VISIT_WEIGHT)
+        hazard = hazard_in(frame)
+        if hazard is not None:
+            state = self.state
+            if state is SearchState.FORWARD or (
+                state is SearchState.FOLLOW and hazard is not Hazard.OBSTACLE
+            ):
+                self._meet(hazard, odo, snap.time)
+        if self.not_driving():
+            # a cliff or wheel drop in Safe mode: remembered above, so the retry avoids it
+            return self.fail(self.fallback_message())
+        act = _ACTS
+        while True:
+            status = act[self.state](self, frame)
+            if status is not None:
+                return status
+
+    def _meet(self, hazard: Hazard, odo: Odometry, now: float) -> None:
+        """A hazard met while moving on: mark it ahead on the grid; an obstacle ahead while
+        wanting a wall starts following it, anything else backs off."""
+        hx = odo.x_mm + HAZARD_AHEAD_MM * math.cos(odo.theta_rad)
+        hy = odo.y_mm + HAZARD_AHEAD_MM * math.sin(odo.theta_rad)
+        cliff = hazard is Hazard.CLIFF
+        self.grid.visit(hx, hy, CLIFF_VISIT_WEIGHT if cliff else HAZARD_VISIT_WEIGHT)
+        self.grid.hazards.append((hx, hy))
+        if (
+            hazard is Hazard.OBSTACLE
+            and self.state is SearchState.FORWARD
+            and (self._want_wall or self.travelled() > CROSSED_BEFORE_WALL_MM)
+        ):
+            self._start_follow()  # found a wall to follow (after crossing some floor)
+            return
+        # a bump while following (a door jamb, a chair leg) is part of the same wall:
+        # back off and follow on with the same hand
+        self._resume_follow = self.state is SearchState.FOLLOW and hazard is Hazard.BUMP
+        self.state = SearchState.BACK
+        self._back_until = now + (BACK_OFF_CLIFF_S if cliff else BACK_OFF_S)
+        self._avoid = odo.theta_rad
+        if cliff:
+            self._want_wall = False  # a drop is no wall: wander away from it
+
+    # states ------------------------------------------------------------------------
+    def _spin(self, frame: SensorFrame) -> Status | None:
+        if abs(self.turned()) < math.tau:
+            self.wheels(-SPIN_MM_S, SPIN_MM_S)
+            return RUNNING
+        self._target = self.grid.choose_heading(self.snapshot.odometry, None)
+        self.state = SearchState.TURN
+        return None
+
+    def _follow(self, frame: SensorFrame) -> Status | None:
+        if (
+            self.travelled() < self.number("follow")
+            and not self._follow_lost
+            and self._follow_is_new()
+        ):
+            self._keep_wall(frame)
+            return RUNNING
+        self._want_wall = False  # followed far enough: cross the room
+        odo = self.snapshot.odometry
+        self._target = self.grid.choose_heading(
+            odo, odo.theta_rad - self._follow_side * math.pi / 2
+        )
+        self.state = SearchState.TURN
+        return None
+
+    def _back(self, frame: SensorFrame) -> Status | None:
+        if self.snapshot.time < self._back_until:
+            self.wheels(-BACK_MM_S, -BACK_MM_S)
+            return RUNNING
+        if self._resume_follow:
+            # turn away from the wall side, then follow on with the same hand; a wall
+            # that keeps bumping (a corner too tight for the robot) is given up
+            self._resume_follow = False
+            self._follow_bumps += 1
+            if self._follow_bumps <= FOLLOW_BUMPS:
+                self.state = SearchState.UNWEDGE
+                self.mark_turn()
+                self._wall_seen_at = None
+                return None
+            self._want_wall = False  # cross the room instead
+        if self._want_wall and frame.light_bumper.any and not frame.any_bump:
+            self._start_follow()
+            return RUNNING
+        self._target = self.grid.choose_heading(self.snapshot.odometry, self._avoid)
+        self.state = SearchState.TURN
+        return None
+
+    def _unwedge(self, frame: SensorFrame) -> Status | None:
+        if abs(self.turned()) < UNWEDGE_TURN_RAD:
+            hand = self._follow_side
+            self.wheels(-UNWEDGE_MM_S * hand, UNWEDGE_MM_S * hand)
+            return RUNNING
+        self.state = SearchState.FOLLOW
+        return RUNNING
+
+    def _turn(self, frame: SensorFrame) -> Status | None:
+        err = math.remainder(self._target - self.snapshot.odometry.theta_rad, math.tau)
+        if abs(err) < TURN_DONE_RAD and frame.light_bumper_ahead:
+            # still blocked: aim further round, and drive the leg's step this tick
+            self._target += math.copysign(BLOCKED_NUDGE_RAD, err or 1.0)
+            return self._forward(frame)
+        if abs(err) < TURN_DONE_RAD:
+            self.state = SearchState.FORWARD
+            self.mark_distance()
+            return None
+        w = TURN_FAST_MM_S if abs(err) > TURN_SLOW_WITHIN_RAD else TURN_SLOW_MM_S
+        self.spin_toward(err, w)
+        return RUNNING
+
+    def _forward(self, frame: SensorFrame) -> Status | None:
+        """A straight leg toward unexplored space, then look for a wall again."""
+        odo = self.snapshot.odometry
+        if self.travelled() >= self.number("leg"):
+            self._want_wall = True
+            self._target = self.grid.choose_heading(odo, None)
+            self.state = SearchState.TURN
+            self.mark_distance()
+            return RUNNING
+        speed = self.number("speed")
+        err = math.remainder(self._target - odo.theta_rad, math.tau)
+        turn = max(-STEER_LIMIT_MM_S, min(STEER_LIMIT_MM_S, STEER_MM_S_PER_RAD * err))
+        self.wheels(speed - turn, speed + turn)
+        return RUNNING
+
+    # wall following ----------------------------------------------------------------
+    def _start_follow(self) -> None:
+        self.state = SearchState.FOLLOW
+        self._wall_seen_at = None
+        self._follow_lost = False
+        self._follow_side = 1 if self.value("wall_side") == "right" else -1
+        self._follow_cells: set[Cell] = set()
+        self._old_cells = 0
+        self._follow_bumps = 0
+        self.mark_distance()
+
+    def _follow_is_new(self) -> bool:
+        """False once the wall leads through cells visited before this follow (it has been
+        followed already): time to cross the room instead."""
+        odo = self.snapshot.odometry
+        cell = self.grid.cell(odo.x_mm, odo.y_mm)
+        if cell not in self._follow_cells:
+            self._follow_cells.add(cell)
+            # followed before (not merely crossed): this wall, or this island, is done
+            seen_before = cell in self.grid.followed
+            self.grid.followed.add(cell)
+            self._old_cells = self._old_cells + 1 if seen_before else 0
+        return self._old_cells < OLD_CELLS_LIMIT or self.travelled() < FOLLOW_MIN_MM
+
+    def _keep_wall(self, frame: SensorFrame) -> None:
+        """Keep a wall on one side (``_follow_side``: +1 right, -1 left) at a steady
+        light-bumper signal: right / front-right, or left / front-left; the centre pair for
+        a wall ahead (turn away from it in place)."""
+        speed = min(self.number("speed"), FOLLOW_MAX_MM_S)
+        hand = self._follow_side
+        front = max(frame.light_bump_center_left_signal, frame.light_bump_center_right_signal)
+        if hand > 0:
+            side, front_side = frame.light_bump_right_signal, frame.light_bump_front_right_signal
+        else:
+            side, front_side = frame.light_bump_left_signal, frame.light_bump_front_left_signal
+        if front > WALL_AHEAD_SIGNAL or frame.any_bump:
+            # wall ahead: turn away from the wall side
+            self.wheels(-FOLLOW_TURN_MM_S * hand, FOLLOW_TURN_MM_S * hand)
+        elif side == 0 and front_side == 0:
+            # lost it (an outside corner, or the end of a wall at a door): arc toward the
+            # wall side; rounding a jamb takes about 0.9 m of path without a signal
+            if hand > 0:
+                self.wheels(speed, speed * CORNER_INNER_SHARE)
+            else:
+                self.wheels(speed * CORNER_INNER_SHARE, speed)
+            path = self.snapshot.odometry.path_mm
+            if self._wall_seen_at is None:
+                self._wall_seen_at = path
+            elif path - self._wall_seen_at > WALL_LOST_MM:
+                self._follow_lost = True  # no wall there after all
+        else:
+            self._wall_seen_at = None
+            error = WALL_SIGNAL - max(side, front_side // 2)
+            limit = speed * WALL_STEER_SHARE
+            turn = hand * max(-limit, min(limit, WALL_GAIN_MM_S * error))
+            self.wheels(speed + turn, speed - turn)
+
+    state = SearchState.SPIN
+    _spun = False
+    _want_wall = True
+    _avoid = 0.0
+    _target = 0.0
+    _back_until = 0.0
+    _wall_seen_at: float | None = None
+    _follow_lost = False
+    _resume_follow = False
+    _follow_bumps = 0
+    _follow_side = 1  # +1: the wall on the right
+    _old_cells = 0
+
+
+#: Each state's method (see the module's drawing).
+_ACTS: dict[SearchState, Callable[[DockSearch, SensorFrame], Status | None]] = {
+    SearchState.SPIN: DockSearch._spin,
+    SearchState.FOLLOW: DockSearch._follow,
+    SearchState.BACK: DockSearch._back,
+    SearchState.UNWEDGE: DockSearch._unwedge,
+    SearchState.TURN: DockSearch._turn,
+    SearchState.FORWARD: DockSearch._forward,
+}
