@@ -31,7 +31,7 @@ from roomba_bt.behaviours.docking.common import (
     DockingAction,
     DockView,
     Hazard,
-    StateEnum,
+    IdentityEnum,
     hazard_in,
 )
 from roomba_bt.behaviours.units import ANGLE, DURATION, SPEED
@@ -95,7 +95,7 @@ FRINGE_RAD = math.radians(60.0)
 FACE_RESTART_RAD = math.radians(540.0)
 
 
-class ApproachState(StateEnum):
+class ApproachState(IdentityEnum):
     FACE = "face"
     CLOSER = "closer"
     TURN_AWAY = "turn_away"

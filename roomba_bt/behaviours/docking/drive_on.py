@@ -19,7 +19,7 @@ from roomba_bt.behaviours.docking.common import (
     WHEEL_ARG,
     DockingAction,
     DockView,
-    StateEnum,
+    IdentityEnum,
 )
 from roomba_bt.behaviours.units import ANGLE, DURATION, SPEED
 from roomba_bt.oi.frames import (
@@ -47,7 +47,7 @@ WIGGLE_MM_S = 30.0
 WIGGLE_PUSH_MM_S = 8.0
 
 
-class DriveOnState(StateEnum):
+class DriveOnState(IdentityEnum):
     DRIVE = "drive"
     WIGGLE = "wiggle"
 

@@ -31,7 +31,7 @@ from roomba_bt.behaviours.docking.common import (
     DockingAction,
     DockView,
     Hazard,
-    StateEnum,
+    IdentityEnum,
     hazard_in,
 )
 from roomba_bt.behaviours.units import BOOL, DISTANCE, DURATION, SPEED, enum
@@ -121,13 +121,21 @@ FOLLOW_BUMPS = 6
 Cell = tuple[int, int]
 
 
-class SearchState(StateEnum):
+class SearchState(IdentityEnum):
     SPIN = "spin"
     FOLLOW = "follow"
     BACK = "back"
     UNWEDGE = "unwedge"
     TURN = "turn"
     FORWARD = "forward"
+
+
+#: The hazards each state stops for (backs off, or follows what is ahead): on a leg, any;
+#: along a wall, all but an obstacle ahead (the wall itself); turning or backing off, none.
+STOPS_FOR: dict[SearchState, frozenset[Hazard]] = {
+    SearchState.FORWARD: frozenset(Hazard),
+    SearchState.FOLLOW: frozenset(Hazard) - {Hazard.OBSTACLE},
+}
 
 
 class VisitGrid:
@@ -246,12 +254,8 @@ class DockSearch(DockingAction):
         odo = snap.odometry
         self.grid.visit(odo.x_mm, odo.y_mm, TICK_VISIT_WEIGHT)
         hazard = hazard_in(frame)
-        if hazard is not None:
-            state = self.state
-            if state is SearchState.FORWARD or (
-                state is SearchState.FOLLOW and hazard is not Hazard.OBSTACLE
-            ):
-                self._meet(hazard, odo, snap.time)
+        if hazard is not None and hazard in STOPS_FOR.get(self.state, ()):
+            self._meet(hazard, odo, snap.time)
         if self.not_driving():
             # a cliff or wheel drop in Safe mode: remembered above, so the retry avoids it
             return self.fail(self.fallback_message())
@@ -399,11 +403,10 @@ class DockSearch(DockingAction):
         a wall ahead (turn away from it in place)."""
         speed = min(self.number("speed"), FOLLOW_MAX_MM_S)
         hand = self._follow_side
-        front = max(frame.light_bump_center_left_signal, frame.light_bump_center_right_signal)
-        if hand > 0:
-            side, front_side = frame.light_bump_right_signal, frame.light_bump_front_right_signal
-        else:
-            side, front_side = frame.light_bump_left_signal, frame.light_bump_front_left_signal
+        # all six signals in one accessor (read every tick of a follow)
+        left, front_left, centre_left, centre_right, front_right, right = frame.light_bump_signals
+        front = max(centre_left, centre_right)
+        side, front_side = (right, front_right) if hand > 0 else (left, front_left)
         if front > WALL_AHEAD_SIGNAL or frame.any_bump:
             # wall ahead: turn away from the wall side
             self.wheels(-FOLLOW_TURN_MM_S * hand, FOLLOW_TURN_MM_S * hand)
