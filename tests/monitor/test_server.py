@@ -208,20 +208,23 @@ def test_several_pages_watch_one_run() -> None:
         connection, mission, profile=CREATE2, packets=packets, timeout_s=20.0, gate=session
     )
 
-    async def page(received: list[dict[str, Any]]) -> None:
+    connected = [threading.Event(), threading.Event()]
+
+    async def page(received: list[dict[str, Any]], which: int) -> None:
         async with (
             aiohttp.ClientSession() as client,
             client.ws_connect(f"ws://127.0.0.1:{server.port}/ws") as ws,
         ):
             async for message in ws:
                 received.append(json.loads(message.data))
+                connected[which].set()
                 if any("state" in m for m in received) and len(received) >= 3:
                     return
 
     async def two_pages() -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
         first: list[dict[str, Any]] = []
         second: list[dict[str, Any]] = []
-        await asyncio.wait_for(asyncio.gather(page(first), page(second)), 60)
+        await asyncio.wait_for(asyncio.gather(page(first, 0), page(second, 1)), 60)
         return first, second
 
     thread = threading.Thread(target=runner.run, daemon=True)
@@ -229,13 +232,17 @@ def test_several_pages_watch_one_run() -> None:
     # the pages' event loop in a thread of its own: the browser tests' driver may own this one
     watcher = threading.Thread(target=lambda: pages.append(asyncio.run(two_pages())))
     try:
-        thread.start()
+        # both pages connected (their hello received) before the run starts: on the virtual
+        # clock the whole run may otherwise end before a page has seen one of its ticks
         watcher.start()
+        assert all(event.wait(30) for event in connected), "a page never connected"
+        thread.start()
         watcher.join(90)
         first, second = pages[0]
     finally:
         session.request("stop")
-        thread.join(30)
+        if thread.ident is not None:  # started
+            thread.join(30)
         server.close()
     for received in (first, second):
         assert received[0]["type"] == "hello"
