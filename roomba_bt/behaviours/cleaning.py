@@ -86,6 +86,23 @@ def _wrap(angle: float) -> float:
     return math.remainder(angle, math.tau)
 
 
+def _held(action: Action) -> Status | None:
+    """Why a driving leaf cannot drive this tick: a wheel drop fails it; out of Safe/Full it
+    waits, and fails once stranded there after it began to move. None: it may drive."""
+    snap = action.snapshot
+    if snap.frame.any_wheel_drop:
+        action.feedback_message = "wheel drop"
+        return _FAIL
+    if snap.mode not in DRIVING_MODES:
+        stranded = action.stranded() if action._started_motion else None
+        if stranded is not None:
+            action._started_motion = False
+            action.feedback_message = stranded
+            return _FAIL
+        return _RUN
+    return None
+
+
 # --------------------------------------------------------------------------- spiral
 
 
@@ -119,18 +136,11 @@ class Spiral(Action):
         self._start_angle = self.snapshot.odometry.angle_rad
 
     def update(self) -> Status:
+        held = _held(self)
+        if held is not None:
+            return held
         snap = self.snapshot
         frame = snap.frame
-        if frame.any_wheel_drop:
-            self.feedback_message = "wheel drop"
-            return _FAIL
-        if snap.mode not in DRIVING_MODES:
-            stranded = self.stranded() if self._started_motion else None
-            if stranded is not None:
-                self._started_motion = False
-                self.feedback_message = stranded
-                return _FAIL
-            return _RUN
         turned = abs(snap.odometry.angle_rad - self._start_angle)
         radius = self.number("start_radius") + self.number("spacing") * turned / math.tau
         why = _blocked(frame) or ("wall ahead" if _near(frame) else None)
@@ -229,18 +239,11 @@ class Lanes(Action):
         return speed - turn, speed + turn
 
     def update(self) -> Status:
+        held = _held(self)
+        if held is not None:
+            return held
         snap = self.snapshot
         frame = snap.frame
-        if frame.any_wheel_drop:
-            self.feedback_message = "wheel drop"
-            return _FAIL
-        if snap.mode not in DRIVING_MODES:
-            stranded = self.stranded() if self._started_motion else None
-            if stranded is not None:
-                self._started_motion = False
-                self.feedback_message = stranded
-                return _FAIL
-            return _RUN
         wheels = self._wheel_speeds(frame)
         if wheels is None:
             self.send(oi.halt())
