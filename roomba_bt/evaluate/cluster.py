@@ -79,6 +79,9 @@ def dask_client(scheduler: str | None = None, workers: int = 2) -> Iterator[Any]
             threads_per_worker=1,
             processes=True,
             dashboard_address=None,
+            # the scheduler's HTTP server (health routes) would take port 8787 even with no
+            # dashboard, and two evaluations at once would collide: any free port
+            scheduler_kwargs={"dashboard": False, "dashboard_address": ":0"},
             silence_logs=40,  # logging.ERROR: no worker chatter over the progress bar
         ) as cluster,
         distributed.Client(cluster) as client,

@@ -126,3 +126,21 @@ def test_an_unreachable_scheduler_exits_3(capsys: pytest.CaptureFixture[str]) ->
                  "--scheduler", f"tcp://127.0.0.1:{port}"])  # fmt: skip
     assert code == 3
     assert f"--scheduler tcp://127.0.0.1:{port}: cannot connect" in capsys.readouterr().err
+
+
+def test_a_local_cluster_takes_no_fixed_port() -> None:
+    """Two evaluations at once (two suites, two users) each start a local cluster: the
+    scheduler's HTTP server must not take Dask's default port 8787, or the second one warns
+    "Port 8787 is already in use" (an error under this suite's warning filter)."""
+    with socket.socket() as held:
+        held.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            held.bind(("127.0.0.1", 8787))
+            held.listen()
+        except OSError:
+            pass  # someone else already holds it: the same situation
+        with dask_client(workers=1) as client:
+            scheduler = client.cluster.scheduler
+            assert scheduler.http_server is not None
+            ports = {s.getsockname()[1] for s in scheduler.http_server._sockets.values()}
+            assert 8787 not in ports
