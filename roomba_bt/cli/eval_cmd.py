@@ -302,26 +302,28 @@ def eval_command(args: argparse.Namespace) -> int:
             write_results(args.out, [r for e in done for r in e.results])
         except OSError as exc:
             return _error(f"--out {args.out}: {exc.strerror or exc}")
+    from roomba_bt.evaluate.coverage import summarize_coverage
+
     if args.json:
         import json
 
+        coverages = [summarize_coverage(e.results) for e in done]
         print(json.dumps({
             "engine": engine.describe(),
             "retried": retried,
             "interrupted": interrupted,
-            "variants": [{"label": v.label, "params": dict(v.params), **s.to_dict()}
-                         for v, s in zip(chosen, summaries, strict=True)],
+            "variants": [{"label": v.label, "params": dict(v.params), **s.to_dict(),
+                          "coverage": c.to_dict() if c is not None else None}
+                         for v, s, c in zip(chosen, summaries, coverages, strict=True)],
             "comparisons": [c.to_dict() for c in comparisons],
         }, indent=2))  # fmt: skip
     else:
-        from roomba_bt.evaluate.coverage import summarize_coverage
-
         for v, s, e in zip(chosen, summaries, done, strict=True):
             if len(chosen) > 1:
                 print(f"variant      {v.label}")
             print(s)
             coverage = summarize_coverage(e.results)
-            if coverage is not None and not args.json:
+            if coverage is not None:
                 print(coverage)
             print()
         for c in comparisons:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import statistics
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 from roomba_bt.evaluate.episode import EpisodeResult
 
@@ -33,6 +34,9 @@ class Spread:
     def of(cls, values: Sequence[float]) -> Spread:
         sd = statistics.stdev(values) if len(values) > 1 else 0.0
         return cls(statistics.fmean(values), sd, min(values), max(values))
+
+    def to_dict(self) -> dict[str, float]:
+        return {"mean": self.mean, "sd": self.sd, "min": self.low, "max": self.high}
 
     def __str__(self) -> str:
         return (
@@ -65,6 +69,18 @@ class CoverageSummary:
             f"brush time without new floor (longest {self.longest_idle_s:.0f} s)"
         )
         return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain data for ``eval --json`` (fractions 0..1, times in s)."""
+        return {
+            "area": self.area,
+            "episodes": self.episodes,
+            "at": [{"time_s": t, **spread.to_dict()} for t, spread in self.at],
+            "final": self.final.to_dict(),
+            "by_area": {name: spread.to_dict() for name, spread in self.by_area},
+            "longest_idle_s": self.longest_idle_s,
+            "stuck": self.stuck,
+        }
 
     def __str__(self) -> str:
         return "\n".join(self.lines())

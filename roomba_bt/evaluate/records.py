@@ -14,8 +14,16 @@ Columns (:data:`COLUMNS`): ``outcome`` is the word the run summary prints (``SUC
 ``FAILURE``, ``TIMEOUT``, ...); times in seconds, positions and distances in metres, headings
 in degrees. ``params`` is an object in JSON Lines and ``name=value;name=value`` in CSV. The
 trajectory (plots) and the per-bump contact steps are not written: they are for figures, not
-tables. Readers should ignore columns they do not know: later versions add columns (coverage,
-for instance), never rename or drop one.
+tables. Readers should ignore columns they do not know: later versions add columns, never
+rename or drop one.
+
+Coverage (:data:`COVERAGE_COLUMNS`, after the others) is empty (``null`` / an empty cell) for
+an episode whose brushes never ran: ``coverage`` is the fraction of the start area (or of all
+the reachable floor: ``coverage_area`` empty) cleaned at the end, ``coverage_5min`` ...
+``coverage_20min`` the same at those mission times, ``coverage_overall`` of all the reachable
+floor, ``coverage_by_area`` per named room, ``coverage_curve`` the samples every 30 s
+(``[[t, c], ...]``; in CSV ``t:c;t:c``), ``longest_idle`` the longest brush time (s) without
+new floor. In pandas, ``df.groupby("mission").coverage_10min.describe()``.
 """
 
 from __future__ import annotations
@@ -27,7 +35,7 @@ from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
-from roomba_bt.evaluate.episode import EpisodeResult
+from roomba_bt.evaluate.episode import Coverage, EpisodeResult
 
 FORMATS = (".jsonl", ".csv")
 
@@ -63,6 +71,20 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "worker": ("worker", "str"),
 }
 
+#: the coverage columns (empty when the episode did not clean): name -> Coverage field
+COVERAGE_COLUMNS: dict[str, str] = {
+    "coverage": "final",
+    "coverage_area": "area",
+    "coverage_5min": "at:300",
+    "coverage_10min": "at:600",
+    "coverage_20min": "at:1200",
+    "coverage_overall": "overall",
+    "coverage_by_area": "by_area",
+    "coverage_curve": "curve",
+    "longest_idle": "longest_idle_s",
+    "cleaning_time": "cleaning_s",
+}
+
 
 class ResultsFileError(ValueError):
     """A results file that cannot be read back: the message names the file and line."""
@@ -89,7 +111,47 @@ def to_record(result: EpisodeResult) -> dict[str, Any]:
         elif kind == "params":
             value = dict(value)
         out[column] = value
+    out.update(_coverage_record(result.coverage))
     return out
+
+
+def _coverage_record(coverage: Coverage | None) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for column, name in COVERAGE_COLUMNS.items():
+        if coverage is None:
+            out[column] = None
+        elif name.startswith("at:"):
+            out[column] = coverage.at(float(name[3:]))
+        elif name in ("by_area", "curve"):
+            out[column] = (
+                {a: c for a, c in coverage.by_area}
+                if name == "by_area"
+                else [[t, c] for t, c in coverage.curve]
+            )
+        else:
+            out[column] = getattr(coverage, name)
+    return out
+
+
+def _coverage_from(record: dict[str, Any]) -> Coverage | None:
+    """The episode's coverage from its record, None when it did not clean (or the file was
+    written before coverage was recorded)."""
+    final = record.get("coverage")
+    if final is None or final == "":
+        return None
+    by_area, curve = record["coverage_by_area"], record["coverage_curve"]
+    if isinstance(by_area, str):  # CSV
+        by_area = {a: c for a, _, c in (p.partition("=") for p in by_area.split(";") if p)}
+        curve = [p.split(":") for p in curve.split(";") if p]
+    return Coverage(
+        area=str(record["coverage_area"] or ""),
+        final=float(final),
+        curve=tuple((float(t), float(c)) for t, c in curve),
+        overall=float(record["coverage_overall"]),
+        by_area=tuple((str(a), float(c)) for a, c in by_area.items()),
+        longest_idle_s=float(record["longest_idle"]),
+        cleaning_s=float(record["cleaning_time"]),
+    )
 
 
 def from_record(record: dict[str, Any]) -> EpisodeResult:
@@ -115,6 +177,7 @@ def from_record(record: dict[str, Any]) -> EpisodeResult:
     values["start"], values["end"] = tuple(values["start"]), tuple(values["end"])
     known = {f.name for f in fields(EpisodeResult)}
     defaults = {"contact_steps": (), "trajectory": ()}
+    values["coverage"] = _coverage_from(record)
     return EpisodeResult(**{**defaults, **{k: v for k, v in values.items() if k in known}})
 
 
@@ -135,12 +198,22 @@ def write_results(path: str | Path, results: Iterable[EpisodeResult]) -> int:
             for record in records:
                 out.write(json.dumps(record) + "\n")
         else:
-            writer = csv.DictWriter(out, fieldnames=list(COLUMNS))
+            writer = csv.DictWriter(out, fieldnames=[*COLUMNS, *COVERAGE_COLUMNS])
             writer.writeheader()
             for record in records:
-                params = ";".join(f"{k}={v}" for k, v in record["params"].items())
-                writer.writerow({**record, "params": params})  # str(float) is its repr
+                writer.writerow({**record, **_csv_cells(record)})  # str(float) is its repr
     return len(records)
+
+
+def _csv_cells(record: dict[str, Any]) -> dict[str, str]:
+    """The record's structured values as CSV cells (``None`` is an empty cell already)."""
+    cells = {"params": ";".join(f"{k}={v}" for k, v in record["params"].items())}
+    if record["coverage_by_area"] is not None:
+        cells["coverage_by_area"] = ";".join(
+            f"{a}={c!r}" for a, c in record["coverage_by_area"].items()
+        )
+        cells["coverage_curve"] = ";".join(f"{t!r}:{c!r}" for t, c in record["coverage_curve"])
+    return cells
 
 
 def read_results(path: str | Path) -> list[EpisodeResult]:

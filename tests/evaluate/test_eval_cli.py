@@ -109,6 +109,7 @@ def test_ab_report_on_two_variants_is_reproduced_from_its_records(
     assert cmp["pairs"] == cmp["both"] + cmp["only_a"] + cmp["only_b"] + cmp["neither"] == 6
     assert cmp["mcnemar_p"] == mcnemar_exact(cmp["only_a"], cmp["only_b"])
     assert [v["label"] for v in report["variants"]] == [cmp["a"], cmp["b"]]
+    assert [v["coverage"] for v in report["variants"]] == [None, None]  # no brushes
     assert cmp["b"].endswith("-p speed=400mm/s")
     assert main(argv) == 0
     rerun = json.loads(capsys.readouterr().out)
@@ -170,3 +171,22 @@ def test_ctrl_c_prints_what_finished_and_exits_130(tmp_path: Path) -> None:
     assert 1 <= finished < 200
     assert f"/{finished} = " in stdout.decode()
     assert f"interrupted; {finished} episode(s) finished" in (seen + stderr).decode()
+
+
+def test_a_cleaning_mission_reports_its_coverage_as_json(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import json
+
+    from roomba_bt.evaluate.coverage import summarize_coverage
+    from roomba_bt.evaluate.records import read_results
+
+    out_file = tmp_path / "clean.csv"
+    argv = ["eval", str(MISSIONS / "clean.yaml"), "--world", "apartment", "--runs", "2",
+            "--seed", "8", "--timeout", "40s", "--no-progress", "--json",
+            "--out", str(out_file)]  # fmt: skip
+    assert main(argv) in (0, 1)
+    (variant,) = json.loads(capsys.readouterr().out)["variants"]
+    coverage = summarize_coverage(read_results(out_file))
+    assert coverage is not None and variant["coverage"] == coverage.to_dict()
+    assert variant["coverage"]["episodes"] == 2 and 0 < variant["coverage"]["final"]["mean"] < 1

@@ -40,8 +40,10 @@ def test_a_results_file_reloads_to_the_same_summary(
 
 
 def test_a_record_has_the_columns_a_script_needs(results: list[EpisodeResult]) -> None:
+    from roomba_bt.evaluate.records import COVERAGE_COLUMNS
+
     record = to_record(results[0])
-    assert list(record) == list(COLUMNS)
+    assert list(record) == [*COLUMNS, *COVERAGE_COLUMNS]
     assert record["seed"] == 4 and record["world"] == "apartment"
     assert record["outcome"] in ("SUCCESS", "FAILURE", "TIMEOUT")
     assert record["params"] == {"duration": "4s"}
@@ -68,3 +70,31 @@ def test_bad_results_files_say_where(tmp_path: Path) -> None:
     bad.write_text('{"seed": 1}\n', encoding="utf-8")
     with pytest.raises(ResultsFileError, match=r"bad.jsonl:1: missing column 'mission'"):
         read_results(bad)
+
+
+@pytest.mark.parametrize("suffix", [".jsonl", ".csv"])
+def test_coverage_is_in_the_records_and_reads_back(tmp_path: Path, suffix: str) -> None:
+    from roomba_bt.evaluate.coverage import summarize_coverage
+    from roomba_bt.evaluate.records import COVERAGE_COLUMNS
+
+    clean = str(MISSIONS / "clean.yaml")
+    specs = episode_specs(clean, world="apartment", runs=2, seed=3, timeout_s=40.0)
+    cleaned = run_episodes(specs)
+    assert all(r.coverage is not None for r in cleaned)
+    path = tmp_path / f"results{suffix}"
+    write_results(
+        path,
+        [
+            *cleaned,
+            *run_episodes(episode_specs(BUMP, world="apartment", runs=1, seed=4, timeout_s=2.0)),
+        ],
+    )
+    again = read_results(path)
+    assert [r.coverage for r in again[:2]] == [r.coverage for r in cleaned]
+    assert again[2].coverage is None  # no brushes, no coverage
+    assert summarize_coverage(again) == summarize_coverage(cleaned)
+    record = to_record(cleaned[0])
+    assert list(record) == [*COLUMNS, *COVERAGE_COLUMNS]
+    assert record["coverage"] is not None and 0 < record["coverage"] <= 1
+    assert 0 < record["coverage_5min"] <= record["coverage"] + 1e-9
+    assert to_record(again[2])["coverage"] is None
