@@ -39,7 +39,7 @@ def test_there_are_missions() -> None:
 def test_mission_runs_and_ends_safely(path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     world = WORLDS.get(path.name, "empty-room")
     code = main(["run", str(path), "--fast", "--display", "none", "--world", world,
-                 "--timeout", "2min", "--seed", "3"])  # fmt: skip
+                 "--timeout", "2min", "--seed", "3", "--allow-plugin-files"])  # fmt: skip
     out, err = capsys.readouterr()
     assert code in (0, 1), out + err
     assert "outcome      ERROR" not in out, out + err

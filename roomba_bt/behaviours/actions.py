@@ -152,7 +152,34 @@ def _drive_constraints(params: Mapping[str, Any]) -> list[str]:
         errors.append("give both left and right wheel speeds, or neither")
     if wheels and ("radius" in params or "velocity" in params):
         errors.append("give either velocity/radius or left/right wheel speeds, not both")
-    return errors
+    return errors + _never_finishes(params)
+
+
+def _never_finishes(params: Mapping[str, Any]) -> list[str]:
+    """An end the wheels can never reach: the leaf would run for ever. ``distance`` is the
+    centre's path (a spin in place covers none), ``angle`` the heading (a straight drive
+    keeps it). Values read from the blackboard are not known here and pass."""
+    left, right = params.get("left"), params.get("right")
+    velocity, radius = params.get("velocity", 200.0), params.get("radius", "straight")
+    ends = (params.get("distance"), params.get("angle"))
+    given = [v for v in (left, right, velocity, radius, *ends) if v is not None]
+    known = all(isinstance(v, int | float) or v in _RADIUS_WORDS for v in given)
+    if not known:
+        return []
+    if left is not None and right is not None:
+        centre, spins = (float(left) + float(right)) / 2, float(left) != float(right)
+        how = f"left {left:g} and right {right:g} mm/s"
+    else:
+        centre = 0.0 if radius in ("spin_left", "spin_right") else float(velocity)
+        spins = float(velocity) != 0 and radius != "straight"
+        how = f"{float(velocity):g} mm/s" + (f", radius {radius}" if "radius" in params else "")
+    if float(params.get("distance") or 0) > 0 and centre == 0:
+        return [f"drive at {how} never covers its distance (its centre does not move): "
+                "it would run for ever; give a speed, or end it by angle or duration"]  # fmt: skip
+    if float(params.get("angle") or 0) > 0 and not spins:
+        return [f"drive at {how} never turns, so its angle is never reached: it would run "
+                "for ever; give a radius (or different wheel speeds), or use turn"]  # fmt: skip
+    return []
 
 
 def _drive_reads(params: Mapping[str, Any]) -> tuple[int, ...]:

@@ -8,10 +8,13 @@ import argparse
 import math
 import os
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from roomba_bt.mission.shipped import find_mission
 from roomba_bt.oi.encode import BAUD_CODES
+
+if TYPE_CHECKING:
+    from roomba_bt.mission import Permissions
 
 
 def baud_rate(text: str) -> int:
@@ -106,3 +109,40 @@ def mission_file(text: str) -> str | tuple[str]:
     (``roomba-bt run dock``); ``(problem,)`` when neither exists."""
     found = find_mission(text)
     return str(found.path) if found.path is not None else (found.problem,)
+
+
+def add_permission_options(parser: argparse.ArgumentParser) -> None:
+    """What a mission file may reach, granted here and never by the file: its plugin files
+    (Python, imported) and include folders beyond its own folder tree and the shipped library."""
+    parser.add_argument(
+        "--allow-plugin-files",
+        action="store_true",
+        help="import the Python files the mission names under plugins: (a mission file runs "
+        "no code without it; installed plugin packages need no permission)",
+    )
+    parser.add_argument(
+        "--include-dir",
+        action="append",
+        default=[],
+        metavar="DIR",
+        type=include_dir,
+        help="a folder the mission may also include from (repeatable)",
+    )
+
+
+def include_dir(text: str) -> Path:
+    """An existing folder (``--include-dir``)."""
+    folder = Path(text)
+    if not folder.is_dir():
+        raise argparse.ArgumentTypeError(f"found {text!r}: there is no such directory")
+    return folder
+
+
+def permissions(args: argparse.Namespace) -> Permissions:
+    """The :class:`~roomba_bt.mission.Permissions` the command line grants."""
+    from roomba_bt.mission import Permissions
+
+    return Permissions(
+        plugin_files=bool(getattr(args, "allow_plugin_files", False)),
+        include_dirs=tuple(getattr(args, "include_dir", None) or ()),
+    )

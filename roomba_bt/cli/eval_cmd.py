@@ -32,9 +32,11 @@ from typing import Any
 
 from roomba_bt.cli.arguments import (
     add_param_option,
+    add_permission_options,
     mission_file,
     parse_params,
     parse_timeout,
+    permissions,
     plot_file,
 )
 from roomba_bt.oi.profiles import PROFILES
@@ -120,6 +122,7 @@ def register(sub: Any) -> None:
     ev.add_argument("--min-rate", type=float, metavar="FRACTION",
                     help="exit 1 if the success rate is below this (for CI)")  # fmt: skip
     ev.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_permission_options(ev)
     ev.set_defaults(func=eval_command)
 
 
@@ -252,6 +255,7 @@ def eval_command(args: argparse.Namespace) -> int:
             dock=dock,
             battery=args.battery,
             start_area=args.start_area,
+            permissions=permissions(args),
         )
         for v in chosen
     ]
@@ -261,7 +265,10 @@ def eval_command(args: argparse.Namespace) -> int:
     from roomba_bt.oi.profiles import get_profile
 
     for v in chosen:
-        if isinstance(loaded := load(v.mission, dict(v.params), get_profile(args.profile)), int):
+        loaded = load(
+            v.mission, dict(v.params), get_profile(args.profile), granted=permissions(args)
+        )
+        if isinstance(loaded, int):
             return loaded
     try:
         world = build_world(batches[0][0])

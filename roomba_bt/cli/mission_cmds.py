@@ -13,7 +13,14 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from roomba_bt.cli.arguments import add_param_option, baud_rate, mission_file, parse_params
+from roomba_bt.cli.arguments import (
+    add_param_option,
+    add_permission_options,
+    baud_rate,
+    mission_file,
+    parse_params,
+    permissions,
+)
 from roomba_bt.oi.profiles import PROFILES, get_profile
 from roomba_bt.runtime.summary import ExitCode
 
@@ -66,6 +73,14 @@ def register(sub: Any) -> None:
         description="Print the JSON Schema of mission files (roomba-bt schema > "
         "mission.schema.json), generated from the behaviour declarations.",
     )
+    schema.add_argument(
+        "--plugin-file",
+        action="append",
+        default=[],
+        metavar="FILE",
+        help="also describe the behaviours of this plugin file (imported: it is code), for "
+        "missions that name it under plugins: (repeatable)",
+    )
     schema.set_defaults(func=schema_command)
 
 
@@ -73,6 +88,7 @@ def _common(parser: argparse.ArgumentParser) -> None:
     add_param_option(parser, "set a mission parameter, e.g. -p speed=250mm/s (repeatable)")
     parser.add_argument("--profile", choices=sorted(PROFILES), default="create2")
     parser.add_argument("--baud", type=baud_rate, default=115200, help="baud rate (default 115200)")
+    add_permission_options(parser)
 
 
 def _params(items: list[str]) -> dict[str, str] | None:
@@ -98,7 +114,11 @@ def validate_command(args: argparse.Namespace) -> int:
             status = ExitCode.INVALID
             continue
         diagnostics = validate_files(
-            [found], params, profile=get_profile(args.profile), baud=args.baud
+            [found],
+            params,
+            profile=get_profile(args.profile),
+            baud=args.baud,
+            permissions=permissions(args),
         )
         for d in diagnostics:
             print(d)
@@ -122,7 +142,11 @@ def show_command(args: argparse.Namespace) -> int:
         print(f"roomba-bt show: {found[0]}", file=sys.stderr)
         return ExitCode.INVALID
     mission, diagnostics = compile_mission(
-        found, params, profile=get_profile(args.profile), baud=args.baud
+        found,
+        params,
+        profile=get_profile(args.profile),
+        baud=args.baud,
+        permissions=permissions(args),
     )
     if mission is None:
         for d in diagnostics:
@@ -280,7 +304,17 @@ def behaviours_command(args: argparse.Namespace) -> int:
 
 
 def schema_command(args: argparse.Namespace) -> int:
+    from roomba_bt.behaviours import default_registry
     from roomba_bt.mission.schema import mission_schema
 
-    print(json.dumps(mission_schema(), indent=2))
+    registry = default_registry()
+    for file in args.plugin_file:
+        if not Path(file).is_file():
+            print(f"roomba-bt schema: --plugin-file {file}: no such file", file=sys.stderr)
+            return ExitCode.INVALID
+        registry, error = registry.with_file(Path(file))
+        if error is not None:
+            print(f"roomba-bt schema: --plugin-file {file}: {error}", file=sys.stderr)
+            return ExitCode.INVALID
+    print(json.dumps(mission_schema(registry), indent=2))
     return ExitCode.OK

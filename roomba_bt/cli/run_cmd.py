@@ -6,15 +6,17 @@ import argparse
 import logging
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from roomba_bt.cli.arguments import (
     add_param_option,
+    add_permission_options,
     baud_rate,
     mission_file,
     output_file,
     parse_params,
     parse_timeout,
+    permissions,
     plot_file,
     seconds,
 )
@@ -24,6 +26,9 @@ from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.profiles import PROFILES, RobotProfile, get_profile
 from roomba_bt.runtime.summary import ExitCode
 
+if TYPE_CHECKING:
+    from roomba_bt.mission import Permissions
+
 
 def register(sub: Any) -> None:
     run = sub.add_parser(
@@ -31,7 +36,8 @@ def register(sub: Any) -> None:
         help="run a mission on a robot (--port) or the simulator",
         description="Run MISSION. Without --port it runs on the built-in simulator (real time; "
         "--fast on the virtual clock). Exit codes: 0 succeeded, 1 failed or timed out, "
-        "2 invalid mission or usage, 3 connection or stream failure, 130 interrupted.",
+        "2 invalid mission or usage, 3 connection or stream failure, 4 a behaviour raised an "
+        "exception, 130 interrupted.",
     )
     run.add_argument("mission", help="mission YAML file, or a shipped mission's name (dock)")
     run.add_argument(
@@ -59,6 +65,7 @@ def register(sub: Any) -> None:
     run.add_argument(
         "--plot", metavar="FILE.png", type=plot_file, help="simulator only: plot the trajectory"
     )
+    add_permission_options(run)
     run.add_argument("--fast", action="store_true", help="simulator on the virtual clock")
     run.add_argument(
         "--end-in", choices=("passive", "stop"), default="passive",
@@ -84,11 +91,14 @@ def register(sub: Any) -> None:
         "replay",
         help="play a --record file back through the tree",
         description="Feed the recorded sensor bytes back through the same parser and tree and "
-        "compare the commands the tree writes with the recorded ones.",
+        "compare the commands the tree writes with the recorded ones. Exit codes: 0 the same "
+        "bytes, 1 at the first difference (its mission time and both commands are printed), "
+        "2 invalid record or mission, or a mission reading packets the record lacks.",
     )
     replay.add_argument("record", help="a file written by run --record")
     replay.add_argument("--mission", help="mission to replay against (default: the recorded one)")
     add_param_option(replay)
+    add_permission_options(replay)
     replay.set_defaults(func=replay_command)
 
 
@@ -97,13 +107,21 @@ def _error(message: str) -> int:
     return ExitCode.INVALID
 
 
-def load(path: str, params: dict[str, str], profile: RobotProfile, baud: int = 115200) -> Any:
+def load(
+    path: str,
+    params: dict[str, str],
+    profile: RobotProfile,
+    baud: int = 115200,
+    granted: Permissions | None = None,
+) -> Any:
     """The compiled mission, or an int exit code after printing every diagnostic (``run``,
     ``replay``, and ``eval`` before its workers start)."""
-    from roomba_bt.mission import MissionError, load_mission
+    from roomba_bt.mission import MissionError, Permissions, load_mission
 
     try:
-        return load_mission(path, params, profile=profile, baud=baud)
+        return load_mission(
+            path, params, profile=profile, baud=baud, permissions=granted or Permissions()
+        )
     except MissionError as exc:
         for diagnostic in exc.diagnostics:
             print(str(diagnostic), file=sys.stderr)
@@ -140,7 +158,7 @@ def run_command(args: argparse.Namespace) -> int:
     if isinstance(found, tuple):
         return _error(found[0])
     args.mission = found
-    mission = load(args.mission, params, profile, args.baud)
+    mission = load(args.mission, params, profile, args.baud, permissions(args))
     if isinstance(mission, int):
         return mission
     try:
@@ -235,10 +253,16 @@ def run_command(args: argparse.Namespace) -> int:
     if simulator is not None and simulator.swept is not None and simulator.swept.cleaning_time:
         print(_coverage_line(simulator))
     if (
-        summary.outcome.exit_code in (ExitCode.CONNECTION, ExitCode.MISSION_FAILED)
+        summary.outcome.exit_code
+        in (ExitCode.CONNECTION, ExitCode.MISSION_FAILED, ExitCode.BEHAVIOUR_ERROR)
         and summary.reason
     ):
         print(f"roomba-bt: {summary.outcome.value}: {summary.reason}", file=sys.stderr)
+    if summary.traceback:
+        if getattr(args, "verbose", 0):
+            print(summary.traceback, file=sys.stderr, end="")
+        else:
+            print("roomba-bt: run with -v for the traceback", file=sys.stderr)
     for refusal in stack.runner.refusals[:5]:
         print(f"refused: {refusal}", file=sys.stderr)
     if args.plot and simulator is not None:
@@ -303,10 +327,24 @@ def replay_command(args: argparse.Namespace) -> int:
         return _error(extra)
     params.update(extra)
     baud = int(header.get("baud", 115200))
-    mission = load(mission_path, params, profile, baud)
+    mission = load(mission_path, params, profile, baud, permissions(args))
     if isinstance(mission, int):
         return mission
-    packets = tuple(header.get("packets") or stream_packets(mission, baud))
+    from roomba_bt.mission import RUNTIME_PACKETS
+
+    recorded_packets = header.get("packets")
+    if not isinstance(recorded_packets, list) or not all(
+        isinstance(p, int) for p in recorded_packets
+    ):
+        return _error(f'{args.record}:1: the header lists no stream packets ("packets")')
+    missing = sorted((set(mission.packets) | set(RUNTIME_PACKETS)) - set(recorded_packets))
+    if missing:
+        return _error(
+            f"{args.record}: the recording streams packets {sorted(recorded_packets)} but "
+            f"{mission_path} reads {missing} too: it cannot be replayed against this mission "
+            "(record it again with this mission)"
+        )
+    packets = tuple(recorded_packets)
     transport = ReplayTransport(record, name=f"replay:{args.record}")
     stack = RunStack(
         mission,
@@ -315,20 +353,23 @@ def replay_command(args: argparse.Namespace) -> int:
         baud=baud,
         packets=packets,
         watchdog=0.0,
-        input_ended=lambda: "end of the record" if transport.exhausted else None,
+        input_ended=lambda: (
+            "first difference from the record"
+            if transport.difference is not None
+            else "end of the record"
+            if transport.exhausted
+            else None
+        ),
     )
     summary = stack.run()
     print(summary)
-    recorded, replayed = record.outbound, bytes(transport.written)
-    if recorded == replayed:
-        print(f"replay: the tree wrote the same {len(replayed)} bytes as the recorded run")
-    else:
-        at = next(
-            (i for i, (a, b) in enumerate(zip(recorded, replayed, strict=False)) if a != b),
-            min(len(recorded), len(replayed)),
-        )
-        print(
-            f"replay: the tree's bytes differ from the record at byte {at} "
-            f"(recorded {len(recorded)} bytes, replayed {len(replayed)})"
-        )
-    return summary.exit_code
+    difference = transport.first_difference()
+    if difference is None:
+        print(f"replay: the tree wrote the same {len(transport.written)} bytes as the recorded run")
+        return ExitCode.OK
+    offset, expected, sent = difference
+    print(
+        f"replay: first difference at mission time {summary.mission_time_s:.3f} s "
+        f"(byte {offset} of {len(record.outbound)} recorded): expected {expected}, sent {sent}"
+    )
+    return ExitCode.MISSION_FAILED

@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from roomba_bt.evaluate.sources import MissionSources, bundle_mission, bundle_world
-from roomba_bt.mission import MissionError, load_mission
+from roomba_bt.mission import NO_PERMISSIONS, MissionError, Permissions, load_mission
 from roomba_bt.oi.profiles import get_profile
 from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome
@@ -67,6 +67,9 @@ class EpisodeSpec:
     battery: float | None = None
     #: keep every n-th trace point in the result (trajectory plots)
     trace_every: int = 2
+    #: what the mission file may reach (its plugin files, other include folders), as the
+    #: command line granted when the mission was checked before any episode
+    permissions: Permissions = NO_PERMISSIONS
     #: the mission's texts (and its includes'): set, the episode reads no file
     #: (:func:`self_contained`); None, it reads ``mission`` from this machine's disk
     sources: MissionSources | None = field(default=None, repr=False)
@@ -275,8 +278,12 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
 def _run_episode(spec: EpisodeSpec) -> EpisodeResult:
     profile = get_profile(spec.profile)
     path = spec.sources.materialise() if spec.sources is not None else spec.mission
+    granted = spec.permissions
+    if spec.sources is not None:  # the bundle holds what the submitter's check allowed
+        folder = Path(path).parents[len(Path(spec.sources.main).parts) - 1]
+        granted = replace(granted, include_dirs=(*granted.include_dirs, folder))
     try:
-        mission = load_mission(path, dict(spec.params), profile=profile)
+        mission = load_mission(path, dict(spec.params), profile=profile, permissions=granted)
     except MissionError as exc:
         raise EvaluationError("\n".join(str(d) for d in exc.diagnostics)) from None
     world = build_world(spec)

@@ -15,9 +15,15 @@ from pathlib import Path
 
 from roomba_bt.behaviours.registry import Registry, default_registry
 from roomba_bt.mission.build import CompiledMission, build
-from roomba_bt.mission.checks import RUNTIME_PACKETS, KeyCheck, ModeCheck, check_stream
+from roomba_bt.mission.checks import (
+    RUNTIME_PACKETS,
+    KeyCheck,
+    ModeCheck,
+    check_stream,
+    restarted_limits,
+)
 from roomba_bt.mission.diagnostics import Diagnostic, MissionError
-from roomba_bt.mission.loader import Loader
+from roomba_bt.mission.loader import NO_PERMISSIONS, SHIPPED_LIBRARY, Loader, Permissions
 from roomba_bt.mission.values import Context, shown
 from roomba_bt.oi.modes import ALL_MODES, OIMode
 from roomba_bt.oi.profiles import CREATE2, RobotProfile
@@ -26,7 +32,10 @@ __all__ = [
     "RUNTIME_PACKETS",
     "CompiledMission",
     "Diagnostic",
+    "NO_PERMISSIONS",
     "MissionError",
+    "Permissions",
+    "SHIPPED_LIBRARY",
     "compile_mission",
     "load_mission",
     "validate_files",
@@ -48,11 +57,14 @@ def compile_mission(
     baud: int | None = None,
     registry: Registry | None = None,
     require_tree: bool = True,
+    permissions: Permissions = NO_PERMISSIONS,
 ) -> tuple[CompiledMission | None, list[Diagnostic]]:
-    """Compile and check; ``(mission or None, diagnostics)``. Never raises for bad input."""
+    """Compile and check; ``(mission or None, diagnostics)``. Never raises for bad input.
+    ``permissions`` (none by default) says whether the file's plugin files may be imported
+    and where else it may include from."""
     path = Path(path)
     try:
-        return _compile(path, params, profile, baud, registry, require_tree)
+        return _compile(path, params, profile, baud, registry, require_tree, permissions)
     except Exception as exc:  # a compiler bug must still not be a traceback at a user
         message = f"internal error while compiling ({type(exc).__name__}: {exc}); please report it"
         return None, [Diagnostic(_display(path), 1, 1, message)]
@@ -65,9 +77,12 @@ def _compile(
     baud: int | None,
     registry: Registry | None,
     require_tree: bool,
+    permissions: Permissions,
 ) -> tuple[CompiledMission | None, list[Diagnostic]]:
     ctx = Context(registry=registry or default_registry())
-    parsed = Loader(ctx, _display).compile_file(path, dict(params or {}), require_tree=require_tree)
+    parsed = Loader(ctx, _display, permissions).compile_file(
+        path, dict(params or {}), require_tree=require_tree
+    )
     if parsed is None or parsed.tree is None:
         return None, sorted(ctx.diagnostics)
     tree = parsed.tree
@@ -85,7 +100,7 @@ def _compile(
             after = node.decl.mode_after(node.params)
             if after is not None:
                 needed.add(after)
-    diagnostics = ctx.diagnostics + modes.errors + keys.errors
+    diagnostics = ctx.diagnostics + modes.errors + keys.errors + restarted_limits(tree)
     problem = check_stream(tuple(sorted(packets)), baud or profile.default_baud)
     if problem is not None:
         assert parsed.tree_loc is not None
@@ -116,11 +131,12 @@ def load_mission(
     profile: RobotProfile = CREATE2,
     baud: int = 115200,
     registry: Registry | None = None,
+    permissions: Permissions = NO_PERMISSIONS,
 ) -> CompiledMission:
     """Compile the mission at ``path`` with ``params`` (``-p name=value`` strings); raises
     :class:`MissionError` carrying every diagnostic."""
     mission, diagnostics = compile_mission(
-        path, params, profile=profile, baud=baud, registry=registry
+        path, params, profile=profile, baud=baud, registry=registry, permissions=permissions
     )
     if mission is None:
         raise MissionError(diagnostics)
@@ -134,6 +150,7 @@ def validate_files(
     profile: RobotProfile = CREATE2,
     baud: int = 115200,
     registry: Registry | None = None,
+    permissions: Permissions = NO_PERMISSIONS,
 ) -> list[Diagnostic]:
     """Every diagnostic of every file. A file without ``tree:`` is checked as a library of
     subtrees (what ``include`` brings in)."""
@@ -143,7 +160,7 @@ def validate_files(
         require_tree = _has_tree(path)
         _, diagnostics = compile_mission(
             path, params, profile=profile, baud=baud, registry=registry,
-            require_tree=require_tree,
+            require_tree=require_tree, permissions=permissions,
         )  # fmt: skip
         out.extend(diagnostics)
     return out

@@ -14,6 +14,11 @@
   written on every path before it: by an ``initial`` value, a ``set``/``mark`` earlier in a
   sequence, or the ``for_each`` that owns it. Fallback alternatives and parallel branches
   guarantee only what all of them write.
+* **Limits a reactive parent resets.** A reactive fallback re-ticks its children from the
+  first on every tick: a child that failed while a later one runs starts again, fresh, on the
+  next tick. A time limit (``timeout``, ``dock_time_limit``) or a ``retry`` in such a child
+  would never end anything (it fails, and its count or clock starts over for ever), so it is
+  an error unless it sits in the last child, whose failure fails the parent.
 * **Bandwidth.** The packets the leaves read, plus the runtime's own
   (:data:`RUNTIME_PACKETS`), must fit one 15 ms stream frame at the chosen baud.
 """
@@ -222,6 +227,46 @@ class KeyCheck:
         if kind in ("inverter", "force_success", "force_failure", "oneshot"):
             return written
         return inner
+
+
+#: Leaves that fail when their time is up (the ``timeout`` decorator is the other limit).
+TIME_LIMIT_LEAVES = frozenset({"dock_time_limit"})
+_REACTIVE_SELECTORS = frozenset({"fallback", "selector", "reactive_fallback", "reactive_selector"})
+
+
+def _limits(node: Node) -> list[Node]:
+    """The time limits and retries in ``node``'s subtree."""
+    return [
+        n
+        for n in node.walk()
+        if n.kind in ("timeout", "retry")
+        or (n.decl is not None and n.decl.name in TIME_LIMIT_LEAVES)
+    ]
+
+
+def restarted_limits(root: Node) -> list[Diagnostic]:
+    """A limit under a reactive fallback's non-last child: its failure lets a later child
+    run, and the next tick starts it again with a fresh clock or count."""
+    errors = []
+    for node in root.walk():
+        if node.kind not in _REACTIVE_SELECTORS or node.options.get("memory", True):
+            continue
+        for child in node.children[:-1]:
+            for limit in _limits(child):
+                word = limit.decl.name if limit.decl is not None else limit.kind
+                where = f"{limit.loc.file}:{limit.loc.line}"
+                if limit.loc.file == child.loc.file:
+                    where = f"line {limit.loc.line}"
+                errors.append(
+                    child.loc.at(
+                        f"{word} ({where}) is under {node.kind} ({node.loc.line}:"
+                        f"{node.loc.column}), which starts it again on the next tick when it "
+                        f"fails and a later child runs: it would never end the mission; put "
+                        f"what it limits under a sequence or fallback with memory, or make it "
+                        "the last child"
+                    )
+                )
+    return errors
 
 
 def check_stream(packets: tuple[int, ...], baud: int) -> str | None:

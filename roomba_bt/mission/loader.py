@@ -8,7 +8,7 @@ A mission file::
       side: {type: distance, default: 1 m}
     blackboard:                          # declared keys, with types
       leg: distance
-    plugins: [./my_behaviour.py]         # behaviour modules by path
+    plugins: [./my_behaviour.py]         # behaviour modules by path (needs permission)
     include: [lib/common.yaml]           # subtrees (and keys) of other files; the shipped
                                          # library: roomba-bt:lib/docking.yaml
     subtrees:
@@ -25,6 +25,12 @@ subtree definitions); :class:`~roomba_bt.mission.nodes.NodeParser` parses the tr
 stops at the first error: each problem becomes a
 :class:`~roomba_bt.mission.diagnostics.Diagnostic` and parsing goes on with the next node.
 ``docs/missions.md`` documents every word.
+
+A mission file is data, never code: a plugin file it names is imported only when the caller
+grants :attr:`Permissions.plugin_files` (the command line's ``--allow-plugin-files``), and an
+include resolves only inside the top mission's folder tree, the shipped library
+(:data:`SHIPPED_LIBRARY`) and the folders the caller adds (``--include-dir``). A file that is
+not a mission is reported as such, never quoted back.
 """
 
 from __future__ import annotations
@@ -74,6 +80,28 @@ TOP_LEVEL = ("mission", "description", "parameters", "blackboard", "plugins", "i
              "subtrees", "tree")  # fmt: skip
 _IDENT = re.compile(r"^[a-z_][a-z0-9_]*$")
 _PARAM_TYPES = [n for n in VALUE_TYPES if n != "mark"]
+_INCLUDED_KEYS = ("description", "plugins", "include", "blackboard", "subtrees")
+
+#: Folders every mission may include from, wherever it lives: the shipped missions' folder
+#: (package data, named ``roomba-bt:lib/docking.yaml`` in an include), wherever installed.
+SHIPPED_LIBRARY: tuple[Path, ...] = (SHIPPED_DIR.resolve(),)
+
+
+@dataclass(frozen=True, slots=True)
+class Permissions:
+    """What a mission file may reach beyond its own data, granted by whoever runs it (the
+    command line), never by the file.
+
+    ``plugin_files``: import the Python files its ``plugins:`` names (``--allow-plugin-files``).
+    ``include_dirs``: folders it may include from besides its own folder tree and the shipped
+    library (``--include-dir``)."""
+
+    plugin_files: bool = False
+    include_dirs: tuple[Path, ...] = ()
+
+
+#: The default: a mission file imports nothing and includes only from its tree and the library.
+NO_PERMISSIONS = Permissions()
 
 
 @dataclass
@@ -90,11 +118,18 @@ class Loader:
     """Reads one mission file and what it includes: sections, plugins, parameters, the
     blackboard and subtree definitions; the trees go to the :class:`NodeParser`."""
 
-    def __init__(self, ctx: Context, display: Callable[[Path], str] | None = None) -> None:
+    def __init__(
+        self,
+        ctx: Context,
+        display: Callable[[Path], str] | None = None,
+        permissions: Permissions = NO_PERMISSIONS,
+    ) -> None:
         self.ctx = ctx
         self.display: Callable[[Path], str] = display or (lambda p: str(p))
         self.nodes = NodeParser(ctx)
+        self.permissions = permissions
         self._include_stack: list[Path] = []
+        self._include_roots: tuple[Path, ...] = ()
 
     def compile_file(
         self, path: Path, overrides: Mapping[str, str], *, require_tree: bool = True
@@ -106,11 +141,19 @@ class Loader:
         if root is None:
             return None
         root_loc = loc_of(root, display, "")
+        if not _is_mission(root, TOP_LEVEL):
+            self.ctx.error(root_loc.at(_not_a_mission("this file", TOP_LEVEL)))
+            return None
         try:
             items = mapping(root, root_loc, "a mission file")
         except Bad as bad:
             self.ctx.error(bad.diagnostic)
             return None
+        self._include_roots = (
+            path.resolve().parent,
+            *SHIPPED_LIBRARY,
+            *(folder.resolve() for folder in self.permissions.include_dirs),
+        )
         self._include_stack.append(path.resolve())
         sections = {k: (v, kl, vl) for k, v, kl, vl in items}
         for key, _, key_loc, _ in items:
@@ -189,6 +232,15 @@ class Loader:
 
     def _plugins(self, path: Path, node: yaml.Node, loc: Loc) -> None:
         for text, target, iloc in self._files(path, node, loc, "plugins", "a plugin"):
+            if not self.permissions.plugin_files:
+                self.ctx.error(
+                    iloc.at(
+                        f"plugin file {text!r} not loaded: a mission file cannot run code on "
+                        "its own; allow its plugin files with --allow-plugin-files (or install "
+                        "the plugin as a package)"
+                    )
+                )
+                continue
             if not target.is_file():
                 self.ctx.error(
                     iloc.at(
@@ -203,6 +255,14 @@ class Loader:
 
     def _includes(self, path: Path, node: yaml.Node, loc: Loc) -> None:
         for text, target, iloc in self._files(path, node, loc, "include", "an include"):
+            if not any(target.is_relative_to(root) for root in self._include_roots):
+                self.ctx.error(
+                    iloc.at(
+                        f"include {text!r} is outside the mission's folder and the shipped "
+                        "library; allow its folder with --include-dir DIR"
+                    )
+                )
+                continue
             if target in self._include_stack:
                 chain = [p.name for p in self._include_stack[self._include_stack.index(target) :]]
                 self.ctx.error(iloc.at(f"include cycle: {' -> '.join([*chain, target.name])}"))
@@ -223,14 +283,17 @@ class Loader:
                     )
                 )
                 continue
-            self._include(target, iloc)
+            self._include(target, text, iloc)
 
-    def _include(self, target: Path, iloc: Loc) -> None:
+    def _include(self, target: Path, text: str, iloc: Loc) -> None:
         display = self.display(target)
         root, errors = compose(target, display)
         for e in errors:
             self.ctx.error(e)
         if root is None:
+            return
+        if not _is_mission(root, _INCLUDED_KEYS):
+            self.ctx.error(iloc.at(_not_a_mission(f"included file {text!r}", _INCLUDED_KEYS)))
             return
         root_loc = loc_of(root, display, "")
         try:
@@ -238,7 +301,7 @@ class Loader:
         except Bad as bad:
             self.ctx.error(bad.diagnostic)
             return
-        allowed = ("description", "plugins", "include", "blackboard", "subtrees")
+        allowed = _INCLUDED_KEYS
         for key, _, key_loc, _ in items:
             if key not in allowed:
                 self.ctx.error(
@@ -423,6 +486,18 @@ class Loader:
         else:
             body, _, body_loc = fields["tree"]
         self.ctx.subtrees[name] = SubtreeDef(name, key_loc, params, body, body_loc)
+
+
+def _is_mission(root: yaml.Node, words: tuple[str, ...]) -> bool:
+    """A mapping with at least one mission word as a key: anything else is not a mission
+    file, and its content is never quoted back in an error."""
+    return isinstance(root, yaml.MappingNode) and any(
+        isinstance(key, yaml.ScalarNode) and key.value in words for key, _ in root.value
+    )
+
+
+def _not_a_mission(what: str, words: tuple[str, ...]) -> str:
+    return f"{what} is not a mission file: expected a mapping with some of {', '.join(words)}"
 
 
 def _new_name(

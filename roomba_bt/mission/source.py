@@ -61,6 +61,9 @@ def compose(path: Path, display: str) -> tuple[yaml.Node | None, list[Diagnostic
 def compose_text(text: str, display: str) -> tuple[yaml.Node | None, list[Diagnostic]]:
     try:
         node = yamlsource.compose(text)
+    except yamlsource.Refused as exc:
+        line, column = yamlsource.error_position(exc) or (1, 1)
+        return None, [Diagnostic(display, line, column, str(exc.problem))]
     except yaml.MarkedYAMLError as exc:
         line, column = yamlsource.error_position(exc) or (1, 1)
         problem = exc.problem or exc.context or "invalid YAML"

@@ -16,7 +16,9 @@ speed, or a simulation on the virtual clock, make the same decisions. See ``docs
 from __future__ import annotations
 
 import contextlib
+import inspect
 import time
+import traceback
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any, Protocol
 
@@ -54,6 +56,35 @@ def stream_request(mission_packets: Iterable[int], baud: int) -> tuple[int, ...]
     except BandwidthError:
         return tuple(sorted(required))
     return wanted
+
+
+def behaviour_error(exc: BaseException) -> str:
+    """What a behaviour's exception says to the user: the behaviour's path in the tree (the
+    innermost behaviour on the traceback) and the file:line where it raised in that
+    behaviour's own module (a plugin's file), else the line the exception came from."""
+    frames = list(traceback.walk_tb(exc.__traceback__))
+    what = f"{type(exc).__name__}: {exc}"
+    behaviour = None
+    for frame, _ in reversed(frames):
+        candidate = frame.f_locals.get("self")
+        if isinstance(candidate, py_trees.behaviour.Behaviour):
+            behaviour = candidate
+            break
+    where = f"{frames[-1][0].f_code.co_filename}:{frames[-1][1]}" if frames else ""
+    if behaviour is None:
+        return f"{what} (at {where})" if where else what
+    with contextlib.suppress(TypeError, OSError):
+        home = inspect.getfile(type(behaviour))
+        for frame, line in reversed(frames):
+            if frame.f_code.co_filename == home:
+                where = f"{home}:{line}"
+                break
+    path = []
+    node: py_trees.behaviour.Behaviour | None = behaviour
+    while node is not None:
+        path.append(node.name)
+        node = node.parent
+    return f"behaviour {' / '.join(reversed(path))} raised {what} (at {where})"
 
 
 class MissionLike(Protocol):
@@ -171,7 +202,8 @@ class MissionRunner:
                 f"{type(exc).__name__}: {exc}",
             )
         except Exception as exc:  # a bug in a behaviour must still end in a safe stop
-            summary.outcome, summary.reason = Outcome.ERROR, f"{type(exc).__name__}: {exc}"
+            summary.outcome, summary.reason = Outcome.ERROR, behaviour_error(exc)
+            summary.traceback = "".join(traceback.format_exception(exc))
         finally:
             self._finish(self.mission.root, summary, wall_start)
         return summary

@@ -22,6 +22,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
 
+from roomba_bt.oi.encode import decode_command
+from roomba_bt.oi.errors import EncodeError
 from roomba_bt.transport.base import Transport
 
 RECORD_FORMAT = "roomba-bt-record"
@@ -167,6 +169,27 @@ def load_record(path: str | Path) -> Record:
     return record
 
 
+def command_at(stream: bytes, offset: int) -> str:
+    """The OI command of ``stream`` (host -> robot bytes, commands back to back) that holds
+    byte ``offset``: ``Drive (137) 89 00 c8 80 00``; ``nothing`` past the end."""
+    if offset >= len(stream):
+        return "nothing"
+    at = 0
+    while at <= offset:
+        try:
+            decoded = decode_command(stream[at:])
+        except EncodeError:
+            decoded = None
+        if decoded is None:  # not a command from here: show the bytes themselves
+            return f"bytes {stream[offset : offset + 8].hex(' ')}"
+        command, size = decoded
+        if at + size > offset:
+            spec = command.spec
+            return f"{spec.title} ({spec.opcode}) {stream[at : at + size].hex(' ')}"
+        at += size
+    return f"bytes {stream[offset : offset + 8].hex(' ')}"
+
+
 class ReplayTransport:
     """A transport that plays back the "in" side of a record on the recorded clock.
 
@@ -181,15 +204,27 @@ class ReplayTransport:
     def __init__(self, record: Record, name: str = "replay") -> None:
         self.name = name
         self._inbound = record.inbound_after_writes
+        self._expected = record.outbound
         self._next = 0
         self._now = 0.0
         self._open = True
         self.written = bytearray()
+        #: byte offset of the first difference from the recorded "out" side, once there is one
+        self.difference: int | None = None
 
     def write(self, data: bytes) -> None:
+        if self.difference is None:
+            start, expected = len(self.written), self._expected[len(self.written) :]
+            for i, byte in enumerate(data):
+                if i >= len(expected) or expected[i] != byte:
+                    self.difference = start + i
+                    break
         self.written += data
 
     def read(self, timeout: float) -> bytes:
+        if self.difference is not None:  # the first difference ends the replay
+            self._now += timeout
+            return b""
         if self._next >= len(self._inbound):
             self._now += timeout
             return b""
@@ -204,6 +239,20 @@ class ReplayTransport:
     @property
     def exhausted(self) -> bool:
         return self._next >= len(self._inbound)
+
+    def first_difference(self) -> tuple[int, str, str] | None:
+        """``(byte offset, command expected, command sent)`` of the first difference between
+        what the tree wrote and the record's "out" side, or None when they are the same."""
+        offset = self.difference
+        if offset is None and len(self.written) < len(self._expected):
+            offset = len(self.written)
+        if offset is None:
+            return None
+        return (
+            offset,
+            command_at(self._expected, offset),
+            command_at(bytes(self.written), offset),
+        )
 
     def set_baud(self, baud: int) -> None:
         pass

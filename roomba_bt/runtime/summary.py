@@ -16,6 +16,7 @@ class ExitCode(IntEnum):
     MISSION_FAILED = 1  # the tree ended in FAILURE (or the timeout ran out)
     INVALID = 2  # invalid mission, world or command-line usage
     CONNECTION = 3  # port could not be opened, robot did not answer, stream lost
+    BEHAVIOUR_ERROR = 4  # a behaviour raised an exception (a bug in it or its plugin)
     INTERRUPTED = 130  # Ctrl-C or SIGTERM, after the safe stop
 
 
@@ -39,7 +40,7 @@ _EXIT = {
     Outcome.TIMEOUT: ExitCode.MISSION_FAILED,
     Outcome.INTERRUPTED: ExitCode.INTERRUPTED,
     Outcome.CONNECTION_LOST: ExitCode.CONNECTION,
-    Outcome.ERROR: ExitCode.MISSION_FAILED,
+    Outcome.ERROR: ExitCode.BEHAVIOUR_ERROR,
 }
 
 
@@ -65,6 +66,8 @@ class RunSummary:
     battery_percent: float | None = None
     safe_stop: str = "not attempted"
     max_tick_s: float = 0.0
+    #: the exception's traceback when a behaviour raised one (printed under ``-v``)
+    traceback: str = ""
 
     @property
     def exit_code(self) -> int:

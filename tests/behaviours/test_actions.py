@@ -315,3 +315,27 @@ def test_a_behaviour_ticked_without_a_robot_says_so() -> None:
     behaviour = a.Wait("wait", {"duration": 1.0})
     with pytest.raises(RuntimeError, match="before setup"):
         behaviour.tick_once()
+
+
+@pytest.mark.parametrize(
+    ("motor", "bit"),
+    [("side_brush", 0x01), ("vacuum", 0x02), ("main_brush", 0x04),
+     ("side_brush_clockwise", 0x08), ("main_brush_outward", 0x10)],
+)  # fmt: skip
+def test_each_motor_alone_sets_its_own_bit(
+    robot: StubRobot, make: Make, motor: str, bit: int
+) -> None:
+    """Motors 138's bits (OI spec: side brush 0, vacuum 1, main brush 2, side brush clockwise
+    3, main brush outward 4): a motor forced off (or on) fails here."""
+    tick(make(a.Motors, **{motor: True}))
+    assert data(robot) == [[138, bit]]
+
+
+def test_every_motor_on_and_the_vacuum_alone_on(robot: StubRobot, make: Make) -> None:
+    everything = ("main_brush", "side_brush", "vacuum", "side_brush_clockwise",
+                  "main_brush_outward")  # fmt: skip
+    tick(make(a.Motors, **dict.fromkeys(everything, True)))
+    assert data(robot) == [[138, 0x1F]]
+    robot.sent.clear()
+    tick(make(a.Vacuum, on=True))
+    assert data(robot) == [[138, 0x02]]

@@ -96,7 +96,11 @@ def test_a_self_contained_spec_needs_none_of_its_files(
     for name in (mission, named):
         (folder / name).parent.mkdir(parents=True, exist_ok=True)
         shutil.copy(MISSIONS / "examples" / name, folder / name)
-    spec = EpisodeSpec(str(folder / mission), "empty-room", seed=3, timeout_s=3.0)
+    from roomba_bt.mission import Permissions
+
+    allowed = Permissions(plugin_files=True)  # as eval --allow-plugin-files grants
+    spec = EpisodeSpec(str(folder / mission), "empty-room", seed=3, timeout_s=3.0,
+                       permissions=allowed)  # fmt: skip
     from_files = run_episode(spec)
     travelling = self_contained(spec)
     assert travelling.sources is not None

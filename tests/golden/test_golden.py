@@ -11,7 +11,7 @@ import pytest
 
 from roomba_bt.sim import Simulator
 
-from .scenarios import CHECKPOINT_NS, SCENARIOS, load_recordings, scripted
+from .scenarios import CHECKPOINT_NS, SCENARIOS, load_recordings
 
 RECORDED = load_recordings()
 
@@ -41,8 +41,14 @@ def test_bytes_are_as_recorded(name: str) -> None:
         )
 
 
-def test_a_one_byte_change_is_caught(monkeypatch: pytest.MonkeyPatch) -> None:
-    """One byte of one frame changed, 30 s into a session: the comparison sees it."""
+ONE_OF_EACH_KIND = ("sim/create2/empty-room", "fault/roomba600-corrupt",
+                    "mission/bump-and-turn/corridor")  # fmt: skip
+
+
+@pytest.mark.parametrize("name", ONE_OF_EACH_KIND)
+def test_a_one_byte_change_is_caught(name: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """One byte of what the simulator sends changed, 30 s into a session: the comparison
+    sees it, in a scripted session, one with faults, and a whole mission episode."""
     read = Simulator.read
 
     def read_with_one_byte_changed(self: Simulator) -> bytes:
@@ -51,9 +57,20 @@ def test_a_one_byte_change_is_caught(monkeypatch: pytest.MonkeyPatch) -> None:
             data = bytes([data[0] ^ 0x01]) + data[1:]
         return data
 
-    name = "sim/create2/empty-room"
-    assert scripted("create2", "empty-room").summary()["sha256"] == RECORDED[name]["sha256"]
+    assert SCENARIOS[name]().summary()["sha256"] == RECORDED[name]["sha256"]
     monkeypatch.setattr(Simulator, "read", read_with_one_byte_changed)
-    changed = scripted("create2", "empty-room").summary()
+    changed = SCENARIOS[name]().summary()
     assert changed["sha256"] != RECORDED[name]["sha256"]
     assert "between t=30 s and t=40 s" in first_difference(RECORDED[name], changed)
+
+
+def test_every_kind_of_scenario_is_recorded() -> None:
+    """Every profile in every shipped world, faults, and whole episodes of the shipped
+    missions."""
+    from roomba_bt.oi.profiles import PROFILES
+    from roomba_bt.sim import shipped_worlds
+
+    assert {f"sim/{p}/{w}" for p in PROFILES for w in shipped_worlds()} <= set(RECORDED)
+    assert any(n.startswith("fault/") for n in RECORDED)
+    missions = {n.split("/")[1] for n in RECORDED if n.startswith("mission/")}
+    assert missions >= {"dock", "dock-builtin", "patrol", "bump-and-turn", "wall-follow"}

@@ -16,7 +16,8 @@ Capsys = pytest.CaptureFixture[str]
 
 def test_validate_valid_files_exits_0(capsys: Capsys) -> None:
     files = [str(p) for p in sorted(EXAMPLES.glob("*.yaml"))]
-    assert main(["validate", *files, str(EXAMPLES / "lib" / "escapes.yaml")]) == 0
+    lib = str(EXAMPLES / "lib" / "escapes.yaml")
+    assert main(["validate", *files, lib, "--allow-plugin-files"]) == 0
     out, err = capsys.readouterr()
     assert err == ""
     assert out.count(": ok") == len(files) + 1
@@ -103,3 +104,12 @@ def test_schema_is_json_with_every_behaviour(capsys: Capsys) -> None:
     assert drive["additionalProperties"] is False
     assert defs["turn"]["properties"]["turn"]["anyOf"][0]["required"] == ["angle"]
     assert set(defs["drive"]["properties"]) == {"drive", "name", "while", "until"}
+
+
+def test_schema_with_a_plugin_file_describes_its_behaviours(capsys: Capsys) -> None:
+    assert main(["schema"]) == 0
+    assert "near_wall" not in json.loads(capsys.readouterr().out)["$defs"]
+    plugin = str(EXAMPLES / "plugins" / "near_wall.py")
+    assert main(["schema", "--plugin-file", plugin]) == 0
+    assert "near_wall" in json.loads(capsys.readouterr().out)["$defs"]
+    assert main(["schema", "--plugin-file", "no_such.py"]) == 2

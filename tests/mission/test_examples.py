@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from roomba_bt.mission import load_mission, validate_files
+from roomba_bt.mission import Permissions, load_mission, validate_files
 from roomba_bt.robot.testing import StubRobot
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "missions" / "examples"
@@ -21,7 +21,7 @@ def test_there_are_examples() -> None:
 
 @pytest.mark.parametrize("path", MISSIONS, ids=lambda p: p.name)
 def test_example_compiles_and_ticks(path: Path) -> None:
-    mission = load_mission(path)
+    mission = load_mission(path, permissions=Permissions(plugin_files=True))
     assert mission.name
     assert mission.packets
     robot = StubRobot()

@@ -1,7 +1,8 @@
 """The malformed-mission corpus: each file ends with the exact errors it must produce.
 
 A file's trailing ``# expect: LINE:COL: message`` comments list every diagnostic, in order;
-``# baud: N`` and ``# params: name=value ...`` lines set what the command line would. The
+``# baud: N``, ``# params: name=value ...`` and ``# allow-plugin-files`` lines set what the
+command line would. The
 test also checks that ``roomba-bt validate`` prints the same lines and exits 2, with no
 traceback.
 """
@@ -14,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from roomba_bt.cli import main
-from roomba_bt.mission import MissionError, compile_mission, load_mission
+from roomba_bt.mission import MissionError, Permissions, compile_mission, load_mission
 
 CORPUS = Path(__file__).parent / "malformed"
 FILES = sorted(CORPUS.glob("*.yaml"))
@@ -29,6 +30,12 @@ def expectations(path: Path) -> tuple[list[str], int, dict[str, str] | None]:
     return expected, int(baud.group(1)) if baud else 115200, given
 
 
+def granted(path: Path) -> Permissions:
+    """``# allow-plugin-files``: the file is compiled as with ``--allow-plugin-files``."""
+    text = path.read_text(encoding="utf-8")
+    return Permissions(plugin_files=re.search(r"^# allow-plugin-files$", text, re.M) is not None)
+
+
 def test_the_corpus_has_at_least_30_missions() -> None:
     assert len(FILES) >= 30
 
@@ -37,14 +44,14 @@ def test_the_corpus_has_at_least_30_missions() -> None:
 def test_malformed_mission_gives_its_exact_errors(path: Path) -> None:
     expected, baud, params = expectations(path)
     assert expected, f"{path.name} has no '# expect:' line"
-    mission, diagnostics = compile_mission(path, params, baud=baud)
+    mission, diagnostics = compile_mission(path, params, baud=baud, permissions=granted(path))
     assert mission is None
     assert [f"{d.line}:{d.column}: {d.message}" for d in diagnostics] == expected
     for d in diagnostics:
         assert d.file.endswith(path.name) or "lib" in d.file
         assert str(d).startswith(f"{d.file}:{d.line}:{d.column}: ")
     with pytest.raises(MissionError) as raised:
-        load_mission(path, params, baud=baud)
+        load_mission(path, params, baud=baud, permissions=granted(path))
     assert raised.value.diagnostics == diagnostics
 
 
@@ -52,6 +59,8 @@ def test_malformed_mission_gives_its_exact_errors(path: Path) -> None:
 def test_validate_prints_them_and_exits_2(path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     expected, baud, params = expectations(path)
     argv = ["validate", str(path), "--baud", str(baud)]
+    if granted(path).plugin_files:
+        argv.append("--allow-plugin-files")
     for name, value in (params or {}).items():
         argv += ["-p", f"{name}={value}"]
     assert main(argv) == 2

@@ -116,6 +116,28 @@ def test_selector_is_a_synonym_and_reactive_fallback_preempts(compile_text: Comp
     assert r.mission.root.memory is True
 
 
+@pytest.mark.parametrize(
+    ("word", "reactive"),
+    [("sequence", False), ("reactive_sequence", True), ("fallback", False),
+     ("selector", False), ("reactive_fallback", True), ("reactive_selector", True)],
+)  # fmt: skip
+def test_each_composite_word_resumes_or_rechecks_as_documented(
+    compile_text: Compile, word: str, reactive: bool
+) -> None:
+    """Each word's behaviour, not only its flag: a reactive composite re-ticks its first
+    child while a later one runs (a condition preempts), one with memory resumes the running
+    child. ``reactive_selector`` given memory, or ``selector`` losing it, fails here."""
+    if "sequence" in word:
+        r = run(compile_text, f"tree: {{{word}: [{{bump: left}}, {{wait: 1s}}]}}")
+        assert r.tick(bump=2) is R
+        assert r.tick(bump=0) is (F if reactive else R)
+    else:
+        r = run(compile_text, f"tree: {{{word}: [{{bump: any}}, {{wait: 1s}}]}}")
+        assert r.tick() is R
+        assert r.tick(bump=1) is (S if reactive else R)
+    assert r.mission.root.memory is not reactive
+
+
 @pytest.mark.parametrize(("policy", "expected"), [("all", [R, R, S]), ("one", [S])])
 def test_parallel_policies(compile_text: Compile, policy: str, expected: list[Status]) -> None:
     r = run(
@@ -267,7 +289,7 @@ def test_include_brings_subtrees(mission_file: Callable[..., Path]) -> None:
 
 
 def test_plugin_by_path(mission_file: Callable[..., Path]) -> None:
-    from roomba_bt.mission import load_mission
+    from roomba_bt.mission import Permissions, load_mission
 
     mission_file(
         "from roomba_bt.behaviours import Condition, declare\n"
@@ -278,7 +300,8 @@ def test_plugin_by_path(mission_file: Callable[..., Path]) -> None:
         "        return True\n",
         "my_behaviour.py",
     )
-    mission = load_mission(mission_file("plugins: [./my_behaviour.py]\ntree: always_true\n"))
+    path = mission_file("plugins: [./my_behaviour.py]\ntree: always_true\n")
+    mission = load_mission(path, permissions=Permissions(plugin_files=True))
     assert Run(mission).tick() is S
     assert 8 in mission.packets
 

@@ -1,12 +1,13 @@
 """The generated JSON Schema accepts every shipped mission and rejects unknown words.
 
-jsonschema is not a dependency, so this file carries a small validator for the subset the
-schema uses (type, enum, const, pattern, properties, required, additionalProperties, items,
-minItems, maxItems, anyOf, $ref).
+Checked with the jsonschema package (in the test extra) and with a small validator for the
+subset the schema uses (type, enum, const, pattern, properties, required,
+additionalProperties, items, minItems, maxItems, anyOf, $ref), which needs nothing.
 """
 
 from __future__ import annotations
 
+import functools
 import re
 from pathlib import Path
 from typing import Any
@@ -62,14 +63,65 @@ def valid(value: Any, schema: dict[str, Any]) -> bool:
     return True
 
 
-@pytest.mark.parametrize(
-    "path", sorted(EXAMPLES.glob("*.yaml")) + sorted(EXAMPLES.glob("lib/*.yaml")), ids=str
-)
-def test_the_schema_accepts_every_example(path: Path) -> None:
+MISSIONS = EXAMPLES.parent
+SHIPPED = sorted(
+    {*MISSIONS.glob("*.yaml"), *MISSIONS.glob("lib/*.yaml"), *EXAMPLES.glob("*.yaml"),
+     *EXAMPLES.glob("lib/*.yaml")}
+)  # fmt: skip
+
+
+def _schema_for(mission: dict[str, Any], path: Path) -> dict[str, Any]:
+    """The published schema, or for a mission with plugin files the one ``roomba-bt schema
+    --plugin-file FILE`` publishes (the installed behaviours plus those files')."""
+    if "plugins" not in mission:
+        return SCHEMA
+    from roomba_bt.behaviours.registry import default_registry
+
+    registry = default_registry()
+    for plugin in mission["plugins"]:
+        registry, error = registry.with_file(path.parent / plugin)
+        assert error is None, error
+    return mission_schema(registry)
+
+
+@functools.cache
+def _published() -> Any:
+    """A jsonschema validator of the published schema, the schema itself checked once."""
+    import jsonschema
+
+    jsonschema.Draft202012Validator.check_schema(SCHEMA)
+    return jsonschema.Draft202012Validator(SCHEMA)
+
+
+@pytest.mark.parametrize("path", SHIPPED, ids=lambda p: str(p.relative_to(MISSIONS)))
+def test_every_shipped_mission_and_example_is_valid_by_jsonschema(path: Path) -> None:
+    """With the jsonschema package (a test dependency): what editors and CI would use."""
+    import jsonschema
+
     mission = yaml.safe_load(path.read_text(encoding="utf-8"))
-    if "plugins" in mission:
-        pytest.skip("behaviours from plugin files are not in the published schema")
-    assert valid(mission, SCHEMA)
+    schema = _schema_for(mission, path)
+    if schema is SCHEMA:
+        _published().validate(mission)
+        assert valid(mission, schema)
+    else:
+        jsonschema.validate(mission, schema, cls=jsonschema.Draft202012Validator)
+
+
+def test_the_published_schema_knows_no_plugin_file_behaviour() -> None:
+    import jsonschema
+
+    path = EXAMPLES / "custom_condition.yaml"
+    mission = yaml.safe_load(path.read_text(encoding="utf-8"))
+    with pytest.raises(jsonschema.ValidationError):
+        _published().validate(mission)
+
+
+def test_jsonschema_rejects_what_the_validator_rejects() -> None:
+    import jsonschema
+
+    for tree in ({"drvie": {"velocity": "100 mm/s"}}, {"drive": {"velocity": 100}}):
+        with pytest.raises(jsonschema.ValidationError):
+            _published().validate({"tree": tree})
 
 
 @pytest.mark.parametrize(

@@ -16,7 +16,7 @@ EXAMPLES = Path(__file__).resolve().parents[2] / "missions" / "examples"
     ("mission", "extra"),
     [
         ("square.yaml", ["-p", "side=50cm"]),
-        ("custom_condition.yaml", ["--world", "corridor"]),
+        ("custom_condition.yaml", ["--world", "corridor", "--allow-plugin-files"]),
         ("guarded_patrol.yaml", ["--world", "corridor", "-p", "laps=1"]),
         ("show_off.yaml", []),
         ("dock.yaml", []),

@@ -210,6 +210,22 @@ def test_patrol_docks_when_the_battery_runs_low(seed: int) -> None:
     assert result.docked and result.charging
 
 
+def test_patrol_dock_time_limit_ends_the_mission() -> None:
+    """A dock it cannot find (beams cut to nothing) and ``dock_time_limit=2min``: the patrol
+    fails at 2 min, naming the limit. Under the old reactive fallback the limit failed at 120,
+    240, 360 s ... and docking started again each time, until the run's own timeout."""
+    unreachable = (("buoy_range", 0.01), ("force_field", 0.01), ("red", (0.0, 0.1)),
+                   ("green", (0.0, 0.1)))  # fmt: skip
+    result = run_episode(
+        EpisodeSpec(str(MISSIONS / "patrol.yaml"), "corridor", seed=0, battery=0.14,
+                    dock=unreachable, params=(("dock_time_limit", "2min"),), timeout_s=600)
+    )  # fmt: skip
+    assert result.outcome == "failure", result.reason
+    assert 120.0 <= result.time_s < 121.0
+    assert result.reason.startswith("dock_time_limit(120 s)"), result.reason
+    assert "gave up after the time limit of 120 s" in result.reason
+
+
 def test_patrol_in_the_apartment_keeps_moving_and_out_of_the_kitchen_door() -> None:
     """The apartment has a gap narrower than the robot (sofa and wall), a virtual wall across
     the kitchen door and a staircase. The patrol used to push into the gap for 3.8 hours

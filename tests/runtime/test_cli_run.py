@@ -130,3 +130,45 @@ def test_summary_packets_are_dropped_when_they_do_not_fit_the_baud() -> None:
     at_19200 = stream_request((7,), 19200)
     assert not set(SUMMARY_PACKETS) & set(at_19200)
     assert {7, 35, 43, 44} <= set(at_19200)
+
+
+def _record_a_drive(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> Path:
+    mission = tmp_path / "drive.yaml"
+    mission.write_text(
+        "tree:\n  sequence:\n    - mode: safe\n    - wait: 1s\n"
+        "    - drive: {velocity: 200 mm/s, distance: 20 cm}\n"
+    )
+    record = tmp_path / "drive.jsonl"
+    argv = ["run", str(mission), "--fast", "--display", "none", "--record", str(record)]
+    assert main(argv) == 0
+    capsys.readouterr()
+    return record
+
+
+def test_replay_stops_at_the_first_difference_and_names_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    record = _record_a_drive(tmp_path, capsys)
+    slower = tmp_path / "slower.yaml"
+    slower.write_text(
+        "tree:\n  sequence:\n    - mode: safe\n    - wait: 1s\n"
+        "    - drive: {velocity: 100 mm/s, distance: 20 cm}\n"
+    )
+    assert main(["replay", str(record), "--mission", str(slower)]) == 1
+    out = capsys.readouterr().out
+    line = next(x for x in out.splitlines() if x.startswith("replay:"))
+    assert "first difference at mission time 1.0" in line
+    assert "expected Drive (137) 89 00 c8 80 00, sent Drive (137) 89 00 64 80 00" in line
+    assert "end of the record" not in out  # it stopped there, not at the record's end
+
+
+def test_replay_checks_the_record_holds_the_missions_packets(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    record = _record_a_drive(tmp_path, capsys)
+    walls = tmp_path / "walls.yaml"
+    walls.write_text("tree:\n  sequence:\n    - wait: 1s\n    - sensor: wall_signal > 100\n")
+    assert main(["replay", str(record), "--mission", str(walls)]) == 2
+    err = capsys.readouterr().err
+    assert "walls.yaml reads [27] too: it cannot be replayed against this mission" in err
+    assert "Traceback" not in err

@@ -228,3 +228,23 @@ def test_the_same_drive_after_a_drive_direct_applies_again() -> None:
     host.send(C.drive(200, C.Radius.STRAIGHT), C.drive_direct(-100, -100))
     host.send(C.drive(200, C.Radius.STRAIGHT))
     assert host.sim.requested_left == host.sim.requested_right > 0.0
+
+
+@pytest.mark.parametrize(
+    "mode_command",
+    [C.start(), C.safe(), C.full(), C.control()],
+    ids=["start", "safe", "full", "control"],
+)
+def test_a_mode_command_stops_the_wheels(mode_command: object) -> None:
+    """The OI spec: a mode command stops the drive motors. Start then Safe must not resume
+    the 200 mm/s drive sent before (it did once the stop was dropped: this test fails)."""
+    host = make(mode="safe")
+    host.send(C.drive(200, 0x7FFF))
+    host.run(0.3)
+    assert host.sim.x > 2000.0
+    host.send(mode_command)  # type: ignore[arg-type]
+    host.send(C.safe())
+    x = host.sim.x
+    host.run(1.0)
+    assert host.sim.x == pytest.approx(x, abs=1.0)
+    assert (host.sim.left_speed, host.sim.right_speed) == (0.0, 0.0)

@@ -137,7 +137,7 @@ def test_near_dock_start_region_needs_a_dock() -> None:
 
 def test_yaml_tags_that_build_objects_are_refused() -> None:
     [problem] = problems("rooms: !!python/object:os.system {}\n")
-    assert problem.startswith("w.yaml:1:8: (YAML): found the tag")
+    assert problem.startswith("w.yaml:1:8: (YAML): found explicit tag !!python/object:os.system")
 
 
 DIRTY = """
@@ -174,3 +174,10 @@ def test_a_world_without_dirt_reads_0_and_bad_dirt_is_named() -> None:
     assert len(found) == 3, found
     assert all("dirt" in p and "level" in p and "1..255" in p for p in found)
     assert found[0].startswith("w.yaml:2:")
+
+
+def test_yaml_aliases_and_scalar_tags_in_a_world_are_refused_at_their_place() -> None:
+    [alias] = problems("a: &r [[0, 0], [3, 0], [3, 3], [0, 3]]\nrooms: [*r]\n")
+    assert alias.startswith("w.yaml:2:9: (YAML): found alias *r is not allowed")
+    [tag] = problems("rooms: [[[0, 0], [3, 0], [3, !!int x], [0, 3]]]\n")
+    assert tag.startswith("w.yaml:1:30: (YAML): found explicit tag !!int is not allowed")

@@ -15,6 +15,13 @@ def root(text: str) -> yaml.Node:
     return node
 
 
+def raw(text: str) -> yaml.Node:
+    """Composed without the alias and tag refusal, to test the layers behind it."""
+    node = yaml.compose(text, Loader=yamlsource.FAST_LOADER)
+    assert node is not None
+    return node
+
+
 def test_every_value_and_key_has_its_line_and_column() -> None:
     data, marks = yamlsource.to_data(root("name: room\nrooms:\n  - [[0, 0], [1, 2]]\n"), "{tag}")
     assert data == {"name": "room", "rooms": [[[0, 0], [1, 2]]]}
@@ -42,13 +49,13 @@ def test_keys_compare_as_values_one_and_true_are_one_key() -> None:
 
 def test_a_tagged_collection_is_refused_with_the_callers_words_never_built() -> None:
     with pytest.raises(yaml.constructor.ConstructorError) as caught:
-        yamlsource.to_data(root("x: !!python/object:os.system {}\n"), "no {tag!r} here")
+        yamlsource.to_data(raw("x: !!python/object:os.system {}\n"), "no {tag!r} here")
     assert caught.value.problem == "no 'tag:yaml.org,2002:python/object:os.system' here"
     assert yamlsource.error_position(caught.value) == (1, 4)
 
 
 def test_a_scalar_tag_without_a_safe_constructor_is_an_error_not_an_object() -> None:
-    node = root("!!python/name:os.system x\n")
+    node = raw("!!python/name:os.system x\n")
     assert not yamlsource.is_plain(node)
     with pytest.raises(yaml.constructor.ConstructorError):
         yamlsource.scalar(node)
@@ -60,7 +67,7 @@ def test_a_scalar_tag_without_a_safe_constructor_is_an_error_not_an_object() -> 
     [("3\n", True), ("2020-01-01\n", True), ("!foo x\n", False), ("!!set {a}\n", False)],
 )
 def test_only_core_schema_values_are_plain(text: str, plain: bool) -> None:
-    assert yamlsource.is_plain(root(text)) is plain
+    assert yamlsource.is_plain(raw(text)) is plain
 
 
 def test_syntax_errors_have_a_position_and_an_empty_document_is_none() -> None:
@@ -71,5 +78,52 @@ def test_syntax_errors_have_a_position_and_an_empty_document_is_none() -> None:
 
 
 def test_merge_keys_are_merged() -> None:
-    data, _ = yamlsource.to_data(root("a: &b {x: 1}\nc: {<<: *b, y: 2}\n"), "{tag}")
+    data, _ = yamlsource.to_data(raw("a: &b {x: 1}\nc: {<<: *b, y: 2}\n"), "{tag}")
     assert data["c"] == {"x": 1, "y": 2}
+
+
+def _bomb(levels: int, as_subtree: bool) -> str:
+    lines = ["a0: &a0 [x, x, x, x, x, x, x, x, x, x]"]
+    for i in range(1, levels + 1):
+        lines.append(f"a{i}: &a{i} [" + ", ".join([f"*a{i - 1}"] * 10) + "]")
+    use = (
+        f"tree: {{sequence: *a{levels}}}"
+        if not as_subtree
+        else (f"subtrees:\n  s:\n    tree: {{sequence: [{{wait: 1s}}, *a{levels}]}}")
+    )
+    return "\n".join([*lines, use]) + "\n"
+
+
+@pytest.mark.parametrize("loader", [yamlsource.FAST_LOADER, yamlsource.PURE_LOADER])
+@pytest.mark.parametrize("levels", [6, 7, 8])
+@pytest.mark.parametrize("as_subtree", [False, True])
+def test_an_alias_bomb_is_refused_at_its_first_alias(
+    loader: type, levels: int, as_subtree: bool
+) -> None:
+    """6 levels in 857 bytes took 18 s to validate; now nothing is composed: the first alias
+    is refused where it is written (no timing asserted: refusal before any expansion)."""
+    with pytest.raises(yamlsource.Refused) as caught:
+        yamlsource.compose(_bomb(levels, as_subtree), loader)
+    assert yamlsource.error_position(caught.value) == (2, 10)
+    assert "alias *a0 is not allowed" in str(caught.value.problem)
+
+
+@pytest.mark.parametrize(
+    ("text", "where", "shown"),
+    [("wait: !!int 1s\n", (1, 7), "!!int"), ("x: [1, !!float 2]\n", (1, 8), "!!float"),
+     ("x: {y: !!bool yes}\n", (1, 8), "!!bool"), ("x: !!str 3\n", (1, 4), "!!str"),
+     ("x: !!python/object:os.system {}\n", (1, 4), "!!python/object:os.system"),
+     ("- !custom 3\n", (1, 3), "!custom"), ("x: !!map {}\n", (1, 4), "!!map")],
+)  # fmt: skip
+def test_an_explicit_tag_is_refused_where_it_is_written(
+    text: str, where: tuple[int, int], shown: str
+) -> None:
+    with pytest.raises(yamlsource.Refused) as caught:
+        yamlsource.compose(text)
+    assert yamlsource.error_position(caught.value) == where
+    assert f"explicit tag {shown} is not allowed" in str(caught.value.problem)
+
+
+def test_an_anchor_alone_and_quoted_values_are_fine() -> None:
+    data, _ = yamlsource.to_data(root("a: &x 1\nb: '2'\nc: \"3\"\n"), "{tag}")
+    assert data == {"a": 1, "b": "2", "c": "3"}

@@ -1,0 +1,127 @@
+"""Seeded mutations of the shipped missions through the validator, in-process.
+
+    python tests/mission/mutations.py 10000 --seed 1
+
+Each mutation edits one shipped mission or example (a character, a line, a token: numbers,
+units, brackets, YAML anchors, aliases and tags, indentation) and compiles it with
+:func:`~roomba_bt.mission.compile_mission`. Counted: internal errors (the compiler's own
+exceptions, which must be none), the slowest compile, and the traced memory after the first
+and the last tenth of the run (flat: nothing kept between compiles). The suite runs a smaller
+seeded set (tests/mission/test_mutations.py).
+"""
+
+from __future__ import annotations
+
+import argparse
+import random
+import shutil
+import sys
+import tempfile
+import time
+import tracemalloc
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from roomba_bt.mission import compile_mission
+
+MISSIONS = Path(__file__).resolve().parents[2] / "missions"
+SOURCES = sorted({*MISSIONS.glob("*.yaml"), *MISSIONS.glob("examples/*.yaml")})
+TOKENS = ("0", "-1", "1e9", "2s", "mm/s", "deg", "100 mm/s", "${speed}", "@key", "&a ", "*a",
+          "!!int ", "!!float ", "!!bool ", "!!python/object:os.system ", "{", "}", "[", "]",
+          ": ", "- ", ",", "'", '"', "\t", "  ", "null", "~", "true", "sequence", "drive",
+          "reactive_fallback", "retry", "timeout", "subtree", "include", "plugins",
+          "<<: ")  # fmt: skip
+
+
+def mutate(text: str, rng: random.Random) -> str:
+    """One to three random edits of ``text``."""
+    for _ in range(rng.randint(1, 3)):
+        lines = text.splitlines(keepends=True) or ["\n"]
+        kind = rng.randrange(7)
+        at = rng.randrange(len(text) + 1)
+        if kind == 0:  # delete a few characters
+            text = text[:at] + text[at + rng.randint(1, 4) :]
+        elif kind == 1:  # insert a token
+            text = text[:at] + rng.choice(TOKENS) + text[at:]
+        elif kind == 2:  # replace a character
+            text = text[:at] + chr(rng.randint(32, 126)) + text[at + 1 :]
+        elif kind == 3:  # duplicate a line
+            i = rng.randrange(len(lines))
+            lines.insert(i, lines[i])
+            text = "".join(lines)
+        elif kind == 4:  # delete a line
+            del lines[rng.randrange(len(lines))]
+            text = "".join(lines)
+        elif kind == 5:  # re-indent a line
+            i = rng.randrange(len(lines))
+            lines[i] = " " * rng.choice((0, 1, 2, 4, 6)) + lines[i].lstrip(" ")
+            text = "".join(lines)
+        else:  # swap two lines
+            i, j = rng.randrange(len(lines)), rng.randrange(len(lines))
+            lines[i], lines[j] = lines[j], lines[i]
+            text = "".join(lines)
+    return text
+
+
+@dataclass
+class Tally:
+    compiles: int = 0
+    valid: int = 0
+    internal_errors: list[str] = field(default_factory=list)
+    slowest_s: float = 0.0
+    slowest: str = ""
+    memory_early: int = 0
+    memory_late: int = 0
+
+
+def run(count: int, seed: int, *, measure_time: bool = False) -> Tally:
+    """``count`` mutations from ``seed``, compiled in a copy of the missions folder (so
+    includes resolve as they would)."""
+    rng = random.Random(seed)
+    tally = Tally()
+    texts = {p.relative_to(MISSIONS): p.read_text(encoding="utf-8") for p in SOURCES}
+    names = sorted(texts)
+    tracemalloc.start()
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp) / "missions"
+        shutil.copytree(MISSIONS, folder)
+        for n in range(count):
+            name = rng.choice(names)
+            target = folder / name.parent / f"mutant_{n % 2}.yaml"
+            text = mutate(texts[name], rng)
+            target.write_text(text, encoding="utf-8")
+            start = time.perf_counter() if measure_time else 0.0
+            mission, diagnostics = compile_mission(target)
+            if measure_time and (spent := time.perf_counter() - start) > tally.slowest_s:
+                tally.slowest_s, tally.slowest = spent, f"{name} #{n}"
+            tally.compiles += 1
+            tally.valid += mission is not None
+            for d in diagnostics:
+                if "internal error" in d.message:
+                    tally.internal_errors.append(f"{name} #{n}: {d.message}\n{text}")
+            del mission, diagnostics
+            if n + 1 == max(1, count // 10):
+                tally.memory_early = tracemalloc.get_traced_memory()[0]
+    tally.memory_late = tracemalloc.get_traced_memory()[0]
+    tracemalloc.stop()
+    return tally
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("count", type=int, nargs="?", default=10_000)
+    parser.add_argument("--seed", type=int, default=1)
+    args = parser.parse_args(argv)
+    tally = run(args.count, args.seed, measure_time=True)
+    print(f"{tally.compiles} mutations (seed {args.seed}): {tally.valid} still valid, "
+          f"{len(tally.internal_errors)} internal errors, slowest compile "
+          f"{tally.slowest_s:.3f} s ({tally.slowest}), traced memory after the first tenth "
+          f"{tally.memory_early / 1e6:.2f} MB, at the end "
+          f"{tally.memory_late / 1e6:.2f} MB")  # fmt: skip
+    for error in tally.internal_errors[:5]:
+        print(error, file=sys.stderr)
+    return 1 if tally.internal_errors else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,147 @@
+"""A mission file is data: it imports no plugin file and reads no file outside its tree unless
+the command line allows it (``--allow-plugin-files``, ``--include-dir``)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.cli import main
+from roomba_bt.mission import Permissions, compile_mission
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "missions" / "examples"
+Capsys = pytest.CaptureFixture[str]
+Write = Callable[..., Path]
+
+#: a plugin file that leaves a trace when imported (the test's proof of "nothing imported")
+PLUGIN = """
+from pathlib import Path
+Path(__file__).with_name("imported.txt").write_text("imported")
+from roomba_bt.behaviours import Condition, declare
+@declare("always_true", kind="condition", reads=(8,))
+class AlwaysTrue(Condition):
+    '''Always.'''
+    def check(self, snapshot):
+        return True
+"""
+
+
+@pytest.fixture
+def plugin_mission(mission_file: Write) -> Path:
+    mission_file(PLUGIN, "evil.py")
+    return mission_file("plugins: [./evil.py]\ntree: {sequence: [always_true, {wait: 1s}]}\n")
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["validate"],
+        ["show"],
+        ["run", "--fast", "--display", "none", "--timeout", "5s"],
+        ["eval", "--runs", "1", "--no-progress", "--timeout", "5s"],
+    ],
+    ids=lambda c: c[0],
+)
+def test_a_plugin_file_needs_the_command_lines_permission(
+    plugin_mission: Path, command: list[str], capsys: Capsys
+) -> None:
+    assert main([command[0], str(plugin_mission), *command[1:]]) == 2
+    out, err = capsys.readouterr()
+    assert "m.yaml:1:11: plugin file './evil.py' not loaded" in out + err
+    assert "--allow-plugin-files" in out + err
+    assert not (plugin_mission.parent / "imported.txt").exists()
+    assert "Traceback" not in out + err
+
+
+def test_with_the_permission_the_plugin_file_loads(plugin_mission: Path, capsys: Capsys) -> None:
+    assert main(["validate", str(plugin_mission), "--allow-plugin-files"]) == 0
+    assert (plugin_mission.parent / "imported.txt").exists()
+
+
+def test_the_shipped_plugin_example_runs_with_the_permission(capsys: Capsys) -> None:
+    mission = str(EXAMPLES / "custom_condition.yaml")
+    assert main(["validate", mission]) == 2
+    argv = ["run", mission, "--fast", "--display", "none", "--world", "corridor"]
+    assert main([*argv, "--timeout", "5min", "--allow-plugin-files"]) == 0
+
+
+def test_an_included_plugin_file_needs_it_too(mission_file: Write) -> None:
+    mission_file(PLUGIN, "lib/evil.py")
+    mission_file("plugins: [./evil.py]\nsubtrees: {t: {tree: {wait: 1s}}}\n", "lib/l.yaml")
+    path = mission_file("include: [lib/l.yaml]\ntree: {wait: 1s}\n")
+    _, diagnostics = compile_mission(path)
+    assert [(d.file.endswith("l.yaml"), d.line, d.column) for d in diagnostics][:1] == [
+        (True, 1, 11)
+    ]
+    assert not (path.parent / "lib" / "imported.txt").exists()
+
+
+@pytest.mark.parametrize("target", ["/etc/passwd", "../outside/secret.yaml"])
+@pytest.mark.parametrize("command", ["validate", "show", "run"])
+def test_an_include_outside_the_mission_folder_is_refused(
+    tmp_path: Path, target: str, command: str, capsys: Capsys
+) -> None:
+    (tmp_path / "outside").mkdir()
+    (tmp_path / "outside" / "secret.yaml").write_text("password: hunter2\n")
+    folder = tmp_path / "mission"
+    folder.mkdir()
+    path = folder / "m.yaml"
+    path.write_text(f"include: [{target}]\ntree: {{wait: 1s}}\n")
+    extra = ["--fast", "--display", "none"] if command == "run" else []
+    assert main([command, str(path), *extra]) == 2
+    out, err = capsys.readouterr()
+    assert f"m.yaml:1:11: include {target!r} is outside the mission's folder" in out + err
+    assert "--include-dir" in out + err
+    assert "hunter2" not in out + err and "root:" not in out + err
+
+
+def test_include_dir_allows_a_folder(tmp_path: Path, capsys: Capsys) -> None:
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    (shared / "lib.yaml").write_text("subtrees: {pause: {tree: {wait: 1s}}}\n")
+    folder = tmp_path / "mission"
+    folder.mkdir()
+    path = folder / "m.yaml"
+    path.write_text("include: [../shared/lib.yaml]\ntree: {subtree: pause}\n")
+    assert main(["validate", str(path)]) == 2
+    assert main(["validate", str(path), "--include-dir", str(shared)]) == 0
+    mission, _ = compile_mission(path, permissions=Permissions(include_dirs=(shared,)))
+    assert mission is not None
+
+
+def test_a_symlink_out_of_the_tree_is_outside(tmp_path: Path) -> None:
+    (tmp_path / "outside.yaml").write_text("subtrees: {pause: {tree: {wait: 1s}}}\n")
+    folder = tmp_path / "mission"
+    folder.mkdir()
+    (folder / "link.yaml").symlink_to(tmp_path / "outside.yaml")
+    path = folder / "m.yaml"
+    path.write_text("include: [link.yaml]\ntree: {subtree: pause}\n")
+    _, diagnostics = compile_mission(path)
+    assert "is outside the mission's folder" in diagnostics[0].message
+
+
+def test_a_file_that_is_not_a_mission_is_never_echoed(tmp_path: Path, capsys: Capsys) -> None:
+    passwd = tmp_path / "passwd"
+    passwd.write_text("root:x:0:0:root:/root:/bin/bash\n")
+    config = tmp_path / "config.yaml"
+    config.write_text("password: hunter2\ntoken: abc\n")
+    (tmp_path / "m.yaml").write_text("include: [passwd, config.yaml]\ntree: {wait: 1s}\n")
+    for path in (passwd, config, tmp_path / "m.yaml"):
+        assert main(["validate", str(path)]) == 2
+    out, err = capsys.readouterr()
+    assert "is not a mission file" in out
+    assert "root:" not in out + err and "hunter2" not in out + err and "abc" not in out + err
+
+
+def test_the_shipped_library_is_allowed_from_anywhere(tmp_path: Path) -> None:
+    from roomba_bt.mission import SHIPPED_LIBRARY
+
+    by_path = SHIPPED_LIBRARY[0] / "lib" / "docking.yaml"
+    for name in ("roomba-bt:lib/docking.yaml", str(by_path)):
+        path = tmp_path / "m.yaml"
+        path.write_text(f"include: [{name}]\ntree: {{subtree: dock}}\n")
+        mission, diagnostics = compile_mission(path)
+        assert diagnostics == []
+        assert mission is not None
