@@ -143,7 +143,7 @@ def test_refusals_are_stamped_with_mission_time(
     (tmp_path / "rogue.py").write_text(ROGUE)
     path = tmp_path / "refused.yaml"
     path.write_text("plugins: [./rogue.py]\ntree:\n  sequence: [{wait: 0.3s}, rogue]\n")
-    main(["run", str(path), "--fast", "--display", "none"])
+    main(["run", str(path), "--fast", "--display", "none", "--allow-plugin-files"])
     err = capsys.readouterr().err
     assert re.search(r"^refused: t=0\.3\d\d ", err, re.M), err
 
