@@ -38,9 +38,9 @@ from roomba_bt.oi.bits import (
 )
 from roomba_bt.oi.errors import EncodeError
 from roomba_bt.oi.ir import IR_CHARACTERS, IRCharacter
-from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.oi.opcodes import COMMANDS
-from roomba_bt.oi.packets import PACKETS, PACKETS_BY_NAME, VALID_PACKET_IDS, expand
+from roomba_bt.oi.packets import PACKETS, PACKETS_BY_NAME, VALID_PACKET_IDS, PacketSpec, expand
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
 
 STREAM_HEADER = 19
@@ -74,6 +74,8 @@ class FrameLayout:
     """Where each packet sits in a payload for one requested packet list."""
 
     __slots__ = (
+        "encoder_slots",
+        "frame_id_mask",
         "frame_mask",
         "frame_template",
         "id_offsets",
@@ -82,6 +84,7 @@ class FrameLayout:
         "packet_ids",
         "payload_size",
         "profile",
+        "range_checks",
         "struct",
         "with_ids",
     )
@@ -96,6 +99,10 @@ class FrameLayout:
         members: list[int] = []
         id_offsets: list[int] = []
         offset = 0
+        # bits no in-range value sets (reserved bits, the high nibble of a 12-bit signal),
+        # by the byte offset in the payload
+        zero_bits: list[tuple[int, int]] = []
+        range_checks: list[tuple[int, int, int]] = []
         for pid in packet_ids:
             if with_ids:
                 id_offsets.append(offset)
@@ -104,6 +111,10 @@ class FrameLayout:
             for member in expand(pid):
                 spec = profile.packet(member)
                 if member not in index:
+                    zeros, check = _range_rule(spec)
+                    zero_bits += [(offset + i, byte) for i, byte in enumerate(zeros) if byte]
+                    if check is not None:
+                        range_checks.append((len(members), *check))
                     index[member] = len(members)
                     members.append(member)
                     codes.append(spec.struct_code)
@@ -112,6 +123,12 @@ class FrameLayout:
                 offset += spec.size
         self.members = tuple(members)
         self.index: Mapping[int, int] = index
+        #: (value slot, lowest, highest) for each packet whose range the mask below cannot say
+        self.range_checks: tuple[tuple[int, int, int], ...] = tuple(range_checks)
+        #: value slots of the left and right encoder counts (packets 43, 44), if both are here
+        self.encoder_slots: tuple[int, int] | None = (
+            (index[43], index[44]) if 43 in index and 44 in index else None
+        )
         self.struct = struct.Struct(">" + "".join(codes))
         self.payload_size = offset
         if with_ids and offset > 255:  # n-bytes is one byte: such a stream cannot be framed
@@ -123,11 +140,19 @@ class FrameLayout:
         # and the values under it, each one big-endian integer (one test per candidate).
         mask = bytearray(offset + 3)
         template = bytearray(offset + 3)
+        # The values' reserved bits are in the same mask, with 0 in the template: a frame whose
+        # bytes set one is out of range, and costs the parser no second test.
         if with_ids:
             fixed = [(0, STREAM_HEADER), (1, offset & 0xFF)]
             fixed += [(2 + off, pid) for off, pid in zip(id_offsets, packet_ids, strict=True)]
             for position, value in fixed:
                 mask[position], template[position] = 0xFF, value
+        #: the mask of the fixed bytes alone (header, n-bytes, ids): tells a candidate with
+        #: a reserved bit set (out of range) from one that is no frame at all
+        self.frame_id_mask = int.from_bytes(mask, "big")
+        if with_ids:
+            for position, bits in zero_bits:
+                mask[2 + position] |= bits
         self.frame_mask = int.from_bytes(mask, "big")
         self.frame_template = int.from_bytes(template, "big")
 
@@ -172,6 +197,28 @@ class FrameLayout:
         body = bytes((STREAM_HEADER, len(payload))) + payload
         total = sum(body) if include_header else sum(body) - STREAM_HEADER
         return body + bytes(((-total) & 0xFF,))
+
+
+def _range_rule(spec: PacketSpec) -> tuple[bytes, tuple[int, int] | None]:
+    """How a value of ``spec`` is checked against its range: the bits of its bytes that no
+    value in range sets (big-endian, as on the wire), and a (lowest, highest) test for what
+    those bits cannot say (0-5, 0-108, -500..500), or None.
+
+    ``bumps_wheel_drops`` (0-15) -> ``b"\xf0"``, no test; ``wall_signal`` (0-1023) ->
+    ``b"\xfc\x00"``; ``charging_state`` (0-5) -> ``b"\xf8"`` and (0, 5); packet 35 (the OI
+    mode) gets only its bits: the parser tests its range, which the "mode + 1" firmware moves.
+    """
+    bits = 8 * spec.size
+    if spec.signed:
+        full = spec.minimum == -(1 << (bits - 1)) and spec.maximum == (1 << (bits - 1)) - 1
+        return bytes(spec.size), None if full else (spec.minimum, spec.maximum)
+    top = spec.maximum + 1 if spec.id != OI_MODE_PACKET else spec.maximum + 2
+    width = max(top - 1, 0).bit_length()
+    zeros = (((1 << bits) - 1) & ~((1 << width) - 1)).to_bytes(spec.size, "big")
+    exact = spec.minimum == 0 and top == 1 << width
+    if exact or spec.id == OI_MODE_PACKET:
+        return zeros, None
+    return zeros, (spec.minimum, spec.maximum)
 
 
 @lru_cache(maxsize=256)

@@ -16,6 +16,16 @@ How garbage is handled (the parser never raises on bad bytes):
   the requested ones, is not a frame: one byte is skipped and the search goes on;
 * a candidate whose checksum fails is counted in ``checksum_failures`` and only its header byte
   is skipped, so a valid frame that starts inside it (after a truncated frame) is still found;
+* a candidate that passes the checksum but carries a value out of its range is not a frame
+  either: counted in ``implausible`` and, like a checksum failure, only its header byte is
+  skipped. The OI checksum is an 8-bit sum: two flips of the same bit in opposite directions
+  cancel (1 pair in 16), and a truncated frame completed by the next one's bytes passes about
+  1 time in 256; the ranges catch most of those. Out of range means: a reserved bit set
+  (packet 7 bits 4-7, 14 bits 5-7, 45 bit 7, the high nibble of a 12-bit signal...), a value
+  past its table limit (charging state 0-5, requested velocities -500..500, packet 35 0-3, or
+  1-4 on firmware that reports the mode + 1), or an encoder step larger than the wheels turn
+  in the frames since the last accepted one (:data:`~roomba_bt.oi.odometry.MAX_COUNTS_PER_SLOT`
+  each; two consecutive frames that agree re-anchor the encoders after a real gap);
 * a frame cut at the end of a chunk waits for the next ``feed``.
 """
 
@@ -27,6 +37,8 @@ from dataclasses import dataclass
 
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.frames import STREAM_HEADER, FrameLayout, SensorFrame, layout_for
+from roomba_bt.oi.modes import OI_MODE_PACKET
+from roomba_bt.oi.odometry import MAX_COUNTS_PER_SLOT
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
 
 
@@ -71,6 +83,8 @@ class ParserCounters:
     checksum_failures: int = 0
     skipped_bytes: int = 0
     bytes_fed: int = 0
+    #: candidates that passed the checksum with a value out of range (dropped)
+    implausible: int = 0
 
 
 class StreamParser:
@@ -84,12 +98,16 @@ class StreamParser:
     """
 
     __slots__ = (
+        "_anchor",
         "_buffer",
         "_byte_sum",
+        "_checks",
+        "_encoders",
         "_mask",
         "_n",
         "_ok_sums",
         "_size",
+        "_suspect",
         "_template",
         "_unpack",
         "counters",
@@ -100,8 +118,23 @@ class StreamParser:
         self,
         packet_ids: Iterable[int],
         profile: RobotProfile = DEFAULT_PROFILE,
+        *,
+        mode_plus_one: bool | None = None,
     ) -> None:
+        """``mode_plus_one``: whether packet 35 reads the mode + 1 (1-4 in range instead of
+        0-3), as the session learned at start-up; None: as the profile expects."""
         self.layout: FrameLayout = layout_for(tuple(packet_ids), profile, True)
+        layout = self.layout
+        plus_one = profile.reports_mode_plus_one if mode_plus_one is None else mode_plus_one
+        checks = list(layout.range_checks)
+        if OI_MODE_PACKET in layout.index:
+            checks.append((layout.index[OI_MODE_PACKET], int(plus_one), 3 + int(plus_one)))
+        self._checks = tuple(checks)
+        self._encoders = layout.encoder_slots
+        # (left, right, byte offset in the stream, time) of the last accepted frame, and of
+        # the last frame refused for its encoder step alone
+        self._anchor: _EncoderMark | None = None
+        self._suspect: _EncoderMark | None = None
         self.counters = ParserCounters()
         self._buffer = bytearray()
         self._n = self.layout.payload_size
@@ -129,7 +162,47 @@ class StreamParser:
     def reset(self) -> None:
         self._buffer.clear()
 
-    def feed(self, data: bytes | bytearray | memoryview) -> list[SensorFrame]:
+    def plausible(self, values: tuple[int, ...], at: int, now: float | None = None) -> bool:
+        """True if every value of a frame starting at byte ``at`` of the stream, read at
+        ``now`` (seconds, any clock; None: unknown) is in range (the layout's reserved bits
+        are already checked with the frame's fixed bytes). The frames since the last
+        accepted one are counted in bytes, or in 15 ms slots of ``now`` where more (frames
+        lost whole, with no bytes)."""
+        for slot, lowest, highest in self._checks:
+            value = values[slot]
+            if value < lowest or value > highest:
+                return False
+        encoders = self._encoders
+        if encoders is None:
+            return True
+        left, right = values[encoders[0]], values[encoders[1]]
+        anchor = self._anchor
+        if anchor is not None and not _steps_within(
+            anchor, left, right, self._limit(anchor, at, now)
+        ):
+            suspect = self._suspect
+            self._suspect = (left, right, at, now)
+            if suspect is None or not _steps_within(
+                suspect, left, right, self._limit(suspect, at, now)
+            ):
+                return False
+        self._anchor = (left, right, at, now)
+        self._suspect = None
+        return True
+
+    def _limit(self, since: _EncoderMark, at: int, now: float | None) -> int:
+        """Most counts the wheels can turn between the frame ``since`` and one at ``at``."""
+        slots = round((at - since[2]) / self._size)
+        then = since[3]
+        if now is not None and then is not None:
+            slots = max(slots, round((now - then) / SLOT_SECONDS))
+        return MAX_COUNTS_PER_SLOT * max(1, slots)
+
+    def feed(
+        self, data: bytes | bytearray | memoryview, now: float | None = None
+    ) -> list[SensorFrame]:
+        """The frames ``data`` completes; ``now``: when it arrived (seconds, for the
+        encoder step check across frames lost whole), None if unknown."""
         buf = self._buffer
         size = self._size
         # The common case, one whole frame per read: the same four checks as below,
@@ -141,21 +214,29 @@ class StreamParser:
             and self._byte_sum(data) & 0xFF in self._ok_sums
         ):
             counters = self.counters
-            counters.bytes_fed += size
-            counters.frames += 1
-            return [SensorFrame(self.layout, self._unpack(data, 2))]
+            values = self._unpack(data, 2)
+            if self.plausible(values, counters.bytes_fed, now):
+                counters.bytes_fed += size
+                counters.frames += 1
+                return [SensorFrame(self.layout, values)]
+            counters.implausible += 1
+            first = 1  # its header byte skipped; the search goes on inside it
+        else:
+            first = 0
         buf += data
         counters = self.counters
         counters.bytes_fed += len(data)
+        base = counters.bytes_fed - len(buf)  # the stream's byte offset of buf[0]
+        plausible = self.plausible
         frames: list[SensorFrame] = []
         layout = self.layout
         ok_sums = self._ok_sums
         mask, template, unpack, byte_sum = self._mask, self._template, self._unpack, self._byte_sum
+        id_mask = self.layout.frame_id_mask
         from_bytes = int.from_bytes
         n = self._n
-        pos = 0
+        pos = skipped = first
         end = len(buf)
-        skipped = 0
         while True:
             start = buf.find(STREAM_HEADER, pos)
             if start < 0:
@@ -171,12 +252,21 @@ class StreamParser:
                     continue
                 break
             window = buf[pos : pos + size]
-            if from_bytes(window, "big") & mask != template:
+            bits = from_bytes(window, "big")
+            if bits & mask != template:
+                if bits & id_mask == template:  # a frame, but a reserved bit is set
+                    counters.implausible += 1
                 skipped += 1
                 pos += 1
             elif byte_sum(window) & 0xFF in ok_sums:
-                frames.append(SensorFrame(layout, unpack(window, 2)))
-                pos += size
+                values = unpack(window, 2)
+                if plausible(values, base + pos, now):
+                    frames.append(SensorFrame(layout, values))
+                    pos += size
+                else:
+                    counters.implausible += 1
+                    skipped += 1
+                    pos += 1
             else:
                 counters.checksum_failures += 1
                 skipped += 1
@@ -186,6 +276,20 @@ class StreamParser:
         counters.frames += len(frames)
         counters.skipped_bytes += skipped
         return frames
+
+
+#: (left counts, right counts, byte offset in the stream, arrival time or None)
+_EncoderMark = tuple[int, int, int, float | None]
+#: A stream frame every 15 ms.
+SLOT_SECONDS = 0.015
+
+
+def _steps_within(anchor: _EncoderMark, left: int, right: int, limit: int) -> bool:
+    """Both encoders moved at most ``limit`` counts from ``anchor`` (modulo 2**16)."""
+    return (
+        abs(((left - anchor[0] + 0x8000) & 0xFFFF) - 0x8000) <= limit
+        and abs(((right - anchor[1] + 0x8000) & 0xFFFF) - 0x8000) <= limit
+    )
 
 
 class ReplyParser:

@@ -12,8 +12,10 @@ Start-up (:meth:`Connection.start`)::
 
     [128]                 Start: the OI leaves Off for Passive
     [150][0]              pause a stream a previous session may have left running
-    [149][1][35]          Query List, packet 35: the robot answers one byte (its mode), which
-                          proves it listens at this baud and calibrates the "mode + 1" rule
+    [149][1][35]  x 2     Query List, packet 35, twice: the robot answers one byte (its mode),
+                          which proves it listens at this baud and calibrates the "mode + 1"
+                          rule; the reply has no checksum, so two that agree are needed (up to
+                          START_QUERIES asks)
     [131] or [132]        Safe or Full, if asked
     [148][n][ids...]      the stream, checked against the bandwidth before it is sent
 
@@ -71,6 +73,8 @@ BAUD_CHANGE_WAIT = 0.1
 #: How long the input must stay quiet after pausing a stale stream, before the confirm query.
 DRAIN_QUIET = 2 * SLOT_SECONDS
 DRAIN_LIMIT = 0.25
+#: Most Query Lists of packet 35 at start-up, looking for two consecutive replies that agree.
+START_QUERIES = 4
 NO_ANSWER_CAUSES = (
     "wrong baud rate (115200 by default; 19200 after holding Clean at power-off or a BRC pulse)",
     "no power or the robot asleep (press Clean or the power button)",
@@ -87,6 +91,8 @@ class LinkCounters:
 
     frames: int = 0
     checksum_failures: int = 0
+    #: frames that passed the checksum with a value out of range (dropped like a failure)
+    implausible_frames: int = 0
     skipped_bytes: int = 0
     bytes_read: int = 0
     bytes_written: int = 0
@@ -212,21 +218,15 @@ class Connection:
         self.send(oi.start())
         self.send(oi.pause_stream())
         self._drain()
-        reply = self.query((OI_MODE_PACKET,), confirm_timeout)
-        if reply is None:
+        raw = self._agreed_mode_reply(confirm_timeout)
+        if not self.modes.calibrate(raw, self.link.transport.now()):
             raise ConnectionFailed(
                 self.name,
-                f"the robot did not answer a Query List (149) for packet 35 within "
-                f"{confirm_timeout:g} s",
-                NO_ANSWER_CAUSES,
-            )
-        if self.modes.mode is not OIMode.PASSIVE or self.modes.plus_one is None:
-            raise ConnectionFailed(
-                self.name,
-                f"the robot answered {reply[OI_MODE_PACKET]} for its OI mode right after Start, "
+                f"the robot answered {raw} for its OI mode right after Start, "
                 f"which is no mode (Passive reads 1, or 2 on firmware that reports mode + 1)",
                 (*NO_ANSWER_CAUSES[:1], "another program talking to the robot"),
             )
+        self.link.mode_plus_one = self.modes.plus_one
         if target is OIMode.SAFE:
             self.send(oi.safe())
         elif target is OIMode.FULL:
@@ -235,6 +235,30 @@ class Connection:
             self.send(stream_command)
         log.info(
             "%s: %s in %s, streaming %s", self.name, self.profile.title, target.label, list(ids)
+        )
+
+    def _agreed_mode_reply(self, timeout: float) -> int:
+        """Packet 35 as two consecutive Query List replies agree on it (a reply has no
+        checksum: one corrupted byte must not end the run or teach a wrong offset)."""
+        replies: list[int] = []
+        for _ in range(START_QUERIES):
+            reply = self._query_raw((OI_MODE_PACKET,), timeout)
+            if reply is None:
+                raise ConnectionFailed(
+                    self.name,
+                    f"the robot did not answer a Query List (149) for packet 35 within "
+                    f"{timeout:g} s",
+                    NO_ANSWER_CAUSES,
+                )
+            replies.append(reply[OI_MODE_PACKET])
+            if len(replies) >= 2 and replies[-1] == replies[-2]:
+                return replies[-1]
+            log.warning("%s: packet 35 replies disagree (%s); asking again", self.name, replies)
+        raise ConnectionFailed(
+            self.name,
+            f"{START_QUERIES} replies to a Query List for packet 35 never agreed twice in a row "
+            f"({replies})",
+            ("a noisy line", *NO_ANSWER_CAUSES[:1], "another program talking to the robot"),
         )
 
     def _drain(self) -> None:
@@ -250,6 +274,15 @@ class Connection:
 
         Only while no stream runs (a reply has no header: it could not be told apart).
         """
+        frame = self._query_raw(packet_ids, timeout)
+        if frame is not None:
+            change = self.modes.reconcile(frame, self.link.index, self.link.transport.now())
+            if change is not None:
+                self._report_change(change)
+        return frame
+
+    def _query_raw(self, packet_ids: Sequence[int], timeout: float) -> SensorFrame | None:
+        """Query List and its reply, without telling the mode model."""
         if self.link.streaming:
             raise RobotError("query() needs the stream paused: a reply cannot be told apart")
         reply = ReplyParser(tuple(packet_ids), self.profile)
@@ -259,9 +292,6 @@ class Connection:
         while True:
             frame = reply.feed(self.link.read(max(0.0, deadline - clock())))
             if frame is not None:
-                change = self.modes.reconcile(frame, self.link.index, clock())
-                if change is not None:
-                    self._report_change(change)
                 return frame
             if clock() >= deadline:
                 return None
@@ -312,10 +342,11 @@ class Connection:
     @property
     def counters(self) -> LinkCounters:
         link = self.link
-        frames, checksums, skipped = link.parsed()
+        frames, checksums, skipped, implausible = link.parsed()
         return LinkCounters(
             frames=frames,
             checksum_failures=checksums,
+            implausible_frames=implausible,
             skipped_bytes=skipped,
             bytes_read=link.bytes_read,
             bytes_written=link.bytes_written,

@@ -94,8 +94,11 @@ class StreamLink:
         self.bytes_read = 0
         self.bytes_written = 0
         self.watchdog_trips = 0
+        #: whether packet 35 reads the mode + 1, as the session learned at start-up (None:
+        #: as the profile expects); the parser's range for packet 35 follows it
+        self.mode_plus_one: bool | None = None
         self._parser: StreamParser | None = None
-        self._parsed_before = (0, 0, 0)  # frames, checksum failures, skipped: older parsers
+        self._parsed_before = (0, 0, 0, 0)  # frames, checksum failures, skipped, implausible
         self._stream_started = 0.0
         self._last_frame_time: float | None = None
 
@@ -140,14 +143,17 @@ class StreamLink:
         """Stream (148) was written: frames of ``ids`` from now on (none: no stream)."""
         if self._parser is not None:
             c = self._parser.counters
-            frames, checksums, skipped = self._parsed_before
+            frames, checksums, skipped, implausible = self._parsed_before
             self._parsed_before = (
                 frames + c.frames,
                 checksums + c.checksum_failures,
                 skipped + c.skipped_bytes,
+                implausible + c.implausible,
             )
         self.stream_ids = ids
-        self._parser = StreamParser(ids, self.profile) if ids else None
+        self._parser = (
+            StreamParser(ids, self.profile, mode_plus_one=self.mode_plus_one) if ids else None
+        )
         self.streaming = bool(ids)
         self._stream_started = now
         self._last_frame_time = None
@@ -161,15 +167,17 @@ class StreamLink:
         if self.streaming:
             self.status = LinkStatus.STREAMING
 
-    def parsed(self) -> tuple[int, int, int]:
-        """Frames, checksum failures and skipped bytes since the link was made."""
-        frames, checksums, skipped = self._parsed_before
+    def parsed(self) -> tuple[int, int, int, int]:
+        """Frames, checksum failures, skipped bytes and frames dropped as out of range since
+        the link was made."""
+        frames, checksums, skipped, implausible = self._parsed_before
         if self._parser is not None:
             c = self._parser.counters
             frames += c.frames
             checksums += c.checksum_failures
             skipped += c.skipped_bytes
-        return frames, checksums, skipped
+            implausible += c.implausible
+        return frames, checksums, skipped, implausible
 
     def read_frames(self, timeout: float) -> list[TimedFrame]:
         """What is there now, or wait up to ``timeout`` s for at least one frame; then the
@@ -191,7 +199,7 @@ class StreamLink:
         """Feed ``data`` that arrived at ``arrival`` to the parser; the frames it completed."""
         if self._parser is None:
             return []
-        frames = self._parser.feed(data)
+        frames = self._parser.feed(data, arrival)
         if not frames:
             return []
         out: list[TimedFrame] = []

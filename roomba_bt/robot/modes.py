@@ -17,31 +17,32 @@ mode does not accept, or one the profile does not have.
 
 Packet 35 and the "mode + 1" bug
 --------------------------------
-Some 600-series firmware reports OI mode + 1 (Passive reads 2, Safe 3, Full 4). The model
-learns the offset (0 or 1) from readings that admit one reading only, and until then ignores
-readings that admit two. The rule rests on two facts: a robot in Off neither streams nor
-answers, so a packet 35 that arrived never means Off; and a robot changes mode by itself only
-by falling back to Passive. So the modes the robot may be in are the model's mode, the mode a
-command just sent leads to (for ``settle`` seconds after it was sent), and Passive if either
-is Safe or Full. A raw value fits offset ``o`` if ``raw - o`` is one of those modes:
+Some 600-series firmware reports OI mode + 1 (Passive reads 2, Safe 3, Full 4). The offset
+(0 or 1) is learned once, at start-up, by :meth:`ModeModel.calibrate`: right after Start the
+robot is in Passive, so a reply of 1 means offset 0 and a reply of 2 offset 1; the
+:class:`~roomba_bt.robot.connection.Connection` asks twice (a reply has no checksum) and
+calibrates only when both replies agree. A stream frame never teaches the offset: one
+corrupted frame with packet 35 = 4 made an earlier model take every later Safe for Passive,
+which disarmed the safe stop. Until the offset is known, packet 35 is ignored.
 
-* fits one offset only: that offset is learned, the mode is ``raw - o``. Right after Start a
-  reading of 2 can only be Passive + 1, a reading of 1 only Passive; 4 is always Full + 1;
-* fits both (in Safe, 2 may be Safe or Passive + 1): ignored until the offset is known;
-* fits none while the offset is known: taken as ``raw - offset`` (a resync) if that is a mode,
-  otherwise ignored and counted in :attr:`ModeModel.invalid_readings`; never an exception.
-
-:class:`~roomba_bt.robot.connection.Connection` queries packet 35 right after Start, so the
-offset is known before the first mode command on every robot. The profile's
-``reports_mode_plus_one`` only decides whether finding the bug is expected (info) or a
-surprise (warning).
+With the offset known, the modes the robot may be in are the model's mode, the mode a command
+just sent leads to (for ``settle`` seconds after it was sent), and Passive if either is Safe or
+Full (a robot changes mode by itself only by falling back to Passive). A reading
+``raw - offset`` that is one of those is followed; one that is another mode is a resync; one
+that is no mode is ignored and counted in :attr:`ModeModel.invalid_readings`; never an
+exception. A change the robot made by itself is followed only when two consecutive frames
+report it (:attr:`ModeModel.confirm`), or when the frame that reports a fall to Passive also
+shows its cause (a cliff, a wheel drop, the charger: the robot's reaction agrees with its
+sensors, and the tree must not drive on for a frame): a single corrupted packet 35 that passed
+the checksum and the range checks changes nothing. The profile's ``reports_mode_plus_one``
+only decides whether finding the bug is expected (info) or a surprise (warning).
 """
 
 from __future__ import annotations
 
 import logging
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable
 from typing import Any
 
 from transitions import Machine
@@ -136,23 +137,22 @@ class OffsetDetector:
         self.offset: int | None = None
         self.expected_plus_one = profile.reports_mode_plus_one
 
-    def interpret(self, raw: int, possible: Iterable[OIMode]) -> OIMode | None:
-        """The mode ``raw`` means given the modes the robot may be in, or None (ignore)."""
-        allowed = set(possible) - {OIMode.OFF}
-        offsets = (0, 1) if self.offset is None else (self.offset,)
-        fits = [(o, OIMode(raw - o)) for o in offsets if 1 <= raw - o <= 3]
-        fitting = [(o, m) for o, m in fits if m in allowed]
-        if raw == 4 and self.offset != 1:
-            self._learn(1, raw)
-            return OIMode.FULL
-        if fitting and len({o for o, _ in fitting}) == 1:
-            offset, mode = fitting[0]
-            if self.offset is None:
-                self._learn(offset, raw)
-            return mode
-        if self.offset is not None and fits:
-            return fits[0][1]
-        return None
+    def interpret(self, raw: int) -> OIMode | None:
+        """The mode ``raw`` means with the offset learned at start-up, or None (ignore: no
+        offset yet, or no mode an open robot can report)."""
+        offset = self.offset
+        if offset is None or not 1 <= raw - offset <= 3:
+            return None
+        return OIMode(raw - offset)
+
+    def calibrate(self, raw: int) -> bool:
+        """Learn the offset from a reply read right after Start (Passive: 1, or 2 with the
+        bug); False if ``raw`` is neither."""
+        if raw not in (1, 2):
+            return False
+        if self.offset != raw - 1:
+            self._learn(raw - 1, raw)
+        return True
 
     def _learn(self, offset: int, raw: int) -> None:
         previous, self.offset = self.offset, offset
@@ -165,9 +165,10 @@ class OffsetDetector:
             )
 
 
-def infer_cause(frame: SensorFrame, previous: SensorFrame | None = None) -> str:
-    """Why the robot left Safe by itself, from the packets the frame carries."""
-    for candidate in (frame, previous):
+def infer_cause(frame: SensorFrame, *earlier: SensorFrame | None) -> str:
+    """Why the robot left Safe by itself, from the packets the frame carries, else from the
+    frames before it (newest first)."""
+    for candidate in (frame, *earlier):
         if candidate is None:
             continue
         causes: list[str] = []
@@ -209,6 +210,10 @@ class ModeModel:
         self.last_fallback: ModeChange | None = None
         self.detector = OffsetDetector(profile)
         self.invalid_readings = 0
+        #: consecutive frames that must report a change the robot made by itself
+        self.confirm = 2
+        # (reported mode, frames so far, the first such frame, the frame before it)
+        self._unconfirmed: tuple[OIMode, int, SensorFrame, SensorFrame | None] | None = None
         self._pending: tuple[OIMode, OIMode, float] | None = None  # (from, to, sent at)
         self._previous_frame: SensorFrame | None = None
         self._allowed = self._allowed_table()
@@ -268,6 +273,28 @@ class ModeModel:
         return ModeError(spec.name, needs, self._mode, self.since_wall, self.cause, hint)
 
     # ------------------------------------------------------------------ commands
+    def calibrate(self, raw: int, time: float) -> bool:
+        """The robot answered ``raw`` for packet 35 right after Start (twice, agreeing): learn
+        the "mode + 1" offset and take the robot as in Passive. False if ``raw`` is no
+        Passive reading (nothing changes)."""
+        if not self.detector.calibrate(raw):
+            return False
+        if self._mode is not OIMode.PASSIVE:
+            self.force(OIMode.PASSIVE, time)
+        self._pending = None
+        return True
+
+    def snapshot(self) -> tuple[Any, ...]:
+        """What :meth:`restore` puts back: the model before commands that were not written."""
+        return (self._mode, self._model.state, self.since, self.since_wall, self.cause,
+                self._pending)  # fmt: skip
+
+    def restore(self, saved: tuple[Any, ...]) -> None:
+        """Undo :meth:`apply` for commands that never reached the wire (the write failed)."""
+        mode, state, self.since, self.since_wall, self.cause, self._pending = saved
+        self.machine.set_state(state, model=self._model)
+        self._mode = mode
+
     def apply(self, command: Command | CommandSpec, time: float) -> None:
         """Record that ``command`` was written at link time ``time``: fire its trigger."""
         spec = command.spec if isinstance(command, Command) else command
@@ -320,23 +347,38 @@ class ModeModel:
             return None
         offset = self.detector.offset
         if self._pending is None and offset is not None and raw - offset == self._mode:
+            self._unconfirmed = None
             return None  # the common case, once per frame: the robot is where we think
-        reported = self.detector.interpret(raw, self.possible_modes(time))
+        reported = self.detector.interpret(raw)
         if reported is None:
             self.invalid_readings += 1
             return None
         if self._pending is not None:
             if reported is self._pending[1]:
                 self._pending = None
+                self._unconfirmed = None
                 return None
             if time - self._pending[2] < self.settle:
                 return None
             self._pending = None
         if reported is self._mode:
+            self._unconfirmed = None
             return None
         before = self._mode
-        if reported is OIMode.PASSIVE and before in (OIMode.SAFE, OIMode.FULL):
-            cause = infer_cause(frame, previous_frame)
+        falls = reported is OIMode.PASSIVE and before in DRIVING_MODES
+        seen = self._unconfirmed
+        if seen is None or seen[0] is not reported:
+            seen = (reported, 0, frame, previous_frame)
+        count = seen[1] + 1
+        # A fall the same frame explains (a cliff, a wheel drop, the charger: the robot's own
+        # reaction agrees with its sensors) is followed at once; anything else needs
+        # ``confirm`` consecutive frames.
+        if count < self.confirm and not (falls and infer_cause(frame) != "unknown"):
+            self._unconfirmed = (reported, count, seen[2], seen[3])
+            return None
+        self._unconfirmed = None
+        if falls:
+            cause = infer_cause(frame, seen[2], seen[3])
             trigger = FALL_BACK
         else:
             cause = "unexpected report"

@@ -22,6 +22,8 @@ from roomba_bt.robot.interface import SLOT_SECONDS, Odometry, Outbox, Snapshot
 
 __all__ = ["StubRobot"]
 
+_MODE_VALUES = frozenset(int(mode) for mode in OIMode)
+
 
 class StubRobot:
     """A :class:`RobotHandle` whose frames a test sets by hand: tick behaviours with no robot.
@@ -66,7 +68,8 @@ class StubRobot:
         frame = layout.decode(layout.pack(values))
         if mode is not None:
             self._mode = mode
-        elif OI_MODE_PACKET in values:
+        elif values.get(OI_MODE_PACKET) in _MODE_VALUES:
+            # out of range (4...): the runtime drops such a frame, the mode stays as it was
             self._mode = OIMode(values[OI_MODE_PACKET])
         if all(pid in values for pid in ENCODER_PACKETS):
             left, right = (values[pid] for pid in ENCODER_PACKETS)

@@ -242,6 +242,7 @@ class MissionRunner:
         if counters is not None:
             summary.checksum_failures = int(getattr(counters, "checksum_failures", 0))
             summary.skipped_bytes = int(getattr(counters, "skipped_bytes", 0))
+            summary.implausible_frames = int(getattr(counters, "implausible_frames", 0))
 
     def _current_mode(self) -> OIMode | None:
         mode = getattr(self.connection, "mode", None)

@@ -58,6 +58,7 @@ class RunSummary:
     stale_frames_dropped: int = 0
     frames_lost: int = 0
     checksum_failures: int = 0
+    implausible_frames: int = 0
     skipped_bytes: int = 0
     refused_commands: int = 0
     commands_written: int = 0
@@ -84,7 +85,8 @@ class RunSummary:
             f"ticks        {self.ticks} ({self.overruns} overruns > 15 ms, "
             f"slowest {self.max_tick_s * 1000:.2f} ms)",
             f"frames       {self.stale_frames_dropped} stale dropped, {self.frames_lost} lost, "
-            f"{self.checksum_failures} checksum failures, {self.skipped_bytes} bytes skipped",
+            f"{self.checksum_failures} checksum failures, "
+            f"{self.implausible_frames} out of range, {self.skipped_bytes} bytes skipped",
             f"commands     {self.commands_written} written, "
             f"{self.refused_commands} refused by the mode guard",
             f"distance     {self.distance_mm / 1000:.2f} m",

@@ -22,6 +22,7 @@ import random
 from dataclasses import dataclass
 
 from roomba_bt.oi.frames import FrameLayout, layout_for
+from roomba_bt.oi.odometry import MAX_COUNTS_PER_SLOT
 from roomba_bt.oi.profiles import CREATE2, ROOMBA500, ROOMBA600, RobotProfile
 
 FIRMWARE_TEXT = (
@@ -51,12 +52,42 @@ def ok_sums(profile: RobotProfile) -> frozenset[int]:
     return frozenset({0}) if profile.checksum_includes_header else frozenset({19})
 
 
+#: Encoder counts of intact frames: any two differ by less than one 15 ms step of the wheels,
+#: so the parser's step check keeps every intact frame whatever the order.
+ENCODER_VALUES = (0, 13)
+#: Packet 35 of intact frames: a mode with and without the "mode + 1" offset.
+MODE_VALUES = (1, 3)
+
+
 def random_values(rng: random.Random, layout: FrameLayout) -> dict[int, int]:
     out: dict[int, int] = {}
     for pid in layout.members:
         spec = layout.profile.packet(pid)
-        out[pid] = rng.randint(spec.minimum, spec.maximum)
+        if pid in (43, 44):
+            out[pid] = rng.randint(*ENCODER_VALUES)
+        elif pid == 35:
+            out[pid] = rng.randint(*MODE_VALUES)
+        else:
+            out[pid] = rng.randint(spec.minimum, spec.maximum)
     return out
+
+
+def in_range(data: bytes, i: int, layout: FrameLayout) -> bool:
+    """Every value of the window at ``i`` within the packet table's range (packet 35: 0-3, or
+    1-4 on a profile that reports the mode + 1)."""
+    frame = layout.decode(data, i + 2)
+    for pid, value in frame:
+        spec = layout.profile.packet(pid)
+        low, high = spec.minimum, spec.maximum
+        if pid == 35 and layout.profile.reports_mode_plus_one:
+            low, high = 1, 4
+        if not low <= value <= high:
+            return False
+    return True
+
+
+def _step(a: int, b: int) -> int:
+    return abs(((b - a + 0x8000) & 0xFFFF) - 0x8000)
 
 
 POOL_SIZE = 256
@@ -91,17 +122,38 @@ def is_valid_at(data: bytes, i: int, layout: FrameLayout, sums: frozenset[int]) 
         data[i + 2 + off] == pid
         for off, pid in zip(layout.id_offsets, layout.packet_ids, strict=True)
     )
-    return ids_ok and sum(data[i : i + size]) & 0xFF in sums
+    return ids_ok and sum(data[i : i + size]) & 0xFF in sums and in_range(data, i, layout)
 
 
 def reference_scan(data: bytes, layout: FrameLayout, sums: frozenset[int]) -> list[int]:
-    """Start positions a plain left-to-right scan accepts."""
+    """Start positions a plain left-to-right scan accepts: valid windows whose encoder step
+    from the last accepted one is at most MAX_COUNTS_PER_SLOT per frame size between them,
+    or, after one refused for its step alone, from that one."""
     starts: list[int] = []
+    size = layout.frame_size
+    anchor: tuple[int, int, int] | None = None
+    suspect: tuple[int, int, int] | None = None
+    encoders = 43 in layout.members and 44 in layout.members
+
+    def near(ref: tuple[int, int, int], left: int, right: int, at: int) -> bool:
+        limit = MAX_COUNTS_PER_SLOT * max(1, round((at - ref[2]) / size))
+        return _step(ref[0], left) <= limit and _step(ref[1], right) <= limit
+
     i = 0
     while i < len(data):
         if is_valid_at(data, i, layout, sums):
+            if encoders:
+                frame = layout.decode(data, i + 2)
+                left, right = frame[43], frame[44]
+                if anchor is not None and not near(anchor, left, right, i):
+                    refused = suspect
+                    suspect = (left, right, i)
+                    if refused is None or not near(refused, left, right, i):
+                        i += 1
+                        continue
+                anchor, suspect = (left, right, i), None
             starts.append(i)
-            i += layout.frame_size
+            i += size
         else:
             i += 1
     return starts

@@ -87,7 +87,8 @@ def test_a_truncated_frame_does_not_hide_the_next() -> None:
     parser = StreamParser([100])
     frames = parser.feed(whole[:40] + whole + whole[:3] + whole)
     assert [f.voltage_mv for f in frames] == [15000, 15000]
-    assert parser.counters.checksum_failures >= 1
+    # the cut frame completed by the next one's bytes: a checksum failure, or out of range
+    assert parser.counters.checksum_failures + parser.counters.implausible >= 1
     _counters_balance(parser)
 
 
@@ -104,7 +105,7 @@ def test_a_header_byte_inside_data_is_not_a_frame() -> None:
 
 def test_every_chunk_size_gives_the_same_frames() -> None:
     layout = layout_for((7, 43, 44, 35), CREATE2)
-    frames = [layout.stream_frame({7: i % 16, 43: i * 37, 44: -i, 35: 2}) for i in range(12)]
+    frames = [layout.stream_frame({7: i % 16, 43: i * 7, 44: -i, 35: 2}) for i in range(12)]
     data = (
         BANNER[:30]
         + frames[0]
@@ -243,7 +244,7 @@ def test_frames_checked_on_both_sum_paths(profile: RobotProfile, ids: tuple[int,
     """A right frame passes and a wrong checksum does not, whether the byte sum comes from
     adler32 (frames up to 256 bytes) or from ``sum`` (the 257-byte longest frame)."""
     layout = layout_for(ids, profile)
-    frame = layout.stream_frame({pid: 0 for pid in layout.members})
+    frame = layout.stream_frame({pid: 0 for pid in layout.members} | {35: 2})
     parser = StreamParser(ids, profile)
     assert len(parser.feed(frame)) == 1
     assert parser.feed(frame[:-1] + bytes([(frame[-1] + 1) & 0xFF])) == []

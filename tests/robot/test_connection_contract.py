@@ -55,7 +55,14 @@ def test_start_confirms_enters_mode_and_streams(link: Link) -> None:
         assert connection.counters.checksum_failures == 0
     if link.robot is not None:
         assert link.robot.wait_until(lambda r: r.received.endswith(STOP_TO_PASSIVE))
-        assert link.robot.opcodes()[:5] == [128, 150, 149, 131, 148]
+        assert link.robot.opcodes()[:6] == [
+            128,
+            150,
+            149,
+            149,
+            131,
+            148,
+        ]  # 149 twice: two replies agree
         assert link.robot.mode is OIMode.PASSIVE
         no_actuator_outside_safe(link.robot)
 

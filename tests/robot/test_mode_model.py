@@ -33,7 +33,7 @@ def frame(values: dict[int, int]):  # type: ignore[no-untyped-def]
 def model_in(mode: OIMode, profile=CREATE2, **kwargs):  # type: ignore[no-untyped-def]
     model = ModeModel(profile, wall_clock=lambda: NOON, **kwargs)
     model.apply(oi.start(), 0.0)
-    model.reconcile(frame({35: 1}), 0, 0.0)  # calibrates: no "mode + 1"
+    assert model.calibrate(1, 0.0)  # no "mode + 1"
     if mode is OIMode.SAFE:
         model.apply(oi.safe(), 0.0)
     elif mode is OIMode.FULL:
@@ -41,6 +41,13 @@ def model_in(mode: OIMode, profile=CREATE2, **kwargs):  # type: ignore[no-untype
     model.reconcile(frame({35: int(mode)}), 1, 0.015)
     assert model.mode is mode
     return model
+
+
+def fall(model, values: dict[int, int], tick: int, time: float):  # type: ignore[no-untyped-def]
+    """A change the robot made by itself, reported by two consecutive frames: the first
+    changes nothing, the second is the change."""
+    assert model.reconcile(frame(values), tick, time) is None
+    return model.reconcile(frame(values), tick + 1, time + 0.015)
 
 
 # ------------------------------------------------------------------ the machine
@@ -105,7 +112,7 @@ def test_mode_commands_move_the_model() -> None:
 
 def test_fall_back_with_wheel_drop_is_a_transition_with_cause_and_message() -> None:
     model = model_in(OIMode.SAFE)
-    change = model.reconcile(frame({7: 0b1000, 35: 1}), 40, 0.6)
+    change = model.reconcile(frame({7: 0b1000, 35: 1}), 40, 0.6)  # explained: followed at once
     assert change is not None
     assert (change.previous, change.current, change.cause) == (
         OIMode.SAFE,
@@ -136,14 +143,18 @@ def test_fall_back_with_wheel_drop_is_a_transition_with_cause_and_message() -> N
 )
 def test_cause_inferred_from_the_same_frame(values: dict[int, int], cause: str) -> None:
     full = {7: 0, 9: 0, 10: 0, 11: 0, 12: 0, 34: 0, **values, 35: 1}
-    change = model_in(OIMode.SAFE).reconcile(frame(full), 5, 0.5)
+    model = model_in(OIMode.SAFE)
+    change = model.reconcile(frame(full), 5, 0.5)
+    if cause == "unknown":  # unexplained: a second frame confirms it
+        assert change is None
+        change = model.reconcile(frame(full), 6, 0.515)
     assert change is not None and change.cause == cause
 
 
 def test_cause_taken_from_the_frame_before_when_the_fall_frame_shows_none() -> None:
     model = model_in(OIMode.SAFE)
     model.reconcile(frame({10: 1, 35: 2}), 5, 0.5)
-    change = model.reconcile(frame({10: 0, 35: 1}), 6, 0.515)
+    change = fall(model, {10: 0, 35: 1}, 6, 0.515)
     assert change is not None and change.cause == "cliff"
     assert infer_cause(frame({10: 0})) == "unknown"
 
@@ -153,13 +164,13 @@ def test_old_mode_seen_just_after_a_mode_command_is_not_a_fall() -> None:
     model.apply(oi.safe(), 1.0)
     assert model.reconcile(frame({35: 1}), 2, 1.03) is None  # the robot had not taken it yet
     assert model.mode is OIMode.SAFE
-    change = model.reconcile(frame({35: 1}), 20, 1.3)  # still Passive after settling: a fall
+    change = fall(model, {35: 1}, 20, 1.3)  # still Passive after settling: a fall
     assert change is not None and change.current is OIMode.PASSIVE
 
 
 def test_unexpected_report_is_followed_and_logged(caplog: pytest.LogCaptureFixture) -> None:
     model = model_in(OIMode.SAFE)
-    change = model.reconcile(frame({35: 3}), 9, 1.0)  # Full without a command: another client
+    change = fall(model, {35: 3}, 9, 1.0)  # Full without a command: another client
     assert change is not None and change.current is OIMode.FULL
     assert change.cause == "unexpected report"
     assert "packet 35 reports Full" in caplog.text
@@ -171,7 +182,7 @@ def test_unexpected_report_is_followed_and_logged(caplog: pytest.LogCaptureFixtu
 def started(profile=ROOMBA600, raw: int = 2):  # type: ignore[no-untyped-def]
     model = ModeModel(profile)
     model.apply(oi.start(), 0.0)
-    model.reconcile(frame({35: raw}), 0, 0.01)
+    assert model.calibrate(raw, 0.01)
     return model
 
 
@@ -193,22 +204,42 @@ def test_one_right_after_start_rules_the_bug_out() -> None:
     assert model.mode is OIMode.SAFE and model.last_fallback is None
 
 
-def test_four_is_always_full_plus_one() -> None:
+@pytest.mark.parametrize("raw", [0, 3, 4, 255])
+def test_a_start_up_reply_that_is_no_passive_reading_teaches_nothing(raw: int) -> None:
     model = ModeModel(CREATE2)
     model.apply(oi.start(), 0.0)
-    model.apply(oi.full(), 0.0)
-    assert model.reconcile(frame({35: 4}), 1, 0.01) is None
-    assert model.plus_one is True and model.mode is OIMode.FULL
+    assert not model.calibrate(raw, 0.01)
+    assert model.plus_one is None
 
 
-def test_ambiguous_reading_is_ignored_until_the_offset_is_known() -> None:
+@pytest.mark.parametrize("profile", [CREATE2, ROOMBA600])
+def test_a_stream_frame_with_packet_35_four_changes_neither_offset_nor_mode(profile) -> None:  # type: ignore[no-untyped-def]
+    """One corrupted frame with 35 = 4 once taught the "mode + 1" offset for good: every later
+    Safe read as Passive, drive refused, the safe stop's drive 0 skipped."""
+    model = model_in(OIMode.SAFE, profile)
+    for tick in range(1, 4):  # even several in a row
+        assert model.reconcile(frame({35: 4}), tick, 1.0 + tick * 0.015) is None
+    assert model.plus_one is False and model.mode is OIMode.SAFE
+    assert model.reconcile(frame({35: 2}), 9, 1.2) is None
+    assert model.mode is OIMode.SAFE and model.last_fallback is None
+    model.check(oi.drive(100, 0))  # still allowed
+
+
+def test_one_corrupted_mode_reading_is_not_a_fall() -> None:
+    model = model_in(OIMode.SAFE)
+    assert model.reconcile(frame({35: 1}), 5, 0.5) is None  # Passive, once
+    assert model.reconcile(frame({35: 2}), 6, 0.515) is None  # Safe again
+    assert model.reconcile(frame({35: 1}), 7, 0.53) is None  # once more, alone
+    assert model.mode is OIMode.SAFE and model.last_fallback is None
+
+
+def test_readings_are_ignored_until_start_up_calibrates() -> None:
     model = ModeModel(ROOMBA600)
     model.force(OIMode.SAFE)
-    assert model.reconcile(frame({35: 2}), 1, 1.0) is None  # Safe, or Passive + 1?
+    for tick, raw in enumerate((2, 3, 4, 1)):
+        assert model.reconcile(frame({35: raw}), tick, 1.0 + tick * 0.015) is None
     assert model.mode is OIMode.SAFE and model.plus_one is None
-    assert model.invalid_readings == 1
-    model.reconcile(frame({35: 3}), 2, 1.015)  # only Safe + 1 fits
-    assert model.plus_one is True and model.mode is OIMode.SAFE
+    assert model.invalid_readings == 4
 
 
 @pytest.mark.parametrize("raw", [0, 5, 17, 255])
@@ -229,6 +260,7 @@ def test_values_that_are_no_mode_are_counted_never_raised(raw: int) -> None:
 def test_any_packet_35_sequence_keeps_a_valid_mode(raws, commands, profile) -> None:  # type: ignore[no-untyped-def]
     model = ModeModel(profile)
     model.apply(oi.start(), 0.0)
+    model.calibrate(2 if profile.reports_mode_plus_one else 1, 0.0)
     t = 0.0
     for i, raw in enumerate(raws):
         if commands and i % 5 == 0:

@@ -32,8 +32,13 @@ def test_corrupted_bytes_fail_the_checksum_and_the_parser_resynchronises() -> No
 
 
 def test_dropped_frames_are_never_sent() -> None:
-    data, sim = stream_bytes(Faults(drop_rate=0.5))
-    frames = StreamParser(IDS).feed(data)
+    sim = Simulator(world(BOX), seed=0, faults=Faults(drop_rate=0.5))
+    sim.receive(C.start().data + C.full().data + C.stream(IDS).data + C.drive(200, 500).data)
+    parser = StreamParser(IDS)
+    frames = []
+    for _ in range(200):  # fed as it arrives: frames lost whole leave a gap in time, not bytes
+        sim.step()
+        frames += parser.feed(sim.read(), sim.time)
     assert len(frames) == sim.frames_sent
     assert 0.35 * 200 < sim.frames_sent < 0.65 * 200
 
