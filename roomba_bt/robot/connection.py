@@ -167,6 +167,11 @@ class Connection:
         self._refused = 0
         self._closed = False
         self.safe_stopped: bool | None = None
+        #: the last wheel command written (Drive, Drive Direct, PWM, a cleaning cycle)
+        self.last_wheels: Command | None = None
+        #: why the stop did not reach the robot, with the robot's last known state (None: it
+        #: did, or no stop was tried)
+        self.stop_report: str | None = None
         self._builtin_may_run = False  # a Clean/Spot/Max/Seek Dock cycle may be driving
         # Keep-awake (robot/wake.py): on by default where the profile sleeps in Passive.
         self.keep_awake = self.profile.sleeps_in_passive if keep_awake is None else keep_awake
@@ -423,6 +428,8 @@ class Connection:
         are left out; after the others are written the first refusal is raised."""
         refused: list[Exception] = []
         batch = bytearray()
+        # the model follows what was written: if the batch never leaves, it is put back
+        saved = self.modes.snapshot(), self.last_wheels
         try:
             for command in commands:
                 try:
@@ -431,7 +438,12 @@ class Connection:
                     refused.append(exc)
         finally:
             if batch:
-                self.link.write(bytes(batch))
+                try:
+                    self.link.write(bytes(batch))
+                except PortLost:
+                    self.modes.restore(saved[0])
+                    self.last_wheels = saved[1]
+                    raise
         if refused:
             for extra in refused[1:]:
                 log.warning("%s: also refused: %s", self.name, extra)
@@ -460,6 +472,8 @@ class Connection:
         now = self.link.transport.now()
         self._last_command_at = now
         self.modes.apply(command, now)
+        if spec.channel == "wheels":
+            self.last_wheels = command
         self._sent += 1
         if effect is not None or spec.leads_to is not None:  # not a plain actuator command
             self._after(command, now)
@@ -527,28 +541,54 @@ class Connection:
         stopped (writes are bounded by the transport's write timeout, so this cannot hang).
         """
         if not self.link.transport.is_open:
-            log.error("%s: the port is closed; could not stop the robot", self.name)
-            self.safe_stopped = False
-            return False
+            return self._undelivered("the stop was not delivered: the port is gone")
         lost = self.link.status is LinkStatus.LOST
         try:
             with _signals_deferred():
                 self.send_many(self.stop_sequence())
-            if lost:
-                raise PortLost(self.name, "the link was lost before the stop: it is unconfirmed")
+        except PortLost:
+            return self._undelivered("the stop was not delivered: the port is gone")
         except _RECOVERABLE as exc:
-            log.error(
-                "%s: could not stop the robot (%s); it may still be in %s mode",
-                self.name,
-                exc,
-                self.modes.mode.label,
+            return self._undelivered(f"the stop was not delivered: {exc}")
+        if lost:
+            return self._undelivered(
+                "the stop was written but is unconfirmed: the port had failed before it"
             )
-            self.safe_stopped = False
-            return False
         self.link.streaming = False
         self.link.status = LinkStatus.STOPPED
         self.safe_stopped = True
         return True
+
+    def activity(self) -> str:
+        """What the last wheel command written had the robot doing: ``at 200 mm/s``,
+        ``stopped``, ``in its Clean cycle``."""
+        command = self.last_wheels
+        if command is None:
+            return "with its wheels never commanded"
+        spec = command.spec
+        if spec.effect is Effect.BUILTIN_CYCLE:
+            return f"in its {spec.title} cycle"
+        if not any(command.args):
+            return "stopped"
+        if spec.name == "drive":
+            velocity, radius = command.args
+            if radius in (1, -1):  # the spec's turn in place
+                return f"spinning {'left' if radius == 1 else 'right'} at {velocity} mm/s"
+            turning = "" if radius in (-32768, 32767) else f", radius {radius} mm"
+            return f"at {velocity} mm/s{turning}"
+        values = ", ".join(
+            f"{arg.name} {value} {arg.unit}".rstrip()
+            for arg, value in zip(spec.args, command.args, strict=True)
+        )
+        return f"after {spec.name} ({values})"
+
+    def _undelivered(self, why: str) -> bool:
+        """The stop did not reach the robot: say so, with what the robot was last seen
+        doing; False (what :meth:`safe_stop` returns)."""
+        self.stop_report = f"last seen in {self.modes.mode.label} {self.activity()}; {why}"
+        log.error("%s: %s", self.name, self.stop_report)
+        self.safe_stopped = False
+        return False
 
     def close(self) -> bool:
         """Safe stop (once), close the port. True if the robot was stopped (or never

@@ -220,7 +220,11 @@ class MissionRunner:
             with sigterm_raises():
                 stopped = self.connection.safe_stop()
             if not stopped:
-                summary.safe_stop = "FAILED: the stop sequence could not be written (port gone?)"
+                report = getattr(self.connection, "stop_report", None)
+                summary.safe_stop = "NOT DELIVERED: " + (
+                    report or "the stop sequence could not be written"
+                )
+                summary.stop_delivered = False
             else:
                 summary.safe_stop = "sent " + ", ".join(sequence) if sequence else "nothing to send"
         except KeyboardInterrupt:

@@ -15,7 +15,10 @@ class ExitCode(IntEnum):
     OK = 0  # mission succeeded / command did what was asked
     MISSION_FAILED = 1  # the tree ended in FAILURE (or the timeout ran out)
     INVALID = 2  # invalid mission, world or command-line usage
-    CONNECTION = 3  # port could not be opened, robot did not answer, stream lost
+    #: port could not be opened, robot did not answer, stream lost; the summary's "safe stop"
+    #: line says whether the stop reached the robot ("NOT DELIVERED: last seen in Safe at
+    #: 200 mm/s; the stop was not delivered: the port is gone")
+    CONNECTION = 3
     BEHAVIOUR_ERROR = 4  # a behaviour raised an exception (a bug in it or its plugin)
     INTERRUPTED = 130  # Ctrl-C or SIGTERM, after the safe stop
 
@@ -66,6 +69,9 @@ class RunSummary:
     final_mode: OIMode | None = None
     battery_percent: float | None = None
     safe_stop: str = "not attempted"
+    #: False when the stop could not reach the robot: the final mode is then only the last
+    #: one seen, and says so
+    stop_delivered: bool = True
     max_tick_s: float = 0.0
     #: the exception's traceback when a behaviour raised one (printed under ``-v``)
     traceback: str = ""
@@ -76,6 +82,8 @@ class RunSummary:
 
     def lines(self) -> list[str]:
         mode = self.final_mode.label if self.final_mode is not None else "unknown"
+        if not self.stop_delivered:
+            mode = f"unknown: last seen in {mode}, the stop was not delivered"
         battery = f"{self.battery_percent:.0f}%" if self.battery_percent is not None else "n/a"
         reason = f" ({self.reason})" if self.reason else ""
         return [

@@ -149,7 +149,13 @@ def test_unplugged_link_is_exit_3_and_says_the_stop_was_not_sent(run_mission: Ru
     )
     assert run.summary.outcome is Outcome.CONNECTION_LOST
     assert run.summary.exit_code == 3
-    assert run.summary.safe_stop.startswith("FAILED")
+    assert run.summary.safe_stop == (
+        "NOT DELIVERED: last seen in Safe spinning left at 100 mm/s; "
+        "the stop was not delivered: the port is gone"
+    )
+    assert "final mode   unknown: last seen in Safe, the stop was not delivered" in (
+        run.summary.lines()
+    )
 
 
 def test_a_bump_changes_the_drive_command_in_the_same_tick(run_mission: RunMission) -> None:
