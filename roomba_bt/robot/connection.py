@@ -256,9 +256,10 @@ class Connection:
                     NO_ANSWER_CAUSES,
                 )
             replies.append(reply[OI_MODE_PACKET])
-            if len(replies) >= 2 and replies[-1] == replies[-2]:
-                return replies[-1]
-            log.warning("%s: packet 35 replies disagree (%s); asking again", self.name, replies)
+            if len(replies) >= 2:
+                if replies[-1] == replies[-2]:
+                    return replies[-1]
+                log.warning("%s: packet 35 replies disagree (%s); asking again", self.name, replies)
         raise ConnectionFailed(
             self.name,
             f"{START_QUERIES} replies to a Query List for packet 35 never agreed twice in a row "
