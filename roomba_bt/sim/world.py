@@ -396,16 +396,25 @@ class _Checker:
             return None
         return value
 
+    def numbers(
+        self, value: object, path: PathKey, count: int, limits: tuple[float, float, str], what: str
+    ) -> tuple[float, ...] | None:
+        """A list of ``count`` numbers, each within ``limits`` (lo, hi, unit); every bad one
+        is reported. ``what`` says what the whole list should be."""
+        if not isinstance(value, list) or len(value) != count:
+            self.error(path, _show(value), what)
+            return None
+        nums = [self.number(v, (*path, i), *limits) for i, v in enumerate(value)]
+        if any(n is None for n in nums):
+            return None
+        return tuple(n or 0.0 for n in nums)
+
     def point(self, value: object, path: PathKey) -> Point | None:
         """``[x, y]`` in metres -> mm."""
-        if not isinstance(value, list) or len(value) != 2:
-            self.error(path, _show(value), "a point [x, y] in metres")
+        xy = self.numbers(value, path, 2, _METRES, "a point [x, y] in metres")
+        if xy is None:
             return None
-        x = self.number(value[0], (*path, 0), -1000, 1000, "m")
-        y = self.number(value[1], (*path, 1), -1000, 1000, "m")
-        if x is None or y is None:
-            return None
-        return (x * 1000.0, y * 1000.0)
+        return (xy[0] * 1000.0, xy[1] * 1000.0)
 
     def polygon(self, value: object, path: PathKey) -> Polygon | None:
         if not isinstance(value, list) or len(value) < 3:
@@ -421,13 +430,10 @@ class _Checker:
         return poly
 
     def rect(self, value: object, path: PathKey) -> tuple[float, float, float, float] | None:
-        if not isinstance(value, list) or len(value) != 4:
-            self.error(path, _show(value), "a rectangle [x0, y0, x1, y1] in metres")
+        nums = self.numbers(value, path, 4, _METRES, "a rectangle [x0, y0, x1, y1] in metres")
+        if nums is None:
             return None
-        nums = [self.number(v, (*path, i), -1000, 1000, "m") for i, v in enumerate(value)]
-        if any(n is None for n in nums):
-            return None
-        x0, y0, x1, y1 = (float(n or 0.0) * 1000.0 for n in nums)
+        x0, y0, x1, y1 = (n * 1000.0 for n in nums)
         if x1 <= x0 or y1 <= y0:
             self.error(path, _show(value), "x0 < x1 and y0 < y1")
             return None
@@ -466,6 +472,8 @@ def _area(poly: Polygon) -> float:
     )
 
 
+#: Coordinates in a world file: metres, within a kilometre of the origin.
+_METRES = (-1000.0, 1000.0, "m")
 _TOP_KEYS = (
     "name", "description", "rooms", "walls", "obstacles", "drops", "dirt", "virtual_walls",
     "lighthouses", "dock", "robot", "events", "areas",
@@ -477,13 +485,10 @@ _DOCK_KEYS = (
 
 
 def _angle_range(c: _Checker, value: object, path: PathKey) -> tuple[float, float] | None:
-    if not isinstance(value, list) or len(value) != 2:
-        c.error(path, _show(value), "[from, to] in degrees, -90..90, from < to")
+    pair = c.numbers(value, path, 2, (-90, 90, "deg"), "[from, to] in degrees, -90..90, from < to")
+    if pair is None:
         return None
-    lo = c.number(value[0], (*path, 0), -90, 90, "deg")
-    hi = c.number(value[1], (*path, 1), -90, 90, "deg")
-    if lo is None or hi is None:
-        return None
+    lo, hi = pair
     if lo >= hi:
         c.error(path, _show(value), "[from, to] with from < to")
         return None
@@ -558,15 +563,11 @@ def _start_region(c: _Checker, value: object, path: PathKey) -> StartRegion | No
         if rect is None:
             return None
     if "heading" in spec and spec["heading"] != "any":
-        raw = spec["heading"]
-        if not isinstance(raw, list) or len(raw) != 2:
-            c.error((*path, "heading"), _show(raw), "'any' or [from, to] in degrees")
+        pair = c.numbers(spec["heading"], (*path, "heading"), 2, (-360, 360, "deg"),
+                         "'any' or [from, to] in degrees")  # fmt: skip
+        if pair is None:
             return None
-        lo = c.number(raw[0], (*path, "heading", 0), -360, 360, "deg")
-        hi = c.number(raw[1], (*path, "heading", 1), -360, 360, "deg")
-        if lo is None or hi is None:
-            return None
-        heading = (math.radians(lo), math.radians(hi))
+        heading = (math.radians(pair[0]), math.radians(pair[1]))
     return StartRegion(near, rect, heading, area)
 
 
@@ -627,50 +628,103 @@ def parse_world(text: str, source: str = "<world>") -> World:
 
 
 def _build_world(c: _Checker, data: object, source: str) -> World:
+    """The whole world file, checked part by part in the file's order; every problem is
+    collected before :class:`WorldError` is raised."""
     top = c.mapping(data, (), _TOP_KEYS, ("rooms",))
     if top is None:
         raise WorldError(c.problems)
-    name = top.get("name", pathlib.Path(source).stem)
-    if not isinstance(name, str):
-        c.error(("name",), _show(name), "a string")
-        name = str(name)
-    description = top.get("description", "")
-    if not isinstance(description, str):
-        c.error(("description",), _show(description), "a string")
-        description = ""
+    name = _text(c, top, "name", pathlib.Path(source).stem)
+    description = _text(c, top, "description", "")
     rooms = [
         c.polygon(r, ("rooms", i)) for i, r in enumerate(c.items(top.get("rooms"), ("rooms",)))
     ]
     if isinstance(top.get("rooms"), list) and not rooms:
         c.error(("rooms",), "no room", "at least one room polygon")
-    walls: list[Segment] = []
-    for i, w in enumerate(c.items(top.get("walls"), ("walls",))):
-        r = None
-        if isinstance(w, list) and len(w) == 4:
-            nums = [c.number(v, ("walls", i, j), -1000, 1000, "m") for j, v in enumerate(w)]
-            if all(n is not None for n in nums):
-                r = tuple(float(n or 0.0) * 1000.0 for n in nums)
-        else:
-            c.error(("walls", i), _show(w), "a segment [x0, y0, x1, y1] in metres")
-        if r is not None:
-            walls.append((r[0], r[1], r[2], r[3]))
+    walls = _walls(c, top.get("walls"))
     obstacles = [
         c.shape(o, ("obstacles", i))
         for i, o in enumerate(c.items(top.get("obstacles"), ("obstacles",)))
     ]
     drops = [c.shape(o, ("drops", i)) for i, o in enumerate(c.items(top.get("drops"), ("drops",)))]
+    dirt = _dirt(c, top.get("dirt"))
+    vwalls = _virtual_walls(c, top.get("virtual_walls"))
+    lighthouses = _lighthouses(c, top.get("lighthouses"))
+    dock = _dock(c, top["dock"]) if "dock" in top else None
+    start, region, battery = _robot(c, top)
+    events = [
+        e for i, v in enumerate(c.items(top.get("events"), ("events",)))
+        if (e := _event(c, v, ("events", i))) is not None
+    ]  # fmt: skip
+    areas = _areas(c, top.get("areas"))
+    names = [a.name for a in areas]
+    if region is not None and region.area is not None and region.area not in names:
+        allowed = f"one of the world's areas ({', '.join(names) or 'none'})"
+        c.error(("robot", "start_region", "area"), repr(region.area), allowed)
+    if c.problems:
+        raise WorldError(c.problems)
+    room_polys = tuple(r for r in rooms if r is not None)
+    world = World(
+        name=name,
+        rooms=room_polys,
+        start=start if start is not None else _default_start(dock, room_polys),
+        walls=walls,
+        obstacles=tuple(o for o in obstacles if o is not None),
+        drops=tuple(d for d in drops if d is not None),
+        dirt=dirt,
+        virtual_walls=vwalls,
+        lighthouses=lighthouses,
+        dock=dock,
+        start_region=region,
+        events=tuple(sorted(events, key=lambda e: e.time)),
+        battery=battery,
+        source=source,
+        description=description,
+        areas=areas,
+    )
+    _check_placement(c, world, "robot" in top)
+    if c.problems:
+        raise WorldError(c.problems)
+    return world
+
+
+def _text(c: _Checker, top: dict[str, Any], key: str, default: str) -> str:
+    """A top-level string (``name``, ``description``); a non-string is reported."""
+    value = top.get(key, default)
+    if isinstance(value, str):
+        return value
+    c.error((key,), _show(value), "a string")
+    return str(value) if key == "name" else default
+
+
+def _walls(c: _Checker, value: object) -> tuple[Segment, ...]:
+    """``walls: [[x0, y0, x1, y1], ...]`` in metres -> segments in mm."""
+    walls: list[Segment] = []
+    for i, w in enumerate(c.items(value, ("walls",))):
+        r = c.numbers(w, ("walls", i), 4, _METRES, "a segment [x0, y0, x1, y1] in metres")
+        if r is not None:
+            walls.append((r[0] * 1000.0, r[1] * 1000.0, r[2] * 1000.0, r[3] * 1000.0))
+    return tuple(walls)
+
+
+def _dirt(c: _Checker, value: object) -> tuple[DirtSpec, ...]:
+    """``dirt: [{rect: [...], level: 1..255}, ...]``: patches the dirt detector sees."""
     dirt: list[DirtSpec] = []
-    for i, patch in enumerate(c.items(top.get("dirt"), ("dirt",))):
+    for i, patch in enumerate(c.items(value, ("dirt",))):
         area = c.shape(patch, ("dirt", i), extra=("level",))
-        dirt_level = patch.get("level") if isinstance(patch, dict) else None
         if not isinstance(patch, dict):
             continue
+        dirt_level = patch.get("level")
         if type(dirt_level) is not int or not 1 <= dirt_level <= 255:
             c.error(("dirt", i, "level"), _show(dirt_level), "an integer dirt-detect level 1..255")
         elif area is not None:
             dirt.append(DirtSpec(area, dirt_level))
+    return tuple(dirt)
+
+
+def _virtual_walls(c: _Checker, value: object) -> tuple[VirtualWallSpec, ...]:
+    """``virtual_walls: [{from: [x, y], to: [x, y], width: m, halo: m}, ...]``."""
     vwalls: list[VirtualWallSpec] = []
-    for i, v in enumerate(c.items(top.get("virtual_walls"), ("virtual_walls",))):
+    for i, v in enumerate(c.items(value, ("virtual_walls",))):
         path: PathKey = ("virtual_walls", i)
         spec = c.mapping(v, path, ("name", "from", "to", "halo", "width"), ("from", "to"))
         if spec is None or "from" not in spec or "to" not in spec:
@@ -681,9 +735,14 @@ def _build_world(c: _Checker, data: object, source: str) -> World:
         width = c.number(spec.get("width", 0.12), (*path, "width"), 0.02, 1.0, "m")
         if a and b and halo is not None and width is not None:
             vwalls.append(VirtualWallSpec(a[0], a[1], b[0], b[1], width * 500.0, halo * 1000.0))
+    return tuple(vwalls)
+
+
+def _lighthouses(c: _Checker, value: object) -> tuple[LighthouseSpec, ...]:
+    """``lighthouses: [{id: 1..10, at: [x, y], heading: deg, fence: m, halo: m}, ...]``."""
     lighthouses: list[LighthouseSpec] = []
-    for i, v in enumerate(c.items(top.get("lighthouses"), ("lighthouses",))):
-        path = ("lighthouses", i)
+    for i, v in enumerate(c.items(value, ("lighthouses",))):
+        path: PathKey = ("lighthouses", i)
         spec = c.mapping(v, path, ("id", "at", "heading", "fence", "halo"), ("id", "at"))
         if spec is None or "id" not in spec or "at" not in spec:
             continue
@@ -700,63 +759,47 @@ def _build_world(c: _Checker, data: object, source: str) -> World:
                 LighthouseSpec(lid, at[0], at[1], math.radians(heading), fence * 1000.0,
                                halo * 1000.0)
             )  # fmt: skip
-    dock = _dock(c, top["dock"]) if "dock" in top else None
+    return tuple(lighthouses)
+
+
+def _robot(c: _Checker, top: dict[str, Any]) -> tuple[Pose | None, StartRegion | None, float]:
+    """``robot: {start | start_region, battery}``: the start pose or region and the charge."""
     start: Pose | None = None
     region: StartRegion | None = None
     battery = 0.8
-    if "robot" in top:
-        robot = c.mapping(top["robot"], ("robot",), ("start", "start_region", "battery"))
-        if robot is not None:
-            if "start" in robot:
-                start = _pose(c, robot["start"], ("robot", "start"))
-            if "start_region" in robot:
-                region = _start_region(c, robot["start_region"], ("robot", "start_region"))
-                if region is not None and region.near_dock is not None and "dock" not in top:
-                    c.error(("robot", "start_region", "near_dock"), "no dock in this world",
-                            "near_dock only in a world with a dock")  # fmt: skip
-            if "battery" in robot:
-                level = c.number(robot["battery"], ("robot", "battery"), 0.0, 1.0, "(fraction)")
-                battery = 0.8 if level is None else level
-    events = [
-        e for i, v in enumerate(c.items(top.get("events"), ("events",)))
-        if (e := _event(c, v, ("events", i))) is not None
-    ]  # fmt: skip
-    areas = _areas(c, top.get("areas"))
-    names = [a.name for a in areas]
-    if region is not None and region.area is not None and region.area not in names:
-        allowed = f"one of the world's areas ({', '.join(names) or 'none'})"
-        c.error(("robot", "start_region", "area"), repr(region.area), allowed)
-    if c.problems:
-        raise WorldError(c.problems)
-    room_polys = tuple(r for r in rooms if r is not None)
-    if start is None:
-        if dock is not None:
-            d = dock.docked_pose
-            start = Pose(
-                d.x + 800.0 * math.cos(dock.facing), d.y + 800.0 * math.sin(dock.facing), d.theta
-            )
-        else:
-            xs = [p[0] for p in room_polys[0]]
-            ys = [p[1] for p in room_polys[0]]
-            start = Pose(sum(xs) / len(xs), sum(ys) / len(ys), 0.0)
-    world = World(
-        name=name,
-        rooms=room_polys,
-        start=start,
-        walls=tuple(walls),
-        obstacles=tuple(o for o in obstacles if o is not None),
-        drops=tuple(d for d in drops if d is not None),
-        dirt=tuple(dirt),
-        virtual_walls=tuple(vwalls),
-        lighthouses=tuple(lighthouses),
-        dock=dock,
-        start_region=region,
-        events=tuple(sorted(events, key=lambda e: e.time)),
-        battery=battery,
-        source=source,
-        description=description,
-        areas=areas,
-    )
+    if "robot" not in top:
+        return start, region, battery
+    robot = c.mapping(top["robot"], ("robot",), ("start", "start_region", "battery"))
+    if robot is None:
+        return start, region, battery
+    if "start" in robot:
+        start = _pose(c, robot["start"], ("robot", "start"))
+    if "start_region" in robot:
+        region = _start_region(c, robot["start_region"], ("robot", "start_region"))
+        if region is not None and region.near_dock is not None and "dock" not in top:
+            c.error(("robot", "start_region", "near_dock"), "no dock in this world",
+                    "near_dock only in a world with a dock")  # fmt: skip
+    if "battery" in robot:
+        level = c.number(robot["battery"], ("robot", "battery"), 0.0, 1.0, "(fraction)")
+        battery = 0.8 if level is None else level
+    return start, region, battery
+
+
+def _default_start(dock: DockSpec | None, rooms: tuple[Polygon, ...]) -> Pose:
+    """No start pose given: 0.8 m out from the docked pose, else the first room's middle."""
+    if dock is not None:
+        d = dock.docked_pose
+        return Pose(
+            d.x + 800.0 * math.cos(dock.facing), d.y + 800.0 * math.sin(dock.facing), d.theta
+        )
+    xs = [p[0] for p in rooms[0]]
+    ys = [p[1] for p in rooms[0]]
+    return Pose(sum(xs) / len(xs), sum(ys) / len(ys), 0.0)
+
+
+def _check_placement(c: _Checker, world: World, start_given: bool) -> None:
+    """The dock stands on the floor and the robot fits where it starts."""
+    dock = world.dock
     if dock is not None and not world.on_floor(
         dock.x + 10 * math.cos(dock.facing), dock.y + 10 * math.sin(dock.facing)
     ):
@@ -764,13 +807,10 @@ def _build_world(c: _Checker, data: object, source: str) -> World:
     if not world.pose_is_free(world.start):
         where = f"({world.start.x / 1000:.2f}, {world.start.y / 1000:.2f}) m"
         c.error(
-            ("robot", "start") if "robot" in top else ("rooms",),
+            ("robot", "start") if start_given else ("rooms",),
             f"a start pose {where} where the robot does not fit",
             "a pose on the floor with 0.17 m clear of every wall, obstacle and drop",
         )
-    if c.problems:
-        raise WorldError(c.problems)
-    return world
 
 
 def shipped_worlds() -> tuple[str, ...]:
