@@ -176,41 +176,25 @@ class Motion(Sensing):
         motion = self._motion
         if motion[0] != left or motion[1] != right or motion[2] != dt:
             motion = self._motion = _motion_of(left, right, dt, self._half_base)
-        dist, dtheta, half_turn = motion[3], motion[4], motion[5]
+        dist, dtheta = motion[3], motion[4]
         fraction = 1.0
         stuck = self.lifted or self.fallen
-        x, y, theta = self.x, self.y, self.theta
         if stuck:
             fraction = 0.0
         elif dist:
-            heading = theta + half_turn
+            x, y = self.x, self.y
+            heading = self.theta + motion[5]
             ux = dist * math.cos(heading)
             uy = dist * math.sin(heading)
             if abs(dist) >= self._clearance and self._blocked(x + ux, y + uy):
-                lo, hi = 0.0, 1.0
-                if self._clearance < 0.5 and self._blocked(x + ux / 64, y + uy / 64):
-                    hi = 0.0  # pressed against the wall already: no room at all
-                while hi - lo > 0.01:
-                    mid = (lo + hi) / 2.0
-                    if self._blocked(x + ux * mid, y + uy * mid):
-                        hi = mid
-                    else:
-                        lo = mid
-                fraction = lo
-            self.x = x = x + ux * fraction
-            self.y = y = y + uy * fraction
+                fraction = self._reach(x, y, ux, uy)
+            self.x = x + ux * fraction
+            self.y = y + uy * fraction
         v = self.values
         if fraction == 1.0:
             # free motion (the usual step): what the wheels did is the same every step
             self.blocked = False
-            theta = theta + dtheta
-            if theta > _PI:
-                theta -= _TWO_PI
-            elif theta < -_PI:
-                theta += _TWO_PI
-            self.theta = theta
-            self._distance_acc += dist
-            self._angle_acc += dtheta
+            self._turn(self.theta + dtheta, dist, dtheta)
             left_counts = self._left_counts = self._left_counts + motion[6]
             right_counts = self._right_counts = self._right_counts + motion[7]
             v[58] = motion[8]
@@ -229,6 +213,31 @@ class Motion(Sensing):
         if not self.ticks & 3:
             self.trace.append(TracePoint(self.time, self.x, self.y, self.theta, self.mode))
 
+    def _reach(self, x: float, y: float, ux: float, uy: float) -> float:
+        """A wall is in the way of the move (ux, uy) from (x, y): how far along it the body
+        gets, to 1 % (bisection)."""
+        lo, hi = 0.0, 1.0
+        if self._clearance < 0.5 and self._blocked(x + ux / 64, y + uy / 64):
+            hi = 0.0  # pressed against the wall already: no room at all
+        while hi - lo > 0.01:
+            mid = (lo + hi) / 2.0
+            if self._blocked(x + ux * mid, y + uy * mid):
+                hi = mid
+            else:
+                lo = mid
+        return lo
+
+    def _turn(self, theta: float, travelled: float, dtheta: float) -> None:
+        """The body now faces ``theta`` (wrapped into -pi..pi here), having travelled
+        ``travelled`` mm and turned ``dtheta`` rad: what packets 19 and 20 add up."""
+        if theta > _PI:
+            theta -= _TWO_PI
+        elif theta < -_PI:
+            theta += _TWO_PI
+        self.theta = theta
+        self._distance_acc += travelled
+        self._angle_acc += dtheta
+
     def _move_hindered(self, dist: float, dtheta: float, fraction: float, stuck: bool) -> None:
         """The rest of a step that a wall cut short, or a lifted or fallen robot's."""
         half_base = self._half_base
@@ -240,14 +249,7 @@ class Motion(Sensing):
             travelled = dist
         else:
             travelled = dist * fraction
-            theta = self.theta + dtheta + guided
-            if theta > _PI:
-                theta -= _TWO_PI
-            elif theta < -_PI:
-                theta += _TWO_PI
-            self.theta = theta
-            self._distance_acc += travelled
-            self._angle_acc += dtheta
+            self._turn(self.theta + dtheta + guided, travelled, dtheta)
         # Encoders count wheel turns: a blocked robot's wheels stall, a lifted one's spin.
         self._left_counts = self._left_counts + (travelled - dtheta * half_base) / MM_PER_COUNT
         self._right_counts = self._right_counts + (travelled + dtheta * half_base) / MM_PER_COUNT
