@@ -28,7 +28,7 @@ import argparse
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from roomba_bt.cli.arguments import (
     add_param_option,
@@ -41,6 +41,12 @@ from roomba_bt.cli.arguments import (
 )
 from roomba_bt.oi.profiles import PROFILES
 from roomba_bt.runtime.summary import ExitCode
+
+if TYPE_CHECKING:  # the evaluation is imported when it runs: the CLI starts faster
+    from roomba_bt.evaluate.episode import EpisodeSpec
+    from roomba_bt.evaluate.parallel import Engine, Evaluation
+    from roomba_bt.evaluate.stats import Comparison, Summary
+    from roomba_bt.sim.world import World
 
 
 def register(sub: Any) -> None:
@@ -59,6 +65,15 @@ def register(sub: Any) -> None:
         help="mission YAML file or a shipped mission's name (dock); two or more: compare them "
         "(A/B) on the same seeds",
     )
+    _add_episode_options(ev)
+    _add_output_options(ev)
+    _add_start_options(ev)
+    add_permission_options(ev)
+    ev.set_defaults(func=eval_command)
+
+
+def _add_episode_options(ev: argparse.ArgumentParser) -> None:
+    """The world, how many episodes from which seed, and where they run."""
     ev.add_argument("--world", default="empty-room", help="a shipped world name or a YAML path")
     ev.add_argument("--runs", type=int, default=20, help="number of episodes (default 20)")
     ev.add_argument("--seed", type=int, default=0, help="first seed (default 0)")
@@ -79,6 +94,10 @@ def register(sub: Any) -> None:
         metavar="tcp://HOST:8786",
         help="run on this Dask scheduler's cluster (implies --engine dask)",
     )
+
+
+def _add_output_options(ev: argparse.ArgumentParser) -> None:
+    """What is written (records, JSON, a plot) and the variants compared."""
     ev.add_argument(
         "--out", metavar="FILE", help="one record per episode: .jsonl (JSON Lines) or .csv"
     )
@@ -97,6 +116,10 @@ def register(sub: Any) -> None:
     )
     ev.add_argument("--plot", metavar="FILE.png", type=plot_file,
                     help="draw every trajectory (matplotlib)")  # fmt: skip
+
+
+def _add_start_options(ev: argparse.ArgumentParser) -> None:
+    """How each episode starts (pose, parameters, dock, charge), its limits, and CI's bar."""
     ev.add_argument(
         "--within", type=float, metavar="METRES",
         help="start within this distance of the docked pose (default: the world's region)",
@@ -122,8 +145,6 @@ def register(sub: Any) -> None:
     ev.add_argument("--min-rate", type=float, metavar="FRACTION",
                     help="exit 1 if the success rate is below this (for CI)")  # fmt: skip
     ev.add_argument("--no-progress", action="store_true", help="no progress bar")
-    add_permission_options(ev)
-    ev.set_defaults(func=eval_command)
 
 
 def _error(message: str) -> int:
@@ -204,32 +225,97 @@ def variants(args: argparse.Namespace, params: dict[str, str]) -> list[Variant] 
 
 
 def eval_command(args: argparse.Namespace) -> int:
-    from roomba_bt.evaluate import EvaluationError, episode_specs, summarize
-    from roomba_bt.evaluate.parallel import Engine, ProgressBar, evaluate
+    from roomba_bt.evaluate import summarize
+    from roomba_bt.evaluate.parallel import Engine
 
+    problem = _check_arguments(args)
+    if problem is not None:
+        return _error(problem)
+    plan = _plan(args)
+    if isinstance(plan, int):
+        return plan
+    chosen, batches, world = plan
+    engine = Engine("dask" if args.scheduler or args.engine == "dask" else "local", args.jobs,
+                    args.scheduler)  # fmt: skip
+    done = _run(args, chosen, batches, engine)
+    if isinstance(done, int):
+        return done
+    summaries = [
+        summarize(v.mission, world.name, e.results) for v, e in zip(chosen, done, strict=True)
+    ]
+    interrupted = any(e.interrupted for e in done)
+    comparisons = []
+    if len(chosen) > 1 and not interrupted:
+        from roomba_bt.evaluate.stats import compare
+
+        comparisons = [compare(chosen[0].label, v.label, done[0].results, e.results)
+                       for v, e in zip(chosen[1:], done[1:], strict=True)]  # fmt: skip
+    if args.out is not None:
+        from roomba_bt.evaluate.records import write_results
+
+        try:
+            write_results(args.out, [r for e in done for r in e.results])
+        except OSError as exc:
+            return _error(f"--out {args.out}: {exc.strerror or exc}")
+    _report(args, engine.describe(), chosen, summaries, comparisons, done)
+    if args.out is not None:
+        print(f"results written to {args.out}", file=sys.stderr)
+    if interrupted:
+        finished = sum(len(e.results) for e in done)
+        print(f"roomba-bt eval: interrupted; {finished} episode(s) finished, summarised above",
+              file=sys.stderr)  # fmt: skip
+        return ExitCode.INTERRUPTED
+    if args.plot:
+        plotted = _plot(args.plot, world, chosen[0], done[0], summaries[0])
+        if plotted is not None:
+            return plotted
+    low = [s for s in summaries if args.min_rate is not None and s.rate < args.min_rate]
+    for s in low:
+        print(
+            f"roomba-bt eval: {s.mission}: success rate {100 * s.rate:.1f} % is below "
+            f"--min-rate {100 * args.min_rate:.1f} %",
+            file=sys.stderr,
+        )
+    return ExitCode.MISSION_FAILED if low else ExitCode.OK
+
+
+def _check_arguments(args: argparse.Namespace) -> str | None:
+    """The missions found (their paths kept in ``args.mission_paths``) and every number in
+    its range; the first problem's message."""
     args.mission_paths = {}
     for mission in args.missions:
         found = mission_file(mission)
         if isinstance(found, tuple):
-            return _error(found[0])
+            return found[0]
         args.mission_paths[mission] = found
     if args.runs < 1:
-        return _error(f"--runs {args.runs}: expected at least 1")
+        return f"--runs {args.runs}: expected at least 1"
     if args.jobs < 1:
-        return _error(f"--jobs {args.jobs}: expected at least 1")
+        return f"--jobs {args.jobs}: expected at least 1"
     if args.within is not None and args.within <= 0:
-        return _error(f"--within {args.within}: expected a distance above 0 m")
+        return f"--within {args.within}: expected a distance above 0 m"
     if args.battery is not None and not 0.0 <= args.battery <= 1.0:
-        return _error(f"--battery {args.battery}: expected a fraction in 0..1")
+        return f"--battery {args.battery}: expected a fraction in 0..1"
     if args.min_rate is not None and not 0.0 <= args.min_rate <= 1.0:
-        return _error(f"--min-rate {args.min_rate}: expected a fraction in 0..1")
+        return f"--min-rate {args.min_rate}: expected a fraction in 0..1"
     if args.out is not None:
         from roomba_bt.evaluate.records import results_format
 
         try:
             results_format(args.out)
         except ValueError as exc:
-            return _error(f"--out {exc}")
+            return f"--out {exc}"
+    return None
+
+
+def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpec]], World] | int:
+    """The variants and their episodes; each mission and the world checked once, here,
+    before any worker starts. An exit code on a problem (said on stderr)."""
+    from roomba_bt.cli.run_cmd import load
+    from roomba_bt.evaluate import EvaluationError, episode_specs
+    from roomba_bt.evaluate.episode import build_world, start_pose
+    from roomba_bt.oi.profiles import get_profile
+
     params = parse_params(args.param)
     if isinstance(params, str):
         return _error(params)
@@ -259,11 +345,6 @@ def eval_command(args: argparse.Namespace) -> int:
         )
         for v in chosen
     ]
-    # Check each mission and the world once, here, before any worker starts.
-    from roomba_bt.cli.run_cmd import load
-    from roomba_bt.evaluate.episode import build_world, start_pose
-    from roomba_bt.oi.profiles import get_profile
-
     for v in chosen:
         loaded = load(
             v.mission, dict(v.params), get_profile(args.profile), granted=permissions(args)
@@ -275,94 +356,87 @@ def eval_command(args: argparse.Namespace) -> int:
         start_pose(world, batches[0][0])
     except EvaluationError as exc:
         return _error(str(exc))
-    engine = Engine("dask" if args.scheduler or args.engine == "dask" else "local", args.jobs,
-                    args.scheduler)  # fmt: skip
+    return chosen, batches, world
+
+
+def _run(
+    args: argparse.Namespace,
+    chosen: list[Variant],
+    batches: list[list[EpisodeSpec]],
+    engine: Engine,
+) -> list[Evaluation] | int:
+    """Every variant's episodes on the engine, a progress bar each; an exit code when the
+    cluster is not there."""
+    from roomba_bt.evaluate.cluster import ClusterUnavailableError, SchedulerUnreachableError
+    from roomba_bt.evaluate.parallel import ProgressBar, evaluate
+
     bars = [
         None if args.no_progress else ProgressBar(label=f"{Path(v.mission).stem} "
                                                   f"{' '.join(f'{k}={x}' for k, x in v.params)} ")
         for v in chosen
     ]  # fmt: skip
-    from roomba_bt.evaluate.cluster import ClusterUnavailableError, SchedulerUnreachableError
-
     try:
-        done = evaluate(batches, engine, bars)
+        return evaluate(batches, engine, bars)
     except SchedulerUnreachableError as exc:
         print(f"roomba-bt eval: {exc}", file=sys.stderr)
         return ExitCode.CONNECTION
     except ClusterUnavailableError as exc:
         return _error(str(exc))
-    summaries = [
-        summarize(v.mission, world.name, e.results) for v, e in zip(chosen, done, strict=True)
-    ]
-    retried = sum(e.retried for e in done)
-    interrupted = any(e.interrupted for e in done)
-    comparisons = []
-    if len(chosen) > 1 and not interrupted:
-        from roomba_bt.evaluate.stats import compare
 
-        comparisons = [compare(chosen[0].label, v.label, done[0].results, e.results)
-                       for v, e in zip(chosen[1:], done[1:], strict=True)]  # fmt: skip
-    if args.out is not None:
-        from roomba_bt.evaluate.records import write_results
 
-        try:
-            write_results(args.out, [r for e in done for r in e.results])
-        except OSError as exc:
-            return _error(f"--out {args.out}: {exc.strerror or exc}")
+def _report(
+    args: argparse.Namespace,
+    engine: str,
+    chosen: list[Variant],
+    summaries: list[Summary],
+    comparisons: list[Comparison],
+    done: list[Evaluation],
+) -> None:
+    """The summaries, coverage and comparisons on stdout: as JSON with ``--json``, else text."""
     from roomba_bt.evaluate.coverage import summarize_coverage
 
+    retried = sum(e.retried for e in done)
     if args.json:
         import json
 
         coverages = [summarize_coverage(e.results) for e in done]
         print(json.dumps({
-            "engine": engine.describe(),
+            "engine": engine,
             "retried": retried,
-            "interrupted": interrupted,
+            "interrupted": any(e.interrupted for e in done),
             "variants": [{"label": v.label, "params": dict(v.params), **s.to_dict(),
                           "coverage": c.to_dict() if c is not None else None}
                          for v, s, c in zip(chosen, summaries, coverages, strict=True)],
             "comparisons": [c.to_dict() for c in comparisons],
         }, indent=2))  # fmt: skip
-    else:
-        for v, s, e in zip(chosen, summaries, done, strict=True):
-            if len(chosen) > 1:
-                print(f"variant      {v.label}")
-            print(s)
-            coverage = summarize_coverage(e.results)
-            if coverage is not None:
-                print(coverage)
-            print()
-        for c in comparisons:
-            print(c)
-            print()
-        print(f"engine       {engine.describe()}; {retried} episode(s) run again after a "
-              f"worker was lost")  # fmt: skip
-    if args.out is not None:
-        print(f"results written to {args.out}", file=sys.stderr)
-    if interrupted:
-        finished = sum(len(e.results) for e in done)
-        print(f"roomba-bt eval: interrupted; {finished} episode(s) finished, summarised above",
-              file=sys.stderr)  # fmt: skip
-        return ExitCode.INTERRUPTED
-    summary = summaries[0]
-    if args.plot:
-        from roomba_bt.evaluate.plot import PlotUnavailableError, plot_trajectories
+        return
+    for v, s, e in zip(chosen, summaries, done, strict=True):
+        if len(chosen) > 1:
+            print(f"variant      {v.label}")
+        print(s)
+        coverage = summarize_coverage(e.results)
+        if coverage is not None:
+            print(coverage)
+        print()
+    for c in comparisons:
+        print(c)
+        print()
+    print(f"engine       {engine}; {retried} episode(s) run again after a worker was lost")
 
-        try:
-            plot_trajectories(world, done[0].results, args.plot, f"{Path(chosen[0].mission).stem}"
-                              f" in {world.name}: {summary.successes}/{summary.runs}")  # fmt: skip
-        except PlotUnavailableError as exc:
-            print(f"roomba-bt eval: {exc}", file=sys.stderr)
-            return ExitCode.INVALID
-        except OSError as exc:
-            return _error(f"--plot {args.plot}: {exc.strerror or exc}")
-        print(f"trajectories written to {args.plot}", file=sys.stderr)
-    low = [s for s in summaries if args.min_rate is not None and s.rate < args.min_rate]
-    for s in low:
-        print(
-            f"roomba-bt eval: {s.mission}: success rate {100 * s.rate:.1f} % is below "
-            f"--min-rate {100 * args.min_rate:.1f} %",
-            file=sys.stderr,
-        )
-    return ExitCode.MISSION_FAILED if low else ExitCode.OK
+
+def _plot(
+    out: str, world: World, first: Variant, evaluated: Evaluation, summary: Summary
+) -> int | None:
+    """The first variant's trajectories drawn to ``out``; an exit code if that failed."""
+    from roomba_bt.evaluate.plot import PlotUnavailableError, plot_trajectories
+
+    try:
+        plot_trajectories(world, evaluated.results, out, f"{Path(first.mission).stem}"
+                          f" in {world.name}: {summary.successes}/{summary.runs}")  # fmt: skip
+    except PlotUnavailableError as exc:
+        print(f"roomba-bt eval: {exc}", file=sys.stderr)
+        return ExitCode.INVALID
+    except OSError as exc:
+        return _error(f"--plot {out}: {exc.strerror or exc}")
+    print(f"trajectories written to {out}", file=sys.stderr)
+    return None
