@@ -17,7 +17,7 @@ from typing import Any
 
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import Action, Param, declare, write_key
+from roomba_bt.behaviours.declare import WHEEL, Action, Param, declare, write_key
 from roomba_bt.behaviours.units import (
     ANGLE,
     ANY,
@@ -47,7 +47,6 @@ log = logging.getLogger("roomba_bt.mission")
 # Ranges read from the opcode table, never retyped.
 _VELOCITY = COMMANDS_BY_NAME["drive"].args[0]
 _RADIUS = COMMANDS_BY_NAME["drive"].args[1]
-_WHEEL = COMMANDS_BY_NAME["drive_direct"].args[0]
 _SONG_NUMBER = COMMANDS_BY_NAME["song"].args[0]
 _SONG_LENGTH = COMMANDS_BY_NAME["song"].args[1]
 _LED_COLOR = COMMANDS_BY_NAME["leds"].args[1]
@@ -195,9 +194,9 @@ def _drive_reads(params: Mapping[str, Any]) -> tuple[int, ...]:
         Param("radius", RADIUS, default="straight", minimum=_RADIUS.minimum,
               maximum=_RADIUS.maximum,
               doc="turn radius (positive turns left), straight, spin_left or spin_right"),
-        Param("left", SPEED, minimum=_WHEEL.minimum, maximum=_WHEEL.maximum,
+        Param("left", SPEED, minimum=WHEEL.minimum, maximum=WHEEL.maximum,
               doc="left wheel speed (Drive Direct 145), with right"),
-        Param("right", SPEED, minimum=_WHEEL.minimum, maximum=_WHEEL.maximum,
+        Param("right", SPEED, minimum=WHEEL.minimum, maximum=WHEEL.maximum,
               doc="right wheel speed (Drive Direct 145), with left"),
         Param("distance", DISTANCE, minimum=0, doc="stop after this path length (odometry)"),
         Param("angle", ANGLE, minimum=0, doc="stop after this heading change (odometry)"),

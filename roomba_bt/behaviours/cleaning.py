@@ -30,7 +30,7 @@ import math
 
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import Action, Param, declare
+from roomba_bt.behaviours.declare import WHEEL, Action, Param, declare, wheel_speeds
 from roomba_bt.behaviours.units import ANGLE, DISTANCE, INT, SPEED, enum
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import (
@@ -42,11 +42,10 @@ from roomba_bt.oi.frames import (
     SensorFrame,
 )
 from roomba_bt.oi.modes import DRIVING_MODES
-from roomba_bt.oi.opcodes import COMMANDS_BY_NAME
+from roomba_bt.oi.opcodes import opcodes
 from roomba_bt.oi.profiles import WHEEL_BASE_MM
 
 _OK, _RUN, _FAIL = Status.SUCCESS, Status.RUNNING, Status.FAILURE
-_WHEEL = COMMANDS_BY_NAME["drive_direct"].args[0]  # -500..500 mm/s, from the opcode table
 _HAZARDS = (*BUMPS_PACKETS, *CLIFF_PACKETS, *VIRTUAL_WALL_PACKETS)
 #: a centre light-bump signal above this: something within a few centimetres, slow down
 _NEAR_SIGNAL = 150
@@ -60,10 +59,8 @@ _STALL_S = 3.0
 
 
 def _wheels(left: float, right: float) -> oi.Command:
-    limit = _WHEEL.maximum
-    return oi.drive_direct(
-        max(-limit, min(limit, round(right))), max(-limit, min(limit, round(left)))
-    )
+    lo, ro = wheel_speeds(left, right)
+    return oi.drive_direct(ro, lo)
 
 
 def _blocked(frame: SensorFrame) -> str | None:
@@ -103,6 +100,30 @@ def _held(action: Action) -> Status | None:
     return None
 
 
+class _Pattern(Action):
+    """A cleaning pattern: each tick :func:`_held`'s guard, then the pattern's wheel speeds
+    (Drive Direct); None from :meth:`wheel_speeds` ends it: the wheels halt, SUCCESS."""
+
+    moves = True
+
+    def update(self) -> Status:
+        held = _held(self)
+        if held is not None:
+            return held
+        wheels = self.wheel_speeds(self.snapshot.frame)
+        if wheels is None:
+            self.send(oi.halt())
+            self._started_motion = False
+            return _OK
+        self.send(_wheels(*wheels))
+        self._started_motion = True
+        return _RUN
+
+    def wheel_speeds(self, frame: SensorFrame) -> tuple[float, float] | None:
+        """This tick's (left, right) wheel speeds, mm/s; None when the pattern is done."""
+        raise NotImplementedError
+
+
 # --------------------------------------------------------------------------- spiral
 
 
@@ -110,7 +131,7 @@ def _held(action: Action) -> Status | None:
     "spiral",
     kind="action",
     params=(
-        Param("speed", SPEED, default="300 mm/s", minimum=20, maximum=_WHEEL.maximum,
+        Param("speed", SPEED, default="300 mm/s", minimum=20, maximum=WHEEL.maximum,
               doc="speed of the robot's centre along the spiral"),
         Param("spacing", DISTANCE, default="25 cm", minimum=50, maximum=1000,
               doc="the radius grows this much a turn (the swept strip is 27.5 cm wide)"),
@@ -119,9 +140,9 @@ def _held(action: Action) -> Status | None:
               doc="SUCCESS once the spiral is this wide"),
     ),
     reads=(*_HAZARDS, *ENCODER_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS),
-    sends=(145,),
+    sends=opcodes("drive_direct"),
 )  # fmt: skip
-class Spiral(Action):
+class Spiral(_Pattern):
     """Spiral outward, turning left, over open floor: SUCCESS when it is ``max_radius`` wide
     or something is in the way (a bump, a cliff, a virtual wall, a wall close ahead); the
     wheels halt. FAILURE on a wheel drop, or when the robot leaves Safe/Full.
@@ -130,17 +151,11 @@ class Spiral(Action):
     so the rings lie side by side; the outside of the turn is the robot's right, where the
     side brush widens the strip. Wheel speeds from Drive Direct (145)."""
 
-    moves = True
-
     def start(self) -> None:
         self._start_angle = self.snapshot.odometry.angle_rad
 
-    def update(self) -> Status:
-        held = _held(self)
-        if held is not None:
-            return held
+    def wheel_speeds(self, frame: SensorFrame) -> tuple[float, float] | None:
         snap = self.snapshot
-        frame = snap.frame
         turned = abs(snap.odometry.angle_rad - self._start_angle)
         radius = self.number("start_radius") + self.number("spacing") * turned / math.tau
         why = _blocked(frame) or ("wall ahead" if _near(frame) else None)
@@ -148,17 +163,11 @@ class Spiral(Action):
             why = "wide enough"
         if why is not None:
             self.feedback_message = why
-            self.send(oi.halt())
-            self._started_motion = False
-            return _OK
+            return None
         speed = self.number("speed")
         base = self.robot.profile.wheel_base_mm if self.robot is not None else WHEEL_BASE_MM
         half_base = base / 2.0
-        left = speed * (radius - half_base) / radius
-        right = speed * (radius + half_base) / radius
-        self.send(_wheels(left, right))
-        self._started_motion = True
-        return _RUN
+        return speed * (radius - half_base) / radius, speed * (radius + half_base) / radius
 
 
 # --------------------------------------------------------------------------- lanes
@@ -173,8 +182,8 @@ class Spiral(Action):
                   "following a wall, 0deg: along the wall, 90deg: across the room)"),
         Param("side", enum("left", "right"), default="left",
               doc="the side the lanes advance to (left: away from a wall on the right)"),
-        Param("speed", SPEED, default="300 mm/s", minimum=20, maximum=_WHEEL.maximum),
-        Param("turn_speed", SPEED, default="200 mm/s", minimum=20, maximum=_WHEEL.maximum,
+        Param("speed", SPEED, default="300 mm/s", minimum=20, maximum=WHEEL.maximum),
+        Param("turn_speed", SPEED, default="200 mm/s", minimum=20, maximum=WHEEL.maximum,
               doc="wheel speed when turning in place"),
         Param("shift_left", DISTANCE, default="15 cm", minimum=20, maximum=1000,
               doc="lane spacing when the next lane is to the robot's left"),
@@ -187,9 +196,9 @@ class Spiral(Action):
               doc="SUCCESS after this many lanes"),
     ),
     reads=(*_HAZARDS, *ENCODER_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS),
-    sends=(145,),
+    sends=opcodes("drive_direct"),
 )  # fmt: skip
-class Lanes(Action):
+class Lanes(_Pattern):
     """Sweep the floor in parallel lanes, back and forth (boustrophedon), by odometry.
 
     A lane runs until a bump or a cliff (then it backs off 3 or 6 cm), a virtual wall's beam or
@@ -198,8 +207,6 @@ class Lanes(Action):
     blocked before half its length (the sweep has reached the far side) or after ``lanes``
     lanes; FAILURE on a wheel drop or when the robot leaves Safe/Full. Wheel speeds from
     Drive Direct (145)."""
-
-    moves = True
 
     def start(self) -> None:
         heading = self.snapshot.odometry.theta_rad
@@ -238,22 +245,7 @@ class Lanes(Action):
         turn = max(-0.5 * speed, min(0.5 * speed, 600.0 * error))
         return speed - turn, speed + turn
 
-    def update(self) -> Status:
-        held = _held(self)
-        if held is not None:
-            return held
-        snap = self.snapshot
-        frame = snap.frame
-        wheels = self._wheel_speeds(frame)
-        if wheels is None:
-            self.send(oi.halt())
-            self._started_motion = False
-            return _OK
-        self.send(_wheels(*wheels))
-        self._started_motion = True
-        return _RUN
-
-    def _wheel_speeds(self, frame: SensorFrame) -> tuple[float, float] | None:
+    def wheel_speeds(self, frame: SensorFrame) -> tuple[float, float] | None:
         """This tick's wheel speeds, or None when the sweep is done. A phase that ends hands
         over to the next in the same tick."""
         snap = self.snapshot

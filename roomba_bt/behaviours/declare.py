@@ -31,7 +31,7 @@ from roomba_bt.behaviours.lean import DirectLeaf
 from roomba_bt.behaviours.units import UnitError, ValueType
 from roomba_bt.oi.encode import Command, halt
 from roomba_bt.oi.modes import ALL_MODES, DRIVING_MODES, OIMode
-from roomba_bt.oi.opcodes import COMMANDS
+from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.robot.interface import RobotHandle, Snapshot
 
@@ -309,6 +309,17 @@ def read_key(key: str) -> Any:
 
 def write_key(key: str, value: Any) -> None:
     py_trees.blackboard.Blackboard.storage[MISSION_NAMESPACE + key] = value
+
+
+#: One wheel's speed as Drive Direct takes it, mm/s (-500..500, from the opcode table): the
+#: bound of every wheel-speed parameter and of what a driving action sends.
+WHEEL = COMMANDS_BY_NAME["drive_direct"].args[0]
+
+
+def wheel_speeds(left: float, right: float) -> tuple[int, int]:
+    """``left``, ``right`` (mm/s) rounded and clamped to what Drive Direct takes."""
+    limit = WHEEL.maximum
+    return max(-limit, min(limit, round(left))), max(-limit, min(limit, round(right)))
 
 
 class Action(RobotBehaviour):

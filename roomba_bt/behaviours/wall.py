@@ -23,17 +23,16 @@ import math
 
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import Action, Param, declare
+from roomba_bt.behaviours.declare import WHEEL, Action, Param, declare, wheel_speeds
 from roomba_bt.behaviours.units import ANGLE, DURATION, FLOAT, INT, SPEED
 from roomba_bt.oi import commands
 from roomba_bt.oi.frames import BUMPS_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS
 from roomba_bt.oi.modes import DRIVING_MODES
-from roomba_bt.oi.opcodes import COMMANDS_BY_NAME, opcodes
+from roomba_bt.oi.opcodes import opcodes
 from roomba_bt.oi.packets import PACKETS
 
 __all__ = ["WALL_FOLLOWING", "WallFollow"]
 
-_WHEEL = COMMANDS_BY_NAME["drive_direct"].args[0]  # -500..500 mm/s, from the opcode table
 #: the light-bumper signals it reads: centre left, centre right, front right, right
 _SIGNALS = LIGHT_BUMP_SIGNAL_PACKETS[2:]
 _SIGNAL_MAX = PACKETS[_SIGNALS[-1]].maximum
@@ -47,7 +46,7 @@ _TURN_S = 4.0
     "wall_follow",
     kind="action",
     params=(
-        Param("speed", SPEED, default="150 mm/s", minimum=20, maximum=_WHEEL.maximum,
+        Param("speed", SPEED, default="150 mm/s", minimum=20, maximum=WHEEL.maximum,
               doc="forward wheel speed"),
         Param("target", INT, default=600, minimum=1, maximum=_SIGNAL_MAX,
               doc="right light-bumper signal (51) to hold"),
@@ -115,10 +114,7 @@ class WallFollow(Action):
         self._previous_error, self._previous_time = error, now
         turn = self.number("kp") * error + self.number("kd") * derivative
         turn = max(-speed, min(speed, turn))
-        limit = _WHEEL.maximum
-        left = max(-limit, min(limit, round(speed + turn)))
-        right = max(-limit, min(limit, round(speed - turn)))
-        return left, right
+        return wheel_speeds(speed + turn, speed - turn)
 
     def update(self) -> Status:
         snap = self.snapshot

@@ -21,13 +21,12 @@ from collections.abc import Callable
 import py_trees
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import Param, declare
+from roomba_bt.behaviours.declare import WHEEL, Param, declare
 from roomba_bt.behaviours.docking.common import (
     DRIVE_SENDS,
     OMNI_AHEAD_MM,
     RUN_KEY,
     RUNNING,
-    WHEEL_ARG,
     DockingAction,
     DockView,
     Hazard,
@@ -109,7 +108,7 @@ class ApproachState(IdentityEnum):
     "dock_approach",
     kind="action",
     params=(
-        Param("speed", SPEED, default="150 mm/s", minimum=30, maximum=WHEEL_ARG.maximum,
+        Param("speed", SPEED, default="150 mm/s", minimum=30, maximum=WHEEL.maximum,
               doc="speed toward the axis"),
         Param("cross_angle", ANGLE, default="80deg", minimum=20, maximum=90,
               doc="how far it turns away from the dock to move toward its axis"),

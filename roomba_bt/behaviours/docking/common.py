@@ -9,14 +9,13 @@ from typing import NamedTuple
 import py_trees
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import Action
+from roomba_bt.behaviours.declare import Action, wheel_speeds
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.ir import IRCharacter
 from roomba_bt.oi.modes import DRIVING_MODES
 from roomba_bt.oi.opcodes import COMMANDS_BY_NAME
 
-WHEEL_ARG = COMMANDS_BY_NAME["drive_direct"].args[0]
 #: The stages drive with Drive Direct and halt with Drive 0: their ``sends=``.
 DRIVE_SENDS = (COMMANDS_BY_NAME["drive"].opcode, COMMANDS_BY_NAME["drive_direct"].opcode)
 OK, RUNNING, FAILED = Status.SUCCESS, Status.RUNNING, Status.FAILURE
@@ -163,9 +162,7 @@ class DockingAction(Action):
     def wheels(self, left: float, right: float) -> None:
         """Drive Direct (mm/s), sent only when the wheel speeds change (the robot keeps
         them), clamped to the command's range."""
-        limit = WHEEL_ARG.maximum
-        lo = max(-limit, min(limit, round(left)))
-        ro = max(-limit, min(limit, round(right)))
+        lo, ro = wheel_speeds(left, right)
         if (lo, ro) != self._last_wheels or not self._started_motion:
             self.send(oi.drive_direct(ro, lo))
         self._last_wheels = (lo, ro)

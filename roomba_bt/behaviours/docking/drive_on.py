@@ -12,11 +12,10 @@ from collections.abc import Callable
 
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import Param, declare
+from roomba_bt.behaviours.declare import WHEEL, Param, declare
 from roomba_bt.behaviours.docking.common import (
     DRIVE_SENDS,
     RUNNING,
-    WHEEL_ARG,
     DockingAction,
     DockView,
     IdentityEnum,
@@ -56,9 +55,9 @@ class DriveOnState(IdentityEnum):
     "dock_drive_on",
     kind="action",
     params=(
-        Param("speed", SPEED, default="120 mm/s", minimum=20, maximum=WHEEL_ARG.maximum,
+        Param("speed", SPEED, default="120 mm/s", minimum=20, maximum=WHEEL.maximum,
               doc="speed along the axis outside the force field"),
-        Param("slow", SPEED, default="60 mm/s", minimum=10, maximum=WHEEL_ARG.maximum,
+        Param("slow", SPEED, default="60 mm/s", minimum=10, maximum=WHEEL.maximum,
               doc="speed inside the force field"),
         Param("wiggle", ANGLE, default="12deg", minimum=0, maximum=45,
               doc="how far it turns each way on contact to seat the charging contacts"),

@@ -23,11 +23,10 @@ from collections.abc import Callable
 
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import Param, declare
+from roomba_bt.behaviours.declare import WHEEL, Param, declare
 from roomba_bt.behaviours.docking.common import (
     DRIVE_SENDS,
     RUNNING,
-    WHEEL_ARG,
     DockingAction,
     DockView,
     Hazard,
@@ -193,7 +192,7 @@ class VisitGrid:
     "dock_search",
     kind="action",
     params=(
-        Param("speed", SPEED, default="200 mm/s", minimum=50, maximum=WHEEL_ARG.maximum,
+        Param("speed", SPEED, default="200 mm/s", minimum=50, maximum=WHEEL.maximum,
               doc="forward speed while wandering"),
         Param("spin_first", BOOL, default=True, doc="turn once in place before wandering"),
         Param("leg", DISTANCE, default="2 m", minimum=200,
