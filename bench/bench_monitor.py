@@ -170,16 +170,7 @@ def memory(ticks: int) -> list[tuple[int, float]]:
     simulator = Simulator(load_world("empty-room"), CREATE2, 0)
     connection = Connection(SimLink(simulator), CREATE2, watchdog=0.0)
     packets = stream_request(mission.packets, 115200)
-    samples: list[tuple[int, float]] = []
-
-    def observe(runner: MissionRunner) -> None:
-        done = runner.summary.ticks
-        if done % 10_000 == 0:
-            simulator.trace.clear()
-            simulator.events.clear()
-        if done % 20_000 == 0:
-            samples.append((done, bench_runtime._rss_mb()))
-
+    observe, samples = bench_runtime.memory_observer(simulator, 20_000)
     runner = MissionRunner(connection, mission, profile=CREATE2, packets=packets,
                            timeout_s=ticks * 0.015, observer=observe)  # fmt: skip
     feed, session = _monitor_for(mission, simulator)

@@ -29,8 +29,9 @@ import sys
 import tempfile
 import textwrap
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import py_trees
 
@@ -41,6 +42,9 @@ from roomba_bt.oi.stream import StreamParser
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.testing import StubRobot
 from roomba_bt.runtime.loop import MissionRunner, stream_request
+
+if TYPE_CHECKING:
+    from roomba_bt.sim import Simulator
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -301,6 +305,25 @@ def _rss_mb() -> float:
     return pages * os.sysconf("SC_PAGE_SIZE") / 2**20
 
 
+def memory_observer(
+    sim: Simulator, every: int
+) -> tuple[Callable[[MissionRunner], None], list[tuple[int, float]]]:
+    """A runner observer that samples this process's resident memory every ``every`` ticks
+    (as (ticks, MB) into the list returned with it) and empties the simulator's trace and
+    events every 10,000 ticks, so that they do not count as a leak of the runtime."""
+    samples: list[tuple[int, float]] = []
+
+    def observe(runner: MissionRunner) -> None:
+        ticks_done = runner.summary.ticks
+        if ticks_done % 10_000 == 0:
+            sim.trace.clear()
+            sim.events.clear()
+        if ticks_done % every == 0:
+            samples.append((ticks_done, _rss_mb()))
+
+    return observe, samples
+
+
 def memory_run(tmp: Path, ticks: int = 1_000_000) -> list[tuple[int, float]]:
     from roomba_bt.sim import SimLink, Simulator, load_world
 
@@ -320,16 +343,7 @@ def memory_run(tmp: Path, ticks: int = 1_000_000) -> list[tuple[int, float]]:
     sim = Simulator(load_world("empty-room"), CREATE2, 0)
     link = SimLink(sim)
     connection = Connection(link, CREATE2, watchdog=0.0)
-    samples: list[tuple[int, float]] = []
-
-    def observe(runner: MissionRunner) -> None:
-        ticks_done = runner.summary.ticks
-        if ticks_done % 10_000 == 0:
-            sim.trace.clear()
-            sim.events.clear()
-        if ticks_done % 100_000 == 0:
-            samples.append((ticks_done, _rss_mb()))
-
+    observe, samples = memory_observer(sim, 100_000)
     packets = stream_request(mission.packets, 115200)
     runner = MissionRunner(connection, mission, profile=CREATE2, packets=packets,
                            timeout_s=ticks * 0.015, observer=observe)  # fmt: skip
