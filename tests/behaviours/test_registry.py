@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from importlib.metadata import EntryPoint
 from pathlib import Path
+from typing import Any
 
 import pytest
 from py_trees.common import Status
@@ -80,48 +81,26 @@ def test_a_plugin_that_declares_itself_wrongly_is_named() -> None:
     assert "decorate it with @declare" in str(error)
 
 
-def test_declaration_errors() -> None:
+@pytest.mark.parametrize(
+    ("name", "declared", "message"),
+    [
+        ("drive", {}, "already taken"),
+        ("sequence", {}, "word of the mission language"),
+        ("BadName", {}, "snake_case"),
+        ("reads_junk", {"reads": (999,)}, r"unknown sensor packets \[999\]"),
+        ("bad_default", {"params": (Param("n", INT, default="x"),)}, "default of 'n'"),
+    ],
+)
+def test_declaration_errors(name: str, declared: dict[str, Any], message: str) -> None:
     registry = builtin_registry()
 
-    @declare("drive", kind="condition")
-    class Clash(Condition):
+    @declare(name, kind="condition", **declared)
+    class Declared(Condition):
         def check(self, snapshot: Snapshot) -> bool:
             return True
 
-    with pytest.raises(DeclarationError, match="already taken"):
-        registry.register(Clash)
-
-    @declare("sequence", kind="condition")
-    class Reserved(Condition):
-        def check(self, snapshot: Snapshot) -> bool:
-            return True
-
-    with pytest.raises(DeclarationError, match="word of the mission language"):
-        registry.register(Reserved)
-
-    @declare("BadName", kind="condition")
-    class Camel(Condition):
-        def check(self, snapshot: Snapshot) -> bool:
-            return True
-
-    with pytest.raises(DeclarationError, match="snake_case"):
-        registry.register(Camel)
-
-    @declare("reads_junk", kind="condition", reads=(999,))
-    class Junk(Condition):
-        def check(self, snapshot: Snapshot) -> bool:
-            return True
-
-    with pytest.raises(DeclarationError, match=r"unknown sensor packets \[999\]"):
-        registry.register(Junk)
-
-    @declare("bad_default", kind="condition", params=(Param("n", INT, default="x"),))
-    class BadDefault(Condition):
-        def check(self, snapshot: Snapshot) -> bool:
-            return True
-
-    with pytest.raises(DeclarationError, match="default of 'n'"):
-        registry.register(BadDefault)
+    with pytest.raises(DeclarationError, match=message):
+        registry.register(Declared)
 
 
 def test_a_plugin_file_loads_into_a_copy(tmp_path: Path) -> None:

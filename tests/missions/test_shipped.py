@@ -17,6 +17,15 @@ from .conftest import MISSIONS, ROOT, SHIPPED
 NAMES = ("dock", "dock-builtin", "patrol", "bump-and-turn", "wall-follow")
 
 
+def _docks(spec: EpisodeSpec, *, charging: bool = True) -> None:
+    """The episode succeeds with the robot on the home base (and charging, by default)."""
+    result = run_episode(spec)
+    assert result.outcome == "success", (spec.seed, result.reason)
+    assert result.docked
+    if charging:
+        assert result.charging
+
+
 def test_the_five_routines_are_shipped() -> None:
     assert {p.stem for p in SHIPPED} >= set(NAMES)
 
@@ -69,12 +78,8 @@ def test_dock_reads_all_three_receivers_and_the_charging_packets() -> None:
 def test_dock_from_ten_random_poses_near_the_dock(seed: int) -> None:
     """Within 1.5 m of the docked pose, any heading: every one of 10 seeds docks and
     charges (the 200-pose figure is in docs/routines.md)."""
-    result = run_episode(
-        EpisodeSpec(str(MISSIONS / "dock.yaml"), "empty-room", seed=seed, within_m=1.5,
-                    timeout_s=360)
-    )  # fmt: skip
-    assert result.outcome == "success", result.reason
-    assert result.docked and result.charging
+    _docks(EpisodeSpec(str(MISSIONS / "dock.yaml"), "empty-room", seed=seed, within_m=1.5,
+                       timeout_s=360))  # fmt: skip
 
 
 @pytest.mark.parametrize(
@@ -88,12 +93,8 @@ def test_dock_from_ten_random_poses_near_the_dock(seed: int) -> None:
 )
 def test_dock_with_other_beams(dock: tuple[tuple[str, object], ...]) -> None:
     for seed in range(3):
-        result = run_episode(
-            EpisodeSpec(str(MISSIONS / "dock.yaml"), "empty-room", seed=seed, within_m=1.5,
-                        dock=dock, timeout_s=360)
-        )  # fmt: skip
-        assert result.outcome == "success", (seed, result.reason)
-        assert result.docked
+        _docks(EpisodeSpec(str(MISSIONS / "dock.yaml"), "empty-room", seed=seed, within_m=1.5,
+                           dock=dock, timeout_s=360), charging=False)  # fmt: skip
 
 
 SHORT_BEAMS = (("buoy_range", 0.5), ("force_field", 0.3))
@@ -112,12 +113,8 @@ def test_dock_approach_does_not_shuttle_until_the_time_limit(
     (crossing the axis close to the dock overshot it by up to 12 cm, every time) and narrow
     buoys (in the force field outside both buoys, straight lines toward a guessed side left
     the field and the guesses alternated). Each now docks in well under two minutes."""
-    result = run_episode(
-        EpisodeSpec(str(MISSIONS / "dock.yaml"), "empty-room", seed=seed, within_m=1.5,
-                    dock=dock, timeout_s=150)
-    )  # fmt: skip
-    assert result.outcome == "success", result.reason
-    assert result.docked
+    _docks(EpisodeSpec(str(MISSIONS / "dock.yaml"), "empty-room", seed=seed, within_m=1.5,
+                       dock=dock, timeout_s=150), charging=False)  # fmt: skip
 
 
 def test_dock_approach_starting_over_keeps_the_beams(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -161,12 +158,8 @@ def test_dock_from_another_room(tmp_path: Path, x: float, y: float, heading: int
     assert start in text
     world = tmp_path / "apartment-elsewhere.yaml"
     world.write_text(text.replace(start, f"start: {{at: [{x}, {y}], heading: {heading}}}"))
-    result = run_episode(
-        EpisodeSpec(str(MISSIONS / "dock.yaml"), str(world), random_start=False,
-                    timeout_s=660)
-    )  # fmt: skip
-    assert result.outcome == "success", result.reason
-    assert result.docked and result.charging
+    _docks(EpisodeSpec(str(MISSIONS / "dock.yaml"), str(world), random_start=False,
+                       timeout_s=660))  # fmt: skip
 
 
 def test_dock_gives_up_naming_the_stage(cliff_world: str) -> None:
@@ -181,11 +174,10 @@ def test_dock_gives_up_naming_the_stage(cliff_world: str) -> None:
 
 
 def test_dock_builtin_docks() -> None:
-    result = run_episode(
-        EpisodeSpec(str(MISSIONS / "dock-builtin.yaml"), "empty-room", seed=1, within_m=1.0)
+    _docks(
+        EpisodeSpec(str(MISSIONS / "dock-builtin.yaml"), "empty-room", seed=1, within_m=1.0),
+        charging=False,
     )
-    assert result.outcome == "success", result.reason
-    assert result.docked
 
 
 @pytest.mark.parametrize("seed", range(2))
@@ -202,12 +194,8 @@ def test_patrol_does_its_laps_in_the_corridor(seed: int) -> None:
 
 @pytest.mark.parametrize("seed", range(2))
 def test_patrol_docks_when_the_battery_runs_low(seed: int) -> None:
-    result = run_episode(
-        EpisodeSpec(str(MISSIONS / "patrol.yaml"), "corridor", seed=seed, battery=0.152,
-                    timeout_s=600)
-    )  # fmt: skip
-    assert result.outcome == "success", result.reason
-    assert result.docked and result.charging
+    _docks(EpisodeSpec(str(MISSIONS / "patrol.yaml"), "corridor", seed=seed, battery=0.152,
+                       timeout_s=600))  # fmt: skip
 
 
 def test_patrol_dock_time_limit_ends_the_mission() -> None:
