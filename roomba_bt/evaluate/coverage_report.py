@@ -160,13 +160,28 @@ def main(argv: Sequence[str] | None = None) -> int:
     living_ok = {n: s for n, s in living_cov.items() if s is not None}
     apartment_ok = {n: s for n, s in apartment_cov.items() if s is not None}
     _curves_figure(living, figures / "coverage-living-room.png")
-    ten = {n: dict(s.at)[600.0].mean for n, s in living_ok.items()}
-    section = [
+    section = _section(args, living_ok, apartment_ok, battery)
+    before, _, rest = text.partition(BEGIN)
+    _, _, after = rest.partition(END)
+    page.write_text(before + "\n".join(section) + after, encoding="utf-8")
+    print(f"{page}: coverage section written", file=sys.stderr)
+    return 0
+
+
+def _section(
+    args: argparse.Namespace,
+    living: dict[str, CoverageSummary],
+    apartment: dict[str, CoverageSummary],
+    battery: dict[str, list[EpisodeResult]],
+) -> list[str]:
+    """The lines between BEGIN and END: the three experiments' tables and the figure."""
+    ten = {n: dict(s.at)[600.0].mean for n, s in living.items()}
+    return [
         BEGIN,
         f"Living room of the apartment, {args.runs} seeded starts in the living room (the same "
         "for both), 20 minutes each; coverage of the living room's reachable floor, mean (sd):",
         "",
-        *_living_room_table(living_ok),
+        *_living_room_table(living),
         "",
         f"At 10 minutes `clean.yaml` is {100 * (ten['clean'] - ten['clean-builtin']):+.1f} "
         "points from `clean-builtin.yaml`.",
@@ -176,7 +191,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"Whole apartment, {args.apartment_runs} seeded starts anywhere, 60 minutes each; "
         "coverage per room at the end, mean (min):",
         "",
-        *_apartment_table(apartment_ok),
+        *_apartment_table(apartment),
         "",
         f"Whole apartment from {100 * LOW_BATTERY:.0f} % of charge (the 15 % threshold comes "
         f"after about 20 minutes of cleaning), {args.apartment_runs} starts, 60 minutes:",
@@ -186,11 +201,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         "Produced by `make coverage` (`python -m roomba_bt.evaluate.coverage_report`).",
         END,
     ]
-    before, _, rest = text.partition(BEGIN)
-    _, _, after = rest.partition(END)
-    page.write_text(before + "\n".join(section) + after, encoding="utf-8")
-    print(f"{page}: coverage section written", file=sys.stderr)
-    return 0
 
 
 if __name__ == "__main__":
