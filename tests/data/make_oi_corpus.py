@@ -62,9 +62,9 @@ def _frames(
     return data, expected
 
 
-def main() -> None:
-    HERE.mkdir(exist_ok=True)
-    entries = [
+def _spec_examples() -> list[dict[str, object]]:
+    """The specs' own worked examples, byte for byte."""
+    return [
         _entry(
             "spec_600_example",
             "The 600 / Create 2 spec's stream example: checksum over the header too.",
@@ -92,7 +92,10 @@ def main() -> None:
         ),
     ]
 
-    # Reset banner, then a group-100 stream of a robot driving forward: encoders rolling over.
+
+def _banner_then_group_100() -> dict[str, object]:
+    """Reset banner, then a group-100 stream of a robot driving forward: encoders rolling
+    over."""
     values = []
     left, right = 65_500, 65_510
     for tick in range(12):
@@ -103,51 +106,51 @@ def main() -> None:
              44: right - 65_536 if right > 32_767 else right, 58: 1}
         )  # fmt: skip
     frames, expected = _frames([100], "create2", values)
-    entries.append(
-        _entry(
-            "banner_then_group_100",
-            "The reset banner (ASCII, as the 600 spec describes), then 12 group-100 frames of"
-            " a robot driving forward whose encoders roll over 65535 -> 0.",
-            [100],
-            "create2",
-            BANNER + frames,
-            expected,
-        )
+    return _entry(
+        "banner_then_group_100",
+        "The reset banner (ASCII, as the 600 spec describes), then 12 group-100 frames of"
+        " a robot driving forward whose encoders roll over 65535 -> 0.",
+        [100],
+        "create2",
+        BANNER + frames,
+        expected,
     )
 
-    # Docking: IR characters of the 600 dock, charging text, then charging on the home base.
+
+def _docking_with_charger_text() -> dict[str, object]:
+    """IR characters of the 600 dock, charging text, then charging on the home base."""
     dock = [(0, 0, 0), (168, 0, 0), (172, 0, 0), (164, 0, 0), (173, 0, 0), (161, 2, 0)]
     values = [{17: ir, 34: sources, 21: state, 35: 1, 7: 0} for ir, sources, state in dock]
     values.append({17: 161, 34: 2, 21: 2, 35: 1, 7: 0})
     first, expected_first = _frames([17, 34, 21, 35, 7], "roomba600", values[:6])
     last, expected_last = _frames([17, 34, 21, 35, 7], "roomba600", values[6:])
-    entries.append(
-        _entry(
-            "docking_with_charger_text",
-            "Approaching a 600 dock (red, red+green, green, all three, force field), docked,"
-            " the firmware printing text as charging starts.",
-            [17, 34, 21, 35, 7],
-            "roomba600",
-            first + b"\r\nCharging\r\ndo-charging-reset\r\n" + last,
-            expected_first + expected_last,
-        )
+    return _entry(
+        "docking_with_charger_text",
+        "Approaching a 600 dock (red, red+green, green, all three, force field), docked,"
+        " the firmware printing text as charging starts.",
+        [17, 34, 21, 35, 7],
+        "roomba600",
+        first + b"\r\nCharging\r\ndo-charging-reset\r\n" + last,
+        expected_first + expected_last,
     )
 
-    # Roomba 600 firmware reporting OI mode + 1 (4 = Full): decoded as sent.
+
+def _mode_plus_one() -> dict[str, object]:
+    """Roomba 600 firmware reporting OI mode + 1 (4 = Full): decoded as sent."""
     frames, expected = _frames([35, 7], "roomba600", [{35: 2}, {35: 3}, {35: 4}])
-    entries.append(
-        _entry(
-            "mode_plus_one",
-            "Packet 35 from a 600 with the 'mode + 1' bug: 2, 3, 4. The parser reports raw"
-            " values; correcting them is the robot layer's job.",
-            [35, 7],
-            "roomba600",
-            frames,
-            expected,
-        )
+    return _entry(
+        "mode_plus_one",
+        "Packet 35 from a 600 with the 'mode + 1' bug: 2, 3, 4. The parser reports raw"
+        " values; correcting them is the robot layer's job.",
+        [35, 7],
+        "roomba600",
+        frames,
+        expected,
     )
 
-    # 1% of bytes corrupted: only the untouched frames are expected.
+
+def _corrupted_1_percent() -> dict[str, object]:
+    """1% of bytes corrupted: only the untouched frames are expected."""
     rng = random.Random(7)
     layout = layout_for((7, 19, 20, 43, 44), PROFILES["create2"], True)
     data = bytearray()
@@ -163,18 +166,26 @@ def main() -> None:
         if not touched:
             expected.append(dict(layout.decode(layout.pack(v))))
         data += frame
-    entries.append(
-        _entry(
-            "corrupted_1_percent",
-            "300 frames with 1% of their bytes changed at random (seed 7); the untouched"
-            " frames, and only those, come out.",
-            [7, 19, 20, 43, 44],
-            "create2",
-            bytes(data),
-            expected,
-        )
+    return _entry(
+        "corrupted_1_percent",
+        "300 frames with 1% of their bytes changed at random (seed 7); the untouched"
+        " frames, and only those, come out.",
+        [7, 19, 20, 43, 44],
+        "create2",
+        bytes(data),
+        expected,
     )
 
+
+def main() -> None:
+    HERE.mkdir(exist_ok=True)
+    entries = [
+        *_spec_examples(),
+        _banner_then_group_100(),
+        _docking_with_charger_text(),
+        _mode_plus_one(),
+        _corrupted_1_percent(),
+    ]
     path = HERE / "manifest.json"
     by_hand = []  # entries added by hand (real captures) are kept as they are
     if path.exists():
