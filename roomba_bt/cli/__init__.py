@@ -21,6 +21,7 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "roomba_bt.cli.mission_cmds",
     "roomba_bt.cli.sim_cmd",
     "roomba_bt.cli.sensors_cmd",
+    "roomba_bt.cli.doctor_cmd",
     "roomba_bt.cli.eval_cmd",
     "roomba_bt.cli.monitor_cmd",
 )

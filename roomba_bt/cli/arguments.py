@@ -29,6 +29,21 @@ def baud_rate(text: str) -> int:
     return rate
 
 
+#: ``--baud auto``: find the rate (``robot/handshake.py``); argparse stores None.
+AUTO_BAUD = "auto"
+
+
+def baud_or_auto(text: str) -> int | None:
+    """``auto`` (None: try the OI's rates, 115200 then 19200, and take the one that
+    answers) or a rate as :func:`baud_rate`."""
+    if text.strip().lower() == AUTO_BAUD:
+        return None
+    try:
+        return baud_rate(text)
+    except argparse.ArgumentTypeError as exc:
+        raise argparse.ArgumentTypeError(f"{exc}, or auto") from None
+
+
 def seconds(text: str) -> float:
     """A time in seconds, 0 or more (``0.1``)."""
     try:

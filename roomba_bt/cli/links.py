@@ -10,24 +10,48 @@ the wall clock.
 
 from __future__ import annotations
 
+import logging
 from dataclasses import replace
 
 from roomba_bt.oi.profiles import RobotProfile
-from roomba_bt.robot.connection import OPEN_CAUSES
+from roomba_bt.robot.connection import NO_ANSWER_CAUSES, OPEN_CAUSES
 from roomba_bt.robot.errors import ConnectionFailed
+from roomba_bt.robot.handshake import OI_RATES, describe_silence, find_robot
 from roomba_bt.sim import Faults, RealtimeSimLink, SimLink, Simulator, load_world
-from roomba_bt.transport import SerialTransport, Transport, TransportError
+from roomba_bt.transport import SerialTransport, TransportError
 
 DEFAULT_WORLD = "empty-room"
 
+log = logging.getLogger(__name__)
 
-def open_port(url: str, baud: int) -> Transport:
+
+def open_port(url: str, baud: int | None) -> SerialTransport:
     """The serial port (device path or pyserial URL) to a robot; :class:`ConnectionFailed`
-    names the port and what to check if it cannot be opened."""
+    names the port and what to check if it cannot be opened.
+
+    ``baud`` None (``--baud auto``): the rate the robot answers at, found as ``doctor`` finds
+    it (:func:`roomba_bt.robot.handshake.find_robot`: 115200, then 19200, then a BRC pulse
+    and both again); the port is left at that rate (``transport.baud``)."""
     try:
-        return SerialTransport.open(url, baud)
+        transport = SerialTransport.open(url, baud or OI_RATES[0])
     except TransportError as exc:
         raise ConnectionFailed(url, f"could not open the port ({exc.cause})", OPEN_CAUSES) from exc
+    if baud is not None:
+        return transport
+    try:
+        found = find_robot(transport)
+    except OSError as exc:
+        transport.close()
+        raise ConnectionFailed(url, f"the port failed while finding the baud rate ({exc})") from exc
+    if found.baud is None:
+        transport.close()
+        raise ConnectionFailed(
+            url,
+            f"--baud auto: no answer at any OI rate ({describe_silence(found)})",
+            (*NO_ANSWER_CAUSES[1:], "run roomba-bt doctor --port URL for each step"),
+        )
+    log.info("%s: the robot answers at %d baud (--baud auto)", url, found.baud)
+    return transport
 
 
 def make_simulator(

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 from roomba_bt.cli.arguments import (
     add_param_option,
     add_permission_options,
-    baud_rate,
+    baud_or_auto,
     mission_file,
     output_file,
     parse_params,
@@ -44,7 +44,10 @@ def register(sub: Any) -> None:
         "--port", help="serial device or URL (socket://host:port, rfc2217://, loop://)"
     )
     run.add_argument("--profile", choices=sorted(PROFILES), default="create2")
-    run.add_argument("--baud", type=baud_rate, default=115200, help="baud rate (default 115200)")
+    run.add_argument(
+        "--baud", type=baud_or_auto, default=115200,
+        help="baud rate (default 115200), or auto: the OI's rate the robot answers at",
+    )  # fmt: skip
     run.add_argument("--world", help="simulator world: a shipped name or a YAML path")
     run.add_argument("--seed", type=int, default=0, help="simulator seed (default 0)")
     run.add_argument(
@@ -158,6 +161,19 @@ def run_command(args: argparse.Namespace) -> int:
     if isinstance(found, tuple):
         return _error(found[0])
     args.mission = found
+    port_link: Transport | None = None
+    if args.baud is None:  # --baud auto: the mission's stream is checked at the rate found
+        if args.port:
+            from roomba_bt.cli.links import open_port
+
+            try:
+                port_link = open_port(args.port, None)
+            except ConnectionFailed as exc:
+                print(f"roomba-bt: {exc}", file=sys.stderr)
+                return ExitCode.CONNECTION
+            args.baud = port_link.baud
+        else:
+            args.baud = profile.default_baud  # the simulator's
     mission = load(args.mission, params, profile, args.baud, permissions(args))
     if isinstance(mission, int):
         return mission
@@ -194,10 +210,12 @@ def run_command(args: argparse.Namespace) -> int:
         if failed is not None:
             return failed
     try:
-        if args.port:
+        if port_link is not None:
+            link: Transport = port_link
+        elif args.port:
             from roomba_bt.cli.links import open_port
 
-            link: Transport = open_port(args.port, args.baud)
+            link = open_port(args.port, args.baud)
         else:
             from roomba_bt.cli.links import make_link
 

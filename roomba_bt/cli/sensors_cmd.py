@@ -7,7 +7,7 @@ import sys
 import time
 from typing import Any
 
-from roomba_bt.cli.arguments import baud_rate
+from roomba_bt.cli.arguments import baud_or_auto
 from roomba_bt.oi.frames import stream_frame_size
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import PROFILES, get_profile
@@ -36,7 +36,10 @@ def register(sub: Any) -> None:
     )
     parser.add_argument("--port", help="serial device or URL; default: the built-in simulator")
     parser.add_argument("--profile", choices=sorted(PROFILES), default="create2")
-    parser.add_argument("--baud", type=baud_rate, default=115200)
+    parser.add_argument(
+        "--baud", type=baud_or_auto, default=115200,
+        help="baud rate (default 115200), or auto: the OI's rate the robot answers at",
+    )  # fmt: skip
     parser.add_argument("--world", help="simulator world (without --port)")
     parser.add_argument("--count", type=int, default=0, help="stop after N refreshes (0: run)")
     parser.add_argument("--rate", type=float, default=5.0, help="refreshes per second")
@@ -77,8 +80,24 @@ def sensors_command(args: argparse.Namespace) -> int:
     from roomba_bt.transport import Transport
 
     profile = get_profile(args.profile)
+    link: Transport | None = None
+    if args.baud is None:  # --baud auto
+        if args.port:
+            from roomba_bt.cli.links import open_port
+
+            try:
+                opened = open_port(args.port, None)
+            except ConnectionFailed as exc:
+                print(f"roomba-bt: {exc}", file=sys.stderr)
+                return ExitCode.CONNECTION
+            args.baud = opened.baud
+            link = opened
+        else:
+            args.baud = profile.default_baud  # the simulator's
     group = group_for(args.baud)
     if group is None:
+        if link is not None:
+            link.close()
         print(
             f"roomba-bt sensors: --baud {args.baud}: no sensor stream fits in 15 ms at this "
             f"rate (at most {stream_budget(args.baud)} bytes a frame); allowed: 9600 or more",
@@ -86,10 +105,12 @@ def sensors_command(args: argparse.Namespace) -> int:
         )
         return ExitCode.INVALID
     try:
-        if args.port:
+        if link is not None:
+            pass  # opened and its rate found above (--baud auto)
+        elif args.port:
             from roomba_bt.cli.links import open_port
 
-            link: Transport = open_port(args.port, args.baud)
+            link = open_port(args.port, args.baud)
         else:
             from roomba_bt.cli.links import make_link, make_simulator
             from roomba_bt.sim import WorldError

@@ -1,8 +1,13 @@
-"""``roomba-bt sim``: the simulated robot on a pty or a TCP socket, in real time.
+"""``roomba-bt sim``: the simulated robot on a pty, a TCP socket or an RFC 2217 port, in real
+time.
 
 The first line on stdout is where to connect (flushed at once, so a script can read it):
 the pty's device path (``/dev/pts/7``) with ``--pty``, a pyserial URL
-(``socket://127.0.0.1:PORT``) with ``--tcp``. Both open with ``serial.serial_for_url``. It
+(``socket://127.0.0.1:PORT``) with ``--tcp``, ``rfc2217://127.0.0.1:PORT`` with
+``--rfc2217`` (the one that carries the modem lines, so a BRC pulse reaches the robot; see
+:mod:`roomba_bt.sim.server`). All open with ``serial.serial_for_url``. ``--baud`` is the
+robot's rate (a client at another rate reads garbage and is not heard, on the pty and on
+RFC 2217); ``--asleep`` starts it asleep, deaf until a BRC pulse. It
 serves until SIGINT or SIGTERM (or ``--duration`` seconds), then prints a summary on stderr,
 optionally writes a trajectory plot, and exits 0.
 """
@@ -30,6 +35,24 @@ def register(sub: Any) -> None:
     where = parser.add_mutually_exclusive_group(required=True)
     where.add_argument("--pty", action="store_true", help="serve on a new pseudo-terminal")
     where.add_argument("--tcp", metavar="HOST:PORT", help="serve on a TCP socket (port 0: any)")
+    where.add_argument(
+        "--rfc2217", metavar="HOST:PORT",
+        help="serve RFC 2217 on a TCP socket: the client's baud rate and modem lines (BRC on "
+        "RTS/DTR) reach the robot",
+    )  # fmt: skip
+    parser.add_argument(
+        "--baud", type=int, choices=(19200, 115200), default=None,
+        help="the robot's baud rate: 115200 (the default) or 19200 (Clean held at power-off)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--asleep", action="store_true",
+        help="start asleep (the 5-minute Passive sleep): deaf until a BRC pulse (--rfc2217)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--firmware", default=None, metavar="RELEASE",
+        help="the release the reset banner names, e.g. release-3.6.0 (before release-3.8.2 / "
+        "release-stm32-3.7.7 a BRC pulse does not wake it on the dock)",
+    )  # fmt: skip
     parser.add_argument("--world", default="empty-room", help="shipped world name or YAML path")
     parser.add_argument("--profile", default="create2", help="create2, roomba600 or roomba500")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
@@ -58,9 +81,10 @@ def _fail(message: str, code: ExitCode) -> int:
 
 
 def run_sim(args: argparse.Namespace) -> int:
+    from roomba_bt.oi.identify import parse_firmware
     from roomba_bt.oi.profiles import get_profile
     from roomba_bt.sim import Faults, Simulator, WorldError, load_world
-    from roomba_bt.sim.server import Endpoint, PtyEndpoint, TcpEndpoint, serve
+    from roomba_bt.sim.server import Endpoint, PtyEndpoint, Rfc2217Endpoint, TcpEndpoint, serve
 
     try:
         profile = get_profile(args.profile)
@@ -87,18 +111,34 @@ def run_sim(args: argparse.Namespace) -> int:
         )
     except WorldError as exc:
         return _fail(f"invalid world:\n{exc}", ExitCode.INVALID)
+    if args.baud is not None:
+        simulator.baud = args.baud
+    if args.firmware is not None:
+        if parse_firmware(args.firmware) is None:
+            return _fail(
+                f"--firmware: found {args.firmware!r}; allowed: release-X.Y.Z or "
+                "release-stm32-X.Y.Z",
+                ExitCode.INVALID,
+            )
+        simulator.firmware = args.firmware
+    if args.asleep:
+        simulator.fall_asleep("started asleep (--asleep)")
     endpoint: Endpoint
     try:
         if args.pty:
             endpoint = PtyEndpoint()
         else:
-            host, sep, port_text = str(args.tcp).rpartition(":")
+            option, text = ("--tcp", args.tcp) if args.tcp else ("--rfc2217", args.rfc2217)
+            host, sep, port_text = str(text).rpartition(":")
             if not sep or not host or not port_text.isdigit() or int(port_text) > 65535:
                 return _fail(
-                    f"--tcp: found {args.tcp!r}; allowed: HOST:PORT such as 127.0.0.1:7777",
+                    f"{option}: found {text!r}; allowed: HOST:PORT such as 127.0.0.1:7777",
                     ExitCode.INVALID,
                 )
-            endpoint = TcpEndpoint(host, int(port_text))
+            if args.tcp:
+                endpoint = TcpEndpoint(host, int(port_text))
+            else:
+                endpoint = Rfc2217Endpoint(host, int(port_text), simulator.baud)
     except OSError as exc:
         return _fail(f"cannot serve: {exc}", ExitCode.CONNECTION)
 

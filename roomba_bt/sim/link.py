@@ -29,6 +29,12 @@ from roomba_bt.sim.robot import STEP_SECONDS, Simulator
 _GARBLE = bytes.maketrans(bytes(range(256)), bytes((b * 37 + 11) & 0xFF for b in range(256)))
 
 
+def at_wrong_baud(data: bytes) -> bytes:
+    """The robot's bytes as a host reading at another baud rate sees them: each byte mapped
+    to another (the in-process link and the pty/RFC 2217 server share this model)."""
+    return data.translate(_GARBLE)
+
+
 class SimLink:
     """A :class:`~roomba_bt.sim.robot.Simulator` behind the Transport contract."""
 
@@ -74,7 +80,7 @@ class SimLink:
                 data = read()
                 if data or sim.time >= deadline:
                     break
-        return data if self.baud == sim.baud else data.translate(_GARBLE)
+        return data if self.baud == sim.baud else at_wrong_baud(data)
 
     def set_baud(self, baud: int) -> None:
         self._check()

@@ -24,6 +24,7 @@ from collections.abc import Callable
 
 from roomba_bt.oi.bits import WHEEL_DROP_BITS
 from roomba_bt.oi.encode import BAUD_RATES
+from roomba_bt.oi.identify import parse_firmware
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME, CommandSpec, Effect
 from roomba_bt.sim.cycles import CYCLES, BuiltinCycle
@@ -32,12 +33,22 @@ from roomba_bt.sim.state import TracePoint, Violation
 
 #: Passive without a byte from the host for this long: the robot sleeps.
 PASSIVE_SLEEP_SECONDS = 300.0
-#: Bytes the firmware prints on Reset (7), as captured by pycreate2's author on a Create 2.
-RESET_BANNER = (
-    b"bl-start\r\nSTR730\r\nbootloader id: #x47186549 82ECCFFF\r\n"
-    b"bootloader info rev: #xF000\r\nbootloader rev: #x0001\r\n2007-05-14-1715-L   \r\n"
-    b"Roomba by iRobot!\r\nstr730\r\n2012-03-22-1549-L\r\nbattery-current-zero 252\r\n"
-)
+#: The firmware a simulated robot runs unless told otherwise: the first release that wakes
+#: by BRC on the dock (the 600 spec's Appendix B).
+DEFAULT_FIRMWARE = "release-stm32-3.7.7"
+
+
+def reset_banner(firmware: str) -> bytes:
+    """What the firmware prints on Reset (7): the lines pycreate2's author captured on a
+    Create 2, then the release line the 600 spec quotes (``r3_robot/tags/<firmware>``)."""
+    return (
+        b"bl-start\r\nSTR730\r\nbootloader id: #x47186549 82ECCFFF\r\n"
+        b"bootloader info rev: #xF000\r\nbootloader rev: #x0001\r\n2007-05-14-1715-L   \r\n"
+        b"Roomba by iRobot!\r\nstr730\r\n2012-03-22-1549-L\r\nbattery-current-zero 252\r\n"
+        + f"r3_robot/tags/{firmware} CLEAN\r\n".encode("ascii")
+    )
+
+
 #: what Off (and a sleeping robot) answers: the commands the table accepts in Off (Start, Reset)
 _WAKERS = frozenset(c.opcode for c in COMMANDS.values() if OIMode.OFF in c.modes)
 _DRIVE = COMMANDS_BY_NAME["drive"].opcode
@@ -73,6 +84,11 @@ class OIProtocol(StreamOutput):
         self._last_activity = 0.0
         self.brc_low = False
         self.brc_pulses = 0
+        #: the release the reset banner names; before release-3.8.2 / release-stm32-3.7.7 a
+        #: BRC pulse does not wake the robot on the dock
+        self.firmware = DEFAULT_FIRMWARE
+        #: asleep by the five-minute idle rule: deaf to the serial line until BRC wakes it
+        self.deaf = False
         self.ignored_bytes = 0
         self._inbuf = bytearray()
         self._commands: dict[int, CommandSpec] = {c.opcode: c for c in profile.commands}
@@ -126,6 +142,8 @@ class OIProtocol(StreamOutput):
 
     def _execute(self, spec: CommandSpec, args: bytes) -> None:
         op = spec.opcode
+        if self.deaf:
+            return  # power saving: the UART is not listening (a BRC pulse wakes it)
         if self.asleep or self.mode is OIMode.OFF:
             # Off (and asleep) answers nothing but Start, and Reset where it exists.
             if op not in _WAKERS:
@@ -146,7 +164,7 @@ class OIProtocol(StreamOutput):
     def _command_mode(self, spec: CommandSpec) -> None:
         target = spec.leads_to
         assert target is not None
-        self.asleep = False
+        self.asleep = self.deaf = False
         self.builtin = None
         self._stop_wheels()
         if target is not OIMode.SAFE and target is not OIMode.FULL:
@@ -191,15 +209,28 @@ class OIProtocol(StreamOutput):
         if low and not self.brc_low:
             self.brc_pulses += 1
             self._last_activity = self.time
-            if self.asleep:
-                self.asleep = False
+            if self.asleep and (not self.docked or self._wakes_on_dock()):
+                self.asleep = self.deaf = False
                 self._set_mode(OIMode.PASSIVE, "BRC pulse")
                 self._event("wake", "BRC pulse")
         self.brc_low = low
 
-    def _fall_asleep(self, cause: str) -> None:
-        """Sleep: nothing but Start (or Reset) wakes the robot; the stream ends."""
+    def fall_asleep(self, cause: str) -> None:
+        """Asleep as after five idle minutes in Passive (``sim --asleep``): deaf until a BRC
+        pulse."""
+        self._set_mode(OIMode.PASSIVE, cause)
+        self._fall_asleep(cause, deaf=True)
+
+    def _wakes_on_dock(self) -> bool:
+        version = parse_firmware(self.firmware)
+        return version is None or version.wakes_by_brc_on_dock
+
+    def _fall_asleep(self, cause: str, *, deaf: bool = False) -> None:
+        """Sleep; the stream ends. The five-minute power saving (``deaf``) answers nothing
+        until a BRC pulse (the 600 spec, "Passive Mode"; a robot asleep there answers no
+        byte: robotics.stackexchange.com/q/10666); after Power (133) Start wakes it too."""
         self.asleep = True
+        self.deaf = deaf
         self._end_stream()
         self._event("sleep", cause)
 
@@ -208,7 +239,7 @@ class OIProtocol(StreamOutput):
         self._end_stream()
         self.songs.clear()
         self._inbuf.clear()
-        self._emit(RESET_BANNER)
+        self._emit(reset_banner(self.firmware))
 
     def _on_start(self, args: bytes) -> None:
         return None  # the mode change (leads_to) is all Start does

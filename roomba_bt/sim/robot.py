@@ -152,7 +152,7 @@ class Simulator(OIProtocol):
             and self.time - self._last_activity >= PASSIVE_SLEEP_SECONDS
             and self.builtin is None
         ):
-            self._fall_asleep("5 min idle")
+            self._fall_asleep("5 min idle", deaf=True)
             return
         stream = self._stream
         if stream is not None and not self._stream_paused:

@@ -1,13 +1,35 @@
-"""The simulator on a wall clock, behind a pseudo-terminal or a TCP socket.
+"""The simulator on a wall clock, behind a pseudo-terminal, a TCP socket or an RFC 2217 port.
 
 Any OI client can connect: a serial driver opens the pty's slave device as if it were
 ``/dev/ttyUSB0``; a Wi-Fi-bridge client connects to the socket (pyserial:
-``serial.serial_for_url("socket://127.0.0.1:PORT")``). The loop steps the simulator every
-15 ms of real time, feeds it every byte as soon as it arrives (so replies to Sensors and Query
-List go out at once, not at the next step) and writes what it sends back.
+``serial.serial_for_url("socket://127.0.0.1:PORT")``); a client that needs the modem lines
+opens ``rfc2217://127.0.0.1:PORT`` (a Telnet COM-port server, RFC 2217). The loop steps the
+simulator every 15 ms of real time, feeds it every byte as soon as it arrives (so replies to
+Sensors and Query List go out at once, not at the next step) and writes what it sends back.
 
 Real serial ports lose what nobody reads; so does this: if the client does not read and the
 kernel buffer is full, robot bytes are dropped rather than blocking the clock.
+
+**The line's baud rate.** A real line at two different rates carries garbage. Each endpoint
+says the rate its client set, where it can know it (:meth:`Endpoint.line_baud`):
+
+* the pty: the speed the client put in the terminal's settings (``tcsetattr``: pyserial's
+  ``baudrate``), read from the pty's own side with ``tcgetattr``, since a pseudo-terminal
+  keeps the speed but does not use it;
+* RFC 2217: the rate the client's SET-BAUDRATE asked for;
+* a raw TCP socket carries no rate: no mismatch is modelled.
+
+When the client's rate is not the robot's (``Simulator.baud``: ``sim --baud``, or after Baud
+129), the robot gets none of the client's bytes (framing errors) and the client reads the
+robot's bytes scrambled (:func:`~roomba_bt.sim.link.at_wrong_baud`), as
+:class:`~roomba_bt.sim.link.SimLink` does in-process.
+
+**The modem lines.** The USB cables wire the robot's BRC pin to RTS or DTR (asserted = BRC
+low). A pty has no modem lines (pyserial's ``rts`` raises "Inappropriate ioctl for device" on
+it) and a raw socket carries none, so only the RFC 2217 endpoint carries them: pyserial's own
+server side, :class:`serial.rfc2217.PortManager`, reads the client's SET-CONTROL commands into
+a :class:`VirtualLine`, and the loop hands RTS-or-DTR to ``Simulator.set_brc``
+(:meth:`Endpoint.wake_line`).
 """
 
 from __future__ import annotations
@@ -17,11 +39,16 @@ import errno
 import os
 import select
 import socket
+import termios
 import time
 import tty
 from collections.abc import Callable
-from typing import Protocol
+from typing import Any, Protocol
 
+from serial.rfc2217 import PortManager
+
+from roomba_bt.oi.encode import BAUD_RATES
+from roomba_bt.sim.link import at_wrong_baud
 from roomba_bt.sim.robot import STEP_SECONDS, Simulator
 
 #: If the host falls this far behind the 15 ms cadence (a suspended process), resynchronise
@@ -29,8 +56,25 @@ from roomba_bt.sim.robot import STEP_SECONDS, Simulator
 MAX_LAG_SECONDS = 0.5
 
 
+#: termios speed constants -> bits per second, for the rates the OI knows
+_TERMIOS_SPEEDS = {
+    getattr(termios, f"B{rate}"): rate
+    for rate in BAUD_RATES.values()
+    if hasattr(termios, f"B{rate}")
+}
+
+
 class Endpoint(Protocol):
     address: str
+
+    def line_baud(self) -> int | None:
+        """The rate the client set on its side of the line; None if this endpoint cannot
+        know it (then no mismatch is modelled)."""
+        ...
+
+    def wake_line(self) -> bool | None:
+        """Whether the client holds BRC low (RTS or DTR asserted); None: no modem lines."""
+        ...
 
     def wait_read(self, timeout: float) -> bytes: ...
 
@@ -51,6 +95,19 @@ class PtyEndpoint:
         os.set_blocking(self._master, False)
         self.address = os.ttyname(self._slave)
         self._hung_up = False
+
+    def line_baud(self) -> int | None:
+        """The output speed in the terminal's settings, which the client's ``tcsetattr`` set
+        (one settings block for both sides of a pty). A rate the OI does not know is 0: no
+        OI rate matches it."""
+        try:
+            speed = termios.tcgetattr(self._slave)[5]
+        except termios.error:
+            return None
+        return _TERMIOS_SPEEDS.get(speed, 0)
+
+    def wake_line(self) -> bool | None:
+        return None  # a pty has no modem lines
 
     def wait_read(self, timeout: float) -> bytes:
         if self._hung_up:
@@ -101,6 +158,22 @@ class TcpEndpoint:
         self._client: socket.socket | None = None
         self._hung_up = False
 
+    def line_baud(self) -> int | None:
+        return None  # a raw socket carries bytes, not a rate
+
+    def wake_line(self) -> bool | None:
+        return None
+
+    def _accepted(self, client: socket.socket) -> None:
+        """A client connected (subclasses start their protocol here)."""
+
+    def _incoming(self, data: bytes) -> bytes:
+        """The robot's share of what the client sent."""
+        return data
+
+    def _outgoing(self, data: bytes) -> bytes:
+        return data
+
     def wait_read(self, timeout: float) -> bytes:
         if self._hung_up:
             time.sleep(timeout)
@@ -120,6 +193,7 @@ class TcpEndpoint:
                         client.setblocking(False)
                         client.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
                         self._client = client
+                        self._accepted(client)
             elif self._client is not None:
                 try:
                     data = self._client.recv(4096)
@@ -129,6 +203,8 @@ class TcpEndpoint:
                     data = b""
                 if not data:
                     self._drop_client()
+                else:
+                    data = self._incoming(data)
         return data
 
     def _drop_client(self) -> None:
@@ -139,6 +215,11 @@ class TcpEndpoint:
 
     def send(self, data: bytes) -> None:
         if self._client is None or self._hung_up:
+            return
+        self._send_raw(self._outgoing(data))
+
+    def _send_raw(self, data: bytes) -> None:
+        if self._client is None:
             return
         try:
             self._client.send(data)
@@ -157,6 +238,84 @@ class TcpEndpoint:
         self.hang_up()
 
 
+class VirtualLine:
+    """The serial port :class:`serial.rfc2217.PortManager` configures: it keeps what the
+    client set (rate, framing, RTS, DTR) instead of driving hardware."""
+
+    def __init__(self, baudrate: int) -> None:
+        self.baudrate = baudrate
+        self.bytesize = 8
+        self.parity = "N"
+        self.stopbits = 1
+        self.xonxoff = False
+        self.rtscts = False
+        self.break_condition = False
+        self.rts = False
+        self.dtr = False
+        # the lines a robot would drive back: the cable has none of them wired
+        self.cts = False
+        self.dsr = False
+        self.ri = False
+        self.cd = False
+
+    def reset_input_buffer(self) -> None:
+        """Nothing is buffered on this side."""
+
+    def reset_output_buffer(self) -> None:
+        """Nothing is buffered on this side."""
+
+
+class Rfc2217Endpoint(TcpEndpoint):
+    """A TCP server speaking RFC 2217 (Telnet COM-port control): the client opens
+    ``rfc2217://HOST:PORT`` and its baud rate and modem lines reach the simulator."""
+
+    def __init__(self, host: str, port: int, baud: int) -> None:
+        super().__init__(host, port)
+        self.address = self.address.replace("socket://", "rfc2217://", 1)
+        self._initial_baud = baud
+        self.line = VirtualLine(baud)
+        self._manager: PortManager | None = None
+
+    def line_baud(self) -> int | None:
+        return int(self.line.baudrate) if self._manager is not None else None
+
+    def wake_line(self) -> bool | None:
+        return bool(self.line.rts or self.line.dtr)
+
+    def _accepted(self, client: socket.socket) -> None:
+        self.line = VirtualLine(self._initial_baud)
+        # PortManager duck-types both: it sets attributes on the port and writes to the other
+        line: Any = self.line
+        writer: Any = _Writer(self)
+        self._manager = PortManager(line, writer)
+
+    def _incoming(self, data: bytes) -> bytes:
+        if self._manager is None:
+            return data
+        return b"".join(self._manager.filter(data))
+
+    def _outgoing(self, data: bytes) -> bytes:
+        if self._manager is None:
+            return data
+        return b"".join(self._manager.escape(data))
+
+    def _drop_client(self) -> None:
+        super()._drop_client()
+        # a closed port lets its lines go: BRC high
+        self._manager = None
+        self.line.rts = self.line.dtr = False
+
+
+class _Writer:
+    """What PortManager writes its Telnet answers to: the client's socket, unescaped."""
+
+    def __init__(self, endpoint: Rfc2217Endpoint) -> None:
+        self._endpoint = endpoint
+
+    def write(self, data: bytes) -> None:
+        self._endpoint._send_raw(bytes(data))
+
+
 def serve(
     simulator: Simulator,
     endpoint: Endpoint,
@@ -167,8 +326,14 @@ def serve(
     next_step = clock() + STEP_SECONDS
     while not should_stop():
         data = endpoint.wait_read(max(0.0, next_step - clock()))
+        wake = endpoint.wake_line()
+        if wake is not None and wake != simulator.brc_low:
+            simulator.set_brc(wake)
         if data:
-            simulator.receive(data)
+            if _same_rate(endpoint, simulator):
+                simulator.receive(data)
+            else:
+                simulator.ignored_bytes += len(data)  # framing errors: nothing gets through
         now = clock()
         if now - next_step > MAX_LAG_SECONDS:
             next_step = now
@@ -177,6 +342,11 @@ def serve(
             next_step += STEP_SECONDS
         out = simulator.read()
         if out:
-            endpoint.send(out)
+            endpoint.send(out if _same_rate(endpoint, simulator) else at_wrong_baud(out))
         if simulator.disconnected:
             endpoint.hang_up()
+
+
+def _same_rate(endpoint: Endpoint, simulator: Simulator) -> bool:
+    rate = endpoint.line_baud()
+    return rate is None or rate == simulator.baud

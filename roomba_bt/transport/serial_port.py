@@ -22,6 +22,7 @@ import time
 from typing import Any
 
 import serial
+from serial import rfc2217
 
 from roomba_bt.transport.base import TransportError
 
@@ -30,6 +31,11 @@ READ_CHUNK = 4096
 DEFAULT_BAUD = 115200
 #: A stop sequence is 12 bytes; anything slower than this means the far end is gone.
 DEFAULT_WRITE_TIMEOUT = 0.5
+#: pyserial's RFC 2217 handler refuses to open with a write timeout ("not supported"): its
+#: writes go to a TCP socket with the kernel's buffer, so they are opened without one.
+NO_WRITE_TIMEOUT_SCHEMES = ("rfc2217://",)
+#: How often a polled port (RFC 2217) is looked at while a read waits.
+POLL_INTERVAL = 0.001
 
 
 class SerialTransport:
@@ -41,6 +47,11 @@ class SerialTransport:
         port.timeout = 0
         self._port_timeout: float = 0.0
         self._wait_handle: Any = getattr(port, "fd", None) or getattr(port, "_socket", None)
+        # pyserial's RFC 2217 port reads its socket in a thread of its own: a select on the
+        # socket would race that thread, so its reads poll the port's queue instead.
+        self._polled = isinstance(port, rfc2217.Serial)
+        if self._polled:
+            self._wait_handle = None
 
     @classmethod
     def open(
@@ -49,10 +60,24 @@ class SerialTransport:
         baud: int = DEFAULT_BAUD,
         *,
         write_timeout: float = DEFAULT_WRITE_TIMEOUT,
+        brc_high: bool = False,
     ) -> SerialTransport:
-        """Open ``url`` (device path or pyserial URL) at ``baud``, 8N1, no flow control."""
+        """Open ``url`` (device path or pyserial URL) at ``baud``, 8N1, no flow control.
+
+        pyserial asserts RTS and DTR when it opens a port, which on the usual cables pulls
+        BRC low (a wake pulse). ``brc_high``: open with both released, so that the robot
+        sees no pulse until :meth:`set_wake_line` gives one (``doctor`` says when it wakes
+        the robot instead of waking it unknowingly)."""
+        if url.startswith(NO_WRITE_TIMEOUT_SCHEMES):
+            write_timeout = None  # type: ignore[assignment]  # the handler refuses one
         try:
-            port = serial.serial_for_url(url, baudrate=baud, timeout=0, write_timeout=write_timeout)
+            port = serial.serial_for_url(
+                url, baudrate=baud, timeout=0, write_timeout=write_timeout, do_not_open=True
+            )
+            if brc_high:
+                port.rts = False
+                port.dtr = False
+            port.open()
         except (serial.SerialException, OSError, ValueError) as exc:
             raise TransportError(url, "open the port", exc) from exc
         return cls(port, url)
@@ -97,6 +122,8 @@ class SerialTransport:
             if self._wait_handle is not None:
                 ready, _, _ = select.select([self._wait_handle], [], [], timeout)
                 return self._port.read(READ_CHUNK) if ready else b""
+            if self._polled:
+                return self._poll(timeout)
             self._set_timeout(timeout)
             try:
                 first: bytes = self._port.read(1)
@@ -105,6 +132,15 @@ class SerialTransport:
             return first + self._port.read(READ_CHUNK) if first else b""
         except (serial.SerialException, OSError, ValueError, TypeError) as exc:
             raise TransportError(self.name, "read", exc) from exc
+
+    def _poll(self, timeout: float) -> bytes:
+        deadline = time.monotonic() + timeout
+        while (remaining := deadline - time.monotonic()) > 0:
+            time.sleep(min(POLL_INTERVAL, remaining))
+            data: bytes = self._port.read(READ_CHUNK)
+            if data:
+                return data
+        return b""
 
     def _set_timeout(self, timeout: float) -> None:
         if timeout != self._port_timeout:
@@ -143,7 +179,11 @@ class SerialTransport:
 
 
 def open_transport(
-    url: str, baud: int = DEFAULT_BAUD, *, write_timeout: float = DEFAULT_WRITE_TIMEOUT
+    url: str,
+    baud: int = DEFAULT_BAUD,
+    *,
+    write_timeout: float = DEFAULT_WRITE_TIMEOUT,
+    brc_high: bool = False,
 ) -> SerialTransport:
     """Open any pyserial URL or device path; see :class:`SerialTransport`."""
-    return SerialTransport.open(url, baud, write_timeout=write_timeout)
+    return SerialTransport.open(url, baud, write_timeout=write_timeout, brc_high=brc_high)

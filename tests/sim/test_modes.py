@@ -165,7 +165,9 @@ def test_safe_mode_powered_charger_drops_to_passive_but_full_does_not() -> None:
     assert host.sim.mode is OIMode.FULL
 
 
-def test_passive_sleeps_after_five_minutes_idle_and_start_wakes_it() -> None:
+def test_passive_sleeps_after_five_minutes_idle_deaf_until_a_brc_pulse() -> None:
+    """Power saving: a sleeping robot answers no byte, Start included (a robot asleep answers
+    nothing: robotics.stackexchange.com/q/10666); a BRC pulse wakes it into Passive."""
     host = make(mode="passive")
     host.stream([35])
     host.run(299.0)
@@ -176,8 +178,37 @@ def test_passive_sleeps_after_five_minutes_idle_and_start_wakes_it() -> None:
     host.send(C.sensors(35))
     assert host.sim.read() == b""
     host.send(C.start())
+    assert host.sim.asleep, "Start does not reach a sleeping robot"
+    host.sim.set_brc(True)
+    host.sim.set_brc(False)
     assert not host.sim.asleep
     assert mode_of(host) == OIMode.PASSIVE
+
+
+def test_old_firmware_does_not_wake_by_brc_on_the_dock() -> None:
+    """600 spec, Appendix B: before release-3.8.2 / release-stm32-3.7.7 a BRC pulse does not
+    wake the robot on the dock; later releases do, and anywhere off the dock both do."""
+    for firmware, wakes in (("release-3.6.0", False), ("release-3.8.2", True)):
+        host = make(DOCK_WORLD, start=docked_start())
+        host.sim.firmware = firmware
+        host.sim.fall_asleep("test")
+        host.sim.set_brc(True)
+        host.sim.set_brc(False)
+        assert host.sim.asleep is not wakes, firmware
+    host = make()
+    host.sim.firmware = "release-3.6.0"
+    host.sim.fall_asleep("test")
+    host.sim.set_brc(True)
+    assert not host.sim.asleep
+
+
+def test_the_reset_banner_names_the_firmware() -> None:
+    host = make()
+    host.sim.firmware = "release-3.8.2"
+    host.send(C.reset())
+    banner = host.sim.read()
+    assert banner.startswith(b"bl-start\r\n")
+    assert b"r3_robot/tags/release-3.8.2 CLEAN\r\n" in banner
 
 
 def test_safe_mode_never_sleeps() -> None:

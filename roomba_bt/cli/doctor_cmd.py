@@ -1,0 +1,451 @@
+"""``roomba-bt doctor --port URL``: find the robot on a port and say what it is, step by step.
+
+Each step prints what it saw and, when it fails, what to do next::
+
+    port      the port opens (RTS and DTR released: BRC high, so opening wakes nothing)
+    baud      Start and a Query List at 115200, then 19200 (robot/handshake.py)
+    wake      silent at both: BRC pulsed low one second through RTS/DTR, both rates again
+    start     the mode packet right after Start: Passive reads 1, or 2 (the mode + 1 bug)
+    reset     --allow-reset only: Reset (7) and its banner (a Roomba 500 has no Reset)
+    stream    a short stream: frames counted, checksums checked, which checksum convention
+    profile   the profiles that fit: the banner, the checksum convention, the mode reading
+    battery   charge, capacity, voltage, current;  charging: state and sources;  mode
+    missions  each shipped mission's stream frame against the bytes a 15 ms slot carries
+    firmware  the release the banner names, and whether it wakes by BRC on the dock
+
+The robot is left in Passive with the stream paused. Exit codes (:class:`DoctorExit`): 0 the
+robot was found and named; 2 usage; 3 the port could not be opened; 5 nothing answered at
+any OI rate (even after a BRC pulse, or none could be given); 6 the robot answered but a
+later step failed (no stream, the link lost, a reply that makes no sense); 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import sys
+from dataclasses import dataclass, field
+from enum import IntEnum
+from typing import Any, TextIO
+
+from roomba_bt.cli.arguments import baud_or_auto
+
+#: Seconds of stream the round-trip reads (33 frames at one per 15 ms).
+STREAM_CHECK_S = 0.5
+#: The round-trip's packets: bumps, mode, charging state (a 9-byte frame, fits 19200 easily).
+STREAM_CHECK_PACKETS = (7, 35, 21)
+#: The battery step's Query List: charging state, voltage, current, charge, capacity,
+#: charging sources, OI mode.
+STATUS_PACKETS = (21, 22, 23, 25, 26, 34, 35)
+#: How long the banner may take to print after Reset, and the quiet that ends it.
+BANNER_LIMIT_S = 6.0
+BANNER_QUIET_S = 0.5
+
+WAKE_FIX = (
+    "a robot asleep (5 minutes in Passive) answers nothing until a BRC pulse or its Clean "
+    "button: press Clean and run doctor again. To wake it from here, use a cable that wires "
+    "BRC to RTS or DTR (the iRobot Create cable does) or an rfc2217:// bridge (roomba-bt sim "
+    "--rfc2217 serves one)"
+)
+SILENT_FIX = (
+    "check that the robot is on (press Clean: its light comes on), that the cable is a 5 V "
+    "TTL serial adapter with TX and RX not swapped, and that no other program holds the "
+    "port; a robot on the dock with firmware older than release-3.8.2 / release-stm32-3.7.7 "
+    "does not wake by BRC there: lift it off the dock or press Clean"
+)
+
+
+class DoctorExit(IntEnum):
+    """``roomba-bt doctor``'s exit codes (docs/doctor.md)."""
+
+    FOUND = 0
+    INVALID = 2
+    PORT = 3  # the port could not be opened
+    SILENT = 5  # nothing answered at any OI rate, even after a BRC pulse (or none possible)
+    UNHEALTHY = 6  # it answered, but a later step failed
+    INTERRUPTED = 130
+
+
+def register(sub: Any) -> None:
+    parser = sub.add_parser(
+        "doctor",
+        help="find the robot on a port and say what it is, step by step",
+        description="Find the robot on --port: the port, the baud rate (115200, then 19200), "
+        "a BRC wake pulse if it is silent, Start, its profile, battery, charging, OI mode, a "
+        "stream round-trip, whether the shipped missions' streams fit the rate, and (with "
+        "--allow-reset) its firmware. Exit codes: 0 found, 2 usage, 3 the port could not be "
+        "opened, 5 nothing answered, 6 it answered but a later step failed, 130 interrupted.",
+    )
+    parser.add_argument(
+        "--port", required=True, help="serial device or URL (/dev/ttyUSB0, rfc2217://, socket://)"
+    )
+    parser.add_argument(
+        "--baud", type=baud_or_auto, default=None,
+        help="a rate to try first (default auto: 115200, then 19200)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--allow-reset", action="store_true",
+        help="send Reset (7) to read the firmware version from the banner (restarts the OI)",
+    )  # fmt: skip
+    parser.set_defaults(func=doctor_command)
+
+
+@dataclass
+class Report:
+    """The steps as they happen: ``[ok]``, ``[--]`` (skipped or not needed), ``[warn]``,
+    ``[FAIL]``; a failure's fix on the next line."""
+
+    out: TextIO
+    failed: bool = False
+    facts: dict[str, str] = field(default_factory=dict)
+
+    def line(self, mark: str, step: str, text: str, fix: str = "") -> None:
+        print(f"[{mark}]".ljust(7) + f"{step:<10}{text}", file=self.out, flush=True)
+        if fix:
+            print(" " * 17 + f"fix: {fix}", file=self.out, flush=True)
+
+    def ok(self, step: str, text: str) -> None:
+        self.line("ok", step, text)
+
+    def skip(self, step: str, text: str) -> None:
+        self.line("--", step, text)
+
+    def warn(self, step: str, text: str, fix: str = "") -> None:
+        self.line("warn", step, text, fix)
+
+    def fail(self, step: str, text: str, fix: str) -> None:
+        self.failed = True
+        self.line("FAIL", step, text, fix)
+
+
+class _Failed(Exception):
+    """A step failed (already reported); the exit code to end with."""
+
+    def __init__(self, code: DoctorExit) -> None:
+        super().__init__(code.name)
+        self.code = code
+
+
+def doctor_command(args: argparse.Namespace) -> int:
+    from roomba_bt.transport import SerialTransport, TransportError
+
+    report = Report(sys.stdout)
+    url = args.port
+    print(f"roomba-bt doctor: {url}", flush=True)
+    from roomba_bt.robot.handshake import rates_to_try
+
+    rates = rates_to_try(args.baud)
+    try:
+        transport = SerialTransport.open(url, rates[0], brc_high=True)
+    except TransportError as exc:
+        report.fail(
+            "port",
+            f"could not open {url}: {exc.cause}",
+            "check the device path (ls /dev/ttyUSB* /dev/serial/by-id/), that no other "
+            "program has it open, and that you may use it (the dialout group on Linux)",
+        )
+        return DoctorExit.PORT
+    report.ok("port", f"opened {url} (8N1, no flow control; RTS and DTR released: BRC high)")
+    try:
+        return _examine(transport, rates, args.allow_reset, report)
+    except _Failed as failed:
+        return failed.code
+    except KeyboardInterrupt:
+        print("roomba-bt doctor: interrupted", file=sys.stderr)
+        return DoctorExit.INTERRUPTED
+    except OSError as exc:
+        report.fail(
+            "link",
+            f"the port failed: {exc}",
+            "check the cable and the robot's power, then run doctor again",
+        )
+        return DoctorExit.UNHEALTHY
+    finally:
+        _leave_passive(transport)
+        transport.close()
+
+
+def _leave_passive(transport: Any) -> None:
+    """Pause any stream and Start: the robot is left in Passive (errors: nothing to save)."""
+    from roomba_bt.oi import commands as oi
+
+    with contextlib.suppress(OSError):
+        transport.write(oi.pause_stream().data + oi.start().data)
+
+
+def _examine(transport: Any, rates: tuple[int, ...], allow_reset: bool, report: Report) -> int:
+    from roomba_bt.robot.handshake import search, wake_pulse
+
+    first = search(transport, rates)
+    for probe in first.probes:
+        mark = "ok" if probe.answered else "--"
+        report.line(mark, "baud", f"{probe.baud}: {probe.seen}")
+    found = first.found
+    if found is None:
+        problem = wake_pulse(transport)
+        if problem is not None:
+            report.fail(
+                "wake",
+                f"silent at {' and '.join(str(r) for r in rates)}, and this port cannot pulse "
+                f"BRC: {problem}",
+                WAKE_FIX,
+            )
+            raise _Failed(DoctorExit.SILENT)
+        report.ok("wake", "silent at every rate: pulsed BRC low for 1 s (RTS and DTR)")
+        second = search(transport, rates)
+        for probe in second.probes:
+            mark = "ok" if probe.answered else "--"
+            report.line(mark, "baud", f"{probe.baud} after the pulse: {probe.seen}")
+        found = second.found
+        if found is None:
+            report.fail("baud", "silent at every OI rate, even after a BRC pulse", SILENT_FIX)
+            raise _Failed(DoctorExit.SILENT)
+        report.ok("wake", "it answered after the pulse: the robot was asleep")
+    else:
+        report.skip("wake", "not needed: the robot answered")
+    baud = found.baud
+    report.facts["baud"] = str(baud)
+    report.ok("baud", f"the robot talks at {baud} baud")
+    mode_raw = found.reply[0]
+    plus_one = mode_raw == 2
+    report.ok(
+        "start",
+        f"Start (128): Passive; packet 35 reads {mode_raw}"
+        + (" (this firmware reports the OI mode + 1)" if plus_one else ""),
+    )
+    banner, reset_tried = _reset(transport, baud, allow_reset, report)
+    header_in_checksum = _stream(transport, baud, report)
+    profile = _profile(plus_one, header_in_checksum, banner, reset_tried, report)
+    _status(transport, profile, plus_one, report)
+    _missions(profile, baud, report)
+    _firmware(banner, reset_tried, report)
+    facts = report.facts
+    print(
+        f"found: {profile.title} on {transport.name} at {baud} baud, "
+        f"{facts.get('mode', '?')}, battery {facts.get('battery', '?')}, "
+        f"{facts.get('charging', '?')}",
+        flush=True,
+    )
+    return DoctorExit.UNHEALTHY if report.failed else DoctorExit.FOUND
+
+
+def _reset(transport: Any, baud: int, allow_reset: bool, report: Report) -> tuple[Any, bool]:
+    """Reset (7) and read its banner (``--allow-reset``); then Start again."""
+    from roomba_bt.oi import commands as oi
+    from roomba_bt.oi.identify import parse_banner
+    from roomba_bt.robot.handshake import search
+
+    if not allow_reset:
+        report.skip(
+            "reset",
+            "not asked: --allow-reset sends Reset (7) and reads the firmware from its banner",
+        )
+        return None, False
+    transport.write(oi.reset().data)
+    clock = transport.now
+    started = quiet_since = clock()
+    data = b""
+    while clock() - quiet_since < BANNER_QUIET_S and clock() - started < BANNER_LIMIT_S:
+        chunk = transport.read(0.05)
+        if chunk:
+            data += chunk
+            quiet_since = clock()
+    banner = parse_banner(data)
+    if banner is None:
+        report.ok(
+            "reset",
+            f"no banner after Reset (7) ({len(data)} bytes): the Roomba 500 has no Reset",
+        )
+    else:
+        lines = [ln.strip() for ln in banner.text.splitlines() if ln.strip()]
+        report.ok("reset", f"banner of {len(lines)} lines; last: {lines[-1]!r}")
+    # Reset leaves the OI Off (and may restore the default rate): find it again, Start.
+    again = search(transport, (baud, *(r for r in (115200, 19200) if r != baud)))
+    if again.found is None:
+        report.fail(
+            "reset",
+            "the robot did not answer after Reset (7)",
+            "wait a few seconds (it reboots) and run doctor again without --allow-reset",
+        )
+        raise _Failed(DoctorExit.UNHEALTHY)
+    if again.found.baud != baud:
+        report.warn("reset", f"after Reset the robot talks at {again.found.baud} baud")
+    return banner, True
+
+
+def _stream(transport: Any, baud: int, report: Report) -> bool | None:
+    """Stream (148) a short list for :data:`STREAM_CHECK_S`; which checksum convention the
+    frames follow (None if no whole frame came)."""
+    from roomba_bt.oi import commands as oi
+    from roomba_bt.oi.frames import stream_frame_size
+    from roomba_bt.oi.identify import checksum_covers_header
+
+    ids = STREAM_CHECK_PACKETS
+    size = stream_frame_size(ids)
+    transport.write(oi.stream(ids).data)
+    clock = transport.now
+    deadline = clock() + STREAM_CHECK_S
+    data = b""
+    while (remaining := deadline - clock()) > 0:
+        data += transport.read(remaining)
+    transport.write(oi.pause_stream().data)
+    conventions: list[bool] = []
+    at = 0
+    skipped = 0
+    while at + size <= len(data):
+        verdict = checksum_covers_header(data[at : at + size])
+        if verdict is None:
+            at += 1
+            skipped += 1
+            continue
+        conventions.append(verdict)
+        at += size
+    expected = round(STREAM_CHECK_S / 0.015)
+    frames = len(conventions)
+    text = (
+        f"Stream (148) of {list(ids)}: {frames} frames of {size} bytes in {STREAM_CHECK_S:g} s "
+        f"(one per 15 ms: {expected}), {skipped} bytes skipped"
+    )
+    if frames == 0:
+        report.fail(
+            "stream",
+            text + f"; {len(data)} bytes came, no whole frame",
+            "the robot answers queries but does not stream: another program may be talking "
+            "to it, or the line drops bytes (a long cable, a bad adapter)",
+        )
+        raise _Failed(DoctorExit.UNHEALTHY)
+    if frames < expected // 2 or skipped:
+        report.warn("stream", text, "frames are lost or damaged on this line: check the cable")
+    else:
+        report.ok("stream", text)
+    covers = sum(conventions) > len(conventions) / 2
+    return covers
+
+
+def _profile(
+    plus_one: bool, header: bool | None, banner: Any, reset_tried: bool, report: Report
+) -> Any:
+    from roomba_bt.oi.identify import identify
+    from roomba_bt.oi.profiles import DEFAULT_PROFILE
+
+    found = identify(
+        mode_plus_one=plus_one, header_in_checksum=header, banner=banner, reset_tried=reset_tried
+    )
+    why = "; ".join(found.evidence)
+    best = found.best
+    if best is None:
+        report.warn(
+            "profile",
+            f"no profile fits: {why}; using {DEFAULT_PROFILE.title}",
+            "report this robot's banner (doctor --allow-reset) and model with an issue",
+        )
+        return DEFAULT_PROFILE
+    names = " or ".join(p.name for p in found.candidates)
+    report.ok("profile", f"{best.title} (--profile {names}): {why}")
+    return best
+
+
+def _status(transport: Any, profile: Any, plus_one: bool, report: Report) -> None:
+    from roomba_bt.oi import commands as oi
+    from roomba_bt.oi.bits import ChargingSources, ChargingState
+    from roomba_bt.oi.modes import mode_from_packet
+    from roomba_bt.oi.stream import ReplyParser
+
+    ids = STATUS_PACKETS
+    parser = ReplyParser(ids, profile)
+    transport.read(0.0)
+    transport.write(oi.query_list(ids).data)
+    clock = transport.now
+    deadline = clock() + 0.5
+    frame = None
+    while frame is None and (remaining := deadline - clock()) > 0:
+        frame = parser.feed(transport.read(remaining))
+    if frame is None:
+        report.fail(
+            "battery",
+            f"no answer to Query List {list(ids)} within 0.5 s",
+            "the line drops bytes or another program talks to the robot: run doctor again",
+        )
+        raise _Failed(DoctorExit.UNHEALTHY)
+    charge, capacity = frame[25], frame[26]
+    percent = f"{100 * charge / capacity:.0f} %" if capacity else "capacity 0 (no battery?)"
+    report.facts["battery"] = percent
+    report.ok(
+        "battery",
+        f"{charge} of {capacity} mAh ({percent}), {frame[22] / 1000:.2f} V, {frame[23]} mA",
+    )
+    try:
+        state = ChargingState(frame[21]).name.lower().replace("_", " ")
+    except ValueError:
+        state = f"unknown state {frame[21]}"
+    sources = ChargingSources.from_byte(frame[34])
+    powered = [
+        name
+        for name, on in (("home base", sources.home_base), ("internal", sources.internal_charger))
+        if on
+    ]
+    report.facts["charging"] = state
+    report.ok("charging", f"{state} (21 = {frame[21]}); sources: {', '.join(powered) or 'none'}")
+    mode = mode_from_packet(frame[35], plus_one)
+    if mode is None:
+        report.fail(
+            "mode",
+            f"packet 35 reads {frame[35]}, which is no OI mode",
+            "another program may be talking to the robot; run doctor again",
+        )
+        raise _Failed(DoctorExit.UNHEALTHY)
+    report.facts["mode"] = mode.label
+    quirk = "mode + 1 firmware: the runtime subtracts 1" if plus_one else "as is"
+    report.ok("mode", f"{mode.label} (35 = {frame[35]}, {quirk})")
+
+
+def _missions(profile: Any, baud: int, report: Report) -> None:
+    """Each shipped mission's stream (its packets and the runtime's) against the budget."""
+    from roomba_bt.mission import RUNTIME_PACKETS, MissionError, load_mission
+    from roomba_bt.mission.shipped import shipped_missions
+    from roomba_bt.oi.frames import stream_frame_size
+    from roomba_bt.oi.stream import stream_budget
+
+    budget = stream_budget(baud)
+    fits: list[str] = []
+    too_big: list[str] = []
+    for name, path in shipped_missions().items():
+        try:
+            mission = load_mission(path, profile=profile)
+        except MissionError as exc:
+            too_big.append(f"{name} (does not load: {exc.diagnostics[0]})")
+            continue
+        size = stream_frame_size(sorted(set(mission.packets) | set(RUNTIME_PACKETS)))
+        (fits if size <= budget else too_big).append(f"{name} {size}")
+    text = f"a 15 ms slot carries {budget} bytes at {baud} baud; frames: " + ", ".join(fits)
+    if too_big:
+        report.warn(
+            "missions",
+            text + "; too big: " + ", ".join(too_big),
+            "switch the robot to 115200 (power-cycle it, or Baud 129) to run those",
+        )
+    else:
+        report.ok("missions", text + ": all fit")
+
+
+def _firmware(banner: Any, reset_tried: bool, report: Report) -> None:
+    if banner is None or banner.firmware is None:
+        why = (
+            "the banner names no release"
+            if reset_tried and banner is not None
+            else "not read (--allow-reset: the reset banner names it)"
+            if not reset_tried
+            else "no banner (a Roomba 500)"
+        )
+        report.skip("firmware", why)
+        return
+    firmware = banner.firmware
+    if firmware.wakes_by_brc_on_dock:
+        report.ok("firmware", f"{firmware.text}: wakes by a BRC pulse on the dock too")
+    else:
+        report.warn(
+            "firmware",
+            f"{firmware.text}: older than release-3.8.2 / release-stm32-3.7.7, it does not "
+            "wake by a BRC pulse on the dock",
+            "on the dock keep it awake (keep-awake is on by default) or wake it with Clean",
+        )

@@ -1,0 +1,150 @@
+"""Telling robots apart by what they say: the reset banner, the stream's checksum, the mode.
+
+Three things a robot shows without being told which model it is (``roomba-bt doctor`` reads
+them; the simulator produces them from its profile):
+
+* **The reset banner.** Reset (7) exists only on the Roomba 600 / Create 2 (the 500 spec has
+  no opcode 7: a 500 stays silent). The firmware prints a welcome text that names its
+  release, for example (a Roomba 620, and the spec's own example)::
+
+      Roomba by iRobot!
+      battery-current-zero 258
+      r3_robot/tags/release-3.2.6:4975 CLEAN
+      ...
+      r3_robot/tags/release-stm32-3.7.7
+
+  The 600 spec (Appendix B, "Dock wakeup"): firmware older than release-3.8.2 /
+  release-stm32-3.7.7 does not wake by a BRC pulse while on the dock.
+* **The stream checksum.** The 600 / Create 2 sum the header byte 19 into the checksum, the
+  500 leaves it out (``docs/protocol.md``): one frame of a stream says which.
+* **The mode reading right after Start.** Passive is 1; firmware that reports mode + 1 reads
+  2. Of the profiles only the Roomba 600 has that bug (``reports_mode_plus_one``).
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+from roomba_bt.oi.frames import STREAM_HEADER
+from roomba_bt.oi.profiles import PROFILES, RobotProfile
+
+#: The first release of each firmware line that wakes by BRC on the dock (600 spec, App. B).
+BRC_DOCK_WAKE_FIXED: dict[str, tuple[int, int, int]] = {
+    "release": (3, 8, 2),
+    "release-stm32": (3, 7, 7),
+}
+_RELEASE = re.compile(r"(release(?:-stm32)?)-(\d+)\.(\d+)\.(\d+)")
+
+
+@dataclass(frozen=True, slots=True)
+class FirmwareVersion:
+    """A firmware release as the banner names it: ``release-stm32-3.7.7``."""
+
+    line: str  # "release" or "release-stm32"
+    number: tuple[int, int, int]
+
+    @property
+    def text(self) -> str:
+        return f"{self.line}-{'.'.join(str(n) for n in self.number)}"
+
+    @property
+    def wakes_by_brc_on_dock(self) -> bool:
+        """False before release-3.8.2 / release-stm32-3.7.7 (the 600 spec's Appendix B)."""
+        return self.number >= BRC_DOCK_WAKE_FIXED[self.line]
+
+
+def parse_firmware(text: str) -> FirmwareVersion | None:
+    """The first ``release-X.Y.Z`` or ``release-stm32-X.Y.Z`` in ``text``, or None."""
+    found = _RELEASE.search(text)
+    if found is None:
+        return None
+    line, *numbers = found.groups()
+    major, minor, patch = (int(n) for n in numbers)
+    return FirmwareVersion(line, (major, minor, patch))
+
+
+@dataclass(frozen=True, slots=True)
+class Banner:
+    """What the robot printed after Reset (7): its text and the firmware it names."""
+
+    text: str
+    firmware: FirmwareVersion | None
+
+
+def parse_banner(data: bytes) -> Banner | None:
+    """The banner in ``data`` (bytes read after Reset), or None if ``data`` holds no text
+    (a Roomba 500, which has no Reset, answers nothing)."""
+    text = data.decode("ascii", errors="replace")
+    printable = sum(ch.isprintable() or ch in "\r\n" for ch in text)
+    if not text.strip() or printable < 0.9 * len(text):
+        return None
+    return Banner(text, parse_firmware(text))
+
+
+def checksum_covers_header(frame: bytes) -> bool | None:
+    """Whether one stream frame ``[19][n][payload...][checksum]`` sums its header into the
+    checksum (600 / Create 2: True) or not (500: False); None if neither sum is 0 (not a
+    frame, or a corrupted one)."""
+    if len(frame) < 3 or frame[0] != STREAM_HEADER or frame[1] != len(frame) - 3:
+        return None
+    total = sum(frame) & 0xFF
+    if total == 0:
+        return True
+    if (total - STREAM_HEADER) & 0xFF == 0:
+        return False
+    return None
+
+
+@dataclass(frozen=True, slots=True)
+class Identification:
+    """The profiles that fit what was seen, best first, and why."""
+
+    candidates: tuple[RobotProfile, ...]
+    evidence: tuple[str, ...]
+
+    @property
+    def best(self) -> RobotProfile | None:
+        return self.candidates[0] if self.candidates else None
+
+
+def identify(
+    *,
+    mode_plus_one: bool | None,
+    header_in_checksum: bool | None,
+    banner: Banner | None = None,
+    reset_tried: bool = False,
+) -> Identification:
+    """The profiles consistent with the evidence. ``reset_tried`` with no ``banner``: the
+    robot ignored Reset, which only the 500 does."""
+    candidates = list(PROFILES.values())
+    evidence: list[str] = []
+
+    def keep(test: bool | None, keep_if: bool, field: str, note: str) -> None:
+        nonlocal candidates
+        if test is None:
+            return
+        candidates = [p for p in candidates if getattr(p, field) is (test if keep_if else not test)]
+        evidence.append(note)
+
+    if reset_tried:
+        has_reset = banner is not None
+        candidates = [p for p in candidates if p.has_command("reset") is has_reset]
+        evidence.append(
+            "it printed a banner after Reset (7): a 600 or a Create 2"
+            if has_reset
+            else "it ignored Reset (7): the Roomba 500 has none"
+        )
+    keep(
+        header_in_checksum, True, "checksum_includes_header",
+        "its stream checksum covers the header (600 / Create 2)"
+        if header_in_checksum
+        else "its stream checksum leaves the header out (Roomba 500)",
+    )  # fmt: skip
+    keep(
+        mode_plus_one, True, "reports_mode_plus_one",
+        "it reports the OI mode + 1 (the Roomba 600 firmware bug)"
+        if mode_plus_one
+        else "it reports the OI mode as is (Create 2 or Roomba 500; a 600 on fixed firmware too)",
+    )  # fmt: skip
+    return Identification(tuple(candidates), tuple(evidence))

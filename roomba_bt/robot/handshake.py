@@ -1,0 +1,214 @@
+"""Finding a robot on a port: which baud rate it talks at, and a BRC pulse if it is silent.
+
+One function for ``roomba-bt doctor`` and ``--baud auto`` (``run``, ``sensors``), so both try
+the same rates in the same order and read an answer the same way.
+
+The OI talks at 115200 (its default) or 19200 (after Clean is held at power-off, or three BRC
+pulses at power-on); those are the rates tried, 115200 first because it is the default and
+so the likeliest (a rate the user names goes first). At each rate the probe sends::
+
+    [128]                 Start: Passive, from any mode (Off included)
+    [150][0]              pause a stream a previous program may have left running
+                          ... read until the line is quiet (a stale stream, a banner)
+    [149][3][35][21][34]  Query List: OI mode, charging state, charging sources
+
+and expects exactly three bytes back, each in its packet's range, the mode reading Passive
+(1, or 2 on firmware that reports mode + 1). At a wrong rate a real line carries nothing the
+robot understands and returns nothing or garbage: garbage is a reply of the wrong length or
+out of range, and is reported as such (the user learns something answered).
+
+A robot asleep (five minutes in Passive) answers nothing at any rate. The USB cables wire
+BRC to RTS or DTR; :func:`wake_pulse` holds them asserted (BRC low) for one second, the
+length keep-awake uses (longer than the 50-500 ms pulses of the baud-change gesture), and
+then the rates are tried again.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
+from roomba_bt.oi.packets import PACKETS
+from roomba_bt.robot.wake import PULSE_LENGTH_S, WakeLine
+from roomba_bt.transport.base import Transport
+
+#: The OI's rates, likeliest first: the default, then the rate of the Clean-held power-off.
+OI_RATES: tuple[int, ...] = (115200, 19200)
+#: OI mode, charging state, charging sources: one byte each, each with a narrow range.
+PROBE_PACKETS: tuple[int, ...] = (OI_MODE_PACKET, 21, 34)
+#: How long the line must stay quiet after Start and the pause before the query.
+QUIET_S = 0.03
+#: Give up draining after this long (a stream at another rate never goes quiet).
+DRAIN_LIMIT_S = 0.25
+#: How long to wait for the reply to the query.
+REPLY_TIMEOUT_S = 0.3
+#: After a wake pulse, the robot's time to come up before the rates are tried again.
+WAKE_SETTLE_S = 0.5
+
+
+@dataclass(frozen=True, slots=True)
+class Probe:
+    """What one rate returned: the bytes after the query, and whether they are an answer."""
+
+    baud: int
+    reply: bytes
+    noise: int  # bytes drained before the query (a stale stream, a banner, garbage)
+    answered: bool
+
+    @property
+    def mode_raw(self) -> int | None:
+        return self.reply[0] if self.answered else None
+
+    @property
+    def seen(self) -> str:
+        """What the line carried, in words."""
+        if self.answered:
+            return f"answered {list(self.reply)} to Query List {list(PROBE_PACKETS)}"
+        if not self.reply and not self.noise:
+            return "nothing"
+        total = len(self.reply) + self.noise
+        return f"{total} bytes that are no answer (a robot at another rate sends garbage)"
+
+
+@dataclass(frozen=True, slots=True)
+class Search:
+    """The probes made, in order, and the rate that answered (None: none did)."""
+
+    probes: tuple[Probe, ...]
+
+    @property
+    def found(self) -> Probe | None:
+        return next((p for p in self.probes if p.answered), None)
+
+    @property
+    def baud(self) -> int | None:
+        found = self.found
+        return found.baud if found is not None else None
+
+
+def rates_to_try(preferred: int | None = None) -> tuple[int, ...]:
+    """``preferred`` (a rate the user named) first, then the OI's rates, likeliest first."""
+    if preferred is None:
+        return OI_RATES
+    return (preferred, *(rate for rate in OI_RATES if rate != preferred))
+
+
+def _wait(transport: Transport, seconds: float) -> int:
+    """Read (and drop) for ``seconds`` of the link's clock; the bytes read."""
+    clock = transport.now
+    deadline = clock() + seconds
+    seen = 0
+    while (remaining := deadline - clock()) > 0:
+        seen += len(transport.read(remaining))
+    return seen
+
+
+def _drain(transport: Transport) -> int:
+    clock = transport.now
+    started = quiet_since = clock()
+    seen = 0
+    while clock() - quiet_since < QUIET_S and clock() - started < DRAIN_LIMIT_S:
+        data = transport.read(QUIET_S / 2)
+        if data:
+            seen += len(data)
+            quiet_since = clock()
+    return seen
+
+
+def is_answer(reply: bytes) -> bool:
+    """Three bytes, each in its packet's range, the mode reading Passive (1, or 2 with the
+    mode + 1 firmware bug) since Start came just before."""
+    if len(reply) != len(PROBE_PACKETS):
+        return False
+    for pid, value in zip(PROBE_PACKETS, reply, strict=True):
+        spec = PACKETS[pid]
+        if not spec.minimum <= value <= spec.maximum + (1 if pid == OI_MODE_PACKET else 0):
+            return False
+    return reply[0] in (int(OIMode.PASSIVE), int(OIMode.PASSIVE) + 1)
+
+
+def probe(transport: Transport, baud: int) -> Probe:
+    """Set the port to ``baud`` and ask: see the module docstring."""
+    transport.set_baud(baud)
+    transport.write(oi.start().data + oi.pause_stream().data)
+    noise = _drain(transport)
+    transport.write(oi.query_list(PROBE_PACKETS).data)
+    clock = transport.now
+    deadline = clock() + REPLY_TIMEOUT_S
+    reply = b""
+    while len(reply) < len(PROBE_PACKETS) and (remaining := deadline - clock()) > 0:
+        reply += transport.read(remaining)
+    if reply:
+        reply += transport.read(QUIET_S)  # anything more means it was not our reply
+    return Probe(baud, reply, noise, is_answer(reply))
+
+
+def search(transport: Transport, rates: Sequence[int]) -> Search:
+    """Probe each of ``rates`` until one answers; the port is left at that rate."""
+    probes: list[Probe] = []
+    for rate in rates:
+        result = probe(transport, rate)
+        probes.append(result)
+        if result.answered:
+            break
+    return Search(tuple(probes))
+
+
+def wake_pulse(transport: Transport, length: float = PULSE_LENGTH_S) -> str | None:
+    """Hold BRC low (RTS and DTR asserted) for ``length`` s, then let the robot come up.
+    None when pulsed; otherwise why it could not be (the port has no modem lines)."""
+    if not isinstance(transport, WakeLine):
+        return f"{transport.name} cannot drive modem lines"
+    try:
+        transport.set_wake_line(True)
+        _wait(transport, length)
+        transport.set_wake_line(False)
+    except OSError as exc:
+        return str(exc)
+    _wait(transport, WAKE_SETTLE_S)
+    return None
+
+
+@dataclass(frozen=True, slots=True)
+class Found:
+    """Where the robot answered: the rate, every probe made and the wake pulse, if one was
+    needed (``woken``) or could not be given (``wake_problem``)."""
+
+    baud: int | None
+    before_wake: Search
+    after_wake: Search | None
+    wake_problem: str | None
+
+    @property
+    def woken(self) -> bool:
+        return self.after_wake is not None and self.after_wake.baud is not None
+
+    @property
+    def probes(self) -> tuple[Probe, ...]:
+        after = self.after_wake.probes if self.after_wake is not None else ()
+        return self.before_wake.probes + after
+
+
+def find_robot(transport: Transport, preferred: int | None = None, *, wake: bool = True) -> Found:
+    """Try the rates; if none answers and ``wake``, pulse BRC and try them again."""
+    rates = rates_to_try(preferred)
+    first = search(transport, rates)
+    if first.baud is not None or not wake:
+        return Found(first.baud, first, None, None)
+    problem = wake_pulse(transport)
+    if problem is not None:
+        return Found(None, first, None, problem)
+    second = search(transport, rates)
+    return Found(second.baud, first, second, None)
+
+
+def describe_silence(found: Found) -> str:
+    """One sentence: what each rate returned (for an error message)."""
+    seen = "; ".join(f"{p.baud}: {p.seen}" for p in found.probes)
+    if found.wake_problem is not None:
+        seen += f"; no BRC pulse possible ({found.wake_problem})"
+    elif found.after_wake is not None:
+        seen += " (the last after a BRC pulse)"
+    return seen
