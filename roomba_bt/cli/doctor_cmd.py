@@ -350,10 +350,11 @@ def _status(transport: Any, profile: Any, plus_one: bool, report: Report) -> Non
     from roomba_bt.oi.bits import ChargingSources, ChargingState
     from roomba_bt.oi.modes import mode_from_packet
     from roomba_bt.oi.stream import ReplyParser
+    from roomba_bt.robot.handshake import drain
 
     ids = STATUS_PACKETS
     parser = ReplyParser(ids, profile)
-    transport.read(0.0)
+    drain(transport)  # the paused stream's last frames may still be on the way
     transport.write(oi.query_list(ids).data)
     clock = transport.now
     deadline = clock() + 0.5

@@ -105,7 +105,9 @@ def _wait(transport: Transport, seconds: float) -> int:
     return seen
 
 
-def _drain(transport: Transport) -> int:
+def drain(transport: Transport) -> int:
+    """Read and drop until the line stays quiet for :data:`QUIET_S` (at most
+    :data:`DRAIN_LIMIT_S`); the bytes dropped."""
     clock = transport.now
     started = quiet_since = clock()
     seen = 0
@@ -133,7 +135,7 @@ def probe(transport: Transport, baud: int) -> Probe:
     """Set the port to ``baud`` and ask: see the module docstring."""
     transport.set_baud(baud)
     transport.write(oi.start().data + oi.pause_stream().data)
-    noise = _drain(transport)
+    noise = drain(transport)
     transport.write(oi.query_list(PROBE_PACKETS).data)
     clock = transport.now
     deadline = clock() + REPLY_TIMEOUT_S
@@ -184,6 +186,11 @@ class Found:
     @property
     def woken(self) -> bool:
         return self.after_wake is not None and self.after_wake.baud is not None
+
+    @property
+    def answer(self) -> Probe | None:
+        """The probe that answered (its reply holds the mode reading after Start)."""
+        return next((p for p in self.probes if p.answered), None)
 
     @property
     def probes(self) -> tuple[Probe, ...]:

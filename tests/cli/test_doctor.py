@@ -1,0 +1,240 @@
+"""``roomba-bt doctor`` against the simulator served on a pty and on RFC 2217, at both OI
+rates, awake and asleep, as three robot models; against a pty nobody answers; and
+``--baud auto`` for ``run`` and ``sensors``. Every run is a subprocess with a 10 s timeout:
+a doctor that hangs fails the test, and no test reads the wall clock."""
+
+from __future__ import annotations
+
+import os
+import select
+import signal
+import subprocess
+import sys
+import textwrap
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.cli.doctor_cmd import DoctorExit
+
+#: The acceptance bar: nothing behind the port, the answer comes within 10 s.
+DOCTOR_TIMEOUT_S = 10.0
+
+
+class Sim:
+    """``roomba-bt sim`` in a child process; ``address`` is what it printed."""
+
+    def __init__(self, *args: str) -> None:
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "roomba_bt.cli", "sim", *args],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        assert self.proc.stdout is not None
+        ready, _, _ = select.select([self.proc.stdout], [], [], 30.0)
+        assert ready, "the simulator printed no address"
+        self.address = self.proc.stdout.readline().strip()
+
+    def stop(self) -> str:
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+        _, err = self.proc.communicate(timeout=10)
+        return err
+
+
+@pytest.fixture
+def sims() -> Iterator[list[Sim]]:
+    started: list[Sim] = []
+    yield started
+    for sim in started:
+        sim.stop()
+
+
+def _sim(sims: list[Sim], *args: str) -> Sim:
+    sim = Sim(*args)
+    sims.append(sim)
+    return sim
+
+
+def _cli(*args: str, timeout: float = DOCTOR_TIMEOUT_S) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "roomba_bt.cli", *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
+
+
+def _doctor(port: str, *extra: str) -> subprocess.CompletedProcess[str]:
+    done = _cli("doctor", "--port", port, *extra)
+    assert "Traceback" not in done.stderr + done.stdout
+    return done
+
+
+def _step(out: str, step: str) -> list[str]:
+    """The lines of one step (``[ok]   baud ...``), without the mark's padding."""
+    return [line for line in out.splitlines() if line[7:].startswith(f"{step:<10}")]
+
+
+@pytest.mark.parametrize("baud", [19200, 115200])
+def test_doctor_finds_an_awake_create2_on_a_pty_at_either_rate(sims: list[Sim], baud: int) -> None:
+    sim = _sim(sims, "--pty", "--baud", str(baud))
+    done = _doctor(sim.address)
+    assert done.returncode == DoctorExit.FOUND, done.stdout
+    out = done.stdout
+    assert f"found: iRobot Create 2 on {sim.address} at {baud} baud, Passive, battery " in out
+    assert "not charging" in out.splitlines()[-1]
+    assert _step(out, "wake") == ["[--]   wake      not needed: the robot answered"]
+    if baud == 19200:
+        assert "[--]   baud      115200: nothing" in out, "115200 is tried first"
+    assert f"[ok]   baud      {baud}: answered [1, 0, 0]" in out
+    assert "[ok]   profile   iRobot Create 2 (--profile create2)" in out
+    assert "[ok]   mode      Passive (35 = 1, as is)" in out
+    assert any(" 0 bytes skipped" in line for line in _step(out, "stream"))
+    missions = _step(out, "missions")[0]
+    if baud == 19200:
+        assert missions.startswith("[warn]") and "carries 28 bytes at 19200 baud" in missions
+        assert "too big: " in missions and "patrol 59" in missions
+    else:
+        assert missions.startswith("[ok]") and missions.endswith("all fit")
+    assert "mode Passive" in sim.stop(), "the robot is left in Passive"
+
+
+@pytest.mark.parametrize("baud", [19200, 115200])
+def test_doctor_wakes_an_asleep_robot_by_brc_over_rfc2217_and_names_it(
+    sims: list[Sim], baud: int
+) -> None:
+    sim = _sim(sims, "--rfc2217", "127.0.0.1:0", "--asleep", "--baud", str(baud))
+    done = _doctor(sim.address)
+    assert done.returncode == DoctorExit.FOUND, done.stdout
+    out = done.stdout
+    assert "[--]   baud      115200: nothing" in out and "[--]   baud      19200: nothing" in out
+    assert "[ok]   wake      silent at every rate: pulsed BRC low for 1 s (RTS and DTR)" in out
+    assert "[ok]   wake      it answered after the pulse: the robot was asleep" in out
+    assert f"found: iRobot Create 2 on {sim.address} at {baud} baud, Passive, battery " in out
+
+
+def test_an_asleep_robot_on_a_pty_is_reported_with_the_fix_exit_5(sims: list[Sim]) -> None:
+    """A pty has no modem lines: the BRC pulse cannot be given, and doctor says so."""
+    sim = _sim(sims, "--pty", "--asleep")
+    done = _doctor(sim.address)
+    assert done.returncode == DoctorExit.SILENT, done.stdout
+    wake = _step(done.stdout, "wake")[0]
+    assert wake.startswith("[FAIL]") and "cannot pulse BRC" in wake
+    assert "Inappropriate ioctl" in wake
+    assert "fix: a robot asleep (5 minutes in Passive)" in done.stdout
+    assert "press Clean" in done.stdout
+
+
+def test_a_roomba600_is_told_by_its_mode_plus_one(sims: list[Sim]) -> None:
+    sim = _sim(sims, "--pty", "--profile", "roomba600")
+    done = _doctor(sim.address)
+    assert done.returncode == DoctorExit.FOUND, done.stdout
+    assert "Start (128): Passive; packet 35 reads 2 (this firmware reports the OI mode + 1)" in (
+        done.stdout
+    )
+    assert "[ok]   profile   Roomba 600 series (--profile roomba600)" in done.stdout
+    assert "[ok]   mode      Passive (35 = 2, mode + 1 firmware" in done.stdout
+
+
+def test_with_allow_reset_a_roomba500_is_told_by_its_silence_and_its_checksum(
+    sims: list[Sim],
+) -> None:
+    sim = _sim(sims, "--rfc2217", "127.0.0.1:0", "--profile", "roomba500", "--baud", "19200")
+    done = _doctor(sim.address, "--allow-reset")
+    assert done.returncode == DoctorExit.FOUND, done.stdout
+    profile = _step(done.stdout, "profile")[0]
+    assert profile.startswith("[ok]   profile   Roomba 500 series (--profile roomba500)")
+    assert "ignored Reset (7)" in profile and "leaves the header out" in profile
+    assert _step(done.stdout, "firmware") == ["[--]   firmware  no banner (a Roomba 500)"]
+
+
+@pytest.mark.parametrize(("firmware", "wakes"), [("release-3.6.0", False), ("release-3.8.2", True)])
+def test_with_allow_reset_the_banner_gives_the_firmware_and_the_dock_wake(
+    sims: list[Sim], firmware: str, wakes: bool
+) -> None:
+    sim = _sim(sims, "--pty", "--firmware", firmware)
+    done = _doctor(sim.address, "--allow-reset")
+    assert done.returncode == DoctorExit.FOUND, done.stdout
+    reset = _step(done.stdout, "reset")[0]
+    assert f"last: 'r3_robot/tags/{firmware} CLEAN'" in reset
+    line = _step(done.stdout, "firmware")[0]
+    if wakes:
+        assert line == f"[ok]   firmware  {firmware}: wakes by a BRC pulse on the dock too"
+    else:
+        assert line.startswith("[warn]") and "does not wake by a BRC pulse on the dock" in line
+    assert "printed a banner after Reset (7)" in _step(done.stdout, "profile")[0]
+
+
+def test_a_pty_with_nothing_behind_it_says_so_and_exits_non_zero_within_10_s() -> None:
+    """Nobody reads the other side of this pty: the subprocess timeout is the 10 s bar."""
+    master, slave = os.openpty()
+    try:
+        done = _doctor(os.ttyname(slave))
+    finally:
+        os.close(master)
+        os.close(slave)
+    assert done.returncode == DoctorExit.SILENT, done.stdout
+    assert "[--]   baud      115200: nothing" in done.stdout
+    assert "[--]   baud      19200: nothing" in done.stdout
+    assert _step(done.stdout, "wake")[0].startswith("[FAIL]")
+    assert "found:" not in done.stdout
+
+
+def test_a_port_that_does_not_open_is_exit_3_with_what_to_check(tmp_path: Path) -> None:
+    done = _doctor(str(tmp_path / "ttyUSB9"))
+    assert done.returncode == DoctorExit.PORT
+    assert "[FAIL] port      could not open" in done.stdout
+    assert "fix: check the device path" in done.stdout
+
+
+def test_a_bad_baud_is_a_usage_error() -> None:
+    done = _cli("doctor", "--port", "/dev/null", "--baud", "1234")
+    assert done.returncode == DoctorExit.INVALID
+    assert "allowed: " in done.stderr and "or auto" in done.stderr
+
+
+MISSION = """
+mission: short
+tree:
+  sequence:
+    - mode: safe
+    - wait: 0.3s
+"""
+
+
+def test_run_baud_auto_finds_19200_and_runs(sims: list[Sim], tmp_path: Path) -> None:
+    sim = _sim(sims, "--pty", "--baud", "19200")
+    mission = tmp_path / "short.yaml"
+    mission.write_text(textwrap.dedent(MISSION))
+    done = _cli(
+        "run", str(mission), "--port", sim.address, "--baud", "auto", "--display", "none",
+        timeout=30,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "outcome      SUCCESS" in done.stdout
+    assert "the robot answers at 19200 baud (--baud auto)" in done.stderr
+
+
+def test_sensors_baud_auto_finds_19200_and_shows_a_table(sims: list[Sim]) -> None:
+    sim = _sim(sims, "--pty", "--baud", "19200")
+    done = _cli("sensors", "--port", sim.address, "--baud", "auto", "--count", "1", timeout=30)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith(f"{sim.address}  (iRobot Create 2)")
+    # group 1 (packets 7-16): the largest that fits the 28 bytes of a 15 ms slot at 19200
+    assert "bumps_wheel_drops" in done.stdout and "unused_16" in done.stdout
+    assert "oi_mode" not in done.stdout
+
+
+def test_baud_auto_with_nothing_behind_the_port_is_a_connection_failure() -> None:
+    master, slave = os.openpty()
+    try:
+        done = _cli("sensors", "--port", os.ttyname(slave), "--baud", "auto", "--count", "1")
+    finally:
+        os.close(master)
+        os.close(slave)
+    assert done.returncode == 3
+    assert "--baud auto: no answer at any OI rate (115200: nothing; 19200: nothing" in done.stderr
+    assert "Traceback" not in done.stderr

@@ -1,0 +1,71 @@
+"""Telling robots apart (oi/identify.py): the banner's release, the checksum convention and
+the mode + 1 reading each narrow the profiles."""
+
+from __future__ import annotations
+
+from roomba_bt.oi import commands as C
+from roomba_bt.oi.frames import layout_for
+from roomba_bt.oi.identify import (
+    FirmwareVersion,
+    checksum_covers_header,
+    identify,
+    parse_banner,
+    parse_firmware,
+)
+from roomba_bt.oi.profiles import CREATE2, ROOMBA500, ROOMBA600
+
+#: A Roomba 620's banner as posted on robotics.stackexchange.com (question 12846).
+ROOMBA620_BANNER = (
+    b"bootloader id: #x47135160 6BFA3FFF\r\nbootloader info rev: #xF000\r\n"
+    b"bootloader rev: #x0001\r\nRoomba by iRobot!\r\nbattery-current-zero 258\r\n"
+    b"r3_robot/tags/release-3.2.6:4975 CLEAN\r\n"
+)
+
+
+def test_the_firmware_release_and_whether_it_wakes_by_brc_on_the_dock() -> None:
+    assert parse_firmware("r3_robot/tags/release-stm32-3.7.7") == FirmwareVersion(
+        "release-stm32", (3, 7, 7)
+    )
+    cases = {
+        "release-3.2.6": False,
+        "release-3.8.1": False,
+        "release-3.8.2": True,
+        "release-3.10.0": True,
+        "release-stm32-3.7.6": False,
+        "release-stm32-3.7.7": True,
+    }
+    for text, wakes in cases.items():
+        version = parse_firmware(text)
+        assert version is not None and version.text == text
+        assert version.wakes_by_brc_on_dock is wakes, text
+    assert parse_firmware("2012-03-22-1549-L") is None
+
+
+def test_a_banner_is_text_with_its_release_and_garbage_is_none() -> None:
+    banner = parse_banner(ROOMBA620_BANNER)
+    assert banner is not None and banner.firmware is not None
+    assert banner.firmware.text == "release-3.2.6"
+    assert not banner.firmware.wakes_by_brc_on_dock
+    assert parse_banner(b"") is None
+    assert parse_banner(bytes(range(0, 40))) is None
+
+
+def test_the_checksum_convention_of_a_frame() -> None:
+    for profile, covers in ((CREATE2, True), (ROOMBA500, False)):
+        layout = layout_for((7, 35), profile, True)
+        frame = layout.stream_frame({7: 1, 35: 2}, profile.checksum_includes_header)
+        assert checksum_covers_header(frame) is covers, profile.name
+    assert checksum_covers_header(bytes([19, 2, 7, 1])) is None  # wrong length
+    assert checksum_covers_header(C.start().data) is None
+
+
+def test_the_evidence_narrows_the_profiles() -> None:
+    assert identify(mode_plus_one=True, header_in_checksum=True).candidates == (ROOMBA600,)
+    assert identify(mode_plus_one=False, header_in_checksum=True).candidates == (CREATE2,)
+    assert identify(mode_plus_one=False, header_in_checksum=False).candidates == (ROOMBA500,)
+    silent = identify(mode_plus_one=None, header_in_checksum=None, reset_tried=True)
+    assert silent.candidates == (ROOMBA500,)
+    banner = parse_banner(ROOMBA620_BANNER)
+    printed = identify(mode_plus_one=None, header_in_checksum=None, banner=banner, reset_tried=True)
+    assert set(printed.candidates) == {CREATE2, ROOMBA600}
+    assert identify(mode_plus_one=True, header_in_checksum=False).best is None

@@ -1,0 +1,94 @@
+"""Finding the rate and waking the robot (robot/handshake.py), on the simulator's in-process
+link (virtual clock): the same function ``doctor`` and ``--baud auto`` use."""
+
+from __future__ import annotations
+
+from roomba_bt.oi.profiles import CREATE2, ROOMBA600
+from roomba_bt.robot.handshake import (
+    OI_RATES,
+    find_robot,
+    is_answer,
+    probe,
+    rates_to_try,
+    wake_pulse,
+)
+from roomba_bt.sim import Simulator, load_world
+from roomba_bt.sim.link import SimLink
+
+
+def _link(baud: int = 115200, *, asleep: bool = False, profile: object = CREATE2) -> SimLink:
+    simulator = Simulator(load_world("empty-room"), profile, 0)  # type: ignore[arg-type]
+    simulator.baud = baud
+    if asleep:
+        simulator.fall_asleep("test")
+    return SimLink(simulator)
+
+
+def test_the_rates_likeliest_first_and_a_named_rate_before_them() -> None:
+    assert OI_RATES == (115200, 19200)
+    assert rates_to_try() == (115200, 19200)
+    assert rates_to_try(19200) == (19200, 115200)
+    assert rates_to_try(57600) == (57600, 115200, 19200)
+
+
+def test_an_answer_is_three_bytes_in_range_with_the_mode_passive() -> None:
+    assert is_answer(bytes([1, 0, 0]))
+    assert is_answer(bytes([2, 2, 2]))  # the mode + 1 firmware, charging on the home base
+    assert not is_answer(bytes([3, 0, 0]))  # Start leads to Passive: 3 is Full
+    assert not is_answer(bytes([1, 9, 0]))  # no charging state 9
+    assert not is_answer(bytes([1, 0, 0, 0]))  # more than asked for
+    assert not is_answer(b"")
+
+
+def test_at_19200_the_first_probe_hears_nothing_and_the_second_finds_it() -> None:
+    link = _link(19200)
+    found = find_robot(link)
+    assert found.baud == 19200
+    assert [(p.baud, p.answered, p.reply) for p in found.probes] == [
+        (115200, False, b""),
+        (19200, True, bytes([1, 0, 0])),
+    ]
+    assert found.probes[0].seen == "nothing"
+    assert link.baud == 19200, "the port is left at the rate found"
+    assert found.after_wake is None
+
+
+def test_a_stream_at_another_rate_is_garbage_not_an_answer() -> None:
+    link = _link(19200)
+    link.set_baud(19200)
+    link.write(bytes([128, 148, 1, 7]))  # Start, a stream of bumps the host cannot read
+    result = probe(link, 115200)
+    assert not result.answered
+    assert result.noise > 0
+    assert "bytes that are no answer" in result.seen
+
+
+def test_the_mode_plus_one_firmware_answers_2() -> None:
+    found = find_robot(_link(profile=ROOMBA600))
+    assert found.answer is not None and found.answer.mode_raw == 2
+
+
+def test_an_asleep_robot_is_found_after_a_brc_pulse() -> None:
+    link = _link(19200, asleep=True)
+    found = find_robot(link)
+    assert found.woken and found.baud == 19200
+    assert [p.answered for p in found.before_wake.probes] == [False, False]
+    assert link.simulator.brc_pulses == 1
+    assert not link.simulator.brc_low, "BRC is let go after the pulse"
+
+
+def test_without_wake_the_asleep_robot_stays_unfound() -> None:
+    found = find_robot(_link(asleep=True), wake=False)
+    assert found.baud is None and found.after_wake is None
+
+
+class _NoLines:
+    name = "pty"
+
+    def set_wake_line(self, low: bool) -> None:
+        raise OSError(25, "Inappropriate ioctl for device")
+
+
+def test_a_port_without_modem_lines_says_why_it_cannot_pulse() -> None:
+    problem = wake_pulse(_NoLines())  # type: ignore[arg-type]
+    assert problem is not None and "Inappropriate ioctl" in problem

@@ -1,0 +1,139 @@
+"""The line model of the real-time server (sim/server.py): the pty's speed and the RFC 2217
+client's rate against the robot's (a client at another rate is not heard and reads
+garbage), and the modem lines that RFC 2217 carries to the BRC pin."""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Iterator
+
+import pytest
+import serial
+
+from roomba_bt.oi import commands as C
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.sim import Simulator, load_world
+from roomba_bt.sim.link import at_wrong_baud
+from roomba_bt.sim.server import Endpoint, PtyEndpoint, Rfc2217Endpoint, serve
+
+
+class Served:
+    """A simulator served on ``endpoint`` in a thread, until the test ends."""
+
+    def __init__(self, endpoint: Endpoint, baud: int = 115200, asleep: bool = False) -> None:
+        self.simulator = Simulator(load_world("empty-room"), CREATE2, 0)
+        self.simulator.baud = baud
+        if asleep:
+            self.simulator.fall_asleep("test")
+        self.endpoint = endpoint
+        self._stop = threading.Event()
+        self._thread = threading.Thread(
+            target=serve, args=(self.simulator, endpoint, self._stop.is_set), daemon=True
+        )
+        self._thread.start()
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=5)
+        self.endpoint.close()
+
+
+@pytest.fixture
+def served() -> Iterator[list[Served]]:
+    made: list[Served] = []
+    yield made
+    for one in made:
+        one.close()
+
+
+def _pty(made: list[Served], baud: int, asleep: bool = False) -> Served:
+    one = Served(PtyEndpoint(), baud, asleep)
+    made.append(one)
+    return one
+
+
+def _rfc(made: list[Served], baud: int, asleep: bool = False) -> Served:
+    one = Served(Rfc2217Endpoint("127.0.0.1", 0, baud), baud, asleep)
+    made.append(one)
+    return one
+
+
+def _mode_reply(port: serial.Serial) -> bytes:
+    port.reset_input_buffer()
+    port.write(C.start().data + C.query_list([35]).data)
+    return bytes(port.read(1))
+
+
+@pytest.mark.parametrize("robot_baud", [19200, 115200])
+def test_the_pty_answers_only_a_client_at_the_robots_rate(
+    served: list[Served], robot_baud: int
+) -> None:
+    one = _pty(served, robot_baud)
+    other = 115200 if robot_baud == 19200 else 19200
+    port = serial.Serial(one.endpoint.address, other, timeout=0.3)
+    try:
+        assert one.endpoint.line_baud() == other, "the client's tcsetattr is what the pty says"
+        assert _mode_reply(port) == b""
+        assert one.simulator.mode is OIMode.OFF, "nothing reached the robot"
+        assert one.simulator.ignored_bytes > 0
+        port.baudrate = robot_baud
+        assert _mode_reply(port) == b"\x01"
+        assert one.simulator.mode is OIMode.PASSIVE  # type: ignore[comparison-overlap]
+    finally:
+        port.close()
+
+
+def test_a_client_at_another_rate_reads_the_robots_bytes_scrambled(served: list[Served]) -> None:
+    one = _pty(served, 19200)
+    port = serial.Serial(one.endpoint.address, 19200, timeout=0.3)
+    try:
+        port.write(C.start().data + C.stream([35]).data)  # frames: [19][2][35][1][checksum]
+        assert port.read(64)
+        port.baudrate = 115200
+        port.reset_input_buffer()
+        seen = bytes(port.read(64))
+        frame = bytes([19, 2, 35, 1, (-(19 + 2 + 35 + 1)) & 0xFF])
+        assert seen and frame not in seen
+        assert at_wrong_baud(frame) in seen
+    finally:
+        port.close()
+
+
+# pyserial's RFC 2217 client names its reader thread with the deprecated setDaemon/setName
+@pytest.mark.filterwarnings("ignore:set(Daemon|Name)\\(\\) is deprecated:DeprecationWarning")
+def test_rfc2217_carries_the_rate_and_the_modem_lines_to_brc(served: list[Served]) -> None:
+    one = _rfc(served, 19200, asleep=True)
+    port: serial.Serial = serial.serial_for_url(
+        one.endpoint.address, do_not_open=True, baudrate=19200
+    )
+    port.timeout = 0.3
+    port.rts = port.dtr = False  # opened with BRC high: no pulse yet
+    port.open()
+    try:
+        assert one.endpoint.line_baud() == 19200
+        assert _mode_reply(port) == b"", "asleep: deaf"
+        port.rts = True  # BRC low: the falling edge wakes it
+        port.rts = False
+        assert _mode_reply(port) == b"\x01"
+        assert one.simulator.brc_pulses == 1
+        port.dtr = True  # DTR drives BRC too (some cables wire that one)
+        port.dtr = False
+        assert _mode_reply(port) == b"\x01"
+        assert one.simulator.brc_pulses == 2
+        port.baudrate = 115200
+        assert one.endpoint.line_baud() == 115200
+        assert _mode_reply(port) == b""
+    finally:
+        port.close()
+
+
+def test_a_pty_has_no_modem_lines(served: list[Served]) -> None:
+    one = _pty(served, 115200)
+    assert one.endpoint.wake_line() is None
+    port = serial.Serial(one.endpoint.address, 115200)
+    try:
+        with pytest.raises(OSError, match="Inappropriate ioctl"):
+            port.rts = True
+    finally:
+        port.close()
