@@ -19,7 +19,9 @@ expected, after the rewrites of :func:`fast_variant`:
   ``sensors`` stops after one refresh (``--count 1``);
 * no real time: ``run`` gets ``--fast`` (the same tree, the virtual clock);
 * short: ``eval`` runs 2 episodes (``--runs N`` -> 2), one job; ``sim`` serves for 0.5 s
-  (``--duration 0.5``) on a free TCP port (``--tcp HOST:0``);
+  (``--duration 0.5``) on a free TCP port (``--tcp HOST:0``, ``--rfc2217 HOST:0``);
+* ``doctor --port URL`` runs against a simulator this test serves: ``roomba-bt sim --rfc2217``,
+  asleep, at 19200, so every step up to the BRC wake is taken;
 * placeholders get a value: ``[NAME...]`` -> ``drive``, ``A.yaml``/``B.yaml`` ->
   ``missions/dock.yaml``/``missions/dock-builtin.yaml``;
 * ``make run`` runs the command its Makefile recipe runs.
@@ -176,9 +178,10 @@ def fast_variant(command: str) -> list[str]:
         if "--jobs" in argv:
             argv[argv.index("--jobs") + 1] = "1"
     if sub == "sim":
-        if "--tcp" in argv:
-            i = argv.index("--tcp")
-            argv[i + 1] = argv[i + 1].rsplit(":", 1)[0] + ":0"
+        for option in ("--tcp", "--rfc2217"):
+            if option in argv:
+                i = argv.index(option)
+                argv[i + 1] = argv[i + 1].rsplit(":", 1)[0] + ":0"
         argv += ["--duration", "0.5"]
     return argv
 
@@ -241,7 +244,9 @@ def test_every_command_in_the_docs_runs(
         argv = fast_variant(part)
         expanded = [w for word in argv for w in (sorted(glob.glob(word)) or [word])]
         assert expanded[0] == "roomba-bt", f"{where}: {part}"
-        if expanded[1] == "sim":  # serves until stopped: its own process
+        if expanded[1] == "doctor":
+            code, out, err = _doctor_on_a_simulator(expanded)
+        elif expanded[1] == "sim":  # serves until stopped: its own process
             done = subprocess.run(
                 [sys.executable, "-m", "roomba_bt.cli", *expanded[1:]],
                 capture_output=True, text=True, timeout=60, env=dict(os.environ),
@@ -254,3 +259,28 @@ def test_every_command_in_the_docs_runs(
         if redirect is not None:
             (workdir / redirect).write_text(out)
             assert out.strip(), f"{where}: {part} wrote nothing to {redirect}"
+
+
+#: The robot the docs' ``doctor`` commands find: asleep, at 19200, behind RFC 2217 (the
+#: endpoint that carries the BRC pulse), so every step up to the wake is taken.
+DOCTOR_SIM = ("sim", "--rfc2217", "127.0.0.1:0", "--asleep", "--baud", "19200")
+
+
+def _doctor_on_a_simulator(argv: list[str]) -> tuple[int, str, str]:
+    """``roomba-bt doctor`` (its ``--port`` already dropped) against :data:`DOCTOR_SIM`."""
+    sim = subprocess.Popen(
+        [sys.executable, "-m", "roomba_bt.cli", *DOCTOR_SIM],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        assert sim.stdout is not None
+        address = sim.stdout.readline().strip()
+        done = subprocess.run(
+            [sys.executable, "-m", "roomba_bt.cli", *argv[1:], "--port", address],
+            capture_output=True, text=True, timeout=30, env=dict(os.environ),
+        )  # fmt: skip
+        assert "found: " in done.stdout, done.stdout
+        return done.returncode, done.stdout, done.stderr
+    finally:
+        sim.terminate()
+        sim.communicate(timeout=10)
