@@ -63,11 +63,7 @@ class ModeCheck:
         """(modes on SUCCESS, modes on FAILURE) after ``node`` entered in ``entry``."""
         if not entry:
             return _EMPTY, _EMPTY
-        kind = node.kind
-        handler: Callable[[Node, Modes], tuple[Modes, Modes]] = getattr(
-            self, f"_{kind}", self._decorator
-        )
-        return handler(node, entry)
+        return _MODE_HANDLERS.get(node.kind, ModeCheck._decorator)(self, node, entry)
 
     def _leaf(self, node: Node, entry: Modes) -> tuple[Modes, Modes]:
         decl = node.decl
@@ -113,11 +109,6 @@ class ModeCheck:
 
     def _selector(self, node: Node, entry: Modes) -> tuple[Modes, Modes]:
         return self._chain(node, entry, on_success=False)
-
-    _reactive_sequence = _sequence
-    _fallback = _selector
-    _reactive_fallback = _selector
-    _reactive_selector = _selector
 
     def _parallel(self, node: Node, entry: Modes) -> tuple[Modes, Modes]:
         produced = entry
@@ -166,6 +157,22 @@ class ModeCheck:
         if kind == "oneshot":
             return ok | entry, ko | entry
         return ok, ko  # delay
+
+
+#: The mode pass's handler of each node kind; every other kind is a decorator. A table, not
+#: ``getattr(self, f"_{kind}")``: that built a new name string per node visited, and the
+#: interpreter's method cache (keyed by the string's address) kept up to thousands of them,
+#: so memory grew over a long run of compiles.
+_MODE_HANDLERS: dict[str, Callable[[ModeCheck, Node, Modes], tuple[Modes, Modes]]] = {
+    "leaf": ModeCheck._leaf,
+    "sequence": ModeCheck._sequence,
+    "reactive_sequence": ModeCheck._sequence,
+    "fallback": ModeCheck._selector,
+    "selector": ModeCheck._selector,
+    "reactive_fallback": ModeCheck._selector,
+    "reactive_selector": ModeCheck._selector,
+    "parallel": ModeCheck._parallel,
+}
 
 
 def _leads_to_within(node: Node) -> Modes:
