@@ -379,6 +379,16 @@ class _Checker:
                 self.error(path, f"no {key!r}", f"a mapping with {key!r}")
         return value
 
+    def record(
+        self, value: object, path: PathKey, keys: tuple[str, ...], required: tuple[str, ...]
+    ) -> dict[str, Any] | None:
+        """A :meth:`mapping` that is only of use with all its ``required`` keys: None (and
+        the problems reported) without one of them."""
+        spec = self.mapping(value, path, keys, required)
+        if spec is None or any(key not in spec for key in required):
+            return None
+        return spec
+
     def number(self, value: object, path: PathKey, lo: float, hi: float, unit: str) -> float | None:
         if isinstance(value, bool) or not isinstance(value, int | float):
             self.error(path, _show(value), f"a number in {lo:g}..{hi:g} {unit}")
@@ -497,8 +507,8 @@ def _angle_range(c: _Checker, value: object, path: PathKey) -> tuple[float, floa
 
 def _dock(c: _Checker, value: object) -> DockSpec | None:
     path: PathKey = ("dock",)
-    spec = c.mapping(value, path, _DOCK_KEYS, ("at", "facing"))
-    if spec is None or "at" not in spec or "facing" not in spec:
+    spec = c.record(value, path, _DOCK_KEYS, ("at", "facing"))
+    if spec is None:
         return None
     at = c.point(spec["at"], (*path, "at"))
     facing = c.number(spec["facing"], (*path, "facing"), -360, 360, "deg")
@@ -525,8 +535,8 @@ def _dock(c: _Checker, value: object) -> DockSpec | None:
 
 
 def _pose(c: _Checker, value: object, path: PathKey) -> Pose | None:
-    spec = c.mapping(value, path, ("at", "heading"), ("at",))
-    if spec is None or "at" not in spec:
+    spec = c.record(value, path, ("at", "heading"), ("at",))
+    if spec is None:
         return None
     at = c.point(spec["at"], (*path, "at"))
     heading = c.number(spec.get("heading", 0), (*path, "heading"), -360, 360, "deg")
@@ -572,8 +582,8 @@ def _start_region(c: _Checker, value: object, path: PathKey) -> StartRegion | No
 
 
 def _event(c: _Checker, value: object, path: PathKey) -> TimelineEvent | None:
-    spec = c.mapping(value, path, ("at", "kind", "side", "duration"), ("at", "kind"))
-    if spec is None or "at" not in spec or "kind" not in spec:
+    spec = c.record(value, path, ("at", "kind", "side", "duration"), ("at", "kind"))
+    if spec is None:
         return None
     at = c.number(spec["at"], (*path, "at"), 0, 1e6, "s")
     kind = c.choice(spec["kind"], (*path, "kind"), EVENT_KINDS)
@@ -726,8 +736,8 @@ def _virtual_walls(c: _Checker, value: object) -> tuple[VirtualWallSpec, ...]:
     vwalls: list[VirtualWallSpec] = []
     for i, v in enumerate(c.items(value, ("virtual_walls",))):
         path: PathKey = ("virtual_walls", i)
-        spec = c.mapping(v, path, ("name", "from", "to", "halo", "width"), ("from", "to"))
-        if spec is None or "from" not in spec or "to" not in spec:
+        spec = c.record(v, path, ("name", "from", "to", "halo", "width"), ("from", "to"))
+        if spec is None:
             continue
         a = c.point(spec["from"], (*path, "from"))
         b = c.point(spec["to"], (*path, "to"))
@@ -743,8 +753,8 @@ def _lighthouses(c: _Checker, value: object) -> tuple[LighthouseSpec, ...]:
     lighthouses: list[LighthouseSpec] = []
     for i, v in enumerate(c.items(value, ("lighthouses",))):
         path: PathKey = ("lighthouses", i)
-        spec = c.mapping(v, path, ("id", "at", "heading", "fence", "halo"), ("id", "at"))
-        if spec is None or "id" not in spec or "at" not in spec:
+        spec = c.record(v, path, ("id", "at", "heading", "fence", "halo"), ("id", "at"))
+        if spec is None:
             continue
         lid = spec["id"]
         if isinstance(lid, bool) or not isinstance(lid, int) or not 1 <= lid <= 10:
