@@ -164,8 +164,8 @@ class Motion(Sensing):
         v[42] = round(self.requested_left)
         v[39] = (v[41] + v[42]) // 2
 
-    # One function for the usual step (over 60 lines on purpose): it runs on every step the
-    # wheels turn; only a step cut short by a wall, a lift or a fall calls out.
+    # The usual step runs inline but for one call (_turn, shared with a hindered step): it
+    # runs on every step the wheels turn; a wall in the way, a lift or a fall calls out.
     def _move(self, left: float, right: float, dt: float) -> None:
         """Turn the wheels at ``left``, ``right`` mm/s for ``dt`` seconds."""
         self.left_speed, self.right_speed = left, right
