@@ -24,6 +24,7 @@ from py_trees.common import Status
 from roomba_bt.behaviours.declare import WHEEL, Param, declare
 from roomba_bt.behaviours.docking.common import (
     DRIVE_SENDS,
+    HAZARD_IN_PACKETS,
     OMNI_AHEAD_MM,
     RUN_KEY,
     RUNNING,
@@ -37,10 +38,7 @@ from roomba_bt.behaviours.units import ANGLE, DURATION, SPEED
 from roomba_bt.oi.frames import (
     CHARGING_SOURCES_PACKETS,
     ENCODER_PACKETS,
-    HAZARD_PACKETS,
     IR_PACKETS,
-    LIGHT_BUMPER_PACKETS,
-    VIRTUAL_WALL_PACKETS,
 )
 
 #: Attempts (starts of this leaf) in one docking run before the approach first backs away
@@ -117,8 +115,7 @@ class ApproachState(IdentityEnum):
         Param("timeout", DURATION, default="90s", minimum=1,
               doc="FAILURE if not facing the dock on its axis by then"),
     ),
-    reads=(*IR_PACKETS, *HAZARD_PACKETS, *VIRTUAL_WALL_PACKETS, *LIGHT_BUMPER_PACKETS,
-           *CHARGING_SOURCES_PACKETS, *ENCODER_PACKETS),
+    reads=(*IR_PACKETS, *HAZARD_IN_PACKETS, *CHARGING_SOURCES_PACKETS, *ENCODER_PACKETS),
     sends=DRIVE_SENDS,
 )  # fmt: skip
 class DockApproach(DockingAction):

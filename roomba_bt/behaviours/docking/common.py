@@ -11,7 +11,12 @@ from py_trees.common import Status
 
 from roomba_bt.behaviours.declare import Action, wheel_speeds
 from roomba_bt.oi import commands as oi
-from roomba_bt.oi.frames import SensorFrame
+from roomba_bt.oi.frames import (
+    HAZARD_PACKETS,
+    LIGHT_BUMPER_PACKETS,
+    VIRTUAL_WALL_PACKETS,
+    SensorFrame,
+)
 from roomba_bt.oi.ir import IRCharacter
 from roomba_bt.oi.modes import DRIVING_MODES
 from roomba_bt.oi.opcodes import COMMANDS_BY_NAME
@@ -134,6 +139,11 @@ class Hazard(IdentityEnum):
 _WHEEL_DROP, _CLIFF, _BUMP, _OBSTACLE = (
     Hazard.WHEEL_DROP, Hazard.CLIFF, Hazard.BUMP, Hazard.OBSTACLE,
 )  # fmt: skip
+
+
+#: What :func:`hazard_in` reads: packets 7 and 9-12 (bumps, wheel drops, cliffs), 13 (a
+#: virtual wall) and 45 (the light bumper), for the ``reads`` of a stage that calls it.
+HAZARD_IN_PACKETS = (*HAZARD_PACKETS, *VIRTUAL_WALL_PACKETS, *LIGHT_BUMPER_PACKETS)
 
 
 def hazard_in(frame: SensorFrame, *, obstacles: bool = True) -> Hazard | None:

@@ -26,6 +26,7 @@ from py_trees.common import Status
 from roomba_bt.behaviours.declare import WHEEL, Param, declare
 from roomba_bt.behaviours.docking.common import (
     DRIVE_SENDS,
+    HAZARD_IN_PACKETS,
     RUNNING,
     DockingAction,
     DockView,
@@ -36,11 +37,8 @@ from roomba_bt.behaviours.docking.common import (
 from roomba_bt.behaviours.units import BOOL, DISTANCE, DURATION, SPEED, enum
 from roomba_bt.oi.frames import (
     ENCODER_PACKETS,
-    HAZARD_PACKETS,
     IR_PACKETS,
     LIGHT_BUMP_SIGNAL_PACKETS,
-    LIGHT_BUMPER_PACKETS,
-    VIRTUAL_WALL_PACKETS,
     SensorFrame,
 )
 from roomba_bt.robot.interface import Odometry
@@ -205,8 +203,7 @@ class VisitGrid:
         Param("timeout", DURATION, default="5min", minimum=1,
               doc="FAILURE if no dock beam is seen by then"),
     ),
-    reads=(*IR_PACKETS, *HAZARD_PACKETS, *VIRTUAL_WALL_PACKETS, *LIGHT_BUMPER_PACKETS,
-           *LIGHT_BUMP_SIGNAL_PACKETS, *ENCODER_PACKETS),
+    reads=(*IR_PACKETS, *HAZARD_IN_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS, *ENCODER_PACKETS),
     sends=DRIVE_SENDS,
 )  # fmt: skip
 class DockSearch(DockingAction):
