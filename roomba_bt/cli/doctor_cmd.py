@@ -8,7 +8,8 @@ Each step prints what it saw and, when it fails, what to do next::
     start     the mode packet right after Start: Passive reads 1, or 2 (the mode + 1 bug)
     reset     --allow-reset only: Reset (7) and its banner (a Roomba 500 has no Reset)
     stream    a short stream: frames counted, checksums checked, which checksum convention
-    profile   the profiles that fit: the banner, the checksum convention, the mode reading
+    profile   the profiles that fit: the banner, the checksum convention, the mode reading,
+              readings only one model's ranges allow (wall signal 27, stasis 58)
     battery   charge, capacity, voltage, current;  charging: state and sources;  mode
     missions  each shipped mission's stream frame against the bytes a 15 ms slot carries
     firmware  the release the banner names, and whether it wakes by BRC on the dock
@@ -32,8 +33,9 @@ from roomba_bt.cli.arguments import baud_or_auto
 
 #: Seconds of stream the round-trip reads (33 frames at one per 15 ms).
 STREAM_CHECK_S = 0.5
-#: The round-trip's packets: bumps, mode, charging state (a 9-byte frame, fits 19200 easily).
-STREAM_CHECK_PACKETS = (7, 35, 21)
+#: The round-trip's packets: bumps, mode, charging state, and two whose ranges differ between
+#: the models, wall signal and stasis (a 14-byte frame: fits the 28 bytes of 19200).
+STREAM_CHECK_PACKETS = (7, 35, 21, 27, 58)
 #: The battery step's Query List: charging state, voltage, current, charge, capacity,
 #: charging sources, OI mode.
 STATUS_PACKETS = (21, 22, 23, 25, 26, 34, 35)
@@ -214,8 +216,8 @@ def _examine(transport: Any, rates: tuple[int, ...], allow_reset: bool, report: 
         + (" (this firmware reports the OI mode + 1)" if plus_one else ""),
     )
     banner, reset_tried = _reset(transport, baud, allow_reset, report)
-    header_in_checksum = _stream(transport, baud, report)
-    profile = _profile(plus_one, header_in_checksum, banner, reset_tried, report)
+    header_in_checksum, readings = _stream(transport, baud, report)
+    profile = _profile(plus_one, header_in_checksum, banner, reset_tried, readings, report)
     _status(transport, profile, plus_one, report)
     _missions(profile, baud, report)
     _firmware(banner, reset_tried, report)
@@ -273,12 +275,12 @@ def _reset(transport: Any, baud: int, allow_reset: bool, report: Report) -> tupl
     return banner, True
 
 
-def _stream(transport: Any, baud: int, report: Report) -> bool | None:
+def _stream(transport: Any, baud: int, report: Report) -> tuple[bool | None, dict[int, int]]:
     """Stream (148) a short list for :data:`STREAM_CHECK_S`; which checksum convention the
-    frames follow (None if no whole frame came)."""
+    frames follow, and the widest reading of each packet seen (for the profile's ranges)."""
     from roomba_bt.oi import commands as oi
     from roomba_bt.oi.frames import stream_frame_size
-    from roomba_bt.oi.identify import checksum_covers_header
+    from roomba_bt.oi.identify import checksum_covers_header, stream_readings
 
     ids = STREAM_CHECK_PACKETS
     size = stream_frame_size(ids)
@@ -290,15 +292,19 @@ def _stream(transport: Any, baud: int, report: Report) -> bool | None:
         data += transport.read(remaining)
     transport.write(oi.pause_stream().data)
     conventions: list[bool] = []
+    readings: dict[int, int] = {}
     at = 0
     skipped = 0
     while at + size <= len(data):
-        verdict = checksum_covers_header(data[at : at + size])
+        frame = data[at : at + size]
+        verdict = checksum_covers_header(frame)
         if verdict is None:
             at += 1
             skipped += 1
             continue
         conventions.append(verdict)
+        for pid, value in stream_readings(frame).items():
+            readings[pid] = max(value, readings.get(pid, value))
         at += size
     expected = round(STREAM_CHECK_S / 0.015)
     frames = len(conventions)
@@ -319,17 +325,26 @@ def _stream(transport: Any, baud: int, report: Report) -> bool | None:
     else:
         report.ok("stream", text)
     covers = sum(conventions) > len(conventions) / 2
-    return covers
+    return covers, readings
 
 
 def _profile(
-    plus_one: bool, header: bool | None, banner: Any, reset_tried: bool, report: Report
+    plus_one: bool,
+    header: bool | None,
+    banner: Any,
+    reset_tried: bool,
+    readings: dict[int, int],
+    report: Report,
 ) -> Any:
     from roomba_bt.oi.identify import identify
     from roomba_bt.oi.profiles import DEFAULT_PROFILE
 
     found = identify(
-        mode_plus_one=plus_one, header_in_checksum=header, banner=banner, reset_tried=reset_tried
+        mode_plus_one=plus_one,
+        header_in_checksum=header,
+        banner=banner,
+        reset_tried=reset_tried,
+        readings={pid: readings[pid] for pid in (27, 58) if pid in readings},
     )
     why = "; ".join(found.evidence)
     best = found.best

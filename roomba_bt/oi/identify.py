@@ -19,14 +19,20 @@ them; the simulator produces them from its profile):
   500 leaves it out (``docs/protocol.md``): one frame of a stream says which.
 * **The mode reading right after Start.** Passive is 1; firmware that reports mode + 1 reads
   2. Of the profiles only the Roomba 600 has that bug (``reports_mode_plus_one``).
+* **Values only one model's ranges allow.** The 500's wall signal (27) reaches 4095, the 600's
+  1023; the 600's stasis (58) reads 2 or 3 (the wheel too dirty to read), the 500's 0 or 1. A
+  reading outside a profile's range rules that profile out (a reading inside both says
+  nothing: most readings).
 """
 
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 from roomba_bt.oi.frames import STREAM_HEADER
+from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import PROFILES, RobotProfile
 
 #: The first release of each firmware line that wakes by BRC on the dock (600 spec, App. B).
@@ -114,9 +120,11 @@ def identify(
     header_in_checksum: bool | None,
     banner: Banner | None = None,
     reset_tried: bool = False,
+    readings: Mapping[int, int] | None = None,
 ) -> Identification:
     """The profiles consistent with the evidence. ``reset_tried`` with no ``banner``: the
-    robot ignored Reset, which only the 500 does."""
+    robot ignored Reset, which only the 500 does. ``readings``: raw packet values seen (packet
+    id -> value); each rules out the profiles whose range does not hold it."""
     candidates = list(PROFILES.values())
     evidence: list[str] = []
 
@@ -147,4 +155,30 @@ def identify(
         if mode_plus_one
         else "it reports the OI mode as is (Create 2 or Roomba 500; a 600 on fixed firmware too)",
     )  # fmt: skip
+    for pid, value in sorted((readings or {}).items()):
+        fits = [p for p in candidates if p.packet(pid).minimum <= value <= p.packet(pid).maximum]
+        if len(fits) < len(candidates):
+            candidates = fits
+            title = PACKETS[pid].title.lower()
+            evidence.append(
+                f"its {title} ({pid}) read {value}, in range for "
+                f"{' and '.join(p.name for p in fits) or 'no profile'}"
+            )
     return Identification(tuple(candidates), tuple(evidence))
+
+
+def stream_readings(frame: bytes) -> dict[int, int]:
+    """Packet id -> raw value of one stream frame ``[19][n][id][value]...[checksum]``, read
+    by the packet table alone (no profile: the profile is what is being found out); empty
+    if the frame does not cut cleanly."""
+    readings: dict[int, int] = {}
+    body = frame[2:-1]
+    at = 0
+    while at < len(body):
+        spec = PACKETS.get(body[at])
+        if spec is None or at + 1 + spec.size > len(body):
+            return {}
+        raw = body[at + 1 : at + 1 + spec.size]
+        readings[spec.id] = int.from_bytes(raw, "big", signed=spec.signed)
+        at += 1 + spec.size
+    return readings

@@ -11,6 +11,7 @@ from roomba_bt.oi.identify import (
     identify,
     parse_banner,
     parse_firmware,
+    stream_readings,
 )
 from roomba_bt.oi.profiles import CREATE2, ROOMBA500, ROOMBA600
 
@@ -69,3 +70,19 @@ def test_the_evidence_narrows_the_profiles() -> None:
     printed = identify(mode_plus_one=None, header_in_checksum=None, banner=banner, reset_tried=True)
     assert set(printed.candidates) == {CREATE2, ROOMBA600}
     assert identify(mode_plus_one=True, header_in_checksum=False).best is None
+
+
+def test_a_reading_only_one_models_range_allows_rules_the_others_out() -> None:
+    wall = identify(mode_plus_one=None, header_in_checksum=None, readings={27: 2000})
+    assert wall.candidates == (ROOMBA500,)  # the 600's wall signal stops at 1023
+    assert wall.evidence == ("its wall signal (27) read 2000, in range for roomba500",)
+    dirty = identify(mode_plus_one=None, header_in_checksum=None, readings={58: 2})
+    assert set(dirty.candidates) == {CREATE2, ROOMBA600}  # stasis 2: the wheel too dirty
+    common = identify(mode_plus_one=None, header_in_checksum=None, readings={27: 10, 58: 1})
+    assert len(common.candidates) == 3 and common.evidence == ()
+
+
+def test_stream_readings_cut_a_frame_by_the_packet_table() -> None:
+    frame = layout_for((7, 27, 58), CREATE2, True).stream_frame({7: 3, 27: 900, 58: 2})
+    assert stream_readings(frame) == {7: 3, 27: 900, 58: 2}
+    assert stream_readings(frame[:-2] + frame[-1:]) == {}  # cut short: no reading
