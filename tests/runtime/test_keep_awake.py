@@ -64,6 +64,41 @@ def test_without_keep_awake_it_sleeps_and_is_reported_asleep(tmp_path: Path) -> 
     assert "no valid sensor frame" not in summary.reason
 
 
+def _patrol(keep_awake: bool | None) -> tuple[RunSummary, Simulator]:
+    """The shipped patrol in the corridor from 19.5 % of charge: about 20 min of laps in
+    Safe, then the dock below 15 %, then 10 min on the charger in Passive: 30 min in all."""
+    from dataclasses import replace
+
+    from roomba_bt.mission.shipped import shipped_missions
+
+    params = {"laps": "1000", "charge_for": "10min"}
+    mission = load_mission(shipped_missions()["patrol"], params)
+    world = replace(load_world("corridor"), battery=0.195)
+    simulator = Simulator(world, CREATE2, 0)
+    stack = RunStack(mission, SimLink(simulator), profile=CREATE2, timeout_s=3600.0,
+                     keep_awake=keep_awake)  # fmt: skip
+    summary = stack.run()
+    stack.close()
+    return summary, simulator
+
+
+def test_the_shipped_patrol_with_a_ten_minute_charge_wait_never_sleeps() -> None:
+    summary, simulator = _patrol(None)
+    assert summary.outcome is Outcome.SUCCESS, summary.reason
+    assert simulator.time >= 28 * 60, "half an hour, the last ten minutes on the charger"
+    assert simulator.charging
+    assert [e for e in simulator.events if e.kind == "sleep"] == []
+    assert simulator.brc_pulses >= 9, "a pulse a minute while it charged in Passive"
+
+
+def test_the_shipped_patrol_without_keep_awake_sleeps_on_the_charger_and_says_so() -> None:
+    summary, simulator = _patrol(False)
+    assert [e.detail for e in simulator.events if e.kind == "sleep"] == ["5 min idle"]
+    assert summary.outcome is Outcome.CONNECTION_LOST
+    assert "the robot fell asleep" in summary.reason
+    assert "drop --no-keep-awake" in summary.reason
+
+
 class _Line:
     def __init__(self) -> None:
         self.changes: list[tuple[float, bool]] = []
