@@ -19,7 +19,7 @@ floor covered at 5, 10 and 20 minutes and at the end (mean, sd, min..max; of ``-
 if given; per area at the end) and how many episodes went a minute of brush time without
 new floor. Ctrl-C prints what finished (exit 130). Exit codes: 0 (and 1 when
 ``--min-rate`` is given and not reached), 2 for invalid input, 3 when the ``--scheduler``
-does not answer.
+does not answer, 4 when a behaviour raised in an episode (a bug, not a mission outcome).
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ from roomba_bt.cli.arguments import (
     plot_file,
 )
 from roomba_bt.oi.profiles import PROFILES
-from roomba_bt.runtime.summary import ExitCode
+from roomba_bt.runtime.summary import ExitCode, Outcome
 
 if TYPE_CHECKING:  # the evaluation is imported when it runs: the CLI starts faster
     from roomba_bt.evaluate.episode import EpisodeSpec
@@ -56,7 +56,8 @@ def register(sub: Any) -> None:
         description="Run MISSION in N seeded episodes on the simulator's virtual clock and "
         "report the success rate (95% Wilson interval), median and p90 time, bumps and the "
         "failure reasons. Exit codes: 0 done, 1 --min-rate not reached, 2 invalid input, "
-        "3 --scheduler unreachable, 130 interrupted (what finished is summarised).",
+        "3 --scheduler unreachable, 4 a behaviour raised in an episode, 130 interrupted "
+        "(what finished is summarised).",
     )
     ev.add_argument(
         "missions",
@@ -276,6 +277,17 @@ def eval_command(args: argparse.Namespace) -> int:
             f"--min-rate {100 * args.min_rate:.1f} %",
             file=sys.stderr,
         )
+    errors = [r for e in done for r in e.results if r.outcome == Outcome.ERROR.value]
+    if errors:
+        first = errors[0]
+        print(
+            f"roomba-bt eval: {len(errors)} episode(s) ended with a behaviour's exception "
+            f"(a bug in it or its plugin), the first: seed {first.seed}: {first.reason}; "
+            f"see its traceback with: roomba-bt run {first.mission} --fast --seed "
+            f"{first.seed} -v",
+            file=sys.stderr,
+        )
+        return ExitCode.BEHAVIOUR_ERROR
     return ExitCode.MISSION_FAILED if low else ExitCode.OK
 
 

@@ -190,3 +190,27 @@ def test_a_cleaning_mission_reports_its_coverage_as_json(
     coverage = summarize_coverage(read_results(out_file))
     assert coverage is not None and variant["coverage"] == coverage.to_dict()
     assert variant["coverage"]["episodes"] == 2 and 0 < variant["coverage"]["final"]["mean"] < 1
+
+
+def test_a_behaviour_that_raises_in_an_episode_exits_4(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A plugin's exception is a bug, not a mission outcome: eval says which episode and how
+    to see the traceback, and exits 4 as `run` does (it used to exit 0)."""
+    (tmp_path / "boom.py").write_text(
+        "from roomba_bt.behaviours import Condition, declare\n\n\n"
+        '@declare("boom", kind="condition", reads=(27,))\n'
+        "class Boom(Condition):\n"
+        '    """Raises."""\n\n'
+        "    def check(self, snapshot):\n"
+        '        raise RuntimeError("kaboom")\n'
+    )
+    mission = tmp_path / "boom.yaml"
+    mission.write_text("plugins: [./boom.py]\ntree:\n  sequence:\n    - boom\n")
+    code = main(["eval", str(mission), "--runs", "2", "--seed", "3", "--allow-plugin-files",
+                 "--no-progress"])  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 4
+    assert "2 episode(s) ended with a behaviour's exception" in err
+    assert "seed 3: " in err and "kaboom" in err and "boom.py:9" in err
+    assert f"roomba-bt run {mission} --fast --seed 3 -v" in err
