@@ -1,4 +1,5 @@
-"""Suite-wide: under ``CI=true`` a test skipped for a missing test dependency fails instead.
+"""Suite-wide: under ``CI=true`` a test skipped for a missing test dependency fails instead;
+``clean_blackboard`` for the folders whose tests write py_trees' blackboard.
 
 Outside CI a missing optional package (the peer clients pycreate2 and PyRoombaAdapter,
 matplotlib, jsonschema, the example wall-follow plugin) skips its tests with the install
@@ -9,8 +10,9 @@ which package is missing.
 from __future__ import annotations
 
 import os
-from collections.abc import Generator
+from collections.abc import Generator, Iterator
 
+import py_trees
 import pytest
 
 #: skip reasons that mean "a test dependency is not installed"
@@ -33,3 +35,11 @@ def pytest_runtest_makereport(
     if any(sign in reason for sign in MISSING_DEPENDENCY):
         report.outcome = "failed"
         report.longrepr = f"CI=true: a test dependency is missing, so this fails: {reason}"
+
+
+@pytest.fixture
+def clean_blackboard() -> Iterator[None]:
+    """py_trees' blackboard is one per process: empty before the test and after it."""
+    py_trees.blackboard.Blackboard.clear()
+    yield
+    py_trees.blackboard.Blackboard.clear()

@@ -1,9 +1,8 @@
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from typing import Any
 
-import py_trees
 import pytest
 
 from roomba_bt.behaviours.declare import RobotBehaviour
@@ -12,10 +11,8 @@ from roomba_bt.robot.testing import StubRobot
 
 
 @pytest.fixture(autouse=True)
-def clean_blackboard() -> Iterator[None]:
-    py_trees.blackboard.Blackboard.clear()
-    yield
-    py_trees.blackboard.Blackboard.clear()
+def _fresh_blackboard(clean_blackboard: None) -> None:
+    """Every test here runs on an empty blackboard (``clean_blackboard``, tests/conftest.py)."""
 
 
 @pytest.fixture

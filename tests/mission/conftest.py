@@ -1,20 +1,17 @@
 from __future__ import annotations
 
 import textwrap
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 
-import py_trees
 import pytest
 
 from roomba_bt.mission import CompiledMission, Diagnostic, compile_mission, load_mission
 
 
 @pytest.fixture(autouse=True)
-def clean_blackboard() -> Iterator[None]:
-    py_trees.blackboard.Blackboard.clear()
-    yield
-    py_trees.blackboard.Blackboard.clear()
+def _fresh_blackboard(clean_blackboard: None) -> None:
+    """Every test here runs on an empty blackboard (``clean_blackboard``, tests/conftest.py)."""
 
 
 @pytest.fixture
