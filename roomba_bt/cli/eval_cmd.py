@@ -270,11 +270,17 @@ def eval_command(args: argparse.Namespace) -> int:
         plotted = _plot(args.plot, world, chosen[0], done[0], summaries[0])
         if plotted is not None:
             return plotted
-    low = [s for s in summaries if args.min_rate is not None and s.rate < args.min_rate]
+    return _verdict(args.min_rate, summaries, done)
+
+
+def _verdict(min_rate: float | None, summaries: list[Summary], done: list[Evaluation]) -> int:
+    """The exit code of a finished evaluation, with what decided it on stderr: 4 when a
+    behaviour raised in an episode, 1 when a success rate is below ``--min-rate``, else 0."""
+    low = [s for s in summaries if min_rate is not None and s.rate < min_rate]
     for s in low:
         print(
             f"roomba-bt eval: {s.mission}: success rate {100 * s.rate:.1f} % is below "
-            f"--min-rate {100 * args.min_rate:.1f} %",
+            f"--min-rate {100 * (min_rate or 0.0):.1f} %",
             file=sys.stderr,
         )
     errors = [r for e in done for r in e.results if r.outcome == Outcome.ERROR.value]
