@@ -4,7 +4,8 @@ Each step prints what it saw and, when it fails, what to do next::
 
     port      the port opens (RTS and DTR released: BRC high, so opening wakes nothing)
     baud      Start and a Query List at 115200, then 19200 (robot/handshake.py)
-    wake      silent at both: BRC pulsed low one second through RTS/DTR, both rates again
+    wake      silent at both: BRC pulsed one second through RTS/DTR (or, where they cannot be
+              set, a one-second hang-up: speed 0), both rates again
     start     the mode packet right after Start: Passive reads 1, or 2 (the mode + 1 bug)
     reset     --allow-reset only: Reset (7) and its banner (a Roomba 500 has no Reset)
     stream    a short stream: frames counted, checksums checked, which checksum convention
@@ -184,16 +185,16 @@ def _examine(transport: Any, rates: tuple[int, ...], allow_reset: bool, report: 
         report.line(mark, "baud", f"{probe.baud}: {probe.seen}")
     found = first.found
     if found is None:
-        problem = wake_pulse(transport)
-        if problem is not None:
+        pulse = wake_pulse(transport)
+        if pulse.problem is not None:
             report.fail(
                 "wake",
                 f"silent at {' and '.join(str(r) for r in rates)}, and this port cannot pulse "
-                f"BRC: {problem}",
+                f"BRC: {pulse.problem}",
                 WAKE_FIX,
             )
             raise _Failed(DoctorExit.SILENT)
-        report.ok("wake", "silent at every rate: pulsed BRC low for 1 s (RTS and DTR)")
+        report.ok("wake", f"silent at every rate: {pulse.how}")
         second = search(transport, rates)
         for probe in second.probes:
             mark = "ok" if probe.answered else "--"

@@ -20,7 +20,8 @@ out of range, and is reported as such (the user learns something answered).
 A robot asleep (five minutes in Passive) answers nothing at any rate. The USB cables wire
 BRC to RTS or DTR; :func:`wake_pulse` holds them asserted (BRC low) for one second, the
 length keep-awake uses (longer than the 50-500 ms pulses of the baud-change gesture), and
-then the rates are tried again.
+then the rates are tried again. A port whose modem lines cannot be set (a pty) is hung up
+for that second instead (speed 0 drops DTR and RTS; the rate's return raises them).
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from dataclasses import dataclass
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.oi.packets import PACKETS
-from roomba_bt.robot.wake import PULSE_LENGTH_S, WakeLine
+from roomba_bt.robot.wake import PULSE_LENGTH_S, HangUpLine, WakeLine
 from roomba_bt.transport.base import Transport
 
 #: The OI's rates, likeliest first: the default, then the rate of the Clean-held power-off.
@@ -158,19 +159,48 @@ def search(transport: Transport, rates: Sequence[int]) -> Search:
     return Search(tuple(probes))
 
 
-def wake_pulse(transport: Transport, length: float = PULSE_LENGTH_S) -> str | None:
-    """Hold BRC low (RTS and DTR asserted) for ``length`` s, then let the robot come up.
-    None when pulsed; otherwise why it could not be (the port has no modem lines)."""
+@dataclass(frozen=True, slots=True)
+class WakePulse:
+    """How a BRC pulse was given, in words (``how``), or why none could be (``problem``)."""
+
+    how: str | None
+    problem: str | None = None
+
+
+def wake_pulse(transport: Transport, length: float = PULSE_LENGTH_S) -> WakePulse:
+    """Pulse BRC for ``length`` s, then let the robot come up.
+
+    First through the modem lines (RTS and DTR asserted: BRC low). Where they cannot be set
+    (the ioctl fails: a pty, a few adapters) the line is hung up instead for ``length`` s
+    (:class:`~roomba_bt.robot.wake.HangUpLine`: speed 0, the rate restored after; nothing
+    is written meanwhile)."""
     if not isinstance(transport, WakeLine):
-        return f"{transport.name} cannot drive modem lines"
+        return WakePulse(None, f"{transport.name} cannot drive modem lines")
     try:
         transport.set_wake_line(True)
-        _wait(transport, length)
-        transport.set_wake_line(False)
     except OSError as exc:
-        return str(exc)
+        if not isinstance(transport, HangUpLine):
+            return WakePulse(None, str(exc))
+        try:
+            with transport.hung_up():
+                _wait(transport, length)
+        except OSError as hang_up_exc:
+            return WakePulse(None, f"{exc}; nor by a hang-up: {hang_up_exc}")
+        how = (
+            f"pulsed BRC by a {length:g} s hang-up (the modem lines cannot be set here: "
+            "speed 0 drops DTR and RTS, the rate's return raises them)"
+        )
+    else:
+        try:
+            try:
+                _wait(transport, length)
+            finally:
+                transport.set_wake_line(False)  # BRC let go on every exit, Ctrl-C too
+        except OSError as exc:
+            return WakePulse(None, str(exc))
+        how = f"pulsed BRC low for {length:g} s (RTS and DTR)"
     _wait(transport, WAKE_SETTLE_S)
-    return None
+    return WakePulse(how)
 
 
 @dataclass(frozen=True, slots=True)
@@ -204,9 +234,9 @@ def find_robot(transport: Transport, preferred: int | None = None, *, wake: bool
     first = search(transport, rates)
     if first.baud is not None or not wake:
         return Found(first.baud, first, None, None)
-    problem = wake_pulse(transport)
-    if problem is not None:
-        return Found(None, first, None, problem)
+    pulse = wake_pulse(transport)
+    if pulse.problem is not None:
+        return Found(None, first, None, pulse.problem)
     second = search(transport, rates)
     return Found(second.baud, first, second, None)
 

@@ -21,6 +21,7 @@ connection says so once.
 from __future__ import annotations
 
 import logging
+from contextlib import AbstractContextManager
 from typing import Protocol, runtime_checkable
 
 log = logging.getLogger(__name__)
@@ -38,6 +39,15 @@ class WakeLine(Protocol):
     """A transport that can drive the robot's BRC pin (asserted = low)."""
 
     def set_wake_line(self, low: bool) -> None: ...
+
+
+@runtime_checkable
+class HangUpLine(Protocol):
+    """A transport that can hang its line up (output speed 0: DTR and RTS drop) for a block
+    and restore the rate after: the BRC pulse where the modem lines cannot be set one by one
+    (:meth:`~roomba_bt.transport.serial_port.SerialTransport.hung_up`)."""
+
+    def hung_up(self) -> AbstractContextManager[None]: ...
 
 
 class KeepAwake:

@@ -25,11 +25,14 @@ robot's bytes scrambled (:func:`~roomba_bt.sim.link.at_wrong_baud`), as
 :class:`~roomba_bt.sim.link.SimLink` does in-process.
 
 **The modem lines.** The USB cables wire the robot's BRC pin to RTS or DTR (asserted = BRC
-low). A pty has no modem lines (pyserial's ``rts`` raises "Inappropriate ioctl for device" on
-it) and a raw socket carries none, so only the RFC 2217 endpoint carries them: pyserial's own
-server side, :class:`serial.rfc2217.PortManager`, reads the client's SET-CONTROL commands into
-a :class:`VirtualLine`, and the loop hands RTS-or-DTR to ``Simulator.set_brc``
-(:meth:`Endpoint.wake_line`).
+low). The RFC 2217 endpoint carries them: pyserial's own server side,
+:class:`serial.rfc2217.PortManager`, reads the client's SET-CONTROL commands into a
+:class:`VirtualLine`, and the loop hands RTS-or-DTR to ``Simulator.set_brc``
+(:meth:`Endpoint.wake_line`). A pty has no modem lines to set (pyserial's ``rts`` raises
+"Inappropriate ioctl for device" on it), but POSIX ties them to the speed: B0 (a hang-up)
+drops DTR and RTS and a real speed asserts them, so the pty endpoint reads speed 0 as BRC high
+and the return to a rate as BRC low, the falling edge that wakes the robot (the client's
+fallback pulse, ``SerialTransport.hung_up``). A raw socket carries no lines.
 """
 
 from __future__ import annotations
@@ -96,18 +99,28 @@ class PtyEndpoint:
         self.address = os.ttyname(self._slave)
         self._hung_up = False
 
-    def line_baud(self) -> int | None:
-        """The output speed in the terminal's settings, which the client's ``tcsetattr`` set
-        (one settings block for both sides of a pty). A rate the OI does not know is 0: no
-        OI rate matches it."""
+    def _speed(self) -> int | None:
+        """The output speed in the terminal's settings (a termios ``B`` constant), which the
+        client's ``tcsetattr`` set (one settings block for both sides of a pty)."""
         try:
-            speed = termios.tcgetattr(self._slave)[5]
+            speed: int = termios.tcgetattr(self._slave)[5]
         except termios.error:
             return None
-        return _TERMIOS_SPEEDS.get(speed, 0)
+        return speed
+
+    def line_baud(self) -> int | None:
+        """The client's rate; a rate the OI does not know (B0 included) is 0: no OI rate
+        matches it."""
+        speed = self._speed()
+        return None if speed is None else _TERMIOS_SPEEDS.get(speed, 0)
 
     def wake_line(self) -> bool | None:
-        return None  # a pty has no modem lines
+        """DTR and RTS as POSIX sets them from the speed: a pty has no lines of its own, but
+        speed 0 (B0, a hang-up) drops them and a real speed asserts them (Linux raises both
+        when a port opens and when it leaves B0). Asserted = BRC low, so a hang-up is BRC
+        high and the return to a rate is BRC's falling edge: the wake."""
+        speed = self._speed()
+        return None if speed is None else speed != termios.B0
 
     def wait_read(self, timeout: float) -> bytes:
         if self._hung_up:
@@ -324,6 +337,9 @@ def serve(
 ) -> None:
     """Run ``simulator`` in real time on ``endpoint`` until ``should_stop()`` is true."""
     next_step = clock() + STEP_SECONDS
+    # The line as the robot finds it when it comes up is no edge (a pty's lines read as
+    # asserted from the start: BRC low, not a pulse).
+    simulator.brc_low = bool(endpoint.wake_line())
     while not should_stop():
         data = endpoint.wait_read(max(0.0, next_step - clock()))
         wake = endpoint.wake_line()

@@ -19,6 +19,7 @@ from __future__ import annotations
 import contextlib
 import select
 import time
+from collections.abc import Iterator
 from typing import Any
 
 import serial
@@ -52,6 +53,7 @@ class SerialTransport:
         self._polled = isinstance(port, rfc2217.Serial)
         if self._polled:
             self._wait_handle = None
+        self._hung_up = False
 
     @classmethod
     def open(
@@ -99,6 +101,10 @@ class SerialTransport:
         return time.monotonic()
 
     def write(self, data: bytes) -> None:
+        if self._hung_up:
+            raise TransportError(
+                self.name, "write", "the line is hung up (speed 0) for a BRC pulse"
+            )
         try:
             written = self._port.write(data)
             if written is not None and written != len(data):
@@ -162,6 +168,38 @@ class SerialTransport:
             self._port.dtr = low
         except (serial.SerialException, OSError, ValueError) as exc:
             raise TransportError(self.name, "set the modem lines (BRC)", exc) from exc
+
+    @contextlib.contextmanager
+    def hung_up(self) -> Iterator[None]:
+        """Hang the line up for the block: output speed 0 (``B0``), then the rate it had.
+
+        The BRC pulse of a port whose modem lines cannot be set one by one (a pty: TIOCMSET
+        fails with ENOTTY). POSIX (termios, "Baud Rates"): at B0 "the modem control lines
+        shall no longer be asserted", so DTR and RTS drop; Linux's serial drivers assert them
+        again when a real speed comes back, as they did when the port opened::
+
+            speed  115200 ──┐  B0   ┌── 115200
+            DTR    asserted └───────┘ asserted
+            BRC    low      ┌───────┐ low       the falling edge at the restore wakes it
+                   ─────────┘       └──────
+
+        pyserial takes ``baudrate = 0`` as ``termios.B0`` on POSIX, so no termios call of our
+        own is needed. Nothing is written meanwhile (:meth:`write` refuses: a byte at B0 is a
+        byte at no rate), and the rate comes back on every exit, an exception or Ctrl-C too.
+        """
+        rate = self.baud
+        try:
+            self._port.baudrate = 0
+        except (serial.SerialException, OSError, ValueError) as exc:
+            with contextlib.suppress(serial.SerialException, OSError, ValueError):
+                self._port.baudrate = rate  # pyserial keeps the refused 0 as its setting
+            raise TransportError(self.name, "hang up (set the speed to 0)", exc) from exc
+        self._hung_up = True
+        try:
+            yield
+        finally:
+            self._hung_up = False
+            self.set_baud(rate)
 
     def close(self) -> None:
         # pyserial's socket:// close skips socket.close() when shutdown() fails (the peer

@@ -5,6 +5,8 @@ a doctor that hangs fails the test, and no test reads the wall clock."""
 
 from __future__ import annotations
 
+import argparse
+import contextlib
 import os
 import select
 import signal
@@ -16,7 +18,9 @@ from pathlib import Path
 
 import pytest
 
-from roomba_bt.cli.doctor_cmd import DoctorExit
+import roomba_bt.transport as transport_package
+from roomba_bt.cli.doctor_cmd import DoctorExit, doctor_command
+from roomba_bt.transport import SerialTransport, TransportError
 
 #: The acceptance bar: nothing behind the port, the answer comes within 10 s.
 DOCTOR_TIMEOUT_S = 10.0
@@ -116,16 +120,50 @@ def test_doctor_wakes_an_asleep_robot_by_brc_over_rfc2217_and_names_it(
     assert f"found: iRobot Create 2 on {sim.address} at {baud} baud, Passive, battery " in out
 
 
-def test_an_asleep_robot_on_a_pty_is_reported_with_the_fix_exit_5(sims: list[Sim]) -> None:
-    """A pty has no modem lines: the BRC pulse cannot be given, and doctor says so."""
-    sim = _sim(sims, "--pty", "--asleep")
+@pytest.mark.parametrize("baud", [19200, 115200])
+def test_doctor_wakes_an_asleep_robot_on_a_pty_by_a_hang_up_and_names_it(
+    sims: list[Sim], baud: int
+) -> None:
+    """A pty's modem lines cannot be set (ENOTTY): the pulse is a 1 s hang-up (speed 0)."""
+    sim = _sim(sims, "--pty", "--asleep", "--baud", str(baud))
     done = _doctor(sim.address)
-    assert done.returncode == DoctorExit.SILENT, done.stdout
-    wake = _step(done.stdout, "wake")[0]
+    assert done.returncode == DoctorExit.FOUND, done.stdout
+    out = done.stdout
+    assert "[--]   baud      115200: nothing" in out and "[--]   baud      19200: nothing" in out
+    assert (
+        "[ok]   wake      silent at every rate: pulsed BRC by a 1 s hang-up (the modem lines "
+        "cannot be set here: speed 0 drops DTR and RTS, the rate's return raises them)"
+    ) in out
+    assert "[ok]   wake      it answered after the pulse: the robot was asleep" in out
+    assert f"found: iRobot Create 2 on {sim.address} at {baud} baud, Passive, battery " in out
+    assert "mode Passive" in sim.stop(), "the robot is left in Passive"
+
+
+class _NoHangUp(SerialTransport):
+    """A port that refuses speed 0 as well as the modem ioctl (as a Windows port would)."""
+
+    @contextlib.contextmanager
+    def hung_up(self) -> Iterator[None]:
+        raise TransportError(self.name, "hang up (set the speed to 0)", "Invalid argument")
+        yield
+
+
+def test_a_port_that_can_neither_set_its_lines_nor_hang_up_says_press_clean_exit_5(
+    sims: list[Sim], monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """In process: the real pty (its ioctl fails) behind a transport whose B0 fails too."""
+    sim = _sim(sims, "--pty", "--asleep")
+    monkeypatch.setattr(transport_package, "SerialTransport", _NoHangUp)
+    code = doctor_command(argparse.Namespace(port=sim.address, baud=None, allow_reset=False))
+    out = capsys.readouterr().out
+    assert code == DoctorExit.SILENT, out
+    wake = _step(out, "wake")[0]
     assert wake.startswith("[FAIL]") and "cannot pulse BRC" in wake
     assert "Inappropriate ioctl" in wake
-    assert "fix: a robot asleep (5 minutes in Passive)" in done.stdout
-    assert "press Clean" in done.stdout
+    assert "nor by a hang-up" in wake and "Invalid argument" in wake
+    assert "fix: a robot asleep (5 minutes in Passive)" in out
+    assert "press Clean" in out
+    assert "found:" not in out
 
 
 def test_a_roomba600_is_told_by_its_mode_plus_one(sims: list[Sim]) -> None:
@@ -179,7 +217,9 @@ def test_a_pty_with_nothing_behind_it_says_so_and_exits_non_zero_within_10_s() -
     assert done.returncode == DoctorExit.SILENT, done.stdout
     assert "[--]   baud      115200: nothing" in done.stdout
     assert "[--]   baud      19200: nothing" in done.stdout
-    assert _step(done.stdout, "wake")[0].startswith("[FAIL]")
+    assert _step(done.stdout, "wake")[0].startswith("[ok]"), "a pty can be hung up"
+    assert _step(done.stdout, "baud")[-1].startswith("[FAIL]")
+    assert "even after a BRC pulse" in done.stdout
     assert "found:" not in done.stdout
 
 

@@ -3,6 +3,9 @@ link (virtual clock): the same function ``doctor`` and ``--baud auto`` use."""
 
 from __future__ import annotations
 
+import contextlib
+from collections.abc import Iterator
+
 from roomba_bt.oi.profiles import CREATE2, ROOMBA600
 from roomba_bt.robot.handshake import (
     OI_RATES,
@@ -90,5 +93,46 @@ class _NoLines:
 
 
 def test_a_port_without_modem_lines_says_why_it_cannot_pulse() -> None:
-    problem = wake_pulse(_NoLines())  # type: ignore[arg-type]
-    assert problem is not None and "Inappropriate ioctl" in problem
+    pulse = wake_pulse(_NoLines())  # type: ignore[arg-type]
+    assert pulse.how is None
+    assert pulse.problem is not None and "Inappropriate ioctl" in pulse.problem
+
+
+class _HangUpOnly(SimLink):
+    """A link whose modem ioctl fails but whose line can be hung up: as on a pty, speed 0
+    drops DTR/RTS (BRC high) and the rate's return asserts them (BRC low)."""
+
+    writes_while_hung_up = 0
+    _hung = False
+
+    def set_wake_line(self, low: bool) -> None:
+        raise OSError(25, "Inappropriate ioctl for device")
+
+    def write(self, data: bytes) -> None:
+        self.writes_while_hung_up += self._hung
+        super().write(data)
+
+    @contextlib.contextmanager
+    def hung_up(self) -> Iterator[None]:
+        self.simulator.set_brc(False)
+        self._hung = True
+        try:
+            yield
+        finally:
+            self._hung = False
+            self.simulator.set_brc(True)
+
+
+def test_a_port_without_modem_lines_is_hung_up_instead_and_the_robot_wakes() -> None:
+    simulator = Simulator(load_world("empty-room"), CREATE2, 0)
+    simulator.baud = 19200
+    simulator.fall_asleep("test")
+    link = _HangUpOnly(simulator)
+    found = find_robot(link)
+    assert found.woken and found.baud == 19200
+    assert simulator.brc_pulses == 1
+    assert link.writes_while_hung_up == 0
+    assert wake_pulse(link).how == (
+        "pulsed BRC by a 1 s hang-up (the modem lines cannot be set here: speed 0 drops DTR "
+        "and RTS, the rate's return raises them)"
+    )

@@ -5,7 +5,7 @@ garbage), and the modem lines that RFC 2217 carries to the BRC pin."""
 from __future__ import annotations
 
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 import pytest
 import serial
@@ -128,12 +128,34 @@ def test_rfc2217_carries_the_rate_and_the_modem_lines_to_brc(served: list[Served
         port.close()
 
 
-def test_a_pty_has_no_modem_lines(served: list[Served]) -> None:
-    one = _pty(served, 115200)
-    assert one.endpoint.wake_line() is None
-    port = serial.Serial(one.endpoint.address, 115200)
+def test_a_pty_hang_up_is_brc_high_and_the_rates_return_the_falling_edge_that_wakes(
+    served: list[Served],
+) -> None:
+    """A pty has no modem lines to set, but speed 0 (B0) drops DTR and RTS and a real speed
+    asserts them (POSIX): the endpoint reads them so, and opening is no pulse."""
+    one = _pty(served, 115200, asleep=True)
+    port = serial.Serial(one.endpoint.address, 115200, timeout=0.3)
     try:
         with pytest.raises(OSError, match="Inappropriate ioctl"):
             port.rts = True
+        assert one.endpoint.wake_line() is True, "a real speed: lines asserted, BRC low"
+        assert _mode_reply(port) == b"", "opening woke nothing: still asleep, deaf"
+        assert one.simulator.brc_pulses == 0
+        port.baudrate = 0
+        assert one.endpoint.wake_line() is False, "B0: lines dropped, BRC high"
+        _until(lambda: not one.simulator.brc_low)
+        port.baudrate = 115200
+        _until(lambda: one.simulator.brc_pulses == 1)
+        assert _mode_reply(port) == b"\x01", "woken by the falling edge, into Passive"
     finally:
         port.close()
+
+
+def _until(condition: Callable[[], bool]) -> None:
+    """Wait for the serving thread to see the line (it looks every 15 ms)."""
+    done = threading.Event()
+    for _ in range(200):
+        if condition():
+            return
+        done.wait(0.01)
+    raise AssertionError("the server did not see the line change within 2 s")

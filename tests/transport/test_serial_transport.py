@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import os
 import socket
+import termios
 import threading
 import tty
 from collections.abc import Callable, Iterator
@@ -183,4 +184,30 @@ def test_a_far_end_that_stops_reading_times_the_write_out_instead_of_hanging() -
                 for _ in range(10_000):  # the pty's buffer fills: then the bounded write fails
                     transport.write(chunk)
         finally:
+            transport.close()
+
+
+def test_hung_up_holds_speed_0_refuses_writes_and_restores_the_rate_on_any_exit() -> None:
+    """The BRC pulse of a port without settable modem lines (docs/doctor.md): a pty's own
+    side reads the speed the client set, so B0 and the rate's return are seen there."""
+    with pty_far_end() as end:
+        transport = SerialTransport.open(end.url, 19200)
+        slave = os.open(end.url, os.O_RDWR | os.O_NOCTTY)
+        try:
+            with pytest.raises(OSError, match="Inappropriate ioctl"):
+                transport.set_wake_line(True)  # why the fallback exists
+            with transport.hung_up():
+                assert termios.tcgetattr(slave)[5] == termios.B0
+                with pytest.raises(TransportError, match="hung up \\(speed 0\\)"):
+                    transport.write(b"\x80")
+            assert termios.tcgetattr(slave)[5] == termios.B19200
+            assert transport.baud == 19200
+            transport.write(b"\x80")
+            assert end.recv(16) == b"\x80", "nothing was written while hung up"
+            with pytest.raises(KeyboardInterrupt), transport.hung_up():
+                raise KeyboardInterrupt
+            assert termios.tcgetattr(slave)[5] == termios.B19200, "restored after Ctrl-C"
+            transport.write(b"\x81")
+        finally:
+            os.close(slave)
             transport.close()
