@@ -45,6 +45,8 @@ import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
+from roomba_bt.behaviours.reasons import failure_reason
+
 #: The py_trees releases whose ticks these classes are proven to repeat (by the property tests
 #: in tests/behaviours/test_lean.py); ``pyproject.toml`` pins the same. A release may change a
 #: composite's tick, which the classes here would then silently not follow.
@@ -412,11 +414,20 @@ class DecoratorTick(Stepped, py_trees.decorators.Decorator):
 
 
 class Retry(DecoratorTick, py_trees.decorators.Retry):
+    """py_trees' retry, whose giving up names the last attempt's failure: ``gave up after 30
+    failed attempts; the last: drive(...): cliff front right`` (the child is reset between
+    attempts, so by the end its leaves no longer say why)."""
+
+    last_failure: str = ""
+
     def update(self) -> Status:
+        if self.decorated.status is Status.FAILURE:
+            self.last_failure = failure_reason(self)
         status = super().update()
         if status is Status.FAILURE:  # py_trees: "final failure [status: 3 failure from 3]"
             attempts = "attempt" if self.failures == 1 else "attempts"
-            self.feedback_message = f"gave up after {self.failures} failed {attempts}"
+            last = f"; the last: {self.last_failure}" if self.last_failure else ""
+            self.feedback_message = f"gave up after {self.failures} failed {attempts}{last}"
         return status
 
 

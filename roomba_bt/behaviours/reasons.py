@@ -30,6 +30,7 @@ def failure_reason(root: Behaviour) -> str:
     low-battery check tried beside it."""
     failure = py_trees.common.Status.FAILURE
     node = root
+    path = [root]
     leaf: Behaviour | None = None
     with_message: Behaviour | None = None
     while True:
@@ -37,10 +38,38 @@ def failure_reason(root: Behaviour) -> str:
         if not failed:
             break
         node = failed[-1]
+        path.append(node)
         if not node.children:
             leaf = node
         elif node.feedback_message and not isinstance(node, _FLIPS):
             with_message = node
     best = leaf or with_message or node
+    if best is node and isinstance(node, py_trees.decorators.SuccessIsFailure):
+        # a forced failure ("back away, then fail"): what held just before it is the cause
+        # (the patrol's cliff that ended the drive before the back-off)
+        held = _held_before(path)
+        if held is not None:
+            return held
     message = "" if isinstance(best, _FLIPS) else best.feedback_message
     return f"{best.name}: {message}" if message else best.name
+
+
+def _held_before(path: list[Behaviour]) -> str | None:
+    """The condition that ended the step before the failure, where the failure's path left a
+    sequence: in ``[drive until cliff, fallback[inverter(cliff), force_failure(back off)]]``
+    the cliff (the leaf that succeeded last under the step just before)."""
+    success = py_trees.common.Status.SUCCESS
+    for parent, child in zip(reversed(path[:-1]), reversed(path[1:]), strict=True):
+        if not isinstance(parent, py_trees.composites.Sequence):
+            continue
+        index = parent.children.index(child)
+        if index == 0:
+            return None
+        node = parent.children[index - 1]
+        while node.children:
+            held = [c for c in node.children if c.status == success]
+            if not held:
+                break
+            node = held[-1]
+        return node.name if node.status == success and not node.children else None
+    return None

@@ -24,7 +24,7 @@ from roomba_bt.cli.monitor_cmd import LiveMonitor
 from roomba_bt.cli.monitor_cmd import add_run_arguments as add_monitor_arguments
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.profiles import PROFILES, RobotProfile, get_profile
-from roomba_bt.runtime.summary import ExitCode
+from roomba_bt.runtime.summary import DEFAULT_GRACE, ExitCode
 
 if TYPE_CHECKING:
     from roomba_bt.mission import Permissions
@@ -75,6 +75,11 @@ def register(sub: Any) -> None:
         help="leave the robot in Passive (Start) or, where the profile has it, Stop (173)",
     )  # fmt: skip
     run.add_argument("--watchdog", type=seconds, default=0.1, help="stream watchdog, seconds")
+    run.add_argument(
+        "--grace", type=seconds, default=DEFAULT_GRACE, metavar="SECONDS",
+        help="after the watchdog stopped the wheels, wait this long for valid frames before "
+        f"ending as a lost connection (default {DEFAULT_GRACE:g}; 0: end at once)",
+    )  # fmt: skip
     run.add_argument(
         "--no-keep-awake",
         dest="keep_awake",
@@ -238,6 +243,7 @@ def run_command(args: argparse.Namespace) -> int:
             baud=args.baud,
             packets=packets,
             watchdog=args.watchdog,
+            grace=args.grace,
             keep_awake=None if args.keep_awake else False,
             end_in=args.end_in,
             timeout_s=timeout,
@@ -255,6 +261,7 @@ def run_command(args: argparse.Namespace) -> int:
     if not quiet:
         print(_render_tree(mission), flush=True)
     stack.runner.gate = monitor.session if monitor is not None else None
+    stack.runner.hold_interrupts = True  # once the safe stop began: the summary still prints
     use_mission_clock(stack.runner)
     try:
         summary = stack.run()
@@ -262,32 +269,35 @@ def run_command(args: argparse.Namespace) -> int:
         use_mission_clock(None)
         if monitor is not None:
             monitor.finish(stack.runner.summary)
-    stack.close()
-    if isinstance(observer, TerminalDisplay) and stack.runner.has_snapshot:
-        observer.render(stack.runner)
-    if not quiet:
-        print(_render_tree(mission, status=True))
-    print(summary)
-    if simulator is not None and simulator.swept is not None and simulator.swept.cleaning_time:
-        print(_coverage_line(simulator))
-    if (
-        summary.outcome.exit_code
-        in (ExitCode.CONNECTION, ExitCode.MISSION_FAILED, ExitCode.BEHAVIOUR_ERROR)
-        and summary.reason
-    ):
-        print(f"roomba-bt: {summary.outcome.value}: {summary.reason}", file=sys.stderr)
-    if summary.traceback:
-        if getattr(args, "verbose", 0):
-            print(summary.traceback, file=sys.stderr, end="")
-        else:
-            print("roomba-bt: run with -v for the traceback", file=sys.stderr)
-    for refusal in stack.runner.refusals[:5]:
-        print(f"refused: {refusal}", file=sys.stderr)
-    if args.plot and simulator is not None:
-        plotted = _plot(simulator, args.plot)
-        if plotted:
-            print(plotted, file=sys.stderr)
-    return summary.exit_code
+    try:
+        stack.close()
+        if isinstance(observer, TerminalDisplay) and stack.runner.has_snapshot:
+            observer.render(stack.runner)
+        if not quiet:
+            print(_render_tree(mission, status=True))
+        print(summary)
+        if simulator is not None and simulator.swept is not None and simulator.swept.cleaning_time:
+            print(_coverage_line(simulator))
+        if (
+            summary.outcome.exit_code
+            in (ExitCode.CONNECTION, ExitCode.MISSION_FAILED, ExitCode.BEHAVIOUR_ERROR)
+            and summary.reason
+        ):
+            print(f"roomba-bt: {summary.outcome.value}: {summary.reason}", file=sys.stderr)
+        if summary.traceback:
+            if getattr(args, "verbose", 0):
+                print(summary.traceback, file=sys.stderr, end="")
+            else:
+                print("roomba-bt: run with -v for the traceback", file=sys.stderr)
+        for refusal in stack.runner.refusals[:5]:
+            print(f"refused: {refusal}", file=sys.stderr)
+        if args.plot and simulator is not None:
+            plotted = _plot(simulator, args.plot)
+            if plotted:
+                print(plotted, file=sys.stderr)
+        return summary.exit_code
+    finally:
+        stack.runner.release_interrupts()  # the summary is out
 
 
 def _render_tree(mission: Any, status: bool = False) -> str:

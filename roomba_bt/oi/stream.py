@@ -77,6 +77,17 @@ def byte_sum_for(frame_size: int) -> tuple[ByteSum, int]:
     return sum, 0
 
 
+#: Text the firmware prints when it restarts (at 115200 baud, whatever the OI's rate): any of
+#: these in the bytes read means the robot reset and its OI is Off. The bootloader's first
+#: line and the product line, as captured on a Create 2 / Roomba 600.
+RESET_BANNER_MARKERS: tuple[bytes, ...] = (b"bl-start", b"bootloader id", b"Roomba by iRobot")
+
+
+def shows_reset_banner(data: bytes) -> bool:
+    """Whether ``data`` holds a line of the firmware's start-up banner."""
+    return any(marker in data for marker in RESET_BANNER_MARKERS)
+
+
 @dataclass(slots=True)
 class ParserCounters:
     frames: int = 0

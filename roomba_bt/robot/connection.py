@@ -53,6 +53,8 @@ from roomba_bt.robot.errors import (
     PortLost,
     RobotAsleep,
     RobotError,
+    RobotReset,
+    StreamLost,
     StreamStalled,
 )
 from roomba_bt.robot.interface import SLOT_SECONDS, ModeChange
@@ -367,8 +369,10 @@ class Connection:
         """New frames: what is there now, or wait up to ``timeout`` s for at least one.
 
         Reads in the caller's thread, reconciles the mode model with every frame, checks
-        the watchdog. Raises :class:`PortLost` if the port fails and :class:`StreamStalled`
-        once when the watchdog trips (frames coming back clear the stall).
+        the watchdog. Raises :class:`PortLost` if the port fails and, once when the watchdog
+        trips (frames coming back clear the stall), the stall's cause if it is already known
+        (:class:`RobotReset`: the banner was read; :class:`RobotAsleep`) or
+        :class:`StreamStalled` (see :meth:`check_stall` for riding it through).
         """
         wake = self.wake
         if wake is not None:
@@ -376,11 +380,28 @@ class Connection:
         try:
             return self.link.read_frames(timeout)
         except StreamStalled as exc:
+            if self.link.banner_seen():
+                raise RobotReset(self.name, exc.halted) from exc
             asleep = self._asleep(exc)
             if asleep is None:
                 raise
-            log.error("%s", asleep)
             raise asleep from exc
+
+    def check_stall(self, bytes_before: int, grace: float, halted: bool) -> None:
+        """While a stall is ridden through (the watchdog tripped, drive 0 sent): raise the
+        cause once it is known. :class:`RobotReset` as soon as the firmware's banner is read;
+        :class:`StreamLost` once no valid frame came for ``grace`` s (``bytes_before``: the
+        bytes read when the stall began, to tell a stopped stream from a garbled line)."""
+        link = self.link
+        if link.banner_seen():
+            raise RobotReset(self.name, halted)
+        now = link.transport.now()
+        since = link.silent_since
+        if now - since > grace:
+            raise StreamLost(
+                self.name, now - since, grace, link.bytes_read - bytes_before,
+                watchdog=link.watchdog, halted=halted,
+            )  # fmt: skip
 
     def _asleep(self, stalled: StreamStalled) -> RobotAsleep | None:
         """The stall explained as sleep: Passive, a profile that sleeps, and nothing from us

@@ -2,8 +2,11 @@
 
 * :class:`ModeError`: a command the robot's current OI mode would not accept; nothing was sent.
 * :class:`ConnectionFailed`: the robot could not be reached at start-up.
-* :class:`LinkDown` and its two kinds, :class:`PortLost` (the port raised) and
-  :class:`StreamStalled` (no valid frame within the watchdog): the link failed while running.
+* :class:`LinkDown` and its kinds, each a cause named: :class:`PortLost` (the port raised:
+  the port is gone), :class:`StreamStalled` (no valid frame within the watchdog: the run
+  rides through it for a grace), :class:`StreamLost` (still none after the grace: the stream
+  stopped, or the line is garbled), :class:`RobotReset` (the start-up banner came instead),
+  :class:`RobotAsleep` (Passive past the sleep time).
 
 The link errors subclass :class:`ConnectionError`, like
 :class:`~roomba_bt.transport.TransportError`, so "the robot is unreachable" is one ``except``.
@@ -121,6 +124,55 @@ class StreamStalled(LinkDown):
             f"no valid sensor frame for {silent_for * 1000:.0f} ms (watchdog "
             f"{watchdog * 1000:.0f} ms); {action}",
         )
+
+
+class RobotReset(LinkDown):
+    """The robot restarted while running: its start-up banner came down the line and the
+    stream stopped (after a reset the OI is Off and streams nothing until Start)."""
+
+    def __init__(self, port: str, halted: bool) -> None:
+        action = "drive 0 sent" if halted else "it was not driving"
+        super().__init__(
+            port,
+            "the robot reset: its start-up banner was on the line and the stream stopped (the "
+            "OI is Off after a reset: a battery or power dip, a firmware fault, the power "
+            f"button held); {action}",
+        )
+
+
+class StreamLost(LinkDown):
+    """No valid frame came back within the grace after the watchdog tripped: the stream
+    stopped (nothing arrived) or the line is garbled (bytes arrived, none made a frame)."""
+
+    def __init__(
+        self,
+        port: str,
+        silent_for: float,
+        grace: float,
+        bytes_seen: int,
+        *,
+        watchdog: float,
+        halted: bool,
+    ) -> None:
+        self.silent_for = silent_for
+        self.grace = grace
+        self.bytes_seen = bytes_seen
+        if bytes_seen:
+            what = (
+                f"the line is garbled: no valid sensor frame for {silent_for:.1f} s while "
+                f"{bytes_seen} bytes arrived (noise on the line, or a wrong baud rate)"
+            )
+        else:
+            what = (
+                f"the sensor stream stopped: nothing arrived for {silent_for:.1f} s (the robot "
+                "switched off or stopped streaming, or the cable)"
+            )
+        action = (
+            f"the watchdog sent drive 0 after {watchdog * 1000:.0f} ms"
+            if halted
+            else "the robot was not driving"
+        )
+        super().__init__(port, f"{what}; {action}, then the run waited the {grace:g} s grace")
 
 
 class RobotAsleep(LinkDown):

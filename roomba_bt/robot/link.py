@@ -10,12 +10,14 @@ virtual clock the caller's reads are what move time::
      (OSError: PortLost)  (checksum, resync)    (the session's mode model)
 
     no valid frame for ``watchdog`` s while a stream runs ──► halt() ──► StreamStalled
+                                                      (once; frames coming back clear it)
 """
 
 from __future__ import annotations
 
 import enum
 import logging
+from collections import deque
 from collections.abc import Callable
 from typing import NamedTuple
 
@@ -23,7 +25,7 @@ import serial
 
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.profiles import RobotProfile
-from roomba_bt.oi.stream import StreamParser
+from roomba_bt.oi.stream import StreamParser, shows_reset_banner
 from roomba_bt.robot.errors import PortLost, StreamStalled
 from roomba_bt.robot.interface import ModeChange
 from roomba_bt.transport.base import Transport, TransportError
@@ -32,6 +34,9 @@ log = logging.getLogger(__name__)
 
 #: What breaking a link raises, from our transport, pyserial, sockets or the simulator.
 LINK_ERRORS = (OSError, serial.SerialException)
+
+#: Chunks read kept for :meth:`StreamLink.banner_seen` (one chunk per read: a few frames).
+RECENT_CHUNKS = 16
 
 #: The session's mode model, told of every frame: the change the robot made by itself, if any.
 Reconcile = Callable[[SensorFrame, int, float], ModeChange | None]
@@ -101,6 +106,8 @@ class StreamLink:
         self._parsed_before = (0, 0, 0, 0)  # frames, checksum failures, skipped, implausible
         self._stream_started = 0.0
         self._last_frame_time: float | None = None
+        #: the last chunks read (a reset's banner comes just before the stream stops)
+        self._recent: deque[bytes] = deque(maxlen=RECENT_CHUNKS)
 
     @property
     def name(self) -> str:
@@ -112,7 +119,9 @@ class StreamLink:
             data = self.transport.read(timeout)
         except LINK_ERRORS as exc:
             raise self.lost("read", exc) from exc
-        self.bytes_read += len(data)
+        if data:
+            self.bytes_read += len(data)
+            self._recent.append(data)
         return data
 
     def write(self, data: bytes) -> None:
@@ -136,7 +145,20 @@ class StreamLink:
         self.status = LinkStatus.LOST
         self.streaming = False
         cause = exc.cause if isinstance(exc, TransportError) else exc
-        return PortLost(self.name, f"the port failed on {action} ({cause}); the link is lost")
+        return PortLost(
+            self.name, f"the port is gone: it failed on {action} ({cause}); the link is lost"
+        )
+
+    def banner_seen(self) -> bool:
+        """Whether the firmware's start-up banner is in the last chunks read: it reset."""
+        return shows_reset_banner(b"".join(self._recent))
+
+    @property
+    def silent_since(self) -> float:
+        """When the last valid frame arrived, or the stream started if none has (link
+        clock): what the watchdog measures from."""
+        last = self._last_frame_time
+        return self._stream_started if last is None else last
 
     # ------------------------------------------------------------------ the stream
     def new_stream(self, ids: tuple[int, ...], now: float) -> None:
@@ -215,7 +237,6 @@ class StreamLink:
         self.latest = out[-1]
         self._last_frame_time = arrival
         if self.status is LinkStatus.STALLED:
-            log.warning("%s: the sensor stream is back", self.name)
             self.status = LinkStatus.STREAMING
         return out
 
@@ -231,6 +252,4 @@ class StreamLink:
         self.status = LinkStatus.STALLED
         self.watchdog_trips += 1
         halted = self._halt()
-        error = StreamStalled(self.name, silent, self.watchdog, halted)
-        log.error("%s", error)
-        raise error
+        raise StreamStalled(self.name, silent, self.watchdog, halted)

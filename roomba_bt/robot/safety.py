@@ -1,4 +1,5 @@
-"""Turning SIGTERM into an exception, so that ``with Connection(...)`` stops the robot.
+"""Turning SIGTERM into an exception, so that ``with Connection(...)`` stops the robot; and
+one signal per run (:class:`InterruptGuard`: a second Ctrl-C waits for the safe stop).
 
 Python turns SIGINT into :class:`KeyboardInterrupt`, which unwinds ``with`` blocks and so runs
 :meth:`~roomba_bt.robot.connection.Connection.close`. SIGTERM (``kill``, systemd, a container
@@ -11,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import os
 import signal
 import threading
 from collections.abc import Iterator
@@ -50,3 +52,60 @@ def sigterm_raises() -> Iterator[None]:
         yield
     finally:
         signal.signal(signal.SIGTERM, previous)
+
+
+#: What a Ctrl-C or SIGTERM during the safe stop prints (straight to stderr: a handler may
+#: run while the main thread is inside a write to it).
+_WAITING = b"roomba-bt: the safe stop is under way; waiting for it to end (the summary follows)\n"
+
+
+class InterruptGuard:
+    """Ctrl-C and SIGTERM end a run once: the first raises (:class:`KeyboardInterrupt`,
+    :class:`Terminated`), and once :meth:`stopping` was called (the safe stop began) every
+    further one is noted and ignored, so the stop is written whole and the summary printed.
+
+    Used as a context manager around a run; the previous handlers come back on the way out,
+    or with ``hold`` both signals stay ignored until :meth:`release` (the CLI: its summary is
+    still to be printed). Signal handlers belong to the main thread: elsewhere it does nothing.
+    """
+
+    def __init__(self, *, hold: bool = False) -> None:
+        self.hold = hold
+        self.stop_begun = False
+        self.ignored = 0
+        self._previous: dict[int, object] = {}
+
+    def stopping(self) -> None:
+        """The safe stop begins: from now on a signal waits for it."""
+        self.stop_begun = True
+
+    def _handle(self, signum: int, frame: FrameType | None) -> None:
+        if self.stop_begun:
+            self.ignored += 1
+            if self.ignored == 1:
+                with contextlib.suppress(OSError):
+                    os.write(2, _WAITING)
+            return
+        self.stop_begun = True  # the run now unwinds into its safe stop
+        if signum == signal.SIGINT:
+            raise KeyboardInterrupt
+        raise Terminated(signum)
+
+    def __enter__(self) -> InterruptGuard:
+        if threading.current_thread() is threading.main_thread():
+            for signum in (signal.SIGINT, signal.SIGTERM):
+                self._previous[signum] = signal.signal(signum, self._handle)
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        if self.hold:  # ignored until release(): the summary is still to be printed
+            for signum in self._previous:
+                signal.signal(signum, signal.SIG_IGN)
+            return
+        self.release()
+
+    def release(self) -> None:
+        """The previous handlers back (a held guard: once the summary is printed)."""
+        for signum, previous in self._previous.items():
+            signal.signal(signum, previous)  # type: ignore[arg-type]
+        self._previous.clear()

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import contextlib
 import inspect
+import logging
 import time
 import traceback
 from collections.abc import Callable, Iterable, Sequence
@@ -30,14 +31,17 @@ from roomba_bt.mission import RUNTIME_PACKETS
 from roomba_bt.oi.encode import Command
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.frames import SensorFrame
-from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
 from roomba_bt.robot.connection import Connection, TimedFrame
-from roomba_bt.robot.errors import ConnectionFailed, LinkDown, ModeError
+from roomba_bt.robot.errors import ConnectionFailed, LinkDown, ModeError, StreamStalled
+from roomba_bt.robot.hazards import HazardConfirmation
 from roomba_bt.robot.interface import SLOT_SECONDS, ModeChange, Odometry, Outbox, Snapshot
-from roomba_bt.robot.safety import Terminated, sigterm_raises
-from roomba_bt.runtime.summary import Outcome, RunSummary
+from roomba_bt.robot.safety import InterruptGuard, Terminated
+from roomba_bt.runtime.summary import DEFAULT_GRACE, Outcome, RunSummary
+
+log = logging.getLogger(__name__)
 
 #: Battery charge and capacity, for the run summary: streamed when the budget allows.
 SUMMARY_PACKETS: tuple[int, ...] = (25, 26)
@@ -131,6 +135,8 @@ class MissionRunner:
         poll_timeout: float = 0.05,
         input_ended: Callable[[], str | None] | None = None,
         gate: TickGate | None = None,
+        grace: float = DEFAULT_GRACE,
+        hold_interrupts: bool = False,
     ) -> None:
         self.connection = connection
         self.mission = mission
@@ -141,6 +147,16 @@ class MissionRunner:
         self.poll_timeout = poll_timeout
         self.input_ended = input_ended
         self.gate = gate
+        #: seconds to wait for valid frames after the watchdog tripped (0: end at once)
+        self.grace = grace
+        #: Ctrl-C and SIGTERM stay ignored after :meth:`run` returns, until
+        #: :meth:`release_interrupts` (the CLI: its summary is still to be printed); else the
+        #: previous handlers come back when it returns
+        self.hold_interrupts = hold_interrupts
+        self._guard: InterruptGuard | None = None
+        #: while a stall is ridden through: (bytes read when it began, drive 0 sent, the
+        #: last valid frame's time)
+        self._stall: tuple[int, bool, float] | None = None
         self._outbox = Outbox()
         self._snapshot: Snapshot | None = None
         self._odometry = Odometry()
@@ -154,6 +170,9 @@ class MissionRunner:
         self._blackboard: py_trees.blackboard.Client | None = None
         self._layout: object = None
         self._has_encoders = False
+        #: hazards shown to the tree once two frames agree, or the robot's own reaction does
+        self._hazards = HazardConfirmation()
+        self._fallback_seen: object = None
 
     # ---------------------------------------------------------------- RobotHandle
     @property
@@ -179,34 +198,41 @@ class MissionRunner:
         summary = self.summary
         wall_start = time.perf_counter()
         root = self.mission.root
-        try:
-            with sigterm_raises():
+        guard = self._guard = InterruptGuard(hold=self.hold_interrupts)
+        with guard:
+            try:
                 self.connection.start(OIMode.PASSIVE, self.packets)
                 self._blackboard = py_trees.blackboard.Client(name="roomba-bt runtime")
                 self._blackboard.register_key(key=SNAPSHOT_KEY, access=py_trees.common.Access.WRITE)
                 self.mission.setup(self)
                 self._loop(root, summary)
-        except Terminated:
-            summary.outcome, summary.reason = Outcome.INTERRUPTED, "SIGTERM"
-        except KeyboardInterrupt:
-            summary.outcome, summary.reason = Outcome.INTERRUPTED, "Ctrl-C"
-        except StopRequested as exc:
-            summary.outcome, summary.reason = Outcome.INTERRUPTED, str(exc)
-        except ConnectionFailed as exc:
-            summary.outcome, summary.reason = Outcome.CONNECTION_LOST, str(exc)
-        except LinkDown as exc:
-            summary.outcome, summary.reason = Outcome.CONNECTION_LOST, str(exc)
-        except (OSError, ConnectionError) as exc:
-            summary.outcome, summary.reason = (
-                Outcome.CONNECTION_LOST,
-                f"{type(exc).__name__}: {exc}",
-            )
-        except Exception as exc:  # a bug in a behaviour must still end in a safe stop
-            summary.outcome, summary.reason = Outcome.ERROR, behaviour_error(exc)
-            summary.traceback = "".join(traceback.format_exception(exc))
-        finally:
-            self._finish(self.mission.root, summary, wall_start)
+            except Terminated:
+                summary.outcome, summary.reason = Outcome.INTERRUPTED, "SIGTERM"
+            except KeyboardInterrupt:
+                summary.outcome, summary.reason = Outcome.INTERRUPTED, "Ctrl-C"
+            except StopRequested as exc:
+                summary.outcome, summary.reason = Outcome.INTERRUPTED, str(exc)
+            except ConnectionFailed as exc:
+                summary.outcome, summary.reason = Outcome.CONNECTION_LOST, str(exc)
+            except LinkDown as exc:
+                summary.outcome, summary.reason = Outcome.CONNECTION_LOST, str(exc)
+            except (OSError, ConnectionError) as exc:
+                summary.outcome, summary.reason = (
+                    Outcome.CONNECTION_LOST,
+                    f"{type(exc).__name__}: {exc}",
+                )
+            except Exception as exc:  # a bug in a behaviour must still end in a safe stop
+                summary.outcome, summary.reason = Outcome.ERROR, behaviour_error(exc)
+                summary.traceback = "".join(traceback.format_exception(exc))
+            finally:
+                guard.stopping()  # a further Ctrl-C or SIGTERM waits for the safe stop
+                self._finish(self.mission.root, summary, wall_start)
         return summary
+
+    def release_interrupts(self) -> None:
+        """Ctrl-C and SIGTERM as they were before :meth:`run` (after a held run's summary)."""
+        if self._guard is not None:
+            self._guard.release()
 
     def _finish(
         self, root: py_trees.behaviour.Behaviour, summary: RunSummary, wall_start: float
@@ -217,8 +243,7 @@ class MissionRunner:
         self._outbox.clear()  # whatever a terminating leaf queued: the safe stop supersedes it
         try:
             sequence = [c.name for c in self.connection.stop_sequence()]
-            with sigterm_raises():
-                stopped = self.connection.safe_stop()
+            stopped = self.connection.safe_stop()
             if not stopped:
                 report = getattr(self.connection, "stop_report", None)
                 summary.safe_stop = "NOT DELIVERED: " + (
@@ -242,6 +267,7 @@ class MissionRunner:
             if 25 in snap.frame and 26 in snap.frame:
                 summary.battery_percent = snap.frame.battery_percent
         summary.final_mode = self._current_mode()
+        summary.unconfirmed_hazards = self._hazards.unconfirmed
         counters = getattr(self.connection, "counters", None)
         if counters is not None:
             summary.checksum_failures = int(getattr(counters, "checksum_failures", 0))
@@ -255,8 +281,18 @@ class MissionRunner:
     def _loop(self, root: py_trees.behaviour.Behaviour, summary: RunSummary) -> None:
         success, failure = py_trees.common.Status.SUCCESS, py_trees.common.Status.FAILURE
         perf = time.perf_counter
+        connection = self.connection
         while True:
-            batch = self.connection.poll(self.poll_timeout)
+            try:
+                batch = connection.poll(self.poll_timeout)
+            except StreamStalled as stalled:
+                self._stalled(stalled)
+                batch = []
+            if (stall := self._stall) is not None:
+                if batch:
+                    self._stream_back(stall[2])
+                else:
+                    connection.check_stall(stall[0], self.grace, stall[1])
             if not batch:
                 if self.input_ended is not None and (why := self.input_ended()):
                     summary.outcome, summary.reason = Outcome.CONNECTION_LOST, why
@@ -296,12 +332,45 @@ class MissionRunner:
                 )
                 return
 
+    def _stalled(self, stalled: StreamStalled) -> None:
+        """The watchdog tripped (drive 0 sent): ride it through for :attr:`grace` seconds,
+        or end now without one."""
+        if self.grace <= 0:
+            raise stalled
+        self.summary.stalls += 1
+        link = self.connection.link
+        self._stall = (link.bytes_read, stalled.halted, link.silent_since)
+        log.warning("%s; waiting up to %g s for valid frames", stalled, self.grace)
+
+    def _stream_back(self, silent_since: float) -> None:
+        """Valid frames came back within the grace: the tree goes on, and the wheels get
+        their last command again (the watchdog's drive 0 had replaced it) unless the tick
+        sends another."""
+        self._stall = None
+        self.summary.stalls_ridden += 1
+        connection = self.connection
+        gap = connection.link.silent_since - silent_since
+        log.warning(
+            "%s: valid frames are back after %.0f ms; the mission goes on", connection.name,
+            gap * 1000,
+        )  # fmt: skip
+        wheels = self.last_sent.get("wheels")
+        if wheels is not None and any(wheels.args) and connection.mode in DRIVING_MODES:
+            self._outbox.send(wheels, self)
+
     def _advance(self, batch: Sequence[TimedFrame]) -> Snapshot:
         """Newest frame of the batch -> the tick's snapshot; stale frames and gaps counted."""
         newest = batch[-1]
-        frame: SensorFrame = newest.frame
         arrival: float = newest.time
         count = len(batch)
+        confirm = self._hazards.frame
+        for older in batch[:-1] if count > 1 else ():
+            confirm(older.frame)
+        connection = self.connection
+        fallback = connection.last_fallback
+        reacted = fallback is not self._fallback_seen
+        self._fallback_seen = fallback
+        frame: SensorFrame = confirm(newest.frame, reacted)
         self.summary.stale_frames_dropped += count - 1
         if self._last_arrival is None:
             slots = 1
@@ -319,9 +388,7 @@ class MissionRunner:
             self._odometry = self._odometry.advance(
                 frame[43], frame[44], self._profile.wheel_base_mm
             )
-        connection = self.connection
         mode = connection.mode
-        fallback = connection.last_fallback
         snapshot = Snapshot(
             frame=frame,
             tick=self._tick,

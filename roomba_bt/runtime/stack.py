@@ -25,7 +25,7 @@ from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.robot.connection import Connection, EndMode
 from roomba_bt.runtime.loop import MissionLike, MissionRunner, TickObserver, stream_request
 from roomba_bt.runtime.recording import RecordingTransport
-from roomba_bt.runtime.summary import RunSummary
+from roomba_bt.runtime.summary import DEFAULT_GRACE, RunSummary
 from roomba_bt.transport.base import Transport
 
 
@@ -57,6 +57,7 @@ class RunStack:
         baud: int = 115200,
         packets: Sequence[int] | None = None,
         watchdog: float = 0.1,
+        grace: float = DEFAULT_GRACE,
         end_in: EndMode = "passive",
         timeout_s: float | None = None,
         observer: TickObserver | None = None,
@@ -91,6 +92,7 @@ class RunStack:
             timeout_s=timeout_s,
             observer=observer,
             input_ended=input_ended,
+            grace=grace,
         )
 
     def run(self) -> RunSummary:

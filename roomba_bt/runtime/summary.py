@@ -8,6 +8,10 @@ from enum import Enum, IntEnum
 
 from roomba_bt.oi.modes import OIMode
 
+#: Seconds a run waits, after the watchdog stopped the wheels, for valid frames to come back
+#: before it ends as a lost connection, exit 3 (``run --grace``).
+DEFAULT_GRACE = 2.0
+
 
 class ExitCode(IntEnum):
     """Exit codes of ``roomba-bt``, documented in the README and ``docs/runtime.md``."""
@@ -63,7 +67,14 @@ class RunSummary:
     checksum_failures: int = 0
     implausible_frames: int = 0
     skipped_bytes: int = 0
+    #: hazard onsets (bump, wheel drop, cliff) the next frame did not confirm: never shown to
+    #: the tree (robot/hazards.py); a corrupted frame would have stopped an action for each
+    unconfirmed_hazards: int = 0
     refused_commands: int = 0
+    #: times the watchdog tripped (drive 0) and the run waited for valid frames; how many
+    #: of those the frames came back from within the grace
+    stalls: int = 0
+    stalls_ridden: int = 0
     commands_written: int = 0
     distance_mm: float = 0.0
     final_mode: OIMode | None = None
@@ -94,7 +105,16 @@ class RunSummary:
             f"slowest {self.max_tick_s * 1000:.2f} ms)",
             f"frames       {self.stale_frames_dropped} stale dropped, {self.frames_lost} lost, "
             f"{self.checksum_failures} checksum failures, "
-            f"{self.implausible_frames} out of range, {self.skipped_bytes} bytes skipped",
+            f"{self.implausible_frames} out of range, {self.skipped_bytes} bytes skipped, "
+            f"{self.unconfirmed_hazards} unconfirmed hazards",
+            *(
+                [
+                    f"stalls       {self.stalls} (watchdog drive 0), {self.stalls_ridden} ridden "
+                    "through"
+                ]
+                if self.stalls
+                else []
+            ),
             f"commands     {self.commands_written} written, "
             f"{self.refused_commands} refused by the mode guard",
             f"distance     {self.distance_mm / 1000:.2f} m",

@@ -47,7 +47,9 @@ def test_the_path_of_the_failure_is_followed_not_the_last_failed_leaf() -> None:
     assert root.status == FAILURE
     leaf.stop(py_trees.common.Status.INVALID)  # reset by a parent, as a retry or guard does
     attempt.stop(py_trees.common.Status.INVALID)
-    assert failure_reason(root) == "retry: gave up after 2 failed attempts"
+    assert (
+        failure_reason(root) == "retry: gave up after 2 failed attempts; the last: cliff: failure"
+    )
 
 
 def test_a_flipped_status_is_named_without_its_canned_message() -> None:
@@ -58,3 +60,26 @@ def test_a_flipped_status_is_named_without_its_canned_message() -> None:
     root.tick_once()
     assert root.status == FAILURE
     assert failure_reason(root) == "nothing may be ahead"
+
+
+def test_a_forced_failure_after_a_condition_names_the_condition() -> None:
+    """The patrol's pattern: drive until a cliff, then back off and fail on purpose so the
+    retry tries again; its giving up names the cliff, not ``force_failure``."""
+    cliff = py_trees.behaviours.Success(name="cliff(any)")
+    until = py_trees.composites.Selector(
+        "until", memory=False, children=[py_trees.behaviours.Failure(name="lap done"), cliff]
+    )
+    back_off = py_trees.decorators.SuccessIsFailure(
+        "force_failure", child=py_trees.behaviours.Success(name="back off")
+    )
+    inverter = py_trees.decorators.Inverter(
+        "inverter", child=py_trees.behaviours.Success(name="cliff(any) again")
+    )
+    react = py_trees.composites.Selector("fallback", memory=True, children=[inverter, back_off])
+    attempt = py_trees.composites.Sequence("attempt", memory=True, children=[until, react])
+    retry = Retry("retry", child=attempt, num_failures=2)
+    root = py_trees.composites.Sequence("patrol", memory=True, children=[retry])
+    root.tick_once()
+    root.tick_once()
+    assert root.status == FAILURE
+    assert failure_reason(root) == "retry: gave up after 2 failed attempts; the last: cliff(any)"

@@ -90,6 +90,24 @@ def test_signal_ends_with_the_safe_stop_and_exit_130(
     assert load_record(record).outbound.endswith(SAFE_END)
 
 
+@pytest.mark.parametrize("gap", [0.0, 0.002, 0.02])
+def test_a_second_ctrl_c_waits_for_the_safe_stop_and_the_summary(
+    sim_port: str, tmp_path: Path, gap: float
+) -> None:
+    record = tmp_path / "run.jsonl"
+    proc = _start_run(sim_port, _mission(tmp_path, FOREVER), record)
+    _wait_for_driving(record)
+    proc.send_signal(signal.SIGINT)
+    time.sleep(gap)  # the second one lands in the unwinding, the stop or the summary
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=10)
+    assert proc.returncode == 130, out + err
+    assert "outcome      INTERRUPTED (Ctrl-C)" in out
+    assert "safe stop    sent drive, motors, pause_resume_stream, start" in out
+    assert "Traceback" not in err
+    assert load_record(record).outbound.endswith(SAFE_END)
+
+
 def test_success_over_the_pty(sim_port: str, tmp_path: Path) -> None:
     record = tmp_path / "run.jsonl"
     mission = _mission(

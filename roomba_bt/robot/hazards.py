@@ -1,0 +1,96 @@
+"""Hazard confirmation: a bump, wheel drop or cliff ends an action only once it is confirmed.
+
+The OI checksum is an 8-bit sum: two bit flips at the same position in opposite directions
+cancel (1 pair in 16), so on a noisy line a few corrupted frames pass it with every value in
+range, and one of them may show a cliff that is not there. A real hazard lasts: the bumper
+stays pressed, the drop stays under the sensor for many 15 ms frames. So a hazard bit that
+was clear in the frame before is held back for one frame, and shown in the next frame if it
+is still set there::
+
+    frame   n-1   n     n+1
+    cliff   0     1     1        the tick of frame n sees no cliff, the tick of n+1 sees it
+    cliff   0     1     0        never seen (one corrupted frame)
+
+A hazard the robot itself reacted to in the same frame (it fell from Safe to Passive: the
+mode model followed packet 35 at once because the frame shows the cause) is confirmed by
+that agreement and shown at once. Either way a real hazard's reaction is late by at most one
+frame (15 ms); clearing is never delayed.
+
+The hazard bits: packet 7's bump and wheel drop bits (0-3; the reserved bits 4-7 never pass
+the range checks) and the four cliff packets 9-12, folded into one integer per frame so the
+common case (no hazard, or the same hazards as before) is one comparison.
+"""
+
+from __future__ import annotations
+
+from roomba_bt.oi.bits import BUMP_BITS, WHEEL_DROP_BITS
+from roomba_bt.oi.frames import BUMPS_PACKETS, CLIFF_PACKETS, FrameLayout, SensorFrame
+
+_BUMP_PACKET = BUMPS_PACKETS[0]
+_PACKET_7_HAZARDS = BUMP_BITS | WHEEL_DROP_BITS  # 0b1111
+#: bit of each cliff packet in the folded hazard word (above packet 7's four bits)
+_CLIFF_BITS = {pid: 1 << (4 + i) for i, pid in enumerate(CLIFF_PACKETS)}
+
+
+class HazardConfirmation:
+    """Holds back, for one frame, hazard bits the frame before did not show.
+
+    :meth:`frame` is called with every frame of the stream, in order (not only the ones a
+    tick reads): "the frame before" is the stream's, so a tick that reads the newest of a
+    batch still confirms against the one just before it. ``held`` counts frames whose
+    hazards were held back; ``unconfirmed`` counts onsets that were gone in the next frame
+    (what a corrupted frame would have stopped the robot for).
+    """
+
+    __slots__ = ("_layout", "_previous", "_slots", "held", "pending", "unconfirmed")
+
+    def __init__(self) -> None:
+        self._layout: FrameLayout | None = None
+        self._slots: tuple[int | None, tuple[tuple[int, int], ...]] = (None, ())
+        self._previous = 0  # the folded hazard word of the frame before
+        self.pending = 0  # the bits held back from the frame before
+        self.held = 0
+        self.unconfirmed = 0
+
+    def _bind(self, layout: FrameLayout) -> None:
+        index = layout.index
+        cliffs = tuple((index[pid], bit) for pid, bit in _CLIFF_BITS.items() if pid in index)
+        self._slots = (index.get(_BUMP_PACKET), cliffs)
+        self._layout = layout
+
+    def word(self, frame: SensorFrame) -> int:
+        """The frame's hazard bits folded into one integer (0: no hazard)."""
+        if frame.layout is not self._layout:
+            self._bind(frame.layout)
+        values = frame._values
+        bump_slot, cliffs = self._slots
+        word = values[bump_slot] & _PACKET_7_HAZARDS if bump_slot is not None else 0
+        for slot, bit in cliffs:
+            if values[slot]:
+                word |= bit
+        return word
+
+    def frame(self, frame: SensorFrame, robot_reacted: bool = False) -> SensorFrame:
+        """``frame`` with the hazard bits that are new since the frame before cleared, unless
+        ``robot_reacted`` (the robot's own fall to Passive in this frame agrees with them)."""
+        word = self.word(frame)
+        previous, self._previous = self._previous, word
+        if self.pending and not self.pending & word:
+            self.unconfirmed += 1
+        new = word & ~previous
+        if not new or robot_reacted:
+            self.pending = 0
+            return frame
+        self.pending = new
+        self.held += 1
+        return self._without(frame, new)
+
+    def _without(self, frame: SensorFrame, bits: int) -> SensorFrame:
+        values = list(frame._values)
+        bump_slot, cliffs = self._slots
+        if bump_slot is not None and bits & _PACKET_7_HAZARDS:
+            values[bump_slot] &= ~(bits & _PACKET_7_HAZARDS)
+        for slot, bit in cliffs:
+            if bits & bit:
+                values[slot] = 0
+        return SensorFrame(frame.layout, tuple(values))

@@ -1,0 +1,121 @@
+"""A bad patch of line is ridden through: the watchdog still stops the wheels 100 ms after the
+last valid frame, the run waits the grace for valid frames, then the tree goes on and the
+wheels get their command again; a loss longer than the grace ends as exit 3, its cause named
+(a stopped stream, a garbled line, a reset)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from roomba_bt.mission import load_mission
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.runtime.stack import RunStack
+from roomba_bt.runtime.summary import Outcome, RunSummary
+from roomba_bt.sim import Simulator, load_world
+from roomba_bt.sim.protocol import RESET_BANNER
+
+from .simrun import TapLink
+
+SPIN = """
+mission: spin
+tree:
+  sequence:
+    - mode: safe
+    - drive: {velocity: 100 mm/s, radius: spin_left}
+"""
+SPIN_COMMAND = oi.drive(100, oi.Radius.TURN_COUNTER_CLOCKWISE).data
+HALT = oi.halt().data
+
+
+class BadPatchLink(TapLink):
+    """Between ``start`` and ``end`` s of simulated time the robot's bytes arrive garbled
+    (every byte inverted: nothing frames), or not at all (``silent``); ``banner`` sends the
+    firmware's reset banner at ``start`` and nothing after (as the simulator's Reset does)."""
+
+    def __init__(
+        self, simulator: Simulator, start: float, end: float, kind: str = "garbled"
+    ) -> None:
+        super().__init__(simulator)
+        self.start, self.end, self.kind = start, end, kind
+        self.bannered = False
+
+    def read(self, timeout: float) -> bytes:
+        data = super().read(timeout)
+        now = self.simulator.time
+        if not self.start <= now < self.end:
+            return data
+        if self.kind == "banner":
+            if self.bannered:
+                return b""
+            self.bannered = True
+            return RESET_BANNER
+        if self.kind == "silent":
+            return b""
+        return bytes(b ^ 0xFF for b in data)
+
+
+def run(
+    tmp_path: Path, link_of: type[BadPatchLink], *args: object, **run: float
+) -> tuple[RunSummary, BadPatchLink]:
+    path = tmp_path / "m.yaml"
+    path.write_text(SPIN)
+    mission = load_mission(path, {}, profile=CREATE2)
+    link = link_of(Simulator(load_world("empty-room"), CREATE2, 0), *args)
+    stack = RunStack(mission, link, profile=CREATE2, timeout_s=run.get("timeout", 4.0),
+                     grace=run.get("grace", 2.0))  # fmt: skip
+    return stack.run(), link
+
+
+def writes_between(link: TapLink, start: float, end: float) -> list[bytes]:
+    return [b for t, b in link.writes if start <= t < end]
+
+
+def test_a_garbled_second_is_ridden_through_and_the_wheels_get_their_command_again(
+    tmp_path: Path,
+) -> None:
+    summary, link = run(tmp_path, BadPatchLink, 1.0, 2.0)
+    assert summary.outcome is Outcome.TIMEOUT, summary.reason  # the mission went on
+    assert summary.stalls == 1 and summary.stalls_ridden == 1
+    # drive 0 within 150 ms of the last valid frame, nothing else while garbled
+    halts = [t for t, b in link.writes if b == HALT and 1.0 <= t < 2.0]
+    assert halts and halts[0] <= 1.0 + 0.15
+    assert writes_between(link, halts[0] + 0.001, 2.0) == []
+    # the spin again in the first tick after the line came back
+    back = [(t, b) for t, b in link.writes if t >= 2.0]
+    assert back[0][1] == SPIN_COMMAND and back[0][0] < 2.0 + 0.05
+    assert link.simulator.time >= 4.0
+
+
+def test_a_stream_stopped_past_the_grace_is_exit_3_named_stopped(tmp_path: Path) -> None:
+    summary, link = run(tmp_path, BadPatchLink, 1.0, 99.0, "silent", timeout=10.0)
+    assert summary.outcome is Outcome.CONNECTION_LOST and summary.exit_code == 3
+    assert "the sensor stream stopped: nothing arrived for 2.0 s" in summary.reason
+    assert "the watchdog sent drive 0 after 100 ms" in summary.reason
+    assert [t for t, b in link.writes if b == HALT and 1.0 <= t <= 1.15]
+    assert summary.stalls == 1 and summary.stalls_ridden == 0
+
+
+def test_a_garbled_line_past_the_grace_is_exit_3_named_garbled(tmp_path: Path) -> None:
+    summary, _ = run(tmp_path, BadPatchLink, 1.0, 99.0, "garbled", timeout=10.0, grace=0.5)
+    assert summary.outcome is Outcome.CONNECTION_LOST
+    assert "the line is garbled: no valid sensor frame for 0.5 s while" in summary.reason
+    assert "bytes arrived (noise on the line, or a wrong baud rate)" in summary.reason
+
+
+def test_a_reset_banner_is_named_at_once(tmp_path: Path) -> None:
+    summary, link = run(tmp_path, BadPatchLink, 1.0, 99.0, "banner", timeout=10.0)
+    assert summary.outcome is Outcome.CONNECTION_LOST
+    assert summary.reason.endswith(
+        "the robot reset: its start-up banner was on the line and the stream stopped (the OI "
+        "is Off after a reset: a battery or power dip, a firmware fault, the power button "
+        "held); drive 0 sent"
+    )
+    assert link.simulator.time < 1.3  # named when the watchdog trips, no grace waited
+
+
+def test_grace_0_ends_when_the_watchdog_trips(tmp_path: Path) -> None:
+    summary, link = run(tmp_path, BadPatchLink, 1.0, 2.0, grace=0.0)
+    assert summary.outcome is Outcome.CONNECTION_LOST
+    assert "no valid sensor frame for" in summary.reason
+    assert link.simulator.time < 1.3
