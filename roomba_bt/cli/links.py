@@ -63,14 +63,18 @@ def make_simulator(
     faults: Faults | None = None,
     coverage: bool = False,
     battery: float | None = None,
+    trace: bool = True,
 ) -> Simulator:
     """A simulator in ``world`` (a shipped name or a path), its battery at ``battery`` (a
     fraction) instead of the world's if given; raises WorldError if invalid.
-    ``coverage``: it tracks the floor cleaned (:mod:`roomba_bt.sim.coverage`)."""
+    ``coverage``: it tracks the floor cleaned (:mod:`roomba_bt.sim.coverage`); ``trace``: it
+    keeps its trajectory (for a plot)."""
     loaded = load_world(world or DEFAULT_WORLD)
     if battery is not None:
         loaded = replace(loaded, battery=battery)
-    return Simulator(loaded, profile, seed, faults, random_start=random_start, coverage=coverage)
+    return Simulator(
+        loaded, profile, seed, faults, random_start=random_start, coverage=coverage, trace=trace
+    )
 
 
 def make_link(simulator: Simulator, fast: bool) -> SimLink:

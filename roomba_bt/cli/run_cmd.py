@@ -200,6 +200,7 @@ def run_command(args: argparse.Namespace) -> int:
                 random_start=args.random_start,
                 coverage=True,
                 battery=args.battery,
+                trace=bool(args.plot),  # only a plot reads the trajectory
             )
         except WorldError as exc:
             return _error(str(exc))

@@ -96,6 +96,9 @@ class ParserCounters:
     bytes_fed: int = 0
     #: candidates that passed the checksum with a value out of range (dropped)
     implausible: int = 0
+    #: a header and the right n-bytes, but an id byte wrong: most likely a frame cut short
+    #: (the next one's bytes where its ids should be)
+    cut_frames: int = 0
 
 
 class StreamParser:
@@ -191,18 +194,28 @@ class StreamParser:
             anchor, left, right, self._limit(anchor, at, now)
         ):
             suspect = self._suspect
-            self._suspect = (left, right, at, now)
+            self._suspect = (left, right, at, now, self._failed())
             if suspect is None or not _steps_within(
                 suspect, left, right, self._limit(suspect, at, now)
             ):
                 return False
         self._suspect = None
-        self._anchor = (left, right, at, now)
+        self._anchor = (left, right, at, now, self._failed())
         return True
 
+    def _failed(self) -> int:
+        """Candidates refused so far (cut short, checksum failures, out of range)."""
+        counters = self.counters
+        return counters.checksum_failures + counters.implausible + counters.cut_frames
+
     def _limit(self, since: _EncoderMark, at: int, now: float | None) -> int:
-        """Most counts the wheels can turn between the frame ``since`` and one at ``at``."""
-        slots = round((at - since[2]) / self._size)
+        """Most counts the wheels can turn between the frame ``since`` and one at ``at``.
+        Bytes between them that are not whole frames count as one more frame, and so does
+        each candidate refused (checksum, range) since: a frame cut short or corrupted on the
+        line took its 15 ms on the robot, so the next one may be two steps on."""
+        slots = -(-(at - since[2]) // self._size)
+        # each candidate refused since was most likely a frame: one slot each
+        slots = max(slots, 1 + self._failed() - since[4])
         then = since[3]
         if now is not None and then is not None:
             slots = max(slots, round((now - then) / SLOT_SECONDS))
@@ -266,6 +279,8 @@ class StreamParser:
             if bits & mask != template:
                 if bits & id_mask == template:  # a frame, but a reserved bit is set
                     counters.implausible += 1
+                elif window[1] == n:
+                    counters.cut_frames += 1
                 skipped += 1
                 pos += 1
             elif byte_sum(window) & 0xFF in ok_sums:
@@ -282,7 +297,10 @@ class StreamParser:
                         and (left - anchor[0] + MAX_COUNTS_PER_SLOT) & 0xFFFF <= _ONE_SLOT_SPAN
                         and (right - anchor[1] + MAX_COUNTS_PER_SLOT) & 0xFFFF <= _ONE_SLOT_SPAN
                     ):
-                        self._anchor = (left, right, base + pos, now)
+                        refused = (
+                            counters.checksum_failures + counters.implausible + counters.cut_frames
+                        )  # what _failed() says, without the call
+                        self._anchor = (left, right, base + pos, now, refused)
                         self._suspect = None
                         ok = True
                     else:
@@ -323,7 +341,8 @@ def _compile_checks(checks: tuple[tuple[int, int, int], ...]) -> ValueCheck | No
 
 
 #: (left counts, right counts, byte offset in the stream, arrival time or None)
-_EncoderMark = tuple[int, int, int, float | None]
+#: left and right counts, byte offset in the stream, arrival time, candidates refused so far
+_EncoderMark = tuple[int, int, int, float | None, int]
 #: A stream frame every 15 ms.
 SLOT_SECONDS = 0.015
 

@@ -16,10 +16,20 @@ class Faults:
     """What goes wrong, and how often.
 
     ``corrupt_rate``   probability that a robot->host byte is replaced by a random byte
+    ``bit_flip_rate``  probability that a robot->host byte has one of its bits flipped (what a
+                       noisy line does; two flips of one bit position in opposite directions
+                       within a frame cancel in the 8-bit checksum)
+    ``truncate_rate``  probability that a stream frame is cut short: a random 1..n-1 bytes of
+                       it are sent, the rest never (the next frame follows at once)
     ``drop_rate``      probability that a stream frame is never sent (its distance/angle lost)
     ``latency``        seconds added before robot->host bytes become readable
     ``inject_text``    ASCII the "firmware" prints into the stream, every ``inject_every`` s
     ``disconnect_at``  simulated time (s) at which the link goes away for good
+    ``reset_at``       simulated time (s) at which the robot resets (as Reset, 7, does: the
+                       firmware banner, the OI Off, the stream ended)
+    ``stream_stop_at`` simulated time (s) at which the robot stops streaming (the port open,
+                       the OI still listening)
+    ``sleep_at``       simulated time (s) at which the robot falls asleep (deaf but for Start)
     ``noise``          standard deviation, in raw units, added to analog sensor signals
                        (cliff, light-bump and wall signals, voltage, currents)
     """
@@ -31,10 +41,17 @@ class Faults:
     inject_every: float = 1.0
     disconnect_at: float | None = None
     noise: float = 0.0
+    bit_flip_rate: float = 0.0
+    truncate_rate: float = 0.0
+    reset_at: float | None = None
+    stream_stop_at: float | None = None
+    sleep_at: float | None = None
 
     def __post_init__(self) -> None:
         for name, lo, hi in (
             ("corrupt_rate", 0.0, 1.0),
+            ("bit_flip_rate", 0.0, 1.0),
+            ("truncate_rate", 0.0, 1.0),
             ("drop_rate", 0.0, 1.0),
             ("latency", 0.0, 10.0),
             ("inject_every", 0.015, 3600.0),
@@ -45,16 +62,26 @@ class Faults:
                 raise ValueError(f"faults.{name}: found {value!r}; allowed: a number {lo}..{hi}")
             if not lo <= value <= hi or math.isnan(value):
                 raise ValueError(f"faults.{name}: found {value!r}; allowed: {lo}..{hi}")
-        if self.disconnect_at is not None and not (
-            isinstance(self.disconnect_at, int | float) and self.disconnect_at >= 0
-        ):
-            raise ValueError(
-                f"faults.disconnect_at: found {self.disconnect_at!r}; allowed: seconds >= 0"
-            )
+        for name in ("disconnect_at", "reset_at", "stream_stop_at", "sleep_at"):
+            at = getattr(self, name)
+            if at is not None and not (
+                isinstance(at, int | float) and not isinstance(at, bool) and at >= 0
+            ):
+                raise ValueError(f"faults.{name}: found {at!r}; allowed: seconds >= 0")
         if not self.inject_text.isascii():
             raise ValueError(
                 f"faults.inject_text: found {self.inject_text!r}; allowed: ASCII text only"
             )
+
+    @property
+    def timed(self) -> tuple[tuple[float, str], ...]:
+        """The one-off faults (not the link's loss), as (time, kind), soonest first."""
+        kinds = (
+            ("reset", self.reset_at),
+            ("stream stop", self.stream_stop_at),
+            ("sleep", self.sleep_at),
+        )
+        return tuple(sorted((at, kind) for kind, at in kinds if at is not None))
 
 
 NO_FAULTS = Faults()

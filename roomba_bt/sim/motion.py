@@ -210,7 +210,7 @@ class Motion(Sensing):
             rc = rc - 0x10000 if rc > 0x7FFF else rc
         v[43] = lc
         v[44] = rc
-        if not self.ticks & 3:
+        if not self.ticks & 3 and self.keeps_trace:
             self.trace.append(TracePoint(self.time, self.x, self.y, self.theta, self.mode))
 
     def _reach(self, x: float, y: float, ux: float, uy: float) -> float:

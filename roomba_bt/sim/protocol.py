@@ -176,7 +176,8 @@ class OIProtocol(StreamOutput):
         if mode is not self.mode:
             self._event("mode", f"{self.mode.label}->{mode.label} ({cause})")
             self.mode = mode
-            self.trace.append(TracePoint(self.time, self.x, self.y, self.theta, mode))
+            if self.keeps_trace:
+                self.trace.append(TracePoint(self.time, self.x, self.y, self.theta, mode))
         # Some 600-series firmware reports mode + 1 in packet 35 (the profile says which).
         self.values[35] = int(mode) + (1 if self.profile.reports_mode_plus_one else 0)
 

@@ -98,7 +98,12 @@ class StreamOutput(Power):
         self._delayed: deque[tuple[float, bytes]] = deque()
         self._reply_packers: dict[tuple[int, ...], _Packer] = {}
         #: no fault touches the bytes on their way out: a frame goes straight into _out
-        self._plain_output = not (faults.corrupt_rate or faults.latency)
+        self._plain_output = not (
+            faults.corrupt_rate or faults.latency or faults.bit_flip_rate or faults.truncate_rate
+        )
+        #: bytes still to send before the next bit flip (drawn geometrically: one draw per
+        #: flip, not one per byte)
+        self._flip_in = self._next_flip() if faults.bit_flip_rate else 0
         self.bytes_sent = 0
         self.frames_sent = 0
 
@@ -165,11 +170,35 @@ class StreamOutput(Power):
                 if rng.random() < rate:
                     buf[i] = (buf[i] + rng.randrange(1, 256)) & 0xFF
             data = bytes(buf)
+        if faults.bit_flip_rate:
+            data = self._flip_bits(data)
         self.bytes_sent += len(data)
         if faults.latency:
             self._delayed.append((self.time + faults.latency, data))
         else:
             self._out += data
+
+    def _next_flip(self) -> int:
+        """Bytes to the next flipped one: geometric with the per-byte rate (0: this one)."""
+        rate = self.faults.bit_flip_rate
+        if rate >= 1.0:
+            return 0
+        u = 1.0 - self._fault_rng.random()  # in (0, 1]
+        return int(math.log(u) / math.log1p(-rate))
+
+    def _flip_bits(self, data: bytes) -> bytes:
+        """``data`` with one bit flipped in each byte the geometric draws land on."""
+        at = self._flip_in
+        if at >= len(data):
+            self._flip_in = at - len(data)
+            return data
+        buf = bytearray(data)
+        rng = self._fault_rng
+        while at < len(buf):
+            buf[at] ^= 1 << rng.randrange(8)
+            at += 1 + self._next_flip()
+        self._flip_in = at - len(buf)
+        return bytes(buf)
 
     def _pack_reply(self, ids: tuple[int, ...]) -> bytes:
         packer = self._reply_packers.get(ids)

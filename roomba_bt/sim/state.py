@@ -78,6 +78,9 @@ class RobotState:
         values[59 + k] == k                    (k = 0..255)
     """
 
+    #: whether ``trace`` grows (the Simulator's ``trace`` argument)
+    keeps_trace: bool = True
+
     def __init__(
         self,
         world: World,

@@ -18,6 +18,7 @@ on the wire, for any parser. The oracle therefore does not assume it away:
 from __future__ import annotations
 
 import functools
+import math
 import random
 from dataclasses import dataclass
 
@@ -125,33 +126,51 @@ def is_valid_at(data: bytes, i: int, layout: FrameLayout, sums: frozenset[int]) 
     return ids_ok and sum(data[i : i + size]) & 0xFF in sums and in_range(data, i, layout)
 
 
+def refused_at(data: bytes, i: int, layout: FrameLayout, sums: frozenset[int]) -> bool:
+    """A candidate the parser counts as refused: a header and the right n-bytes, then an id
+    wrong (cut short), a reserved bit set, the sum wrong or a value out of range (the encoder
+    step aside: the scan counts that one)."""
+    size = layout.frame_size
+    if i + size > len(data) or data[i] != 19:
+        return False
+    if data[i + 1] != layout.payload_size:
+        return False  # no candidate at all
+    # a frame cut short (an id wrong), a reserved bit set, the sum wrong, or out of range
+    return not is_valid_at(data, i, layout, sums)
+
+
 def reference_scan(data: bytes, layout: FrameLayout, sums: frozenset[int]) -> list[int]:
     """Start positions a plain left-to-right scan accepts: valid windows whose encoder step
     from the last accepted one is at most MAX_COUNTS_PER_SLOT per frame size between them,
     or, after one refused for its step alone, from that one."""
     starts: list[int] = []
     size = layout.frame_size
-    anchor: tuple[int, int, int] | None = None
-    suspect: tuple[int, int, int] | None = None
+    anchor: tuple[int, int, int, int] | None = None
+    suspect: tuple[int, int, int, int] | None = None
     encoders = 43 in layout.members and 44 in layout.members
+    failures = 0  # candidates refused so far, as the parser counts them
 
-    def near(ref: tuple[int, int, int], left: int, right: int, at: int) -> bool:
-        limit = MAX_COUNTS_PER_SLOT * max(1, round((at - ref[2]) / size))
+    def near(ref: tuple[int, int, int, int], left: int, right: int, at: int) -> bool:
+        slots = max(math.ceil((at - ref[2]) / size), 1 + failures - ref[3])
+        limit = MAX_COUNTS_PER_SLOT * max(1, slots)
         return _step(ref[0], left) <= limit and _step(ref[1], right) <= limit
 
     i = 0
     while i < len(data):
+        if refused_at(data, i, layout, sums):
+            failures += 1
         if is_valid_at(data, i, layout, sums):
             if encoders:
                 frame = layout.decode(data, i + 2)
                 left, right = frame[43], frame[44]
                 if anchor is not None and not near(anchor, left, right, i):
                     refused = suspect
-                    suspect = (left, right, i)
+                    suspect = (left, right, i, failures)
                     if refused is None or not near(refused, left, right, i):
+                        failures += 1
                         i += 1
                         continue
-                anchor, suspect = (left, right, i), None
+                anchor, suspect = (left, right, i, failures), None
             starts.append(i)
             i += size
         else:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from roomba_bt.oi import commands as C
+from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.stream import StreamParser
 from roomba_bt.sim import Faults, SimLink, Simulator
 
@@ -105,3 +106,60 @@ def test_faults_are_repeatable_for_a_seed() -> None:
 def test_bad_faults_name_the_field(kwargs: dict[str, object], field: str) -> None:
     with pytest.raises(ValueError, match=f"faults.{field}: found"):
         Faults(**kwargs)  # type: ignore[arg-type]
+
+
+def test_bit_flips_change_one_bit_of_a_byte_at_about_the_rate() -> None:
+    data, _ = stream_bytes(Faults(bit_flip_rate=0.01), seconds=20.0)
+    clean, _ = stream_bytes(Faults(), seconds=20.0)
+    assert len(data) == len(clean)
+    flipped = [a ^ b for a, b in zip(data, clean, strict=True) if a != b]
+    assert all(bin(x).count("1") == 1 for x in flipped)  # single bits, never a new byte
+    assert 0.007 * len(data) < len(flipped) < 0.013 * len(data)
+
+
+def test_bit_flips_some_pass_the_checksum_and_the_parser_survives() -> None:
+    data, sim = stream_bytes(Faults(bit_flip_rate=0.02), seconds=30.0)
+    parser = StreamParser(IDS)
+    frames = parser.feed(data)
+    assert parser.counters.checksum_failures > 0
+    assert 0.5 * sim.frames_sent < len(frames) <= sim.frames_sent
+
+
+def test_truncated_frames_are_cut_short_and_the_next_one_follows() -> None:
+    data, sim = stream_bytes(Faults(truncate_rate=0.2), seconds=6.0)
+    clean, _ = stream_bytes(Faults(), seconds=6.0)
+    assert len(data) < len(clean)
+    parser = StreamParser(IDS)
+    frames = parser.feed(data)
+    # every cut frame is lost, the others are found (a cut frame hides no whole one)
+    assert 0.7 * sim.frames_sent < len(frames) < 0.9 * sim.frames_sent
+
+
+@pytest.mark.parametrize(
+    ("faults", "event", "streaming"),
+    [
+        (Faults(reset_at=1.0), "reset", False),
+        (Faults(stream_stop_at=1.0), "stream stop", False),
+        (Faults(sleep_at=1.0), "sleep", False),
+    ],
+)
+def test_timed_faults_happen_once_at_their_time(
+    faults: Faults, event: str, streaming: bool
+) -> None:
+    data, sim = stream_bytes(faults, seconds=2.0)
+    assert [e.detail for e in sim.events if e.kind == "fault"] == [event]
+    assert sim.streaming is streaming
+    parser = StreamParser(IDS)
+    frames = parser.feed(data)
+    assert 60 <= len(frames) <= 68  # one second of frames, then none
+    if event == "reset":
+        assert b"Roomba by iRobot" in data and sim.mode is OIMode.OFF
+    if event == "sleep":
+        assert sim.asleep
+
+
+def test_fault_times_and_rates_are_checked() -> None:
+    with pytest.raises(ValueError, match=r"faults.reset_at: found -1; allowed: seconds >= 0"):
+        Faults(reset_at=-1)
+    with pytest.raises(ValueError, match=r"faults.bit_flip_rate: found 2"):
+        Faults(bit_flip_rate=2)
