@@ -9,7 +9,7 @@ RUN_STAMP := $(VENV)/.installed-run
 STAMP := $(VENV)/.installed
 EXTRAS ?= test,plot,bench,cluster,monitor,browser-test
 
-.PHONY: run test wheel-check lint typecheck bench icount routines coverage golden venv clean monitor-screenshots
+.PHONY: run test wheel-check lint typecheck bench icount routines coverage golden venv clean monitor-screenshots reliability
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -55,6 +55,11 @@ bench: $(STAMP)
 # companion of the timings in docs/performance.md; 1 to 3 min on 2 cores).
 icount: $(STAMP)
 	$(BIN)/python -m bench.icount
+
+# docs/reliability.md's figures: noise on the virtual clock, the fault table over a pty, memory
+# over 4 robot-hours (about 40 min of CPU, and real time for the faults).
+reliability: $(STAMP)
+	$(BIN)/python -m bench.reliability
 
 # The routines' success rates and speed into docs/routines.md (2 to 7 min on 2 cores).
 routines: $(STAMP)

@@ -72,6 +72,11 @@ def register(sub: Any) -> None:
     faults.add_argument("--inject-every", type=float, default=1.0, help="seconds between texts")
     faults.add_argument("--disconnect-at", type=float, help="drop the line at this time (s)")
     faults.add_argument("--noise", type=float, default=0.0, help="analog sensor noise (raw)")
+    faults.add_argument("--bit-flip-rate", type=float, default=0.0, help="per-byte probability")
+    faults.add_argument("--truncate-rate", type=float, default=0.0, help="per-frame probability")
+    faults.add_argument("--reset-at", type=float, help="the robot resets at this time (s)")
+    faults.add_argument("--stream-stop-at", type=float, help="the stream stops at this time (s)")
+    faults.add_argument("--sleep-at", type=float, help="the robot falls asleep at this time (s)")
     parser.set_defaults(func=run_sim)
 
 
@@ -96,6 +101,11 @@ def run_sim(args: argparse.Namespace) -> int:
             inject_every=args.inject_every,
             disconnect_at=args.disconnect_at,
             noise=args.noise,
+            bit_flip_rate=args.bit_flip_rate,
+            truncate_rate=args.truncate_rate,
+            reset_at=args.reset_at,
+            stream_stop_at=args.stream_stop_at,
+            sleep_at=args.sleep_at,
         )
     except ValueError as exc:
         return _fail(str(exc), ExitCode.INVALID)
@@ -167,7 +177,8 @@ def run_sim(args: argparse.Namespace) -> int:
             signal.signal(sig, handler)
     print(
         f"roomba-bt sim: {simulator.time:.1f} s simulated, {simulator.frames_sent} frames, "
-        f"{len(simulator.violations)} ignored actuator commands, mode {simulator.mode.label}",
+        f"{len(simulator.violations)} ignored actuator commands, mode {simulator.mode.label}, "
+        f"wheels {simulator.requested_left:.0f}/{simulator.requested_right:.0f} mm/s",
         file=sys.stderr,
     )
     if args.plot:

@@ -1,0 +1,471 @@
+"""``make reliability``: the figures of docs/reliability.md, from one command.
+
+Two parts (``python -m bench.reliability noise|faults|memory``, all three by default):
+
+* **noise**: bump-and-turn in the corridor on the virtual clock, single-bit flips on the
+  robot's bytes (``Faults.bit_flip_rate``) at 10^-3 and 10^-2 per byte, back-to-back runs of
+  at most an hour until the robot-hours are reached. A *phantom hazard stop* is a run that
+  ends on a cliff or a wheel drop: the corridor has no drop and the simulator's wheels never
+  drop, so every one is a corrupted frame the tree believed. A *phantom bump* is a bump the
+  tree saw start that the simulator's bumpers did not show in the last three steps (an
+  unneeded back-off and turn). Each rate also without the hazard confirmation (the runner's
+  :class:`~roomba_bt.robot.hazards.HazardConfirmation` bypassed), for comparison.
+* **faults**: each fault injected N times (20 by default) over a pty: ``roomba-bt sim --pty``
+  in one process, ``roomba-bt run --port`` in another with ``--record``; exit code, the message
+  naming the cause, the simulator's final mode and wheels (its summary line), whether the run
+  said the stop was undeliverable, and the time from the last valid frame (or the signal) to
+  the first drive 0 written (from the record), or to the process's end.
+* **memory**: ``roomba-bt run patrol --fast`` for 4 robot-hours without ``--plot``: resident
+  memory sampled every simulated 10 minutes.
+
+Figures vary with the machine's load (the fault timings are wall-clock); the counts do not.
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import json
+import os
+import signal
+import statistics
+import subprocess
+import sys
+import tempfile
+import textwrap
+import time
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+
+CLI = [sys.executable, "-m", "roomba_bt.cli"]
+HALT = bytes([137, 0, 0, 0, 0])
+SPIN = """
+mission: spin-forever
+tree:
+  sequence:
+    - mode: safe
+    - drive: {velocity: 200 mm/s, radius: spin_left}
+"""
+WAIT_IN_PASSIVE = """
+mission: wait-in-passive
+tree:
+  wait: 10min
+"""
+
+
+# ----------------------------------------------------------------------------- noise
+@dataclass
+class NoiseResult:
+    rate: float
+    confirm: bool
+    robot_hours: float = 0.0
+    runs: int = 0
+    phantom_stops: int = 0
+    phantom_bumps: int = 0
+    real_bumps: int = 0
+    lost_connection: int = 0
+    stalls: int = 0
+    stalls_ridden: int = 0
+    unconfirmed: int = 0
+    reasons: list[str] = field(default_factory=list)
+
+    def row(self) -> str:
+        hours = self.robot_hours or 1.0
+        return (
+            f"| {self.rate:g} | {'yes' if self.confirm else 'no (bypassed)'} | "
+            f"{self.robot_hours:.1f} | {self.phantom_stops} ({self.phantom_stops / hours:.2f}"
+            f" per robot-hour) | {self.phantom_bumps} ({self.phantom_bumps / hours:.1f}/h) | "
+            f"{self.real_bumps} | {self.unconfirmed} | {self.stalls} / {self.stalls_ridden} | "
+            f"{self.lost_connection} |"
+        )
+
+
+NOISE_HEADER = (
+    "| bit flips per byte | hazard confirmation | robot-hours | phantom hazard stops | "
+    "phantom bumps | real bumps | onsets held and never confirmed | watchdog stalls / "
+    "ridden through | ended as lost connection |\n|---|---|---|---|---|---|---|---|---|"
+)
+
+
+def noise(rate: float, hours: float, confirm: bool, seed: int = 1) -> NoiseResult:
+    from roomba_bt.mission import load_mission
+    from roomba_bt.mission.shipped import shipped_missions
+    from roomba_bt.oi.profiles import CREATE2
+    from roomba_bt.robot import hazards
+    from roomba_bt.runtime.loop import MissionRunner
+    from roomba_bt.runtime.stack import RunStack
+    from roomba_bt.runtime.summary import Outcome
+    from roomba_bt.sim import Faults, SimLink, Simulator, load_world
+
+    result = NoiseResult(rate, confirm)
+    world = load_world("corridor")
+    original = hazards.HazardConfirmation.frame
+    if not confirm:
+        hazards.HazardConfirmation.frame = (  # type: ignore[method-assign]
+            lambda self, frame, robot_reacted=False: frame
+        )
+    try:
+        left = hours * 3600.0
+        while left > 1.0:
+            chunk = min(3600.0, left)
+            mission = load_mission(
+                shipped_missions()["bump-and-turn"], {"duration": f"{chunk:.0f}s"}, profile=CREATE2
+            )
+            sim = Simulator(
+                world, CREATE2, seed + result.runs, Faults(bit_flip_rate=rate), trace=False
+            )
+            truth = [0, 0, 0]
+            seen = [0]
+
+            def observe(
+                runner: MissionRunner,
+                sim: Simulator = sim,
+                truth: list[int] = truth,
+                seen: list[int] = seen,
+            ) -> None:
+                frame = runner.snapshot.frame
+                shown = frame[7] & 0b11
+                true = sim.values[7] & 0b11
+                truth.pop(0)
+                truth.append(true)
+                onset = shown & ~seen[0]
+                if onset:
+                    if onset & (truth[0] | truth[1] | truth[2]):
+                        result.real_bumps += 1
+                    else:
+                        result.phantom_bumps += 1
+                seen[0] = shown
+
+            stack = RunStack(mission, SimLink(sim), profile=CREATE2, observer=observe)
+            summary = stack.run()
+            result.runs += 1
+            result.robot_hours += summary.mission_time_s / 3600.0
+            left -= summary.mission_time_s
+            result.stalls += summary.stalls
+            result.stalls_ridden += summary.stalls_ridden
+            result.unconfirmed += summary.unconfirmed_hazards
+            if summary.outcome is Outcome.CONNECTION_LOST:
+                result.lost_connection += 1
+            if summary.outcome is Outcome.FAILURE and (
+                "cliff" in summary.reason or "wheel drop" in summary.reason
+            ):
+                result.phantom_stops += 1
+                result.reasons.append(summary.reason)
+            elif summary.outcome is not Outcome.SUCCESS:
+                result.reasons.append(f"{summary.outcome.value}: {summary.reason}")
+            if summary.mission_time_s < 1.0:
+                break  # a run that cannot start: do not spin
+    finally:
+        hazards.HazardConfirmation.frame = original  # type: ignore[method-assign]
+    return result
+
+
+# ----------------------------------------------------------------------------- faults
+@dataclass
+class Trial:
+    exit_code: int | None
+    message: str
+    sim_line: str
+    undeliverable: bool
+    to_stop_ms: float | None
+    traceback: bool
+    summary_printed: bool
+
+
+@dataclass
+class Fault:
+    name: str
+    sim_args: tuple[str, ...] = ()
+    mission: str = SPIN
+    run_args: tuple[str, ...] = ()
+    #: what the script does to the run or the simulator once the robot drives
+    act: Callable[[subprocess.Popen[str], subprocess.Popen[str]], float | None] | None = None
+    #: which line names the cause (the reason on stderr, or the summary's outcome)
+    note: str = ""
+
+
+def _signal(*signums: int, gap: float = 0.005) -> Callable[..., float]:
+    def act(run: subprocess.Popen[str], sim: subprocess.Popen[str]) -> float:
+        sent = time.monotonic()
+        for i, signum in enumerate(signums):
+            if i:
+                time.sleep(gap)
+            run.send_signal(signum)
+        return sent
+
+    return act
+
+
+def _kill_sim(run: subprocess.Popen[str], sim: subprocess.Popen[str]) -> float:
+    sent = time.monotonic()
+    sim.kill()
+    return sent
+
+
+FAULTS = (
+    Fault("robot reset", ("--reset-at", "12")),
+    Fault("port vanished (simulator killed)", act=_kill_sim),
+    Fault("stream stopped", ("--stream-stop-at", "12")),
+    Fault("baud mismatch (robot at 19200, run at 115200)", ("--baud", "19200")),
+    Fault("SIGINT", act=_signal(signal.SIGINT)),
+    Fault("double SIGINT", act=_signal(signal.SIGINT, signal.SIGINT)),
+    Fault("SIGTERM", act=_signal(signal.SIGTERM)),
+)
+
+
+def _wait_for(predicate: Callable[[], bool], timeout: float) -> bool:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return True
+        time.sleep(0.02)
+    return False
+
+
+def _record(path: Path) -> list[dict[str, object]]:
+    if not path.exists():
+        return []
+    out = []
+    for line in path.read_text().splitlines():
+        try:
+            out.append(json.loads(line))
+        except json.JSONDecodeError:
+            continue
+    return out
+
+
+def trial(fault: Fault, workdir: Path, index: int) -> Trial:
+    mission = workdir / f"{index}.yaml"
+    mission.write_text(textwrap.dedent(fault.mission))
+    record = workdir / f"{index}.jsonl"
+    sim = subprocess.Popen(
+        [*CLI, "sim", "--pty", *fault.sim_args],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    assert sim.stdout is not None
+    port = sim.stdout.readline().strip()
+    run = subprocess.Popen(
+        [*CLI, "run", str(mission), "--port", port, "--record", str(record), "--display",
+         "none", *fault.run_args],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    sent = None
+    if fault.act is not None:
+        started = _wait_for(
+            lambda: '"b": "89' in (record.read_text() if record.exists() else ""), 15
+        )
+        if started:
+            time.sleep(0.5)
+            sent = fault.act(run, sim)
+    try:
+        out, err = run.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        run.kill()
+        out, err = run.communicate()
+        err = "roomba-bt: HUNG: killed after 60 s\n" + err
+    ended = time.monotonic()
+    if sim.poll() is None:
+        sim.send_signal(signal.SIGINT)
+    try:
+        _, sim_err = sim.communicate(timeout=10)
+    except subprocess.TimeoutExpired:
+        sim.kill()
+        _, sim_err = sim.communicate()
+    sim_line = next((line for line in sim_err.splitlines() if "simulated" in line), "(killed)")
+    # time from the fault to the first drive 0: the last chunk read before it (a frame) for
+    # a fault on the robot's side, the signal for a signal
+    # (the watchdog's drive 0: the first one written 50 ms or more after the last chunk read;
+    # a tick's drive 0 follows its frame at once)
+    to_stop = None
+    last_in = None
+    for entry in _record(record):
+        at = float(entry.get("t", 0.0))  # type: ignore[arg-type]
+        if entry.get("d") == "in":
+            last_in = at
+        elif (
+            entry.get("d") == "out"
+            and last_in is not None
+            and at - last_in >= 0.05
+            and bytes.fromhex(str(entry.get("b", ""))).startswith(HALT)
+        ):
+            to_stop = (at - last_in) * 1000
+            break
+    if sent is not None:  # a signal or the port: to the process's end
+        to_stop = (ended - sent) * 1000
+    reason = next(
+        (
+            line
+            for line in err.splitlines()
+            if line.startswith(("roomba-bt: connection lost", "roomba-bt: HUNG"))
+        ),
+        next((line for line in out.splitlines() if line.startswith("outcome")), ""),
+    )
+    return Trial(
+        exit_code=run.returncode,
+        message=reason,
+        sim_line=sim_line,
+        undeliverable="NOT DELIVERED" in out,
+        to_stop_ms=to_stop,
+        traceback="Traceback" in err,
+        summary_printed="safe stop" in out,
+    )
+
+
+FAULT_HEADER = (
+    "| fault | trials | exit codes | the message (first trial) | simulator at the end "
+    "(first trial) | stop undeliverable, said so | fault to drive 0 (ms: median, max) | "
+    "traceback / no summary / hung |\n|---|---|---|---|---|---|---|---|"
+)
+
+
+def fault_row(fault: Fault, trials: list[Trial]) -> str:
+    codes = sorted({t.exit_code for t in trials}, key=lambda c: (c is None, c or 0))
+    times = [t.to_stop_ms for t in trials if t.to_stop_ms is not None]
+    timing = f"{statistics.median(times):.0f}, {max(times):.0f}" if times else "n/a"
+    if fault.act is not None and fault.name != "port vanished (simulator killed)":
+        timing += " (signal to exit)"
+    if fault.name.startswith("port vanished"):
+        timing = f"none possible ({timing} to exit)"
+    if fault.name.startswith("baud"):
+        timing = "never drove (start-up refused)"
+    bad = sum(t.traceback for t in trials), sum(not t.summary_printed for t in trials)
+    hung = sum("HUNG" in t.message for t in trials)
+    first = trials[0]
+    return (
+        f"| {fault.name} | {len(trials)} | {', '.join(str(c) for c in codes)} | "
+        f"{first.message.replace('|', '/')} | {first.sim_line.removeprefix('roomba-bt sim: ')} | "
+        f"{sum(t.undeliverable for t in trials)} | {timing} | {bad[0]} / {bad[1]} / {hung} |"
+    )
+
+
+def faults(count: int, workers: int) -> list[str]:
+    rows = [FAULT_HEADER]
+    with tempfile.TemporaryDirectory() as tmp:
+        for n, fault in enumerate(FAULTS):
+            workdir = Path(tmp) / str(n)
+            workdir.mkdir()
+            with ThreadPoolExecutor(workers) as pool:
+                trials = list(pool.map(functools.partial(trial, fault, workdir), range(count)))
+            rows.append(fault_row(fault, trials))
+            print(rows[-1], flush=True)
+    rows.append(asleep_row(count))
+    print(rows[-1], flush=True)
+    return rows
+
+
+def asleep_row(count: int) -> str:
+    """The robot falls asleep (5 minutes in Passive, keep-awake off): on the virtual clock, in
+    process (on a pty each trial would take 5 minutes of wall time)."""
+    from roomba_bt.mission import load_mission
+    from roomba_bt.oi.profiles import CREATE2
+    from roomba_bt.runtime.stack import RunStack
+    from roomba_bt.sim import SimLink, Simulator, load_world
+
+    codes: set[int] = set()
+    message = sim_line = ""
+    waits: list[float] = []
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "wait.yaml"
+        path.write_text(WAIT_IN_PASSIVE)
+        for seed in range(count):
+            mission = load_mission(path, {}, profile=CREATE2)
+            sim = Simulator(load_world("empty-room"), CREATE2, seed, trace=False)
+            stack = RunStack(mission, SimLink(sim), profile=CREATE2, keep_awake=False)
+            summary = stack.run()
+            stack.close()
+            codes.add(summary.exit_code)
+            slept = next(e.time for e in sim.events if e.kind == "sleep")
+            waits.append(sim.time - slept)
+            if not message:
+                message = summary.reason
+                sim_line = (
+                    f"mode {sim.mode.label}, asleep {sim.asleep}, wheels "
+                    f"{sim.requested_left:.0f}/{sim.requested_right:.0f} mm/s"
+                )
+    return (
+        f"| robot asleep (5 min in Passive, --no-keep-awake; virtual clock, in process) | "
+        f"{count} | {', '.join(map(str, sorted(codes)))} | {message} | {sim_line} | 0 | "
+        f"not driving (Passive: no drive 0 needed); sleep to the run's end "
+        f"{statistics.median(waits) * 1000:.0f} ms | 0 / 0 / 0 |"
+    )
+
+
+# ----------------------------------------------------------------------------- memory
+def memory(hours: float) -> str:
+    """Resident memory of a patrol run on the virtual clock, every simulated 10 minutes."""
+    import resource
+
+    from roomba_bt.mission import load_mission
+    from roomba_bt.mission.shipped import shipped_missions
+    from roomba_bt.oi.profiles import CREATE2
+    from roomba_bt.runtime.loop import MissionRunner
+    from roomba_bt.runtime.stack import RunStack
+    from roomba_bt.sim import SimLink, Simulator, load_world
+
+    def rss_mb() -> float:
+        with open("/proc/self/statm") as statm:
+            return int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 1e6
+
+    samples: list[tuple[float, float]] = []
+    mission = load_mission(
+        shipped_missions()["patrol"], {"laps": "100000", "low_battery": "0%"}, profile=CREATE2
+    )
+    world = load_world("corridor")
+    sim = Simulator(world, CREATE2, 1, coverage=True, trace=False)  # as run without --plot
+    sim.battery_charge = 1e9  # four hours of driving on one charge: memory is the question
+
+    def observe(runner: MissionRunner) -> None:
+        now = runner.snapshot.time
+        if not samples or now - samples[-1][0] >= 600:
+            samples.append((now, rss_mb()))
+
+    stack = RunStack(mission, SimLink(sim), profile=CREATE2, timeout_s=hours * 3600,
+                     observer=observe)  # fmt: skip
+    summary = stack.run()
+    samples.append((summary.mission_time_s, rss_mb()))
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1000
+    after_warmup = [mb for t, mb in samples if t >= 600]
+    spread = max(after_warmup) - min(after_warmup) if after_warmup else 0.0
+    points = ", ".join(
+        f"{t / 3600:.1f} h {mb:.1f}" for t, mb in samples[:: max(1, len(samples) // 9)]
+    )
+    return (
+        f"patrol, corridor, {summary.mission_time_s / 3600:.2f} robot-hours "
+        f"({summary.outcome.value}), trace off: resident memory (MB) {points}; from 10 min "
+        f"to the end it varies by {spread:.1f} MB (peak {peak:.0f} MB)"
+    )
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n", 1)[0])
+    parser.add_argument("part", nargs="*", choices=("noise", "faults", "memory"), default=[])
+    parser.add_argument("--hours", type=float, default=10.0, help="robot-hours at 1e-3")
+    parser.add_argument("--hours-1e-2", type=float, default=3.0, help="robot-hours at 1e-2")
+    parser.add_argument(
+        "--hours-bypassed", type=float, default=2.0,
+        help="robot-hours at each rate without the hazard confirmation",
+    )  # fmt: skip
+    parser.add_argument("--trials", type=int, default=20, help="trials per fault")
+    parser.add_argument("--workers", type=int, default=2, help="trials at once")
+    parser.add_argument("--memory-hours", type=float, default=4.0)
+    args = parser.parse_args(argv)
+    parts = args.part or ["noise", "faults", "memory"]
+    if "noise" in parts:
+        print(NOISE_HEADER, flush=True)
+        for rate, hours in ((1e-3, args.hours), (1e-2, args.hours_1e_2)):
+            for confirm in (True, False):
+                result = noise(rate, hours if confirm else args.hours_bypassed, confirm)
+                print(result.row(), flush=True)
+                for reason in result.reasons[:3]:
+                    print(f"  e.g. {reason}", file=sys.stderr)
+    if "faults" in parts:
+        faults(args.trials, args.workers)
+    if "memory" in parts:
+        print(memory(args.memory_hours), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
