@@ -69,7 +69,7 @@ __all__ = ["Connection", "EndMode", "LinkCounters", "LinkStatus", "TimedFrame"]
 log = logging.getLogger(__name__)
 
 #: What a stop may meet and must survive.
-_RECOVERABLE = (RobotError, *LINK_ERRORS)
+_RECOVERABLE: tuple[type[Exception], ...] = (RobotError, *LINK_ERRORS)
 #: The spec asks for 100 ms after Baud (129) before sending at the new rate.
 BAUD_CHANGE_WAIT = 0.1
 #: How long the input must stay quiet after pausing a stale stream, before the confirm query.

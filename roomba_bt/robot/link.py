@@ -29,11 +29,12 @@ from roomba_bt.oi.stream import StreamParser, shows_reset_banner
 from roomba_bt.robot.errors import PortLost, StreamStalled
 from roomba_bt.robot.interface import ModeChange
 from roomba_bt.transport.base import Transport, TransportError
+from roomba_bt.transport.serial_port import TERMIOS_ERRORS
 
 log = logging.getLogger(__name__)
 
-#: What breaking a link raises, from our transport, pyserial, sockets or the simulator.
-LINK_ERRORS = (OSError, serial.SerialException)
+#: What breaking a link raises, from our transport, pyserial, sockets, termios or the simulator.
+LINK_ERRORS: tuple[type[Exception], ...] = (OSError, serial.SerialException, *TERMIOS_ERRORS)
 
 #: Chunks read kept for :meth:`StreamLink.banner_seen` (one chunk per read: a few frames).
 RECENT_CHUNKS = 16

@@ -39,6 +39,17 @@ NO_WRITE_TIMEOUT_SCHEMES = ("rfc2217://",)
 POLL_INTERVAL = 0.001
 
 
+try:  # a pty whose other side closed while it was being set up: termios.error, no OSError
+    import termios
+
+    TERMIOS_ERRORS: tuple[type[Exception], ...] = (termios.error,)
+except ImportError:  # not POSIX
+    TERMIOS_ERRORS = ()
+_OPEN_ERRORS: tuple[type[Exception], ...] = (
+    serial.SerialException, OSError, ValueError, *TERMIOS_ERRORS
+)  # fmt: skip
+
+
 class SerialTransport:
     """Bytes over a pyserial port, with errors wrapped in :class:`TransportError`."""
 
@@ -80,7 +91,7 @@ class SerialTransport:
                 port.rts = False
                 port.dtr = False
             port.open()
-        except (serial.SerialException, OSError, ValueError) as exc:
+        except _OPEN_ERRORS as exc:
             raise TransportError(url, "open the port", exc) from exc
         return cls(port, url)
 

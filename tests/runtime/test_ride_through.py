@@ -13,7 +13,7 @@ from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome, RunSummary
 from roomba_bt.sim import Simulator, load_world
-from roomba_bt.sim.protocol import RESET_BANNER
+from roomba_bt.sim.protocol import DEFAULT_FIRMWARE, reset_banner
 
 from .simrun import TapLink
 
@@ -49,7 +49,7 @@ class BadPatchLink(TapLink):
             if self.bannered:
                 return b""
             self.bannered = True
-            return RESET_BANNER
+            return reset_banner(DEFAULT_FIRMWARE)
         if self.kind == "silent":
             return b""
         return bytes(b ^ 0xFF for b in data)
