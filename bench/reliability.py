@@ -211,6 +211,11 @@ FAULTS = (
     Fault("port vanished (simulator killed)", act=_kill_sim),
     Fault("stream stopped", ("--stream-stop-at", "12"), at=12.0),
     Fault("baud mismatch (robot at 19200, run at 115200)", ("--baud", "19200"), drives=False),
+    Fault(
+        "single-bit flips on 1 % of the bytes for 30 s (no fault: it must not end early)",
+        ("--bit-flip-rate", "0.01"),
+        run_args=("--timeout", "30s"),
+    ),
     Fault("SIGINT", act=_signal(signal.SIGINT)),
     Fault("double SIGINT", act=_signal(signal.SIGINT, signal.SIGINT)),
     Fault("SIGTERM", act=_signal(signal.SIGTERM)),
@@ -347,6 +352,8 @@ def fault_row(fault: Fault, trials: list[Trial]) -> str:
         timing = f"none possible ({timing} to exit)"
     if fault.name.startswith("baud"):
         timing = "never drove (start-up refused)"
+    if fault.name.startswith("single-bit"):
+        timing = "n/a (ends by its --timeout: exit 1)"
     bad = sum(t.traceback for t in trials), sum(not t.summary_printed for t in trials)
     hung = sum("HUNG" in t.message for t in trials)
     first = trials[0]
