@@ -9,7 +9,9 @@ nothing touches the tree or the connection from another thread. Per frame::
     after_tick:  record the tick in the feed -> a breakpoint hit? pause -> a step done? pause
 
 Pausing is the safe stop without ending the run: drive 0 and motors off where the mode takes
-them, then Start (Passive); the stream goes on, so the page still shows the robot. Resuming
+them, then Start (Passive); the stream goes on, so the page still shows the robot, but mission
+time stands still (the runner's ``clock_held``; the stream's tick index goes on): a wait or a
+time limit does not count the pause, and the summary's mission time leaves it out. Resuming
 re-enters the mode the robot was in before the pause (Safe or Full) through the connection,
 whose mode guard checks it like any other command, and the tree goes on from where it was.
 """
@@ -212,6 +214,7 @@ class MonitorSession:
         connection.send_many(commands)
         runner.summary.commands_written += len(commands)
         self.state.paused, self.state.pause_reason = True, why
+        runner.clock_held = True  # mission time stands still until the resume
         sent = ", ".join(c.name for c in commands) or "nothing to send"
         self.feed.event("control", f"pause ({why}): safe stop sent {sent}; tree frozen")
         for listener in self.listeners:
@@ -228,6 +231,7 @@ class MonitorSession:
             runner.connection.send_many(again)
             runner.summary.commands_written += len(again)
         self.state.paused, self.state.pause_reason = False, ""
+        runner.clock_held = False
         self._skip_tick = True  # the tree next ticks on a frame that shows the new mode
         back = f"back to {mode.label}" if mode is not None else "mode unchanged"
         if len(again) > 1:
@@ -278,12 +282,8 @@ class MonitorSession:
                 return
 
     def _previous_statuses(self, record: Any) -> str | None:
-        with self.feed.lock:
-            records = self.feed.records
-            if len(records) < 2:
-                return None
-            previous = records[-2]
-            return previous.statuses if previous.tree == record.tree else None
+        previous = self.feed.record(record.seq - 1)
+        return previous.statuses if previous is not None and previous.tree == record.tree else None
 
     def _replace_tree(self, runner: MissionRunner, mission: Any) -> None:
         """Reload at a safe point: safe stop, the old tree stopped, the new one from its root."""
@@ -301,6 +301,7 @@ class MonitorSession:
         self.feed.set_tree(mission.root)
         self.feed.event("reload", f"reloaded {mission.name}: the new tree starts from its root")
         self.state.paused = was_paused
+        runner.clock_held = was_paused
         self._skip_tick = True
         if not was_paused:
             self.state.pause_reason = ""

@@ -13,7 +13,7 @@ from roomba_bt.monitor.feed import RunFeed, TickRecord
 from roomba_bt.oi.bits import ChargingState
 from roomba_bt.oi.ir import IRCharacter
 from roomba_bt.oi.odometry import counts_to_mm, encoder_delta
-from roomba_bt.robot.interface import Snapshot
+from roomba_bt.robot.interface import SLOT_SECONDS, Snapshot
 
 
 def _ir(code: int) -> dict[str, Any]:
@@ -80,9 +80,10 @@ def robot_view(snapshot: Snapshot, rates: tuple[float, float] | None) -> dict[st
 
 
 def _rates(record: TickRecord, earlier: list[TickRecord]) -> tuple[float, float] | None:
-    if not earlier or earlier[0].time >= record.time:
+    """Per second of the stream (a paused run's mission time stands still; its stream not)."""
+    if not earlier or earlier[0].tick >= record.tick:
         return None
-    dt = record.time - earlier[0].time
+    dt = (record.tick - earlier[0].tick) * SLOT_SECONDS
     return (
         round((record.sent - earlier[0].sent) / dt, 1),
         round((record.refused - earlier[0].refused) / dt, 1),
@@ -94,9 +95,10 @@ def _value(value: Any) -> str:
     return text if len(text) <= 200 else text[:197] + "..."
 
 
-def state_view(record: TickRecord, earlier: list[TickRecord]) -> dict[str, Any]:
+def state_view(feed: RunFeed, record: TickRecord, earlier: list[TickRecord]) -> dict[str, Any]:
     """One tick: statuses, failure reasons, robot, poses, blackboard."""
-    snapshot = record.snapshot
+    snapshot = feed.snapshot(record)
+    board = feed.blackboard(record)
     out: dict[str, Any] = {
         "seq": record.seq,
         "tick": record.tick,
@@ -107,7 +109,7 @@ def state_view(record: TickRecord, earlier: list[TickRecord]) -> dict[str, Any]:
         "reasons": {str(k): v for k, v in record.reasons.items()},
         "ticked": record.ticked,
         "truth": list(record.truth) if record.truth is not None else None,
-        "blackboard": {k: _value(v) for k, v in sorted(record.blackboard.items())},
+        "blackboard": {k: _value(v) for k, v in sorted(board.items())},
     }
     if snapshot is not None:
         robot = out["robot"] = robot_view(snapshot, _rates(record, earlier))
@@ -120,15 +122,14 @@ def state_view(record: TickRecord, earlier: list[TickRecord]) -> dict[str, Any]:
 
 def _measured_wheels(record: TickRecord, previous: TickRecord) -> dict[str, Any] | None:
     """Wheel speeds from the encoders (43, 44) between the previous record and this one."""
-    now, before = record.snapshot, previous.snapshot
-    if now is None or before is None or record.time <= previous.time:
+    a, b = previous.odometry, record.odometry
+    if a is None or b is None or record.tick <= previous.tick:
         return None
-    a, b = before.odometry, now.odometry
     if a.left_counts is None or a.right_counts is None:
         return None
     if b.left_counts is None or b.right_counts is None:
         return None
-    dt = record.time - previous.time
+    dt = (record.tick - previous.tick) * SLOT_SECONDS
     left = counts_to_mm(encoder_delta(a.left_counts, b.left_counts)) / dt
     right = counts_to_mm(encoder_delta(a.right_counts, b.right_counts)) / dt
     return {"left": round(left), "right": round(right), "source": "encoders (43, 44)"}
@@ -138,8 +139,8 @@ def path_view(records: list[TickRecord]) -> dict[str, list[list[float]]]:
     odometry: list[list[float]] = []
     truth: list[list[float]] = []
     for r in records:
-        if r.snapshot is not None:
-            odo = r.snapshot.odometry
+        if r.odometry is not None:
+            odo = r.odometry
             odometry.append([round(odo.x_mm, 1), round(odo.y_mm, 1)])
         if r.truth is not None:
             truth.append([round(r.truth[0], 1), round(r.truth[1], 1)])

@@ -271,6 +271,11 @@ class SensorFrame:
     def packet_ids(self) -> tuple[int, ...]:
         return self._layout.members
 
+    @property
+    def values(self) -> tuple[int, ...]:
+        """The raw values in the layout's order: ``SensorFrame(f.layout, f.values) == f``."""
+        return self._values
+
     def __contains__(self, packet_id: object) -> bool:
         return packet_id in self._layout.index
 

@@ -167,6 +167,11 @@ class MissionRunner:
         #: the last command written on each actuator channel ("wheels", "motors", ...): what
         #: a resume after the monitor's pause sends again
         self.last_sent: dict[str, Command] = {}
+        #: True while the monitor holds the run paused: frames still come and make snapshots
+        #: (the page shows the robot) and the tick index (the stream's) goes on, but mission
+        #: time stands still: a wait, a time limit or the run's timeout does not count the pause
+        self.clock_held = False
+        self._held_slots = 0
         self._blackboard: py_trees.blackboard.Client | None = None
         self._layout: object = None
         self._has_encoders = False
@@ -380,6 +385,8 @@ class MissionRunner:
             self.summary.frames_lost += slots - count
         self._last_arrival = arrival
         self._tick += slots
+        if self.clock_held:
+            self._held_slots += slots
         layout = frame.layout
         if layout is not self._layout:  # the same for every frame of a stream
             self._layout = layout
@@ -392,7 +399,7 @@ class MissionRunner:
         snapshot = Snapshot(
             frame=frame,
             tick=self._tick,
-            time=self._tick * SLOT_SECONDS,
+            time=(self._tick - self._held_slots) * SLOT_SECONDS,
             mode=mode,
             odometry=self._odometry,
             last_fallback=fallback if isinstance(fallback, ModeChange) else None,

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from roomba_bt.mission import load_mission
-from roomba_bt.monitor.feed import RunFeed
+from roomba_bt.monitor.feed import Ring, RunFeed
 from roomba_bt.monitor.recorded import replay_into_feed
 from roomba_bt.monitor.session import ControlRefused, MonitorSession
 from roomba_bt.oi.modes import OIMode
@@ -22,13 +22,16 @@ from roomba_bt.sim import SimLink, Simulator, load_world
 
 HERE = Path(__file__).resolve().parent
 SHUTTLE = HERE / "missions" / "shuttle.yaml"
+WAIT_THEN_DRIVE = HERE / "missions" / "wait-then-drive.yaml"
 
 
 class Rig:
     """A shuttle run on the virtual clock with the monitor's session as its gate."""
 
-    def __init__(self, *, simulator: bool = True, record: Path | None = None) -> None:
-        self.mission = load_mission(SHUTTLE, {}, profile=CREATE2)
+    def __init__(
+        self, *, simulator: bool = True, record: Path | None = None, mission: Path = SHUTTLE
+    ) -> None:
+        self.mission = load_mission(mission, {}, profile=CREATE2)
         self.sim = Simulator(load_world("empty-room"), CREATE2, 0)
         recording = Recording(record, str(SHUTTLE)) if record is not None else None
         self.stack = RunStack(
@@ -111,6 +114,29 @@ def test_pause_freezes_the_tree_in_passive_resume_drives_again_stop_ends_as_ctrl
     assert kinds == ["pause", "resume", "stop:"]
 
 
+def test_mission_time_stands_still_while_paused_so_a_wait_does_not_count_the_pause() -> None:
+    rig = Rig(mission=WAIT_THEN_DRIVE)
+    wait = next(i.index for i in rig.feed.infos if i.name == "one second")
+    rig.session.request("break", wait, "start")  # paused in the tick the wait starts
+
+    def operator(rig: Rig) -> None:
+        rig.wait(lambda: rig.ticks(ticked=False) > 200)  # 3 s of frames, paused
+        rig.session.request("resume")
+
+    summary = rig.run_with(operator)
+    assert summary.outcome is Outcome.SUCCESS
+    records = rig.feed.since(0)[0]
+    started = next(r for r in records if r.statuses[wait] == "R")
+    waited = next(r for r in records if r.statuses[wait] == "S")
+    assert 1.0 <= waited.time - started.time < 1.05  # one second of mission time...
+    assert (waited.seq - started.seq) * 0.015 > 1.0 + 3.0  # ...over the pause's frames too
+    paused = [r for r in records if not r.ticked]
+    assert len(paused) > 200
+    assert len({r.time for r in paused}) <= 2  # held; then the frame skipped after resume
+    assert len({r.tick for r in paused}) == len(paused)  # the stream's ticks went on
+    assert summary.mission_time_s < (len(records) - 200) * 0.015  # the pause left out
+
+
 def test_resume_and_step_are_refused_unless_paused_and_bad_requests_change_nothing() -> None:
     rig = Rig()
     with pytest.raises(ControlRefused, match="not paused"):
@@ -187,7 +213,7 @@ def test_a_breakpoint_on_an_ending_pauses_after_that_tick_and_step_ticks_once() 
 
 def test_the_feed_is_bounded_and_shares_what_did_not_change() -> None:
     rig = Rig()
-    rig.feed.records = type(rig.feed.records)(maxlen=300)
+    rig.feed.ring = Ring(300)
 
     def operator(rig: Rig) -> None:
         rig.wait(lambda: rig.ticks(ticked=True) >= 300 and rig.feed.latest().seq > 1000)  # type: ignore[union-attr]
