@@ -75,6 +75,7 @@ class LiveMonitor:
 
         self.args = args
         self.loader = loader
+        self._watched = _files_of(mission, Path(args.mission))
         truth = None
         world = None
         if simulator is not None:
@@ -149,17 +150,29 @@ class LiveMonitor:
 
     # ---------------------------------------------------------------- --watch
     def _watch(self) -> None:
+        """Every 0.25 s: has the mission file or a file it includes changed? Then reload. The
+        files watched are those of the last mission that loaded (an include added or removed
+        by a valid reload is watched from then on), and always the mission file."""
         path = Path(self.args.mission)
-        last = _stamp(path)
+        stamps = {f: _stamp(f) for f in self._watched}
+        shown = ", ".join(_shown(f) for f in self._watched)
+        print(f"watching {shown}: a change reloads the mission", flush=True)
         while not self._done.wait(0.25):
-            now = _stamp(path)
-            if now == last:
+            now = {f: _stamp(f) for f in self._watched}
+            if now == stamps:
                 continue
-            last = now
-            self._reload(path)
+            changed = [f for f in self._watched if now[f] != stamps.get(f)]
+            mission = self._reload(path, changed)
+            if mission is not None:
+                self._watched = _files_of(mission, path)
+            stamps = {f: _stamp(f) for f in self._watched}
 
-    def _reload(self, path: Path) -> None:
+    def _reload(self, path: Path, changed: list[Path]) -> Any:
+        """The new mission once it is handed to the session, or None (refused)."""
         from roomba_bt.mission import MissionError
+
+        names = ", ".join(_shown(f) for f in changed)
+        self.feed.event("reload", f"changed: {names}; checking {path}")
 
         try:
             mission = self.loader(path)
@@ -168,17 +181,18 @@ class LiveMonitor:
             for line in lines:
                 print(f"reload refused: {line}", file=sys.stderr, flush=True)
             self.feed.event("error", "reload refused, the run goes on: " + "; ".join(lines))
-            return
+            return None
         except OSError as exc:
             self.feed.event("error", f"reload refused: {path}: {exc.strerror or exc}")
-            return
+            return None
         why = self.session.check_reloadable(mission)
         if why is not None:
             print(f"reload refused: {path}: {why}", file=sys.stderr, flush=True)
             self.feed.event("error", f"reload refused, the run goes on: {path}: {why}")
-            return
+            return None
         print(f"reload: {path} is valid; the new tree starts at the next safe point", flush=True)
         self.session.reload(mission)
+        return mission
 
     # ---------------------------------------------------------------- terminal keys
     def _keys(self) -> None:
@@ -205,6 +219,18 @@ class LiveMonitor:
                     self.session.request(action)
         finally:
             termios.tcsetattr(fd, termios.TCSADRAIN, saved)
+
+
+def _files_of(mission: Any, path: Path) -> tuple[Path, ...]:
+    """The mission file and the files it includes, each once."""
+    files = getattr(mission, "files", ()) or ()
+    return tuple(dict.fromkeys([path.resolve(), *files]))
+
+
+def _shown(path: Path) -> str:
+    with contextlib.suppress(ValueError):
+        return str(path.relative_to(Path.cwd()))
+    return str(path)
 
 
 def _stamp(path: Path) -> tuple[float, int] | None:

@@ -80,9 +80,8 @@ def _compile(
     permissions: Permissions,
 ) -> tuple[CompiledMission | None, list[Diagnostic]]:
     ctx = Context(registry=registry or default_registry())
-    parsed = Loader(ctx, _display, permissions).compile_file(
-        path, dict(params or {}), require_tree=require_tree
-    )
+    loader = Loader(ctx, _display, permissions)
+    parsed = loader.compile_file(path, dict(params or {}), require_tree=require_tree)
     if parsed is None or parsed.tree is None:
         return None, sorted(ctx.diagnostics)
     tree = parsed.tree
@@ -118,6 +117,7 @@ def _compile(
             name: shown(bound.type, bound.value) for name, bound in parsed.params.items()
         },
         source=path,
+        files=tuple(dict.fromkeys(loader.files)),
         blackboard_initial={k: d.initial for k, d in ctx.keys.items() if d.has_initial},
         blackboard_keys={k: d.type.describe() for k, d in ctx.keys.items()},
     )

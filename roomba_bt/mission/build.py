@@ -46,6 +46,8 @@ class CompiledMission:
     modes_needed: frozenset[OIMode]
     parameters: Mapping[str, Any]
     source: Path
+    #: the mission file and every file it includes (what ``run --watch`` watches)
+    files: tuple[Path, ...] = ()
     blackboard_initial: Mapping[str, Any] = field(default_factory=dict)
     blackboard_keys: Mapping[str, str] = field(default_factory=dict)
     #: each parameter's value as a mission writes it, with its unit (``side: 50 cm``)

@@ -130,11 +130,14 @@ class Loader:
         self.permissions = permissions
         self._include_stack: list[Path] = []
         self._include_roots: tuple[Path, ...] = ()
+        #: every file read: the mission file, then each include as it is reached
+        self.files: list[Path] = []
 
     def compile_file(
         self, path: Path, overrides: Mapping[str, str], *, require_tree: bool = True
     ) -> ParsedFile | None:
         display = self.display(path)
+        self.files.append(path.resolve())
         root, errors = compose(path, display)
         for e in errors:
             self.ctx.error(e)
@@ -287,6 +290,7 @@ class Loader:
 
     def _include(self, target: Path, text: str, iloc: Loc) -> None:
         display = self.display(target)
+        self.files.append(target)
         root, errors = compose(target, display)
         for e in errors:
             self.ctx.error(e)

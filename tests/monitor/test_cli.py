@@ -3,8 +3,15 @@ before anything moves."""
 
 from __future__ import annotations
 
+import queue
+import re
+import signal
 import socket
+import subprocess
+import sys
+import threading
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -62,3 +69,79 @@ def test_monitor_names_a_bad_record(tmp_path: Path, capsys: pytest.CaptureFixtur
     bad.write_text('{"format": "something else"}\n')
     assert main(["monitor", str(bad), "--monitor", "0"]) == 2
     assert f"{bad}:1: not a roomba-bt-record file" in capsys.readouterr().err
+
+
+MAIN_WITH_LIBRARY = """\
+mission: shuttle-with-a-library
+description: The shuttle, its leg in an included file.
+include: [leg.yaml]
+tree:
+  sequence:
+    - mode: safe
+    - repeat:
+        do: {subtree: leg}
+"""
+LEG = """\
+subtrees:
+  leg:
+    tree:
+      sequence:
+        name: there and back
+        children:
+          - drive: {velocity: 100 mm/s, distance: 3 cm}
+          - drive: {velocity: -100 mm/s, distance: 3 cm}
+"""
+
+
+def test_watch_reloads_when_an_included_file_changes(tmp_path: Path) -> None:
+    mission, leg = tmp_path / "main.yaml", tmp_path / "leg.yaml"
+    mission.write_text(MAIN_WITH_LIBRARY)
+    leg.write_text(LEG)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "roomba_bt.cli", "run", str(mission), "--watch",
+         "--display", "none"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    lines: queue.SimpleQueue[str] = queue.SimpleQueue()
+
+    def read(stream: Any, label: str) -> None:
+        for line in stream:
+            lines.put(f"{label}: {line}")
+
+    readers = [
+        threading.Thread(target=read, args=(stream, label), daemon=True)
+        for stream, label in ((proc.stdout, "out"), (proc.stderr, "err"))
+    ]
+    for reader in readers:
+        reader.start()
+
+    def expect(text: str) -> str:
+        seen: list[str] = []
+        while True:
+            try:
+                line = lines.get(timeout=30)
+            except queue.Empty:
+                raise AssertionError(f"never saw {text!r}; saw {seen}") from None
+            seen.append(line)
+            if text in line:
+                return line
+
+    try:
+        watching = expect("out: watching ")  # the watcher has the files' first stamps
+        assert "main.yaml" in watching and "leg.yaml" in watching
+        leg.write_text(LEG.replace("there and back", "out and home, a longer name"))
+        expect(f"out: reload: {mission} is valid")
+        leg.write_text(LEG.replace("velocity: 100 mm/s", "velocity: fast"))
+        refused = expect("err: reload refused:")
+        assert re.search(rf"{re.escape(str(leg))}:\d+:\d+", refused), refused
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(timeout=30) == 130
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+        for reader in readers:
+            reader.join(10)
+        for stream in (proc.stdout, proc.stderr):
+            if stream is not None:
+                stream.close()
