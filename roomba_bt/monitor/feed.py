@@ -1,20 +1,20 @@
-"""The monitor's record of a run: each tick's statuses, snapshot and counters, in a bounded
-ring the tick thread appends to and the web server reads from.
+"""The monitor's record of a run: each tick's statuses, sensor frame and counters, in a
+bounded ring the tick thread appends to and the web server reads from.
 
 The tick thread's part is :meth:`RunFeed.observe`, called once per tick after the tick and its
 flush. It reads every node's status into a list and compares it with the last one (a C-level
 list compare of enum identities); only when something flipped does it build the new status
-string and the failure reasons. Then it stores one reference in a preallocated ring and bumps
-a counter: no lock, no dict built, no JSON. It never waits for a page or for the server: the
+string and the failure reasons. Then it stores one record in a preallocated ring and bumps a
+counter: no lock, nothing formatted, no JSON. It never waits for a page or for the server: the
 server thread reads the ring by sequence number (a slot overwritten meanwhile is seen by its
 sequence number and skipped) and formats on its own time, at most ~20 times a second per
-page, in the shadow of a tick (see :meth:`RunFeed.call_after_next`). A page that stalls misses
+page, right after a tick (see the server's module). A page that stalls misses
 updates (it is sent the newest state when it catches up); the tick never waits.
 
 Why no lock: a lock the tick thread shares with the server is a convoy. When the server holds
 it, the tick thread blocks, gives up the GIL, and gets it back only when the server thread
-blocks or is made to switch (CPython's 5 ms switch interval): a tick that took 0.3 ms took
-3 ms (measured: reaction latency p99 2.1 ms with the monitor against 0.5 ms without).
+blocks or is made to switch (CPython's 5 ms switch interval): reaction latency p99 was
+2.1 ms with the monitor against 0.55 ms without (the first version, on a quiet machine).
 
 Memory is bounded: the ring keeps the last ``history`` ticks (default 20 000, 5 min at
 66.7 Hz); a tick whose statuses did not change shares the previous tick's status string and

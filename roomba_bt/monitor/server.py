@@ -7,13 +7,11 @@ looks every 2 ms for the ring's next record (the end of a tick), then takes what
 gained since it last sent, merges it (the newest statuses, every node that flipped in between,
 the new events) and sends one message. Its Python work (a few tenths of a millisecond) so
 falls in the ~15 ms the tick thread sleeps until the next frame instead of holding the GIL
-when a frame arrives; a look that finds the tick thread running waits for the GIL until that
-thread sleeps, which is the same end of a tick. The tick thread is never asked to wake the
-server: a wake-up from it (a write to the loop's self-pipe) releases the GIL mid-``after_tick``
-and cost it up to 0.4 ms (measured). With no tick for 50 ms (a recorded run, a run that ended
-or is held) it sends anyway. A page whose socket is slow holds
-up only its own pump; when it catches up, it is sent the newest state and the ticks in
-between are lost to it, never to the robot.
+when a frame arrives. The tick thread is never asked to wake the server: a wake-up from it (a
+write to the loop's self-pipe) releases the GIL mid-``after_tick`` and cost it up to 0.4 ms
+(measured). With no tick for 50 ms (a recorded run, a run that ended or is held) it sends
+anyway. A page whose socket is slow holds up only its own pump; when it catches up, it is
+sent the newest state and the ticks in between are lost to it, never to the robot.
 
 Routes (all behind the token when one is set)::
 
@@ -66,12 +64,12 @@ def _freeze_startup_objects() -> None:
     """Once per process, before the run: collect, then move every object alive (modules,
     aiohttp's, the mission's tree) out of the cyclic collector's sight (``gc.freeze``).
 
-    The ring keeps each tick's snapshot alive, so the collector's older generations fill up
-    and its first full collection comes within seconds of the start; it then walks every
-    object start-up made: 70-95 ms measured (60 000 ticks on the virtual clock), in
-    whichever thread allocates at that moment, the tick thread most likely. Frozen, that
-    collection walks only what the run made since: 25 ms. Frozen objects are still freed
-    when their last reference goes; only a reference cycle among them would outlive the run.
+    A run's first full collection walks every object start-up made, in whichever thread
+    allocates at that moment, the tick thread most likely: 70-95 ms measured (60 000 ticks on
+    the virtual clock with the monitor's feed; 69 ms without it), so one tick of the run
+    overran by that much. Frozen, the full collection walks only what the run made since:
+    16 ms. Frozen objects are still freed when their last reference goes; only a reference
+    cycle among them would outlive the run.
     """
     if _frozen.is_set():
         return
@@ -319,13 +317,14 @@ class MonitorServer:
             self._sockets.discard(ws)
         return ws
 
-    async def _after_a_tick(self, last_sent: float, seen: int) -> None:
-        """Wait out the update period, then until the ring gains a record after ``seen``
-        (the tick thread has just recorded a tick and is about to sleep until the next frame),
-        or :data:`TICK_WAIT_S` has passed."""
+    async def _after_a_tick(self, last_sent: float) -> None:
+        """Wait out the update period, then until the ring gains its next record (the tick
+        thread has just recorded a tick and is about to sleep until the next frame), or
+        :data:`TICK_WAIT_S` has passed."""
         loop = asyncio.get_running_loop()
         await asyncio.sleep(max(last_sent + UPDATE_PERIOD_S - loop.time(), 0.0))
         ring, give_up = self.feed.ring, loop.time() + TICK_WAIT_S
+        seen = ring.count
         while ring.count == seen and loop.time() < give_up:
             await asyncio.sleep(TICK_POLL_S)
 
@@ -370,4 +369,4 @@ class MonitorServer:
                     await ws.send_str(json.dumps(message))
                 except (ConnectionResetError, RuntimeError):
                     return
-            await self._after_a_tick(last_sent, feed.ring.count)
+            await self._after_a_tick(last_sent)
