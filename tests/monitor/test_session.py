@@ -97,7 +97,12 @@ def test_pause_freezes_the_tree_in_passive_resume_drives_again_stop_ends_as_ctrl
         seen["ticked later"] = rig.ticks(ticked=True)
         rig.session.request("resume")
         rig.wait(lambda: rig.ticks(ticked=True) > seen["ticked later"] + 50)  # type: ignore[operator]
-        seen["resumed"] = (rig.sim.mode, rig.sim.left_speed, rig.sim.right_speed)
+
+        def driving() -> bool:  # read at once: the shuttle stops for a frame at each turn
+            seen["resumed"] = (rig.sim.mode, rig.sim.left_speed, rig.sim.right_speed)
+            return bool(rig.sim.left_speed or rig.sim.right_speed)
+
+        rig.wait(driving)
         rig.session.request("stop")
 
     summary = rig.run_with(operator)
