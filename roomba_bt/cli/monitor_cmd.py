@@ -162,10 +162,13 @@ class LiveMonitor:
             if now == stamps:
                 continue
             changed = [f for f in self._watched if now[f] != stamps.get(f)]
+            # the stamps seen before the reload reads the files: an edit made while it reads
+            # is seen at the next look (stamps taken after it would hide that edit)
+            stamps = now
             mission = self._reload(path, changed)
             if mission is not None:
                 self._watched = _files_of(mission, path)
-            stamps = {f: _stamp(f) for f in self._watched}
+                stamps = {f: now[f] if f in now else _stamp(f) for f in self._watched}
 
     def _reload(self, path: Path, changed: list[Path]) -> Any:
         """The new mission once it is handed to the session, or None (refused)."""
