@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 from roomba_bt.mission.shipped import find_mission
 from roomba_bt.oi.encode import BAUD_CODES
+from roomba_bt.oi.profiles import PROFILES
 
 if TYPE_CHECKING:
     from roomba_bt.mission import Permissions
@@ -42,6 +43,18 @@ def baud_or_auto(text: str) -> int | None:
         return baud_rate(text)
     except argparse.ArgumentTypeError as exc:
         raise argparse.ArgumentTypeError(f"{exc}, or auto") from None
+
+
+def add_far_end_options(parser: Any, *, port_help: str, world_help: str) -> None:
+    """What a command talks to (``run``, ``sensors``): ``--port`` (none: the simulator),
+    ``--profile``, ``--baud`` (a rate or auto) and the simulator's ``--world``."""
+    parser.add_argument("--port", help=port_help)
+    parser.add_argument("--profile", choices=sorted(PROFILES), default="create2")
+    parser.add_argument(
+        "--baud", type=baud_or_auto, default=115200,
+        help="baud rate (default 115200), or auto: the OI's rate the robot answers at",
+    )  # fmt: skip
+    parser.add_argument("--world", help=world_help)
 
 
 def seconds(text: str) -> float:

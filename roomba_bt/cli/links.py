@@ -18,7 +18,7 @@ from roomba_bt.robot.connection import NO_ANSWER_CAUSES, OPEN_CAUSES
 from roomba_bt.robot.errors import ConnectionFailed
 from roomba_bt.robot.handshake import OI_RATES, describe_silence, find_robot
 from roomba_bt.sim import Faults, RealtimeSimLink, SimLink, Simulator, load_world
-from roomba_bt.transport import SerialTransport, TransportError
+from roomba_bt.transport import SerialTransport, Transport, TransportError
 
 DEFAULT_WORLD = "empty-room"
 
@@ -80,3 +80,32 @@ def make_simulator(
 def make_link(simulator: Simulator, fast: bool) -> SimLink:
     """The virtual-clock link (``fast``) or the wall-clock one."""
     return SimLink(simulator) if fast else RealtimeSimLink(simulator)
+
+
+def auto_baud(port: str | None, profile: RobotProfile) -> tuple[int, SerialTransport | None]:
+    """``--baud auto``: on a port, the rate the robot answers at and the port left open at it
+    (:func:`open_port`; :class:`ConnectionFailed` if nothing answers); on the simulator, the
+    profile's default rate and no port."""
+    if not port:
+        return profile.default_baud, None
+    opened = open_port(port, None)
+    return opened.baud, opened
+
+
+def far_end(
+    port: str | None,
+    baud: int,
+    simulator: Simulator | None,
+    *,
+    fast: bool = False,
+    opened: SerialTransport | None = None,
+) -> Transport:
+    """The link a command talks over: the port ``--baud auto`` left ``opened``, else the port
+    at ``baud``, else the ``simulator``'s link (:func:`make_link`)."""
+    if opened is not None:
+        return opened
+    if port:
+        return open_port(port, baud)
+    if simulator is None:
+        raise ValueError("no --port and no simulator to talk to")
+    return make_link(simulator, fast)

@@ -9,9 +9,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from roomba_bt.cli.arguments import (
+    add_far_end_options,
     add_param_option,
     add_permission_options,
-    baud_or_auto,
     mission_file,
     output_file,
     parse_params,
@@ -23,14 +23,23 @@ from roomba_bt.cli.arguments import (
 from roomba_bt.cli.monitor_cmd import LiveMonitor
 from roomba_bt.cli.monitor_cmd import add_run_arguments as add_monitor_arguments
 from roomba_bt.oi.errors import BandwidthError
-from roomba_bt.oi.profiles import PROFILES, RobotProfile, get_profile
+from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.runtime.summary import DEFAULT_GRACE, ExitCode
 
 if TYPE_CHECKING:
     from roomba_bt.mission import Permissions
+    from roomba_bt.runtime.loop import TickObserver
+    from roomba_bt.runtime.stack import RunStack
+    from roomba_bt.runtime.summary import RunSummary
+    from roomba_bt.sim import Simulator
 
 
 def register(sub: Any) -> None:
+    _add_run_parser(sub)
+    _add_replay_parser(sub)
+
+
+def _add_run_parser(sub: Any) -> None:
     run = sub.add_parser(
         "run",
         help="run a mission on a robot (--port) or the simulator",
@@ -40,15 +49,11 @@ def register(sub: Any) -> None:
         "exception, 130 interrupted.",
     )
     run.add_argument("mission", help="mission YAML file, or a shipped mission's name (dock)")
-    run.add_argument(
-        "--port", help="serial device or URL (socket://host:port, rfc2217://, loop://)"
+    add_far_end_options(
+        run,
+        port_help="serial device or URL (socket://host:port, rfc2217://, loop://)",
+        world_help="simulator world: a shipped name or a YAML path",
     )
-    run.add_argument("--profile", choices=sorted(PROFILES), default="create2")
-    run.add_argument(
-        "--baud", type=baud_or_auto, default=115200,
-        help="baud rate (default 115200), or auto: the OI's rate the robot answers at",
-    )  # fmt: skip
-    run.add_argument("--world", help="simulator world: a shipped name or a YAML path")
     run.add_argument("--seed", type=int, default=0, help="simulator seed (default 0)")
     run.add_argument(
         "--battery", type=float, metavar="FRACTION",
@@ -70,6 +75,18 @@ def register(sub: Any) -> None:
     )
     add_permission_options(run)
     run.add_argument("--fast", action="store_true", help="simulator on the virtual clock")
+    _add_session_options(run)
+    run.add_argument(
+        "--display", choices=("auto", "tree", "log", "none"), default="auto",
+        help="live tree on a terminal (auto), one line per status change (log), or only the "
+        "summary (none)",
+    )  # fmt: skip
+    add_monitor_arguments(run)
+    run.set_defaults(func=run_command)
+
+
+def _add_session_options(run: argparse.ArgumentParser) -> None:
+    """How the connection ends, watches the stream and keeps the robot awake."""
     run.add_argument(
         "--end-in", choices=("passive", "stop"), default="passive",
         help="leave the robot in Passive (Start) or, where the profile has it, Stop (173)",
@@ -87,14 +104,9 @@ def register(sub: Any) -> None:
         help="do not pulse BRC (RTS/DTR) once a minute; a robot left in Passive then sleeps "
         "after 5 minutes",
     )
-    run.add_argument(
-        "--display", choices=("auto", "tree", "log", "none"), default="auto",
-        help="live tree on a terminal (auto), one line per status change (log), or only the "
-        "summary (none)",
-    )  # fmt: skip
-    add_monitor_arguments(run)
-    run.set_defaults(func=run_command)
 
+
+def _add_replay_parser(sub: Any) -> None:
     replay = sub.add_parser(
         "replay",
         help="play a --record file back through the tree",
@@ -144,41 +156,23 @@ def stream_packets(mission: Any, baud: int) -> tuple[int, ...]:
 
 
 def run_command(args: argparse.Namespace) -> int:
+    from roomba_bt.cli.links import auto_baud, far_end
     from roomba_bt.robot.errors import ConnectionFailed
-    from roomba_bt.runtime.display import TerminalDisplay, observer_for, use_mission_clock
+    from roomba_bt.runtime.display import observer_for
     from roomba_bt.runtime.stack import Recording, RunStack
-    from roomba_bt.transport import Transport
 
+    checked = _checked_arguments(args)
+    if isinstance(checked, int):
+        return checked
+    params, timeout = checked
     profile = get_profile(args.profile)
-    params = parse_params(args.param)
-    if isinstance(params, str):
-        return _error(params)
-    timeout = parse_timeout(args.timeout)
-    if isinstance(timeout, str):
-        return _error(timeout)
-    if args.port and (args.world or args.plot or args.fast or args.battery is not None):
-        return _error(
-            "--world, --plot, --fast and --battery are for the simulator: drop them or --port"
-        )
-    if args.battery is not None and not 0.0 <= args.battery <= 1.0:
-        return _error(f"--battery {args.battery}: expected a fraction in 0..1")
-    found = mission_file(args.mission)
-    if isinstance(found, tuple):
-        return _error(found[0])
-    args.mission = found
-    port_link: Transport | None = None
+    opened = None
     if args.baud is None:  # --baud auto: the mission's stream is checked at the rate found
-        if args.port:
-            from roomba_bt.cli.links import open_port
-
-            try:
-                port_link = open_port(args.port, None)
-            except ConnectionFailed as exc:
-                print(f"roomba-bt: {exc}", file=sys.stderr)
-                return ExitCode.CONNECTION
-            args.baud = port_link.baud
-        else:
-            args.baud = profile.default_baud  # the simulator's
+        try:
+            args.baud, opened = auto_baud(args.port, profile)
+        except ConnectionFailed as exc:
+            print(f"roomba-bt: {exc}", file=sys.stderr)
+            return ExitCode.CONNECTION
     mission = load(args.mission, params, profile, args.baud, permissions(args))
     if isinstance(mission, int):
         return mission
@@ -186,47 +180,17 @@ def run_command(args: argparse.Namespace) -> int:
         packets = stream_packets(mission, args.baud)
     except BandwidthError as exc:
         return _error(f"{args.mission}: {exc}")
-
-    simulator = None
-    if args.port is None:
-        from roomba_bt.cli.links import make_simulator
-        from roomba_bt.sim import WorldError
-
-        try:
-            simulator = make_simulator(
-                args.world,
-                profile,
-                args.seed,
-                random_start=args.random_start,
-                coverage=True,
-                battery=args.battery,
-                trace=bool(args.plot),  # only a plot reads the trajectory
-            )
-        except WorldError as exc:
-            return _error(str(exc))
+    simulator = _simulator(args, profile)
+    if isinstance(simulator, str):
+        return _error(simulator)
     monitor = None
     if args.monitor is not None or args.watch:
-        from roomba_bt.mission import load_mission
-
-        monitor = LiveMonitor(
-            args, mission, simulator=simulator, packets=packets,
-            loader=lambda path: load_mission(path, params, profile=profile, baud=args.baud),
-        )  # fmt: skip
+        monitor = _live_monitor(args, mission, simulator, packets, params, profile)
         failed = monitor.start()
         if failed is not None:
             return failed
     try:
-        if port_link is not None:
-            link: Transport = port_link
-        elif args.port:
-            from roomba_bt.cli.links import open_port
-
-            link = open_port(args.port, args.baud)
-        else:
-            from roomba_bt.cli.links import make_link
-
-            assert simulator is not None  # made above when there is no --port
-            link = make_link(simulator, args.fast)
+        link = far_end(args.port, args.baud, simulator, fast=args.fast, opened=opened)
     except ConnectionFailed as exc:
         if monitor is not None:
             monitor.finish(None)
@@ -255,7 +219,80 @@ def run_command(args: argparse.Namespace) -> int:
         if monitor is not None:
             monitor.finish(None)
         return _error(f"--record {args.record}: {exc.strerror or exc}")
+    return _run_and_report(args, stack, observer, simulator, monitor)
 
+
+def _checked_arguments(args: argparse.Namespace) -> tuple[dict[str, str], float | None] | int:
+    """The parameters and the time limit, or the exit code after saying which argument is
+    wrong (the mission's path is resolved into ``args.mission``)."""
+    params = parse_params(args.param)
+    if isinstance(params, str):
+        return _error(params)
+    timeout = parse_timeout(args.timeout)
+    if isinstance(timeout, str):
+        return _error(timeout)
+    if args.port and (args.world or args.plot or args.fast or args.battery is not None):
+        return _error(
+            "--world, --plot, --fast and --battery are for the simulator: drop them or --port"
+        )
+    if args.battery is not None and not 0.0 <= args.battery <= 1.0:
+        return _error(f"--battery {args.battery}: expected a fraction in 0..1")
+    found = mission_file(args.mission)
+    if isinstance(found, tuple):
+        return _error(found[0])
+    args.mission = found
+    return params, timeout
+
+
+def _simulator(args: argparse.Namespace, profile: RobotProfile) -> Simulator | str | None:
+    """The simulator when there is no ``--port`` (None with one); the world's problem as text."""
+    if args.port:
+        return None
+    from roomba_bt.cli.links import make_simulator
+    from roomba_bt.sim import WorldError
+
+    try:
+        return make_simulator(
+            args.world,
+            profile,
+            args.seed,
+            random_start=args.random_start,
+            coverage=True,
+            battery=args.battery,
+            trace=bool(args.plot),  # only a plot reads the trajectory
+        )
+    except WorldError as exc:
+        return str(exc)
+
+
+def _live_monitor(
+    args: argparse.Namespace,
+    mission: Any,
+    simulator: Simulator | None,
+    packets: tuple[int, ...],
+    params: dict[str, str],
+    profile: RobotProfile,
+) -> LiveMonitor:
+    """``--monitor`` / ``--watch``: the page and the reloads read the same parameters."""
+    from roomba_bt.mission import load_mission
+
+    return LiveMonitor(
+        args, mission, simulator=simulator, packets=packets,
+        loader=lambda path: load_mission(path, params, profile=profile, baud=args.baud),
+    )  # fmt: skip
+
+
+def _run_and_report(
+    args: argparse.Namespace,
+    stack: RunStack,
+    observer: TickObserver | None,
+    simulator: Simulator | None,
+    monitor: LiveMonitor | None,
+) -> int:
+    """The run, then what it did: the tree's last state, the summary, what went wrong."""
+    from roomba_bt.runtime.display import use_mission_clock
+
+    mission = stack.mission
     quiet = args.display == "none"
     if quiet and not args.verbose:  # nothing but the summary (and what went wrong)
         logging.getLogger().setLevel(max(logging.getLogger().level, logging.WARNING))
@@ -272,33 +309,45 @@ def run_command(args: argparse.Namespace) -> int:
             monitor.finish(stack.runner.summary)
     try:
         stack.close()
-        if isinstance(observer, TerminalDisplay) and stack.runner.has_snapshot:
-            observer.render(stack.runner)
-        if not quiet:
-            print(_render_tree(mission, status=True))
-        print(summary)
-        if simulator is not None and simulator.swept is not None and simulator.swept.cleaning_time:
-            print(_coverage_line(simulator))
-        if (
-            summary.outcome.exit_code
-            in (ExitCode.CONNECTION, ExitCode.MISSION_FAILED, ExitCode.BEHAVIOUR_ERROR)
-            and summary.reason
-        ):
-            print(f"roomba-bt: {summary.outcome.value}: {summary.reason}", file=sys.stderr)
-        if summary.traceback:
-            if getattr(args, "verbose", 0):
-                print(summary.traceback, file=sys.stderr, end="")
-            else:
-                print("roomba-bt: run with -v for the traceback", file=sys.stderr)
-        for refusal in stack.runner.refusals[:5]:
-            print(f"refused: {refusal}", file=sys.stderr)
-        if args.plot and simulator is not None:
-            plotted = _plot(simulator, args.plot)
-            if plotted:
-                print(plotted, file=sys.stderr)
+        _report(args, stack, summary, observer, simulator)
         return summary.exit_code
     finally:
         stack.runner.release_interrupts()  # the summary is out
+
+
+def _report(
+    args: argparse.Namespace,
+    stack: RunStack,
+    summary: RunSummary,
+    observer: TickObserver | None,
+    simulator: Simulator | None,
+) -> None:
+    from roomba_bt.runtime.display import TerminalDisplay
+
+    if isinstance(observer, TerminalDisplay) and stack.runner.has_snapshot:
+        observer.render(stack.runner)
+    if args.display != "none":
+        print(_render_tree(stack.mission, status=True))
+    print(summary)
+    if simulator is not None and simulator.swept is not None and simulator.swept.cleaning_time:
+        print(_coverage_line(simulator))
+    if (
+        summary.outcome.exit_code
+        in (ExitCode.CONNECTION, ExitCode.MISSION_FAILED, ExitCode.BEHAVIOUR_ERROR)
+        and summary.reason
+    ):
+        print(f"roomba-bt: {summary.outcome.value}: {summary.reason}", file=sys.stderr)
+    if summary.traceback:
+        if getattr(args, "verbose", 0):
+            print(summary.traceback, file=sys.stderr, end="")
+        else:
+            print("roomba-bt: run with -v for the traceback", file=sys.stderr)
+    for refusal in stack.runner.refusals[:5]:
+        print(f"refused: {refusal}", file=sys.stderr)
+    if args.plot and simulator is not None:
+        plotted = _plot(simulator, args.plot)
+        if plotted:
+            print(plotted, file=sys.stderr)
 
 
 def _render_tree(mission: Any, status: bool = False) -> str:
@@ -333,8 +382,8 @@ def _plot(simulator: Any, path: str) -> str:
 
 
 def replay_command(args: argparse.Namespace) -> int:
-    from roomba_bt.runtime.recording import RecordError, ReplayTransport, load_record
-    from roomba_bt.runtime.stack import RunStack
+    from roomba_bt.runtime.recording import RecordError, load_record
+    from roomba_bt.runtime.stack import replay_record
 
     try:
         record = load_record(args.record)
@@ -349,48 +398,21 @@ def replay_command(args: argparse.Namespace) -> int:
     found = mission_file(str(mission_path)) if mission_path else None
     if not isinstance(found, str):
         return _error(f"{args.record}: mission {mission_path!r} not found; pass --mission FILE")
-    mission_path = found
     params = dict(header.get("parameters") or {})
     extra = parse_params(args.param)
     if isinstance(extra, str):
         return _error(extra)
     params.update(extra)
     baud = int(header.get("baud", 115200))
-    mission = load(mission_path, params, profile, baud, permissions(args))
+    mission = load(found, params, profile, baud, permissions(args))
     if isinstance(mission, int):
         return mission
-    from roomba_bt.mission import RUNTIME_PACKETS
-
-    recorded_packets = header.get("packets")
-    if not isinstance(recorded_packets, list) or not all(
-        isinstance(p, int) for p in recorded_packets
-    ):
-        return _error(f'{args.record}:1: the header lists no stream packets ("packets")')
-    missing = sorted((set(mission.packets) | set(RUNTIME_PACKETS)) - set(recorded_packets))
-    if missing:
-        return _error(
-            f"{args.record}: the recording streams packets {sorted(recorded_packets)} but "
-            f"{mission_path} reads {missing} too: it cannot be replayed against this mission "
-            "(record it again with this mission)"
-        )
-    packets = tuple(recorded_packets)
-    transport = ReplayTransport(record, name=f"replay:{args.record}")
-    stack = RunStack(
-        mission,
-        transport,
-        profile=profile,
-        baud=baud,
-        packets=packets,
-        watchdog=0.0,
-        input_ended=lambda: (
-            "first difference from the record"
-            if transport.difference is not None
-            else "end of the record"
-            if transport.exhausted
-            else None
-        ),
+    packets = _recorded_packets(args.record, header, mission, found)
+    if isinstance(packets, str):
+        return _error(packets)
+    summary, transport = replay_record(
+        record, mission, profile=profile, packets=packets, baud=baud, name=args.record
     )
-    summary = stack.run()
     print(summary)
     difference = transport.first_difference()
     if difference is None:
@@ -402,3 +424,23 @@ def replay_command(args: argparse.Namespace) -> int:
         f"(byte {offset} of {len(record.outbound)} recorded): expected {expected}, sent {sent}"
     )
     return ExitCode.MISSION_FAILED
+
+
+def _recorded_packets(
+    record_path: str, header: dict[str, Any], mission: Any, mission_path: str
+) -> tuple[int, ...] | str:
+    """The packets the record streams, or what is wrong: none listed, or the mission reads
+    one the record lacks."""
+    from roomba_bt.mission import RUNTIME_PACKETS
+
+    recorded = header.get("packets")
+    if not isinstance(recorded, list) or not all(isinstance(p, int) for p in recorded):
+        return f'{record_path}:1: the header lists no stream packets ("packets")'
+    missing = sorted((set(mission.packets) | set(RUNTIME_PACKETS)) - set(recorded))
+    if missing:
+        return (
+            f"{record_path}: the recording streams packets {sorted(recorded)} but "
+            f"{mission_path} reads {missing} too: it cannot be replayed against this mission "
+            "(record it again with this mission)"
+        )
+    return tuple(recorded)

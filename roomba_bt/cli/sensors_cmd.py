@@ -5,14 +5,17 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from roomba_bt.cli.arguments import baud_or_auto
+from roomba_bt.cli.arguments import add_far_end_options
 from roomba_bt.oi.frames import stream_frame_size
 from roomba_bt.oi.packets import PACKETS
-from roomba_bt.oi.profiles import PROFILES, get_profile
+from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.oi.stream import stream_budget
 from roomba_bt.runtime.summary import ExitCode
+
+if TYPE_CHECKING:
+    from roomba_bt.transport import Transport
 
 #: The groups tried, most packets first: the first whose stream frame fits the baud rate's
 #: 15 ms budget is shown. Group 100 (every packet, 80 data bytes, an 84-byte frame) fits at
@@ -34,13 +37,11 @@ def register(sub: Any) -> None:
         "sensors",
         help="show every decoded sensor, live",
     )
-    parser.add_argument("--port", help="serial device or URL; default: the built-in simulator")
-    parser.add_argument("--profile", choices=sorted(PROFILES), default="create2")
-    parser.add_argument(
-        "--baud", type=baud_or_auto, default=115200,
-        help="baud rate (default 115200), or auto: the OI's rate the robot answers at",
-    )  # fmt: skip
-    parser.add_argument("--world", help="simulator world (without --port)")
+    add_far_end_options(
+        parser,
+        port_help="serial device or URL; default: the built-in simulator",
+        world_help="simulator world (without --port)",
+    )
     parser.add_argument("--count", type=int, default=0, help="stop after N refreshes (0: run)")
     parser.add_argument("--rate", type=float, default=5.0, help="refreshes per second")
     parser.set_defaults(func=sensors_command)
@@ -74,74 +75,62 @@ def _show(value: object) -> str:
 
 
 def sensors_command(args: argparse.Namespace) -> int:
-    from roomba_bt.robot.connection import Connection
+    from roomba_bt.cli.links import auto_baud, far_end, make_simulator
     from roomba_bt.robot.errors import ConnectionFailed, LinkDown
-    from roomba_bt.robot.safety import sigterm_raises
-    from roomba_bt.transport import Transport
+    from roomba_bt.sim import WorldError
 
     profile = get_profile(args.profile)
-    link: Transport | None = None
-    if args.baud is None:  # --baud auto
-        if args.port:
-            from roomba_bt.cli.links import open_port
-
-            try:
-                opened = open_port(args.port, None)
-            except ConnectionFailed as exc:
-                print(f"roomba-bt: {exc}", file=sys.stderr)
-                return ExitCode.CONNECTION
-            args.baud = opened.baud
-            link = opened
-        else:
-            args.baud = profile.default_baud  # the simulator's
-    group = group_for(args.baud)
-    if group is None:
-        if link is not None:
-            link.close()
-        print(
-            f"roomba-bt sensors: --baud {args.baud}: no sensor stream fits in 15 ms at this "
-            f"rate (at most {stream_budget(args.baud)} bytes a frame); allowed: 9600 or more",
-            file=sys.stderr,
-        )
-        return ExitCode.INVALID
+    opened = None
     try:
-        if link is not None:
-            pass  # opened and its rate found above (--baud auto)
-        elif args.port:
-            from roomba_bt.cli.links import open_port
-
-            link = open_port(args.port, args.baud)
-        else:
-            from roomba_bt.cli.links import make_link, make_simulator
-            from roomba_bt.sim import WorldError
-
+        if args.baud is None:  # --baud auto
+            args.baud, opened = auto_baud(args.port, profile)
+        group = group_for(args.baud)
+        if group is None:
+            if opened is not None:
+                opened.close()
+            print(
+                f"roomba-bt sensors: --baud {args.baud}: no sensor stream fits in 15 ms at this "
+                f"rate (at most {stream_budget(args.baud)} bytes a frame); allowed: 9600 or more",
+                file=sys.stderr,
+            )
+            return ExitCode.INVALID
+        simulator = None
+        if not args.port:
             try:
                 simulator = make_simulator(args.world, profile, 0)
             except WorldError as exc:
                 print(f"roomba-bt: {exc}", file=sys.stderr)
                 return ExitCode.INVALID
-            link = make_link(simulator, fast=False)
-        connection = Connection(link, profile, baud=args.baud)
-        interactive = sys.stdout.isatty()
-        shown = 0
-        with sigterm_raises(), connection:
-            connection.start("passive", (group,))
-            last = 0.0
-            while args.count == 0 or shown < args.count:
-                frames = connection.poll(0.1)
-                if not frames or time.monotonic() - last < 1.0 / args.rate:
-                    continue
-                last = time.monotonic()
-                table = format_table(frames[-1].frame)
-                prefix = "\x1b[H\x1b[J" if interactive else ""
-                print(f"{prefix}{connection.name}  ({profile.title})\n{table}\n", flush=True)
-                shown += 1
-    except ConnectionFailed as exc:
-        print(f"roomba-bt: {exc}", file=sys.stderr)
-        return ExitCode.CONNECTION
-    except LinkDown as exc:
+        link = far_end(args.port, args.baud, simulator, opened=opened)
+        _show_live(link, profile, args, group)
+    except (ConnectionFailed, LinkDown) as exc:
         print(f"roomba-bt: {exc}", file=sys.stderr)
         return ExitCode.CONNECTION
     except KeyboardInterrupt:
         return ExitCode.INTERRUPTED
     return ExitCode.OK
+
+
+def _show_live(
+    link: Transport, profile: RobotProfile, args: argparse.Namespace, group: int
+) -> None:
+    """The table of the newest frame, ``args.rate`` times a second, ``args.count`` times (0:
+    until interrupted); the robot is left in Passive."""
+    from roomba_bt.robot.connection import Connection
+    from roomba_bt.robot.safety import sigterm_raises
+
+    connection = Connection(link, profile, baud=args.baud)
+    interactive = sys.stdout.isatty()
+    shown = 0
+    with sigterm_raises(), connection:
+        connection.start("passive", (group,))
+        last = 0.0
+        while args.count == 0 or shown < args.count:
+            frames = connection.poll(0.1)
+            if not frames or time.monotonic() - last < 1.0 / args.rate:
+                continue
+            last = time.monotonic()
+            table = format_table(frames[-1].frame)
+            prefix = "\x1b[H\x1b[J" if interactive else ""
+            print(f"{prefix}{connection.name}  ({profile.title})\n{table}\n", flush=True)
+            shown += 1

@@ -11,8 +11,8 @@ from __future__ import annotations
 from typing import Any
 
 from roomba_bt.monitor.feed import RunFeed
-from roomba_bt.runtime.recording import Record, ReplayTransport
-from roomba_bt.runtime.stack import RunStack
+from roomba_bt.runtime.recording import Record
+from roomba_bt.runtime.stack import replay_record
 from roomba_bt.runtime.summary import RunSummary
 
 #: Ticks kept of a recorded run (about 100 min): the whole run, within a bound.
@@ -25,18 +25,10 @@ def replay_into_feed(
     """Replay ``record`` through ``mission``; the feed holds every tick."""
     feed = RunFeed(history=RECORD_HISTORY, source="record", mission_name=mission.name)
     feed.set_tree(mission.root)
-    transport = ReplayTransport(record, name=f"replay:{name}")
-    stack = RunStack(
-        mission,
-        transport,
-        profile=profile,
-        baud=baud,
-        packets=packets,
-        watchdog=0.0,
+    summary, _ = replay_record(
+        record, mission, profile=profile, packets=packets, baud=baud, name=name,
         observer=lambda r: _ignore(feed.observe(r)),
-        input_ended=lambda: "end of the record" if transport.exhausted else None,
-    )
-    summary = stack.run()
+    )  # fmt: skip
     for t, note in record.notes:
         feed.event("force" if "force" in note else "note", _note_text(note), t)
     feed.finished = f"{summary.outcome.value} (recorded run, {summary.ticks} ticks)"

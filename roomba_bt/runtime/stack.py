@@ -24,7 +24,7 @@ from pathlib import Path
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.robot.connection import Connection, EndMode
 from roomba_bt.runtime.loop import MissionLike, MissionRunner, TickObserver, stream_request
-from roomba_bt.runtime.recording import RecordingTransport
+from roomba_bt.runtime.recording import Record, RecordingTransport, ReplayTransport
 from roomba_bt.runtime.summary import DEFAULT_GRACE, RunSummary
 from roomba_bt.transport.base import Transport
 
@@ -104,3 +104,36 @@ class RunStack:
         run's summary has said what happened to it."""
         with contextlib.suppress(Exception):
             self.connection.close()
+
+
+def replay_record(
+    record: Record,
+    mission: MissionLike,
+    *,
+    profile: RobotProfile,
+    packets: Sequence[int],
+    baud: int,
+    name: str,
+    observer: TickObserver | None = None,
+) -> tuple[RunSummary, ReplayTransport]:
+    """``record``'s sensor bytes through ``mission`` on the recorded clock (``replay`` and the
+    monitor's recorded runs): the run ends at the record's end or at the first command that
+    differs from the recorded ones; the transport holds what the tree wrote."""
+    transport = ReplayTransport(record, name=f"replay:{name}")
+
+    def input_ended() -> str | None:
+        if transport.difference is not None:
+            return "first difference from the record"
+        return "end of the record" if transport.exhausted else None
+
+    stack = RunStack(
+        mission,
+        transport,
+        profile=profile,
+        baud=baud,
+        packets=packets,
+        watchdog=0.0,
+        observer=observer,
+        input_ended=input_ended,
+    )
+    return stack.run(), transport
