@@ -19,10 +19,31 @@ import signal
 import sys
 import time
 from types import FrameType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from roomba_bt.cli.arguments import plot_file, seconds
 from roomba_bt.runtime.summary import ExitCode
+
+if TYPE_CHECKING:
+    from roomba_bt.sim import Simulator
+    from roomba_bt.sim.server import Endpoint
+
+
+#: The faults as options: :class:`~roomba_bt.sim.Faults`' field, its type, default and help.
+FAULT_OPTIONS: tuple[tuple[str, type, object, str], ...] = (
+    ("corrupt_rate", float, 0.0, "per-byte probability"),
+    ("drop_rate", float, 0.0, "per-frame probability"),
+    ("latency", float, 0.0, "extra seconds per byte"),
+    ("inject_text", str, "", "ASCII printed into the stream"),
+    ("inject_every", float, 1.0, "seconds between texts"),
+    ("disconnect_at", float, None, "drop the line at this time (s)"),
+    ("noise", float, 0.0, "analog sensor noise (raw)"),
+    ("bit_flip_rate", float, 0.0, "per-byte probability"),
+    ("truncate_rate", float, 0.0, "per-frame probability"),
+    ("reset_at", float, None, "the robot resets at this time (s)"),
+    ("stream_stop_at", float, None, "the stream stops at this time (s)"),
+    ("sleep_at", float, None, "the robot falls asleep at this time (s)"),
+)
 
 
 def register(sub: Any) -> None:
@@ -65,18 +86,9 @@ def register(sub: Any) -> None:
         "--plot", metavar="FILE.png", type=plot_file, help="write the trajectory on exit"
     )
     faults = parser.add_argument_group("faults")
-    faults.add_argument("--corrupt-rate", type=float, default=0.0, help="per-byte probability")
-    faults.add_argument("--drop-rate", type=float, default=0.0, help="per-frame probability")
-    faults.add_argument("--latency", type=float, default=0.0, help="extra seconds per byte")
-    faults.add_argument("--inject-text", default="", help="ASCII printed into the stream")
-    faults.add_argument("--inject-every", type=float, default=1.0, help="seconds between texts")
-    faults.add_argument("--disconnect-at", type=float, help="drop the line at this time (s)")
-    faults.add_argument("--noise", type=float, default=0.0, help="analog sensor noise (raw)")
-    faults.add_argument("--bit-flip-rate", type=float, default=0.0, help="per-byte probability")
-    faults.add_argument("--truncate-rate", type=float, default=0.0, help="per-frame probability")
-    faults.add_argument("--reset-at", type=float, help="the robot resets at this time (s)")
-    faults.add_argument("--stream-stop-at", type=float, help="the stream stops at this time (s)")
-    faults.add_argument("--sleep-at", type=float, help="the robot falls asleep at this time (s)")
+    for name, kind, default, help in FAULT_OPTIONS:
+        option = "--" + name.replace("_", "-")
+        faults.add_argument(option, type=kind, default=default, help=help)
     parser.set_defaults(func=run_sim)
 
 
@@ -86,27 +98,44 @@ def _fail(message: str, code: ExitCode) -> int:
 
 
 def run_sim(args: argparse.Namespace) -> int:
+    simulator = _simulator(args)
+    if isinstance(simulator, int):
+        return simulator
+    endpoint = _endpoint(args, simulator.baud)
+    if isinstance(endpoint, int):
+        return endpoint
+    failed = _serve_until_stopped(simulator, endpoint, args.duration)
+    if failed is not None:
+        return failed
+    print(
+        f"roomba-bt sim: {simulator.time:.1f} s simulated, {simulator.frames_sent} frames, "
+        f"{len(simulator.violations)} ignored actuator commands, mode {simulator.mode.label}, "
+        f"wheels {simulator.requested_left:.0f}/{simulator.requested_right:.0f} mm/s",
+        file=sys.stderr,
+    )
+    if args.plot:
+        try:
+            from roomba_bt.sim.plot import plot_run
+
+            plot_run(simulator, args.plot)
+        except ImportError as exc:
+            return _fail(str(exc), ExitCode.INVALID)
+        except OSError as exc:
+            return _fail(f"--plot {args.plot}: {exc.strerror or exc}", ExitCode.INVALID)
+        print(f"roomba-bt sim: trajectory written to {args.plot}", file=sys.stderr)
+    return ExitCode.OK
+
+
+def _simulator(args: argparse.Namespace) -> Simulator | int:
+    """The simulated robot the options describe (faults, world, rate, firmware, asleep), or
+    the exit code after saying which option is wrong."""
     from roomba_bt.oi.identify import parse_firmware
     from roomba_bt.oi.profiles import get_profile
     from roomba_bt.sim import Faults, Simulator, WorldError, load_world
-    from roomba_bt.sim.server import Endpoint, PtyEndpoint, Rfc2217Endpoint, TcpEndpoint, serve
 
     try:
         profile = get_profile(args.profile)
-        faults = Faults(
-            corrupt_rate=args.corrupt_rate,
-            drop_rate=args.drop_rate,
-            latency=args.latency,
-            inject_text=args.inject_text,
-            inject_every=args.inject_every,
-            disconnect_at=args.disconnect_at,
-            noise=args.noise,
-            bit_flip_rate=args.bit_flip_rate,
-            truncate_rate=args.truncate_rate,
-            reset_at=args.reset_at,
-            stream_stop_at=args.stream_stop_at,
-            sleep_at=args.sleep_at,
-        )
+        faults = Faults(**{name: getattr(args, name) for name, *_ in FAULT_OPTIONS})
     except ValueError as exc:
         return _fail(str(exc), ExitCode.INVALID)
     try:
@@ -133,24 +162,37 @@ def run_sim(args: argparse.Namespace) -> int:
         simulator.firmware = args.firmware
     if args.asleep:
         simulator.fall_asleep("started asleep (--asleep)")
-    endpoint: Endpoint
+    return simulator
+
+
+def _endpoint(args: argparse.Namespace, baud: int) -> Endpoint | int:
+    """Where the robot is served (``--pty``, ``--tcp``, ``--rfc2217`` at ``baud``), or the
+    exit code after saying why it cannot be."""
+    from roomba_bt.sim.server import PtyEndpoint, Rfc2217Endpoint, TcpEndpoint
+
     try:
         if args.pty:
-            endpoint = PtyEndpoint()
-        else:
-            option, text = ("--tcp", args.tcp) if args.tcp else ("--rfc2217", args.rfc2217)
-            host, sep, port_text = str(text).rpartition(":")
-            if not sep or not host or not port_text.isdigit() or int(port_text) > 65535:
-                return _fail(
-                    f"{option}: found {text!r}; allowed: HOST:PORT such as 127.0.0.1:7777",
-                    ExitCode.INVALID,
-                )
-            if args.tcp:
-                endpoint = TcpEndpoint(host, int(port_text))
-            else:
-                endpoint = Rfc2217Endpoint(host, int(port_text), simulator.baud)
+            return PtyEndpoint()
+        option, text = ("--tcp", args.tcp) if args.tcp else ("--rfc2217", args.rfc2217)
+        host, sep, port_text = str(text).rpartition(":")
+        if not sep or not host or not port_text.isdigit() or int(port_text) > 65535:
+            return _fail(
+                f"{option}: found {text!r}; allowed: HOST:PORT such as 127.0.0.1:7777",
+                ExitCode.INVALID,
+            )
+        if args.tcp:
+            return TcpEndpoint(host, int(port_text))
+        return Rfc2217Endpoint(host, int(port_text), baud)
     except OSError as exc:
         return _fail(f"cannot serve: {exc}", ExitCode.CONNECTION)
+
+
+def _serve_until_stopped(
+    simulator: Simulator, endpoint: Endpoint, duration: float | None
+) -> int | None:
+    """Serve until SIGINT or SIGTERM, or ``duration`` seconds; the endpoint is closed and the
+    signal handlers restored. The exit code if the endpoint failed, else None."""
+    from roomba_bt.sim.server import serve
 
     stop = {"signal": 0}
 
@@ -160,7 +202,6 @@ def run_sim(args: argparse.Namespace) -> int:
     previous = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     print(endpoint.address, flush=True)
     started = time.monotonic()
-    duration = args.duration
 
     def should_stop() -> bool:
         if stop["signal"]:
@@ -175,20 +216,4 @@ def run_sim(args: argparse.Namespace) -> int:
         endpoint.close()
         for sig, handler in previous.items():
             signal.signal(sig, handler)
-    print(
-        f"roomba-bt sim: {simulator.time:.1f} s simulated, {simulator.frames_sent} frames, "
-        f"{len(simulator.violations)} ignored actuator commands, mode {simulator.mode.label}, "
-        f"wheels {simulator.requested_left:.0f}/{simulator.requested_right:.0f} mm/s",
-        file=sys.stderr,
-    )
-    if args.plot:
-        try:
-            from roomba_bt.sim.plot import plot_run
-
-            plot_run(simulator, args.plot)
-        except ImportError as exc:
-            return _fail(str(exc), ExitCode.INVALID)
-        except OSError as exc:
-            return _fail(f"--plot {args.plot}: {exc.strerror or exc}", ExitCode.INVALID)
-        print(f"roomba-bt sim: trajectory written to {args.plot}", file=sys.stderr)
-    return ExitCode.OK
+    return None

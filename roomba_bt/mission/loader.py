@@ -136,52 +136,18 @@ class Loader:
     def compile_file(
         self, path: Path, overrides: Mapping[str, str], *, require_tree: bool = True
     ) -> ParsedFile | None:
-        display = self.display(path)
-        self.files.append(path.resolve())
-        root, errors = compose(path, display)
-        for e in errors:
-            self.ctx.error(e)
-        if root is None:
+        read = self._read_sections(path)
+        if read is None:
             return None
-        root_loc = loc_of(root, display, "")
-        if not _is_mission(root, TOP_LEVEL):
-            self.ctx.error(root_loc.at(_not_a_mission("this file", TOP_LEVEL)))
-            return None
-        try:
-            items = mapping(root, root_loc, "a mission file")
-        except Bad as bad:
-            self.ctx.error(bad.diagnostic)
-            return None
+        sections, root_loc = read
         self._include_roots = (
             path.resolve().parent,
             *SHIPPED_LIBRARY,
             *(folder.resolve() for folder in self.permissions.include_dirs),
         )
         self._include_stack.append(path.resolve())
-        sections = {k: (v, kl, vl) for k, v, kl, vl in items}
-        for key, _, key_loc, _ in items:
-            if key not in TOP_LEVEL:
-                self.ctx.error(
-                    key_loc.at(
-                        f"unknown top-level key {key!r}{closest(key, TOP_LEVEL)}; "
-                        f"known: {', '.join(TOP_LEVEL)}"
-                    )
-                )
         self._file_sections(path, sections)
-        name = path.stem
-        description = ""
-        for key in ("mission", "description"):
-            if key in sections:
-                node, _, vloc = sections[key]
-                try:
-                    text = scalar_text(node, vloc, key)
-                except Bad as bad:
-                    self.ctx.error(bad.diagnostic)
-                    continue
-                if key == "mission":
-                    name = text
-                else:
-                    description = text
+        name, description = self._names(path, sections)
         params = self._parameters(sections.get("parameters"), overrides, root_loc)
         self.nodes.global_env = params
         description = SUBSTITUTION.sub(
@@ -198,6 +164,51 @@ class Loader:
         self.nodes.check_unused_subtrees()
         self._include_stack.pop()
         return ParsedFile(name, description, params, tree, tree_loc, root_loc)
+
+    def _read_sections(
+        self, path: Path
+    ) -> tuple[dict[str, tuple[yaml.Node, Loc, Loc]], Loc] | None:
+        """The file's top-level sections by key (node, key's and value's place) and the
+        root's place; None when it is no mission file. Unknown keys are reported."""
+        display = self.display(path)
+        self.files.append(path.resolve())
+        root, errors = compose(path, display)
+        for e in errors:
+            self.ctx.error(e)
+        if root is None:
+            return None
+        root_loc = loc_of(root, display, "")
+        if not _is_mission(root, TOP_LEVEL):
+            self.ctx.error(root_loc.at(_not_a_mission("this file", TOP_LEVEL)))
+            return None
+        try:
+            items = mapping(root, root_loc, "a mission file")
+        except Bad as bad:
+            self.ctx.error(bad.diagnostic)
+            return None
+        for key, _, key_loc, _ in items:
+            if key not in TOP_LEVEL:
+                self.ctx.error(
+                    key_loc.at(
+                        f"unknown top-level key {key!r}{closest(key, TOP_LEVEL)}; "
+                        f"known: {', '.join(TOP_LEVEL)}"
+                    )
+                )
+        return {k: (v, kl, vl) for k, v, kl, vl in items}, root_loc
+
+    def _names(
+        self, path: Path, sections: dict[str, tuple[yaml.Node, Loc, Loc]]
+    ) -> tuple[str, str]:
+        """``mission:`` (the file's stem if absent) and ``description:`` as written."""
+        found = {"mission": path.stem, "description": ""}
+        for key in found:
+            if key in sections:
+                node, _, vloc = sections[key]
+                try:
+                    found[key] = scalar_text(node, vloc, key)
+                except Bad as bad:
+                    self.ctx.error(bad.diagnostic)
+        return found["mission"], found["description"]
 
     def _file_sections(self, path: Path, sections: dict[str, tuple[yaml.Node, Loc, Loc]]) -> None:
         """plugins, include, blackboard, subtrees: what an included file contributes too."""

@@ -94,63 +94,45 @@ class FrameLayout:
         self.packet_ids = packet_ids
         self.with_ids = with_ids
         self.profile = profile
-        codes: list[str] = []
-        index: dict[int, int] = {}
-        members: list[int] = []
-        id_offsets: list[int] = []
-        offset = 0
-        # bits no in-range value sets (reserved bits, the high nibble of a 12-bit signal),
-        # by the byte offset in the payload
-        zero_bits: list[tuple[int, int]] = []
-        range_checks: list[tuple[int, int, int]] = []
-        for pid in packet_ids:
-            if with_ids:
-                id_offsets.append(offset)
-                codes.append("x")
-                offset += 1
-            for member in expand(pid):
-                spec = profile.packet(member)
-                if member not in index:
-                    zeros, check = _range_rule(spec)
-                    zero_bits += [(offset + i, byte) for i, byte in enumerate(zeros) if byte]
-                    if check is not None:
-                        range_checks.append((len(members), *check))
-                    index[member] = len(members)
-                    members.append(member)
-                    codes.append(spec.struct_code)
-                else:  # a packet asked for twice: keep the first, skip the bytes
-                    codes.append(f"{spec.size}x")
-                offset += spec.size
-        self.members = tuple(members)
+        places = _Places(packet_ids, profile, with_ids)
+        index = places.index
+        self.members = tuple(places.members)
         self.index: Mapping[int, int] = index
         #: (value slot, lowest, highest) for each packet whose range the mask below cannot say
-        self.range_checks: tuple[tuple[int, int, int], ...] = tuple(range_checks)
+        self.range_checks: tuple[tuple[int, int, int], ...] = tuple(places.range_checks)
         #: value slots of the left and right encoder counts (packets 43, 44), if both are here
         self.encoder_slots: tuple[int, int] | None = (
             (index[43], index[44]) if 43 in index and 44 in index else None
         )
-        self.struct = struct.Struct(">" + "".join(codes))
+        self.struct = struct.Struct(">" + "".join(places.codes))
+        offset = places.offset
         self.payload_size = offset
         if with_ids and offset > 255:  # n-bytes is one byte: such a stream cannot be framed
             raise EncodeError(
                 "stream", "packet ids", "at most 255 bytes of ids and data per frame", offset
             )
-        self.id_offsets = tuple(id_offsets)
-        # For the stream parser: header, n-bytes and every id byte of a whole frame, as a mask
-        # and the values under it, each one big-endian integer (one test per candidate).
+        self.id_offsets = tuple(places.id_offsets)
+        self._set_masks(places.zero_bits)
+
+    def _set_masks(self, zero_bits: list[tuple[int, int]]) -> None:
+        """For the stream parser: header, n-bytes and every id byte of a whole frame, as a mask
+        and the values under it, each one big-endian integer (one test per candidate)."""
+        offset = self.payload_size
         mask = bytearray(offset + 3)
         template = bytearray(offset + 3)
         # The values' reserved bits are in the same mask, with 0 in the template: a frame whose
         # bytes set one is out of range, and costs the parser no second test.
-        if with_ids:
+        if self.with_ids:
             fixed = [(0, STREAM_HEADER), (1, offset & 0xFF)]
-            fixed += [(2 + off, pid) for off, pid in zip(id_offsets, packet_ids, strict=True)]
+            fixed += [
+                (2 + off, pid) for off, pid in zip(self.id_offsets, self.packet_ids, strict=True)
+            ]
             for position, value in fixed:
                 mask[position], template[position] = 0xFF, value
         #: the mask of the fixed bytes alone (header, n-bytes, ids): tells a candidate with
         #: a reserved bit set (out of range) from one that is no frame at all
         self.frame_id_mask = int.from_bytes(mask, "big")
-        if with_ids:
+        if self.with_ids:
             for position, bits in zero_bits:
                 mask[2 + position] |= bits
         self.frame_mask = int.from_bytes(mask, "big")
@@ -197,6 +179,42 @@ class FrameLayout:
         body = bytes((STREAM_HEADER, len(payload))) + payload
         total = sum(body) if include_header else sum(body) - STREAM_HEADER
         return body + bytes(((-total) & 0xFF,))
+
+
+class _Places:
+    """Where each packet of a list sits in the payload: the struct codes, each packet's value
+    slot, the id bytes' offsets, and what its range rule says (:func:`_range_rule`)."""
+
+    def __init__(self, packet_ids: tuple[int, ...], profile: RobotProfile, with_ids: bool) -> None:
+        self.codes: list[str] = []
+        self.index: dict[int, int] = {}
+        self.members: list[int] = []
+        self.id_offsets: list[int] = []
+        self.offset = 0
+        # bits no in-range value sets (reserved bits, the high nibble of a 12-bit signal),
+        # by the byte offset in the payload
+        self.zero_bits: list[tuple[int, int]] = []
+        self.range_checks: list[tuple[int, int, int]] = []
+        for pid in packet_ids:
+            if with_ids:
+                self.id_offsets.append(self.offset)
+                self.codes.append("x")
+                self.offset += 1
+            for member in expand(pid):
+                self._place(profile.packet(member))
+
+    def _place(self, spec: PacketSpec) -> None:
+        if spec.id in self.index:  # a packet asked for twice: keep the first, skip the bytes
+            self.codes.append(f"{spec.size}x")
+        else:
+            zeros, check = _range_rule(spec)
+            self.zero_bits += [(self.offset + i, byte) for i, byte in enumerate(zeros) if byte]
+            if check is not None:
+                self.range_checks.append((len(self.members), *check))
+            self.index[spec.id] = len(self.members)
+            self.members.append(spec.id)
+            self.codes.append(spec.struct_code)
+        self.offset += spec.size
 
 
 def _range_rule(spec: PacketSpec) -> tuple[bytes, tuple[int, int] | None]:

@@ -247,8 +247,16 @@ class StreamParser:
         else:
             first = 0
         buf += data
+        self.counters.bytes_fed += len(data)
+        return self._scan(first, now)
+
+    def _scan(self, first: int, now: float | None) -> list[SensorFrame]:
+        """The frames in the buffer from byte ``first`` on; the bytes they used or skipped
+        leave the buffer. One function with :meth:`plausible`'s common case inline: a call per
+        candidate would cost it on every frame of a 4 KiB read (``bench.bench_oi``)."""
+        buf = self._buffer
+        size = self._size
         counters = self.counters
-        counters.bytes_fed += len(data)
         base = counters.bytes_fed - len(buf)  # the stream's byte offset of buf[0]
         plausible, checks, encoders = self.plausible, self._checks, self._encoders
         frames: list[SensorFrame] = []
