@@ -32,6 +32,7 @@ if TYPE_CHECKING:
     from roomba_bt.runtime.stack import RunStack
     from roomba_bt.runtime.summary import RunSummary
     from roomba_bt.sim import Simulator
+    from roomba_bt.transport import Transport
 
 
 def register(sub: Any) -> None:
@@ -159,7 +160,6 @@ def run_command(args: argparse.Namespace) -> int:
     from roomba_bt.cli.links import auto_baud, far_end
     from roomba_bt.robot.errors import ConnectionFailed
     from roomba_bt.runtime.display import observer_for
-    from roomba_bt.runtime.stack import Recording, RunStack
 
     checked = _checked_arguments(args)
     if isinstance(checked, int):
@@ -196,30 +196,45 @@ def run_command(args: argparse.Namespace) -> int:
             monitor.finish(None)
         print(f"roomba-bt: {exc}", file=sys.stderr)
         return ExitCode.CONNECTION
-    record = None
-    if args.record:
-        record = Recording(args.record, str(Path(args.mission).resolve()), params)
     observer = observer_for(args.display, sys.stdout)
     try:
-        stack = RunStack(
-            mission,
-            link,
-            profile=profile,
-            baud=args.baud,
-            packets=packets,
-            watchdog=args.watchdog,
-            grace=args.grace,
-            keep_awake=None if args.keep_awake else False,
-            end_in=args.end_in,
-            timeout_s=timeout,
-            observer=observer,
-            record=record,
-        )
+        stack = _stack(args, mission, link, packets, params, timeout, observer)
     except OSError as exc:
         if monitor is not None:
             monitor.finish(None)
         return _error(f"--record {args.record}: {exc.strerror or exc}")
     return _run_and_report(args, stack, observer, simulator, monitor)
+
+
+def _stack(
+    args: argparse.Namespace,
+    mission: Any,
+    link: Transport,
+    packets: tuple[int, ...],
+    params: dict[str, str],
+    timeout: float | None,
+    observer: TickObserver | None,
+) -> RunStack:
+    """The run's stack as the options say (OSError: the --record file cannot be written)."""
+    from roomba_bt.runtime.stack import Recording, RunStack
+
+    record = None
+    if args.record:
+        record = Recording(args.record, str(Path(args.mission).resolve()), params)
+    return RunStack(
+        mission,
+        link,
+        profile=get_profile(args.profile),
+        baud=args.baud,
+        packets=packets,
+        watchdog=args.watchdog,
+        grace=args.grace,
+        keep_awake=None if args.keep_awake else False,
+        end_in=args.end_in,
+        timeout_s=timeout,
+        observer=observer,
+        record=record,
+    )
 
 
 def _checked_arguments(args: argparse.Namespace) -> tuple[dict[str, str], float | None] | int:
