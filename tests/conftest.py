@@ -1,5 +1,7 @@
 """Suite-wide: under ``CI=true`` a test skipped for a missing test dependency fails instead;
-``clean_blackboard`` for the folders whose tests write py_trees' blackboard.
+``clean_blackboard`` for the folders whose tests write py_trees' blackboard; ``served_sim``,
+``roomba-bt sim`` in a child process; ``silent_port``, a pty nobody answers on;
+``usage_error``, a command line that must be refused.
 
 Outside CI a missing optional package (the peer clients pycreate2 and PyRoombaAdapter,
 matplotlib, jsonschema, the example wall-follow plugin) skips its tests with the install
@@ -10,7 +12,11 @@ which package is missing.
 from __future__ import annotations
 
 import os
-from collections.abc import Generator, Iterator
+import select
+import signal
+import subprocess
+import sys
+from collections.abc import Callable, Generator, Iterator
 
 import py_trees
 import pytest
@@ -43,3 +49,70 @@ def clean_blackboard() -> Iterator[None]:
     py_trees.blackboard.Blackboard.clear()
     yield
     py_trees.blackboard.Blackboard.clear()
+
+
+class ServedSim:
+    """``roomba-bt sim ARGS`` in a child process, in real time; ``address`` is the first line
+    it printed: the pty's path or the URL to open."""
+
+    def __init__(self, *args: str) -> None:
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "roomba_bt.cli", "sim", *args],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        assert self.proc.stdout is not None
+        ready, _, _ = select.select([self.proc.stdout], [], [], 30.0)
+        assert ready, "the simulator printed no address"
+        self.address = self.proc.stdout.readline().strip()
+
+    def stop(self, sig: int = signal.SIGTERM) -> tuple[int, str]:
+        """``sig`` to it if it still runs; its exit code and what it wrote on stderr (the
+        summary line: simulated time, frames, mode, wheels)."""
+        if self.proc.poll() is None:
+            self.proc.send_signal(sig)
+        _, err = self.proc.communicate(timeout=10)
+        return self.proc.returncode, err
+
+
+@pytest.fixture
+def served_sim() -> Iterator[Callable[..., ServedSim]]:
+    """``served_sim("--pty", "--baud", "19200")`` starts a :class:`ServedSim`; each one a test
+    started and did not stop is stopped after it."""
+    started: list[ServedSim] = []
+
+    def start(*args: str) -> ServedSim:
+        sim = ServedSim(*args)
+        started.append(sim)
+        return sim
+
+    yield start
+    for sim in started:
+        if sim.proc.poll() is None:
+            sim.stop()
+
+
+@pytest.fixture
+def silent_port() -> Iterator[str]:
+    """A pty's device path with nothing behind it: nobody reads what is written or answers."""
+    master, slave = os.openpty()
+    try:
+        yield os.ttyname(slave)
+    finally:
+        os.close(master)
+        os.close(slave)
+
+
+@pytest.fixture
+def usage_error(capsys: pytest.CaptureFixture[str]) -> Callable[..., str]:
+    """``usage_error(main, argv)``: ``main(argv)`` must end in argparse's usage error (exit 2);
+    what it wrote on stderr."""
+
+    def refused(main: Callable[[list[str]], object], argv: list[str]) -> str:
+        with pytest.raises(SystemExit) as exit_:
+            main(argv)
+        assert exit_.value.code == 2
+        return capsys.readouterr().err
+
+    return refused

@@ -28,9 +28,12 @@ import contextlib
 import sys
 from dataclasses import dataclass, field
 from enum import IntEnum
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
 
 from roomba_bt.cli.arguments import baud_or_auto
+
+if TYPE_CHECKING:
+    from roomba_bt.robot.handshake import Probe
 
 #: Seconds of stream the round-trip reads (33 frames at one per 15 ms).
 STREAM_CHECK_S = 0.5
@@ -176,14 +179,21 @@ def _leave_passive(transport: Any) -> None:
         transport.write(oi.pause_stream().data + oi.start().data)
 
 
-def _examine(transport: Any, rates: tuple[int, ...], allow_reset: bool, report: Report) -> int:
-    from roomba_bt.robot.handshake import search, wake_pulse
+def _search(transport: Any, rates: tuple[int, ...], report: Report, when: str) -> Probe | None:
+    """Each rate tried, a line each (``when``: after what); the first that answered, or None."""
+    from roomba_bt.robot.handshake import search
 
-    first = search(transport, rates)
-    for probe in first.probes:
+    result = search(transport, rates)
+    for probe in result.probes:
         mark = "ok" if probe.answered else "--"
-        report.line(mark, "baud", f"{probe.baud}: {probe.seen}")
-    found = first.found
+        report.line(mark, "baud", f"{probe.baud}{when}: {probe.seen}")
+    return result.found
+
+
+def _examine(transport: Any, rates: tuple[int, ...], allow_reset: bool, report: Report) -> int:
+    from roomba_bt.robot.handshake import wake_pulse
+
+    found = _search(transport, rates, report, "")
     if found is None:
         pulse = wake_pulse(transport)
         if pulse.problem is not None:
@@ -195,11 +205,7 @@ def _examine(transport: Any, rates: tuple[int, ...], allow_reset: bool, report: 
             )
             raise _Failed(DoctorExit.SILENT)
         report.ok("wake", f"silent at every rate: {pulse.how}")
-        second = search(transport, rates)
-        for probe in second.probes:
-            mark = "ok" if probe.answered else "--"
-            report.line(mark, "baud", f"{probe.baud} after the pulse: {probe.seen}")
-        found = second.found
+        found = _search(transport, rates, report, " after the pulse")
         if found is None:
             report.fail("baud", "silent at every OI rate, even after a BRC pulse", SILENT_FIX)
             raise _Failed(DoctorExit.SILENT)

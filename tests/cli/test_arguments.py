@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
 
 import pytest
 
@@ -46,12 +47,9 @@ def test_bad_seconds(text: str) -> None:
     ],
 )
 def test_commands_refuse_them_with_exit_2(
-    argv: list[str], message: str, capsys: pytest.CaptureFixture[str]
+    argv: list[str], message: str, usage_error: Callable[..., str]
 ) -> None:
-    with pytest.raises(SystemExit) as exit_:
-        main(argv)
-    assert exit_.value.code == 2
-    assert message in capsys.readouterr().err
+    assert message in usage_error(main, argv)
 
 
 def test_params_are_read_as_text_name_to_value() -> None:

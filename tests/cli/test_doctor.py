@@ -7,14 +7,12 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import os
-import select
-import signal
 import subprocess
 import sys
 import textwrap
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -24,42 +22,6 @@ from roomba_bt.transport import SerialTransport, TransportError
 
 #: The acceptance bar: nothing behind the port, the answer comes within 10 s.
 DOCTOR_TIMEOUT_S = 10.0
-
-
-class Sim:
-    """``roomba-bt sim`` in a child process; ``address`` is what it printed."""
-
-    def __init__(self, *args: str) -> None:
-        self.proc = subprocess.Popen(
-            [sys.executable, "-m", "roomba_bt.cli", "sim", *args],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-        )
-        assert self.proc.stdout is not None
-        ready, _, _ = select.select([self.proc.stdout], [], [], 30.0)
-        assert ready, "the simulator printed no address"
-        self.address = self.proc.stdout.readline().strip()
-
-    def stop(self) -> str:
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGTERM)
-        _, err = self.proc.communicate(timeout=10)
-        return err
-
-
-@pytest.fixture
-def sims() -> Iterator[list[Sim]]:
-    started: list[Sim] = []
-    yield started
-    for sim in started:
-        sim.stop()
-
-
-def _sim(sims: list[Sim], *args: str) -> Sim:
-    sim = Sim(*args)
-    sims.append(sim)
-    return sim
 
 
 def _cli(*args: str, timeout: float = DOCTOR_TIMEOUT_S) -> subprocess.CompletedProcess[str]:
@@ -83,8 +45,10 @@ def _step(out: str, step: str) -> list[str]:
 
 
 @pytest.mark.parametrize("baud", [19200, 115200])
-def test_doctor_finds_an_awake_create2_on_a_pty_at_either_rate(sims: list[Sim], baud: int) -> None:
-    sim = _sim(sims, "--pty", "--baud", str(baud))
+def test_doctor_finds_an_awake_create2_on_a_pty_at_either_rate(
+    served_sim: Callable[..., Any], baud: int
+) -> None:
+    sim = served_sim("--pty", "--baud", str(baud))
     done = _doctor(sim.address)
     assert done.returncode == DoctorExit.FOUND, done.stdout
     out = done.stdout
@@ -103,14 +67,14 @@ def test_doctor_finds_an_awake_create2_on_a_pty_at_either_rate(sims: list[Sim], 
         assert "too big: " in missions and "patrol 59" in missions
     else:
         assert missions.startswith("[ok]") and missions.endswith("all fit")
-    assert "mode Passive" in sim.stop(), "the robot is left in Passive"
+    assert "mode Passive" in sim.stop()[1], "the robot is left in Passive"
 
 
 @pytest.mark.parametrize("baud", [19200, 115200])
 def test_doctor_wakes_an_asleep_robot_by_brc_over_rfc2217_and_names_it(
-    sims: list[Sim], baud: int
+    served_sim: Callable[..., Any], baud: int
 ) -> None:
-    sim = _sim(sims, "--rfc2217", "127.0.0.1:0", "--asleep", "--baud", str(baud))
+    sim = served_sim("--rfc2217", "127.0.0.1:0", "--asleep", "--baud", str(baud))
     done = _doctor(sim.address)
     assert done.returncode == DoctorExit.FOUND, done.stdout
     out = done.stdout
@@ -122,10 +86,10 @@ def test_doctor_wakes_an_asleep_robot_by_brc_over_rfc2217_and_names_it(
 
 @pytest.mark.parametrize("baud", [19200, 115200])
 def test_doctor_wakes_an_asleep_robot_on_a_pty_by_a_hang_up_and_names_it(
-    sims: list[Sim], baud: int
+    served_sim: Callable[..., Any], baud: int
 ) -> None:
     """A pty's modem lines cannot be set (ENOTTY): the pulse is a 1 s hang-up (speed 0)."""
-    sim = _sim(sims, "--pty", "--asleep", "--baud", str(baud))
+    sim = served_sim("--pty", "--asleep", "--baud", str(baud))
     done = _doctor(sim.address)
     assert done.returncode == DoctorExit.FOUND, done.stdout
     out = done.stdout
@@ -136,7 +100,7 @@ def test_doctor_wakes_an_asleep_robot_on_a_pty_by_a_hang_up_and_names_it(
     ) in out
     assert "[ok]   wake      it answered after the pulse: the robot was asleep" in out
     assert f"found: iRobot Create 2 on {sim.address} at {baud} baud, Passive, battery " in out
-    assert "mode Passive" in sim.stop(), "the robot is left in Passive"
+    assert "mode Passive" in sim.stop()[1], "the robot is left in Passive"
 
 
 class _NoHangUp(SerialTransport):
@@ -149,10 +113,12 @@ class _NoHangUp(SerialTransport):
 
 
 def test_a_port_that_can_neither_set_its_lines_nor_hang_up_says_press_clean_exit_5(
-    sims: list[Sim], monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+    served_sim: Callable[..., Any],
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
 ) -> None:
     """In process: the real pty (its ioctl fails) behind a transport whose B0 fails too."""
-    sim = _sim(sims, "--pty", "--asleep")
+    sim = served_sim("--pty", "--asleep")
     monkeypatch.setattr(transport_package, "SerialTransport", _NoHangUp)
     code = doctor_command(argparse.Namespace(port=sim.address, baud=None, allow_reset=False))
     out = capsys.readouterr().out
@@ -166,8 +132,8 @@ def test_a_port_that_can_neither_set_its_lines_nor_hang_up_says_press_clean_exit
     assert "found:" not in out
 
 
-def test_a_roomba600_is_told_by_its_mode_plus_one(sims: list[Sim]) -> None:
-    sim = _sim(sims, "--pty", "--profile", "roomba600")
+def test_a_roomba600_is_told_by_its_mode_plus_one(served_sim: Callable[..., Any]) -> None:
+    sim = served_sim("--pty", "--profile", "roomba600")
     done = _doctor(sim.address)
     assert done.returncode == DoctorExit.FOUND, done.stdout
     assert "Start (128): Passive; packet 35 reads 2 (this firmware reports the OI mode + 1)" in (
@@ -178,9 +144,9 @@ def test_a_roomba600_is_told_by_its_mode_plus_one(sims: list[Sim]) -> None:
 
 
 def test_with_allow_reset_a_roomba500_is_told_by_its_silence_and_its_checksum(
-    sims: list[Sim],
+    served_sim: Callable[..., Any],
 ) -> None:
-    sim = _sim(sims, "--rfc2217", "127.0.0.1:0", "--profile", "roomba500", "--baud", "19200")
+    sim = served_sim("--rfc2217", "127.0.0.1:0", "--profile", "roomba500", "--baud", "19200")
     done = _doctor(sim.address, "--allow-reset")
     assert done.returncode == DoctorExit.FOUND, done.stdout
     profile = _step(done.stdout, "profile")[0]
@@ -191,9 +157,9 @@ def test_with_allow_reset_a_roomba500_is_told_by_its_silence_and_its_checksum(
 
 @pytest.mark.parametrize(("firmware", "wakes"), [("release-3.6.0", False), ("release-3.8.2", True)])
 def test_with_allow_reset_the_banner_gives_the_firmware_and_the_dock_wake(
-    sims: list[Sim], firmware: str, wakes: bool
+    served_sim: Callable[..., Any], firmware: str, wakes: bool
 ) -> None:
-    sim = _sim(sims, "--pty", "--firmware", firmware)
+    sim = served_sim("--pty", "--firmware", firmware)
     done = _doctor(sim.address, "--allow-reset")
     assert done.returncode == DoctorExit.FOUND, done.stdout
     reset = _step(done.stdout, "reset")[0]
@@ -206,14 +172,11 @@ def test_with_allow_reset_the_banner_gives_the_firmware_and_the_dock_wake(
     assert "printed a banner after Reset (7)" in _step(done.stdout, "profile")[0]
 
 
-def test_a_pty_with_nothing_behind_it_says_so_and_exits_non_zero_within_10_s() -> None:
+def test_a_pty_with_nothing_behind_it_says_so_and_exits_non_zero_within_10_s(
+    silent_port: str,
+) -> None:
     """Nobody reads the other side of this pty: the subprocess timeout is the 10 s bar."""
-    master, slave = os.openpty()
-    try:
-        done = _doctor(os.ttyname(slave))
-    finally:
-        os.close(master)
-        os.close(slave)
+    done = _doctor(silent_port)
     assert done.returncode == DoctorExit.SILENT, done.stdout
     assert "[--]   baud      115200: nothing" in done.stdout
     assert "[--]   baud      19200: nothing" in done.stdout
@@ -245,8 +208,8 @@ tree:
 """
 
 
-def test_run_baud_auto_finds_19200_and_runs(sims: list[Sim], tmp_path: Path) -> None:
-    sim = _sim(sims, "--pty", "--baud", "19200")
+def test_run_baud_auto_finds_19200_and_runs(served_sim: Callable[..., Any], tmp_path: Path) -> None:
+    sim = served_sim("--pty", "--baud", "19200")
     mission = tmp_path / "short.yaml"
     mission.write_text(textwrap.dedent(MISSION))
     done = _cli(
@@ -258,8 +221,8 @@ def test_run_baud_auto_finds_19200_and_runs(sims: list[Sim], tmp_path: Path) -> 
     assert "the robot answers at 19200 baud (--baud auto)" in done.stderr
 
 
-def test_sensors_baud_auto_finds_19200_and_shows_a_table(sims: list[Sim]) -> None:
-    sim = _sim(sims, "--pty", "--baud", "19200")
+def test_sensors_baud_auto_finds_19200_and_shows_a_table(served_sim: Callable[..., Any]) -> None:
+    sim = served_sim("--pty", "--baud", "19200")
     done = _cli("sensors", "--port", sim.address, "--baud", "auto", "--count", "1", timeout=30)
     assert done.returncode == 0, done.stderr
     assert done.stdout.startswith(f"{sim.address}  (iRobot Create 2)")
@@ -268,13 +231,8 @@ def test_sensors_baud_auto_finds_19200_and_shows_a_table(sims: list[Sim]) -> Non
     assert "oi_mode" not in done.stdout
 
 
-def test_baud_auto_with_nothing_behind_the_port_is_a_connection_failure() -> None:
-    master, slave = os.openpty()
-    try:
-        done = _cli("sensors", "--port", os.ttyname(slave), "--baud", "auto", "--count", "1")
-    finally:
-        os.close(master)
-        os.close(slave)
+def test_baud_auto_with_nothing_behind_the_port_is_a_connection_failure(silent_port: str) -> None:
+    done = _cli("sensors", "--port", silent_port, "--baud", "auto", "--count", "1")
     assert done.returncode == 3
     assert "--baud auto: no answer at any OI rate (115200: nothing; 19200: nothing" in done.stderr
     assert "Traceback" not in done.stderr

@@ -9,8 +9,9 @@ import subprocess
 import sys
 import textwrap
 import time
-from collections.abc import Iterator
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -24,21 +25,10 @@ pytestmark = pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs a pty"
 
 
 @pytest.fixture
-def sim_port() -> Iterator[str]:
-    proc = subprocess.Popen(
-        [*CLI, "sim", "--pty"], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True
-    )
-    assert proc.stdout is not None
-    port = proc.stdout.readline().strip()
+def sim_port(served_sim: Callable[..., Any]) -> str:
+    port: str = served_sim("--pty").address
     assert port.startswith("/dev/"), port
-    yield port
-    proc.send_signal(signal.SIGINT)
-    try:
-        proc.wait(timeout=5)
-    except subprocess.TimeoutExpired:
-        proc.kill()
-        proc.wait()
-    proc.stdout.close()
+    return port
 
 
 def _mission(tmp_path: Path, text: str) -> Path:
@@ -76,13 +66,19 @@ def _wait_for_driving(record: Path, timeout: float = 10.0) -> None:
     raise AssertionError("the run never started driving")
 
 
+def _driving(port: str, tmp_path: Path) -> tuple[subprocess.Popen[str], Path]:
+    """A run spinning for ever on ``port``, once it drives; its record's path."""
+    record = tmp_path / "run.jsonl"
+    proc = _start_run(port, _mission(tmp_path, FOREVER), record)
+    _wait_for_driving(record)
+    return proc, record
+
+
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_signal_ends_with_the_safe_stop_and_exit_130(
     sim_port: str, tmp_path: Path, signum: int
 ) -> None:
-    record = tmp_path / "run.jsonl"
-    proc = _start_run(sim_port, _mission(tmp_path, FOREVER), record)
-    _wait_for_driving(record)
+    proc, record = _driving(sim_port, tmp_path)
     proc.send_signal(signum)
     out, err = proc.communicate(timeout=10)
     assert proc.returncode == 130, err
@@ -94,9 +90,7 @@ def test_signal_ends_with_the_safe_stop_and_exit_130(
 def test_a_second_ctrl_c_waits_for_the_safe_stop_and_the_summary(
     sim_port: str, tmp_path: Path, gap: float
 ) -> None:
-    record = tmp_path / "run.jsonl"
-    proc = _start_run(sim_port, _mission(tmp_path, FOREVER), record)
-    _wait_for_driving(record)
+    proc, record = _driving(sim_port, tmp_path)
     proc.send_signal(signal.SIGINT)
     time.sleep(gap)  # the second one lands in the unwinding, the stop or the summary
     proc.send_signal(signal.SIGINT)
@@ -142,18 +136,13 @@ def test_timeout_over_the_pty_is_exit_1(sim_port: str, tmp_path: Path) -> None:
     assert load_record(record).outbound.endswith(SAFE_END)
 
 
-def test_no_robot_on_the_port_is_exit_3(tmp_path: Path) -> None:
-    master, slave = os.openpty()
-    try:
-        result = subprocess.run(
-            [*CLI, "run", str(_mission(tmp_path, FOREVER)), "--port", os.ttyname(slave)],
-            capture_output=True,
-            text=True,
-            timeout=30,
-        )
-    finally:
-        os.close(master)
-        os.close(slave)
+def test_no_robot_on_the_port_is_exit_3(tmp_path: Path, silent_port: str) -> None:
+    result = subprocess.run(
+        [*CLI, "run", str(_mission(tmp_path, FOREVER)), "--port", silent_port],
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
     assert result.returncode == 3
     assert "did not answer" in result.stderr
     assert "Traceback" not in result.stderr

@@ -4,13 +4,13 @@ write (pycreate2, pyserial), through the ``roomba-bt sim`` command."""
 from __future__ import annotations
 
 import gc
-import select
 import signal
 import subprocess
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 import serial
@@ -20,35 +20,13 @@ from roomba_bt.oi.profiles import ROOMBA500
 from roomba_bt.oi.stream import StreamParser
 
 
-class Server:
-    def __init__(self, *args: str) -> None:
-        self.proc = subprocess.Popen(
-            [sys.executable, "-m", "roomba_bt.cli", "sim", *args],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-        )
-        assert self.proc.stdout is not None
-        ready, _, _ = select.select([self.proc.stdout], [], [], 20.0)
-        assert ready, "the simulator printed no address"
-        self.address = self.proc.stdout.readline().strip()
-
-    def stop(self, sig: int = signal.SIGTERM) -> tuple[int, str]:
-        self.proc.send_signal(sig)
-        _, err = self.proc.communicate(timeout=10)
-        return self.proc.returncode, err
-
-
 @pytest.fixture
-def pty_server() -> Iterator[Server]:
-    server = Server("--pty", "--world", "empty-room")
-    yield server
-    if server.proc.poll() is None:
-        server.stop()
+def pty_server(served_sim: Callable[..., Any]) -> Any:
+    return served_sim("--pty", "--world", "empty-room")
 
 
 def test_pycreate2_reads_sensors_that_make_sense_drives_and_the_encoders_move(
-    pty_server: Server,
+    pty_server: Any,
 ) -> None:
     pycreate2 = pytest.importorskip("pycreate2")
     assert pty_server.address.startswith("/dev/")
@@ -80,8 +58,10 @@ def test_pycreate2_reads_sensors_that_make_sense_drives_and_the_encoders_move(
     assert "mode Off" in err and "0 ignored actuator commands" in err
 
 
-def test_tcp_serves_a_stream_to_pyserial_and_exits_cleanly_on_sigint() -> None:
-    server = Server("--tcp", "127.0.0.1:0", "--profile", "roomba500")
+def test_tcp_serves_a_stream_to_pyserial_and_exits_cleanly_on_sigint(
+    served_sim: Callable[..., Any],
+) -> None:
+    server = served_sim("--tcp", "127.0.0.1:0", "--profile", "roomba500")
     assert server.address.startswith("socket://127.0.0.1:")
     port = serial.serial_for_url(server.address, timeout=0.2)
     try:
@@ -100,8 +80,8 @@ def test_tcp_serves_a_stream_to_pyserial_and_exits_cleanly_on_sigint() -> None:
     assert code == 0 and "simulated" in err
 
 
-def test_disconnect_fault_hangs_up_the_line() -> None:
-    server = Server("--tcp", "127.0.0.1:0", "--disconnect-at", "0.3")
+def test_disconnect_fault_hangs_up_the_line(served_sim: Callable[..., Any]) -> None:
+    server = served_sim("--tcp", "127.0.0.1:0", "--disconnect-at", "0.3")
     port = serial.serial_for_url(server.address, timeout=0.2)
     try:
         port.write(C.start().data + C.stream([35]).data)
@@ -146,7 +126,7 @@ def test_bad_options_exit_2(args: list[str]) -> None:
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
 
 
-def test_pyroombaadapter_streams_queries_and_drives(pty_server: Server) -> None:
+def test_pyroombaadapter_streams_queries_and_drives(pty_server: Any) -> None:
     pra = pytest.importorskip("pyroombaadapter")
     adapter = pra.PyRoombaAdapter(pty_server.address)  # Start + Safe, then 1 s
     try:
