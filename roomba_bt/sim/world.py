@@ -32,6 +32,7 @@ import math
 import os
 import pathlib
 import random
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -389,6 +390,17 @@ class _Checker:
             return None
         return spec
 
+    def records(
+        self, value: object, section: str, keys: tuple[str, ...], required: tuple[str, ...]
+    ) -> Iterator[tuple[PathKey, dict[str, Any]]]:
+        """Each :meth:`record` of the list ``section`` holds, with its path; the ones that are
+        none are reported and left out."""
+        for i, item in enumerate(self.items(value, (section,))):
+            path: PathKey = (section, i)
+            spec = self.record(item, path, keys, required)
+            if spec is not None:
+                yield path, spec
+
     def number(self, value: object, path: PathKey, lo: float, hi: float, unit: str) -> float | None:
         if isinstance(value, bool) or not isinstance(value, int | float):
             self.error(path, _show(value), f"a number in {lo:g}..{hi:g} {unit}")
@@ -734,11 +746,8 @@ def _dirt(c: _Checker, value: object) -> tuple[DirtSpec, ...]:
 def _virtual_walls(c: _Checker, value: object) -> tuple[VirtualWallSpec, ...]:
     """``virtual_walls: [{from: [x, y], to: [x, y], width: m, halo: m}, ...]``."""
     vwalls: list[VirtualWallSpec] = []
-    for i, v in enumerate(c.items(value, ("virtual_walls",))):
-        path: PathKey = ("virtual_walls", i)
-        spec = c.record(v, path, ("name", "from", "to", "halo", "width"), ("from", "to"))
-        if spec is None:
-            continue
+    keys = ("name", "from", "to", "halo", "width")
+    for path, spec in c.records(value, "virtual_walls", keys, ("from", "to")):
         a = c.point(spec["from"], (*path, "from"))
         b = c.point(spec["to"], (*path, "to"))
         halo = c.number(spec.get("halo", 0.0), (*path, "halo"), 0.0, 2.0, "m")
@@ -751,11 +760,8 @@ def _virtual_walls(c: _Checker, value: object) -> tuple[VirtualWallSpec, ...]:
 def _lighthouses(c: _Checker, value: object) -> tuple[LighthouseSpec, ...]:
     """``lighthouses: [{id: 1..10, at: [x, y], heading: deg, fence: m, halo: m}, ...]``."""
     lighthouses: list[LighthouseSpec] = []
-    for i, v in enumerate(c.items(value, ("lighthouses",))):
-        path: PathKey = ("lighthouses", i)
-        spec = c.record(v, path, ("id", "at", "heading", "fence", "halo"), ("id", "at"))
-        if spec is None:
-            continue
+    keys = ("id", "at", "heading", "fence", "halo")
+    for path, spec in c.records(value, "lighthouses", keys, ("id", "at")):
         lid = spec["id"]
         if isinstance(lid, bool) or not isinstance(lid, int) or not 1 <= lid <= 10:
             c.error((*path, "id"), _show(lid), "an integer lighthouse id 1..10")
