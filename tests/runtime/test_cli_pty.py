@@ -136,25 +136,24 @@ def test_timeout_over_the_pty_is_exit_1(sim_port: str, tmp_path: Path) -> None:
     assert load_record(record).outbound.endswith(SAFE_END)
 
 
-def test_no_robot_on_the_port_is_exit_3(tmp_path: Path, silent_port: str) -> None:
-    result = subprocess.run(
-        [*CLI, "run", str(_mission(tmp_path, FOREVER)), "--port", silent_port],
+def _run_on(port: str, tmp_path: Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [*CLI, "run", str(_mission(tmp_path, FOREVER)), "--port", port],
         capture_output=True,
         text=True,
         timeout=30,
     )
+
+
+def test_no_robot_on_the_port_is_exit_3(tmp_path: Path, silent_port: str) -> None:
+    result = _run_on(silent_port, tmp_path)
     assert result.returncode == 3
     assert "did not answer" in result.stderr
     assert "Traceback" not in result.stderr
 
 
 def test_missing_port_is_exit_3(tmp_path: Path) -> None:
-    result = subprocess.run(
-        [*CLI, "run", str(_mission(tmp_path, FOREVER)), "--port", "/dev/does-not-exist"],
-        capture_output=True,
-        text=True,
-        timeout=30,
-    )
+    result = _run_on("/dev/does-not-exist", tmp_path)
     assert result.returncode == 3
     assert "/dev/does-not-exist" in result.stderr
     assert "Traceback" not in result.stderr
