@@ -38,6 +38,12 @@ from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from roomba_bt.runtime.loop import MissionRunner
+    from roomba_bt.runtime.summary import RunSummary
+    from roomba_bt.sim import Simulator
 
 CLI = [sys.executable, "-m", "roomba_bt.cli"]
 HALT = bytes([137, 0, 0, 0, 0])
@@ -94,9 +100,7 @@ def noise(rate: float, hours: float, confirm: bool, seed: int = 1) -> NoiseResul
     from roomba_bt.mission.shipped import shipped_missions
     from roomba_bt.oi.profiles import CREATE2
     from roomba_bt.robot import hazards
-    from roomba_bt.runtime.loop import MissionRunner
     from roomba_bt.runtime.stack import RunStack
-    from roomba_bt.runtime.summary import Outcome
     from roomba_bt.sim import Faults, SimLink, Simulator, load_world
 
     result = NoiseResult(rate, confirm)
@@ -116,50 +120,62 @@ def noise(rate: float, hours: float, confirm: bool, seed: int = 1) -> NoiseResul
             sim = Simulator(
                 world, CREATE2, seed + result.runs, Faults(bit_flip_rate=rate), trace=False
             )
-            truth = [0, 0, 0]
-            seen = [0]
-
-            def observe(
-                runner: MissionRunner,
-                sim: Simulator = sim,
-                truth: list[int] = truth,
-                seen: list[int] = seen,
-            ) -> None:
-                frame = runner.snapshot.frame
-                shown = frame[7] & 0b11
-                true = sim.values[7] & 0b11
-                truth.pop(0)
-                truth.append(true)
-                onset = shown & ~seen[0]
-                if onset:
-                    if onset & (truth[0] | truth[1] | truth[2]):
-                        result.real_bumps += 1
-                    else:
-                        result.phantom_bumps += 1
-                seen[0] = shown
-
-            stack = RunStack(mission, SimLink(sim), profile=CREATE2, observer=observe)
-            summary = stack.run()
-            result.runs += 1
-            result.robot_hours += summary.mission_time_s / 3600.0
+            observer = _BumpWitness(sim, result)
+            summary = RunStack(mission, SimLink(sim), profile=CREATE2, observer=observer).run()
+            _count(result, summary)
             left -= summary.mission_time_s
-            result.stalls += summary.stalls
-            result.stalls_ridden += summary.stalls_ridden
-            result.unconfirmed += summary.unconfirmed_hazards
-            if summary.outcome is Outcome.CONNECTION_LOST:
-                result.lost_connection += 1
-            if summary.outcome is Outcome.FAILURE and (
-                "cliff" in summary.reason or "wheel drop" in summary.reason
-            ):
-                result.phantom_stops += 1
-                result.reasons.append(summary.reason)
-            elif summary.outcome is not Outcome.SUCCESS:
-                result.reasons.append(f"{summary.outcome.value}: {summary.reason}")
             if summary.mission_time_s < 1.0:
                 break  # a run that cannot start: do not spin
     finally:
         hazards.HazardConfirmation.frame = original  # type: ignore[method-assign]
     return result
+
+
+class _BumpWitness:
+    """A tick observer: each bump the tree saw start is real if the simulator's bumpers showed
+    it in the last three steps, else a phantom (a corrupted frame believed)."""
+
+    def __init__(self, sim: Simulator, result: NoiseResult) -> None:
+        self.sim = sim
+        self.result = result
+        self.truth = [0, 0, 0]
+        self.seen = 0
+
+    def __call__(self, runner: MissionRunner) -> None:
+        from roomba_bt.oi.bits import BUMP_BITS
+        from roomba_bt.oi.frames import BUMPS_PACKETS
+
+        (packet,) = BUMPS_PACKETS
+        shown = runner.snapshot.frame[packet] & BUMP_BITS
+        self.truth.pop(0)
+        self.truth.append(self.sim.values[packet] & BUMP_BITS)
+        onset = shown & ~self.seen
+        if onset:
+            if onset & (self.truth[0] | self.truth[1] | self.truth[2]):
+                self.result.real_bumps += 1
+            else:
+                self.result.phantom_bumps += 1
+        self.seen = shown
+
+
+def _count(result: NoiseResult, summary: RunSummary) -> None:
+    """One run's robot-hours, stalls and ending added to ``result``."""
+    from roomba_bt.runtime.summary import Outcome
+
+    result.runs += 1
+    result.robot_hours += summary.mission_time_s / 3600.0
+    result.stalls += summary.stalls
+    result.stalls_ridden += summary.stalls_ridden
+    result.unconfirmed += summary.unconfirmed_hazards
+    if summary.outcome is Outcome.CONNECTION_LOST:
+        result.lost_connection += 1
+    if summary.outcome is Outcome.FAILURE and (
+        "cliff" in summary.reason or "wheel drop" in summary.reason
+    ):
+        result.phantom_stops += 1
+        result.reasons.append(summary.reason)
+    elif summary.outcome is not Outcome.SUCCESS:
+        result.reasons.append(f"{summary.outcome.value}: {summary.reason}")
 
 
 # ----------------------------------------------------------------------------- faults
@@ -281,6 +297,32 @@ def _trial(fault: Fault, workdir: Path, index: int) -> Trial | None:
         if fault.act is not None:
             time.sleep(0.5)
             sent = fault.act(run, sim)
+    out, err, sim_err, ended = _finish(run, sim)
+    to_stop = _watchdog_stop_ms(record)
+    if sent is not None:  # a signal or the port: to the process's end
+        to_stop = (ended - sent) * 1000
+    reason = next(
+        (
+            line
+            for line in err.splitlines()
+            if line.startswith(("roomba-bt: connection lost", "roomba-bt: HUNG"))
+        ),
+        next((line for line in out.splitlines() if line.startswith("outcome")), ""),
+    )
+    return Trial(
+        exit_code=run.returncode,
+        message=reason,
+        sim_line=next((ln for ln in sim_err.splitlines() if "simulated" in ln), "(killed)"),
+        undeliverable="NOT DELIVERED" in out,
+        to_stop_ms=to_stop,
+        traceback="Traceback" in err,
+        summary_printed="safe stop" in out,
+    )
+
+
+def _finish(run: subprocess.Popen[str], sim: subprocess.Popen[str]) -> tuple[str, str, str, float]:
+    """The run to its end (killed after 60 s: HUNG), then the simulator (SIGINT, killed after
+    10 s): the run's stdout and stderr, the simulator's stderr, when the run ended."""
     try:
         out, err = run.communicate(timeout=60)
     except subprocess.TimeoutExpired:
@@ -295,12 +337,13 @@ def _trial(fault: Fault, workdir: Path, index: int) -> Trial | None:
     except subprocess.TimeoutExpired:
         sim.kill()
         _, sim_err = sim.communicate()
-    sim_line = next((line for line in sim_err.splitlines() if "simulated" in line), "(killed)")
-    # time from the fault to the first drive 0: the last chunk read before it (a frame) for
-    # a fault on the robot's side, the signal for a signal
-    # (the watchdog's drive 0: the first one written 50 ms or more after the last chunk read;
-    # a tick's drive 0 follows its frame at once)
-    to_stop = None
+    return out, err, sim_err, ended
+
+
+def _watchdog_stop_ms(record: Path) -> float | None:
+    """Time from the fault to the first drive 0, for a fault on the robot's side: from the
+    last chunk read before it (a frame). The watchdog's drive 0 is the first one written 50 ms
+    or more after the last chunk read; a tick's drive 0 follows its frame at once."""
     last_in = None
     for entry in _record(record):
         at = float(entry.get("t", 0.0))  # type: ignore[arg-type]
@@ -312,27 +355,8 @@ def _trial(fault: Fault, workdir: Path, index: int) -> Trial | None:
             and at - last_in >= 0.05
             and bytes.fromhex(str(entry.get("b", ""))).startswith(HALT)
         ):
-            to_stop = (at - last_in) * 1000
-            break
-    if sent is not None:  # a signal or the port: to the process's end
-        to_stop = (ended - sent) * 1000
-    reason = next(
-        (
-            line
-            for line in err.splitlines()
-            if line.startswith(("roomba-bt: connection lost", "roomba-bt: HUNG"))
-        ),
-        next((line for line in out.splitlines() if line.startswith("outcome")), ""),
-    )
-    return Trial(
-        exit_code=run.returncode,
-        message=reason,
-        sim_line=sim_line,
-        undeliverable="NOT DELIVERED" in out,
-        to_stop_ms=to_stop,
-        traceback="Traceback" in err,
-        summary_printed="safe stop" in out,
-    )
+            return (at - last_in) * 1000
+    return None
 
 
 FAULT_HEADER = (
@@ -424,7 +448,6 @@ def memory(hours: float, trace: bool = False) -> str:
     from roomba_bt.mission import load_mission
     from roomba_bt.mission.shipped import shipped_missions
     from roomba_bt.oi.profiles import CREATE2
-    from roomba_bt.runtime.loop import MissionRunner
     from roomba_bt.runtime.stack import RunStack
     from roomba_bt.sim import SimLink, Simulator, load_world
 
