@@ -202,6 +202,9 @@ class Fault:
     #: driving then is retried: under load a run can take seconds to start)
     at: float | None = None
     drives: bool = True
+    #: what in the record shows the run is under way (hex of a command written): the drive
+    #: (89), or the stream's start (94) for a mission that waits in Passive
+    ready: str = '"b": "89'
 
 
 def _signal(*signums: int, gap: float = 0.005) -> Callable[..., float]:
@@ -231,6 +234,13 @@ FAULTS = (
         "single-bit flips on 1 % of the bytes for 30 s (no fault: it must not end early)",
         ("--bit-flip-rate", "0.01"),
         run_args=("--timeout", "30s"),
+    ),
+    Fault(
+        "robot asleep (falls asleep in Passive; over the pty, no modem lines)",
+        ("--sleep-at", "12"),
+        mission=WAIT_IN_PASSIVE,
+        at=12.0,
+        ready='"b": "94',
     ),
     Fault("SIGINT", act=_signal(signal.SIGINT)),
     Fault("double SIGINT", act=_signal(signal.SIGINT, signal.SIGINT)),
@@ -286,8 +296,8 @@ def _trial(fault: Fault, workdir: Path, index: int) -> Trial | None:
     )  # fmt: skip
     sent = None
     if fault.drives:
-        driving = '"b": "89'
-        started = _wait_for(lambda: driving in (record.read_text() if record.exists() else ""), 30)
+        ready = fault.ready
+        started = _wait_for(lambda: ready in (record.read_text() if record.exists() else ""), 30)
         late = fault.at is not None and time.monotonic() - sim_started > fault.at - 1.0
         if not started or late:  # the fault would come before the run drove: again
             for proc in (run, sim):
@@ -376,6 +386,8 @@ def fault_row(fault: Fault, trials: list[Trial]) -> str:
         timing = f"none possible ({timing} to exit)"
     if fault.name.startswith("baud"):
         timing = "never drove (start-up refused)"
+    if fault.name.startswith("robot asleep"):
+        timing = "not driving (Passive: no drive 0 needed)"
     if fault.name.startswith("single-bit"):
         timing = "n/a (ends by its --timeout: exit 1)"
     bad = sum(t.traceback for t in trials), sum(not t.summary_printed for t in trials)

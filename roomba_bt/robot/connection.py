@@ -51,7 +51,6 @@ from roomba_bt.robot.errors import (
     ConnectionFailed,
     ModeError,
     PortLost,
-    RobotAsleep,
     RobotError,
     RobotReset,
     StreamLost,
@@ -60,7 +59,8 @@ from roomba_bt.robot.errors import (
 from roomba_bt.robot.interface import SLOT_SECONDS, ModeChange
 from roomba_bt.robot.link import LINK_ERRORS, LinkStatus, StreamLink, TimedFrame
 from roomba_bt.robot.modes import DEFAULT_SETTLE, ModeModel
-from roomba_bt.robot.wake import SLEEP_AFTER_S, keep_awake_for
+from roomba_bt.robot.silence import asleep_by_idle, explain_silence
+from roomba_bt.robot.wake import keep_awake_for
 from roomba_bt.transport.base import Transport, TransportError
 from roomba_bt.transport.serial_port import DEFAULT_BAUD, SerialTransport
 
@@ -382,7 +382,7 @@ class Connection:
         except StreamStalled as exc:
             if self.link.banner_seen():
                 raise RobotReset(self.name, exc.halted) from exc
-            asleep = self._asleep(exc)
+            asleep = asleep_by_idle(self)
             if asleep is None:
                 raise
             raise asleep from exc
@@ -390,32 +390,33 @@ class Connection:
     def check_stall(self, bytes_before: int, grace: float, halted: bool) -> None:
         """While a stall is ridden through (the watchdog tripped, drive 0 sent): raise the
         cause once it is known. :class:`RobotReset` as soon as the firmware's banner is read;
-        :class:`StreamLost` once no valid frame came for ``grace`` s (``bytes_before``: the
-        bytes read when the stall began, to tell a stopped stream from a garbled line)."""
+        once no valid frame came for ``grace`` s (``bytes_before``: the bytes read when the
+        stall began, to tell a stopped stream from a garbled line), :class:`StreamLost` for a
+        garbled line, or for a silent one what asking the robot shows
+        (:func:`~roomba_bt.robot.silence.explain_silence`: :class:`RobotAsleep` if a BRC
+        pulse woke it)."""
         link = self.link
         if link.banner_seen():
             raise RobotReset(self.name, halted)
         now = link.transport.now()
         since = link.silent_since
-        if now - since > grace:
-            raise StreamLost(
-                self.name, now - since, grace, link.bytes_read - bytes_before,
-                watchdog=link.watchdog, halted=halted,
-            )  # fmt: skip
+        if now - since <= grace:
+            return
+        garbled = link.bytes_read - bytes_before
+        if not garbled:
+            raise explain_silence(self, now - since, grace, halted=halted)
+        raise StreamLost(
+            self.name, now - since, grace, garbled, watchdog=link.watchdog, halted=halted
+        )
 
-    def _asleep(self, stalled: StreamStalled) -> RobotAsleep | None:
-        """The stall explained as sleep: Passive, a profile that sleeps, and nothing from us
-        (no command, no BRC pulse) for the five minutes the OI waits before sleeping."""
-        if not self.profile.sleeps_in_passive or self.modes.mode is not OIMode.PASSIVE:
-            return None
+    @property
+    def idle_since(self) -> float:
+        """When we last gave the robot a reason to stay awake: a command or a BRC pulse
+        (link clock)."""
         last = self._last_command_at
         if self.wake is not None and self.wake.last_pulse is not None:
             last = max(last, self.wake.last_pulse)
-        idle = self.link.transport.now() - last
-        if idle < SLEEP_AFTER_S:
-            return None
-        pulses = self.wake is not None and self.wake.unavailable is None
-        return RobotAsleep(self.name, idle, keep_awake=self.keep_awake, pulses=pulses)
+        return last
 
     def _report_change(self, change: ModeChange) -> None:
         log.warning(

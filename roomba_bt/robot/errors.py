@@ -153,6 +153,7 @@ class StreamLost(LinkDown):
         *,
         watchdog: float,
         halted: bool,
+        probed: str = "",
     ) -> None:
         self.silent_for = silent_for
         self.grace = grace
@@ -172,15 +173,29 @@ class StreamLost(LinkDown):
             if halted
             else "the robot was not driving"
         )
-        super().__init__(port, f"{what}; {action}, then the run waited the {grace:g} s grace")
+        #: what asking the robot afterwards showed (it still answers; nothing, even after a
+        #: BRC pulse), or ""
+        self.probed = probed
+        tail = f"; {probed}" if probed else ""
+        super().__init__(port, f"{what}; {action}, then the run waited the {grace:g} s grace{tail}")
 
 
 class RobotAsleep(LinkDown):
     """The stream stopped because the robot slept: it sat in Passive five minutes with
-    nothing from us (no command, no BRC pulse). Says how to keep it awake."""
+    nothing from us (no command, no BRC pulse), or it answered nothing until a BRC pulse
+    woke it (``woken_by``: how the pulse was given). Says how to keep it awake."""
 
-    def __init__(self, port: str, idle_s: float, *, keep_awake: bool, pulses: bool) -> None:
+    def __init__(
+        self,
+        port: str,
+        idle_s: float,
+        *,
+        keep_awake: bool,
+        pulses: bool,
+        woken_by: str | None = None,
+    ) -> None:
         self.idle_s = idle_s
+        self.woken_by = woken_by
         if not keep_awake:
             fix = "leave keep-awake on (drop --no-keep-awake): it pulses BRC once a minute"
         elif not pulses:
@@ -190,10 +205,20 @@ class RobotAsleep(LinkDown):
             )
         else:
             fix = "check that the cable wires BRC to RTS or DTR"
+        if woken_by is None:
+            what = (
+                f"the robot fell asleep: {idle_s:.0f} s in Passive without a command or a "
+                "BRC pulse (the OI sleeps after 5 minutes)"
+            )
+        else:
+            what = (
+                "the robot was asleep: its stream stopped and it answered nothing until a BRC "
+                f"pulse woke it ({woken_by}); it had been {idle_s:.0f} s without a command "
+                "or a pulse from us when its stream stopped, and is awake now, in Passive"
+            )
         super().__init__(
             port,
-            f"the robot fell asleep: {idle_s:.0f} s in Passive without a command or a BRC "
-            f"pulse (the OI sleeps after 5 minutes); {fix}. Firmware older than "
+            f"{what}; {fix}. Firmware older than "
             "release-3.8.2 / release-stm32-3.7.7 does not wake by BRC on the dock "
             "(roomba-bt doctor --allow-reset reads the version)",
         )

@@ -39,6 +39,9 @@ LINK_ERRORS: tuple[type[Exception], ...] = (OSError, serial.SerialException, *TE
 #: Chunks read kept for :meth:`StreamLink.banner_seen` (one chunk per read: a few frames).
 RECENT_CHUNKS = 16
 
+#: How far past its limit the watchdog's wait ends (the check is "silent for more than").
+WATCHDOG_MARGIN = 0.001
+
 #: The session's mode model, told of every frame: the change the robot made by itself, if any.
 Reconcile = Callable[[SensorFrame, int, float], ModeChange | None]
 
@@ -204,19 +207,37 @@ class StreamLink:
 
     def read_frames(self, timeout: float) -> list[TimedFrame]:
         """What is there now, or wait up to ``timeout`` s for at least one frame; then the
-        watchdog."""
+        watchdog.
+
+        The wait never outlasts the watchdog's own deadline: a read blocked for the caller's
+        whole ``timeout`` (the runtime polls with 50 ms) would check the watchdog up to that
+        much late, which over a loaded pty put drive 0 283 ms after the last frame::
+
+            last frame ──── watchdog (100 ms) ──┐ the read returns here, drive 0
+                                                 └ not at the end of the caller's timeout
+        """
         clock = self.transport.now
-        deadline = clock() + timeout
+        now = clock()
+        deadline = now + timeout
+        due = self._watchdog_due()
+        if due is not None and due < deadline:
+            deadline = max(now, due)
         out: list[TimedFrame] = []
         while True:
-            remaining = deadline - clock()
-            data = self.read(max(0.0, remaining))
+            data = self.read(max(0.0, deadline - clock()))
             if data:
                 out += self.ingest(data, clock())
-            if out or remaining <= 0:
-                break
+            if out or clock() >= deadline:  # no read past the deadline (a virtual clock's
+                break  # read of 0 s still steps once)
         self._check_watchdog(clock())
         return out
+
+    def _watchdog_due(self) -> float | None:
+        """When the watchdog trips if no valid frame comes (link clock; a slot's margin past
+        its limit, so the check after the wait finds it tripped), or None when it cannot."""
+        if not self.streaming or self.watchdog <= 0 or self.status is not LinkStatus.STREAMING:
+            return None
+        return self.silent_since + self.watchdog + WATCHDOG_MARGIN
 
     def ingest(self, data: bytes, arrival: float) -> list[TimedFrame]:
         """Feed ``data`` that arrived at ``arrival`` to the parser; the frames it completed."""
