@@ -1,6 +1,7 @@
 """``make reliability``: the figures of docs/reliability.md, from one command.
 
-Two parts (``python -m bench.reliability noise|faults|memory``, all three by default):
+Three parts (``python -m bench.reliability noise|faults|memory``, all three by default;
+``faults --only NAME`` for the fault rows whose name starts with NAME):
 
 * **noise**: bump-and-turn in the corridor on the virtual clock, single-bit flips on the
   robot's bytes (``Faults.bit_flip_rate``) at 10^-3 and 10^-2 per byte, back-to-back runs of
@@ -205,6 +206,9 @@ class Fault:
     #: what in the record shows the run is under way (hex of a command written): the drive
     #: (89), or the stream's start (94) for a mission that waits in Passive
     ready: str = '"b": "89'
+    #: which drive 0 after the watchdog's counts as the stop: 0 the watchdog's own, 1 the
+    #: next (a baud change: the watchdog's goes out at the old rate, the next at the new)
+    halt_index: int = 0
 
 
 def _signal(*signums: int, gap: float = 0.005) -> Callable[..., float]:
@@ -229,6 +233,12 @@ FAULTS = (
     Fault("robot reset", ("--reset-at", "12"), at=12.0),
     Fault("port vanished (simulator killed)", act=_kill_sim),
     Fault("stream stopped", ("--stream-stop-at", "12"), at=12.0),
+    Fault(
+        "baud change mid-run (the robot's port to 19200 at 12 s)",
+        ("--baud-change-at", "12"),
+        at=12.0,
+        halt_index=1,
+    ),
     Fault("baud mismatch (robot at 19200, run at 115200)", ("--baud", "19200"), drives=False),
     Fault(
         "single-bit flips on 1 % of the bytes for 30 s (no fault: it must not end early)",
@@ -308,7 +318,7 @@ def _trial(fault: Fault, workdir: Path, index: int) -> Trial | None:
             time.sleep(0.5)
             sent = fault.act(run, sim)
     out, err, sim_err, ended = _finish(run, sim)
-    to_stop = _watchdog_stop_ms(record)
+    to_stop = _to_stop_ms(_record(record), fault.halt_index)
     if sent is not None:  # a signal or the port: to the process's end
         to_stop = (ended - sent) * 1000
     reason = next(
@@ -350,28 +360,42 @@ def _finish(run: subprocess.Popen[str], sim: subprocess.Popen[str]) -> tuple[str
     return out, err, sim_err, ended
 
 
-def _watchdog_stop_ms(record: Path) -> float | None:
-    """Time from the fault to the first drive 0, for a fault on the robot's side: from the
-    last chunk read before it (a frame). The watchdog's drive 0 is the first one written 50 ms
-    or more after the last chunk read; a tick's drive 0 follows its frame at once."""
-    last_in = None
-    for entry in _record(record):
+def _to_stop_ms(entries: list[dict[str, object]], halt_index: int) -> float | None:
+    """Time from the last valid frame to the stop, from a record: the watchdog's drive 0 is
+    the first written 50 ms or more after the last chunk that completed a valid frame (a
+    tick's drive 0 follows its frame at once); ``halt_index`` 1: the drive 0 after it."""
+    from roomba_bt.oi.profiles import get_profile
+    from roomba_bt.oi.stream import StreamParser
+
+    if not entries or "packets" not in entries[0]:
+        return None
+    header = entries[0]
+    packets = tuple(int(p) for p in header["packets"])  # type: ignore[attr-defined]
+    parser = StreamParser(packets, get_profile(str(header.get("profile", "create2"))))
+    last_frame: float | None = None
+    reference: float | None = None  # the last valid frame before the watchdog's drive 0
+    halts = 0
+    for entry in entries[1:]:
         at = float(entry.get("t", 0.0))  # type: ignore[arg-type]
+        data = bytes.fromhex(str(entry.get("b", "")))
         if entry.get("d") == "in":
-            last_in = at
-        elif (
-            entry.get("d") == "out"
-            and last_in is not None
-            and at - last_in >= 0.05
-            and bytes.fromhex(str(entry.get("b", ""))).startswith(HALT)
-        ):
-            return (at - last_in) * 1000
+            if parser.feed(data, at):
+                last_frame = at
+        elif entry.get("d") == "out" and data.startswith(HALT):
+            if reference is None:
+                if last_frame is None or at - last_frame < 0.05:
+                    continue
+                reference = last_frame
+            if halts == halt_index:
+                return (at - reference) * 1000
+            halts += 1
     return None
 
 
 FAULT_HEADER = (
-    "| fault | trials | exit codes | the message (first trial) | simulator at the end "
-    "(first trial) | stop undeliverable, said so | fault to drive 0 (ms: median, max) | "
+    "| fault | trials | exit codes | the message (first trial; trials with its cause) | "
+    "simulator at the end (first trial; trials left in Passive, wheels 0) | stop "
+    "undeliverable, said so | fault to drive 0 (ms: median, max) | "
     "traceback / no summary / hung |\n|---|---|---|---|---|---|---|---|"
 )
 
@@ -384,7 +408,7 @@ def fault_row(fault: Fault, trials: list[Trial]) -> str:
         timing += " (signal to exit)"
     if fault.name.startswith("port vanished"):
         timing = f"none possible ({timing} to exit)"
-    if fault.name.startswith("baud"):
+    if fault.name.startswith("baud mismatch"):
         timing = "never drove (start-up refused)"
     if fault.name.startswith("robot asleep"):
         timing = "not driving (Passive: no drive 0 needed)"
@@ -393,26 +417,55 @@ def fault_row(fault: Fault, trials: list[Trial]) -> str:
     bad = sum(t.traceback for t in trials), sum(not t.summary_printed for t in trials)
     hung = sum("HUNG" in t.message for t in trials)
     first = trials[0]
+    same = sum(cause(t.message) == cause(first.message) for t in trials)
+    stopped = sum(STOPPED_IN_PASSIVE in t.sim_line for t in trials)
     return (
         f"| {fault.name} | {len(trials)} | {', '.join(str(c) for c in codes)} | "
-        f"{first.message.replace('|', '/')} | {first.sim_line.removeprefix('roomba-bt sim: ')} | "
+        f"{first.message.replace('|', '/')} ({same} of {len(trials)} the same cause) | "
+        f"{first.sim_line.removeprefix('roomba-bt sim: ')} ({stopped} of {len(trials)} in "
+        f"Passive, wheels 0) | "
         f"{sum(t.undeliverable for t in trials)} | {timing} | {bad[0]} / {bad[1]} / {hung} |"
     )
 
 
-def faults(count: int, workers: int) -> list[str]:
+#: The simulator's summary line of a robot left stopped in Passive.
+STOPPED_IN_PASSIVE = "mode Passive, wheels 0/0 mm/s"
+
+
+def cause(message: str) -> str:
+    """A message's cause, without the port and the figures that vary from trial to trial:
+    ``the robot reset``, ``the sensor stream stopped``."""
+    text = message.split(": ", 3)[-1] if message.startswith("roomba-bt:") else message
+    what = text.split(":", 1)[0].split(";", 1)[0]
+    if "grace; " in text:  # what asking the robot showed
+        what += " / " + text.split("grace; ", 1)[1].split(":", 1)[0]
+    return what
+
+
+def faults(count: int, workers: int, only: tuple[str, ...] = ()) -> list[str]:
+    """The fault table; ``only``: the rows whose fault name starts with one of these."""
     rows = [FAULT_HEADER]
+
+    def chosen(name: str) -> bool:
+        return not only or name.startswith(only)
+
     with tempfile.TemporaryDirectory() as tmp:
         for n, fault in enumerate(FAULTS):
+            if not chosen(fault.name):
+                continue
             workdir = Path(tmp) / str(n)
             workdir.mkdir()
             with ThreadPoolExecutor(workers) as pool:
                 trials = list(pool.map(functools.partial(trial, fault, workdir), range(count)))
             rows.append(fault_row(fault, trials))
             print(rows[-1], flush=True)
-    rows.append(asleep_row(count))
-    print(rows[-1], flush=True)
+    if chosen(ASLEEP_BY_IDLE):
+        rows.append(asleep_row(count))
+        print(rows[-1], flush=True)
     return rows
+
+
+ASLEEP_BY_IDLE = "robot asleep (5 min in Passive, --no-keep-awake; virtual clock, in process)"
 
 
 def asleep_row(count: int) -> str:
@@ -445,7 +498,7 @@ def asleep_row(count: int) -> str:
                     f"{sim.requested_left:.0f}/{sim.requested_right:.0f} mm/s"
                 )
     return (
-        f"| robot asleep (5 min in Passive, --no-keep-awake; virtual clock, in process) | "
+        f"| {ASLEEP_BY_IDLE} | "
         f"{count} | {', '.join(map(str, sorted(codes)))} | {message} | {sim_line} | 0 | "
         f"not driving (Passive: no drive 0 needed); sleep to the run's end "
         f"{statistics.median(waits) * 1000:.0f} ms | 0 / 0 / 0 |"
@@ -509,6 +562,10 @@ def main(argv: list[str] | None = None) -> int:
     )  # fmt: skip
     parser.add_argument("--trials", type=int, default=20, help="trials per fault")
     parser.add_argument("--workers", type=int, default=2, help="trials at once")
+    parser.add_argument(
+        "--only", action="append", default=[], metavar="NAME",
+        help="faults: only the rows whose name starts with NAME (repeatable)",
+    )  # fmt: skip
     parser.add_argument("--memory-hours", type=float, default=4.0)
     args = parser.parse_args(argv)
     parts = args.part or ["noise", "faults", "memory"]
@@ -521,7 +578,7 @@ def main(argv: list[str] | None = None) -> int:
                 for reason in result.reasons[:3]:
                     print(f"  e.g. {reason}", file=sys.stderr)
     if "faults" in parts:
-        faults(args.trials, args.workers)
+        faults(args.trials, args.workers, tuple(args.only))
     if "memory" in parts:
         print(memory(args.memory_hours), flush=True)
         print(memory(1.0, trace=True), flush=True)  # what it was: the trace kept

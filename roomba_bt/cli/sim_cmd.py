@@ -43,6 +43,8 @@ FAULT_OPTIONS: tuple[tuple[str, type, object, str], ...] = (
     ("reset_at", float, None, "the robot resets at this time (s)"),
     ("stream_stop_at", float, None, "the stream stops at this time (s)"),
     ("sleep_at", float, None, "the robot falls asleep at this time (s)"),
+    ("baud_change_at", float, None, "the robot's port changes its rate at this time (s)"),
+    ("baud_change_to", int, None, "the rate it changes to (default: the other OI rate)"),
 )
 
 

@@ -59,7 +59,7 @@ from roomba_bt.robot.errors import (
 from roomba_bt.robot.interface import SLOT_SECONDS, ModeChange
 from roomba_bt.robot.link import LINK_ERRORS, LinkStatus, StreamLink, TimedFrame
 from roomba_bt.robot.modes import DEFAULT_SETTLE, ModeModel
-from roomba_bt.robot.silence import asleep_by_idle, explain_silence
+from roomba_bt.robot.silence import asleep_by_idle, explain_silence, follow_baud
 from roomba_bt.robot.wake import keep_awake_for
 from roomba_bt.transport.base import Transport, TransportError
 from roomba_bt.transport.serial_port import DEFAULT_BAUD, SerialTransport
@@ -163,7 +163,7 @@ class Connection:
         self.modes = ModeModel(self.profile, settle=settle)
         self.link = StreamLink(
             transport, self.profile, watchdog=watchdog, reconcile=self.modes.reconcile,
-            report=self._report_change, halt=self._halt,
+            report=self._report_change, halt=self.halt,
         )  # fmt: skip
         self._sent = 0
         self._refused = 0
@@ -371,7 +371,8 @@ class Connection:
         Reads in the caller's thread, reconciles the mode model with every frame, checks
         the watchdog. Raises :class:`PortLost` if the port fails and, once when the watchdog
         trips (frames coming back clear the stall), the stall's cause if it is already known
-        (:class:`RobotReset`: the banner was read; :class:`RobotAsleep`) or
+        (:class:`RobotReset`: the banner was read; :class:`RobotAsleep`; :class:`BaudChanged`:
+        garbage, and frames at another rate) or
         :class:`StreamStalled` (see :meth:`check_stall` for riding it through).
         """
         wake = self.wake
@@ -382,10 +383,10 @@ class Connection:
         except StreamStalled as exc:
             if self.link.banner_seen():
                 raise RobotReset(self.name, exc.halted) from exc
-            asleep = asleep_by_idle(self)
-            if asleep is None:
+            cause = asleep_by_idle(self) or follow_baud(self, exc)
+            if cause is None:
                 raise
-            raise asleep from exc
+            raise cause from exc
 
     def check_stall(self, bytes_before: int, grace: float, halted: bool) -> None:
         """While a stall is ridden through (the watchdog tripped, drive 0 sent): raise the
@@ -427,8 +428,9 @@ class Connection:
             change.cause,
         )
 
-    def _halt(self) -> bool:
-        """Drive 0 if the model says the robot may be driving; True if it was sent."""
+    def halt(self) -> bool:
+        """Drive 0 if the model says the robot may be driving; True if it was sent (the
+        watchdog's action)."""
         if self.modes.mode not in DRIVING_MODES:
             return False
         self.send(oi.halt())

@@ -6,7 +6,8 @@
   the port is gone), :class:`StreamStalled` (no valid frame within the watchdog: the run
   rides through it for a grace), :class:`StreamLost` (still none after the grace: the stream
   stopped, or the line is garbled), :class:`RobotReset` (the start-up banner came instead),
-  :class:`RobotAsleep` (Passive past the sleep time).
+  :class:`RobotAsleep` (Passive past the sleep time, or silent until a BRC pulse),
+  :class:`BaudChanged` (garbage, and frames at another rate).
 
 The link errors subclass :class:`ConnectionError`, like
 :class:`~roomba_bt.transport.TransportError`, so "the robot is unreachable" is one ``except``.
@@ -221,4 +222,30 @@ class RobotAsleep(LinkDown):
             f"{what}; {fix}. Firmware older than "
             "release-3.8.2 / release-stm32-3.7.7 does not wake by BRC on the dock "
             "(roomba-bt doctor --allow-reset reads the version)",
+        )
+
+
+class BaudChanged(LinkDown):
+    """The robot's port changed its rate in the middle of the run (a battery swap or a reset
+    brings a Create 2 back at its default rate): garbage on the line since the last valid
+    frame, and frames again when the port listened at ``rate``. The port was left at that
+    rate, so the stop reaches the robot."""
+
+    def __init__(
+        self, port: str, rate: int, was: int, garbage_s: float, since_wall: float, *,
+        halted: bool,
+    ) -> None:  # fmt: skip
+        self.rate = rate
+        self.was = was
+        action = (
+            f"drive 0 sent again at {rate} (the watchdog's at {was} could not be understood)"
+            if halted
+            else "it was not driving"
+        )
+        super().__init__(
+            port,
+            f"the robot now talks at another baud rate: {rate}, not the {was} of the run; "
+            f"garbage since {format_wall_time(since_wall)} ({garbage_s * 1000:.0f} ms without a "
+            f"valid frame while bytes arrived), and valid frames at {rate}: the port followed "
+            f"it (a battery swap or a reset brings the robot back at its default rate); {action}",
         )

@@ -110,6 +110,7 @@ class StreamLink:
         self._parsed_before = (0, 0, 0, 0)  # frames, checksum failures, skipped, implausible
         self._stream_started = 0.0
         self._last_frame_time: float | None = None
+        self._bytes_at_frame = 0  # bytes_read when the last valid frame came
         #: the last chunks read (a reset's banner comes just before the stream stops)
         self._recent: deque[bytes] = deque(maxlen=RECENT_CHUNKS)
 
@@ -144,6 +145,31 @@ class StreamLink:
         if self._parser is not None:
             self.new_stream(self.stream_ids, self.transport.now())
 
+    def listen_at(self, rate: int, seconds: float, enough: int) -> bool:
+        """Whether ``enough`` valid frames of the running stream come within ``seconds`` with
+        the port at ``rate``. The port is left at ``rate`` if they do, put back if not; the
+        link's own parser and its watchdog times are not touched (what is read meanwhile is
+        only counted)."""
+        was = self.transport.baud if hasattr(self.transport, "baud") else None
+        parser = StreamParser(self.stream_ids, self.profile, mode_plus_one=self.mode_plus_one)
+        try:
+            self.transport.set_baud(rate)
+        except LINK_ERRORS as exc:
+            raise self.lost("baud change", exc) from exc
+        clock = self.transport.now
+        deadline = clock() + seconds
+        frames = 0
+        while frames < enough and (remaining := deadline - clock()) > 0:
+            data = self.read(remaining)
+            if data:
+                frames += len(parser.feed(data, clock()))
+        if frames < enough and was is not None:
+            try:
+                self.transport.set_baud(int(was))
+            except LINK_ERRORS as exc:
+                raise self.lost("baud change", exc) from exc
+        return frames >= enough
+
     def lost(self, action: str, exc: BaseException) -> PortLost:
         """Mark the link lost; the error to raise."""
         self.status = LinkStatus.LOST
@@ -164,6 +190,11 @@ class StreamLink:
         last = self._last_frame_time
         return self._stream_started if last is None else last
 
+    @property
+    def bytes_since_frame(self) -> int:
+        """Bytes read since the last valid frame (garbage, if a stall has any)."""
+        return self.bytes_read - self._bytes_at_frame
+
     # ------------------------------------------------------------------ the stream
     def new_stream(self, ids: tuple[int, ...], now: float) -> None:
         """Stream (148) was written: frames of ``ids`` from now on (none: no stream)."""
@@ -183,6 +214,7 @@ class StreamLink:
         self.streaming = bool(ids)
         self._stream_started = now
         self._last_frame_time = None
+        self._bytes_at_frame = self.bytes_read
         self.status = LinkStatus.STREAMING if ids else LinkStatus.OPEN
 
     def pause_resume(self, resume: bool, now: float) -> None:
@@ -258,6 +290,7 @@ class StreamLink:
         self.index = index
         self.latest = out[-1]
         self._last_frame_time = arrival
+        self._bytes_at_frame = self.bytes_read
         if self.status is LinkStatus.STALLED:
             self.status = LinkStatus.STREAMING
         return out

@@ -12,19 +12,37 @@ battery went flat, or the cable. Asking tells the first two from the rest::
                     answered ──► it was asleep: the pulse woke it      RobotAsleep
                     nothing ───► switched off, a flat battery, the cable  StreamLost
 
+Bytes that keep coming without a frame are noise, or the robot at another rate (a battery
+swap or a reset brings a Create 2 back at its default rate): :func:`follow_baud` listens at
+the other OI rates when the watchdog trips on garbage.
+
 A robot that sleeps is in Passive; asleep is also named without asking when the model has
 been in Passive past the OI's five minutes with nothing from us (:func:`asleep_by_idle`).
 """
 
 from __future__ import annotations
 
+import time
 from typing import TYPE_CHECKING
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
-from roomba_bt.robot.errors import LinkDown, ModeError, RobotAsleep, StreamLost
-from roomba_bt.robot.handshake import wake_pulse
+from roomba_bt.robot.errors import (
+    BaudChanged,
+    LinkDown,
+    ModeError,
+    RobotAsleep,
+    StreamLost,
+    StreamStalled,
+)
+from roomba_bt.robot.handshake import OI_RATES, wake_pulse
 from roomba_bt.robot.wake import SLEEP_AFTER_S
+
+#: Garbage that must have come since the last valid frame before other rates are tried.
+GARBAGE_BYTES = 16
+#: How long the port listens at another rate, and the frames it must find there.
+LISTEN_S = 0.1
+FRAMES_TO_FOLLOW = 2
 
 if TYPE_CHECKING:
     from roomba_bt.robot.connection import Connection
@@ -95,3 +113,27 @@ def _answers(connection: Connection) -> bool:
 def _pulses(connection: Connection) -> bool:
     wake = connection.wake
     return wake is not None and wake.unavailable is None
+
+
+def follow_baud(connection: Connection, stalled: StreamStalled) -> BaudChanged | None:
+    """The watchdog tripped while bytes kept coming: if the stream's frames come at another
+    OI rate, the robot changed its rate (the port is left there, drive 0 sent again at it,
+    where the robot understands it); None if they do not (noise: the stall is ridden through
+    at the run's rate)::
+
+        115200 ▒▒▒▒▒▒▒▒ (100 ms, no frame) ──► port at 19200, listen 100 ms ──► 2 frames
+    """
+    link = connection.link
+    if link.bytes_since_frame < GARBAGE_BYTES or not link.stream_ids:
+        return None
+    was = connection.baud
+    garbage_s = link.transport.now() - link.silent_since
+    since_wall = time.time() - garbage_s  # the last valid frame, for the message
+    for rate in OI_RATES:
+        if rate == was or not link.listen_at(rate, LISTEN_S, FRAMES_TO_FOLLOW):
+            continue
+        link.set_baud(rate)  # the link's parser starts again at the new rate
+        connection.baud = rate
+        halted = connection.halt()
+        return BaudChanged(connection.name, rate, was, garbage_s, since_wall, halted=halted)
+    return None

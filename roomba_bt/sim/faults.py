@@ -10,6 +10,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from roomba_bt.oi.encode import BAUD_RATES
+
 
 @dataclass(frozen=True, slots=True)
 class Faults:
@@ -30,6 +32,11 @@ class Faults:
     ``stream_stop_at`` simulated time (s) at which the robot stops streaming (the port open,
                        the OI still listening)
     ``sleep_at``       simulated time (s) at which the robot falls asleep (deaf but for Start)
+    ``baud_change_at`` simulated time (s) at which the robot's serial port changes its rate
+                       (as after a battery swap or a reset: the Create 2 comes back at its
+                       default rate, whatever Baud, 129, had set) and streams on at it
+    ``baud_change_to`` the rate it changes to (None: the other OI rate, 19200 from 115200
+                       and 115200 from anything else)
     ``noise``          standard deviation, in raw units, added to analog sensor signals
                        (cliff, light-bump and wall signals, voltage, currents)
     """
@@ -46,6 +53,8 @@ class Faults:
     reset_at: float | None = None
     stream_stop_at: float | None = None
     sleep_at: float | None = None
+    baud_change_at: float | None = None
+    baud_change_to: int | None = None
 
     def __post_init__(self) -> None:
         for name, lo, hi in (
@@ -62,12 +71,17 @@ class Faults:
                 raise ValueError(f"faults.{name}: found {value!r}; allowed: a number {lo}..{hi}")
             if not lo <= value <= hi or math.isnan(value):
                 raise ValueError(f"faults.{name}: found {value!r}; allowed: {lo}..{hi}")
-        for name in ("disconnect_at", "reset_at", "stream_stop_at", "sleep_at"):
+        for name in ("disconnect_at", "reset_at", "stream_stop_at", "sleep_at", "baud_change_at"):
             at = getattr(self, name)
             if at is not None and not (
                 isinstance(at, int | float) and not isinstance(at, bool) and at >= 0
             ):
                 raise ValueError(f"faults.{name}: found {at!r}; allowed: seconds >= 0")
+        if self.baud_change_to is not None and self.baud_change_to not in BAUD_RATES.values():
+            rates = ", ".join(str(r) for r in sorted(BAUD_RATES.values()))
+            raise ValueError(
+                f"faults.baud_change_to: found {self.baud_change_to!r}; allowed: {rates}"
+            )
         if not self.inject_text.isascii():
             raise ValueError(
                 f"faults.inject_text: found {self.inject_text!r}; allowed: ASCII text only"
@@ -80,6 +94,7 @@ class Faults:
             ("reset", self.reset_at),
             ("stream stop", self.stream_stop_at),
             ("sleep", self.sleep_at),
+            ("baud change", self.baud_change_at),
         )
         return tuple(sorted((at, kind) for kind, at in kinds if at is not None))
 

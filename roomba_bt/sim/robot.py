@@ -192,7 +192,8 @@ class Simulator(OIProtocol):
         return bytes(out)
 
     def _timed_fault(self) -> None:
-        """The one-off faults due now (``Faults.reset_at``, ``stream_stop_at``, ``sleep_at``)."""
+        """The one-off faults due now (``Faults.reset_at``, ``stream_stop_at``, ``sleep_at``,
+        ``baud_change_at``)."""
         while self._timed_faults and self._timed_faults[0][0] <= self.time:
             _, kind = self._timed_faults.pop(0)
             self._event("fault", kind)
@@ -203,6 +204,10 @@ class Simulator(OIProtocol):
                 self._on_reset(b"")
             elif kind == "sleep":
                 self._fall_asleep("fault: sleep_at")
+            elif kind == "baud change":
+                to = self.faults.baud_change_to
+                self.baud = to if to is not None else 19200 if self.baud == 115200 else 115200
+                self._event("baud", f"now {self.baud}")
             else:
                 self._end_stream()
         self._next_timed = self._timed_faults[0][0] if self._timed_faults else math.inf

@@ -158,7 +158,26 @@ def test_timed_faults_happen_once_at_their_time(
         assert sim.asleep
 
 
+def test_a_baud_change_mid_run_streams_on_at_the_other_rate() -> None:
+    sim = Simulator(world(BOX), seed=0, faults=Faults(baud_change_at=1.0))
+    link = SimLink(sim)  # the host at 115200
+    link.write(C.start().data + C.full().data + C.stream(IDS).data)
+    data = bytearray()
+    while sim.time < 2.0:
+        data += link.read(0.015)
+    assert [e.detail for e in sim.events if e.kind == "fault"] == ["baud change"]
+    assert sim.baud == 19200 and sim.streaming
+    assert 60 <= len(StreamParser(IDS).feed(bytes(data))) <= 68  # then garbage at 115200
+    link.set_baud(19200)  # the host follows: frames again
+    after = bytearray()
+    while sim.time < 2.5:
+        after += link.read(0.015)
+    assert len(StreamParser(IDS).feed(bytes(after))) >= 30
+
+
 def test_fault_times_and_rates_are_checked() -> None:
+    with pytest.raises(ValueError, match=r"faults.baud_change_to: found 1234; allowed: 300"):
+        Faults(baud_change_to=1234)
     with pytest.raises(ValueError, match=r"faults.reset_at: found -1; allowed: seconds >= 0"):
         Faults(reset_at=-1)
     with pytest.raises(ValueError, match=r"faults.bit_flip_rate: found 2"):
