@@ -8,24 +8,15 @@ watchdog). Everything that leaves goes through the guard:
                  (refused: ModeError,                                   then ModeModel.apply
                   nothing written)                                      and the opcode's Effect
 
-Start-up (:meth:`Connection.start`)::
+Start-up (:meth:`Connection.start`: Start, the robot's mode asked twice, the mode, the
+stream) is drawn in :mod:`~roomba_bt.robot.startup`; every ending (:meth:`Connection.close`,
+the context manager, :meth:`Connection.safe_stop`: drive 0 and motors off while driving,
+pause, Start or Stop) in :mod:`~roomba_bt.robot.ending`; why a stream stopped in
+:mod:`~roomba_bt.robot.silence`.
 
-    [128]                 Start: the OI leaves Off for Passive
-    [150][0]              pause a stream a previous session may have left running
-    [149][1][35]  x 2     Query List, packet 35, twice: the robot answers one byte (its mode),
-                          which proves it listens at this baud and calibrates the "mode + 1"
-                          rule; the reply has no checksum, so two that agree are needed (up to
-                          START_QUERIES asks)
-    [131] or [132]        Safe or Full, if asked
-    [148][n][ids...]      the stream, checked against the bandwidth before it is sent
-
-Every ending (:meth:`Connection.close`, the context manager, :meth:`safe_stop`)::
-
-    [137][0][0][0][0]     drive 0            } only while the model is in Safe or Full: in
-    [138][0]              motors off         } Passive and Off the robot refuses actuators
-    [150][0]              pause the stream
-    [128]  or  [173]      Start (back to Passive) or, with end_in="stop" where the profile
-                          has it, Stop (Off)
+Over 400 lines on purpose: the session's state (the mode model, the last wheel command, the
+stop's report, keep-awake) is one object's, and what is left here is what reads or changes it;
+the read-only views of the link (``name``, ``status``, ``counters``...) are a sixth of it.
 
 Frames are read in the caller's thread (:meth:`poll`). See ``docs/robot.md``.
 """
@@ -34,10 +25,8 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import signal
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import Literal
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import BAUD_RATES, Command
@@ -47,6 +36,7 @@ from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
 from roomba_bt.oi.opcodes import Effect
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile, get_profile
 from roomba_bt.oi.stream import ReplyParser, check_bandwidth
+from roomba_bt.robot.ending import EndMode, describe_activity, signals_deferred, stop_sequence
 from roomba_bt.robot.errors import (
     ConnectionFailed,
     ModeError,
@@ -56,15 +46,31 @@ from roomba_bt.robot.errors import (
     StreamLost,
     StreamStalled,
 )
-from roomba_bt.robot.interface import SLOT_SECONDS, ModeChange
+from roomba_bt.robot.handshake import drain
+from roomba_bt.robot.interface import ModeChange
 from roomba_bt.robot.link import LINK_ERRORS, LinkStatus, StreamLink, TimedFrame
 from roomba_bt.robot.modes import DEFAULT_SETTLE, ModeModel
 from roomba_bt.robot.silence import asleep_by_idle, explain_silence, follow_baud
+from roomba_bt.robot.startup import (
+    NO_ANSWER_CAUSES,
+    OPEN_CAUSES,
+    agreed_mode_reply,
+    as_mode,
+    not_a_mode,
+)
 from roomba_bt.robot.wake import keep_awake_for
 from roomba_bt.transport.base import Transport, TransportError
 from roomba_bt.transport.serial_port import DEFAULT_BAUD, SerialTransport
 
-__all__ = ["Connection", "EndMode", "LinkCounters", "LinkStatus", "TimedFrame"]
+__all__ = [
+    "NO_ANSWER_CAUSES",  # where the CLI has them from
+    "OPEN_CAUSES",
+    "Connection",
+    "EndMode",
+    "LinkCounters",
+    "LinkStatus",
+    "TimedFrame",
+]
 
 log = logging.getLogger(__name__)
 
@@ -72,19 +78,6 @@ log = logging.getLogger(__name__)
 _RECOVERABLE: tuple[type[Exception], ...] = (RobotError, *LINK_ERRORS)
 #: The spec asks for 100 ms after Baud (129) before sending at the new rate.
 BAUD_CHANGE_WAIT = 0.1
-#: How long the input must stay quiet after pausing a stale stream, before the confirm query.
-DRAIN_QUIET = 2 * SLOT_SECONDS
-DRAIN_LIMIT = 0.25
-#: Most Query Lists of packet 35 at start-up, looking for two consecutive replies that agree.
-START_QUERIES = 4
-NO_ANSWER_CAUSES = (
-    "wrong baud rate (115200 by default; 19200 after holding Clean at power-off or a BRC pulse)",
-    "no power or the robot asleep (press Clean or the power button)",
-    "wrong cable or wiring (TX/RX swapped, adapter not a 5 V TTL serial)",
-)
-OPEN_CAUSES = ("wrong device path or URL", "the port in use by another program", "permissions")
-
-EndMode = Literal["passive", "stop"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -102,30 +95,6 @@ class LinkCounters:
     commands_refused: int = 0
     watchdog_trips: int = 0
     mode_readings_ignored: int = 0
-
-
-def _as_mode(mode: OIMode | str) -> OIMode:
-    if isinstance(mode, OIMode):
-        return mode
-    try:
-        return OIMode[mode.upper()]
-    except KeyError:
-        raise ValueError(f"unknown OI mode {mode!r}; use passive, safe or full") from None
-
-
-@contextlib.contextmanager
-def _signals_deferred() -> Iterator[None]:
-    """Hold SIGINT/SIGTERM while a stop sequence is written, so it leaves whole."""
-    blockable = {signal.SIGINT, signal.SIGTERM}
-    try:
-        previous = signal.pthread_sigmask(signal.SIG_BLOCK, blockable)
-    except (AttributeError, OSError, ValueError):  # not POSIX: nothing to hold
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 class Connection:
@@ -213,7 +182,7 @@ class Connection:
         is sent. Raises :class:`ConnectionFailed` if the robot does not answer in
         ``confirm_timeout`` seconds.
         """
-        target = _as_mode(mode)
+        target = as_mode(mode)
         if target is OIMode.OFF:
             raise ValueError("start() enters Passive, Safe or Full; use close() to end in Off")
         ids = tuple(packets)
@@ -224,15 +193,13 @@ class Connection:
         self.safe_stopped = None
         self.send(oi.start())
         self.send(oi.pause_stream())
-        self._drain()
-        raw = self._agreed_mode_reply(confirm_timeout)
+        drain(self.link.transport, self.link.read)  # a stale stream, a reset banner
+        raw = agreed_mode_reply(
+            self.name, lambda: self._query_raw((OI_MODE_PACKET,), confirm_timeout),
+            confirm_timeout,
+        )  # fmt: skip
         if not self.modes.calibrate(raw, self.link.transport.now()):
-            raise ConnectionFailed(
-                self.name,
-                f"the robot answered {raw} for its OI mode right after Start, "
-                f"which is no mode (Passive reads 1, or 2 on firmware that reports mode + 1)",
-                (*NO_ANSWER_CAUSES[:1], "another program talking to the robot"),
-            )
+            raise not_a_mode(self.name, raw)
         self.link.mode_plus_one = self.modes.plus_one
         if target is OIMode.SAFE:
             self.send(oi.safe())
@@ -243,39 +210,6 @@ class Connection:
         log.info(
             "%s: %s in %s, streaming %s", self.name, self.profile.title, target.label, list(ids)
         )
-
-    def _agreed_mode_reply(self, timeout: float) -> int:
-        """Packet 35 as two consecutive Query List replies agree on it (a reply has no
-        checksum: one corrupted byte must not end the run or teach a wrong offset)."""
-        replies: list[int] = []
-        for _ in range(START_QUERIES):
-            reply = self._query_raw((OI_MODE_PACKET,), timeout)
-            if reply is None:
-                raise ConnectionFailed(
-                    self.name,
-                    f"the robot did not answer a Query List (149) for packet 35 within "
-                    f"{timeout:g} s",
-                    NO_ANSWER_CAUSES,
-                )
-            replies.append(reply[OI_MODE_PACKET])
-            if len(replies) >= 2:
-                if replies[-1] == replies[-2]:
-                    return replies[-1]
-                log.warning("%s: packet 35 replies disagree (%s); asking again", self.name, replies)
-        raise ConnectionFailed(
-            self.name,
-            f"{START_QUERIES} replies to a Query List for packet 35 never agreed twice in a row "
-            f"({replies})",
-            ("a noisy line", *NO_ANSWER_CAUSES[:1], "another program talking to the robot"),
-        )
-
-    def _drain(self) -> None:
-        """Read and drop input until it stays quiet (a stale stream, a reset banner)."""
-        clock = self.link.transport.now
-        started = quiet_since = clock()
-        while clock() - quiet_since < DRAIN_QUIET and clock() - started < DRAIN_LIMIT:
-            if self.link.read(DRAIN_QUIET / 2):
-                quiet_since = clock()
 
     def query(self, packet_ids: Sequence[int], timeout: float = 1.0) -> SensorFrame | None:
         """Query List (149) for ``packet_ids``; the decoded reply, or None after ``timeout``.
@@ -542,22 +476,11 @@ class Connection:
 
     # ------------------------------------------------------------------ endings
     def stop_sequence(self) -> list[Command]:
-        """What :meth:`safe_stop` sends from the current mode (see the module docstring)."""
-        mode = self.modes.mode
-        if mode is OIMode.OFF:
-            return []
-        commands: list[Command] = []
-        if mode is OIMode.PASSIVE and self._builtin_may_run:
-            # Clean, Spot, Max or Seek Dock drive the robot in Passive, where drive 0 is not
-            # accepted; Safe (131) ends the cycle and makes drive 0 and motors off possible.
-            commands.append(oi.safe())
-            mode = OIMode.SAFE
-        if mode in DRIVING_MODES:
-            commands += [oi.halt(), oi.motors_off()]
-        commands.append(oi.pause_stream())
-        use_stop = self.end_in == "stop" and self.profile.has_command("stop")
-        commands.append(oi.stop() if use_stop else oi.start())
-        return commands
+        """What :meth:`safe_stop` sends from the current mode (:mod:`~roomba_bt.robot.ending`)."""
+        return stop_sequence(
+            self.modes.mode, builtin_may_run=self._builtin_may_run, end_in=self.end_in,
+            profile=self.profile,
+        )  # fmt: skip
 
     def safe_stop(self) -> bool:
         """Stop the robot and leave it in Passive (or Off with ``end_in="stop"``).
@@ -569,7 +492,7 @@ class Connection:
             return self._undelivered("the stop was not delivered: the port is gone")
         lost = self.link.status is LinkStatus.LOST
         try:
-            with _signals_deferred():
+            with signals_deferred():
                 self.send_many(self.stop_sequence())
         except PortLost:
             return self._undelivered("the stop was not delivered: the port is gone")
@@ -587,25 +510,7 @@ class Connection:
     def activity(self) -> str:
         """What the last wheel command written had the robot doing: ``at 200 mm/s``,
         ``stopped``, ``in its Clean cycle``."""
-        command = self.last_wheels
-        if command is None:
-            return "with its wheels never commanded"
-        spec = command.spec
-        if spec.effect is Effect.BUILTIN_CYCLE:
-            return f"in its {spec.title} cycle"
-        if not any(command.args):
-            return "stopped"
-        if spec.name == "drive":
-            velocity, radius = command.args
-            if radius in (1, -1):  # the spec's turn in place
-                return f"spinning {'left' if radius == 1 else 'right'} at {velocity} mm/s"
-            turning = "" if radius in (-32768, 32767) else f", radius {radius} mm"
-            return f"at {velocity} mm/s{turning}"
-        values = ", ".join(
-            f"{arg.name} {value} {arg.unit}".rstrip()
-            for arg, value in zip(spec.args, command.args, strict=True)
-        )
-        return f"after {spec.name} ({values})"
+        return describe_activity(self.last_wheels)
 
     def _undelivered(self, why: str) -> bool:
         """The stop did not reach the robot: say so, with what the robot was last seen

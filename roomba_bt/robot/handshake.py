@@ -26,7 +26,7 @@ for that second instead (speed 0 drops DTR and RTS; the rate's return raises the
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from roomba_bt.oi import commands as oi
@@ -106,14 +106,17 @@ def _wait(transport: Transport, seconds: float) -> int:
     return seen
 
 
-def drain(transport: Transport) -> int:
+def drain(transport: Transport, read: Callable[[float], bytes] | None = None) -> int:
     """Read and drop until the line stays quiet for :data:`QUIET_S` (at most
-    :data:`DRAIN_LIMIT_S`); the bytes dropped."""
+    :data:`DRAIN_LIMIT_S`) on the transport's clock; the bytes dropped. ``read``: read
+    through this instead of the transport (a link's, which counts the bytes and turns a
+    failing port into ``PortLost``)."""
     clock = transport.now
+    read = transport.read if read is None else read
     started = quiet_since = clock()
     seen = 0
     while clock() - quiet_since < QUIET_S and clock() - started < DRAIN_LIMIT_S:
-        data = transport.read(QUIET_S / 2)
+        data = read(QUIET_S / 2)
         if data:
             seen += len(data)
             quiet_since = clock()

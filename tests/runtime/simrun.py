@@ -11,6 +11,16 @@ from roomba_bt.runtime.loop import MissionRunner
 from roomba_bt.runtime.summary import RunSummary
 from roomba_bt.sim import SimLink, Simulator
 
+#: Safe, then spin in place at 100 mm/s until something ends the run: a robot that is
+#: driving when a fault comes.
+SPIN = """
+mission: spin
+tree:
+  sequence:
+    - mode: safe
+    - drive: {velocity: 100 mm/s, radius: spin_left}
+"""
+
 
 class TapLink(SimLink):
     """A SimLink that keeps every chunk written and read, with the simulated time."""

@@ -15,15 +15,8 @@ from roomba_bt.runtime.summary import Outcome, RunSummary
 from roomba_bt.sim import Simulator, load_world
 from roomba_bt.sim.protocol import DEFAULT_FIRMWARE, reset_banner
 
-from .simrun import TapLink
+from .simrun import SPIN, TapLink
 
-SPIN = """
-mission: spin
-tree:
-  sequence:
-    - mode: safe
-    - drive: {velocity: 100 mm/s, radius: spin_left}
-"""
 SPIN_COMMAND = oi.drive(100, oi.Radius.TURN_COUNTER_CLOCKWISE).data
 HALT = oi.halt().data
 

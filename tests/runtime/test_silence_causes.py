@@ -1,7 +1,11 @@
-"""A stream that stops with nothing on the line is explained by asking the robot once the
-grace runs out (robot/silence.py): a robot that answers stopped streaming; one that answers
-only after a BRC pulse was asleep (at any time, not only after the OI's five minutes); one
-that never answers is switched off or cut off. On the virtual clock, in process."""
+"""Why no valid frame comes (robot/silence.py), on the virtual clock, in process.
+
+Nothing on the line: the robot is asked once the grace runs out; one that answers stopped
+streaming, one that answers only after a BRC pulse was asleep (at any time, not only after
+the OI's five minutes), one that never answers is switched off or cut off. Garbage on the
+line: the robot's port changed its rate in the middle of the run (a battery swap or a reset
+brings a Create 2 back at its default rate); the run names it, follows it and stops the robot
+at the new rate, and noise at the run's rate is not taken for one."""
 
 from __future__ import annotations
 
@@ -14,17 +18,12 @@ from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome, RunSummary
 from roomba_bt.sim import Faults, SimLink, Simulator, load_world
 
+from .simrun import SPIN
+
 WAIT_IN_PASSIVE = """
 mission: wait-in-passive
 tree:
   wait: 10min
-"""
-SPIN = """
-mission: spin
-tree:
-  sequence:
-    - mode: safe
-    - drive: {velocity: 100 mm/s, radius: spin_left}
 """
 
 
@@ -36,13 +35,17 @@ class NoModemLines(SimLink):
 
 
 def run(
-    tmp_path: Path, text: str, faults: Faults, link_type: type[SimLink] = SimLink
+    tmp_path: Path,
+    text: str,
+    faults: Faults,
+    link_type: type[SimLink] = SimLink,
+    timeout: float = 60.0,
 ) -> tuple[RunSummary, Simulator]:
     path = tmp_path / "m.yaml"
     path.write_text(text)
     mission = load_mission(path, {}, profile=CREATE2)
     simulator = Simulator(load_world("empty-room"), CREATE2, 0, faults, trace=False)
-    stack = RunStack(mission, link_type(simulator), profile=CREATE2, timeout_s=60.0)
+    stack = RunStack(mission, link_type(simulator), profile=CREATE2, timeout_s=timeout)
     summary = stack.run()
     stack.close()
     return summary, simulator
@@ -77,3 +80,24 @@ def test_a_robot_that_cannot_be_pulsed_is_not_called_asleep(tmp_path: Path) -> N
     assert "the sensor stream stopped" in summary.reason
     assert "no BRC pulse could wake it" in summary.reason
     assert [e.kind for e in simulator.events if e.kind == "wake"] == []  # no pulse woke it
+
+
+def test_a_baud_change_mid_run_is_named_followed_and_the_robot_stopped(tmp_path: Path) -> None:
+    summary, simulator = run(tmp_path, SPIN, Faults(baud_change_at=3.0), timeout=10.0)
+    assert summary.outcome is Outcome.CONNECTION_LOST and summary.exit_code == 3
+    assert "the robot now talks at another baud rate: 19200, not the 115200" in summary.reason
+    assert "drive 0 sent again at 19200" in summary.reason
+    assert "garbage since" in summary.reason
+    assert summary.stop_delivered
+    # the stop reached the robot at its new rate: stopped, in Passive
+    assert simulator.mode is OIMode.PASSIVE
+    assert simulator.requested_left == simulator.requested_right == 0
+    # stopped within the watchdog, the listen and a slot or two of the change
+    stops = [e.time for e in simulator.events if e.kind == "mode" and "Passive" in e.detail]
+    assert stops and stops[-1] - 3.0 <= 0.1 + 0.1 + 0.06
+
+
+def test_noise_at_the_run_rate_is_not_taken_for_a_baud_change(tmp_path: Path) -> None:
+    summary, _ = run(tmp_path, SPIN, Faults(bit_flip_rate=0.02), timeout=20.0)
+    assert summary.stalls >= 1  # the watchdog tripped on garbage: the other rate was tried
+    assert "baud rate" not in summary.reason, summary.reason

@@ -1,0 +1,80 @@
+"""A connection's start-up: the robot proven to listen, and the "mode + 1" rule learned.
+
+:meth:`~roomba_bt.robot.connection.Connection.start` sends::
+
+    [128]                 Start: the OI leaves Off for Passive
+    [150][0]              pause a stream a previous session may have left running
+                          ... read until the line is quiet (a stale stream, a banner)
+    [149][1][35]  x 2     Query List, packet 35, twice: the robot answers one byte (its mode),
+                          which proves it listens at this baud and calibrates the "mode + 1"
+                          rule; the reply has no checksum, so two that agree are needed (up to
+                          START_QUERIES asks: :func:`agreed_mode_reply`)
+    [131] or [132]        Safe or Full, if asked
+    [148][n][ids...]      the stream, checked against the bandwidth before it is sent
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+
+from roomba_bt.oi.frames import SensorFrame
+from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
+from roomba_bt.robot.errors import ConnectionFailed
+
+log = logging.getLogger(__name__)
+
+#: Most Query Lists of packet 35 at start-up, looking for two consecutive replies that agree.
+START_QUERIES = 4
+NO_ANSWER_CAUSES = (
+    "wrong baud rate (115200 by default; 19200 after holding Clean at power-off or a BRC pulse)",
+    "no power or the robot asleep (press Clean or the power button)",
+    "wrong cable or wiring (TX/RX swapped, adapter not a 5 V TTL serial)",
+)
+OPEN_CAUSES = ("wrong device path or URL", "the port in use by another program", "permissions")
+
+
+def as_mode(mode: OIMode | str) -> OIMode:
+    """``"safe"`` or :attr:`OIMode.SAFE` to the mode; a clear error for anything else."""
+    if isinstance(mode, OIMode):
+        return mode
+    try:
+        return OIMode[mode.upper()]
+    except KeyError:
+        raise ValueError(f"unknown OI mode {mode!r}; use passive, safe or full") from None
+
+
+def agreed_mode_reply(port: str, ask: Callable[[], SensorFrame | None], timeout: float) -> int:
+    """Packet 35 as two consecutive Query List replies (``ask``: one Query List, its reply
+    or None after ``timeout`` s) agree on it: a reply has no checksum, and one corrupted byte
+    must not end the run or teach a wrong offset."""
+    replies: list[int] = []
+    for _ in range(START_QUERIES):
+        reply = ask()
+        if reply is None:
+            raise ConnectionFailed(
+                port,
+                f"the robot did not answer a Query List (149) for packet 35 within {timeout:g} s",
+                NO_ANSWER_CAUSES,
+            )
+        replies.append(reply[OI_MODE_PACKET])
+        if len(replies) >= 2:
+            if replies[-1] == replies[-2]:
+                return replies[-1]
+            log.warning("%s: packet 35 replies disagree (%s); asking again", port, replies)
+    raise ConnectionFailed(
+        port,
+        f"{START_QUERIES} replies to a Query List for packet 35 never agreed twice in a row "
+        f"({replies})",
+        ("a noisy line", *NO_ANSWER_CAUSES[:1], "another program talking to the robot"),
+    )
+
+
+def not_a_mode(port: str, raw: int) -> ConnectionFailed:
+    """The agreed reply is no mode reading right after Start."""
+    return ConnectionFailed(
+        port,
+        f"the robot answered {raw} for its OI mode right after Start, "
+        f"which is no mode (Passive reads 1, or 2 on firmware that reports mode + 1)",
+        (*NO_ANSWER_CAUSES[:1], "another program talking to the robot"),
+    )
