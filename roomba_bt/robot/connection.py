@@ -143,6 +143,9 @@ class Connection:
         #: why the stop did not reach the robot, with the robot's last known state (None: it
         #: did, or no stop was tried)
         self.stop_report: str | None = None
+        #: why a stop written now could not be known to arrive (the robot no longer answers
+        #: or the line is garbled), or None
+        self.unheard: str | None = None
         self._builtin_may_run = False  # a Clean/Spot/Max/Seek Dock cycle may be driving
         # Keep-awake (robot/wake.py): on by default where the profile sleeps in Passive.
         self.keep_awake = self.profile.sleeps_in_passive if keep_awake is None else keep_awake
@@ -191,6 +194,7 @@ class Connection:
             check_bandwidth(ids, self.baud)
         self._closed = False
         self.safe_stopped = None
+        self.unheard = None
         self.send(oi.start())
         self.send(oi.pause_stream())
         drain(self.link.transport, self.link.read)  # a stale stream, a reset banner
@@ -340,6 +344,7 @@ class Connection:
         garbled = link.bytes_read - bytes_before
         if not garbled:
             raise explain_silence(self, now - since, grace, halted=halted)
+        self.unheard = f"the line is garbled (no valid frame at {self.baud} or another OI rate)"
         raise StreamLost(
             self.name, now - since, grace, garbled, watchdog=link.watchdog, halted=halted
         )
@@ -502,6 +507,8 @@ class Connection:
             return self._undelivered(
                 "the stop was written but is unconfirmed: the port had failed before it"
             )
+        if self.unheard is not None:
+            return self._undelivered(f"the stop was written but is unconfirmed: {self.unheard}")
         self.link.streaming = False
         self.link.status = LinkStatus.STOPPED
         self.safe_stopped = True

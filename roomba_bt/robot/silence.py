@@ -87,6 +87,7 @@ def explain_silence(
         return lost(
             "the robot still answers a query (its OI is on): it stopped streaming by itself"
         )
+    connection.unheard = "the robot answers nothing"  # unless a pulse wakes it
     if not connection.profile.sleeps_in_passive:
         return lost("it answered no query either (switched off, a flat battery, or the cable)")
     pulse = wake_pulse(connection.transport)
@@ -96,6 +97,7 @@ def explain_silence(
             f"the rest ({pulse.problem})"
         )
     if _answers(connection):
+        connection.unheard = None
         return RobotAsleep(
             connection.name, idle, keep_awake=connection.keep_awake,
             pulses=_pulses(connection), woken_by=pulse.how,

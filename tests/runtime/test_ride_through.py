@@ -94,6 +94,9 @@ def test_a_garbled_line_past_the_grace_is_exit_3_named_garbled(tmp_path: Path) -
     assert summary.outcome is Outcome.CONNECTION_LOST
     assert "the line is garbled: no valid sensor frame for 0.5 s while" in summary.reason
     assert "bytes arrived (noise on the line, or a wrong baud rate)" in summary.reason
+    # the stop went out at the run's rate, where nothing valid came from: not known to arrive
+    assert not summary.stop_delivered
+    assert "the stop was written but is unconfirmed: the line is garbled" in summary.safe_stop
 
 
 def test_a_reset_banner_is_named_at_once(tmp_path: Path) -> None:

@@ -62,6 +62,7 @@ def test_a_robot_that_fell_asleep_early_is_woken_by_a_pulse_and_named_asleep(
     assert "sensor stream stopped" not in summary.reason
     assert [e.kind for e in simulator.events if e.kind in ("sleep", "wake")] == ["sleep", "wake"]
     assert not simulator.asleep and simulator.mode is OIMode.PASSIVE
+    assert summary.stop_delivered  # it answered after the pulse: it hears the stop
 
 
 def test_a_robot_that_only_stopped_streaming_is_said_to_still_answer(tmp_path: Path) -> None:
@@ -80,6 +81,8 @@ def test_a_robot_that_cannot_be_pulsed_is_not_called_asleep(tmp_path: Path) -> N
     assert "the sensor stream stopped" in summary.reason
     assert "no BRC pulse could wake it" in summary.reason
     assert [e.kind for e in simulator.events if e.kind == "wake"] == []  # no pulse woke it
+    assert not summary.stop_delivered  # a robot that answers nothing: the stop not known
+    assert "unconfirmed: the robot answers nothing" in summary.safe_stop
 
 
 def test_a_baud_change_mid_run_is_named_followed_and_the_robot_stopped(tmp_path: Path) -> None:
