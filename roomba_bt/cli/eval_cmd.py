@@ -141,6 +141,14 @@ def _add_start_options(ev: argparse.ArgumentParser) -> None:
         "family=discovery (characters 240-254)",
     )
     ev.add_argument("--battery", type=float, metavar="FRACTION", help="initial charge 0..1")
+    ev.add_argument(
+        "--odometry-error",
+        type=float,
+        default=0.0,
+        metavar="FRACTION",
+        help="the encoders' error (0..0.2; e.g. 0.015: wheel scales off by up to 1.5 %%, a "
+        "heading drift of up to 0.9 deg/min; seeded; default 0: exact)",
+    )
     ev.add_argument("--timeout", default="15min", help="mission time per episode (default 15min)")
     ev.add_argument("--profile", choices=sorted(PROFILES), default="create2")
     ev.add_argument("--min-rate", type=float, metavar="FRACTION",
@@ -314,6 +322,8 @@ def _check_arguments(args: argparse.Namespace) -> str | None:
         return f"--within {args.within}: expected a distance above 0 m"
     if args.battery is not None and not 0.0 <= args.battery <= 1.0:
         return f"--battery {args.battery}: expected a fraction in 0..1"
+    if not 0.0 <= args.odometry_error <= 0.2:
+        return f"--odometry-error {args.odometry_error}: expected a fraction in 0..0.2"
     if args.min_rate is not None and not 0.0 <= args.min_rate <= 1.0:
         return f"--min-rate {args.min_rate}: expected a fraction in 0..1"
     if args.out is not None:
@@ -359,6 +369,7 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
             dock=dock,
             battery=args.battery,
             start_area=args.start_area,
+            odometry_error=args.odometry_error,
             permissions=permissions(args),
         )
         for v in chosen

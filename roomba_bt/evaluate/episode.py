@@ -30,7 +30,7 @@ from roomba_bt.mission import NO_PERMISSIONS, MissionError, Permissions, load_mi
 from roomba_bt.oi.profiles import get_profile
 from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome
-from roomba_bt.sim import SimLink, Simulator, World, load_world
+from roomba_bt.sim import Faults, SimLink, Simulator, World, load_world
 from roomba_bt.sim.world import DockSpec, parse_world
 
 #: Dock fields an evaluation may override (``--dock buoy_range=0.5``), with their units:
@@ -77,6 +77,8 @@ class EpisodeSpec:
     world_file: tuple[str, str] | None = field(default=None, repr=False)
     #: start in this named area of the world (``areas:``); its coverage is the headline
     start_area: str | None = None
+    #: the encoders' error (``Faults.odometry_error``, a fraction; 0: exact odometry)
+    odometry_error: float = 0.0
 
 
 def self_contained(spec: EpisodeSpec) -> EpisodeSpec:
@@ -288,7 +290,8 @@ def _run_episode(spec: EpisodeSpec) -> EpisodeResult:
         raise EvaluationError("\n".join(str(d) for d in exc.diagnostics)) from None
     world = build_world(spec)
     pose = start_pose(world, spec)
-    simulator = _MeasuredSimulator(world, profile, spec.seed, start=pose, coverage=True)
+    faults = Faults(odometry_error=spec.odometry_error) if spec.odometry_error else None
+    simulator = _MeasuredSimulator(world, profile, spec.seed, faults, start=pose, coverage=True)
     stack = RunStack(mission, SimLink(simulator), profile=profile, timeout_s=spec.timeout_s)
     summary = stack.run()
     if summary.outcome is Outcome.INTERRUPTED:  # Ctrl-C (or SIGTERM) stops the evaluation,

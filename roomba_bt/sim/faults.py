@@ -39,6 +39,9 @@ class Faults:
                        and 115200 from anything else)
     ``noise``          standard deviation, in raw units, added to analog sensor signals
                        (cliff, light-bump and wall signals, voltage, currents)
+    ``odometry_error`` the encoders' error, as a fraction (0: exact, the default): each
+                       wheel's counts are off by a seeded scale (see sim/state.py's
+                       ``OdometryError``), and the heading they give drifts slowly
     """
 
     corrupt_rate: float = 0.0
@@ -55,6 +58,7 @@ class Faults:
     sleep_at: float | None = None
     baud_change_at: float | None = None
     baud_change_to: int | None = None
+    odometry_error: float = 0.0
 
     def __post_init__(self) -> None:
         for name, lo, hi in (
@@ -65,6 +69,7 @@ class Faults:
             ("latency", 0.0, 10.0),
             ("inject_every", 0.015, 3600.0),
             ("noise", 0.0, 4095.0),
+            ("odometry_error", 0.0, 0.2),
         ):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int | float):

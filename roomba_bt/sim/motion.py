@@ -27,7 +27,7 @@ import struct
 from roomba_bt.oi.odometry import MM_PER_COUNT
 from roomba_bt.sim.geometry import closest_point, wrap_angle
 from roomba_bt.sim.sensing import Sensing
-from roomba_bt.sim.state import STEP_SECONDS, TracePoint
+from roomba_bt.sim.state import EXACT_ODOMETRY, STEP_SECONDS, OdometryError, TracePoint
 from roomba_bt.sim.world import ROBOT_RADIUS_MM
 
 #: The robot's wheel speed controller moves in steps of about 28.5 mm/s.
@@ -47,20 +47,45 @@ _TWO_PI = 2.0 * math.pi
 #:     3 dist   4 dtheta  5 dtheta / 2  travel of the centre (mm), turn (rad)
 #:     6 left counts  7 right counts    encoder counts of an unhindered step
 #:     8 packet 58 (stasis) of an unhindered step
-_Motion = tuple[float, float, float, float, float, float, float, float, int]
+#:     9 measured dist  10 measured dtheta   what the encoders say (packets 19, 20): the
+#:                                          travel and turn unless Faults.odometry_error
+_Motion = tuple[float, float, float, float, float, float, float, float, int, float, float]
 
 
-def _motion_of(left: float, right: float, dt: float, half_base: float) -> _Motion:
+def _motion_of(
+    left: float, right: float, dt: float, half_base: float, error: OdometryError = EXACT_ODOMETRY
+) -> _Motion:
     dl = left * dt
     dr = right * dt
     dist = (dl + dr) / 2.0
     dtheta = (dr - dl) / (2.0 * half_base)
+    if error is EXACT_ODOMETRY:
+        return (
+            left, right, dt, dist, dtheta, dtheta / 2.0,
+            (dist - dtheta * half_base) / MM_PER_COUNT,
+            (dist + dtheta * half_base) / MM_PER_COUNT,
+            1 if dist > 0.0 else 0, dist, dtheta,
+        )  # fmt: skip
+    measured_dist, measured_dtheta = _measured(dist, dtheta, dt, half_base, error)
     return (
         left, right, dt, dist, dtheta, dtheta / 2.0,
-        (dist - dtheta * half_base) / MM_PER_COUNT,
-        (dist + dtheta * half_base) / MM_PER_COUNT,
-        1 if dist > 0.0 else 0,
+        (measured_dist - measured_dtheta * half_base) / MM_PER_COUNT,
+        (measured_dist + measured_dtheta * half_base) / MM_PER_COUNT,
+        1 if dist > 0.0 else 0, measured_dist, measured_dtheta,
     )  # fmt: skip
+
+
+def _measured(
+    dist: float, dtheta: float, dt: float, half_base: float, error: OdometryError
+) -> tuple[float, float]:
+    """(travel, turn) as the encoders count them for a true ``dist`` (mm) and ``dtheta``
+    (rad) over ``dt`` s of turning wheels: each wheel's scale, then the drift."""
+    if error is EXACT_ODOMETRY:
+        return dist, dtheta
+    drift = error.drift * dt * half_base
+    left = (dist - dtheta * half_base) * error.left_scale - drift
+    right = (dist + dtheta * half_base) * error.right_scale + drift
+    return (left + right) / 2.0, (right - left) / (2.0 * half_base)
 
 
 def _quantise(speed: float) -> float:
@@ -175,7 +200,9 @@ class Motion(Sensing):
             return
         motion = self._motion
         if motion[0] != left or motion[1] != right or motion[2] != dt:
-            motion = self._motion = _motion_of(left, right, dt, self._half_base)
+            motion = self._motion = _motion_of(
+                left, right, dt, self._half_base, self.odometry_error
+            )
         dist, dtheta = motion[3], motion[4]
         fraction = 1.0
         stuck = self.lifted or self.fallen
@@ -194,14 +221,14 @@ class Motion(Sensing):
         if fraction == 1.0:
             # free motion (the usual step): what the wheels did is the same every step
             self.blocked = False
-            self._turn(self.theta + dtheta, dist, dtheta)
+            self._turn(self.theta + dtheta, motion[9], motion[10])
             left_counts = self._left_counts = self._left_counts + motion[6]
             right_counts = self._right_counts = self._right_counts + motion[7]
             v[58] = motion[8]
             self._stall_steps = 0
             self._geometry_dirty = True
         else:
-            self._move_hindered(dist, dtheta, fraction, stuck)
+            self._move_hindered(dist, dtheta, fraction, stuck, dt)
             left_counts, right_counts = self._left_counts, self._right_counts
         lc = int(left_counts) & 0xFFFF
         rc = int(right_counts) & 0xFFFF
@@ -228,8 +255,8 @@ class Motion(Sensing):
         return lo
 
     def _turn(self, theta: float, travelled: float, dtheta: float) -> None:
-        """The body now faces ``theta`` (wrapped into -pi..pi here), having travelled
-        ``travelled`` mm and turned ``dtheta`` rad: what packets 19 and 20 add up."""
+        """The body now faces ``theta`` (wrapped into -pi..pi here); the encoders count
+        ``travelled`` mm and ``dtheta`` rad: what packets 19 and 20 add up."""
         if theta > _PI:
             theta -= _TWO_PI
         elif theta < -_PI:
@@ -238,21 +265,22 @@ class Motion(Sensing):
         self._distance_acc += travelled
         self._angle_acc += dtheta
 
-    def _move_hindered(self, dist: float, dtheta: float, fraction: float, stuck: bool) -> None:
+    def _move_hindered(
+        self, dist: float, dtheta: float, fraction: float, stuck: bool, dt: float
+    ) -> None:
         """The rest of a step that a wall cut short, or a lifted or fallen robot's."""
         half_base = self._half_base
         blocked = self.blocked = fraction < 1.0 and dist != 0.0 and not stuck
         guided = 0.0
         if blocked and dist > 0.0 and self._dock_target is not None:
             guided = self._dock_guides()  # the body turns, the wheels slip: no encoder counts
-        if stuck:
-            travelled = dist
-        else:
-            travelled = dist * fraction
-            self._turn(self.theta + dtheta + guided, travelled, dtheta)
+        travelled = dist if stuck else dist * fraction
+        counted, turned = _measured(travelled, dtheta, dt, half_base, self.odometry_error)
+        if not stuck:
+            self._turn(self.theta + dtheta + guided, counted, turned)
         # Encoders count wheel turns: a blocked robot's wheels stall, a lifted one's spin.
-        self._left_counts = self._left_counts + (travelled - dtheta * half_base) / MM_PER_COUNT
-        self._right_counts = self._right_counts + (travelled + dtheta * half_base) / MM_PER_COUNT
+        self._left_counts = self._left_counts + (counted - turned * half_base) / MM_PER_COUNT
+        self._right_counts = self._right_counts + (counted + turned * half_base) / MM_PER_COUNT
         self.values[58] = 1 if dist > 0.0 and fraction > 0.5 and not stuck else 0
         self._stall_steps = self._stall_steps + 1 if blocked else 0
         if fraction or dtheta or guided:

@@ -20,6 +20,7 @@ cycles (cycles.py) and the world's timeline (timeline.py).
 
 from __future__ import annotations
 
+import math
 import random
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -66,6 +67,44 @@ class Violation:
     mode: OIMode
 
 
+@dataclass(frozen=True, slots=True)
+class OdometryError:
+    """How far the encoders' counts are from what the wheels did (``Faults.odometry_error``).
+
+    A real robot's odometry drifts: the wheels' effective diameters differ from the nominal
+    (wear, load, carpet), and the two differ a little from each other, so distances come out
+    a percent or two off and a straight line reads as a slow curve; slip adds a slow heading
+    drift. The simulator's pose stays the truth; only the counts (packets 43, 44) and the
+    distance and angle (19, 20) carry the error. Drawn once per seed, with ``f`` the fault's
+    fraction::
+
+        common        ~ U(-f, f)          both wheels: distances and turns off by it
+        differential  ~ U(-f/10, f/10)    left 1 + common - differential, right 1 + common
+                                          + differential: a straight line reads as a curve
+        drift         ~ U(-f, f) deg/s    heading drift while the wheels turn (f = 0.015:
+                                          up to 0.9 deg per minute of driving)
+    """
+
+    left_scale: float = 1.0
+    right_scale: float = 1.0
+    #: rad/s added to the measured turn while the wheels turn
+    drift: float = 0.0
+
+    @classmethod
+    def draw(cls, fraction: float, seed: int) -> OdometryError:
+        """The seed's error for a fault of ``fraction`` (none for 0: the exact encoders)."""
+        if not fraction:
+            return EXACT_ODOMETRY
+        rng = random.Random(f"odometry:{seed}")  # its own draws: other faults unchanged
+        common = fraction * rng.uniform(-1.0, 1.0)
+        differential = fraction / 10.0 * rng.uniform(-1.0, 1.0)
+        drift = math.radians(fraction) * rng.uniform(-1.0, 1.0)
+        return cls(1.0 + common - differential, 1.0 + common + differential, drift)
+
+
+EXACT_ODOMETRY = OdometryError()
+
+
 class RobotState:
     """The state every layer reads: set once here, changed by the layer that owns each part.
 
@@ -98,6 +137,7 @@ class RobotState:
         self.faults = faults or NO_FAULTS
         self.old_firmware_angle = old_firmware_angle
         self._fault_rng = random.Random(f"faults:{seed}")
+        self.odometry_error = OdometryError.draw(self.faults.odometry_error, seed)
         pose = start or (world.sample_start(seed) if random_start else world.start)
         self.x, self.y, self.theta = pose.x, pose.y, pose.theta
         self.mode = mode
