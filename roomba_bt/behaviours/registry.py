@@ -199,11 +199,12 @@ def builtin_registry() -> Registry:
     from roomba_bt.behaviours.actions import ACTIONS
     from roomba_bt.behaviours.cleaning import CLEANING
     from roomba_bt.behaviours.conditions import CONDITIONS
+    from roomba_bt.behaviours.coverage_map import COVERAGE
     from roomba_bt.behaviours.docking import DOCKING
     from roomba_bt.behaviours.wall import WALL_FOLLOWING
 
     registry = Registry(entry_point_group=None)
-    for cls in (*ACTIONS, *WALL_FOLLOWING, *CONDITIONS, *DOCKING, *CLEANING):
+    for cls in (*ACTIONS, *WALL_FOLLOWING, *CONDITIONS, *DOCKING, *CLEANING, *COVERAGE):
         registry.register(cls, "builtin")
     return registry
 

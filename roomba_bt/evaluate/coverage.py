@@ -51,7 +51,8 @@ class CoverageSummary:
 
     area: str  # "" for all the reachable floor
     episodes: int
-    #: (time s, spread) for each report time that every episode reached
+    #: (time s, spread) for each report time that every episode reached (or ended with
+    #: success before: its coverage at the end holds)
     at: tuple[tuple[float, Spread], ...]
     final: Spread
     by_area: tuple[tuple[str, Spread], ...]
@@ -93,7 +94,11 @@ def summarize_coverage(
     covered = [r.coverage for r in results if r.coverage is not None]
     if not covered:
         return None
-    last = min(r.time_s for r in results if r.coverage is not None)
+    # a mission that ended by itself (the floor done) keeps its coverage to any later time
+    # another episode reached; one cut short otherwise (a failure) ends the report times
+    ran = [r for r in results if r.coverage is not None]
+    cut = [r.time_s for r in ran if not r.succeeded]
+    last = min(cut) if cut else max(r.time_s for r in ran)
     names = [name for name, _ in covered[0].by_area]
     by_area = []
     for name in names:

@@ -7,6 +7,7 @@ from pathlib import Path
 from roomba_bt.behaviours.actions import ACTIONS
 from roomba_bt.behaviours.cleaning import CLEANING
 from roomba_bt.behaviours.conditions import CONDITIONS
+from roomba_bt.behaviours.coverage_map import COVERAGE
 from roomba_bt.behaviours.language import MODIFIERS, WORDS, Shape
 from roomba_bt.mission.loader import TOP_LEVEL
 
@@ -19,7 +20,7 @@ def test_every_language_word_is_documented() -> None:
 
 
 def test_every_builtin_behaviour_and_parameter_is_documented() -> None:
-    for cls in (*ACTIONS, *CONDITIONS, *CLEANING):
+    for cls in (*ACTIONS, *CONDITIONS, *CLEANING, *COVERAGE):
         decl = cls.declaration
         assert f"**`{decl.name}`**" in DOC, decl.name
         for param in decl.params:

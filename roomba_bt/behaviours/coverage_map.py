@@ -1,0 +1,720 @@
+"""``cover``: clean the floor with a map of its own, kept from odometry and the bumper.
+
+A robot without a camera still knows where it has been: the encoders' pose. ``cover`` keeps a
+coarse grid (10 cm cells) in the odometry frame and marks in it, every tick:
+
+* **swept** cells: under the strip the brushes clean (90 mm left of the centre to 185 mm
+  right, where the side brush reaches past the body), while the robot drives;
+* **blocked** cells: where the bumper met something, where a light-bumper ray sees a surface
+  (its signal gives the distance), ahead of a cliff sensor or a virtual wall's beam; the
+  cells next to a blocked one are no place for the robot's centre.
+
+It never reads anything but the snapshot (the encoders and the sensors): no true pose, no
+simulator map. With the grid it decides where to go::
+
+    start:  straight ahead to a wall, then follow the edge (wall on the right: the side brush
+            cleans along it) until a metre goes by without new floor
+    then:   lanes back and forth (boustrophedon) along the walls' direction, each lane ending
+            at an obstacle or where the floor ahead is already swept; the next lane only
+            if the floor beside this one is not swept yet
+    when a region stops giving new floor: a breadth-first search over the cells it has
+            been on finds the nearest swept cell next to floor it has not swept (the
+            frontier); it drives there along the path and sweeps lanes from there; a
+            frontier that lies along a wall gets an edge instead
+    when no frontier is left: an edge from wherever it is; when that finds no new floor
+            either, SUCCESS (the whole floor it can reach is swept)
+
+The cost per tick is the cells the strip and the rays touch (a few); the search runs only
+when a region ends, over the cells seen so far (a few thousand).
+
+Odometry drifts (the encoders miscount a percent or two; a straight line reads as a slow
+curve). The lanes' direction is re-anchored on the walls: while it follows a straight stretch
+of wall (a metre with the heading within 2 deg), the wall's heading by odometry becomes the
+lanes' axis, so lanes stay parallel to the walls however the heading has drifted.
+
+Every driving step stops for hazards in the tick that shows them (bump, cliff, virtual wall),
+backs off and goes on with the next decision, so it runs in Full mode (a cliff then does not
+drop the robot to Passive, which would stop the brushes). A wheel drop fails it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from collections.abc import Callable
+from functools import partial
+
+from py_trees.common import Status
+
+from roomba_bt.behaviours.cleaning import _blocked, _held, _wheels, _wrap
+from roomba_bt.behaviours.declare import WHEEL, Action, Param, declare
+from roomba_bt.behaviours.units import DISTANCE, DURATION, SPEED
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.frames import (
+    BUMPS_PACKETS,
+    CLIFF_PACKETS,
+    ENCODER_PACKETS,
+    LIGHT_BUMP_SIGNAL_PACKETS,
+    VIRTUAL_WALL_PACKETS,
+    SensorFrame,
+)
+from roomba_bt.oi.opcodes import opcodes
+from roomba_bt.robot.interface import Odometry
+
+__all__ = ["COVERAGE", "Cover", "FloorMap"]
+
+_OK, _RUN = Status.SUCCESS, Status.RUNNING
+
+#: the map's cell side (mm) and its extent (cells a side, centred on the start: 60 m)
+CELL_MM = 100.0
+_SIDE = 600
+_HALF_SIDE = _SIDE // 2
+#: cell bits
+SWEPT, BLOCKED, VISITED, TRIED = 1, 2, 4, 8
+#: the strip the brushes clean, as points across the body (x forward, y left; mm): the main
+#: brush 90 mm to the left, the side brush 185 mm to the right (kept a little inside both)
+_STRIP = (*((0.0, y) for y in (80.0, 40.0, 0.0, -40.0, -80.0)), (40.0, -120.0), (50.0, -160.0))
+#: the body's radius and the light bumper: rays from the centre at these angles, starting on
+#: the bumper, 150 mm long, signal = 4095 (1 - d / 150) ** 2
+_RADIUS_MM = 170.0
+_RAY_ANGLES = tuple(math.radians(a) for a in (65.0, 38.0, 12.0, -12.0, -38.0, -65.0))
+_RAY_RANGE_MM = 150.0
+#: a ray's signal from which the surface it sees is marked (about 13 cm from the bumper)
+_RAY_MARK = 60
+#: a centre ray's signal above which it slows down (a few cm ahead)
+_NEAR_SIGNAL = 150
+#: back off this far (mm) from a bump, a cliff, a virtual wall's beam
+_BACK_MM = {"bump": 30.0, "cliff": 60.0, "virtual wall": 100.0}
+_TURN_TOLERANCE = math.radians(2.0)
+_HALF_BASE_MM = 117.5
+_STALL_S = 3.0
+#: a lane that has swept nothing new for this far (mm) ends: it has reached swept floor
+_NO_YIELD_MM = 400.0
+#: an edge that has swept nothing new for this far (mm) ends (a loop closed, or old floor)
+_EDGE_NO_YIELD_MM = 1200.0
+#: a straight stretch of wall: this long (mm) with the heading within this angle re-anchors
+_ANCHOR_MM, _ANCHOR_SPREAD = 1000.0, math.radians(2.0)
+#: a straight wall this close to the axis (or square to it) re-anchors the heading
+_SNAP = math.radians(25.0)
+#: an edge that found more new cells than this was worth it: another may be
+_EDGE_NEW_CELLS = 20
+
+Cell = int
+
+
+def _distance_of(signal: int) -> float:
+    """A light-bumper signal as the distance (mm) from the bumper along its ray."""
+    return _RAY_RANGE_MM * (1.0 - math.sqrt(min(signal, 4095) / 4095.0))
+
+
+class FloorMap:
+    """The robot's own grid: one byte a cell, in the odometry frame (mm), bits SWEPT, BLOCKED,
+    VISITED, TRIED; ``near`` counts the blocked cells around each cell (3 x 3)."""
+
+    def __init__(self) -> None:
+        self.cells = bytearray(_SIDE * _SIDE)
+        self.near = bytearray(_SIDE * _SIDE)
+        #: cells newly swept (a counter: the caller compares)
+        self.swept = 0
+
+    @staticmethod
+    def cell(x: float, y: float) -> Cell | None:
+        col = math.floor(x / CELL_MM) + _HALF_SIDE
+        row = math.floor(y / CELL_MM) + _HALF_SIDE
+        if 1 <= col < _SIDE - 1 and 1 <= row < _SIDE - 1:
+            return row * _SIDE + col
+        return None
+
+    @staticmethod
+    def centre(cell: Cell) -> tuple[float, float]:
+        row, col = divmod(cell, _SIDE)
+        return ((col - _HALF_SIDE + 0.5) * CELL_MM, (row - _HALF_SIDE + 0.5) * CELL_MM)
+
+    def sweep(self, x: float, y: float, theta: float) -> None:
+        """Mark the strip under the robot at (x, y) facing theta swept, and its centre."""
+        c, s = math.cos(theta), math.sin(theta)
+        cells = self.cells
+        for ax, ay in _STRIP:
+            cell = self.cell(x + ax * c - ay * s, y + ax * s + ay * c)
+            if cell is not None and not cells[cell] & SWEPT:
+                cells[cell] |= SWEPT
+                self.swept += 1
+        cell = self.cell(x, y)
+        if cell is not None:
+            cells[cell] |= VISITED
+
+    def block(self, x: float, y: float) -> None:
+        """Something is at (x, y): that cell is blocked, its neighbours no place for the
+        robot's centre."""
+        cell = self.cell(x, y)
+        if cell is None or self.cells[cell] & BLOCKED:
+            return
+        self.cells[cell] |= BLOCKED
+        near = self.near
+        for d in (-_SIDE - 1, -_SIDE, -_SIDE + 1, -1, 0, 1, _SIDE - 1, _SIDE, _SIDE + 1):
+            if near[cell + d] < 255:
+                near[cell + d] += 1
+
+    def block_ahead(self, x: float, y: float, theta: float, reach: float, spread: float) -> None:
+        """Block the points ``reach`` mm from (x, y) at ``theta`` and ``theta +- spread``."""
+        for a in (theta - spread, theta, theta + spread):
+            self.block(x + reach * math.cos(a), y + reach * math.sin(a))
+
+    def free(self, cell: Cell) -> bool:
+        """May the robot's centre be in this cell (nothing known blocks it)?"""
+        return not self.near[cell]
+
+    def open_floor(self, cell: Cell) -> bool:
+        """Floor not swept yet where the robot's centre could go: worth a visit."""
+        return not self.cells[cell] & (SWEPT | BLOCKED | TRIED) and not self.near[cell]
+
+    def frontier(self, start: Cell) -> list[Cell] | None:
+        """The path (cells, from ``start``) over cells the robot has been on or swept, to
+        the nearest one beside open floor; None when there is none. Breadth-first."""
+        cells, near = self.cells, self.near
+        parent: dict[Cell, Cell] = {start: start}
+        queue = deque((start,))
+        # the robot may stand next to something it just met: its own neighbourhood is free
+        for d in (-_SIDE - 1, -_SIDE, -_SIDE + 1, -1, 1, _SIDE - 1, _SIDE, _SIDE + 1):
+            if cells[start + d] & (SWEPT | VISITED) and not cells[start + d] & BLOCKED:
+                parent[start + d] = start
+                queue.append(start + d)
+        steps = (-_SIDE, _SIDE, -1, 1)
+        while queue:
+            cell = queue.popleft()
+            if cell != start and not cells[cell] & TRIED:
+                for d in steps:
+                    if self.open_floor(cell + d):
+                        path = [cell]
+                        while path[-1] != start:
+                            path.append(parent[path[-1]])
+                        path.reverse()
+                        return path
+            for d in steps:
+                nxt = cell + d
+                if nxt not in parent and cells[nxt] & (SWEPT | VISITED) and not near[nxt]:
+                    parent[nxt] = cell
+                    queue.append(nxt)
+        return None
+
+    def line_free(self, a: Cell, b: Cell) -> bool:
+        """Can the centre go straight from cell a to cell b (every cell on the way free)?"""
+        (ax, ay), (bx, by) = self.centre(a), self.centre(b)
+        steps = max(1, int(math.hypot(bx - ax, by - ay) / (CELL_MM / 2.0)))
+        for k in range(steps + 1):
+            cell = self.cell(ax + (bx - ax) * k / steps, ay + (by - ay) * k / steps)
+            if cell is None or self.near[cell]:
+                return False
+        return True
+
+    def open_along(self, x: float, y: float, heading: float, length: float) -> int:
+        """Open-floor cells on the line from (x, y) along ``heading`` for ``length`` mm,
+        up to the first blocked one."""
+        count = 0
+        c, s = math.cos(heading), math.sin(heading)
+        seen: set[Cell] = set()
+        for k in range(1, int(length / (CELL_MM / 2.0)) + 1):
+            d = k * CELL_MM / 2.0
+            cell = self.cell(x + d * c, y + d * s)
+            if cell is None or self.cells[cell] & BLOCKED:
+                break
+            if cell not in seen and self.open_floor(cell):
+                seen.add(cell)
+                count += 1
+        return count
+
+
+@declare(
+    "cover",
+    kind="action",
+    params=(
+        Param("speed", SPEED, default="300 mm/s", minimum=50, maximum=WHEEL.maximum,
+              doc="driving speed on lanes and edges"),
+        Param("turn_speed", SPEED, default="300 mm/s", minimum=20, maximum=WHEEL.maximum,
+              doc="wheel speed when turning in place"),
+        Param("shift_left", DISTANCE, default="15 cm", minimum=50, maximum=500,
+              doc="lane spacing when the next lane is to the robot's left (the strip "
+                  "reaches 9 cm to the left of the centre)"),
+        Param("shift_right", DISTANCE, default="32 cm", minimum=50, maximum=500,
+              doc="lane spacing when the next lane is to the robot's right (the side "
+                  "brush's side: 18.5 cm)"),
+        Param("edge_distance", DISTANCE, default="18 cm", minimum=150, maximum=400,
+              doc="the centre's distance from a wall followed on the right (the side brush "
+                  "reaches 18.5 cm)"),
+        Param("edge_time", DURATION, default="3min", minimum=5,
+              doc="an edge ends after this long even if it still finds new floor"),
+    ),
+    reads=(*BUMPS_PACKETS, *CLIFF_PACKETS, *VIRTUAL_WALL_PACKETS, *ENCODER_PACKETS,
+           *LIGHT_BUMP_SIGNAL_PACKETS),
+    sends=opcodes("drive_direct"),
+)  # fmt: skip
+class Cover(Action):
+    """Cover the floor with a map of its own (odometry and bumps, 10 cm cells): an edge,
+    lanes where the floor is open, the nearest unswept floor next (a breadth-first search
+    on its map), edges where the frontier is a wall. SUCCESS when nothing reachable is left
+    unswept; FAILURE on a wheel drop or when the robot leaves Safe/Full. Drive Direct (145)."""
+
+    moves = True
+    #: re-anchorings of the heading on a wall (for tests and the curious)
+    anchored = 0
+
+    def start(self) -> None:
+        self._map = FloorMap()
+        odo = self.snapshot.odometry
+        #: its own pose: the odometry's increments, the heading re-anchored on walls
+        self._pose = odo
+        self._last = (odo.distance_mm, odo.angle_rad)
+        self._axis: float | None = None  # the lanes' axis (rad, mod 90 deg), from the walls
+        self._plan: list[Callable[[], None]] = []
+        self._edge_found = 0  # new cells the last edge found
+        self._idle_edges = 0  # edges in a row that followed no frontier
+        self._line = (odo.x_mm, odo.y_mm, odo.theta_rad)
+        self._phase = ""
+        self._seek(then_edge=True)
+
+    # ------------------------------------------------------------------ the tick
+
+    def update(self) -> Status:
+        held = _held(self)
+        if held is not None:
+            return held
+        snap = self.snapshot
+        frame = snap.frame
+        odo = self._integrate(snap.odometry)
+        self._observe(frame, odo.x_mm, odo.y_mm, odo.theta_rad)
+        for _ in range(6):
+            if self._phase == "done":
+                self.send(oi.halt())
+                self._started_motion = False
+                return _OK
+            wheels = self._step(frame)
+            if wheels is not None:
+                self.send(_wheels(*wheels))
+                self._started_motion = True
+                return _RUN
+        self.send(_wheels(0.0, 0.0))
+        return _RUN
+
+    def _integrate(self, odo: Odometry) -> Odometry:
+        """Its pose after this tick: the odometry's travel and turn since the last, from
+        its own (re-anchored) pose."""
+        pose = self._pose
+        distance, angle = odo.distance_mm - self._last[0], odo.angle_rad - self._last[1]
+        self._last = (odo.distance_mm, odo.angle_rad)
+        mid = pose.theta_rad + angle / 2.0
+        self._pose = pose = odo._replace(
+            x_mm=pose.x_mm + distance * math.cos(mid),
+            y_mm=pose.y_mm + distance * math.sin(mid),
+            theta_rad=pose.theta_rad + angle,
+        )
+        return pose
+
+    def _observe(self, frame: SensorFrame, x: float, y: float, theta: float) -> None:
+        """Mark what this tick shows: the strip swept (while the wheels turn), surfaces."""
+        fmap = self._map
+        fmap.sweep(x, y, theta)
+        signals = frame.light_bump_signals
+        for angle, signal in zip(_RAY_ANGLES, signals, strict=True):
+            if signal >= _RAY_MARK:
+                reach = _RADIUS_MM + _distance_of(signal) + 20.0
+                a = theta + angle
+                fmap.block(x + reach * math.cos(a), y + reach * math.sin(a))
+        bumps = frame[7] & 3
+        if bumps:
+            spread = 0.0 if bumps == 3 else (-0.6 if bumps == 1 else 0.6)
+            fmap.block_ahead(x, y, theta + spread, _RADIUS_MM + 30.0, 0.35)
+        if frame.any_cliff:
+            fmap.block_ahead(x, y, theta, _RADIUS_MM + 60.0, 0.5)
+        if frame.virtual_wall:
+            fmap.block_ahead(x, y, theta, _RADIUS_MM + 80.0, 0.5)
+
+    def _step(self, frame: SensorFrame) -> tuple[float, float] | None:
+        """This tick's wheel speeds in the current phase; None: the phase ended (the next
+        one is set up), look again."""
+        phase = self._phase
+        if phase == "turn":
+            return self._turning()
+        if phase == "edge":
+            return self._edging(frame)
+        if phase == "back":
+            return self._backing()
+        if phase == "uturn":
+            return self._uturning(frame)
+        return self._driving(frame)
+
+    def _next(self) -> None:
+        """The phase ended: the plan's next step, or a new decision."""
+        if self._plan:
+            self._plan.pop(0)()
+        else:
+            self._decide()
+
+    # ------------------------------------------------------------------ phases
+
+    def _turn_to(self, heading: float) -> None:
+        self._phase, self._heading = "turn", heading
+        self._since = self.snapshot.time
+
+    def _turning(self) -> tuple[float, float] | None:
+        error = _wrap(self._heading - self._pose.theta_rad)
+        if abs(error) <= _TURN_TOLERANCE or self.snapshot.time - self._since > 6.0:
+            self._next()
+            return None
+        w = min(self.number("turn_speed"), max(60.0, 500.0 * abs(error)))
+        return (-w, w) if error > 0 else (w, -w)
+
+    def _back(self, distance: float) -> None:
+        odo = self._pose
+        self._phase, self._back_to = "back", odo.distance_mm - distance
+        self._since = self.snapshot.time
+
+    def _backing(self) -> tuple[float, float] | None:
+        if self._pose.distance_mm > self._back_to and (self.snapshot.time - self._since < 1.5):
+            return (-250.0, -250.0)
+        self._next()
+        return None
+
+    def _drive(
+        self, kind: str, heading: float, limit: float, through: tuple[float, float] | None = None
+    ) -> None:
+        """Drive a straight line along ``heading`` (through a point, or from here): a lane,
+        a shift, a leg of a path (``goto``), or ``seek`` (ahead to the first obstacle)."""
+        odo = self._pose
+        self._phase, self._kind, self._limit = "drive", kind, limit
+        x, y = through if through is not None else (odo.x_mm, odo.y_mm)
+        self._line = (x, y, heading)
+        self._progress = (0.0, self.snapshot.time)
+        self._yield = (self._map.swept, 0.0)  # swept counter, distance when it last grew
+        self._achieved = 0.0
+
+    def _along(self) -> tuple[float, float]:
+        odo = self._pose
+        x0, y0, heading = self._line
+        dx, dy = odo.x_mm - x0, odo.y_mm - y0
+        c, s = math.cos(heading), math.sin(heading)
+        return dx * c + dy * s, -dx * s + dy * c
+
+    def _steer(self, speed: float) -> tuple[float, float]:
+        _, offset = self._along()
+        heading = self._line[2] - math.atan(max(-1.0, min(1.0, offset / 300.0)))
+        error = _wrap(heading - self._pose.theta_rad)
+        turn = max(-0.5 * speed, min(0.5 * speed, 600.0 * error))
+        return speed - turn, speed + turn
+
+    def _driving(self, frame: SensorFrame) -> tuple[float, float] | None:
+        snap = self.snapshot
+        along, _ = self._along()
+        if along > self._progress[0] + 10.0:
+            self._progress = (along, snap.time)
+        if self._map.swept != self._yield[0]:
+            self._yield = (self._map.swept, along)
+        why = _blocked(frame)
+        kind = self._kind
+        if why is None:
+            if snap.time - self._progress[1] >= _STALL_S:
+                why = "stalled"
+            elif along >= self._limit:
+                why = "limit"
+            elif kind == "lane" and along - self._yield[1] > _NO_YIELD_MM:
+                why = "swept"
+            elif kind in ("lane", "shift") and self._blocked_ahead():
+                why = "map"
+        if why is None:
+            signals = frame.light_bump_signals
+            near = max(signals[1], signals[2], signals[3], signals[4]) >= _NEAR_SIGNAL
+            speed = self.number("speed")
+            if kind == "shift" or kind == "goto":
+                speed = min(speed, 250.0)
+            return self._steer(min(speed, 150.0) if near else speed)
+        self._achieved = along
+        self._why = why
+        if why in _BACK_MM:
+            self._plan.insert(0, self._ended)
+            self._back(_BACK_MM[why])
+        else:
+            self._ended()
+        return None
+
+    def _blocked_ahead(self) -> bool:
+        odo = self._pose
+        heading = self._line[2]
+        reach = _RADIUS_MM + 40.0
+        x, y = odo.x_mm + reach * math.cos(heading), odo.y_mm + reach * math.sin(heading)
+        cell = self._map.cell(x, y)
+        return cell is not None and bool(self._map.cells[cell] & BLOCKED)
+
+    def _ended(self) -> None:
+        """A straight line ended (``self._why``, after ``self._achieved`` mm)."""
+        kind = self._kind
+        if kind == "lane":
+            self._lane_ended()
+        elif kind == "shift":
+            if self._achieved < 0.5 * self._limit:
+                self._plan.clear()
+                self._decide()
+            else:
+                self._lane(_wrap(self._lane_heading + math.pi))
+        elif kind == "goto":
+            if self._why != "limit":  # blocked on the way: decide again from here
+                self._plan.clear()
+                self._decide()
+            else:
+                self._next()
+        else:  # seek
+            self._next()
+
+    # ------------------------------------------------------------------ edges
+
+    def _edge(self) -> None:
+        """Follow the wall on the right until it gives no new floor for a while."""
+        snap = self.snapshot
+        self._phase = "edge"
+        self._edge_start = (snap.time, self._map.swept)
+        self._edge_yield = (self._map.swept, self._pose.path_mm)
+        self._edge_recovery: tuple[str, float, float, str] | None = None
+        self._edge_previous: float | None = None
+        self._straight: list[tuple[float, float]] = []  # (path mm, heading) on a straight wall
+
+    def _edging(self, frame: SensorFrame) -> tuple[float, float] | None:
+        snap = self.snapshot
+        odo = self._pose
+        if self._map.swept != self._edge_yield[0]:
+            self._edge_yield = (self._map.swept, odo.path_mm)
+        if odo.path_mm - self._edge_yield[1] > _EDGE_NO_YIELD_MM or snap.time - self._edge_start[
+            0
+        ] > float(self.value("edge_time")):
+            self._edge_done()
+            self._next()
+            return None
+        speed = self.number("speed")
+        recovery = self._edge_recovery
+        why = _blocked(frame)
+        if why is not None and (recovery is None or recovery[0] == "turn"):
+            # a bump, a drop or a beam: back off, turn left, go on along it
+            recovery = self._edge_recovery = ("back", odo.distance_mm, snap.time, why)
+            self._straight.clear()
+        if recovery is not None:
+            phase, mark, since, cause = recovery
+            if phase == "back":
+                if mark - odo.distance_mm < _BACK_MM[cause] and snap.time - since < 1.5:
+                    return (-150.0, -150.0)
+                recovery = self._edge_recovery = ("turn", odo.angle_rad, snap.time, cause)
+                phase, mark, since, cause = recovery
+            turn = math.radians(35.0 if cause == "bump" else 60.0)
+            if odo.angle_rad - mark < turn and snap.time - since < 3.0:
+                return (-150.0, 150.0)
+            self._edge_recovery = None
+            self._edge_previous = None
+        signals = frame.light_bump_signals
+        front = max(signals[2], signals[3])
+        if front >= 900:  # a wall ahead: turn left in place
+            self._edge_previous = None
+            self._straight.clear()
+            return (-150.0, 150.0)
+        right = signals[5]
+        if right == 0 and signals[4] == 0:
+            # no wall on the right: curve right (around an outside corner, or to find it)
+            self._straight.clear()
+            self._edge_previous = None
+            return (speed, speed * 0.35)
+        distance = 0.906 * (_RADIUS_MM + _distance_of(max(right, 1)))
+        error = distance - self.number("edge_distance")  # > 0: too far, turn right
+        derivative = 0.0
+        if self._edge_previous is not None:
+            derivative = (error - self._edge_previous) / 0.015
+        self._edge_previous = error
+        turn = max(-0.6 * speed, min(0.6 * speed, 4.0 * error + 0.15 * derivative))
+        self._anchor(odo.path_mm, odo.theta_rad, abs(error) < 15.0)
+        slow = speed if front < 200 else min(speed, 150.0)
+        return slow + turn, slow - turn
+
+    def _anchor(self, path: float, heading: float, steady: bool) -> None:
+        """Along a straight stretch of wall, its heading re-anchors the lanes' axis."""
+        straight = self._straight
+        if not steady:
+            straight.clear()
+            return
+        straight.append((path, heading))
+        while straight and path - straight[0][0] > _ANCHOR_MM:
+            headings = [h for _, h in straight]
+            mean = math.atan2(
+                sum(math.sin(h) for h in headings), sum(math.cos(h) for h in headings)
+            )
+            if max(abs(_wrap(h - mean)) for h in headings) <= _ANCHOR_SPREAD:
+                self._reanchor(mean)
+                straight.clear()
+                return
+            straight.pop(0)
+
+    def _reanchor(self, wall: float) -> None:
+        """A straight wall runs along ``wall`` (rad) by its pose. The first one sets the
+        lanes' axis; walls meet at right angles, so a later one off the axis by less than
+        :data:`_SNAP` says how far its heading has drifted: taken off the pose."""
+        axis = self._axis
+        if axis is None:
+            self._axis = wall
+            return
+        quarter = math.pi / 2
+        error = _wrap(wall - axis - quarter * round(_wrap(wall - axis) / quarter))
+        if abs(error) < _SNAP:
+            self._pose = self._pose._replace(theta_rad=self._pose.theta_rad - error)
+            self.anchored += 1
+
+    def _edge_done(self) -> None:
+        """An edge ends: how much new floor it found decides whether another is worth it."""
+        self._edge_found = self._map.swept - self._edge_start[1]
+
+    # ------------------------------------------------------------------ lanes
+
+    def _lanes(self) -> None:
+        """Start sweeping lanes from here: along the axis, the way with most open floor."""
+        odo = self._pose
+        axis = self._axis if self._axis is not None else odo.theta_rad
+        x, y = odo.x_mm, odo.y_mm
+        options = [_wrap(axis + k * math.pi / 2) for k in range(4)]
+        score = {h: self._map.open_along(x, y, h, 1500.0) for h in options}
+        heading = max(options, key=lambda h: (score[h], -abs(_wrap(h - odo.theta_rad))))
+        left = _wrap(heading + math.pi / 2)
+        right = _wrap(heading - math.pi / 2)
+        # advance to the side with more open floor (looked at beside the first lane)
+        self._advance = left if self._side_open(left) >= self._side_open(right) else right
+        self._lane(heading)
+
+    def _side_open(self, direction: float) -> int:
+        odo = self._pose
+        total = 0
+        for k in (1, 2, 3):
+            d = k * 250.0
+            x = odo.x_mm + d * math.cos(direction)
+            y = odo.y_mm + d * math.sin(direction)
+            for h in (direction + math.pi / 2, direction - math.pi / 2):
+                total += self._map.open_along(x, y, h, 1000.0)
+        return total
+
+    def _uturn(
+        self, heading: float, shift: float, side: float, through: tuple[float, float]
+    ) -> None:
+        """Half a turn on an arc of ``shift`` wide toward ``side`` (+1 left, -1 right) onto
+        the next lane, along ``heading`` through ``through``: a turn in place, a move over and
+        another turn took three times as long. An arc needs its radius clear ahead."""
+        radius = shift / 2.0
+        room = radius + 20.0 - (_BACK_MM.get(self._why, 0.0) if self._why in _BACK_MM else 0.0)
+        if self._why in ("swept", "limit", "stalled"):
+            room = 0.0
+        self._lane_heading = heading
+
+        def arc() -> None:
+            self._phase, self._arc = "uturn", (radius, side, self._pose.angle_rad)
+            self._since = self.snapshot.time
+
+        self._plan.insert(0, lambda: self._drive("lane", heading, 12_000.0, through))
+        if room > 0.0:
+            self._plan.insert(0, arc)
+            self._back(room)
+        else:
+            arc()
+
+    def _uturning(self, frame: SensorFrame) -> tuple[float, float] | None:
+        radius, side, start = self._arc
+        turned = side * (self._pose.angle_rad - start)
+        why = _blocked(frame)
+        if why is not None or self.snapshot.time - self._since > 6.0:
+            self._plan.clear()  # something beside the lane: decide again from here
+            self._why = why or "stalled"
+            if why in _BACK_MM:
+                self._plan.append(self._decide)
+                self._back(_BACK_MM[why])
+            else:
+                self._decide()
+            return None
+        if turned >= math.pi - _TURN_TOLERANCE:
+            self._next()
+            return None
+        half = _HALF_BASE_MM
+        outer = radius + half
+        speed = min(self.number("speed"), WHEEL.maximum * radius / outer, 250.0)
+        inner_wheel = speed * (radius - half) / radius
+        outer_wheel = speed * outer / radius
+        return (inner_wheel, outer_wheel) if side > 0 else (outer_wheel, inner_wheel)
+
+    def _lane(self, heading: float) -> None:
+        self._lane_heading = heading
+        self._plan.insert(0, lambda: self._drive("lane", heading, 12_000.0))
+        self._turn_to(heading)
+
+    def _lane_ended(self) -> None:
+        heading = self._lane_heading
+        advance = self._advance
+        to_left = _wrap(advance - heading) > 0
+        shift = self.number("shift_left" if to_left else "shift_right")
+        odo = self._pose
+        x = odo.x_mm + shift * math.cos(advance)
+        y = odo.y_mm + shift * math.sin(advance)
+        back = _wrap(heading + math.pi)
+        if self._map.open_along(x, y, back, 1500.0) < 2:
+            self._plan.clear()
+            self._decide()  # nothing beside this lane: the region is done
+            return
+        self._uturn(back, shift, 1.0 if to_left else -1.0, (x, y))
+
+    # ------------------------------------------------------------------ decisions
+
+    def _seek(self, then_edge: bool) -> None:
+        """Straight ahead to the first obstacle; then turn it onto the right and edge."""
+        heading = self._pose.theta_rad
+        if then_edge:
+            self._plan.extend((self._onto_right, self._edge))
+        self._drive("seek", heading, 8_000.0)
+
+    def _onto_right(self) -> None:
+        self._turn_to(_wrap(self._pose.theta_rad + math.radians(75.0)))
+
+    def _decide(self) -> None:
+        """Where next: the nearest frontier, or an edge, or done."""
+        odo = self._pose
+        here = self._map.cell(odo.x_mm, odo.y_mm)
+        path = self._map.frontier(here) if here is not None else None
+        if path is None:
+            if self._edge_found > _EDGE_NEW_CELLS:
+                self._idle_edges = 0
+            self._edge_found = 0
+            if self._idle_edges >= 2:
+                self._phase = "done"
+                return
+            self._idle_edges += 1
+            self._seek(then_edge=True)
+            return
+        target = path[-1]
+        waypoints = self._waypoints(path)
+        self._map.cells[target] |= TRIED  # once reached, its lanes decide; never again
+        for cell in waypoints:
+            self._plan.append(partial(self._go, cell))
+        self._plan.append(self._lanes)
+        self._next()
+
+    def _waypoints(self, path: list[Cell]) -> list[Cell]:
+        """The path's corners: the farthest cell reachable in a straight line, and on."""
+        points: list[Cell] = []
+        i = 0
+        while i < len(path) - 1:
+            j = len(path) - 1
+            while j > i + 1 and not self._map.line_free(path[i], path[j]):
+                j -= 1
+            points.append(path[j])
+            i = j
+        return points
+
+    def _go(self, cell: Cell) -> None:
+        odo = self._pose
+        x, y = self._map.centre(cell)
+        dx, dy = x - odo.x_mm, y - odo.y_mm
+        distance = math.hypot(dx, dy)
+        if distance < 40.0:
+            self._next()
+            return
+        heading = math.atan2(dy, dx)
+        self._plan.insert(0, lambda: self._drive("goto", heading, distance))
+        self._turn_to(heading)
+
+
+COVERAGE: tuple[type[Action], ...] = (Cover,)

@@ -1,0 +1,128 @@
+"""``cover``: its own map (swept strip, blocked cells, the frontier search) and the whole
+behaviour on the simulator: a room swept to its edges, drops and virtual walls respected,
+the same with the encoders' error on."""
+
+from __future__ import annotations
+
+import itertools
+import math
+from pathlib import Path
+
+from roomba_bt.behaviours.coverage_map import BLOCKED, CELL_MM, SWEPT, VISITED, FloorMap
+from roomba_bt.evaluate import EpisodeSpec, run_episode
+from roomba_bt.evaluate.episode import EpisodeResult
+
+ROOM = """
+name: box
+rooms: [[[0, 0], [3, 0], [3, 2.5], [0, 2.5]]]
+robot: {{start: {{at: [1.2, 1.0], heading: 20}}}}
+{extra}
+"""
+
+MISSION = """
+mission: sweep
+tree:
+  sequence:
+    - mode: full
+    - motors: {main_brush: true, side_brush: true, vacuum: true}
+    - cover: {}
+    - mode: passive
+"""
+
+
+def run(tmp_path: Path, extra: str = "", odometry_error: float = 0.0) -> EpisodeResult:
+    world = tmp_path / "box.yaml"
+    world.write_text(ROOM.format(extra=extra))
+    mission = tmp_path / "sweep.yaml"
+    mission.write_text(MISSION)
+    spec = EpisodeSpec(
+        str(mission), str(world), seed=3, random_start=False, timeout_s=600.0,
+        odometry_error=odometry_error,
+    )  # fmt: skip
+    return run_episode(spec)
+
+
+def test_the_strip_is_swept_and_the_centre_visited() -> None:
+    fmap = FloorMap()
+    for k in range(11):  # 1 m along x, facing +x
+        fmap.sweep(k * 100.0, 0.0, 0.0)
+    here = fmap.cell(500.0, 0.0)
+    assert here is not None
+    assert fmap.cells[here] & (SWEPT | VISITED) == SWEPT | VISITED
+    left, right = fmap.cell(500.0, 70.0), fmap.cell(500.0, -150.0)
+    assert left is not None and right is not None
+    assert fmap.cells[left] & SWEPT and fmap.cells[right] & SWEPT  # the side brush's side
+    beyond = fmap.cell(500.0, 260.0)
+    assert beyond is not None and not fmap.cells[beyond]
+    assert fmap.swept == len([c for c in fmap.cells if c & SWEPT])
+
+
+def test_a_blocked_cell_keeps_the_centre_out_of_its_neighbours() -> None:
+    fmap = FloorMap()
+    fmap.block(1000.0, 0.0)
+    blocked = fmap.cell(1000.0, 0.0)
+    assert blocked is not None and fmap.cells[blocked] & BLOCKED
+    for dx, dy in ((CELL_MM, 0.0), (0.0, CELL_MM), (-CELL_MM, -CELL_MM)):
+        cell = fmap.cell(1000.0 + dx, dy)
+        assert cell is not None and not fmap.free(cell)
+    far = fmap.cell(1000.0 + 2 * CELL_MM, 0.0)
+    assert far is not None and fmap.free(far)
+    start, end = fmap.cell(500.0, 0.0), fmap.cell(1500.0, 0.0)
+    assert start is not None and end is not None
+    assert not fmap.line_free(start, end)
+    above = fmap.cell(1500.0, 400.0)
+    assert above is not None and fmap.line_free(start, above)
+
+
+def test_the_frontier_is_the_nearest_known_cell_beside_open_floor() -> None:
+    fmap = FloorMap()
+    for y in range(-10, 11):  # a swept square, 2 m a side, around the origin
+        for x in range(-10, 11):
+            cell = fmap.cell(x * CELL_MM, y * CELL_MM)
+            assert cell is not None
+            fmap.cells[cell] |= SWEPT
+    for y in range(-12, 13):  # walls on three sides: open floor only past x = +1 m
+        fmap.block(-11 * CELL_MM, y * CELL_MM)
+        fmap.block(y * CELL_MM, 11 * CELL_MM + 50)
+        fmap.block(y * CELL_MM, -11 * CELL_MM - 50)
+    start = fmap.cell(0.0, 0.0)
+    assert start is not None
+    path = fmap.frontier(start)
+    assert path is not None and path[0] == start
+    target_x, _ = fmap.centre(path[-1])
+    assert target_x > 900.0  # toward the only open side
+    assert len(path) <= 12  # about 1 m: breadth-first, the nearest
+    assert abs(path[1] - path[0]) in (1, 599, 600, 601)  # from the robot's own 3 x 3
+    for a, b in itertools.pairwise(path[1:]):
+        assert abs(a - b) in (1, 600)  # then 4-neighbours
+    # swept everywhere it can reach: no frontier
+    for y in range(-10, 11):
+        fmap.block(11 * CELL_MM + 50, y * CELL_MM)
+    assert fmap.frontier(start) is None
+
+
+def test_cover_sweeps_a_room_to_its_edges_and_ends(tmp_path: Path) -> None:
+    result = run(tmp_path)
+    assert result.outcome == "success", result.reason
+    assert result.coverage is not None and result.coverage.overall >= 0.9
+    assert result.coverage.longest_idle_s < 60.0
+    assert result.violations == 0 and not result.fell
+
+
+def test_cover_respects_a_drop_and_a_virtual_wall(tmp_path: Path) -> None:
+    extra = (
+        "drops: [{name: stairs, rect: [2.3, 0, 3, 1.2]}]\n"
+        "virtual_walls: [{from: [0.8, 0], to: [0.8, 2.5]}]"
+    )
+    result = run(tmp_path, extra)
+    assert result.outcome == "success", result.reason
+    assert not result.fell
+    assert result.coverage is not None and result.coverage.overall >= 0.85
+    assert min(x for x, _ in result.trajectory) > 0.8  # never past the beam
+
+
+def test_cover_holds_up_with_the_encoders_error(tmp_path: Path) -> None:
+    result = run(tmp_path, odometry_error=0.02)
+    assert result.coverage is not None and result.coverage.overall >= 0.85
+    assert result.outcome in ("success", "timeout"), result.reason
+    assert not math.isnan(result.coverage.overall)
