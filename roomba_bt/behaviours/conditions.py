@@ -366,9 +366,18 @@ def _sensor_reads(params: Mapping[str, Any]) -> tuple[int, ...]:
 class Sensor(Condition):
     """Compare any sensor packet's raw value, by name: ``sensor: wall_signal > 100``."""
 
+    def __init__(self, name: str, params: Mapping[str, Any] | None = None) -> None:
+        super().__init__(name, params)
+        test = self.params.get("test")
+        #: (packet id, comparison, number), looked up once: the test is never an @key value
+        self._compare = (test[0], OPERATORS[test[1]], test[2]) if isinstance(test, tuple) else None
+
     def check(self, snapshot: Snapshot) -> bool:
-        pid, op, number = self.value("test")
-        return OPERATORS[op](snapshot.frame[pid], number)
+        if self._compare is None:
+            pid, op, number = self.value("test")
+            return OPERATORS[op](snapshot.frame[pid], number)
+        pid, compare, number = self._compare
+        return compare(snapshot.frame[pid], number)
 
 
 @declare(

@@ -27,7 +27,7 @@ from typing import Any, Literal, TypeVar
 
 import py_trees
 
-from roomba_bt.behaviours.lean import DirectLeaf
+from roomba_bt.behaviours.lean import DirectLeaf, behaviour_tick
 from roomba_bt.behaviours.units import UnitError, ValueType
 from roomba_bt.oi.encode import Command, halt
 from roomba_bt.oi.modes import ALL_MODES, DRIVING_MODES, OIMode
@@ -368,6 +368,12 @@ class Action(RobotBehaviour):
         self._out_of_driving_since = None
 
 
+_RUNNING, _SUCCESS, _FAILURE = (
+    py_trees.common.Status.RUNNING, py_trees.common.Status.SUCCESS, py_trees.common.Status.FAILURE
+)  # fmt: skip
+_DEBUG = py_trees.logging.Level.DEBUG
+
+
 class Condition(RobotBehaviour):
     """A condition: SUCCESS or FAILURE from this tick's frame, never RUNNING."""
 
@@ -377,3 +383,37 @@ class Condition(RobotBehaviour):
     def update(self) -> py_trees.common.Status:
         ok = self.check(self.snapshot)
         return py_trees.common.Status.SUCCESS if ok else py_trees.common.Status.FAILURE
+
+    def tick_direct(self, started: bool = False) -> None:
+        """The leaf tick (:func:`~roomba_bt.behaviours.lean.behaviour_tick`) of a condition
+        that keeps this lifecycle, with the calls that do nothing left out: ``initialise``
+        only reads ``@key`` parameters (``start`` does nothing), ``update`` is ``check``,
+        and ``stop`` is the status (``terminate`` does nothing). The reactive guards restart
+        every condition on every tick, so this is most of what a tree's tick calls. A class
+        with a lifecycle step of its own (looked up each tick: a test may patch one in) gets
+        the whole leaf tick."""
+        cls = type(self)
+        if (
+            started
+            or self.status is _RUNNING
+            or py_trees.logging.level is _DEBUG
+            or cls.update is not _CONDITION_UPDATE
+            or cls.initialise is not _CONDITION_INITIALISE
+            or cls.start is not _CONDITION_START
+            or cls.terminate is not _CONDITION_TERMINATE
+            or cls.stop is not _CONDITION_STOP
+        ):
+            behaviour_tick(self, started)
+            return
+        if self._refs != {}:  # not looked for yet, or @key parameters to read at each start
+            self.initialise()
+        robot = self.robot
+        ok = self.check(robot.snapshot if robot is not None else self.snapshot)
+        self.status = _SUCCESS if ok else _FAILURE
+
+
+#: the lifecycle steps a condition's short tick stands for (:meth:`Condition.tick_direct`)
+_CONDITION_UPDATE, _CONDITION_INITIALISE, _CONDITION_START = (
+    Condition.update, Condition.initialise, Condition.start
+)  # fmt: skip
+_CONDITION_TERMINATE, _CONDITION_STOP = Condition.terminate, Condition.stop

@@ -15,7 +15,7 @@ from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
 from roomba_bt.behaviours.declare import write_key
-from roomba_bt.behaviours.lean import DONE, DecoratorTick, Stepped
+from roomba_bt.behaviours.lean import DONE, DecoratorTick, Stepped, composite_stop
 from roomba_bt.behaviours.reasons import failure_reason
 from roomba_bt.robot.interface import RobotHandle
 
@@ -206,4 +206,4 @@ class Guard(Stepped, py_trees.composites.Composite):
     def stop(self, new_status: Status = Status.INVALID) -> None:
         if self.child.status is Status.RUNNING:
             self.child.stop(Status.INVALID)
-        super().stop(new_status)
+        composite_stop(self, new_status)

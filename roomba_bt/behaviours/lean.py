@@ -119,6 +119,17 @@ class Direct:
     def tick_once(self) -> None:
         self.tick_direct()
 
+    @property
+    def iterator(self) -> typing.Iterator[Behaviour]:
+        """py_trees' ``iterator`` (a fresh ``tick()`` generator, which py_trees' ``stop`` builds
+        on every stop and nothing reads), built only when asked for: every condition stops on
+        every tick, and the generator was an allocation each time."""
+        return typing.cast(Behaviour, self).tick()
+
+    @iterator.setter
+    def iterator(self, value: typing.Iterator[Behaviour]) -> None:
+        """py_trees' ``__init__`` assigns one; the property builds its own."""
+
 
 def behaviour_tick(node: Behaviour, started: bool = False) -> None:
     """py_trees' ``Behaviour.tick`` as calls: a leaf's tick (and a completed OneShot's).
@@ -159,7 +170,6 @@ class DirectLeaf(Direct):
             node.logger.debug(f"{type(self).__name__}.stop({change})")
         node.terminate(new_status)
         node.status = new_status
-        node.iterator = node.tick()
 
 
 #: what a step returns when the node's tick is over (no further child to tick)
@@ -205,6 +215,19 @@ class Stepped(Direct):
             index = self.tick_next(index)
 
 
+def composite_stop(node: py_trees.composites.Composite, new_status: Status) -> None:
+    """py_trees 2.6's ``Composite.stop`` (without building the ``iterator`` nothing reads):
+    on INVALID the current child is lost and every child not INVALID stopped; then
+    ``terminate`` and the status."""
+    if new_status is _INVALID:
+        node.current_child = None
+        for child in node.children:
+            if child.status is not _INVALID:
+                child.stop(new_status)
+    node.terminate(new_status)
+    node.status = new_status
+
+
 class _CompositeStop:
     """``Sequence.stop`` / ``Selector.stop``: the debug line, then ``Composite.stop``."""
 
@@ -212,7 +235,7 @@ class _CompositeStop:
         node = typing.cast(py_trees.composites.Composite, self)
         if py_trees.logging.level is _DEBUG:
             node.logger.debug(f"{type(self).__name__}.stop()[{node.status}->{new_status}]")
-        py_trees.composites.Composite.stop(node, new_status)
+        composite_stop(node, new_status)
 
 
 class Sequence(Stepped, _CompositeStop, py_trees.composites.Sequence):
@@ -319,7 +342,7 @@ class Parallel(Stepped, py_trees.composites.Parallel):
         for child in self.children:
             if child.status == Status.RUNNING:
                 child.stop(Status.INVALID)
-        py_trees.composites.Composite.stop(self, new_status)
+        composite_stop(self, new_status)
 
     def tick_start(self) -> int:
         if py_trees.logging.level is _DEBUG:

@@ -213,3 +213,38 @@ def test_check_blackboard_key(robot: StubRobot, make: Make) -> None:
     assert not holds(make(c.CheckKey, key="count", op=">=", value=3))
     write_key("count", "text")
     assert not holds(make(c.CheckKey, key="count", op="<", value=3))  # incomparable: false
+
+
+def test_a_condition_with_a_lifecycle_of_its_own_gets_every_call_of_the_leaf_tick(
+    robot: StubRobot, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Plain conditions take a short tick (no ``start``, ``terminate`` or ``stop`` calls,
+    which do nothing for them); one that overrides any of these, or has one patched in, is
+    ticked by the whole leaf tick, in py_trees' order."""
+    calls: list[str] = []
+
+    class Logged(c.Bump):
+        def start(self) -> None:
+            calls.append("start")
+
+        def terminate(self, new_status: Status) -> None:
+            calls.append(f"terminate={new_status.name}")
+
+    plain, logged = c.Bump("plain", {"side": "any"}), Logged("logged", {"side": "any"})
+    for node in (plain, logged):
+        node.setup(robot=robot)
+    robot.set_frame({7: 0b01})
+    assert holds(plain) and holds(logged)
+    robot.set_frame({7: 0})
+    assert not holds(plain) and not holds(logged)
+    assert calls == ["start", "terminate=SUCCESS", "start", "terminate=FAILURE"]
+    monkeypatch.setattr(c.Bump, "update", lambda self: Status.FAILURE)
+    robot.set_frame({7: 0b01})
+    assert not holds(plain)
+
+
+def test_one_sensor_node_compares_each_tick_s_frame(robot: StubRobot, make: Make) -> None:
+    sensor = make(c.Sensor, test=c.COMPARISON.parse("wall_signal > 100"))
+    for raw, expected in ((100, False), (101, True), (7, False)):
+        robot.set_frame({27: raw})
+        assert holds(sensor) is expected
