@@ -27,6 +27,8 @@ from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.odometry import arc_from_wheels, counts_to_mm, encoder_delta
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
 
+_new_tuple = tuple.__new__
+
 #: One stream slot: the robot updates its sensors and sends a frame every 15 ms.
 SLOT_SECONDS = 0.015
 
@@ -49,24 +51,26 @@ class Odometry(NamedTuple):
     path_mm: float = 0.0  # unsigned path length: "distance driven"
 
     def advance(self, left_counts: int, right_counts: int, wheel_base_mm: float) -> Odometry:
-        """The odometry after a frame carrying these raw encoder counts."""
+        """The odometry after a frame carrying these raw encoder counts (built by
+        ``tuple.__new__``: once a tick, and the named tuple's own ``__new__`` is a Python
+        call)."""
         if left_counts == self.left_counts and right_counts == self.right_counts:
             return self  # standing still (most frames of a docked or waiting robot)
         if self.left_counts is None or self.right_counts is None:
-            return Odometry(
+            return _new_tuple(Odometry, (
                 self.x_mm, self.y_mm, self.theta_rad, self.distance_mm, self.angle_rad,
                 left_counts, right_counts, self.path_mm,
-            )  # fmt: skip
+            ))  # fmt: skip
         left = counts_to_mm(encoder_delta(self.left_counts, left_counts))
         right = counts_to_mm(encoder_delta(self.right_counts, right_counts))
         if left == 0.0 and right == 0.0:
-            return Odometry(
+            return _new_tuple(Odometry, (
                 self.x_mm, self.y_mm, self.theta_rad, self.distance_mm, self.angle_rad,
                 left_counts, right_counts, self.path_mm,
-            )  # fmt: skip
+            ))  # fmt: skip
         dist, dtheta = arc_from_wheels(left, right, wheel_base_mm)
         mid = self.theta_rad + dtheta / 2.0
-        return Odometry(
+        return _new_tuple(Odometry, (
             self.x_mm + dist * math.cos(mid),
             self.y_mm + dist * math.sin(mid),
             self.theta_rad + dtheta,
@@ -75,7 +79,7 @@ class Odometry(NamedTuple):
             left_counts,
             right_counts,
             self.path_mm + abs(dist),
-        )
+        ))  # fmt: skip
 
 
 @dataclass(frozen=True, slots=True)

@@ -42,6 +42,7 @@ from roomba_bt.robot.safety import InterruptGuard, Terminated
 from roomba_bt.runtime.summary import DEFAULT_GRACE, Outcome, RunSummary
 
 log = logging.getLogger(__name__)
+_new_tuple = tuple.__new__
 
 #: Battery charge and capacity, for the run summary: streamed when the budget allows.
 SUMMARY_PACKETS: tuple[int, ...] = (25, 26)
@@ -174,7 +175,8 @@ class MissionRunner:
         self._held_slots = 0
         self._blackboard: py_trees.blackboard.Client | None = None
         self._layout: object = None
-        self._has_encoders = False
+        #: where the encoder counts (43, 44) are in the stream's frames, if it carries them
+        self._encoder_slots: tuple[int, int] | None = None
         #: hazards shown to the tree once two frames agree, or the robot's own reaction does
         self._hazards = HazardConfirmation()
         self._fallback_seen: object = None
@@ -376,36 +378,44 @@ class MissionRunner:
         reacted = fallback is not self._fallback_seen
         self._fallback_seen = fallback
         frame: SensorFrame = confirm(newest.frame, reacted)
-        self.summary.stale_frames_dropped += count - 1
+        summary = self.summary
+        if count > 1:
+            summary.stale_frames_dropped += count - 1
         if self._last_arrival is None:
             slots = 1
         else:
             spanned = round((arrival - self._last_arrival) / SLOT_SECONDS)
             slots = max(count, spanned)
-            self.summary.frames_lost += slots - count
+            if slots != count:
+                summary.frames_lost += slots - count
         self._last_arrival = arrival
-        self._tick += slots
+        tick = self._tick = self._tick + slots
         if self.clock_held:
             self._held_slots += slots
         layout = frame.layout
         if layout is not self._layout:  # the same for every frame of a stream
             self._layout = layout
-            self._has_encoders = 43 in frame and 44 in frame
-        if self._has_encoders:
-            self._odometry = self._odometry.advance(
-                frame[43], frame[44], self._profile.wheel_base_mm
+            index = layout.index
+            self._encoder_slots = (index[43], index[44]) if 43 in frame and 44 in frame else None
+        odometry = self._odometry
+        if self._encoder_slots is not None:
+            values = frame.values
+            left, right = self._encoder_slots
+            odometry = self._odometry = odometry.advance(
+                values[left], values[right], self._profile.wheel_base_mm
             )
-        mode = connection.mode
-        snapshot = Snapshot(
-            frame=frame,
-            tick=self._tick,
-            time=(self._tick - self._held_slots) * SLOT_SECONDS,
-            mode=mode,
-            odometry=self._odometry,
-            last_fallback=fallback if isinstance(fallback, ModeChange) else None,
-            profile=self._profile,
-            frames_lost=self.summary.frames_lost,
-        )
+        # tuple.__new__: the named tuple's own __new__ is a Python call that binds each
+        # field (with keywords, several times the cost of the rest of this method)
+        snapshot: Snapshot = _new_tuple(Snapshot, (
+            frame,
+            tick,
+            (tick - self._held_slots) * SLOT_SECONDS,
+            connection.mode,
+            odometry,
+            fallback if isinstance(fallback, ModeChange) else None,
+            self._profile,
+            summary.frames_lost,
+        ))  # fmt: skip
         self._snapshot = snapshot
         if self._blackboard is not None:
             if py_trees.blackboard.Blackboard.activity_stream is None:

@@ -21,6 +21,8 @@ from roomba_bt.oi.ir import IRCharacter
 from roomba_bt.oi.modes import DRIVING_MODES
 from roomba_bt.oi.opcodes import COMMANDS_BY_NAME
 
+_new_tuple = tuple.__new__  # a named tuple without its Python-level __new__ (once a tick)
+
 #: The stages drive with Drive Direct and halt with Drive 0: their ``sends=``.
 DRIVE_SENDS = (COMMANDS_BY_NAME["drive"].opcode, COMMANDS_BY_NAME["drive_direct"].opcode)
 OK, RUNNING, FAILED = Status.SUCCESS, Status.RUNNING, Status.FAILURE
@@ -53,7 +55,7 @@ class DockView(NamedTuple):
 
     @classmethod
     def of(cls, frame: SensorFrame) -> DockView:
-        return cls(frame.ir_omni, frame.ir_left, frame.ir_right)
+        return _new_tuple(cls, (frame.ir_omni, frame.ir_left, frame.ir_right))
 
     @property
     def seen(self) -> bool:
@@ -102,7 +104,7 @@ class DockView(NamedTuple):
     def side(self) -> int:
         """+1 on the dock's left (red only), -1 on its right (green only), 0 on the axis or
         unknown."""
-        red, green = self.red, self.green
+        red, green, _ = self._beams()
         if red and not green:
             return 1
         if green and not red:
@@ -111,7 +113,8 @@ class DockView(NamedTuple):
 
     @property
     def on_axis(self) -> bool:
-        return self.red and self.green
+        red, green, _ = self._beams()
+        return red and green
 
 
 class IdentityEnum(Enum):
