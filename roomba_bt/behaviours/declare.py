@@ -390,9 +390,10 @@ class Condition(RobotBehaviour):
         only reads ``@key`` parameters (``start`` does nothing), ``update`` is ``check``,
         and ``stop`` is the status (``terminate`` does nothing). The reactive guards restart
         every condition on every tick, so this is most of what a tree's tick calls. A class
-        with a lifecycle step of its own (looked up each tick: a test may patch one in) gets
-        the whole leaf tick."""
-        cls = type(self)
+        or a node with a lifecycle step of its own (looked up each tick: a test may patch
+        one into the class, the monitor forces a condition with the node's own ``update``)
+        gets the whole leaf tick."""
+        cls, own = type(self), self.__dict__
         if (
             started
             or self.status is _RUNNING
@@ -402,6 +403,11 @@ class Condition(RobotBehaviour):
             or cls.start is not _CONDITION_START
             or cls.terminate is not _CONDITION_TERMINATE
             or cls.stop is not _CONDITION_STOP
+            or "update" in own
+            or "initialise" in own
+            or "start" in own
+            or "terminate" in own
+            or "stop" in own
         ):
             behaviour_tick(self, started)
             return

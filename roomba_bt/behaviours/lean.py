@@ -163,8 +163,10 @@ class DirectLeaf(Direct):
 
     def stop(self, new_status: Status) -> None:
         """py_trees' stop, without formatting its debug message (two enum ``__format__``
-        calls) when debug logging is off: every condition stops on every tick."""
-        node = typing.cast(Behaviour, self)
+        calls) when debug logging is off: every condition stops on every tick. (``node``
+        is ``self`` typed as the Behaviour it is mixed into: an annotation, since
+        ``typing.cast`` is a function call at run time.)"""
+        node: Behaviour = self  # type: ignore[assignment]
         if py_trees.logging.level is _DEBUG:
             change = f"{node.status}->{new_status}" if node.status != new_status else new_status
             node.logger.debug(f"{type(self).__name__}.stop({change})")
@@ -232,7 +234,7 @@ class _CompositeStop:
     """``Sequence.stop`` / ``Selector.stop``: the debug line, then ``Composite.stop``."""
 
     def stop(self, new_status: Status = Status.INVALID) -> None:
-        node = typing.cast(py_trees.composites.Composite, self)
+        node: py_trees.composites.Composite = self  # type: ignore[assignment]
         if py_trees.logging.level is _DEBUG:
             node.logger.debug(f"{type(self).__name__}.stop()[{node.status}->{new_status}]")
         composite_stop(node, new_status)

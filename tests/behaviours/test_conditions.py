@@ -238,8 +238,12 @@ def test_a_condition_with_a_lifecycle_of_its_own_gets_every_call_of_the_leaf_tic
     robot.set_frame({7: 0})
     assert not holds(plain) and not holds(logged)
     assert calls == ["start", "terminate=SUCCESS", "start", "terminate=FAILURE"]
-    monkeypatch.setattr(c.Bump, "update", lambda self: Status.FAILURE)
     robot.set_frame({7: 0b01})
+    plain.update = lambda: Status.FAILURE  # type: ignore[method-assign]  # the monitor's force
+    assert not holds(plain)
+    del plain.update
+    assert holds(plain)
+    monkeypatch.setattr(c.Bump, "update", lambda self: Status.FAILURE)
     assert not holds(plain)
 
 
