@@ -57,25 +57,44 @@ STATIC_TYPES = {".js": "text/javascript", ".css": "text/css", ".svg": "image/svg
 Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
 
 
-_frozen = threading.Event()
+class _StartupFreeze:
+    """``gc.freeze`` while a monitor serves, undone when the last one closes.
 
-
-def _freeze_startup_objects() -> None:
-    """Once per process, before the run: collect, then move every object alive (modules,
-    aiohttp's, the mission's tree) out of the cyclic collector's sight (``gc.freeze``).
-
-    A run's first full collection walks every object start-up made, in whichever thread
-    allocates at that moment, the tick thread most likely: 70-95 ms measured (60 000 ticks on
-    the virtual clock with the monitor's feed; 69 ms without it), so one tick of the run
-    overran by that much. Frozen, the full collection walks only what the run made since:
-    16 ms. Frozen objects are still freed when their last reference goes; only a reference
-    cycle among them would outlive the run.
+    Before the run: collect, then move every object alive (modules, aiohttp's, the mission's
+    tree) out of the cyclic collector's sight. A run's first full collection walks every
+    object start-up made, in whichever thread allocates at that moment, the tick thread most
+    likely: 70-95 ms measured (60 000 ticks on the virtual clock with the monitor's feed; 69 ms
+    without it), so one tick of the run overran by that much. Frozen, the full collection
+    walks only what the run made since: 16 ms. Frozen objects are still freed when their last
+    reference goes; only a reference cycle among them would outlive the run, so the freeze is
+    the run's, not the process's: the last server to close calls ``gc.unfreeze`` (the objects
+    go back to the oldest generation), and a library user's process is left as it was. If
+    the process had frozen objects of its own before (``gc.get_freeze_count()`` above 0), it
+    manages freezing itself: the monitor neither freezes nor unfreezes.
     """
-    if _frozen.is_set():
-        return
-    _frozen.set()
-    gc.collect()
-    gc.freeze()
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._users = 0
+        self._frozen = False
+
+    def acquire(self) -> None:
+        with self._lock:
+            self._users += 1
+            if self._users == 1 and gc.get_freeze_count() == 0:
+                gc.collect()
+                gc.freeze()
+                self._frozen = True
+
+    def release(self) -> None:
+        with self._lock:
+            self._users -= 1
+            if self._users == 0 and self._frozen:
+                gc.unfreeze()
+                self._frozen = False
+
+
+STARTUP_FREEZE = _StartupFreeze()
 
 
 def _error(status: int, message: str) -> web.Response:
@@ -112,6 +131,7 @@ class MonitorServer:
         self._thread: threading.Thread | None = None
         self._ready = threading.Event()
         self._error: BaseException | None = None
+        self._freezing = False
 
     # ---------------------------------------------------------------- lifecycle
     @property
@@ -128,11 +148,16 @@ class MonitorServer:
         self._ready.wait(10)
         if self._error is not None:
             raise self._error
-        _freeze_startup_objects()
+        if not self._freezing:
+            STARTUP_FREEZE.acquire()
+            self._freezing = True
         return self.url
 
     def close(self, grace_s: float = 0.0) -> None:
         """Stop serving (after ``grace_s``, so pages get the last update)."""
+        if self._freezing:
+            self._freezing = False
+            STARTUP_FREEZE.release()
         loop, stopped = self._loop, self._stopped
         if loop is None or stopped is None or self._thread is None:
             return

@@ -3,6 +3,7 @@ HTTP error and change nothing; a stalled page never holds up a tick."""
 
 from __future__ import annotations
 
+import gc
 import json
 import socket
 import threading
@@ -248,3 +249,29 @@ def test_several_pages_watch_one_run() -> None:
         assert received[0]["type"] == "hello"
         assert [n["name"] for n in received[0]["header"]["tree"]][:2] == ["sequence", "mode(safe)"]
         assert any(m.get("state", {}).get("robot", {}).get("mode") for m in received[1:])
+
+
+def test_the_startup_freeze_is_undone_when_the_last_server_closes() -> None:
+    """gc.freeze is the run's: a library user's process gets its collector back as it was."""
+    assert gc.get_freeze_count() == 0
+    first = _serve()
+    assert gc.get_freeze_count() > 0  # start-up objects moved out of the collector's sight
+    second = _serve()
+    first.close()
+    assert gc.get_freeze_count() > 0  # the second one still serves
+    second.close()
+    assert gc.get_freeze_count() == 0
+    first.close()  # a second close changes nothing
+    assert gc.get_freeze_count() == 0
+
+
+def test_a_process_that_froze_objects_itself_keeps_its_freeze() -> None:
+    gc.freeze()
+    try:
+        frozen = gc.get_freeze_count()
+        served = _serve()
+        assert gc.get_freeze_count() == frozen  # the monitor left freezing to the process
+        served.close()
+        assert gc.get_freeze_count() == frozen  # and did not undo the process's own
+    finally:
+        gc.unfreeze()
