@@ -112,12 +112,16 @@ class Registry:
             c if c.isalnum() else "_" for c in str(path.resolve())
         )
         module = sys.modules.get(module_name)
-        if module is None:
+        stamp = _stamp(path)
+        # imported once per version of the file: a mission reloaded (run --watch) after its
+        # plugin file changed gets the new code, an unchanged one the module it had
+        if module is None or getattr(module, "__roomba_bt_stamp__", stamp) != stamp:
             try:
                 spec = importlib.util.spec_from_file_location(module_name, path)
                 if spec is None or spec.loader is None:
                     raise ImportError(f"cannot load {path} as a Python module")
                 module = importlib.util.module_from_spec(spec)
+                module.__dict__["__roomba_bt_stamp__"] = stamp
                 sys.modules[module_name] = module
                 spec.loader.exec_module(module)
             except Exception as exc:
@@ -158,6 +162,15 @@ class Registry:
     def errors(self) -> list[PluginError]:
         self._ensure_loaded()
         return list(self._errors)
+
+
+def _stamp(path: Path) -> tuple[int, int] | None:
+    """The file's version as a reload sees it (modification time, size); None if unreadable."""
+    try:
+        st = path.stat()
+    except OSError:
+        return None
+    return (st.st_mtime_ns, st.st_size)
 
 
 def _qualname(cls: object) -> str:

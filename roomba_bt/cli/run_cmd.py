@@ -293,7 +293,9 @@ def _live_monitor(
 
     return LiveMonitor(
         args, mission, simulator=simulator, packets=packets,
-        loader=lambda path: load_mission(path, params, profile=profile, baud=args.baud),
+        loader=lambda path: load_mission(
+            path, params, profile=profile, baud=args.baud, permissions=permissions(args)
+        ),
     )  # fmt: skip
 
 

@@ -130,7 +130,7 @@ class Loader:
         self.permissions = permissions
         self._include_stack: list[Path] = []
         self._include_roots: tuple[Path, ...] = ()
-        #: every file read: the mission file, then each include as it is reached
+        #: every file read: the mission file, then each include and plugin file as reached
         self.files: list[Path] = []
 
     def compile_file(
@@ -262,6 +262,7 @@ class Loader:
                     )
                 )
                 continue
+            self.files.append(target)  # read like an include: run --watch watches it too
             registry, error = self.ctx.registry.with_file(target)
             if error is not None:
                 self.ctx.error(iloc.at(str(error)))

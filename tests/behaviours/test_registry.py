@@ -125,6 +125,32 @@ def test_a_plugin_file_loads_into_a_copy(tmp_path: Path) -> None:
     assert "failed to import: RuntimeError: boom" in str(error)
 
 
+def test_a_changed_plugin_file_is_imported_again_an_unchanged_one_is_not(tmp_path: Path) -> None:
+    """run --watch reloads a mission whose plugin file changed: it must get the new code."""
+    plugin = tmp_path / "changing.py"
+    source = (
+        "from roomba_bt.behaviours import Condition, declare\n"
+        "@declare('changing', kind='condition')\n"
+        "class Changing(Condition):\n"
+        "    '''{doc}'''\n"
+        "    def check(self, snapshot):\n"
+        "        return True\n"
+    )
+    plugin.write_text(source.format(doc="First."))
+    base = builtin_registry()
+    first = base.with_file(plugin)[0].get("changing")
+    again = base.with_file(plugin)[0].get("changing")
+    assert first is not None and again is not None
+    assert again.cls is first.cls  # unchanged: the module is imported once
+    plugin.write_text(source.format(doc="Second, a longer text."))
+    changed = base.with_file(plugin)[0].get("changing")
+    assert changed is not None and changed.cls is not first.cls
+    assert changed.cls.__doc__ == "Second, a longer text."
+    plugin.write_text("def broken(:\n")
+    _, error = base.with_file(plugin)
+    assert error is not None and "failed to import: SyntaxError" in str(error)
+
+
 def test_a_registered_plugin_behaviour_ticks() -> None:
     from roomba_bt.robot.testing import StubRobot
 

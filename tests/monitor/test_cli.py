@@ -93,55 +93,113 @@ subtrees:
 """
 
 
-def test_watch_reloads_when_an_included_file_changes(tmp_path: Path) -> None:
-    mission, leg = tmp_path / "main.yaml", tmp_path / "leg.yaml"
-    mission.write_text(MAIN_WITH_LIBRARY)
-    leg.write_text(LEG)
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "roomba_bt.cli", "run", str(mission), "--watch",
-         "--display", "none"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
-    lines: queue.SimpleQueue[str] = queue.SimpleQueue()
+class WatchedRun:
+    """``roomba-bt run ... --watch`` in a subprocess, its output lines read as they come."""
 
-    def read(stream: Any, label: str) -> None:
+    def __init__(self, *args: str) -> None:
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "roomba_bt.cli", "run", *args, "--watch",
+             "--display", "none"],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        )  # fmt: skip
+        self.lines: queue.SimpleQueue[str] = queue.SimpleQueue()
+        self.readers = [
+            threading.Thread(target=self._read, args=(stream, label), daemon=True)
+            for stream, label in ((self.proc.stdout, "out"), (self.proc.stderr, "err"))
+        ]
+        for reader in self.readers:
+            reader.start()
+
+    def _read(self, stream: Any, label: str) -> None:
         for line in stream:
-            lines.put(f"{label}: {line}")
+            self.lines.put(f"{label}: {line}")
 
-    readers = [
-        threading.Thread(target=read, args=(stream, label), daemon=True)
-        for stream, label in ((proc.stdout, "out"), (proc.stderr, "err"))
-    ]
-    for reader in readers:
-        reader.start()
-
-    def expect(text: str) -> str:
+    def expect(self, text: str) -> str:
         seen: list[str] = []
         while True:
             try:
-                line = lines.get(timeout=30)
+                line = self.lines.get(timeout=30)
             except queue.Empty:
                 raise AssertionError(f"never saw {text!r}; saw {seen}") from None
             seen.append(line)
             if text in line:
                 return line
 
-    try:
-        watching = expect("out: watching ")  # the watcher has the files' first stamps
-        assert "main.yaml" in watching and "leg.yaml" in watching
-        leg.write_text(LEG.replace("there and back", "out and home, a longer name"))
-        expect(f"out: reload: {mission} is valid")
-        leg.write_text(LEG.replace("velocity: 100 mm/s", "velocity: fast"))
-        refused = expect("err: reload refused:")
-        assert re.search(rf"{re.escape(str(leg))}:\d+:\d+", refused), refused
-        proc.send_signal(signal.SIGINT)
-        assert proc.wait(timeout=30) == 130
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
-        for reader in readers:
+    def interrupt(self) -> int:
+        self.proc.send_signal(signal.SIGINT)
+        return self.proc.wait(timeout=30)
+
+    def close(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait()
+        for reader in self.readers:
             reader.join(10)
-        for stream in (proc.stdout, proc.stderr):
+        for stream in (self.proc.stdout, self.proc.stderr):
             if stream is not None:
                 stream.close()
+
+
+def test_watch_reloads_when_an_included_file_changes(tmp_path: Path) -> None:
+    mission, leg = tmp_path / "main.yaml", tmp_path / "leg.yaml"
+    mission.write_text(MAIN_WITH_LIBRARY)
+    leg.write_text(LEG)
+    run = WatchedRun(str(mission))
+    try:
+        watching = run.expect("out: watching ")  # the watcher has the files' first stamps
+        assert "main.yaml" in watching and "leg.yaml" in watching
+        leg.write_text(LEG.replace("there and back", "out and home, a longer name"))
+        run.expect(f"out: reload: {mission} is valid")
+        leg.write_text(LEG.replace("velocity: 100 mm/s", "velocity: fast"))
+        refused = run.expect("err: reload refused:")
+        assert re.search(rf"{re.escape(str(leg))}:\d+:\d+", refused), refused
+        assert run.interrupt() == 130
+    finally:
+        run.close()
+
+
+MAIN_WITH_PLUGIN = """\
+mission: shuttle-with-a-plugin
+plugins: [./always.py]
+tree:
+  sequence:
+    - mode: safe
+    - repeat:
+        do:
+          sequence:
+            - always_clear
+            - drive: {velocity: 100 mm/s, distance: 3 cm}
+            - drive: {velocity: -100 mm/s, distance: 3 cm}
+"""
+PLUGIN = """\
+from roomba_bt.behaviours import Condition, declare
+
+
+@declare("always_clear", kind="condition", reads=(7,))
+class AlwaysClear(Condition):
+    \"\"\"The way is clear (a plugin file of the mission's own).\"\"\"
+
+    def check(self, snapshot):
+        return True
+"""
+
+
+def test_watch_reloads_when_a_plugin_file_changes(tmp_path: Path) -> None:
+    """--allow-plugin-files: the plugin files the mission loads are watched as includes are,
+    and a changed one is imported again (a broken one is refused, naming where it is listed)."""
+    mission, plugin = tmp_path / "main.yaml", tmp_path / "always.py"
+    mission.write_text(MAIN_WITH_PLUGIN)
+    plugin.write_text(PLUGIN)
+    run = WatchedRun(str(mission), "--allow-plugin-files")
+    try:
+        watching = run.expect("out: watching ")
+        assert "main.yaml" in watching and "always.py" in watching, watching
+        plugin.write_text(PLUGIN.replace("(a plugin file", "(a changed plugin file"))
+        run.expect(f"out: reload: {mission} is valid")
+        plugin.write_text(PLUGIN.replace("def check(self, snapshot):", "def check(self, snapshot:"))
+        refused = run.expect("err: reload refused:")
+        assert re.search(rf"{re.escape(str(mission))}:2:\d+: .*always.py", refused), refused
+        assert "SyntaxError" in refused, refused
+        assert run.interrupt() == 130
+    finally:
+        run.close()
