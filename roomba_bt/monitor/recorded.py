@@ -3,17 +3,30 @@
 The record's sensor bytes go through the same parser, mode model and tree as ``replay`` does
 (:class:`~roomba_bt.runtime.recording.ReplayTransport`), and every tick is kept, so the page's
 timeline covers the whole run. A record holds no simulator truth: the path is the odometry.
-Notes in the record (a condition forced from the page) become events.
+
+The operator's acts are in the record as notes, each with the tick it was done at and in which
+half of that frame (before or after the tick): pause, resume, a condition forced. The replay
+does each at the same place through the same session as the live run (:class:`ReplayedActs`),
+so the bytes it writes stay the recorded ones and a pause shows as it happened: the stream's
+ticks go on, the tree is frozen and mission time stands still until the resume. A reload
+(``run --watch``) ends the replay there: the record has no copy of the new mission. Notes
+without a tick (records made before they had one) are only shown as events.
 """
 
 from __future__ import annotations
 
-from typing import Any
+from collections import deque
+from typing import TYPE_CHECKING, Any
 
 from roomba_bt.monitor.feed import RunFeed
+from roomba_bt.monitor.session import MonitorSession
+from roomba_bt.runtime.loop import StopRequested
 from roomba_bt.runtime.recording import Record
 from roomba_bt.runtime.stack import replay_record
 from roomba_bt.runtime.summary import RunSummary
+
+if TYPE_CHECKING:
+    from roomba_bt.runtime.loop import MissionRunner
 
 #: Ticks kept of a recorded run (about 100 min): the whole run, within a bound.
 RECORD_HISTORY = 400_000
@@ -25,12 +38,14 @@ def replay_into_feed(
     """Replay ``record`` through ``mission``; the feed holds every tick."""
     feed = RunFeed(history=RECORD_HISTORY, source="record", mission_name=mission.name)
     feed.set_tree(mission.root)
+    acts = [note for _, note in record.notes if isinstance(note.get("tick"), int)]
     summary, _ = replay_record(
         record, mission, profile=profile, packets=packets, baud=baud, name=name,
-        observer=lambda r: _ignore(feed.observe(r)),
+        gate=ReplayedActs(feed, acts),  # it records each tick in the feed, as live
     )  # fmt: skip
     for t, note in record.notes:
-        feed.event("force" if "force" in note else "note", _note_text(note), t)
+        if not isinstance(note.get("tick"), int):
+            feed.event("force" if "force" in note else "note", _note_text(note), t)
     feed.finished = f"{summary.outcome.value} (recorded run, {summary.ticks} ticks)"
     return feed, summary
 
@@ -42,5 +57,38 @@ def _note_text(note: dict[str, Any]) -> str:
     return ", ".join(f"{k}={v}" for k, v in note.items())
 
 
-def _ignore(_: object) -> None:
-    """An observer returns nothing."""
+class ReplayedActs(MonitorSession):
+    """The live run's session, its requests taken from the record's notes instead of a page:
+    each act is done in the frame (and the half of it) it was done in live."""
+
+    def __init__(self, feed: RunFeed, acts: list[dict[str, Any]]) -> None:
+        super().__init__(feed, simulator=False, allow_force=True)
+        self._acts = deque(acts)  # in the record's order, which is the order they were done
+
+    def before_tick(self, runner: MissionRunner) -> bool:
+        self._replay(runner, "before")
+        return super().before_tick(runner)
+
+    def after_tick(self, runner: MissionRunner) -> None:
+        super().after_tick(runner)
+        self._replay(runner, "after")
+
+    def _replay(self, runner: MissionRunner, half: str) -> None:
+        acts, tick = self._acts, runner.snapshot.tick
+        while acts and (
+            acts[0]["tick"] < tick or (acts[0]["tick"] == tick and acts[0].get("at") == half)
+        ):
+            act = acts.popleft()
+            if "pause" in act and not self.state.paused:
+                self._pause(runner, str(act["pause"]), half)
+            elif "resume" in act and self.state.paused:
+                self._resume(runner, str(act["resume"]))
+            elif "force" in act and isinstance(act.get("node"), int):
+                if 0 <= act["node"] < len(self.feed.nodes) and act.get("to") in (
+                    "success", "failure", "none",
+                ):  # fmt: skip
+                    self._force(runner, act["node"], str(act["to"]))
+            elif "reload" in act:
+                self.feed.event("reload", f"the run reloaded its mission ({act['reload']}) here: "
+                                "the record has no copy of it, so the replay ends")  # fmt: skip
+                raise StopRequested("the recorded run reloaded its mission here")

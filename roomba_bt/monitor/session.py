@@ -206,7 +206,13 @@ class MonitorSession:
             elif req.action == "reload":
                 self._pending_mission = req.payload
 
-    def _pause(self, runner: MissionRunner, why: str) -> None:
+    def _pause(
+        self, runner: MissionRunner, why: str, at: str = "before", *, noted: bool = True
+    ) -> None:
+        """The safe stop, the tree frozen, mission time held; ``at``: in which half of the
+        frame (before or after its tick) it happened, for the record's replay."""
+        if noted:
+            _note(runner, {"pause": why, "at": at})
         connection = runner.connection
         mode = connection.mode
         self._mode_before_pause = mode if mode in (OIMode.SAFE, OIMode.FULL) else None
@@ -222,6 +228,7 @@ class MonitorSession:
                 listener(why)
 
     def _resume(self, runner: MissionRunner, why: str) -> None:
+        _note(runner, {"resume": why, "at": "before"})
         mode = self._mode_before_pause
         again: list[Command] = []
         if mode in (OIMode.SAFE, OIMode.FULL):
@@ -252,9 +259,7 @@ class MonitorSession:
             self.state.forced[index] = value
             text = f"{name} forced to {status.value}"
         self.feed.event("force", text)
-        note = getattr(runner.connection.transport, "note", None)
-        if callable(note):
-            note({"force": name, "node": index, "to": value})
+        _note(runner, {"force": name, "node": index, "to": value, "at": "before"})
 
     def _check_breakpoints(self, runner: MissionRunner, changed: tuple[int, ...]) -> None:
         record = self.feed.latest()
@@ -278,7 +283,7 @@ class MonitorSession:
                 name = self.feed.infos[index].name
                 self.feed.event("breakpoint", f"breakpoint: {name} {_on(on)} at tick {record.tick}")
                 self._steps_left = None
-                self._pause(runner, f"breakpoint: {name} {_on(on)}")
+                self._pause(runner, f"breakpoint: {name} {_on(on)}", at="after")
                 return
 
     def _previous_statuses(self, record: Any) -> str | None:
@@ -288,8 +293,10 @@ class MonitorSession:
     def _replace_tree(self, runner: MissionRunner, mission: Any) -> None:
         """Reload at a safe point: safe stop, the old tree stopped, the new one from its root."""
         was_paused = self.state.paused
+        # a replay cannot go on past this point: the record has no copy of the new mission
+        _note(runner, {"reload": mission.name, "at": "before"})
         if not was_paused:
-            self._pause(runner, "reload")
+            self._pause(runner, "reload", noted=False)
         old = runner.mission.root
         with contextlib.suppress(Exception):
             if old.status is Status.RUNNING:
@@ -316,6 +323,14 @@ class MonitorSession:
                 "to use it"
             )
         return None
+
+
+def _note(runner: MissionRunner, act: dict[str, Any]) -> None:
+    """Mark an operator's act in the record (``run --record``), with the tick it was done at,
+    so that a replay does it at the same place (:mod:`roomba_bt.monitor.recorded`)."""
+    note = getattr(runner.connection.transport, "note", None)
+    if callable(note):
+        note({**act, "tick": runner.snapshot.tick if runner.has_snapshot else 0})
 
 
 def _on(value: object) -> str:

@@ -23,7 +23,13 @@ from pathlib import Path
 
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.robot.connection import Connection, EndMode
-from roomba_bt.runtime.loop import MissionLike, MissionRunner, TickObserver, stream_request
+from roomba_bt.runtime.loop import (
+    MissionLike,
+    MissionRunner,
+    TickGate,
+    TickObserver,
+    stream_request,
+)
 from roomba_bt.runtime.recording import Record, RecordingTransport, ReplayTransport
 from roomba_bt.runtime.summary import DEFAULT_GRACE, RunSummary
 from roomba_bt.transport.base import Transport
@@ -115,6 +121,7 @@ def replay_record(
     baud: int,
     name: str,
     observer: TickObserver | None = None,
+    gate: TickGate | None = None,
 ) -> tuple[RunSummary, ReplayTransport]:
     """``record``'s sensor bytes through ``mission`` on the recorded clock (``replay`` and the
     monitor's recorded runs): the run ends at the record's end or at the first command that
@@ -136,4 +143,5 @@ def replay_record(
         observer=observer,
         input_ended=input_ended,
     )
+    stack.runner.gate = gate  # the monitor's replay of the operator's acts
     return stack.run(), transport

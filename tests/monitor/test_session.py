@@ -186,11 +186,52 @@ def test_a_forced_condition_decides_the_branch_and_is_marked_in_the_events_and_t
     assert any(e.kind == "force" and "no bump forced to FAILURE" in e.text for e in rig.feed.events)
     record = load_record(record_path)
     assert record.notes
-    assert record.notes[0][1] == {"force": "no bump", "node": no_bump, "to": "failure"}
+    forced = record.notes[0][1]
+    assert forced == {"force": "no bump", "node": no_bump, "to": "failure", "at": "before",
+                      "tick": forced["tick"]}  # fmt: skip
+    replayed, replay = replay_into_feed(
+        record, load_mission(SHUTTLE, {}, profile=CREATE2), CREATE2, rig.packets, 115200, "x"
+    )
+    assert any(e.kind == "force" and "no bump forced to FAILURE" in e.text for e in replayed.events)
+    assert replay.outcome is Outcome.FAILURE  # forced at the same tick: the same branch taken
+    assert _ticks(replayed) == _ticks(rig.feed)
+
+
+def _ticks(feed: RunFeed) -> list[tuple[int, bool, str, float]]:
+    return [(r.tick, r.ticked, r.statuses, round(r.time, 6)) for r in feed.since(0)[0]]
+
+
+def test_a_replayed_pause_is_time_passing_with_the_tree_frozen(tmp_path: Path) -> None:
+    """The record marks pause and resume with their tick: the replay pauses there too (the
+    stream's ticks go on, the tree and mission time stand still), then goes on as live did."""
+    record_path = tmp_path / "paused.jsonl"
+    rig = Rig(record=record_path)
+
+    def operator(rig: Rig) -> None:
+        rig.wait(lambda: rig.ticks(ticked=True) > 100)
+        rig.session.request("pause")
+        rig.wait(lambda: rig.ticks(ticked=False) > 50)
+        rig.session.request("resume")
+        after = rig.ticks(ticked=True)
+        rig.wait(lambda: rig.ticks(ticked=True) > after + 100)
+        rig.session.request("stop")
+
+    rig.run_with(operator)
+    rig.stack.close()
+    record = load_record(record_path)
+    assert [next(iter(note)) for _, note in record.notes] == ["pause", "resume"]
     replayed, _ = replay_into_feed(
         record, load_mission(SHUTTLE, {}, profile=CREATE2), CREATE2, rig.packets, 115200, "x"
     )
-    assert any(e.kind == "force" and "no bump forced to failure" in e.text for e in replayed.events)
+    live, again = _ticks(rig.feed), _ticks(replayed)
+    assert again[: len(live) - 1] == live[:-1]  # the last live frame may be the stop's
+    frozen = [r for r in again if not r[1]]
+    assert len(frozen) > 50
+    assert len({(r[2], r[3]) for r in frozen}) == 1  # statuses and mission time held
+    assert frozen[-1][0] - frozen[0][0] == len(frozen) - 1  # while the stream's ticks went on
+    assert sum(1 for r in again if r[1] and r[0] > frozen[-1][0]) > 90  # and it went on after
+    controls = [e.text.split(" ")[0] for e in replayed.events if e.kind == "control"]
+    assert controls == ["pause", "resume"]
 
 
 def test_a_breakpoint_on_an_ending_pauses_after_that_tick_and_step_ticks_once() -> None:
