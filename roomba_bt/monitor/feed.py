@@ -30,6 +30,7 @@ from __future__ import annotations
 import logging
 import operator
 import threading
+import time
 from collections import deque
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -60,6 +61,7 @@ UNNAMED = frozenset(WORDS) | {"root"}
 
 
 _STATUS = operator.attrgetter("status")
+_monotonic = time.monotonic
 _TUPLE_NEW: Any = tuple.__new__
 
 
@@ -187,6 +189,9 @@ class Ring:
         self.size = size
         self._slots: list[TickRecord | None] = [None] * size if size is not None else []
         self.count = 0  # records ever appended
+        #: when the newest record was appended (time.monotonic, the server loop's clock): the
+        #: end of the newest tick, from which the server's pump knows when the next ones end
+        self.ended = 0.0
 
     def append(self, record: TickRecord) -> None:
         """Tick thread only; ``record.seq`` must be ``count``."""
@@ -195,6 +200,7 @@ class Ring:
         else:
             self._slots[record.seq % self.size] = record
         self.count = record.seq + 1
+        self.ended = _monotonic()
 
     @property
     def first(self) -> int:

@@ -2,12 +2,15 @@
 
 aiohttp (the ``monitor`` extra) in a thread of its own with its own event loop: the tick loop
 stays the main thread's, and the server reads the feed's ring (without a lock) when it
-chooses. Per page, a pump sends at most 20 updates a second: 50 ms after its last one it
-looks every 2 ms for the ring's next record (the end of a tick), then takes what the ring
-gained since it last sent, merges it (the newest statuses, every node that flipped in between,
-the new events) and sends one message. Its Python work (a few tenths of a millisecond) so
-falls in the ~15 ms the tick thread sleeps until the next frame instead of holding the GIL
-when a frame arrives. The tick thread is never asked to wake the server: a wake-up from it (a
+chooses. Per page, a pump sends at most 20 updates a second: from the newest tick's end (the
+ring's ``ended``) and the 15 ms between frames it knows when the first tick after its 50 ms
+period ends, wakes 1 ms after that, then takes what the ring gained since it last sent,
+merges it (the newest statuses, every node that flipped in between, the new events) and
+sends one message. Its Python work (a few tenths of a millisecond) so falls in the ~15 ms the
+tick thread sleeps until the next frame instead of holding the GIL when a frame arrives, and
+it wakes once an update (it looked every 2 ms before: about 5 wake-ups an update, each one a
+chance to want the GIL while a tick held it); a late tick is looked for every 2 ms. The tick
+thread is never asked to wake the server: a wake-up from it (a
 write to the loop's self-pipe) releases the GIL mid-``after_tick`` and cost it up to 0.4 ms
 (measured). With no tick for 50 ms (a recorded run, a run that ended or is held) it sends
 anyway. A page whose socket is slow holds up only its own pump; when it catches up, it is
@@ -35,6 +38,7 @@ import contextlib
 import gc
 import hmac
 import json
+import math
 import secrets
 import threading
 from collections.abc import Awaitable, Callable
@@ -48,10 +52,12 @@ from roomba_bt.monitor.address import DEFAULT_PORT, is_loopback
 from roomba_bt.monitor.feed import RunFeed
 from roomba_bt.monitor.session import ControlRefused, MonitorSession
 from roomba_bt.monitor.views import header_view, path_view, state_view, tree_view
+from roomba_bt.robot.interface import SLOT_SECONDS
 
 UPDATE_PERIOD_S = 0.05  # at most 20 updates a second per page
 TICK_WAIT_S = 0.05  # the longest a pump waits for a tick's end before it sends anyway
-TICK_POLL_S = 0.002  # how often it looks for that end
+TICK_POLL_S = 0.002  # how often it looks for that end when a tick is late
+AFTER_TICK_S = 0.001  # how long after a tick's expected end the pump looks
 COOKIE = "roomba_bt_monitor"
 STATIC_TYPES = {".js": "text/javascript", ".css": "text/css", ".svg": "image/svg+xml"}
 Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
@@ -95,6 +101,17 @@ class _StartupFreeze:
 
 
 STARTUP_FREEZE = _StartupFreeze()
+
+
+def next_look(ended: float, due: float, period: float = SLOT_SECONDS) -> float:
+    """:data:`AFTER_TICK_S` after the first tick end at or after ``due``, ticks ending every
+    ``period`` from ``ended`` (the newest tick's end)::
+
+        ended        +15 ms       +30 ms       +45 ms   +60 ms
+          |------------|------------|-----due----|x        x = the look
+    """
+    steps = max(1, math.ceil((due - ended - AFTER_TICK_S) / period))
+    return ended + steps * period + AFTER_TICK_S
 
 
 def _error(status: int, message: str) -> web.Response:
@@ -343,14 +360,26 @@ class MonitorServer:
         return ws
 
     async def _after_a_tick(self, last_sent: float) -> None:
-        """Wait out the update period, then until the ring gains its next record (the tick
-        thread has just recorded a tick and is about to sleep until the next frame), or
-        :data:`TICK_WAIT_S` has passed."""
+        """Wait out the update period, then until just after a tick's end (the tick thread has
+        recorded a tick and is about to sleep until the next frame), or :data:`TICK_WAIT_S`.
+
+        Frames come every 15 ms, so ticks end every 15 ms: from the newest one's end
+        (``ring.ended``) the pump sleeps until :data:`AFTER_TICK_S` after the first end due
+        after its period, and wakes once, not every 2 ms, never in the middle of a tick that
+        is on time. If no tick has just ended there (a late frame), it looks every
+        :data:`TICK_POLL_S`; a run with no ticks (recorded, ended) is sent after the period."""
         loop = asyncio.get_running_loop()
-        await asyncio.sleep(max(last_sent + UPDATE_PERIOD_S - loop.time(), 0.0))
-        ring, give_up = self.feed.ring, loop.time() + TICK_WAIT_S
-        seen = ring.count
-        while ring.count == seen and loop.time() < give_up:
+        ring = self.feed.ring
+        due = last_sent + UPDATE_PERIOD_S
+        ticking = loop.time() - ring.ended < TICK_WAIT_S
+        look = next_look(ring.ended, due) if ticking else due
+        await asyncio.sleep(max(look - loop.time(), 0.0))
+        give_up, seen = loop.time() + TICK_WAIT_S, ring.count
+        while loop.time() < give_up:
+            if ticking and loop.time() - ring.ended < AFTER_TICK_S + TICK_POLL_S:
+                return  # a tick has just ended
+            if not ticking and ring.count != seen:
+                return
             await asyncio.sleep(TICK_POLL_S)
 
     async def _pump(self, ws: web.WebSocketResponse) -> None:

@@ -17,10 +17,11 @@ import pytest
 
 from roomba_bt.mission import load_mission
 from roomba_bt.monitor.feed import RunFeed
-from roomba_bt.monitor.server import MonitorServer
+from roomba_bt.monitor.server import AFTER_TICK_S, MonitorServer, next_look
 from roomba_bt.monitor.session import MonitorSession
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.connection import Connection
+from roomba_bt.robot.interface import SLOT_SECONDS
 from roomba_bt.runtime.loop import MissionRunner, stream_request
 from roomba_bt.sim import SimLink, Simulator, load_world
 
@@ -275,3 +276,13 @@ def test_a_process_that_froze_objects_itself_keeps_its_freeze() -> None:
         assert gc.get_freeze_count() == frozen  # and did not undo the process's own
     finally:
         gc.unfreeze()
+
+
+def test_the_pump_looks_just_after_the_first_tick_end_due_after_its_period() -> None:
+    # the newest tick ended at 10.000 s; ticks end every 15 ms; the period ends at 10.050 s
+    assert next_look(10.000, 10.050) == pytest.approx(10.000 + 4 * SLOT_SECONDS + AFTER_TICK_S)
+    # the look is the first one at or after the period's end
+    assert next_look(10.000, 10.0455) == pytest.approx(10.046)
+    assert next_look(10.000, 10.0465) == pytest.approx(10.061)
+    # a tick that ended after the period was due: the next end
+    assert next_look(10.000, 9.990) == pytest.approx(10.016)
