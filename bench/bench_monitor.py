@@ -12,7 +12,12 @@ beside the pooled figures, so a block disturbed by other work shows as such.
   flush, like the terminal display. With the monitor: its server on 127.0.0.1 and one page,
   a WebSocket client reading every update in a process of its own as a browser is (a client
   thread in this process would take the tick thread's GIL, which no browser does). Target:
-  p99 at most 1.10x without it.
+  p99 at most 1.10x without it. Beside it, where the slow ticks went: each arm's ticks above
+  the p99 without the monitor, split into the tick thread's own CPU time and its time off
+  the CPU (waiting for the GIL or for a core), and counted with a collection of the cyclic
+  collector inside the tick (``gc.callbacks``) or the server thread running meanwhile (its
+  CPU clock moved); the tick thread's CPU time a tick (preemption and GIL waits left out);
+  the collections a second of each arm and the server thread's CPU a second.
 * reaction latency: as ``bench_runtime`` measures it (a simulator subprocess on a pty bumps
   the robot every 150 ms; bump frame read -> new drive written), with and without the
   monitor and a page. "Unchanged": p99 with it at most 1.2x, or 0.2 ms above, p99 without
@@ -21,24 +26,33 @@ beside the pooled figures, so a block disturbed by other work shows as such.
 * memory: RSS over 10^5 ticks on the virtual clock with the monitor and a page, sampled every
   20 000 ticks: flat once the feed's ring (20 000 ticks) is full.
 
-``BENCH_QUICK=1``: 2 blocks of 5 s per arm instead of 3 of 10 s, shorter latency blocks.
+``BENCH_QUICK=1``: 2 blocks of 5 s per arm instead of 4 of 15 s, shorter latency blocks.
+
+``python -m bench.bench_monitor designs [SECONDS [BLOCKS [NAME,...]]]`` runs the tick-time
+measure for the designs weighed against the p99 excess (:data:`DESIGNS`: the switch interval
+lowered or raised while the monitor serves, a slower pump, the feed without the server, the
+server without a page) in turn in each block, each with the attribution lines.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import gc
 import os
 import statistics
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from roomba_bt.mission import load_mission
+from roomba_bt.monitor import server as server_module
 from roomba_bt.monitor.feed import RunFeed
 from roomba_bt.monitor.server import MonitorServer
 from roomba_bt.monitor.session import MonitorSession
@@ -54,21 +68,89 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 class TimedRunner(MissionRunner):
-    """Stamps each tick: snapshot start -> end of flush, and -> end of the gate's after_tick."""
+    """Stamps each tick: snapshot start -> end of flush, and -> end of the gate's after_tick.
+
+    Beside the wall time, each tick's share of the answer to "where did a slow tick go": the
+    tick thread's own CPU time (off-CPU = wall - CPU: the thread waited, for the GIL or for a
+    core), and the CPU clock of the thread that could take the GIL from it (the monitor's
+    server; without the monitor this thread's own clock, so both arms read two clocks a tick).
+    """
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
         self.tick_s: list[float] = []
+        self.cpu_s: list[float] = []
+        self.rival_ran: list[bool] = []  # the server thread used CPU during the tick
+        self.starts: list[float] = []
         self.with_record_s: list[float] = []
-        self._started = 0.0
+        self.rival_clock = time.CLOCK_THREAD_CPUTIME_ID
+        self._started = self._cpu = self._rival = 0.0
 
     def _advance(self, batch: Sequence[TimedFrame]) -> Snapshot:
+        self._rival = time.clock_gettime(self.rival_clock)
+        self._cpu = time.thread_time()
         self._started = time.perf_counter()
         return super()._advance(batch)
 
     def _flush(self) -> None:
         super()._flush()
-        self.tick_s.append(time.perf_counter() - self._started)
+        ended = time.perf_counter()
+        self.cpu_s.append(time.thread_time() - self._cpu)
+        rival = time.clock_gettime(self.rival_clock)
+        self.tick_s.append(ended - self._started)
+        self.starts.append(self._started)
+        self.rival_ran.append(self.rival_clock != time.CLOCK_THREAD_CPUTIME_ID
+                              and rival > self._rival)  # fmt: skip
+
+
+class Collections:
+    """The cyclic collector's runs (``gc.callbacks``): when, how long, which generation, in
+    which thread."""
+
+    def __init__(self) -> None:
+        self.runs: list[tuple[float, float, int, int]] = []  # start, end, generation, thread
+        self._open: dict[int, float] = {}
+
+    def __call__(self, phase: str, info: dict[str, Any]) -> None:
+        thread = threading.get_ident()
+        if phase == "start":
+            self._open[thread] = time.perf_counter()
+        elif thread in self._open:
+            start = self._open.pop(thread)
+            self.runs.append((start, time.perf_counter(), int(info["generation"]), thread))
+
+    @contextlib.contextmanager
+    def watching(self) -> Iterator[Collections]:
+        gc.callbacks.append(self)
+        try:
+            yield self
+        finally:
+            gc.callbacks.remove(self)
+
+    def inside(self, starts: list[float], ticks: list[float], thread: int) -> list[bool]:
+        """For each tick: did a collection run in ``thread`` during it?"""
+        runs = sorted(r for r in self.runs if r[3] == thread)
+        out, j = [], 0
+        for start, length in zip(starts, ticks, strict=True):
+            while j < len(runs) and runs[j][1] < start:
+                j += 1
+            out.append(j < len(runs) and runs[j][0] < start + length)
+        return out
+
+
+@dataclass
+class Block:
+    """One paced run: its ticks, and what each slow one may be blamed on."""
+
+    tick_s: list[float]
+    cpu_s: list[float]
+    record_s: list[float]
+    rival_ran: list[bool]
+    collected: list[bool]
+    collections: list[tuple[float, float, int, int]]
+    seconds: float
+    messages: int = 0
+    server_cpu_s: float = 0.0
 
 
 class TimedSession(MonitorSession):
@@ -118,14 +200,18 @@ async def _read_page(url: str) -> None:
 
 
 @contextlib.contextmanager
-def monitored(feed: RunFeed, session: MonitorSession) -> Iterator[Page]:
+def monitored(
+    feed: RunFeed, session: MonitorSession, page: bool = True
+) -> Iterator[tuple[Page | None, MonitorServer]]:
     server = MonitorServer(feed, session, port=0)
-    page = Page(server.start())
+    url = server.start()
+    reader = Page(url) if page else None
     try:
-        yield page
+        yield reader, server
     finally:
         server.close()
-        page.close()
+        if reader is not None:
+            reader.close()
 
 
 def _monitor_for(
@@ -142,20 +228,93 @@ def _monitor_for(
     return feed, TimedSession(feed, simulator=simulator is not None)
 
 
-def paced_dock(seconds: float, monitor: bool) -> tuple[list[float], list[float], int]:
+#: The designs ``python -m bench.bench_monitor designs`` compares (docs/monitor.md).
+DESIGNS = {
+    "without": "no monitor",
+    "monitor": "the monitor and a page, as shipped",
+    "feed-only": "the feed and the tick gate, no server (the hook's own cost)",
+    "no-page": "the monitor's server, no page connected",
+    "switch-0.5ms": "the monitor and a page, sys.setswitchinterval(0.0005) while it serves",
+    "switch-50ms": "the monitor and a page, sys.setswitchinterval(0.05) while it serves",
+    "poll-10ms": "the monitor and a page, the pump looking for a tick's end every 10 ms",
+}
+
+
+@contextlib.contextmanager
+def _variant(design: str) -> Iterator[None]:
+    """The process-wide settings a design changes, restored after its block."""
+    interval, poll = sys.getswitchinterval(), server_module.TICK_POLL_S
+    if design.startswith("switch-"):
+        sys.setswitchinterval(float(design.removeprefix("switch-").removesuffix("ms")) / 1e3)
+    if design == "poll-10ms":
+        server_module.TICK_POLL_S = 0.010
+    try:
+        yield
+    finally:
+        sys.setswitchinterval(interval)
+        server_module.TICK_POLL_S = poll
+
+
+def paced_dock(seconds: float, monitor: bool, design: str | None = None) -> Block:
+    design = design or ("monitor" if monitor else "without")
     mission = load_mission(ROOT / "missions" / "dock.yaml", {}, profile=CREATE2)
     simulator = Simulator(load_world("apartment"), CREATE2, 3)
     connection = Connection(RealtimeSimLink(simulator), CREATE2)
     packets = stream_request(mission.packets, 115200)
     runner = TimedRunner(connection, mission, profile=CREATE2, packets=packets, timeout_s=seconds)
-    if not monitor:
-        runner.run()
-        return runner.tick_s, runner.tick_s, 0
-    feed, session = _monitor_for(mission, simulator)
-    runner.gate = session
-    with monitored(feed, session) as page:
-        runner.run()
-    return runner.tick_s, runner.with_record_s, page.messages
+    messages, server_cpu = 0, 0.0
+    with Collections().watching() as collections, _variant(design):
+        if design == "without":
+            runner.run()
+        else:
+            feed, session = _monitor_for(mission, simulator)
+            runner.gate = session
+            if design == "feed-only":
+                runner.run()
+            else:
+                with monitored(feed, session, page=design != "no-page") as (page, server):
+                    thread = server._thread
+                    assert thread is not None and thread.ident is not None
+                    runner.rival_clock = time.pthread_getcpuclockid(thread.ident)
+                    before = time.clock_gettime(runner.rival_clock)
+                    runner.run()
+                    server_cpu = time.clock_gettime(runner.rival_clock) - before
+                messages = page.messages if page is not None else 0
+    inside = collections.inside(runner.starts, runner.tick_s, threading.get_ident())
+    first, last = runner.starts[0], runner.starts[-1] + runner.tick_s[-1]
+    during = [r for r in collections.runs if first <= r[0] <= last]  # not the server's start
+    return Block(
+        runner.tick_s, runner.cpu_s, runner.with_record_s if design != "without" else runner.tick_s,
+        runner.rival_ran, inside, during, seconds, messages, server_cpu,
+    )  # fmt: skip
+
+
+def designs(seconds: float, blocks: int, names: Sequence[str]) -> None:
+    """Each design against no monitor, all in turn in each block (the order reversed every
+    other block), with the same attribution lines as the tick-time measure."""
+    runs: dict[str, list[Block]] = {name: [] for name in names}
+    for i in range(blocks):
+        for name in names if i % 2 == 0 else list(reversed(names)):
+            runs[name].append(paced_dock(seconds, name != "without", name))
+    base = [t for b in runs["without"] for t in b.tick_s] if "without" in runs else []
+    threshold = _p(base, 0.99) if base else 0.0
+    print(f"   dock/apartment paced, {blocks} blocks of {seconds:.0f} s per design, in turn:")
+    for name in names:
+        ticks = [t for b in runs[name] for t in b.tick_s]
+        cpu = [c for b in runs[name] for c in b.cpu_s]
+        each = ", ".join(f"{_p(b.tick_s, 0.99) * 1e6:.0f}" for b in runs[name])
+        ratio = f" ({_p(ticks, 0.99) / threshold:.2f}x)" if threshold else ""
+        server = sum(b.server_cpu_s for b in runs[name]) / (blocks * seconds)
+        print(f"   {name}: {DESIGNS[name]}")
+        print(f"      tick median {statistics.median(ticks) * 1e6:.0f} us, p99 "
+              f"{_p(ticks, 0.99) * 1e6:.0f} us{ratio} (per block: {each}); CPU time a tick "
+              f"median {statistics.median(cpu) * 1e6:.0f} us, p99 {_p(cpu, 0.99) * 1e6:.0f} us; "
+              f"server CPU {server * 1e3:.1f} ms/s")  # fmt: skip
+        overlapped = sum(sum(b.rival_ran) for b in runs[name])
+        print(f"      collections {_collections(runs[name])}; the server thread ran during "
+              f"{overlapped} of {len(ticks)} ticks")  # fmt: skip
+        if threshold:
+            print(f"      above the p99 without: {_blame(runs[name], threshold)}")
 
 
 def _p(values: list[float], q: float) -> float:
@@ -221,26 +380,53 @@ def _ms(values: list[float], q: float) -> str:
 LATENCY_RATIO, LATENCY_SLACK_S = 1.2, 0.2e-3
 
 
-def main() -> None:
-    quick = os.environ.get("BENCH_QUICK") == "1"
-    blocks, seconds = (2, 5.0) if quick else (3, 10.0)
-    ticks: dict[bool, list[float]] = {False: [], True: []}
-    with_record: list[float] = []
-    block_p99: dict[bool, list[float]] = {False: [], True: []}
-    messages = 0
+def _blame(blocks: list[Block], above: float) -> str:
+    """What the ticks slower than ``above`` had: off-CPU time (a wait for the GIL or a core),
+    a collection in the tick thread during the tick, the server thread running meanwhile."""
+    slow = [
+        (t, c, r, g)
+        for b in blocks
+        for t, c, r, g in zip(b.tick_s, b.cpu_s, b.rival_ran, b.collected, strict=True)
+        if t > above
+    ]
+    if not slow:
+        return "none"
+    off = statistics.mean(t - c for t, c, _, _ in slow) * 1e6
+    waited = sum(1 for t, c, _, _ in slow if t - c > 100e-6)
+    return (f"{len(slow)}: mean {statistics.mean(t for t, _, _, _ in slow) * 1e6:.0f} us of which "
+            f"off-CPU {off:.0f} us; off-CPU > 100 us in {waited}, a collection in the tick in "
+            f"{sum(1 for *_, g in slow if g)}, the server thread ran during "
+            f"{sum(1 for _, _, r, _ in slow if r)}")  # fmt: skip
+
+
+def _collections(blocks: list[Block]) -> str:
+    seconds = sum(b.seconds for b in blocks)
+    main_thread = threading.get_ident()
+    out = []
+    for generation in (0, 1, 2):
+        runs = [r for b in blocks for r in b.collections if r[2] == generation]
+        if runs:
+            here = sum(1 for r in runs if r[3] == main_thread)
+            longest = max(r[1] - r[0] for r in runs) * 1e3
+            out.append(f"gen{generation} {len(runs) / seconds:.2f}/s ({here} in the tick "
+                       f"thread, longest {longest:.1f} ms)")  # fmt: skip
+    inside = sum(sum(b.collected) for b in blocks)
+    return f"{', '.join(out) or 'none'}; during a tick: {inside}"
+
+
+def tick_time(blocks: int, seconds: float) -> None:
+    runs: dict[bool, list[Block]] = {False: [], True: []}
     for monitor in _arms(blocks):
-        tick_s, record_s, got = paced_dock(seconds, monitor)
-        ticks[monitor] += tick_s
-        block_p99[monitor].append(_p(tick_s, 0.99))
-        if monitor:
-            with_record += record_s
-            messages += got
-    base, watched = ticks[False], ticks[True]
+        runs[monitor].append(paced_dock(seconds, monitor))
+    base = [t for b in runs[False] for t in b.tick_s]
+    watched = [t for b in runs[True] for t in b.tick_s]
+    with_record = [t for b in runs[True] for t in b.record_s]
     print(f"   dock/apartment paced, {blocks} blocks of {seconds:.0f} s per arm, alternating:")
     for label, values in (("without the monitor", base), ("with the monitor + a page", watched),
                           ("... + the feed's record", with_record)):  # fmt: skip
         median, p99 = statistics.median(values) * 1e6, _p(values, 0.99) * 1e6
         print(f"   {len(values)} ticks {label}: median {median:.0f} us, p99 {p99:.0f} us")
+    block_p99 = {m: [_p(b.tick_s, 0.99) for b in runs[m]] for m in (False, True)}
     for monitor, label in ((False, "without"), (True, "with")):
         each = ", ".join(f"{v * 1e6:.0f}" for v in block_p99[monitor])
         print(f"   p99 per block {label}: {each} us")
@@ -249,11 +435,31 @@ def main() -> None:
     )
     print(f"   p99 ratio of each block with to the block beside it without, median: {paired:.2f}x "
           "(a block disturbed by other work on the machine weighs less)")  # fmt: skip
+    for monitor, label in ((False, "without"), (True, "with")):
+        cpu = [c for b in runs[monitor] for c in b.cpu_s]
+        median = statistics.median(cpu) * 1e6
+        p99 = _p(cpu, 0.99) * 1e6
+        print(f"   {label}: the tick thread's CPU time a tick, median {median:.0f} us, p99 "
+              f"{p99:.0f} us; collections {_collections(runs[monitor])}")  # fmt: skip
+    threshold = _p(base, 0.99)
+    for monitor, label in ((False, "without"), (True, "with")):
+        print(f"   ticks above the p99 without ({threshold * 1e6:.0f} us), {label}: "
+              f"{_blame(runs[monitor], threshold)}")  # fmt: skip
+    server_cpu = sum(b.server_cpu_s for b in runs[True]) / sum(b.seconds for b in runs[True])
+    messages = sum(b.messages for b in runs[True])
     ratio, recorded = _p(watched, 0.99) / _p(base, 0.99), _p(with_record, 0.99) / _p(base, 0.99)
     verdict = "holds" if ratio <= 1.10 else "DOES NOT HOLD"
+    overlapped = sum(sum(b.rival_ran) for b in runs[True])
     print(f"   tick p99 ratio {ratio:.2f}x (target <= 1.10x: {verdict}), with the record "
-          f"{recorded:.2f}x; the page got {messages} updates in "
-          f"{blocks * seconds:.0f} s")  # fmt: skip
+          f"{recorded:.2f}x; the page got {messages} updates in {blocks * seconds:.0f} s; the "
+          f"server thread used {server_cpu * 1e3:.1f} ms of CPU a second and ran during "
+          f"{overlapped} of {len(watched)} ticks")  # fmt: skip
+
+
+def main() -> None:
+    quick = os.environ.get("BENCH_QUICK") == "1"
+    blocks, seconds = (2, 5.0) if quick else (4, 15.0)
+    tick_time(blocks, seconds)
     lat: dict[bool, list[float]] = {False: [], True: []}
     lat_blocks: dict[bool, list[str]] = {False: [], True: []}
     with tempfile.TemporaryDirectory() as tmpdir:
@@ -288,5 +494,13 @@ def main() -> None:
 if __name__ == "__main__":
     if sys.argv[1:2] == ["page"]:
         asyncio.run(_read_page(sys.argv[2]))
+    elif sys.argv[1:2] == ["designs"]:
+        # designs [SECONDS [BLOCKS [NAME,NAME,...]]]: defaults 10 s, 2 blocks, all designs
+        chosen = sys.argv[4].split(",") if len(sys.argv) > 4 else list(DESIGNS)
+        unknown = [name for name in chosen if name not in DESIGNS]
+        if unknown:
+            sys.exit(f"unknown design {unknown[0]!r}; known: {', '.join(DESIGNS)}")
+        designs(float(sys.argv[2]) if len(sys.argv) > 2 else 10.0,
+                int(sys.argv[3]) if len(sys.argv) > 3 else 2, chosen)  # fmt: skip
     else:
         main()
