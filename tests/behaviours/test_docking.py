@@ -213,18 +213,21 @@ def test_the_approach_reads_no_obstacles(robot: StubRobot) -> None:
 TURN_80_COUNTS = 400
 
 
+@pytest.mark.parametrize(("turn_speed", "wheel"), [(None, 200), (90.0, 90)])
 def test_approach_on_the_docks_left_turns_to_the_axis_then_crosses(
-    robot: StubRobot, make: Make
+    robot: StubRobot, make: Make, turn_speed: float | None, wheel: int
 ) -> None:
-    """Facing the dock in its force field, red only (its left): turn left toward the axis,
-    then, turned far enough, cross toward it in the same tick (slowed in the force field)."""
-    approach = make(DockApproach)
+    """Facing the dock in its force field, red only (its left): turn left toward the axis
+    at ``turn_speed`` (200 mm/s by default), then, turned far enough, cross toward it in
+    the same tick (slowed in the force field)."""
+    params = {} if turn_speed is None else {"turn_speed": turn_speed}
+    approach = make(DockApproach, **params)
     assert isinstance(approach, DockApproach)
     red = dock_character(red=True, green=False, force_field=True)
     robot.set_frame(frame(omni=red, left=red, right=red))
     approach.tick_once()
     assert state(approach) is ApproachState.TURN_AWAY
-    assert last_wheels(robot) == (-90, 90)
+    assert last_wheels(robot) == (-wheel, wheel)
     turned = frame(omni=red, left=red, right=red)
     turned.update({43: -TURN_80_COUNTS & 0xFFFF, 44: TURN_80_COUNTS})
     robot.set_frame(turned)

@@ -55,8 +55,6 @@ CLOSER_MAX_MM = 1500.0
 #: BACK: straight back (mm/s) for BACK_S after a bump or a cliff.
 BACK_MM_S = 120
 BACK_S = 0.5
-#: TURN_AWAY: wheel speed (mm/s) of the turn in place toward the crossing line.
-TURN_AWAY_MM_S = 90.0
 #: RETREAT: straight back (mm/s), out of the force field, at most RETREAT_MAX_MM.
 RETREAT_MM_S = 120
 RETREAT_MAX_MM = 600.0
@@ -78,12 +76,17 @@ CENTRE_GAIN_PER_S = 1.5
 CENTRE_MIN_MM_S = 30.0
 NEAR_EDGE_SHARE = 0.6
 NEAR_EDGE_MAX_MM = 400.0
-#: FACE: spinning in place (mm/s) while a receiver sees the dock, and while none does; turning
-#: to a computed heading fast, slow within FACE_SLOW_WITHIN_RAD, done within FACE_DONE_RAD.
-FACE_SEEN_MM_S = 70.0
-FACE_SEARCH_MM_S = 110.0
-FACE_FAST_MM_S = 60.0
-FACE_SLOW_MM_S = 35.0
+#: Turns in place, as shares of ``turn_speed`` (each wheel, mm/s): toward the crossing line
+#: (TURN_AWAY) and, facing the dock, spinning while a receiver sees it (FACE_SEEN) and while
+#: none does (FACE_SEARCH); turning to a computed heading fast (FACE_FAST), slow within
+#: FACE_SLOW_WITHIN_RAD (FACE_SLOW), done within FACE_DONE_RAD. At 200 mm/s the robot turns
+#: 1.7 rad/s: about 3 deg between two readings of the receivers (every 30 ms), inside the
+#: 10 deg where both see the dock.
+TURN_AWAY_SHARE = 1.0
+FACE_SEEN_SHARE = 0.7
+FACE_SEARCH_SHARE = 1.0
+FACE_FAST_SHARE = 0.6
+FACE_SLOW_SHARE = 0.25
 FACE_SLOW_WITHIN_RAD = math.radians(8.0)
 FACE_DONE_RAD = math.radians(2.0)
 #: seen at one heading only, then nothing for this much turn: face that heading
@@ -108,6 +111,8 @@ class ApproachState(IdentityEnum):
     params=(
         Param("speed", SPEED, default="150 mm/s", minimum=30, maximum=WHEEL.maximum,
               doc="speed toward the axis"),
+        Param("turn_speed", SPEED, default="200 mm/s", minimum=40, maximum=WHEEL.maximum,
+              doc="wheel speed of the turns in place (facing the dock, turning away)"),
         Param("cross_angle", ANGLE, default="80deg", minimum=20, maximum=90,
               doc="how far it turns away from the dock to move toward its axis"),
         Param("lost_after", DURATION, default="4s", minimum=0.1,
@@ -245,7 +250,7 @@ class DockApproach(DockingAction):
         if state is not None:
             self._sweep = state  # where the omni was last seen relative to the axis
         if abs(self.turned()) < math.radians(self.number("cross_angle")):
-            w = TURN_AWAY_MM_S * self._cross_side
+            w = TURN_AWAY_SHARE * self.number("turn_speed") * self._cross_side
             self.wheels(-w, w)
             return RUNNING
         snap = self.snapshot
@@ -442,7 +447,7 @@ class DockApproach(DockingAction):
         if abs(self.turned()) > FACE_RESTART_RAD:
             self._lead_theta = None
             self.mark_turn()
-        w = FACE_SEEN_MM_S if (left or right) else FACE_SEARCH_MM_S
+        w = (FACE_SEEN_SHARE if (left or right) else FACE_SEARCH_SHARE) * self.number("turn_speed")
         self.wheels(-w * self._spin_dir, w * self._spin_dir)
         return False
 
@@ -453,8 +458,8 @@ class DockApproach(DockingAction):
         if abs(err) < FACE_DONE_RAD or view.facing:
             self.halt()
             return True
-        w = FACE_FAST_MM_S if abs(err) > FACE_SLOW_WITHIN_RAD else FACE_SLOW_MM_S
-        self.spin_toward(err, w)
+        share = FACE_FAST_SHARE if abs(err) > FACE_SLOW_WITHIN_RAD else FACE_SLOW_SHARE
+        self.spin_toward(err, share * self.number("turn_speed"))
         return False
 
     state = ApproachState.FACE
