@@ -65,9 +65,9 @@ reliability: $(STAMP)
 routines: $(STAMP)
 	$(BIN)/python -m roomba_bt.evaluate.report --docs docs --missions missions
 
-# clean.yaml against the firmware's Clean into docs/routines.md (about 25 min of CPU).
+# clean.yaml against the firmware's Clean into docs/routines.md (about 40 min of CPU; 22 min on 2 cores).
 coverage: $(STAMP)
-	$(BIN)/python -m roomba_bt.evaluate.coverage_report --docs docs --missions missions --jobs 2
+	$(BIN)/python -m roomba_bt.evaluate.coverage_report --docs docs --missions missions --runs 50 --apartment-runs 4 --drift-runs 20 --jobs 2
 
 # The monitor page's pictures in docs/monitor.md (a dock run in the apartment, mid-approach;
 # needs the OS's chromium: apt-get install chromium).
