@@ -368,7 +368,9 @@ class Action(RobotBehaviour):
         self._out_of_driving_since = None
 
 
-_RUNNING = py_trees.common.Status.RUNNING
+_RUNNING, _SUCCESS, _FAILURE = (
+    py_trees.common.Status.RUNNING, py_trees.common.Status.SUCCESS, py_trees.common.Status.FAILURE
+)  # fmt: skip
 _DEBUG = py_trees.logging.Level.DEBUG
 
 
@@ -389,9 +391,10 @@ class Condition(RobotBehaviour):
         (``terminate`` does nothing). The reactive guards restart every condition on every
         tick, so this is most of what a tree's tick calls. A class with a lifecycle step of
         its own (looked up each tick: a test may patch one in) gets the whole leaf tick;
-        ``update`` is always called, so a node's own (the monitor forces a condition so)
-        decides. The node's ``__dict__`` is not read: on CPython 3.11 that gives the node a
-        dictionary for good, and every attribute read of it gets slower."""
+        ``update`` is looked up on the node, so a node's own (the monitor forces a condition
+        so) decides, and when it is :meth:`update` itself, ``check`` is called directly. The
+        node's ``__dict__`` is not read: on CPython 3.11 that gives the node a dictionary for
+        good, and every attribute read of it gets slower."""
         cls = type(self)
         if (
             started
@@ -406,12 +409,20 @@ class Condition(RobotBehaviour):
             return
         if self._refs != {}:  # not looked for yet, or @key parameters to read at each start
             self.initialise()
-        status = self.update()
+        update = self.update
+        if getattr(update, "__func__", None) is _CONDITION_UPDATE:  # update is check
+            robot = self.robot
+            ok = self.check(robot.snapshot if robot is not None else self.snapshot)
+            self.status = _SUCCESS if ok else _FAILURE
+            return
+        status = update()
         if type(status) is not py_trees.common.Status:
             status = checked_status(self, status)
         self.status = status
 
 
 #: the lifecycle steps a condition's short tick stands for (:meth:`Condition.tick_direct`)
-_CONDITION_INITIALISE, _CONDITION_START = Condition.initialise, Condition.start
+_CONDITION_UPDATE, _CONDITION_INITIALISE, _CONDITION_START = (
+    Condition.update, Condition.initialise, Condition.start
+)  # fmt: skip
 _CONDITION_TERMINATE, _CONDITION_STOP = Condition.terminate, Condition.stop
