@@ -361,9 +361,16 @@ def _finish(run: subprocess.Popen[str], sim: subprocess.Popen[str]) -> tuple[str
 
 
 def _to_stop_ms(entries: list[dict[str, object]], halt_index: int) -> float | None:
-    """Time from the last valid frame to the stop, from a record: the watchdog's drive 0 is
-    the first written 50 ms or more after the last chunk that completed a valid frame (a
-    tick's drive 0 follows its frame at once); ``halt_index`` 1: the drive 0 after it."""
+    """Time from the last valid frame to the stop, from a record: a watchdog's drive 0 is one
+    written 50 ms or more after the last chunk that completed a valid frame (a tick's drive 0
+    follows its frame at once); ``halt_index`` 1: the drive 0 after it. The stall measured is
+    the run's last: a stall ridden through earlier (frames came back: a loaded host's hiccup)
+    is not the fault's, and counting from its frame measured 7601 ms for a stop 120 ms after
+    the baud change's last frame::
+
+        frame ─ drive 0 ─ frames ... frame ─ drive 0 (watchdog) ─ listen ─ drive 0 (new rate)
+        └ an earlier stall, ridden through  └──────── measured ─────────────────────┘
+    """
     from roomba_bt.oi.profiles import get_profile
     from roomba_bt.oi.stream import StreamParser
 
@@ -373,8 +380,9 @@ def _to_stop_ms(entries: list[dict[str, object]], halt_index: int) -> float | No
     packets = tuple(int(p) for p in header["packets"])  # type: ignore[attr-defined]
     parser = StreamParser(packets, get_profile(str(header.get("profile", "create2"))))
     last_frame: float | None = None
-    reference: float | None = None  # the last valid frame before the watchdog's drive 0
+    reference: float | None = None  # the last valid frame before this stall's first drive 0
     halts = 0
+    measured: float | None = None
     for entry in entries[1:]:
         at = float(entry.get("t", 0.0))  # type: ignore[arg-type]
         data = bytes.fromhex(str(entry.get("b", "")))
@@ -382,14 +390,16 @@ def _to_stop_ms(entries: list[dict[str, object]], halt_index: int) -> float | No
             if parser.feed(data, at):
                 last_frame = at
         elif entry.get("d") == "out" and data.startswith(HALT):
-            if reference is None:
-                if last_frame is None or at - last_frame < 0.05:
-                    continue
-                reference = last_frame
+            if last_frame is None:
+                continue
+            if at - last_frame >= 0.05 and (reference is None or last_frame > reference):
+                reference, halts, measured = last_frame, 0, None  # a new stall
+            elif reference is None:
+                continue
             if halts == halt_index:
-                return (at - reference) * 1000
+                measured = (at - reference) * 1000
             halts += 1
-    return None
+    return measured
 
 
 FAULT_HEADER = (

@@ -151,6 +151,9 @@ class Connection:
         self.keep_awake = self.profile.sleeps_in_passive if keep_awake is None else keep_awake
         self.wake = keep_awake_for(transport, self.link.name, self.keep_awake)
         self._last_command_at = float("-inf")
+        #: when the port last listened at other rates and the bytes read by then (link
+        #: clock; silence.follow_baud tries again while garbage keeps coming)
+        self.baud_listened: tuple[float, int] | None = None
 
     # ------------------------------------------------------------------ opening
     @classmethod
@@ -321,7 +324,7 @@ class Connection:
         except StreamStalled as exc:
             if self.link.banner_seen():
                 raise RobotReset(self.name, exc.halted) from exc
-            cause = asleep_by_idle(self) or follow_baud(self, exc)
+            cause = asleep_by_idle(self) or follow_baud(self)
             if cause is None:
                 raise
             raise cause from exc
@@ -333,10 +336,14 @@ class Connection:
         stall began, to tell a stopped stream from a garbled line), :class:`StreamLost` for a
         garbled line, or for a silent one what asking the robot shows
         (:func:`~roomba_bt.robot.silence.explain_silence`: :class:`RobotAsleep` if a BRC
-        pulse woke it)."""
+        pulse woke it). While garbage keeps coming the other rates are listened at again
+        (a first listen can miss the change): :class:`BaudChanged` as soon as one finds it."""
         link = self.link
         if link.banner_seen():
             raise RobotReset(self.name, halted)
+        followed = follow_baud(self)
+        if followed is not None:
+            raise followed
         now = link.transport.now()
         since = link.silent_since
         if now - since <= grace:

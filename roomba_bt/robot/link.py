@@ -149,7 +149,8 @@ class StreamLink:
         """Whether ``enough`` valid frames of the running stream come within ``seconds`` with
         the port at ``rate``. The port is left at ``rate`` if they do, put back if not; the
         link's own parser and its watchdog times are not touched (what is read meanwhile is
-        only counted)."""
+        only counted). What came by the deadline is read even if the wait overran it (a
+        host starved past the whole window still finds the frames sent meanwhile)."""
         was = self.transport.baud if hasattr(self.transport, "baud") else None
         parser = StreamParser(self.stream_ids, self.profile, mode_plus_one=self.mode_plus_one)
         try:
@@ -159,10 +160,13 @@ class StreamLink:
         clock = self.transport.now
         deadline = clock() + seconds
         frames = 0
-        while frames < enough and (remaining := deadline - clock()) > 0:
-            data = self.read(remaining)
+        while frames < enough:
+            remaining = deadline - clock()
+            data = self.read(max(0.0, remaining))
             if data:
                 frames += len(parser.feed(data, clock()))
+            if remaining <= 0:
+                break
         if frames < enough and was is not None:
             try:
                 self.transport.set_baud(int(was))

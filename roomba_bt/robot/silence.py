@@ -26,6 +26,7 @@ import time
 from typing import TYPE_CHECKING
 
 from roomba_bt.oi import commands as oi
+from roomba_bt.oi.frames import stream_frame_size
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.robot.errors import (
     BaudChanged,
@@ -33,16 +34,20 @@ from roomba_bt.robot.errors import (
     ModeError,
     RobotAsleep,
     StreamLost,
-    StreamStalled,
 )
 from roomba_bt.robot.handshake import OI_RATES, wake_pulse
 from roomba_bt.robot.wake import SLEEP_AFTER_S
 
-#: Garbage that must have come since the last valid frame before other rates are tried.
+#: Garbage that must have come since the last valid frame (or the last listen) before other
+#: rates are tried.
 GARBAGE_BYTES = 16
-#: How long the port listens at another rate, and the frames it must find there.
+#: How long the port listens at another rate at least, and the frames it must find there.
 LISTEN_S = 0.1
 FRAMES_TO_FOLLOW = 2
+#: While garbage keeps coming, how long after a listen that found nothing the next is tried:
+#: a listen can miss the change (a hiccup of the host or of the robot's port, the change
+#: landing after the listen began), and a robot still driving must hear drive 0 soon.
+RETRY_AFTER_S = 0.1
 
 if TYPE_CHECKING:
     from roomba_bt.robot.connection import Connection
@@ -117,25 +122,54 @@ def _pulses(connection: Connection) -> bool:
     return wake is not None and wake.unavailable is None
 
 
-def follow_baud(connection: Connection, stalled: StreamStalled) -> BaudChanged | None:
+def listen_window(packet_ids: tuple[int, ...], rate: int) -> float:
+    """How long to listen at ``rate`` for :data:`FRAMES_TO_FOLLOW` frames of ``packet_ids``:
+    the first may be cut by the window's start, and a frame longer than the 15 ms slot at a
+    slow rate comes once per its own transfer time (10 bits a byte)::
+
+        |▒▒▒[ frame ][ frame ][ frame ]|     (frames to follow + 1) transfers + a slot
+
+    Group 100 (84 bytes) at 19200: 44 ms a frame, a window of 146 ms, not 100."""
+    transfer = max(SLOT_S, stream_frame_size(packet_ids) * 10 / rate)
+    return max(LISTEN_S, (FRAMES_TO_FOLLOW + 1) * transfer + SLOT_S)
+
+
+#: The OI's stream period.
+SLOT_S = 0.015
+
+
+def follow_baud(connection: Connection) -> BaudChanged | None:
     """The watchdog tripped while bytes kept coming: if the stream's frames come at another
     OI rate, the robot changed its rate (the port is left there, drive 0 sent again at it,
-    where the robot understands it); None if they do not (noise: the stall is ridden through
-    at the run's rate)::
+    where the robot understands it); None if they do not (noise, or a listen that missed:
+    the stall is ridden through at the run's rate, and this is called again while garbage
+    keeps coming, :data:`RETRY_AFTER_S` after the last listen)::
 
         115200 ▒▒▒▒▒▒▒▒ (100 ms, no frame) ──► port at 19200, listen 100 ms ──► 2 frames
+                                                   nothing: 115200, 100 ms ──► listen again
     """
     link = connection.link
-    if link.bytes_since_frame < GARBAGE_BYTES or not link.stream_ids:
+    if not link.stream_ids:
+        return None
+    now = link.transport.now()
+    last = connection.baud_listened
+    if last is not None and last[0] > link.silent_since:  # a listen in this stall
+        if now - last[0] < RETRY_AFTER_S or link.bytes_read - last[1] < GARBAGE_BYTES:
+            return None
+    elif link.bytes_since_frame < GARBAGE_BYTES:
         return None
     was = connection.baud
-    garbage_s = link.transport.now() - link.silent_since
+    garbage_s = now - link.silent_since
     since_wall = time.time() - garbage_s  # the last valid frame, for the message
-    for rate in OI_RATES:
-        if rate == was or not link.listen_at(rate, LISTEN_S, FRAMES_TO_FOLLOW):
-            continue
-        link.set_baud(rate)  # the link's parser starts again at the new rate
-        connection.baud = rate
-        halted = connection.halt()
-        return BaudChanged(connection.name, rate, was, garbage_s, since_wall, halted=halted)
+    try:
+        for rate in OI_RATES:
+            window = listen_window(link.stream_ids, rate)
+            if rate == was or not link.listen_at(rate, window, FRAMES_TO_FOLLOW):
+                continue
+            link.set_baud(rate)  # the link's parser starts again at the new rate
+            connection.baud = rate
+            halted = connection.halt()
+            return BaudChanged(connection.name, rate, was, garbage_s, since_wall, halted=halted)
+    finally:
+        connection.baud_listened = (link.transport.now(), link.bytes_read)
     return None

@@ -11,9 +11,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
 from roomba_bt.mission import load_mission
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.robot.silence import LISTEN_S, listen_window
 from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome, RunSummary
 from roomba_bt.sim import Faults, SimLink, Simulator, load_world
@@ -32,6 +35,28 @@ class NoModemLines(SimLink):
 
     def set_wake_line(self, low: bool) -> None:
         raise OSError(25, "Inappropriate ioctl for device")
+
+
+class DeafAtFirstListen(SimLink):
+    """A link whose host hears nothing for ``deaf_s`` of simulated time from the first time it
+    turns its port to another rate (a loaded host, a hiccup of the robot's port): the
+    robot's frames meanwhile are lost, so a listen shorter than that finds none."""
+
+    deaf_s = 0.15
+
+    def __init__(self, simulator: Simulator) -> None:
+        super().__init__(simulator)
+        self.deaf_until: float | None = None
+
+    def set_baud(self, baud: int) -> None:
+        super().set_baud(baud)
+        if self.deaf_until is None and baud != self.simulator.profile.default_baud:
+            self.deaf_until = self.simulator.time + self.deaf_s
+
+    def read(self, timeout: float) -> bytes:
+        data = super().read(timeout)
+        deaf_until = self.deaf_until
+        return b"" if deaf_until is not None and self.simulator.time < deaf_until else data
 
 
 def run(
@@ -104,3 +129,34 @@ def test_noise_at_the_run_rate_is_not_taken_for_a_baud_change(tmp_path: Path) ->
     summary, _ = run(tmp_path, SPIN, Faults(bit_flip_rate=0.02), timeout=20.0)
     assert summary.stalls >= 1  # the watchdog tripped on garbage: the other rate was tried
     assert "baud rate" not in summary.reason, summary.reason
+
+
+@pytest.mark.parametrize("deaf_s", [0.05, 0.15, 0.4])
+@pytest.mark.parametrize("phase", [0.0, 0.004, 0.008, 0.012])
+def test_a_listen_that_misses_the_change_is_tried_again_and_the_robot_stopped(
+    tmp_path: Path, deaf_s: float, phase: float
+) -> None:
+    """The first listen at the other rate finds no frame (the host deaf for ``deaf_s`` from
+    its start; the change at each phase of a 15 ms slot): the stall is ridden through and
+    the other rate listened at again while garbage keeps coming, so drive 0 reaches the
+    robot at its new rate within the watchdog, the deafness and two listens, not after the
+    2 s grace at the old rate (where the robot understands nothing and keeps driving)."""
+    link_type = type("Deaf", (DeafAtFirstListen,), {"deaf_s": deaf_s})
+    change = 3.0 + phase
+    summary, simulator = run(tmp_path, SPIN, Faults(baud_change_at=change), link_type, timeout=10.0)
+    assert "the robot now talks at another baud rate: 19200, not the 115200" in summary.reason
+    assert "drive 0 sent again at 19200" in summary.reason
+    assert summary.stop_delivered
+    assert simulator.mode is OIMode.PASSIVE
+    assert simulator.requested_left == simulator.requested_right == 0
+    stops = [e.time for e in simulator.events if e.kind == "mode" and "Passive" in e.detail]
+    assert stops and stops[-1] - change <= 0.1 + deaf_s + 2 * LISTEN_S + 0.1
+
+
+def test_the_listen_is_long_enough_for_two_whole_frames_at_the_rate() -> None:
+    """At 19200 a frame of group 100 (84 bytes) takes 44 ms: two whole frames after a cut one
+    do not fit in 100 ms; the run's short frames keep the 100 ms."""
+    assert listen_window((100,), 19200) == pytest.approx(3 * 84 * 10 / 19200 + 0.015)
+    assert listen_window((100,), 19200) > 0.14
+    assert listen_window((7, 9, 10, 11, 12, 25, 26, 34, 35, 43, 44), 19200) == LISTEN_S
+    assert listen_window((100,), 115200) == LISTEN_S
