@@ -59,14 +59,9 @@ def _motion_of(
     dr = right * dt
     dist = (dl + dr) / 2.0
     dtheta = (dr - dl) / (2.0 * half_base)
-    if error is EXACT_ODOMETRY:
-        return (
-            left, right, dt, dist, dtheta, dtheta / 2.0,
-            (dist - dtheta * half_base) / MM_PER_COUNT,
-            (dist + dtheta * half_base) / MM_PER_COUNT,
-            1 if dist > 0.0 else 0, dist, dtheta,
-        )  # fmt: skip
-    measured_dist, measured_dtheta = _measured(dist, dtheta, dt, half_base, error)
+    measured_dist, measured_dtheta = (
+        (dist, dtheta) if error is EXACT_ODOMETRY else _measured(dist, dtheta, dt, half_base, error)
+    )
     return (
         left, right, dt, dist, dtheta, dtheta / 2.0,
         (measured_dist - measured_dtheta * half_base) / MM_PER_COUNT,
