@@ -1,46 +1,40 @@
-"""The robot connection, the session half: start-up, guarded commands, batching, a safe stop.
+"""The robot connection, the session half: one robot's session over one link.
 
 One :class:`Connection` keeps one :class:`~roomba_bt.robot.modes.ModeModel` and drives one
 :class:`~roomba_bt.robot.link.StreamLink` (the transport's bytes, the stream parser, the
-watchdog). Everything that leaves goes through the guard:
+watchdog). The session's parts, each beside its state::
 
-    command ──► ModeModel.check ──► Command.data (encoded, range-checked) ──► link.write
-                 (refused: ModeError,                                   then ModeModel.apply
-                  nothing written)                                      and the opcode's Effect
+    Connection ─┬─ StreamLink     robot/link.py     bytes, frames, the watchdog
+                ├─ ModeModel      robot/modes.py    the OI mode predicted and reconciled
+                ├─ CommandWriter  robot/writer.py   the guard, a tick's batch, each opcode's
+                │                                   effect, Baud change (the command path)
+                ├─ SafeStop       robot/ending.py   every ending: the stop sequence, whether
+                │                                   it arrived, the port closed once
+                └─ KeepAwake      robot/wake.py     BRC pulses where the profile sleeps
 
-Start-up (:meth:`Connection.start`: Start, the robot's mode asked twice, the mode, the
-stream) is drawn in :mod:`~roomba_bt.robot.startup`; every ending (:meth:`Connection.close`,
-the context manager, :meth:`Connection.safe_stop`: drive 0 and motors off while driving,
-pause, Start or Stop) in :mod:`~roomba_bt.robot.ending`; why a stream stopped in
-:mod:`~roomba_bt.robot.silence`.
-
-Over 400 lines on purpose: the session's state (the mode model, the last wheel command, the
-stop's report, keep-awake) is one object's, and what is left here is what reads or changes it;
-the read-only views of the link (``name``, ``status``, ``counters``...) are a sixth of it.
+What is left here is the glue: start-up (:meth:`Connection.start`: Start, the robot's mode
+asked twice, the mode, the stream; drawn in :mod:`~roomba_bt.robot.startup`), a Query List,
+reading (:meth:`Connection.poll`, and why a stream stopped, :mod:`~roomba_bt.robot.silence`),
+and the read-only views the runtime and the tests use (``name``, ``status``, ``counters``...).
 
 Frames are read in the caller's thread (:meth:`poll`). See ``docs/robot.md``.
 """
 
 from __future__ import annotations
 
-import contextlib
 import logging
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 from roomba_bt.oi import commands as oi
-from roomba_bt.oi.encode import BAUD_RATES, Command
-from roomba_bt.oi.errors import UnsupportedCommandError
+from roomba_bt.oi.encode import Command
 from roomba_bt.oi.frames import SensorFrame
-from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
-from roomba_bt.oi.opcodes import Effect
+from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile, get_profile
 from roomba_bt.oi.stream import ReplyParser, check_bandwidth
-from roomba_bt.robot.ending import EndMode, describe_activity, signals_deferred, stop_sequence
+from roomba_bt.robot.ending import EndMode, SafeStop
 from roomba_bt.robot.errors import (
     ConnectionFailed,
-    ModeError,
-    PortLost,
     RobotError,
     RobotReset,
     StreamLost,
@@ -48,7 +42,7 @@ from roomba_bt.robot.errors import (
 )
 from roomba_bt.robot.handshake import drain
 from roomba_bt.robot.interface import ModeChange
-from roomba_bt.robot.link import LINK_ERRORS, LinkStatus, StreamLink, TimedFrame
+from roomba_bt.robot.link import LinkStatus, StreamLink, TimedFrame
 from roomba_bt.robot.modes import DEFAULT_SETTLE, ModeModel
 from roomba_bt.robot.silence import asleep_by_idle, explain_silence, follow_baud
 from roomba_bt.robot.startup import (
@@ -59,6 +53,7 @@ from roomba_bt.robot.startup import (
     not_a_mode,
 )
 from roomba_bt.robot.wake import keep_awake_for
+from roomba_bt.robot.writer import CommandWriter
 from roomba_bt.transport.base import Transport, TransportError
 from roomba_bt.transport.serial_port import DEFAULT_BAUD, SerialTransport
 
@@ -73,11 +68,6 @@ __all__ = [
 ]
 
 log = logging.getLogger(__name__)
-
-#: What a stop may meet and must survive.
-_RECOVERABLE: tuple[type[Exception], ...] = (RobotError, *LINK_ERRORS)
-#: The spec asks for 100 ms after Baud (129) before sending at the new rate.
-BAUD_CHANGE_WAIT = 0.1
 
 
 @dataclass(frozen=True, slots=True)
@@ -121,9 +111,7 @@ class Connection:
         if watchdog < 0:
             raise ValueError(f"watchdog must be >= 0 seconds, got {watchdog!r}")
         self.profile = get_profile(profile) if isinstance(profile, str) else profile
-        self.end_in: EndMode = end_in
         self.settle = settle
-        self.baud = baud if baud is not None else int(getattr(transport, "baud", DEFAULT_BAUD))
         if end_in == "stop" and not self.profile.has_command("stop"):
             log.warning(
                 "%s has no Stop (173); the connection will end in Passive (Start)",
@@ -134,23 +122,14 @@ class Connection:
             transport, self.profile, watchdog=watchdog, reconcile=self.modes.reconcile,
             report=self._report_change, halt=self.halt,
         )  # fmt: skip
-        self._sent = 0
-        self._refused = 0
-        self._closed = False
-        self.safe_stopped: bool | None = None
-        #: the last wheel command written (Drive, Drive Direct, PWM, a cleaning cycle)
-        self.last_wheels: Command | None = None
-        #: why the stop did not reach the robot, with the robot's last known state (None: it
-        #: did, or no stop was tried)
-        self.stop_report: str | None = None
-        #: why a stop written now could not be known to arrive (the robot no longer answers
-        #: or the line is garbled), or None
-        self.unheard: str | None = None
-        self._builtin_may_run = False  # a Clean/Spot/Max/Seek Dock cycle may be driving
+        if baud is None:
+            baud = int(getattr(transport, "baud", DEFAULT_BAUD))
+        #: the command path (robot/writer.py) and the endings (robot/ending.py)
+        self.writer = CommandWriter(self.link, self.modes, self.profile, baud)
+        self.ending = SafeStop(self.writer, end_in)
         # Keep-awake (robot/wake.py): on by default where the profile sleeps in Passive.
         self.keep_awake = self.profile.sleeps_in_passive if keep_awake is None else keep_awake
         self.wake = keep_awake_for(transport, self.link.name, self.keep_awake)
-        self._last_command_at = float("-inf")
         #: when the port last listened at other rates and the bytes read by then (link
         #: clock; silence.follow_baud tries again while garbage keeps coming)
         self.baud_listened: tuple[float, int] | None = None
@@ -195,9 +174,7 @@ class Connection:
         stream_command = oi.stream(ids) if ids else None
         if ids:
             check_bandwidth(ids, self.baud)
-        self._closed = False
-        self.safe_stopped = None
-        self.unheard = None
+        self.ending.begin()
         self.send(oi.start())
         self.send(oi.pause_stream())
         drain(self.link.transport, self.link.read)  # a stale stream, a reset banner
@@ -299,8 +276,8 @@ class Connection:
             skipped_bytes=skipped,
             bytes_read=link.bytes_read,
             bytes_written=link.bytes_written,
-            commands_sent=self._sent,
-            commands_refused=self._refused,
+            commands_sent=self.writer.sent,
+            commands_refused=self.writer.refused,
             watchdog_trips=link.watchdog_trips,
             mode_readings_ignored=self.modes.invalid_readings,
         )
@@ -360,7 +337,7 @@ class Connection:
     def idle_since(self) -> float:
         """When we last gave the robot a reason to stay awake: a command or a BRC pulse
         (link clock)."""
-        last = self._last_command_at
+        last = self.writer.last_command_at
         if self.wake is not None and self.wake.last_pulse is not None:
             last = max(last, self.wake.last_pulse)
         return last
@@ -377,122 +354,37 @@ class Connection:
     def halt(self) -> bool:
         """Drive 0 if the model says the robot may be driving; True if it was sent (the
         watchdog's action)."""
-        if self.modes.mode not in DRIVING_MODES:
-            return False
-        self.send(oi.halt())
-        return True
+        return self.writer.halt()
 
     # ------------------------------------------------------------------ writing
     def send(self, command: Command) -> None:
-        """Guard, then write ``command``'s bytes, then update the mode model.
-
-        A refused command raises (:class:`ModeError`,
-        :class:`~roomba_bt.oi.errors.UnsupportedCommandError`,
-        :class:`~roomba_bt.oi.errors.BandwidthError` for a stream that does not fit) and
-        nothing is written.
-        """
-        self._send(command, None)
+        """Guard, write, follow one command (:meth:`CommandWriter.send
+        <roomba_bt.robot.writer.CommandWriter.send>`; a refused one raises, nothing written)."""
+        self.writer.send(command)
 
     def send_many(self, commands: Iterable[Command]) -> None:
-        """A tick's outbox, in order, in one write. Each command is guarded against the mode
-        the commands before it lead to (so ``safe`` then ``drive`` passes). Refused commands
-        are left out; after the others are written the first refusal is raised."""
-        refused: list[Exception] = []
-        batch = bytearray()
-        # the model follows what was written: if the batch never leaves, it is put back
-        saved = self.modes.snapshot(), self.last_wheels
-        try:
-            for command in commands:
-                try:
-                    self._send(command, batch)
-                except (ModeError, UnsupportedCommandError) as exc:
-                    refused.append(exc)
-        finally:
-            if batch:
-                try:
-                    self.link.write(bytes(batch))
-                except PortLost:
-                    self.modes.restore(saved[0])
-                    self.last_wheels = saved[1]
-                    raise
-        if refused:
-            for extra in refused[1:]:
-                log.warning("%s: also refused: %s", self.name, extra)
-            raise refused[0]
-
-    def _send(self, command: Command, batch: bytearray | None) -> None:
-        spec = command.spec
-        try:
-            self.modes.check(command)
-        except (ModeError, UnsupportedCommandError):
-            self._refused += 1
-            raise
-        effect = spec.effect
-        if effect is Effect.STREAM:
-            check_bandwidth(command.args[1:], self.baud)
-        warning = self.profile.command_warning(spec)
-        if warning is not None:
-            log.warning("%s: %s", self.name, warning)
-        if batch is None or effect is Effect.BAUD:  # the rest goes at the new rate
-            if batch:
-                self.link.write(bytes(batch))
-                batch.clear()
-            self.link.write(command.data)
-        else:
-            batch += command.data
-        now = self.link.transport.now()
-        self._last_command_at = now
-        self.modes.apply(command, now)
-        if spec.channel == "wheels":
-            self.last_wheels = command
-        self._sent += 1
-        if effect is not None or spec.leads_to is not None:  # not a plain actuator command
-            self._after(command, now)
-
-    def _after(self, command: Command, now: float) -> None:
-        """What a written command changes on our side of the link (the opcode table's
-        :class:`~roomba_bt.oi.opcodes.Effect` and mode)."""
-        spec = command.spec
-        effect = spec.effect
-        if effect is Effect.STREAM:
-            self.link.new_stream(tuple(command.args[1:]), now)
-        elif effect is Effect.PAUSE_RESUME:
-            self.link.pause_resume(bool(command.args[0]), now)
-        elif effect is Effect.SILENCES:
-            self.link.streaming = False
-        if effect is Effect.BUILTIN_CYCLE:
-            self._builtin_may_run = True
-        elif spec.ends_cycle:
-            self._builtin_may_run = False
-        elif effect is Effect.BAUD:
-            self._change_baud(BAUD_RATES[command.args[0]])
-
-    def _change_baud(self, rate: int) -> None:
-        """Baud (129) was written: wait the 100 ms the spec asks (reading, so the link's
-        clock moves on a virtual link too), then change the port's rate."""
-        link = self.link
-        clock = link.transport.now
-        deadline = clock() + BAUD_CHANGE_WAIT
-        while (remaining := deadline - clock()) > 0:
-            data = link.read(remaining)
-            if data:
-                link.ingest(data, clock())
-        link.set_baud(rate)
-        self.baud = rate
+        """A tick's outbox in one write (:meth:`CommandWriter.send_many
+        <roomba_bt.robot.writer.CommandWriter.send_many>`): refused commands left out, the
+        first refusal raised after the others are written."""
+        self.writer.send_many(commands)
 
     def set_baud(self, rate: int) -> None:
         """Baud (129) by rate (e.g. 19200); the port follows after 100 ms."""
-        if self.link.stream_ids:
-            check_bandwidth(self.link.stream_ids, rate)
-        self.send(oi.baud_rate(rate))
+        self.writer.set_baud(rate)
+
+    @property
+    def baud(self) -> int:
+        """The rate the port talks at (it follows Baud, and a robot found at another rate)."""
+        return self.writer.baud
+
+    @baud.setter
+    def baud(self, rate: int) -> None:
+        self.writer.baud = rate
 
     # ------------------------------------------------------------------ endings
     def stop_sequence(self) -> list[Command]:
         """What :meth:`safe_stop` sends from the current mode (:mod:`~roomba_bt.robot.ending`)."""
-        return stop_sequence(
-            self.modes.mode, builtin_may_run=self._builtin_may_run, end_in=self.end_in,
-            profile=self.profile,
-        )  # fmt: skip
+        return self.ending.sequence()
 
     def safe_stop(self) -> bool:
         """Stop the robot and leave it in Passive (or Off with ``end_in="stop"``).
@@ -500,59 +392,42 @@ class Connection:
         Never raises for a dead link: returns False and logs that the robot could not be
         stopped (writes are bounded by the transport's write timeout, so this cannot hang).
         """
-        if not self.link.transport.is_open:
-            return self._undelivered("the stop was not delivered: the port is gone")
-        lost = self.link.status is LinkStatus.LOST
-        try:
-            with signals_deferred():
-                self.send_many(self.stop_sequence())
-        except PortLost:
-            return self._undelivered("the stop was not delivered: the port is gone")
-        except _RECOVERABLE as exc:
-            return self._undelivered(f"the stop was not delivered: {exc}")
-        if lost:
-            return self._undelivered(
-                "the stop was written but is unconfirmed: the port had failed before it"
-            )
-        if self.unheard is not None:
-            return self._undelivered(f"the stop was written but is unconfirmed: {self.unheard}")
-        self.link.streaming = False
-        self.link.status = LinkStatus.STOPPED
-        self.safe_stopped = True
-        return True
-
-    def activity(self) -> str:
-        """What the last wheel command written had the robot doing: ``at 200 mm/s``,
-        ``stopped``, ``in its Clean cycle``."""
-        return describe_activity(self.last_wheels)
-
-    def _undelivered(self, why: str) -> bool:
-        """The stop did not reach the robot: say so, with what the robot was last seen
-        doing; False (what :meth:`safe_stop` returns)."""
-        self.stop_report = f"last seen in {self.modes.mode.label} {self.activity()}; {why}"
-        log.error("%s: %s", self.name, self.stop_report)
-        self.safe_stopped = False
-        return False
+        return self.ending.stop()
 
     def close(self) -> bool:
         """Safe stop (once), close the port. True if the robot was stopped (or never
         started); idempotent."""
-        if self._closed:
-            return bool(self.safe_stopped)
-        self._closed = True
-        stopped = True
-        if self.safe_stopped is True:
-            pass  # already stopped: a second stop sequence would only add bytes
-        elif self.modes.mode is not OIMode.OFF:  # safe_stop reports a port already gone
-            stopped = self.safe_stop()
-        if self.wake is not None:
-            with contextlib.suppress(*LINK_ERRORS):
-                self.wake.release()
-        self.link.transport.close()
-        self.link.status = LinkStatus.CLOSED
-        if self.safe_stopped is None:
-            self.safe_stopped = stopped
-        return stopped
+        return self.ending.close(self.wake)
+
+    def activity(self) -> str:
+        """What the last wheel command written had the robot doing: ``at 200 mm/s``,
+        ``stopped``, ``in its Clean cycle``."""
+        return self.ending.activity()
+
+    @property
+    def end_in(self) -> EndMode:
+        return self.ending.end_in
+
+    @property
+    def safe_stopped(self) -> bool | None:
+        """True once a stop is known sent, False when one failed, None before any ending."""
+        return self.ending.safe_stopped
+
+    @property
+    def stop_report(self) -> str | None:
+        """Why the stop did not reach the robot, with its last known state (None: it did, or
+        no stop was tried)."""
+        return self.ending.stop_report
+
+    @property
+    def unheard(self) -> str | None:
+        """Why a stop written now could not be known to arrive (the robot no longer answers
+        or the line is garbled), or None."""
+        return self.ending.unheard
+
+    @unheard.setter
+    def unheard(self, why: str | None) -> None:
+        self.ending.unheard = why
 
     def __enter__(self) -> Connection:
         return self

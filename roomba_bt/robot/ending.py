@@ -13,12 +13,16 @@ holds::
                           has it, Stop (Off)
 
 A stop that cannot be delivered is reported with :func:`describe_activity` of the last wheel
-command written ("last seen in Safe at 200 mm/s; ...").
+command written ("last seen in Safe at 200 mm/s; ..."). :class:`SafeStop` is the session's
+part that does it: it writes the sequence through the session's
+:class:`~roomba_bt.robot.writer.CommandWriter` (whole: SIGINT/SIGTERM held meanwhile) and
+keeps whether the stop reached the robot.
 """
 
 from __future__ import annotations
 
 import contextlib
+import logging
 import signal
 from collections.abc import Iterator
 from typing import Literal
@@ -28,8 +32,17 @@ from roomba_bt.oi.encode import Command
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import Effect
 from roomba_bt.oi.profiles import RobotProfile
+from roomba_bt.robot.errors import PortLost, RobotError
+from roomba_bt.robot.link import LINK_ERRORS, LinkStatus
+from roomba_bt.robot.wake import KeepAwake
+from roomba_bt.robot.writer import CommandWriter
+
+log = logging.getLogger(__name__)
 
 EndMode = Literal["passive", "stop"]
+
+#: What a stop may meet and must survive.
+_RECOVERABLE: tuple[type[Exception], ...] = (RobotError, *LINK_ERRORS)
 
 
 def stop_sequence(
@@ -88,3 +101,95 @@ def signals_deferred() -> Iterator[None]:
         yield
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+class SafeStop:
+    """The endings of one session: the stop sequence written whole from the mode the model
+    holds, whether it reached the robot, and the port closed once.
+
+    ``safe_stopped``: True once a stop is known sent, False when one failed (``stop_report``
+    then says why, with what the robot was last seen doing), None before any ending.
+    ``unheard``: why a stop written now could not be known to arrive (the robot no longer
+    answers, or the line is garbled), or None.
+    """
+
+    def __init__(self, writer: CommandWriter, end_in: EndMode) -> None:
+        self.writer = writer
+        self.end_in: EndMode = end_in
+        self.safe_stopped: bool | None = None
+        self.stop_report: str | None = None
+        self.unheard: str | None = None
+        self.closed = False
+
+    def begin(self) -> None:
+        """A session starts (again): nothing has ended."""
+        self.closed = False
+        self.safe_stopped = None
+        self.unheard = None
+
+    def sequence(self) -> list[Command]:
+        """What :meth:`stop` sends from the current mode (:func:`stop_sequence`)."""
+        writer = self.writer
+        return stop_sequence(
+            writer.modes.mode, builtin_may_run=writer.builtin_may_run, end_in=self.end_in,
+            profile=writer.profile,
+        )  # fmt: skip
+
+    def stop(self) -> bool:
+        """Stop the robot and leave it in Passive (or Off with ``end_in="stop"``); never
+        raises for a dead link (False, and the stop report logged)."""
+        link = self.writer.link
+        if not link.transport.is_open:
+            return self._undelivered("the stop was not delivered: the port is gone")
+        lost = link.status is LinkStatus.LOST
+        try:
+            with signals_deferred():
+                self.writer.send_many(self.sequence())
+        except PortLost:
+            return self._undelivered("the stop was not delivered: the port is gone")
+        except _RECOVERABLE as exc:
+            return self._undelivered(f"the stop was not delivered: {exc}")
+        if lost:
+            return self._undelivered(
+                "the stop was written but is unconfirmed: the port had failed before it"
+            )
+        if self.unheard is not None:
+            return self._undelivered(f"the stop was written but is unconfirmed: {self.unheard}")
+        link.streaming = False
+        link.status = LinkStatus.STOPPED
+        self.safe_stopped = True
+        return True
+
+    def activity(self) -> str:
+        """What the last wheel command written had the robot doing (:func:`describe_activity`)."""
+        return describe_activity(self.writer.last_wheels)
+
+    def _undelivered(self, why: str) -> bool:
+        """The stop did not reach the robot: say so, with what the robot was last seen
+        doing; False (what :meth:`stop` returns)."""
+        mode = self.writer.modes.mode
+        self.stop_report = f"last seen in {mode.label} {self.activity()}; {why}"
+        log.error("%s: %s", self.writer.link.name, self.stop_report)
+        self.safe_stopped = False
+        return False
+
+    def close(self, wake: KeepAwake | None) -> bool:
+        """Stop (once), release keep-awake, close the port. True if the robot was stopped
+        (or never started); idempotent."""
+        if self.closed:
+            return bool(self.safe_stopped)
+        self.closed = True
+        stopped = True
+        if self.safe_stopped is True:
+            pass  # already stopped: a second stop sequence would only add bytes
+        elif self.writer.modes.mode is not OIMode.OFF:  # stop() reports a port already gone
+            stopped = self.stop()
+        if wake is not None:
+            with contextlib.suppress(*LINK_ERRORS):
+                wake.release()
+        link = self.writer.link
+        link.transport.close()
+        link.status = LinkStatus.CLOSED
+        if self.safe_stopped is None:
+            self.safe_stopped = stopped
+        return stopped

@@ -1,0 +1,173 @@
+"""The command path of a session: the guard, a tick's batch in one write, each opcode's effect.
+
+Every command a :class:`~roomba_bt.robot.connection.Connection` sends leaves through one
+:class:`CommandWriter`::
+
+    command ──► ModeModel.check ──► Command.data (encoded, range-checked) ──► link.write
+                 (refused: ModeError,                                   then ModeModel.apply
+                  nothing written)                                      and the opcode's Effect
+
+A tick's outbox (:meth:`CommandWriter.send_many`) is guarded command by command against the
+mode the commands before it lead to and written in one write; a Baud (129) in it sends what
+came before at the old rate and the rest after the port followed. What a written command
+changes on our side of the link is the opcode table's
+:class:`~roomba_bt.oi.opcodes.Effect`: a new stream, a pause, a baud change, a built-in cycle
+that may drive in Passive.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Iterable
+
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.encode import BAUD_RATES, Command
+from roomba_bt.oi.errors import UnsupportedCommandError
+from roomba_bt.oi.modes import DRIVING_MODES
+from roomba_bt.oi.opcodes import Effect
+from roomba_bt.oi.profiles import RobotProfile
+from roomba_bt.oi.stream import check_bandwidth
+from roomba_bt.robot.errors import ModeError, PortLost
+from roomba_bt.robot.link import StreamLink
+from roomba_bt.robot.modes import ModeModel
+
+log = logging.getLogger(__name__)
+
+#: The spec asks for 100 ms after Baud (129) before sending at the new rate.
+BAUD_CHANGE_WAIT = 0.1
+
+
+class CommandWriter:
+    """Guards, writes and follows the commands of one session over ``link``.
+
+    It keeps what the written commands leave behind: ``modes`` (the session's mode model,
+    moved by each command), the port's ``baud``, the last wheel command, whether a built-in
+    cycle may be driving, when the last command went, and the counts sent and refused.
+    """
+
+    def __init__(
+        self, link: StreamLink, modes: ModeModel, profile: RobotProfile, baud: int
+    ) -> None:
+        self.link = link
+        self.modes = modes
+        self.profile = profile
+        self.baud = baud
+        self.sent = 0
+        self.refused = 0
+        #: the last wheel command written (Drive, Drive Direct, PWM, a cleaning cycle)
+        self.last_wheels: Command | None = None
+        #: a Clean/Spot/Max/Seek Dock cycle may be driving
+        self.builtin_may_run = False
+        #: when the last command was written (link clock)
+        self.last_command_at = float("-inf")
+
+    def send(self, command: Command) -> None:
+        """Guard, then write ``command``'s bytes, then update the mode model.
+
+        A refused command raises (:class:`ModeError`,
+        :class:`~roomba_bt.oi.errors.UnsupportedCommandError`,
+        :class:`~roomba_bt.oi.errors.BandwidthError` for a stream that does not fit) and
+        nothing is written.
+        """
+        self._send(command, None)
+
+    def send_many(self, commands: Iterable[Command]) -> None:
+        """A tick's outbox, in order, in one write. Each command is guarded against the mode
+        the commands before it lead to (so ``safe`` then ``drive`` passes). Refused commands
+        are left out; after the others are written the first refusal is raised."""
+        refused: list[Exception] = []
+        batch = bytearray()
+        # the model follows what was written: if the batch never leaves, it is put back
+        saved = self.modes.snapshot(), self.last_wheels
+        try:
+            for command in commands:
+                try:
+                    self._send(command, batch)
+                except (ModeError, UnsupportedCommandError) as exc:
+                    refused.append(exc)
+        finally:
+            if batch:
+                try:
+                    self.link.write(bytes(batch))
+                except PortLost:
+                    self.modes.restore(saved[0])
+                    self.last_wheels = saved[1]
+                    raise
+        if refused:
+            for extra in refused[1:]:
+                log.warning("%s: also refused: %s", self.link.name, extra)
+            raise refused[0]
+
+    def _send(self, command: Command, batch: bytearray | None) -> None:
+        spec = command.spec
+        try:
+            self.modes.check(command)
+        except (ModeError, UnsupportedCommandError):
+            self.refused += 1
+            raise
+        effect = spec.effect
+        if effect is Effect.STREAM:
+            check_bandwidth(command.args[1:], self.baud)
+        warning = self.profile.command_warning(spec)
+        if warning is not None:
+            log.warning("%s: %s", self.link.name, warning)
+        if batch is None or effect is Effect.BAUD:  # the rest goes at the new rate
+            if batch:
+                self.link.write(bytes(batch))
+                batch.clear()
+            self.link.write(command.data)
+        else:
+            batch += command.data
+        now = self.link.transport.now()
+        self.last_command_at = now
+        self.modes.apply(command, now)
+        if spec.channel == "wheels":
+            self.last_wheels = command
+        self.sent += 1
+        if effect is not None or spec.leads_to is not None:  # not a plain actuator command
+            self._after(command, now)
+
+    def _after(self, command: Command, now: float) -> None:
+        """What a written command changes on our side of the link (the opcode table's
+        :class:`~roomba_bt.oi.opcodes.Effect` and mode)."""
+        spec = command.spec
+        effect = spec.effect
+        if effect is Effect.STREAM:
+            self.link.new_stream(tuple(command.args[1:]), now)
+        elif effect is Effect.PAUSE_RESUME:
+            self.link.pause_resume(bool(command.args[0]), now)
+        elif effect is Effect.SILENCES:
+            self.link.streaming = False
+        if effect is Effect.BUILTIN_CYCLE:
+            self.builtin_may_run = True
+        elif spec.ends_cycle:
+            self.builtin_may_run = False
+        elif effect is Effect.BAUD:
+            self._change_baud(BAUD_RATES[command.args[0]])
+
+    def _change_baud(self, rate: int) -> None:
+        """Baud (129) was written: wait the 100 ms the spec asks (reading, so the link's
+        clock moves on a virtual link too), then change the port's rate."""
+        link = self.link
+        clock = link.transport.now
+        deadline = clock() + BAUD_CHANGE_WAIT
+        while (remaining := deadline - clock()) > 0:
+            data = link.read(remaining)
+            if data:
+                link.ingest(data, clock())
+        link.set_baud(rate)
+        self.baud = rate
+
+    def set_baud(self, rate: int) -> None:
+        """Baud (129) by rate (e.g. 19200); the port follows after 100 ms."""
+        if self.link.stream_ids:
+            check_bandwidth(self.link.stream_ids, rate)
+        self.send(oi.baud_rate(rate))
+
+    def halt(self) -> bool:
+        """Drive 0 if the model says the robot may be driving; True if it was sent (the
+        watchdog's action)."""
+        if self.modes.mode not in DRIVING_MODES:
+            return False
+        self.send(oi.halt())
+        return True
