@@ -18,6 +18,8 @@ import pytest
 from roomba_bt.oi import commands as oi
 from roomba_bt.runtime.recording import load_record
 
+from .simrun import SPIN
+
 SAFE_END = oi.halt().data + oi.motors_off().data + oi.pause_stream().data + oi.start().data
 CLI = [sys.executable, "-m", "roomba_bt.cli"]
 
@@ -35,15 +37,6 @@ def _mission(tmp_path: Path, text: str) -> Path:
     path = tmp_path / "mission.yaml"
     path.write_text(textwrap.dedent(text))
     return path
-
-
-FOREVER = """
-mission: spin-forever
-tree:
-  sequence:
-    - mode: safe
-    - drive: {velocity: 100 mm/s, radius: spin_left}
-"""
 
 
 def _start_run(port: str, mission: Path, record: Path, *extra: str) -> subprocess.Popen[str]:
@@ -69,7 +62,7 @@ def _wait_for_driving(record: Path, timeout: float = 10.0) -> None:
 def _driving(port: str, tmp_path: Path) -> tuple[subprocess.Popen[str], Path]:
     """A run spinning for ever on ``port``, once it drives; its record's path."""
     record = tmp_path / "run.jsonl"
-    proc = _start_run(port, _mission(tmp_path, FOREVER), record)
+    proc = _start_run(port, _mission(tmp_path, SPIN), record)
     _wait_for_driving(record)
     return proc, record
 
@@ -129,7 +122,7 @@ def test_success_over_the_pty(sim_port: str, tmp_path: Path) -> None:
 
 def test_timeout_over_the_pty_is_exit_1(sim_port: str, tmp_path: Path) -> None:
     record = tmp_path / "run.jsonl"
-    proc = _start_run(sim_port, _mission(tmp_path, FOREVER), record, "--timeout", "1s")
+    proc = _start_run(sim_port, _mission(tmp_path, SPIN), record, "--timeout", "1s")
     out, err = proc.communicate(timeout=30)
     assert proc.returncode == 1, err
     assert "TIMEOUT" in out
@@ -138,7 +131,7 @@ def test_timeout_over_the_pty_is_exit_1(sim_port: str, tmp_path: Path) -> None:
 
 def _run_on(port: str, tmp_path: Path) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [*CLI, "run", str(_mission(tmp_path, FOREVER)), "--port", port],
+        [*CLI, "run", str(_mission(tmp_path, SPIN)), "--port", port],
         capture_output=True,
         text=True,
         timeout=30,

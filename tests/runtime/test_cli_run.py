@@ -10,6 +10,8 @@ import pytest
 from roomba_bt.cli import main
 from roomba_bt.runtime.recording import load_record
 
+from .simrun import SPIN
+
 MISSION = """
 mission: short-drive
 parameters:
@@ -87,10 +89,7 @@ def test_missing_mission_file_is_exit_2(capsys: pytest.CaptureFixture[str]) -> N
 
 def test_timeout_is_exit_1(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     spin = tmp_path / "spin.yaml"
-    spin.write_text(
-        "tree:\n  sequence:\n    - mode: safe\n"
-        "    - drive: {velocity: 100 mm/s, radius: spin_left}\n"
-    )
+    spin.write_text(SPIN)
     assert main(["run", str(spin), "--fast", "--display", "none", "--timeout", "2s"]) == 1
     assert "TIMEOUT" in capsys.readouterr().out
 

@@ -11,7 +11,7 @@ from roomba_bt.oi.stream import StreamParser
 from roomba_bt.runtime.summary import Outcome
 from roomba_bt.sim import Faults
 
-from .simrun import RunMission
+from .simrun import SPIN, RunMission
 
 HALT = oi.halt().data
 MOTORS_OFF = oi.motors_off().data
@@ -65,15 +65,7 @@ def test_failure_is_exit_1_and_names_the_failed_leaf(run_mission: RunMission) ->
 
 
 def test_timeout_counts_mission_time(run_mission: RunMission) -> None:
-    run = run_mission(
-        """
-        tree:
-          sequence:
-            - mode: safe
-            - drive: {velocity: 100 mm/s, radius: spin_left}
-        """,
-        timeout=1.5,
-    )
+    run = run_mission(SPIN, timeout=1.5)
     assert run.summary.outcome is Outcome.TIMEOUT
     assert run.summary.exit_code == 1
     assert run.summary.mission_time_s == pytest.approx(1.5, abs=0.016)
@@ -118,16 +110,7 @@ def test_ctrl_c_is_exit_130_after_the_safe_stop(
 
 
 def test_lost_stream_trips_the_watchdog_and_stops(run_mission: RunMission) -> None:
-    run = run_mission(
-        """
-        tree:
-          sequence:
-            - mode: safe
-            - drive: {velocity: 100 mm/s, radius: spin_left}
-        """,
-        stall_after=1.0,
-        timeout=5.0,
-    )
+    run = run_mission(SPIN, stall_after=1.0, timeout=5.0)
     assert run.summary.outcome is Outcome.CONNECTION_LOST
     assert run.summary.exit_code == 3
     assert "the sensor stream stopped: nothing arrived for 2.0 s" in run.summary.reason
@@ -139,15 +122,7 @@ def test_lost_stream_trips_the_watchdog_and_stops(run_mission: RunMission) -> No
 
 
 def test_unplugged_link_is_exit_3_and_says_the_stop_was_not_sent(run_mission: RunMission) -> None:
-    run = run_mission(
-        """
-        tree:
-          sequence:
-            - mode: safe
-            - drive: {velocity: 100 mm/s, radius: spin_left}
-        """,
-        faults=Faults(disconnect_at=1.0),
-    )
+    run = run_mission(SPIN, faults=Faults(disconnect_at=1.0))
     assert run.summary.outcome is Outcome.CONNECTION_LOST
     assert run.summary.exit_code == 3
     assert run.summary.safe_stop == (

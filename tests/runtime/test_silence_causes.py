@@ -110,19 +110,26 @@ def test_a_robot_that_cannot_be_pulsed_is_not_called_asleep(tmp_path: Path) -> N
     assert "unconfirmed: the robot answers nothing" in summary.safe_stop
 
 
-def test_a_baud_change_mid_run_is_named_followed_and_the_robot_stopped(tmp_path: Path) -> None:
-    summary, simulator = run(tmp_path, SPIN, Faults(baud_change_at=3.0), timeout=10.0)
+def assert_followed_and_stopped(
+    summary: RunSummary, simulator: Simulator, change: float, within: float
+) -> None:
+    """The run named the change to 19200 and sent drive 0 again there; the stop reached the
+    robot at its new rate (stopped, in Passive) within ``within`` s of the change."""
     assert summary.outcome is Outcome.CONNECTION_LOST and summary.exit_code == 3
     assert "the robot now talks at another baud rate: 19200, not the 115200" in summary.reason
     assert "drive 0 sent again at 19200" in summary.reason
-    assert "garbage since" in summary.reason
     assert summary.stop_delivered
-    # the stop reached the robot at its new rate: stopped, in Passive
     assert simulator.mode is OIMode.PASSIVE
     assert simulator.requested_left == simulator.requested_right == 0
-    # stopped within the watchdog, the listen and a slot or two of the change
     stops = [e.time for e in simulator.events if e.kind == "mode" and "Passive" in e.detail]
-    assert stops and stops[-1] - 3.0 <= 0.1 + 0.1 + 0.06
+    assert stops and stops[-1] - change <= within
+
+
+def test_a_baud_change_mid_run_is_named_followed_and_the_robot_stopped(tmp_path: Path) -> None:
+    summary, simulator = run(tmp_path, SPIN, Faults(baud_change_at=3.0), timeout=10.0)
+    assert "garbage since" in summary.reason
+    # stopped within the watchdog, the listen and a slot or two of the change
+    assert_followed_and_stopped(summary, simulator, 3.0, 0.1 + 0.1 + 0.06)
 
 
 def test_noise_at_the_run_rate_is_not_taken_for_a_baud_change(tmp_path: Path) -> None:
@@ -144,13 +151,7 @@ def test_a_listen_that_misses_the_change_is_tried_again_and_the_robot_stopped(
     link_type = type("Deaf", (DeafAtFirstListen,), {"deaf_s": deaf_s})
     change = 3.0 + phase
     summary, simulator = run(tmp_path, SPIN, Faults(baud_change_at=change), link_type, timeout=10.0)
-    assert "the robot now talks at another baud rate: 19200, not the 115200" in summary.reason
-    assert "drive 0 sent again at 19200" in summary.reason
-    assert summary.stop_delivered
-    assert simulator.mode is OIMode.PASSIVE
-    assert simulator.requested_left == simulator.requested_right == 0
-    stops = [e.time for e in simulator.events if e.kind == "mode" and "Passive" in e.detail]
-    assert stops and stops[-1] - change <= 0.1 + deaf_s + 2 * LISTEN_S + 0.1
+    assert_followed_and_stopped(summary, simulator, change, 0.1 + deaf_s + 2 * LISTEN_S + 0.1)
 
 
 def test_the_listen_is_long_enough_for_two_whole_frames_at_the_rate() -> None:
