@@ -164,19 +164,19 @@ def test_a_bump_changes_the_drive_command_within_one_frame(run_mission: RunMissi
     assert after[0] in (HALT, oi.drive(-100, oi.Radius.STRAIGHT).data)
 
 
+#: Safe, then 3 s of mission time counted in slots.
+WAIT_3S = """
+tree:
+  sequence:
+    - mode: safe
+    - wait: {duration: 3s}
+"""
+
+
 def test_stale_frames_are_dropped_not_queued(run_mission: RunMission) -> None:
     # Frames arrive three at a time (a host that fell behind): only the newest is ticked,
     # the two older ones are dropped and counted, and mission time still counts every slot.
-    run = run_mission(
-        """
-        tree:
-          sequence:
-            - mode: safe
-            - wait: {duration: 3s}
-        """,
-        burst=3,
-        watchdog=0.5,
-    )
+    run = run_mission(WAIT_3S, burst=3, watchdog=0.5)
     summary = run.summary
     assert summary.outcome is Outcome.SUCCESS
     assert summary.stale_frames_dropped >= 2 * (summary.ticks - 2)
@@ -186,16 +186,7 @@ def test_stale_frames_are_dropped_not_queued(run_mission: RunMission) -> None:
 
 
 def test_lost_frames_are_measured_and_the_clock_keeps_slots(run_mission: RunMission) -> None:
-    run = run_mission(
-        """
-        tree:
-          sequence:
-            - mode: safe
-            - wait: {duration: 3s}
-        """,
-        faults=Faults(drop_rate=0.2),
-        watchdog=1.0,
-    )
+    run = run_mission(WAIT_3S, faults=Faults(drop_rate=0.2), watchdog=1.0)
     assert run.summary.outcome is Outcome.SUCCESS
     assert run.summary.frames_lost > 0
     # 3 s of mission time, whatever was lost: the wait counts slots, not frames.
