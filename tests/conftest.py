@@ -1,6 +1,7 @@
 """Suite-wide: under ``CI=true`` a test skipped for a missing test dependency fails instead;
 ``clean_blackboard`` for the folders whose tests write py_trees' blackboard; ``served_sim``,
-``roomba-bt sim`` in a child process; ``silent_port``, a pty nobody answers on;
+``roomba-bt sim`` in a child process; ``child``, any child process, killed if a test leaves it
+running; ``silent_port``, a pty nobody answers on;
 ``usage_error``, a command line that must be refused.
 
 Outside CI a missing optional package (the peer clients pycreate2 and PyRoombaAdapter,
@@ -16,11 +17,14 @@ import select
 import signal
 import subprocess
 import sys
-from collections.abc import Callable, Generator, Iterator
+from collections.abc import Callable, Generator, Iterator, Sequence
+from pathlib import Path
 
 import py_trees
 import pytest
 
+#: the checkout, first on a child's path (its ``roomba_bt``, whatever is installed)
+ROOT = Path(__file__).resolve().parents[1]
 #: skip reasons that mean "a test dependency is not installed"
 MISSING_DEPENDENCY = ("could not import", "No module named", "pip install")
 
@@ -91,6 +95,28 @@ def served_sim() -> Iterator[Callable[..., ServedSim]]:
     for sim in started:
         if sim.proc.poll() is None:
             sim.stop()
+
+
+@pytest.fixture
+def child() -> Iterator[Callable[[Sequence[str]], subprocess.Popen[str]]]:
+    """``child([sys.executable, ...])`` starts a process with text pipes and this checkout
+    first on its ``PYTHONPATH``; each one still running when the test ends (a failed
+    assertion, a timeout) is killed, so none outlives its test."""
+    started: list[subprocess.Popen[str]] = []
+
+    def start(args: Sequence[str]) -> subprocess.Popen[str]:
+        env = {**os.environ, "PYTHONPATH": str(ROOT)}
+        proc = subprocess.Popen(
+            list(args), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env
+        )
+        started.append(proc)
+        return proc
+
+    yield start
+    for proc in started:
+        if proc.poll() is None:
+            proc.kill()
+        proc.communicate()
 
 
 @pytest.fixture

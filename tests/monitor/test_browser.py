@@ -12,7 +12,7 @@ import re
 import subprocess
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -32,6 +32,14 @@ from .live import LiveRun, start_live_run
 HERE = Path(__file__).resolve().parent
 SHUTTLE = HERE / "missions" / "shuttle.yaml"
 WAIT_MS = 15_000
+#: the ``child`` fixture (tests/conftest.py)
+Child = Callable[[Sequence[str]], "subprocess.Popen[str]"]
+
+
+def monitored_run(mission: Path) -> list[str]:
+    """``roomba-bt run MISSION --monitor 0``: its page on a free port, no terminal display."""
+    return [sys.executable, "-m", "roomba_bt.cli", "run", str(mission), "--monitor", "0",
+            "--display", "none"]  # fmt: skip
 
 
 @pytest.fixture
@@ -136,22 +144,12 @@ def test_a_breakpoint_pauses_the_run_where_the_node_starts_and_step_ticks_once(
     assert live.session.state.paused
 
 
-def test_stop_ends_the_run_as_ctrl_c_with_the_safe_stop(page: Any, tmp_path: Path) -> None:
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "roomba_bt.cli", "run", str(SHUTTLE), "--monitor", "0",
-         "--display", "none"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
-    try:
-        url = _url_from(proc)
-        page.goto(url)
-        page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
-        page.click("#stop")
-        out, err = proc.communicate(timeout=30)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
+def test_stop_ends_the_run_as_ctrl_c_with_the_safe_stop(page: Any, child: Child) -> None:
+    proc = child(monitored_run(SHUTTLE))
+    page.goto(_url_from(proc))
+    page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+    page.click("#stop")
+    out, err = proc.communicate(timeout=30)
     assert proc.returncode == 130, err
     assert "outcome      INTERRUPTED (stopped by the operator)" in out
     assert re.search(r"safe stop    sent drive, motors, pause_resume_stream, start", out), out
@@ -206,37 +204,30 @@ def test_a_recorded_run_on_the_timeline_shows_that_ticks_statuses(
         server.close()
 
 
-def test_watch_reloads_a_valid_change_and_refuses_an_invalid_one(page: Any, tmp_path: Path) -> None:
+def test_watch_reloads_a_valid_change_and_refuses_an_invalid_one(
+    page: Any, tmp_path: Path, child: Child
+) -> None:
     mission = tmp_path / "shuttle.yaml"
     mission.write_text(SHUTTLE.read_text())
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "roomba_bt.cli", "run", str(mission), "--monitor", "0",
-         "--watch", "--display", "none"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
-    try:
-        page.goto(_url_from(proc))
-        page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
-        mission.write_text(SHUTTLE.read_text().replace("there and back", "out and home"))
-        page.wait_for_selector('.node[data-name="out and home"]', timeout=WAIT_MS)
-        page.wait_for_selector('#events li:has-text("reloaded shuttle")', timeout=WAIT_MS)
-        page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)  # the new tree drives
-        broken = SHUTTLE.read_text().replace("velocity: 100 mm/s", "velocity: fast")
-        mission.write_text(broken)
-        refused = page.wait_for_selector('#events li:has-text("reload refused")', timeout=WAIT_MS)
-        assert re.search(rf"{re.escape(str(mission))}:\d+:\d+", refused.inner_text())
-        tick = int(page.inner_text("#tick"))
-        page.wait_for_function(
-            f"Number(document.getElementById('tick').textContent) > {tick + 20}",
-            timeout=WAIT_MS,
-        )  # the run goes on
-        assert page.query_selector('.node[data-name="out and home"]') is not None
-        page.click("#stop")
-        out, err = proc.communicate(timeout=30)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
+    proc = child([*monitored_run(mission), "--watch"])
+    page.goto(_url_from(proc))
+    page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+    mission.write_text(SHUTTLE.read_text().replace("there and back", "out and home"))
+    page.wait_for_selector('.node[data-name="out and home"]', timeout=WAIT_MS)
+    page.wait_for_selector('#events li:has-text("reloaded shuttle")', timeout=WAIT_MS)
+    page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)  # the new tree drives
+    broken = SHUTTLE.read_text().replace("velocity: 100 mm/s", "velocity: fast")
+    mission.write_text(broken)
+    refused = page.wait_for_selector('#events li:has-text("reload refused")', timeout=WAIT_MS)
+    assert re.search(rf"{re.escape(str(mission))}:\d+:\d+", refused.inner_text())
+    tick = int(page.inner_text("#tick"))
+    page.wait_for_function(
+        f"Number(document.getElementById('tick').textContent) > {tick + 20}",
+        timeout=WAIT_MS,
+    )  # the run goes on
+    assert page.query_selector('.node[data-name="out and home"]') is not None
+    page.click("#stop")
+    out, err = proc.communicate(timeout=30)
     assert proc.returncode == 130
     assert re.search(rf"reload refused: {re.escape(str(mission))}:\d+:\d+", err), err
     assert "new tree starts at the next safe point" in out

@@ -9,6 +9,7 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Callable, Sequence
 
 import pytest
 
@@ -17,7 +18,6 @@ from roomba_bt.robot.safety import Terminated, sigterm_raises
 from .fake_robot import FakeRobot, PtyEndpoint
 
 CHILD = pathlib.Path(__file__).with_name("child_connection.py")
-ROOT = pathlib.Path(__file__).resolve().parents[2]
 STOP_TO_PASSIVE = bytes([137, 0, 0, 0, 0, 138, 0, 150, 0, 128])
 
 
@@ -26,29 +26,19 @@ STOP_TO_PASSIVE = bytes([137, 0, 0, 0, 0, 138, 0, 150, 0, 128])
     [(signal.SIGINT, "KeyboardInterrupt"), (signal.SIGTERM, "Terminated")],
     ids=["SIGINT", "SIGTERM"],
 )
-def test_signal_to_a_child_leaves_the_robot_stopped_in_passive(signum: int, raised: str) -> None:
+def test_signal_to_a_child_leaves_the_robot_stopped_in_passive(
+    signum: int, raised: str, child: Callable[[Sequence[str]], subprocess.Popen[str]]
+) -> None:
     endpoint = PtyEndpoint()
     with FakeRobot(endpoint) as robot:
-        env = {**os.environ, "PYTHONPATH": str(ROOT)}
-        child = subprocess.Popen(
-            [sys.executable, str(CHILD), endpoint.url],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-            env=env,
-        )
-        try:
-            assert child.stdout is not None
-            assert child.stdout.readline().strip() == "ready", child.stderr
-            driving = bytes([137, 0, 120, 0x80, 0x00])
-            assert robot.wait_until(lambda r: r.received.count(driving) >= 3)
-            child.send_signal(signum)
-            out, err = child.communicate(timeout=10)
-        finally:
-            if child.poll() is None:
-                child.kill()
-                child.wait()
-        assert child.returncode == 130, err
+        connection = child([sys.executable, str(CHILD), endpoint.url])
+        assert connection.stdout is not None
+        assert connection.stdout.readline().strip() == "ready", connection.stderr
+        driving = bytes([137, 0, 120, 0x80, 0x00])
+        assert robot.wait_until(lambda r: r.received.count(driving) >= 3)
+        connection.send_signal(signum)
+        out, err = connection.communicate(timeout=10)
+        assert connection.returncode == 130, err
         assert out.strip() == raised
         assert robot.wait_until(lambda r: r.received.endswith(STOP_TO_PASSIVE))
         assert robot.wait_until(lambda r: r.mode.label == "Passive")
