@@ -169,6 +169,24 @@ class Outbox:
         self._senders.clear()
 
 
+class BaseHandle:
+    """The part every :class:`RobotHandle` holds alike: the robot's profile and the outbox the
+    behaviours queue into. The runtime's runner and the tests' stub add the snapshot, each
+    from its own frames."""
+
+    def __init__(self, profile: RobotProfile) -> None:
+        self._profile = profile
+        self._outbox = Outbox()
+
+    @property
+    def outbox(self) -> Outbox:
+        return self._outbox
+
+    @property
+    def profile(self) -> RobotProfile:
+        return self._profile
+
+
 class RobotHandle(Protocol):
     """What ``tree.setup(robot=handle)`` hands to every behaviour."""
 

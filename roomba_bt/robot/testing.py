@@ -18,14 +18,14 @@ from roomba_bt.oi.encode import Command
 from roomba_bt.oi.frames import ENCODER_PACKETS, layout_for
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
-from roomba_bt.robot.interface import SLOT_SECONDS, Odometry, Outbox, Snapshot
+from roomba_bt.robot.interface import SLOT_SECONDS, BaseHandle, Odometry, Snapshot
 
 __all__ = ["StubRobot"]
 
 _MODE_VALUES = frozenset(int(mode) for mode in OIMode)
 
 
-class StubRobot:
+class StubRobot(BaseHandle):
     """A :class:`RobotHandle` whose frames a test sets by hand: tick behaviours with no robot.
 
     ``stub.set_frame({7: 1, 35: 2})`` builds a frame of exactly those packets (ids -> raw
@@ -33,8 +33,7 @@ class StubRobot:
     """
 
     def __init__(self, profile: RobotProfile = DEFAULT_PROFILE, mode: OIMode = OIMode.SAFE) -> None:
-        self._profile = profile
-        self._outbox = Outbox()
+        super().__init__(profile)
         self._tick = -1
         self._mode = mode
         self._odometry = Odometry()
@@ -50,14 +49,6 @@ class StubRobot:
     @property
     def snapshot(self) -> Snapshot:
         return self._snapshot
-
-    @property
-    def outbox(self) -> Outbox:
-        return self._outbox
-
-    @property
-    def profile(self) -> RobotProfile:
-        return self._profile
 
     def set_frame(
         self, values: dict[int, int], *, mode: OIMode | None = None, ticks: int = 1

@@ -37,7 +37,13 @@ from roomba_bt.oi.stream import check_bandwidth
 from roomba_bt.robot.connection import Connection, TimedFrame
 from roomba_bt.robot.errors import ConnectionFailed, LinkDown, ModeError, StreamStalled
 from roomba_bt.robot.hazards import HazardConfirmation
-from roomba_bt.robot.interface import SLOT_SECONDS, ModeChange, Odometry, Outbox, Snapshot
+from roomba_bt.robot.interface import (
+    SLOT_SECONDS,
+    BaseHandle,
+    ModeChange,
+    Odometry,
+    Snapshot,
+)
 from roomba_bt.robot.safety import InterruptGuard, Terminated
 from roomba_bt.runtime.summary import DEFAULT_GRACE, Outcome, RunSummary
 
@@ -121,7 +127,7 @@ class StopRequested(Exception):
     """An operator ended the run (the monitor's stop): it ends as on Ctrl-C, exit 130."""
 
 
-class MissionRunner:
+class MissionRunner(BaseHandle):
     """Runs one compiled mission on one connection; is the behaviours' ``RobotHandle``."""
 
     def __init__(
@@ -139,9 +145,9 @@ class MissionRunner:
         grace: float = DEFAULT_GRACE,
         hold_interrupts: bool = False,
     ) -> None:
+        super().__init__(profile)
         self.connection = connection
         self.mission = mission
-        self._profile = profile
         self.packets = tuple(packets)
         self.timeout_s = timeout_s
         self.observer = observer
@@ -158,7 +164,6 @@ class MissionRunner:
         #: while a stall is ridden through: (bytes read when it began, drive 0 sent, the
         #: last valid frame's time)
         self._stall: tuple[int, bool, float] | None = None
-        self._outbox = Outbox()
         self._snapshot: Snapshot | None = None
         self._odometry = Odometry()
         self._tick = -1
@@ -187,14 +192,6 @@ class MissionRunner:
         if self._snapshot is None:
             raise RuntimeError("no sensor frame yet: the tree is ticked only after the first")
         return self._snapshot
-
-    @property
-    def outbox(self) -> Outbox:
-        return self._outbox
-
-    @property
-    def profile(self) -> RobotProfile:
-        return self._profile
 
     @property
     def has_snapshot(self) -> bool:
