@@ -46,6 +46,7 @@ import termios
 import time
 import tty
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any, Protocol
 
 from serial.rfc2217 import PortManager
@@ -251,25 +252,25 @@ class TcpEndpoint:
         self.hang_up()
 
 
+@dataclass
 class VirtualLine:
     """The serial port :class:`serial.rfc2217.PortManager` configures: it keeps what the
     client set (rate, framing, RTS, DTR) instead of driving hardware."""
 
-    def __init__(self, baudrate: int) -> None:
-        self.baudrate = baudrate
-        self.bytesize = 8
-        self.parity = "N"
-        self.stopbits = 1
-        self.xonxoff = False
-        self.rtscts = False
-        self.break_condition = False
-        self.rts = False
-        self.dtr = False
-        # the lines a robot would drive back: the cable has none of them wired
-        self.cts = False
-        self.dsr = False
-        self.ri = False
-        self.cd = False
+    baudrate: int
+    bytesize: int = 8
+    parity: str = "N"
+    stopbits: int = 1
+    xonxoff: bool = False
+    rtscts: bool = False
+    break_condition: bool = False
+    rts: bool = False
+    dtr: bool = False
+    # the lines a robot would drive back: the cable has none of them wired
+    cts: bool = False
+    dsr: bool = False
+    ri: bool = False
+    cd: bool = False
 
     def reset_input_buffer(self) -> None:
         """Nothing is buffered on this side."""
