@@ -202,15 +202,7 @@ class StreamLink:
     # ------------------------------------------------------------------ the stream
     def new_stream(self, ids: tuple[int, ...], now: float) -> None:
         """Stream (148) was written: frames of ``ids`` from now on (none: no stream)."""
-        if self._parser is not None:
-            c = self._parser.counters
-            frames, checksums, skipped, implausible = self._parsed_before
-            self._parsed_before = (
-                frames + c.frames,
-                checksums + c.checksum_failures,
-                skipped + c.skipped_bytes,
-                implausible + c.implausible,
-            )
+        self._parsed_before = self.parsed()  # the old parser's counts, kept
         self.stream_ids = ids
         self._parser = (
             StreamParser(ids, self.profile, mode_plus_one=self.mode_plus_one) if ids else None
