@@ -107,3 +107,19 @@ def test_the_simulator_in_process_for_every_profile(profile_name: str) -> None:
     assert bytes(robot.received).endswith(STOP_TO_PASSIVE)
     assert robot.mode is OIMode.PASSIVE
     assert robot.actuator_commands_outside_safe_or_full() == []
+
+
+def test_counters_run_across_a_new_stream_request() -> None:
+    """A second Stream (148) starts a new parser; the frames the first one counted stay in
+    :attr:`Connection.counters` (they are since the connection was made)."""
+    link, _ = make_sim_link(get_profile("create2"))
+    with Connection(link, "create2") as connection:
+        connection.start("safe", PACKETS)
+        while connection.counters.frames < 10:
+            connection.poll(0.1)
+        before = connection.counters.frames
+        connection.send(oi.stream(PACKETS[:2]))
+        after: list[object] = []
+        while len(after) < 5:
+            after += connection.poll(0.1)
+        assert connection.counters.frames >= before + 5
