@@ -16,11 +16,28 @@ Every figure is measured in this process, beside its baseline:
 * eval on Dask: the same 48 episodes on a local Dask cluster of 1 and of 2 worker processes
   (each cluster started and its workers' imports warmed before the clock starts: what a
   long-running cluster costs per evaluation). Target: >= 1.8x.
+
+``python -m bench.bench_routines --against 626461e [--rounds N]`` measures issue 18's "halve
+the mission + runtime cost per tick" without a moving divisor: the physics got faster since
+the issue was filed, so "x the physics" reads worse for the same mission code. The given
+commit's ``roomba_bt`` and ``missions`` (``git archive``) and this tree's run the same kind of
+episodes in child processes, interleaved, several rounds, in the same minute; per tick, each
+side's mission + runtime cost is its episodes' CPU time less its own simulator stepping alone
+for as many steps, and both are given as multiples of ONE yardstick: the old commit's
+simulator stepping. The dock mission changed on purpose since then (faster turns and
+approach: other episodes, other lengths), so the unit is the tick, not the episode.
 """
 
 from __future__ import annotations
 
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
 import time
+from collections.abc import Sequence
 from pathlib import Path
 
 from roomba_bt.evaluate import episode_specs, run_episodes
@@ -105,5 +122,172 @@ def dask_scaling(repeats: int = 2) -> None:
     )
 
 
-if __name__ == "__main__":
+#: (label, mission file, world, eval fields): the two episode kinds of ``main``
+AGAINST_CASES: tuple[tuple[str, str, str, dict[str, object]], ...] = (
+    ("dock, empty room, 8 poses", "dock.yaml", "empty-room", {"within_m": 1.5}),
+    ("bump-and-turn, corridor, 8 x 60 s", "bump-and-turn.yaml", "corridor", {"timeout_s": 90.0}),
+)
+
+
+#: an episode this long is its start (compile, connection, start-up) and end (stop, summary)
+SETUP_TIMEOUT_S = 0.015
+
+
+def _child(mission: str, world: str, fields_json: str) -> None:
+    """In a child process: 8 episodes, then the simulator alone for as many steps; CPU times.
+
+    Runs with whichever ``roomba_bt`` the child's working directory holds (this tree's or an
+    archived commit's); only the evaluation API both share is used."""
+    import roomba_bt
+    from roomba_bt.evaluate import episode_specs, run_episode
+    from roomba_bt.sim import Simulator, load_world
+
+    fields = json.loads(fields_json)
+    specs = episode_specs(mission, world=world, runs=8, seed=100, **fields)
+    started = time.process_time()
+    results = [run_episode(spec) for spec in specs]
+    episodes = time.process_time() - started
+    ticks = sum(r.ticks for r in results)
+    fields["timeout_s"] = SETUP_TIMEOUT_S  # the same episodes cut short: their fixed cost
+    started = time.process_time()
+    short = [
+        run_episode(spec)
+        for spec in episode_specs(mission, world=world, runs=8, seed=100, **fields)
+    ]
+    setup = time.process_time() - started
+    sim = Simulator(load_world(world))
+    started = time.process_time()
+    for _ in range(ticks):
+        sim.step()
+    physics = time.process_time() - started
+    print(json.dumps({
+        "episodes_s": episodes, "physics_s": physics, "ticks": ticks,
+        "setup_s": setup, "setup_ticks": sum(r.ticks for r in short),
+        "succeeded": sum(r.outcome == "success" for r in results),
+        "package": roomba_bt.__file__,
+    }))  # fmt: skip
+
+
+def _run_child(
+    code: Path, mission: Path, world: str, fields: dict[str, object]
+) -> dict[str, float]:
+    """One child run with ``code``'s package first on the path (its working directory)."""
+    env = {k: v for k, v in os.environ.items() if k != "ROOMBA_BT_WORLDS"}
+    env["PYTHONPATH"] = str(ROOT)  # for ``bench`` itself; ``roomba_bt`` comes from ``code``
+    done = subprocess.run(
+        [sys.executable, "-m", "bench.bench_routines", "--child",
+         str(mission), world, json.dumps(fields)],
+        cwd=code, env=env, capture_output=True, text=True, check=False,
+    )  # fmt: skip
+    if done.returncode != 0:
+        raise RuntimeError(f"child run in {code} failed:\n{done.stderr[-2000:]}")
+    found: dict[str, float] = json.loads(done.stdout.strip().splitlines()[-1])
+    expected = (code / "roomba_bt" / "__init__.py").resolve()
+    if Path(str(found.pop("package"))).resolve() != expected:
+        raise RuntimeError(f"the child in {code} imported another roomba_bt")
+    return found
+
+
+def archive(commit: str, into: Path) -> str | None:
+    """Extract ``commit``'s package and missions into ``into``; a reason when there is no
+    history to take them from (an installed wheel, a shallow clone)."""
+    if not (ROOT / ".git").exists():
+        return f"no git history here ({ROOT} is not a git checkout)"
+    verify = subprocess.run(
+        ["git", "-C", str(ROOT), "rev-parse", "--verify", "--quiet", f"{commit}^{{commit}}"],
+        capture_output=True, text=True, check=False,
+    )  # fmt: skip
+    if verify.returncode != 0:
+        return f"commit {commit} is not in this clone's history (a shallow clone?)"
+    tar = subprocess.run(
+        ["git", "-C", str(ROOT), "archive", "--format=tar", commit, "roomba_bt", "missions"],
+        capture_output=True, check=False,
+    )  # fmt: skip
+    if tar.returncode != 0:
+        return f"git archive {commit} failed: {tar.stderr.decode(errors='replace').strip()}"
+    subprocess.run(["tar", "-x", "-C", str(into)], input=tar.stdout, check=True)
+    return None
+
+
+def _per_tick_us(run: dict[str, float], key: str) -> float:
+    return run[key] / run["ticks"] * 1e6
+
+
+def against(commit: str, rounds: int = 5) -> int:
+    """Print each episode kind's mission + runtime cost per tick, ``commit``'s and this tree's."""
+    with tempfile.TemporaryDirectory(prefix="bench-against-") as tmp:
+        old = Path(tmp)
+        reason = archive(commit, old)
+        if reason is not None:
+            print(f"against {commit}: skipped ({reason})")
+            return 0
+        print(
+            f"mission + runtime cost per tick, {commit} against this tree: child processes "
+            f"interleaved, {rounds} rounds, medians; CPU time of the child (load average "
+            f"{os.getloadavg()[0]:.1f} at the start)"
+        )
+        for label, mission, world, fields in AGAINST_CASES:
+            sides: dict[str, list[dict[str, float]]] = {"old": [], "new": []}
+            for round_ in range(rounds):
+                order = ("old", "new") if round_ % 2 == 0 else ("new", "old")
+                for side in order:
+                    code = old if side == "old" else ROOT
+                    sides[side].append(_run_child(code, code / "missions" / mission, world, fields))
+            _print_against(label, commit, sides)
+        print(f"   (load average {os.getloadavg()[0]:.1f} at the end)")
+    return 0
+
+
+def _print_against(label: str, commit: str, sides: dict[str, list[dict[str, float]]]) -> None:
+    def median(side: str, key: str) -> float:
+        return statistics.median(_per_tick_us(run, key) for run in sides[side])
+
+    def cost(side: str) -> float:  # per round, so the two times are of the same moment
+        return statistics.median(
+            _per_tick_us(run, "episodes_s") - _per_tick_us(run, "physics_s") for run in sides[side]
+        )
+
+    def steady(side: str) -> float:  # the set-up's episodes and ticks taken away
+        return statistics.median(
+            (run["episodes_s"] - run["setup_s"]) / (run["ticks"] - run["setup_ticks"]) * 1e6
+            - _per_tick_us(run, "physics_s")
+            for run in sides[side]
+        )
+
+    def setup_ms(side: str) -> float:
+        return statistics.median(run["setup_s"] / 8 * 1e3 for run in sides[side])
+
+    yardstick = median("old", "physics_s")
+    print(f"   {label}: per tick (yardstick: {commit}'s simulator stepping, {yardstick:.2f} us)")
+    for side, name in (("old", commit), ("new", "this tree")):
+        run, physics = sides[side][0], median(side, "physics_s")
+        print(
+            f"     {name:10s} {run['ticks']:6.0f} ticks, {run['succeeded']:.0f}/8 succeeded; "
+            f"episode {median(side, 'episodes_s'):6.2f} us, its physics alone {physics:5.2f} us; "
+            f"mission + runtime {cost(side):6.2f} us = {cost(side) / yardstick:5.1f}x the "
+            f"yardstick ({cost(side) / physics:5.1f}x its own physics); without the set-up "
+            f"({setup_ms(side):5.2f} ms an episode) {steady(side):6.2f} us = "
+            f"{steady(side) / yardstick:5.1f}x the yardstick"
+        )
+    print(
+        f"     ratio this tree / {commit}: {cost('new') / cost('old'):.3f} (issue 18: <= 0.5); "
+        f"without the set-up {steady('new') / steady('old'):.3f}"
+    )
+
+
+def cli(argv: Sequence[str]) -> int:
+    if argv[:1] == ["--child"]:
+        _child(*argv[1:4])
+        return 0
+    if argv[:1] == ["--against"] and len(argv) >= 2:
+        rounds = int(argv[3]) if argv[2:3] == ["--rounds"] and len(argv) >= 4 else 5
+        return against(argv[1], rounds)
+    if argv:
+        print("usage: python -m bench.bench_routines [--against COMMIT [--rounds N]]")
+        return 2
     main()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(cli(sys.argv[1:]))

@@ -12,15 +12,26 @@ in fresh interpreters, with and without the work, so start-up and imports cancel
 
 Slow (valgrind runs Python about 50x slower): 1 to 3 minutes on 2 cores. Not part of
 ``make bench``; the figures go into ``docs/performance.md`` beside the timings.
+
+``python -m bench.icount --against 626461e``: issue 18's mission + runtime cost per tick in
+instructions, that commit's code (``git archive``: its package and missions) against this
+tree's, on the same kinds of episodes (:data:`EPISODES`). Per side and episode kind, four
+runs with the same set-up (specs built, world loaded, one idle simulator): nothing more; the
+episodes; the idle simulator stepped as many times as the episodes ticked; the episodes cut
+to their first ticks (``bench_routines.SETUP_TIMEOUT_S``). Mission + runtime per tick is
+(episodes - stepping) / ticks; without the set-up it leaves out the cut episodes' count and
+ticks too. Takes 5 to 10 minutes on 2 cores.
 """
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import shutil
 import subprocess
 import sys
+import tempfile
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -64,13 +75,39 @@ def _child_episodes(mission: str, world: str, runs: int) -> None:
     print(f"TICKS {ticks}")
 
 
-def _count(*args: str) -> tuple[int, str]:
-    """Instructions of one child run under callgrind, and what it printed."""
+def _child_against(work: str, mission: str, world: str, fields_json: str, steps: str) -> None:
+    """The same set-up, then ``work``: none, the episodes, ``steps`` idle steps, or the
+    episodes cut short; with whichever ``roomba_bt`` the working directory holds."""
+    from bench.bench_routines import SETUP_TIMEOUT_S
+    from roomba_bt.evaluate import episode_specs
+    from roomba_bt.evaluate.episode import run_episode
+    from roomba_bt.sim import Simulator, load_world
+
+    fields = json.loads(fields_json)
+    runs = fields.pop("runs")
+    specs = episode_specs(mission, world=world, runs=runs, seed=100, **fields)
+    short = episode_specs(
+        mission, world=world, runs=runs, seed=100, **{**fields, "timeout_s": SETUP_TIMEOUT_S}
+    )
+    sim = Simulator(load_world(world))
+    if work == "episodes":
+        print(f"TICKS {sum(run_episode(spec).ticks for spec in specs)}")
+    elif work == "short":
+        print(f"TICKS {sum(run_episode(spec).ticks for spec in short)}")
+    elif work == "physics":
+        for _ in range(int(steps)):
+            sim.step()
+
+
+def _count(*args: str, code: Path = ROOT) -> tuple[int, str]:
+    """Instructions of one child run under callgrind, and what it printed; ``roomba_bt``
+    from ``code`` (its working directory; ``bench`` from this tree)."""
     done = subprocess.run(
         ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null",
          sys.executable, "-m", "bench.icount", "--child", *args],
-        cwd=ROOT, capture_output=True, text=True, check=False,
-        env={**os.environ, "PYTHONHASHSEED": "0"},  # string hashes vary the count otherwise
+        cwd=code, capture_output=True, text=True, check=False,
+        # string hashes vary the count otherwise
+        env={**os.environ, "PYTHONHASHSEED": "0", "PYTHONPATH": str(ROOT)},
     )  # fmt: skip
     found = _COLLECTED.search(done.stderr)
     if done.returncode != 0 or found is None:
@@ -96,17 +133,75 @@ def _episode_line(mission: str, world: str, runs: int) -> str:
     )
 
 
+def _against_cell(code: Path, entry: tuple[str, str, int, dict[str, object]]) -> dict[str, int]:
+    """One side's four counts for one episode kind, and its ticks."""
+    mission, world, runs, fields = entry
+    args = (str(code / "missions" / mission), world, json.dumps({**fields, "runs": runs}))
+    base, _ = _count("against", "none", *args, "0", code=code)
+    episodes, out = _count("against", "episodes", *args, "0", code=code)
+    ticks = int(re.findall(r"TICKS (\d+)", out)[-1])
+    physics, _ = _count("against", "physics", *args, str(ticks), code=code)
+    short, out = _count("against", "short", *args, "0", code=code)
+    short_ticks = int(re.findall(r"TICKS (\d+)", out)[-1])
+    return {
+        "base": base, "episodes": episodes, "physics": physics, "short": short,
+        "ticks": ticks, "short_ticks": short_ticks,
+    }  # fmt: skip
+
+
+def against(commit: str) -> int:
+    """Print the mission + runtime instructions per tick of ``commit`` and of this tree."""
+    from bench.bench_routines import archive
+
+    with tempfile.TemporaryDirectory(prefix="icount-against-") as tmp:
+        old = Path(tmp)
+        reason = archive(commit, old)
+        if reason is not None:
+            print(f"against {commit}: skipped ({reason})")
+            return 0
+        cells = [
+            (side, code, entry)
+            for entry in EPISODES
+            for side, code in ((commit, old), ("this tree", ROOT))
+        ]
+        with ThreadPoolExecutor(max_workers=2) as pool:
+            counts = list(pool.map(lambda cell: _against_cell(cell[1], cell[2]), cells))
+    print(f"mission + runtime instructions per tick (callgrind), {commit} against this tree")
+    for index, (side, _, (mission, world, runs, _)) in enumerate(cells):
+        found = counts[index]
+        ticks = found["ticks"]
+        physics = (found["physics"] - found["base"]) / ticks
+        cost = (found["episodes"] - found["physics"]) / ticks
+        steady = (found["episodes"] - found["short"]) / (ticks - found["short_ticks"]) - physics
+        setup = (found["short"] - found["base"]) / runs
+        line = (
+            f"   {mission} in {world}, {runs} episodes, {side:10s} {ticks:6d} ticks: mission + "
+            f"runtime {cost:9,.0f} / tick (physics alone {physics:7,.0f}); without the set-up "
+            f"({setup / 1e6:5.1f} M an episode) {steady:9,.0f} / tick"
+        )
+        if index % 2:
+            before = counts[index - 1]
+            old_cost = (before["episodes"] - before["physics"]) / before["ticks"]
+            line += f"; ratio to {commit}: {cost / old_cost:.3f}"
+        print(line, flush=True)
+    return 0
+
+
 def main(argv: list[str]) -> int:
     if argv[:1] == ["--child"]:
         kind, *rest = argv[1:]
         if kind == "sim":
             _child_sim(rest[0], int(rest[1]))
+        elif kind == "against":
+            _child_against(*rest[:5])
         else:
             _child_episodes(rest[0], rest[1], int(rest[2]))
         return 0
     if shutil.which("valgrind") is None:
         print("valgrind is not installed: instruction counts need valgrind --tool=callgrind")
         return 2
+    if argv[:1] == ["--against"] and len(argv) == 2:
+        return against(argv[1])
     with ThreadPoolExecutor(max_workers=2) as pool:  # each job runs two valgrind processes
         futures = [pool.submit(_sim_line, case) for case in SIM_CASES]
         futures += [pool.submit(_episode_line, m, w, n) for m, w, n, _ in EPISODES]
