@@ -217,13 +217,30 @@ class Drive(Action):
     """
 
     moves = True
+    #: how it ends ("distance", "angle", "duration", or "": never by itself) and its bound
+    _end: tuple[str, float] = ("", 0.0)
 
     def start(self) -> None:
         snap = self.snapshot
+        odometry = snap.odometry
         self._start_time = snap.time
-        self._start_distance = snap.odometry.distance_mm
-        self._start_angle = snap.odometry.angle_rad
+        self._start_distance = odometry.distance_mm
+        self._start_angle = odometry.angle_rad
         self._last_mode: OIMode | None = None
+        # which end and its bound, read once a start (the parameters are resolved before it)
+        distance, angle, duration = (
+            self.value("distance"),
+            self.value("angle"),
+            self.value("duration"),
+        )
+        if distance is not None:
+            self._end = ("distance", float(distance))
+        elif angle is not None:
+            self._end = ("angle", float(angle))
+        elif duration is not None:
+            self._end = ("duration", float(duration) - 1e-9)
+        else:
+            self._end = ("", 0.0)
 
     def command(self) -> oi.Command:
         left, right = self.value("left"), self.value("right")
@@ -234,34 +251,34 @@ class Drive(Action):
         return oi.drive(round(self.value("velocity")), wire_radius)
 
     def finished(self) -> bool:
+        end, bound = self._end
+        if not end:
+            return False
         snap = self.snapshot
-        distance, angle, duration = (
-            self.value("distance"),
-            self.value("angle"),
-            self.value("duration"),
-        )
-        if distance is not None:
-            return abs(snap.odometry.distance_mm - self._start_distance) >= float(distance)
-        if angle is not None:
-            turned = abs(math.degrees(snap.odometry.angle_rad - self._start_angle))
-            return turned >= float(angle)
-        if duration is not None:
-            return snap.time - self._start_time >= float(duration) - 1e-9
-        return False
+        if end == "distance":
+            return abs(snap.odometry.distance_mm - self._start_distance) >= bound
+        if end == "angle":
+            return abs(math.degrees(snap.odometry.angle_rad - self._start_angle)) >= bound
+        return snap.time - self._start_time >= bound
 
     def update(self) -> Status:
         if self.finished():
             self.send(oi.halt())
             self._started_motion = False
             return _OK
-        mode = self.snapshot.mode
+        robot = self.robot
+        mode = (robot.snapshot if robot is not None else self.snapshot).mode
+        driving = mode in DRIVING_MODES
         if self._started_motion:
-            stranded = self.stranded()
-            if stranded is not None:
-                self._started_motion = False  # the firmware stopped the wheels already
-                self.feedback_message = stranded
-                return _FAIL
-        if mode in DRIVING_MODES and self._last_mode not in DRIVING_MODES:
+            if driving:  # what stranded() does in a driving mode, without its call
+                self._out_of_driving_since = None
+            else:
+                stranded = self.stranded()
+                if stranded is not None:
+                    self._started_motion = False  # the firmware stopped the wheels already
+                    self.feedback_message = stranded
+                    return _FAIL
+        if driving and self._last_mode not in DRIVING_MODES:
             self.send(self.command())
             self._started_motion = True
         self._last_mode = mode
@@ -284,12 +301,12 @@ class Drive(Action):
 class Turn(Drive):
     """Turn in place by an angle measured by the wheel encoders, then halt."""
 
+    def start(self) -> None:
+        super().start()
+        self._end = ("angle", abs(self.number("angle")))
+
     def command(self) -> oi.Command:
         return oi.spin(round(self.value("speed")), clockwise=self.value("angle") < 0)
-
-    def finished(self) -> bool:
-        turned = abs(math.degrees(self.snapshot.odometry.angle_rad - self._start_angle))
-        return turned >= abs(self.number("angle"))
 
 
 @declare(

@@ -407,7 +407,8 @@ class Condition(RobotBehaviour):
         ):
             behaviour_tick(self, started)
             return
-        if self._refs != {}:  # not looked for yet, or @key parameters to read at each start
+        refs = self._refs
+        if refs is None or refs:  # not looked for yet, or @key parameters to read at each start
             self.initialise()
         update = self.update
         if getattr(update, "__func__", None) is _CONDITION_UPDATE:  # update is check

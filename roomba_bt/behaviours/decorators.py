@@ -19,6 +19,13 @@ from roomba_bt.behaviours.lean import DONE, DecoratorTick, Stepped, composite_st
 from roomba_bt.behaviours.reasons import failure_reason
 from roomba_bt.robot.interface import RobotHandle
 
+#: the statuses as module constants: ``Status.RUNNING`` goes through the Enum metaclass's
+#: ``__getattr__`` hook on every read (several times a global's cost), and guards and
+#: repeats read them on every tick
+_RUNNING, _SUCCESS, _FAILURE, _INVALID = (
+    Status.RUNNING, Status.SUCCESS, Status.FAILURE, Status.INVALID
+)  # fmt: skip
+
 
 class _MissionClock:
     """Mixin: ``now()`` is the mission time of the current snapshot; ``lasted(duration)``
@@ -64,9 +71,9 @@ class Timeout(_Lasting):
 
     def update(self) -> Status:
         status: Status = self.decorated.status
-        if status is Status.RUNNING and self.lasted(self.duration):
+        if status is _RUNNING and self.lasted(self.duration):
             self.feedback_message = f"timed out after {self.duration:g} s"
-            return Status.FAILURE
+            return _FAILURE
         return status
 
 
@@ -78,7 +85,7 @@ class Delay(_Lasting):
         """Waiting: RUNNING without ticking the child; then a decorator's tick."""
         first = super().tick_start()
         if not self.lasted(self.duration):
-            self.status = Status.RUNNING
+            self.status = _RUNNING
             return DONE
         return first
 
@@ -105,15 +112,15 @@ class Repeat(_MissionClock, DecoratorTick, py_trees.decorators.Decorator):
 
     def update(self) -> Status:
         status: Status = self.decorated.status
-        if status is not Status.SUCCESS:
+        if status is not _SUCCESS:
             return status
         self.count += 1
         if self.times is not None and self.count >= self.times:
-            return Status.SUCCESS
+            return _SUCCESS
         if self.duration is not None and self.lasted(self.duration):
-            return Status.SUCCESS
+            return _SUCCESS
         self.feedback_message = f"{self.count} done"
-        return Status.RUNNING
+        return _RUNNING
 
 
 class ForEach(DecoratorTick, py_trees.decorators.Decorator):
@@ -136,20 +143,20 @@ class ForEach(DecoratorTick, py_trees.decorators.Decorator):
     def tick_start(self) -> int:
         """No items: SUCCESS at once, the child never ticked."""
         if not self.items:
-            self.status = Status.SUCCESS
+            self.status = _SUCCESS
             return DONE
         return super().tick_start()
 
     def update(self) -> Status:
         status: Status = self.decorated.status
-        if status is not Status.SUCCESS:
+        if status is not _SUCCESS:
             return status
         self.index += 1
         if self.index >= len(self.items):
-            return Status.SUCCESS
+            return _SUCCESS
         write_key(self.key, self.items[self.index])
         self.feedback_message = f"item {self.index + 1} of {len(self.items)}"
-        return Status.RUNNING
+        return _RUNNING
 
 
 class Guard(Stepped, py_trees.composites.Composite):
@@ -172,7 +179,7 @@ class Guard(Stepped, py_trees.composites.Composite):
 
     def tick_start(self) -> int:
         """The condition first (child 0)."""
-        if self.status is not Status.RUNNING:
+        if self.status is not _RUNNING:
             self.initialise()
         return 0
 
@@ -180,18 +187,18 @@ class Guard(Stepped, py_trees.composites.Composite):
         """After the condition: stop here, or tick the child (child 1); after the child: its
         status."""
         if index == 0:
-            holds = self.condition.status is Status.SUCCESS
+            holds = self.condition.status is _SUCCESS
             if holds == self.until:
-                new_status = Status.SUCCESS if self.until else Status.FAILURE
-                if self.child.status is Status.RUNNING:
-                    self.child.stop(Status.INVALID)
+                new_status = _SUCCESS if self.until else _FAILURE
+                if self.child.status is _RUNNING:
+                    self.child.stop(_INVALID)
                 self.feedback_message = self._why()
                 self.stop(new_status)
                 return DONE
             self.current_child = self.child
             return 1
         status: Status = self.child.status
-        if status is not Status.RUNNING:
+        if status is not _RUNNING:
             self.stop(status)
         self.status = status
         return DONE
@@ -203,7 +210,7 @@ class Guard(Stepped, py_trees.composites.Composite):
             return "condition met"
         return f"condition no longer holds: {failure_reason(self.condition)}"
 
-    def stop(self, new_status: Status = Status.INVALID) -> None:
-        if self.child.status is Status.RUNNING:
-            self.child.stop(Status.INVALID)
+    def stop(self, new_status: Status = _INVALID) -> None:
+        if self.child.status is _RUNNING:
+            self.child.stop(_INVALID)
         composite_stop(self, new_status)

@@ -342,8 +342,8 @@ class Parallel(Stepped, py_trees.composites.Parallel):
         if py_trees.logging.level is _DEBUG:
             self.logger.debug(f"{type(self).__name__}.stop()[{self.status}->{new_status}]")
         for child in self.children:
-            if child.status == Status.RUNNING:
-                child.stop(Status.INVALID)
+            if child.status == _RUNNING:
+                child.stop(_INVALID)
         composite_stop(self, new_status)
 
     def tick_start(self) -> int:
@@ -431,10 +431,10 @@ class DecoratorTick(Stepped, py_trees.decorators.Decorator):
         if py_trees.logging.level is _DEBUG:
             self.logger.debug(f"{type(self).__name__}.stop({new_status})")
         self.terminate(new_status)
-        if new_status == Status.INVALID:
+        if new_status == _INVALID:
             self.decorated.stop(new_status)
-        if self.decorated.status == Status.RUNNING:
-            self.decorated.stop(Status.INVALID)
+        if self.decorated.status == _RUNNING:
+            self.decorated.stop(_INVALID)
         self.status = new_status
 
 
@@ -446,10 +446,10 @@ class Retry(DecoratorTick, py_trees.decorators.Retry):
     last_failure: str = ""
 
     def update(self) -> Status:
-        if self.decorated.status is Status.FAILURE:
+        if self.decorated.status is _FAILURE:
             self.last_failure = failure_reason(self)
         status = super().update()
-        if status is Status.FAILURE:  # py_trees: "final failure [status: 3 failure from 3]"
+        if status is _FAILURE:  # py_trees: "final failure [status: 3 failure from 3]"
             attempts = "attempt" if self.failures == 1 else "attempts"
             last = f"; the last: {self.last_failure}" if self.last_failure else ""
             self.feedback_message = f"gave up after {self.failures} failed {attempts}{last}"

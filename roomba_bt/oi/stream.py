@@ -190,8 +190,13 @@ class StreamParser:
             return True
         left, right = values[encoders[0]], values[encoders[1]]
         anchor = self._anchor
-        if anchor is not None and not _steps_within(
-            anchor, left, right, self._limit(anchor, at, now)
+        if (
+            anchor is not None  # within one slot's step is within any limit: no _limit then
+            and (
+                (left - anchor[0] + MAX_COUNTS_PER_SLOT) & 0xFFFF > _ONE_SLOT_SPAN
+                or (right - anchor[1] + MAX_COUNTS_PER_SLOT) & 0xFFFF > _ONE_SLOT_SPAN
+            )
+            and not _steps_within(anchor, left, right, self._limit(anchor, at, now))
         ):
             suspect = self._suspect
             self._suspect = (left, right, at, now, self._failed())

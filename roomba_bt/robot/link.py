@@ -57,16 +57,25 @@ class LinkStatus(enum.Enum):
     CLOSED = "closed"
 
 
+#: read on every tick: a module constant (an Enum class's member lookup goes through its
+#: metaclass's ``__getattr__`` hook, several times the cost of a global)
+_STREAMING, _STALLED = LinkStatus.STREAMING, LinkStatus.STALLED
+
+
 class TimedFrame(NamedTuple):
     """A checked stream frame, when it arrived (link clock) and its number in the stream.
 
     A named tuple (immutable, built once per frame on the tick path, several times faster
-    than a frozen dataclass). ``index`` is the frame's number, not ``tuple.index``: the
-    field's name predates the tuple and is kept."""
+    than a frozen dataclass; :meth:`StreamLink.ingest` builds it by ``tuple.__new__``, as
+    the named tuple's own ``__new__`` is a Python call binding each field). ``index`` is the
+    frame's number, not ``tuple.index``: the field's name predates the tuple and is kept."""
 
     frame: SensorFrame
     time: float
     index: int  # type: ignore[assignment]
+
+
+_new_tuple = tuple.__new__
 
 
 class StreamLink:
@@ -252,18 +261,19 @@ class StreamLink:
             deadline = max(now, due)
         out: list[TimedFrame] = []
         while True:
-            data = self.read(max(0.0, deadline - clock()))
+            data = self.read(max(0.0, deadline - now))
+            now = clock()  # once a read: the frames' arrival, the deadline's and watchdog's now
             if data:
-                out += self.ingest(data, clock())
-            if out or clock() >= deadline:  # no read past the deadline (a virtual clock's
+                out += self.ingest(data, now)
+            if out or now >= deadline:  # no read past the deadline (a virtual clock's
                 break  # read of 0 s still steps once)
-        self._check_watchdog(clock())
+        self._check_watchdog(now)
         return out
 
     def _watchdog_due(self) -> float | None:
         """When the watchdog trips if no valid frame comes (link clock; a slot's margin past
         its limit, so the check after the wait finds it tripped), or None when it cannot."""
-        if not self.streaming or self.watchdog <= 0 or self.status is not LinkStatus.STREAMING:
+        if not self.streaming or self.watchdog <= 0 or self.status is not _STREAMING:
             return None
         return self.silent_since + self.watchdog + WATCHDOG_MARGIN
 
@@ -282,17 +292,17 @@ class StreamLink:
             change = reconcile(frame, index, arrival)
             if change is not None:
                 self._report(change)
-            out.append(TimedFrame(frame, arrival, index))
+            out.append(_new_tuple(TimedFrame, (frame, arrival, index)))
         self.index = index
         self.latest = out[-1]
         self._last_frame_time = arrival
         self._bytes_at_frame = self.bytes_read
-        if self.status is LinkStatus.STALLED:
-            self.status = LinkStatus.STREAMING
+        if self.status is _STALLED:
+            self.status = _STREAMING
         return out
 
     def _check_watchdog(self, now: float) -> None:
-        if not self.streaming or self.watchdog <= 0 or self.status is not LinkStatus.STREAMING:
+        if not self.streaming or self.watchdog <= 0 or self.status is not _STREAMING:
             return
         reference = self._last_frame_time
         if reference is None:

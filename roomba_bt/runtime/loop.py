@@ -21,7 +21,7 @@ import logging
 import time
 import traceback
 from collections.abc import Callable, Iterable, Sequence
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import py_trees
 
@@ -187,11 +187,16 @@ class MissionRunner(BaseHandle):
         self._fallback_seen: object = None
 
     # ---------------------------------------------------------------- RobotHandle
-    @property
-    def snapshot(self) -> Snapshot:
-        if self._snapshot is None:
-            raise RuntimeError("no sensor frame yet: the tree is ticked only after the first")
-        return self._snapshot
+    #: this tick's snapshot: an attribute set by each tick (the leaves read it several times
+    #: a tick; a property was a call each time); before the first frame, ``__getattr__`` says so
+    snapshot: Snapshot
+
+    if not TYPE_CHECKING:  # for mypy the attribute is always there
+
+        def __getattr__(self, name: str) -> Any:
+            if name == "snapshot":
+                raise RuntimeError("no sensor frame yet: the tree is ticked only after the first")
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     @property
     def has_snapshot(self) -> bool:
@@ -413,7 +418,7 @@ class MissionRunner(BaseHandle):
             self._profile,
             summary.frames_lost,
         ))  # fmt: skip
-        self._snapshot = snapshot
+        self._snapshot = self.snapshot = snapshot
         if self._blackboard is not None:
             if py_trees.blackboard.Blackboard.activity_stream is None:
                 # the client's own key, registered for writing: its permission checks and
