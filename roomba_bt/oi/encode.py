@@ -13,7 +13,7 @@ Drive (137), velocity -200 mm/s, radius 500 mm (the spec's example)::
 from __future__ import annotations
 
 import struct
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from enum import IntEnum
 
@@ -153,16 +153,29 @@ def decode_command(data: bytes | bytearray) -> tuple[Command, int] | None:
 # ----------------------------------------------------------------- named helpers
 
 
-def start() -> Command:
-    return encode(128)
+def _without_arguments(name: str) -> Callable[[], Command]:
+    """The helper of an argument-less command: the table entry called ``name`` encoded once
+    (its one opcode byte never changes), returned by every call."""
+    command = encode(name)
+
+    def helper() -> Command:
+        return command
+
+    helper.__doc__ = f"{command.spec.title} ({command.opcode}): ``{list(command.data)}``."
+    return helper
 
 
-def reset() -> Command:
-    return encode(7)
-
-
-def stop() -> Command:
-    return encode(173)
+start = _without_arguments("start")
+reset = _without_arguments("reset")
+stop = _without_arguments("stop")
+control = _without_arguments("control")
+safe = _without_arguments("safe")
+full = _without_arguments("full")
+power = _without_arguments("power")
+spot = _without_arguments("spot")
+clean = _without_arguments("clean")
+max_clean = _without_arguments("max")
+seek_dock = _without_arguments("seek_dock")
 
 
 def baud(baud_code: int) -> Command:
@@ -182,38 +195,6 @@ def baud_rate(rate: int) -> Command:
     if not _is_int(rate) or rate not in BAUD_CODES:
         raise EncodeError("baud", "rate", f"one of {sorted(BAUD_CODES)} bps", rate)
     return baud(BAUD_CODES[rate])
-
-
-def control() -> Command:
-    return encode(130)
-
-
-def safe() -> Command:
-    return encode(131)
-
-
-def full() -> Command:
-    return encode(132)
-
-
-def power() -> Command:
-    return encode(133)
-
-
-def spot() -> Command:
-    return encode(134)
-
-
-def clean() -> Command:
-    return encode(135)
-
-
-def max_clean() -> Command:
-    return encode(136)
-
-
-def seek_dock() -> Command:
-    return encode(143)
 
 
 def drive(velocity: int, radius: int | Radius) -> Command:

@@ -18,6 +18,7 @@ from __future__ import annotations
 import struct
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from functools import lru_cache
+from typing import Protocol, TypeVar, cast
 
 from roomba_bt.oi.bits import (
     BUMP_BITS,
@@ -28,16 +29,11 @@ from roomba_bt.oi.bits import (
     LIGHT_BUMPER_BY_BYTE,
     OVERCURRENTS_BY_BYTE,
     WHEEL_DROP_BITS,
-    BumpsWheelDrops,
-    Buttons,
-    ChargingSources,
     ChargingState,
-    LightBumper,
-    Overcurrents,
     Stasis,
 )
 from roomba_bt.oi.errors import EncodeError
-from roomba_bt.oi.ir import IR_CHARACTERS, IRCharacter
+from roomba_bt.oi.ir import IR_CHARACTERS
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.oi.opcodes import COMMANDS
 from roomba_bt.oi.packets import PACKETS, PACKETS_BY_NAME, VALID_PACKET_IDS, PacketSpec, expand
@@ -261,6 +257,80 @@ def stream_frame_size(packet_ids: Iterable[int]) -> int:
     return 3 + sum(1 + sum(PACKETS[m].size for m in expand(pid)) for pid in ids)
 
 
+# ------------------------------------------------------------- the frame's accessors
+# Most of :class:`SensorFrame`'s properties read one packet: its raw value, a test of some of
+# its bits, or its typed view looked up by byte. Each is made here from its packet id (and
+# mask or table), so the slot lookup and the KeyError for a packet the frame lacks are
+# written once.
+
+_T = TypeVar("_T")
+_T_co = TypeVar("_T_co", covariant=True)
+
+
+class _Accessor(Protocol[_T_co]):
+    """What a made property gives a type checker: the value type on a frame."""
+
+    def __get__(self, frame: SensorFrame, owner: type[SensorFrame] | None = None) -> _T_co: ...
+
+
+#: Packet id -> its typed view, for :meth:`SensorFrame.as_dict`: each table :func:`_decoded`
+#: reads.
+_VIEWS: dict[int, Callable[[int], object]] = {}
+
+
+def _raw(packet_id: int) -> _Accessor[int]:
+    """A property: packet ``packet_id``'s raw value (``frame[packet_id]``, without the call)."""
+
+    def read(frame: SensorFrame) -> int:
+        try:
+            return frame._values[frame._layout.index[packet_id]]
+        except KeyError:
+            raise frame._missing(packet_id) from None
+
+    doc = f"Packet {packet_id} ({PACKETS[packet_id].name}) as sent."
+    return cast("_Accessor[int]", property(read, doc=doc))
+
+
+def _bits_set(packet_id: int, mask: int = 0xFF) -> _Accessor[bool]:
+    """A property: True if any of ``mask``'s bits is set in packet ``packet_id`` (the whole
+    byte by default: a one-bit packet such as wall 8 or cliff left 9)."""
+
+    def read(frame: SensorFrame) -> bool:
+        try:
+            return frame._values[frame._layout.index[packet_id]] & mask != 0
+        except KeyError:
+            raise frame._missing(packet_id) from None
+
+    doc = f"Packet {packet_id} ({PACKETS[packet_id].name}) has a bit of {mask:#b} set."
+    return cast("_Accessor[bool]", property(read, doc=doc))
+
+
+def _decoded(packet_id: int, by_byte: tuple[_T, ...]) -> _Accessor[_T]:
+    """A property: packet ``packet_id``'s typed view, ``by_byte[value & 0xFF]`` (a table of
+    every byte value decoded once: no allocation)."""
+
+    def read(frame: SensorFrame) -> _T:
+        try:
+            return by_byte[frame._values[frame._layout.index[packet_id]] & 0xFF]
+        except KeyError:
+            raise frame._missing(packet_id) from None
+
+    _VIEWS[packet_id] = by_byte.__getitem__
+    doc = f"Packet {packet_id} ({PACKETS[packet_id].name}) as {type(by_byte[0]).__name__}."
+    return cast("_Accessor[_T]", property(read, doc=doc))
+
+
+def _by_byte(decode: Callable[[int], _T]) -> tuple[_T, ...]:
+    return tuple(decode(value) for value in range(256))
+
+
+#: Packets 21, 35 and 58 by byte: a value past the enum reads as its last member (a charging
+#: fault; Full for the "mode + 1" reading 4); stasis keeps its two low bits.
+_CHARGING_STATE_BY_BYTE = _by_byte(lambda v: ChargingState(v) if v <= 5 else ChargingState.FAULT)
+_OI_MODE_BY_BYTE = _by_byte(lambda v: OIMode(v) if v <= 3 else OIMode.FULL)
+_STASIS_BY_BYTE = _by_byte(lambda v: Stasis(v & 3))
+
+
 class SensorFrame:
     """One decoded, immutable set of sensor values (a stream frame or a reply).
 
@@ -345,48 +415,61 @@ class SensorFrame:
             out[name] = view(raw) if view is not None else raw
         return out
 
-    # typed views -------------------------------------------------------------
-    @property
-    def bumps(self) -> BumpsWheelDrops:
-        return BUMPS_BY_BYTE[self[7] & 0xFF]
+    # The readings: each reads its value straight from the slots (no ``__getitem__`` call:
+    # the hazards are read on every tick); a missing packet raises the same KeyError as
+    # ``frame[id]``. Flags first, then typed views, raw values, and the readings of several
+    # packets.
+    #: Either bumper pressed (packet 7, bits 0-1).
+    any_bump = _bits_set(7, BUMP_BITS)
+    #: Either wheel dropped (packet 7, bits 2-3 only; the unused bits 4-7 are not read).
+    any_wheel_drop = _bits_set(7, WHEEL_DROP_BITS)
+    wall = _bits_set(8)
+    cliff_left = _bits_set(9)
+    cliff_front_left = _bits_set(10)
+    cliff_front_right = _bits_set(11)
+    cliff_right = _bits_set(12)
+    virtual_wall = _bits_set(13)
+    song_playing = _bits_set(37)
+    #: One of the four front light-bumper sensors (packet 45 bits 1-4) sees something.
+    light_bumper_ahead = _bits_set(45, LIGHT_BUMPER_AHEAD_BITS)
 
-    # Hazards: read on every tick by the behaviours, so each reads its values straight from
-    # the slots (no ``__getitem__`` call); a missing packet raises the same KeyError.
-    @property
-    def any_bump(self) -> bool:
-        """Either bumper pressed (packet 7, bits 0-1)."""
-        try:
-            return self._values[self._layout.index[7]] & BUMP_BITS != 0
-        except KeyError:
-            raise self._missing(7) from None
+    bumps = _decoded(7, BUMPS_BY_BYTE)
+    overcurrents = _decoded(14, OVERCURRENTS_BY_BYTE)
+    ir_omni = _decoded(17, IR_CHARACTERS)
+    buttons = _decoded(18, BUTTONS_BY_BYTE)
+    charging_state = _decoded(21, _CHARGING_STATE_BY_BYTE)
+    charging_sources = _decoded(34, CHARGING_SOURCES_BY_BYTE)
+    oi_mode = _decoded(35, _OI_MODE_BY_BYTE)
+    light_bumper = _decoded(45, LIGHT_BUMPER_BY_BYTE)
+    ir_left = _decoded(52, IR_CHARACTERS)
+    ir_right = _decoded(53, IR_CHARACTERS)
+    stasis = _decoded(58, _STASIS_BY_BYTE)
 
-    @property
-    def any_wheel_drop(self) -> bool:
-        """Either wheel dropped (packet 7, bits 2-3 only; the unused bits 4-7 are not read)."""
-        try:
-            return self._values[self._layout.index[7]] & WHEEL_DROP_BITS != 0
-        except KeyError:
-            raise self._missing(7) from None
-
-    @property
-    def wall(self) -> bool:
-        return bool(self[8])
-
-    @property
-    def cliff_left(self) -> bool:
-        return bool(self[9])
-
-    @property
-    def cliff_front_left(self) -> bool:
-        return bool(self[10])
-
-    @property
-    def cliff_front_right(self) -> bool:
-        return bool(self[11])
-
-    @property
-    def cliff_right(self) -> bool:
-        return bool(self[12])
+    dirt_detect = _raw(15)
+    distance_mm = _raw(19)
+    angle_deg = _raw(20)
+    voltage_mv = _raw(22)
+    current_ma = _raw(23)
+    temperature_c = _raw(24)
+    battery_charge_mah = _raw(25)
+    battery_capacity_mah = _raw(26)
+    wall_signal = _raw(27)
+    #: Packet 35 as sent (see the robot layer for the 600-series "mode + 1" fix).
+    oi_mode_raw = _raw(35)
+    song_number = _raw(36)
+    stream_packet_count = _raw(38)
+    requested_velocity = _raw(39)
+    requested_radius = _raw(40)
+    requested_right_velocity = _raw(41)
+    requested_left_velocity = _raw(42)
+    left_encoder_counts = _raw(43)
+    right_encoder_counts = _raw(44)
+    light_bump_left_signal = _raw(46)
+    light_bump_front_left_signal = _raw(47)
+    light_bump_center_left_signal = _raw(48)
+    light_bump_center_right_signal = _raw(49)
+    light_bump_front_right_signal = _raw(50)
+    light_bump_right_signal = _raw(51)
 
     @property
     def any_cliff(self) -> bool:
@@ -409,148 +492,13 @@ class SensorFrame:
             raise self._missing(exc.args[0]) from None
 
     @property
-    def virtual_wall(self) -> bool:
-        return bool(self[13])
-
-    @property
-    def overcurrents(self) -> Overcurrents:
-        return OVERCURRENTS_BY_BYTE[self[14] & 0xFF]
-
-    @property
-    def dirt_detect(self) -> int:
-        return self[15]
-
-    @property
-    def ir_omni(self) -> IRCharacter:
-        try:
-            return IR_CHARACTERS[self._values[self._layout.index[17]] & 0xFF]
-        except KeyError:
-            raise self._missing(17) from None
-
-    @property
-    def ir_left(self) -> IRCharacter:
-        try:
-            return IR_CHARACTERS[self._values[self._layout.index[52]] & 0xFF]
-        except KeyError:
-            raise self._missing(52) from None
-
-    @property
-    def ir_right(self) -> IRCharacter:
-        try:
-            return IR_CHARACTERS[self._values[self._layout.index[53]] & 0xFF]
-        except KeyError:
-            raise self._missing(53) from None
-
-    @property
-    def buttons(self) -> Buttons:
-        return BUTTONS_BY_BYTE[self[18] & 0xFF]
-
-    @property
-    def distance_mm(self) -> int:
-        return self[19]
-
-    @property
-    def angle_deg(self) -> int:
-        return self[20]
-
-    @property
-    def charging_state(self) -> ChargingState:
-        return _charging_state(self[21])
-
-    @property
-    def voltage_mv(self) -> int:
-        return self[22]
-
-    @property
-    def current_ma(self) -> int:
-        return self[23]
-
-    @property
-    def temperature_c(self) -> int:
-        return self[24]
-
-    @property
-    def battery_charge_mah(self) -> int:
-        return self[25]
-
-    @property
-    def battery_capacity_mah(self) -> int:
-        return self[26]
-
-    @property
     def battery_percent(self) -> float:
         capacity = self[26]
         return 100.0 * self[25] / capacity if capacity else 0.0
 
     @property
-    def wall_signal(self) -> int:
-        return self[27]
-
-    @property
     def cliff_signals(self) -> tuple[int, int, int, int]:
         return (self[28], self[29], self[30], self[31])
-
-    @property
-    def charging_sources(self) -> ChargingSources:
-        return CHARGING_SOURCES_BY_BYTE[self[34] & 0xFF]
-
-    @property
-    def oi_mode_raw(self) -> int:
-        """Packet 35 as sent (see the robot layer for the 600-series "mode + 1" fix)."""
-        return self[35]
-
-    @property
-    def oi_mode(self) -> OIMode:
-        raw = self[35]
-        return OIMode(raw) if raw <= 3 else OIMode.FULL
-
-    @property
-    def song_number(self) -> int:
-        return self[36]
-
-    @property
-    def song_playing(self) -> bool:
-        return bool(self[37])
-
-    @property
-    def stream_packet_count(self) -> int:
-        return self[38]
-
-    @property
-    def requested_velocity(self) -> int:
-        return self[39]
-
-    @property
-    def requested_radius(self) -> int:
-        return self[40]
-
-    @property
-    def requested_right_velocity(self) -> int:
-        return self[41]
-
-    @property
-    def requested_left_velocity(self) -> int:
-        return self[42]
-
-    @property
-    def left_encoder_counts(self) -> int:
-        return self[43]
-
-    @property
-    def right_encoder_counts(self) -> int:
-        return self[44]
-
-    @property
-    def light_bumper(self) -> LightBumper:
-        return LIGHT_BUMPER_BY_BYTE[self[45] & 0xFF]
-
-    @property
-    def light_bumper_ahead(self) -> bool:
-        """One of the four front light-bumper sensors (packet 45 bits 1-4) sees something."""
-        try:
-            return self._values[self._layout.index[45]] & LIGHT_BUMPER_AHEAD_BITS != 0
-        except KeyError:
-            raise self._missing(45) from None
 
     @property
     def light_bump_signals(self) -> tuple[int, int, int, int, int, int]:
@@ -558,55 +506,9 @@ class SensorFrame:
         return (self[46], self[47], self[48], self[49], self[50], self[51])
 
     @property
-    def light_bump_left_signal(self) -> int:
-        try:
-            return self._values[self._layout.index[46]]
-        except KeyError:
-            raise self._missing(46) from None
-
-    @property
-    def light_bump_front_left_signal(self) -> int:
-        try:
-            return self._values[self._layout.index[47]]
-        except KeyError:
-            raise self._missing(47) from None
-
-    @property
-    def light_bump_center_left_signal(self) -> int:
-        try:
-            return self._values[self._layout.index[48]]
-        except KeyError:
-            raise self._missing(48) from None
-
-    @property
-    def light_bump_center_right_signal(self) -> int:
-        try:
-            return self._values[self._layout.index[49]]
-        except KeyError:
-            raise self._missing(49) from None
-
-    @property
-    def light_bump_front_right_signal(self) -> int:
-        try:
-            return self._values[self._layout.index[50]]
-        except KeyError:
-            raise self._missing(50) from None
-
-    @property
-    def light_bump_right_signal(self) -> int:
-        try:
-            return self._values[self._layout.index[51]]
-        except KeyError:
-            raise self._missing(51) from None
-
-    @property
     def motor_currents_ma(self) -> tuple[int, int, int, int]:
         """Left wheel, right wheel, main brush, side brush."""
         return (self[54], self[55], self[56], self[57])
-
-    @property
-    def stasis(self) -> Stasis:
-        return _STASIS[self[58] & 3]
 
 
 # Slot setters: a frame is immutable (``__setattr__`` refuses), so its constructor sets its two
@@ -615,32 +517,8 @@ _set_layout: Callable[[SensorFrame, FrameLayout], None] = SensorFrame.__dict__["
 _set_values: Callable[[SensorFrame, tuple[int, ...]], None] = SensorFrame.__dict__[
     "_values"
 ].__set__
-_STASIS = tuple(Stasis)
 
 
-def _charging_state(raw: int) -> ChargingState:
-    return ChargingState(raw) if raw <= 5 else ChargingState.FAULT
-
-
-def _oi_mode(raw: int) -> OIMode | int:
-    return OIMode(raw) if raw <= 3 else raw
-
-
-def _stasis(raw: int) -> Stasis:
-    return Stasis(raw & 3)
-
-
-#: Packet id -> its typed view, for :meth:`SensorFrame.as_dict`.
-_VIEWS: dict[int, Callable[[int], object]] = {
-    7: BumpsWheelDrops.from_byte,
-    14: Overcurrents.from_byte,
-    17: IRCharacter.decode,
-    18: Buttons.from_byte,
-    21: _charging_state,
-    34: ChargingSources.from_byte,
-    35: _oi_mode,
-    45: LightBumper.from_byte,
-    52: IRCharacter.decode,
-    53: IRCharacter.decode,
-    58: _stasis,
-}
+#: The OI mode in :meth:`SensorFrame.as_dict` is the value as sent past Full (the "mode + 1"
+#: reading 4 stays 4), where :attr:`SensorFrame.oi_mode` reads it as Full.
+_VIEWS[OI_MODE_PACKET] = lambda raw: OIMode(raw) if raw <= 3 else raw
