@@ -1,12 +1,15 @@
 """Arguments shared by the commands: bad values become argparse's usage error (exit 2)
 with what was found and what is allowed, never a traceback from deep inside; the mission's
-``-p NAME=VALUE`` and ``--timeout``, read once for every command that takes them."""
+``-p NAME=VALUE`` and ``--timeout``, read once for every command that takes them; and
+:func:`add_command`, which declares each subcommand from the function that runs it."""
 
 from __future__ import annotations
 
 import argparse
+import inspect
 import math
 import os
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -16,6 +19,20 @@ from roomba_bt.oi.profiles import PROFILES
 
 if TYPE_CHECKING:
     from roomba_bt.mission import Permissions
+
+
+def add_command(
+    sub: Any, name: str, command: Callable[[argparse.Namespace], int]
+) -> argparse.ArgumentParser:
+    """The subcommand ``name``, which runs ``command``; its texts are ``command``'s docstring:
+    the first line is its entry in ``roomba-bt --help``, the rest (if any) the description
+    its own ``--help`` opens with (argparse refills the lines)."""
+    summary, _, details = inspect.cleandoc(command.__doc__ or "").partition("\n")
+    parser: argparse.ArgumentParser = sub.add_parser(
+        name, help=summary, description=details.strip() or None
+    )
+    parser.set_defaults(func=command)
+    return parser
 
 
 def baud_rate(text: str) -> int:

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 from enum import IntEnum
 from typing import TYPE_CHECKING, Any, TextIO
 
-from roomba_bt.cli.arguments import baud_or_auto
+from roomba_bt.cli.arguments import add_command, baud_or_auto
 
 if TYPE_CHECKING:
     from roomba_bt.robot.handshake import Probe
@@ -73,15 +73,7 @@ class DoctorExit(IntEnum):
 
 
 def register(sub: Any) -> None:
-    parser = sub.add_parser(
-        "doctor",
-        help="find the robot on a port and say what it is, step by step",
-        description="Find the robot on --port: the port, the baud rate (115200, then 19200), "
-        "a BRC wake pulse if it is silent, Start, its profile, battery, charging, OI mode, a "
-        "stream round-trip, whether the shipped missions' streams fit the rate, and (with "
-        "--allow-reset) its firmware. Exit codes: 0 found, 2 usage, 3 the port could not be "
-        "opened, 5 nothing answered, 6 it answered but a later step failed, 130 interrupted.",
-    )
+    parser = add_command(sub, "doctor", doctor_command)
     parser.add_argument(
         "--port", required=True, help="serial device or URL (/dev/ttyUSB0, rfc2217://, socket://)"
     )
@@ -93,7 +85,6 @@ def register(sub: Any) -> None:
         "--allow-reset", action="store_true",
         help="send Reset (7) to read the firmware version from the banner (restarts the OI)",
     )  # fmt: skip
-    parser.set_defaults(func=doctor_command)
 
 
 @dataclass
@@ -133,6 +124,14 @@ class _Failed(Exception):
 
 
 def doctor_command(args: argparse.Namespace) -> int:
+    """find the robot on a port and say what it is, step by step
+
+    Find the robot on --port: the port, the baud rate (115200, then 19200), a BRC wake pulse if
+    it is silent, Start, its profile, battery, charging, OI mode, a stream round-trip, whether
+    the shipped missions' streams fit the rate, and (with --allow-reset) its firmware. Exit
+    codes: 0 found, 2 usage, 3 the port could not be opened, 5 nothing answered, 6 it answered
+    but a later step failed, 130 interrupted.
+    """
     from roomba_bt.transport import SerialTransport, TransportError
 
     report = Report(sys.stdout)

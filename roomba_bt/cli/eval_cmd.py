@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from roomba_bt.cli.arguments import (
+    add_command,
     add_param_option,
     add_permission_options,
     mission_file,
@@ -50,15 +51,7 @@ if TYPE_CHECKING:  # the evaluation is imported when it runs: the CLI starts fas
 
 
 def register(sub: Any) -> None:
-    ev = sub.add_parser(
-        "eval",
-        help="run missions many times on the simulator: success rates",
-        description="Run MISSION in N seeded episodes on the simulator's virtual clock and "
-        "report the success rate (95% Wilson interval), median and p90 time, bumps and the "
-        "failure reasons. Exit codes: 0 done, 1 --min-rate not reached, 2 invalid input, "
-        "3 --scheduler unreachable, 4 a behaviour raised in an episode, 130 interrupted "
-        "(what finished is summarised).",
-    )
+    ev = add_command(sub, "eval", eval_command)
     ev.add_argument(
         "missions",
         nargs="+",
@@ -70,7 +63,6 @@ def register(sub: Any) -> None:
     _add_output_options(ev)
     _add_start_options(ev)
     add_permission_options(ev)
-    ev.set_defaults(func=eval_command)
 
 
 def _add_episode_options(ev: argparse.ArgumentParser) -> None:
@@ -234,6 +226,13 @@ def variants(args: argparse.Namespace, params: dict[str, str]) -> list[Variant] 
 
 
 def eval_command(args: argparse.Namespace) -> int:
+    """run missions many times on the simulator: success rates
+
+    Run MISSION in N seeded episodes on the simulator's virtual clock and report the success
+    rate (95% Wilson interval), median and p90 time, bumps and the failure reasons. Exit codes:
+    0 done, 1 --min-rate not reached, 2 invalid input, 3 --scheduler unreachable, 4 a behaviour
+    raised in an episode, 130 interrupted (what finished is summarised).
+    """
     from roomba_bt.evaluate import summarize
     from roomba_bt.evaluate.parallel import Engine
 

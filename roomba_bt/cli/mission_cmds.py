@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from roomba_bt.cli.arguments import (
+    add_command,
     add_param_option,
     add_permission_options,
     baud_rate,
@@ -26,53 +27,25 @@ from roomba_bt.runtime.summary import ExitCode
 
 
 def register(sub: Any) -> None:
-    validate = sub.add_parser(
-        "validate",
-        help="check mission files before anything moves",
-        description="Check each FILE: names, parameters, units, ranges, subtrees, includes, "
-        "blackboard keys, OI modes of every actuator, and the sensor stream budget. Every "
-        "error is printed as file:line:col: message. Exit 0 if all are valid, 2 if not.",
-    )
+    validate = add_command(sub, "validate", validate_command)
     validate.add_argument(
         "files", nargs="+", metavar="FILE", help="a mission file, or a shipped mission's name"
     )
     _common(validate)
-    validate.set_defaults(func=validate_command)
 
-    show = sub.add_parser(
-        "show", help="print a mission's tree", description="Print the compiled tree of FILE."
-    )
+    show = add_command(sub, "show", show_command)
     show.add_argument("file", metavar="FILE", help="a mission file, or a shipped mission's name")
     _common(show)
     show.add_argument("--dot", metavar="OUT.dot", help="also write the tree as Graphviz dot")
     show.add_argument("--svg", metavar="OUT.svg", help="also write the tree as SVG (needs dot)")
-    show.set_defaults(func=show_command)
 
-    missions = sub.add_parser(
-        "missions",
-        help="list the shipped missions with their parameters",
-        description="List the missions shipped with roomba-bt (run one by name: roomba-bt run "
-        "dock), each with its description and parameters (type, default, doc), and the "
-        "shipped library a mission can include (include: [roomba-bt:lib/docking.yaml]).",
-    )
-    missions.set_defaults(func=missions_command)
+    add_command(sub, "missions", missions_command)
 
-    behaviours = sub.add_parser(
-        "behaviours",
-        help="list every behaviour with its parameters",
-        description="List the built-in and plugin behaviours: parameters (type, unit, range, "
-        "default), sensor packets read, OI modes needed.",
-    )
+    behaviours = add_command(sub, "behaviours", behaviours_command)
     behaviours.add_argument("names", nargs="*", help="only these behaviours")
     behaviours.add_argument("--json", action="store_true", help="machine-readable output")
-    behaviours.set_defaults(func=behaviours_command)
 
-    schema = sub.add_parser(
-        "schema",
-        help="print the JSON Schema of mission files",
-        description="Print the JSON Schema of mission files (roomba-bt schema > "
-        "mission.schema.json), generated from the behaviour declarations.",
-    )
+    schema = add_command(sub, "schema", schema_command)
     schema.add_argument(
         "--plugin-file",
         action="append",
@@ -81,7 +54,6 @@ def register(sub: Any) -> None:
         help="also describe the behaviours of this plugin file (imported: it is code), for "
         "missions that name it under plugins: (repeatable)",
     )
-    schema.set_defaults(func=schema_command)
 
 
 def _common(parser: argparse.ArgumentParser) -> None:
@@ -101,6 +73,12 @@ def _params(items: list[str]) -> dict[str, str] | None:
 
 
 def validate_command(args: argparse.Namespace) -> int:
+    """check mission files before anything moves
+
+    Check each FILE: names, parameters, units, ranges, subtrees, includes, blackboard keys, OI
+    modes of every actuator, and the sensor stream budget. Every error is printed as
+    file:line:col: message. Exit 0 if all are valid, 2 if not.
+    """
     from roomba_bt.mission import validate_files
 
     params = _params(args.param)
@@ -130,6 +108,10 @@ def validate_command(args: argparse.Namespace) -> int:
 
 
 def show_command(args: argparse.Namespace) -> int:
+    """print a mission's tree
+
+    Print the compiled tree of FILE.
+    """
     import py_trees
 
     from roomba_bt.mission import compile_mission
@@ -170,6 +152,12 @@ def show_command(args: argparse.Namespace) -> int:
 
 
 def missions_command(args: argparse.Namespace) -> int:
+    """list the shipped missions with their parameters
+
+    List the missions shipped with roomba-bt (run one by name: roomba-bt run dock), each with
+    its description and parameters (type, default, doc), and the shipped library a mission can
+    include (include: [roomba-bt:lib/docking.yaml]).
+    """
     from roomba_bt.mission.shipped import describe_shipped, shipped_library_files
 
     for entry in describe_shipped():
@@ -251,6 +239,11 @@ def _leads_to(decl: Any) -> str | None:
 
 
 def behaviours_command(args: argparse.Namespace) -> int:
+    """list every behaviour with its parameters
+
+    List the built-in and plugin behaviours: parameters (type, unit, range, default), sensor
+    packets read, OI modes needed.
+    """
     from roomba_bt.behaviours import default_registry
 
     registry = default_registry()
@@ -304,6 +297,11 @@ def behaviours_command(args: argparse.Namespace) -> int:
 
 
 def schema_command(args: argparse.Namespace) -> int:
+    """print the JSON Schema of mission files
+
+    Print the JSON Schema of mission files (roomba-bt schema > mission.schema.json), generated
+    from the behaviour declarations.
+    """
     from roomba_bt.behaviours import default_registry
     from roomba_bt.mission.schema import mission_schema
 

@@ -17,7 +17,7 @@ import threading
 from pathlib import Path
 from typing import Any
 
-from roomba_bt.cli.arguments import add_param_option
+from roomba_bt.cli.arguments import add_command, add_param_option
 from roomba_bt.monitor import INSTALL_HINT, server_available
 from roomba_bt.monitor.address import parse_address
 from roomba_bt.runtime.summary import ExitCode
@@ -246,12 +246,7 @@ def _stamp(path: Path) -> tuple[float, int] | None:
 
 # -------------------------------------------------------------------- roomba-bt monitor
 def register(sub: Any) -> None:
-    monitor = sub.add_parser(
-        "monitor",
-        help="the live monitor's page for a recorded run (run --record)",
-        description="Replay RECORD (written by run --record) through its mission and serve the "
-        "monitor page for it: scrub the timeline, play at any speed. Ctrl-C ends it.",
-    )
+    monitor = add_command(sub, "monitor", monitor_command)
     monitor.add_argument("record", help="a file written by run --record")
     monitor.add_argument(
         "--monitor", type=monitor_address, default=None, metavar="[HOST:]PORT",
@@ -259,10 +254,14 @@ def register(sub: Any) -> None:
     )  # fmt: skip
     monitor.add_argument("--mission", help="mission to replay against (default: the recorded one)")
     add_param_option(monitor, "set a mission parameter for the replay (repeatable)")
-    monitor.set_defaults(func=monitor_command)
 
 
 def monitor_command(args: argparse.Namespace) -> int:
+    """the live monitor's page for a recorded run (run --record)
+
+    Replay RECORD (written by run --record) through its mission and serve the monitor page for
+    it: scrub the timeline, play at any speed. Ctrl-C ends it.
+    """
     from roomba_bt.cli.arguments import parse_params
     from roomba_bt.cli.run_cmd import load, stream_packets
     from roomba_bt.oi.profiles import get_profile

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from roomba_bt.cli.arguments import (
+    add_command,
     add_far_end_options,
     add_param_option,
     add_permission_options,
@@ -41,14 +42,7 @@ def register(sub: Any) -> None:
 
 
 def _add_run_parser(sub: Any) -> None:
-    run = sub.add_parser(
-        "run",
-        help="run a mission on a robot (--port) or the simulator",
-        description="Run MISSION. Without --port it runs on the built-in simulator (real time; "
-        "--fast on the virtual clock). Exit codes: 0 succeeded, 1 failed or timed out, "
-        "2 invalid mission or usage, 3 connection or stream failure, 4 a behaviour raised an "
-        "exception, 130 interrupted.",
-    )
+    run = add_command(sub, "run", run_command)
     run.add_argument("mission", help="mission YAML file, or a shipped mission's name (dock)")
     add_far_end_options(
         run,
@@ -83,7 +77,6 @@ def _add_run_parser(sub: Any) -> None:
         "summary (none)",
     )  # fmt: skip
     add_monitor_arguments(run)
-    run.set_defaults(func=run_command)
 
 
 def _add_session_options(run: argparse.ArgumentParser) -> None:
@@ -108,19 +101,11 @@ def _add_session_options(run: argparse.ArgumentParser) -> None:
 
 
 def _add_replay_parser(sub: Any) -> None:
-    replay = sub.add_parser(
-        "replay",
-        help="play a --record file back through the tree",
-        description="Feed the recorded sensor bytes back through the same parser and tree and "
-        "compare the commands the tree writes with the recorded ones. Exit codes: 0 the same "
-        "bytes, 1 at the first difference (its mission time and both commands are printed), "
-        "2 invalid record or mission, or a mission reading packets the record lacks.",
-    )
+    replay = add_command(sub, "replay", replay_command)
     replay.add_argument("record", help="a file written by run --record")
     replay.add_argument("--mission", help="mission to replay against (default: the recorded one)")
     add_param_option(replay)
     add_permission_options(replay)
-    replay.set_defaults(func=replay_command)
 
 
 def _error(message: str) -> int:
@@ -157,6 +142,12 @@ def stream_packets(mission: Any, baud: int) -> tuple[int, ...]:
 
 
 def run_command(args: argparse.Namespace) -> int:
+    """run a mission on a robot (--port) or the simulator
+
+    Run MISSION. Without --port it runs on the built-in simulator (real time; --fast on the
+    virtual clock). Exit codes: 0 succeeded, 1 failed or timed out, 2 invalid mission or usage,
+    3 connection or stream failure, 4 a behaviour raised an exception, 130 interrupted.
+    """
     from roomba_bt.cli.links import auto_baud, far_end
     from roomba_bt.robot.errors import ConnectionFailed
     from roomba_bt.runtime.display import observer_for
@@ -399,6 +390,13 @@ def _plot(simulator: Any, path: str) -> str:
 
 
 def replay_command(args: argparse.Namespace) -> int:
+    """play a --record file back through the tree
+
+    Feed the recorded sensor bytes back through the same parser and tree and compare the
+    commands the tree writes with the recorded ones. Exit codes: 0 the same bytes, 1 at the
+    first difference (its mission time and both commands are printed), 2 invalid record or
+    mission, or a mission reading packets the record lacks.
+    """
     from roomba_bt.runtime.recording import RecordError, load_record
     from roomba_bt.runtime.stack import replay_record
 

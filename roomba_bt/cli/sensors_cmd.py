@@ -7,7 +7,7 @@ import sys
 import time
 from typing import TYPE_CHECKING, Any
 
-from roomba_bt.cli.arguments import add_far_end_options
+from roomba_bt.cli.arguments import add_command, add_far_end_options
 from roomba_bt.oi.frames import stream_frame_size
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import RobotProfile, get_profile
@@ -33,10 +33,7 @@ def group_for(baud: int) -> int | None:
 
 
 def register(sub: Any) -> None:
-    parser = sub.add_parser(
-        "sensors",
-        help="show every decoded sensor, live",
-    )
+    parser = add_command(sub, "sensors", sensors_command)
     add_far_end_options(
         parser,
         port_help="serial device or URL; default: the built-in simulator",
@@ -44,7 +41,6 @@ def register(sub: Any) -> None:
     )
     parser.add_argument("--count", type=int, default=0, help="stop after N refreshes (0: run)")
     parser.add_argument("--rate", type=float, default=5.0, help="refreshes per second")
-    parser.set_defaults(func=sensors_command)
 
 
 def format_table(frame: Any) -> str:
@@ -75,6 +71,7 @@ def _show(value: object) -> str:
 
 
 def sensors_command(args: argparse.Namespace) -> int:
+    """show every decoded sensor, live"""
     from roomba_bt.cli.links import auto_baud, far_end, make_simulator
     from roomba_bt.robot.errors import ConnectionFailed, LinkDown
     from roomba_bt.sim import WorldError

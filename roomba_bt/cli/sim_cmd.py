@@ -21,7 +21,7 @@ import time
 from types import FrameType
 from typing import TYPE_CHECKING, Any
 
-from roomba_bt.cli.arguments import plot_file, seconds
+from roomba_bt.cli.arguments import add_command, plot_file, seconds
 from roomba_bt.runtime.summary import ExitCode
 
 if TYPE_CHECKING:
@@ -49,12 +49,7 @@ FAULT_OPTIONS: tuple[tuple[str, type, object, str], ...] = (
 
 
 def register(sub: Any) -> None:
-    parser = sub.add_parser(
-        "sim",
-        help="serve the simulated robot on a pty or a TCP socket",
-        description="Serve a simulated Roomba / Create 2 in real time. The first stdout line "
-        "is the pty path or the socket:// URL to open.",
-    )
+    parser = add_command(sub, "sim", run_sim)
     where = parser.add_mutually_exclusive_group(required=True)
     where.add_argument("--pty", action="store_true", help="serve on a new pseudo-terminal")
     where.add_argument("--tcp", metavar="HOST:PORT", help="serve on a TCP socket (port 0: any)")
@@ -91,7 +86,6 @@ def register(sub: Any) -> None:
     for name, kind, default, help in FAULT_OPTIONS:
         option = "--" + name.replace("_", "-")
         faults.add_argument(option, type=kind, default=default, help=help)
-    parser.set_defaults(func=run_sim)
 
 
 def _fail(message: str, code: ExitCode) -> int:
@@ -100,6 +94,11 @@ def _fail(message: str, code: ExitCode) -> int:
 
 
 def run_sim(args: argparse.Namespace) -> int:
+    """serve the simulated robot on a pty or a TCP socket
+
+    Serve a simulated Roomba / Create 2 in real time. The first stdout line is the pty path or
+    the socket:// URL to open.
+    """
     simulator = _simulator(args)
     if isinstance(simulator, int):
         return simulator
