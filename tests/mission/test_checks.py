@@ -49,66 +49,80 @@ def test_paths_without_the_mode_change_are_found(errors_of: Errors, tree: str) -
     assert "accepted only in Safe or Full mode, but it can be reached in Passive mode" in error
 
 
-def test_keys_written_on_every_path_may_be_read(errors_of: Errors) -> None:
-    ok = """
-        blackboard: {n: int}
-        tree:
-          sequence:
-            - fallback: [{sequence: [wall, {set: {key: n, value: 1}}]}, {set: {key: n, value: 2}}]
-            - check: {key: n, value: 1}
-    """
-    assert errors_of(ok) == []
-    bad = """
-        blackboard: {n: int}
-        tree:
-          sequence:
-            - fallback: [{sequence: [wall, {set: {key: n, value: 1}}]}, bump]
-            - check: {key: n, value: 1}
-    """
-    [error] = errors_of(bad)
-    assert "reads blackboard key 'n' before anything writes it on some path" in error
-
-
-def test_for_each_key_is_written_inside_its_loop_only(errors_of: Errors) -> None:
-    text = """
-        blackboard: {leg: distance}
-        tree:
-          sequence:
-            - mode: safe
-            - for_each: {key: leg, in: [1 m], do: {drive: {distance: "@leg"}}}
-            - drive: {distance: "@leg"}
-    """
-    assert errors_of(text) == []  # after a non-empty for_each the key holds its last item
-
-
-def test_mark_then_odometry(errors_of: Errors) -> None:
-    text = """
-        blackboard: {start: mark}
-        tree: {sequence: [{mark: start}, {odometry: {since: start, distance: 1 m}}]}
-    """
+@pytest.mark.parametrize(
+    "text",
+    [
+        pytest.param(
+            """
+            blackboard: {n: int}
+            tree:
+              sequence:
+                - fallback:
+                    - {sequence: [wall, {set: {key: n, value: 1}}]}
+                    - {set: {key: n, value: 2}}
+                - check: {key: n, value: 1}
+            """,
+            id="a key written on every path may be read",
+        ),
+        pytest.param(
+            """
+            blackboard: {leg: distance}
+            tree:
+              sequence:
+                - mode: safe
+                - for_each: {key: leg, in: [1 m], do: {drive: {distance: "@leg"}}}
+                - drive: {distance: "@leg"}
+            """,
+            id="after a non-empty for_each its key holds its last item",
+        ),
+        pytest.param(
+            """
+            blackboard: {start: mark}
+            tree: {sequence: [{mark: start}, {odometry: {since: start, distance: 1 m}}]}
+            """,
+            id="mark then odometry",
+        ),
+    ],
+)
+def test_blackboard_keys_accepted(errors_of: Errors, text: str) -> None:
     assert errors_of(text) == []
 
 
-def test_set_value_is_typed_by_its_key(errors_of: Errors) -> None:
-    text = """
-        blackboard: {leg: distance}
-        tree: {set: {key: leg, value: 90deg}}
-    """
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        pytest.param(
+            """
+            blackboard: {n: int}
+            tree:
+              sequence:
+                - fallback: [{sequence: [wall, {set: {key: n, value: 1}}]}, bump]
+                - check: {key: n, value: 1}
+            """,
+            "reads blackboard key 'n' before anything writes it on some path",
+            id="a key not written on every path",
+        ),
+        pytest.param(
+            """
+            blackboard: {leg: distance}
+            tree: {set: {key: leg, value: 90deg}}
+            """,
+            "set.value: unknown distance unit 'deg' in '90deg'; use one of: mm, cm, m",
+            id="a set value is typed by its key",
+        ),
+        pytest.param(
+            """
+            blackboard: {turn: angle}
+            tree: {sequence: [{mode: safe}, {drive: {distance: "@turn"}}]}
+            """,
+            "blackboard key 'turn' holds angle (deg), but drive.distance needs distance (mm)",
+            id="a blackboard value of another type",
+        ),
+    ],
+)
+def test_blackboard_keys_refused(errors_of: Errors, text: str, message: str) -> None:
     [error] = errors_of(text)
-    assert error.endswith(
-        "set.value: unknown distance unit 'deg' in '90deg'; use one of: mm, cm, m"
-    )
-
-
-def test_blackboard_value_of_another_type_is_refused(errors_of: Errors) -> None:
-    text = """
-        blackboard: {turn: angle}
-        tree: {sequence: [{mode: safe}, {drive: {distance: "@turn"}}]}
-    """
-    [error] = errors_of(text)
-    assert (
-        "blackboard key 'turn' holds angle (deg), but drive.distance needs distance (mm)" in error
-    )
+    assert message in error
 
 
 def test_runtime_packets_and_stream_budget() -> None:
