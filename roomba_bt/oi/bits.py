@@ -26,12 +26,26 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from enum import IntEnum
+from typing import Any, ClassVar, Self
 
 from roomba_bt.oi.errors import EncodeError
 
 
 def _bit(value: int, n: int) -> bool:
     return bool(value >> n & 1)
+
+
+class _ByteView:
+    """A bit field's view of one byte; each subclass decodes the 256 byte values once, into
+    ``by_byte``, so that :meth:`from_byte` is a lookup."""
+
+    __slots__ = ()
+    by_byte: ClassVar[tuple[Any, ...]] = ()
+
+    @classmethod
+    def from_byte(cls, value: int) -> Self:
+        view: Self = cls.by_byte[value & 0xFF]
+        return view
 
 
 #: Packet 7's two bump bits (bit 1 left, bit 0 right) and two wheel-drop bits (bit 3 left,
@@ -41,7 +55,7 @@ WHEEL_DROP_BITS = 0b1100
 
 
 @dataclass(frozen=True, slots=True)
-class BumpsWheelDrops:
+class BumpsWheelDrops(_ByteView):
     """Packet 7. Bit 0 is bump RIGHT, bit 1 bump LEFT (a peer driver has them swapped)."""
 
     raw: int
@@ -57,18 +71,14 @@ class BumpsWheelDrops:
         object.__setattr__(self, "any_bump", self.bump_left or self.bump_right)
         object.__setattr__(self, "any_wheel_drop", self.wheel_drop_left or self.wheel_drop_right)
 
-    @classmethod
-    def from_byte(cls, value: int) -> BumpsWheelDrops:
-        return _BUMPS[value & 0xFF]
 
-
-_BUMPS = tuple(
+BumpsWheelDrops.by_byte = tuple(
     BumpsWheelDrops(v, _bit(v, 0), _bit(v, 1), _bit(v, 2), _bit(v, 3)) for v in range(256)
 )
 
 
 @dataclass(frozen=True, slots=True)
-class Overcurrents:
+class Overcurrents(_ByteView):
     """Packet 14: bit 0 side brush, bit 2 main brush, bit 3 right wheel, bit 4 left wheel."""
 
     raw: int
@@ -81,18 +91,14 @@ class Overcurrents:
     def any(self) -> bool:
         return self.raw & 0b11101 != 0
 
-    @classmethod
-    def from_byte(cls, value: int) -> Overcurrents:
-        return _OVERCURRENTS[value & 0xFF]
 
-
-_OVERCURRENTS = tuple(
+Overcurrents.by_byte = tuple(
     Overcurrents(v, _bit(v, 0), _bit(v, 2), _bit(v, 3), _bit(v, 4)) for v in range(256)
 )
 
 
 @dataclass(frozen=True, slots=True)
-class Buttons:
+class Buttons(_ByteView):
     """Packet 18 (and the data byte of opcode 165)."""
 
     raw: int
@@ -109,19 +115,15 @@ class Buttons:
     def any(self) -> bool:
         return self.raw != 0
 
-    @classmethod
-    def from_byte(cls, value: int) -> Buttons:
-        return _BUTTONS[value & 0xFF]
-
 
 BUTTON_NAMES: tuple[str, ...] = (
     "clean", "spot", "dock", "minute", "hour", "day", "schedule", "clock"
 )  # fmt: skip
-_BUTTONS = tuple(Buttons(v, *(_bit(v, n) for n in range(8))) for v in range(256))
+Buttons.by_byte = tuple(Buttons(v, *(_bit(v, n) for n in range(8))) for v in range(256))
 
 
 @dataclass(frozen=True, slots=True)
-class ChargingSources:
+class ChargingSources(_ByteView):
     """Packet 34: 1 = charging source present and powered."""
 
     raw: int
@@ -132,12 +134,8 @@ class ChargingSources:
     def any(self) -> bool:
         return self.internal_charger or self.home_base
 
-    @classmethod
-    def from_byte(cls, value: int) -> ChargingSources:
-        return _SOURCES[value & 0xFF]
 
-
-_SOURCES = tuple(ChargingSources(v, _bit(v, 0), _bit(v, 1)) for v in range(256))
+ChargingSources.by_byte = tuple(ChargingSources(v, _bit(v, 0), _bit(v, 1)) for v in range(256))
 
 
 #: Packet 45's four front sensors (front-left, centre-left, centre-right, front-right, bits
@@ -148,7 +146,7 @@ LIGHT_BUMPER_BITS = 0b111111
 
 
 @dataclass(frozen=True, slots=True)
-class LightBumper:
+class LightBumper(_ByteView):
     """Packet 45: which of the six light-bumper sensors sees an obstacle."""
 
     raw: int
@@ -166,15 +164,11 @@ class LightBumper:
         object.__setattr__(self, "any", self.raw & LIGHT_BUMPER_BITS != 0)
         object.__setattr__(self, "ahead", self.raw & LIGHT_BUMPER_AHEAD_BITS != 0)
 
-    @classmethod
-    def from_byte(cls, value: int) -> LightBumper:
-        return _LIGHT[value & 0xFF]
-
 
 LIGHT_BUMPER_NAMES: tuple[str, ...] = (
     "left", "front_left", "center_left", "center_right", "front_right", "right"
 )  # fmt: skip
-_LIGHT = tuple(LightBumper(v, *(_bit(v, n) for n in range(6))) for v in range(256))
+LightBumper.by_byte = tuple(LightBumper(v, *(_bit(v, n) for n in range(6))) for v in range(256))
 
 
 class ChargingState(IntEnum):
@@ -292,8 +286,8 @@ DIGIT_ASCII: frozenset[int] = frozenset(range(32, 127)) - {42, 43, 64}
 
 
 #: Every byte value decoded once, for the frame's typed views (a lookup, no allocation).
-BUMPS_BY_BYTE: tuple[BumpsWheelDrops, ...] = _BUMPS
-OVERCURRENTS_BY_BYTE: tuple[Overcurrents, ...] = _OVERCURRENTS
-BUTTONS_BY_BYTE: tuple[Buttons, ...] = _BUTTONS
-CHARGING_SOURCES_BY_BYTE: tuple[ChargingSources, ...] = _SOURCES
-LIGHT_BUMPER_BY_BYTE: tuple[LightBumper, ...] = _LIGHT
+BUMPS_BY_BYTE: tuple[BumpsWheelDrops, ...] = BumpsWheelDrops.by_byte
+OVERCURRENTS_BY_BYTE: tuple[Overcurrents, ...] = Overcurrents.by_byte
+BUTTONS_BY_BYTE: tuple[Buttons, ...] = Buttons.by_byte
+CHARGING_SOURCES_BY_BYTE: tuple[ChargingSources, ...] = ChargingSources.by_byte
+LIGHT_BUMPER_BY_BYTE: tuple[LightBumper, ...] = LightBumper.by_byte
