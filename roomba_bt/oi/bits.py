@@ -24,9 +24,9 @@ Layouts (bit 7 left, bit 0 right)::
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from enum import IntEnum
-from typing import Any, ClassVar, Self
+from typing import TYPE_CHECKING, Any, ClassVar, Self
 
 from roomba_bt.oi.errors import EncodeError
 
@@ -36,16 +36,32 @@ def _bit(value: int, n: int) -> bool:
 
 
 class _ByteView:
-    """A bit field's view of one byte; each subclass decodes the 256 byte values once, into
-    ``by_byte``, so that :meth:`from_byte` is a lookup."""
+    """A bit field's view of one byte: its flags are its fields after ``raw``, in the order of
+    their bits. Each subclass decodes the 256 byte values once (:meth:`_decode_every_byte`),
+    so that :meth:`from_byte` is a lookup."""
 
     __slots__ = ()
     by_byte: ClassVar[tuple[Any, ...]] = ()
+
+    if TYPE_CHECKING:  # each subclass is a dataclass of these
+
+        def __init__(self, raw: int, *flags: bool) -> None: ...
 
     @classmethod
     def from_byte(cls, value: int) -> Self:
         view: Self = cls.by_byte[value & 0xFF]
         return view
+
+    @classmethod
+    def _decode_every_byte(cls, bits: Iterable[int]) -> None:
+        """Fill :attr:`by_byte`: its flags read ``bits`` (bit numbers, in field order)."""
+        numbers = tuple(bits)
+        cls.by_byte = tuple(cls(v, *(_bit(v, n) for n in numbers)) for v in range(256))
+
+    @classmethod
+    def flag_names(cls) -> tuple[str, ...]:
+        """The flags' names in the order of their bits."""
+        return tuple(f.name for f in fields(cls) if f.init and f.name != "raw")  # type: ignore[arg-type]
 
 
 #: Packet 7's two bump bits (bit 1 left, bit 0 right) and two wheel-drop bits (bit 3 left,
@@ -72,9 +88,7 @@ class BumpsWheelDrops(_ByteView):
         object.__setattr__(self, "any_wheel_drop", self.wheel_drop_left or self.wheel_drop_right)
 
 
-BumpsWheelDrops.by_byte = tuple(
-    BumpsWheelDrops(v, _bit(v, 0), _bit(v, 1), _bit(v, 2), _bit(v, 3)) for v in range(256)
-)
+BumpsWheelDrops._decode_every_byte(range(4))
 
 
 @dataclass(frozen=True, slots=True)
@@ -92,9 +106,7 @@ class Overcurrents(_ByteView):
         return self.raw & 0b11101 != 0
 
 
-Overcurrents.by_byte = tuple(
-    Overcurrents(v, _bit(v, 0), _bit(v, 2), _bit(v, 3), _bit(v, 4)) for v in range(256)
-)
+Overcurrents._decode_every_byte((0, 2, 3, 4))
 
 
 @dataclass(frozen=True, slots=True)
@@ -116,10 +128,8 @@ class Buttons(_ByteView):
         return self.raw != 0
 
 
-BUTTON_NAMES: tuple[str, ...] = (
-    "clean", "spot", "dock", "minute", "hour", "day", "schedule", "clock"
-)  # fmt: skip
-Buttons.by_byte = tuple(Buttons(v, *(_bit(v, n) for n in range(8))) for v in range(256))
+Buttons._decode_every_byte(range(8))
+BUTTON_NAMES: tuple[str, ...] = Buttons.flag_names()
 
 
 @dataclass(frozen=True, slots=True)
@@ -135,7 +145,7 @@ class ChargingSources(_ByteView):
         return self.internal_charger or self.home_base
 
 
-ChargingSources.by_byte = tuple(ChargingSources(v, _bit(v, 0), _bit(v, 1)) for v in range(256))
+ChargingSources._decode_every_byte(range(2))
 
 
 #: Packet 45's four front sensors (front-left, centre-left, centre-right, front-right, bits
@@ -165,10 +175,8 @@ class LightBumper(_ByteView):
         object.__setattr__(self, "ahead", self.raw & LIGHT_BUMPER_AHEAD_BITS != 0)
 
 
-LIGHT_BUMPER_NAMES: tuple[str, ...] = (
-    "left", "front_left", "center_left", "center_right", "front_right", "right"
-)  # fmt: skip
-LightBumper.by_byte = tuple(LightBumper(v, *(_bit(v, n) for n in range(6))) for v in range(256))
+LightBumper._decode_every_byte(range(6))
+LIGHT_BUMPER_NAMES: tuple[str, ...] = LightBumper.flag_names()
 
 
 class ChargingState(IntEnum):
