@@ -4,12 +4,13 @@
 from __future__ import annotations
 
 import argparse
+import re
 from collections.abc import Callable
 
 import pytest
 
 from roomba_bt.cli import main
-from roomba_bt.cli.arguments import baud_rate, parse_params, parse_timeout, seconds
+from roomba_bt.cli.arguments import add_command, baud_rate, parse_params, parse_timeout, seconds
 from roomba_bt.oi.encode import BAUD_CODES
 
 
@@ -78,3 +79,31 @@ def test_bad_timeout_is_a_message(text: str, message: str) -> None:
     result = parse_timeout(text)
     assert isinstance(result, str) and result.startswith(f"--timeout {text!r}: ")
     assert message in result
+
+
+def _launch(args: argparse.Namespace) -> int:
+    """launch the thing
+
+    Launch it at --speed, and report
+    where it landed.
+    """
+    return 0
+
+
+def _plain(args: argparse.Namespace) -> int:
+    """do it"""
+    return 0
+
+
+def test_a_command_is_declared_from_its_function() -> None:
+    parser = argparse.ArgumentParser(prog="roomba-bt")
+    sub = parser.add_subparsers()
+    launch = add_command(sub, "launch", _launch)
+    plain = add_command(sub, "plain", _plain)
+    listing = parser.format_help()
+    assert re.search(r"launch +launch the thing", listing) and re.search(r"plain +do it", listing)
+    assert launch.description == "Launch it at --speed, and report\nwhere it landed."
+    assert "Launch it at --speed, and report where it landed." in launch.format_help()
+    assert plain.description is None
+    assert parser.parse_args(["launch"]).func is _launch
+    assert parser.parse_args(["plain"]).func is _plain
