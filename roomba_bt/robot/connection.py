@@ -175,6 +175,7 @@ class Connection:
         if ids:
             check_bandwidth(ids, self.baud)
         self.ending.begin()
+        self.release_forward()
         self.send(oi.start())
         self.send(oi.pause_stream())
         drain(self.link.transport, self.link.read)  # a stale stream, a reset banner
@@ -355,6 +356,22 @@ class Connection:
         """Drive 0 if the model says the robot may be driving; True if it was sent (the
         watchdog's action)."""
         return self.writer.halt()
+
+    # ------------------------------------------------------------------ the bump reflex
+    def hold_forward(self) -> None:
+        """Drive 0 now if the wheels drive forward, and forward wheel commands kept, not
+        written, while a bump onset waits for its confirming frame
+        (:meth:`CommandWriter.hold_forward <roomba_bt.robot.writer.CommandWriter.hold_forward>`)."""
+        self.writer.hold_forward()
+
+    def release_forward(self) -> Command | None:
+        """The hold ends; the forward command it kept, to be sent again, or None."""
+        return self.writer.release_forward()
+
+    @property
+    def forward_held(self) -> bool:
+        """Whether the bump reflex holds forward motion (robot/hazards.py)."""
+        return self.writer.forward_held
 
     # ------------------------------------------------------------------ writing
     def send(self, command: Command) -> None:

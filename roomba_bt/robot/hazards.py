@@ -16,6 +16,25 @@ mode model followed packet 35 at once because the frame shows the cause) is conf
 that agreement and shown at once. Either way a real hazard's reaction is late by at most one
 frame (15 ms); clearing is never delayed.
 
+A held bump must not cost the robot a step into the wall: while a bump onset waits for its
+second frame, the robot layer holds forward motion at 0 (the *bump reflex*: the runtime calls
+:meth:`~roomba_bt.robot.connection.Connection.hold_forward` in the onset's tick, which writes
+drive 0 at once if the wheels drive forward and keeps the tree's forward wheel commands
+unwritten). The action is not ended and the tree does not see the bump yet. The next frame
+confirms it (the tree reacts as it would have, one frame later, from where the robot stood
+still) or clears it (a corrupted frame: the forward command held is written again, as after
+a ridden-through stall; the phantom cost a 15 ms pause, not a stop)::
+
+    frame          n-1        n              n+1
+    bumper         0          1              1 (confirmed)      0 (cleared)
+    written        drive 200  drive 0        the tree's back-off  drive 200 again
+    tree sees      no bump    no bump        bump                no bump
+
+Without the reflex the wheels drove one more 15 ms step into the wall before the tree's
+back-off (the bumper stayed pressed up to 3 frames after the bump frame, not 1). Cliffs and
+wheel drops are confirmed the same way, without a reflex: a real one in Safe or Full makes the
+robot fall to Passive (or the tree stop) and is shown at once by that agreement.
+
 The hazard bits: packet 7's bump and wheel drop bits (0-3; the reserved bits 4-7 never pass
 the range checks) and the four cliff packets 9-12, folded into one integer per frame so the
 common case (no hazard, or the same hazards as before) is one comparison.
@@ -24,12 +43,30 @@ common case (no hazard, or the same hazards as before) is one comparison.
 from __future__ import annotations
 
 from roomba_bt.oi.bits import BUMP_BITS, WHEEL_DROP_BITS
+from roomba_bt.oi.encode import Command
 from roomba_bt.oi.frames import BUMPS_PACKETS, CLIFF_PACKETS, FrameLayout, SensorFrame
 
 _BUMP_PACKET = BUMPS_PACKETS[0]
 _PACKET_7_HAZARDS = BUMP_BITS | WHEEL_DROP_BITS  # 0b1111
 #: bit of each cliff packet in the folded hazard word (above packet 7's four bits)
 _CLIFF_BITS = {pid: 1 << (4 + i) for i, pid in enumerate(CLIFF_PACKETS)}
+#: Drive's radius for a turn in place (the spec's -1 and 1): the velocity is a wheel's speed
+_SPIN_RADII = (-1, 1)
+
+
+def drives_forward(command: Command) -> bool:
+    """Whether a wheel command moves the robot's centre forward (what the bump reflex holds):
+    Drive (137) at a positive velocity on a straight line or an arc (a turn in place moves
+    no centre), Drive Direct (145) or Drive PWM (146) with the wheels' sum positive. A
+    cleaning cycle drives itself and reacts to its own bumps: never held."""
+    name = command.spec.name
+    if name == "drive":
+        velocity, radius = command.args
+        return velocity > 0 and radius not in _SPIN_RADII
+    if name in ("drive_direct", "drive_pwm"):
+        right, left = command.args
+        return right + left > 0
+    return False
 
 
 class HazardConfirmation:
@@ -51,6 +88,12 @@ class HazardConfirmation:
         self.pending = 0  # the bits held back from the frame before
         self.held = 0
         self.unconfirmed = 0
+
+    @property
+    def bump_pending(self) -> bool:
+        """A bump onset is held back from the last frame (the next one confirms or clears
+        it): what the bump reflex holds forward motion for."""
+        return bool(self.pending & BUMP_BITS)
 
     def _bind(self, layout: FrameLayout) -> None:
         index = layout.index

@@ -28,6 +28,7 @@ from roomba_bt.oi.opcodes import Effect
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
 from roomba_bt.robot.errors import ModeError, PortLost
+from roomba_bt.robot.hazards import drives_forward
 from roomba_bt.robot.link import StreamLink
 from roomba_bt.robot.modes import ModeModel
 
@@ -60,6 +61,10 @@ class CommandWriter:
         self.builtin_may_run = False
         #: when the last command was written (link clock)
         self.last_command_at = float("-inf")
+        #: the bump reflex (robot/hazards.py): while a bump onset waits for its confirming
+        #: frame, forward wheel commands are kept, not written; the one to send again after
+        self.forward_held = False
+        self.held_wheels: Command | None = None
 
     def send(self, command: Command) -> None:
         """Guard, then write ``command``'s bytes, then update the mode model.
@@ -105,6 +110,11 @@ class CommandWriter:
         except (ModeError, UnsupportedCommandError):
             self.refused += 1
             raise
+        if self.forward_held and spec.channel == "wheels":
+            if drives_forward(command):  # the bump reflex: kept for release_forward
+                self.held_wheels = command
+                return
+            self.held_wheels = None  # the tree wants something else now
         effect = spec.effect
         if effect is Effect.STREAM:
             check_bandwidth(command.args[1:], self.baud)
@@ -171,3 +181,24 @@ class CommandWriter:
             return False
         self.send(oi.halt())
         return True
+
+    def hold_forward(self) -> None:
+        """A bump onset waits for the frame that confirms it (robot/hazards.py): drive 0 now
+        if the last wheel command drives forward, so the robot does not push on into what it
+        may have hit, and until :meth:`release_forward` forward wheel commands are kept, not
+        written (the action goes on: the tree does not know of the bump yet)."""
+        if self.forward_held:
+            return
+        self.forward_held = True
+        wheels = self.last_wheels
+        if wheels is not None and drives_forward(wheels) and self.modes.mode in DRIVING_MODES:
+            self.send(oi.halt())
+            self.held_wheels = wheels
+
+    def release_forward(self) -> Command | None:
+        """The onset was confirmed or cleared: the hold ends. The forward command it kept (the
+        one driving when it began, or the last one sent since), to be sent again unless the
+        tick sends another; None when nothing was held."""
+        self.forward_held = False
+        held, self.held_wheels = self.held_wheels, None
+        return held

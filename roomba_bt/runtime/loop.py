@@ -429,6 +429,8 @@ class MissionRunner(BaseHandle):
         return snapshot
 
     def _flush(self) -> None:
+        if self._hazards.pending or self.connection.forward_held:
+            self._bump_reflex()
         if not len(self._outbox):
             return
         for command in self._outbox.drain():
@@ -443,6 +445,18 @@ class MissionRunner(BaseHandle):
                 if len(self.refusals) < 100:
                     when = self._snapshot.time if self._snapshot is not None else 0.0
                     self.refusals.append(f"t={when:.3f} {exc}")
+
+    def _bump_reflex(self) -> None:
+        """While a bump onset waits for its confirming frame, forward motion is held at 0
+        (robot/hazards.py); confirmed or cleared, the forward command held goes out again
+        unless this tick queued another wheel command (the tree's reaction)."""
+        connection = self.connection
+        if self._hazards.bump_pending:
+            connection.hold_forward()
+        elif connection.forward_held:
+            held = connection.release_forward()
+            if held is not None and all(c.spec.channel != "wheels" for c in self._outbox):
+                self._outbox.send(held, self)
 
 
 def running_in(root: py_trees.behaviour.Behaviour) -> str:

@@ -1,14 +1,20 @@
 """Hazard confirmation: a hazard onset is shown once the next frame agrees, or at once when
-the robot's own fall to Passive agrees; clearing is never delayed."""
+the robot's own fall to Passive agrees; clearing is never delayed. While a bump onset waits,
+the connection holds forward motion at 0 (the bump reflex) and gives the command back after."""
 
 from __future__ import annotations
 
+from roomba_bt.oi import commands
 from roomba_bt.oi.frames import SensorFrame, layout_for
+from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
-from roomba_bt.robot.hazards import HazardConfirmation
+from roomba_bt.robot.connection import Connection
+from roomba_bt.robot.hazards import HazardConfirmation, drives_forward
+from roomba_bt.sim import SimLink, Simulator, load_world
 
 PACKETS = (7, 9, 10, 11, 12, 35)
 LAYOUT = layout_for(PACKETS, CREATE2, True)
+HALT = bytes((137, 0, 0, 0, 0))
 
 
 def frame(**values: int) -> SensorFrame:
@@ -64,3 +70,75 @@ def test_a_frame_without_hazard_packets_passes_through() -> None:
     only = layout.decode(layout.pack({35: 2, 43: 10, 44: 10}))
     confirm = HazardConfirmation()
     assert confirm.frame(only) is only and confirm.word(only) == 0
+
+
+def test_a_bump_onset_is_pending_for_the_reflex_a_cliff_is_not() -> None:
+    confirm = HazardConfirmation()
+    confirm.frame(frame())
+    confirm.frame(frame(bumps=0b10))
+    assert confirm.bump_pending  # the robot layer holds forward motion for this frame
+    confirm.frame(frame(bumps=0b10))
+    assert not confirm.bump_pending  # confirmed: the tree sees it now
+    confirm.frame(frame(bumps=0b10, cliff_left=1))
+    assert confirm.pending and not confirm.bump_pending  # cliffs: confirmed, no reflex
+
+
+def test_what_the_reflex_holds_is_forward_motion_only() -> None:
+    assert drives_forward(commands.drive(200, commands.Radius.STRAIGHT))
+    assert drives_forward(commands.drive(150, 500))  # an arc still pushes ahead
+    assert drives_forward(commands.drive_direct(100, 50))
+    assert drives_forward(commands.drive_pwm(60, 0))
+    assert not drives_forward(commands.halt())
+    assert not drives_forward(commands.drive(-150, commands.Radius.STRAIGHT))
+    assert not drives_forward(commands.spin(200, clockwise=True))  # turning in place
+    assert not drives_forward(commands.drive_direct(100, -100))
+    assert not drives_forward(commands.clean())  # the cycle reacts to its own bumps
+
+
+def _safe_connection() -> tuple[Connection, list[bytes]]:
+    simulator = Simulator(load_world("empty-room"), CREATE2, 0)
+    written: list[bytes] = []
+
+    class Tap(SimLink):
+        def write(self, data: bytes) -> None:
+            written.append(bytes(data))
+            super().write(data)
+
+    connection = Connection(Tap(simulator), CREATE2)
+    connection.start(OIMode.SAFE)
+    written.clear()
+    return connection, written
+
+
+def test_the_hold_stops_forward_motion_at_once_and_gives_the_command_back() -> None:
+    connection, written = _safe_connection()
+    forward = commands.drive(200, commands.Radius.STRAIGHT)
+    connection.send(forward)
+    connection.hold_forward()
+    assert written == [forward.data, HALT]  # drive 0 written at once
+    connection.hold_forward()  # the same onset's hold: nothing more
+    faster = commands.drive(300, commands.Radius.STRAIGHT)
+    connection.send(faster)  # the tree, unaware, asks for more: kept, not written
+    assert written == [forward.data, HALT]
+    assert connection.release_forward() == faster
+    assert not connection.forward_held
+    connection.send(faster)
+    assert written[-1] == faster.data
+
+
+def test_the_hold_lets_other_wheel_commands_through_and_forgets_the_forward_one() -> None:
+    connection, written = _safe_connection()
+    connection.send(commands.drive(200, commands.Radius.STRAIGHT))
+    connection.hold_forward()
+    back = commands.drive(-150, commands.Radius.STRAIGHT)
+    connection.send(back)  # the tree's own reaction: written at once
+    assert written[-1] == back.data
+    assert connection.release_forward() is None  # nothing to send again
+
+
+def test_a_hold_while_not_driving_forward_writes_nothing() -> None:
+    connection, written = _safe_connection()
+    connection.send(commands.spin(100, clockwise=False))
+    connection.hold_forward()
+    assert written == [commands.spin(100, clockwise=False).data]
+    assert connection.release_forward() is None
