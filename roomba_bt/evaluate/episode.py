@@ -140,6 +140,10 @@ class EpisodeResult:
     loops: float
     longest_stall_s: float
     trajectory: tuple[tuple[float, float], ...] = field(repr=False, default=())
+    #: per bump onset, steps from the bump frame to the first wheel request that no longer
+    #: drives forward (a drive 0 or the reaction) and to the first that backs out (-1: none
+    #: within a second); 0 is a command written in the bump frame's own tick
+    reaction_steps: tuple[tuple[int, int], ...] = field(repr=False, default=())
     #: what ran: the mission (as given), the world's name, the parameters
     mission: str = ""
     world: str = ""
@@ -171,13 +175,19 @@ class _MeasuredSimulator(Simulator):
         self._progress_mark = (0.0, 0.0)  # (loop angle, time)
         self.longest_stall = 0.0
         self._radius = max(1.0, math.hypot(self.x - self._centre[0], self.y - self._centre[1]))
+        self.reaction_steps: list[tuple[int, int]] = []
+        self._since_onset: int | None = None  # steps since the last onset, while awaited
+        self._stopped_after = -1
 
     def step(self, dt: float = 0.015) -> None:
+        if self._since_onset is not None:
+            self._watch_reaction(self._since_onset)
         super().step(dt)
         pressed = bool(self.values[7] & 3)
         if pressed:
             if not self._in_contact:
                 self.contact_steps.append(0)
+                self._since_onset, self._stopped_after = 0, -1
             else:
                 self.contact_steps[-1] += 1
         self._in_contact = pressed
@@ -189,6 +199,17 @@ class _MeasuredSimulator(Simulator):
             self._progress_mark = (self._loop_angle, self.time)
         else:
             self.longest_stall = max(self.longest_stall, self.time - since)
+
+    def _watch_reaction(self, waited: int) -> None:
+        """The wheels as requested before the step, ``waited`` steps after a bump frame."""
+        mean = self.requested_left + self.requested_right
+        if self._stopped_after < 0 and mean <= 0.0:
+            self._stopped_after = waited
+        if mean < 0.0 or waited >= 66:
+            self.reaction_steps.append((self._stopped_after, waited if mean < 0.0 else -1))
+            self._since_onset = None
+        else:
+            self._since_onset = waited + 1
 
     @property
     def loops(self) -> float:
@@ -309,6 +330,7 @@ def _run_episode(spec: EpisodeSpec) -> EpisodeResult:
         end=(simulator.x / 1000.0, simulator.y / 1000.0, math.degrees(simulator.theta)),
         bumps=sum(1 for e in events if e.kind == "bump"),
         contact_steps=tuple(simulator.contact_steps),
+        reaction_steps=tuple(simulator.reaction_steps),
         docked=simulator.docked,
         charging=simulator.charging,
         cliffs=sum(1 for e in events if e.kind == "cliff"),

@@ -18,7 +18,7 @@ import math
 import re
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -142,6 +142,15 @@ def patrol_lines(exp: Experiment, s: Summary, results: Sequence[EpisodeResult]) 
     return [line]
 
 
+def _spread(counts: Iterable[int]) -> str:
+    """``0: 12, 1: 3`` (-1 counted as ``none``); ``no bump`` when empty."""
+    histogram: dict[int, int] = {}
+    for c in counts:
+        histogram[c] = histogram.get(c, 0) + 1
+    text = ", ".join(f"{k if k >= 0 else 'none'}: {v}" for k, v in sorted(histogram.items()))
+    return text or "no bump"
+
+
 def bump_lines(s: Summary, results: Sequence[EpisodeResult]) -> list[str]:
     """Reaction to bumps, from the simulator's bumper state at every 15 ms step."""
     steps = [c for r in results for c in r.contact_steps]
@@ -151,9 +160,13 @@ def bump_lines(s: Summary, results: Sequence[EpisodeResult]) -> list[str]:
     spread = ", ".join(f"{k} ticks: {v}" for k, v in sorted(histogram.items()))
     worst = max(steps) if steps else 0
     outcomes = ", ".join(f"{count} {reason}" for reason, count in s.failures) or "none"
+    reactions = [r for e in results for r in e.reaction_steps]
     return [
         f"- {s.runs} runs, {len(steps)} bumps; ticks the bumper stayed pressed after the bump "
         f"frame: {spread or 'no bump'}; worst **{worst}** (bar: at most 2).",
+        "- ticks from the bump frame to the write that ended forward motion: "
+        f"{_spread(r[0] for r in reactions)}; to the back-off: "
+        f"{_spread(r[1] for r in reactions)} (0: written in the bump frame's own tick).",
         f"- {s.successes} of {s.runs} runs drove the full minute; the others stopped as "
         f"designed: {outcomes}.",
     ]
