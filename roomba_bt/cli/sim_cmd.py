@@ -42,6 +42,8 @@ FAULT_OPTIONS: tuple[tuple[str, type, object, str], ...] = (
     ("truncate_rate", float, 0.0, "per-frame probability"),
     ("reset_at", float, None, "the robot resets at this time (s)"),
     ("stream_stop_at", float, None, "the stream stops at this time (s)"),
+    ("stream_gap_at", float, None, "the stream pauses at this time (s), then goes on"),
+    ("stream_gap_s", float, 0.8, "how long the stream's gap lasts (s)"),
     ("sleep_at", float, None, "the robot falls asleep at this time (s)"),
     ("baud_change_at", float, None, "the robot's port changes its rate at this time (s)"),
     ("baud_change_to", int, None, "the rate it changes to (default: the other OI rate)"),

@@ -31,7 +31,10 @@ class Faults:
                        firmware banner, the OI Off, the stream ended)
     ``stream_stop_at`` simulated time (s) at which the robot stops streaming (the port open,
                        the OI still listening)
-    ``sleep_at``       simulated time (s) at which the robot falls asleep (deaf but for Start)
+    ``stream_gap_at``  simulated time (s) at which the stream pauses by itself for
+                       ``stream_gap_s`` (0.8 s by default: the oracle's stream loss), then
+                       goes on (a loose connector, a robot busy for a moment)
+    ``sleep_at``       simulated time (s) at which the robot falls asleep (deaf until a BRC pulse)
     ``baud_change_at`` simulated time (s) at which the robot's serial port changes its rate
                        (as after a battery swap or a reset: the Create 2 comes back at its
                        default rate, whatever Baud, 129, had set) and streams on at it
@@ -55,6 +58,8 @@ class Faults:
     truncate_rate: float = 0.0
     reset_at: float | None = None
     stream_stop_at: float | None = None
+    stream_gap_at: float | None = None
+    stream_gap_s: float = 0.8
     sleep_at: float | None = None
     baud_change_at: float | None = None
     baud_change_to: int | None = None
@@ -70,13 +75,17 @@ class Faults:
             ("inject_every", 0.015, 3600.0),
             ("noise", 0.0, 4095.0),
             ("odometry_error", 0.0, 0.2),
+            ("stream_gap_s", 0.0, 3600.0),
         ):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int | float):
                 raise ValueError(f"faults.{name}: found {value!r}; allowed: a number {lo}..{hi}")
             if not lo <= value <= hi or math.isnan(value):
                 raise ValueError(f"faults.{name}: found {value!r}; allowed: {lo}..{hi}")
-        for name in ("disconnect_at", "reset_at", "stream_stop_at", "sleep_at", "baud_change_at"):
+        for name in (
+            "disconnect_at", "reset_at", "stream_stop_at", "stream_gap_at", "sleep_at",
+            "baud_change_at",
+        ):  # fmt: skip
             at = getattr(self, name)
             if at is not None and not (
                 isinstance(at, int | float) and not isinstance(at, bool) and at >= 0
@@ -98,6 +107,11 @@ class Faults:
         kinds = (
             ("reset", self.reset_at),
             ("stream stop", self.stream_stop_at),
+            ("stream gap", self.stream_gap_at),
+            (
+                "stream gap end",
+                None if self.stream_gap_at is None else self.stream_gap_at + self.stream_gap_s,
+            ),
             ("sleep", self.sleep_at),
             ("baud change", self.baud_change_at),
         )

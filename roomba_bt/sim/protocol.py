@@ -217,8 +217,18 @@ class OIProtocol(StreamOutput):
         self.brc_low = low
 
     def fall_asleep(self, cause: str) -> None:
-        """Asleep as after five idle minutes in Passive (``sim --asleep``): deaf until a BRC
-        pulse."""
+        """Asleep as after five idle minutes in Passive (``sim --asleep``, the ``sleep_at``
+        fault): in Passive with its motors off, no stream, deaf to every byte (Start and
+        Query List included) until a BRC pulse. The 600 spec's only wake for this sleep is
+        the BRC pulse ("Passive Mode"; Appendix B: "Dock wakeup: BRC pulse"); Start is what
+        Off listens for, and a robot asleep answers no byte (robotics.stackexchange.com/q/10666).
+        A robot in Safe or Full never sleeps by itself; the fault puts one to sleep all the
+        same, as if it had been left in Passive."""
+        self.builtin = None
+        self._stop_wheels()
+        self.left_speed = self.right_speed = 0.0
+        self.motor_bits = 0
+        self.brush_pwm = (0, 0, 0)
         self._set_mode(OIMode.PASSIVE, cause)
         self._fall_asleep(cause, deaf=True)
 

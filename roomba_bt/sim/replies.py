@@ -93,6 +93,8 @@ class StreamOutput(Power):
         self._stream: _Packer | None = None
         self._stream_ids: tuple[int, ...] = ()
         self._stream_paused = False
+        #: the stream held back during a ``stream_gap_at`` fault (robot.py), or None
+        self._gapped_stream: _Packer | None = None
         self._next_inject = faults.inject_every if faults.inject_text else math.inf
         self._out = bytearray()
         self._delayed: deque[tuple[float, bytes]] = deque()
@@ -117,6 +119,7 @@ class StreamOutput(Power):
 
     def _end_stream(self) -> None:
         self._stream = None
+        self._gapped_stream = None
         self._stream_ids = ()
 
     def _on_sensors(self, args: bytes) -> None:

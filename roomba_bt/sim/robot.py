@@ -202,8 +202,14 @@ class Simulator(OIProtocol):
                 if spec.leads_to is not None:
                     self._command_mode(spec)
                 self._on_reset(b"")
+            elif kind == "stream gap":  # no frame until the gap's end; its stream kept
+                self._gapped_stream, self._stream = self._stream, None
+            elif kind == "stream gap end":
+                if self._stream is None:  # unless a new one came meanwhile
+                    self._stream = self._gapped_stream
+                self._gapped_stream = None
             elif kind == "sleep":
-                self._fall_asleep("fault: sleep_at")
+                self.fall_asleep("fault: sleep_at")  # deaf until BRC, as the 5-min sleep
             elif kind == "baud change":
                 to = self.faults.baud_change_to
                 self.baud = to if to is not None else 19200 if self.baud == 115200 else 115200

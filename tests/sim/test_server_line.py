@@ -13,7 +13,7 @@ import serial
 from roomba_bt.oi import commands as C
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
-from roomba_bt.sim import Simulator, load_world
+from roomba_bt.sim import Faults, Simulator, load_world
 from roomba_bt.sim.link import at_wrong_baud
 from roomba_bt.sim.server import Endpoint, PtyEndpoint, Rfc2217Endpoint, serve
 
@@ -21,8 +21,14 @@ from roomba_bt.sim.server import Endpoint, PtyEndpoint, Rfc2217Endpoint, serve
 class Served:
     """A simulator served on ``endpoint`` in a thread, until the test ends."""
 
-    def __init__(self, endpoint: Endpoint, baud: int = 115200, asleep: bool = False) -> None:
-        self.simulator = Simulator(load_world("empty-room"), CREATE2, 0)
+    def __init__(
+        self,
+        endpoint: Endpoint,
+        baud: int = 115200,
+        asleep: bool = False,
+        faults: Faults | None = None,
+    ) -> None:
+        self.simulator = Simulator(load_world("empty-room"), CREATE2, 0, faults)
         self.simulator.baud = baud
         if asleep:
             self.simulator.fall_asleep("test")
@@ -147,6 +153,33 @@ def test_a_pty_hang_up_is_brc_high_and_the_rates_return_the_falling_edge_that_wa
         port.baudrate = 115200
         _until(lambda: one.simulator.brc_pulses == 1)
         assert _mode_reply(port) == b"\x01", "woken by the falling edge, into Passive"
+    finally:
+        port.close()
+
+
+def test_the_sleep_at_fault_is_the_power_saving_sleep_start_does_not_wake_it(
+    served: list[Served],
+) -> None:
+    """``sim --sleep-at``: the robot sleeps as after five idle minutes in Passive, its motors
+    off, deaf to every byte: Start does not wake it (the 600 spec wakes this sleep by a BRC
+    pulse only; Start is what Off listens for), the pty's hang-up pulse does."""
+    one = Served(PtyEndpoint(), faults=Faults(sleep_at=1.5))
+    served.append(one)
+    sim = one.simulator
+    port = serial.Serial(one.endpoint.address, 115200, timeout=0.3)
+    try:
+        port.write(C.start().data + C.safe().data + C.drive(200, 1).data)
+        _until(lambda: sim.mode is OIMode.SAFE and sim.requested_left != 0)
+        _until(lambda: sim.asleep)
+        assert sim.mode is OIMode.PASSIVE
+        assert sim.requested_left == sim.requested_right == 0
+        assert _mode_reply(port) == b"", "Start and Query List do not reach a sleeping robot"
+        assert sim.asleep
+        port.baudrate = 0  # the pty's BRC pulse: a hang-up, then the rate's return
+        _until(lambda: not sim.brc_low)
+        port.baudrate = 115200
+        _until(lambda: sim.brc_pulses == 1)
+        assert _mode_reply(port) == b"\x01", "woken by the pulse, into Passive"
     finally:
         port.close()
 
