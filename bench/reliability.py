@@ -25,6 +25,7 @@ Figures vary with the machine's load (the fault timings are wall-clock); the cou
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import functools
 import json
 import os
@@ -194,6 +195,10 @@ class Trial:
     to_stop_ms: float | None
     traceback: bool
     summary_printed: bool
+    #: the run's stdout and stderr, for --details
+    output: str = ""
+    #: the wheels commanded again (a drive other than drive 0) after the measured stop
+    commanded_again: bool = False
 
 
 @dataclass
@@ -214,6 +219,10 @@ class Fault:
     #: which drive 0 after the watchdog's counts as the stop: 0 the watchdog's own, 1 the
     #: next (a baud change: the watchdog's goes out at the old rate, the next at the new)
     halt_index: int = 0
+
+
+#: The oracle's stream loss: frames stop for 0.8 s, then come back (shorter than the grace).
+GAP = "stream gap 0.8 s (the oracle's stream loss; ridden through, the run ends by --timeout)"
 
 
 def _signal(*signums: int, gap: float = 0.005) -> Callable[..., float]:
@@ -238,6 +247,12 @@ FAULTS = (
     Fault("robot reset", ("--reset-at", "12"), at=12.0),
     Fault("port vanished (simulator killed)", act=_kill_sim),
     Fault("stream stopped", ("--stream-stop-at", "12"), at=12.0),
+    Fault(
+        GAP,
+        ("--stream-gap-at", "12"),
+        run_args=("--timeout", "15s"),
+        at=12.0,
+    ),
     Fault(
         "baud change mid-run (the robot's port to 19200 at 12 s)",
         ("--baud-change-at", "12"),
@@ -323,7 +338,8 @@ def _trial(fault: Fault, workdir: Path, index: int) -> Trial | None:
             time.sleep(0.5)
             sent = fault.act(run, sim)
     out, err, sim_err, ended = _finish(run, sim)
-    to_stop = _to_stop_ms(_record(record), fault.halt_index)
+    entries = _record(record)
+    to_stop = _to_stop_ms(entries, fault.halt_index)
     if sent is not None:  # a signal or the port: to the process's end
         to_stop = (ended - sent) * 1000
     reason = next(
@@ -342,6 +358,8 @@ def _trial(fault: Fault, workdir: Path, index: int) -> Trial | None:
         to_stop_ms=to_stop,
         traceback="Traceback" in err,
         summary_printed="safe stop" in out,
+        output=err + out,
+        commanded_again=_commanded_again(entries),
     )
 
 
@@ -407,6 +425,21 @@ def _to_stop_ms(entries: list[dict[str, object]], halt_index: int) -> float | No
     return measured
 
 
+def _commanded_again(entries: list[dict[str, object]]) -> bool:
+    """Whether a drive other than drive 0 was written after the last drive 0 that followed a
+    stall (the wheels given their command again once frames came back)."""
+    halted = False
+    for entry in entries[1:]:
+        if entry.get("d") != "out":
+            continue
+        data = bytes.fromhex(str(entry.get("b", "")))
+        if data.startswith(HALT):
+            halted = True
+        elif halted and data[:1] == HALT[:1]:
+            return True
+    return False
+
+
 FAULT_HEADER = (
     "| fault | trials | exit codes | the message (first trial; trials with its cause) | "
     "simulator at the end (first trial; trials left in Passive, wheels 0) | stop "
@@ -429,6 +462,9 @@ def fault_row(fault: Fault, trials: list[Trial]) -> str:
         timing = "not driving (Passive: no drive 0 needed)"
     if fault.name.startswith("single-bit"):
         timing = "n/a (ends by its --timeout: exit 1)"
+    if fault.name == GAP:
+        again = sum(t.commanded_again for t in trials)
+        timing += f"; the wheels commanded again after the gap in {again} of {len(trials)}"
     bad = sum(t.traceback for t in trials), sum(not t.summary_printed for t in trials)
     hung = sum("HUNG" in t.message for t in trials)
     first = trials[0]
@@ -457,8 +493,11 @@ def cause(message: str) -> str:
     return what
 
 
-def faults(count: int, workers: int, only: tuple[str, ...] = ()) -> list[str]:
-    """The fault table; ``only``: the rows whose fault name starts with one of these."""
+def faults(
+    count: int, workers: int, only: tuple[str, ...] = (), details: Path | None = None
+) -> list[str]:
+    """The fault table; ``only``: the rows whose fault name starts with one of these;
+    ``details``: each trial appended to this file as a JSON line (to look at one trial)."""
     rows = [FAULT_HEADER]
 
     def chosen(name: str) -> bool:
@@ -474,6 +513,11 @@ def faults(count: int, workers: int, only: tuple[str, ...] = ()) -> list[str]:
                 trials = list(pool.map(functools.partial(trial, fault, workdir), range(count)))
             rows.append(fault_row(fault, trials))
             print(rows[-1], flush=True)
+            if details is not None:
+                with details.open("a") as out:
+                    for t in trials:
+                        out.write(json.dumps({"fault": fault.name, **dataclasses.asdict(t)}))
+                        out.write("\n")
     if chosen(ASLEEP_BY_IDLE):
         rows.append(asleep_row(count))
         print(rows[-1], flush=True)
@@ -581,6 +625,10 @@ def main(argv: list[str] | None = None) -> int:
         "--only", action="append", default=[], metavar="NAME",
         help="faults: only the rows whose name starts with NAME (repeatable)",
     )  # fmt: skip
+    parser.add_argument(
+        "--details", type=Path, metavar="FILE",
+        help="faults: each trial appended to FILE as a JSON line",
+    )  # fmt: skip
     parser.add_argument("--memory-hours", type=float, default=4.0)
     args = parser.parse_args(argv)
     parts = args.part or ["noise", "faults", "memory"]
@@ -595,7 +643,7 @@ def main(argv: list[str] | None = None) -> int:
                 for reason in result.reasons[:3]:
                     print(f"  e.g. {reason}", file=sys.stderr)
     if "faults" in parts:
-        faults(args.trials, args.workers, tuple(args.only))
+        faults(args.trials, args.workers, tuple(args.only), args.details)
     if "memory" in parts:
         print(memory(args.memory_hours), flush=True)
         print(memory(1.0, trace=True), flush=True)  # what it was: the trace kept

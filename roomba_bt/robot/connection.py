@@ -35,6 +35,7 @@ from roomba_bt.oi.stream import ReplyParser, check_bandwidth
 from roomba_bt.robot.ending import EndMode, SafeStop
 from roomba_bt.robot.errors import (
     ConnectionFailed,
+    NoAnswer,
     RobotError,
     RobotReset,
     StreamLost,
@@ -44,7 +45,12 @@ from roomba_bt.robot.handshake import drain
 from roomba_bt.robot.interface import ModeChange
 from roomba_bt.robot.link import LinkStatus, StreamLink, TimedFrame
 from roomba_bt.robot.modes import DEFAULT_SETTLE, ModeModel
-from roomba_bt.robot.silence import asleep_by_idle, explain_silence, follow_baud
+from roomba_bt.robot.silence import (
+    answers_elsewhere,
+    asleep_by_idle,
+    explain_silence,
+    follow_baud,
+)
 from roomba_bt.robot.startup import (
     NO_ANSWER_CAUSES,
     OPEN_CAUSES,
@@ -179,10 +185,13 @@ class Connection:
         self.send(oi.start())
         self.send(oi.pause_stream())
         drain(self.link.transport, self.link.read)  # a stale stream, a reset banner
-        raw = agreed_mode_reply(
-            self.name, lambda: self._query_raw((OI_MODE_PACKET,), confirm_timeout),
-            confirm_timeout,
-        )  # fmt: skip
+        try:
+            raw = agreed_mode_reply(
+                self.name, lambda: self._query_raw((OI_MODE_PACKET,), confirm_timeout),
+                confirm_timeout,
+            )  # fmt: skip
+        except NoAnswer as silent:
+            raise answers_elsewhere(self, silent) from None
         if not self.modes.calibrate(raw, self.link.transport.now()):
             raise not_a_mode(self.name, raw)
         self.link.mode_plus_one = self.modes.plus_one

@@ -168,8 +168,10 @@ class SafeStop:
         """The stop did not reach the robot: say so, with what the robot was last seen
         doing; False (what :meth:`stop` returns)."""
         mode = self.writer.modes.mode
-        self.stop_report = f"last seen in {mode.label} {self.activity()}; {why}"
-        log.error("%s: %s", self.writer.link.name, self.stop_report)
+        report = f"last seen in {mode.label} {self.activity()}; {why}"
+        if report != self.stop_report:  # close() tries once more: said once, not twice
+            log.error("%s: %s", self.writer.link.name, report)
+        self.stop_report = report
         self.safe_stopped = False
         return False
 

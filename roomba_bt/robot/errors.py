@@ -1,7 +1,8 @@
 """The robot layer's errors: one type per thing a caller handles differently.
 
 * :class:`ModeError`: a command the robot's current OI mode would not accept; nothing was sent.
-* :class:`ConnectionFailed`: the robot could not be reached at start-up.
+* :class:`ConnectionFailed`: the robot could not be reached at start-up (:class:`NoAnswer`:
+  it answered nothing at the run's rate).
 * :class:`LinkDown` and its kinds, each a cause named: :class:`PortLost` (the port raised:
   the port is gone), :class:`StreamStalled` (no valid frame within the watchdog: the run
   rides through it for a grace), :class:`StreamLost` (still none after the grace: the stream
@@ -98,6 +99,11 @@ class ConnectionFailed(RobotError, ConnectionError):
         if likely_causes:
             message += "; likely causes: " + ", ".join(likely_causes)
         super().__init__(message)
+
+
+class NoAnswer(ConnectionFailed):
+    """The robot answered no Query List at start-up, at the run's rate (the connection then
+    asks at the other OI rates: :func:`~roomba_bt.robot.silence.answers_elsewhere`)."""
 
 
 class LinkDown(RobotError, ConnectionError):
@@ -229,14 +235,16 @@ class BaudChanged(LinkDown):
     """The robot's port changed its rate in the middle of the run (a battery swap or a reset
     brings a Create 2 back at its default rate): garbage on the line since the last valid
     frame, and frames again when the port listened at ``rate``. The port was left at that
-    rate, so the stop reaches the robot."""
+    rate, so the stop reaches the robot. The garbage is said as a duration, like the other
+    causes (the log line's ``t=`` stamp is the run's time), not a time of day."""
 
     def __init__(
-        self, port: str, rate: int, was: int, garbage_s: float, since_wall: float, *,
+        self, port: str, rate: int, was: int, garbage_s: float, garbage_bytes: int, *,
         halted: bool,
     ) -> None:  # fmt: skip
         self.rate = rate
         self.was = was
+        self.garbage_s = garbage_s
         action = (
             f"drive 0 sent again at {rate} (the watchdog's at {was} could not be understood)"
             if halted
@@ -245,7 +253,7 @@ class BaudChanged(LinkDown):
         super().__init__(
             port,
             f"the robot now talks at another baud rate: {rate}, not the {was} of the run; "
-            f"garbage since {format_wall_time(since_wall)} ({garbage_s * 1000:.0f} ms without a "
-            f"valid frame while bytes arrived), and valid frames at {rate}: the port followed "
-            f"it (a battery swap or a reset brings the robot back at its default rate); {action}",
+            f"no valid sensor frame for {garbage_s * 1000:.0f} ms while {garbage_bytes} bytes "
+            f"arrived, then valid frames at {rate}: the port followed it (a battery swap or a "
+            f"reset brings the robot back at its default rate); {action}",
         )

@@ -18,11 +18,15 @@ the other OI rates when the watchdog trips on garbage.
 
 A robot that sleeps is in Passive; asleep is also named without asking when the model has
 been in Passive past the OI's five minutes with nothing from us (:func:`asleep_by_idle`).
+
+A robot silent from the start (no answer to the start-up's Query List at the run's rate) is
+asked at the other OI rates before the run gives up (:func:`answers_elsewhere`): one that
+answers there is named ("the robot answers at 19200 baud, not at the 115200 of the run"), not
+left among the likely causes.
 """
 
 from __future__ import annotations
 
-import time
 from typing import TYPE_CHECKING
 
 from roomba_bt.oi import commands as oi
@@ -30,12 +34,15 @@ from roomba_bt.oi.frames import stream_frame_size
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.robot.errors import (
     BaudChanged,
+    ConnectionFailed,
     LinkDown,
     ModeError,
+    NoAnswer,
     RobotAsleep,
     StreamLost,
 )
-from roomba_bt.robot.handshake import OI_RATES, wake_pulse
+from roomba_bt.robot.handshake import OI_RATES, search, wake_pulse
+from roomba_bt.robot.link import LINK_ERRORS
 from roomba_bt.robot.wake import SLEEP_AFTER_S
 
 #: Garbage that must have come since the last valid frame (or the last listen) before other
@@ -160,7 +167,7 @@ def follow_baud(connection: Connection) -> BaudChanged | None:
         return None
     was = connection.baud
     garbage_s = now - link.silent_since
-    since_wall = time.time() - garbage_s  # the last valid frame, for the message
+    garbage_bytes = link.bytes_since_frame
     try:
         for rate in OI_RATES:
             window = listen_window(link.stream_ids, rate)
@@ -169,7 +176,38 @@ def follow_baud(connection: Connection) -> BaudChanged | None:
             link.set_baud(rate)  # the link's parser starts again at the new rate
             connection.baud = rate
             halted = connection.halt()
-            return BaudChanged(connection.name, rate, was, garbage_s, since_wall, halted=halted)
+            return BaudChanged(connection.name, rate, was, garbage_s, garbage_bytes, halted=halted)
     finally:
         connection.baud_listened = (link.transport.now(), link.bytes_read)
     return None
+
+
+def answers_elsewhere(connection: Connection, silent: NoAnswer) -> ConnectionFailed:
+    """The robot answered no Query List at start-up at the run's rate: ask at the other OI
+    rates (:func:`~roomba_bt.robot.handshake.search`: Start, pause the stream, a Query List;
+    no BRC pulse). A rate that answers is the cause, named; the port is left there so the
+    stop that ends the run reaches the robot (in Passive: the probe's Start put it there)::
+
+        115200  [128][150 0][149 1 35] ... nothing ──► 19200 [128][150 0][149 3 35 21 34]
+                                                             answered: "answers at 19200"
+
+    No rate answers (or the port cannot change its rate): ``silent`` as it was, with its
+    likely causes."""
+    transport = connection.link.transport
+    run_rate = connection.baud
+    others = tuple(rate for rate in OI_RATES if rate != run_rate)
+    try:
+        found = search(transport, others)
+        if found.baud is None:
+            transport.set_baud(run_rate)
+            return silent
+    except LINK_ERRORS:
+        return silent
+    connection.baud = found.baud
+    return ConnectionFailed(
+        connection.name,
+        f"the robot answers at {found.baud} baud, not at the {run_rate} of the run: it answered "
+        f"no Query List at {run_rate}, and Start and a Query List at {found.baud} (a Create 2 "
+        f"talks at 19200 after Clean was held at power-off, or three BRC pulses at power-on, "
+        f"until its battery is out); run with --baud {found.baud} or --baud auto",
+    )

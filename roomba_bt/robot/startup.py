@@ -20,7 +20,7 @@ from collections.abc import Callable
 
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
-from roomba_bt.robot.errors import ConnectionFailed
+from roomba_bt.robot.errors import ConnectionFailed, NoAnswer
 
 log = logging.getLogger(__name__)
 
@@ -52,7 +52,7 @@ def agreed_mode_reply(port: str, ask: Callable[[], SensorFrame | None], timeout:
     for _ in range(START_QUERIES):
         reply = ask()
         if reply is None:
-            raise ConnectionFailed(
+            raise NoAnswer(
                 port,
                 f"the robot did not answer a Query List (149) for packet 35 within {timeout:g} s",
                 NO_ANSWER_CAUSES,

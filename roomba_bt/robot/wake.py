@@ -15,7 +15,10 @@ simulator's links model the pin). Asserted means BRC low::
                t     t+1 s                   t+60 s
 
 A transport without the method (a TCP bridge without RFC 2217, a replay) gets no pulses; the
-connection says so once.
+connection says so once. Nor does a port whose lines cannot be set (a pty: the ioctl fails,
+keep-awake turns itself off, said once): the hang-up that pulses BRC there once, to ask
+whether a silent robot sleeps (:func:`~roomba_bt.robot.handshake.wake_pulse`), carries no
+byte for its second, and a pulse a minute would stall the stream once a minute.
 """
 
 from __future__ import annotations
@@ -93,7 +96,11 @@ class KeepAwake:
         except OSError as exc:
             self.unavailable = str(exc)
             self._low_until = None
-            log.warning("keep-awake off: %s; a robot left in Passive sleeps after 5 minutes", exc)
+            log.warning(
+                "keep-awake off: %s; a robot left in Passive sleeps after 5 minutes (no "
+                "hang-up pulse instead: it would blank the stream for its second)",
+                exc,
+            )
 
     def release(self) -> None:
         """Leave BRC high (end of a run)."""

@@ -138,6 +138,24 @@ def _run_on(port: str, tmp_path: Path) -> subprocess.CompletedProcess[str]:
     )
 
 
+def test_the_simulator_killed_mid_run_is_the_port_gone_and_the_stop_said_undelivered(
+    served_sim: Callable[..., Any], tmp_path: Path
+) -> None:
+    """The cable pulled: exit 3 naming the port gone, the stop reported undeliverable with
+    what the robot was last seen doing, logged once (close() tries the stop again)."""
+    sim = served_sim("--pty")
+    proc, _ = _driving(sim.address, tmp_path)
+    sim.proc.kill()
+    sim.proc.communicate()  # its pipes closed
+    out, err = proc.communicate(timeout=30)
+    assert proc.returncode == 3, err
+    assert "the port is gone" in err
+    report = "last seen in Safe spinning left at 100 mm/s; the stop was not delivered"
+    assert f"NOT DELIVERED: {report}: the port is gone" in out
+    assert err.count(report) == 1, err
+    assert "Traceback" not in err
+
+
 def test_no_robot_on_the_port_is_exit_3(tmp_path: Path, silent_port: str) -> None:
     result = _run_on(silent_port, tmp_path)
     assert result.returncode == 3

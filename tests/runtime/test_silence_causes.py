@@ -9,11 +9,13 @@ at the new rate, and noise at the run's rate is not taken for one."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
 
 from roomba_bt.mission import load_mission
+from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.silence import LISTEN_S, listen_window
@@ -21,7 +23,7 @@ from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome, RunSummary
 from roomba_bt.sim import Faults, SimLink, Simulator, load_world
 
-from .simrun import SPIN
+from .simrun import SPIN, TapLink
 
 WAIT_IN_PASSIVE = """
 mission: wait-in-passive
@@ -65,11 +67,14 @@ def run(
     faults: Faults,
     link_type: type[SimLink] = SimLink,
     timeout: float = 60.0,
+    robot_baud: int | None = None,
 ) -> tuple[RunSummary, Simulator]:
     path = tmp_path / "m.yaml"
     path.write_text(text)
     mission = load_mission(path, {}, profile=CREATE2)
     simulator = Simulator(load_world("empty-room"), CREATE2, 0, faults, trace=False)
+    if robot_baud is not None:
+        simulator.baud = robot_baud  # the robot's port (sim --baud), the run at 115200
     stack = RunStack(mission, link_type(simulator), profile=CREATE2, timeout_s=timeout)
     summary = stack.run()
     stack.close()
@@ -88,6 +93,34 @@ def test_a_robot_that_fell_asleep_early_is_woken_by_a_pulse_and_named_asleep(
     assert [e.kind for e in simulator.events if e.kind in ("sleep", "wake")] == ["sleep", "wake"]
     assert not simulator.asleep and simulator.mode is OIMode.PASSIVE
     assert summary.stop_delivered  # it answered after the pulse: it hears the stop
+
+
+def test_the_oracles_stream_gap_is_ridden_through_the_wheels_stopped_within_150_ms(
+    tmp_path: Path,
+) -> None:
+    """``sim --stream-gap-at``: no frame for 0.8 s (the oracle's stream loss), then the
+    stream goes on: drive 0 within 150 ms of the last frame, the spin again after the gap,
+    the run ends by its timeout, not as a lost connection."""
+    path = tmp_path / "m.yaml"
+    path.write_text(SPIN)
+    simulator = Simulator(
+        load_world("empty-room"), CREATE2, 0, Faults(stream_gap_at=3.0), trace=False
+    )
+    link = TapLink(simulator)
+    stack = RunStack(load_mission(path, {}, profile=CREATE2), link, profile=CREATE2, timeout_s=6)
+    summary = stack.run()
+    stack.close()
+    assert summary.outcome is Outcome.TIMEOUT, summary.reason
+    assert summary.stalls == 1 and summary.stalls_ridden == 1
+    last_frame = max(t for t, b in link.reads if b and t <= 3.0)
+    halts = [t for t, b in link.writes if b == oi.halt().data and 3.0 <= t < 3.8]
+    assert halts and halts[0] - last_frame <= 0.15
+    spin = oi.drive(100, oi.Radius.TURN_COUNTER_CLOCKWISE).data
+    assert any(b == spin for t, b in link.writes if 3.8 <= t < 3.9)  # commanded again
+    assert [e.detail for e in simulator.events if e.kind == "fault"] == [
+        "stream gap",
+        "stream gap end",
+    ]
 
 
 def test_a_robot_that_only_stopped_streaming_is_said_to_still_answer(tmp_path: Path) -> None:
@@ -127,9 +160,39 @@ def assert_followed_and_stopped(
 
 def test_a_baud_change_mid_run_is_named_followed_and_the_robot_stopped(tmp_path: Path) -> None:
     summary, simulator = run(tmp_path, SPIN, Faults(baud_change_at=3.0), timeout=10.0)
-    assert "garbage since" in summary.reason
+    # the garbage as a duration and a count, like the other causes (no time of day)
+    assert re.search(r"no valid sensor frame for \d+ ms while \d+ bytes arrived", summary.reason)
+    assert not re.search(r"\d\d:\d\d:\d\d", summary.reason), summary.reason
     # stopped within the watchdog, the listen and a slot or two of the change
     assert_followed_and_stopped(summary, simulator, 3.0, 0.1 + 0.1 + 0.06)
+
+
+def test_a_robot_at_another_rate_from_the_start_is_named_and_left_in_passive(
+    tmp_path: Path,
+) -> None:
+    """The robot at 19200 (Clean held at power-off), the run at 115200: no answer at the
+    run's rate, so the other OI rate is asked before the run gives up, and named."""
+    summary, simulator = run(tmp_path, SPIN, Faults(), robot_baud=19200)
+    assert summary.outcome is Outcome.CONNECTION_LOST and summary.exit_code == 3
+    assert "the robot answers at 19200 baud, not at the 115200 of the run" in summary.reason
+    assert "run with --baud 19200 or --baud auto" in summary.reason
+    assert "likely causes" not in summary.reason
+    assert simulator.mode is OIMode.PASSIVE  # never driven; the stop went at 19200
+    assert simulator.requested_left == simulator.requested_right == 0
+
+
+def test_a_robot_silent_at_every_rate_keeps_the_likely_causes(tmp_path: Path) -> None:
+    path = tmp_path / "m.yaml"
+    path.write_text(SPIN)
+    simulator = Simulator(load_world("empty-room"), CREATE2, 0, trace=False)
+    simulator.fall_asleep("test")  # deaf at every rate; the run pulses no BRC at start-up
+    stack = RunStack(load_mission(path, {}, profile=CREATE2), SimLink(simulator), profile=CREATE2)
+    summary = stack.run()
+    stack.close()
+    assert summary.exit_code == 3
+    assert "the robot did not answer a Query List (149) for packet 35" in summary.reason
+    assert "likely causes: wrong baud rate" in summary.reason
+    assert "answers at" not in summary.reason
 
 
 def test_noise_at_the_run_rate_is_not_taken_for_a_baud_change(tmp_path: Path) -> None:
