@@ -1,7 +1,8 @@
 """``make reliability``: the figures of docs/reliability.md, from one command.
 
 Three parts (``python -m bench.reliability noise|faults|memory``, all three by default;
-``faults --only NAME`` for the fault rows whose name starts with NAME):
+``faults --only NAME`` for the fault rows whose name starts with NAME; ``--details FILE``
+each trial as a JSON line, ``--keep DIR`` each trial's record):
 
 * **noise**: bump-and-turn in the corridor on the virtual clock, single-bit flips on the
   robot's bytes (``Faults.bit_flip_rate``) at 10^-3 and 10^-2 per byte, back-to-back runs of
@@ -199,6 +200,9 @@ class Trial:
     output: str = ""
     #: the wheels commanded again (a drive other than drive 0) after the measured stop
     commanded_again: bool = False
+    #: wall-clock time (time.time) when the run ended, to set a slow trial beside the host's
+    #: load at that moment
+    ended_wall: float = 0.0
 
 
 @dataclass
@@ -299,6 +303,10 @@ def _record(path: Path) -> list[dict[str, object]]:
     return out
 
 
+#: where each trial's record is copied (``--keep DIR``), or None
+KEEP_RECORDS: Path | None = None
+
+
 def trial(fault: Fault, workdir: Path, index: int) -> Trial:
     """One trial; a robot-side fault that came before the run drove is tried again."""
     for attempt in range(5):
@@ -338,6 +346,10 @@ def _trial(fault: Fault, workdir: Path, index: int) -> Trial | None:
             time.sleep(0.5)
             sent = fault.act(run, sim)
     out, err, sim_err, ended = _finish(run, sim)
+    if KEEP_RECORDS is not None and record.exists():  # to look at a slow trial afterwards
+        KEEP_RECORDS.mkdir(parents=True, exist_ok=True)
+        kept = KEEP_RECORDS / f"{time.strftime('%H%M%S')}-{workdir.name}-{index}.jsonl"
+        kept.write_bytes(record.read_bytes())
     entries = _record(record)
     to_stop = _to_stop_ms(entries, fault.halt_index)
     if sent is not None:  # a signal or the port: to the process's end
@@ -360,6 +372,7 @@ def _trial(fault: Fault, workdir: Path, index: int) -> Trial | None:
         summary_printed="safe stop" in out,
         output=err + out,
         commanded_again=_commanded_again(entries),
+        ended_wall=time.time() - (time.monotonic() - ended),
     )
 
 
@@ -629,9 +642,15 @@ def main(argv: list[str] | None = None) -> int:
         "--details", type=Path, metavar="FILE",
         help="faults: each trial appended to FILE as a JSON line",
     )  # fmt: skip
+    parser.add_argument(
+        "--keep", type=Path, metavar="DIR",
+        help="faults: copy each trial's record into DIR (named by time, row and trial)",
+    )  # fmt: skip
     parser.add_argument("--memory-hours", type=float, default=4.0)
     args = parser.parse_args(argv)
     parts = args.part or ["noise", "faults", "memory"]
+    global KEEP_RECORDS
+    KEEP_RECORDS = args.keep
     if "noise" in parts:
         print(NOISE_HEADER, flush=True)
         for rate, hours in ((1e-3, args.hours), (1e-2, args.hours_1e_2)):
