@@ -30,25 +30,15 @@ import math
 
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import WHEEL, Action, Param, declare, wheel_speeds
-from roomba_bt.behaviours.units import ANGLE, DISTANCE, INT, SPEED, enum
+from roomba_bt.behaviours import driving
+from roomba_bt.behaviours.declare import Action, Param, declare, wheel_speed_param
+from roomba_bt.behaviours.units import ANGLE, DISTANCE, INT, enum
 from roomba_bt.oi import commands as oi
-from roomba_bt.oi.frames import (
-    BUMPS_PACKETS,
-    CLIFF_PACKETS,
-    ENCODER_PACKETS,
-    LIGHT_BUMP_SIGNAL_PACKETS,
-    VIRTUAL_WALL_PACKETS,
-    SensorFrame,
-)
-from roomba_bt.oi.modes import DRIVING_MODES
+from roomba_bt.oi.frames import ENCODER_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS, SensorFrame
 from roomba_bt.oi.opcodes import opcodes
 from roomba_bt.oi.profiles import WHEEL_BASE_MM
 
-_OK, _RUN, _FAIL = Status.SUCCESS, Status.RUNNING, Status.FAILURE
-_HAZARDS = (*BUMPS_PACKETS, *CLIFF_PACKETS, *VIRTUAL_WALL_PACKETS)
-#: a centre light-bump signal above this: something within a few centimetres, slow down
-_NEAR_SIGNAL = 150
+_OK, _RUN = Status.SUCCESS, Status.RUNNING
 #: at a lane's end: back off this far (mm) before turning (from a bump: room to turn and move
 #: over without touching; from a cliff: the cliff sensors back over the floor)
 _BACK_MM = {"bump": 30.0, "cliff": 60.0}
@@ -58,64 +48,23 @@ _TURN_TOLERANCE = math.radians(2.0)
 _STALL_S = 3.0
 
 
-def _wheels(left: float, right: float) -> oi.Command:
-    lo, ro = wheel_speeds(left, right)
-    return oi.drive_direct(ro, lo)
-
-
-def _blocked(frame: SensorFrame) -> str | None:
-    """Why the robot must not go on forward (bump, cliff, virtual wall), or None."""
-    if frame.any_cliff:
-        return "cliff"
-    if frame.any_bump:
-        return "bump"
-    if frame.virtual_wall:
-        return "virtual wall"
-    return None
-
-
-def _near(frame: SensorFrame) -> bool:
-    signals = frame.light_bump_signals
-    return max(signals[1], signals[2], signals[3], signals[4]) >= _NEAR_SIGNAL
-
-
-def _wrap(angle: float) -> float:
-    return math.remainder(angle, math.tau)
-
-
-def _held(action: Action) -> Status | None:
-    """Why a driving leaf cannot drive this tick: a wheel drop fails it; out of Safe/Full it
-    waits, and fails once stranded there after it began to move. None: it may drive."""
-    snap = action.snapshot
-    if snap.frame.any_wheel_drop:
-        action.feedback_message = "wheel drop"
-        return _FAIL
-    if snap.mode not in DRIVING_MODES:
-        stranded = action.stranded() if action._started_motion else None
-        if stranded is not None:
-            action._started_motion = False
-            action.feedback_message = stranded
-            return _FAIL
-        return _RUN
-    return None
-
-
 class _Pattern(Action):
-    """A cleaning pattern: each tick :func:`_held`'s guard, then the pattern's wheel speeds
-    (Drive Direct); None from :meth:`wheel_speeds` ends it: the wheels halt, SUCCESS."""
+    """A cleaning pattern: each tick the driving leaves' guard (:func:`.driving.held`), then
+    the pattern's wheel speeds (Drive Direct); None from :meth:`wheel_speeds` ends it: the
+    wheels halt, SUCCESS."""
 
     moves = True
 
     def update(self) -> Status:
-        held = _held(self)
-        if held is not None:
-            return held
+        waiting = driving.held(self)
+        if waiting is not None:
+            return waiting
         wheels = self.wheel_speeds(self.snapshot.frame)
         if wheels is None:
             self.send(oi.halt())
             self._started_motion = False
             return _OK
-        self.send(_wheels(*wheels))
+        self.send(driving.drive_wheels(*wheels))
         self._started_motion = True
         return _RUN
 
@@ -131,15 +80,15 @@ class _Pattern(Action):
     "spiral",
     kind="action",
     params=(
-        Param("speed", SPEED, default="300 mm/s", minimum=20, maximum=WHEEL.maximum,
-              doc="speed of the robot's centre along the spiral"),
+        wheel_speed_param("speed", "300 mm/s", minimum=20,
+                          doc="speed of the robot's centre along the spiral"),
         Param("spacing", DISTANCE, default="25 cm", minimum=50, maximum=1000,
               doc="the radius grows this much a turn (the swept strip is 27.5 cm wide)"),
         Param("start_radius", DISTANCE, default="10 cm", minimum=10, maximum=2000),
         Param("max_radius", DISTANCE, default="1.2 m", minimum=50, maximum=5000,
               doc="SUCCESS once the spiral is this wide"),
     ),
-    reads=(*_HAZARDS, *ENCODER_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS),
+    reads=(*driving.BLOCKED_PACKETS, *ENCODER_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS),
     sends=opcodes("drive_direct"),
 )  # fmt: skip
 class Spiral(_Pattern):
@@ -158,7 +107,7 @@ class Spiral(_Pattern):
         snap = self.snapshot
         turned = abs(snap.odometry.angle_rad - self._start_angle)
         radius = self.number("start_radius") + self.number("spacing") * turned / math.tau
-        why = _blocked(frame) or ("wall ahead" if _near(frame) else None)
+        why = driving.blocked(frame) or ("wall ahead" if driving.near_ahead(frame) else None)
         if why is None and radius > self.number("max_radius"):
             why = "wide enough"
         if why is not None:
@@ -166,8 +115,7 @@ class Spiral(_Pattern):
             return None
         speed = self.number("speed")
         base = self.robot.profile.wheel_base_mm if self.robot is not None else WHEEL_BASE_MM
-        half_base = base / 2.0
-        return speed * (radius - half_base) / radius, speed * (radius + half_base) / radius
+        return driving.arc_wheels(speed, radius, base / 2.0)
 
 
 # --------------------------------------------------------------------------- lanes
@@ -182,9 +130,9 @@ class Spiral(_Pattern):
                   "following a wall, 0deg: along the wall, 90deg: across the room)"),
         Param("side", enum("left", "right"), default="left",
               doc="the side the lanes advance to (left: away from a wall on the right)"),
-        Param("speed", SPEED, default="300 mm/s", minimum=20, maximum=WHEEL.maximum),
-        Param("turn_speed", SPEED, default="200 mm/s", minimum=20, maximum=WHEEL.maximum,
-              doc="wheel speed when turning in place"),
+        wheel_speed_param("speed", "300 mm/s", minimum=20),
+        wheel_speed_param("turn_speed", "200 mm/s", minimum=20,
+                          doc="wheel speed when turning in place"),
         Param("shift_left", DISTANCE, default="15 cm", minimum=20, maximum=1000,
               doc="lane spacing when the next lane is to the robot's left"),
         Param("shift_right", DISTANCE, default="32 cm", minimum=20, maximum=1000,
@@ -195,7 +143,7 @@ class Spiral(_Pattern):
         Param("lanes", INT, default=200, minimum=1, maximum=10_000,
               doc="SUCCESS after this many lanes"),
     ),
-    reads=(*_HAZARDS, *ENCODER_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS),
+    reads=(*driving.BLOCKED_PACKETS, *ENCODER_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS),
     sends=opcodes("drive_direct"),
 )  # fmt: skip
 class Lanes(_Pattern):
@@ -210,7 +158,7 @@ class Lanes(_Pattern):
 
     def start(self) -> None:
         heading = self.snapshot.odometry.theta_rad
-        self._heading = _wrap(heading + math.radians(self.number("angle")))
+        self._heading = driving.wrap(heading + math.radians(self.number("angle")))
         self._lanes = 0
         self._lane_heading = self._heading
         self._shift = 0.0
@@ -226,24 +174,18 @@ class Lanes(_Pattern):
     def _begin_line(self, phase: str, heading: float, then: str = "") -> None:
         odo = self.snapshot.odometry
         self._phase, self._then = phase, then
-        self._line = (odo.x_mm, odo.y_mm, heading)
+        self._line: driving.Line = (odo.x_mm, odo.y_mm, heading)
         self._progress = (0.0, self.snapshot.time)
 
     def _along_line(self) -> tuple[float, float]:
         """(distance along the current line, signed offset to its left), mm."""
         odo = self.snapshot.odometry
-        x0, y0, heading = self._line
-        dx, dy = odo.x_mm - x0, odo.y_mm - y0
-        c, s = math.cos(heading), math.sin(heading)
-        return dx * c + dy * s, -dx * s + dy * c
+        return driving.along_line(self._line, odo.x_mm, odo.y_mm)
 
     def _steer(self, speed: float) -> tuple[float, float]:
-        """Wheel speeds holding the current line: heading error plus sideways drift."""
-        _, offset = self._along_line()
-        heading = self._line[2] - math.atan(max(-1.0, min(1.0, offset / 300.0)))
-        error = _wrap(heading - self.snapshot.odometry.theta_rad)
-        turn = max(-0.5 * speed, min(0.5 * speed, 600.0 * error))
-        return speed - turn, speed + turn
+        """Wheel speeds holding the current line."""
+        odo = self.snapshot.odometry
+        return driving.steer_along(self._line, odo.x_mm, odo.y_mm, odo.theta_rad, speed)
 
     def wheel_speeds(self, frame: SensorFrame) -> tuple[float, float] | None:
         """This tick's wheel speeds, or None when the sweep is done. A phase that ends hands
@@ -252,10 +194,9 @@ class Lanes(_Pattern):
         for _ in range(4):
             phase = self._phase
             if phase == "turn":
-                error = _wrap(self._target - snap.odometry.theta_rad)
+                error = driving.wrap(self._target - snap.odometry.theta_rad)
                 if abs(error) > _TURN_TOLERANCE:
-                    w = min(self.number("turn_speed"), max(40.0, 400.0 * abs(error)))
-                    return (-w, w) if error > 0 else (w, -w)
+                    return driving.turn_toward(error, self.number("turn_speed"), 40.0, 400.0)
                 self._begin_line(self._then, self._target)
                 continue
             along, _ = self._along_line()
@@ -267,14 +208,14 @@ class Lanes(_Pattern):
                 continue
             if along > self._progress[0] + 10.0:
                 self._progress = (along, snap.time)
-            why = _blocked(frame)
+            why = driving.blocked(frame)
             stalled = snap.time - self._progress[1] >= _STALL_S
             limit = self.number("max_lane") if phase == "lane" else self._shift
             if why is None and not stalled and along < limit:
                 if phase == "shift":
                     return self._steer(min(self.number("speed"), 200.0))
-                return self._steer(min(self.number("speed"), 150.0) if _near(frame) else
-                                   self.number("speed"))  # fmt: skip
+                speed = self.number("speed")
+                return self._steer(min(speed, 150.0) if driving.near_ahead(frame) else speed)
             self._achieved = along
             if why in _BACK_MM:
                 self._back = _BACK_MM[why]
@@ -292,15 +233,15 @@ class Lanes(_Pattern):
             if self._lanes >= int(self.number("lanes")):
                 return False
             # toward the side the lanes advance to: the robot's left or right on this lane
-            forward = abs(_wrap(self._lane_heading - self._heading)) < math.pi / 2
+            forward = abs(driving.wrap(self._lane_heading - self._heading)) < math.pi / 2
             to_left = (self.value("side") == "left") == forward
             self._shift = self.number("shift_left" if to_left else "shift_right")
             turn = math.pi / 2 if to_left else -math.pi / 2
-            self._begin_turn(_wrap(self._lane_heading + turn), "shift")
+            self._begin_turn(driving.wrap(self._lane_heading + turn), "shift")
             return True
         if achieved < 0.5 * self._shift:
             return False  # the far side: nothing more to sweep this way
-        self._lane_heading = _wrap(self._lane_heading + math.pi)
+        self._lane_heading = driving.wrap(self._lane_heading + math.pi)
         self._begin_turn(self._lane_heading, "lane")
         return True
 

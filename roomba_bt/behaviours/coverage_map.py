@@ -46,19 +46,13 @@ from functools import partial
 
 from py_trees.common import Status
 
-from roomba_bt.behaviours.cleaning import _blocked, _held, _wheels, _wrap
-from roomba_bt.behaviours.declare import WHEEL, Action, Param, declare
-from roomba_bt.behaviours.units import DISTANCE, DURATION, SPEED
+from roomba_bt.behaviours import driving
+from roomba_bt.behaviours.declare import WHEEL, Action, Param, declare, wheel_speed_param
+from roomba_bt.behaviours.units import DISTANCE, DURATION
 from roomba_bt.oi import commands as oi
-from roomba_bt.oi.frames import (
-    BUMPS_PACKETS,
-    CLIFF_PACKETS,
-    ENCODER_PACKETS,
-    LIGHT_BUMP_SIGNAL_PACKETS,
-    VIRTUAL_WALL_PACKETS,
-    SensorFrame,
-)
+from roomba_bt.oi.frames import ENCODER_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS, SensorFrame
 from roomba_bt.oi.opcodes import opcodes
+from roomba_bt.oi.profiles import WHEEL_BASE_MM
 from roomba_bt.robot.interface import Odometry
 
 __all__ = ["COVERAGE", "Cover", "FloorMap"]
@@ -81,12 +75,10 @@ _RAY_ANGLES = tuple(math.radians(a) for a in (65.0, 38.0, 12.0, -12.0, -38.0, -6
 _RAY_RANGE_MM = 150.0
 #: a ray's signal from which the surface it sees is marked (about 13 cm from the bumper)
 _RAY_MARK = 60
-#: a centre ray's signal above which it slows down (a few cm ahead)
-_NEAR_SIGNAL = 150
 #: back off this far (mm) from a bump, a cliff, a virtual wall's beam
 _BACK_MM = {"bump": 30.0, "cliff": 60.0, "virtual wall": 100.0}
 _TURN_TOLERANCE = math.radians(2.0)
-_HALF_BASE_MM = 117.5
+_HALF_BASE_MM = WHEEL_BASE_MM / 2.0
 _STALL_S = 3.0
 #: a lane that has swept nothing new for this far (mm) ends: it has reached swept floor
 _NO_YIELD_MM = 400.0
@@ -228,10 +220,9 @@ class FloorMap:
     "cover",
     kind="action",
     params=(
-        Param("speed", SPEED, default="300 mm/s", minimum=50, maximum=WHEEL.maximum,
-              doc="driving speed on lanes and edges"),
-        Param("turn_speed", SPEED, default="300 mm/s", minimum=20, maximum=WHEEL.maximum,
-              doc="wheel speed when turning in place"),
+        wheel_speed_param("speed", "300 mm/s", minimum=50, doc="driving speed on lanes and edges"),
+        wheel_speed_param("turn_speed", "300 mm/s", minimum=20,
+                          doc="wheel speed when turning in place"),
         Param("shift_left", DISTANCE, default="15 cm", minimum=50, maximum=500,
               doc="lane spacing when the next lane is to the robot's left (the strip "
                   "reaches 9 cm to the left of the centre)"),
@@ -244,8 +235,7 @@ class FloorMap:
         Param("edge_time", DURATION, default="3min", minimum=5,
               doc="an edge ends after this long even if it still finds new floor"),
     ),
-    reads=(*BUMPS_PACKETS, *CLIFF_PACKETS, *VIRTUAL_WALL_PACKETS, *ENCODER_PACKETS,
-           *LIGHT_BUMP_SIGNAL_PACKETS),
+    reads=(*driving.BLOCKED_PACKETS, *ENCODER_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS),
     sends=opcodes("drive_direct"),
 )  # fmt: skip
 class Cover(Action):
@@ -268,16 +258,16 @@ class Cover(Action):
         self._plan: list[Callable[[], None]] = []
         self._edge_found = 0  # new cells the last edge found
         self._idle_edges = 0  # edges in a row that followed no frontier
-        self._line = (odo.x_mm, odo.y_mm, odo.theta_rad)
+        self._line: driving.Line = (odo.x_mm, odo.y_mm, odo.theta_rad)
         self._phase = ""
         self._seek(then_edge=True)
 
     # ------------------------------------------------------------------ the tick
 
     def update(self) -> Status:
-        held = _held(self)
-        if held is not None:
-            return held
+        waiting = driving.held(self)
+        if waiting is not None:
+            return waiting
         snap = self.snapshot
         frame = snap.frame
         odo = self._integrate(snap.odometry)
@@ -289,10 +279,10 @@ class Cover(Action):
                 return _OK
             wheels = self._step(frame)
             if wheels is not None:
-                self.send(_wheels(*wheels))
+                self.send(driving.drive_wheels(*wheels))
                 self._started_motion = True
                 return _RUN
-        self.send(_wheels(0.0, 0.0))
+        self.send(driving.drive_wheels(0.0, 0.0))
         return _RUN
 
     def _integrate(self, odo: Odometry) -> Odometry:
@@ -319,9 +309,11 @@ class Cover(Action):
                 reach = _RADIUS_MM + _distance_of(signal) + 20.0
                 a = theta + angle
                 fmap.block(x + reach * math.cos(a), y + reach * math.sin(a))
-        bumps = frame[7] & 3
-        if bumps:
-            spread = 0.0 if bumps == 3 else (-0.6 if bumps == 1 else 0.6)
+        if frame.any_bump:
+            bumps = frame.bumps  # one side alone: the contact is off to that side
+            spread = (
+                0.0 if bumps.bump_left == bumps.bump_right else (0.6 if bumps.bump_left else -0.6)
+            )
             fmap.block_ahead(x, y, theta + spread, _RADIUS_MM + 30.0, 0.35)
         if frame.any_cliff:
             fmap.block_ahead(x, y, theta, _RADIUS_MM + 60.0, 0.5)
@@ -356,12 +348,11 @@ class Cover(Action):
         self._since = self.snapshot.time
 
     def _turning(self) -> tuple[float, float] | None:
-        error = _wrap(self._heading - self._pose.theta_rad)
+        error = driving.wrap(self._heading - self._pose.theta_rad)
         if abs(error) <= _TURN_TOLERANCE or self.snapshot.time - self._since > 6.0:
             self._next()
             return None
-        w = min(self.number("turn_speed"), max(60.0, 500.0 * abs(error)))
-        return (-w, w) if error > 0 else (w, -w)
+        return driving.turn_toward(error, self.number("turn_speed"), 60.0, 500.0)
 
     def _back(self, distance: float) -> None:
         odo = self._pose
@@ -387,28 +378,15 @@ class Cover(Action):
         self._yield = (self._map.swept, 0.0)  # swept counter, distance when it last grew
         self._achieved = 0.0
 
-    def _along(self) -> tuple[float, float]:
-        odo = self._pose
-        x0, y0, heading = self._line
-        dx, dy = odo.x_mm - x0, odo.y_mm - y0
-        c, s = math.cos(heading), math.sin(heading)
-        return dx * c + dy * s, -dx * s + dy * c
-
-    def _steer(self, speed: float) -> tuple[float, float]:
-        _, offset = self._along()
-        heading = self._line[2] - math.atan(max(-1.0, min(1.0, offset / 300.0)))
-        error = _wrap(heading - self._pose.theta_rad)
-        turn = max(-0.5 * speed, min(0.5 * speed, 600.0 * error))
-        return speed - turn, speed + turn
-
     def _driving(self, frame: SensorFrame) -> tuple[float, float] | None:
         snap = self.snapshot
-        along, _ = self._along()
+        pose = self._pose
+        along, _ = driving.along_line(self._line, pose.x_mm, pose.y_mm)
         if along > self._progress[0] + 10.0:
             self._progress = (along, snap.time)
         if self._map.swept != self._yield[0]:
             self._yield = (self._map.swept, along)
-        why = _blocked(frame)
+        why = driving.blocked(frame)
         kind = self._kind
         if why is None:
             if snap.time - self._progress[1] >= _STALL_S:
@@ -420,12 +398,12 @@ class Cover(Action):
             elif kind in ("lane", "shift") and self._blocked_ahead():
                 why = "map"
         if why is None:
-            signals = frame.light_bump_signals
-            near = max(signals[1], signals[2], signals[3], signals[4]) >= _NEAR_SIGNAL
             speed = self.number("speed")
             if kind == "shift" or kind == "goto":
                 speed = min(speed, 250.0)
-            return self._steer(min(speed, 150.0) if near else speed)
+            if driving.near_ahead(frame):
+                speed = min(speed, 150.0)
+            return driving.steer_along(self._line, pose.x_mm, pose.y_mm, pose.theta_rad, speed)
         self._achieved = along
         self._why = why
         if why in _BACK_MM:
@@ -453,7 +431,7 @@ class Cover(Action):
                 self._plan.clear()
                 self._decide()
             else:
-                self._lane(_wrap(self._lane_heading + math.pi))
+                self._lane(driving.wrap(self._lane_heading + math.pi))
         elif kind == "goto":
             if self._why != "limit":  # blocked on the way: decide again from here
                 self._plan.clear()
@@ -488,7 +466,7 @@ class Cover(Action):
             return None
         speed = self.number("speed")
         recovery = self._edge_recovery
-        why = _blocked(frame)
+        why = driving.blocked(frame)
         if why is not None and (recovery is None or recovery[0] == "turn"):
             # a bump, a drop or a beam: back off, turn left, go on along it
             recovery = self._edge_recovery = ("back", odo.distance_mm, snap.time, why)
@@ -540,7 +518,7 @@ class Cover(Action):
             mean = math.atan2(
                 sum(math.sin(h) for h in headings), sum(math.cos(h) for h in headings)
             )
-            if max(abs(_wrap(h - mean)) for h in headings) <= _ANCHOR_SPREAD:
+            if max(abs(driving.wrap(h - mean)) for h in headings) <= _ANCHOR_SPREAD:
                 self._reanchor(mean)
                 straight.clear()
                 return
@@ -555,7 +533,7 @@ class Cover(Action):
             self._axis = wall
             return
         quarter = math.pi / 2
-        error = _wrap(wall - axis - quarter * round(_wrap(wall - axis) / quarter))
+        error = driving.wrap(wall - axis - quarter * round(driving.wrap(wall - axis) / quarter))
         if abs(error) < _SNAP:
             self._pose = self._pose._replace(theta_rad=self._pose.theta_rad - error)
             self.anchored += 1
@@ -571,11 +549,11 @@ class Cover(Action):
         odo = self._pose
         axis = self._axis if self._axis is not None else odo.theta_rad
         x, y = odo.x_mm, odo.y_mm
-        options = [_wrap(axis + k * math.pi / 2) for k in range(4)]
+        options = [driving.wrap(axis + k * math.pi / 2) for k in range(4)]
         score = {h: self._map.open_along(x, y, h, 1500.0) for h in options}
-        heading = max(options, key=lambda h: (score[h], -abs(_wrap(h - odo.theta_rad))))
-        left = _wrap(heading + math.pi / 2)
-        right = _wrap(heading - math.pi / 2)
+        heading = max(options, key=lambda h: (score[h], -abs(driving.wrap(h - odo.theta_rad))))
+        left = driving.wrap(heading + math.pi / 2)
+        right = driving.wrap(heading - math.pi / 2)
         # advance to the side with more open floor (looked at beside the first lane)
         self._advance = left if self._side_open(left) >= self._side_open(right) else right
         self._lane(heading)
@@ -617,7 +595,7 @@ class Cover(Action):
     def _uturning(self, frame: SensorFrame) -> tuple[float, float] | None:
         radius, side, start = self._arc
         turned = side * (self._pose.angle_rad - start)
-        why = _blocked(frame)
+        why = driving.blocked(frame)
         if why is not None or self.snapshot.time - self._since > 6.0:
             self._plan.clear()  # something beside the lane: decide again from here
             self._why = why or "stalled"
@@ -630,11 +608,9 @@ class Cover(Action):
         if turned >= math.pi - _TURN_TOLERANCE:
             self._next()
             return None
-        half = _HALF_BASE_MM
-        outer = radius + half
+        outer = radius + _HALF_BASE_MM
         speed = min(self.number("speed"), WHEEL.maximum * radius / outer, 250.0)
-        inner_wheel = speed * (radius - half) / radius
-        outer_wheel = speed * outer / radius
+        inner_wheel, outer_wheel = driving.arc_wheels(speed, radius, _HALF_BASE_MM)
         return (inner_wheel, outer_wheel) if side > 0 else (outer_wheel, inner_wheel)
 
     def _lane(self, heading: float) -> None:
@@ -645,12 +621,12 @@ class Cover(Action):
     def _lane_ended(self) -> None:
         heading = self._lane_heading
         advance = self._advance
-        to_left = _wrap(advance - heading) > 0
+        to_left = driving.wrap(advance - heading) > 0
         shift = self.number("shift_left" if to_left else "shift_right")
         odo = self._pose
         x = odo.x_mm + shift * math.cos(advance)
         y = odo.y_mm + shift * math.sin(advance)
-        back = _wrap(heading + math.pi)
+        back = driving.wrap(heading + math.pi)
         if self._map.open_along(x, y, back, 1500.0) < 2:
             self._plan.clear()
             self._decide()  # nothing beside this lane: the region is done
@@ -667,7 +643,7 @@ class Cover(Action):
         self._drive("seek", heading, 8_000.0)
 
     def _onto_right(self) -> None:
-        self._turn_to(_wrap(self._pose.theta_rad + math.radians(75.0)))
+        self._turn_to(driving.wrap(self._pose.theta_rad + math.radians(75.0)))
 
     def _decide(self) -> None:
         """Where next: the nearest frontier, or an edge, or done."""

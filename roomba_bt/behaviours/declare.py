@@ -28,7 +28,7 @@ from typing import Any, Literal, TypeVar
 import py_trees
 
 from roomba_bt.behaviours.lean import DirectLeaf, behaviour_tick, checked_status
-from roomba_bt.behaviours.units import UnitError, ValueType
+from roomba_bt.behaviours.units import SPEED, UnitError, ValueType
 from roomba_bt.oi.encode import Command, halt
 from roomba_bt.oi.modes import ALL_MODES, DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME
@@ -316,10 +316,10 @@ def write_key(key: str, value: Any) -> None:
 WHEEL = COMMANDS_BY_NAME["drive_direct"].args[0]
 
 
-def wheel_speeds(left: float, right: float) -> tuple[int, int]:
-    """``left``, ``right`` (mm/s) rounded and clamped to what Drive Direct takes."""
-    limit = WHEEL.maximum
-    return max(-limit, min(limit, round(left))), max(-limit, min(limit, round(right)))
+def wheel_speed_param(name: str, default: str, *, minimum: float, doc: str = "") -> Param:
+    """A forward wheel-speed parameter (a ``speed``, mm/s): from ``minimum`` up to what one
+    wheel of Drive Direct takes (:data:`WHEEL`)."""
+    return Param(name, SPEED, default=default, minimum=minimum, maximum=WHEEL.maximum, doc=doc)
 
 
 class Action(RobotBehaviour):
@@ -356,6 +356,16 @@ class Action(RobotBehaviour):
             f"the robot left Safe/Full mode{cause} and was not brought back within "
             f"{self.PASSIVE_GRACE_S:g} s"
         )
+
+    def wait_for_driving_mode(self) -> py_trees.common.Status:
+        """Out of Safe/Full, where the mode model would refuse a drive command: RUNNING
+        while it waits for them, FAILURE once :meth:`stranded` after it began to move."""
+        stranded = self.stranded() if self._started_motion else None
+        if stranded is not None:
+            self._started_motion = False
+            self.feedback_message = stranded
+            return _FAILURE
+        return _RUNNING
 
     def terminate(self, new_status: py_trees.common.Status) -> None:
         """However the action ends (success, failure, or preempted: INVALID), wheels it

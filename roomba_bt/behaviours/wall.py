@@ -23,8 +23,9 @@ import math
 
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import WHEEL, Action, Param, declare, wheel_speeds
-from roomba_bt.behaviours.units import ANGLE, DURATION, FLOAT, INT, SPEED
+from roomba_bt.behaviours.declare import Action, Param, declare, wheel_speed_param
+from roomba_bt.behaviours.driving import wheel_speeds
+from roomba_bt.behaviours.units import ANGLE, DURATION, FLOAT, INT
 from roomba_bt.oi import commands
 from roomba_bt.oi.frames import BUMPS_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS
 from roomba_bt.oi.modes import DRIVING_MODES
@@ -46,8 +47,7 @@ _TURN_S = 4.0
     "wall_follow",
     kind="action",
     params=(
-        Param("speed", SPEED, default="150 mm/s", minimum=20, maximum=WHEEL.maximum,
-              doc="forward wheel speed"),
+        wheel_speed_param("speed", "150 mm/s", minimum=20, doc="forward wheel speed"),
         Param("target", INT, default=600, minimum=1, maximum=_SIGNAL_MAX,
               doc="right light-bumper signal (51) to hold"),
         Param("kp", FLOAT, default=0.15, minimum=0, maximum=10,
@@ -124,13 +124,7 @@ class WallFollow(Action):
             self._started_motion = False
             return Status.SUCCESS
         if snap.mode not in DRIVING_MODES:
-            # the mode model would refuse a command: wait for Safe/Full, a second at most
-            stranded = self.stranded() if self._started_motion else None
-            if stranded is not None:
-                self._started_motion = False
-                self.feedback_message = stranded
-                return Status.FAILURE
-            return Status.RUNNING
+            return self.wait_for_driving_mode()
         self.stranded()  # back in Safe/Full: the wait is over
         frame = snap.frame
         recovering = self.recovery_speeds(frame.any_bump)

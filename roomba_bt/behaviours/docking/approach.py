@@ -21,9 +21,8 @@ from collections.abc import Callable
 import py_trees
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import WHEEL, Param, declare
+from roomba_bt.behaviours.declare import Param, wheel_speed_param
 from roomba_bt.behaviours.docking.common import (
-    DRIVE_SENDS,
     HAZARD_IN_PACKETS,
     OMNI_AHEAD_MM,
     RUN_KEY,
@@ -32,14 +31,11 @@ from roomba_bt.behaviours.docking.common import (
     DockView,
     Hazard,
     IdentityEnum,
+    declare_stage,
     hazard_in,
 )
-from roomba_bt.behaviours.units import ANGLE, DURATION, SPEED
-from roomba_bt.oi.frames import (
-    CHARGING_SOURCES_PACKETS,
-    ENCODER_PACKETS,
-    IR_PACKETS,
-)
+from roomba_bt.behaviours.units import ANGLE, DURATION
+from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS
 
 #: Attempts (starts of this leaf) in one docking run before the approach first backs away
 #: from the dock and comes in again.
@@ -105,23 +101,20 @@ class ApproachState(IdentityEnum):
     BACK = "back"
 
 
-@declare(
+@declare_stage(
     "dock_approach",
-    kind="action",
     params=(
-        Param("speed", SPEED, default="150 mm/s", minimum=30, maximum=WHEEL.maximum,
-              doc="speed toward the axis"),
-        Param("turn_speed", SPEED, default="200 mm/s", minimum=40, maximum=WHEEL.maximum,
-              doc="wheel speed of the turns in place (facing the dock, turning away)"),
+        wheel_speed_param("speed", "150 mm/s", minimum=30, doc="speed toward the axis"),
+        wheel_speed_param("turn_speed", "200 mm/s", minimum=40,
+                          doc="wheel speed of the turns in place (facing the dock, turning away)"),
         Param("cross_angle", ANGLE, default="80deg", minimum=20, maximum=90,
               doc="how far it turns away from the dock to move toward its axis"),
         Param("lost_after", DURATION, default="4s", minimum=0.1,
               doc="FAILURE when no beam has been seen for this long"),
-        Param("timeout", DURATION, default="90s", minimum=1,
-              doc="FAILURE if not facing the dock on its axis by then"),
     ),
-    reads=(*IR_PACKETS, *HAZARD_IN_PACKETS, *CHARGING_SOURCES_PACKETS, *ENCODER_PACKETS),
-    sends=DRIVE_SENDS,
+    timeout="90s",
+    timeout_doc="FAILURE if not facing the dock on its axis by then",
+    reads=(*HAZARD_IN_PACKETS, *CHARGING_SOURCES_PACKETS),
 )  # fmt: skip
 class DockApproach(DockingAction):
     """Get onto the dock's axis, facing it (SUCCESS), from anywhere its beams are seen.

@@ -3,16 +3,21 @@ the wheel commands, and the notes the stages leave for ``dock_time_limit``."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from enum import Enum
-from typing import NamedTuple
+from typing import NamedTuple, TypeVar
 
 import py_trees
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import Action, wheel_speeds
+from roomba_bt.behaviours.declare import Action, Param, declare
+from roomba_bt.behaviours.driving import wheel_speeds
+from roomba_bt.behaviours.units import DURATION
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import (
+    ENCODER_PACKETS,
     HAZARD_PACKETS,
+    IR_PACKETS,
     LIGHT_BUMPER_PACKETS,
     VIRTUAL_WALL_PACKETS,
     SensorFrame,
@@ -242,3 +247,29 @@ class DockingAction(Action):
     _turn_mark = 0.0
     _distance_mark = 0.0
     _t0 = 0.0
+
+
+Stage = TypeVar("Stage", bound=type[DockingAction])
+
+
+def declare_stage(
+    name: str,
+    *,
+    timeout: str,
+    timeout_doc: str,
+    params: tuple[Param, ...] = (),
+    reads: tuple[int, ...] = (),
+) -> Callable[[Stage], Stage]:
+    """``@declare`` for a driving stage, with what :class:`DockingAction` itself uses said
+    once: the ``timeout`` parameter :meth:`~DockingAction.timed_out` reads (after the
+    stage's own ``params``), the receivers' IR characters (:class:`DockView`) before and the
+    encoders (the odometry marks) after the packets in ``reads``, and Drive Direct and Drive
+    0 sent (:meth:`~DockingAction.wheels`, :meth:`~DockingAction.halt`)."""
+    limit = Param("timeout", DURATION, default=timeout, minimum=1, doc=timeout_doc)
+    return declare(
+        name,
+        kind="action",
+        params=(*params, limit),
+        reads=(*IR_PACKETS, *reads, *ENCODER_PACKETS),
+        sends=DRIVE_SENDS,
+    )

@@ -12,22 +12,16 @@ from collections.abc import Callable
 
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import WHEEL, Param, declare
+from roomba_bt.behaviours.declare import Param, wheel_speed_param
 from roomba_bt.behaviours.docking.common import (
-    DRIVE_SENDS,
     RUNNING,
     DockingAction,
     DockView,
     IdentityEnum,
+    declare_stage,
 )
-from roomba_bt.behaviours.units import ANGLE, DURATION, SPEED
-from roomba_bt.oi.frames import (
-    BUMPS_PACKETS,
-    CHARGING_SOURCES_PACKETS,
-    ENCODER_PACKETS,
-    IR_PACKETS,
-    SensorFrame,
-)
+from roomba_bt.behaviours.units import ANGLE
+from roomba_bt.oi.frames import BUMPS_PACKETS, CHARGING_SOURCES_PACKETS, SensorFrame
 
 #: FAILURE once no receiver has seen the dock for this long (s).
 LOST_BEAMS_S = 1.5
@@ -51,21 +45,18 @@ class DriveOnState(IdentityEnum):
     WIGGLE = "wiggle"
 
 
-@declare(
+@declare_stage(
     "dock_drive_on",
-    kind="action",
     params=(
-        Param("speed", SPEED, default="120 mm/s", minimum=20, maximum=WHEEL.maximum,
-              doc="speed along the axis outside the force field"),
-        Param("slow", SPEED, default="60 mm/s", minimum=10, maximum=WHEEL.maximum,
-              doc="speed inside the force field"),
+        wheel_speed_param("speed", "120 mm/s", minimum=20,
+                          doc="speed along the axis outside the force field"),
+        wheel_speed_param("slow", "60 mm/s", minimum=10, doc="speed inside the force field"),
         Param("wiggle", ANGLE, default="12deg", minimum=0, maximum=45,
               doc="how far it turns each way on contact to seat the charging contacts"),
-        Param("timeout", DURATION, default="45s", minimum=1,
-              doc="FAILURE if the home base is not reached by then"),
     ),
-    reads=(*IR_PACKETS, *BUMPS_PACKETS, *CHARGING_SOURCES_PACKETS, *ENCODER_PACKETS),
-    sends=DRIVE_SENDS,
+    timeout="45s",
+    timeout_doc="FAILURE if the home base is not reached by then",
+    reads=(*BUMPS_PACKETS, *CHARGING_SOURCES_PACKETS),
 )  # fmt: skip
 class DockDriveOn(DockingAction):
     """Final alignment: drive onto the contacts along the axis (SUCCESS: packet 34 shows

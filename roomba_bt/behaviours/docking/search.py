@@ -23,24 +23,19 @@ from collections.abc import Callable
 
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import WHEEL, Param, declare
+from roomba_bt.behaviours.declare import Param, wheel_speed_param
 from roomba_bt.behaviours.docking.common import (
-    DRIVE_SENDS,
     HAZARD_IN_PACKETS,
     RUNNING,
     DockingAction,
     DockView,
     Hazard,
     IdentityEnum,
+    declare_stage,
     hazard_in,
 )
-from roomba_bt.behaviours.units import BOOL, DISTANCE, DURATION, SPEED, enum
-from roomba_bt.oi.frames import (
-    ENCODER_PACKETS,
-    IR_PACKETS,
-    LIGHT_BUMP_SIGNAL_PACKETS,
-    SensorFrame,
-)
+from roomba_bt.behaviours.units import BOOL, DISTANCE, enum
+from roomba_bt.oi.frames import LIGHT_BUMP_SIGNAL_PACKETS, SensorFrame
 from roomba_bt.robot.interface import Odometry
 
 # The visit grid (odometry frame) and how a heading is chosen on it.
@@ -186,12 +181,10 @@ class VisitGrid:
         return best
 
 
-@declare(
+@declare_stage(
     "dock_search",
-    kind="action",
     params=(
-        Param("speed", SPEED, default="200 mm/s", minimum=50, maximum=WHEEL.maximum,
-              doc="forward speed while wandering"),
+        wheel_speed_param("speed", "200 mm/s", minimum=50, doc="forward speed while wandering"),
         Param("spin_first", BOOL, default=True, doc="turn once in place before wandering"),
         Param("leg", DISTANCE, default="2 m", minimum=200,
               doc="longest straight leg before choosing a new heading"),
@@ -200,11 +193,10 @@ class VisitGrid:
         Param("wall_side", enum("right", "left"), default="right", from_blackboard=False,
               doc="which side walls are kept on while following them (always the same: "
                   "a one-handed follower goes round a room and through its doors)"),
-        Param("timeout", DURATION, default="5min", minimum=1,
-              doc="FAILURE if no dock beam is seen by then"),
     ),
-    reads=(*IR_PACKETS, *HAZARD_IN_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS, *ENCODER_PACKETS),
-    sends=DRIVE_SENDS,
+    timeout="5min",
+    timeout_doc="FAILURE if no dock beam is seen by then",
+    reads=(*HAZARD_IN_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS),
 )  # fmt: skip
 class DockSearch(DockingAction):
     """Search for the dock's beams: spin once, then wander toward unexplored space.

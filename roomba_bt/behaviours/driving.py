@@ -1,0 +1,154 @@
+"""What the driving leaves share: the wheel command, the hazards that end a move, the wait
+for Safe/Full, and the geometry of their moves, each said once.
+
+The cleaning patterns (``spiral``, ``lanes``), ``cover``, ``wall_follow`` and the docking
+stages all drive with Drive Direct (145), wheel speeds clamped to what it takes::
+
+    [145][right hi][right lo][left hi][left lo]      (signed 16-bit mm/s, -500..500)
+
+and steer by the odometry of the snapshot. Their moves, as (left, right) wheel speeds (mm/s):
+
+* turning in place toward the side of a heading error: ``(-w, w)`` to the left (counter-
+  clockwise, error > 0), ``(w, -w)`` to the right (:func:`spin_toward`, :func:`turn_toward`);
+* holding a straight line through a point (:func:`steer_along`): the heading error plus the
+  sideways drift, so a lane stays on its line and lanes stay parallel::
+
+        offset (mm, + to the line's left) -> aim atan(offset / 300 mm) back toward the line
+        turn = 600 mm/s per rad of error, at most half the speed; (speed - turn, speed + turn)
+
+* an arc of a radius around a point on one side (:func:`arc_wheels`): both wheels at the
+  centre's speed scaled by their own radius, ``radius -+ half the wheel base``.
+"""
+
+from __future__ import annotations
+
+import math
+
+from py_trees.common import Status
+
+from roomba_bt.behaviours.declare import WHEEL, Action
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.frames import (
+    BUMPS_PACKETS,
+    CLIFF_PACKETS,
+    VIRTUAL_WALL_PACKETS,
+    SensorFrame,
+)
+from roomba_bt.oi.modes import DRIVING_MODES
+
+__all__ = [
+    "BLOCKED_PACKETS",
+    "NEAR_SIGNAL",
+    "Line",
+    "along_line",
+    "arc_wheels",
+    "blocked",
+    "drive_wheels",
+    "held",
+    "near_ahead",
+    "spin_toward",
+    "steer_along",
+    "turn_toward",
+    "wheel_speeds",
+    "wrap",
+]
+
+#: a centre light-bump signal (packets 47-50) at or above this: something within a few
+#: centimetres ahead, slow down
+NEAR_SIGNAL = 150
+#: holding a line: an offset of this much (mm) aims 45 deg back toward it; the turn is this
+#: many mm/s of wheel difference per radian of heading error, at most this share of the speed
+LINE_OFFSET_MM = 300.0
+LINE_TURN_MM_S_PER_RAD = 600.0
+LINE_TURN_SHARE = 0.5
+
+#: What :func:`blocked` and :func:`held` read: packets 7 (bumps, wheel drops), 9-12 (cliffs)
+#: and 13 (a virtual wall), for the ``reads`` of a leaf that calls them.
+BLOCKED_PACKETS = (*BUMPS_PACKETS, *CLIFF_PACKETS, *VIRTUAL_WALL_PACKETS)
+
+#: A straight line: a point on it (x, y, mm) and its heading (rad), in the odometry frame.
+Line = tuple[float, float, float]
+
+
+def wheel_speeds(left: float, right: float) -> tuple[int, int]:
+    """``left``, ``right`` (mm/s) rounded and clamped to what Drive Direct takes."""
+    limit = WHEEL.maximum
+    return max(-limit, min(limit, round(left))), max(-limit, min(limit, round(right)))
+
+
+def drive_wheels(left: float, right: float) -> oi.Command:
+    """Drive Direct with ``left``, ``right`` (mm/s) rounded and clamped (right goes first on
+    the wire)."""
+    lo, ro = wheel_speeds(left, right)
+    return oi.drive_direct(ro, lo)
+
+
+def wrap(angle: float) -> float:
+    """``angle`` (rad) brought into -pi..pi."""
+    return math.remainder(angle, math.tau)
+
+
+def blocked(frame: SensorFrame) -> str | None:
+    """Why the robot must not go on forward (cliff, bump, virtual wall), or None."""
+    if frame.any_cliff:
+        return "cliff"
+    if frame.any_bump:
+        return "bump"
+    if frame.virtual_wall:
+        return "virtual wall"
+    return None
+
+
+def near_ahead(frame: SensorFrame) -> bool:
+    """One of the four centre light-bump signals is at :data:`NEAR_SIGNAL` or above."""
+    signals = frame.light_bump_signals
+    return max(signals[1], signals[2], signals[3], signals[4]) >= NEAR_SIGNAL
+
+
+def held(action: Action) -> Status | None:
+    """Why a driving leaf cannot drive this tick: a wheel drop fails it; out of Safe/Full it
+    waits, and fails once stranded there after it began to move. None: it may drive."""
+    snap = action.snapshot
+    if snap.frame.any_wheel_drop:
+        action.feedback_message = "wheel drop"
+        return Status.FAILURE
+    if snap.mode not in DRIVING_MODES:
+        return action.wait_for_driving_mode()
+    return None
+
+
+def spin_toward(error: float, speed: float) -> tuple[float, float]:
+    """Turn in place at ``speed`` (each wheel, mm/s) toward the side of ``error`` (rad,
+    counter-clockwise positive): left when it is positive, else right."""
+    return (-speed, speed) if error > 0 else (speed, -speed)
+
+
+def turn_toward(error: float, top: float, least: float, gain: float) -> tuple[float, float]:
+    """Turn in place toward the side of ``error`` (rad), each wheel at ``gain`` mm/s per
+    radian of it, between ``least`` (the last degrees still turn) and ``top``."""
+    return spin_toward(error, min(top, max(least, gain * abs(error))))
+
+
+def along_line(line: Line, x: float, y: float) -> tuple[float, float]:
+    """Where (x, y) is from ``line``: (distance along it, signed offset to its left), mm."""
+    x0, y0, heading = line
+    dx, dy = x - x0, y - y0
+    c, s = math.cos(heading), math.sin(heading)
+    return dx * c + dy * s, -dx * s + dy * c
+
+
+def steer_along(line: Line, x: float, y: float, theta: float, speed: float) -> tuple[float, float]:
+    """Wheel speeds holding ``line`` from the pose (x, y, theta): heading error plus
+    sideways drift (the module's drawing)."""
+    _, offset = along_line(line, x, y)
+    heading = line[2] - math.atan(max(-1.0, min(1.0, offset / LINE_OFFSET_MM)))
+    error = wrap(heading - theta)
+    limit = LINE_TURN_SHARE * speed
+    turn = max(-limit, min(limit, LINE_TURN_MM_S_PER_RAD * error))
+    return speed - turn, speed + turn
+
+
+def arc_wheels(speed: float, radius: float, half_base: float) -> tuple[float, float]:
+    """(inner, outer) wheel speeds (mm/s) of an arc of ``radius`` (mm, of the centre's
+    path) at ``speed`` along it: each wheel on its own radius, ``radius -+ half_base``."""
+    return speed * (radius - half_base) / radius, speed * (radius + half_base) / radius
