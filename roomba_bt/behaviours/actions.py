@@ -336,21 +336,21 @@ class _BuiltIn(Action):
         return _OK
 
 
-@declare("clean", kind="action", sends=opcodes("clean"), leads_to=OIMode.PASSIVE)
+@declare("clean", kind="action", sends=opcodes("clean"))
 class Clean(_BuiltIn):
     """Start the robot's own cleaning cycle (Clean 135); the OI drops to Passive."""
 
     opcode_helper = staticmethod(oi.clean)
 
 
-@declare("spot", kind="action", sends=opcodes("spot"), leads_to=OIMode.PASSIVE)
+@declare("spot", kind="action", sends=opcodes("spot"))
 class Spot(_BuiltIn):
     """Start spot cleaning (Spot 134); the OI drops to Passive."""
 
     opcode_helper = staticmethod(oi.spot)
 
 
-@declare("max", kind="action", sends=opcodes("max"), leads_to=OIMode.PASSIVE)
+@declare("max", kind="action", sends=opcodes("max"))
 class MaxClean(_BuiltIn):
     """Start a Max cleaning cycle (Max 136), until the battery runs out; Passive."""
 
@@ -366,7 +366,6 @@ class MaxClean(_BuiltIn):
     ),
     reads=CHARGING_SOURCES_PACKETS,
     sends=opcodes("seek_dock"),
-    leads_to=OIMode.PASSIVE,
 )  # fmt: skip
 class SeekDock(Action):
     """Send Seek Dock (143) and, by default, wait until the home base powers the robot."""

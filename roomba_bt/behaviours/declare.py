@@ -194,6 +194,15 @@ class Declaration:
 B = TypeVar("B", bound="type[RobotBehaviour]")
 
 
+def mode_after_sending(sends: tuple[int, ...]) -> OIMode | None:
+    """The OI mode after the commands of ``sends``, from the opcode table's ``leads_to``:
+    the one mode they lead to; None when none of them changes the mode, or when they lead to
+    several (a behaviour that sends Safe or Full by a parameter says which with a function
+    of its parameters)."""
+    after = {COMMANDS[op].leads_to for op in sends if op in COMMANDS} - {None}
+    return after.pop() if len(after) == 1 else None
+
+
 def declare(
     name: str,
     *,
@@ -208,12 +217,15 @@ def declare(
     constraints: Callable[[Mapping[str, Any]], list[str]] | None = None,
 ) -> Callable[[B], B]:
     """Class decorator: attach the :class:`Declaration` as ``cls.declaration``; the doc is
-    the class docstring's first paragraph."""
+    the class docstring's first paragraph. ``leads_to`` defaults to what the opcode table
+    says of the commands in ``sends`` (:func:`mode_after_sending`): Spot (134) leads to
+    Passive, so ``spot`` need not say it."""
+    after = mode_after_sending(sends) if leads_to is None else leads_to
 
     def attach(cls: B) -> B:
         doc = " ".join((cls.__doc__ or "").strip().split("\n\n")[0].split())
         cls.declaration = Declaration(
-            name, kind, cls, params, reads, sends, leads_to, doc, primary,
+            name, kind, cls, params, reads, sends, after, doc, primary,
             constraints=constraints, writes_keys=writes_keys, reads_keys=reads_keys,
         )  # fmt: skip
         return cls

@@ -7,10 +7,10 @@ behaviour. ``dirt_detect`` reads the robot's dirt detector, packet 15 (one unsig
     stream frame  [19][n] ... [15][level] ... [checksum]
 
 ``spot_clean`` sends Spot, one byte ``[134]``: the robot's own spot-cleaning spiral. The OI
-drops to Passive (the declaration says ``leads_to``, so the validator knows a driving
-action after it needs a ``mode: safe`` first). It stays RUNNING while the spiral runs (the
-wheels turning, as the encoders show) and succeeds once they have stood still for
-``settle``; a spiral still going after ``timeout`` fails. Time is the mission clock.
+drops to Passive (the opcode table says so: from the declaration's ``sends`` the validator
+knows that a driving action after it needs a ``mode: safe`` first). It stays RUNNING while
+the spiral runs (the wheels turning, as the encoders show) and succeeds once they have stood
+still for ``settle``; a spiral still going after ``timeout`` fails. Time is the mission clock.
 """
 
 from __future__ import annotations
@@ -20,7 +20,6 @@ from py_trees.common import Status
 from roomba_bt.behaviours import DURATION, INT, Action, Condition, Param, declare
 from roomba_bt.oi import commands
 from roomba_bt.oi.frames import ENCODER_PACKETS
-from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.opcodes import opcodes
 from roomba_bt.oi.packets import PACKETS_BY_NAME, packet_ids
 from roomba_bt.robot.interface import Snapshot
@@ -59,7 +58,6 @@ class DirtDetect(Condition):
     ),
     reads=ENCODER_PACKETS,
     sends=opcodes("spot"),
-    leads_to=OIMode.PASSIVE,
 )  # fmt: skip
 class SpotClean(Action):
     """Spot-clean here (Spot 134, the robot's own spiral, in Passive) and wait until it ends."""
