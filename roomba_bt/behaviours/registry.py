@@ -112,7 +112,7 @@ class Registry:
             c if c.isalnum() else "_" for c in str(path.resolve())
         )
         module = sys.modules.get(module_name)
-        stamp = _stamp(path)
+        stamp = file_version(path)
         # imported once per version of the file: a mission reloaded (run --watch) after its
         # plugin file changed gets the new code, an unchanged one the module it had
         if module is None or getattr(module, "__roomba_bt_stamp__", stamp) != stamp:
@@ -164,8 +164,10 @@ class Registry:
         return list(self._errors)
 
 
-def _stamp(path: Path) -> tuple[int, int] | None:
-    """The file's version as a reload sees it (modification time, size); None if unreadable."""
+def file_version(path: Path) -> tuple[int, int] | None:
+    """The file's version as a reload sees it (modification time in ns, size); None if
+    unreadable. A plugin file is imported again when it changes; the monitor's ``--watch``
+    reloads a mission when one of its files does."""
     try:
         st = path.stat()
     except OSError:

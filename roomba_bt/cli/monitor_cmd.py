@@ -153,12 +153,14 @@ class LiveMonitor:
         """Every 0.25 s: has the mission file or a file it includes changed? Then reload. The
         files watched are those of the last mission that loaded (an include added or removed
         by a valid reload is watched from then on), and always the mission file."""
+        from roomba_bt.behaviours.registry import file_version
+
         path = Path(self.args.mission)
-        stamps = {f: _stamp(f) for f in self._watched}
+        stamps = {f: file_version(f) for f in self._watched}
         shown = ", ".join(_shown(f) for f in self._watched)
         print(f"watching {shown}: a change reloads the mission", flush=True)
         while not self._done.wait(0.25):
-            now = {f: _stamp(f) for f in self._watched}
+            now = {f: file_version(f) for f in self._watched}
             if now == stamps:
                 continue
             changed = [f for f in self._watched if now[f] != stamps.get(f)]
@@ -168,7 +170,7 @@ class LiveMonitor:
             mission = self._reload(path, changed)
             if mission is not None:
                 self._watched = _files_of(mission, path)
-                stamps = {f: now[f] if f in now else _stamp(f) for f in self._watched}
+                stamps = {f: now[f] if f in now else file_version(f) for f in self._watched}
 
     def _reload(self, path: Path, changed: list[Path]) -> Any:
         """The new mission once it is handed to the session, or None (refused)."""
@@ -234,14 +236,6 @@ def _shown(path: Path) -> str:
     with contextlib.suppress(ValueError):
         return str(path.relative_to(Path.cwd()))
     return str(path)
-
-
-def _stamp(path: Path) -> tuple[float, int] | None:
-    try:
-        st = path.stat()
-    except OSError:
-        return None
-    return (st.st_mtime, st.st_size)
 
 
 # -------------------------------------------------------------------- roomba-bt monitor
