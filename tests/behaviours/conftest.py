@@ -1,11 +1,14 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import pytest
 
 from roomba_bt.behaviours.declare import RobotBehaviour
+from roomba_bt.evaluate import EpisodeSpec, run_episode
+from roomba_bt.evaluate.episode import EpisodeResult
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.robot.testing import StubRobot
 
@@ -34,3 +37,50 @@ def make(robot: StubRobot) -> Make:
         return behaviour
 
     return build
+
+
+#: A 3 m x 2.5 m room; ``extra`` adds world lines (drops, virtual walls, events).
+BOX = """
+name: box
+rooms: [[[0, 0], [3, 0], [3, 2.5], [0, 2.5]]]
+robot: {{start: {{at: [{x}, {y}], heading: {heading}}}}}
+{extra}
+"""
+#: One leaf in Full mode with the brushes and the vacuum on, then Passive.
+SWEEP = """
+mission: sweep
+tree:
+  sequence:
+    - mode: full
+    - motors: {{main_brush: true, side_brush: true, vacuum: true}}
+    - {leaf}
+    - mode: passive
+"""
+
+
+Sweep = Callable[..., EpisodeResult]
+
+
+@pytest.fixture
+def sweep(tmp_path: Path) -> Sweep:
+    """``sweep(leaf, (x m, y m, heading deg), extra, timeout_s, **spec)``: an episode of the
+    mission :data:`SWEEP` around ``leaf`` in the room :data:`BOX` on the simulator, from that
+    start (``spec``: more :class:`EpisodeSpec` fields, such as ``seed``)."""
+
+    def run(
+        leaf: str,
+        start: tuple[float, float, int],
+        extra: str = "",
+        timeout_s: float = 300.0,
+        **spec: Any,
+    ) -> EpisodeResult:
+        x, y, heading = start
+        world = tmp_path / "box.yaml"
+        world.write_text(BOX.format(x=x, y=y, heading=heading, extra=extra))
+        mission = tmp_path / "sweep.yaml"
+        mission.write_text(SWEEP.format(leaf=leaf))
+        return run_episode(
+            EpisodeSpec(str(mission), str(world), random_start=False, timeout_s=timeout_s, **spec)
+        )
+
+    return run

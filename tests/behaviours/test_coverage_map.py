@@ -6,40 +6,14 @@ from __future__ import annotations
 
 import itertools
 import math
-from pathlib import Path
+from collections.abc import Callable
 
 from roomba_bt.behaviours.coverage_map import BLOCKED, CELL_MM, SWEPT, VISITED, FloorMap
-from roomba_bt.evaluate import EpisodeSpec, run_episode
 from roomba_bt.evaluate.episode import EpisodeResult
 
-ROOM = """
-name: box
-rooms: [[[0, 0], [3, 0], [3, 2.5], [0, 2.5]]]
-robot: {{start: {{at: [1.2, 1.0], heading: 20}}}}
-{extra}
-"""
-
-MISSION = """
-mission: sweep
-tree:
-  sequence:
-    - mode: full
-    - motors: {main_brush: true, side_brush: true, vacuum: true}
-    - cover: {}
-    - mode: passive
-"""
-
-
-def run(tmp_path: Path, extra: str = "", odometry_error: float = 0.0) -> EpisodeResult:
-    world = tmp_path / "box.yaml"
-    world.write_text(ROOM.format(extra=extra))
-    mission = tmp_path / "sweep.yaml"
-    mission.write_text(MISSION)
-    spec = EpisodeSpec(
-        str(mission), str(world), seed=3, random_start=False, timeout_s=600.0,
-        odometry_error=odometry_error,
-    )  # fmt: skip
-    return run_episode(spec)
+Sweep = Callable[..., EpisodeResult]
+#: ``cover`` starts in the middle of the room, at an angle to its walls
+MIDDLE = (1.2, 1.0, 20)
 
 
 def test_the_strip_is_swept_and_the_centre_visited() -> None:
@@ -101,28 +75,28 @@ def test_the_frontier_is_the_nearest_known_cell_beside_open_floor() -> None:
     assert fmap.frontier(start) is None
 
 
-def test_cover_sweeps_a_room_to_its_edges_and_ends(tmp_path: Path) -> None:
-    result = run(tmp_path)
+def test_cover_sweeps_a_room_to_its_edges_and_ends(sweep: Sweep) -> None:
+    result = sweep("cover: {}", MIDDLE, seed=3, timeout_s=600.0)
     assert result.outcome == "success", result.reason
     assert result.coverage is not None and result.coverage.overall >= 0.9
     assert result.coverage.longest_idle_s < 60.0
     assert result.violations == 0 and not result.fell
 
 
-def test_cover_respects_a_drop_and_a_virtual_wall(tmp_path: Path) -> None:
+def test_cover_respects_a_drop_and_a_virtual_wall(sweep: Sweep) -> None:
     extra = (
         "drops: [{name: stairs, rect: [2.3, 0, 3, 1.2]}]\n"
         "virtual_walls: [{from: [0.8, 0], to: [0.8, 2.5]}]"
     )
-    result = run(tmp_path, extra)
+    result = sweep("cover: {}", MIDDLE, extra, seed=3, timeout_s=600.0)
     assert result.outcome == "success", result.reason
     assert not result.fell
     assert result.coverage is not None and result.coverage.overall >= 0.85
     assert min(x for x, _ in result.trajectory) > 0.8  # never past the beam
 
 
-def test_cover_holds_up_with_the_encoders_error(tmp_path: Path) -> None:
-    result = run(tmp_path, odometry_error=0.02)
+def test_cover_holds_up_with_the_encoders_error(sweep: Sweep) -> None:
+    result = sweep("cover: {}", MIDDLE, seed=3, timeout_s=600.0, odometry_error=0.02)
     assert result.coverage is not None and result.coverage.overall >= 0.85
     assert result.outcome in ("success", "timeout"), result.reason
     assert not math.isnan(result.coverage.overall)
