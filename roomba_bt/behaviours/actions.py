@@ -36,7 +36,7 @@ from roomba_bt.behaviours.units import (
     parse_quantity,
 )
 from roomba_bt.oi import commands as oi
-from roomba_bt.oi.bits import led_bits, motor_bits
+from roomba_bt.oi.bits import LED_NAMES, led_bits, motor_bits
 from roomba_bt.oi.encode import Note, Radius, note_number
 from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS, ENCODER_PACKETS
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
@@ -395,30 +395,21 @@ class SeekDock(Action):
 
 # --------------------------------------------------------------------------- actuators
 
+#: ``motors``' switches: :func:`~roomba_bt.oi.bits.motor_bits`' keywords, brushes first
+_MOTORS = ("main_brush", "side_brush", "vacuum", "side_brush_clockwise", "main_brush_outward")
+
 
 @declare(
     "motors",
     kind="action",
-    params=(
-        Param("main_brush", BOOL, default=False),
-        Param("side_brush", BOOL, default=False),
-        Param("vacuum", BOOL, default=False),
-        Param("side_brush_clockwise", BOOL, default=False),
-        Param("main_brush_outward", BOOL, default=False),
-    ),
+    params=tuple(Param(name, BOOL, default=False) for name in _MOTORS),
     sends=opcodes("motors"),
 )
 class Motors(Action):
     """Switch the cleaning motors (Motors 138 ``[138][bits]``); unnamed ones go off."""
 
     def update(self) -> Status:
-        bits = motor_bits(
-            side_brush=bool(self.value("side_brush")),
-            vacuum=bool(self.value("vacuum")),
-            main_brush=bool(self.value("main_brush")),
-            side_brush_clockwise=bool(self.value("side_brush_clockwise")),
-            main_brush_outward=bool(self.value("main_brush_outward")),
-        )
+        bits = motor_bits(**{name: bool(self.value(name)) for name in _MOTORS})
         self.send(oi.motors(bits))
         return _OK
 
@@ -442,10 +433,7 @@ class Vacuum(Action):
     "leds",
     kind="action",
     params=(
-        Param("debris", BOOL, default=False),
-        Param("spot", BOOL, default=False),
-        Param("dock", BOOL, default=False),
-        Param("check_robot", BOOL, default=False),
+        *(Param(name, BOOL, default=False) for name in LED_NAMES),
         Param("power_color", INT, default=0, minimum=_LED_COLOR.minimum,
               maximum=_LED_COLOR.maximum, doc="0 green .. 255 red"),
         Param("power_intensity", PERCENT, default="0%", minimum=0, maximum=100),
@@ -456,7 +444,7 @@ class Leds(Action):
     """Set the LEDs (LEDs 139 ``[139][led bits][power colour][power intensity]``)."""
 
     def update(self) -> Status:
-        names = [n for n in ("debris", "spot", "dock", "check_robot") if self.value(n)]
+        names = [n for n in LED_NAMES if self.value(n)]
         intensity = round(float(self.value("power_intensity")) * 255 / 100)
         self.send(oi.leds(led_bits(*names), int(self.value("power_color")), intensity))
         return _OK
