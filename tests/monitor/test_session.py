@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import threading
+import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -15,6 +16,7 @@ from roomba_bt.monitor.recorded import replay_into_feed
 from roomba_bt.monitor.session import ControlRefused, MonitorSession
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.runtime.loop import MissionRunner
 from roomba_bt.runtime.recording import load_record
 from roomba_bt.runtime.stack import Recording, RunStack
 from roomba_bt.runtime.summary import Outcome, RunSummary
@@ -23,6 +25,24 @@ from roomba_bt.sim import SimLink, Simulator, load_world
 HERE = Path(__file__).resolve().parent
 SHUTTLE = HERE / "missions" / "shuttle.yaml"
 WAIT_THEN_DRIVE = HERE / "missions" / "wait-then-drive.yaml"
+
+
+class PacedGate:
+    """The session as the run's gate, with the tick thread sleeping a little before each
+    tick: on the virtual clock a run otherwise holds the GIL for thousands of ticks (the
+    whole 60 s mission) before the operator's thread gets to act, as no page ever could."""
+
+    PACE_S = 0.0002
+
+    def __init__(self, session: MonitorSession) -> None:
+        self.session = session
+
+    def before_tick(self, runner: MissionRunner) -> bool:
+        time.sleep(self.PACE_S)
+        return self.session.before_tick(runner)
+
+    def after_tick(self, runner: MissionRunner) -> None:
+        self.session.after_tick(runner)
 
 
 class Rig:
@@ -49,7 +69,7 @@ class Rig:
         self.session = MonitorSession(self.feed, simulator=simulator, stream_packets=self.packets)
         self.ended = threading.Event()
         self.runner = self.stack.runner
-        self.runner.gate = self.session
+        self.runner.gate = PacedGate(self.session)
 
     def run_with(self, operator: Callable[[Rig], None]) -> RunSummary:
         """Run; ``operator`` acts from another thread, as the page would."""
