@@ -7,8 +7,9 @@ The real firmware's algorithms are not specified; these behave the way a client 
 * Spot: an outward spiral at 200 mm/s for 30 s, ended early by a bump or a cliff;
 * Clean (10 min, 300 mm/s) and Max (60 min, 400 mm/s): forward until a bump, cliff, virtual
   wall, close light bump or stall, back up 0.3 s, turn a random 0.4-1.4 s, go on;
-* Seek Dock: head for where the dock is (bouncing off obstacles) until the omni receiver sees
-  a dock beam, then a point 0.45 m out on the dock's axis, turn to face it, drive on slowly.
+* Seek Dock: search without a map (straight runs, bounces, wall-following spells) until a
+  receiver sees a dock beam, then a point 0.45 m out on the dock's axis, turn to face it,
+  drive on slowly.
 
 Components, not a layer: each cycle is an object with its own state (phase and timers), asked
 for wheel speeds once a step while it runs. Nothing here is on the step path otherwise.
@@ -21,13 +22,25 @@ import random
 from abc import ABC, abstractmethod
 
 from roomba_bt.oi.bits import BUMP_BITS
+from roomba_bt.oi.ir import IR_CHARACTERS
 from roomba_bt.sim.geometry import wrap_angle
 from roomba_bt.sim.motion import drive_wheel_speeds
 from roomba_bt.sim.power import BATTERY_CAPACITY_MAH, Power
-from roomba_bt.sim.sensing import VIRTUAL_WALL_CHARACTER
 from roomba_bt.sim.world import Pose
 
 Wheels = tuple[float, float]
+#: Seek Dock's own limit: it stops searching after 10 minutes.
+SEEK_DOCK_LIMIT_S = 600.0
+#: Seek Dock's search: the cleaning speed straight, slower along a wall.
+_SEARCH_SPEED = 300.0
+_FOLLOW_SPEED = 250.0
+#: light-bumper signals (0-4095) of the wall following: something ahead within about 9 cm;
+#: a wall on the right at all; the right rays' set point (about 5 cm from the wall)
+_FOLLOW_AHEAD = 600
+_FOLLOW_SEEN = 150
+_FOLLOW_SET = 2000
+#: which IR characters a home base sends (either family), by code
+_FROM_DOCK = tuple(IR_CHARACTERS[code].from_dock for code in range(256))
 _STOP: Wheels = (0.0, 0.0)
 #: packet 45: the centre left and centre right light bumps (a wall straight ahead)
 _LIGHT_BUMPS_CENTRE = 0b001100
@@ -44,7 +57,6 @@ class BuiltinCycle(ABC):
         self.phase = "forward"
         self.phase_until = 0.0
         self.turn_sign = 1.0
-        self.wander_until = 0.0  # after a bounce, go straight a while before aiming again
         self.ended: str | None = None
 
     @abstractmethod
@@ -81,7 +93,9 @@ class BuiltinCycle(ABC):
             if now < self.phase_until:
                 return -150.0 * self.turn_sign, 150.0 * self.turn_sign
             self.phase = "forward"
-            self.wander_until = now + self.rng.uniform(1.5, 3.0)
+            # a draw that once timed Seek Dock's wander before aiming at the dock; kept so
+            # that Clean and Max follow the same random sequence (and recordings) as before
+            self.rng.uniform(1.5, 3.0)
         return speed, speed
 
 
@@ -116,34 +130,112 @@ class Clean(BuiltinCycle):
 
 
 class SeekDock(BuiltinCycle):
-    """Simple homing. The real firmware's algorithm is not specified, so this one uses the
-    world's geometry once the dock is in sight: head for where the dock was (bouncing off
-    obstacles) until the omni receiver sees a dock beam, then go to a point 0.45 m out on the
-    dock's axis, turn to face the dock and drive on slowly."""
+    """Seek Dock as the OI specifications describe it, with no map of the home.
+
+    The Roomba 500 OI: "This command directs Roomba to drive onto the dock the next time it
+    encounters the docking beams"; the Create 2: "This command sends Roomba to the dock". The
+    firmware knows nothing of where the dock is until a receiver picks up one of its beams, so
+    until then this cycle searches as the cleaning cycles move, never reading the dock's pose
+    (nor the world's): straight runs at the cleaning speed; at an obstacle it backs up, then
+    either turns a random amount or follows the wall on its right (the right light bumper
+    rays, round a wall's end as into a doorway) for a random 6-20 s spell. The draws come
+    from the robot's seeded generator. Once any receiver (omni 17, left 52, right 53) has
+    seen a dock character it homes: to a point 0.45 m out on the dock's axis, turn to face the
+    dock, drive on slowly (a stand-in for the firmware's beam following, which is not
+    specified; it keeps homing if the beam is lost again). Gives up after 10 min."""
+
+    def __init__(self, name: str, started: float, rng: random.Random) -> None:
+        super().__init__(name, started, rng)
+        self.homing = False
+        self.follow_until = 0.0  # the wall-following spell's end (0: running straight)
+        self.wall_lost_at = 0.0
 
     def wheels(self, robot: Power) -> Wheels:
-        dock = robot.world.dock
         if robot.docked:
             return self._end("docked")
-        if dock is None or robot.time - self.started > 600.0:
+        if robot.time - self.started > SEEK_DOCK_LIMIT_S:
             return self._end("seek dock gave up")
-        omni = robot.values[17]
-        sees = omni and omni != VIRTUAL_WALL_CHARACTER
+        v = robot.values
+        if not self.homing:
+            if not (_FROM_DOCK[v[17]] or _FROM_DOCK[v[52]] or _FROM_DOCK[v[53]]):
+                return self._search(robot)
+            self.homing = True
+            self.phase = "approach"
+        dock = robot.world.dock
+        if dock is None:  # a beam seen once but no dock any more: nothing to home on
+            return _STOP
         target = dock.docked_pose
         fx, fy = math.cos(dock.facing), math.sin(dock.facing)
-        if self.phase in ("forward", "back", "turn") and not sees:
-            # search: head for where the firmware remembers the dock, bouncing off obstacles
-            if (
-                self.phase == "forward"
-                and robot.time >= self.wander_until
-                and not (robot.values[7] & BUMP_BITS or robot.blocked)
-            ):
-                sx, sy = target.x + 700.0 * fx, target.y + 700.0 * fy
-                return _steer_to(robot, sx, sy, 200.0)
-            return self._bounce(robot, 200.0)
-        if self.phase in ("forward", "back", "turn"):
-            self.phase = "approach"
         return self._home(robot, target, target.x + 450.0 * fx, target.y + 450.0 * fy)
+
+    def _search(self, robot: Power) -> Wheels:
+        """No beam seen yet: the cleaning cycles' moves from the robot's own sensors only."""
+        v = robot.values
+        now = robot.time
+        if self.phase == "follow":
+            if now >= self.follow_until or v[9] or v[10] or v[11] or v[12] or v[13]:
+                self.follow_until = 0.0
+                self.phase, self.phase_until = "back", now + 0.3
+            elif v[7] & BUMP_BITS or robot.blocked:
+                self.phase, self.phase_until = "follow_back", now + 0.55
+            else:
+                return self._follow(robot)
+        if self.phase == "follow_back":  # a bump while following: back off, turn left a little
+            if now < self.phase_until - 0.35:
+                return -150.0, -150.0
+            if now < self.phase_until:
+                return -150.0, 150.0
+            self.phase = "follow"
+            return self._follow(robot)
+        if self.phase == "forward":
+            if (
+                v[7] & BUMP_BITS
+                or v[9] or v[10] or v[11] or v[12]
+                or v[13]
+                or v[45] & _LIGHT_BUMPS_CENTRE
+                or robot.blocked
+            ):  # fmt: skip
+                self.phase, self.phase_until = "back", now + 0.3
+                # a wall (not a drop, not a beam): follow it for a spell, or turn away
+                if not (v[9] or v[10] or v[11] or v[12] or v[13]) and self.rng.random() < 0.5:
+                    self.phase_until = now + 0.15
+                    self.follow_until = now + self.rng.uniform(6.0, 20.0)
+            else:
+                return _SEARCH_SPEED, _SEARCH_SPEED
+        if self.phase == "back":
+            if now < self.phase_until:
+                return -150.0, -150.0
+            if self.follow_until:
+                self.phase = "follow"
+                self.wall_lost_at = now
+                return self._follow(robot)
+            self.phase = "turn"
+            self.turn_sign = self.rng.choice((-1.0, 1.0))
+            self.phase_until = now + self.rng.uniform(0.4, 1.4)
+        if self.phase == "turn":
+            if now < self.phase_until:
+                return -150.0 * self.turn_sign, 150.0 * self.turn_sign
+            self.phase = "forward"
+        return _SEARCH_SPEED, _SEARCH_SPEED
+
+    def _follow(self, robot: Power) -> Wheels:
+        """Wall on the right: turn left while something is close ahead, keep the right rays'
+        signal near a set point (about 5 cm from the wall), arc right round a wall's end;
+        3 s without a wall ends the spell."""
+        v = robot.values
+        now = robot.time
+        if max(v[47], v[48], v[49]) > _FOLLOW_AHEAD:
+            self.wall_lost_at = now
+            return -150.0, 150.0
+        side = v[51] + v[50] // 2
+        if side > _FOLLOW_SEEN:
+            self.wall_lost_at = now
+            err = max(-1.0, min(1.0, (side - _FOLLOW_SET) / _FOLLOW_SET))
+            return _FOLLOW_SPEED - 60.0 * err, _FOLLOW_SPEED + 60.0 * err
+        if now - self.wall_lost_at > 3.0:
+            self.phase, self.follow_until = "forward", 0.0
+            return _SEARCH_SPEED, _SEARCH_SPEED
+        return _FOLLOW_SPEED, 0.35 * _FOLLOW_SPEED
 
     def _home(self, robot: Power, target: Pose, ax: float, ay: float) -> Wheels:
         """In sight of the dock: to (ax, ay) on its axis, turn to face the docked pose
