@@ -70,33 +70,46 @@ class BuiltinCycle(ABC):
     def _bounce(self, robot: Power, speed: float) -> Wheels:
         """Forward until a bump, cliff, virtual wall or close light-bump; back up, turn a
         random amount, go on."""
-        v = robot.values
         now = robot.time
         if self.phase == "forward":
-            if (
-                v[7] & BUMP_BITS
-                or any(v[9:13])
-                or v[13]
-                or v[45] & _LIGHT_BUMPS_CENTRE
-                or robot.blocked
-            ):
+            if _in_the_way(robot):
                 self.phase, self.phase_until = "back", now + 0.3
             else:
                 return speed, speed
         if self.phase == "back":
             if now < self.phase_until:
                 return -150.0, -150.0
-            self.phase = "turn"
-            self.turn_sign = self.rng.choice((-1.0, 1.0))
-            self.phase_until = now + self.rng.uniform(0.4, 1.4)
+            self._start_turn(now)
         if self.phase == "turn":
-            if now < self.phase_until:
-                return -150.0 * self.turn_sign, 150.0 * self.turn_sign
-            self.phase = "forward"
+            turning = self._turning(now)
+            if turning is not None:
+                return turning
             # a draw that once timed Seek Dock's wander before aiming at the dock; kept so
             # that Clean and Max follow the same random sequence (and recordings) as before
             self.rng.uniform(1.5, 3.0)
         return speed, speed
+
+    def _start_turn(self, now: float) -> None:
+        """Turn on the spot a random way for a random 0.4-1.4 s (two draws, in this order)."""
+        self.phase = "turn"
+        self.turn_sign = self.rng.choice((-1.0, 1.0))
+        self.phase_until = now + self.rng.uniform(0.4, 1.4)
+
+    def _turning(self, now: float) -> Wheels | None:
+        """The turn's wheels, or None once it is over (the phase is then "forward")."""
+        if now < self.phase_until:
+            return -150.0 * self.turn_sign, 150.0 * self.turn_sign
+        self.phase = "forward"
+        return None
+
+
+def _in_the_way(robot: Power) -> bool:
+    """A bump, a cliff, a virtual wall or something close dead ahead: what ends a straight run
+    of the firmware's bounce."""
+    v = robot.values
+    return bool(
+        v[7] & BUMP_BITS or any(v[9:13]) or v[13] or v[45] & _LIGHT_BUMPS_CENTRE or robot.blocked
+    )
 
 
 class Spot(BuiltinCycle):
@@ -188,13 +201,7 @@ class SeekDock(BuiltinCycle):
             self.phase = "follow"
             return self._follow(robot)
         if self.phase == "forward":
-            if (
-                v[7] & BUMP_BITS
-                or v[9] or v[10] or v[11] or v[12]
-                or v[13]
-                or v[45] & _LIGHT_BUMPS_CENTRE
-                or robot.blocked
-            ):  # fmt: skip
+            if _in_the_way(robot):
                 self.phase, self.phase_until = "back", now + 0.3
                 # a wall (not a drop, not a beam): follow it for a spell, or turn away
                 if not (v[9] or v[10] or v[11] or v[12] or v[13]) and self.rng.random() < 0.5:
@@ -209,13 +216,11 @@ class SeekDock(BuiltinCycle):
                 self.phase = "follow"
                 self.wall_lost_at = now
                 return self._follow(robot)
-            self.phase = "turn"
-            self.turn_sign = self.rng.choice((-1.0, 1.0))
-            self.phase_until = now + self.rng.uniform(0.4, 1.4)
+            self._start_turn(now)
         if self.phase == "turn":
-            if now < self.phase_until:
-                return -150.0 * self.turn_sign, 150.0 * self.turn_sign
-            self.phase = "forward"
+            turning = self._turning(now)
+            if turning is not None:
+                return turning
         return _SEARCH_SPEED, _SEARCH_SPEED
 
     def _follow(self, robot: Power) -> Wheels:
