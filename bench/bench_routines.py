@@ -30,6 +30,7 @@ approach: other episodes, other lengths), so the unit is the tick, not the episo
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import statistics
@@ -37,7 +38,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 from roomba_bt.evaluate import episode_specs, run_episodes
@@ -209,17 +210,26 @@ def archive(commit: str, into: Path) -> str | None:
     return None
 
 
+@contextlib.contextmanager
+def archived(commit: str, prefix: str) -> Iterator[Path | None]:
+    """``commit``'s package and missions in a temporary folder, removed on leaving; None
+    after printing why the comparison is skipped. What ``--against`` needs here and in
+    :mod:`bench.icount`, so both skip the same way for the same reasons."""
+    with tempfile.TemporaryDirectory(prefix=prefix) as tmp:
+        reason = archive(commit, Path(tmp))
+        if reason is not None:
+            print(f"against {commit}: skipped ({reason})")
+        yield None if reason is not None else Path(tmp)
+
+
 def _per_tick_us(run: dict[str, float], key: str) -> float:
     return run[key] / run["ticks"] * 1e6
 
 
 def against(commit: str, rounds: int = 5) -> int:
     """Print each episode kind's mission + runtime cost per tick, ``commit``'s and this tree's."""
-    with tempfile.TemporaryDirectory(prefix="bench-against-") as tmp:
-        old = Path(tmp)
-        reason = archive(commit, old)
-        if reason is not None:
-            print(f"against {commit}: skipped ({reason})")
+    with archived(commit, "bench-against-") as old:
+        if old is None:
             return 0
         print(
             f"mission + runtime cost per tick, {commit} against this tree: child processes "

@@ -31,7 +31,6 @@ import re
 import shutil
 import subprocess
 import sys
-import tempfile
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -151,13 +150,10 @@ def _against_cell(code: Path, entry: tuple[str, str, int, dict[str, object]]) ->
 
 def against(commit: str) -> int:
     """Print the mission + runtime instructions per tick of ``commit`` and of this tree."""
-    from bench.bench_routines import archive
+    from bench.bench_routines import archived
 
-    with tempfile.TemporaryDirectory(prefix="icount-against-") as tmp:
-        old = Path(tmp)
-        reason = archive(commit, old)
-        if reason is not None:
-            print(f"against {commit}: skipped ({reason})")
+    with archived(commit, "icount-against-") as old:
+        if old is None:
             return 0
         cells = [
             (side, code, entry)
