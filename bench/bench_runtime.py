@@ -43,6 +43,7 @@ from roomba_bt.oi.stream import StreamParser
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.testing import StubRobot
 from roomba_bt.runtime.loop import MissionRunner, stream_request
+from roomba_bt.transport.testing import NullTransport
 
 if TYPE_CHECKING:
     from roomba_bt.sim import Simulator
@@ -158,11 +159,14 @@ def reaction_latency(tmp: Path, seconds: float = 15.0) -> list[float]:
     return latencies
 
 
-class InstantFrames:
+class InstantFrames(NullTransport):
     """A transport that answers the start-up handshake and then hands out pre-built stream
     frames instantly, one per read, on a clock that advances 15 ms per frame."""
 
+    name = "instant"
+
     def __init__(self, packets: tuple[int, ...], count: int) -> None:
+        super().__init__()
         layout = layout_for(packets, CREATE2, True)
         values = {p: 0 for p in range(7, 59)}
         values[35] = 1
@@ -170,8 +174,6 @@ class InstantFrames:
         values[25] = 2000
         self.frame = layout.stream_frame(values)
         self.count = count
-        self.name = "instant"
-        self._now = 0.0
         self._pending = bytearray()
         self.sent = 0
 
@@ -187,24 +189,11 @@ class InstantFrames:
             self._pending.clear()
             return out
         if self.sent >= self.count:
-            self._now += timeout
+            self.clock += timeout
             return b""
         self.sent += 1
-        self._now += 0.015
+        self.clock += 0.015
         return self.frame
-
-    def set_baud(self, baud: int) -> None:
-        pass
-
-    def close(self) -> None:
-        pass
-
-    @property
-    def is_open(self) -> bool:
-        return True
-
-    def now(self) -> float:
-        return self._now
 
 
 class _OneLeaf:

@@ -14,6 +14,7 @@ from roomba_bt.oi.modes import DRIVING_MODES
 from roomba_bt.oi.profiles import PROFILES
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.errors import ModeError
+from roomba_bt.transport.testing import RecordingTransport
 
 COMMANDS: list[Command] = [
     oi.start(),
@@ -32,29 +33,6 @@ COMMANDS: list[Command] = [
     oi.query_list([7, 35]),
     oi.halt(),
 ]
-
-
-class RecordingTransport:
-    name = "recording"
-    is_open = True
-
-    def __init__(self) -> None:
-        self.writes: list[bytes] = []
-
-    def write(self, data: bytes) -> None:
-        self.writes.append(bytes(data))
-
-    def read(self, timeout: float) -> bytes:
-        return b""
-
-    def set_baud(self, baud: int) -> None:
-        pass
-
-    def close(self) -> None:
-        pass
-
-    def now(self) -> float:
-        return 0.0
 
 
 @settings(max_examples=150, deadline=None)

@@ -1,0 +1,58 @@
+"""Transports for tests and benchmarks: no port, no robot, a clock only the caller moves.
+
+:class:`NullTransport` takes bytes and drops them and never has any to read: what a
+:class:`~roomba_bt.robot.connection.Connection` costs, or refuses, with nothing on the line.
+:class:`RecordingTransport` also keeps every write, for tests that look at the wire.
+Subclasses give ``read`` something to hand out (a benchmark's stream frames).
+
+They ship in the package, beside the contract they honour, the way
+:mod:`roomba_bt.robot.testing` ships the robot handle that behaviour tests tick against: the
+test suite and ``bench/`` use the same double, and neither has to import the other (the
+tests' folders are not an importable package once installed).
+"""
+
+from __future__ import annotations
+
+__all__ = ["NullTransport", "RecordingTransport"]
+
+
+class NullTransport:
+    """A :class:`~roomba_bt.transport.base.Transport` with nothing at the far end.
+
+    ``write`` drops the bytes, ``read`` returns ``b""`` at once, ``set_baud`` has no port to
+    change; ``now()`` is :attr:`clock`, 0.0 until the caller (or a subclass) moves it.
+    """
+
+    name = "null"
+
+    def __init__(self) -> None:
+        self.clock = 0.0
+        self.is_open = True
+
+    def write(self, data: bytes) -> None:
+        """Nobody listens: the bytes are dropped."""
+
+    def read(self, timeout: float) -> bytes:
+        return b""
+
+    def set_baud(self, baud: int) -> None:
+        """No port, so no rate to change."""
+
+    def close(self) -> None:
+        self.is_open = False
+
+    def now(self) -> float:
+        return self.clock
+
+
+class RecordingTransport(NullTransport):
+    """A :class:`NullTransport` that keeps each write, as written, in :attr:`writes`."""
+
+    name = "recording"
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.writes: list[bytes] = []
+
+    def write(self, data: bytes) -> None:
+        self.writes.append(bytes(data))
