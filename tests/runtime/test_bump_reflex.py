@@ -15,7 +15,9 @@ from roomba_bt.oi.stream import StreamParser
 from roomba_bt.runtime.loop import stream_request
 from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome, RunSummary
-from roomba_bt.sim import SimLink, Simulator, load_world
+from roomba_bt.sim import Simulator, load_world
+
+from .simrun import TapLink
 
 FORWARD_UNTIL_BUMP = """
 mission: forward-until-bump
@@ -32,10 +34,11 @@ BACK = commands.drive(-100, commands.Radius.STRAIGHT).data
 SLOT = 0.015
 
 
-class BumpTap(SimLink):
-    """Keeps every write with the simulated time; notes when a frame first showed a bump;
-    with ``forge_at``, once after that many seconds appends to a read a copy of its last
-    frame with the right bumper pressed and a right checksum (two cancelling bit flips)."""
+class BumpTap(TapLink):
+    """Every write with the simulated time (:class:`TapLink`); notes when a frame first
+    showed a bump; with ``forge_at``, once after that many seconds appends to a read a copy of
+    its last frame with the right bumper pressed and a right checksum (two cancelling bit
+    flips)."""
 
     def __init__(self, simulator: Simulator, packets: tuple[int, ...], forge_at: float = 0.0):
         super().__init__(simulator)
@@ -44,11 +47,6 @@ class BumpTap(SimLink):
         self.forge_at = forge_at
         self.forged_at: float | None = None
         self.bumped_at: float | None = None
-        self.writes: list[tuple[float, bytes]] = []
-
-    def write(self, data: bytes) -> None:
-        self.writes.append((self.simulator.time, bytes(data)))
-        super().write(data)
 
     def read(self, timeout: float) -> bytes:
         data = super().read(timeout)
