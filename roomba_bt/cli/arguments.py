@@ -1,7 +1,8 @@
 """Arguments shared by the commands: bad values become argparse's usage error (exit 2)
 with what was found and what is allowed, never a traceback from deep inside; the mission's
 ``-p NAME=VALUE`` and ``--timeout``, read once for every command that takes them; and
-:func:`add_command`, which declares each subcommand from the function that runs it."""
+:func:`add_command`, which declares each subcommand with its texts and the function that runs
+it."""
 
 from __future__ import annotations
 
@@ -22,12 +23,14 @@ if TYPE_CHECKING:
 
 
 def add_command(
-    sub: Any, name: str, command: Callable[[argparse.Namespace], int]
+    sub: Any, name: str, command: Callable[[argparse.Namespace], int], text: str
 ) -> argparse.ArgumentParser:
-    """The subcommand ``name``, which runs ``command``; its texts are ``command``'s docstring:
-    the first line is its entry in ``roomba-bt --help``, the rest (if any) the description
-    its own ``--help`` opens with (argparse refills the lines)."""
-    summary, _, details = inspect.cleandoc(command.__doc__ or "").partition("\n")
+    """The subcommand ``name``, which runs ``command``. ``text`` is laid out like a docstring:
+    its first line is the entry in ``roomba-bt --help``, the rest (if any) the description its
+    own ``--help`` opens with (argparse refills the lines). A string given here, not
+    ``command``'s docstring, because ``python -OO`` strips docstrings and left the listing
+    blank."""
+    summary, _, details = inspect.cleandoc(text).partition("\n")
     parser: argparse.ArgumentParser = sub.add_parser(
         name, help=summary, description=details.strip() or None
     )

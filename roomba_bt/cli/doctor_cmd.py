@@ -73,7 +73,19 @@ class DoctorExit(IntEnum):
 
 
 def register(sub: Any) -> None:
-    parser = add_command(sub, "doctor", doctor_command)
+    parser = add_command(
+        sub,
+        "doctor",
+        doctor_command,
+        """find the robot on a port and say what it is, step by step
+
+        Find the robot on --port: the port, the baud rate (115200, then 19200), a BRC wake pulse if
+        it is silent, Start, its profile, battery, charging, OI mode, a stream round-trip, whether
+        the shipped missions' streams fit the rate, and (with --allow-reset) its firmware. Exit
+        codes: 0 found, 2 usage, 3 the port could not be opened, 5 nothing answered, 6 it answered
+        but a later step failed, 130 interrupted.
+        """,
+    )
     parser.add_argument(
         "--port", required=True, help="serial device or URL (/dev/ttyUSB0, rfc2217://, socket://)"
     )
@@ -124,14 +136,6 @@ class _Failed(Exception):
 
 
 def doctor_command(args: argparse.Namespace) -> int:
-    """find the robot on a port and say what it is, step by step
-
-    Find the robot on --port: the port, the baud rate (115200, then 19200), a BRC wake pulse if
-    it is silent, Start, its profile, battery, charging, OI mode, a stream round-trip, whether
-    the shipped missions' streams fit the rate, and (with --allow-reset) its firmware. Exit
-    codes: 0 found, 2 usage, 3 the port could not be opened, 5 nothing answered, 6 it answered
-    but a later step failed, 130 interrupted.
-    """
     from roomba_bt.transport import SerialTransport, TransportError
 
     report = Report(sys.stdout)

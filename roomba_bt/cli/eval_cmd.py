@@ -51,7 +51,18 @@ if TYPE_CHECKING:  # the evaluation is imported when it runs: the CLI starts fas
 
 
 def register(sub: Any) -> None:
-    ev = add_command(sub, "eval", eval_command)
+    ev = add_command(
+        sub,
+        "eval",
+        eval_command,
+        """run missions many times on the simulator: success rates
+
+        Run MISSION in N seeded episodes on the simulator's virtual clock and report the success
+        rate (95% Wilson interval), median and p90 time, bumps and the failure reasons. Exit codes:
+        0 done, 1 --min-rate not reached, 2 invalid input, 3 --scheduler unreachable, 4 a behaviour
+        raised in an episode, 130 interrupted (what finished is summarised).
+        """,
+    )
     ev.add_argument(
         "missions",
         nargs="+",
@@ -226,13 +237,6 @@ def variants(args: argparse.Namespace, params: dict[str, str]) -> list[Variant] 
 
 
 def eval_command(args: argparse.Namespace) -> int:
-    """run missions many times on the simulator: success rates
-
-    Run MISSION in N seeded episodes on the simulator's virtual clock and report the success
-    rate (95% Wilson interval), median and p90 time, bumps and the failure reasons. Exit codes:
-    0 done, 1 --min-rate not reached, 2 invalid input, 3 --scheduler unreachable, 4 a behaviour
-    raised in an episode, 130 interrupted (what finished is summarised).
-    """
     from roomba_bt.evaluate import summarize
     from roomba_bt.evaluate.parallel import Engine
 

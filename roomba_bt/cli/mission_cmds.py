@@ -27,25 +27,71 @@ from roomba_bt.runtime.summary import ExitCode
 
 
 def register(sub: Any) -> None:
-    validate = add_command(sub, "validate", validate_command)
+    validate = add_command(
+        sub,
+        "validate",
+        validate_command,
+        """check mission files before anything moves
+
+        Check each FILE: names, parameters, units, ranges, subtrees, includes, blackboard keys, OI
+        modes of every actuator, and the sensor stream budget. Every error is printed as
+        file:line:col: message. Exit 0 if all are valid, 2 if not.
+        """,
+    )
     validate.add_argument(
         "files", nargs="+", metavar="FILE", help="a mission file, or a shipped mission's name"
     )
     _common(validate)
 
-    show = add_command(sub, "show", show_command)
+    show = add_command(
+        sub,
+        "show",
+        show_command,
+        """print a mission's tree
+
+        Print the compiled tree of FILE.
+        """,
+    )
     show.add_argument("file", metavar="FILE", help="a mission file, or a shipped mission's name")
     _common(show)
     show.add_argument("--dot", metavar="OUT.dot", help="also write the tree as Graphviz dot")
     show.add_argument("--svg", metavar="OUT.svg", help="also write the tree as SVG (needs dot)")
 
-    add_command(sub, "missions", missions_command)
+    add_command(
+        sub,
+        "missions",
+        missions_command,
+        """list the shipped missions with their parameters
 
-    behaviours = add_command(sub, "behaviours", behaviours_command)
+        List the missions shipped with roomba-bt (run one by name: roomba-bt run dock), each with
+        its description and parameters (type, default, doc), and the shipped library a mission can
+        include (include: [roomba-bt:lib/docking.yaml]).
+        """,
+    )
+
+    behaviours = add_command(
+        sub,
+        "behaviours",
+        behaviours_command,
+        """list every behaviour with its parameters
+
+        List the built-in and plugin behaviours: parameters (type, unit, range, default), sensor
+        packets read, OI modes needed.
+        """,
+    )
     behaviours.add_argument("names", nargs="*", help="only these behaviours")
     behaviours.add_argument("--json", action="store_true", help="machine-readable output")
 
-    schema = add_command(sub, "schema", schema_command)
+    schema = add_command(
+        sub,
+        "schema",
+        schema_command,
+        """print the JSON Schema of mission files
+
+        Print the JSON Schema of mission files (roomba-bt schema > mission.schema.json), generated
+        from the behaviour declarations.
+        """,
+    )
     schema.add_argument(
         "--plugin-file",
         action="append",
@@ -73,12 +119,6 @@ def _params(items: list[str]) -> dict[str, str] | None:
 
 
 def validate_command(args: argparse.Namespace) -> int:
-    """check mission files before anything moves
-
-    Check each FILE: names, parameters, units, ranges, subtrees, includes, blackboard keys, OI
-    modes of every actuator, and the sensor stream budget. Every error is printed as
-    file:line:col: message. Exit 0 if all are valid, 2 if not.
-    """
     from roomba_bt.mission import validate_files
 
     params = _params(args.param)
@@ -108,10 +148,6 @@ def validate_command(args: argparse.Namespace) -> int:
 
 
 def show_command(args: argparse.Namespace) -> int:
-    """print a mission's tree
-
-    Print the compiled tree of FILE.
-    """
     import py_trees
 
     from roomba_bt.mission import compile_mission
@@ -152,12 +188,6 @@ def show_command(args: argparse.Namespace) -> int:
 
 
 def missions_command(args: argparse.Namespace) -> int:
-    """list the shipped missions with their parameters
-
-    List the missions shipped with roomba-bt (run one by name: roomba-bt run dock), each with
-    its description and parameters (type, default, doc), and the shipped library a mission can
-    include (include: [roomba-bt:lib/docking.yaml]).
-    """
     from roomba_bt.mission.shipped import describe_shipped, shipped_library_files
 
     for entry in describe_shipped():
@@ -239,11 +269,6 @@ def _leads_to(decl: Any) -> str | None:
 
 
 def behaviours_command(args: argparse.Namespace) -> int:
-    """list every behaviour with its parameters
-
-    List the built-in and plugin behaviours: parameters (type, unit, range, default), sensor
-    packets read, OI modes needed.
-    """
     from roomba_bt.behaviours import default_registry
 
     registry = default_registry()
@@ -297,11 +322,6 @@ def behaviours_command(args: argparse.Namespace) -> int:
 
 
 def schema_command(args: argparse.Namespace) -> int:
-    """print the JSON Schema of mission files
-
-    Print the JSON Schema of mission files (roomba-bt schema > mission.schema.json), generated
-    from the behaviour declarations.
-    """
     from roomba_bt.behaviours import default_registry
     from roomba_bt.mission.schema import mission_schema
 

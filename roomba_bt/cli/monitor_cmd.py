@@ -240,7 +240,16 @@ def _shown(path: Path) -> str:
 
 # -------------------------------------------------------------------- roomba-bt monitor
 def register(sub: Any) -> None:
-    monitor = add_command(sub, "monitor", monitor_command)
+    monitor = add_command(
+        sub,
+        "monitor",
+        monitor_command,
+        """the live monitor's page for a recorded run (run --record)
+
+        Replay RECORD (written by run --record) through its mission and serve the monitor page for
+        it: scrub the timeline, play at any speed. Ctrl-C ends it.
+        """,
+    )
     monitor.add_argument("record", help="a file written by run --record")
     monitor.add_argument(
         "--monitor", type=monitor_address, default=None, metavar="[HOST:]PORT",
@@ -251,11 +260,6 @@ def register(sub: Any) -> None:
 
 
 def monitor_command(args: argparse.Namespace) -> int:
-    """the live monitor's page for a recorded run (run --record)
-
-    Replay RECORD (written by run --record) through its mission and serve the monitor page for
-    it: scrub the timeline, play at any speed. Ctrl-C ends it.
-    """
     from roomba_bt.cli.arguments import parse_params
     from roomba_bt.cli.run_cmd import load, stream_packets
     from roomba_bt.oi.profiles import get_profile

@@ -42,7 +42,17 @@ def register(sub: Any) -> None:
 
 
 def _add_run_parser(sub: Any) -> None:
-    run = add_command(sub, "run", run_command)
+    run = add_command(
+        sub,
+        "run",
+        run_command,
+        """run a mission on a robot (--port) or the simulator
+
+        Run MISSION. Without --port it runs on the built-in simulator (real time; --fast on the
+        virtual clock). Exit codes: 0 succeeded, 1 failed or timed out, 2 invalid mission or usage,
+        3 connection or stream failure, 4 a behaviour raised an exception, 130 interrupted.
+        """,
+    )
     run.add_argument("mission", help="mission YAML file, or a shipped mission's name (dock)")
     add_far_end_options(
         run,
@@ -101,7 +111,18 @@ def _add_session_options(run: argparse.ArgumentParser) -> None:
 
 
 def _add_replay_parser(sub: Any) -> None:
-    replay = add_command(sub, "replay", replay_command)
+    replay = add_command(
+        sub,
+        "replay",
+        replay_command,
+        """play a --record file back through the tree
+
+        Feed the recorded sensor bytes back through the same parser and tree and compare the
+        commands the tree writes with the recorded ones. Exit codes: 0 the same bytes, 1 at the
+        first difference (its mission time and both commands are printed), 2 invalid record or
+        mission, or a mission reading packets the record lacks.
+        """,
+    )
     replay.add_argument("record", help="a file written by run --record")
     replay.add_argument("--mission", help="mission to replay against (default: the recorded one)")
     add_param_option(replay)
@@ -142,12 +163,6 @@ def stream_packets(mission: Any, baud: int) -> tuple[int, ...]:
 
 
 def run_command(args: argparse.Namespace) -> int:
-    """run a mission on a robot (--port) or the simulator
-
-    Run MISSION. Without --port it runs on the built-in simulator (real time; --fast on the
-    virtual clock). Exit codes: 0 succeeded, 1 failed or timed out, 2 invalid mission or usage,
-    3 connection or stream failure, 4 a behaviour raised an exception, 130 interrupted.
-    """
     from roomba_bt.cli.links import auto_baud, far_end
     from roomba_bt.robot.errors import ConnectionFailed
     from roomba_bt.runtime.display import observer_for
@@ -390,13 +405,6 @@ def _plot(simulator: Any, path: str) -> str:
 
 
 def replay_command(args: argparse.Namespace) -> int:
-    """play a --record file back through the tree
-
-    Feed the recorded sensor bytes back through the same parser and tree and compare the
-    commands the tree writes with the recorded ones. Exit codes: 0 the same bytes, 1 at the
-    first difference (its mission time and both commands are printed), 2 invalid record or
-    mission, or a mission reading packets the record lacks.
-    """
     from roomba_bt.runtime.recording import RecordError, load_record
     from roomba_bt.runtime.stack import replay_record
 

@@ -33,7 +33,7 @@ def group_for(baud: int) -> int | None:
 
 
 def register(sub: Any) -> None:
-    parser = add_command(sub, "sensors", sensors_command)
+    parser = add_command(sub, "sensors", sensors_command, """show every decoded sensor, live""")
     add_far_end_options(
         parser,
         port_help="serial device or URL; default: the built-in simulator",
@@ -71,7 +71,6 @@ def _show(value: object) -> str:
 
 
 def sensors_command(args: argparse.Namespace) -> int:
-    """show every decoded sensor, live"""
     from roomba_bt.cli.links import auto_baud, far_end, make_simulator
     from roomba_bt.robot.errors import ConnectionFailed, LinkDown
     from roomba_bt.sim import WorldError

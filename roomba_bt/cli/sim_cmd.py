@@ -51,7 +51,16 @@ FAULT_OPTIONS: tuple[tuple[str, type, object, str], ...] = (
 
 
 def register(sub: Any) -> None:
-    parser = add_command(sub, "sim", run_sim)
+    parser = add_command(
+        sub,
+        "sim",
+        run_sim,
+        """serve the simulated robot on a pty or a TCP socket
+
+        Serve a simulated Roomba / Create 2 in real time. The first stdout line is the pty path or
+        the socket:// URL to open.
+        """,
+    )
     where = parser.add_mutually_exclusive_group(required=True)
     where.add_argument("--pty", action="store_true", help="serve on a new pseudo-terminal")
     where.add_argument("--tcp", metavar="HOST:PORT", help="serve on a TCP socket (port 0: any)")
@@ -96,11 +105,6 @@ def _fail(message: str, code: ExitCode) -> int:
 
 
 def run_sim(args: argparse.Namespace) -> int:
-    """serve the simulated robot on a pty or a TCP socket
-
-    Serve a simulated Roomba / Create 2 in real time. The first stdout line is the pty path or
-    the socket:// URL to open.
-    """
     simulator = _simulator(args)
     if isinstance(simulator, int):
         return simulator

@@ -171,7 +171,10 @@ def _battery_lines(results: dict[str, list[EpisodeResult]]) -> list[str]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else "")
+    parser = argparse.ArgumentParser(
+        description="The cleaning figures of docs/routines.md: clean.yaml against the "
+        "firmware's Clean."
+    )
     parser.add_argument("--docs", type=Path, required=True, help="the docs folder")
     parser.add_argument("--missions", type=Path, required=True, help="the missions folder")
     parser.add_argument("--runs", type=int, default=50, help="living-room starts (50)")

@@ -4,12 +4,15 @@
 from __future__ import annotations
 
 import argparse
+import os
 import re
+import subprocess
+import sys
 from collections.abc import Callable
 
 import pytest
 
-from roomba_bt.cli import main
+from roomba_bt.cli import build_parser, main
 from roomba_bt.cli.arguments import add_command, baud_rate, parse_params, parse_timeout, seconds
 from roomba_bt.oi.encode import BAUD_CODES
 
@@ -82,24 +85,27 @@ def test_bad_timeout_is_a_message(text: str, message: str) -> None:
 
 
 def _launch(args: argparse.Namespace) -> int:
-    """launch the thing
-
-    Launch it at --speed, and report
-    where it landed.
-    """
     return 0
 
 
 def _plain(args: argparse.Namespace) -> int:
-    """do it"""
     return 0
 
 
-def test_a_command_is_declared_from_its_function() -> None:
+def test_a_command_is_declared_with_its_texts() -> None:
     parser = argparse.ArgumentParser(prog="roomba-bt")
     sub = parser.add_subparsers()
-    launch = add_command(sub, "launch", _launch)
-    plain = add_command(sub, "plain", _plain)
+    launch = add_command(
+        sub,
+        "launch",
+        _launch,
+        """launch the thing
+
+        Launch it at --speed, and report
+        where it landed.
+        """,
+    )
+    plain = add_command(sub, "plain", _plain, "do it")
     listing = parser.format_help()
     assert re.search(r"launch +launch the thing", listing) and re.search(r"plain +do it", listing)
     assert launch.description == "Launch it at --speed, and report\nwhere it landed."
@@ -107,3 +113,26 @@ def test_a_command_is_declared_from_its_function() -> None:
     assert plain.description is None
     assert parser.parse_args(["launch"]).func is _launch
     assert parser.parse_args(["plain"]).func is _plain
+
+
+def _help_under_oo(*args: str) -> str:
+    """``roomba-bt ARGS --help`` in a ``python -OO`` process (docstrings stripped)."""
+    done = subprocess.run(
+        [sys.executable, "-OO", "-m", "roomba_bt.cli", *args, "--help"],
+        capture_output=True, text=True, timeout=120, check=True,
+        env={**os.environ, "COLUMNS": "100"},
+    )  # fmt: skip
+    return done.stdout
+
+
+def test_the_help_survives_python_oo(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``-OO`` strips docstrings: the listing and a command's description must not come from
+    them (they did, and every command's line in ``roomba-bt --help`` was blank)."""
+    monkeypatch.setenv("COLUMNS", "100")
+    parser = build_parser()
+    listing = _help_under_oo()
+    assert listing == parser.format_help()
+    commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    for name in commands.choices:
+        assert re.search(rf"^    {name} +\S", listing, re.MULTILINE), name
+    assert "Exit codes: 0 succeeded" in _help_under_oo("run")
