@@ -17,9 +17,10 @@ import pytest
 
 from roomba_bt.oi.profiles import CREATE2, RobotProfile, get_profile
 from roomba_bt.robot.connection import Connection
+from roomba_bt.sim.server import PtyEndpoint, TcpEndpoint
 
-from .fake_robot import FakeRobot, PtyEndpoint, TcpEndpoint
-from .sim_backend import SimRobot, make_sim_link, sim_pty_server, simulator_missing
+from .fake_robot import FakeRobot
+from .sim_backend import SimRobot, make_sim_link, sim_pty_server
 
 REAL_PORT_ENV = "ROOMBA_BT_PORT"
 
@@ -53,9 +54,9 @@ class Link:
 
 
 def make_fake_link(kind: str, profile: RobotProfile = CREATE2, **robot_kwargs: Any) -> Link:
-    endpoint = PtyEndpoint() if kind == "pty" else TcpEndpoint()
+    endpoint = PtyEndpoint() if kind == "pty" else TcpEndpoint("127.0.0.1", 0)
     robot = FakeRobot(endpoint, profile, **robot_kwargs)
-    return Link(kind, endpoint.url, robot, profile)
+    return Link(kind, endpoint.address, robot, profile)
 
 
 def _close(link: Link) -> None:
@@ -63,9 +64,6 @@ def _close(link: Link) -> None:
         connection.close()
     if link.robot is not None:
         link.robot.stop()
-        endpoint = getattr(link.robot, "endpoint", None)
-        if isinstance(endpoint, PtyEndpoint):
-            endpoint.close_slave()
 
 
 @pytest.fixture
@@ -111,9 +109,6 @@ def link(request: pytest.FixtureRequest, fake_links: Any) -> Iterator[Link]:
         _close(real)
         return
     if kind in ("sim", "sim-pty"):
-        missing = simulator_missing()
-        if missing is not None:
-            pytest.skip(f"simulator backend: {missing}")
         if kind == "sim":
             transport, robot = make_sim_link(CREATE2)
             sim = Link("sim", transport.name, robot, CREATE2)

@@ -1,6 +1,10 @@
 """A minimal robot that speaks OI bytes on the far end of a pty or a TCP socket.
 
-Not the simulator: no world, no physics. It decodes the commands it receives with the
+Not the simulator: no world, no physics; but the same line. Its far end is one of the
+simulator server's endpoints (:class:`~roomba_bt.sim.server.PtyEndpoint`,
+:class:`~roomba_bt.sim.server.TcpEndpoint`: ``endpoint.address`` is what the connection
+opens), so the contract tests meet the pty and the socket as ``roomba-bt sim`` serves them,
+and the robot's side of a line is written once. It decodes the commands it receives with the
 protocol layer's own table (``decode_command``), records every byte and, for every command,
 the mode it was in when the command arrived; applies mode commands the way the spec says;
 answers Sensors (142) and Query List (149) from :attr:`FakeRobot.values`; streams frames every
@@ -10,13 +14,8 @@ go silent, hang up.
 
 from __future__ import annotations
 
-import contextlib
-import os
-import select
-import socket
 import threading
 import time
-import tty
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -25,113 +24,9 @@ from roomba_bt.oi.errors import OIError
 from roomba_bt.oi.frames import layout_for
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.profiles import CREATE2, RobotProfile
+from roomba_bt.sim.server import Endpoint
 
 SLOT = 0.015
-
-
-class Endpoint:
-    """The robot's side of a link: a file descriptor it can select on, read and write."""
-
-    name = "endpoint"
-
-    def fileno(self) -> int:
-        raise NotImplementedError
-
-    def recv(self) -> bytes:
-        raise NotImplementedError
-
-    def send(self, data: bytes) -> None:
-        raise NotImplementedError
-
-    def close(self) -> None:
-        raise NotImplementedError
-
-    def ready(self) -> bool:
-        """Block until the link is usable (a TCP client connected); False if closed."""
-        return True
-
-
-class PtyEndpoint(Endpoint):
-    """The master side of ``os.openpty()``; :attr:`url` is the slave device path."""
-
-    name = "pty"
-
-    def __init__(self) -> None:
-        self.master, self.slave = os.openpty()
-        tty.setraw(self.slave)
-        self.url = os.ttyname(self.slave)
-        self._closed = False
-
-    def fileno(self) -> int:
-        return self.master
-
-    def recv(self) -> bytes:
-        try:
-            return os.read(self.master, 4096)
-        except OSError:  # EIO: every slave handle closed
-            return b""
-
-    def send(self, data: bytes) -> None:
-        os.write(self.master, data)
-
-    def close(self) -> None:
-        if not self._closed:
-            self._closed = True
-            os.close(self.master)
-
-    def close_slave(self) -> None:
-        with contextlib.suppress(OSError):
-            os.close(self.slave)
-
-
-class TcpEndpoint(Endpoint):
-    """A listener on 127.0.0.1; :attr:`url` is ``socket://127.0.0.1:port``."""
-
-    name = "tcp"
-
-    def __init__(self) -> None:
-        self.listener = socket.create_server(("127.0.0.1", 0))
-        self.url = f"socket://127.0.0.1:{self.listener.getsockname()[1]}"
-        self.conn: socket.socket | None = None
-        self._closed = False
-
-    def ready(self) -> bool:
-        self.listener.settimeout(0.1)
-        while not self._closed:
-            try:
-                self.conn, _ = self.listener.accept()
-            except TimeoutError:
-                continue
-            except OSError:
-                return False
-            self.conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-            return True
-        return False
-
-    def fileno(self) -> int:
-        assert self.conn is not None
-        return self.conn.fileno()
-
-    def recv(self) -> bytes:
-        assert self.conn is not None
-        try:
-            return self.conn.recv(4096)
-        except OSError:
-            return b""
-
-    def send(self, data: bytes) -> None:
-        assert self.conn is not None
-        self.conn.sendall(data)
-
-    def close(self) -> None:
-        if self._closed:
-            return
-        self._closed = True
-        if self.conn is not None:
-            with contextlib.suppress(OSError):
-                self.conn.shutdown(socket.SHUT_RDWR)
-            self.conn.close()
-        self.listener.close()
 
 
 @dataclass(frozen=True)
@@ -143,7 +38,32 @@ class Received:
     time: float
 
 
-class FakeRobot:
+class RobotDouble:
+    """What the contract tests read from either robot double (:class:`FakeRobot` here,
+    ``SimRobot`` on the simulator): every byte the host wrote, each command with the mode it
+    arrived in, and whether the stream is withheld (``muted``: the link stays, no frames)."""
+
+    def __init__(self) -> None:
+        self.received = bytearray()
+        self.commands: list[Received] = []
+        self.muted = False
+        self.closed = threading.Event()
+        self._lock = threading.RLock()
+
+    def opcodes(self) -> list[int]:
+        with self._lock:
+            return [r.command.opcode for r in self.commands]
+
+    def actuator_commands_outside_safe_or_full(self) -> list[Received]:
+        with self._lock:
+            return [
+                r
+                for r in self.commands
+                if r.command.spec.modes <= DRIVING_MODES and r.mode not in DRIVING_MODES
+            ]
+
+
+class FakeRobot(RobotDouble):
     """See the module docstring. Use as a context manager (starts and stops its thread)."""
 
     def __init__(
@@ -154,23 +74,19 @@ class FakeRobot:
         plus_one: bool = False,
         silent: bool = False,
     ) -> None:
+        super().__init__()
         self.endpoint = endpoint
         self.profile = profile
         self.plus_one = plus_one
         self.silent = silent
         self.mode = OIMode.OFF
         self.values: dict[int, int] = {}
-        self.received = bytearray()
-        self.commands: list[Received] = []
         self.unknown_bytes = 0
         self.streaming = False
         self.stream_ids: tuple[int, ...] = ()
-        self.muted = False  # True: keep the link, send no frames ("the stream stopped")
         self.frames_sent = 0
-        self.closed = threading.Event()
         self._pending = bytearray()
         self._inject = bytearray()
-        self._lock = threading.RLock()
         self._changed = threading.Condition(self._lock)
         self._running = True
         self._thread = threading.Thread(target=self._run, name="fake robot", daemon=True)
@@ -210,7 +126,7 @@ class FakeRobot:
     def hang_up(self) -> None:
         """The cable is pulled: the link closes under the connection."""
         self._running = False
-        self.endpoint.close()
+        self.endpoint.hang_up()
 
     def wait_until(self, predicate: Callable[[FakeRobot], bool], timeout: float = 5.0) -> bool:
         deadline = time.monotonic() + timeout
@@ -222,18 +138,6 @@ class FakeRobot:
                 self._changed.wait(left)
         return True
 
-    def opcodes(self) -> list[int]:
-        with self._lock:
-            return [r.command.opcode for r in self.commands]
-
-    def actuator_commands_outside_safe_or_full(self) -> list[Received]:
-        with self._lock:
-            return [
-                r
-                for r in self.commands
-                if r.command.spec.modes <= DRIVING_MODES and r.mode not in DRIVING_MODES
-            ]
-
     # ---------------------------------------------------------------- the robot
     def _reported_mode(self) -> int:
         return int(self.mode) + (1 if self.plus_one else 0)
@@ -244,21 +148,15 @@ class FakeRobot:
         return values
 
     def _run(self) -> None:
-        if not self.endpoint.ready():
-            self.closed.set()
-            return
         next_frame = time.monotonic() + SLOT
         try:
             while self._running:
                 wait = max(0.0, next_frame - time.monotonic())
                 try:
-                    ready, _, _ = select.select([self.endpoint], [], [], wait)
-                except (OSError, ValueError):
+                    data = self.endpoint.wait_read(wait)
+                except (OSError, ValueError):  # closed under the read by stop or hang_up
                     break
-                if ready:
-                    data = self.endpoint.recv()
-                    if not data:
-                        break
+                if data:
                     self._take(data)
                 now = time.monotonic()
                 if now >= next_frame:

@@ -15,7 +15,7 @@ from roomba_bt.robot.errors import ConnectionFailed, ModeError
 from roomba_bt.transport import SerialTransport
 
 from .conftest import Link
-from .sim_backend import make_sim_link, simulator_missing
+from .sim_backend import make_sim_link
 from .test_connection_contract import PACKETS, STOP_TO_PASSIVE, frames_until
 
 
@@ -89,9 +89,6 @@ def test_firmware_text_in_the_stream_is_skipped_and_frames_go_on(fake_links: Any
 
 @pytest.mark.parametrize("profile_name", ["create2", "roomba600", "roomba500"])
 def test_the_simulator_in_process_for_every_profile(profile_name: str) -> None:
-    missing = simulator_missing()
-    if missing is not None:
-        pytest.skip(missing)
     profile = get_profile(profile_name)
     link, robot = make_sim_link(profile)
     with Connection(link, profile) as connection:

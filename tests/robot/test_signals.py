@@ -14,8 +14,9 @@ from collections.abc import Callable, Sequence
 import pytest
 
 from roomba_bt.robot.safety import Terminated, sigterm_raises
+from roomba_bt.sim.server import PtyEndpoint
 
-from .fake_robot import FakeRobot, PtyEndpoint
+from .fake_robot import FakeRobot
 
 CHILD = pathlib.Path(__file__).with_name("child_connection.py")
 STOP_TO_PASSIVE = bytes([137, 0, 0, 0, 0, 138, 0, 150, 0, 128])
@@ -31,7 +32,7 @@ def test_signal_to_a_child_leaves_the_robot_stopped_in_passive(
 ) -> None:
     endpoint = PtyEndpoint()
     with FakeRobot(endpoint) as robot:
-        connection = child([sys.executable, str(CHILD), endpoint.url])
+        connection = child([sys.executable, str(CHILD), endpoint.address])
         assert connection.stdout is not None
         assert connection.stdout.readline().strip() == "ready", connection.stderr
         driving = bytes([137, 0, 120, 0x80, 0x00])
@@ -43,7 +44,6 @@ def test_signal_to_a_child_leaves_the_robot_stopped_in_passive(
         assert robot.wait_until(lambda r: r.received.endswith(STOP_TO_PASSIVE))
         assert robot.wait_until(lambda r: r.mode.label == "Passive")
         assert robot.actuator_commands_outside_safe_or_full() == []
-    endpoint.close_slave()
 
 
 def test_sigterm_raises_terminated_and_restores_the_old_handler() -> None:
