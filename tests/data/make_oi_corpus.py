@@ -62,35 +62,18 @@ def _frames(
     return data, expected
 
 
-def _spec_examples() -> list[dict[str, object]]:
-    """The specs' own worked examples, byte for byte."""
-    return [
-        _entry(
-            "spec_600_example",
-            "The 600 / Create 2 spec's stream example: checksum over the header too.",
-            [29, 13],
-            "create2",
-            bytes([19, 5, 29, 2, 25, 13, 0, 163]),
-            [{29: 537, 13: 0}],
-        ),
-        _entry(
-            "spec_500_example",
-            "The 500 spec's stream example: checksum without the header.",
-            [29, 13],
-            "roomba500",
-            bytes([19, 5, 29, 2, 25, 13, 0, 182]),
-            [{29: 537, 13: 0}],
-        ),
-        _entry(
-            "query_list_reply",
-            "Reply to the specs' Query List example [149][2][7][13]: no header, no checksum.",
-            [7, 13],
-            "create2",
-            bytes([0b01, 1]),
-            [{7: 1, 13: 1}],
-            kind="reply",
-        ),
-    ]
+#: The specs' own worked examples, byte for byte: name, what it shows, packets asked for,
+#: profile, the bytes, the frames they decode to, stream or reply. The two stream examples
+#: differ only in the profile and the checksum byte: whether the header is summed.
+SPEC_EXAMPLES: tuple[tuple[str, str, list[int], str, bytes, list[dict[int, int]], str], ...] = (
+    ("spec_600_example", "The 600 / Create 2 spec's stream example: checksum over the header too.",
+     [29, 13], "create2", bytes([19, 5, 29, 2, 25, 13, 0, 163]), [{29: 537, 13: 0}], "stream"),
+    ("spec_500_example", "The 500 spec's stream example: checksum without the header.",
+     [29, 13], "roomba500", bytes([19, 5, 29, 2, 25, 13, 0, 182]), [{29: 537, 13: 0}], "stream"),
+    ("query_list_reply",
+     "Reply to the specs' Query List example [149][2][7][13]: no header, no checksum.",
+     [7, 13], "create2", bytes([0b01, 1]), [{7: 1, 13: 1}], "reply"),
+)  # fmt: skip
 
 
 def _banner_then_group_100() -> dict[str, object]:
@@ -180,7 +163,7 @@ def _corrupted_1_percent() -> dict[str, object]:
 def main() -> None:
     HERE.mkdir(exist_ok=True)
     entries = [
-        *_spec_examples(),
+        *(_entry(*example) for example in SPEC_EXAMPLES),
         _banner_then_group_100(),
         _docking_with_charger_text(),
         _mode_plus_one(),
