@@ -2,7 +2,7 @@
 ``clean_blackboard`` for the folders whose tests write py_trees' blackboard; ``served_sim``,
 ``roomba-bt sim`` in a child process; ``child``, any child process, killed if a test leaves it
 running; ``silent_port``, a pty nobody answers on;
-``usage_error``, a command line that must be refused.
+``usage_error``, a command line that must be refused; ``until``, a wait for another thread.
 
 Outside CI a missing optional package (the peer clients pycreate2 and PyRoombaAdapter,
 matplotlib, jsonschema, the example wall-follow plugin) skips its tests with the install
@@ -17,6 +17,7 @@ import select
 import signal
 import subprocess
 import sys
+import time
 from collections.abc import Callable, Generator, Iterator, Sequence
 from pathlib import Path
 
@@ -142,3 +143,24 @@ def usage_error(capsys: pytest.CaptureFixture[str]) -> Callable[..., str]:
         return capsys.readouterr().err
 
     return refused
+
+
+#: How long :func:`until` waits before the test fails: generous, for a loaded 2-core machine
+#: (what it waits for takes milliseconds on an idle one).
+UNTIL_SECONDS = 20.0
+
+
+@pytest.fixture
+def until() -> Callable[[Callable[[], bool]], None]:
+    """``until(condition)``: wait for another thread of this process (a served simulator's
+    loop, a run's tick thread) to make ``condition()`` true, looking every millisecond; fail
+    after :data:`UNTIL_SECONDS` (the traceback's line names the condition)."""
+
+    def wait(condition: Callable[[], bool]) -> None:
+        deadline = time.monotonic() + UNTIL_SECONDS
+        while not condition():
+            if time.monotonic() > deadline:
+                raise AssertionError(f"the condition never held within {UNTIL_SECONDS:g} s")
+            time.sleep(0.001)
+
+    return wait

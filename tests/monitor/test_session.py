@@ -90,39 +90,33 @@ class Rig:
         self.connection.close()
         return result[0]
 
-    def wait(self, predicate: Callable[[], bool]) -> None:
-        done = threading.Event()
-        for _ in range(20_000):
-            if predicate():
-                return
-            done.wait(0.001)
-        raise AssertionError("the condition never held")
-
     def ticks(self, *, ticked: bool) -> int:
         return sum(1 for r in self.feed.since(0)[0] if r.ticked is ticked)
 
 
-def test_pause_freezes_the_tree_in_passive_resume_drives_again_stop_ends_as_ctrl_c() -> None:
+def test_pause_freezes_the_tree_in_passive_resume_drives_again_stop_ends_as_ctrl_c(
+    until: Callable[..., None],
+) -> None:
     rig = Rig()
     seen: dict[str, object] = {}
 
     def operator(rig: Rig) -> None:
-        rig.wait(lambda: rig.ticks(ticked=True) > 100)
+        until(lambda: rig.ticks(ticked=True) > 100)
         rig.session.request("pause")
-        rig.wait(lambda: rig.ticks(ticked=False) > 50)
+        until(lambda: rig.ticks(ticked=False) > 50)
         seen["mode"] = rig.sim.mode
         seen["wheels"] = (rig.sim.left_speed, rig.sim.right_speed)
         seen["ticked while paused"] = rig.ticks(ticked=True)
-        rig.wait(lambda: rig.ticks(ticked=False) > 60)
+        until(lambda: rig.ticks(ticked=False) > 60)
         seen["ticked later"] = rig.ticks(ticked=True)
         rig.session.request("resume")
-        rig.wait(lambda: rig.ticks(ticked=True) > seen["ticked later"] + 50)  # type: ignore[operator]
+        until(lambda: rig.ticks(ticked=True) > seen["ticked later"] + 50)  # type: ignore[operator]
 
         def driving() -> bool:  # read at once: the shuttle stops for a frame at each turn
             seen["resumed"] = (rig.sim.mode, rig.sim.left_speed, rig.sim.right_speed)
             return bool(rig.sim.left_speed or rig.sim.right_speed)
 
-        rig.wait(driving)
+        until(driving)
         rig.session.request("stop")
 
     summary = rig.run_with(operator)
@@ -139,13 +133,15 @@ def test_pause_freezes_the_tree_in_passive_resume_drives_again_stop_ends_as_ctrl
     assert kinds == ["pause", "resume", "stop:"]
 
 
-def test_mission_time_stands_still_while_paused_so_a_wait_does_not_count_the_pause() -> None:
+def test_mission_time_stands_still_while_paused_so_a_wait_does_not_count_the_pause(
+    until: Callable[..., None],
+) -> None:
     rig = Rig(mission=WAIT_THEN_DRIVE)
     wait = next(i.index for i in rig.feed.infos if i.name == "one second")
     rig.session.request("break", wait, "start")  # paused in the tick the wait starts
 
     def operator(rig: Rig) -> None:
-        rig.wait(lambda: rig.ticks(ticked=False) > 200)  # 3 s of frames, paused
+        until(lambda: rig.ticks(ticked=False) > 200)  # 3 s of frames, paused
         rig.session.request("resume")
 
     summary = rig.run_with(operator)
@@ -189,14 +185,14 @@ def test_forcing_is_refused_on_a_real_robot_unless_allowed() -> None:
 
 
 def test_a_forced_condition_decides_the_branch_and_is_marked_in_the_events_and_the_record(
-    tmp_path: Path,
+    tmp_path: Path, until: Callable[..., None]
 ) -> None:
     record_path = tmp_path / "forced.jsonl"
     rig = Rig(record=record_path)
     no_bump = [i.name for i in rig.feed.infos].index("no bump")
 
     def operator(rig: Rig) -> None:
-        rig.wait(lambda: rig.ticks(ticked=True) > 50)
+        until(lambda: rig.ticks(ticked=True) > 50)
         rig.session.request("force", no_bump, "failure")
         rig.ended.wait(30)
 
@@ -221,19 +217,21 @@ def _ticks(feed: RunFeed) -> list[tuple[int, bool, str, float]]:
     return [(r.tick, r.ticked, r.statuses, round(r.time, 6)) for r in feed.since(0)[0]]
 
 
-def test_a_replayed_pause_is_time_passing_with_the_tree_frozen(tmp_path: Path) -> None:
+def test_a_replayed_pause_is_time_passing_with_the_tree_frozen(
+    tmp_path: Path, until: Callable[..., None]
+) -> None:
     """The record marks pause and resume with their tick: the replay pauses there too (the
     stream's ticks go on, the tree and mission time stand still), then goes on as live did."""
     record_path = tmp_path / "paused.jsonl"
     rig = Rig(record=record_path)
 
     def operator(rig: Rig) -> None:
-        rig.wait(lambda: rig.ticks(ticked=True) > 100)
+        until(lambda: rig.ticks(ticked=True) > 100)
         rig.session.request("pause")
-        rig.wait(lambda: rig.ticks(ticked=False) > 50)
+        until(lambda: rig.ticks(ticked=False) > 50)
         rig.session.request("resume")
         after = rig.ticks(ticked=True)
-        rig.wait(lambda: rig.ticks(ticked=True) > after + 100)
+        until(lambda: rig.ticks(ticked=True) > after + 100)
         rig.session.request("stop")
 
     rig.run_with(operator)
@@ -254,7 +252,9 @@ def test_a_replayed_pause_is_time_passing_with_the_tree_frozen(tmp_path: Path) -
     assert controls == ["pause", "resume"]
 
 
-def test_a_breakpoint_on_an_ending_pauses_after_that_tick_and_step_ticks_once() -> None:
+def test_a_breakpoint_on_an_ending_pauses_after_that_tick_and_step_ticks_once(
+    until: Callable[..., None],
+) -> None:
     rig = Rig()
     names = [i.name for i in rig.feed.infos]
     forth = names.index("drive(velocity=100 mm/s, distance=3 cm)")
@@ -262,12 +262,12 @@ def test_a_breakpoint_on_an_ending_pauses_after_that_tick_and_step_ticks_once() 
 
     def operator(rig: Rig) -> None:
         rig.session.request("break", forth, "success")
-        rig.wait(lambda: rig.session.state.paused)
+        until(lambda: rig.session.state.paused)
         hit = [r for r in rig.feed.since(0)[0] if r.ticked][-1]
         assert hit.statuses[forth] == "S" and forth in hit.changed
         seen["ticked"] = rig.ticks(ticked=True)
         rig.session.request("step")
-        rig.wait(lambda: rig.session.state.pause_reason == "stepped one tick")
+        until(lambda: rig.session.state.pause_reason == "stepped one tick")
         seen["after step"] = rig.ticks(ticked=True)
 
     rig.run_with(operator)
@@ -277,12 +277,12 @@ def test_a_breakpoint_on_an_ending_pauses_after_that_tick_and_step_ticks_once() 
     assert "breakpoint: drive(velocity=100 mm/s, distance=3 cm) ends in SUCCESS at tick" in texts[1]
 
 
-def test_the_feed_is_bounded_and_shares_what_did_not_change() -> None:
+def test_the_feed_is_bounded_and_shares_what_did_not_change(until: Callable[..., None]) -> None:
     rig = Rig()
     rig.feed.ring = Ring(300)
 
     def operator(rig: Rig) -> None:
-        rig.wait(lambda: rig.ticks(ticked=True) >= 300 and rig.feed.latest().seq > 1000)  # type: ignore[union-attr]
+        until(lambda: rig.ticks(ticked=True) >= 300 and rig.feed.latest().seq > 1000)  # type: ignore[union-attr]
 
     rig.run_with(operator)
     records = rig.feed.since(0)[0]

@@ -135,7 +135,7 @@ def test_rfc2217_carries_the_rate_and_the_modem_lines_to_brc(served: list[Served
 
 
 def test_a_pty_hang_up_is_brc_high_and_the_rates_return_the_falling_edge_that_wakes(
-    served: list[Served],
+    served: list[Served], until: Callable[..., None]
 ) -> None:
     """A pty has no modem lines to set, but speed 0 (B0) drops DTR and RTS and a real speed
     asserts them (POSIX): the endpoint reads them so, and opening is no pulse."""
@@ -149,16 +149,16 @@ def test_a_pty_hang_up_is_brc_high_and_the_rates_return_the_falling_edge_that_wa
         assert one.simulator.brc_pulses == 0
         port.baudrate = 0
         assert one.endpoint.wake_line() is False, "B0: lines dropped, BRC high"
-        _until(lambda: not one.simulator.brc_low)
+        until(lambda: not one.simulator.brc_low)
         port.baudrate = 115200
-        _until(lambda: one.simulator.brc_pulses == 1)
+        until(lambda: one.simulator.brc_pulses == 1)
         assert _mode_reply(port) == b"\x01", "woken by the falling edge, into Passive"
     finally:
         port.close()
 
 
 def test_the_sleep_at_fault_is_the_power_saving_sleep_start_does_not_wake_it(
-    served: list[Served],
+    served: list[Served], until: Callable[..., None]
 ) -> None:
     """``sim --sleep-at``: the robot sleeps as after five idle minutes in Passive, its motors
     off, deaf to every byte: Start does not wake it (the 600 spec wakes this sleep by a BRC
@@ -169,26 +169,16 @@ def test_the_sleep_at_fault_is_the_power_saving_sleep_start_does_not_wake_it(
     port = serial.Serial(one.endpoint.address, 115200, timeout=0.3)
     try:
         port.write(C.start().data + C.safe().data + C.drive(200, 1).data)
-        _until(lambda: sim.mode is OIMode.SAFE and sim.requested_left != 0)
-        _until(lambda: sim.asleep)
+        until(lambda: sim.mode is OIMode.SAFE and sim.requested_left != 0)
+        until(lambda: sim.asleep)
         assert sim.mode is OIMode.PASSIVE
         assert sim.requested_left == sim.requested_right == 0
         assert _mode_reply(port) == b"", "Start and Query List do not reach a sleeping robot"
         assert sim.asleep
         port.baudrate = 0  # the pty's BRC pulse: a hang-up, then the rate's return
-        _until(lambda: not sim.brc_low)
+        until(lambda: not sim.brc_low)
         port.baudrate = 115200
-        _until(lambda: sim.brc_pulses == 1)
+        until(lambda: sim.brc_pulses == 1)
         assert _mode_reply(port) == b"\x01", "woken by the pulse, into Passive"
     finally:
         port.close()
-
-
-def _until(condition: Callable[[], bool]) -> None:
-    """Wait for the serving thread to see the line (it looks every 15 ms)."""
-    done = threading.Event()
-    for _ in range(200):
-        if condition():
-            return
-        done.wait(0.01)
-    raise AssertionError("the server did not see the line change within 2 s")
