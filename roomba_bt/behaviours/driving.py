@@ -107,13 +107,15 @@ def near_ahead(frame: SensorFrame) -> bool:
 
 def held(action: Action) -> Status | None:
     """Why a driving leaf cannot drive this tick: a wheel drop fails it; out of Safe/Full it
-    waits, and fails once stranded there after it began to move. None: it may drive."""
+    waits, and fails once stranded there after it began to move. None: it may drive (back
+    in Safe/Full, the wait is over: the next time out of them has its own grace)."""
     snap = action.snapshot
     if snap.frame.any_wheel_drop:
         action.feedback_message = "wheel drop"
         return Status.FAILURE
     if snap.mode not in DRIVING_MODES:
         return action.wait_for_driving_mode()
+    action.stranded()  # in Safe/Full: clears the time it left them, returns None
     return None
 
 

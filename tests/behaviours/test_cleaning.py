@@ -1,4 +1,5 @@
-"""The cleaning motions on the simulator: lanes sweep a room, a spiral grows, hazards stop them."""
+"""The cleaning motions on the simulator: lanes sweep a room, a spiral grows, hazards stop them;
+and on a stub robot, the wait out of Safe/Full they share."""
 
 from __future__ import annotations
 
@@ -6,10 +7,16 @@ import math
 from collections.abc import Callable
 
 import pytest
+from py_trees.common import Status
 
+from roomba_bt.behaviours.cleaning import Lanes, Spiral
+from roomba_bt.behaviours.coverage_map import Cover
+from roomba_bt.behaviours.declare import RobotBehaviour
 from roomba_bt.evaluate.episode import EpisodeResult
+from roomba_bt.robot.testing import StubRobot
 
 Sweep = Callable[..., EpisodeResult]
+Make = Callable[..., RobotBehaviour]
 #: the lanes start in a corner of the room, facing along its long side
 CORNER = (0.25, 0.2, 0)
 
@@ -58,3 +65,30 @@ def test_the_spiral_stops_at_a_wall(sweep: Sweep) -> None:
     result = sweep("spiral: {max_radius: 3 m}", CORNER)
     assert result.outcome == "success", result.reason
     assert result.time_s < 120
+
+
+def tick(
+    node: RobotBehaviour, robot: StubRobot, values: dict[int, int], mode: int, ticks: int = 1
+) -> Status:
+    """One tick of ``node`` on a frame of ``values`` in OI mode ``mode`` (packet 35)."""
+    robot.set_frame({**values, 35: mode}, ticks=ticks)
+    node.tick_once()
+    return node.status
+
+
+@pytest.mark.parametrize("leaf", [Spiral, Lanes, Cover])
+def test_back_in_safe_the_grace_out_of_it_starts_again(
+    robot: StubRobot, make: Make, leaf: type[RobotBehaviour]
+) -> None:
+    """A second out of Safe/Full fails a driving leaf; once the robot is back, the next time
+    it leaves counts its own second (a fall to Passive long after the first one does not
+    fail it at once, as :meth:`~roomba_bt.behaviours.declare.Action.stranded` says)."""
+    node = make(leaf)
+    still = {pid: 0 for pid in leaf.declaration.packets(node.params)}
+    assert tick(node, robot, still, 2) is Status.RUNNING  # Safe: it drives
+    assert tick(node, robot, still, 1) is Status.RUNNING  # Passive: it waits
+    assert tick(node, robot, still, 2, ticks=200) is Status.RUNNING  # 3 s later, Safe again
+    statuses = [tick(node, robot, still, 1) for _ in range(68)]  # Passive again
+    assert statuses[:-1] == [Status.RUNNING] * 67  # a second of grace, again
+    assert statuses[-1] is Status.FAILURE
+    assert node.feedback_message.startswith("the robot left Safe/Full mode")
