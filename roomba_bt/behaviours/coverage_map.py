@@ -55,7 +55,7 @@ from roomba_bt.oi.opcodes import opcodes
 from roomba_bt.oi.profiles import WHEEL_BASE_MM
 from roomba_bt.robot.interface import Odometry
 
-__all__ = ["COVERAGE", "Cover", "FloorMap"]
+__all__ = ["COVERAGE", "Bearings", "Cover", "FloorMap"]
 
 _OK, _RUN = Status.SUCCESS, Status.RUNNING
 
@@ -216,6 +216,107 @@ class FloorMap:
         return count
 
 
+class Bearings:
+    """Where ``cover`` is and what it has met, kept apart from what it decides: its own pose
+    (the odometry's increments since the start, the heading re-anchored on straight walls:
+    the module's last paragraph but one) and, each tick, what the sensors show marked in its
+    :class:`FloorMap`. Reads only the snapshot's odometry and frame."""
+
+    def __init__(self, fmap: FloorMap, odo: Odometry) -> None:
+        self.map = fmap
+        #: its own pose: the odometry's increments, the heading re-anchored on walls
+        self.pose = odo
+        self._last = (odo.distance_mm, odo.angle_rad)
+        #: the lanes' axis (rad, mod 90 deg), from the walls; None before the first one
+        self.axis: float | None = None
+        #: (path mm, heading) along the straight stretch of wall followed now
+        self._straight: list[tuple[float, float]] = []
+        #: re-anchorings of the heading on a wall (for tests and the curious)
+        self.anchored = 0
+
+    def integrate(self, odo: Odometry) -> Odometry:
+        """Its pose after this tick: the odometry's travel and turn since the last, from
+        its own (re-anchored) pose."""
+        pose = self.pose
+        distance, angle = odo.distance_mm - self._last[0], odo.angle_rad - self._last[1]
+        self._last = (odo.distance_mm, odo.angle_rad)
+        mid = pose.theta_rad + angle / 2.0
+        self.pose = pose = odo._replace(
+            x_mm=pose.x_mm + distance * math.cos(mid),
+            y_mm=pose.y_mm + distance * math.sin(mid),
+            theta_rad=pose.theta_rad + angle,
+        )
+        return pose
+
+    def observe(self, frame: SensorFrame) -> None:
+        """Mark what this tick shows from the pose: the strip swept (while the wheels
+        turn), surfaces."""
+        pose = self.pose
+        x, y, theta = pose.x_mm, pose.y_mm, pose.theta_rad
+        fmap = self.map
+        fmap.sweep(x, y, theta)
+        signals = frame.light_bump_signals
+        for angle, signal in zip(_RAY_ANGLES, signals, strict=True):
+            if signal >= _RAY_MARK:
+                reach = _RADIUS_MM + _distance_of(signal) + 20.0
+                a = theta + angle
+                fmap.block(x + reach * math.cos(a), y + reach * math.sin(a))
+        if frame.any_bump:
+            bumps = frame.bumps  # one side alone: the contact is off to that side
+            spread = (
+                0.0 if bumps.bump_left == bumps.bump_right else (0.6 if bumps.bump_left else -0.6)
+            )
+            fmap.block_ahead(x, y, theta + spread, _RADIUS_MM + 30.0, 0.35)
+        if frame.any_cliff:
+            fmap.block_ahead(x, y, theta, _RADIUS_MM + 60.0, 0.5)
+        if frame.virtual_wall:
+            fmap.block_ahead(x, y, theta, _RADIUS_MM + 80.0, 0.5)
+
+    def blocked_ahead(self, heading: float) -> bool:
+        """The map has something just ahead of the bumper along ``heading``."""
+        odo = self.pose
+        reach = _RADIUS_MM + 40.0
+        x, y = odo.x_mm + reach * math.cos(heading), odo.y_mm + reach * math.sin(heading)
+        cell = self.map.cell(x, y)
+        return cell is not None and bool(self.map.cells[cell] & BLOCKED)
+
+    def off_wall(self) -> None:
+        """No straight stretch of wall now (a corner, a recovery, a new edge)."""
+        self._straight.clear()
+
+    def anchor(self, path: float, heading: float, steady: bool) -> None:
+        """Along a straight stretch of wall, its heading re-anchors the lanes' axis."""
+        straight = self._straight
+        if not steady:
+            straight.clear()
+            return
+        straight.append((path, heading))
+        while straight and path - straight[0][0] > _ANCHOR_MM:
+            headings = [h for _, h in straight]
+            mean = math.atan2(
+                sum(math.sin(h) for h in headings), sum(math.cos(h) for h in headings)
+            )
+            if max(abs(driving.wrap(h - mean)) for h in headings) <= _ANCHOR_SPREAD:
+                self._reanchor(mean)
+                straight.clear()
+                return
+            straight.pop(0)
+
+    def _reanchor(self, wall: float) -> None:
+        """A straight wall runs along ``wall`` (rad) by its pose. The first one sets the
+        lanes' axis; walls meet at right angles, so a later one off the axis by less than
+        :data:`_SNAP` says how far its heading has drifted: taken off the pose."""
+        axis = self.axis
+        if axis is None:
+            self.axis = wall
+            return
+        quarter = math.pi / 2
+        error = driving.wrap(wall - axis - quarter * round(driving.wrap(wall - axis) / quarter))
+        if abs(error) < _SNAP:
+            self.pose = self.pose._replace(theta_rad=self.pose.theta_rad - error)
+            self.anchored += 1
+
+
 @declare(
     "cover",
     kind="action",
@@ -245,16 +346,11 @@ class Cover(Action):
     unswept; FAILURE on a wheel drop or when the robot leaves Safe/Full. Drive Direct (145)."""
 
     moves = True
-    #: re-anchorings of the heading on a wall (for tests and the curious)
-    anchored = 0
 
     def start(self) -> None:
         self._map = FloorMap()
         odo = self.snapshot.odometry
-        #: its own pose: the odometry's increments, the heading re-anchored on walls
-        self._pose = odo
-        self._last = (odo.distance_mm, odo.angle_rad)
-        self._axis: float | None = None  # the lanes' axis (rad, mod 90 deg), from the walls
+        self._bearings = Bearings(self._map, odo)
         self._plan: list[Callable[[], None]] = []
         self._edge_found = 0  # new cells the last edge found
         self._idle_edges = 0  # edges in a row that followed no frontier
@@ -270,8 +366,9 @@ class Cover(Action):
             return waiting
         snap = self.snapshot
         frame = snap.frame
-        odo = self._integrate(snap.odometry)
-        self._observe(frame, odo.x_mm, odo.y_mm, odo.theta_rad)
+        bearings = self._bearings
+        bearings.integrate(snap.odometry)
+        bearings.observe(frame)
         for _ in range(6):
             if self._phase == "done":
                 self.send(oi.halt())
@@ -285,40 +382,10 @@ class Cover(Action):
         self.send(driving.drive_wheels(0.0, 0.0))
         return _RUN
 
-    def _integrate(self, odo: Odometry) -> Odometry:
-        """Its pose after this tick: the odometry's travel and turn since the last, from
-        its own (re-anchored) pose."""
-        pose = self._pose
-        distance, angle = odo.distance_mm - self._last[0], odo.angle_rad - self._last[1]
-        self._last = (odo.distance_mm, odo.angle_rad)
-        mid = pose.theta_rad + angle / 2.0
-        self._pose = pose = odo._replace(
-            x_mm=pose.x_mm + distance * math.cos(mid),
-            y_mm=pose.y_mm + distance * math.sin(mid),
-            theta_rad=pose.theta_rad + angle,
-        )
-        return pose
-
-    def _observe(self, frame: SensorFrame, x: float, y: float, theta: float) -> None:
-        """Mark what this tick shows: the strip swept (while the wheels turn), surfaces."""
-        fmap = self._map
-        fmap.sweep(x, y, theta)
-        signals = frame.light_bump_signals
-        for angle, signal in zip(_RAY_ANGLES, signals, strict=True):
-            if signal >= _RAY_MARK:
-                reach = _RADIUS_MM + _distance_of(signal) + 20.0
-                a = theta + angle
-                fmap.block(x + reach * math.cos(a), y + reach * math.sin(a))
-        if frame.any_bump:
-            bumps = frame.bumps  # one side alone: the contact is off to that side
-            spread = (
-                0.0 if bumps.bump_left == bumps.bump_right else (0.6 if bumps.bump_left else -0.6)
-            )
-            fmap.block_ahead(x, y, theta + spread, _RADIUS_MM + 30.0, 0.35)
-        if frame.any_cliff:
-            fmap.block_ahead(x, y, theta, _RADIUS_MM + 60.0, 0.5)
-        if frame.virtual_wall:
-            fmap.block_ahead(x, y, theta, _RADIUS_MM + 80.0, 0.5)
+    @property
+    def _pose(self) -> Odometry:
+        """Its own pose, as :class:`Bearings` keeps it."""
+        return self._bearings.pose
 
     def _step(self, frame: SensorFrame) -> tuple[float, float] | None:
         """This tick's wheel speeds in the current phase; None: the phase ended (the next
@@ -395,7 +462,7 @@ class Cover(Action):
                 why = "limit"
             elif kind == "lane" and along - self._yield[1] > _NO_YIELD_MM:
                 why = "swept"
-            elif kind in ("lane", "shift") and self._blocked_ahead():
+            elif kind in ("lane", "shift") and self._bearings.blocked_ahead(self._line[2]):
                 why = "map"
         if why is None:
             speed = self.number("speed")
@@ -412,14 +479,6 @@ class Cover(Action):
         else:
             self._ended()
         return None
-
-    def _blocked_ahead(self) -> bool:
-        odo = self._pose
-        heading = self._line[2]
-        reach = _RADIUS_MM + 40.0
-        x, y = odo.x_mm + reach * math.cos(heading), odo.y_mm + reach * math.sin(heading)
-        cell = self._map.cell(x, y)
-        return cell is not None and bool(self._map.cells[cell] & BLOCKED)
 
     def _ended(self) -> None:
         """A straight line ended (``self._why``, after ``self._achieved`` mm)."""
@@ -451,7 +510,7 @@ class Cover(Action):
         self._edge_yield = (self._map.swept, self._pose.path_mm)
         self._edge_recovery: tuple[str, float, float, str] | None = None
         self._edge_previous: float | None = None
-        self._straight: list[tuple[float, float]] = []  # (path mm, heading) on a straight wall
+        self._bearings.off_wall()
 
     def _edging(self, frame: SensorFrame) -> tuple[float, float] | None:
         snap = self.snapshot
@@ -470,7 +529,7 @@ class Cover(Action):
         if why is not None and (recovery is None or recovery[0] == "turn"):
             # a bump, a drop or a beam: back off, turn left, go on along it
             recovery = self._edge_recovery = ("back", odo.distance_mm, snap.time, why)
-            self._straight.clear()
+            self._bearings.off_wall()
         if recovery is not None:
             phase, mark, since, cause = recovery
             if phase == "back":
@@ -487,12 +546,12 @@ class Cover(Action):
         front = max(signals[2], signals[3])
         if front >= 900:  # a wall ahead: turn left in place
             self._edge_previous = None
-            self._straight.clear()
+            self._bearings.off_wall()
             return (-150.0, 150.0)
         right = signals[5]
         if right == 0 and signals[4] == 0:
             # no wall on the right: curve right (around an outside corner, or to find it)
-            self._straight.clear()
+            self._bearings.off_wall()
             self._edge_previous = None
             return (speed, speed * 0.35)
         distance = 0.906 * (_RADIUS_MM + _distance_of(max(right, 1)))
@@ -502,41 +561,9 @@ class Cover(Action):
             derivative = (error - self._edge_previous) / 0.015
         self._edge_previous = error
         turn = max(-0.6 * speed, min(0.6 * speed, 4.0 * error + 0.15 * derivative))
-        self._anchor(odo.path_mm, odo.theta_rad, abs(error) < 15.0)
+        self._bearings.anchor(odo.path_mm, odo.theta_rad, abs(error) < 15.0)
         slow = speed if front < 200 else min(speed, 150.0)
         return slow + turn, slow - turn
-
-    def _anchor(self, path: float, heading: float, steady: bool) -> None:
-        """Along a straight stretch of wall, its heading re-anchors the lanes' axis."""
-        straight = self._straight
-        if not steady:
-            straight.clear()
-            return
-        straight.append((path, heading))
-        while straight and path - straight[0][0] > _ANCHOR_MM:
-            headings = [h for _, h in straight]
-            mean = math.atan2(
-                sum(math.sin(h) for h in headings), sum(math.cos(h) for h in headings)
-            )
-            if max(abs(driving.wrap(h - mean)) for h in headings) <= _ANCHOR_SPREAD:
-                self._reanchor(mean)
-                straight.clear()
-                return
-            straight.pop(0)
-
-    def _reanchor(self, wall: float) -> None:
-        """A straight wall runs along ``wall`` (rad) by its pose. The first one sets the
-        lanes' axis; walls meet at right angles, so a later one off the axis by less than
-        :data:`_SNAP` says how far its heading has drifted: taken off the pose."""
-        axis = self._axis
-        if axis is None:
-            self._axis = wall
-            return
-        quarter = math.pi / 2
-        error = driving.wrap(wall - axis - quarter * round(driving.wrap(wall - axis) / quarter))
-        if abs(error) < _SNAP:
-            self._pose = self._pose._replace(theta_rad=self._pose.theta_rad - error)
-            self.anchored += 1
 
     def _edge_done(self) -> None:
         """An edge ends: how much new floor it found decides whether another is worth it."""
@@ -547,7 +574,9 @@ class Cover(Action):
     def _lanes(self) -> None:
         """Start sweeping lanes from here: along the axis, the way with most open floor."""
         odo = self._pose
-        axis = self._axis if self._axis is not None else odo.theta_rad
+        axis = self._bearings.axis
+        if axis is None:
+            axis = odo.theta_rad
         x, y = odo.x_mm, odo.y_mm
         options = [driving.wrap(axis + k * math.pi / 2) for k in range(4)]
         score = {h: self._map.open_along(x, y, h, 1500.0) for h in options}
