@@ -450,12 +450,17 @@ class Leds(Action):
         return _OK
 
 
+#: the slot ``song`` stores a song in (Song 140) and ``play`` plays it from (Play 141): one
+#: parameter, its range the opcode table's
+_SONG_SLOT = Param("number", INT, default=0, minimum=_SONG_NUMBER.minimum,
+                   maximum=_SONG_NUMBER.maximum, doc="song slot")  # fmt: skip
+
+
 @declare(
     "song",
     kind="action",
     params=(
-        Param("number", INT, default=0, minimum=_SONG_NUMBER.minimum,
-              maximum=_SONG_NUMBER.maximum, doc="song slot"),
+        _SONG_SLOT,
         Param("notes", NOTES, required=True, doc='e.g. ["C4 250ms", "rest 125ms", "G4 500ms"]'),
     ),
     sends=opcodes("song"),
@@ -472,13 +477,10 @@ class Song(Action):
 @declare(
     "play",
     kind="action",
-    params=(
-        Param("number", INT, default=0, minimum=_SONG_NUMBER.minimum,
-              maximum=_SONG_NUMBER.maximum),
-    ),
+    params=(_SONG_SLOT,),
     sends=opcodes("play"),
     primary="number",
-)  # fmt: skip
+)
 class Play(Action):
     """Play a defined song (Play 141 ``[141][number]``)."""
 
