@@ -10,10 +10,12 @@ from __future__ import annotations
 import math
 import operator
 import re
-from collections.abc import Callable, Mapping
-from typing import Any
+from collections.abc import Callable, Iterable, Mapping
+from operator import attrgetter
+from types import MappingProxyType
+from typing import Any, ClassVar
 
-from roomba_bt.behaviours.declare import Condition, Param, declare, read_key
+from roomba_bt.behaviours.declare import BlackboardRef, Condition, Param, declare, read_key
 from roomba_bt.behaviours.units import (
     ANGLE,
     ANY,
@@ -36,6 +38,7 @@ from roomba_bt.oi.frames import (
     LIGHT_BUMP_SIGNAL_PACKETS,
     LIGHT_BUMPER_PACKETS,
     VIRTUAL_WALL_PACKETS,
+    SensorFrame,
 )
 from roomba_bt.oi.ir import REMOTE_BUTTONS, IRCharacter
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
@@ -50,29 +53,61 @@ OPERATORS: dict[str, Callable[[Any, Any], bool]] = {
     ">=": operator.ge,
     ">": operator.gt,
 }
-_SIDES = enum("left", "right", "any")
 
 
-@declare("bump", kind="condition", params=(Param("side", _SIDES, default="any"),),
+Flags = Mapping[str, Callable[[SensorFrame], bool]]
+
+
+def _flags(view: str, names: Iterable[str], prefix: str = "", either: str = "any") -> Flags:
+    """A flag condition's choices, in order, each with how it reads the frame: each of
+    ``names``, the flag ``prefix`` + name of the frame's decoded ``view``; then ``any``, the
+    view's flag ``either`` (the union it stores)."""
+    flags = {name: attrgetter(f"{view}.{prefix}{name}") for name in names}
+    return MappingProxyType({**flags, "any": attrgetter(f"{view}.{either}")})
+
+
+_BUMP = _flags("bumps", ("left", "right"), "bump_", "any_bump")
+_WHEEL_DROP = _flags("bumps", ("left", "right"), "wheel_drop_", "any_wheel_drop")
+_OVERCURRENT = _flags("overcurrents", ("left_wheel", "right_wheel", "main_brush", "side_brush"))
+_BUTTON = _flags("buttons", BUTTON_NAMES)
+
+
+class _Flag(Condition):
+    """One flag of a packet's decoded view (:mod:`roomba_bt.oi.bits`): the one the
+    parameter :attr:`choice` names, or ``any``."""
+
+    #: the parameter naming the flag, and how each of its values reads it (:func:`_flags`)
+    choice: ClassVar[str]
+    flags: ClassVar[Flags]
+
+    def __init__(self, name: str, params: Mapping[str, Any] | None = None) -> None:
+        super().__init__(name, params)
+        choice = self.params[self.choice]
+        #: how it reads the flag, looked up once unless the choice is an @key value
+        self._read = None if isinstance(choice, BlackboardRef) else self.flags[choice]
+
+    def check(self, snapshot: Snapshot) -> bool:
+        read = self._read
+        if read is None:
+            read = self.flags[self.value(self.choice)]
+        return read(snapshot.frame)
+
+
+@declare("bump", kind="condition", params=(Param("side", enum(*_BUMP), default="any"),),
          reads=BUMPS_PACKETS, primary="side")  # fmt: skip
-class Bump(Condition):
+class Bump(_Flag):
     """A bumper is pressed (packet 7: bit 0 right, bit 1 left)."""
 
-    def check(self, snapshot: Snapshot) -> bool:
-        bumps = snapshot.frame.bumps
-        side = self.value("side")
-        return bumps.any_bump if side == "any" else getattr(bumps, f"bump_{side}")
+    choice, flags = "side", _BUMP
 
 
-@declare("wheel_drop", kind="condition", params=(Param("side", _SIDES, default="any"),),
+@declare("wheel_drop", kind="condition",
+         params=(Param("side", enum(*_WHEEL_DROP), default="any"),),
          reads=BUMPS_PACKETS, primary="side")  # fmt: skip
-class WheelDrop(Condition):
+class WheelDrop(_Flag):
     """A wheel has dropped (packet 7: bit 2 right, bit 3 left)."""
 
-    def check(self, snapshot: Snapshot) -> bool:
-        bumps = snapshot.frame.bumps
-        side = self.value("side")
-        return bumps.any_wheel_drop if side == "any" else getattr(bumps, f"wheel_drop_{side}")
+    choice, flags = "side", _WHEEL_DROP
 
 
 _CLIFFS = dict(zip(("left", "front_left", "front_right", "right"), CLIFF_PACKETS, strict=True))
@@ -215,10 +250,15 @@ class OnHomeBase(Condition):
         return snapshot.frame.charging_sources.home_base
 
 
-def _battery_constraints(params: Mapping[str, Any]) -> list[str]:
-    if ("above" in params) == ("below" in params):
-        return ["give exactly one of above, below"]
-    return []
+def _exactly_one(*names: str) -> Callable[[Mapping[str, Any]], list[str]]:
+    """A declaration's ``constraints``: one of ``names`` given, not none, not several."""
+
+    def constraints(params: Mapping[str, Any]) -> list[str]:
+        if sum(name in params for name in names) != 1:
+            return [f"give exactly one of {', '.join(names)}"]
+        return []
+
+    return constraints
 
 
 @declare(
@@ -229,7 +269,7 @@ def _battery_constraints(params: Mapping[str, Any]) -> list[str]:
         Param("below", PERCENT, minimum=0, maximum=100),
     ),
     reads=packet_ids("battery_charge", "battery_capacity"),
-    constraints=_battery_constraints,
+    constraints=_exactly_one("above", "below"),
 )
 class Battery(Condition):
     """Battery charge (25) as a percent of capacity (26) above or below a level."""
@@ -252,12 +292,6 @@ class OIModeIs(Condition):
         return snapshot.mode is OIMode[str(self.value("is")).upper()]
 
 
-def _odometry_constraints(params: Mapping[str, Any]) -> list[str]:
-    if ("distance" in params) == ("angle" in params):
-        return ["give exactly one of distance, angle"]
-    return []
-
-
 @declare(
     "odometry",
     kind="condition",
@@ -268,7 +302,7 @@ def _odometry_constraints(params: Mapping[str, Any]) -> list[str]:
     ),
     reads=ENCODER_PACKETS,
     reads_keys=("since",),
-    constraints=_odometry_constraints,
+    constraints=_exactly_one("distance", "angle"),
 )  # fmt: skip
 class OdometrySince(Condition):
     """The robot has travelled a distance, or turned an angle, since a mark (or the start)."""
@@ -297,31 +331,21 @@ class StasisIs(Condition):
         return snapshot.frame.stasis is _STASIS[self.value("state")]
 
 
-_MOTORS = ("left_wheel", "right_wheel", "main_brush", "side_brush", "any")
-
-
 @declare("overcurrent", kind="condition",
-         params=(Param("motor", enum(*_MOTORS), default="any"),),
+         params=(Param("motor", enum(*_OVERCURRENT), default="any"),),
          reads=packet_ids("overcurrents"), primary="motor")  # fmt: skip
-class Overcurrent(Condition):
+class Overcurrent(_Flag):
     """A motor draws too much current (packet 14: 0 side brush, 2 main, 3 right, 4 left)."""
 
-    def check(self, snapshot: Snapshot) -> bool:
-        over = snapshot.frame.overcurrents
-        motor = self.value("motor")
-        return over.any if motor == "any" else bool(getattr(over, motor))
+    choice, flags = "motor", _OVERCURRENT
 
 
-@declare("button", kind="condition",
-         params=(Param("name", enum(*BUTTON_NAMES, "any"), default="any"),),
+@declare("button", kind="condition", params=(Param("name", enum(*_BUTTON), default="any"),),
          reads=packet_ids("buttons"), primary="name")  # fmt: skip
-class Button(Condition):
+class Button(_Flag):
     """A button on the robot is pressed (packet 18)."""
 
-    def check(self, snapshot: Snapshot) -> bool:
-        buttons = snapshot.frame.buttons
-        name = self.value("name")
-        return buttons.any if name == "any" else bool(getattr(buttons, name))
+    choice, flags = "name", _BUTTON
 
 
 _COMPARISON = re.compile(r"^\s*([a-z_][a-z0-9_]*)\s*(<=|>=|==|!=|<|>)\s*(-?\d+(?:\.\d+)?)\s*$")
