@@ -37,15 +37,22 @@ def _bit(value: int, n: int) -> bool:
 
 class _ByteView:
     """A bit field's view of one byte: its flags are its fields after ``raw``, in the order of
-    their bits. Each subclass decodes the 256 byte values once (:meth:`_decode_every_byte`),
-    so that :meth:`from_byte` is a lookup."""
+    their bits, then any :func:`_union` of bits. Each subclass decodes the 256 byte values
+    once (:meth:`_decode_every_byte`), so that :meth:`from_byte` is a lookup."""
 
     __slots__ = ()
     by_byte: ClassVar[tuple[Any, ...]] = ()
+    #: (field name, bits) of each :func:`_union` field, in field order
+    _unions: ClassVar[tuple[tuple[str, int], ...]] = ()
 
     if TYPE_CHECKING:  # each subclass is a dataclass of these
+        raw: int
 
         def __init__(self, raw: int, *flags: bool) -> None: ...
+
+    def __post_init__(self) -> None:
+        for name, bits in self._unions:
+            object.__setattr__(self, name, self.raw & bits != 0)
 
     @classmethod
     def from_byte(cls, value: int) -> Self:
@@ -56,12 +63,24 @@ class _ByteView:
     def _decode_every_byte(cls, bits: Iterable[int]) -> None:
         """Fill :attr:`by_byte`: its flags read ``bits`` (bit numbers, in field order)."""
         numbers = tuple(bits)
+        own = fields(cls)  # type: ignore[arg-type]
+        cls._unions = tuple((f.name, f.metadata[_UNION]) for f in own if _UNION in f.metadata)
         cls.by_byte = tuple(cls(v, *(_bit(v, n) for n in numbers)) for v in range(256))
 
     @classmethod
     def flag_names(cls) -> tuple[str, ...]:
         """The flags' names in the order of their bits."""
         return tuple(f.name for f in fields(cls) if f.init and f.name != "raw")  # type: ignore[arg-type]
+
+
+_UNION = "union of bits"
+
+
+def _union(bits: int) -> Any:
+    """A flag set when any of ``bits`` is (either bump, any light-bumper sensor ahead):
+    computed with the view (:meth:`_ByteView.__post_init__`) and stored, not a property,
+    because the hazards are read on every tick."""
+    return field(init=False, repr=False, compare=False, metadata={_UNION: bits})
 
 
 #: Packet 7's two bump bits (bit 1 left, bit 0 right) and two wheel-drop bits (bit 3 left,
@@ -79,13 +98,9 @@ class BumpsWheelDrops(_ByteView):
     bump_left: bool
     wheel_drop_right: bool
     wheel_drop_left: bool
-    #: either bump / either wheel drop; stored, not computed: read on every tick
-    any_bump: bool = field(init=False, repr=False, compare=False)
-    any_wheel_drop: bool = field(init=False, repr=False, compare=False)
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "any_bump", self.bump_left or self.bump_right)
-        object.__setattr__(self, "any_wheel_drop", self.wheel_drop_left or self.wheel_drop_right)
+    #: either bump / either wheel drop
+    any_bump: bool = _union(BUMP_BITS)
+    any_wheel_drop: bool = _union(WHEEL_DROP_BITS)
 
 
 BumpsWheelDrops._decode_every_byte(range(4))
@@ -166,13 +181,9 @@ class LightBumper(_ByteView):
     center_right: bool
     front_right: bool
     right: bool
-    #: any of the six / any of the four front ones; stored, not computed: read every tick
-    any: bool = field(init=False, repr=False, compare=False)
-    ahead: bool = field(init=False, repr=False, compare=False)
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "any", self.raw & LIGHT_BUMPER_BITS != 0)
-        object.__setattr__(self, "ahead", self.raw & LIGHT_BUMPER_AHEAD_BITS != 0)
+    #: any of the six / any of the four front ones
+    any: bool = _union(LIGHT_BUMPER_BITS)
+    ahead: bool = _union(LIGHT_BUMPER_AHEAD_BITS)
 
 
 LightBumper._decode_every_byte(range(6))
