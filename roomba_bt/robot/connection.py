@@ -268,14 +268,6 @@ class Connection:
         return self.modes.last_fallback
 
     @property
-    def stream_ids(self) -> tuple[int, ...]:
-        return self.link.stream_ids
-
-    @property
-    def streaming(self) -> bool:
-        return self.link.streaming
-
-    @property
     def counters(self) -> LinkCounters:
         link = self.link
         frames, checksums, skipped, implausible = link.parsed()
