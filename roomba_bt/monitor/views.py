@@ -11,6 +11,18 @@ from typing import Any
 
 from roomba_bt.monitor.feed import RunFeed, TickRecord
 from roomba_bt.oi.bits import ChargingState
+from roomba_bt.oi.frames import (
+    BATTERY_PACKETS,
+    BUMPS_PACKETS,
+    CHARGING_SOURCES_PACKETS,
+    CHARGING_STATE_PACKETS,
+    CLIFF_PACKETS,
+    IR_PACKETS,
+    LIGHT_BUMP_SIGNAL_PACKETS,
+    LIGHT_BUMPER_PACKETS,
+    REQUESTED_DRIVE_PACKETS,
+    REQUESTED_WHEELS_PACKETS,
+)
 from roomba_bt.oi.ir import IRCharacter
 from roomba_bt.oi.odometry import counts_to_mm, encoder_delta
 from roomba_bt.robot.interface import SLOT_SECONDS, Snapshot
@@ -31,47 +43,57 @@ def robot_view(snapshot: Snapshot, rates: tuple[float, float] | None) -> dict[st
     """The robot panel: whatever the streamed frame carries, and the command rates."""
     frame = snapshot.frame
     out: dict[str, Any] = {"mode": snapshot.mode.label, "frames_lost": snapshot.frames_lost}
-    if 7 in frame:
+    if frame.carries(BUMPS_PACKETS):
         b = frame.bumps
         out["bumps"] = {"left": b.bump_left, "right": b.bump_right}
         out["wheel_drops"] = {"left": b.wheel_drop_left, "right": b.wheel_drop_right}
-    if all(p in frame for p in (9, 10, 11, 12)):
+    if frame.carries(CLIFF_PACKETS):
         out["cliffs"] = {
             "left": frame.cliff_left,
             "front_left": frame.cliff_front_left,
             "front_right": frame.cliff_front_right,
             "right": frame.cliff_right,
         }
-    for pid, label in ((17, "omni"), (52, "left"), (53, "right")):
+    for pid, label in zip(IR_PACKETS, ("omni", "left", "right"), strict=True):
         if pid in frame:
             out.setdefault("ir", {})[label] = _ir(int(frame[pid]))
-    if 45 in frame:
+    if frame.carries(LIGHT_BUMPER_PACKETS):
         lb = frame.light_bumper
         out["light_bumper"] = {
             "left": lb.left, "front_left": lb.front_left, "center_left": lb.center_left,
             "center_right": lb.center_right, "front_right": lb.front_right, "right": lb.right,
         }  # fmt: skip
-    if all(p in frame for p in range(46, 52)):
+    if frame.carries(LIGHT_BUMP_SIGNAL_PACKETS):
         out["light_bump_signals"] = list(frame.light_bump_signals)
-    if 25 in frame and 26 in frame:
+    if frame.carries(BATTERY_PACKETS):
         out["battery_percent"] = round(frame.battery_percent, 1)
-    if 21 in frame:
-        state = frame[21]
+    if frame.carries(CHARGING_STATE_PACKETS):
+        state = frame.value("charging_state")
         out["charging"] = (
             ChargingState(state).name.lower().replace("_", " ")
             if state in ChargingState._value2member_map_
             else f"unknown ({state})"
         )
-    if 34 in frame:
+    if frame.carries(CHARGING_SOURCES_PACKETS):
         sources = frame.charging_sources
         out["charging_sources"] = {
             "home_base": sources.home_base,
             "internal": sources.internal_charger,
         }
-    if 41 in frame and 42 in frame:
-        out["wheels"] = {"left": frame[42], "right": frame[41], "source": "requested (41, 42)"}
-    elif 39 in frame:
-        out["wheels"] = {"velocity": frame[39], "radius": frame.get(40), "source": "requested (39)"}
+    if frame.carries(REQUESTED_WHEELS_PACKETS):
+        out["wheels"] = {
+            "left": frame.requested_left_velocity,
+            "right": frame.requested_right_velocity,
+            "source": f"requested {REQUESTED_WHEELS_PACKETS}",
+        }
+    else:
+        velocity, radius = REQUESTED_DRIVE_PACKETS
+        if velocity in frame:  # the radius may be missing
+            out["wheels"] = {
+                "velocity": frame[velocity],
+                "radius": frame.get(radius),
+                "source": f"requested ({velocity})",
+            }
     odo = snapshot.odometry
     out["odometry"] = {"x": odo.x_mm, "y": odo.y_mm, "theta": odo.theta_rad, "path": odo.path_mm}
     if rates is not None:

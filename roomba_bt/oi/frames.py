@@ -64,6 +64,13 @@ CHARGING_SOURCES_PACKETS: tuple[int, ...] = (34,)
 CHARGING_STATE_PACKETS: tuple[int, ...] = (21,)
 #: :attr:`SensorFrame.left_encoder_counts`, :attr:`~SensorFrame.right_encoder_counts`
 ENCODER_PACKETS: tuple[int, ...] = (43, 44)
+#: :attr:`SensorFrame.battery_percent` (charge, capacity)
+BATTERY_PACKETS: tuple[int, ...] = (25, 26)
+#: :attr:`SensorFrame.requested_velocity`, :attr:`~SensorFrame.requested_radius` (Drive)
+REQUESTED_DRIVE_PACKETS: tuple[int, ...] = (39, 40)
+#: :attr:`SensorFrame.requested_right_velocity`, :attr:`~SensorFrame.requested_left_velocity`
+#: (Drive Direct)
+REQUESTED_WHEELS_PACKETS: tuple[int, ...] = (41, 42)
 
 
 class FrameLayout:
@@ -382,6 +389,12 @@ class SensorFrame:
             f"packet {packet_id} ({name}) is not in this frame; it carries "
             f"{list(self._layout.members)}"
         )
+
+    def carries(self, packet_ids: Iterable[int]) -> bool:
+        """Whether the frame holds every one of ``packet_ids`` (one of the groups above, so
+        that a reader of a stream that may lack them need not name packets by number)."""
+        index = self._layout.index
+        return all(packet_id in index for packet_id in packet_ids)
 
     def get(self, packet_id: int, default: int | None = None) -> int | None:
         i = self._layout.index.get(packet_id)

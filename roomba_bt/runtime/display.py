@@ -16,6 +16,13 @@ from typing import TYPE_CHECKING, Literal, TextIO
 
 import py_trees
 
+from roomba_bt.oi.frames import (
+    BATTERY_PACKETS,
+    BUMPS_PACKETS,
+    CHARGING_SOURCES_PACKETS,
+    CLIFF_PACKETS,
+    IR_PACKETS,
+)
 from roomba_bt.oi.ir import IRCharacter
 
 if TYPE_CHECKING:
@@ -66,15 +73,15 @@ def sensor_line(snapshot: Snapshot) -> str:
     """One line of the sensors that matter most, from whatever the frame carries."""
     frame = snapshot.frame
     parts = [f"t={snapshot.time:7.2f}s", f"mode={snapshot.mode.label}"]
-    if 7 in frame:
+    if frame.carries(BUMPS_PACKETS):
         b = frame.bumps
         bumps = "L" * b.bump_left + "R" * b.bump_right or "-"
         drops = "L" * b.wheel_drop_left + "R" * b.wheel_drop_right or "-"
         parts += [f"bump={bumps}", f"drop={drops}"]
-    if all(p in frame for p in (9, 10, 11, 12)):
-        cliffs = "".join(c for c, p in zip("LlrR", (9, 10, 11, 12), strict=False) if frame[p])
+    if frame.carries(CLIFF_PACKETS):
+        cliffs = "".join(c for c, p in zip("LlrR", CLIFF_PACKETS, strict=True) if frame[p])
         parts.append(f"cliff={cliffs or '-'}")
-    for pid, label in ((17, "ir"), (52, "irL"), (53, "irR")):
+    for pid, label in zip(IR_PACKETS, ("ir", "irL", "irR"), strict=True):
         if frame.get(pid):
             ir = IRCharacter.decode(frame[pid])
             beams = "".join(
@@ -83,9 +90,9 @@ def sensor_line(snapshot: Snapshot) -> str:
                 if on
             )
             parts.append(f"{label}={ir.code}{'(' + beams + ')' if beams else ''}")
-    if 34 in frame and frame.charging_sources.any:
+    if frame.carries(CHARGING_SOURCES_PACKETS) and frame.charging_sources.any:
         parts.append("charger=" + ("home" if frame.charging_sources.home_base else "internal"))
-    if 25 in frame and 26 in frame:
+    if frame.carries(BATTERY_PACKETS):
         parts.append(f"battery={frame.battery_percent:.0f}%")
     odo = snapshot.odometry
     parts.append(f"odo=({odo.x_mm / 1000:+.2f},{odo.y_mm / 1000:+.2f})m")

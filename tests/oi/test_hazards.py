@@ -9,6 +9,7 @@ import pytest
 
 from roomba_bt.oi.bits import LIGHT_BUMPER_AHEAD_BITS, BumpsWheelDrops, LightBumper
 from roomba_bt.oi.frames import (
+    BATTERY_PACKETS,
     BUMPS_PACKETS,
     CHARGING_SOURCES_PACKETS,
     CHARGING_STATE_PACKETS,
@@ -18,6 +19,8 @@ from roomba_bt.oi.frames import (
     IR_PACKETS,
     LIGHT_BUMP_SIGNAL_PACKETS,
     LIGHT_BUMPER_PACKETS,
+    REQUESTED_DRIVE_PACKETS,
+    REQUESTED_WHEELS_PACKETS,
     VIRTUAL_WALL_PACKETS,
     SensorFrame,
     layout_for,
@@ -133,9 +136,20 @@ def test_any_cliff_names_the_missing_cliff_packet() -> None:
         (CHARGING_SOURCES_PACKETS, ("charging_sources",)),
         (CHARGING_STATE_PACKETS, ("charging_state",)),
         (ENCODER_PACKETS, ("left_encoder_counts", "right_encoder_counts")),
+        (BATTERY_PACKETS, ("battery_charge", "battery_capacity")),
+        (REQUESTED_DRIVE_PACKETS, ("requested_velocity", "requested_radius")),
+        (REQUESTED_WHEELS_PACKETS, ("requested_right_velocity", "requested_left_velocity")),
     ],
 )  # fmt: skip
 def test_accessor_packet_groups_name_their_packets(
     ids: tuple[int, ...], names: tuple[str, ...]
 ) -> None:
     assert tuple(PACKETS[i].name for i in ids) == names
+
+
+def test_a_frame_carries_a_group_only_whole() -> None:
+    partial = _frame({}, ids=(7, 9, 10, 11))
+    assert partial.carries(BUMPS_PACKETS)
+    assert not partial.carries(CLIFF_PACKETS)  # 12 is missing
+    assert not partial.carries(HAZARD_PACKETS)
+    assert _frame({}).carries(HAZARD_PACKETS)
