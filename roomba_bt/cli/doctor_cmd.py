@@ -31,18 +31,27 @@ from enum import IntEnum
 from typing import TYPE_CHECKING, Any, TextIO
 
 from roomba_bt.cli.arguments import add_command, baud_or_auto
+from roomba_bt.oi.modes import OI_MODE_PACKET
+from roomba_bt.oi.packets import packet_ids
 
 if TYPE_CHECKING:
     from roomba_bt.robot.handshake import Probe
 
 #: Seconds of stream the round-trip reads (33 frames at one per 15 ms).
 STREAM_CHECK_S = 0.5
-#: The round-trip's packets: bumps, mode, charging state, and two whose ranges differ between
-#: the models, wall signal and stasis (a 14-byte frame: fits the 28 bytes of 19200).
-STREAM_CHECK_PACKETS = (7, 35, 21, 27, 58)
-#: The battery step's Query List: charging state, voltage, current, charge, capacity,
-#: charging sources, OI mode.
-STATUS_PACKETS = (21, 22, 23, 25, 26, 34, 35)
+#: The round-trip's packets whose ranges differ between the models (the profile's evidence).
+MODEL_RANGE_PACKETS = packet_ids("wall_signal", "stasis")
+#: The round-trip's packets: bumps, mode, charging state, and the two above (a 14-byte frame:
+#: fits the 28 bytes of 19200).
+STREAM_CHECK_PACKETS = (
+    packet_ids("bumps_wheel_drops", "oi_mode", "charging_state") + MODEL_RANGE_PACKETS
+)
+#: The battery step's Query List.
+STATUS_PACKETS = packet_ids(
+    "charging_state", "voltage", "current", "battery_charge", "battery_capacity",
+    "charging_sources", "oi_mode",
+)  # fmt: skip
+(CHARGING_STATE_PACKET,) = packet_ids("charging_state")
 #: How long the banner may take to print after Reset, and the quiet that ends it.
 BANNER_LIMIT_S = 6.0
 BANNER_QUIET_S = 0.5
@@ -354,7 +363,7 @@ def _profile(
         header_in_checksum=header,
         banner=banner,
         reset_tried=reset_tried,
-        readings={pid: readings[pid] for pid in (27, 58) if pid in readings},
+        readings={pid: readings[pid] for pid in MODEL_RANGE_PACKETS if pid in readings},
     )
     why = "; ".join(found.evidence)
     best = found.best
@@ -372,7 +381,7 @@ def _profile(
 
 def _status(transport: Any, profile: Any, plus_one: bool, report: Report) -> None:
     from roomba_bt.oi import commands as oi
-    from roomba_bt.oi.bits import ChargingSources, ChargingState
+    from roomba_bt.oi.bits import ChargingState
     from roomba_bt.oi.modes import mode_from_packet
     from roomba_bt.oi.stream import ReplyParser
     from roomba_bt.robot.handshake import drain
@@ -393,36 +402,41 @@ def _status(transport: Any, profile: Any, plus_one: bool, report: Report) -> Non
             "the line drops bytes or another program talks to the robot: run doctor again",
         )
         raise _Failed(DoctorExit.UNHEALTHY)
-    charge, capacity = frame[25], frame[26]
+    charge, capacity = frame.battery_charge_mah, frame.battery_capacity_mah
     percent = f"{100 * charge / capacity:.0f} %" if capacity else "capacity 0 (no battery?)"
     report.facts["battery"] = percent
     report.ok(
         "battery",
-        f"{charge} of {capacity} mAh ({percent}), {frame[22] / 1000:.2f} V, {frame[23]} mA",
+        f"{charge} of {capacity} mAh ({percent}), {frame.voltage_mv / 1000:.2f} V, "
+        f"{frame.current_ma} mA",
     )
+    charging = frame[CHARGING_STATE_PACKET]
     try:
-        state = ChargingState(frame[21]).name.lower().replace("_", " ")
+        state = ChargingState(charging).name.lower().replace("_", " ")
     except ValueError:
-        state = f"unknown state {frame[21]}"
-    sources = ChargingSources.from_byte(frame[34])
+        state = f"unknown state {charging}"
+    sources = frame.charging_sources
     powered = [
         name
         for name, on in (("home base", sources.home_base), ("internal", sources.internal_charger))
         if on
     ]
     report.facts["charging"] = state
-    report.ok("charging", f"{state} (21 = {frame[21]}); sources: {', '.join(powered) or 'none'}")
-    mode = mode_from_packet(frame[35], plus_one)
+    report.ok(
+        "charging",
+        f"{state} ({CHARGING_STATE_PACKET} = {charging}); sources: {', '.join(powered) or 'none'}",
+    )
+    mode = mode_from_packet(frame.oi_mode_raw, plus_one)
     if mode is None:
         report.fail(
             "mode",
-            f"packet 35 reads {frame[35]}, which is no OI mode",
+            f"packet {OI_MODE_PACKET} reads {frame.oi_mode_raw}, which is no OI mode",
             "another program may be talking to the robot; run doctor again",
         )
         raise _Failed(DoctorExit.UNHEALTHY)
     report.facts["mode"] = mode.label
     quirk = "mode + 1 firmware: the runtime subtracts 1" if plus_one else "as is"
-    report.ok("mode", f"{mode.label} (35 = {frame[35]}, {quirk})")
+    report.ok("mode", f"{mode.label} ({OI_MODE_PACKET} = {frame.oi_mode_raw}, {quirk})")
 
 
 def _missions(profile: Any, baud: int, report: Report) -> None:

@@ -31,16 +31,14 @@ from dataclasses import dataclass
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
-from roomba_bt.oi.packets import PACKETS, PACKETS_BY_NAME
+from roomba_bt.oi.packets import PACKETS, packet_ids
 from roomba_bt.robot.wake import PULSE_LENGTH_S, HangUpLine, WakeLine
 from roomba_bt.transport.base import Transport
 
 #: The OI's rates, likeliest first: the default, then the rate of the Clean-held power-off.
 OI_RATES: tuple[int, ...] = (115200, 19200)
 #: OI mode, charging state, charging sources: one byte each, each with a narrow range.
-PROBE_PACKETS: tuple[int, ...] = tuple(
-    PACKETS_BY_NAME[name].id for name in ("oi_mode", "charging_state", "charging_sources")
-)
+PROBE_PACKETS: tuple[int, ...] = packet_ids("oi_mode", "charging_state", "charging_sources")
 #: How long the line must stay quiet after Start and the pause before the query.
 QUIET_S = 0.03
 #: Give up draining after this long (a stream at another rate never goes quiet).
