@@ -33,7 +33,7 @@ def group_for(baud: int) -> int | None:
 
 
 def register(sub: Any) -> None:
-    parser = add_command(sub, "sensors", sensors_command, """show every decoded sensor, live""")
+    parser = add_command(sub, "sensors", sensors_command, "show every decoded sensor, live")
     add_far_end_options(
         parser,
         port_help="serial device or URL; default: the built-in simulator",

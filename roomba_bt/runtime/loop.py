@@ -30,7 +30,7 @@ from roomba_bt.behaviours.reasons import failure_reason
 from roomba_bt.mission import RUNTIME_PACKETS
 from roomba_bt.oi.encode import Command
 from roomba_bt.oi.errors import BandwidthError
-from roomba_bt.oi.frames import SensorFrame
+from roomba_bt.oi.frames import BATTERY_PACKETS, SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
@@ -51,7 +51,7 @@ log = logging.getLogger(__name__)
 _new_tuple = tuple.__new__
 
 #: Battery charge and capacity, for the run summary: streamed when the budget allows.
-SUMMARY_PACKETS: tuple[int, ...] = (25, 26)
+SUMMARY_PACKETS: tuple[int, ...] = BATTERY_PACKETS
 
 
 def stream_request(mission_packets: Iterable[int], baud: int) -> tuple[int, ...]:
@@ -180,7 +180,7 @@ class MissionRunner(BaseHandle):
         self._held_slots = 0
         self._blackboard: py_trees.blackboard.Client | None = None
         self._layout: object = None
-        #: where the encoder counts (43, 44) are in the stream's frames, if it carries them
+        #: where the encoder counts are in the stream's frames, if it carries them (the layout's)
         self._encoder_slots: tuple[int, int] | None = None
         #: hazards shown to the tree once two frames agree, or the robot's own reaction does
         self._hazards = HazardConfirmation()
@@ -397,8 +397,7 @@ class MissionRunner(BaseHandle):
         layout = frame.layout
         if layout is not self._layout:  # the same for every frame of a stream
             self._layout = layout
-            index = layout.index
-            self._encoder_slots = (index[43], index[44]) if 43 in frame and 44 in frame else None
+            self._encoder_slots = layout.encoder_slots
         odometry = self._odometry
         if self._encoder_slots is not None:
             values = frame.values
