@@ -9,7 +9,9 @@ best of several runs (the machine may be shared):
   the walls, the dock's plate and beams and the light bumpers are all in play;
 * the same with a typical mission's packet list (bumps, IR, charging, mode, encoders);
 * with a trivial client ticking: every frame is parsed by ``oi.StreamParser`` and answered
-  with one Drive command, through :class:`~roomba_bt.sim.link.SimLink` (no behaviour tree).
+  with one Drive command, through :class:`~roomba_bt.sim.link.SimLink` (no behaviour tree);
+* a robot moving as in an episode: the host bytes of a recorded dock and bump-and-turn
+  episode replayed at the steps they came (``bench/sim_replay.py``), no mission running.
 
 Times are CPU time of this process (one core), so that other work on a shared machine does
 not count against the simulator.
@@ -20,6 +22,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
+from bench import sim_replay
 from roomba_bt.oi import commands
 from roomba_bt.oi.stream import StreamParser
 from roomba_bt.sim import Pose, SimLink, Simulator, load_world
@@ -112,6 +115,8 @@ def main() -> None:
         ("stream+physics, group 100 (80 B/frame)", _physics_only([100])),
         ("stream+physics, mission packets (27 B/frame)", _physics_only(MISSION_PACKETS)),
         ("with a trivial client (StreamParser + Drive/frame)", _with_client()),
+        ("replay of a dock episode (empty room)", lambda: sim_replay.prepare("dock")[1]),
+        ("replay of a bump-and-turn episode (corridor)", lambda: sim_replay.prepare("bump")[1]),
     ]
     for label, run in cases:
         per_step = _best(run)

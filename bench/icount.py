@@ -7,11 +7,15 @@ the same count whatever else the machine is doing. Each figure is the difference
 in fresh interpreters, with and without the work, so start-up and imports cancel out:
 
 * simulator cases of ``bench/bench_sim.py``: (count for N steps - count for 0 steps) / N;
+  the replays of recorded episodes (``bench/sim_replay.py``: the simulator alone, its robot
+  moving as in a dock or bump-and-turn episode): the same over the recording's steps;
 * whole episodes of a shipped mission (``roomba_bt.evaluate``, simulator included):
   (count for the episodes - count for none) / ticks.
 
 Slow (valgrind runs Python about 50x slower): 1 to 3 minutes on 2 cores. Not part of
 ``make bench``; the figures go into ``docs/performance.md`` beside the timings.
+
+``python -m bench.icount --sim [case ...]``: only the simulator's cases (all, or those named).
 
 ``python -m bench.icount --against 626461e``: issue 18's mission + runtime cost per tick in
 instructions, that commit's code (``git archive``: its package and missions) against this
@@ -36,7 +40,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 STEPS = 2000
-SIM_CASES = ("open", "g100", "mission", "client")
+SIM_CASES = ("open", "g100", "mission", "client", "dock", "bump")
+#: the cases that replay a recorded episode (bench/sim_replay.py), all its steps
+REPLAYS = ("dock", "bump")
 #: (mission, world, episodes, eval fields): seeds from 100, as in bench_routines
 EPISODES = (
     ("dock.yaml", "empty-room", 3, {"within_m": 1.5}),
@@ -49,7 +55,13 @@ _COLLECTED = re.compile(r"Collected : (\d+)")
 def _child_sim(case: str, steps: int) -> None:
     """The work counted: ``steps`` steps of one bench_sim case (the robot built either way)."""
     import bench.bench_sim as sim_bench
+    from bench import sim_replay
 
+    if case in REPLAYS:
+        _, replay = sim_replay.prepare(case)
+        if steps:
+            replay()
+        return
     sim_bench.STEPS = steps
     prepare = {
         "open": sim_bench._physics_only([100], open_floor=True),
@@ -115,9 +127,13 @@ def _count(*args: str, code: Path = ROOT) -> tuple[int, str]:
 
 
 def _sim_line(case: str) -> str:
-    with_work, _ = _count("sim", case, str(STEPS))
+    from bench import sim_replay
+
+    steps = sim_replay.load(case)["steps"] if case in REPLAYS else STEPS
+    with_work, _ = _count("sim", case, str(steps))
     without, _ = _count("sim", case, "0")
-    return f"   simulator, {case:<8} {(with_work - without) / STEPS:10,.0f} instructions / step"
+    label = f"{case} (replay)" if case in REPLAYS else case
+    return f"   simulator, {label:<13} {(with_work - without) / steps:10,.0f} instructions / step"
 
 
 def _episode_line(mission: str, world: str, runs: int) -> str:
@@ -198,6 +214,11 @@ def main(argv: list[str]) -> int:
         return 2
     if argv[:1] == ["--against"] and len(argv) == 2:
         return against(argv[1])
+    if argv[:1] == ["--sim"]:  # only the simulator's cases (those named, or all)
+        with ThreadPoolExecutor(max_workers=2) as pool:
+            for line in pool.map(_sim_line, argv[1:] or SIM_CASES):
+                print(line, flush=True)
+        return 0
     with ThreadPoolExecutor(max_workers=2) as pool:  # each job runs two valgrind processes
         futures = [pool.submit(_sim_line, case) for case in SIM_CASES]
         futures += [pool.submit(_episode_line, m, w, n) for m, w, n, _ in EPISODES]
