@@ -302,7 +302,8 @@ class Motion(Sensing):
     def _blocked(self, x: float, y: float) -> bool:
         """Would the body at (x, y) overlap a wall it does not overlap now?"""
         r2 = ROBOT_RADIUS_MM * ROBOT_RADIUS_MM
-        for seg in self._near_segments():
+        for wall in self._near_segments():
+            seg = wall[6]
             d_new = closest_point(x, y, seg)[2]
             if d_new < r2 and d_new < closest_point(self.x, self.y, seg)[2] - 1e-9:
                 return True

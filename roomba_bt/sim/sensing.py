@@ -55,6 +55,12 @@ VIRTUAL_WALL_CHARACTER = 162
 _NEAR_MARGIN_MM = 300.0
 _RAY_RANGES = (LIGHT_BUMP_RANGE_MM,) * 6 + (WALL_SENSOR_RANGE_MM,)
 _Line = tuple[float, float, float, float, float, float, float]
+#: A wall as the sensing pass reads it, computed once per world: a, b - a, |b - a|^2 (1 for
+#: a point), its line (:func:`_line`) and the segment itself
+_Wall = tuple[float, float, float, float, float, _Line, Segment]
+#: One ray of the light bumper (0-5) or the wall sensor (6): its index and direction
+_Ray = tuple[int, float, float]
+_DARK = (0,) * 6  # the six light bumper signals with no wall in sight
 #: packet 7's bump bits of each side of the bumper (the timeline's ``bump`` events say sides)
 BUMP_SIDE_BITS = {"right": 1, "left": 2, "both": 3}
 _BUMP_SIDES = {bits: side for side, bits in BUMP_SIDE_BITS.items()}
@@ -67,6 +73,25 @@ def _line(seg: Segment) -> _Line:
     tx, ty = ((bx - ax) / length, (by - ay) / length) if length else (1.0, 0.0)
     nx, ny = -ty, tx
     return (nx, ny, nx * ax + ny * ay, tx, ty, tx * ax + ty * ay, length)
+
+
+def _wall(seg: Segment) -> _Wall:
+    ax, ay, bx, by = seg
+    ex, ey = bx - ax, by - ay
+    return (ax, ay, ex, ey, ex * ex + ey * ey or 1.0, _line(seg), seg)
+
+
+def _rays(theta: float) -> tuple[_Ray, ...]:
+    """The rays' directions for a heading ``theta``: the light bumper's six, then the wall
+    sensor's, which looks right of the heading (a ray through the centre, started on the
+    bumper: near enough to the real sensor at -60 deg, looking right)."""
+    ct, st = math.cos(theta), math.sin(theta)
+    rays = [
+        (i, ct * ca - st * sa, st * ca + ct * sa)
+        for i, (ca, sa) in enumerate(_LIGHT_BUMP_DIRECTIONS)
+    ]
+    rays.append((6, st, -ct))
+    return tuple(rays)
 
 
 _NEAR_RADIUS_MM = ROBOT_RADIUS_MM + LIGHT_BUMP_RANGE_MM + 40.0 + _NEAR_MARGIN_MM
@@ -134,9 +159,12 @@ class Sensing(RobotState):
         v = self.values
         v[28] = v[29] = v[30] = v[31] = CLIFF_FLOOR_SIGNAL
         self._geometry_dirty = True
-        self._near: tuple[Segment, ...] = ()
+        self._near: tuple[_Wall, ...] = ()
         self._near_at = (math.inf, math.inf)
-        self._lines = {seg: _line(seg) for seg in world.solid}
+        self._walls = tuple(_wall(seg) for seg in world.solid)
+        #: the rays' directions and the heading they are for (computed again when it changes)
+        self._rays: tuple[_Ray, ...] = _rays(math.nan)
+        self._rays_theta = math.nan
         self._drops = world.drops
         self._dirt = world.dirt
         self._beams = _DockBeams(world.dock) if world.dock is not None else None
@@ -207,23 +235,19 @@ class Sensing(RobotState):
         """The light bumper (packets 45-51) and the wall sensor (8, 27): rays from the
         bumper against the walls close enough to show; returns packet 45's bits."""
         v = self.values
-        light_bits = 0
-        ct, st = math.cos(theta), math.sin(theta)
-        rays = [(ct * ca - st * sa, st * ca + ct * sa) for ca, sa in _LIGHT_BUMP_DIRECTIONS]
-        # the wall sensor looks right of the heading (a ray through the centre, started
-        # on the bumper: near enough to the real sensor at -60 deg, looking right)
-        rays.append((st, -ct))
+        if theta != self._rays_theta:  # driving straight: the same rays as the last step
+            self._rays = _rays(theta)
+            self._rays_theta = theta
         # Each close wall as a line: unit normal n, unit tangent t, n.a, t.a, length. A ray
         # from the centre c in direction d meets it at c + k d, k = (n.a - n.c) / (n.d);
         # the ray starts on the bumper (k = R), the hit's place along the wall is t.(c+kd).
         hits = list(_RAY_RANGES)
+        lit: list[int] = []  # the rays that hit a wall in range (a ray may come twice)
         radius = ROBOT_RADIUS_MM
         for nx, ny, w, tx, ty, ta, length in close_lines:
             p = w - (nx * x + ny * y)
             q = tx * x + ty * y - ta
-            i = -1
-            for c, s in rays:
-                i += 1
+            for i, c, s in self._rays:
                 dn = nx * c + ny * s
                 if dn * p <= 0.0:
                     continue  # pointing away from (or along) this wall
@@ -234,22 +258,22 @@ class Sensing(RobotState):
                 along = q + k * (tx * c + ty * s)
                 if 0.0 <= along <= length:
                     hits[i] = t
-        for i in range(6):
+                    lit.append(i)
+        # only the rays that hit have a signal (two or three of seven, usually)
+        v[46:52] = _DARK
+        v[27] = v[8] = 0
+        light_bits = 0
+        for i in lit:
             d = hits[i]
-            if d < LIGHT_BUMP_RANGE_MM:
+            if i == 6:
+                top = self.profile.wall_signal_maximum
+                v[27] = int(top * (1.0 - d / WALL_SENSOR_RANGE_MM) ** 2)
+                v[8] = 1 if d < WALL_SENSOR_TRIGGER_MM else 0
+            else:
                 signal = int(4095 * (1.0 - d / LIGHT_BUMP_RANGE_MM) ** 2)
+                v[46 + i] = signal
                 if signal >= LIGHT_BUMP_THRESHOLD:
                     light_bits |= 1 << i
-            else:
-                signal = 0
-            v[46 + i] = signal
-        d = hits[6]
-        if d < WALL_SENSOR_RANGE_MM:
-            top = self.profile.wall_signal_maximum
-            v[27] = int(top * (1.0 - d / WALL_SENSOR_RANGE_MM) ** 2)
-            v[8] = 1 if d < WALL_SENSOR_TRIGGER_MM else 0
-        else:
-            v[27] = v[8] = 0
         self._rays_on = True
         return light_bits
 
@@ -290,13 +314,10 @@ class Sensing(RobotState):
         near = self._near if dx * dx + dy * dy <= _NEAR_MARGIN2 else self._near_segments()
         bumps = 0
         reach2 = _REACH2
-        lines = self._lines
         contact2 = _CONTACT2
         nearest2 = _NEAREST2
-        for seg in near:
-            ax, ay, bx, by = seg
-            ex, ey = bx - ax, by - ay
-            t = ((x - ax) * ex + (y - ay) * ey) / (ex * ex + ey * ey or 1.0)
+        for ax, ay, ex, ey, length2, line, _ in near:
+            t = ((x - ax) * ex + (y - ay) * ey) / length2
             t = 0.0 if t < 0.0 else 1.0 if t > 1.0 else t
             cx, cy = ax + t * ex, ay + t * ey
             dx, dy = x - cx, y - cy
@@ -304,7 +325,7 @@ class Sensing(RobotState):
             if d2 < nearest2:
                 nearest2 = d2
             if d2 < reach2:
-                close_lines.append(lines[seg])
+                close_lines.append(line)
                 if d2 < contact2:
                     a = wrap_angle(math.atan2(cy - y, cx - x) - theta)
                     if -BUMP_HALF_SPAN < a < BUMP_HALF_SPAN:
@@ -323,14 +344,14 @@ class Sensing(RobotState):
         self._free2 = free * free if free > 0.0 else 0.0
         return bumps
 
-    def _near_segments(self) -> tuple[Segment, ...]:
+    def _near_segments(self) -> tuple[_Wall, ...]:
         """The walls within reach of any sensor, kept until the robot has moved 0.3 m."""
         nx, ny = self._near_at
         dx, dy = self.x - nx, self.y - ny
         if dx * dx + dy * dy > _NEAR_MARGIN2:
             limit = _NEAR_RADIUS_MM**2
             x, y = self.x, self.y
-            self._near = tuple(s for s in self.world.solid if closest_point(x, y, s)[2] < limit)
+            self._near = tuple(w for w in self._walls if closest_point(x, y, w[6])[2] < limit)
             self._near_at = (x, y)
         return self._near
 

@@ -83,6 +83,30 @@ def test_wall_sensor_sees_a_wall_close_on_the_right() -> None:
     assert host.query([8, 27])[27] == 0
 
 
+RAY_PACKETS = [8, 27, 45, 46, 47, 48, 49, 50, 51]
+
+
+@pytest.mark.parametrize(
+    "wheels", [(100, -100), (150, 150), (160, 60)], ids=["spin", "straight", "arc"]
+)
+def test_the_rays_of_a_moving_robot_are_those_of_a_robot_placed_where_it_is(
+    wheels: tuple[int, int],
+) -> None:
+    # the rays' directions are kept while the heading stays the same (sensing.py): spinning,
+    # driving straight along a wall and arcing into a corner, every step's light bumper and
+    # wall sensor read what a robot built at that pose reads
+    host = make(ROOM, start=pose(2.0 - 0.25, 0.22, 60), mode="full")
+    host.send(C.drive_direct(*wheels))
+    seen = set()
+    for _ in range(40):
+        host.sim.step()
+        moving = host.query(RAY_PACKETS)
+        placed = make(ROOM, start=host.sim.pose, mode="full").query(RAY_PACKETS)
+        assert [moving[p] for p in RAY_PACKETS] == [placed[p] for p in RAY_PACKETS]
+        seen.add(tuple(moving[p] for p in RAY_PACKETS))
+    assert len(seen) > 10  # the signals changed as the robot moved
+
+
 CLIFFS = """
 rooms: [[[0, 0], [4, 0], [4, 4], [0, 4]]]
 drops: [{rect: [2.0, 0, 4, 4]}]
