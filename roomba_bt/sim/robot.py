@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import math
 
-from roomba_bt.oi.bits import WHEEL_DROP_BITS
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.opcodes import COMMANDS, opcodes
 from roomba_bt.oi.profiles import CREATE2, RobotProfile
@@ -147,7 +146,7 @@ class Simulator(OIProtocol):
         if self._geometry_dirty:
             self._sense()
         if mode is _SAFE:
-            if v[7] & WHEEL_DROP_BITS or v[9] or v[10] or v[11] or v[12] or self.docked:
+            if self._safety_due:
                 self._safety()
         elif mode is _FULL and self._drops and not self.fallen and self._over_drop(self.x, self.y):
             self._fall()

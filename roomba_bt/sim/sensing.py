@@ -170,6 +170,10 @@ class Sensing(RobotState):
         self._beams = _DockBeams(world.dock) if world.dock is not None else None
         self._prev_bumps = 0
         self._prev_cliffs = 0
+        #: a wheel drop, a cliff or the dock's contacts: what Safe mode's own rules act on
+        #: (``OIProtocol._safety``), kept as they change instead of read from five packets
+        #: every step
+        self._safety_due = False
         self._rays_on = True
         self._ir_stale = True
         #: how far the robot can move before a wall could stop it (motion's fast path)
@@ -230,6 +234,7 @@ class Sensing(RobotState):
             if docked != self.docked:
                 self.docked = docked
                 self._event("docked" if docked else "undocked", "")
+                self._check_safety()
 
     def _sense_rays(self, x: float, y: float, theta: float, close_lines: list[_Line]) -> int:
         """The light bumper (packets 45-51) and the wall sensor (8, 27): rays from the
@@ -284,6 +289,13 @@ class Sensing(RobotState):
         if bumps & WHEEL_DROP_BITS and not self._prev_bumps & WHEEL_DROP_BITS:
             self._event("wheel_drop", "")
         self._prev_bumps = bumps
+        self._check_safety()
+
+    def _check_safety(self) -> None:
+        """A wheel drop, a cliff or the dock's contacts changed (packet 7, 9-12, 34)."""
+        self._safety_due = bool(
+            self._prev_bumps & WHEEL_DROP_BITS or self._prev_cliffs or self.docked
+        )
 
     def _cliffs_over_drops(self, x: float, y: float, theta: float) -> int:
         """Bits of the cliff sensors over a drop (left 1, front left 2, front right 4, right 8)."""
@@ -305,6 +317,7 @@ class Sensing(RobotState):
         if cliffs and not self._prev_cliffs:
             self._event("cliff", f"{cliffs:04b}")
         self._prev_cliffs = cliffs
+        self._check_safety()
 
     def _sense_walls(self, x: float, y: float, theta: float, close_lines: list[_Line]) -> int:
         """The bumper bits from walls touching the robot; the walls close enough for the light

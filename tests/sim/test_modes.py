@@ -128,6 +128,23 @@ robot: {start: {at: [2, 2], heading: 0}}
     assert any("cliff while driving forward" in e.detail for e in host.sim.events)
 
 
+def test_safe_mode_acts_on_a_wheel_drop_and_not_once_the_robot_is_put_down() -> None:
+    text = """
+rooms: [[[0, 0], [4, 0], [4, 4], [0, 4]]]
+robot: {start: {at: [1, 2], heading: 0}}
+events: [{at: 0.3, kind: lift, duration: 0.5}]
+"""
+    host = make(text)
+    host.send(C.drive_direct(100, 100))
+    host.run(0.6)
+    assert host.sim.mode is OIMode.PASSIVE
+    assert any("safety: wheel drop" in e.detail for e in host.sim.events)
+    host.run(0.6)  # put down again
+    host.send(C.safe(), C.drive_direct(100, 100))
+    host.run(1.0)
+    assert host.sim.mode is OIMode.SAFE and host.sim.x > 1050.0
+
+
 def test_full_mode_has_no_cliff_safety_and_the_robot_falls() -> None:
     text = """
 rooms: [[[0, 0], [4, 0], [4, 4], [0, 4]]]
