@@ -303,6 +303,7 @@ def _cycle_starter(name: str) -> Callable[[OIProtocol, bytes], None]:
     cycle = CYCLES[name]
 
     def start(robot: OIProtocol, args: bytes) -> None:
+        robot._settle_far()  # a cycle reads the far sensors every step, from its first
         robot.builtin = cycle(name, robot.time, robot._rng)
         robot._event("builtin", name)
 

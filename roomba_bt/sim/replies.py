@@ -28,6 +28,7 @@ from roomba_bt.oi.packets import VALID_PACKET_IDS, expand
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import byte_sum_for
 from roomba_bt.sim.power import Power
+from roomba_bt.sim.sensing import FAR_PACKETS
 from roomba_bt.sim.state import CONSTANTS
 
 #: n-bytes is one byte: a longer stream cannot be framed
@@ -44,7 +45,8 @@ class _Packer:
     """Packs a list of packet ids from the flat value list in one ``struct`` call."""
 
     __slots__ = (
-        "byte_sum", "getter", "has_angle", "has_distance", "size", "snapshot", "struct", "sum_bias",
+        "byte_sum", "far", "getter", "has_angle", "has_distance", "size", "snapshot", "struct",
+        "sum_bias",
     )  # fmt: skip
 
     def __init__(
@@ -69,6 +71,8 @@ class _Packer:
             getter if len(idx) > 1 else (lambda v: (getter(v),))
         )
         members = {m for p in ids for m in expand(p)}
+        #: packs a far sensor's packet (sensing.py: measured every step while streamed)
+        self.far = not FAR_PACKETS.isdisjoint(members)
         self.has_distance = 19 in members
         self.has_angle = 20 in members
         #: the values need preparing before a frame: distance/angle since last read, noise
@@ -142,6 +146,7 @@ class StreamOutput(Power):
             return
         self._stream_ids = ids
         self._stream = _Packer(ids, self.profile, True, bool(self.faults.noise)) if ids else None
+        self._settle_far()  # a stream reads them every step (sensing.py)
         self._stream_paused = False
         self.values[38] = min(len(ids), 108)
 
@@ -207,6 +212,8 @@ class StreamOutput(Power):
         packer = self._reply_packers.get(ids)
         if packer is None:
             packer = self._reply_packers[ids] = _Packer(ids, self.profile, False)
+        if packer.far:
+            self._settle_far()
         return packer.struct.pack(*packer.getter(self._snapshot_values(packer)))
 
     def _snapshot_values(self, packer: _Packer) -> list[int]:

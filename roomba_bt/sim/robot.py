@@ -144,7 +144,9 @@ class Simulator(OIProtocol):
         if left or right or self.left_speed or self.right_speed:
             self._move(left, right, dt)
         if self._geometry_dirty:
-            self._sense()
+            # the far sensors measured now only if read every step (sensing.py)
+            stream = self._stream
+            self._sense(self.builtin is not None or (stream is not None and stream.far))
         if mode is _SAFE:
             if self._safety_due:
                 self._safety()
@@ -206,6 +208,7 @@ class Simulator(OIProtocol):
             elif kind == "stream gap end":
                 if self._stream is None:  # unless a new one came meanwhile
                     self._stream = self._gapped_stream
+                    self._settle_far()  # the far sensors may be streamed again
                 self._gapped_stream = None
             elif kind == "sleep":
                 self.fall_asleep("fault: sleep_at")  # deaf until BRC, as the 5-min sleep

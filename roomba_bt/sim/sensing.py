@@ -15,6 +15,14 @@ A layer of the simulator (see state.py): :meth:`Sensing._sense` runs on most ste
 reads the pose and writes the value list through ``self`` directly, and geometry is measured
 again only when the pose or the world changed (``_geometry_dirty``), walls only once the robot
 may have come within reach of one (``_free_at``, ``_free2``).
+
+The far sensors (the light bumper, the wall sensor and the IR receivers: 8, 13, 17, 27,
+45-53) change nothing on the robot itself; they are only read. When nothing reads them every
+step (no stream of them, no built-in cycle driving), :meth:`Sensing._sense` keeps what they
+were due to be measured from (the pose, the close walls, the step) and
+:meth:`Sensing._settle_far` measures them from it when they are read: before a reply, and
+when a stream of them or a built-in cycle starts (both read them every step). The same
+values, measured once instead of every step; a bump-and-turn mission streams none of them.
 """
 
 from __future__ import annotations
@@ -52,6 +60,8 @@ RECEIVER_INNER = math.radians(5.0)
 RECEIVER_OUTER = math.radians(90.0)
 #: The virtual wall's character on the omni receiver (it also sets packet 13).
 VIRTUAL_WALL_CHARACTER = 162
+#: the far sensors' packets: wall (8, 27), virtual wall (13), IR (17, 52, 53), light bumper
+FAR_PACKETS = frozenset((8, 13, 17, 27, 45, 46, 47, 48, 49, 50, 51, 52, 53))
 _NEAR_MARGIN_MM = 300.0
 _RAY_RANGES = (LIGHT_BUMP_RANGE_MM,) * 6 + (WALL_SENSOR_RANGE_MM,)
 _Line = tuple[float, float, float, float, float, float, float]
@@ -176,6 +186,11 @@ class Sensing(RobotState):
         self._safety_due = False
         self._rays_on = True
         self._ir_stale = True
+        #: the far sensors owed (see the module's docstring): the arguments of
+        #: :meth:`_far_rays` and :meth:`_sense_ir` as they were due, or None
+        self._owed_rays: tuple[float, float, float, list[_Line]] | None = None
+        self._owed_ir: tuple[float, float, float, int, bool] | None = None
+        self._far_owed = False
         #: how far the robot can move before a wall could stop it (motion's fast path)
         self._clearance = 0.0
         #: where walls were last measured, and the squared distance it may move from there
@@ -185,8 +200,9 @@ class Sensing(RobotState):
 
     # Few calls (the rays only near a wall): it runs on every step the robot moves, and a call
     # costs about a tenth of a microsecond, 3 % of a whole step.
-    def _sense(self) -> None:
-        """Every geometric sensor, from the pose and the world (only when either changed)."""
+    def _sense(self, far: bool = True) -> None:
+        """Every geometric sensor, from the pose and the world (only when either changed);
+        the far sensors now if ``far`` (something reads them every step), else owed."""
         self._geometry_dirty = False
         v = self.values
         x, y, theta = self.x, self.y, self.theta
@@ -207,21 +223,23 @@ class Sensing(RobotState):
         v[7] = bumps
         if bumps != self._prev_bumps:
             self._bumps_changed(bumps)
-        # light bumpers and the wall sensor (rays from the bumper against close walls)
-        light_bits = 0
-        if close_lines:
-            light_bits = self._sense_rays(x, y, theta, close_lines)
-        elif self._rays_on:
-            v[46] = v[47] = v[48] = v[49] = v[50] = v[51] = v[27] = v[8] = 0
-            self._rays_on = False
-        v[45] = light_bits
+        if far:  # nothing owed: settled as soon as something reads them every step
+            self._far_rays(x, y, theta, close_lines)
+        else:
+            self._owed_rays = (x, y, theta, close_lines)
+            self._far_owed = True
         cliffs = 15 if down else self._cliffs_over_drops(x, y, theta) if self._drops else 0
         if self._dirt:
             v[15] = 0 if down else self.world.dirt_at(x, y)
         if cliffs != self._prev_cliffs:
             self._cliffs_changed(cliffs)
         if not self.ticks & 1 or self._ir_stale:
-            self._sense_ir()
+            if far:
+                self._sense_ir(x, y, theta, self.ticks, self.dock_powered)
+            else:
+                self._owed_ir = (x, y, theta, self.ticks, self.dock_powered)
+                self._far_owed = True
+            self._ir_stale = False
         # on the contacts: within the dock's tolerances of the docked pose, not lifted
         beams = self._beams
         if beams is not None:
@@ -235,6 +253,31 @@ class Sensing(RobotState):
                 self.docked = docked
                 self._event("docked" if docked else "undocked", "")
                 self._check_safety()
+
+    def _settle_far(self) -> None:
+        """Measure the far sensors owed, from the pose and step they were due at: before a
+        reply and whenever something starts to read them every step (a stream of them, a
+        built-in cycle), after which :meth:`_sense` measures them as they are due."""
+        if not self._far_owed:
+            return
+        rays, ir = self._owed_rays, self._owed_ir
+        self._owed_rays = self._owed_ir = None
+        self._far_owed = False
+        if rays is not None:
+            self._far_rays(*rays)
+        if ir is not None:
+            self._sense_ir(*ir)
+
+    def _far_rays(self, x: float, y: float, theta: float, close_lines: list[_Line]) -> None:
+        """The light bumper and the wall sensor: rays from the bumper against close walls."""
+        v = self.values
+        light_bits = 0
+        if close_lines:
+            light_bits = self._sense_rays(x, y, theta, close_lines)
+        elif self._rays_on:
+            v[46] = v[47] = v[48] = v[49] = v[50] = v[51] = v[27] = v[8] = 0
+            self._rays_on = False
+        v[45] = light_bits
 
     def _sense_rays(self, x: float, y: float, theta: float, close_lines: list[_Line]) -> int:
         """The light bumper (packets 45-51) and the wall sensor (8, 27): rays from the
@@ -371,19 +414,18 @@ class Sensing(RobotState):
     def _over_drop(self, x: float, y: float) -> bool:
         return any(point_in_polygon(x, y, drop) for drop in self._drops)
 
-    def _sense_ir(self) -> None:
-        """The IR receivers. A character takes tens of milliseconds to send, so they are
+    def _sense_ir(self, x: float, y: float, theta: float, ticks: int, powered: bool) -> None:
+        """The IR receivers at the pose (``x``, ``y``, ``theta``) of step ``ticks``, the
+        dock ``powered`` or not. A character takes tens of milliseconds to send, so they are
         updated every other step (30 ms), and at once when the world changes."""
-        self._ir_stale = False
         v = self.values
-        x, y, theta = self.x, self.y, self.theta
         c, s = math.cos(theta), math.sin(theta)
         omni_x, omni_y = x + OMNI_FORWARD_MM * c, y + OMNI_FORWARD_MM * s
         omni = left = right = 0
         beams = self._beams
         if beams is not None:
             dx, dy = omni_x - beams.x, omni_y - beams.y
-            if dx * dx + dy * dy < beams.reach2 and self.dock_powered:
+            if dx * dx + dy * dy < beams.reach2 and powered:
                 character = beams.character
                 omni = character(omni_x, omni_y)
                 fx = x + RECEIVER_FORWARD_MM * c
@@ -412,7 +454,7 @@ class Sensing(RobotState):
                         wall = lighthouse_character(lh.id, LighthouseBeam.FORCE_FIELD)
                         break
         v[13] = 1 if wall == VIRTUAL_WALL_CHARACTER else 0
-        if wall and (not omni or self.ticks & 2):  # both seen: they alternate
+        if wall and (not omni or ticks & 2):  # both seen: they alternate
             omni = wall
         v[17] = omni
         v[52] = left

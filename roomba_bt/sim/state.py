@@ -115,6 +115,10 @@ class RobotState:
         values[7]   bumps and wheel drops      values[35]        OI mode (packet 35)
         values[19]  distance since last read   values[46..51]    light bump signals
         values[59 + k] == k                    (k = 0..255)
+
+    The far sensors' packets (light bumper, wall sensor, IR receivers: sensing.py) are
+    measured when read unless a stream of them or a built-in cycle reads them every step:
+    ask for them with a reply (Query List) rather than read them here.
     """
 
     #: whether ``trace`` grows (the Simulator's ``trace`` argument)

@@ -7,6 +7,7 @@ import pytest
 
 from roomba_bt.oi import commands as C
 from roomba_bt.oi.ir import IRSource, LighthouseBeam
+from roomba_bt.sim.sensing import FAR_PACKETS
 from roomba_bt.sim.world import ROBOT_RADIUS_MM
 
 from .helpers import make, pose
@@ -105,6 +106,60 @@ def test_the_rays_of_a_moving_robot_are_those_of_a_robot_placed_where_it_is(
         assert [moving[p] for p in RAY_PACKETS] == [placed[p] for p in RAY_PACKETS]
         seen.add(tuple(moving[p] for p in RAY_PACKETS))
     assert len(seen) > 10  # the signals changed as the robot moved
+
+
+DOCK_ROOM = """
+rooms: [[[0, 0], [3, 0], [3, 3], [0, 3]]]
+dock: {at: [1.5, 0], facing: 90}
+virtual_walls: [{from: [0.3, 1.2], to: [0.3, 2.8]}]
+robot: {start: {at: [1.5, 0.22], heading: 0}}
+events: [{at: 3.0, kind: charger_step, duration: 1.0}]
+"""
+
+
+def test_far_sensors_not_streamed_read_as_if_measured_every_step() -> None:
+    # Not streamed, the light bumper, wall sensor and IR receivers are measured when read,
+    # from the pose and step they were due at (sensing.py): a robot streaming only its
+    # bumper answers every query, on odd and even steps, as one streaming them all; and a
+    # stream of them started later sends the same frames from its first. The robot circles
+    # the room 0.22 m from its walls, past the dock, its beams and a virtual wall, and back.
+    far = sorted(FAR_PACKETS)
+    lazy, eager = make(DOCK_ROOM, mode="full"), make(DOCK_ROOM, mode="full")
+    lazy.stream([7])
+    eager.stream([7, *far])
+    for host in (lazy, eager):
+        host.send(C.drive(400, 1280))
+    seen = set()
+    for step in range(1400):  # even: the first frame below is on an odd step, without IR
+        for host in (lazy, eager):
+            host.sim.step()
+            host.sim.read()
+        # every odd step (often the IR receivers owed since the step before) and every
+        # third even one; none in the last 100 steps, back into the dock's beams
+        if step < 1300 and (step % 2 == 0 or step % 6 == 1):
+            owed = lazy.query(far)
+            measured = eager.query(far)
+            assert [owed[p] for p in far] == [measured[p] for p in far], step
+            seen.add(tuple(owed[p] for p in far))
+    assert len(seen) > 30 and len({values[far.index(17)] for values in seen}) > 2
+    for host in (lazy, eager):
+        host.stream(far)
+    assert lazy.frames(0.3) == eager.frames(0.3)
+
+
+def test_a_builtin_cycle_reads_far_sensors_measured_as_it_starts() -> None:
+    # the light bumper owed while nothing streamed it is measured when Clean starts: its
+    # first step sees the wall ahead (and backs off) as a robot streaming it does
+    lazy, eager = make(ROOM), make(ROOM)
+    lazy.stream([7])
+    eager.stream([7, 45, 46, 47, 48, 49, 50, 51])
+    for host in (lazy, eager):
+        host.send(C.drive_direct(200, 200))
+        host.run(3.6)  # 0.11 m from the east wall: the light bumper sees it
+        host.send(C.clean())
+        host.run(0.3)
+    assert eager.sim.x < 2000.0 - 170.0 - 110.0 - 30.0  # backed off at once
+    assert lazy.sim.pose == eager.sim.pose
 
 
 CLIFFS = """
