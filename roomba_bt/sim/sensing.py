@@ -64,6 +64,8 @@ VIRTUAL_WALL_CHARACTER = 162
 FAR_PACKETS = frozenset((8, 13, 17, 27, 45, 46, 47, 48, 49, 50, 51, 52, 53))
 _NEAR_MARGIN_MM = 300.0
 _RAY_RANGES = (LIGHT_BUMP_RANGE_MM,) * 6 + (WALL_SENSOR_RANGE_MM,)
+#: the farthest any ray reaches from the robot's centre, and 1 mm more
+_RAY_REACH = ROBOT_RADIUS_MM + max(LIGHT_BUMP_RANGE_MM, WALL_SENSOR_RANGE_MM) + 1.0
 _Line = tuple[float, float, float, float, float, float, float]
 #: A wall as the sensing pass reads it, computed once per world: a, b - a, |b - a|^2 (1 for
 #: a point), its line (:func:`_line`) and the segment itself
@@ -295,10 +297,15 @@ class Sensing(RobotState):
         for nx, ny, w, tx, ty, ta, length in close_lines:
             p = w - (nx * x + ny * y)
             q = tx * x + ty * y - ta
+            if p < 0.0:  # the normal turned towards the wall (negation is exact: same k)
+                nx, ny, p = -nx, -ny, -p
+            # A ray meets the wall within its range only if n.d > p / (R + range): the others
+            # are passed over at once (with a margin; the exact test below decides the rest).
+            least = p / _RAY_REACH
             for i, c, s in self._rays:
                 dn = nx * c + ny * s
-                if dn * p <= 0.0:
-                    continue  # pointing away from (or along) this wall
+                if dn <= least:
+                    continue  # pointing away from (or along) this wall, or out of range
                 k = p / dn
                 t = k - radius
                 if t < 0.0 or t >= hits[i]:
