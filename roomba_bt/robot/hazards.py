@@ -42,6 +42,9 @@ common case (no hazard, or the same hazards as before) is one comparison.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from operator import itemgetter
+
 from roomba_bt.oi.bits import BUMP_BITS, WHEEL_DROP_BITS
 from roomba_bt.oi.encode import Command
 from roomba_bt.oi.frames import BUMPS_PACKETS, CLIFF_PACKETS, FrameLayout, SensorFrame
@@ -52,6 +55,11 @@ _PACKET_7_HAZARDS = BUMP_BITS | WHEEL_DROP_BITS  # 0b1111
 _CLIFF_BITS = {pid: 1 << (4 + i) for i, pid in enumerate(CLIFF_PACKETS)}
 #: Drive's radius for a turn in place (the spec's -1 and 1): the velocity is a wheel's speed
 _SPIN_RADII = (-1, 1)
+
+
+def _no_hazard_packets(values: tuple[int, ...]) -> object:
+    """What :attr:`HazardConfirmation._raw` reads of a layout without hazard packets."""
+    return ()
 
 
 def drives_forward(command: Command) -> bool:
@@ -79,12 +87,25 @@ class HazardConfirmation:
     (what a corrupted frame would have stopped the robot for).
     """
 
-    __slots__ = ("_layout", "_previous", "_slots", "held", "pending", "unconfirmed")
+    __slots__ = (
+        "_layout",
+        "_previous",
+        "_previous_raw",
+        "_raw",
+        "_slots",
+        "held",
+        "pending",
+        "unconfirmed",
+    )
 
     def __init__(self) -> None:
         self._layout: FrameLayout | None = None
         self._slots: tuple[int | None, tuple[tuple[int, int], ...]] = (None, ())
+        #: the hazard packets' raw values of a frame, read in C (``operator.itemgetter``)
+        self._raw: Callable[[tuple[int, ...]], object] = _no_hazard_packets
         self._previous = 0  # the folded hazard word of the frame before
+        #: the frame before's hazard packets as :attr:`_raw` read them (None: no frame yet)
+        self._previous_raw: object = None
         self.pending = 0  # the bits held back from the frame before
         self.held = 0
         self.unconfirmed = 0
@@ -98,7 +119,11 @@ class HazardConfirmation:
     def _bind(self, layout: FrameLayout) -> None:
         index = layout.index
         cliffs = tuple((index[pid], bit) for pid, bit in _CLIFF_BITS.items() if pid in index)
-        self._slots = (index.get(_BUMP_PACKET), cliffs)
+        bump = index.get(_BUMP_PACKET)
+        self._slots = (bump, cliffs)
+        slots = ([] if bump is None else [bump]) + [slot for slot, _ in cliffs]
+        self._raw = itemgetter(*slots) if slots else _no_hazard_packets
+        self._previous_raw = None  # another layout's values do not compare
         self._layout = layout
 
     def word(self, frame: SensorFrame) -> int:
@@ -115,7 +140,18 @@ class HazardConfirmation:
 
     def frame(self, frame: SensorFrame, robot_reacted: bool = False) -> SensorFrame:
         """``frame`` with the hazard bits that are new since the frame before cleared, unless
-        ``robot_reacted`` (the robot's own fall to Passive in this frame agrees with them)."""
+        ``robot_reacted`` (the robot's own fall to Passive in this frame agrees with them).
+
+        Most frames carry the same hazard packets as the frame before (none, or the same
+        bumper held): then nothing is new, an onset held back from the frame before is
+        confirmed, and the word is not folded again."""
+        if frame.layout is not self._layout:
+            self._bind(frame.layout)
+        raw = self._raw(frame._values)
+        if raw == self._previous_raw:
+            self.pending = 0
+            return frame
+        self._previous_raw = raw
         word = self.word(frame)
         previous, self._previous = self._previous, word
         if self.pending and not self.pending & word:

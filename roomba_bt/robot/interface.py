@@ -24,7 +24,7 @@ from typing import NamedTuple, Protocol
 from roomba_bt.oi.encode import Command
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import OIMode
-from roomba_bt.oi.odometry import arc_from_wheels, counts_to_mm, encoder_delta
+from roomba_bt.oi.odometry import MM_PER_COUNT
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
 
 _new_tuple = tuple.__new__
@@ -53,27 +53,34 @@ class Odometry(NamedTuple):
     def advance(self, left_counts: int, right_counts: int, wheel_base_mm: float) -> Odometry:
         """The odometry after a frame carrying these raw encoder counts (built by
         ``tuple.__new__``: once a tick, and the named tuple's own ``__new__`` is a Python
-        call)."""
-        if left_counts == self.left_counts and right_counts == self.right_counts:
+        call). The arithmetic of :func:`~roomba_bt.oi.odometry.encoder_delta`,
+        :func:`~roomba_bt.oi.odometry.counts_to_mm` and
+        :func:`~roomba_bt.oi.odometry.arc_from_wheels` is written out here, the same
+        operations in the same order (the same floats): three calls a tick cost more than the
+        arithmetic (tests/robot/test_odometry.py checks it against them)."""
+        previous_left, previous_right = self.left_counts, self.right_counts
+        if left_counts == previous_left and right_counts == previous_right:
             return self  # standing still (most frames of a docked or waiting robot)
-        if self.left_counts is None or self.right_counts is None:
+        if previous_left is None or previous_right is None:
             return _new_tuple(Odometry, (
                 self.x_mm, self.y_mm, self.theta_rad, self.distance_mm, self.angle_rad,
                 left_counts, right_counts, self.path_mm,
             ))  # fmt: skip
-        left = counts_to_mm(encoder_delta(self.left_counts, left_counts))
-        right = counts_to_mm(encoder_delta(self.right_counts, right_counts))
+        left = (((left_counts - previous_left + 0x8000) & 0xFFFF) - 0x8000) * MM_PER_COUNT
+        right = (((right_counts - previous_right + 0x8000) & 0xFFFF) - 0x8000) * MM_PER_COUNT
         if left == 0.0 and right == 0.0:
             return _new_tuple(Odometry, (
                 self.x_mm, self.y_mm, self.theta_rad, self.distance_mm, self.angle_rad,
                 left_counts, right_counts, self.path_mm,
             ))  # fmt: skip
-        dist, dtheta = arc_from_wheels(left, right, wheel_base_mm)
-        mid = self.theta_rad + dtheta / 2.0
+        dist = (left + right) / 2.0
+        dtheta = (right - left) / wheel_base_mm
+        theta = self.theta_rad
+        mid = theta + dtheta / 2.0
         return _new_tuple(Odometry, (
             self.x_mm + dist * math.cos(mid),
             self.y_mm + dist * math.sin(mid),
-            self.theta_rad + dtheta,
+            theta + dtheta,
             self.distance_mm + dist,
             self.angle_rad + dtheta,
             left_counts,

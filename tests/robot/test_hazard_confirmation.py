@@ -142,3 +142,76 @@ def test_a_hold_while_not_driving_forward_writes_nothing() -> None:
     connection.hold_forward()
     assert written == [commands.spin(100, clockwise=False).data]
     assert connection.release_forward() is None
+
+
+# ---------------------------------------------------------------- the unchanged-frame skip
+# HazardConfirmation.frame skips folding the hazard word when the hazard packets' raw values
+# are those of the frame before: the outcome must be the one of folding every frame.
+
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+OTHER_LAYOUT = layout_for((12, 35, 7, 43, 44), CREATE2, True)  # fewer cliffs, other slots
+
+
+class FoldEveryFrame:
+    """The rule of robot/hazards.py with the word folded for every frame, no skip."""
+
+    def __init__(self) -> None:
+        self.previous = self.pending = self.held = self.unconfirmed = 0
+        self.words = HazardConfirmation()  # only its word(), which folds afresh
+
+    def frame(self, frame: SensorFrame, robot_reacted: bool) -> tuple[int, ...]:
+        word = self.words.word(frame)
+        previous, self.previous = self.previous, word
+        if self.pending and not self.pending & word:
+            self.unconfirmed += 1
+        new = word & ~previous
+        if not new or robot_reacted:
+            self.pending = 0
+            return frame.values
+        self.pending = new
+        self.held += 1
+        return self.words._without(frame, new).values
+
+
+FRAMES = st.tuples(
+    st.integers(0, 15), st.integers(0, 1), st.integers(0, 1), st.booleans(), st.booleans()
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(FRAMES, min_size=1, max_size=40))
+def test_skipping_unchanged_frames_changes_nothing(
+    stream: list[tuple[int, int, int, bool, bool]],
+) -> None:
+    confirm, reference = HazardConfirmation(), FoldEveryFrame()
+    for bumps, cliff_a, cliff_b, other_layout, reacted in stream:
+        if other_layout:  # a new stream's layout: the values before it do not compare
+            values = {7: bumps, 12: cliff_a, 35: 2, 43: 5, 44: 5}
+            shown = confirm.frame(OTHER_LAYOUT.decode(OTHER_LAYOUT.pack(values)), reacted)
+            expected = reference.frame(OTHER_LAYOUT.decode(OTHER_LAYOUT.pack(values)), reacted)
+        else:
+            shown = confirm.frame(
+                frame(bumps=bumps, cliff_left=cliff_a, cliff_right=cliff_b), reacted
+            )
+            expected = reference.frame(
+                frame(bumps=bumps, cliff_left=cliff_a, cliff_right=cliff_b), reacted
+            )
+        assert shown.values == expected
+        assert (confirm.pending, confirm.held, confirm.unconfirmed) == (
+            reference.pending,
+            reference.held,
+            reference.unconfirmed,
+        )
+
+
+def test_a_new_layout_is_compared_afresh() -> None:
+    """The same raw values at the same slots of another layout are not "the frame before":
+    a cliff on the right after one on the left is new, and held back."""
+    left, right = layout_for((7, 9, 35), CREATE2, True), layout_for((7, 12, 35), CREATE2, True)
+    confirm = HazardConfirmation()
+    confirm.frame(left.decode(left.pack({7: 0, 9: 1, 35: 2})))
+    assert confirm.frame(left.decode(left.pack({7: 0, 9: 1, 35: 2}))).cliff_left  # confirmed
+    switched = confirm.frame(right.decode(right.pack({7: 0, 12: 1, 35: 2})))
+    assert not switched.cliff_right and confirm.held == 2
