@@ -163,7 +163,13 @@ class EpisodeResult:
 
 
 class _MeasuredSimulator(Simulator):
-    """A simulator that also records, per step, what the evaluation measures."""
+    """A simulator that also records, per step, what the evaluation measures.
+
+    Its work is on every step of every episode, so it does only what changed: the bearing
+    around the world's centre is taken again only when the robot moved (standing still, the
+    loop angle cannot change nor the progress mark move), and the longest stall is kept as
+    the time of the last step without progress, folded in when the mark moves (the stall
+    grows with time between two marks: its largest value is its last)."""
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
@@ -172,8 +178,12 @@ class _MeasuredSimulator(Simulator):
         self._centre = _world_centre(self.world)
         self._loop_angle = 0.0
         self._last_bearing = math.atan2(self.y - self._centre[1], self.x - self._centre[0])
+        self._last_xy = (self.x, self.y)
         self._progress_mark = (0.0, 0.0)  # (loop angle, time)
-        self.longest_stall = 0.0
+        #: the longest stall before the progress mark, and the time of the last step since
+        #: the mark without progress (None: none yet)
+        self._longest_before_mark = 0.0
+        self._stalled_at: float | None = None
         self._radius = max(1.0, math.hypot(self.x - self._centre[0], self.y - self._centre[1]))
         self.reaction_steps: list[tuple[int, int]] = []
         self._since_onset: int | None = None  # steps since the last onset, while awaited
@@ -191,14 +201,27 @@ class _MeasuredSimulator(Simulator):
             else:
                 self.contact_steps[-1] += 1
         self._in_contact = pressed
-        bearing = math.atan2(self.y - self._centre[1], self.x - self._centre[0])
-        self._loop_angle += math.remainder(bearing - self._last_bearing, math.tau)
-        self._last_bearing = bearing
-        angle, since = self._progress_mark
-        if abs(self._loop_angle - angle) * self._radius >= 300.0:
-            self._progress_mark = (self._loop_angle, self.time)
-        else:
-            self.longest_stall = max(self.longest_stall, self.time - since)
+        xy = (self.x, self.y)
+        if xy != self._last_xy:
+            self._last_xy = xy
+            centre = self._centre
+            bearing = math.atan2(xy[1] - centre[1], xy[0] - centre[0])
+            self._loop_angle += math.remainder(bearing - self._last_bearing, math.tau)
+            self._last_bearing = bearing
+            if abs(self._loop_angle - self._progress_mark[0]) * self._radius >= 300.0:
+                self._longest_before_mark = self.longest_stall
+                self._progress_mark = (self._loop_angle, self.time)
+                self._stalled_at = None
+                return
+        self._stalled_at = self.time
+
+    @property
+    def longest_stall(self) -> float:
+        """The longest time (s) with less than 0.3 m of progress around the world's centre."""
+        stalled_at = self._stalled_at
+        if stalled_at is None:
+            return self._longest_before_mark
+        return max(self._longest_before_mark, stalled_at - self._progress_mark[1])
 
     def _watch_reaction(self, waited: int) -> None:
         """The wheels as requested before the step, ``waited`` steps after a bump frame."""

@@ -40,7 +40,6 @@ from roomba_bt.robot.hazards import HazardConfirmation
 from roomba_bt.robot.interface import (
     SLOT_SECONDS,
     BaseHandle,
-    ModeChange,
     Odometry,
     Snapshot,
 )
@@ -185,6 +184,10 @@ class MissionRunner(BaseHandle):
         #: hazards shown to the tree once two frames agree, or the robot's own reaction does
         self._hazards = HazardConfirmation()
         self._fallback_seen: object = None
+        #: the connection's mode model and command writer, read on every tick (one hop, not
+        #: a chain of properties)
+        self._modes = connection.modes
+        self._writer = connection.writer
 
     # ---------------------------------------------------------------- RobotHandle
     #: this tick's snapshot: an attribute set by each tick (the leaves read it several times
@@ -375,8 +378,8 @@ class MissionRunner(BaseHandle):
         confirm = self._hazards.frame
         for older in batch[:-1] if count > 1 else ():
             confirm(older.frame)
-        connection = self.connection
-        fallback = connection.last_fallback
+        modes = self._modes
+        fallback = modes.last_fallback
         reacted = fallback is not self._fallback_seen
         self._fallback_seen = fallback
         frame: SensorFrame = confirm(newest.frame, reacted)
@@ -411,9 +414,9 @@ class MissionRunner(BaseHandle):
             frame,
             tick,
             (tick - self._held_slots) * SLOT_SECONDS,
-            connection.mode,
+            modes.mode,
             odometry,
-            fallback if isinstance(fallback, ModeChange) else None,
+            fallback,
             self._profile,
             summary.frames_lost,
         ))  # fmt: skip
@@ -428,9 +431,9 @@ class MissionRunner(BaseHandle):
         return snapshot
 
     def _flush(self) -> None:
-        if self._hazards.pending or self.connection.forward_held:
+        if self._hazards.pending or self._writer.forward_held:
             self._bump_reflex()
-        if not len(self._outbox):
+        if not self._outbox:
             return
         for command in self._outbox.drain():
             try:
