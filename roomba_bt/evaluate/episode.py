@@ -16,6 +16,7 @@ the world's loop (for patrols). Episodes are plain data (picklable) so that
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 import os
@@ -26,12 +27,18 @@ from pathlib import Path
 from typing import Any
 
 from roomba_bt.evaluate.sources import MissionSources, bundle_mission, bundle_world
-from roomba_bt.mission import NO_PERMISSIONS, MissionError, Permissions, load_mission
-from roomba_bt.oi.profiles import get_profile
+from roomba_bt.mission import (
+    NO_PERMISSIONS,
+    CompiledMission,
+    MissionError,
+    Permissions,
+    load_mission,
+)
+from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome
-from roomba_bt.sim import Faults, SimLink, Simulator, World, load_world
-from roomba_bt.sim.world import DockSpec, parse_world
+from roomba_bt.sim import Faults, SimLink, Simulator, World
+from roomba_bt.sim.world import DockSpec, parse_world, world_text
 
 #: Dock fields an evaluation may override (``--dock buoy_range=0.5``), with their units:
 #: lengths in metres, angles in degrees, as in a world file.
@@ -249,10 +256,10 @@ def build_world(spec: EpisodeSpec) -> World:
     """The spec's world with its dock and battery overrides applied."""
     try:
         if spec.world_file is not None:
-            name, text = spec.world_file
-            world = parse_world(text, name)
+            source, text = spec.world_file
         else:
-            world = load_world(spec.world)
+            text, source = world_text(spec.world)
+        world = _parsed_world(text, source)
     except Exception as exc:  # WorldError: every problem, already worded for the user
         raise EvaluationError(str(exc)) from None
     if spec.dock:
@@ -262,6 +269,14 @@ def build_world(spec: EpisodeSpec) -> World:
     if spec.battery is not None:
         world = replace(world, battery=spec.battery)
     return world
+
+
+@functools.lru_cache(maxsize=16)
+def _parsed_world(text: str, source: str) -> World:
+    """A world's text parsed once per process: the episodes of an evaluation all read the
+    same world, and parsing its YAML again was most of an episode's set-up. A
+    :class:`World` is frozen: the episodes share it (their overrides make new ones)."""
+    return parse_world(text, source)
 
 
 def _override_dock(dock: DockSpec, overrides: dict[str, Any]) -> DockSpec:
@@ -321,6 +336,45 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
         logger.setLevel(level)
 
 
+#: Missions compiled in this process, by what decides the compiled mission (the file, the
+#: parameters, the profile, the permissions), with the text of every file it read: the
+#: next episode of an evaluation builds its tree again from the checked plan
+#: (:meth:`CompiledMission.rebuilt`) instead of compiling the same texts again.
+_COMPILED: dict[
+    tuple[object, ...], tuple[CompiledMission, tuple[tuple[Path, str | None], ...]]
+] = {}
+_COMPILED_KEPT = 16
+
+
+def _mission(
+    path: Path, params: tuple[tuple[str, str], ...], profile: RobotProfile, granted: Permissions
+) -> CompiledMission:
+    """The compiled mission for an episode, a tree of its own: compiled once per process
+    while the texts of its files stay the same (each is read again and compared)."""
+    key = (path.resolve(), params, profile.name, granted)
+    cached = _COMPILED.get(key)
+    if cached is not None:
+        mission, texts = cached
+        if all(_text_of(file) == text for file, text in texts):
+            return mission.rebuilt()
+    try:
+        mission = load_mission(path, dict(params), profile=profile, permissions=granted)
+    except MissionError as exc:
+        raise EvaluationError("\n".join(str(d) for d in exc.diagnostics)) from None
+    if len(_COMPILED) >= _COMPILED_KEPT:
+        del _COMPILED[next(iter(_COMPILED))]  # the oldest
+    _COMPILED[key] = (mission, tuple((file, _text_of(file)) for file in mission.files))
+    return mission
+
+
+def _text_of(path: Path) -> str | None:
+    """A mission's file as it is now (None: unreadable, which never matches a text)."""
+    try:
+        return path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return None
+
+
 def _run_episode(spec: EpisodeSpec) -> EpisodeResult:
     profile = get_profile(spec.profile)
     path = spec.sources.materialise() if spec.sources is not None else spec.mission
@@ -328,10 +382,7 @@ def _run_episode(spec: EpisodeSpec) -> EpisodeResult:
     if spec.sources is not None:  # the bundle holds what the submitter's check allowed
         folder = Path(path).parents[len(Path(spec.sources.main).parts) - 1]
         granted = replace(granted, include_dirs=(*granted.include_dirs, folder))
-    try:
-        mission = load_mission(path, dict(spec.params), profile=profile, permissions=granted)
-    except MissionError as exc:
-        raise EvaluationError("\n".join(str(d) for d in exc.diagnostics)) from None
+    mission = _mission(Path(path), spec.params, profile, granted)
     world = build_world(spec)
     pose = start_pose(world, spec)
     faults = Faults(odometry_error=spec.odometry_error) if spec.odometry_error else None

@@ -120,6 +120,7 @@ def _compile(
         files=tuple(dict.fromkeys(loader.files)),
         blackboard_initial={k: d.initial for k, d in ctx.keys.items() if d.has_initial},
         blackboard_keys={k: d.type.describe() for k, d in ctx.keys.items()},
+        plan=tree,
     )
     return mission, []
 

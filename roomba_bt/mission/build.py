@@ -9,8 +9,9 @@ a compiled mission unchanged.
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -52,6 +53,21 @@ class CompiledMission:
     blackboard_keys: Mapping[str, str] = field(default_factory=dict)
     #: each parameter's value as a mission writes it, with its unit (``side: 50 cm``)
     parameters_shown: Mapping[str, str] = field(default_factory=dict)
+    #: the checked tree ``root`` was built from (:meth:`rebuilt`); None: not kept
+    plan: Node | None = field(default=None, repr=False, compare=False)
+
+    def rebuilt(self) -> CompiledMission:
+        """The same mission with a tree of its own: new behaviours, in their initial state,
+        built again from the checked plan (an evaluation's next episode, without compiling
+        the same text again). The blackboard's initial values are copied too: a run may
+        change a mutable one in place."""
+        if self.plan is None:
+            raise ValueError(f"mission {self.name!r} kept no plan to build a tree from")
+        return replace(
+            self,
+            root=build(self.plan),
+            blackboard_initial=copy.deepcopy(dict(self.blackboard_initial)),
+        )
 
     def setup(self, robot: RobotHandle, **kwargs: Any) -> None:
         """Hand the robot to every node (py_trees idiom: hardware arrives in ``setup``) and

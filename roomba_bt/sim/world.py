@@ -836,6 +836,12 @@ def shipped_worlds() -> tuple[str, ...]:
 
 def load_world(path_or_name: str | pathlib.Path) -> World:
     """A shipped world by name (``"empty-room"``) or a world file by path."""
+    return parse_world(*world_text(path_or_name))
+
+
+def world_text(path_or_name: str | pathlib.Path) -> tuple[str, str]:
+    """The text of a shipped world by name or of a world file by path, and its source (the
+    file's path) for :func:`parse_world`; :class:`WorldError` if there is none to read."""
     path = pathlib.Path(path_or_name)
     if not path.is_file():
         shipped = WORLDS_DIR / f"{path_or_name}.yaml"
@@ -856,4 +862,4 @@ def load_world(path_or_name: str | pathlib.Path) -> World:
                 )
             ]
         ) from None
-    return parse_world(text, str(path))
+    return text, str(path)
