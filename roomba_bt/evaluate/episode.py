@@ -34,6 +34,7 @@ from roomba_bt.mission import (
     Permissions,
     load_mission,
 )
+from roomba_bt.oi.opcodes import opcodes
 from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome
@@ -386,7 +387,9 @@ def _run_episode(spec: EpisodeSpec) -> EpisodeResult:
     world = build_world(spec)
     pose = start_pose(world, spec)
     faults = Faults(odometry_error=spec.odometry_error) if spec.odometry_error else None
-    simulator = _MeasuredSimulator(world, profile, spec.seed, faults, start=pose, coverage=True)
+    simulator = _MeasuredSimulator(
+        world, profile, spec.seed, faults, start=pose, coverage=bool(mission.sends & BRUSHES)
+    )
     stack = RunStack(mission, SimLink(simulator), profile=profile, timeout_s=spec.timeout_s)
     summary = stack.run()
     if summary.outcome is Outcome.INTERRUPTED:  # Ctrl-C (or SIGTERM) stops the evaluation,
@@ -427,6 +430,11 @@ def _run_episode(spec: EpisodeSpec) -> EpisodeResult:
         coverage=_coverage(simulator, spec.start_area or ""),
     )
 
+
+#: What runs the brushes (Motors, PWM Motors, the firmware's Clean, Spot and Max): a mission
+#: whose leaves send none of these never cleans, and its simulator keeps no coverage grid
+#: (building one was a fifth of an episode's set-up, and it was updated on every step).
+BRUSHES = frozenset(opcodes("motors", "pwm_motors", "clean", "spot", "max"))
 
 #: how often an episode's coverage curve is sampled (s)
 COVERAGE_SAMPLE_S = 30.0

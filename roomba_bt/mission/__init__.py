@@ -90,10 +90,12 @@ def _compile(
     keys = KeyCheck()
     keys.run(tree, frozenset(k for k, d in ctx.keys.items() if d.has_initial))
     packets: set[int] = set()
+    sends: set[int] = set()
     needed: set[OIMode] = set()
     for node in tree.walk():
         if node.decl is not None:
             packets.update(node.decl.packets(node.params))
+            sends.update(node.decl.sends)
             if node.decl.modes != ALL_MODES and node.decl.is_actuator:
                 needed.update(node.decl.modes)
             after = node.decl.mode_after(node.params)
@@ -120,6 +122,7 @@ def _compile(
         files=tuple(dict.fromkeys(loader.files)),
         blackboard_initial={k: d.initial for k, d in ctx.keys.items() if d.has_initial},
         blackboard_keys={k: d.type.describe() for k, d in ctx.keys.items()},
+        sends=frozenset(sends),
         plan=tree,
     )
     return mission, []

@@ -53,6 +53,8 @@ class CompiledMission:
     blackboard_keys: Mapping[str, str] = field(default_factory=dict)
     #: each parameter's value as a mission writes it, with its unit (``side: 50 cm``)
     parameters_shown: Mapping[str, str] = field(default_factory=dict)
+    #: the opcodes its leaves may send (their ``sends=``)
+    sends: frozenset[int] = frozenset()
     #: the checked tree ``root`` was built from (:meth:`rebuilt`); None: not kept
     plan: Node | None = field(default=None, repr=False, compare=False)
 

@@ -93,3 +93,29 @@ def test_a_rebuilt_mission_has_its_own_blackboard_initial_values() -> None:
     assert again.root is not mission.root
     with pytest.raises(ValueError, match="no plan"):
         dataclasses.replace(mission, plan=None).rebuilt()
+
+
+def test_a_coverage_grid_only_for_a_mission_that_can_run_the_brushes(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import roomba_bt.sim.robot as sim_robot
+
+    built: list[object] = []
+
+    class Counted(sim_robot.SweptArea):
+        def __init__(self, *args: object, **kwargs: object) -> None:
+            built.append(self)
+            super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(sim_robot, "SweptArea", Counted)
+    path = tmp_path / "shuttle.yaml"
+    path.write_text(SHUTTLE, encoding="utf-8")
+    assert run_episode(EpisodeSpec(str(path), "empty-room", timeout_s=5.0)).coverage is None
+    assert not built  # Drive and Safe only: no grid
+    brushing = SHUTTLE.replace(
+        "    - mode: safe\n", "    - mode: safe\n    - motors: {main_brush: true}\n"
+    )
+    path.write_text(brushing, encoding="utf-8")
+    result = run_episode(EpisodeSpec(str(path), "empty-room", timeout_s=5.0))
+    assert len(built) == 1
+    assert result.coverage is not None and result.coverage.final > 0.0
