@@ -210,8 +210,10 @@ class Motion(Sensing):
             uy = dist * math.sin(heading)
             if abs(dist) >= self._clearance and self._blocked(x + ux, y + uy):
                 fraction = self._reach(x, y, ux, uy)
-            self.x = x + ux * fraction
-            self.y = y + uy * fraction
+                ux *= fraction
+                uy *= fraction
+            self.x = x + ux
+            self.y = y + uy
         v = self.values
         if fraction == 1.0:
             # free motion (the usual step): what the wheels did is the same every step

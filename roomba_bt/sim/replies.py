@@ -105,7 +105,11 @@ class StreamOutput(Power):
         self._reply_packers: dict[tuple[int, ...], _Packer] = {}
         #: no fault touches the bytes on their way out: a frame goes straight into _out
         self._plain_output = not (
-            faults.corrupt_rate or faults.latency or faults.bit_flip_rate or faults.truncate_rate
+            faults.corrupt_rate
+            or faults.latency
+            or faults.bit_flip_rate
+            or faults.truncate_rate
+            or faults.drop_rate
         )
         #: bytes still to send before the next bit flip (drawn geometrically: one draw per
         #: flip, not one per byte)

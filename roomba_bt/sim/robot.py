@@ -173,16 +173,23 @@ class Simulator(OIProtocol):
             values = self._snapshot_values(stream) if stream.snapshot else self.values
             body = stream.struct.pack(*stream.getter(values))
             frame = body + CHECKSUM_BYTE[(stream.byte_sum(body) - stream.sum_bias) & 0xFF]
-            if faults.drop_rate and self._fault_rng.random() < faults.drop_rate:
-                return
-            if faults.truncate_rate and self._fault_rng.random() < faults.truncate_rate:
-                frame = frame[: self._fault_rng.randrange(1, len(frame))]
-            self.frames_sent += 1
-            if self._plain_output:
+            if self._plain_output:  # no fault on the way out: straight into the output
+                self.frames_sent += 1
                 self.bytes_sent += len(frame)
                 self._out += frame
             else:
-                self._emit(frame)
+                self._send_frame(frame)
+
+    def _send_frame(self, frame: bytes) -> None:
+        """A stream frame through the faults of the link: dropped, cut short, then
+        corrupted, flipped or delayed (:meth:`_emit`)."""
+        faults = self.faults
+        if faults.drop_rate and self._fault_rng.random() < faults.drop_rate:
+            return
+        if faults.truncate_rate and self._fault_rng.random() < faults.truncate_rate:
+            frame = frame[: self._fault_rng.randrange(1, len(frame))]
+        self.frames_sent += 1
+        self._emit(frame)
 
     def run(self, seconds: float) -> bytes:
         """Step for ``seconds`` of simulated time; return everything sent meanwhile."""

@@ -38,6 +38,7 @@ from roomba_bt.sim.world import ROBOT_RADIUS_MM, DockSpec
 # Sensor geometry (robot frame: angle from the heading, CCW positive).
 _LIGHT_BUMP_ANGLES = tuple(math.radians(a) for a in (65.0, 38.0, 12.0, -12.0, -38.0, -65.0))
 _LIGHT_BUMP_DIRECTIONS = tuple((math.cos(a), math.sin(a)) for a in _LIGHT_BUMP_ANGLES)
+_LIGHT_BUMP_RAYS = tuple((i, ca, sa) for i, (ca, sa) in enumerate(_LIGHT_BUMP_DIRECTIONS))
 LIGHT_BUMP_RANGE_MM = 150.0
 LIGHT_BUMP_THRESHOLD = 100
 _CLIFF_ANGLES = tuple(math.radians(a) for a in (60.0, 20.0, -20.0, -60.0))
@@ -98,10 +99,7 @@ def _rays(theta: float) -> tuple[_Ray, ...]:
     sensor's, which looks right of the heading (a ray through the centre, started on the
     bumper: near enough to the real sensor at -60 deg, looking right)."""
     ct, st = math.cos(theta), math.sin(theta)
-    rays = [
-        (i, ct * ca - st * sa, st * ca + ct * sa)
-        for i, (ca, sa) in enumerate(_LIGHT_BUMP_DIRECTIONS)
-    ]
+    rays = [(i, ct * ca - st * sa, st * ca + ct * sa) for i, ca, sa in _LIGHT_BUMP_RAYS]
     rays.append((6, st, -ct))
     return tuple(rays)
 
@@ -294,6 +292,7 @@ class Sensing(RobotState):
         hits = list(_RAY_RANGES)
         lit: list[int] = []  # the rays that hit a wall in range (a ray may come twice)
         radius = ROBOT_RADIUS_MM
+        rays = self._rays
         for nx, ny, w, tx, ty, ta, length in close_lines:
             p = w - (nx * x + ny * y)
             q = tx * x + ty * y - ta
@@ -302,7 +301,7 @@ class Sensing(RobotState):
             # A ray meets the wall within its range only if n.d > p / (R + range): the others
             # are passed over at once (with a margin; the exact test below decides the rest).
             least = p / _RAY_REACH
-            for i, c, s in self._rays:
+            for i, c, s in rays:
                 dn = nx * c + ny * s
                 if dn <= least:
                     continue  # pointing away from (or along) this wall, or out of range
