@@ -223,8 +223,9 @@ class Sensing(RobotState):
         v[7] = bumps
         if bumps != self._prev_bumps:
             self._bumps_changed(bumps)
-        if far:  # nothing owed: settled as soon as something reads them every step
+        if far:  # measured now: what was owed is out of date (a fall measures at once)
             self._far_rays(x, y, theta, close_lines)
+            self._owed_rays = None
         else:
             self._owed_rays = (x, y, theta, close_lines)
             self._far_owed = True
@@ -236,6 +237,7 @@ class Sensing(RobotState):
         if not self.ticks & 1 or self._ir_stale:
             if far:
                 self._sense_ir(x, y, theta, self.ticks, self.dock_powered)
+                self._owed_ir = None
             else:
                 self._owed_ir = (x, y, theta, self.ticks, self.dock_powered)
                 self._far_owed = True
