@@ -217,6 +217,15 @@ class Stepped(Direct):
             index = self.tick_next(index)
 
 
+def tick_child(child: Behaviour) -> None:
+    """Tick ``child`` as :meth:`Stepped.tick_direct` does: by its direct path when it has
+    one, else by its generator."""
+    if isinstance(child, Direct):
+        child.tick_direct()
+    else:
+        tick_generator(child)
+
+
 def composite_stop(node: py_trees.composites.Composite, new_status: Status) -> None:
     """py_trees 2.6's ``Composite.stop`` (without building the ``iterator`` nothing reads):
     on INVALID the current child is lost and every child not INVALID stopped; then
@@ -441,18 +450,43 @@ class DecoratorTick(Stepped, py_trees.decorators.Decorator):
 class Retry(DecoratorTick, py_trees.decorators.Retry):
     """py_trees' retry, whose giving up names the last attempt's failure: ``gave up after 30
     failed attempts; the last: drive(...): cliff front right`` (the child is reset between
-    attempts, so by the end its leaves no longer say why)."""
+    attempts, so by the end its leaves no longer say why).
+
+    Its ``update`` is py_trees 2.6's ``Retry.update`` (the same counts, statuses and
+    messages) without rebuilding the message on every tick: py_trees formats ``running
+    [status: 0 failure from 40]`` each time its child runs, which is every tick of a docking
+    attempt, and reads three ``Status`` members off the Enum class to do it."""
 
     last_failure: str = ""
+    #: what the message last written by :meth:`_say` says, and that message itself
+    _said: tuple[str, int, int] | None = None
+    _said_text: str | None = None
 
     def update(self) -> Status:
-        if self.decorated.status is _FAILURE:
+        child = self.decorated.status
+        if child is _FAILURE:
             self.last_failure = failure_reason(self)
-        status = super().update()
-        if status is _FAILURE:  # py_trees: "final failure [status: 3 failure from 3]"
+            self.failures += 1
+            if self.failures < self.num_failures:
+                return self._say("attempt failed", _RUNNING)
+            # py_trees: "final failure [status: 3 failure from 3]"
             attempts = "attempt" if self.failures == 1 else "attempts"
             last = f"; the last: {self.last_failure}" if self.last_failure else ""
             self.feedback_message = f"gave up after {self.failures} failed {attempts}{last}"
+            return _FAILURE
+        if child is _RUNNING:
+            return self._say("running", _RUNNING)
+        return self._say("succeeded", _SUCCESS)  # py_trees' else: SUCCESS (or INVALID)
+
+    def _say(self, word: str, status: Status) -> Status:
+        """py_trees' message ``{word} [status: {failures} failure from {num_failures}]``,
+        formatted only when it differs from the one already shown (set by this method and
+        not replaced since); then ``status``."""
+        said = (word, self.failures, self.num_failures)
+        if said != self._said or self.feedback_message is not self._said_text:
+            text = f"{word} [status: {self.failures} failure from {self.num_failures}]"
+            self.feedback_message = self._said_text = text
+            self._said = said
         return status
 
 

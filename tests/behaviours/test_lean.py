@@ -251,6 +251,39 @@ def test_an_invalid_status_becomes_invalid_as_in_py_trees() -> None:
     assert leaf.status is Status.INVALID
 
 
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(st.sampled_from(STATUSES), min_size=1, max_size=6),
+    st.integers(1, 4),
+    st.integers(1, 15),
+)
+def test_retry_says_what_py_trees_retry_says(script: list[Status], times: int, ticks: int) -> None:
+    """The lean retry writes py_trees' messages (formatted only when they change) on every
+    tick, except its own on giving up."""
+    stock = py_trees.decorators.Retry("retry", ScriptLeaf("leaf", tuple(script), []), times)
+    made = lean.Retry("retry", LeanLeaf("leaf", tuple(script), []), times)
+    for _ in range(ticks):
+        stock.tick_once()
+        made.tick_once()
+        assert made.status is stock.status and made.failures == stock.failures
+        if made.status is Status.FAILURE:
+            assert made.feedback_message.startswith(f"gave up after {times} failed attempt")
+        else:
+            assert made.feedback_message == stock.feedback_message
+
+
+def test_retry_writes_its_message_again_once_something_else_replaced_it() -> None:
+    made = lean.Retry("retry", LeanLeaf("leaf", (Status.RUNNING,), []), 3)
+    made.tick_once()
+    assert made.feedback_message == "running [status: 0 failure from 3]"
+    made.feedback_message = "shown by someone else"
+    made.tick_once()
+    assert made.feedback_message == "running [status: 0 failure from 3]"
+    made.num_failures = 5
+    made.tick_once()
+    assert made.feedback_message == "running [status: 0 failure from 5]"
+
+
 def test_a_py_trees_release_not_proven_is_refused_naming_both_versions() -> None:
     with pytest.raises(lean.UnsupportedPyTrees) as refused:
         lean.check_py_trees("2.7.0")
