@@ -3,6 +3,9 @@
 Each condition reads only the packets it declares (so the stream asks for exactly those) and
 decodes them through the typed views of :class:`~roomba_bt.oi.frames.SensorFrame` (packet 7
 bit 0 is bump RIGHT, bit 1 bump LEFT; packet 14 bit 3 right wheel, bit 4 left wheel, ...).
+Those whose result depends on nothing else (not the mode, the odometry or the blackboard) say
+so with ``frame_pure``: a ``while``/``until`` guard made of them is not re-ticked while those
+packets keep their values (:class:`~roomba_bt.behaviours.declare.FrameInputs`).
 """
 
 from __future__ import annotations
@@ -76,6 +79,8 @@ class _Flag(Condition):
     """One flag of a packet's decoded view (:mod:`roomba_bt.oi.bits`): the one the
     parameter :attr:`choice` names, or ``any``."""
 
+    frame_pure = True
+
     #: the parameter naming the flag, and how each of its values reads it (:func:`_flags`)
     choice: ClassVar[str]
     flags: ClassVar[Flags]
@@ -128,6 +133,8 @@ def _cliff_reads(params: Mapping[str, Any]) -> tuple[int, ...]:
 class Cliff(Condition):
     """A cliff sensor sees a drop (packets 9-12), one sensor or any."""
 
+    frame_pure = True
+
     def check(self, snapshot: Snapshot) -> bool:
         sensor = self.value("sensor")
         if sensor == "any":
@@ -139,6 +146,8 @@ class Cliff(Condition):
 class Wall(Condition):
     """The right-side wall sensor sees a wall (packet 8)."""
 
+    frame_pure = True
+
     def check(self, snapshot: Snapshot) -> bool:
         return snapshot.frame.wall
 
@@ -146,6 +155,8 @@ class Wall(Condition):
 @declare("virtual_wall", kind="condition", reads=VIRTUAL_WALL_PACKETS)
 class VirtualWall(Condition):
     """A virtual wall beam is detected (packet 13)."""
+
+    frame_pure = True
 
     def check(self, snapshot: Snapshot) -> bool:
         return snapshot.frame.virtual_wall
@@ -176,6 +187,8 @@ def _light_reads(params: Mapping[str, Any]) -> tuple[int, ...]:
 class LightBumper(Condition):
     """An obstacle near a light-bumper sensor: its bit (packet 45), or its signal (46-51)
     at or above a threshold."""
+
+    frame_pure = True
 
     def check(self, snapshot: Snapshot) -> bool:
         sensor, threshold = self.value("sensor"), self.value("threshold")
@@ -208,6 +221,8 @@ class InfraRed(Condition):
     """An IR character on the omni (17), left (52) or right (53) receiver: a dock buoy, the
     force field, a virtual wall, a remote button."""
 
+    frame_pure = True
+
     def check(self, snapshot: Snapshot) -> bool:
         char: IRCharacter = getattr(snapshot.frame, f"ir_{self.value('receiver')}")
         sees = self.value("sees")
@@ -238,6 +253,8 @@ _CHARGING: dict[str, Callable[[ChargingState], bool]] = {
 class Charging(Condition):
     """The charging state (packet 21) is the one named (``charging``: any charging state)."""
 
+    frame_pure = True
+
     def check(self, snapshot: Snapshot) -> bool:
         return bool(_CHARGING[self.value("state")](snapshot.frame.charging_state))
 
@@ -245,6 +262,8 @@ class Charging(Condition):
 @declare("on_home_base", kind="condition", reads=CHARGING_SOURCES_PACKETS)
 class OnHomeBase(Condition):
     """The home base powers the robot (packet 34, bit 1)."""
+
+    frame_pure = True
 
     def check(self, snapshot: Snapshot) -> bool:
         return snapshot.frame.charging_sources.home_base
@@ -273,6 +292,8 @@ def _exactly_one(*names: str) -> Callable[[Mapping[str, Any]], list[str]]:
 )
 class Battery(Condition):
     """Battery charge (25) as a percent of capacity (26) above or below a level."""
+
+    frame_pure = True
 
     def check(self, snapshot: Snapshot) -> bool:
         percent = snapshot.frame.battery_percent
@@ -326,6 +347,8 @@ _STASIS = {"moving": Stasis.FORWARD_PROGRESS, "stuck": Stasis.NO_PROGRESS, "dirt
          reads=packet_ids("stasis"), primary="state")  # fmt: skip
 class StasisIs(Condition):
     """The stasis caster (58) reports forward progress, none, or (600 series) too dirty."""
+
+    frame_pure = True
 
     def check(self, snapshot: Snapshot) -> bool:
         return snapshot.frame.stasis is _STASIS[self.value("state")]
@@ -389,6 +412,8 @@ def _sensor_reads(params: Mapping[str, Any]) -> tuple[int, ...]:
 )  # fmt: skip
 class Sensor(Condition):
     """Compare any sensor packet's raw value, by name: ``sensor: wall_signal > 100``."""
+
+    frame_pure = True
 
     def __init__(self, name: str, params: Mapping[str, Any] | None = None) -> None:
         super().__init__(name, params)

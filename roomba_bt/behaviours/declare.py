@@ -20,6 +20,7 @@ Drive (137) needs Safe or Full because the table says so.
 
 from __future__ import annotations
 
+import operator
 import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -27,7 +28,13 @@ from typing import Any, Literal, TypeVar
 
 import py_trees
 
-from roomba_bt.behaviours.lean import DirectLeaf, behaviour_tick, checked_status
+from roomba_bt.behaviours.lean import (
+    DirectLeaf,
+    Selector,
+    Sequence,
+    behaviour_tick,
+    checked_status,
+)
 from roomba_bt.behaviours.units import SPEED, UnitError, ValueType
 from roomba_bt.oi.encode import Command, halt
 from roomba_bt.oi.modes import ALL_MODES, DRIVING_MODES, OIMode
@@ -399,6 +406,19 @@ _DEBUG = py_trees.logging.Level.DEBUG
 class Condition(RobotBehaviour):
     """A condition: SUCCESS or FAILURE from this tick's frame, never RUNNING."""
 
+    #: True on a class whose ``check`` reads nothing but its own parameters and, from
+    #: ``snapshot.frame``, the packets it declares: its result is then a function of those
+    #: packets' values (see :class:`FrameInputs`). Said by the class that defines ``check``:
+    #: a subclass with a ``check`` of its own is not taken to be pure unless it says so too.
+    frame_pure = False
+    #: the ``check`` that ``frame_pure`` was said of
+    _pure_check: Callable[[Condition, Snapshot], bool] | None = None
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if vars(cls).get("frame_pure"):
+            cls._pure_check = cls.check
+
     def check(self, snapshot: Snapshot) -> bool:
         raise NotImplementedError
 
@@ -449,3 +469,106 @@ _CONDITION_UPDATE, _CONDITION_INITIALISE, _CONDITION_START = (
     Condition.update, Condition.initialise, Condition.start
 )  # fmt: skip
 _CONDITION_TERMINATE, _CONDITION_STOP = Condition.terminate, Condition.stop
+
+
+def _short_tick(cls: type[Condition]) -> bool:
+    """The class's lifecycle is the one :meth:`Condition.tick_direct` shortens (nothing
+    patched in since): its tick only sets the status ``check`` gives."""
+    return (
+        cls.update is _CONDITION_UPDATE
+        and cls.initialise is _CONDITION_INITIALISE
+        and cls.start is _CONDITION_START
+        and cls.terminate is _CONDITION_TERMINATE
+        and cls.stop is _CONDITION_STOP
+    )
+
+
+class FrameInputs:
+    """What decides the statuses of a subtree of frame-pure conditions: the values of the
+    packets its leaves read, in this tick's frame.
+
+    Such a subtree is :class:`Condition` leaves (of ``frame_pure`` classes, without ``@key``
+    parameters) under py_trees' sequences and selectors (the lean ones, exactly: no subclass
+    with steps of its own). Ticked on the same values as last time, from the statuses that
+    tick left, it ends with the same statuses: each leaf's status is a function of the
+    values, a composite's of its children's, and its lifecycle calls (the leaves'
+    ``terminate`` and ``initialise``, the composites') do nothing. So the ``while``/``until``
+    guard, which re-ticks its condition every frame, may leave it as it is while :meth:`key`
+    is unchanged and :meth:`usable` holds.
+    """
+
+    __slots__ = ("_checks", "_classes", "_layout", "_packets", "_read", "_robot")
+
+    def __init__(self, leaves: list[Condition]) -> None:
+        checks = [(leaf, type(leaf)._pure_check) for leaf in leaves]
+        self._checks = checks
+        self._classes = list({type(leaf): check for leaf, check in checks}.items())
+        self._packets = tuple(
+            sorted({pid for leaf in leaves for pid in leaf.declaration.packets(leaf.params)})
+        )
+        self._robot = leaves[0].robot
+        self._layout: object = None
+        self._read: Callable[[tuple[int, ...]], object] | None = None
+
+    @classmethod
+    def of(cls, root: py_trees.behaviour.Behaviour) -> FrameInputs | None:
+        """The inputs of the subtree at ``root``, or None when it is not made only of
+        frame-pure conditions (or has no robot yet)."""
+        leaves: list[Condition] = []
+        if not _collect_pure(root, leaves) or not leaves:
+            return None
+        robot = leaves[0].robot
+        if robot is None or any(leaf.robot is not robot for leaf in leaves):
+            return None
+        return cls(leaves)
+
+    def key(self) -> object:
+        """The values of the subtree's packets in this tick's frame (None: the frame lacks
+        one of them; the subtree's own tick then says so)."""
+        robot = self._robot
+        if robot is None:
+            return None
+        frame = robot.snapshot.frame
+        layout = frame.layout
+        if layout is not self._layout:  # the same for every frame of a stream
+            try:
+                slots = [layout.index[pid] for pid in self._packets]
+            except KeyError:
+                return None
+            self._layout, self._read = layout, operator.itemgetter(*slots)
+        assert self._read is not None
+        return self._read(frame.values)
+
+    def usable(self) -> bool:
+        """Nothing has been patched in since (a class's lifecycle or ``check``, a node's own
+        ``update`` as the monitor forces one, or ``check``), the leaves still have this robot,
+        and debug logging (which a tick would write to) is off."""
+        if py_trees.logging.level is _DEBUG:
+            return False
+        for cls, check in self._classes:
+            if cls.check is not check or not _short_tick(cls):
+                return False
+        robot = self._robot
+        for leaf, check in self._checks:
+            if (
+                leaf.robot is not robot
+                or getattr(leaf.update, "__func__", None) is not _CONDITION_UPDATE
+                or getattr(leaf.check, "__func__", None) is not check
+            ):
+                return False
+        return True
+
+
+def _collect_pure(node: py_trees.behaviour.Behaviour, leaves: list[Condition]) -> bool:
+    """Add the leaves under ``node`` to ``leaves``; False if one of the nodes is not a
+    frame-pure condition nor a lean sequence or selector."""
+    if type(node) in (Sequence, Selector):
+        return all(_collect_pure(child, leaves) for child in node.children)
+    if not isinstance(node, Condition):
+        return False
+    cls = type(node)
+    pure = cls.frame_pure and cls._pure_check is not None and cls.check is cls._pure_check
+    if not pure or any(isinstance(v, BlackboardRef) for v in node.params.values()):
+        return False
+    leaves.append(node)
+    return True

@@ -7,15 +7,15 @@ same decisions. These decorators receive the robot in ``setup(robot=...)`` like 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import Any
+from collections.abc import Iterator, Sequence
+from typing import Any, Literal
 
 import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import write_key
-from roomba_bt.behaviours.lean import DONE, DecoratorTick, Stepped, composite_stop
+from roomba_bt.behaviours.declare import FrameInputs, write_key
+from roomba_bt.behaviours.lean import DONE, DecoratorTick, Stepped, composite_stop, tick_child
 from roomba_bt.behaviours.reasons import failure_reason
 from roomba_bt.robot.interface import RobotHandle
 
@@ -176,6 +176,51 @@ class Guard(Stepped, py_trees.composites.Composite):
         self.condition = condition
         self.child = child
         self.until = until
+        #: the condition's inputs (False: it has others than the frame; None: not looked at)
+        self._inputs: FrameInputs | Literal[False] | None = None
+        #: the condition's status after its last tick, and the inputs' values it had then
+        self._seen: tuple[Status, object] | None = None
+
+    def tick(self) -> Iterator[Behaviour]:
+        """py_trees' generator (:class:`Stepped`): ticks the condition, which is then no
+        longer what :meth:`tick_direct` last saw."""
+        self._seen = None
+        yield from super().tick()
+
+    def tick_direct(self) -> None:
+        """The steps of :meth:`Stepped.tick_direct` (condition, then the child if it holds),
+        without the condition's tick when it would change nothing: a condition subtree
+        of frame-pure leaves ticked last time on the same values of its packets ends this
+        tick with the statuses it has (:class:`FrameInputs`). A cliff or bump guard is
+        re-ticked on every frame, and the cliff and bump sensors change on few of them."""
+        index = self.tick_start()
+        children = self.children
+        while index != DONE:
+            child = children[index]
+            if index != 0 or not self._condition_unchanged(child):
+                tick_child(child)
+                if index == 0:
+                    self._remember(child)
+            index = self.tick_next(index)
+
+    def _condition_unchanged(self, condition: Behaviour) -> bool:
+        seen, inputs = self._seen, self._inputs
+        if seen is None or not inputs or condition.status is not seen[0]:
+            return False
+        return inputs.key() == seen[1] and inputs.usable()
+
+    def _remember(self, condition: Behaviour) -> None:
+        """After the condition's tick: its status and its inputs' values, for the next;
+        nothing when that tick was not the pure one (a node forced, a check patched in)."""
+        inputs = self._inputs
+        if inputs is None:
+            inputs = self._inputs = FrameInputs.of(condition) or False
+        status = condition.status
+        if inputs and (status is _SUCCESS or status is _FAILURE) and inputs.usable():
+            key = inputs.key()
+            self._seen = (status, key) if key is not None else None
+        else:
+            self._seen = None
 
     def tick_start(self) -> int:
         """The condition first (child 0)."""
