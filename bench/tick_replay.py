@@ -18,6 +18,7 @@ replaying none), so the recording, imports and start-up cancel out.
 
 from __future__ import annotations
 
+import hashlib
 import os
 import re
 import shutil
@@ -76,7 +77,9 @@ def record(case: str) -> list[Recorded]:
     try:
         for spec in specs:
             episodes.append(Recorded(spec.mission, dict(spec.params), [], []))
-            run_episode(spec)
+            result = run_episode(spec)
+            if result.outcome == "error":  # a broken tree: nothing worth measuring
+                raise RuntimeError(f"{case}, seed {spec.seed}: {result.reason}")
     finally:
         MissionRunner._flush = original  # type: ignore[method-assign]
     return episodes
@@ -182,9 +185,14 @@ def main(argv: list[str]) -> int:
             if differ:
                 print(f"   {case}: commands differ from the episode at ticks {differ[:5]}")
                 return 1
+        digest = hashlib.sha1()  # of every tick's commands: compare it across versions
+        for episode in episodes:
+            for commands in episode.commands:
+                digest.update(b"".join(c.data for c in commands) + b"|")
         print(
-            f"   {case}: {ticks} ticks replayed, the same commands; "
-            f"{seconds / ticks * 1e6:.1f} us/tick (CPU time: a rough guide)"
+            f"   {case}: {ticks} ticks replayed, the same commands as in the episodes (digest "
+            f"{digest.hexdigest()[:12]}); {seconds / ticks * 1e6:.1f} us/tick (CPU time: a "
+            "rough guide)"
         )
     return 0
 

@@ -251,6 +251,22 @@ def test_drive_on_fails_on_a_bump_outside_the_buoys(robot: StubRobot, make: Make
     assert drive_on.feedback_message.startswith("final alignment: bumped into something")
 
 
+def test_drive_on_wiggles_on_contact_inside_the_buoys(robot: StubRobot, make: Make) -> None:
+    """Touching the plate without the home-base bit: turn ``wiggle`` (12 deg) left first,
+    in place at 30 mm/s with 8 mm/s forward on both wheels to keep the bumper on it."""
+    drive_on = make(DockDriveOn)
+    both = dock_character(red=True, green=True, force_field=True)
+    robot.set_frame(frame(omni=both, left=both, right=both))
+    drive_on.tick_once()
+    robot.flush()
+    values = frame(omni=both, left=both, right=both)
+    values[7] = 3
+    robot.set_frame(values)
+    drive_on.tick_once()
+    assert status(drive_on) is Status.RUNNING
+    assert last_wheels(robot) == (-22, 38)
+
+
 def test_drive_on_succeeds_on_the_home_base_bit(robot: StubRobot, make: Make) -> None:
     drive_on = make(DockDriveOn)
     values = frame()

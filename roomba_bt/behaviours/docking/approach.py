@@ -36,6 +36,7 @@ from roomba_bt.behaviours.docking.common import (
 )
 from roomba_bt.behaviours.units import ANGLE, DURATION
 from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS
+from roomba_bt.oi.modes import DRIVING_MODES
 
 #: Attempts (starts of this leaf) in one docking run before the approach first backs away
 #: from the dock and comes in again.
@@ -138,6 +139,11 @@ class DockApproach(DockingAction):
 
     def start(self) -> None:
         self.begin()
+        # read once a start, used on every tick
+        self._speed = self.number("speed")
+        self._turn_speed = self.number("turn_speed")
+        self._cross_angle = math.radians(self.number("cross_angle"))
+        self._lost_after = self.number("lost_after")
         self._last_seen = self.snapshot.time
         self._side_guess = 0
         self._last_side = 0
@@ -160,16 +166,16 @@ class DockApproach(DockingAction):
         view = DockView.of(frame)
         if frame.charging_sources.home_base:
             return self.succeed()
-        if self.timed_out():
+        if self.timed_out(snap.time):
             return self.fail(f"not on the dock's axis after {self.number('timeout'):g} s")
-        if self.not_driving():
+        if snap.mode not in DRIVING_MODES:
             return self.fail(self.fallback_message())
         if view.seen:
             self._last_seen = snap.time
             if view.side:
                 self._last_side = view.side
                 self._last_side_time = snap.time
-        elif snap.time - self._last_seen >= self.number("lost_after"):
+        elif snap.time - self._last_seen >= self._lost_after:
             return self.fail(f"lost the dock's beams for {self.number('lost_after'):g} s")
         # near the dock its wall is always in sight of the light bumper: not a hazard here
         hazard = hazard_in(frame, obstacles=False)
@@ -227,7 +233,7 @@ class DockApproach(DockingAction):
         if hazard is not None or self.travelled() > CLOSER_MAX_MM:
             self._start_back()
             return None
-        slow = self.number("speed") * CLOSER_SHARE
+        slow = self._speed * CLOSER_SHARE
         inner = slow * CLOSER_INNER_SHARE
         if view.on_left:
             self.wheels(inner, inner + CLOSER_STEER_MM_S)
@@ -242,8 +248,8 @@ class DockApproach(DockingAction):
         state = self._omni_state(view)
         if state is not None:
             self._sweep = state  # where the omni was last seen relative to the axis
-        if abs(self.turned()) < math.radians(self.number("cross_angle")):
-            w = TURN_AWAY_SHARE * self.number("turn_speed") * self._cross_side
+        if abs(self.turned()) < self._cross_angle:
+            w = TURN_AWAY_SHARE * self._turn_speed * self._cross_side
             self.wheels(-w, w)
             return RUNNING
         snap = self.snapshot
@@ -323,7 +329,7 @@ class DockApproach(DockingAction):
                 return None
             self.halt()
             return RUNNING
-        v = ORBIT_SHARE * self.number("speed")
+        v = ORBIT_SHARE * self._speed
         # the dock is on the side opposite to the turn away (_cross_side +1: on the right);
         # the wheel on the side to turn to runs slow
         slow = ORBIT_INNER_SHARE * v
@@ -362,7 +368,7 @@ class DockApproach(DockingAction):
                 return None
             self.halt()
             return RUNNING
-        speed = self.number("speed")
+        speed = self._speed
         slow = FORCE_FIELD_SHARE if view.force_field else 1.0
         before, past = self._before_at, self._past_at
         if before is not None and past is not None:
@@ -440,7 +446,7 @@ class DockApproach(DockingAction):
         if abs(self.turned()) > FACE_RESTART_RAD:
             self._lead_theta = None
             self.mark_turn()
-        w = (FACE_SEEN_SHARE if (left or right) else FACE_SEARCH_SHARE) * self.number("turn_speed")
+        w = (FACE_SEEN_SHARE if (left or right) else FACE_SEARCH_SHARE) * self._turn_speed
         self.wheels(-w * self._spin_dir, w * self._spin_dir)
         return False
 
@@ -452,7 +458,7 @@ class DockApproach(DockingAction):
             self.halt()
             return True
         share = FACE_FAST_SHARE if abs(err) > FACE_SLOW_WITHIN_RAD else FACE_SLOW_SHARE
-        self.spin_toward(err, share * self.number("turn_speed"))
+        self.spin_toward(err, share * self._turn_speed)
         return False
 
     state = ApproachState.FACE
@@ -477,6 +483,10 @@ class DockApproach(DockingAction):
     _spin_dir = 1.0
     _last_seen = 0.0
     _back_until = 0.0
+    _speed = 0.0
+    _turn_speed = 0.0
+    _cross_angle = 0.0
+    _lost_after = 0.0
 
 
 #: Each state's method (see the module's drawing).

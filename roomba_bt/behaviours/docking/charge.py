@@ -39,13 +39,15 @@ class DockWaitCharge(Action):
     def start(self) -> None:
         note_stage(self.stage)
         self._t0 = self.snapshot.time
+        self._limit = self.number("timeout") - 1e-9  # read once a start
 
     def update(self) -> Status:
-        frame = self.snapshot.frame
+        snap = self.snapshot
+        frame = snap.frame
         home = frame.charging_sources.home_base
         if home and frame.charging_state.is_charging:
             return OK
-        if self.snapshot.time - self._t0 >= self.number("timeout") - 1e-9:
+        if snap.time - self._t0 >= self._limit:
             why = "charging state stays" if home else "the home base is not powering the robot;"
             state = frame.charging_state.name.lower().replace("_", " ")
             self.feedback_message = (
@@ -57,6 +59,7 @@ class DockWaitCharge(Action):
         return RUNNING
 
     _t0 = 0.0
+    _limit = 0.0
 
 
 @declare(
@@ -75,9 +78,10 @@ class DockTimeLimit(Action):
         storage = py_trees.blackboard.Blackboard.storage
         storage.pop(STAGE_KEY, None)  # a new docking run
         storage[RUN_KEY] = (id(self), self._t0)
+        self._limit = self.number("limit") - 1e-9  # read once a start
 
     def update(self) -> Status:
-        if self.snapshot.time - self._t0 >= self.number("limit") - 1e-9:
+        if self.snapshot.time - self._t0 >= self._limit:
             stage = current_stage() or "search"
             self.feedback_message = (
                 f"{stage}: gave up after the time limit of {self.number('limit'):g} s "
@@ -87,3 +91,4 @@ class DockTimeLimit(Action):
         return RUNNING
 
     _t0 = 0.0
+    _limit = 0.0

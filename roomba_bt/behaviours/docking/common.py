@@ -122,6 +122,12 @@ class DockView(NamedTuple):
         return red and green
 
 
+def dock_seen(frame: SensorFrame) -> bool:
+    """A receiver sees a dock character: :attr:`DockView.seen` without building the view
+    (the search asks on every tick, and needs nothing else of it)."""
+    return frame.ir_omni.from_dock or frame.ir_left.from_dock or frame.ir_right.from_dock
+
+
 class IdentityEnum(Enum):
     """Base of the docking enums: hashed by identity (members are singletons), since Enum's
     own ``__hash__`` is a Python call on every tick's table look-ups (``ACTS[self.state]``,
@@ -211,13 +217,13 @@ class DockingAction(Action):
     def begin(self) -> None:
         note_stage(self.stage)
         self._t0 = self.snapshot.time
+        # read once a start (the parameters are resolved before it), compared every tick
+        self._time_limit = self.number("timeout") - 1e-9
 
-    def elapsed(self) -> float:
-        return self.snapshot.time - self._t0
-
-    def timed_out(self) -> bool:
-        """The ``timeout`` parameter (s) has passed since the stage began."""
-        return self.elapsed() >= self.number("timeout") - 1e-9
+    def timed_out(self, now: float) -> bool:
+        """The ``timeout`` parameter (s) has passed since the stage began (``now``: the
+        snapshot's time)."""
+        return now - self._t0 >= self._time_limit
 
     def not_driving(self) -> bool:
         return self.snapshot.mode not in DRIVING_MODES
@@ -247,6 +253,7 @@ class DockingAction(Action):
     _turn_mark = 0.0
     _distance_mark = 0.0
     _t0 = 0.0
+    _time_limit = 0.0
 
 
 Stage = TypeVar("Stage", bound=type[DockingAction])

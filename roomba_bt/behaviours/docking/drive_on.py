@@ -22,6 +22,7 @@ from roomba_bt.behaviours.docking.common import (
 )
 from roomba_bt.behaviours.units import ANGLE
 from roomba_bt.oi.frames import BUMPS_PACKETS, CHARGING_SOURCES_PACKETS, SensorFrame
+from roomba_bt.oi.modes import DRIVING_MODES
 
 #: FAILURE once no receiver has seen the dock for this long (s).
 LOST_BEAMS_S = 1.5
@@ -72,6 +73,10 @@ class DockDriveOn(DockingAction):
 
     def start(self) -> None:
         self.begin()
+        # read once a start, used on every tick
+        self._speed = self.number("speed")
+        self._slow = self.number("slow")
+        self._wiggle_rad = math.radians(self.number("wiggle"))
         self.state = DriveOnState.DRIVE
         self._last_seen = self.snapshot.time
         self.mark_turn()
@@ -81,9 +86,9 @@ class DockDriveOn(DockingAction):
         frame = snap.frame
         if frame.charging_sources.home_base:
             return self.succeed()
-        if self.timed_out():
+        if self.timed_out(snap.time):
             return self.fail(f"did not reach the contacts in {self.number('timeout'):g} s")
-        if self.not_driving():
+        if snap.mode not in DRIVING_MODES:
             return self.fail(self.fallback_message())
         view = DockView.of(frame)
         if view.seen:
@@ -112,7 +117,7 @@ class DockDriveOn(DockingAction):
     def _drive(self, view: DockView) -> Status:
         """In along the axis, slow in the force field, steering toward the receiver that
         sees the dock, nudging toward the axis when one buoy is seen."""
-        speed = self.number("slow") if view.force_field else self.number("speed")
+        speed = self._slow if view.force_field else self._speed
         if view.on_left:
             self.wheels(speed * STEER_SHARE, speed * STEER_SHARE + STEER_MM_S)
         elif view.on_right:
@@ -126,7 +131,7 @@ class DockDriveOn(DockingAction):
 
     def _wiggle(self, frame: SensorFrame, view: DockView) -> Status | None:
         """In place: +wiggle, back through 0 to -wiggle, back to 0; FAILURE after that."""
-        w = math.radians(self.number("wiggle"))
+        w = self._wiggle_rad
         targets = (w, -w, 0.0)
         if self._wiggle_step >= len(targets):
             return self.fail("touched the dock but the contacts did not engage")
@@ -143,6 +148,9 @@ class DockDriveOn(DockingAction):
     state = DriveOnState.DRIVE
     _wiggle_step = 0
     _last_seen = 0.0
+    _speed = 0.0
+    _slow = 0.0
+    _wiggle_rad = 0.0
 
 
 #: Each state's method.

@@ -28,14 +28,15 @@ from roomba_bt.behaviours.docking.common import (
     HAZARD_IN_PACKETS,
     RUNNING,
     DockingAction,
-    DockView,
     Hazard,
     IdentityEnum,
     declare_stage,
+    dock_seen,
     hazard_in,
 )
 from roomba_bt.behaviours.units import BOOL, DISTANCE, enum
 from roomba_bt.oi.frames import LIGHT_BUMP_SIGNAL_PACKETS, SensorFrame
+from roomba_bt.oi.modes import DRIVING_MODES
 from roomba_bt.robot.interface import Odometry
 
 # The visit grid (odometry frame) and how a heading is chosen on it.
@@ -231,20 +232,24 @@ class DockSearch(DockingAction):
         self._target = self.heading()
         self._back_until = 0.0
         self._want_wall = True
+        # read once a start, used on every tick
+        self._speed = self.number("speed")
+        self._leg = self.number("leg")
+        self._follow_for = self.number("follow")
 
     def update(self) -> Status:
         snap = self.snapshot
         frame = snap.frame
-        if DockView.of(frame).seen:
+        if dock_seen(frame):
             return self.succeed()
-        if self.timed_out():
+        if self.timed_out(snap.time):
             return self.fail(f"no dock beam seen in {self.number('timeout'):g} s")
         odo = snap.odometry
         self.grid.visit(odo.x_mm, odo.y_mm, TICK_VISIT_WEIGHT)
         hazard = hazard_in(frame)
         if hazard is not None and hazard in STOPS_FOR.get(self.state, ()):
             self._meet(hazard, odo, snap.time)
-        if self.not_driving():
+        if snap.mode not in DRIVING_MODES:
             # a cliff or wheel drop in Safe mode: remembered above, so the retry avoids it
             return self.fail(self.fallback_message())
         act = _ACTS
@@ -287,11 +292,7 @@ class DockSearch(DockingAction):
         return None
 
     def _follow(self, frame: SensorFrame) -> Status | None:
-        if (
-            self.travelled() < self.number("follow")
-            and not self._follow_lost
-            and self._follow_is_new()
-        ):
+        if self.travelled() < self._follow_for and not self._follow_lost and self._follow_is_new():
             self._keep_wall(frame)
             return RUNNING
         self._want_wall = False  # followed far enough: cross the room
@@ -349,13 +350,13 @@ class DockSearch(DockingAction):
     def _forward(self, frame: SensorFrame) -> Status | None:
         """A straight leg toward unexplored space, then look for a wall again."""
         odo = self.snapshot.odometry
-        if self.travelled() >= self.number("leg"):
+        if self.travelled() >= self._leg:
             self._want_wall = True
             self._target = self.grid.choose_heading(odo, None)
             self.state = SearchState.TURN
             self.mark_distance()
             return RUNNING
-        speed = self.number("speed")
+        speed = self._speed
         err = math.remainder(self._target - odo.theta_rad, math.tau)
         turn = max(-STEER_LIMIT_MM_S, min(STEER_LIMIT_MM_S, STEER_MM_S_PER_RAD * err))
         self.wheels(speed - turn, speed + turn)
@@ -389,7 +390,7 @@ class DockSearch(DockingAction):
         """Keep a wall on one side (``_follow_side``: +1 right, -1 left) at a steady
         light-bumper signal: right / front-right, or left / front-left; the centre pair for
         a wall ahead (turn away from it in place)."""
-        speed = min(self.number("speed"), FOLLOW_MAX_MM_S)
+        speed = min(self._speed, FOLLOW_MAX_MM_S)
         hand = self._follow_side
         # all six signals in one accessor (read every tick of a follow)
         left, front_left, centre_left, centre_right, front_right, right = frame.light_bump_signals
@@ -429,6 +430,9 @@ class DockSearch(DockingAction):
     _follow_bumps = 0
     _follow_side = 1  # +1: the wall on the right
     _old_cells = 0
+    _speed = 0.0
+    _leg = 0.0
+    _follow_for = 0.0
 
 
 #: Each state's method (see the module's drawing).
