@@ -503,10 +503,11 @@ class Wait(Action):
 
     def start(self) -> None:
         self._start_time = self.snapshot.time
+        self._lasts = float(self.value("duration")) - 1e-9  # read once a start
 
     def update(self) -> Status:
         elapsed = self.snapshot.time - self._start_time
-        return _OK if elapsed >= float(self.value("duration")) - 1e-9 else _RUN
+        return _OK if elapsed >= self._lasts else _RUN
 
 
 @declare(
