@@ -518,8 +518,14 @@ class SensorFrame:
 
     @property
     def light_bump_signals(self) -> tuple[int, int, int, int, int, int]:
-        """Left, front left, centre left, centre right, front right, right (packets 46-51)."""
-        return (self[46], self[47], self[48], self[49], self[50], self[51])
+        """Left, front left, centre left, centre right, front right, right (packets 46-51),
+        read from the slots in one accessor (the wall followers read all six every tick)."""
+        values, index = self._values, self._layout.index
+        try:
+            return (values[index[46]], values[index[47]], values[index[48]],
+                    values[index[49]], values[index[50]], values[index[51]])  # fmt: skip
+        except KeyError as exc:
+            raise self._missing(exc.args[0]) from None
 
     @property
     def motor_currents_ma(self) -> tuple[int, int, int, int]:

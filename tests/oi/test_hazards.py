@@ -104,6 +104,7 @@ def test_ir_receivers(code: int) -> None:
         ("any_hazard", 7),
         ("light_bumper_ahead", 45),
         ("light_bump_center_left_signal", 48),
+        ("light_bump_signals", 46),
         ("ir_omni", 17),
         ("ir_left", 52),
         ("ir_right", 53),
@@ -119,6 +120,12 @@ def test_any_cliff_names_the_missing_cliff_packet() -> None:
     f = _frame({}, ids=(9, 10))
     with pytest.raises(KeyError, match="packet 11 \\(cliff_front_right\\)"):
         _ = f.any_cliff
+
+
+def test_light_bump_signals_names_the_first_missing_signal() -> None:
+    f = _frame({}, ids=(46, 47, 48))
+    with pytest.raises(KeyError, match="packet 49 \\(light_bump_center_right_signal\\)"):
+        _ = f.light_bump_signals
 
 
 @pytest.mark.parametrize(
