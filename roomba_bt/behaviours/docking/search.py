@@ -146,7 +146,9 @@ class VisitGrid:
         return (math.floor(x / CELL_MM), math.floor(y / CELL_MM))
 
     def visit(self, x: float, y: float, weight: float) -> None:
-        cell = self.cell(x, y)
+        self.visit_cell(self.cell(x, y), weight)
+
+    def visit_cell(self, cell: Cell, weight: float) -> None:
         self.visits[cell] = self.visits.get(cell, 0.0) + weight
 
     def choose_heading(self, odo: Odometry, avoid: float | None) -> float:
@@ -245,7 +247,9 @@ class DockSearch(DockingAction):
         if self.timed_out(snap.time):
             return self.fail(f"no dock beam seen in {self.number('timeout'):g} s")
         odo = snap.odometry
-        self.grid.visit(odo.x_mm, odo.y_mm, TICK_VISIT_WEIGHT)
+        # the robot's cell, found once a tick: visited here, and read by a wall follow
+        self._cell = cell = VisitGrid.cell(odo.x_mm, odo.y_mm)
+        self.grid.visit_cell(cell, TICK_VISIT_WEIGHT)
         hazard = hazard_in(frame)
         if hazard is not None and hazard in STOPS_FOR.get(self.state, ()):
             self._meet(hazard, odo, snap.time)
@@ -376,8 +380,7 @@ class DockSearch(DockingAction):
     def _follow_is_new(self) -> bool:
         """False once the wall leads through cells visited before this follow (it has been
         followed already): time to cross the room instead."""
-        odo = self.snapshot.odometry
-        cell = self.grid.cell(odo.x_mm, odo.y_mm)
+        cell = self._cell  # this tick's (update)
         if cell not in self._follow_cells:
             self._follow_cells.add(cell)
             # followed before (not merely crossed): this wall, or this island, is done
@@ -430,6 +433,7 @@ class DockSearch(DockingAction):
     _follow_bumps = 0
     _follow_side = 1  # +1: the wall on the right
     _old_cells = 0
+    _cell: Cell = (0, 0)
     _speed = 0.0
     _leg = 0.0
     _follow_for = 0.0
