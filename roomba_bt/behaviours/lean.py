@@ -77,6 +77,14 @@ _STATUSES = frozenset(Status)
 _RUNNING, _SUCCESS, _FAILURE, _INVALID = (
     Status.RUNNING, Status.SUCCESS, Status.FAILURE, Status.INVALID
 )  # fmt: skip
+#: the parallel policies, read as globals on every tick of a parallel
+_ON_ALL, _ON_ONE, _ON_SELECTED = (
+    py_trees.common.ParallelPolicy.SuccessOnAll,
+    py_trees.common.ParallelPolicy.SuccessOnOne,
+    py_trees.common.ParallelPolicy.SuccessOnSelected,
+)
+#: py_trees' own check of a parallel's policy, which looks at SuccessOnSelected only
+_VALIDATE_POLICY = py_trees.composites.Parallel.validate_policy_configuration
 
 
 def checked_status(node: Behaviour, status: object) -> Status:
@@ -358,7 +366,10 @@ class Parallel(Stepped, py_trees.composites.Parallel):
     def tick_start(self) -> int:
         if py_trees.logging.level is _DEBUG:
             self.logger.debug(f"{type(self).__name__}.tick()")
-        self.validate_policy_configuration()
+        if isinstance(self.policy, _ON_SELECTED) or (
+            type(self).validate_policy_configuration is not _VALIDATE_POLICY
+        ):  # py_trees validates on every tick; its check has nothing to say of the others
+            self.validate_policy_configuration()
         children = self.children
         if self.status is not _RUNNING:
             for child in children:
@@ -396,17 +407,17 @@ class Parallel(Stepped, py_trees.composites.Parallel):
                 new_status = _FAILURE
                 break
         else:
-            if isinstance(policy, py_trees.common.ParallelPolicy.SuccessOnAll):
+            if isinstance(policy, _ON_ALL):
                 if all(c.status is _SUCCESS for c in children):
                     new_status = _SUCCESS
                     self.current_child = children[-1]
-            elif isinstance(policy, py_trees.common.ParallelPolicy.SuccessOnOne):
+            elif isinstance(policy, _ON_ONE):
                 for child in reversed(children):
                     if child.status is _SUCCESS:
                         new_status = _SUCCESS
                         self.current_child = child
                         break
-            elif isinstance(policy, py_trees.common.ParallelPolicy.SuccessOnSelected):
+            elif isinstance(policy, _ON_SELECTED):
                 if all(c.status is _SUCCESS for c in policy.children):
                     new_status = _SUCCESS
                     self.current_child = policy.children[-1]

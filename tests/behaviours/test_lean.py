@@ -284,6 +284,16 @@ def test_retry_writes_its_message_again_once_something_else_replaced_it() -> Non
     assert made.feedback_message == "running [status: 0 failure from 5]"
 
 
+def test_a_parallel_still_refuses_a_selection_that_is_not_its_children() -> None:
+    """py_trees validates the policy on every tick; the lean parallel skips the call only
+    for the policies that check has nothing to say of."""
+    other = LeanLeaf("other", (Status.SUCCESS,), [])
+    policy = ParallelPolicy.SuccessOnSelected([other])
+    parallel = lean.Parallel("parallel", policy, [LeanLeaf("a", (Status.SUCCESS,), [])])
+    with pytest.raises(RuntimeError, match="not children of this parallel"):
+        parallel.tick_once()
+
+
 def test_a_py_trees_release_not_proven_is_refused_naming_both_versions() -> None:
     with pytest.raises(lean.UnsupportedPyTrees) as refused:
         lean.check_py_trees("2.7.0")
