@@ -58,34 +58,32 @@ class Odometry(NamedTuple):
         :func:`~roomba_bt.oi.odometry.arc_from_wheels` is written out here, the same
         operations in the same order (the same floats): three calls a tick cost more than the
         arithmetic (tests/robot/test_odometry.py checks it against them)."""
-        previous_left, previous_right = self.left_counts, self.right_counts
+        # one unpacking, not a lookup through the class for each field read
+        x, y, theta, distance, angle, previous_left, previous_right, path = self
         if left_counts == previous_left and right_counts == previous_right:
             return self  # standing still (most frames of a docked or waiting robot)
         if previous_left is None or previous_right is None:
             return _new_tuple(Odometry, (
-                self.x_mm, self.y_mm, self.theta_rad, self.distance_mm, self.angle_rad,
-                left_counts, right_counts, self.path_mm,
+                x, y, theta, distance, angle, left_counts, right_counts, path,
             ))  # fmt: skip
         left = (((left_counts - previous_left + 0x8000) & 0xFFFF) - 0x8000) * MM_PER_COUNT
         right = (((right_counts - previous_right + 0x8000) & 0xFFFF) - 0x8000) * MM_PER_COUNT
         if left == 0.0 and right == 0.0:
             return _new_tuple(Odometry, (
-                self.x_mm, self.y_mm, self.theta_rad, self.distance_mm, self.angle_rad,
-                left_counts, right_counts, self.path_mm,
+                x, y, theta, distance, angle, left_counts, right_counts, path,
             ))  # fmt: skip
         dist = (left + right) / 2.0
         dtheta = (right - left) / wheel_base_mm
-        theta = self.theta_rad
         mid = theta + dtheta / 2.0
         return _new_tuple(Odometry, (
-            self.x_mm + dist * math.cos(mid),
-            self.y_mm + dist * math.sin(mid),
+            x + dist * math.cos(mid),
+            y + dist * math.sin(mid),
             theta + dtheta,
-            self.distance_mm + dist,
-            self.angle_rad + dtheta,
+            distance + dist,
+            angle + dtheta,
             left_counts,
             right_counts,
-            self.path_mm + abs(dist),
+            path + abs(dist),
         ))  # fmt: skip
 
 
