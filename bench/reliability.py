@@ -624,7 +624,7 @@ def memory(hours: float, trace: bool = False) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n", 1)[0])
+    parser = argparse.ArgumentParser(description=(__doc__ or "").partition("\n")[0])
     parser.add_argument("part", nargs="*", choices=("noise", "faults", "memory"), default=[])
     parser.add_argument("--hours", type=float, default=10.0, help="robot-hours at 1e-3")
     parser.add_argument("--hours-1e-2", type=float, default=3.0, help="robot-hours at 1e-2")

@@ -128,6 +128,11 @@ def build_machine(
     return machine, model
 
 
+#: what packet 35 reads right after Start: Passive, or Passive + 1 on a robot with the
+#: 600-series mode + 1 bug (oi/modes.py)
+_PASSIVE_READINGS = (OIMode.PASSIVE, OIMode.PASSIVE + 1)
+
+
 class OffsetDetector:
     """Learns whether packet 35 reads mode + 1 (see the module docstring for the rule)."""
 
@@ -148,7 +153,7 @@ class OffsetDetector:
     def calibrate(self, raw: int) -> bool:
         """Learn the offset from a reply read right after Start (Passive: 1, or 2 with the
         bug); False if ``raw`` is neither."""
-        if raw not in (1, 2):
+        if raw not in _PASSIVE_READINGS:
             return False
         if self.offset != raw - 1:
             self._learn(raw - 1, raw)

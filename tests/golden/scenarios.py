@@ -229,7 +229,7 @@ def load_recordings() -> dict[str, dict[str, object]]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=(__doc__ or "").partition("\n")[0])
     parser.add_argument("--renew", action="store_true", help="write recordings.json anew")
     parser.add_argument("names", nargs="*", help="scenarios (default: all)")
     args = parser.parse_args(argv)

@@ -219,7 +219,7 @@ HEADER = (
 
 
 def main(argv: list[str] | None = None, out: Callable[[str], None] = print) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n", 1)[0])
+    parser = argparse.ArgumentParser(description=(__doc__ or "").partition("\n")[0])
     parser.add_argument("--bytes", type=int, default=1_000_000, help="bytes per case")
     parser.add_argument("--seed", type=int, default=1)
     args = parser.parse_args(argv)
