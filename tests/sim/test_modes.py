@@ -139,6 +139,9 @@ events: [{at: 0.3, kind: lift, duration: 0.5}]
     host.run(0.6)
     assert host.sim.mode is OIMode.PASSIVE
     assert any("safety: wheel drop" in e.detail for e in host.sim.events)
+    reply = host.query([7, 9, 10, 11, 12])  # still lifted: both wheels down, every cliff
+    assert reply.bumps.wheel_drop_left and reply.bumps.wheel_drop_right
+    assert reply.any_cliff
     host.run(0.6)  # put down again
     host.send(C.safe(), C.drive_direct(100, 100))
     host.run(1.0)
@@ -157,20 +160,6 @@ robot: {start: {at: [2, 2], heading: 0}}
     assert host.sim.mode is OIMode.FULL
     assert host.sim.fallen
     assert host.query([7])[7] & 0b1100 == 0b1100
-
-
-def test_safe_mode_wheel_drop_drops_to_passive() -> None:
-    text = """
-rooms: [[[0, 0], [4, 0], [4, 4], [0, 4]]]
-robot: {start: {at: [2, 2], heading: 0}}
-events: [{at: 0.5, kind: lift, duration: 1.0}]
-"""
-    host = make(text)
-    host.run(0.6)
-    assert host.sim.mode is OIMode.PASSIVE
-    reply = host.query([7, 9, 10, 11, 12])
-    assert reply.bumps.wheel_drop_left and reply.bumps.wheel_drop_right
-    assert reply.any_cliff
 
 
 def test_safe_mode_powered_charger_drops_to_passive_but_full_does_not() -> None:
