@@ -52,7 +52,12 @@ from roomba_bt.behaviours.units import DISTANCE, DURATION
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import ENCODER_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS, SensorFrame
 from roomba_bt.oi.opcodes import opcodes
-from roomba_bt.oi.profiles import WHEEL_BASE_MM
+from roomba_bt.oi.profiles import (
+    BODY_RADIUS_MM,
+    LIGHT_BUMP_ANGLES_DEG,
+    LIGHT_BUMP_RANGE_MM,
+    WHEEL_BASE_MM,
+)
 from roomba_bt.robot.interface import Odometry
 
 __all__ = ["COVERAGE", "Bearings", "Cover", "FloorMap"]
@@ -70,9 +75,9 @@ SWEPT, BLOCKED, VISITED, TRIED = 1, 2, 4, 8
 _STRIP = (*((0.0, y) for y in (80.0, 40.0, 0.0, -40.0, -80.0)), (40.0, -120.0), (50.0, -160.0))
 #: the body's radius and the light bumper: rays from the centre at these angles, starting on
 #: the bumper, 150 mm long, signal = 4095 (1 - d / 150) ** 2
-_RADIUS_MM = 170.0
-_RAY_ANGLES = tuple(math.radians(a) for a in (65.0, 38.0, 12.0, -12.0, -38.0, -65.0))
-_RAY_RANGE_MM = 150.0
+_RADIUS_MM = BODY_RADIUS_MM
+_RAY_ANGLES = tuple(math.radians(a) for a in LIGHT_BUMP_ANGLES_DEG)
+_RAY_RANGE_MM = LIGHT_BUMP_RANGE_MM
 #: a ray's signal from which the surface it sees is marked (about 13 cm from the bumper)
 _RAY_MARK = 60
 #: back off this far (mm) from a bump, a cliff, a virtual wall's beam

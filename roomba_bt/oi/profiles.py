@@ -35,6 +35,19 @@ WHEEL_BASE_MM = 235.0
 WHEEL_DIAMETER_MM = 72.0
 COUNTS_PER_REVOLUTION = 508.8
 
+# The body, as the simulator models it and the behaviours that steer by their sensors assume
+# it (one home, so the two cannot drift apart). Neither spec gives these figures; they are
+# measured off a Roomba 600 / Create 2 and its light bumper's window.
+#: Radius of the round body (340 mm across).
+BODY_RADIUS_MM = 170.0
+#: How far the omni IR receiver (on top of the bumper) is ahead of the wheels' axle.
+OMNI_AHEAD_MM = 130.0
+#: The light bumper's six sensors (packets 46-51: left, front left, centre left, centre right,
+#: front right, right) as rays from the body's centre, degrees from the heading (CCW
+#: positive), starting at the bumper and seeing this far beyond it.
+LIGHT_BUMP_ANGLES_DEG = (65.0, 38.0, 12.0, -12.0, -38.0, -65.0)
+LIGHT_BUMP_RANGE_MM = 150.0
+
 
 @dataclass(frozen=True, slots=True)
 class RobotProfile:

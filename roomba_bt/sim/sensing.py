@@ -31,15 +31,15 @@ import math
 
 from roomba_bt.oi.bits import BUMP_BITS, WHEEL_DROP_BITS
 from roomba_bt.oi.ir import LighthouseBeam, dock_character, lighthouse_character
+from roomba_bt.oi.profiles import LIGHT_BUMP_ANGLES_DEG, LIGHT_BUMP_RANGE_MM, OMNI_AHEAD_MM
 from roomba_bt.sim.geometry import Segment, closest_point, point_in_polygon, wrap_angle
 from roomba_bt.sim.state import RobotState
 from roomba_bt.sim.world import ROBOT_RADIUS_MM, DockSpec
 
 # Sensor geometry (robot frame: angle from the heading, CCW positive).
-_LIGHT_BUMP_ANGLES = tuple(math.radians(a) for a in (65.0, 38.0, 12.0, -12.0, -38.0, -65.0))
+_LIGHT_BUMP_ANGLES = tuple(math.radians(a) for a in LIGHT_BUMP_ANGLES_DEG)
 _LIGHT_BUMP_DIRECTIONS = tuple((math.cos(a), math.sin(a)) for a in _LIGHT_BUMP_ANGLES)
 _LIGHT_BUMP_RAYS = tuple((i, ca, sa) for i, (ca, sa) in enumerate(_LIGHT_BUMP_DIRECTIONS))
-LIGHT_BUMP_RANGE_MM = 150.0
 LIGHT_BUMP_THRESHOLD = 100
 _CLIFF_ANGLES = tuple(math.radians(a) for a in (60.0, 20.0, -20.0, -60.0))
 CLIFF_SENSOR_RADIUS_MM = 150.0
@@ -52,7 +52,7 @@ BUMP_CENTRE_ANGLE = math.radians(12.0)
 BUMP_HALF_SPAN = math.radians(85.0)
 CONTACT_MM = 1.5
 #: IR receivers: the omni on top of the bumper, the directional ones left and right of it.
-OMNI_FORWARD_MM = 130.0
+OMNI_FORWARD_MM = OMNI_AHEAD_MM
 RECEIVER_FORWARD_MM = 150.0
 RECEIVER_SIDE_MM = 40.0
 #: Field of view of the directional receivers, from the heading: left sees -5..+90 deg,

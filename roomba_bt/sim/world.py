@@ -39,6 +39,7 @@ from typing import Any
 import yaml
 
 from roomba_bt import yamlsource
+from roomba_bt.oi.profiles import BODY_RADIUS_MM
 from roomba_bt.sim.geometry import (
     Point,
     Polygon,
@@ -49,8 +50,8 @@ from roomba_bt.sim.geometry import (
     wrap_angle,
 )
 
-#: Radius of the round Roomba / Create 2 body (340 mm across).
-ROBOT_RADIUS_MM = 170.0
+#: Radius of the round Roomba / Create 2 body (oi.profiles.BODY_RADIUS_MM).
+ROBOT_RADIUS_MM = BODY_RADIUS_MM
 
 #: The shipped worlds: package data (``roomba_bt/sim/worlds/``, also linked as ``worlds/`` at
 #: the top of the source tree), or ``$ROOMBA_BT_WORLDS`` if set.

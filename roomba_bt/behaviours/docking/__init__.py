@@ -52,7 +52,6 @@ from roomba_bt.behaviours.declare import Action
 from roomba_bt.behaviours.docking.approach import ApproachState, DockApproach
 from roomba_bt.behaviours.docking.charge import DockTimeLimit, DockWaitCharge
 from roomba_bt.behaviours.docking.common import (
-    OMNI_AHEAD_MM,
     RUN_KEY,
     STAGE_KEY,
     DockingAction,
@@ -63,6 +62,7 @@ from roomba_bt.behaviours.docking.common import (
 )
 from roomba_bt.behaviours.docking.drive_on import DockDriveOn, DriveOnState
 from roomba_bt.behaviours.docking.search import DockSearch, SearchState, VisitGrid
+from roomba_bt.oi.profiles import OMNI_AHEAD_MM
 
 DOCKING: tuple[type[Action], ...] = (
     DockSearch, DockApproach, DockDriveOn, DockWaitCharge, DockTimeLimit,

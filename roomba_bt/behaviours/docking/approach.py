@@ -24,7 +24,6 @@ from py_trees.common import Status
 from roomba_bt.behaviours.declare import Param, wheel_speed_param
 from roomba_bt.behaviours.docking.common import (
     HAZARD_IN_PACKETS,
-    OMNI_AHEAD_MM,
     RUN_KEY,
     RUNNING,
     DockingAction,
@@ -37,6 +36,7 @@ from roomba_bt.behaviours.docking.common import (
 from roomba_bt.behaviours.units import ANGLE, DURATION
 from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS
 from roomba_bt.oi.modes import DRIVING_MODES
+from roomba_bt.oi.profiles import OMNI_AHEAD_MM
 
 #: Attempts (starts of this leaf) in one docking run before the approach first backs away
 #: from the dock and comes in again.

@@ -37,8 +37,6 @@ STAGE_KEY = "/roomba/docking/stage"
 #: When the current docking run began (``dock_time_limit`` notes it): the approach counts
 #: its attempts per run.
 RUN_KEY = "/roomba/docking/run"
-#: How far the omni receiver is ahead of the wheels' axle (Roomba / Create 2: about 13 cm).
-OMNI_AHEAD_MM = 130.0
 
 
 def note_stage(stage: str) -> None:
