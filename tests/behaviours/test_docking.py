@@ -310,3 +310,32 @@ def test_time_limit_names_the_running_stage(robot: StubRobot, make: Make) -> Non
     limit.tick_once()
     assert status(limit) is Status.FAILURE
     assert limit.feedback_message.startswith("search: gave up after the time limit of 2 s")
+
+
+def test_wheels_sends_only_a_change_and_again_after_a_halt(robot: StubRobot, make: Make) -> None:
+    """The same speeds asked again are not sent again (the robot keeps them); after a halt,
+    or once the motion was reset (a stop), they are; speeds that round alike are not."""
+    search = make(DockSearch)
+    assert isinstance(search, DockSearch)
+    robot.set_frame(frame())
+
+    def sent() -> list[tuple[int, ...]]:
+        return [tuple(c.args) for c in robot.flush() if c.spec.name in ("drive_direct", "drive")]
+
+    search.wheels(100.0, 120.0)
+    assert sent() == [(120, 100)]
+    search.wheels(100.0, 120.0)
+    search.wheels(100.2, 119.9)  # rounds to the same speeds
+    search.wheels(100.2, 119.9)
+    assert sent() == []
+    search.wheels(100.0, 120.0)
+    assert sent() == []
+    search.wheels(90.0, 120.0)
+    assert sent() == [(120, 90)]
+    search.halt()
+    assert sent() == [(0, 0)]
+    search.wheels(90.0, 120.0)
+    assert sent() == [(120, 90)]
+    search._started_motion = False  # as a stop leaves it: the speeds are sent again
+    search.wheels(90.0, 120.0)
+    assert sent() == [(120, 90)]

@@ -183,11 +183,16 @@ class DockingAction(Action):
 
     def wheels(self, left: float, right: float) -> None:
         """Drive Direct (mm/s), sent only when the wheel speeds change (the robot keeps
-        them), clamped to the command's range."""
+        them), clamped to the command's range. Asked the same speeds as last time with the
+        wheels still turning (no halt since), it has nothing to do: most ticks of a spin or
+        a straight leg ask the same (rounding and clamping them again was most of its cost)."""
+        if self._started_motion and self._asked == (left, right):
+            return
         lo, ro = wheel_speeds(left, right)
         if (lo, ro) != self._last_wheels or not self._started_motion:
             self.send(oi.drive_direct(ro, lo))
         self._last_wheels = (lo, ro)
+        self._asked = (left, right)
         self._started_motion = True
 
     def spin_toward(self, err: float, speed: float) -> None:
@@ -200,8 +205,11 @@ class DockingAction(Action):
             self.send(oi.halt())
         self._started_motion = False
         self._last_wheels = (0, 0)
+        self._asked = None
 
     _last_wheels = (0, 0)
+    #: the speeds (mm/s) that set ``_last_wheels``, None after a halt
+    _asked: tuple[float, float] | None = None
 
     def fail(self, message: str) -> Status:
         self.halt()
