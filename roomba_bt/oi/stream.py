@@ -205,7 +205,9 @@ class StreamParser:
             ):
                 return False
         self._suspect = None
-        self._anchor = (left, right, at, now, self._failed())
+        counters = self.counters  # what _failed() says, without the call (once a frame)
+        refused = counters.checksum_failures + counters.implausible + counters.cut_frames
+        self._anchor = (left, right, at, now, refused)
         return True
 
     def _failed(self) -> int:

@@ -276,7 +276,9 @@ class StreamLink:
         its limit, so the check after the wait finds it tripped), or None when it cannot."""
         if not self.streaming or self.watchdog <= 0 or self.status is not _STREAMING:
             return None
-        return self.silent_since + self.watchdog + WATCHDOG_MARGIN
+        last = self._last_frame_time  # silent_since, without the property (every poll)
+        since = self._stream_started if last is None else last
+        return since + self.watchdog + WATCHDOG_MARGIN
 
     def ingest(self, data: bytes, arrival: float) -> list[TimedFrame]:
         """Feed ``data`` that arrived at ``arrival`` to the parser; the frames it completed."""

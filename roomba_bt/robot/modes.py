@@ -52,6 +52,7 @@ from roomba_bt.oi.frames import (
     BUMPS_PACKETS,
     CHARGING_SOURCES_PACKETS,
     CLIFF_PACKETS,
+    FrameLayout,
     SensorFrame,
 )
 from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
@@ -221,6 +222,9 @@ class ModeModel:
         self._unconfirmed: tuple[OIMode, int, SensorFrame, SensorFrame | None] | None = None
         self._pending: tuple[OIMode, OIMode, float] | None = None  # (from, to, sent at)
         self._previous_frame: SensorFrame | None = None
+        #: the layout of the frames reconciled last and packet 35's slot in it (None: not
+        #: carried), found once per layout instead of by a lookup every frame
+        self._mode_slot: tuple[FrameLayout | None, int | None] = (None, None)
         self._allowed = self._allowed_table()
 
     # ------------------------------------------------------------------ state
@@ -347,9 +351,13 @@ class ModeModel:
     def reconcile(self, frame: SensorFrame, tick: int, time: float) -> ModeChange | None:
         """Follow packet 35 of ``frame``; return the change the robot made by itself, if any."""
         previous_frame, self._previous_frame = self._previous_frame, frame
-        raw = frame.get(OI_MODE_PACKET)
-        if raw is None:
+        layout, slot = self._mode_slot
+        if frame._layout is not layout:  # the fields, not the properties: once a frame
+            slot = frame._layout.index.get(OI_MODE_PACKET)
+            self._mode_slot = (frame._layout, slot)
+        if slot is None:
             return None
+        raw = frame._values[slot]
         offset = self.detector.offset
         if self._pending is None and offset is not None and raw - offset == self._mode:
             self._unconfirmed = None

@@ -110,6 +110,21 @@ def test_mode_commands_move_the_model() -> None:
 # ------------------------------------------------------------------ reconciliation
 
 
+def test_packet_35_is_read_at_its_slot_in_each_layout_as_the_layout_changes() -> None:
+    """The model finds packet 35's slot once per layout: a frame of another layout (35 at
+    another slot, or not carried) is read at its own slot, not the last layout's."""
+    model = model_in(OIMode.SAFE)  # reconciled a frame of 35 alone: its slot 0
+    # 35 at slot 1 now, slot 0 holding 2 (what Safe would read at the old slot)
+    assert model.reconcile(frame({22: 2, 35: 1}), 2, 0.03) is None  # one frame: unconfirmed
+    assert model.reconcile(frame({22: 2}), 3, 0.045) is None  # no packet 35: nothing read
+    assert model.mode is OIMode.SAFE
+    change = model.reconcile(frame({22: 2, 35: 1}), 4, 0.06)  # the second report: followed
+    assert change is not None
+    assert (change.previous, change.current) == (OIMode.SAFE, OIMode.PASSIVE)
+    assert model.reconcile(frame({35: 1}), 5, 0.075) is None  # back to 35 at slot 0
+    assert model.mode is OIMode.PASSIVE
+
+
 def test_fall_back_with_wheel_drop_is_a_transition_with_cause_and_message() -> None:
     model = model_in(OIMode.SAFE)
     change = model.reconcile(frame({7: 0b1000, 35: 1}), 40, 0.6)  # explained: followed at once
