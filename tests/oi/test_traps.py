@@ -135,41 +135,42 @@ def test_mode_from_packet() -> None:
 
 # -- IR characters ---------------------------------------------------------------------------
 
-DOCK_600 = {  # both specs' table for the Roomba 500/600 drive-on charger
-    161: (False, False, True),
-    164: (False, True, False),
-    165: (False, True, True),
-    168: (True, False, False),
-    169: (True, False, True),
-    172: (True, True, False),
-    173: (True, True, True),
-}
-DOCK_DISCOVERY = {  # the Roomba Discovery drive-on charger
-    248: (True, False, False),
-    244: (False, True, False),
-    242: (False, False, True),
-    252: (True, True, False),
-    250: (True, False, True),
-    246: (False, True, True),
-    254: (True, True, True),
+#: The drive-on chargers' characters, by the beams seen (red buoy, green buoy, force field):
+#: the Roomba 500/600 charger's (both specs' table) and the Roomba Discovery charger's.
+DOCK_CHARACTERS = {
+    # red, green, force field: 500/600, Discovery
+    (False, False, True): (161, 242),
+    (False, True, False): (164, 244),
+    (False, True, True): (165, 246),
+    (True, False, False): (168, 248),
+    (True, False, True): (169, 250),
+    (True, True, False): (172, 252),
+    (True, True, True): (173, 254),
 }
 
 
-@pytest.mark.parametrize(("code", "beams"), sorted(DOCK_600.items()))
-def test_600_dock_characters(code: int, beams: tuple[bool, bool, bool]) -> None:
-    ch = IRCharacter.decode(code)
-    assert ch.source is IRSource.DOCK and ch.from_dock
-    assert (ch.red_buoy, ch.green_buoy, ch.force_field) == beams
-    assert dock_character(red=beams[0], green=beams[1], force_field=beams[2]) == code
+def _beams_id(beams: tuple[bool, bool, bool]) -> str:
+    return "+".join(
+        name for name, on in zip(("red", "green", "force_field"), beams, strict=True) if on
+    )
 
 
-@pytest.mark.parametrize(("code", "beams"), sorted(DOCK_DISCOVERY.items()))
-def test_discovery_dock_characters(code: int, beams: tuple[bool, bool, bool]) -> None:
+@pytest.mark.parametrize("beams", DOCK_CHARACTERS, ids=_beams_id)
+@pytest.mark.parametrize(
+    ("discovery", "source"),
+    [
+        pytest.param(False, IRSource.DOCK, id="600"),
+        pytest.param(True, IRSource.DISCOVERY_DOCK, id="discovery"),
+    ],
+)
+def test_dock_characters(beams: tuple[bool, bool, bool], discovery: bool, source: IRSource) -> None:
+    code = DOCK_CHARACTERS[beams][discovery]
     ch = IRCharacter.decode(code)
-    assert ch.source is IRSource.DISCOVERY_DOCK and ch.from_dock
+    assert ch.source is source and ch.from_dock
     assert (ch.red_buoy, ch.green_buoy, ch.force_field) == beams
+    red, green, force_field = beams
     assert (
-        dock_character(red=beams[0], green=beams[1], force_field=beams[2], discovery=True) == code
+        dock_character(red=red, green=green, force_field=force_field, discovery=discovery) == code
     )
 
 

@@ -11,6 +11,17 @@ from roomba_bt.runtime.loop import MissionRunner
 from roomba_bt.runtime.summary import RunSummary
 from roomba_bt.sim import SimLink, Simulator
 
+#: Safe, then forward at 200 mm/s until a bump ends the drive.
+DRIVE_TO_WALL = """
+mission: to-the-wall
+tree:
+  sequence:
+    - mode: safe
+    - drive: {velocity: 200 mm/s}
+      until: {bump: {}}
+"""
+#: The same, then the tree's reaction to the bump: back off 5 cm.
+DRIVE_TO_WALL_AND_BACK_OFF = DRIVE_TO_WALL + "    - drive: {velocity: -100 mm/s, distance: 50 mm}\n"
 #: Safe, then spin in place at 100 mm/s until something ends the run: a robot that is
 #: driving when a fault comes.
 SPIN = """

@@ -17,17 +17,8 @@ from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome, RunSummary
 from roomba_bt.sim import Simulator, load_world
 
-from .simrun import TapLink
+from .simrun import DRIVE_TO_WALL_AND_BACK_OFF, TapLink
 
-FORWARD_UNTIL_BUMP = """
-mission: forward-until-bump
-tree:
-  sequence:
-    - mode: safe
-    - drive: {velocity: 200 mm/s}
-      until: {bump: {}}
-    - drive: {velocity: -100 mm/s, distance: 50 mm}
-"""
 HALT = bytes((137, 0, 0, 0, 0))
 FORWARD = commands.drive(200, commands.Radius.STRAIGHT).data
 BACK = commands.drive(-100, commands.Radius.STRAIGHT).data
@@ -65,7 +56,7 @@ class BumpTap(TapLink):
 
 def run(tmp_path: Path, forge_at: float = 0.0) -> tuple[RunSummary, BumpTap]:
     path = tmp_path / "m.yaml"
-    path.write_text(FORWARD_UNTIL_BUMP)
+    path.write_text(DRIVE_TO_WALL_AND_BACK_OFF)
     mission = load_mission(path, {}, profile=CREATE2)
     simulator = Simulator(load_world("empty-room"), CREATE2, 0)
     link = BumpTap(simulator, stream_request(mission.packets, 115200), forge_at)

@@ -11,7 +11,7 @@ from roomba_bt.oi.stream import StreamParser
 from roomba_bt.runtime.summary import Outcome
 from roomba_bt.sim import Faults
 
-from .simrun import SPIN, RunMission
+from .simrun import DRIVE_TO_WALL, DRIVE_TO_WALL_AND_BACK_OFF, SPIN, RunMission
 
 HALT = oi.halt().data
 MOTORS_OFF = oi.motors_off().data
@@ -19,15 +19,6 @@ PAUSE = oi.pause_stream().data
 START = oi.start().data
 STOP = oi.stop().data
 SAFE_END = HALT + MOTORS_OFF + PAUSE + START
-
-DRIVE_TO_WALL = """
-mission: to-the-wall
-tree:
-  sequence:
-    - mode: safe
-    - drive: {velocity: 200 mm/s}
-      until: {bump: {}}
-"""
 
 
 def test_success_ends_with_the_safe_stop_bytes(run_mission: RunMission) -> None:
@@ -137,16 +128,7 @@ def test_unplugged_link_is_exit_3_and_says_the_stop_was_not_sent(run_mission: Ru
 def test_a_bump_changes_the_drive_command_within_one_frame(run_mission: RunMission) -> None:
     # A bump's onset is confirmed by the next frame (robot/hazards.py): the reaction is
     # written in the tick of the bump's second frame, 15 ms after the first, never later.
-    run = run_mission(
-        """
-        tree:
-          sequence:
-            - mode: safe
-            - drive: {velocity: 200 mm/s}
-              until: {bump: {}}
-            - drive: {velocity: -100 mm/s, distance: 50 mm}
-        """
-    )
+    run = run_mission(DRIVE_TO_WALL_AND_BACK_OFF)
     assert run.summary.outcome is Outcome.SUCCESS
     # Find the read that completed the first frame with a bump bit, and the next write.
     parser = StreamParser(run.runner.packets)
