@@ -131,7 +131,7 @@ class Motion(Sensing):
         self._last_drive = b""
         self._half_base = self.profile.wheel_base_mm / 2.0
         self._motion: _Motion = _motion_of(0.0, 0.0, STEP_SECONDS, self._half_base)
-        self._encoder_signed = self.profile.encoders_signed
+        self._encoder_bias = 0x8000 if self.profile.encoders_signed else 0
         dock = self.world.dock
         self._dock_target = dock.docked_pose if dock is not None else None
         self.values[40] = -32768
@@ -184,8 +184,8 @@ class Motion(Sensing):
         v[42] = round(self.requested_left)
         v[39] = (v[41] + v[42]) // 2
 
-    # The usual step runs inline but for one call (_turn, shared with a hindered step): it
-    # runs on every step the wheels turn; a wall in the way, a lift or a fall calls out.
+    # The usual step runs inline, no call (_turn's work too): it runs on every step the
+    # wheels turn; a wall in the way, a lift or a fall calls out.
     def _move(self, left: float, right: float, dt: float) -> None:
         """Turn the wheels at ``left``, ``right`` mm/s for ``dt`` seconds."""
         self.left_speed, self.right_speed = left, right
@@ -216,9 +216,17 @@ class Motion(Sensing):
             self.y = y + uy
         v = self.values
         if fraction == 1.0:
-            # free motion (the usual step): what the wheels did is the same every step
+            # free motion (the usual step): what the wheels did is the same every step (the
+            # heading and the counts as _turn does them, inline: this runs every step)
             self.blocked = False
-            self._turn(self.theta + dtheta, motion[9], motion[10])
+            theta = self.theta + dtheta
+            if theta > _PI:
+                theta -= _TWO_PI
+            elif theta < -_PI:
+                theta += _TWO_PI
+            self.theta = theta
+            self._distance_acc += motion[9]
+            self._angle_acc += motion[10]
             left_counts = self._left_counts = self._left_counts + motion[6]
             right_counts = self._right_counts = self._right_counts + motion[7]
             v[58] = motion[8]
@@ -227,13 +235,10 @@ class Motion(Sensing):
         else:
             self._move_hindered(dist, dtheta, fraction, stuck, dt)
             left_counts, right_counts = self._left_counts, self._right_counts
-        lc = int(left_counts) & 0xFFFF
-        rc = int(right_counts) & 0xFFFF
-        if self._encoder_signed:
-            lc = lc - 0x10000 if lc > 0x7FFF else lc
-            rc = rc - 0x10000 if rc > 0x7FFF else rc
-        v[43] = lc
-        v[44] = rc
+        # 16 bits, signed or not: (n + bias) & 0xFFFF - bias, bias 0x8000 when signed
+        bias = self._encoder_bias
+        v[43] = (int(left_counts) + bias & 0xFFFF) - bias
+        v[44] = (int(right_counts) + bias & 0xFFFF) - bias
         if not self.ticks & 3 and self.keeps_trace:
             self.trace.append(TracePoint(self.time, self.x, self.y, self.theta, self.mode))
 
@@ -241,7 +246,11 @@ class Motion(Sensing):
         """A wall is in the way of the move (ux, uy) from (x, y): how far along it the body
         gets, to 1 % (bisection)."""
         lo, hi = 0.0, 1.0
-        if self._clearance < 0.5 and self._blocked(x + ux / 64, y + uy / 64):
+        if (
+            self._clearance < 0.5  # a bound below the clearance: is the clearance itself?
+            and self._exact_clearance() < 0.5
+            and self._blocked(x + ux / 64, y + uy / 64)
+        ):
             hi = 0.0  # pressed against the wall already: no room at all
         while hi - lo > 0.01:
             mid = (lo + hi) / 2.0

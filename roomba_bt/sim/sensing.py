@@ -14,7 +14,8 @@ bumper's six rays (45, 46-51), the IR receivers (13, 17, 52, 53) and the dock's 
 A layer of the simulator (see state.py): :meth:`Sensing._sense` runs on most steps, so it
 reads the pose and writes the value list through ``self`` directly, and geometry is measured
 again only when the pose or the world changed (``_geometry_dirty``), walls only once the robot
-may have come within reach of one (``_free_at``, ``_free2``).
+may have moved far enough for what they show to change (``_walls_at``, ``_walls_same2``: no
+wall touching, the same walls within the rays' reach).
 
 The far sensors (the light bumper, the wall sensor and the IR receivers: 8, 13, 17, 27,
 45-53) change nothing on the robot itself; they are only read. When nothing reads them every
@@ -104,14 +105,20 @@ def _rays(theta: float) -> tuple[_Ray, ...]:
     return tuple(rays)
 
 
-_NEAR_RADIUS_MM = ROBOT_RADIUS_MM + LIGHT_BUMP_RANGE_MM + 40.0 + _NEAR_MARGIN_MM
+#: the walls kept near (a wall beyond the near radius less its margin is that far away at
+#: least: the 120 mm beyond the rays' reach let the robot move that far before measuring again)
+_NEAR_RADIUS_MM = ROBOT_RADIUS_MM + LIGHT_BUMP_RANGE_MM + 120.0 + _NEAR_MARGIN_MM
 _NEAR_MARGIN2 = _NEAR_MARGIN_MM**2
 _REACH2 = (ROBOT_RADIUS_MM + LIGHT_BUMP_RANGE_MM + 5.0) ** 2  # walls the rays may hit
 _CONTACT2 = (ROBOT_RADIUS_MM + CONTACT_MM) ** 2  # walls touching the bumper
 _NEAREST2 = (_NEAR_RADIUS_MM - _NEAR_MARGIN_MM) ** 2  # the clearance the near set guarantees
 _REACH = math.sqrt(_REACH2)
-#: a lower bound of the clearance while no wall is within reach (the real one is larger)
-_OPEN_CLEARANCE = _REACH - ROBOT_RADIUS_MM - 1.0
+#: no wall measured closer than this (from the centre) touches the bumper on a move shorter
+#: than the difference, less 10 mm: the clearance stays above a step's travel (7.5 mm at
+#: 500 mm/s), so the _move fast path does not look for walls in the way
+_QUIET_CONTACT = math.sqrt(_CONTACT2) + 10.0
+#: what rounding could take off a distance measured (far more than it can)
+_SAME_MARGIN = 0.01
 _PI = math.pi
 _TWO_PI = 2.0 * math.pi
 
@@ -122,9 +129,9 @@ class _DockBeams:
     function calls for the angle wrap, one table lookup for the character."""
 
     __slots__ = (
-        "angle_tolerance", "buoy2", "characters", "contact2", "facing", "field2", "green_from",
-        "green_to", "reach2", "red_from", "red_to", "target_theta", "target_x", "target_y",
-        "x", "y",
+        "angle_tolerance", "buoy2", "characters", "contact", "contact2", "facing", "field2",
+        "green_from", "green_to", "reach2", "red_from", "red_to", "target_theta", "target_x",
+        "target_y", "x", "y",
     )  # fmt: skip
 
     def __init__(self, dock: DockSpec) -> None:
@@ -144,6 +151,7 @@ class _DockBeams:
         )  # fmt: skip
         target = dock.docked_pose
         self.target_x, self.target_y, self.target_theta = target.x, target.y, target.theta
+        self.contact = dock.contact_tolerance
         self.contact2 = dock.contact_tolerance**2
         self.angle_tolerance = dock.angle_tolerance
 
@@ -188,15 +196,20 @@ class Sensing(RobotState):
         self._ir_stale = True
         #: the far sensors owed (see the module's docstring): the arguments of
         #: :meth:`_far_rays` and :meth:`_sense_ir` as they were due, or None
-        self._owed_rays: tuple[float, float, float, list[_Line]] | None = None
+        self._owed_rays: tuple[float, float, float, tuple[_Line, ...]] | None = None
         self._owed_ir: tuple[float, float, float, int, bool] | None = None
         self._far_owed = False
-        #: how far the robot can move before a wall could stop it (motion's fast path)
+        #: how far the robot can move before a wall could stop it (motion's fast path): exact
+        #: where the walls were measured, less the distance moved since elsewhere (a bound)
         self._clearance = 0.0
-        #: where walls were last measured, and the squared distance it may move from there
-        #: before any wall could come within reach of a sensor
-        self._free_at = (math.inf, math.inf)
-        self._free2 = 0.0
+        #: where walls were last measured, and the squared distance the robot may move from
+        #: there before what they show could change (:meth:`_sense_walls`): no wall touches
+        #: the bumper, and the same walls are within reach of the rays (``_walls_lines``)
+        self._walls_at = (math.inf, math.inf)
+        self._walls_same2 = 0.0
+        self._walls_lines: tuple[_Line, ...] = ()
+        #: the clearance where the walls were measured
+        self._walls_clear = 0.0
 
     # Few calls (the rays only near a wall): it runs on every step the robot moves, and a call
     # costs about a tenth of a microsecond, 3 % of a whole step.
@@ -206,16 +219,19 @@ class Sensing(RobotState):
         self._geometry_dirty = False
         v = self.values
         x, y, theta = self.x, self.y, self.theta
-        close_lines: list[_Line] = []
-        fx, fy = self._free_at
-        dx, dy = x - fx, y - fy
-        if dx * dx + dy * dy < self._free2:
-            # Still in the open: no wall was within reach of a sensor plus the distance moved
-            # since the walls were last measured, so none touches or shows now either.
+        wx, wy = self._walls_at
+        dx, dy = x - wx, y - wy
+        moved2 = dx * dx + dy * dy
+        if moved2 < self._walls_same2:
+            # Within the circle where the walls were measured: none touches the bumper, the
+            # same ones are within the rays' reach, the dock's contacts are out of reach (the
+            # walls are not looked at again, the contacts not tested).
             bumps = 0
-            self._clearance = _OPEN_CLEARANCE
+            self._clearance = self._walls_clear - math.sqrt(moved2)
+            contacts = False
         else:
-            bumps = self._sense_walls(x, y, theta, close_lines)
+            bumps = self._sense_walls(x, y, theta)
+            contacts = self._beams is not None
         bumps |= self._event_bump
         down = self.lifted or self.fallen
         if down:
@@ -223,8 +239,13 @@ class Sensing(RobotState):
         v[7] = bumps
         if bumps != self._prev_bumps:
             self._bumps_changed(bumps)
+        close_lines = self._walls_lines
         if far:  # measured now: what was owed is out of date (a fall measures at once)
-            self._far_rays(x, y, theta, close_lines)
+            if close_lines:
+                v[45] = self._sense_rays(x, y, theta, close_lines)
+            elif self._rays_on:
+                v[45] = v[46] = v[47] = v[48] = v[49] = v[50] = v[51] = v[27] = v[8] = 0
+                self._rays_on = False
             self._owed_rays = None
         else:
             self._owed_rays = (x, y, theta, close_lines)
@@ -242,19 +263,23 @@ class Sensing(RobotState):
                 self._owed_ir = (x, y, theta, self.ticks, self.dock_powered)
                 self._far_owed = True
             self._ir_stale = False
-        # on the contacts: within the dock's tolerances of the docked pose, not lifted
+        if contacts:
+            self._sense_contacts(x, y, theta)
+
+    def _sense_contacts(self, x: float, y: float, theta: float) -> None:
+        """On the dock's contacts: within its tolerances of the docked pose, not lifted."""
         beams = self._beams
-        if beams is not None:
-            ex, ey = x - beams.target_x, y - beams.target_y
-            docked = (
-                ex * ex + ey * ey <= beams.contact2
-                and abs((theta - beams.target_theta + _PI) % _TWO_PI - _PI) <= beams.angle_tolerance
-                and not self.lifted
-            )
-            if docked != self.docked:
-                self.docked = docked
-                self._event("docked" if docked else "undocked", "")
-                self._check_safety()
+        assert beams is not None
+        ex, ey = x - beams.target_x, y - beams.target_y
+        docked = (
+            ex * ex + ey * ey <= beams.contact2
+            and abs((theta - beams.target_theta + _PI) % _TWO_PI - _PI) <= beams.angle_tolerance
+            and not self.lifted
+        )
+        if docked != self.docked:
+            self.docked = docked
+            self._event("docked" if docked else "undocked", "")
+            self._check_safety()
 
     def _settle_far(self) -> None:
         """Measure the far sensors owed, from the pose and step they were due at: before a
@@ -270,7 +295,7 @@ class Sensing(RobotState):
         if ir is not None:
             self._sense_ir(*ir)
 
-    def _far_rays(self, x: float, y: float, theta: float, close_lines: list[_Line]) -> None:
+    def _far_rays(self, x: float, y: float, theta: float, close_lines: tuple[_Line, ...]) -> None:
         """The light bumper and the wall sensor: rays from the bumper against close walls."""
         v = self.values
         light_bits = 0
@@ -281,7 +306,7 @@ class Sensing(RobotState):
             self._rays_on = False
         v[45] = light_bits
 
-    def _sense_rays(self, x: float, y: float, theta: float, close_lines: list[_Line]) -> int:
+    def _sense_rays(self, x: float, y: float, theta: float, close_lines: tuple[_Line, ...]) -> int:
         """The light bumper (packets 45-51) and the wall sensor (8, 27): rays from the
         bumper against the walls close enough to show; returns packet 45's bits."""
         v = self.values
@@ -370,16 +395,21 @@ class Sensing(RobotState):
         self._prev_cliffs = cliffs
         self._check_safety()
 
-    def _sense_walls(self, x: float, y: float, theta: float, close_lines: list[_Line]) -> int:
-        """The bumper bits from walls touching the robot; the walls close enough for the light
-        bumper's rays go into ``close_lines``; how far the robot is from every wall."""
+    def _sense_walls(self, x: float, y: float, theta: float) -> int:
+        """The bumper bits from walls touching the robot at (``x``, ``y``, ``theta``); the
+        walls close enough for the light bumper's rays (``_walls_lines``); how far the robot
+        is from every wall (``_clearance``), and how far it may move from here before either
+        could change (``_walls_same2``: :meth:`_sense` measures them again only beyond it)."""
         nx, ny = self._near_at
         dx, dy = x - nx, y - ny
         near = self._near if dx * dx + dy * dy <= _NEAR_MARGIN2 else self._near_segments()
         bumps = 0
         reach2 = _REACH2
         contact2 = _CONTACT2
-        nearest2 = _NEAREST2
+        # the walls beyond the near set are farther than it guarantees
+        nearest2 = outside2 = _NEAREST2
+        inside2 = 0.0
+        close_lines: list[_Line] = []
         for ax, ay, ex, ey, length2, line, _ in near:
             t = ((x - ax) * ex + (y - ay) * ey) / length2
             t = 0.0 if t < 0.0 else 1.0 if t > 1.0 else t
@@ -390,6 +420,8 @@ class Sensing(RobotState):
                 nearest2 = d2
             if d2 < reach2:
                 close_lines.append(line)
+                if d2 > inside2:
+                    inside2 = d2
                 if d2 < contact2:
                     a = wrap_angle(math.atan2(cy - y, cx - x) - theta)
                     if -BUMP_HALF_SPAN < a < BUMP_HALF_SPAN:
@@ -399,14 +431,34 @@ class Sensing(RobotState):
                             bumps |= 1
                         else:
                             bumps |= 3
+            elif d2 < outside2:
+                outside2 = d2
         nearest = math.sqrt(nearest2)
         # how far the robot can move before a wall could stop it (the _move fast path)
-        self._clearance = nearest - ROBOT_RADIUS_MM - 1.0
-        # how far it can move before any wall could come within reach of a sensor
-        free = nearest - _REACH
-        self._free_at = (x, y)
-        self._free2 = free * free if free > 0.0 else 0.0
+        self._clearance = self._walls_clear = nearest - ROBOT_RADIUS_MM - 1.0
+        self._walls_at = (x, y)
+        self._walls_lines = tuple(close_lines)
+        # A point's distance to a wall changes by at most the distance the point moves: no
+        # wall comes within _QUIET_CONTACT, none enters or leaves the rays' reach, closer.
+        same = min(
+            nearest - _QUIET_CONTACT,
+            math.sqrt(outside2) - _REACH,
+            _REACH - math.sqrt(inside2),
+        )
+        beams = self._beams
+        if beams is not None:  # nor come onto the dock's contacts
+            ex, ey = x - beams.target_x, y - beams.target_y
+            contacts = math.sqrt(ex * ex + ey * ey) - beams.contact
+            if contacts < same:
+                same = contacts
+        same -= _SAME_MARGIN
+        self._walls_same2 = same * same if same > 0.0 else 0.0
         return bumps
+
+    def _exact_clearance(self) -> float:
+        """The clearance at the pose now (``_clearance`` may be a bound below it)."""
+        self._sense_walls(self.x, self.y, self.theta)
+        return self._clearance
 
     def _near_segments(self) -> tuple[_Wall, ...]:
         """The walls within reach of any sensor, kept until the robot has moved 0.3 m."""
