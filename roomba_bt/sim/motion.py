@@ -323,6 +323,7 @@ class Motion(Sensing):
     def _fall(self) -> None:
         """Off a drop (Full mode has no cliff safety): wheel drops, all cliffs, stuck."""
         self.fallen = True
+        self._body_changed()
         self.left_speed = self.right_speed = 0.0
         self._event("fell", "drove off a drop")
         self._geometry_dirty = True

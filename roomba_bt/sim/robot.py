@@ -234,6 +234,7 @@ class Simulator(OIProtocol):
         effects = timeline.effects()
         if effects != (self._event_bump, self.lifted, self.dock_powered):
             self._event_bump, self.lifted, self.dock_powered = effects
+            self._body_changed()
             self._geometry_dirty = True
             self._ir_stale = True
         if timeline.over:

@@ -186,6 +186,11 @@ class Sensing(RobotState):
         self._drops = world.drops
         self._dirt = world.dirt
         self._beams = _DockBeams(world.dock) if world.dock is not None else None
+        #: packet 7's bits the walls do not set (the timeline's bump, wheel drops), and
+        #: whether the cliffs and dirt can be anything but clear (:meth:`_body_changed`)
+        self._body_bits = 0
+        self._ground_varies = False
+        self._body_changed()
         self._prev_bumps = 0
         self._prev_cliffs = 0
         #: a wheel drop, a cliff or the dock's contacts: what Safe mode's own rules act on
@@ -232,10 +237,7 @@ class Sensing(RobotState):
         else:
             bumps = self._sense_walls(x, y, theta)
             contacts = self._beams is not None
-        bumps |= self._event_bump
-        down = self.lifted or self.fallen
-        if down:
-            bumps |= WHEEL_DROP_BITS
+        bumps |= self._body_bits
         v[7] = bumps
         if bumps != self._prev_bumps:
             self._bumps_changed(bumps)
@@ -250,11 +252,8 @@ class Sensing(RobotState):
         else:
             self._owed_rays = (x, y, theta, close_lines)
             self._far_owed = True
-        cliffs = 15 if down else self._cliffs_over_drops(x, y, theta) if self._drops else 0
-        if self._dirt:
-            v[15] = 0 if down else self.world.dirt_at(x, y)
-        if cliffs != self._prev_cliffs:
-            self._cliffs_changed(cliffs)
+        if self._ground_varies or self._prev_cliffs:  # else no cliff, no dirt, as before
+            self._sense_ground(x, y, theta)
         if not self.ticks & 1 or self._ir_stale:
             if far:
                 self._sense_ir(x, y, theta, self.ticks, self.dock_powered)
@@ -265,6 +264,22 @@ class Sensing(RobotState):
             self._ir_stale = False
         if contacts:
             self._sense_contacts(x, y, theta)
+
+    def _sense_ground(self, x: float, y: float, theta: float) -> None:
+        """The cliff sensors (9-12, 28-31) and the dirt detector (15)."""
+        down = self.lifted or self.fallen
+        cliffs = 15 if down else self._cliffs_over_drops(x, y, theta) if self._drops else 0
+        if self._dirt:
+            self.values[15] = 0 if down else self.world.dirt_at(x, y)
+        if cliffs != self._prev_cliffs:
+            self._cliffs_changed(cliffs)
+
+    def _body_changed(self) -> None:
+        """The timeline pressed the bumper, lifted the robot, or it fell: the bits of packet 7
+        that are not the walls' (``_body_bits``), and whether the ground must be looked at."""
+        down = self.lifted or self.fallen
+        self._body_bits = self._event_bump | (WHEEL_DROP_BITS if down else 0)
+        self._ground_varies = bool(down or self._drops or self._dirt)
 
     def _sense_contacts(self, x: float, y: float, theta: float) -> None:
         """On the dock's contacts: within its tolerances of the docked pose, not lifted."""
