@@ -7,6 +7,7 @@ import pytest
 
 from roomba_bt.oi import commands as C
 from roomba_bt.oi.ir import IRSource, LighthouseBeam
+from roomba_bt.sim import Pose, Simulator
 from roomba_bt.sim.sensing import FAR_PACKETS
 from roomba_bt.sim.world import ROBOT_RADIUS_MM
 
@@ -225,3 +226,25 @@ def test_lighthouse_fence_and_force_field_characters() -> None:
     assert not fence.virtual_wall  # packet 13 is the virtual wall's, not the lighthouse's
     halo = make(VIRTUAL, start=pose(0.5, 3.1, 90)).query([17])
     assert halo.ir_omni.lighthouse_beam is LighthouseBeam.FORCE_FIELD
+
+
+@pytest.mark.parametrize("wheels", [(300, 300), (200, 120), (-150, 150), (480, 350)])
+def test_a_moving_robot_reports_what_a_robot_placed_at_its_pose_measures(
+    wheels: tuple[int, int],
+) -> None:
+    # The walls are measured again only once the robot may have moved far enough for what
+    # they show to change (sensing.py): every step, the sensors must be those a robot built
+    # at that pose measures from scratch. Driving about a room with a dock, along and into
+    # walls, in and out of the light bumper's reach.
+    room = ROOM + "dock: {at: [1, 0], facing: 90}\n"
+    host = make(room, start=pose(0.6, 0.5, 20), mode="full")
+    sim = host.sim
+    host.send(C.drive_direct(*wheels))
+    near = (7, 8, 27, 45, 46, 47, 48, 49, 50, 51)
+    for _ in range(900):
+        sim.step()
+        sim._settle_far()  # as a reply of them would
+        fresh = Simulator(sim.world, start=Pose(sim.x, sim.y, sim.theta))
+        assert [sim.values[p] for p in near] == [fresh.values[p] for p in near]
+        assert sim.docked == fresh.docked
+        assert sim._clearance <= fresh._clearance
