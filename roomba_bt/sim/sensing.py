@@ -130,8 +130,8 @@ class _DockBeams:
 
     __slots__ = (
         "angle_tolerance", "buoy2", "characters", "contact", "contact2", "facing", "field2",
-        "green_from", "green_to", "reach2", "red_from", "red_to", "target_theta", "target_x",
-        "target_y", "x", "y",
+        "green_from", "green_to", "reach", "reach2", "red_from", "red_to", "target_theta",
+        "target_x", "target_y", "x", "y",
     )  # fmt: skip
 
     def __init__(self, dock: DockSpec) -> None:
@@ -139,6 +139,7 @@ class _DockBeams:
         self.field2 = dock.force_field * dock.force_field
         self.buoy2 = dock.buoy_range * dock.buoy_range
         reach = max(dock.buoy_range, dock.force_field) + 200.0
+        self.reach = reach
         self.reach2 = reach * reach
         self.red_from, self.red_to = dock.red
         self.green_from, self.green_to = dock.green
@@ -199,6 +200,12 @@ class Sensing(RobotState):
         self._safety_due = False
         self._rays_on = True
         self._ir_stale = True
+        #: no virtual wall nor lighthouse: away from the dock, the IR receivers see nothing;
+        #: where they were last measured so, and how far (squared) the robot may move from
+        #: there with them still beyond the dock's beams (:meth:`_ir_quiet_circle`)
+        self._ir_beamless = not (world.virtual_walls or world.lighthouses)
+        self._ir_quiet_at = (math.inf, math.inf)
+        self._ir_quiet2 = 0.0
         #: the far sensors owed (see the module's docstring): the arguments of
         #: :meth:`_far_rays` and :meth:`_sense_ir` as they were due, or None
         self._owed_rays: tuple[float, float, float, tuple[_Line, ...]] | None = None
@@ -493,6 +500,10 @@ class Sensing(RobotState):
         """The IR receivers at the pose (``x``, ``y``, ``theta``) of step ``ticks``, the
         dock ``powered`` or not. A character takes tens of milliseconds to send, so they are
         updated every other step (30 ms), and at once when the world changes."""
+        qx, qy = self._ir_quiet_at
+        dx, dy = x - qx, y - qy
+        if dx * dx + dy * dy < self._ir_quiet2:
+            return  # still beyond every beam's reach: nothing seen, as where it was measured
         v = self.values
         c, s = math.cos(theta), math.sin(theta)
         omni_x, omni_y = x + OMNI_FORWARD_MM * c, y + OMNI_FORWARD_MM * s
@@ -534,6 +545,23 @@ class Sensing(RobotState):
         v[17] = omni
         v[52] = left
         v[53] = right
+        if self._ir_beamless:
+            self._ir_quiet_circle(x, y)
+
+    def _ir_quiet_circle(self, x: float, y: float) -> None:
+        """How far the robot may move from (``x``, ``y``) with every IR receiver beyond the
+        dock's beams (a world with no virtual wall nor lighthouse): :meth:`_sense_ir` need not
+        look again within it. The receivers see a beam only while the omni receiver is within
+        the beams' reach, and it is OMNI_FORWARD_MM from the centre: its distance to the dock
+        changes no more than the robot moves."""
+        beams = self._beams
+        if beams is None:
+            quiet = math.inf
+        else:
+            dx, dy = x - beams.x, y - beams.y
+            quiet = math.sqrt(dx * dx + dy * dy) - OMNI_FORWARD_MM - beams.reach - _SAME_MARGIN
+        self._ir_quiet_at = (x, y)
+        self._ir_quiet2 = quiet * quiet if quiet > 0.0 else 0.0
 
     @staticmethod
     def _in_beam(px: float, py: float, seg: Segment, half_width: float, halo: float) -> bool:

@@ -228,23 +228,38 @@ def test_lighthouse_fence_and_force_field_characters() -> None:
     assert halo.ir_omni.lighthouse_beam is LighthouseBeam.FORCE_FIELD
 
 
+@pytest.mark.parametrize(
+    ("room", "start"),
+    [
+        (ROOM + "dock: {at: [1, 0], facing: 90}\n", (0.6, 0.5, 20)),
+        (  # a large room: in and out of the dock's beams
+            "rooms: [[[0, 0], [5, 0], [5, 5], [0, 5]]]\n"
+            "robot: {start: {at: [1, 1], heading: 0}}\n"
+            "dock: {at: [2.5, 0], facing: 90}\n",
+            (1.0, 3.0, -60),
+        ),
+    ],
+)
 @pytest.mark.parametrize("wheels", [(300, 300), (200, 120), (-150, 150), (480, 350)])
 def test_a_moving_robot_reports_what_a_robot_placed_at_its_pose_measures(
-    wheels: tuple[int, int],
+    room: str, start: tuple[float, float, float], wheels: tuple[int, int]
 ) -> None:
     # The walls are measured again only once the robot may have moved far enough for what
-    # they show to change (sensing.py): every step, the sensors must be those a robot built
-    # at that pose measures from scratch. Driving about a room with a dock, along and into
-    # walls, in and out of the light bumper's reach.
-    room = ROOM + "dock: {at: [1, 0], facing: 90}\n"
-    host = make(room, start=pose(0.6, 0.5, 20), mode="full")
+    # they show to change, the IR receivers only once it may have come within the dock's
+    # beams (sensing.py): every step, the sensors must be those a robot built at that pose
+    # measures from scratch (the IR's, every other step, when they are measured). Driving
+    # about a room with a dock, along and into walls, in and out of the light bumper's reach.
+    host = make(room, start=pose(*start), mode="full")
     sim = host.sim
     host.send(C.drive_direct(*wheels))
     near = (7, 8, 27, 45, 46, 47, 48, 49, 50, 51)
+    ir = (13, 17, 52, 53)
     for _ in range(900):
         sim.step()
         sim._settle_far()  # as a reply of them would
         fresh = Simulator(sim.world, start=Pose(sim.x, sim.y, sim.theta))
         assert [sim.values[p] for p in near] == [fresh.values[p] for p in near]
+        if not sim.ticks & 1:
+            assert [sim.values[p] for p in ir] == [fresh.values[p] for p in ir]
         assert sim.docked == fresh.docked
         assert sim._clearance <= fresh._clearance
