@@ -233,29 +233,61 @@ class StreamParser:
     ) -> list[SensorFrame]:
         """The frames ``data`` completes; ``now``: when it arrived (seconds, for the
         encoder step check across frames lost whole), None if unknown."""
-        buf = self._buffer
-        size = self._size
-        # The common case, one whole frame per read: the same four checks as below,
-        # without copying into the buffer and searching.
-        if (
-            not buf
-            and len(data) == size
-            and int.from_bytes(data, "big") & self._mask == self._template
-            and self._byte_sum(data) & 0xFF in self._ok_sums
-        ):
-            counters = self.counters
-            values = self._unpack(data, 2)
-            if self.plausible(values, counters.bytes_fed, now):
-                counters.bytes_fed += size
-                counters.frames += 1
-                return [SensorFrame(self.layout, values)]
-            counters.implausible += 1
-            first = 1  # its header byte skipped; the search goes on inside it
-        else:
-            first = 0
-        buf += data
+        frame = self.take(data, now)
+        return [frame] if frame is not None else self.search(data, now)
+
+    def search(
+        self, data: bytes | bytearray | memoryview, now: float | None = None
+    ) -> list[SensorFrame]:
+        """:meth:`feed` for ``data`` that :meth:`take` did not take: added to what is held
+        back, and the frames searched for."""
+        self._buffer += data
         self.counters.bytes_fed += len(data)
-        return self._scan(first, now)
+        return self._scan(0, now)
+
+    def take(
+        self, data: bytes | bytearray | memoryview, now: float | None = None
+    ) -> SensorFrame | None:
+        """The frame ``data`` is, in the common case: one whole frame, nothing held back
+        before it, its ids, reserved bits and checksum right, its values in range and its
+        encoders within one slot's step of the last frame's. Counted like :meth:`feed`;
+        otherwise None and nothing changed (:meth:`feed` it then: the search, the counters
+        of what is refused, a frame cut short).
+
+        What one read brings on the tick path: the four checks of :meth:`_scan` and the
+        common case of :meth:`plausible` in one method, without copying into the buffer."""
+        size = self._size
+        if (
+            len(data) != size
+            or self._buffer
+            or int.from_bytes(data, "big") & self._mask != self._template
+            or self._byte_sum(data) & 0xFF not in self._ok_sums
+        ):
+            return None
+        values = self._unpack(data, 2)
+        checks = self._checks
+        if checks is not None and not checks(values):
+            return None
+        counters = self.counters
+        encoders = self._encoders
+        if encoders is not None:
+            anchor = self._anchor
+            if anchor is None:
+                return None
+            left, right = values[encoders[0]], values[encoders[1]]
+            # fmt: off
+            if (
+                (left - anchor[0] + MAX_COUNTS_PER_SLOT) & 0xFFFF > _ONE_SLOT_SPAN
+                or (right - anchor[1] + MAX_COUNTS_PER_SLOT) & 0xFFFF > _ONE_SLOT_SPAN
+            ):
+                return None
+            # fmt: on
+            refused = counters.checksum_failures + counters.implausible + counters.cut_frames
+            self._anchor = (left, right, counters.bytes_fed, now, refused)
+            self._suspect = None
+        counters.bytes_fed += size
+        counters.frames += 1
+        return SensorFrame(self.layout, values)
 
     def _scan(self, first: int, now: float | None) -> list[SensorFrame]:
         """The frames in the buffer from byte ``first`` on; the bytes they used or skipped
@@ -355,7 +387,6 @@ def _compile_checks(checks: tuple[tuple[int, int, int], ...]) -> ValueCheck | No
     return function
 
 
-#: (left counts, right counts, byte offset in the stream, arrival time or None)
 #: left and right counts, byte offset in the stream, arrival time, candidates refused so far
 _EncoderMark = tuple[int, int, int, float | None, int]
 #: A stream frame every 15 ms.

@@ -295,11 +295,14 @@ class Connection:
         garbage, and frames at another rate) or
         :class:`StreamStalled` (see :meth:`check_stall` for riding it through).
         """
+        link = self.link
+        now = link.transport.now()  # the read's start too: read_frames need not ask again
         wake = self.wake
-        if wake is not None:
-            wake.tick(self.link.transport.now())
+        if wake is not None and now >= wake.due:  # most polls: no pulse to start or end
+            wake.tick(now)
+            now = link.transport.now()  # driving the line may take time on a real port
         try:
-            return self.link.read_frames(timeout)
+            return link.read_frames(timeout, now)
         except StreamStalled as exc:
             if self.link.banner_seen():
                 raise RobotReset(self.name, exc.halted) from exc

@@ -145,8 +145,8 @@ class HazardConfirmation:
         Most frames carry the same hazard packets as the frame before (none, or the same
         bumper held): then nothing is new, an onset held back from the frame before is
         confirmed, and the word is not folded again."""
-        if frame.layout is not self._layout:
-            self._bind(frame.layout)
+        if frame._layout is not self._layout:  # the field, not the property: every frame
+            self._bind(frame._layout)
         raw = self._raw(frame._values)
         if raw == self._previous_raw:
             self.pending = 0

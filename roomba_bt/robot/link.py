@@ -117,8 +117,9 @@ class StreamLink:
         self.mode_plus_one: bool | None = None
         self._parser: StreamParser | None = None
         self._parsed_before = (0, 0, 0, 0)  # frames, checksum failures, skipped, implausible
-        self._stream_started = 0.0
-        self._last_frame_time: float | None = None
+        #: when the last valid frame arrived, or the stream started (or resumed) if none
+        #: has since (link clock): what the watchdog measures from
+        self._silent_since = 0.0
         self._bytes_at_frame = 0  # bytes_read when the last valid frame came
         #: the last chunks read (a reset's banner comes just before the stream stops)
         self._recent: deque[bytes] = deque(maxlen=RECENT_CHUNKS)
@@ -200,8 +201,7 @@ class StreamLink:
     def silent_since(self) -> float:
         """When the last valid frame arrived, or the stream started if none has (link
         clock): what the watchdog measures from."""
-        last = self._last_frame_time
-        return self._stream_started if last is None else last
+        return self._silent_since
 
     @property
     def bytes_since_frame(self) -> int:
@@ -217,16 +217,14 @@ class StreamLink:
             StreamParser(ids, self.profile, mode_plus_one=self.mode_plus_one) if ids else None
         )
         self.streaming = bool(ids)
-        self._stream_started = now
-        self._last_frame_time = None
+        self._silent_since = now
         self._bytes_at_frame = self.bytes_read
         self.status = LinkStatus.STREAMING if ids else LinkStatus.OPEN
 
     def pause_resume(self, resume: bool, now: float) -> None:
         """Pause/Resume Stream (150) was written."""
         self.streaming = resume and bool(self.stream_ids)
-        self._stream_started = now
-        self._last_frame_time = None
+        self._silent_since = now
         if self.streaming:
             self.status = LinkStatus.STREAMING
 
@@ -242,9 +240,9 @@ class StreamLink:
             implausible += c.implausible
         return frames, checksums, skipped, implausible
 
-    def read_frames(self, timeout: float) -> list[TimedFrame]:
+    def read_frames(self, timeout: float, now: float | None = None) -> list[TimedFrame]:
         """What is there now, or wait up to ``timeout`` s for at least one frame; then the
-        watchdog.
+        watchdog. ``now``: the link clock's time if the caller has just read it.
 
         The wait never outlasts the watchdog's own deadline: a read blocked for the caller's
         whole ``timeout`` (the runtime polls with 50 ms) would check the watchdog up to that
@@ -252,41 +250,67 @@ class StreamLink:
 
             last frame ──── watchdog (100 ms) ──┐ the read returns here, drive 0
                                                  └ not at the end of the caller's timeout
-        """
-        clock = self.transport.now
-        now = clock()
-        deadline = now + timeout
-        due = self._watchdog_due()
-        if due is not None and due < deadline:
-            deadline = max(now, due)
-        out: list[TimedFrame] = []
-        while True:
-            data = self.read(max(0.0, deadline - now))
-            now = clock()  # once a read: the frames' arrival, the deadline's and watchdog's now
-            if data:
-                out += self.ingest(data, now)
-            if out or now >= deadline:  # no read past the deadline (a virtual clock's
-                break  # read of 0 s still steps once)
-        if not out:  # a frame that came now leaves nothing silent for the watchdog to see
-            self._check_watchdog(now)
-        return out
 
-    def _watchdog_due(self) -> float | None:
-        """When the watchdog trips if no valid frame comes (link clock; a slot's margin past
-        its limit, so the check after the wait finds it tripped), or None when it cannot."""
-        if not self.streaming or self.watchdog <= 0 or self.status is not _STREAMING:
-            return None
-        last = self._last_frame_time  # silent_since, without the property (every poll)
-        since = self._stream_started if last is None else last
-        return since + self.watchdog + WATCHDOG_MARGIN
+        Once a frame on the tick path, so the common case, a read that brings exactly one
+        whole frame, is written out here: :meth:`read`, the parser's
+        :meth:`~roomba_bt.oi.stream.StreamParser.take` and :meth:`_timed` for that one
+        frame, with no call of this class's own (each was about a tenth of the link's cost
+        a frame).
+        """
+        transport = self.transport  # its methods called, not bound: most polls read once
+        if now is None:
+            now = transport.now()
+        deadline = now + timeout
+        # When the watchdog trips if no valid frame comes: a margin past its limit, so the
+        # check after the wait finds it tripped. Most polls come well before it: the
+        # conditions under which it can trip are read only when it would cut the wait.
+        due = self._silent_since + self.watchdog + WATCHDOG_MARGIN
+        if due < deadline and self.streaming and self.watchdog > 0 and self.status is _STREAMING:
+            deadline = due if due > now else now
+        while True:
+            wait = deadline - now
+            try:
+                data = transport.read(wait if wait > 0.0 else 0.0)
+            except LINK_ERRORS as exc:
+                raise self.lost("read", exc) from exc
+            now = transport.now()  # once a read: the frames' arrival, the deadline's, the
+            # watchdog's now
+            if data:
+                self.bytes_read += len(data)
+                self._recent.append(data)
+                parser = self._parser
+                if parser is not None:
+                    frame = parser.take(data, now)
+                    if frame is not None:  # one whole frame: _timed's work, for it alone
+                        index = self.index = self.index + 1
+                        change = self._reconcile(frame, index, now)
+                        if change is not None:
+                            self._report(change)
+                        self.latest = timed = _new_tuple(TimedFrame, (frame, now, index))
+                        self._silent_since = now
+                        self._bytes_at_frame = self.bytes_read
+                        if self.status is _STALLED:
+                            self.status = _STREAMING
+                        return [timed]
+                    frames = parser.search(data, now)
+                    if frames:  # a frame that came now leaves nothing silent for the watchdog
+                        return self._timed(frames, now)
+            if now >= deadline:  # no read past the deadline (a virtual clock's read of
+                break  # 0 s still steps once)
+        self._check_watchdog(now)
+        return []
 
     def ingest(self, data: bytes, arrival: float) -> list[TimedFrame]:
         """Feed ``data`` that arrived at ``arrival`` to the parser; the frames it completed."""
-        if self._parser is None:
+        parser = self._parser
+        if parser is None:
             return []
-        frames = self._parser.feed(data, arrival)
-        if not frames:
-            return []
+        frames = parser.feed(data, arrival)
+        return self._timed(frames, arrival) if frames else []
+
+    def _timed(self, frames: list[SensorFrame], arrival: float) -> list[TimedFrame]:
+        """``frames``, just checked (at least one), each told to the mode model, numbered
+        and timed."""
         out: list[TimedFrame] = []
         reconcile = self._reconcile
         index = self.index
@@ -298,7 +322,7 @@ class StreamLink:
             out.append(_new_tuple(TimedFrame, (frame, arrival, index)))
         self.index = index
         self.latest = out[-1]
-        self._last_frame_time = arrival
+        self._silent_since = arrival
         self._bytes_at_frame = self.bytes_read
         if self.status is _STALLED:
             self.status = _STREAMING
@@ -307,10 +331,7 @@ class StreamLink:
     def _check_watchdog(self, now: float) -> None:
         if not self.streaming or self.watchdog <= 0 or self.status is not _STREAMING:
             return
-        reference = self._last_frame_time
-        if reference is None:
-            reference = self._stream_started
-        silent = now - reference
+        silent = now - self._silent_since
         if silent <= self.watchdog:
             return
         self.status = LinkStatus.STALLED

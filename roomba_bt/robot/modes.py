@@ -224,10 +224,21 @@ class ModeModel:
         self._previous_frame: SensorFrame | None = None
         #: the layout of the frames reconciled last and packet 35's slot in it (None: not
         #: carried), found once per layout instead of by a lookup every frame
-        self._mode_slot: tuple[FrameLayout | None, int | None] = (None, None)
+        self._mode_layout: FrameLayout | None = None
+        self._mode_slot: int | None = None
+        #: the packet 35 reading that changes nothing (:meth:`_track`)
+        self._steady: int | None = None
         self._allowed = self._allowed_table()
 
     # ------------------------------------------------------------------ state
+    def _track(self) -> None:
+        """After every change of the mode, the command pending or the offset: the raw
+        packet 35 reading that says the robot is where the model thinks with no command
+        pending (the model's mode + the offset), or None when no reading can say that. What
+        :meth:`reconcile` compares each frame with, in one test instead of three."""
+        offset = self.detector.offset
+        self._steady = None if self._pending is not None or offset is None else self._mode + offset
+
     @property
     def mode(self) -> OIMode:
         return self._mode
@@ -291,6 +302,7 @@ class ModeModel:
         if self._mode is not OIMode.PASSIVE:
             self.force(OIMode.PASSIVE, time)
         self._pending = None
+        self._track()
         return True
 
     def snapshot(self) -> tuple[Any, ...]:
@@ -303,6 +315,7 @@ class ModeModel:
         mode, state, self.since, self.since_wall, self.cause, self._pending = saved
         self.machine.set_state(state, model=self._model)
         self._mode = mode
+        self._track()
 
     def apply(self, command: Command | CommandSpec, time: float) -> None:
         """Record that ``command`` was written at link time ``time``: fire its trigger."""
@@ -312,6 +325,7 @@ class ModeModel:
         previous = self._mode
         self._fire(spec.name, spec.leads_to, time, cause=None)
         self._pending = (previous, spec.leads_to, time)
+        self._track()
 
     def _fire(self, trigger: str, dest: OIMode, time: float, cause: str | None) -> None:
         self._model.trigger(trigger)  # type: ignore[attr-defined]
@@ -320,6 +334,7 @@ class ModeModel:
             self.since_wall = self._wall_clock()
         self._mode = dest
         self.cause = cause
+        self._track()
 
     def force(self, mode: OIMode, time: float = 0.0) -> None:
         """Set the mode without a command (a robot known to be in ``mode``: tests, replays)."""
@@ -328,16 +343,19 @@ class ModeModel:
         else:
             self._fire(RESYNC_PREFIX + mode.name.lower(), mode, time, None)
         self._pending = None
+        self._track()
 
     def _reset_off(self, time: float) -> None:
         self.machine.set_state("Off", model=self._model)
         self._mode = OIMode.OFF
         self.since, self.since_wall, self.cause = time, self._wall_clock(), None
+        self._track()
 
     def robot_off(self, time: float) -> None:
         """The link is gone or the robot stopped talking: assume nothing is allowed."""
         self._reset_off(time)
         self._pending = None
+        self._track()
 
     # ------------------------------------------------------------------ packet 35
     def possible_modes(self, time: float) -> set[OIMode]:
@@ -351,17 +369,18 @@ class ModeModel:
     def reconcile(self, frame: SensorFrame, tick: int, time: float) -> ModeChange | None:
         """Follow packet 35 of ``frame``; return the change the robot made by itself, if any."""
         previous_frame, self._previous_frame = self._previous_frame, frame
-        layout, slot = self._mode_slot
-        if frame._layout is not layout:  # the fields, not the properties: once a frame
-            slot = frame._layout.index.get(OI_MODE_PACKET)
-            self._mode_slot = (frame._layout, slot)
+        layout = frame._layout  # the fields, not the properties: once a frame
+        if layout is self._mode_layout:
+            slot = self._mode_slot
+        else:
+            slot = self._mode_slot = layout.index.get(OI_MODE_PACKET)
+            self._mode_layout = layout
         if slot is None:
             return None
         raw = frame._values[slot]
-        offset = self.detector.offset
-        if self._pending is None and offset is not None and raw - offset == self._mode:
-            self._unconfirmed = None
-            return None  # the common case, once per frame: the robot is where we think
+        if raw == self._steady:  # the common case, once per frame: the robot is where we
+            self._unconfirmed = None  # think, no command pending
+            return None
         reported = self.detector.interpret(raw)
         if reported is None:
             self.invalid_readings += 1
@@ -370,10 +389,12 @@ class ModeModel:
             if reported is self._pending[1]:
                 self._pending = None
                 self._unconfirmed = None
+                self._track()
                 return None
             if time - self._pending[2] < self.settle:
                 return None
             self._pending = None
+            self._track()
         if reported is self._mode:
             self._unconfirmed = None
             return None

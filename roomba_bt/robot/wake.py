@@ -24,6 +24,7 @@ byte for its second, and a pulse a minute would stall the stream once a minute.
 from __future__ import annotations
 
 import logging
+import math
 from contextlib import AbstractContextManager
 from typing import Protocol, runtime_checkable
 
@@ -75,6 +76,10 @@ class KeepAwake:
         self.unavailable: str | None = None
         self._low_until: float | None = None
         self._next: float | None = None
+        #: the link time from which :meth:`tick` has something to do (a pulse to start or to
+        #: end; infinity once the line cannot be driven): before it, a tick would do nothing,
+        #: so the caller, which ticks before every read, need not call it
+        self.due = -math.inf
 
     def tick(self, now: float) -> None:
         """Start or end a pulse if it is time; the first pulse starts at the first tick. A
@@ -86,16 +91,18 @@ class KeepAwake:
                 if now >= self._low_until:
                     self.line.set_wake_line(False)
                     self._low_until = None
+                    self.due = self._next if self._next is not None else -math.inf
                 return
             if self._next is None or now >= self._next:
                 self.line.set_wake_line(True)
                 self.pulses += 1
                 self.last_pulse = now
-                self._low_until = now + self.length
+                self._low_until = self.due = now + self.length
                 self._next = now + self.period
         except OSError as exc:
             self.unavailable = str(exc)
             self._low_until = None
+            self.due = math.inf
             log.warning(
                 "keep-awake off: %s; a robot left in Passive sleeps after 5 minutes (no "
                 "hang-up pulse instead: it would blank the stream for its second)",
@@ -107,6 +114,7 @@ class KeepAwake:
         if self._low_until is not None and self.unavailable is None:
             self.line.set_wake_line(False)
             self._low_until = None
+            self.due = self._next if self._next is not None else -math.inf
 
 
 def keep_awake_for(transport: object, name: str, enabled: bool) -> KeepAwake | None:

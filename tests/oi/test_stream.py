@@ -265,3 +265,42 @@ def test_one_whole_frame_per_feed_and_a_frame_sized_non_frame() -> None:
     assert [f[7] for f in parser.feed(good[3:])] == [3]
     assert parser.counters.frames == 2
     _counters_balance(parser)
+
+
+def _state(parser: StreamParser) -> tuple[object, ...]:
+    """Everything a parser keeps between reads that :meth:`StreamParser.take` may change."""
+    return (repr(parser.counters), parser.pending, parser._anchor, parser._suspect)
+
+
+def test_take_takes_one_whole_frame_and_counts_it_as_feed_does() -> None:
+    layout = layout_for((7, 43, 44, 35), CREATE2)
+    frames = [layout.stream_frame({7: 1, 43: 10 * i, 44: 7 * i, 35: 2}) for i in range(3)]
+    fed, taken = StreamParser([7, 43, 44, 35]), StreamParser([7, 43, 44, 35])
+    assert fed.feed(frames[0], 0.0) == taken.feed(frames[0], 0.0)  # the encoders' anchor
+    for i, frame in enumerate(frames[1:], 1):
+        got = taken.take(frame, 0.015 * i)
+        assert got is not None and got == fed.feed(frame, 0.015 * i)[0]
+        assert _state(taken) == _state(fed)
+    _counters_balance(taken)
+
+
+def test_take_leaves_anything_else_to_feed_and_changes_nothing() -> None:
+    layout = layout_for((7, 43, 44, 35), CREATE2)
+    first = layout.stream_frame({43: 100, 44: 100, 35: 2})
+    far = layout.stream_frame({43: 900, 44: 100, 35: 2})  # an encoder step past one slot's
+    bad_sum = first[:-1] + bytes(((first[-1] + 1) & 0xFF,))
+    out_of_range = layout.stream_frame({43: 100, 44: 100, 35: 7})
+    fresh = StreamParser([7, 43, 44, 35])
+    before = _state(fresh)
+    assert fresh.take(first) is None  # no anchor yet: the first frame is fed
+    assert _state(fresh) == before
+    parser = StreamParser([7, 43, 44, 35])
+    assert len(parser.feed(first, 0.0)) == 1
+    for data in (first[:-1], first + first[:1], bad_sum, out_of_range, far):
+        before = _state(parser)
+        assert parser.take(data, 0.015) is None, data
+        assert _state(parser) == before
+    parser.feed(first[:5])
+    before = _state(parser)
+    assert parser.take(first, 0.03) is None  # bytes held back: the frame cannot start here
+    assert _state(parser) == before

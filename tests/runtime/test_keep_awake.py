@@ -156,3 +156,39 @@ def test_a_port_without_modem_lines_turns_keep_awake_off_once() -> None:
     wake.release()
     assert wake.unavailable is not None and "Inappropriate ioctl" in wake.unavailable
     assert wake.pulses == 0
+
+
+class _Line:
+    def __init__(self) -> None:
+        self.levels: list[bool] = []
+
+    def set_wake_line(self, low: bool) -> None:
+        self.levels.append(low)
+
+
+def test_due_is_when_a_tick_next_has_something_to_do() -> None:
+    line = _Line()
+    wake = KeepAwake(line, period=60.0, length=1.0)
+    assert wake.due == float("-inf")  # the first tick starts a pulse
+    wake.tick(5.0)
+    assert (line.levels, wake.due) == ([True], 6.0)
+    wake.tick(5.9)
+    assert (line.levels, wake.due) == ([True], 6.0)  # before due: nothing
+    wake.tick(6.0)
+    assert (line.levels, wake.due) == ([True, False], 65.0)
+    wake.tick(64.0)
+    assert line.levels == [True, False]
+    wake.tick(65.0)
+    assert (line.levels, wake.due) == ([True, False, True], 66.0)
+    wake.release()
+    assert (line.levels, wake.due) == ([True, False, True, False], 125.0)
+
+
+def test_a_line_that_cannot_be_driven_is_never_due_again() -> None:
+    class _Broken:
+        def set_wake_line(self, low: bool) -> None:
+            raise OSError("no modem lines on a pty")
+
+    wake = KeepAwake(_Broken())
+    wake.tick(0.0)
+    assert wake.unavailable is not None and wake.due == float("inf")
