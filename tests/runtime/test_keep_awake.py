@@ -158,7 +158,7 @@ def test_a_port_without_modem_lines_turns_keep_awake_off_once() -> None:
     assert wake.pulses == 0
 
 
-class _Line:
+class _Levels:
     def __init__(self) -> None:
         self.levels: list[bool] = []
 
@@ -167,7 +167,7 @@ class _Line:
 
 
 def test_due_is_when_a_tick_next_has_something_to_do() -> None:
-    line = _Line()
+    line = _Levels()
     wake = KeepAwake(line, period=60.0, length=1.0)
     assert wake.due == float("-inf")  # the first tick starts a pulse
     wake.tick(5.0)
