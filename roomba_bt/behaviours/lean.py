@@ -83,6 +83,7 @@ _ON_ALL, _ON_ONE, _ON_SELECTED = (
     py_trees.common.ParallelPolicy.SuccessOnOne,
     py_trees.common.ParallelPolicy.SuccessOnSelected,
 )
+_ON_ALL_OR_ONE = (_ON_ALL, _ON_ONE)
 #: py_trees' own check of a parallel's policy, which looks at SuccessOnSelected only
 _VALIDATE_POLICY = py_trees.composites.Parallel.validate_policy_configuration
 
@@ -199,6 +200,16 @@ class Stepped(Direct):
 
     children: list[Behaviour]
 
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        """A subclass that rewrites a step (``tick_start``/``tick_next``) without its own
+        ``tick_direct`` is ticked by the steps themselves (:meth:`Stepped.tick_direct`): the
+        shortcut a lean class writes beside its steps (the resumed tick of a running
+        sequence, of a decorator) repeats the class's steps, not the subclass's."""
+        super().__init_subclass__(**kwargs)
+        own = vars(cls)
+        if "tick_direct" not in own and ("tick_start" in own or "tick_next" in own):
+            cls.tick_direct = Stepped.tick_direct  # type: ignore[method-assign]
+
     def tick_start(self) -> int:
         raise NotImplementedError
 
@@ -215,6 +226,18 @@ class Stepped(Direct):
 
     def tick_direct(self) -> None:
         index = self.tick_start()
+        children = self.children
+        while index != DONE:
+            child = children[index]
+            if isinstance(child, Direct):  # by its direct path when it has one
+                child.tick_direct()
+            else:
+                tick_generator(child)
+            index = self.tick_next(index)
+
+    def tick_steps(self, index: int) -> None:
+        """The rest of :meth:`tick_direct` from the child at ``index`` (a shortcut that has
+        ticked a child and called ``tick_next`` goes on with the steps from there)."""
         children = self.children
         while index != DONE:
             child = children[index]
@@ -260,6 +283,31 @@ class _CompositeStop:
 class Sequence(Stepped, _CompositeStop, py_trees.composites.Sequence):
     """py_trees 2.6's ``Sequence.tick``, step for step."""
 
+    def tick_direct(self) -> None:
+        """A running sequence with memory resumes its current child: ``tick_start`` only
+        finds that child's index then, and when the child is still running, ``tick_next``
+        only sets the sequence's status to RUNNING. A mission's root and its attempts are
+        such sequences on almost every tick, one child running for seconds; the steps
+        (two calls and their reads) are run only when the child has ended."""
+        child = self.current_child
+        if (
+            child is None
+            or self.status is not _RUNNING
+            or not self.memory
+            or py_trees.logging.level is _DEBUG
+        ):
+            Stepped.tick_direct(self)
+            return
+        index = self.children.index(child)
+        if isinstance(child, Direct):
+            child.tick_direct()
+        else:
+            tick_generator(child)
+        if child.status is _RUNNING:
+            self.status = _RUNNING
+            return
+        self.tick_steps(self.tick_next(index))
+
     def tick_start(self) -> int:
         if py_trees.logging.level is _DEBUG:
             self.logger.debug(f"{type(self).__name__}.tick()")
@@ -303,6 +351,36 @@ class Sequence(Stepped, _CompositeStop, py_trees.composites.Sequence):
 
 class Selector(Stepped, _CompositeStop, py_trees.composites.Selector):
     """py_trees 2.6's ``Selector.tick``, step for step."""
+
+    def tick_direct(self) -> None:
+        """A running selector with memory resumes its current child, as a sequence does
+        (:meth:`Sequence.tick_direct`): ``tick_start`` stops the children before it (none
+        is left to stop but on its first resumed tick) and names it; when it is still
+        running, ``tick_next`` keeps it current (it was: nothing was interrupted) and sets
+        the selector's status to RUNNING."""
+        child = self.current_child
+        if (
+            child is None
+            or self.status is not _RUNNING
+            or not self.memory
+            or py_trees.logging.level is _DEBUG
+        ):
+            Stepped.tick_direct(self)
+            return
+        children = self.children
+        index = children.index(child)
+        if index:
+            for earlier in islice(children, None, index):
+                if earlier.status is not _INVALID:
+                    earlier.stop(_INVALID)
+        if isinstance(child, Direct):
+            child.tick_direct()
+        else:
+            tick_generator(child)
+        if child.status is _RUNNING and self.current_child is child:
+            self.status = _RUNNING
+            return
+        self.tick_steps(self.tick_next(index))
 
     def tick_start(self) -> int:
         if py_trees.logging.level is _DEBUG:
@@ -363,6 +441,35 @@ class Parallel(Stepped, py_trees.composites.Parallel):
                 child.stop(_INVALID)
         composite_stop(self, new_status)
 
+    def tick_direct(self) -> None:
+        """The steps in one call: every child not yet succeeded (when synchronised) ticked
+        in turn, then :meth:`_conclude`; a parallel is ticked on every tick of a mission
+        that has one, and its children are never skipped. The steps themselves when there
+        is more to do first (debug logging, the policy to validate, no children)."""
+        if (
+            py_trees.logging.level is _DEBUG
+            or isinstance(self.policy, _ON_SELECTED)
+            or type(self).validate_policy_configuration is not _VALIDATE_POLICY
+            or not self.children
+        ):
+            Stepped.tick_direct(self)
+            return
+        children = self.children
+        if self.status is not _RUNNING:
+            for child in children:
+                if child.status is not _INVALID:
+                    child.stop(_INVALID)
+            self.current_child = None
+            self.initialise()
+        for child in children:
+            if self.policy.synchronise and child.status is _SUCCESS:
+                continue
+            if isinstance(child, Direct):
+                child.tick_direct()
+            else:
+                tick_generator(child)
+        self._conclude()
+
     def tick_start(self) -> int:
         if py_trees.logging.level is _DEBUG:
             self.logger.debug(f"{type(self).__name__}.tick()")
@@ -397,35 +504,44 @@ class Parallel(Stepped, py_trees.composites.Parallel):
         return DONE
 
     def _conclude(self) -> None:
+        """py_trees' ending of the tick, from one pass over the children's statuses: the
+        first that failed (the parallel fails, naming it), else the last that succeeded
+        (SuccessOnOne's ``reversed`` search) and whether all did (SuccessOnAll)."""
         children = self.children
         policy = self.policy
-        new_status = _RUNNING
-        self.current_child = children[-1]
+        succeeded = None
+        all_succeeded = True
         for child in children:
-            if child.status is _FAILURE:
+            status = child.status
+            if status is _FAILURE:
                 self.current_child = child
-                new_status = _FAILURE
-                break
-        else:
-            if isinstance(policy, _ON_ALL):
-                if all(c.status is _SUCCESS for c in children):
-                    new_status = _SUCCESS
-                    self.current_child = children[-1]
-            elif isinstance(policy, _ON_ONE):
-                for child in reversed(children):
-                    if child.status is _SUCCESS:
-                        new_status = _SUCCESS
-                        self.current_child = child
-                        break
-            elif isinstance(policy, _ON_SELECTED):
-                if all(c.status is _SUCCESS for c in policy.children):
-                    new_status = _SUCCESS
-                    self.current_child = policy.children[-1]
+                self.stop(_FAILURE)
+                self.status = _FAILURE
+                return
+            if status is _SUCCESS:
+                succeeded = child
             else:
-                raise RuntimeError(
-                    f"this parallel has been configured with an unrecognised policy "
-                    f"[{type(policy)}]"
-                )
+                all_succeeded = False
+        new_status = _RUNNING
+        current = children[-1]
+        if succeeded is None and isinstance(policy, _ON_ALL_OR_ONE):
+            pass  # neither policy is met while nothing has succeeded: RUNNING
+        elif isinstance(policy, _ON_ALL):
+            if all_succeeded:
+                new_status = _SUCCESS
+        elif isinstance(policy, _ON_ONE):
+            if succeeded is not None:
+                new_status = _SUCCESS
+                current = succeeded
+        elif isinstance(policy, _ON_SELECTED):
+            if all(c.status is _SUCCESS for c in policy.children):
+                new_status = _SUCCESS
+                current = policy.children[-1]
+        else:
+            raise RuntimeError(
+                f"this parallel has been configured with an unrecognised policy [{type(policy)}]"
+            )
+        self.current_child = current
         if new_status is not _RUNNING:
             self.stop(new_status)
         self.status = new_status
@@ -446,6 +562,22 @@ class DecoratorTick(Stepped, py_trees.decorators.Decorator):
     def tick_next(self, index: int) -> int:
         behaviour_tick(self, started=True)
         return DONE
+
+    def tick_direct(self) -> None:
+        """The two steps in one call (``initialise`` unless running, the child's tick, the
+        rest of the decorator's own tick). A decorator that rewrites a step is ticked by its
+        steps (:meth:`Stepped.__init_subclass__`)."""
+        if py_trees.logging.level is _DEBUG:
+            Stepped.tick_direct(self)
+            return
+        if self.status is not _RUNNING:
+            self.initialise()
+        child = self.children[0]
+        if isinstance(child, Direct):
+            child.tick_direct()
+        else:
+            tick_generator(child)
+        behaviour_tick(self, started=True)
 
     def stop(self, new_status: Status) -> None:
         if py_trees.logging.level is _DEBUG:
@@ -473,6 +605,34 @@ class Retry(DecoratorTick, py_trees.decorators.Retry):
     _said: tuple[str, int, int] | None = None
     _said_text: str | None = None
 
+    def tick_direct(self) -> None:
+        """The decorator's tick (:meth:`DecoratorTick.tick_direct`), ending at once while
+        the child runs and the message :meth:`update` would write again is the one shown:
+        ``update`` would then only return RUNNING, and the status is set so. A retry runs
+        for the whole of a docking attempt. (``update`` is looked up on the node, as
+        ``behaviour_tick`` calls it: a node's own, or a subclass's, is called.)"""
+        if (
+            py_trees.logging.level is _DEBUG
+            or getattr(self.update, "__func__", None) is not _RETRY_UPDATE
+        ):
+            DecoratorTick.tick_direct(self)
+            return
+        if self.status is not _RUNNING:
+            self.initialise()
+        child = self.children[0]
+        if isinstance(child, Direct):
+            child.tick_direct()
+        else:
+            tick_generator(child)
+        if (
+            self.decorated.status is _RUNNING
+            and self.feedback_message is self._said_text
+            and self._said == ("running", self.failures, self.num_failures)
+        ):
+            self.status = _RUNNING
+            return
+        behaviour_tick(self, started=True)
+
     def update(self) -> Status:
         child = self.decorated.status
         if child is _FAILURE:
@@ -499,6 +659,9 @@ class Retry(DecoratorTick, py_trees.decorators.Retry):
             self.feedback_message = self._said_text = text
             self._said = said
         return status
+
+
+_RETRY_UPDATE = Retry.update
 
 
 class Inverter(DecoratorTick, py_trees.decorators.Inverter):

@@ -215,6 +215,52 @@ def test_a_subclass_that_overrides_tick_is_ticked_by_its_own_tick() -> None:
     assert leaf.status is Status.SUCCESS and root.status is Status.SUCCESS
 
 
+def test_a_subclass_that_rewrites_a_step_is_ticked_by_its_steps() -> None:
+    """The shortcuts of the lean classes (a running sequence or selector with memory
+    resuming its child, a decorator's tick in one call, a parallel's) repeat the class's
+    own steps: a subclass that rewrites one is ticked by the steps, its own included."""
+    calls: list[str] = []
+
+    class CountingSequence(lean.Sequence):
+        def tick_next(self, index: int) -> int:
+            calls.append(f"sequence next {index}")
+            return super().tick_next(index)
+
+    class CountingSelector(lean.Selector):
+        def tick_start(self) -> int:
+            calls.append("selector start")
+            return super().tick_start()
+
+    class CountingParallel(lean.Parallel):
+        def tick_next(self, index: int) -> int:
+            calls.append(f"parallel next {index}")
+            return super().tick_next(index)
+
+    class CountingDecorator(lean.DecoratorTick, py_trees.decorators.Decorator):
+        def tick_start(self) -> int:
+            calls.append("decorator start")
+            return super().tick_start()
+
+        def update(self) -> Status:
+            return self.decorated.status
+
+    def running(name: str) -> LeanLeaf:
+        return LeanLeaf(name, (Status.RUNNING,), [])
+
+    sequence = CountingSequence("sequence", True, [running("a")])
+    selector = CountingSelector("selector", True, [running("b")])
+    parallel = CountingParallel("parallel", ParallelPolicy.SuccessOnAll(), [running("c")])
+    decorator = CountingDecorator("decorator", running("d"))
+    for node in (sequence, selector, parallel, decorator):
+        node.tick_once()
+        node.tick_once()  # running: the resumed tick
+    assert calls == [
+        "sequence next 0", "sequence next 0", "selector start", "selector start",
+        "parallel next -1", "parallel next 0", "parallel next -1", "parallel next 0",
+        "decorator start", "decorator start",
+    ]  # fmt: skip
+
+
 def test_the_decorators_made_lean_do_not_define_their_own_tick_or_stop() -> None:
     """The lean classes replace py_trees' ``Decorator.tick``/``stop``; if a py_trees release
     gives one of these decorators its own, the replacement would hide it."""
@@ -282,6 +328,30 @@ def test_retry_writes_its_message_again_once_something_else_replaced_it() -> Non
     made.num_failures = 5
     made.tick_once()
     assert made.feedback_message == "running [status: 0 failure from 5]"
+
+
+def test_a_retry_with_an_update_of_its_own_is_ticked_through_it() -> None:
+    """While its child runs, the retry's tick ends without calling its ``update`` (it would
+    only say RUNNING again), unless the node or a subclass has an ``update`` of its own."""
+    made = lean.Retry("retry", LeanLeaf("leaf", (Status.RUNNING,), []), 3)
+    made.tick_once()
+    made.tick_once()
+    assert made.status is Status.RUNNING
+    made.update = lambda: Status.SUCCESS  # type: ignore[method-assign]
+    made.tick_once()
+    assert made.status is Status.SUCCESS
+
+    class Counting(lean.Retry):
+        updates = 0
+
+        def update(self) -> Status:
+            self.updates += 1
+            return super().update()
+
+    counted = Counting("retry", LeanLeaf("leaf", (Status.RUNNING,), []), 3)
+    for _ in range(3):
+        counted.tick_once()
+    assert counted.updates == 3 and counted.status is Status.RUNNING
 
 
 def test_a_parallel_still_refuses_a_selection_that_is_not_its_children() -> None:
