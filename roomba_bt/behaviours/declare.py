@@ -471,16 +471,12 @@ _CONDITION_UPDATE, _CONDITION_INITIALISE, _CONDITION_START = (
 _CONDITION_TERMINATE, _CONDITION_STOP = Condition.terminate, Condition.stop
 
 
-def _short_tick(cls: type[Condition]) -> bool:
-    """The class's lifecycle is the one :meth:`Condition.tick_direct` shortens (nothing
-    patched in since): its tick only sets the status ``check`` gives."""
-    return (
-        cls.update is _CONDITION_UPDATE
-        and cls.initialise is _CONDITION_INITIALISE
-        and cls.start is _CONDITION_START
-        and cls.terminate is _CONDITION_TERMINATE
-        and cls.stop is _CONDITION_STOP
-    )
+#: what a class with the short tick has after ``check``: its update, initialise, start,
+#: terminate and stop (:meth:`FrameInputs.usable` compares the six at once)
+_SHORT_LIFECYCLE = (
+    _CONDITION_UPDATE, _CONDITION_INITIALISE, _CONDITION_START, _CONDITION_TERMINATE,
+    _CONDITION_STOP,
+)  # fmt: skip
 
 
 class FrameInputs:
@@ -493,20 +489,32 @@ class FrameInputs:
     tick left, it ends with the same statuses: each leaf's status is a function of the
     values, a composite's of its children's, and its lifecycle calls (the leaves'
     ``terminate`` and ``initialise``, the composites') do nothing. So the ``while``/``until``
-    guard, which re-ticks its condition every frame, may leave it as it is while :meth:`key`
-    is unchanged and :meth:`usable` holds.
+    guard, which re-ticks its condition every frame, may leave it as it is while
+    :meth:`unchanged` holds for the values :meth:`values` gave after its last tick.
+
+    Everything is looked up once, here and when a stream's layout is first seen: the slots
+    of the packets in the frame's values (one ``itemgetter`` reads them all, one tuple
+    comparison compares them), the lifecycle each class must still have, and each leaf's
+    ``__dict__``, where what is patched into one node (the monitor forces a condition by
+    giving it an ``update`` of its own) is found by name. (Reading a node's ``__dict__``
+    makes CPython 3.11 keep a dictionary for it, which slows every later read of its
+    attributes a little; these leaves are ticked only when their packets change.)
     """
 
-    __slots__ = ("_checks", "_classes", "_layout", "_packets", "_read", "_robot")
+    __slots__ = ("_classes", "_layout", "_nodes", "_packets", "_read", "_robot")
 
     def __init__(self, leaves: list[Condition]) -> None:
-        checks = [(leaf, type(leaf)._pure_check) for leaf in leaves]
-        self._checks = checks
-        self._classes = list({type(leaf): check for leaf, check in checks}.items())
+        #: per class, its pure check and the lifecycle of the short tick: a patch differs
+        self._classes = [
+            (cls, (cls._pure_check, *_SHORT_LIFECYCLE))
+            for cls in {type(leaf): None for leaf in leaves}
+        ]
+        #: the leaves' own attributes (the dictionary is the node's for good once read)
+        self._nodes = [vars(leaf) for leaf in leaves]
         self._packets = tuple(
             sorted({pid for leaf in leaves for pid in leaf.declaration.packets(leaf.params)})
         )
-        self._robot = leaves[0].robot
+        self._robot: RobotHandle = leaves[0].robot  # type: ignore[assignment]
         self._layout: object = None
         self._read: Callable[[tuple[int, ...]], object] | None = None
 
@@ -522,15 +530,13 @@ class FrameInputs:
             return None
         return cls(leaves)
 
-    def key(self) -> object:
+    def values(self) -> object:
         """The values of the subtree's packets in this tick's frame (None: the frame lacks
-        one of them; the subtree's own tick then says so)."""
-        robot = self._robot
-        if robot is None:
-            return None
-        frame = robot.snapshot.frame
+        one of them; the subtree's own tick then says so). A layout not seen before has
+        its slots looked up (the same for every frame of a stream)."""
+        frame = self._robot.snapshot.frame
         layout = frame.layout
-        if layout is not self._layout:  # the same for every frame of a stream
+        if layout is not self._layout:
             try:
                 slots = [layout.index[pid] for pid in self._packets]
             except KeyError:
@@ -539,22 +545,29 @@ class FrameInputs:
         assert self._read is not None
         return self._read(frame.values)
 
+    def unchanged(self, values: object) -> bool:
+        """This tick's frame has ``values`` at the slots last read, and the subtree's tick
+        would still be the pure one (:meth:`usable`)."""
+        frame = self._robot.snapshot.frame
+        read = self._read
+        if frame.layout is not self._layout or read is None or read(frame.values) != values:
+            return False
+        return self.usable()
+
     def usable(self) -> bool:
         """Nothing has been patched in since (a class's lifecycle or ``check``, a node's own
         ``update`` as the monitor forces one, or ``check``), the leaves still have this robot,
         and debug logging (which a tick would write to) is off."""
         if py_trees.logging.level is _DEBUG:
             return False
-        for cls, check in self._classes:
-            if cls.check is not check or not _short_tick(cls):
+        for cls, lifecycle in self._classes:
+            if (
+                cls.check, cls.update, cls.initialise, cls.start, cls.terminate, cls.stop
+            ) != lifecycle:  # fmt: skip
                 return False
         robot = self._robot
-        for leaf, check in self._checks:
-            if (
-                leaf.robot is not robot
-                or getattr(leaf.update, "__func__", None) is not _CONDITION_UPDATE
-                or getattr(leaf.check, "__func__", None) is not check
-            ):
+        for node in self._nodes:
+            if "update" in node or "check" in node or node.get("robot") is not robot:
                 return False
         return True
 

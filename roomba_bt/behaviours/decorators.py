@@ -15,7 +15,14 @@ from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
 from roomba_bt.behaviours.declare import FrameInputs, write_key
-from roomba_bt.behaviours.lean import DONE, DecoratorTick, Stepped, composite_stop, tick_child
+from roomba_bt.behaviours.lean import (
+    DONE,
+    DecoratorTick,
+    Direct,
+    Stepped,
+    composite_stop,
+    tick_generator,
+)
 from roomba_bt.behaviours.reasons import failure_reason
 from roomba_bt.robot.interface import RobotHandle
 
@@ -188,26 +195,43 @@ class Guard(Stepped, py_trees.composites.Composite):
         yield from super().tick()
 
     def tick_direct(self) -> None:
-        """The steps of :meth:`Stepped.tick_direct` (condition, then the child if it holds),
-        without the condition's tick when it would change nothing: a condition subtree
-        of frame-pure leaves ticked last time on the same values of its packets ends this
-        tick with the statuses it has (:class:`FrameInputs`). A cliff or bump guard is
-        re-ticked on every frame, and the cliff and bump sensors change on few of them."""
-        index = self.tick_start()
+        """The steps of :meth:`Stepped.tick_direct` in one call (``tick_start``; the
+        condition; :meth:`tick_next`'s reading of it; the child; ``tick_next``'s reading of
+        the child, written out here for the guard that goes on running, which it does on
+        almost every tick), without the condition's tick when it would change nothing: a
+        condition subtree of frame-pure leaves ticked last time on the same values of its
+        packets ends this tick with the statuses it has (:class:`FrameInputs`). A cliff or
+        bump guard is re-ticked on every frame, and the cliff and bump sensors change on
+        few of them."""
+        if self.status is not _RUNNING:
+            self.initialise()
         children = self.children
-        while index != DONE:
-            child = children[index]
-            if index != 0 or not self._condition_unchanged(child):
-                tick_child(child)
-                if index == 0:
-                    self._remember(child)
-            index = self.tick_next(index)
-
-    def _condition_unchanged(self, condition: Behaviour) -> bool:
+        condition = children[0]
         seen, inputs = self._seen, self._inputs
-        if seen is None or not inputs or condition.status is not seen[0]:
-            return False
-        return inputs.key() == seen[1] and inputs.usable()
+        if (
+            seen is None
+            or condition.status is not seen[0]
+            or not inputs
+            or not inputs.unchanged(seen[1])
+        ):
+            if isinstance(condition, Direct):
+                condition.tick_direct()
+            else:
+                tick_generator(condition)
+            self._remember(condition)
+        if (self.condition.status is _SUCCESS) == self.until:
+            self.tick_next(0)  # the guard ends here
+            return
+        self.current_child = self.child
+        child = children[1]
+        if isinstance(child, Direct):
+            child.tick_direct()
+        else:
+            tick_generator(child)
+        status: Status = self.child.status
+        if status is not _RUNNING:
+            self.stop(status)
+        self.status = status
 
     def _remember(self, condition: Behaviour) -> None:
         """After the condition's tick: its status and its inputs' values, for the next;
@@ -217,8 +241,8 @@ class Guard(Stepped, py_trees.composites.Composite):
             inputs = self._inputs = FrameInputs.of(condition) or False
         status = condition.status
         if inputs and (status is _SUCCESS or status is _FAILURE) and inputs.usable():
-            key = inputs.key()
-            self._seen = (status, key) if key is not None else None
+            values = inputs.values()
+            self._seen = (status, values) if values is not None else None
         else:
             self._seen = None
 

@@ -4,7 +4,8 @@ The guard re-ticks its condition subtree on every frame; a subtree of frame-pure
 (:class:`~roomba_bt.behaviours.declare.FrameInputs`) ticked again on the same values of its
 packets would end with the statuses it has, so the guard skips that tick. These tests check
 that every node's status after every tick is what re-ticking gives (random trees and frames,
-against the same tree whose conditions are not taken to be pure), and that whatever else may
+against the same tree whose conditions are not taken to be pure, ticked by the guard's plain
+steps), and that whatever else may
 change a condition's result makes the guard tick it again.
 """
 
@@ -124,7 +125,10 @@ def _run(spec: Any, until: bool, ticks: list[Any], pure: bool) -> list[list[str]
                 first.update = lambda: Status.SUCCESS  # type: ignore[method-assign]
             elif how == "release":
                 vars(first).pop("update", None)
-            guard.tick_once()
+            if pure:
+                guard.tick_once()
+            else:  # the reference: the guard's steps, nothing skipped nor folded
+                lean.Stepped.tick_direct(guard)
         seen.append([f"{n.name}={n.status.name}" for n in guard.iterate()])
         seen[-1].append(guard.feedback_message)
     return seen
