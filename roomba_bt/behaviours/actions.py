@@ -262,7 +262,8 @@ class Drive(Action):
         return snap.time - self._start_time >= bound
 
     def update(self) -> Status:
-        if self.finished():
+        # a drive without an end (most ticks: the drive a guard ends) asks nothing of finished()
+        if self._end[0] and self.finished():
             self.send(oi.halt())
             self._started_motion = False
             return _OK
@@ -506,7 +507,8 @@ class Wait(Action):
         self._lasts = float(self.value("duration")) - 1e-9  # read once a start
 
     def update(self) -> Status:
-        elapsed = self.snapshot.time - self._start_time
+        robot = self.robot  # the handle's snapshot, without the property's call (every tick)
+        elapsed = (robot.snapshot if robot is not None else self.snapshot).time - self._start_time
         return _OK if elapsed >= self._lasts else _RUN
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable
 
 import pytest
@@ -20,7 +21,15 @@ from roomba_bt.behaviours.docking import (
     SearchState,
     hazard_in,
 )
-from roomba_bt.oi.ir import dock_character
+from roomba_bt.behaviours.docking.common import (
+    HAZARD_IN_PACKETS,
+    drive_direct,
+    hazard_of,
+    view_of,
+)
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.frames import SensorFrame
+from roomba_bt.oi.ir import IR_CHARACTERS, dock_character
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.robot.testing import StubRobot
 
@@ -339,3 +348,125 @@ def test_wheels_sends_only_a_change_and_again_after_a_halt(robot: StubRobot, mak
     search._started_motion = False  # as a stop leaves it: the speeds are sent again
     search.wheels(90.0, 120.0)
     assert sent() == [(120, 90)]
+
+
+def _reference_hazard(frame: SensorFrame, obstacles: bool) -> Hazard | None:
+    """The hazard as the frame's own readings say it (what the stages asked every tick
+    before they read the values by slot)."""
+    if frame.any_hazard:
+        if frame.any_wheel_drop:
+            return Hazard.WHEEL_DROP
+        return Hazard.CLIFF if frame.any_cliff else Hazard.BUMP
+    if frame.virtual_wall:
+        return Hazard.CLIFF
+    if obstacles and frame.light_bumper_ahead:
+        return Hazard.OBSTACLE
+    return None
+
+
+@pytest.mark.parametrize("obstacles", [True, False])
+def test_hazard_of_the_values_is_the_frames_readings(robot: StubRobot, obstacles: bool) -> None:
+    """Every combination of bumper and wheel-drop bits, each cliff, a virtual wall and each
+    light-bumper bit: the hazard worked out from the raw values is the one the frame's
+    readings give."""
+    for bumps, cliff, wall, light in itertools.product(
+        range(16), (None, 9, 10, 11, 12), (0, 1), (0, *(1 << bit for bit in range(6)))
+    ):
+        packets = {7: bumps, 13: wall, 45: light} | ({cliff: 1} if cliff else {})
+        snap = robot.set_frame({**frame(), **packets})
+        expected = _reference_hazard(snap.frame, obstacles)
+        assert hazard_in(snap.frame, obstacles=obstacles) is expected, packets
+        values = [snap.frame[packet] for packet in HAZARD_IN_PACKETS]
+        assert hazard_of(*values, obstacles=obstacles) is expected, packets
+
+
+#: Every kind of character the receivers meet: none, both dock families' beams, a virtual
+#: wall, a remote button, a lighthouse, an unknown byte.
+CHARACTERS = (
+    0, 162, 130, 0b0001_1001, 255,
+    *(dock_character(red=r, green=g, force_field=f, discovery=d)
+      for r, g, f, d in itertools.product((False, True), repeat=4) if r or g or f),
+)  # fmt: skip
+
+
+def test_the_view_of_the_codes_reads_as_the_receivers_do() -> None:
+    """Each reading of a view built from three bytes (once, then kept) is what the three
+    receivers' characters say: the omni decides the beams when it sees the dock, else the
+    side receivers that do."""
+    for codes in itertools.product(CHARACTERS, repeat=3):
+        omni, left, right = (IR_CHARACTERS[code] for code in codes)
+        view = view_of(codes)
+        assert view is view_of(codes)  # built once
+        beams = omni if omni.from_dock else None
+        sides = [c for c in (left, right) if c.from_dock]
+        red = beams.red_buoy if beams else any(c.red_buoy for c in sides)
+        green = beams.green_buoy if beams else any(c.green_buoy for c in sides)
+        field = beams.force_field if beams else any(c.force_field for c in sides)
+        assert (view.omni, view.left, view.right) == (omni, left, right)
+        assert view.seen == (omni.from_dock or left.from_dock or right.from_dock), codes
+        assert view.facing == (left.from_dock and right.from_dock), codes
+        assert view.on_left == (left.from_dock and not right.from_dock), codes
+        assert view.on_right == (right.from_dock and not left.from_dock), codes
+        assert (view.red, view.green, view.force_field) == (red, green, field), codes
+        assert view.on_axis == (red and green), codes
+        assert view.side == (1 if red and not green else -1 if green and not red else 0), codes
+
+
+def test_a_stage_reads_each_layout_at_its_own_slots(robot: StubRobot, make: Make) -> None:
+    """The search finds the slots of what it reads once per frame layout: a frame of another
+    layout (one more packet, so every slot after it moves) is read at its own slots."""
+    search = make(DockSearch)
+    robot.set_frame(frame())
+    search.tick_once()
+    assert status(search) is Status.RUNNING
+    # packet 8 sorts before the hazards and the receivers: each of their slots moves by one
+    moved = {**frame(right=dock_character(red=False, green=True, force_field=False)), 8: 0}
+    robot.set_frame(moved)
+    search.tick_once()
+    assert status(search) is Status.SUCCESS
+
+
+def test_a_stage_on_a_frame_without_its_packets_names_the_one_missing(
+    robot: StubRobot, make: Make
+) -> None:
+    search = make(DockSearch)
+    values = frame()
+    del values[13]
+    robot.set_frame(values)
+    with pytest.raises(KeyError, match="packet 13"):
+        search.tick_once()
+
+
+def test_drive_direct_is_encoded_once_per_pair_of_speeds() -> None:
+    command = drive_direct(120, -35)
+    assert command is drive_direct(120, -35)
+    assert command == oi.drive_direct(120, -35)
+    assert drive_direct(-35, 120).data == oi.drive_direct(-35, 120).data != command.data
+
+
+def test_a_follow_with_the_same_signals_sends_again_only_after_a_halt(
+    robot: StubRobot, make: Make
+) -> None:
+    """Along a wall, the same signals ask the same speeds: nothing is sent again while the
+    wheels keep them; after a halt (or other speeds asked in between) they are sent again."""
+    search = follow_a_wall(robot, make)
+    along = {**frame(), 51: 420}  # the wall on the right, a little far: steer toward it
+    robot.set_frame(along)
+    search.tick_once()
+    steer = last_wheels(robot)
+    assert steer[0] > steer[1] > 0
+    for _ in range(3):
+        robot.set_frame(along)
+        search.tick_once()
+        assert robot.flush() == []
+    assert isinstance(search, DockSearch)
+    search.halt()
+    robot.flush()
+    robot.set_frame(along)
+    search.tick_once()
+    assert last_wheels(robot) == steer
+    search.wheels(10.0, 10.0)
+    robot.flush()
+    robot.set_frame(along)
+    search.tick_once()
+    assert last_wheels(robot) == steer

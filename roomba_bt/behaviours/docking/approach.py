@@ -24,6 +24,7 @@ from py_trees.common import Status
 from roomba_bt.behaviours.declare import Param, wheel_speed_param
 from roomba_bt.behaviours.docking.common import (
     HAZARD_IN_PACKETS,
+    HOME_BASE,
     RUN_KEY,
     RUNNING,
     DockingAction,
@@ -31,12 +32,19 @@ from roomba_bt.behaviours.docking.common import (
     Hazard,
     IdentityEnum,
     declare_stage,
-    hazard_in,
+    hazard_of,
+    view_of,
 )
 from roomba_bt.behaviours.units import ANGLE, DURATION
-from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS
+from roomba_bt.oi.frames import (
+    CHARGING_SOURCES_PACKETS,
+    HAZARD_PACKETS,
+    IR_PACKETS,
+    VIRTUAL_WALL_PACKETS,
+)
 from roomba_bt.oi.modes import DRIVING_MODES
 from roomba_bt.oi.profiles import OMNI_AHEAD_MM
+from roomba_bt.robot.interface import Snapshot
 
 #: Attempts (starts of this leaf) in one docking run before the approach first backs away
 #: from the dock and comes in again.
@@ -133,6 +141,9 @@ class DockApproach(DockingAction):
     """
 
     stage = "approach"
+    #: the receivers (the view), the home base, the hazards but the light bumper (near the
+    #: dock its wall is always in sight of it: not a hazard here)
+    WATCHED = (*IR_PACKETS, *CHARGING_SOURCES_PACKETS, *HAZARD_PACKETS, *VIRTUAL_WALL_PACKETS)
     #: Turns toward the axis (crossings, circles) in one approach before it backs away from
     #: the dock and starts over from the edge of the force field; three are usually enough.
     MAX_CROSSINGS = 6
@@ -160,35 +171,50 @@ class DockApproach(DockingAction):
         view = DockView.of(self.snapshot.frame)
         self._start_facing(-1.0 if view.on_right else 1.0)
 
+    def read(self, raw: tuple[int, ...]) -> None:
+        omni, left, right, sources, bumps, cliff_l, cliff_fl, cliff_fr, cliff_r, virtual_wall = raw
+        self._view = view_of((omni, left, right))
+        self._home = HOME_BASE[sources & 0xFF]  # frame.charging_sources.home_base
+        self._hazard = hazard_of(
+            bumps, cliff_l, cliff_fl, cliff_fr, cliff_r, virtual_wall, 0, obstacles=False
+        )
+
     def update(self) -> Status:
-        snap = self.snapshot
+        robot = self.robot
+        snap = robot.snapshot if robot is not None else self.snapshot
         frame = snap.frame
-        view = DockView.of(frame)
-        if frame.charging_sources.home_base:
+        if frame._layout is not self._layout:  # the fields, not the properties: every tick
+            self.bind(frame)
+        raw = self._watched(frame._values)
+        if raw != self._raw:
+            self._raw = raw
+            self.read(raw)
+        if self._home:
             return self.succeed()
-        if self.timed_out(snap.time):
+        now = snap.time
+        if now - self._t0 >= self._time_limit:
             return self.fail(f"not on the dock's axis after {self.number('timeout'):g} s")
         if snap.mode not in DRIVING_MODES:
             return self.fail(self.fallback_message())
+        view = self._view
         if view.seen:
-            self._last_seen = snap.time
+            self._last_seen = now
             if view.side:
                 self._last_side = view.side
-                self._last_side_time = snap.time
-        elif snap.time - self._last_seen >= self._lost_after:
+                self._last_side_time = now
+        elif now - self._last_seen >= self._lost_after:
             return self.fail(f"lost the dock's beams for {self.number('lost_after'):g} s")
-        # near the dock its wall is always in sight of the light bumper: not a hazard here
-        hazard = hazard_in(frame, obstacles=False)
+        hazard = self._hazard
         act = _ACTS
         while True:
-            status = act[self.state](self, view, hazard)
+            status = act[self.state](self, snap, view, hazard)
             if status is not None:
                 return status
 
     # states ------------------------------------------------------------------------
-    def _face_state(self, view: DockView, hazard: Hazard | None) -> Status | None:
+    def _face_state(self, snap: Snapshot, view: DockView, hazard: Hazard | None) -> Status | None:
         """Face the dock; then done (on the axis), or on toward it: closer, or across."""
-        if not self._face(view):
+        if not self._face(snap, view):
             return RUNNING
         if self._retreat:
             return self._start_retreat()
@@ -207,7 +233,7 @@ class DockApproach(DockingAction):
         if side == 0:
             # force field only: the side last seen, if recent; else guesses that
             # alternate (+1, -1, ...) until one leads into the buoys
-            now = self.snapshot.time
+            now = snap.time
             if self._last_side and now - self._last_side_time < SIDE_REMEMBERED_S:
                 side = self._last_side
             else:
@@ -223,14 +249,15 @@ class DockApproach(DockingAction):
         self.mark_turn()
         return None
 
-    def _closer(self, view: DockView, hazard: Hazard | None) -> Status | None:
+    def _closer(self, snap: Snapshot, view: DockView, hazard: Hazard | None) -> Status | None:
         """Along the beams until the omni is in the force field (or on the axis)."""
         if view.omni.from_dock and (view.omni.force_field or view.on_axis):
             self._start_facing(1.0)
             if view.on_axis and view.facing:
                 return self.succeed()
             return RUNNING
-        if hazard is not None or self.travelled() > CLOSER_MAX_MM:
+        travelled = abs(snap.odometry.distance_mm - self._distance_mark)  # self.travelled()
+        if hazard is not None or travelled > CLOSER_MAX_MM:
             self._start_back()
             return None
         slow = self._speed * CLOSER_SHARE
@@ -243,16 +270,15 @@ class DockApproach(DockingAction):
             self.wheels(slow, slow)
         return RUNNING
 
-    def _turn_away(self, view: DockView, hazard: Hazard | None) -> Status | None:
+    def _turn_away(self, snap: Snapshot, view: DockView, hazard: Hazard | None) -> Status | None:
         """Turn ``cross_angle`` away from the dock, toward the axis; then cross (or orbit)."""
         state = self._omni_state(view)
         if state is not None:
             self._sweep = state  # where the omni was last seen relative to the axis
-        if abs(self.turned()) < self._cross_angle:
+        if abs(snap.odometry.angle_rad - self._turn_mark) < self._cross_angle:  # self.turned()
             w = TURN_AWAY_SHARE * self._turn_speed * self._cross_side
             self.wheels(-w, w)
             return RUNNING
-        snap = self.snapshot
         self.state = ApproachState.ORBIT if self._orbit else ApproachState.CROSS
         self._orbit = False
         self._before_at = self._past_at = None
@@ -263,10 +289,13 @@ class DockApproach(DockingAction):
         self.mark_distance()
         return None
 
-    def _retreat_state(self, view: DockView, hazard: Hazard | None) -> Status | None:
+    def _retreat_state(
+        self, snap: Snapshot, view: DockView, hazard: Hazard | None
+    ) -> Status | None:
         """Out of the force field while a buoy is still in sight, but never out of every
         beam: that would leave the search to find the dock again."""
-        if hazard is not None or not view.omni.from_dock or self.travelled() > RETREAT_MAX_MM:
+        travelled = abs(snap.odometry.distance_mm - self._distance_mark)  # self.travelled()
+        if hazard is not None or not view.omni.from_dock or travelled > RETREAT_MAX_MM:
             self._centred = False
             self._start_facing(self._spin_dir)
             self.halt()
@@ -274,8 +303,8 @@ class DockApproach(DockingAction):
         self.wheels(-RETREAT_MM_S, -RETREAT_MM_S)
         return RUNNING
 
-    def _back(self, view: DockView, hazard: Hazard | None) -> Status | None:
-        if self.snapshot.time < self._back_until:
+    def _back(self, snap: Snapshot, view: DockView, hazard: Hazard | None) -> Status | None:
+        if snap.time < self._back_until:
             self.wheels(-BACK_MM_S, -BACK_MM_S)
             return RUNNING
         self._start_facing(self._spin_dir)
@@ -307,7 +336,7 @@ class DockApproach(DockingAction):
             return 0
         return 1 if (1 if omni.red_buoy else -1) == self._cross_side else -1
 
-    def _orbit_state(self, view: DockView, hazard: Hazard | None) -> Status | None:
+    def _orbit_state(self, snap: Snapshot, view: DockView, hazard: Hazard | None) -> Status | None:
         """Circle the dock along the edge of its force field until the omni sees a buoy.
 
         In the force field with no buoy in sight (outside the buoys' wedges) the side of
@@ -322,7 +351,7 @@ class DockApproach(DockingAction):
             self._start_facing(-float(self._cross_side))  # a buoy: the side is known now
             self.halt()
             return RUNNING
-        if hazard is not None or self.snapshot.odometry.path_mm - self._cross_path > ORBIT_MAX_MM:
+        if hazard is not None or snap.odometry.path_mm - self._cross_path > ORBIT_MAX_MM:
             self._start_facing(-float(self._cross_side))
             if hazard is not None:
                 self._start_back()
@@ -340,7 +369,7 @@ class DockApproach(DockingAction):
             self.wheels(near, far)
         return RUNNING
 
-    def _cross(self, view: DockView, hazard: Hazard | None) -> Status | None:
+    def _cross(self, snap: Snapshot, view: DockView, hazard: Hazard | None) -> Status | None:
         """Move along the crossing line until the centre is on the dock's axis, then face it.
 
         Only the omni receiver is read: it sits on the crossing line, ``OMNI_AHEAD_MM``
@@ -354,7 +383,6 @@ class DockApproach(DockingAction):
         the band overshot the axis by up to 12 cm, and the robot crossed back and forth
         without ever landing in the band).
         """
-        snap = self.snapshot
         s = snap.odometry.distance_mm - self._distance_mark
         self._note_band(self._omni_state(view), s)
         path = snap.odometry.path_mm - self._cross_path
@@ -410,14 +438,15 @@ class DockApproach(DockingAction):
         self._face_target: float | None = None
         self.mark_turn()
 
-    def _face(self, view: DockView) -> bool:
+    def _face(self, snap: Snapshot, view: DockView) -> bool:
         """Turn to face the dock; True once facing it.
 
         Spinning counter-clockwise, the dock passes from the left receiver to the right one
         (clockwise: the other way round). Both at once: facing. At the edge of a beam the
         two may never see it together: then the heading half-way between the last one seen
         by the leading receiver and the first one by the trailing receiver is the dock's."""
-        theta = self.heading()
+        odo = snap.odometry
+        theta = odo.theta_rad  # self.heading()
         if self._face_target is not None:
             return self._turn_to_target(view, theta, self._face_target)
         if view.facing:
@@ -443,7 +472,7 @@ class DockApproach(DockingAction):
             # seen at one heading only (the fringe of a beam): face that way and go closer
             self._face_target = self._lead_theta
             return False
-        if abs(self.turned()) > FACE_RESTART_RAD:
+        if abs(odo.angle_rad - self._turn_mark) > FACE_RESTART_RAD:  # abs(self.turned())
             self._lead_theta = None
             self.mark_turn()
         w = (FACE_SEEN_SHARE if (left or right) else FACE_SEARCH_SHARE) * self._turn_speed
@@ -487,10 +516,16 @@ class DockApproach(DockingAction):
     _turn_speed = 0.0
     _cross_angle = 0.0
     _lost_after = 0.0
+    # the readings (read)
+    _view: DockView
+    _home = False
+    _hazard: Hazard | None = None
 
 
 #: Each state's method (see the module's drawing).
-_ACTS: dict[ApproachState, Callable[[DockApproach, DockView, Hazard | None], Status | None]] = {
+_ACTS: dict[
+    ApproachState, Callable[[DockApproach, Snapshot, DockView, Hazard | None], Status | None]
+] = {
     ApproachState.FACE: DockApproach._face_state,
     ApproachState.CLOSER: DockApproach._closer,
     ApproachState.TURN_AWAY: DockApproach._turn_away,

@@ -81,7 +81,8 @@ class DockTimeLimit(Action):
         self._limit = self.number("limit") - 1e-9  # read once a start
 
     def update(self) -> Status:
-        if self.snapshot.time - self._t0 >= self._limit:
+        robot = self.robot  # the handle's snapshot, without the property's call (every tick)
+        if (robot.snapshot if robot is not None else self.snapshot).time - self._t0 >= self._limit:
             stage = current_stage() or "search"
             self.feedback_message = (
                 f"{stage}: gave up after the time limit of {self.number('limit'):g} s "

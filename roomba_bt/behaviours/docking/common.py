@@ -5,7 +5,8 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from enum import Enum
-from typing import NamedTuple, TypeVar
+from operator import itemgetter
+from typing import TypeVar
 
 import py_trees
 from py_trees.common import Status
@@ -14,19 +15,24 @@ from roomba_bt.behaviours.declare import Action, Param, declare
 from roomba_bt.behaviours.driving import wheel_speeds
 from roomba_bt.behaviours.units import DURATION
 from roomba_bt.oi import commands as oi
+from roomba_bt.oi.bits import (
+    BUMP_BITS,
+    CHARGING_SOURCES_BY_BYTE,
+    LIGHT_BUMPER_AHEAD_BITS,
+    WHEEL_DROP_BITS,
+)
 from roomba_bt.oi.frames import (
     ENCODER_PACKETS,
     HAZARD_PACKETS,
     IR_PACKETS,
     LIGHT_BUMPER_PACKETS,
     VIRTUAL_WALL_PACKETS,
+    FrameLayout,
     SensorFrame,
 )
-from roomba_bt.oi.ir import IRCharacter
+from roomba_bt.oi.ir import IR_CHARACTERS, IRCharacter
 from roomba_bt.oi.modes import DRIVING_MODES
 from roomba_bt.oi.opcodes import COMMANDS_BY_NAME
-
-_new_tuple = tuple.__new__  # a named tuple without its Python-level __new__ (once a tick)
 
 #: The stages drive with Drive Direct and halt with Drive 0: their ``sends=``.
 DRIVE_SENDS = (COMMANDS_BY_NAME["drive"].opcode, COMMANDS_BY_NAME["drive_direct"].opcode)
@@ -49,81 +55,83 @@ def current_stage() -> str | None:
     return stage if isinstance(stage, str) else None
 
 
-class DockView(NamedTuple):
-    """What one frame says about the dock (a named tuple: one is built every tick)."""
+class DockView:
+    """What the three receivers' IR characters say about the dock.
 
-    omni: IRCharacter
-    left: IRCharacter
-    right: IRCharacter
+    Every reading is worked out when the view is built, and a view is built once per
+    distinct (omni, left, right) triple of bytes (:func:`view_of`): the stages read several
+    of them on every tick, and a tick's view is then one dictionary look-up and plain
+    attribute reads, not a tuple and a dozen property calls."""
+
+    __slots__ = (
+        "facing",
+        "force_field",
+        "green",
+        "left",
+        "omni",
+        "on_axis",
+        "on_left",
+        "on_right",
+        "red",
+        "right",
+        "seen",
+        "side",
+    )
+
+    def __init__(self, omni: IRCharacter, left: IRCharacter, right: IRCharacter) -> None:
+        self.omni, self.left, self.right = omni, left, right
+        by_left, by_right = left.from_dock, right.from_dock
+        self.seen: bool = omni.from_dock or by_left or by_right
+        #: only the left receiver sees the dock: it is more than ~5 deg to the left
+        self.on_left: bool = by_left and not by_right
+        self.on_right: bool = by_right and not by_left
+        self.facing: bool = by_left and by_right
+        # The beams seen (red buoy, green buoy, force field). The omni receiver sits on the
+        # robot's axis: where it is, the robot is. The side receivers are 4 cm off it and
+        # count only when the omni sees nothing of the dock.
+        if omni.from_dock:
+            red, green, force_field = omni.red_buoy, omni.green_buoy, omni.force_field
+        else:
+            red = (by_left and left.red_buoy) or (by_right and right.red_buoy)
+            green = (by_left and left.green_buoy) or (by_right and right.green_buoy)
+            force_field = (by_left and left.force_field) or (by_right and right.force_field)
+        self.red: bool = red
+        self.green: bool = green
+        self.force_field: bool = force_field
+        #: +1 on the dock's left (red only), -1 on its right (green only), 0 on the axis or
+        #: unknown
+        self.side: int = 1 if red and not green else -1 if green and not red else 0
+        self.on_axis: bool = red and green
 
     @classmethod
     def of(cls, frame: SensorFrame) -> DockView:
-        return _new_tuple(cls, (frame.ir_omni, frame.ir_left, frame.ir_right))
+        return view_of(tuple(frame[packet] for packet in IR_PACKETS))
 
-    @property
-    def seen(self) -> bool:
-        return self.omni.from_dock or self.left.from_dock or self.right.from_dock
 
-    @property
-    def on_left(self) -> bool:
-        """Only the left receiver sees the dock: it is more than ~5 deg to the left."""
-        return self.left.from_dock and not self.right.from_dock
+#: The views built so far, by (omni, left, right) byte (:func:`view_of`).
+_VIEWS: dict[tuple[int, ...], DockView] = {}
+#: More distinct triples than a run meets (a few dozen): the views are built afresh.
+_VIEWS_KEPT = 4096
 
-    @property
-    def on_right(self) -> bool:
-        return self.right.from_dock and not self.left.from_dock
 
-    @property
-    def facing(self) -> bool:
-        return self.left.from_dock and self.right.from_dock
-
-    def _beams(self) -> tuple[bool, bool, bool]:
-        """(red buoy, green buoy, force field) seen. The omni receiver sits on the robot's
-        axis: where it is, the robot is. The side receivers are 4 cm off it and count only
-        when the omni sees nothing of the dock."""
-        omni, left, right = self
-        if omni.from_dock:
-            return omni.red_buoy, omni.green_buoy, omni.force_field
-        by_left, by_right = left.from_dock, right.from_dock
-        return (
-            (by_left and left.red_buoy) or (by_right and right.red_buoy),
-            (by_left and left.green_buoy) or (by_right and right.green_buoy),
-            (by_left and left.force_field) or (by_right and right.force_field),
+def view_of(codes: tuple[int, ...]) -> DockView:
+    """The :class:`DockView` of the receivers' bytes (``codes``: packets 17, 52 and 53, the
+    order of ``IR_PACKETS``), built on the first meeting and kept."""
+    view = _VIEWS.get(codes)
+    if view is None:
+        if len(_VIEWS) >= _VIEWS_KEPT:
+            _VIEWS.clear()
+        omni, left, right = codes
+        view = _VIEWS[codes] = DockView(
+            IR_CHARACTERS[omni & 0xFF], IR_CHARACTERS[left & 0xFF], IR_CHARACTERS[right & 0xFF]
         )
-
-    @property
-    def red(self) -> bool:
-        return self._beams()[0]
-
-    @property
-    def green(self) -> bool:
-        return self._beams()[1]
-
-    @property
-    def force_field(self) -> bool:
-        return self._beams()[2]
-
-    @property
-    def side(self) -> int:
-        """+1 on the dock's left (red only), -1 on its right (green only), 0 on the axis or
-        unknown."""
-        red, green, _ = self._beams()
-        if red and not green:
-            return 1
-        if green and not red:
-            return -1
-        return 0
-
-    @property
-    def on_axis(self) -> bool:
-        red, green, _ = self._beams()
-        return red and green
+    return view
 
 
-def dock_seen(frame: SensorFrame) -> bool:
-    """A receiver sees a dock character: :attr:`DockView.seen` without building the view
-    (the search asks on every tick, and needs nothing else of it)."""
-    return frame.ir_omni.from_dock or frame.ir_left.from_dock or frame.ir_right.from_dock
+#: By byte of packet 17, 52 or 53: a character sent by a home base.
+FROM_DOCK: tuple[bool, ...] = tuple(character.from_dock for character in IR_CHARACTERS)
+#: By byte of packet 34: the home base powers the robot.
+HOME_BASE: tuple[bool, ...] = tuple(sources.home_base for sources in CHARGING_SOURCES_BY_BYTE)
 
 
 class IdentityEnum(Enum):
@@ -154,32 +162,118 @@ _WHEEL_DROP, _CLIFF, _BUMP, _OBSTACLE = (
 
 
 #: What :func:`hazard_in` reads: packets 7 and 9-12 (bumps, wheel drops, cliffs), 13 (a
-#: virtual wall) and 45 (the light bumper), for the ``reads`` of a stage that calls it.
+#: virtual wall) and 45 (the light bumper), for the ``reads`` of a stage that calls it, and
+#: the order of :func:`hazard_of`'s arguments.
 HAZARD_IN_PACKETS = (*HAZARD_PACKETS, *VIRTUAL_WALL_PACKETS, *LIGHT_BUMPER_PACKETS)
+assert HAZARD_IN_PACKETS == (7, 9, 10, 11, 12, 13, 45)
 
 
-def hazard_in(frame: SensorFrame, *, obstacles: bool = True) -> Hazard | None:
-    """The most serious hazard the frame shows, or None; with ``obstacles=False`` the light
-    bumper is not read (nothing ahead counts). Read every tick: the union ``any_hazard``
-    first, so a clear frame costs one accessor for packets 7 and 9-12, not three."""
-    if frame.any_hazard:
-        if frame.any_wheel_drop:
+def hazard_of(
+    bumps: int,
+    cliff_left: int,
+    cliff_front_left: int,
+    cliff_front_right: int,
+    cliff_right: int,
+    virtual_wall: int,
+    light_bumper: int,
+    obstacles: bool = True,
+) -> Hazard | None:
+    """The most serious hazard the raw values of :data:`HAZARD_IN_PACKETS` show, or None;
+    with ``obstacles=False`` the light bumper is not read (nothing ahead counts). The bits
+    the frame's readings test: ``any_hazard`` (packets 7 and 9-12), ``any_wheel_drop``,
+    ``any_cliff``, ``virtual_wall``, ``light_bumper_ahead``."""
+    if (
+        bumps & (BUMP_BITS | WHEEL_DROP_BITS)
+        or cliff_left
+        or cliff_front_left
+        or cliff_front_right
+        or cliff_right
+    ):
+        if bumps & WHEEL_DROP_BITS:
             return _WHEEL_DROP
-        if frame.any_cliff:
+        if cliff_left or cliff_front_left or cliff_front_right or cliff_right:
             return _CLIFF
         return _BUMP
-    if frame.virtual_wall:
+    if virtual_wall & 0xFF:
         return _CLIFF
-    if obstacles and frame.light_bumper_ahead:
+    if obstacles and light_bumper & LIGHT_BUMPER_AHEAD_BITS:
         return _OBSTACLE
     return None
 
 
+def hazard_in(frame: SensorFrame, *, obstacles: bool = True) -> Hazard | None:
+    """The most serious hazard the frame shows, or None (:func:`hazard_of` of its values);
+    with ``obstacles=False`` the light bumper is not read (nothing ahead counts)."""
+    bumps, cliff_l, cliff_fl, cliff_fr, cliff_r, virtual_wall, light = (
+        frame[packet] for packet in HAZARD_IN_PACKETS
+    )
+    return hazard_of(
+        bumps, cliff_l, cliff_fl, cliff_fr, cliff_r, virtual_wall, light, obstacles=obstacles
+    )
+
+
+#: The Drive Direct commands encoded so far, by (right, left) mm/s (:func:`drive_direct`).
+_DRIVE_DIRECT: dict[tuple[int, int], oi.Command] = {}
+#: More distinct speed pairs than a run sends (a few hundred): encoded afresh.
+_DRIVE_DIRECT_KEPT = 4096
+
+
+def drive_direct(right: int, left: int) -> oi.Command:
+    """:func:`~roomba_bt.oi.encode.drive_direct`, each pair of speeds encoded once and the
+    (immutable) command kept: a wall follow sends a few hundred distinct pairs, a thousand
+    times, and checking and packing the same bytes again was most of a sending tick."""
+    command = _DRIVE_DIRECT.get((right, left))
+    if command is None:
+        if len(_DRIVE_DIRECT) >= _DRIVE_DIRECT_KEPT:
+            _DRIVE_DIRECT.clear()
+        command = _DRIVE_DIRECT[right, left] = oi.drive_direct(right, left)
+    return command
+
+
 class DockingAction(Action):
-    """Shared helpers: wheel commands, stage notes and messages, odometry marks."""
+    """Shared helpers: wheel commands, stage notes and messages, odometry marks, and the
+    frame's readings taken once a tick by slot.
+
+    Each stage names the packets its readings come from (:attr:`WATCHED`). Their slots in a
+    frame's layout are found once (:meth:`bind`: every frame of a stream has the same
+    layout), their values are read every tick in one call, and the readings (the dock seen,
+    the hazard, ...) are worked out again (:meth:`read`) only when one of those values
+    changed: most ticks see the same receivers and the same bumpers as the tick before.
+    ``update`` does it in its first lines::
+
+        frame = snap.frame
+        if frame._layout is not self._layout:  # the fields, not the properties
+            self.bind(frame)
+        raw = self._watched(frame._values)
+        if raw != self._raw:
+            self._raw = raw
+            self.read(raw)
+    """
 
     moves = True
     stage = ""
+    #: the packets :meth:`read` takes the values of, in its order (two at least)
+    WATCHED: tuple[int, ...] = ()
+
+    def bind(self, frame: SensorFrame) -> None:
+        """Find the slots of :attr:`WATCHED` in the frame's layout; a packet the frame lacks
+        raises its ``KeyError`` here (the stream carries what the stage declares)."""
+        index = frame.layout.index
+        for packet in self.WATCHED:
+            if packet not in index:
+                frame[packet]  # raises the KeyError naming the packet
+        self._watched = itemgetter(*(index[packet] for packet in self.WATCHED))
+        self._layout = frame.layout
+
+    def read(self, raw: tuple[int, ...]) -> None:
+        """Work the readings out from the values of :attr:`WATCHED` (``raw``): they stand
+        until one of those values changes."""
+        raise NotImplementedError
+
+    _layout: FrameLayout | None = None
+    _watched: Callable[[tuple[int, ...]], tuple[int, ...]]
+    #: the values the readings were worked out from (None: none yet)
+    _raw: tuple[int, ...] | None = None
 
     def wheels(self, left: float, right: float) -> None:
         """Drive Direct (mm/s), sent only when the wheel speeds change (the robot keeps
@@ -190,7 +284,7 @@ class DockingAction(Action):
             return
         lo, ro = wheel_speeds(left, right)
         if (lo, ro) != self._last_wheels or not self._started_motion:
-            self.send(oi.drive_direct(ro, lo))
+            self.send(drive_direct(ro, lo))
         self._last_wheels = (lo, ro)
         self._asked = (left, right)
         self._started_motion = True
@@ -221,15 +315,12 @@ class DockingAction(Action):
         return OK
 
     def begin(self) -> None:
+        """Note the stage and when it began. Its ``timeout`` parameter (s) is read once a
+        start (the parameters are resolved before it): each tick's ``update`` compares
+        ``now - _t0 >= _time_limit``."""
         note_stage(self.stage)
         self._t0 = self.snapshot.time
-        # read once a start (the parameters are resolved before it), compared every tick
         self._time_limit = self.number("timeout") - 1e-9
-
-    def timed_out(self, now: float) -> bool:
-        """The ``timeout`` parameter (s) has passed since the stage began (``now``: the
-        snapshot's time)."""
-        return now - self._t0 >= self._time_limit
 
     def not_driving(self) -> bool:
         return self.snapshot.mode not in DRIVING_MODES
@@ -274,7 +365,7 @@ def declare_stage(
     reads: tuple[int, ...] = (),
 ) -> Callable[[Stage], Stage]:
     """``@declare`` for a driving stage, with what :class:`DockingAction` itself uses said
-    once: the ``timeout`` parameter :meth:`~DockingAction.timed_out` reads (after the
+    once: the ``timeout`` parameter :meth:`~DockingAction.begin` reads (after the
     stage's own ``params``), the receivers' IR characters (:class:`DockView`) before and the
     encoders (the odometry marks) after the packets in ``reads``, and Drive Direct and Drive
     0 sent (:meth:`~DockingAction.wheels`, :meth:`~DockingAction.halt`)."""

@@ -14,15 +14,19 @@ from py_trees.common import Status
 
 from roomba_bt.behaviours.declare import Param, wheel_speed_param
 from roomba_bt.behaviours.docking.common import (
+    HOME_BASE,
     RUNNING,
     DockingAction,
     DockView,
     IdentityEnum,
     declare_stage,
+    view_of,
 )
 from roomba_bt.behaviours.units import ANGLE
-from roomba_bt.oi.frames import BUMPS_PACKETS, CHARGING_SOURCES_PACKETS, SensorFrame
+from roomba_bt.oi.bits import BUMP_BITS
+from roomba_bt.oi.frames import BUMPS_PACKETS, CHARGING_SOURCES_PACKETS, IR_PACKETS
 from roomba_bt.oi.modes import DRIVING_MODES
+from roomba_bt.robot.interface import Snapshot
 
 #: FAILURE once no receiver has seen the dock for this long (s).
 LOST_BEAMS_S = 1.5
@@ -70,6 +74,8 @@ class DockDriveOn(DockingAction):
     """
 
     stage = "final alignment"
+    #: the receivers (the view), the home base, the bumper
+    WATCHED = (*IR_PACKETS, *CHARGING_SOURCES_PACKETS, *BUMPS_PACKETS)
 
     def start(self) -> None:
         self.begin()
@@ -81,30 +87,44 @@ class DockDriveOn(DockingAction):
         self._last_seen = self.snapshot.time
         self.mark_turn()
 
+    def read(self, raw: tuple[int, ...]) -> None:
+        omni, left, right, sources, bumps = raw
+        self._view = view_of((omni, left, right))
+        self._home = HOME_BASE[sources & 0xFF]  # frame.charging_sources.home_base
+        self._bumped = bumps & BUMP_BITS != 0  # frame.any_bump
+
     def update(self) -> Status:
-        snap = self.snapshot
+        robot = self.robot
+        snap = robot.snapshot if robot is not None else self.snapshot
         frame = snap.frame
-        if frame.charging_sources.home_base:
+        if frame._layout is not self._layout:  # the fields, not the properties: every tick
+            self.bind(frame)
+        raw = self._watched(frame._values)
+        if raw != self._raw:
+            self._raw = raw
+            self.read(raw)
+        if self._home:
             return self.succeed()
-        if self.timed_out(snap.time):
+        now = snap.time
+        if now - self._t0 >= self._time_limit:
             return self.fail(f"did not reach the contacts in {self.number('timeout'):g} s")
         if snap.mode not in DRIVING_MODES:
             return self.fail(self.fallback_message())
-        view = DockView.of(frame)
+        view = self._view
         if view.seen:
-            self._last_seen = snap.time
-        elif snap.time - self._last_seen > LOST_BEAMS_S:
+            self._last_seen = now
+        elif now - self._last_seen > LOST_BEAMS_S:
             return self.fail("lost the dock's beams")
         act = _ACTS
         while True:
-            status = act[self.state](self, frame, view)
+            status = act[self.state](self, snap, view)
             if status is not None:
                 return status
 
     # states ------------------------------------------------------------------------
-    def _drive_state(self, frame: SensorFrame, view: DockView) -> Status | None:
+    def _drive_state(self, snap: Snapshot, view: DockView) -> Status | None:
         """In along the axis until the bumper touches the plate; then wiggle."""
-        if not frame.any_bump:
+        if not self._bumped:  # frame.any_bump
             return self._drive(view)
         if not (view.red or view.green):
             # the plate is in the buoys' beams: outside them, it is something else
@@ -129,14 +149,14 @@ class DockDriveOn(DockingAction):
             self.wheels(speed - nudge, speed + nudge)
         return RUNNING
 
-    def _wiggle(self, frame: SensorFrame, view: DockView) -> Status | None:
+    def _wiggle(self, snap: Snapshot, view: DockView) -> Status | None:
         """In place: +wiggle, back through 0 to -wiggle, back to 0; FAILURE after that."""
         w = self._wiggle_rad
         targets = (w, -w, 0.0)
         if self._wiggle_step >= len(targets):
             return self.fail("touched the dock but the contacts did not engage")
         goal = targets[self._wiggle_step]
-        err = goal - self.turned()
+        err = goal - (snap.odometry.angle_rad - self._turn_mark)  # self.turned()
         if abs(err) < WIGGLE_DONE_RAD:
             self._wiggle_step += 1
             self.halt()
@@ -151,10 +171,14 @@ class DockDriveOn(DockingAction):
     _speed = 0.0
     _slow = 0.0
     _wiggle_rad = 0.0
+    # the readings (read)
+    _view: DockView
+    _home = False
+    _bumped = False
 
 
 #: Each state's method.
-_ACTS: dict[DriveOnState, Callable[[DockDriveOn, SensorFrame, DockView], Status | None]] = {
+_ACTS: dict[DriveOnState, Callable[[DockDriveOn, Snapshot, DockView], Status | None]] = {
     DriveOnState.DRIVE: DockDriveOn._drive_state,
     DriveOnState.WIGGLE: DockDriveOn._wiggle,
 }

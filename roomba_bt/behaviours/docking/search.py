@@ -20,24 +20,26 @@ from __future__ import annotations
 import math
 from collections import deque
 from collections.abc import Callable
+from operator import itemgetter
 
 from py_trees.common import Status
 
 from roomba_bt.behaviours.declare import Param, wheel_speed_param
 from roomba_bt.behaviours.docking.common import (
+    FROM_DOCK,
     HAZARD_IN_PACKETS,
     RUNNING,
     DockingAction,
     Hazard,
     IdentityEnum,
     declare_stage,
-    dock_seen,
-    hazard_in,
+    hazard_of,
 )
 from roomba_bt.behaviours.units import BOOL, DISTANCE, enum
-from roomba_bt.oi.frames import LIGHT_BUMP_SIGNAL_PACKETS, SensorFrame
+from roomba_bt.oi.bits import BUMP_BITS, LIGHT_BUMPER_AHEAD_BITS, LIGHT_BUMPER_BITS
+from roomba_bt.oi.frames import IR_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS, SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES
-from roomba_bt.robot.interface import Odometry
+from roomba_bt.robot.interface import Odometry, Snapshot
 
 # The visit grid (odometry frame) and how a heading is chosen on it.
 #: side of a grid cell (mm)
@@ -218,6 +220,8 @@ class DockSearch(DockingAction):
     """
 
     stage = "search"
+    #: the receivers (is a dock seen), then the hazards (:func:`hazard_of`'s order)
+    WATCHED = (*IR_PACKETS, *HAZARD_IN_PACKETS)
 
     def __init__(self, name: str, params: dict[str, object] | None = None) -> None:
         super().__init__(name, params)
@@ -238,27 +242,58 @@ class DockSearch(DockingAction):
         self._speed = self.number("speed")
         self._leg = self.number("leg")
         self._follow_for = self.number("follow")
+        self._follow_speed = speed = min(self._speed, FOLLOW_MAX_MM_S)
+        self._follow_steer = speed * WALL_STEER_SHARE
+        self._follow_hand = 1 if self.value("wall_side") == "right" else -1
+        self._kept = None  # the speeds may differ from the last start's
+
+    def bind(self, frame: SensorFrame) -> None:
+        super().bind(frame)
+        # the six light-bumper signals, read on every tick of a wall follow
+        index = frame.layout.index
+        for packet in LIGHT_BUMP_SIGNAL_PACKETS:
+            if packet not in index:
+                frame[packet]  # raises the KeyError naming the packet
+        self._signals = itemgetter(*(index[packet] for packet in LIGHT_BUMP_SIGNAL_PACKETS))
+
+    def read(self, raw: tuple[int, ...]) -> None:
+        omni, left, right, bumps, cliff_l, cliff_fl, cliff_fr, cliff_r, virtual_wall, light = raw
+        self._seen = FROM_DOCK[omni & 0xFF] or FROM_DOCK[left & 0xFF] or FROM_DOCK[right & 0xFF]
+        self._hazard = hazard_of(bumps, cliff_l, cliff_fl, cliff_fr, cliff_r, virtual_wall, light)
+        self._bumped = bumps & BUMP_BITS != 0  # frame.any_bump
+        self._lit = light & LIGHT_BUMPER_BITS != 0  # frame.light_bumper.any
+        self._lit_ahead = light & LIGHT_BUMPER_AHEAD_BITS != 0  # frame.light_bumper_ahead
 
     def update(self) -> Status:
-        snap = self.snapshot
+        robot = self.robot
+        snap = robot.snapshot if robot is not None else self.snapshot
         frame = snap.frame
-        if dock_seen(frame):
+        if frame._layout is not self._layout:  # the fields, not the properties: every tick
+            self.bind(frame)
+        raw = self._watched(frame._values)
+        if raw != self._raw:
+            self._raw = raw
+            self.read(raw)
+        if self._seen:
             return self.succeed()
-        if self.timed_out(snap.time):
+        now = snap.time
+        if now - self._t0 >= self._time_limit:
             return self.fail(f"no dock beam seen in {self.number('timeout'):g} s")
         odo = snap.odometry
-        # the robot's cell, found once a tick: visited here, and read by a wall follow
-        self._cell = cell = VisitGrid.cell(odo.x_mm, odo.y_mm)
-        self.grid.visit_cell(cell, TICK_VISIT_WEIGHT)
-        hazard = hazard_in(frame)
+        # the robot's cell (VisitGrid.cell), found once a tick: visited here, and read by a
+        # wall follow
+        self._cell = cell = (math.floor(odo.x_mm / CELL_MM), math.floor(odo.y_mm / CELL_MM))
+        visits = self.grid.visits
+        visits[cell] = visits.get(cell, 0.0) + TICK_VISIT_WEIGHT
+        hazard = self._hazard
         if hazard is not None and hazard in STOPS_FOR.get(self.state, ()):
-            self._meet(hazard, odo, snap.time)
+            self._meet(hazard, odo, now)
         if snap.mode not in DRIVING_MODES:
             # a cliff or wheel drop in Safe mode: remembered above, so the retry avoids it
             return self.fail(self.fallback_message())
         act = _ACTS
         while True:
-            status = act[self.state](self, frame)
+            status = act[self.state](self, snap)
             if status is not None:
                 return status
 
@@ -287,28 +322,33 @@ class DockSearch(DockingAction):
             self._want_wall = False  # a drop is no wall: wander away from it
 
     # states ------------------------------------------------------------------------
-    def _spin(self, frame: SensorFrame) -> Status | None:
-        if abs(self.turned()) < math.tau:
+    def _spin(self, snap: Snapshot) -> Status | None:
+        odo = snap.odometry
+        if abs(odo.angle_rad - self._turn_mark) < math.tau:  # abs(self.turned())
             self.wheels(-SPIN_MM_S, SPIN_MM_S)
             return RUNNING
-        self._target = self.grid.choose_heading(self.snapshot.odometry, None)
+        self._target = self.grid.choose_heading(odo, None)
         self.state = SearchState.TURN
         return None
 
-    def _follow(self, frame: SensorFrame) -> Status | None:
-        if self.travelled() < self._follow_for and not self._follow_lost and self._follow_is_new():
-            self._keep_wall(frame)
-            return RUNNING
+    def _follow(self, snap: Snapshot) -> Status | None:
+        odo = snap.odometry
+        travelled = abs(odo.distance_mm - self._distance_mark)  # self.travelled()
+        if travelled < self._follow_for and not self._follow_lost:
+            if self._cell not in self._follow_cells:
+                self._note_followed(self._cell)
+            if self._old_cells < OLD_CELLS_LIMIT or travelled < FOLLOW_MIN_MM:
+                self._keep_wall(snap)
+                return RUNNING
         self._want_wall = False  # followed far enough: cross the room
-        odo = self.snapshot.odometry
         self._target = self.grid.choose_heading(
             odo, odo.theta_rad - self._follow_side * math.pi / 2
         )
         self.state = SearchState.TURN
         return None
 
-    def _back(self, frame: SensorFrame) -> Status | None:
-        if self.snapshot.time < self._back_until:
+    def _back(self, snap: Snapshot) -> Status | None:
+        if snap.time < self._back_until:
             self.wheels(-BACK_MM_S, -BACK_MM_S)
             return RUNNING
         if self._resume_follow:
@@ -322,43 +362,43 @@ class DockSearch(DockingAction):
                 self._wall_seen_at = None
                 return None
             self._want_wall = False  # cross the room instead
-        if self._want_wall and frame.light_bumper.any and not frame.any_bump:
+        if self._want_wall and self._lit and not self._bumped:
             self._start_follow()
             return RUNNING
-        self._target = self.grid.choose_heading(self.snapshot.odometry, self._avoid)
+        self._target = self.grid.choose_heading(snap.odometry, self._avoid)
         self.state = SearchState.TURN
         return None
 
-    def _unwedge(self, frame: SensorFrame) -> Status | None:
-        if abs(self.turned()) < UNWEDGE_TURN_RAD:
+    def _unwedge(self, snap: Snapshot) -> Status | None:
+        if abs(snap.odometry.angle_rad - self._turn_mark) < UNWEDGE_TURN_RAD:
             hand = self._follow_side
             self.wheels(-UNWEDGE_MM_S * hand, UNWEDGE_MM_S * hand)
             return RUNNING
         self.state = SearchState.FOLLOW
         return RUNNING
 
-    def _turn(self, frame: SensorFrame) -> Status | None:
-        err = math.remainder(self._target - self.snapshot.odometry.theta_rad, math.tau)
-        if abs(err) < TURN_DONE_RAD and frame.light_bumper_ahead:
+    def _turn(self, snap: Snapshot) -> Status | None:
+        err = math.remainder(self._target - snap.odometry.theta_rad, math.tau)
+        if abs(err) < TURN_DONE_RAD and self._lit_ahead:
             # still blocked: aim further round, and drive the leg's step this tick
             self._target += math.copysign(BLOCKED_NUDGE_RAD, err or 1.0)
-            return self._forward(frame)
+            return self._forward(snap)
         if abs(err) < TURN_DONE_RAD:
             self.state = SearchState.FORWARD
-            self.mark_distance()
+            self._distance_mark = snap.odometry.distance_mm  # self.mark_distance()
             return None
         w = TURN_FAST_MM_S if abs(err) > TURN_SLOW_WITHIN_RAD else TURN_SLOW_MM_S
         self.spin_toward(err, w)
         return RUNNING
 
-    def _forward(self, frame: SensorFrame) -> Status | None:
+    def _forward(self, snap: Snapshot) -> Status | None:
         """A straight leg toward unexplored space, then look for a wall again."""
-        odo = self.snapshot.odometry
-        if self.travelled() >= self._leg:
+        odo = snap.odometry
+        if abs(odo.distance_mm - self._distance_mark) >= self._leg:  # self.travelled()
             self._want_wall = True
             self._target = self.grid.choose_heading(odo, None)
             self.state = SearchState.TURN
-            self.mark_distance()
+            self._distance_mark = odo.distance_mm  # self.mark_distance()
             return RUNNING
         speed = self._speed
         err = math.remainder(self._target - odo.theta_rad, math.tau)
@@ -371,35 +411,50 @@ class DockSearch(DockingAction):
         self.state = SearchState.FOLLOW
         self._wall_seen_at = None
         self._follow_lost = False
-        self._follow_side = 1 if self.value("wall_side") == "right" else -1
+        self._follow_side = self._follow_hand
         self._follow_cells: set[Cell] = set()
         self._old_cells = 0
         self._follow_bumps = 0
         self.mark_distance()
 
-    def _follow_is_new(self) -> bool:
-        """False once the wall leads through cells visited before this follow (it has been
-        followed already): time to cross the room instead."""
-        cell = self._cell  # this tick's (update)
-        if cell not in self._follow_cells:
-            self._follow_cells.add(cell)
-            # followed before (not merely crossed): this wall, or this island, is done
-            seen_before = cell in self.grid.followed
-            self.grid.followed.add(cell)
-            self._old_cells = self._old_cells + 1 if seen_before else 0
-        return self._old_cells < OLD_CELLS_LIMIT or self.travelled() < FOLLOW_MIN_MM
+    def _note_followed(self, cell: Cell) -> None:
+        """The follow enters ``cell``, new to it. A cell followed before (not merely
+        crossed) means the wall leads where it was followed already (this wall, or this
+        island): :data:`OLD_CELLS_LIMIT` such cells in a row, after :data:`FOLLOW_MIN_MM`
+        of the follow, end it (time to cross the room instead)."""
+        self._follow_cells.add(cell)
+        seen_before = cell in self.grid.followed
+        self.grid.followed.add(cell)
+        self._old_cells = self._old_cells + 1 if seen_before else 0
 
-    def _keep_wall(self, frame: SensorFrame) -> None:
+    def _keep_wall(self, snap: Snapshot) -> None:
         """Keep a wall on one side (``_follow_side``: +1 right, -1 left) at a steady
         light-bumper signal: right / front-right, or left / front-left; the centre pair for
-        a wall ahead (turn away from it in place)."""
-        speed = min(self._speed, FOLLOW_MAX_MM_S)
+        a wall ahead (turn away from it in place).
+
+        Along a wall or turning from one, the speeds asked are a function of the signals
+        and the bumper alone: when those are the same as at the last tick that asked them
+        and the wheels still keep those speeds (no other speeds asked, no halt, no stop
+        since: :meth:`wheels` would return at once), there is nothing to do. The signals
+        stand still on about two ticks in five of a follow. Without a wall the arc's path
+        is counted every tick: that branch is never skipped."""
+        # all six signals in one call, by slot (read every tick of a follow)
+        signals = self._signals(snap.frame._values)
+        kept = self._kept
+        if (
+            kept is not None
+            and kept[0] == signals
+            and kept[1] is self._bumped
+            and kept[2] is self._asked
+            and self._started_motion
+        ):
+            return
+        speed = self._follow_speed  # min(speed, FOLLOW_MAX_MM_S)
         hand = self._follow_side
-        # all six signals in one accessor (read every tick of a follow)
-        left, front_left, centre_left, centre_right, front_right, right = frame.light_bump_signals
+        left, front_left, centre_left, centre_right, front_right, right = signals
         front = max(centre_left, centre_right)
         side, front_side = (right, front_right) if hand > 0 else (left, front_left)
-        if front > WALL_AHEAD_SIGNAL or frame.any_bump:
+        if front > WALL_AHEAD_SIGNAL or self._bumped:
             # wall ahead: turn away from the wall side
             self.wheels(-FOLLOW_TURN_MM_S * hand, FOLLOW_TURN_MM_S * hand)
         elif side == 0 and front_side == 0:
@@ -409,17 +464,20 @@ class DockSearch(DockingAction):
                 self.wheels(speed, speed * CORNER_INNER_SHARE)
             else:
                 self.wheels(speed * CORNER_INNER_SHARE, speed)
-            path = self.snapshot.odometry.path_mm
+            path = snap.odometry.path_mm
             if self._wall_seen_at is None:
                 self._wall_seen_at = path
             elif path - self._wall_seen_at > WALL_LOST_MM:
                 self._follow_lost = True  # no wall there after all
+            self._kept = None
+            return
         else:
             self._wall_seen_at = None
             error = WALL_SIGNAL - max(side, front_side // 2)
-            limit = speed * WALL_STEER_SHARE
+            limit = self._follow_steer  # speed * WALL_STEER_SHARE
             turn = hand * max(-limit, min(limit, WALL_GAIN_MM_S * error))
             self.wheels(speed + turn, speed - turn)
+        self._kept = (signals, self._bumped, self._asked)
 
     state = SearchState.SPIN
     _spun = False
@@ -437,10 +495,23 @@ class DockSearch(DockingAction):
     _speed = 0.0
     _leg = 0.0
     _follow_for = 0.0
+    _follow_speed = 0.0
+    _follow_steer = 0.0
+    _follow_hand = 1
+    # the readings (read)
+    _seen = False
+    _hazard: Hazard | None = None
+    _bumped = False
+    _lit = False
+    _lit_ahead = False
+    _signals: Callable[[tuple[int, ...]], tuple[int, int, int, int, int, int]]
+    #: what the last tick of :meth:`_keep_wall` that asked speeds read (signals, bumper)
+    #: and the speeds it left asked (None: it asked none, or the arc without a wall)
+    _kept: tuple[tuple[int, ...], bool, tuple[float, float] | None] | None = None
 
 
 #: Each state's method (see the module's drawing).
-_ACTS: dict[SearchState, Callable[[DockSearch, SensorFrame], Status | None]] = {
+_ACTS: dict[SearchState, Callable[[DockSearch, Snapshot], Status | None]] = {
     SearchState.SPIN: DockSearch._spin,
     SearchState.FOLLOW: DockSearch._follow,
     SearchState.BACK: DockSearch._back,
