@@ -182,11 +182,11 @@ class _MeasuredSimulator(Simulator):
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
         self.contact_steps: list[int] = []
-        self._in_contact = False
+        self._in_contact = 0  # the bump bits of the last step (0: not pressed)
         self._centre = _world_centre(self.world)
         self._loop_angle = 0.0
         self._last_bearing = math.atan2(self.y - self._centre[1], self.x - self._centre[0])
-        self._last_xy = (self.x, self.y)
+        self._last_x, self._last_y = self.x, self.y
         self._progress_mark = (0.0, 0.0)  # (loop angle, time)
         #: the longest stall before the progress mark, and the time of the last step since
         #: the mark without progress (None: none yet)
@@ -198,10 +198,11 @@ class _MeasuredSimulator(Simulator):
         self._stopped_after = -1
 
     def step(self, dt: float = 0.015) -> None:
+        # Simulator.step named, not super().step: super() builds an object every step
         if self._since_onset is not None:
             self._watch_reaction(self._since_onset)
-        super().step(dt)
-        pressed = bool(self.values[7] & 3)
+        _simulator_step(self, dt)
+        pressed = self.values[7] & 3
         if pressed:
             if not self._in_contact:
                 self.contact_steps.append(0)
@@ -209,11 +210,11 @@ class _MeasuredSimulator(Simulator):
             else:
                 self.contact_steps[-1] += 1
         self._in_contact = pressed
-        xy = (self.x, self.y)
-        if xy != self._last_xy:
-            self._last_xy = xy
+        x, y = self.x, self.y
+        if x != self._last_x or y != self._last_y:  # moved (no tuple built to compare)
+            self._last_x, self._last_y = x, y
             centre = self._centre
-            bearing = math.atan2(xy[1] - centre[1], xy[0] - centre[0])
+            bearing = math.atan2(y - centre[1], x - centre[0])
             self._loop_angle += math.remainder(bearing - self._last_bearing, math.tau)
             self._last_bearing = bearing
             if abs(self._loop_angle - self._progress_mark[0]) * self._radius >= 300.0:
@@ -245,6 +246,9 @@ class _MeasuredSimulator(Simulator):
     @property
     def loops(self) -> float:
         return self._loop_angle / math.tau
+
+
+_simulator_step = Simulator.step
 
 
 def _world_centre(world: World) -> tuple[float, float]:

@@ -17,12 +17,13 @@ or a simulation on a virtual clock makes the same decisions as the live run.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
+from operator import itemgetter
 from typing import NamedTuple, Protocol
 
 from roomba_bt.oi.encode import Command
-from roomba_bt.oi.frames import SensorFrame
+from roomba_bt.oi.frames import FrameLayout, SensorFrame
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.odometry import MM_PER_COUNT
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
@@ -87,6 +88,43 @@ class Odometry(NamedTuple):
         ))  # fmt: skip
 
 
+class Odometer:
+    """The odometry of one run's stream, integrated frame by frame (the runtime's, once a
+    tick): :attr:`odometry` is the newest :class:`Odometry`.
+
+    What is the same for every frame of a stream is found once per layout, not per frame:
+    where the encoder counts sit in the frame's values (read by one ``itemgetter``, in C).
+    A frame whose counts are those of the frame before (a robot standing still: docked,
+    waiting) leaves the odometry as it is, the same object, with no call; a frame without
+    the encoder packets too."""
+
+    __slots__ = ("_counts", "_layout", "_wheel_base_mm", "odometry")
+
+    def __init__(self, wheel_base_mm: float) -> None:
+        self.odometry = Odometry()
+        self._wheel_base_mm = wheel_base_mm
+        self._layout: FrameLayout | None = None
+        #: the frame's (left, right) encoder counts, or None when its layout has none
+        self._counts: Callable[[tuple[int, ...]], tuple[int, int]] | None = None
+
+    def frame(self, frame: SensorFrame) -> Odometry:
+        """The odometry after ``frame`` (:meth:`Odometry.advance` on its encoder counts)."""
+        layout = frame._layout  # the frame's own slots: a property would be a call a tick
+        if layout is not self._layout:
+            self._layout = layout
+            slots = layout.encoder_slots
+            self._counts = None if slots is None else itemgetter(*slots)
+        counts = self._counts
+        odometry = self.odometry
+        if counts is None:
+            return odometry
+        left, right = counts(frame._values)
+        if left == odometry[5] and right == odometry[6]:  # left_counts, right_counts
+            return odometry
+        odometry = self.odometry = odometry.advance(left, right, self._wheel_base_mm)
+        return odometry
+
+
 @dataclass(frozen=True, slots=True)
 class ModeChange:
     """A mode change the robot made by itself (seen in packet 35), with its likely cause."""
@@ -130,11 +168,14 @@ class Outbox:
     stood still while the new branch believed it was turning).
     """
 
-    __slots__ = ("_queue", "_senders")
+    __slots__ = ("_queue", "_senders", "queued")
 
     def __init__(self) -> None:
         self._queue: dict[object, Command] = {}
         self._senders: dict[object, object] = {}
+        #: the queue itself, read-only: true while a command waits (the runtime asks after
+        #: every tick, and most ticks queue nothing: a dict's truth is no call, ``len`` is)
+        self.queued: Mapping[object, Command] = self._queue
 
     def send(self, command: Command, sender: object = None) -> None:
         channel = command.spec.channel

@@ -40,7 +40,7 @@ from roomba_bt.robot.hazards import HazardConfirmation
 from roomba_bt.robot.interface import (
     SLOT_SECONDS,
     BaseHandle,
-    Odometry,
+    Odometer,
     Snapshot,
 )
 from roomba_bt.robot.safety import InterruptGuard, Terminated
@@ -48,6 +48,7 @@ from roomba_bt.runtime.summary import DEFAULT_GRACE, Outcome, RunSummary
 
 log = logging.getLogger(__name__)
 _new_tuple = tuple.__new__
+_Blackboard = py_trees.blackboard.Blackboard
 
 #: Battery charge and capacity, for the run summary: streamed when the budget allows.
 SUMMARY_PACKETS: tuple[int, ...] = BATTERY_PACKETS
@@ -164,7 +165,7 @@ class MissionRunner(BaseHandle):
         #: last valid frame's time)
         self._stall: tuple[int, bool, float] | None = None
         self._snapshot: Snapshot | None = None
-        self._odometry = Odometry()
+        self._odometer = Odometer(profile.wheel_base_mm)
         self._tick = -1
         self._last_arrival: float | None = None
         self.summary = RunSummary(mission.name)
@@ -178,11 +179,9 @@ class MissionRunner(BaseHandle):
         self.clock_held = False
         self._held_slots = 0
         self._blackboard: py_trees.blackboard.Client | None = None
-        self._layout: object = None
-        #: where the encoder counts are in the stream's frames, if it carries them (the layout's)
-        self._encoder_slots: tuple[int, int] | None = None
         #: hazards shown to the tree once two frames agree, or the robot's own reaction does
         self._hazards = HazardConfirmation()
+        self._confirm = self._hazards.frame  # bound once, called every tick
         self._fallback_seen: object = None
         #: the connection's mode model and command writer, read on every tick (one hop, not
         #: a chain of properties)
@@ -371,43 +370,34 @@ class MissionRunner(BaseHandle):
             self._outbox.send(wheels, self)
 
     def _advance(self, batch: Sequence[TimedFrame]) -> Snapshot:
-        """Newest frame of the batch -> the tick's snapshot; stale frames and gaps counted."""
-        newest = batch[-1]
-        arrival: float = newest.time
+        """Newest frame of the batch -> the tick's snapshot; stale frames and gaps counted.
+
+        The common frame (the only one of its batch, one slot after the one before) takes
+        the first branch of each test: no stale frame to confirm hazards with, no gap to
+        measure (``round``, ``max``)."""
         count = len(batch)
-        confirm = self._hazards.frame
-        for older in batch[:-1] if count > 1 else ():
-            confirm(older.frame)
+        if count > 1:
+            self._stale(batch)
+        frame: SensorFrame
+        frame, arrival, _ = batch[-1]
         modes = self._modes
         fallback = modes.last_fallback
-        reacted = fallback is not self._fallback_seen
-        self._fallback_seen = fallback
-        frame: SensorFrame = confirm(newest.frame, reacted)
+        if fallback is self._fallback_seen:
+            frame = self._confirm(frame)
+        else:
+            self._fallback_seen = fallback
+            frame = self._confirm(frame, True)
         summary = self.summary
-        if count > 1:
-            summary.stale_frames_dropped += count - 1
-        if self._last_arrival is None:
+        last = self._last_arrival
+        self._last_arrival = arrival
+        # round(x) <= 1 exactly when x < 1.5 (round(1.5) is 2): one slot, nothing lost
+        if count == 1 and last is not None and (arrival - last) / SLOT_SECONDS < 1.5:
             slots = 1
         else:
-            spanned = round((arrival - self._last_arrival) / SLOT_SECONDS)
-            slots = max(count, spanned)
-            if slots != count:
-                summary.frames_lost += slots - count
-        self._last_arrival = arrival
+            slots = self._slots_spanned(count, arrival, last)
         tick = self._tick = self._tick + slots
         if self.clock_held:
             self._held_slots += slots
-        layout = frame.layout
-        if layout is not self._layout:  # the same for every frame of a stream
-            self._layout = layout
-            self._encoder_slots = layout.encoder_slots
-        odometry = self._odometry
-        if self._encoder_slots is not None:
-            values = frame.values
-            left, right = self._encoder_slots
-            odometry = self._odometry = odometry.advance(
-                values[left], values[right], self._profile.wheel_base_mm
-            )
         # tuple.__new__: the named tuple's own __new__ is a Python call that binds each
         # field (with keywords, several times the cost of the rest of this method)
         snapshot: Snapshot = _new_tuple(Snapshot, (
@@ -415,25 +405,42 @@ class MissionRunner(BaseHandle):
             tick,
             (tick - self._held_slots) * SLOT_SECONDS,
             modes.mode,
-            odometry,
+            self._odometer.frame(frame),
             fallback,
             self._profile,
             summary.frames_lost,
         ))  # fmt: skip
         self._snapshot = self.snapshot = snapshot
         if self._blackboard is not None:
-            if py_trees.blackboard.Blackboard.activity_stream is None:
+            if _Blackboard.activity_stream is None:
                 # the client's own key, registered for writing: its permission checks and
                 # name parsing cost more than the rest of this method
-                py_trees.blackboard.Blackboard.storage[SNAPSHOT_KEY] = snapshot
+                _Blackboard.storage[SNAPSHOT_KEY] = snapshot
             else:  # someone is watching the blackboard's activity: tell it
                 self._blackboard.set(SNAPSHOT_KEY, snapshot, overwrite=True)
         return snapshot
 
+    def _stale(self, batch: Sequence[TimedFrame]) -> None:
+        """The frames of a batch before its newest: dropped (counted), their hazards seen."""
+        confirm = self._confirm
+        for older in batch[:-1]:
+            confirm(older.frame)
+        self.summary.stale_frames_dropped += len(batch) - 1
+
+    def _slots_spanned(self, count: int, arrival: float, last: float | None) -> int:
+        """The slots a batch of ``count`` frames spans (the first frame: one); more than
+        ``count`` when frames were lost in transit (counted)."""
+        if last is None:
+            return 1
+        slots = max(count, round((arrival - last) / SLOT_SECONDS))
+        if slots != count:
+            self.summary.frames_lost += slots - count
+        return slots
+
     def _flush(self) -> None:
         if self._hazards.pending or self._writer.forward_held:
             self._bump_reflex()
-        if not self._outbox:
+        if not self._outbox.queued:
             return
         for command in self._outbox.drain():
             try:
