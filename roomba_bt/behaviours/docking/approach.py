@@ -180,15 +180,7 @@ class DockApproach(DockingAction):
         )
 
     def update(self) -> Status:
-        robot = self.robot
-        snap = robot.snapshot if robot is not None else self.snapshot
-        frame = snap.frame
-        if frame._layout is not self._layout:  # the fields, not the properties: every tick
-            self.bind(frame)
-        raw = self._watched(frame._values)
-        if raw != self._raw:
-            self._raw = raw
-            self.read(raw)
+        snap = self.observe()
         if self._home:
             return self.succeed()
         now = snap.time

@@ -33,6 +33,7 @@ from roomba_bt.oi.frames import (
 from roomba_bt.oi.ir import IR_CHARACTERS, IRCharacter
 from roomba_bt.oi.modes import DRIVING_MODES
 from roomba_bt.oi.opcodes import COMMANDS_BY_NAME
+from roomba_bt.robot.interface import Snapshot
 
 #: The stages drive with Drive Direct and halt with Drive 0: their ``sends=``.
 DRIVE_SENDS = (COMMANDS_BY_NAME["drive"].opcode, COMMANDS_BY_NAME["drive_direct"].opcode)
@@ -239,15 +240,7 @@ class DockingAction(Action):
     layout), their values are read every tick in one call, and the readings (the dock seen,
     the hazard, ...) are worked out again (:meth:`read`) only when one of those values
     changed: most ticks see the same receivers and the same bumpers as the tick before.
-    ``update`` does it in its first lines::
-
-        frame = snap.frame
-        if frame._layout is not self._layout:  # the fields, not the properties
-            self.bind(frame)
-        raw = self._watched(frame._values)
-        if raw != self._raw:
-            self._raw = raw
-            self.read(raw)
+    ``update`` does it in its first line, :meth:`observe`.
     """
 
     moves = True
@@ -264,6 +257,20 @@ class DockingAction(Action):
                 frame[packet]  # raises the KeyError naming the packet
         self._watched = itemgetter(*(index[packet] for packet in self.WATCHED))
         self._layout = frame.layout
+
+    def observe(self) -> Snapshot:
+        """The tick's snapshot, its readings worked out again (:meth:`read`) only when a value
+        of :attr:`WATCHED` changed: every stage's ``update`` starts with it."""
+        robot = self.robot
+        snap = robot.snapshot if robot is not None else self.snapshot
+        frame = snap.frame
+        if frame._layout is not self._layout:  # the fields, not the properties: every tick
+            self.bind(frame)
+        raw = self._watched(frame._values)
+        if raw != self._raw:
+            self._raw = raw
+            self.read(raw)
+        return snap
 
     def read(self, raw: tuple[int, ...]) -> None:
         """Work the readings out from the values of :attr:`WATCHED` (``raw``): they stand

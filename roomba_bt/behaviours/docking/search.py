@@ -265,15 +265,7 @@ class DockSearch(DockingAction):
         self._lit_ahead = light & LIGHT_BUMPER_AHEAD_BITS != 0  # frame.light_bumper_ahead
 
     def update(self) -> Status:
-        robot = self.robot
-        snap = robot.snapshot if robot is not None else self.snapshot
-        frame = snap.frame
-        if frame._layout is not self._layout:  # the fields, not the properties: every tick
-            self.bind(frame)
-        raw = self._watched(frame._values)
-        if raw != self._raw:
-            self._raw = raw
-            self.read(raw)
+        snap = self.observe()
         if self._seen:
             return self.succeed()
         now = snap.time
