@@ -131,6 +131,11 @@ class Motion(Sensing):
         self._last_drive = b""
         self._half_base = self.profile.wheel_base_mm / 2.0
         self._motion: _Motion = _motion_of(0.0, 0.0, STEP_SECONDS, self._half_base)
+        #: a free step's travel of the centre (mm, x and y), and the heading and motion it is
+        #: for (:meth:`_move`: driving straight, the same each step)
+        self._travel = (0.0, 0.0)
+        self._travel_heading = math.nan
+        self._travel_motion = self._motion
         self._encoder_bias = 0x8000 if self.profile.encoders_signed else 0
         dock = self.world.dock
         self._dock_target = dock.docked_pose if dock is not None else None
@@ -206,8 +211,14 @@ class Motion(Sensing):
         elif dist:
             x, y = self.x, self.y
             heading = self.theta + motion[5]
-            ux = dist * math.cos(heading)
-            uy = dist * math.sin(heading)
+            if heading != self._travel_heading or motion is not self._travel_motion or not heading:
+                # a new heading or speed: the centre's travel along it (a straight drive keeps
+                # both, and the same step's travel from one step to the next; a zero heading
+                # is worked out every time, its sign being the one thing equality misses)
+                self._travel = (dist * math.cos(heading), dist * math.sin(heading))
+                self._travel_heading = heading
+                self._travel_motion = motion
+            ux, uy = self._travel
             if abs(dist) >= self._clearance and self._blocked(x + ux, y + uy):
                 fraction = self._reach(x, y, ux, uy)
                 ux *= fraction

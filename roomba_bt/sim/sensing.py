@@ -74,6 +74,13 @@ _Line = tuple[float, float, float, float, float, float, float]
 _Wall = tuple[float, float, float, float, float, _Line, Segment]
 #: One ray of the light bumper (0-5) or the wall sensor (6): its index and direction
 _Ray = tuple[int, float, float]
+#: a ray that may meet a wall: n.d (> 0), its index, t.d (see :func:`_facing_walls`)
+_Facing = tuple[float, int, float]
+#: a close wall's line (:data:`_Line`), then the rays that may meet it from its normal's
+#: side and from the other side
+_FacingWall = tuple[
+    float, float, float, float, float, float, float, tuple[_Facing, ...], tuple[_Facing, ...]
+]
 _DARK = (0,) * 6  # the six light bumper signals with no wall in sight
 #: packet 7's bump bits of each side of the bumper (the timeline's ``bump`` events say sides)
 BUMP_SIDE_BITS = {"right": 1, "left": 2, "both": 3}
@@ -95,6 +102,14 @@ def _wall(seg: Segment) -> _Wall:
     return (ax, ay, ex, ey, ex * ex + ey * ey or 1.0, _line(seg), seg)
 
 
+#: each ray as a rotation of the heading (:meth:`Sensing._sense_rays` turning): its index,
+#: cos and sin. The wall sensor's, by -90 deg, gives (sin, -cos) of the heading as _rays
+#: does: the same numbers, x + 0.0 and x * -1.0 being exact (but for a heading of -0.0,
+#: whose sine -0.0 comes out +0.0: a zero either way, the rays meet the same walls at the
+#: same places)
+_RAY_TURNS = (*_LIGHT_BUMP_RAYS, (6, 0.0, -1.0))
+
+
 def _rays(theta: float) -> tuple[_Ray, ...]:
     """The rays' directions for a heading ``theta``: the light bumper's six, then the wall
     sensor's, which looks right of the heading (a ray through the centre, started on the
@@ -103,6 +118,33 @@ def _rays(theta: float) -> tuple[_Ray, ...]:
     rays = [(i, ct * ca - st * sa, st * ca + ct * sa) for i, ca, sa in _LIGHT_BUMP_RAYS]
     rays.append((6, st, -ct))
     return tuple(rays)
+
+
+def _facing_walls(
+    rays: tuple[_Ray, ...], close_lines: tuple[_Line, ...]
+) -> tuple[_FacingWall, ...]:
+    """The close walls as the ``rays`` (:func:`_rays`) see them: each wall's line, then
+    the rays that may meet it from either side of it, as (n.d, ray, t.d), sorted by n.d
+    from the largest down and only those with n.d > 0 (from the far side, n turned over:
+    -n.d, exactly the same number negated). The same for every step at one heading and the
+    same close walls: driving straight, n.d and t.d are not worked out again every step,
+    the rays pointing away from a wall are not looked at, and a wall no ray points at is
+    passed over with one comparison."""
+    facing: list[_FacingWall] = []
+    for line in close_lines:
+        nx, ny, _, tx, ty, _, _ = line
+        front: list[_Facing] = []
+        back: list[_Facing] = []
+        for i, c, s in rays:
+            dn = nx * c + ny * s
+            if dn > 0.0:
+                front.append((dn, i, tx * c + ty * s))
+            elif dn < 0.0:
+                back.append((-dn, i, tx * c + ty * s))
+        front.sort(reverse=True)
+        back.sort(reverse=True)
+        facing.append((*line, tuple(front), tuple(back)))
+    return tuple(facing)
 
 
 #: the walls kept near (a wall beyond the near radius less its margin is that far away at
@@ -181,9 +223,13 @@ class Sensing(RobotState):
         self._near: tuple[_Wall, ...] = ()
         self._near_at = (math.inf, math.inf)
         self._walls = tuple(_wall(seg) for seg in world.solid)
-        #: the rays' directions and the heading they are for (computed again when it changes)
-        self._rays: tuple[_Ray, ...] = _rays(math.nan)
+        #: the heading the rays were last measured at (the same again: driving straight)
         self._rays_theta = math.nan
+        #: the close walls as the rays see them at a heading (:func:`_facing_walls`), and the
+        #: heading and walls they are for (worked out again when either changes)
+        self._facing: tuple[_FacingWall, ...] = ()
+        self._facing_theta = math.nan
+        self._facing_lines: tuple[_Line, ...] = ()
         self._drops = world.drops
         self._dirt = world.dirt
         self._beams = _DockBeams(world.dock) if world.dock is not None else None
@@ -212,7 +258,7 @@ class Sensing(RobotState):
         self._owed_ir: tuple[float, float, float, int, bool] | None = None
         self._far_owed = False
         #: how far the robot can move before a wall could stop it (motion's fast path): exact
-        #: where the walls were measured, less the distance moved since elsewhere (a bound)
+        #: where the walls were measured, elsewhere a bound below it (``_walls_clear``)
         self._clearance = 0.0
         #: where walls were last measured, and the squared distance the robot may move from
         #: there before what they show could change (:meth:`_sense_walls`): no wall touches
@@ -220,7 +266,9 @@ class Sensing(RobotState):
         self._walls_at = (math.inf, math.inf)
         self._walls_same2 = 0.0
         self._walls_lines: tuple[_Line, ...] = ()
-        #: the clearance where the walls were measured
+        #: the clearance anywhere within that circle: where the walls were measured, less the
+        #: circle's radius (a bound set once per circle, instead of the distance moved, a
+        #: square root, taken off every step)
         self._walls_clear = 0.0
 
     # Few calls (the rays only near a wall): it runs on every step the robot moves, and a call
@@ -239,7 +287,7 @@ class Sensing(RobotState):
             # same ones are within the rays' reach, the dock's contacts are out of reach (the
             # walls are not looked at again, the contacts not tested).
             bumps = 0
-            self._clearance = self._walls_clear - math.sqrt(moved2)
+            self._clearance = self._walls_clear
             contacts = False
         else:
             bumps = self._sense_walls(x, y, theta)
@@ -332,36 +380,67 @@ class Sensing(RobotState):
         """The light bumper (packets 45-51) and the wall sensor (8, 27): rays from the
         bumper against the walls close enough to show; returns packet 45's bits."""
         v = self.values
-        if theta != self._rays_theta:  # driving straight: the same rays as the last step
-            self._rays = _rays(theta)
-            self._rays_theta = theta
-        # Each close wall as a line: unit normal n, unit tangent t, n.a, t.a, length. A ray
-        # from the centre c in direction d meets it at c + k d, k = (n.a - n.c) / (n.d);
-        # the ray starts on the bumper (k = R), the hit's place along the wall is t.(c+kd).
         hits = list(_RAY_RANGES)
         lit: list[int] = []  # the rays that hit a wall in range (a ray may come twice)
         radius = ROBOT_RADIUS_MM
-        rays = self._rays
-        for nx, ny, w, tx, ty, ta, length in close_lines:
-            p = w - (nx * x + ny * y)
-            q = tx * x + ty * y - ta
-            if p < 0.0:  # the normal turned towards the wall (negation is exact: same k)
-                nx, ny, p = -nx, -ny, -p
-            # A ray meets the wall within its range only if n.d > p / (R + range): the others
-            # are passed over at once (with a margin; the exact test below decides the rest).
-            least = p / _RAY_REACH
-            for i, c, s in rays:
-                dn = nx * c + ny * s
-                if dn <= least:
-                    continue  # pointing away from (or along) this wall, or out of range
-                k = p / dn
-                t = k - radius
-                if t < 0.0 or t >= hits[i]:
-                    continue
-                along = q + k * (tx * c + ty * s)
-                if 0.0 <= along <= length:
-                    hits[i] = t
-                    lit.append(i)
+        # A ray from the centre c in direction d meets a wall's line at c + k d,
+        # k = (n.a - n.c) / (n.d); the ray starts on the bumper (k = R), the hit's place along
+        # the wall is t.(c + kd). A ray meets the wall within its range only if
+        # n.d > p / (R + range): the others are passed over at once (with a margin; the
+        # exact test decides the rest).
+        if theta != self._rays_theta:
+            # Turning: each ray against each wall at this heading, once; the rays' directions
+            # as _rays gives them, worked out in the loop (no tuple of them made for one use).
+            self._rays_theta = theta
+            ct, st = math.cos(theta), math.sin(theta)
+            for nx, ny, w, tx, ty, ta, length in close_lines:
+                p = w - (nx * x + ny * y)
+                q = tx * x + ty * y - ta
+                if p < 0.0:  # the normal turned towards the wall (negation is exact: same k)
+                    nx, ny, p = -nx, -ny, -p
+                least = p / _RAY_REACH
+                for i, ca, sa in _RAY_TURNS:
+                    c = ct * ca - st * sa
+                    s = st * ca + ct * sa
+                    dn = nx * c + ny * s
+                    if dn <= least:
+                        continue  # pointing away from (or along) this wall, or out of range
+                    k = p / dn
+                    t = k - radius
+                    if t < 0.0 or t >= hits[i]:
+                        continue
+                    along = q + k * (tx * c + ty * s)
+                    if 0.0 <= along <= length:
+                        hits[i] = t
+                        lit.append(i)
+        else:
+            # The heading of the last step (driving straight, or standing): the rays that can
+            # meet each wall, worked out once for this heading and these walls.
+            facing = self._facing
+            if theta != self._facing_theta or close_lines is not self._facing_lines:
+                facing = self._facing = _facing_walls(_rays(theta), close_lines)
+                self._facing_theta = theta
+                self._facing_lines = close_lines
+            for nx, ny, w, tx, ty, ta, length, front, back in facing:
+                p = w - (nx * x + ny * y)
+                if p < 0.0:  # on the other side of the wall's line: the rays seen from there
+                    p = -p
+                    front = back
+                least = p / _RAY_REACH
+                if not front or front[0][0] <= least:
+                    continue  # no ray reaches this wall
+                q = tx * x + ty * y - ta
+                for dn, i, td in front:
+                    if dn <= least:
+                        break  # nor any after it: n.d only gets smaller
+                    k = p / dn
+                    t = k - radius
+                    if t < 0.0 or t >= hits[i]:
+                        continue
+                    along = q + k * td
+                    if 0.0 <= along <= length:
+                        hits[i] = t
+                        lit.append(i)
         # only the rays that hit have a signal (two or three of seven, usually)
         v[46:52] = _DARK
         v[27] = v[8] = 0
@@ -457,7 +536,7 @@ class Sensing(RobotState):
                 outside2 = d2
         nearest = math.sqrt(nearest2)
         # how far the robot can move before a wall could stop it (the _move fast path)
-        self._clearance = self._walls_clear = nearest - ROBOT_RADIUS_MM - 1.0
+        clearance = self._clearance = nearest - ROBOT_RADIUS_MM - 1.0
         self._walls_at = (x, y)
         self._walls_lines = tuple(close_lines)
         # A point's distance to a wall changes by at most the distance the point moves: no
@@ -474,7 +553,13 @@ class Sensing(RobotState):
             if contacts < same:
                 same = contacts
         same -= _SAME_MARGIN
-        self._walls_same2 = same * same if same > 0.0 else 0.0
+        if same > 0.0:
+            self._walls_same2 = same * same
+            # the clearance anywhere within the circle: 10.5 mm at least (see _QUIET_CONTACT),
+            # more than a step's travel, which is all the _move fast path asks of it
+            self._walls_clear = clearance - same
+        else:
+            self._walls_same2 = 0.0
         return bumps
 
     def _exact_clearance(self) -> float:

@@ -13,7 +13,7 @@ from roomba_bt.oi.bits import motor_bits
 from roomba_bt.oi.encode import Radius
 from roomba_bt.oi.odometry import MM_PER_COUNT, OLD_FIRMWARE_ANGLE_FACTOR, encoder_delta
 from roomba_bt.oi.profiles import CREATE2, ROOMBA500, ROOMBA600
-from roomba_bt.sim import drive_wheel_speeds
+from roomba_bt.sim import Pose, drive_wheel_speeds
 from roomba_bt.sim.motion import WHEEL_SPEED_STEP_MM_S
 
 from .helpers import make
@@ -192,3 +192,17 @@ def test_battery_drains_faster_while_moving() -> None:
     start = still.sim.world.battery * 2696
     assert start - moving.sim.battery_charge > start - still.sim.battery_charge > 0
     assert moving.query([25])[25] < still.query([25])[25]
+
+
+def test_a_new_speed_at_the_same_heading_moves_the_robot_at_that_speed() -> None:
+    # A straight drive's travel a step is kept while the heading and the speeds stay
+    # (motion.py, _move): a new speed at the same heading must move the robot at it.
+    host = make(BIG, start=Pose(0.0, 0.0, math.radians(30.0)), mode="full")
+    host.send(C.drive_direct(200, 200))
+    host.run(0.3)
+    x, y = host.sim.x, host.sim.y
+    host.send(C.drive_direct(400, 400))
+    host.run(0.3)
+    speed = math.hypot(host.sim.x - x, host.sim.y - y) / 0.3
+    assert speed == pytest.approx(round(400 / WHEEL_SPEED_STEP_MM_S) * WHEEL_SPEED_STEP_MM_S)
+    assert host.sim.theta == math.radians(30.0)

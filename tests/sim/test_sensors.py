@@ -263,3 +263,40 @@ def test_a_moving_robot_reports_what_a_robot_placed_at_its_pose_measures(
             assert [sim.values[p] for p in ir] == [fresh.values[p] for p in ir]
         assert sim.docked == fresh.docked
         assert sim._clearance <= fresh._clearance
+
+
+#: posts on both sides of a straight path: walls come within the rays' reach and leave it
+#: while the heading stays the same
+POSTS = """
+rooms: [[[0, 0], [6, 0], [6, 2], [0, 2]]]
+obstacles:
+  - {rect: [1.0, 0.05, 1.1, 0.25]}
+  - {rect: [1.6, 0.66, 1.75, 0.85]}
+  - {rect: [2.3, 0.1, 2.6, 0.24]}
+  - {polygon: [[3.1, 0.64], [3.4, 0.7], [3.2, 0.9]]}
+"""
+
+
+@pytest.mark.parametrize("wheels", [(300, 300), (500, 500), (-200, -200)])
+def test_driving_straight_past_walls_the_rays_see_what_a_robot_placed_there_sees(
+    wheels: tuple[int, int],
+) -> None:
+    # Driving straight, the rays' table of which may meet each close wall is kept from one
+    # step to the next (sensing.py, _facing_walls): it must be made again when other walls
+    # come within reach at the same heading, and give every step what a robot built at
+    # that pose measures from scratch.
+    start = pose(0.4, 0.45, 0) if wheels[0] > 0 else pose(3.9, 0.45, 0)
+    host = make(POSTS, start=start, mode="full")
+    sim = host.sim
+    host.send(C.drive_direct(*wheels))
+    near = (7, 8, 27, 45, 46, 47, 48, 49, 50, 51)
+    seen = set()
+    for _ in range(700):
+        sim.step()
+        sim._settle_far()
+        fresh = Simulator(sim.world, start=Pose(sim.x, sim.y, sim.theta))
+        measured = [sim.values[p] for p in near]
+        assert measured == [fresh.values[p] for p in near]
+        seen.add(tuple(measured))
+    assert sim.theta == 0.0  # straight all the way
+    assert len(seen) > 50  # the posts came into the rays' view and went
