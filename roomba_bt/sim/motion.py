@@ -39,6 +39,7 @@ _GUIDE_STEP = math.radians(1.0)
 _DRIVE = bytes((137,))
 _PI = math.pi
 _TWO_PI = 2.0 * math.pi
+_new_tuple = tuple.__new__
 
 #: What one step of steady wheel speeds does, computed once per (left, right, dt): a plain
 #: tuple (indexed on the step path, where a tuple subscript is the cheapest access)::
@@ -251,7 +252,9 @@ class Motion(Sensing):
         v[43] = (int(left_counts) + bias & 0xFFFF) - bias
         v[44] = (int(right_counts) + bias & 0xFFFF) - bias
         if not self.ticks & 3 and self.keeps_trace:
-            self.trace.append(TracePoint(self.time, self.x, self.y, self.theta, self.mode))
+            # built as the tuple it is: the NamedTuple's __new__ is a Python call
+            point = (self.time, self.x, self.y, self.theta, self.mode)
+            self.trace.append(_new_tuple(TracePoint, point))
 
     def _reach(self, x: float, y: float, ux: float, uy: float) -> float:
         """A wall is in the way of the move (ux, uy) from (x, y): how far along it the body
