@@ -110,20 +110,26 @@ def _child_against(work: str, mission: str, world: str, fields_json: str, steps:
             sim.step()
 
 
-def _count(*args: str, code: Path = ROOT) -> tuple[int, str]:
-    """Instructions of one child run under callgrind, and what it printed; ``roomba_bt``
-    from ``code`` (its working directory; ``bench`` from this tree)."""
+def callgrind(module: str, *args: str, code: Path = ROOT) -> tuple[int, str]:
+    """Instructions of one child run, ``python -m module --child *args`` under callgrind,
+    and what it printed; ``roomba_bt`` from ``code`` (its working directory; ``bench`` from
+    this tree). Every bench that counts instructions runs its children here."""
     done = subprocess.run(
         ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null",
-         sys.executable, "-m", "bench.icount", "--child", *args],
+         sys.executable, "-m", module, "--child", *args],
         cwd=code, capture_output=True, text=True, check=False,
         # string hashes vary the count otherwise
         env={**os.environ, "PYTHONHASHSEED": "0", "PYTHONPATH": str(ROOT)},
     )  # fmt: skip
     found = _COLLECTED.search(done.stderr)
     if done.returncode != 0 or found is None:
-        raise RuntimeError(f"callgrind run {args} failed:\n{done.stderr[-2000:]}")
+        raise RuntimeError(f"callgrind run {module} {args} failed:\n{done.stderr[-2000:]}")
     return int(found.group(1)), done.stdout
+
+
+def _count(*args: str, code: Path = ROOT) -> tuple[int, str]:
+    """:func:`callgrind` of this module's child."""
+    return callgrind("bench.icount", *args, code=code)
 
 
 def _sim_line(case: str) -> str:

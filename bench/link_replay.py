@@ -28,10 +28,7 @@ chunks, each in a fresh interpreter).
 from __future__ import annotations
 
 import hashlib
-import os
 import random
-import re
-import subprocess
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -39,7 +36,6 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 #: a stream frame every 15 ms
 SLOT = 0.015
-_COLLECTED = re.compile(r"Collected : (\d+)")
 
 
 def recorded(kind: str) -> tuple[str, tuple[int, ...], list[bytes]]:
@@ -48,7 +44,6 @@ def recorded(kind: str) -> tuple[str, tuple[int, ...], list[bytes]]:
     from bench import sim_replay
 
     recording = sim_replay.load(kind)
-    sim, inputs = sim_replay._build(recording)
     ids: tuple[int, ...] = ()
     streamed_from = 0
     for tick, what, arg in recording["inputs"]:
@@ -56,17 +51,7 @@ def recorded(kind: str) -> tuple[str, tuple[int, ...], list[bytes]]:
             ids = tuple(bytes.fromhex(arg)[2:])
             streamed_from = tick
             break
-    chunks: list[bytes] = []
-    at = 0
-    for tick in range(recording["steps"]):
-        while inputs[at][0] == tick:
-            _, give, arg = inputs[at]
-            give(arg)
-            at += 1
-        sim.step()
-        data = sim.read()
-        if tick >= streamed_from:
-            chunks.append(data)
+    chunks = list(sim_replay.sent(recording))[streamed_from:]
     return str(recording["profile"]), ids, chunks
 
 
@@ -174,16 +159,9 @@ def _child(kind: str, noisy: bool, reads: int) -> None:
 
 
 def _count(kind: str, noisy: bool, reads: int) -> int:
-    done = subprocess.run(
-        ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null", sys.executable,
-         "-m", "bench.link_replay", "--child", kind, "noisy" if noisy else "clean", str(reads)],
-        cwd=ROOT, capture_output=True, text=True, check=False,
-        env={**os.environ, "PYTHONHASHSEED": "0", "PYTHONPATH": str(ROOT)},
-    )  # fmt: skip
-    found = _COLLECTED.search(done.stderr)
-    if done.returncode != 0 or found is None:
-        raise RuntimeError(f"callgrind run failed:\n{done.stderr[-2000:]}")
-    return int(found.group(1))
+    from bench.icount import callgrind
+
+    return callgrind("bench.link_replay", kind, "noisy" if noisy else "clean", str(reads))[0]
 
 
 def main(argv: list[str]) -> int:

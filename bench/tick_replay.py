@@ -19,10 +19,8 @@ replaying none), so the recording, imports and start-up cancel out.
 from __future__ import annotations
 
 import hashlib
-import os
 import re
 import shutil
-import subprocess
 import sys
 import time
 from dataclasses import dataclass
@@ -41,7 +39,6 @@ CASES = (
     ("dock", "dock.yaml", "empty-room", 3, {"within_m": 1.5}),
     ("bump", "bump-and-turn.yaml", "corridor", 2, {"timeout_s": 90.0}),
 )
-_COLLECTED = re.compile(r"Collected : (\d+)")
 
 
 @dataclass
@@ -143,17 +140,13 @@ def _child(case: str, replaying: bool) -> None:
 
 
 def _count(case: str, replaying: bool) -> tuple[int, int]:
-    done = subprocess.run(
-        ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null",
-         sys.executable, "-m", "bench.tick_replay", "--child", case, str(int(replaying))],
-        cwd=ROOT, capture_output=True, text=True, check=False,
-        env={**os.environ, "PYTHONHASHSEED": "0"},  # string hashes vary the count otherwise
-    )  # fmt: skip
-    found = _COLLECTED.search(done.stderr)
-    ticks = re.search(r"TICKS (\d+)", done.stdout)
-    if done.returncode != 0 or found is None or ticks is None:
-        raise RuntimeError(f"callgrind run {case} failed:\n{done.stderr[-2000:]}{done.stdout}")
-    return int(found.group(1)), int(ticks.group(1))
+    from bench.icount import callgrind
+
+    count, printed = callgrind("bench.tick_replay", case, str(int(replaying)))
+    ticks = re.search(r"TICKS (\d+)", printed)
+    if ticks is None:
+        raise RuntimeError(f"callgrind run {case} printed no tick count:\n{printed}")
+    return count, int(ticks.group(1))
 
 
 def main(argv: list[str]) -> int:

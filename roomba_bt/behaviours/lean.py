@@ -357,7 +357,12 @@ class Selector(Stepped, _CompositeStop, py_trees.composites.Selector):
         (:meth:`Sequence.tick_direct`): ``tick_start`` stops the children before it (none
         is left to stop but on its first resumed tick) and names it; when it is still
         running, ``tick_next`` keeps it current (it was: nothing was interrupted) and sets
-        the selector's status to RUNNING."""
+        the selector's status to RUNNING.
+
+        Written out again, not shared with the sequence's: CPython specializes a code
+        object's attribute reads for the one class it sees, and one function ticking both
+        classes measured 2,900 more instructions a dock tick (``bench.tick_replay --icount``,
+        session 11); this is the hottest path of the tree."""
         child = self.current_child
         if (
             child is None

@@ -42,7 +42,6 @@ from roomba_bt.oi.frames import (
     IR_PACKETS,
     VIRTUAL_WALL_PACKETS,
 )
-from roomba_bt.oi.modes import DRIVING_MODES
 from roomba_bt.oi.profiles import OMNI_AHEAD_MM
 from roomba_bt.robot.interface import Snapshot
 
@@ -141,6 +140,7 @@ class DockApproach(DockingAction):
     """
 
     stage = "approach"
+    LATE = "not on the dock's axis after {:g} s"
     #: the receivers (the view), the home base, the hazards but the light bumper (near the
     #: dock its wall is always in sight of it: not a hazard here)
     WATCHED = (*IR_PACKETS, *CHARGING_SOURCES_PACKETS, *HAZARD_PACKETS, *VIRTUAL_WALL_PACKETS)
@@ -174,20 +174,13 @@ class DockApproach(DockingAction):
     def read(self, raw: tuple[int, ...]) -> None:
         omni, left, right, sources, bumps, cliff_l, cliff_fl, cliff_fr, cliff_r, virtual_wall = raw
         self._view = view_of((omni, left, right))
-        self._home = HOME_BASE[sources & 0xFF]  # frame.charging_sources.home_base
+        self._done = HOME_BASE[sources & 0xFF]  # frame.charging_sources.home_base
         self._hazard = hazard_of(
             bumps, cliff_l, cliff_fl, cliff_fr, cliff_r, virtual_wall, 0, obstacles=False
         )
 
-    def update(self) -> Status:
-        snap = self.observe()
-        if self._home:
-            return self.succeed()
+    def step(self, snap: Snapshot) -> Status:
         now = snap.time
-        if now - self._t0 >= self._time_limit:
-            return self.fail(f"not on the dock's axis after {self.number('timeout'):g} s")
-        if snap.mode not in DRIVING_MODES:
-            return self.fail(self.fallback_message())
         view = self._view
         if view.seen:
             self._last_seen = now
@@ -510,7 +503,6 @@ class DockApproach(DockingAction):
     _lost_after = 0.0
     # the readings (read)
     _view: DockView
-    _home = False
     _hazard: Hazard | None = None
 
 

@@ -247,6 +247,10 @@ class DockingAction(Action):
     stage = ""
     #: the packets :meth:`read` takes the values of, in its order (two at least)
     WATCHED: tuple[int, ...] = ()
+    #: what the stage did not do within its ``timeout`` (``{:g}``: the seconds)
+    LATE = "not done in {:g} s"
+    #: the stage's goal reached, as :meth:`read` last found it
+    _done = False
 
     def bind(self, frame: SensorFrame) -> None:
         """Find the slots of :attr:`WATCHED` in the frame's layout; a packet the frame lacks
@@ -271,6 +275,25 @@ class DockingAction(Action):
             self._raw = raw
             self.read(raw)
         return snap
+
+    def update(self) -> Status:
+        """A driving stage's tick, its checks in one order: the readings (:meth:`observe`);
+        the stage's goal reached (``_done``, set by :meth:`read`): SUCCESS; its ``timeout``
+        up: FAILURE saying what was not done (:attr:`LATE`); the robot out of Safe/Full:
+        FAILURE; else the stage's own :meth:`step`. (The search keeps its own: it marks a
+        hazard met on its map before the mode check.)"""
+        snap = self.observe()
+        if self._done:
+            return self.succeed()
+        if snap.time - self._t0 >= self._time_limit:
+            return self.fail(self.LATE.format(self.number("timeout")))
+        if snap.mode not in DRIVING_MODES:
+            return self.fail(self.fallback_message())
+        return self.step(snap)
+
+    def step(self, snap: Snapshot) -> Status:
+        """The stage's own tick, once the checks of :meth:`update` passed."""
+        raise NotImplementedError
 
     def read(self, raw: tuple[int, ...]) -> None:
         """Work the readings out from the values of :attr:`WATCHED` (``raw``): they stand

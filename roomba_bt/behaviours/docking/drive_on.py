@@ -25,7 +25,6 @@ from roomba_bt.behaviours.docking.common import (
 from roomba_bt.behaviours.units import ANGLE
 from roomba_bt.oi.bits import BUMP_BITS
 from roomba_bt.oi.frames import BUMPS_PACKETS, CHARGING_SOURCES_PACKETS, IR_PACKETS
-from roomba_bt.oi.modes import DRIVING_MODES
 from roomba_bt.robot.interface import Snapshot
 
 #: FAILURE once no receiver has seen the dock for this long (s).
@@ -74,6 +73,7 @@ class DockDriveOn(DockingAction):
     """
 
     stage = "final alignment"
+    LATE = "did not reach the contacts in {:g} s"
     #: the receivers (the view), the home base, the bumper
     WATCHED = (*IR_PACKETS, *CHARGING_SOURCES_PACKETS, *BUMPS_PACKETS)
 
@@ -90,18 +90,11 @@ class DockDriveOn(DockingAction):
     def read(self, raw: tuple[int, ...]) -> None:
         omni, left, right, sources, bumps = raw
         self._view = view_of((omni, left, right))
-        self._home = HOME_BASE[sources & 0xFF]  # frame.charging_sources.home_base
+        self._done = HOME_BASE[sources & 0xFF]  # frame.charging_sources.home_base
         self._bumped = bumps & BUMP_BITS != 0  # frame.any_bump
 
-    def update(self) -> Status:
-        snap = self.observe()
-        if self._home:
-            return self.succeed()
+    def step(self, snap: Snapshot) -> Status:
         now = snap.time
-        if now - self._t0 >= self._time_limit:
-            return self.fail(f"did not reach the contacts in {self.number('timeout'):g} s")
-        if snap.mode not in DRIVING_MODES:
-            return self.fail(self.fallback_message())
         view = self._view
         if view.seen:
             self._last_seen = now
@@ -165,7 +158,6 @@ class DockDriveOn(DockingAction):
     _wiggle_rad = 0.0
     # the readings (read)
     _view: DockView
-    _home = False
     _bumped = False
 
 

@@ -220,6 +220,7 @@ class DockSearch(DockingAction):
     """
 
     stage = "search"
+    LATE = "no dock beam seen in {:g} s"
     #: the receivers (is a dock seen), then the hazards (:func:`hazard_of`'s order)
     WATCHED = (*IR_PACKETS, *HAZARD_IN_PACKETS)
 
@@ -258,19 +259,22 @@ class DockSearch(DockingAction):
 
     def read(self, raw: tuple[int, ...]) -> None:
         omni, left, right, bumps, cliff_l, cliff_fl, cliff_fr, cliff_r, virtual_wall, light = raw
-        self._seen = FROM_DOCK[omni & 0xFF] or FROM_DOCK[left & 0xFF] or FROM_DOCK[right & 0xFF]
+        self._done = FROM_DOCK[omni & 0xFF] or FROM_DOCK[left & 0xFF] or FROM_DOCK[right & 0xFF]
         self._hazard = hazard_of(bumps, cliff_l, cliff_fl, cliff_fr, cliff_r, virtual_wall, light)
         self._bumped = bumps & BUMP_BITS != 0  # frame.any_bump
         self._lit = light & LIGHT_BUMPER_BITS != 0  # frame.light_bumper.any
         self._lit_ahead = light & LIGHT_BUMPER_AHEAD_BITS != 0  # frame.light_bumper_ahead
 
     def update(self) -> Status:
+        """:meth:`DockingAction.update`'s checks, with the robot's cell visited and a hazard
+        met marked ahead of it before the mode check: a cliff or wheel drop that dropped the
+        robot to Passive is remembered, so the retry avoids it."""
         snap = self.observe()
-        if self._seen:
+        if self._done:
             return self.succeed()
         now = snap.time
         if now - self._t0 >= self._time_limit:
-            return self.fail(f"no dock beam seen in {self.number('timeout'):g} s")
+            return self.fail(self.LATE.format(self.number("timeout")))
         odo = snap.odometry
         # the robot's cell (VisitGrid.cell), found once a tick: visited here, and read by a
         # wall follow
@@ -281,7 +285,6 @@ class DockSearch(DockingAction):
         if hazard is not None and hazard in STOPS_FOR.get(self.state, ()):
             self._meet(hazard, odo, now)
         if snap.mode not in DRIVING_MODES:
-            # a cliff or wheel drop in Safe mode: remembered above, so the retry avoids it
             return self.fail(self.fallback_message())
         act = _ACTS
         while True:
@@ -491,7 +494,6 @@ class DockSearch(DockingAction):
     _follow_steer = 0.0
     _follow_hand = 1
     # the readings (read)
-    _seen = False
     _hazard: Hazard | None = None
     _bumped = False
     _lit = False
