@@ -550,7 +550,8 @@ class FrameInputs:
         would still be the pure one (:meth:`usable`)."""
         frame = self._robot.snapshot.frame
         read = self._read
-        if frame.layout is not self._layout or read is None or read(frame.values) != values:
+        # the frame's fields, not its properties (two Python calls a guard a tick)
+        if frame._layout is not self._layout or read is None or read(frame._values) != values:
             return False
         return self.usable()
 
