@@ -56,8 +56,9 @@ from roomba_bt.monitor import server as server_module
 from roomba_bt.monitor.feed import RunFeed
 from roomba_bt.monitor.server import MonitorServer
 from roomba_bt.monitor.session import MonitorSession
+from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.profiles import CREATE2
-from roomba_bt.robot.connection import Connection, TimedFrame
+from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.interface import Snapshot
 from roomba_bt.runtime.loop import MissionRunner, stream_request
 from roomba_bt.sim import RealtimeSimLink, SimLink, Simulator, load_world
@@ -86,7 +87,7 @@ class TimedRunner(MissionRunner):
         self.rival_clock = time.CLOCK_THREAD_CPUTIME_ID
         self._started = self._cpu = self._rival = 0.0
 
-    def _advance(self, batch: Sequence[TimedFrame]) -> Snapshot:
+    def _advance(self, batch: Sequence[SensorFrame]) -> Snapshot:
         self._rival = time.clock_gettime(self.rival_clock)
         self._cpu = time.thread_time()
         self._started = time.perf_counter()

@@ -2,12 +2,12 @@
 :class:`~roomba_bt.robot.connection.Connection`, with no simulator, tree or runtime loop.
 
 What the runtime does with one stream frame before its tick starts is
-``Connection.poll`` (keep-awake, the read, the stream parser, the mode model, the watchdog)
-and ``HazardConfirmation.frame``. :func:`prepare` replays the simulator's recording of an
+``Connection.poll_frames`` (keep-awake, the read, the stream parser, the mode model, the
+watchdog) and ``HazardConfirmation.frame``. :func:`prepare` replays the simulator's recording of an
 episode (``bench/data/sim_replay.json``, :mod:`bench.sim_replay`) once to collect the chunks
 the robot sent, one per 15 ms step, and returns a function that reads them back through a
 started connection: the host's start-up commands (Start, Safe, the stream the episode asked
-for) written first, then ``poll`` until every chunk is read, each frame handed to the hazard
+for) written first, then ``poll_frames`` until every chunk is read, each frame handed to the hazard
 confirmation as the runtime does. The chunks' transport keeps its own clock (15 ms a read)
 and drives a BRC line, so keep-awake runs as it does on the simulator.
 
@@ -136,15 +136,17 @@ def prepare(kind: str, noisy: bool = False) -> tuple[int, Callable[[int, bool], 
 
     def run(reads: int, frames_digested: bool = True) -> str:
         digest = hashlib.sha256()
-        poll, confirm = connection.poll, hazards.frame
+        poll, confirm, link = connection.poll_frames, hazards.frame, connection.link
         if not frames_digested:  # what is counted: no digest of each frame
             while transport.at < reads:
-                for timed in poll(0.05):
-                    confirm(timed.frame)
+                for got in poll(0.05):
+                    confirm(got)
         while transport.at < reads:
-            for timed in poll(0.05):
-                frame = confirm(timed.frame)
-                digest.update(repr((timed.index, timed.time, frame.values)).encode())
+            batch = poll(0.05)
+            first = link.index - len(batch) + 1  # the frames' numbers, and when they came
+            for index, got in enumerate(batch, first):
+                frame = confirm(got)
+                digest.update(repr((index, link.arrival, frame.values)).encode())
         counters = connection.counters
         digest.update(repr((counters, hazards.held, hazards.unconfirmed)).encode())
         digest.update(repr((connection.mode, connection.link.status)).encode())
@@ -174,7 +176,7 @@ def main(argv: list[str]) -> int:
     print(f"{kind}{' (noisy)' if noisy else ''}: {chunks} chunks, digest {run(chunks, True)}")
     if "--icount" in argv:
         full, none = _count(kind, noisy, chunks), _count(kind, noisy, 0)
-        print(f"Connection.poll + HazardConfirmation.frame: {(full - none) / chunks:,.0f} "
+        print(f"Connection.poll_frames + HazardConfirmation.frame: {(full - none) / chunks:,.0f} "
               "instructions a chunk (callgrind)")  # fmt: skip
     return 0
 

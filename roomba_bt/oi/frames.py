@@ -18,7 +18,7 @@ from __future__ import annotations
 import struct
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from functools import lru_cache
-from typing import Protocol, TypeVar, cast
+from typing import TYPE_CHECKING, Protocol, TypeVar, cast
 
 from roomba_bt.oi.bits import (
     BUMP_BITS,
@@ -291,7 +291,7 @@ def _raw(packet_id: int) -> _Accessor[int]:
 
     def read(frame: SensorFrame, packet_id: int = packet_id) -> int:
         try:
-            return frame._values[frame._layout.index[packet_id]]
+            return frame.values[frame.layout.index[packet_id]]
         except KeyError:
             raise frame._missing(packet_id) from None
 
@@ -305,7 +305,7 @@ def _bits_set(packet_id: int, mask: int = 0xFF) -> _Accessor[bool]:
 
     def read(frame: SensorFrame, packet_id: int = packet_id, mask: int = mask) -> bool:
         try:
-            return frame._values[frame._layout.index[packet_id]] & mask != 0
+            return frame.values[frame.layout.index[packet_id]] & mask != 0
         except KeyError:
             raise frame._missing(packet_id) from None
 
@@ -321,7 +321,7 @@ def _decoded(packet_id: int, by_byte: tuple[_T, ...]) -> _Accessor[_T]:
         frame: SensorFrame, packet_id: int = packet_id, by_byte: tuple[_T, ...] = by_byte
     ) -> _T:
         try:
-            return by_byte[frame._values[frame._layout.index[packet_id]] & 0xFF]
+            return by_byte[frame.values[frame.layout.index[packet_id]] & 0xFF]
         except KeyError:
             raise frame._missing(packet_id) from None
 
@@ -342,44 +342,45 @@ _STASIS_BY_BYTE = _by_byte(lambda v: Stasis(v & 3))
 
 
 class SensorFrame:
-    """One decoded, immutable set of sensor values (a stream frame or a reply).
+    """One decoded set of sensor values (a stream frame or a reply), read-only.
 
     ``frame[packet_id]`` is the raw integer the robot sent (signed where the packet is signed);
     the properties give typed views. Asking for a packet the frame does not carry raises
     ``KeyError`` naming it.
+
+    Read-only by contract: :attr:`layout` and :attr:`values` are set once, when the frame is
+    made, and nothing assigns them after (a frame is shared: the tick's snapshot, the mode
+    model's frame before, a recording). Nothing else can be set (no instance dict:
+    ``AttributeError``). The two are plain slots, not properties guarded by a
+    ``__setattr__`` that refuses: a frame is made for every 15 ms of the stream, and read
+    many times a tick (a slot's read is no call); with that guard, making one cost twice as
+    many instructions.
     """
 
-    __slots__ = ("_layout", "_values")
+    __slots__ = ("layout", "values")
 
-    _layout: FrameLayout
-    _values: tuple[int, ...]
+    #: where each packet sits in :attr:`values`
+    layout: FrameLayout
+    #: the raw values in the layout's order: ``SensorFrame(f.layout, f.values) == f``
+    values: tuple[int, ...]
+    if TYPE_CHECKING:  # the same two slots under their older private names (below)
+        _layout: FrameLayout
+        _values: tuple[int, ...]
 
     def __init__(self, layout: FrameLayout, values: tuple[int, ...]) -> None:
-        _set_layout(self, layout)
-        _set_values(self, values)
-
-    def __setattr__(self, name: str, value: object) -> None:
-        raise AttributeError("SensorFrame is immutable")
-
-    @property
-    def layout(self) -> FrameLayout:
-        return self._layout
+        self.layout = layout
+        self.values = values
 
     @property
     def packet_ids(self) -> tuple[int, ...]:
-        return self._layout.members
-
-    @property
-    def values(self) -> tuple[int, ...]:
-        """The raw values in the layout's order: ``SensorFrame(f.layout, f.values) == f``."""
-        return self._values
+        return self.layout.members
 
     def __contains__(self, packet_id: object) -> bool:
-        return packet_id in self._layout.index
+        return packet_id in self.layout.index
 
     def __getitem__(self, packet_id: int) -> int:
         try:
-            return self._values[self._layout.index[packet_id]]
+            return self.values[self.layout.index[packet_id]]
         except (KeyError, TypeError):
             raise self._missing(packet_id) from None
 
@@ -387,21 +388,21 @@ class SensorFrame:
         name = PACKETS[packet_id].name if packet_id in PACKETS else "unknown"  # type: ignore[index]
         return KeyError(
             f"packet {packet_id} ({name}) is not in this frame; it carries "
-            f"{list(self._layout.members)}"
+            f"{list(self.layout.members)}"
         )
 
     def carries(self, packet_ids: Iterable[int]) -> bool:
         """Whether the frame holds every one of ``packet_ids`` (one of the groups above, so
         that a reader of a stream that may lack them need not name packets by number)."""
-        index = self._layout.index
+        index = self.layout.index
         return all(packet_id in index for packet_id in packet_ids)
 
     def get(self, packet_id: int, default: int | None = None) -> int | None:
-        i = self._layout.index.get(packet_id)
-        return default if i is None else self._values[i]
+        i = self.layout.index.get(packet_id)
+        return default if i is None else self.values[i]
 
     def __iter__(self) -> Iterator[tuple[int, int]]:
-        return zip(self._layout.members, self._values, strict=True)
+        return zip(self.layout.members, self.values, strict=True)
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, SensorFrame):
@@ -490,7 +491,7 @@ class SensorFrame:
     @property
     def any_cliff(self) -> bool:
         """One of the four cliff sensors (packets 9-12) sees a drop."""
-        values, index = self._values, self._layout.index
+        values, index = self.values, self.layout.index
         try:
             return bool(values[index[9]] or values[index[10]] or values[index[11]]
                         or values[index[12]])  # fmt: skip
@@ -500,7 +501,7 @@ class SensorFrame:
     @property
     def any_hazard(self) -> bool:
         """A bump, a wheel drop or a cliff (packets 7, 9-12): the union of the three."""
-        values, index = self._values, self._layout.index
+        values, index = self.values, self.layout.index
         try:
             return bool(values[index[7]] & (BUMP_BITS | WHEEL_DROP_BITS) or values[index[9]]
                         or values[index[10]] or values[index[11]] or values[index[12]])  # fmt: skip
@@ -520,7 +521,7 @@ class SensorFrame:
     def light_bump_signals(self) -> tuple[int, int, int, int, int, int]:
         """Left, front left, centre left, centre right, front right, right (packets 46-51),
         read from the slots in one accessor (the wall followers read all six every tick)."""
-        values, index = self._values, self._layout.index
+        values, index = self.values, self.layout.index
         try:
             return (values[index[46]], values[index[47]], values[index[48]],
                     values[index[49]], values[index[50]], values[index[51]])  # fmt: skip
@@ -533,13 +534,10 @@ class SensorFrame:
         return (self[54], self[55], self[56], self[57])
 
 
-# Slot setters: a frame is immutable (``__setattr__`` refuses), so its constructor sets its two
-# slots through their descriptors; faster than ``object.__setattr__`` on the decode hot path.
-_set_layout: Callable[[SensorFrame, FrameLayout], None] = SensorFrame.__dict__["_layout"].__set__
-_set_values: Callable[[SensorFrame, tuple[int, ...]], None] = SensorFrame.__dict__[
-    "_values"
-].__set__
-
+# The two slots under the names the robot layer and the docking stages read them by (the same
+# member descriptors: as fast as the public names, with no property call).
+SensorFrame._layout = SensorFrame.__dict__["layout"]
+SensorFrame._values = SensorFrame.__dict__["values"]
 
 #: The OI mode in :meth:`SensorFrame.as_dict` is the value as sent past Full (the "mode + 1"
 #: reading 4 stays 4), where :attr:`SensorFrame.oi_mode` reads it as Full.

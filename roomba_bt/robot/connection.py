@@ -295,14 +295,20 @@ class Connection:
         garbage, and frames at another rate) or
         :class:`StreamStalled` (see :meth:`check_stall` for riding it through).
         """
+        frames = self.poll_frames(timeout)
+        return self.link.read_timed(frames) if frames else []
+
+    def poll_frames(self, timeout: float = 0.0) -> Sequence[SensorFrame]:
+        """:meth:`poll`'s frames alone, the newest last: the runtime's read, once a tick.
+        They came in one read, at ``link.arrival``; the newest is number ``link.index``."""
         link = self.link
-        now = link.transport.now()  # the read's start too: read_frames need not ask again
+        now = link.transport.now()  # the read's start too: read_checked need not ask again
         wake = self.wake
         if wake is not None and now >= wake.due:  # most polls: no pulse to start or end
             wake.tick(now)
             now = link.transport.now()  # driving the line may take time on a real port
         try:
-            return link.read_frames(timeout, now)
+            return link.read_checked(timeout, now)
         except StreamStalled as exc:
             if self.link.banner_seen():
                 raise RobotReset(self.name, exc.halted) from exc

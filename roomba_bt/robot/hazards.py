@@ -130,7 +130,7 @@ class HazardConfirmation:
         """The frame's hazard bits folded into one integer (0: no hazard)."""
         if frame.layout is not self._layout:
             self._bind(frame.layout)
-        values = frame._values
+        values = frame.values
         bump_slot, cliffs = self._slots
         word = values[bump_slot] & _PACKET_7_HAZARDS if bump_slot is not None else 0
         for slot, bit in cliffs:
@@ -145,9 +145,9 @@ class HazardConfirmation:
         Most frames carry the same hazard packets as the frame before (none, or the same
         bumper held): then nothing is new, an onset held back from the frame before is
         confirmed, and the word is not folded again."""
-        if frame._layout is not self._layout:  # the field, not the property: every frame
-            self._bind(frame._layout)
-        raw = self._raw(frame._values)
+        if frame.layout is not self._layout:
+            self._bind(frame.layout)
+        raw = self._raw(frame.values)
         if raw == self._previous_raw:
             self.pending = 0
             return frame
@@ -165,7 +165,7 @@ class HazardConfirmation:
         return self._without(frame, new)
 
     def _without(self, frame: SensorFrame, bits: int) -> SensorFrame:
-        values = list(frame._values)
+        values = list(frame.values)
         bump_slot, cliffs = self._slots
         if bump_slot is not None and bits & _PACKET_7_HAZARDS:
             values[bump_slot] &= ~(bits & _PACKET_7_HAZARDS)

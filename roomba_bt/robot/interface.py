@@ -109,7 +109,7 @@ class Odometer:
 
     def frame(self, frame: SensorFrame) -> Odometry:
         """The odometry after ``frame`` (:meth:`Odometry.advance` on its encoder counts)."""
-        layout = frame._layout  # the frame's own slots: a property would be a call a tick
+        layout = frame.layout
         if layout is not self._layout:
             self._layout = layout
             slots = layout.encoder_slots
@@ -118,7 +118,7 @@ class Odometer:
         odometry = self.odometry
         if counts is None:
             return odometry
-        left, right = counts(frame._values)
+        left, right = counts(frame.values)
         if left == odometry[5] and right == odometry[6]:  # left_counts, right_counts
             return odometry
         odometry = self.odometry = odometry.advance(left, right, self._wheel_base_mm)

@@ -6,8 +6,8 @@ mode model). Reading happens in the caller's thread, which is what the runtime w
 thread hop between a frame's arrival and the tick that reads it, and on the simulator's
 virtual clock the caller's reads are what move time::
 
-    transport.read ──► StreamParser.feed ──► reconcile(frame, index, arrival) ──► TimedFrame
-     (OSError: PortLost)  (checksum, resync)    (the session's mode model)
+    transport.read ──► StreamParser.feed ──► reconcile(frame, index, arrival) ──► SensorFrame
+     (OSError: PortLost)  (checksum, resync)    (the session's mode model)       (TimedFrame)
 
     no valid frame for ``watchdog`` s while a stream runs ──► halt() ──► StreamStalled
                                                       (once; frames coming back clear it)
@@ -18,7 +18,7 @@ from __future__ import annotations
 import enum
 import logging
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import NamedTuple
 
 import serial
@@ -65,10 +65,12 @@ _STREAMING, _STALLED = LinkStatus.STREAMING, LinkStatus.STALLED
 class TimedFrame(NamedTuple):
     """A checked stream frame, when it arrived (link clock) and its number in the stream.
 
-    A named tuple (immutable, built once per frame on the tick path, several times faster
-    than a frozen dataclass; :meth:`StreamLink.ingest` builds it by ``tuple.__new__``, as
-    the named tuple's own ``__new__`` is a Python call binding each field). ``index`` is the
-    frame's number, not ``tuple.index``: the field's name predates the tuple and is kept."""
+    A named tuple (immutable, several times faster to make than a frozen dataclass;
+    :meth:`StreamLink.read_timed` makes it by ``tuple.__new__``, as the named tuple's own
+    ``__new__`` is a Python call binding each field). What ``Connection.poll`` gives; the
+    runtime reads the frames alone (``Connection.poll_frames``), with no TimedFrame made a
+    tick. ``index`` is the frame's number, not ``tuple.index``: the field's name predates
+    the tuple and is kept."""
 
     frame: SensorFrame
     time: float
@@ -107,8 +109,11 @@ class StreamLink:
         self.status = LinkStatus.OPEN if transport.is_open else LinkStatus.CLOSED
         self.stream_ids: tuple[int, ...] = ()
         self.streaming = False
-        self.latest: TimedFrame | None = None
-        self.index = 0  # the number of the last checked frame
+        #: the newest checked frame (None before the first), when it arrived (link clock)
+        #: and its number in the stream: :attr:`latest` in one
+        self.frame: SensorFrame | None = None
+        self.arrival = 0.0
+        self.index = 0
         self.bytes_read = 0
         self.bytes_written = 0
         self.watchdog_trips = 0
@@ -240,9 +245,23 @@ class StreamLink:
             implausible += c.implausible
         return frames, checksums, skipped, implausible
 
+    @property
+    def latest(self) -> TimedFrame | None:
+        """The newest checked frame, when it arrived and its number (None before the first)."""
+        frame = self.frame
+        return None if frame is None else TimedFrame(frame, self.arrival, self.index)
+
     def read_frames(self, timeout: float, now: float | None = None) -> list[TimedFrame]:
+        """:meth:`read_checked`'s frames, each with its arrival and its number."""
+        frames = self.read_checked(timeout, now)
+        return self.read_timed(frames) if frames else []
+
+    def read_checked(self, timeout: float, now: float | None = None) -> Sequence[SensorFrame]:
         """What is there now, or wait up to ``timeout`` s for at least one frame; then the
-        watchdog. ``now``: the link clock's time if the caller has just read it.
+        watchdog. ``now``: the link clock's time if the caller has just read it. The frames
+        alone: they all came in one read, at :attr:`arrival`, and the newest is number
+        :attr:`index` (the runtime reads them so, once a tick, with no :class:`TimedFrame`
+        made for each: a named tuple's making is about a tenth of the link's cost a frame).
 
         The wait never outlasts the watchdog's own deadline: a read blocked for the caller's
         whole ``timeout`` (the runtime polls with 50 ms) would check the watchdog up to that
@@ -253,7 +272,7 @@ class StreamLink:
 
         Once a frame on the tick path, so the common case, a read that brings exactly one
         whole frame, is written out here: :meth:`read`, the parser's
-        :meth:`~roomba_bt.oi.stream.StreamParser.take` and :meth:`_timed` for that one
+        :meth:`~roomba_bt.oi.stream.StreamParser.take` and :meth:`_checked` for that one
         frame, with no call of this class's own (each was about a tenth of the link's cost
         a frame).
         """
@@ -281,24 +300,24 @@ class StreamLink:
                 parser = self._parser
                 if parser is not None:
                     frame = parser.take(data, now)
-                    if frame is not None:  # one whole frame: _timed's work, for it alone
+                    if frame is not None:  # one whole frame: _checked's work, for it alone
                         index = self.index = self.index + 1
                         change = self._reconcile(frame, index, now)
                         if change is not None:
                             self._report(change)
-                        self.latest = timed = _new_tuple(TimedFrame, (frame, now, index))
-                        self._silent_since = now
+                        self.frame = frame
+                        self.arrival = self._silent_since = now
                         self._bytes_at_frame = self.bytes_read
                         if self.status is _STALLED:
                             self.status = _STREAMING
-                        return [timed]
+                        return (frame,)  # a tuple: one allocation, a list's is two
                     frames = parser.search(data, now)
                     if frames:  # a frame that came now leaves nothing silent for the watchdog
-                        return self._timed(frames, now)
+                        return self._checked(frames, now)
             if now >= deadline:  # no read past the deadline (a virtual clock's read of
                 break  # 0 s still steps once)
         self._check_watchdog(now)
-        return []
+        return ()
 
     def ingest(self, data: bytes, arrival: float) -> list[TimedFrame]:
         """Feed ``data`` that arrived at ``arrival`` to the parser; the frames it completed."""
@@ -306,12 +325,11 @@ class StreamLink:
         if parser is None:
             return []
         frames = parser.feed(data, arrival)
-        return self._timed(frames, arrival) if frames else []
+        return self.read_timed(self._checked(frames, arrival)) if frames else []
 
-    def _timed(self, frames: list[SensorFrame], arrival: float) -> list[TimedFrame]:
-        """``frames``, just checked (at least one), each told to the mode model, numbered
-        and timed."""
-        out: list[TimedFrame] = []
+    def _checked(self, frames: list[SensorFrame], arrival: float) -> list[SensorFrame]:
+        """``frames``, just checked (at least one), each told to the mode model and
+        numbered; the newest is :attr:`frame`."""
         reconcile = self._reconcile
         index = self.index
         for frame in frames:
@@ -319,14 +337,23 @@ class StreamLink:
             change = reconcile(frame, index, arrival)
             if change is not None:
                 self._report(change)
-            out.append(_new_tuple(TimedFrame, (frame, arrival, index)))
         self.index = index
-        self.latest = out[-1]
-        self._silent_since = arrival
+        self.frame = frames[-1]
+        self.arrival = self._silent_since = arrival
         self._bytes_at_frame = self.bytes_read
         if self.status is _STALLED:
             self.status = _STREAMING
-        return out
+        return frames
+
+    def read_timed(self, frames: Sequence[SensorFrame]) -> list[TimedFrame]:
+        """The frames the last read checked (:meth:`read_checked`), each with its arrival and
+        its number."""
+        arrival = self.arrival
+        first = self.index - len(frames) + 1
+        return [
+            _new_tuple(TimedFrame, (frame, arrival, index))
+            for index, frame in enumerate(frames, first)
+        ]
 
     def _check_watchdog(self, now: float) -> None:
         if not self.streaming or self.watchdog <= 0 or self.status is not _STREAMING:

@@ -208,8 +208,11 @@ class ModeModel:
         self.profile = profile
         self.settle = settle
         self._wall_clock = wall_clock
-        self.machine, self._model = build_machine(profile, initial)
-        self._mode = initial
+        self.machine, self.model = build_machine(profile, initial)
+        #: the mode the robot is in, as the model has it: read-only outside the model (its
+        #: commands and packet 35 set it); an attribute, not a property, as the runtime
+        #: reads it once a tick
+        self.mode = initial
         self.since: float = 0.0
         self.since_wall: float = wall_clock()
         self.cause: str | None = None  # set while the current mode is a fall-back's
@@ -224,8 +227,8 @@ class ModeModel:
         self._previous_frame: SensorFrame | None = None
         #: the layout of the frames reconciled last and packet 35's slot in it (None: not
         #: carried), found once per layout instead of by a lookup every frame
-        self._mode_layout: FrameLayout | None = None
-        self._mode_slot: int | None = None
+        self.mode_layout: FrameLayout | None = None
+        self.mode_slot: int | None = None
         #: the packet 35 reading that changes nothing (:meth:`_track`)
         self._steady: int | None = None
         self._allowed = self._allowed_table()
@@ -237,16 +240,12 @@ class ModeModel:
         pending (the model's mode + the offset), or None when no reading can say that. What
         :meth:`reconcile` compares each frame with, in one test instead of three."""
         offset = self.detector.offset
-        self._steady = None if self._pending is not None or offset is None else self._mode + offset
-
-    @property
-    def mode(self) -> OIMode:
-        return self._mode
+        self._steady = None if self._pending is not None or offset is None else self.mode + offset
 
     @property
     def state(self) -> str:
         """The machine's state name (``"Passive"``...)."""
-        return self._model.state
+        return self.model.state
 
     @property
     def plus_one(self) -> bool | None:
@@ -268,7 +267,7 @@ class ModeModel:
 
     def allows(self, command: Command | CommandSpec, mode: OIMode | None = None) -> bool:
         spec = command.spec if isinstance(command, Command) else command
-        return spec.opcode in self._allowed[self._mode if mode is None else mode]
+        return spec.opcode in self._allowed[self.mode if mode is None else mode]
 
     # ------------------------------------------------------------------ guard
     def check(self, command: Command | CommandSpec) -> None:
@@ -278,7 +277,7 @@ class ModeModel:
         not have, :class:`~roomba_bt.robot.errors.ModeError` for one the mode refuses.
         """
         spec = command.spec if isinstance(command, Command) else command
-        if spec.opcode in self._allowed[self._mode]:
+        if spec.opcode in self._allowed[self.mode]:
             return
         self.profile.check_supported(spec)
         raise self.refusal(spec)
@@ -286,11 +285,11 @@ class ModeModel:
     def refusal(self, spec: CommandSpec) -> ModeError:
         needs = frozenset(m for m in OIMode if spec.opcode in self._allowed[m])
         hint = ""
-        if self._mode is OIMode.OFF:
+        if self.mode is OIMode.OFF:
             hint = "send start first"
         elif self.cause is None and needs <= DRIVING_MODES:
             hint = "send safe or full first"
-        return ModeError(spec.name, needs, self._mode, self.since_wall, self.cause, hint)
+        return ModeError(spec.name, needs, self.mode, self.since_wall, self.cause, hint)
 
     # ------------------------------------------------------------------ commands
     def calibrate(self, raw: int, time: float) -> bool:
@@ -299,7 +298,7 @@ class ModeModel:
         Passive reading (nothing changes)."""
         if not self.detector.calibrate(raw):
             return False
-        if self._mode is not OIMode.PASSIVE:
+        if self.mode is not OIMode.PASSIVE:
             self.force(OIMode.PASSIVE, time)
         self._pending = None
         self._track()
@@ -307,14 +306,14 @@ class ModeModel:
 
     def snapshot(self) -> tuple[Any, ...]:
         """What :meth:`restore` puts back: the model before commands that were not written."""
-        return (self._mode, self._model.state, self.since, self.since_wall, self.cause,
+        return (self.mode, self.model.state, self.since, self.since_wall, self.cause,
                 self._pending)  # fmt: skip
 
     def restore(self, saved: tuple[Any, ...]) -> None:
         """Undo :meth:`apply` for commands that never reached the wire (the write failed)."""
         mode, state, self.since, self.since_wall, self.cause, self._pending = saved
-        self.machine.set_state(state, model=self._model)
-        self._mode = mode
+        self.machine.set_state(state, model=self.model)
+        self.mode = mode
         self._track()
 
     def apply(self, command: Command | CommandSpec, time: float) -> None:
@@ -322,17 +321,17 @@ class ModeModel:
         spec = command.spec if isinstance(command, Command) else command
         if spec.leads_to is None:
             return
-        previous = self._mode
+        previous = self.mode
         self._fire(spec.name, spec.leads_to, time, cause=None)
         self._pending = (previous, spec.leads_to, time)
         self._track()
 
     def _fire(self, trigger: str, dest: OIMode, time: float, cause: str | None) -> None:
-        self._model.trigger(trigger)  # type: ignore[attr-defined]
-        if self._mode is not dest or cause is not None:
+        self.model.trigger(trigger)  # type: ignore[attr-defined]
+        if self.mode is not dest or cause is not None:
             self.since = time
             self.since_wall = self._wall_clock()
-        self._mode = dest
+        self.mode = dest
         self.cause = cause
         self._track()
 
@@ -346,8 +345,8 @@ class ModeModel:
         self._track()
 
     def _reset_off(self, time: float) -> None:
-        self.machine.set_state("Off", model=self._model)
-        self._mode = OIMode.OFF
+        self.machine.set_state("Off", model=self.model)
+        self.mode = OIMode.OFF
         self.since, self.since_wall, self.cause = time, self._wall_clock(), None
         self._track()
 
@@ -360,7 +359,7 @@ class ModeModel:
     # ------------------------------------------------------------------ packet 35
     def possible_modes(self, time: float) -> set[OIMode]:
         """Modes the robot may be in at ``time`` (see the module docstring)."""
-        modes = {self._mode} | FALLS[self._mode]
+        modes = {self.mode} | FALLS[self.mode]
         if self._pending is not None and time - self._pending[2] < self.settle:
             before = self._pending[0]
             modes |= {before} | FALLS[before]
@@ -369,15 +368,15 @@ class ModeModel:
     def reconcile(self, frame: SensorFrame, tick: int, time: float) -> ModeChange | None:
         """Follow packet 35 of ``frame``; return the change the robot made by itself, if any."""
         previous_frame, self._previous_frame = self._previous_frame, frame
-        layout = frame._layout  # the fields, not the properties: once a frame
-        if layout is self._mode_layout:
-            slot = self._mode_slot
+        layout = frame.layout
+        if layout is self.mode_layout:
+            slot = self.mode_slot
         else:
-            slot = self._mode_slot = layout.index.get(OI_MODE_PACKET)
-            self._mode_layout = layout
+            slot = self.mode_slot = layout.index.get(OI_MODE_PACKET)
+            self.mode_layout = layout
         if slot is None:
             return None
-        raw = frame._values[slot]
+        raw = frame.values[slot]
         if raw == self._steady:  # the common case, once per frame: the robot is where we
             self._unconfirmed = None  # think, no command pending
             return None
@@ -395,10 +394,10 @@ class ModeModel:
                 return None
             self._pending = None
             self._track()
-        if reported is self._mode:
+        if reported is self.mode:
             self._unconfirmed = None
             return None
-        before = self._mode
+        before = self.mode
         falls = reported is OIMode.PASSIVE and before in DRIVING_MODES
         seen = self._unconfirmed
         if seen is None or seen[0] is not reported:

@@ -34,7 +34,7 @@ from roomba_bt.oi.frames import BATTERY_PACKETS, SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
-from roomba_bt.robot.connection import Connection, TimedFrame
+from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.errors import ConnectionFailed, LinkDown, ModeError, StreamStalled
 from roomba_bt.robot.hazards import HazardConfirmation
 from roomba_bt.robot.interface import (
@@ -187,6 +187,7 @@ class MissionRunner(BaseHandle):
         #: a chain of properties)
         self._modes = connection.modes
         self._writer = connection.writer
+        self._link = connection.link
 
     # ---------------------------------------------------------------- RobotHandle
     #: this tick's snapshot: an attribute set by each tick (the leaves read it several times
@@ -295,10 +296,10 @@ class MissionRunner(BaseHandle):
         connection = self.connection
         while True:
             try:
-                batch = connection.poll(self.poll_timeout)
+                batch = connection.poll_frames(self.poll_timeout)
             except StreamStalled as stalled:
                 self._stalled(stalled)
-                batch = []
+                batch = ()
             if (stall := self._stall) is not None:
                 if batch:
                     self._stream_back(stall[2])
@@ -369,8 +370,9 @@ class MissionRunner(BaseHandle):
         if wheels is not None and any(wheels.args) and connection.mode in DRIVING_MODES:
             self._outbox.send(wheels, self)
 
-    def _advance(self, batch: Sequence[TimedFrame]) -> Snapshot:
+    def _advance(self, batch: Sequence[SensorFrame]) -> Snapshot:
         """Newest frame of the batch -> the tick's snapshot; stale frames and gaps counted.
+        The frames of a batch came in one read, at the link's ``arrival``.
 
         The common frame (the only one of its batch, one slot after the one before) takes
         the first branch of each test: no stale frame to confirm hazards with, no gap to
@@ -378,8 +380,8 @@ class MissionRunner(BaseHandle):
         count = len(batch)
         if count > 1:
             self._stale(batch)
-        frame: SensorFrame
-        frame, arrival, _ = batch[-1]
+        frame = batch[-1]
+        arrival = self._link.arrival
         modes = self._modes
         fallback = modes.last_fallback
         if fallback is self._fallback_seen:
@@ -420,11 +422,11 @@ class MissionRunner(BaseHandle):
                 self._blackboard.set(SNAPSHOT_KEY, snapshot, overwrite=True)
         return snapshot
 
-    def _stale(self, batch: Sequence[TimedFrame]) -> None:
+    def _stale(self, batch: Sequence[SensorFrame]) -> None:
         """The frames of a batch before its newest: dropped (counted), their hazards seen."""
         confirm = self._confirm
         for older in batch[:-1]:
-            confirm(older.frame)
+            confirm(older)
         self.summary.stale_frames_dropped += len(batch) - 1
 
     def _slots_spanned(self, count: int, arrival: float, last: float | None) -> int:

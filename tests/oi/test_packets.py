@@ -13,7 +13,7 @@ from roomba_bt.oi.ir import IRSource
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.packets import GROUP_SIZES, GROUPS, PACKETS, data_size, expand
 from roomba_bt.oi.profiles import CREATE2, ROOMBA500, ROOMBA600
-from roomba_bt.oi.stream import decode_reply
+from roomba_bt.oi.stream import StreamParser, decode_reply
 
 #: packet id -> (reply bytes, the value they decode to on create2). Multi-byte values are high
 #: byte first; signed packets use two's complement.
@@ -216,6 +216,18 @@ def test_frames_are_immutable_values() -> None:
     with pytest.raises(AttributeError):
         a.anything = 1  # type: ignore[attr-defined]
     assert "bumps_wheel_drops=1" in repr(a)
+
+
+def test_a_frame_the_parser_takes_is_the_frame_its_values_make() -> None:
+    parser = StreamParser((7, 35), CREATE2)
+    layout = parser.layout
+    taken = parser.take(layout.stream_frame({7: 3, 35: 2}))  # the one-frame path
+    assert type(taken) is SensorFrame and taken == SensorFrame(layout, (3, 2))
+    assert taken.layout is layout and taken.values == (3, 2) and taken.any_bump
+    # the older private names read the same two slots
+    assert taken._layout is taken.layout and taken._values is taken.values
+    with pytest.raises(AttributeError):
+        taken.other = 1  # type: ignore[attr-defined]
 
 
 def test_a_packet_asked_twice_keeps_the_first_value() -> None:
