@@ -252,9 +252,12 @@ class Sensing(RobotState):
         self._ir_beamless = not (world.virtual_walls or world.lighthouses)
         self._ir_quiet_at = (math.inf, math.inf)
         self._ir_quiet2 = 0.0
-        #: the far sensors owed (see the module's docstring): the arguments of
-        #: :meth:`_far_rays` and :meth:`_sense_ir` as they were due, or None
-        self._owed_rays: tuple[float, float, float, tuple[_Line, ...]] | None = None
+        #: the far sensors owed (see the module's docstring). The rays: whether they are owed
+        #: from the last :meth:`_sense`'s pose and close walls, which stay the robot's own
+        #: until the next step moves it (and senses again): a flag, not a tuple a step. The
+        #: IR receivers' are due every other step: the arguments of :meth:`_sense_ir` as
+        #: they were due, or None
+        self._rays_owed = False
         self._owed_ir: tuple[float, float, float, int, bool] | None = None
         self._far_owed = False
         #: how far the robot can move before a wall could stop it (motion's fast path): exact
@@ -303,9 +306,9 @@ class Sensing(RobotState):
             elif self._rays_on:
                 v[45] = v[46] = v[47] = v[48] = v[49] = v[50] = v[51] = v[27] = v[8] = 0
                 self._rays_on = False
-            self._owed_rays = None
+            self._rays_owed = False
         else:
-            self._owed_rays = (x, y, theta, close_lines)
+            self._rays_owed = True
             self._far_owed = True
         if self._ground_varies or self._prev_cliffs:  # else no cliff, no dirt, as before
             self._sense_ground(x, y, theta)
@@ -357,11 +360,12 @@ class Sensing(RobotState):
         built-in cycle), after which :meth:`_sense` measures them as they are due."""
         if not self._far_owed:
             return
-        rays, ir = self._owed_rays, self._owed_ir
-        self._owed_rays = self._owed_ir = None
+        ir = self._owed_ir
+        self._owed_ir = None
         self._far_owed = False
-        if rays is not None:
-            self._far_rays(*rays)
+        if self._rays_owed:
+            self._rays_owed = False
+            self._far_rays(self.x, self.y, self.theta, self._walls_lines)
         if ir is not None:
             self._sense_ir(*ir)
 
