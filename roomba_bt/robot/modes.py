@@ -208,7 +208,7 @@ class ModeModel:
         self.profile = profile
         self.settle = settle
         self._wall_clock = wall_clock
-        self.machine, self.model = build_machine(profile, initial)
+        self.machine, self._model = build_machine(profile, initial)
         #: the mode the robot is in, as the model has it: read-only outside the model (its
         #: commands and packet 35 set it); an attribute, not a property, as the runtime
         #: reads it once a tick
@@ -227,8 +227,8 @@ class ModeModel:
         self._previous_frame: SensorFrame | None = None
         #: the layout of the frames reconciled last and packet 35's slot in it (None: not
         #: carried), found once per layout instead of by a lookup every frame
-        self.mode_layout: FrameLayout | None = None
-        self.mode_slot: int | None = None
+        self._mode_layout: FrameLayout | None = None
+        self._mode_slot: int | None = None
         #: the packet 35 reading that changes nothing (:meth:`_track`)
         self._steady: int | None = None
         self._allowed = self._allowed_table()
@@ -245,7 +245,7 @@ class ModeModel:
     @property
     def state(self) -> str:
         """The machine's state name (``"Passive"``...)."""
-        return self.model.state
+        return self._model.state
 
     @property
     def plus_one(self) -> bool | None:
@@ -306,13 +306,13 @@ class ModeModel:
 
     def snapshot(self) -> tuple[Any, ...]:
         """What :meth:`restore` puts back: the model before commands that were not written."""
-        return (self.mode, self.model.state, self.since, self.since_wall, self.cause,
+        return (self.mode, self._model.state, self.since, self.since_wall, self.cause,
                 self._pending)  # fmt: skip
 
     def restore(self, saved: tuple[Any, ...]) -> None:
         """Undo :meth:`apply` for commands that never reached the wire (the write failed)."""
         mode, state, self.since, self.since_wall, self.cause, self._pending = saved
-        self.machine.set_state(state, model=self.model)
+        self.machine.set_state(state, model=self._model)
         self.mode = mode
         self._track()
 
@@ -327,7 +327,7 @@ class ModeModel:
         self._track()
 
     def _fire(self, trigger: str, dest: OIMode, time: float, cause: str | None) -> None:
-        self.model.trigger(trigger)  # type: ignore[attr-defined]
+        self._model.trigger(trigger)  # type: ignore[attr-defined]
         if self.mode is not dest or cause is not None:
             self.since = time
             self.since_wall = self._wall_clock()
@@ -345,7 +345,7 @@ class ModeModel:
         self._track()
 
     def _reset_off(self, time: float) -> None:
-        self.machine.set_state("Off", model=self.model)
+        self.machine.set_state("Off", model=self._model)
         self.mode = OIMode.OFF
         self.since, self.since_wall, self.cause = time, self._wall_clock(), None
         self._track()
@@ -369,11 +369,11 @@ class ModeModel:
         """Follow packet 35 of ``frame``; return the change the robot made by itself, if any."""
         previous_frame, self._previous_frame = self._previous_frame, frame
         layout = frame.layout
-        if layout is self.mode_layout:
-            slot = self.mode_slot
+        if layout is self._mode_layout:
+            slot = self._mode_slot
         else:
-            slot = self.mode_slot = layout.index.get(OI_MODE_PACKET)
-            self.mode_layout = layout
+            slot = self._mode_slot = layout.index.get(OI_MODE_PACKET)
+            self._mode_layout = layout
         if slot is None:
             return None
         raw = frame.values[slot]
