@@ -251,11 +251,6 @@ class StreamLink:
         frame = self.frame
         return None if frame is None else TimedFrame(frame, self.arrival, self.index)
 
-    def read_frames(self, timeout: float, now: float | None = None) -> list[TimedFrame]:
-        """:meth:`read_checked`'s frames, each with its arrival and its number."""
-        frames = self.read_checked(timeout, now)
-        return self.read_timed(frames) if frames else []
-
     def read_checked(self, timeout: float, now: float | None = None) -> Sequence[SensorFrame]:
         """What is there now, or wait up to ``timeout`` s for at least one frame; then the
         watchdog. ``now``: the link clock's time if the caller has just read it. The frames
