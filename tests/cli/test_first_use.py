@@ -57,6 +57,26 @@ def test_an_unsupported_py_trees_is_a_message_and_exit_2_not_a_traceback(
     assert done.stdout == ""
 
 
+def test_python_m_roomba_bt_is_the_command(mission: Path, tmp_path: Path) -> None:
+    """``python -m roomba_bt`` where the venv's scripts are not on PATH: the same command,
+    the same exit codes (0 valid, 2 invalid), named ``roomba-bt`` in its messages."""
+    run = [sys.executable, "-m", "roomba_bt"]
+    done = subprocess.run(
+        [*run, "validate", str(mission)], capture_output=True, text=True, timeout=60, cwd=tmp_path
+    )
+    assert (done.returncode, done.stdout.strip()) == (0, f"{mission}: ok"), done.stderr
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("mission: bad\ntree:\n  drive: {velocity: 200}\n")
+    done = subprocess.run(
+        [*run, "validate", bad.name], capture_output=True, text=True, timeout=60, cwd=tmp_path
+    )
+    assert done.returncode == 2
+    assert done.stdout.startswith("bad.yaml:3:21: drive.velocity"), done.stdout
+    assert "Traceback" not in done.stdout + done.stderr
+    usage = subprocess.run([*run], capture_output=True, text=True, timeout=60, cwd=tmp_path)
+    assert usage.returncode == 2 and usage.stderr.startswith("usage: roomba-bt"), usage.stderr
+
+
 def test_every_subcommand_has_a_one_line_description_in_the_help(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:

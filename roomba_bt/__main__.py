@@ -1,0 +1,11 @@
+"""``python -m roomba_bt``: the ``roomba-bt`` command, for an environment whose scripts
+folder is not on ``PATH`` (a venv not activated, ``pip install --user``, Windows)."""
+
+from __future__ import annotations
+
+import sys
+
+from roomba_bt.cli import main
+
+if __name__ == "__main__":
+    sys.exit(main())
