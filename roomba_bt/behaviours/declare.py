@@ -551,7 +551,7 @@ class FrameInputs:
         frame = self._robot.snapshot.frame
         read = self._read
         # the frame's fields, not its properties (two Python calls a guard a tick)
-        if frame._layout is not self._layout or read is None or read(frame._values) != values:
+        if frame.layout is not self._layout or read is None or read(frame.values) != values:
             return False
         return self.usable()
 

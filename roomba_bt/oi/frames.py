@@ -18,7 +18,7 @@ from __future__ import annotations
 import struct
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from functools import lru_cache
-from typing import TYPE_CHECKING, Protocol, TypeVar, cast
+from typing import Protocol, TypeVar, cast
 
 from roomba_bt.oi.bits import (
     BUMP_BITS,
@@ -363,9 +363,6 @@ class SensorFrame:
     layout: FrameLayout
     #: the raw values in the layout's order: ``SensorFrame(f.layout, f.values) == f``
     values: tuple[int, ...]
-    if TYPE_CHECKING:  # the same two slots under their older private names (below)
-        _layout: FrameLayout
-        _values: tuple[int, ...]
 
     def __init__(self, layout: FrameLayout, values: tuple[int, ...]) -> None:
         self.layout = layout
@@ -533,11 +530,6 @@ class SensorFrame:
         """Left wheel, right wheel, main brush, side brush."""
         return (self[54], self[55], self[56], self[57])
 
-
-# The two slots under the names the robot layer and the docking stages read them by (the same
-# member descriptors: as fast as the public names, with no property call).
-SensorFrame._layout = SensorFrame.__dict__["layout"]
-SensorFrame._values = SensorFrame.__dict__["values"]
 
 #: The OI mode in :meth:`SensorFrame.as_dict` is the value as sent past Full (the "mode + 1"
 #: reading 4 stays 4), where :attr:`SensorFrame.oi_mode` reads it as Full.

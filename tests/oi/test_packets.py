@@ -224,8 +224,6 @@ def test_a_frame_the_parser_takes_is_the_frame_its_values_make() -> None:
     taken = parser.take(layout.stream_frame({7: 3, 35: 2}))  # the one-frame path
     assert type(taken) is SensorFrame and taken == SensorFrame(layout, (3, 2))
     assert taken.layout is layout and taken.values == (3, 2) and taken.any_bump
-    # the older private names read the same two slots
-    assert taken._layout is taken.layout and taken._values is taken.values
     with pytest.raises(AttributeError):
         taken.other = 1  # type: ignore[attr-defined]
 

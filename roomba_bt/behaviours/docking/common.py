@@ -268,9 +268,9 @@ class DockingAction(Action):
         robot = self.robot
         snap = robot.snapshot if robot is not None else self.snapshot
         frame = snap.frame
-        if frame._layout is not self._layout:  # the fields, not the properties: every tick
+        if frame.layout is not self._layout:
             self.bind(frame)
-        raw = self._watched(frame._values)
+        raw = self._watched(frame.values)
         if raw != self._raw:
             self._raw = raw
             self.read(raw)

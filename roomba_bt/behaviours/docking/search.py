@@ -434,7 +434,7 @@ class DockSearch(DockingAction):
         stand still on about two ticks in five of a follow. Without a wall the arc's path
         is counted every tick: that branch is never skipped."""
         # all six signals in one call, by slot (read every tick of a follow)
-        signals = self._signals(snap.frame._values)
+        signals = self._signals(snap.frame.values)
         kept = self._kept
         if (
             kept is not None
