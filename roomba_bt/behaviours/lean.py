@@ -152,6 +152,9 @@ def behaviour_tick(node: Behaviour, started: bool = False) -> None:
         if node.status is not _RUNNING:
             node.initialise()
     new_status = node.update()
+    if new_status is _RUNNING:  # most ticks of a leaf: a Status, and nothing to stop
+        node.status = new_status
+        return
     if type(new_status) is not Status:
         new_status = checked_status(node, new_status)
     if new_status is not _RUNNING:
@@ -298,7 +301,6 @@ class Sequence(Stepped, _CompositeStop, py_trees.composites.Sequence):
         ):
             Stepped.tick_direct(self)
             return
-        index = self.children.index(child)
         if isinstance(child, Direct):
             child.tick_direct()
         else:
@@ -306,7 +308,7 @@ class Sequence(Stepped, _CompositeStop, py_trees.composites.Sequence):
         if child.status is _RUNNING:
             self.status = _RUNNING
             return
-        self.tick_steps(self.tick_next(index))
+        self.tick_steps(self.tick_next(self.children.index(child)))
 
     def tick_start(self) -> int:
         if py_trees.logging.level is _DEBUG:
@@ -373,11 +375,11 @@ class Selector(Stepped, _CompositeStop, py_trees.composites.Selector):
             Stepped.tick_direct(self)
             return
         children = self.children
-        index = children.index(child)
-        if index:
-            for earlier in islice(children, None, index):
-                if earlier.status is not _INVALID:
-                    earlier.stop(_INVALID)
+        for earlier in children:  # the children before it (its index is needed only after)
+            if earlier is child:
+                break
+            if earlier.status is not _INVALID:
+                earlier.stop(_INVALID)
         if isinstance(child, Direct):
             child.tick_direct()
         else:
@@ -385,7 +387,7 @@ class Selector(Stepped, _CompositeStop, py_trees.composites.Selector):
         if child.status is _RUNNING and self.current_child is child:
             self.status = _RUNNING
             return
-        self.tick_steps(self.tick_next(index))
+        self.tick_steps(self.tick_next(children.index(child)))
 
     def tick_start(self) -> int:
         if py_trees.logging.level is _DEBUG:
@@ -450,10 +452,18 @@ class Parallel(Stepped, py_trees.composites.Parallel):
         """The steps in one call: every child not yet succeeded (when synchronised) ticked
         in turn, then :meth:`_conclude`; a parallel is ticked on every tick of a mission
         that has one, and its children are never skipped. The steps themselves when there
-        is more to do first (debug logging, the policy to validate, no children)."""
+        is more to do first (debug logging, a policy other than py_trees' SuccessOnAll and
+        SuccessOnOne, a policy check of its own, no children).
+
+        With every child still running after its tick, :meth:`_conclude` would find neither
+        a failure nor a success: the parallel runs on, its current child the last one
+        (both policies). That is most ticks of a docking run (the time limit beside the
+        attempt), and it is decided here without the call and its pass over the policies."""
+        policy = self.policy
+        kind = type(policy)
         if (
-            py_trees.logging.level is _DEBUG
-            or isinstance(self.policy, _ON_SELECTED)
+            (kind is not _ON_ONE and kind is not _ON_ALL)
+            or py_trees.logging.level is _DEBUG
             or type(self).validate_policy_configuration is not _VALIDATE_POLICY
             or not self.children
         ):
@@ -466,14 +476,20 @@ class Parallel(Stepped, py_trees.composites.Parallel):
                     child.stop(_INVALID)
             self.current_child = None
             self.initialise()
+        synchronise = policy.synchronise
         for child in children:
-            if self.policy.synchronise and child.status is _SUCCESS:
+            if synchronise and child.status is _SUCCESS:
                 continue
             if isinstance(child, Direct):
                 child.tick_direct()
             else:
                 tick_generator(child)
-        self._conclude()
+        for child in children:
+            if child.status is not _RUNNING:
+                self._conclude()
+                return
+        self.current_child = children[-1]
+        self.status = _RUNNING
 
     def tick_start(self) -> int:
         if py_trees.logging.level is _DEBUG:

@@ -70,14 +70,13 @@ class SimLink:
         data = sim.read()
         if not data:
             deadline = sim.time + (timeout if timeout > 0.0 else 0.0) - 1e-9
-            step, read = sim.step, sim.read
-            while True:
-                step()
+            while True:  # most reads step once: the methods are called, not bound first
+                sim.step()
                 if sim.disconnected:
                     raise ConnectionError(
                         f"{self.name}: simulated disconnect at t={sim.time:.3f} s"
                     )
-                data = read()
+                data = sim.read()
                 if data or sim.time >= deadline:
                     break
         return data if self.baud == sim.baud else at_wrong_baud(data)

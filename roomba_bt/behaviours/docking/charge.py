@@ -16,8 +16,11 @@ from roomba_bt.behaviours.docking.common import (
     current_stage,
     note_stage,
 )
+from roomba_bt.behaviours.lean import behaviour_tick
 from roomba_bt.behaviours.units import DURATION
 from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS, CHARGING_STATE_PACKETS
+
+_DEBUG = py_trees.logging.Level.DEBUG
 
 
 @declare(
@@ -80,6 +83,25 @@ class DockTimeLimit(Action):
         storage[RUN_KEY] = (id(self), self._t0)
         self._limit = self.number("limit") - 1e-9  # read once a start
 
+    def tick_direct(self, started: bool = False) -> None:
+        """The leaf tick (:func:`~roomba_bt.behaviours.lean.behaviour_tick`), which while the
+        limit runs and its time is not up only calls :meth:`update` to hear RUNNING again and
+        sets the status it has: then nothing is called. It is ticked beside the stages on
+        every tick of a docking run. (``update`` is looked up on the node, as the leaf tick
+        calls it: a node's own, or a subclass's, gets the whole tick.)"""
+        if (
+            not started
+            and self.status is RUNNING
+            and py_trees.logging.level is not _DEBUG
+            and getattr(self.update, "__func__", None) is _UPDATE
+        ):
+            robot = self.robot  # the handle's snapshot, without the property's call
+            if (
+                robot.snapshot if robot is not None else self.snapshot
+            ).time - self._t0 < self._limit:
+                return
+        behaviour_tick(self, started)
+
     def update(self) -> Status:
         robot = self.robot  # the handle's snapshot, without the property's call (every tick)
         if (robot.snapshot if robot is not None else self.snapshot).time - self._t0 >= self._limit:
@@ -93,3 +115,6 @@ class DockTimeLimit(Action):
 
     _t0 = 0.0
     _limit = 0.0
+
+
+_UPDATE = DockTimeLimit.update
