@@ -51,6 +51,7 @@ __all__ = [
 ]
 
 _STEP_NS = 15_000_000
+_from_bytes = int.from_bytes
 _PASSIVE, _SAFE, _FULL = OIMode.PASSIVE, OIMode.SAFE, OIMode.FULL
 
 
@@ -171,7 +172,10 @@ class Simulator(OIProtocol):
                 self._emit(faults.inject_text.encode("ascii"))
                 self._next_inject += faults.inject_every
             values = self._snapshot_values(stream) if stream.snapshot else self.values
-            body = stream.struct.pack(*stream.getter(values))
+            # the values packed, the header and ids or-ed in (replies.py)
+            body = (
+                _from_bytes(stream.struct.pack(*stream.getter(values)), "big") | stream.fixed
+            ).to_bytes(stream.size, "big")
             frame = body + CHECKSUM_BYTE[(stream.byte_sum(body) - stream.sum_bias) & 0xFF]
             if self._plain_output:  # no fault on the way out: straight into the output
                 self.frames_sent += 1

@@ -31,8 +31,6 @@ from roomba_bt.sim.faults import NO_FAULTS, Faults
 from roomba_bt.sim.world import Pose, World
 
 STEP_SECONDS = 0.015
-#: values[CONSTANTS + k] == k: constant bytes (a frame's header and ids) packed with the values
-CONSTANTS = 59
 
 
 class TracePoint(NamedTuple):
@@ -109,12 +107,10 @@ class RobotState:
     """The state every layer reads: set once here, changed by the layer that owns each part.
 
     ``values`` is the robot's sensor state as the OI reports it, one flat list indexed by
-    packet id (0..58), followed by the constants 0..255 so that a stream frame's header and
-    packet ids are packed by the same ``struct`` call as the values (see replies.py)::
+    packet id (0..58), packed into replies and stream frames by replies.py::
 
         values[7]   bumps and wheel drops      values[35]        OI mode (packet 35)
         values[19]  distance since last read   values[46..51]    light bump signals
-        values[59 + k] == k                    (k = 0..255)
 
     The far sensors' packets (light bumper, wall sensor, IR receivers: sensing.py) are
     measured when read unless a stream of them or a built-in cycle reads them every step:
@@ -156,7 +152,7 @@ class RobotState:
         self.fallen = False
         self.docked = False
         self.dock_powered = True
-        self.values: list[int] = [0] * CONSTANTS + list(range(256))
+        self.values: list[int] = [0] * 59
         self.values[35] = int(mode) + (1 if profile.reports_mode_plus_one else 0)
         self.events: list[SimEvent] = []
         self.trace: list[TracePoint] = [TracePoint(0.0, self.x, self.y, self.theta, self.mode)]
