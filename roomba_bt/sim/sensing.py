@@ -29,6 +29,7 @@ values, measured once instead of every step; a bump-and-turn mission streams non
 from __future__ import annotations
 
 import math
+from bisect import bisect_left, bisect_right
 
 from roomba_bt.oi.bits import BUMP_BITS, WHEEL_DROP_BITS
 from roomba_bt.oi.ir import LighthouseBeam, dock_character, lighthouse_character
@@ -68,7 +69,7 @@ _NEAR_MARGIN_MM = 300.0
 _RAY_RANGES = (LIGHT_BUMP_RANGE_MM,) * 6 + (WALL_SENSOR_RANGE_MM,)
 #: the farthest any ray reaches from the robot's centre, and 1 mm more
 _RAY_REACH = ROBOT_RADIUS_MM + max(LIGHT_BUMP_RANGE_MM, WALL_SENSOR_RANGE_MM) + 1.0
-_Line = tuple[float, float, float, float, float, float, float]
+_Line = tuple[float, float, float, float, float, float, float, float, float]
 #: A wall as the sensing pass reads it, computed once per world: a, b - a, |b - a|^2 (1 for
 #: a point), its line (:func:`_line`) and the segment itself
 _Wall = tuple[float, float, float, float, float, _Line, Segment]
@@ -79,8 +80,9 @@ _Facing = tuple[float, int, float]
 #: a close wall's line (:data:`_Line`), then the rays that may meet it from its normal's
 #: side and from the other side
 _FacingWall = tuple[
-    float, float, float, float, float, float, float, tuple[_Facing, ...], tuple[_Facing, ...]
-]
+    float, float, float, float, float, float, float, float, float,
+    tuple[_Facing, ...], tuple[_Facing, ...],
+]  # fmt: skip
 _DARK = (0,) * 6  # the six light bumper signals with no wall in sight
 #: packet 7's bump bits of each side of the bumper (the timeline's ``bump`` events say sides)
 BUMP_SIDE_BITS = {"right": 1, "left": 2, "both": 3}
@@ -88,12 +90,16 @@ _BUMP_SIDES = {bits: side for side, bits in BUMP_SIDE_BITS.items()}
 
 
 def _line(seg: Segment) -> _Line:
-    """(nx, ny, n.a, tx, ty, t.a, length) of a wall segment from a to b."""
+    """(nx, ny, n.a, tx, ty, t.a, length, angle of n, angle of -n) of a wall segment from a
+    to b (angles from the x axis, -pi..pi)."""
     ax, ay, bx, by = seg
     length = math.hypot(bx - ax, by - ay)
     tx, ty = ((bx - ax) / length, (by - ay) / length) if length else (1.0, 0.0)
     nx, ny = -ty, tx
-    return (nx, ny, nx * ax + ny * ay, tx, ty, tx * ax + ty * ay, length)
+    return (
+        nx, ny, nx * ax + ny * ay, tx, ty, tx * ax + ty * ay, length,
+        math.atan2(ny, nx), math.atan2(-ny, -nx),
+    )  # fmt: skip
 
 
 def _wall(seg: Segment) -> _Wall:
@@ -108,6 +114,28 @@ def _wall(seg: Segment) -> _Wall:
 #: whose sine -0.0 comes out +0.0: a zero either way, the rays meet the same walls at the
 #: same places)
 _RAY_TURNS = (*_LIGHT_BUMP_RAYS, (6, 0.0, -1.0))
+#: the rays of _RAY_TURNS sorted by their angle from the heading, repeated a turn below and
+#: a turn above (:meth:`Sensing._sense_rays` turning): the rays whose angle is within a
+#: window about any bearing in -pi..pi (the window less than a turn wide) are one slice of
+#: them, found by bisection of _ARC_ANGLES. (The rays lie within -90..65 deg and a window
+#: reaches 90 deg and a margin either side of its bearing: a copy a turn away falls in one
+#: only at right angles to the wall's normal, where n.d is 0 but for rounding. Kept so that
+#: the slice holds every ray the full loop would test, rounding and all.)
+_ARC = sorted(
+    (math.atan2(sa, ca) + turn, (i, ca, sa))
+    for turn in (-2.0 * math.pi, 0.0, 2.0 * math.pi)
+    for i, ca, sa in _RAY_TURNS
+)
+_ARC_ANGLES = tuple(angle for angle, _ in _ARC)
+_ARC_RAYS = tuple(ray for _, ray in _ARC)
+#: far more than rounding makes n.d or a bearing off by (a few 1e-16)
+_ANGLE_MARGIN = 1e-9
+#: ``least`` (n.d a ray needs to reach a wall) this far above 1: no ray's n.d, 1 at most with
+#: rounding, is above it
+_LEAST_TOP = 1.0 + _ANGLE_MARGIN
+#: a ray reaches a wall only if its angle from the wall's normal is below acos(least);
+#: pi/2 - least is above that (acos x = pi/2 - asin x, asin x >= x for x >= 0), with margins
+_HALF_TOP = math.pi / 2.0 + 3 * _ANGLE_MARGIN
 
 
 def _rays(theta: float) -> tuple[_Ray, ...]:
@@ -132,7 +160,7 @@ def _facing_walls(
     passed over with one comparison."""
     facing: list[_FacingWall] = []
     for line in close_lines:
-        nx, ny, _, tx, ty, _, _ = line
+        nx, ny, _, tx, ty, _, _, _, _ = line
         front: list[_Facing] = []
         back: list[_Facing] = []
         for i, c, s in rays:
@@ -393,17 +421,32 @@ class Sensing(RobotState):
         # n.d > p / (R + range): the others are passed over at once (with a margin; the
         # exact test decides the rest).
         if theta != self._rays_theta:
-            # Turning: each ray against each wall at this heading, once; the rays' directions
-            # as _rays gives them, worked out in the loop (no tuple of them made for one use).
+            # Turning: the rays that may meet each wall at this heading, once; the rays'
+            # directions as _rays gives them, worked out in the loop (no tuple of them made
+            # for one use). A ray meets the wall's line in range only if n.d > least, i.e.
+            # if its angle from the normal is below acos(least) (< half): only the rays
+            # within half of the normal's bearing are looked at, the others (four or five of
+            # seven, usually) passed over by bisecting the rays sorted by angle (_ARC).
             self._rays_theta = theta
             ct, st = math.cos(theta), math.sin(theta)
-            for nx, ny, w, tx, ty, ta, length in close_lines:
+            for nx, ny, w, tx, ty, ta, length, ahead, behind in close_lines:
                 p = w - (nx * x + ny * y)
-                q = tx * x + ty * y - ta
                 if p < 0.0:  # the normal turned towards the wall (negation is exact: same k)
                     nx, ny, p = -nx, -ny, -p
+                    bearing = behind - theta
+                else:
+                    bearing = ahead - theta  # the normal's angle from the heading
                 least = p / _RAY_REACH
-                for i, ca, sa in _RAY_TURNS:
+                if least >= _LEAST_TOP:
+                    continue  # beyond every ray's reach
+                while bearing > _PI:
+                    bearing -= _TWO_PI
+                while bearing < -_PI:
+                    bearing += _TWO_PI
+                half = _HALF_TOP - least
+                first = bisect_left(_ARC_ANGLES, bearing - half)
+                q = tx * x + ty * y - ta
+                for i, ca, sa in _ARC_RAYS[first : bisect_right(_ARC_ANGLES, bearing + half)]:
                     c = ct * ca - st * sa
                     s = st * ca + ct * sa
                     dn = nx * c + ny * s
@@ -425,7 +468,7 @@ class Sensing(RobotState):
                 facing = self._facing = _facing_walls(_rays(theta), close_lines)
                 self._facing_theta = theta
                 self._facing_lines = close_lines
-            for nx, ny, w, tx, ty, ta, length, front, back in facing:
+            for nx, ny, w, tx, ty, ta, length, _, _, front, back in facing:
                 p = w - (nx * x + ny * y)
                 if p < 0.0:  # on the other side of the wall's line: the rays seen from there
                     p = -p

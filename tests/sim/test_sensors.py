@@ -3,12 +3,15 @@ walls and lighthouses. The robot never passes through a wall."""
 
 from __future__ import annotations
 
+import math
+import random
+
 import pytest
 
 from roomba_bt.oi import commands as C
 from roomba_bt.oi.ir import IRSource, LighthouseBeam
 from roomba_bt.sim import Pose, Simulator
-from roomba_bt.sim.sensing import FAR_PACKETS
+from roomba_bt.sim.sensing import _RAY_REACH, _RAY_TURNS, FAR_PACKETS
 from roomba_bt.sim.world import ROBOT_RADIUS_MM
 
 from .helpers import make, pose
@@ -300,3 +303,68 @@ def test_driving_straight_past_walls_the_rays_see_what_a_robot_placed_there_sees
         seen.add(tuple(measured))
     assert sim.theta == 0.0  # straight all the way
     assert len(seen) > 50  # the posts came into the rays' view and went
+
+
+def _every_ray_against_every_wall(sim: Simulator) -> list[int]:
+    """Packets 8, 27 and 45-51 as the turning robot measured them before the rays were
+    chosen by angle (sensing.py): every ray against every close wall, with the same
+    arithmetic, so the same bits."""
+    x, y, theta = sim.x, sim.y, sim.theta
+    ct, st = math.cos(theta), math.sin(theta)
+    hits = [150.0] * 6 + [120.0]
+    lit = set()
+    for nx, ny, w, tx, ty, ta, length, _, _ in sim._walls_lines:
+        p = w - (nx * x + ny * y)
+        q = tx * x + ty * y - ta
+        if p < 0.0:
+            nx, ny, p = -nx, -ny, -p
+        least = p / _RAY_REACH
+        for i, ca, sa in _RAY_TURNS:
+            c = ct * ca - st * sa
+            s = st * ca + ct * sa
+            dn = nx * c + ny * s
+            if dn <= least:
+                continue
+            k = p / dn
+            t = k - ROBOT_RADIUS_MM
+            if 0.0 <= t < hits[i] and 0.0 <= q + k * (tx * c + ty * s) <= length:
+                hits[i] = t
+                lit.add(i)
+    signals = [int(4095 * (1.0 - hits[i] / 150.0) ** 2) if i in lit else 0 for i in range(6)]
+    bits = sum(1 << i for i, signal in enumerate(signals) if signal >= 100)
+    wall = 0
+    if 6 in lit:
+        wall = int(sim.profile.wall_signal_maximum * (1.0 - hits[6] / 120.0) ** 2)
+    return [1 if 6 in lit and hits[6] < 50.0 else 0, wall, bits, *signals]
+
+
+#: walls at every angle, thin ones seen from both sides, corners: the rays meet them at
+#: grazing angles and head on
+ANGLES = """
+rooms: [[[0, 0], [3, 0], [3.4, 1.2], [2.2, 2.6], [0.3, 2.2]]]
+obstacles:
+  - {polygon: [[1.0, 0.8], [1.4, 0.7], [1.2, 1.1]]}
+  - {polygon: [[2.0, 1.0], [2.02, 1.5], [2.01, 1.0]]}
+  - {rect: [0.6, 1.5, 0.9, 1.55]}
+"""
+
+
+def test_turning_rays_chosen_by_angle_are_those_every_ray_against_every_wall_gives() -> None:
+    # Turning, the rays looked at for each close wall are those within an angle of its
+    # normal (sensing.py, _ARC): at thousands of poses near walls, at every heading (and
+    # about the -pi/pi seam), the light bumper and wall sensor read what every ray against
+    # every close wall reads.
+    rng = random.Random(18)
+    sim = make(ANGLES, mode="full").sim
+    seen = set()
+    for n in range(6000):
+        theta = math.pi - rng.random() * 1e-3 if n % 10 == 0 else rng.uniform(-math.pi, math.pi)
+        sim.x, sim.y = rng.uniform(0.0, 3400.0), rng.uniform(0.0, 2600.0)
+        sim.theta = -theta if n % 20 == 0 else theta
+        sim._walls_same2 = 0.0  # the walls measured again here
+        sim._rays_theta = math.nan  # turning
+        sim._sense()
+        measured = [sim.values[p] for p in RAY_PACKETS]
+        assert measured == _every_ray_against_every_wall(sim), (sim.x, sim.y, sim.theta)
+        seen.add(tuple(measured))
+    assert len(seen) > 2000  # the rays met walls in every way
