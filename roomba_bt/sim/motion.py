@@ -194,6 +194,8 @@ class Motion(Sensing):
     # wheels turn; a wall in the way, a lift or a fall calls out.
     def _move(self, left: float, right: float, dt: float) -> None:
         """Turn the wheels at ``left``, ``right`` mm/s for ``dt`` seconds."""
+        if left != self.left_speed or right != self.right_speed:
+            self._power_due = True  # the wheels draw other currents (power.py)
         self.left_speed, self.right_speed = left, right
         if not left and not right:
             self.values[58] = 0
@@ -230,7 +232,9 @@ class Motion(Sensing):
         if fraction == 1.0:
             # free motion (the usual step): what the wheels did is the same every step (the
             # heading and the counts as _turn does them, inline: this runs every step)
-            self.blocked = False
+            if self.blocked:
+                self.blocked = False
+                self._power_due = True
             theta = self.theta + dtheta
             if theta > _PI:
                 theta -= _TWO_PI
@@ -290,6 +294,7 @@ class Motion(Sensing):
     ) -> None:
         """The rest of a step that a wall cut short, or a lifted or fallen robot's."""
         half_base = self._half_base
+        self._power_due = True  # a stall draws more current
         blocked = self.blocked = fraction < 1.0 and dist != 0.0 and not stuck
         guided = 0.0
         if blocked and dist > 0.0 and self._dock_target is not None:
@@ -339,6 +344,7 @@ class Motion(Sensing):
         self.fallen = True
         self._body_changed()
         self.left_speed = self.right_speed = 0.0
+        self._power_due = True
         self._event("fell", "drove off a drop")
         self._geometry_dirty = True
         self._sense()

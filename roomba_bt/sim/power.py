@@ -7,8 +7,22 @@ packets 54 and 55, is 600 mA higher). On a powered dock in Passive or Off it cha
 23 (current), 25 (charge), 26 (capacity), 34 (charging sources: home base), 54-57 (motor
 currents) and 14 (overcurrents).
 
-A layer of the simulator (see state.py): the charge integrates on every step, so its state is
-on the robot; the currents are recomputed only when what draws them changes.
+A layer of the simulator (see state.py). The charge integrates on every step, and the
+currents are recomputed only when what draws them changes; the packets show the charge every
+32nd step (about 0.5 s) and when the currents change. So the battery's step
+(:meth:`Power._battery`) runs only then: on a step after something the currents depend on
+changed (the wheel speeds, brushes, dock, mode, a stall: every place that changes one sets
+``_power_due``), on every 32nd step, and on every step while charging fast (its switch to
+trickle charging is checked every step). On the other steps the robot's ``step`` only counts
+the charge's step as owed (``_charge_owed``); the owed steps are taken, one by one as
+:meth:`Power._battery` takes them, the next time the battery's step runs or the charge is
+read (:attr:`Power.battery_charge`). The same additions, in the same order: the same charge
+and packets, for a count a step instead of a call and a comparison of what draws the
+currents (tests/sim/test_physics.py checks both, and that no change is missed)::
+
+    step        1   2 ... 31  32  33 ... 40  41 ...   (the wheels change speed at step 40)
+    _battery    x             x              x  x ...  the charge of steps 33-39 owed, taken
+    owed        1   2 ... 31  0   1  ... 7   0  0      at 40 before the currents change
 """
 
 from __future__ import annotations
@@ -17,15 +31,23 @@ import struct
 
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.sim.motion import Motion
+from roomba_bt.sim.state import STEP_SECONDS
 
 BATTERY_CAPACITY_MAH = 2696.0
+#: above this current (mA, charging fast) the battery's step runs every step (trickle switch)
+_FAST_CHARGE_MA = 200.0
 
 
 class Power(Motion):
     """Battery charge and currents; the brushes and vacuum, which draw current too."""
 
     def _init_power(self) -> None:
-        self.battery_charge = self.world.battery * BATTERY_CAPACITY_MAH
+        #: the charge (mAh) as of the last battery step, and the steps since whose charge is
+        #: owed (:attr:`battery_charge` is the charge now)
+        self._charge = self.world.battery * BATTERY_CAPACITY_MAH
+        self._charge_owed = 0
+        #: the step the battery's step next runs at unless something changes first
+        self._battery_at = 0
         self.motor_bits = 0
         self.brush_pwm = (0, 0, 0)
         self._current = 0.0
@@ -36,10 +58,23 @@ class Power(Motion):
         v[24] = 24  # temperature, deg C
 
     @property
+    def battery_charge(self) -> float:
+        """The charge now (mAh), the steps owed taken."""
+        if self._charge_owed:
+            self._settle_charge()
+        return self._charge
+
+    @battery_charge.setter
+    def battery_charge(self, charge: float) -> None:
+        self._charge_owed = 0  # what the owed steps would have added is replaced
+        self._charge = charge
+
+    @property
     def charging(self) -> bool:
         return self.values[21] in (1, 2, 3)
 
     def _on_motors(self, args: bytes) -> None:
+        self._power_due = True
         self.motor_bits = args[0]
         self.brush_pwm = (
             127 if args[0] & 4 else 0,
@@ -49,35 +84,62 @@ class Power(Motion):
 
     def _on_pwm_motors(self, args: bytes) -> None:
         main, side, vacuum = struct.unpack(">bbb", args)
+        self._power_due = True
         self.brush_pwm = (main, side, vacuum)
         self.motor_bits = (1 if side else 0) | (2 if vacuum else 0) | (4 if main else 0)
 
     def _battery(self, dt: float) -> None:
-        """Charge and currents. Currents are recomputed only when what draws them changes
-        (the step must stay cheap); the charge integrates every step."""
-        key = (
-            self.left_speed, self.right_speed, self.brush_pwm, self.docked, self.dock_powered,
-            self.mode, self.blocked, self._stall_steps > 30,
-        )  # fmt: skip
+        """The battery's step: the owed steps' charge, the currents if what draws them
+        changed, this step's charge, the packets every 32nd step. Runs when due (see the
+        module's docstring); ``dt`` is this step's length."""
+        if self._charge_owed:
+            self._settle_charge()
+        self._power_due = False
+        key = self._power_inputs()
         if key != self._power_key:
             self._power_key = key
             self._power_changed()
-        charge = self.battery_charge + self._current * dt / 3600.0
-        if charge >= BATTERY_CAPACITY_MAH * 0.98 and self._current > 200.0:
-            self._power_key = None  # switch to trickle charging
+        current = self._current
+        charge = self._charge + current * dt / 3600.0
+        if charge >= BATTERY_CAPACITY_MAH * 0.98 and current > _FAST_CHARGE_MA:
+            self._power_key = None  # switch to trickle charging on the next step
         if charge < 0.0:
             charge = 0.0
         elif charge > BATTERY_CAPACITY_MAH:
             charge = BATTERY_CAPACITY_MAH
-        self.battery_charge = charge
-        if not self.ticks & 31:
+        self._charge = charge
+        ticks = self.ticks
+        if not ticks & 31:
             self._update_battery_values()
+        self._battery_at = ticks + 1 if current > _FAST_CHARGE_MA else (ticks | 31) + 1
+
+    def _settle_charge(self) -> None:
+        """The owed steps' charge, each step's as :meth:`_battery` adds it (a 15 ms step:
+        the robot's ``step`` owes only those; the current the same all along, below
+        _FAST_CHARGE_MA)."""
+        added = self._current * STEP_SECONDS / 3600.0
+        charge = self._charge
+        for _ in range(self._charge_owed):
+            charge = charge + added
+            if charge < 0.0:
+                charge = 0.0
+            elif charge > BATTERY_CAPACITY_MAH:
+                charge = BATTERY_CAPACITY_MAH
+        self._charge = charge
+        self._charge_owed = 0
+
+    def _power_inputs(self) -> tuple[object, ...]:
+        """What the currents are computed from (:meth:`_power_changed`)."""
+        return (
+            self.left_speed, self.right_speed, self.brush_pwm, self.docked, self.dock_powered,
+            self.mode, self.blocked, self._stall_steps > 30,
+        )  # fmt: skip
 
     def _power_changed(self) -> None:
         v = self.values
         charging = self.docked and self.dock_powered and self.mode in (OIMode.PASSIVE, OIMode.OFF)
         if charging:
-            full = self.battery_charge >= BATTERY_CAPACITY_MAH * 0.98
+            full = self._charge >= BATTERY_CAPACITY_MAH * 0.98
             current = 150.0 if full else 1500.0
             v[21] = 3 if full else 2
         else:
@@ -101,7 +163,7 @@ class Power(Motion):
 
     def _update_battery_values(self) -> None:
         v = self.values
-        fraction = self.battery_charge / BATTERY_CAPACITY_MAH
-        v[25] = int(self.battery_charge)
+        fraction = self._charge / BATTERY_CAPACITY_MAH
+        v[25] = int(self._charge)
         v[22] = int(13200 + 3200 * fraction + (600 if self._current > 0 else 0))
         v[23] = int(self._current)

@@ -173,6 +173,8 @@ class OIProtocol(StreamOutput):
         self._set_mode(target, spec.name)
 
     def _set_mode(self, mode: OIMode, cause: str) -> None:
+        # the mode, and the wheels and brushes its callers stopped, draw other currents
+        self._power_due = True
         if mode is not self.mode:
             self._event("mode", f"{self.mode.label}->{mode.label} ({cause})")
             self.mode = mode

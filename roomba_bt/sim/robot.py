@@ -153,7 +153,10 @@ class Simulator(OIProtocol):
                 self._safety()
         elif mode is _FULL and self._drops and not self.fallen and self._over_drop(self.x, self.y):
             self._fall()
-        self._battery(dt)
+        if self._power_due or self.ticks >= self._battery_at or dt != STEP_SECONDS:
+            self._battery(dt)
+        else:
+            self._charge_owed += 1  # the charge's step, taken later with the others (power.py)
         if self.swept is not None:
             cycle = self.builtin  # the firmware's Clean, Spot and Max run every motor
             cleaning = cycle is not None and cycle.name != "seek_dock"
@@ -238,6 +241,7 @@ class Simulator(OIProtocol):
         effects = timeline.effects()
         if effects != (self._event_bump, self.lifted, self.dock_powered):
             self._event_bump, self.lifted, self.dock_powered = effects
+            self._power_due = True  # the charger may have come on or gone off
             self._body_changed()
             self._geometry_dirty = True
             self._ir_stale = True

@@ -379,6 +379,7 @@ class Sensing(RobotState):
         )
         if docked != self.docked:
             self.docked = docked
+            self._power_due = True  # the contacts may charge (power.py)
             self._event("docked" if docked else "undocked", "")
             self._check_safety()
 

@@ -152,6 +152,9 @@ class RobotState:
         self.fallen = False
         self.docked = False
         self.dock_powered = True
+        #: something the battery's currents depend on may have changed (power.py): set by
+        #: every layer that changes one of them
+        self._power_due = True
         self.values: list[int] = [0] * 59
         self.values[35] = int(mode) + (1 if profile.reports_mode_plus_one else 0)
         self.events: list[SimEvent] = []

@@ -9,14 +9,15 @@ import math
 import pytest
 
 from roomba_bt.oi import commands as C
-from roomba_bt.oi.bits import motor_bits
-from roomba_bt.oi.encode import Radius
+from roomba_bt.oi.bits import ChargingState, motor_bits
+from roomba_bt.oi.encode import Command, Radius
 from roomba_bt.oi.odometry import MM_PER_COUNT, OLD_FIRMWARE_ANGLE_FACTOR, encoder_delta
 from roomba_bt.oi.profiles import CREATE2, ROOMBA500, ROOMBA600
 from roomba_bt.sim import Pose, drive_wheel_speeds
 from roomba_bt.sim.motion import WHEEL_SPEED_STEP_MM_S
+from roomba_bt.sim.state import STEP_SECONDS
 
-from .helpers import make
+from .helpers import docked_start, make
 
 BIG = """
 rooms: [[[-50, -50], [50, -50], [50, 50], [-50, 50]]]
@@ -206,3 +207,74 @@ def test_a_new_speed_at_the_same_heading_moves_the_robot_at_that_speed() -> None
     speed = math.hypot(host.sim.x - x, host.sim.y - y) / 0.3
     assert speed == pytest.approx(round(400 / WHEEL_SPEED_STEP_MM_S) * WHEEL_SPEED_STEP_MM_S)
     assert host.sim.theta == math.radians(30.0)
+
+
+#: a powered dock to charge on (fast, then trickle from 98 %), its charger stepped on, a
+#: wall and the dock to stall against, a drop to fall off in Full mode, a lift and a bump
+POWER_WORLD = """
+rooms: [[[0, 0], [4, 0], [4, 3], [0, 3]]]
+dock: {at: [2, 0], facing: 90}
+drops: [{rect: [3.6, 0, 4, 3]}]
+robot: {start: {at: [2, 1.2], heading: -90}, battery: 0.9799}
+events:
+  - {at: 1.5, kind: charger_step, duration: 0.6}
+  - {at: 9.0, kind: lift, duration: 0.4}
+  - {at: 10.0, kind: bump, side: left, duration: 0.3}
+"""
+
+#: (steps, commands sent before them): on the dock in Passive, Safe (the powered charger
+#: drops it to Passive), Full: off the dock, brushes, arcs, a spin, into the dock and
+#: stalled there, away, a stop, then off the drop
+POWER_SCRIPT: list[tuple[int, list[Command]]] = [
+    (190, []),
+    (20, [C.safe()]),
+    (30, [C.full()]),
+    (70, [C.drive_direct(-200, -200)]),
+    (40, [C.motors(7)]),
+    (30, [C.pwm_motors(50, -30, 100)]),
+    (60, [C.drive(200, 500)]),
+    (50, [C.spin(150, True)]),
+    (60, [C.drive_direct(300, 280)]),
+    (150, [C.drive_direct(150, 150)]),
+    (120, [C.drive_direct(60, 250)]),
+    (40, [C.drive_direct(150, 150)]),
+    (30, [C.motors_off(), C.drive_direct(0, 0)]),
+    (190, [C.drive_pwm(-60, 60)]),
+    (500, [C.drive_direct(400, 400)]),
+]
+
+
+def test_the_battery_step_run_only_when_due_gives_what_one_run_every_step_gives() -> None:
+    # The battery's step runs only when something the currents depend on changed, every
+    # 32nd step and while charging fast; the other steps' charge is owed and taken later
+    # (power.py). A robot whose battery step runs every step (as if everything changed)
+    # must report the same packets every step and the same charge; and between steps,
+    # unless a change is due, the currents are those of the robot's state now (no place
+    # that changes what draws them forgets to say so).
+    due = make(POWER_WORLD, start=docked_start(), mode="passive")
+    every = make(POWER_WORLD, start=docked_start(), mode="passive")
+    states = set()
+    n = 0
+    for steps, commands in POWER_SCRIPT:
+        due.send(*commands)
+        every.send(*commands)
+        for _ in range(steps):
+            n += 1
+            dt = 0.03 if n % 37 == 0 and n < 190 else STEP_SECONDS  # a longer step now and then
+            every.sim._power_due = True
+            every.sim.step(dt)
+            due.sim.step(dt)
+            sim = due.sim
+            assert sim.values == every.sim.values, n
+            assert (
+                sim._power_due or sim._power_key is None or (sim._power_inputs() == sim._power_key)
+            ), n
+            if n % 50 == 0:
+                assert sim.battery_charge == every.sim.battery_charge, n
+            states.add((sim.values[21], sim.values[14] != 0, sim.docked, sim.lifted, sim.mode))
+    assert due.sim.battery_charge == every.sim.battery_charge
+    assert due.sim.fallen
+    charging = {state[0] for state in states}
+    assert {ChargingState.FULL_CHARGING, ChargingState.TRICKLE_CHARGING, 0} <= charging
+    assert any(state[1] for state in states)  # stalled long enough for an overcurrent
+    assert {True, False} <= {state[2] for state in states} and any(s[3] for s in states)
