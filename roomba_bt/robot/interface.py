@@ -118,38 +118,10 @@ class Odometer:
         odometry = self.odometry
         if counts is None:
             return odometry
-        left_counts, right_counts = counts(frame.values)
-        x, y, theta, distance, angle, previous_left, previous_right, path = odometry
-        if left_counts == previous_left and right_counts == previous_right:
+        left, right = counts(frame.values)
+        if left == odometry[5] and right == odometry[6]:  # left_counts, right_counts
             return odometry
-        if previous_left is None or previous_right is None:  # the first frame
-            odometry = self.odometry = odometry.advance(
-                left_counts, right_counts, self._wheel_base_mm
-            )
-            return odometry
-        # Odometry.advance's arithmetic, the same operations in the same order, written out
-        # once more here: the call was a tenth of a moving tick's odometry
-        # (tests/robot/test_odometry.py checks the odometer against advance)
-        left = (((left_counts - previous_left + 0x8000) & 0xFFFF) - 0x8000) * MM_PER_COUNT
-        right = (((right_counts - previous_right + 0x8000) & 0xFFFF) - 0x8000) * MM_PER_COUNT
-        if left == 0.0 and right == 0.0:
-            odometry = self.odometry = _new_tuple(Odometry, (
-                x, y, theta, distance, angle, left_counts, right_counts, path,
-            ))  # fmt: skip
-            return odometry
-        dist = (left + right) / 2.0
-        dtheta = (right - left) / self._wheel_base_mm
-        mid = theta + dtheta / 2.0
-        odometry = self.odometry = _new_tuple(Odometry, (
-            x + dist * math.cos(mid),
-            y + dist * math.sin(mid),
-            theta + dtheta,
-            distance + dist,
-            angle + dtheta,
-            left_counts,
-            right_counts,
-            path + abs(dist),
-        ))  # fmt: skip
+        odometry = self.odometry = odometry.advance(left, right, self._wheel_base_mm)
         return odometry
 
 

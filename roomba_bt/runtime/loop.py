@@ -20,9 +20,8 @@ import inspect
 import logging
 import time
 import traceback
-import typing
 from collections.abc import Callable, Iterable, Sequence
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol, cast
 
 import py_trees
 
@@ -481,7 +480,7 @@ def tick_of(root: py_trees.behaviour.Behaviour) -> Callable[[], None]:
     itself then, one call less on every tick. A class with a ``tick_once`` of its own keeps
     it."""
     if getattr(type(root), "tick_once", None) is _DIRECT_TICK_ONCE:
-        return typing.cast(Direct, root).tick_direct
+        return cast(Direct, root).tick_direct
     return root.tick_once
 
 
