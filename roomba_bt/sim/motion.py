@@ -194,18 +194,20 @@ class Motion(Sensing):
     # wheels turn; a wall in the way, a lift or a fall calls out.
     def _move(self, left: float, right: float, dt: float) -> None:
         """Turn the wheels at ``left``, ``right`` mm/s for ``dt`` seconds."""
-        if left != self.left_speed or right != self.right_speed:
-            self._power_due = True  # the wheels draw other currents (power.py)
-        self.left_speed, self.right_speed = left, right
-        if not left and not right:
-            self.values[58] = 0
-            self._stall_steps = 0
-            return
         motion = self._motion
-        if motion[0] != left or motion[1] != right or motion[2] != dt:
-            motion = self._motion = _motion_of(
-                left, right, dt, self._half_base, self.odometry_error
-            )
+        if left != self.left_speed or right != self.right_speed or dt != motion[2]:
+            # New speeds (or step). Speeds that stay are those of the last move (only a stop
+            # sets others: 0), and the motion kept is theirs: nothing to check on a step.
+            self._power_due = True  # the wheels draw other currents (power.py)
+            self.left_speed, self.right_speed = left, right
+            if not left and not right:
+                self.values[58] = 0
+                self._stall_steps = 0
+                return
+            if motion[0] != left or motion[1] != right or motion[2] != dt:
+                motion = self._motion = _motion_of(
+                    left, right, dt, self._half_base, self.odometry_error
+                )
         dist, dtheta = motion[3], motion[4]
         fraction = 1.0
         stuck = self.lifted or self.fallen
