@@ -377,9 +377,12 @@ def reachable_floor(world: World, start: Pose, cell: float = CELL_MM) -> bytes:
 class SweptArea:
     """The floor cleaned by one robot, updated from its true pose every step.
 
-    ``update(time, x, y, theta, main, side)`` is called once per simulator step with the pose
+    ``update(time, x, y, theta, motors)`` is called once per simulator step with the pose
     and which brushes run; coverage is read with :meth:`coverage`, :meth:`coverage_by_area`,
-    :attr:`curve` and :meth:`longest_idle`.
+    :attr:`curve` and :meth:`longest_idle`. With no brush running and before
+    :attr:`idle_until`, an update would only note the step's time: the simulator sets
+    :attr:`last_time` itself then instead of calling (a call a step saved while a robot
+    drives with its brushes off, as docking does).
     """
 
     def __init__(self, world: World, start: Pose, cell: float = CELL_MM) -> None:
@@ -408,7 +411,11 @@ class SweptArea:
         self._next_sample = SAMPLE_EVERY_S
         self._mark: tuple[float, float, float] | None = None  # pose of the last mark
         self._footprint: tuple[float, float, float, float] | None = None
-        self._last_time = 0.0
+        #: the time of the last update (``update``'s, or the simulator's on an idle step)
+        self.last_time = 0.0
+        #: until then an update with no brush running changes nothing but last_time: no mark
+        #: to drop, no sample due
+        self.idle_until = SAMPLE_EVERY_S
         self.cleaning_time = 0.0
         self._last_new = 0.0  # cleaning time of the last new cell
         self._longest_idle = 0.0
@@ -419,7 +426,7 @@ class SweptArea:
         Motors, 138: side brush 1, vacuum 2, main brush 4)."""
         footprint = FOOTPRINTS[motors & 7]
         if footprint is not None:
-            self.cleaning_time += time - self._last_time
+            self.cleaning_time += time - self.last_time
             mark = self._mark
             if mark is None or footprint is not self._footprint:
                 self._mark = (x, y, theta)
@@ -435,10 +442,11 @@ class SweptArea:
                     self._sweep(footprint, mx, my, mtheta, x, y, theta)
         elif self._mark is not None:
             self._mark = None
-        self._last_time = time
+        self.last_time = time
         if time >= self._next_sample:
             self.curve.append((time, tuple(self.cleaned_cells)))
             self._next_sample += SAMPLE_EVERY_S
+        self.idle_until = self._next_sample if self._mark is None else -math.inf
 
     def finish(self, time: float, x: float, y: float, theta: float) -> None:
         """Sweep what moved since the last mark (at the end of a run, or before reading)."""

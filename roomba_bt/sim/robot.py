@@ -157,11 +157,15 @@ class Simulator(OIProtocol):
             self._battery(dt)
         else:
             self._charge_owed += 1  # the charge's step, taken later with the others (power.py)
-        if self.swept is not None:
+        swept = self.swept
+        if swept is not None:
             cycle = self.builtin  # the firmware's Clean, Spot and Max run every motor
             cleaning = cycle is not None and cycle.name != "seek_dock"
             motors = ALL_BRUSHES if cleaning else self.motor_bits
-            self.swept.update(self.time, self.x, self.y, self.theta, motors)
+            if motors & ALL_BRUSHES or self.time >= swept.idle_until:
+                swept.update(self.time, self.x, self.y, self.theta, motors)
+            else:  # no brush: all an update would do (coverage.py)
+                swept.last_time = self.time
         if (
             mode is _PASSIVE
             and self.time - self._last_activity >= PASSIVE_SLEEP_SECONDS

@@ -228,3 +228,24 @@ def test_the_firmware_clean_cycle_counts_as_cleaning_seek_dock_does_not() -> Non
     sim.receive(C.seek_dock().data)
     sim.run(5.0)
     assert sim.swept.cleaned_total == cleaned
+
+
+def test_steps_with_the_brushes_off_skip_the_update_and_the_coverage_is_the_same() -> None:
+    # With no brush running the simulator only notes the step's time instead of updating the
+    # swept area, until a mark is to be dropped or a sample is due (coverage.py, idle_until):
+    # brushes on and off, across samples, the area is the one an update every step gives.
+    w = world()
+    sim = Simulator(w, start=Pose(1000.0, 2003.0, 0.0), coverage=True)
+    every = SweptArea(w, sim.pose)
+    sim.receive(C.start().data + C.full().data + C.drive(250, 800).data)
+    brushes = ((3.0, 0), (4.0, ALL), (2.0, 0), (3.0, ALL), (2.0, 0b001), (6.5, 0), (3.0, 0b001))
+    for seconds, motors in brushes:
+        sim.receive(C.motors(motors).data)
+        for _ in range(round(seconds / 0.015)):
+            sim.step()
+            every.update(sim.time, sim.x, sim.y, sim.theta, sim.motor_bits)
+    swept = sim.swept
+    assert swept is not None and swept.cleaned_total > 0
+    assert swept.cleaning_time == every.cleaning_time
+    assert swept.curve == every.curve and len(swept.curve) == 5
+    assert swept.cells == every.cells and swept.longest_idle() == every.longest_idle()
