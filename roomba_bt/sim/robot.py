@@ -94,6 +94,8 @@ class Simulator(OIProtocol):
         )
         self._timed_faults = list(self.faults.timed)
         self._next_timed = self._timed_faults[0][0] if self._timed_faults else math.inf
+        #: the first of the two: one comparison a step
+        self._fault_at = min(self._disconnect_at, self._next_timed)
         self._sense()
         self._battery(0.0)
         #: the floor cleaned so far (``coverage=True``; it reads the pose, never the bytes)
@@ -107,17 +109,16 @@ class Simulator(OIProtocol):
         # Whole nanoseconds, no drift: 200 steps are exactly 3.0 s (round(t, 9) costs more
         # than a third of a microsecond, the integer sum a tenth of that).
         self._time_ns += _STEP_NS if dt == STEP_SECONDS else round(dt * 1e9)
-        self.time = self._time_ns / 1e9
+        now = self.time = self._time_ns / 1e9
         if self.disconnected:
             return
-        faults = self.faults
-        if self.time >= self._disconnect_at:
-            self.disconnected = True
-            self._out.clear()
-            self._delayed.clear()
-            self._event("disconnect", "link lost")
-            return
-        if self.time >= self._next_timed:
+        if now >= self._fault_at:  # the link lost, or a timed fault due
+            if now >= self._disconnect_at:
+                self.disconnected = True
+                self._out.clear()
+                self._delayed.clear()
+                self._event("disconnect", "link lost")
+                return
             self._timed_fault()
         timeline = self._timeline
         if timeline is not None:
@@ -128,9 +129,9 @@ class Simulator(OIProtocol):
             return
         v = self.values
         if v[37] or v[18]:
-            if v[37] and self.time >= self._song_until:
+            if v[37] and now >= self._song_until:
                 v[37] = 0
-            if v[18] and self.time >= self._buttons_until:
+            if v[18] and now >= self._buttons_until:
                 v[18] = 0
         mode = self.mode
         cycle = self.builtin
@@ -162,20 +163,21 @@ class Simulator(OIProtocol):
             cycle = self.builtin  # the firmware's Clean, Spot and Max run every motor
             cleaning = cycle is not None and cycle.name != "seek_dock"
             motors = ALL_BRUSHES if cleaning else self.motor_bits
-            if motors & ALL_BRUSHES or self.time >= swept.idle_until:
-                swept.update(self.time, self.x, self.y, self.theta, motors)
+            if motors & ALL_BRUSHES or now >= swept.idle_until:
+                swept.update(now, self.x, self.y, self.theta, motors)
             else:  # no brush: all an update would do (coverage.py)
-                swept.last_time = self.time
+                swept.last_time = now
         if (
             mode is _PASSIVE
-            and self.time - self._last_activity >= PASSIVE_SLEEP_SECONDS
+            and now - self._last_activity >= PASSIVE_SLEEP_SECONDS
             and self.builtin is None
         ):
             self._fall_asleep("5 min idle", deaf=True)
             return
         stream = self._stream
         if stream is not None and not self._stream_paused:
-            if self.time >= self._next_inject:
+            if now >= self._next_inject:
+                faults = self.faults
                 self._emit(faults.inject_text.encode("ascii"))
                 self._next_inject += faults.inject_every
             values = self._snapshot_values(stream) if stream.snapshot else self.values
@@ -237,6 +239,7 @@ class Simulator(OIProtocol):
             else:
                 self._end_stream()
         self._next_timed = self._timed_faults[0][0] if self._timed_faults else math.inf
+        self._fault_at = min(self._disconnect_at, self._next_timed)
 
     def _world_events(self, timeline: Timeline) -> None:
         """The timeline's events due now: marked, and their effects on the body."""

@@ -182,3 +182,19 @@ def test_fault_times_and_rates_are_checked() -> None:
         Faults(reset_at=-1)
     with pytest.raises(ValueError, match=r"faults.bit_flip_rate: found 2"):
         Faults(bit_flip_rate=2)
+
+
+@pytest.mark.parametrize(("reset_at", "disconnect_at"), [(1.0, 2.0), (2.0, 1.0), (1.5, 1.5)])
+def test_timed_faults_and_the_disconnect_each_come_at_their_time(
+    reset_at: float, disconnect_at: float
+) -> None:
+    # The step compares the time with the first of the next timed fault and the disconnect
+    # (robot.py, _fault_at): each still comes at its own time, the later one too.
+    sim = Simulator(world(BOX), faults=Faults(reset_at=reset_at, disconnect_at=disconnect_at))
+    sim.run(3.0)
+    happened = {event.kind: event.time for event in sim.events if event.kind != "mode"}
+    assert disconnect_at <= happened["disconnect"] < disconnect_at + 0.015  # the first step on
+    if reset_at < disconnect_at:
+        assert reset_at <= happened["fault"] < reset_at + 0.015
+    else:
+        assert "fault" not in happened  # the link was lost first
