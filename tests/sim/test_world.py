@@ -8,8 +8,10 @@ import pathlib
 
 import pytest
 
+from roomba_bt import yamlsource
 from roomba_bt.oi import commands as C
 from roomba_bt.sim import WorldError, load_world, parse_world, shipped_worlds
+from roomba_bt.sim import world as world_module
 from roomba_bt.sim.world import ROBOT_RADIUS_MM
 
 from .helpers import make, pose
@@ -120,6 +122,37 @@ def test_duplicate_keys_and_yaml_syntax_errors_have_positions() -> None:
     assert dup.startswith("w.yaml:2:1: rooms: found the key 'rooms' twice")
     [syntax] = problems("rooms: [[[0, 0]\n")
     assert syntax.startswith("w.yaml:") and "(YAML)" in syntax
+
+
+def _pure_compose(text: str) -> object:
+    return yamlsource.compose(text, yamlsource.PURE_LOADER)
+
+
+@pytest.mark.parametrize("name", shipped_worlds())
+def test_a_shipped_world_reads_the_same_by_either_yaml_parser(
+    name: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Worlds are read by libyaml where installed (faster): the same world, every position
+    the same, as PyYAML's own parser reads."""
+    text = (world_module.WORLDS_DIR / f"{name}.yaml").read_text()
+    fast = parse_world(text, f"{name}.yaml")
+    monkeypatch.setattr(world_module, "_compose_world", _pure_compose)
+    assert parse_world(text, f"{name}.yaml") == fast
+
+
+@pytest.mark.parametrize(
+    "text",
+    ["rooms: [[[0, 0]\n", "rooms:\n  - [[0, 0]]\n - x\n", "rooms: {a: 1\n", "a: *r\n",
+     "rooms: !!int 3\n", "name: 'x\n"],
+)  # fmt: skip
+def test_a_broken_world_s_message_is_py_yaml_s_own_whichever_parser_read_it(
+    text: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """libyaml's syntax messages differ from PyYAML's: a text libyaml refuses is read again
+    by PyYAML's parser, so the problem and its position do not depend on libyaml."""
+    found = problems(text)
+    monkeypatch.setattr(world_module, "_compose_world", _pure_compose)
+    assert problems(text) == found
 
 
 def test_a_start_pose_inside_a_wall_is_refused() -> None:
