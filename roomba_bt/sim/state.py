@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.sim.faults import NO_FAULTS, Faults
 from roomba_bt.sim.world import Pose, World
@@ -155,7 +156,7 @@ class RobotState:
         #: something the battery's currents depend on may have changed (power.py): set by
         #: every layer that changes one of them
         self._power_due = True
-        self.values: list[int] = [0] * 59
+        self.values: list[int] = [0] * (max(PACKETS) + 1)  # indexed by packet id, 0..58
         self.values[35] = int(mode) + (1 if profile.reports_mode_plus_one else 0)
         self.events: list[SimEvent] = []
         self.trace: list[TracePoint] = [TracePoint(0.0, self.x, self.y, self.theta, self.mode)]

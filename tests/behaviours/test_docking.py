@@ -321,6 +321,23 @@ def test_time_limit_names_the_running_stage(robot: StubRobot, make: Make) -> Non
     assert limit.feedback_message.startswith("search: gave up after the time limit of 2 s")
 
 
+def test_time_limit_forced_by_the_monitor_ends_before_its_time(
+    robot: StubRobot, make: Make
+) -> None:
+    """The running limit's tick is a comparison while its time is not up, unless its
+    ``update`` is not the class's: the monitor forces a leaf by the node's own ``update``."""
+    limit = make(DockTimeLimit, limit=60.0)
+    robot.set_frame(frame())
+    limit.tick_once()
+    robot.set_frame(frame(), ticks=2)
+    limit.tick_once()
+    assert status(limit) is Status.RUNNING
+    limit.__dict__["update"] = lambda: Status.FAILURE  # as monitor/session.py forces it
+    robot.set_frame(frame(), ticks=3)
+    limit.tick_once()
+    assert status(limit) is Status.FAILURE
+
+
 def test_wheels_sends_only_a_change_and_again_after_a_halt(robot: StubRobot, make: Make) -> None:
     """The same speeds asked again are not sent again (the robot keeps them); after a halt,
     or once the motion was reset (a stop), they are; speeds that round alike are not."""
