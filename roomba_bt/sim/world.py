@@ -297,6 +297,11 @@ class World:
 
 @dataclass(frozen=True, slots=True)
 class WorldProblem:
+    """One problem of a world file: ``field`` (dotted path) found ``found``, ``allowed`` says
+    what may stand there. Without ``allowed``, ``found`` is a whole sentence (YAML's own
+    syntax message after ``field`` "YAML syntax error", or an alias or tag refused), worded
+    as a mission file's are."""
+
     source: str
     line: int
     column: int
@@ -306,6 +311,9 @@ class WorldProblem:
 
     def __str__(self) -> str:
         where = f"{self.source}:{self.line}:{self.column}" if self.line else self.source
+        if not self.allowed:  # a sentence of its own: YAML's syntax error, a refused tag
+            field = f"{self.field}: " if self.field else ""
+            return f"{where}: {field}{self.found}"
         return f"{where}: {self.field}: found {self.found}; allowed: {self.allowed}"
 
 
@@ -652,11 +660,11 @@ def parse_world(text: str, source: str = "<world>") -> World:
                           f"the key {str(dup.key)!r} twice", "each key once")]
         ) from None  # fmt: skip
     except yaml.YAMLError as exc:
+        # worded as a mission's (mission/source.py): PyYAML's sentence after the position
         line, col = yamlsource.error_position(exc) or (0, 0)
-        problem = getattr(exc, "problem", None) or str(exc)
-        raise WorldError(
-            [WorldProblem(source, line, col, "(YAML)", str(problem), "valid YAML")]
-        ) from None
+        problem = getattr(exc, "problem", None) or getattr(exc, "context", None) or str(exc)
+        kind = "" if isinstance(exc, yamlsource.Refused) else "YAML syntax error"
+        raise WorldError([WorldProblem(source, line, col, kind, str(problem), "")]) from None
     c = _Checker(source, marks)
     return _build_world(c, data, source)
 

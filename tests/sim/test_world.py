@@ -121,7 +121,7 @@ def test_duplicate_keys_and_yaml_syntax_errors_have_positions() -> None:
     [dup] = problems("rooms: []\nrooms: []\n")
     assert dup.startswith("w.yaml:2:1: rooms: found the key 'rooms' twice")
     [syntax] = problems("rooms: [[[0, 0]\n")
-    assert syntax.startswith("w.yaml:") and "(YAML)" in syntax
+    assert syntax == "w.yaml:2:1: YAML syntax error: expected ',' or ']', but got '<stream end>'"
 
 
 def _pure_compose(text: str) -> object:
@@ -170,7 +170,7 @@ def test_near_dock_start_region_needs_a_dock() -> None:
 
 def test_yaml_tags_that_build_objects_are_refused() -> None:
     [problem] = problems("rooms: !!python/object:os.system {}\n")
-    assert problem.startswith("w.yaml:1:8: (YAML): found explicit tag !!python/object:os.system")
+    assert problem.startswith("w.yaml:1:8: explicit tag !!python/object:os.system is not allowed")
 
 
 DIRTY = """
@@ -211,6 +211,6 @@ def test_a_world_without_dirt_reads_0_and_bad_dirt_is_named() -> None:
 
 def test_yaml_aliases_and_scalar_tags_in_a_world_are_refused_at_their_place() -> None:
     [alias] = problems("a: &r [[0, 0], [3, 0], [3, 3], [0, 3]]\nrooms: [*r]\n")
-    assert alias.startswith("w.yaml:2:9: (YAML): found alias *r is not allowed")
+    assert alias.startswith("w.yaml:2:9: alias *r is not allowed: write the value out")
     [tag] = problems("rooms: [[[0, 0], [3, 0], [3, !!int x], [0, 3]]]\n")
-    assert tag.startswith("w.yaml:1:30: (YAML): found explicit tag !!int is not allowed")
+    assert tag.startswith("w.yaml:1:30: explicit tag !!int is not allowed: write the plain value")
