@@ -196,6 +196,9 @@ class Declaration:
             raise DeclarationError(f"sends unknown opcodes {bad}")
         if self.primary is not None and self.primary not in seen:
             raise DeclarationError(f"primary parameter {self.primary!r} is not declared")
+        problem = self.cls.declaration_problem(self)
+        if problem is not None:
+            raise DeclarationError(problem)
 
 
 B = TypeVar("B", bound="type[RobotBehaviour]")
@@ -268,6 +271,14 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
         self.robot: RobotHandle | None = None
         self._resolved: dict[str, Any] = values
         self._refs: dict[str, BlackboardRef] | None = None
+
+    @classmethod
+    def declaration_problem(cls, declaration: Declaration) -> str | None:
+        """What makes ``declaration`` wrong for this class, beyond what every declaration is
+        checked for (None: nothing). A base class whose subclasses must declare something
+        it relies on says so here, so a plugin's mistake is named when it is declared, not
+        at its first tick on a robot."""
+        return None
 
     def setup(self, **kwargs: Any) -> None:
         robot = kwargs.get("robot")

@@ -487,3 +487,28 @@ def test_a_follow_with_the_same_signals_sends_again_only_after_a_halt(
     robot.set_frame(along)
     search.tick_once()
     assert last_wheels(robot) == steer
+
+
+def test_a_stage_watching_a_packet_it_does_not_declare_is_refused_when_declared() -> None:
+    """A plugin's stage adding a packet to WATCHED without declaring it would get a KeyError
+    at its first tick on a robot (the stream carries only declared packets): named at once."""
+    from roomba_bt.behaviours.declare import DeclarationError
+    from roomba_bt.behaviours.docking.common import declare_stage
+
+    own = tuple(p for p in DockApproach.declaration.params if p.name != "timeout")
+    approach_reads = DockApproach.declaration.packets({})
+
+    class Watching(DockApproach):
+        """Approach, watching the light bumper too."""
+
+        WATCHED = (*DockApproach.WATCHED, 45)
+
+    declared = declare_stage("watching", timeout="60s", timeout_doc="-", params=own)
+    with pytest.raises(DeclarationError, match=r"Watching.WATCHED .* 45 \(light_bumper\)"):
+        declared(Watching).declaration.validate()  # as registering a plugin does
+    # with the packets declared it is accepted; so is every shipped stage
+    reads = (*approach_reads, 45)
+    declare_stage("watching", timeout="60s", timeout_doc="-", params=own, reads=reads)(Watching)
+    Watching.declaration.validate()
+    for stage in (DockApproach, DockSearch, DockDriveOn, DockWaitCharge):
+        assert stage.declaration_problem(stage.declaration) is None

@@ -11,7 +11,7 @@ from typing import TypeVar
 import py_trees
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import Action, Param, declare
+from roomba_bt.behaviours.declare import Action, Declaration, Param, declare
 from roomba_bt.behaviours.driving import wheel_speeds
 from roomba_bt.behaviours.units import DURATION
 from roomba_bt.oi import commands as oi
@@ -33,6 +33,7 @@ from roomba_bt.oi.frames import (
 from roomba_bt.oi.ir import IR_CHARACTERS, IRCharacter
 from roomba_bt.oi.modes import DRIVING_MODES
 from roomba_bt.oi.opcodes import COMMANDS_BY_NAME
+from roomba_bt.oi.packets import PACKETS
 from roomba_bt.robot.interface import Snapshot
 
 #: The stages drive with Drive Direct and halt with Drive 0: their ``sends=``.
@@ -251,6 +252,22 @@ class DockingAction(Action):
     LATE = "not done in {:g} s"
     #: the stage's goal reached, as :meth:`read` last found it
     _done = False
+
+    @classmethod
+    def declaration_problem(cls, declaration: Declaration) -> str | None:
+        """Each packet of :attr:`WATCHED` among the declared reads: the stream carries only
+        what the tree declares, and a stage watching a packet it did not declare would raise
+        ``KeyError`` at its first tick (a plugin's subclass adding one to ``WATCHED``)."""
+        if callable(declaration.reads):
+            return None
+        missing = [packet for packet in cls.WATCHED if packet not in declaration.reads]
+        if not missing:
+            return None
+        named = ", ".join(f"{packet} ({PACKETS[packet].name})" for packet in missing)
+        return (
+            f"{cls.__name__}.WATCHED has packets its declaration does not read: {named}; "
+            "add them to the declaration's reads"
+        )
 
     def bind(self, frame: SensorFrame) -> None:
         """Find the slots of :attr:`WATCHED` in the frame's layout; a packet the frame lacks
