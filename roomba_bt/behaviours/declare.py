@@ -306,8 +306,17 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
         return self._resolved.get(name)
 
     def number(self, name: str) -> float:
-        """A numeric parameter as a float (for comparisons)."""
-        return float(self._resolved[name])
+        """A numeric parameter as a float (for comparisons). One the declaration lacks (a
+        plugin's subclass that re-declared a stage without its parameters) is named as such,
+        not as a bare ``KeyError: 'speed'``."""
+        try:
+            return float(self._resolved[name])
+        except KeyError:
+            declared = ", ".join(p.name for p in self.declaration.params) or "none"
+            raise KeyError(
+                f"{type(self).__name__} reads parameter {name!r}, which its declaration "
+                f"{self.declaration.name!r} does not have; it declares: {declared}"
+            ) from None
 
     def initialise(self) -> None:
         refs = self._refs

@@ -512,3 +512,17 @@ def test_a_stage_watching_a_packet_it_does_not_declare_is_refused_when_declared(
     Watching.declaration.validate()
     for stage in (DockApproach, DockSearch, DockDriveOn, DockWaitCharge):
         assert stage.declaration_problem(stage.declaration) is None
+
+
+def test_a_parameter_the_declaration_lacks_is_named_when_read() -> None:
+    from roomba_bt.behaviours.docking.common import declare_stage
+
+    class Bare(DockApproach):
+        """Approach re-declared without the approach's own parameters."""
+
+    reads = DockApproach.declaration.packets({})
+    declare_stage("bare", timeout="60s", timeout_doc="-", reads=reads)(Bare)
+    with pytest.raises(KeyError, match="Bare reads parameter 'speed', which its declaration "
+                       "'bare' does not have; it declares: timeout"):  # fmt: skip
+        Bare("bare").number("speed")
+    assert Bare("bare").number("timeout") == 60.0
