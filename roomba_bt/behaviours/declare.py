@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import operator
 import re
+import sys
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal, TypeVar
@@ -233,7 +234,7 @@ def declare(
     after = mode_after_sending(sends) if leads_to is None else leads_to
 
     def attach(cls: B) -> B:
-        doc = " ".join((cls.__doc__ or "").strip().split("\n\n")[0].split())
+        doc = " ".join((class_doc(cls) or "").strip().split("\n\n")[0].split())
         cls.declaration = Declaration(
             name, kind, cls, params, reads, sends, after, doc, primary,
             constraints=constraints, writes_keys=writes_keys, reads_keys=reads_keys,
@@ -241,6 +242,25 @@ def declare(
         return cls
 
     return attach
+
+
+def class_doc(cls: type) -> str | None:
+    """``cls.__doc__``, or under ``python -OO`` (which drops docstrings) the docstring read
+    from the class's source with :mod:`ast`: the descriptions in ``roomba-bt behaviours``, the
+    JSON Schema and ``show`` are the docstrings, and a user's interpreter flags should not
+    empty them. None when neither has one (no docstring, or no source file)."""
+    if cls.__doc__ is not None or sys.flags.optimize < 2:
+        return cls.__doc__
+    import ast  # only under -OO
+    import inspect
+    import textwrap
+
+    try:
+        tree = ast.parse(textwrap.dedent(inspect.getsource(cls)))
+    except (OSError, TypeError, SyntaxError):
+        return None
+    node = tree.body[0] if tree.body else None
+    return ast.get_docstring(node) if isinstance(node, ast.ClassDef) else None
 
 
 class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):

@@ -6,6 +6,7 @@ mission time, and matplotlib's INFO lines on a first ``--plot``."""
 
 from __future__ import annotations
 
+import json
 import logging
 import os
 import re
@@ -75,6 +76,22 @@ def test_python_m_roomba_bt_is_the_command(mission: Path, tmp_path: Path) -> Non
     assert "Traceback" not in done.stdout + done.stderr
     usage = subprocess.run([*run], capture_output=True, text=True, timeout=60, cwd=tmp_path)
     assert usage.returncode == 2 and usage.stderr.startswith("usage: roomba-bt"), usage.stderr
+
+
+def test_behaviour_descriptions_survive_python_OO(tmp_path: Path) -> None:
+    """``python -OO`` drops docstrings, where the behaviours' descriptions come from: they are
+    read from the source then, so ``roomba-bt behaviours`` says the same either way."""
+    run = [sys.executable, "-m", "roomba_bt", "behaviours", "--json"]
+    plain, optimised = (
+        subprocess.run(
+            [*run[:1], *flags, *run[1:]], capture_output=True, text=True, timeout=60, cwd=tmp_path
+        )
+        for flags in ((), ("-OO",))
+    )
+    assert plain.returncode == optimised.returncode == 0, optimised.stderr
+    described = json.loads(optimised.stdout)
+    assert optimised.stdout == plain.stdout
+    assert "bumper is pressed" in str(described)
 
 
 def test_every_subcommand_has_a_one_line_description_in_the_help(
