@@ -36,7 +36,7 @@ from roomba_bt.oi.packets import VALID_PACKET_IDS, expand
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import byte_sum_for
 from roomba_bt.sim.power import Power
-from roomba_bt.sim.sensing import FAR_PACKETS
+from roomba_bt.sim.sensing import far_groups
 
 #: n-bytes is one byte: a longer stream cannot be framed
 MAX_STREAM_PAYLOAD = 255
@@ -82,8 +82,8 @@ class _Packer:
             getter if len(idx) > 1 else (lambda v: (getter(v),))
         )
         members = {m for p in ids for m in expand(p)}
-        #: packs a far sensor's packet (sensing.py: measured every step while streamed)
-        self.far = not FAR_PACKETS.isdisjoint(members)
+        #: the groups of far sensors it packs (sensing.py: measured every step while streamed)
+        self.far = far_groups(members)
         self.has_distance = 19 in members
         self.has_angle = 20 in members
         #: the values need preparing before a frame: distance/angle since last read, noise

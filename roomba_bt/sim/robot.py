@@ -36,6 +36,7 @@ from roomba_bt.sim.faults import Faults
 from roomba_bt.sim.motion import WHEEL_SPEED_STEP_MM_S, drive_wheel_speeds
 from roomba_bt.sim.protocol import PASSIVE_SLEEP_SECONDS, OIProtocol
 from roomba_bt.sim.replies import CHECKSUM_BYTE
+from roomba_bt.sim.sensing import FAR_ALL
 from roomba_bt.sim.state import STEP_SECONDS, SimEvent, TracePoint, Violation
 from roomba_bt.sim.timeline import Timeline
 from roomba_bt.sim.world import Pose, World
@@ -148,7 +149,8 @@ class Simulator(OIProtocol):
         if self._geometry_dirty:
             # the far sensors measured now only if read every step (sensing.py)
             stream = self._stream
-            self._sense(self.builtin is not None or (stream is not None and stream.far))
+            far = 0 if stream is None else stream.far
+            self._sense(FAR_ALL if self.builtin is not None else far)
         if mode is _SAFE:
             if self._safety_due:
                 self._safety()

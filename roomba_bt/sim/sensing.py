@@ -65,8 +65,28 @@ RECEIVER_OUTER = math.radians(90.0)
 VIRTUAL_WALL_CHARACTER = 162
 #: the far sensors' packets: wall (8, 27), virtual wall (13), IR (17, 52, 53), light bumper
 FAR_PACKETS = frozenset((8, 13, 17, 27, 45, 46, 47, 48, 49, 50, 51, 52, 53))
+#: The far sensors in three groups, each measured every step only while something reads it
+#: (bits of the ``far`` argument of :meth:`Sensing._sense`): a dock mission streams the light
+#: bumper and the IR receivers but not the wall sensor, whose ray is then owed.
+FAR_LIGHT = 1  # the light bumper, 45-51
+FAR_WALL = 2  # the wall sensor, 8 and 27
+FAR_IR = 4  # the virtual wall and IR receivers, 13, 17, 52, 53
+FAR_ALL = FAR_LIGHT | FAR_WALL | FAR_IR
+_FAR_RAYS = FAR_LIGHT | FAR_WALL
+_FAR_GROUPS = (
+    (FAR_LIGHT, frozenset(range(45, 52))),
+    (FAR_WALL, frozenset((8, 27))),
+    (FAR_IR, frozenset((13, 17, 52, 53))),
+)
+
+
+def far_groups(packets: frozenset[int] | set[int]) -> int:
+    """The far sensor groups (FAR_LIGHT, FAR_WALL, FAR_IR bits) among ``packets``."""
+    return sum(group for group, members in _FAR_GROUPS if not members.isdisjoint(packets))
+
+
 _NEAR_MARGIN_MM = 300.0
-_RAY_RANGES = (LIGHT_BUMP_RANGE_MM,) * 6 + (WALL_SENSOR_RANGE_MM,)
+_LIGHT_RANGES = (LIGHT_BUMP_RANGE_MM,) * 6
 #: the farthest any ray reaches from the robot's centre, and 1 mm more
 _RAY_REACH = ROBOT_RADIUS_MM + max(LIGHT_BUMP_RANGE_MM, WALL_SENSOR_RANGE_MM) + 1.0
 _Line = tuple[float, float, float, float, float, float, float, float, float]
@@ -108,23 +128,22 @@ def _wall(seg: Segment) -> _Wall:
     return (ax, ay, ex, ey, ex * ex + ey * ey or 1.0, _line(seg), seg)
 
 
-#: each ray as a rotation of the heading (:meth:`Sensing._sense_rays` turning): its index,
-#: cos and sin. The wall sensor's, by -90 deg, gives (sin, -cos) of the heading as _rays
-#: does: the same numbers, x + 0.0 and x * -1.0 being exact (but for a heading of -0.0,
-#: whose sine -0.0 comes out +0.0: a zero either way, the rays meet the same walls at the
-#: same places)
+#: each ray as a rotation of the heading: its index, cos and sin. The wall sensor's, by
+#: -90 deg, gives (sin, -cos) of the heading as :meth:`Sensing._sense_wall` takes it: the same
+#: numbers, x + 0.0 and x * -1.0 being exact (but for a heading of -0.0, whose sine -0.0
+#: comes out +0.0: a zero either way, the rays meet the same walls at the same places)
 _RAY_TURNS = (*_LIGHT_BUMP_RAYS, (6, 0.0, -1.0))
-#: the rays of _RAY_TURNS sorted by their angle from the heading, repeated a turn below and
-#: a turn above (:meth:`Sensing._sense_rays` turning): the rays whose angle is within a
+#: the light bumper's rays sorted by their angle from the heading, repeated a turn below
+#: and a turn above (:meth:`Sensing._sense_rays` turning): the rays whose angle is within a
 #: window about any bearing in -pi..pi (the window less than a turn wide) are one slice of
-#: them, found by bisection of _ARC_ANGLES. (The rays lie within -90..65 deg and a window
+#: them, found by bisection of _ARC_ANGLES. (The rays lie within -65..65 deg and a window
 #: reaches 90 deg and a margin either side of its bearing: a copy a turn away falls in one
 #: only at right angles to the wall's normal, where n.d is 0 but for rounding. Kept so that
 #: the slice holds every ray the full loop would test, rounding and all.)
 _ARC = sorted(
     (math.atan2(sa, ca) + turn, (i, ca, sa))
     for turn in (-2.0 * math.pi, 0.0, 2.0 * math.pi)
-    for i, ca, sa in _RAY_TURNS
+    for i, ca, sa in _LIGHT_BUMP_RAYS
 )
 _ARC_ANGLES = tuple(angle for angle, _ in _ARC)
 _ARC_RAYS = tuple(ray for _, ray in _ARC)
@@ -139,13 +158,9 @@ _HALF_TOP = math.pi / 2.0 + 3 * _ANGLE_MARGIN
 
 
 def _rays(theta: float) -> tuple[_Ray, ...]:
-    """The rays' directions for a heading ``theta``: the light bumper's six, then the wall
-    sensor's, which looks right of the heading (a ray through the centre, started on the
-    bumper: near enough to the real sensor at -60 deg, looking right)."""
+    """The light bumper's six rays' directions for a heading ``theta``."""
     ct, st = math.cos(theta), math.sin(theta)
-    rays = [(i, ct * ca - st * sa, st * ca + ct * sa) for i, ca, sa in _LIGHT_BUMP_RAYS]
-    rays.append((6, st, -ct))
-    return tuple(rays)
+    return tuple((i, ct * ca - st * sa, st * ca + ct * sa) for i, ca, sa in _LIGHT_BUMP_RAYS)
 
 
 def _facing_walls(
@@ -280,14 +295,13 @@ class Sensing(RobotState):
         self._ir_beamless = not (world.virtual_walls or world.lighthouses)
         self._ir_quiet_at = (math.inf, math.inf)
         self._ir_quiet2 = 0.0
-        #: the far sensors owed (see the module's docstring). The rays: whether they are owed
-        #: from the last :meth:`_sense`'s pose and close walls, which stay the robot's own
-        #: until the next step moves it (and senses again): a flag, not a tuple a step. The
-        #: IR receivers' are due every other step: the arguments of :meth:`_sense_ir` as
-        #: they were due, or None
-        self._rays_owed = False
+        #: the far sensors owed (see the module's docstring). The rays: the groups of them
+        #: (FAR_LIGHT, FAR_WALL) the last :meth:`_sense` measured, the others owed from its
+        #: pose and close walls, which stay the robot's own until the next step moves it (and
+        #: senses again): a number, not a tuple a step. The IR receivers' are due every other
+        #: step: the arguments of :meth:`_sense_ir` as they were due, or None
+        self._rays_read = _FAR_RAYS
         self._owed_ir: tuple[float, float, float, int, bool] | None = None
-        self._far_owed = False
         #: how far the robot can move before a wall could stop it (motion's fast path): exact
         #: where the walls were measured, elsewhere a bound below it (``_walls_clear``)
         self._clearance = 0.0
@@ -304,9 +318,10 @@ class Sensing(RobotState):
 
     # Few calls (the rays only near a wall): it runs on every step the robot moves, and a call
     # costs about a tenth of a microsecond, 3 % of a whole step.
-    def _sense(self, far: bool = True) -> None:
+    def _sense(self, far: int = FAR_ALL) -> None:
         """Every geometric sensor, from the pose and the world (only when either changed);
-        the far sensors now if ``far`` (something reads them every step), else owed."""
+        the far sensors of the groups in ``far`` (FAR_LIGHT, FAR_WALL, FAR_IR: something reads
+        them every step) now, the others owed."""
         self._geometry_dirty = False
         v = self.values
         x, y, theta = self.x, self.y, self.theta
@@ -328,25 +343,25 @@ class Sensing(RobotState):
         if bumps != self._prev_bumps:
             self._bumps_changed(bumps)
         close_lines = self._walls_lines
-        if far:  # measured now: what was owed is out of date (a fall measures at once)
+        # measured now: what was owed is out of date (a fall measures at once)
+        rays = self._rays_read = far & _FAR_RAYS
+        if rays:
             if close_lines:
-                v[45] = self._sense_rays(x, y, theta, close_lines)
-            elif self._rays_on:
+                if rays & FAR_LIGHT:
+                    v[45] = self._sense_rays(x, y, theta, close_lines)
+                if rays & FAR_WALL:
+                    self._sense_wall(x, y, theta, close_lines)
+            elif self._rays_on:  # no wall in reach: every ray dark, none owed
                 v[45] = v[46] = v[47] = v[48] = v[49] = v[50] = v[51] = v[27] = v[8] = 0
                 self._rays_on = False
-            self._rays_owed = False
-        else:
-            self._rays_owed = True
-            self._far_owed = True
         if self._ground_varies or self._prev_cliffs:  # else no cliff, no dirt, as before
             self._sense_ground(x, y, theta)
         if not self.ticks & 1 or self._ir_stale:
-            if far:
+            if far & FAR_IR:
                 self._sense_ir(x, y, theta, self.ticks, self.dock_powered)
                 self._owed_ir = None
             else:
                 self._owed_ir = (x, y, theta, self.ticks, self.dock_powered)
-                self._far_owed = True
             self._ir_stale = False
         if contacts:
             self._sense_contacts(x, y, theta)
@@ -387,34 +402,33 @@ class Sensing(RobotState):
         """Measure the far sensors owed, from the pose and step they were due at: before a
         reply and whenever something starts to read them every step (a stream of them, a
         built-in cycle), after which :meth:`_sense` measures them as they are due."""
-        if not self._far_owed:
-            return
+        owed = _FAR_RAYS & ~self._rays_read
+        if owed:
+            self._rays_read = _FAR_RAYS
+            close_lines = self._walls_lines
+            if close_lines:
+                x, y, theta = self.x, self.y, self.theta
+                if owed & FAR_LIGHT:
+                    self.values[45] = self._sense_rays(x, y, theta, close_lines)
+                if owed & FAR_WALL:
+                    self._sense_wall(x, y, theta, close_lines)
+            elif self._rays_on:
+                v = self.values
+                v[45] = v[46] = v[47] = v[48] = v[49] = v[50] = v[51] = v[27] = v[8] = 0
+                self._rays_on = False
         ir = self._owed_ir
-        self._owed_ir = None
-        self._far_owed = False
-        if self._rays_owed:
-            self._rays_owed = False
-            self._far_rays(self.x, self.y, self.theta, self._walls_lines)
         if ir is not None:
+            self._owed_ir = None
             self._sense_ir(*ir)
 
-    def _far_rays(self, x: float, y: float, theta: float, close_lines: tuple[_Line, ...]) -> None:
-        """The light bumper and the wall sensor: rays from the bumper against close walls."""
-        v = self.values
-        light_bits = 0
-        if close_lines:
-            light_bits = self._sense_rays(x, y, theta, close_lines)
-        elif self._rays_on:
-            v[46] = v[47] = v[48] = v[49] = v[50] = v[51] = v[27] = v[8] = 0
-            self._rays_on = False
-        v[45] = light_bits
-
     def _sense_rays(self, x: float, y: float, theta: float, close_lines: tuple[_Line, ...]) -> int:
-        """The light bumper (packets 45-51) and the wall sensor (8, 27): rays from the
-        bumper against the walls close enough to show; returns packet 45's bits."""
+        """The light bumper (packets 46-51): six rays from the bumper against the walls close
+        enough to show; returns packet 45's bits. A ray's signal is worked out where it hits
+        (a ray meets a second wall only closer: its signal, stronger, replaces the first)."""
         v = self.values
-        hits = list(_RAY_RANGES)
-        lit: list[int] = []  # the rays that hit a wall in range (a ray may come twice)
+        v[46:52] = _DARK
+        hits = list(_LIGHT_RANGES)  # the nearest hit of each ray so far
+        bits = 0
         radius = ROBOT_RADIUS_MM
         # A ray from the centre c in direction d meets a wall's line at c + k d,
         # k = (n.a - n.c) / (n.d); the ray starts on the bumper (k = R), the hit's place along
@@ -426,8 +440,8 @@ class Sensing(RobotState):
             # directions as _rays gives them, worked out in the loop (no tuple of them made
             # for one use). A ray meets the wall's line in range only if n.d > least, i.e.
             # if its angle from the normal is below acos(least) (< half): only the rays
-            # within half of the normal's bearing are looked at, the others (four or five of
-            # seven, usually) passed over by bisecting the rays sorted by angle (_ARC).
+            # within half of the normal's bearing are looked at, the others (four of six,
+            # usually) passed over by bisecting the rays sorted by angle (_ARC).
             self._rays_theta = theta
             ct, st = math.cos(theta), math.sin(theta)
             for nx, ny, w, tx, ty, ta, length, ahead, behind in close_lines:
@@ -460,7 +474,11 @@ class Sensing(RobotState):
                     along = q + k * (tx * c + ty * s)
                     if 0.0 <= along <= length:
                         hits[i] = t
-                        lit.append(i)
+                        signal = v[46 + i] = int(4095 * (1.0 - t / LIGHT_BUMP_RANGE_MM) ** 2)
+                        if signal >= LIGHT_BUMP_THRESHOLD:
+                            bits |= 1 << i
+                        else:
+                            bits &= ~(1 << i)
         else:
             # The heading of the last step (driving straight, or standing): the rays that can
             # meet each wall, worked out once for this heading and these walls.
@@ -488,24 +506,43 @@ class Sensing(RobotState):
                     along = q + k * td
                     if 0.0 <= along <= length:
                         hits[i] = t
-                        lit.append(i)
-        # only the rays that hit have a signal (two or three of seven, usually)
-        v[46:52] = _DARK
-        v[27] = v[8] = 0
-        light_bits = 0
-        for i in lit:
-            d = hits[i]
-            if i == 6:
-                top = self.profile.wall_signal_maximum
-                v[27] = int(top * (1.0 - d / WALL_SENSOR_RANGE_MM) ** 2)
-                v[8] = 1 if d < WALL_SENSOR_TRIGGER_MM else 0
-            else:
-                signal = int(4095 * (1.0 - d / LIGHT_BUMP_RANGE_MM) ** 2)
-                v[46 + i] = signal
-                if signal >= LIGHT_BUMP_THRESHOLD:
-                    light_bits |= 1 << i
+                        signal = v[46 + i] = int(4095 * (1.0 - t / LIGHT_BUMP_RANGE_MM) ** 2)
+                        if signal >= LIGHT_BUMP_THRESHOLD:
+                            bits |= 1 << i
+                        else:
+                            bits &= ~(1 << i)
         self._rays_on = True
-        return light_bits
+        return bits
+
+    def _sense_wall(self, x: float, y: float, theta: float, close_lines: tuple[_Line, ...]) -> None:
+        """The wall sensor (packets 8, 27): a ray right of the heading (through the centre,
+        started on the bumper: near enough to the real sensor at -60 deg, looking right)
+        against the close walls, with the light bumper's arithmetic (:meth:`_sense_rays`)."""
+        c, s = math.sin(theta), -math.cos(theta)
+        hit = WALL_SENSOR_RANGE_MM
+        for nx, ny, w, tx, ty, ta, length, _, _ in close_lines:
+            p = w - (nx * x + ny * y)
+            if p < 0.0:
+                nx, ny, p = -nx, -ny, -p
+            dn = nx * c + ny * s
+            if dn <= p / _RAY_REACH:
+                continue
+            k = p / dn
+            t = k - ROBOT_RADIUS_MM
+            if t < 0.0 or t >= hit:
+                continue
+            q = tx * x + ty * y - ta
+            along = q + k * (tx * c + ty * s)
+            if 0.0 <= along <= length:
+                hit = t
+        v = self.values
+        if hit < WALL_SENSOR_RANGE_MM:
+            top = self.profile.wall_signal_maximum
+            v[27] = int(top * (1.0 - hit / WALL_SENSOR_RANGE_MM) ** 2)
+            v[8] = 1 if hit < WALL_SENSOR_TRIGGER_MM else 0
+        else:
+            v[27] = v[8] = 0
+        self._rays_on = True
 
     def _bumps_changed(self, bumps: int) -> None:
         """Packet 7 changed: mark a new bump and a new wheel drop."""
