@@ -116,6 +116,14 @@ def drive_wheel_speeds(velocity: float, radius: int, wheel_base_mm: float) -> tu
 class Motion(Sensing):
     """Wheel speeds asked for and done, the pose's change, odometry, collisions."""
 
+    #: its own state's attributes (state.py: slots, not a dict, on the step's path)
+    __slots__ = (
+        "_angle_acc", "_distance_acc", "_dock_target", "_encoder_bias", "_half_base",
+        "_last_drive", "_left_counts", "_motion", "_right_counts", "_stall_steps", "_travel",
+        "_travel_heading", "_travel_motion", "blocked", "left_speed", "requested_left",
+        "requested_right", "right_speed",
+    )  # fmt: skip
+
     def _init_motion(self) -> None:
         self.requested_left = 0.0  # mm/s, from Drive / Drive Direct / Drive PWM
         self.requested_right = 0.0

@@ -41,6 +41,12 @@ _FAST_CHARGE_MA = 200.0
 class Power(Motion):
     """Battery charge and currents; the brushes and vacuum, which draw current too."""
 
+    #: its own state's attributes (state.py: slots, not a dict, on the step's path)
+    __slots__ = (
+        "_battery_at", "_charge", "_charge_owed", "_current", "_power_key", "brush_pwm",
+        "motor_bits",
+    )  # fmt: skip
+
     def _init_power(self) -> None:
         #: the charge (mAh) as of the last battery step, and the steps since whose charge is
         #: owed (:attr:`battery_charge` is the charge now)

@@ -68,6 +68,14 @@ def _count_offset(spec: CommandSpec) -> int:
 class OIProtocol(StreamOutput):
     """Host bytes to commands, commands to state; the mode rules."""
 
+    #: its own state's attributes (state.py: slots, not a dict, on the step's path)
+    __slots__ = (
+        "_buttons_until", "_commands", "_data_sizes", "_drive_modes", "_inbuf",
+        "_last_activity", "_rng", "_song_until", "_tails", "baud", "brc_low", "brc_pulses",
+        "builtin", "day_time", "deaf", "digits", "firmware", "ignored_bytes", "leds",
+        "schedule", "scheduling_leds", "songs",
+    )  # fmt: skip
+
     def _init_protocol(self) -> None:
         profile = self.profile
         self.baud = profile.default_baud

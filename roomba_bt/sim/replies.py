@@ -103,6 +103,13 @@ def stream_payload(ids: tuple[int, ...], profile: RobotProfile) -> int:
 class StreamOutput(Power):
     """What the robot has sent and the host has not read; the stream it sends every step."""
 
+    #: its own state's attributes (state.py: slots, not a dict, on the step's path)
+    __slots__ = (
+        "_delayed", "_flip_in", "_gapped_stream", "_next_inject", "_out", "_plain_output",
+        "_reply_packers", "_stream", "_stream_ids", "_stream_paused", "bytes_sent",
+        "frames_sent",
+    )  # fmt: skip
+
     def _init_output(self) -> None:
         faults = self.faults
         self._stream: _Packer | None = None

@@ -63,6 +63,12 @@ class Simulator(OIProtocol):
     robot sent. Same world, seed, faults and input bytes -> the same output bytes.
     """
 
+    #: its own state's attributes (state.py: slots, not a dict, on the step's path)
+    __slots__ = (
+        "_disconnect_at", "_fault_at", "_next_timed", "_timed_faults", "_timeline",
+        "keeps_trace", "swept",
+    )  # fmt: skip
+
     def __init__(
         self,
         world: World,

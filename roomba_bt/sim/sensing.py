@@ -258,6 +258,15 @@ class _DockBeams:
 class Sensing(RobotState):
     """The sensors' packets in :attr:`values`, measured again when the pose or world changed."""
 
+    #: its own state's attributes (state.py: slots, not a dict, on the step's path)
+    __slots__ = (
+        "_beams", "_body_bits", "_clearance", "_dirt", "_drops", "_facing", "_facing_lines",
+        "_facing_theta", "_geometry_dirty", "_ground_varies", "_ir_beamless", "_ir_quiet2",
+        "_ir_quiet_at", "_ir_stale", "_near", "_near_at", "_owed_ir", "_prev_bumps",
+        "_prev_cliffs", "_rays_on", "_rays_read", "_rays_theta", "_safety_due", "_walls",
+        "_walls_at", "_walls_clear", "_walls_lines", "_walls_same2",
+    )  # fmt: skip
+
     def _init_sensing(self) -> None:
         world = self.world
         v = self.values

@@ -6,7 +6,6 @@ from __future__ import annotations
 import threading
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 from roomba_bt.mission import load_mission
 from roomba_bt.monitor.feed import RunFeed
@@ -68,18 +67,18 @@ def start_live_run(
     history: int | None = 20_000,
 ) -> LiveRun:
     compiled = load_mission(mission, params or {}, profile=CREATE2)
-    simulator = Simulator(load_world(world), CREATE2, 0)
     steps: list[Step] = []
     writes: list[tuple[float, bytes]] = []
-    step = simulator.step
 
-    def logged_step(*args: Any, **kwargs: Any) -> None:
-        step(*args, **kwargs)
-        steps.append(
-            Step(simulator.time, simulator.left_speed, simulator.right_speed, simulator.mode)
-        )
+    class LoggedSimulator(Simulator):
+        """Notes the wheels and mode after every step (a subclass: the simulator's
+        attributes are slots, its methods not replaceable on the instance)."""
 
-    simulator.step = logged_step  # type: ignore[method-assign]
+        def step(self, dt: float = 0.015) -> None:
+            super().step(dt)
+            steps.append(Step(self.time, self.left_speed, self.right_speed, self.mode))
+
+    simulator = LoggedSimulator(load_world(world), CREATE2, 0)
     link: SimLink = RealtimeSimLink(simulator) if realtime else SimLink(simulator)
     write = link.write
 
