@@ -118,7 +118,10 @@ class StreamOutput(Power):
         #: the stream held back during a ``stream_gap_at`` fault (robot.py), or None
         self._gapped_stream: _Packer | None = None
         self._next_inject = faults.inject_every if faults.inject_text else math.inf
-        self._out = bytearray()
+        #: what was sent and not read yet, as sent: a list of byte strings, joined when read
+        #: (one frame a step, read after each: read hands the frame itself over, no copy in
+        #: and out of a buffer)
+        self._out: list[bytes] = []
         self._delayed: deque[tuple[float, bytes]] = deque()
         self._reply_packers: dict[tuple[int, ...], _Packer] = {}
         #: no fault touches the bytes on their way out: a frame goes straight into _out
@@ -181,11 +184,12 @@ class StreamOutput(Power):
         if self._delayed:
             now = self.time
             while self._delayed and self._delayed[0][0] <= now + 1e-9:
-                self._out += self._delayed.popleft()[1]
-        if not self._out:
+                self._out.append(self._delayed.popleft()[1])
+        out = self._out
+        if not out:
             return b""
-        data = bytes(self._out)
-        self._out.clear()
+        data = b"".join(out)  # one byte string: itself
+        out.clear()
         return data
 
     def _emit(self, data: bytes) -> None:
@@ -206,7 +210,7 @@ class StreamOutput(Power):
         if faults.latency:
             self._delayed.append((self.time + faults.latency, data))
         else:
-            self._out += data
+            self._out.append(data)
 
     def _next_flip(self) -> int:
         """Bytes to the next flipped one: geometric with the per-byte rate (0: this one)."""

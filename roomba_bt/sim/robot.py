@@ -197,7 +197,7 @@ class Simulator(OIProtocol):
             if self._plain_output:  # no fault on the way out: straight into the output
                 self.frames_sent += 1
                 self.bytes_sent += len(frame)
-                self._out += frame
+                self._out.append(frame)
             else:
                 self._send_frame(frame)
 
