@@ -687,10 +687,12 @@ class Sensing(RobotState):
         c, s = math.cos(theta), math.sin(theta)
         omni_x, omni_y = x + OMNI_FORWARD_MM * c, y + OMNI_FORWARD_MM * s
         omni = left = right = 0
+        near = False  # the omni receiver within the beams' reach
         beams = self._beams
         if beams is not None:
             dx, dy = omni_x - beams.x, omni_y - beams.y
-            if dx * dx + dy * dy < beams.reach2 and powered:
+            near = dx * dx + dy * dy < beams.reach2
+            if near and powered:
                 character = beams.character
                 omni = character(omni_x, omni_y)
                 fx = x + RECEIVER_FORWARD_MM * c
@@ -725,7 +727,10 @@ class Sensing(RobotState):
         v[52] = left
         v[53] = right
         if self._ir_beamless:
-            self._ir_quiet_circle(x, y)
+            if near:  # the centre within OMNI_FORWARD_MM more: no quiet circle (0)
+                self._ir_quiet2 = 0.0
+            else:
+                self._ir_quiet_circle(x, y)
 
     def _ir_quiet_circle(self, x: float, y: float) -> None:
         """How far the robot may move from (``x``, ``y``) with every IR receiver beyond the
