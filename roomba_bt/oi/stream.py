@@ -63,6 +63,7 @@ def check_bandwidth(packet_ids: Iterable[int], baud: int) -> int:
 
 
 _new_object = object.__new__
+_from_bytes = int.from_bytes
 
 ByteSum = Callable[[bytes | bytearray | memoryview], int]
 
@@ -257,16 +258,24 @@ class StreamParser:
         of what is refused, a frame cut short).
 
         What one read brings on the tick path: the four checks of :meth:`_scan` and the
-        common case of :meth:`plausible` in one method, without copying into the buffer."""
+        common case of :meth:`plausible` in one method, without copying into the buffer.
+
+        The functions kept in the parser's slots (the byte sum, the unpacking) are read into
+        a local and called from there: ``self._byte_sum(data)`` is a method-call lookup,
+        which CPython 3.11 specialises only for methods of the class, not for a function in
+        an attribute (so it took the generic lookup every frame); ``int.from_bytes`` too
+        (a class method read off the type), bound once at import instead."""
         size = self._size
+        byte_sum = self._byte_sum
         if (
             len(data) != size
             or self._buffer
-            or int.from_bytes(data, "big") & self._mask != self._template
-            or self._byte_sum(data) & 0xFF not in self._ok_sums
+            or _from_bytes(data, "big") & self._mask != self._template
+            or byte_sum(data) & 0xFF not in self._ok_sums
         ):
             return None
-        values = self._unpack(data, 2)
+        unpack = self._unpack
+        values = unpack(data, 2)
         checks = self._checks
         if checks is not None and not checks(values):
             return None

@@ -147,7 +147,8 @@ class HazardConfirmation:
         confirmed, and the word is not folded again."""
         if frame.layout is not self._layout:
             self._bind(frame.layout)
-        raw = self._raw(frame.values)
+        read_raw = self._raw  # read, then called: see StreamParser.take
+        raw = read_raw(frame.values)
         if raw == self._previous_raw:
             self.pending = 0
             return frame

@@ -297,7 +297,10 @@ class StreamLink:
                     frame = parser.take(data, now)
                     if frame is not None:  # one whole frame: _checked's work, for it alone
                         index = self.index = self.index + 1
-                        change = self._reconcile(frame, index, now)
+                        # read, then called: a method-call lookup of a function kept in an
+                        # attribute is not specialised by CPython 3.11 (generic every frame)
+                        reconcile = self._reconcile
+                        change = reconcile(frame, index, now)
                         if change is not None:
                             self._report(change)
                         self.frame = frame
