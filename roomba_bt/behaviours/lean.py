@@ -440,6 +440,20 @@ class Selector(Stepped, _CompositeStop, py_trees.composites.Selector):
 class Parallel(Stepped, py_trees.composites.Parallel):
     """py_trees 2.6's ``Parallel.tick``, step for step."""
 
+    def __init__(
+        self,
+        name: str,
+        policy: py_trees.common.ParallelPolicy.Base,
+        children: typing.Sequence[Behaviour] | None = None,
+    ) -> None:
+        super().__init__(name, policy, children)
+        #: whether the node's class checks its policy as py_trees' does (which has nothing to
+        #: say of SuccessOnAll and SuccessOnOne): found once, as the class cannot change
+        #: under its node, for :meth:`tick_direct`, where ``type(self).<method>`` (a read off
+        #: the class, which CPython 3.11 does not specialise) was a few hundred instructions
+        #: on every tick
+        self._stock_policy_check = type(self).validate_policy_configuration is _VALIDATE_POLICY
+
     def stop(self, new_status: Status = Status.INVALID) -> None:
         if py_trees.logging.level is _DEBUG:
             self.logger.debug(f"{type(self).__name__}.stop()[{self.status}->{new_status}]")
@@ -464,7 +478,7 @@ class Parallel(Stepped, py_trees.composites.Parallel):
         if (
             (kind is not _ON_ONE and kind is not _ON_ALL)
             or py_trees.logging.level is _DEBUG
-            or type(self).validate_policy_configuration is not _VALIDATE_POLICY
+            or not self._stock_policy_check
             or not self.children
         ):
             Stepped.tick_direct(self)

@@ -148,6 +148,13 @@ class DockApproach(DockingAction):
     #: the dock and starts over from the edge of the force field; three are usually enough.
     MAX_CROSSINGS = 6
 
+    def __init__(self, name: str, params: dict[str, object] | None = None) -> None:
+        super().__init__(name, params)
+        #: an attribute of each node, not a class default: CPython 3.11 does not specialise
+        #: reading an attribute whose class holds an instance of a Python class (an enum
+        #: member) under the same name, read on every tick (``_ACTS[self.state]``)
+        self.state = ApproachState.FACE
+
     def start(self) -> None:
         self.begin()
         # read once a start, used on every tick
@@ -475,7 +482,7 @@ class DockApproach(DockingAction):
         self.spin_toward(err, share * self._turn_speed)
         return False
 
-    state = ApproachState.FACE
+    state: ApproachState
     _crossings = 0
     _before_at: float | None = None
     _past_at: float | None = None

@@ -77,6 +77,13 @@ class DockDriveOn(DockingAction):
     #: the receivers (the view), the home base, the bumper
     WATCHED = (*IR_PACKETS, *CHARGING_SOURCES_PACKETS, *BUMPS_PACKETS)
 
+    def __init__(self, name: str, params: dict[str, object] | None = None) -> None:
+        super().__init__(name, params)
+        #: an attribute of each node, not a class default: CPython 3.11 does not specialise
+        #: reading an attribute whose class holds an instance of a Python class (an enum
+        #: member) under the same name, read on every tick (``_ACTS[self.state]``)
+        self.state = DriveOnState.DRIVE
+
     def start(self) -> None:
         self.begin()
         # read once a start, used on every tick
@@ -150,7 +157,7 @@ class DockDriveOn(DockingAction):
         self.wheels(-spin + WIGGLE_PUSH_MM_S, spin + WIGGLE_PUSH_MM_S)
         return RUNNING
 
-    state = DriveOnState.DRIVE
+    state: DriveOnState
     _wiggle_step = 0
     _last_seen = 0.0
     _speed = 0.0

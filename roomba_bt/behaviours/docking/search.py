@@ -227,6 +227,10 @@ class DockSearch(DockingAction):
     def __init__(self, name: str, params: dict[str, object] | None = None) -> None:
         super().__init__(name, params)
         self.grid = VisitGrid()
+        #: an attribute of each node, not a class default: CPython 3.11 does not specialise
+        #: reading an attribute whose class holds an instance of a Python class (an enum
+        #: member) under the same name, read on every tick (``_ACTS[self.state]``)
+        self.state = SearchState.SPIN
 
     def start(self) -> None:
         self.begin()
@@ -474,7 +478,7 @@ class DockSearch(DockingAction):
             self.wheels(speed + turn, speed - turn)
         self._kept = (signals, self._bumped, self._asked)
 
-    state = SearchState.SPIN
+    state: SearchState
     _spun = False
     _want_wall = True
     _avoid = 0.0
