@@ -191,7 +191,6 @@ class MissionRunner(BaseHandle):
         #: while a stall is ridden through: (bytes read when it began, drive 0 sent, the
         #: last valid frame's time)
         self._stall: tuple[int, bool, float] | None = None
-        self._snapshot: Snapshot | None = None
         self.snapshot = NO_SNAPSHOT_YET
         self._odometer = Odometer(profile.wheel_base_mm)
         self._tick = -1
@@ -209,13 +208,15 @@ class MissionRunner(BaseHandle):
         self._blackboard: py_trees.blackboard.Client | None = None
         #: hazards shown to the tree once two frames agree, or the robot's own reaction does
         self._hazards = HazardConfirmation()
-        self._confirm = self._hazards.frame  # bound once, called every tick
         self._fallback_seen: object = None
-        #: the connection's mode model and command writer, read on every tick (one hop, not
-        #: a chain of properties)
+        #: the connection's mode model and link, read on every tick (one hop, not a chain of
+        #: properties)
         self._modes = connection.modes
-        self._writer = connection.writer
         self._link = connection.link
+        # No more attributes than these 29 (a subclass may add its own): CPython 3.11 keeps
+        # an instance's attributes in a compact table shared by its class only up to 30
+        # names; past that the instance gets a dictionary of its own, and then no method call
+        # on it (``self._advance(...)``, ``self._flush()`` every tick) is specialised.
 
     # ---------------------------------------------------------------- RobotHandle
     #: this tick's snapshot: an attribute set by each tick (the leaves read it several times
@@ -225,7 +226,7 @@ class MissionRunner(BaseHandle):
 
     @property
     def has_snapshot(self) -> bool:
-        return self._snapshot is not None
+        return self.snapshot is not NO_SNAPSHOT_YET
 
     # ---------------------------------------------------------------- running
     def run(self) -> RunSummary:
@@ -294,7 +295,7 @@ class MissionRunner(BaseHandle):
             with contextlib.suppress(Exception):
                 self._blackboard.unregister(clear=True)
         summary.wall_time_s = time.perf_counter() - wall_start
-        snap = self._snapshot
+        snap = self.snapshot if self.has_snapshot else None
         if snap is not None:
             summary.mission_time_s = snap.time
             summary.distance_mm = snap.odometry.path_mm
@@ -409,10 +410,10 @@ class MissionRunner(BaseHandle):
         modes = self._modes
         fallback = modes.last_fallback
         if fallback is self._fallback_seen:
-            frame = self._confirm(frame)
+            frame = self._hazards.frame(frame)
         else:
             self._fallback_seen = fallback
-            frame = self._confirm(frame, True)
+            frame = self._hazards.frame(frame, True)
         summary = self.summary
         last = self._last_arrival
         self._last_arrival = arrival
@@ -436,7 +437,7 @@ class MissionRunner(BaseHandle):
             self._profile,
             summary.frames_lost,
         ))  # fmt: skip
-        self._snapshot = self.snapshot = snapshot
+        self.snapshot = snapshot
         if self._blackboard is not None:
             if _Blackboard.activity_stream is None:
                 # the client's own key, registered for writing: its permission checks and
@@ -448,7 +449,7 @@ class MissionRunner(BaseHandle):
 
     def _stale(self, batch: Sequence[SensorFrame]) -> None:
         """The frames of a batch before its newest: dropped (counted), their hazards seen."""
-        confirm = self._confirm
+        confirm = self._hazards.frame
         for older in batch[:-1]:
             confirm(older)
         self.summary.stale_frames_dropped += len(batch) - 1
@@ -464,7 +465,7 @@ class MissionRunner(BaseHandle):
         return slots
 
     def _flush(self) -> None:
-        if self._hazards.pending or self._writer.forward_held:
+        if self._hazards.pending or self.connection.writer.forward_held:
             self._bump_reflex()
         if not self._outbox.queued:
             return
@@ -478,7 +479,7 @@ class MissionRunner(BaseHandle):
             except ModeError as exc:
                 self.summary.refused_commands += 1
                 if len(self.refusals) < 100:
-                    when = self._snapshot.time if self._snapshot is not None else 0.0
+                    when = self.snapshot.time if self.has_snapshot else 0.0
                     self.refusals.append(f"t={when:.3f} {exc}")
 
     def _bump_reflex(self) -> None:
