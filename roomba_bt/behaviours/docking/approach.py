@@ -148,12 +148,70 @@ class DockApproach(DockingAction):
     #: the dock and starts over from the edge of the force field; three are usually enough.
     MAX_CROSSINGS = 6
 
+    #: the stage's own state in slots (see :class:`~.common.DockingAction`)
+    __slots__ = (
+        "_back_until",
+        "_band_seen",
+        "_before_at",
+        "_centred",
+        "_cross_angle",
+        "_cross_path",
+        "_cross_side",
+        "_crossings",
+        "_face_target",
+        "_guesses",
+        "_hazard",
+        "_last_seen",
+        "_last_side",
+        "_last_side_time",
+        "_lead_theta",
+        "_lost_after",
+        "_orbit",
+        "_past_at",
+        "_retreat",
+        "_run",
+        "_side_guess",
+        "_speed",
+        "_spin_dir",
+        "_starts",
+        "_sweep",
+        "_turn_speed",
+        "_view",
+        "state",
+    )
+
     def __init__(self, name: str, params: dict[str, object] | None = None) -> None:
         super().__init__(name, params)
         #: an attribute of each node, not a class default: CPython 3.11 does not specialise
         #: reading an attribute whose class holds an instance of a Python class (an enum
         #: member) under the same name, read on every tick (``_ACTS[self.state]``)
         self.state = ApproachState.FACE
+        self._crossings = 0
+        self._before_at = None
+        self._past_at = None
+        self._band_seen = False
+        self._cross_path = 0.0
+        self._orbit = False
+        self._sweep = 1
+        self._centred = False
+        self._retreat = False
+        self._run = None
+        self._starts = 0
+        self._lead_theta = None
+        self._face_target = None
+        self._cross_side = 1
+        self._side_guess = 0
+        self._last_side = 0
+        self._last_side_time = 0.0
+        self._guesses = 0
+        self._spin_dir = 1.0
+        self._last_seen = 0.0
+        self._back_until = 0.0
+        self._speed = 0.0
+        self._turn_speed = 0.0
+        self._cross_angle = 0.0
+        self._lost_after = 0.0
+        self._hazard = None
 
     def start(self) -> None:
         self.begin()
@@ -483,34 +541,14 @@ class DockApproach(DockingAction):
         return False
 
     state: ApproachState
-    _crossings = 0
-    _before_at: float | None = None
-    _past_at: float | None = None
-    _band_seen = False
-    _cross_path = 0.0
-    _orbit = False
-    _sweep = 1
-    _centred = False
-    _retreat = False
-    _run: object = None
-    _starts = 0
-    _lead_theta: float | None = None
-    _face_target: float | None = None
-    _cross_side = 1
-    _side_guess = 0
-    _last_side = 0
-    _last_side_time = 0.0
-    _guesses = 0
-    _spin_dir = 1.0
-    _last_seen = 0.0
-    _back_until = 0.0
-    _speed = 0.0
-    _turn_speed = 0.0
-    _cross_angle = 0.0
-    _lost_after = 0.0
+    _before_at: float | None
+    _past_at: float | None
+    _run: object
+    _lead_theta: float | None
+    _face_target: float | None
     # the readings (read)
     _view: DockView
-    _hazard: Hazard | None = None
+    _hazard: Hazard | None
 
 
 #: Each state's method (see the module's drawing).

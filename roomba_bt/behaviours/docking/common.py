@@ -250,8 +250,37 @@ class DockingAction(Action):
     WATCHED: tuple[int, ...] = ()
     #: what the stage did not do within its ``timeout`` (``{:g}``: the seconds)
     LATE = "not done in {:g} s"
-    #: the stage's goal reached, as :meth:`read` last found it
-    _done = False
+    #: The stages' state in slots, set in ``__init__`` (the class keeps no defaults of
+    #: these names): a node's own attributes past the 30 that CPython 3.11 keeps in its
+    #: class's shared table give it a dictionary of its own, and then no method call on it
+    #: (``self.observe()``, ``self.wheels(...)``, the parent's ``child.tick_direct()``: each
+    #: tick) is specialised. py_trees' and the leaf base classes' attributes stay in the
+    #: instance's own table, now under that limit; each stage adds its slots.
+    __slots__ = (
+        "_asked",
+        "_distance_mark",
+        "_done",
+        "_last_wheels",
+        "_layout",
+        "_raw",
+        "_t0",
+        "_time_limit",
+        "_turn_mark",
+        "_watched",
+    )
+
+    def __init__(self, name: str, params: dict[str, object] | None = None) -> None:
+        super().__init__(name, params)
+        #: the stage's goal reached, as :meth:`read` last found it
+        self._done = False
+        self._layout = None
+        self._raw = None
+        self._last_wheels = (0, 0)
+        self._asked = None
+        self._turn_mark = 0.0
+        self._distance_mark = 0.0
+        self._t0 = 0.0
+        self._time_limit = 0.0
 
     @classmethod
     def declaration_problem(cls, declaration: Declaration) -> str | None:
@@ -317,10 +346,10 @@ class DockingAction(Action):
         until one of those values changes."""
         raise NotImplementedError
 
-    _layout: FrameLayout | None = None
+    _layout: FrameLayout | None
     _watched: Callable[[tuple[int, ...]], tuple[int, ...]]
     #: the values the readings were worked out from (None: none yet)
-    _raw: tuple[int, ...] | None = None
+    _raw: tuple[int, ...] | None
 
     def wheels(self, left: float, right: float) -> None:
         """Drive Direct (mm/s), sent only when the wheel speeds change (the robot keeps
@@ -348,9 +377,8 @@ class DockingAction(Action):
         self._last_wheels = (0, 0)
         self._asked = None
 
-    _last_wheels = (0, 0)
     #: the speeds (mm/s) that set ``_last_wheels``, None after a halt
-    _asked: tuple[float, float] | None = None
+    _asked: tuple[float, float] | None
 
     def fail(self, message: str) -> Status:
         self.halt()
@@ -393,11 +421,6 @@ class DockingAction(Action):
 
     def mark_distance(self) -> None:
         self._distance_mark = self.snapshot.odometry.distance_mm
-
-    _turn_mark = 0.0
-    _distance_mark = 0.0
-    _t0 = 0.0
-    _time_limit = 0.0
 
 
 Stage = TypeVar("Stage", bound=type[DockingAction])

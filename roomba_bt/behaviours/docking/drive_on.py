@@ -77,12 +77,30 @@ class DockDriveOn(DockingAction):
     #: the receivers (the view), the home base, the bumper
     WATCHED = (*IR_PACKETS, *CHARGING_SOURCES_PACKETS, *BUMPS_PACKETS)
 
+    #: the stage's own state in slots (see :class:`~.common.DockingAction`)
+    __slots__ = (
+        "_bumped",
+        "_last_seen",
+        "_slow",
+        "_speed",
+        "_view",
+        "_wiggle_rad",
+        "_wiggle_step",
+        "state",
+    )
+
     def __init__(self, name: str, params: dict[str, object] | None = None) -> None:
         super().__init__(name, params)
         #: an attribute of each node, not a class default: CPython 3.11 does not specialise
         #: reading an attribute whose class holds an instance of a Python class (an enum
         #: member) under the same name, read on every tick (``_ACTS[self.state]``)
         self.state = DriveOnState.DRIVE
+        self._wiggle_step = 0
+        self._last_seen = 0.0
+        self._speed = 0.0
+        self._slow = 0.0
+        self._wiggle_rad = 0.0
+        self._bumped = False
 
     def start(self) -> None:
         self.begin()
@@ -158,14 +176,8 @@ class DockDriveOn(DockingAction):
         return RUNNING
 
     state: DriveOnState
-    _wiggle_step = 0
-    _last_seen = 0.0
-    _speed = 0.0
-    _slow = 0.0
-    _wiggle_rad = 0.0
     # the readings (read)
     _view: DockView
-    _bumped = False
 
 
 #: Each state's method.

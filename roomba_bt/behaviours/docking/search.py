@@ -224,6 +224,36 @@ class DockSearch(DockingAction):
     #: the receivers (is a dock seen), then the hazards (:func:`hazard_of`'s order)
     WATCHED = (*IR_PACKETS, *HAZARD_IN_PACKETS)
 
+    #: the stage's own state in slots (see :class:`~.common.DockingAction`)
+    __slots__ = (
+        "_avoid",
+        "_back_until",
+        "_bumped",
+        "_cell",
+        "_follow_bumps",
+        "_follow_cells",
+        "_follow_for",
+        "_follow_hand",
+        "_follow_lost",
+        "_follow_side",
+        "_follow_speed",
+        "_follow_steer",
+        "_hazard",
+        "_kept",
+        "_leg",
+        "_lit",
+        "_lit_ahead",
+        "_old_cells",
+        "_resume_follow",
+        "_signals",
+        "_speed",
+        "_spun",
+        "_target",
+        "_wall_seen_at",
+        "_want_wall",
+        "state",
+    )
+
     def __init__(self, name: str, params: dict[str, object] | None = None) -> None:
         super().__init__(name, params)
         self.grid = VisitGrid()
@@ -231,6 +261,29 @@ class DockSearch(DockingAction):
         #: reading an attribute whose class holds an instance of a Python class (an enum
         #: member) under the same name, read on every tick (``_ACTS[self.state]``)
         self.state = SearchState.SPIN
+        self._spun = False
+        self._want_wall = True
+        self._avoid = 0.0
+        self._target = 0.0
+        self._back_until = 0.0
+        self._wall_seen_at = None
+        self._follow_lost = False
+        self._resume_follow = False
+        self._follow_bumps = 0
+        self._follow_side = 1  # +1: the wall on the right
+        self._old_cells = 0
+        self._cell = (0, 0)
+        self._speed = 0.0
+        self._leg = 0.0
+        self._follow_for = 0.0
+        self._follow_speed = 0.0
+        self._follow_steer = 0.0
+        self._follow_hand = 1
+        self._hazard = None
+        self._bumped = False
+        self._lit = False
+        self._lit_ahead = False
+        self._kept = None
 
     def start(self) -> None:
         self.begin()
@@ -479,33 +532,14 @@ class DockSearch(DockingAction):
         self._kept = (signals, self._bumped, self._asked)
 
     state: SearchState
-    _spun = False
-    _want_wall = True
-    _avoid = 0.0
-    _target = 0.0
-    _back_until = 0.0
-    _wall_seen_at: float | None = None
-    _follow_lost = False
-    _resume_follow = False
-    _follow_bumps = 0
-    _follow_side = 1  # +1: the wall on the right
-    _old_cells = 0
-    _cell: Cell = (0, 0)
-    _speed = 0.0
-    _leg = 0.0
-    _follow_for = 0.0
-    _follow_speed = 0.0
-    _follow_steer = 0.0
-    _follow_hand = 1
+    _wall_seen_at: float | None
+    _cell: Cell
     # the readings (read)
-    _hazard: Hazard | None = None
-    _bumped = False
-    _lit = False
-    _lit_ahead = False
+    _hazard: Hazard | None
     _signals: Callable[[tuple[int, ...]], tuple[int, int, int, int, int, int]]
     #: what the last tick of :meth:`_keep_wall` that asked speeds read (signals, bumper)
     #: and the speeds it left asked (None: it asked none, or the arc without a wall)
-    _kept: tuple[tuple[int, ...], bool, tuple[float, float] | None] | None = None
+    _kept: tuple[tuple[int, ...], bool, tuple[float, float] | None] | None
 
 
 #: Each state's method (see the module's drawing).
