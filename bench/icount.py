@@ -25,17 +25,30 @@ episodes; the idle simulator stepped as many times as the episodes ticked; the e
 to their first ticks (``bench_routines.SETUP_TIMEOUT_S``). Mission + runtime per tick is
 (episodes - stepping) / ticks; without the set-up it leaves out the cut episodes' count and
 ticks too. Takes 5 to 10 minutes on 2 cores.
+
+``python -m bench.icount --setup [--against COMMIT]``: what an evaluation pays that is not per
+tick, per episode kind (:data:`EPISODES`): the same set-up as ``--against`` (the specs built,
+the world loaded, one idle simulator), then none, one or three episodes cut to their first
+ticks (``bench_routines.SETUP_TIMEOUT_S``). Each episode's set-up (mission compiled or rebuilt,
+simulator, connection and handshake, tree, its first ticks) is (three - one) / 2; the first
+episode's one-off cost (the behaviours imported and registered, the plugin entry points
+scanned, the mission's first compile, anything else done once a process) is
+(one - none) - that. Also the whole ``roomba-bt validate missions/dock.yaml`` command and the
+interpreter's own start (``python -c pass``), a new user's first taste. With ``--against``,
+the same for that commit's code. Takes 3 to 6 minutes a side on 2 cores.
 """
 
 from __future__ import annotations
 
 import compileall
+import contextlib
 import json
 import os
 import re
 import shutil
 import subprocess
 import sys
+from collections.abc import Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -128,6 +141,20 @@ def callgrind(module: str, *args: str, code: Path = ROOT) -> tuple[int, str]:
     return int(found.group(1)), done.stdout
 
 
+def _command_count(args: Sequence[str], code: Path) -> int:
+    """Instructions of one whole command, ``python *args`` under callgrind in ``code``
+    (``roomba_bt`` from there), start-up and imports included."""
+    done = subprocess.run(
+        ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null", sys.executable, *args],
+        cwd=code, capture_output=True, text=True, check=False,
+        env={**os.environ, "PYTHONHASHSEED": "0", "PYTHONPATH": str(code)},
+    )  # fmt: skip
+    found = _COLLECTED.search(done.stderr)
+    if done.returncode != 0 or found is None:
+        raise RuntimeError(f"callgrind run python {args} failed:\n{done.stderr[-2000:]}")
+    return int(found.group(1))
+
+
 def _compiled(code: Path) -> None:
     """Byte-compile ``code``'s package before counting, as pip does when it installs the
     wheel. Without the ``.pyc`` files (a fresh ``git archive``, or ``PYTHONDONTWRITEBYTECODE``
@@ -217,6 +244,78 @@ def against(commit: str) -> int:
     return 0
 
 
+#: the whole command a user runs first, and the interpreter alone (``--setup``)
+VALIDATE = ("-m", "roomba_bt.cli", "validate", "missions/dock.yaml")
+BARE = ("-c", "pass")
+
+
+def _setup_cell(
+    code: Path, mission: str, world: str, fields: Mapping[str, object]
+) -> dict[str, int]:
+    """One side's counts for one episode kind: the set-up alone, one and three cut episodes."""
+    counts: dict[str, int] = {}
+    for runs in (0, 1, 3):
+        args = (
+            str(code / "missions" / mission),
+            world,
+            json.dumps({**fields, "runs": max(runs, 1)}),
+        )
+        counts[str(runs)], out = _count(
+            "against", "short" if runs else "none", *args, "0", code=code
+        )
+        if runs:
+            counts[f"ticks{runs}"] = int(re.findall(r"TICKS (\d+)", out)[-1])
+    return counts
+
+
+def setup(commit: str | None) -> int:
+    """Print the one-off and per-episode set-up instructions of this tree (and ``commit``'s)."""
+    from bench.bench_routines import archived
+
+    with contextlib.ExitStack() as stack:
+        sides: list[tuple[str, Path]] = [("this tree", ROOT)]
+        if commit is not None:
+            old = stack.enter_context(archived(commit, "icount-setup-"))
+            if old is None:
+                return 0
+            sides.insert(0, (commit, old))
+        for _, code in sides:
+            _compiled(code)
+        with ThreadPoolExecutor(max_workers=2) as pool:
+            cells = {
+                (side, mission): pool.submit(_setup_cell, code, mission, world, fields)
+                for side, code in sides
+                for mission, world, _, fields in EPISODES
+            }
+            commands = {
+                (side, name): pool.submit(_command_count, args, code)
+                for side, code in sides
+                for name, args in (("validate", VALIDATE), ("bare", BARE))
+            }
+            print("one-off and per-episode set-up, instructions (callgrind)")
+            for mission, world, _, _ in EPISODES:
+                for side, _ in sides:
+                    found = cells[side, mission].result()
+                    per_episode = (found["3"] - found["1"]) / 2
+                    one_off = found["1"] - found["0"] - per_episode
+                    ticks = (found["ticks3"] - found["ticks1"]) / 2
+                    print(
+                        f"   {mission} in {world}, {side + ':':10s} first episode's one-off "
+                        f"{one_off / 1e6:6.1f} M; each episode's set-up {per_episode / 1e6:5.1f} M "
+                        f"(cut after {ticks:.0f} ticks)",
+                        flush=True,
+                    )
+            for side, _ in sides:
+                validate = commands[side, "validate"].result()
+                bare = commands[side, "bare"].result()
+                print(
+                    f"   {' '.join(VALIDATE[1:])}, {side + ':':10s} {validate / 1e6:6.1f} M "
+                    f"(python -c pass: {bare / 1e6:5.1f} M)",
+                    flush=True,
+                )
+    return 0
+
+
 def main(argv: list[str]) -> int:
     if argv[:1] == ["--child"]:
         kind, *rest = argv[1:]
@@ -230,6 +329,8 @@ def main(argv: list[str]) -> int:
     if shutil.which("valgrind") is None:
         print("valgrind is not installed: instruction counts need valgrind --tool=callgrind")
         return 2
+    if argv[:1] == ["--setup"] and len(argv) in (1, 3) and argv[1:2] in ([], ["--against"]):
+        return setup(argv[2] if len(argv) == 3 else None)
     if argv[:1] == ["--against"] and len(argv) == 2:
         return against(argv[1])
     if argv[:1] == ["--sim"]:  # only the simulator's cases (those named, or all)
