@@ -9,6 +9,7 @@ import time
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from transitions import MachineError
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.errors import UnsupportedCommandError
@@ -105,6 +106,28 @@ def test_mode_commands_move_the_model() -> None:
     assert model.mode is OIMode.PASSIVE
     model.apply(oi.stop(), 3.0)
     assert model.mode is OIMode.OFF
+
+
+def test_models_of_one_profile_share_the_machine_but_each_has_its_own_mode() -> None:
+    """The machine is built once per profile; the state it moves is each model's own."""
+    first, second = model_in(OIMode.SAFE), model_in(OIMode.PASSIVE)
+    assert first.machine is second.machine
+    assert first.machine is not model_in(OIMode.PASSIVE, ROOMBA500).machine
+    first.apply(oi.full(), 1.0)
+    second.force(OIMode.OFF, 1.0)
+    assert (first.mode, first.state) == (OIMode.FULL, "Full")
+    assert (second.mode, second.state) == (OIMode.OFF, "Off")
+    assert ModeModel(CREATE2, initial=OIMode.SAFE).state == "Safe"
+    saved = first.snapshot()
+    first.apply(oi.seek_dock(), 2.0)
+    second.apply(oi.start(), 2.0)
+    first.restore(saved)
+    assert (first.mode, first.state, second.state) == (OIMode.FULL, "Full", "Passive")
+    # a trigger from a state that has none is the machine's error, as before
+    with pytest.raises(MachineError, match="Can't trigger event safe from state Off"):
+        ModeModel(CREATE2)._fire("safe", OIMode.SAFE, 0.0, None)
+    with pytest.raises(AttributeError, match="Do not know event named 'reset'"):
+        model_in(OIMode.PASSIVE, ROOMBA500)._fire("reset", OIMode.OFF, 0.0, None)
 
 
 # ------------------------------------------------------------------ reconciliation
