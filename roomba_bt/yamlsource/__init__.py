@@ -48,9 +48,21 @@ class Refused(yaml.MarkedYAMLError):
 def compose(text: str, loader: type[Any] = FAST_LOADER) -> yaml.Node | None:
     """The document's root node (None for an empty document); raises :class:`yaml.YAMLError`
     (see :func:`error_position`) for a syntax error, :class:`Refused` for an alias or an
-    explicit tag. A fresh loader reads each text: nothing is kept between calls."""
-    refuse_aliases_and_tags(text, loader)
-    return yaml.compose(text, Loader=loader)
+    explicit tag. A fresh loader reads each text: nothing is kept between calls.
+
+    An alias is written with ``*`` and a tag with ``!``: a text with neither holds none, and
+    its event pass (:func:`refuse_aliases_and_tags`, a sixth of compiling a mission) is left
+    out unless composing fails, when it runs first as always, so that the error raised is the
+    same one (a syntax error after the first document is the event pass's, not the
+    composer's "expected a single document")."""
+    if "*" in text or "!" in text:
+        refuse_aliases_and_tags(text, loader)
+        return yaml.compose(text, Loader=loader)
+    try:
+        return yaml.compose(text, Loader=loader)
+    except yaml.YAMLError:
+        refuse_aliases_and_tags(text, loader)
+        raise
 
 
 def refuse_aliases_and_tags(text: str, loader: type[Any] = FAST_LOADER) -> None:

@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import pytest
 import yaml
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from roomba_bt import yamlsource
 from roomba_bt.yamlsource import KEY
@@ -127,3 +131,51 @@ def test_an_explicit_tag_is_refused_where_it_is_written(
 def test_an_anchor_alone_and_quoted_values_are_fine() -> None:
     data, _ = yamlsource.to_data(root("a: &x 1\nb: '2'\nc: \"3\"\n"), "{tag}")
     assert data == {"a": 1, "b": "2", "c": "3"}
+
+
+def _checked_first(text: str, loader: type) -> yaml.Node | None:
+    """The reader as it was before texts without ``*`` or ``!`` skipped the event pass."""
+    yamlsource.refuse_aliases_and_tags(text, loader)
+    return yaml.compose(text, Loader=loader)
+
+
+def _outcome(read: Callable[[], yaml.Node | None]) -> object:
+    """What reading gives, comparable: the node's events, or the error with its place."""
+    try:
+        node = read()
+    except yaml.YAMLError as exc:
+        return type(exc).__name__, str(exc), yamlsource.error_position(exc)
+    return None if node is None else [repr(e) for e in yaml.serialize(node, stream=None)]
+
+
+@pytest.mark.parametrize("loader", [yamlsource.FAST_LOADER, yamlsource.PURE_LOADER])
+def test_a_syntax_error_after_the_first_document_is_the_parsers_not_the_composers(
+    loader: type,
+) -> None:
+    """Composing stops at a second document; the event pass reads on to the error. A text
+    with no ``*`` or ``!`` is composed without the event pass, which still decides the error
+    when composing fails."""
+    with pytest.raises(yaml.YAMLError) as caught:
+        yamlsource.compose("a: 1\n---\nb: [1\n", loader)
+    assert not isinstance(caught.value, yaml.composer.ComposerError)
+    assert yamlsource.error_position(caught.value) == (4, 1)
+    with pytest.raises(yaml.composer.ComposerError, match="another document"):
+        yamlsource.compose("a: 1\n---\nb: 2\n", loader)
+
+
+_PIECES = st.sampled_from(
+    ["a: 1", "- x", "b: [1, 2]", "c: {d: e}", "---", "...", "  f: g", "&h i", "j: &k l",
+     "m: [", "]", "}", "'n'", '"o: p"', "q:", "  - r", "s: t: u", "#v", "%YAML 1.1", "\t", ""]
+)  # fmt: skip
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(_PIECES, max_size=8), st.sampled_from(["fast", "pure"]))
+def test_a_text_without_aliases_or_tags_reads_as_with_the_event_pass_first(
+    lines: list[str], which: str
+) -> None:
+    loader = yamlsource.FAST_LOADER if which == "fast" else yamlsource.PURE_LOADER
+    text = "\n".join(lines) + "\n"
+    assert _outcome(lambda: yamlsource.compose(text, loader)) == _outcome(
+        lambda: _checked_first(text, loader)
+    )
