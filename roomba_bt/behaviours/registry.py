@@ -23,7 +23,7 @@ import sys
 import types
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, replace
-from importlib.metadata import EntryPoint, entry_points
+from importlib.metadata import Distribution, EntryPoint, distributions, entry_points
 from pathlib import Path
 
 from roomba_bt.behaviours.declare import Declaration, DeclarationError, RobotBehaviour
@@ -92,7 +92,7 @@ class Registry:
         if self._loaded:
             return
         self._loaded = True
-        for ep in sorted(entry_points(group=self._group or ""), key=lambda e: e.name):
+        for ep in sorted(group_entry_points(self._group or ""), key=lambda e: e.name):
             self.load_entry_point(ep)
 
     def load_entry_point(self, ep: EntryPoint) -> list[Declaration]:
@@ -162,6 +162,38 @@ class Registry:
     def errors(self) -> list[PluginError]:
         self._ensure_loaded()
         return list(self._errors)
+
+
+def group_entry_points(group: str) -> list[EntryPoint]:
+    """``importlib.metadata.entry_points(group=group)``: the same entry points in the same
+    order, from the same distributions (in the order found on ``sys.path``, the first of each
+    name), but only a distribution whose ``entry_points.txt`` has a ``[group]`` line is parsed.
+    ``entry_points`` parses every distribution's entry points to keep a group's: with the
+    test extras installed that was a third of the plugin scan, about 6 of 19 M instructions.
+
+    The ``[group]`` text is necessary, not sufficient (the parser strips a line and its
+    brackets, so a section named ``group`` has that text); a distribution that has it is
+    parsed and its entry points selected as ``entry_points`` selects them. Where the standard
+    library no longer names distributions as ``entry_points`` does (``_normalized_name``), the
+    function is ``entry_points`` itself."""
+    if not _NAMES_DISTRIBUTIONS:
+        return list(entry_points(group=group))
+    header = f"[{group}]"
+    seen: set[str] = set()
+    found: list[EntryPoint] = []
+    for dist in distributions():
+        name: str = dist._normalized_name  # type: ignore[attr-defined]
+        if name in seen:  # a distribution of this name came earlier on the path: it wins
+            continue
+        seen.add(name)
+        text = dist.read_text("entry_points.txt")
+        if text is not None and header in text:
+            found.extend(dist.entry_points.select(group=group))
+    return found
+
+
+#: whether distributions have the name ``entry_points`` tells them apart by
+_NAMES_DISTRIBUTIONS = hasattr(Distribution, "_normalized_name")
 
 
 def file_version(path: Path) -> tuple[int, int] | None:

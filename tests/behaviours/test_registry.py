@@ -159,3 +159,42 @@ def test_a_registered_plugin_behaviour_ticks() -> None:
     node.tick_once()
     assert node.status is Status.SUCCESS
     assert node.value("n") == 1
+
+
+def _distribution(folder: Path, name: str, entry_points_txt: str) -> None:
+    info = folder / f"{name.replace('-', '_')}-1.0.dist-info"
+    info.mkdir(parents=True)
+    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {name}\nVersion: 1.0\n")
+    (info / "entry_points.txt").write_text(entry_points_txt)
+
+
+def test_the_plugin_scan_finds_what_importlib_metadata_entry_points_finds(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Only distributions whose entry points name the group are parsed; the first of a name
+    on the path still hides a later copy, with or without plugins."""
+    from importlib.metadata import entry_points
+
+    from roomba_bt.behaviours.registry import ENTRY_POINT_GROUP, group_entry_points
+
+    _distribution(tmp_path / "c", "other-dist", (
+        "[console_scripts]\nother = m:main\n# [roomba_bt.behaviours] in a comment\n"
+        "[ roomba_bt.behaviours ]\nspaced = m:Spaced\n"
+        "[roomba_bt.behaviours]\nmine = m:Mine\ntheirs = m:Theirs\n[pytest11]\np = m\n"
+    ))  # fmt: skip
+    _distribution(tmp_path / "b", "shadow-dist", "[roomba_bt.behaviours]\nshadowed = m:C\n")
+    _distribution(tmp_path / "a", "shadow-dist", "[console_scripts]\nshadow = m:main\n")
+    for folder in ("c", "b", "a"):  # a first on the path
+        monkeypatch.syspath_prepend(str(tmp_path / folder))
+    mine = group_entry_points(ENTRY_POINT_GROUP)
+    assert [ep.name for ep in mine if ep.dist and ep.dist.name == "other-dist"] == [
+        "mine",
+        "theirs",
+    ]
+    assert "shadowed" not in [ep.name for ep in mine]
+    for group in (ENTRY_POINT_GROUP, "console_scripts", "pytest11", " roomba_bt.behaviours "):
+        ours, theirs = group_entry_points(group), list(entry_points(group=group))
+        assert ours == theirs
+        assert [ep.dist.name for ep in ours if ep.dist] == [
+            ep.dist.name for ep in theirs if ep.dist
+        ]
