@@ -71,7 +71,8 @@ class Registry:
                 f"name {declaration.name!r} is already taken by {_qualname(existing.cls)} "
                 f"({existing.origin})"
             )
-        declaration = replace(declaration, origin=origin)
+        if declaration.origin != origin:  # a built-in's own declaration says "builtin"
+            declaration = replace(declaration, origin=origin)
         self._declarations[declaration.name] = declaration
         return declaration
 
