@@ -334,13 +334,16 @@ def _dilate(region: bytes | bytearray, grid: Grid, radius: float) -> bytes:
 
 def _nearest_free(free: bytes, grid: Grid, x: float, y: float) -> int | None:
     """The free cell nearest ``(x, y)`` within 10 cells (a start pose close to a wall may sit
-    in a cell whose centre is a little too close)."""
+    in a cell whose centre is a little too close). Each episode's start looks: a span is one
+    row, so the centre's row term is taken once a row (:meth:`Grid.centre`'s arithmetic)."""
     best: tuple[float, int] | None = None
-    for a, b in grid.disc_spans(x, y, 10 * grid.cell):
+    x0, y0, cell, columns = grid.x0, grid.y0, grid.cell, grid.columns
+    for a, b in grid.disc_spans(x, y, 10 * cell):
+        j = a // columns
+        row, dy2 = j * columns, (y0 + (j + 0.5) * cell - y) ** 2
         for k in range(a, b):
             if free[k]:
-                cx, cy = grid.centre(k)
-                d = (cx - x) ** 2 + (cy - y) ** 2
+                d = (x0 + (k - row + 0.5) * cell - x) ** 2 + dy2
                 if best is None or d < best[0]:
                     best = (d, k)
     return None if best is None else best[1]

@@ -249,3 +249,29 @@ def test_steps_with_the_brushes_off_skip_the_update_and_the_coverage_is_the_same
     assert swept.cleaning_time == every.cleaning_time
     assert swept.curve == every.curve and len(swept.curve) == 5
     assert swept.cells == every.cells and swept.longest_idle() == every.longest_idle()
+
+
+def test_the_nearest_free_cell_is_the_one_whose_centre_is_nearest() -> None:
+    """A start pose's nearest free cell (within 10 cells), against every free cell's centre
+    measured by the grid itself, in each shipped world, from poses on and between cells."""
+    from roomba_bt.sim import load_world
+    from roomba_bt.sim.coverage import _nearest_free, floor_model
+
+    for name in ("corridor", "apartment", "empty-room"):
+        model = floor_model(load_world(name))
+        grid, free = model.grid, model.free
+        for n in range(400):
+            x = grid.x0 + (n * 7.31 % (grid.columns * 0.8) + grid.columns * 0.1) * grid.cell
+            y = grid.y0 + (n * 3.17 % (grid.rows * 0.8) + grid.rows * 0.1) * grid.cell
+            if n % 5 == 0:  # on a cell's corner: four centres at one distance
+                x = grid.x0 + round((x - grid.x0) / grid.cell) * grid.cell
+                y = grid.y0 + round((y - grid.y0) / grid.cell) * grid.cell
+            best: tuple[float, int] | None = None
+            for a, b in grid.disc_spans(x, y, 10 * grid.cell):
+                for k in range(a, b):
+                    if free[k]:
+                        cx, cy = grid.centre(k)
+                        d = (cx - x) ** 2 + (cy - y) ** 2
+                        if best is None or d < best[0]:
+                            best = (d, k)
+            assert _nearest_free(free, grid, x, y) == (None if best is None else best[1])
