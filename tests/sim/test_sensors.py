@@ -151,6 +151,30 @@ def test_far_sensors_not_streamed_read_as_if_measured_every_step() -> None:
     assert lazy.frames(0.3) == eager.frames(0.3)
 
 
+def test_the_wall_sensor_not_streamed_beside_the_light_bumper_reads_as_if_measured() -> None:
+    # The far sensors are owed by group (sensing.py): a stream of the light bumper alone
+    # (a dock mission's) measures its rays every step and owes the wall sensor's, measured
+    # when asked for. Arcing along and into the walls, every query of the wall sensor (and
+    # the light bumper's frames) must be what a robot streaming both reads.
+    light = [45, 46, 47, 48, 49, 50, 51]
+    lazy, eager = make(ROOM, mode="full"), make(ROOM, mode="full")
+    lazy.stream([7, *light])
+    eager.stream([7, 8, 27, *light])
+    for host in (lazy, eager):
+        host.send(C.drive(300, 900))
+    seen = set()
+    for step in range(900):
+        for host in (lazy, eager):
+            host.sim.step()
+            host.sim.read()
+        assert [lazy.sim.values[p] for p in light] == [eager.sim.values[p] for p in light]
+        if step % 3 == 0:
+            owed, measured = lazy.query([8, 27]), eager.query([8, 27])
+            assert (owed[8], owed[27]) == (measured[8], measured[27]), step
+            seen.add((owed[8], owed[27]))
+    assert len(seen) > 20  # the wall sensor saw the walls come and go
+
+
 def test_a_builtin_cycle_reads_far_sensors_measured_as_it_starts() -> None:
     # the light bumper owed while nothing streamed it is measured when Clean starts: its
     # first step sees the wall ahead (and backs off) as a robot streaming it does
