@@ -109,6 +109,9 @@ class ApproachState(IdentityEnum):
     BACK = "back"
 
 
+# DockApproach is over 400 lines on purpose: one stage, its states (ApproachState) each a
+# method of the one node, sharing the facing and crossing marks; a class per state would
+# hand those between objects on every tick.
 @declare_stage(
     "dock_approach",
     params=(
