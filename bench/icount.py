@@ -128,31 +128,28 @@ def callgrind(module: str, *args: str, code: Path = ROOT) -> tuple[int, str]:
     """Instructions of one child run, ``python -m module --child *args`` under callgrind,
     and what it printed; ``roomba_bt`` from ``code`` (its working directory; ``bench`` from
     this tree). Every bench that counts instructions runs its children here."""
-    done = subprocess.run(
-        ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null",
-         sys.executable, "-m", module, "--child", *args],
-        cwd=code, capture_output=True, text=True, check=False,
-        # string hashes vary the count otherwise
-        env={**os.environ, "PYTHONHASHSEED": "0", "PYTHONPATH": str(ROOT)},
-    )  # fmt: skip
-    found = _COLLECTED.search(done.stderr)
-    if done.returncode != 0 or found is None:
-        raise RuntimeError(f"callgrind run {module} {args} failed:\n{done.stderr[-2000:]}")
-    return int(found.group(1)), done.stdout
+    return _counted(["-m", module, "--child", *args], code, str(ROOT))
 
 
 def _command_count(args: Sequence[str], code: Path) -> int:
     """Instructions of one whole command, ``python *args`` under callgrind in ``code``
     (``roomba_bt`` from there), start-up and imports included."""
+    return _counted(args, code, str(code))[0]
+
+
+def _counted(args: Sequence[str], code: Path, path: str) -> tuple[int, str]:
+    """``python *args`` under callgrind in ``code`` with ``PYTHONPATH`` ``path``: its
+    instructions and what it printed."""
     done = subprocess.run(
         ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null", sys.executable, *args],
         cwd=code, capture_output=True, text=True, check=False,
-        env={**os.environ, "PYTHONHASHSEED": "0", "PYTHONPATH": str(code)},
+        # string hashes vary the count otherwise
+        env={**os.environ, "PYTHONHASHSEED": "0", "PYTHONPATH": path},
     )  # fmt: skip
     found = _COLLECTED.search(done.stderr)
     if done.returncode != 0 or found is None:
         raise RuntimeError(f"callgrind run python {args} failed:\n{done.stderr[-2000:]}")
-    return int(found.group(1))
+    return int(found.group(1)), done.stdout
 
 
 def _compiled(code: Path) -> None:

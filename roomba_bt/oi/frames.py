@@ -77,20 +77,9 @@ class FrameLayout:
     """Where each packet sits in a payload for one requested packet list."""
 
     __slots__ = (
-        "encoder_slots",
-        "frame_id_mask",
-        "frame_mask",
-        "frame_template",
-        "id_offsets",
-        "index",
-        "members",
-        "packet_ids",
-        "payload_size",
-        "profile",
-        "range_checks",
-        "struct",
-        "with_ids",
-    )
+        "encoder_slots", "frame_id_mask", "frame_mask", "frame_template", "id_offsets", "index",
+        "members", "packet_ids", "payload_size", "profile", "range_checks", "struct", "with_ids",
+    )  # fmt: skip
 
     def __init__(self, packet_ids: tuple[int, ...], profile: RobotProfile, with_ids: bool) -> None:
         _check_ids("sensors", packet_ids)

@@ -115,21 +115,9 @@ class StreamParser:
     """
 
     __slots__ = (
-        "_anchor",
-        "_buffer",
-        "_byte_sum",
-        "_checks",
-        "_encoders",
-        "_mask",
-        "_n",
-        "_ok_sums",
-        "_size",
-        "_suspect",
-        "_template",
-        "_unpack",
-        "counters",
-        "layout",
-    )
+        "_anchor", "_buffer", "_byte_sum", "_checks", "_encoders", "_mask", "_n", "_ok_sums",
+        "_size", "_suspect", "_template", "_unpack", "counters", "layout",
+    )  # fmt: skip
 
     def __init__(
         self,

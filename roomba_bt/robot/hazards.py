@@ -88,15 +88,8 @@ class HazardConfirmation:
     """
 
     __slots__ = (
-        "_layout",
-        "_previous",
-        "_previous_raw",
-        "_raw",
-        "_slots",
-        "held",
-        "pending",
-        "unconfirmed",
-    )
+        "_layout", "_previous", "_previous_raw", "_raw", "_slots", "held", "pending", "unconfirmed",
+    )  # fmt: skip
 
     def __init__(self) -> None:
         self._layout: FrameLayout | None = None

@@ -153,35 +153,12 @@ class DockApproach(DockingAction):
 
     #: the stage's own state in slots (see :class:`~.common.DockingAction`)
     __slots__ = (
-        "_back_until",
-        "_band_seen",
-        "_before_at",
-        "_centred",
-        "_cross_angle",
-        "_cross_path",
-        "_cross_side",
-        "_crossings",
-        "_face_target",
-        "_guesses",
-        "_hazard",
-        "_last_seen",
-        "_last_side",
-        "_last_side_time",
-        "_lead_theta",
-        "_lost_after",
-        "_orbit",
-        "_past_at",
-        "_retreat",
-        "_run",
-        "_side_guess",
-        "_speed",
-        "_spin_dir",
-        "_starts",
-        "_sweep",
-        "_turn_speed",
-        "_view",
-        "state",
-    )
+        "_back_until", "_band_seen", "_before_at", "_centred", "_cross_angle", "_cross_path",
+        "_cross_side", "_crossings", "_face_target", "_guesses", "_hazard", "_last_seen",
+        "_last_side", "_last_side_time", "_lead_theta", "_lost_after", "_orbit", "_past_at",
+        "_retreat", "_run", "_side_guess", "_speed", "_spin_dir", "_starts", "_sweep",
+        "_turn_speed", "_view", "state",
+    )  # fmt: skip
 
     def __init__(self, name: str, params: dict[str, object] | None = None) -> None:
         super().__init__(name, params)

@@ -66,19 +66,9 @@ class DockView:
     attribute reads, not a tuple and a dozen property calls."""
 
     __slots__ = (
-        "facing",
-        "force_field",
-        "green",
-        "left",
-        "omni",
-        "on_axis",
-        "on_left",
-        "on_right",
-        "red",
-        "right",
-        "seen",
-        "side",
-    )
+        "facing", "force_field", "green", "left", "omni", "on_axis", "on_left", "on_right", "red",
+        "right", "seen", "side",
+    )  # fmt: skip
 
     def __init__(self, omni: IRCharacter, left: IRCharacter, right: IRCharacter) -> None:
         self.omni, self.left, self.right = omni, left, right
@@ -257,17 +247,9 @@ class DockingAction(Action):
     #: tick) is specialised. py_trees' and the leaf base classes' attributes stay in the
     #: instance's own table, now under that limit; each stage adds its slots.
     __slots__ = (
-        "_asked",
-        "_distance_mark",
-        "_done",
-        "_last_wheels",
-        "_layout",
-        "_raw",
-        "_t0",
-        "_time_limit",
-        "_turn_mark",
-        "_watched",
-    )
+        "_asked", "_distance_mark", "_done", "_last_wheels", "_layout", "_raw", "_t0",
+        "_time_limit", "_turn_mark", "_watched",
+    )  # fmt: skip
 
     def __init__(self, name: str, params: dict[str, object] | None = None) -> None:
         super().__init__(name, params)

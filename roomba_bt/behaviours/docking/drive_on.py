@@ -79,15 +79,8 @@ class DockDriveOn(DockingAction):
 
     #: the stage's own state in slots (see :class:`~.common.DockingAction`)
     __slots__ = (
-        "_bumped",
-        "_last_seen",
-        "_slow",
-        "_speed",
-        "_view",
-        "_wiggle_rad",
-        "_wiggle_step",
-        "state",
-    )
+        "_bumped", "_last_seen", "_slow", "_speed", "_view", "_wiggle_rad", "_wiggle_step", "state",
+    )  # fmt: skip
 
     def __init__(self, name: str, params: dict[str, object] | None = None) -> None:
         super().__init__(name, params)

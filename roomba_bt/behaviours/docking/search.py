@@ -226,33 +226,12 @@ class DockSearch(DockingAction):
 
     #: the stage's own state in slots (see :class:`~.common.DockingAction`)
     __slots__ = (
-        "_avoid",
-        "_back_until",
-        "_bumped",
-        "_cell",
-        "_follow_bumps",
-        "_follow_cells",
-        "_follow_for",
-        "_follow_hand",
-        "_follow_lost",
-        "_follow_side",
-        "_follow_speed",
-        "_follow_steer",
-        "_hazard",
-        "_kept",
-        "_leg",
-        "_lit",
-        "_lit_ahead",
-        "_old_cells",
-        "_resume_follow",
-        "_signals",
-        "_speed",
-        "_spun",
-        "_target",
-        "_wall_seen_at",
-        "_want_wall",
+        "_avoid", "_back_until", "_bumped", "_cell", "_follow_bumps", "_follow_cells",
+        "_follow_for", "_follow_hand", "_follow_lost", "_follow_side", "_follow_speed",
+        "_follow_steer", "_hazard", "_kept", "_leg", "_lit", "_lit_ahead", "_old_cells",
+        "_resume_follow", "_signals", "_speed", "_spun", "_target", "_wall_seen_at", "_want_wall",
         "state",
-    )
+    )  # fmt: skip
 
     def __init__(self, name: str, params: dict[str, object] | None = None) -> None:
         super().__init__(name, params)
