@@ -43,12 +43,6 @@ class SimLink:
         self.name = name if name != "sim://" else f"sim://{simulator.world.name}"
         self._open = True
         self.baud = simulator.profile.default_baud
-        #: the simulator's ``step`` and ``read``, bound once (:meth:`read` calls them on every
-        #: tick): the simulator has more attributes than CPython 3.11 keeps in its class's
-        #: shared table (30), so it has a dictionary of its own, and a method call on such an
-        #: instance (``sim.step()``) is not specialised: a generic lookup each time
-        self._sim_step = simulator.step
-        self._sim_read = simulator.read
 
     @property
     def is_open(self) -> bool:
@@ -73,18 +67,16 @@ class SimLink:
         sim = self.simulator
         if not self._open or sim.disconnected:
             self._check()
-        sim_read = self._sim_read
-        data = sim_read()
+        data = sim.read()
         if not data:
             deadline = sim.time + (timeout if timeout > 0.0 else 0.0) - 1e-9
-            step = self._sim_step
-            while True:
-                step()
+            while True:  # most reads step once; the simulator's slots make sim.step() fast
+                sim.step()
                 if sim.disconnected:
                     raise ConnectionError(
                         f"{self.name}: simulated disconnect at t={sim.time:.3f} s"
                     )
-                data = sim_read()
+                data = sim.read()
                 if data or sim.time >= deadline:
                     break
         return data if self.baud == sim.baud else at_wrong_baud(data)
