@@ -166,32 +166,15 @@ class DockApproach(DockingAction):
         #: reading an attribute whose class holds an instance of a Python class (an enum
         #: member) under the same name, read on every tick (``_ACTS[self.state]``)
         self.state = ApproachState.FACE
-        self._crossings = 0
-        self._before_at = None
-        self._past_at = None
-        self._band_seen = False
-        self._cross_path = 0.0
-        self._orbit = False
-        self._sweep = 1
-        self._centred = False
-        self._retreat = False
-        self._run = None
-        self._starts = 0
-        self._lead_theta = None
-        self._face_target = None
-        self._cross_side = 1
-        self._side_guess = 0
-        self._last_side = 0
-        self._last_side_time = 0.0
-        self._guesses = 0
-        self._spin_dir = 1.0
-        self._last_seen = 0.0
-        self._back_until = 0.0
-        self._speed = 0.0
-        self._turn_speed = 0.0
-        self._cross_angle = 0.0
-        self._lost_after = 0.0
-        self._hazard = None
+        # kept across starts: the docking run (RUN_KEY) the starts belong to, how many
+        self._run, self._starts = None, 0
+        # a turn toward the axis (:meth:`_turn_away` sets them again) and its side
+        self._before_at = self._past_at = None
+        self._band_seen = self._orbit = False
+        self._cross_path, self._sweep, self._cross_side = 0.0, 1, 1
+        self._last_side_time = self._back_until = 0.0
+        # the rest is set before any tick reads it: by :meth:`start` (the parameters, the
+        # guesses, the facing), by :meth:`read` (the view, the hazard)
 
     def start(self) -> None:
         self.begin()

@@ -255,14 +255,9 @@ class DockingAction(Action):
         super().__init__(name, params)
         #: the stage's goal reached, as :meth:`read` last found it
         self._done = False
-        self._layout = None
-        self._raw = None
-        self._last_wheels = (0, 0)
-        self._asked = None
-        self._turn_mark = 0.0
-        self._distance_mark = 0.0
-        self._t0 = 0.0
-        self._time_limit = 0.0
+        self._layout = self._raw = None  # nothing bound nor read yet (:meth:`observe`)
+        self._last_wheels, self._asked = (0, 0), None  # as after a :meth:`halt`
+        self._turn_mark = self._distance_mark = self._t0 = self._time_limit = 0.0
 
     @classmethod
     def declaration_problem(cls, declaration: Declaration) -> str | None:

@@ -89,11 +89,8 @@ class DockDriveOn(DockingAction):
         #: member) under the same name, read on every tick (``_ACTS[self.state]``)
         self.state = DriveOnState.DRIVE
         self._wiggle_step = 0
-        self._last_seen = 0.0
-        self._speed = 0.0
-        self._slow = 0.0
-        self._wiggle_rad = 0.0
-        self._bumped = False
+        # the rest is set before any tick reads it: by :meth:`start` (the parameters, the
+        # last beam seen), by :meth:`read` (the view, the bumper)
 
     def start(self) -> None:
         self.begin()

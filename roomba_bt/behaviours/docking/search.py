@@ -240,29 +240,17 @@ class DockSearch(DockingAction):
         #: reading an attribute whose class holds an instance of a Python class (an enum
         #: member) under the same name, read on every tick (``_ACTS[self.state]``)
         self.state = SearchState.SPIN
-        self._spun = False
-        self._want_wall = True
-        self._avoid = 0.0
-        self._target = 0.0
-        self._back_until = 0.0
+        self._spun = False  # kept across starts: spin once a search
+        self._cell = (0, 0)
+        # the last hazard met: its heading, and whether a wall follow goes on after it
+        self._avoid, self._resume_follow = 0.0, False
+        # following a wall (:meth:`_start_follow` sets them again)
         self._wall_seen_at = None
         self._follow_lost = False
-        self._resume_follow = False
-        self._follow_bumps = 0
+        self._follow_bumps = self._old_cells = 0
         self._follow_side = 1  # +1: the wall on the right
-        self._old_cells = 0
-        self._cell = (0, 0)
-        self._speed = 0.0
-        self._leg = 0.0
-        self._follow_for = 0.0
-        self._follow_speed = 0.0
-        self._follow_steer = 0.0
-        self._follow_hand = 1
-        self._hazard = None
-        self._bumped = False
-        self._lit = False
-        self._lit_ahead = False
-        self._kept = None
+        # the rest is set before any tick reads it: by :meth:`start` (the parameters, the
+        # heading), by :meth:`read` (the hazards)
 
     def start(self) -> None:
         self.begin()
