@@ -9,16 +9,19 @@ n-bytes count, each packet's id, and a checksum that brings the frame's sum to 0
 
 Both are packed from the flat value list (state.py) by one precompiled :class:`struct.Struct`
 per packet list (:class:`_Packer`). A stream frame's header and ids never change: its struct
-leaves a zero byte in each of their places, and one integer holding them in those places
-(``_Packer.fixed``) is or-ed into the packed bytes. A frame of 23 packets has 25 such bytes,
+leaves a zero byte in each of their places and in the checksum's, and one integer holding
+them in those places is or-ed into the packed bytes. A frame of 23 packets has 25 such bytes,
 and each value fetched from a list and packed by ``struct`` costs about 230 instructions,
-the or of two 50-byte integers about 2,900 in all. Distance (19) and angle (20) report what
-accumulated since the last read. The stream frame itself is packed in ``Simulator.step`` (the
-hot path)::
+the or of two 50-byte integers about 2,900 in all. The checksum is or-ed in with them: the
+data bytes' sum (the header's and ids' is known) picks one of 256 integers, the header and
+ids with each checksum byte (``_Packer.framing``), so the frame is built once, not the body
+and then the body and its checksum (about 250 instructions less a frame). Distance (19) and
+angle (20) report what accumulated since the last read. The stream frame itself is packed in
+``Simulator.step`` (the hot path)::
 
-    struct.pack(values...)    [00][00][00][b7][00][b35]         0: a header or id byte's place
-    | fixed                   [19][04][07][00][35][00]
-    = body                    [19][04][07][b7][35][b35]         then the checksum byte
+    struct.pack(values...)    [00][00][00][b7][00][b35][00]     0: a header, id or checksum place
+    | framing[sum]            [19][04][07][00][35][00][chk]     sum: of b7, b35 (and 19+4+7+35)
+    = frame                   [19][04][07][b7][35][b35][chk]
 
 A layer of the simulator (see state.py).
 """
@@ -40,8 +43,6 @@ from roomba_bt.sim.sensing import far_groups
 
 #: n-bytes is one byte: a longer stream cannot be framed
 MAX_STREAM_PAYLOAD = 255
-#: The checksum byte that brings a frame's sum to 0 mod 256, for every partial sum.
-CHECKSUM_BYTE = tuple(bytes(((-total) & 0xFF,)) for total in range(256))
 _DEGREES_PER_RADIAN = 180.0 / math.pi
 _OLD_ANGLE_PER_RADIAN = _DEGREES_PER_RADIAN * OLD_FIRMWARE_ANGLE_FACTOR
 #: the analog signals the noise fault disturbs
@@ -52,7 +53,7 @@ class _Packer:
     """Packs a list of packet ids from the flat value list in one ``struct`` call."""
 
     __slots__ = (
-        "byte_sum", "far", "fixed", "getter", "has_angle", "has_distance", "size", "snapshot",
+        "byte_sum", "far", "framing", "getter", "has_angle", "has_distance", "size", "snapshot",
         "struct", "sum_bias",
     )  # fmt: skip
 
@@ -74,9 +75,10 @@ class _Packer:
                 codes.append(spec.struct_code)
                 fixed += bytes(spec.size)
                 idx.append(member)
+        if stream:
+            codes.append("x")  # the checksum's place
+            fixed.append(0)
         self.struct = struct.Struct("".join(codes))
-        #: the header and ids, or-ed into the packed bytes (0 for a reply: it has none)
-        self.fixed = int.from_bytes(fixed, "big")
         getter = itemgetter(*idx)
         self.getter: Callable[[list[int]], tuple[int, ...]] = (
             getter if len(idx) > 1 else (lambda v: (getter(v),))
@@ -88,11 +90,18 @@ class _Packer:
         self.has_angle = 20 in members
         #: the values need preparing before a frame: distance/angle since last read, noise
         self.snapshot = self.has_distance or self.has_angle or noise
+        #: the bytes packed: a reply's, or a whole stream frame's, checksum included
         self.size = self.struct.size
         # The checksum byte is -(sum of the frame's bytes, less the header's 19 where the
-        # profile's checksum leaves it out) & 0xFF; the sum taken as the parser takes it.
+        # profile's checksum leaves it out) & 0xFF; the sum taken as the parser takes it, of
+        # the data bytes packed (byte_sum adds ``added``), the header's and ids' added here.
         self.byte_sum, added = byte_sum_for(self.size)
-        self.sum_bias = added + (0 if profile.checksum_includes_header else 19)
+        self.sum_bias = added - sum(fixed) + (0 if profile.checksum_includes_header else 19)
+        #: a stream frame's header and ids, and its checksum byte for each sum of the frame
+        #: (``(byte_sum(packed) - sum_bias) & 0xFF``), or-ed into the packed bytes (none for
+        #: a reply)
+        header = int.from_bytes(fixed)
+        self.framing = tuple(header | (-total & 0xFF) for total in range(256)) if stream else ()
 
 
 def stream_payload(ids: tuple[int, ...], profile: RobotProfile) -> int:

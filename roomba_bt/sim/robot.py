@@ -35,7 +35,6 @@ from roomba_bt.sim.cycles import BuiltinCycle
 from roomba_bt.sim.faults import Faults
 from roomba_bt.sim.motion import WHEEL_SPEED_STEP_MM_S, drive_wheel_speeds
 from roomba_bt.sim.protocol import PASSIVE_SLEEP_SECONDS, OIProtocol
-from roomba_bt.sim.replies import CHECKSUM_BYTE
 from roomba_bt.sim.sensing import FAR_ALL
 from roomba_bt.sim.state import STEP_SECONDS, SimEvent, TracePoint, Violation
 from roomba_bt.sim.timeline import Timeline
@@ -189,14 +188,15 @@ class Simulator(OIProtocol):
                 self._emit(faults.inject_text.encode("ascii"))
                 self._next_inject += faults.inject_every
             values = self._snapshot_values(stream) if stream.snapshot else self.values
-            # the values packed, the header and ids or-ed in (replies.py)
-            body = (
-                _from_bytes(stream.struct.pack(*stream.getter(values)), "big") | stream.fixed
-            ).to_bytes(stream.size, "big")
-            frame = body + CHECKSUM_BYTE[(stream.byte_sum(body) - stream.sum_bias) & 0xFF]
+            # the values packed, the header, ids and checksum or-ed in (replies.py)
+            packed = stream.struct.pack(*stream.getter(values))
+            frame = (
+                _from_bytes(packed)
+                | stream.framing[(stream.byte_sum(packed) - stream.sum_bias) & 0xFF]
+            ).to_bytes(stream.size)
             if self._plain_output:  # no fault on the way out: straight into the output
                 self.frames_sent += 1
-                self.bytes_sent += len(frame)
+                self.bytes_sent += stream.size
                 self._out.append(frame)
             else:
                 self._send_frame(frame)
