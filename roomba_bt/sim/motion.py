@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 import struct
+from math import trunc
 
 from roomba_bt.oi.odometry import MM_PER_COUNT
 from roomba_bt.sim.geometry import closest_point, wrap_angle
@@ -261,10 +262,11 @@ class Motion(Sensing):
         else:
             self._move_hindered(dist, dtheta, fraction, stuck, dt)
             left_counts, right_counts = self._left_counts, self._right_counts
-        # 16 bits, signed or not: (n + bias) & 0xFFFF - bias, bias 0x8000 when signed
+        # 16 bits, signed or not: (n + bias) & 0xFFFF - bias, bias 0x8000 when signed (trunc,
+        # not int: state.py)
         bias = self._encoder_bias
-        v[43] = (int(left_counts) + bias & 0xFFFF) - bias
-        v[44] = (int(right_counts) + bias & 0xFFFF) - bias
+        v[43] = (trunc(left_counts) + bias & 0xFFFF) - bias
+        v[44] = (trunc(right_counts) + bias & 0xFFFF) - bias
         if not self.ticks & 3 and self.keeps_trace:
             # built as the tuple it is: the NamedTuple's __new__ is a Python call
             point = (self.time, self.x, self.y, self.theta, self.mode)

@@ -28,6 +28,7 @@ currents (tests/sim/test_physics.py checks both, and that no change is missed)::
 from __future__ import annotations
 
 import struct
+from math import trunc
 
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.sim.motion import Motion
@@ -157,10 +158,10 @@ class Power(Motion):
         v[34] = 2 if self.docked and self.dock_powered else 0
         stall = 600 if self.blocked else 0
         left, right = self.left_speed, self.right_speed
-        v[54] = int(0.6 * left) + (stall if left > 0 else -stall if left < 0 else 0)
-        v[55] = int(0.6 * right) + (stall if right > 0 else -stall if right < 0 else 0)
-        v[56] = int(2.4 * abs(self.brush_pwm[0]))
-        v[57] = int(0.8 * abs(self.brush_pwm[1]))
+        v[54] = trunc(0.6 * left) + (stall if left > 0 else -stall if left < 0 else 0)
+        v[55] = trunc(0.6 * right) + (stall if right > 0 else -stall if right < 0 else 0)
+        v[56] = trunc(2.4 * abs(self.brush_pwm[0]))
+        v[57] = trunc(0.8 * abs(self.brush_pwm[1]))
         over = 0
         if self._stall_steps > 30:
             over |= (16 if left else 0) | (8 if right else 0)
@@ -170,6 +171,6 @@ class Power(Motion):
     def _update_battery_values(self) -> None:
         v = self.values
         fraction = self._charge / BATTERY_CAPACITY_MAH
-        v[25] = int(self._charge)
-        v[22] = int(13200 + 3200 * fraction + (600 if self._current > 0 else 0))
-        v[23] = int(self._current)
+        v[25] = trunc(self._charge)
+        v[22] = trunc(13200 + 3200 * fraction + (600 if self._current > 0 else 0))
+        v[23] = trunc(self._current)

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 from bisect import bisect_left, bisect_right
+from math import trunc
 
 from roomba_bt.oi.bits import BUMP_BITS, WHEEL_DROP_BITS
 from roomba_bt.oi.ir import LighthouseBeam, dock_character, lighthouse_character
@@ -487,7 +488,7 @@ class Sensing(RobotState):
                     along = q + k * (tx * c + ty * s)
                     if 0.0 <= along <= length:
                         hits[i] = t
-                        signal = v[46 + i] = int(4095 * (1.0 - t / LIGHT_BUMP_RANGE_MM) ** 2)
+                        signal = v[46 + i] = trunc(4095 * (1.0 - t / LIGHT_BUMP_RANGE_MM) ** 2)
                         if signal >= LIGHT_BUMP_THRESHOLD:
                             bits |= 1 << i
                         else:
@@ -519,7 +520,7 @@ class Sensing(RobotState):
                     along = q + k * td
                     if 0.0 <= along <= length:
                         hits[i] = t
-                        signal = v[46 + i] = int(4095 * (1.0 - t / LIGHT_BUMP_RANGE_MM) ** 2)
+                        signal = v[46 + i] = trunc(4095 * (1.0 - t / LIGHT_BUMP_RANGE_MM) ** 2)
                         if signal >= LIGHT_BUMP_THRESHOLD:
                             bits |= 1 << i
                         else:
@@ -551,7 +552,7 @@ class Sensing(RobotState):
         v = self.values
         if hit < WALL_SENSOR_RANGE_MM:
             top = self.profile.wall_signal_maximum
-            v[27] = int(top * (1.0 - hit / WALL_SENSOR_RANGE_MM) ** 2)
+            v[27] = trunc(top * (1.0 - hit / WALL_SENSOR_RANGE_MM) ** 2)
             v[8] = 1 if hit < WALL_SENSOR_TRIGGER_MM else 0
         else:
             v[27] = v[8] = 0

@@ -20,6 +20,10 @@ many for CPython's shared-key instance dict, and with a dict of its own every me
 step; a subclass, as the evaluation's, may still add a dict).
 The parts that are not on every step's path are objects with their own state: the built-in
 cycles (cycles.py) and the world's timeline (timeline.py).
+
+A float becomes a packet's whole number by ``math.trunc``, not ``int``: the same number (both
+cut towards zero), and where ``int(x)`` is a call of the type (about 760 instructions in
+CPython 3.11), ``trunc(x)`` is a call of a builtin function (about 280).
 """
 
 from __future__ import annotations
