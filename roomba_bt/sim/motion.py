@@ -87,7 +87,24 @@ def _measured(
 
 def _quantise(speed: float) -> float:
     q = round(speed / WHEEL_SPEED_STEP_MM_S) * WHEEL_SPEED_STEP_MM_S
-    return max(-MAX_WHEEL_SPEED_MM_S, min(MAX_WHEEL_SPEED_MM_S, q))
+    # a condition, not max(min()): each of those parses its keywords (~900 instructions)
+    top = MAX_WHEEL_SPEED_MM_S
+    return -top if q < -top else top if q > top else q
+
+
+class _Quantised(dict[int, float]):
+    """:func:`_quantise` of the Drive Direct (145) speeds asked so far (-500..500 mm/s): a
+    docking client sends one every few steps, and a look-up costs a tenth of the call (kept
+    as they are asked for: a table of all 1001 would cost 3 M instructions at import)."""
+
+    def __missing__(self, speed: int) -> float:
+        quantised = self[speed] = _quantise(speed)
+        return quantised
+
+
+_QUANTISED = _Quantised()
+#: two big-endian signed 16-bit arguments: Drive's, Drive Direct's and Drive PWM's
+_unpack_two = struct.Struct(">hh").unpack
 
 
 def drive_wheel_speeds(velocity: float, radius: int, wheel_base_mm: float) -> tuple[float, float]:
@@ -164,7 +181,7 @@ class Motion(Sensing):
         if command == self._last_drive:
             return  # the same Drive again: nothing changes
         self._last_drive = command
-        velocity, radius = struct.unpack(">hh", args)
+        velocity, radius = _unpack_two(args)
         # The speed controller steps the commanded velocity; the radius sets the wheel ratio.
         speed = _quantise(velocity)
         left, right = drive_wheel_speeds(speed, radius, self.profile.wheel_base_mm)
@@ -178,10 +195,10 @@ class Motion(Sensing):
 
     def _on_drive_direct(self, args: bytes) -> None:
         self._last_drive = b""
-        right, left = struct.unpack(">hh", args)
-        right = max(-500, min(500, right))
-        left = max(-500, min(500, left))
-        self.requested_left, self.requested_right = _quantise(left), _quantise(right)
+        right, left = _unpack_two(args)
+        right = -500 if right < -500 else 500 if right > 500 else right
+        left = -500 if left < -500 else 500 if left > 500 else left
+        self.requested_left, self.requested_right = _QUANTISED[left], _QUANTISED[right]
         v = self.values
         v[39] = (left + right) // 2
         v[40] = -32768 if left == right else 0
@@ -190,7 +207,7 @@ class Motion(Sensing):
 
     def _on_drive_pwm(self, args: bytes) -> None:
         self._last_drive = b""
-        right, left = struct.unpack(">hh", args)
+        right, left = _unpack_two(args)
         scale = MAX_WHEEL_SPEED_MM_S / 255.0
         self.requested_right = _quantise(max(-255, min(255, right)) * scale)
         self.requested_left = _quantise(max(-255, min(255, left)) * scale)
