@@ -37,6 +37,8 @@ from roomba_bt.sim.state import STEP_SECONDS
 BATTERY_CAPACITY_MAH = 2696.0
 #: above this current (mA, charging fast) the battery's step runs every step (trickle switch)
 _FAST_CHARGE_MA = 200.0
+#: 1 mAh below the capacity (:meth:`Power._settle_charge`)
+_NEAR_FULL = BATTERY_CAPACITY_MAH - 1.0
 
 
 class Power(Motion):
@@ -126,12 +128,19 @@ class Power(Motion):
         _FAST_CHARGE_MA)."""
         added = self._current * STEP_SECONDS / 3600.0
         charge = self._charge
-        for _ in range(self._charge_owed):
-            charge = charge + added
-            if charge < 0.0:
-                charge = 0.0
-            elif charge > BATTERY_CAPACITY_MAH:
-                charge = BATTERY_CAPACITY_MAH
+        owed = self._charge_owed
+        if 0.0 <= charge <= BATTERY_CAPACITY_MAH and 1.0 < charge + owed * added < _NEAR_FULL:
+            # The sums go one way, from a charge within the limits to one over 1 mAh inside
+            # them (rounding is far less): no step reaches a limit, none is checked.
+            for _ in range(owed):
+                charge += added
+        else:
+            for _ in range(owed):
+                charge = charge + added
+                if charge < 0.0:
+                    charge = 0.0
+                elif charge > BATTERY_CAPACITY_MAH:
+                    charge = BATTERY_CAPACITY_MAH
         self._charge = charge
         self._charge_owed = 0
 
