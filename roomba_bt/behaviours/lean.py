@@ -155,6 +155,18 @@ def behaviour_tick(node: Behaviour, started: bool = False) -> None:
     if new_status is _RUNNING:  # most ticks of a leaf: a Status, and nothing to stop
         node.status = new_status
         return
+    tick_ended(node, new_status)
+
+
+def tick_ended(node: Behaviour, new_status: object) -> None:
+    """The end of :func:`behaviour_tick` once ``update`` returned ``new_status`` (RUNNING
+    is done there): checked as a Status, the node stopped on a final one, then its status.
+
+    For a node that calls its ``update`` from its own ``tick_direct``: CPython 3.11
+    specialises an attribute read for the one class it meets at that place, and
+    ``behaviour_tick`` ticks the running leaf on every tick; a decorator or a leaf ticked
+    beside it there too (the retry and ``dock_time_limit`` of a docking run) made its reads
+    switch class two or three times a tick."""
     if type(new_status) is not Status:
         new_status = checked_status(node, new_status)
     if new_status is not _RUNNING:
@@ -600,8 +612,9 @@ class DecoratorTick(Stepped, py_trees.decorators.Decorator):
 
     def tick_direct(self) -> None:
         """The two steps in one call (``initialise`` unless running, the child's tick, the
-        rest of the decorator's own tick). A decorator that rewrites a step is ticked by its
-        steps (:meth:`Stepped.__init_subclass__`)."""
+        rest of the decorator's own tick: ``update``, and :func:`tick_ended` unless it says
+        RUNNING). A decorator that rewrites a step is ticked by its steps
+        (:meth:`Stepped.__init_subclass__`)."""
         if py_trees.logging.level is _DEBUG:
             Stepped.tick_direct(self)
             return
@@ -612,7 +625,11 @@ class DecoratorTick(Stepped, py_trees.decorators.Decorator):
             child.tick_direct()
         else:
             tick_generator(child)
-        behaviour_tick(self, started=True)
+        new_status = self.update()
+        if new_status is _RUNNING:
+            self.status = new_status
+            return
+        tick_ended(self, new_status)
 
     def stop(self, new_status: Status) -> None:
         if py_trees.logging.level is _DEBUG:
@@ -640,34 +657,6 @@ class Retry(DecoratorTick, py_trees.decorators.Retry):
     _said: tuple[str, int, int] | None = None
     _said_text: str | None = None
 
-    def tick_direct(self) -> None:
-        """The decorator's tick (:meth:`DecoratorTick.tick_direct`), ending at once while
-        the child runs and the message :meth:`update` would write again is the one shown:
-        ``update`` would then only return RUNNING, and the status is set so. A retry runs
-        for the whole of a docking attempt. (``update`` is looked up on the node, as
-        ``behaviour_tick`` calls it: a node's own, or a subclass's, is called.)"""
-        if (
-            py_trees.logging.level is _DEBUG
-            or getattr(self.update, "__func__", None) is not _RETRY_UPDATE
-        ):
-            DecoratorTick.tick_direct(self)
-            return
-        if self.status is not _RUNNING:
-            self.initialise()
-        child = self.children[0]
-        if isinstance(child, Direct):
-            child.tick_direct()
-        else:
-            tick_generator(child)
-        if (
-            self.decorated.status is _RUNNING
-            and self.feedback_message is self._said_text
-            and self._said == ("running", self.failures, self.num_failures)
-        ):
-            self.status = _RUNNING
-            return
-        behaviour_tick(self, started=True)
-
     def update(self) -> Status:
         child = self.decorated.status
         if child is _FAILURE:
@@ -681,6 +670,11 @@ class Retry(DecoratorTick, py_trees.decorators.Retry):
             self.feedback_message = f"gave up after {self.failures} failed {attempts}{last}"
             return _FAILURE
         if child is _RUNNING:
+            # every tick of a docking attempt: the message shown says so already (the test
+            # of _say, without its call)
+            said = ("running", self.failures, self.num_failures)
+            if said == self._said and self.feedback_message is self._said_text:
+                return _RUNNING
             return self._say("running", _RUNNING)
         return self._say("succeeded", _SUCCESS)  # py_trees' else: SUCCESS (or INVALID)
 
@@ -694,9 +688,6 @@ class Retry(DecoratorTick, py_trees.decorators.Retry):
             self.feedback_message = self._said_text = text
             self._said = said
         return status
-
-
-_RETRY_UPDATE = Retry.update
 
 
 class Inverter(DecoratorTick, py_trees.decorators.Inverter):

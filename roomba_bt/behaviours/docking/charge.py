@@ -16,7 +16,7 @@ from roomba_bt.behaviours.docking.common import (
     current_stage,
     note_stage,
 )
-from roomba_bt.behaviours.lean import behaviour_tick
+from roomba_bt.behaviours.lean import behaviour_tick, tick_ended
 from roomba_bt.behaviours.units import DURATION
 from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS, CHARGING_STATE_PACKETS
 
@@ -84,23 +84,18 @@ class DockTimeLimit(Action):
         self._limit = self.number("limit") - 1e-9  # read once a start
 
     def tick_direct(self, started: bool = False) -> None:
-        """The leaf tick (:func:`~roomba_bt.behaviours.lean.behaviour_tick`), which while the
-        limit runs and its time is not up only calls :meth:`update` to hear RUNNING again and
-        sets the status it has: then nothing is called. It is ticked beside the stages on
-        every tick of a docking run. (``update`` is looked up on the node, as the leaf tick
-        calls it: a node's own, or a subclass's, gets the whole tick.)"""
-        if (
-            not started
-            and self.status is RUNNING
-            and py_trees.logging.level is not _DEBUG
-            and getattr(self.update, "__func__", None) is _UPDATE
-        ):
-            robot = self.robot  # the handle's snapshot, without the property's call
-            if (
-                robot.snapshot if robot is not None else self.snapshot
-            ).time - self._t0 < self._limit:
-                return
-        behaviour_tick(self, started)
+        """The leaf tick (:func:`~roomba_bt.behaviours.lean.behaviour_tick`), its steps for a
+        running limit written here: :meth:`update` (the node's own, a subclass's or this
+        one), and :func:`~roomba_bt.behaviours.lean.tick_ended` once it says other than
+        RUNNING. Ticked beside the stages on every tick of a docking run, through
+        ``behaviour_tick`` it made that function's attribute reads, specialised for the
+        running stage, switch class twice a tick."""
+        if started or self.status is not RUNNING or py_trees.logging.level is _DEBUG:
+            behaviour_tick(self, started)
+            return
+        new_status = self.update()
+        if new_status is not RUNNING:
+            tick_ended(self, new_status)
 
     def update(self) -> Status:
         robot = self.robot  # the handle's snapshot, without the property's call (every tick)
@@ -115,6 +110,3 @@ class DockTimeLimit(Action):
 
     _t0 = 0.0
     _limit = 0.0
-
-
-_UPDATE = DockTimeLimit.update

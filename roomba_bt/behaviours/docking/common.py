@@ -293,7 +293,8 @@ class DockingAction(Action):
         frame = snap.frame
         if frame.layout is not self._layout:
             self.bind(frame)
-        raw = self._watched(frame.values)
+        watched = self._watched  # read, then called: see StreamParser.take
+        raw = watched(frame.values)
         if raw != self._raw:
             self._raw = raw
             self.read(raw)

@@ -421,7 +421,11 @@ class DockSearch(DockingAction):
             return RUNNING
         speed = self._speed
         err = math.remainder(self._target - odo.theta_rad, math.tau)
-        turn = max(-STEER_LIMIT_MM_S, min(STEER_LIMIT_MM_S, STEER_MM_S_PER_RAD * err))
+        # max(-STEER_LIMIT_MM_S, min(STEER_LIMIT_MM_S, ...)) as comparisons, on every
+        # tick of a leg (driving.wheel_speeds says why)
+        turn = STEER_MM_S_PER_RAD * err
+        turn = turn if turn < STEER_LIMIT_MM_S else STEER_LIMIT_MM_S
+        turn = turn if turn > -STEER_LIMIT_MM_S else -STEER_LIMIT_MM_S
         self.wheels(speed - turn, speed + turn)
         return RUNNING
 
@@ -458,7 +462,8 @@ class DockSearch(DockingAction):
         stand still on about two ticks in five of a follow. Without a wall the arc's path
         is counted every tick: that branch is never skipped."""
         # all six signals in one call, by slot (read every tick of a follow)
-        signals = self._signals(snap.frame.values)
+        read_signals = self._signals  # read, then called: see StreamParser.take
+        signals = read_signals(snap.frame.values)
         kept = self._kept
         if (
             kept is not None
@@ -471,7 +476,8 @@ class DockSearch(DockingAction):
         speed = self._follow_speed  # min(speed, FOLLOW_MAX_MM_S)
         hand = self._follow_side
         left, front_left, centre_left, centre_right, front_right, right = signals
-        front = max(centre_left, centre_right)
+        # max() and min() written out as their comparisons (driving.wheel_speeds says why)
+        front = centre_right if centre_right > centre_left else centre_left
         side, front_side = (right, front_right) if hand > 0 else (left, front_left)
         if front > WALL_AHEAD_SIGNAL or self._bumped:
             # wall ahead: turn away from the wall side
@@ -492,9 +498,12 @@ class DockSearch(DockingAction):
             return
         else:
             self._wall_seen_at = None
-            error = WALL_SIGNAL - max(side, front_side // 2)
+            half = front_side // 2
+            error = WALL_SIGNAL - (half if half > side else side)
             limit = self._follow_steer  # speed * WALL_STEER_SHARE
-            turn = hand * max(-limit, min(limit, WALL_GAIN_MM_S * error))
+            steer = WALL_GAIN_MM_S * error
+            steer = steer if steer < limit else limit
+            turn = hand * (steer if steer > -limit else -limit)
             self.wheels(speed + turn, speed - turn)
         self._kept = (signals, self._bumped, self._asked)
 
