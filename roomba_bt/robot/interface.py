@@ -98,7 +98,7 @@ class Odometer:
     waiting) leaves the odometry as it is, the same object, with no call; a frame without
     the encoder packets too."""
 
-    __slots__ = ("_counts", "_layout", "_wheel_base_mm", "odometry")
+    __slots__ = ("_counted", "_counts", "_layout", "_wheel_base_mm", "odometry")
 
     def __init__(self, wheel_base_mm: float) -> None:
         self.odometry = Odometry()
@@ -106,6 +106,8 @@ class Odometer:
         self._layout: FrameLayout | None = None
         #: the frame's (left, right) encoder counts, or None when its layout has none
         self._counts: Callable[[tuple[int, ...]], tuple[int, int]] | None = None
+        #: the counts :attr:`odometry` was last advanced to (None: none yet)
+        self._counted: tuple[int, int] | None = None
 
     def frame(self, frame: SensorFrame) -> Odometry:
         """The odometry after ``frame`` (:meth:`Odometry.advance` on its encoder counts)."""
@@ -118,9 +120,13 @@ class Odometer:
         odometry = self.odometry
         if counts is None:
             return odometry
-        left, right = counts(frame.values)
-        if left == odometry[5] and right == odometry[6]:  # left_counts, right_counts
+        counted = counts(frame.values)
+        # the odometry's own left_counts and right_counts, kept as read: a named tuple's
+        # items are read through the generic protocol, twice the cost of one comparison
+        if counted == self._counted:
             return odometry
+        self._counted = counted
+        left, right = counted
         odometry = self.odometry = odometry.advance(left, right, self._wheel_base_mm)
         return odometry
 

@@ -50,6 +50,9 @@ from roomba_bt.runtime.summary import DEFAULT_GRACE, Outcome, RunSummary
 log = logging.getLogger(__name__)
 _new_tuple = tuple.__new__
 _Blackboard = py_trees.blackboard.Blackboard
+#: the blackboard's one store (py_trees clears it, never replaces it): read off the class on
+#: every tick, it was an attribute read CPython 3.11 does not specialise
+_STORAGE = _Blackboard.storage
 _DIRECT_TICK_ONCE = Direct.tick_once
 
 #: Battery charge and capacity, for the run summary: streamed when the budget allows.
@@ -442,7 +445,7 @@ class MissionRunner(BaseHandle):
             if _Blackboard.activity_stream is None:
                 # the client's own key, registered for writing: its permission checks and
                 # name parsing cost more than the rest of this method
-                _Blackboard.storage[SNAPSHOT_KEY] = snapshot
+                _STORAGE[SNAPSHOT_KEY] = snapshot
             else:  # someone is watching the blackboard's activity: tell it
                 self._blackboard.set(SNAPSHOT_KEY, snapshot, overwrite=True)
         return snapshot
