@@ -51,7 +51,8 @@ _new_tuple = tuple.__new__
 #:     8 packet 58 (stasis) of an unhindered step
 #:     9 measured dist  10 measured dtheta   what the encoders say (packets 19, 20): the
 #:                                          travel and turn unless Faults.odometry_error
-_Motion = tuple[float, float, float, float, float, float, float, float, int, float, float]
+#:    11 |dist|         the travel's length, against the clearance (no abs() a step)
+_Motion = tuple[float, float, float, float, float, float, float, float, int, float, float, float]
 
 
 def _motion_of(
@@ -68,7 +69,7 @@ def _motion_of(
         left, right, dt, dist, dtheta, dtheta / 2.0,
         (measured_dist - measured_dtheta * half_base) / MM_PER_COUNT,
         (measured_dist + measured_dtheta * half_base) / MM_PER_COUNT,
-        1 if dist > 0.0 else 0, measured_dist, measured_dtheta,
+        1 if dist > 0.0 else 0, measured_dist, measured_dtheta, abs(dist),
     )  # fmt: skip
 
 
@@ -250,7 +251,7 @@ class Motion(Sensing):
                 self._travel_heading = heading
                 self._travel_motion = motion
             ux, uy = self._travel
-            if abs(dist) >= self._clearance and self._blocked(x + ux, y + uy):
+            if motion[11] >= self._clearance and self._blocked(x + ux, y + uy):
                 fraction = self._reach(x, y, ux, uy)
                 ux *= fraction
                 uy *= fraction

@@ -19,6 +19,7 @@ A layer of the simulator (see state.py): the top one, it reads every other.
 
 from __future__ import annotations
 
+import math
 import random
 from collections.abc import Callable
 
@@ -70,7 +71,7 @@ class OIProtocol(StreamOutput):
 
     #: its own state's attributes (state.py: slots, not a dict, on the step's path)
     __slots__ = (
-        "_buttons_until", "_commands", "_data_sizes", "_drive_modes", "_inbuf",
+        "_buttons_until", "_commands", "_data_sizes", "_drive_modes", "_held_until", "_inbuf",
         "_last_activity", "_rng", "_song_until", "_tails", "baud", "brc_low", "brc_pulses",
         "builtin", "day_time", "deaf", "digits", "firmware", "ignored_bytes", "leds",
         "schedule", "scheduling_leds", "songs",
@@ -87,6 +88,9 @@ class OIProtocol(StreamOutput):
         self.day_time: tuple[int, int, int] = (0, 0, 0)
         self._song_until = 0.0
         self._buttons_until = 0.0
+        #: the first of those two still to come while its packet shows (37 a song playing,
+        #: 18 buttons pressed), else infinity: the step looks at one time, not two packets
+        self._held_until = math.inf
         self.builtin: BuiltinCycle | None = None
         self._rng = random.Random(f"robot:{self.seed}")  # the built-in cycles' choices
         self._last_activity = 0.0
@@ -297,10 +301,23 @@ class OIProtocol(StreamOutput):
         self.values[36] = args[0]
         self.values[37] = 1
         self._song_until = self.time + sum(d for _, d in song) / 64.0
+        self._held_until = min(self._held_until, self._song_until)
 
     def _on_buttons(self, args: bytes) -> None:
         self.values[18] = args[0]
         self._buttons_until = self.time + 1.0 / 6.0
+        self._held_until = min(self._held_until, self._buttons_until)
+
+    def _release_held(self, now: float) -> None:
+        """A song's end or the buttons' release is due by ``now``: its packet cleared."""
+        v = self.values
+        if v[37] and now >= self._song_until:
+            v[37] = 0
+        if v[18] and now >= self._buttons_until:
+            v[18] = 0
+        song = self._song_until if v[37] else math.inf
+        buttons = self._buttons_until if v[18] else math.inf
+        self._held_until = min(song, buttons)
 
     def _on_schedule(self, args: bytes) -> None:
         self.schedule = bytes(args)

@@ -133,12 +133,8 @@ class Simulator(OIProtocol):
             if self.docked and self.dock_powered:
                 self._battery(dt)  # asleep on the dock, the battery still charges
             return
-        v = self.values
-        if v[37] or v[18]:
-            if v[37] and now >= self._song_until:
-                v[37] = 0
-            if v[18] and now >= self._buttons_until:
-                v[18] = 0
+        if now >= self._held_until:  # a song's end or the buttons' release (protocol.py)
+            self._release_held(now)
         mode = self.mode
         cycle = self.builtin
         if cycle is not None and mode is _PASSIVE:
