@@ -5,21 +5,33 @@ through a :class:`StreamLink` (bytes, the stream parser, the watchdog) over any
 :class:`~roomba_bt.transport.Transport`;
 :class:`ModeModel` is its ``transitions`` model of the OI modes and the guard of every
 command; :mod:`~roomba_bt.robot.interface` is the contract with the behaviours above.
+
+The names below are imported from their modules when first asked for (a module
+``__getattr__``): every behaviour imports :mod:`~roomba_bt.robot.interface`, and importing it
+runs this file, which would otherwise load the connection, the mode model (``transitions``)
+and the serial transport too, about 45 M instructions that ``roomba-bt validate`` and a
+mission's compile never use.
 """
 
-from roomba_bt.robot.connection import Connection, LinkCounters
-from roomba_bt.robot.errors import (
-    ConnectionFailed,
-    LinkDown,
-    ModeError,
-    PortLost,
-    RobotError,
-    StreamStalled,
-)
-from roomba_bt.robot.interface import ModeChange, Odometry, Outbox, RobotHandle, Snapshot
-from roomba_bt.robot.link import LinkStatus, StreamLink, TimedFrame
-from roomba_bt.robot.modes import ModeModel, infer_cause
-from roomba_bt.robot.safety import Terminated, sigterm_raises
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from roomba_bt.robot.connection import Connection, LinkCounters
+    from roomba_bt.robot.errors import (
+        ConnectionFailed,
+        LinkDown,
+        ModeError,
+        PortLost,
+        RobotError,
+        StreamStalled,
+    )
+    from roomba_bt.robot.interface import ModeChange, Odometry, Outbox, RobotHandle, Snapshot
+    from roomba_bt.robot.link import LinkStatus, StreamLink, TimedFrame
+    from roomba_bt.robot.modes import ModeModel, infer_cause
+    from roomba_bt.robot.safety import Terminated, sigterm_raises
 
 __all__ = [
     "Connection",
@@ -43,3 +55,31 @@ __all__ = [
     "infer_cause",
     "sigterm_raises",
 ]
+
+#: the module of this package that defines each name of :data:`__all__`
+_MODULE_OF: dict[str, str] = {
+    **dict.fromkeys(("Connection", "LinkCounters"), "connection"),
+    **dict.fromkeys(
+        ("ConnectionFailed", "LinkDown", "ModeError", "PortLost", "RobotError", "StreamStalled"),
+        "errors",
+    ),
+    **dict.fromkeys(("ModeChange", "Odometry", "Outbox", "RobotHandle", "Snapshot"), "interface"),
+    **dict.fromkeys(("LinkStatus", "StreamLink", "TimedFrame"), "link"),
+    **dict.fromkeys(("ModeModel", "infer_cause"), "modes"),
+    **dict.fromkeys(("Terminated", "sigterm_raises"), "safety"),
+}
+
+
+def __getattr__(name: str) -> Any:
+    """``roomba_bt.robot.Connection`` and the other names of :data:`__all__`, from their
+    module (imported now if it was not); kept here, so asked for once."""
+    module = _MODULE_OF.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *__all__})
