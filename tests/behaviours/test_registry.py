@@ -198,3 +198,139 @@ def test_the_plugin_scan_finds_what_importlib_metadata_entry_points_finds(
         assert [ep.dist.name for ep in ours if ep.dist] == [
             ep.dist.name for ep in theirs if ep.dist
         ]
+
+
+def _same_as_importlib_metadata(group: str) -> list[EntryPoint]:
+    from importlib.metadata import entry_points
+
+    from roomba_bt.behaviours.registry import group_entry_points
+
+    ours, theirs = group_entry_points(group), list(entry_points(group=group))
+    assert ours == theirs
+    assert [ep.dist.name for ep in ours if ep.dist] == [ep.dist.name for ep in theirs if ep.dist]
+    return ours
+
+
+def test_the_folder_scan_reads_the_path_as_importlib_metadata_does(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The plugin scan's own reading of ``sys.path`` (:func:`_declaring_folders`, no
+    ``importlib.metadata`` walk) on what a path may hold: two copies of a name in one folder
+    (the first listed wins), an old egg-info file, a metadata folder without entry points,
+    an ``entry_points.txt`` that is a folder, the working directory (``''``), a folder that
+    does not exist."""
+    import os
+
+    from roomba_bt.behaviours.registry import ENTRY_POINT_GROUP, _declaring_folders
+
+    group = f"[{ENTRY_POINT_GROUP}]"
+    a = tmp_path / "a"
+    _distribution(a, "one-dist", f"{group}\none = m:One\n")
+    for folder, entry in (("two.dist-1.0.dist-info", "two"), ("Two_Dist-2.0.egg-info", "copy")):
+        (a / folder).mkdir()
+        (a / folder / "METADATA").write_text("Metadata-Version: 2.1\nName: two.dist\n")
+        (a / folder / "entry_points.txt").write_text(f"{group}\n{entry} = m:Two\n")
+    (a / "old.egg-info").write_text("Metadata-Version: 1.0\nName: old\n")
+    (a / "bare-1.0.dist-info").mkdir()
+    (a / "odd-1.0.dist-info" / "entry_points.txt").mkdir(parents=True)
+    _distribution(tmp_path / "cwd", "here-dist", f"{group}\nhere = m:Here\n")
+    monkeypatch.chdir(tmp_path / "cwd")
+    for entry in (str(tmp_path / "missing"), str(a), ""):
+        monkeypatch.syspath_prepend(entry)
+    assert _declaring_folders(group) is not None  # read without importlib.metadata's walk
+    first = next(c for c in os.listdir(a) if c.lower().startswith("two"))
+    names = [ep.name for ep in _same_as_importlib_metadata(ENTRY_POINT_GROUP)]
+    assert names[0] == "here"
+    assert sorted(names[1:3]) == sorted(["one", "two" if first.startswith("two.") else "copy"])
+    _same_as_importlib_metadata("console_scripts")
+
+
+class _OwnFinder:
+    """A meta path finder with distributions of its own (as some installers add)."""
+
+    @staticmethod
+    def find_spec(*args: object) -> None:
+        return None
+
+    @staticmethod
+    def find_distributions(*args: object) -> list[Any]:
+        return []
+
+
+def test_what_only_importlib_metadata_reads_is_left_to_it(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A metadata folder with an upper-case suffix (named from its metadata), a zip file or
+    an egg on the path, a finder of distributions of its own: the scan cannot tell, and
+    ``importlib.metadata`` finds the distributions."""
+    import sys
+    import zipfile
+
+    from roomba_bt.behaviours.registry import ENTRY_POINT_GROUP, _declaring_folders
+
+    group = f"[{ENTRY_POINT_GROUP}]"
+    _distribution(tmp_path / "upper", "upper-dist", f"{group}\nupper = m:Upper\n")
+    (tmp_path / "upper" / "upper_dist-1.0.dist-info").rename(
+        tmp_path / "upper" / "upper_dist-1.0.DIST-INFO"
+    )
+    archive = tmp_path / "plugins.zip"
+    with zipfile.ZipFile(archive, "w") as zipped:
+        zipped.writestr("zipped-1.0.dist-info/METADATA", "Metadata-Version: 2.1\nName: zipped\n")
+        zipped.writestr("zipped-1.0.dist-info/entry_points.txt", f"{group}\nzipped = m:Z\n")
+    (tmp_path / "x.egg").mkdir()
+    for entry, found in (
+        (tmp_path / "upper", "upper"),
+        (archive, "zipped"),
+        (tmp_path / "x.egg", None),
+    ):
+        with monkeypatch.context() as patched:
+            patched.syspath_prepend(str(entry))
+            assert _declaring_folders(group) is None
+            names = [ep.name for ep in _same_as_importlib_metadata(ENTRY_POINT_GROUP)]
+            assert found is None or found in names
+    monkeypatch.setattr(sys, "meta_path", [*sys.meta_path, _OwnFinder])
+    assert _declaring_folders(group) is None
+    _same_as_importlib_metadata(ENTRY_POINT_GROUP)
+
+
+@pytest.mark.parametrize(
+    "metadata",
+    [
+        "Metadata-Version: 2.1\nName: plain\nVersion: 1.0\n",
+        "Metadata-Version: 2.1\nname:  lower-case field, blanks kept \nVersion: 1.0\n",
+        "Metadata-Version: 2.1\nSummary: folded\n  over two lines\nName: after-a-fold\n",
+        "Metadata-Version: 2.1\nName: folded\n name\nVersion: 1.0\n",
+        "Metadata-Version: 2.1\r\nName: crlf\r\nVersion: 1.0\r\n",
+        "Metadata-Version: 2.1\nnot a field\nName: after-a-body-line\n",
+        "From someone\nName: unix-from\n",
+        " leading\nName: leading-fold\n",
+        "Metadata-Version: 2.1\n\nName: in-the-body\n",
+        "Metadata-Version: 2.1\nName:\tTabbed\nName: second\n",
+        ":no-name\nName: colon-first\n",
+        "",
+    ],
+)
+def test_a_distribution_is_named_as_its_metadata_says(tmp_path: Path, metadata: str) -> None:
+    """The plugin's origin names its distribution (``from roomba-bt-dirt``) as
+    ``Distribution.name`` does, e-mail parser or not."""
+    import warnings
+    from importlib.metadata import Distribution
+
+    from roomba_bt.behaviours.registry import _distribution_name
+
+    folder = tmp_path / "some-1.0.dist-info"
+    folder.mkdir()
+    (folder / "METADATA").write_text(metadata, newline="")
+    dist = Distribution.at(folder)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # a missing Name warns, and is None either way
+        assert _distribution_name(dist) == dist.name
+
+
+def test_every_installed_distribution_is_named_as_importlib_metadata_names_it() -> None:
+    from importlib.metadata import distributions
+
+    from roomba_bt.behaviours.registry import _distribution_name
+
+    for dist in distributions():
+        assert _distribution_name(dist) == dist.name
