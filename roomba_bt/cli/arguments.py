@@ -14,7 +14,6 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from roomba_bt.mission.shipped import find_mission
 from roomba_bt.oi.encode import BAUD_CODES
 from roomba_bt.oi.profiles import PROFILES
 
@@ -154,7 +153,12 @@ def parse_timeout(text: str | None) -> float | str | None:
 
 def mission_file(text: str) -> str | tuple[str]:
     """A mission argument as a path: an existing file, else the shipped mission of that name
-    (``roomba-bt run dock``); ``(problem,)`` when neither exists."""
+    (``roomba-bt run dock``); ``(problem,)`` when neither exists. The mission package (its
+    compiler, the behaviours, py_trees and YAML) is imported here, when a command names a
+    mission, not with the parser every command builds: ``roomba-bt --version`` or ``sim``
+    need none of it."""
+    from roomba_bt.mission.shipped import find_mission
+
     found = find_mission(text)
     return str(found.path) if found.path is not None else (found.problem,)
 

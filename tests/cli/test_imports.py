@@ -15,21 +15,23 @@ from pathlib import Path
 MISSION = Path(__file__).resolve().parents[2] / "missions" / "dock.yaml"
 
 
-def imported_by(*args: str) -> set[str]:
-    """The modules loaded by ``roomba-bt *args`` in a fresh interpreter (its output dropped)."""
-    script = (
-        "import contextlib, io, json, sys\n"
-        "from roomba_bt.cli import main\n"
-        "with contextlib.redirect_stdout(io.StringIO()):\n"
-        f"    code = main({list(args)!r})\n"
-        "print(json.dumps([code, sorted(sys.modules)]))\n"
-    )
+def modules_after(script: str) -> set[str]:
+    """The modules loaded once ``script`` has run in a fresh interpreter."""
+    script += "\nimport json, sys\nprint(json.dumps(sorted(sys.modules)))\n"
     done = subprocess.run(
         [sys.executable, "-c", script], capture_output=True, text=True, timeout=120, check=True
     )
-    code, modules = json.loads(done.stdout.splitlines()[-1])
-    assert code == 0, done.stderr
-    return set(modules)
+    return set(json.loads(done.stdout.splitlines()[-1]))
+
+
+def imported_by(*args: str) -> set[str]:
+    """The modules loaded by ``roomba-bt *args`` (which must succeed; its output dropped)."""
+    return modules_after(
+        "import contextlib, io\n"
+        "from roomba_bt.cli import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        f"    assert main({list(args)!r}) == 0\n"
+    )
 
 
 def test_validate_loads_no_connection_mode_model_or_serial_port() -> None:
@@ -46,4 +48,14 @@ def test_validate_loads_no_connection_mode_model_or_serial_port() -> None:
         "transitions",
         "serial",
     ):
+        assert unused not in modules, unused
+
+
+def test_the_parser_every_command_builds_loads_no_mission_compiler() -> None:
+    """``roomba-bt --version``, ``sim`` or ``sensors`` build the whole parser, every
+    subcommand's arguments; the mission package (compiler, behaviours, py_trees, YAML, the
+    plugin scan's importlib.metadata) is imported when a mission argument is read."""
+    modules = modules_after("from roomba_bt.cli import build_parser\nbuild_parser()")
+    assert "roomba_bt.cli.arguments" in modules
+    for unused in ("roomba_bt.mission", "roomba_bt.behaviours", "py_trees", "yaml"):
         assert unused not in modules, unused
