@@ -419,9 +419,11 @@ class DockApproach(DockingAction):
                 self._start_facing(-float(self._cross_side))
                 self.halt()
                 return RUNNING
-            v = math.copysign(
-                max(CENTRE_MIN_MM_S, min(speed * slow, CENTRE_GAIN_PER_S * abs(err))), err
-            )
+            # max(CENTRE_MIN_MM_S, min(top, wanted)) as comparisons (driving.wheel_speeds
+            # says why)
+            top, wanted = speed * slow, CENTRE_GAIN_PER_S * abs(err)
+            wanted = wanted if wanted < top else top
+            v = math.copysign(wanted if wanted > CENTRE_MIN_MM_S else CENTRE_MIN_MM_S, err)
         elif before is None and (past is not None or self._band_seen):
             if s < -NEAR_EDGE_MAX_MM:  # no near buoy behind: give up this crossing, face again
                 self._start_facing(-float(self._cross_side))
@@ -438,10 +440,12 @@ class DockApproach(DockingAction):
         """Where (``s``, mm along the crossing) the omni saw the band and its two edges."""
         if state == 0:
             self._band_seen = True
-        elif state == 1:
-            self._before_at = s if self._before_at is None else max(self._before_at, s)
+        elif state == 1:  # the furthest "before", the nearest "past" (max, min written out)
+            before = self._before_at
+            self._before_at = s if before is None or s > before else before
         elif state == -1:
-            self._past_at = s if self._past_at is None else min(self._past_at, s)
+            past = self._past_at
+            self._past_at = s if past is None or s < past else past
 
     # facing the dock ---------------------------------------------------------------
     def _start_facing(self, spin_dir: float) -> None:
