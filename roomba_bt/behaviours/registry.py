@@ -17,11 +17,8 @@ every other behaviour still loads. A mission may also name a module by path
 from __future__ import annotations
 
 import importlib
-import importlib.machinery
 import importlib.util
 import inspect
-import os
-import re
 import sys
 import types
 from collections.abc import Iterable, Iterator
@@ -100,8 +97,7 @@ class Registry:
             self.load_entry_point(ep)
 
     def load_entry_point(self, ep: EntryPoint) -> list[Declaration]:
-        dist = f", from {_distribution_name(ep.dist)}" if ep.dist else ""
-        origin = f"{ep.name!r} ({ep.value}{dist})"
+        origin = f"{ep.name!r} ({ep.value}" + (f", from {ep.dist.name}" if ep.dist else "") + ")"
         try:
             provider = ep.load()
         except Exception as exc:  # any import-time failure of third-party code
@@ -178,21 +174,12 @@ def group_entry_points(group: str) -> list[EntryPoint]:
 
     The ``[group]`` text is necessary, not sufficient (the parser strips a line and its
     brackets, so a section named ``group`` has that text); a distribution that has it is
-    parsed and its entry points selected as ``entry_points`` selects them. The distributions
-    are found by :func:`_declaring_folders` where it can tell (the folders of ``sys.path``),
-    else by ``importlib.metadata`` itself; where the standard library no longer names
-    distributions as ``entry_points`` does (``_normalized_name``), the function is
-    ``entry_points`` itself."""
+    parsed and its entry points selected as ``entry_points`` selects them. Where the standard
+    library no longer names distributions as ``entry_points`` does (``_normalized_name``), the
+    function is ``entry_points`` itself."""
     if not _NAMES_DISTRIBUTIONS:
         return list(entry_points(group=group))
     header = f"[{group}]"
-    folders = _declaring_folders(header)
-    if folders is not None:
-        return [
-            ep
-            for folder in folders
-            for ep in Distribution.at(folder).entry_points.select(group=group)
-        ]
     seen: set[str] = set()
     found: list[EntryPoint] = []
     for dist in distributions():
@@ -208,95 +195,6 @@ def group_entry_points(group: str) -> list[EntryPoint]:
 
 #: whether distributions have the name ``entry_points`` tells them apart by
 _NAMES_DISTRIBUTIONS = hasattr(Distribution, "_normalized_name")
-#: runs of the characters a distribution's name normalises to one ``_``
-_NAME_SEPARATORS = re.compile(r"[-_.]+")
-#: what ``Distribution.read_text`` takes for "no such file" (it returns None for these)
-_NO_FILE = (FileNotFoundError, IsADirectoryError, NotADirectoryError, PermissionError)
-
-
-def _declaring_folders(header: str) -> list[str] | None:
-    """The metadata folders (``*.dist-info``, ``*.egg-info``) of the distributions
-    ``importlib.metadata.distributions()`` yields, the first of each name, whose
-    ``entry_points.txt`` holds ``header``, in its order; None where only ``importlib.metadata``
-    can tell. Reading ``sys.path``'s folders with :func:`os.listdir` and each metadata folder's
-    one file with :func:`open` costs a third of what ``distributions()`` and its path objects
-    did: with the test extras' 73 distributions installed the plugin scan took 4.2 M
-    instructions instead of 13 M.
-
-    It is what ``importlib.metadata`` does for the usual ``sys.path``: its one finder of
-    distributions (``PathFinder``) lists each folder on the path in order; a child whose name
-    ends in ``.dist-info`` or ``.egg-info`` (any case) is a distribution, named by what comes
-    before the first ``-``, normalised. Anything else is left to ``importlib.metadata``: a
-    finder of distributions of its own on ``sys.meta_path``, a path entry that exists but is
-    no folder (a zip file) or is an egg, a metadata folder whose suffix is not in lower case
-    (``importlib.metadata`` then names it from its metadata), or an ``entry_points.txt`` that
-    ``read_text`` would fail on."""
-    for finder in sys.meta_path:
-        if finder is not importlib.machinery.PathFinder and hasattr(finder, "find_distributions"):
-            return None
-    seen: set[str] = set()
-    found: list[str] = []
-    for entry in sys.path:
-        if not isinstance(entry, str) or entry.lower().endswith(".egg"):
-            return None
-        try:
-            children = os.listdir(entry or ".")
-        except OSError:
-            if os.path.exists(entry or "."):
-                return None
-            continue  # importlib.metadata finds nothing there either
-        for child in children:
-            if not child.lower().endswith((".dist-info", ".egg-info")):
-                continue
-            stem, suffix = os.path.splitext(child)
-            if suffix not in (".dist-info", ".egg-info"):
-                return None
-            name = _NAME_SEPARATORS.sub("_", stem.partition("-")[0]).lower()
-            if name in seen:  # a distribution of this name came earlier on the path: it wins
-                continue
-            seen.add(name)
-            folder = os.path.join(entry, child)
-            path = os.path.join(folder, "entry_points.txt")
-            if not os.access(path, os.F_OK):  # most have none: found so without an exception
-                continue
-            try:
-                with open(path, encoding="utf-8") as file:
-                    text = file.read()
-            except _NO_FILE:
-                continue
-            except (OSError, ValueError):
-                return None
-            if header in text:
-                found.append(folder)
-    return found
-
-
-#: a field's first line in e-mail style metadata, as the standard library's parser takes
-#: one: the field's name (printable ASCII but ``:``) and a colon
-_FIELD = re.compile(r"[!-9;-~]+:")
-
-
-def _distribution_name(dist: Distribution) -> str:
-    """``dist.name``, its metadata's ``Name`` field, read from ``METADATA`` without the e-mail
-    parser ``importlib.metadata`` reads it with (about 5 M instructions, half of them importing
-    the parser) when the field is written as every build tool writes it: on one line, after
-    ``Field: value`` lines (folded or not), in a file with ``\n`` line ends. The value is then
-    what that parser gives: the rest of the line after the colon and any blanks. Anything else
-    (no ``METADATA``, another line before it, a folded name) is left to ``dist.name``."""
-    text = dist.read_text("METADATA")
-    lines = text.split("\n") if text and "\r" not in text else []
-    for index, line in enumerate(lines):
-        if line[:1] in (" ", "\t"):  # the folded part of the field before
-            continue
-        field = _FIELD.match(line)
-        if field is None:  # the end of the fields, or a line the parser takes otherwise
-            break
-        if field.group().lower() == "name:":
-            if index + 1 < len(lines) and lines[index + 1][:1] in (" ", "\t"):
-                break
-            return line[field.end() :].lstrip(" \t")
-    name: str = dist.name
-    return name
 
 
 def file_version(path: Path) -> tuple[int, int] | None:
