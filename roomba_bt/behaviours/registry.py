@@ -48,6 +48,9 @@ class Registry:
 
     def __init__(self, *, entry_point_group: str | None = ENTRY_POINT_GROUP) -> None:
         self._declarations: dict[str, Declaration] = {}
+        #: entry-point plugins' declarations whose origin does not name the distribution
+        #: yet, by name: the entry point that names it (:meth:`_named`)
+        self._unnamed: dict[str, EntryPoint] = {}
         self._errors: list[PluginError] = []
         self._group = entry_point_group
         self._loaded = entry_point_group is None
@@ -67,6 +70,7 @@ class Registry:
             raise DeclarationError(f"name {declaration.name!r} is a word of the mission language")
         existing = self._declarations.get(declaration.name)
         if existing is not None and existing.cls is not cls:
+            existing = self._named(existing)
             raise DeclarationError(
                 f"name {declaration.name!r} is already taken by {_qualname(existing.cls)} "
                 f"({existing.origin})"
@@ -74,16 +78,14 @@ class Registry:
         if declaration.origin != origin:  # a built-in's own declaration says "builtin"
             declaration = replace(declaration, origin=origin)
         self._declarations[declaration.name] = declaration
+        self._unnamed.pop(declaration.name, None)
         return declaration
 
     def register_provider(self, provider: object, origin: str) -> list[Declaration]:
         """Register what an entry point or a plugin file provides (class, sequence of
         classes, or module); a wrong declaration becomes a recorded :class:`PluginError`."""
         try:
-            classes = list(_classes_of(provider))
-            if not classes:
-                raise DeclarationError("it provides no behaviour class (decorated with @declare)")
-            return [self.register(cls, origin) for cls in classes]
+            return [self.register(cls, origin) for cls in _provided(provider)]
         except DeclarationError as exc:
             self._errors.append(PluginError(origin, f"declares itself wrongly: {exc}"))
             return []
@@ -94,16 +96,44 @@ class Registry:
             return
         self._loaded = True
         for ep in sorted(group_entry_points(self._group or ""), key=lambda e: e.name):
-            self.load_entry_point(ep)
+            self._load_entry_point(ep)
 
     def load_entry_point(self, ep: EntryPoint) -> list[Declaration]:
-        origin = f"{ep.name!r} ({ep.value}" + (f", from {ep.dist.name}" if ep.dist else "") + ")"
+        """Import an entry point and register what it provides; a failure becomes a
+        recorded :class:`PluginError` naming it."""
+        return [self._named(declaration) for declaration in self._load_entry_point(ep)]
+
+    def _load_entry_point(self, ep: EntryPoint) -> list[Declaration]:
+        """:meth:`load_entry_point`, its declarations' origins not yet naming the
+        distribution: that name is its METADATA's ``Name``, read by the e-mail parser,
+        whose first import alone costs about 2.6 M instructions (more than importing and
+        registering the example plugin), and a mission run or ``validate`` never shows a
+        plugin's origin. :meth:`_named` writes it in when a declaration is handed out; an
+        error names the distribution at once."""
         try:
             provider = ep.load()
         except Exception as exc:  # any import-time failure of third-party code
-            self._errors.append(PluginError(origin, f"failed to import: {_cause(exc)}"))
+            self._errors.append(PluginError(_origin(ep), f"failed to import: {_cause(exc)}"))
             return []
-        return self.register_provider(provider, origin)
+        registered: list[Declaration] = []
+        try:
+            for cls in _provided(provider):
+                registered.append(self.register(cls, _origin(ep, named=False)))
+                self._unnamed[registered[-1].name] = ep
+        except DeclarationError as exc:
+            self._errors.append(PluginError(_origin(ep), f"declares itself wrongly: {exc}"))
+            return []
+        return registered
+
+    def _named(self, declaration: Declaration) -> Declaration:
+        """``declaration`` as handed out: an entry-point plugin's with the origin that names
+        its distribution (:meth:`_load_entry_point`), written in on the first read."""
+        ep = self._unnamed.pop(declaration.name, None)
+        if ep is None:
+            return declaration
+        declaration = replace(declaration, origin=_origin(ep))
+        self._declarations[declaration.name] = declaration
+        return declaration
 
     def with_file(self, path: Path) -> tuple[Registry, PluginError | None]:
         """A copy of this registry plus the behaviours of the module at ``path``."""
@@ -137,6 +167,7 @@ class Registry:
         self._ensure_loaded()
         other = Registry(entry_point_group=None)
         other._declarations = dict(self._declarations)
+        other._unnamed = dict(self._unnamed)
         other._errors = list(self._errors)
         return other
 
@@ -146,7 +177,7 @@ class Registry:
         if found is None:
             self._ensure_loaded()
             found = self._declarations.get(name)
-        return found
+        return found if found is None or not self._unnamed else self._named(found)
 
     def __contains__(self, name: object) -> bool:
         return isinstance(name, str) and self.get(name) is not None
@@ -157,7 +188,7 @@ class Registry:
 
     def __iter__(self) -> Iterator[Declaration]:
         self._ensure_loaded()
-        return iter([self._declarations[n] for n in sorted(self._declarations)])
+        return iter([self._named(self._declarations[n]) for n in sorted(self._declarations)])
 
     @property
     def errors(self) -> list[PluginError]:
@@ -208,12 +239,29 @@ def file_version(path: Path) -> tuple[int, int] | None:
     return (st.st_mtime_ns, st.st_size)
 
 
+def _origin(ep: EntryPoint, *, named: bool = True) -> str:
+    """Where an entry point's behaviours come from, as a declaration's origin and a plugin
+    error say: ``'dirt' (roomba_bt_dirt, from roomba-bt-dirt)``; without the distribution
+    when it has none, or ``named`` is False (:meth:`Registry._load_entry_point`)."""
+    source = f", from {ep.dist.name}" if named and ep.dist else ""
+    return f"{ep.name!r} ({ep.value}{source})"
+
+
 def _qualname(cls: object) -> str:
     return f"{getattr(cls, '__module__', '?')}.{getattr(cls, '__qualname__', repr(cls))}"
 
 
 def _cause(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}"
+
+
+def _provided(provider: object) -> list[type[RobotBehaviour]]:
+    """The behaviour classes an entry point or a plugin file provides; raises
+    :class:`DeclarationError` when it provides none, or something else."""
+    classes = list(_classes_of(provider))
+    if not classes:
+        raise DeclarationError("it provides no behaviour class (decorated with @declare)")
+    return classes
 
 
 def _classes_of(provider: object) -> Iterable[type[RobotBehaviour]]:
