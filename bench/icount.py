@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import compileall
 import contextlib
+import importlib.util
 import json
 import os
 import re
@@ -50,6 +51,7 @@ import subprocess
 import sys
 from collections.abc import Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
+from importlib.metadata import entry_points
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -157,8 +159,15 @@ def _compiled(code: Path) -> None:
     wheel. Without the ``.pyc`` files (a fresh ``git archive``, or ``PYTHONDONTWRITEBYTECODE``
     set, as on the development machine) every child would compile the modules an episode
     imports late (the behaviours, on the first compile of a mission) from source, and count
-    that as the episode's: a cost of the checkout, larger the more code it has, not of a tick."""
+    that as the episode's: a cost of the checkout, larger the more code it has, not of a tick.
+    The same for the installed plugins' packages (the example plugin, installed editable: its
+    source is imported by every process's first registry use), as pip compiles a plugin's
+    wheel; found without importing them."""
     compileall.compile_dir(code / "roomba_bt", quiet=1)
+    for ep in entry_points(group="roomba_bt.behaviours"):
+        spec = importlib.util.find_spec(ep.module.partition(".")[0])
+        for folder in (spec.submodule_search_locations or []) if spec is not None else []:
+            compileall.compile_dir(folder, quiet=1)
 
 
 def _count(*args: str, code: Path = ROOT) -> tuple[int, str]:
