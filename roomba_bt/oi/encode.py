@@ -79,10 +79,50 @@ def _spec(command: int | str | CommandSpec) -> CommandSpec:
         raise EncodeError("encode", "command", "a known opcode or command name", command) from None
 
 
+#: How a command of the table with fixed arguments only is checked and packed: the table's
+#: entry, the Struct of its bytes and each argument's (minimum, maximum).
+_FixedForm = tuple[CommandSpec, struct.Struct, tuple[tuple[int, int], ...]]
+
+
+def _fixed_form(spec: CommandSpec) -> _FixedForm | None:
+    """``spec``'s :data:`_FixedForm`, or None for a command :func:`encode` always checks in
+    full: Drive (137, whose radius has special values), the tails of Song, Stream and Query
+    List, an argument limited to chosen values (a packet id)."""
+    if spec.opcode == 137 or spec.tail is not None:
+        return None
+    if any(arg.choices is not None for arg in spec.args):
+        return None
+    packer = struct.Struct(">B" + "".join(arg.code for arg in spec.args))
+    return spec, packer, tuple((arg.minimum, arg.maximum) for arg in spec.args)
+
+
+#: :func:`_fixed_form` of each opcode that has one (built at import: about 30 Structs)
+_FIXED_FORMS: dict[int, _FixedForm] = {
+    opcode: form for opcode, spec in COMMANDS.items() if (form := _fixed_form(spec)) is not None
+}
+
+
 def encode(command: int | str | CommandSpec, *args: int, tail: Sequence[int] = ()) -> Command:
     """Encode ``command`` with its fixed arguments (in table order) and, for Song, Stream and
     Query List, the ``tail`` items whose count the fixed arguments give. Every value is
-    checked before a byte is built; prefer the named helpers below."""
+    checked before a byte is built; prefer the named helpers below.
+
+    A command of fixed arguments only whose values are all plain integers within their
+    limits (every Drive Direct a docking run sends) is packed by its prepared
+    :data:`_FixedForm`, with no further call; anything else, and every error, goes the full
+    way below, which says what is wrong. Drive Direct cost about 29,000 instructions the
+    full way (callgrind), a few thousand this way."""
+    if type(command) is int and type(tail) is tuple and not tail:
+        form = _FIXED_FORMS.get(command)
+        if form is not None:
+            spec, packer, limits = form
+            if len(args) == len(limits):
+                for value, (low, high) in zip(args, limits):  # noqa: B905 (lengths equal)
+                    # type(...) is int: not a bool, nor an int subclass (the full way's checks)
+                    if type(value) is not int or not low <= value <= high:
+                        break
+                else:
+                    return Command(spec, args, packer.pack(command, *args))
     spec = _spec(command)
     if len(args) != len(spec.args):
         names = ", ".join(a.name for a in spec.args)
@@ -237,8 +277,12 @@ def drive_pwm(right_pwm: int, left_pwm: int) -> Command:
 
 
 def halt() -> Command:
-    """Drive 0: what every safe ending sends. ``[137][0][0][0][0]``."""
-    return encode(137, 0, 0)
+    """Drive 0: what every safe ending sends. ``[137][0][0][0][0]``; encoded once (a command
+    is immutable), as a leaf sends it on every halt."""
+    return _HALT
+
+
+_HALT = encode(137, 0, 0)
 
 
 def motors(motor_bits: int) -> Command:

@@ -7,7 +7,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from roomba_bt.oi import commands as c
-from roomba_bt.oi.encode import Radius, decode_command, encode
+from roomba_bt.oi.encode import Command, Radius, decode_command, encode
+from roomba_bt.oi.errors import EncodeError
 from roomba_bt.oi.frames import layout_for
 from roomba_bt.oi.opcodes import COMMANDS, ArgSpec, CommandSpec
 from roomba_bt.oi.packets import VALID_PACKET_IDS, expand
@@ -95,3 +96,42 @@ def test_every_command_round_trips_through_the_robots_reader(
     assert len(command.data) == 1 + spec.data_bytes(args)  # never a short command
     decoded = decode_command(command.data)
     assert decoded == (command, len(command.data))
+
+
+#: values an argument may be given besides those it accepts: any width of integer, the
+#: edges of the tables' ranges, and what is not an int
+_ODD_VALUE = st.one_of(
+    st.integers(-70000, 70000),
+    st.sampled_from([-500, 500, -501, 501, 0, 255, 256, -128, 127, True, False, Radius.STRAIGHT]),
+    st.sampled_from([1.0, "1", None]),
+)
+
+
+@st.composite
+def any_arguments(draw: st.DrawFn) -> tuple[CommandSpec, list[object]]:
+    """A command and values for it: mostly as many as it takes, each often one it accepts."""
+    spec = draw(st.sampled_from(list(COMMANDS.values())))
+    if draw(st.integers(0, 5)) == 0:
+        return spec, draw(st.lists(_ODD_VALUE, max_size=16))
+    return spec, [draw(st.one_of(_arg_values(a), _ODD_VALUE)) for a in spec.args]
+
+
+@settings(max_examples=1000)
+@given(case=any_arguments())
+def test_encoding_by_opcode_agrees_with_the_table_entrys_full_checks(
+    case: tuple[CommandSpec, list[object]],
+) -> None:
+    # encode(opcode, ...) packs a command of fixed arguments by its prepared form; given the
+    # table's entry itself it checks in full: the same command or the same error either way
+    spec, args = case
+
+    def outcome(command: int | CommandSpec) -> object:
+        try:
+            return encode(command, *args)  # type: ignore[arg-type]
+        except EncodeError as exc:
+            return ("error", str(exc))
+
+    by_opcode, in_full = outcome(spec.opcode), outcome(spec)
+    assert by_opcode == in_full
+    if isinstance(by_opcode, Command) and isinstance(in_full, Command):
+        assert [type(a) for a in by_opcode.args] == [type(a) for a in in_full.args]
