@@ -114,9 +114,9 @@ class StreamOutput(Power):
 
     #: its own state's attributes (state.py: slots, not a dict, on the step's path)
     __slots__ = (
-        "_delayed", "_flip_in", "_gapped_stream", "_next_inject", "_out", "_plain_output",
-        "_reply_packers", "_stream", "_stream_ids", "_stream_paused", "bytes_sent",
-        "frames_sent",
+        "_delayed", "_flip_in", "_frame", "_gapped_stream", "_next_inject", "_out",
+        "_plain_output", "_reply_packers", "_stream", "_stream_ids", "_stream_paused",
+        "bytes_sent", "frames_sent",
     )  # fmt: skip
 
     def _init_output(self) -> None:
@@ -131,6 +131,11 @@ class StreamOutput(Power):
         #: (one frame a step, read after each: read hands the frame itself over, no copy in
         #: and out of a buffer)
         self._out: list[bytes] = []
+        #: the last stream frame sent straight out (no fault on the way), after everything in
+        #: _out, or None: the step's frame kept in a slot and handed over by read itself, not
+        #: appended to a list and joined out of it (about 300 instructions a step); anything
+        #: sent after it moves it into _out first (:meth:`_emit`), so the order stays
+        self._frame: bytes | None = None
         self._delayed: deque[tuple[float, bytes]] = deque()
         self._reply_packers: dict[tuple[int, ...], _Packer] = {}
         #: no fault touches the bytes on their way out: a frame goes straight into _out
@@ -194,16 +199,33 @@ class StreamOutput(Power):
             now = self.time
             while self._delayed and self._delayed[0][0] <= now + 1e-9:
                 self._out.append(self._delayed.popleft()[1])
+        frame = self._frame
         out = self._out
-        if not out:
+        if out:
+            if frame is not None:  # the frame came last
+                self._frame = None
+                out.append(frame)
+            data = b"".join(out)  # one byte string: itself
+            out.clear()
+            return data
+        if frame is None:
             return b""
-        data = b"".join(out)  # one byte string: itself
-        out.clear()
-        return data
+        self._frame = None  # the usual read: the step's frame alone
+        return frame
+
+    def _discard_output(self) -> None:
+        """Nothing sent and unread reaches the host (the link lost)."""
+        self._out.clear()
+        self._frame = None
+        self._delayed.clear()
 
     def _emit(self, data: bytes) -> None:
         if self.disconnected:
             return
+        frame = self._frame
+        if frame is not None:  # sent before these bytes
+            self._frame = None
+            self._out.append(frame)
         faults = self.faults
         if faults.corrupt_rate:
             rng = self._fault_rng

@@ -121,8 +121,7 @@ class Simulator(OIProtocol):
         if now >= self._fault_at:  # the link lost, or a timed fault due
             if now >= self._disconnect_at:
                 self.disconnected = True
-                self._out.clear()
-                self._delayed.clear()
+                self._discard_output()
                 self._event("disconnect", "link lost")
                 return
             self._timed_fault()
@@ -193,7 +192,10 @@ class Simulator(OIProtocol):
             if self._plain_output:  # no fault on the way out: straight into the output
                 self.frames_sent += 1
                 self.bytes_sent += stream.size
-                self._out.append(frame)
+                unread = self._frame  # a step's frame not read yet (replies.py)
+                if unread is not None:
+                    self._out.append(unread)
+                self._frame = frame
             else:
                 self._send_frame(frame)
 

@@ -71,6 +71,24 @@ def test_query_list_149_replies_in_order_without_header_or_checksum() -> None:
     assert reply.oi_mode == 2 and reply[7] == 0 and reply[22] > 12000
 
 
+def test_unread_frames_and_replies_are_read_in_the_order_sent() -> None:
+    host = make()
+    host.stream([7, 35])
+    host.sim.read()
+    host.sim.step()
+    first = expected_frame(host, [7, 35])
+    host.send(C.sensors(35))  # a reply after an unread frame
+    mode = bytes([host.sim.values[35]])
+    assert host.sim.read() == first + mode
+    host.sim.step()
+    second = expected_frame(host, [7, 35])
+    host.sim.step()  # a second frame before the first is read
+    host.send(C.sensors(35))
+    host.sim.step()  # a frame after a reply
+    assert host.sim.read() == second + second + mode + second
+    assert host.sim.read() == b""
+
+
 def test_an_invalid_packet_id_gets_no_reply() -> None:
     host = make()
     host.send(bytes([142, 99]))
