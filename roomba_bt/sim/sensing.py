@@ -93,8 +93,6 @@ _Line = tuple[float, float, float, float, float, float, float, float, float]
 #: A wall as the sensing pass reads it, computed once per world: a, b - a, |b - a|^2 (1 for
 #: a point), its line (:func:`_line`) and the segment itself
 _Wall = tuple[float, float, float, float, float, _Line, Segment]
-#: One ray of the light bumper (0-5) or the wall sensor (6): its index and direction
-_Ray = tuple[int, float, float]
 #: a ray that may meet a wall: n.d (> 0), its index, t.d (see :func:`_facing_walls`)
 _Facing = tuple[float, int, float]
 #: a close wall's line (:data:`_Line`), then the rays that may meet it from its normal's
@@ -189,28 +187,25 @@ _LEAST_TOP = 1.0 + _ANGLE_MARGIN
 _HALF_TOP = math.pi / 2.0 + 3 * _ANGLE_MARGIN
 
 
-def _rays(theta: float) -> tuple[_Ray, ...]:
-    """The light bumper's six rays' directions for a heading ``theta``."""
+def _facing_walls(theta: float, close_lines: tuple[_Line, ...]) -> tuple[_FacingWall, ...]:
+    """The close walls as the light bumper's rays see them at a heading ``theta``: each
+    wall's line, then the rays that may meet it from either side of it, as (n.d, ray, t.d),
+    sorted by n.d from the largest down and only those with n.d > 0 (from the far side, n
+    turned over: -n.d, exactly the same number negated). The same for every step at one
+    heading and the same close walls: driving straight, n.d and t.d are not worked out again
+    every step, the rays pointing away from a wall are not looked at, and a wall no ray
+    points at is passed over with one comparison. The rays' directions (the heading turned
+    by each ray's angle) are worked out in the loop, as :meth:`Sensing._sense_rays` does
+    turning: no tuple of them built (by a generator, a call per ray) for one use or two."""
     ct, st = math.cos(theta), math.sin(theta)
-    return tuple((i, ct * ca - st * sa, st * ca + ct * sa) for i, ca, sa in _LIGHT_BUMP_RAYS)
-
-
-def _facing_walls(
-    rays: tuple[_Ray, ...], close_lines: tuple[_Line, ...]
-) -> tuple[_FacingWall, ...]:
-    """The close walls as the ``rays`` (:func:`_rays`) see them: each wall's line, then
-    the rays that may meet it from either side of it, as (n.d, ray, t.d), sorted by n.d
-    from the largest down and only those with n.d > 0 (from the far side, n turned over:
-    -n.d, exactly the same number negated). The same for every step at one heading and the
-    same close walls: driving straight, n.d and t.d are not worked out again every step,
-    the rays pointing away from a wall are not looked at, and a wall no ray points at is
-    passed over with one comparison."""
     facing: list[_FacingWall] = []
     for line in close_lines:
         nx, ny, _, tx, ty, _, _, _, _ = line
         front: list[_Facing] = []
         back: list[_Facing] = []
-        for i, c, s in rays:
+        for i, ca, sa in _LIGHT_BUMP_RAYS:
+            c = ct * ca - st * sa
+            s = st * ca + ct * sa
             dn = nx * c + ny * s
             if dn > 0.0:
                 front.append((dn, i, tx * c + ty * s))
@@ -482,8 +477,8 @@ class Sensing(RobotState):
         # exact test decides the rest).
         if theta != self._rays_theta:
             # Turning: the rays that may meet each wall at this heading, once; the rays'
-            # directions as _rays gives them, worked out in the loop (no tuple of them made
-            # for one use). A ray meets the wall's line in range only if n.d > least, i.e.
+            # directions as _facing_walls works them out, in the loop (no tuple of them
+            # made for one use). A ray meets the wall's line in range only if n.d > least, i.e.
             # if its angle from the normal is below acos(least) (< half): only the rays
             # within half of the normal's bearing are looked at, the others (four of six,
             # usually) passed over by a slice of the rays sorted by angle (_ARC).
@@ -530,7 +525,7 @@ class Sensing(RobotState):
             # meet each wall, worked out once for this heading and these walls.
             facing = self._facing
             if theta != self._facing_theta or close_lines is not self._facing_lines:
-                facing = self._facing = _facing_walls(_rays(theta), close_lines)
+                facing = self._facing = _facing_walls(theta, close_lines)
                 self._facing_theta = theta
                 self._facing_lines = close_lines
             for nx, ny, w, tx, ty, ta, length, _, _, front, back in facing:
