@@ -27,6 +27,8 @@ FAST_LOADER: type[Any] = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 PURE_LOADER: type[Any] = yaml.SafeLoader
 
 CORE = "tag:yaml.org,2002:"
+#: a text's tag, the one every mapping key has
+STR = CORE + "str"
 _PLAIN_SCALARS = frozenset(CORE + t for t in ("str", "int", "float", "bool", "null"))
 #: scalars YAML resolves implicitly that a mission takes as text
 TEXT_SCALARS = frozenset(CORE + t for t in ("timestamp", "binary"))
@@ -109,13 +111,21 @@ def is_plain(node: yaml.Node) -> bool:
     tag = node.tag or ""
     if isinstance(node, yaml.ScalarNode):
         return tag in _PLAIN_SCALARS or tag in TEXT_SCALARS
-    return isinstance(node, yaml.SequenceNode | yaml.MappingNode) and tag in _PLAIN_COLLECTIONS
+    return isinstance(node, _COLLECTIONS) and tag in _PLAIN_COLLECTIONS
+
+
+#: (a tuple: ``A | B`` written in a call builds a new union object each time)
+_COLLECTIONS = (yaml.SequenceNode, yaml.MappingNode)
 
 
 def scalar(node: yaml.Node) -> Any:
     """A node as Python data by the safe constructor (``3`` -> 3, ``true`` -> True,
     ``2s`` -> "2s"); a tag it has no constructor for raises
-    :class:`yaml.constructor.ConstructorError`."""
+    :class:`yaml.constructor.ConstructorError`. A text is its value, as the constructor
+    would return it, without the constructor's dispatch and caches (most scalars of a
+    mission are texts)."""
+    if node.tag == STR and isinstance(node, yaml.ScalarNode):
+        return node.value
     try:
         return _CONSTRUCTOR.construct_object(node, deep=True)
     finally:  # its caches would keep every node alive and remember a failed one
@@ -140,7 +150,7 @@ def pairs(node: yaml.MappingNode) -> Iterator[tuple[Any, yaml.Node, yaml.Node]]:
     key comes again (keys compared as Python values: ``1`` and ``1.0`` are one key)."""
     seen: dict[Any, yaml.Node] = {}
     for key_node, value_node in node.value:
-        if key_node.tag == CORE + "str":
+        if key_node.tag == STR:
             key: Any = key_node.value
         else:  # a tagged key stays a node, for the caller to refuse
             key = scalar(key_node) if is_plain(key_node) else key_node
