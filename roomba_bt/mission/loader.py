@@ -51,7 +51,7 @@ from roomba_bt.mission.shipped import (
     DOCKING_LIBRARY,
     SHIPPED_DIR,
     SHIPPED_PREFIX,
-    shipped_file,
+    in_shipped_library,
     shipped_library_files,
 )
 from roomba_bt.mission.source import (
@@ -136,16 +136,17 @@ class Loader:
     def compile_file(
         self, path: Path, overrides: Mapping[str, str], *, require_tree: bool = True
     ) -> ParsedFile | None:
-        read = self._read_sections(path)
+        resolved = path.resolve()  # once: a resolve is a system call per folder on the way
+        read = self._read_sections(path, resolved)
         if read is None:
             return None
         sections, root_loc = read
         self._include_roots = (
-            path.resolve().parent,
+            resolved.parent,
             *SHIPPED_LIBRARY,
             *(folder.resolve() for folder in self.permissions.include_dirs),
         )
-        self._include_stack.append(path.resolve())
+        self._include_stack.append(resolved)
         self._file_sections(path, sections)
         name, description = self._names(path, sections)
         params = self._parameters(sections.get("parameters"), overrides, root_loc)
@@ -166,12 +167,12 @@ class Loader:
         return ParsedFile(name, description, params, tree, tree_loc, root_loc)
 
     def _read_sections(
-        self, path: Path
+        self, path: Path, resolved: Path
     ) -> tuple[dict[str, tuple[yaml.Node, Loc, Loc]], Loc] | None:
         """The file's top-level sections by key (node, key's and value's place) and the
         root's place; None when it is no mission file. Unknown keys are reported."""
         display = self.display(path)
-        self.files.append(path.resolve())
+        self.files.append(resolved)
         root, errors = compose(path, display)
         for e in errors:
             self.ctx.error(e)
@@ -282,7 +283,7 @@ class Loader:
                 chain = [p.name for p in self._include_stack[self._include_stack.index(target) :]]
                 self.ctx.error(iloc.at(f"include cycle: {' -> '.join([*chain, target.name])}"))
                 continue
-            if text.startswith(SHIPPED_PREFIX) and shipped_file(text) is None:
+            if text.startswith(SHIPPED_PREFIX) and not in_shipped_library(target):
                 self.ctx.error(
                     iloc.at(
                         f"included file {text!r} is not in the shipped library; "

@@ -80,9 +80,13 @@ def shipped_file(text: str) -> Path | None:
         return None
     relative = text[len(SHIPPED_PREFIX) :]
     target = (SHIPPED_DIR / relative).resolve()
-    if not target.is_relative_to(SHIPPED_DIR) or not target.is_file():
-        return None
-    return target
+    return target if in_shipped_library(target) else None
+
+
+def in_shipped_library(target: Path) -> bool:
+    """``target`` (a resolved path) is a file of the shipped directory: what a
+    ``roomba-bt:PATH`` name may designate."""
+    return target.is_relative_to(SHIPPED_DIR) and target.is_file()
 
 
 def find_mission(text: str) -> ShippedLookup:
