@@ -52,40 +52,53 @@ class Odometry(NamedTuple):
     path_mm: float = 0.0  # unsigned path length: "distance driven"
 
     def advance(self, left_counts: int, right_counts: int, wheel_base_mm: float) -> Odometry:
-        """The odometry after a frame carrying these raw encoder counts (built by
-        ``tuple.__new__``: once a tick, and the named tuple's own ``__new__`` is a Python
-        call). The arithmetic of :func:`~roomba_bt.oi.odometry.encoder_delta`,
-        :func:`~roomba_bt.oi.odometry.counts_to_mm` and
-        :func:`~roomba_bt.oi.odometry.arc_from_wheels` is written out here, the same
-        operations in the same order (the same floats): three calls a tick cost more than the
-        arithmetic (tests/robot/test_odometry.py checks it against them)."""
-        # one unpacking, not a lookup through the class for each field read
-        x, y, theta, distance, angle, previous_left, previous_right, path = self
-        if left_counts == previous_left and right_counts == previous_right:
-            return self  # standing still (most frames of a docked or waiting robot)
-        if previous_left is None or previous_right is None:
-            return _new_tuple(Odometry, (
-                x, y, theta, distance, angle, left_counts, right_counts, path,
-            ))  # fmt: skip
-        left = (((left_counts - previous_left + 0x8000) & 0xFFFF) - 0x8000) * MM_PER_COUNT
-        right = (((right_counts - previous_right + 0x8000) & 0xFFFF) - 0x8000) * MM_PER_COUNT
-        if left == 0.0 and right == 0.0:
-            return _new_tuple(Odometry, (
-                x, y, theta, distance, angle, left_counts, right_counts, path,
-            ))  # fmt: skip
-        dist = (left + right) / 2.0
-        dtheta = (right - left) / wheel_base_mm
-        mid = theta + dtheta / 2.0
-        return _new_tuple(Odometry, (
-            x + dist * math.cos(mid),
-            y + dist * math.sin(mid),
-            theta + dtheta,
-            distance + dist,
-            angle + dtheta,
-            left_counts,
-            right_counts,
-            path + abs(dist),
-        ))  # fmt: skip
+        """The odometry after a frame carrying these raw encoder counts
+        (:func:`advanced_fields` of its fields; the same object while the counts stand)."""
+        moved = advanced_fields(self, left_counts, right_counts, wheel_base_mm)
+        return self if moved is self else _new_tuple(Odometry, moved)
+
+
+#: An :class:`Odometry`'s fields in a plain tuple, in its order.
+OdometryFields = tuple[float, float, float, float, float, int | None, int | None, float]
+
+
+def advanced_fields(
+    fields: OdometryFields, left_counts: int, right_counts: int, wheel_base_mm: float
+) -> OdometryFields:
+    """:meth:`Odometry.advance` on the fields of an odometry (an :class:`Odometry`, or its
+    fields in a plain tuple): ``fields`` itself while the counts stand (most frames of a
+    docked or waiting robot), else the new fields in a plain tuple.
+
+    The :class:`Odometer` keeps the plain tuple it built its odometry from and passes that:
+    CPython 3.11 unpacks an exact tuple in one step, a named tuple's items through an
+    iterator (about 500 instructions more, on every tick of a moving robot). The
+    arithmetic of :func:`~roomba_bt.oi.odometry.encoder_delta`,
+    :func:`~roomba_bt.oi.odometry.counts_to_mm` and
+    :func:`~roomba_bt.oi.odometry.arc_from_wheels` is written out here, the same operations
+    in the same order (the same floats): three calls a tick cost more than the arithmetic
+    (tests/robot/test_odometry.py checks it against them)."""
+    x, y, theta, distance, angle, previous_left, previous_right, path = fields
+    if left_counts == previous_left and right_counts == previous_right:
+        return fields
+    if previous_left is None or previous_right is None:
+        return (x, y, theta, distance, angle, left_counts, right_counts, path)
+    left = (((left_counts - previous_left + 0x8000) & 0xFFFF) - 0x8000) * MM_PER_COUNT
+    right = (((right_counts - previous_right + 0x8000) & 0xFFFF) - 0x8000) * MM_PER_COUNT
+    if left == 0.0 and right == 0.0:
+        return (x, y, theta, distance, angle, left_counts, right_counts, path)
+    dist = (left + right) / 2.0
+    dtheta = (right - left) / wheel_base_mm
+    mid = theta + dtheta / 2.0
+    return (
+        x + dist * math.cos(mid),
+        y + dist * math.sin(mid),
+        theta + dtheta,
+        distance + dist,
+        angle + dtheta,
+        left_counts,
+        right_counts,
+        path + abs(dist),
+    )
 
 
 class Odometer:
@@ -98,10 +111,13 @@ class Odometer:
     waiting) leaves the odometry as it is, the same object, with no call; a frame without
     the encoder packets too."""
 
-    __slots__ = ("_counted", "_counts", "_layout", "_wheel_base_mm", "odometry")
+    __slots__ = ("_counted", "_counts", "_fields", "_layout", "_wheel_base_mm", "odometry")
 
     def __init__(self, wheel_base_mm: float) -> None:
         self.odometry = Odometry()
+        #: what :attr:`odometry` was built from (:func:`advanced_fields`: after the first
+        #: move, its fields in a plain tuple)
+        self._fields: OdometryFields = self.odometry
         self._wheel_base_mm = wheel_base_mm
         self._layout: FrameLayout | None = None
         #: the frame's (left, right) encoder counts, or None when its layout has none
@@ -127,7 +143,10 @@ class Odometer:
             return odometry
         self._counted = counted
         left, right = counted
-        odometry = self.odometry = odometry.advance(left, right, self._wheel_base_mm)
+        fields = advanced_fields(self._fields, left, right, self._wheel_base_mm)
+        if fields is not self._fields:
+            self._fields = fields
+            odometry = self.odometry = _new_tuple(Odometry, fields)
         return odometry
 
 
