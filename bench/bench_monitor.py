@@ -59,7 +59,6 @@ from roomba_bt.monitor.session import MonitorSession
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.connection import Connection
-from roomba_bt.robot.interface import Snapshot
 from roomba_bt.runtime.loop import MissionRunner, stream_request
 from roomba_bt.sim import RealtimeSimLink, SimLink, Simulator, load_world
 
@@ -87,7 +86,7 @@ class TimedRunner(MissionRunner):
         self.rival_clock = time.CLOCK_THREAD_CPUTIME_ID
         self._started = self._cpu = self._rival = 0.0
 
-    def _advance(self, batch: Sequence[SensorFrame]) -> Snapshot:
+    def _advance(self, batch: Sequence[SensorFrame]) -> float:
         self._rival = time.clock_gettime(self.rival_clock)
         self._cpu = time.thread_time()
         self._started = time.perf_counter()

@@ -338,7 +338,7 @@ class MissionRunner(BaseHandle):
                     return
                 continue
             started = perf()
-            snapshot = self._advance(batch)
+            mission_time = self._advance(batch)
             gate = self.gate
             if gate is not None:
                 if not gate.before_tick(self):
@@ -365,7 +365,7 @@ class MissionRunner(BaseHandle):
                 summary.outcome = Outcome.FAILURE
                 summary.reason = failure_reason(root)
                 return
-            if self.timeout_s is not None and snapshot.time >= self.timeout_s:
+            if self.timeout_s is not None and mission_time >= self.timeout_s:
                 summary.outcome = Outcome.TIMEOUT
                 summary.reason = (
                     f"--timeout {self.timeout_s:g} s of mission time ran out{running_in(root)}"
@@ -398,9 +398,11 @@ class MissionRunner(BaseHandle):
         if wheels is not None and any(wheels.args) and connection.mode in DRIVING_MODES:
             self._outbox.send(wheels, self)
 
-    def _advance(self, batch: Sequence[SensorFrame]) -> Snapshot:
+    def _advance(self, batch: Sequence[SensorFrame]) -> float:
         """Newest frame of the batch -> the tick's snapshot; stale frames and gaps counted.
-        The frames of a batch came in one read, at the link's ``arrival``.
+        The frames of a batch came in one read, at the link's ``arrival``. Returns the
+        snapshot's mission time, for the loop's timeout (a named tuple's field read is a
+        generic attribute read in CPython 3.11, about 170 instructions).
 
         The common frame (the only one of its batch, one slot after the one before) takes
         the first branch of each test: no stale frame to confirm hazards with, no gap to
@@ -428,12 +430,13 @@ class MissionRunner(BaseHandle):
         tick = self._tick = self._tick + slots
         if self.clock_held:
             self._held_slots += slots
+        mission_time = (tick - self._held_slots) * SLOT_SECONDS
         # tuple.__new__: the named tuple's own __new__ is a Python call that binds each
         # field (with keywords, several times the cost of the rest of this method)
         snapshot: Snapshot = _new_tuple(Snapshot, (
             frame,
             tick,
-            (tick - self._held_slots) * SLOT_SECONDS,
+            mission_time,
             modes.mode,
             self._odometer.frame(frame),
             fallback,
@@ -448,7 +451,7 @@ class MissionRunner(BaseHandle):
                 _STORAGE[SNAPSHOT_KEY] = snapshot
             else:  # someone is watching the blackboard's activity: tell it
                 self._blackboard.set(SNAPSHOT_KEY, snapshot, overwrite=True)
-        return snapshot
+        return mission_time
 
     def _stale(self, batch: Sequence[SensorFrame]) -> None:
         """The frames of a batch before its newest: dropped (counted), their hazards seen."""
