@@ -161,7 +161,7 @@ class RobotState:
         self.disconnected = False
         self.ticks = 0
         self.time = 0.0
-        self._time_ns = 0  # the clock in whole nanoseconds: no drift (robot.py's step)
+        self._time_ns = 0.0  # the clock in whole nanoseconds: no drift (robot.py's step)
         #: the timeline's effects on the body (timeline.py): held down, lifted, charger off
         self._event_bump = 0
         self.lifted = False
