@@ -137,9 +137,9 @@ class Motion(Sensing):
 
     #: its own state's attributes (state.py: slots, not a dict, on the step's path)
     __slots__ = (
-        "_angle_acc", "_distance_acc", "_dock_target", "_encoder_bias", "_half_base",
-        "_last_drive", "_left_counts", "_motion", "_right_counts", "_stall_steps", "_travel",
-        "_travel_heading", "_travel_motion", "blocked", "left_speed", "requested_left",
+        "_angle_acc", "_distance_acc", "_dock_target", "_encoder_low", "_half_base",
+        "_last_drive", "_left_counts", "_motion", "_right_counts", "_stall_steps", "_steady",
+        "_travel", "_travel_heading", "_travel_motion", "blocked", "left_speed", "requested_left",
         "requested_right", "right_speed",
     )  # fmt: skip
 
@@ -150,6 +150,9 @@ class Motion(Sensing):
         self.right_speed = 0.0
         self.blocked = False
         self._stall_steps = 0
+        #: the last step moved freely at the speeds now (:meth:`_move`): packet 58 and the
+        #: stall count stay as that step left them, not set again every step
+        self._steady = False
         self._left_counts = 0.0
         self._right_counts = 0.0
         #: travel and turn not yet reported in packets 19 and 20 (replies.py reads them)
@@ -164,7 +167,7 @@ class Motion(Sensing):
         self._travel = (0.0, 0.0)
         self._travel_heading = math.nan
         self._travel_motion = self._motion
-        self._encoder_bias = 0x8000 if self.profile.encoders_signed else 0
+        self._encoder_low = -0x8000 if self.profile.encoders_signed else 0
         dock = self.world.dock
         self._dock_target = dock.docked_pose if dock is not None else None
         self.values[40] = -32768
@@ -226,6 +229,7 @@ class Motion(Sensing):
             # New speeds (or step). Speeds that stay are those of the last move (only a stop
             # sets others: 0), and the motion kept is theirs: nothing to check on a step.
             self._power_due = True  # the wheels draw other currents (power.py)
+            self._steady = False
             self.left_speed, self.right_speed = left, right
             if not left and not right:
                 self.values[58] = 0
@@ -261,9 +265,15 @@ class Motion(Sensing):
         if fraction == 1.0:
             # free motion (the usual step): what the wheels did is the same every step (the
             # heading and the counts as _turn does them, inline: this runs every step)
-            if self.blocked:
-                self.blocked = False
-                self._power_due = True
+            if not self._steady:
+                # the first free step at these speeds or after a hindered one: packet 58, the
+                # stall count and the blocked flag as free steps leave them, the same after
+                self._steady = True
+                v[58] = motion[8]
+                self._stall_steps = 0
+                if self.blocked:
+                    self.blocked = False
+                    self._power_due = True
             theta = self.theta + dtheta
             if theta > _PI:
                 theta -= _TWO_PI
@@ -274,17 +284,19 @@ class Motion(Sensing):
             self._angle_acc += motion[10]
             left_counts = self._left_counts = self._left_counts + motion[6]
             right_counts = self._right_counts = self._right_counts + motion[7]
-            v[58] = motion[8]
-            self._stall_steps = 0
             self._geometry_dirty = True
         else:
             self._move_hindered(dist, dtheta, fraction, stuck, dt)
             left_counts, right_counts = self._left_counts, self._right_counts
-        # 16 bits, signed or not: (n + bias) & 0xFFFF - bias, bias 0x8000 when signed (trunc,
-        # not int: state.py)
-        bias = self._encoder_bias
-        v[43] = (trunc(left_counts) + bias & 0xFFFF) - bias
-        v[44] = (trunc(right_counts) + bias & 0xFFFF) - bias
+        # 16 bits, signed or not: the count itself while within low..low + 0xFFFF (low -0x8000
+        # when signed, else 0), else (n - low) & 0xFFFF + low: comparisons, not three new
+        # integers a wheel (trunc, not int: state.py)
+        low = self._encoder_low
+        high = low + 0xFFFF
+        n = trunc(left_counts)
+        v[43] = n if low <= n <= high else (n - low & 0xFFFF) + low
+        n = trunc(right_counts)
+        v[44] = n if low <= n <= high else (n - low & 0xFFFF) + low
         if not self.ticks & 3 and self.keeps_trace:
             # built as the tuple it is: the NamedTuple's __new__ is a Python call
             point = (self.time, self.x, self.y, self.theta, self.mode)
@@ -325,6 +337,7 @@ class Motion(Sensing):
         """The rest of a step that a wall cut short, or a lifted or fallen robot's."""
         half_base = self._half_base
         self._power_due = True  # a stall draws more current
+        self._steady = False  # packet 58 and the stall count set here
         blocked = self.blocked = fraction < 1.0 and dist != 0.0 and not stuck
         guided = 0.0
         if blocked and dist > 0.0 and self._dock_target is not None:
