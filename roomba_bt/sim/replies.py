@@ -53,8 +53,8 @@ class _Packer:
     """Packs a list of packet ids from the flat value list in one ``struct`` call."""
 
     __slots__ = (
-        "byte_sum", "far", "framing", "getter", "has_angle", "has_distance", "size", "snapshot",
-        "struct", "sum_bias",
+        "byte_sum", "far", "framing", "getter", "has_angle", "has_distance", "pack", "size",
+        "snapshot", "struct",
     )  # fmt: skip
 
     def __init__(
@@ -79,6 +79,8 @@ class _Packer:
             codes.append("x")  # the checksum's place
             fixed.append(0)
         self.struct = struct.Struct("".join(codes))
+        #: its pack, bound once (a look-up less a frame)
+        self.pack = self.struct.pack
         getter = itemgetter(*idx)
         self.getter: Callable[[list[int]], tuple[int, ...]] = (
             getter if len(idx) > 1 else (lambda v: (getter(v),))
@@ -96,12 +98,12 @@ class _Packer:
         # profile's checksum leaves it out) & 0xFF; the sum taken as the parser takes it, of
         # the data bytes packed (byte_sum adds ``added``), the header's and ids' added here.
         self.byte_sum, added = byte_sum_for(self.size)
-        self.sum_bias = added - sum(fixed) + (0 if profile.checksum_includes_header else 19)
-        #: a stream frame's header and ids, and its checksum byte for each sum of the frame
-        #: (``(byte_sum(packed) - sum_bias) & 0xFF``), or-ed into the packed bytes (none for
-        #: a reply)
+        bias = added - sum(fixed) + (0 if profile.checksum_includes_header else 19)
+        #: a stream frame's header and ids, and its checksum byte for each low byte of the
+        #: packed bytes' sum (``byte_sum(packed) & 0xFF``: the frame's, the bias taken off
+        #: here, not every frame), or-ed into the packed bytes (none for a reply)
         header = int.from_bytes(fixed)
-        self.framing = tuple(header | (-total & 0xFF) for total in range(256)) if stream else ()
+        self.framing = tuple(header | (bias - low & 0xFF) for low in range(256)) if stream else ()
 
 
 def stream_payload(ids: tuple[int, ...], profile: RobotProfile) -> int:
@@ -271,7 +273,7 @@ class StreamOutput(Power):
             packer = self._reply_packers[ids] = _Packer(ids, self.profile, False)
         if packer.far:
             self._settle_far()
-        return packer.struct.pack(*packer.getter(self._snapshot_values(packer)))
+        return packer.pack(*packer.getter(self._snapshot_values(packer)))
 
     def _snapshot_values(self, packer: _Packer) -> list[int]:
         """The value list to send now: distance/angle since last read, noise if asked."""

@@ -165,9 +165,11 @@ class Simulator(OIProtocol):
             self._charge_owed += 1  # the charge's step, taken later with the others (power.py)
         swept = self.swept
         if swept is not None:
-            cycle = self.builtin  # the firmware's Clean, Spot and Max run every motor
-            cleaning = cycle is not None and cycle.name != "seek_dock"
-            motors = ALL_BRUSHES if cleaning else self.motor_bits
+            cycle = self.builtin
+            if cycle is None or cycle.name == "seek_dock":
+                motors = self.motor_bits
+            else:  # the firmware's Clean, Spot and Max run every motor
+                motors = ALL_BRUSHES
             if motors & ALL_BRUSHES or now >= swept.idle_until:
                 swept.update(now, self.x, self.y, self.theta, motors)
             else:  # no brush: all an update would do (coverage.py)
@@ -187,11 +189,9 @@ class Simulator(OIProtocol):
                 self._next_inject += faults.inject_every
             values = self._snapshot_values(stream) if stream.snapshot else self.values
             # the values packed, the header, ids and checksum or-ed in (replies.py)
-            packed = stream.struct.pack(*stream.getter(values))
-            frame = (
-                _from_bytes(packed)
-                | stream.framing[(stream.byte_sum(packed) - stream.sum_bias) & 0xFF]
-            ).to_bytes(stream.size)
+            packed = stream.pack(*stream.getter(values))
+            framing = stream.framing[stream.byte_sum(packed) & 0xFF]
+            frame = (_from_bytes(packed) | framing).to_bytes(stream.size)
             if self._plain_output:  # no fault on the way out: straight into the output
                 self.frames_sent += 1
                 self.bytes_sent += stream.size
