@@ -38,6 +38,7 @@ calls.
 from __future__ import annotations
 
 import typing
+from collections.abc import Callable
 from itertools import islice
 from typing import Any
 
@@ -214,6 +215,12 @@ class Stepped(Direct):
     """
 
     children: list[Behaviour]
+    #: the child a resumed tick (:meth:`Sequence.tick_direct`, :meth:`Selector.tick_direct`,
+    #: :meth:`DecoratorTick.tick_direct`) last found to be :class:`Direct`, and its
+    #: ``tick_direct``: the same child on the next tick is ticked so without asking
+    #: ``isinstance`` again (about 170 instructions a node, four nodes on every tick of a
+    #: docking run; a node's class does not change). Before any: :data:`_NO_CHILD`.
+    _direct_child: tuple[object, Callable[[], None]]
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         """A subclass that rewrites a step (``tick_start``/``tick_next``) without its own
@@ -261,6 +268,11 @@ class Stepped(Direct):
             else:
                 tick_generator(child)
             index = self.tick_next(index)
+
+
+#: :attr:`Stepped._direct_child` before a resumed tick has found one (no child is None)
+_NO_CHILD: tuple[object, Callable[[], None]] = (None, lambda: None)
+Stepped._direct_child = _NO_CHILD
 
 
 def tick_child(child: Behaviour) -> None:
@@ -313,7 +325,11 @@ class Sequence(Stepped, _CompositeStop, py_trees.composites.Sequence):
         ):
             Stepped.tick_direct(self)
             return
-        if isinstance(child, Direct):
+        known = self._direct_child  # Stepped._direct_child
+        if known[0] is child:
+            known[1]()
+        elif isinstance(child, Direct):
+            self._direct_child = (child, child.tick_direct)
             child.tick_direct()
         else:
             tick_generator(child)
@@ -392,7 +408,11 @@ class Selector(Stepped, _CompositeStop, py_trees.composites.Selector):
                 break
             if earlier.status is not _INVALID:
                 earlier.stop(_INVALID)
-        if isinstance(child, Direct):
+        known = self._direct_child  # Stepped._direct_child
+        if known[0] is child:
+            known[1]()
+        elif isinstance(child, Direct):
+            self._direct_child = (child, child.tick_direct)
             child.tick_direct()
         else:
             tick_generator(child)
@@ -621,7 +641,11 @@ class DecoratorTick(Stepped, py_trees.decorators.Decorator):
         if self.status is not _RUNNING:
             self.initialise()
         child = self.children[0]
-        if isinstance(child, Direct):
+        known = self._direct_child  # Stepped._direct_child
+        if known[0] is child:
+            known[1]()
+        elif isinstance(child, Direct):
+            self._direct_child = (child, child.tick_direct)
             child.tick_direct()
         else:
             tick_generator(child)
