@@ -189,12 +189,12 @@ class Simulator(OIProtocol):
                 self._next_inject += faults.inject_every
             values = self._snapshot_values(stream) if stream.snapshot else self.values
             # the values packed, the header, ids and checksum or-ed in (replies.py)
-            packed = stream.pack(*stream.getter(values))
-            framing = stream.framing[stream.byte_sum(packed) & 0xFF]
-            frame = (_from_bytes(packed) | framing).to_bytes(stream.size)
+            pack, getter, byte_sum, framings, size = stream.frame_tools
+            packed = pack(*getter(values))
+            frame = (_from_bytes(packed) | framings[byte_sum(packed) & 0xFF]).to_bytes(size)
             if self._plain_output:  # no fault on the way out: straight into the output
                 self.frames_sent += 1
-                self.bytes_sent += stream.size
+                self.bytes_sent += size
                 unread = self._frame  # a step's frame not read yet (replies.py)
                 if unread is not None:
                     self._out.append(unread)
