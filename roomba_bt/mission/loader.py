@@ -166,11 +166,10 @@ class Loader:
         self._include_stack.pop()
         return ParsedFile(name, description, params, tree, tree_loc, root_loc)
 
-    def _read_sections(
-        self, path: Path, resolved: Path
-    ) -> tuple[dict[str, tuple[yaml.Node, Loc, Loc]], Loc] | None:
-        """The file's top-level sections by key (node, key's and value's place) and the
-        root's place; None when it is no mission file. Unknown keys are reported."""
+    def _compose(self, path: Path, resolved: Path) -> tuple[yaml.Node, Loc] | None:
+        """One file of the mission (the main file or an include) read as YAML nodes: its
+        root and the root's place, None when it cannot be read or parsed (reported). The
+        file is remembered (``files``, resolved) for ``--watch``."""
         display = self.display(path)
         self.files.append(resolved)
         root, errors = compose(path, display)
@@ -178,7 +177,17 @@ class Loader:
             self.ctx.error(e)
         if root is None:
             return None
-        root_loc = loc_of(root, display, "")
+        return root, loc_of(root, display, "")
+
+    def _read_sections(
+        self, path: Path, resolved: Path
+    ) -> tuple[dict[str, tuple[yaml.Node, Loc, Loc]], Loc] | None:
+        """The file's top-level sections by key (node, key's and value's place) and the
+        root's place; None when it is no mission file. Unknown keys are reported."""
+        read = self._compose(path, resolved)
+        if read is None:
+            return None
+        root, root_loc = read
         if not _is_mission(root, TOP_LEVEL):
             self.ctx.error(root_loc.at(_not_a_mission("this file", TOP_LEVEL)))
             return None
@@ -302,17 +311,13 @@ class Loader:
             self._include(target, text, iloc)
 
     def _include(self, target: Path, text: str, iloc: Loc) -> None:
-        display = self.display(target)
-        self.files.append(target)
-        root, errors = compose(target, display)
-        for e in errors:
-            self.ctx.error(e)
-        if root is None:
+        read = self._compose(target, target)
+        if read is None:
             return
+        root, root_loc = read
         if not _is_mission(root, _INCLUDED_KEYS):
             self.ctx.error(iloc.at(_not_a_mission(f"included file {text!r}", _INCLUDED_KEYS)))
             return
-        root_loc = loc_of(root, display, "")
         try:
             items = mapping(root, root_loc, "an included file")
         except Bad as bad:
