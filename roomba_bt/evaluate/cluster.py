@@ -23,7 +23,12 @@ import uuid
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
-from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec, run_episode, self_contained
+from roomba_bt.evaluate.episode import (
+    EpisodeResult,
+    EpisodeSpec,
+    all_self_contained,
+    run_episode,
+)
 
 
 class ClusterUnavailableError(RuntimeError):
@@ -56,6 +61,18 @@ def _import_distributed() -> Any:
     return distributed
 
 
+#: Dask settings of the local cluster (``--engine dask``), read by its scheduler, nannies and
+#: workers as they start. It has no dashboard, so nothing shows what these would collect:
+#: each worker's statistical profiler samples the episode's thread every 10 ms, holding the
+#: GIL (about 0.4 s of a worker's CPU in 48 dock episodes, taken from the episodes), and the
+#: system monitor reads the disk counters twice a second. A cluster of one's own
+#: (``--scheduler``) keeps its own settings.
+LOCAL_CLUSTER_CONFIG: dict[str, object] = {
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.system-monitor.disk": False,
+}
+
+
 @contextlib.contextmanager
 def dask_client(scheduler: str | None = None, workers: int = 2) -> Iterator[Any]:
     """A client of the scheduler at ``scheduler``, or of a local cluster of ``workers``
@@ -73,7 +90,10 @@ def dask_client(scheduler: str | None = None, workers: int = 2) -> Iterator[Any]
         with client:
             yield client
         return
+    import dask
+
     with (
+        dask.config.set(LOCAL_CLUSTER_CONFIG),
         distributed.LocalCluster(
             n_workers=workers,
             threads_per_worker=1,
@@ -99,17 +119,17 @@ def run_on_client(
     total = len(specs)
     batch = uuid.uuid4().hex[:12]  # keys unique on a cluster shared by many evaluations
     futures = [
-        client.submit(run_on_worker, self_contained(spec), key=f"episode-{batch}-{i}",
-                      pure=False)
-        for i, spec in enumerate(specs)
-    ]  # fmt: skip
+        client.submit(run_on_worker, spec, key=f"episode-{batch}-{i}", pure=False)
+        for i, spec in enumerate(all_self_contained(specs))
+    ]
     index = {future.key: i for i, future in enumerate(futures)}
     results: list[EpisodeResult | None] = [None] * total
     done = 0
     interrupted = False
     try:
-        for future in distributed.as_completed(futures):
-            result = future.result()
+        # results gathered on the client's event loop as they complete, not one blocking
+        # round trip from this thread each
+        for future, result in distributed.as_completed(futures, with_results=True):
             results[index[future.key]] = result
             done += 1
             if progress is not None:

@@ -11,6 +11,7 @@ import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -144,3 +145,22 @@ def test_a_local_cluster_takes_no_fixed_port() -> None:
             assert scheduler.http_server is not None
             ports = {s.getsockname()[1] for s in scheduler.http_server._sockets.values()}
             assert 8787 not in ports
+
+
+def _worker_settings(dask_worker: Any) -> tuple[bool, bool]:
+    import dask
+
+    return "profile" in dask_worker.periodic_callbacks, bool(
+        dask.config.get("distributed.admin.system-monitor.disk")
+    )
+
+
+def test_a_local_clusters_workers_run_without_what_only_a_dashboard_shows() -> None:
+    """The local cluster has no dashboard: its workers start without the statistical profiler
+    (it samples the episode's thread every 10 ms, holding the GIL) and the disk counters,
+    and the settings do not leak into the process that started it."""
+    import dask
+
+    with dask_client(workers=1) as client:
+        assert set(client.run(_worker_settings).values()) == {(False, False)}
+    assert dask.config.get("distributed.worker.profile.enabled") is True

@@ -79,6 +79,29 @@ def test_assert_success_rate_passes_and_fails_with_the_report() -> None:
         assert_success_rate(str(MISSIONS / "dock.yaml"), runs=2, within_s=2, rate=0.5)
 
 
+def test_an_evaluations_specs_carry_one_reading_of_each_file(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Made self-contained together, an evaluation's episodes share one reading of the
+    mission (and of a world file): parsed once, not once an episode, and the same bytes in
+    all of them even if the file is saved while they are submitted."""
+    import roomba_bt.evaluate.episode as episode
+
+    world = tmp_path / "room.yaml"
+    world.write_text((MISSIONS.parent / "roomba_bt/sim/worlds/corridor.yaml").read_text())
+    specs = episode_specs(BUMP, world=str(world), runs=3, seed=1)
+    specs += episode_specs(str(MISSIONS / "dock.yaml"), world=str(world), runs=2, seed=1)
+    read: list[str] = []
+    bundle = episode.bundle_mission
+    monkeypatch.setattr(episode, "bundle_mission", lambda p: read.append(p) or bundle(p))
+    travelling = episode.all_self_contained(specs)
+    assert read == [BUMP, str(MISSIONS / "dock.yaml")]
+    assert len({id(s.sources) for s in travelling}) == 2
+    assert len({id(s.world_file) for s in travelling}) == 1
+    assert travelling[0] == episode.self_contained(specs[0])
+    assert [dataclasses.replace(s, sources=None, world_file=None) for s in travelling] == specs
+
+
 @pytest.mark.parametrize(
     ("mission", "named"),
     [("bounce.yaml", "lib/escapes.yaml"), ("custom_condition.yaml", "plugins/near_wall.py")],
