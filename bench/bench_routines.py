@@ -15,7 +15,8 @@ Every figure is measured in this process, beside its baseline:
   do with those episodes, and how much slower each episode ran beside the other worker.
 * eval on Dask: the same 48 episodes on a local Dask cluster of 1 and of 2 worker processes
   (each cluster started and its workers' imports warmed before the clock starts: what a
-  long-running cluster costs per evaluation). Target: >= 1.8x.
+  long-running cluster costs per evaluation), in interleaved rounds; the median of the
+  rounds' ratios. Target: >= 1.8x.
 
 ``python -m bench.bench_routines --against 626461e [--rounds N]`` (and ``make bench``, against
 :data:`FILED_AT` with :data:`AGAINST_ROUNDS` rounds) measures issue 18's "halve
@@ -100,8 +101,17 @@ FILED_AT = "626461e"
 AGAINST_ROUNDS = 15
 
 
-def dask_scaling(repeats: int = 2) -> None:
-    """Wall seconds of the 48 episodes on 1 and 2 Dask workers, each the best of ``repeats``."""
+#: rounds of the Dask comparison: its ratio moved between 1.59x and 1.83x in three single
+#: rounds a minute apart on the 2-core VM (docs/performance.md, session 16); about 25 s each
+DASK_ROUNDS = 5
+
+
+def dask_scaling(rounds: int = DASK_ROUNDS, repeats: int = 2) -> None:
+    """Wall seconds of the 48 episodes on a local Dask cluster of 1 and of 2 workers, over
+    ``rounds`` rounds: each starts both clusters afresh (in turn, 1 then 2 workers, the next
+    round 2 then 1, so that a drift of the host falls on both sides), warms their imports and
+    takes each one's best of ``repeats`` runs. The figure is the median of the rounds'
+    ratios; every round's is printed too."""
     from roomba_bt.evaluate.cluster import (
         ClusterUnavailableError,
         dask_client,
@@ -110,27 +120,32 @@ def dask_scaling(repeats: int = 2) -> None:
     )
 
     specs = episode_specs(DOCK, world="empty-room", runs=SPEED_EPISODES, seed=200, within_m=1.5)
-    walls: dict[int, float] = {}
+    ratios: list[float] = []
+    walls: dict[int, list[float]] = {1: [], 2: []}
     retried = 0
     try:
-        for workers in (1, 2):
-            with dask_client(None, workers) as client:
-                warm_up(client)
-                best = float("inf")
-                for _ in range(repeats):
-                    started = time.perf_counter()
-                    results, again, _ = run_on_client(client, specs)
-                    best = min(best, time.perf_counter() - started)
-                    retried += again
-                    assert all(r is not None for r in results)
-                walls[workers] = best
+        for round_ in range(rounds):
+            for workers in (1, 2) if round_ % 2 == 0 else (2, 1):
+                with dask_client(None, workers) as client:
+                    warm_up(client)
+                    best = float("inf")
+                    for _ in range(repeats):
+                        started = time.perf_counter()
+                        results, again, _ = run_on_client(client, specs)
+                        best = min(best, time.perf_counter() - started)
+                        retried += again
+                        assert all(r is not None for r in results)
+                walls[workers].append(best)
+            ratios.append(walls[1][-1] / walls[2][-1])
     except ClusterUnavailableError as exc:
         print(f"eval on Dask: skipped ({exc})")
         return
     print(
-        f"eval on Dask: {SPEED_EPISODES} dock episodes, best of {repeats}, 1 worker "
-        f"{walls[1]:.2f} s, 2 workers {walls[2]:.2f} s = {walls[1] / walls[2]:.2f}x "
-        f"(target >= 1.8x; {retried} retried)"
+        f"eval on Dask: {SPEED_EPISODES} dock episodes, {rounds} rounds (each the best of "
+        f"{repeats}), 1 worker median {statistics.median(walls[1]):.2f} s, 2 workers "
+        f"{statistics.median(walls[2]):.2f} s; 1 -> 2 workers median "
+        f"{statistics.median(ratios):.2f}x (target >= 1.8x; rounds "
+        f"{', '.join(f'{r:.2f}' for r in ratios)}; {retried} retried)"
     )
 
 
@@ -303,8 +318,14 @@ def cli(argv: Sequence[str]) -> int:
     if argv[:1] == ["--against"] and len(argv) >= 2:
         rounds = int(argv[3]) if argv[2:3] == ["--rounds"] and len(argv) >= 4 else 5
         return against(argv[1], rounds)
+    if argv[:1] == ["--dask"]:
+        dask_scaling(int(argv[1]) if len(argv) >= 2 else DASK_ROUNDS)
+        return 0
     if argv:
-        print("usage: python -m bench.bench_routines [--against COMMIT [--rounds N]]")
+        print(
+            "usage: python -m bench.bench_routines "
+            "[--against COMMIT [--rounds N] | --dask [ROUNDS]]"
+        )
         return 2
     main()
     return 0
