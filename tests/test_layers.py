@@ -83,3 +83,35 @@ def test_the_protocol_layer_uses_the_standard_library_only() -> None:
                 assert top in sys.stdlib_module_names or top in allowed_third_party, (
                     f"{path.name} imports {top}"
                 )
+
+
+#: issue 13's guide: a class over about 400 lines or a function over about 60 says why
+LONG_CLASS, LONG_FUNCTION = 400, 60
+
+
+def _too_long_without_a_reason(path: Path) -> list[str]:
+    """Each long class or function whose comment above it or docstring does not say it is
+    long "on purpose" (and why, beside it)."""
+    lines = path.read_text().splitlines()
+    found = []
+    for node in ast.walk(ast.parse("\n".join(lines), filename=str(path))):
+        if isinstance(node, ast.ClassDef):
+            limit = LONG_CLASS
+        elif isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+            limit = LONG_FUNCTION
+        else:
+            continue
+        assert node.end_lineno is not None
+        if node.end_lineno - node.lineno + 1 <= limit:
+            continue
+        first = node.decorator_list[0].lineno if node.decorator_list else node.lineno
+        said = "\n".join(lines[max(0, first - 5) : node.lineno])
+        said += ast.get_docstring(node) or ""
+        if "on purpose" not in " ".join(said.lower().split()):
+            found.append(f"{path.relative_to(PACKAGE.parent)}:{node.lineno} {node.name}")
+    return found
+
+
+def test_long_classes_and_functions_say_why() -> None:
+    every = sorted(PACKAGE.rglob("*.py"))
+    assert [name for path in every for name in _too_long_without_a_reason(path)] == []

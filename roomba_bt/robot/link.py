@@ -265,8 +265,8 @@ class StreamLink:
             last frame ──── watchdog (100 ms) ──┐ the read returns here, drive 0
                                                  └ not at the end of the caller's timeout
 
-        Once a frame on the tick path, so the common case, a read that brings exactly one
-        whole frame, is written out here: :meth:`read`, the parser's
+        Once a frame on the tick path, so (over 60 lines on purpose) the common case, a read
+        that brings exactly one whole frame, is written out here: :meth:`read`, the parser's
         :meth:`~roomba_bt.oi.stream.StreamParser.take` and :meth:`_checked` for that one
         frame, with no call of this class's own (each was about a tenth of the link's cost
         a frame).

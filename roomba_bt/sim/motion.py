@@ -220,8 +220,8 @@ class Motion(Sensing):
         v[42] = round(self.requested_left)
         v[39] = (v[41] + v[42]) // 2
 
-    # The usual step runs inline, no call (_turn's work too): it runs on every step the
-    # wheels turn; a wall in the way, a lift or a fall calls out.
+    # Over 60 lines on purpose: the usual step runs inline, no call (_turn's work too): it
+    # runs on every step the wheels turn; a wall in the way, a lift or a fall calls out.
     def _move(self, left: float, right: float, dt: float) -> None:
         """Turn the wheels at ``left``, ``right`` mm/s for ``dt`` seconds."""
         motion = self._motion

@@ -474,6 +474,8 @@ class Sensing(RobotState):
             self._owed_ir = None
             self._sense_ir(*ir)
 
+    # Over 60 lines on purpose: both ray loops (turning, straight) inline with no call a ray,
+    # on the step's path whenever the light bumper is streamed near a wall.
     def _sense_rays(self, x: float, y: float, theta: float, close_lines: tuple[_Line, ...]) -> int:
         """The light bumper (packets 46-51): six rays from the bumper against the walls close
         enough to show; returns packet 45's bits. A ray's signal is worked out where it hits
@@ -635,6 +637,8 @@ class Sensing(RobotState):
         self._prev_cliffs = cliffs
         self._check_safety()
 
+    # Over 60 lines on purpose: one pass over the near walls gives the bumps, the rays' walls
+    # and the clearances that let the next steps skip this pass; split, it would walk twice.
     def _sense_walls(self, x: float, y: float, theta: float) -> int:
         """The bumper bits from walls touching the robot at (``x``, ``y``, ``theta``); the
         walls close enough for the light bumper's rays (``_walls_lines``); how far the robot
