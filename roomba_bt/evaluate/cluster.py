@@ -39,6 +39,33 @@ class SchedulerUnreachableError(ClusterUnavailableError):
     """The scheduler at ``--scheduler`` did not answer: a connection problem."""
 
 
+class SchedulerAddressError(ClusterUnavailableError):
+    """``--scheduler`` is not an address Dask can connect to: a usage problem."""
+
+
+def check_scheduler_address(scheduler: str) -> None:
+    """Raise :class:`SchedulerAddressError` unless Dask can parse ``scheduler``: a known
+    scheme (``tcp://`` when none is written) and, on the network ones, a host and a port
+    1..65535. Dask's own parsers decide; a port out of range it would only time out on."""
+    distributed = _import_distributed()
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    known = sorted(distributed.comm.registry.backends)
+    try:
+        scheme, location = parse_address(scheduler)
+        if scheme not in known:
+            raise ValueError(f"unknown scheme {scheme}://, known: {', '.join(known)}")
+        if scheme != "inproc":
+            _, port = parse_host_port(location)
+            if not 0 < int(port) < 65536:
+                raise ValueError(f"port {port} is not 1..65535")
+    except (ValueError, TypeError) as exc:
+        raise SchedulerAddressError(
+            f"--scheduler {scheduler}: not a scheduler address ({exc}); expected "
+            "tcp://HOST:PORT, as `dask scheduler` prints it (e.g. tcp://192.168.1.20:8786)"
+        ) from None
+
+
 def run_on_worker(spec: EpisodeSpec) -> EpisodeResult:
     """One episode on a Dask worker; the result names the worker."""
     from dataclasses import replace
@@ -81,6 +108,7 @@ def dask_client(scheduler: str | None = None, workers: int = 2) -> Iterator[Any]
     # the scheduler's and nannies' INFO lines would scroll over the progress bar
     logging.getLogger("distributed").setLevel(logging.WARNING)
     if scheduler is not None:
+        check_scheduler_address(scheduler)
         try:
             client = distributed.Client(scheduler, timeout="10s")
         except (OSError, TimeoutError) as exc:

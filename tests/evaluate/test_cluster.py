@@ -129,6 +129,33 @@ def test_an_unreachable_scheduler_exits_3(capsys: pytest.CaptureFixture[str]) ->
     assert f"--scheduler tcp://127.0.0.1:{port}: cannot connect" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize(
+    ("address", "why"),
+    [
+        ("foo", "missing port number"),
+        ("tcp://10.0.0.5", "missing port number"),
+        ("http://10.0.0.5:8786", "unknown scheme http://"),
+        ("tcp://10.0.0.5:port", "invalid literal"),
+        ("tcp://10.0.0.5:99999", "port 99999 is not 1..65535"),
+        ("tcp://[::1", "ipv6 needs brackets"),
+    ],
+)
+def test_a_malformed_scheduler_address_exits_2_naming_it(
+    address: str, why: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A mistyped ``--scheduler`` is bad input (exit 2, the address, Dask's reason and the
+    form expected), not a traceback from inside Dask's client and not a 10 s wait."""
+    from roomba_bt.cli import main
+
+    code = main(["eval", str(MISSIONS / "dock.yaml"), "--runs", "1", "--no-progress",
+                 "--scheduler", address])  # fmt: skip
+    assert code == 2
+    err = capsys.readouterr().err
+    assert f"--scheduler {address}: not a scheduler address (" in err
+    assert why in err and "expected tcp://HOST:PORT" in err
+    assert "Traceback" not in err
+
+
 def test_a_local_cluster_takes_no_fixed_port() -> None:
     """Two evaluations at once (two suites, two users) each start a local cluster: the
     scheduler's HTTP server must not take Dask's default port 8787, or the second one warns
