@@ -99,14 +99,24 @@ def output_file(text: str) -> str:
 
 
 def plot_file(text: str) -> str:
-    """A PNG to draw (--plot): as :func:`output_file`, and matplotlib (an optional extra) must
-    be installed."""
+    """A picture to draw (--plot): as :func:`output_file`; matplotlib (an optional extra) must
+    be installed and write the file's suffix (.png, .svg, .pdf, ...), checked before anything
+    runs: a run would otherwise end in matplotlib's ``Format 'txt' is not supported``, and
+    a name without a suffix would be written with ``.png`` added."""
     try:
-        import matplotlib  # noqa: F401
+        import matplotlib  # noqa: F401  (the package itself: it is the extra)
+        from matplotlib.backend_bases import FigureCanvasBase
     except ImportError:
         raise argparse.ArgumentTypeError(
             "--plot needs matplotlib, an optional extra: pip install 'roomba-bt[plot]'"
         ) from None
+    formats = sorted(FigureCanvasBase.get_supported_filetypes())
+    suffix = Path(text).suffix.lower()
+    if suffix[1:] not in formats:
+        raise argparse.ArgumentTypeError(
+            f"found {text!r}: {f'no picture format {suffix!r}' if suffix else 'no suffix'}; "
+            f"allowed: a file ending in {', '.join('.' + f for f in formats)}"
+        )
     return output_file(text)
 
 

@@ -81,6 +81,26 @@ def test_plot_into_a_missing_directory_is_refused_before_running(
     assert out == ""
 
 
+@pytest.mark.parametrize("command", [["eval", BUMP, "--runs", "1"], ["run", BUMP, "--fast"],
+                                     ["sim", "--pty", "--duration", "0"]])  # fmt: skip
+@pytest.mark.parametrize(("name", "why"), [("x.txt", "no picture format '.txt'"),
+                                          ("x", "no suffix")])  # fmt: skip
+def test_plot_to_a_format_matplotlib_cannot_write_is_refused_before_running(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], command: list[str], name: str, why: str
+) -> None:
+    """Not matplotlib's ``Format 'txt' is not supported`` traceback after the run; without a
+    suffix matplotlib would write another file than the one named (``x.png``)."""
+    target = tmp_path / name
+    with pytest.raises(SystemExit) as exit_:
+        main([*command, "--plot", str(target)])
+    assert exit_.value.code == 2
+    out, err = capsys.readouterr()
+    assert f"--plot: found '{target}': {why}; allowed: a file ending in " in err
+    assert ".png" in err and ".svg" in err
+    assert out == ""
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_ab_report_on_two_variants_is_reproduced_from_its_records(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
