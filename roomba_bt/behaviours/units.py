@@ -21,6 +21,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from roomba_bt.yamlsource import quoted
+
 _NUMBER = r"[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?"
 _QUANTITY = re.compile(rf"^\s*({_NUMBER})\s*([A-Za-z°%/]*)\s*$")
 
@@ -63,7 +65,7 @@ def parse_quantity(dimension: str, value: object) -> float:
         if value == 0:
             return 0.0
         raise UnitError(
-            f"expected a {dimension} with a unit such as {EXAMPLES[dimension]}, got {value!r}"
+            f"expected a {dimension} with a unit such as {EXAMPLES[dimension]}, got {quoted(value)}"
             f" (write the unit: {value}{CANONICAL[dimension]})"
         )
     if not isinstance(value, str):
@@ -72,7 +74,9 @@ def parse_quantity(dimension: str, value: object) -> float:
         )
     match = _QUANTITY.match(value)
     if match is None:
-        raise UnitError(f"expected a {dimension} such as {EXAMPLES[dimension]}, got {value!r}")
+        raise UnitError(
+            f"expected a {dimension} such as {EXAMPLES[dimension]}, got {quoted(value)}"
+        )
     number, unit = float(match.group(1)), match.group(2)
     if unit not in units:
         known = ", ".join(units)
@@ -96,7 +100,7 @@ def _describe(value: object) -> str:
         return "a list"
     if isinstance(value, dict):
         return "a mapping"
-    return repr(value)
+    return quoted(value)
 
 
 def format_quantity(dimension: str, value: float) -> str:

@@ -350,7 +350,7 @@ def _show(value: object) -> str:
         return "a mapping"
     if isinstance(value, list):
         return f"a list of {len(value)}"
-    return repr(value)
+    return yamlsource.quoted(value)
 
 
 class _Checker:

@@ -42,6 +42,20 @@ PathKey = tuple[str | int, ...]
 Marks = dict[PathKey, tuple[int, int]]
 
 
+#: how much of a value a diagnostic quotes: a stranger's file may hold a page in one scalar
+#: (a world given ``/etc/passwd`` quoted all of it, on one line)
+QUOTE_LIMIT = 60
+
+
+def quoted(value: object, limit: int = QUOTE_LIMIT) -> str:
+    """``repr(value)`` for a diagnostic, a long one cut and its length said:
+    ``'root:x:0:0:root:/root:/bin/bash daemon:x:1:1:daemon:/usr/sb... (1,234 characters)``."""
+    text = repr(value)
+    if len(text) <= limit:
+        return text
+    return f"{text[:limit]}... ({len(str(value)):,} characters)"
+
+
 class Refused(yaml.MarkedYAMLError):
     """Something a data file may not hold, found before anything is composed: an alias or an
     explicit tag. ``problem`` says what, ``problem_mark`` where."""

@@ -97,3 +97,9 @@ def test_closest_suggests_a_near_name_only() -> None:
 def test_format_quantity() -> None:
     assert format_quantity("speed", 200.0) == "200 mm/s"
     assert format_quantity("percent", 20.0) == "20%"
+
+
+def test_a_long_wrong_value_is_quoted_short() -> None:
+    with pytest.raises(UnitError) as info:
+        SPEED.parse("a" * 500)
+    assert str(info.value).endswith("got '" + "a" * 59 + "... (500 characters)")

@@ -214,3 +214,12 @@ def test_yaml_aliases_and_scalar_tags_in_a_world_are_refused_at_their_place() ->
     assert alias.startswith("w.yaml:2:9: alias *r is not allowed: write the value out")
     [tag] = problems("rooms: [[[0, 0], [3, 0], [3, !!int x], [0, 3]]]\n")
     assert tag.startswith("w.yaml:1:30: explicit tag !!int is not allowed: write the plain value")
+
+
+def test_a_file_that_is_no_world_is_quoted_short() -> None:
+    """A world given some other text file (a page in one scalar) names it in a line, not
+    the whole page."""
+    (problem,) = problems("root:x:0:0:root:/root:/bin/bash\n" * 40)
+    assert problem.startswith("w.yaml:1:1: (document): found 'root:x:0:0:root:/root:")
+    assert "... (1,279 characters); allowed: a mapping with keys name," in problem
+    assert len(problem) < 400

@@ -179,3 +179,10 @@ def test_a_text_without_aliases_or_tags_reads_as_with_the_event_pass_first(
     assert _outcome(lambda: yamlsource.compose(text, loader)) == _outcome(
         lambda: _checked_first(text, loader)
     )
+
+
+def test_a_long_value_is_quoted_cut_with_its_length() -> None:
+    assert yamlsource.quoted("200 mm/s") == "'200 mm/s'"
+    page = "root:x:0:0:root:/root:/bin/bash\n" * 40
+    shown = yamlsource.quoted(page)
+    assert shown == repr(page)[: yamlsource.QUOTE_LIMIT] + "... (1,280 characters)"
