@@ -272,13 +272,18 @@ def _provided(provider: object) -> list[type[RobotBehaviour]]:
 
 def _classes_of(provider: object) -> Iterable[type[RobotBehaviour]]:
     if isinstance(provider, types.ModuleType):
-        return [
+        declared = [
             obj
             for _, obj in inspect.getmembers(provider, inspect.isclass)
-            if issubclass(obj, RobotBehaviour)
-            and obj.__module__ == provider.__name__
-            and "declaration" in obj.__dict__
+            if obj.__module__ == provider.__name__ and "declaration" in obj.__dict__
         ]
+        for obj in declared:
+            if not issubclass(obj, RobotBehaviour):
+                raise DeclarationError(
+                    f"class {obj.__qualname__} is decorated with @declare but is not a "
+                    "behaviour: derive it from roomba_bt.behaviours.Action or Condition"
+                )
+        return [obj for obj in declared if issubclass(obj, RobotBehaviour)]
     if isinstance(provider, type):
         if not issubclass(provider, RobotBehaviour):
             raise DeclarationError(f"{_qualname(provider)} is not a RobotBehaviour subclass")

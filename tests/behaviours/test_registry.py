@@ -125,6 +125,24 @@ def test_a_plugin_file_loads_into_a_copy(tmp_path: Path) -> None:
     assert "failed to import: RuntimeError: boom" in str(error)
 
 
+def test_a_declared_class_that_is_no_behaviour_is_named(tmp_path: Path) -> None:
+    """A plugin author's first mistake: @declare on a plain class. Said as such, not as "it
+    provides no behaviour class (decorated with @declare)", which it seems to."""
+    plugin = tmp_path / "plain.py"
+    plugin.write_text(
+        "from roomba_bt.behaviours import declare\n"
+        "@declare('near', kind='condition')\n"
+        "class Near:\n"
+        "    pass\n"
+    )
+    _, error = builtin_registry().with_file(plugin)
+    assert error is not None
+    assert (
+        "class Near is decorated with @declare but is not a behaviour: derive it from "
+        "roomba_bt.behaviours.Action or Condition"
+    ) in str(error)
+
+
 def test_a_changed_plugin_file_is_imported_again_an_unchanged_one_is_not(tmp_path: Path) -> None:
     """run --watch reloads a mission whose plugin file changed: it must get the new code."""
     plugin = tmp_path / "changing.py"
