@@ -61,7 +61,12 @@ def compose(path: Path, display: str) -> tuple[yaml.Node | None, list[Diagnostic
     except OSError as exc:
         return None, [Diagnostic(display, 1, 1, f"cannot read mission file: {exc.strerror}")]
     except UnicodeDecodeError as exc:
-        return None, [Diagnostic(display, 1, 1, f"mission file is not UTF-8 text: {exc.reason}")]
+        line, column = yamlsource.undecodable_position(exc)
+        byte = bytes(exc.object)[exc.start]
+        return None, [
+            Diagnostic(display, line, column,
+                       f"mission file is not UTF-8 text: byte 0x{byte:02x} ({exc.reason})")
+        ]  # fmt: skip
     return compose_text(text, display)
 
 
@@ -74,6 +79,7 @@ def compose_text(text: str, display: str) -> tuple[yaml.Node | None, list[Diagno
     except yaml.MarkedYAMLError as exc:
         line, column = yamlsource.error_position(exc) or (1, 1)
         problem = exc.problem or exc.context or "invalid YAML"
+        problem += yamlsource.tab_hint(text, line, column)
         return None, [Diagnostic(display, line, column, f"YAML syntax error: {problem}")]
     except yaml.YAMLError as exc:
         return None, [Diagnostic(display, 1, 1, f"YAML error: {exc}")]

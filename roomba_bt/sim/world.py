@@ -663,8 +663,9 @@ def parse_world(text: str, source: str = "<world>") -> World:
         # worded as a mission's (mission/source.py): PyYAML's sentence after the position
         line, col = yamlsource.error_position(exc) or (0, 0)
         problem = getattr(exc, "problem", None) or getattr(exc, "context", None) or str(exc)
+        problem = str(problem) + yamlsource.tab_hint(text, line, col)
         kind = "" if isinstance(exc, yamlsource.Refused) else "YAML syntax error"
-        raise WorldError([WorldProblem(source, line, col, kind, str(problem), "")]) from None
+        raise WorldError([WorldProblem(source, line, col, kind, problem, "")]) from None
     c = _Checker(source, marks)
     return _build_world(c, data, source)
 
@@ -874,7 +875,14 @@ def world_text(path_or_name: str | pathlib.Path) -> tuple[str, str]:
             )  # fmt: skip
     try:
         text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
+    except UnicodeDecodeError as exc:
+        line, col = yamlsource.undecodable_position(exc)
+        byte = bytes(exc.object)[exc.start]
+        raise WorldError(
+            [WorldProblem(str(path), line, col, "world", f"byte 0x{byte:02x}, not UTF-8 text",
+                          "a UTF-8 YAML file")]
+        ) from None  # fmt: skip
+    except OSError as exc:
         raise WorldError(
             [
                 WorldProblem(

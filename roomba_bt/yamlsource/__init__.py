@@ -56,6 +56,24 @@ def quoted(value: object, limit: int = QUOTE_LIMIT) -> str:
     return f"{text[:limit]}... ({len(str(value)):,} characters)"
 
 
+def tab_hint(text: str, line: int, column: int) -> str:
+    """What to add to PyYAML's syntax error at (``line``, ``column``), 1-based, when the
+    character there is a tab ("found character that cannot start any token" says nothing
+    of it): an editor's tab in a stranger's file is the commonest such error."""
+    lines = text.splitlines()
+    inside = 0 < line <= len(lines) and 0 < column <= len(lines[line - 1])
+    if inside and lines[line - 1][column - 1] == "\t":
+        return " (a tab: YAML indents with spaces)"
+    return ""
+
+
+def undecodable_position(exc: UnicodeDecodeError) -> tuple[int, int]:
+    """1-based line and column (in bytes) of the first byte that is not UTF-8."""
+    data = bytes(exc.object)
+    line_start = data.rfind(b"\n", 0, exc.start) + 1
+    return data.count(b"\n", 0, exc.start) + 1, exc.start - line_start + 1
+
+
 class Refused(yaml.MarkedYAMLError):
     """Something a data file may not hold, found before anything is composed: an alias or an
     explicit tag. ``problem`` says what, ``problem_mark`` where."""

@@ -70,3 +70,21 @@ def test_validate_prints_them_and_exits_2(path: Path, capsys: pytest.CaptureFixt
     for line, want in zip(lines, expected, strict=True):
         assert f":{want}" in line
     assert "Traceback" not in out + err
+
+
+def test_a_tab_and_a_byte_that_is_not_utf8_are_placed_and_named(tmp_path: Path) -> None:
+    """Two things a stranger's editor leaves: a tab in the indentation (PyYAML's sentence
+    says nothing of tabs) and a Latin-1 byte (the position of the byte, not 1:1)."""
+    tabbed = tmp_path / "tabbed.yaml"
+    tabbed.write_text("tree:\n  sequence:\n\t- mode: safe\n")
+    _, (problem,) = compile_mission(tabbed)
+    assert (problem.line, problem.column) == (3, 1)
+    assert problem.message.startswith("YAML syntax error: ")
+    assert problem.message.endswith("(a tab: YAML indents with spaces)")
+    latin = tmp_path / "latin.yaml"
+    latin.write_bytes(b"tree:\n  sequence:\n    - log: {message: caf\xe9}\n")
+    _, (problem,) = compile_mission(latin)
+    assert (problem.line, problem.column) == (3, 25)
+    assert problem.message == (
+        "mission file is not UTF-8 text: byte 0xe9 (invalid continuation byte)"
+    )

@@ -223,3 +223,17 @@ def test_a_file_that_is_no_world_is_quoted_short() -> None:
     assert problem.startswith("w.yaml:1:1: (document): found 'root:x:0:0:root:/root:")
     assert "... (1,279 characters); allowed: a mapping with keys name," in problem
     assert len(problem) < 400
+
+
+def test_a_tab_and_a_byte_that_is_not_utf8_in_a_world_are_placed(tmp_path: pathlib.Path) -> None:
+    assert problems("rooms:\n\t- [[0, 0]]\n") == [
+        "w.yaml:2:1: YAML syntax error: found character '\\t' that cannot start any token"
+        " (a tab: YAML indents with spaces)"
+    ]
+    latin = tmp_path / "latin.yaml"
+    latin.write_bytes(b"name: caf\xe9\n")
+    with pytest.raises(WorldError) as info:
+        load_world(str(latin))
+    assert [str(p) for p in info.value.problems] == [
+        f"{latin}:1:10: world: found byte 0xe9, not UTF-8 text; allowed: a UTF-8 YAML file"
+    ]

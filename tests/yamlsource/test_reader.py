@@ -186,3 +186,17 @@ def test_a_long_value_is_quoted_cut_with_its_length() -> None:
     page = "root:x:0:0:root:/root:/bin/bash\n" * 40
     shown = yamlsource.quoted(page)
     assert shown == repr(page)[: yamlsource.QUOTE_LIMIT] + "... (1,280 characters)"
+
+
+def test_a_tab_where_yaml_stops_is_named() -> None:
+    text = "tree:\n\tsequence: []\n"
+    assert yamlsource.tab_hint(text, 2, 1) == " (a tab: YAML indents with spaces)"
+    assert yamlsource.tab_hint(text, 1, 1) == ""
+    assert yamlsource.tab_hint(text, 9, 1) == ""  # a position past the text: no hint
+
+
+def test_the_first_byte_that_is_not_utf8_is_placed() -> None:
+    data = "tree:\n  x: é\n".encode() + b"  y: \xff\n"
+    with pytest.raises(UnicodeDecodeError) as info:
+        data.decode("utf-8")
+    assert yamlsource.undecodable_position(info.value) == (3, 6)
