@@ -374,6 +374,7 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
             start_area=args.start_area,
             odometry_error=args.odometry_error,
             permissions=permissions(args),
+            trace_every=2 if args.plot else 0,  # only the plot reads trajectories
         )
         for v in chosen
     ]

@@ -79,6 +79,18 @@ def test_assert_success_rate_passes_and_fails_with_the_report() -> None:
         assert_success_rate(str(MISSIONS / "dock.yaml"), runs=2, within_s=2, rate=0.5)
 
 
+def test_without_a_trace_the_episode_is_the_same_and_keeps_no_trajectory() -> None:
+    """``eval`` without ``--plot`` asks for no trajectory (``trace_every=0``): the simulator
+    keeps no trace and the result none, everything else as with one."""
+    traced = run_episode(EpisodeSpec(BUMP, "corridor", seed=4, timeout_s=20.0))
+    untraced = run_episode(EpisodeSpec(BUMP, "corridor", seed=4, timeout_s=20.0, trace_every=0))
+    assert len(traced.trajectory) > 100
+    assert untraced.trajectory == ()
+    assert _without_wall_time([untraced]) == _without_wall_time(
+        [dataclasses.replace(traced, trajectory=())]
+    )
+
+
 def test_an_evaluations_specs_carry_one_reading_of_each_file(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
