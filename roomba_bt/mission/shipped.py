@@ -103,6 +103,10 @@ def find_mission(text: str) -> ShippedLookup:
     if "/" not in text and stem in shipped:
         return ShippedLookup(shipped[stem])
     names = ", ".join(shipped) or "none"
+    if given.is_dir():
+        return ShippedLookup(None, f"{text}: a directory, not a mission file (a .yaml file)")
+    if given.exists():  # a device, a pipe: nothing a mission is read from
+        return ShippedLookup(None, f"{text}: not a regular file; a mission is a .yaml file")
     return ShippedLookup(
         None,
         f"{text}: no such mission file, and no shipped mission of that name "

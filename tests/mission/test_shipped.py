@@ -55,6 +55,21 @@ def test_a_name_finds_the_shipped_mission_and_a_file_wins(
     assert find_mission("sub/dock").path is None, "a path is never taken for a name"
 
 
+def test_a_directory_or_a_device_is_named_as_such(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "missions").mkdir()
+    assert find_mission("missions").problem == (
+        "missions: a directory, not a mission file (a .yaml file)"
+    )
+    assert find_mission("/dev/null").problem == (
+        "/dev/null: not a regular file; a mission is a .yaml file"
+    )
+    (tmp_path / "dock").mkdir()
+    assert find_mission("dock").path == SHIPPED_DIR / "dock.yaml", "a name still finds it"
+
+
 def test_a_shipped_name_cannot_climb_out_of_the_package() -> None:
     assert shipped_file("roomba-bt:../mission/shipped.py") is None
     assert shipped_file("roomba-bt:lib/nope.yaml") is None
