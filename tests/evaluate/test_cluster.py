@@ -187,7 +187,9 @@ def test_a_local_clusters_workers_run_without_what_only_a_dashboard_shows() -> N
     (it samples the episode's thread every 10 ms, holding the GIL) and the disk counters,
     and the settings do not leak into the process that started it."""
     import dask
+    import distributed  # noqa: F401  (its defaults join dask's configuration)
 
+    before = dask.config.get("distributed.worker.profile.enabled")
     with dask_client(workers=1) as client:
         assert set(client.run(_worker_settings).values()) == {(False, False)}
-    assert dask.config.get("distributed.worker.profile.enabled") is True
+    assert dask.config.get("distributed.worker.profile.enabled") == before
