@@ -92,11 +92,20 @@ def _import_distributed() -> Any:
 #: workers as they start. It has no dashboard, so nothing shows what these would collect:
 #: each worker's statistical profiler samples the episode's thread every 10 ms, holding the
 #: GIL (about 0.4 s of a worker's CPU in 48 dock episodes, taken from the episodes), and the
-#: system monitor reads the disk counters twice a second. A cluster of one's own
-#: (``--scheduler``) keeps its own settings.
+#: system monitor reads the disk counters twice a second. What stays is read less often, on
+#: the two cores the workers need: the event-loop tick every 0.5 s, not 20 ms (a metric and
+#: an INFO line about a blocked loop, which this cluster's logging drops; Dask's own test
+#: clusters use 0.5 s), the memory monitors of nannies and workers every 1 s, not 0.1 s
+#: (a runaway worker is still paused and restarted), the system monitor every 2 s, not 0.5 s.
+#: Together the submitting process (scheduler, nannies, client) spent 0.43 s of CPU on 48
+#: dock episodes with 2 workers where it spent 0.61 s (docs/performance.md, session 17).
+#: A cluster of one's own (``--scheduler``) keeps its own settings.
 LOCAL_CLUSTER_CONFIG: dict[str, object] = {
     "distributed.worker.profile.enabled": False,
     "distributed.admin.system-monitor.disk": False,
+    "distributed.admin.tick.interval": "500ms",
+    "distributed.worker.memory.monitor-interval": "1s",
+    "distributed.admin.system-monitor.interval": "2s",
 }
 
 

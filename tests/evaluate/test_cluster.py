@@ -174,22 +174,31 @@ def test_a_local_cluster_takes_no_fixed_port() -> None:
             assert 8787 not in ports
 
 
-def _worker_settings(dask_worker: Any) -> tuple[bool, bool]:
+def _worker_settings(dask_worker: Any) -> tuple[bool, bool, float, float]:
     import dask
 
-    return "profile" in dask_worker.periodic_callbacks, bool(
-        dask.config.get("distributed.admin.system-monitor.disk")
+    callbacks = dask_worker.periodic_callbacks
+    return (
+        "profile" in callbacks,
+        bool(dask.config.get("distributed.admin.system-monitor.disk")),
+        callbacks["tick"].callback_time,
+        callbacks["memory_monitor"].callback_time,
     )
 
 
 def test_a_local_clusters_workers_run_without_what_only_a_dashboard_shows() -> None:
     """The local cluster has no dashboard: its workers start without the statistical profiler
-    (it samples the episode's thread every 10 ms, holding the GIL) and the disk counters,
-    and the settings do not leak into the process that started it."""
+    (it samples the episode's thread every 10 ms, holding the GIL) and the disk counters, and
+    read the event-loop tick and their memory less often; the settings do not leak into the
+    process that started it."""
     import dask
     import distributed  # noqa: F401  (its defaults join dask's configuration)
 
-    before = dask.config.get("distributed.worker.profile.enabled")
+    keys = ("distributed.worker.profile.enabled", "distributed.admin.tick.interval")
+    before = [dask.config.get(key) for key in keys]
     with dask_client(workers=1) as client:
-        assert set(client.run(_worker_settings).values()) == {(False, False)}
-    assert dask.config.get("distributed.worker.profile.enabled") == before
+        assert set(client.run(_worker_settings).values()) == {(False, False, 500, 1000)}
+        scheduler = client.cluster.scheduler
+        assert scheduler.periodic_callbacks["tick"].callback_time == 500
+        assert scheduler.periodic_callbacks["monitor"].callback_time == 2000
+    assert [dask.config.get(key) for key in keys] == before
