@@ -22,6 +22,7 @@ of wall time), so a run without ``--fast`` looks and feels like a robot.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 
 from roomba_bt.sim.robot import STEP_SECONDS, Simulator
 
@@ -103,32 +104,67 @@ class SimLink:
 
 
 class RealtimeSimLink(SimLink):
-    """A :class:`SimLink` whose simulated time never runs ahead of the wall clock."""
+    """A :class:`SimLink` whose simulated time follows the wall clock: never ahead of it, and
+    never left behind.
 
-    def __init__(self, simulator: Simulator, name: str = "sim://") -> None:
+    A robot streams every 15 ms whatever the host is doing. When the host was busy (a slow
+    tick, a plugin that blocked, a paused debugger), the robot went on driving on its last
+    command meanwhile and its frames queued up in the port; the next read gets them all at
+    once (the runtime counts the stale ones and ticks on the newest). So each read first
+    steps the simulator through every 15 ms slot that has passed on the wall clock, then
+    waits for the next one. Without that, a slow tree would stop the simulated world while
+    it thinks, and a mission that drives blind for half a second on a robot would look safe
+    here.
+
+    The slots to catch up are those due when the read starts, so a host slower than real
+    time cannot keep one read stepping for ever. ``clock`` and ``sleep`` are the wall
+    clock's (tests hand in their own)."""
+
+    def __init__(
+        self,
+        simulator: Simulator,
+        name: str = "sim://",
+        *,
+        clock: Callable[[], float] = time.monotonic,
+        sleep: Callable[[float], None] = time.sleep,
+    ) -> None:
         super().__init__(simulator, name)
-        self._wall0 = time.monotonic()
+        self._clock = clock
+        self._sleep = sleep
+        self._wall0 = clock()
         self._sim0 = simulator.time
+
+    def _due(self) -> float:
+        """The wall-clock time (``clock``) of the simulator's next 15 ms step."""
+        return self._wall0 + (self.simulator.time + STEP_SECONDS - self._sim0)
+
+    def _step(self) -> None:
+        self.simulator.step()
+        if self.simulator.disconnected:
+            raise ConnectionError(
+                f"{self.name}: simulated disconnect at t={self.simulator.time:.3f} s"
+            )
 
     def read(self, timeout: float) -> bytes:
         self._check()
         sim = self.simulator
+        started = self._clock()
+        while self._due() <= started:  # the slots that passed while the host was busy
+            self._step()
         data = sim.read()
         if data:
-            return data
-        deadline = time.monotonic() + max(timeout, 0.0)
+            return data if self.baud == sim.baud else at_wrong_baud(data)
+        deadline = started + max(timeout, 0.0)
         while True:
-            due = self._wall0 + (sim.time + STEP_SECONDS - self._sim0)
-            now = time.monotonic()
+            due = self._due()
+            now = self._clock()
             if due > deadline:
                 if deadline > now:
-                    time.sleep(deadline - now)
+                    self._sleep(deadline - now)
                 return b""
             if due > now:
-                time.sleep(due - now)
-            sim.step()
-            if sim.disconnected:
-                raise ConnectionError(f"{self.name}: simulated disconnect at t={sim.time:.3f} s")
+                self._sleep(due - now)
+            self._step()
             data = sim.read()
             if data:
-                return data
+                return data if self.baud == sim.baud else at_wrong_baud(data)

@@ -6,7 +6,7 @@ import pytest
 
 from roomba_bt.oi import commands as C
 from roomba_bt.oi.stream import StreamParser
-from roomba_bt.sim import SimLink, Simulator
+from roomba_bt.sim import RealtimeSimLink, SimLink, Simulator
 
 from .helpers import BOX, world
 
@@ -66,3 +66,62 @@ def test_after_baud_129_the_link_must_follow_or_it_reads_garbage() -> None:
     assert len(frames) >= 9 and frames[-1].oi_mode_raw == 1
     ln.write(C.full().data)
     assert ln.simulator.mode.name == "FULL"
+
+
+class WallClock:
+    """A wall clock that moves only when told to, or when the link sleeps on it."""
+
+    def __init__(self) -> None:
+        self.now = 100.0
+        self.slept: list[float] = []
+
+    def __call__(self) -> float:
+        return self.now
+
+    def sleep(self, seconds: float) -> None:
+        self.slept.append(seconds)
+        self.now += seconds
+
+
+def realtime_link() -> tuple[RealtimeSimLink, WallClock]:
+    wall = WallClock()
+    return RealtimeSimLink(Simulator(world(BOX)), clock=wall, sleep=wall.sleep), wall
+
+
+def test_the_realtime_link_waits_for_each_slot_and_never_runs_ahead_of_the_wall() -> None:
+    ln, wall = realtime_link()
+    ln.write(C.start().data + C.stream([35]).data)
+    parser = StreamParser([35])
+    frames = []
+    for _ in range(10):
+        frames += parser.feed(ln.read(1.0))
+        assert ln.now() <= wall.now - 100.0 + 1e-9
+    assert len(frames) == 10
+    assert wall.now - 100.0 == pytest.approx(0.150)
+    assert wall.slept == pytest.approx([0.015] * 10)
+
+
+def test_while_the_host_is_busy_the_robot_streams_on_and_the_frames_queue() -> None:
+    """A tick that took half a second: on a robot 33 frames are waiting in the port and the
+    robot drove on meanwhile; the simulated world does not stop while the host thinks."""
+    ln, wall = realtime_link()
+    ln.write(C.start().data + C.safe().data + C.stream([35, 19]).data)
+    parser = StreamParser([35, 19])
+    assert len(parser.feed(ln.read(1.0))) == 1
+    ln.write(C.drive_direct(200, 200).data)
+    wall.now += 0.5  # the host busy: nothing read
+    frames = parser.feed(ln.read(1.0))
+    assert len(frames) == 33
+    assert wall.slept == [pytest.approx(0.015)]  # the catching up did not wait
+    assert ln.now() == pytest.approx(0.015 + 33 * 0.015)
+    assert sum(f.values[1] for f in frames) == pytest.approx(200 * 0.5, abs=10)  # mm driven
+
+
+def test_the_realtime_link_reads_garbage_at_the_wrong_baud_too() -> None:
+    ln, _ = realtime_link()
+    ln.write(C.start().data + C.stream([35, 7]).data)
+    parser = StreamParser([35, 7])
+    assert parser.feed(ln.read(0.1))
+    ln.write(C.baud_rate(57600).data)
+    garbled = b"".join(ln.read(0.1) for _ in range(20))
+    assert len(garbled) == 20 * 7 and parser.feed(garbled) == []
