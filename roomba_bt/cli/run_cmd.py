@@ -25,7 +25,7 @@ from roomba_bt.cli.monitor_cmd import LiveMonitor
 from roomba_bt.cli.monitor_cmd import add_run_arguments as add_monitor_arguments
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.profiles import RobotProfile, get_profile
-from roomba_bt.runtime.summary import DEFAULT_GRACE, ExitCode
+from roomba_bt.runtime.summary import DEFAULT_GRACE, DEFAULT_TICK_LIMIT, ExitCode
 
 if TYPE_CHECKING:
     from roomba_bt.mission import Permissions
@@ -100,6 +100,12 @@ def _add_session_options(run: argparse.ArgumentParser) -> None:
         "--grace", type=seconds, default=DEFAULT_GRACE, metavar="SECONDS",
         help="after the watchdog stopped the wheels, wait this long for valid frames before "
         f"ending as a lost connection (default {DEFAULT_GRACE:g}; 0: end at once)",
+    )  # fmt: skip
+    run.add_argument(
+        "--tick-limit", type=seconds, default=DEFAULT_TICK_LIMIT, metavar="SECONDS",
+        help="stop the wheels (drive 0) when a tick runs this long, e.g. a behaviour that "
+        "blocks; the mission then goes on (default "
+        f"{DEFAULT_TICK_LIMIT:g}; 0: no guard; --fast has none: nothing moves while it thinks)",
     )  # fmt: skip
     run.add_argument(
         "--no-keep-awake",
@@ -235,6 +241,7 @@ def _stack(
         packets=packets,
         watchdog=args.watchdog,
         grace=args.grace,
+        tick_limit=None if args.fast or not args.tick_limit else args.tick_limit,
         keep_awake=None if args.keep_awake else False,
         end_in=args.end_in,
         timeout_s=timeout,

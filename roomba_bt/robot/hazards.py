@@ -77,6 +77,17 @@ def drives_forward(command: Command) -> bool:
     return False
 
 
+def turns_a_wheel(command: Command) -> bool:
+    """Whether a wheel command turns a wheel: Drive (137) at a velocity other than 0 (any
+    radius), Drive Direct (145) or Drive PWM (146) with a wheel not at 0."""
+    name = command.spec.name
+    if name == "drive":
+        return command.args[0] != 0
+    if name in ("drive_direct", "drive_pwm"):
+        return any(command.args)
+    return False
+
+
 class HazardConfirmation:
     """Holds back, for one frame, hazard bits the frame before did not show.
 

@@ -46,6 +46,7 @@ from roomba_bt.robot.interface import (
 )
 from roomba_bt.robot.safety import InterruptGuard, Terminated
 from roomba_bt.runtime.summary import DEFAULT_GRACE, Outcome, RunSummary
+from roomba_bt.runtime.tick_guard import TickGuard
 
 log = logging.getLogger(__name__)
 _new_tuple = tuple.__new__
@@ -174,6 +175,7 @@ class MissionRunner(BaseHandle):
         gate: TickGate | None = None,
         grace: float = DEFAULT_GRACE,
         hold_interrupts: bool = False,
+        tick_limit: float | None = None,
     ) -> None:
         super().__init__(profile)
         self.connection = connection
@@ -190,6 +192,8 @@ class MissionRunner(BaseHandle):
         #: :meth:`release_interrupts` (the CLI: its summary is still to be printed); else the
         #: previous handlers come back when it returns
         self.hold_interrupts = hold_interrupts
+        if tick_limit is not None:  # set only when given: see the class attribute
+            self.tick_limit = tick_limit
         self._guard: InterruptGuard | None = None
         #: while a stall is ridden through: (bytes read when it began, drive 0 sent, the
         #: last valid frame's time)
@@ -227,6 +231,12 @@ class MissionRunner(BaseHandle):
     #: :data:`NO_SNAPSHOT_YET`, whose every use says that there is none yet
     snapshot: Snapshot
 
+    #: seconds a tick may run before the wheels are stopped (:mod:`roomba_bt.runtime.tick_guard`;
+    #: None: no guard, as on the virtual clock and in a replay). A class attribute the
+    #: instance sets only when given, so the evaluation's runners keep one attribute fewer
+    #: (see the note at the end of ``__init__``)
+    tick_limit: float | None = None
+
     @property
     def has_snapshot(self) -> bool:
         return self.snapshot is not NO_SNAPSHOT_YET
@@ -237,13 +247,17 @@ class MissionRunner(BaseHandle):
         wall_start = time.perf_counter()
         root = self.mission.root
         guard = self._guard = InterruptGuard(hold=self.hold_interrupts)
+        tick_guard: TickGuard | None = None
         with guard:
             try:
                 self.connection.start(OIMode.PASSIVE, self.packets)
                 self._blackboard = py_trees.blackboard.Client(name="roomba-bt runtime")
                 self._blackboard.register_key(key=SNAPSHOT_KEY, access=py_trees.common.Access.WRITE)
                 self.mission.setup(self)
-                self._loop(root, summary)
+                if self.tick_limit is not None:
+                    tick_guard = TickGuard(self.connection, self.tick_limit)
+                    tick_guard.start()
+                self._loop(root, summary, tick_guard)
             except Terminated:
                 summary.outcome, summary.reason = Outcome.INTERRUPTED, "SIGTERM"
             except KeyboardInterrupt:
@@ -263,6 +277,8 @@ class MissionRunner(BaseHandle):
                 summary.outcome, summary.reason = Outcome.ERROR, behaviour_error(exc)
                 summary.traceback = "".join(traceback.format_exception(exc))
             finally:
+                if tick_guard is not None:
+                    tick_guard.close()  # it writes nothing more: the safe stop is ours
                 guard.stopping()  # a further Ctrl-C or SIGTERM waits for the safe stop
                 self._finish(self.mission.root, summary, wall_start)
         return summary
@@ -316,11 +332,16 @@ class MissionRunner(BaseHandle):
         mode = getattr(self.connection, "mode", None)
         return mode if isinstance(mode, OIMode) else None
 
-    def _loop(self, root: py_trees.behaviour.Behaviour, summary: RunSummary) -> None:
+    def _loop(
+        self,
+        root: py_trees.behaviour.Behaviour,
+        summary: RunSummary,
+        tick_guard: TickGuard | None = None,
+    ) -> None:
         success, failure = py_trees.common.Status.SUCCESS, py_trees.common.Status.FAILURE
         perf = time.perf_counter
         connection = self.connection
-        tick = tick_of(root)
+        tick = self._tick_of(root, tick_guard)
         while True:
             try:
                 batch = connection.poll_frames(self.poll_timeout)
@@ -344,7 +365,7 @@ class MissionRunner(BaseHandle):
                 if not gate.before_tick(self):
                     continue
                 root = self.mission.root  # a reload may have replaced it
-                tick = tick_of(root)
+                tick = self._tick_of(root, tick_guard)
             tick()
             self._flush()
             elapsed = perf() - started
@@ -381,6 +402,33 @@ class MissionRunner(BaseHandle):
         link = self.connection.link
         self._stall = (link.bytes_read, stalled.halted, link.silent_since)
         log.warning("%s; waiting up to %g s for valid frames", stalled, self.grace)
+
+    def _tick_of(
+        self, root: py_trees.behaviour.Behaviour, tick_guard: TickGuard | None
+    ) -> Callable[[], object]:
+        """The root's tick, through the tick guard when the run has one."""
+        tick = tick_of(root)
+        return tick if tick_guard is None else tick_guard.guarded(tick, self._tick_halted)
+
+    def _tick_halted(self, seconds: float, where: str) -> None:
+        """The tick guard stopped the wheels during the tick that just returned: counted,
+        said, and, as after a watchdog stall, the last wheel command goes out again unless
+        this tick queued another (the mission goes on where it was)."""
+        summary = self.summary
+        summary.tick_halts += 1
+        if not summary.tick_halt_first:
+            summary.tick_halt_first = where or "unknown"
+        log.warning(
+            "a tick ran over %g s (%s): the tick guard sent drive 0; the mission goes on",
+            self.tick_limit or 0.0, where or "where: unknown",
+        )  # fmt: skip
+        wheels = self.last_sent.get("wheels")
+        if (
+            wheels is not None
+            and self.connection.mode in DRIVING_MODES
+            and all(c.spec.channel != "wheels" for c in self._outbox)
+        ):
+            self._outbox.send(wheels, self)
 
     def _stream_back(self, silent_since: float) -> None:
         """Valid frames came back within the grace: the tree goes on, and the wheels get

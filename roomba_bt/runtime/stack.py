@@ -70,6 +70,7 @@ class RunStack:
         input_ended: Callable[[], str | None] | None = None,
         record: Recording | None = None,
         keep_awake: bool | None = None,
+        tick_limit: float | None = None,
     ) -> None:
         self.mission = mission
         self.packets = tuple(
@@ -99,6 +100,7 @@ class RunStack:
             observer=observer,
             input_ended=input_ended,
             grace=grace,
+            tick_limit=tick_limit,
         )
 
     def run(self) -> RunSummary:

@@ -12,6 +12,10 @@ from roomba_bt.oi.modes import OIMode
 #: before it ends as a lost connection, exit 3 (``run --grace``).
 DEFAULT_GRACE = 2.0
 
+#: ``run --tick-limit`` default, seconds (runtime/tick_guard.py): 17 stream slots; at
+#: 500 mm/s, 12.5 cm driven blind
+DEFAULT_TICK_LIMIT = 0.25
+
 
 class ExitCode(IntEnum):
     """Exit codes of ``roomba-bt``, documented in the README and ``docs/runtime.md``."""
@@ -75,6 +79,10 @@ class RunSummary:
     #: of those the frames came back from within the grace
     stalls: int = 0
     stalls_ridden: int = 0
+    #: ticks that ran over ``--tick-limit`` with the wheels moving, each stopped by the tick
+    #: guard (runtime/tick_guard.py); where the first one was (the behaviour, its line)
+    tick_halts: int = 0
+    tick_halt_first: str = ""
     commands_written: int = 0
     distance_mm: float = 0.0
     final_mode: OIMode | None = None
@@ -113,6 +121,14 @@ class RunSummary:
                     "through"
                 ]
                 if self.stalls
+                else []
+            ),
+            *(
+                [
+                    f"tick guard   {self.tick_halts} slow tick(s): drive 0 sent while the tree "
+                    f"was busy; the first in {self.tick_halt_first}"
+                ]
+                if self.tick_halts
                 else []
             ),
             f"commands     {self.commands_written} written, "

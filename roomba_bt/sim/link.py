@@ -112,9 +112,9 @@ class RealtimeSimLink(SimLink):
     command meanwhile and its frames queued up in the port; the next read gets them all at
     once (the runtime counts the stale ones and ticks on the newest). So each read first
     steps the simulator through every 15 ms slot that has passed on the wall clock, then
-    waits for the next one. Without that, a slow tree would stop the simulated world while
-    it thinks, and a mission that drives blind for half a second on a robot would look safe
-    here.
+    waits for the next one; each write too, before the robot gets the bytes. Without that,
+    a slow tree would stop the simulated world while it thinks, and a mission that drives
+    blind for half a second on a robot would look safe here.
 
     The slots to catch up are those due when the read starts, so a host slower than real
     time cannot keep one read stepping for ever. ``clock`` and ``sleep`` are the wall
@@ -145,12 +145,25 @@ class RealtimeSimLink(SimLink):
                 f"{self.name}: simulated disconnect at t={self.simulator.time:.3f} s"
             )
 
+    def _catch_up(self) -> float:
+        """Step through the slots that passed on the wall clock; the wall time now."""
+        now = self._clock()
+        while self._due() <= now:
+            self._step()
+        return now
+
+    def write(self, data: bytes) -> None:
+        """The bytes reach the robot at the wall time they are written: a command written
+        after a long tick (or by the tick guard during one) acts from now, not from where
+        the simulator's clock was left."""
+        self._check()
+        self._catch_up()
+        super().write(data)
+
     def read(self, timeout: float) -> bytes:
         self._check()
         sim = self.simulator
-        started = self._clock()
-        while self._due() <= started:  # the slots that passed while the host was busy
-            self._step()
+        started = self._catch_up()  # the slots that passed while the host was busy
         data = sim.read()
         if data:
             return data if self.baud == sim.baud else at_wrong_baud(data)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from roomba_bt.mission import load_mission
+from roomba_bt.mission import NO_PERMISSIONS, Permissions, load_mission
 from roomba_bt.oi.profiles import CREATE2, RobotProfile
 from roomba_bt.runtime.loop import MissionRunner
 from roomba_bt.runtime.stack import RunStack
@@ -33,10 +33,12 @@ def run_mission(tmp_path: Path) -> RunMission:
         stall_after: float | None = None,
         burst: int = 1,
         observer: Callable[[MissionRunner], None] | None = None,
+        tick_limit: float | None = None,
+        permissions: Permissions = NO_PERMISSIONS,
     ) -> Run:
         path = tmp_path / "mission.yaml"
         path.write_text(textwrap.dedent(text))
-        mission = load_mission(path, params or {}, profile=profile)
+        mission = load_mission(path, params or {}, profile=profile, permissions=permissions)
         simulator = Simulator(load_world(world), profile, seed, faults)
         link = TapLink(simulator, stall_after, burst)
         stack = RunStack(
@@ -47,6 +49,7 @@ def run_mission(tmp_path: Path) -> RunMission:
             end_in=end_in,  # type: ignore[arg-type]
             timeout_s=timeout,
             observer=observer,
+            tick_limit=tick_limit,
         )
         summary = stack.run()
         return Run(summary, link, simulator, stack.runner)

@@ -125,3 +125,20 @@ def test_the_realtime_link_reads_garbage_at_the_wrong_baud_too() -> None:
     ln.write(C.baud_rate(57600).data)
     garbled = b"".join(ln.read(0.1) for _ in range(20))
     assert len(garbled) == 20 * 7 and parser.feed(garbled) == []
+
+
+def test_a_write_reaches_the_robot_at_the_wall_time_it_is_written() -> None:
+    """Written after the host was busy (or by the tick guard during a long tick), a command
+    acts from now: the robot drove on its last command until then."""
+    ln, wall = realtime_link()
+    ln.write(C.start().data + C.safe().data + C.stream([35, 19]).data)
+    parser = StreamParser([35, 19])
+    parser.feed(ln.read(1.0))
+    ln.write(C.drive_direct(200, 200).data)
+    wall.now += 0.3
+    ln.write(C.drive_direct(0, 0).data)
+    assert ln.now() == pytest.approx(0.015 + 20 * 0.015)
+    wall.now += 0.3
+    frames = parser.feed(ln.read(1.0))
+    assert len(frames) == 40
+    assert sum(f.values[1] for f in frames) == pytest.approx(200 * 0.3, abs=10)

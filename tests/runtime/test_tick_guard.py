@@ -1,0 +1,136 @@
+"""The tick guard (runtime/tick_guard.py): a tick that blocks while the wheels move gets
+drive 0 from the guard's thread, never in the middle of the main thread's bytes; when the
+tick returns the run counts it, names the behaviour and its line, sends the last wheel
+command again and goes on. Event-driven: the blocking behaviour waits until the guard has
+acted (at most 10 s), so nothing here depends on the machine's speed."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.cli import main
+from roomba_bt.mission import Permissions
+from roomba_bt.oi import commands as C
+from roomba_bt.robot.hazards import turns_a_wheel
+
+from .simrun import RunMission
+
+PLUGIN = '''
+import time
+
+from py_trees.common import Status
+
+from roomba_bt.behaviours import Action, declare
+
+
+@declare("stuck", kind="action")
+class Stuck(Action):
+    """Blocks its first tick until the wheels were stopped behind its back (at most 10 s)."""
+
+    def update(self):
+        if not getattr(self, "waited", False):
+            self.waited = True
+            writer = self.robot.connection.writer
+            deadline = time.monotonic() + 10.0
+            while getattr(writer.last_wheels, "args", None) != (0, 0):
+                if time.monotonic() > deadline:
+                    break
+                time.sleep(0.002)
+        return Status.SUCCESS
+'''
+
+#: forward at 100 mm/s for 6 cm, with the blocking leaf beside the drive
+MISSION = """
+plugins: [./stuck.py]
+tree:
+  sequence:
+    - mode: safe
+    - parallel:
+        policy: all
+        children:
+          - drive: {velocity: 100 mm/s, distance: 6 cm}
+          - sequence: [{wait: 150ms}, stuck]
+"""
+
+HALT = C.drive(0, 0).data
+FORWARD = C.drive(100, 32768).data
+
+
+@pytest.fixture
+def plugin_dir(tmp_path: Path) -> Path:
+    (tmp_path / "stuck.py").write_text(PLUGIN)
+    return tmp_path
+
+
+def test_a_tick_that_blocks_gets_drive_0_and_the_run_goes_on(
+    run_mission: RunMission, plugin_dir: Path
+) -> None:
+    run = run_mission(
+        MISSION, tick_limit=0.02, permissions=Permissions(plugin_files=True), timeout=20.0
+    )
+    assert run.summary.outcome.value == "success", run.summary
+    assert run.summary.tick_halts == 1
+    assert run.summary.tick_halt_first.startswith("stuck (Stuck.update at ")
+    assert f"{plugin_dir / 'stuck.py'}:" in run.summary.tick_halt_first
+    assert "tick guard   1 slow tick(s)" in str(run.summary)
+    written = [data for _, data in run.link.writes]
+    drives = [data for data in written if data[:1] == HALT[:1]]
+    # forward, the guard's drive 0, forward again (the last wheel command), the end's 0
+    assert drives[:3] == [FORWARD, HALT, FORWARD], drives
+    assert run.summary.distance_mm == pytest.approx(60, abs=5)
+
+
+def test_no_guard_no_halt(run_mission: RunMission, plugin_dir: Path) -> None:
+    """Without the guard the same tick blocks until its own 10 s: the wheels are not
+    stopped behind its back (the virtual clock: the robot did not move meanwhile)."""
+    blocked = MISSION.replace("10.0", "0.05")
+    (plugin_dir / "stuck.py").write_text(PLUGIN.replace("10.0", "0.05"))
+    run = run_mission(blocked, permissions=Permissions(plugin_files=True), timeout=20.0)
+    assert run.summary.tick_halts == 0
+    assert [d for _, d in run.link.writes if d[:1] == HALT[:1]][:2] == [FORWARD, HALT]
+
+
+def test_a_slow_tick_with_the_wheels_at_rest_sends_nothing(
+    run_mission: RunMission, plugin_dir: Path
+) -> None:
+    (plugin_dir / "stuck.py").write_text(PLUGIN.replace("10.0", "0.1"))
+    run = run_mission(
+        "plugins: [./stuck.py]\ntree:\n  sequence:\n    - mode: safe\n    - stuck\n",
+        tick_limit=0.02, permissions=Permissions(plugin_files=True),
+    )  # fmt: skip
+    assert run.summary.outcome.value == "success"
+    assert run.summary.tick_halts == 0
+    assert not any(data[:1] == HALT[:1] for _, data in run.link.writes[:-4])
+
+
+def test_turns_a_wheel() -> None:
+    assert turns_a_wheel(C.drive(100, 32768)) and turns_a_wheel(C.drive(-50, 1))
+    assert not turns_a_wheel(C.drive(0, 32767)) and not turns_a_wheel(C.drive(0, 0))
+    assert turns_a_wheel(C.drive_direct(0, 10)) and not turns_a_wheel(C.drive_direct(0, 0))
+    assert turns_a_wheel(C.drive_pwm(0, -5)) and not turns_a_wheel(C.safe())
+
+
+def test_the_cli_guards_wall_clock_runs_only(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """``--tick-limit`` reaches the runner on the wall clock; ``--fast`` and 0 turn it off."""
+    import roomba_bt.runtime.stack as stack
+
+    seen: list[float | None] = []
+    original = stack.MissionRunner.__init__
+
+    def spy(self: object, *args: object, **kwargs: object) -> None:
+        seen.append(kwargs.get("tick_limit"))  # type: ignore[arg-type]
+        original(self, *args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(stack.MissionRunner, "__init__", spy)
+    mission = tmp_path / "m.yaml"
+    mission.write_text("tree:\n  sequence:\n    - mode: safe\n    - wait: 30ms\n")
+    quiet = ["run", str(mission), "--display", "none"]
+    assert main([*quiet]) == 0
+    assert main([*quiet, "--tick-limit", "0.5"]) == 0
+    assert main([*quiet, "--tick-limit", "0"]) == 0
+    assert main([*quiet, "--fast"]) == 0
+    assert seen == [0.25, 0.5, None, None]
