@@ -419,7 +419,7 @@ class MissionRunner(BaseHandle):
         if not summary.tick_halt_first:
             summary.tick_halt_first = where or "unknown"
         log.warning(
-            "a tick ran over %g s (%s): the tick guard sent drive 0; the mission goes on",
+            "a tick ran over %g s (%s): the tick guard sent drive 0",
             self.tick_limit or 0.0, where or "where: unknown",
         )  # fmt: skip
         wheels = self.last_sent.get("wheels")

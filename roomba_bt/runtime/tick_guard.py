@@ -86,8 +86,9 @@ class TickGuard:
         self, tick: Callable[[], object], halted: Callable[[float, str], None]
     ) -> Callable[[], None]:
         """``tick`` with the lock released around it; ``halted(seconds, where)`` is called in
-        the main thread, lock held, after a tick during which the guard stopped the wheels
-        (``seconds``: how long that tick had run by then; ``where``: :meth:`_where`)."""
+        the main thread, lock held, after a tick during which the guard stopped the wheels,
+        whether it returned or raised (``seconds``: how long that tick had run by then;
+        ``where``: :meth:`_where`)."""
         lock = self.lock
         clock = self.clock
 
@@ -97,12 +98,12 @@ class TickGuard:
             lock.release()
             try:
                 tick()
-            finally:
+            finally:  # also when the tick raised or was interrupted: the halt is counted
                 lock.acquire()
                 self._entered = None
-            stopped = self._halted
-            if stopped is not None and stopped[0] == self._ticks:
-                halted(stopped[1], stopped[2])
+                stopped = self._halted
+                if stopped is not None and stopped[0] == self._ticks:
+                    halted(stopped[1], stopped[2])
 
         return guarded_tick
 

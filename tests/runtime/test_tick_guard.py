@@ -134,3 +134,20 @@ def test_the_cli_guards_wall_clock_runs_only(
     assert main([*quiet, "--tick-limit", "0"]) == 0
     assert main([*quiet, "--fast"]) == 0
     assert seen == [0.25, 0.5, None, None]
+
+
+def test_a_blocked_tick_that_then_raises_is_counted_and_the_stop_is_the_safe_stop(
+    run_mission: RunMission, plugin_dir: Path
+) -> None:
+    (plugin_dir / "stuck.py").write_text(
+        PLUGIN.replace("        return Status.SUCCESS", "        raise RuntimeError('gave up')")
+    )
+    run = run_mission(
+        MISSION, tick_limit=0.02, permissions=Permissions(plugin_files=True), timeout=20.0
+    )
+    assert run.summary.outcome.value == "error"
+    assert "gave up" in run.summary.reason
+    assert run.summary.tick_halts == 1
+    drives = [data for _, data in run.link.writes if data[:1] == HALT[:1]]
+    # the guard's drive 0, then the safe stop's (one write, drive 0 first): no resend
+    assert len(drives) == 3 and drives[:2] == [FORWARD, HALT] and drives[2].startswith(HALT)
