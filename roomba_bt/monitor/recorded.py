@@ -38,13 +38,20 @@ def replay_into_feed(
     """Replay ``record`` through ``mission``; the feed holds every tick."""
     feed = RunFeed(history=RECORD_HISTORY, source="record", mission_name=mission.name)
     feed.set_tree(mission.root)
-    acts = [note for _, note in record.notes if isinstance(note.get("tick"), int)]
+    acts = [  # the operator's; the tick guard's are replayed by the runner's own guard
+        note
+        for _, note in record.notes
+        if isinstance(note.get("tick"), int) and "tick_guard" not in note
+    ]
     summary, _ = replay_record(
         record, mission, profile=profile, packets=packets, baud=baud, name=name,
         gate=ReplayedActs(feed, acts),  # it records each tick in the feed, as live
     )  # fmt: skip
     for t, note in record.notes:
-        if not isinstance(note.get("tick"), int):
+        if "tick_guard" in note:
+            feed.event("note", f"tick guard: drive 0 after {note['tick_guard']} s in "
+                       f"{note.get('where') or 'a tick'}", t)  # fmt: skip
+        elif not isinstance(note.get("tick"), int):
             feed.event("force" if "force" in note else "note", _note_text(note), t)
     feed.finished = f"{summary.outcome.value} (recorded run, {summary.ticks} ticks)"
     return feed, summary

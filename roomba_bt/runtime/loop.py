@@ -46,7 +46,7 @@ from roomba_bt.robot.interface import (
 )
 from roomba_bt.robot.safety import InterruptGuard, Terminated
 from roomba_bt.runtime.summary import DEFAULT_GRACE, Outcome, RunSummary
-from roomba_bt.runtime.tick_guard import TickGuard
+from roomba_bt.runtime.tick_guard import TickGuardLike
 
 log = logging.getLogger(__name__)
 _new_tuple = tuple.__new__
@@ -175,7 +175,7 @@ class MissionRunner(BaseHandle):
         gate: TickGate | None = None,
         grace: float = DEFAULT_GRACE,
         hold_interrupts: bool = False,
-        tick_limit: float | None = None,
+        tick_guard: TickGuardLike | None = None,
     ) -> None:
         super().__init__(profile)
         self.connection = connection
@@ -192,8 +192,8 @@ class MissionRunner(BaseHandle):
         #: :meth:`release_interrupts` (the CLI: its summary is still to be printed); else the
         #: previous handlers come back when it returns
         self.hold_interrupts = hold_interrupts
-        if tick_limit is not None:  # set only when given: see the class attribute
-            self.tick_limit = tick_limit
+        if tick_guard is not None:  # set only when given: see the class attribute
+            self.tick_guard = tick_guard
         self._guard: InterruptGuard | None = None
         #: while a stall is ridden through: (bytes read when it began, drive 0 sent, the
         #: last valid frame's time)
@@ -231,11 +231,11 @@ class MissionRunner(BaseHandle):
     #: :data:`NO_SNAPSHOT_YET`, whose every use says that there is none yet
     snapshot: Snapshot
 
-    #: seconds a tick may run before the wheels are stopped (:mod:`roomba_bt.runtime.tick_guard`;
-    #: None: no guard, as on the virtual clock and in a replay). A class attribute the
-    #: instance sets only when given, so the evaluation's runners keep one attribute fewer
-    #: (see the note at the end of ``__init__``)
-    tick_limit: float | None = None
+    #: what stops the wheels when a tick runs too long (:mod:`roomba_bt.runtime.tick_guard`;
+    #: None: no guard, as on the virtual clock). A class attribute the instance sets only
+    #: when given, so the evaluation's runners keep one attribute fewer (see the note at the
+    #: end of ``__init__``)
+    tick_guard: TickGuardLike | None = None
 
     @property
     def has_snapshot(self) -> bool:
@@ -247,15 +247,14 @@ class MissionRunner(BaseHandle):
         wall_start = time.perf_counter()
         root = self.mission.root
         guard = self._guard = InterruptGuard(hold=self.hold_interrupts)
-        tick_guard: TickGuard | None = None
+        tick_guard = self.tick_guard
         with guard:
             try:
                 self.connection.start(OIMode.PASSIVE, self.packets)
                 self._blackboard = py_trees.blackboard.Client(name="roomba-bt runtime")
                 self._blackboard.register_key(key=SNAPSHOT_KEY, access=py_trees.common.Access.WRITE)
                 self.mission.setup(self)
-                if self.tick_limit is not None:
-                    tick_guard = TickGuard(self.connection, self.tick_limit)
+                if tick_guard is not None:
                     tick_guard.start()
                 self._loop(root, summary, tick_guard)
             except Terminated:
@@ -336,7 +335,7 @@ class MissionRunner(BaseHandle):
         self,
         root: py_trees.behaviour.Behaviour,
         summary: RunSummary,
-        tick_guard: TickGuard | None = None,
+        tick_guard: TickGuardLike | None = None,
     ) -> None:
         success, failure = py_trees.common.Status.SUCCESS, py_trees.common.Status.FAILURE
         perf = time.perf_counter
@@ -404,11 +403,13 @@ class MissionRunner(BaseHandle):
         log.warning("%s; waiting up to %g s for valid frames", stalled, self.grace)
 
     def _tick_of(
-        self, root: py_trees.behaviour.Behaviour, tick_guard: TickGuard | None
+        self, root: py_trees.behaviour.Behaviour, tick_guard: TickGuardLike | None
     ) -> Callable[[], object]:
         """The root's tick, through the tick guard when the run has one."""
         tick = tick_of(root)
-        return tick if tick_guard is None else tick_guard.guarded(tick, self._tick_halted)
+        if tick_guard is None:
+            return tick
+        return tick_guard.guarded(tick, self._tick_halted, lambda: self.snapshot.tick)
 
     def _tick_halted(self, seconds: float, where: str) -> None:
         """The tick guard stopped the wheels during the tick that just returned: counted,
@@ -420,7 +421,7 @@ class MissionRunner(BaseHandle):
             summary.tick_halt_first = where or "unknown"
         log.warning(
             "a tick ran over %g s (%s): the tick guard sent drive 0",
-            self.tick_limit or 0.0, where or "where: unknown",
+            self.tick_guard.limit_s if self.tick_guard else 0.0, where or "where: unknown",
         )  # fmt: skip
         wheels = self.last_sent.get("wheels")
         if (

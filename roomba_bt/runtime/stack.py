@@ -20,6 +20,7 @@ import contextlib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.robot.connection import Connection, EndMode
@@ -32,6 +33,7 @@ from roomba_bt.runtime.loop import (
 )
 from roomba_bt.runtime.recording import Record, RecordingTransport, ReplayTransport
 from roomba_bt.runtime.summary import DEFAULT_GRACE, RunSummary
+from roomba_bt.runtime.tick_guard import TickGuard, recorded_tick_guard
 from roomba_bt.transport.base import Transport
 
 
@@ -71,6 +73,7 @@ class RunStack:
         record: Recording | None = None,
         keep_awake: bool | None = None,
         tick_limit: float | None = None,
+        replayed_notes: Sequence[dict[str, Any]] | None = None,
     ) -> None:
         self.mission = mission
         self.packets = tuple(
@@ -100,7 +103,13 @@ class RunStack:
             observer=observer,
             input_ended=input_ended,
             grace=grace,
-            tick_limit=tick_limit,
+            tick_guard=(
+                recorded_tick_guard(self.connection, replayed_notes)
+                if replayed_notes is not None
+                else TickGuard(self.connection, tick_limit)
+                if tick_limit
+                else None
+            ),
         )
 
     def run(self) -> RunSummary:
@@ -144,6 +153,7 @@ def replay_record(
         watchdog=0.0,
         observer=observer,
         input_ended=input_ended,
+        replayed_notes=[note for _, note in record.notes],  # the tick guard's acts
     )
     stack.runner.gate = gate  # the monitor's replay of the operator's acts
     return stack.run(), transport

@@ -18,7 +18,9 @@ the runner counts it and, as after a watchdog stall, sends the last wheel comman
 unless the tick queued another: the mission goes on where it was.
 
 Only a run on the wall clock has one (a robot's port, the real-time simulator); on the
-virtual clock and in a replay the robot does not move while the host thinks.
+virtual clock the robot does not move while the host thinks. With ``--record`` each act is a
+note in the record (its tick, how long the tick had run, where), and a replay does it again
+in the same tick (:class:`RecordedTickGuard`): the bytes stay the recorded ones.
 """
 
 from __future__ import annotations
@@ -27,8 +29,10 @@ import logging
 import sys
 import threading
 import time
-from collections.abc import Callable
+from collections import deque
+from collections.abc import Callable, Iterable
 from types import FrameType
+from typing import Any, Protocol
 
 import py_trees
 
@@ -38,6 +42,22 @@ from roomba_bt.robot.hazards import turns_a_wheel
 from roomba_bt.runtime.summary import DEFAULT_TICK_LIMIT
 
 log = logging.getLogger(__name__)
+
+
+#: ``halted(seconds, where)``: the runner's reaction, in the ticking thread, lock held
+Halted = Callable[[float, str], None]
+
+
+class TickGuardLike(Protocol):
+    """What the runner asks of a tick guard: the live one or a record's."""
+
+    limit_s: float
+
+    def start(self) -> None: ...
+    def close(self) -> None: ...
+    def guarded(
+        self, tick: Callable[[], object], halted: Halted, index: Callable[[], int]
+    ) -> Callable[[], None]: ...
 
 
 class TickGuard:
@@ -63,6 +83,8 @@ class TickGuard:
         #: the tick whose wheels the guard stopped, how long it had run then, and where it
         #: was (:meth:`_where`)
         self._halted: tuple[int, float, str] | None = None
+        #: the stream's tick index of the running tick (the runner's snapshot), for the note
+        self._index: Callable[[], int] = lambda: 0
         self._owner = 0  # the thread that ticks
         self._done = threading.Event()
         self._thread = threading.Thread(
@@ -83,14 +105,15 @@ class TickGuard:
             self._thread.join()
 
     def guarded(
-        self, tick: Callable[[], object], halted: Callable[[float, str], None]
+        self, tick: Callable[[], object], halted: Halted, index: Callable[[], int]
     ) -> Callable[[], None]:
         """``tick`` with the lock released around it; ``halted(seconds, where)`` is called in
         the main thread, lock held, after a tick during which the guard stopped the wheels,
         whether it returned or raised (``seconds``: how long that tick had run by then;
-        ``where``: :meth:`_where`)."""
+        ``where``: :meth:`_where`). ``index()``: the running tick's index in the stream."""
         lock = self.lock
         clock = self.clock
+        self._index = index
 
         def guarded_tick() -> None:
             self._ticks += 1
@@ -118,12 +141,23 @@ class TickGuard:
                 continue
             try:  # lock held: the main thread is inside a tick; is it still that one?
                 if self._entered is not None and self._ticks == tick and self._moving():
-                    self._halted = (tick, ran, self._where())
+                    where = self._where()
+                    self._halted = (tick, ran, where)
+                    self._note(ran, where)
                     self.connection.halt()
             except Exception as exc:  # the port gone, say: the main thread meets it next
                 log.warning("the tick guard could not send drive 0: %s", exc)
             finally:
                 self.lock.release()
+
+    def _note(self, ran: float, where: str) -> None:
+        """The act in the record (``run --record``), for a replay to do it again."""
+        note = getattr(self.connection.transport, "note", None)
+        if callable(note):
+            note({
+                "tick_guard": round(ran, 3), "limit": self.limit_s, "where": where,
+                "tick": self._index(), "at": "during",
+            })  # fmt: skip
 
     def _moving(self) -> bool:
         """The last wheel command drives, in a mode where the robot obeys it."""
@@ -150,3 +184,46 @@ class TickGuard:
         if innermost is None:
             return ""
         return f"at {innermost.f_code.co_filename}:{innermost.f_lineno}"
+
+
+class RecordedTickGuard:
+    """A replay's tick guard: the acts of the recorded run's (its notes), each done again in
+    the tick it was done in, after that tick (which does not block here) and before its
+    flush, as live: drive 0 where the record has it, then the runner's reaction."""
+
+    def __init__(self, connection: Connection, notes: Iterable[dict[str, Any]]) -> None:
+        self.connection = connection
+        acts = [n for n in notes if "tick_guard" in n and isinstance(n.get("tick"), int)]
+        self._acts = deque(sorted(acts, key=lambda n: int(n["tick"])))
+        self.limit_s = float(acts[0].get("limit", DEFAULT_TICK_LIMIT)) if acts else 0.0
+
+    def start(self) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
+
+    def guarded(
+        self, tick: Callable[[], object], halted: Halted, index: Callable[[], int]
+    ) -> Callable[[], None]:
+        acts = self._acts
+
+        def replayed_tick() -> None:
+            tick()
+            now = index()
+            while acts and int(acts[0]["tick"]) < now:
+                acts.popleft()  # a tick the replay did not reach as recorded
+            if acts and int(acts[0]["tick"]) == now:
+                act = acts.popleft()
+                self.connection.halt()
+                halted(float(act["tick_guard"]), str(act.get("where", "")))
+
+        return replayed_tick
+
+
+def recorded_tick_guard(
+    connection: Connection, notes: Iterable[dict[str, Any]]
+) -> RecordedTickGuard | None:
+    """The record's tick guard, or None when the recorded run's guard never acted."""
+    guard = RecordedTickGuard(connection, notes)
+    return guard if guard._acts else None

@@ -11,7 +11,7 @@ import pytest
 from roomba_bt.mission import NO_PERMISSIONS, Permissions, load_mission
 from roomba_bt.oi.profiles import CREATE2, RobotProfile
 from roomba_bt.runtime.loop import MissionRunner
-from roomba_bt.runtime.stack import RunStack
+from roomba_bt.runtime.stack import Recording, RunStack
 from roomba_bt.sim import Faults, Simulator, load_world
 
 from .simrun import Run, RunMission, TapLink
@@ -35,6 +35,7 @@ def run_mission(tmp_path: Path) -> RunMission:
         observer: Callable[[MissionRunner], None] | None = None,
         tick_limit: float | None = None,
         permissions: Permissions = NO_PERMISSIONS,
+        record: Path | None = None,
     ) -> Run:
         path = tmp_path / "mission.yaml"
         path.write_text(textwrap.dedent(text))
@@ -50,8 +51,11 @@ def run_mission(tmp_path: Path) -> RunMission:
             timeout_s=timeout,
             observer=observer,
             tick_limit=tick_limit,
+            record=Recording(record, str(path)) if record is not None else None,
         )
         summary = stack.run()
+        if record is not None:
+            stack.close()  # the record written out
         return Run(summary, link, simulator, stack.runner)
 
     return run

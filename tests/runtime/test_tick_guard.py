@@ -14,6 +14,7 @@ from roomba_bt.cli import main
 from roomba_bt.mission import Permissions
 from roomba_bt.oi import commands as C
 from roomba_bt.robot.hazards import turns_a_wheel
+from roomba_bt.runtime.tick_guard import TickGuard
 
 from .simrun import RunMission
 
@@ -122,7 +123,8 @@ def test_the_cli_guards_wall_clock_runs_only(
     original = stack.MissionRunner.__init__
 
     def spy(self: object, *args: object, **kwargs: object) -> None:
-        seen.append(kwargs.get("tick_limit"))  # type: ignore[arg-type]
+        guard = kwargs.get("tick_guard")
+        seen.append(guard.limit_s if isinstance(guard, TickGuard) else None)
         original(self, *args, **kwargs)  # type: ignore[arg-type]
 
     monkeypatch.setattr(stack.MissionRunner, "__init__", spy)
@@ -151,3 +153,33 @@ def test_a_blocked_tick_that_then_raises_is_counted_and_the_stop_is_the_safe_sto
     drives = [data for _, data in run.link.writes if data[:1] == HALT[:1]]
     # the guard's drive 0, then the safe stop's (one write, drive 0 first): no resend
     assert len(drives) == 3 and drives[:2] == [FORWARD, HALT] and drives[2].startswith(HALT)
+
+
+def test_a_record_replays_the_guards_acts_byte_for_byte(
+    run_mission: RunMission, plugin_dir: Path, tmp_path: Path
+) -> None:
+    """``run --record`` notes each act (its tick); ``replay`` does it again in that tick,
+    where the tick does not block: the same bytes as the recorded run, the same count."""
+    from roomba_bt.mission import load_mission
+    from roomba_bt.oi.profiles import CREATE2
+    from roomba_bt.runtime.recording import load_record
+    from roomba_bt.runtime.stack import replay_record
+
+    record_path = tmp_path / "run.rec"
+    allowed = Permissions(plugin_files=True)
+
+    run = run_mission(MISSION, tick_limit=0.02, permissions=allowed, timeout=20.0,
+                      record=record_path)  # fmt: skip
+    assert run.summary.tick_halts == 1
+    record = load_record(record_path)
+    assert [n["tick_guard"] > 0 for _, n in record.notes] == [True]
+    # in the replay nothing stops the wheels during the tick: do not wait 10 s for it
+    (plugin_dir / "stuck.py").write_text(PLUGIN.replace("10.0", "0.0"))
+    mission = load_mission(plugin_dir / "mission.yaml", permissions=allowed)
+    summary, transport = replay_record(
+        record, mission, profile=CREATE2, packets=record.header["packets"],
+        baud=record.header["baud"], name="run.rec",
+    )  # fmt: skip
+    assert transport.first_difference() is None
+    assert bytes(transport.written) == record.outbound
+    assert summary.tick_halts == 1 and summary.tick_halt_first.startswith("stuck (Stuck.update")
