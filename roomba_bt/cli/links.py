@@ -14,7 +14,7 @@ import logging
 from dataclasses import replace
 
 from roomba_bt.oi.profiles import RobotProfile
-from roomba_bt.robot.connection import NO_ANSWER_CAUSES, OPEN_CAUSES
+from roomba_bt.robot.connection import NO_ANSWER_CAUSES, port_not_opened
 from roomba_bt.robot.errors import ConnectionFailed
 from roomba_bt.robot.handshake import OI_RATES, describe_silence, find_robot
 from roomba_bt.sim import Faults, RealtimeSimLink, SimLink, Simulator, load_world
@@ -35,7 +35,7 @@ def open_port(url: str, baud: int | None) -> SerialTransport:
     try:
         transport = SerialTransport.open(url, baud or OI_RATES[0])
     except TransportError as exc:
-        raise ConnectionFailed(url, f"could not open the port ({exc.cause})", OPEN_CAUSES) from exc
+        raise port_not_opened(url, exc) from exc
     if baud is not None:
         return transport
     try:

@@ -34,7 +34,6 @@ from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile, get_profile
 from roomba_bt.oi.stream import ReplyParser, check_bandwidth
 from roomba_bt.robot.ending import EndMode, SafeStop
 from roomba_bt.robot.errors import (
-    ConnectionFailed,
     NoAnswer,
     RobotError,
     RobotReset,
@@ -57,6 +56,7 @@ from roomba_bt.robot.startup import (
     agreed_mode_reply,
     as_mode,
     not_a_mode,
+    port_not_opened,
 )
 from roomba_bt.robot.wake import keep_awake_for
 from roomba_bt.robot.writer import CommandWriter
@@ -66,6 +66,7 @@ from roomba_bt.transport.serial_port import DEFAULT_BAUD, SerialTransport
 __all__ = [
     "NO_ANSWER_CAUSES",  # where the CLI has them from
     "OPEN_CAUSES",
+    "port_not_opened",
     "Connection",
     "EndMode",
     "LinkCounters",
@@ -156,9 +157,7 @@ class Connection:
         try:
             transport = SerialTransport.open(url, baud, write_timeout=write_timeout)
         except TransportError as exc:
-            raise ConnectionFailed(
-                url, f"could not open the port ({exc.cause})", OPEN_CAUSES
-            ) from exc
+            raise port_not_opened(url, exc) from exc
         return cls(transport, profile, watchdog=watchdog, end_in=end_in, baud=baud)
 
     def start(

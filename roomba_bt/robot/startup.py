@@ -21,6 +21,8 @@ from collections.abc import Callable
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.robot.errors import ConnectionFailed, NoAnswer
+from roomba_bt.transport.base import TransportError
+from roomba_bt.transport.serial_port import IN_USE
 
 log = logging.getLogger(__name__)
 
@@ -32,6 +34,14 @@ NO_ANSWER_CAUSES = (
     "wrong cable or wiring (TX/RX swapped, adapter not a 5 V TTL serial)",
 )
 OPEN_CAUSES = ("wrong device path or URL", "the port in use by another program", "permissions")
+
+
+def port_not_opened(url: str, exc: TransportError) -> ConnectionFailed:
+    """Why ``url`` could not be opened, with what to check; a port another program holds
+    is named as such alone (the cause is known)."""
+    if exc.cause == IN_USE:
+        return ConnectionFailed(url, f"could not open the port: {IN_USE}")
+    return ConnectionFailed(url, f"could not open the port ({exc.cause})", OPEN_CAUSES)
 
 
 def as_mode(mode: OIMode | str) -> OIMode:

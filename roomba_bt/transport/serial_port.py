@@ -17,6 +17,7 @@ of hanging.
 from __future__ import annotations
 
 import contextlib
+import errno
 import select
 import time
 from collections.abc import Iterator
@@ -50,6 +51,13 @@ _OPEN_ERRORS: tuple[type[Exception], ...] = (
 )  # fmt: skip
 
 
+#: why a device that another process holds (``flock``) was not opened
+IN_USE = (
+    "another program has it open (another roomba-bt run, sensors, doctor or sim client?); "
+    "two programs on one robot would each read half of its stream and mix their commands"
+)
+
+
 class SerialTransport:
     """Bytes over a pyserial port, with errors wrapped in :class:`TransportError`."""
 
@@ -77,6 +85,11 @@ class SerialTransport:
     ) -> SerialTransport:
         """Open ``url`` (device path or pyserial URL) at ``baud``, 8N1, no flow control.
 
+        A device is opened for this process alone (pyserial's ``exclusive``: an advisory
+        ``flock``): a second roomba-bt on the same robot, a ``sensors`` beside a ``run``,
+        would take every other chunk of the stream and interleave its commands with the
+        run's; it is refused at once instead, :data:`IN_USE`.
+
         pyserial asserts RTS and DTR when it opens a port, which on the usual cables pulls
         BRC low (a wake pulse). ``brc_high``: open with both released, so that the robot
         sees no pulse until :meth:`set_wake_line` gives one (``doctor`` says when it wakes
@@ -90,8 +103,12 @@ class SerialTransport:
             if brc_high:
                 port.rts = False
                 port.dtr = False
+            if isinstance(port, serial.Serial):  # a device, not a socket:// or loop:// URL
+                port.exclusive = True
             port.open()
         except _OPEN_ERRORS as exc:
+            if getattr(exc, "errno", None) in (errno.EAGAIN, errno.EWOULDBLOCK):
+                raise TransportError(url, "open the port", IN_USE) from exc
             raise TransportError(url, "open the port", exc) from exc
         return cls(port, url)
 

@@ -72,6 +72,23 @@ def test_open_failure_names_the_port_and_causes() -> None:
         Connection.open("/dev/no-such-roomba")
 
 
+def test_a_port_another_program_holds_is_named_as_such_alone() -> None:
+    """The cause is known: no list of what else to check."""
+    import os
+
+    master, slave = os.openpty()
+    try:
+        holder = SerialTransport.open(os.ttyname(slave))
+        with pytest.raises(ConnectionFailed) as failed:
+            Connection.open(os.ttyname(slave))
+        assert "another program has it open" in str(failed.value)
+        assert failed.value.likely_causes == ()
+        holder.close()
+    finally:
+        os.close(master)
+        os.close(slave)
+
+
 def test_firmware_text_in_the_stream_is_skipped_and_frames_go_on(fake_links: Any) -> None:
     link: Link = fake_links("pty")
     robot = link.scripted()

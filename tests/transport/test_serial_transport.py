@@ -167,6 +167,30 @@ def test_opening_a_missing_port_names_it() -> None:
         open_transport("nosuchscheme://x")
 
 
+def test_a_device_is_opened_for_one_program_at_a_time() -> None:
+    """A second opener of the same device (another roomba-bt on the robot) is refused at
+    once, naming why; once the first closes, the device opens again."""
+    from roomba_bt.transport.serial_port import IN_USE
+
+    with pty_far_end() as end:
+        first = SerialTransport.open(end.url)
+        with pytest.raises(TransportError) as refused:
+            SerialTransport.open(end.url)
+        assert refused.value.cause == IN_USE
+        assert str(refused.value).startswith(f"{end.url}: could not open the port: another ")
+        first.close()
+        SerialTransport.open(end.url).close()
+
+
+def test_socket_urls_may_be_opened_twice() -> None:
+    """``exclusive`` is a device's lock; a socket:// URL is two connections to a server."""
+    with tcp_far_end() as end:
+        first = SerialTransport.open(end.url)
+        second = SerialTransport.open(end.url)
+        first.close()
+        second.close()
+
+
 def test_write_to_a_closed_transport_is_a_transport_error() -> None:
     transport = open_transport("loop://")
     transport.close()
