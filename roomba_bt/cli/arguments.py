@@ -88,13 +88,19 @@ def seconds(text: str) -> float:
 
 
 def output_file(text: str) -> str:
-    """A file to write (--record, --plot): its directory must exist and be writable, checked
-    before anything runs, so that a long run does not end in ``No such file or directory``."""
-    folder = Path(text).resolve().parent
+    """A file to write (--record, --plot, eval --out): not a directory, its directory must
+    exist and be writable, and the file too if it is there, checked before anything runs, so
+    that a long run (a sweep of hours) does not end in ``No such file or directory``."""
+    path = Path(text)
+    if path.is_dir():
+        raise argparse.ArgumentTypeError(f"found {text!r}: a directory; expected a file name")
+    folder = path.resolve().parent
     if not folder.is_dir():
         raise argparse.ArgumentTypeError(f"found {text!r}: there is no directory {folder}")
     if not os.access(folder, os.W_OK):
         raise argparse.ArgumentTypeError(f"found {text!r}: directory {folder} is not writable")
+    if path.exists() and not os.access(path, os.W_OK):
+        raise argparse.ArgumentTypeError(f"found {text!r}: the file is not writable")
     return text
 
 

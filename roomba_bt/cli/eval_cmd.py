@@ -35,6 +35,7 @@ from roomba_bt.cli.arguments import (
     add_param_option,
     add_permission_options,
     mission_file,
+    output_file,
     parse_params,
     parse_timeout,
     permissions,
@@ -103,8 +104,9 @@ def _add_episode_options(ev: argparse.ArgumentParser) -> None:
 def _add_output_options(ev: argparse.ArgumentParser) -> None:
     """What is written (records, JSON, a plot) and the variants compared."""
     ev.add_argument(
-        "--out", metavar="FILE", help="one record per episode: .jsonl (JSON Lines) or .csv"
-    )
+        "--out", metavar="FILE", type=output_file,
+        help="one record per episode: .jsonl (JSON Lines) or .csv",
+    )  # fmt: skip
     ev.add_argument("--json", action="store_true", help="print the summary as JSON")
     ev.add_argument(
         "--sweep",
@@ -262,15 +264,14 @@ def eval_command(args: argparse.Namespace) -> int:
 
         comparisons = [compare(chosen[0].label, v.label, done[0].results, e.results)
                        for v, e in zip(chosen[1:], done[1:], strict=True)]  # fmt: skip
-    if args.out is not None:
+    _report(args, engine.describe(), chosen, summaries, comparisons, done)
+    if args.out is not None:  # after the report: a disk that filled meanwhile loses only this
         from roomba_bt.evaluate.records import write_results
 
         try:
             write_results(args.out, [r for e in done for r in e.results])
         except OSError as exc:
-            return _error(f"--out {args.out}: {exc.strerror or exc}")
-    _report(args, engine.describe(), chosen, summaries, comparisons, done)
-    if args.out is not None:
+            return _error(f"--out {args.out}: {exc.strerror or exc}; the summary is above")
         print(f"results written to {args.out}", file=sys.stderr)
     if interrupted:
         finished = sum(len(e.results) for e in done)

@@ -165,6 +165,41 @@ def test_bad_comparison_and_output_options_exit_2(
     assert message in capsys.readouterr().err
 
 
+@pytest.mark.parametrize(
+    ("where", "message"),
+    [("folder", "a directory; expected a file name"), ("no/x.jsonl", "there is no directory")],
+)
+def test_an_out_file_that_cannot_be_written_is_refused_before_any_episode(
+    where: str, message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    (tmp_path / "folder").mkdir()
+    with pytest.raises(SystemExit) as exited:  # argparse's own exit, with its usage line
+        main(["eval", BUMP, "--runs", "2", "--out", str(tmp_path / where)])
+    assert exited.value.code == 2
+    err = capsys.readouterr().err
+    assert message in err and "1/2" not in err  # no episode ran
+
+
+def test_a_failed_results_write_keeps_the_summary(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A disk that filled during an evaluation of hours: the summary is still printed."""
+    import errno
+
+    import roomba_bt.evaluate.records as records
+
+    def full(path: object, results: object) -> int:
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(records, "write_results", full)
+    code = main(["eval", BUMP, "--runs", "2", "--timeout", "5s", "--no-progress",
+                 "--out", str(tmp_path / "r.jsonl")])  # fmt: skip
+    out, err = capsys.readouterr()
+    assert code == 2
+    assert "success      " in out
+    assert "No space left on device; the summary is above" in err
+
+
 def test_ctrl_c_prints_what_finished_and_exits_130(tmp_path: Path) -> None:
     """SIGINT after the first episode has reported (read from the progress bar, not a
     clock): the summary of the finished episodes, and exit code 130."""
