@@ -256,7 +256,7 @@ class MissionRunner(BaseHandle):
                 self.mission.setup(self)
                 if tick_guard is not None:
                     tick_guard.start()
-                self._loop(root, summary, tick_guard)
+                self._loop(root, summary)
             except Terminated:
                 summary.outcome, summary.reason = Outcome.INTERRUPTED, "SIGTERM"
             except KeyboardInterrupt:
@@ -331,15 +331,11 @@ class MissionRunner(BaseHandle):
         mode = getattr(self.connection, "mode", None)
         return mode if isinstance(mode, OIMode) else None
 
-    def _loop(
-        self,
-        root: py_trees.behaviour.Behaviour,
-        summary: RunSummary,
-        tick_guard: TickGuardLike | None = None,
-    ) -> None:
+    def _loop(self, root: py_trees.behaviour.Behaviour, summary: RunSummary) -> None:
         success, failure = py_trees.common.Status.SUCCESS, py_trees.common.Status.FAILURE
         perf = time.perf_counter
         connection = self.connection
+        tick_guard = self.tick_guard  # started by run()
         tick = self._tick_of(root, tick_guard)
         while True:
             try:
@@ -363,8 +359,9 @@ class MissionRunner(BaseHandle):
             if gate is not None:
                 if not gate.before_tick(self):
                     continue
-                root = self.mission.root  # a reload may have replaced it
-                tick = self._tick_of(root, tick_guard)
+                if self.mission.root is not root:  # a reload replaced it
+                    root = self.mission.root
+                    tick = self._tick_of(root, tick_guard)
             tick()
             self._flush()
             elapsed = perf() - started
