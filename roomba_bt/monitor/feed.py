@@ -276,6 +276,7 @@ class RunFeed:
         self._layout: FrameLayout | None = None
         self._mode: object = None
         self._refused_seen = 0
+        self._tick_halts_seen = 0
         self._unnamed: frozenset[int] = frozenset()
 
     # ---------------------------------------------------------------- tree
@@ -314,6 +315,14 @@ class RunFeed:
             self._mode = snapshot.mode
         if summary.refused_commands != self._refused_seen:
             self._refused(runner, snapshot)
+        if summary.tick_halts != self._tick_halts_seen:
+            self._tick_halts_seen = summary.tick_halts
+            self.event(
+                "note",
+                f"tick guard: drive 0 while a tick ran over its limit, in "
+                f"{summary.tick_halt_last} ({summary.tick_halts} so far)",
+                snapshot.time if snapshot is not None else None,
+            )
         storage = py_trees.blackboard.Blackboard.storage
         if len(storage) > 1 or SNAPSHOT_KEY not in storage:
             board = storage.copy()  # two C calls: a third of a comprehension's time

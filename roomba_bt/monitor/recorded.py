@@ -48,10 +48,7 @@ def replay_into_feed(
         gate=ReplayedActs(feed, acts),  # it records each tick in the feed, as live
     )  # fmt: skip
     for t, note in record.notes:
-        if "tick_guard" in note:
-            feed.event("note", f"tick guard: drive 0 after {note['tick_guard']} s in "
-                       f"{note.get('where') or 'a tick'}", t)  # fmt: skip
-        elif not isinstance(note.get("tick"), int):
+        if not isinstance(note.get("tick"), int):  # the tick guard's: shown as the run had it
             feed.event("force" if "force" in note else "note", _note_text(note), t)
     feed.finished = f"{summary.outcome.value} (recorded run, {summary.ticks} ticks)"
     return feed, summary

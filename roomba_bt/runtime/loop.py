@@ -414,8 +414,9 @@ class MissionRunner(BaseHandle):
         this tick queued another (the mission goes on where it was)."""
         summary = self.summary
         summary.tick_halts += 1
+        summary.tick_halt_last = where or "unknown"
         if not summary.tick_halt_first:
-            summary.tick_halt_first = where or "unknown"
+            summary.tick_halt_first = summary.tick_halt_last
         log.warning(
             "a tick ran over %g s (%s): the tick guard sent drive 0",
             self.tick_guard.limit_s if self.tick_guard else 0.0, where or "where: unknown",

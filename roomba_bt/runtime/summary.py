@@ -80,9 +80,11 @@ class RunSummary:
     stalls: int = 0
     stalls_ridden: int = 0
     #: ticks that ran over ``--tick-limit`` with the wheels moving, each stopped by the tick
-    #: guard (runtime/tick_guard.py); where the first one was (the behaviour, its line)
+    #: guard (runtime/tick_guard.py); where the first and the last were (the behaviour, its
+    #: line)
     tick_halts: int = 0
     tick_halt_first: str = ""
+    tick_halt_last: str = ""
     commands_written: int = 0
     distance_mm: float = 0.0
     final_mode: OIMode | None = None

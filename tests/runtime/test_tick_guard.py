@@ -183,3 +183,30 @@ def test_a_record_replays_the_guards_acts_byte_for_byte(
     assert transport.first_difference() is None
     assert bytes(transport.written) == record.outbound
     assert summary.tick_halts == 1 and summary.tick_halt_first.startswith("stuck (Stuck.update")
+
+
+def test_the_monitor_shows_each_act_of_a_recorded_run(
+    run_mission: RunMission, plugin_dir: Path, tmp_path: Path
+) -> None:
+    """``roomba-bt monitor RECORD``: the replay does the act again and its timeline says so,
+    as the live page did (one event per act, naming the behaviour)."""
+    pytest.importorskip("aiohttp")
+    from roomba_bt.mission import load_mission
+    from roomba_bt.monitor.recorded import replay_into_feed
+    from roomba_bt.oi.profiles import CREATE2
+    from roomba_bt.runtime.recording import load_record
+
+    record_path = tmp_path / "run.rec"
+    allowed = Permissions(plugin_files=True)
+    run_mission(MISSION, tick_limit=0.02, permissions=allowed, timeout=20.0,
+                record=record_path)  # fmt: skip
+    (plugin_dir / "stuck.py").write_text(PLUGIN.replace("10.0", "0.0"))
+    record = load_record(record_path)
+    mission = load_mission(plugin_dir / "mission.yaml", permissions=allowed)
+    feed, summary = replay_into_feed(
+        record, mission, CREATE2, tuple(record.header["packets"]), record.header["baud"], "r"
+    )
+    assert summary.tick_halts == 1
+    notes = [e.text for e in feed.events if e.kind == "note"]
+    assert len(notes) == 1 and notes[0].startswith("tick guard: drive 0 while a tick ran over")
+    assert "stuck (Stuck.update at " in notes[0] and "(1 so far)" in notes[0]
