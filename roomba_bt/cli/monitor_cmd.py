@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import errno
 import logging
 import os
 import select
@@ -24,6 +25,17 @@ from roomba_bt.runtime.summary import ExitCode
 
 log = logging.getLogger("roomba_bt.monitor")
 KEYS_HELP = "keys: p pause, r resume, n step, q stop"
+
+
+def address_problem(host: str, port: int, exc: OSError) -> str:
+    """Why the monitor's page cannot be served at ``host:port``; a port taken (another run's
+    monitor, most likely) says which option picks another."""
+    if exc.errno == errno.EADDRINUSE or "address already in use" in str(exc):
+        return (
+            f"--monitor {host}:{port}: the port is taken (another run's monitor?); give "
+            f"another: --monitor {port + 1 if port < 65535 else 8765}"
+        )
+    return f"--monitor {host}:{port}: {exc.strerror or exc}"
 
 
 def monitor_address(text: str) -> tuple[str, int]:
@@ -118,7 +130,7 @@ class LiveMonitor:
             try:
                 url = self.server.start()
             except OSError as exc:
-                print(f"roomba-bt: --monitor {host}:{port}: {exc.strerror or exc}", file=sys.stderr)
+                print(f"roomba-bt: {address_problem(host, port, exc)}", file=sys.stderr)
                 return ExitCode.INVALID
             print(f"monitor: {url}", flush=True)
         logging.getLogger("roomba_bt").addHandler(self._handler)
@@ -306,7 +318,7 @@ def monitor_command(args: argparse.Namespace) -> int:
     try:
         url = server.start()
     except OSError as exc:
-        print(f"roomba-bt: --monitor {host}:{port}: {exc.strerror or exc}", file=sys.stderr)
+        print(f"roomba-bt: {address_problem(host, port, exc)}", file=sys.stderr)
         return ExitCode.INVALID
     print(f"{args.record}: {summary.ticks} ticks, {summary.outcome.value}")
     print(f"monitor: {url}  (Ctrl-C ends)", flush=True)

@@ -35,6 +35,21 @@ def test_without_the_extra_monitor_says_how_to_install_it_and_exits_2(
     assert exited.value.code == 2
 
 
+def test_a_taken_port_says_so_and_which_option_picks_another(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    pytest.importorskip("aiohttp")
+    with socket.socket() as held:
+        held.bind(("127.0.0.1", 0))
+        held.listen()
+        port = held.getsockname()[1]
+        code = main(["run", str(SHUTTLE), "--fast", "--display", "none", "--monitor", str(port)])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert f"--monitor 127.0.0.1:{port}: the port is taken (another run's monitor?)" in err
+    assert f"--monitor {port + 1}" in err
+
+
 @pytest.mark.parametrize(
     ("address", "message"),
     [("99999", "0 to 65535"), ("host:port", "allowed: [HOST:]PORT"), ("-1", "0 to 65535")],
