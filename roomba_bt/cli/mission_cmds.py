@@ -143,10 +143,10 @@ def validate_command(args: argparse.Namespace) -> int:
         )
         for d in diagnostics:
             print(d)
-        if diagnostics:
+        if any(d.severity == "error" for d in diagnostics):
             status = ExitCode.INVALID
         else:
-            print(f"{file}: ok")
+            print(f"{file}: ok" if not diagnostics else f"{file}: ok, with warnings")
     return status
 
 

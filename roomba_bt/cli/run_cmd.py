@@ -152,13 +152,16 @@ def load(
     from roomba_bt.mission import MissionError, Permissions, load_mission
 
     try:
-        return load_mission(
+        mission = load_mission(
             path, params, profile=profile, baud=baud, permissions=granted or Permissions()
         )
     except MissionError as exc:
         for diagnostic in exc.diagnostics:
             print(str(diagnostic), file=sys.stderr)
         return ExitCode.INVALID
+    for warning in mission.warnings:
+        print(str(warning), file=sys.stderr)
+    return mission
 
 
 def stream_packets(mission: Any, baud: int) -> tuple[int, ...]:

@@ -19,6 +19,7 @@ from roomba_bt.mission.checks import (
     RUNTIME_PACKETS,
     KeyCheck,
     ModeCheck,
+    blind_in_full,
     check_stream,
     restarted_limits,
 )
@@ -124,6 +125,7 @@ def _compile(
         blackboard_keys={k: d.type.describe() for k, d in ctx.keys.items()},
         sends=frozenset(sends),
         plan=tree,
+        warnings=tuple(blind_in_full(tree, modes)),
     )
     return mission, []
 
@@ -156,17 +158,19 @@ def validate_files(
     registry: Registry | None = None,
     permissions: Permissions = NO_PERMISSIONS,
 ) -> list[Diagnostic]:
-    """Every diagnostic of every file. A file without ``tree:`` is checked as a library of
-    subtrees (what ``include`` brings in)."""
+    """Every diagnostic of every file, errors and warnings (``severity``). A file without
+    ``tree:`` is checked as a library of subtrees (what ``include`` brings in)."""
     out: list[Diagnostic] = []
     for path in paths:
         path = Path(path)
         require_tree = _has_tree(path)
-        _, diagnostics = compile_mission(
+        mission, diagnostics = compile_mission(
             path, params, profile=profile, baud=baud, registry=registry,
             require_tree=require_tree, permissions=permissions,
         )  # fmt: skip
         out.extend(diagnostics)
+        if mission is not None:
+            out.extend(mission.warnings)
     return out
 
 

@@ -19,6 +19,7 @@ from py_trees.behaviour import Behaviour
 
 from roomba_bt.behaviours.declare import write_key
 from roomba_bt.behaviours.language import GUARD, WORDS
+from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.ir import Node
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.robot.interface import RobotHandle
@@ -57,6 +58,8 @@ class CompiledMission:
     sends: frozenset[int] = frozenset()
     #: the checked tree ``root`` was built from (:meth:`rebuilt`); None: not kept
     plan: Node | None = field(default=None, repr=False, compare=False)
+    #: what compiles but is likely a mistake (``Diagnostic.severity == "warning"``)
+    warnings: tuple[Diagnostic, ...] = ()
 
     def rebuilt(self) -> CompiledMission:
         """The same mission with a tree of its own: new behaviours, in their initial state,

@@ -21,6 +21,10 @@
   an error unless it sits in the last child, whose failure fails the parent.
 * **Bandwidth.** The packets the leaves read, plus the runtime's own
   (:data:`RUNTIME_PACKETS`), must fit one 15 ms stream frame at the chosen baud.
+* **Blind in Full (a warning).** In Full mode the robot's firmware does not stop at a cliff
+  or a wheel drop (it does in Safe, by falling to Passive). A leaf that turns the wheels and
+  can run in Full, in a mission where nothing reads the cliff sensors, drives down the stairs
+  if it meets them: compiled, with a warning (:func:`blind_in_full`).
 """
 
 from __future__ import annotations
@@ -55,6 +59,8 @@ class ModeCheck:
     def __init__(self) -> None:
         self.errors: list[Diagnostic] = []
         self._reported: set[int] = set()
+        #: each leaf reached, and every mode it may be entered in
+        self.entered: dict[int, tuple[Node, Modes]] = {}
 
     def run(self, root: Node, start: Modes = frozenset({OIMode.PASSIVE})) -> None:
         self.visit(root, start)
@@ -68,6 +74,8 @@ class ModeCheck:
     def _leaf(self, node: Node, entry: Modes) -> tuple[Modes, Modes]:
         decl = node.decl
         assert decl is not None
+        seen = self.entered.get(id(node))
+        self.entered[id(node)] = (node, entry if seen is None else seen[1] | entry)
         allowed = decl.modes
         bad = entry - allowed
         if bad and id(node) not in self._reported:
@@ -274,6 +282,31 @@ def restarted_limits(root: Node) -> list[Diagnostic]:
                     )
                 )
     return errors
+
+
+#: wheel commands: Drive (137), Drive Direct (145), Drive PWM (146)
+WHEEL_OPCODES = frozenset({137, 145, 146})
+CLIFF_SENSOR_PACKETS = frozenset({9, 10, 11, 12})
+
+
+def blind_in_full(root: Node, modes: ModeCheck) -> list[Diagnostic]:
+    """Warnings (see the module docstring): the first wheel-turning leaf that can run in
+    Full, when no leaf of the mission reads a cliff sensor (packets 9-12)."""
+    leaves = [n for n in root.walk() if n.decl is not None]
+    if any(CLIFF_SENSOR_PACKETS & set(n.decl.packets(n.params)) for n in leaves if n.decl):
+        return []
+    for node, entered in modes.entered.values():
+        decl = node.decl
+        if decl is None or OIMode.FULL not in entered or not WHEEL_OPCODES & set(decl.sends):
+            continue
+        return [
+            node.loc.at(
+                f"{decl.name} can turn the wheels in Full mode, where the robot does not stop at a "
+                "cliff or a wheel drop, and nothing in this mission reads the cliff sensors "
+                "(packets 9-12): use mode: safe, or end it on a cliff (until: {cliff: {}})"
+            ).as_warning()
+        ]
+    return []
 
 
 def check_stream(packets: tuple[int, ...], baud: int) -> str | None:

@@ -9,22 +9,28 @@
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 
 @dataclass(frozen=True, slots=True, order=True)
 class Diagnostic:
-    """One error: file, 1-based line and column, the message, and the YAML path."""
+    """One error (or, ``severity="warning"``, something that compiles but is likely a
+    mistake): file, 1-based line and column, the message, and the YAML path."""
 
     file: str
     line: int
     column: int
     message: str
     yaml_path: str = ""
+    severity: str = "error"
 
     def __str__(self) -> str:
         where = f" [{self.yaml_path}]" if self.yaml_path else ""
-        return f"{self.file}:{self.line}:{self.column}: {self.message}{where}"
+        kind = "warning: " if self.severity == "warning" else ""
+        return f"{self.file}:{self.line}:{self.column}: {kind}{self.message}{where}"
+
+    def as_warning(self) -> Diagnostic:
+        return replace(self, severity="warning")
 
 
 class MissionError(Exception):

@@ -6,7 +6,7 @@ from collections.abc import Callable
 
 import pytest
 
-from roomba_bt.mission import RUNTIME_PACKETS
+from roomba_bt.mission import RUNTIME_PACKETS, CompiledMission
 from roomba_bt.mission.checks import check_stream
 
 Errors = Callable[..., list[str]]
@@ -170,3 +170,46 @@ def test_a_parameter_without_a_value_is_reported_once(
     )
     assert len(errors) == 1, errors
     assert errors[0].startswith(first)
+
+
+FULL_DRIVE = """
+tree:
+  sequence:
+    - mode: {mode}
+    - {extra}
+    - drive: {{velocity: 200 mm/s, distance: 1 m}}
+"""
+
+
+@pytest.mark.parametrize(
+    ("mode", "extra", "warned"),
+    [
+        ("full", "wait: 1s", True),  # nothing reads a cliff: down the stairs
+        ("full", "turn: 90deg", True),  # the first wheel leaf that can run in Full is named
+        ("safe", "wait: 1s", False),  # Safe stops at a cliff by itself
+        ("full", "cliff: {sensor: left}", False),  # the mission watches a cliff sensor
+        ("full", "leds: {dock: true}", True),
+    ],
+)
+def test_driving_in_full_with_no_cliff_sensor_read_is_a_warning(
+    compile_text: Callable[..., CompiledMission], mode: str, extra: str, warned: bool
+) -> None:
+    mission = compile_text(FULL_DRIVE.format(mode=mode, extra=extra))  # compiles either way
+    warnings = [f"{w.line}:{w.column}: {w.message}" for w in mission.warnings]
+    if not warned:
+        assert warnings == []
+        return
+    name, line = ("turn", 4) if extra.startswith("turn") else ("drive", 5)
+    assert warnings == [
+        f"{line}:7: {name} can turn the wheels in Full mode, where the robot does not stop at "
+        "a cliff or a wheel drop, and nothing in this mission reads the cliff sensors (packets "
+        "9-12): use mode: safe, or end it on a cliff (until: {cliff: {}})"
+    ]
+    assert str(mission.warnings[0]).split(": ", 2)[1] == "warning"
+
+
+def test_full_mode_without_wheels_is_no_warning(
+    compile_text: Callable[..., CompiledMission],
+) -> None:
+    mission = compile_text("tree:\n  sequence:\n    - mode: full\n    - leds: {dock: true}\n")
+    assert mission.warnings == ()

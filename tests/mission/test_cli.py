@@ -41,6 +41,18 @@ def test_validate_takes_parameters(mission_file: Callable[..., Path], capsys: Ca
     assert main(["validate", str(path), "-p", "t"]) == 2
 
 
+def test_validate_prints_warnings_and_still_exits_0(
+    mission_file: Callable[..., Path], capsys: Capsys
+) -> None:
+    path = mission_file(
+        "tree:\n  sequence:\n    - mode: full\n    - drive: {velocity: 100 mm/s, distance: 1 m}\n"
+    )
+    assert main(["validate", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert f"{path}:4:7: warning: drive can turn the wheels in Full mode" in out
+    assert out.rstrip().endswith(f"{path}: ok, with warnings")
+
+
 def test_validate_a_missing_file(capsys: Capsys, tmp_path: Path) -> None:
     assert main(["validate", str(tmp_path / "nope.yaml")]) == 2
     assert "nope.yaml: no such mission file, and no shipped mission" in capsys.readouterr().out
