@@ -48,6 +48,7 @@ from roomba_bt.robot.interface import SLOT_SECONDS, Odometry, Snapshot
 
 if TYPE_CHECKING:
     from roomba_bt.runtime.loop import MissionRunner
+    from roomba_bt.runtime.summary import RunSummary
 
 STATUS_CODE: dict[Status, str] = {
     Status.SUCCESS: "S",
@@ -316,13 +317,7 @@ class RunFeed:
         if summary.refused_commands != self._refused_seen:
             self._refused(runner, snapshot)
         if summary.tick_halts != self._tick_halts_seen:
-            self._tick_halts_seen = summary.tick_halts
-            self.event(
-                "note",
-                f"tick guard: drive 0 while a tick ran over its limit, in "
-                f"{summary.tick_halt_last} ({summary.tick_halts} so far)",
-                snapshot.time if snapshot is not None else None,
-            )
+            self._tick_halted(summary, snapshot)
         storage = py_trees.blackboard.Blackboard.storage
         if len(storage) > 1 or SNAPSHOT_KEY not in storage:
             board = storage.copy()  # two C calls: a third of a comprehension's time
@@ -409,6 +404,15 @@ class RunFeed:
         last = runner.refusals[-1] if runner.refusals else "by the mode guard"
         more = f" (+{count - 1} more)" if count > 1 else ""
         self.event("refused", f"{last}{more}", snapshot.time if snapshot else 0.0)
+
+    def _tick_halted(self, summary: RunSummary, snapshot: Snapshot | None) -> None:
+        self._tick_halts_seen = summary.tick_halts
+        self.event(
+            "note",
+            f"tick guard: drive 0 while a tick ran over its limit, in "
+            f"{summary.tick_halt_last} ({summary.tick_halts} so far)",
+            snapshot.time if snapshot is not None else None,
+        )
 
     # ---------------------------------------------------------------- any thread
     def event(self, kind: str, text: str, time: float | None = None) -> None:
