@@ -37,7 +37,7 @@ from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.errors import ConnectionFailed, LinkDown, ModeError, StreamStalled
-from roomba_bt.robot.hazards import HazardConfirmation
+from roomba_bt.robot.hazards import HazardConfirmation, turns_a_wheel
 from roomba_bt.robot.interface import (
     SLOT_SECONDS,
     BaseHandle,
@@ -421,9 +421,16 @@ class MissionRunner(BaseHandle):
             "a tick ran over %g s (%s): the tick guard sent drive 0",
             self.tick_guard.limit_s if self.tick_guard else 0.0, where or "where: unknown",
         )  # fmt: skip
+        self._send_wheels_again()
+
+    def _send_wheels_again(self) -> None:
+        """After a drive 0 the runtime sent on its own (the watchdog's, the tick guard's): the
+        last wheel command the tree wrote goes out again, if it turns a wheel and the robot
+        obeys it, unless this tick queued another wheel command (the tree's newer word)."""
         wheels = self.last_sent.get("wheels")
         if (
             wheels is not None
+            and turns_a_wheel(wheels)
             and self.connection.mode in DRIVING_MODES
             and all(c.spec.channel != "wheels" for c in self._outbox)
         ):
@@ -441,9 +448,7 @@ class MissionRunner(BaseHandle):
             "%s: valid frames are back after %.0f ms; the mission goes on", connection.name,
             gap * 1000,
         )  # fmt: skip
-        wheels = self.last_sent.get("wheels")
-        if wheels is not None and any(wheels.args) and connection.mode in DRIVING_MODES:
-            self._outbox.send(wheels, self)
+        self._send_wheels_again()
 
     def _advance(self, batch: Sequence[SensorFrame]) -> float:
         """Newest frame of the batch -> the tick's snapshot; stale frames and gaps counted.
