@@ -292,9 +292,9 @@ CLIFF_SENSOR_PACKETS = frozenset({9, 10, 11, 12})
 def blind_in_full(root: Node, modes: ModeCheck) -> list[Diagnostic]:
     """Warnings (see the module docstring): the first wheel-turning leaf that can run in
     Full, when no leaf of the mission reads a cliff sensor (packets 9-12)."""
-    leaves = [n for n in root.walk() if n.decl is not None]
-    if any(CLIFF_SENSOR_PACKETS & set(n.decl.packets(n.params)) for n in leaves if n.decl):
-        return []
+    for node in root.walk():
+        if node.decl is not None and CLIFF_SENSOR_PACKETS & set(node.decl.packets(node.params)):
+            return []
     for node, entered in modes.entered.values():
         decl = node.decl
         if decl is None or OIMode.FULL not in entered or not WHEEL_OPCODES & set(decl.sends):

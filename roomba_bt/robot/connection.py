@@ -52,7 +52,6 @@ from roomba_bt.robot.silence import (
 )
 from roomba_bt.robot.startup import (
     NO_ANSWER_CAUSES,
-    OPEN_CAUSES,
     agreed_mode_reply,
     as_mode,
     not_a_mode,
@@ -65,7 +64,6 @@ from roomba_bt.transport.serial_port import DEFAULT_BAUD, SerialTransport
 
 __all__ = [
     "NO_ANSWER_CAUSES",  # where the CLI has them from
-    "OPEN_CAUSES",
     "port_not_opened",
     "Connection",
     "EndMode",

@@ -142,9 +142,9 @@ class TickGuard:
             try:  # lock held: the main thread is inside a tick; is it still that one?
                 if self._entered is not None and self._ticks == tick and self._moving():
                     where = self._where()
-                    self._halted = (tick, ran, where)
-                    self._note(ran, where)
+                    self._halted = (tick, ran, where)  # once a tick, even if the write fails
                     self.connection.halt()
+                    self._note(ran, where)  # only a drive 0 that went out is replayed
             except Exception as exc:  # the port gone, say: the main thread meets it next
                 log.warning("the tick guard could not send drive 0: %s", exc)
             finally:

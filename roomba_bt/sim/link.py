@@ -165,10 +165,8 @@ class RealtimeSimLink(SimLink):
         sim = self.simulator
         started = self._catch_up()  # the slots that passed while the host was busy
         data = sim.read()
-        if data:
-            return data if self.baud == sim.baud else at_wrong_baud(data)
         deadline = started + max(timeout, 0.0)
-        while True:
+        while not data:
             due = self._due()
             now = self._clock()
             if due > deadline:
@@ -179,5 +177,4 @@ class RealtimeSimLink(SimLink):
                 self._sleep(due - now)
             self._step()
             data = sim.read()
-            if data:
-                return data if self.baud == sim.baud else at_wrong_baud(data)
+        return data if self.baud == sim.baud else at_wrong_baud(data)
