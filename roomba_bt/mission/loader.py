@@ -369,7 +369,8 @@ class Loader:
             if name not in declared:
                 self.ctx.error(
                     root.at(
-                        f"unknown parameter {name!r} given with -p{closest(name, list(declared))}; "
+                        f"unknown parameter {name!r} set on the command line"
+                        f"{closest(name, list(declared))}; "
                         f"the mission declares: {', '.join(declared) or 'none'}"
                     )
                 )
@@ -378,7 +379,7 @@ class Loader:
             try:
                 value = vtype.parse(_cli_value(text, vtype))
             except UnitError as exc:
-                self.ctx.error(key_loc.at(f"parameter {name}={text} (from -p): {exc}"))
+                self.ctx.error(key_loc.at(f"parameter {name}={text} (from the command line): {exc}"))
                 env[name] = Bound(vtype, UNKNOWN, "?")  # reported once, not at every use
                 continue
             env[name] = Bound(vtype, value, text)

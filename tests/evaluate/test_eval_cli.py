@@ -156,6 +156,9 @@ def test_two_missions_are_compared_and_the_text_report_says_so(
         (["--sweep", "speed"], "expected NAME=V1,V2"),
         (["--sweep", "speed=1,2", "--variant", "speed=3"], "one or the other"),
         (["--variant", "speed"], "--variant 'speed': expected NAME=VALUE"),
+        # the loader names no one option: the name may come from -p, --sweep or --variant
+        (["--sweep", "sped=1mm/s,2mm/s"], "unknown parameter 'sped' set on the command line"),
+        (["--variant", "speed=fast"], "parameter speed=fast (from the command line)"),
     ],
 )
 def test_bad_comparison_and_output_options_exit_2(

@@ -143,7 +143,7 @@ def test_baud_is_checked_per_mission(errors_of: Errors) -> None:
     ("params", "first"),
     [
         ({}, "2:3: parameter 't' has no default: give it with -p t=VALUE"),
-        ({"t": "soon"}, "2:3: parameter t=soon (from -p): expected a duration"),
+        ({"t": "soon"}, "2:3: parameter t=soon (from the command line): expected a duration"),
     ],
     ids=["no-default", "bad-override"],
 )
