@@ -315,6 +315,7 @@ class Turn(Drive):
     kind="action",
     params=(Param("motors", BOOL, default=False, doc="also switch the brushes and vacuum off"),),
     sends=opcodes("drive", "motors"),
+    halts_only=True,  # Drive 0
 )
 class Stop(Action):
     """Stop the wheels (Drive 0: ``[137][0][0][0][0]``), and the motors if asked."""

@@ -132,6 +132,8 @@ class Declaration:
     constraints: Callable[[Mapping[str, Any]], list[str]] | None = None
     writes_keys: tuple[str, ...] = field(default=())  # params naming keys it writes
     reads_keys: tuple[str, ...] = field(default=())  # params naming keys it reads
+    #: its wheel commands only stop the wheels (``stop``: Drive 0), so it turns none
+    halts_only: bool = False
 
     @property
     def defaults(self) -> dict[str, Any]:
@@ -149,6 +151,11 @@ class Declaration:
         for opcode in self.sends:
             modes = modes & COMMANDS[opcode].modes
         return modes
+
+    @property
+    def turns_wheels(self) -> bool:
+        """Whether it may turn the wheels (the compile-time Full-mode warning asks)."""
+        return not self.halts_only and any(COMMANDS[op].drives_wheels for op in self.sends)
 
     @property
     def is_actuator(self) -> bool:
@@ -226,11 +233,13 @@ def declare(
     writes_keys: tuple[str, ...] = (),
     reads_keys: tuple[str, ...] = (),
     constraints: Callable[[Mapping[str, Any]], list[str]] | None = None,
+    halts_only: bool = False,
 ) -> Callable[[B], B]:
     """Class decorator: attach the :class:`Declaration` as ``cls.declaration``; the doc is
     the class docstring's first paragraph. ``leads_to`` defaults to what the opcode table
     says of the commands in ``sends`` (:func:`mode_after_sending`): Spot (134) leads to
-    Passive, so ``spot`` need not say it."""
+    Passive, so ``spot`` need not say it. ``halts_only=True`` says that its wheel commands
+    only stop the wheels (``stop``): the Full-mode warning passes it by."""
     after = mode_after_sending(sends) if leads_to is None else leads_to
 
     def attach(cls: B) -> B:
@@ -238,6 +247,7 @@ def declare(
         cls.declaration = Declaration(
             name, kind, cls, params, reads, sends, after, doc, primary,
             constraints=constraints, writes_keys=writes_keys, reads_keys=reads_keys,
+            halts_only=halts_only,
         )  # fmt: skip
         return cls
 

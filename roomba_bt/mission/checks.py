@@ -23,8 +23,9 @@
   (:data:`RUNTIME_PACKETS`), must fit one 15 ms stream frame at the chosen baud.
 * **Blind in Full (a warning).** In Full mode the robot's firmware does not stop at a cliff
   or a wheel drop (it does in Safe, by falling to Passive). A leaf that turns the wheels and
-  can run in Full, in a mission where nothing reads the cliff sensors, drives down the stairs
-  if it meets them: compiled, with a warning (:func:`blind_in_full`).
+  can run in Full, with no cliff sensor read while it runs (by itself, a guard around it, an
+  earlier child of a reactive parent, a parallel branch beside it), drives down the stairs if
+  it meets them: compiled, with a warning (:func:`blind_in_full`).
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ from collections.abc import Callable
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.ir import Node
 from roomba_bt.oi.errors import BandwidthError
+from roomba_bt.oi.frames import CLIFF_PACKETS
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.opcodes import COMMANDS
 from roomba_bt.oi.stream import check_bandwidth
@@ -284,29 +286,79 @@ def restarted_limits(root: Node) -> list[Diagnostic]:
     return errors
 
 
-#: wheel commands: Drive (137), Drive Direct (145), Drive PWM (146)
-WHEEL_OPCODES = frozenset({137, 145, 146})
-CLIFF_SENSOR_PACKETS = frozenset({9, 10, 11, 12})
+def _reads_cliffs(node: Node) -> bool:
+    """Whether a leaf of ``node``'s subtree reads a cliff sensor (packets 9-12)."""
+    return any(
+        n.decl is not None and not CLIFF_PACKETS_SET.isdisjoint(n.decl.packets(n.params))
+        for n in node.walk()
+    )
+
+
+CLIFF_PACKETS_SET = frozenset(CLIFF_PACKETS)
+
+
+def _watched_children(node: Node, watched: bool) -> list[tuple[Node, bool]]:
+    """Each child of ``node`` and whether a cliff sensor is read on every tick it runs:
+    by the condition of an ``until``/``while`` around it, by an earlier child of a reactive
+    composite (ticked again every tick, it can end the later one), or by another branch
+    of a parallel (ticked beside it). A sequence or fallback with memory ticks an earlier
+    child once, not while the later one runs: no watch."""
+    children = node.children
+    if watched:
+        return [(child, True) for child in children]
+    if node.kind == "guard":  # children: the condition, the guarded node
+        return [(children[0], False), (children[1], _reads_cliffs(children[0]))]
+    if node.kind == "parallel":
+        reads = [_reads_cliffs(child) for child in children]
+        return [(c, any(r for j, r in enumerate(reads) if j != i)) for i, c in enumerate(children)]
+    if node.kind in _CHAINS and not node.options.get("memory", True):
+        out, before = [], False
+        for child in children:
+            out.append((child, before))
+            before = before or _reads_cliffs(child)
+        return out
+    return [(child, False) for child in children]
+
+
+_CHAINS = frozenset({"sequence", "reactive_sequence"}) | _REACTIVE_SELECTORS
 
 
 def blind_in_full(root: Node, modes: ModeCheck) -> list[Diagnostic]:
-    """Warnings (see the module docstring): the first wheel-turning leaf that can run in
-    Full, when no leaf of the mission reads a cliff sensor (packets 9-12)."""
-    for node in root.walk():
-        if node.decl is not None and CLIFF_SENSOR_PACKETS & set(node.decl.packets(node.params)):
-            return []
-    for node, entered in modes.entered.values():
-        decl = node.decl
-        if decl is None or OIMode.FULL not in entered or not WHEEL_OPCODES & set(decl.sends):
+    """Warnings (see the module docstring): each leaf that turns the wheels, can run in Full,
+    reads no cliff sensor itself, and runs with nothing around it that reads one on every
+    tick (:func:`_watched_children`). A cliff read elsewhere (a check before a drive, another
+    branch) does not stop this drive at the stairs."""
+    warnings: list[Diagnostic] = []
+    seen: set[tuple[str, int, int]] = set()  # a subtree used twice is one place in its file
+    pending = [(root, False)]
+    while pending:
+        node, watched = pending.pop()
+        if node.kind != "leaf":
+            pending.extend(reversed(_watched_children(node, watched)))
             continue
-        return [
+        decl = node.decl
+        entered = modes.entered.get(id(node))
+        if (
+            watched
+            or decl is None
+            or entered is None
+            or OIMode.FULL not in entered[1]
+            or not decl.turns_wheels
+            or _reads_cliffs(node)
+        ):
+            continue
+        where = (str(node.loc.file), node.loc.line, node.loc.column)
+        if where in seen:
+            continue
+        seen.add(where)
+        warnings.append(
             node.loc.at(
-                f"{decl.name} can turn the wheels in Full mode, where the robot does not stop at a "
-                "cliff or a wheel drop, and nothing in this mission reads the cliff sensors "
-                "(packets 9-12): use mode: safe, or end it on a cliff (until: {cliff: {}})"
+                f"{decl.name} can turn the wheels in Full mode, where the robot does not stop "
+                "at a cliff or a wheel drop, and no cliff sensor (packets 9-12) is read while it "
+                "runs: use mode: safe, or end it on a cliff (until: {cliff: any})"
             ).as_warning()
-        ]
-    return []
+        )
+    return warnings
 
 
 def check_stream(packets: tuple[int, ...], baud: int) -> str | None:

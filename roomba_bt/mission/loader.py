@@ -379,7 +379,8 @@ class Loader:
             try:
                 value = vtype.parse(_cli_value(text, vtype))
             except UnitError as exc:
-                self.ctx.error(key_loc.at(f"parameter {name}={text} (from the command line): {exc}"))
+                where = f"parameter {name}={text} (from the command line)"
+                self.ctx.error(key_loc.at(f"{where}: {exc}"))
                 env[name] = Bound(vtype, UNKNOWN, "?")  # reported once, not at every use
                 continue
             env[name] = Bound(vtype, value, text)

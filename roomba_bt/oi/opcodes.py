@@ -159,6 +159,12 @@ class CommandSpec:
         return self.modes == DRIVING_MODES
 
     @property
+    def drives_wheels(self) -> bool:
+        """A wheel command of the host's own: Drive (137), Drive Direct (145), Drive PWM
+        (146), accepted in Safe and Full (a built-in cycle's wheels are the firmware's)."""
+        return self.channel == "wheels" and self.is_actuator
+
+    @property
     def changes_mode(self) -> bool:
         return self.leads_to is not None
 

@@ -172,6 +172,11 @@ def test_a_parameter_without_a_value_is_reported_once(
     assert errors[0].startswith(first)
 
 
+BLIND = (
+    "can turn the wheels in Full mode, where the robot does not stop at a cliff or a wheel "
+    "drop, and no cliff sensor (packets 9-12) is read while it runs: use mode: safe, or end it "
+    "on a cliff (until: {cliff: any})"
+)
 FULL_DRIVE = """
 tree:
   sequence:
@@ -184,28 +189,75 @@ tree:
 @pytest.mark.parametrize(
     ("mode", "extra", "warned"),
     [
-        ("full", "wait: 1s", True),  # nothing reads a cliff: down the stairs
-        ("full", "turn: 90deg", True),  # the first wheel leaf that can run in Full is named
-        ("safe", "wait: 1s", False),  # Safe stops at a cliff by itself
-        ("full", "cliff: {sensor: left}", False),  # the mission watches a cliff sensor
-        ("full", "leds: {dock: true}", True),
+        ("full", "wait: 1s", ["5:7: drive"]),  # nothing reads a cliff: down the stairs
+        ("full", "turn: 90deg", ["4:7: turn", "5:7: drive"]),  # each blind wheel leaf
+        ("safe", "wait: 1s", []),  # Safe stops at a cliff by itself
+        # read once, before the drive starts: the drive itself runs blind
+        ("full", "cliff: {sensor: left}", ["5:7: drive"]),
+        ("full", "leds: {dock: true}", ["5:7: drive"]),
+        ("full", "stop", ["5:7: drive"]),  # stop sends Drive 0: it turns no wheel
     ],
 )
 def test_driving_in_full_with_no_cliff_sensor_read_is_a_warning(
-    compile_text: Callable[..., CompiledMission], mode: str, extra: str, warned: bool
+    compile_text: Callable[..., CompiledMission], mode: str, extra: str, warned: list[str]
 ) -> None:
     mission = compile_text(FULL_DRIVE.format(mode=mode, extra=extra))  # compiles either way
     warnings = [f"{w.line}:{w.column}: {w.message}" for w in mission.warnings]
-    if not warned:
-        assert warnings == []
-        return
-    name, line = ("turn", 4) if extra.startswith("turn") else ("drive", 5)
-    assert warnings == [
-        f"{line}:7: {name} can turn the wheels in Full mode, where the robot does not stop at "
-        "a cliff or a wheel drop, and nothing in this mission reads the cliff sensors (packets "
-        "9-12): use mode: safe, or end it on a cliff (until: {cliff: {}})"
-    ]
-    assert str(mission.warnings[0]).split(": ", 2)[1] == "warning"
+    assert warnings == [f"{where} {BLIND}" for where in warned]
+    if warned:
+        assert str(mission.warnings[0]).split(": ", 2)[1] == "warning"
+
+
+@pytest.mark.parametrize(
+    ("tree", "warned"),
+    [
+        # watched on every tick: a guard, an earlier child of a reactive composite, a
+        # parallel branch, or the leaf itself
+        ("- drive: {velocity: 200 mm/s}\n  until: {cliff: any}", False),
+        ("- drive: {velocity: 200 mm/s}\n  while: {inverter: {cliff: any}}", False),
+        ("- reactive_sequence: [{inverter: {cliff: any}}, {drive: {velocity: 200 mm/s}}]", False),
+        ("- reactive_fallback: [{cliff: any}, {drive: {velocity: 200 mm/s}}]", False),
+        ("- parallel: [{drive: {velocity: 200 mm/s}}, {inverter: {cliff: any}}]", False),
+        ("- until: {cliff: any}\n  sequence: [{turn: 90deg}, {drive: {velocity: 200 mm/s}}]",
+         False),
+        ("- cover: {}", False),
+        # not watched: a cliff read elsewhere, once, or after the drive
+        ("- reactive_sequence: [{drive: {velocity: 200 mm/s}}, {inverter: {cliff: any}}]", True),
+        ("- fallback: [{cliff: any}, {drive: {velocity: 200 mm/s}}]", True),
+        ("- fallback: [{drive: {velocity: 200 mm/s, distance: 1 m}}, {cliff: any}]", True),
+        ("- sequence: [{inverter: {cliff: any}}, {drive: {velocity: 200 mm/s}}]", True),
+        ("- drive: {velocity: 200 mm/s}\n  until: {bump: any}", True),
+    ],
+)  # fmt: skip
+def test_the_full_mode_warning_asks_whether_a_cliff_is_read_while_the_wheels_turn(
+    compile_text: Callable[..., CompiledMission], tree: str, warned: bool
+) -> None:
+    body = "\n".join("    " + line for line in tree.splitlines())
+    mission = compile_text(f"tree:\n  sequence:\n    - mode: full\n{body}\n")
+    assert [w.message.split(" ", 1)[0] for w in mission.warnings] == (
+        ["drive"] if warned else []
+    ), tree
+
+
+def test_a_subtree_used_twice_is_warned_at_its_place_once(
+    compile_text: Callable[..., CompiledMission],
+) -> None:
+    mission = compile_text(
+        """
+subtrees:
+  go:
+    tree:
+      drive: {velocity: 200 mm/s, distance: 1 m}
+tree:
+  sequence:
+    - mode: full
+    - subtree: go
+    - subtree: go
+    - subtree: go
+      until: {cliff: any}
+"""
+    )
+    assert [(w.line, w.column) for w in mission.warnings] == [(4, 7)]
 
 
 def test_full_mode_without_wheels_is_no_warning(
