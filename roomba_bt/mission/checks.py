@@ -35,8 +35,13 @@ from collections.abc import Callable
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.ir import Node
 from roomba_bt.oi.errors import BandwidthError
-from roomba_bt.oi.frames import CLIFF_PACKETS
-from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.frames import (
+    CHARGING_SOURCES_PACKETS,
+    CLIFF_PACKETS,
+    ENCODER_PACKETS,
+    HAZARD_PACKETS,
+)
+from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.oi.opcodes import COMMANDS
 from roomba_bt.oi.stream import check_bandwidth
 
@@ -45,7 +50,13 @@ from roomba_bt.oi.stream import check_bandwidth
 #: mode model, and the encoders (43, 44) for odometry. The runtime and the validator both
 #: use this one constant. (The runtime adds battery charge and capacity, 25 and 26, for its
 #: summary, only when they fit the baud rate's budget.)
-RUNTIME_PACKETS: tuple[int, ...] = (7, 9, 10, 11, 12, 34, 35, 43, 44)
+RUNTIME_PACKETS: tuple[int, ...] = (
+    *HAZARD_PACKETS,
+    *CHARGING_SOURCES_PACKETS,
+    OI_MODE_PACKET,
+    *ENCODER_PACKETS,
+)
+assert RUNTIME_PACKETS == (7, 9, 10, 11, 12, 34, 35, 43, 44)
 
 Modes = frozenset[OIMode]
 _EMPTY: Modes = frozenset()
