@@ -65,3 +65,25 @@ def point_in_polygon(px: float, py: float, polygon: Polygon) -> bool:
 def wrap_angle(angle: float) -> float:
     """``angle`` in radians, wrapped into -pi..pi."""
     return (angle + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def segments_meet(p: Point, q: Point, r: Point, s: Point) -> bool:
+    """Whether the closed segments pq and rs have a point in common."""
+
+    def turn(a: Point, b: Point, c: Point) -> float:
+        return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+
+    def within(a: Point, b: Point, c: Point) -> bool:  # c on the line ab: between a and b?
+        return min(a[0], b[0]) <= c[0] <= max(a[0], b[0]) and (
+            min(a[1], b[1]) <= c[1] <= max(a[1], b[1])
+        )
+
+    d1, d2, d3, d4 = turn(r, s, p), turn(r, s, q), turn(p, q, r), turn(p, q, s)
+    if ((d1 > 0 > d2) or (d1 < 0 < d2)) and ((d3 > 0 > d4) or (d3 < 0 < d4)):
+        return True
+    return (
+        (d1 == 0 and within(r, s, p))
+        or (d2 == 0 and within(r, s, q))
+        or (d3 == 0 and within(p, q, r))
+        or (d4 == 0 and within(p, q, s))
+    )

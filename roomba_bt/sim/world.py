@@ -47,6 +47,7 @@ from roomba_bt.sim.geometry import (
     distance_sq_to_segment,
     point_in_polygon,
     polygon_edges,
+    segments_meet,
     wrap_angle,
 )
 
@@ -458,6 +459,16 @@ class _Checker:
         if abs(_area(poly)) < 1.0:
             self.error(path, "a polygon of zero area", "a polygon enclosing some floor")
             return None
+        crossing = _first_crossing(poly)
+        if crossing is not None:
+            sides = " and ".join(_side(poly, i) for i in crossing)
+            self.error(
+                path,
+                f"a polygon whose sides cross ({sides})",
+                "a polygon whose points go once around it, in order (its sides meet only at "
+                "its corners)",
+            )
+            return None
         return poly
 
     def rect(self, value: object, path: PathKey) -> tuple[float, float, float, float] | None:
@@ -494,6 +505,28 @@ class _Checker:
             self.error(path, _show(value), "a list")
             return []
         return value
+
+
+def _first_crossing(poly: Polygon) -> tuple[int, int] | None:
+    """The first two sides of ``poly`` that meet other than at the corner they share (side
+    ``i`` from point ``i`` to ``i + 1``), or None for a simple polygon. A world's polygon is
+    drawn by hand: points out of order make a bow tie, whose floor and walls are not what its
+    author meant (which side of a crossed side is inside?)."""
+    n = len(poly)
+    for a in range(n):
+        p, q = poly[a], poly[(a + 1) % n]
+        for b in range(a + 1, n):
+            if b == a + 1 or (a == 0 and b == n - 1):
+                continue  # neighbours: they share a corner
+            if segments_meet(p, q, poly[b], poly[(b + 1) % n]):
+                return a, b
+    return None
+
+
+def _side(poly: Polygon, i: int) -> str:
+    """Side ``i`` of ``poly`` as the file writes it: ``[x, y]-[x, y]`` in metres."""
+    a, b = poly[i], poly[(i + 1) % len(poly)]
+    return f"[{a[0] / 1000:g}, {a[1] / 1000:g}]-[{b[0] / 1000:g}, {b[1] / 1000:g}]"
 
 
 def _area(poly: Polygon) -> float:

@@ -237,3 +237,24 @@ def test_a_tab_and_a_byte_that_is_not_utf8_in_a_world_are_placed(tmp_path: pathl
     assert [str(p) for p in info.value.problems] == [
         f"{latin}:1:10: world: found byte 0xe9, not UTF-8 text; allowed: a UTF-8 YAML file"
     ]
+
+
+@pytest.mark.parametrize(
+    ("shape", "sides"),
+    [
+        # points out of order: a bow tie (its area is not zero, so that check lets it by)
+        ("[[0, 0], [4, 4], [4, 0], [0, 3]]", "[0, 0]-[4, 4] and [4, 0]-[0, 3]"),
+        # a corner on a side that is not its own: the floor pinched to a point
+        ("[[0, 0], [4, 0], [4, 4], [2, 0], [0, 4]]", "[0, 0]-[4, 0] and [4, 4]-[2, 0]"),
+    ],
+)
+def test_a_polygon_whose_sides_cross_is_refused_naming_them(shape: str, sides: str) -> None:
+    assert problems(f"rooms: [{shape}]\n") == [
+        f"w.yaml:1:9: rooms[0]: found a polygon whose sides cross ({sides}); allowed: a "
+        "polygon whose points go once around it, in order (its sides meet only at its corners)"
+    ]
+    # obstacles, drops, dirt and areas are read by the same polygon check
+    found = problems(
+        f"rooms: [[[0, 0], [5, 0], [5, 5], [0, 5]]]\nobstacles: [{{name: x, polygon: {shape}}}]\n"
+    )
+    assert len(found) == 1 and "obstacles[0].polygon: found a polygon whose sides cross" in found[0]
