@@ -25,6 +25,7 @@ from typing import IO, Any
 from roomba_bt.oi.encode import decode_command
 from roomba_bt.oi.errors import EncodeError
 from roomba_bt.transport.base import Transport
+from roomba_bt.yamlsource import undecodable_position
 
 RECORD_FORMAT = "roomba-bt-record"
 RECORD_VERSION = 1
@@ -131,6 +132,13 @@ def load_record(path: str | Path) -> Record:
     path = Path(path)
     try:
         lines = path.read_text(encoding="utf-8").splitlines()
+    except UnicodeDecodeError as exc:  # a damaged copy, or not a record at all
+        line, column = undecodable_position(exc)
+        byte = bytes(exc.object)[exc.start]
+        raise RecordError(
+            f"{path}:{line}:{column}: byte 0x{byte:02x}, not UTF-8 text; expected the JSON "
+            f"lines of a {RECORD_FORMAT} file (run --record)"
+        ) from None
     except OSError as exc:
         raise RecordError(f"{path}: cannot read record: {exc.strerror or exc}") from None
     if not lines:

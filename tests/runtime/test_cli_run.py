@@ -122,6 +122,19 @@ def test_replay_of_a_malformed_record_is_exit_2(
     assert "bad.jsonl:2:" in err
 
 
+@pytest.mark.parametrize("command", ["replay", "monitor"])
+def test_a_record_with_a_byte_that_is_not_utf8_is_placed_not_a_traceback(
+    command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    record = tmp_path / "damaged.jsonl"
+    record.write_bytes(b'{"format": "roomba-bt-record", "version": 1}\n{"t": 0.0, \xff}\n')
+    assert main([command, str(record)]) == 2
+    assert capsys.readouterr().err.strip() == (
+        f"roomba-bt: {record}:2:12: byte 0xff, not UTF-8 text; expected the JSON lines of a "
+        "roomba-bt-record file (run --record)"
+    )
+
+
 def test_summary_packets_are_dropped_when_they_do_not_fit_the_baud() -> None:
     from roomba_bt.runtime.loop import SUMMARY_PACKETS, stream_request
 
