@@ -118,7 +118,7 @@ class Registry:
         error names the distribution at once."""
         try:
             provider = ep.load()
-        except Exception as exc:  # any import-time failure of third-party code
+        except (Exception, SystemExit) as exc:  # any import-time failure of third-party code
             self._errors.append(PluginError(_origin(ep), f"failed to import: {_cause(exc)}"))
             return []
         registered: list[Declaration] = []
@@ -161,7 +161,7 @@ class Registry:
                 module.__dict__["__roomba_bt_stamp__"] = stamp
                 sys.modules[module_name] = module
                 spec.loader.exec_module(module)
-            except Exception as exc:
+            except (Exception, SystemExit) as exc:  # sys.exit() in it: not ours to exit
                 sys.modules.pop(module_name, None)
                 return copy, PluginError(origin, f"failed to import: {_cause(exc)}")
         before = len(copy._errors)
@@ -258,6 +258,8 @@ def _qualname(cls: object) -> str:
 
 
 def _cause(exc: BaseException) -> str:
+    if isinstance(exc, SystemExit):  # its exit code would have passed for one of ours
+        return f"it called sys.exit({exc.code!r})"
     return f"{type(exc).__name__}: {exc}"
 
 

@@ -123,6 +123,12 @@ def test_a_plugin_file_loads_into_a_copy(tmp_path: Path) -> None:
     _, error = base.with_file(broken)
     assert error is not None
     assert "failed to import: RuntimeError: boom" in str(error)
+    # sys.exit() at import is a failed import too: its code would pass for one of the CLI's
+    leaving = tmp_path / "leaving.py"
+    leaving.write_text("import sys\nsys.exit(3)\n")
+    _, error = base.with_file(leaving)
+    assert error is not None
+    assert "failed to import: it called sys.exit(3)" in str(error)
 
 
 def test_a_declared_class_that_is_no_behaviour_is_named(tmp_path: Path) -> None:
