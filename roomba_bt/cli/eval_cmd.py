@@ -249,7 +249,9 @@ def eval_command(args: argparse.Namespace) -> int:
     if isinstance(plan, int):
         return plan
     chosen, batches, world = plan
-    engine = Engine("dask" if args.scheduler or args.engine == "dask" else "local", args.jobs,
+    # no more workers than episodes: a local Dask cluster would start each one's process
+    jobs = min(args.jobs, sum(len(batch) for batch in batches))
+    engine = Engine("dask" if args.scheduler or args.engine == "dask" else "local", jobs,
                     args.scheduler)  # fmt: skip
     done = _run(args, chosen, batches, engine)
     if isinstance(done, int):

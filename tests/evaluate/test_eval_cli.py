@@ -272,3 +272,10 @@ def test_a_behaviour_that_raises_in_an_episode_exits_4(
     assert "2 episode(s) ended with a behaviour's exception" in err
     assert "seed 3: " in err and "kaboom" in err and "boom.py:9" in err
     assert f"roomba-bt run {mission} --fast --seed 3 -v" in err
+
+
+def test_no_more_workers_than_episodes_are_started(capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(["eval", BUMP, "-p", "duration=1s", "--runs", "2", "--jobs", "16",
+                 "--no-progress"])  # fmt: skip
+    assert code == 0
+    assert "engine       2 local processes;" in capsys.readouterr().out
