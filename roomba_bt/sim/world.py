@@ -902,8 +902,15 @@ def world_text(path_or_name: str | pathlib.Path) -> tuple[str, str]:
         if isinstance(path_or_name, str) and "/" not in path_or_name and shipped.is_file():
             path = shipped
         else:
+            found = (
+                "a directory"
+                if path.is_dir()
+                else "a device or a pipe, not a file"
+                if path.exists()
+                else "no such file or shipped world"
+            )
             raise WorldError(
-                [WorldProblem(str(path_or_name), 0, 0, "world", "no such file or shipped world",
+                [WorldProblem(str(path_or_name), 0, 0, "world", found,
                               f"a YAML file or one of {', '.join(shipped_worlds())}")]
             )  # fmt: skip
     try:

@@ -258,3 +258,13 @@ def test_a_polygon_whose_sides_cross_is_refused_naming_them(shape: str, sides: s
         f"rooms: [[[0, 0], [5, 0], [5, 5], [0, 5]]]\nobstacles: [{{name: x, polygon: {shape}}}]\n"
     )
     assert len(found) == 1 and "obstacles[0].polygon: found a polygon whose sides cross" in found[0]
+
+
+def test_a_world_path_that_is_a_directory_or_a_device_is_named_so(tmp_path: pathlib.Path) -> None:
+    for where, found in (
+        (tmp_path, "a directory"),
+        ("/dev/null", "a device or a pipe, not a file"),
+    ):
+        with pytest.raises(WorldError) as info:
+            load_world(where)
+        assert str(info.value.problems[0]).startswith(f"{where}: world: found {found}; allowed:")
