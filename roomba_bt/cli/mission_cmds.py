@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import shutil
 import sys
 from pathlib import Path
 from typing import Any
@@ -19,6 +20,7 @@ from roomba_bt.cli.arguments import (
     add_permission_options,
     baud_rate,
     mission_file,
+    output_file,
     parse_params,
     permissions,
 )
@@ -57,8 +59,10 @@ def register(sub: Any) -> None:
     )
     show.add_argument("file", metavar="FILE", help="a mission file, or a shipped mission's name")
     _common(show)
-    show.add_argument("--dot", metavar="OUT.dot", help="also write the tree as Graphviz dot")
-    show.add_argument("--svg", metavar="OUT.svg", help="also write the tree as SVG (needs dot)")
+    show.add_argument("--dot", metavar="OUT.dot", type=output_file,
+                      help="also write the tree as Graphviz dot")  # fmt: skip
+    show.add_argument("--svg", metavar="OUT.svg", type=output_file,
+                      help="also write the tree as SVG (needs Graphviz's dot program)")  # fmt: skip
 
     add_command(
         sub,
@@ -162,6 +166,10 @@ def show_command(args: argparse.Namespace) -> int:
     if isinstance(found, tuple):
         print(f"roomba-bt show: {found[0]}", file=sys.stderr)
         return ExitCode.INVALID
+    missing = graph_tools_missing(dot=args.dot is not None, svg=args.svg is not None)
+    if missing is not None:  # said before the tree is printed, not after
+        print(f"roomba-bt show: {missing}", file=sys.stderr)
+        return ExitCode.INVALID
     mission, diagnostics = compile_mission(
         found,
         params,
@@ -203,12 +211,28 @@ def missions_command(args: argparse.Namespace) -> int:
     return ExitCode.OK
 
 
-def write_graph(root: Any, target: Path, fmt: str) -> str | None:
-    """Write the tree as dot or svg; an error message (never a traceback) if impossible."""
+def graph_tools_missing(*, dot: bool, svg: bool) -> str | None:
+    """What ``--dot``/``--svg`` need and this machine lacks: pydot (both), Graphviz's ``dot``
+    program (``--svg``, which it renders); None when nothing is missing or nothing is asked."""
+    if not (dot or svg):
+        return None
     try:
         import pydot  # noqa: F401
     except ImportError:
         return "--dot/--svg need pydot: pip install pydot (and Graphviz for --svg)"
+    if svg and shutil.which("dot") is None:
+        return (
+            "--svg needs Graphviz's dot program, which is not on the PATH (apt-get install "
+            "graphviz, brew install graphviz); --dot writes the graph as text without it"
+        )
+    return None
+
+
+def write_graph(root: Any, target: Path, fmt: str) -> str | None:
+    """Write the tree as dot or svg; an error message (never a traceback) if impossible."""
+    missing = graph_tools_missing(dot=fmt == "dot", svg=fmt == "svg")
+    if missing is not None:
+        return missing
     import py_trees
 
     graph = py_trees.display.dot_tree(root)
@@ -218,12 +242,10 @@ def write_graph(root: Any, target: Path, fmt: str) -> str | None:
         else:
             svg = graph.create(format="svg")
             target.write_bytes(svg if isinstance(svg, bytes) else str(svg).encode())
-    except FileNotFoundError as exc:
-        return f"cannot write {target}: {exc} (is Graphviz's dot installed?)"
     except OSError as exc:
         return f"cannot write {target}: {exc}"
-    except Exception as exc:  # pydot raises plain Exception when Graphviz is missing
-        return f"cannot render {fmt}: {exc} (is Graphviz's dot installed?)"
+    except Exception as exc:  # pydot raises plain Exception when Graphviz fails
+        return f"cannot render {fmt}: {exc}"
     print(f"wrote {target}", file=sys.stderr)
     return None
 

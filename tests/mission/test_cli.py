@@ -78,9 +78,21 @@ def test_show_svg_without_graphviz_is_a_clear_error(
 ) -> None:
     monkeypatch.setenv("PATH", str(tmp_path))  # no 'dot' executable
     assert main(["show", str(EXAMPLES / "dock.yaml"), "--svg", str(tmp_path / "t.svg")]) == 2
-    _, err = capsys.readouterr()
-    assert "Graphviz" in err
+    out, err = capsys.readouterr()
+    assert "Graphviz's dot program, which is not on the PATH" in err
     assert "Traceback" not in err
+    assert out == ""  # said before the tree, not after it
+
+
+def test_show_refuses_a_graph_file_it_cannot_write_before_anything_else(
+    capsys: Capsys, tmp_path: Path
+) -> None:
+    with pytest.raises(SystemExit) as exited:  # argparse's own exit, with its usage line
+        main(["show", str(EXAMPLES / "dock.yaml"), "--dot", str(tmp_path / "no" / "t.dot")])
+    assert exited.value.code == 2
+    out, err = capsys.readouterr()
+    assert "--dot: found" in err and "there is no directory" in err
+    assert "Graphviz" not in err and out == ""
 
 
 def test_show_an_invalid_mission(mission_file: Callable[..., Path], capsys: Capsys) -> None:
