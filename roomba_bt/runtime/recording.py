@@ -133,10 +133,10 @@ def load_record(path: str | Path) -> Record:
     try:
         lines = path.read_text(encoding="utf-8").splitlines()
     except UnicodeDecodeError as exc:  # a damaged copy, or not a record at all
-        line, column = undecodable_position(exc)
+        row, column = undecodable_position(exc)
         byte = bytes(exc.object)[exc.start]
         raise RecordError(
-            f"{path}:{line}:{column}: byte 0x{byte:02x}, not UTF-8 text; expected the JSON "
+            f"{path}:{row}:{column}: byte 0x{byte:02x}, not UTF-8 text; expected the JSON "
             f"lines of a {RECORD_FORMAT} file (run --record)"
         ) from None
     except OSError as exc:
