@@ -30,7 +30,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from roomba_bt.oi import commands as oi
-from roomba_bt.oi.frames import stream_frame_size
+from roomba_bt.oi.frames import BATTERY_PACKETS, stream_frame_size
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.robot.errors import (
     BaudChanged,
@@ -115,9 +115,28 @@ def explain_silence(
             pulses=_pulses(connection), woken_by=pulse.how,
         )  # fmt: skip
     return lost(
-        f"it answered no query, not even after a BRC pulse ({pulse.how}): switched off, a "
-        "flat battery, or the cable"
+        f"it answered no query, not even after a BRC pulse ({pulse.how}): "
+        f"{_silent_causes(connection)}"
     )
+
+
+#: At or below this charge (%) in the last frame, a robot that answers nothing most likely
+#: switched itself off: it was running on an empty battery.
+FLAT_PERCENT = 1.0
+
+
+def _silent_causes(connection: Connection) -> str:
+    """The likely causes of a robot that answers nothing, the likeliest first: a flat battery
+    when the last frame read the charge (packets 25, 26) at :data:`FLAT_PERCENT` or less."""
+    last = connection.link.frame
+    if last is not None and last.carries(BATTERY_PACKETS):
+        percent = last.battery_percent
+        if percent <= FLAT_PERCENT:
+            return (
+                f"most likely a flat battery (the last frame read {percent:.1f} %: it switched "
+                "itself off; put it on its charger), else switched off or the cable"
+            )
+    return "switched off, a flat battery, or the cable"
 
 
 def _answers(connection: Connection) -> bool:

@@ -224,7 +224,11 @@ class OIProtocol(StreamOutput):
         if low and not self.brc_low:
             self.brc_pulses += 1
             self._last_activity = self.time
-            if self.asleep and (not self.docked or self._wakes_on_dock()):
+            if (
+                self.asleep
+                and (not self.docked or self._wakes_on_dock())
+                and self.battery_charge > 0.0  # a flat battery wakes for nothing
+            ):
                 self.asleep = self.deaf = False
                 self._set_mode(OIMode.PASSIVE, "BRC pulse")
                 self._event("wake", "BRC pulse")

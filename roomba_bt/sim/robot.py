@@ -161,6 +161,8 @@ class Simulator(OIProtocol):
             self._fall()
         if self._power_due or self.ticks >= self._battery_at or dt != STEP_SECONDS:
             self._battery(dt)
+            if self._charge <= 0.0 and self._current < 0.0:  # drained: it switches off
+                self.fall_asleep("battery empty")
         else:
             self._charge_owed += 1  # the charge's step, taken later with the others (power.py)
         swept = self.swept

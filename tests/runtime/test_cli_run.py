@@ -184,3 +184,17 @@ def test_replay_checks_the_record_holds_the_missions_packets(
     err = capsys.readouterr().err
     assert "walls.yaml reads [27] too: it cannot be replayed against this mission" in err
     assert "Traceback" not in err
+
+
+def test_a_robot_whose_battery_went_flat_is_named_as_such(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The simulated robot switches itself off at an empty battery; the run ends as a lost
+    connection (exit 3), and the cause it gives first is the battery the last frame read."""
+    mission = tmp_path / "go.yaml"
+    mission.write_text("tree:\n  sequence:\n    - mode: safe\n    - drive: {velocity: 200 mm/s}\n")
+    argv = ["run", str(mission), "--fast", "--display", "none", "--battery", "0.0002",
+            "--world", "corridor"]  # fmt: skip
+    assert main(argv) == 3
+    err = capsys.readouterr().err
+    assert "most likely a flat battery (the last frame read 0.0 %: it switched itself off" in err

@@ -208,6 +208,41 @@ def test_old_firmware_does_not_wake_by_brc_on_the_dock() -> None:
     assert not host.sim.asleep
 
 
+def test_a_flat_battery_switches_the_robot_off_until_it_has_charged() -> None:
+    """Decided (the specs are silent): at an empty battery the robot switches itself off, as
+    a real one does at its cut-off voltage: its wheels stop, its stream ends, it answers
+    nothing, and a BRC pulse does not wake it until the charger has put some charge in."""
+    host = make(mode=None)
+    host.sim.battery_charge = 0.5  # mAh: about 4 s at 150 + 0.6 x 2 x 200 mA
+    host.send(C.start(), C.safe(), C.drive_direct(200, 200))
+    host.stream([7, 25])
+    assert host.frames(1.0)
+    host.run(10.0)
+    assert host.sim.asleep and host.sim.battery_charge == 0.0
+    assert host.sim.left_speed == host.sim.right_speed == 0.0
+    assert [e.detail for e in host.sim.events if e.kind == "sleep"] == ["battery empty"]
+    assert host.frames(0.5) == []
+    host.send(C.sensors(35))
+    assert host.sim.read() == b""
+    host.sim.set_brc(True)
+    host.sim.set_brc(False)
+    assert host.sim.asleep, "no charge: a BRC pulse wakes nothing"
+
+
+def test_a_robot_that_went_flat_on_its_powered_dock_charges_and_then_wakes() -> None:
+    # in Full on the dock (Safe would fall to Passive there, and charge): no charging
+    host = make(DOCK_WORLD, start=docked_start(), mode="full")
+    host.sim.firmware = "release-3.8.2"  # wakes by BRC on the dock
+    host.sim.battery_charge = 0.01
+    host.run(1.0)
+    assert host.sim.asleep
+    host.run(2.0)  # asleep on the powered dock (Passive): it charges
+    assert host.sim.battery_charge > 0.0
+    host.sim.set_brc(True)
+    host.sim.set_brc(False)
+    assert not host.sim.asleep and mode_of(host) == OIMode.PASSIVE
+
+
 def test_the_reset_banner_names_the_firmware() -> None:
     host = make()
     host.sim.firmware = "release-3.8.2"
