@@ -297,15 +297,17 @@ def restarted_limits(root: Node) -> list[Diagnostic]:
     return errors
 
 
+CLIFF_PACKETS_SET = frozenset(CLIFF_PACKETS)
+#: the composites that tick children in order (a sequence or a fallback)
+_CHAINS = frozenset({"sequence", "reactive_sequence"}) | _REACTIVE_SELECTORS
+
+
 def _reads_cliffs(node: Node) -> bool:
     """Whether a leaf of ``node``'s subtree reads a cliff sensor (packets 9-12)."""
     return any(
         n.decl is not None and not CLIFF_PACKETS_SET.isdisjoint(n.decl.packets(n.params))
         for n in node.walk()
     )
-
-
-CLIFF_PACKETS_SET = frozenset(CLIFF_PACKETS)
 
 
 def _watched_children(node: Node, watched: bool) -> list[tuple[Node, bool]]:
@@ -329,9 +331,6 @@ def _watched_children(node: Node, watched: bool) -> list[tuple[Node, bool]]:
             before = before or _reads_cliffs(child)
         return out
     return [(child, False) for child in children]
-
-
-_CHAINS = frozenset({"sequence", "reactive_sequence"}) | _REACTIVE_SELECTORS
 
 
 def blind_in_full(root: Node, modes: ModeCheck) -> list[Diagnostic]:
