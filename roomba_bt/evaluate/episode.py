@@ -356,10 +356,12 @@ def start_pose(world: World, spec: EpisodeSpec) -> Any:
 
 def run_episode(spec: EpisodeSpec) -> EpisodeResult:
     """Run one episode to its end (success, failure, or the spec's timeout). The robot
-    layer's log lines (stream started, mode fell back) are silenced: the result has them."""
+    layer's log lines (stream started, mode fell back, a stop a robot that switched itself
+    off could not confirm) are silenced: the result's outcome and reason say what happened,
+    and a thousand episodes' lines would scroll over the progress bar."""
     logger = logging.getLogger("roomba_bt")
     level = logger.level
-    logger.setLevel(logging.ERROR)
+    logger.setLevel(logging.CRITICAL)
     try:
         return _run_episode(spec)
     finally:

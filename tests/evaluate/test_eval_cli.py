@@ -279,3 +279,17 @@ def test_no_more_workers_than_episodes_are_started(capsys: pytest.CaptureFixture
                  "--no-progress"])  # fmt: skip
     assert code == 0
     assert "engine       2 local processes;" in capsys.readouterr().out
+
+
+def test_episodes_whose_robot_switched_off_are_failures_not_log_lines(
+    capsys: pytest.CaptureFixture[str], caplog: pytest.LogCaptureFixture
+) -> None:
+    """A flat battery switches the simulated robot off: each episode ends as a lost
+    connection, said once in the grouped failures, with no per-episode ERROR line."""
+    code = main(["eval", BUMP, "--world", "corridor", "--battery", "0.0002", "--runs", "2",
+                 "--no-progress"])  # fmt: skip
+    assert code == 0  # an evaluation that ran (--min-rate makes a low rate exit 1)
+    out, err = capsys.readouterr()
+    assert "2  connection lost:" in out and "most likely a flat battery" in out
+    assert "unconfirmed" not in err
+    assert not [r for r in caplog.records if r.name.startswith("roomba_bt")]
