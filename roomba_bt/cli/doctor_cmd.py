@@ -35,7 +35,7 @@ from roomba_bt.oi.modes import OI_MODE_PACKET
 from roomba_bt.oi.packets import packet_ids
 
 if TYPE_CHECKING:
-    from roomba_bt.robot.handshake import Probe
+    from roomba_bt.robot.handshake import Search
 
 #: Seconds of stream the round-trip reads (33 frames at one per 15 ms).
 STREAM_CHECK_S = 0.5
@@ -61,6 +61,10 @@ WAKE_FIX = (
     "button: press Clean and run doctor again. To wake it from here, use a cable that wires "
     "BRC to RTS or DTR (the iRobot Create cable does) or an rfc2217:// bridge (roomba-bt sim "
     "--rfc2217 serves one)"
+)
+ECHO_FIX = (
+    "this is not a robot's port: loop:// or a test port, a cable or adapter whose transmit and "
+    "receive lines are joined, or the wrong device; give the robot's port (ls /dev/ttyUSB*)"
 )
 SILENT_FIX = (
     "check that the robot is on (press Clean: its light comes on), that the cable is a 5 V "
@@ -191,21 +195,26 @@ def _leave_passive(transport: Any) -> None:
         transport.write(oi.pause_stream().data + oi.start().data)
 
 
-def _search(transport: Any, rates: tuple[int, ...], report: Report, when: str) -> Probe | None:
-    """Each rate tried, a line each (``when``: after what); the first that answered, or None."""
+def _search(transport: Any, rates: tuple[int, ...], report: Report, when: str) -> Search:
+    """Each rate tried, a line each (``when``: after what); the probes made."""
     from roomba_bt.robot.handshake import search
 
     result = search(transport, rates)
     for probe in result.probes:
         mark = "ok" if probe.answered else "--"
         report.line(mark, "baud", f"{probe.baud}{when}: {probe.seen}")
-    return result.found
+    return result
 
 
 def _examine(transport: Any, rates: tuple[int, ...], allow_reset: bool, report: Report) -> int:
     from roomba_bt.robot.handshake import wake_pulse
 
-    found = _search(transport, rates, report, "")
+    searched = _search(transport, rates, report, "")
+    found = searched.found
+    if found is None and all(probe.echoed for probe in searched.probes):
+        report.fail("port", "it gives back every byte written to it: a loopback, no robot",
+                    ECHO_FIX)  # fmt: skip
+        raise _Failed(DoctorExit.SILENT)
     if found is None:
         pulse = wake_pulse(transport)
         if pulse.problem is not None:
@@ -217,7 +226,7 @@ def _examine(transport: Any, rates: tuple[int, ...], allow_reset: bool, report: 
             )
             raise _Failed(DoctorExit.SILENT)
         report.ok("wake", f"silent at every rate: {pulse.how}")
-        found = _search(transport, rates, report, " after the pulse")
+        found = _search(transport, rates, report, " after the pulse").found
         if found is None:
             report.fail("baud", "silent at every OI rate, even after a BRC pulse", SILENT_FIX)
             raise _Failed(DoctorExit.SILENT)

@@ -39,6 +39,8 @@ from roomba_bt.transport.base import Transport
 OI_RATES: tuple[int, ...] = (115200, 19200)
 #: OI mode, charging state, charging sources: one byte each, each with a narrow range.
 PROBE_PACKETS: tuple[int, ...] = packet_ids("oi_mode", "charging_state", "charging_sources")
+#: The probe's question, ``[149][3][35][21][34]``.
+PROBE_QUERY = oi.query_list(PROBE_PACKETS).data
 #: How long the line must stay quiet after Start and the pause before the query.
 QUIET_S = 0.03
 #: Give up draining after this long (a stream at another rate never goes quiet).
@@ -63,10 +65,18 @@ class Probe:
         return self.reply[0] if self.answered else None
 
     @property
+    def echoed(self) -> bool:
+        """The reply is the query itself: the port gives back what is written to it (a
+        loopback, a cable with its data lines joined), no robot."""
+        return not self.answered and self.reply == PROBE_QUERY
+
+    @property
     def seen(self) -> str:
         """What the line carried, in words."""
         if self.answered:
             return f"answered {list(self.reply)} to Query List {list(PROBE_PACKETS)}"
+        if self.echoed:
+            return f"the Query List itself back ({list(self.reply)}): the port echoes"
         if not self.reply and not self.noise:
             return "nothing"
         total = len(self.reply) + self.noise
@@ -140,7 +150,7 @@ def probe(transport: Transport, baud: int) -> Probe:
     transport.set_baud(baud)
     transport.write(oi.start().data + oi.pause_stream().data)
     noise = drain(transport)
-    transport.write(oi.query_list(PROBE_PACKETS).data)
+    transport.write(PROBE_QUERY)
     clock = transport.now
     deadline = clock() + REPLY_TIMEOUT_S
     reply = b""

@@ -18,6 +18,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable
 
+from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.robot.errors import ConnectionFailed, NoAnswer
@@ -80,8 +81,22 @@ def agreed_mode_reply(port: str, ask: Callable[[], SensorFrame | None], timeout:
     )
 
 
+#: The first byte of the start-up's Query List for packet 35, ``[149][1][35]``: a "mode"
+#: that reads it is the port giving back what was written to it.
+_QUERY_FIRST_BYTE = oi.query_list((OI_MODE_PACKET,)).data[0]
+
+
 def not_a_mode(port: str, raw: int) -> ConnectionFailed:
-    """The agreed reply is no mode reading right after Start."""
+    """The agreed reply is no mode reading right after Start; when it is the first byte of
+    the query itself, the port echoes (a loopback, a cable with its data lines joined)."""
+    if raw == _QUERY_FIRST_BYTE:
+        return ConnectionFailed(
+            port,
+            f"the port gives back what is written to it (it answered {raw}, the first byte of "
+            "the Query List just sent, for the OI mode): a loopback, not a robot",
+            ("loop:// or another test port given as the robot's", "a cable or adapter whose "
+             "transmit and receive lines are joined", "the wrong device"),
+        )  # fmt: skip
     return ConnectionFailed(
         port,
         f"the robot answered {raw} for its OI mode right after Start, "

@@ -193,6 +193,20 @@ def test_a_port_that_does_not_open_is_exit_3_with_what_to_check(tmp_path: Path) 
     assert "fix: check the device path" in done.stdout
 
 
+def test_a_port_that_echoes_is_named_a_loopback_not_a_silent_robot() -> None:
+    """loop:// (or a cable with its data lines joined) gives the query back: said at once,
+    exit 5, with no BRC pulse and no "is the robot on?"."""
+    done = _doctor("loop://")
+    assert done.returncode == DoctorExit.SILENT
+    assert _step(done.stdout, "baud") == [
+        f"[--]   baud      {rate}: the Query List itself back ([149, 3, 35, 21, 34]): "
+        "the port echoes"
+        for rate in (115200, 19200)
+    ]
+    assert "[FAIL] port      it gives back every byte written to it: a loopback" in done.stdout
+    assert "wake" not in done.stdout
+
+
 def test_a_bad_baud_is_a_usage_error() -> None:
     done = _cli("doctor", "--port", "/dev/null", "--baud", "1234")
     assert done.returncode == DoctorExit.INVALID

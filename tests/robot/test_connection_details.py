@@ -62,7 +62,10 @@ def test_start_refuses_off_and_unknown_modes() -> None:
 
 def test_loop_back_is_no_robot() -> None:
     connection = Connection.open("loop://")
-    with pytest.raises(ConnectionFailed, match="loop://: the robot answered 149 for its OI mode"):
+    with pytest.raises(
+        ConnectionFailed,
+        match=r"loop://: the port gives back what is written to it \(it answered 149",
+    ):
         connection.start("safe", (35,), confirm_timeout=0.2)
     connection.close()
 
