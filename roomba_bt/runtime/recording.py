@@ -17,7 +17,9 @@ bytes to show where a changed mission decides differently.
 
 from __future__ import annotations
 
+import contextlib
 import json
+import logging
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
@@ -27,28 +29,58 @@ from roomba_bt.oi.errors import EncodeError
 from roomba_bt.transport.base import Transport
 from roomba_bt.yamlsource import undecodable_position
 
+log = logging.getLogger(__name__)
+
 RECORD_FORMAT = "roomba-bt-record"
 RECORD_VERSION = 1
 
 
 class RecordingTransport:
-    """Wraps a transport; writes every chunk in and out to a JSON Lines record."""
+    """Wraps a transport; writes every chunk in and out to a JSON Lines record.
+
+    The record is a witness, not the run: a file that can no longer be written (the disk
+    full, a USB stick pulled) stops the recording, said once, and the run goes on; the
+    port's own errors are the port's. Before, the file's ``OSError`` rose from a read or a
+    write of the port, and the run ended as a lost port without its safe stop."""
 
     def __init__(self, inner: Transport, path: str | Path, header: dict[str, Any]) -> None:
         self._inner = inner
         self.name = inner.name
+        self.path = str(path)
         self._file: IO[str] = open(path, "w", encoding="utf-8")  # noqa: SIM115
         self._t0: float | None = None
+        #: why and when the recording stopped before the run's end (None: it did not)
+        self.stopped: str | None = None
         head = {"format": RECORD_FORMAT, "version": RECORD_VERSION, **header}
-        self._file.write(json.dumps(head) + "\n")
+        self._put(json.dumps(head) + "\n")
+
+    def _put(self, line: str) -> None:
+        try:
+            self._file.write(line)
+        except OSError as exc:
+            self._stop(exc)
+
+    def _stop(self, exc: OSError) -> None:
+        """The file cannot be written: close it (what it holds is a record up to here)."""
+        t = self._inner.now() - (self._t0 if self._t0 is not None else self._inner.now())
+        self.stopped = f"stopped at {t:.3f} s: {exc.strerror or exc}; the file ends there"
+        log.warning("%s: --record %s %s (the run goes on)", self.name, self.path, self.stopped)
+        with contextlib.suppress(OSError):  # its flush fails again; the file is closed
+            self._file.close()
+
+    def flush(self) -> None:
+        """Write out what is buffered (at the run's end, before the summary is made)."""
+        if not self._file.closed:
+            try:
+                self._file.flush()
+            except OSError as exc:
+                self._stop(exc)
 
     def _log(self, direction: str, data: bytes) -> None:
         now = self._inner.now()
         if self._t0 is None:
             self._t0 = now
-        self._file.write(
-            f'{{"t": {now - self._t0:.6f}, "d": "{direction}", "b": "{data.hex()}"}}\n'
-        )
+        self._put(f'{{"t": {now - self._t0:.6f}, "d": "{direction}", "b": "{data.hex()}"}}\n')
 
     def note(self, payload: dict[str, Any]) -> None:
         """Mark an operator's act in the record (replay skips it; the monitor shows it)."""
@@ -56,7 +88,7 @@ class RecordingTransport:
             return
         now = self._inner.now()
         t = now - (self._t0 if self._t0 is not None else now)
-        self._file.write(json.dumps({"t": round(t, 6), "d": "note", "note": payload}) + "\n")
+        self._put(json.dumps({"t": round(t, 6), "d": "note", "note": payload}) + "\n")
 
     def write(self, data: bytes) -> None:
         self._inner.write(data)
@@ -82,6 +114,7 @@ class RecordingTransport:
         try:
             self._inner.close()
         finally:
+            self.flush()
             if not self._file.closed:
                 self._file.close()
 

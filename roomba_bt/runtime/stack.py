@@ -113,8 +113,14 @@ class RunStack:
         )
 
     def run(self) -> RunSummary:
-        """The mission to its end; the robot is left stopped (see :meth:`MissionRunner.run`)."""
-        return self.runner.run()
+        """The mission to its end; the robot is left stopped (see :meth:`MissionRunner.run`).
+        With ``--record``, the record is written out before the summary is made, which says
+        when a file that could not be written stopped it."""
+        summary = self.runner.run()
+        if isinstance(self.transport, RecordingTransport):
+            self.transport.flush()
+            summary.record_stopped = self.transport.stopped or ""
+        return summary
 
     def close(self) -> None:
         """Close the connection (and the record); a link already gone is no error here: the

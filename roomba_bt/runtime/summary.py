@@ -96,6 +96,8 @@ class RunSummary:
     max_tick_s: float = 0.0
     #: the exception's traceback when a behaviour raised one (printed under ``-v``)
     traceback: str = ""
+    #: ``--record``: why and when the record stopped before the run's end ("" if it did not)
+    record_stopped: str = ""
 
     @property
     def exit_code(self) -> int:
@@ -139,6 +141,7 @@ class RunSummary:
             f"final mode   {mode}",
             f"battery      {battery}",
             f"safe stop    {self.safe_stop}",
+            *([f"record       {self.record_stopped}"] if self.record_stopped else []),
         ]
 
     def __str__(self) -> str:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import textwrap
 from pathlib import Path
 
@@ -198,3 +199,24 @@ def test_a_robot_whose_battery_went_flat_is_named_as_such(
     assert main(argv) == 3
     err = capsys.readouterr().err
     assert "most likely a flat battery (the last frame read 0.0 %: it switched itself off" in err
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full (Linux)")
+def test_a_record_that_cannot_be_written_stops_the_record_not_the_run(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], caplog: pytest.LogCaptureFixture
+) -> None:
+    """A full disk under --record: the file's error rose from the port's read, and the run
+    ended as a lost port without its safe stop. Now the record stops, the run goes on."""
+    mission = tmp_path / "drive.yaml"
+    mission.write_text("tree:\n  sequence:\n    - mode: safe\n    - drive: {velocity: 200 mm/s, "
+                       "distance: 50 cm}\n")  # fmt: skip
+    argv = ["run", str(mission), "--fast", "--display", "none", "--record", "/dev/full"]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert "outcome      SUCCESS" in out
+    assert "safe stop    sent" in out
+    # the first write that reached the disk failed (a buffer's worth of lines in)
+    assert re.search(
+        r"record       stopped at \d+\.\d{3} s: No space left on device; the file ends there", out
+    )
+    assert any("--record /dev/full stopped at" in r.getMessage() for r in caplog.records)
