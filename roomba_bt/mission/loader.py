@@ -264,8 +264,10 @@ class Loader:
                         "the plugin as a package)"
                     )
                 )
+                self.ctx.unloaded_plugins.append(text)
                 continue
             if not target.is_file():
+                self.ctx.unloaded_plugins.append(text)
                 self.ctx.error(
                     iloc.at(
                         f"plugin file {text!r} not found (paths are relative to the file naming it)"

@@ -98,6 +98,10 @@ class NodeParser:
         return built
 
     def _unknown_word(self, word: str, where: str = "") -> str:
+        unloaded = self.ctx.unloaded_plugins
+        if unloaded:  # most likely theirs: no "did you mean" a built-in of another name
+            files = ", ".join(repr(text) for text in unloaded)
+            return f"unknown node {word!r}{where} (the plugin file {files} was not loaded)"
         names = [*WORDS, *self.ctx.registry.names(), *MODIFIERS]
         message = f"unknown node {word!r}{where}{closest(word, names)}"
         if self.ctx.registry.errors:

@@ -91,6 +91,9 @@ class Context:
     diagnostics: list[Diagnostic] = field(default_factory=list)
     keys: dict[str, KeyDecl] = field(default_factory=dict)
     subtrees: dict[str, SubtreeDef] = field(default_factory=dict)
+    #: plugin files named but not loaded (no --allow-plugin-files, or not found): an unknown
+    #: word may be one of theirs
+    unloaded_plugins: list[str] = field(default_factory=list)
 
     def error(self, diagnostic: Diagnostic) -> None:
         if diagnostic not in self.diagnostics:

@@ -53,6 +53,8 @@ def test_a_plugin_file_needs_the_command_lines_permission(
     assert "--allow-plugin-files" in out + err
     assert not (plugin_mission.parent / "imported.txt").exists()
     assert "Traceback" not in out + err
+    # the plugin's word is put down to the file not loaded, not "did you mean" another
+    assert "unknown node 'always_true' (the plugin file './evil.py' was not loaded)" in out + err
 
 
 def test_with_the_permission_the_plugin_file_loads(plugin_mission: Path, capsys: Capsys) -> None:
