@@ -35,6 +35,8 @@ from roomba_bt.mission import (
     Permissions,
     load_mission,
 )
+from roomba_bt.oi.bits import BUMP_BITS
+from roomba_bt.oi.frames import BUMPS_PACKETS
 from roomba_bt.oi.opcodes import opcodes
 from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.runtime.stack import RunStack
@@ -227,7 +229,7 @@ class _MeasuredSimulator(Simulator):
         if self._since_onset is not None:
             self._watch_reaction(self._since_onset)
         _simulator_step(self, dt)
-        pressed = self.values[7] & 3
+        pressed = self.values[_BUMPS_PACKET] & BUMP_BITS
         if pressed:
             if not self._in_contact:
                 self.contact_steps.append(0)
@@ -274,6 +276,8 @@ class _MeasuredSimulator(Simulator):
 
 
 _simulator_step = Simulator.step
+#: the bumper's packet (7) in the simulator's values, read every step for the contacts
+(_BUMPS_PACKET,) = BUMPS_PACKETS
 
 
 def _world_centre(world: World) -> tuple[float, float]:
