@@ -34,6 +34,7 @@ from roomba_bt.oi.opcodes import Effect
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.robot.errors import PortLost, RobotError
 from roomba_bt.robot.link import LINK_ERRORS, LinkStatus
+from roomba_bt.robot.safety import ENDING_SIGNALS
 from roomba_bt.robot.wake import KeepAwake
 from roomba_bt.robot.writer import CommandWriter
 
@@ -90,8 +91,9 @@ def describe_activity(command: Command | None) -> str:
 
 @contextlib.contextmanager
 def signals_deferred() -> Iterator[None]:
-    """Hold SIGINT/SIGTERM while a stop sequence is written, so it leaves whole."""
-    blockable = {signal.SIGINT, signal.SIGTERM}
+    """Hold the signals that end a run (SIGINT, SIGTERM, SIGHUP) while a stop sequence is
+    written, so it leaves whole."""
+    blockable = set(ENDING_SIGNALS)
     try:
         previous = signal.pthread_sigmask(signal.SIG_BLOCK, blockable)
     except (AttributeError, OSError, ValueError):  # not POSIX: nothing to hold

@@ -1,11 +1,13 @@
-"""Turning SIGTERM into an exception, so that ``with Connection(...)`` stops the robot; and
-one signal per run (:class:`InterruptGuard`: a second Ctrl-C waits for the safe stop).
+"""Turning SIGTERM and SIGHUP into an exception, so that ``with Connection(...)`` stops the
+robot; and one signal per run (:class:`InterruptGuard`: a second Ctrl-C waits for the safe
+stop).
 
 Python turns SIGINT into :class:`KeyboardInterrupt`, which unwinds ``with`` blocks and so runs
 :meth:`~roomba_bt.robot.connection.Connection.close`. SIGTERM (``kill``, systemd, a container
-stopping) would end the process without unwinding anything and leave the robot driving in
-Safe mode. Inside :func:`sigterm_raises` it raises :class:`Terminated` instead; the previous
-handler comes back on the way out.
+stopping) and SIGHUP (the terminal gone: an SSH session to the robot's computer dropped, its
+window closed) would end the process without unwinding anything and leave the robot driving
+in Safe mode: the Open Interface has no command timeout. Inside :func:`sigterm_raises` they
+raise :class:`Terminated` instead; the previous handlers come back on the way out.
 """
 
 from __future__ import annotations
@@ -20,9 +22,18 @@ from types import FrameType
 
 log = logging.getLogger(__name__)
 
+#: The signals that end a run with its safe stop: Ctrl-C, ``kill``/systemd, the terminal
+#: gone (SIGHUP exists on POSIX only).
+ENDING_SIGNALS: tuple[int, ...] = (
+    signal.SIGINT,
+    signal.SIGTERM,
+    *((signal.SIGHUP,) if hasattr(signal, "SIGHUP") else ()),
+)
+
 
 class Terminated(KeyboardInterrupt):
-    """Raised in the main thread when SIGTERM arrives inside :func:`sigterm_raises`.
+    """Raised in the main thread when SIGTERM or SIGHUP arrives inside :func:`sigterm_raises`
+    or an :class:`InterruptGuard`.
 
     A :class:`KeyboardInterrupt`, so whatever handles Ctrl-C (the CLI: exit code 130) handles
     it too, and ``except Exception`` does not swallow it.
@@ -33,13 +44,21 @@ class Terminated(KeyboardInterrupt):
         super().__init__(f"terminated by signal {signal.Signals(signum).name}")
 
 
+def signal_reason(signum: int) -> str:
+    """How a run's summary names the signal that ended it."""
+    if signum == getattr(signal, "SIGHUP", None):
+        return "SIGHUP: the terminal was closed (an SSH session dropped?)"
+    return signal.Signals(signum).name
+
+
 def _raise_terminated(signum: int, frame: FrameType | None) -> None:
     raise Terminated(signum)
 
 
 @contextlib.contextmanager
 def sigterm_raises() -> Iterator[None]:
-    """Within the block, SIGTERM raises :class:`Terminated`; the old handler is restored.
+    """Within the block, SIGTERM and SIGHUP raise :class:`Terminated`; the old handlers are
+    restored.
 
     Signal handlers belong to the main thread: elsewhere this does nothing (and says so).
     """
@@ -47,11 +66,16 @@ def sigterm_raises() -> Iterator[None]:
         log.debug("sigterm_raises() outside the main thread: SIGTERM left as it is")
         yield
         return
-    previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    previous = {
+        signum: signal.signal(signum, _raise_terminated)
+        for signum in ENDING_SIGNALS
+        if signum != signal.SIGINT
+    }
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
 
 
 #: What a Ctrl-C or SIGTERM during the safe stop prints (straight to stderr: a handler may
@@ -93,7 +117,7 @@ class InterruptGuard:
 
     def __enter__(self) -> InterruptGuard:
         if threading.current_thread() is threading.main_thread():
-            for signum in (signal.SIGINT, signal.SIGTERM):
+            for signum in ENDING_SIGNALS:
                 self._previous[signum] = signal.signal(signum, self._handle)
         return self
 

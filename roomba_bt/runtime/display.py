@@ -162,6 +162,8 @@ class TerminalDisplay:
         size: Callable[[], tuple[int, int]] | None = None,
     ) -> None:
         self.stream = stream
+        #: the terminal could not be written: nothing more is drawn
+        self.gone = False
         self.period = 1.0 / refresh_hz
         self._last = 0.0
         self._size = size or _terminal_size
@@ -174,12 +176,19 @@ class TerminalDisplay:
         self.render(runner)
 
     def render(self, runner: MissionRunner) -> None:
+        """Draw once; a terminal that is gone (EIO after a hang-up, a closed pipe) ends the
+        drawing, not the run: its ``OSError`` in the tick loop read as a lost port."""
+        if self.gone:
+            return
         columns, rows = self._size()
         status = sensor_line(runner.snapshot)[:columns]
         # the status line, a blank line, the tree, and the cursor's line left free
         tree = fitted_tree(runner.mission.root, rows - 3, columns)
-        self.stream.write("\x1b[H\x1b[J" + status + "\n\n" + "\n".join(tree) + "\n")
-        self.stream.flush()
+        try:
+            self.stream.write("\x1b[H\x1b[J" + status + "\n\n" + "\n".join(tree) + "\n")
+            self.stream.flush()
+        except OSError:
+            self.gone = True
 
 
 def _terminal_size() -> tuple[int, int]:

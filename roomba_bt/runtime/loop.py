@@ -44,7 +44,7 @@ from roomba_bt.robot.interface import (
     Odometer,
     Snapshot,
 )
-from roomba_bt.robot.safety import InterruptGuard, Terminated
+from roomba_bt.robot.safety import InterruptGuard, Terminated, signal_reason
 from roomba_bt.runtime.summary import DEFAULT_GRACE, Outcome, RunSummary
 from roomba_bt.runtime.tick_guard import TickGuardLike
 
@@ -257,8 +257,8 @@ class MissionRunner(BaseHandle):
                 if tick_guard is not None:
                     tick_guard.start()
                 self._loop(root, summary)
-            except Terminated:
-                summary.outcome, summary.reason = Outcome.INTERRUPTED, "SIGTERM"
+            except Terminated as exc:
+                summary.outcome, summary.reason = Outcome.INTERRUPTED, signal_reason(exc.signum)
             except KeyboardInterrupt:
                 summary.outcome, summary.reason = Outcome.INTERRUPTED, "Ctrl-C"
             except StopRequested as exc:

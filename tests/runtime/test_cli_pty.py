@@ -3,11 +3,13 @@ another, every ending checked on the bytes the run wrote (its --record)."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import subprocess
 import sys
 import textwrap
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -67,7 +69,7 @@ def _driving(port: str, tmp_path: Path) -> tuple[subprocess.Popen[str], Path]:
     return proc, record
 
 
-@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
 def test_signal_ends_with_the_safe_stop_and_exit_130(
     sim_port: str, tmp_path: Path, signum: int
 ) -> None:
@@ -76,6 +78,37 @@ def test_signal_ends_with_the_safe_stop_and_exit_130(
     out, err = proc.communicate(timeout=10)
     assert proc.returncode == 130, err
     assert "INTERRUPTED" in out
+    assert load_record(record).outbound.endswith(SAFE_END)
+
+
+def test_the_terminal_closing_ends_with_the_safe_stop_and_exit_130(
+    sim_port: str, tmp_path: Path
+) -> None:
+    """An SSH session to the robot's computer drops: the run's terminal goes, SIGHUP comes,
+    and writes to the terminal fail. The robot was left driving (SIGHUP's default ended the
+    process; the OI has no command timeout); now it is stopped, and the exit code says so."""
+    import pty
+
+    record = tmp_path / "run.jsonl"
+    mission = _mission(tmp_path, SPIN)
+    pid, terminal = pty.fork()
+    if pid == 0:  # the run, its terminal the pty's (the live display draws on it)
+        os.execv(sys.executable, [*CLI, "run", str(mission), "--port", sim_port, "--record",
+                                  str(record)])  # fmt: skip
+
+    def read_the_screen() -> None:  # as a terminal does: a full pty would block the run
+        with contextlib.suppress(OSError):
+            while os.read(terminal, 4096):
+                pass
+
+    reader = threading.Thread(target=read_the_screen, daemon=True)
+    reader.start()
+    try:
+        _wait_for_driving(record)
+    finally:
+        os.close(terminal)  # the terminal goes: SIGHUP to the run's session
+    _, status = os.waitpid(pid, 0)
+    assert os.waitstatus_to_exitcode(status) == 130
     assert load_record(record).outbound.endswith(SAFE_END)
 
 
