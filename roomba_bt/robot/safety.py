@@ -23,17 +23,19 @@ from types import FrameType
 log = logging.getLogger(__name__)
 
 #: The signals that end a run with its safe stop: Ctrl-C, ``kill``/systemd, the terminal
-#: gone (SIGHUP exists on POSIX only).
+#: gone, and Ctrl-Z (decided: a suspended process cannot stop its robot, which would drive on
+#: with its last Drive until ``fg``; so Ctrl-Z ends the run as Ctrl-C does). SIGHUP and
+#: SIGTSTP exist on POSIX only.
 ENDING_SIGNALS: tuple[int, ...] = (
     signal.SIGINT,
     signal.SIGTERM,
-    *((signal.SIGHUP,) if hasattr(signal, "SIGHUP") else ()),
+    *(getattr(signal, name) for name in ("SIGHUP", "SIGTSTP") if hasattr(signal, name)),
 )
 
 
 class Terminated(KeyboardInterrupt):
-    """Raised in the main thread when SIGTERM or SIGHUP arrives inside :func:`sigterm_raises`
-    or an :class:`InterruptGuard`.
+    """Raised in the main thread when SIGTERM, SIGHUP or SIGTSTP (Ctrl-Z) arrives inside
+    :func:`sigterm_raises` or an :class:`InterruptGuard`.
 
     A :class:`KeyboardInterrupt`, so whatever handles Ctrl-C (the CLI: exit code 130) handles
     it too, and ``except Exception`` does not swallow it.
@@ -48,6 +50,8 @@ def signal_reason(signum: int) -> str:
     """How a run's summary names the signal that ended it."""
     if signum == getattr(signal, "SIGHUP", None):
         return "SIGHUP: the terminal was closed (an SSH session dropped?)"
+    if signum == getattr(signal, "SIGTSTP", None):
+        return "Ctrl-Z (SIGTSTP): a suspended run could not stop its robot, so it ended"
     return signal.Signals(signum).name
 
 
@@ -57,8 +61,8 @@ def _raise_terminated(signum: int, frame: FrameType | None) -> None:
 
 @contextlib.contextmanager
 def sigterm_raises() -> Iterator[None]:
-    """Within the block, SIGTERM and SIGHUP raise :class:`Terminated`; the old handlers are
-    restored.
+    """Within the block, SIGTERM, SIGHUP and SIGTSTP raise :class:`Terminated`; the old
+    handlers are restored.
 
     Signal handlers belong to the main thread: elsewhere this does nothing (and says so).
     """
