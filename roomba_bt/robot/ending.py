@@ -91,8 +91,8 @@ def describe_activity(command: Command | None) -> str:
 
 @contextlib.contextmanager
 def signals_deferred() -> Iterator[None]:
-    """Hold the signals that end a run (SIGINT, SIGTERM, SIGHUP) while a stop sequence is
-    written, so it leaves whole."""
+    """Hold the signals that end a run (:data:`~roomba_bt.robot.safety.ENDING_SIGNALS`)
+    while a stop sequence is written, so it leaves whole."""
     blockable = set(ENDING_SIGNALS)
     try:
         previous = signal.pthread_sigmask(signal.SIG_BLOCK, blockable)

@@ -1,13 +1,14 @@
-"""Turning SIGTERM and SIGHUP into an exception, so that ``with Connection(...)`` stops the
-robot; and one signal per run (:class:`InterruptGuard`: a second Ctrl-C waits for the safe
-stop).
+"""Turning SIGTERM, SIGHUP and SIGTSTP into an exception, so that ``with Connection(...)``
+stops the robot; and one signal per run (:class:`InterruptGuard`: a second Ctrl-C waits for
+the safe stop).
 
 Python turns SIGINT into :class:`KeyboardInterrupt`, which unwinds ``with`` blocks and so runs
 :meth:`~roomba_bt.robot.connection.Connection.close`. SIGTERM (``kill``, systemd, a container
 stopping) and SIGHUP (the terminal gone: an SSH session to the robot's computer dropped, its
-window closed) would end the process without unwinding anything and leave the robot driving
-in Safe mode: the Open Interface has no command timeout. Inside :func:`sigterm_raises` they
-raise :class:`Terminated` instead; the previous handlers come back on the way out.
+window closed) would end the process without unwinding anything, and SIGTSTP (Ctrl-Z) would
+suspend it, each leaving the robot driving in Safe mode: the Open Interface has no command
+timeout. Inside :func:`sigterm_raises` they raise :class:`Terminated` instead; the previous
+handlers come back on the way out.
 """
 
 from __future__ import annotations
