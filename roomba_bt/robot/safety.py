@@ -98,8 +98,15 @@ class InterruptGuard:
     still to be printed). Signal handlers belong to the main thread: elsewhere it does nothing.
     """
 
-    def __init__(self, *, hold: bool = False) -> None:
+    def __init__(self, *, hold: bool = False, suspend_ends: bool = True) -> None:
         self.hold = hold
+        #: Ctrl-Z (SIGTSTP) ends the run too; False where no robot moves on the wall clock
+        #: (an evaluation, ``--fast``): there a suspended process leaves nothing driving
+        self.signals = tuple(
+            signum
+            for signum in ENDING_SIGNALS
+            if suspend_ends or signum != getattr(signal, "SIGTSTP", None)
+        )
         self.stop_begun = False
         self.ignored = 0
         self._previous: dict[int, object] = {}
@@ -122,7 +129,7 @@ class InterruptGuard:
 
     def __enter__(self) -> InterruptGuard:
         if threading.current_thread() is threading.main_thread():
-            for signum in ENDING_SIGNALS:
+            for signum in self.signals:
                 self._previous[signum] = signal.signal(signum, self._handle)
         return self
 

@@ -1,5 +1,5 @@
-"""Endings by signal: SIGINT and SIGTERM to a child process driving the fake robot over a
-pty; and the SIGTERM helper restoring the previous handler."""
+"""Endings by signal: SIGINT, SIGTERM, SIGHUP and SIGTSTP to a child process driving the fake
+robot over a pty; and the helper restoring the previous handlers."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from collections.abc import Callable, Sequence
 
 import pytest
 
-from roomba_bt.robot.safety import Terminated, sigterm_raises
+from roomba_bt.robot.safety import InterruptGuard, Terminated, sigterm_raises
 from roomba_bt.sim.server import PtyEndpoint
 
 from .fake_robot import FakeRobot
@@ -24,8 +24,13 @@ STOP_TO_PASSIVE = bytes([137, 0, 0, 0, 0, 138, 0, 150, 0, 128])
 
 @pytest.mark.parametrize(
     ("signum", "raised"),
-    [(signal.SIGINT, "KeyboardInterrupt"), (signal.SIGTERM, "Terminated")],
-    ids=["SIGINT", "SIGTERM"],
+    [
+        (signal.SIGINT, "KeyboardInterrupt"),
+        (signal.SIGTERM, "Terminated"),
+        (signal.SIGHUP, "Terminated"),  # the terminal gone: an SSH session dropped
+        (signal.SIGTSTP, "Terminated"),  # Ctrl-Z: a suspended process cannot stop its robot
+    ],
+    ids=["SIGINT", "SIGTERM", "SIGHUP", "SIGTSTP"],
 )
 def test_signal_to_a_child_leaves_the_robot_stopped_in_passive(
     signum: int, raised: str, child: Callable[[Sequence[str]], subprocess.Popen[str]]
@@ -54,3 +59,27 @@ def test_sigterm_raises_terminated_and_restores_the_old_handler() -> None:
     assert isinstance(ended.value, KeyboardInterrupt)
     assert ended.value.signum == signal.SIGTERM
     assert signal.getsignal(signal.SIGTERM) is before
+
+
+@pytest.mark.parametrize("signum", [signal.SIGHUP, signal.SIGTSTP], ids=["SIGHUP", "SIGTSTP"])
+def test_sigterm_raises_takes_the_hang_up_and_ctrl_z_too(signum: int) -> None:
+    before = signal.getsignal(signum)
+    with pytest.raises(Terminated) as ended, sigterm_raises():
+        os.kill(os.getpid(), signum)
+        time.sleep(5)  # the handler raises inside the sleep
+    assert ended.value.signum == signum
+    assert signal.getsignal(signum) is before
+
+
+def test_a_guard_where_nothing_drives_leaves_ctrl_z_to_suspend() -> None:
+    """An evaluation, ``run --fast``, a replay: on the virtual clock nothing drives while the
+    process is suspended, so Ctrl-Z keeps its meaning there; a run on the wall clock ends."""
+    before = signal.getsignal(signal.SIGTSTP)
+    hang_up = signal.getsignal(signal.SIGHUP)
+    with InterruptGuard(suspend_ends=False):
+        assert signal.getsignal(signal.SIGTSTP) is before
+        assert signal.getsignal(signal.SIGHUP) is not hang_up  # a hang-up still ends it
+    with InterruptGuard():
+        assert signal.getsignal(signal.SIGTSTP) is not before
+    assert signal.getsignal(signal.SIGTSTP) is before
+    assert signal.getsignal(signal.SIGHUP) is hang_up
