@@ -324,7 +324,7 @@ def _run_and_report(
     monitor: LiveMonitor | None,
 ) -> int:
     """The run, then what it did: the tree's last state, the summary, what went wrong."""
-    from roomba_bt.runtime.display import use_mission_clock
+    from roomba_bt.runtime.display import logging_off_the_tick, use_mission_clock
 
     mission = stack.mission
     quiet = args.display == "none"
@@ -338,7 +338,8 @@ def _run_and_report(
     stack.runner.suspend_ends_run = not args.fast
     use_mission_clock(stack.runner)
     try:
-        summary = stack.run()
+        with logging_off_the_tick():  # a stalled terminal must not hold up the tick loop
+            summary = stack.run()
     finally:
         use_mission_clock(None)
         if monitor is not None:
@@ -363,8 +364,10 @@ def _report(
 ) -> None:
     from roomba_bt.runtime.display import TerminalDisplay
 
-    if isinstance(observer, TerminalDisplay) and stack.runner.has_snapshot:
-        observer.render(stack.runner)
+    if isinstance(observer, TerminalDisplay):
+        if stack.runner.has_snapshot:
+            observer.render(stack.runner)
+        observer.close()  # the last screen drawn before the report is printed under it
     if args.display != "none":
         print(_render_tree(stack.mission, status=True))
     print(summary)

@@ -10,8 +10,11 @@ from __future__ import annotations
 
 import logging
 import shutil
+import threading
 import time
-from collections.abc import Callable
+from collections import deque
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import TYPE_CHECKING, Literal, TextIO
 
 import py_trees
@@ -150,6 +153,119 @@ def fitted_tree(root: py_trees.behaviour.Behaviour, rows: int, columns: int) -> 
     return [text[: max(columns, 10)] for text, _ in lines]
 
 
+class OffTickWriter:
+    """Writes text to a stream from a thread of its own, so that a terminal that stops taking
+    it never holds up the tick loop.
+
+    A terminal over SSH on a bad network stops reading; once its buffer is full (a few KiB)
+    every write blocks, and a write from the tick loop blocked the loop: no frame read, no
+    watchdog, no tick guard (a write is outside the tick), the robot driving on with its last
+    Drive for as long as the network stalled (a 4 KiB pipe nobody read held a run after 3.8 s).
+    Here the loop only hands text over; the thread writes it. A screen (``latest_only``)
+    replaces the one still waiting, so a slow terminal sees fewer redraws, not older ones;
+    lines (the log) wait up to :attr:`limit`, then the oldest are dropped and counted. A
+    stream that fails (a terminal gone) ends the writing."""
+
+    def __init__(self, stream: TextIO, limit: int = 1000) -> None:
+        self.stream = stream
+        self.limit = limit
+        self.dropped = 0
+        #: the stream failed: nothing more is written
+        self.gone = False
+        self._items: deque[tuple[str, bool]] = deque()
+        self._ready = threading.Condition()
+        self._closing = False
+        self._idle = threading.Event()
+        self._idle.set()
+        self._thread = threading.Thread(target=self._drain, name="roomba-bt terminal", daemon=True)
+        self._thread.start()
+
+    def post(self, text: str, *, latest_only: bool = False) -> None:
+        with self._ready:
+            if self.gone or self._closing:
+                return
+            items = self._items
+            if latest_only and items and items[-1][1]:
+                items.pop()  # the screen not drawn yet: this one replaces it
+            elif len(items) >= self.limit:
+                items.popleft()
+                self.dropped += 1
+            items.append((text, latest_only))
+            self._idle.clear()
+            self._ready.notify()
+
+    def _drain(self) -> None:
+        while True:
+            with self._ready:
+                while not self._items and not self._closing:
+                    self._idle.set()
+                    self._ready.wait()
+                if not self._items:
+                    self._idle.set()
+                    return
+                text, _ = self._items.popleft()
+            try:
+                self.stream.write(text)
+                self.stream.flush()
+            except (OSError, ValueError):  # gone (EIO after a hang-up), or closed
+                with self._ready:
+                    self.gone = True
+                    self._items.clear()
+                    self._idle.set()
+                return
+
+    def wait_written(self, timeout: float) -> bool:
+        """Wait up to ``timeout`` s for what was posted to be written; False if it was not
+        (the terminal still stalled)."""
+        return self._idle.wait(timeout)
+
+    def close(self, timeout: float = 1.0) -> None:
+        """Write what is pending (for up to ``timeout`` s), then stop posting and writing."""
+        self.wait_written(timeout)
+        with self._ready:
+            self._closing = True
+            self._ready.notify()
+
+
+class OffTickHandler(logging.Handler):
+    """A logging handler whose lines an :class:`OffTickWriter` writes: formatted here (the
+    mission clock of the tick that logged), written off the tick loop."""
+
+    def __init__(self, writer: OffTickWriter) -> None:
+        super().__init__()
+        self.writer = writer
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            self.writer.post(self.format(record) + "\n")
+        except Exception:  # as StreamHandler.emit does
+            self.handleError(record)
+
+
+@contextmanager
+def logging_off_the_tick(timeout: float = 1.0) -> Iterator[None]:
+    """Within the block (a run), the root logger's stream handlers write through
+    :class:`OffTickHandler`s; on the way out the lines waiting are written (for up to
+    ``timeout`` s) and the handlers put back, so the report that follows comes after them."""
+    root = logging.getLogger()
+    swapped: list[tuple[logging.Handler, OffTickHandler]] = []
+    for handler in list(root.handlers):
+        if type(handler) is logging.StreamHandler:  # not a file's, nor a test's capture
+            off = OffTickHandler(OffTickWriter(handler.stream))
+            off.setFormatter(handler.formatter)
+            off.setLevel(handler.level)
+            root.removeHandler(handler)
+            root.addHandler(off)
+            swapped.append((handler, off))
+    try:
+        yield
+    finally:
+        for handler, off in swapped:
+            off.writer.close(timeout)
+            root.removeHandler(off)
+            root.addHandler(handler)
+
+
 class TerminalDisplay:
     """Redraws the tree and the sensor line at most ``refresh_hz`` times a second, within the
     terminal's size: the screen is cleared and rewritten in place, never scrolled (a tree
@@ -162,8 +278,9 @@ class TerminalDisplay:
         size: Callable[[], tuple[int, int]] | None = None,
     ) -> None:
         self.stream = stream
-        #: the terminal could not be written: nothing more is drawn
-        self.gone = False
+        #: what draws on the terminal, off the tick loop (a stalled terminal must not hold
+        #: it up); a terminal that failed ends the drawing
+        self.writer = OffTickWriter(stream)
         self.period = 1.0 / refresh_hz
         self._last = 0.0
         self._size = size or _terminal_size
@@ -175,20 +292,26 @@ class TerminalDisplay:
         self._last = now
         self.render(runner)
 
+    @property
+    def gone(self) -> bool:
+        """The terminal could not be written (EIO after a hang-up, a closed pipe)."""
+        return self.writer.gone
+
     def render(self, runner: MissionRunner) -> None:
-        """Draw once; a terminal that is gone (EIO after a hang-up, a closed pipe) ends the
-        drawing, not the run: its ``OSError`` in the tick loop read as a lost port."""
-        if self.gone:
+        """Draw once, through :attr:`writer`: a terminal that stalls or is gone holds up
+        nothing, and its ``OSError`` no longer reads as a lost port in the tick loop."""
+        if self.writer.gone:
             return
         columns, rows = self._size()
         status = sensor_line(runner.snapshot)[:columns]
         # the status line, a blank line, the tree, and the cursor's line left free
         tree = fitted_tree(runner.mission.root, rows - 3, columns)
-        try:
-            self.stream.write("\x1b[H\x1b[J" + status + "\n\n" + "\n".join(tree) + "\n")
-            self.stream.flush()
-        except OSError:
-            self.gone = True
+        text = "\x1b[H\x1b[J" + status + "\n\n" + "\n".join(tree) + "\n"
+        self.writer.post(text, latest_only=True)
+
+    def close(self, timeout: float = 1.0) -> None:
+        """The last screen written (for up to ``timeout`` s), then no more."""
+        self.writer.close(timeout)
 
 
 def _terminal_size() -> tuple[int, int]:

@@ -203,3 +203,51 @@ def test_missing_port_is_exit_3(tmp_path: Path) -> None:
     assert result.returncode == 3
     assert "/dev/does-not-exist" in result.stderr
     assert "Traceback" not in result.stderr
+
+
+#: a status change every few ticks: a line of the status log each
+BACK_AND_FORTH = """
+tree:
+  repeat:
+    do:
+      sequence:
+        - mode: safe
+        - drive: {velocity: 100 mm/s, distance: 1 cm}
+        - drive: {velocity: -100 mm/s, distance: 1 cm}
+"""
+
+
+@pytest.mark.parametrize("display", ["tree", "log"])
+def test_a_terminal_that_stops_reading_does_not_hold_up_the_run(
+    sim_port: str, tmp_path: Path, display: str
+) -> None:
+    """An SSH session on a stalled network: the terminal takes nothing, its buffer fills, and
+    every write to it blocks. The live tree and the status log were written from the tick
+    loop, which then stopped reading frames with the robot driving on (a 4 KiB buffer held a
+    run after about a second). Now they are written off the loop: the run reads on."""
+    import fcntl
+
+    record = tmp_path / "run.jsonl"
+    mission = _mission(tmp_path, SPIN if display == "tree" else BACK_AND_FORTH)
+    read_end, write_end = os.pipe()
+    fcntl.fcntl(write_end, 1031, 4096)  # F_SETPIPE_SZ: a terminal's few KiB, never read
+    quiet = subprocess.DEVNULL
+    out, err = (write_end, quiet) if display == "tree" else (quiet, write_end)
+    proc = subprocess.Popen(
+        [*CLI, "run", str(mission), "--port", sim_port, "--record", str(record), "--display",
+         display],
+        stdout=out, stderr=err,
+    )  # fmt: skip
+    os.close(write_end)
+    try:
+        frames = 0
+        deadline = time.monotonic() + 30.0
+        while frames < 600 and time.monotonic() < deadline:  # about 9 s of stream
+            time.sleep(0.2)
+            if record.exists():
+                frames = record.read_text().count('"d": "in"')
+        assert frames >= 600, f"the run stopped reading after {frames} reads"
+    finally:
+        proc.kill()
+        proc.wait()
+        os.close(read_end)

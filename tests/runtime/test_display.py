@@ -4,15 +4,19 @@ from __future__ import annotations
 
 import io
 import logging
+import threading
 
 import pytest
 
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.robot.testing import StubRobot
 from roomba_bt.runtime.display import (
+    OffTickHandler,
+    OffTickWriter,
     StatusChangeLogger,
     TerminalDisplay,
     fitted_tree,
+    logging_off_the_tick,
     sensor_line,
 )
 from roomba_bt.runtime.loop import MissionRunner
@@ -61,7 +65,9 @@ def test_status_changes_are_logged_once_each(
 def test_terminal_display_draws_the_tree_with_statuses(run_mission: RunMission) -> None:
     run = run_mission(DRIVE)
     out = io.StringIO()
-    TerminalDisplay(out).render(run.runner)
+    display = TerminalDisplay(out)
+    display.render(run.runner)
+    assert display.writer.wait_written(5.0)  # written off the tick loop, by its own thread
     text = out.getvalue()
     assert text.startswith("\x1b[H\x1b[J")
     assert "sequence" in text and "drive" in text
@@ -95,6 +101,7 @@ def test_the_live_tree_fits_the_terminal_and_keeps_the_running_path(
         out.seek(0)
         out.truncate()
         display.render(runner)
+        assert display.writer.wait_written(5.0)
         screens.append(out.getvalue())
 
     run_mission(LONG, observer=observe)
@@ -119,3 +126,72 @@ def test_fitted_tree_says_how_many_lines_it_left_out(run_mission: RunMission) ->
     assert len(lines) == 8
     assert lines[-1].startswith("... ") and "more lines" in lines[-1]
     assert lines[0].startswith("sequence [✓]")
+
+
+class _StalledTerminal(io.StringIO):
+    """A terminal that stops taking text (an SSH session on a stalled network) until let go."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.go = threading.Event()
+        self.entered = threading.Event()
+
+    def write(self, text: str) -> int:
+        self.entered.set()
+        self.go.wait(10.0)
+        return super().write(text)
+
+
+def test_a_stalled_terminal_holds_up_nothing_and_sees_the_newest_screen() -> None:
+    terminal = _StalledTerminal()
+    writer = OffTickWriter(terminal)
+    writer.post("first screen", latest_only=True)
+    assert terminal.entered.wait(5.0)  # the writer's thread is stuck in the write
+    for i in range(100):  # the tick loop goes on: each post returns at once
+        writer.post(f"screen {i}", latest_only=True)
+    assert len(writer._items) == 1  # only the newest waits
+    terminal.go.set()
+    assert writer.wait_written(5.0)
+    assert terminal.getvalue() == "first screen" + "screen 99"
+
+
+def test_log_lines_wait_up_to_a_limit_then_the_oldest_are_dropped_and_counted() -> None:
+    terminal = _StalledTerminal()
+    writer = OffTickWriter(terminal, limit=10)
+    writer.post("line 0\n")
+    assert terminal.entered.wait(5.0)
+    for i in range(1, 31):
+        writer.post(f"line {i}\n")
+    assert writer.dropped == 20
+    terminal.go.set()
+    writer.close(5.0)
+    assert terminal.getvalue().splitlines() == ["line 0", *(f"line {i}" for i in range(21, 31))]
+
+
+def test_a_terminal_that_fails_ends_the_writing_not_the_caller() -> None:
+    class Gone(io.StringIO):
+        def write(self, text: str) -> int:
+            raise OSError(5, "Input/output error")  # EIO: the terminal hung up
+
+    writer = OffTickWriter(Gone())
+    writer.post("screen", latest_only=True)
+    assert writer.wait_written(5.0) and writer.gone
+    writer.post("more")  # nothing raised, nothing kept
+    assert not writer._items
+
+
+def test_log_lines_go_through_the_writer_only_during_the_block() -> None:
+    root = logging.getLogger()
+    stream = io.StringIO()
+    handler = logging.StreamHandler(stream)
+    root.addHandler(handler)
+    try:
+        with logging_off_the_tick():
+            assert handler not in root.handlers
+            off = [h for h in root.handlers if isinstance(h, OffTickHandler)]
+            assert len(off) == 1 and off[0].writer.stream is stream
+            root.warning("during the run")
+        assert handler in root.handlers and off[0] not in root.handlers
+        assert stream.getvalue() == "during the run\n"  # written before the block ended
+    finally:
+        root.removeHandler(handler)
