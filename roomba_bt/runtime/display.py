@@ -264,6 +264,11 @@ def logging_off_the_tick(timeout: float = 1.0) -> Iterator[None]:
             off.writer.close(timeout)
             root.removeHandler(off)
             root.addHandler(handler)
+            if off.writer.dropped:  # said once, where the terminal may take it again
+                log.warning(
+                    "%d log line(s) of the run were dropped: the terminal did not take them",
+                    off.writer.dropped,
+                )
 
 
 class TerminalDisplay:
@@ -291,11 +296,6 @@ class TerminalDisplay:
             return
         self._last = now
         self.render(runner)
-
-    @property
-    def gone(self) -> bool:
-        """The terminal could not be written (EIO after a hang-up, a closed pipe)."""
-        return self.writer.gone
 
     def render(self, runner: MissionRunner) -> None:
         """Draw once, through :attr:`writer`: a terminal that stalls or is gone holds up

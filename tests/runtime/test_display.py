@@ -195,3 +195,24 @@ def test_log_lines_go_through_the_writer_only_during_the_block() -> None:
         assert stream.getvalue() == "during the run\n"  # written before the block ended
     finally:
         root.removeHandler(handler)
+
+
+def test_log_lines_the_terminal_did_not_take_are_counted_after_the_run(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    root = logging.getLogger()
+    terminal = _StalledTerminal()
+    handler = logging.StreamHandler(terminal)
+    root.addHandler(handler)
+    try:
+        with logging_off_the_tick(timeout=0.1):
+            off = next(h for h in root.handlers if isinstance(h, OffTickHandler))
+            off.writer.limit = 5
+            for i in range(20):
+                root.warning("line %d", i)
+            assert terminal.entered.wait(5.0)
+            terminal.go.set()  # the lines past the limit are dropped already
+    finally:
+        root.removeHandler(handler)
+    assert off.writer.dropped > 0
+    assert f"{off.writer.dropped} log line(s) of the run were dropped" in caplog.text
