@@ -334,8 +334,8 @@ def _run_and_report(
         print(_render_tree(mission), flush=True)
     stack.runner.gate = monitor.session if monitor is not None else None
     stack.runner.hold_interrupts = True  # once the safe stop began: the summary still prints
-    # on the virtual clock nothing drives while the process is suspended: Ctrl-Z suspends
-    stack.runner.suspend_ends_run = not args.fast
+    # on the virtual clock nothing drives meanwhile: Ctrl-Z suspends, Ctrl-\ quits
+    stack.runner.on_wall_clock = not args.fast
     use_mission_clock(stack.runner)
     try:
         with logging_off_the_tick():  # a stalled terminal must not hold up the tick loop

@@ -427,7 +427,7 @@ def _run_episode(spec: EpisodeSpec) -> EpisodeResult:
         trace=spec.trace_every > 0,
     )  # fmt: skip
     stack = RunStack(mission, SimLink(simulator), profile=profile, timeout_s=spec.timeout_s)
-    stack.runner.suspend_ends_run = False  # Ctrl-Z suspends an evaluation: nothing drives
+    stack.runner.on_wall_clock = False  # Ctrl-Z suspends an evaluation, Ctrl-\ quits it
     summary = stack.run()
     if summary.outcome is Outcome.INTERRUPTED:  # Ctrl-C (or SIGTERM) stops the evaluation,
         raise KeyboardInterrupt(summary.reason)  # not just this episode

@@ -1,13 +1,14 @@
-"""Turning SIGTERM, SIGHUP and SIGTSTP into an exception, so that ``with Connection(...)``
+"""Turning SIGTERM, SIGHUP, SIGTSTP and SIGQUIT into an exception, so that ``with Connection(...)``
 stops the robot; and one signal per run (:class:`InterruptGuard`: a second Ctrl-C waits for
 the safe stop).
 
 Python turns SIGINT into :class:`KeyboardInterrupt`, which unwinds ``with`` blocks and so runs
 :meth:`~roomba_bt.robot.connection.Connection.close`. SIGTERM (``kill``, systemd, a container
 stopping) and SIGHUP (the terminal gone: an SSH session to the robot's computer dropped, its
-window closed) would end the process without unwinding anything, and SIGTSTP (Ctrl-Z) would
-suspend it, each leaving the robot driving in Safe mode: the Open Interface has no command
-timeout. Inside :func:`sigterm_raises` they raise :class:`Terminated` instead; the previous
+window closed) would end the process without unwinding anything, SIGQUIT (Ctrl-\\, the key
+pressed when Ctrl-C seems slow) would end it at once with a core dump, and SIGTSTP (Ctrl-Z)
+would suspend it, each leaving the robot driving in Safe mode: the Open Interface has no
+command timeout. Inside :func:`sigterm_raises` they raise :class:`Terminated` instead; the previous
 handlers come back on the way out.
 """
 
@@ -23,19 +24,28 @@ from types import FrameType
 
 log = logging.getLogger(__name__)
 
+#: Signals whose usual meaning leaves a robot on the wall clock driving, so on the wall clock
+#: they end the run with its safe stop (decided): Ctrl-Z (a suspended process cannot stop its
+#: robot, which would drive on with its last Drive until ``fg``) and Ctrl-\ (SIGQUIT: quit
+#: at once, with a core dump). Where nothing drives on the wall clock (an evaluation,
+#: ``--fast``, a replay) they keep their meaning. POSIX only.
+WALL_CLOCK_SIGNALS: tuple[int, ...] = tuple(
+    getattr(signal, name) for name in ("SIGTSTP", "SIGQUIT") if hasattr(signal, name)
+)
+
 #: The signals that end a run with its safe stop: Ctrl-C, ``kill``/systemd, the terminal
-#: gone, and Ctrl-Z (decided: a suspended process cannot stop its robot, which would drive on
-#: with its last Drive until ``fg``; so Ctrl-Z ends the run as Ctrl-C does). SIGHUP and
-#: SIGTSTP exist on POSIX only.
+#: gone, and :data:`WALL_CLOCK_SIGNALS`. SIGHUP exists on POSIX only.
 ENDING_SIGNALS: tuple[int, ...] = (
     signal.SIGINT,
     signal.SIGTERM,
-    *(getattr(signal, name) for name in ("SIGHUP", "SIGTSTP") if hasattr(signal, name)),
+    *(getattr(signal, name) for name in ("SIGHUP",) if hasattr(signal, name)),
+    *WALL_CLOCK_SIGNALS,
 )
 
 
 class Terminated(KeyboardInterrupt):
-    """Raised in the main thread when SIGTERM, SIGHUP or SIGTSTP (Ctrl-Z) arrives inside
+    """Raised in the main thread when SIGTERM, SIGHUP, SIGTSTP (Ctrl-Z) or SIGQUIT (Ctrl-\\)
+    arrives inside
     :func:`sigterm_raises` or an :class:`InterruptGuard`.
 
     A :class:`KeyboardInterrupt`, so whatever handles Ctrl-C (the CLI: exit code 130) handles
@@ -53,6 +63,8 @@ def signal_reason(signum: int) -> str:
         return "SIGHUP: the terminal was closed (an SSH session dropped?)"
     if signum == getattr(signal, "SIGTSTP", None):
         return "Ctrl-Z (SIGTSTP): a suspended run could not stop its robot, so it ended"
+    if signum == getattr(signal, "SIGQUIT", None):
+        return "Ctrl-\\ (SIGQUIT): the run ended with its safe stop, not at once"
     return signal.Signals(signum).name
 
 
@@ -62,7 +74,7 @@ def _raise_terminated(signum: int, frame: FrameType | None) -> None:
 
 @contextlib.contextmanager
 def sigterm_raises() -> Iterator[None]:
-    """Within the block, SIGTERM, SIGHUP and SIGTSTP raise :class:`Terminated`; the old
+    """Within the block, SIGTERM, SIGHUP, SIGTSTP and SIGQUIT raise :class:`Terminated`; the old
     handlers are restored.
 
     Signal handlers belong to the main thread: elsewhere this does nothing (and says so).
@@ -98,14 +110,13 @@ class InterruptGuard:
     still to be printed). Signal handlers belong to the main thread: elsewhere it does nothing.
     """
 
-    def __init__(self, *, hold: bool = False, suspend_ends: bool = True) -> None:
+    def __init__(self, *, hold: bool = False, wall_clock: bool = True) -> None:
         self.hold = hold
-        #: Ctrl-Z (SIGTSTP) ends the run too; False where no robot moves on the wall clock
-        #: (an evaluation, ``--fast``): there a suspended process leaves nothing driving
+        #: Ctrl-Z and Ctrl-\ (:data:`WALL_CLOCK_SIGNALS`) end the run too; ``wall_clock``
+        #: False where no robot moves on the wall clock (an evaluation, ``--fast``): there a
+        #: suspended or quit process leaves nothing driving
         self.signals = tuple(
-            signum
-            for signum in ENDING_SIGNALS
-            if suspend_ends or signum != getattr(signal, "SIGTSTP", None)
+            signum for signum in ENDING_SIGNALS if wall_clock or signum not in WALL_CLOCK_SIGNALS
         )
         self.stop_begun = False
         self.ignored = 0

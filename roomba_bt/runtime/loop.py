@@ -236,11 +236,11 @@ class MissionRunner(BaseHandle):
     #: when given, so the evaluation's runners keep one attribute fewer (see the note at the
     #: end of ``__init__``)
     tick_guard: TickGuardLike | None = None
-    #: Ctrl-Z ends the run with its safe stop (a suspended run cannot stop its robot); an
-    #: evaluation and ``run --fast`` set it False: on the virtual clock nothing drives while
-    #: the process is suspended, and Ctrl-Z suspends as it does elsewhere. A class attribute
-    #: for the same reason as ``tick_guard``
-    suspend_ends_run: bool = True
+    #: Ctrl-Z and Ctrl-\ end the run with its safe stop (a suspended run cannot stop its
+    #: robot; one quit at once leaves it driving); an evaluation and ``run --fast`` set it
+    #: False: on the virtual clock nothing drives meanwhile, and both keep their usual
+    #: meaning. A class attribute for the same reason as ``tick_guard``
+    on_wall_clock: bool = True
 
     @property
     def has_snapshot(self) -> bool:
@@ -252,7 +252,7 @@ class MissionRunner(BaseHandle):
         wall_start = time.perf_counter()
         root = self.mission.root
         guard = self._guard = InterruptGuard(
-            hold=self.hold_interrupts, suspend_ends=self.suspend_ends_run
+            hold=self.hold_interrupts, wall_clock=self.on_wall_clock
         )
         tick_guard = self.tick_guard
         with guard:

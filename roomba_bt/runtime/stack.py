@@ -162,5 +162,5 @@ def replay_record(
         replayed_notes=[note for _, note in record.notes],  # the tick guard's acts
     )
     stack.runner.gate = gate  # the monitor's replay of the operator's acts
-    stack.runner.suspend_ends_run = False  # a record's clock: nothing drives while suspended
+    stack.runner.on_wall_clock = False  # a record's clock: Ctrl-Z suspends, Ctrl-\ quits
     return stack.run(), transport

@@ -1,5 +1,5 @@
-"""Endings by signal: SIGINT, SIGTERM, SIGHUP and SIGTSTP to a child process driving the fake
-robot over a pty; and the helper restoring the previous handlers."""
+"""Endings by signal: SIGINT, SIGTERM, SIGHUP, SIGTSTP and SIGQUIT to a child process driving
+the fake robot over a pty; and the helper restoring the previous handlers."""
 
 from __future__ import annotations
 
@@ -29,8 +29,9 @@ STOP_TO_PASSIVE = bytes([137, 0, 0, 0, 0, 138, 0, 150, 0, 128])
         (signal.SIGTERM, "Terminated"),
         (signal.SIGHUP, "Terminated"),  # the terminal gone: an SSH session dropped
         (signal.SIGTSTP, "Terminated"),  # Ctrl-Z: a suspended process cannot stop its robot
+        (signal.SIGQUIT, "Terminated"),  # Ctrl-\: quit at once, the robot left driving
     ],
-    ids=["SIGINT", "SIGTERM", "SIGHUP", "SIGTSTP"],
+    ids=["SIGINT", "SIGTERM", "SIGHUP", "SIGTSTP", "SIGQUIT"],
 )
 def test_signal_to_a_child_leaves_the_robot_stopped_in_passive(
     signum: int, raised: str, child: Callable[[Sequence[str]], subprocess.Popen[str]]
@@ -61,8 +62,10 @@ def test_sigterm_raises_terminated_and_restores_the_old_handler() -> None:
     assert signal.getsignal(signal.SIGTERM) is before
 
 
-@pytest.mark.parametrize("signum", [signal.SIGHUP, signal.SIGTSTP], ids=["SIGHUP", "SIGTSTP"])
-def test_sigterm_raises_takes_the_hang_up_and_ctrl_z_too(signum: int) -> None:
+@pytest.mark.parametrize(
+    "signum", [signal.SIGHUP, signal.SIGTSTP, signal.SIGQUIT], ids=["SIGHUP", "SIGTSTP", "SIGQUIT"]
+)
+def test_sigterm_raises_takes_the_hang_up_ctrl_z_and_ctrl_backslash_too(signum: int) -> None:
     before = signal.getsignal(signum)
     with pytest.raises(Terminated) as ended, sigterm_raises():
         os.kill(os.getpid(), signum)
@@ -71,15 +74,17 @@ def test_sigterm_raises_takes_the_hang_up_and_ctrl_z_too(signum: int) -> None:
     assert signal.getsignal(signum) is before
 
 
-def test_a_guard_where_nothing_drives_leaves_ctrl_z_to_suspend() -> None:
+@pytest.mark.parametrize("signum", [signal.SIGTSTP, signal.SIGQUIT], ids=["SIGTSTP", "SIGQUIT"])
+def test_a_guard_where_nothing_drives_leaves_ctrl_z_and_ctrl_backslash_alone(signum: int) -> None:
     """An evaluation, ``run --fast``, a replay: on the virtual clock nothing drives while the
-    process is suspended, so Ctrl-Z keeps its meaning there; a run on the wall clock ends."""
-    before = signal.getsignal(signal.SIGTSTP)
+    process is suspended or after it quit, so Ctrl-Z and Ctrl-\\ keep their meaning there; a
+    run on the wall clock ends."""
+    before = signal.getsignal(signum)
     hang_up = signal.getsignal(signal.SIGHUP)
-    with InterruptGuard(suspend_ends=False):
-        assert signal.getsignal(signal.SIGTSTP) is before
+    with InterruptGuard(wall_clock=False):
+        assert signal.getsignal(signum) is before
         assert signal.getsignal(signal.SIGHUP) is not hang_up  # a hang-up still ends it
     with InterruptGuard():
-        assert signal.getsignal(signal.SIGTSTP) is not before
-    assert signal.getsignal(signal.SIGTSTP) is before
+        assert signal.getsignal(signum) is not before
+    assert signal.getsignal(signum) is before
     assert signal.getsignal(signal.SIGHUP) is hang_up

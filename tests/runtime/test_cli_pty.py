@@ -70,7 +70,9 @@ def _driving(port: str, tmp_path: Path) -> tuple[subprocess.Popen[str], Path]:
 
 
 @pytest.mark.parametrize(
-    "signum", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGTSTP], ids=lambda s: s.name
+    "signum",
+    [signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGTSTP, signal.SIGQUIT],
+    ids=lambda s: s.name,
 )
 def test_signal_ends_with_the_safe_stop_and_exit_130(
     sim_port: str, tmp_path: Path, signum: int
