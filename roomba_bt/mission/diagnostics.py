@@ -25,12 +25,30 @@ class Diagnostic:
     severity: str = "error"
 
     def __str__(self) -> str:
-        where = f" [{self.yaml_path}]" if self.yaml_path else ""
+        where = f" [{shortened_path(self.yaml_path)}]" if self.yaml_path else ""
         kind = "warning: " if self.severity == "warning" else ""
         return f"{self.file}:{self.line}:{self.column}: {kind}{self.message}{where}"
 
     def as_warning(self) -> Diagnostic:
         return replace(self, severity="warning")
+
+
+#: a YAML path longer than this is shown by its ends (:func:`shortened_path`)
+PATH_SHOWN = 100
+
+
+def shortened_path(path: str, ends: int = 3) -> str:
+    """``path`` as an error line shows it: whole, or when longer than :data:`PATH_SHOWN`, its
+    first and last ``ends`` steps and how many lie between (a tree nested a hundred deep gave
+    a path of 1,200 characters)::
+
+        tree.sequence[0].sequence[0] ... (94 more) ... sequence[0].sequence[0].mode
+    """
+    steps = path.split(".")
+    if len(path) <= PATH_SHOWN or len(steps) <= 2 * ends:
+        return path
+    hidden = len(steps) - 2 * ends
+    return f"{'.'.join(steps[:ends])} ... ({hidden} more) ... {'.'.join(steps[-ends:])}"
 
 
 class MissionError(Exception):

@@ -29,6 +29,12 @@ from roomba_bt.mission.values import (
     unknown,
 )
 
+#: How deep a tree may nest, counted in nodes from the root, subtrees expanded. A mission
+#: written by hand nests a dozen or so; a file nested hundreds deep (a generator gone wrong)
+#: ran the parser, the checks and the tick out of Python's stack ("internal error ...
+#: RecursionError" at about 250): it is refused at this depth instead (decided).
+MAX_TREE_DEPTH = 100
+
 
 class NodeParser:
     """Parses trees (the mission's, each subtree's at each use) within one :class:`Context`."""
@@ -38,15 +44,31 @@ class NodeParser:
         #: the mission's parameters: what ``${name}`` sees outside (and under) subtrees
         self.global_env: dict[str, Bound] = {}
         self._use_stack: list[str] = []
+        #: nodes from the root to the one being parsed (:data:`MAX_TREE_DEPTH`)
+        self._depth = 0
+        self._too_deep = False
 
     def node(self, ynode: yaml.Node, loc: Loc, env: Mapping[str, Bound]) -> Node | None:
         """Parse one node; errors are recorded and None returned for a node that cannot be
         built (its parent goes on with the other children)."""
+        if self._depth >= MAX_TREE_DEPTH:
+            if not self._too_deep:  # said once: every node below it is as deep
+                self._too_deep = True
+                self.ctx.error(
+                    loc.at(
+                        f"the tree nests more than {MAX_TREE_DEPTH} nodes deep here; at most "
+                        f"{MAX_TREE_DEPTH} are allowed (a file generated wrong?)"
+                    )
+                )
+            return None
+        self._depth += 1
         try:
             return self._node(ynode, loc, env)
         except Bad as bad:
             self.ctx.error(bad.diagnostic)
             return None
+        finally:
+            self._depth -= 1
 
     def _node(self, ynode: yaml.Node, loc: Loc, env: Mapping[str, Bound]) -> Node | None:
         if isinstance(ynode, yaml.ScalarNode):

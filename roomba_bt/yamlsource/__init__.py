@@ -81,22 +81,79 @@ class Refused(yaml.MarkedYAMLError):
 
 def compose(text: str, loader: type[Any] = FAST_LOADER) -> yaml.Node | None:
     """The document's root node (None for an empty document); raises :class:`yaml.YAMLError`
-    (see :func:`error_position`) for a syntax error, :class:`Refused` for an alias or an
-    explicit tag. A fresh loader reads each text: nothing is kept between calls.
+    (see :func:`error_position`) for a syntax error, :class:`Refused` for an alias, an
+    explicit tag or lists and mappings nested deeper than :data:`MAX_NESTING`. A fresh loader
+    reads each text: nothing is kept between calls.
 
     An alias is written with ``*`` and a tag with ``!``: a text with neither holds none, and
     its event pass (:func:`refuse_aliases_and_tags`, a sixth of compiling a mission) is left
     out unless composing fails, when it runs first as always, so that the error raised is the
     same one (a syntax error after the first document is the event pass's, not the
     composer's "expected a single document")."""
-    if "*" in text or "!" in text:
-        refuse_aliases_and_tags(text, loader)
-        return yaml.compose(text, Loader=loader)
     try:
-        return yaml.compose(text, Loader=loader)
-    except yaml.YAMLError:
-        refuse_aliases_and_tags(text, loader)
+        if "*" in text or "!" in text:
+            refuse_aliases_and_tags(text, loader)
+            root = yaml.compose(text, Loader=loader)
+        else:
+            try:
+                root = yaml.compose(text, Loader=loader)
+            except yaml.YAMLError:
+                refuse_aliases_and_tags(text, loader)
+                raise
+    except RecursionError:  # PyYAML's own composer recurses: deeper than Python's stack
+        refuse_deep_events(text, loader)
         raise
+    if root is not None:
+        refuse_deep_nodes(root)
+    return root
+
+
+#: How deep lists and mappings may nest in a file roomba-bt reads (decided). A mission tree
+#: nests two a level (``sequence: [...]``) and may be 100 nodes deep; a world, four. Deeper
+#: nesting ran the readers out of Python's stack (a world nested 990 deep was a traceback;
+#: PyYAML's own composer fails at about 600, libyaml refuses 1000).
+MAX_NESTING = 300
+
+
+def _too_deep(mark: Any) -> Refused:
+    return Refused(
+        problem=f"lists and mappings nested more than {MAX_NESTING} deep here: at most "
+        f"{MAX_NESTING} are allowed (a file generated wrong?)",
+        problem_mark=mark,
+    )
+
+
+def refuse_deep_nodes(root: yaml.Node) -> None:
+    """Raise :class:`Refused` at the first collection (in the file's order) nested deeper
+    than :data:`MAX_NESTING`; a walk with a stack of its own, so any depth is measured. Only
+    collections are visited (scalars, most of a file, cannot nest)."""
+    scalar = yaml.ScalarNode
+    pending: list[tuple[yaml.Node, int]] = [] if root.__class__ is scalar else [(root, 1)]
+    while pending:
+        node, depth = pending.pop()
+        if depth > MAX_NESTING:
+            raise _too_deep(node.start_mark)
+        if node.__class__ is yaml.MappingNode:
+            children = [item for pair in node.value for item in pair]
+        else:
+            children = node.value
+        depth += 1
+        for child in reversed(children):
+            if child.__class__ is not scalar:
+                pending.append((child, depth))
+
+
+def refuse_deep_events(text: str, loader: type[Any] = FAST_LOADER) -> None:
+    """:func:`refuse_deep_nodes` on the event stream (nothing composed): for a text too deep
+    for the composer to build."""
+    depth = 0
+    for event in yaml.parse(text, Loader=loader):
+        if isinstance(event, yaml.CollectionStartEvent):
+            depth += 1
+            if depth > MAX_NESTING:
+                raise _too_deep(event.start_mark)
+        elif isinstance(event, yaml.CollectionEndEvent):
+            depth -= 1
 
 
 def refuse_aliases_and_tags(text: str, loader: type[Any] = FAST_LOADER) -> None:

@@ -88,3 +88,69 @@ def test_a_tab_and_a_byte_that_is_not_utf8_are_placed_and_named(tmp_path: Path) 
     assert problem.message == (
         "mission file is not UTF-8 text: byte 0xe9 (invalid continuation byte)"
     )
+
+
+def _nested_sequences(nodes: int) -> str:
+    """A tree ``nodes`` deep: sequences inside each other around one ``mode: safe``."""
+    return "{sequence: [" * (nodes - 1) + "{mode: safe}" + "]}" * (nodes - 1)
+
+
+def test_a_tree_nested_past_the_limit_is_refused_once_where_it_goes_over(
+    tmp_path: Path,
+) -> None:
+    """A tree 250 deep was "internal error while compiling (RecursionError ...)"; one that
+    deep is now refused by the YAML reader (two collections a level), 140 by the parser."""
+    from roomba_bt.mission.nodes import MAX_TREE_DEPTH
+
+    path = tmp_path / "deep.yaml"
+    path.write_text(f"mission: deep\ntree: {_nested_sequences(MAX_TREE_DEPTH)}\n")
+    assert compile_mission(path)[1] == []
+    for nodes in (MAX_TREE_DEPTH + 1, 140):
+        path.write_text(f"mission: deep\ntree: {_nested_sequences(nodes)}\n")
+        _, (problem,) = compile_mission(path)
+        # the node past the limit: the 101st "{", after "tree: " and 12 characters a level
+        assert (problem.line, problem.column) == (2, 7 + 12 * MAX_TREE_DEPTH)
+        assert problem.message.startswith(f"the tree nests more than {MAX_TREE_DEPTH} nodes")
+
+
+def test_subtrees_count_toward_the_depth_as_they_are_built(tmp_path: Path) -> None:
+    """Subtrees are expanded where they are used: the tree built is as deep as both."""
+    from roomba_bt.mission.nodes import MAX_TREE_DEPTH
+
+    half = MAX_TREE_DEPTH // 2 + 1
+    path = tmp_path / "deep.yaml"
+    inner = _nested_sequences(half)
+    outer = "{sequence: [" * (half - 1) + "{subtree: inner}" + "]}" * (half - 1)
+    path.write_text(f"mission: deep\nsubtrees:\n  inner: {{tree: {inner}}}\ntree: {outer}\n")
+    _, problems = compile_mission(path)
+    assert [p.line for p in problems] == [3]
+    assert problems[0].message.startswith(f"the tree nests more than {MAX_TREE_DEPTH} nodes")
+
+
+def test_the_cli_names_a_deep_file_with_exit_2_and_a_short_path(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "deep.yaml"
+    path.write_text(f"mission: deep\ntree: {_nested_sequences(140)}\n")
+    assert main(["validate", str(path)]) == 2
+    out, err = capsys.readouterr()
+    (line,) = out.splitlines()
+    assert "nodes deep here" in line
+    assert line.endswith(" ... (95 more) ... sequence[0].sequence[0].sequence[0]]")
+    assert len(line) < 300
+    assert "Traceback" not in out + err
+
+
+def test_a_long_yaml_path_is_shown_by_its_ends() -> None:
+    from roomba_bt.mission.diagnostics import PATH_SHOWN, Diagnostic, shortened_path
+
+    short = "tree.sequence[2].drive.velocity"
+    assert shortened_path(short) == short
+    steps = [f"sequence[{i}]" for i in range(40)]
+    long = ".".join(["tree", *steps, "mode"])
+    assert len(long) > PATH_SHOWN
+    assert shortened_path(long) == (
+        "tree.sequence[0].sequence[1] ... (36 more) ... sequence[38].sequence[39].mode"
+    )
+    assert str(Diagnostic("m.yaml", 1, 2, "bad", long)).endswith(f"[{shortened_path(long)}]")
+    assert Diagnostic("m.yaml", 1, 2, "bad", long).yaml_path == long  # the data keeps it whole

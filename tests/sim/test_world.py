@@ -268,3 +268,11 @@ def test_a_world_path_that_is_a_directory_or_a_device_is_named_so(tmp_path: path
         with pytest.raises(WorldError) as info:
             load_world(where)
         assert str(info.value.problems[0]).startswith(f"{where}: world: found {found}; allowed:")
+
+
+def test_a_world_nested_deeper_than_the_reader_allows_is_refused_where_it_goes_over() -> None:
+    """A world nested 990 deep was a RecursionError traceback out of ``roomba-bt run``."""
+    deep = "[" * 989 + "0" + "]" * 989
+    [problem] = problems(f"rooms: {deep}\n")
+    column = 8 + yamlsource.MAX_NESTING - 1  # the list that is one too deep
+    assert problem.startswith(f"w.yaml:1:{column}: lists and mappings nested more than ")

@@ -200,3 +200,31 @@ def test_the_first_byte_that_is_not_utf8_is_placed() -> None:
     with pytest.raises(UnicodeDecodeError) as info:
         data.decode("utf-8")
     assert yamlsource.undecodable_position(info.value) == (3, 6)
+
+
+def _nested(levels: int) -> str:
+    """A mapping ``x`` holding lists nested so that the deepest is ``levels`` deep."""
+    return "x: " + "[" * (levels - 1) + "1" + "]" * (levels - 1) + "\n"
+
+
+@pytest.mark.parametrize("loader", [yamlsource.FAST_LOADER, yamlsource.PURE_LOADER])
+def test_nesting_up_to_the_limit_reads_and_deeper_is_refused_where_it_goes_over(
+    loader: type,
+) -> None:
+    """A world nested 990 deep was a RecursionError traceback, a mission's description an
+    "internal error"; PyYAML's own composer fails at about 600 (it recurses), libyaml at 1000."""
+    limit = yamlsource.MAX_NESTING
+    assert yamlsource.compose(_nested(limit), loader) is not None
+    for levels in (limit + 1, 700, 990):
+        with pytest.raises(yamlsource.Refused) as caught:
+            yamlsource.compose(_nested(levels), loader)
+        assert yamlsource.error_position(caught.value) == (1, 3 + limit)
+        assert f"nested more than {limit} deep" in str(caught.value.problem)
+
+
+def test_the_deepest_collection_first_in_the_file_is_the_one_named() -> None:
+    deep = "[" * yamlsource.MAX_NESTING + "1" + "]" * yamlsource.MAX_NESTING
+    text = f"a: 1\nb: [2, 3]\nc: {deep}\nd: {deep}\n"
+    with pytest.raises(yamlsource.Refused) as caught:
+        yamlsource.compose(text)
+    assert yamlsource.error_position(caught.value) == (3, 3 + yamlsource.MAX_NESTING)
