@@ -329,6 +329,11 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
         robot = self.robot
         if robot is None:
             raise RuntimeError(f"behaviour {self.name!r} has no robot: call setup(robot=...)")
+        if type(command) is not Command:  # raw bytes would pass no mode guard nor range check
+            raise TypeError(
+                f"send() takes a Command from roomba_bt.oi.commands (such as "
+                f"commands.drive(200, 32767)), not {type(command).__name__} {command!r:.60}"
+            )
         robot.outbox.send(command, self)
 
     def value(self, name: str) -> Any:

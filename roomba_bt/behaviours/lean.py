@@ -89,8 +89,25 @@ _ON_ALL_OR_ONE = (_ON_ALL, _ON_ONE)
 _VALIDATE_POLICY = py_trees.composites.Parallel.validate_policy_configuration
 
 
+class InvalidStatus(TypeError):
+    """A node's ``update`` returned something that is not a py_trees Status (``None``: a
+    forgotten ``return``). Decided: py_trees logs an error and sets INVALID, on every tick,
+    and the tree around it goes on (a sequence stays INVALID, a selector fails, a parallel
+    runs on), so a run drove on until its timeout printing one line a tick; here it is the
+    node's bug, raised, and the run ends as an error with its safe stop (exit 4)."""
+
+    def __init__(self, node: Behaviour, status: object) -> None:
+        self.node = node
+        self.status = status
+        shown = repr(status) if len(repr(status)) <= 60 else repr(status)[:57] + "..."
+        super().__init__(
+            f"{type(node).__name__}.update() returned {shown}, not a Status: it must return "
+            "py_trees.common.Status.SUCCESS, FAILURE or RUNNING"
+        )
+
+
 def checked_status(node: Behaviour, status: object) -> Status:
-    """``status`` if it is a Status; otherwise INVALID, logged as py_trees does."""
+    """``status`` if it is a Status; otherwise :class:`InvalidStatus` is raised."""
     if type(status) is Status:  # members only: an Enum with members cannot be subclassed
         return status
     try:
@@ -98,10 +115,7 @@ def checked_status(node: Behaviour, status: object) -> Status:
             return status
     except TypeError:  # unhashable: not a Status either
         pass
-    node.logger.error(
-        f"A behaviour returned an invalid status, setting to INVALID [{status}][{node.name}]"
-    )
-    return Status.INVALID
+    raise InvalidStatus(node, status)
 
 
 def tick_generator(node: Behaviour) -> None:

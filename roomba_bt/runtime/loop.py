@@ -26,7 +26,7 @@ from typing import Any, NoReturn, Protocol, cast
 import py_trees
 
 from roomba_bt.behaviours import SNAPSHOT_KEY
-from roomba_bt.behaviours.lean import Direct
+from roomba_bt.behaviours.lean import Direct, InvalidStatus
 from roomba_bt.behaviours.reasons import failure_reason
 from roomba_bt.mission import RUNTIME_PACKETS
 from roomba_bt.oi.encode import Command
@@ -88,6 +88,11 @@ def behaviour_error(exc: BaseException) -> str:
             behaviour = candidate
             break
     where = f"{frames[-1][0].f_code.co_filename}:{frames[-1][1]}" if frames else ""
+    if isinstance(exc, InvalidStatus):  # raised after its update returned: where update is
+        behaviour, frames = exc.node, []
+        update = getattr(type(behaviour), "update", None)
+        with contextlib.suppress(TypeError, OSError):
+            where = f"{inspect.getsourcefile(update)}:{inspect.getsourcelines(update)[1]}"  # type: ignore[arg-type]
     if behaviour is None:
         return f"{what} (at {where})" if where else what
     with contextlib.suppress(TypeError, OSError):

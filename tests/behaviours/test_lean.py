@@ -287,14 +287,21 @@ def test_debug_logging_still_logs(make: Callable[[], Behaviour], capsys: Any) ->
     assert "LeanLeaf.tick()" in text and "LeanLeaf.stop(" in text and "Sequence.stop()" in text
 
 
-def test_an_invalid_status_becomes_invalid_as_in_py_trees() -> None:
+@pytest.mark.parametrize("returned", [None, "SUCCESS", ["not", "a", "status"]])
+def test_an_invalid_status_is_the_nodes_error_not_invalid_as_in_py_trees(returned: object) -> None:
+    """Decided: py_trees logs and sets INVALID on every tick and the tree goes on; here the
+    node's bug is raised (the runner ends the run with its safe stop, exit 4)."""
+
     class Broken(LeanLeaf):
         def update(self) -> Status:
-            return typing.cast(Status, ["not", "a", "status"])
+            return typing.cast(Status, returned)
 
     leaf = Broken("broken", (Status.SUCCESS,), [])
-    leaf.tick_once()
-    assert leaf.status is Status.INVALID
+    with pytest.raises(lean.InvalidStatus, match=r"Broken.update\(\) returned .*, not a Status"):
+        leaf.tick_once()
+    with pytest.raises(lean.InvalidStatus) as raised:
+        lean.Sequence("root", True, [Broken("inner", (Status.SUCCESS,), [])]).tick_once()
+    assert raised.value.node.name == "inner" and raised.value.status == returned
 
 
 @settings(max_examples=200, deadline=None)

@@ -65,3 +65,65 @@ def test_the_traceback_under_verbose(mission: Path, capsys: pytest.CaptureFixtur
     _, err = capsys.readouterr()
     assert "Traceback (most recent call last)" in err
     assert "return 1000 // snapshot.frame[27] > 3" in err
+
+
+FORGETFUL = '''
+from roomba_bt.behaviours import Action, declare
+from roomba_bt.oi import commands
+
+
+@declare("forgetful", kind="action", sends=(137,))
+class Forgetful(Action):
+    """Drives, and forgets to say it is running."""
+
+    def update(self):
+        self.send(commands.drive(100, 32767))
+'''
+
+RAW = '''
+from py_trees.common import Status
+
+from roomba_bt.behaviours import Action, declare
+
+
+@declare("raw_bytes", kind="action", sends=(137,))
+class RawBytes(Action):
+    """Sends the bytes of a drive itself."""
+
+    def update(self):
+        self.send(bytes([137, 0, 100, 128, 0]))
+        return Status.RUNNING
+'''
+
+
+@pytest.mark.parametrize(
+    ("word", "source", "said", "line"),
+    [
+        ("forgetful", FORGETFUL,
+         "raised InvalidStatus: Forgetful.update() returned None, not a Status", 10),
+        ("raw_bytes", RAW,
+         "raised TypeError: send() takes a Command from roomba_bt.oi.commands", 12),
+    ],
+)  # fmt: skip
+def test_a_plugin_that_breaks_the_contract_ends_the_run_as_its_error(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    word: str,
+    source: str,
+    said: str,
+    line: int,
+) -> None:
+    """``update`` returning None (a forgotten ``return``) was py_trees' "invalid status" on
+    stdout every tick, with the robot driving on to the timeout; raw bytes passed to
+    ``send`` were an AttributeError deep in the outbox. Both now end the run at once as the
+    plugin's error, with the safe stop, naming where."""
+    (tmp_path / "plugin.py").write_text(source)
+    mission = tmp_path / "m.yaml"
+    mission.write_text(f"plugins: [./plugin.py]\ntree:\n  sequence: [{{mode: safe}}, {word}]\n")
+    assert main(_run(mission)) == ExitCode.BEHAVIOUR_ERROR
+    out, err = capsys.readouterr()
+    assert f"behaviour sequence / {word} {said}" in err
+    assert f"(at {tmp_path / 'plugin.py'}:{line})" in err
+    assert "ticks        1 " in out  # ended on the tick it happened
+    assert "safe stop    sent drive, motors" in out
+    assert "invalid status" not in out + err
