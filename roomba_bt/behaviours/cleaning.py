@@ -89,7 +89,7 @@ class _Pattern(Action):
               doc="SUCCESS once the spiral is this wide"),
     ),
     reads=(*driving.BLOCKED_PACKETS, *ENCODER_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS),
-    sends=opcodes("drive_direct"),
+    sends=opcodes("drive_direct", "drive"),
 )  # fmt: skip
 class Spiral(_Pattern):
     """Spiral outward, turning left, over open floor: SUCCESS when it is ``max_radius`` wide
@@ -144,7 +144,7 @@ class Spiral(_Pattern):
               doc="SUCCESS after this many lanes"),
     ),
     reads=(*driving.BLOCKED_PACKETS, *ENCODER_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS),
-    sends=opcodes("drive_direct"),
+    sends=opcodes("drive_direct", "drive"),
 )  # fmt: skip
 class Lanes(_Pattern):
     """Sweep the floor in parallel lanes, back and forth (boustrophedon), by odometry.

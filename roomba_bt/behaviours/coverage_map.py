@@ -342,7 +342,7 @@ class Bearings:
               doc="an edge ends after this long even if it still finds new floor"),
     ),
     reads=(*driving.BLOCKED_PACKETS, *ENCODER_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS),
-    sends=opcodes("drive_direct"),
+    sends=opcodes("drive_direct", "drive"),
 )  # fmt: skip
 class Cover(Action):
     """Cover the floor with a map of its own (odometry and bumps, 10 cm cells): an edge,

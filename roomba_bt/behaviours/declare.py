@@ -273,6 +273,22 @@ def class_doc(cls: type) -> str | None:
     return ast.get_docstring(node) if isinstance(node, ast.ClassDef) else None
 
 
+class UndeclaredCommand(TypeError):
+    """A behaviour sent a command its declaration's ``sends=`` does not list. What it sends
+    is what the compiler reads: the modes the mission needs, the mode check, the Full-mode
+    warning about driving blind at a cliff; an undeclared Drive escaped all three (decided:
+    the behaviour's error, at its first such send, before the command is queued)."""
+
+    def __init__(self, behaviour: RobotBehaviour, command: Command) -> None:
+        declaration = behaviour.declaration
+        listed = ", ".join(str(op) for op in declaration.sends) or "nothing"
+        super().__init__(
+            f"{declaration.name} sent {command.spec.name} ({command.spec.opcode}), which its "
+            f"declaration does not list: add {command.spec.opcode} to @declare(sends=...) "
+            f"(it lists {listed})"
+        )
+
+
 class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
     """Base of every leaf: configuration in ``__init__``, the robot in ``setup(robot=...)``.
 
@@ -334,6 +350,9 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
                 f"send() takes a Command from roomba_bt.oi.commands (such as "
                 f"commands.drive(200, 32767)), not {type(command).__name__} {command!r:.60}"
             )
+        declared = self.declaration.sends
+        if command.spec.opcode not in declared:  # the compile-time checks read sends=
+            raise UndeclaredCommand(self, command)
         robot.outbox.send(command, self)
 
     def value(self, name: str) -> Any:

@@ -61,7 +61,7 @@ _TURN_S = 4.0
         Param("duration", DURATION, minimum=0, doc="SUCCESS after this long; default: never"),
     ),
     reads=(*BUMPS_PACKETS, *_SIGNALS),
-    sends=opcodes("drive_direct"),
+    sends=opcodes("drive_direct", "drive"),
 )  # fmt: skip
 class WallFollow(Action):
     """Follow a wall on the right at a steady light-bumper signal (PD on wheel speeds).

@@ -14,7 +14,7 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 
 from roomba_bt.behaviours.registry import Registry, default_registry
-from roomba_bt.mission.build import CompiledMission, build
+from roomba_bt.mission.build import BuildError, CompiledMission, build
 from roomba_bt.mission.checks import (
     RUNTIME_PACKETS,
     KeyCheck,
@@ -24,6 +24,7 @@ from roomba_bt.mission.checks import (
     restarted_limits,
 )
 from roomba_bt.mission.diagnostics import Diagnostic, MissionError
+from roomba_bt.mission.ir import Node
 from roomba_bt.mission.loader import NO_PERMISSIONS, SHIPPED_LIBRARY, Loader, Permissions
 from roomba_bt.mission.values import Context, shown
 from roomba_bt.oi.modes import ALL_MODES, OIMode
@@ -90,18 +91,7 @@ def _compile(
     modes.run(tree)
     keys = KeyCheck()
     keys.run(tree, frozenset(k for k, d in ctx.keys.items() if d.has_initial))
-    packets: set[int] = set()
-    sends: set[int] = set()
-    needed: set[OIMode] = set()
-    for node in tree.walk():
-        if node.decl is not None:
-            packets.update(node.decl.packets(node.params))
-            sends.update(node.decl.sends)
-            if node.decl.modes != ALL_MODES and node.decl.is_actuator:
-                needed.update(node.decl.modes)
-            after = node.decl.mode_after(node.params)
-            if after is not None:
-                needed.add(after)
+    packets, sends, needed = _what_leaves_use(tree)
     diagnostics = ctx.diagnostics + modes.errors + keys.errors + restarted_limits(tree)
     problem = check_stream(tuple(sorted(packets)), baud or profile.default_baud)
     if problem is not None:
@@ -109,10 +99,14 @@ def _compile(
         diagnostics.append(parsed.tree_loc.at(problem))
     if diagnostics:
         return None, sorted(set(diagnostics))
+    try:
+        root = build(tree)
+    except BuildError as failed:
+        return None, [failed.diagnostic()]
     mission = CompiledMission(
         name=parsed.name,
         description=parsed.description,
-        root=build(tree),
+        root=root,
         packets=tuple(sorted(packets)),
         modes_needed=frozenset(needed),
         parameters={name: bound.value for name, bound in parsed.params.items()},
@@ -128,6 +122,23 @@ def _compile(
         warnings=tuple(blind_in_full(tree, modes)),
     )
     return mission, []
+
+
+def _what_leaves_use(tree: Node) -> tuple[set[int], set[int], set[OIMode]]:
+    """The packets the leaves read, the opcodes they send and the modes they need."""
+    packets: set[int] = set()
+    sends: set[int] = set()
+    needed: set[OIMode] = set()
+    for node in tree.walk():
+        if node.decl is not None:
+            packets.update(node.decl.packets(node.params))
+            sends.update(node.decl.sends)
+            if node.decl.modes != ALL_MODES and node.decl.is_actuator:
+                needed.update(node.decl.modes)
+            after = node.decl.mode_after(node.params)
+            if after is not None:
+                needed.add(after)
+    return packets, sends, needed
 
 
 def load_mission(

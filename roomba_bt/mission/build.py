@@ -10,6 +10,7 @@ a compiled mission unchanged.
 from __future__ import annotations
 
 import copy
+import traceback
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -25,12 +26,34 @@ from roomba_bt.oi.modes import OIMode
 from roomba_bt.robot.interface import RobotHandle
 
 
+class BuildError(Exception):
+    """A behaviour's class raised while it was built (a plugin's ``__init__``): the node it
+    was built for and the exception, said as a diagnostic at the node's place."""
+
+    def __init__(self, node: Node, error: Exception) -> None:
+        self.node = node
+        self.error = error
+        frames = traceback.extract_tb(error.__traceback__)
+        where = f" (at {frames[-1].filename}:{frames[-1].lineno})" if frames else ""
+        assert node.decl is not None
+        super().__init__(
+            f"{node.decl.name}: building it raised {type(error).__name__}: {error}{where}"
+        )
+
+    def diagnostic(self) -> Diagnostic:
+        return self.node.loc.at(str(self))
+
+
 def build(node: Node) -> Behaviour:
     """The py_trees (sub)tree for a checked node: a leaf's declared class, or the class the
-    language table names for the node's word."""
+    language table names for the node's word. A leaf's class that raises (a plugin's bug in
+    its ``__init__``) raises :class:`BuildError`, not an internal error of the compiler."""
     if node.kind == "leaf":
         assert node.decl is not None
-        return node.decl.cls(node.name, node.params)
+        try:
+            return node.decl.cls(node.name, node.params)
+        except Exception as exc:
+            raise BuildError(node, exc) from exc
     children = [build(child) for child in node.children]
     kind = GUARD if node.kind == GUARD.word else WORDS[node.kind]
     assert kind.build is not None, f"no builder for node kind {node.kind!r}"

@@ -166,10 +166,11 @@ from roomba_bt.oi import commands
 
 @declare("rogue", kind="action")
 class Rogue(Action):
-    """Sends Drive without declaring it: the mode guard refuses it in Passive."""
+    """Queues Drive past its declaration, straight into the outbox (``send`` would refuse
+    an undeclared command): the mode guard refuses it in Passive."""
 
     def update(self) -> Status:
-        self.send(commands.drive(100, 0))
+        self.robot.outbox.send(commands.drive(100, 0), self)
         return Status.SUCCESS
 '''
 

@@ -306,6 +306,31 @@ def test_plugin_by_path(mission_file: Callable[..., Path]) -> None:
     assert 8 in mission.packets
 
 
+def test_a_plugin_class_that_raises_when_built_is_its_error_at_its_node(
+    mission_file: Callable[..., Path],
+) -> None:
+    """It was "internal error while compiling (ValueError: ...); please report it" at 1:1."""
+    from roomba_bt.mission import Permissions, compile_mission
+
+    plugin = mission_file(
+        "from roomba_bt.behaviours import Condition, declare\n"
+        "@declare('touchy', kind='condition', reads=(8,))\n"
+        "class Touchy(Condition):\n"
+        "    '''Refuses to be built.'''\n"
+        "    def __init__(self, *args, **kwargs):\n"
+        "        super().__init__(*args, **kwargs)\n"
+        "        raise ValueError('no calibration file')\n",
+        "touchy.py",
+    )
+    path = mission_file("plugins: [./touchy.py]\ntree:\n  sequence: [touchy]\n")
+    mission, (problem,) = compile_mission(path, permissions=Permissions(plugin_files=True))
+    assert mission is None
+    assert (problem.line, problem.column) == (3, 14)
+    assert problem.message == (
+        f"touchy: building it raised ValueError: no calibration file (at {plugin}:7)"
+    )
+
+
 def test_parameters_defaults_and_overrides(compile_text: Compile) -> None:
     text = """
         parameters:

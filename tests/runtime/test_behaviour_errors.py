@@ -96,6 +96,23 @@ class RawBytes(Action):
 '''
 
 
+UNDECLARED = '''
+from py_trees.common import Status
+
+from roomba_bt.behaviours import Action, declare
+from roomba_bt.oi import commands
+
+
+@declare("sneaky", kind="action", sends=(139,))
+class Sneaky(Action):
+    """Declares the LEDs, and drives."""
+
+    def update(self):
+        self.send(commands.drive(100, 32767))
+        return Status.RUNNING
+'''
+
+
 @pytest.mark.parametrize(
     ("word", "source", "said", "line"),
     [
@@ -103,6 +120,9 @@ class RawBytes(Action):
          "raised InvalidStatus: Forgetful.update() returned None, not a Status", 10),
         ("raw_bytes", RAW,
          "raised TypeError: send() takes a Command from roomba_bt.oi.commands", 12),
+        ("sneaky", UNDECLARED,
+         "raised UndeclaredCommand: sneaky sent drive (137), which its declaration does not "
+         "list: add 137 to @declare(sends=...) (it lists 139)", 13),
     ],
 )  # fmt: skip
 def test_a_plugin_that_breaks_the_contract_ends_the_run_as_its_error(
@@ -115,8 +135,9 @@ def test_a_plugin_that_breaks_the_contract_ends_the_run_as_its_error(
 ) -> None:
     """``update`` returning None (a forgotten ``return``) was py_trees' "invalid status" on
     stdout every tick, with the robot driving on to the timeout; raw bytes passed to
-    ``send`` were an AttributeError deep in the outbox. Both now end the run at once as the
-    plugin's error, with the safe stop, naming where."""
+    ``send`` were an AttributeError deep in the outbox; a Drive its declaration did not list
+    escaped the compiler's mode check and Full-mode warning, which read the declaration.
+    Each now ends the run at once as the plugin's error, with the safe stop, naming where."""
     (tmp_path / "plugin.py").write_text(source)
     mission = tmp_path / "m.yaml"
     mission.write_text(f"plugins: [./plugin.py]\ntree:\n  sequence: [{{mode: safe}}, {word}]\n")
