@@ -17,7 +17,15 @@ from roomba_bt.behaviours.declare import Param
 from roomba_bt.behaviours.language import CHILD_NAMES, KEY_ITEMS, TEXT, NodeKind, Shape
 from roomba_bt.mission.ir import Node
 from roomba_bt.mission.source import Bad, Loc, kind_of, mapping, plain, scalar_text, sequence
-from roomba_bt.mission.values import UNKNOWN, Bound, Context, Written, resolve, unknown
+from roomba_bt.mission.values import (
+    UNKNOWN,
+    Bound,
+    Context,
+    Written,
+    origin_of,
+    resolve,
+    unknown,
+)
 
 if TYPE_CHECKING:
     from roomba_bt.mission.nodes import NodeParser
@@ -183,9 +191,12 @@ def _decorator_options(
     for param in kind.options:
         value = options.get(param.name)
         if param.minimum is not None and value is not None and value < param.minimum:
+            written, where = fields[param.name]
+            origin = origin_of(written, env)
             raise Bad(
-                fields[param.name][1].at(
+                where.at(
                     f"{word}.{param.name} must be at least {param.minimum:g}, got {value}"
+                    + (f" ({written.value.strip()} is {origin})" if origin else "")
                 )
             )
     return options

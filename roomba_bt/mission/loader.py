@@ -385,7 +385,7 @@ class Loader:
                 self.ctx.error(key_loc.at(f"{where}: {exc}"))
                 env[name] = Bound(vtype, UNKNOWN, "?")  # reported once, not at every use
                 continue
-            env[name] = Bound(vtype, value, text)
+            env[name] = Bound(vtype, value, text, f"{name}={text}, set on the command line")
         return env
 
     def _param_decl(self, node: yaml.Node, loc: Loc, name: str) -> tuple[ValueType, Any, bool, str]:

@@ -24,6 +24,7 @@ from roomba_bt.mission.values import (
     Context,
     SubtreeDef,
     Written,
+    origin_of,
     resolve,
     shown,
     unknown,
@@ -215,7 +216,10 @@ class NodeParser:
                 self.ctx.error(bad.diagnostic)
                 resolved = UNKNOWN
             sub_env[pname] = Bound(
-                vtype, resolved, shown(vtype, resolved) if resolved is not UNKNOWN else "?"
+                vtype,
+                resolved,
+                shown(vtype, resolved) if resolved is not UNKNOWN else "?",
+                origin_of(pvalue, env),
             )
         given = {a[0] for a in args}
         for pname, (vtype, default, _) in sub.params.items():

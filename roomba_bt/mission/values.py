@@ -55,11 +55,14 @@ UNKNOWN: Any = _Unknown()
 
 @dataclass(frozen=True, slots=True)
 class Bound:
-    """A parameter in scope: its type, canonical value and the text it was written as."""
+    """A parameter in scope: its type, canonical value and the text it was written as; and
+    where its value was set when that was not beside its use (``origin``, said with an
+    error at the use: "time_limit=0s, set on the command line")."""
 
     type: ValueType
     value: Any
     text: str
+    origin: str = ""
 
 
 @dataclass(frozen=True, slots=True)
@@ -184,7 +187,8 @@ def resolve(
                         value = _negate(value)
                     except UnitError as exc:
                         raise Bad(loc.at(f"{what}: {exc}")) from None
-                return _check_range(value, loc, what, param)
+                origin = f" (${{{pname}}} is {bound.origin})" if bound.origin else ""
+                return _check_range(value, loc, what, param, origin)
             if bound.type.name != "str":
                 raise Bad(
                     loc.at(
@@ -247,13 +251,26 @@ def _substitute(raw: str, loc: Loc, env: Mapping[str, Bound], what: str) -> Any:
     return text
 
 
-def _check_range(value: Any, loc: Loc, what: str, param: Param | None) -> Any:
+def _check_range(value: Any, loc: Loc, what: str, param: Param | None, origin: str = "") -> Any:
     if param is not None:
         problem = param.check_range(value)
         if problem is not None:
             owner = what.rsplit(".", 1)[0] if "." in what else what
-            raise Bad(loc.at(f"{owner}: {problem}"))
+            raise Bad(loc.at(f"{owner}: {problem}{origin}"))
     return value
+
+
+def origin_of(node: yaml.Node, env: Mapping[str, Bound]) -> str:
+    """Where the value of ``node`` was set, when it is a whole ``${name}`` whose parameter
+    was set elsewhere (a subtree's argument passing the mission's on: the error at its use
+    in a library names the command line)."""
+    if isinstance(node, yaml.ScalarNode) and isinstance(node.value, str):
+        full = _FULL_SUBSTITUTION.match(node.value)
+        if full is not None:
+            bound = env.get(full.group(2))
+            if bound is not None:
+                return bound.origin
+    return ""
 
 
 def _reference(ctx: Context, raw: str, loc: Loc, vtype: ValueType, what: str) -> BlackboardRef:

@@ -154,3 +154,40 @@ def test_a_long_yaml_path_is_shown_by_its_ends() -> None:
     )
     assert str(Diagnostic("m.yaml", 1, 2, "bad", long)).endswith(f"[{shortened_path(long)}]")
     assert Diagnostic("m.yaml", 1, 2, "bad", long).yaml_path == long  # the data keeps it whole
+
+
+def test_a_value_out_of_range_from_the_command_line_says_so_where_it_is_used(
+    tmp_path: Path,
+) -> None:
+    """``run dock -p search_speed=600mm/s`` was refused at a line of the shipped docking
+    library, a file the user never wrote, with nothing tying it to their ``-p``."""
+    (tmp_path / "lib.yaml").write_text(
+        "subtrees:\n"
+        "  go:\n"
+        "    parameters: {v: {type: speed, default: 100 mm/s}, n: {type: int, default: 2}}\n"
+        "    tree:\n"
+        "      repeat: {times: '${n}', do: {drive: {velocity: '${v}', distance: 5cm}}}\n"
+    )
+    path = tmp_path / "m.yaml"
+    path.write_text(
+        "include: [lib.yaml]\n"
+        "parameters: {speed: {type: speed, default: 100 mm/s}, laps: {type: int, default: 2}}\n"
+        "tree:\n"
+        "  sequence:\n"
+        "    - mode: safe\n"
+        "    - drive: {velocity: '${speed}', distance: 5cm}\n"
+        "    - subtree: {id: go, v: '${speed}', n: '${laps}'}\n"
+    )
+    _, problems = compile_mission(path, {"speed": "600mm/s"})
+    assert [(p.file.rsplit("/", 1)[-1], p.line, p.message) for p in problems] == [
+        ("lib.yaml", 5, "drive: velocity 600 mm/s is out of range: allowed -500..500 mm/s "
+                        "(${v} is speed=600mm/s, set on the command line)"),
+        ("m.yaml", 6, "drive: velocity 600 mm/s is out of range: allowed -500..500 mm/s "
+                      "(${speed} is speed=600mm/s, set on the command line)"),
+    ]  # fmt: skip
+    _, (problem,) = compile_mission(path, {"laps": "0"})
+    assert (problem.line, problem.message) == (
+        5,
+        "repeat.times must be at least 1, got 0 (${n} is laps=0, set on the command line)",
+    )
+    assert compile_mission(path, {"speed": "400mm/s"})[1] == []
