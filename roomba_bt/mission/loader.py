@@ -44,7 +44,7 @@ from typing import Any
 import yaml
 
 from roomba_bt.behaviours.language import WORDS
-from roomba_bt.behaviours.units import VALUE_TYPES, UnitError, ValueType, closest, enum
+from roomba_bt.behaviours.units import STR, VALUE_TYPES, UnitError, ValueType, closest, enum
 from roomba_bt.mission.ir import KeyDecl, Node
 from roomba_bt.mission.nodes import NodeParser
 from roomba_bt.mission.shipped import (
@@ -79,7 +79,7 @@ from roomba_bt.mission.values import (
 TOP_LEVEL = ("mission", "description", "parameters", "blackboard", "plugins", "include",
              "subtrees", "tree")  # fmt: skip
 _IDENT = re.compile(r"^[a-z_][a-z0-9_]*$")
-_PARAM_TYPES = [n for n in VALUE_TYPES if n != "mark"]
+_PARAM_TYPES = [*(n for n in VALUE_TYPES if n != "mark"), "enum"]
 _INCLUDED_KEYS = ("description", "plugins", "include", "blackboard", "subtrees")
 
 #: Folders every mission may include from, wherever it lives: the shipped missions' folder
@@ -342,6 +342,7 @@ class Loader:
     ) -> dict[str, Bound]:
         env: dict[str, Bound] = {}
         declared: dict[str, tuple[ValueType, Loc]] = {}
+        broken: set[str] = set()  # declared wrongly: reported once, not at each use nor -p
         if section is not None:
             node, _, loc = section
             try:
@@ -354,6 +355,8 @@ class Loader:
                     vtype, default, has_default, _ = self._param_decl(value, vloc, name)
                 except Bad as bad:
                     self.ctx.error(bad.diagnostic)
+                    env[name] = Bound(STR, UNKNOWN, "?")  # a use reads "unknown": no type check
+                    broken.add(name)
                     continue
                 declared[name] = (vtype, key_loc)
                 if name in overrides:
@@ -368,6 +371,8 @@ class Loader:
                     continue
                 env[name] = Bound(vtype, default, _text(value, vloc, default))
         for name, text in overrides.items():
+            if name in broken:
+                continue
             if name not in declared:
                 self.ctx.error(
                     root.at(
@@ -413,7 +418,7 @@ class Loader:
                 raise Bad(cloc.at("choices must be a list of words"))
             vtype = enum(*choices)
         else:
-            vtype = parse_type_name(tnode, tloc)
+            vtype = parse_type_name(tnode, tloc, also=("enum",))
         doc = ""
         if "doc" in fields:
             doc = scalar_text(fields["doc"][0], fields["doc"][2], "doc")

@@ -103,11 +103,15 @@ class Context:
             self.diagnostics.append(diagnostic)
 
 
-def parse_type_name(node: yaml.Node, loc: Loc, *, allow_mark: bool = False) -> ValueType:
+def parse_type_name(
+    node: yaml.Node, loc: Loc, *, allow_mark: bool = False, also: tuple[str, ...] = ()
+) -> ValueType:
+    """The value type ``node`` names; ``also``: names the caller handles itself (a
+    parameter's ``enum``), listed among the known ones when the name is not known."""
     text = scalar_text(node, loc, "type")
     vtype = VALUE_TYPES.get(text)
     if vtype is None or (vtype is MARK and not allow_mark):
-        names = [n for n in VALUE_TYPES if allow_mark or n != "mark"]
+        names = [n for n in VALUE_TYPES if allow_mark or n != "mark"] + list(also)
         raise Bad(
             loc.at(f"unknown type {text!r}{closest(text, names)}; known types: {', '.join(names)}")
         )
