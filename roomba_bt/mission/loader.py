@@ -44,7 +44,7 @@ from typing import Any
 import yaml
 
 from roomba_bt.behaviours.language import WORDS
-from roomba_bt.behaviours.units import STR, VALUE_TYPES, UnitError, ValueType, closest, enum
+from roomba_bt.behaviours.units import ANY, STR, VALUE_TYPES, UnitError, ValueType, closest, enum
 from roomba_bt.mission.ir import KeyDecl, Node
 from roomba_bt.mission.nodes import NodeParser
 from roomba_bt.mission.shipped import (
@@ -450,6 +450,13 @@ class Loader:
 
     def _key_decl(self, name: str, node: yaml.Node, key_loc: Loc, loc: Loc) -> None:
         _new_name(name, key_loc, "blackboard key", "blackboard key", self.ctx.keys, "declared")
+        try:
+            self._key_body(name, node, key_loc, loc)
+        except Bad:  # declared wrongly: its uses are not reported again as an unknown key
+            self.ctx.keys[name] = KeyDecl(name, ANY, key_loc, None, True, "")
+            raise
+
+    def _key_body(self, name: str, node: yaml.Node, key_loc: Loc, loc: Loc) -> None:
         initial: Any = None
         has_initial = False
         doc = ""
@@ -502,6 +509,7 @@ class Loader:
                     kl.at(unknown(f"key in subtree {name!r}", key, ["parameters", "tree", "doc"]))
                 )
         params: dict[str, tuple[ValueType, Any, Loc]] = {}
+        broken: set[str] = set()
         if "parameters" in fields:
             pnode, _, ploc = fields["parameters"]
             for pname, pvalue, pkloc, pvloc in mapping(pnode, ploc, "parameters"):
@@ -509,6 +517,7 @@ class Loader:
                     vtype, default, has_default, _ = self._param_decl(pvalue, pvloc, pname)
                 except Bad as bad:
                     self.ctx.error(bad.diagnostic)
+                    broken.add(pname)  # not reported again at its uses and arguments
                     continue
                 params[pname] = (vtype, default if has_default else None, pkloc)
         if "tree" not in fields:
@@ -516,7 +525,9 @@ class Loader:
             body, body_loc = None, loc
         else:
             body, _, body_loc = fields["tree"]
-        self.ctx.subtrees[name] = SubtreeDef(name, key_loc, params, body, body_loc)
+        self.ctx.subtrees[name] = SubtreeDef(
+            name, key_loc, params, body, body_loc, broken=frozenset(broken)
+        )
 
 
 def _is_mission(root: yaml.Node, words: tuple[str, ...]) -> bool:

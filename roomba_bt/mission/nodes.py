@@ -13,7 +13,7 @@ from collections.abc import Mapping
 import yaml
 
 from roomba_bt.behaviours.language import MODIFIERS, WORDS, Shape
-from roomba_bt.behaviours.units import closest
+from roomba_bt.behaviours.units import STR, closest
 from roomba_bt.mission.control import parse_composite, parse_decorator
 from roomba_bt.mission.ir import Node
 from roomba_bt.mission.leaves import parse_leaf
@@ -203,7 +203,11 @@ class NodeParser:
         """The mission's parameters, then the subtree's: given at the use or by default."""
         name = sub.name
         sub_env = dict(self.global_env)
+        for pname in sub.broken:
+            sub_env[pname] = Bound(STR, UNKNOWN, "?")
         for pname, pvalue, pkloc, pvloc in args:
+            if pname in sub.broken:
+                continue
             if pname not in sub.params:
                 self.ctx.error(
                     pkloc.at(f"subtree {name!r}: " + unknown("parameter", pname, list(sub.params)))
@@ -240,6 +244,8 @@ class NodeParser:
                 continue
             sub.used = True
             env = dict(self.global_env)
+            for pname in sub.broken:
+                env[pname] = Bound(STR, UNKNOWN, "?")
             for pname, (vtype, default, _) in sub.params.items():
                 env[pname] = Bound(vtype, UNKNOWN if default is None else default, "?")
             self._use_stack.append(sub.name)

@@ -84,6 +84,8 @@ class SubtreeDef:
     body: yaml.Node | None
     body_loc: Loc
     used: bool = False
+    #: parameters declared wrongly (reported there): unknown values at every use
+    broken: frozenset[str] = frozenset()
 
 
 @dataclass
