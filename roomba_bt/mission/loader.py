@@ -352,7 +352,7 @@ class Loader:
                 items = []
             for name, value, key_loc, vloc in items:
                 try:
-                    vtype, default, has_default, _ = self._param_decl(value, vloc, name)
+                    vtype, default, has_default, _ = param_decl(self.ctx, value, vloc, name)
                 except Bad as bad:
                     self.ctx.error(bad.diagnostic)
                     env[name] = Bound(STR, UNKNOWN, "?")  # a use reads "unknown": no type check
@@ -393,41 +393,6 @@ class Loader:
             env[name] = Bound(vtype, value, text, f"{name}={text}, set on the command line")
         return env
 
-    def _param_decl(self, node: yaml.Node, loc: Loc, name: str) -> tuple[ValueType, Any, bool, str]:
-        if not _IDENT.match(name):
-            raise Bad(loc.at(f"parameter name {name!r} must be snake_case"))
-        fields = {k: (v, kl, vl) for k, v, kl, vl in mapping(node, loc, f"parameter {name!r}")}
-        for key, (_, kl, _) in fields.items():
-            if key not in ("type", "default", "doc", "choices"):
-                raise Bad(
-                    kl.at(
-                        unknown(
-                            f"key in parameter {name!r}", key, ["type", "default", "doc", "choices"]
-                        )
-                    )
-                )
-        if "type" not in fields:
-            raise Bad(loc.at(f"parameter {name!r} needs a type (one of {', '.join(_PARAM_TYPES)})"))
-        tnode, _, tloc = fields["type"]
-        if plain(tnode, tloc) == "enum":
-            if "choices" not in fields:
-                raise Bad(tloc.at(f"parameter {name!r} of type enum needs choices: [...]"))
-            cnode, _, cloc = fields["choices"]
-            choices = plain(cnode, cloc)
-            if not isinstance(choices, list) or not all(isinstance(c, str) for c in choices):
-                raise Bad(cloc.at("choices must be a list of words"))
-            vtype = enum(*choices)
-        else:
-            vtype = parse_type_name(tnode, tloc, also=("enum",))
-        doc = ""
-        if "doc" in fields:
-            doc = scalar_text(fields["doc"][0], fields["doc"][2], "doc")
-        if "default" not in fields:
-            return vtype, None, False, doc
-        dnode, _, dloc = fields["default"]
-        default = resolve(self.ctx, dnode, dloc, vtype, {}, f"parameter {name}")
-        return vtype, default, True, doc
-
     def _each(
         self,
         node: yaml.Node,
@@ -451,52 +416,10 @@ class Loader:
     def _key_decl(self, name: str, node: yaml.Node, key_loc: Loc, loc: Loc) -> None:
         _new_name(name, key_loc, "blackboard key", "blackboard key", self.ctx.keys, "declared")
         try:
-            self._key_body(name, node, key_loc, loc)
+            key_decl(self.ctx, self.nodes.global_env, name, node, key_loc, loc)
         except Bad:  # declared wrongly: its uses are not reported again as an unknown key
             self.ctx.keys[name] = KeyDecl(name, ANY, key_loc, None, True, "")
             raise
-
-    def _key_body(self, name: str, node: yaml.Node, key_loc: Loc, loc: Loc) -> None:
-        initial: Any = None
-        has_initial = False
-        doc = ""
-        if isinstance(node, yaml.ScalarNode):
-            vtype = parse_type_name(node, loc, allow_mark=True)
-        else:
-            fields = {
-                k: (v, kl, vl) for k, v, kl, vl in mapping(node, loc, f"blackboard key {name!r}")
-            }
-            for key, (_, kl, _) in fields.items():
-                if key not in ("type", "fields", "initial", "doc"):
-                    raise Bad(
-                        kl.at(
-                            unknown(
-                                f"key in blackboard key {name!r}",
-                                key,
-                                ["type", "fields", "initial", "doc"],
-                            )
-                        )
-                    )
-            if "fields" in fields:
-                fnode, _, floc = fields["fields"]
-                ftypes = {
-                    fname: parse_type_name(fvalue, fvloc)
-                    for fname, fvalue, _, fvloc in mapping(fnode, floc, "fields")
-                }
-                vtype = record_type(ftypes)
-            elif "type" in fields:
-                vtype = parse_type_name(fields["type"][0], fields["type"][2], allow_mark=True)
-            else:
-                raise Bad(loc.at(f"blackboard key {name!r} needs a type (or fields)"))
-            if "initial" in fields:
-                inode, _, iloc = fields["initial"]
-                initial = resolve(
-                    self.ctx, inode, iloc, vtype, self.nodes.global_env, f"initial value of {name}"
-                )
-                has_initial = True
-            if "doc" in fields:
-                doc = scalar_text(fields["doc"][0], fields["doc"][2], "doc")
-        self.ctx.keys[name] = KeyDecl(name, vtype, key_loc, initial, has_initial, doc)
 
     def _subtree_def(self, name: str, node: yaml.Node, key_loc: Loc, loc: Loc) -> None:
         _new_name(name, key_loc, "subtree name", "subtree", self.ctx.subtrees, "defined")
@@ -514,7 +437,7 @@ class Loader:
             pnode, _, ploc = fields["parameters"]
             for pname, pvalue, pkloc, pvloc in mapping(pnode, ploc, "parameters"):
                 try:
-                    vtype, default, has_default, _ = self._param_decl(pvalue, pvloc, pname)
+                    vtype, default, has_default, _ = param_decl(self.ctx, pvalue, pvloc, pname)
                 except Bad as bad:
                     self.ctx.error(bad.diagnostic)
                     broken.add(pname)  # not reported again at its uses and arguments
@@ -528,6 +451,89 @@ class Loader:
         self.ctx.subtrees[name] = SubtreeDef(
             name, key_loc, params, body, body_loc, broken=frozenset(broken)
         )
+
+
+def param_decl(
+    ctx: Context, node: yaml.Node, loc: Loc, name: str
+) -> tuple[ValueType, Any, bool, str]:
+    """A parameter's declaration (the mission's or a subtree's): its type, default (when it
+    has one: the third item) and doc. Raises :class:`Bad`."""
+    if not _IDENT.match(name):
+        raise Bad(loc.at(f"parameter name {name!r} must be snake_case"))
+    fields = {k: (v, kl, vl) for k, v, kl, vl in mapping(node, loc, f"parameter {name!r}")}
+    for key, (_, kl, _) in fields.items():
+        if key not in ("type", "default", "doc", "choices"):
+            raise Bad(
+                kl.at(
+                    unknown(
+                        f"key in parameter {name!r}", key, ["type", "default", "doc", "choices"]
+                    )
+                )
+            )
+    if "type" not in fields:
+        raise Bad(loc.at(f"parameter {name!r} needs a type (one of {', '.join(_PARAM_TYPES)})"))
+    tnode, _, tloc = fields["type"]
+    if plain(tnode, tloc) == "enum":
+        if "choices" not in fields:
+            raise Bad(tloc.at(f"parameter {name!r} of type enum needs choices: [...]"))
+        cnode, _, cloc = fields["choices"]
+        choices = plain(cnode, cloc)
+        if not isinstance(choices, list) or not all(isinstance(c, str) for c in choices):
+            raise Bad(cloc.at("choices must be a list of words"))
+        vtype = enum(*choices)
+    else:
+        vtype = parse_type_name(tnode, tloc, also=("enum",))
+    doc = ""
+    if "doc" in fields:
+        doc = scalar_text(fields["doc"][0], fields["doc"][2], "doc")
+    if "default" not in fields:
+        return vtype, None, False, doc
+    dnode, _, dloc = fields["default"]
+    default = resolve(ctx, dnode, dloc, vtype, {}, f"parameter {name}")
+    return vtype, default, True, doc
+
+
+def key_decl(
+    ctx: Context, env: Mapping[str, Bound], name: str, node: yaml.Node, key_loc: Loc, loc: Loc
+) -> None:
+    """A blackboard key's declaration into ``ctx.keys`` (its initial value may use the
+    mission's parameters, ``env``). Raises :class:`Bad`."""
+    initial: Any = None
+    has_initial = False
+    doc = ""
+    if isinstance(node, yaml.ScalarNode):
+        vtype = parse_type_name(node, loc, allow_mark=True)
+    else:
+        fields = {k: (v, kl, vl) for k, v, kl, vl in mapping(node, loc, f"blackboard key {name!r}")}
+        for key, (_, kl, _) in fields.items():
+            if key not in ("type", "fields", "initial", "doc"):
+                raise Bad(
+                    kl.at(
+                        unknown(
+                            f"key in blackboard key {name!r}",
+                            key,
+                            ["type", "fields", "initial", "doc"],
+                        )
+                    )
+                )
+        if "fields" in fields:
+            fnode, _, floc = fields["fields"]
+            ftypes = {
+                fname: parse_type_name(fvalue, fvloc)
+                for fname, fvalue, _, fvloc in mapping(fnode, floc, "fields")
+            }
+            vtype = record_type(ftypes)
+        elif "type" in fields:
+            vtype = parse_type_name(fields["type"][0], fields["type"][2], allow_mark=True)
+        else:
+            raise Bad(loc.at(f"blackboard key {name!r} needs a type (or fields)"))
+        if "initial" in fields:
+            inode, _, iloc = fields["initial"]
+            initial = resolve(ctx, inode, iloc, vtype, env, f"initial value of {name}")
+            has_initial = True
+        if "doc" in fields:
+            doc = scalar_text(fields["doc"][0], fields["doc"][2], "doc")
+    ctx.keys[name] = KeyDecl(name, vtype, key_loc, initial, has_initial, doc)
 
 
 def _is_mission(root: yaml.Node, words: tuple[str, ...]) -> bool:
