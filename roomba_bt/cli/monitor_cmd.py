@@ -18,7 +18,7 @@ import threading
 from pathlib import Path
 from typing import Any
 
-from roomba_bt.cli.arguments import add_command, add_param_option
+from roomba_bt.cli.arguments import add_command, add_param_option, add_permission_options
 from roomba_bt.monitor import INSTALL_HINT, server_available
 from roomba_bt.monitor.address import parse_address
 from roomba_bt.runtime.summary import ExitCode
@@ -269,13 +269,11 @@ def register(sub: Any) -> None:
     )  # fmt: skip
     monitor.add_argument("--mission", help="mission to replay against (default: the recorded one)")
     add_param_option(monitor, "set a mission parameter for the replay (repeatable)")
+    add_permission_options(monitor)
 
 
 def monitor_command(args: argparse.Namespace) -> int:
-    from roomba_bt.cli.arguments import parse_params
-    from roomba_bt.cli.run_cmd import load, stream_packets
-    from roomba_bt.oi.profiles import get_profile
-    from roomba_bt.runtime.recording import RecordError, load_record
+    from roomba_bt.cli.run_cmd import load_recorded
 
     if not server_available():
         print(f"roomba-bt: {INSTALL_HINT}", file=sys.stderr)
@@ -283,35 +281,10 @@ def monitor_command(args: argparse.Namespace) -> int:
     from roomba_bt.monitor.recorded import replay_into_feed
     from roomba_bt.monitor.server import MonitorServer
 
-    try:
-        record = load_record(args.record)
-    except RecordError as exc:
-        print(f"roomba-bt: {exc}", file=sys.stderr)
-        return ExitCode.INVALID
-    header = record.header
-    try:
-        profile = get_profile(str(header.get("profile", "create2")))
-    except ValueError as exc:
-        print(f"roomba-bt: {args.record}:1: {exc}", file=sys.stderr)
-        return ExitCode.INVALID
-    mission_path = args.mission or header.get("mission")
-    if not mission_path or not Path(mission_path).is_file():
-        print(
-            f"roomba-bt: {args.record}: mission {mission_path!r} not found; pass --mission FILE",
-            file=sys.stderr,
-        )
-        return ExitCode.INVALID
-    params = dict(header.get("parameters") or {})
-    extra = parse_params(args.param)
-    if isinstance(extra, str):
-        print(f"roomba-bt: {extra}", file=sys.stderr)
-        return ExitCode.INVALID
-    params.update(extra)
-    baud = int(header.get("baud", 115200))
-    mission = load(mission_path, params, profile, baud)
-    if isinstance(mission, int):
-        return mission
-    packets = tuple(header.get("packets") or stream_packets(mission, baud))
+    recorded = load_recorded(args)
+    if isinstance(recorded, int):
+        return recorded
+    record, mission, profile, baud, packets = recorded
     feed, summary = replay_into_feed(record, mission, profile, packets, baud, args.record)
     host, port = args.monitor or parse_address(None)
     server = MonitorServer(feed, None, host=host, port=port, readonly=True)

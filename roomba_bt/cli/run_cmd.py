@@ -7,7 +7,7 @@ import contextlib
 import logging
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 from roomba_bt.cli.arguments import (
     add_command,
@@ -31,6 +31,7 @@ from roomba_bt.runtime.summary import DEFAULT_GRACE, DEFAULT_TICK_LIMIT, ExitCod
 if TYPE_CHECKING:
     from roomba_bt.mission import Permissions
     from roomba_bt.runtime.loop import TickObserver
+    from roomba_bt.runtime.recording import Record
     from roomba_bt.runtime.stack import RunStack
     from roomba_bt.runtime.summary import RunSummary
     from roomba_bt.sim import Simulator
@@ -423,38 +424,58 @@ def _plot(simulator: Any, path: str) -> str:
     return f"trajectory written to {path}"
 
 
-def replay_command(args: argparse.Namespace) -> int:
+class Recorded(NamedTuple):
+    """What a recorded run is replayed with (``replay``, the monitor's recorded runs)."""
+
+    record: Record
+    mission: Any
+    profile: RobotProfile
+    baud: int
+    packets: tuple[int, ...]
+
+
+def load_recorded(args: argparse.Namespace) -> Recorded | int:
+    """The record ``args.record``, its mission (``--mission``, else the recorded one, by path
+    or shipped name; ``-p`` over the recorded parameters; ``--allow-plugin-files``), profile,
+    baud and packets; or an exit code after printing what is wrong."""
     from roomba_bt.runtime.recording import RecordError, load_record
-    from roomba_bt.runtime.stack import replay_record
 
     try:
-        record = load_record(args.record)
+        record = load_record(args.record)  # its header's fields checked there
     except RecordError as exc:
         return _error(str(exc))
     header = record.header
-    try:
-        profile = get_profile(str(header.get("profile", "create2")))
-    except ValueError as exc:
-        return _error(f"{args.record}:1: {exc}")
+    profile = get_profile(header.get("profile", "create2"))
     mission_path = args.mission or header.get("mission")
     found = mission_file(str(mission_path)) if mission_path else None
     if not isinstance(found, str):
         return _error(f"{args.record}: mission {mission_path!r} not found; pass --mission FILE")
-    params = dict(header.get("parameters") or {})
+    params = {name: str(value) for name, value in (header.get("parameters") or {}).items()}
     extra = parse_params(args.param)
     if isinstance(extra, str):
         return _error(extra)
     params.update(extra)
-    baud = int(header.get("baud", 115200))
+    baud: int = header.get("baud", 115200)
     mission = load(found, params, profile, baud, permissions(args))
     if isinstance(mission, int):
         return mission
     packets = _recorded_packets(args.record, header, mission, found)
     if isinstance(packets, str):
         return _error(packets)
+    return Recorded(record, mission, profile, baud, packets)
+
+
+def replay_command(args: argparse.Namespace) -> int:
+    from roomba_bt.runtime.stack import replay_record
+
+    recorded = load_recorded(args)
+    if isinstance(recorded, int):
+        return recorded
+    record = recorded.record
     summary, transport = replay_record(
-        record, mission, profile=profile, packets=packets, baud=baud, name=args.record
-    )
+        record, recorded.mission, profile=recorded.profile, packets=recorded.packets,
+        baud=recorded.baud, name=args.record,
+    )  # fmt: skip
     print(summary)
     difference = transport.first_difference()
     if difference is None:

@@ -20,12 +20,15 @@ from __future__ import annotations
 import contextlib
 import json
 import logging
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
 
-from roomba_bt.oi.encode import decode_command
+from roomba_bt.oi.encode import BAUD_CODES, decode_command
 from roomba_bt.oi.errors import EncodeError
+from roomba_bt.oi.packets import PACKETS
+from roomba_bt.oi.profiles import PROFILES
 from roomba_bt.transport.base import Transport
 from roomba_bt.yamlsource import undecodable_position
 
@@ -187,13 +190,19 @@ def load_record(path: str | Path) -> Record:
             f"{path}:1: record version {header.get('version')!r}; this roomba-bt reads "
             f"version {RECORD_VERSION}"
         )
+    problem = header_problem(header)
+    if problem is not None:
+        raise RecordError(f"{path}:1: {problem}")
     record = Record(header)
+    last = 0.0
     for number, line in enumerate(lines[1:], start=2):
         if not line.strip():
             continue
         try:
             item = json.loads(line)
-            if isinstance(item, dict) and item.get("d") == "note":
+            if not isinstance(item, dict):
+                raise TypeError(f"a JSON {type(item).__name__}, not an object")
+            if item.get("d") == "note":
                 if isinstance(item.get("note"), dict):
                     record.notes.append((float(item["t"]), item["note"]))
                     continue
@@ -206,8 +215,41 @@ def load_record(path: str | Path) -> Record:
             ) from None
         if d not in ("in", "out"):
             raise RecordError(f"{path}:{number}: direction {d!r}; allowed: in, out, note")
+        if not math.isfinite(t) or t < last:
+            raise RecordError(
+                f"{path}:{number}: time {t!r} s; expected a finite time, not before the line "
+                f"before it ({last:g} s)"
+            )
+        last = t
         record.chunks.append((t, d, b))
     return record
+
+
+def header_problem(header: dict[str, Any]) -> str | None:
+    """What is wrong with a record's header fields (each read by ``replay`` and the monitor's
+    recorded runs), or None. A hand-edited header with ``"baud": "fast"`` was a traceback."""
+    profile = header.get("profile", "create2")
+    if not isinstance(profile, str) or profile not in PROFILES:
+        return f"header field 'profile' is {profile!r}; known profiles: {', '.join(PROFILES)}"
+    baud = header.get("baud", 115200)
+    if type(baud) is not int or baud not in BAUD_CODES:
+        rates = ", ".join(str(rate) for rate in sorted(BAUD_CODES))
+        return f"header field 'baud' is {baud!r}; allowed: the OI's rates {rates}"
+    mission = header.get("mission")
+    if mission is not None and not isinstance(mission, str):
+        return f"header field 'mission' is {mission!r}; expected the mission file's path"
+    parameters = header.get("parameters", {})
+    if not isinstance(parameters, dict) or not all(
+        isinstance(k, str) and isinstance(v, str | int | float) for k, v in parameters.items()
+    ):
+        return f"header field 'parameters' is {parameters!r}; expected {{name: value}}"
+    packets = header.get("packets")
+    if not isinstance(packets, list) or not packets:
+        return 'the header lists no stream packets ("packets")'
+    unknown = [p for p in packets if type(p) is not int or p not in PACKETS]
+    if unknown:
+        return f"header field 'packets' holds {unknown}, not sensor packet ids"
+    return None
 
 
 def command_at(stream: bytes, offset: int) -> str:

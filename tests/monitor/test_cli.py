@@ -218,3 +218,43 @@ def test_watch_reloads_when_a_plugin_file_changes(tmp_path: Path) -> None:
         assert run.interrupt() == 130
     finally:
         run.close()
+
+
+ALWAYS_CLEAR = '''
+from roomba_bt.behaviours import Condition, declare
+
+
+@declare("always_clear", kind="condition", reads=(7,))
+class AlwaysClear(Condition):
+    """Always clear."""
+
+    def check(self, snapshot):
+        return True
+'''
+
+
+def test_a_recorded_run_of_a_mission_with_a_plugin_file_can_be_shown(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``monitor RECORD`` said "allow its plugin files with --allow-plugin-files", and then
+    refused that option: a recorded plugin mission could not be shown at all."""
+    from roomba_bt.cli import build_parser
+    from roomba_bt.cli.run_cmd import Recorded, load_recorded
+
+    (tmp_path / "plugin.py").write_text(ALWAYS_CLEAR)
+    mission = tmp_path / "m.yaml"
+    mission.write_text(
+        "plugins: [./plugin.py]\ntree:\n  sequence: [{mode: safe}, always_clear, "
+        "{drive: {velocity: 100 mm/s, distance: 3 cm}}]\n"
+    )
+    record = tmp_path / "run.jsonl"
+    argv = ["run", str(mission), "--fast", "--display", "none", "--allow-plugin-files"]
+    assert main([*argv, "--record", str(record)]) == 0
+    capsys.readouterr()
+    refused = load_recorded(build_parser().parse_args(["monitor", str(record)]))
+    assert refused == 2
+    assert "allow its plugin files with --allow-plugin-files" in capsys.readouterr().err
+    args = build_parser().parse_args(["monitor", str(record), "--allow-plugin-files"])
+    recorded = load_recorded(args)
+    assert isinstance(recorded, Recorded)
+    assert recorded.packets == tuple(recorded.record.header["packets"])

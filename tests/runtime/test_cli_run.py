@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import re
 import textwrap
 from pathlib import Path
@@ -117,10 +118,56 @@ def test_replay_of_a_malformed_record_is_exit_2(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     record = tmp_path / "bad.jsonl"
-    record.write_text('{"format": "roomba-bt-record", "version": 1}\n{"t": "x"}\n')
+    record.write_text('{"format": "roomba-bt-record", "version": 1, "packets": [7]}\n{"t": "x"}\n')
     assert main(["replay", str(record)]) == 2
     err = capsys.readouterr().err
     assert "bad.jsonl:2:" in err
+
+
+HEADER = {"format": "roomba-bt-record", "version": 1, "profile": "create2", "baud": 115200,
+          "mission": "dock", "parameters": {}, "packets": [7, 35]}  # fmt: skip
+
+
+@pytest.mark.parametrize("command", ["replay", "monitor"])
+@pytest.mark.parametrize(
+    ("field", "value", "said"),
+    [("baud", "fast", "header field 'baud' is 'fast'; allowed: the OI's rates 300, "),
+     ("baud", 12345, "header field 'baud' is 12345"),
+     ("profile", 3, "header field 'profile' is 3; known profiles: create2, roomba600, roomba500"),
+     ("mission", ["dock"], "header field 'mission' is ['dock']"),
+     ("parameters", ["speed"], "header field 'parameters' is ['speed']; expected {name: value}"),
+     ("packets", [7, "35"], "header field 'packets' holds ['35'], not sensor packet ids"),
+     ("packets", [7, 99], "header field 'packets' holds [99]"),
+     ("packets", [], 'the header lists no stream packets ("packets")')],
+)  # fmt: skip
+def test_a_hand_edited_header_is_named_field_by_field(
+    command: str,
+    field: str,
+    value: object,
+    said: str,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``"baud": "fast"`` was a ValueError traceback out of both commands."""
+    record = tmp_path / "edited.jsonl"
+    chunk = '{"t": 0.0, "d": "out", "b": "80"}'
+    record.write_text(json.dumps({**HEADER, field: value}) + f"\n{chunk}\n")
+    assert main([command, str(record)]) == 2
+    out, err = capsys.readouterr()
+    assert f"{record}:1: {said}" in err
+    assert "Traceback" not in out + err
+
+
+@pytest.mark.parametrize("t", ["NaN", "-5", "Infinity", "0.5"])
+def test_a_time_that_is_not_finite_or_goes_back_is_placed(
+    t: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    record = tmp_path / "edited.jsonl"
+    chunks = ['{"t": 0.0, "d": "out", "b": "80"}', '{"t": 1.0, "d": "out", "b": "80"}',
+              f'{{"t": {t}, "d": "in", "b": "01"}}']  # fmt: skip
+    record.write_text("\n".join([json.dumps(HEADER), *chunks]) + "\n")
+    assert main(["replay", str(record)]) == 2
+    assert f"{record}:4: time " in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("command", ["replay", "monitor"])
