@@ -425,12 +425,7 @@ class Loader:
         _new_name(name, key_loc, "subtree name", "subtree", self.ctx.subtrees, "defined")
         if name in WORDS or name in self.ctx.registry:
             raise Bad(key_loc.at(f"subtree name {name!r} is already a node name"))
-        fields = {k: (v, kl, vl) for k, v, kl, vl in mapping(node, loc, f"subtree {name!r}")}
-        for key, (_, kl, _) in fields.items():
-            if key not in ("parameters", "tree", "doc"):
-                raise Bad(
-                    kl.at(unknown(f"key in subtree {name!r}", key, ["parameters", "tree", "doc"]))
-                )
+        fields = known_fields(node, loc, f"subtree {name!r}", ("parameters", "tree", "doc"))
         params: dict[str, tuple[ValueType, Any, Loc]] = {}
         broken: set[str] = set()
         if "parameters" in fields:
@@ -453,6 +448,18 @@ class Loader:
         )
 
 
+def known_fields(
+    node: yaml.Node, loc: Loc, what: str, allowed: tuple[str, ...]
+) -> dict[str, tuple[yaml.Node, Loc, Loc]]:
+    """The mapping ``node`` as ``{key: (value, key loc, value loc)}``; :class:`Bad` at the
+    first key not ``allowed`` (naming the closest allowed one)."""
+    fields = {k: (v, kl, vl) for k, v, kl, vl in mapping(node, loc, what)}
+    for key, (_, kl, _) in fields.items():
+        if key not in allowed:
+            raise Bad(kl.at(unknown(f"key in {what}", key, list(allowed))))
+    return fields
+
+
 def param_decl(
     ctx: Context, node: yaml.Node, loc: Loc, name: str
 ) -> tuple[ValueType, Any, bool, str]:
@@ -460,16 +467,7 @@ def param_decl(
     has one: the third item) and doc. Raises :class:`Bad`."""
     if not _IDENT.match(name):
         raise Bad(loc.at(f"parameter name {name!r} must be snake_case"))
-    fields = {k: (v, kl, vl) for k, v, kl, vl in mapping(node, loc, f"parameter {name!r}")}
-    for key, (_, kl, _) in fields.items():
-        if key not in ("type", "default", "doc", "choices"):
-            raise Bad(
-                kl.at(
-                    unknown(
-                        f"key in parameter {name!r}", key, ["type", "default", "doc", "choices"]
-                    )
-                )
-            )
+    fields = known_fields(node, loc, f"parameter {name!r}", ("type", "default", "doc", "choices"))
     if "type" not in fields:
         raise Bad(loc.at(f"parameter {name!r} needs a type (one of {', '.join(_PARAM_TYPES)})"))
     tnode, _, tloc = fields["type"]
@@ -504,18 +502,8 @@ def key_decl(
     if isinstance(node, yaml.ScalarNode):
         vtype = parse_type_name(node, loc, allow_mark=True)
     else:
-        fields = {k: (v, kl, vl) for k, v, kl, vl in mapping(node, loc, f"blackboard key {name!r}")}
-        for key, (_, kl, _) in fields.items():
-            if key not in ("type", "fields", "initial", "doc"):
-                raise Bad(
-                    kl.at(
-                        unknown(
-                            f"key in blackboard key {name!r}",
-                            key,
-                            ["type", "fields", "initial", "doc"],
-                        )
-                    )
-                )
+        allowed = ("type", "fields", "initial", "doc")
+        fields = known_fields(node, loc, f"blackboard key {name!r}", allowed)
         if "fields" in fields:
             fnode, _, floc = fields["fields"]
             ftypes = {
