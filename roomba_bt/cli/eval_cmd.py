@@ -25,6 +25,7 @@ does not answer, 4 when a behaviour raised in an episode (a bug, not a mission o
 from __future__ import annotations
 
 import argparse
+import shlex
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -284,12 +285,44 @@ def eval_command(args: argparse.Namespace) -> int:
         plotted = _plot(args.plot, world, chosen[0], done[0], summaries[0])
         if plotted is not None:
             return plotted
-    return _verdict(args.min_rate, summaries, done)
+    return _verdict(args, summaries, done)
 
 
-def _verdict(min_rate: float | None, summaries: list[Summary], done: list[Evaluation]) -> int:
+def rerun_command(args: argparse.Namespace, result: Any) -> str:
+    """The ``roomba-bt run`` line that runs episode ``result`` again, alone, with its
+    traceback: its seed and seeded start, world, parameters, profile, charge and what the
+    evaluation was allowed to load. ``run`` has no --within, --start-area, --dock nor
+    --odometry-error: with any of those the line says its start or world may differ."""
+    words = ["roomba-bt", "-v", "run", result.mission, "--fast", "--random-start", "--seed",
+             str(result.seed)]  # fmt: skip
+    if args.world != "empty-room":
+        words += ["--world", args.world]
+    for name, value in dict(result.params).items():
+        words += ["-p", f"{name}={value}"]
+    if args.profile != "create2":
+        words += ["--profile", args.profile]
+    if args.battery is not None:
+        words += ["--battery", f"{args.battery:g}"]
+    if getattr(args, "allow_plugin_files", False):
+        words.append("--allow-plugin-files")
+    for folder in getattr(args, "include_dir", None) or ():
+        words += ["--include-dir", folder]
+    line = shlex.join(words)
+    unmatched = [
+        option for option, given in (
+            ("--within", args.within is not None), ("--start-area", args.start_area is not None),
+            ("--dock", bool(args.dock)), ("--odometry-error", bool(args.odometry_error)),
+        ) if given
+    ]  # fmt: skip
+    if unmatched:
+        line += f" (run has no {', '.join(unmatched)}: its start or world may differ)"
+    return line
+
+
+def _verdict(args: argparse.Namespace, summaries: list[Summary], done: list[Evaluation]) -> int:
     """The exit code of a finished evaluation, with what decided it on stderr: 4 when a
     behaviour raised in an episode, 1 when a success rate is below ``--min-rate``, else 0."""
+    min_rate: float | None = args.min_rate
     low = [s for s in summaries if min_rate is not None and s.rate < min_rate]
     for s in low:
         print(
@@ -303,8 +336,7 @@ def _verdict(min_rate: float | None, summaries: list[Summary], done: list[Evalua
         print(
             f"roomba-bt eval: {len(errors)} episode(s) ended with a behaviour's exception "
             f"(a bug in it or its plugin), the first: seed {first.seed}: {first.reason}; "
-            f"see its traceback with: roomba-bt run {first.mission} --fast --seed "
-            f"{first.seed} -v",
+            f"see its traceback with: {rerun_command(args, first)}",
             file=sys.stderr,
         )
         return ExitCode.BEHAVIOUR_ERROR

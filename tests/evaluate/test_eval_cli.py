@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import shlex
 import sys
 from pathlib import Path
 
@@ -271,7 +272,44 @@ def test_a_behaviour_that_raises_in_an_episode_exits_4(
     assert code == 4
     assert "2 episode(s) ended with a behaviour's exception" in err
     assert "seed 3: " in err and "kaboom" in err and "boom.py:9" in err
-    assert f"roomba-bt run {mission} --fast --seed 3 -v" in err
+    assert f"roomba-bt -v run {mission} --fast --random-start --seed 3 --allow-plugin-files" in err
+
+
+def test_the_line_an_error_says_to_run_runs_that_episode_again_with_its_traceback(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """It said ``roomba-bt run M --fast --seed N -v``: ``-v`` after the command is refused,
+    and without the seeded start, the world, ``-p`` and ``--allow-plugin-files`` it was
+    another episode, or none."""
+    (tmp_path / "odd.py").write_text(
+        "from roomba_bt.behaviours import Condition, declare\n\n\n"
+        '@declare("odd", kind="condition", reads=(43,))\n'
+        "class Odd(Condition):\n"
+        '    """Raises on some encoder counts: where depends on the start."""\n\n'
+        "    def check(self, snapshot):\n"
+        "        if snapshot.frame[43] % 7 == 3:\n"
+        '            raise RuntimeError("odd count")\n'
+        "        return False\n"
+    )
+    mission = tmp_path / "odd.yaml"
+    mission.write_text(
+        "plugins: [./odd.py]\nparameters: {speed: {type: speed, default: 100 mm/s}}\n"
+        "tree:\n  sequence:\n    - mode: safe\n"
+        "    - drive: {velocity: '${speed}', distance: 40 cm}\n      until: odd\n"
+    )
+    code = main(["eval", str(mission), "--runs", "4", "--seed", "5", "--world", "corridor",
+                 "-p", "speed=250mm/s", "--allow-plugin-files", "--no-progress"])  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 4
+    reason = err.split(": seed ", 1)[1].split(": ", 1)[1].split("; see its traceback with: ")[0]
+    line = err.rsplit("see its traceback with: ", 1)[1].strip()
+    assert "--world corridor" in line and "-p speed=250mm/s" in line
+    words = shlex.split(line)
+    assert words[:2] == ["roomba-bt", "-v"]
+    assert main(words[1:]) == 4
+    out, err = capsys.readouterr()
+    assert f"outcome      ERROR ({reason})" in out
+    assert "Traceback (most recent call last)" in err
 
 
 def test_no_more_workers_than_episodes_are_started(capsys: pytest.CaptureFixture[str]) -> None:
