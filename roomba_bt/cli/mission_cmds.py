@@ -12,7 +12,7 @@ import json
 import shutil
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from roomba_bt.cli.arguments import (
     add_command,
@@ -26,6 +26,9 @@ from roomba_bt.cli.arguments import (
 )
 from roomba_bt.oi.profiles import PROFILES, get_profile
 from roomba_bt.runtime.summary import ExitCode
+
+if TYPE_CHECKING:
+    from roomba_bt.behaviours.registry import Registry
 
 
 def register(sub: Any) -> None:
@@ -88,6 +91,7 @@ def register(sub: Any) -> None:
     )
     behaviours.add_argument("names", nargs="*", help="only these behaviours")
     behaviours.add_argument("--json", action="store_true", help="machine-readable output")
+    _add_plugin_file_option(behaviours, "also list")
 
     schema = add_command(
         sub,
@@ -99,14 +103,35 @@ def register(sub: Any) -> None:
         from the behaviour declarations.
         """,
     )
-    schema.add_argument(
+    _add_plugin_file_option(schema, "also describe")
+
+
+def _add_plugin_file_option(parser: argparse.ArgumentParser, verb: str) -> None:
+    parser.add_argument(
         "--plugin-file",
         action="append",
         default=[],
         metavar="FILE",
-        help="also describe the behaviours of this plugin file (imported: it is code), for "
+        help=f"{verb} the behaviours of this plugin file (imported: it is code), for "
         "missions that name it under plugins: (repeatable)",
     )
+
+
+def _registry_with_files(command: str, files: list[str]) -> Registry | int:
+    """The default registry and the behaviours of each ``--plugin-file``, or an exit code
+    after saying which file could not be read."""
+    from roomba_bt.behaviours import default_registry
+
+    registry = default_registry()
+    for file in files:
+        if not Path(file).is_file():
+            print(f"roomba-bt {command}: --plugin-file {file}: no such file", file=sys.stderr)
+            return ExitCode.INVALID
+        registry, error = registry.with_file(Path(file))
+        if error is not None:
+            print(f"roomba-bt {command}: --plugin-file {file}: {error}", file=sys.stderr)
+            return ExitCode.INVALID
+    return registry
 
 
 def _common(parser: argparse.ArgumentParser) -> None:
@@ -250,12 +275,14 @@ def write_graph(root: Any, target: Path, fmt: str) -> str | None:
     return None
 
 
-def describe_behaviours(names: list[str] | None = None) -> list[dict[str, Any]]:
-    """The registry as data: what ``behaviours --json`` prints."""
+def describe_behaviours(
+    names: list[str] | None = None, registry: Registry | None = None
+) -> list[dict[str, Any]]:
+    """The registry (by default the default one) as data: what ``behaviours --json`` prints."""
     from roomba_bt.behaviours import default_registry
 
     out = []
-    for decl in default_registry():
+    for decl in registry if registry is not None else default_registry():
         if names and decl.name not in names:
             continue
         out.append(
@@ -294,20 +321,24 @@ def _leads_to(decl: Any) -> str | None:
 
 
 def behaviours_command(args: argparse.Namespace) -> int:
-    from roomba_bt.behaviours import default_registry
-
-    registry = default_registry()
+    registry = _registry_with_files("behaviours", args.plugin_file)
+    if isinstance(registry, int):
+        return registry
     unknown = [n for n in args.names if n not in registry]
     if unknown:
         from roomba_bt.behaviours.units import closest
 
         for name in unknown:
             hint = closest(name, registry.names())
-            print(f"roomba-bt behaviours: unknown behaviour {name!r}{hint}", file=sys.stderr)
+            print(
+                f"roomba-bt behaviours: unknown behaviour {name!r}{hint}; a plugin file's "
+                "are listed with --plugin-file FILE",
+                file=sys.stderr,
+            )
         return ExitCode.INVALID
     for error in registry.errors:
         print(f"roomba-bt: warning: {error}", file=sys.stderr)
-    data = describe_behaviours(args.names)
+    data = describe_behaviours(args.names, registry)
     if args.json:
         print(json.dumps(data, indent=2, default=str))
         return ExitCode.OK
@@ -347,17 +378,10 @@ def behaviours_command(args: argparse.Namespace) -> int:
 
 
 def schema_command(args: argparse.Namespace) -> int:
-    from roomba_bt.behaviours import default_registry
     from roomba_bt.mission.schema import mission_schema
 
-    registry = default_registry()
-    for file in args.plugin_file:
-        if not Path(file).is_file():
-            print(f"roomba-bt schema: --plugin-file {file}: no such file", file=sys.stderr)
-            return ExitCode.INVALID
-        registry, error = registry.with_file(Path(file))
-        if error is not None:
-            print(f"roomba-bt schema: --plugin-file {file}: {error}", file=sys.stderr)
-            return ExitCode.INVALID
+    registry = _registry_with_files("schema", args.plugin_file)
+    if isinstance(registry, int):
+        return registry
     print(json.dumps(mission_schema(registry), indent=2))
     return ExitCode.OK

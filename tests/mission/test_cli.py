@@ -117,6 +117,19 @@ def test_behaviours_json_and_unknown_names(capsys: Capsys) -> None:
     assert "did you mean 'drive'" in capsys.readouterr().err
 
 
+def test_behaviours_lists_a_plugin_files_behaviours_with_plugin_file(capsys: Capsys) -> None:
+    """``schema`` took ``--plugin-file``; ``behaviours`` had no way to show a file's."""
+    assert main(["behaviours", "near_wall"]) == 2
+    assert "; a plugin file's are listed with --plugin-file FILE" in capsys.readouterr().err
+    plugin = str(EXAMPLES / "plugins" / "near_wall.py")
+    assert main(["behaviours", "near_wall", "--plugin-file", plugin]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith(f"near_wall  (condition; from {plugin})")
+    assert "closer_than: int" in out
+    assert main(["behaviours", "--plugin-file", "no_such.py"]) == 2
+    assert "--plugin-file no_such.py: no such file" in capsys.readouterr().err
+
+
 def test_schema_is_json_with_every_behaviour(capsys: Capsys) -> None:
     assert main(["schema"]) == 0
     schema = json.loads(capsys.readouterr().out)
