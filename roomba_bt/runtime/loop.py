@@ -49,6 +49,9 @@ from roomba_bt.runtime.summary import DEFAULT_GRACE, Outcome, RunSummary
 from roomba_bt.runtime.tick_guard import TickGuardLike
 
 log = logging.getLogger(__name__)
+
+#: a gap between frames read this long, not a stall the watchdog saw, is said (``_unread``)
+UNREAD_GAP_SECONDS = 1.0
 _new_tuple = tuple.__new__
 _Blackboard = py_trees.blackboard.Blackboard
 #: the blackboard's one store (py_trees clears it, never replaces it): read off the class on
@@ -246,6 +249,9 @@ class MissionRunner(BaseHandle):
     #: False: on the virtual clock nothing drives meanwhile, and both keep their usual
     #: meaning. A class attribute for the same reason as ``tick_guard``
     on_wall_clock: bool = True
+    #: the next batch's gap is a stall the watchdog saw and the run rode through (set by
+    #: ``_stream_back``, read once by ``_slots_spanned``): not a gap nobody read
+    _gap_explained: bool = False
 
     @property
     def has_snapshot(self) -> bool:
@@ -453,6 +459,7 @@ class MissionRunner(BaseHandle):
         their last command again (the watchdog's drive 0 had replaced it) unless the tick
         sends another."""
         self._stall = None
+        self._gap_explained = True
         self.summary.stalls_ridden += 1
         connection = self.connection
         gap = connection.link.silent_since - silent_since
@@ -529,10 +536,28 @@ class MissionRunner(BaseHandle):
         ``count`` when frames were lost in transit (counted)."""
         if last is None:
             return 1
-        slots = max(count, round((arrival - last) / SLOT_SECONDS))
+        gap = arrival - last
+        if gap >= UNREAD_GAP_SECONDS and not self._gap_explained:
+            self._unread(gap)
+        self._gap_explained = False
+        slots = max(count, round(gap / SLOT_SECONDS))
         if slots != count:
             self.summary.frames_lost += slots - count
         return slots
+
+    def _unread(self, gap: float) -> None:
+        """No frame was read for ``gap`` seconds and the watchdog did not trip: the process
+        did not run (a laptop suspended, SIGSTOP, a host starved of CPU), or the watchdog is
+        off and the robot was silent. Either way the robot went on with its last command,
+        unwatched: counted and said (the frames that waited are dropped as stale)."""
+        summary = self.summary
+        summary.unread_gaps += 1
+        summary.longest_unread_s = max(summary.longest_unread_s, gap)
+        log.warning(
+            "%s: no frame was read for %.2f s (the process suspended or starved of CPU, or "
+            "the robot silent with the watchdog off); the robot went on with its last "
+            "command meanwhile", self.connection.name, gap,
+        )  # fmt: skip
 
     def _flush(self) -> None:
         if self._hazards.pending or self.connection.writer.forward_held:

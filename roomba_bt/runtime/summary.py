@@ -79,6 +79,10 @@ class RunSummary:
     #: of those the frames came back from within the grace
     stalls: int = 0
     stalls_ridden: int = 0
+    #: gaps of a second or more with no frame read and no watchdog trip (the process
+    #: suspended or starved: runtime/loop.py ``_unread``), and the longest
+    unread_gaps: int = 0
+    longest_unread_s: float = 0.0
     #: ticks that ran over ``--tick-limit`` with the wheels moving, each stopped by the tick
     #: guard (runtime/tick_guard.py); where the first and the last were (the behaviour, its
     #: line)
@@ -125,6 +129,14 @@ class RunSummary:
                     "through"
                 ]
                 if self.stalls
+                else []
+            ),
+            *(
+                [
+                    f"unread       {self.unread_gaps} gap(s) with no frame read, the longest "
+                    f"{self.longest_unread_s:.2f} s: the robot went on with its last command"
+                ]
+                if self.unread_gaps
                 else []
             ),
             *(

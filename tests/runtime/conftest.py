@@ -32,6 +32,7 @@ def run_mission(tmp_path: Path) -> RunMission:
         seed: int = 0,
         stall_after: float | None = None,
         burst: int = 1,
+        freeze: tuple[float, float] | None = None,
         observer: Callable[[MissionRunner], None] | None = None,
         tick_limit: float | None = None,
         permissions: Permissions = NO_PERMISSIONS,
@@ -41,7 +42,7 @@ def run_mission(tmp_path: Path) -> RunMission:
         path.write_text(textwrap.dedent(text))
         mission = load_mission(path, params or {}, profile=profile, permissions=permissions)
         simulator = Simulator(load_world(world), profile, seed, faults)
-        link = TapLink(simulator, stall_after, burst)
+        link = TapLink(simulator, stall_after, burst, freeze)
         stack = RunStack(
             mission,
             link,

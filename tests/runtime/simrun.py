@@ -37,11 +37,19 @@ class TapLink(SimLink):
     """A SimLink that keeps every chunk written and read, with the simulated time."""
 
     def __init__(
-        self, simulator: Simulator, stall_after: float | None = None, burst: int = 1
+        self,
+        simulator: Simulator,
+        stall_after: float | None = None,
+        burst: int = 1,
+        freeze: tuple[float, float] | None = None,
     ) -> None:
         super().__init__(simulator)
         self.stall_after = stall_after
         self.burst = burst  # frames delivered per read, as a busy host or USB latency would
+        #: (at, seconds): the first read after ``at`` comes ``seconds`` later, with every
+        #: frame sent meanwhile: the process did not run (a laptop suspended) while the
+        #: robot went on
+        self.freeze = freeze
         self.writes: list[tuple[float, bytes]] = []
         self.reads: list[tuple[float, bytes]] = []
 
@@ -51,6 +59,11 @@ class TapLink(SimLink):
 
     def read(self, timeout: float) -> bytes:
         data = super().read(timeout)
+        if self.freeze is not None and self.simulator.time >= self.freeze[0]:
+            for _ in range(round(self.freeze[1] / 0.015)):
+                self.simulator.step()
+                data += self.simulator.read()
+            self.freeze = None
         if data and self.burst > 1:
             for _ in range(self.burst - 1):
                 self.simulator.step()

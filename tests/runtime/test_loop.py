@@ -262,3 +262,26 @@ def test_without_a_builtin_cycle_passive_ends_with_pause_and_start(
     )
     assert run.link.written.endswith(PAUSE + START)
     assert not run.link.written.endswith(oi.safe().data + SAFE_END)
+
+
+def test_a_gap_nobody_read_is_counted_and_said(
+    run_mission: RunMission, caplog: pytest.LogCaptureFixture
+) -> None:
+    """A laptop suspended mid-run, a process stopped: when it runs again every frame sent
+    meanwhile is there at once, and the watchdog (which watches the link from the running
+    process) saw no silence. The robot drove on with its last command; the run says so."""
+    run = run_mission(SPIN, freeze=(1.0, 2.5), timeout=4.0, watchdog=0.3)
+    summary = run.summary
+    assert summary.outcome is Outcome.TIMEOUT
+    assert summary.unread_gaps == 1 and summary.stalls == 0
+    assert summary.longest_unread_s == pytest.approx(2.5, abs=0.03)
+    assert "unread       1 gap(s) with no frame read, the longest 2.5" in str(summary)
+    assert "no frame was read for 2.5" in caplog.text
+    assert summary.mission_time_s == pytest.approx(4.0, abs=0.05)  # the slots still count
+
+
+def test_a_gap_under_a_second_is_not_said(run_mission: RunMission) -> None:
+    """(A stall the watchdog saw and the run rode through is not one either:
+    test_ride_through.py.)"""
+    summary = run_mission(SPIN, freeze=(1.0, 0.6), timeout=3.0, watchdog=1.0).summary
+    assert summary.unread_gaps == 0 and "unread" not in str(summary)

@@ -70,6 +70,7 @@ def test_a_garbled_second_is_ridden_through_and_the_wheels_get_their_command_aga
     summary, link = run(tmp_path, BadPatchLink, 1.0, 2.0)
     assert summary.outcome is Outcome.TIMEOUT, summary.reason  # the mission went on
     assert summary.stalls == 1 and summary.stalls_ridden == 1
+    assert summary.unread_gaps == 0  # the watchdog saw this gap: not one nobody read
     # drive 0 within 150 ms of the last valid frame, nothing else while garbled
     halts = [t for t, b in link.writes if b == HALT and 1.0 <= t < 2.0]
     assert halts and halts[0] <= 1.0 + 0.15
