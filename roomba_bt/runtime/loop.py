@@ -50,7 +50,7 @@ from roomba_bt.runtime.tick_guard import TickGuardLike
 
 log = logging.getLogger(__name__)
 
-#: a gap between frames read this long, not a stall the watchdog saw, is said (``_unread``)
+#: a gap between frames read this long, not a stall the watchdog saw, is said (``unread_gap``)
 UNREAD_GAP_SECONDS = 1.0
 _new_tuple = tuple.__new__
 _Blackboard = py_trees.blackboard.Blackboard
@@ -331,23 +331,10 @@ class MissionRunner(BaseHandle):
             with contextlib.suppress(Exception):
                 self._blackboard.unregister(clear=True)
         summary.wall_time_s = time.perf_counter() - wall_start
-        snap = self.snapshot if self.has_snapshot else None
-        if snap is not None:
-            summary.mission_time_s = snap.time
-            summary.distance_mm = snap.odometry.path_mm
-            if 25 in snap.frame and 26 in snap.frame:
-                summary.battery_percent = snap.frame.battery_percent
-        summary.final_mode = self._current_mode()
+        summary.take_last(self.snapshot if self.has_snapshot else None)
+        summary.final_mode = mode_of(self.connection)
         summary.unconfirmed_hazards = self._hazards.unconfirmed
-        counters = getattr(self.connection, "counters", None)
-        if counters is not None:
-            summary.checksum_failures = int(getattr(counters, "checksum_failures", 0))
-            summary.skipped_bytes = int(getattr(counters, "skipped_bytes", 0))
-            summary.implausible_frames = int(getattr(counters, "implausible_frames", 0))
-
-    def _current_mode(self) -> OIMode | None:
-        mode = getattr(self.connection, "mode", None)
-        return mode if isinstance(mode, OIMode) else None
+        summary.take_counters(getattr(self.connection, "counters", None))
 
     def _loop(self, root: py_trees.behaviour.Behaviour, summary: RunSummary) -> None:
         success, failure = py_trees.common.Status.SUCCESS, py_trees.common.Status.FAILURE
@@ -538,26 +525,12 @@ class MissionRunner(BaseHandle):
             return 1
         gap = arrival - last
         if gap >= UNREAD_GAP_SECONDS and not self._gap_explained:
-            self._unread(gap)
+            unread_gap(self.summary, self.connection.name, gap)
         self._gap_explained = False
         slots = max(count, round(gap / SLOT_SECONDS))
         if slots != count:
             self.summary.frames_lost += slots - count
         return slots
-
-    def _unread(self, gap: float) -> None:
-        """No frame was read for ``gap`` seconds and the watchdog did not trip: the process
-        did not run (a laptop suspended, SIGSTOP, a host starved of CPU), or the watchdog is
-        off and the robot was silent. Either way the robot went on with its last command,
-        unwatched: counted and said (the frames that waited are dropped as stale)."""
-        summary = self.summary
-        summary.unread_gaps += 1
-        summary.longest_unread_s = max(summary.longest_unread_s, gap)
-        log.warning(
-            "%s: no frame was read for %.2f s (the process suspended or starved of CPU, or "
-            "the robot silent with the watchdog off); the robot went on with its last "
-            "command meanwhile", self.connection.name, gap,
-        )  # fmt: skip
 
     def _flush(self) -> None:
         if self._hazards.pending or self.connection.writer.forward_held:
@@ -588,6 +561,26 @@ class MissionRunner(BaseHandle):
             held = connection.release_forward()
             if held is not None and all(c.spec.channel != "wheels" for c in self._outbox):
                 self._outbox.send(held, self)
+
+
+def unread_gap(summary: RunSummary, link: str, gap: float) -> None:
+    """No frame was read for ``gap`` seconds and the watchdog did not trip: the process did
+    not run (a laptop suspended, SIGSTOP, a host starved of CPU), or the watchdog is off and
+    the robot was silent. Either way the robot went on with its last command, unwatched:
+    counted and said (the frames that waited are dropped as stale)."""
+    summary.unread_gaps += 1
+    summary.longest_unread_s = max(summary.longest_unread_s, gap)
+    log.warning(
+        "%s: no frame was read for %.2f s (the process suspended or starved of CPU, or the "
+        "robot silent with the watchdog off); the robot went on with its last command "
+        "meanwhile", link, gap,
+    )  # fmt: skip
+
+
+def mode_of(connection: object) -> OIMode | None:
+    """The OI mode ``connection``'s model holds, if it has one."""
+    mode = getattr(connection, "mode", None)
+    return mode if isinstance(mode, OIMode) else None
 
 
 def tick_of(root: py_trees.behaviour.Behaviour) -> Callable[[], None]:

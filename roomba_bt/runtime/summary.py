@@ -5,8 +5,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import Enum, IntEnum
+from typing import TYPE_CHECKING
 
+from roomba_bt.oi.frames import BATTERY_PACKETS
 from roomba_bt.oi.modes import OIMode
+
+if TYPE_CHECKING:
+    from roomba_bt.robot.interface import Snapshot
 
 #: Seconds a run waits, after the watchdog stopped the wheels, for valid frames to come back
 #: before it ends as a lost connection, exit 3 (``run --grace``).
@@ -80,7 +85,7 @@ class RunSummary:
     stalls: int = 0
     stalls_ridden: int = 0
     #: gaps of a second or more with no frame read and no watchdog trip (the process
-    #: suspended or starved: runtime/loop.py ``_unread``), and the longest
+    #: suspended or starved: runtime/loop.py ``unread_gap``), and the longest
     unread_gaps: int = 0
     longest_unread_s: float = 0.0
     #: ticks that ran over ``--tick-limit`` with the wheels moving, each stopped by the tick
@@ -106,6 +111,23 @@ class RunSummary:
     @property
     def exit_code(self) -> int:
         return self.outcome.exit_code
+
+    def take_last(self, snapshot: Snapshot | None) -> None:
+        """Mission time, distance and charge as the last snapshot had them (None: the run
+        ended before its first frame, and they stay unknown)."""
+        if snapshot is None:
+            return
+        self.mission_time_s = snapshot.time
+        self.distance_mm = snapshot.odometry.path_mm
+        if snapshot.frame.carries(BATTERY_PACKETS):
+            self.battery_percent = snapshot.frame.battery_percent
+
+    def take_counters(self, counters: object) -> None:
+        """What the stream parser refused or skipped (its ``counters``; None: a link without)."""
+        if counters is not None:
+            self.checksum_failures = int(getattr(counters, "checksum_failures", 0))
+            self.skipped_bytes = int(getattr(counters, "skipped_bytes", 0))
+            self.implausible_frames = int(getattr(counters, "implausible_frames", 0))
 
     def lines(self) -> list[str]:
         mode = self.final_mode.label if self.final_mode is not None else "unknown"
