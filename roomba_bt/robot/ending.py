@@ -157,6 +157,10 @@ class SafeStop:
             )
         if self.unheard is not None:
             return self._undelivered(f"the stop was written but is unconfirmed: {self.unheard}")
+        if link.bytes_read == 0:  # written for a robot that may hear and not answer (TX cut)
+            return self._undelivered(
+                "the stop was written but is unconfirmed: the robot never answered"
+            )
         link.streaming = False
         link.status = LinkStatus.STOPPED
         self.safe_stopped = True
@@ -169,8 +173,10 @@ class SafeStop:
     def _undelivered(self, why: str) -> bool:
         """The stop did not reach the robot: say so, with what the robot was last seen
         doing; False (what :meth:`stop` returns)."""
-        mode = self.writer.modes.mode
-        report = f"last seen in {mode.label} {self.activity()}; {why}"
+        if self.writer.link.bytes_read == 0:  # nothing was ever seen of it
+            report = why
+        else:
+            report = f"last seen in {self.writer.modes.mode.label} {self.activity()}; {why}"
         if report != self.stop_report:  # close() tries once more: said once, not twice
             log.error("%s: %s", self.writer.link.name, report)
         self.stop_report = report

@@ -333,6 +333,8 @@ class MissionRunner(BaseHandle):
         summary.wall_time_s = time.perf_counter() - wall_start
         summary.take_last(self.snapshot if self.has_snapshot else None)
         summary.final_mode = mode_of(self.connection)
+        link = getattr(self.connection, "link", None)
+        summary.robot_answered = getattr(link, "bytes_read", 1) > 0
         summary.unconfirmed_hazards = self._hazards.unconfirmed
         summary.take_counters(getattr(self.connection, "counters", None))
 

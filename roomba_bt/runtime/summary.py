@@ -102,6 +102,8 @@ class RunSummary:
     #: False when the stop could not reach the robot: the final mode is then only the last
     #: one seen, and says so
     stop_delivered: bool = True
+    #: False when not one byte came from the robot: its mode is then not known at all
+    robot_answered: bool = True
     max_tick_s: float = 0.0
     #: the exception's traceback when a behaviour raised one (printed under ``-v``)
     traceback: str = ""
@@ -131,7 +133,9 @@ class RunSummary:
 
     def lines(self) -> list[str]:
         mode = self.final_mode.label if self.final_mode is not None else "unknown"
-        if not self.stop_delivered:
+        if not self.robot_answered:
+            mode = "unknown: the robot never answered"
+        elif not self.stop_delivered:
             mode = f"unknown: last seen in {mode}, the stop was not delivered"
         battery = f"{self.battery_percent:.0f}%" if self.battery_percent is not None else "n/a"
         reason = f" ({self.reason})" if self.reason else ""

@@ -193,6 +193,13 @@ def test_a_robot_silent_at_every_rate_keeps_the_likely_causes(tmp_path: Path) ->
     assert "the robot did not answer a Query List (149) for packet 35" in summary.reason
     assert "likely causes: wrong baud rate" in summary.reason
     assert "answers at" not in summary.reason
+    # nothing was ever heard: its mode is not known, and the stop (written: a robot that
+    # hears but cannot answer is stopped by it) is not claimed delivered
+    assert not summary.robot_answered
+    assert "final mode   unknown: the robot never answered" in str(summary)
+    assert summary.safe_stop == (
+        "NOT DELIVERED: the stop was written but is unconfirmed: the robot never answered"
+    )
 
 
 def test_noise_at_the_run_rate_is_not_taken_for_a_baud_change(tmp_path: Path) -> None:
