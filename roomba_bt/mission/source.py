@@ -57,7 +57,9 @@ def loc_of(node: yaml.Node, file: str, path: str) -> Loc:
 def compose(path: Path, display: str) -> tuple[yaml.Node | None, list[Diagnostic]]:
     """The document's root node, or the syntax error as a diagnostic."""
     try:
-        text = path.read_text(encoding="utf-8")
+        text = yamlsource.read_text(path)
+    except yamlsource.FileTooLarge as exc:
+        return None, [Diagnostic(display, 1, 1, f"mission file of {exc}")]
     except OSError as exc:
         return None, [Diagnostic(display, 1, 1, f"cannot read mission file: {exc.strerror}")]
     except UnicodeDecodeError as exc:

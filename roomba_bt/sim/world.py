@@ -914,7 +914,11 @@ def world_text(path_or_name: str | pathlib.Path) -> tuple[str, str]:
                               f"a YAML file or one of {', '.join(shipped_worlds())}")]
             )  # fmt: skip
     try:
-        text = path.read_text(encoding="utf-8")
+        text = yamlsource.read_text(path)
+    except yamlsource.FileTooLarge as exc:
+        raise WorldError(
+            [WorldProblem(str(path), 0, 0, "world", f"a file of {exc}", "a YAML file up to 1 MiB")]
+        ) from None
     except UnicodeDecodeError as exc:
         line, col = yamlsource.undecodable_position(exc)
         byte = bytes(exc.object)[exc.start]

@@ -16,7 +16,9 @@ Missions walk the composed nodes (:func:`compose`, :func:`position`, :func:`is_p
 
 from __future__ import annotations
 
+import os
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import yaml
@@ -72,6 +74,37 @@ def undecodable_position(exc: UnicodeDecodeError) -> tuple[int, int]:
     data = bytes(exc.object)
     line_start = data.rfind(b"\n", 0, exc.start) + 1
     return data.count(b"\n", 0, exc.start) + 1, exc.start - line_start + 1
+
+
+#: The most of a YAML file roomba-bt reads (decided): a mission or a world is a few KB, a long
+#: waypoint list a few hundred; a generated 3 MB mission took 8 s and 500 MB to validate, so a
+#: larger file is refused before it is read, not composed until the machine runs out of memory.
+MAX_FILE_BYTES = 1 << 20
+
+
+class FileTooLarge(Exception):
+    """A YAML file over :data:`MAX_FILE_BYTES`; ``size`` in bytes."""
+
+    def __init__(self, size: int) -> None:
+        self.size = size
+        super().__init__(
+            f"{size:,} bytes; at most {MAX_FILE_BYTES:,} are read (a mission or a world is a "
+            "few KB: a file generated wrong?)"
+        )
+
+
+def read_text(path: Path) -> str:
+    """A YAML file's text; :class:`FileTooLarge` before reading one over the limit, else what
+    ``Path.read_text`` raises (``OSError``, ``UnicodeDecodeError``)."""
+    with path.open("rb") as file:
+        size = os.fstat(file.fileno()).st_size
+        if size > MAX_FILE_BYTES:
+            raise FileTooLarge(size)
+        data = file.read(MAX_FILE_BYTES + 1)
+    if len(data) > MAX_FILE_BYTES:  # grew since, or a size the file system does not give
+        raise FileTooLarge(len(data))
+    # as Path.read_text: universal newlines (a CRLF file's columns as a LF file's)
+    return data.decode("utf-8").replace("\r\n", "\n").replace("\r", "\n")
 
 
 class Refused(yaml.MarkedYAMLError):

@@ -191,3 +191,18 @@ def test_a_value_out_of_range_from_the_command_line_says_so_where_it_is_used(
         "repeat.times must be at least 1, got 0 (${n} is laps=0, set on the command line)",
     )
     assert compile_mission(path, {"speed": "400mm/s"})[1] == []
+
+
+def test_a_mission_or_include_over_a_mebibyte_is_named_not_read(tmp_path: Path) -> None:
+    from roomba_bt.yamlsource import MAX_FILE_BYTES
+
+    big = "# " + "x" * MAX_FILE_BYTES + "\n"
+    path = tmp_path / "big.yaml"
+    path.write_text("mission: big\ntree: {wait: 1s}\n" + big)
+    _, (problem,) = compile_mission(path)
+    assert (problem.line, problem.column) == (1, 1)
+    assert problem.message.startswith("mission file of 1,048,6")
+    (tmp_path / "lib.yaml").write_text("subtrees: {}\n" + big)
+    path.write_text("include: [lib.yaml]\ntree: {wait: 1s}\n")
+    _, problems = compile_mission(path)
+    assert any("lib.yaml" in p.file and "at most 1,048,576 are read" in p.message for p in problems)

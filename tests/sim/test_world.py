@@ -276,3 +276,12 @@ def test_a_world_nested_deeper_than_the_reader_allows_is_refused_where_it_goes_o
     [problem] = problems(f"rooms: {deep}\n")
     column = 8 + yamlsource.MAX_NESTING - 1  # the list that is one too deep
     assert problem.startswith(f"w.yaml:1:{column}: lists and mappings nested more than ")
+
+
+def test_a_world_file_over_a_mebibyte_is_named_not_read(tmp_path: pathlib.Path) -> None:
+    path = tmp_path / "huge.yaml"
+    path.write_text("rooms: [[[0, 0], [3, 0], [3, 3], [0, 3]]]\n# " + "x" * (1 << 20) + "\n")
+    with pytest.raises(WorldError) as info:
+        load_world(str(path))
+    [problem] = [str(p) for p in info.value.problems]
+    assert "at most 1,048,576 are read" in problem
