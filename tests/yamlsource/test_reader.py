@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 import yaml
@@ -230,13 +231,9 @@ def test_the_deepest_collection_first_in_the_file_is_the_one_named() -> None:
     assert yamlsource.error_position(caught.value) == (3, 3 + yamlsource.MAX_NESTING)
 
 
-def test_a_file_over_the_limit_is_refused_before_it_is_read(
-    tmp_path: pytest.TempPathFactory,
-) -> None:
+def test_a_file_over_the_limit_is_refused_before_it_is_read(tmp_path: Path) -> None:
     """A generated 3 MB mission took 8 s and 500 MB to validate."""
-    from pathlib import Path
-
-    folder = Path(str(tmp_path))
+    folder = tmp_path
     at_limit = folder / "at.yaml"
     at_limit.write_bytes(b"a: 1\r\n" + b"#" * (yamlsource.MAX_FILE_BYTES - 6))
     assert yamlsource.read_text(at_limit).startswith("a: 1\n")  # newlines as read_text's
