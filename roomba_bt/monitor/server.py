@@ -327,6 +327,8 @@ class MonitorServer:
             body = await request.json()
         except (json.JSONDecodeError, UnicodeDecodeError):
             return _error(400, 'the body is not JSON; expected {"action": "pause"} or similar')
+        except RecursionError:  # json's decoder recurses: a body nested thousands deep
+            return _error(400, 'the body is nested too deeply; expected {"action": "pause"}')
         if not isinstance(body, dict) or not isinstance(body.get("action"), str):
             return _error(400, 'expected a JSON object with "action" (a string)')
         node = body.get("node")

@@ -71,6 +71,7 @@ def _control(server: MonitorServer, payload: object, **headers: str) -> tuple[in
     ("payload", "status", "message"),
     [
         (b"{not json", 400, "not JSON"),
+        (b'{"a":' * 5000 + b"1" + b"}" * 5000, 400, "nested too deeply"),  # was a 500, a traceback
         ([1, 2], 400, '"action"'),
         ({"action": "explode"}, 400, "allowed pause, resume, step, stop, break, force"),
         ({"action": "break", "node": "x", "value": "start"}, 400, "node index"),
