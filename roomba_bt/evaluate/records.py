@@ -233,6 +233,8 @@ def read_results(path: str | Path) -> list[EpisodeResult]:
                     raise ResultsFileError(
                         f"{path}:{n}:{exc.colno}: not JSON ({exc.msg})"
                     ) from None
+                except RecursionError:  # json's decoder recurses: nested thousands deep
+                    raise ResultsFileError(f"{path}:{n}: nested too deeply for a result") from None
                 if not isinstance(record, dict):
                     raise ResultsFileError(f"{path}:{n}: expected an object per line")
                 rows.append((n, record))

@@ -183,6 +183,8 @@ def load_record(path: str | Path) -> Record:
         header = json.loads(lines[0])
     except json.JSONDecodeError as exc:
         raise RecordError(f"{path}:1:{exc.colno}: header is not JSON: {exc.msg}") from None
+    except RecursionError:  # json's decoder recurses: a line nested thousands deep
+        raise RecordError(f"{path}:1: header nested too deeply to be a record's") from None
     if not isinstance(header, dict) or header.get("format") != RECORD_FORMAT:
         raise RecordError(f"{path}:1: not a {RECORD_FORMAT} file (header format field)")
     if header.get("version") != RECORD_VERSION:
@@ -208,6 +210,8 @@ def load_record(path: str | Path) -> Record:
                     continue
                 raise TypeError("a note's 'note' must be an object")
             t, d, b = float(item["t"]), str(item["d"]), bytes.fromhex(item["b"])
+        except RecursionError:
+            raise RecordError(f"{path}:{number}: a chunk nested too deeply to be one") from None
         except (json.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
             raise RecordError(
                 f"{path}:{number}: malformed chunk ({type(exc).__name__}: {exc}); expected "

@@ -70,6 +70,9 @@ def test_bad_results_files_say_where(tmp_path: Path) -> None:
     bad.write_text('{"seed": 1}\n', encoding="utf-8")
     with pytest.raises(ResultsFileError, match=r"bad.jsonl:1: missing column 'mission'"):
         read_results(bad)
+    bad.write_text('{"seed": 1}\n' + "[" * 100_000 + "]" * 100_000 + "\n", encoding="utf-8")
+    with pytest.raises(ResultsFileError, match=r"bad.jsonl:2: nested too deeply"):
+        read_results(bad)  # json's RecursionError was a traceback
 
 
 @pytest.mark.parametrize("suffix", [".jsonl", ".csv"])

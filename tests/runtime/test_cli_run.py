@@ -158,6 +158,19 @@ def test_a_hand_edited_header_is_named_field_by_field(
     assert "Traceback" not in out + err
 
 
+@pytest.mark.parametrize("line", [1, 2])
+def test_a_line_nested_thousands_deep_is_placed_not_a_traceback(
+    line: int, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    record = tmp_path / "deep.jsonl"
+    deep = "[" * 100_000 + "]" * 100_000
+    record.write_text("\n".join([json.dumps(HEADER), deep] if line == 2 else [deep]) + "\n")
+    assert main(["replay", str(record)]) == 2
+    out, err = capsys.readouterr()
+    assert f"{record}:{line}: " in err and "nested too deeply" in err
+    assert "Traceback" not in out + err
+
+
 @pytest.mark.parametrize("t", ["NaN", "-5", "Infinity", "0.5"])
 def test_a_time_that_is_not_finite_or_goes_back_is_placed(
     t: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
