@@ -25,6 +25,7 @@ does not answer, 4 when a behaviour raised in an episode (a bug, not a mission o
 from __future__ import annotations
 
 import argparse
+import math
 import shlex
 import sys
 from dataclasses import dataclass
@@ -192,8 +193,8 @@ def parse_dock(items: list[str]) -> tuple[tuple[str, Any], ...] | str:
                 out.append((name, (lo, hi)))
             else:
                 value = float(text)
-                if value <= 0:
-                    return f"--dock {item!r}: expected a number above 0"
+                if not (math.isfinite(value) and value > 0):
+                    return f"--dock {item!r}: expected a finite number above 0"
                 out.append((name, value))
         except ValueError:
             return f"--dock {item!r}: {text!r} is not a number (or FROM,TO for red/green)"
@@ -356,8 +357,8 @@ def _check_arguments(args: argparse.Namespace) -> str | None:
         return f"--runs {args.runs}: expected at least 1"
     if args.jobs < 1:
         return f"--jobs {args.jobs}: expected at least 1"
-    if args.within is not None and args.within <= 0:
-        return f"--within {args.within}: expected a distance above 0 m"
+    if args.within is not None and not (math.isfinite(args.within) and args.within > 0):
+        return f"--within {args.within}: expected a finite distance above 0 m"
     if args.battery is not None and not 0.0 <= args.battery <= 1.0:
         return f"--battery {args.battery}: expected a fraction in 0..1"
     if not 0.0 <= args.odometry_error <= 0.2:

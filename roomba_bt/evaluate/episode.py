@@ -355,7 +355,8 @@ def start_pose(world: World, spec: EpisodeSpec) -> Any:
     try:
         return world.sample_start(spec.seed)
     except Exception as exc:
-        raise EvaluationError(str(exc)) from None
+        given = f"--within {spec.within_m:g} m: " if spec.within_m is not None else ""
+        raise EvaluationError(f"{given}{exc}") from None
 
 
 def run_episode(spec: EpisodeSpec) -> EpisodeResult:

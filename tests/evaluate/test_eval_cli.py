@@ -40,6 +40,10 @@ def test_min_rate_not_reached_exits_1(capsys: pytest.CaptureFixture[str]) -> Non
         ([BUMP, "--runs", "0"], "--runs 0"),
         ([BUMP, "--dock", "buoy_range=far"], "is not a number"),
         ([BUMP, "--dock", "colour=1"], "FIELD one of"),
+        ([BUMP, "--dock", "buoy_range=nan"], "expected a finite number above 0"),  # were taken
+        ([BUMP, "--dock", "force_field=inf"], "expected a finite number above 0"),
+        ([BUMP, "--within", "nan"], "--within nan: expected a finite distance above 0 m"),
+        ([BUMP, "--within", "1e-9"], "--within 1e-09 m: "),  # was the world file's fault
         ([BUMP, "--world", "moon"], "no such file or shipped world"),
         ([BUMP, "--within", "1", "--world", "empty-room", "--battery", "2"], "--battery"),
         ([BUMP, "-p", "speed"], "NAME=VALUE"),
