@@ -162,8 +162,8 @@ def parse_timeout(text: str | None) -> float | str | None:
             value = parse_quantity("duration", text)
         except UnitError as exc:
             return f"--timeout {text!r}: {exc}"
-    if value <= 0:
-        return f"--timeout {text!r}: must be more than 0 s"
+    if not math.isfinite(value) or value <= 0:  # float() takes "nan" and "inf"
+        return f"--timeout {text!r}: must be a finite duration, more than 0 s"
     return value
 
 

@@ -56,6 +56,8 @@ def test_parameter_from_the_command_line(
         (["-p", "speed"], "expected NAME=VALUE"),
         (["-p", "speed=900mm/s"], "900 mm/s"),
         (["--timeout", "soon"], "--timeout 'soon'"),
+        (["--timeout", "nan"], "--timeout 'nan': must be a finite duration"),  # was no timeout
+        (["--timeout", "1e999s"], "--timeout '1e999s': must be a finite duration"),
         (["--world", "no-such-world"], "no-such-world"),
         (["--baud", "19200", "-p", "speed=100mm/s"], None),
     ],
