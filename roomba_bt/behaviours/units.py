@@ -78,6 +78,8 @@ def parse_quantity(dimension: str, value: object) -> float:
             f"expected a {dimension} such as {EXAMPLES[dimension]}, got {quoted(value)}"
         )
     number, unit = float(match.group(1)), match.group(2)
+    if not math.isfinite(number):  # 1e400 overflows to inf
+        raise UnitError(f"{value!r}: {match.group(1)} is too large a number for a {dimension}")
     if unit not in units:
         known = ", ".join(units)
         if unit == "":

@@ -103,3 +103,11 @@ def test_a_long_wrong_value_is_quoted_short() -> None:
     with pytest.raises(UnitError) as info:
         SPEED.parse("a" * 500)
     assert str(info.value).endswith("got '" + "a" * 59 + "... (500 characters)")
+
+
+@pytest.mark.parametrize("text", ["1e400 s", "-1e400 s", "1e309ms"])
+def test_a_number_too_large_for_a_float_is_refused_not_infinity(text: str) -> None:
+    """``wait: 1e400 s`` was taken as a wait of inf s (``inf s`` itself was refused)."""
+    with pytest.raises(UnitError, match="is too large a number for a duration"):
+        parse_quantity("duration", text)
+    assert parse_quantity("duration", "1e300 s") == 1e300
