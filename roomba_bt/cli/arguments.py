@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import inspect
+import json
 import math
 import os
 from collections.abc import Callable
@@ -102,6 +103,33 @@ def output_file(text: str) -> str:
     if path.exists() and not os.access(path, os.W_OK):
         raise argparse.ArgumentTypeError(f"found {text!r}: the file is not writable")
     return text
+
+
+def record_file(text: str) -> str:
+    """A file for ``--record``: as :func:`output_file`, and if it exists, an earlier record
+    (written over) and nothing else: ``run m.yaml --record m.yaml`` wrote the record over
+    the mission (a record has no suffix to check, as a picture or a results file has)."""
+    output_file(text)
+    path = Path(text)
+    if path.is_file() and path.stat().st_size > 0 and not _is_record(path):
+        raise argparse.ArgumentTypeError(
+            f"found {text!r}: a file that is not a record (a mission? a world?); --record "
+            "writes over an earlier record only: name a new file (run.jsonl)"
+        )
+    return text
+
+
+def _is_record(path: Path) -> bool:
+    """Whether ``path`` starts with a record's header line."""
+    from roomba_bt.runtime.recording import RECORD_FORMAT
+
+    try:
+        with path.open(encoding="utf-8", errors="replace") as file:
+            first = file.readline(4096)
+        header = json.loads(first)
+    except (OSError, ValueError, RecursionError):
+        return False
+    return isinstance(header, dict) and header.get("format") == RECORD_FORMAT
 
 
 def plot_file(text: str) -> str:

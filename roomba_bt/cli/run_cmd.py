@@ -15,11 +15,11 @@ from roomba_bt.cli.arguments import (
     add_param_option,
     add_permission_options,
     mission_file,
-    output_file,
     parse_params,
     parse_timeout,
     permissions,
     plot_file,
+    record_file,
     seconds,
 )
 from roomba_bt.cli.monitor_cmd import LiveMonitor
@@ -74,7 +74,7 @@ def _add_run_parser(sub: Any) -> None:
     run.add_argument(
         "--record",
         metavar="FILE",
-        type=output_file,
+        type=record_file,
         help="write every byte in and out, timestamped",
     )
     run.add_argument(

@@ -282,3 +282,19 @@ def test_a_record_that_cannot_be_written_stops_the_record_not_the_run(
         r"record       stopped at \d+\.\d{3} s: No space left on device; the file ends there", out
     )
     assert any("--record /dev/full stopped at" in r.getMessage() for r in caplog.records)
+
+
+def test_a_record_is_not_written_over_a_file_that_is_not_one(
+    mission: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``run m.yaml --record m.yaml`` wrote the record over the mission file."""
+    before = mission.read_text()
+    argv = ["run", str(mission), "--fast", "--display", "none"]
+    assert main([*argv, "--record", str(mission)]) == 2
+    assert "a file that is not a record (a mission? a world?)" in capsys.readouterr().err
+    assert mission.read_text() == before
+    record = tmp_path / "run.jsonl"
+    assert main([*argv, "--record", str(record)]) == 0  # a new file
+    assert main([*argv, "--record", str(record)]) == 0  # an earlier record: written over
+    (tmp_path / "empty.jsonl").write_text("")
+    assert main([*argv, "--record", str(tmp_path / "empty.jsonl")]) == 0
