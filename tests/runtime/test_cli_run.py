@@ -290,7 +290,9 @@ def test_a_record_is_not_written_over_a_file_that_is_not_one(
     """``run m.yaml --record m.yaml`` wrote the record over the mission file."""
     before = mission.read_text()
     argv = ["run", str(mission), "--fast", "--display", "none"]
-    assert main([*argv, "--record", str(mission)]) == 2
+    with pytest.raises(SystemExit) as refused:  # argparse's usage error
+        main([*argv, "--record", str(mission)])
+    assert refused.value.code == 2
     assert "a file that is not a record (a mission? a world?)" in capsys.readouterr().err
     assert mission.read_text() == before
     record = tmp_path / "run.jsonl"
