@@ -105,6 +105,20 @@ def output_file(text: str) -> str:
     return text
 
 
+def output_with_suffix(*suffixes: str) -> Callable[[str], str]:
+    """An :func:`output_file` whose name ends in one of ``suffixes`` (``show --dot``, ``--svg``):
+    ``show m.yaml --dot m.yaml`` wrote the graph over the mission."""
+
+    def check(text: str) -> str:
+        if Path(text).suffix.lower() not in suffixes:
+            raise argparse.ArgumentTypeError(
+                f"found {text!r}; allowed: a file ending in {' or '.join(suffixes)}"
+            )
+        return output_file(text)
+
+    return check
+
+
 def record_file(text: str) -> str:
     """A file for ``--record``: as :func:`output_file`, and if it exists, an earlier record
     (written over) and nothing else: ``run m.yaml --record m.yaml`` wrote the record over

@@ -20,7 +20,7 @@ from roomba_bt.cli.arguments import (
     add_permission_options,
     baud_rate,
     mission_file,
-    output_file,
+    output_with_suffix,
     parse_params,
     permissions,
 )
@@ -62,9 +62,9 @@ def register(sub: Any) -> None:
     )
     show.add_argument("file", metavar="FILE", help="a mission file, or a shipped mission's name")
     _common(show)
-    show.add_argument("--dot", metavar="OUT.dot", type=output_file,
+    show.add_argument("--dot", metavar="OUT.dot", type=output_with_suffix(".dot", ".gv"),
                       help="also write the tree as Graphviz dot")  # fmt: skip
-    show.add_argument("--svg", metavar="OUT.svg", type=output_file,
+    show.add_argument("--svg", metavar="OUT.svg", type=output_with_suffix(".svg"),
                       help="also write the tree as SVG (needs Graphviz's dot program)")  # fmt: skip
 
     add_command(

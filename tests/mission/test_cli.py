@@ -95,6 +95,20 @@ def test_show_refuses_a_graph_file_it_cannot_write_before_anything_else(
     assert "Graphviz" not in err and out == ""
 
 
+@pytest.mark.parametrize("option", ["--dot", "--svg"])
+def test_show_writes_its_graph_only_to_a_file_named_for_it(
+    option: str, capsys: Capsys, tmp_path: Path
+) -> None:
+    """``show m.yaml --dot m.yaml`` wrote the graph over the mission."""
+    mission = tmp_path / "m.yaml"
+    mission.write_text("tree: {wait: 1s}\n")
+    with pytest.raises(SystemExit) as exited:
+        main(["show", str(mission), option, str(mission)])
+    assert exited.value.code == 2
+    assert f"{option}: found {str(mission)!r}; allowed: a file ending in ." in capsys.readouterr().err
+    assert mission.read_text() == "tree: {wait: 1s}\n"
+
+
 def test_show_an_invalid_mission(mission_file: Callable[..., Path], capsys: Capsys) -> None:
     assert main(["show", str(mission_file("tree: []\n"))]) == 2
     assert "expected a node" in capsys.readouterr().out
