@@ -105,7 +105,8 @@ def test_show_writes_its_graph_only_to_a_file_named_for_it(
     with pytest.raises(SystemExit) as exited:
         main(["show", str(mission), option, str(mission)])
     assert exited.value.code == 2
-    assert f"{option}: found {str(mission)!r}; allowed: a file ending in ." in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert f"{option}: found {str(mission)!r}; allowed: a file ending in ." in err
     assert mission.read_text() == "tree: {wait: 1s}\n"
 
 
