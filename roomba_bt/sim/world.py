@@ -509,18 +509,39 @@ class _Checker:
 
 def _first_crossing(poly: Polygon) -> tuple[int, int] | None:
     """The first two sides of ``poly`` that meet other than at the corner they share (side
-    ``i`` from point ``i`` to ``i + 1``), or None for a simple polygon. A world's polygon is
-    drawn by hand: points out of order make a bow tie, whose floor and walls are not what its
-    author meant (which side of a crossed side is inside?)."""
+    ``i`` from point ``i`` to ``i + 1``; the first: the least ``(i, j)``), or None for a
+    simple polygon. A world's polygon is drawn by hand: points out of order make a bow tie,
+    whose floor and walls are not what its author meant (which side of a crossed side is
+    inside?).
+
+    Only sides that share a cell of a grid (cells about a side long) are tested against each
+    other: every pair was tested, and a floor plan of 10,000 points (200 KB) took 37 s to
+    load; a side meets another only where their boxes overlap, in a cell both are in."""
     n = len(poly)
-    for a in range(n):
-        p, q = poly[a], poly[(a + 1) % n]
-        for b in range(a + 1, n):
-            if b == a + 1 or (a == 0 and b == n - 1):
-                continue  # neighbours: they share a corner
-            if segments_meet(p, q, poly[b], poly[(b + 1) % n]):
-                return a, b
-    return None
+    if n < 4:
+        return None
+    sides = [(poly[i], poly[(i + 1) % n]) for i in range(n)]
+    xs = [x for x, _ in poly]
+    ys = [y for _, y in poly]
+    extent = max(max(xs) - min(xs), max(ys) - min(ys), 1e-9)
+    cell = max(extent / max(1.0, n**0.5), sum(math.dist(a, b) for a, b in sides) / n, 1e-9)
+    cells: dict[tuple[int, int], list[int]] = {}
+    for i, (a, b) in enumerate(sides):
+        for cx in range(int((min(a[0], b[0])) // cell), int((max(a[0], b[0])) // cell) + 1):
+            for cy in range(int((min(a[1], b[1])) // cell), int((max(a[1], b[1])) // cell) + 1):
+                cells.setdefault((cx, cy), []).append(i)
+    crossings: list[tuple[int, int]] = []
+    tested: set[tuple[int, int]] = set()
+    for members in cells.values():
+        for k, first in enumerate(members):
+            for second in members[k + 1 :]:
+                pair = (first, second) if first < second else (second, first)
+                if pair in tested or pair[1] == pair[0] + 1 or pair == (0, n - 1):
+                    continue  # tested in another cell, or neighbours (they share a corner)
+                tested.add(pair)
+                if segments_meet(*sides[pair[0]], *sides[pair[1]]):
+                    crossings.append(pair)
+    return min(crossings) if crossings else None
 
 
 def _side(poly: Polygon, i: int) -> str:

@@ -7,6 +7,8 @@ import math
 import pathlib
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from roomba_bt import yamlsource
 from roomba_bt.oi import commands as C
@@ -285,3 +287,53 @@ def test_a_world_file_over_a_mebibyte_is_named_not_read(tmp_path: pathlib.Path) 
         load_world(str(path))
     [problem] = [str(p) for p in info.value.problems]
     assert "at most 1,048,576 are read" in problem
+
+
+def _every_pair_crossing(poly: tuple[tuple[float, float], ...]) -> tuple[int, int] | None:
+    """The first crossing as every pair of sides finds it (the reference)."""
+    from roomba_bt.sim.geometry import segments_meet
+
+    n = len(poly)
+    for a in range(n):
+        for b in range(a + 1, n):
+            if b == a + 1 or (a == 0 and b == n - 1):
+                continue
+            if segments_meet(poly[a], poly[(a + 1) % n], poly[b], poly[(b + 1) % n]):
+                return a, b
+    return None
+
+
+_GRID_POINT = st.tuples(st.integers(0, 8), st.integers(0, 8)).map(
+    lambda p: (p[0] * 250.0, p[1] * 250.0)  # on a grid: collinear and touching sides are common
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(_GRID_POINT, min_size=3, max_size=12, unique=True))
+def test_the_grid_finds_the_crossing_every_pair_finds(points: list[tuple[float, float]]) -> None:
+    poly = tuple(points)
+    assert world_module._first_crossing(poly) == _every_pair_crossing(poly)
+
+
+def test_a_floor_plan_of_many_points_tests_few_pairs(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every pair of sides was tested: a 10,000-point floor plan (200 KB) took 37 s to load.
+    Counted, not timed: the pairs tested grow with the points, not with their square."""
+    from roomba_bt.sim import geometry
+
+    tested = 0
+
+    def counting(*args: tuple[float, float]) -> bool:
+        nonlocal tested
+        tested += 1
+        return geometry.segments_meet(*args)
+
+    monkeypatch.setattr(world_module, "segments_meet", counting)
+    n = 4000
+    circle = tuple(
+        (5000 + 4000 * math.cos(math.tau * i / n), 5000 + 4000 * math.sin(math.tau * i / n))
+        for i in range(n)
+    )
+    assert world_module._first_crossing(circle) is None
+    assert tested < 10 * n  # every pair: n (n - 3) / 2, about 8 million
+    bow = (circle[0], circle[2], circle[1], *circle[3:])  # two points out of order
+    assert world_module._first_crossing(bow) == _every_pair_crossing(bow) == (0, 2)
