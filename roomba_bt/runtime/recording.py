@@ -166,6 +166,29 @@ class Record:
 def load_record(path: str | Path) -> Record:
     """Read a record; :class:`RecordError` names the file and line of anything malformed."""
     path = Path(path)
+    lines = _record_lines(path)
+    record = Record(_header(path, lines[0]))
+    last = 0.0
+    for number, line in enumerate(lines[1:], start=2):
+        if not line.strip():
+            continue
+        item = _chunk(path, number, line)
+        if isinstance(item, dict):  # an operator's act: a note
+            record.notes.append((float(item["t"]), item["note"]))
+            continue
+        t = item[0]
+        if not math.isfinite(t) or t < last:
+            raise RecordError(
+                f"{path}:{number}: time {t!r} s; expected a finite time, not before the line "
+                f"before it ({last:g} s)"
+            )
+        last = t
+        record.chunks.append(item)
+    return record
+
+
+def _record_lines(path: Path) -> list[str]:
+    """The lines of the record file ``path``, at least one."""
     try:
         lines = path.read_text(encoding="utf-8").splitlines()
     except UnicodeDecodeError as exc:  # a damaged copy, or not a record at all
@@ -179,8 +202,13 @@ def load_record(path: str | Path) -> Record:
         raise RecordError(f"{path}: cannot read record: {exc.strerror or exc}") from None
     if not lines:
         raise RecordError(f"{path}:1: empty file; expected a {RECORD_FORMAT} header line")
+    return lines
+
+
+def _header(path: Path, line: str) -> dict[str, Any]:
+    """The record's first line: its header, every field checked (:func:`header_problem`)."""
     try:
-        header = json.loads(lines[0])
+        header = json.loads(line)
     except json.JSONDecodeError as exc:
         raise RecordError(f"{path}:1:{exc.colno}: header is not JSON: {exc.msg}") from None
     except RecursionError:  # json's decoder recurses: a line nested thousands deep
@@ -195,38 +223,31 @@ def load_record(path: str | Path) -> Record:
     problem = header_problem(header)
     if problem is not None:
         raise RecordError(f"{path}:1: {problem}")
-    record = Record(header)
-    last = 0.0
-    for number, line in enumerate(lines[1:], start=2):
-        if not line.strip():
-            continue
-        try:
-            item = json.loads(line)
-            if not isinstance(item, dict):
-                raise TypeError(f"a JSON {type(item).__name__}, not an object")
-            if item.get("d") == "note":
-                if isinstance(item.get("note"), dict):
-                    record.notes.append((float(item["t"]), item["note"]))
-                    continue
-                raise TypeError("a note's 'note' must be an object")
-            t, d, b = float(item["t"]), str(item["d"]), bytes.fromhex(item["b"])
-        except RecursionError:
-            raise RecordError(f"{path}:{number}: a chunk nested too deeply to be one") from None
-        except (json.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
-            raise RecordError(
-                f"{path}:{number}: malformed chunk ({type(exc).__name__}: {exc}); expected "
-                '{"t": seconds, "d": "in"|"out", "b": hex}'
-            ) from None
-        if d not in ("in", "out"):
-            raise RecordError(f"{path}:{number}: direction {d!r}; allowed: in, out, note")
-        if not math.isfinite(t) or t < last:
-            raise RecordError(
-                f"{path}:{number}: time {t!r} s; expected a finite time, not before the line "
-                f"before it ({last:g} s)"
-            )
-        last = t
-        record.chunks.append((t, d, b))
-    return record
+    return header
+
+
+def _chunk(path: Path, number: int, line: str) -> tuple[float, str, bytes] | dict[str, Any]:
+    """Line ``number``: a chunk ``(t, "in" | "out", bytes)``, or a note (its object)."""
+    try:
+        item = json.loads(line)
+        if not isinstance(item, dict):
+            raise TypeError(f"a JSON {type(item).__name__}, not an object")
+        if item.get("d") == "note":
+            if isinstance(item.get("note"), dict):
+                float(item["t"])
+                return item
+            raise TypeError("a note's 'note' must be an object")
+        t, d, b = float(item["t"]), str(item["d"]), bytes.fromhex(item["b"])
+    except RecursionError:
+        raise RecordError(f"{path}:{number}: a chunk nested too deeply to be one") from None
+    except (json.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
+        raise RecordError(
+            f"{path}:{number}: malformed chunk ({type(exc).__name__}: {exc}); expected "
+            '{"t": seconds, "d": "in"|"out", "b": hex}'
+        ) from None
+    if d not in ("in", "out"):
+        raise RecordError(f"{path}:{number}: direction {d!r}; allowed: in, out, note")
+    return t, d, b
 
 
 def header_problem(header: dict[str, Any]) -> str | None:
