@@ -281,7 +281,7 @@ class UndeclaredCommand(TypeError):
 
     def __init__(self, behaviour: RobotBehaviour, command: Command) -> None:
         declaration = behaviour.declaration
-        listed = ", ".join(str(op) for op in declaration.sends) or "nothing"
+        listed = ", ".join(f"{COMMANDS[op].name} ({op})" for op in declaration.sends) or "nothing"
         super().__init__(
             f"{declaration.name} sent {command.spec.name} ({command.spec.opcode}), which its "
             f"declaration does not list: add {command.spec.opcode} to @declare(sends=...) "

@@ -47,6 +47,7 @@ from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
 from roomba_bt.behaviours.reasons import failure_reason
+from roomba_bt.yamlsource import quoted
 
 #: The py_trees releases whose ticks these classes are proven to repeat (by the property tests
 #: in tests/behaviours/test_lean.py); ``pyproject.toml`` pins the same. A release may change a
@@ -99,9 +100,9 @@ class InvalidStatus(TypeError):
     def __init__(self, node: Behaviour, status: object) -> None:
         self.node = node
         self.status = status
-        shown = repr(status) if len(repr(status)) <= 60 else repr(status)[:57] + "..."
         super().__init__(
-            f"{type(node).__name__}.update() returned {shown}, not a Status: it must return "
+            f"{type(node).__name__}.update() returned {quoted(status)}, not a Status: it must "
+            "return "
             "py_trees.common.Status.SUCCESS, FAILURE or RUNNING"
         )
 

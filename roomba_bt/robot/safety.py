@@ -8,8 +8,8 @@ stopping) and SIGHUP (the terminal gone: an SSH session to the robot's computer 
 window closed) would end the process without unwinding anything, SIGQUIT (Ctrl-\\, the key
 pressed when Ctrl-C seems slow) would end it at once with a core dump, and SIGTSTP (Ctrl-Z)
 would suspend it, each leaving the robot driving in Safe mode: the Open Interface has no
-command timeout. Inside :func:`sigterm_raises` they raise :class:`Terminated` instead; the previous
-handlers come back on the way out.
+command timeout. Inside :func:`sigterm_raises` they raise :class:`Terminated` instead; the
+previous handlers come back on the way out.
 """
 
 from __future__ import annotations
@@ -45,8 +45,7 @@ ENDING_SIGNALS: tuple[int, ...] = (
 
 class Terminated(KeyboardInterrupt):
     """Raised in the main thread when SIGTERM, SIGHUP, SIGTSTP (Ctrl-Z) or SIGQUIT (Ctrl-\\)
-    arrives inside
-    :func:`sigterm_raises` or an :class:`InterruptGuard`.
+    arrives inside :func:`sigterm_raises` or an :class:`InterruptGuard`.
 
     A :class:`KeyboardInterrupt`, so whatever handles Ctrl-C (the CLI: exit code 130) handles
     it too, and ``except Exception`` does not swallow it.

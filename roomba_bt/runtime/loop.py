@@ -93,9 +93,9 @@ def behaviour_error(exc: BaseException) -> str:
     where = f"{frames[-1][0].f_code.co_filename}:{frames[-1][1]}" if frames else ""
     if isinstance(exc, InvalidStatus):  # raised after its update returned: where update is
         behaviour, frames = exc.node, []
-        update = getattr(type(behaviour), "update", None)
+        update: Any = getattr(type(behaviour), "update", None)
         with contextlib.suppress(TypeError, OSError):
-            where = f"{inspect.getsourcefile(update)}:{inspect.getsourcelines(update)[1]}"  # type: ignore[arg-type]
+            where = f"{inspect.getsourcefile(update)}:{inspect.getsourcelines(update)[1]}"
     if behaviour is None:
         return f"{what} (at {where})" if where else what
     with contextlib.suppress(TypeError, OSError):

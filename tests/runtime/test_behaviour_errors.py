@@ -122,7 +122,7 @@ class Sneaky(Action):
          "raised TypeError: send() takes a Command from roomba_bt.oi.commands", 12),
         ("sneaky", UNDECLARED,
          "raised UndeclaredCommand: sneaky sent drive (137), which its declaration does not "
-         "list: add 137 to @declare(sends=...) (it lists 139)", 13),
+         "list: add 137 to @declare(sends=...) (it lists leds (139))", 13),
     ],
 )  # fmt: skip
 def test_a_plugin_that_breaks_the_contract_ends_the_run_as_its_error(
