@@ -139,7 +139,7 @@ def _is_record(path: Path) -> bool:
 
     try:
         with path.open(encoding="utf-8", errors="replace") as file:
-            first = file.readline(4096)
+            first = file.readline(1 << 16)  # a header line, parameters and all
         header = json.loads(first)
     except (OSError, ValueError, RecursionError):
         return False
