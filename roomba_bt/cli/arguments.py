@@ -133,6 +133,43 @@ def record_file(text: str) -> str:
     return text
 
 
+def results_file(text: str) -> str:
+    """A file for ``eval --out``: as :func:`output_file`, ``.jsonl`` or ``.csv``, and if it
+    exists, earlier results and nothing else (as :func:`record_file`: an hour's sweep written
+    over someone's data)."""
+    from roomba_bt.evaluate.records import FORMATS
+
+    output_file(text)
+    path = Path(text)
+    suffix = path.suffix.lower()
+    if suffix not in FORMATS:
+        raise argparse.ArgumentTypeError(
+            f"found {text!r}; allowed: a file ending in {' or '.join(FORMATS)}"
+        )
+    if path.is_file() and path.stat().st_size > 0 and not _is_results(path, suffix):
+        raise argparse.ArgumentTypeError(
+            f"found {text!r}: a file that is not an evaluation's results; --out writes over "
+            "earlier results only: name a new file"
+        )
+    return text
+
+
+def _is_results(path: Path, suffix: str) -> bool:
+    """Whether ``path`` starts as ``eval --out`` writes: a record (JSON Lines) or a header
+    row (CSV) with the episode's seed and outcome."""
+    try:
+        with path.open(encoding="utf-8", errors="replace") as file:
+            first = file.readline(1 << 16)
+        if suffix == ".csv":
+            columns = set(first.strip().split(","))
+        else:
+            record = json.loads(first)
+            columns = set(record) if isinstance(record, dict) else set()
+    except (OSError, ValueError, RecursionError):
+        return False
+    return {"seed", "outcome"} <= columns
+
+
 def _is_record(path: Path) -> bool:
     """Whether ``path`` starts with a record's header line."""
     from roomba_bt.runtime.recording import RECORD_FORMAT

@@ -37,11 +37,11 @@ from roomba_bt.cli.arguments import (
     add_param_option,
     add_permission_options,
     mission_file,
-    output_file,
     parse_params,
     parse_timeout,
     permissions,
     plot_file,
+    results_file,
 )
 from roomba_bt.oi.profiles import PROFILES
 from roomba_bt.runtime.summary import ExitCode, Outcome
@@ -106,7 +106,7 @@ def _add_episode_options(ev: argparse.ArgumentParser) -> None:
 def _add_output_options(ev: argparse.ArgumentParser) -> None:
     """What is written (records, JSON, a plot) and the variants compared."""
     ev.add_argument(
-        "--out", metavar="FILE", type=output_file,
+        "--out", metavar="FILE", type=results_file,
         help="one record per episode: .jsonl (JSON Lines) or .csv",
     )  # fmt: skip
     ev.add_argument("--json", action="store_true", help="print the summary as JSON")

@@ -157,7 +157,6 @@ def test_two_missions_are_compared_and_the_text_report_says_so(
 @pytest.mark.parametrize(
     ("extra", "message"),
     [
-        (["--out", "results.txt"], "allowed: .jsonl, .csv"),
         (["--sweep", "speed"], "expected NAME=V1,V2"),
         (["--sweep", "speed=1,2", "--variant", "speed=3"], "one or the other"),
         (["--variant", "speed"], "--variant 'speed': expected NAME=VALUE"),
@@ -175,17 +174,35 @@ def test_bad_comparison_and_output_options_exit_2(
 
 @pytest.mark.parametrize(
     ("where", "message"),
-    [("folder", "a directory; expected a file name"), ("no/x.jsonl", "there is no directory")],
-)
+    [("folder", "a directory; expected a file name"), ("no/x.jsonl", "there is no directory"),
+     ("results.txt", "allowed: a file ending in .jsonl or .csv"),
+     # someone's data: written over by an hour's sweep before
+     ("data.csv", "a file that is not an evaluation's results; --out writes over earlier")],
+)  # fmt: skip
 def test_an_out_file_that_cannot_be_written_is_refused_before_any_episode(
     where: str, message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     (tmp_path / "folder").mkdir()
+    (tmp_path / "data.csv").write_text("when,what\n2026-12-04,lunch\n")
     with pytest.raises(SystemExit) as exited:  # argparse's own exit, with its usage line
         main(["eval", BUMP, "--runs", "2", "--out", str(tmp_path / where)])
     assert exited.value.code == 2
     err = capsys.readouterr().err
     assert message in err and "1/2" not in err  # no episode ran
+    assert (tmp_path / "data.csv").read_text() == "when,what\n2026-12-04,lunch\n"
+
+
+@pytest.mark.parametrize("suffix", [".jsonl", ".csv"])
+def test_earlier_results_are_written_over(
+    suffix: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / f"r{suffix}"
+    argv = ["eval", BUMP, "-p", "duration=1s", "--no-progress", "--out", str(out)]
+    assert main([*argv, "--runs", "2"]) == 0
+    assert main([*argv, "--runs", "3"]) == 0
+    assert capsys.readouterr().err.count("results written to") == 2
+    lines = out.read_text().splitlines()
+    assert len(lines) == (3 if suffix == ".jsonl" else 4)  # the second run's (CSV: a header)
 
 
 def test_a_failed_results_write_keeps_the_summary(
