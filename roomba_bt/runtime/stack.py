@@ -157,6 +157,7 @@ def replay_record(
         baud=baud,
         packets=packets,
         watchdog=0.0,
+        keep_awake=False,  # no robot to keep awake (it said a robot "sleeps after 5 minutes")
         observer=observer,
         input_ended=input_ended,
         replayed_notes=[note for _, note in record.notes],  # the tick guard's acts

@@ -111,9 +111,10 @@ def test_a_run_recorded_on_the_virtual_clock_replays_byte_for_byte(
     assert main([*argv, "-p", "duration=3s"] if name.startswith("bump") else argv) == 0
     capsys.readouterr()
     assert main(["replay", str(record)]) == 0
-    out = capsys.readouterr().out
+    out, err = capsys.readouterr()
     assert "outcome      SUCCESS" in out
     assert "the tree wrote the same" in out
+    assert "pulse BRC" not in err  # no robot to keep awake in a replay
 
 
 def test_replay_of_a_malformed_record_is_exit_2(
