@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from roomba_bt.cli import main
+from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.runtime.recording import load_record
 
 from .simrun import SPIN
@@ -111,10 +112,32 @@ def test_a_run_recorded_on_the_virtual_clock_replays_byte_for_byte(
     assert main([*argv, "-p", "duration=3s"] if name.startswith("bump") else argv) == 0
     capsys.readouterr()
     assert main(["replay", str(record)]) == 0
-    out, err = capsys.readouterr()
+    out = capsys.readouterr().out
     assert "outcome      SUCCESS" in out
     assert "the tree wrote the same" in out
-    assert "pulse BRC" not in err  # no robot to keep awake in a replay
+
+
+def test_a_replay_keeps_no_robot_awake(tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    """It said "no modem line to pulse BRC on this link: a robot left in Passive sleeps after
+    5 minutes": there is no robot in a replay."""
+    import logging
+
+    from roomba_bt.mission import load_mission
+    from roomba_bt.runtime.recording import load_record
+    from roomba_bt.runtime.stack import replay_record
+
+    mission = Path(__file__).resolve().parents[2] / "missions" / "dock.yaml"
+    record = tmp_path / "run.jsonl"
+    argv = ["run", str(mission), "--fast", "--display", "none", "--record", str(record)]
+    assert main(argv) == 0
+    loaded = load_record(record)
+    caplog.set_level(logging.INFO, logger="roomba_bt")
+    summary, transport = replay_record(
+        loaded, load_mission(mission), profile=CREATE2, baud=115200, name="run.jsonl",
+        packets=tuple(loaded.header["packets"]),
+    )  # fmt: skip
+    assert transport.first_difference() is None and summary.outcome.value == "success"
+    assert not [r for r in caplog.records if r.name == "roomba_bt.robot.wake"]
 
 
 def test_replay_of_a_malformed_record_is_exit_2(
