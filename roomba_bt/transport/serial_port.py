@@ -30,6 +30,13 @@ from roomba_bt.transport.base import TransportError
 
 #: Bytes taken from the port in one read; a 115200 baud link carries 172 bytes per 15 ms.
 READ_CHUNK = 4096
+#: A read this large is taken for a backlog and the port is drained
+#: (``SerialTransport._drained``): a tty gives at most 4 KiB a read (its line discipline's
+#: buffer) however much more waits behind it; a stream at 115200 baud brings 2 KiB in 0.18 s
+BACKLOG_SIGN = READ_CHUNK // 2
+#: The most one read takes when the port holds a backlog: more than a pty or a USB serial
+#: driver holds (64 KiB)
+MAX_BACKLOG = 1 << 18
 DEFAULT_BAUD = 115200
 #: A stop sequence is 12 bytes; anything slower than this means the far end is gone.
 DEFAULT_WRITE_TIMEOUT = 0.5
@@ -151,21 +158,42 @@ class SerialTransport:
     def read(self, timeout: float) -> bytes:
         try:
             data: bytes = self._port.read(READ_CHUNK)
-            if data or timeout <= 0:
-                return data
-            if self._wait_handle is not None:
-                ready, _, _ = select.select([self._wait_handle], [], [], timeout)
-                return self._port.read(READ_CHUNK) if ready else b""
-            if self._polled:
-                return self._poll(timeout)
-            self._set_timeout(timeout)
-            try:
-                first: bytes = self._port.read(1)
-            finally:
-                self._set_timeout(0.0)
-            return first + self._port.read(READ_CHUNK) if first else b""
+            if not data and timeout > 0:
+                data = self._wait(timeout)
+            return data if len(data) < BACKLOG_SIGN else self._drained(data)
         except (serial.SerialException, OSError, ValueError, TypeError) as exc:
             raise TransportError(self.name, "read", exc) from exc
+
+    def _wait(self, timeout: float) -> bytes:
+        """What comes within ``timeout`` seconds on a port that had nothing."""
+        if self._wait_handle is not None:
+            ready, _, _ = select.select([self._wait_handle], [], [], timeout)
+            return self._port.read(READ_CHUNK) if ready else b""
+        if self._polled:
+            return self._poll(timeout)
+        self._set_timeout(timeout)
+        try:
+            first: bytes = self._port.read(1)
+        finally:
+            self._set_timeout(0.0)
+        return first + self._port.read(READ_CHUNK) if first else b""
+
+    def _drained(self, data: bytes) -> bytes:
+        """``data`` (half a chunk or more) and the rest of what waits in the port, up to
+        :data:`MAX_BACKLOG`: after the process did not run for a while (a laptop suspended),
+        the OS holds seconds of frames (a pty or a USB serial driver up to 64 KiB), and read a
+        chunk at a time they came as several batches, the first given the gap's slots and the
+        others counted again by their frames: the mission clock ran ahead (10.6 s of mission
+        time in 8.75 s after a 4 s stop). In one batch the runtime counts them once."""
+        chunks = [data]
+        total = len(data)
+        while total < MAX_BACKLOG:
+            data = self._port.read(READ_CHUNK)  # the port's timeout is 0: what is there
+            if not data:
+                break
+            chunks.append(data)
+            total += len(data)
+        return b"".join(chunks)
 
     def _poll(self, timeout: float) -> bytes:
         deadline = time.monotonic() + timeout

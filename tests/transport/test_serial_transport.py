@@ -235,3 +235,39 @@ def test_hung_up_holds_speed_0_refuses_writes_and_restores_the_rate_on_any_exit(
         finally:
             os.close(slave)
             transport.close()
+
+
+class _TtyPort:
+    """A port as a tty gives its bytes: at most 4095 a read (its line discipline's buffer),
+    whatever more waits behind it; nothing once empty (the port's timeout is 0)."""
+
+    def __init__(self, waiting: bytes) -> None:
+        self.waiting = waiting
+        self.reads = 0
+
+    def read(self, size: int) -> bytes:
+        self.reads += 1
+        taken, self.waiting = self.waiting[: min(size, 4095)], self.waiting[min(size, 4095) :]
+        return taken
+
+
+def test_a_backlog_is_read_whole_in_one_read() -> None:
+    """After the process did not run for a while the OS holds seconds of frames (a pty took
+    20 KiB here), and a tty gives at most 4 KiB a read: read a chunk at a time, the backlog
+    came as several batches that the runtime counted twice (over a pty, after a 4 s SIGSTOP:
+    10.6 s of mission time in 8.75 s; now 8.80 s in 8.83 s)."""
+    from roomba_bt.transport.serial_port import BACKLOG_SIGN, READ_CHUNK
+
+    with pty_far_end() as far:
+        transport = open_transport(far.url)
+        try:
+            backlog = bytes(i % 251 for i in range(5 * READ_CHUNK + 17))
+            real = transport._port  # type: ignore[attr-defined]
+            transport._port = _TtyPort(backlog)  # type: ignore[attr-defined]
+            assert transport.read(0.0) == backlog  # in one read, not six
+            small = bytes(BACKLOG_SIGN - 1)
+            port = transport._port = _TtyPort(small)  # type: ignore[attr-defined]
+            assert transport.read(0.0) == small and port.reads == 1  # not drained: one read
+        finally:
+            transport._port = real  # type: ignore[attr-defined]
+            transport.close()
