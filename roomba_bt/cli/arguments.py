@@ -123,64 +123,67 @@ def record_file(text: str) -> str:
     """A file for ``--record``: as :func:`output_file`, and if it exists, an earlier record
     (written over) and nothing else: ``run m.yaml --record m.yaml`` wrote the record over
     the mission (a record has no suffix to check, as a picture or a results file has)."""
+    from roomba_bt.runtime.recording import RECORD_FORMAT
+
     output_file(text)
-    path = Path(text)
-    if path.is_file() and path.stat().st_size > 0 and not _is_record(path):
-        raise argparse.ArgumentTypeError(
-            f"found {text!r}: a file that is not a record (a mission? a world?); --record "
-            "writes over an earlier record only: name a new file (run.jsonl)"
-        )
-    return text
+
+    def is_record(first: str) -> bool:
+        header = _json_object(first)
+        return header is not None and header.get("format") == RECORD_FORMAT
+
+    return _written_over_only(
+        text, is_record, "a record (a mission? a world?); --record writes over an earlier "
+        "record only: name a new file (run.jsonl)",
+    )  # fmt: skip
 
 
 def results_file(text: str) -> str:
     """A file for ``eval --out``: as :func:`output_file`, ``.jsonl`` or ``.csv``, and if it
     exists, earlier results and nothing else (as :func:`record_file`: an hour's sweep written
-    over someone's data)."""
+    over someone's data): a JSON Lines record or a CSV header with the seed and outcome."""
     from roomba_bt.evaluate.records import FORMATS
 
     output_file(text)
-    path = Path(text)
-    suffix = path.suffix.lower()
+    suffix = Path(text).suffix.lower()
     if suffix not in FORMATS:
         raise argparse.ArgumentTypeError(
             f"found {text!r}; allowed: a file ending in {' or '.join(FORMATS)}"
         )
-    if path.is_file() and path.stat().st_size > 0 and not _is_results(path, suffix):
-        raise argparse.ArgumentTypeError(
-            f"found {text!r}: a file that is not an evaluation's results; --out writes over "
-            "earlier results only: name a new file"
-        )
-    return text
+
+    def is_results(first: str) -> bool:
+        record = _json_object(first) if suffix == ".jsonl" else None
+        columns = set(record or ()) if suffix == ".jsonl" else set(first.strip().split(","))
+        return {"seed", "outcome"} <= columns
+
+    return _written_over_only(
+        text, is_results, "an evaluation's results; --out writes over earlier results only: "
+        "name a new file",
+    )  # fmt: skip
 
 
-def _is_results(path: Path, suffix: str) -> bool:
-    """Whether ``path`` starts as ``eval --out`` writes: a record (JSON Lines) or a header
-    row (CSV) with the episode's seed and outcome."""
-    try:
-        with path.open(encoding="utf-8", errors="replace") as file:
-            first = file.readline(1 << 16)
-        if suffix == ".csv":
-            columns = set(first.strip().split(","))
-        else:
-            record = json.loads(first)
-            columns = set(record) if isinstance(record, dict) else set()
-    except (OSError, ValueError, RecursionError):
-        return False
-    return {"seed", "outcome"} <= columns
-
-
-def _is_record(path: Path) -> bool:
-    """Whether ``path`` starts with a record's header line."""
-    from roomba_bt.runtime.recording import RECORD_FORMAT
-
+def _written_over_only(text: str, is_kind: Callable[[str], bool], refusal: str) -> str:
+    """An existing file (not empty) only if its first line says it is of the kind written
+    (``is_kind``): what else is there is someone's, not ours."""
+    path = Path(text)
+    if not path.is_file() or path.stat().st_size == 0:
+        return text
     try:
         with path.open(encoding="utf-8", errors="replace") as file:
             first = file.readline(1 << 16)  # a header line, parameters and all
-        header = json.loads(first)
-    except (OSError, ValueError, RecursionError):
-        return False
-    return isinstance(header, dict) and header.get("format") == RECORD_FORMAT
+    except OSError:
+        first = ""
+    if not is_kind(first):
+        raise argparse.ArgumentTypeError(f"found {text!r}: a file that is not {refusal}")
+    return text
+
+
+def _json_object(line: str) -> dict[str, Any] | None:
+    """``line`` as a JSON object, or None (not JSON, not an object, nested too deep)."""
+    try:
+        value = json.loads(line)
+    except (ValueError, RecursionError):
+        return None
+    return value if isinstance(value, dict) else None
 
 
 def plot_file(text: str) -> str:

@@ -174,7 +174,7 @@ def load_record(path: str | Path) -> Record:
             continue
         item = _chunk(path, number, line)
         if isinstance(item, dict):  # an operator's act: a note
-            record.notes.append((float(item["t"]), item["note"]))
+            record.notes.append((item["t"], item["note"]))
             continue
         t = item[0]
         if not math.isfinite(t) or t < last:
@@ -234,7 +234,7 @@ def _chunk(path: Path, number: int, line: str) -> tuple[float, str, bytes] | dic
             raise TypeError(f"a JSON {type(item).__name__}, not an object")
         if item.get("d") == "note":
             if isinstance(item.get("note"), dict):
-                float(item["t"])
+                item["t"] = float(item["t"])  # checked here, once
                 return item
             raise TypeError("a note's 'note' must be an object")
         t, d, b = float(item["t"]), str(item["d"]), bytes.fromhex(item["b"])
