@@ -297,10 +297,7 @@ class MonitorSession:
         _note(runner, {"reload": mission.name, "at": "before"})
         if not was_paused:
             self._pause(runner, "reload", noted=False)
-        old = runner.mission.root
-        with contextlib.suppress(Exception):
-            if old.status is Status.RUNNING:
-                old.stop(Status.INVALID)
+        runner.stop_tree()
         runner.mission = mission
         mission.setup(runner)
         self.state.forced.clear()

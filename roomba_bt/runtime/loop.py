@@ -297,7 +297,7 @@ class MissionRunner(BaseHandle):
                 if tick_guard is not None:
                     tick_guard.close()  # it writes nothing more: the safe stop is ours
                 guard.stopping()  # a further Ctrl-C or SIGTERM waits for the safe stop
-                self._finish(self.mission.root, summary, wall_start)
+                self._finish(summary, wall_start)
         return summary
 
     def release_interrupts(self) -> None:
@@ -305,13 +305,18 @@ class MissionRunner(BaseHandle):
         if self._guard is not None:
             self._guard.release()
 
-    def _finish(
-        self, root: py_trees.behaviour.Behaviour, summary: RunSummary, wall_start: float
-    ) -> None:
+    def stop_tree(self) -> None:
+        """Stop the running tree (each running leaf's ``terminate``) and drop what its leaves
+        queued on the way out: the safe stop that comes with it (the run's end, a reload from
+        the monitor) supersedes their halts, which Passive would refuse anyway."""
+        root = self.mission.root
         with contextlib.suppress(Exception):
             if root.status == py_trees.common.Status.RUNNING:
                 root.stop(py_trees.common.Status.INVALID)
-        self._outbox.clear()  # whatever a terminating leaf queued: the safe stop supersedes it
+        self._outbox.clear()
+
+    def _finish(self, summary: RunSummary, wall_start: float) -> None:
+        self.stop_tree()
         try:
             sequence = [c.name for c in self.connection.stop_sequence()]
             stopped = self.connection.safe_stop()

@@ -75,7 +75,6 @@ class RunStack:
         tick_limit: float | None = None,
         replayed_notes: Sequence[dict[str, Any]] | None = None,
     ) -> None:
-        self.mission = mission
         self.packets = tuple(
             packets if packets is not None else stream_request(mission.packets, baud)
         )
@@ -111,6 +110,11 @@ class RunStack:
                 else None
             ),
         )
+
+    @property
+    def mission(self) -> MissionLike:
+        """The mission running now: the one given, until the monitor reloads another."""
+        return self.runner.mission
 
     def run(self) -> RunSummary:
         """The mission to its end; the robot is left stopped (see :meth:`MissionRunner.run`).

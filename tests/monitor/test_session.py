@@ -292,3 +292,28 @@ def test_the_feed_is_bounded_and_shares_what_did_not_change(until: Callable[...,
     assert unchanged
     pairs = itertools.pairwise(records)
     assert all(b.statuses is a.statuses for a, b in pairs if not b.changed and a.tree == b.tree)
+
+
+def test_a_reload_stops_the_old_tree_under_the_safe_stop_and_the_new_tree_is_the_runs(
+    until: Callable[..., None], tmp_path: Path
+) -> None:
+    """A reload while the shuttle drives: the old tree's running drive, stopped after the
+    reload's safe stop, queued its halt, which went out in Passive and was refused (two
+    "refused: drive needs Safe or Full" lines under a run that did nothing wrong); and the
+    run's last tree, printed under the summary, was the first mission's."""
+    waiting = tmp_path / "waiting.yaml"
+    waiting.write_text("mission: waiting\ntree:\n  sequence:\n    - mode: safe\n    - wait: 1s\n")
+    rig = Rig()
+    new = load_mission(waiting, {}, profile=CREATE2)
+
+    def operator(rig: Rig) -> None:
+        until(lambda: rig.ticks(ticked=True) > 100 and bool(rig.sim.left_speed))
+        rig.session.reload(new)
+
+    summary = rig.run_with(operator)
+    assert summary.outcome is Outcome.SUCCESS, summary.reason
+    assert summary.refused_commands == 0, rig.runner.refusals
+    assert rig.stack.mission is new
+    assert [e.text for e in rig.feed.events if e.kind == "reload"] == [
+        "reloaded waiting: the new tree starts from its root"
+    ]
