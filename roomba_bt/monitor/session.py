@@ -307,9 +307,11 @@ class MonitorSession:
         self.state.paused = was_paused
         runner.clock_held = was_paused
         self._skip_tick = True
+        # the new tree sets its own modes, from Passive: now, or when a paused run resumes
+        # (which sends nothing back: neither the old tree's mode nor its wheel commands)
+        self._mode_before_pause = None
         if not was_paused:
             self.state.pause_reason = ""
-            self._mode_before_pause = None  # the new tree sets its own modes, from Passive
 
     def check_reloadable(self, mission: Any) -> str | None:
         """Why ``mission`` cannot replace the running one, or None."""

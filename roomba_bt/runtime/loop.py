@@ -308,12 +308,14 @@ class MissionRunner(BaseHandle):
     def stop_tree(self) -> None:
         """Stop the running tree (each running leaf's ``terminate``) and drop what its leaves
         queued on the way out: the safe stop that comes with it (the run's end, a reload from
-        the monitor) supersedes their halts, which Passive would refuse anyway."""
+        the monitor) supersedes their halts, which Passive would refuse anyway. Its commands
+        no longer stand: nothing sends them again (a resume, the watchdog's recovery)."""
         root = self.mission.root
         with contextlib.suppress(Exception):
             if root.status == py_trees.common.Status.RUNNING:
                 root.stop(py_trees.common.Status.INVALID)
         self._outbox.clear()
+        self.last_sent.clear()
 
     def _finish(self, summary: RunSummary, wall_start: float) -> None:
         self.stop_tree()

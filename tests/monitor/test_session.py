@@ -317,3 +317,33 @@ def test_a_reload_stops_the_old_tree_under_the_safe_stop_and_the_new_tree_is_the
     assert [e.text for e in rig.feed.events if e.kind == "reload"] == [
         "reloaded waiting: the new tree starts from its root"
     ]
+
+
+def test_a_reload_while_paused_resumes_into_the_new_tree_from_passive_with_no_old_command(
+    until: Callable[..., None], tmp_path: Path
+) -> None:
+    """Paused, reloaded, resumed: the resume sent the old tree's mode and its last Drive
+    again (the actuators as *that* tree left them), so the new tree's first ``wait`` drove
+    the shuttle's 100 mm/s, in Safe, although no leaf of it asked to move."""
+    waiting = tmp_path / "waiting.yaml"
+    waiting.write_text("mission: waiting\ntree:\n  sequence:\n    - wait: 2s\n    - mode: safe\n")
+    rig = Rig()
+    new = load_mission(waiting, {}, profile=CREATE2)
+    seen: dict[str, object] = {}
+
+    def operator(rig: Rig) -> None:
+        until(lambda: rig.ticks(ticked=True) > 100 and bool(rig.sim.left_speed))
+        rig.session.request("pause")
+        until(lambda: rig.session.state.paused)
+        rig.session.reload(new)
+        until(lambda: rig.stack.mission is new)
+        rig.session.request("resume")
+        resumed = rig.ticks(ticked=True)
+        until(lambda: rig.ticks(ticked=True) > resumed + 60)  # 0.9 s into the 2 s wait
+        seen["during the wait"] = (rig.sim.mode, rig.sim.left_speed, rig.sim.right_speed)
+
+    summary = rig.run_with(operator)
+    assert summary.outcome is Outcome.SUCCESS, summary.reason
+    assert seen["during the wait"] == (OIMode.PASSIVE, 0.0, 0.0)
+    resumes = [e.text for e in rig.feed.events if e.text.startswith("resume")]
+    assert resumes == ["resume (resumed by the operator): mode unchanged; the tree goes on"]
