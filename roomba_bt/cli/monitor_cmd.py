@@ -137,8 +137,11 @@ class LiveMonitor:
         if self.args.watch:
             self._spawn(self._watch, "roomba-bt watch")
         if sys.stdin.isatty() and not self.args.monitor_readonly:
-            print(KEYS_HELP, flush=True)
-            self._spawn(self._keys, "roomba-bt keys")
+            if in_foreground(sys.stdin.fileno()):
+                print(KEYS_HELP, flush=True)
+                self._spawn(self._keys, "roomba-bt keys")
+            else:  # setting the terminal from the background (&) stopped the run (SIGTTOU)
+                print("keys: off (started in the background); the page's controls work")
         return None
 
     def _spawn(self, target: Any, name: str) -> None:
@@ -228,7 +231,10 @@ class LiveMonitor:
                 ready, _, _ = select.select([fd], [], [], 0.2)
                 if not ready:
                     continue
-                key = os.read(fd, 1).decode(errors="replace").lower()
+                try:
+                    key = os.read(fd, 1).decode(errors="replace").lower()
+                except OSError:  # the terminal gone, or read from the background (EIO)
+                    return
                 action = actions.get(key)
                 if action is None:
                     continue
@@ -236,6 +242,15 @@ class LiveMonitor:
                     self.session.request(action)
         finally:
             termios.tcsetattr(fd, termios.TCSADRAIN, saved)
+
+
+def in_foreground(fd: int) -> bool:
+    """Whether this process's group owns the terminal at ``fd``: a command started with ``&``
+    does not, and the terminal stops it (SIGTTOU) when it changes the terminal's settings."""
+    try:
+        return os.tcgetpgrp(fd) == os.getpgrp()
+    except OSError:
+        return False
 
 
 def _files_of(mission: Any, path: Path) -> tuple[Path, ...]:

@@ -33,6 +33,14 @@ WALL_CLOCK_SIGNALS: tuple[int, ...] = tuple(
     getattr(signal, name) for name in ("SIGTSTP", "SIGQUIT") if hasattr(signal, name)
 )
 
+#: The terminal's own stops, Ctrl-Z's kin: a process in the background is stopped by SIGTTOU
+#: when it writes to a terminal set with ``stty tostop`` or changes the terminal's settings,
+#: and by SIGTTIN when it reads from it, its robot driving on. On the wall clock they are
+#: ignored: the write goes through (POSIX), a read fails with EIO.
+TERMINAL_STOP_SIGNALS: tuple[int, ...] = tuple(
+    getattr(signal, name) for name in ("SIGTTOU", "SIGTTIN") if hasattr(signal, name)
+)
+
 #: The signals that end a run with its safe stop: Ctrl-C, ``kill``/systemd, the terminal
 #: gone, and :data:`WALL_CLOCK_SIGNALS`. SIGHUP exists on POSIX only.
 ENDING_SIGNALS: tuple[int, ...] = (
@@ -117,6 +125,8 @@ class InterruptGuard:
         self.signals = tuple(
             signum for signum in ENDING_SIGNALS if wall_clock or signum not in WALL_CLOCK_SIGNALS
         )
+        #: :data:`TERMINAL_STOP_SIGNALS`, ignored on the wall clock
+        self.ignoring = TERMINAL_STOP_SIGNALS if wall_clock else ()
         self.stop_begun = False
         self.ignored = 0
         self._previous: dict[int, object] = {}
@@ -141,6 +151,8 @@ class InterruptGuard:
         if threading.current_thread() is threading.main_thread():
             for signum in self.signals:
                 self._previous[signum] = signal.signal(signum, self._handle)
+            for signum in self.ignoring:
+                self._previous[signum] = signal.signal(signum, signal.SIG_IGN)
         return self
 
     def __exit__(self, *exc_info: object) -> None:

@@ -88,3 +88,25 @@ def test_a_guard_where_nothing_drives_leaves_ctrl_z_and_ctrl_backslash_alone(sig
         assert signal.getsignal(signum) is not before
     assert signal.getsignal(signum) is before
     assert signal.getsignal(signal.SIGHUP) is hang_up
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTTOU, signal.SIGTTIN], ids=["SIGTTOU", "SIGTTIN"])
+def test_a_guard_on_the_wall_clock_ignores_the_terminals_stops_and_gives_them_back(
+    signum: int,
+) -> None:
+    """A background job writing to a ``tostop`` terminal (SIGTTOU) or reading it (SIGTTIN)
+    is stopped as by Ctrl-Z; on the wall clock the run ignores them (the write goes
+    through), elsewhere they keep their meaning (tests/runtime/test_background.py runs it)."""
+    before = signal.getsignal(signum)
+    with InterruptGuard(wall_clock=False):
+        assert signal.getsignal(signum) is before
+    with InterruptGuard():
+        assert signal.getsignal(signum) is signal.SIG_IGN
+        os.kill(os.getpid(), signum)  # not stopped: the test goes on
+    assert signal.getsignal(signum) is before
+    guard = InterruptGuard(hold=True)
+    with guard:
+        pass
+    assert signal.getsignal(signum) is signal.SIG_IGN  # until the summary is printed
+    guard.release()
+    assert signal.getsignal(signum) is before
