@@ -100,6 +100,9 @@ class MonitorSession:
         self._requests: queue.SimpleQueue[Request] = queue.SimpleQueue()
         self._wake = threading.Event()
         self._mode_before_pause: OIMode | None = None
+        #: a built-in cycle (Seek Dock, Clean) driving the robot in Passive when it paused:
+        #: the pause's safe stop ended it, the resume starts it again
+        self._cycle_before_pause: Command | None = None
         self._steps_left: int | None = None  # ticks left before a step pauses again
         self._skip_tick = False
         self._stop: str | None = None
@@ -216,6 +219,7 @@ class MonitorSession:
         connection = runner.connection
         mode = connection.mode
         self._mode_before_pause = mode if mode in (OIMode.SAFE, OIMode.FULL) else None
+        self._cycle_before_pause = connection.running_cycle if mode is OIMode.PASSIVE else None
         commands = pause_sequence(connection)
         connection.send_many(commands)
         runner.summary.commands_written += len(commands)
@@ -235,14 +239,18 @@ class MonitorSession:
             again.append(oi.safe() if mode is OIMode.SAFE else oi.full())
             # the actuators as the tree left them: its actions sent their commands once
             again += [c for c in runner.last_sent.values() if c.spec.leads_to is None]
+        elif self._cycle_before_pause is not None:  # its leaf waits on it: started again
+            again.append(self._cycle_before_pause)
+        if again:
             runner.connection.send_many(again)
             runner.summary.commands_written += len(again)
         self.state.paused, self.state.pause_reason = False, ""
         runner.clock_held = False
         self._skip_tick = True  # the tree next ticks on a frame that shows the new mode
         back = f"back to {mode.label}" if mode is not None else "mode unchanged"
-        if len(again) > 1:
-            back += ", " + ", ".join(c.name for c in again[1:]) + " sent again"
+        resent = again[1:] if mode is not None else again
+        if resent:
+            back += ", " + ", ".join(c.name for c in resent) + " sent again"
         self.feed.event("control", f"resume ({why}): {back}; the tree goes on")
 
     def _force(self, runner: MissionRunner, index: int, value: str) -> None:
@@ -309,7 +317,7 @@ class MonitorSession:
         self._skip_tick = True
         # the new tree sets its own modes, from Passive: now, or when a paused run resumes
         # (which sends nothing back: neither the old tree's mode nor its wheel commands)
-        self._mode_before_pause = None
+        self._mode_before_pause = self._cycle_before_pause = None
         if not was_paused:
             self.state.pause_reason = ""
 

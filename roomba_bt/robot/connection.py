@@ -376,6 +376,12 @@ class Connection:
         return self.writer.release_forward()
 
     @property
+    def running_cycle(self) -> Command | None:
+        """The built-in cycle that may be driving the robot now (:attr:`CommandWriter.running_cycle
+        <roomba_bt.robot.writer.CommandWriter.running_cycle>`), or None."""
+        return self.writer.running_cycle
+
+    @property
     def forward_held(self) -> bool:
         """Whether the bump reflex holds forward motion (robot/hazards.py)."""
         return self.writer.forward_held

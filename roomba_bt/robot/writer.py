@@ -178,6 +178,15 @@ class CommandWriter:
             check_bandwidth(self.link.stream_ids, rate)
         self.send(oi.baud_rate(rate))
 
+    @property
+    def running_cycle(self) -> Command | None:
+        """The Clean/Spot/Max/Seek Dock command written last while its cycle may still be
+        driving the robot (in Passive), else None."""
+        wheels = self.last_wheels
+        if self.builtin_may_run and wheels is not None:
+            return wheels if wheels.spec.effect is Effect.BUILTIN_CYCLE else None
+        return None
+
     def halt(self) -> bool:
         """Drive 0 if the model says the robot may be driving; True if it was sent (the
         watchdog's action)."""

@@ -347,3 +347,29 @@ def test_a_reload_while_paused_resumes_into_the_new_tree_from_passive_with_no_ol
     assert seen["during the wait"] == (OIMode.PASSIVE, 0.0, 0.0)
     resumes = [e.text for e in rig.feed.events if e.text.startswith("resume")]
     assert resumes == ["resume (resumed by the operator): mode unchanged; the tree goes on"]
+
+
+def test_a_pause_during_seek_dock_resumes_the_cycle(until: Callable[..., None]) -> None:
+    """dock-builtin: Seek Dock (143) drives the robot in Passive. The pause's safe stop ends
+    the cycle (Safe, drive 0, Start); the resume sent nothing back (the robot was in
+    Passive), so the robot sat still while ``seek_dock`` waited for the dock until its time
+    limit. The cycle the tree started is started again."""
+    rig = Rig(mission=HERE.parents[1] / "missions" / "dock-builtin.yaml")
+    seen: dict[str, object] = {}
+
+    def operator(rig: Rig) -> None:
+        until(lambda: rig.ticks(ticked=True) > 100 and bool(rig.sim.left_speed))
+        rig.session.request("pause")
+        paused = rig.ticks(ticked=False)
+        until(lambda: rig.ticks(ticked=False) > paused + 30)
+        seen["paused"] = (rig.sim.left_speed, rig.sim.right_speed)
+        rig.session.request("resume")
+
+    summary = rig.run_with(operator)
+    assert seen["paused"] == (0.0, 0.0)
+    assert summary.outcome is Outcome.SUCCESS, summary.reason
+    assert rig.sim.docked
+    resumes = [e.text for e in rig.feed.events if e.text.startswith("resume")]
+    assert resumes == [
+        "resume (resumed by the operator): mode unchanged, seek_dock sent again; the tree goes on"
+    ]
