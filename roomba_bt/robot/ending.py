@@ -173,13 +173,17 @@ class SafeStop:
     def _undelivered(self, why: str) -> bool:
         """The stop did not reach the robot: say so, with what the robot was last seen
         doing; False (what :meth:`stop` returns)."""
-        level = logging.ERROR
-        if self.writer.link.bytes_read == 0:  # nothing was ever seen of it
+        writer = self.writer
+        # never told to move and seen in Passive, or never seen at all: nothing was left
+        # driving (``sensors``, ``doctor``); the summary or the error says the port's fate
+        idle = writer.last_wheels is None and (
+            writer.link.bytes_read == 0 or writer.modes.mode is OIMode.PASSIVE
+        )
+        level = logging.DEBUG if idle else logging.ERROR
+        if writer.link.bytes_read == 0:  # nothing was ever seen of it
             report = why
-            if self.writer.last_wheels is None:  # nor was it ever told to move: the summary says it
-                level = logging.DEBUG
         else:
-            report = f"last seen in {self.writer.modes.mode.label} {self.activity()}; {why}"
+            report = f"last seen in {writer.modes.mode.label} {self.activity()}; {why}"
         if report != self.stop_report:  # close() tries once more: said once, not twice
             log.log(level, "%s: %s", self.writer.link.name, report)
         self.stop_report = report

@@ -73,3 +73,31 @@ def test_a_delivered_stop_leaves_no_report() -> None:
     assert connection.safe_stop() is True
     assert connection.stop_report is None
     assert connection.mode is OIMode.PASSIVE
+
+
+def test_a_robot_never_told_to_move_has_its_undelivered_stop_said_quietly(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """``roomba-bt sensors`` with its cable pulled: "ERROR ... last seen in Passive with its
+    wheels never commanded; the stop was not delivered" under the error that the port is
+    gone, about a robot nothing had asked to move. Reported (the summary's line), logged at
+    DEBUG; a robot that was driving is still an ERROR."""
+    link = Pullable(SimLink(Simulator(parse_world(BOX, "<test>"), profile=CREATE2)))
+    connection = Connection(link, CREATE2)
+    connection.start("passive", PACKETS)
+    while connection.counters.frames < 10:
+        connection.poll(0.05)
+    link.pulled = True
+    with caplog.at_level("DEBUG", logger="roomba_bt.robot.ending"):
+        assert connection.safe_stop() is False
+    assert connection.stop_report == (
+        "last seen in Passive with its wheels never commanded; the stop was not delivered: "
+        "the port is gone"
+    )
+    assert [r.levelname for r in caplog.records] == ["DEBUG"]
+    connection, link = driving()
+    link.pulled = True
+    caplog.clear()
+    with caplog.at_level("DEBUG", logger="roomba_bt.robot.ending"):
+        assert connection.safe_stop() is False
+    assert [r.levelname for r in caplog.records] == ["ERROR"]
