@@ -238,7 +238,7 @@ class MonitorSession:
         if mode in (OIMode.SAFE, OIMode.FULL):
             again.append(oi.safe() if mode is OIMode.SAFE else oi.full())
             # the actuators as the tree left them: its actions sent their commands once
-            again += [c for c in runner.last_sent.values() if c.spec.leads_to is None]
+            again += [c for c in runner.last_sent.values() if c.spec.sets_state]
         elif self._cycle_before_pause is not None:  # its leaf waits on it: started again
             again.append(self._cycle_before_pause)
         if again:

@@ -121,6 +121,10 @@ class Effect(enum.Enum):
     POWER_DOWN = "power_down"
 
 
+#: The actuator channels whose commands set a lasting state (:attr:`CommandSpec.sets_state`).
+STATE_CHANNELS = frozenset({"wheels", "motors", "leds", "scheduling_leds", "digits"})
+
+
 @dataclass(frozen=True, slots=True)
 class CommandSpec:
     """One OI command (opcode)."""
@@ -163,6 +167,14 @@ class CommandSpec:
         """A wheel command of the host's own: Drive (137), Drive Direct (145), Drive PWM
         (146), accepted in Safe and Full (a built-in cycle's wheels are the firmware's)."""
         return self.channel == "wheels" and self.is_actuator
+
+    @property
+    def sets_state(self) -> bool:
+        """An actuator command whose effect lasts and is the same when sent again (the
+        wheels, motors, LEDs and digits): a pause's resume sends these again. Play (141) and
+        Buttons (165) are events (sent again, a song plays twice, a button is pressed twice),
+        and a built-in cycle (Clean, Seek Dock) starts over and changes the mode."""
+        return self.channel in STATE_CHANNELS and self.leads_to is None
 
     @property
     def changes_mode(self) -> bool:

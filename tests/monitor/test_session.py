@@ -7,6 +7,7 @@ import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -373,3 +374,40 @@ def test_a_pause_during_seek_dock_resumes_the_cycle(until: Callable[..., None]) 
     assert resumes == [
         "resume (resumed by the operator): mode unchanged, seek_dock sent again; the tree goes on"
     ]
+
+
+def test_a_resume_sends_the_actuators_state_again_not_a_song_played_earlier(
+    until: Callable[..., None], tmp_path: Path
+) -> None:
+    """The resume sent the last command of every channel again: the song the mission played
+    at its start played again at each resume (and a Buttons press would be pressed again).
+    The wheels, motors and LEDs are sent again; Play is not."""
+    tune = tmp_path / "tune.yaml"
+    tune.write_text(
+        SHUTTLE.read_text().replace(
+            "    - mode: safe\n",
+            "    - mode: safe\n    - song: {notes: [C4 100ms]}\n    - play\n"
+            "    - leds: {spot: true}\n",
+            1,
+        )
+    )
+    rig = Rig(mission=tune)
+    written: list[str] = []
+    send_many = rig.connection.send_many
+
+    def noting(commands: Any) -> None:
+        written.extend(c.name for c in commands)
+        send_many(commands)
+
+    def operator(rig: Rig) -> None:
+        until(lambda: rig.ticks(ticked=True) > 100 and bool(rig.sim.left_speed))
+        rig.session.request("pause")
+        until(lambda: rig.session.state.paused)
+        rig.connection.send_many = noting  # type: ignore[method-assign]
+        rig.session.request("resume")
+        until(lambda: not rig.session.state.paused)
+        rig.session.request("stop")
+
+    rig.run_with(operator)
+    assert written[0] == "safe" and "drive" in written and "leds" in written, written
+    assert "play" not in written, written
