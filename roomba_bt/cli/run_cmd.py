@@ -486,7 +486,25 @@ def replay_command(args: argparse.Namespace) -> int:
         f"replay: first difference at mission time {summary.mission_time_s:.3f} s "
         f"(byte {offset} of {len(record.outbound)} recorded): expected {expected}, sent {sent}"
     )
+    acts = operator_acts(record)
+    if acts:
+        print(
+            f"replay: the recorded run holds its operator's acts ({acts}), which replay does "
+            f"not do; roomba-bt monitor {args.record} replays them"
+        )
     return ExitCode.MISSION_FAILED
+
+
+def operator_acts(record: Record) -> str:
+    """The monitor's acts the record notes (``pause at 2.01 s, reload at 5.30 s``), the
+    first few; empty when there are none."""
+    acts = [
+        f"{act} at {t:.2f} s"
+        for t, note in record.notes
+        for act in ("pause", "resume", "force", "reload")
+        if act in note
+    ]
+    return ", ".join(acts[:4]) + (", ..." if len(acts) > 4 else "")
 
 
 def _recorded_packets(

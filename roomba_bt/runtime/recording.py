@@ -298,6 +298,11 @@ def command_at(stream: bytes, offset: int) -> str:
     return f"bytes {stream[offset : offset + 8].hex(' ')}"
 
 
+#: Seconds of the record's clock a replay waits, past the robot's next recorded bytes, for
+#: the bytes the tree wrote before them (:meth:`ReplayTransport.starved`).
+STARVED_AFTER_S = 1.0
+
+
 class ReplayTransport:
     """A transport that plays back the "in" side of a record on the recorded clock.
 
@@ -319,6 +324,7 @@ class ReplayTransport:
         self.written = bytearray()
         #: byte offset of the first difference from the recorded "out" side, once there is one
         self.difference: int | None = None
+        self._starved_at: int | None = None  # where the tree stopped short (:meth:`starved`)
 
     def write(self, data: bytes) -> None:
         if self.difference is None:
@@ -348,6 +354,20 @@ class ReplayTransport:
     def exhausted(self) -> bool:
         return self._next >= len(self._inbound)
 
+    def starved(self) -> bool:
+        """Whether the replay waits for ever: the robot's next recorded bytes wait for bytes
+        the tree has not written, and the clock is :data:`STARVED_AFTER_S` past them. The tree
+        writes only when it ticks, and ticks only on those bytes' frames: it stopped short of
+        the recorded run (a mission changed since, a reload in the run). That is its first
+        difference (the command expected, nothing sent)."""
+        if self.difference is not None or self._next >= len(self._inbound):
+            return False
+        t, _, written_before = self._inbound[self._next]
+        if len(self.written) < written_before and self._now > t + STARVED_AFTER_S:
+            self.difference = self._starved_at = len(self.written)
+            return True
+        return False
+
     def first_difference(self) -> tuple[int, str, str] | None:
         """``(byte offset, command expected, command sent)`` of the first difference between
         what the tree wrote and the record's "out" side, or None when they are the same."""
@@ -356,11 +376,8 @@ class ReplayTransport:
             offset = len(self.written)
         if offset is None:
             return None
-        return (
-            offset,
-            command_at(self._expected, offset),
-            command_at(bytes(self.written), offset),
-        )
+        sent = "nothing" if offset == self._starved_at else command_at(bytes(self.written), offset)
+        return offset, command_at(self._expected, offset), sent
 
     def set_baud(self, baud: int) -> None:
         pass

@@ -150,7 +150,7 @@ def replay_record(
     transport = ReplayTransport(record, name=f"replay:{name}")
 
     def input_ended() -> str | None:
-        if transport.difference is not None:
+        if transport.difference is not None or transport.starved():
             return "first difference from the record"
         return "end of the record" if transport.exhausted else None
 

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 import re
+import subprocess
+import sys
 import textwrap
 from pathlib import Path
 
@@ -138,6 +140,32 @@ def test_a_replay_keeps_no_robot_awake(tmp_path: Path, caplog: pytest.LogCapture
     )  # fmt: skip
     assert transport.first_difference() is None and summary.outcome.value == "success"
     assert not [r for r in caplog.records if r.name == "roomba_bt.robot.wake"]
+
+
+def test_a_replay_whose_tree_stops_short_of_the_record_ends_at_that_difference(
+    tmp_path: Path,
+) -> None:
+    """The robot's recorded bytes wait for the bytes the tree wrote before them (a reply comes
+    after its request); a tree that does not write them (its mission changed since, a pause or
+    a reload in the run) never got them, never ticked again and the replay spun for ever at
+    100 % CPU. A subprocess, so the old hang is a timeout, not a stuck suite."""
+    drive, wait = tmp_path / "drive.yaml", tmp_path / "wait.yaml"
+    drive.write_text(SPIN)
+    wait.write_text("mission: waiting\ntree:\n  sequence:\n    - mode: safe\n    - wait: 10s\n")
+    record = tmp_path / "run.jsonl"
+    run = ["run", str(drive), "--fast", "--display", "none", "--timeout", "2s"]
+    assert main([*run, "--record", str(record)]) == 1
+    header, *rest = record.read_text().splitlines(keepends=True)
+    pause = {"t": 0.0, "d": "note", "note": {"pause": "operator", "at": "before", "tick": 1}}
+    record.write_text("".join([header, json.dumps(pause) + "\n", *rest]))  # as --monitor notes
+    done = subprocess.run(
+        [sys.executable, "-m", "roomba_bt.cli", "replay", str(record), "--mission", str(wait)],
+        capture_output=True, text=True, timeout=60,
+    )  # fmt: skip
+    assert done.returncode == 1, done.stderr
+    assert "replay: first difference at mission time" in done.stdout
+    assert "expected Drive (137)" in done.stdout and ", sent nothing" in done.stdout
+    assert "holds its operator's acts (pause at 0.00 s), which replay does not do" in done.stdout
 
 
 def test_replay_of_a_malformed_record_is_exit_2(
