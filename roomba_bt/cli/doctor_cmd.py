@@ -163,7 +163,9 @@ def doctor_command(args: argparse.Namespace) -> int:
         report.fail(
             "port",
             f"could not open {url}: {exc.cause}",
-            "check the device path (ls /dev/ttyUSB* /dev/serial/by-id/), that no other "
+            ""  # a cause its error number told says what to do (transport/open_failure.py)
+            if isinstance(exc.cause, str)
+            else "check the device path (ls /dev/ttyUSB* /dev/serial/by-id/), that no other "
             "program has it open, and that you may use it (the dialout group on Linux)",
         )
         return DoctorExit.PORT

@@ -23,7 +23,6 @@ from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.robot.errors import ConnectionFailed, NoAnswer
 from roomba_bt.transport.base import TransportError
-from roomba_bt.transport.serial_port import IN_USE
 
 log = logging.getLogger(__name__)
 
@@ -38,10 +37,11 @@ OPEN_CAUSES = ("wrong device path or URL", "the port in use by another program",
 
 
 def port_not_opened(url: str, exc: TransportError) -> ConnectionFailed:
-    """Why ``url`` could not be opened, with what to check; a port another program holds
-    is named as such alone (the cause is known)."""
-    if exc.cause == IN_USE:
-        return ConnectionFailed(url, f"could not open the port: {IN_USE}")
+    """Why ``url`` could not be opened, with what to check; a cause the error number told
+    (another program holds it, permissions, no such device:
+    :func:`~roomba_bt.transport.open_failure.open_failure`) is named alone."""
+    if isinstance(exc.cause, str):
+        return ConnectionFailed(url, f"could not open the port: {exc.cause}")
     return ConnectionFailed(url, f"could not open the port ({exc.cause})", OPEN_CAUSES)
 
 

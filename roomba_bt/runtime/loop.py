@@ -319,21 +319,7 @@ class MissionRunner(BaseHandle):
 
     def _finish(self, summary: RunSummary, wall_start: float) -> None:
         self.stop_tree()
-        try:
-            sequence = [c.name for c in self.connection.stop_sequence()]
-            stopped = self.connection.safe_stop()
-            if not stopped:
-                report = getattr(self.connection, "stop_report", None)
-                summary.safe_stop = "NOT DELIVERED: " + (
-                    report or "the stop sequence could not be written"
-                )
-                summary.stop_delivered = False
-            else:
-                summary.safe_stop = "sent " + ", ".join(sequence) if sequence else "nothing to send"
-        except KeyboardInterrupt:
-            summary.safe_stop = "interrupted during the safe stop"
-        except Exception as exc:
-            summary.safe_stop = f"FAILED: {type(exc).__name__}: {exc}"
+        stop_robot(self.connection, summary)
         if self._blackboard is not None:
             with contextlib.suppress(Exception):
                 self._blackboard.unregister(clear=True)
@@ -570,6 +556,23 @@ class MissionRunner(BaseHandle):
             held = connection.release_forward()
             if held is not None and all(c.spec.channel != "wheels" for c in self._outbox):
                 self._outbox.send(held, self)
+
+
+def stop_robot(connection: Connection, summary: RunSummary) -> None:
+    """The safe stop, and the summary's word on it: what was sent, or why it was not
+    delivered (the connection's report)."""
+    try:
+        sequence = [c.name for c in connection.stop_sequence()]
+        if connection.safe_stop():
+            summary.safe_stop = "sent " + ", ".join(sequence) if sequence else "nothing to send"
+            return
+        report = getattr(connection, "stop_report", None)
+        summary.safe_stop = "NOT DELIVERED: " + (report or "the stop sequence could not be written")
+        summary.stop_delivered = False
+    except KeyboardInterrupt:
+        summary.safe_stop = "interrupted during the safe stop"
+    except Exception as exc:
+        summary.safe_stop = f"FAILED: {type(exc).__name__}: {exc}"
 
 
 def unread_gap(summary: RunSummary, link: str, gap: float) -> None:

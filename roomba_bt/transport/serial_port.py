@@ -17,7 +17,6 @@ of hanging.
 from __future__ import annotations
 
 import contextlib
-import errno
 import select
 import time
 from collections.abc import Iterator
@@ -27,6 +26,7 @@ import serial
 from serial import rfc2217
 
 from roomba_bt.transport.base import TransportError
+from roomba_bt.transport.open_failure import open_failure
 
 #: Bytes taken from the port in one read; a 115200 baud link carries 172 bytes per 15 ms.
 READ_CHUNK = 4096
@@ -56,13 +56,6 @@ except ImportError:  # not POSIX
 _OPEN_ERRORS: tuple[type[Exception], ...] = (
     serial.SerialException, OSError, ValueError, *TERMIOS_ERRORS
 )  # fmt: skip
-
-
-#: why a device that another process holds (``flock``) was not opened
-IN_USE = (
-    "another program has it open (another roomba-bt run, sensors, doctor or sim client?); "
-    "two programs on one robot would each read half of its stream and mix their commands"
-)
 
 
 class SerialTransport:
@@ -95,7 +88,7 @@ class SerialTransport:
         A device is opened for this process alone (pyserial's ``exclusive``: an advisory
         ``flock``): a second roomba-bt on the same robot, a ``sensors`` beside a ``run``,
         would take every other chunk of the stream and interleave its commands with the
-        run's; it is refused at once instead, :data:`IN_USE`.
+        run's; it is refused at once instead, :data:`~roomba_bt.transport.open_failure.IN_USE`.
 
         pyserial asserts RTS and DTR when it opens a port, which on the usual cables pulls
         BRC low (a wake pulse). ``brc_high``: open with both released, so that the robot
@@ -114,9 +107,8 @@ class SerialTransport:
                 port.exclusive = True
             port.open()
         except _OPEN_ERRORS as exc:
-            if getattr(exc, "errno", None) in (errno.EAGAIN, errno.EWOULDBLOCK):
-                raise TransportError(url, "open the port", IN_USE) from exc
-            raise TransportError(url, "open the port", exc) from exc
+            known = open_failure(url, getattr(exc, "errno", None))
+            raise TransportError(url, "open the port", known or exc) from exc
         return cls(port, url)
 
     @property

@@ -187,9 +187,15 @@ def test_a_pty_with_nothing_behind_it_says_so_and_exits_non_zero_within_10_s(
 
 
 def test_a_port_that_does_not_open_is_exit_3_with_what_to_check(tmp_path: Path) -> None:
+    """No such device: said with the serial ports present (the cause known, no list of
+    guesses); a failure whose error tells nothing more: what to check."""
     done = _doctor(str(tmp_path / "ttyUSB9"))
     assert done.returncode == DoctorExit.PORT
     assert "[FAIL] port      could not open" in done.stdout
+    assert ": no such device: the cable unplugged, or the adapter has another name" in done.stdout
+    assert "(serial ports present: " in done.stdout and "fix:" not in done.stdout
+    done = _doctor("nosuchscheme://x")
+    assert done.returncode == DoctorExit.PORT
     assert "fix: check the device path" in done.stdout
 
 

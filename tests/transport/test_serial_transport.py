@@ -170,7 +170,7 @@ def test_opening_a_missing_port_names_it() -> None:
 def test_a_device_is_opened_for_one_program_at_a_time() -> None:
     """A second opener of the same device (another roomba-bt on the robot) is refused at
     once, naming why; once the first closes, the device opens again."""
-    from roomba_bt.transport.serial_port import IN_USE
+    from roomba_bt.transport.open_failure import IN_USE
 
     with pty_far_end() as end:
         first = SerialTransport.open(end.url)

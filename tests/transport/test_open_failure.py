@@ -1,0 +1,85 @@
+"""A port that cannot be opened is refused with its cause and what to do, when the error
+number tells it (another program holds it, permissions, no such device)."""
+
+from __future__ import annotations
+
+import errno
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+
+from roomba_bt.transport import SerialTransport, TransportError
+from roomba_bt.transport import open_failure as failures
+from roomba_bt.transport.open_failure import IN_USE, open_failure
+
+
+def test_no_such_device_lists_the_serial_ports_present(monkeypatch: pytest.MonkeyPatch) -> None:
+    ports = [SimpleNamespace(device=f"/dev/ttyUSB{n}") for n in (1, 0)]
+    monkeypatch.setattr(failures.list_ports, "comports", lambda: ports)
+    with pytest.raises(TransportError) as refused:
+        SerialTransport.open("/dev/no-such-roomba")
+    assert str(refused.value) == (
+        "/dev/no-such-roomba: could not open the port: no such device: the cable unplugged, or "
+        "the adapter has another name (serial ports present: /dev/ttyUSB0, /dev/ttyUSB1)"
+    )
+    monkeypatch.setattr(failures.list_ports, "comports", lambda: [])
+    assert open_failure("/dev/ttyUSB0", errno.ENOENT) == (
+        "no such device: the cable unplugged, or the adapter has another name "
+        "(serial ports present: none)"
+    )
+
+
+@pytest.mark.skipif(os.name != "posix", reason="POSIX owners and groups")
+def test_permission_denied_names_the_group_to_join_or_the_owner(tmp_path: Path) -> None:
+    import grp
+    import pwd
+
+    device = tmp_path / "ttyUSB0"
+    device.write_bytes(b"")
+    status = device.stat()
+    owner = pwd.getpwuid(status.st_uid).pw_name
+    device.chmod(0o600)
+    assert open_failure(str(device), errno.EACCES) == (
+        f"permission denied: only its owner {owner} may use it (a udev rule can give it to a "
+        'group: MODE="0660", GROUP="dialout")'
+    )
+    device.chmod(0o660)
+    group = grp.getgrgid(status.st_gid).gr_name
+    if group == "root":  # root's group is no group to join: a group of the machine's own
+        others = [g for g in grp.getgrall() if g.gr_gid != 0]
+        if os.geteuid() != 0 or not others:
+            pytest.skip("needs a group other than root to give the file to")
+        group = next((g.gr_name for g in others if g.gr_name == "dialout"), others[0].gr_name)
+        os.chown(device, -1, grp.getgrnam(group).gr_gid)
+    assert open_failure(str(device), errno.EACCES) == (
+        f"permission denied: its group {group} may use it and this user is not in it "
+        f"(sudo usermod -aG {group} $USER, then log out and in again)"
+    )
+    assert open_failure(str(device), errno.EAGAIN) == IN_USE
+    assert open_failure(str(device), errno.EIO) is None
+
+
+@pytest.mark.skipif(
+    not hasattr(os, "geteuid") or os.geteuid() != 0 or shutil.which("setpriv") is None,
+    reason="runs the CLI as another user (root and setpriv: CI)",
+)
+def test_a_user_who_may_not_open_the_port_is_told_why(tmp_path: Path) -> None:
+    """As an unprivileged user, a root-only device: the run said "likely causes: wrong device
+    path or URL, the port in use by another program, permissions"; it names the one."""
+    device = "/dev/ttyS0" if os.path.exists("/dev/ttyS0") else None
+    if device is None or os.stat(device).st_mode & 0o006:
+        pytest.skip("no device closed to other users")
+    tmp_path.chmod(0o755)
+    done = subprocess.run(
+        ["setpriv", "--reuid=65534", "--regid=65534", "--clear-groups",
+         sys.executable, "-m", "roomba_bt.cli", "run", "dock", "--port", device],
+        capture_output=True, text=True, timeout=60, cwd=tmp_path,
+    )  # fmt: skip
+    assert done.returncode == 3, done.stderr
+    assert f"{device}: could not open the port: permission denied: " in done.stderr
+    assert "likely causes" not in done.stderr
