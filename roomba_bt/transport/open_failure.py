@@ -7,8 +7,11 @@ use by another program, permissions" lists all three where the errno names the o
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import os
+import re
+import stat
 
 from serial.tools import list_ports
 
@@ -17,17 +20,36 @@ IN_USE = (
     "another program has it open (another roomba-bt run, sensors, doctor or sim client?); "
     "two programs on one robot would each read half of its stream and mix their commands"
 )
+#: ``HOST:PORT`` without a scheme (pyserial would take it for a device path)
+_ADDRESS = re.compile(r"[A-Za-z0-9.-]+:[0-9]{1,5}")
 #: most ports named where a device path named none
 LISTED_PORTS = 6
 
 
 def open_failure(device: str, code: int | None) -> str | None:
-    """The cause of a failed open of ``device`` told by its errno ``code``, with what to do;
-    None when the errno tells nothing more than its own message."""
+    """The cause of a failed open of ``device`` told by its errno ``code`` (or by what the
+    name is), with what to do; None when they tell nothing more than the error's message."""
+    if _ADDRESS.fullmatch(device):
+        return (
+            "a network address needs its scheme: socket://HOST:PORT (a Wi-Fi bridge, roomba-bt "
+            "sim --tcp) or rfc2217://HOST:PORT"
+        )
     if code in (errno.EAGAIN, errno.EWOULDBLOCK):
         return IN_USE
     if code == errno.EACCES:
         return IN_USE if os.name == "nt" else no_permission(device)  # Windows: held by another
+    with contextlib.suppress(OSError, ValueError):
+        mode = os.stat(device).st_mode
+        if not stat.S_ISCHR(mode):
+            what = "a folder" if stat.S_ISDIR(mode) else "a file"
+            return (
+                f"not a serial port but {what} (--port takes a device such as /dev/ttyUSB0, "
+                "or a URL such as socket://HOST:PORT)"
+            )
+    if code == errno.ENOTTY:
+        return "not a serial port: a device, but no terminal (a USB serial adapter is /dev/ttyUSB*)"
+    if code == errno.ECONNREFUSED:
+        return "nothing listens there (is the bridge, or roomba-bt sim --tcp, running?)"
     if code == errno.ENOENT:
         return no_such_device()
     return None
@@ -68,3 +90,20 @@ def no_such_device() -> str:
         "no such device: the cable unplugged, or the adapter has another name "
         f"(serial ports present: {listed or 'none'})"
     )
+
+
+def error_number(exc: BaseException) -> int | None:
+    """The error number of ``exc`` or of the error it was raised from: pyserial wraps a
+    refused socket or a termios failure in a SerialException that has none of its own."""
+    seen: BaseException | None = exc
+    for _ in range(4):  # the chain, a few links deep
+        if seen is None:
+            return None
+        code = getattr(seen, "errno", None)
+        if isinstance(code, int):
+            return code
+        args = getattr(seen, "args", ())
+        if seen is not exc and args and isinstance(args[0], int):  # termios.error(25, ...)
+            return args[0]
+        seen = seen.__cause__ or seen.__context__
+    return None

@@ -26,7 +26,7 @@ import serial
 from serial import rfc2217
 
 from roomba_bt.transport.base import TransportError
-from roomba_bt.transport.open_failure import open_failure
+from roomba_bt.transport.open_failure import error_number, open_failure
 
 #: Bytes taken from the port in one read; a 115200 baud link carries 172 bytes per 15 ms.
 READ_CHUNK = 4096
@@ -107,7 +107,7 @@ class SerialTransport:
                 port.exclusive = True
             port.open()
         except _OPEN_ERRORS as exc:
-            known = open_failure(url, getattr(exc, "errno", None))
+            known = open_failure(url, error_number(exc))
             raise TransportError(url, "open the port", known or exc) from exc
         return cls(port, url)
 

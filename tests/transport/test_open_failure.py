@@ -61,7 +61,7 @@ def test_permission_denied_names_the_group_to_join_or_the_owner(tmp_path: Path) 
         f"(sudo usermod -aG {group} $USER, then log out and in again)"
     )
     assert open_failure(str(device), errno.EAGAIN) == IN_USE
-    assert open_failure(str(device), errno.EIO) is None
+    assert open_failure("/dev/null", errno.EIO) is None  # nothing more than its message
 
 
 @pytest.mark.skipif(
@@ -83,3 +83,32 @@ def test_a_user_who_may_not_open_the_port_is_told_why(tmp_path: Path) -> None:
     assert done.returncode == 3, done.stderr
     assert f"{device}: could not open the port: permission denied: " in done.stderr
     assert "likely causes" not in done.stderr
+
+
+@pytest.mark.parametrize(
+    ("port", "said"),
+    [
+        ("192.168.1.20:8888", "a network address needs its scheme: socket://HOST:PORT"),
+        ("robot.local:23", "a network address needs its scheme: socket://HOST:PORT"),
+        ("{file}", "not a serial port but a file (--port takes a device such as /dev/ttyUSB0"),
+        ("{folder}", "not a serial port but a folder"),
+        ("/dev/null", "not a serial port: a device, but no terminal"),
+        ("socket://127.0.0.1:{closed}", "nothing listens there (is the bridge, or roomba-bt sim"),
+    ],
+    ids=["address", "host-name", "file", "folder", "no-terminal", "refused"],
+)
+def test_a_port_that_is_no_port_says_what_it_is(tmp_path: Path, port: str, said: str) -> None:
+    """A mission file given as the port, a folder, /dev/null, a bridge's address without
+    ``socket://``, a bridge not running: each was "could not open the port (...); likely
+    causes: wrong device path or URL, the port in use by another program, permissions"."""
+    import socket
+
+    mission = tmp_path / "dock.yaml"
+    mission.write_text("mission: x\n")
+    with socket.socket() as unused:  # a port nothing listens on
+        unused.bind(("127.0.0.1", 0))
+        closed = unused.getsockname()[1]
+    url = port.format(file=mission, folder=tmp_path, closed=closed)
+    with pytest.raises(TransportError) as refused:
+        SerialTransport.open(url)
+    assert str(refused.value).startswith(f"{url}: could not open the port: {said}")
