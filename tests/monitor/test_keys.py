@@ -1,0 +1,89 @@
+"""The monitor's terminal keys (``p`` pause, ``r`` resume, ``q`` stop), typed on a real pty
+that is the run's controlling terminal, the run in its foreground; what they did is read
+from the run's record, where the monitor notes each act."""
+
+from __future__ import annotations
+
+import json
+import os
+import select
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("aiohttp")
+pty = pytest.importorskip("pty")
+termios = pytest.importorskip("termios")
+
+CIRCLE = """\
+mission: circle
+tree:
+  sequence:
+    - mode: safe
+    - drive: {velocity: 100 mm/s, radius: 200 mm}
+"""
+
+
+class Terminal:
+    """The CLI on a pty of its own (``pty.fork``: its session, its controlling terminal)."""
+
+    def __init__(self, *args: str, cwd: Path) -> None:
+        self.pid, self.fd = pty.fork()
+        if self.pid == 0:  # the child: the run, in the terminal's foreground
+            os.chdir(cwd)
+            os.execv(sys.executable, [sys.executable, "-m", "roomba_bt.cli", *args])
+        self.screen = ""
+
+    def read(self, timeout: float) -> bool:
+        """What the run wrote within ``timeout`` s, onto :attr:`screen`; False once it ended."""
+        ready, _, _ = select.select([self.fd], [], [], timeout)
+        if ready:
+            try:
+                self.screen += os.read(self.fd, 65536).decode(errors="replace")
+            except OSError:  # the run ended: its side of the pty closed
+                return False
+        return True
+
+    def until(self, text: str, timeout: float = 30.0) -> None:
+        deadline = time.monotonic() + timeout
+        while text not in self.screen:
+            assert time.monotonic() < deadline, f"never saw {text!r} in {self.screen!r}"
+            if not self.read(0.05):
+                break
+
+    def type(self, key: str) -> None:
+        os.write(self.fd, key.encode())
+
+    def wait(self) -> int:
+        _, status = os.waitpid(self.pid, 0)
+        return os.waitstatus_to_exitcode(status)
+
+
+def _acts(record: Path) -> list[str]:
+    notes = [json.loads(line) for line in record.read_text().splitlines()[1:]]
+    return [next(iter(n["note"])) for n in notes if n.get("d") == "note"]
+
+
+def test_p_pauses_r_resumes_q_stops_and_the_terminal_is_given_back(tmp_path: Path) -> None:
+    (tmp_path / "circle.yaml").write_text(CIRCLE)
+    record = tmp_path / "run.jsonl"
+    run = Terminal(
+        "run", "circle.yaml", "--monitor", "127.0.0.1:0", "--display", "log",
+        "--record", str(record), "--timeout", "60s", cwd=tmp_path,
+    )  # fmt: skip
+    run.until("keys: p pause, r resume, n step, q stop")
+    run.until("drive(velocity=100 mm/s, radius=200 mm) -> RUNNING")
+    run.type("p")
+    deadline = time.monotonic() + 30
+    while not record.exists() or "pause" not in _acts(record):  # noted as it is done
+        assert time.monotonic() < deadline, "p did not pause"
+        run.read(0.05)
+    run.type("r")
+    run.type("q")
+    run.until("outcome      INTERRUPTED (stopped by the operator)")
+    assert run.wait() == 130
+    settings = termios.tcgetattr(run.fd)[3]  # the terminal as the run found it: cooked
+    assert settings & termios.ICANON and settings & termios.ECHO
+    assert _acts(record) == ["pause", "resume"]
