@@ -17,13 +17,7 @@ pytest.importorskip("aiohttp")
 pty = pytest.importorskip("pty")
 termios = pytest.importorskip("termios")
 
-CIRCLE = """\
-mission: circle
-tree:
-  sequence:
-    - mode: safe
-    - drive: {velocity: 100 mm/s, radius: 200 mm}
-"""
+SHUTTLE = Path(__file__).resolve().parent / "missions" / "shuttle.yaml"  # drives for ever
 
 
 class Terminal:
@@ -67,14 +61,13 @@ def _acts(record: Path) -> list[str]:
 
 
 def test_p_pauses_r_resumes_q_stops_and_the_terminal_is_given_back(tmp_path: Path) -> None:
-    (tmp_path / "circle.yaml").write_text(CIRCLE)
     record = tmp_path / "run.jsonl"
     run = Terminal(
-        "run", "circle.yaml", "--monitor", "127.0.0.1:0", "--display", "log",
+        "run", str(SHUTTLE), "--monitor", "127.0.0.1:0", "--display", "log",
         "--record", str(record), "--timeout", "60s", cwd=tmp_path,
     )  # fmt: skip
     run.until("keys: p pause, r resume, n step, q stop")
-    run.until("drive(velocity=100 mm/s, radius=200 mm) -> RUNNING")
+    run.until("drive(velocity=100 mm/s, distance=3 cm) -> RUNNING")
     run.type("p")
     deadline = time.monotonic() + 30
     while not record.exists() or "pause" not in _acts(record):  # noted as it is done
