@@ -75,6 +75,9 @@ def check_py_trees(installed: str | None = None) -> None:
 check_py_trees()
 
 _DEBUG = py_trees.logging.Level.DEBUG
+#: py_trees' logging module, whose ``level`` every node's tick reads (``py_trees.logging``
+#: is one attribute read more each time, about 40 instructions, several nodes a tick)
+_LOGGING = py_trees.logging
 _STATUSES = frozenset(Status)
 _RUNNING, _SUCCESS, _FAILURE, _INVALID = (
     Status.RUNNING, Status.SUCCESS, Status.FAILURE, Status.INVALID
@@ -163,7 +166,7 @@ def behaviour_tick(node: Behaviour, started: bool = False) -> None:
     ticked since: the rest is the end of py_trees' ``Decorator.tick`` (``update``, ``stop``
     on a final status), which is that of ``Behaviour.tick``."""
     if not started:
-        if py_trees.logging.level is _DEBUG:
+        if _LOGGING.level is _DEBUG:
             node.logger.debug(f"{type(node).__name__}.tick()")
         if node.status is not _RUNNING:
             node.initialise()
@@ -207,7 +210,7 @@ class DirectLeaf(Direct):
         is ``self`` typed as the Behaviour it is mixed into: an annotation, since
         ``typing.cast`` is a function call at run time.)"""
         node: Behaviour = self  # type: ignore[assignment]
-        if py_trees.logging.level is _DEBUG:
+        if _LOGGING.level is _DEBUG:
             change = f"{node.status}->{new_status}" if node.status != new_status else new_status
             node.logger.debug(f"{type(self).__name__}.stop({change})")
         node.terminate(new_status)
@@ -317,7 +320,7 @@ class _CompositeStop:
 
     def stop(self, new_status: Status = Status.INVALID) -> None:
         node: py_trees.composites.Composite = self  # type: ignore[assignment]
-        if py_trees.logging.level is _DEBUG:
+        if _LOGGING.level is _DEBUG:
             node.logger.debug(f"{type(self).__name__}.stop()[{node.status}->{new_status}]")
         composite_stop(node, new_status)
 
@@ -336,7 +339,7 @@ class Sequence(Stepped, _CompositeStop, py_trees.composites.Sequence):
             child is None
             or self.status is not _RUNNING
             or not self.memory
-            or py_trees.logging.level is _DEBUG
+            or _LOGGING.level is _DEBUG
         ):
             Stepped.tick_direct(self)
             return
@@ -354,7 +357,7 @@ class Sequence(Stepped, _CompositeStop, py_trees.composites.Sequence):
         self.tick_steps(self.tick_next(self.children.index(child)))
 
     def tick_start(self) -> int:
-        if py_trees.logging.level is _DEBUG:
+        if _LOGGING.level is _DEBUG:
             self.logger.debug(f"{type(self).__name__}.tick()")
         children = self.children
         index = 0
@@ -413,7 +416,7 @@ class Selector(Stepped, _CompositeStop, py_trees.composites.Selector):
             child is None
             or self.status is not _RUNNING
             or not self.memory
-            or py_trees.logging.level is _DEBUG
+            or _LOGGING.level is _DEBUG
         ):
             Stepped.tick_direct(self)
             return
@@ -437,7 +440,7 @@ class Selector(Stepped, _CompositeStop, py_trees.composites.Selector):
         self.tick_steps(self.tick_next(children.index(child)))
 
     def tick_start(self) -> int:
-        if py_trees.logging.level is _DEBUG:
+        if _LOGGING.level is _DEBUG:
             self.logger.debug(f"{type(self).__name__}.tick()")
         children = self.children
         if self.status is not _RUNNING:
@@ -500,9 +503,13 @@ class Parallel(Stepped, py_trees.composites.Parallel):
         #: the class, which CPython 3.11 does not specialise) was a few hundred instructions
         #: on every tick
         self._stock_policy_check = type(self).validate_policy_configuration is _VALIDATE_POLICY
+        #: the policy object :meth:`tick_direct` last found to be py_trees' SuccessOnAll or
+        #: SuccessOnOne, its check py_trees' own (None: none yet): the same object on the next
+        #: tick is not asked its type again (a policy is seldom replaced, never changed)
+        self._lean_policy: py_trees.common.ParallelPolicy.Base | None = None
 
     def stop(self, new_status: Status = Status.INVALID) -> None:
-        if py_trees.logging.level is _DEBUG:
+        if _LOGGING.level is _DEBUG:
             self.logger.debug(f"{type(self).__name__}.stop()[{self.status}->{new_status}]")
         for child in self.children:
             if child.status == _RUNNING:
@@ -521,13 +528,13 @@ class Parallel(Stepped, py_trees.composites.Parallel):
         (both policies). That is most ticks of a docking run (the time limit beside the
         attempt), and it is decided here without the call and its pass over the policies."""
         policy = self.policy
-        kind = type(policy)
-        if (
-            (kind is not _ON_ONE and kind is not _ON_ALL)
-            or py_trees.logging.level is _DEBUG
-            or not self._stock_policy_check
-            or not self.children
-        ):
+        if policy is not self._lean_policy:
+            kind = type(policy)
+            if (kind is not _ON_ONE and kind is not _ON_ALL) or not self._stock_policy_check:
+                Stepped.tick_direct(self)
+                return
+            self._lean_policy = policy
+        if _LOGGING.level is _DEBUG or not self.children:
             Stepped.tick_direct(self)
             return
         children = self.children
@@ -553,7 +560,7 @@ class Parallel(Stepped, py_trees.composites.Parallel):
         self.status = _RUNNING
 
     def tick_start(self) -> int:
-        if py_trees.logging.level is _DEBUG:
+        if _LOGGING.level is _DEBUG:
             self.logger.debug(f"{type(self).__name__}.tick()")
         if isinstance(self.policy, _ON_SELECTED) or (
             type(self).validate_policy_configuration is not _VALIDATE_POLICY
@@ -635,7 +642,7 @@ class DecoratorTick(Stepped, py_trees.decorators.Decorator):
     debugging. A decorator with its own tick overrides a step."""
 
     def tick_start(self) -> int:
-        if py_trees.logging.level is _DEBUG:
+        if _LOGGING.level is _DEBUG:
             self.logger.debug(f"{type(self).__name__}.tick()")
         if self.status is not _RUNNING:
             self.initialise()
@@ -650,7 +657,7 @@ class DecoratorTick(Stepped, py_trees.decorators.Decorator):
         rest of the decorator's own tick: ``update``, and :func:`tick_ended` unless it says
         RUNNING). A decorator that rewrites a step is ticked by its steps
         (:meth:`Stepped.__init_subclass__`)."""
-        if py_trees.logging.level is _DEBUG:
+        if _LOGGING.level is _DEBUG:
             Stepped.tick_direct(self)
             return
         if self.status is not _RUNNING:
@@ -671,7 +678,7 @@ class DecoratorTick(Stepped, py_trees.decorators.Decorator):
         tick_ended(self, new_status)
 
     def stop(self, new_status: Status) -> None:
-        if py_trees.logging.level is _DEBUG:
+        if _LOGGING.level is _DEBUG:
             self.logger.debug(f"{type(self).__name__}.stop({new_status})")
         self.terminate(new_status)
         if new_status == _INVALID:

@@ -21,6 +21,7 @@ from roomba_bt.behaviours.units import DURATION
 from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS, CHARGING_STATE_PACKETS
 
 _DEBUG = py_trees.logging.Level.DEBUG
+_LOGGING = py_trees.logging  # its level read on every tick (lean.py's _LOGGING)
 
 
 @declare(
@@ -90,7 +91,7 @@ class DockTimeLimit(Action):
         RUNNING. Ticked beside the stages on every tick of a docking run, through
         ``behaviour_tick`` it made that function's attribute reads, specialised for the
         running stage, switch class twice a tick."""
-        if started or self.status is not RUNNING or py_trees.logging.level is _DEBUG:
+        if started or self.status is not RUNNING or _LOGGING.level is _DEBUG:
             behaviour_tick(self, started)
             return
         new_status = self.update()
