@@ -68,7 +68,13 @@ class SimLink:
         sim = self.simulator
         if not self._open or sim.disconnected:
             self._check()
-        data = sim.read()
+        # what the robot sent and the host did not read yet (replies.py's output): none on
+        # most reads (the last read took the step's frame), and then read() would find
+        # nothing; the step comes first without that call
+        if sim._frame is None and not sim._out and not sim._delayed:
+            data = b""
+        else:
+            data = sim.read()
         if not data:
             deadline = sim.time + (timeout if timeout > 0.0 else 0.0) - 1e-9
             while True:  # most reads step once; the simulator's slots make sim.step() fast
