@@ -210,16 +210,18 @@ class _MeasuredSimulator(Simulator):
         super().__init__(*args, **kwargs)
         self.contact_steps: list[int] = []
         self._in_contact = 0  # the bump bits of the last step (0: not pressed)
-        self._centre = _world_centre(self.world)
+        self._centre_x, self._centre_y = centre = _world_centre(self.world)
         self._loop_angle = 0.0
-        self._last_bearing = math.atan2(self.y - self._centre[1], self.x - self._centre[0])
+        self._last_bearing = math.atan2(self.y - centre[1], self.x - centre[0])
         self._last_x, self._last_y = self.x, self.y
-        self._progress_mark = (0.0, 0.0)  # (loop angle, time)
+        # the progress mark: the loop angle and the time it was set (two attributes, not a
+        # pair: the angle is read on every step that moves)
+        self._mark_angle = self._mark_time = 0.0
         #: the longest stall before the progress mark, and the time of the last step since
         #: the mark without progress (None: none yet)
         self._longest_before_mark = 0.0
         self._stalled_at: float | None = None
-        self._radius = max(1.0, math.hypot(self.x - self._centre[0], self.y - self._centre[1]))
+        self._radius = max(1.0, math.hypot(self.x - centre[0], self.y - centre[1]))
         self.reaction_steps: list[tuple[int, int]] = []
         self._since_onset: int | None = None  # steps since the last onset, while awaited
         self._stopped_after = -1
@@ -240,13 +242,14 @@ class _MeasuredSimulator(Simulator):
         x, y = self.x, self.y
         if x != self._last_x or y != self._last_y:  # moved (no tuple built to compare)
             self._last_x, self._last_y = x, y
-            centre = self._centre
-            bearing = math.atan2(y - centre[1], x - centre[0])
-            self._loop_angle += math.remainder(bearing - self._last_bearing, math.tau)
+            bearing = _atan2(y - self._centre_y, x - self._centre_x)
+            loop_angle = self._loop_angle = self._loop_angle + _remainder(
+                bearing - self._last_bearing, _TAU
+            )
             self._last_bearing = bearing
-            if abs(self._loop_angle - self._progress_mark[0]) * self._radius >= 300.0:
+            if abs(loop_angle - self._mark_angle) * self._radius >= 300.0:
                 self._longest_before_mark = self.longest_stall
-                self._progress_mark = (self._loop_angle, self.time)
+                self._mark_angle, self._mark_time = loop_angle, self.time
                 self._stalled_at = None
                 return
         self._stalled_at = self.time
@@ -257,7 +260,7 @@ class _MeasuredSimulator(Simulator):
         stalled_at = self._stalled_at
         if stalled_at is None:
             return self._longest_before_mark
-        return max(self._longest_before_mark, stalled_at - self._progress_mark[1])
+        return max(self._longest_before_mark, stalled_at - self._mark_time)
 
     def _watch_reaction(self, waited: int) -> None:
         """The wheels as requested before the step, ``waited`` steps after a bump frame."""
@@ -276,6 +279,8 @@ class _MeasuredSimulator(Simulator):
 
 
 _simulator_step = Simulator.step
+#: read on every step that moves, as globals (a module attribute is one read more)
+_atan2, _remainder, _TAU = math.atan2, math.remainder, math.tau
 #: the bumper's packet (7) in the simulator's values, read every step for the contacts
 (_BUMPS_PACKET,) = BUMPS_PACKETS
 
