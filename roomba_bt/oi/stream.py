@@ -134,7 +134,11 @@ class StreamParser:
         checks = list(layout.range_checks)
         if OI_MODE_PACKET in layout.index:
             checks.append((layout.index[OI_MODE_PACKET], int(plus_one), 3 + int(plus_one)))
-        self._checks = _compile_checks(tuple(checks))
+        # a value unpacked unsigned is never below 0: a lowest of 0 needs no test there
+        unsigned = frozenset(
+            slot for slot, pid in enumerate(layout.members) if not profile.packet(pid).signed
+        )
+        self._checks = _compile_checks(tuple(checks), unsigned)
         self._encoders = layout.encoder_slots
         # (left, right, byte offset in the stream, time) of the last accepted frame, and of
         # the last frame refused for its encoder step alone
@@ -380,13 +384,20 @@ _ONE_SLOT_SPAN = 2 * MAX_COUNTS_PER_SLOT
 ValueCheck = Callable[[tuple[int, ...]], bool]
 
 
-def _compile_checks(checks: tuple[tuple[int, int, int], ...]) -> ValueCheck | None:
+def _compile_checks(
+    checks: tuple[tuple[int, int, int], ...], unsigned: frozenset[int] = frozenset()
+) -> ValueCheck | None:
     """One function testing every ``(slot, lowest, highest)`` of a layout: a chained
     comparison per packet, built once per parser (a loop over the tuple costs twice as much
-    on the tick path). None when there is nothing to test."""
+    on the tick path); only the highest where the lowest is 0 and the slot is in ``unsigned``
+    (its values are never negative: half the operations, every frame). None when there is
+    nothing to test."""
     if not checks:
         return None
-    body = " and ".join(f"{lo} <= v[{slot}] <= {hi}" for slot, lo, hi in checks)
+    body = " and ".join(
+        f"v[{slot}] <= {hi}" if lo == 0 and slot in unsigned else f"{lo} <= v[{slot}] <= {hi}"
+        for slot, lo, hi in checks
+    )
     function: ValueCheck = eval(f"lambda v: {body}", {"__builtins__": {}})
     return function
 
