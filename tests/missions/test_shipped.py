@@ -247,6 +247,30 @@ def test_a_patrol_whose_first_arc_meets_the_stairs_backs_off(seed: int) -> None:
     assert result.cliffs >= 1 and not result.fell
 
 
+def test_a_patrol_started_in_the_open_floor_finds_a_wall() -> None:
+    """Seed 27 starts in the living room with nothing within the search arc's circle (2 m
+    across): the arc went round it for the whole of a 3-hour evaluation. After one circle
+    it goes straight on until it meets something."""
+    result = run_episode(
+        EpisodeSpec(str(MISSIONS / "patrol.yaml"), "apartment", seed=27,
+                    params=(("laps", "1"),), timeout_s=1200)
+    )  # fmt: skip
+    assert result.outcome == "success", result.reason
+
+
+def test_a_long_patrol_in_the_apartment_gets_past_the_staircase_lap_after_lap() -> None:
+    """A lap counts its cliffs, and a lap may pass the staircase's 3.4 m edge twice (a lap
+    is 360 deg and 6 m from wherever the last ended): with 30 a lap, 5 of 20 ten-lap patrols
+    gave up there (``eval ... --sweep cliff_retries=30,60``, docs/routines.md); seed 8 in
+    its fourth lap, after 1229 s."""
+    result = run_episode(
+        EpisodeSpec(str(MISSIONS / "patrol.yaml"), "apartment", seed=8,
+                    params=(("laps", "5"),), timeout_s=3600)
+    )  # fmt: skip
+    assert result.outcome == "success", result.reason
+    assert result.cliffs > 30 and not result.fell
+
+
 def test_a_patrol_that_gives_up_says_why() -> None:
     """Two cliff retries a lap are not enough for the apartment's stairs: the failure is the
     patrol's retry giving up, not the low-battery check beside it (which the report named
