@@ -478,11 +478,12 @@ class Sensing(RobotState):
     # on the step's path whenever the light bumper is streamed near a wall.
     def _sense_rays(self, x: float, y: float, theta: float, close_lines: tuple[_Line, ...]) -> int:
         """The light bumper (packets 46-51): six rays from the bumper against the walls close
-        enough to show; returns packet 45's bits. The loops keep each ray's nearest hit; its
-        signal is worked out once, after them."""
+        enough to show; returns packet 45's bits. A ray's signal is worked out where it hits
+        (a ray meets a second wall only closer: its signal, stronger, replaces the first)."""
         v = self.values
         v[46:52] = _DARK
         hits = list(_LIGHT_RANGES)  # the nearest hit of each ray so far
+        bits = 0
         radius = ROBOT_RADIUS_MM
         # A ray from the centre c in direction d meets a wall's line at c + k d,
         # k = (n.a - n.c) / (n.d); the ray starts on the bumper (k = R), the hit's place along
@@ -529,6 +530,11 @@ class Sensing(RobotState):
                     along = q + k * (tx * c + ty * s)
                     if 0.0 <= along <= length:
                         hits[i] = t
+                        signal = v[46 + i] = trunc(4095 * (1.0 - t / LIGHT_BUMP_RANGE_MM) ** 2)
+                        if signal >= LIGHT_BUMP_THRESHOLD:
+                            bits |= 1 << i
+                        else:
+                            bits &= ~(1 << i)
         else:
             # The heading of the last step (driving straight, or standing): the rays that can
             # meet each wall, worked out once for this heading and these walls.
@@ -556,12 +562,11 @@ class Sensing(RobotState):
                     along = q + k * td
                     if 0.0 <= along <= length:
                         hits[i] = t
-        bits = 0
-        for i, t in enumerate(hits):
-            if t < LIGHT_BUMP_RANGE_MM:
-                signal = v[46 + i] = trunc(4095 * (1.0 - t / LIGHT_BUMP_RANGE_MM) ** 2)
-                if signal >= LIGHT_BUMP_THRESHOLD:
-                    bits |= 1 << i
+                        signal = v[46 + i] = trunc(4095 * (1.0 - t / LIGHT_BUMP_RANGE_MM) ** 2)
+                        if signal >= LIGHT_BUMP_THRESHOLD:
+                            bits |= 1 << i
+                        else:
+                            bits &= ~(1 << i)
         self._rays_on = True
         return bits
 
