@@ -68,8 +68,7 @@ def advanced_fields(
     fields in a plain tuple): ``fields`` itself while the counts stand (most frames of a
     docked or waiting robot), else the new fields in a plain tuple.
 
-    The :class:`Odometer` repeats these steps in its own :meth:`~Odometer.frame` (a call
-    a tick saved: about 600 instructions), on the plain tuple it built its odometry from:
+    The :class:`Odometer` keeps the plain tuple it built its odometry from and passes that:
     CPython 3.11 unpacks an exact tuple in one step, a named tuple's items through an
     iterator (about 500 instructions more, on every tick of a moving robot). The
     arithmetic of :func:`~roomba_bt.oi.odometry.encoder_delta`,
@@ -132,11 +131,7 @@ class Odometer:
         self._counted_right: int | None = None
 
     def frame(self, frame: SensorFrame) -> Odometry:
-        """The odometry after ``frame`` (:meth:`Odometry.advance` on its encoder counts).
-
-        :func:`advanced_fields` written out, the same operations in the same order (the
-        same floats; tests/robot/test_odometry.py holds the two equal): once a tick, and
-        its call cost more than the counts' arithmetic."""
+        """The odometry after ``frame`` (:meth:`Odometry.advance` on its encoder counts)."""
         layout = frame.layout
         if layout is not self._layout:
             self._layout = layout
@@ -154,28 +149,9 @@ class Odometer:
         if left_counts == self._counted_left and right_counts == self._counted_right:
             return odometry
         self._counted_left, self._counted_right = left_counts, right_counts
-        x, y, theta, distance, angle, previous_left, previous_right, path = self._fields
-        if previous_left is None or previous_right is None:
-            fields = (x, y, theta, distance, angle, left_counts, right_counts, path)
-        else:
-            left = (((left_counts - previous_left + 0x8000) & 0xFFFF) - 0x8000) * MM_PER_COUNT
-            right = (((right_counts - previous_right + 0x8000) & 0xFFFF) - 0x8000) * MM_PER_COUNT
-            if left == 0.0 and right == 0.0:
-                fields = (x, y, theta, distance, angle, left_counts, right_counts, path)
-            else:
-                dist = (left + right) / 2.0
-                dtheta = (right - left) / self._wheel_base_mm
-                mid = theta + dtheta / 2.0
-                fields = (
-                    x + dist * math.cos(mid),
-                    y + dist * math.sin(mid),
-                    theta + dtheta,
-                    distance + dist,
-                    angle + dtheta,
-                    left_counts,
-                    right_counts,
-                    path + abs(dist),
-                )
+        fields = advanced_fields(self._fields, left_counts, right_counts, self._wheel_base_mm)
+        if fields is self._fields:
+            return odometry
         self._fields = fields
         odometry = self.odometry = _new_tuple(Odometry, fields)
         return odometry
