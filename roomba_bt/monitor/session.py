@@ -219,7 +219,9 @@ class MonitorSession:
         connection = runner.connection
         mode = connection.mode
         self._mode_before_pause = mode if mode in (OIMode.SAFE, OIMode.FULL) else None
-        self._cycle_before_pause = connection.running_cycle if mode is OIMode.PASSIVE else None
+        cycle = connection.running_cycle if mode is OIMode.PASSIVE else None
+        # on its home base the cycle has ended there (Seek Dock docked; Clean came home)
+        self._cycle_before_pause = None if cycle is None or _on_home_base(runner) else cycle
         commands = pause_sequence(connection)
         connection.send_many(commands)
         runner.summary.commands_written += len(commands)
@@ -330,6 +332,16 @@ class MonitorSession:
                 "to use it"
             )
         return None
+
+
+def _on_home_base(runner: MissionRunner) -> bool:
+    """Whether the run's last frame shows the robot on its home base (packet 34)."""
+    if not runner.has_snapshot:
+        return False
+    try:
+        return bool(runner.snapshot.frame.charging_sources.home_base)
+    except (AttributeError, KeyError, LookupError):  # a stream without packet 34
+        return False
 
 
 def _note(runner: MissionRunner, act: dict[str, Any]) -> None:

@@ -411,3 +411,26 @@ def test_a_resume_sends_the_actuators_state_again_not_a_song_played_earlier(
     rig.run_with(operator)
     assert written[0] == "safe" and "drive" in written and "leds" in written, written
     assert "play" not in written, written
+
+
+def test_a_pause_on_the_home_base_does_not_start_the_cycle_again(
+    until: Callable[..., None],
+) -> None:
+    """Seek Dock has docked the robot and ``dock_wait_charge`` waits for the charge: the
+    cycle ended on the dock, and a resume that sent Seek Dock again would send a docked
+    robot looking for its dock (a Clean that came home would leave it again)."""
+    rig = Rig(mission=HERE.parents[1] / "missions" / "dock-builtin.yaml")
+
+    def operator(rig: Rig) -> None:
+        until(
+            lambda: rig.runner.has_snapshot and rig.runner.snapshot.frame.charging_sources.home_base
+        )
+        rig.session.request("pause")
+        until(lambda: rig.session.state.paused)
+        rig.session.request("resume")
+
+    summary = rig.run_with(operator)
+    assert summary.outcome is Outcome.SUCCESS, summary.reason
+    assert rig.sim.docked
+    resumes = [e.text for e in rig.feed.events if e.text.startswith("resume")]
+    assert resumes == ["resume (resumed by the operator): mode unchanged; the tree goes on"]
