@@ -414,17 +414,20 @@ def test_a_resume_sends_the_actuators_state_again_not_a_song_played_earlier(
 
 
 def test_a_pause_on_the_home_base_does_not_start_the_cycle_again(
-    until: Callable[..., None],
+    until: Callable[..., None], tmp_path: Path
 ) -> None:
-    """Seek Dock has docked the robot and ``dock_wait_charge`` waits for the charge: the
-    cycle ended on the dock, and a resume that sent Seek Dock again would send a docked
-    robot looking for its dock (a Clean that came home would leave it again)."""
-    rig = Rig(mission=HERE.parents[1] / "missions" / "dock-builtin.yaml")
+    """Seek Dock has docked the robot, which waits there: the cycle ended on the dock, and a
+    resume that sent Seek Dock again would send a docked robot looking for its dock (a
+    Clean that came home would leave it again)."""
+    docked = tmp_path / "seek-and-stay.yaml"
+    docked.write_text(
+        "mission: seek-and-stay\ntree:\n  sequence:\n    - mode: passive\n"
+        "    - seek_dock: {timeout: 60s}\n    - wait: 20s\n"
+    )
+    rig = Rig(mission=docked)
 
     def operator(rig: Rig) -> None:
-        until(
-            lambda: rig.runner.has_snapshot and rig.runner.snapshot.frame.charging_sources.home_base
-        )
+        until(lambda: rig.sim.docked and rig.ticks(ticked=True) > 600)  # seek_dock done
         rig.session.request("pause")
         until(lambda: rig.session.state.paused)
         rig.session.request("resume")
