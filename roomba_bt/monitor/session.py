@@ -340,7 +340,7 @@ def _on_home_base(runner: MissionRunner) -> bool:
         return False
     try:
         return bool(runner.snapshot.frame.charging_sources.home_base)
-    except (AttributeError, KeyError, LookupError):  # a stream without packet 34
+    except (AttributeError, LookupError):  # a stream without packet 34
         return False
 
 

@@ -1,8 +1,9 @@
 """Why a serial port could not be opened, when its error number tells: what to do about it.
 
-A first run on a new machine meets these three before anything else; "could not open the
-port ([Errno 13] ... Permission denied); likely causes: wrong device path or URL, the port in
-use by another program, permissions" lists all three where the errno names the one.
+A first run on a new machine meets these before anything else (another program holds the
+port, permissions, no such device, a name that is no serial port); "could not open the port
+([Errno 13] ... Permission denied); likely causes: wrong device path or URL, the port in use
+by another program, permissions" listed three guesses where the errno names the one.
 """
 
 from __future__ import annotations
