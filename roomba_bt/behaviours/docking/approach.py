@@ -30,6 +30,7 @@ from roomba_bt.behaviours.docking.common import (
     DockingAction,
     DockView,
     Hazard,
+    HeadingTurn,
     IdentityEnum,
     declare_stage,
     hazard_of,
@@ -82,17 +83,15 @@ NEAR_EDGE_SHARE = 0.6
 NEAR_EDGE_MAX_MM = 400.0
 #: Turns in place, as shares of ``turn_speed`` (each wheel, mm/s): toward the crossing line
 #: (TURN_AWAY) and, facing the dock, spinning while a receiver sees it (FACE_SEEN) and while
-#: none does (FACE_SEARCH); turning to a computed heading fast (FACE_FAST), slow within
-#: FACE_SLOW_WITHIN_RAD (FACE_SLOW), done within FACE_DONE_RAD. At 200 mm/s the robot turns
-#: 1.7 rad/s: about 3 deg between two readings of the receivers (every 30 ms), inside the
-#: 10 deg where both see the dock.
+#: none does (FACE_SEARCH); turning to a computed heading (FACE_TURN). At 200 mm/s the robot
+#: turns 1.7 rad/s: about 3 deg between two readings of the receivers (every 30 ms), inside
+#: the 10 deg where both see the dock.
 TURN_AWAY_SHARE = 1.0
 FACE_SEEN_SHARE = 0.7
 FACE_SEARCH_SHARE = 1.0
-FACE_FAST_SHARE = 0.6
-FACE_SLOW_SHARE = 0.25
-FACE_SLOW_WITHIN_RAD = math.radians(8.0)
-FACE_DONE_RAD = math.radians(2.0)
+FACE_TURN = HeadingTurn(
+    fast=0.6, slow=0.25, slow_within_rad=math.radians(8), done_rad=math.radians(2)
+)
 #: seen at one heading only, then nothing for this much turn: face that heading
 FRINGE_RAD = math.radians(60.0)
 #: spun this far without facing: forget the heading where the dock was seen, start again
@@ -154,9 +153,9 @@ class DockApproach(DockingAction):
     #: the stage's own state in slots (see :class:`~.common.DockingAction`)
     __slots__ = (
         "_back_until", "_band_seen", "_before_at", "_centred", "_cross_angle", "_cross_path",
-        "_cross_side", "_crossings", "_face_target", "_guesses", "_hazard", "_last_seen",
-        "_last_side", "_last_side_time", "_lead_theta", "_lost_after", "_orbit", "_past_at",
-        "_retreat", "_run", "_side_guess", "_speed", "_spin_dir", "_starts", "_sweep",
+        "_cross_side", "_crossings", "_face_target", "_face_turn", "_guesses", "_hazard",
+        "_last_seen", "_last_side", "_last_side_time", "_lead_theta", "_lost_after", "_orbit",
+        "_past_at", "_retreat", "_run", "_side_guess", "_speed", "_spin_dir", "_starts", "_sweep",
         "_turn_speed", "_view", "state",
     )  # fmt: skip
 
@@ -181,6 +180,7 @@ class DockApproach(DockingAction):
         # read once a start, used on every tick
         self._speed = self.number("speed")
         self._turn_speed = self.number("turn_speed")
+        self._face_turn = FACE_TURN.scaled(self._turn_speed)
         self._cross_angle = math.radians(self.number("cross_angle"))
         self._lost_after = self.number("lost_after")
         self._last_seen = self.snapshot.time
@@ -499,12 +499,9 @@ class DockApproach(DockingAction):
     def _turn_to_target(self, view: DockView, theta: float, target: float) -> bool:
         """Turn in place to the computed heading ``target``; True once there (or facing
         the dock on the way)."""
-        err = math.remainder(target - theta, math.tau)
-        if abs(err) < FACE_DONE_RAD or view.facing:
+        if view.facing or self.spin_to(math.remainder(target - theta, math.tau), self._face_turn):
             self.halt()
             return True
-        share = FACE_FAST_SHARE if abs(err) > FACE_SLOW_WITHIN_RAD else FACE_SLOW_SHARE
-        self.spin_toward(err, share * self._turn_speed)
         return False
 
     state: ApproachState
@@ -513,6 +510,7 @@ class DockApproach(DockingAction):
     _run: object
     _lead_theta: float | None
     _face_target: float | None
+    _face_turn: HeadingTurn
     # the readings (read)
     _view: DockView
     _hazard: Hazard | None

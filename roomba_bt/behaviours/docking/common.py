@@ -4,6 +4,7 @@ the wheel commands, and the notes the stages leave for ``dock_time_limit``."""
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass, replace
 from enum import Enum
 from operator import itemgetter
 from typing import TypeVar
@@ -124,6 +125,22 @@ def view_of(codes: tuple[int, ...]) -> DockView:
 FROM_DOCK: tuple[bool, ...] = tuple(character.from_dock for character in IR_CHARACTERS)
 #: By byte of packet 34: the home base powers the robot.
 HOME_BASE: tuple[bool, ...] = tuple(sources.home_base for sources in CHARGING_SOURCES_BY_BYTE)
+
+
+@dataclass(frozen=True, slots=True)
+class HeadingTurn:
+    """How a stage turns in place to a heading: ``fast`` (mm/s on each wheel), ``slow``
+    once within ``slow_within_rad`` of it, there within ``done_rad``. The search and the
+    approach each turn with their own (:meth:`DockingAction.spin_to`)."""
+
+    fast: float
+    slow: float
+    slow_within_rad: float
+    done_rad: float
+
+    def scaled(self, speed: float) -> HeadingTurn:
+        """The same turn with ``fast`` and ``slow`` given as shares of ``speed``."""
+        return replace(self, fast=self.fast * speed, slow=self.slow * speed)
 
 
 class IdentityEnum(Enum):
@@ -347,6 +364,14 @@ class DockingAction(Action):
         """Turn in place at ``speed`` (mm/s on each wheel) toward the side of ``err``
         (radians, counter-clockwise positive)."""
         self.wheels(-speed if err > 0 else speed, speed if err > 0 else -speed)
+
+    def spin_to(self, err: float, turn: HeadingTurn) -> bool:
+        """Turning to a heading ``err`` radians away (counter-clockwise positive): True,
+        sending nothing, once within ``turn.done_rad``; else a spin toward it, fast or slow."""
+        if abs(err) < turn.done_rad:
+            return True
+        self.spin_toward(err, turn.fast if abs(err) > turn.slow_within_rad else turn.slow)
+        return False
 
     def halt(self) -> None:
         if self._started_motion and not self.not_driving():

@@ -31,6 +31,7 @@ from roomba_bt.behaviours.docking.common import (
     RUNNING,
     DockingAction,
     Hazard,
+    HeadingTurn,
     IdentityEnum,
     declare_stage,
     hazard_of,
@@ -68,13 +69,11 @@ AVOID_WITHIN_RAD = 1.4
 TURN_PENALTY_PER_RAD = 0.05
 
 # Moving.
-#: turning in place: the first full turn, toward a chosen heading (fast, then slow within
-#: TURN_SLOW_WITHIN_RAD), done within TURN_DONE_RAD; wheel speeds in mm/s
+#: turning in place: the first full turn (wheel speeds in mm/s), then toward a chosen heading
 SPIN_MM_S = 180
-TURN_FAST_MM_S = 160.0
-TURN_SLOW_MM_S = 60.0
-TURN_SLOW_WITHIN_RAD = math.radians(20)
-TURN_DONE_RAD = math.radians(4)
+TURN = HeadingTurn(
+    fast=160.0, slow=60.0, slow_within_rad=math.radians(20), done_rad=math.radians(4)
+)
 #: facing the chosen heading with something still ahead: try this much further round
 BLOCKED_NUDGE_RAD = math.radians(20)
 #: holding the heading on a leg: mm/s of wheel difference per radian off, and at most
@@ -398,17 +397,15 @@ class DockSearch(DockingAction):
 
     def _turn(self, snap: Snapshot) -> Status | None:
         err = math.remainder(self._target - snap.odometry.theta_rad, math.tau)
-        if abs(err) < TURN_DONE_RAD and self._lit_ahead:
+        if not self.spin_to(err, TURN):
+            return RUNNING
+        if self._lit_ahead:
             # still blocked: aim further round, and drive the leg's step this tick
             self._target += math.copysign(BLOCKED_NUDGE_RAD, err or 1.0)
             return self._forward(snap)
-        if abs(err) < TURN_DONE_RAD:
-            self.state = SearchState.FORWARD
-            self._distance_mark = snap.odometry.distance_mm  # self.mark_distance()
-            return None
-        w = TURN_FAST_MM_S if abs(err) > TURN_SLOW_WITHIN_RAD else TURN_SLOW_MM_S
-        self.spin_toward(err, w)
-        return RUNNING
+        self.state = SearchState.FORWARD
+        self._distance_mark = snap.odometry.distance_mm  # self.mark_distance()
+        return None
 
     def _forward(self, snap: Snapshot) -> Status | None:
         """A straight leg toward unexplored space, then look for a wall again."""
