@@ -293,15 +293,6 @@ _NO_CHILD: tuple[object, Callable[[], None]] = (None, lambda: None)
 Stepped._direct_child = _NO_CHILD
 
 
-def tick_child(child: Behaviour) -> None:
-    """Tick ``child`` as :meth:`Stepped.tick_direct` does: by its direct path when it has
-    one, else by its generator."""
-    if isinstance(child, Direct):
-        child.tick_direct()
-    else:
-        tick_generator(child)
-
-
 def composite_stop(node: py_trees.composites.Composite, new_status: Status) -> None:
     """py_trees 2.6's ``Composite.stop`` (without building the ``iterator`` nothing reads):
     on INVALID the current child is lost and every child not INVALID stopped; then

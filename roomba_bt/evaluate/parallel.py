@@ -10,7 +10,6 @@ give the same results in the same order; only the wall time differs. Workers are
 from __future__ import annotations
 
 import multiprocessing
-import os
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -20,11 +19,6 @@ from typing import TextIO
 from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec, run_episode
 
 Progress = Callable[[int, int, EpisodeResult], None]
-
-
-def default_jobs() -> int:
-    return max(1, min(len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
-                      else (os.cpu_count() or 1), 8))  # fmt: skip
 
 
 def run_episodes(

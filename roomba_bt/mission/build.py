@@ -104,7 +104,3 @@ class CompiledMission:
             write_key(key, value)
         for node in self.root.iterate():
             node.setup(robot=robot, **kwargs)
-
-    def reset_blackboard(self) -> None:
-        for key, value in self.blackboard_initial.items():
-            write_key(key, value)

@@ -139,13 +139,6 @@ class FrameLayout:
         """Decode a payload starting at ``offset`` (ids, if any, are not checked here)."""
         return SensorFrame(self, self.struct.unpack_from(buffer, offset))
 
-    def ids_match(self, buffer: bytes | bytearray, offset: int) -> bool:
-        """True if every packet-id byte of a stream payload at ``offset`` is the one asked."""
-        for pos, pid in zip(self.id_offsets, self.packet_ids, strict=True):
-            if buffer[offset + pos] != pid:
-                return False
-        return True
-
     def pack(self, values: Mapping[int, int]) -> bytes:
         """The payload for ``values`` (packet id -> raw value); the simulator's encoder.
 

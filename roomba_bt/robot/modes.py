@@ -369,21 +369,7 @@ class ModeModel:
         self.since, self.since_wall, self.cause = time, self._wall_clock(), None
         self._track()
 
-    def robot_off(self, time: float) -> None:
-        """The link is gone or the robot stopped talking: assume nothing is allowed."""
-        self._reset_off(time)
-        self._pending = None
-        self._track()
-
     # ------------------------------------------------------------------ packet 35
-    def possible_modes(self, time: float) -> set[OIMode]:
-        """Modes the robot may be in at ``time`` (see the module docstring)."""
-        modes = {self.mode} | FALLS[self.mode]
-        if self._pending is not None and time - self._pending[2] < self.settle:
-            before = self._pending[0]
-            modes |= {before} | FALLS[before]
-        return modes
-
     def reconcile(self, frame: SensorFrame, tick: int, time: float) -> ModeChange | None:
         """Follow packet 35 of ``frame``; return the change the robot made by itself, if any."""
         previous_frame, self._previous_frame = self._previous_frame, frame

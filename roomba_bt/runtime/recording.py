@@ -143,10 +143,6 @@ class Record:
     notes: list[tuple[float, dict[str, Any]]] = field(default_factory=list)
 
     @property
-    def inbound(self) -> list[tuple[float, bytes]]:
-        return [(t, b) for t, d, b in self.chunks if d == "in"]
-
-    @property
     def inbound_after_writes(self) -> list[tuple[float, bytes, int]]:
         """Each "in" chunk with how many bytes the host had written before it was read."""
         out: list[tuple[float, bytes, int]] = []
