@@ -464,9 +464,17 @@ class Action(RobotBehaviour):
         """However the action ends (success, failure, or preempted: INVALID), wheels it
         set turning are stopped: ``[137][0][0][0][0]`` queued in this tick's outbox, unless
         another behaviour already queued a wheel command in this tick (the branch that
-        preempted this one: its Drive stands)."""
-        if self.moves and self.robot is not None and self._started_motion:
-            self.robot.outbox.send_stop(halt(), self)
+        preempted this one: its Drive stands), or the robot is out of Safe and Full: it
+        stopped its wheels when it fell to Passive (a cliff, a wheel drop, the charger),
+        and the mode guard would refuse the halt."""
+        robot = self.robot
+        if (
+            self.moves
+            and robot is not None
+            and self._started_motion
+            and robot.snapshot.mode in DRIVING_MODES
+        ):
+            robot.outbox.send_stop(halt(), self)
         self._started_motion = False
         self._out_of_driving_since = None
 

@@ -165,6 +165,26 @@ def test_drive_fails_when_the_robot_stays_out_of_safe(robot: StubRobot, make: Ma
     assert robot.flush() == []  # no halt: the firmware stopped the wheels already
 
 
+def test_drive_stopped_after_a_fall_back_to_passive_sends_no_halt(
+    robot: StubRobot, make: Make
+) -> None:
+    """A cliff dropped the robot to Passive (the firmware stopped the wheels) and the same
+    frame ended the drive (``until: cliff``): a halt there is refused by the mode guard, a
+    refusal in the run's summary under a mission that did nothing wrong."""
+    robot.set_frame({35: 2})
+    behaviour = make(a.Drive, velocity=100.0)
+    tick(behaviour)
+    robot.flush()
+    robot.set_frame({35: 1})
+    behaviour.stop(Status.INVALID)
+    assert robot.flush() == []
+    robot.set_frame({35: 3})  # in Full a cliff does not stop the robot: the halt is sent
+    tick(behaviour)
+    robot.flush()
+    behaviour.stop(Status.INVALID)
+    assert data(robot) == [HALT]
+
+
 def test_drive_reads_a_blackboard_value_when_it_starts(robot: StubRobot, make: Make) -> None:
     write_key("leg", 50.0)
     robot.set_frame({35: 2, **encoders(0, 0)})
