@@ -74,6 +74,11 @@ def register(sub: Any) -> None:
         help="the robot's baud rate: 115200 (the default) or 19200 (Clean held at power-off)",
     )  # fmt: skip
     parser.add_argument(
+        "--log", action="store_true",
+        help="on stderr, a line for each command the robot hears (decoded, with its bytes), "
+        "each command its mode ignores, and each event (modes, bumps, cliffs, docking, faults)",
+    )  # fmt: skip
+    parser.add_argument(
         "--asleep", action="store_true",
         help="start asleep (the 5-minute Passive sleep): deaf until a BRC pulse (--rfc2217)",
     )  # fmt: skip
@@ -111,7 +116,7 @@ def run_sim(args: argparse.Namespace) -> int:
     endpoint = _endpoint(args, simulator.baud)
     if isinstance(endpoint, int):
         return endpoint
-    failed = _serve_until_stopped(simulator, endpoint, args.duration)
+    failed = _serve_until_stopped(simulator, endpoint, args.duration, log=args.log)
     if failed is not None:
         return failed
     print(
@@ -195,11 +200,16 @@ def _endpoint(args: argparse.Namespace, baud: int) -> Endpoint | int:
 
 
 def _serve_until_stopped(
-    simulator: Simulator, endpoint: Endpoint, duration: float | None
+    simulator: Simulator, endpoint: Endpoint, duration: float | None, *, log: bool = False
 ) -> int | None:
     """Serve until SIGINT or SIGTERM, or ``duration`` seconds; the endpoint is closed and the
     signal handlers restored. The exit code if the endpoint failed, else None."""
+    from roomba_bt.sim.narrate import Narrator
     from roomba_bt.sim.server import serve
+
+    narrator = (
+        Narrator(simulator, lambda line: print(line, file=sys.stderr, flush=True)) if log else None
+    )
 
     stop = {"signal": 0}
 
@@ -216,7 +226,7 @@ def _serve_until_stopped(
         return duration is not None and time.monotonic() - started >= duration
 
     try:
-        serve(simulator, endpoint, should_stop)
+        serve(simulator, endpoint, should_stop, narrator=narrator)
     except OSError as exc:
         return _fail(f"the {endpoint.address} endpoint failed: {exc}", ExitCode.CONNECTION)
     finally:

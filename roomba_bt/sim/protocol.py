@@ -73,7 +73,7 @@ class OIProtocol(StreamOutput):
     __slots__ = (
         "_buttons_until", "_commands", "_data_sizes", "_drive_modes", "_held_until", "_inbuf",
         "_last_activity", "_rng", "_song_until", "_tails", "baud", "brc_low", "brc_pulses",
-        "builtin", "day_time", "deaf", "digits", "firmware", "ignored_bytes", "leds",
+        "builtin", "day_time", "deaf", "digits", "firmware", "heard", "ignored_bytes", "leds",
         "schedule", "scheduling_leds", "songs",
     )  # fmt: skip
 
@@ -102,6 +102,9 @@ class OIProtocol(StreamOutput):
         #: asleep by the five-minute idle rule: deaf to the serial line until BRC wakes it
         self.deaf = False
         self.ignored_bytes = 0
+        #: told of each command the robot takes in, before its mode is checked (``sim --log``,
+        #: :class:`~roomba_bt.sim.narrate.Narrator`); None: nobody is told
+        self.heard: Callable[[CommandSpec, bytes], None] | None = None
         self._inbuf = bytearray()
         self._commands: dict[int, CommandSpec] = {c.opcode: c for c in profile.commands}
         self._data_sizes = {c.opcode: c.fixed_data_bytes for c in profile.commands}
@@ -156,6 +159,8 @@ class OIProtocol(StreamOutput):
         op = spec.opcode
         if self.deaf:
             return  # power saving: the UART is not listening (a BRC pulse wakes it)
+        if self.heard is not None:
+            self.heard(spec, args)
         if self.asleep or self.mode is OIMode.OFF:
             # Off (and asleep) answers nothing but Start, and Reset where it exists.
             if op not in _WAKERS:

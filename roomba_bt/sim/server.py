@@ -53,6 +53,7 @@ from serial.rfc2217 import PortManager
 
 from roomba_bt.oi.encode import BAUD_RATES
 from roomba_bt.sim.link import at_wrong_baud
+from roomba_bt.sim.narrate import Narrator
 from roomba_bt.sim.robot import STEP_SECONDS, Simulator
 
 #: If the host falls this far behind the 15 ms cadence (a suspended process), resynchronise
@@ -335,8 +336,10 @@ def serve(
     endpoint: Endpoint,
     should_stop: Callable[[], bool],
     clock: Callable[[], float] = time.monotonic,
+    narrator: Narrator | None = None,
 ) -> None:
-    """Run ``simulator`` in real time on ``endpoint`` until ``should_stop()`` is true."""
+    """Run ``simulator`` in real time on ``endpoint`` until ``should_stop()`` is true; a
+    ``narrator`` (``sim --log``) is told after each read and each round of steps."""
     next_step = clock() + STEP_SECONDS
     # The line as the robot finds it when it comes up is no edge (a pty's lines read as
     # asserted from the start: BRC low, not a pulse).
@@ -360,6 +363,8 @@ def serve(
         out = simulator.read()
         if out:
             endpoint.send(out if _same_rate(endpoint, simulator) else at_wrong_baud(out))
+        if narrator is not None:
+            narrator.catch_up()
         if simulator.disconnected:
             endpoint.hang_up()
 

@@ -58,6 +58,31 @@ def test_pycreate2_reads_sensors_that_make_sense_drives_and_the_encoders_move(
     assert "mode Off" in err and "0 ignored actuator commands" in err
 
 
+def test_log_shows_what_pycreate2_sent_and_what_the_robot_did(
+    served_sim: Callable[..., Any],
+) -> None:
+    """``sim --log``: a driver's commands decoded as the robot heard them, and the mode
+    changes they made, in order."""
+    pycreate2 = pytest.importorskip("pycreate2")
+    served = served_sim("--pty", "--log")
+    bot = pycreate2.Create2(served.address)
+    bot.start()
+    bot.safe()
+    bot.drive_direct(150, -150)
+    bot.get_sensors()
+    bot.drive_stop()
+    del bot  # pycreate2's destructor stops the motors and sends Stop (173)
+    gc.collect()
+    code, err = served.stop()
+    assert code == 0
+    heard = [line.split(" s  ", 1)[1] for line in err.splitlines() if " s  " in line]
+    words = [line.split(" (", 1)[0] for line in heard]
+    assert words[:4] == ["heard Start", "mode: Off->Passive", "heard Safe", "mode: Passive->Safe"]
+    assert any(line.startswith("heard Drive Direct (145) right_velocity 150, left_velocity -150")
+               for line in heard), heard  # fmt: skip
+    assert "heard Stop" in words and "mode: Safe->Off" in words
+
+
 def test_tcp_serves_a_stream_to_pyserial_and_exits_cleanly_on_sigint(
     served_sim: Callable[..., Any],
 ) -> None:

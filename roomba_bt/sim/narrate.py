@@ -1,0 +1,85 @@
+"""``roomba-bt sim --log``: what the simulated robot heard, did and ignored, a line each.
+
+A driver under test (pycreate2, a student's script, ours) writes bytes the robot either takes
+or ignores, and the robot answers with mode changes, bumps and cliffs. The summary at exit
+counts them; the log shows them as they happen, in the robot's own time::
+
+       0.000 s  heard Start (128)                                            80
+       0.000 s  mode: Off->Passive (start)
+       0.300 s  heard Drive (137) velocity 200, radius -32768               89 00 c8 80 00
+       0.300 s  ignored Drive (137): not accepted in Passive
+       1.215 s  heard Safe (131)                                             83
+
+Each command is named from the opcode table with its arguments as the robot reads them
+(two-byte ones signed or not as the table says) and its bytes; the events are the
+simulator's own (:attr:`Simulator.events`: modes, bumps, cliffs, docking, faults, built-in
+cycles); an actuator command the mode does not accept is one of
+:attr:`Simulator.violations`. A Drive repeated with the same bytes changes nothing on the
+robot and is heard without a line (a client that sends one a frame would fill the log).
+"""
+
+from __future__ import annotations
+
+import struct
+from collections.abc import Callable
+
+from roomba_bt.oi.opcodes import COMMANDS, CommandSpec
+from roomba_bt.sim.robot import Simulator
+
+#: the width the command's name and arguments are padded to, before its bytes
+_TEXT_WIDTH = 60
+
+
+def command_text(spec: CommandSpec, args: bytes) -> str:
+    """``Drive (137) velocity 200, radius -32768``: the name, then each fixed argument; a
+    variable tail (Song's notes, Stream's packet ids) as its count of items."""
+    fixed = spec.fixed_data_bytes
+    codes = "".join(arg.code for arg in spec.args)
+    values = struct.unpack_from(">" + codes, args) if codes and len(args) >= fixed else ()
+    words = [f"{arg.name} {value}" for arg, value in zip(spec.args, values, strict=False)]
+    if spec.tail is not None and len(args) > fixed:
+        words.append(f"then {', '.join(str(b) for b in args[fixed:])}")
+    text = f"{spec.title} ({spec.opcode})"
+    return f"{text} {', '.join(words)}" if words else text
+
+
+class Narrator:
+    """Writes the log of one simulator (``write`` takes a line): the commands as the robot
+    hears them (its :attr:`~Simulator.heard`), and what followed each (:meth:`catch_up`, also
+    called by the server after the steps, for what the robot did by itself)."""
+
+    def __init__(self, simulator: Simulator, write: Callable[[str], None]) -> None:
+        self.simulator = simulator
+        self.write = write
+        self._events = len(simulator.events)
+        self._violations = len(simulator.violations)
+        self._ignored_bytes = simulator.ignored_bytes
+        simulator.heard = self._heard
+
+    def _heard(self, spec: CommandSpec, args: bytes) -> None:
+        self.catch_up()  # what the commands before it did, first
+        text = command_text(spec, args)
+        data = bytes([spec.opcode]) + args
+        self._line(f"heard {text:<{_TEXT_WIDTH}} {data.hex(' ')}")
+
+    def catch_up(self) -> None:
+        """Write the events, ignored commands and ignored bytes since the last call."""
+        sim = self.simulator
+        events = sim.events
+        for event in events[self._events :]:
+            detail = f": {event.detail}" if event.detail else ""
+            self._line(f"{event.kind}{detail}", event.time)
+        self._events = len(events)
+        violations = sim.violations
+        for v in violations[self._violations :]:
+            title = COMMANDS[v.opcode].title
+            self._line(f"ignored {title} ({v.opcode}): not accepted in {v.mode.label}", v.time)
+        self._violations = len(violations)
+        skipped = sim.ignored_bytes - self._ignored_bytes
+        if skipped:
+            self._ignored_bytes = sim.ignored_bytes
+            self._line(f"ignored {skipped} byte(s): no opcode, or sent at another baud rate")
+
+    def _line(self, text: str, time: float | None = None) -> None:
+        at = self.simulator.time if time is None else time
+        self.write(f"{at:10.3f} s  {text}")

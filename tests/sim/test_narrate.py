@@ -1,0 +1,57 @@
+"""``sim --log``: the commands the simulated robot hears, what it ignores, and its events."""
+
+from __future__ import annotations
+
+from roomba_bt.oi import commands as C
+from roomba_bt.sim.narrate import Narrator, command_text
+
+from .helpers import Host, make
+
+
+def narrated() -> tuple[Host, Narrator, list[str]]:
+    """A robot just switched on (Off) and its log, as text after the time."""
+    lines: list[str] = []
+    host = make(mode=None)
+    narrator = Narrator(host.sim, lambda line: lines.append(line.split(" s  ", 1)[1].rstrip()))
+    return host, narrator, lines
+
+
+def test_each_command_is_named_with_its_arguments_and_bytes_and_what_followed_it() -> None:
+    host, narrator, lines = narrated()
+    host.send(C.start(), C.drive(200, 500))
+    host.send(C.safe(), C.drive(-200, 500))
+    host.sim.step()
+    narrator.catch_up()
+    assert lines[0].startswith("heard Start (128)") and lines[0].endswith(" 80")
+    assert lines[1] == "mode: Off->Passive (start)"
+    assert lines[2].startswith("heard Drive (137) velocity 200, radius 500")
+    assert lines[2].endswith("89 00 c8 01 f4")
+    assert lines[3] == "ignored Drive (137): not accepted in Passive"
+    assert lines[4].startswith("heard Safe (131)")
+    assert lines[5] == "mode: Passive->Safe (safe)"
+    assert lines[6].startswith("heard Drive (137) velocity -200, radius 500")
+    assert len(lines) == 7
+
+
+def test_a_drive_sent_again_unchanged_has_no_line_and_stray_bytes_are_counted() -> None:
+    host, narrator, lines = narrated()
+    host.send(C.start(), C.safe())
+    host.send(C.drive(100, 0x8000))
+    before = len(lines)
+    for _ in range(5):
+        host.send(C.drive(100, 0x8000))  # a client sending the same Drive every frame
+    assert len(lines) == before
+    host.send(b"\x01")  # no opcode
+    narrator.catch_up()
+    assert lines[-1] == "ignored 1 byte(s): no opcode, or sent at another baud rate"
+
+
+def test_a_variable_tail_is_listed_after_the_fixed_arguments() -> None:
+    assert command_text(C.stream([7, 35]).spec, bytes([2, 7, 35])) == (
+        "Stream (148) packet_count 2, then 7, 35"
+    )
+    assert command_text(C.start().spec, b"") == "Start (128)"
+
+
+def test_nobody_is_told_without_a_narrator() -> None:
+    assert make().sim.heard is None
