@@ -74,11 +74,6 @@ def register(sub: Any) -> None:
         help="the robot's baud rate: 115200 (the default) or 19200 (Clean held at power-off)",
     )  # fmt: skip
     parser.add_argument(
-        "--log", action="store_true",
-        help="on stderr, a line for each command the robot hears (decoded, with its bytes), "
-        "each command its mode ignores, and each event (modes, bumps, cliffs, docking, faults)",
-    )  # fmt: skip
-    parser.add_argument(
         "--asleep", action="store_true",
         help="start asleep (the 5-minute Passive sleep): deaf until a BRC pulse (--rfc2217)",
     )  # fmt: skip
@@ -97,6 +92,9 @@ def register(sub: Any) -> None:
     parser.add_argument("--duration", type=seconds, help="stop after this many seconds")
     parser.add_argument(
         "--plot", metavar="FILE.png", type=plot_file, help="write the trajectory on exit"
+    )
+    parser.add_argument(
+        "--log", action="store_true", help="on stderr: each command heard or ignored, each event"
     )
     faults = parser.add_argument_group("faults")
     for name, kind, default, help in FAULT_OPTIONS:
