@@ -88,6 +88,35 @@ def seconds(text: str) -> float:
     return value
 
 
+def count(text: str) -> int:
+    """A whole number, 0 or more (``--count``)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"found {text!r}; allowed: a whole number, 0 or more"
+        ) from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"found {value}; allowed: a whole number, 0 or more")
+    return value
+
+
+#: the most refreshes a second a live view can show: one a stream frame (every 15 ms)
+MAX_REFRESH_RATE = 66.0
+
+
+def refresh_rate(text: str) -> float:
+    """Refreshes a second (``sensors --rate``): above 0, at most one a stream frame."""
+    allowed = f"refreshes a second, above 0 and at most {MAX_REFRESH_RATE:g}"
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"found {text!r}; allowed: {allowed}") from None
+    if not (math.isfinite(value) and 0 < value <= MAX_REFRESH_RATE):
+        raise argparse.ArgumentTypeError(f"found {text}; allowed: {allowed}")
+    return value
+
+
 def output_file(text: str) -> str:
     """A file to write (--record, --plot, eval --out): not a directory, its directory must
     exist and be writable, and the file too if it is there, checked before anything runs, so

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from typing import TYPE_CHECKING, Any
 
-from roomba_bt.cli.arguments import add_command, add_far_end_options
+from roomba_bt.cli.arguments import add_command, add_far_end_options, count, refresh_rate
 from roomba_bt.oi.frames import stream_frame_size
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import RobotProfile, get_profile
@@ -33,14 +34,27 @@ def group_for(baud: int) -> int | None:
 
 
 def register(sub: Any) -> None:
-    parser = add_command(sub, "sensors", sensors_command, "show every decoded sensor, live")
+    parser = add_command(
+        sub,
+        "sensors",
+        sensors_command,
+        """show every decoded sensor, live
+
+        Stream the largest sensor group the baud rate carries and show every packet decoded,
+        with its unit, a few times a second; the robot stays in Passive and is left there.
+        Without --port, the built-in simulator. Exit codes: 0 done (--count reached), 2
+        invalid option, 3 connection or stream failure, 130 interrupted.
+        """,
+    )
     add_far_end_options(
         parser,
         port_help="serial device or URL; default: the built-in simulator",
         world_help="simulator world (without --port)",
     )
-    parser.add_argument("--count", type=int, default=0, help="stop after N refreshes (0: run)")
-    parser.add_argument("--rate", type=float, default=5.0, help="refreshes per second")
+    parser.add_argument("--count", type=count, default=0, help="stop after N refreshes (0: run)")
+    parser.add_argument(
+        "--rate", type=refresh_rate, default=5.0, help="refreshes a second (default 5, at most 66)"
+    )
 
 
 def format_table(frame: Any) -> str:
@@ -120,7 +134,7 @@ def _show_live(
     shown = 0
     with sigterm_raises(), connection:
         connection.start("passive", (group,))
-        last = 0.0
+        last = -math.inf  # the first frame is shown at once
         while args.count == 0 or shown < args.count:
             frames = connection.poll(0.1)
             if not frames or time.monotonic() - last < 1.0 / args.rate:

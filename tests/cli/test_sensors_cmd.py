@@ -38,3 +38,34 @@ def test_a_rate_too_slow_for_any_stream_is_a_clear_error(
     assert main(["sensors", "--baud", "4800", "--count", "1"]) == 2
     err = capsys.readouterr().err
     assert "--baud 4800: no sensor stream fits in 15 ms" in err and "9600 or more" in err
+
+
+@pytest.mark.parametrize(
+    ("option", "value", "allowed"),
+    [
+        ("--rate", "0", "above 0 and at most 66"),  # was a ZeroDivisionError traceback
+        ("--rate", "-1", "above 0 and at most 66"),
+        ("--rate", "nan", "above 0 and at most 66"),
+        ("--rate", "inf", "above 0 and at most 66"),
+        ("--rate", "100", "above 0 and at most 66"),
+        ("--count", "-1", "a whole number, 0 or more"),  # printed nothing and exited 0
+    ],
+)
+def test_a_refresh_rate_or_count_out_of_range_is_a_usage_error(
+    option: str, value: str, allowed: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(SystemExit) as exit_:
+        main(["sensors", option, value, "--count", "1"] if option == "--rate" else
+             ["sensors", option, value])  # fmt: skip
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err
+    assert f"argument {option}: found {value}; allowed: " in err and allowed in err
+
+
+def test_the_first_table_is_shown_at_once_at_a_slow_rate(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The first table waited a whole period from the clock's zero (at --rate 1e-9, 31
+    years: for ever)."""
+    assert main(["sensors", "--rate", "1e-9", "--count", "1"]) == 0
+    assert "bumps_wheel_drops" in capsys.readouterr().out
