@@ -33,7 +33,7 @@ class Radius(IntEnum):
 
 #: Radius values that mean "straight": 0x8000 (also written -32768, its signed reading) and
 #: 0x7FFF. They lie outside -2000..2000 and are sent unchanged.
-_STRAIGHT_VALUES = frozenset({0x8000, 0x7FFF, -0x8000})
+STRAIGHT_RADII = frozenset({0x8000, 0x7FFF, -0x8000})
 _RADIUS_ALLOWED = "in -2000..2000 mm, or 32768/32767 (straight) or -1/1 (spin in place)"
 
 
@@ -167,7 +167,7 @@ def _check_tail(spec: CommandSpec, checked: list[int], tail: Sequence[int]) -> t
 def _radius(spec: CommandSpec, value: object) -> int:
     if not isinstance(value, int) or isinstance(value, bool):
         raise EncodeError(spec.name, "radius", f"an integer {_RADIUS_ALLOWED}", value)
-    if value in _STRAIGHT_VALUES:
+    if value in STRAIGHT_RADII:
         return 0x7FFF if value == 0x7FFF else 0x8000
     if not spec.args[1].accepts(value):
         raise EncodeError(spec.name, "radius", _RADIUS_ALLOWED, value)

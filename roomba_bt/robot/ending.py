@@ -28,7 +28,7 @@ from collections.abc import Iterator
 from typing import Literal
 
 from roomba_bt.oi import commands as oi
-from roomba_bt.oi.encode import Command
+from roomba_bt.oi.encode import STRAIGHT_RADII, Command
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import Effect
 from roomba_bt.oi.profiles import RobotProfile
@@ -80,7 +80,7 @@ def describe_activity(command: Command | None) -> str:
         velocity, radius = command.args
         if radius in (1, -1):  # the spec's turn in place
             return f"spinning {'left' if radius == 1 else 'right'} at {velocity} mm/s"
-        turning = "" if radius in (-32768, 32767) else f", radius {radius} mm"
+        turning = "" if radius in STRAIGHT_RADII else f", radius {radius} mm"
         return f"at {velocity} mm/s{turning}"
     values = ", ".join(
         f"{arg.name} {value} {arg.unit}".rstrip()

@@ -11,6 +11,7 @@ from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.connection import Connection
+from roomba_bt.robot.ending import describe_activity
 from roomba_bt.robot.errors import PortLost
 from roomba_bt.sim import SimLink, Simulator, parse_world
 
@@ -101,3 +102,10 @@ def test_a_robot_never_told_to_move_has_its_undelivered_stop_said_quietly(
     with caplog.at_level("DEBUG", logger="roomba_bt.robot.ending"):
         assert connection.safe_stop() is False
     assert [r.levelname for r in caplog.records] == ["ERROR"]
+
+
+@pytest.mark.parametrize("straight", [0x8000, 0x7FFF])
+def test_driving_straight_is_said_without_a_radius(straight: int) -> None:
+    """``radius: straight`` is sent as 0x8000: it was said "radius 32768 mm"."""
+    assert describe_activity(oi.drive(200, straight)) == "at 200 mm/s"
+    assert describe_activity(oi.drive(200, -1000)) == "at 200 mm/s, radius -1000 mm"
