@@ -350,7 +350,7 @@ class MissionRunner(BaseHandle):
                     connection.check_stall(stall[0], self.grace, stall[1])
             if not batch:
                 if self.input_ended is not None and (why := self.input_ended()):
-                    summary.outcome, summary.reason = Outcome.CONNECTION_LOST, why
+                    summary.outcome, summary.reason = Outcome.INPUT_ENDED, why
                     return
                 continue
             started = perf()

@@ -43,6 +43,9 @@ class Outcome(Enum):
     INTERRUPTED = "interrupted"
     CONNECTION_LOST = "connection lost"
     ERROR = "error"
+    #: the run's input ended before the tree did: a replayed record's end, or its first
+    #: difference from what the tree wrote (``replay`` says which, and exits by the bytes)
+    INPUT_ENDED = "input ended"
 
     @property
     def exit_code(self) -> ExitCode:
@@ -57,6 +60,7 @@ _EXIT = {
     Outcome.INTERRUPTED: ExitCode.INTERRUPTED,
     Outcome.CONNECTION_LOST: ExitCode.CONNECTION,
     Outcome.ERROR: ExitCode.BEHAVIOUR_ERROR,
+    Outcome.INPUT_ENDED: ExitCode.MISSION_FAILED,
 }
 
 

@@ -287,6 +287,8 @@ def test_replay_stops_at_the_first_difference_and_names_it(
     assert "first difference at mission time 1.0" in line
     assert "expected Drive (137) 89 00 c8 80 00, sent Drive (137) 89 00 64 80 00" in line
     assert "end of the record" not in out  # it stopped there, not at the record's end
+    # the tree's input ended: nothing was lost (it read "CONNECTION LOST")
+    assert "outcome      INPUT ENDED (first difference from the record)" in out
 
 
 def test_replay_checks_the_record_holds_the_missions_packets(
