@@ -80,6 +80,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ImportError as exc:
         return _cannot_run(exc)
     args = parser.parse_args(argv)
+    args.verbose += getattr(args, "verbose_after", 0)
+    args.quiet += getattr(args, "quiet_after", 0)
     setup_logging(args.verbose, args.quiet)
     func = getattr(args, "func", None)
     if func is None:

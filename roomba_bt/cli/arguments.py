@@ -35,6 +35,14 @@ def add_command(
         name, help=summary, description=details.strip() or None
     )
     parser.set_defaults(func=command)
+    # -v and -q after the command too (``roomba-bt run m.yaml -v``, as the hints say it):
+    # counted with those before it (:func:`roomba_bt.cli.main` adds them up)
+    parser.add_argument(
+        "-v", "--verbose", dest="verbose_after", action="count", default=0, help="more logging"
+    )
+    parser.add_argument(
+        "-q", "--quiet", dest="quiet_after", action="count", default=0, help="less logging"
+    )
     return parser
 
 

@@ -351,7 +351,12 @@ class Connection:
         return last
 
     def _report_change(self, change: ModeChange) -> None:
-        log.warning(
+        """A warning, unless the charger alone was the cause: docking ends that way (the OI
+        drops to Passive on the home base's contacts), which a successful dock run reported
+        as a WARNING."""
+        level = logging.INFO if change.cause == "charger" else logging.WARNING
+        log.log(
+            level,
             "%s: the robot went from %s to %s by itself (%s)",
             self.name,
             change.previous.label,

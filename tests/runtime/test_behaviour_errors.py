@@ -60,8 +60,13 @@ def test_names_the_behaviour_and_the_plugin_line(
     assert "safe stop    sent" in out
 
 
-def test_the_traceback_under_verbose(mission: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(_run(mission, "-v")) == 4
+@pytest.mark.parametrize("after", [False, True], ids=["before the command", "after it"])
+def test_the_traceback_under_verbose(
+    mission: Path, after: bool, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``-v`` where the hint puts it, after the command, too: it was an unrecognized
+    argument there (exit 2)."""
+    assert main([*_run(mission), "-v"] if after else _run(mission, "-v")) == 4
     _, err = capsys.readouterr()
     assert "Traceback (most recent call last)" in err
     assert "return 1000 // snapshot.frame[27] > 3" in err

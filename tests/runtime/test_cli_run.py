@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import logging
 import re
 import subprocess
 import sys
@@ -354,3 +355,16 @@ def test_a_record_is_not_written_over_a_file_that_is_not_one(
     assert main([*argv, "--record", str(record)]) == 0  # an earlier record: written over
     (tmp_path / "empty.jsonl").write_text("")
     assert main([*argv, "--record", str(tmp_path / "empty.jsonl")]) == 0
+
+
+def test_docking_reports_the_fall_to_passive_on_the_charger_as_information(
+    caplog: pytest.LogCaptureFixture, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A dock run that succeeded logged a WARNING for the end docking is for; a cliff or a
+    wheel drop is still one."""
+    with caplog.at_level(logging.INFO, logger="roomba_bt"):
+        assert main(["run", "dock", "--fast", "--display", "none"]) == 0
+    changes = [r for r in caplog.records if "by itself" in r.getMessage()]
+    assert [(r.levelno, r.getMessage().rsplit(" ", 1)[-1]) for r in changes] == [
+        (logging.INFO, "(charger)")
+    ]
