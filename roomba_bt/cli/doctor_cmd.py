@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 from enum import IntEnum
 from typing import TYPE_CHECKING, Any, TextIO
 
-from roomba_bt.cli.arguments import add_command, baud_or_auto
+from roomba_bt.cli.arguments import add_command, baud_or_auto, port_name
 from roomba_bt.oi.modes import OI_MODE_PACKET
 from roomba_bt.oi.packets import packet_ids
 
@@ -100,8 +100,9 @@ def register(sub: Any) -> None:
         """,
     )
     parser.add_argument(
-        "--port", required=True, help="serial device or URL (/dev/ttyUSB0, rfc2217://, socket://)"
-    )
+        "--port", required=True, type=port_name,
+        help="serial device or URL (/dev/ttyUSB0, rfc2217://, socket://)",
+    )  # fmt: skip
     parser.add_argument(
         "--baud", type=baud_or_auto, default=None,
         help="a rate to try first (default auto: 115200, then 19200)",

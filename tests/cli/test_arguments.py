@@ -13,7 +13,14 @@ from collections.abc import Callable
 import pytest
 
 from roomba_bt.cli import build_parser, main
-from roomba_bt.cli.arguments import add_command, baud_rate, parse_params, parse_timeout, seconds
+from roomba_bt.cli.arguments import (
+    add_command,
+    baud_rate,
+    parse_params,
+    parse_timeout,
+    port_name,
+    seconds,
+)
 from roomba_bt.oi.encode import BAUD_CODES
 
 
@@ -48,12 +55,24 @@ def test_bad_seconds(text: str) -> None:
         (["sensors", "--baud", "-1"], "--baud: found -1"),
         (["run", "missions/dock.yaml", "--record", "/no/such/dir/run.log"], "no directory"),
         (["sim", "--pty", "--duration", "-1"], "--duration: found -1"),
+        # a URL typo was "could not open" (exit 3) with a fix about the dialout group
+        (["doctor", "--port", "bogus://x"], "'bogus://x', a URL of no scheme pyserial knows"),
+        (["run", "dock", "--port", "socket://robot"], "allowed: socket://HOST:PORT"),
+        (["sensors", "--port", "rfc2217://h:99999"], "a port in 1..65535"),
     ],
 )
 def test_commands_refuse_them_with_exit_2(
     argv: list[str], message: str, usage_error: Callable[..., str]
 ) -> None:
     assert message in usage_error(main, argv)
+
+
+@pytest.mark.parametrize(
+    "port", ["/dev/ttyUSB0", "COM3", "socket://127.0.0.1:7777", "SOCKET://bridge:23", "loop://",
+             "rfc2217://localhost:7777?logging=debug"],
+)  # fmt: skip
+def test_port_names_pyserial_opens_are_taken_as_given(port: str) -> None:
+    assert port_name(port) == port
 
 
 def test_params_are_read_as_text_name_to_value() -> None:

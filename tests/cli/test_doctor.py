@@ -194,9 +194,12 @@ def test_a_port_that_does_not_open_is_exit_3_with_what_to_check(tmp_path: Path) 
     assert "[FAIL] port      could not open" in done.stdout
     assert ": no such device: the cable unplugged, or the adapter has another name" in done.stdout
     assert "(serial ports present: " in done.stdout and "fix:" not in done.stdout
-    done = _doctor("nosuchscheme://x")
+    done = _doctor("hwgrep://^no-such-adapter$")  # pyserial's search by name: no errno
     assert done.returncode == DoctorExit.PORT
     assert "fix: check the device path" in done.stdout
+    done = _doctor("nosuchscheme://x")  # a URL typo is a usage error (it was exit 3)
+    assert done.returncode == 2
+    assert "a URL of no scheme pyserial knows" in done.stderr
 
 
 def test_a_port_that_echoes_is_named_a_loopback_not_a_silent_robot() -> None:
