@@ -22,6 +22,8 @@ from typing import Any
 
 import yaml
 
+from roomba_bt.behaviours.units import closest
+
 #: Where the shipped missions live: the package's data directory (a sibling of ``mission/``).
 SHIPPED_DIR = Path(__file__).resolve().parent.parent / "missions"
 
@@ -107,10 +109,15 @@ def find_mission(text: str) -> ShippedLookup:
         return ShippedLookup(None, f"{text}: a directory, not a mission file (a .yaml file)")
     if given.exists():  # a device, a pipe: nothing a mission is read from
         return ShippedLookup(None, f"{text}: not a regular file; a mission is a .yaml file")
+    base = Path(stem).name
+    if base in shipped:  # missions/dock.yaml from a checkout's docs, in an empty folder
+        hint = f"; the shipped mission {base!r} is named alone: {base}"
+    else:
+        hint = closest(base, list(shipped))
     return ShippedLookup(
         None,
         f"{text}: no such mission file, and no shipped mission of that name "
-        f"(shipped: {names}; `roomba-bt missions` lists them)",
+        f"(shipped: {names}; `roomba-bt missions` lists them){hint}",
     )
 
 

@@ -4,6 +4,8 @@ Standard library only. Everything above (transport, robot, simulator, missions) 
 tables defined here: :mod:`~roomba_bt.oi.opcodes` and :mod:`~roomba_bt.oi.packets`.
 """
 
+import sys
+
 from roomba_bt.oi import encode as commands
 from roomba_bt.oi.bits import (
     BumpsWheelDrops,
@@ -77,3 +79,7 @@ __all__ = [
     "stream_budget",
     "stream_frame_size",
 ]
+
+# ``roomba_bt.oi.commands`` is the encoder's name for plugin authors: importable by that path
+# too (``from roomba_bt.oi.commands import drive``), the one module, as ``os.path`` is.
+sys.modules[f"{__name__}.commands"] = commands

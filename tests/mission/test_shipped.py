@@ -52,7 +52,12 @@ def test_a_name_finds_the_shipped_mission_and_a_file_wins(
     assert missing.path is None
     assert missing.problem.startswith("dok: no such mission file, and no shipped mission")
     assert "dock-builtin" in missing.problem
+    assert missing.problem.endswith("(did you mean 'dock'?)")
     assert find_mission("sub/dock").path is None, "a path is never taken for a name"
+    # a checkout's path from the README, in a folder without it (a pip user's)
+    from_docs = find_mission("missions/dock.yaml")
+    assert from_docs.path is None and from_docs.problem is not None
+    assert from_docs.problem.endswith("; the shipped mission 'dock' is named alone: dock")
 
 
 def test_a_directory_or_a_device_is_named_as_such(

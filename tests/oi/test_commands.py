@@ -4,6 +4,7 @@ command added to ``COMMANDS`` without a case here fails ``test_every_opcode_has_
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable
 
 import pytest
@@ -229,3 +230,14 @@ def test_pack_wraps_values_as_the_robot_counters_do() -> None:
     layout = layout_for((43, 7), with_ids=False)
     assert layout.pack({43: 65_536 + 5, 7: 257}) == bytes([0, 5, 1])
     assert layout.pack({43: -1}) == bytes([0xFF, 0xFF, 0])
+
+
+def test_the_commands_module_is_importable_by_the_name_the_docs_give_it() -> None:
+    """docs/plugins.md: "a Command from roomba_bt.oi.commands"; that import path raised
+    ModuleNotFoundError (only ``from roomba_bt.oi import commands`` worked)."""
+    import importlib
+
+    module = importlib.import_module("roomba_bt.oi.commands")
+    from roomba_bt.oi.commands import drive
+
+    assert module is sys.modules["roomba_bt.oi.encode"] and module.drive is drive
