@@ -52,3 +52,14 @@ def test_clean_in_a_small_room_ends_when_the_floor_is_done() -> None:
     assert result.time_s < 1200.0  # before the 20 minutes: it knew it was done
     assert result.coverage is not None and result.coverage.overall >= 0.9
     assert not result.docked  # done, not a low battery: no dock
+
+
+@pytest.mark.parametrize("minutes", [1, 7])
+def test_the_builtin_clean_ends_at_its_duration_within_a_cycle(minutes: int) -> None:
+    """``-p duration=7min`` cleaned 10 minutes: ``repeat: {for: ...}`` stops only between
+    its 5-minute cycles. The cleaning stops at the duration, the motors off, in Passive."""
+    result = _living_room("clean-builtin", 3, minutes)
+    assert result.outcome == "success", result.reason
+    assert minutes * 60.0 <= result.time_s < minutes * 60.0 + 1.0
+    assert result.coverage is not None
+    assert result.coverage.cleaning_s == pytest.approx(minutes * 60.0, abs=1.0)
