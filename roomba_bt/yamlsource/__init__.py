@@ -108,21 +108,33 @@ def read_text(path: Path) -> str:
 
 
 class Refused(yaml.MarkedYAMLError):
-    """Something a data file may not hold, found before anything is composed: an alias or an
-    explicit tag. ``problem`` says what, ``problem_mark`` where."""
+    """Something a data file may not hold, found before anything is composed: an alias, an
+    explicit tag, a character the YAML reader refuses. ``problem`` says what,
+    ``problem_mark`` where."""
 
 
 def compose(text: str, loader: type[Any] = FAST_LOADER) -> yaml.Node | None:
     """The document's root node (None for an empty document); raises :class:`yaml.YAMLError`
     (see :func:`error_position`) for a syntax error, :class:`Refused` for an alias, an
-    explicit tag or lists and mappings nested deeper than :data:`MAX_NESTING`. A fresh loader
-    reads each text: nothing is kept between calls.
+    explicit tag, a character YAML does not allow (:func:`unprintable`) or lists and mappings
+    nested deeper than :data:`MAX_NESTING`. A fresh loader reads each text: nothing is kept
+    between calls.
 
     An alias is written with ``*`` and a tag with ``!``: a text with neither holds none, and
     its event pass (:func:`refuse_aliases_and_tags`, a sixth of compiling a mission) is left
     out unless composing fails, when it runs first as always, so that the error raised is the
     same one (a syntax error after the first document is the event pass's, not the
     composer's "expected a single document")."""
+    try:
+        root = _compose(text, loader)
+    except yaml.reader.ReaderError as exc:
+        raise unprintable(text, exc) from None
+    if root is not None:
+        refuse_deep_nodes(root)
+    return root
+
+
+def _compose(text: str, loader: type[Any]) -> yaml.Node | None:
     try:
         if "*" in text or "!" in text:
             refuse_aliases_and_tags(text, loader)
@@ -136,9 +148,46 @@ def compose(text: str, loader: type[Any] = FAST_LOADER) -> yaml.Node | None:
     except RecursionError:  # PyYAML's own composer recurses: deeper than Python's stack
         refuse_deep_events(text, loader)
         raise
-    if root is not None:
-        refuse_deep_nodes(root)
     return root
+
+
+def reader_offset(text: str, exc: yaml.reader.ReaderError) -> int | None:
+    """Index in ``text`` of the character a :class:`yaml.reader.ReaderError` refused.
+
+    PyYAML's reader gives ``position`` in characters, libyaml's in bytes of the UTF-8
+    encoding: the two differ after any non-ASCII character. Both report the first character
+    they refuse, so the smaller of the two readings that holds that character is it."""
+    char = chr(exc.character)
+    position: int = exc.position
+    in_bytes = len(text.encode("utf-8")[:position].decode("utf-8", "ignore"))
+    for index in sorted({in_bytes, position}):
+        if 0 <= index < len(text) and text[index] == char:
+            return index
+    found = text.find(char)
+    return found if found >= 0 else None
+
+
+def character_name(char: str) -> str:
+    """``U+001B``: how a diagnostic names a character that cannot be shown as itself."""
+    return f"U+{ord(char):04X}"
+
+
+def unprintable(text: str, exc: yaml.reader.ReaderError) -> Refused:
+    """A character the YAML reader refuses (a NUL, a BEL in a comment, a raw ESC), as a
+    :class:`Refused` at its own line and column: PyYAML says "position 52" of "<unicode
+    string>" on a second line, and a mark of 1:1."""
+    index = reader_offset(text, exc)
+    char = chr(exc.character)
+    kind = "control character" if char < " " or "\x7f" <= char <= "\x9f" else "character"
+    problem = (
+        f"{kind} {character_name(char)} is not allowed in a YAML file: it may hold printable "
+        "characters, tabs and line breaks only"
+    )
+    if index is None:
+        return Refused(problem=problem)
+    line = text.count("\n", 0, index)
+    column = index - (text.rfind("\n", 0, index) + 1)
+    return Refused(problem=problem, problem_mark=yaml.Mark("<text>", index, line, column, None, 0))
 
 
 #: How deep lists and mappings may nest in a file roomba-bt reads (decided). A mission tree

@@ -206,3 +206,26 @@ def test_a_mission_or_include_over_a_mebibyte_is_named_not_read(tmp_path: Path) 
     path.write_text("include: [lib.yaml]\ntree: {wait: 1s}\n")
     _, problems = compile_mission(path)
     assert any("lib.yaml" in p.file and "at most 1,048,576 are read" in p.message for p in problems)
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [("mission: nul\ntree:\n  sequence: [{mode: safe}, stop]\n\x00\n", "4:1: control character "
+      "U+0000 is not allowed in a YAML file: it may hold printable characters, tabs and line "
+      "breaks only"),
+     ("mission: bell\ntree:\n  sequence: [{mode: safe}, stop]\n  # bell \x07 here\n", "4:10: "
+      "control character U+0007 is not allowed in a YAML file: it may hold printable "
+      "characters, tabs and line breaks only")],
+    ids=["nul", "bel-in-a-comment"],
+)  # fmt: skip
+def test_a_control_character_in_the_file_is_one_line_at_its_place(
+    tmp_path: Path, text: str, expected: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A NUL or a BEL (in a comment too) was ``1:1: YAML error: unacceptable character
+    #x0000 ...`` and a second line ``in "<unicode string>", position 52``."""
+    path = tmp_path / "ctl.yaml"
+    path.write_text(text, encoding="utf-8")
+    assert main(["validate", str(path)]) == 2
+    out, err = capsys.readouterr()
+    assert out.splitlines() == [f"{path}:{expected}"]
+    assert "Traceback" not in out + err

@@ -243,3 +243,28 @@ def test_a_file_over_the_limit_is_refused_before_it_is_read(tmp_path: Path) -> N
         yamlsource.read_text(over)
     assert caught.value.size == yamlsource.MAX_FILE_BYTES + 1
     assert str(caught.value).startswith(f"{yamlsource.MAX_FILE_BYTES + 1:,} bytes; at most ")
+
+
+@pytest.mark.parametrize("loader", [yamlsource.FAST_LOADER, yamlsource.PURE_LOADER])
+@pytest.mark.parametrize(
+    ("text", "where", "named"),
+    [("mission: nul\ntree: stop\n\x00\n", (3, 1), "control character U+0000"),
+     ("a: 1\n  # bell \x07 here\n", (2, 10), "control character U+0007"),
+     ("a: \"é ü \x1b[31m\"\n", (1, 9), "control character U+001B"),  # libyaml counts bytes
+     ("é: 1\nb: x\x9by\n", (2, 5), "control character U+009B"),
+     ("a: \ufffe\n", (1, 4), "character U+FFFE")],
+    ids=["nul", "bel-in-a-comment", "esc-after-non-ascii", "c1", "not-a-character"],
+)  # fmt: skip
+def test_a_character_the_reader_refuses_is_placed_and_named(
+    loader: type, text: str, where: tuple[int, int], named: str
+) -> None:
+    """PyYAML said "unacceptable character #x0000 ... position 52" of "<unicode string>" on a
+    second line, and its mark was 1:1; libyaml's position is in bytes, PyYAML's in
+    characters: both now give the character's own line and column."""
+    with pytest.raises(yamlsource.Refused) as caught:
+        yamlsource.compose(text, loader)
+    assert yamlsource.error_position(caught.value) == where
+    problem = str(caught.value.problem)
+    assert problem.startswith(f"{named} is not allowed in a YAML file: ")
+    assert "printable characters, tabs and line breaks" in problem
+    assert "\n" not in problem
