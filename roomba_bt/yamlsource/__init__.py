@@ -17,6 +17,7 @@ Missions walk the composed nodes (:func:`compose`, :func:`position`, :func:`is_p
 from __future__ import annotations
 
 import os
+import re
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -131,6 +132,8 @@ def compose(text: str, loader: type[Any] = FAST_LOADER) -> yaml.Node | None:
         raise unprintable(text, exc) from None
     if root is not None:
         refuse_deep_nodes(root)
+        if "\\" in text:  # a control character gets into a text only as a "\e" escape
+            refuse_control_characters(root)
     return root
 
 
@@ -188,6 +191,40 @@ def unprintable(text: str, exc: yaml.reader.ReaderError) -> Refused:
     line = text.count("\n", 0, index)
     column = index - (text.rfind("\n", 0, index) + 1)
     return Refused(problem=problem, problem_mark=yaml.Mark("<text>", index, line, column, None, 0))
+
+
+#: Characters no text of a data file may hold (C0 but tab and newline, DEL, C1): a file
+#: travels between strangers, and its texts reach the terminal (``show``, the live tree, the
+#: log, error lines), where ``"\e[2J"`` clears the screen and ``"\e]0;...\a"`` retitles it
+CONTROL = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f]")
+
+
+def refuse_control_characters(root: yaml.Node) -> None:
+    """Raise :class:`Refused` at the first key or value (in the file's order) holding a
+    :data:`CONTROL` character. The reader refuses such characters written raw; a double-quoted
+    text still makes them from escapes (``"\\e"``, ``"\\x1b"``, ``"\\u001b"``, ``"\\a"``,
+    ``"\\r"``): the text is refused at its own line and column, the character named."""
+    pending: list[tuple[yaml.Node, str]] = [(root, "value")]
+    while pending:
+        node, role = pending.pop()
+        if node.__class__ is yaml.ScalarNode:
+            found = CONTROL.search(node.value)
+            if found is not None:
+                raise Refused(problem=_control_problem(found.group(), role),
+                              problem_mark=node.start_mark)  # fmt: skip
+        elif node.__class__ is yaml.MappingNode:
+            for key, value in reversed(node.value):
+                pending += ((value, "value"), (key, "key"))
+        else:
+            pending.extend((item, "value") for item in reversed(node.value))
+
+
+def _control_problem(char: str, role: str) -> str:
+    return (
+        f"control character {character_name(char)} (an escape such as \\e, \\x1b or \\a in "
+        f"quotes) is not allowed in a {role}: a text may hold printable characters, tabs and "
+        "line breaks only"
+    )
 
 
 #: How deep lists and mappings may nest in a file roomba-bt reads (decided). A mission tree

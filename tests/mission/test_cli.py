@@ -165,3 +165,29 @@ def test_schema_with_a_plugin_file_describes_its_behaviours(capsys: Capsys) -> N
     assert main(["schema", "--plugin-file", plugin]) == 0
     assert "near_wall" in json.loads(capsys.readouterr().out)["$defs"]
     assert main(["schema", "--plugin-file", "no_such.py"]) == 2
+
+
+@pytest.mark.parametrize("command", ["validate", "show"])
+def test_a_terminal_escape_in_a_mission_never_reaches_the_screen(
+    mission_file: Callable[..., Path], capsys: Capsys, command: str
+) -> None:
+    """``"\\e[2J"`` in a name, a description, a log message or a key cleared the user's
+    screen through ``show`` (and the run's display, log and summary), and a key's path in an
+    error line was printed raw."""
+    mission = mission_file(
+        'mission: "\\e[31mRED"\n'
+        "tree:\n"
+        "  sequence:\n"
+        "    - mode: safe\n"
+        '    - "\\e[2Jdrvie": {velocity: "\\e]0;t\\a"}\n'
+        '    - log: "\\e[41m log"\n'
+    )
+    assert main([command, str(mission)]) == 2
+    out, err = capsys.readouterr()
+    assert out == (
+        f"{mission}:1:10: control character U+001B (an escape such as \\e, \\x1b or \\a in "
+        "quotes) is not allowed in a value: a text may hold printable characters, tabs and "
+        "line breaks only\n"
+    )
+    assert "\x1b" not in out + err
+    assert "\x07" not in out + err

@@ -15,7 +15,13 @@ from pathlib import Path
 import pytest
 
 from roomba_bt.cli import main
-from roomba_bt.mission import MissionError, Permissions, compile_mission, load_mission
+from roomba_bt.mission import (
+    Diagnostic,
+    MissionError,
+    Permissions,
+    compile_mission,
+    load_mission,
+)
 
 CORPUS = Path(__file__).parent / "malformed"
 FILES = sorted(CORPUS.glob("*.yaml"))
@@ -229,3 +235,10 @@ def test_a_control_character_in_the_file_is_one_line_at_its_place(
     out, err = capsys.readouterr()
     assert out.splitlines() == [f"{path}:{expected}"]
     assert "Traceback" not in out + err
+
+
+def test_an_error_line_escapes_control_characters_of_its_path_and_file() -> None:
+    """What the reader cannot refuse (a file's name, a path built from elsewhere) is still
+    shown as ``\\x1b``, never sent raw to the terminal; tab and newline stay in a message."""
+    line = str(Diagnostic("a\x1b[2J.yaml", 5, 7, "unknown node\tx", "tree.\x1b[2Jdrvie\n"))
+    assert line == "a\\x1b[2J.yaml:5:7: unknown node\tx [tree.\\x1b[2Jdrvie\\x0a]"

@@ -268,3 +268,34 @@ def test_a_character_the_reader_refuses_is_placed_and_named(
     assert problem.startswith(f"{named} is not allowed in a YAML file: ")
     assert "printable characters, tabs and line breaks" in problem
     assert "\n" not in problem
+
+
+@pytest.mark.parametrize("loader", [yamlsource.FAST_LOADER, yamlsource.PURE_LOADER])
+@pytest.mark.parametrize(
+    ("text", "where", "named", "role"),
+    [('mission: "\\e[31mred"\n', (1, 10), "U+001B", "value"),
+     ('a:\n  - "ok"\n  - "\\x1b]0;title\\a"\n', (3, 5), "U+001B", "value"),
+     ('a: {"\\u001b[2Jdrvie": 1}\n', (1, 5), "U+001B", "key"),
+     ('a: "bell \\a"\n', (1, 4), "U+0007", "value"),
+     ('a: "ok\\rFAILED"\n', (1, 4), "U+000D", "value"),
+     ('a: "\\x9b2J"\n', (1, 4), "U+009B", "value"),
+     ('a: "\\0"\nb: "\\e"\n', (1, 4), "U+0000", "value")],
+    ids=["esc", "osc-in-a-list", "in-a-key", "bel", "carriage-return", "c1-csi", "first-one"],
+)  # fmt: skip
+def test_a_control_character_written_as_an_escape_is_refused_at_its_text(
+    loader: type, text: str, where: tuple[int, int], named: str, role: str
+) -> None:
+    """The reader refuses a raw ESC, but ``"\\e[2J"`` in double quotes made one: a shared
+    mission file reached the user's terminal (``show``, the live tree, the log, error lines)."""
+    with pytest.raises(yamlsource.Refused) as caught:
+        yamlsource.compose(text, loader)
+    assert yamlsource.error_position(caught.value) == where
+    assert str(caught.value.problem).startswith(
+        f"control character {named} (an escape such as \\e, \\x1b or \\a in quotes) is not "
+        f"allowed in a {role}: a text may hold printable characters, tabs and line breaks only"
+    )
+
+
+def test_tabs_newlines_and_backslashes_as_written_are_fine() -> None:
+    data, _ = yamlsource.to_data(root("a: \"x\\ty\\nz\"\nb: C:\\e\\x1b\nc: '\\e'\n"), "{tag}")
+    assert data == {"a": "x\ty\nz", "b": "C:\\e\\x1b", "c": "\\e"}
