@@ -76,8 +76,11 @@ def compose_text(text: str, display: str) -> tuple[yaml.Node | None, list[Diagno
     try:
         node = yamlsource.compose(text)
     except yamlsource.Refused as exc:
-        line, column = yamlsource.error_position(exc) or (1, 1)
-        return None, [Diagnostic(display, line, column, str(exc.problem))]
+        refused = []
+        for each in exc.every():
+            line, column = yamlsource.error_position(each) or (1, 1)
+            refused.append(Diagnostic(display, line, column, str(each.problem)))
+        return None, refused
     except yaml.MarkedYAMLError as exc:
         line, column = yamlsource.error_position(exc) or (1, 1)
         problem = exc.problem or exc.context or "invalid YAML"

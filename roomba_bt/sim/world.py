@@ -713,15 +713,22 @@ def parse_world(text: str, source: str = "<world>") -> World:
             [WorldProblem(source, line, col, _dotted(dup.path or ()),
                           f"the key {str(dup.key)!r} twice", "each key once")]
         ) from None  # fmt: skip
+    except yamlsource.Refused as exc:  # each alias, tag or control character, at once
+        raise WorldError([_yaml_problem(each, text, source) for each in exc.every()]) from None
     except yaml.YAMLError as exc:
-        # worded as a mission's (mission/source.py): PyYAML's sentence after the position
-        line, col = yamlsource.error_position(exc) or (0, 0)
-        problem = getattr(exc, "problem", None) or getattr(exc, "context", None) or str(exc)
-        problem = str(problem) + yamlsource.tab_hint(text, line, col)
-        kind = "" if isinstance(exc, yamlsource.Refused) else "YAML syntax error"
-        raise WorldError([WorldProblem(source, line, col, kind, problem, "")]) from None
+        raise WorldError([_yaml_problem(exc, text, source)]) from None
     c = _Checker(source, marks)
     return _build_world(c, data, source)
+
+
+def _yaml_problem(exc: yaml.YAMLError, text: str, source: str) -> WorldProblem:
+    """A YAML error or a refusal worded as a mission's (mission/source.py): PyYAML's
+    sentence after the position."""
+    line, col = yamlsource.error_position(exc) or (0, 0)
+    problem = getattr(exc, "problem", None) or getattr(exc, "context", None) or str(exc)
+    problem = str(problem) + yamlsource.tab_hint(text, line, col)
+    kind = "" if isinstance(exc, yamlsource.Refused) else "YAML syntax error"
+    return WorldProblem(source, line, col, kind, problem, "")
 
 
 def _build_world(c: _Checker, data: object, source: str) -> World:

@@ -20,7 +20,7 @@ import os
 import re
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 import yaml
 
@@ -113,6 +113,13 @@ class Refused(yaml.MarkedYAMLError):
     explicit tag, a character the YAML reader refuses. ``problem`` says what,
     ``problem_mark`` where."""
 
+    #: the refusals found after this one, in the file's order: every one is reported at once
+    more: tuple[Refused, ...] = ()
+
+    def every(self) -> list[Refused]:
+        """This refusal and the others found with it."""
+        return [self, *self.more]
+
 
 def compose(text: str, loader: type[Any] = FAST_LOADER) -> yaml.Node | None:
     """The document's root node (None for an empty document); raises :class:`yaml.YAMLError`
@@ -201,22 +208,26 @@ CONTROL = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f]")
 
 def refuse_control_characters(root: yaml.Node) -> None:
     """Raise :class:`Refused` at the first key or value (in the file's order) holding a
-    :data:`CONTROL` character. The reader refuses such characters written raw; a double-quoted
-    text still makes them from escapes (``"\\e"``, ``"\\x1b"``, ``"\\u001b"``, ``"\\a"``,
-    ``"\\r"``): the text is refused at its own line and column, the character named."""
+    :data:`CONTROL` character, the others in its ``more``. The reader refuses such characters
+    written raw; a double-quoted text still makes them from escapes (``"\\e"``, ``"\\x1b"``,
+    ``"\\u001b"``, ``"\\a"``, ``"\\r"``): the text is refused at its own line and column,
+    the character named."""
+    found: list[Refused] = []
     pending: list[tuple[yaml.Node, str]] = [(root, "value")]
     while pending:
         node, role = pending.pop()
         if node.__class__ is yaml.ScalarNode:
-            found = CONTROL.search(node.value)
-            if found is not None:
-                raise Refused(problem=_control_problem(found.group(), role),
-                              problem_mark=node.start_mark)  # fmt: skip
+            control = CONTROL.search(node.value)
+            if control is not None:
+                found.append(Refused(problem=_control_problem(control.group(), role),
+                                     problem_mark=node.start_mark))  # fmt: skip
         elif node.__class__ is yaml.MappingNode:
             for key, value in reversed(node.value):
                 pending += ((value, "value"), (key, "key"))
         else:
             pending.extend((item, "value") for item in reversed(node.value))
+    if found:
+        raise_every(found)
 
 
 def _control_problem(char: str, role: str) -> str:
@@ -277,28 +288,71 @@ def refuse_deep_events(text: str, loader: type[Any] = FAST_LOADER) -> None:
 
 def refuse_aliases_and_tags(text: str, loader: type[Any] = FAST_LOADER) -> None:
     """Read the event stream (linear in the text, nothing built) and raise :class:`Refused` at
-    the first alias or explicit tag:
+    the first alias, explicit tag or :data:`CONTROL` character in a text, every other one
+    found in :attr:`Refused.more` (a stranger fixing the first must not meet the next):
 
     * ``*name``: aliases nested a few levels expand a small file exponentially (6 levels in
       857 bytes took 18 s to validate, 7 more than 15 s); no mission or world needs them;
     * ``!!int 1s``, ``!!float``, ``!!bool``, ``!!python/...``, ``!custom``: a tag decides
       what is built (an int from "1s" fails deep inside; a Python object is code). Values
-      are written plain, and the schema's own rules type them."""
-    for event in yaml.parse(text, Loader=loader):
-        if isinstance(event, yaml.AliasEvent):
-            raise Refused(
-                problem=f"alias *{event.anchor} is not allowed: write the value out "
-                "(aliases can expand a small file without bound)",
-                problem_mark=event.start_mark,  # type: ignore[arg-type]
-            )
-        tag = getattr(event, "tag", None)
-        if tag is not None and isinstance(event, yaml.NodeEvent):
-            shown = "!!" + tag[len(CORE) :] if tag.startswith(CORE) else tag
-            raise Refused(
-                problem=f"explicit tag {shown} is not allowed: write the plain value "
-                "(1s, 2, true, text)",
-                problem_mark=event.start_mark,  # type: ignore[arg-type]
-            )
+      are written plain, and the schema's own rules type them.
+
+    A syntax error past a refusal ends the pass with the refusals found before it (the
+    error is the parser's to report once they are gone)."""
+    found: list[Refused] = []
+    # per open collection: nodes read so far in a mapping (even: a key comes next), -1 in a list
+    open_: list[int] = []
+    try:
+        for event in yaml.parse(text, Loader=loader):
+            if isinstance(event, yaml.CollectionEndEvent):
+                open_.pop()
+                continue
+            if not isinstance(event, yaml.NodeEvent):
+                continue
+            role = "key" if open_ and open_[-1] >= 0 and open_[-1] % 2 == 0 else "value"
+            if open_ and open_[-1] >= 0:
+                open_[-1] += 1
+            if isinstance(event, yaml.CollectionStartEvent):
+                open_.append(0 if isinstance(event, yaml.MappingStartEvent) else -1)
+            refused = _refused_event(event, role)
+            if refused is not None:
+                found.append(refused)
+    except yaml.YAMLError:
+        if not found:
+            raise
+    if found:
+        raise_every(found)
+
+
+def _refused_event(event: yaml.NodeEvent, role: str) -> Refused | None:
+    """What :func:`refuse_aliases_and_tags` refuses in one event, if anything."""
+    mark: Any = event.start_mark
+    if isinstance(event, yaml.AliasEvent):
+        return Refused(
+            problem=f"alias *{event.anchor} is not allowed: write the value out "
+            "(aliases can expand a small file without bound)",
+            problem_mark=mark,
+        )
+    tag = getattr(event, "tag", None)
+    if tag is not None:
+        shown = "!!" + tag[len(CORE) :] if tag.startswith(CORE) else tag
+        return Refused(
+            problem=f"explicit tag {shown} is not allowed: write the plain value "
+            "(1s, 2, true, text)",
+            problem_mark=mark,
+        )
+    if isinstance(event, yaml.ScalarEvent):
+        control = CONTROL.search(event.value)
+        if control is not None:
+            return Refused(problem=_control_problem(control.group(), role), problem_mark=mark)
+    return None
+
+
+def raise_every(found: list[Refused]) -> NoReturn:
+    """Raise the first of ``found`` (in the file's order) with the others in its ``more``."""
+    first = found[0]
+    first.more = tuple(found[1:])
+    raise first
 
 
 def position(node: yaml.Node) -> tuple[int, int]:

@@ -184,10 +184,14 @@ def test_a_terminal_escape_in_a_mission_never_reaches_the_screen(
     )
     assert main([command, str(mission)]) == 2
     out, err = capsys.readouterr()
-    assert out == (
+    lines = out.splitlines()
+    assert lines[0] == (
         f"{mission}:1:10: control character U+001B (an escape such as \\e, \\x1b or \\a in "
         "quotes) is not allowed in a value: a text may hold printable characters, tabs and "
-        "line breaks only\n"
+        "line breaks only"
     )
+    assert [line.split(": control character U+001B")[0] for line in lines] == [
+        f"{mission}:{at}" for at in ("1:10", "5:7", "5:32", "6:12")
+    ]
     assert "\x1b" not in out + err
     assert "\x07" not in out + err

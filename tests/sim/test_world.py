@@ -218,6 +218,20 @@ def test_yaml_aliases_and_scalar_tags_in_a_world_are_refused_at_their_place() ->
     assert tag.startswith("w.yaml:1:30: explicit tag !!int is not allowed: write the plain value")
 
 
+def test_every_alias_tag_and_control_character_of_a_world_is_refused_at_once() -> None:
+    """Only the first was said: fixing it showed the next."""
+    found = problems(
+        "a: &r [[0, 0], [3, 0], [3, 3], [0, 3]]\n"
+        "rooms: [*r, [[0, 0], [3, 0], [3, !!int x], [0, 3]]]\n"
+        'name: "\\e[2J"\n'
+    )
+    assert [p.split(" is not allowed")[0] for p in found] == [
+        "w.yaml:2:9: alias *r",
+        "w.yaml:2:34: explicit tag !!int",
+        "w.yaml:3:7: control character U+001B (an escape such as \\e, \\x1b or \\a in quotes)",
+    ]
+
+
 def test_a_file_that_is_no_world_is_quoted_short() -> None:
     """A world given some other text file (a page in one scalar) names it in a line, not
     the whole page."""

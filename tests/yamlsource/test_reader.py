@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from pathlib import Path
 
@@ -299,3 +300,31 @@ def test_a_control_character_written_as_an_escape_is_refused_at_its_text(
 def test_tabs_newlines_and_backslashes_as_written_are_fine() -> None:
     data, _ = yamlsource.to_data(root("a: \"x\\ty\\nz\"\nb: C:\\e\\x1b\nc: '\\e'\n"), "{tag}")
     assert data == {"a": "x\ty\nz", "b": "C:\\e\\x1b", "c": "\\e"}
+
+
+@pytest.mark.parametrize("loader", [yamlsource.FAST_LOADER, yamlsource.PURE_LOADER])
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [("- &a stop\n- *a\n- !!python/object:os.system ls\n- {\"\\a\": \"\\e\"}\n- *a\n",
+      [((2, 3), "alias *a"), ((3, 3), "explicit tag !!python/object:os.system"),
+       ((4, 4), "control character U+0007"), ((4, 10), "control character U+001B"),
+       ((5, 3), "alias *a")]),
+     ("a: \"\\e\"\nb: [\"\\a\", {\"\\r\": 1}]\n",  # no * nor !: found in the composed nodes
+      [((1, 4), "control character U+001B"), ((2, 5), "control character U+0007"),
+       ((2, 12), "control character U+000D")]),
+     ("a: *x\nb: !!int 1\nc: [\n", [((1, 4), "alias *x"), ((2, 4), "explicit tag !!int")])],
+    ids=["aliases-tags-controls", "controls-only", "then-a-syntax-error"],
+)  # fmt: skip
+def test_every_refusal_is_raised_at_once_in_the_files_order(
+    loader: type, text: str, expected: list[tuple[tuple[int, int], str]]
+) -> None:
+    """An alias hid a ``!!python/object`` tag on the next line: a stranger fixing one error
+    met the next. The first is raised, the others in its ``more``; a syntax error past them
+    is the parser's to report once they are gone."""
+    with pytest.raises(yamlsource.Refused) as caught:
+        yamlsource.compose(text, loader)
+    found = [
+        (yamlsource.error_position(each), re.split(r" is not| \(an escape", str(each.problem))[0])
+        for each in caught.value.every()
+    ]
+    assert found == expected
