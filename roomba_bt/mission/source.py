@@ -90,7 +90,35 @@ def compose_text(text: str, display: str) -> tuple[yaml.Node | None, list[Diagno
         return None, [Diagnostic(display, 1, 1, f"YAML error: {exc}")]
     if node is None:
         return None, [Diagnostic(display, 1, 1, "the mission file is empty")]
-    return node, []
+    return node, duplicate_keys(node, display)
+
+
+def duplicate_keys(root: yaml.Node, display: str) -> list[Diagnostic]:
+    """Every key written twice in a mapping of the file, each at its second place: found
+    here, before anything is parsed, so that :func:`mapping` leaves the second one out and the
+    parser goes on to the file's other errors (a duplicate ``tree:`` hid every error inside
+    the first tree)."""
+    found = []
+    pending: list[tuple[yaml.Node, str]] = [(root, "")]
+    while pending:
+        node, path = pending.pop()
+        if isinstance(node, yaml.SequenceNode):
+            pending += ((item, f"{path}[{i}]") for i, item in enumerate(node.value))
+        elif isinstance(node, yaml.MappingNode):
+            texts = {k.value for k, _ in node.value if k.tag == yamlsource.STR}
+            if len(texts) == len(node.value):  # all texts, all different (most mappings)
+                dups = []
+            else:
+                dups = yamlsource.duplicate_keys(node)
+            for dup in dups:
+                key = str(dup.key)
+                first = yamlsource.position(dup.first)[0]
+                where = loc_of(dup.node, display, join(path, key))
+                found.append(where.at(f"duplicate key {key!r} (first at line {first})"))
+            for key_node, value in node.value:
+                if isinstance(key_node, yaml.ScalarNode):
+                    pending.append((value, join(path, str(key_node.value))))
+    return found
 
 
 class Bad(Exception):
@@ -125,25 +153,20 @@ def plain(node: yaml.Node, loc: Loc) -> Any:
 
 
 def mapping(node: yaml.Node, loc: Loc, what: str) -> list[tuple[str, yaml.Node, Loc, Loc]]:
-    """``(key, value node, key loc, value loc)`` of a mapping; duplicate or non-text keys are
-    errors."""
+    """``(key, value node, key loc, value loc)`` of a mapping; a non-text key is an error. A
+    key written again is left out, the first one standing: :func:`compose_text` reported
+    every duplicate already (:func:`duplicate_keys`)."""
     check_tag(node, loc)
     if not isinstance(node, yaml.MappingNode):
         raise Bad(loc.at(f"{what} must be a mapping (key: value), got {kind_of(node)}"))
     out = []
-    try:
-        for _, key_node, value_node in yamlsource.pairs(node):
-            if not isinstance(key_node, yaml.ScalarNode) or key_node.tag != yamlsource.STR:
-                key_loc = loc_of(key_node, loc.file, loc.path)
-                raise Bad(key_loc.at(f"keys of {what} must be names, got {kind_of(key_node)}"))
-            key = str(key_node.value)
-            key_loc = loc_of(key_node, loc.file, join(loc.path, key))
-            out.append((key, value_node, key_loc, loc_of(value_node, loc.file, key_loc.path)))
-    except yamlsource.DuplicateKey as dup:
-        key = str(dup.key)
-        first = yamlsource.position(dup.first)[0]
-        where = loc_of(dup.node, loc.file, join(loc.path, key))
-        raise Bad(where.at(f"duplicate key {key!r} (first at line {first})")) from None
+    for _, key_node, value_node in yamlsource.pairs(node, skip_duplicates=True):
+        if not isinstance(key_node, yaml.ScalarNode) or key_node.tag != yamlsource.STR:
+            key_loc = loc_of(key_node, loc.file, loc.path)
+            raise Bad(key_loc.at(f"keys of {what} must be names, got {kind_of(key_node)}"))
+        key = str(key_node.value)
+        key_loc = loc_of(key_node, loc.file, join(loc.path, key))
+        out.append((key, value_node, key_loc, loc_of(value_node, loc.file, key_loc.path)))
     return out
 
 

@@ -407,21 +407,46 @@ class DuplicateKey(Exception):
         self.path: PathKey | None = None
 
 
-def pairs(node: yaml.MappingNode) -> Iterator[tuple[Any, yaml.Node, yaml.Node]]:
+def pairs(
+    node: yaml.MappingNode, *, skip_duplicates: bool = False
+) -> Iterator[tuple[Any, yaml.Node, yaml.Node]]:
     """``(key, key node, value node)`` in written order; raises :class:`DuplicateKey` when a
-    key comes again (keys compared as Python values: ``1`` and ``1.0`` are one key)."""
+    key comes again (keys compared as Python values: ``1`` and ``1.0`` are one key), or with
+    ``skip_duplicates`` leaves it out (the first one stands): for a caller that reported
+    every duplicate beforehand (:func:`duplicate_keys`) and goes on to the other errors."""
     seen: dict[Any, yaml.Node] = {}
     for key_node, value_node in node.value:
-        if key_node.tag == STR:
-            key: Any = key_node.value
-        else:  # a tagged key stays a node, for the caller to refuse
-            key = scalar(key_node) if is_plain(key_node) else key_node
-        if not isinstance(key, str | int | float | bool):
-            key = str(key)
+        key = _key(key_node)
         if key in seen:
+            if skip_duplicates:
+                continue
             raise DuplicateKey(key, key_node, seen[key])
         seen[key] = key_node
         yield key, key_node, value_node
+
+
+def duplicate_keys(node: yaml.MappingNode) -> list[DuplicateKey]:
+    """Every key of ``node`` written again after its first time (compared as :func:`pairs`
+    compares them), in written order."""
+    seen: dict[Any, yaml.Node] = {}
+    found = []
+    for key_node, _ in node.value:
+        key = _key(key_node)
+        if key in seen:
+            found.append(DuplicateKey(key, key_node, seen[key]))
+        else:
+            seen[key] = key_node
+    return found
+
+
+def _key(key_node: yaml.Node) -> Any:
+    """A mapping key as :func:`pairs` compares it: a text as itself, another plain scalar as
+    its value, anything else as its text (a tagged key stays a node, for the caller to
+    refuse)."""
+    if key_node.tag == STR:
+        return key_node.value
+    key = scalar(key_node) if is_plain(key_node) else key_node
+    return key if isinstance(key, str | int | float | bool) else str(key)
 
 
 def to_data(node: yaml.Node, refuse: str) -> tuple[Any, Marks]:

@@ -328,3 +328,14 @@ def test_every_refusal_is_raised_at_once_in_the_files_order(
         for each in caught.value.every()
     ]
     assert found == expected
+
+
+def test_every_duplicate_of_a_mapping_is_found_and_can_be_left_out() -> None:
+    """A reader that reports every duplicate first goes on with the first of each key."""
+    node = root("a: 1\nb: 2\na: 3\n1: x\n1.0: y\na: 4\n")
+    assert isinstance(node, yaml.MappingNode)
+    found = [(d.key, yamlsource.position(d.node), yamlsource.position(d.first))
+             for d in yamlsource.duplicate_keys(node)]  # fmt: skip
+    assert found == [("a", (3, 1), (1, 1)), (1.0, (5, 1), (4, 1)), ("a", (6, 1), (1, 1))]
+    kept = [(k, v.value) for k, _, v in yamlsource.pairs(node, skip_duplicates=True)]
+    assert kept == [("a", "1"), ("b", "2"), (1, "x")]
