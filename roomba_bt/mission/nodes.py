@@ -91,19 +91,8 @@ class NodeParser:
                     f"{', '.join(mods)}"
                 )
             )
-        if len(words) > 1:
-            names = [w[0] for w in words]
-            known = [n for n in names if n in WORDS or n in self.ctx.registry]
-            if len(known) == 1:
-                other = next(w for w in words if w[0] not in known)
-                raise Bad(other[2].at(self._unknown_word(other[0], f" next to {known[0]!r}")))
-            raise Bad(
-                words[1][2].at(
-                    f"a node has exactly one kind; found {', '.join(names)} "
-                    "(put several nodes in a sequence)"
-                )
-            )
-        word, value, key_loc, value_loc = words[0]
+        word, value, key_loc, value_loc = self._kind(words)
+        stray = len(words) > 1  # unknown words beside it: reported, the node is not built
         built = self._word(word, Written(value, key_loc, value_loc, env))
         if built is None:
             return None
@@ -118,7 +107,31 @@ class NodeParser:
                 self._check_guard(condition, guard)
                 built = Node("guard", gkloc, f"{guard} {condition.name}", [condition, built],
                              options={"until": guard == "until"})  # fmt: skip
-        return built
+        return None if stray else built
+
+    def _kind(
+        self, words: list[tuple[str, yaml.Node, Loc, Loc]]
+    ) -> tuple[str, yaml.Node, Loc, Loc]:
+        """The node's one kind among the keys that are no modifier. Beside exactly one known
+        word, each unknown one (a misspelt ``untill``) is reported and the known word is still
+        parsed, so that its own errors (``velocty``) come in the same pass; :class:`Bad` when
+        none or several are known."""
+        if len(words) == 1:
+            return words[0]
+        names = [w[0] for w in words]
+        known = [w for w in words if w[0] in WORDS or w[0] in self.ctx.registry]
+        if len(known) != 1:
+            raise Bad(
+                words[1][2].at(
+                    f"a node has exactly one kind; found {', '.join(names)} "
+                    "(put several nodes in a sequence)"
+                )
+            )
+        for other in words:
+            if other is not known[0]:
+                where = f" next to {known[0][0]!r}"
+                self.ctx.error(other[2].at(self._unknown_word(other[0], where)))
+        return known[0]
 
     def _unknown_word(self, word: str, where: str = "") -> str:
         unloaded = self.ctx.unloaded_plugins
