@@ -54,6 +54,14 @@ class UnitError(ValueError):
     """A value that does not parse; the message says what was expected."""
 
 
+def with_article(noun: str) -> str:
+    """``noun`` with its article, for a message: "a speed", "an angle", "an int" (the
+    dimension names start with the sound of their letter); "one of a, b" takes none."""
+    if noun.startswith("one of"):
+        return noun
+    return f"{'an' if noun[:1] in 'aeiou' else 'a'} {noun}"
+
+
 def _is_number(value: object) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool)
 
@@ -61,33 +69,29 @@ def _is_number(value: object) -> bool:
 def parse_quantity(dimension: str, value: object) -> float:
     """``parse_quantity("speed", "0.2 m/s") == 200.0``; raises :class:`UnitError`."""
     units = UNITS[dimension]
+    what = with_article(dimension)
     if _is_number(value):
         if value == 0:
             return 0.0
         raise UnitError(
-            f"expected a {dimension} with a unit such as {EXAMPLES[dimension]}, got {quoted(value)}"
+            f"expected {what} with a unit such as {EXAMPLES[dimension]}, got {quoted(value)}"
             f" (write the unit: {value}{CANONICAL[dimension]})"
         )
     if not isinstance(value, str):
-        raise UnitError(
-            f"expected a {dimension} such as {EXAMPLES[dimension]}, got {_describe(value)}"
-        )
+        raise UnitError(f"expected {what} such as {EXAMPLES[dimension]}, got {_describe(value)}")
     match = _QUANTITY.match(value)
     if match is None:
-        raise UnitError(
-            f"expected a {dimension} such as {EXAMPLES[dimension]}, got {quoted(value)}"
-        )
+        raise UnitError(f"expected {what} such as {EXAMPLES[dimension]}, got {quoted(value)}")
     number, unit = float(match.group(1)), match.group(2)
     if not math.isfinite(number):  # 1e400 overflows to inf
-        raise UnitError(f"{value!r}: {match.group(1)} is too large a number for a {dimension}")
+        raise UnitError(f"{value!r}: {match.group(1)} is too large a number for {what}")
     if unit not in units:
         known = ", ".join(units)
         if unit == "":
             if number == 0:
                 return 0.0
             raise UnitError(
-                f"{value!r} has no unit; a {dimension} needs one of: {known}"
-                f" (e.g. {EXAMPLES[dimension]})"
+                f"{value!r} has no unit; {what} needs one of: {known} (e.g. {EXAMPLES[dimension]})"
             )
         raise UnitError(f"unknown {dimension} unit {unit!r} in {value!r}; use one of: {known}")
     return number * units[unit]
@@ -146,7 +150,7 @@ def _quantity_type(dimension: str) -> ValueType:
         lambda v: parse_quantity(dimension, v),
         CANONICAL[dimension],
         (("anyOf", [{"type": "string", "pattern": pattern}, {"const": 0}]),
-         ("description", f"a {dimension}, e.g. {EXAMPLES[dimension]}")),
+         ("description", f"{with_article(dimension)}, e.g. {EXAMPLES[dimension]}")),
     )  # fmt: skip
 
 

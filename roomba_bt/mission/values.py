@@ -27,6 +27,7 @@ from roomba_bt.behaviours.units import (
     compatible,
     convert,
     format_quantity,
+    with_article,
 )
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.ir import KeyDecl
@@ -198,7 +199,8 @@ def resolve(
             if bound.type.name != "str":
                 raise Bad(
                     loc.at(
-                        f"{what}: parameter ${{{pname}}} is a {bound.type.describe()}, "
+                        f"{what}: parameter ${{{pname}}} is "
+                        f"{with_article(bound.type.describe())}, "
                         f"but {what} needs {vtype.describe()}"
                     )
                 )

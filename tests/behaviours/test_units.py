@@ -19,6 +19,7 @@ from roomba_bt.behaviours.units import (
     enum,
     format_quantity,
     parse_quantity,
+    with_article,
 )
 
 
@@ -111,3 +112,23 @@ def test_a_number_too_large_for_a_float_is_refused_not_infinity(text: str) -> No
     with pytest.raises(UnitError, match="is too large a number for a duration"):
         parse_quantity("duration", text)
     assert parse_quantity("duration", "1e300 s") == 1e300
+
+
+@pytest.mark.parametrize(
+    ("value", "message"),
+    [(90, "expected an angle with a unit such as 90deg or 1.57rad, got 90"),
+     ("fast", "expected an angle such as 90deg or 1.57rad, got 'fast'"),
+     ("90", "'90' has no unit; an angle needs one of: ")],
+)  # fmt: skip
+def test_an_angle_is_an_angle_in_the_messages(value: object, message: str) -> None:
+    """The stranger's units.yaml read "expected a angle with a unit"."""
+    with pytest.raises(UnitError) as caught:
+        ANGLE.parse(value)
+    assert str(caught.value).startswith(message)
+
+
+def test_a_noun_takes_the_article_its_first_sound_wants() -> None:
+    assert [with_article(n) for n in ("speed", "angle", "int", "duration")] == [
+        "a speed", "an angle", "an int", "a duration"
+    ]  # fmt: skip
+    assert with_article("one of left, right") == "one of left, right"
