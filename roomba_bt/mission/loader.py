@@ -456,7 +456,7 @@ def known_fields(
     fields = {k: (v, kl, vl) for k, v, kl, vl in mapping(node, loc, what)}
     for key, (_, kl, _) in fields.items():
         if key not in allowed:
-            raise Bad(kl.at(unknown(f"key in {what}", key, list(allowed))))
+            raise Bad(kl.at(f"{what}: " + unknown("key", key, list(allowed))))
     return fields
 
 
