@@ -160,6 +160,8 @@ class Loader:
             node, _, vloc = sections["tree"]
             tree_loc = vloc
             tree = self.nodes.node(node, vloc, params)
+        elif require_tree and "subtrees" in sections:
+            self.ctx.error(root_loc.at(_a_library(resolved, path)))
         elif require_tree:
             self.ctx.error(root_loc.at("a mission needs a tree: (the root node); found none"))
         self.nodes.check_unused_subtrees()
@@ -529,6 +531,20 @@ def _is_mission(root: yaml.Node, words: tuple[str, ...]) -> bool:
     file, and its content is never quoted back in an error."""
     return isinstance(root, yaml.MappingNode) and any(
         isinstance(key, yaml.ScalarNode) and key.value in words for key, _ in root.value
+    )
+
+
+def _a_library(resolved: Path, path: Path) -> str:
+    """What ``show`` or ``run`` says of a library file (``subtrees:``, no ``tree:``), such
+    as the shipped ``roomba-bt:lib/docking.yaml``: "a mission needs a tree" read as if the
+    file were broken, when it is whole and only meant to be included."""
+    name = str(path)
+    if in_shipped_library(resolved):
+        name = SHIPPED_PREFIX + resolved.relative_to(SHIPPED_DIR).as_posix()
+    return (
+        "this file is a library of subtrees (subtrees:, no tree:), to be included, not run: "
+        f"include it in a mission (include: [{name}]) and use them there with subtree: NAME "
+        "(validate checks a library on its own)"
     )
 
 
