@@ -34,10 +34,13 @@ ENTRY_POINT_GROUP = "roomba_bt.behaviours"
 
 @dataclass(frozen=True, slots=True)
 class PluginError:
-    """A plugin that could not be loaded: which one, and why."""
+    """A plugin that could not be loaded: which one, and why. ``imported`` is False when its
+    module did not import at all (it raised): none of its behaviours exist, and a mission's
+    unknown node names the file as not loaded."""
 
     plugin: str
     cause: str
+    imported: bool = True
 
     def __str__(self) -> str:
         return f"plugin {self.plugin}: {self.cause}"
@@ -119,7 +122,8 @@ class Registry:
         try:
             provider = ep.load()
         except (Exception, SystemExit) as exc:  # any import-time failure of third-party code
-            self._errors.append(PluginError(_origin(ep), f"failed to import: {_cause(exc)}"))
+            failed = f"failed to import: {_cause(exc)}"
+            self._errors.append(PluginError(_origin(ep), failed, imported=False))
             return []
         registered: list[Declaration] = []
         try:
@@ -163,7 +167,8 @@ class Registry:
                 spec.loader.exec_module(module)
             except (Exception, SystemExit) as exc:  # sys.exit() in it: not ours to exit
                 sys.modules.pop(module_name, None)
-                return copy, PluginError(origin, f"failed to import: {_cause(exc)}")
+                failed = f"failed to import: {_cause(exc)}"
+                return copy, PluginError(origin, failed, imported=False)
         before = len(copy._errors)
         copy.register_provider(module, origin)
         error = copy._errors[before] if len(copy._errors) > before else None

@@ -280,6 +280,8 @@ class Loader:
             registry, error = self.ctx.registry.with_file(target)
             if error is not None:
                 self.ctx.error(iloc.at(str(error)))
+                if not error.imported:  # as a file not allowed: its nodes say it
+                    self.ctx.unloaded_plugins.append(text)
             self.ctx.registry = registry
 
     def _includes(self, path: Path, node: yaml.Node, loc: Loc) -> None:

@@ -62,6 +62,26 @@ def test_with_the_permission_the_plugin_file_loads(plugin_mission: Path, capsys:
     assert (plugin_mission.parent / "imported.txt").exists()
 
 
+@pytest.mark.parametrize(
+    "source",
+    ["raise RuntimeError('kaboom')\n", "import nonexistent_module_xyz\n", "def oops(:\n"],
+    ids=["raises", "missing-import", "syntax-error"],
+)
+def test_a_plugin_file_that_fails_to_import_is_named_at_its_nodes(
+    mission_file: Write, source: str
+) -> None:
+    """With the permission, a plugin file that raised on import left its word a bare
+    "unknown node 'boom'", without the note a file not allowed gets."""
+    mission_file(source, "boom.py")
+    path = mission_file("plugins: [./boom.py]\ntree: {sequence: [{mode: safe}, boom]}\n")
+    _, diagnostics = compile_mission(path, permissions=Permissions(plugin_files=True))
+    messages = [f"{d.line}:{d.column}: {d.message}" for d in diagnostics]
+    assert messages[0].startswith(f"1:11: plugin {path.parent / 'boom.py'}: failed to import: ")
+    assert messages[1:] == [
+        "2:33: unknown node 'boom' (the plugin file './boom.py' was not loaded)"
+    ]
+
+
 def test_the_shipped_plugin_example_runs_with_the_permission(capsys: Capsys) -> None:
     mission = str(EXAMPLES / "custom_condition.yaml")
     assert main(["validate", mission]) == 2
