@@ -300,23 +300,15 @@ def refuse_aliases_and_tags(text: str, loader: type[Any] = FAST_LOADER) -> None:
     A syntax error past a refusal ends the pass with the refusals found before it (the
     error is the parser's to report once they are gone)."""
     found: list[Refused] = []
-    # per open collection: nodes read so far in a mapping (even: a key comes next), -1 in a list
-    open_: list[int] = []
     try:
-        for event in yaml.parse(text, Loader=loader):
-            if isinstance(event, yaml.CollectionEndEvent):
-                open_.pop()
-                continue
-            if not isinstance(event, yaml.NodeEvent):
-                continue
-            role = "key" if open_ and open_[-1] >= 0 and open_[-1] % 2 == 0 else "value"
-            if open_ and open_[-1] >= 0:
-                open_[-1] += 1
-            if isinstance(event, yaml.CollectionStartEvent):
-                open_.append(0 if isinstance(event, yaml.MappingStartEvent) else -1)
-            refused = _refused_event(event, role)
-            if refused is not None:
-                found.append(refused)
+        if "\\" in text:  # a control character gets into a text only as a "\e" escape
+            _refuse_with_controls(text, loader, found)
+        else:  # the pass as fast as it was before it looked for control characters
+            for event in yaml.parse(text, Loader=loader):
+                if event.__class__ is yaml.AliasEvent or (
+                    getattr(event, "tag", None) is not None and isinstance(event, yaml.NodeEvent)
+                ):
+                    found.append(_refused_event(event))
     except yaml.YAMLError:
         if not found:
             raise
@@ -324,8 +316,34 @@ def refuse_aliases_and_tags(text: str, loader: type[Any] = FAST_LOADER) -> None:
         raise_every(found)
 
 
-def _refused_event(event: yaml.NodeEvent, role: str) -> Refused | None:
-    """What :func:`refuse_aliases_and_tags` refuses in one event, if anything."""
+def _refuse_with_controls(text: str, loader: type[Any], found: list[Refused]) -> None:
+    """:func:`refuse_aliases_and_tags`'s pass that also refuses a :data:`CONTROL` character in
+    a text, saying whether the text is a key or a value (which it follows for each mapping)."""
+    # per open collection: nodes read so far in a mapping (even: a key comes next), -1 in a list
+    open_: list[int] = []
+    for event in yaml.parse(text, Loader=loader):
+        if isinstance(event, yaml.CollectionEndEvent):
+            open_.pop()
+            continue
+        if not isinstance(event, yaml.NodeEvent):
+            continue
+        role = "key" if open_ and open_[-1] >= 0 and open_[-1] % 2 == 0 else "value"
+        if open_ and open_[-1] >= 0:
+            open_[-1] += 1
+        if isinstance(event, yaml.CollectionStartEvent):
+            open_.append(0 if isinstance(event, yaml.MappingStartEvent) else -1)
+        if isinstance(event, yaml.AliasEvent) or getattr(event, "tag", None) is not None:
+            found.append(_refused_event(event))
+        elif isinstance(event, yaml.ScalarEvent):
+            control = CONTROL.search(event.value)
+            if control is not None:
+                mark: Any = event.start_mark
+                found.append(Refused(problem=_control_problem(control.group(), role),
+                                     problem_mark=mark))  # fmt: skip
+
+
+def _refused_event(event: yaml.Event) -> Refused:
+    """The refusal of an alias or a tagged node."""
     mark: Any = event.start_mark
     if isinstance(event, yaml.AliasEvent):
         return Refused(
@@ -333,19 +351,12 @@ def _refused_event(event: yaml.NodeEvent, role: str) -> Refused | None:
             "(aliases can expand a small file without bound)",
             problem_mark=mark,
         )
-    tag = getattr(event, "tag", None)
-    if tag is not None:
-        shown = "!!" + tag[len(CORE) :] if tag.startswith(CORE) else tag
-        return Refused(
-            problem=f"explicit tag {shown} is not allowed: write the plain value "
-            "(1s, 2, true, text)",
-            problem_mark=mark,
-        )
-    if isinstance(event, yaml.ScalarEvent):
-        control = CONTROL.search(event.value)
-        if control is not None:
-            return Refused(problem=_control_problem(control.group(), role), problem_mark=mark)
-    return None
+    tag: str = getattr(event, "tag", "")
+    shown = "!!" + tag[len(CORE) :] if tag.startswith(CORE) else tag
+    return Refused(
+        problem=f"explicit tag {shown} is not allowed: write the plain value (1s, 2, true, text)",
+        problem_mark=mark,
+    )
 
 
 def raise_every(found: list[Refused]) -> NoReturn:
