@@ -20,6 +20,7 @@ Drive (137) needs Safe or Full because the table says so.
 
 from __future__ import annotations
 
+import math
 import operator
 import re
 import sys
@@ -36,8 +37,8 @@ from roomba_bt.behaviours.lean import (
     behaviour_tick,
     checked_status,
 )
-from roomba_bt.behaviours.units import SPEED, UnitError, ValueType
-from roomba_bt.oi.encode import Command, halt
+from roomba_bt.behaviours.units import SPEED, VALUE_TYPES, UnitError, ValueType
+from roomba_bt.oi.encode import Command, halt, turns_wheels
 from roomba_bt.oi.modes import ALL_MODES, DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME
 from roomba_bt.oi.packets import PACKETS
@@ -183,18 +184,17 @@ class Declaration:
             raise DeclarationError(f"{self.cls!r} is not a RobotBehaviour subclass")
         seen: set[str] = set()
         for p in self.params:
-            if not isinstance(p, Param):
-                raise DeclarationError(f"params must be Param(...) objects, got {p!r}")
-            if not isinstance(p.type, ValueType):
-                raise DeclarationError(f"parameter {p.name!r}: type must be a ValueType")
+            problem = _param_problem(p)
+            if problem is not None:
+                raise DeclarationError(problem)
             if p.name in seen:
                 raise DeclarationError(f"parameter {p.name!r} declared twice")
             seen.add(p.name)
-            if p.default is not None and not isinstance(p.default, BlackboardRef):
-                try:
-                    p.type.parse(p.default)
-                except UnitError as exc:
-                    raise DeclarationError(f"default of {p.name!r}: {exc}") from None
+        if self.kind == "condition" and self.sends:
+            raise DeclarationError(
+                f"a condition only reads: it sends nothing (sends={self.sends!r}); a behaviour "
+                "that sends commands is kind='action'"
+            )
         if not callable(self.reads):
             bad = [pid for pid in self.reads if pid not in PACKETS]
             if bad:
@@ -207,6 +207,46 @@ class Declaration:
         problem = self.cls.declaration_problem(self)
         if problem is not None:
             raise DeclarationError(problem)
+
+
+def _param_problem(p: object) -> str | None:
+    """What is wrong with one declared parameter, or None: its name, type, bounds (plain
+    numbers in the type's unit, the lower first), and its default (of the type, within the
+    bounds, and none when it is required). A bound given as text ("0 mm/s") passed here and
+    broke ``roomba-bt behaviours`` and ``schema`` for every plugin with a traceback."""
+    if not isinstance(p, Param):
+        return f"params must be Param(...) objects, got {p!r}"
+    if not isinstance(p.type, ValueType):
+        known = ", ".join(t.name.upper() for t in VALUE_TYPES.values())
+        return (
+            f"parameter {p.name!r}: type must be a ValueType of roomba_bt.behaviours.units "
+            f"({known}), got {p.type!r}"
+        )
+    if not (isinstance(p.name, str) and _NAME.match(p.name)):
+        return f"parameter name {p.name!r} is not snake_case ([a-z][a-z0-9_]*)"
+    unit = p.type.unit or "the type's unit"
+    for which, bound in (("minimum", p.minimum), ("maximum", p.maximum)):
+        if bound is not None and not _is_number(bound):
+            return (
+                f"parameter {p.name!r}: {which} must be a plain number in {unit}, got "
+                f"{bound!r} (e.g. {which}=0)"
+            )
+    if p.minimum is not None and p.maximum is not None and p.minimum > p.maximum:
+        return f"parameter {p.name!r}: minimum {p.minimum:g} is above maximum {p.maximum:g}"
+    if p.default is None or isinstance(p.default, BlackboardRef):
+        return None
+    if p.required:
+        return f"parameter {p.name!r}: required and given a default: a required one has none"
+    try:
+        value = p.type.parse(p.default)
+    except UnitError as exc:
+        return f"default of {p.name!r}: {exc}"
+    out_of_range = p.check_range(value)
+    return f"default of {p.name!r}: {out_of_range}" if out_of_range else None
+
+
+def _is_number(value: object) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
 
 
 B = TypeVar("B", bound="type[RobotBehaviour]")
@@ -350,10 +390,15 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
                 f"send() takes a Command from roomba_bt.oi.commands (such as "
                 f"commands.drive(200, 32767)), not {type(command).__name__} {command!r:.60}"
             )
-        declared = self.declaration.sends
-        if command.spec.opcode not in declared:  # the compile-time checks read sends=
+        spec = command.spec
+        if spec.opcode not in self.declaration.sends:  # the compile-time checks read sends=
             raise UndeclaredCommand(self, command)
+        if spec.drives_wheels:  # what it set turning is stopped when it ends (terminate)
+            self._started_motion = turns_wheels(command)
         robot.outbox.send(command, self)
+
+    #: whether the last wheel command it sent set them turning (:meth:`send` notes it)
+    _started_motion = False
 
     def value(self, name: str) -> Any:
         """The parameter ``name`` for this run (blackboard references resolved at start)."""
@@ -418,10 +463,9 @@ def wheel_speed_param(name: str, default: str, *, minimum: float, doc: str = "")
 class Action(RobotBehaviour):
     """An action: puts commands in the outbox. Motion started must stop on every ending."""
 
-    #: True for actions that start motion: :meth:`terminate` then queues a halt.
+    #: Kept for plugins written before :meth:`send` noted motion by itself: a flag that
+    #: nothing needs to set (an action that sets the wheels turning is halted when it ends).
     moves = False
-    #: set by the action when it sends a motion command, cleared when it halts itself
-    _started_motion = False
 
     #: how long an action that set the wheels moving waits, once the robot has left Safe and
     #: Full by itself (a cliff, a wheel drop, the charger), for something to bring it back
@@ -468,12 +512,7 @@ class Action(RobotBehaviour):
         stopped its wheels when it fell to Passive (a cliff, a wheel drop, the charger),
         and the mode guard would refuse the halt."""
         robot = self.robot
-        if (
-            self.moves
-            and robot is not None
-            and self._started_motion
-            and robot.snapshot.mode in DRIVING_MODES
-        ):
+        if self._started_motion and robot is not None and robot.snapshot.mode in DRIVING_MODES:
             robot.outbox.send_stop(halt(), self)
         self._started_motion = False
         self._out_of_driving_since = None

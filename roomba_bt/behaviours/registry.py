@@ -55,6 +55,11 @@ class Registry:
         #: yet, by name: the entry point that names it (:meth:`_named`)
         self._unnamed: dict[str, EntryPoint] = {}
         self._errors: list[PluginError] = []
+        #: names two plugins both declare, with what to say where a mission uses one: which
+        #: of them it meant is not known (:meth:`clash`)
+        self._contested: dict[str, str] = {}
+        #: built-in names a plugin declares too: the built-in is used (:meth:`clash`)
+        self._shadowed: dict[str, str] = {}
         self._group = entry_point_group
         self._loaded = entry_point_group is None
 
@@ -80,6 +85,7 @@ class Registry:
         existing = self._declarations.get(declaration.name)
         if existing is not None and existing.cls is not cls:
             existing = self._named(existing)
+            self._note_clash(declaration.name, existing, f"{_qualname(cls)} ({origin})")
             raise DeclarationError(
                 f"name {declaration.name!r} is already taken by {_qualname(existing.cls)} "
                 f"({existing.origin})"
@@ -90,14 +96,53 @@ class Registry:
         self._unnamed.pop(declaration.name, None)
         return declaration
 
-    def register_provider(self, provider: object, origin: str) -> list[Declaration]:
+    def _note_clash(self, name: str, existing: Declaration, other: str) -> None:
+        """A second class declares ``name`` (``other``: the class and where it is from)."""
+        first = f"{_qualname(existing.cls)} ({existing.origin})"
+        if existing.origin == "builtin":
+            self._shadowed[name] = (
+                f"a plugin declares {name!r} too, {other}; the built-in is used (rename the "
+                "plugin's behaviour)"
+            )
+        else:
+            self._contested[name] = (
+                f"{name!r} is declared by two plugins, {first} and {other}: which one is meant "
+                "is not known (uninstall one, or rename its behaviour)"
+            )
+
+    def clash(self, name: str) -> tuple[str, str] | None:
+        """("error", why) for a name two plugins declare, ("warning", why) for a built-in's
+        name a plugin declares too, else None: what a mission that uses it is told (a plugin
+        that lost the name was only said by ``roomba-bt behaviours``)."""
+        self._ensure_loaded()
+        if name in self._contested:
+            return "error", self._contested[name]
+        if name in self._shadowed:
+            return "warning", self._shadowed[name]
+        return None
+
+    def register_provider(
+        self, provider: object, origin: str, *, said_as: str | None = None
+    ) -> list[Declaration]:
         """Register what an entry point or a plugin file provides (class, sequence of
-        classes, or module); a wrong declaration becomes a recorded :class:`PluginError`."""
+        classes, or module); each class that declares itself wrongly becomes a recorded
+        :class:`PluginError` naming it and where it is, and the others still load (one bad
+        class dropped the rest of its module). ``said_as``: the origin the errors name, when
+        it is not ``origin``."""
+        said = said_as or origin
         try:
-            return [self.register(cls, origin) for cls in _provided(provider)]
+            classes = _provided(provider)
         except DeclarationError as exc:
-            self._errors.append(PluginError(origin, f"declares itself wrongly: {exc}"))
+            self._errors.append(PluginError(said, f"declares itself wrongly: {exc}"))
             return []
+        registered: list[Declaration] = []
+        for cls in classes:
+            try:
+                registered.append(self.register(cls, origin))
+            except DeclarationError as exc:
+                wrong = f"{_where(cls)} declares itself wrongly: {exc}"
+                self._errors.append(PluginError(said, wrong))
+        return registered
 
     # ------------------------------------------------------------------ lazy plugin loading
     def _ensure_loaded(self) -> None:
@@ -125,14 +170,9 @@ class Registry:
             failed = f"failed to import: {_cause(exc)}"
             self._errors.append(PluginError(_origin(ep), failed, imported=False))
             return []
-        registered: list[Declaration] = []
-        try:
-            for cls in _provided(provider):
-                registered.append(self.register(cls, _origin(ep, named=False)))
-                self._unnamed[registered[-1].name] = ep
-        except DeclarationError as exc:
-            self._errors.append(PluginError(_origin(ep), f"declares itself wrongly: {exc}"))
-            return []
+        registered = self.register_provider(provider, _origin(ep, named=False), said_as=_origin(ep))
+        for declaration in registered:
+            self._unnamed[declaration.name] = ep
         return registered
 
     def _named(self, declaration: Declaration) -> Declaration:
@@ -180,6 +220,8 @@ class Registry:
         other._declarations = dict(self._declarations)
         other._unnamed = dict(self._unnamed)
         other._errors = list(self._errors)
+        other._contested = dict(self._contested)
+        other._shadowed = dict(self._shadowed)
         return other
 
     # ------------------------------------------------------------------ queries
@@ -256,6 +298,16 @@ def _origin(ep: EntryPoint, *, named: bool = True) -> str:
     when it has none, or ``named`` is False (:meth:`Registry._load_entry_point`)."""
     source = f", from {ep.dist.name}" if named and ep.dist else ""
     return f"{ep.name!r} ({ep.value}{source})"
+
+
+def _where(cls: type) -> str:
+    """``Level (badmod/__init__.py:12)``: a class and where it is defined, when known."""
+    try:
+        file = inspect.getsourcefile(cls)
+        line = inspect.getsourcelines(cls)[1]
+    except (OSError, TypeError):
+        return cls.__qualname__
+    return f"{cls.__qualname__} ({file}:{line})"
 
 
 def _qualname(cls: object) -> str:

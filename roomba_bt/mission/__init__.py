@@ -119,7 +119,7 @@ def _compile(
         blackboard_keys={k: d.type.describe() for k, d in ctx.keys.items()},
         sends=frozenset(sends),
         plan=tree,
-        warnings=tuple(blind_in_full(tree, modes)),
+        warnings=(*ctx.warnings, *blind_in_full(tree, modes)),
     )
     return mission, []
 

@@ -160,6 +160,14 @@ class NodeParser:
             decl = self.ctx.registry.get(word)
             if decl is None:
                 raise Bad(at.key_loc.at(self._unknown_word(word)))
+            clash = self.ctx.registry.clash(word)
+            if clash is not None:
+                severity, why = clash
+                if severity == "error":
+                    raise Bad(at.key_loc.at(why))
+                warning = at.key_loc.at(why).as_warning()
+                if warning not in self.ctx.warnings:
+                    self.ctx.warnings.append(warning)
             return parse_leaf(self.ctx, decl, at)
         if kind.shape is Shape.CHILDREN:
             return parse_composite(self, kind, at)

@@ -100,6 +100,9 @@ class Context:
     #: plugin files named but not loaded (no --allow-plugin-files, or not found): an unknown
     #: word may be one of theirs
     unloaded_plugins: list[str] = field(default_factory=list)
+    #: what compiles but is likely a mistake, found while parsing (a plugin's behaviour of a
+    #: built-in's name): the compiled mission's warnings, with the whole-tree checks' own
+    warnings: list[Diagnostic] = field(default_factory=list)
 
     def error(self, diagnostic: Diagnostic) -> None:
         if diagnostic not in self.diagnostics:

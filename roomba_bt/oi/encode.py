@@ -285,6 +285,15 @@ def halt() -> Command:
 _HALT = encode(137, 0, 0)
 
 
+def turns_wheels(command: Command) -> bool:
+    """Whether a wheel command (``spec.drives_wheels``) sets the wheels turning: Drive (137)
+    with a velocity (its radius alone moves nothing: ``[137][0][0][128][0]`` stands still),
+    Drive Direct (145) or Drive PWM (146) with either wheel's value."""
+    if command.spec.opcode == _HALT.opcode:
+        return command.args[0] != 0
+    return any(command.args)
+
+
 def motors(motor_bits: int) -> Command:
     """Motors (138) from raw bits; see :func:`roomba_bt.oi.bits.motor_bits` for names."""
     return encode(138, motor_bits)

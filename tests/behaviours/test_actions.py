@@ -12,7 +12,8 @@ from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
 from roomba_bt.behaviours import actions as a
-from roomba_bt.behaviours.declare import BlackboardRef, read_key, write_key
+from roomba_bt.behaviours.declare import Action, BlackboardRef, declare, read_key, write_key
+from roomba_bt.oi.encode import drive, drive_direct, drive_straight, turns_wheels
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.odometry import mm_to_counts
 from roomba_bt.robot.interface import Odometry
@@ -359,3 +360,29 @@ def test_every_motor_on_and_the_vacuum_alone_on(robot: StubRobot, make: Make) ->
     robot.sent.clear()
     tick(make(a.Vacuum, on=True))
     assert data(robot) == [[138, 0x02]]
+
+
+@declare("forgets_its_flags", kind="action", sends=(137,))
+class ForgetsItsFlags(Action):
+    """A plugin's action that drives and says nothing of it (no ``moves``, no
+    ``_started_motion``): the wheels turned on after it ended."""
+
+    def update(self) -> Status:
+        self.send(drive_straight(200))
+        return Status.RUNNING
+
+
+def test_an_action_that_set_the_wheels_turning_halts_them_when_it_ends_unasked(
+    robot: StubRobot, make: Make
+) -> None:
+    behaviour = make(ForgetsItsFlags)
+    robot.set_frame({35: 2})
+    tick(behaviour)
+    assert data(robot) == [[137, 0, 200, 0x80, 0x00]]
+    behaviour.stop(Status.INVALID)
+    assert data(robot) == [HALT]
+
+
+def test_a_wheel_command_that_moves_nothing_leaves_nothing_to_halt() -> None:
+    assert not turns_wheels(drive(0, 0x8000)) and not turns_wheels(drive_direct(0, 0))
+    assert turns_wheels(drive(-1, 1)) and turns_wheels(drive_direct(0, 5))

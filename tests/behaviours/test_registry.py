@@ -11,6 +11,7 @@ from py_trees.common import Status
 
 from roomba_bt.behaviours import (
     INT,
+    SPEED,
     Condition,
     DeclarationError,
     Param,
@@ -21,6 +22,7 @@ from roomba_bt.behaviours import (
 )
 from roomba_bt.behaviours.actions import ACTIONS
 from roomba_bt.behaviours.conditions import CONDITIONS
+from roomba_bt.mission import compile_mission
 from roomba_bt.robot.interface import Snapshot
 
 
@@ -89,6 +91,31 @@ def test_a_plugin_that_declares_itself_wrongly_is_named() -> None:
         ("BadName", {}, "snake_case"),
         ("reads_junk", {"reads": (999,)}, r"unknown sensor packets \[999\]"),
         ("bad_default", {"params": (Param("n", INT, default="x"),)}, "default of 'n'"),
+        # found by a plugin author: each was accepted, and the first broke `behaviours` and
+        # `schema` for every plugin with a traceback
+        (
+            "text_bound",
+            {"params": (Param("v", SPEED, default="0.2 m/s", minimum="0 mm/s"),)},
+            r"parameter 'v': minimum must be a plain number in mm/s, got '0 mm/s'",
+        ),
+        (
+            "out_of_range",
+            {"params": (Param("v", SPEED, default="900 mm/s", maximum=500),)},
+            r"default of 'v': v 900 mm/s is out of range: allowed \.\.500 mm/s",
+        ),
+        (
+            "upside_down",
+            {"params": (Param("n", INT, minimum=10, maximum=5),)},
+            "minimum 10 is above maximum 5",
+        ),
+        (
+            "required_default",
+            {"params": (Param("n", INT, default=3, required=True),)},
+            "required and given a default",
+        ),
+        ("odd_param", {"params": (Param("Level-X", INT),)}, "parameter name 'Level-X'"),
+        ("python_type", {"params": (Param("n", int),)}, r"type must be a ValueType .*SPEED"),  # type: ignore[arg-type]
+        ("sends_drive", {"sends": (137,)}, "a condition only reads"),
     ],
 )
 def test_declaration_errors(name: str, declared: dict[str, Any], message: str) -> None:
@@ -222,3 +249,85 @@ def test_the_plugin_scan_finds_what_importlib_metadata_entry_points_finds(
         assert [ep.dist.name for ep in ours if ep.dist] == [
             ep.dist.name for ep in theirs if ep.dist
         ]
+
+
+@declare("always", kind="condition")
+class AlwaysToo(Condition):
+    """Another plugin's ``always``: the same name, another class."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        return False
+
+
+@declare("drive", kind="condition")
+class DriveToo(Condition):
+    """A plugin's behaviour that takes a built-in's name."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        return True
+
+
+def _plugin(registry: Registry, name: str, target: str) -> None:
+    registry.load_entry_point(EntryPoint(name, f"{__name__}:{target}", "roomba_bt.behaviours"))
+
+
+def test_a_name_two_plugins_declare_is_an_error_where_a_mission_uses_it(tmp_path: Path) -> None:
+    """The one whose entry point sorted first was used, silently: validate said ok and the
+    run ran the other package's behaviour."""
+    registry = builtin_registry()
+    _plugin(registry, "first", "Always")
+    _plugin(registry, "second", "AlwaysToo")
+    path = tmp_path / "m.yaml"
+    path.write_text("tree:\n  sequence:\n    - wait: 1s\n    - always\n")
+    mission, diagnostics = compile_mission(path, {}, registry=registry)
+    assert mission is None
+    [error] = diagnostics
+    assert (error.line, error.column) == (4, 7)
+    assert "'always' is declared by two plugins" in error.message
+    assert "Always ('first'" in error.message and "AlwaysToo ('second'" in error.message
+
+
+def test_a_plugin_that_takes_a_builtins_name_is_a_warning_where_it_is_used(
+    tmp_path: Path,
+) -> None:
+    registry = builtin_registry()
+    _plugin(registry, "shadow", "DriveToo")
+    path = tmp_path / "m.yaml"
+    path.write_text("tree:\n  sequence:\n    - mode: safe\n    - drive: {velocity: 100 mm/s}\n")
+    mission, diagnostics = compile_mission(path, {}, registry=registry)
+    assert mission is not None and diagnostics == []
+    [warning] = [w for w in mission.warnings if "too" in w.message]
+    assert warning.severity == "warning" and (warning.line, warning.column) == (4, 7)
+    assert "a plugin declares 'drive' too" in warning.message
+    assert "the built-in is used" in warning.message
+
+
+def test_one_class_that_declares_itself_wrongly_leaves_its_module_s_others(
+    tmp_path: Path,
+) -> None:
+    """The good class was dropped with the bad one, and the error said neither which class
+    nor where."""
+    path = tmp_path / "two.py"
+    path.write_text(TWO_CLASSES)
+    registry, error = Registry(entry_point_group=None).with_file(path)
+    assert [d.name for d in registry] == ["good_one"]
+    assert error is not None
+    assert f"Bad ({path}:4) declares itself wrongly" in str(error)  # its @declare
+    assert "parameter 'level': type must be a ValueType" in str(error)
+
+
+TWO_CLASSES = """\
+from roomba_bt.behaviours import Condition, Param, declare
+
+
+@declare("bad_one", kind="condition", params=(Param("level", int, default=3),))
+class Bad(Condition):
+    def check(self, snapshot):
+        return True
+
+
+@declare("good_one", kind="condition")
+class Good(Condition):
+    def check(self, snapshot):
+        return True
+"""
