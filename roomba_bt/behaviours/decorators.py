@@ -122,11 +122,11 @@ class Repeat(_MissionClock, DecoratorTick, py_trees.decorators.Decorator):
         if status is not _SUCCESS:
             return status
         self.count += 1
+        self.feedback_message = f"{self.count} done"  # the last too: the tree shown at the end
         if self.times is not None and self.count >= self.times:
             return _SUCCESS
         if self.duration is not None and self.lasted(self.duration):
             return _SUCCESS
-        self.feedback_message = f"{self.count} done"
         return _RUNNING
 
 

@@ -68,6 +68,7 @@ def test_delay_waits_then_ticks_the_child(robot: StubRobot) -> None:
 def test_repeat_times(robot: StubRobot) -> None:
     node = ready(d.Repeat("repeat", Success("ok"), times=3), robot)
     assert run(node, robot, 3) == [Status.RUNNING, Status.RUNNING, Status.SUCCESS]
+    assert node.feedback_message == "3 done"  # the tree shown at the end said "2 done"
 
 
 def test_repeat_for_a_duration(robot: StubRobot) -> None:
