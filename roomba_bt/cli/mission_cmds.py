@@ -335,9 +335,9 @@ def behaviours_command(args: argparse.Namespace) -> int:
                 "are listed with --plugin-file FILE",
                 file=sys.stderr,
             )
+        _plugin_warnings(registry)  # it may be one of a plugin that did not load
         return ExitCode.INVALID
-    for error in registry.errors:
-        print(f"roomba-bt: warning: {error}", file=sys.stderr)
+    _plugin_warnings(registry)
     data = describe_behaviours(args.names, registry)
     if args.json:
         print(json.dumps(data, indent=2, default=str))
@@ -383,5 +383,12 @@ def schema_command(args: argparse.Namespace) -> int:
     registry = _registry_with_files("schema", args.plugin_file)
     if isinstance(registry, int):
         return registry
+    _plugin_warnings(registry)  # their behaviours are missing from the schema
     print(json.dumps(mission_schema(registry), indent=2))
     return ExitCode.OK
+
+
+def _plugin_warnings(registry: Registry) -> None:
+    """The plugins that did not load, or not whole, each a warning on stderr."""
+    for error in registry.errors:
+        print(f"roomba-bt: warning: {error}", file=sys.stderr)

@@ -214,3 +214,24 @@ def test_show_a_library_says_it_is_one_to_be_included(
     assert main(["show", str(library)]) == 2
     assert f"(include: [{library}])" in capsys.readouterr().out
     assert main(["validate", str(library)]) == 0
+
+
+def test_a_plugin_that_did_not_load_is_said_by_behaviours_name_and_by_schema(
+    capsys: Capsys, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """An entry point whose module is misspelt: ``behaviours typo_cond`` said only "unknown
+    behaviour", ``schema`` nothing at all (its behaviours silently missing)."""
+    from importlib.metadata import EntryPoint
+
+    import roomba_bt.behaviours as behaviours
+
+    registry = behaviours.builtin_registry()
+    registry.load_entry_point(EntryPoint("typo", "typo_mdo", "roomba_bt.behaviours"))
+    monkeypatch.setattr(behaviours, "default_registry", lambda: registry)
+    assert main(["behaviours", "typo_cond"]) == 2
+    err = capsys.readouterr().err
+    assert "unknown behaviour 'typo_cond'" in err
+    assert "warning: plugin 'typo' (typo_mdo): failed to import: ModuleNotFoundError" in err
+    assert main(["schema"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out) and "warning: plugin 'typo' (typo_mdo): failed to import" in err
