@@ -190,18 +190,24 @@ class Declaration:
             if p.name in seen:
                 raise DeclarationError(f"parameter {p.name!r} declared twice")
             seen.add(p.name)
+        if not callable(self.reads):
+            bad = [pid for pid in self.reads if pid not in PACKETS]
+            if bad:
+                raise DeclarationError(
+                    f"reads unknown sensor packets {bad} (single ids 7-58; by name: "
+                    "reads=packet_ids('wall_signal', ...), from roomba_bt.oi.packets)"
+                )
+        bad = [op for op in self.sends if op not in COMMANDS]
+        if bad:
+            raise DeclarationError(
+                f"sends unknown opcodes {bad} (by name: sends=opcodes('drive', ...), from "
+                "roomba_bt.oi.opcodes)"
+            )
         if self.kind == "condition" and self.sends:
             raise DeclarationError(
                 f"a condition only reads: it sends nothing (sends={self.sends!r}); a behaviour "
                 "that sends commands is kind='action'"
             )
-        if not callable(self.reads):
-            bad = [pid for pid in self.reads if pid not in PACKETS]
-            if bad:
-                raise DeclarationError(f"reads unknown sensor packets {bad} (single ids 7-58)")
-        bad = [op for op in self.sends if op not in COMMANDS]
-        if bad:
-            raise DeclarationError(f"sends unknown opcodes {bad}")
         if self.primary is not None and self.primary not in seen:
             raise DeclarationError(f"primary parameter {self.primary!r} is not declared")
         problem = self.cls.declaration_problem(self)

@@ -323,6 +323,15 @@ _OI_MODE_BY_BYTE = _by_byte(lambda v: OIMode(v) if v <= 3 else OIMode.FULL)
 _STASIS_BY_BYTE = _by_byte(lambda v: Stasis(v & 3))
 
 
+class MissingPacket(KeyError):
+    """A packet read from a frame that does not carry it (a behaviour that reads a packet
+    its declaration does not list: the runtime's message says where to add it)."""
+
+    def __init__(self, packet_id: object, message: str) -> None:
+        super().__init__(message)
+        self.packet_id = packet_id
+
+
 class SensorFrame:
     """One decoded set of sensor values (a stream frame or a reply), read-only.
 
@@ -363,11 +372,12 @@ class SensorFrame:
         except (KeyError, TypeError):
             raise self._missing(packet_id) from None
 
-    def _missing(self, packet_id: object) -> KeyError:
+    def _missing(self, packet_id: object) -> MissingPacket:
         name = PACKETS[packet_id].name if packet_id in PACKETS else "unknown"  # type: ignore[index]
-        return KeyError(
+        return MissingPacket(
+            packet_id,
             f"packet {packet_id} ({name}) is not in this frame; it carries "
-            f"{list(self.layout.members)}"
+            f"{list(self.layout.members)}",
         )
 
     def carries(self, packet_ids: Iterable[int]) -> bool:

@@ -31,7 +31,7 @@ from roomba_bt.behaviours.reasons import failure_reason
 from roomba_bt.mission import RUNTIME_PACKETS
 from roomba_bt.oi.encode import Command
 from roomba_bt.oi.errors import BandwidthError
-from roomba_bt.oi.frames import BATTERY_PACKETS, SensorFrame
+from roomba_bt.oi.frames import BATTERY_PACKETS, MissingPacket, SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
@@ -109,7 +109,23 @@ def behaviour_error(exc: BaseException) -> str:
     while node is not None:
         path.append(node.name)
         node = node.parent
-    return f"behaviour {' / '.join(reversed(path))} raised {what} (at {where})"
+    return (
+        f"behaviour {' / '.join(reversed(path))} raised {what} (at {where}){_hint(exc, behaviour)}"
+    )
+
+
+def _hint(exc: BaseException, behaviour: py_trees.behaviour.Behaviour) -> str:
+    """What to do about a packet the behaviour read without declaring it, where it can be
+    told: the declaration that should list it."""
+    declaration = getattr(behaviour, "declaration", None)
+    reads = getattr(declaration, "reads", None)
+    if not isinstance(exc, MissingPacket) or reads is None or callable(reads):
+        return ""
+    listed = ", ".join(str(pid) for pid in reads) or "nothing"
+    return (
+        f"; add {exc.packet_id} to @declare(reads=...) of {declaration.name!r} (it lists "  # type: ignore[union-attr]
+        f"{listed}): the stream carries what the mission's behaviours declare"
+    )
 
 
 class _NoSnapshotYet:

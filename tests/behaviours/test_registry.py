@@ -90,6 +90,8 @@ def test_a_plugin_that_declares_itself_wrongly_is_named() -> None:
         ("sequence", {}, "word of the mission language"),
         ("BadName", {}, "snake_case"),
         ("reads_junk", {"reads": (999,)}, r"unknown sensor packets \[999\]"),
+        ("reads_name", {"reads": ("wall",)}, r"by name: reads=packet_ids\('wall_signal'"),
+        ("sends_name", {"sends": ("drive",)}, r"by name: sends=opcodes\('drive'"),
         ("bad_default", {"params": (Param("n", INT, default="x"),)}, "default of 'n'"),
         # found by a plugin author: each was accepted, and the first broke `behaviours` and
         # `schema` for every plugin with a traceback

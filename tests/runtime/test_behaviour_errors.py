@@ -118,6 +118,19 @@ class Sneaky(Action):
 '''
 
 
+UNREAD = '''
+from roomba_bt.behaviours import Condition, declare
+
+
+@declare("near", kind="condition", reads=(7,))
+class Near(Condition):
+    """Reads the wall signal (27) and declares the bumps only."""
+
+    def check(self, snapshot):
+        return snapshot.frame[27] > 100
+'''
+
+
 @pytest.mark.parametrize(
     ("word", "source", "said", "line"),
     [
@@ -128,6 +141,8 @@ class Sneaky(Action):
         ("sneaky", UNDECLARED,
          "raised UndeclaredCommand: sneaky sent drive (137), which its declaration does not "
          "list: add 137 to @declare(sends=...) (it lists leds (139))", 13),
+        ("near", UNREAD,  # the KeyError did not say where to declare it
+         "raised MissingPacket: 'packet 27 (wall_signal) is not in this frame", 10),
     ],
 )  # fmt: skip
 def test_a_plugin_that_breaks_the_contract_ends_the_run_as_its_error(
@@ -150,6 +165,8 @@ def test_a_plugin_that_breaks_the_contract_ends_the_run_as_its_error(
     out, err = capsys.readouterr()
     assert f"behaviour sequence / {word} {said}" in err
     assert f"(at {tmp_path / 'plugin.py'}:{line})" in err
+    if word == "near":
+        assert "; add 27 to @declare(reads=...) of 'near' (it lists 7)" in err
     assert "ticks        1 " in out  # ended on the tick it happened
     assert "safe stop    sent drive, motors" in out
     assert "invalid status" not in out + err
