@@ -227,11 +227,17 @@ class Outbox:
         self.send(command, sender)
 
     def drain(self) -> list[Command]:
-        """The commands to write, in order; empties the outbox."""
+        """The commands to write, in order; empties the outbox. Who sent each channel's
+        last command is kept until that channel is sent on again (:meth:`sender_of`: a
+        refusal names it); :meth:`send_stop` looks at it only while its channel is queued."""
         out = list(self._queue.values())
         self._queue.clear()
-        self._senders.clear()
         return out
+
+    def sender_of(self, command: Command) -> object:
+        """The behaviour that queued ``command`` (a channel's last one), or None."""
+        channel = command.spec.channel
+        return self._senders.get(channel) if channel is not None else None
 
     def pending(self) -> list[Command]:
         return list(self._queue.values())

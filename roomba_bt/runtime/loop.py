@@ -559,7 +559,9 @@ class MissionRunner(BaseHandle):
                 self.summary.refused_commands += 1
                 if len(self.refusals) < 100:
                     when = self.snapshot.time if self.has_snapshot else 0.0
-                    self.refusals.append(f"t={when:.3f} {exc}")
+                    sender = getattr(self._outbox.sender_of(command), "name", None)
+                    by = f" {sender}:" if isinstance(sender, str) else ""
+                    self.refusals.append(f"t={when:.3f}{by} {exc}")
 
     def _bump_reflex(self) -> None:
         """While a bump onset waits for its confirming frame, forward motion is held at 0

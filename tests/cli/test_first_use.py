@@ -184,6 +184,7 @@ def test_refusals_are_stamped_with_mission_time(
     main(["run", str(path), "--fast", "--display", "none", "--allow-plugin-files"])
     err = capsys.readouterr().err
     assert re.search(r"^refused: t=0\.3\d\d ", err, re.M), err
+    assert re.search(r"^refused: t=0\.3\d\d rogue: drive needs Safe or Full", err, re.M), err
 
 
 def test_matplotlib_info_lines_are_not_shown() -> None:
