@@ -260,12 +260,21 @@ class MonitorSession:
         name = self.feed.infos[index].name
         if value == "none":
             node.__dict__.pop("update", None)
+            node.feedback_message = ""
             self.state.forced.pop(index, None)
             text = f"{name} no longer forced"
         else:
             status = FORCEABLE[value]
+            said = f"forced to {status.value} by the operator"
+
+            def forced() -> Status:
+                # said where the result is read: a mission failed by it says so in its
+                # summary (it read as the sensor's own failure)
+                node.feedback_message = said
+                return status
+
             # an instance attribute: found before the class's update, removed to release
-            node.__dict__["update"] = lambda: status
+            node.__dict__["update"] = forced
             self.state.forced[index] = value
             text = f"{name} forced to {status.value}"
         self.feed.event("force", text)
@@ -309,6 +318,8 @@ class MonitorSession:
             self._pause(runner, "reload", noted=False)
         runner.stop_tree()
         runner.mission = mission
+        # its name too, where a renamed one is shown: the page's header and the summary
+        runner.summary.mission = self.feed.mission_name = mission.name
         mission.setup(runner)
         self.state.forced.clear()
         self.state.breakpoints.clear()

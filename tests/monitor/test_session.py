@@ -199,7 +199,8 @@ def test_a_forced_condition_decides_the_branch_and_is_marked_in_the_events_and_t
 
     summary = rig.run_with(operator)
     assert summary.outcome is Outcome.FAILURE
-    assert "no bump" in summary.reason
+    # the operator's, said so: it read "no bump", as if the bumper had failed the mission
+    assert summary.reason == "no bump: forced to FAILURE by the operator"
     assert any(e.kind == "force" and "no bump forced to FAILURE" in e.text for e in rig.feed.events)
     record = load_record(record_path)
     assert record.notes
@@ -318,6 +319,8 @@ def test_a_reload_stops_the_old_tree_under_the_safe_stop_and_the_new_tree_is_the
     assert [e.text for e in rig.feed.events if e.kind == "reload"] == [
         "reloaded waiting: the new tree starts from its root"
     ]
+    # a new name where it is shown: the summary, the page's header (both kept the first's)
+    assert summary.mission == rig.feed.mission_name == "waiting"
 
 
 def test_a_reload_while_paused_resumes_into_the_new_tree_from_passive_with_no_old_command(
