@@ -154,8 +154,11 @@ class LiveMonitor:
         if summary is None:
             self.feed.finished = "the run did not start"
         else:
+            # what the robot was left in: the page's robot panel holds the last tick before
+            # the safe stop (it showed Safe and the wheels turning after the run had ended)
             reason = f": {summary.reason}" if summary.reason else ""
-            self.feed.finished = f"{summary.outcome.value}{reason}"
+            after = f"final mode {summary.final_mode_text()}; safe stop {summary.safe_stop}"
+            self.feed.finished = f"{summary.outcome.value}{reason} ({after})"
         self._done.set()
         logging.getLogger("roomba_bt").removeHandler(self._handler)
         for thread in self._threads:

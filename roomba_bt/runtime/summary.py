@@ -135,12 +135,17 @@ class RunSummary:
             self.skipped_bytes = int(getattr(counters, "skipped_bytes", 0))
             self.implausible_frames = int(getattr(counters, "implausible_frames", 0))
 
-    def lines(self) -> list[str]:
+    def final_mode_text(self) -> str:
+        """The summary's ``final mode``: the mode after the safe stop, or why it is unknown."""
         mode = self.final_mode.label if self.final_mode is not None else "unknown"
         if not self.robot_answered:
-            mode = "unknown: the robot never answered"
-        elif not self.stop_delivered:
-            mode = f"unknown: last seen in {mode}, the stop was not delivered"
+            return "unknown: the robot never answered"
+        if not self.stop_delivered:
+            return f"unknown: last seen in {mode}, the stop was not delivered"
+        return mode
+
+    def lines(self) -> list[str]:
+        mode = self.final_mode_text()
         battery = f"{self.battery_percent:.0f}%" if self.battery_percent is not None else "n/a"
         reason = f" ({self.reason})" if self.reason else ""
         return [

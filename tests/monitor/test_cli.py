@@ -258,3 +258,28 @@ def test_a_recorded_run_of_a_mission_with_a_plugin_file_can_be_shown(
     recorded = load_recorded(args)
     assert isinstance(recorded, Recorded)
     assert recorded.packets == tuple(recorded.record.header["packets"])
+
+
+def test_the_page_is_told_what_the_robot_was_left_in(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """After the run the page's robot panel holds the last tick before the safe stop: it
+    showed Safe and the wheels turning under "the run ended". The banner says the end."""
+    pytest.importorskip("aiohttp")
+    from roomba_bt.cli import monitor_cmd
+
+    told: list[str | None] = []
+    finish = monitor_cmd.LiveMonitor.finish
+
+    def finish_and_note(self: monitor_cmd.LiveMonitor, summary: Any) -> None:
+        finish(self, summary)
+        told.append(self.feed.finished)
+
+    monkeypatch.setattr(monitor_cmd.LiveMonitor, "finish", finish_and_note)
+    argv = ["run", str(SHUTTLE), "--fast", "--display", "none", "--monitor", "0", "--timeout", "2s"]
+    assert main(argv) == 1
+    [ended] = told
+    assert ended is not None and ended.startswith("timeout: ")
+    assert ended.endswith(
+        "(final mode Passive; safe stop sent drive, motors, pause_resume_stream, start)"
+    )

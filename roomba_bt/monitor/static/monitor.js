@@ -301,7 +301,10 @@ function updateControls() {
   $("resume").disabled = !c || !s.paused;
   $("step").disabled = !c || !s.paused;
   $("stop").disabled = !c;
-  if (view.finished) showBanner("the run ended: " + view.finished, false);
+  if (view.finished) {
+    showBanner("the run ended: " + view.finished, false);
+    $("robot-panel").querySelector("h2").textContent = "Robot: its last tick before the run ended";
+  }
   else if (s.paused) showBanner("PAUSED — " + (s.pause_reason || "") + " (robot stopped, in Passive; resume goes back to the mission's mode)", false);
   else if (!$("banner").classList.contains("error")) showBanner("");
 }
