@@ -19,6 +19,7 @@ whose mode guard checks it like any other command, and the tree goes on from whe
 from __future__ import annotations
 
 import contextlib
+import logging
 import queue
 import threading
 from collections.abc import Callable, Iterable
@@ -39,6 +40,9 @@ if TYPE_CHECKING:
 
 #: What a breakpoint may wait for: a node's start, or its end with a given status.
 BREAK_ON = ("start", "success", "failure", "end")
+
+log = logging.getLogger(__name__)
+
 FORCEABLE = {"success": Status.SUCCESS, "failure": Status.FAILURE}
 
 
@@ -195,15 +199,15 @@ class MonitorSession:
                 self._steps_left = 1  # the next frame's tick, then pause before the one after
             elif req.action == "stop":
                 self._stop = "stopped by the operator"
-                self.feed.event("control", "stop: the run ends (as on Ctrl-C)")
+                self._said("control", "stop: the run ends (as on Ctrl-C)")
             elif req.action == "break" and req.node is not None:
                 name = self.feed.infos[req.node].name
                 if req.value == "none":
                     state.breakpoints.pop(req.node, None)
-                    self.feed.event("breakpoint", f"breakpoint on {name} cleared")
+                    self._said("breakpoint", f"breakpoint on {name} cleared")
                 else:
                     state.breakpoints[req.node] = str(req.value)
-                    self.feed.event("breakpoint", f"break when {name} {_on(req.value)}")
+                    self._said("breakpoint", f"break when {name} {_on(req.value)}")
             elif req.action == "force" and req.node is not None:
                 self._force(runner, req.node, str(req.value))
             elif req.action == "reload":
@@ -228,7 +232,7 @@ class MonitorSession:
         self.state.paused, self.state.pause_reason = True, why
         runner.clock_held = True  # mission time stands still until the resume
         sent = ", ".join(c.name for c in commands) or "nothing to send"
-        self.feed.event("control", f"pause ({why}): safe stop sent {sent}; tree frozen")
+        self._said("control", f"pause ({why}): safe stop sent {sent}; tree frozen")
         for listener in self.listeners:
             with contextlib.suppress(Exception):
                 listener(why)
@@ -253,7 +257,14 @@ class MonitorSession:
         resent = again[1:] if mode is not None else again
         if resent:
             back += ", " + ", ".join(c.name for c in resent) + " sent again"
-        self.feed.event("control", f"resume ({why}): {back}; the tree goes on")
+        self._said("control", f"resume ({why}): {back}; the tree goes on")
+
+    def _said(self, kind: str, text: str) -> None:
+        """An operator's act (or what it caused) into the page's event log, and the run's
+        log on the terminal: a key pressed there (p, r, n) said nothing, and ``--display
+        log`` showed no pause."""
+        self.feed.event(kind, text)
+        log.info("monitor: %s", text)
 
     def _force(self, runner: MissionRunner, index: int, value: str) -> None:
         node = self.feed.nodes[index]
@@ -277,7 +288,7 @@ class MonitorSession:
             node.__dict__["update"] = forced
             self.state.forced[index] = value
             text = f"{name} forced to {status.value}"
-        self.feed.event("force", text)
+        self._said("force", text)
         _note(runner, {"force": name, "node": index, "to": value, "at": "before"})
 
     def _check_breakpoints(self, runner: MissionRunner, changed: tuple[int, ...]) -> None:
@@ -300,7 +311,7 @@ class MonitorSession:
             )
             if hit:
                 name = self.feed.infos[index].name
-                self.feed.event("breakpoint", f"breakpoint: {name} {_on(on)} at tick {record.tick}")
+                self._said("breakpoint", f"breakpoint: {name} {_on(on)} at tick {record.tick}")
                 self._steps_left = None
                 self._pause(runner, f"breakpoint: {name} {_on(on)}", at="after")
                 return
@@ -324,7 +335,7 @@ class MonitorSession:
         self.state.forced.clear()
         self.state.breakpoints.clear()
         self.feed.set_tree(mission.root)
-        self.feed.event("reload", f"reloaded {mission.name}: the new tree starts from its root")
+        self._said("reload", f"reloaded {mission.name}: the new tree starts from its root")
         self.state.paused = was_paused
         runner.clock_held = was_paused
         self._skip_tick = True

@@ -73,7 +73,9 @@ def test_p_pauses_r_resumes_q_stops_and_the_terminal_is_given_back(tmp_path: Pat
     while not record.exists() or "pause" not in _acts(record):  # noted as it is done
         assert time.monotonic() < deadline, "p did not pause"
         run.read(0.05)
+    run.until("monitor: pause (paused by the operator)")  # the terminal said nothing of it
     run.type("r")
+    run.until("monitor: resume (resumed by the operator)")
     run.type("q")
     run.until("outcome      INTERRUPTED (stopped by the operator)")
     assert run.wait() == 130
