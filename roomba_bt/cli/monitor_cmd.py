@@ -13,6 +13,7 @@ import errno
 import logging
 import os
 import select
+import socket
 import sys
 import threading
 from pathlib import Path
@@ -67,6 +68,10 @@ def add_run_arguments(run: argparse.ArgumentParser) -> None:
         help="reload the mission when its file changes: valid, the new tree starts at the next "
         "safe point; invalid, the run goes on and the errors are shown",
     )  # fmt: skip
+
+
+#: addresses that listen on every interface: no address to open a page at
+WILDCARD_HOSTS = ("0.0.0.0", "::", "")
 
 
 class LiveMonitor:
@@ -133,6 +138,7 @@ class LiveMonitor:
                 print(f"roomba-bt: {address_problem(host, port, exc)}", file=sys.stderr)
                 return ExitCode.INVALID
             print(f"monitor: {url}", flush=True)
+            self._say_where(host, url)
         logging.getLogger("roomba_bt").addHandler(self._handler)
         if self.args.watch:
             self._spawn(self._watch, "roomba-bt watch")
@@ -143,6 +149,21 @@ class LiveMonitor:
             else:  # setting the terminal from the background (&) stopped the run (SIGTTOU)
                 print("keys: off (started in the background); the page's controls work")
         return None
+
+    def _say_where(self, host: str, url: str) -> None:
+        """What the URL alone does not say: a wildcard address is no address to open from
+        another machine (browsers refuse 0.0.0.0), and a run on the virtual clock may be
+        over before any page opens."""
+        if host in WILDCARD_HOSTS:
+            named = url.replace(f"//{host}:", f"//{socket.gethostname()}:", 1)
+            print(f"monitor: it listens on every address of this machine: {named}", flush=True)
+        if getattr(self.args, "fast", False):
+            print(
+                "roomba-bt: --fast runs the mission on the virtual clock: it may end before a "
+                "page opens (in real time without --fast; or --record it and open the record "
+                "with roomba-bt monitor FILE)",
+                file=sys.stderr,
+            )
 
     def _spawn(self, target: Any, name: str) -> None:
         thread = threading.Thread(target=target, name=name, daemon=True)

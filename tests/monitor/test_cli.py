@@ -283,3 +283,20 @@ def test_the_page_is_told_what_the_robot_was_left_in(
     assert ended.endswith(
         "(final mode Passive; safe stop sent drive, motors, pause_resume_stream, start)"
     )
+
+
+def test_a_wildcard_address_and_the_virtual_clock_are_said(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``--monitor 0.0.0.0:PORT`` printed only ``http://0.0.0.0:...``, which no browser on
+    another machine opens; ``--fast`` ran to its end before a page could open, unsaid."""
+    pytest.importorskip("aiohttp")
+    argv = ["run", str(SHUTTLE), "--fast", "--display", "none", "--monitor", "0.0.0.0:0",
+            "--timeout", "1s"]  # fmt: skip
+    assert main(argv) == 1
+    out, err = capsys.readouterr()
+    lines = out.splitlines()
+    assert lines[0].startswith("monitor: http://0.0.0.0:")
+    assert lines[1].startswith(f"monitor: it listens on every address of this machine: "
+                               f"http://{socket.gethostname()}:")  # fmt: skip
+    assert "--fast runs the mission on the virtual clock: it may end before a page opens" in err
