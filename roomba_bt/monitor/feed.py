@@ -173,6 +173,9 @@ class Event(NamedTuple):
     time: float
     kind: str  # mode, refused, warning, status, control, breakpoint, force, reload, error
     text: str
+    #: the stream's tick it came at (the newest record's): the page's timeline is in ticks,
+    #: and mission time stands still during a pause (its events all had one time)
+    tick: int = 0
 
 
 class Ring:
@@ -417,11 +420,12 @@ class RunFeed:
     # ---------------------------------------------------------------- any thread
     def event(self, kind: str, text: str, time: float | None = None) -> None:
         """Append to the event log (mission time; the newest tick's when ``time`` is None)."""
+        newest = self.ring.newest()
+        tick = newest.tick if newest is not None else 0
         if time is None:
-            newest = self.ring.newest()
             time = newest.time if newest is not None else 0.0
         with self._event_lock:
-            self.events.append(Event(self._event_seq, time, kind, text))
+            self.events.append(Event(self._event_seq, time, kind, text, tick))
             self._event_seq += 1
 
     def events_after(self, seq: int) -> list[Event]:

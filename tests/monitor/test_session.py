@@ -132,6 +132,10 @@ def test_pause_freezes_the_tree_in_passive_resume_drives_again_stop_ends_as_ctrl
     assert summary.safe_stop.startswith("sent ")
     kinds = [e.text.split(" ")[0] for e in rig.feed.events if e.kind == "control"]
     assert kinds == ["pause", "resume", "stop:"]
+    # mission time stood still: the page places the events by the stream's tick (it greyed
+    # a resume as past at a tick inside the pause)
+    pause, resume = [e for e in rig.feed.events if e.kind == "control"][:2]
+    assert resume.time - pause.time < 0.05 and resume.tick - pause.tick > 60
 
 
 def test_mission_time_stands_still_while_paused_so_a_wait_does_not_count_the_pause(

@@ -201,9 +201,10 @@ function addEvents(events) {
   renderEvents();
 }
 function renderEvents() {
-  const list = $("events"), t = view.live ? Infinity : view.shownTick * SLOT + 1e-9;
+  // greyed by the stream's tick, the timeline's own: mission time stands still while paused
+  const list = $("events"), t = view.live ? Infinity : view.shownTick;
   list.innerHTML = view.events.slice(-400).map((e) =>
-    `<li class="kind-${e.kind}${e.time > t ? " future" : ""}"><span class="k">${e.time.toFixed(3)}s ${e.kind}</span> ${esc(e.text)}</li>`).join("");
+    `<li class="kind-${e.kind}${e.tick > t ? " future" : ""}"><span class="k">${e.time.toFixed(3)}s ${e.kind}</span> ${esc(e.text)}</li>`).join("");
   if (view.live) list.parentElement.scrollTop = list.parentElement.scrollHeight;
 }
 
