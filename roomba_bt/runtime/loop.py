@@ -117,13 +117,12 @@ def behaviour_error(exc: BaseException) -> str:
 def _hint(exc: BaseException, behaviour: py_trees.behaviour.Behaviour) -> str:
     """What to do about a packet the behaviour read without declaring it, where it can be
     told: the declaration that should list it."""
-    declaration = getattr(behaviour, "declaration", None)
-    reads = getattr(declaration, "reads", None)
-    if not isinstance(exc, MissingPacket) or reads is None or callable(reads):
+    declaration: Any = getattr(behaviour, "declaration", None)
+    if not isinstance(exc, MissingPacket) or declaration is None or callable(declaration.reads):
         return ""
-    listed = ", ".join(str(pid) for pid in reads) or "nothing"
+    listed = ", ".join(str(pid) for pid in declaration.reads) or "nothing"
     return (
-        f"; add {exc.packet_id} to @declare(reads=...) of {declaration.name!r} (it lists "  # type: ignore[union-attr]
+        f"; add {exc.packet_id} to @declare(reads=...) of {declaration.name!r} (it lists "
         f"{listed}): the stream carries what the mission's behaviours declare"
     )
 
