@@ -79,11 +79,13 @@ class RecordingTransport:
             except OSError as exc:
                 self._stop(exc)
 
-    def _log(self, direction: str, data: bytes) -> None:
+    def _log(self, direction: str, data: bytes) -> float:
+        """Write one chunk, stamped now; returns the stamp."""
         now = self._inner.now()
         if self._t0 is None:
             self._t0 = now
         self._put(f'{{"t": {now - self._t0:.6f}, "d": "{direction}", "b": "{data.hex()}"}}\n')
+        return now
 
     def note(self, payload: dict[str, Any]) -> None:
         """Mark an operator's act in the record (replay skips it; the monitor shows it)."""
@@ -99,10 +101,18 @@ class RecordingTransport:
             self._log("out", data)
 
     def read(self, timeout: float) -> bytes:
+        """The inner read, recorded. The next :meth:`now` (the link's, right after the read:
+        its frames' arrival) is the time the chunk was stamped with: a replay gives the
+        chunk back at that time, and an arrival read after the record's own line was written
+        (a slow write, the process preempted) put the live run's ticks elsewhere than its
+        replay's, so a replay of a long run on a loaded machine differed where nothing had."""
         data = self._inner.read(timeout)
         if data and not self._file.closed:
-            self._log("in", data)
+            self._read_at = self._log("in", data)
         return data
+
+    #: the stamp of the read just made, for the next :meth:`now` (None: none pending)
+    _read_at: float | None = None
 
     def set_wake_line(self, low: bool) -> None:
         """Keep-awake's BRC pulses reach the port when it has modem lines (not recorded)."""
@@ -126,6 +136,10 @@ class RecordingTransport:
         return self._inner.is_open
 
     def now(self) -> float:
+        read_at = self._read_at
+        if read_at is not None:
+            self._read_at = None
+            return read_at
         return self._inner.now()
 
     def __getattr__(self, name: str) -> Any:

@@ -85,3 +85,52 @@ class _Terminal(io.StringIO):
 def test_display_picks_the_observer(display: str, terminal: bool, kind: type) -> None:
     stream = _Terminal() if terminal else io.StringIO()
     assert isinstance(observer_for(display, stream), kind)  # type: ignore[arg-type]
+
+
+class _SlowClock:
+    """A port whose clock moves on at every reading of it, by a little more each time: the
+    record's line for a chunk written slowly, and more or less so (a full buffer, a
+    preempted process), between the chunk's stamp and the link's own reading of the time."""
+
+    name = "slow"
+    is_open = True
+
+    def __init__(self) -> None:
+        self.t = 100.0
+        self.step = 0.0
+
+    def now(self) -> float:
+        self.step += 0.003
+        self.t += self.step
+        return self.t
+
+    def read(self, timeout: float) -> bytes:
+        return b"\\x13\\x02\\x07\\x00\\xe4"
+
+    def write(self, data: bytes) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
+
+
+def test_the_arrival_the_link_reads_after_a_read_is_the_time_the_record_holds(
+    tmp_path: Path,
+) -> None:
+    """A replay gives a chunk back at its recorded time; the live link read the clock again
+    after the record's line was written, later: its ticks and mission time differed from the
+    replay's by the write's delay (a 35-minute noisy run's replay differed at 112.95 s)."""
+    from roomba_bt.runtime.recording import RecordingTransport
+
+    path = tmp_path / "slow.jsonl"
+    header = {"profile": "create2", "baud": 115200, "mission": "m.yaml", "packets": [7]}
+    recording = RecordingTransport(_SlowClock(), path, header)  # type: ignore[arg-type]
+    recording.read(0.0)
+    first_arrival = recording.now()
+    recording.read(0.0)
+    second_arrival = recording.now()
+    recording.close()
+    record = load_record(path)
+    recorded = [t for t, d, _ in record.chunks if d == "in"]
+    assert second_arrival - first_arrival == pytest.approx(recorded[1] - recorded[0], abs=1e-6)
+    assert recording.now() > second_arrival  # only the read's own arrival is the stamp
