@@ -11,9 +11,11 @@ import argparse
 import contextlib
 import importlib
 import logging
+import re
 import signal
 import sys
 from collections.abc import Sequence
+from typing import NoReturn
 
 from roomba_bt import __version__
 from roomba_bt.runtime.summary import ExitCode
@@ -31,6 +33,18 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
 
 class _Parser(argparse.ArgumentParser):
     """argparse exits with 2 on usage errors, which is our INVALID code too."""
+
+    def error(self, message: str) -> NoReturn:
+        # ``--timeout -3s``: argparse takes "-3s" for an option, not for the value, and says
+        # only "expected one argument"; the way to give such a value is after "=".
+        option = _VALUE_MISSING.fullmatch(message)
+        if option is not None:
+            name = option["option"].split("/")[-1]
+            message += f" (if the value starts with '-', write {name}=VALUE)"
+        super().error(message)
+
+
+_VALUE_MISSING = re.compile(r"argument (?P<option>\S+): expected one argument")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -59,6 +59,9 @@ def test_bad_seconds(text: str) -> None:
         (["doctor", "--port", "bogus://x"], "'bogus://x', a URL of no scheme pyserial knows"),
         (["run", "dock", "--port", "socket://robot"], "allowed: socket://HOST:PORT"),
         (["sensors", "--port", "rfc2217://h:99999"], "a port in 1..65535"),
+        # argparse takes "-3s" for an option: it said only "expected one argument"
+        (["run", "dock", "--timeout", "-3s"], "write --timeout=VALUE"),
+        (["run", "dock", "-p"], "write --param=VALUE"),
     ],
 )
 def test_commands_refuse_them_with_exit_2(
