@@ -60,7 +60,8 @@ class ModeError(RobotError, OIError, ValueError):
     """A command the current OI mode does not accept; it never reached the wire.
 
     ``str(error)`` reads like ``drive needs Safe or Full; the robot is in Passive since
-    12:01:03.120, after a wheel drop``.
+    12:01:03.120, after a wheel drop``: the time of day, for a program using the connection;
+    a run, whose log counts mission time, words it with its own clock (:meth:`worded`).
     """
 
     def __init__(
@@ -71,21 +72,29 @@ class ModeError(RobotError, OIError, ValueError):
         since_wall: float,
         cause: str | None = None,
         hint: str = "",
+        since: float | None = None,
     ) -> None:
         self.command = command
         self.needs = needs
         self.mode = mode
         self.since_wall = since_wall
+        #: when the mode began on the link's clock (None: not known)
+        self.since = since
         self.cause = cause
+        self.hint = hint
+        super().__init__(self.worded(format_wall_time(since_wall)))
+
+    def worded(self, since: str) -> str:
+        """The message with ``since`` as the time the mode began (``t=12.300``)."""
         message = (
-            f"{command} needs {_mode_list(needs)}; the robot is in {mode.label} since "
-            f"{format_wall_time(since_wall)}"
+            f"{self.command} needs {_mode_list(self.needs)}; the robot is in {self.mode.label} "
+            f"since {since}"
         )
-        if cause is not None:
-            message += f", after {describe_cause(cause)}"
-        if hint:
-            message += f" ({hint})"
-        super().__init__(message)
+        if self.cause is not None:
+            message += f", after {describe_cause(self.cause)}"
+        if self.hint:
+            message += f" ({self.hint})"
+        return message
 
 
 class ConnectionFailed(RobotError, ConnectionError):

@@ -305,7 +305,9 @@ class ModeModel:
             hint = "send start first"
         elif self.cause is None and needs <= DRIVING_MODES:
             hint = "send safe or full first"
-        return ModeError(spec.name, needs, self.mode, self.since_wall, self.cause, hint)
+        return ModeError(
+            spec.name, needs, self.mode, self.since_wall, self.cause, hint, since=self.since
+        )
 
     # ------------------------------------------------------------------ commands
     def calibrate(self, raw: int, time: float) -> bool:

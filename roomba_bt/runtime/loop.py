@@ -557,10 +557,22 @@ class MissionRunner(BaseHandle):
             except ModeError as exc:
                 self.summary.refused_commands += 1
                 if len(self.refusals) < 100:
-                    when = self.snapshot.time if self.has_snapshot else 0.0
-                    sender = getattr(self._outbox.sender_of(command), "name", None)
-                    by = f" {sender}:" if isinstance(sender, str) else ""
-                    self.refusals.append(f"t={when:.3f}{by} {exc}")
+                    self.refusals.append(self._refusal(command, exc))
+
+    def _refusal(self, command: Command, exc: ModeError) -> str:
+        """``t=12.345 drive_straight: drive needs Safe or Full; the robot is in Passive since
+        t=12.300, after a cliff``: when, who sent it, and the mode's start in mission time
+        (the error's own words give the time of day, which a ``--fast`` run never saw)."""
+        when = self.snapshot.time if self.has_snapshot else 0.0
+        sender = getattr(self._outbox.sender_of(command), "name", None)
+        by = f" {sender}:" if isinstance(sender, str) else ""
+        text = str(exc)
+        if exc.since is not None and self.has_snapshot:
+            # the link's clock and mission time advance together: the mode began as long
+            # before this tick as the link's newest arrival is after its start
+            ago = max(0.0, self.connection.link.arrival - exc.since)
+            text = exc.worded(f"t={max(0.0, when - ago):.3f}")
+        return f"t={when:.3f}{by} {text}"
 
     def _bump_reflex(self) -> None:
         """While a bump onset waits for its confirming frame, forward motion is held at 0

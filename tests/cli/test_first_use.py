@@ -185,6 +185,24 @@ def test_refusals_are_stamped_with_mission_time(
     err = capsys.readouterr().err
     assert re.search(r"^refused: t=0\.3\d\d ", err, re.M), err
     assert re.search(r"^refused: t=0\.3\d\d rogue: drive needs Safe or Full", err, re.M), err
+    assert re.search(r"the robot is in Passive since t=0\.000 ", err), err
+
+
+def test_a_refusal_says_when_the_mode_began_in_mission_time(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Not the time of day, which a ``--fast`` run never saw beside its ``t=``."""
+    (tmp_path / "rogue.py").write_text(ROGUE)
+    path = tmp_path / "refused.yaml"
+    path.write_text(
+        "plugins: [./rogue.py]\ntree:\n  sequence: [{mode: safe}, {wait: 0.3s}, "
+        "{mode: passive}, {wait: 0.45s}, rogue]\n"
+    )
+    main(["run", str(path), "--fast", "--display", "none", "--allow-plugin-files"])
+    err = capsys.readouterr().err
+    assert re.search(
+        r"^refused: t=0\.7\d\d rogue: .* in Passive since t=0\.3[0-2]\d ", err, re.M
+    ), err
 
 
 def test_matplotlib_info_lines_are_not_shown() -> None:
