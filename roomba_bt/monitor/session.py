@@ -109,6 +109,8 @@ class MonitorSession:
         self._cycle_before_pause: Command | None = None
         self._steps_left: int | None = None  # ticks left before a step pauses again
         self._skip_tick = False
+        #: the tree's root ended while the operator held the run: the resume ends the run
+        self._held_end: str | None = None
         self._stop: str | None = None
         self._pending_mission: Any = None
         self.listeners: list[Callable[[str], None]] = []  # told of pauses (the terminal)
@@ -183,6 +185,17 @@ class MonitorSession:
         if changed and self.state.breakpoints:
             self._check_breakpoints(runner, changed)
 
+    def holds(self, runner: MissionRunner) -> bool:
+        """The tree's root has just ended: True while the run is held there, paused by a
+        breakpoint on the last tick or by a step that was that tick, so the operator sees the
+        end before the run's own; the resume (or a stop) then ends the run."""
+        held = self.state.paused or self._steps_left == 0
+        if held and self._held_end is None:
+            ended = runner.mission.root.status.value
+            self._held_end = ended
+            self._said("control", f"the mission ended: {ended}; held until resumed or stopped")
+        return held
+
     def _apply(self, runner: MissionRunner) -> None:
         while True:
             try:
@@ -239,6 +252,12 @@ class MonitorSession:
 
     def _resume(self, runner: MissionRunner, why: str) -> None:
         _note(runner, {"resume": why, "at": "before"})
+        if self._held_end is not None:  # nothing to go on with: no mode, no wheels again
+            self.state.paused, self.state.pause_reason = False, ""
+            self._steps_left = None
+            self._said("control", f"resume ({why}): the mission ended ({self._held_end}); "
+                       "the run ends")  # fmt: skip
+            return
         mode = self._mode_before_pause
         again: list[Command] = []
         if mode in (OIMode.SAFE, OIMode.FULL):
@@ -334,6 +353,7 @@ class MonitorSession:
         mission.setup(runner)
         self.state.forced.clear()
         self.state.breakpoints.clear()
+        self._held_end = None
         self.feed.set_tree(mission.root)
         self._said("reload", f"reloaded {mission.name}: the new tree starts from its root")
         self.state.paused = was_paused

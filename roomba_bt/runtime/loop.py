@@ -176,6 +176,11 @@ class TickGate(Protocol):
         """After the tick, its flush and the observer."""
         ...
 
+    def holds(self, runner: MissionRunner) -> bool:
+        """The root has just ended: True to hold the run there (its frames go on through
+        :meth:`before_tick`) until :meth:`before_tick` lets a tick through, which ends it."""
+        ...
+
 
 class StopRequested(Exception):
     """An operator ended the run (the monitor's stop): it ends as on Ctrl-C, exit 130."""
@@ -352,6 +357,7 @@ class MissionRunner(BaseHandle):
         connection = self.connection
         tick_guard = self.tick_guard  # started by run()
         tick = self._tick_of(root, tick_guard)
+        held = False  # the root ended and the gate holds the run there (the monitor)
         while True:
             try:
                 batch = connection.poll_frames(self.poll_timeout)
@@ -377,6 +383,10 @@ class MissionRunner(BaseHandle):
                 if self.mission.root is not root:  # a reload replaced it
                     root = self.mission.root
                     tick = self._tick_of(root, tick_guard)
+                elif held:  # the operator let the ended mission go: the run ends
+                    self._ended(root, summary)
+                    return
+                held = False
             tick()
             self._flush()
             elapsed = perf() - started
@@ -390,12 +400,11 @@ class MissionRunner(BaseHandle):
             if gate is not None:
                 gate.after_tick(self)
             status = root.status
-            if status is success:
-                summary.outcome = Outcome.SUCCESS
-                return
-            if status is failure:
-                summary.outcome = Outcome.FAILURE
-                summary.reason = failure_reason(root)
+            if status is success or status is failure:
+                if gate is not None and gate.holds(self):
+                    held = True
+                    continue
+                self._ended(root, summary)
                 return
             if self.timeout_s is not None and mission_time >= self.timeout_s:
                 summary.outcome = Outcome.TIMEOUT
@@ -403,6 +412,14 @@ class MissionRunner(BaseHandle):
                     f"--timeout {self.timeout_s:g} s of mission time ran out{running_in(root)}"
                 )
                 return
+
+    @staticmethod
+    def _ended(root: py_trees.behaviour.Behaviour, summary: RunSummary) -> None:
+        if root.status is py_trees.common.Status.SUCCESS:
+            summary.outcome = Outcome.SUCCESS
+        else:
+            summary.outcome = Outcome.FAILURE
+            summary.reason = failure_reason(root)
 
     def _stalled(self, stalled: StreamStalled) -> None:
         """The watchdog tripped (drive 0 sent): ride it through for :attr:`grace` seconds,

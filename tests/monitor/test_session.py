@@ -45,6 +45,9 @@ class PacedGate:
     def after_tick(self, runner: MissionRunner) -> None:
         self.session.after_tick(runner)
 
+    def holds(self, runner: MissionRunner) -> bool:
+        return self.session.holds(runner)
+
 
 class Rig:
     """A shuttle run on the virtual clock with the monitor's session as its gate."""
@@ -281,6 +284,45 @@ def test_a_breakpoint_on_an_ending_pauses_after_that_tick_and_step_ticks_once(
     texts = [e.text for e in rig.feed.events if e.kind == "breakpoint"]
     assert texts[0].startswith("break when drive(velocity=100 mm/s, distance=3 cm) ends in SUCCESS")
     assert "breakpoint: drive(velocity=100 mm/s, distance=3 cm) ends in SUCCESS at tick" in texts[1]
+
+
+def test_a_breakpoint_on_the_last_tick_holds_the_ended_mission_until_the_resume(
+    tmp_path: Path, until: Callable[..., None]
+) -> None:
+    """The run used to end in the tick the breakpoint was hit, its pause logged and never
+    seen; now the operator sees the end, paused, and the resume (no mode, no wheels sent
+    again) ends the run with the mission's outcome; its record replays so."""
+    record_path = tmp_path / "held.jsonl"
+    rig = Rig(mission=WAIT_THEN_DRIVE, record=record_path)
+    names = [i.name for i in rig.feed.infos]
+    last = names.index("drive(velocity=100 mm/s, distance=3 cm)")
+    seen: dict[str, object] = {}
+
+    def operator(rig: Rig) -> None:
+        rig.session.request("break", last, "success")
+        until(lambda: rig.session.state.paused)
+        held = rig.ticks(ticked=False)
+        until(lambda: rig.ticks(ticked=False) > held + 20)  # frames go on: the run is held
+        seen["ended"] = rig.ended.is_set()
+        seen["robot"] = (rig.sim.mode, rig.sim.left_speed, rig.sim.right_speed)
+        seen["written"] = rig.runner.summary.commands_written
+        rig.session.request("resume")
+
+    summary = rig.run_with(operator)
+    assert seen["ended"] is False
+    assert seen["robot"] == (OIMode.PASSIVE, 0.0, 0.0)
+    assert summary.outcome is Outcome.SUCCESS
+    assert summary.commands_written == seen["written"]  # nothing sent again at the resume
+    controls = [e.text for e in rig.feed.events if e.kind == "control"]
+    assert "the mission ended: SUCCESS; held until resumed or stopped" in controls
+    assert controls[-1].startswith("resume (resumed by the operator): the mission ended")
+    rig.stack.close()
+    replayed, again = replay_into_feed(
+        load_record(record_path), load_mission(WAIT_THEN_DRIVE, {}, profile=CREATE2), CREATE2,
+        rig.packets, 115200, "x",
+    )  # fmt: skip
+    assert again.outcome is Outcome.SUCCESS and again.ticks == summary.ticks
+    assert _ticks(replayed)[: len(_ticks(rig.feed)) - 1] == _ticks(rig.feed)[:-1]
 
 
 def test_the_feed_is_bounded_and_shares_what_did_not_change(until: Callable[..., None]) -> None:
