@@ -94,30 +94,17 @@ def compose_text(text: str, display: str) -> tuple[yaml.Node | None, list[Diagno
 
 
 def duplicate_keys(root: yaml.Node, display: str) -> list[Diagnostic]:
-    """Every key written twice in a mapping of the file, each at its second place: found
-    here, before anything is parsed, so that :func:`mapping` leaves the second one out and the
-    parser goes on to the file's other errors (a duplicate ``tree:`` hid every error inside
-    the first tree)."""
+    """Every key written twice in a mapping of the file, each at its second place
+    (:func:`yamlsource.every_duplicate_key`): :func:`mapping` leaves the second one out and
+    the parser goes on to the file's other errors."""
     found = []
-    pending: list[tuple[yaml.Node, str]] = [(root, "")]
-    while pending:
-        node, path = pending.pop()
-        if isinstance(node, yaml.SequenceNode):
-            pending += ((item, f"{path}[{i}]") for i, item in enumerate(node.value))
-        elif isinstance(node, yaml.MappingNode):
-            texts = {k.value for k, _ in node.value if k.tag == yamlsource.STR}
-            if len(texts) == len(node.value):  # all texts, all different (most mappings)
-                dups = []
-            else:
-                dups = yamlsource.duplicate_keys(node)
-            for dup in dups:
-                key = str(dup.key)
-                first = yamlsource.position(dup.first)[0]
-                where = loc_of(dup.node, display, join(path, key))
-                found.append(where.at(f"duplicate key {key!r} (first at line {first})"))
-            for key_node, value in node.value:
-                if isinstance(key_node, yaml.ScalarNode):
-                    pending.append((value, join(path, str(key_node.value))))
+    for dup in yamlsource.every_duplicate_key(root):
+        path = ""
+        for part in dup.path or ():
+            path = join(path, f"[{part}]" if isinstance(part, int) else part)
+        first = yamlsource.position(dup.first)[0]
+        where = loc_of(dup.node, display, path)
+        found.append(where.at(f"duplicate key {str(dup.key)!r} (first at line {first})"))
     return found
 
 

@@ -319,10 +319,11 @@ class WorldProblem:
 
 
 class WorldError(ValueError):
-    """A world that cannot be loaded; ``problems`` lists every one found."""
+    """A world that cannot be loaded; ``problems`` lists every one found, in the file's
+    order (those without a place last)."""
 
     def __init__(self, problems: list[WorldProblem]) -> None:
-        self.problems = problems
+        self.problems = sorted(problems, key=lambda p: (not p.line, p.line, p.column))
         super().__init__("\n".join(str(p) for p in problems))
 
 
@@ -706,18 +707,23 @@ def parse_world(text: str, source: str = "<world>") -> World:
     """Validate a world given as YAML text; :class:`WorldError` lists every problem."""
     try:
         root = _compose_world(text)
-        data, marks = (None, {}) if root is None else yamlsource.to_data(root, _REFUSED_TAG)
-    except yamlsource.DuplicateKey as dup:
-        line, col = yamlsource.position(dup.node)
-        raise WorldError(
-            [WorldProblem(source, line, col, _dotted(dup.path or ()),
-                          f"the key {str(dup.key)!r} twice", "each key once")]
-        ) from None  # fmt: skip
+        duplicates = [] if root is None else yamlsource.every_duplicate_key(root)
+        data, marks = (
+            (None, {})
+            if root is None
+            else yamlsource.to_data(root, _REFUSED_TAG, skip_duplicates=True)
+        )
     except yamlsource.Refused as exc:  # each alias, tag or control character, at once
         raise WorldError([_yaml_problem(each, text, source) for each in exc.every()]) from None
     except yaml.YAMLError as exc:
         raise WorldError([_yaml_problem(exc, text, source)]) from None
     c = _Checker(source, marks)
+    for dup in duplicates:  # every one, and then the world's other problems
+        line, col = yamlsource.position(dup.node)
+        first = yamlsource.position(dup.first)[0]
+        c.problems.append(WorldProblem(source, line, col, _dotted(dup.path or ()),
+                                       f"the key {str(dup.key)!r} again (first at line {first})",
+                                       "each key once"))  # fmt: skip
     return _build_world(c, data, source)
 
 

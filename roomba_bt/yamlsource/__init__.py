@@ -450,6 +450,30 @@ def duplicate_keys(node: yaml.MappingNode) -> list[DuplicateKey]:
     return found
 
 
+def every_duplicate_key(root: yaml.Node) -> list[DuplicateKey]:
+    """Every key written twice in a mapping of the document, each at its second place with
+    its :attr:`~DuplicateKey.path`: found before anything is read, so that a reader that then
+    leaves them out (``skip_duplicates``) goes on to the file's other errors (a duplicate
+    ``tree:`` or ``rooms:`` hid every error inside the first one)."""
+    found: list[DuplicateKey] = []
+    pending: list[tuple[yaml.Node, PathKey]] = [(root, ())]
+    while pending:
+        node, path = pending.pop()
+        if isinstance(node, yaml.SequenceNode):
+            pending += ((item, (*path, i)) for i, item in enumerate(node.value))
+        elif isinstance(node, yaml.MappingNode):
+            texts = {k.value for k, _ in node.value if k.tag == STR}
+            if len(texts) != len(node.value):  # not all texts, all different (most mappings)
+                for dup in duplicate_keys(node):
+                    dup.path = (*path, str(dup.key))
+                    found.append(dup)
+            for key_node, value in node.value:
+                if isinstance(key_node, yaml.ScalarNode):
+                    pending.append((value, (*path, str(key_node.value))))
+    found.sort(key=lambda dup: position(dup.node))
+    return found
+
+
 def _key(key_node: yaml.Node) -> Any:
     """A mapping key as :func:`pairs` compares it: a text as itself, another plain scalar as
     its value, anything else as its text (a tagged key stays a node, for the caller to
@@ -460,16 +484,17 @@ def _key(key_node: yaml.Node) -> Any:
     return key if isinstance(key, str | int | float | bool) else str(key)
 
 
-def to_data(node: yaml.Node, refuse: str) -> tuple[Any, Marks]:
+def to_data(node: yaml.Node, refuse: str, *, skip_duplicates: bool = False) -> tuple[Any, Marks]:
     """The document as plain Python data, and the position of every value by its path
     (``("rooms", 0, 1)``) and of every key (``(..., key, KEY)``). A list or mapping with a
     tag raises :class:`yaml.constructor.ConstructorError` with ``refuse.format(tag=...)``;
-    merge keys (``<<: *base``) are merged."""
+    merge keys (``<<: *base``) are merged. A duplicate key raises :class:`DuplicateKey`,
+    or with ``skip_duplicates`` is left out (see :func:`every_duplicate_key`)."""
     marks: Marks = {}
-    return _data(node, (), marks, refuse), marks
+    return _data(node, (), marks, refuse, skip_duplicates), marks
 
 
-def _data(node: yaml.Node, path: PathKey, marks: Marks, refuse: str) -> Any:
+def _data(node: yaml.Node, path: PathKey, marks: Marks, refuse: str, skip: bool) -> Any:
     marks[path] = position(node)
     if isinstance(node, yaml.MappingNode | yaml.SequenceNode) and not is_plain(node):
         raise yaml.constructor.ConstructorError(
@@ -479,16 +504,16 @@ def _data(node: yaml.Node, path: PathKey, marks: Marks, refuse: str) -> Any:
         _CONSTRUCTOR.flatten_mapping(node)
         out: dict[Any, Any] = {}
         try:
-            for key, key_node, value_node in pairs(node):
+            for key, key_node, value_node in pairs(node, skip_duplicates=skip):
                 if not is_plain(key_node):
                     scalar(key_node)  # raises: no safe constructor for its tag
                 marks[(*path, str(key), KEY)] = position(key_node)
-                out[key] = _data(value_node, (*path, str(key)), marks, refuse)
+                out[key] = _data(value_node, (*path, str(key)), marks, refuse, skip)
         except DuplicateKey as dup:
             if dup.path is None:
                 dup.path = (*path, str(dup.key))
             raise
         return out
     if isinstance(node, yaml.SequenceNode):
-        return [_data(item, (*path, i), marks, refuse) for i, item in enumerate(node.value)]
+        return [_data(item, (*path, i), marks, refuse, skip) for i, item in enumerate(node.value)]
     return scalar(node)

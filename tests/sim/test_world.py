@@ -120,8 +120,21 @@ def test_bad_event_kind_suggests_the_right_one() -> None:
 
 
 def test_duplicate_keys_and_yaml_syntax_errors_have_positions() -> None:
-    [dup] = problems("rooms: []\nrooms: []\n")
-    assert dup.startswith("w.yaml:2:1: rooms: found the key 'rooms' twice")
+    # every duplicate, and the world's other problems with them, in the file's order (the
+    # first duplicate was all a world file said)
+    found = problems(
+        "name: a\nrooms:\n  - name: r\n    name: s\n    outline: [[0, 0], [1, 0], [1, 1]]\n"
+        "name: b\nseed: x\n"
+    )
+    assert found == [
+        "w.yaml:3:5: rooms[0]: found a mapping; allowed: a polygon: a list of at least 3 points "
+        "[x, y] (m)",
+        "w.yaml:4:5: rooms[0].name: found the key 'name' again (first at line 3); allowed: each "
+        "key once",
+        "w.yaml:6:1: name: found the key 'name' again (first at line 1); allowed: each key once",
+        "w.yaml:7:1: seed: found unknown key 'seed'; allowed: name, description, rooms, walls, "
+        "obstacles, drops, dirt, virtual_walls, lighthouses, dock, robot, events, areas",
+    ]
     [syntax] = problems("rooms: [[[0, 0]\n")
     assert syntax == "w.yaml:2:1: YAML syntax error: expected ',' or ']', but got '<stream end>'"
 
