@@ -314,8 +314,10 @@ function updateTimeline() {
   const t = $("timeline");
   t.min = view.window[0]; t.max = view.window[1];
   if (view.live) t.value = view.window[1];
-  $("timeline-label").textContent = view.live ? `live · ${(view.window[1] * SLOT).toFixed(2)} s`
-    : `tick ${view.shownTick} · ${(view.shownTick * SLOT).toFixed(3)} s`;
+  // the stream's ticks and time (they go on while paused), named so beside the header's
+  // mission time (which does not)
+  $("timeline-label").textContent = view.live ? `live · tick ${view.window[1]}`
+    : `tick ${view.shownTick} · stream ${(view.shownTick * SLOT).toFixed(3)} s`;
   $("live").disabled = view.live || (view.header && view.header.source === "record");
 }
 
