@@ -219,6 +219,8 @@ def variants(args: argparse.Namespace, params: dict[str, str]) -> list[Variant] 
         name, sep, values = args.sweep.partition("=")
         if not sep or not name.strip() or not values.strip():
             return f"--sweep {args.sweep!r}: expected NAME=V1,V2,..., e.g. speed=150mm/s,200mm/s"
+        if name.strip() in params:  # the sweep's values would win, and -p's never run
+            return f"-p {name.strip()} and --sweep {name.strip()}: give its values in --sweep alone"
         sets = [{name.strip(): v.strip()} for v in values.split(",") if v.strip()]
     elif args.variant:
         sets = []
@@ -344,6 +346,10 @@ def _verdict(args: argparse.Namespace, summaries: list[Summary], done: list[Eval
     return ExitCode.MISSION_FAILED if low else ExitCode.OK
 
 
+#: The most episodes one evaluation runs (a million: days of a 2-core machine's time).
+MAX_RUNS = 1_000_000
+
+
 def _check_arguments(args: argparse.Namespace) -> str | None:
     """The missions found (their paths kept in ``args.mission_paths``) and every number in
     its range; the first problem's message."""
@@ -353,12 +359,18 @@ def _check_arguments(args: argparse.Namespace) -> str | None:
         if isinstance(found, tuple):
             return found[0]
         args.mission_paths[mission] = found
-    if args.runs < 1:
-        return f"--runs {args.runs}: expected at least 1"
+    if not 1 <= args.runs <= MAX_RUNS:
+        # each episode's spec is made before the first runs: 10^11 ran the memory out
+        return f"--runs {args.runs}: expected 1..{MAX_RUNS:,} (more: several evaluations)"
     if args.jobs < 1:
         return f"--jobs {args.jobs}: expected at least 1"
-    if args.within is not None and not (math.isfinite(args.within) and args.within > 0):
-        return f"--within {args.within}: expected a finite distance above 0 m"
+    if args.scheduler is not None and not args.scheduler.strip():
+        return "--scheduler '': expected the scheduler's address, e.g. tcp://HOST:8786"
+    from roomba_bt.sim.world import NEAR_DOCK_RANGE_M
+
+    lo, hi = NEAR_DOCK_RANGE_M
+    if args.within is not None and not lo <= args.within <= hi:
+        return f"--within {args.within:g}: expected a distance in {lo:g}..{hi:g} m"
     if args.battery is not None and not 0.0 <= args.battery <= 1.0:
         return f"--battery {args.battery}: expected a fraction in 0..1"
     if not 0.0 <= args.odometry_error <= 0.2:
@@ -425,7 +437,24 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
         start_pose(world, batches[0][0])
     except EvaluationError as exc:
         return _error(str(exc))
+    _warn_if_one_start(args, world)
     return chosen, batches, world
+
+
+def _warn_if_one_start(args: argparse.Namespace, world: World) -> None:
+    """The seed draws the start pose (and the encoders' error): a world without a start
+    region, with neither --within nor --start-area nor --odometry-error, runs one episode
+    ``--runs`` times, which the report's interval would count as that many."""
+    varied = (world.start_region, args.within, args.start_area, args.odometry_error or None)
+    if args.runs > 1 and all(given is None for given in varied):
+        x, y = world.start.x / 1000.0, world.start.y / 1000.0
+        print(
+            f"roomba-bt eval: warning: world {world.name!r} has no robot.start_region and "
+            f"neither --within nor --start-area was given: all {args.runs} episodes start at "
+            f"({x:.2f}, {y:.2f}) m and run alike (the seed draws only the start); the "
+            "interval below counts one episode as many",
+            file=sys.stderr,
+        )
 
 
 def _run(

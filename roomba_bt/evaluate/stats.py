@@ -198,11 +198,13 @@ class Comparison:
             within = (
                 f"95 % interval {ci[0]:+.1f}..{ci[1]:+.1f} s" if ci else "too few for an interval"
             )
-            time = f"median {med:+.1f} s ({within}) over the {self.both} episodes both succeeded"
+            both = "the episode" if self.both == 1 else f"the {self.both} episodes"
+            time = f"median {med:+.1f} s ({within}) over {both} both succeeded"
         return [
             f"A/B          A = {self.a}",
             f"             B = {self.b}",
-            f"paired       {self.pairs} episodes, same seeds and start poses",
+            f"paired       {self.pairs} episode{'s' if self.pairs != 1 else ''}, same seeds "
+            "and start poses",
             f"success      both {self.both}, only A {self.only_a}, only B {self.only_b}, "
             f"neither {self.neither}; exact McNemar p = {self.p_value:.3g}",
             f"time B - A   {time}",

@@ -171,6 +171,11 @@ class TimelineEvent:
     side: str = "both"
 
 
+#: How far from the docked pose a start region may reach (m): the evaluation's ``--within``
+#: too (farther, the region lies almost all outside any room and no free pose is found).
+NEAR_DOCK_RANGE_M = (0.05, 20.0)
+
+
 @dataclass(frozen=True, slots=True)
 class StartRegion:
     """Random start poses for evaluation: within ``near_dock`` mm of the docked pose, in
@@ -324,7 +329,7 @@ class WorldError(ValueError):
 
     def __init__(self, problems: list[WorldProblem]) -> None:
         self.problems = sorted(problems, key=lambda p: (not p.line, p.line, p.column))
-        super().__init__("\n".join(str(p) for p in problems))
+        super().__init__("\n".join(str(p) for p in self.problems))
 
 
 # ----------------------------------------------------------------------------- loading
@@ -635,7 +640,7 @@ def _start_region(c: _Checker, value: object, path: PathKey) -> StartRegion | No
     heading: tuple[float, float] | None = None
     area: str | None = None
     if "near_dock" in spec:
-        n = c.number(spec["near_dock"], (*path, "near_dock"), 0.05, 20.0, "m")
+        n = c.number(spec["near_dock"], (*path, "near_dock"), *NEAR_DOCK_RANGE_M, "m")
         if n is None:
             return None
         near = n * 1000.0

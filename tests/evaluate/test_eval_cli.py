@@ -42,8 +42,18 @@ def test_min_rate_not_reached_exits_1(capsys: pytest.CaptureFixture[str]) -> Non
         ([BUMP, "--dock", "colour=1"], "FIELD one of"),
         ([BUMP, "--dock", "buoy_range=nan"], "expected a finite number above 0"),  # were taken
         ([BUMP, "--dock", "force_field=inf"], "expected a finite number above 0"),
-        ([BUMP, "--within", "nan"], "--within nan: expected a finite distance above 0 m"),
-        ([BUMP, "--within", "1e-9"], "--within 1e-09 m: "),  # was the world file's fault
+        ([BUMP, "--within", "nan"], "--within nan: expected a distance in 0.05..20 m"),
+        ([BUMP, "--within", "1e-9"], "--within 1e-09: expected"),  # was the world file's fault
+        # the same range as a world's near_dock (500 m blamed the world: "no free pose")
+        ([BUMP, "--within", "500"], "--within 500: expected a distance in 0.05..20 m"),
+        # every spec is made up front: 10^11 ran the memory out with no word
+        ([BUMP, "--runs", "100000000000"], "--runs 100000000000: expected 1..1,000,000"),
+        ([BUMP, "--scheduler", ""], "--scheduler '': expected the scheduler's address"),
+        # the sweep's values won and -p's never ran, silently
+        (
+            [BUMP, "-p", "speed=90mm/s", "--sweep", "speed=100mm/s,120mm/s"],
+            "-p speed and --sweep speed: give its values in --sweep alone",
+        ),
         ([BUMP, "--world", "moon"], "no such file or shipped world"),
         ([BUMP, "--within", "1", "--world", "empty-room", "--battery", "2"], "--battery"),
         ([BUMP, "-p", "speed"], "NAME=VALUE"),
@@ -338,6 +348,26 @@ def test_no_more_workers_than_episodes_are_started(capsys: pytest.CaptureFixture
                  "--no-progress"])  # fmt: skip
     assert code == 0
     assert "engine       2 local processes;" in capsys.readouterr().out
+
+
+def test_a_world_with_one_start_pose_is_said_to_run_one_episode_many_times(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The seed draws the start: without a start region (nor --within, --start-area), every
+    episode ran alike and the report gave an interval as if they were independent."""
+    world = tmp_path / "one-start.yaml"
+    world.write_text(
+        "rooms:\n  - [[0, 0], [3, 0], [3, 3], [0, 3]]\n"
+        "robot: {start: {at: [1.5, 1.5], heading: 0}}\n"
+    )
+    argv = ["eval", BUMP, "-p", "duration=1s", "--world", str(world), "--no-progress"]
+    assert main([*argv, "--runs", "3"]) == 0
+    err = capsys.readouterr().err
+    assert "has no robot.start_region" in err and "all 3 episodes start at (1.50, 1.50) m" in err
+    assert main([*argv, "--runs", "1"]) == 0  # one episode: nothing to say
+    assert "start_region" not in capsys.readouterr().err
+    assert main(["eval", BUMP, "-p", "duration=1s", "--runs", "2", "--no-progress"]) == 0
+    assert "start_region" not in capsys.readouterr().err  # the shipped worlds have one
 
 
 def test_episodes_whose_robot_switched_off_are_failures_not_log_lines(
