@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import signal
+import threading
 import uuid
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
@@ -129,21 +131,36 @@ def dask_client(scheduler: str | None = None, workers: int = 2) -> Iterator[Any]
         return
     import dask
 
-    with (
-        dask.config.set(LOCAL_CLUSTER_CONFIG),
-        distributed.LocalCluster(
-            n_workers=workers,
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=None,
-            # the scheduler's HTTP server (health routes) would take port 8787 even with no
-            # dashboard, and two evaluations at once would collide: any free port
-            scheduler_kwargs={"dashboard": False, "dashboard_address": ":0"},
-            silence_logs=40,  # logging.ERROR: no worker chatter over the progress bar
-        ) as cluster,
-        distributed.Client(cluster) as client,
-    ):
-        yield client
+    with dask.config.set(LOCAL_CLUSTER_CONFIG):
+        with _ctrl_c_left_to_this_process():
+            cluster = distributed.LocalCluster(
+                n_workers=workers,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=None,
+                # the scheduler's HTTP server (health routes) would take port 8787 even with
+                # no dashboard, and two evaluations at once would collide: any free port
+                scheduler_kwargs={"dashboard": False, "dashboard_address": ":0"},
+                silence_logs=40,  # logging.ERROR: no worker chatter over the progress bar
+            )
+        with cluster, distributed.Client(cluster) as client:
+            yield client
+
+
+@contextlib.contextmanager
+def _ctrl_c_left_to_this_process() -> Iterator[None]:
+    """The local cluster's processes start with Ctrl-C ignored (a started Python keeps an
+    ignored SIGINT ignored, and asyncio then leaves it so): a terminal's Ctrl-C reaches the
+    whole process group, and every nanny and worker printed its KeyboardInterrupt traceback
+    under the summary. This process takes it and closes the cluster."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def run_on_client(

@@ -417,6 +417,10 @@ def _text_of(path: Path) -> str | None:
         return None
 
 
+#: Set in a local pool's worker processes (:func:`roomba_bt.evaluate.parallel.run_episodes`).
+IN_POOL_WORKER = False
+
+
 def _run_episode(spec: EpisodeSpec) -> EpisodeResult:
     profile = get_profile(spec.profile)
     path = spec.sources.materialise() if spec.sources is not None else spec.mission
@@ -434,6 +438,8 @@ def _run_episode(spec: EpisodeSpec) -> EpisodeResult:
     )  # fmt: skip
     stack = RunStack(mission, SimLink(simulator), profile=profile, timeout_s=spec.timeout_s)
     stack.runner.on_wall_clock = False  # Ctrl-Z suspends an evaluation, Ctrl-\ quits it
+    if IN_POOL_WORKER:  # Ctrl-C is the parent's: it ends the pool, a worker just ends
+        stack.runner.guards_signals = False
     summary = stack.run()
     if summary.outcome is Outcome.INTERRUPTED:  # Ctrl-C (or SIGTERM) stops the evaluation,
         raise KeyboardInterrupt(summary.reason)  # not just this episode

@@ -10,12 +10,14 @@ give the same results in the same order; only the wall time differs. Workers are
 from __future__ import annotations
 
 import multiprocessing
+import signal
 import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TextIO
 
+from roomba_bt.evaluate import episode
 from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec, run_episode
 
 Progress = Callable[[int, int, EpisodeResult], None]
@@ -35,12 +37,20 @@ def run_episodes(
         return results
     method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
     context = multiprocessing.get_context(method)
-    with context.Pool(processes=min(jobs, total)) as pool:
+    with context.Pool(processes=min(jobs, total), initializer=_worker_started) as pool:
         for result in pool.imap(run_episode, specs, chunksize=1):
             results.append(result)
             if progress is not None:
                 progress(len(results), total, result)
     return results
+
+
+def _worker_started() -> None:
+    """A pool worker leaves Ctrl-C to its parent, which ends the pool (SIGTERM ends a worker
+    at once: on the simulator nothing drives): each worker raising KeyboardInterrupt printed
+    its traceback under the summary."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    episode.IN_POOL_WORKER = True
 
 
 @dataclass(frozen=True)

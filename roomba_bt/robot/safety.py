@@ -117,8 +117,13 @@ class InterruptGuard:
     still to be printed). Signal handlers belong to the main thread: elsewhere it does nothing.
     """
 
-    def __init__(self, *, hold: bool = False, wall_clock: bool = True) -> None:
+    def __init__(
+        self, *, hold: bool = False, wall_clock: bool = True, enabled: bool = True
+    ) -> None:
         self.hold = hold
+        #: False: no handler at all (an evaluation's worker process: its parent takes Ctrl-C
+        #: and ends the workers, which have nothing driving to stop)
+        self.enabled = enabled
         #: Ctrl-Z and Ctrl-\ (:data:`WALL_CLOCK_SIGNALS`) end the run too; ``wall_clock``
         #: False where no robot moves on the wall clock (an evaluation, ``--fast``): there a
         #: suspended or quit process leaves nothing driving
@@ -148,7 +153,7 @@ class InterruptGuard:
         raise Terminated(signum)
 
     def __enter__(self) -> InterruptGuard:
-        if threading.current_thread() is threading.main_thread():
+        if self.enabled and threading.current_thread() is threading.main_thread():
             for signum in self.signals:
                 self._previous[signum] = signal.signal(signum, self._handle)
             for signum in self.ignoring:

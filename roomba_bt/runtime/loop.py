@@ -269,6 +269,9 @@ class MissionRunner(BaseHandle):
     #: False: on the virtual clock nothing drives meanwhile, and both keep their usual
     #: meaning. A class attribute for the same reason as ``tick_guard``
     on_wall_clock: bool = True
+    #: False: the run installs no signal handler (an evaluation's pool worker: Ctrl-C is
+    #: its parent's, which ends the workers)
+    guards_signals: bool = True
     #: the next batch's gap is a stall the watchdog saw and the run rode through (set by
     #: ``_stream_back``, read once by ``_slots_spanned``): not a gap nobody read
     _gap_explained: bool = False
@@ -283,7 +286,7 @@ class MissionRunner(BaseHandle):
         wall_start = time.perf_counter()
         root = self.mission.root
         guard = self._guard = InterruptGuard(
-            hold=self.hold_interrupts, wall_clock=self.on_wall_clock
+            hold=self.hold_interrupts, wall_clock=self.on_wall_clock, enabled=self.guards_signals
         )
         tick_guard = self.tick_guard
         with guard:

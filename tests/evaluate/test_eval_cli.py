@@ -235,18 +235,26 @@ def test_a_failed_results_write_keeps_the_summary(
     assert "No space left on device; the summary is above" in err
 
 
-def test_ctrl_c_prints_what_finished_and_exits_130(tmp_path: Path) -> None:
+@pytest.mark.parametrize(
+    "engine", [["--jobs", "1"], ["--jobs", "2"], ["--engine", "dask", "--jobs", "2"]]
+)
+def test_ctrl_c_prints_what_finished_and_exits_130(tmp_path: Path, engine: list[str]) -> None:
     """SIGINT after the first episode has reported (read from the progress bar, not a
-    clock): the summary of the finished episodes, and exit code 130."""
+    clock), to the whole process group as a terminal sends it: the summary of the finished
+    episodes, exit code 130, and no traceback (each pool worker, Dask nanny and worker
+    printed its own)."""
     import os
     import signal
     import subprocess
 
+    if "dask" in engine:
+        pytest.importorskip("distributed")
+
     out = tmp_path / "partial.jsonl"
     proc = subprocess.Popen(
         [sys.executable, "-m", "roomba_bt.cli", "eval", str(MISSIONS / "dock.yaml"),
-         "--runs", "200", "--within", "1.5", "--out", str(out)],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+         "--runs", "200", "--within", "1.5", "--out", str(out), *engine],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,
     )  # fmt: skip
     assert proc.stderr is not None and proc.stdout is not None
     seen = b""
@@ -254,13 +262,14 @@ def test_ctrl_c_prints_what_finished_and_exits_130(tmp_path: Path) -> None:
         chunk = os.read(proc.stderr.fileno(), 4096)
         assert chunk, f"eval ended before its first episode: {seen!r}"
         seen += chunk
-    proc.send_signal(signal.SIGINT)
+    os.killpg(proc.pid, signal.SIGINT)
     stdout, stderr = proc.communicate(timeout=120)
     assert proc.returncode == 130, stderr
     finished = len(out.read_text(encoding="utf-8").splitlines())
     assert 1 <= finished < 200
     assert f"/{finished} = " in stdout.decode()
     assert f"interrupted; {finished} episode(s) finished" in (seen + stderr).decode()
+    assert "Traceback" not in stderr.decode() and "safe stop" not in stderr.decode(), stderr
 
 
 def test_a_cleaning_mission_reports_its_coverage_as_json(
