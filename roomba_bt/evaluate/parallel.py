@@ -126,7 +126,9 @@ def _collect(into: list[EpisodeResult], bar: Progress | None) -> Progress:
 
 
 class ProgressBar:
-    """``[#########.........] 12/50 ok 11 ETA 8s`` on stderr, redrawn in place."""
+    """``[#########.........] 12/50 ok 11 ETA 8s`` on stderr, redrawn in place on a terminal;
+    into a file or a pipe (a CI log), a line of its own after the first episode, each tenth
+    and the last (a redraw per episode filled logs with carriage returns)."""
 
     def __init__(self, stream: TextIO | None = None, width: int = 30, label: str = "") -> None:
         self.stream = stream if stream is not None else sys.stderr
@@ -134,16 +136,24 @@ class ProgressBar:
         self.label = label
         self.started = time.perf_counter()
         self.ok = 0
+        isatty = getattr(self.stream, "isatty", None)
+        self.redraw = bool(isatty()) if isatty is not None else False
 
     def __call__(self, done: int, total: int, result: EpisodeResult) -> None:
         self.ok += result.succeeded
+        if (
+            not self.redraw
+            and done not in (1, total)
+            and done * 10 // total == (done - 1) * 10 // total
+        ):
+            return
         filled = round(self.width * done / max(total, 1))
         elapsed = time.perf_counter() - self.started
         eta = elapsed / done * (total - done) if done else 0.0
         bar = "#" * filled + "." * (self.width - filled)
-        end = "\n" if done == total else ""
+        start, end = ("\r", "\n" if done == total else "") if self.redraw else ("", "\n")
         self.stream.write(
-            f"\r{self.label}[{bar}] {done}/{total} ok {self.ok} "
+            f"{start}{self.label}[{bar}] {done}/{total} ok {self.ok} "
             f"elapsed {elapsed:.0f}s ETA {eta:.0f}s{end}"
         )
         self.stream.flush()

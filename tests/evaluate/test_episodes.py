@@ -71,6 +71,25 @@ def test_progress_bar_counts_successes() -> None:
     assert "2/2 ok 2" in text and text.endswith("\n")
 
 
+class _Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_the_bar_redraws_on_a_terminal_and_writes_each_tenth_into_a_log() -> None:
+    """A CI log got a carriage-return redraw per episode."""
+    result = run_episode(episode_specs(BUMP, runs=1, params=(("duration", "1s"),))[0])
+    log, terminal = io.StringIO(), _Terminal()
+    for stream in (log, terminal):
+        bar = ProgressBar(stream, width=10)
+        for done in range(1, 51):
+            bar(done, 50, result)
+    lines = log.getvalue().splitlines()
+    assert "\r" not in log.getvalue() and len(lines) == 11  # the first, then each tenth
+    assert [line.split()[1] for line in lines[:3]] == ["1/50", "5/50", "10/50"]
+    assert terminal.getvalue().count("\r") == 50 and terminal.getvalue().count("\n") == 1
+
+
 def test_assert_success_rate_passes_and_fails_with_the_report() -> None:
     summary = assert_success_rate(BUMP, runs=2, within_s=20, rate=1.0,
                                   params={"duration": "3s"})  # fmt: skip
