@@ -22,14 +22,17 @@ Frames are read in the caller's thread (:meth:`poll`). See ``docs/robot.md``.
 
 from __future__ import annotations
 
+import atexit
+import contextlib
 import logging
+import weakref
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import Command
 from roomba_bt.oi.frames import SensorFrame
-from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
+from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile, get_profile
 from roomba_bt.oi.stream import ReplyParser, check_bandwidth
 from roomba_bt.robot.ending import EndMode, SafeStop
@@ -92,6 +95,17 @@ class LinkCounters:
     mode_readings_ignored: int = 0
 
 
+#: Connections not yet garbage: closed at the program's end if their user did not.
+_LIVE: weakref.WeakSet[Connection] = weakref.WeakSet()
+
+
+@atexit.register
+def _close_at_exit() -> None:
+    for connection in list(_LIVE):
+        with contextlib.suppress(Exception):
+            connection._close_left_open("the program ended without close()")
+
+
 class Connection:
     """A robot on a :class:`~roomba_bt.transport.Transport`: see the module docstring.
 
@@ -138,6 +152,27 @@ class Connection:
         #: when the port last listened at other rates and the bytes read by then (link
         #: clock; silence.follow_baud tries again while garbage keeps coming)
         self.baud_listened: tuple[float, int] | None = None
+        _LIVE.add(self)
+
+    def __del__(self) -> None:
+        # a program that forgot close() (pycreate2 stops in its __del__ too)
+        with contextlib.suppress(Exception):
+            self._close_left_open("the connection was dropped without close()")
+
+    def _close_left_open(self, why: str) -> None:
+        """The safe stop and close for a started session nobody closed: a library user's
+        script that ended, or dropped its connection, left the robot driving in Safe."""
+        if self.ending.closed:
+            return
+        if self.modes.mode not in DRIVING_MODES and self.running_cycle is None:
+            return  # never started, or stopped in Passive: nothing of ours can be moving
+        doing = self.activity()
+        stopped = self.close()
+        log.warning(
+            "%s: %s while the robot was %s; %s (use `with Connection.open(...)` or call "
+            "close())", self.name, why, doing,
+            "the safe stop was sent" if stopped else "the safe stop could not be delivered",
+        )  # fmt: skip
 
     # ------------------------------------------------------------------ opening
     @classmethod
