@@ -13,7 +13,7 @@ from roomba_bt.oi.frames import stream_frame_size
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.oi.stream import stream_budget
-from roomba_bt.runtime.summary import ExitCode
+from roomba_bt.runtime.summary import DEFAULT_GRACE, ExitCode
 
 if TYPE_CHECKING:
     from roomba_bt.transport import Transport
@@ -127,16 +127,31 @@ def _show_live(
     """The table of the newest frame, ``args.rate`` times a second, ``args.count`` times (0:
     until interrupted); the robot is left in Passive."""
     from roomba_bt.robot.connection import Connection
+    from roomba_bt.robot.errors import StreamStalled
     from roomba_bt.robot.safety import sigterm_raises
 
     connection = Connection(link, profile, baud=args.baud)
     interactive = sys.stdout.isatty()
     shown = 0
+    #: a watchdog trip being ridden through, as ``run`` does: (bytes read then, drive 0 sent)
+    stall: tuple[int, bool] | None = None
     with sigterm_raises(), connection:
         connection.start("passive", (group,))
         last = -math.inf  # the first frame is shown at once
         while args.count == 0 or shown < args.count:
-            frames = connection.poll(0.1)
+            try:
+                frames = connection.poll(0.1)
+            except StreamStalled as stalled:  # a flaky line is what one looks at it for
+                stall = (connection.link.bytes_read, stalled.halted)
+                print(f"roomba-bt: {stalled}; waiting up to {DEFAULT_GRACE:g} s for valid "
+                      "frames", file=sys.stderr)  # fmt: skip
+                frames = []
+            if stall is not None:
+                if not frames:  # the cause, once known or the grace is over (exit 3)
+                    connection.check_stall(stall[0], DEFAULT_GRACE, stall[1])
+                    continue
+                stall = None
+                print("roomba-bt: valid frames are back", file=sys.stderr)
             if not frames or time.monotonic() - last < 1.0 / args.rate:
                 continue
             last = time.monotonic()

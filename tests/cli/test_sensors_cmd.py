@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pytest
+from robot.sim_backend import sim_pty_server  # tests/robot: the simulator on a pty
 
 from roomba_bt.cli import main
 from roomba_bt.cli.sensors_cmd import group_for
@@ -69,3 +70,15 @@ def test_the_first_table_is_shown_at_once_at_a_slow_rate(
     years: for ever)."""
     assert main(["sensors", "--rate", "1e-9", "--count", "1"]) == 0
     assert "bumps_wheel_drops" in capsys.readouterr().out
+
+
+def test_sensors_rides_through_a_stall_as_run_does(capsys: pytest.CaptureFixture[str]) -> None:
+    """On a line dropping most frames the table goes on after each watchdog trip (it ended
+    with exit 3 at the first: the tool one looks at a flaky line with died on it)."""
+    from roomba_bt.oi.profiles import CREATE2
+
+    with sim_pty_server(CREATE2, "--drop-rate", "0.7", "--seed", "3") as port:
+        code = main(["sensors", "--port", port, "--count", "40", "--rate", "66"])
+    err = capsys.readouterr().err
+    assert code == 0, err
+    assert "waiting up to 2 s for valid frames" in err and "valid frames are back" in err

@@ -92,11 +92,21 @@ def make_sim_link(profile: RobotProfile) -> tuple[RecordingSimLink, SimRobot]:
 
 
 @contextlib.contextmanager
-def sim_pty_server(profile: RobotProfile) -> Iterator[str]:
-    """``roomba-bt sim --pty`` in a child process; yields the pty path it prints."""
+def sim_pty_server(profile: RobotProfile, *options: str) -> Iterator[str]:
+    """``roomba-bt sim --pty`` in a child process (with ``options``: faults); yields the pty
+    path it prints."""
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     child = subprocess.Popen(
-        [sys.executable, "-m", "roomba_bt.cli", "sim", "--pty", "--profile", profile.name],
+        [
+            sys.executable,
+            "-m",
+            "roomba_bt.cli",
+            "sim",
+            "--pty",
+            "--profile",
+            profile.name,
+            *options,
+        ],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
