@@ -35,6 +35,7 @@ from roomba_bt.oi.modes import OI_MODE_PACKET
 from roomba_bt.oi.packets import packet_ids
 
 if TYPE_CHECKING:
+    from roomba_bt.oi.frames import SensorFrame
     from roomba_bt.robot.handshake import Search
 
 #: Seconds of stream the round-trip reads (33 frames at one per 15 ms).
@@ -391,6 +392,25 @@ def _profile(
     return best
 
 
+#: The status packets that stay the same between two replies a moment apart.
+STEADY_STATUS_PACKETS = packet_ids(
+    "battery_charge", "battery_capacity", "charging_state", "charging_sources", "oi_mode"
+)
+#: Query Lists asked for the status before its replies must have agreed twice in a row.
+STATUS_QUERIES = 4
+#: How far two readings of the battery's voltage a moment apart may differ (mV): the
+#: charger and the wheels move it, a garbled byte moves it by 256 mV or more.
+VOLTAGE_AGREES_MV = 150
+
+
+def _agree(first: SensorFrame, second: SensorFrame) -> bool:
+    """Two status replies a moment apart tell the same: the charge, capacity, charging state,
+    sources and mode equal, the voltage close (the current may change)."""
+    return all(first[pid] == second[pid] for pid in STEADY_STATUS_PACKETS) and (
+        abs(first.voltage_mv - second.voltage_mv) <= VOLTAGE_AGREES_MV
+    )
+
+
 def _status(transport: Any, profile: Any, plus_one: bool, report: Report) -> None:
     from roomba_bt.oi import commands as oi
     from roomba_bt.oi.bits import ChargingState
@@ -399,19 +419,44 @@ def _status(transport: Any, profile: Any, plus_one: bool, report: Report) -> Non
     from roomba_bt.robot.handshake import drain
 
     ids = STATUS_PACKETS
-    parser = ReplyParser(ids, profile)
     drain(transport)  # the paused stream's last frames may still be on the way
-    transport.write(oi.query_list(ids).data)
     clock = transport.now
-    deadline = clock() + 0.5
-    frame = None
-    while frame is None and (remaining := deadline - clock()) > 0:
-        frame = parser.feed(transport.read(remaining))
-    if frame is None:
+
+    def ask() -> SensorFrame | None:
+        parser = ReplyParser(ids, profile)
+        transport.write(oi.query_list(ids).data)
+        deadline = clock() + 0.5
+        frame = None
+        while frame is None and (remaining := deadline - clock()) > 0:
+            frame = parser.feed(transport.read(remaining))
+        return frame
+
+    # A reply has no checksum: one garbled byte read "65105 of 2696 mAh (2415 %)" as [ok].
+    # Two replies in a row that agree on what changes slowly are the robot's.
+    replies: list[SensorFrame] = []
+    for _ in range(STATUS_QUERIES):
+        frame = ask()
+        if frame is None:
+            report.fail(
+                "battery",
+                f"no answer to Query List {list(ids)} within 0.5 s",
+                "the line drops bytes or another program talks to the robot: run doctor again",
+            )
+            raise _Failed(DoctorExit.UNHEALTHY)
+        replies.append(frame)
+        if len(replies) >= 2 and _agree(replies[-2], frame):
+            break
+    else:
+        shown = "; ".join(
+            f"{r.battery_charge_mah} of {r.battery_capacity_mah} mAh, {r.voltage_mv} mV"
+            for r in replies
+        )
         report.fail(
             "battery",
-            f"no answer to Query List {list(ids)} within 0.5 s",
-            "the line drops bytes or another program talks to the robot: run doctor again",
+            f"{STATUS_QUERIES} replies to Query List {list(ids)} never agreed twice in a row "
+            f"({shown})",
+            "the line garbles bytes (a loose or long cable, a wrong baud rate): check the "
+            "cable and run doctor again",
         )
         raise _Failed(DoctorExit.UNHEALTHY)
     charge, capacity = frame.battery_charge_mah, frame.battery_capacity_mah

@@ -259,3 +259,50 @@ def test_baud_auto_with_nothing_behind_the_port_is_a_connection_failure(silent_p
     assert done.returncode == 3
     assert "--baud auto: no answer at any OI rate (115200: nothing; 19200: nothing" in done.stderr
     assert "Traceback" not in done.stderr
+
+
+class _GarbledReplies:
+    """The simulator behind a line that garbles the battery charge's high byte in the
+    first ``garble`` Query List replies (a reply has no checksum)."""
+
+    def __init__(self, garble: int) -> None:
+        from roomba_bt.oi import commands as oi
+        from roomba_bt.oi.profiles import CREATE2
+        from roomba_bt.sim import SimLink, Simulator, load_world
+
+        self.link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=1))
+        self.link.write(oi.start().data)
+        self.garble = garble
+
+    def write(self, data: bytes) -> None:
+        self.link.write(data)
+
+    def read(self, timeout: float) -> bytes:
+        data = self.link.read(timeout)
+        if len(data) == 11 and self.garble:  # the status reply: charge's high byte at 5
+            self.garble -= 1  # each garbled another way, as noise does
+            data = data[:5] + bytes([data[5] ^ (0x10 << self.garble)]) + data[6:]
+        return data
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.link, name)
+
+
+@pytest.mark.parametrize(("garbled", "shown"), [(1, "[ok]"), (4, "[FAIL]")])
+def test_a_garbled_status_reply_is_asked_again_not_reported_ok(garbled: int, shown: str) -> None:
+    """It printed "[ok] battery 65105 of 2696 mAh (2415 %)" from one garbled reply."""
+    import io
+
+    from roomba_bt.cli.doctor_cmd import Report, _Failed, _status
+    from roomba_bt.oi.profiles import CREATE2
+
+    report = Report(io.StringIO())
+    with contextlib.suppress(_Failed):
+        _status(_GarbledReplies(garbled), CREATE2, False, report)
+    battery = next(line for line in report.out.getvalue().splitlines() if "battery" in line)
+    assert battery.startswith(shown), battery
+    if shown == "[ok]":
+        assert " of 2696 mAh (" in battery and "%)" in battery
+        assert int(battery.split(" of ")[0].split()[-1]) <= 2696
+    else:
+        assert "never agreed twice in a row" in battery
