@@ -122,8 +122,11 @@ def _add_output_options(ev: argparse.ArgumentParser) -> None:
         metavar="NAME=VALUE[;NAME=VALUE]",
         help="a variant: these parameters on top of -p (repeatable; compared with the first)",
     )
-    ev.add_argument("--plot", metavar="FILE.png", type=plot_file,
-                    help="draw every trajectory (matplotlib)")  # fmt: skip
+    ev.add_argument(
+        "--plot", metavar="FILE", type=plot_file,
+        help="draw every trajectory (matplotlib), a panel per variant side by side; the "
+        "suffix is the format: .png, .pdf, .svg or another matplotlib writes",
+    )  # fmt: skip
 
 
 def _add_start_options(ev: argparse.ArgumentParser) -> None:
@@ -285,7 +288,7 @@ def eval_command(args: argparse.Namespace) -> int:
               file=sys.stderr)  # fmt: skip
         return ExitCode.INTERRUPTED
     if args.plot:
-        plotted = _plot(args.plot, world, chosen[0], done[0], summaries[0])
+        plotted = _plot(args.plot, world, chosen, done, summaries)
         if plotted is not None:
             return plotted
     return _verdict(args, summaries, done)
@@ -523,14 +526,25 @@ def _report(
 
 
 def _plot(
-    out: str, world: World, first: Variant, evaluated: Evaluation, summary: Summary
+    out: str,
+    world: World,
+    chosen: list[Variant],
+    done: list[Evaluation],
+    summaries: list[Summary],
 ) -> int | None:
-    """The first variant's trajectories drawn to ``out``; an exit code if that failed."""
-    from roomba_bt.evaluate.plot import PlotUnavailableError, plot_trajectories
+    """Every variant's trajectories drawn to ``out``, a panel each side by side (one variant:
+    one picture); an exit code if that failed."""
+    from roomba_bt.evaluate.plot import PlotUnavailableError, plot_variants
 
+    if len(chosen) == 1:
+        titles = [f"{Path(chosen[0].mission).stem} in {world.name}: "
+                  f"{summaries[0].successes}/{summaries[0].runs}"]  # fmt: skip
+    else:
+        titles = [
+            f"{v.label}: {s.successes}/{s.runs}" for v, s in zip(chosen, summaries, strict=True)
+        ]
     try:
-        plot_trajectories(world, evaluated.results, out, f"{Path(first.mission).stem}"
-                          f" in {world.name}: {summary.successes}/{summary.runs}")  # fmt: skip
+        plot_variants(world, [(t, e.results) for t, e in zip(titles, done, strict=True)], out)
     except PlotUnavailableError as exc:
         print(f"roomba-bt eval: {exc}", file=sys.stderr)
         return ExitCode.INVALID

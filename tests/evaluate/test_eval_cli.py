@@ -26,6 +26,31 @@ def test_eval_prints_the_report_and_plots(tmp_path: Path,
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+def test_every_variant_is_plotted_in_a_panel_of_its_own(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``eval A B --plot`` (here a sweep) drew the first variant only. An SVG keeps each
+    panel's title as text (a comment over its glyphs): both are there, with their counts."""
+    svg = tmp_path / "ab.svg"
+    code = main(["eval", BUMP, "--runs", "2", "--seed", "3", "--sweep", "duration=2s,3s",
+                 "--no-progress", "--plot", str(svg)])  # fmt: skip
+    assert code == 0
+    assert f"trajectories written to {svg}" in capsys.readouterr().err
+    text = svg.read_text()
+    assert text.count("succeeded (2)") == 2  # a legend a panel
+    for value in ("2s", "3s"):
+        assert f"{BUMP} -p duration={value}: 2/2" in text
+
+
+def test_the_plot_help_names_the_formats_it_writes(capsys: pytest.CaptureFixture[str]) -> None:
+    """``--plot x.pdf`` writes a PDF; the help said FILE.png."""
+    with pytest.raises(SystemExit):
+        main(["eval", "--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    assert "--plot FILE " in help_text and "FILE.png" not in help_text
+    assert ".png, .pdf, .svg" in help_text
+
+
 def test_min_rate_not_reached_exits_1(capsys: pytest.CaptureFixture[str]) -> None:
     code = main(["eval", str(MISSIONS / "dock.yaml"), "--runs", "1", "--timeout", "1s",
                  "--min-rate", "0.5", "--no-progress"])  # fmt: skip
