@@ -25,7 +25,6 @@ does not answer, 4 when a behaviour raised in an episode (a bug, not a mission o
 from __future__ import annotations
 
 import argparse
-import math
 import shlex
 import sys
 from dataclasses import dataclass
@@ -148,7 +147,7 @@ def _add_start_options(ev: argparse.ArgumentParser) -> None:
         metavar="FIELD=VALUE",
         help="override a dock beam parameter: buoy_range=0.5 (m), force_field=0.3 (m), "
         "red=-5,25 (deg), green=-25,5, contact_tolerance=0.05 (m), angle_tolerance=6 (deg), "
-        "family=discovery (characters 240-254)",
+        "family=discovery (characters 240-254); each in the range a world file's dock allows",
     )
     ev.add_argument("--battery", type=float, metavar="FRACTION", help="initial charge 0..1")
     ev.add_argument(
@@ -172,8 +171,10 @@ def _error(message: str) -> int:
 
 
 def parse_dock(items: list[str]) -> tuple[tuple[str, Any], ...] | str:
-    """``["buoy_range=0.5", "red=-5,25"]`` -> ((name, value), ...); a message on error."""
+    """``["buoy_range=0.5", "red=-5,25"]`` -> ((name, value), ...); a message on error. Each
+    number in the range a world file's ``dock:`` allows (the same table: ``DOCK_LIMITS``)."""
     from roomba_bt.evaluate.episode import DOCK_OVERRIDES
+    from roomba_bt.sim.world import DOCK_BEAM_LIMIT, DOCK_FAMILIES, DOCK_LIMITS
 
     out: list[tuple[str, Any]] = []
     for item in items:
@@ -186,18 +187,23 @@ def parse_dock(items: list[str]) -> tuple[tuple[str, Any], ...] | str:
             )
         try:
             if name == "family":
-                if text not in ("drive-on", "discovery"):
-                    return f"--dock {item!r}: family is drive-on or discovery"
+                if text not in DOCK_FAMILIES:
+                    return f"--dock {item!r}: family is {' or '.join(DOCK_FAMILIES)}"
                 out.append((name, text))
             elif name in ("red", "green"):
                 lo, hi = (float(v) for v in text.split(","))
-                if not -90 <= lo < hi <= 90:
-                    return f"--dock {item!r}: expected FROM,TO in degrees, -90 <= FROM < TO <= 90"
+                beam = DOCK_BEAM_LIMIT
+                if not (beam.holds(lo) and beam.holds(hi) and lo < hi):
+                    return (
+                        f"--dock {name}={text.strip()}: expected FROM,TO in degrees, "
+                        f"{beam.lo:g} <= FROM < TO <= {beam.hi:g}"
+                    )
                 out.append((name, (lo, hi)))
             else:
                 value = float(text)
-                if not (math.isfinite(value) and value > 0):
-                    return f"--dock {item!r}: expected a finite number above 0"
+                limit = DOCK_LIMITS[name]
+                if not limit.holds(value):
+                    return f"--dock {name}={text.strip()}: expected {limit.allowed()}"
                 out.append((name, value))
         except ValueError:
             return f"--dock {item!r}: {text!r} is not a number (or FROM,TO for red/green)"

@@ -42,19 +42,25 @@ from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome
 from roomba_bt.sim import Faults, SimLink, Simulator, World
-from roomba_bt.sim.world import DockSpec, parse_world, world_text
+from roomba_bt.sim.world import (
+    DOCK_BEAM_LIMIT,
+    DOCK_FAMILIES,
+    DOCK_LIMITS,
+    DockSpec,
+    parse_world,
+    world_text,
+)
 
 #: Dock fields an evaluation may override (``--dock buoy_range=0.5``), with their units:
-#: lengths in metres, angles in degrees, as in a world file.
+#: lengths in metres, angles in degrees, each in the range a world file allows
+#: (:data:`~roomba_bt.sim.world.DOCK_LIMITS`, :data:`~roomba_bt.sim.world.DOCK_BEAM_LIMIT`).
 DOCK_OVERRIDES: dict[str, str] = {
-    "buoy_range": "m",
-    "force_field": "m",
-    "contact_tolerance": "m",
-    "angle_tolerance": "deg",
-    "red": "deg",
-    "green": "deg",
-    "family": "drive-on or discovery",
-}
+    **{key: DOCK_LIMITS[key].unit
+       for key in ("buoy_range", "force_field", "contact_tolerance", "angle_tolerance")},
+    "red": DOCK_BEAM_LIMIT.unit,
+    "green": DOCK_BEAM_LIMIT.unit,
+    "family": " or ".join(DOCK_FAMILIES),
+}  # fmt: skip
 
 
 class EvaluationError(ValueError):
@@ -326,16 +332,15 @@ def _override_dock(dock: DockSpec, overrides: dict[str, Any]) -> DockSpec:
                 f"--dock {key}: unknown dock field; allowed: {', '.join(DOCK_OVERRIDES)}"
             )
         if key == "family":
-            if value not in ("drive-on", "discovery"):
-                raise EvaluationError(f"--dock family={value}: allowed: drive-on, discovery")
+            if value not in DOCK_FAMILIES:
+                raise EvaluationError(f"--dock family={value}: allowed: {', '.join(DOCK_FAMILIES)}")
             values[key] = value
         elif key in ("red", "green"):
             lo, hi = value
-            values[key] = (math.radians(float(lo)), math.radians(float(hi)))
-        elif DOCK_OVERRIDES[key] == "deg":
-            values[key] = math.radians(float(value))
+            scale = DOCK_BEAM_LIMIT.scale
+            values[key] = (float(lo) * scale, float(hi) * scale)
         else:
-            values[key] = float(value) * 1000.0
+            values[key] = float(value) * DOCK_LIMITS[key].scale
     return replace(dock, **values)
 
 

@@ -65,6 +65,36 @@ SIDES = ("left", "right", "both")
 DOCK_FAMILIES = ("drive-on", "discovery")
 
 
+@dataclass(frozen=True, slots=True)
+class Limit:
+    """The range a number of a world may take, as written (``lo..hi`` in ``unit``), and the
+    factor to the model's unit (metres -> mm, degrees -> radians)."""
+
+    lo: float
+    hi: float
+    unit: str
+    scale: float = 1.0
+
+    def allowed(self) -> str:
+        """``a number in 0.2..5 m``: what a message says may stand there."""
+        return f"a number in {self.lo:g}..{self.hi:g} {self.unit}"
+
+    def holds(self, value: float) -> bool:
+        return self.lo <= value <= self.hi  # NaN holds nowhere
+
+
+#: The dock's numbers, in a world file's ``dock:`` and in ``eval --dock FIELD=VALUE`` alike.
+DOCK_LIMITS: dict[str, Limit] = {
+    "buoy_range": Limit(0.2, 5.0, "m", 1000.0),
+    "force_field": Limit(0.1, 2.0, "m", 1000.0),
+    "contact_tolerance": Limit(0.01, 0.3, "m", 1000.0),
+    "plate_width": Limit(0.1, 1.0, "m", 1000.0),
+    "angle_tolerance": Limit(1.0, 45.0, "deg", math.pi / 180.0),
+}
+#: Each end of a dock beam's ``[from, to]`` (``red``, ``green``), from the dock's facing.
+DOCK_BEAM_LIMIT = Limit(-90.0, 90.0, "deg", math.pi / 180.0)
+
+
 # ----------------------------------------------------------------------------- the model
 
 
@@ -418,11 +448,12 @@ class _Checker:
                 yield path, spec
 
     def number(self, value: object, path: PathKey, lo: float, hi: float, unit: str) -> float | None:
+        limit = Limit(lo, hi, unit)
         if isinstance(value, bool) or not isinstance(value, int | float):
-            self.error(path, _show(value), f"a number in {lo:g}..{hi:g} {unit}")
+            self.error(path, _show(value), limit.allowed())
             return None
-        if not lo <= value <= hi or math.isnan(value):
-            self.error(path, _show(value), f"a number in {lo:g}..{hi:g} {unit}")
+        if not limit.holds(value):
+            self.error(path, _show(value), limit.allowed())
             return None
         return float(value)
 
@@ -576,14 +607,16 @@ _DOCK_KEYS = (
 
 
 def _angle_range(c: _Checker, value: object, path: PathKey) -> tuple[float, float] | None:
-    pair = c.numbers(value, path, 2, (-90, 90, "deg"), "[from, to] in degrees, -90..90, from < to")
+    beam = DOCK_BEAM_LIMIT
+    pair = c.numbers(value, path, 2, (beam.lo, beam.hi, beam.unit),
+                     f"[from, to] in degrees, {beam.lo:g}..{beam.hi:g}, from < to")  # fmt: skip
     if pair is None:
         return None
     lo, hi = pair
     if lo >= hi:
         c.error(path, _show(value), "[from, to] with from < to")
         return None
-    return (math.radians(lo), math.radians(hi))
+    return (lo * beam.scale, hi * beam.scale)
 
 
 def _dock(c: _Checker, value: object) -> DockSpec | None:
@@ -597,17 +630,10 @@ def _dock(c: _Checker, value: object) -> DockSpec | None:
     for key in ("red", "green"):
         if key in spec:
             kwargs[key] = _angle_range(c, spec[key], (*path, key))
-    limits = {
-        "buoy_range": (0.2, 5.0, "m", 1000.0),
-        "force_field": (0.1, 2.0, "m", 1000.0),
-        "contact_tolerance": (0.01, 0.3, "m", 1000.0),
-        "plate_width": (0.1, 1.0, "m", 1000.0),
-        "angle_tolerance": (1.0, 45.0, "deg", math.pi / 180.0),
-    }
-    for key, (lo, hi, unit, scale) in limits.items():
+    for key, limit in DOCK_LIMITS.items():
         if key in spec:
-            n = c.number(spec[key], (*path, key), lo, hi, unit)
-            kwargs[key] = None if n is None else n * scale
+            n = c.number(spec[key], (*path, key), limit.lo, limit.hi, limit.unit)
+            kwargs[key] = None if n is None else n * limit.scale
     if "family" in spec:
         kwargs["family"] = c.choice(spec["family"], (*path, "family"), DOCK_FAMILIES)
     if at is None or facing is None or any(v is None for v in kwargs.values()):

@@ -65,8 +65,11 @@ def test_min_rate_not_reached_exits_1(capsys: pytest.CaptureFixture[str]) -> Non
         ([BUMP, "--runs", "0"], "--runs 0"),
         ([BUMP, "--dock", "buoy_range=far"], "is not a number"),
         ([BUMP, "--dock", "colour=1"], "FIELD one of"),
-        ([BUMP, "--dock", "buoy_range=nan"], "expected a finite number above 0"),  # were taken
-        ([BUMP, "--dock", "force_field=inf"], "expected a finite number above 0"),
+        ([BUMP, "--dock", "buoy_range=nan"], "--dock buoy_range=nan: expected a number in"),
+        ([BUMP, "--dock", "force_field=inf"], "--dock force_field=inf: expected a number in"),
+        # a world file's range (any number above 0 was taken)
+        ([BUMP, "--dock", "buoy_range=50"], "--dock buoy_range=50: expected a number in 0.2..5 m"),
+        ([BUMP, "--dock", "red=-100,5"], "--dock red=-100,5: expected FROM,TO in degrees, -90 <="),
         ([BUMP, "--within", "nan"], "--within nan: expected a distance in 0.05..20 m"),
         ([BUMP, "--within", "1e-9"], "--within 1e-09: expected"),  # was the world file's fault
         # the same range as a world's near_dock (500 m blamed the world: "no free pose")
@@ -90,6 +93,37 @@ def test_bad_input_exits_2_with_a_message(
 ) -> None:
     assert main(["eval", *argv]) == 2
     assert message in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "field", ["buoy_range", "force_field", "contact_tolerance", "angle_tolerance"]
+)
+def test_dock_overrides_are_refused_where_a_world_file_is(
+    field: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--dock FIELD=VALUE`` takes what the world file's ``dock:`` takes, no more: the range
+    the world's problem states, its ends included."""
+    import re
+
+    from roomba_bt.cli.eval_cmd import parse_dock
+    from roomba_bt.sim.world import WorldError, parse_world
+
+    text = (
+        "name: t\nrooms:\n  - [[0, 0], [4, 0], [4, 3.5], [0, 3.5]]\n"
+        f"dock: {{at: [2, 0], facing: 90, {field}: 500}}\n"
+    )
+    with pytest.raises(WorldError) as refused:
+        parse_world(text)
+    allowed = re.search(r"allowed: (a number in ([-\d.]+)\.\.([-\d.]+) \w+)", str(refused.value))
+    assert allowed is not None, str(refused.value)
+    phrase, lo, hi = allowed.group(1), float(allowed.group(2)), float(allowed.group(3))
+    for value in (500, lo / 2, 0, -1):
+        assert main(["eval", BUMP, "--runs", "1", "--no-progress", "--dock",
+                     f"{field}={value:g}"]) == 2  # fmt: skip
+        assert f"--dock {field}={value:g}: expected {phrase}" in capsys.readouterr().err
+    for value in (lo, hi):
+        assert parse_dock([f"{field}={value:g}"]) == ((field, value),)
+        parse_world(text.replace(": 500}", f": {value:g}}}"))  # the world takes it too
 
 
 def test_plot_without_matplotlib_is_a_clear_error(
