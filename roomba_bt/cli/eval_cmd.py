@@ -513,6 +513,7 @@ def _report(
 
         coverages = [summarize_coverage(e.results) for e in done]
         print(json.dumps({
+            "conditions": run_conditions(args),
             "engine": engine,
             "retried": retried,
             "interrupted": any(e.interrupted for e in done),
@@ -534,6 +535,37 @@ def _report(
         print(c)
         print()
     print(f"engine       {engine}; {retried} episode(s) run again after a worker was lost")
+
+
+def run_conditions(args: argparse.Namespace) -> dict[str, Any]:
+    """How the episodes were made, for an archived ``--json`` summary: the mission time per
+    episode (s), the first seed, the episodes per variant, the world as given, ``--within``
+    (m), ``--start-area``, the dock's overrides (lengths in m, angles in degrees), the
+    encoders' error, the initial charge (None: the world's), the profile, and the version of
+    roomba-bt that ran them. The arguments were checked before any episode ran."""
+    from roomba_bt import __version__
+
+    dock = parse_dock(args.dock)
+    overrides = (
+        {}
+        if isinstance(dock, str)
+        else {  # str: a problem; none here, checked before
+            name: list(value) if isinstance(value, tuple) else value for name, value in dock
+        }
+    )
+    return {
+        "timeout": parse_timeout(args.timeout),
+        "seed": args.seed,
+        "runs": args.runs,
+        "world": args.world,
+        "within": args.within,
+        "start_area": args.start_area,
+        "dock": overrides,
+        "odometry_error": args.odometry_error,
+        "battery": args.battery,
+        "profile": args.profile,
+        "roomba_bt_version": __version__,
+    }
 
 
 def _plot(

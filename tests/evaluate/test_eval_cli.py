@@ -253,6 +253,44 @@ def test_ab_report_on_two_variants_is_reproduced_from_its_records(
     assert rerun["comparisons"] == report["comparisons"]
 
 
+def test_the_json_summary_records_how_the_episodes_were_made(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """An archived ``--json`` said what ran, not under which conditions: its "conditions"
+    object has them, in the units of the report (s, m, degrees, fractions); the other keys
+    are as they were."""
+    import json
+
+    from roomba_bt import __version__
+
+    assert main(["eval", BUMP, "-p", "duration=1s", "--runs", "2", "--seed", "7",
+                 "--timeout", "2min", "--within", "150cm", "--battery", "40%",
+                 "--dock", "buoy_range=0.8", "--dock", "red=-10,20", "--odometry-error", "0.01",
+                 "--profile", "roomba600", "--no-progress", "--json"]) == 0  # fmt: skip
+    report = json.loads(capsys.readouterr().out)
+    assert set(report) == {"conditions", "engine", "retried", "interrupted", "variants",
+                           "comparisons"}  # fmt: skip
+    assert report["conditions"] == {
+        "timeout": 120.0,
+        "seed": 7,
+        "runs": 2,
+        "world": "empty-room",
+        "within": 1.5,
+        "start_area": None,
+        "dock": {"buoy_range": 0.8, "red": [-10.0, 20.0]},
+        "odometry_error": 0.01,
+        "battery": 0.4,
+        "profile": "roomba600",
+        "roomba_bt_version": __version__,
+    }
+    assert main(["eval", BUMP, "-p", "duration=1s", "--runs", "1", "--world", "apartment",
+                 "--start-area", "kitchen", "--no-progress", "--json"]) == 0  # fmt: skip
+    conditions = json.loads(capsys.readouterr().out)["conditions"]
+    assert conditions["start_area"] == "kitchen" and conditions["world"] == "apartment"
+    assert conditions["within"] is None and conditions["battery"] is None
+    assert conditions["dock"] == {} and conditions["timeout"] == 900.0
+
+
 def test_two_missions_are_compared_and_the_text_report_says_so(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
