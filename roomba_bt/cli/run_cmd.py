@@ -478,7 +478,13 @@ def replay_command(args: argparse.Namespace) -> int:
     )  # fmt: skip
     print(summary)
     difference = transport.first_difference()
+    unended = record.unended()
+    if unended is not None:  # compared up to where it ends
+        print(f"replay: the record ends at {record.last_t:.3f} s without the run's end ({unended})")
     if difference is None:
+        if unended is not None:
+            print(f"replay: the tree wrote the same {len(record.outbound)} bytes up to there")
+            return ExitCode.OK
         print(f"replay: the tree wrote the same {len(transport.written)} bytes as the recorded run")
         return ExitCode.OK
     offset, expected, sent = difference

@@ -7,12 +7,20 @@ A record is JSON Lines, one object a line::
     {"t": 0.000000, "d": "out", "b": "80"}          <- host -> robot, hex
     {"t": 0.015012, "d": "in",  "b": "1305..."}     <- robot -> host, hex
     {"t": 3.120000, "d": "note", "note": {...}}     <- an operator's act (the monitor's force)
+    {"t": 9.075000, "d": "end"}                     <- the run's end (version 2 on)
 
 ``t`` is the link's own clock (``transport.now()``) relative to the first byte, so a record
 made on the virtual clock replays identically, and one made on a robot replays with the
 robot's timing. Replay feeds the recorded "in" bytes, at their recorded times, through the same
 parser, mode model and tree; the bytes the tree writes are compared with the recorded "out"
 bytes to show where a changed mission decides differently.
+
+The end line is written when the run closes the link, after its safe stop. A record without
+it stops where its run did not end: a run killed outright (``kill -9``), a full disk, or a
+version 1 record (they had no end line). Replay compares such a record up to where it ends:
+the bytes the tree writes after the record's last robot bytes are not a difference (the live
+run's were lost, or never written); before, the replay's own safe stop at the end of the
+input was reported as the first difference ("expected nothing, sent Drive").
 """
 
 from __future__ import annotations
@@ -35,7 +43,9 @@ from roomba_bt.yamlsource import undecodable_position
 log = logging.getLogger(__name__)
 
 RECORD_FORMAT = "roomba-bt-record"
-RECORD_VERSION = 1
+RECORD_VERSION = 2
+#: the versions this roomba-bt reads: 1 is 2 without the end line
+READ_VERSIONS = (1, 2)
 
 #: Seconds of the link's clock between two flushes of the record to the operating system: a
 #: run killed outright (``kill -9``, the OOM killer) loses at most this much of its record.
@@ -136,9 +146,14 @@ class RecordingTransport:
         self._inner.set_baud(baud)
 
     def close(self) -> None:
+        """Close the link, then end the record with its end line (the run ended here)."""
         try:
             self._inner.close()
         finally:
+            if not self._file.closed:
+                now = self._inner.now()
+                t = now - (self._t0 if self._t0 is not None else now)
+                self._put(f'{{"t": {t:.6f}, "d": "end"}}\n', now)
             self.flush()
             if not self._file.closed:
                 self._file.close()
@@ -167,6 +182,18 @@ class Record:
     header: dict[str, Any]
     chunks: list[tuple[float, str, bytes]] = field(default_factory=list)
     notes: list[tuple[float, dict[str, Any]]] = field(default_factory=list)
+    #: whether the record holds its run's end line (False: it stops short of the run's end)
+    ended: bool = False
+    #: the time of its last line, seconds of the record's clock
+    last_t: float = 0.0
+
+    def unended(self) -> str | None:
+        """Why the record holds no end line (``the run was killed?``), or None when it does."""
+        if self.ended:
+            return None
+        if self.header.get("version") == 1:
+            return "version 1 records have no end line, or the run was killed"
+        return "the run was killed?"
 
     @property
     def inbound_after_writes(self) -> list[tuple[float, bytes, int]]:
@@ -194,9 +221,15 @@ def load_record(path: str | Path) -> Record:
     for number, line in enumerate(lines[1:], start=2):
         if not line.strip():
             continue
+        if record.ended:
+            raise RecordError(f"{path}:{number}: a line after the run's end line")
         item = _chunk(path, number, line)
-        if isinstance(item, dict):  # an operator's act: a note
-            record.notes.append((item["t"], item["note"]))
+        if isinstance(item, dict):  # an operator's act (a note), or the run's end
+            record.last_t = max(record.last_t, item["t"])
+            if item["d"] == "end":
+                record.ended = True
+            else:
+                record.notes.append((item["t"], item["note"]))
             continue
         t = item[0]
         if not math.isfinite(t) or t < last:
@@ -204,7 +237,7 @@ def load_record(path: str | Path) -> Record:
                 f"{path}:{number}: time {t!r} s; expected a finite time, not before the line "
                 f"before it ({last:g} s)"
             )
-        last = t
+        last = record.last_t = t
         record.chunks.append(item)
     return record
 
@@ -237,10 +270,10 @@ def _header(path: Path, line: str) -> dict[str, Any]:
         raise RecordError(f"{path}:1: header nested too deeply to be a record's") from None
     if not isinstance(header, dict) or header.get("format") != RECORD_FORMAT:
         raise RecordError(f"{path}:1: not a {RECORD_FORMAT} file (header format field)")
-    if header.get("version") != RECORD_VERSION:
+    if header.get("version") not in READ_VERSIONS:
         raise RecordError(
             f"{path}:1: record version {header.get('version')!r}; this roomba-bt reads "
-            f"version {RECORD_VERSION}"
+            f"versions {', '.join(map(str, READ_VERSIONS))}"
         )
     problem = header_problem(header)
     if problem is not None:
@@ -249,11 +282,15 @@ def _header(path: Path, line: str) -> dict[str, Any]:
 
 
 def _chunk(path: Path, number: int, line: str) -> tuple[float, str, bytes] | dict[str, Any]:
-    """Line ``number``: a chunk ``(t, "in" | "out", bytes)``, or a note (its object)."""
+    """Line ``number``: a chunk ``(t, "in" | "out", bytes)``, or a note or the end line (its
+    object)."""
     try:
         item = json.loads(line)
         if not isinstance(item, dict):
             raise TypeError(f"a JSON {type(item).__name__}, not an object")
+        if item.get("d") == "end":
+            item["t"] = float(item["t"])
+            return item
         if item.get("d") == "note":
             if isinstance(item.get("note"), dict):
                 item["t"] = float(item["t"])  # checked here, once
@@ -268,7 +305,7 @@ def _chunk(path: Path, number: int, line: str) -> tuple[float, str, bytes] | dic
             '{"t": seconds, "d": "in"|"out", "b": hex}'
         ) from None
     if d not in ("in", "out"):
-        raise RecordError(f"{path}:{number}: direction {d!r}; allowed: in, out, note")
+        raise RecordError(f"{path}:{number}: direction {d!r}; allowed: in, out, note, end")
     return t, d, b
 
 
@@ -334,12 +371,18 @@ class ReplayTransport:
     comes after its request. On the virtual clock (``run --fast --record``) a reply and its
     request share a time stamp, and a read that drains the line before the request (as the
     start-up does) took the reply away.
+
+    A record without its end line (:meth:`Record.unended`) is compared up to where it ends:
+    what the tree writes once the robot's last recorded bytes are given, past the recorded
+    ones, is no difference (the live run's were lost with the rest of its record, or it was
+    killed before writing them), so the replay's own safe stop is not one.
     """
 
     def __init__(self, record: Record, name: str = "replay") -> None:
         self.name = name
         self._inbound = record.inbound_after_writes
         self._expected = record.outbound
+        self._ended = record.ended
         self._next = 0
         self._now = 0.0
         self._open = True
@@ -352,6 +395,8 @@ class ReplayTransport:
         if self.difference is None:
             start, expected = len(self.written), self._expected[len(self.written) :]
             for i, byte in enumerate(data):
+                if i >= len(expected) and not self._ended and self.exhausted:
+                    break  # past the end of a record that stops short of its run's end
                 if i >= len(expected) or expected[i] != byte:
                     self.difference = start + i
                     break

@@ -5,6 +5,9 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
+
+from roomba_bt.cli import main
 from roomba_bt.runtime.recording import RecordingTransport
 
 FRAME = bytes.fromhex("131a070009000a000b000c001906511a0a88220023022b020d2c020dca")
@@ -52,3 +55,75 @@ def test_the_record_reaches_the_file_as_the_run_goes(tmp_path: Path) -> None:
     assert json.loads(lines[0])["format"] == "roomba-bt-record"
     assert json.loads(lines[-1])["t"] >= last_t - 0.25
     recording.close()
+
+
+MISSIONS = Path(__file__).resolve().parents[2] / "missions"
+
+
+def _recorded_run(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> list[str]:
+    """The lines of a 3 s bump-and-turn record made on the virtual clock."""
+    record = tmp_path / "run.jsonl"
+    argv = ["run", str(MISSIONS / "bump-and-turn.yaml"), "--fast", "--display", "none",
+            "-p", "duration=3s", "--record", str(record)]  # fmt: skip
+    assert main(argv) == 0
+    capsys.readouterr()
+    return record.read_text(encoding="utf-8").splitlines(keepends=True)
+
+
+def _killed_at(lines: list[str], t: float) -> list[str]:
+    """The record a run killed at ``t`` leaves: its lines up to then, no end line."""
+    return [lines[0], *(line for line in lines[1:] if json.loads(line)["t"] <= t)]
+
+
+def test_a_record_ends_with_the_runs_end_line_and_replays_whole(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    lines = _recorded_run(tmp_path, capsys)
+    assert json.loads(lines[-1]) == {"t": json.loads(lines[-2])["t"], "d": "end"}
+    assert main(["replay", str(tmp_path / "run.jsonl")]) == 0
+    out = capsys.readouterr().out
+    assert "the tree wrote the same" in out and "as the recorded run" in out
+    assert "without the run's end" not in out
+
+
+def test_a_killed_runs_record_is_compared_up_to_where_it_ends(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """kill -9 leaves no end line; the replay's own safe stop at the end of the input was
+    the first difference: 'expected nothing, sent Drive (137) 89 00 00 00 00', exit 1."""
+    killed = tmp_path / "killed.jsonl"
+    lines = _killed_at(_recorded_run(tmp_path, capsys), 1.2)
+    killed.write_text("".join(lines), encoding="utf-8")
+    outbound = sum(len(json.loads(x)["b"]) // 2 for x in lines[1:] if '"out"' in x)
+    assert main(["replay", str(killed)]) == 0
+    out = capsys.readouterr().out
+    assert "replay: the record ends at 1.200 s without the run's end (the run was killed?)" in out
+    assert f"replay: the tree wrote the same {outbound} bytes up to there" in out
+    assert "first difference" not in out
+
+
+def test_a_killed_runs_record_still_shows_a_difference_before_its_end(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Up to where it ends it is compared as a whole record is: a command the tree writes
+    while robot bytes recorded after it remain would have been in the record."""
+    killed = tmp_path / "killed.jsonl"
+    lines = _killed_at(_recorded_run(tmp_path, capsys), 1.2)
+    last_out = max(i for i, line in enumerate(lines) if '"out"' in line)
+    killed.write_text("".join(lines[:last_out] + lines[last_out + 1 :]), encoding="utf-8")
+    assert main(["replay", str(killed)]) == 1
+    out = capsys.readouterr().out
+    assert "without the run's end (the run was killed?)" in out
+    assert "replay: first difference at mission time" in out and "expected nothing, sent" in out
+
+
+def test_a_record_made_before_the_end_line_is_compared_up_to_where_it_ends(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    lines = _recorded_run(tmp_path, capsys)
+    old = tmp_path / "v1.jsonl"
+    header = {**json.loads(lines[0]), "version": 1}
+    old.write_text("".join([json.dumps(header) + "\n", *lines[1:-1]]), encoding="utf-8")
+    assert main(["replay", str(old)]) == 0
+    out = capsys.readouterr().out
+    assert "(version 1 records have no end line, or the run was killed)" in out
