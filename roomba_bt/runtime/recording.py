@@ -213,17 +213,33 @@ class Record:
 
 
 def load_record(path: str | Path) -> Record:
-    """Read a record; :class:`RecordError` names the file and line of anything malformed."""
+    """Read a record; :class:`RecordError` names the file and line of anything malformed.
+
+    A malformed last line without its newline is a line cut short (the run killed as it was
+    written, the disk full): it is dropped with a warning naming it, and the record read up to
+    it (without its end line, so replay compares it up to there). Before, the whole record
+    was refused (``malformed chunk``). A malformed line anywhere else is an error."""
     path = Path(path)
     lines = _record_lines(path)
-    record = Record(_header(path, lines[0]))
+    record = Record(_header(path, lines[0].rstrip("\r\n")))
     last = 0.0
+    cut = len(lines) if not lines[-1].endswith(("\n", "\r")) else None
     for number, line in enumerate(lines[1:], start=2):
         if not line.strip():
             continue
         if record.ended:
             raise RecordError(f"{path}:{number}: a line after the run's end line")
-        item = _chunk(path, number, line)
+        try:
+            item = _chunk(path, number, line.rstrip("\r\n"))
+        except RecordError:
+            if number != cut:
+                raise
+            log.warning(
+                "%s:%d: the last line is cut short (no newline at its end: the run killed, "
+                "or the disk full?); dropped, the record is read up to line %d",
+                path, number, number - 1,
+            )  # fmt: skip
+            break
         if isinstance(item, dict):  # an operator's act (a note), or the run's end
             record.last_t = max(record.last_t, item["t"])
             if item["d"] == "end":
@@ -243,9 +259,9 @@ def load_record(path: str | Path) -> Record:
 
 
 def _record_lines(path: Path) -> list[str]:
-    """The lines of the record file ``path``, at least one."""
+    """The lines of the record file ``path``, each with its line end, at least one."""
     try:
-        lines = path.read_text(encoding="utf-8").splitlines()
+        lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
     except UnicodeDecodeError as exc:  # a damaged copy, or not a record at all
         row, column = undecodable_position(exc)
         byte = bytes(exc.object)[exc.start]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import logging
 from pathlib import Path
 
 import pytest
@@ -127,3 +128,38 @@ def test_a_record_made_before_the_end_line_is_compared_up_to_where_it_ends(
     assert main(["replay", str(old)]) == 0
     out = capsys.readouterr().out
     assert "(version 1 records have no end line, or the run was killed)" in out
+
+
+def test_a_record_whose_last_line_is_cut_is_replayed_up_to_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], caplog: pytest.LogCaptureFixture
+) -> None:
+    """`head -c 5000 run.jsonl`, as a kill or a full disk leaves it: the whole record was
+    refused, exit 2, 'malformed chunk'. The cut line is dropped with a warning naming it."""
+    whole = "".join(_recorded_run(tmp_path, capsys))
+    cut = tmp_path / "cut.jsonl"
+    cut.write_text(whole[:5000], encoding="utf-8")
+    number = whole[:5000].count("\n") + 1  # the line cut short
+    assert not whole[:5000].endswith("\n")
+    with caplog.at_level(logging.WARNING):
+        assert main(["replay", str(cut)]) == 0
+    out = capsys.readouterr().out
+    assert f"{cut}:{number}: the last line is cut short" in caplog.text
+    assert f"the record is read up to line {number - 1}" in caplog.text
+    assert "without the run's end (the run was killed?)" in out
+    assert "the tree wrote the same" in out and "up to there" in out
+
+
+@pytest.mark.parametrize("ending", ["", "\n"])
+def test_a_malformed_line_before_the_last_or_ended_is_still_an_error(
+    ending: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Only a last line without its newline is taken for one cut short."""
+    lines = _recorded_run(tmp_path, capsys)
+    damaged = tmp_path / "damaged.jsonl"
+    if ending:  # the last line malformed, but whole: not a cut
+        damaged.write_text("".join([*lines[:40], lines[40][:20] + ending]), encoding="utf-8")
+    else:  # a line in the middle malformed, the last one cut
+        damaged.write_text("".join([*lines[:40], lines[40][:20] + "\n", *lines[41:50],
+                                    lines[50][:20]]), encoding="utf-8")  # fmt: skip
+    assert main(["replay", str(damaged)]) == 2
+    assert f"{damaged}:41: malformed chunk" in capsys.readouterr().err
