@@ -385,6 +385,16 @@ class Connection:
             last = max(last, self.wake.last_pulse)
         return last
 
+    def idle_at(self, moment: float) -> float | None:
+        """How long the robot had been without a command or a BRC pulse from us at
+        ``moment`` (link clock), or None if none is known before it: the watchdog's own
+        drive 0, written after a stream stopped, read as "-0 s" idle when it stopped."""
+        before = [t for t in self.writer.recent_commands if t <= moment]
+        pulse = self.wake.last_pulse if self.wake is not None else None
+        if pulse is not None and pulse <= moment:
+            before.append(pulse)
+        return moment - max(before) if before else None
+
     def _report_change(self, change: ModeChange) -> None:
         """A warning, unless the charger alone was the cause: docking ends that way (the OI
         drops to Passive on the home base's contacts), which a successful dock run reported

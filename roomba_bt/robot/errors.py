@@ -204,7 +204,7 @@ class RobotAsleep(LinkDown):
     def __init__(
         self,
         port: str,
-        idle_s: float,
+        idle_s: float | None,
         *,
         keep_awake: bool,
         pulses: bool,
@@ -221,16 +221,20 @@ class RobotAsleep(LinkDown):
             )
         else:
             fix = "check that the cable wires BRC to RTS or DTR"
+        idle = (
+            f"{idle_s:.0f} s" if idle_s is not None and idle_s >= 0.5
+            else "less than a second" if idle_s is not None else "an unknown time"
+        )  # fmt: skip
         if woken_by is None:
             what = (
-                f"the robot fell asleep: {idle_s:.0f} s in Passive without a command or a "
-                "BRC pulse (the OI sleeps after 5 minutes)"
+                f"the robot fell asleep: {idle} in Passive without a command or a BRC pulse "
+                "(the OI sleeps after 5 minutes)"
             )
         else:
             what = (
                 "the robot was asleep: its stream stopped and it answered nothing until a BRC "
-                f"pulse woke it ({woken_by}); it had been {idle_s:.0f} s without a command "
-                "or a pulse from us when its stream stopped, and is awake now, in Passive"
+                f"pulse woke it ({woken_by}); it had been {idle} without a command or a pulse "
+                "from us when its stream stopped, and is awake now, in Passive"
             )
         super().__init__(
             port,

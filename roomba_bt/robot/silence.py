@@ -90,7 +90,7 @@ def explain_silence(
         )  # fmt: skip
 
     # how long it had been without a command or a pulse when the stream stopped
-    idle = connection.link.silent_since - connection.idle_since
+    idle = connection.idle_at(connection.link.silent_since)
     try:
         connection.send(oi.pause_stream())
     except ModeError:  # the model says Off: nothing to ask

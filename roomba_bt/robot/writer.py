@@ -18,6 +18,7 @@ that may drive in Passive.
 from __future__ import annotations
 
 import logging
+from collections import deque
 from collections.abc import Iterable
 
 from roomba_bt.oi import commands as oi
@@ -40,6 +41,8 @@ _STREAM, _BAUD = Effect.STREAM, Effect.BAUD
 
 #: The spec asks for 100 ms after Baud (129) before sending at the new rate.
 BAUD_CHANGE_WAIT = 0.1
+#: Command times kept for :attr:`CommandWriter.recent_commands`.
+RECENT_COMMANDS = 8
 
 
 class CommandWriter:
@@ -65,6 +68,9 @@ class CommandWriter:
         self.builtin_may_run = False
         #: when the last command was written (link clock)
         self.last_command_at = float("-inf")
+        #: when the last few commands were written (link clock): how long the robot had been
+        #: without one at a moment past, the watchdog's own drive 0 after it aside
+        self.recent_commands: deque[float] = deque(maxlen=RECENT_COMMANDS)
         #: the bump reflex (robot/hazards.py): while a bump onset waits for its confirming
         #: frame, forward wheel commands are kept, not written; the one to send again after
         self.forward_held = False
@@ -134,6 +140,7 @@ class CommandWriter:
             batch += command.data
         now = self.link.transport.now()
         self.last_command_at = now
+        self.recent_commands.append(now)
         self.modes.apply(command, now)
         if spec.channel == "wheels":
             self.last_wheels = command

@@ -95,6 +95,18 @@ def test_a_robot_that_fell_asleep_early_is_woken_by_a_pulse_and_named_asleep(
     assert summary.stop_delivered  # it answered after the pulse: it hears the stop
 
 
+def test_a_robot_asleep_while_driving_is_said_idle_since_our_last_command_before_it(
+    tmp_path: Path,
+) -> None:
+    """The watchdog's own drive 0, written after the stream stopped, read as "-0 s" without a
+    command when it stopped."""
+    driving = "tree:\n  sequence:\n    - mode: safe\n    - drive: {velocity: 100 mm/s}\n"
+    summary, _ = run(tmp_path, driving, Faults(sleep_at=3.0))
+    assert "the robot was asleep" in summary.reason
+    assert "it had been 3 s without a command" in summary.reason, summary.reason  # drive at 0 s
+    assert "-0 s" not in summary.reason
+
+
 def test_the_oracles_stream_gap_is_ridden_through_the_wheels_stopped_within_150_ms(
     tmp_path: Path,
 ) -> None:
