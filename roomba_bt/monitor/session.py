@@ -241,7 +241,7 @@ class MonitorSession:
         self._cycle_before_pause = None if cycle is None or _on_home_base(runner) else cycle
         commands = pause_sequence(connection)
         connection.send_many(commands)
-        runner.summary.commands_written += len(commands)
+        runner.count_written()
         self.state.paused, self.state.pause_reason = True, why
         runner.clock_held = True  # mission time stands still until the resume
         sent = ", ".join(c.name for c in commands) or "nothing to send"
@@ -268,7 +268,7 @@ class MonitorSession:
             again.append(self._cycle_before_pause)
         if again:
             runner.connection.send_many(again)
-            runner.summary.commands_written += len(again)
+            runner.count_written()
         self.state.paused, self.state.pause_reason = False, ""
         runner.clock_held = False
         self._skip_tick = True  # the tree next ticks on a frame that shows the new mode

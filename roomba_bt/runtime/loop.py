@@ -272,6 +272,8 @@ class MissionRunner(BaseHandle):
     #: False: the run installs no signal handler (an evaluation's pool worker: Ctrl-C is
     #: its parent's, which ends the workers)
     guards_signals: bool = True
+    #: the writer's count of commands when the start-up was done (see :meth:`count_written`)
+    _sent_at_start: int | None = None
     #: the next batch's gap is a stall the watchdog saw and the run rode through (set by
     #: ``_stream_back``, read once by ``_slots_spanned``): not a gap nobody read
     _gap_explained: bool = False
@@ -292,6 +294,7 @@ class MissionRunner(BaseHandle):
         with guard:
             try:
                 self.connection.start(OIMode.PASSIVE, self.packets)
+                self._sent_at_start = self.connection.writer.sent
                 self._blackboard = py_trees.blackboard.Client(name="roomba-bt runtime")
                 self._blackboard.register_key(key=SNAPSHOT_KEY, access=py_trees.common.Access.WRITE)
                 self.mission.setup(self)
@@ -342,6 +345,7 @@ class MissionRunner(BaseHandle):
 
     def _finish(self, summary: RunSummary, wall_start: float) -> None:
         self.stop_tree()
+        self.count_written()  # the safe stop's are said apart
         stop_robot(self.connection, summary)
         if self._blackboard is not None:
             with contextlib.suppress(Exception):
@@ -570,7 +574,6 @@ class MissionRunner(BaseHandle):
         for command in self._outbox.drain():
             try:
                 self.connection.send(command)
-                self.summary.commands_written += 1
                 channel = command.spec.channel
                 if channel is not None:
                     self.last_sent[channel] = command
@@ -578,6 +581,16 @@ class MissionRunner(BaseHandle):
                 self.summary.refused_commands += 1
                 if len(self.refusals) < 100:
                     self.refusals.append(self._refusal(command, exc))
+        self.count_written()
+
+    def count_written(self) -> int:
+        """The summary's ``commands_written``: every command written since the start-up, the
+        tree's and those sent for it (the bump reflex's and the watchdog's drive 0, a wheel
+        command sent again, a pause); counted from the outbox, it left those out."""
+        start = self._sent_at_start
+        written = 0 if start is None else self.connection.writer.sent - start
+        self.summary.commands_written = written
+        return written
 
     def _refusal(self, command: Command, exc: ModeError) -> str:
         """``t=12.345 drive_straight: drive needs Safe or Full; the robot is in Passive since

@@ -285,3 +285,21 @@ def test_a_gap_under_a_second_is_not_said(run_mission: RunMission) -> None:
     test_ride_through.py.)"""
     summary = run_mission(SPIN, freeze=(1.0, 0.6), timeout=3.0, watchdog=1.0).summary
     assert summary.unread_gaps == 0 and "unread" not in str(summary)
+
+
+def test_the_summary_counts_every_command_the_run_wrote(run_mission: RunMission) -> None:
+    """The bump reflex's drive 0 (and the watchdog's, a pause's, a resend) went to the
+    robot past the outbox, and the summary's "commands N written" left them out."""
+    from roomba_bt.oi.encode import decode_command
+
+    run = run_mission(DRIVE_TO_WALL_AND_BACK_OFF)
+    assert run.summary.outcome is Outcome.SUCCESS
+    names, rest = [], run.link.written
+    while rest and (decoded := decode_command(rest)) is not None:
+        command, size = decoded
+        names.append(command.spec.name)
+        rest = rest[size:]
+    stop = len(run.summary.safe_stop.removeprefix("sent ").split(", "))
+    ran = names[names.index("stream") + 1 : -stop]  # after the start-up, before the safe stop
+    assert ran.count("drive") >= 3  # forward, the reflex's drive 0, backing off (and its halt)
+    assert run.summary.commands_written == len(ran), ran
