@@ -22,6 +22,13 @@ class OIMode(IntEnum):
     def label(self) -> str:
         return self.name.capitalize()
 
+    def __str__(self) -> str:
+        # ``print(robot.mode)`` printed 2 (an IntEnum's str is its number since Python 3.11)
+        return self.label
+
+    def __format__(self, spec: str) -> str:
+        return self.label if not spec else int.__format__(self, spec)
+
 
 ALL_MODES: frozenset[OIMode] = frozenset(OIMode)
 OPEN_MODES: frozenset[OIMode] = frozenset({OIMode.PASSIVE, OIMode.SAFE, OIMode.FULL})

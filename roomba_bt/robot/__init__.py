@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from roomba_bt.robot.connection import Connection, LinkCounters
     from roomba_bt.robot.errors import (
+        ConnectionClosed,
         ConnectionFailed,
         LinkDown,
         ModeError,
@@ -35,6 +36,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "Connection",
+    "ConnectionClosed",
     "ConnectionFailed",
     "LinkCounters",
     "LinkDown",
@@ -60,7 +62,15 @@ __all__ = [
 _MODULE_OF: dict[str, str] = {
     **dict.fromkeys(("Connection", "LinkCounters"), "connection"),
     **dict.fromkeys(
-        ("ConnectionFailed", "LinkDown", "ModeError", "PortLost", "RobotError", "StreamStalled"),
+        (
+            "ConnectionClosed",
+            "ConnectionFailed",
+            "LinkDown",
+            "ModeError",
+            "PortLost",
+            "RobotError",
+            "StreamStalled",
+        ),
         "errors",
     ),
     **dict.fromkeys(("ModeChange", "Odometry", "Outbox", "RobotHandle", "Snapshot"), "interface"),

@@ -28,16 +28,19 @@ import logging
 import weakref
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import NoReturn
 
 from roomba_bt.oi import commands as oi
-from roomba_bt.oi.encode import Command
+from roomba_bt.oi.encode import BAUD_CODES, Command
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile, get_profile
 from roomba_bt.oi.stream import ReplyParser, check_bandwidth
 from roomba_bt.robot.ending import EndMode, SafeStop
 from roomba_bt.robot.errors import (
+    ConnectionClosed,
     NoAnswer,
+    PortLost,
     RobotError,
     RobotReset,
     StreamLost,
@@ -55,6 +58,7 @@ from roomba_bt.robot.silence import (
 )
 from roomba_bt.robot.startup import (
     NO_ANSWER_CAUSES,
+    ModeName,
     agreed_mode_reply,
     as_mode,
     not_a_mode,
@@ -186,7 +190,11 @@ class Connection:
         end_in: EndMode = "passive",
         write_timeout: float = 0.5,
     ) -> Connection:
-        """Open ``url`` (device path, ``socket://``, ``rfc2217://``, ``loop://``)."""
+        """Open ``url`` (device path, ``socket://``, ``rfc2217://``, ``loop://``) at ``baud``,
+        one of the OI's rates (115200 by default; 19200 after Clean was held at power-on)."""
+        if baud not in BAUD_CODES:
+            rates = ", ".join(str(rate) for rate in BAUD_CODES)
+            raise ValueError(f"baud {baud!r}: the OI talks at {rates}")
         try:
             transport = SerialTransport.open(url, baud, write_timeout=write_timeout)
         except TransportError as exc:
@@ -195,7 +203,7 @@ class Connection:
 
     def start(
         self,
-        mode: OIMode | str = OIMode.SAFE,
+        mode: OIMode | ModeName = OIMode.SAFE,
         packets: Sequence[int] = (),
         confirm_timeout: float = 1.0,
     ) -> None:
@@ -327,7 +335,14 @@ class Connection:
         garbage, and frames at another rate) or
         :class:`StreamStalled` (see :meth:`check_stall` for riding it through).
         """
-        frames = self.poll_frames(timeout)
+        if self.ending.closed:
+            raise ConnectionClosed(self.name)
+        try:
+            frames = self.poll_frames(timeout)
+        except PortLost:
+            if self.ending.closed:  # closed by another thread while this one read
+                raise ConnectionClosed(self.name) from None
+            raise
         return self.link.read_timed(frames) if frames else []
 
     def poll_frames(self, timeout: float = 0.0) -> Sequence[SensorFrame]:
@@ -440,13 +455,30 @@ class Connection:
     def send(self, command: Command) -> None:
         """Guard, write, follow one command (:meth:`CommandWriter.send
         <roomba_bt.robot.writer.CommandWriter.send>`; a refused one raises, nothing written)."""
+        if not isinstance(command, Command) or self.ending.closed:
+            self._refuse_to_send(command)
         self.writer.send(command)
 
     def send_many(self, commands: Iterable[Command]) -> None:
         """A tick's outbox in one write (:meth:`CommandWriter.send_many
         <roomba_bt.robot.writer.CommandWriter.send_many>`): refused commands left out, the
         first refusal raised after the others are written."""
+        commands = list(commands)
+        for command in commands:
+            if not isinstance(command, Command) or self.ending.closed:
+                self._refuse_to_send(command)
         self.writer.send_many(commands)
+
+    def _refuse_to_send(self, command: object) -> NoReturn:
+        """Raw bytes or an opcode (pycreate2's and PyRoombaAdapter's way) would pass the mode
+        guard by; a closed connection read as a port gone."""
+        if self.ending.closed:
+            raise ConnectionClosed(self.name)
+        raise TypeError(
+            f"send() takes a Command from roomba_bt.oi.commands (e.g. oi.drive(200, 32767), "
+            f"oi.safe()), not {type(command).__name__} {command!r:.40}: the mode guard "
+            "reads the command, and raw bytes would pass it by"
+        )
 
     def set_baud(self, rate: int) -> None:
         """Baud (129) by rate (e.g. 19200); the port follows after 100 ms."""

@@ -26,6 +26,14 @@ class RobotError(Exception):
     """Base of every error raised by :mod:`roomba_bt.robot`."""
 
 
+class ConnectionClosed(RobotError, RuntimeError):
+    """The connection was used after :meth:`~roomba_bt.robot.connection.Connection.close`
+    (it read as a port gone: an unplugged cable)."""
+
+    def __init__(self, port: str) -> None:
+        super().__init__(f"{port}: the connection is closed (close() was called): open a new one")
+
+
 def format_wall_time(wall_time: float) -> str:
     """``12:01:03.120``: local time of day with milliseconds, for messages."""
     seconds = int(wall_time)

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
+from typing import Literal
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import SensorFrame
@@ -43,6 +44,11 @@ def port_not_opened(url: str, exc: TransportError) -> ConnectionFailed:
     if isinstance(exc.cause, str):
         return ConnectionFailed(url, f"could not open the port: {exc.cause}")
     return ConnectionFailed(url, f"could not open the port ({exc.cause})", OPEN_CAUSES)
+
+
+#: The modes :meth:`~roomba_bt.robot.connection.Connection.start` enters, by name (a type
+#: checker then refuses ``start("turbo")`` before it runs).
+ModeName = Literal["passive", "safe", "full"]
 
 
 def as_mode(mode: OIMode | str) -> OIMode:

@@ -1,6 +1,8 @@
-"""A library user's program that never calls ``close()`` does not leave the robot driving:
-the connection is stopped and closed when it is dropped, or when the program ends (a script
-that opened, drove and exited left the simulated robot in Safe at 142 mm/s, silently)."""
+"""The connection as a library user meets it (a field trial's findings): a program that never
+calls ``close()`` does not leave the robot driving (it is stopped and closed when dropped, or
+when the program ends: a script that opened, drove and exited left the simulated robot in
+Safe at 142 mm/s, silently); raw bytes, a closed connection, a rate the OI does not talk at
+and a printed mode each say what they are."""
 
 from __future__ import annotations
 
@@ -79,3 +81,36 @@ def test_a_program_that_ends_without_close_stops_the_robot() -> None:
     assert "wrote 89 00 00 00 00" in after  # drive 0
     assert after.rstrip().endswith("80")  # Start: Passive
     assert "the program ended without close() while the robot was at 150 mm/s" in done.stderr
+
+
+def test_raw_bytes_or_an_opcode_are_refused_naming_the_commands_module() -> None:
+    """pycreate2's and PyRoombaAdapter's way; it was "'bytes' object has no attribute
+    'spec'"."""
+    simulator = Simulator(parse_world(BOX, "<test>"), profile=CREATE2)
+    with Connection(SimLink(simulator), CREATE2) as connection:
+        connection.start("safe", (7, 35))
+        for wrong in (b"\x89\x00\x64\x80\x00", 137):
+            with pytest.raises(TypeError, match=r"a Command from roomba_bt.oi.commands"):
+                connection.send(wrong)  # type: ignore[arg-type]
+            with pytest.raises(TypeError, match=r"raw bytes would pass it by"):
+                connection.send_many([oi.safe(), wrong])  # type: ignore[list-item]
+        assert simulator.requested_left == 0  # nothing of the batch was written
+
+
+def test_a_closed_connection_says_it_is_closed_not_that_the_port_is_gone() -> None:
+    from roomba_bt.robot import ConnectionClosed
+
+    simulator = Simulator(parse_world(BOX, "<test>"), profile=CREATE2)
+    connection = Connection(SimLink(simulator), CREATE2)
+    connection.start("safe", (7, 35))
+    connection.close()
+    for use in (lambda: connection.send(oi.drive(100, 0)), lambda: connection.poll(0.01)):
+        with pytest.raises(ConnectionClosed, match=r"the connection is closed \(close\(\) was"):
+            use()
+
+
+def test_open_takes_only_the_ois_rates_and_a_mode_prints_its_name() -> None:
+    with pytest.raises(ValueError, match=r"baud 9999: the OI talks at 300, 600, .*, 115200"):
+        Connection.open("loop://", baud=9999)
+    assert str(OIMode.SAFE) == "Safe" and f"{OIMode.PASSIVE}" == "Passive"  # printed 2, 1
+    assert f"{OIMode.FULL:d}" == "3" and OIMode.SAFE == 2
