@@ -26,7 +26,7 @@ from roomba_bt.cli.monitor_cmd import LiveMonitor
 from roomba_bt.cli.monitor_cmd import add_run_arguments as add_monitor_arguments
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.profiles import RobotProfile, get_profile
-from roomba_bt.runtime.summary import DEFAULT_GRACE, DEFAULT_TICK_LIMIT, ExitCode
+from roomba_bt.runtime.summary import DEFAULT_GRACE, DEFAULT_TICK_LIMIT, ExitCode, Outcome
 
 if TYPE_CHECKING:
     from roomba_bt.mission import Permissions
@@ -380,6 +380,10 @@ def _report(
         and summary.reason
     ):
         print(f"roomba-bt: {summary.outcome.value}: {summary.reason}", file=sys.stderr)
+    if summary.outcome is Outcome.NO_CONNECTION and args.port:
+        # doctor tries what start-up does not: each rate, a BRC pulse or a hang-up to wake it
+        print(f"roomba-bt: `roomba-bt doctor --port {args.port}` finds the robot's rate, wakes "
+              "it if it sleeps and says what else is wrong", file=sys.stderr)  # fmt: skip
     if summary.traceback:
         if getattr(args, "verbose", 0):
             print(summary.traceback, file=sys.stderr, end="")

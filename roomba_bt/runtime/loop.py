@@ -308,7 +308,9 @@ class MissionRunner(BaseHandle):
             except StopRequested as exc:
                 summary.outcome, summary.reason = Outcome.INTERRUPTED, str(exc)
             except ConnectionFailed as exc:
-                summary.outcome, summary.reason = Outcome.CONNECTION_LOST, str(exc)
+                answered = self.has_snapshot  # a robot that never streamed was not lost
+                summary.outcome = Outcome.CONNECTION_LOST if answered else Outcome.NO_CONNECTION
+                summary.reason = str(exc)
             except LinkDown as exc:
                 summary.outcome, summary.reason = Outcome.CONNECTION_LOST, str(exc)
             except (OSError, ConnectionError) as exc:

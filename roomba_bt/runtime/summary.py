@@ -42,6 +42,8 @@ class Outcome(Enum):
     TIMEOUT = "timeout"
     INTERRUPTED = "interrupted"
     CONNECTION_LOST = "connection lost"
+    #: the robot never answered the start-up (it was never connected, so nothing was lost)
+    NO_CONNECTION = "no connection"
     ERROR = "error"
     #: the run's input ended before the tree did: a replayed record's end, or its first
     #: difference from what the tree wrote (``replay`` says which, and exits by the bytes)
@@ -59,6 +61,7 @@ _EXIT = {
     Outcome.TIMEOUT: ExitCode.MISSION_FAILED,
     Outcome.INTERRUPTED: ExitCode.INTERRUPTED,
     Outcome.CONNECTION_LOST: ExitCode.CONNECTION,
+    Outcome.NO_CONNECTION: ExitCode.CONNECTION,
     Outcome.ERROR: ExitCode.BEHAVIOUR_ERROR,
     Outcome.INPUT_ENDED: ExitCode.MISSION_FAILED,
 }

@@ -280,3 +280,20 @@ def test_eval_names_the_stage_that_was_running_when_time_ran_out(
         "dock_approach"
     )
     assert failure_stage("find_dock(speed=1): lost the beam") == "find_dock"
+
+
+def test_a_robot_that_never_answers_is_no_connection_and_doctor_is_named(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """An asleep robot on a pty (no modem line to pulse BRC): it was "CONNECTION LOST"
+    although nothing had been connected, and nothing said that doctor wakes it."""
+    from robot.sim_backend import sim_pty_server
+
+    from roomba_bt.oi.profiles import CREATE2
+
+    with sim_pty_server(CREATE2, "--asleep") as port:
+        code = main(["run", "bump-and-turn", "--port", port, "--display", "none"])
+    out, err = capsys.readouterr()
+    assert code == 3
+    assert "outcome      NO CONNECTION (" in out
+    assert f"`roomba-bt doctor --port {port}` finds the robot's rate, wakes it" in err

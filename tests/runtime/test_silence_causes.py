@@ -185,7 +185,8 @@ def test_a_robot_at_another_rate_from_the_start_is_named_and_left_in_passive(
     """The robot at 19200 (Clean held at power-off), the run at 115200: no answer at the
     run's rate, so the other OI rate is asked before the run gives up, and named."""
     summary, simulator = run(tmp_path, SPIN, Faults(), robot_baud=19200)
-    assert summary.outcome is Outcome.CONNECTION_LOST and summary.exit_code == 3
+    # never connected: "no connection", not "connection lost"; the same exit code
+    assert summary.outcome is Outcome.NO_CONNECTION and summary.exit_code == 3
     assert "the robot answers at 19200 baud, not at the 115200 of the run" in summary.reason
     assert "run with --baud 19200 or --baud auto" in summary.reason
     assert "likely causes" not in summary.reason
