@@ -411,10 +411,10 @@ def _agree(first: SensorFrame, second: SensorFrame) -> bool:
     )
 
 
-def _status(transport: Any, profile: Any, plus_one: bool, report: Report) -> None:
+def _agreed_status(transport: Any, profile: Any, report: Report) -> SensorFrame:
+    """The status Query List's reply, asked until two in a row agree (:func:`_agree`); a
+    failure (no answer, or replies that never agree) is reported and ends the doctor."""
     from roomba_bt.oi import commands as oi
-    from roomba_bt.oi.bits import ChargingState
-    from roomba_bt.oi.modes import mode_from_packet
     from roomba_bt.oi.stream import ReplyParser
     from roomba_bt.robot.handshake import drain
 
@@ -459,6 +459,14 @@ def _status(transport: Any, profile: Any, plus_one: bool, report: Report) -> Non
             "cable and run doctor again",
         )
         raise _Failed(DoctorExit.UNHEALTHY)
+    return frame
+
+
+def _status(transport: Any, profile: Any, plus_one: bool, report: Report) -> None:
+    from roomba_bt.oi.bits import ChargingState
+    from roomba_bt.oi.modes import mode_from_packet
+
+    frame = _agreed_status(transport, profile, report)
     charge, capacity = frame.battery_charge_mah, frame.battery_capacity_mah
     percent = f"{100 * charge / capacity:.0f} %" if capacity else "capacity 0 (no battery?)"
     report.facts["battery"] = percent

@@ -28,7 +28,6 @@ import logging
 import weakref
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import NoReturn
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import BAUD_CODES, Command
@@ -107,7 +106,23 @@ _LIVE: weakref.WeakSet[Connection] = weakref.WeakSet()
 def _close_at_exit() -> None:
     for connection in list(_LIVE):
         with contextlib.suppress(Exception):
-            connection._close_left_open("the program ended without close()")
+            _close_left_open(connection, "the program ended without close()")
+
+
+def _close_left_open(connection: Connection, why: str) -> None:
+    """The safe stop and close for a started session nobody closed: a library user's
+    script that ended, or dropped its connection, left the robot driving in Safe."""
+    if connection.ending.closed:
+        return
+    if connection.mode not in DRIVING_MODES and connection.running_cycle is None:
+        return  # never started, or stopped in Passive: nothing of ours can be moving
+    doing = connection.activity()
+    stopped = connection.close()
+    log.warning(
+        "%s: %s while the robot was %s; %s (use `with Connection.open(...)` or call "
+        "close())", connection.name, why, doing,
+        "the safe stop was sent" if stopped else "the safe stop could not be delivered",
+    )  # fmt: skip
 
 
 class Connection:
@@ -161,22 +176,7 @@ class Connection:
     def __del__(self) -> None:
         # a program that forgot close() (pycreate2 stops in its __del__ too)
         with contextlib.suppress(Exception):
-            self._close_left_open("the connection was dropped without close()")
-
-    def _close_left_open(self, why: str) -> None:
-        """The safe stop and close for a started session nobody closed: a library user's
-        script that ended, or dropped its connection, left the robot driving in Safe."""
-        if self.ending.closed:
-            return
-        if self.modes.mode not in DRIVING_MODES and self.running_cycle is None:
-            return  # never started, or stopped in Passive: nothing of ours can be moving
-        doing = self.activity()
-        stopped = self.close()
-        log.warning(
-            "%s: %s while the robot was %s; %s (use `with Connection.open(...)` or call "
-            "close())", self.name, why, doing,
-            "the safe stop was sent" if stopped else "the safe stop could not be delivered",
-        )  # fmt: skip
+            _close_left_open(self, "the connection was dropped without close()")
 
     # ------------------------------------------------------------------ opening
     @classmethod
@@ -400,16 +400,6 @@ class Connection:
             last = max(last, self.wake.last_pulse)
         return last
 
-    def idle_at(self, moment: float) -> float | None:
-        """How long the robot had been without a command or a BRC pulse from us at
-        ``moment`` (link clock), or None if none is known before it: the watchdog's own
-        drive 0, written after a stream stopped, read as "-0 s" idle when it stopped."""
-        before = [t for t in self.writer.recent_commands if t <= moment]
-        pulse = self.wake.last_pulse if self.wake is not None else None
-        if pulse is not None and pulse <= moment:
-            before.append(pulse)
-        return moment - max(before) if before else None
-
     def _report_change(self, change: ModeChange) -> None:
         """A warning, unless the charger alone was the cause: docking ends that way (the OI
         drops to Passive on the home base's contacts), which a successful dock run reported
@@ -456,7 +446,7 @@ class Connection:
         """Guard, write, follow one command (:meth:`CommandWriter.send
         <roomba_bt.robot.writer.CommandWriter.send>`; a refused one raises, nothing written)."""
         if not isinstance(command, Command) or self.ending.closed:
-            self._refuse_to_send(command)
+            raise _refusal(self, command)
         self.writer.send(command)
 
     def send_many(self, commands: Iterable[Command]) -> None:
@@ -466,19 +456,8 @@ class Connection:
         commands = list(commands)
         for command in commands:
             if not isinstance(command, Command) or self.ending.closed:
-                self._refuse_to_send(command)
+                raise _refusal(self, command)
         self.writer.send_many(commands)
-
-    def _refuse_to_send(self, command: object) -> NoReturn:
-        """Raw bytes or an opcode (pycreate2's and PyRoombaAdapter's way) would pass the mode
-        guard by; a closed connection read as a port gone."""
-        if self.ending.closed:
-            raise ConnectionClosed(self.name)
-        raise TypeError(
-            f"send() takes a Command from roomba_bt.oi.commands (e.g. oi.drive(200, 32767), "
-            f"oi.safe()), not {type(command).__name__} {command!r:.40}: the mode guard "
-            "reads the command, and raw bytes would pass it by"
-        )
 
     def set_baud(self, rate: int) -> None:
         """Baud (129) by rate (e.g. 19200); the port follows after 100 ms."""
@@ -546,3 +525,15 @@ class Connection:
 
     def __exit__(self, *exc_info: object) -> None:
         self.close()
+
+
+def _refusal(connection: Connection, command: object) -> Exception:
+    """Why ``command`` is not sent: raw bytes or an opcode (pycreate2's and PyRoombaAdapter's
+    way) would pass the mode guard by; a closed connection read as a port gone."""
+    if connection.ending.closed:
+        return ConnectionClosed(connection.name)
+    return TypeError(
+        f"send() takes a Command from roomba_bt.oi.commands (e.g. oi.drive(200, 32767), "
+        f"oi.safe()), not {type(command).__name__} {command!r:.40}: the mode guard reads the "
+        "command, and raw bytes would pass it by"
+    )

@@ -76,6 +76,17 @@ def asleep_by_idle(connection: Connection) -> RobotAsleep | None:
     )
 
 
+def idle_at(connection: Connection, moment: float) -> float | None:
+    """How long the robot had been without a command or a BRC pulse from us at ``moment``
+    (link clock), or None if none is known before it: the watchdog's own drive 0, written
+    after a stream stopped, read as "-0 s" idle when it stopped."""
+    before = [t for t in connection.writer.recent_commands if t <= moment]
+    pulse = connection.wake.last_pulse if connection.wake is not None else None
+    if pulse is not None and pulse <= moment:
+        before.append(pulse)
+    return moment - max(before) if before else None
+
+
 def explain_silence(
     connection: Connection, silent_for: float, grace: float, *, halted: bool
 ) -> LinkDown:
@@ -90,7 +101,7 @@ def explain_silence(
         )  # fmt: skip
 
     # how long it had been without a command or a pulse when the stream stopped
-    idle = connection.idle_at(connection.link.silent_since)
+    idle = idle_at(connection, connection.link.silent_since)
     try:
         connection.send(oi.pause_stream())
     except ModeError:  # the model says Off: nothing to ask

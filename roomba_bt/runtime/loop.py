@@ -36,7 +36,7 @@ from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
 from roomba_bt.robot.connection import Connection
-from roomba_bt.robot.errors import ConnectionFailed, LinkDown, ModeError, StreamStalled
+from roomba_bt.robot.errors import ConnectionFailed, LinkDown, ModeError
 from roomba_bt.robot.hazards import HazardConfirmation, turns_a_wheel
 from roomba_bt.robot.interface import (
     SLOT_SECONDS,
@@ -45,6 +45,7 @@ from roomba_bt.robot.interface import (
     Snapshot,
 )
 from roomba_bt.robot.safety import InterruptGuard, Terminated, signal_reason
+from roomba_bt.runtime.stall import StallRide
 from roomba_bt.runtime.summary import DEFAULT_GRACE, Outcome, RunSummary
 from roomba_bt.runtime.tick_guard import TickGuardLike
 
@@ -207,6 +208,7 @@ class MissionRunner(BaseHandle):
     ) -> None:
         super().__init__(profile)
         self.connection = connection
+        self.summary = RunSummary(mission.name)
         self.mission = mission
         self.packets = tuple(packets)
         self.timeout_s = timeout_s
@@ -214,8 +216,8 @@ class MissionRunner(BaseHandle):
         self.poll_timeout = poll_timeout
         self.input_ended = input_ended
         self.gate = gate
-        #: seconds to wait for valid frames after the watchdog tripped (0: end at once)
-        self.grace = grace
+        #: the watchdog's trips, ridden through for ``grace`` seconds (0: a trip ends the run)
+        self._ride = StallRide(connection, self.summary, grace, self._send_wheels_again)
         #: Ctrl-C and SIGTERM stay ignored after :meth:`run` returns, until
         #: :meth:`release_interrupts` (the CLI: its summary is still to be printed); else the
         #: previous handlers come back when it returns
@@ -223,14 +225,10 @@ class MissionRunner(BaseHandle):
         if tick_guard is not None:  # set only when given: see the class attribute
             self.tick_guard = tick_guard
         self._guard: InterruptGuard | None = None
-        #: while a stall is ridden through: (bytes read when it began, drive 0 sent, the
-        #: last valid frame's time)
-        self._stall: tuple[int, bool, float] | None = None
         self.snapshot = NO_SNAPSHOT_YET
         self._odometer = Odometer(profile.wheel_base_mm)
         self._tick = -1
         self._last_arrival: float | None = None
-        self.summary = RunSummary(mission.name)
         self.refusals: list[str] = []
         #: the last command written on each actuator channel ("wheels", "motors", ...): what
         #: a resume after the monitor's pause sends again
@@ -274,9 +272,6 @@ class MissionRunner(BaseHandle):
     guards_signals: bool = True
     #: the writer's count of commands when the start-up was done (see :meth:`count_written`)
     _sent_at_start: int | None = None
-    #: the next batch's gap is a stall the watchdog saw and the run rode through (set by
-    #: ``_stream_back``, read once by ``_slots_spanned``): not a gap nobody read
-    _gap_explained: bool = False
 
     @property
     def has_snapshot(self) -> bool:
@@ -363,21 +358,12 @@ class MissionRunner(BaseHandle):
     def _loop(self, root: py_trees.behaviour.Behaviour, summary: RunSummary) -> None:
         success, failure = py_trees.common.Status.SUCCESS, py_trees.common.Status.FAILURE
         perf = time.perf_counter
-        connection = self.connection
         tick_guard = self.tick_guard  # started by run()
         tick = self._tick_of(root, tick_guard)
+        read, poll_timeout = self._ride.read, self.poll_timeout
         held = False  # the root ended and the gate holds the run there (the monitor)
         while True:
-            try:
-                batch = connection.poll_frames(self.poll_timeout)
-            except StreamStalled as stalled:
-                self._stalled(stalled)
-                batch = ()
-            if (stall := self._stall) is not None:
-                if batch:
-                    self._stream_back(stall[2])
-                else:
-                    connection.check_stall(stall[0], self.grace, stall[1])
+            batch = read(poll_timeout)
             if not batch:
                 if self.input_ended is not None and (why := self.input_ended()):
                     summary.outcome, summary.reason = Outcome.INPUT_ENDED, why
@@ -430,16 +416,6 @@ class MissionRunner(BaseHandle):
             summary.outcome = Outcome.FAILURE
             summary.reason = failure_reason(root)
 
-    def _stalled(self, stalled: StreamStalled) -> None:
-        """The watchdog tripped (drive 0 sent): ride it through for :attr:`grace` seconds,
-        or end now without one."""
-        if self.grace <= 0:
-            raise stalled
-        self.summary.stalls += 1
-        link = self.connection.link
-        self._stall = (link.bytes_read, stalled.halted, link.silent_since)
-        log.warning("%s; waiting up to %g s for valid frames", stalled, self.grace)
-
     def _tick_of(
         self, root: py_trees.behaviour.Behaviour, tick_guard: TickGuardLike | None
     ) -> Callable[[], object]:
@@ -476,21 +452,6 @@ class MissionRunner(BaseHandle):
             and all(c.spec.channel != "wheels" for c in self._outbox)
         ):
             self._outbox.send(wheels, self)
-
-    def _stream_back(self, silent_since: float) -> None:
-        """Valid frames came back within the grace: the tree goes on, and the wheels get
-        their last command again (the watchdog's drive 0 had replaced it) unless the tick
-        sends another."""
-        self._stall = None
-        self._gap_explained = True
-        self.summary.stalls_ridden += 1
-        connection = self.connection
-        gap = connection.link.silent_since - silent_since
-        log.warning(
-            "%s: valid frames are back after %.0f ms; the mission goes on", connection.name,
-            gap * 1000,
-        )  # fmt: skip
-        self._send_wheels_again()
 
     def _advance(self, batch: Sequence[SensorFrame]) -> float:
         """Newest frame of the batch -> the tick's snapshot; stale frames and gaps counted.
@@ -560,9 +521,10 @@ class MissionRunner(BaseHandle):
         if last is None:
             return 1
         gap = arrival - last
-        if gap >= UNREAD_GAP_SECONDS and not self._gap_explained:
+        ride = self._ride
+        if gap >= UNREAD_GAP_SECONDS and not ride.gap_explained:
             unread_gap(self.summary, self.connection.name, gap)
-        self._gap_explained = False
+        ride.gap_explained = False
         slots = max(count, round(gap / SLOT_SECONDS))
         if slots != count:
             self.summary.frames_lost += slots - count

@@ -1,0 +1,83 @@
+"""A watchdog trip, ridden through: the run's read of the stream when frames stop coming.
+
+The connection's watchdog sends drive 0 when no valid frame came for its time and raises
+:class:`~roomba_bt.robot.errors.StreamStalled` once. A noisy cable or a loaded machine makes
+such gaps; the run waits up to its grace (``--grace``, 2 s) for valid frames. Frames coming
+back let the tree go on where it was, the wheels given their last command again; none within
+the grace ends the run with the cause the connection finds (a garbled line, a robot asleep,
+reset or switched off: :meth:`~roomba_bt.robot.connection.Connection.check_stall`).
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Sequence
+
+from roomba_bt.oi.frames import SensorFrame
+from roomba_bt.robot.connection import Connection
+from roomba_bt.robot.errors import StreamStalled
+from roomba_bt.runtime.summary import RunSummary
+
+log = logging.getLogger("roomba_bt.runtime.loop")
+
+
+class StallRide:
+    """The run's reads, each trip counted in ``summary`` and ridden through for ``grace``
+    seconds (0: the trip ends the run); ``wheels_again`` sends the tree's last wheel command
+    once frames are back (the watchdog's drive 0 had replaced it)."""
+
+    def __init__(
+        self,
+        connection: Connection,
+        summary: RunSummary,
+        grace: float,
+        wheels_again: Callable[[], None],
+    ) -> None:
+        self.connection = connection
+        self.summary = summary
+        self.grace = grace
+        self._wheels_again = wheels_again
+        #: while a stall is ridden through: (bytes read when it began, drive 0 sent, the
+        #: last valid frame's time)
+        self.stall: tuple[int, bool, float] | None = None
+        #: the next batch's gap is a stall ridden through, not a gap nobody read (read once
+        #: by the runner's count of the slots a batch spans)
+        self.gap_explained = False
+
+    def read(self, timeout: float) -> Sequence[SensorFrame]:
+        """The frames there now, or within ``timeout`` s (none during a stall); raises the
+        stall's cause once the grace is over."""
+        connection = self.connection
+        try:
+            batch = connection.poll_frames(timeout)
+        except StreamStalled as stalled:
+            self._tripped(stalled)
+            batch = ()
+        if (stall := self.stall) is not None:
+            if batch:
+                self._back(stall[2])
+            else:
+                connection.check_stall(stall[0], self.grace, stall[1])
+        return batch
+
+    def _tripped(self, stalled: StreamStalled) -> None:
+        if self.grace <= 0:
+            raise stalled
+        self.summary.stalls += 1
+        link = self.connection.link
+        self.stall = (link.bytes_read, stalled.halted, link.silent_since)
+        log.warning("%s; waiting up to %g s for valid frames", stalled, self.grace)
+
+    def _back(self, silent_since: float) -> None:
+        """Valid frames came back within the grace: the tree goes on, and the wheels get
+        their last command again unless the tick sends another."""
+        self.stall = None
+        self.gap_explained = True
+        self.summary.stalls_ridden += 1
+        connection = self.connection
+        gap = connection.link.silent_since - silent_since
+        log.warning(
+            "%s: valid frames are back after %.0f ms; the mission goes on", connection.name,
+            gap * 1000,
+        )  # fmt: skip
+        self._wheels_again()
