@@ -48,8 +48,9 @@ from roomba_bt.oi.profiles import PROFILES
 from roomba_bt.runtime.summary import ExitCode, Outcome
 
 if TYPE_CHECKING:  # the evaluation is imported when it runs: the CLI starts faster
-    from roomba_bt.evaluate.episode import EpisodeSpec
-    from roomba_bt.evaluate.parallel import Engine, Evaluation
+    from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec
+    from roomba_bt.evaluate.parallel import Engine, Evaluation, Progress
+    from roomba_bt.evaluate.records import PartialResults
     from roomba_bt.evaluate.stats import Comparison, Summary
     from roomba_bt.sim.world import World
 
@@ -279,8 +280,13 @@ def eval_command(args: argparse.Namespace) -> int:
     jobs = min(args.jobs, sum(len(batch) for batch in batches))
     engine = Engine("dask" if args.scheduler or args.engine == "dask" else "local", jobs,
                     args.scheduler)  # fmt: skip
-    done = _run(args, chosen, batches, engine)
+    partial = _partial(args.out)
+    if isinstance(partial, int):
+        return partial
+    done = _run(args, chosen, batches, engine, partial)
     if isinstance(done, int):
+        if partial is not None:
+            partial.done()
         return done
     summaries = [
         summarize(v.mission, world.name, e.results) for v, e in zip(chosen, done, strict=True)
@@ -299,7 +305,12 @@ def eval_command(args: argparse.Namespace) -> int:
         try:
             write_results(args.out, [r for e in done for r in e.results])
         except OSError as exc:
-            return _error(f"--out {args.out}: {exc.strerror or exc}; the summary is above")
+            assert partial is not None
+            partial.done(keep=True)
+            return _error(f"--out {args.out}: {exc.strerror or exc}; the summary is above, "
+                          f"the records in {partial.path}")  # fmt: skip
+        if partial is not None:
+            partial.done()
         print(f"results written to {args.out}", file=sys.stderr)
     if interrupted:
         finished = sum(len(e.results) for e in done)
@@ -471,14 +482,28 @@ def _warn_if_one_start(args: argparse.Namespace, world: World) -> None:
         )
 
 
+def _partial(out: str | None) -> PartialResults | int | None:
+    """``--out``'s records as they finish (:class:`PartialResults`); an exit code when its
+    file cannot be made."""
+    if out is None:
+        return None
+    from roomba_bt.evaluate.records import PartialResults
+
+    try:
+        return PartialResults(out)
+    except OSError as exc:
+        return _error(f"--out {out}: {exc.strerror or exc}")
+
+
 def _run(
     args: argparse.Namespace,
     chosen: list[Variant],
     batches: list[list[EpisodeSpec]],
     engine: Engine,
+    partial: PartialResults | None = None,
 ) -> list[Evaluation] | int:
-    """Every variant's episodes on the engine, a progress bar each; an exit code when the
-    cluster is not there."""
+    """Every variant's episodes on the engine, a progress bar each, each record into
+    ``partial`` as it finishes; an exit code when the cluster is not there."""
     from roomba_bt.evaluate.cluster import ClusterUnavailableError, SchedulerUnreachableError
     from roomba_bt.evaluate.parallel import ProgressBar, evaluate
 
@@ -487,13 +512,23 @@ def _run(
                                                   f"{' '.join(f'{k}={x}' for k, x in v.params)} ")
         for v in chosen
     ]  # fmt: skip
+    progress = bars if partial is None else [_recorded(partial, bar) for bar in bars]
     try:
-        return evaluate(batches, engine, bars)
+        return evaluate(batches, engine, progress)
     except SchedulerUnreachableError as exc:
         print(f"roomba-bt eval: {exc}", file=sys.stderr)
         return ExitCode.CONNECTION
     except ClusterUnavailableError as exc:
         return _error(str(exc))
+
+
+def _recorded(partial: PartialResults, bar: Progress | None) -> Progress:
+    def progress(done: int, total: int, result: EpisodeResult) -> None:
+        partial.add(result)
+        if bar is not None:
+            bar(done, total, result)
+
+    return progress
 
 
 def _report(

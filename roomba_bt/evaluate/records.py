@@ -205,6 +205,27 @@ def write_results(path: str | Path, results: Iterable[EpisodeResult]) -> int:
     return len(records)
 
 
+class PartialResults:
+    """Each episode's record as it finishes, one JSON line flushed at a time, into
+    ``OUT.partial.jsonl`` beside ``--out OUT`` (which is written, in the episodes' order,
+    only at the end): a sweep killed by the OOM killer or a ``kill -9`` lost every record.
+    :meth:`done` removes it once ``OUT`` is written; :func:`read_results` reads it."""
+
+    def __init__(self, out: str | Path) -> None:
+        self.path = Path(f"{out}.partial.jsonl")
+        self._file = open(self.path, "w", encoding="utf-8")  # noqa: SIM115 (closed in done)
+
+    def add(self, result: EpisodeResult) -> None:
+        self._file.write(json.dumps(to_record(result)) + "\n")
+        self._file.flush()
+
+    def done(self, keep: bool = False) -> None:
+        """Closed; removed unless ``keep`` (the final file could not be written)."""
+        self._file.close()
+        if not keep:
+            self.path.unlink(missing_ok=True)
+
+
 def _csv_cells(record: dict[str, Any]) -> dict[str, str]:
     """The record's structured values as CSV cells (``None`` is an empty cell already)."""
     cells = {"params": ";".join(f"{k}={v}" for k, v in record["params"].items())}

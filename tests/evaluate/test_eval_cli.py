@@ -531,3 +531,39 @@ def test_episodes_whose_robot_switched_off_are_failures_not_log_lines(
     assert "2  connection lost:" in out and "most likely a flat battery" in out
     assert "unconfirmed" not in err
     assert not [r for r in caplog.records if r.name.startswith("roomba_bt")]
+
+
+def test_a_killed_evaluation_leaves_the_records_it_finished(tmp_path: Path) -> None:
+    """The records were written only at the end: a sweep the OOM killer or a kill -9 ended
+    lost them all. Now each is in OUT.partial.jsonl as it finishes (removed once OUT is
+    written)."""
+    import signal
+    import subprocess
+    import time
+
+    from roomba_bt.evaluate.records import read_results
+
+    out = tmp_path / "sweep.csv"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "roomba_bt.cli", "eval", str(MISSIONS / "dock.yaml"),
+         "--runs", "200", "--within", "1.5", "--out", str(out)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+    )  # fmt: skip
+    partial = tmp_path / "sweep.csv.partial.jsonl"
+    deadline = time.monotonic() + 60
+    while not (partial.exists() and partial.read_text().count("\n") >= 2):
+        assert proc.poll() is None and time.monotonic() < deadline, "no records as it ran"
+        time.sleep(0.01)  # a poll for a file another process writes: no event to wait on
+    proc.send_signal(signal.SIGKILL)
+    proc.communicate(timeout=60)
+    assert not out.exists()
+    kept = read_results(partial)
+    assert len(kept) >= 2 and [r.seed for r in kept[:2]] == [0, 1]
+
+
+def test_a_finished_evaluation_leaves_no_partial_file(tmp_path: Path) -> None:
+    out = tmp_path / "r.jsonl"
+    assert main(["eval", BUMP, "-p", "duration=1s", "--runs", "2", "--no-progress",
+                 "--out", str(out)]) == 0  # fmt: skip
+    assert len(out.read_text().splitlines()) == 2
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.jsonl"]
