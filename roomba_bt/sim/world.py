@@ -822,7 +822,7 @@ def _build_world(c: _Checker, data: object, source: str) -> World:
         description=description,
         areas=areas,
     )
-    _check_placement(c, world, "robot" in top)
+    _check_placement(c, world, start is not None)
     if c.problems:
         raise WorldError(c.problems)
     return world
@@ -933,19 +933,35 @@ def _default_start(dock: DockSpec | None, rooms: tuple[Polygon, ...]) -> Pose:
 
 
 def _check_placement(c: _Checker, world: World, start_given: bool) -> None:
-    """The dock stands on the floor and the robot fits where it starts."""
+    """The dock stands on the floor, the robot fits where it starts and its start region
+    has room for it. A start not given is said to be the default one, where it comes from
+    (a dock off the floor puts it off the floor too: that is said once, at the dock)."""
     dock = world.dock
-    if dock is not None and not world.on_floor(
+    dock_off = dock is not None and not world.on_floor(
         dock.x + 10 * math.cos(dock.facing), dock.y + 10 * math.sin(dock.facing)
-    ):
+    )
+    if dock_off:
         c.error(("dock", "at"), "a dock off the floor", "a point inside a room, facing into it")
-    if not world.pose_is_free(world.start):
+    if not world.pose_is_free(world.start) and not (dock_off and not start_given):
         where = f"({world.start.x / 1000:.2f}, {world.start.y / 1000:.2f}) m"
-        c.error(
-            ("robot", "start") if start_given else ("rooms",),
-            f"a start pose {where} where the robot does not fit",
-            "a pose on the floor with 0.17 m clear of every wall, obstacle and drop",
-        )
+        fits = "a pose on the floor with 0.17 m clear of every wall, obstacle and drop"
+        if start_given:
+            c.error(("robot", "start"), f"a start pose {where} where the robot does not fit",
+                    fits)  # fmt: skip
+        else:
+            origin = "0.8 m out from the dock" if dock is not None else "the first room's middle"
+            c.error(
+                ("dock",) if dock is not None else ("rooms",),
+                f"no robot.start, and the default start pose {where} ({origin}) is where the "
+                "robot does not fit",
+                f"a robot.start {{at: [x, y], heading: degrees}} at {fits}",
+            )
+    if world.start_region is not None:
+        try:
+            world.sample_start(0)
+        except WorldError:
+            c.error(("robot", "start_region"), "a region with no free pose for the robot",
+                    "a region on the floor with room for the robot (340 mm across)")  # fmt: skip
 
 
 def shipped_worlds() -> tuple[str, ...]:

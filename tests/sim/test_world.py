@@ -364,3 +364,42 @@ def test_a_floor_plan_of_many_points_tests_few_pairs(monkeypatch: pytest.MonkeyP
     assert tested < 10 * n  # every pair: n (n - 3) / 2, about 8 million
     bow = (circle[0], circle[2], circle[1], *circle[3:])  # two points out of order
     assert world_module._first_crossing(bow) == _every_pair_crossing(bow) == (0, 2)
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        # no robot.start: the default start was blamed on "rooms" as if the user wrote it
+        (
+            "rooms:\n  - [[0, 0], [4, 0], [4, 3], [0, 3]]\n  - [[1, 1], [2, 1], [2, 2], [1, 2]]\n",
+            [
+                "w.yaml:2:3: rooms: found no robot.start, and the default start pose (2.00, 1.50) m "
+                "(the first room's middle) is where the robot does not fit"
+            ],
+        ),
+        # a dock off the floor put the default start off the floor: said once, at the dock
+        (
+            "rooms: [[[0, 0], [4, 0], [4, 3], [0, 3]]]\ndock: {at: [10, 10], facing: 90}\n",
+            ["w.yaml:2:12: dock.at: found a dock off the floor"],
+        ),
+        # a region with no room had no place at all (found when an episode started)
+        (
+            "rooms: [[[0, 0], [4, 0], [4, 3], [0, 3]]]\nrobot:\n"
+            "  start_region: {rect: [10, 10, 12, 12], heading: any}\n",
+            ["w.yaml:3:17: robot.start_region: found a region with no free pose for the robot"],
+        ),
+        # a region alone named robot.start
+        (
+            "rooms: [[[0, 0], [4, 0], [4, 3], [0, 3]]]\nobstacles: [{rect: [1.5, 1, 2.5, 2]}]\n"
+            "robot:\n  start_region: {rect: [0.3, 0.3, 1, 1], heading: any}\n",
+            ["w.yaml:1:8: rooms: found no robot.start, and the default start pose"],
+        ),
+    ],
+)
+def test_a_start_the_file_does_not_give_is_said_to_be_the_default(
+    text: str, expected: list[str]
+) -> None:
+    found = problems(text)
+    assert len(found) == len(expected), found
+    for line, start in zip(found, expected, strict=True):
+        assert line.startswith(start), line
