@@ -130,35 +130,32 @@ def seconds(text: str) -> float:
 
 def metres(text: str, lo: float, hi: float) -> float:
     """A distance in metres, ``lo..hi``: a plain number (metres) or a distance as missions
-    write it (``1.5m``, ``150cm``, ``300 mm``; :mod:`roomba_bt.behaviours.units` reads it)."""
-    from roomba_bt.behaviours.units import UnitError, parse_quantity
-
+    write it (``1.5m``, ``150cm``, ``300 mm``)."""
     allowed = f"a distance in {lo:g}..{hi:g} m: metres (1.5) or with a unit (1.5m, 150cm)"
-    try:
-        value = float(text)
-    except ValueError:
-        try:
-            value = parse_quantity("distance", text) / 1000.0
-        except UnitError:
-            raise argparse.ArgumentTypeError(f"found {text!r}; allowed: {allowed}") from None
-    if not lo <= value <= hi:  # NaN and inf too
-        raise argparse.ArgumentTypeError(f"found {text!r}; allowed: {allowed}")
-    return value
+    return _number_or_quantity(text, "distance", 1000.0, lo, hi, allowed)
 
 
 def fraction(text: str) -> float:
     """A fraction 0..1: a plain number (``0.5``) or a percent (``50%``)."""
+    allowed = "a fraction in 0..1 (0.5) or a percent in 0..100 % (50%)"
+    return _number_or_quantity(text, "percent", 100.0, 0.0, 1.0, allowed)
+
+
+def _number_or_quantity(
+    text: str, dimension: str, per_unit: float, lo: float, hi: float, allowed: str
+) -> float:
+    """``text`` as a plain number, or as a quantity of ``dimension`` the way missions write it
+    (:mod:`roomba_bt.behaviours.units`) divided by ``per_unit``; in ``lo..hi``."""
     from roomba_bt.behaviours.units import UnitError, parse_quantity
 
-    allowed = "a fraction in 0..1 (0.5) or a percent in 0..100 % (50%)"
     try:
         value = float(text)
     except ValueError:
         try:
-            value = parse_quantity("percent", text) / 100.0
+            value = parse_quantity(dimension, text) / per_unit
         except UnitError:
             raise argparse.ArgumentTypeError(f"found {text!r}; allowed: {allowed}") from None
-    if not 0.0 <= value <= 1.0:  # NaN and inf too
+    if not lo <= value <= hi:  # NaN and inf too
         raise argparse.ArgumentTypeError(f"found {text!r}; allowed: {allowed}")
     return value
 

@@ -94,6 +94,10 @@ class Rig:
         self.connection.close()
         return result[0]
 
+    def node(self, name: str) -> int:
+        """The feed's index of the node called ``name``."""
+        return [info.name for info in self.feed.infos].index(name)
+
     def ticks(self, *, ticked: bool) -> int:
         return sum(1 for r in self.feed.since(0)[0] if r.ticked is ticked)
 
@@ -145,7 +149,7 @@ def test_mission_time_stands_still_while_paused_so_a_wait_does_not_count_the_pau
     until: Callable[..., None],
 ) -> None:
     rig = Rig(mission=WAIT_THEN_DRIVE)
-    wait = next(i.index for i in rig.feed.infos if i.name == "one second")
+    wait = rig.node("one second")
     rig.session.request("break", wait, "start")  # paused in the tick the wait starts
 
     def operator(rig: Rig) -> None:
@@ -185,7 +189,7 @@ def test_resume_and_step_are_refused_unless_paused_and_bad_requests_change_nothi
 
 def test_forcing_is_refused_on_a_real_robot_unless_allowed() -> None:
     rig = Rig(simulator=False)
-    no_bump = [i.name for i in rig.feed.infos].index("no bump")
+    no_bump = rig.node("no bump")
     with pytest.raises(ControlRefused, match="--monitor-force"):
         rig.session.request("force", no_bump, "failure")
     allowed = MonitorSession(rig.feed, simulator=False, allow_force=True)
@@ -197,7 +201,7 @@ def test_a_forced_condition_decides_the_branch_and_is_marked_in_the_events_and_t
 ) -> None:
     record_path = tmp_path / "forced.jsonl"
     rig = Rig(record=record_path)
-    no_bump = [i.name for i in rig.feed.infos].index("no bump")
+    no_bump = rig.node("no bump")
 
     def operator(rig: Rig) -> None:
         until(lambda: rig.ticks(ticked=True) > 50)
@@ -265,8 +269,7 @@ def test_a_breakpoint_on_an_ending_pauses_after_that_tick_and_step_ticks_once(
     until: Callable[..., None],
 ) -> None:
     rig = Rig()
-    names = [i.name for i in rig.feed.infos]
-    forth = names.index("drive(velocity=100 mm/s, distance=3 cm)")
+    forth = rig.node("drive(velocity=100 mm/s, distance=3 cm)")
     seen: dict[str, int] = {}
 
     def operator(rig: Rig) -> None:
@@ -294,8 +297,7 @@ def test_a_breakpoint_on_the_last_tick_holds_the_ended_mission_until_the_resume(
     again) ends the run with the mission's outcome; its record replays so."""
     record_path = tmp_path / "held.jsonl"
     rig = Rig(mission=WAIT_THEN_DRIVE, record=record_path)
-    names = [i.name for i in rig.feed.infos]
-    last = names.index("drive(velocity=100 mm/s, distance=3 cm)")
+    last = rig.node("drive(velocity=100 mm/s, distance=3 cm)")
     seen: dict[str, object] = {}
 
     def operator(rig: Rig) -> None:
