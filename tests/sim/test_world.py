@@ -373,8 +373,8 @@ def test_a_floor_plan_of_many_points_tests_few_pairs(monkeypatch: pytest.MonkeyP
         (
             "rooms:\n  - [[0, 0], [4, 0], [4, 3], [0, 3]]\n  - [[1, 1], [2, 1], [2, 2], [1, 2]]\n",
             [
-                "w.yaml:2:3: rooms: found no robot.start, and the default start pose (2.00, 1.50) m "
-                "(the first room's middle) is where the robot does not fit"
+                "w.yaml:2:3: rooms: found no robot.start, and the default start pose "
+                "(2.00, 1.50) m (the first room's middle) is where the robot does not fit"
             ],
         ),
         # a dock off the floor put the default start off the floor: said once, at the dock
