@@ -14,6 +14,7 @@ from roomba_bt.cli.arguments import (
     add_far_end_options,
     add_param_option,
     add_permission_options,
+    fraction,
     mission_file,
     parse_params,
     parse_timeout,
@@ -63,8 +64,9 @@ def _add_run_parser(sub: Any) -> None:
     )
     run.add_argument("--seed", type=int, default=0, help="simulator seed (default 0)")
     run.add_argument(
-        "--battery", type=float, metavar="FRACTION",
-        help="simulator only: initial charge 0..1 (default: the world's)",
+        "--battery", type=fraction, metavar="FRACTION",
+        help="simulator only: initial charge, 0..1 or a percent (0.5, 50%%; default: the "
+        "world's)",
     )  # fmt: skip
     run.add_argument(
         "--random-start", action="store_true", help="start in the world's start region"
@@ -78,7 +80,10 @@ def _add_run_parser(sub: Any) -> None:
         help="write every byte in and out, timestamped",
     )
     run.add_argument(
-        "--plot", metavar="FILE.png", type=plot_file, help="simulator only: plot the trajectory"
+        "--plot",
+        metavar="FILE",
+        type=plot_file,
+        help="simulator only: plot the trajectory (.png, .pdf, .svg: the suffix is the format)",
     )
     add_permission_options(run)
     run.add_argument("--fast", action="store_true", help="simulator on the virtual clock")
@@ -268,8 +273,6 @@ def _checked_arguments(args: argparse.Namespace) -> tuple[dict[str, str], float 
         return _error(
             "--world, --plot, --fast and --battery are for the simulator: drop them or --port"
         )
-    if args.battery is not None and not 0.0 <= args.battery <= 1.0:
-        return _error(f"--battery {args.battery}: expected a fraction in 0..1")
     found = mission_file(args.mission)
     if isinstance(found, tuple):
         return _error(found[0])

@@ -91,7 +91,10 @@ def register(sub: Any) -> None:
     )
     parser.add_argument("--duration", type=seconds, help="stop after this many seconds")
     parser.add_argument(
-        "--plot", metavar="FILE.png", type=plot_file, help="write the trajectory on exit"
+        "--plot",
+        metavar="FILE",
+        type=plot_file,
+        help="write the trajectory on exit (.png, .pdf, .svg: the suffix is the format)",
     )
     parser.add_argument(
         "--log", action="store_true", help="on stderr: each command heard or ignored, each event"

@@ -13,6 +13,7 @@ import re
 import subprocess
 import sys
 import textwrap
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -129,11 +130,14 @@ def test_display_none_prints_nothing_but_the_summary(
     assert not any("-->" in line or "{-}" in line for line in lines)  # no tree
 
 
-def test_run_takes_battery_like_eval(mission: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["run", str(mission), "--fast", "--display", "none", "--battery", "0.3"]) == 0
-    assert re.search(r"battery\s+30%", capsys.readouterr().out)
-    assert main(["run", str(mission), "--fast", "--battery", "1.5"]) == 2
-    assert "--battery 1.5: expected a fraction in 0..1" in capsys.readouterr().err
+def test_run_takes_battery_like_eval(
+    mission: Path, capsys: pytest.CaptureFixture[str], usage_error: Callable[..., str]
+) -> None:
+    for given in ("0.3", "30%"):  # eval took the percent, run refused it
+        assert main(["run", str(mission), "--fast", "--display", "none", "--battery", given]) == 0
+        assert re.search(r"battery\s+30%", capsys.readouterr().out)
+    refused = usage_error(main, ["run", str(mission), "--fast", "--battery", "1.5"])
+    assert "argument --battery: found '1.5'; allowed: a fraction in 0..1" in refused
     assert main(["run", str(mission), "--port", "loop://", "--battery", "0.5"]) == 2
     assert "for the simulator" in capsys.readouterr().err
 
