@@ -119,8 +119,8 @@ def _close_left_open(connection: Connection, why: str) -> None:
     doing = connection.activity()
     stopped = connection.close()
     log.warning(
-        "%s: %s while the robot was %s; %s (use `with Connection.open(...)` or call "
-        "close())", connection.name, why, doing,
+        "%s: %s (the robot %s); %s (use `with Connection.open(...)` or call close())",
+        connection.name, why, doing,
         "the safe stop was sent" if stopped else "the safe stop could not be delivered",
     )  # fmt: skip
 

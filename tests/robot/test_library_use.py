@@ -37,7 +37,7 @@ def test_a_connection_dropped_while_driving_is_stopped(caplog: pytest.LogCapture
     gc.collect()
     assert simulator.mode is OIMode.PASSIVE
     assert (simulator.requested_left, simulator.requested_right) == (0, 0)
-    assert "dropped without close() while the robot was at 150 mm/s" in caplog.text
+    assert "dropped without close() (the robot at 150 mm/s)" in caplog.text
     assert "the safe stop was sent" in caplog.text
 
 
@@ -80,7 +80,7 @@ def test_a_program_that_ends_without_close_stops_the_robot() -> None:
     after = done.stdout.split("exiting\n", 1)[1]
     assert "wrote 89 00 00 00 00" in after  # drive 0
     assert after.rstrip().endswith("80")  # Start: Passive
-    assert "the program ended without close() while the robot was at 150 mm/s" in done.stderr
+    assert "the program ended without close() (the robot at 150 mm/s)" in done.stderr
 
 
 def test_raw_bytes_or_an_opcode_are_refused_naming_the_commands_module() -> None:
