@@ -351,7 +351,7 @@ class RunFeed:
                     snapshot.odometry,
                     snapshot.frames_lost,
                     truth,
-                    summary.commands_written,
+                    runner.count_written(),
                     summary.refused_commands,
                     self._board,
                     self.generation,
@@ -360,7 +360,7 @@ class RunFeed:
             )
         else:
             record = TickRecord(ring.count, 0, 0.0, self._statuses, changed, self._reasons,
-                                None, -1, 0, None, 0, truth, summary.commands_written,
+                                None, -1, 0, None, 0, truth, runner.count_written(),
                                 summary.refused_commands, self._board, self.generation,
                                 ticked)  # fmt: skip
         ring.append(record)

@@ -38,6 +38,7 @@ from roomba_bt.oi.stream import ReplyParser, check_bandwidth
 from roomba_bt.robot.ending import EndMode, SafeStop
 from roomba_bt.robot.errors import (
     ConnectionClosed,
+    ModeError,
     NoAnswer,
     PortLost,
     RobotError,
@@ -445,9 +446,12 @@ class Connection:
     def send(self, command: Command) -> None:
         """Guard, write, follow one command (:meth:`CommandWriter.send
         <roomba_bt.robot.writer.CommandWriter.send>`; a refused one raises, nothing written)."""
-        if not isinstance(command, Command) or self.ending.closed:
-            raise _refusal(self, command)
-        self.writer.send(command)
+        try:
+            self.writer.send(command)
+        except (AttributeError, ModeError, PortLost):  # checked only then: free on the tick path
+            if not isinstance(command, Command) or self.ending.closed:
+                raise _refusal(self, command) from None
+            raise
 
     def send_many(self, commands: Iterable[Command]) -> None:
         """A tick's outbox in one write (:meth:`CommandWriter.send_many

@@ -36,7 +36,7 @@ from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
 from roomba_bt.robot.connection import Connection
-from roomba_bt.robot.errors import ConnectionFailed, LinkDown, ModeError
+from roomba_bt.robot.errors import ConnectionFailed, LinkDown, ModeError, StreamStalled
 from roomba_bt.robot.hazards import HazardConfirmation, turns_a_wheel
 from roomba_bt.robot.interface import (
     SLOT_SECONDS,
@@ -360,10 +360,15 @@ class MissionRunner(BaseHandle):
         perf = time.perf_counter
         tick_guard = self.tick_guard  # started by run()
         tick = self._tick_of(root, tick_guard)
-        read, poll_timeout = self._ride.read, self.poll_timeout
+        poll, poll_timeout, ride = self.connection.poll_frames, self.poll_timeout, self._ride
         held = False  # the root ended and the gate holds the run there (the monitor)
         while True:
-            batch = read(poll_timeout)
+            try:
+                batch = poll(poll_timeout)
+            except StreamStalled as stalled:
+                batch = ride.tripped(stalled)
+            if ride.stall is not None:
+                ride.carry_on(batch)
             if not batch:
                 if self.input_ended is not None and (why := self.input_ended()):
                     summary.outcome, summary.reason = Outcome.INPUT_ENDED, why
@@ -545,12 +550,13 @@ class MissionRunner(BaseHandle):
                 self.summary.refused_commands += 1
                 if len(self.refusals) < 100:
                     self.refusals.append(self._refusal(command, exc))
-        self.count_written()
 
     def count_written(self) -> int:
-        """The summary's ``commands_written``: every command written since the start-up, the
-        tree's and those sent for it (the bump reflex's and the watchdog's drive 0, a wheel
-        command sent again, a pause); counted from the outbox, it left those out."""
+        """The summary's ``commands_written``, brought up to date (at the run's end, and by
+        the monitor's feed each tick; not in the tick loop): every command written since the
+        start-up, the tree's and those sent for it (the bump reflex's and the watchdog's
+        drive 0, a wheel command sent again, a pause); counted from the outbox, it left those
+        out."""
         start = self._sent_at_start
         written = 0 if start is None else self.connection.writer.sent - start
         self.summary.commands_written = written

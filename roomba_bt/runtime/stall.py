@@ -44,29 +44,27 @@ class StallRide:
         #: by the runner's count of the slots a batch spans)
         self.gap_explained = False
 
-    def read(self, timeout: float) -> Sequence[SensorFrame]:
-        """The frames there now, or within ``timeout`` s (none during a stall); raises the
-        stall's cause once the grace is over."""
-        connection = self.connection
-        try:
-            batch = connection.poll_frames(timeout)
-        except StreamStalled as stalled:
-            self._tripped(stalled)
-            batch = ()
-        if (stall := self.stall) is not None:
-            if batch:
-                self._back(stall[2])
-            else:
-                connection.check_stall(stall[0], self.grace, stall[1])
-        return batch
-
-    def _tripped(self, stalled: StreamStalled) -> None:
+    def tripped(self, stalled: StreamStalled) -> Sequence[SensorFrame]:
+        """The watchdog tripped (drive 0 sent): the ride begins, no frames this read; or,
+        without a grace, the trip ends the run."""
         if self.grace <= 0:
             raise stalled
         self.summary.stalls += 1
         link = self.connection.link
         self.stall = (link.bytes_read, stalled.halted, link.silent_since)
         log.warning("%s; waiting up to %g s for valid frames", stalled, self.grace)
+        return ()
+
+    def carry_on(self, batch: Sequence[SensorFrame]) -> None:
+        """During a ride, after a read: frames back end it; none raise the stall's cause once
+        the grace is over. (The run's loop reads the stream itself, and calls this only while
+        :attr:`stall` is set: a call a frame less on the tick path.)"""
+        stall = self.stall
+        assert stall is not None
+        if batch:
+            self._back(stall[2])
+        else:
+            self.connection.check_stall(stall[0], self.grace, stall[1])
 
     def _back(self, silent_since: float) -> None:
         """Valid frames came back within the grace: the tree goes on, and the wheels get
