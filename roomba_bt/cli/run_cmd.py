@@ -377,6 +377,8 @@ def _report(
     print(summary)
     if simulator is not None and simulator.swept is not None and simulator.swept.cleaning_time:
         print(_coverage_line(simulator))
+    if simulator is not None:
+        print(_where_it_ended(simulator))
     if (
         summary.outcome.exit_code
         in (ExitCode.CONNECTION, ExitCode.MISSION_FAILED, ExitCode.BEHAVIOUR_ERROR)
@@ -404,6 +406,22 @@ def _render_tree(mission: Any, status: bool = False) -> str:
     import py_trees
 
     return str(py_trees.display.unicode_tree(mission.root, show_status=status))
+
+
+def _where_it_ended(simulator: Any) -> str:
+    """What the simulator saw of the robot at the end, which the robot's own sensors do not
+    say: it fell off a drop (only the plot showed it; the summary read SUCCESS), or it is on
+    the dock's contacts (and charging), or neither."""
+    fell = next((e for e in simulator.events if e.kind == "fell"), None)
+    if fell is not None:
+        where = f"({fell.x / 1000:.2f}, {fell.y / 1000:.2f}) m at {fell.time:.1f} s"
+        return (f"simulator    the robot FELL off a drop at {where} (it had no cliff safety: "
+                "Full mode, or a mission that drove on)")  # fmt: skip
+    if simulator.docked:
+        charging = ", charging" if simulator.dock_powered else ", the dock unpowered"
+        return f"simulator    ended on the dock's contacts{charging}"
+    return (f"simulator    ended at ({simulator.x / 1000:.2f}, {simulator.y / 1000:.2f}) m, "
+            "off the dock")  # fmt: skip
 
 
 def _coverage_line(simulator: Any) -> str:

@@ -368,3 +368,26 @@ def test_docking_reports_the_fall_to_passive_on_the_charger_as_information(
     assert [(r.levelno, r.getMessage().rsplit(" ", 1)[-1]) for r in changes] == [
         (logging.INFO, "(charger)")
     ]
+
+
+def test_the_summary_says_where_the_simulated_robot_ended(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A fall down the stairs read SUCCESS with nothing said (only the plot marked it); a
+    docked robot said nothing of the dock."""
+    world = tmp_path / "stairs.yaml"
+    world.write_text(
+        "rooms: [[[0, 0], [4, 0], [4, 3], [0, 3]]]\n"
+        "drops: [{rect: [3, 0, 4, 3]}]\n"
+        "robot: {start: {at: [1, 1.5], heading: 0}}\n"
+    )
+    mission = tmp_path / "off.yaml"
+    mission.write_text(
+        "tree:\n  sequence:\n    - mode: full\n    - drive: {velocity: 200 mm/s, distance: 2.5 m}\n"
+    )
+    code = main(["run", str(mission), "--world", str(world), "--fast", "--display", "none"])
+    out = capsys.readouterr().out
+    assert code == 0 and "outcome      SUCCESS" in out
+    assert "simulator    the robot FELL off a drop at (3." in out
+    assert main(["run", "dock", "--fast", "--display", "none"]) == 0
+    assert "simulator    ended on the dock's contacts, charging" in capsys.readouterr().out
