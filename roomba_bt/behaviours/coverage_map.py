@@ -111,6 +111,8 @@ class FloorMap:
     def __init__(self) -> None:
         self.cells = bytearray(_SIDE * _SIDE)
         self.near = bytearray(_SIDE * _SIDE)
+        #: cells a path led into and the robot met something there: no path goes that way
+        self.avoid: set[Cell] = set()
         #: cells newly swept (a counter: the caller compares)
         self.swept = 0
 
@@ -165,17 +167,19 @@ class FloorMap:
         """Floor not swept yet where the robot's centre could go: worth a visit."""
         return not self.cells[cell] & (SWEPT | BLOCKED | TRIED) and not self.near[cell]
 
-    def frontier(self, start: Cell) -> list[Cell] | None:
+    def frontier(self, start: Cell, through_near: bool = False) -> list[Cell] | None:
         """The path (cells, from ``start``) over cells the robot has been on or swept, to
         the nearest one beside open floor; None when there is none. Breadth-first."""
-        cells, near = self.cells, self.near
+        cells, near, avoid = self.cells, self.near, self.avoid
         parent: dict[Cell, Cell] = {start: start}
         queue = deque((start,))
         # the robot may stand next to something it just met: its own neighbourhood is free
         for d in (-_SIDE - 1, -_SIDE, -_SIDE + 1, -1, 1, _SIDE - 1, _SIDE, _SIDE + 1):
-            if cells[start + d] & (SWEPT | VISITED) and not cells[start + d] & BLOCKED:
-                parent[start + d] = start
-                queue.append(start + d)
+            beside = start + d
+            bits = cells[beside]
+            if bits & (SWEPT | VISITED) and not bits & BLOCKED and beside not in avoid:
+                parent[beside] = start
+                queue.append(beside)
         steps = (-_SIDE, _SIDE, -1, 1)
         while queue:
             cell = queue.popleft()
@@ -189,7 +193,9 @@ class FloorMap:
                         return path
             for d in steps:
                 nxt = cell + d
-                if nxt not in parent and cells[nxt] & (SWEPT | VISITED) and not near[nxt]:
+                bits = cells[nxt]
+                passable = bits & VISITED or (bits & SWEPT and (through_near or not near[nxt]))
+                if passable and nxt not in parent and not bits & BLOCKED and nxt not in avoid:
                     parent[nxt] = cell
                     queue.append(nxt)
         return None
@@ -498,6 +504,8 @@ class Cover(Action):
                 self._lane(driving.wrap(self._lane_heading + math.pi))
         elif kind == "goto":
             if self._why != "limit":  # blocked on the way: decide again from here
+                if self._why in _BACK_MM:  # met something: no path that way again (it bumped
+                    self._map.avoid.add(self._goto_cell)  # into it, path after path)
                 self._plan.clear()
                 self._decide()
             else:
@@ -683,7 +691,9 @@ class Cover(Action):
         """Where next: the nearest frontier, or an edge, or done."""
         odo = self._pose
         here = self._map.cell(odo.x_mm, odo.y_mm)
-        path = self._map.frontier(here) if here is not None else None
+        path = None
+        if here is not None:
+            path = self._map.frontier(here) or self._map.frontier(here, through_near=True)
         if path is None:
             if self._edge_found > _EDGE_NEW_CELLS:
                 self._idle_edges = 0
@@ -715,6 +725,7 @@ class Cover(Action):
         return points
 
     def _go(self, cell: Cell) -> None:
+        self._goto_cell = cell
         odo = self._pose
         x, y = self._map.centre(cell)
         dx, dy = x - odo.x_mm, y - odo.y_mm
