@@ -457,11 +457,7 @@ class Connection:
         """A tick's outbox in one write (:meth:`CommandWriter.send_many
         <roomba_bt.robot.writer.CommandWriter.send_many>`): refused commands left out, the
         first refusal raised after the others are written."""
-        commands = list(commands)
-        for command in commands:
-            if not isinstance(command, Command) or self.ending.closed:
-                raise _refusal(self, command)
-        self.writer.send_many(commands)
+        self.writer.send_many(_sendable(self, commands))
 
     def set_baud(self, rate: int) -> None:
         """Baud (129) by rate (e.g. 19200); the port follows after 100 ms."""
@@ -541,3 +537,12 @@ def _refusal(connection: Connection, command: object) -> Exception:
         f"oi.safe()), not {type(command).__name__} {command!r:.40}: the mode guard reads the "
         "command, and raw bytes would pass it by"
     )
+
+
+def _sendable(connection: Connection, commands: Iterable[Command]) -> list[Command]:
+    """``commands``, each a :class:`Command` for an open connection (else :func:`_refusal`)."""
+    commands = list(commands)
+    for command in commands:
+        if not isinstance(command, Command) or connection.ending.closed:
+            raise _refusal(connection, command)
+    return commands

@@ -552,11 +552,8 @@ class MissionRunner(BaseHandle):
                     self.refusals.append(self._refusal(command, exc))
 
     def count_written(self) -> int:
-        """The summary's ``commands_written``, brought up to date (at the run's end, and by
-        the monitor's feed each tick; not in the tick loop): every command written since the
-        start-up, the tree's and those sent for it (the bump reflex's and the watchdog's
-        drive 0, a wheel command sent again, a pause); counted from the outbox, it left those
-        out."""
+        """``summary.commands_written`` brought up to date (at the end, by the monitor's feed):
+        every command since the start-up, the bump reflex's and watchdog's drive 0 too."""
         start = self._sent_at_start
         written = 0 if start is None else self.connection.writer.sent - start
         self.summary.commands_written = written
