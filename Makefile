@@ -65,7 +65,7 @@ reliability: $(STAMP)
 routines: $(STAMP)
 	$(BIN)/python -m roomba_bt.evaluate.report --docs docs --missions missions
 
-# clean.yaml against the firmware's Clean into docs/routines.md (about 40 min of CPU; 22 min on 2 cores).
+# clean.yaml against the firmware's Clean into docs/routines.md (about 5 min on this 2-core VM, session 22).
 coverage: $(STAMP)
 	$(BIN)/python -m roomba_bt.evaluate.coverage_report --docs docs --missions missions --runs 50 --apartment-runs 4 --drift-runs 20 --jobs 2
 
