@@ -190,6 +190,12 @@ class Loader:
         if read is None:
             return None
         root, root_loc = read
+        if _is_world(root):  # its name: and description: are mission words too: 11 lines
+            self.ctx.error(root_loc.at(
+                "this file is a world (rooms:, no tree:), not a mission: run a mission on it "
+                f"with --world {path} (roomba-bt run dock --world {path} --fast)"
+            ))  # fmt: skip
+            return None
         if not _is_mission(root, TOP_LEVEL):
             self.ctx.error(root_loc.at(_not_a_mission("this file", TOP_LEVEL)))
             return None
@@ -534,6 +540,15 @@ def _is_mission(root: yaml.Node, words: tuple[str, ...]) -> bool:
     return isinstance(root, yaml.MappingNode) and any(
         isinstance(key, yaml.ScalarNode) and key.value in words for key, _ in root.value
     )
+
+
+def _is_world(root: yaml.Node) -> bool:
+    """A mapping with ``rooms:`` and no ``tree:``: a simulator world (sim/world.py), not a
+    mission (no mission has a ``rooms`` section)."""
+    if not isinstance(root, yaml.MappingNode):
+        return False
+    keys = {key.value for key, _ in root.value if isinstance(key, yaml.ScalarNode)}
+    return "rooms" in keys and "tree" not in keys
 
 
 def _a_library(resolved: Path, path: Path) -> str:

@@ -514,7 +514,13 @@ class _Checker:
             return None
         x0, y0, x1, y1 = (n * 1000.0 for n in nums)
         if x1 <= x0 or y1 <= y0:
-            self.error(path, _show(value), "x0 < x1 and y0 < y1")
+            a, b, c, d = nums
+            which = " and ".join(
+                f"{lo} {n:g} not below {hi} {m:g}"
+                for lo, n, hi, m in (("x0", a, "x1", c), ("y0", b, "y1", d))
+                if m <= n
+            )  # it said only "a list of 4"
+            self.error(path, f"[{a:g}, {b:g}, {c:g}, {d:g}]: {which}", "x0 < x1 and y0 < y1")
             return None
         return (x0, y0, x1, y1)
 
@@ -990,6 +996,9 @@ def world_text(path_or_name: str | pathlib.Path) -> tuple[str, str]:
                 if path.exists()
                 else "no such file or shipped world"
             )
+            close = difflib.get_close_matches(str(path_or_name), shipped_worlds(), n=1)
+            if close and not path.exists():
+                found += f" (did you mean {close[0]!r}?)"
             raise WorldError(
                 [WorldProblem(str(path_or_name), 0, 0, "world", found,
                               f"a YAML file or one of {', '.join(shipped_worlds())}")]

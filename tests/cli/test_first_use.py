@@ -301,3 +301,19 @@ def test_a_robot_that_never_answers_is_no_connection_and_doctor_is_named(
     assert code == 3
     assert "outcome      NO CONNECTION (" in out
     assert f"`roomba-bt doctor --port {port}` finds the robot's rate, wakes it" in err
+
+
+def test_a_world_file_given_as_a_mission_is_said_to_be_a_world(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Its name: and description: are mission words too: validate listed every other key
+    of it as unknown (11 lines for a field trial's flat)."""
+    world = tmp_path / "flat.yaml"
+    world.write_text(
+        "name: flat\ndescription: my flat\nrooms: [[[0, 0], [4, 0], [4, 3], [0, 3]]]\n"
+        "obstacles: [{rect: [1, 1, 2, 2]}]\ndock: {at: [2, 0], facing: 90}\n"
+    )
+    assert main(["validate", str(world)]) == 2
+    said = "".join(capsys.readouterr())
+    assert said.count("\n") == 1, said
+    assert "this file is a world (rooms:, no tree:), not a mission: run a mission on it" in said

@@ -403,3 +403,21 @@ def test_a_start_the_file_does_not_give_is_said_to_be_the_default(
     assert len(found) == len(expected), found
     for line, start in zip(found, expected, strict=True):
         assert line.startswith(start), line
+
+
+def test_an_upside_down_rect_says_which_corner_is_wrong() -> None:
+    [found] = problems(
+        "rooms: [[[0, 0], [4, 0], [4, 3], [0, 3]]]\nobstacles: [{rect: [2, 1, 1, 3]}]\n"
+    )
+    # it said "found a list of 4"
+    assert found == (
+        "w.yaml:2:20: obstacles[0].rect: found [2, 1, 1, 3]: x0 2 not below x1 1; allowed: "
+        "x0 < x1 and y0 < y1"
+    )
+
+
+def test_a_misspelt_shipped_world_is_named() -> None:
+    with pytest.raises(
+        WorldError, match=r"no such file or shipped world \(did you mean 'apartment'"
+    ):
+        world_module.load_world("apartmnt")
