@@ -493,10 +493,10 @@ class _Checker:
         if any(p is None for p in points):
             return None
         poly = tuple(p for p in points if p is not None)
-        if abs(_area(poly)) < 1.0:
+        crossing = _first_crossing(poly)
+        if abs(_area(poly)) < 1.0 and crossing is None:  # a bowtie's halves cancel: it crosses
             self.error(path, "a polygon of zero area", "a polygon enclosing some floor")
             return None
-        crossing = _first_crossing(poly)
         if crossing is not None:
             sides = " and ".join(_side(poly, i) for i in crossing)
             self.error(

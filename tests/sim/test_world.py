@@ -421,3 +421,12 @@ def test_a_misspelt_shipped_world_is_named() -> None:
         WorldError, match=r"no such file or shipped world \(did you mean 'apartment'"
     ):
         world_module.load_world("apartmnt")
+
+
+def test_a_bowtie_is_said_to_cross_not_to_have_no_area() -> None:
+    """Its two halves' areas cancel: it read "a polygon of zero area", which said nothing of
+    the points written out of order."""
+    [found] = problems("rooms: [[[0, 0], [4, 3], [4, 0], [0, 3]]]\n")
+    assert "found a polygon whose sides cross ([0, 0]-[4, 3] and [4, 0]-[0, 3])" in found
+    [flat] = problems("rooms: [[[0, 0], [1, 0], [2, 0]]]\n")
+    assert "found a polygon of zero area" in flat
