@@ -185,10 +185,10 @@ def _error(message: str) -> int:
 
 
 def parse_dock(items: list[str]) -> tuple[tuple[str, Any], ...] | str:
-    """``["buoy_range=0.5", "red=-5,25"]`` -> ((name, value), ...); a message on error. The
-    ranges are the episode's to check (``_override_dock``, from the world file's own table:
-    ``DOCK_LIMITS``), when the plan builds the world once before any worker starts."""
+    """``["buoy_range=0.5", "red=-5,25"]`` -> ((name, value), ...); a message on error. Each
+    number in the range a world file's ``dock:`` allows (the same table: ``DOCK_LIMITS``)."""
     from roomba_bt.evaluate.episode import DOCK_OVERRIDES
+    from roomba_bt.sim.world import DOCK_BEAM_LIMIT, DOCK_FAMILIES, DOCK_LIMITS
 
     out: list[tuple[str, Any]] = []
     for item in items:
@@ -201,12 +201,24 @@ def parse_dock(items: list[str]) -> tuple[tuple[str, Any], ...] | str:
             )
         try:
             if name == "family":
-                out.append((name, text.strip()))
+                if text not in DOCK_FAMILIES:
+                    return f"--dock {item!r}: family is {' or '.join(DOCK_FAMILIES)}"
+                out.append((name, text))
             elif name in ("red", "green"):
                 lo, hi = (float(v) for v in text.split(","))
+                beam = DOCK_BEAM_LIMIT
+                if not (beam.holds(lo) and beam.holds(hi) and lo < hi):
+                    return (
+                        f"--dock {name}={text.strip()}: expected FROM,TO in degrees, "
+                        f"{beam.lo:g} <= FROM < TO <= {beam.hi:g}"
+                    )
                 out.append((name, (lo, hi)))
             else:
-                out.append((name, float(text)))
+                value = float(text)
+                limit = DOCK_LIMITS[name]
+                if not limit.holds(value):
+                    return f"--dock {name}={text.strip()}: expected {limit.allowed()}"
+                out.append((name, value))
         except ValueError:
             return f"--dock {item!r}: {text!r} is not a number (or FROM,TO for red/green)"
     return tuple(out)

@@ -336,19 +336,11 @@ def _override_dock(dock: DockSpec, overrides: dict[str, Any]) -> DockSpec:
                 raise EvaluationError(f"--dock family={value}: allowed: {', '.join(DOCK_FAMILIES)}")
             values[key] = value
         elif key in ("red", "green"):
-            lo, hi = (float(v) for v in value)
-            beam = DOCK_BEAM_LIMIT
-            if not (beam.holds(lo) and beam.holds(hi) and lo < hi):
-                raise EvaluationError(
-                    f"--dock {key}={lo:g},{hi:g}: expected FROM,TO in degrees, "
-                    f"{beam.lo:g} <= FROM < TO <= {beam.hi:g}"
-                )
-            values[key] = (lo * beam.scale, hi * beam.scale)
-        else:  # each in the range a world file's dock: allows (one table, DOCK_LIMITS)
-            limit, number = DOCK_LIMITS[key], float(value)
-            if not limit.holds(number):
-                raise EvaluationError(f"--dock {key}={number:g}: expected {limit.allowed()}")
-            values[key] = number * limit.scale
+            lo, hi = value
+            scale = DOCK_BEAM_LIMIT.scale
+            values[key] = (float(lo) * scale, float(hi) * scale)
+        else:
+            values[key] = float(value) * DOCK_LIMITS[key].scale
     return replace(dock, **values)
 
 
