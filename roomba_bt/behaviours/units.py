@@ -54,6 +54,35 @@ class UnitError(ValueError):
     """A value that does not parse; the message says what was expected."""
 
 
+class BareNumber(UnitError):
+    """A bare number where a quantity needs its unit (``max_radius: 1``). The message
+    suggests the unit that reads it inside the allowed range, when the caller knows the
+    range (:meth:`within`): ``1`` for a radius of 50..5000 mm is ``1m``, not ``1mm``."""
+
+    def __init__(self, dimension: str, value: float) -> None:
+        self.dimension, self.value = dimension, value
+        super().__init__(self._message(None, None))
+
+    def within(self, lo: float | None, hi: float | None) -> BareNumber:
+        """The same error, its suggestion chosen for the range ``lo..hi`` (canonical unit)."""
+        self.args = (self._message(lo, hi),)
+        return self
+
+    def _message(self, lo: float | None, hi: float | None) -> str:
+        dimension, value = self.dimension, self.value
+        unit = CANONICAL[dimension]
+        units = UNITS[dimension]
+        for candidate in (unit, *units):  # the canonical unit first, then the dimension's order
+            scaled = value * units[candidate]
+            if (lo is None or scaled >= lo) and (hi is None or scaled <= hi):
+                unit = candidate
+                break
+        return (
+            f"expected {with_article(dimension)} with a unit such as {EXAMPLES[dimension]}, "
+            f"got {quoted(value)} (write the unit: {value}{unit})"
+        )
+
+
 def with_article(noun: str) -> str:
     """``noun`` with its article, for a message: "a speed", "an angle", "an int" (the
     dimension names start with the sound of their letter); "one of a, b" takes none."""
@@ -73,10 +102,7 @@ def parse_quantity(dimension: str, value: object) -> float:
     if _is_number(value):
         if value == 0:
             return 0.0
-        raise UnitError(
-            f"expected {what} with a unit such as {EXAMPLES[dimension]}, got {quoted(value)}"
-            f" (write the unit: {value}{CANONICAL[dimension]})"
-        )
+        raise BareNumber(dimension, value)  # type: ignore[arg-type]
     if not isinstance(value, str):
         raise UnitError(f"expected {what} such as {EXAMPLES[dimension]}, got {_describe(value)}")
     match = _QUANTITY.match(value)

@@ -21,6 +21,7 @@ from roomba_bt.behaviours.units import (
     CANONICAL,
     MARK,
     VALUE_TYPES,
+    BareNumber,
     UnitError,
     ValueType,
     closest,
@@ -218,6 +219,10 @@ def resolve(
             return _reference(ctx, raw, loc, vtype, what)
     try:
         value = vtype.parse(raw)
+    except BareNumber as exc:
+        if param is not None:
+            exc.within(param.minimum, param.maximum)
+        raise Bad(loc.at(f"{what}: {exc}")) from None
     except UnitError as exc:
         raise Bad(loc.at(f"{what}: {exc}")) from None
     return _check_range(value, loc, what, param)
