@@ -547,7 +547,9 @@ def _report(
         import json
 
         coverages = [summarize_coverage(e.results) for e in done]
-        print(json.dumps({
+        from roomba_bt.evaluate.stats import tidy
+
+        print(json.dumps(tidy({
             "conditions": run_conditions(args),
             "engine": engine,
             "retried": retried,
@@ -556,7 +558,7 @@ def _report(
                           "coverage": c.to_dict() if c is not None else None}
                          for v, s, c in zip(chosen, summaries, coverages, strict=True)],
             "comparisons": [c.to_dict() for c in comparisons],
-        }, indent=2))  # fmt: skip
+        }), indent=2))  # fmt: skip
         return
     for v, s, e in zip(chosen, summaries, done, strict=True):
         if len(chosen) > 1:

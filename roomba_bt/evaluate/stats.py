@@ -118,6 +118,19 @@ class Summary:
         }
 
 
+def tidy(value: object, digits: int = 10) -> object:
+    """``value`` with every float cut to ``digits`` significant digits, for JSON a person
+    reads: a sum of 15 ms ticks is 27.885 s, not 27.884999999999998 (binary noise in the
+    16th digit). Ten digits keep every figure's meaning (a tick is the 5th)."""
+    if isinstance(value, float):
+        return float(f"{value:.{digits}g}") if math.isfinite(value) else value
+    if isinstance(value, dict):
+        return {k: tidy(v, digits) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [tidy(v, digits) for v in value]
+    return value
+
+
 def summarize(mission: str, world: str, results: Sequence[EpisodeResult]) -> Summary:
     """Aggregate episodes into a :class:`Summary`."""
     runs = len(results)

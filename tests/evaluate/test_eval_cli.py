@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 from roomba_bt.cli import main
+from roomba_bt.evaluate.stats import tidy
 
 MISSIONS = Path(__file__).resolve().parents[2] / "missions"
 BUMP = str(MISSIONS / "bump-and-turn.yaml")
@@ -242,7 +243,7 @@ def test_ab_report_on_two_variants_is_reproduced_from_its_records(
     assert [r.seed for r in a] == [r.seed for r in b] == list(range(20, 26))
     assert [r.start for r in a] == [r.start for r in b], "same start poses"
     again = compare(cmp["a"], cmp["b"], a, b)
-    assert again.to_dict() == cmp
+    assert tidy(again.to_dict()) == cmp
     assert cmp["pairs"] == cmp["both"] + cmp["only_a"] + cmp["only_b"] + cmp["neither"] == 6
     assert cmp["mcnemar_p"] == mcnemar_exact(cmp["only_a"], cmp["only_b"])
     assert [v["label"] for v in report["variants"]] == [cmp["a"], cmp["b"]]
@@ -427,7 +428,7 @@ def test_a_cleaning_mission_reports_its_coverage_as_json(
     assert main(argv) in (0, 1)
     (variant,) = json.loads(capsys.readouterr().out)["variants"]
     coverage = summarize_coverage(read_results(out_file))
-    assert coverage is not None and variant["coverage"] == coverage.to_dict()
+    assert coverage is not None and variant["coverage"] == tidy(coverage.to_dict())
     assert variant["coverage"]["episodes"] == 2 and 0 < variant["coverage"]["final"]["mean"] < 1
 
 

@@ -107,3 +107,17 @@ def test_compare_pairs_episodes_by_seed() -> None:
     assert "only A 1, only B 1" in str(c) and "median -2.0 s" in str(c)
     with pytest.raises(ValueError, match="same seeds"):
         compare("A", "B", a, b[:-1])
+
+
+def test_the_json_summary_is_tidied_of_binary_noise() -> None:
+    """A sum of 15 ms ticks printed 27.884999999999998 in ``eval --json``: floats are cut to
+    ten significant digits (ints, text, infinities and nesting kept as they are)."""
+    import math
+
+    from roomba_bt.evaluate.stats import tidy
+
+    assert 0.015 * 1859 != 27.885  # the noise is real
+    data = {"t": 0.015 * 1859, "i": (0.4385029682449546, 1.0), "n": 3, "s": "x",
+            "inf": math.inf, "none": None, "deep": [{"w": 0.10208152500126744}]}  # fmt: skip
+    assert tidy(data) == {"t": 27.885, "i": [0.4385029682, 1.0], "n": 3, "s": "x",
+                          "inf": math.inf, "none": None, "deep": [{"w": 0.102081525}]}  # fmt: skip
