@@ -782,9 +782,7 @@ def _build_world(c: _Checker, data: object, source: str) -> World:
         raise WorldError(c.problems)
     name = _text(c, top, "name", pathlib.Path(source).stem)
     description = _text(c, top, "description", "")
-    rooms = [
-        c.polygon(r, ("rooms", i)) for i, r in enumerate(c.items(top.get("rooms"), ("rooms",)))
-    ]
+    rooms = [_room(c, r, ("rooms", i)) for i, r in enumerate(c.items(top.get("rooms"), ("rooms",)))]
     if isinstance(top.get("rooms"), list) and not rooms:
         c.error(("rooms",), "no room", "at least one room polygon")
     walls = _walls(c, top.get("walls"))
@@ -832,6 +830,53 @@ def _build_world(c: _Checker, data: object, source: str) -> World:
     if c.problems:
         raise WorldError(c.problems)
     return world
+
+
+def _room(c: _Checker, value: object, path: PathKey) -> Polygon | None:
+    """A room: a polygon ``[[x, y], ...]``, or written as the other shapes are,
+    ``{rect: [...]}`` / ``{polygon: [...]}`` (a stranger's world wrote a room as a rect)."""
+    if isinstance(value, dict):
+        return c.shape(value, path)
+    return c.polygon(value, path)
+
+
+def _overlaps(shape: Polygon, rooms: tuple[Polygon, ...]) -> bool:
+    """Whether ``shape`` has some part inside a room: a corner of one inside the other, or
+    two sides that meet."""
+    for room in rooms:
+        if any(point_in_polygon(x, y, room) for x, y in shape):
+            return True
+        if any(point_in_polygon(x, y, shape) for x, y in room):
+            return True
+        if any(segments_meet(a, b, p, q) for a, b in _sides(shape) for p, q in _sides(room)):
+            return True
+    return False
+
+
+def _sides(poly: Polygon) -> list[tuple[Point, Point]]:
+    return [(poly[i], poly[(i + 1) % len(poly)]) for i in range(len(poly))]
+
+
+def _check_inside_rooms(c: _Checker, world: World) -> None:
+    """Obstacles, drops, dirt and areas lie (at least partly) on a room's floor: one wholly
+    outside does nothing in the simulator, and is a slip (centimetres written for metres, a
+    sign lost); a drop may stick out of a room (stairs drawn past the wall) and is fine."""
+    kinds: tuple[tuple[str, tuple[Polygon, ...]], ...] = (
+        ("obstacles", world.obstacles),
+        ("drops", world.drops),
+        ("dirt", tuple(d.area for d in world.dirt)),
+        ("areas", tuple(a.polygon for a in world.areas)),
+    )
+    for key, shapes in kinds:
+        for i, shape in enumerate(shapes):
+            if not _overlaps(shape, world.rooms):
+                xs, ys = [p[0] / 1000 for p in shape], [p[1] / 1000 for p in shape]
+                c.error(
+                    (key, i),
+                    f"a shape wholly outside every room (x {min(xs):g}..{max(xs):g}, "
+                    f"y {min(ys):g}..{max(ys):g} m)",
+                    "a shape on a room's floor, in metres",
+                )
 
 
 def _text(c: _Checker, top: dict[str, Any], key: str, default: str) -> str:
@@ -948,6 +993,10 @@ def _check_placement(c: _Checker, world: World, start_given: bool) -> None:
     )
     if dock_off:
         c.error(("dock", "at"), "a dock off the floor", "a point inside a room, facing into it")
+    elif dock is not None and world.over_drop(dock.docked_pose.x, dock.docked_pose.y):
+        c.error(("dock", "at"), "a dock whose docked robot stands over a drop",
+                "floor in front of the dock (a docked robot's centre is 0.17 m out)")  # fmt: skip
+    _check_inside_rooms(c, world)
     if not world.pose_is_free(world.start) and not (dock_off and not start_given):
         where = f"({world.start.x / 1000:.2f}, {world.start.y / 1000:.2f}) m"
         fits = "a pose on the floor with 0.17 m clear of every wall, obstacle and drop"

@@ -127,10 +127,11 @@ def test_duplicate_keys_and_yaml_syntax_errors_have_positions() -> None:
         "name: b\nseed: x\n"
     )
     assert found == [
-        "w.yaml:3:5: rooms[0]: found a mapping; allowed: a polygon: a list of at least 3 points "
-        "[x, y] (m)",
+        "w.yaml:3:5: rooms[0]: found neither or both of rect/polygon; allowed: exactly one of "
+        "rect, polygon",
         "w.yaml:4:5: rooms[0].name: found the key 'name' again (first at line 3); allowed: each "
         "key once",
+        "w.yaml:5:5: rooms[0].outline: found unknown key 'outline'; allowed: name, rect, polygon",
         "w.yaml:6:1: name: found the key 'name' again (first at line 1); allowed: each key once",
         "w.yaml:7:1: seed: found unknown key 'seed'; allowed: name, description, rooms, walls, "
         "obstacles, drops, dirt, virtual_walls, lighthouses, dock, robot, events, areas",
@@ -430,3 +431,46 @@ def test_a_bowtie_is_said_to_cross_not_to_have_no_area() -> None:
     assert "found a polygon whose sides cross ([0, 0]-[4, 3] and [4, 0]-[0, 3])" in found
     [flat] = problems("rooms: [[[0, 0], [1, 0], [2, 0]]]\n")
     assert "found a polygon of zero area" in flat
+
+
+def test_shapes_wholly_outside_every_room_are_named() -> None:
+    """An obstacle at [10, 10] in a 4 m room (centimetres written for metres) loaded and did
+    nothing; likewise a drop, dirt or an area. A drop sticking out of a room (stairs drawn
+    past the wall) is fine."""
+    found = problems(
+        "rooms: [[[0, 0], [4, 0], [4, 3], [0, 3]]]\n"
+        "obstacles: [{rect: [100, 100, 150, 150]}, {rect: [1, 1, 1.5, 1.5]}]\n"
+        "drops: [{rect: [3, -1, 5, 1]}, {rect: [-3, 0, -1, 1]}]\n"
+        "dirt: [{rect: [5, 5, 6, 6], level: 9}]\n"
+        "areas: [{name: big, rect: [-1, -1, 5, 4]},\n"
+        "        {name: far, polygon: [[9, 9], [10, 9], [9, 10]]}]\n"
+        "robot: {start: {at: [2.5, 2], heading: 0}}\n"
+    )
+    assert found == [
+        "w.yaml:2:13: obstacles[0]: found a shape wholly outside every room (x 100..150, "
+        "y 100..150 m); allowed: a shape on a room's floor, in metres",
+        "w.yaml:3:32: drops[1]: found a shape wholly outside every room (x -3..-1, y 0..1 m); "
+        "allowed: a shape on a room's floor, in metres",
+        "w.yaml:4:8: dirt[0]: found a shape wholly outside every room (x 5..6, y 5..6 m); "
+        "allowed: a shape on a room's floor, in metres",
+        "w.yaml:6:9: areas[1]: found a shape wholly outside every room (x 9..10, y 9..10 m); "
+        "allowed: a shape on a room's floor, in metres",
+    ]
+
+
+def test_a_dock_at_the_top_of_the_stairs_is_refused() -> None:
+    """The docked robot's centre stands 0.17 m out from the dock: over a drop there, every
+    docking ends down the stairs."""
+    [found] = problems(
+        "rooms: [[[0, 0], [4, 0], [4, 3], [0, 3]]]\ndrops: [{rect: [3, 0, 4, 0.5]}]\n"
+        "dock: {at: [3.5, 0], facing: 90}\nrobot: {start: {at: [1, 1.5], heading: 0}}\n"
+    )
+    assert found.startswith(
+        "w.yaml:3:12: dock.at: found a dock whose docked robot stands over a drop"
+    )
+
+
+def test_a_room_may_be_written_as_a_rect() -> None:
+    """Obstacles, drops and areas take ``{rect: ...}``; a room written so was refused."""
+    world = parse_world("rooms: [{rect: [0, 0, 4, 3]}]\n", "w.yaml")
+    assert world.rooms == (((0.0, 0.0), (4000.0, 0.0), (4000.0, 3000.0), (0.0, 3000.0)),)
