@@ -201,6 +201,11 @@ class Comparison:
     #: B's time minus A's over the episodes both succeeded: median and its 95 % interval
     median_difference_s: float | None
     difference_interval: tuple[float, float] | None
+    #: B's floor cleaned minus A's (fractions 0..1, success or not: a cleaning mission that
+    #: times out still cleaned), over the pairs where both ran their brushes
+    coverage_pairs: int = 0
+    median_coverage_difference: float | None = None
+    coverage_difference_interval: tuple[float, float] | None = None
 
     def lines(self) -> list[str]:
         med = self.median_difference_s
@@ -221,6 +226,22 @@ class Comparison:
             f"success      both {self.both}, only A {self.only_a}, only B {self.only_b}, "
             f"neither {self.neither}; exact McNemar p = {self.p_value:.3g}",
             f"time B - A   {time}",
+            *self._coverage_lines(),
+        ]
+
+    def _coverage_lines(self) -> list[str]:
+        med = self.median_coverage_difference
+        if med is None:
+            return []
+        ci = self.coverage_difference_interval
+        within = (
+            f"95 % interval {100 * ci[0]:+.1f}..{100 * ci[1]:+.1f}"
+            if ci
+            else "too few for an interval"
+        )
+        over = "the episode" if self.coverage_pairs == 1 else f"the {self.coverage_pairs} episodes"
+        return [
+            f"coverage B-A median {100 * med:+.1f} points ({within}) over {over} both cleaned in"
         ]
 
     def __str__(self) -> str:
@@ -240,6 +261,13 @@ class Comparison:
             "time_difference_interval": (
                 None if self.difference_interval is None else list(self.difference_interval)
             ),
+            "coverage_pairs": self.coverage_pairs,
+            "median_coverage_difference": self.median_coverage_difference,
+            "coverage_difference_interval": (
+                None
+                if self.coverage_difference_interval is None
+                else list(self.coverage_difference_interval)
+            ),
         }
 
 
@@ -255,6 +283,11 @@ def compare(
     only_a = sum(1 for ra, rb in pairs if ra.succeeded and not rb.succeeded)
     only_b = sum(1 for ra, rb in pairs if rb.succeeded and not ra.succeeded)
     differences = [rb.time_s - ra.time_s for ra, rb in both]
+    cleaned = [
+        rb.coverage.final - ra.coverage.final
+        for ra, rb in pairs
+        if ra.coverage is not None and rb.coverage is not None
+    ]
     return Comparison(
         a=a,
         b=b,
@@ -266,4 +299,7 @@ def compare(
         p_value=mcnemar_exact(only_a, only_b),
         median_difference_s=percentile(differences, 50),
         difference_interval=median_interval(differences),
+        coverage_pairs=len(cleaned),
+        median_coverage_difference=percentile(cleaned, 50),
+        coverage_difference_interval=median_interval(cleaned),
     )

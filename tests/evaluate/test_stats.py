@@ -109,6 +109,31 @@ def test_compare_pairs_episodes_by_seed() -> None:
         compare("A", "B", a, b[:-1])
 
 
+def test_compare_pairs_the_floor_each_variant_cleaned() -> None:
+    """Two cleaning missions were compared on success and time only (most time out: the
+    floor cleaned is what differs): B's coverage minus A's, episode by episode, success or
+    not; pairs where one ran no brush are left out, and none leaves the line out."""
+    from dataclasses import replace
+
+    from roomba_bt.evaluate.episode import Coverage
+    from roomba_bt.evaluate.stats import compare
+
+    def cleaned(r: EpisodeResult, final: float) -> EpisodeResult:
+        return replace(r, coverage=Coverage("", final, (), final, (), 0.0, 60.0))
+
+    a = [cleaned(result(s, "timeout"), 0.50 + 0.01 * s) for s in range(8)]
+    b = [cleaned(result(s, "timeout"), 0.60 + 0.01 * s) for s in range(7)] + [result(7)]
+    c = compare("A", "B", a, b)
+    assert c.coverage_pairs == 7
+    assert c.median_coverage_difference == pytest.approx(0.10)
+    assert c.coverage_difference_interval == (pytest.approx(0.10), pytest.approx(0.10))
+    assert "coverage B-A median +10.0 points (95 % interval +10.0..+10.0) over the 7 " in str(c)
+    assert c.to_dict()["coverage_pairs"] == 7
+    plain = compare("A", "B", [result(s) for s in range(3)], [result(s) for s in range(3)])
+    assert plain.median_coverage_difference is None and "coverage" not in str(plain)
+    assert plain.to_dict()["coverage_difference_interval"] is None
+
+
 def test_the_json_summary_is_tidied_of_binary_noise() -> None:
     """A sum of 15 ms ticks printed 27.884999999999998 in ``eval --json``: floats are cut to
     ten significant digits (ints, text, infinities and nesting kept as they are)."""
