@@ -9,7 +9,7 @@ out. ``roomba-bt eval`` prints :meth:`CoverageSummary.lines` under the success r
 from __future__ import annotations
 
 import statistics
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -58,13 +58,32 @@ class CoverageSummary:
     by_area: tuple[tuple[str, Spread], ...]
     longest_idle_s: float
     stuck: int  # episodes with STUCK_S of brush time without new floor
+    #: per area, how many episodes could reach it (an area is in an episode's figures only
+    #: when some of it is reachable from its start: not behind a virtual wall)
+    reached: tuple[tuple[str, int], ...] = ()
+
+    @property
+    def partial(self) -> int:
+        """Episodes that could reach only some of the areas (a start behind a virtual wall or
+        in a closed-off room): their "reachable floor" is that part, not the whole."""
+        return max((self.episodes - n for _, n in self.reached), default=0)
 
     def lines(self) -> list[str]:
         what = f"the {self.area}" if self.area else "the reachable floor"
         out = [f"coverage     of {what}, {self.episodes} episodes: mean (sd, min..max)"]
         out += [f"  at {t / 60:4.0f} min {spread}" for t, spread in self.at]
         out.append(f"  at the end {self.final}")
-        out += [f"  {name:<12s} {spread} at the end" for name, spread in self.by_area]
+        reached = dict(self.reached)
+        for name, spread in self.by_area:
+            n = reached.get(name, self.episodes)
+            some = "" if n == self.episodes else f" ({n} of {self.episodes} episodes reached it)"
+            out.append(f"  {name:<12s} {spread} at the end{some}")
+        if self.partial and not self.area:
+            out.append(
+                f"  reach      {self.partial} of {self.episodes} episodes could reach only part "
+                "of the floor (a start behind a virtual wall or in a closed-off room): their "
+                "figures are of that part"
+            )
         out.append(
             f"  stuck      {self.stuck} of {self.episodes} episodes went {STUCK_S:.0f} s of "
             f"brush time without new floor (longest {self.longest_idle_s:.0f} s)"
@@ -81,6 +100,7 @@ class CoverageSummary:
             "by_area": {name: spread.to_dict() for name, spread in self.by_area},
             "longest_idle_s": self.longest_idle_s,
             "stuck": self.stuck,
+            "reached": dict(self.reached),
         }
 
     def __str__(self) -> str:
@@ -99,13 +119,15 @@ def summarize_coverage(
     ran = [r for r in results if r.coverage is not None]
     cut = [r.time_s for r in ran if not r.succeeded]
     last = min(cut) if cut else max(r.time_s for r in ran)
-    names = [name for name, _ in covered[0].by_area]
+    # every area any episode reached, in the world's order (the first episode's alone left
+    # out the rooms it could not reach from its start)
+    names = _in_order([name for name, _ in c.by_area] for c in covered)
     by_area = []
+    reached = []
     for name in names:
-        values = [dict(c.by_area).get(name) for c in covered]
-        present = [v for v in values if v is not None]
-        if present:
-            by_area.append((name, Spread.of(present)))
+        present = [v for c in covered if (v := dict(c.by_area).get(name)) is not None]
+        by_area.append((name, Spread.of(present)))
+        reached.append((name, len(present)))
     idle = [c.longest_idle_s for c in covered]
     return CoverageSummary(
         area=covered[0].area,
@@ -115,4 +137,20 @@ def summarize_coverage(
         by_area=tuple(by_area),
         longest_idle_s=max(idle),
         stuck=sum(1 for i in idle if i >= STUCK_S),
+        reached=tuple(reached),
     )
+
+
+def _in_order(lists: Iterable[list[str]]) -> list[str]:
+    """The names of every list, each once, in the order the lists share (the world's areas,
+    each episode listing those it reached): a name is placed after the one before it."""
+    merged: list[str] = []
+    for names in lists:
+        after = -1
+        for name in names:
+            if name in merged:
+                after = merged.index(name)
+            else:
+                after += 1
+                merged.insert(after, name)
+    return merged

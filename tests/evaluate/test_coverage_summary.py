@@ -53,3 +53,36 @@ def test_eval_refuses_an_unknown_start_area(capsys: pytest.CaptureFixture[str]) 
                  "--start-area", "attic", "--no-progress"])  # fmt: skip
     assert code == 2
     assert "living-room, bedroom, kitchen" in capsys.readouterr().err
+
+
+def test_areas_an_episode_could_not_reach_are_said_not_dropped(tmp_path: Path) -> None:
+    """The per-area lines took their names from the first episode: one that started in the
+    kitchen (behind its virtual wall) hid the other rooms from the whole report. Every area
+    any episode reached is listed, in the world's order, with how many reached it, and the
+    episodes whose reachable floor was only a part are counted."""
+    mission = tmp_path / "sweep.yaml"
+    mission.write_text(SWEEP)
+    result = run_episode(EpisodeSpec(str(mission), "apartment", seed=1, timeout_s=5))
+
+    def cleaned(by_area: tuple[tuple[str, float], ...]) -> Coverage:
+        return Coverage("", 0.5, ((0.0, 0.0),), 0.5, by_area, 1.0, 60.0)
+
+    kitchen_only = replace(result, coverage=cleaned((("kitchen", 0.9),)))
+    whole = replace(
+        result,
+        coverage=cleaned((("living-room", 0.4), ("bedroom", 0.2), ("kitchen", 0.1))),
+    )
+    summary = summarize_coverage([kitchen_only, whole, whole])
+    assert summary is not None
+    assert [name for name, _ in summary.by_area] == ["living-room", "bedroom", "kitchen"]
+    assert dict(summary.reached) == {"living-room": 2, "bedroom": 2, "kitchen": 3}
+    assert summary.partial == 1
+    text = str(summary)
+    assert (
+        "living-room   40.0 % (sd  0.0, 40.0..40.0) at the end (2 of 3 episodes reached it)" in text
+    )
+    assert "kitchen       36.7 %" in text and "kitchen       36.7 % (sd" in text
+    assert "1 of 3 episodes could reach only part of the floor" in text
+    assert summary.to_dict()["reached"] == {"living-room": 2, "bedroom": 2, "kitchen": 3}
+    alike = summarize_coverage([whole, whole])
+    assert alike is not None and alike.partial == 0 and "reached it" not in str(alike)
