@@ -14,6 +14,7 @@ import math
 import operator
 import re
 from collections.abc import Callable, Iterable, Mapping
+from dataclasses import replace
 from operator import attrgetter
 from types import MappingProxyType
 from typing import Any, ClassVar
@@ -45,7 +46,8 @@ from roomba_bt.oi.frames import (
 )
 from roomba_bt.oi.ir import REMOTE_BUTTONS, IRCharacter
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
-from roomba_bt.oi.packets import PACKETS, PACKETS_BY_NAME, packet_ids
+from roomba_bt.oi.packets import PACKETS, PACKETS_BY_NAME, PacketSpec, packet_ids
+from roomba_bt.oi.profiles import PROFILES
 from roomba_bt.robot.interface import Odometry, Snapshot
 
 OPERATORS: dict[str, Callable[[Any, Any], bool]] = {
@@ -374,8 +376,51 @@ class Button(_Flag):
 _COMPARISON = re.compile(r"^\s*([a-z_][a-z0-9_]*)\s*(<=|>=|==|!=|<|>)\s*(-?\d+(?:\.\d+)?)\s*$")
 
 
+def comparison_verdict(op: str, number: float, lo: int, hi: int) -> str | None:
+    """``"never"`` or ``"always"`` when every reading ``lo..hi`` (whole numbers: a packet's
+    raw values) answers ``reading op number`` the same way; None when some answer each way."""
+    whole = number == int(number)
+    if op in ("<", "<="):
+        never, always = not OPERATORS[op](lo, number), OPERATORS[op](hi, number)
+    elif op in (">", ">="):
+        never, always = not OPERATORS[op](hi, number), OPERATORS[op](lo, number)
+    else:
+        absent = not whole or not lo <= number <= hi
+        only = lo == hi == number
+        never, always = (absent, only) if op == "==" else (only, absent)
+    return "never" if never else "always" if always else None
+
+
+def comparison_problem(
+    test: tuple[int, str, float], packets: Mapping[int, PacketSpec], where: str = ""
+) -> str | None:
+    """Why ``test`` cannot tell anything apart with these packets' ranges (``stasis == 7``:
+    never true, stasis reads 0..3), or None."""
+    pid, op, number = test
+    spec = packets[pid]
+    verdict = comparison_verdict(op, number, spec.minimum, spec.maximum)
+    if verdict is None:
+        return None
+    said = "can never be true" if verdict == "never" else "is always true"
+    return (
+        f"'{spec.name} {op} {number:g}' {said}{where}: {spec.name} reads "
+        f"{spec.minimum}..{spec.maximum}"
+    )
+
+
+def _widest(pid: int) -> PacketSpec:
+    """The packet's range over every robot model (a Roomba 500's unsigned encoders, a
+    Create 2's signed ones): what a mission for any of them may compare against."""
+    specs = [profile.packet(pid) for profile in PROFILES.values()]
+    lo, hi = min(s.minimum for s in specs), max(s.maximum for s in specs)
+    return replace(specs[0], minimum=lo, maximum=hi)
+
+
 def _parse_comparison(value: object) -> tuple[int, str, float]:
-    """The whole expression grammar: ``packet_name op number``; never ``eval``."""
+    """The whole expression grammar: ``packet_name op number``; never ``eval``. A test no
+    robot's reading can change the answer of (``stasis == 7``, ``wall_signal >= 0``) is an
+    error: a loop until it never ends, or ends at once (a test true or false only on the
+    chosen model is a warning: :func:`roomba_bt.mission.checks.sensor_ranges`)."""
     match = _COMPARISON.match(value) if isinstance(value, str) else None
     if match is None:
         raise UnitError(
@@ -387,7 +432,11 @@ def _parse_comparison(value: object) -> tuple[int, str, float]:
         from roomba_bt.behaviours.units import closest
 
         raise UnitError(f"unknown sensor packet {name!r}{closest(name, list(PACKETS_BY_NAME))}")
-    return spec.id, op, float(number)
+    test = (spec.id, op, float(number))
+    problem = comparison_problem(test, {spec.id: _widest(spec.id)}, " on any OI robot")
+    if problem is not None:
+        raise UnitError(problem)
+    return test
 
 
 COMPARISON = ValueType(

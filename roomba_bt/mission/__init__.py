@@ -22,6 +22,7 @@ from roomba_bt.mission.checks import (
     blind_in_full,
     check_stream,
     restarted_limits,
+    sensor_ranges,
 )
 from roomba_bt.mission.diagnostics import Diagnostic, MissionError
 from roomba_bt.mission.ir import Node
@@ -119,7 +120,7 @@ def _compile(
         blackboard_keys={k: d.type.describe() for k, d in ctx.keys.items()},
         sends=frozenset(sends),
         plan=tree,
-        warnings=(*ctx.warnings, *blind_in_full(tree, modes)),
+        warnings=(*ctx.warnings, *blind_in_full(tree, modes), *sensor_ranges(tree, profile)),
     )
     return mission, []
 

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from roomba_bt.behaviours.conditions import COMPARISON, comparison_problem
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.ir import Node
 from roomba_bt.oi.errors import BandwidthError
@@ -43,6 +44,7 @@ from roomba_bt.oi.frames import (
 )
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.oi.opcodes import COMMANDS
+from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
 
 #: Packets the runtime always streams, whatever the mission reads: bumps and wheel drops (7),
@@ -368,6 +370,28 @@ def blind_in_full(root: Node, modes: ModeCheck) -> list[Diagnostic]:
                 "runs: use mode: safe, or end it on a cliff (until: {cliff: any})"
             ).as_warning()
         )
+    return warnings
+
+
+def sensor_ranges(root: Node, profile: RobotProfile) -> list[Diagnostic]:
+    """Warnings: each comparison parameter (``sensor: stasis == 2``) whose answer cannot
+    change on the chosen robot, whose packet reads a narrower range than another model's
+    (a Roomba 500's stasis is 0..1, a 600's wall signal 0..1023, a 500's encoders unsigned).
+    A warning, not an error: the same mission may be meant for another model too; a test no
+    model can change is already an error where it is written."""
+    warnings: list[Diagnostic] = []
+    for node in root.walk():
+        decl = node.decl
+        if decl is None:
+            continue
+        for param in decl.params:
+            test = node.params.get(param.name)
+            if param.type is not COMPARISON or not isinstance(test, tuple):
+                continue
+            problem = comparison_problem(test, profile.packets, f" on the {profile.title}")
+            if problem is not None:
+                loc = node.options.get(f"loc:{param.name}", node.loc)
+                warnings.append(loc.at(f"{decl.name}.{param.name}: {problem}").as_warning())
     return warnings
 
 

@@ -217,15 +217,20 @@ def resolve(
             if not allow_ref:
                 raise Bad(loc.at(f"{what}: a blackboard value (@key) is not allowed here"))
             return _reference(ctx, raw, loc, vtype, what)
+    return _check_range(_parsed(vtype, raw, loc, what, param), loc, what, param)
+
+
+def _parsed(vtype: ValueType, raw: object, loc: Loc, what: str, param: Param | None) -> Any:
+    """``raw`` in ``vtype``'s unit; a bare number's hint names the unit that puts it in the
+    parameter's range (``max_radius: 1`` is ``1m``, not ``1mm``)."""
     try:
-        value = vtype.parse(raw)
+        return vtype.parse(raw)
     except BareNumber as exc:
         if param is not None:
             exc.within(param.minimum, param.maximum)
         raise Bad(loc.at(f"{what}: {exc}")) from None
     except UnitError as exc:
         raise Bad(loc.at(f"{what}: {exc}")) from None
-    return _check_range(value, loc, what, param)
 
 
 def _record(

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 
@@ -265,3 +266,65 @@ def test_full_mode_without_wheels_is_no_warning(
 ) -> None:
     mission = compile_text("tree:\n  sequence:\n    - mode: full\n    - leds: {dock: true}\n")
     assert mission.warnings == ()
+
+
+SENSOR_UNTIL = (
+    "tree:\n  sequence:\n    - mode: safe\n    - drive: {{velocity: 100 mm/s}}\n"
+    "      until: {{sensor: '{test}'}}\n"
+)
+
+
+@pytest.mark.parametrize(
+    ("test", "message"),
+    [
+        ("stasis == 7", "'stasis == 7' can never be true on any OI robot: stasis reads 0..3"),
+        ("wall_signal > 5000", "'wall_signal > 5000' can never be true on any OI robot: "
+         "wall_signal reads 0..4095"),
+        ("wall_signal >= 0", "'wall_signal >= 0' is always true on any OI robot: wall_signal "
+         "reads 0..4095"),
+        ("charging_state != 2.5", "'charging_state != 2.5' is always true on any OI robot: "
+         "charging_state reads 0..5"),
+        ("left_encoder_counts > 65535", "'left_encoder_counts > 65535' can never be true on "
+         "any OI robot: left_encoder_counts reads -32768..65535"),
+    ],
+)  # fmt: skip
+def test_a_sensor_test_no_reading_can_change_is_an_error(
+    errors_of: Callable[..., list[str]], test: str, message: str
+) -> None:
+    """``until: {sensor: stasis == 7}`` validated and drove until the timeout: a test whose
+    answer no robot's reading can change is an error where it is written."""
+    assert errors_of(SENSOR_UNTIL.format(test=test)) == [f"5:23: sensor.test: {message}"]
+
+
+@pytest.mark.parametrize(
+    ("test", "profile", "warned"),
+    [
+        ("stasis == 2", "roomba500",
+         "can never be true on the Roomba 500 series: stasis reads 0..1"),
+        ("stasis == 2", "create2", ""),
+        ("left_encoder_counts < 0", "roomba500", "can never be true on the Roomba 500 series: "
+         "left_encoder_counts reads 0..65535"),
+        ("left_encoder_counts < 0", "roomba600", ""),
+        ("wall_signal > 2000", "roomba600", "can never be true on the Roomba 600 series: "
+         "wall_signal reads 0..1023"),
+        ("wall_signal > 2000", "roomba500", ""),
+        ("wall_signal <= 1023", "create2", "is always true on the iRobot Create 2"),
+    ],
+)  # fmt: skip
+def test_a_sensor_test_the_chosen_robot_cannot_change_is_a_warning(
+    mission_file: Callable[..., Path], test: str, profile: str, warned: str
+) -> None:
+    """A range narrower on one model (a Roomba 500's stasis 0..1, its unsigned encoders, a
+    600's wall signal 0..1023) is warned of under that ``--profile``: the mission compiles
+    (it may be meant for another model too)."""
+    from roomba_bt.mission import load_mission
+    from roomba_bt.oi.profiles import get_profile
+
+    mission = load_mission(
+        mission_file(SENSOR_UNTIL.format(test=test)), profile=get_profile(profile)
+    )
+    found = [f"{w.line}:{w.column}: {w.message}" for w in mission.warnings]
+    if warned:
+        assert len(found) == 1 and found[0].startswith(f"5:23: sensor.test: '{test}' {warned}")
+    else:
+        assert found == []
