@@ -37,7 +37,7 @@ from roomba_bt.behaviours.units import (
 )
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.bits import LED_NAMES, led_bits, motor_bits
-from roomba_bt.oi.encode import Note, Radius, note_number
+from roomba_bt.oi.encode import PLAYABLE_NOTES, Note, Radius, note_name, note_number
 from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS, ENCODER_PACKETS
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import COMMANDS_BY_NAME, opcodes
@@ -64,18 +64,25 @@ def _parse_notes(value: object) -> tuple[tuple[int, int], ...]:
     if not isinstance(value, list) or not value:
         raise UnitError('expected a list of notes such as ["C4 250ms", "rest 125ms"]')
     notes: list[tuple[int, int]] = []
-    for item in value:
+    for index, item in enumerate(value, 1):
+        at = f"note {index} of {len(value)}: " if len(value) > 1 else ""
         parts = item.split() if isinstance(item, str) else []
         if len(parts) != 2:
-            raise UnitError(f'expected a note such as "C4 250ms" or "rest 125ms", got {item!r}')
+            raise UnitError(f'{at}expected a note such as "C4 250ms" or "rest 125ms", got {item!r}')
         try:
             number = note_number(parts[0])
         except ValueError:
-            raise UnitError(f"unknown note {parts[0]!r}: write A4, C#5 or rest") from None
+            raise UnitError(f"{at}unknown note {parts[0]!r}: write A4, C#5 or rest") from None
+        if number and number not in PLAYABLE_NOTES:
+            lo, hi = note_name(PLAYABLE_NOTES[0]), note_name(PLAYABLE_NOTES[-1])
+            raise UnitError(
+                f"{at}note {parts[0]} ({number}) is outside the notes the robot plays, {lo} to "
+                f"{hi}: it would sound as a rest (write rest for one)"
+            )
         sixty_fourths = round(parse_quantity("duration", parts[1]) * 64)
         if not 1 <= sixty_fourths <= 255:
             raise UnitError(
-                f"note duration {parts[1]!r} is out of range: 16ms..3.98s (1..255 of 1/64 s)"
+                f"{at}note duration {parts[1]!r} is out of range: 16ms..3.98s (1..255 of 1/64 s)"
             )
         notes.append((number, sixty_fourths))
     if len(notes) > _SONG_LENGTH.maximum:
@@ -151,13 +158,22 @@ def _drive_constraints(params: Mapping[str, Any]) -> list[str]:
         errors.append("give both left and right wheel speeds, or neither")
     if wheels and ("radius" in params or "velocity" in params):
         errors.append("give either velocity/radius or left/right wheel speeds, not both")
+    radius = params.get("radius")
+    if isinstance(radius, int | float) and round(radius) == 0:
+        errors.append(
+            f"radius {radius:g} mm is sent as 0, a radius the OI does not define (straight is "
+            "32768, spinning in place 1 and -1): write straight, spin_left or spin_right, or "
+            "a radius of 2 mm or more"
+        )
     return errors + _never_finishes(params)
 
 
 def _never_finishes(params: Mapping[str, Any]) -> list[str]:
     """An end the wheels can never reach: the leaf would run for ever. ``distance`` is the
     centre's path (a spin in place covers none), ``angle`` the heading (a straight drive
-    keeps it). Values read from the blackboard are not known here and pass."""
+    keeps it). Judged on the values sent, whole mm and mm/s: 0.4 mm/s is sent as 0, a radius
+    of 1 mm as the OI's spin in place (1). Values read from the blackboard are not known here
+    and pass."""
     left, right = params.get("left"), params.get("right")
     velocity, radius = params.get("velocity", 200.0), params.get("radius", "straight")
     ends = (params.get("distance"), params.get("angle"))
@@ -166,19 +182,38 @@ def _never_finishes(params: Mapping[str, Any]) -> list[str]:
     if not known:
         return []
     if left is not None and right is not None:
-        centre, spins = (float(left) + float(right)) / 2, float(left) != float(right)
+        centre, spins = (round(left) + round(right)) / 2, round(left) != round(right)
         how = f"left {left:g} and right {right:g} mm/s"
     else:
-        centre = 0.0 if radius in ("spin_left", "spin_right") else float(velocity)
-        spins = float(velocity) != 0 and radius != "straight"
-        how = f"{float(velocity):g} mm/s" + (f", radius {radius}" if "radius" in params else "")
+        in_place = radius in ("spin_left", "spin_right") or (
+            not isinstance(radius, str) and abs(round(radius)) == 1
+        )
+        centre = 0.0 if in_place else float(round(velocity))
+        spins = round(velocity) != 0 and radius != "straight"
+        sent = " (sent as 0)" if round(velocity) == 0 and velocity != 0 else ""
+        how = f"{float(velocity):g} mm/s{sent}" + (
+            f", radius {_shown(radius)}" if "radius" in params else ""
+        )
+    if left is not None and right is not None:
+        fix = "wheel speeds that do not cancel"
+    else:
+        fix = "a radius of 2 mm or more" if round(velocity) != 0 else "a speed"
     if float(params.get("distance") or 0) > 0 and centre == 0:
         return [f"drive at {how} never covers its distance (its centre does not move): "
-                "it would run for ever; give a speed, or end it by angle or duration"]  # fmt: skip
+                f"it would run for ever; give {fix}, or end it by angle or duration"]  # fmt: skip
     if float(params.get("angle") or 0) > 0 and not spins:
         return [f"drive at {how} never turns, so its angle is never reached: it would run "
                 "for ever; give a radius (or different wheel speeds), or use turn"]  # fmt: skip
     return []
+
+
+def _shown(radius: object) -> str:
+    """A radius as a message says it: ``1 mm (spinning in place)``, ``spin_left``."""
+    if isinstance(radius, str):
+        return radius
+    assert isinstance(radius, int | float)
+    wire = round(radius)
+    return f"{radius:g} mm" + (f" (sent as {wire}: spinning in place)" if abs(wire) == 1 else "")
 
 
 def _drive_reads(params: Mapping[str, Any]) -> tuple[int, ...]:
@@ -463,7 +498,8 @@ _SONG_SLOT = Param("number", INT, default=0, minimum=_SONG_NUMBER.minimum,
     kind="action",
     params=(
         _SONG_SLOT,
-        Param("notes", NOTES, required=True, doc='e.g. ["C4 250ms", "rest 125ms", "G4 500ms"]'),
+        Param("notes", NOTES, required=True,
+              doc='e.g. ["C4 250ms", "rest 125ms", "G4 500ms"]; G1..G9, 16ms..3.98s each'),
     ),
     sends=opcodes("song"),
 )  # fmt: skip

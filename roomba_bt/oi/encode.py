@@ -360,6 +360,13 @@ class Note:
 
 
 NOTE_NAMES = ("C", "C#", "D", "D#", "E", "F", "F#", "G", "G#", "A", "A#", "B")
+#: the MIDI notes the robot plays (both specs: G1 = 31 to G9 = 127); any other is a rest
+PLAYABLE_NOTES = range(31, 128)
+
+
+def note_name(number: int) -> str:
+    """``note_name(69) == "A4"``: the inverse of :func:`note_number` (0: ``rest``)."""
+    return "rest" if number == 0 else f"{NOTE_NAMES[number % 12]}{number // 12 - 1}"
 
 
 def note_number(name: str) -> int:
