@@ -188,7 +188,10 @@ def test_a_robot_at_another_rate_from_the_start_is_named_and_left_in_passive(
     # never connected: "no connection", not "connection lost"; the same exit code
     assert summary.outcome is Outcome.NO_CONNECTION and summary.exit_code == 3
     assert "the robot answers at 19200 baud, not at the 115200 of the run" in summary.reason
-    assert "open it at 19200 (--baud 19200 or --baud auto; in Python, Connection.open(port, baud=19200))" in summary.reason
+    assert (
+        "open it at 19200 (--baud 19200 or --baud auto; in Python, "
+        "Connection.open(port, baud=19200))" in summary.reason
+    )
     assert "likely causes" not in summary.reason
     assert simulator.mode is OIMode.PASSIVE  # never driven; the stop went at 19200
     assert simulator.requested_left == simulator.requested_right == 0
