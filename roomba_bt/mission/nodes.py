@@ -133,6 +133,9 @@ class NodeParser:
                 self.ctx.error(other[2].at(self._unknown_word(other[0], where)))
         return known[0]
 
+    #: at most this many broken plugins are noted beside an unknown node
+    _PLUGIN_NOTES = 3
+
     def _unknown_word(self, word: str, where: str = "") -> str:
         unloaded = self.ctx.unloaded_plugins
         if unloaded:  # most likely theirs: no "did you mean" a built-in of another name
@@ -140,8 +143,17 @@ class NodeParser:
             return f"unknown node {word!r}{where} (the plugin file {files} was not loaded)"
         names = [*WORDS, *self.ctx.registry.names(), *MODIFIERS]
         message = f"unknown node {word!r}{where}{closest(word, names)}"
-        if self.ctx.registry.errors:
-            failed = "; ".join(str(e) for e in self.ctx.registry.errors)
+        errors = self.ctx.registry.errors
+        # the plugins that may have meant this word: one whose error names it, else those
+        # that did not import at all (any name could have been theirs); a few, not every
+        # broken plugin on the machine (one line of more than 1,000 characters)
+        named = [e for e in errors if word in e.cause or word in e.plugin]
+        likely = named or [e for e in errors if not e.imported]
+        if likely:
+            failed = "; ".join(str(e) for e in likely[: self._PLUGIN_NOTES])
+            more = len(likely) - self._PLUGIN_NOTES
+            if more > 0:
+                failed += f"; and {more} more (roomba-bt behaviours lists them)"
             message += f" (note: {failed})"
         return message
 

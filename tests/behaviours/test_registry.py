@@ -333,3 +333,27 @@ class Good(Condition):
     def check(self, snapshot):
         return True
 """
+
+
+def test_an_unknown_node_notes_only_the_plugins_that_may_have_meant_it(tmp_path: Path) -> None:
+    """The note beside an unknown node listed every broken plugin on the machine (a line of
+    more than 1,000 characters): it lists those whose error names the word, else those that
+    did not import at all, three at the most."""
+    registry = builtin_registry()
+    _plugin(registry, "wrong", "Undeclared")  # imported, declared wrongly: no name of ours
+    for n in range(5):
+        registry.load_entry_point(
+            EntryPoint(f"gone{n}", f"no_such_module_{n}:Thing", "roomba_bt.behaviours")
+        )
+    path = tmp_path / "m.yaml"
+    path.write_text("tree:\n  sequence:\n    - wiggle\n")
+    _, [error] = compile_mission(path, {}, registry=registry)
+    assert "plugin 'wrong'" not in error.message
+    assert error.message.count("failed to import") == 3
+    assert "and 2 more (roomba-bt behaviours lists them)" in error.message
+    path.write_text("tree:\n  sequence:\n    - undeclared_thing\n")
+    registry = builtin_registry()
+    _plugin(registry, "undeclared_thing", "Undeclared")
+    registry.load_entry_point(EntryPoint("gone", "no_such_module:Thing", "roomba_bt.behaviours"))
+    _, [error] = compile_mission(path, {}, registry=registry)
+    assert "plugin 'undeclared_thing'" in error.message and "failed to import" not in error.message
