@@ -282,15 +282,20 @@ def describe_behaviours(
     from roomba_bt.behaviours import default_registry
 
     out = []
-    for decl in registry if registry is not None else default_registry():
+    registry = registry if registry is not None else default_registry()
+    for decl in registry:
         if names and decl.name not in names:
             continue
+        clash = registry.clash(decl.name)
         out.append(
             {
                 "name": decl.name,
                 "kind": decl.kind,
                 "doc": decl.doc,
                 "origin": decl.origin,
+                # two plugins declare the name (a mission using it is refused), or a plugin
+                # declares a built-in's (the built-in is used): said where it is listed
+                "clash": None if clash is None else {"severity": clash[0], "why": clash[1]},
                 "parameters": [
                     {
                         "name": p.name,
@@ -352,6 +357,8 @@ def behaviours_command(args: argparse.Namespace) -> int:
         if entry["origin"] != "builtin":
             head += f"; from {entry['origin']}"
         print(head + ")")
+        if entry["clash"]:
+            print(f"    {entry['clash']['severity']}: {entry['clash']['why']}")
         if entry["doc"]:
             print(f"    {entry['doc']}")
         for p in entry["parameters"]:

@@ -357,3 +357,23 @@ def test_an_unknown_node_notes_only_the_plugins_that_may_have_meant_it(tmp_path:
     registry.load_entry_point(EntryPoint("gone", "no_such_module:Thing", "roomba_bt.behaviours"))
     _, [error] = compile_mission(path, {}, registry=registry)
     assert "plugin 'undeclared_thing'" in error.message and "failed to import" not in error.message
+
+
+def test_behaviours_lists_a_name_two_plugins_declare_with_the_clash() -> None:
+    """`roomba-bt behaviours wiggle` showed the first plugin's and exit 0, with no sign that
+    a second declares it too (a mission that uses it is refused)."""
+    from roomba_bt.cli.mission_cmds import describe_behaviours
+
+    registry = builtin_registry()
+    _plugin(registry, "first", "Always")
+    _plugin(registry, "second", "AlwaysToo")
+    _plugin(registry, "shadow", "DriveToo")
+    [always] = describe_behaviours(["always"], registry)
+    assert always["clash"]["severity"] == "error"
+    assert "'always' is declared by two plugins" in always["clash"]["why"]
+    [drive] = describe_behaviours(["drive"], registry)
+    assert (
+        drive["clash"]["severity"] == "warning" and "the built-in is used" in drive["clash"]["why"]
+    )
+    [plain] = describe_behaviours(["wait"], registry)
+    assert plain["clash"] is None
