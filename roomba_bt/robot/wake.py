@@ -105,7 +105,9 @@ class KeepAwake:
             self.due = math.inf
             log.warning(
                 "keep-awake off: %s; a robot left in Passive sleeps after 5 minutes (no "
-                "hang-up pulse instead: it would blank the stream for its second)",
+                "hang-up pulse instead: it would blank the stream for its second). A pty or a "
+                "plain socket has no modem lines: the simulator serves them with --rfc2217; "
+                "run --no-keep-awake says it is meant",
                 exc,
             )
 

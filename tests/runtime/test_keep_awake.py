@@ -149,13 +149,19 @@ class _NoLines:
         raise OSError(25, "Inappropriate ioctl for device")
 
 
-def test_a_port_without_modem_lines_turns_keep_awake_off_once() -> None:
+def test_a_port_without_modem_lines_turns_keep_awake_off_once(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
     wake = KeepAwake(_NoLines())
-    wake.tick(0.0)
-    wake.tick(61.0)
+    with caplog.at_level("WARNING", logger="roomba_bt"):
+        wake.tick(0.0)
+        wake.tick(61.0)
     wake.release()
     assert wake.unavailable is not None and "Inappropriate ioctl" in wake.unavailable
     assert wake.pulses == 0
+    # said once, with what to do (it named only the ioctl's error)
+    [said] = [r.getMessage() for r in caplog.records if "keep-awake off" in r.getMessage()]
+    assert "--rfc2217" in said and "--no-keep-awake" in said
 
 
 class _Levels:
