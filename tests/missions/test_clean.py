@@ -4,6 +4,8 @@ error."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from roomba_bt.evaluate import EpisodeSpec, run_episode
@@ -44,22 +46,34 @@ def test_clean_docks_when_the_battery_runs_low(odometry_error: float) -> None:
     assert result.coverage is not None and result.coverage.cleaning_s > 0
 
 
-def test_clean_in_a_small_room_ends_when_the_floor_is_done() -> None:
+def test_clean_in_a_small_room_ends_when_the_floor_is_done_and_goes_home() -> None:
+    """Done before its 20 minutes, it docks as the firmware's Clean does (it stayed where it
+    stopped: a robot left in the middle of the room, its battery running down)."""
     result = run_episode(
         EpisodeSpec(str(MISSIONS / "clean.yaml"), "empty-room", seed=1, timeout_s=1300.0)
     )
     assert result.outcome == "success", result.reason
-    assert result.time_s < 1200.0  # before the 20 minutes: it knew it was done
     assert result.coverage is not None and result.coverage.overall >= 0.9
-    assert not result.docked  # done, not a low battery: no dock
+    assert result.coverage.cleaning_s < 1200.0  # before the 20 minutes: it knew it was done
+    assert result.docked and result.charging
 
 
-@pytest.mark.parametrize("minutes", [1, 7])
-def test_the_builtin_clean_ends_at_its_duration_within_a_cycle(minutes: int) -> None:
-    """``-p duration=7min`` cleaned 10 minutes: ``repeat: {for: ...}`` stops only between
-    its 5-minute cycles. The cleaning stops at the duration, the motors off, in Passive."""
-    result = _living_room("clean-builtin", 3, minutes)
-    assert result.outcome == "success", result.reason
-    assert minutes * 60.0 <= result.time_s < minutes * 60.0 + 1.0
-    assert result.coverage is not None
-    assert result.coverage.cleaning_s == pytest.approx(minutes * 60.0, abs=1.0)
+def test_clean_without_going_home_or_without_a_dock_ends_where_it_stopped(
+    tmp_path: Path,
+) -> None:
+    """``-p go_home=false`` stays; in a world with no dock the way home fails after its
+    time limit, and the cleaning done is still a success (the log says why it stayed)."""
+    stay = run_episode(
+        EpisodeSpec(str(MISSIONS / "clean.yaml"), "empty-room", seed=1, timeout_s=1300.0,
+                    params=(("go_home", "false"),))
+    )  # fmt: skip
+    assert stay.outcome == "success", stay.reason
+    assert not stay.docked
+    world = tmp_path / "no-dock.yaml"
+    world.write_text("rooms: [[[0, 0], [3, 0], [3, 2.5], [0, 2.5]]]\n")
+    homeless = run_episode(
+        EpisodeSpec(str(MISSIONS / "clean.yaml"), str(world), seed=1, timeout_s=600.0,
+                    params=(("duration", "1min"), ("dock_time_limit", "1min")))
+    )  # fmt: skip
+    assert homeless.outcome == "success", homeless.reason
+    assert not homeless.docked and 120.0 <= homeless.time_s < 200.0
