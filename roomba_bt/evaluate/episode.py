@@ -445,7 +445,7 @@ def _run_episode(spec: EpisodeSpec) -> EpisodeResult:
     stack.runner.on_wall_clock = False  # Ctrl-Z suspends an evaluation, Ctrl-\ quits it
     if IN_POOL_WORKER:  # Ctrl-C is the parent's: it ends the pool, a worker just ends
         stack.runner.guards_signals = False
-    summary = stack.run()
+    summary = stack.run(raise_interrupts=False)
     if summary.outcome is Outcome.INTERRUPTED:  # Ctrl-C (or SIGTERM) stops the evaluation,
         raise KeyboardInterrupt(summary.reason)  # not just this episode
     trace = simulator.trace[:: max(1, spec.trace_every)]

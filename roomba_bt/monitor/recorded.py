@@ -46,6 +46,7 @@ def replay_into_feed(
     summary, _ = replay_record(
         record, mission, profile=profile, packets=packets, baud=baud, name=name,
         gate=ReplayedActs(feed, acts),  # it records each tick in the feed, as live
+        raise_interrupts=False,  # Ctrl-C: the monitor shows the summary, as `replay` does
     )  # fmt: skip
     for t, note in record.notes:
         if not isinstance(note.get("tick"), int):  # the tick guard's: shown as the run had it

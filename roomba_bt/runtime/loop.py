@@ -278,7 +278,15 @@ class MissionRunner(BaseHandle):
         return self.snapshot is not NO_SNAPSHOT_YET
 
     # ---------------------------------------------------------------- running
-    def run(self) -> RunSummary:
+    def run(self, *, raise_interrupts: bool = True) -> RunSummary:
+        """The mission to its end: the start-up, the ticks and, on every ending, the tree
+        stopped and the safe stop sent; the summary says how it ended.
+
+        Ctrl-C, SIGTERM and the other ending signals end the run with its safe stop. Then,
+        with ``raise_interrupts`` (the default), the interrupt is raised again, the summary
+        as its ``summary`` attribute: a program running two missions in a row must not drive
+        the second after its operator pressed Ctrl-C, and a ``kill`` must end it. The CLI
+        and the evaluation pass False: they read Outcome.INTERRUPTED (exit 130)."""
         summary = self.summary
         wall_start = time.perf_counter()
         root = self.mission.root
@@ -286,6 +294,7 @@ class MissionRunner(BaseHandle):
             hold=self.hold_interrupts, wall_clock=self.on_wall_clock, enabled=self.guards_signals
         )
         tick_guard = self.tick_guard
+        interrupt: KeyboardInterrupt | None = None
         with guard:
             try:
                 self.connection.start(OIMode.PASSIVE, self.packets)
@@ -296,10 +305,10 @@ class MissionRunner(BaseHandle):
                 if tick_guard is not None:
                     tick_guard.start()
                 self._loop(root, summary)
-            except Terminated as exc:
-                summary.outcome, summary.reason = Outcome.INTERRUPTED, signal_reason(exc.signum)
-            except KeyboardInterrupt:
-                summary.outcome, summary.reason = Outcome.INTERRUPTED, "Ctrl-C"
+            except KeyboardInterrupt as exc:  # Ctrl-C, or Terminated: SIGTERM, SIGHUP, ...
+                interrupt = exc
+                why = signal_reason(exc.signum) if isinstance(exc, Terminated) else "Ctrl-C"
+                summary.outcome, summary.reason = Outcome.INTERRUPTED, why
             except StopRequested as exc:
                 summary.outcome, summary.reason = Outcome.INTERRUPTED, str(exc)
             except ConnectionFailed as exc:
@@ -321,6 +330,9 @@ class MissionRunner(BaseHandle):
                     tick_guard.close()  # it writes nothing more: the safe stop is ours
                 guard.stopping()  # a further Ctrl-C or SIGTERM waits for the safe stop
                 self._finish(summary, wall_start)
+        if interrupt is not None and raise_interrupts:  # the robot is stopped: now the caller
+            interrupt.summary = summary  # type: ignore[attr-defined]
+            raise interrupt
         return summary
 
     def release_interrupts(self) -> None:

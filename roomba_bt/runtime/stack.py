@@ -116,15 +116,20 @@ class RunStack:
         """The mission running now: the one given, until the monitor reloads another."""
         return self.runner.mission
 
-    def run(self) -> RunSummary:
+    def run(self, *, raise_interrupts: bool = True) -> RunSummary:
         """The mission to its end; the robot is left stopped (see :meth:`MissionRunner.run`).
         With ``--record``, the record is written out before the summary is made, which says
-        when a file that could not be written stopped it."""
-        summary = self.runner.run()
-        if isinstance(self.transport, RecordingTransport):
-            self.transport.flush()
-            summary.record_stopped = self.transport.stopped or ""
-        return summary
+        when a file that could not be written stopped it.
+
+        Ctrl-C or SIGTERM: after the safe stop the interrupt is raised again, the summary as
+        its ``summary`` attribute, unless ``raise_interrupts`` is False (the CLI, the
+        evaluation: the summary's outcome is then INTERRUPTED, exit 130)."""
+        try:
+            return self.runner.run(raise_interrupts=raise_interrupts)
+        finally:  # an interrupt raised again too: its summary says how the record ended
+            if isinstance(self.transport, RecordingTransport):
+                self.transport.flush()
+                self.runner.summary.record_stopped = self.transport.stopped or ""
 
     def close(self) -> None:
         """Close the connection (and the record); a link already gone is no error here: the
@@ -143,10 +148,12 @@ def replay_record(
     name: str,
     observer: TickObserver | None = None,
     gate: TickGate | None = None,
+    raise_interrupts: bool = True,
 ) -> tuple[RunSummary, ReplayTransport]:
     """``record``'s sensor bytes through ``mission`` on the recorded clock (``replay`` and the
     monitor's recorded runs): the run ends at the record's end or at the first command that
-    differs from the recorded ones; the transport holds what the tree wrote."""
+    differs from the recorded ones; the transport holds what the tree wrote. Ctrl-C is
+    raised again unless ``raise_interrupts`` is False (see :meth:`RunStack.run`)."""
     transport = ReplayTransport(record, name=f"replay:{name}")
 
     def input_ended() -> str | None:
@@ -168,4 +175,4 @@ def replay_record(
     )
     stack.runner.gate = gate  # the monitor's replay of the operator's acts
     stack.runner.on_wall_clock = False  # a record's clock: Ctrl-Z suspends, Ctrl-\ quits
-    return stack.run(), transport
+    return stack.run(raise_interrupts=raise_interrupts), transport

@@ -54,7 +54,7 @@ def run_mission(tmp_path: Path) -> RunMission:
             tick_limit=tick_limit,
             record=Recording(record, str(path)) if record is not None else None,
         )
-        summary = stack.run()
+        summary = stack.run(raise_interrupts=False)  # as the CLI: Ctrl-C is a summary
         if record is not None:
             stack.close()  # the record written out
         return Run(summary, link, simulator, stack.runner)
