@@ -16,7 +16,6 @@ speed, or a simulation on the virtual clock, make the same decisions. See ``docs
 from __future__ import annotations
 
 import contextlib
-import inspect
 import logging
 import time
 import traceback
@@ -26,12 +25,12 @@ from typing import Any, NoReturn, Protocol, cast
 import py_trees
 
 from roomba_bt.behaviours import SNAPSHOT_KEY
-from roomba_bt.behaviours.lean import Direct, InvalidStatus
+from roomba_bt.behaviours.lean import Direct
 from roomba_bt.behaviours.reasons import failure_reason
 from roomba_bt.mission import RUNTIME_PACKETS
 from roomba_bt.oi.encode import Command
 from roomba_bt.oi.errors import BandwidthError
-from roomba_bt.oi.frames import BATTERY_PACKETS, MissingPacket, SensorFrame
+from roomba_bt.oi.frames import BATTERY_PACKETS, SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
@@ -47,6 +46,11 @@ from roomba_bt.robot.interface import (
 from roomba_bt.robot.safety import InterruptGuard, Terminated, signal_reason
 from roomba_bt.runtime.stall import StallRide
 from roomba_bt.runtime.summary import DEFAULT_GRACE, Outcome, RunSummary
+from roomba_bt.runtime.teardown import (
+    behaviour_error,
+    note_stop_failures,
+    stop_nodes,
+)
 from roomba_bt.runtime.tick_guard import TickGuardLike
 
 log = logging.getLogger(__name__)
@@ -77,55 +81,6 @@ def stream_request(mission_packets: Iterable[int], baud: int) -> tuple[int, ...]
     except BandwidthError:
         return tuple(sorted(required))
     return wanted
-
-
-def behaviour_error(exc: BaseException) -> str:
-    """What a behaviour's exception says to the user: the behaviour's path in the tree (the
-    innermost behaviour on the traceback) and the file:line where it raised in that
-    behaviour's own module (a plugin's file), else the line the exception came from."""
-    frames = list(traceback.walk_tb(exc.__traceback__))
-    what = f"{type(exc).__name__}: {exc}"
-    behaviour = None
-    for frame, _ in reversed(frames):
-        candidate = frame.f_locals.get("self")
-        if isinstance(candidate, py_trees.behaviour.Behaviour):
-            behaviour = candidate
-            break
-    where = f"{frames[-1][0].f_code.co_filename}:{frames[-1][1]}" if frames else ""
-    if isinstance(exc, InvalidStatus):  # raised after its update returned: where update is
-        behaviour, frames = exc.node, []
-        update: Any = getattr(type(behaviour), "update", None)
-        with contextlib.suppress(TypeError, OSError):
-            where = f"{inspect.getsourcefile(update)}:{inspect.getsourcelines(update)[1]}"
-    if behaviour is None:
-        return f"{what} (at {where})" if where else what
-    with contextlib.suppress(TypeError, OSError):
-        home = inspect.getfile(type(behaviour))
-        for frame, line in reversed(frames):
-            if frame.f_code.co_filename == home:
-                where = f"{home}:{line}"
-                break
-    path = []
-    node: py_trees.behaviour.Behaviour | None = behaviour
-    while node is not None:
-        path.append(node.name)
-        node = node.parent
-    return (
-        f"behaviour {' / '.join(reversed(path))} raised {what} (at {where}){_hint(exc, behaviour)}"
-    )
-
-
-def _hint(exc: BaseException, behaviour: py_trees.behaviour.Behaviour) -> str:
-    """What to do about a packet the behaviour read without declaring it, where it can be
-    told: the declaration that should list it."""
-    declaration: Any = getattr(behaviour, "declaration", None)
-    if not isinstance(exc, MissingPacket) or declaration is None or callable(declaration.reads):
-        return ""
-    listed = ", ".join(str(pid) for pid in declaration.reads) or "nothing"
-    return (
-        f"; add {exc.packet_id} to @declare(reads=...) of {declaration.name!r} (it lists "
-        f"{listed}): the stream carries what the mission's behaviours declare"
-    )
 
 
 class _NoSnapshotYet:
@@ -340,20 +295,20 @@ class MissionRunner(BaseHandle):
         if self._guard is not None:
             self._guard.release()
 
-    def stop_tree(self) -> None:
-        """Stop the running tree (each running leaf's ``terminate``) and drop what its leaves
+    def stop_tree(self) -> list[str]:
+        """Stop the running tree (each running node's ``terminate``, every node even when one
+        raises: :func:`~roomba_bt.runtime.teardown.stop_nodes`) and drop what its leaves
         queued on the way out: the safe stop that comes with it (the run's end, a reload from
         the monitor) supersedes their halts, which Passive would refuse anyway. Its commands
-        no longer stand: nothing sends them again (a resume, the watchdog's recovery)."""
-        root = self.mission.root
-        with contextlib.suppress(Exception):
-            if root.status == py_trees.common.Status.RUNNING:
-                root.stop(py_trees.common.Status.INVALID)
+        no longer stand: nothing sends them again (a resume, the watchdog's recovery).
+        Returns what each ``terminate`` that raised says (each logged as a warning)."""
+        failures = stop_nodes(self.mission.root)
         self._outbox.clear()
         self.last_sent.clear()
+        return failures
 
     def _finish(self, summary: RunSummary, wall_start: float) -> None:
-        self.stop_tree()
+        note_stop_failures(summary, self.stop_tree())
         self.count_written()  # the safe stop's are said apart
         stop_robot(self.connection, summary)
         if self._blackboard is not None:

@@ -1,0 +1,143 @@
+"""The end of a tree's run, each step guarded, and what a behaviour's exception says.
+
+A run (and the monitor's reload, which retires a tree) ends its tree in this order::
+
+    stop_nodes(root)        every node stopped: its terminate() once, in py_trees' order;
+                            one that raises is noted, and the others are stopped all the same
+    the safe stop           the runner's (drive 0, motors off, pause, Passive)
+
+py_trees' own ``root.stop()`` stops the nodes one inside the other: a ``terminate`` that
+raised skipped every node after it, and the tree was left half stopped (nodes RUNNING,
+the same tree run again did nothing until its time limit).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import inspect
+import logging
+import traceback
+from collections.abc import Callable
+from typing import Any
+
+import py_trees
+
+from roomba_bt.behaviours.lean import InvalidStatus
+from roomba_bt.oi.frames import MissingPacket
+from roomba_bt.runtime.summary import Outcome, RunSummary
+
+log = logging.getLogger(__name__)
+
+_INVALID, _RUNNING = py_trees.common.Status.INVALID, py_trees.common.Status.RUNNING
+#: outcomes a failed terminate turns into ERROR: nothing had gone wrong in the run before
+_CLEAN_ENDINGS = frozenset({Outcome.SUCCESS, Outcome.FAILURE, Outcome.TIMEOUT, Outcome.INPUT_ENDED})
+
+
+def behaviour_error(exc: BaseException) -> str:
+    """What a behaviour's exception says to the user: the behaviour's path in the tree (the
+    innermost behaviour on the traceback) and the file:line where it raised in that
+    behaviour's own module (a plugin's file), else the line the exception came from."""
+    frames = list(traceback.walk_tb(exc.__traceback__))
+    what = f"{type(exc).__name__}: {exc}"
+    behaviour = None
+    for frame, _ in reversed(frames):
+        candidate = frame.f_locals.get("self")
+        if isinstance(candidate, py_trees.behaviour.Behaviour):
+            behaviour = candidate
+            break
+    where = f"{frames[-1][0].f_code.co_filename}:{frames[-1][1]}" if frames else ""
+    if isinstance(exc, InvalidStatus):  # raised after its update returned: where update is
+        behaviour, frames = exc.node, []
+        update: Any = getattr(type(behaviour), "update", None)
+        with contextlib.suppress(TypeError, OSError):
+            where = f"{inspect.getsourcefile(update)}:{inspect.getsourcelines(update)[1]}"
+    if behaviour is None:
+        return f"{what} (at {where})" if where else what
+    with contextlib.suppress(TypeError, OSError):
+        home = inspect.getfile(type(behaviour))
+        for frame, line in reversed(frames):
+            if frame.f_code.co_filename == home:
+                where = f"{home}:{line}"
+                break
+    path = []
+    node: py_trees.behaviour.Behaviour | None = behaviour
+    while node is not None:
+        path.append(node.name)
+        node = node.parent
+    return (
+        f"behaviour {' / '.join(reversed(path))} raised {what} (at {where}){_hint(exc, behaviour)}"
+    )
+
+
+def _hint(exc: BaseException, behaviour: py_trees.behaviour.Behaviour) -> str:
+    """What to do about a packet the behaviour read without declaring it, where it can be
+    told: the declaration that should list it."""
+    declaration: Any = getattr(behaviour, "declaration", None)
+    if not isinstance(exc, MissingPacket) or declaration is None or callable(declaration.reads):
+        return ""
+    listed = ", ".join(str(pid) for pid in declaration.reads) or "nothing"
+    return (
+        f"; add {exc.packet_id} to @declare(reads=...) of {declaration.name!r} (it lists "
+        f"{listed}): the stream carries what the mission's behaviours declare"
+    )
+
+
+def stop_nodes(root: py_trees.behaviour.Behaviour) -> list[str]:
+    """Stop the tree at ``root`` (``root.stop(INVALID)``, py_trees' order and each class's
+    own ``stop``) with every node's ``terminate`` guarded: one that raises is caught where
+    it raised, so py_trees goes on to the nodes after it. Every node ends INVALID, each
+    ``terminate`` called once. Returns what each failure says (:func:`behaviour_error`, its
+    file:line), each also logged as a warning."""
+    failures: list[str] = []
+    if root.status is not _RUNNING:
+        return failures
+    nodes = list(root.iterate())
+    own = [(node, _guard_terminate(node, failures)) for node in nodes]
+    try:
+        root.stop(_INVALID)
+    except Exception as exc:  # a stop() of its own raised, not a terminate: said, and
+        failures.append(f"stopping the tree: {behaviour_error(exc)}")  # the rest marked
+        for node in nodes:
+            node.status = _INVALID
+    finally:
+        for node, patched in own:  # the class's terminate again (or the one patched in)
+            if patched is None:
+                del node.terminate
+            else:
+                node.terminate = patched  # type: ignore[method-assign]
+    for failure in failures:
+        log.warning("%s; the other nodes were stopped all the same", failure)
+    return failures
+
+
+def _guard_terminate(
+    node: py_trees.behaviour.Behaviour, failures: list[str]
+) -> Callable[..., None] | None:
+    """Give ``node`` a ``terminate`` of its own that catches what its usual one raises;
+    returns the ``terminate`` that was patched into the node before (None: the class's)."""
+    usual = node.terminate
+    class_own = getattr(usual, "__func__", None) is getattr(type(node), "terminate", None)
+
+    def guarded(new_status: py_trees.common.Status) -> None:
+        try:
+            usual(new_status)
+        except Exception as exc:
+            failures.append(f"stopping the tree: terminate() of {behaviour_error(exc)}")
+
+    node.terminate = guarded  # type: ignore[method-assign]
+    return None if class_own else usual
+
+
+def note_stop_failures(summary: RunSummary, failures: list[str]) -> None:
+    """A ``terminate`` that raised is a bug in a behaviour, as one in ``update`` is: a run
+    that had gone well so far (success, failure, timeout, a replay's end) ends as an ERROR
+    (exit 4) saying so; one that had already ended otherwise (Ctrl-C, a lost link, an
+    error) keeps its outcome, and its reason says it too (decided; ``docs/runtime.md``)."""
+    if not failures:
+        return
+    said = failures[0] + (f" (and {len(failures) - 1} more)" if len(failures) > 1 else "")
+    if summary.outcome in _CLEAN_ENDINGS:
+        was = summary.outcome.value + (f": {summary.reason}" if summary.reason else "")
+        summary.outcome, summary.reason = Outcome.ERROR, f"{said} (the run had ended: {was})"
+    else:
+        summary.reason = f"{summary.reason}; then {said}" if summary.reason else said

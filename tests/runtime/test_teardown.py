@@ -1,0 +1,114 @@
+"""The end of a tree's run: every node stopped even when a ``terminate`` raises, the error
+said (a warning with the behaviour and its file:line, and the summary), and the safe stop
+sent all the same. A tree built by hand in Python, as a py_trees user builds one: plain
+py_trees nodes beside roomba-bt leaves."""
+
+from __future__ import annotations
+
+import logging
+from collections import Counter
+from dataclasses import dataclass, field
+from typing import Any
+
+import py_trees
+import pytest
+from py_trees.common import Status
+
+from roomba_bt.behaviours.actions import Drive, Mode
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.runtime.stack import RunStack
+from roomba_bt.runtime.summary import Outcome
+from roomba_bt.sim import Simulator, load_world
+
+from .simrun import TapLink
+
+SAFE_END = oi.halt().data + oi.motors_off().data + oi.pause_stream().data + oi.start().data
+
+
+class Counting(py_trees.behaviour.Behaviour):
+    """RUNNING for ever; counts its terminate calls in ``calls``."""
+
+    def __init__(self, name: str, calls: Counter[str], *, raises: bool = False) -> None:
+        super().__init__(name)
+        self.calls, self.raises = calls, raises
+
+    def update(self) -> Status:
+        return Status.RUNNING
+
+    def terminate(self, new_status: Status) -> None:
+        self.calls["terminate " + self.name] += 1
+        if self.raises:
+            raise RuntimeError(f"{self.name} could not let go")
+
+
+@dataclass
+class HandBuilt:
+    """A MissionLike for a tree built in Python."""
+
+    root: py_trees.behaviour.Behaviour
+    name: str = "hand-built"
+    packets: tuple[int, ...] = ()
+    setups: list[str] = field(default_factory=list)
+
+    def setup(self, robot: Any) -> None:
+        for node in self.root.iterate():
+            node.setup(robot=robot)
+
+
+def _tree(calls: Counter[str]) -> py_trees.behaviour.Behaviour:
+    """Safe, then in parallel: a spinning Drive and four counting nodes, the third of which
+    raises in terminate (py_trees' own stop then skipped the fourth and every parent)."""
+    parallel = py_trees.composites.Parallel(
+        "together",
+        policy=py_trees.common.ParallelPolicy.SuccessOnAll(),
+        children=[
+            Drive("spin", {"velocity": 100.0, "radius": "spin_left"}),
+            py_trees.composites.Sequence("inner", memory=True, children=[Counting("a", calls)]),
+            Counting("b", calls),
+            Counting("bad", calls, raises=True),
+            py_trees.decorators.Inverter("not", Counting("c", calls)),
+        ],
+    )
+    return py_trees.composites.Sequence(
+        "root", memory=True, children=[Mode("safe", {"to": "safe"}), parallel]
+    )
+
+
+def _run(root: py_trees.behaviour.Behaviour) -> tuple[Any, TapLink]:
+    link = TapLink(Simulator(load_world("empty-room"), CREATE2, 0))
+    stack = RunStack(HandBuilt(root), link, profile=CREATE2, timeout_s=1.0)
+    return stack.run(), link
+
+
+def test_a_terminate_that_raises_leaves_no_node_running(caplog: pytest.LogCaptureFixture) -> None:
+    calls: Counter[str] = Counter()
+    root = _tree(calls)
+    with caplog.at_level(logging.WARNING):
+        summary, link = _run(root)
+    assert [n.name for n in root.iterate() if n.status is not Status.INVALID] == []
+    assert calls == {"terminate a": 1, "terminate b": 1, "terminate bad": 1, "terminate c": 1}
+    # the error said: the behaviour's path and the line that raised, in the log and summary
+    warning = " ".join(r.getMessage() for r in caplog.records if r.levelno == logging.WARNING)
+    assert "terminate() of behaviour root / together / bad raised RuntimeError" in warning
+    assert f"{__file__}:" in warning
+    assert summary.outcome is Outcome.ERROR and summary.exit_code == 4
+    assert "bad could not let go" in summary.reason
+    assert "the run had ended: timeout" in summary.reason
+    # and the safe stop went out all the same
+    assert link.written.endswith(SAFE_END)
+    assert link.simulator.mode is OIMode.PASSIVE
+    assert link.simulator.requested_left == link.simulator.requested_right == 0
+    # the tree's own terminate is the class's again: nothing of the guard is left on a node
+    assert all("terminate" not in vars(node) for node in root.iterate())
+
+
+def test_an_interrupted_run_keeps_its_outcome_and_says_the_terminate_too() -> None:
+    from roomba_bt.runtime.summary import RunSummary
+    from roomba_bt.runtime.teardown import note_stop_failures
+
+    summary = RunSummary("m", outcome=Outcome.INTERRUPTED, reason="Ctrl-C")
+    note_stop_failures(summary, ["terminate() of behaviour x raised E: e (at f.py:1)"])
+    assert summary.outcome is Outcome.INTERRUPTED
+    assert summary.reason == "Ctrl-C; then terminate() of behaviour x raised E: e (at f.py:1)"
