@@ -34,6 +34,7 @@ from roomba_bt.oi.encode import Command
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.robot.interface import SLOT_SECONDS
 from roomba_bt.runtime.loop import StopRequested
+from roomba_bt.runtime.teardown import shutdown_nodes
 
 if TYPE_CHECKING:
     from roomba_bt.runtime.loop import MissionRunner
@@ -347,6 +348,7 @@ class MonitorSession:
         if not was_paused:
             self._pause(runner, "reload", noted=False)
         runner.stop_tree()
+        shutdown_nodes(runner.mission.root)  # the old tree is done with: what it opened, closed
         runner.mission = mission
         # its name too, where a renamed one is shown: the page's header and the summary
         runner.summary.mission = self.feed.mission_name = mission.name

@@ -49,6 +49,7 @@ from roomba_bt.runtime.summary import DEFAULT_GRACE, Outcome, RunSummary
 from roomba_bt.runtime.teardown import (
     behaviour_error,
     note_stop_failures,
+    shutdown_nodes,
     stop_nodes,
 )
 from roomba_bt.runtime.tick_guard import TickGuardLike
@@ -250,12 +251,14 @@ class MissionRunner(BaseHandle):
         )
         tick_guard = self.tick_guard
         interrupt: KeyboardInterrupt | None = None
+        set_up = False  # a tree never set up (the start-up failed) is not shut down
         with guard:
             try:
                 self.connection.start(OIMode.PASSIVE, self.packets)
                 self._sent_at_start = self.connection.writer.sent
                 self._blackboard = py_trees.blackboard.Client(name="roomba-bt runtime")
                 self._blackboard.register_key(key=SNAPSHOT_KEY, access=py_trees.common.Access.WRITE)
+                set_up = True
                 self.mission.setup(self)
                 if tick_guard is not None:
                     tick_guard.start()
@@ -284,7 +287,7 @@ class MissionRunner(BaseHandle):
                 if tick_guard is not None:
                     tick_guard.close()  # it writes nothing more: the safe stop is ours
                 guard.stopping()  # a further Ctrl-C or SIGTERM waits for the safe stop
-                self._finish(summary, wall_start)
+                self._finish(summary, wall_start, set_up)
         if interrupt is not None and raise_interrupts:  # the robot is stopped: now the caller
             interrupt.summary = summary  # type: ignore[attr-defined]
             raise interrupt
@@ -307,10 +310,12 @@ class MissionRunner(BaseHandle):
         self.last_sent.clear()
         return failures
 
-    def _finish(self, summary: RunSummary, wall_start: float) -> None:
+    def _finish(self, summary: RunSummary, wall_start: float, set_up: bool) -> None:
         note_stop_failures(summary, self.stop_tree())
         self.count_written()  # the safe stop's are said apart
         stop_robot(self.connection, summary)
+        if set_up:  # after the safe stop: what the nodes' setup() opened, closed
+            shutdown_nodes(self.mission.root)
         if self._blackboard is not None:
             with contextlib.suppress(Exception):
                 self._blackboard.unregister(clear=True)

@@ -5,6 +5,8 @@ A run (and the monitor's reload, which retires a tree) ends its tree in this ord
     stop_nodes(root)        every node stopped: its terminate() once, in py_trees' order;
                             one that raises is noted, and the others are stopped all the same
     the safe stop           the runner's (drive 0, motors off, pause, Passive)
+    shutdown_nodes(root)    every node's shutdown() (py_trees' BehaviourTree.shutdown), each
+                            guarded: one that raises is logged, the others still run
 
 py_trees' own ``root.stop()`` stops the nodes one inside the other: a ``terminate`` that
 raised skipped every node after it, and the tree was left half stopped (nodes RUNNING,
@@ -141,3 +143,17 @@ def note_stop_failures(summary: RunSummary, failures: list[str]) -> None:
         summary.outcome, summary.reason = Outcome.ERROR, f"{said} (the run had ended: {was})"
     else:
         summary.reason = f"{summary.reason}; then {said}" if summary.reason else said
+
+
+def shutdown_nodes(root: py_trees.behaviour.Behaviour) -> list[str]:
+    """Every node's ``shutdown()`` (py_trees' ``BehaviourTree.shutdown``: what a node opened
+    in ``setup`` closed), each once and guarded: one that raises is logged with its
+    behaviour's name and the others still run. Returns what each failure says."""
+    failures = []
+    for node in root.iterate():
+        try:
+            node.shutdown()
+        except Exception as exc:
+            failures.append(f"shutdown() of {behaviour_error(exc)}")
+            log.warning("%s; the other nodes were shut down all the same", failures[-1])
+    return failures

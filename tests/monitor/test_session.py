@@ -488,3 +488,28 @@ def test_a_pause_on_the_home_base_does_not_start_the_cycle_again(
     assert rig.sim.docked
     resumes = [e.text for e in rig.feed.events if e.text.startswith("resume")]
     assert resumes == ["resume (resumed by the operator): mode unchanged; the tree goes on"]
+
+
+def test_a_reload_shuts_the_old_tree_down_and_the_run_s_end_the_new_one(
+    until: Callable[..., None], tmp_path: Path
+) -> None:
+    """py_trees' lifecycle: each node's shutdown() once, when its tree is done with; the
+    old tree's at the reload (after its stop), the new tree's at the run's end."""
+    waiting = tmp_path / "waiting.yaml"
+    waiting.write_text("mission: waiting\ntree:\n  sequence:\n    - mode: safe\n    - wait: 1s\n")
+    rig = Rig()
+    new = load_mission(waiting, {}, profile=CREATE2)
+    shut: list[str] = []
+    for tree, mission in (("old", rig.mission), ("new", new)):
+        for node in mission.root.iterate():
+            node.shutdown = lambda n=node, t=tree: shut.append(f"{t} {n.name}")  # type: ignore[method-assign]
+
+    def operator(rig: Rig) -> None:
+        until(lambda: rig.ticks(ticked=True) > 100 and bool(rig.sim.left_speed))
+        rig.session.reload(new)
+
+    summary = rig.run_with(operator)
+    assert summary.outcome is Outcome.SUCCESS, summary.reason
+    old = [f"old {node.name}" for node in rig.mission.root.iterate()]
+    # the run's end shuts down its tree then, the new one: the old one's came at the reload
+    assert shut == old + [f"new {node.name}" for node in new.root.iterate()]

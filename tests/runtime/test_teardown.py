@@ -112,3 +112,83 @@ def test_an_interrupted_run_keeps_its_outcome_and_says_the_terminate_too() -> No
     note_stop_failures(summary, ["terminate() of behaviour x raised E: e (at f.py:1)"])
     assert summary.outcome is Outcome.INTERRUPTED
     assert summary.reason == "Ctrl-C; then terminate() of behaviour x raised E: e (at f.py:1)"
+
+
+class Closing(py_trees.behaviour.Behaviour):
+    """What a py_trees user writes: opens something in setup(), closes it in shutdown().
+    Its update gives ``ends`` after ``after`` ticks (None: RUNNING for ever; an exception:
+    raised); its shutdown notes what the link had been written by then."""
+
+    def __init__(
+        self, name: str, log: list[tuple[str, bytes]], link: TapLink, *, ends: Any = Status.SUCCESS,
+        after: int = 0, raises: bool = False,
+    ) -> None:  # fmt: skip
+        super().__init__(name)
+        self.log, self.link, self.ends, self.after, self.raises = log, link, ends, after, raises
+        self.ticks = 0
+
+    def update(self) -> Status:
+        self.ticks += 1
+        if self.ends is None or self.ticks <= self.after:
+            return Status.RUNNING
+        if isinstance(self.ends, BaseException):
+            raise self.ends
+        return self.ends  # type: ignore[no-any-return]
+
+    def shutdown(self) -> None:
+        self.log.append((self.name, self.link.written))
+        if self.raises:
+            raise OSError(f"{self.name}: the log file is gone")
+
+
+ENDINGS = {
+    "success": (Status.SUCCESS, None, Outcome.SUCCESS),
+    "failure": (Status.FAILURE, None, Outcome.FAILURE),
+    "timeout": (None, None, Outcome.TIMEOUT),
+    "exception": (RuntimeError("a bug"), None, Outcome.ERROR),
+    "ctrl-c": (KeyboardInterrupt(), None, Outcome.INTERRUPTED),
+    "lost link": (None, 0.5, Outcome.CONNECTION_LOST),
+}
+
+
+INVERSE = {Status.SUCCESS: Status.FAILURE, Status.FAILURE: Status.SUCCESS}
+
+
+@pytest.mark.parametrize("ending", list(ENDINGS))
+def test_every_node_is_shut_down_once_after_the_safe_stop(
+    ending: str, caplog: pytest.LogCaptureFixture
+) -> None:
+    ends, stall_after, outcome = ENDINGS[ending]
+    log: list[tuple[str, bytes]] = []
+    link = TapLink(Simulator(load_world("empty-room"), CREATE2, 0), stall_after=stall_after)
+    root = py_trees.composites.Sequence(
+        "root", memory=True, children=[
+            Mode("safe", {"to": "safe"}),
+            Closing("opened", log, link),
+            Closing("bad", log, link, raises=True),
+            py_trees.decorators.Inverter(
+                "not", Closing("last", log, link, ends=INVERSE.get(ends, ends), after=20)
+            ),
+        ],
+    )  # fmt: skip
+    stack = RunStack(HandBuilt(root), link, profile=CREATE2, timeout_s=1.0)
+    with caplog.at_level(logging.WARNING):
+        summary = stack.run(raise_interrupts=False)
+    assert summary.outcome is outcome, summary.reason
+    names = [name for name, _ in log]
+    assert sorted(names) == ["bad", "last", "opened"]  # each once
+    assert all(written.endswith(SAFE_END) for _, written in log)  # after the safe stop
+    warnings = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
+    assert any(
+        "shutdown() of behaviour root / bad raised OSError: bad: the log file is gone" in w
+        for w in warnings
+    ), warnings
+
+
+def test_a_run_that_never_started_sets_up_and_shuts_down_nothing() -> None:
+    log: list[tuple[str, bytes]] = []
+    link = TapLink(Simulator(load_world("empty-room"), CREATE2, 0), stall_after=0.0)
+    stack = RunStack(HandBuilt(Closing("a", log, link)), link, profile=CREATE2, timeout_s=1.0)
+    summary = stack.run()
+    assert summary.outcome is Outcome.NO_CONNECTION
+    assert log == []
