@@ -235,14 +235,10 @@ class MissionRunner(BaseHandle):
 
     # ---------------------------------------------------------------- running
     def run(self, *, raise_interrupts: bool = True) -> RunSummary:
-        """The mission to its end: the start-up, the ticks and, on every ending, the tree
-        stopped and the safe stop sent; the summary says how it ended.
-
-        Ctrl-C, SIGTERM and the other ending signals end the run with its safe stop. Then,
-        with ``raise_interrupts`` (the default), the interrupt is raised again, the summary
-        as its ``summary`` attribute: a program running two missions in a row must not drive
-        the second after its operator pressed Ctrl-C, and a ``kill`` must end it. The CLI
-        and the evaluation pass False: they read Outcome.INTERRUPTED (exit 130)."""
+        """The mission to its end; on every ending the tree stopped and the safe stop sent.
+        A Ctrl-C or SIGTERM is then raised again, the summary as its ``summary`` (a program's
+        next mission must not drive after its operator's Ctrl-C), unless ``raise_interrupts``
+        is False: the CLI and the evaluation read Outcome.INTERRUPTED (exit 130)."""
         summary = self.summary
         wall_start = time.perf_counter()
         root = self.mission.root
@@ -251,15 +247,16 @@ class MissionRunner(BaseHandle):
         )
         tick_guard = self.tick_guard
         interrupt: KeyboardInterrupt | None = None
-        set_up = False  # a tree never set up (the start-up failed) is not shut down
         with guard:
             try:
                 self.connection.start(OIMode.PASSIVE, self.packets)
                 self._sent_at_start = self.connection.writer.sent
                 self._blackboard = py_trees.blackboard.Client(name="roomba-bt runtime")
                 self._blackboard.register_key(key=SNAPSHOT_KEY, access=py_trees.common.Access.WRITE)
-                set_up = True
                 self.mission.setup(self)
+                virtual = not getattr(self.connection.transport, "wall_clock", True)
+                if virtual or not self.on_wall_clock:  # py_trees' Timeout would never fire
+                    warn_of_wall_clock_timeouts(root)
                 if tick_guard is not None:
                     tick_guard.start()
                 self._loop(root, summary)
@@ -267,27 +264,13 @@ class MissionRunner(BaseHandle):
                 interrupt = exc
                 why = signal_reason(exc.signum) if isinstance(exc, Terminated) else "Ctrl-C"
                 summary.outcome, summary.reason = Outcome.INTERRUPTED, why
-            except StopRequested as exc:
-                summary.outcome, summary.reason = Outcome.INTERRUPTED, str(exc)
-            except ConnectionFailed as exc:
-                answered = self.has_snapshot  # a robot that never streamed was not lost
-                summary.outcome = Outcome.CONNECTION_LOST if answered else Outcome.NO_CONNECTION
-                summary.reason = str(exc)
-            except LinkDown as exc:
-                summary.outcome, summary.reason = Outcome.CONNECTION_LOST, str(exc)
-            except (OSError, ConnectionError) as exc:
-                summary.outcome, summary.reason = (
-                    Outcome.CONNECTION_LOST,
-                    f"{type(exc).__name__}: {exc}",
-                )
-            except Exception as exc:  # a bug in a behaviour must still end in a safe stop
-                summary.outcome, summary.reason = Outcome.ERROR, behaviour_error(exc)
-                summary.traceback = "".join(traceback.format_exception(exc))
+            except Exception as exc:  # the operator's stop, a lost link, a bug: the safe stop
+                ended_by(exc, summary, answered=self.has_snapshot)
             finally:
                 if tick_guard is not None:
                     tick_guard.close()  # it writes nothing more: the safe stop is ours
                 guard.stopping()  # a further Ctrl-C or SIGTERM waits for the safe stop
-                self._finish(summary, wall_start, set_up)
+                self._finish(summary, wall_start)
         if interrupt is not None and raise_interrupts:  # the robot is stopped: now the caller
             interrupt.summary = summary  # type: ignore[attr-defined]
             raise interrupt
@@ -310,11 +293,11 @@ class MissionRunner(BaseHandle):
         self.last_sent.clear()
         return failures
 
-    def _finish(self, summary: RunSummary, wall_start: float, set_up: bool) -> None:
+    def _finish(self, summary: RunSummary, wall_start: float) -> None:
         note_stop_failures(summary, self.stop_tree())
         self.count_written()  # the safe stop's are said apart
         stop_robot(self.connection, summary)
-        if set_up:  # after the safe stop: what the nodes' setup() opened, closed
+        if self._sent_at_start is not None:  # set up: what its setup() opened, closed
             shutdown_nodes(self.mission.root)
         if self._blackboard is not None:
             with contextlib.suppress(Exception):
@@ -559,6 +542,25 @@ class MissionRunner(BaseHandle):
                 self._outbox.send(held, self)
 
 
+def ended_by(exc: Exception, summary: RunSummary, *, answered: bool) -> None:
+    """The outcome and reason of a run that ``exc`` ended (Ctrl-C aside): the operator's
+    stop, the link (``answered``: the robot had streamed, so it was not merely never
+    there), or a bug in a behaviour (its path and file:line, and the traceback)."""
+    if isinstance(exc, StopRequested):
+        summary.outcome, summary.reason = Outcome.INTERRUPTED, str(exc)
+    elif isinstance(exc, ConnectionFailed):
+        summary.outcome = Outcome.CONNECTION_LOST if answered else Outcome.NO_CONNECTION
+        summary.reason = str(exc)
+    elif isinstance(exc, LinkDown):
+        summary.outcome, summary.reason = Outcome.CONNECTION_LOST, str(exc)
+    elif isinstance(exc, OSError | ConnectionError):
+        summary.outcome = Outcome.CONNECTION_LOST
+        summary.reason = f"{type(exc).__name__}: {exc}"
+    else:  # a bug in a behaviour must still end in a safe stop
+        summary.outcome, summary.reason = Outcome.ERROR, behaviour_error(exc)
+        summary.traceback = "".join(traceback.format_exception(exc))
+
+
 def stop_robot(connection: Connection, summary: RunSummary) -> None:
     """The safe stop, and the summary's word on it: what was sent, or why it was not
     delivered (the connection's report)."""
@@ -613,3 +615,22 @@ def running_in(root: py_trees.behaviour.Behaviour) -> str:
         if node.status is py_trees.common.Status.RUNNING and not node.children:
             return " in " + node.name.split("(", 1)[0]
     return ""
+
+
+def warn_of_wall_clock_timeouts(root: py_trees.behaviour.Behaviour) -> list[str]:
+    """On a clock that is not the wall clock (the simulator's :class:`SimLink`, ``--fast``,
+    a replay, an evaluation), py_trees' own ``Timeout`` decorator still reads
+    ``time.monotonic()``: 5 s of mission time pass in a hundredth of that, and it never
+    fires. One warning at the start of the run names each such node and the decorator that
+    counts mission time; returns their names. (Ours is
+    :class:`roomba_bt.behaviours.decorators.Timeout`, no subclass of py_trees'.)"""
+    names = [n.name for n in root.iterate() if isinstance(n, py_trees.decorators.Timeout)]
+    if names:
+        log.warning(
+            "py_trees.decorators.Timeout %s reads the wall clock, and this run is on a "
+            "virtual clock (the simulator's, a replay's): it would not fire at its mission "
+            "time. Use roomba_bt.behaviours.decorators.Timeout (timeout: in a mission's "
+            "YAML), which counts mission time",
+            ", ".join(repr(name) for name in names),
+        )
+    return names

@@ -65,6 +65,8 @@ class RecordingTransport:
 
     def __init__(self, inner: Transport, path: str | Path, header: dict[str, Any]) -> None:
         self._inner = inner
+        #: the wrapped transport's word on its clock (``Transport``'s note)
+        self.wall_clock: bool = getattr(inner, "wall_clock", True)
         self.name = inner.name
         self.path = str(path)
         self._file: IO[str] = open(path, "w", encoding="utf-8")  # noqa: SIM115
@@ -393,6 +395,9 @@ class ReplayTransport:
     ones, is no difference (the live run's were lost with the rest of its record, or it was
     killed before writing them), so the replay's own safe stop is not one.
     """
+
+    #: the recorded clock, as fast as the replay reads it
+    wall_clock = False
 
     def __init__(self, record: Record, name: str = "replay") -> None:
         self.name = name

@@ -39,6 +39,9 @@ def at_wrong_baud(data: bytes) -> bytes:
 class SimLink:
     """A :class:`~roomba_bt.sim.robot.Simulator` behind the Transport contract."""
 
+    #: its clock is the simulator's, as fast as the host steps it: not the wall clock's pace
+    wall_clock = False
+
     def __init__(self, simulator: Simulator, name: str = "sim://") -> None:
         self.simulator = simulator
         self.name = name if name != "sim://" else f"sim://{simulator.world.name}"
@@ -125,6 +128,8 @@ class RealtimeSimLink(SimLink):
     The slots to catch up are those due when the read starts, so a host slower than real
     time cannot keep one read stepping for ever. ``clock`` and ``sleep`` are the wall
     clock's (tests hand in their own)."""
+
+    wall_clock = True  # paced to it
 
     def __init__(
         self,

@@ -37,6 +37,11 @@ class Transport(Protocol):
     * ``now()`` is this link's clock: :func:`time.monotonic` on real ports, the simulator's
       virtual time in-process. Frame arrival times and watchdogs use it, so the same code
       runs live and on a virtual clock.
+
+    A transport whose clock is not the wall clock's pace says so with a class attribute
+    ``wall_clock = False`` (the simulator's :class:`~roomba_bt.sim.SimLink`, a replay): it is
+    not part of the protocol, and one without it is taken to run on the wall clock. The
+    runner reads it to warn of wall-clock timers in a tree (py_trees' ``Timeout``).
     """
 
     name: str
