@@ -37,7 +37,7 @@ from roomba_bt.behaviours.lean import (
     behaviour_tick,
     checked_status,
 )
-from roomba_bt.behaviours.units import SPEED, VALUE_TYPES, UnitError, ValueType
+from roomba_bt.behaviours.units import SPEED, VALUE_TYPES, UnitError, ValueType, closest
 from roomba_bt.oi.encode import Command, halt, turns_wheels
 from roomba_bt.oi.modes import ALL_MODES, DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME
@@ -55,6 +55,18 @@ _NAME = re.compile(r"^[a-z][a-z0-9_]*$")
 
 class DeclarationError(ValueError):
     """A behaviour that declares itself wrongly (a plugin author's mistake)."""
+
+
+class ParamError(TypeError, ValueError):
+    """A leaf built in Python with a parameter its declaration does not have, a value its
+    type cannot read, one out of range, or a required one missing: refused when the leaf is
+    built, not at its first tick with the robot in Safe. A TypeError, as an unknown keyword
+    argument is, and a ValueError, as a bad value is: either ``except`` catches it."""
+
+
+class CheckedParams(dict[str, Any]):
+    """Parameters the mission compiler has checked and parsed (each problem said at its
+    file:line:col): a leaf built with them takes them as they are, with no second check."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -173,6 +185,39 @@ class Declaration:
             if p.name == name:
                 return p
         return None
+
+    def checked(self, node: str, params: Mapping[str, Any]) -> dict[str, Any]:
+        """``params`` as a leaf built in Python gives them, checked as the compiler checks a
+        mission's: each name declared (else a did-you-mean), a text read through the
+        parameter's type (``"200 mm/s"`` as in YAML; a number is taken in the type's unit,
+        mm/s), each value within the declared range, the required ones given, and the
+        cross-parameter rules. :class:`BlackboardRef` values pass as they are. Raises
+        :class:`ParamError` naming the behaviour, the node and the parameter."""
+        what = f"{self.name} {node!r}"
+        out: dict[str, Any] = {}
+        for pname, value in params.items():
+            param = self.param(pname)
+            if param is None:
+                names = [p.name for p in self.params]
+                raise ParamError(
+                    f"{what}: unknown parameter {pname!r}{closest(str(pname), names)}; "
+                    f"{self.name} takes: {', '.join(names) or 'no parameters'}"
+                )
+            if isinstance(value, str) and param.type.name != "any":
+                try:
+                    value = param.type.parse(value)
+                except UnitError as exc:
+                    raise ParamError(f"{what}: {pname}: {exc}") from None
+            problem = param.check_range(value)
+            if problem is not None:
+                raise ParamError(f"{what}: {problem}")
+            out[pname] = value
+        missing = [p.name for p in self.params if p.required and p.name not in out]
+        if missing:
+            raise ParamError(f"{what}: missing required parameter(s) {', '.join(missing)}")
+        for problem in self.constraints(out) if self.constraints is not None else ():
+            raise ParamError(f"{what}: {problem}")
+        return out
 
     def validate(self) -> None:
         """Raise :class:`DeclarationError` naming what is wrong."""
@@ -358,7 +403,9 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
             defaults = cls.declaration.defaults
             cls._defaults = defaults
         values = dict(defaults)
-        values.update(params or {})
+        if params:  # the compiler's are checked (at file:line:col); Python's are checked here
+            checked = type(params) is CheckedParams
+            values.update(params if checked else cls.declaration.checked(name, params))
         self.params: dict[str, Any] = values
         self.robot: RobotHandle | None = None
         self._resolved: dict[str, Any] = values

@@ -18,7 +18,7 @@ from typing import Any
 
 from py_trees.behaviour import Behaviour
 
-from roomba_bt.behaviours.declare import write_key
+from roomba_bt.behaviours.declare import CheckedParams, write_key
 from roomba_bt.behaviours.language import GUARD, WORDS
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.ir import Node
@@ -51,7 +51,7 @@ def build(node: Node) -> Behaviour:
     if node.kind == "leaf":
         assert node.decl is not None
         try:
-            return node.decl.cls(node.name, node.params)
+            return node.decl.cls(node.name, CheckedParams(node.params))  # checked here
         except Exception as exc:
             raise BuildError(node, exc) from exc
     children = [build(child) for child in node.children]
