@@ -22,6 +22,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from py_trees.behaviour import Behaviour
+
+from roomba_bt.behaviours.declare import Declaration
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.robot.connection import Connection, EndMode
 from roomba_bt.runtime.loop import (
@@ -35,6 +38,35 @@ from roomba_bt.runtime.recording import Record, RecordingTransport, ReplayTransp
 from roomba_bt.runtime.summary import DEFAULT_GRACE, RunSummary
 from roomba_bt.runtime.tick_guard import TickGuard, recorded_tick_guard
 from roomba_bt.transport.base import Transport
+
+
+@dataclass
+class TreeMission:
+    """A tree built in Python, as a run takes it (a
+    :class:`~roomba_bt.runtime.loop.MissionLike`, as a compiled mission is): ``root`` may mix
+    plain py_trees behaviours with roomba-bt's leaves and decorators.
+
+    ``packets`` are what its roomba-bt leaves declare they read (``@declare(reads=...)``,
+    with their parameters), worked out when asked, so a tree changed after this was made
+    is read as it is then; :func:`~roomba_bt.runtime.loop.stream_request` adds what the
+    runtime needs. ``setup(robot)`` hands the robot to every node, as py_trees' idiom has
+    it: a plain behaviour finds it in ``setup(robot=...)`` too (``robot.snapshot``)."""
+
+    root: Behaviour
+    name: str = "tree"
+
+    @property
+    def packets(self) -> tuple[int, ...]:
+        read: set[int] = set()
+        for node in self.root.iterate():
+            declaration = getattr(node, "declaration", None)
+            if isinstance(declaration, Declaration):
+                read.update(declaration.packets(getattr(node, "params", {})))
+        return tuple(sorted(read))
+
+    def setup(self, robot: Any, **kwargs: Any) -> None:
+        for node in self.root.iterate():
+            node.setup(robot=robot, **kwargs)
 
 
 @dataclass(frozen=True)
