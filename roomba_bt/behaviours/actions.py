@@ -581,7 +581,7 @@ class SetKey(Action):
     """Write a value to a blackboard key."""
 
     def update(self) -> Status:
-        write_key(str(self.value("key")), self.value("value"))
+        write_key(str(self.value("key")), self.value("value"), self.name)
         return _OK
 
 
@@ -598,7 +598,7 @@ class Mark(Action):
     """Remember the odometry now, for ``odometry: {since: key, ...}``."""
 
     def update(self) -> Status:
-        write_key(str(self.value("key")), self.snapshot.odometry)
+        write_key(str(self.value("key")), self.snapshot.odometry, self.name)
         return _OK
 
 

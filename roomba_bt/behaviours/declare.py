@@ -24,6 +24,7 @@ import math
 import operator
 import re
 import sys
+import uuid
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal, TypeVar
@@ -498,8 +499,34 @@ def read_key(key: str) -> Any:
     return storage.get(MISSION_NAMESPACE + key)
 
 
-def write_key(key: str, value: Any) -> None:
-    py_trees.blackboard.Blackboard.storage[MISSION_NAMESPACE + key] = value
+#: the id the mission's own writes (``set``, ``mark``, ``for_each``, initial values) carry in
+#: py_trees' activity stream
+_MISSION_WRITER = uuid.uuid4()
+
+
+def write_key(key: str, value: Any, writer: str = "roomba-bt mission") -> None:
+    """Write a mission key. Into the store directly (no py_trees client per node: a client
+    registers each key it may touch and checks it on every access), and, when py_trees'
+    activity stream is on (``Blackboard.enable_activity_stream()``), said there as a client's
+    write would be: a py_trees user's tools show ``/mission/leg`` changing."""
+    name = MISSION_NAMESPACE + key
+    blackboard = py_trees.blackboard.Blackboard
+    stream = blackboard.activity_stream
+    if stream is not None:
+        had = name in blackboard.storage
+        kind = py_trees.blackboard.ActivityType
+        stream.push(
+            py_trees.blackboard.ActivityItem(
+                key=name,
+                client_name=writer,
+                client_id=_MISSION_WRITER,
+                # its value, as py_trees' own clients push it (its display compares with it)
+                activity_type=(kind.WRITE if had else kind.INITIALISED).value,
+                previous_value=blackboard.storage.get(name) if had else None,
+                current_value=value,
+            )
+        )
+    blackboard.storage[name] = value
 
 
 #: One wheel's speed as Drive Direct takes it, mm/s (-500..500, from the opcode table): the

@@ -145,7 +145,7 @@ class ForEach(DecoratorTick, py_trees.decorators.Decorator):
     def initialise(self) -> None:
         self.index = 0
         if self.items:
-            write_key(self.key, self.items[0])
+            write_key(self.key, self.items[0], self.name)
 
     def tick_start(self) -> int:
         """No items: SUCCESS at once, the child never ticked."""
@@ -161,7 +161,7 @@ class ForEach(DecoratorTick, py_trees.decorators.Decorator):
         self.index += 1
         if self.index >= len(self.items):
             return _SUCCESS
-        write_key(self.key, self.items[self.index])
+        write_key(self.key, self.items[self.index], self.name)
         self.feedback_message = f"item {self.index + 1} of {len(self.items)}"
         return _RUNNING
 

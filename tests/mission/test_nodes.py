@@ -452,3 +452,33 @@ def test_a_while_guard_says_which_condition_failed(compile_text: Compile) -> Non
     assert r.tick(bump=1) is F
     reason = failure_reason(r.mission.root)
     assert reason.startswith("while reactive_sequence: condition no longer holds: "), reason
+
+
+def test_the_mission_s_writes_show_in_py_trees_activity_stream(compile_text: Compile) -> None:
+    """A py_trees user's ``enable_activity_stream`` listed only the runtime's snapshot: the
+    mission's writes (``for_each``, ``set``) went to the store without a word."""
+    py_trees.blackboard.Blackboard.enable_activity_stream(100)
+    try:
+        r = run(
+            compile_text,
+            """
+            blackboard:
+              last: distance
+            tree:
+              for_each:
+                key: last
+                in: [1 m, 50cm]
+                do: {set: {key: last, value: 2 mm}}
+            """,
+        )
+        r.ticks(2)
+        stream = py_trees.blackboard.Blackboard.activity_stream
+        assert stream is not None
+        said = [(i.activity_type, i.current_value) for i in stream.data
+                if i.key == "/mission/last"]  # fmt: skip
+        assert said == [("INITIALISED", 1000.0), ("WRITE", 2.0), ("WRITE", 500.0), ("WRITE", 2.0)]
+        writers = {i.client_name for i in stream.data if i.key == "/mission/last"}
+        assert "/mission/last : WRITE" in py_trees.display.unicode_blackboard_activity_stream()
+        assert any("set" in w for w in writers) and any("for_each" in w for w in writers)
+    finally:
+        py_trees.blackboard.Blackboard.disable_activity_stream()
