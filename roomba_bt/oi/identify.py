@@ -182,3 +182,55 @@ def stream_readings(frame: bytes) -> dict[int, int]:
         readings[spec.id] = int.from_bytes(raw, "big", signed=spec.signed)
         at += 1 + spec.size
     return readings
+
+
+#: Frames that must fail a profile's stream checksum and pass the other rule before the
+#: model is named: one could be a corrupted frame summing right by chance (1 in 256).
+MISMATCH_FRAMES = 2
+
+
+def checksum_rule(profile: RobotProfile) -> str:
+    """How ``profile``'s stream checksum treats the header, in words."""
+    if profile.checksum_accepts_both:
+        return "the header 19 summed in or left out"
+    return "the header 19 summed in" if profile.checksum_includes_header else "the header left out"
+
+
+@dataclass(frozen=True, slots=True)
+class ChecksumMismatch:
+    """Stream frames that fail ``profile``'s checksum and pass another model's rule: the
+    robot is most likely one of ``likely`` (a Roomba 500 read with the default profile: its
+    checksum leaves the header out). Found from the stream parser's counters alone
+    (``ParserCounters.other_checksum``, counted on a failure only), never on the tick path."""
+
+    profile: RobotProfile
+    likely: tuple[RobotProfile, ...]
+    failures: int
+    passing: int
+    #: the rule the frames pass, in words ("the header left out")
+    rule: str
+
+    @property
+    def explained(self) -> str:
+        """What was seen and what it means, without the fix (the caller knows its own)."""
+        return (
+            f"{self.failures} frames failed the checksum of the {self.profile.name} profile "
+            f"({checksum_rule(self.profile)}) and {self.passing} of them pass with {self.rule}: "
+            f"the robot is most likely a {' or a '.join(p.title for p in self.likely)}"
+        )
+
+
+def checksum_mismatch(
+    profile: RobotProfile, *, frames: int, failures: int, other_checksum: int
+) -> ChecksumMismatch | None:
+    """Whether a stream with no frame taken (``frames``), ``failures`` checksum failures of
+    which ``other_checksum`` pass the other rule, is a robot of another model; None if it
+    does not say so (frames were taken, or most failures are noise)."""
+    if frames or other_checksum < MISMATCH_FRAMES or 2 * other_checksum < failures:
+        return None
+    other = {0, STREAM_HEADER} - profile.checksum_sums
+    likely = tuple(p for p in PROFILES.values() if p is not profile and p.checksum_sums & other)
+    if not likely:
+        return None
+    rule = "the header 19 summed in" if 0 in other else "the header left out"
+    return ChecksumMismatch(profile, likely, failures, other_checksum, rule)

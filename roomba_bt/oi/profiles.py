@@ -48,6 +48,10 @@ OMNI_AHEAD_MM = 130.0
 LIGHT_BUMP_ANGLES_DEG = (65.0, 38.0, 12.0, -12.0, -38.0, -65.0)
 LIGHT_BUMP_RANGE_MM = 150.0
 
+#: The stream frame's header byte (``frames.STREAM_HEADER``; frames imports this module), as
+#: the sum of a frame that leaves it out of its checksum reads.
+STREAM_CHECKSUM_HEADER = 19
+
 
 @dataclass(frozen=True, slots=True)
 class RobotProfile:
@@ -70,6 +74,15 @@ class RobotProfile:
     max_velocity_mm_s: int = 500
     max_radius_mm: int = 2000
     all_sensors_group: int = 100
+
+    @property
+    def checksum_sums(self) -> frozenset[int]:
+        """The low bytes of a whole stream frame's sum (header included) that this robot's
+        checksum gives: 0 when it covers the header 19, 19 when it leaves it out, both on
+        the ``roomba500`` (``checksum_accepts_both``)."""
+        if self.checksum_accepts_both:
+            return frozenset((0, STREAM_CHECKSUM_HEADER))
+        return frozenset((0 if self.checksum_includes_header else STREAM_CHECKSUM_HEADER,))
 
     def has_command(self, command: CommandSpec | int | str) -> bool:
         spec = _lookup(command)

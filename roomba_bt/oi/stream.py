@@ -102,6 +102,10 @@ class ParserCounters:
     #: a header and the right n-bytes, but an id byte wrong: most likely a frame cut short
     #: (the next one's bytes where its ids should be)
     cut_frames: int = 0
+    #: of the checksum failures, the frames whose sum the other checksum rule takes (the
+    #: header 19 summed in or left out): every frame failing so is a robot of another model
+    #: (:func:`~roomba_bt.oi.identify.checksum_mismatch`); counted on a failure only
+    other_checksum: int = 0
 
 
 class StreamParser:
@@ -116,7 +120,7 @@ class StreamParser:
 
     __slots__ = (
         "_anchor", "_buffer", "_byte_sum", "_checks", "_encoders", "_mask", "_n", "_ok_sums",
-        "_size", "_suspect", "_template", "_unpack", "counters", "layout",
+        "_other_sums", "_size", "_suspect", "_template", "_unpack", "counters", "layout",
     )  # fmt: skip
 
     def __init__(
@@ -148,12 +152,8 @@ class StreamParser:
         self._buffer = bytearray()
         self._n = self.layout.payload_size
         self._size = self._n + 3
-        if profile.checksum_accepts_both:
-            sums = {0, STREAM_HEADER}
-        elif profile.checksum_includes_header:
-            sums = {0}
-        else:
-            sums = {STREAM_HEADER}
+        sums = profile.checksum_sums
+        other = {0, STREAM_HEADER} - sums  # the other rule's sum (none on the roomba500)
         # Header, n-bytes and every id byte checked at once: the candidate read as one
         # big-endian integer, masked to those positions, must equal the layout's template.
         self._mask = self.layout.frame_mask
@@ -162,6 +162,7 @@ class StreamParser:
         # the accepted low bytes, shifted by what the byte-sum function adds
         self._byte_sum, shift = byte_sum_for(self._size)
         self._ok_sums: frozenset[int] = frozenset((total + shift) & 0xFF for total in sums)
+        self._other_sums: frozenset[int] = frozenset((total + shift) & 0xFF for total in other)
 
     @property
     def pending(self) -> int:
@@ -369,6 +370,8 @@ class StreamParser:
                     pos += 1
             else:
                 counters.checksum_failures += 1
+                if byte_sum(window) & 0xFF in self._other_sums:  # a failure only: summed again
+                    counters.other_checksum += 1
                 skipped += 1
                 pos += 1
         if pos:

@@ -387,10 +387,17 @@ class Connection:
         garbled = link.bytes_read - bytes_before
         if not garbled:
             raise explain_silence(self, now - since, grace, halted=halted)
-        self.unheard = f"the line is garbled (no valid frame at {self.baud} or another OI rate)"
-        raise StreamLost(
-            self.name, now - since, grace, garbled, watchdog=link.watchdog, halted=halted
+        mismatch = link.checksum_mismatch()
+        self.unheard = (
+            f"the line is garbled (no valid frame at {self.baud} or another OI rate)"
+            if mismatch is None
+            else f"its frames fail the {self.profile.name} profile's checksum (most likely a "
+            f"{mismatch.likely[0].title}: --profile {mismatch.likely[0].name})"
         )
+        raise StreamLost(
+            self.name, now - since, grace, garbled, watchdog=link.watchdog, halted=halted,
+            mismatch=mismatch,
+        )  # fmt: skip
 
     @property
     def idle_since(self) -> float:

@@ -19,6 +19,7 @@ from __future__ import annotations
 import time
 
 from roomba_bt.oi.errors import OIError
+from roomba_bt.oi.identify import ChecksumMismatch
 from roomba_bt.oi.modes import OIMode
 
 
@@ -135,18 +136,34 @@ class PortLost(LinkDown):
     """Reading or writing the port raised (cable unplugged, bridge closed, robot reset)."""
 
 
-class StreamStalled(LinkDown):
-    """No valid stream frame within the watchdog time; drive 0 was sent (if allowed)."""
+def wrong_profile(mismatch: ChecksumMismatch) -> str:
+    """The frames pass another model's checksum: what was seen and the fix, for the command
+    line and for a Python caller (the ``profile`` argument)."""
+    name = mismatch.likely[0].name
+    return (
+        f"{mismatch.explained}: use --profile {name} (in Python, Connection.open(port, "
+        f"profile={name!r})), or roomba-bt doctor to tell the model"
+    )
 
-    def __init__(self, port: str, silent_for: float, watchdog: float, halted: bool) -> None:
+
+class StreamStalled(LinkDown):
+    """No valid stream frame within the watchdog time; drive 0 was sent (if allowed).
+    ``mismatch``: the frames that came pass another model's checksum (the profile is wrong)."""
+
+    def __init__(
+        self, port: str, silent_for: float, watchdog: float, halted: bool,
+        mismatch: ChecksumMismatch | None = None,
+    ) -> None:  # fmt: skip
         self.silent_for = silent_for
         self.watchdog = watchdog
         self.halted = halted
+        self.mismatch = mismatch
         action = "drive 0 sent" if halted else "the robot was not driving (drive 0 not needed)"
+        why = f"; {wrong_profile(mismatch)}" if mismatch is not None else ""
         super().__init__(
             port,
             f"no valid sensor frame for {silent_for * 1000:.0f} ms (watchdog "
-            f"{watchdog * 1000:.0f} ms); {action}",
+            f"{watchdog * 1000:.0f} ms){why}; {action}",
         )
 
 
@@ -166,7 +183,10 @@ class RobotReset(LinkDown):
 
 class StreamLost(LinkDown):
     """No valid frame came back within the grace after the watchdog tripped: the stream
-    stopped (nothing arrived) or the line is garbled (bytes arrived, none made a frame)."""
+    stopped (nothing arrived) or the line is garbled (bytes arrived, none made a frame).
+    ``mismatch``: the garbled frames pass another model's checksum rule (the profile is
+    wrong: a Roomba 500 read as a Create 2); the message then names the model and the fix,
+    for the command line (``--profile``) and for Python (the ``profile`` argument)."""
 
     def __init__(
         self,
@@ -178,11 +198,18 @@ class StreamLost(LinkDown):
         watchdog: float,
         halted: bool,
         probed: str = "",
+        mismatch: ChecksumMismatch | None = None,
     ) -> None:
         self.silent_for = silent_for
         self.grace = grace
         self.bytes_seen = bytes_seen
-        if bytes_seen:
+        self.mismatch = mismatch
+        if bytes_seen and mismatch is not None:
+            what = (
+                f"the line is garbled: no valid sensor frame for {silent_for:.1f} s while "
+                f"{bytes_seen} bytes arrived; {wrong_profile(mismatch)}"
+            )
+        elif bytes_seen:
             what = (
                 f"the line is garbled: no valid sensor frame for {silent_for:.1f} s while "
                 f"{bytes_seen} bytes arrived (noise on the line, or a wrong baud rate)"

@@ -24,6 +24,7 @@ from typing import NamedTuple
 import serial
 
 from roomba_bt.oi.frames import SensorFrame
+from roomba_bt.oi.identify import ChecksumMismatch, checksum_mismatch
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import StreamParser, shows_reset_banner
 from roomba_bt.robot.errors import PortLost, StreamStalled
@@ -245,6 +246,18 @@ class StreamLink:
             implausible += c.implausible
         return frames, checksums, skipped, implausible
 
+    def checksum_mismatch(self) -> ChecksumMismatch | None:
+        """Whether the running stream's frames fail the profile's checksum and pass another
+        model's (read off the parser's counters: only when a stream is declared lost)."""
+        parser = self._parser
+        if parser is None:
+            return None
+        counters = parser.counters
+        return checksum_mismatch(
+            self.profile, frames=counters.frames, failures=counters.checksum_failures,
+            other_checksum=counters.other_checksum,
+        )  # fmt: skip
+
     @property
     def latest(self) -> TimedFrame | None:
         """The newest checked frame, when it arrived and its number (None before the first)."""
@@ -362,4 +375,4 @@ class StreamLink:
         self.status = LinkStatus.STALLED
         self.watchdog_trips += 1
         halted = self._halt()
-        raise StreamStalled(self.name, silent, self.watchdog, halted)
+        raise StreamStalled(self.name, silent, self.watchdog, halted, self.checksum_mismatch())

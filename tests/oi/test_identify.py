@@ -86,3 +86,22 @@ def test_stream_readings_cut_a_frame_by_the_packet_table() -> None:
     frame = layout_for((7, 27, 58), CREATE2, True).stream_frame({7: 3, 27: 900, 58: 2})
     assert stream_readings(frame) == {7: 3, 27: 900, 58: 2}
     assert stream_readings(frame[:-2] + frame[-1:]) == {}  # cut short: no reading
+
+
+def test_the_parser_counts_frames_passing_the_other_checksum_rule() -> None:
+    """A Roomba 500's frames (header left out of the checksum) fed to the Create 2's parser:
+    none taken, each counted as passing the other rule; noise is not; the 500's parser, which
+    takes either rule, has no other rule to count."""
+    from roomba_bt.oi.stream import StreamParser
+
+    layout = layout_for((7, 35), ROOMBA500, True)
+    frames = b"".join(layout.stream_frame({7: 0, 35: 1}, False) for _ in range(5))
+    parser = StreamParser((7, 35), CREATE2)
+    assert parser.feed(frames) == []
+    assert parser.counters.checksum_failures == parser.counters.other_checksum == 5
+    noise = StreamParser((7, 35), CREATE2)
+    noise.feed(bytes([19, 4, 7, 0, 35, 1, 77]) * 5)
+    assert noise.counters.checksum_failures == 5 and noise.counters.other_checksum == 0
+    both = StreamParser((7, 35), ROOMBA500)
+    assert len(both.feed(frames)) == 5 and both.counters.other_checksum == 0
+    assert CREATE2.checksum_sums == {0} and ROOMBA500.checksum_sums == {0, 19}

@@ -1,0 +1,58 @@
+"""A program opening a Roomba 500 with the default profile: the watchdog's error says the
+frames pass the 500's checksum and how to pass the profile (it said only "no valid sensor
+frame for 101 ms"). A Roomba 500 profile on a 600 / Create 2 reads it: the 500's parser
+takes either checksum (``checksum_accepts_both``)."""
+
+from __future__ import annotations
+
+import pytest
+
+from roomba_bt.oi.profiles import CREATE2, ROOMBA500, ROOMBA600, RobotProfile
+from roomba_bt.robot.connection import Connection
+from roomba_bt.robot.errors import StreamStalled
+from roomba_bt.sim import SimLink, Simulator, load_world
+
+
+def _connection(robot: RobotProfile, profile: RobotProfile) -> Connection:
+    simulator = Simulator(load_world("empty-room"), robot, seed=1)
+    connection = Connection(SimLink(simulator), profile)
+    connection.start("passive", (100,))
+    return connection
+
+
+@pytest.mark.parametrize("profile", [CREATE2, ROOMBA600])
+def test_the_stall_on_a_roomba500_names_its_profile(profile: RobotProfile) -> None:
+    connection = _connection(ROOMBA500, profile)
+    with pytest.raises(StreamStalled) as stalled:
+        for _ in range(20):
+            connection.poll(0.05)
+    message = str(stalled.value)
+    assert stalled.value.mismatch is not None
+    assert f"failed the checksum of the {profile.name} profile (the header 19 summed in)" in message
+    assert "pass with the header left out" in message
+    assert "Connection.open(port, profile='roomba500')" in message
+    assert "--profile roomba500" in message
+    connection.close()
+
+
+@pytest.mark.parametrize("robot", [CREATE2, ROOMBA600])
+def test_the_roomba500_profile_reads_a_600_and_a_create2(robot: RobotProfile) -> None:
+    connection = _connection(robot, ROOMBA500)
+    frames = 0
+    for _ in range(10):
+        frames += len(connection.poll(0.05))
+    assert frames >= 10 and connection.counters.checksum_failures == 0
+    connection.close()
+
+
+def test_noise_is_not_a_wrong_profile() -> None:
+    """Checksum failures that do not pass the other rule (noise) name no model, nor do a
+    frame or two passing it by chance, nor any once the profile's own rule took frames."""
+    from roomba_bt.oi.identify import checksum_mismatch  # new with the check
+
+    assert checksum_mismatch(CREATE2, frames=0, failures=60, other_checksum=1) is None
+    assert checksum_mismatch(CREATE2, frames=0, failures=60, other_checksum=20) is None
+    assert checksum_mismatch(CREATE2, frames=5, failures=60, other_checksum=60) is None
+    assert checksum_mismatch(ROOMBA500, frames=0, failures=60, other_checksum=60) is None
+    found = checksum_mismatch(CREATE2, frames=0, failures=60, other_checksum=58)
+    assert found is not None and found.likely == (ROOMBA500,)
