@@ -21,6 +21,7 @@ from roomba_bt.mission.checks import (
     ModeCheck,
     blind_in_full,
     check_stream,
+    profile_commands,
     restarted_limits,
     sensor_ranges,
 )
@@ -93,7 +94,10 @@ def _compile(
     keys = KeyCheck()
     keys.run(tree, frozenset(k for k, d in ctx.keys.items() if d.has_initial))
     packets, sends, needed = _what_leaves_use(tree)
-    diagnostics = ctx.diagnostics + modes.errors + keys.errors + restarted_limits(tree)
+    unavailable, ignored = profile_commands(tree, profile)
+    diagnostics = (
+        ctx.diagnostics + modes.errors + keys.errors + restarted_limits(tree) + unavailable
+    )
     problem = check_stream(tuple(sorted(packets)), baud or profile.default_baud)
     if problem is not None:
         assert parsed.tree_loc is not None
@@ -120,7 +124,12 @@ def _compile(
         blackboard_keys={k: d.type.describe() for k, d in ctx.keys.items()},
         sends=frozenset(sends),
         plan=tree,
-        warnings=(*ctx.warnings, *blind_in_full(tree, modes), *sensor_ranges(tree, profile)),
+        warnings=(
+            *ctx.warnings,
+            *blind_in_full(tree, modes),
+            *ignored,
+            *sensor_ranges(tree, profile),
+        ),
     )
     return mission, []
 

@@ -26,6 +26,10 @@
   can run in Full, with no cliff sensor read while it runs (by itself, a guard around it, an
   earlier child of a reactive parent, a parallel branch beside it), drives down the stairs if
   it meets them: compiled, with a warning (:func:`blind_in_full`).
+* **Commands the robot has.** Each leaf whose declared ``sends`` include a command the chosen
+  profile lacks (Reset 7 and Stop 173 on the Roomba 500) is an error at that leaf; one the
+  profile has but whose firmware does not honour it (Digit LEDs Raw 163 on the 600 / Create
+  2: the 600 spec's Appendix B) is a warning: it is still sent (:func:`profile_commands`).
 """
 
 from __future__ import annotations
@@ -371,6 +375,38 @@ def blind_in_full(root: Node, modes: ModeCheck) -> list[Diagnostic]:
             ).as_warning()
         )
     return warnings
+
+
+def profile_commands(
+    root: Node, profile: RobotProfile
+) -> tuple[list[Diagnostic], list[Diagnostic]]:
+    """Errors and warnings (see the module docstring) for each leaf's declared ``sends`` on
+    ``profile``: an error where the robot lacks a command (the run would stop with an
+    UnsupportedCommandError after its first commands were written), a warning where the
+    firmware ignores it. A subtree used twice is one place in its file: said once."""
+    errors: list[Diagnostic] = []
+    warnings: list[Diagnostic] = []
+    seen: set[tuple[str, int, int, int]] = set()
+    for node in root.walk():
+        decl = node.decl
+        if decl is None:
+            continue
+        for opcode in decl.sends:
+            where = (str(node.loc.file), node.loc.line, node.loc.column, opcode)
+            if where in seen:
+                continue
+            seen.add(where)
+            problem = profile.command_unavailable(opcode)
+            if problem is not None:
+                errors.append(node.loc.at(
+                    f"{decl.name} sends {problem} (choose the robot's --profile, or leave "
+                    "this node out)"
+                ))  # fmt: skip
+                continue
+            warning = profile.command_warning(opcode)
+            if warning is not None:
+                warnings.append(node.loc.at(f"{decl.name} sends {warning}").as_warning())
+    return errors, warnings
 
 
 def sensor_ranges(root: Node, profile: RobotProfile) -> list[Diagnostic]:

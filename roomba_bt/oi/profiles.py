@@ -95,6 +95,19 @@ class RobotProfile:
         if self.name not in spec.profiles:
             raise UnsupportedCommandError(spec.name, self.name, tuple(sorted(spec.profiles)))
 
+    def command_unavailable(self, command: CommandSpec | int | str) -> str | None:
+        """Why this robot cannot be sent ``command`` (``reset (7) is not available on the
+        Roomba 500 series (roomba500); it exists on create2, roomba600``), or ``None``: the
+        500 spec has no Reset (7) or Stop (173), so what a 500 does with their bytes is not
+        written anywhere. What validation reports at the node that declares it."""
+        spec = _lookup(command)
+        if self.name in spec.profiles:
+            return None
+        return (
+            f"{spec.name} ({spec.opcode}) is not available on the {self.title} ({self.name}); "
+            f"it exists on {', '.join(sorted(spec.profiles))}"
+        )
+
     def command_warning(self, command: CommandSpec | int | str) -> str | None:
         """A sentence to log before sending ``command`` to this robot, or ``None``.
 

@@ -1,0 +1,100 @@
+"""A mission whose leaves declare commands the chosen robot lacks. Validation used only the
+profile's baud: ``validate --profile roomba500`` said ok for a plugin declaring
+``sends=opcodes("reset")``, and the run stopped with ``outcome ERROR (UnsupportedCommandError
+...)``, exit 4, after commands were written. Now: Reset 7 and Stop 173 on a Roomba 500 are
+errors at the node (exit 2, nothing sent); Digit LEDs Raw 163 on a 600 / Create 2 (its
+firmware does not honour it: the 600 spec's Appendix B) is a warning."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.cli import main
+from roomba_bt.mission import Permissions, validate_files
+from roomba_bt.oi.profiles import PROFILES
+
+PLUGIN = '''
+from roomba_bt.behaviours import Action, declare
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.opcodes import opcodes
+from py_trees.common import Status
+
+
+@declare("reboot", kind="action", sends=opcodes("reset"))
+class Reboot(Action):
+    """Reset (7): a 600 / Create 2 only."""
+
+    def update(self):
+        self.send(oi.reset())
+        return Status.SUCCESS
+
+
+@declare("power_off", kind="action", sends=opcodes("stop"))
+class PowerOff(Action):
+    """Stop (173): a 600 / Create 2 only."""
+
+    def update(self):
+        self.send(oi.stop())
+        return Status.SUCCESS
+
+
+@declare("raw_digits", kind="action", sends=opcodes("digit_leds_raw"))
+class RawDigits(Action):
+    """Digit LEDs Raw (163): works on a 500 only."""
+
+    def update(self):
+        self.send(oi.digit_leds_raw((0, 0, 0, 0)))
+        return Status.SUCCESS
+'''
+
+
+def _mission(tmp_path: Path, leaf: str) -> Path:
+    (tmp_path / "extra.py").write_text(PLUGIN)
+    path = tmp_path / f"{leaf}.yaml"
+    path.write_text(
+        f"mission: {leaf}\nplugins: [./extra.py]\ntree:\n  sequence:\n"
+        f"    - mode: safe\n    - {leaf}\n"
+    )
+    return path
+
+
+@pytest.mark.parametrize(("leaf", "opcode"), [("reboot", "reset (7)"), ("power_off", "stop (173)")])
+def test_a_command_the_roomba500_lacks_is_an_error_at_its_node(
+    tmp_path: Path, leaf: str, opcode: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = _mission(tmp_path, leaf)
+    code = main(["validate", str(path), "--profile", "roomba500", "--allow-plugin-files"])
+    out, err = capsys.readouterr()
+    assert code == 2, out + err
+    assert f"{path.name}:6:7: {leaf} sends {opcode} is not available on the Roomba 500 series " \
+        "(roomba500); it exists on create2, roomba600" in out  # fmt: skip
+    for profile in ("create2", "roomba600"):
+        assert main(["validate", str(path), "--profile", profile, "--allow-plugin-files"]) == 0
+
+
+def test_the_run_ends_before_anything_is_sent(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = _mission(tmp_path, "reboot")
+    record = tmp_path / "run.jsonl"
+    code = main(["run", str(path), "--profile", "roomba500", "--fast", "--display", "none",
+                 "--allow-plugin-files", "--record", str(record)])  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert "reset (7) is not available on the Roomba 500 series" in err
+    assert "UnsupportedCommandError" not in err and not record.exists()
+
+
+def test_digit_leds_raw_on_a_600_or_a_create2_is_a_warning(tmp_path: Path) -> None:
+    path = _mission(tmp_path, "raw_digits")
+    allowed = Permissions(plugin_files=True)
+    for name, profile in PROFILES.items():
+        found = validate_files([path], profile=profile, permissions=allowed)
+        if profile.digit_leds_raw_works:
+            assert found == [], name
+            continue
+        assert [d.severity for d in found] == ["warning"], (name, found)
+        assert (found[0].line, found[0].column) == (6, 7)
+        assert "raw_digits sends digit_leds_raw (163) does not work on" in found[0].message
