@@ -273,11 +273,25 @@ def _checked_arguments(args: argparse.Namespace) -> tuple[dict[str, str], float 
         return _error(
             "--world, --plot, --fast and --battery are for the simulator: drop them or --port"
         )
+    ending = end_in_problem(args.end_in, get_profile(args.profile))
+    if ending is not None:
+        return _error(ending)
     found = mission_file(args.mission)
     if isinstance(found, tuple):
         return _error(found[0])
     args.mission = found
     return params, timeout
+
+
+def end_in_problem(end_in: str, profile: RobotProfile) -> str | None:
+    """``--end-in stop`` on a robot without Stop (173): a usage error before anything is sent
+    (it was a warning at run time, and the run ended in Passive with exit 0)."""
+    if end_in != "stop" or profile.has_command("stop"):
+        return None
+    return (
+        f"argument --end-in: found stop, but the {profile.title} (--profile {profile.name}) "
+        "has no Stop (173); allowed: --end-in passive"
+    )
 
 
 def _simulator(args: argparse.Namespace, profile: RobotProfile) -> Simulator | str | None:
