@@ -43,7 +43,6 @@ from roomba_bt.robot.errors import (
     PortLost,
     RobotError,
     RobotReset,
-    StreamLost,
     StreamStalled,
 )
 from roomba_bt.robot.handshake import drain
@@ -55,6 +54,7 @@ from roomba_bt.robot.silence import (
     asleep_by_idle,
     explain_silence,
     follow_baud,
+    garbled_line,
 )
 from roomba_bt.robot.startup import (
     NO_ANSWER_CAUSES,
@@ -387,17 +387,7 @@ class Connection:
         garbled = link.bytes_read - bytes_before
         if not garbled:
             raise explain_silence(self, now - since, grace, halted=halted)
-        mismatch = link.checksum_mismatch()
-        self.unheard = (
-            f"the line is garbled (no valid frame at {self.baud} or another OI rate)"
-            if mismatch is None
-            else f"its frames fail the {self.profile.name} profile's checksum (most likely a "
-            f"{mismatch.likely[0].title}: --profile {mismatch.likely[0].name})"
-        )
-        raise StreamLost(
-            self.name, now - since, grace, garbled, watchdog=link.watchdog, halted=halted,
-            mismatch=mismatch,
-        )  # fmt: skip
+        raise garbled_line(self, now - since, grace, garbled, halted=halted)
 
     @property
     def idle_since(self) -> float:

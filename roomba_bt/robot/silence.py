@@ -131,6 +131,27 @@ def explain_silence(
     )
 
 
+def garbled_line(
+    connection: Connection, silent_for: float, grace: float, garbled: int, *, halted: bool
+) -> StreamLost:
+    """Bytes kept coming for the grace (``garbled`` of them) and none made a frame: noise, or
+    a robot of another model (its frames pass that model's checksum: the profile is wrong,
+    :meth:`~roomba_bt.robot.link.StreamLink.checksum_mismatch`). What a stop written now
+    cannot be known to have reached is said with it."""
+    link = connection.link
+    mismatch = link.checksum_mismatch()
+    connection.unheard = (
+        f"the line is garbled (no valid frame at {connection.baud} or another OI rate)"
+        if mismatch is None
+        else f"its frames fail the {connection.profile.name} profile's checksum (most likely "
+        f"a {mismatch.likely[0].title}: --profile {mismatch.likely[0].name})"
+    )
+    return StreamLost(
+        connection.name, silent_for, grace, garbled, watchdog=link.watchdog, halted=halted,
+        mismatch=mismatch,
+    )  # fmt: skip
+
+
 #: At or below this charge (%) in the last frame, a robot that answers nothing most likely
 #: switched itself off: it was running on an empty battery.
 FLAT_PERCENT = 1.0
