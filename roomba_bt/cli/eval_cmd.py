@@ -35,6 +35,7 @@ from roomba_bt.cli.arguments import (
     add_command,
     add_param_option,
     add_permission_options,
+    add_profile_option,
     fraction,
     metres,
     mission_file,
@@ -45,7 +46,7 @@ from roomba_bt.cli.arguments import (
     results_file,
 )
 from roomba_bt.oi.profiles import PROFILES
-from roomba_bt.runtime.summary import ExitCode, Outcome
+from roomba_bt.runtime.summary import ExitCode, Outcome, profile_shown
 
 if TYPE_CHECKING:  # the evaluation is imported when it runs: the CLI starts faster
     from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec
@@ -164,7 +165,7 @@ def _add_start_options(ev: argparse.ArgumentParser) -> None:
         "heading drift of up to 0.9 deg/min; seeded; default 0: exact)",
     )
     ev.add_argument("--timeout", default="15min", help="mission time per episode (default 15min)")
-    ev.add_argument("--profile", choices=sorted(PROFILES), default="create2")
+    add_profile_option(ev, "the simulated robot's model")
     ev.add_argument("--min-rate", type=fraction, metavar="FRACTION",
                     help="exit 1 if the success rate is below this, a fraction (0.9) or a "
                     "percent (90%%) (for CI)")  # fmt: skip
@@ -288,8 +289,10 @@ def eval_command(args: argparse.Namespace) -> int:
         if partial is not None:
             partial.done()
         return done
+    shown = profile_shown(PROFILES[args.profile])
     summaries = [
-        summarize(v.mission, world.name, e.results) for v, e in zip(chosen, done, strict=True)
+        summarize(v.mission, world.name, e.results, shown)
+        for v, e in zip(chosen, done, strict=True)
     ]
     interrupted = any(e.interrupted for e in done)
     comparisons = []

@@ -18,13 +18,14 @@ from roomba_bt.cli.arguments import (
     add_command,
     add_param_option,
     add_permission_options,
+    add_profile_option,
     baud_rate,
     mission_file,
     output_with_suffix,
     parse_params,
     permissions,
 )
-from roomba_bt.oi.profiles import PROFILES, get_profile
+from roomba_bt.oi.profiles import get_profile
 from roomba_bt.runtime.summary import ExitCode
 
 if TYPE_CHECKING:
@@ -136,7 +137,7 @@ def _registry_with_files(command: str, files: list[str]) -> Registry | int:
 
 def _common(parser: argparse.ArgumentParser) -> None:
     add_param_option(parser, "set a mission parameter, e.g. -p speed=250mm/s (repeatable)")
-    parser.add_argument("--profile", choices=sorted(PROFILES), default="create2")
+    add_profile_option(parser, "the robot the mission is checked for")
     parser.add_argument("--baud", type=baud_rate, default=115200, help="baud rate (default 115200)")
     add_permission_options(parser)
 

@@ -21,7 +21,7 @@ import time
 from types import FrameType
 from typing import TYPE_CHECKING, Any
 
-from roomba_bt.cli.arguments import add_command, plot_file, seconds
+from roomba_bt.cli.arguments import add_command, add_profile_option, plot_file, seconds
 from roomba_bt.runtime.summary import ExitCode
 
 if TYPE_CHECKING:
@@ -83,7 +83,7 @@ def register(sub: Any) -> None:
         "release-stm32-3.7.7 a BRC pulse does not wake it on the dock)",
     )  # fmt: skip
     parser.add_argument("--world", default="empty-room", help="shipped world name or YAML path")
-    parser.add_argument("--profile", default="create2", help="create2, roomba600 or roomba500")
+    add_profile_option(parser, "the model the simulated robot is")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     parser.add_argument("--random-start", action="store_true", help="start in the start region")
     parser.add_argument(

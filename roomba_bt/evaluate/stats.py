@@ -71,6 +71,9 @@ class Summary:
     failures: tuple[tuple[str, int], ...]
     wall_s: float
     simulated_s: float
+    #: the robot profile, said when not the default (``runtime.summary.profile_shown``: "" for
+    #: create2); ``eval --json`` has it in its conditions
+    profile: str = ""
 
     @property
     def rate(self) -> float:
@@ -83,6 +86,7 @@ class Summary:
         speed = self.simulated_s / self.wall_s if self.wall_s > 0 else 0.0
         out = [
             f"mission      {self.mission} in {self.world}",
+            *([f"profile      {self.profile}"] if self.profile else []),
             f"success      {self.successes}/{self.runs} = {100 * self.rate:.1f} % "
             f"(95 % Wilson interval {100 * lo:.1f} %..{100 * hi:.1f} %)",
             f"time         median {med}, p90 {p90} (successful episodes, mission time)",
@@ -131,8 +135,11 @@ def tidy(value: object, digits: int = 10) -> object:
     return value
 
 
-def summarize(mission: str, world: str, results: Sequence[EpisodeResult]) -> Summary:
-    """Aggregate episodes into a :class:`Summary`."""
+def summarize(
+    mission: str, world: str, results: Sequence[EpisodeResult], profile: str = ""
+) -> Summary:
+    """Aggregate episodes into a :class:`Summary` (``profile``: as the text names it, "" for
+    the default)."""
     runs = len(results)
     ok = [r for r in results if r.succeeded]
     times = [r.time_s for r in ok]
@@ -150,6 +157,7 @@ def summarize(mission: str, world: str, results: Sequence[EpisodeResult]) -> Sum
         failures=tuple(sorted(groups.items(), key=lambda kv: (-kv[1], kv[0]))),
         wall_s=sum(r.wall_s for r in results),
         simulated_s=sum(r.time_s for r in results),
+        profile=profile,
     )
 
 

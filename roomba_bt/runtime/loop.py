@@ -45,7 +45,7 @@ from roomba_bt.robot.interface import (
 )
 from roomba_bt.robot.safety import InterruptGuard, Terminated, signal_reason
 from roomba_bt.runtime.stall import StallRide
-from roomba_bt.runtime.summary import DEFAULT_GRACE, Outcome, RunSummary
+from roomba_bt.runtime.summary import DEFAULT_GRACE, Outcome, RunSummary, profile_shown
 from roomba_bt.runtime.teardown import (
     behaviour_error,
     note_stop_failures,
@@ -164,7 +164,7 @@ class MissionRunner(BaseHandle):
     ) -> None:
         super().__init__(profile)
         self.connection = connection
-        self.summary = RunSummary(mission.name)
+        self.summary = RunSummary(mission.name, profile=profile_shown(profile))
         self.mission = mission
         self.packets = tuple(packets)
         self.timeout_s = timeout_s

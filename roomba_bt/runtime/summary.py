@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 
 from roomba_bt.oi.frames import BATTERY_PACKETS
 from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
 
 if TYPE_CHECKING:
     from roomba_bt.robot.interface import Snapshot
@@ -34,6 +35,12 @@ class ExitCode(IntEnum):
     CONNECTION = 3
     BEHAVIOUR_ERROR = 4  # a behaviour raised an exception (a bug in it or its plugin)
     INTERRUPTED = 130  # Ctrl-C or SIGTERM, after the safe stop
+
+
+def profile_shown(profile: RobotProfile) -> str:
+    """How a summary names the robot profile: ``roomba500 (Roomba 500 series)``, or "" for
+    the default (create2), which goes unsaid so that the usual summary reads as it did."""
+    return "" if profile.name == DEFAULT_PROFILE.name else f"{profile.name} ({profile.title})"
 
 
 class Outcome(Enum):
@@ -116,6 +123,9 @@ class RunSummary:
     traceback: str = ""
     #: ``--record``: why and when the record stopped before the run's end ("" if it did not)
     record_stopped: str = ""
+    #: the robot profile, said when it is not the default (``roomba500 (Roomba 500 series)``;
+    #: "" for the default, whose summary reads as it always did)
+    profile: str = ""
 
     @property
     def exit_code(self) -> int:
@@ -153,6 +163,7 @@ class RunSummary:
         reason = f" ({self.reason})" if self.reason else ""
         return [
             f"mission      {self.mission}",
+            *([f"profile      {self.profile}"] if self.profile else []),
             f"outcome      {self.outcome.value.upper()}{reason}",
             f"duration     {self.mission_time_s:.2f} s mission time, {self.wall_time_s:.2f} s wall",
             f"ticks        {self.ticks} ({self.overruns} overruns > 15 ms, "
