@@ -229,6 +229,18 @@ def test_reset_and_stop_exist_only_on_600_and_create2() -> None:
     assert len(CREATE2.commands) == len(ROOMBA500.commands) + 2
 
 
+def test_command_unavailable_names_the_model_and_where_it_exists() -> None:
+    """What validation says at a node declaring Reset or Stop for a Roomba 500."""
+    assert ROOMBA500.command_unavailable("reset") == (
+        "reset (7) is not available on the Roomba 500 series (roomba500); it exists on "
+        "create2, roomba600"
+    )
+    assert ROOMBA500.command_unavailable(173) is not None
+    for profile in (CREATE2, ROOMBA600, ROOMBA500):
+        assert profile.command_unavailable("digit_leds_raw") is None  # a warning, not this
+    assert CREATE2.command_unavailable("reset") is None
+
+
 def test_digit_leds_raw_warning_text() -> None:
     for profile in (CREATE2, ROOMBA600):
         text = command_warning(163, profile)
