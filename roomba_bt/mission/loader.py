@@ -168,13 +168,17 @@ class Loader:
         self._include_stack.pop()
         return ParsedFile(name, description, params, tree, tree_loc, root_loc)
 
-    def _compose(self, path: Path, resolved: Path) -> tuple[yaml.Node, Loc] | None:
+    def _compose(
+        self, path: Path, resolved: Path, include: tuple[str, Loc] | None = None
+    ) -> tuple[yaml.Node, Loc] | None:
         """One file of the mission (the main file or an include) read as YAML nodes: its
         root and the root's place, None when it cannot be read or parsed (reported). The
-        file is remembered (``files``, resolved) for ``--watch``."""
+        file is remembered (``files``, resolved) for ``--watch``. ``include``: the include's
+        text and place, where a file that cannot be opened is reported (its own 1:1 names
+        no line the user wrote)."""
         display = self.display(path)
         self.files.append(resolved)
-        root, errors = compose(path, display)
+        root, errors = compose(path, display, include)
         for e in errors:
             self.ctx.error(e)
         if root is None:
@@ -274,11 +278,15 @@ class Loader:
                 )
                 self.ctx.unloaded_plugins.append(text)
                 continue
-            if not target.is_file():
+            unreadable = _unreadable(target)
+            if unreadable is not None or not target.is_file():
                 self.ctx.unloaded_plugins.append(text)
                 self.ctx.error(
                     iloc.at(
-                        f"plugin file {text!r} not found (paths are relative to the file naming it)"
+                        f"cannot read plugin file {text!r}: {unreadable}"
+                        if unreadable is not None
+                        else f"plugin file {text!r} not found (paths are relative to the file "
+                        "naming it)"
                     )
                 )
                 continue
@@ -312,6 +320,10 @@ class Loader:
                     )
                 )
                 continue
+            unreadable = _unreadable(target)
+            if unreadable is not None:
+                self.ctx.error(iloc.at(f"cannot read included file {text!r}: {unreadable}"))
+                continue
             if not target.is_file():
                 self.ctx.error(
                     iloc.at(
@@ -323,7 +335,7 @@ class Loader:
             self._include(target, text, iloc)
 
     def _include(self, target: Path, text: str, iloc: Loc) -> None:
-        read = self._compose(target, target)
+        read = self._compose(target, target, (text, iloc))
         if read is None:
             return
         root, root_loc = read
@@ -532,6 +544,18 @@ def key_decl(
         if "doc" in fields:
             doc = scalar_text(fields["doc"][0], fields["doc"][2], "doc")
     ctx.keys[name] = KeyDecl(name, vtype, key_loc, initial, has_initial, doc)
+
+
+def _unreadable(target: Path) -> str | None:
+    """Why the file system will not say what ``target`` is (a folder on the way the user
+    cannot enter: ``stat`` fails with "Permission denied"), None when it answers."""
+    try:
+        target.stat()
+    except (FileNotFoundError, NotADirectoryError):  # "not found", as is_file() says
+        return None
+    except OSError as exc:  # not a traceback: "cannot read" where the path is written
+        return str(exc.strerror or exc)
+    return None
 
 
 def _is_mission(root: yaml.Node, words: tuple[str, ...]) -> bool:

@@ -95,6 +95,13 @@ def find_mission(text: str) -> ShippedLookup:
     """A mission argument as the command line takes it: an existing file; else a shipped
     mission's name (``dock``, ``dock.yaml`` or ``roomba-bt:dock.yaml``)."""
     given = Path(text)
+    try:
+        return _find_mission(text, given)
+    except OSError as exc:  # a folder on the way the user cannot enter: stat() itself fails
+        return ShippedLookup(None, f"cannot read {text}: {exc.strerror or exc}")
+
+
+def _find_mission(text: str, given: Path) -> ShippedLookup:
     if given.is_file():
         return ShippedLookup(given)
     named = shipped_file(text)

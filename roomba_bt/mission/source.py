@@ -54,13 +54,20 @@ def loc_of(node: yaml.Node, file: str, path: str) -> Loc:
     return Loc(file, mark.line + 1, mark.column + 1, path)
 
 
-def compose(path: Path, display: str) -> tuple[yaml.Node | None, list[Diagnostic]]:
-    """The document's root node, or the syntax error as a diagnostic."""
+def compose(
+    path: Path, display: str, include: tuple[str, Loc] | None = None
+) -> tuple[yaml.Node | None, list[Diagnostic]]:
+    """The document's root node, or the syntax error as a diagnostic. ``include``: the text
+    and place of the include naming the file, where a file that cannot be opened is
+    reported."""
     try:
         text = yamlsource.read_text(path)
     except yamlsource.FileTooLarge as exc:
         return None, [Diagnostic(display, 1, 1, f"mission file of {exc}")]
     except OSError as exc:
+        if include is not None:
+            name, where = include
+            return None, [where.at(f"cannot read included file {name!r}: {exc.strerror or exc}")]
         return None, [Diagnostic(display, 1, 1, f"cannot read mission file: {exc.strerror}")]
     except UnicodeDecodeError as exc:
         line, column = yamlsource.undecodable_position(exc)

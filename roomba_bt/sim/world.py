@@ -1033,7 +1033,14 @@ def world_text(path_or_name: str | pathlib.Path) -> tuple[str, str]:
     """The text of a shipped world by name or of a world file by path, and its source (the
     file's path) for :func:`parse_world`; :class:`WorldError` if there is none to read."""
     path = pathlib.Path(path_or_name)
-    if not path.is_file():
+    try:
+        is_file = path.is_file()
+    except OSError as exc:  # a folder on the way the user cannot enter: stat() itself fails
+        raise WorldError(
+            [WorldProblem(str(path), 0, 0, "world", f"an unreadable file ({exc.strerror or exc})",
+                          "a UTF-8 YAML file")]
+        ) from None  # fmt: skip
+    if not is_file:
         shipped = WORLDS_DIR / f"{path_or_name}.yaml"
         if isinstance(path_or_name, str) and "/" not in path_or_name and shipped.is_file():
             path = shipped

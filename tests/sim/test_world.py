@@ -474,3 +474,24 @@ def test_a_room_may_be_written_as_a_rect() -> None:
     """Obstacles, drops and areas take ``{rect: ...}``; a room written so was refused."""
     world = parse_world("rooms: [{rect: [0, 0, 4, 3]}]\n", "w.yaml")
     assert world.rooms == (((0.0, 0.0), (4000.0, 0.0), (4000.0, 3000.0), (0.0, 3000.0)),)
+
+
+def test_a_world_in_a_folder_the_user_cannot_enter_is_a_world_error(
+    tmp_path: pathlib.Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``--world np/w.yaml`` (np chmod 000) was a traceback from ``world_text``'s
+    ``is_file``; simulated (the tests run as root) by a ``stat`` that fails."""
+    import errno
+
+    real_stat = pathlib.Path.stat
+
+    def stat(self: pathlib.Path, *args: object, **kwargs: object) -> object:
+        if "np" in self.parts[:-1]:
+            raise PermissionError(errno.EACCES, "Permission denied", str(self))
+        return real_stat(self, *args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(pathlib.Path, "stat", stat)
+    with pytest.raises(WorldError) as info:
+        world_module.world_text(tmp_path / "np" / "w.yaml")
+    (problem,) = info.value.problems
+    assert "an unreadable file (Permission denied)" in str(problem)

@@ -1,0 +1,99 @@
+"""Files a stranger throws at ``roomba-bt validate``: folders the user cannot enter, and
+other edges of the file system. Each case is rc 2 (or a diagnostic) at the place the user
+wrote, never a traceback."""
+
+from __future__ import annotations
+
+import errno
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.cli import main
+from roomba_bt.mission import Permissions, compile_mission
+
+Capsys = pytest.CaptureFixture[str]
+
+
+def lock(monkeypatch: pytest.MonkeyPatch, folder: str) -> None:
+    """Make every path inside a folder named ``folder`` unreachable, as ``chmod 000`` on the
+    folder does for a user who is not root (the tests run as root, which it does not stop):
+    ``stat`` and ``open`` fail with "Permission denied"."""
+
+    def refused(path: object) -> bool:
+        return folder in Path(str(path)).parts[:-1]
+
+    def denied(path: object) -> PermissionError:
+        return PermissionError(errno.EACCES, "Permission denied", str(path))
+
+    real_stat, real_open = Path.stat, Path.open
+
+    def stat(self: Path, *args: object, **kwargs: object) -> object:
+        if refused(self):
+            raise denied(self)
+        return real_stat(self, *args, **kwargs)  # type: ignore[arg-type]
+
+    def open_(self: Path, *args: object, **kwargs: object) -> object:
+        if refused(self):
+            raise denied(self)
+        return real_open(self, *args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(Path, "stat", stat)
+    monkeypatch.setattr(Path, "open", open_)
+
+
+def test_a_mission_in_a_folder_the_user_cannot_enter_is_rc_2(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
+) -> None:
+    """``validate np/a.yaml`` (np chmod 000) was a traceback from ``find_mission``."""
+    (tmp_path / "np").mkdir()
+    (tmp_path / "np" / "a.yaml").write_text("tree: {wait: 1s}\n")
+    monkeypatch.chdir(tmp_path)
+    lock(monkeypatch, "np")
+    assert main(["validate", "np/a.yaml"]) == 2
+    out, err = capsys.readouterr()
+    assert out.splitlines() == ["cannot read np/a.yaml: Permission denied"]
+    assert "Traceback" not in out + err
+
+
+def test_an_include_or_plugin_in_a_locked_folder_is_named_where_it_is_written(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """They were "internal error while compiling (PermissionError ...); please report it"
+    at 1:1 of the top file."""
+    (tmp_path / "locked").mkdir()
+    (tmp_path / "locked" / "z.yaml").write_text("subtrees: {z: {tree: {wait: 1s}}}\n")
+    (tmp_path / "locked" / "p.py").write_text("")
+    mission = tmp_path / "l.yaml"
+    mission.write_text(
+        "mission: l\ninclude: [locked/z.yaml]\nplugins: [locked/p.py]\ntree: {wait: 1s}\n"
+    )
+    lock(monkeypatch, "locked")
+    _, problems = compile_mission(mission, permissions=Permissions(plugin_files=True))
+    assert [(p.line, p.column, p.message) for p in problems] == [
+        (2, 11, "cannot read included file 'locked/z.yaml': Permission denied"),
+        (3, 11, "cannot read plugin file 'locked/p.py': Permission denied"),
+    ]
+
+
+def test_an_include_that_cannot_be_opened_is_named_at_the_include(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A file the folder lets one see but not read (chmod 000 on the file): at the include's
+    line:col, not at 1:1 of a file the user may never have opened."""
+    (tmp_path / "z.yaml").write_text("subtrees: {z: {tree: {wait: 1s}}}\n")
+    mission = tmp_path / "m.yaml"
+    mission.write_text("mission: m\ninclude: [z.yaml]\ntree: {wait: 1s}\n")
+    real_open = Path.open
+
+    def open_(self: Path, *args: object, **kwargs: object) -> object:
+        if self.name == "z.yaml":
+            raise PermissionError(errno.EACCES, "Permission denied", str(self))
+        return real_open(self, *args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(Path, "open", open_)
+    _, problems = compile_mission(mission)
+    (problem,) = problems
+    assert (problem.line, problem.column) == (2, 11)
+    assert problem.file.endswith("m.yaml")
+    assert problem.message == "cannot read included file 'z.yaml': Permission denied"
