@@ -36,6 +36,12 @@ from roomba_bt.mission.values import (
 #: RecursionError" at about 250): it is refused at this depth instead (decided).
 MAX_TREE_DEPTH = 100
 
+#: How many nodes a compile may build, subtrees expanded where they are used (decided). The
+#: largest shipped mission expands to 95 (``patrol``); a subtree that uses another twice, which
+#: uses another twice, ... doubles at each level: 30 levels in a 1.9 KB file hung ``validate``
+#: past 1.3 GB. Counted while expanding, so the blow-up stops here, not after.
+MAX_TREE_NODES = 10_000
+
 
 class NodeParser:
     """Parses trees (the mission's, each subtree's at each use) within one :class:`Context`."""
@@ -48,10 +54,17 @@ class NodeParser:
         #: nodes from the root to the one being parsed (:data:`MAX_TREE_DEPTH`)
         self._depth = 0
         self._too_deep = False
+        #: nodes built so far (:data:`MAX_TREE_NODES`) and the subtree uses being expanded,
+        #: innermost last: where the count goes over is reported at the use that made it
+        self._count = 0
+        self._uses: list[Loc] = []
+        self._too_many = False
 
     def node(self, ynode: yaml.Node, loc: Loc, env: Mapping[str, Bound]) -> Node | None:
         """Parse one node; errors are recorded and None returned for a node that cannot be
         built (its parent goes on with the other children)."""
+        if self._over_count(loc):
+            return None
         if self._depth >= MAX_TREE_DEPTH:
             if not self._too_deep:  # said once: every node below it is as deep
                 self._too_deep = True
@@ -70,6 +83,25 @@ class NodeParser:
             return None
         finally:
             self._depth -= 1
+
+    def _over_count(self, loc: Loc) -> bool:
+        """Count one more node; True (said once, at the innermost subtree use, else at the
+        node) once the tree has more than :data:`MAX_TREE_NODES`: nothing more is built."""
+        if self._too_many:
+            return True
+        self._count += 1
+        if self._count <= MAX_TREE_NODES:
+            return False
+        self._too_many = True
+        where = self._uses[-1] if self._uses else loc
+        self.ctx.error(
+            where.at(
+                f"the tree grows past {MAX_TREE_NODES:,} nodes here (subtrees are expanded where "
+                f"they are used, so a subtree using another several times multiplies it); at "
+                f"most {MAX_TREE_NODES:,} are allowed (a file generated wrong?)"
+            )
+        )
+        return True
 
     def _node(self, ynode: yaml.Node, loc: Loc, env: Mapping[str, Bound]) -> Node | None:
         if isinstance(ynode, yaml.ScalarNode):
@@ -218,10 +250,12 @@ class NodeParser:
         if sub.body is None:
             return None
         self._use_stack.append(name)
+        self._uses.append(key_loc)
         try:
             body = self.node(sub.body, sub.body_loc, sub_env)
         finally:
             self._use_stack.pop()
+            self._uses.pop()
         if body is not None and body.name == body.kind and body.kind != "leaf":
             body.name = name
         return body

@@ -133,6 +133,25 @@ def test_subtrees_count_toward_the_depth_as_they_are_built(tmp_path: Path) -> No
     assert problems[0].message.startswith(f"the tree nests more than {MAX_TREE_DEPTH} nodes")
 
 
+def test_subtrees_that_multiply_are_stopped_while_they_are_expanded(tmp_path: Path) -> None:
+    """30 levels of a subtree using the next twice (2^30 leaves, 1.9 KB) hung ``validate``
+    past 1.3 GB: the count stops the expansion at the limit, in well under a second."""
+    import time
+
+    from roomba_bt.mission.nodes import MAX_TREE_NODES
+
+    levels = [f"  s{i}: {{tree: {{sequence: [{{subtree: s{i + 1}}}, {{subtree: s{i + 1}}}]}}}}"
+              for i in range(30)]  # fmt: skip
+    path = tmp_path / "expo.yaml"
+    path.write_text("subtrees:\n" + "\n".join(levels) + "\n  s30: {tree: {wait: 0s}}\n"
+                    "tree: {subtree: s0}\n")  # fmt: skip
+    start = time.perf_counter()
+    _, (problem,) = compile_mission(path)
+    assert time.perf_counter() - start < 5
+    assert problem.message.startswith(f"the tree grows past {MAX_TREE_NODES:,} nodes here")
+    assert problem.yaml_path.endswith(".subtree")  # at a subtree use, not at a leaf
+
+
 def test_the_cli_names_a_deep_file_with_exit_2_and_a_short_path(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
