@@ -41,6 +41,7 @@ from roomba_bt.oi.encode import PLAYABLE_NOTES, Note, Radius, note_name, note_nu
 from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS, ENCODER_PACKETS
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import COMMANDS_BY_NAME, opcodes
+from roomba_bt.oi.stream import SLOT_SECONDS
 
 log = logging.getLogger("roomba_bt.mission")
 
@@ -399,7 +400,8 @@ class MaxClean(_BuiltIn):
     kind="action",
     params=(
         Param("wait", BOOL, default=True, doc="RUNNING until packet 34 shows the home base"),
-        Param("timeout", DURATION, minimum=0, doc="FAILURE if not docked by then"),
+        # at least one tick: a timeout of 0 fails before the robot could have moved
+        Param("timeout", DURATION, minimum=SLOT_SECONDS, doc="FAILURE if not docked by then"),
     ),
     reads=CHARGING_SOURCES_PACKETS,
     sends=opcodes("seek_dock"),

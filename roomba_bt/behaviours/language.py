@@ -33,6 +33,7 @@ from roomba_bt.behaviours import lean
 from roomba_bt.behaviours.declare import Param
 from roomba_bt.behaviours.units import BOOL, DURATION, INT, STR, UnitError, ValueType
 from roomba_bt.behaviours.units import enum as enum_type
+from roomba_bt.oi.stream import SLOT_SECONDS
 
 
 class Shape(enum.Enum):
@@ -191,17 +192,22 @@ _KINDS: tuple[NodeKind, ...] = (
     NodeKind("retry", Shape.DO, lambda n, k, o: lean.Retry(n, k[0], int(o["times"])),
              (Param("times", INT, required=True, minimum=1, doc="attempts in all"),),
              doc="re-run the child after a failure"),
+    # A negative time is refused everywhere. repeat.for and timeout.after are at least one
+    # tick of the mission clock: less repeats nothing (the child runs once) or fails any
+    # child still running after its first tick. delay.for may be 0 (no delay, as wait: 0s:
+    # a parameter may switch it off).
     NodeKind("repeat", Shape.DO,
              lambda n, k, o: ours.Repeat(n, k[0], o.get("times"), o.get("for")),
              (Param("times", INT, minimum=1, doc="successes in all"),
-              Param("for", DURATION, doc="mission time to repeat for")),
+              Param("for", DURATION, minimum=SLOT_SECONDS, doc="mission time to repeat for")),
              doc="re-run the child after each success (forever without times or for)",
              exclusive=("times", "for")),
     NodeKind("timeout", Shape.DO, lambda n, k, o: ours.Timeout(n, k[0], float(o["after"])),
-             (Param("after", DURATION, required=True, doc="mission time"),),
+             (Param("after", DURATION, required=True, minimum=SLOT_SECONDS,
+                    doc="mission time"),),
              doc="FAILURE, and the child stopped, if it still runs after a while"),
     NodeKind("delay", Shape.DO, lambda n, k, o: ours.Delay(n, k[0], float(o["for"])),
-             (Param("for", DURATION, required=True, doc="mission time"),),
+             (Param("for", DURATION, required=True, minimum=0, doc="mission time"),),
              doc="RUNNING for a while, then ticks the child"),
     NodeKind("oneshot", Shape.CHILD_OR_DO, _oneshot,
              (Param("policy", enum_type("on_success", "on_completion"),

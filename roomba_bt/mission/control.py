@@ -195,11 +195,17 @@ def _decorator_options(
             origin = origin_of(written, env)
             raise Bad(
                 where.at(
-                    f"{word}.{param.name} must be at least {param.minimum:g}, got {value}"
+                    f"{word}.{param.name} must be at least {_amount(param, param.minimum)}, "
+                    f"got {_amount(param, value)}"
                     + (f" ({written.value.strip()} is {origin})" if origin else "")
                 )
             )
     return options
+
+
+def _amount(param: Param, value: float) -> str:
+    """``0.015 s``, ``1``: a value with the unit of the option's type, if it has one."""
+    return f"{value:g} {param.type.unit}" if param.type.unit else f"{value:g}"
 
 
 def _key_items(ctx: Context, kind: NodeKind, options: dict[str, Any], fields: Fields,
