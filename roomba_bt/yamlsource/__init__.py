@@ -133,6 +133,8 @@ def compose(text: str, loader: type[Any] = FAST_LOADER) -> yaml.Node | None:
     out unless composing fails, when it runs first as always, so that the error raised is the
     same one (a syntax error after the first document is the event pass's, not the
     composer's "expected a single document")."""
+    if _HIDDEN_BREAK.search(text) is not None:
+        refuse_hidden_breaks(text)
     try:
         root = _compose(text, loader)
     except yaml.reader.ReaderError as exc:
@@ -198,6 +200,39 @@ def unprintable(text: str, exc: yaml.reader.ReaderError) -> Refused:
     line = text.count("\n", 0, index)
     column = index - (text.rfind("\n", 0, index) + 1)
     return Refused(problem=problem, problem_mark=yaml.Mark("<text>", index, line, column, None, 0))
+
+
+#: Characters YAML reads as a line break and an editor does not show as one: NEL (U+0085, a
+#: C1 control), the line separator U+2028 and the paragraph separator U+2029. PyYAML and
+#: libyaml accept them raw, so every line after one was numbered one off what the editor
+#: shows (a NEL in a comment was a syntax error on the wrong line); refused raw, at their own
+#: line:col, as every other control character (decided: not read as breaks)
+_HIDDEN_BREAK = re.compile("[\x85\u2028\u2029]")
+_BREAK_NAMES = {"\u2028": "line separator", "\u2029": "paragraph separator"}
+
+
+def refuse_hidden_breaks(text: str) -> None:
+    """Raise :class:`Refused` at each :data:`_HIDDEN_BREAK` character of ``text`` (the first,
+    the others in its ``more``), lines counted as an editor counts them (newlines only)."""
+    found = []
+    for match in _HIDDEN_BREAK.finditer(text):
+        index = match.start()
+        char = match.group()
+        line = text.count("\n", 0, index)
+        column = index - (text.rfind("\n", 0, index) + 1)
+        if char in _BREAK_NAMES:
+            problem = (
+                f"{_BREAK_NAMES[char]} {character_name(char)} is not allowed: editors do not "
+                "show it as a line break, YAML reads one (write a newline, or a space)"
+            )
+        else:
+            problem = (
+                f"control character {character_name(char)} (NEL) is not allowed in a YAML "
+                "file: it may hold printable characters, tabs and line breaks only"
+            )
+        mark = yaml.Mark("<text>", index, line, column, None, 0)
+        found.append(Refused(problem=problem, problem_mark=mark))
+    raise_every(found)
 
 
 #: Characters no text of a data file may hold (C0 but tab and newline, DEL, C1): a file

@@ -495,3 +495,14 @@ def test_a_world_in_a_folder_the_user_cannot_enter_is_a_world_error(
         world_module.world_text(tmp_path / "np" / "w.yaml")
     (problem,) = info.value.problems
     assert "an unreadable file (Permission denied)" in str(problem)
+
+
+def test_a_nel_or_line_separator_in_a_world_is_refused_at_its_place() -> None:
+    """Both were read as line breaks: every problem after them was a line off."""
+    found = problems(
+        "# a NEL \x85 here\nname: a \u2028 b\nrooms: [[[0, 0], [3, 0], [3, 3], [0, 3]]]\n"
+    )
+    assert [p.split(" is not allowed")[0] for p in found] == [
+        "w.yaml:1:9: control character U+0085 (NEL)",
+        "w.yaml:2:9: line separator U+2028",
+    ]

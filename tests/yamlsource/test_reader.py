@@ -339,3 +339,23 @@ def test_every_duplicate_of_a_mapping_is_found_and_can_be_left_out() -> None:
     assert found == [("a", (3, 1), (1, 1)), (1.0, (5, 1), (4, 1)), ("a", (6, 1), (1, 1))]
     kept = [(k, v.value) for k, _, v in yamlsource.pairs(node, skip_duplicates=True)]
     assert kept == [("a", "1"), ("b", "2"), (1, "x")]
+
+
+@pytest.mark.parametrize("loader", [yamlsource.FAST_LOADER, yamlsource.PURE_LOADER])
+@pytest.mark.parametrize(
+    ("text", "where", "named"),
+    [("# comment \x85 with NEL\nmission: t\n", (1, 11), "control character U+0085 (NEL)"),
+     ('mission: t\ndescription: "pasted \x85 here"\n', (2, 22), "control character U+0085 (NEL)"),
+     ("# comment \u2028 with LS\nmission: t\n", (1, 11), "line separator U+2028"),
+     ("mission: t\ndescription: a \u2029 b\n", (2, 16), "paragraph separator U+2029")],
+    ids=["nel-in-a-comment", "nel-in-quotes", "ls-in-a-comment", "ps-in-a-text"],
+)  # fmt: skip
+def test_a_line_break_editors_do_not_show_is_refused_at_its_own_place(
+    loader: type, text: str, where: tuple[int, int], named: str
+) -> None:
+    """YAML reads NEL, U+2028 and U+2029 as line breaks, editors do not: a NEL in a comment
+    was a syntax error one line off, one in a value numbered every later line one off."""
+    with pytest.raises(yamlsource.Refused) as caught:
+        yamlsource.compose(text, loader)
+    assert yamlsource.error_position(caught.value) == where
+    assert str(caught.value.problem).startswith(f"{named} is not allowed")
