@@ -231,5 +231,5 @@ def _key_items(ctx: Context, kind: NodeKind, options: dict[str, Any], fields: Fi
             try:
                 items.append(resolve(ctx, item, item_loc, decl.type, env, what))
             except Bad as bad:
-                ctx.error(bad.diagnostic)
+                ctx.report(bad)
         options["items"] = items

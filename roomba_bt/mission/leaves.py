@@ -53,7 +53,7 @@ def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node | None:
                 param=param, allow_ref=param.from_blackboard,
             )  # fmt: skip
         except Bad as bad:
-            ctx.error(bad.diagnostic)
+            ctx.report(bad)
             ok = False
     for p in decl.params:
         if (
@@ -141,7 +141,7 @@ def _key_params(
         try:
             params[pname] = resolve(ctx, pnode, pvloc, key_decl.type, env, f"{decl.name}.{pname}")
         except Bad as bad:
-            ctx.error(bad.diagnostic)
+            ctx.report(bad)
             ok = False
     return ok
 

@@ -206,7 +206,7 @@ class Loader:
         try:
             items = mapping(root, root_loc, "a mission file")
         except Bad as bad:
-            self.ctx.error(bad.diagnostic)
+            self.ctx.report(bad)
             return None
         for key, _, key_loc, _ in items:
             if key not in TOP_LEVEL:
@@ -229,7 +229,7 @@ class Loader:
                 try:
                     found[key] = scalar_text(node, vloc, key)
                 except Bad as bad:
-                    self.ctx.error(bad.diagnostic)
+                    self.ctx.report(bad)
         return found["mission"], found["description"]
 
     def _file_sections(self, path: Path, sections: dict[str, tuple[yaml.Node, Loc, Loc]]) -> None:
@@ -251,14 +251,14 @@ class Loader:
         try:
             entries = sequence(node, loc, what)
         except Bad as bad:
-            self.ctx.error(bad.diagnostic)
+            self.ctx.report(bad)
             return []
         out = []
         for item, iloc in entries:
             try:
                 text = scalar_text(item, iloc, each)
             except Bad as bad:
-                self.ctx.error(bad.diagnostic)
+                self.ctx.report(bad)
                 continue
             if text.startswith(SHIPPED_PREFIX):
                 out.append((text, (SHIPPED_DIR / text[len(SHIPPED_PREFIX) :]).resolve(), iloc))
@@ -345,7 +345,7 @@ class Loader:
         try:
             items = mapping(root, root_loc, "an included file")
         except Bad as bad:
-            self.ctx.error(bad.diagnostic)
+            self.ctx.report(bad)
             return
         allowed = _INCLUDED_KEYS
         for key, _, key_loc, _ in items:
@@ -370,13 +370,13 @@ class Loader:
             try:
                 items = mapping(node, loc, "parameters")
             except Bad as bad:
-                self.ctx.error(bad.diagnostic)
+                self.ctx.report(bad)
                 items = []
             for name, value, key_loc, vloc in items:
                 try:
                     vtype, default, has_default, _ = param_decl(self.ctx, value, vloc, name)
                 except Bad as bad:
-                    self.ctx.error(bad.diagnostic)
+                    self.ctx.report(bad)
                     env[name] = Bound(STR, UNKNOWN, "?")  # a use reads "unknown": no type check
                     broken.add(name)
                     continue
@@ -427,13 +427,13 @@ class Loader:
         try:
             items = mapping(node, loc, what)
         except Bad as bad:
-            self.ctx.error(bad.diagnostic)
+            self.ctx.report(bad)
             return
         for name, value, key_loc, vloc in items:
             try:
                 declare(name, value, key_loc, vloc)
             except Bad as bad:
-                self.ctx.error(bad.diagnostic)
+                self.ctx.report(bad)
 
     def _key_decl(self, name: str, node: yaml.Node, key_loc: Loc, loc: Loc) -> None:
         _new_name(name, key_loc, "blackboard key", "blackboard key", self.ctx.keys, "declared")
@@ -456,7 +456,7 @@ class Loader:
                 try:
                     vtype, default, has_default, _ = param_decl(self.ctx, pvalue, pvloc, pname)
                 except Bad as bad:
-                    self.ctx.error(bad.diagnostic)
+                    self.ctx.report(bad)
                     broken.add(pname)  # not reported again at its uses and arguments
                     continue
                 params[pname] = (vtype, default if has_default else None, pkloc)

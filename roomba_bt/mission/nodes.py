@@ -79,7 +79,7 @@ class NodeParser:
         try:
             return self._node(ynode, loc, env)
         except Bad as bad:
-            self.ctx.error(bad.diagnostic)
+            self.ctx.report(bad)
             return None
         finally:
             self._depth -= 1
@@ -284,7 +284,7 @@ class NodeParser:
             try:
                 resolved = resolve(self.ctx, pvalue, pvloc, vtype, env, f"{name}.{pname}")
             except Bad as bad:
-                self.ctx.error(bad.diagnostic)
+                self.ctx.report(bad)
                 resolved = UNKNOWN
             sub_env[pname] = Bound(
                 vtype,

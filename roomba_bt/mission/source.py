@@ -111,16 +111,26 @@ def duplicate_keys(root: yaml.Node, display: str) -> list[Diagnostic]:
             path = join(path, f"[{part}]" if isinstance(part, int) else part)
         first = yamlsource.position(dup.first)[0]
         where = loc_of(dup.node, display, path)
-        found.append(where.at(f"duplicate key {str(dup.key)!r} (first at line {first})"))
+        found.append(where.at(f"duplicate key {_key_shown(dup.node)} (first at line {first})"))
     return found
+
+
+def _key_shown(node: yaml.Node) -> str:
+    """A key as a diagnostic names it: a text quoted, another value as written, said to
+    be no name (``1``, ``true`` and ``1.0`` are three different keys)."""
+    if isinstance(node, yaml.ScalarNode) and node.tag == yamlsource.STR:
+        return repr(node.value)
+    return f"{kind_of(node)} (not a name)"
 
 
 class Bad(Exception):
     """A value that cannot be used; carries its diagnostic."""
 
-    def __init__(self, diagnostic: Diagnostic) -> None:
+    def __init__(self, diagnostic: Diagnostic, more: tuple[Diagnostic, ...] = ()) -> None:
         super().__init__(str(diagnostic))
         self.diagnostic = diagnostic
+        #: others found with it, reported with it (``Context.report``)
+        self.more = more
 
 
 def check_tag(node: yaml.Node, loc: Loc) -> None:
@@ -154,10 +164,16 @@ def mapping(node: yaml.Node, loc: Loc, what: str) -> list[tuple[str, yaml.Node, 
     if not isinstance(node, yaml.MappingNode):
         raise Bad(loc.at(f"{what} must be a mapping (key: value), got {kind_of(node)}"))
     out = []
+    not_names = [
+        loc_of(key_node, loc.file, loc.path).at(
+            f"keys of {what} must be names, got {kind_of(key_node)}"
+        )
+        for _, key_node, _ in yamlsource.pairs(node, skip_duplicates=True)
+        if not isinstance(key_node, yaml.ScalarNode) or key_node.tag != yamlsource.STR
+    ]
+    if not_names:  # each on its own line: `1:`, `true:`, `1.0:` are three keys, three errors
+        raise Bad(not_names[0], tuple(not_names[1:]))
     for _, key_node, value_node in yamlsource.pairs(node, skip_duplicates=True):
-        if not isinstance(key_node, yaml.ScalarNode) or key_node.tag != yamlsource.STR:
-            key_loc = loc_of(key_node, loc.file, loc.path)
-            raise Bad(key_loc.at(f"keys of {what} must be names, got {kind_of(key_node)}"))
         key = str(key_node.value)
         key_loc = loc_of(key_node, loc.file, join(loc.path, key))
         out.append((key, value_node, key_loc, loc_of(value_node, loc.file, key_loc.path)))

@@ -109,6 +109,12 @@ class Context:
         if diagnostic not in self.diagnostics:
             self.diagnostics.append(diagnostic)
 
+    def report(self, bad: Bad) -> None:
+        """A :class:`Bad`'s diagnostic and those raised with it (each key of a mapping that
+        is no name, on its own line)."""
+        for diagnostic in (bad.diagnostic, *bad.more):
+            self.error(diagnostic)
+
 
 def parse_type_name(
     node: yaml.Node, loc: Loc, *, allow_mark: bool = False, also: tuple[str, ...] = ()

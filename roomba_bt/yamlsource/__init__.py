@@ -457,17 +457,19 @@ def pairs(
     node: yaml.MappingNode, *, skip_duplicates: bool = False
 ) -> Iterator[tuple[Any, yaml.Node, yaml.Node]]:
     """``(key, key node, value node)`` in written order; raises :class:`DuplicateKey` when a
-    key comes again (keys compared as Python values: ``1`` and ``1.0`` are one key), or with
-    ``skip_duplicates`` leaves it out (the first one stands): for a caller that reported
-    every duplicate beforehand (:func:`duplicate_keys`) and goes on to the other errors."""
+    key comes again (keys compared by type and value, :func:`_same`: ``1``, ``true`` and
+    ``1.0`` are three keys, ``1`` and ``0x1`` one), or with ``skip_duplicates`` leaves it
+    out (the first one stands): for a caller that reported every duplicate beforehand
+    (:func:`duplicate_keys`) and goes on to the other errors."""
     seen: dict[Any, yaml.Node] = {}
     for key_node, value_node in node.value:
         key = _key(key_node)
-        if key in seen:
+        same = _same(key)
+        if same in seen:
             if skip_duplicates:
                 continue
-            raise DuplicateKey(key, key_node, seen[key])
-        seen[key] = key_node
+            raise DuplicateKey(key, key_node, seen[same])
+        seen[same] = key_node
         yield key, key_node, value_node
 
 
@@ -478,10 +480,11 @@ def duplicate_keys(node: yaml.MappingNode) -> list[DuplicateKey]:
     found = []
     for key_node, _ in node.value:
         key = _key(key_node)
-        if key in seen:
-            found.append(DuplicateKey(key, key_node, seen[key]))
+        same = _same(key)
+        if same in seen:
+            found.append(DuplicateKey(key, key_node, seen[same]))
         else:
-            seen[key] = key_node
+            seen[same] = key_node
     return found
 
 
@@ -507,6 +510,12 @@ def every_duplicate_key(root: yaml.Node) -> list[DuplicateKey]:
                     pending.append((value, (*path, str(key_node.value))))
     found.sort(key=lambda dup: position(dup.node))
     return found
+
+
+def _same(key: Any) -> Any:
+    """What two keys must share to be one: a text itself, another value with its type
+    (Python's ``1 == True == 1.0`` made ``true:`` a duplicate of ``1:``)."""
+    return key if key.__class__ is str else (key.__class__, key)
 
 
 def _key(key_node: yaml.Node) -> Any:
@@ -542,6 +551,8 @@ def _data(node: yaml.Node, path: PathKey, marks: Marks, refuse: str, skip: bool)
             for key, key_node, value_node in pairs(node, skip_duplicates=skip):
                 if not is_plain(key_node):
                     scalar(key_node)  # raises: no safe constructor for its tag
+                if key in out:  # 1, true and 1.0: three keys, one to a dict: keep each
+                    key = str(key_node.value)
                 marks[(*path, str(key), KEY)] = position(key_node)
                 out[key] = _data(value_node, (*path, str(key)), marks, refuse, skip)
         except DuplicateKey as dup:

@@ -506,3 +506,13 @@ def test_a_nel_or_line_separator_in_a_world_is_refused_at_its_place() -> None:
         "w.yaml:1:9: control character U+0085 (NEL)",
         "w.yaml:2:9: line separator U+2028",
     ]
+
+
+def test_keys_one_true_and_one_point_oh_are_three_keys_of_a_world() -> None:
+    """Each was reported as a duplicate of ``1`` ("duplicate key 'True'")."""
+    found = problems("rooms: [[[0, 0], [3, 0], [3, 3], [0, 3]]]\n1: a\ntrue: b\n1.0: c\n")
+    assert [p.split(";")[0] for p in found] == [
+        "w.yaml:2:1: 1: found unknown key 1",
+        "w.yaml:3:1: true: found unknown key 'true'",
+        "w.yaml:4:1: 1.0: found unknown key '1.0'",
+    ]

@@ -46,11 +46,13 @@ def test_a_key_written_twice_names_both_places_and_its_path() -> None:
     assert yamlsource.position(dup.first) == (2, 3)
 
 
-def test_keys_compare_as_values_one_and_true_are_one_key() -> None:
+def test_keys_compare_by_type_and_value_one_and_true_are_two_keys() -> None:
+    """As Python values ``1 == True``: ``true:`` was reported a duplicate of ``1:``."""
     node = root("1: a\ntrue: b\n")
     assert isinstance(node, yaml.MappingNode)
+    assert [k for k, _, _ in yamlsource.pairs(node)] == [1, True]
     with pytest.raises(yamlsource.DuplicateKey):
-        list(yamlsource.pairs(node))
+        list(yamlsource.pairs(root("1: a\n0x1: b\n")))
 
 
 def test_a_tagged_collection_is_refused_with_the_callers_words_never_built() -> None:
@@ -332,11 +334,11 @@ def test_every_refusal_is_raised_at_once_in_the_files_order(
 
 def test_every_duplicate_of_a_mapping_is_found_and_can_be_left_out() -> None:
     """A reader that reports every duplicate first goes on with the first of each key."""
-    node = root("a: 1\nb: 2\na: 3\n1: x\n1.0: y\na: 4\n")
+    node = root("a: 1\nb: 2\na: 3\n1: x\n0x1: y\na: 4\n")
     assert isinstance(node, yaml.MappingNode)
     found = [(d.key, yamlsource.position(d.node), yamlsource.position(d.first))
              for d in yamlsource.duplicate_keys(node)]  # fmt: skip
-    assert found == [("a", (3, 1), (1, 1)), (1.0, (5, 1), (4, 1)), ("a", (6, 1), (1, 1))]
+    assert found == [("a", (3, 1), (1, 1)), (1, (5, 1), (4, 1)), ("a", (6, 1), (1, 1))]
     kept = [(k, v.value) for k, _, v in yamlsource.pairs(node, skip_duplicates=True)]
     assert kept == [("a", "1"), ("b", "2"), (1, "x")]
 
@@ -359,3 +361,10 @@ def test_a_line_break_editors_do_not_show_is_refused_at_its_own_place(
         yamlsource.compose(text, loader)
     assert yamlsource.error_position(caught.value) == where
     assert str(caught.value.problem).startswith(f"{named} is not allowed")
+
+
+def test_keys_are_compared_by_type_and_value() -> None:
+    """``1``, ``true`` and ``1.0`` are three keys (Python's ``1 == True == 1.0`` made the
+    second and third "duplicate key 'True'"); ``0x1`` is ``1`` written again."""
+    root = yamlsource.compose("1: a\ntrue: b\n1.0: c\n0x1: d\n")
+    assert [yamlsource.position(d.node) for d in yamlsource.every_duplicate_key(root)] == [(4, 1)]
