@@ -130,6 +130,8 @@ class Loader:
         self.permissions = permissions
         self._include_stack: list[Path] = []
         self._include_roots: tuple[Path, ...] = ()
+        #: each file included so far, with the include that first named it
+        self._included: dict[Path, Loc] = {}
         #: every file read: the mission file, then each include and plugin file as reached
         self.files: list[Path] = []
 
@@ -332,7 +334,24 @@ class Loader:
                     )
                 )
                 continue
+            if self._again(target, text, iloc):
+                continue
+            self._included[target] = iloc
             self._include(target, text, iloc)
+
+    def _again(self, target: Path, text: str, iloc: Loc) -> bool:
+        """``target`` was included already: read once. Named twice by one file, an error at
+        the second include (its subtrees were "defined twice" at a line of the included file,
+        the same line twice); reached again through another file (the mission and a library
+        of its both include the docking library), left out without a word."""
+        first = self._included.get(target)
+        if first is None:
+            return False
+        if first.file == iloc.file:
+            self.ctx.error(
+                iloc.at(f"included file {text!r} is included twice (first at line {first.line})")
+            )
+        return True
 
     def _include(self, target: Path, text: str, iloc: Loc) -> None:
         read = self._compose(target, target, (text, iloc))

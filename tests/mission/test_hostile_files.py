@@ -97,3 +97,17 @@ def test_an_include_that_cannot_be_opened_is_named_at_the_include(
     assert (problem.line, problem.column) == (2, 11)
     assert problem.file.endswith("m.yaml")
     assert problem.message == "cannot read included file 'z.yaml': Permission denied"
+
+
+def test_a_library_reached_through_two_files_is_read_once(tmp_path: Path) -> None:
+    """The mission and a library of its both include the docking library: read once (its
+    subtrees were "defined twice" at a line of the installed package)."""
+    (tmp_path / "mine.yaml").write_text(
+        "include: [roomba-bt:lib/docking.yaml]\nsubtrees: {home: {tree: {subtree: {id: dock}}}}\n"
+    )
+    mission = tmp_path / "m.yaml"
+    mission.write_text(
+        "include: [roomba-bt:lib/docking.yaml, mine.yaml]\n"
+        "tree: {sequence: [{mode: safe}, {subtree: home}]}\n"
+    )
+    assert compile_mission(mission)[1] == []
