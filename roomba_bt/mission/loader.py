@@ -327,12 +327,7 @@ class Loader:
                 self.ctx.error(iloc.at(f"cannot read included file {text!r}: {unreadable}"))
                 continue
             if not target.is_file():
-                self.ctx.error(
-                    iloc.at(
-                        f"included file {text!r} not found (paths are relative to the "
-                        f"including file; the shipped docking library is {DOCKING_LIBRARY})"
-                    )
-                )
+                self.ctx.error(iloc.at(_not_a_file(path, text, target)))
                 continue
             if self._again(target, text, iloc):
                 continue
@@ -359,6 +354,12 @@ class Loader:
             return
         root, root_loc = read
         if not _is_mission(root, _INCLUDED_KEYS):
+            if _is_mission(root, ("mission", "tree")):  # a whole mission, not a library
+                self.ctx.error(iloc.at(
+                    f"included file {text!r} is a mission (it has mission: or tree:), not a "
+                    f"library: an included file may hold only {', '.join(_INCLUDED_KEYS)}"
+                ))  # fmt: skip
+                return
             self.ctx.error(iloc.at(_not_a_mission(f"included file {text!r}", _INCLUDED_KEYS)))
             return
         try:
@@ -563,6 +564,33 @@ def key_decl(
         if "doc" in fields:
             doc = scalar_text(fields["doc"][0], fields["doc"][2], "doc")
     ctx.keys[name] = KeyDecl(name, vtype, key_loc, initial, has_initial, doc)
+
+
+def _not_a_file(path: Path, text: str, target: Path) -> str:
+    """What an include names when it is no file: a directory, or nothing, with the file it
+    most likely meant (``lib\\b.yaml`` written the Windows way, ``lib/B.yaml`` in the wrong
+    case: both found on Windows, not here)."""
+    if target.is_dir():
+        return f"included file {text!r} is a directory, not a file: name a .yaml file in it"
+    slashed = text.replace("\\", "/")
+    if slashed != text and (path.parent / slashed).is_file():
+        return (
+            f"included file {text!r} not found; did you mean {slashed!r}? (paths are written "
+            "with /, on Windows too)"
+        )
+    if target.parent.is_dir():
+        same = sorted(p.name for p in target.parent.iterdir()
+                      if p.name.lower() == target.name.lower() and p.is_file())  # fmt: skip
+        if same:
+            meant = text[: len(text) - len(target.name)] + same[0]
+            return (
+                f"included file {text!r} not found; did you mean {meant!r}? (names are "
+                "case-sensitive)"
+            )
+    return (
+        f"included file {text!r} not found (paths are relative to the including file; "
+        f"the shipped docking library is {DOCKING_LIBRARY})"
+    )
 
 
 def _unreadable(target: Path) -> str | None:
