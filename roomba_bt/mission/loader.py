@@ -58,6 +58,7 @@ from roomba_bt.mission.source import (
     Bad,
     Loc,
     compose,
+    kind_of,
     loc_of,
     mapping,
     plain,
@@ -516,11 +517,7 @@ def param_decl(
     if plain(tnode, tloc) == "enum":
         if "choices" not in fields:
             raise Bad(tloc.at(f"parameter {name!r} of type enum needs choices: [...]"))
-        cnode, _, cloc = fields["choices"]
-        choices = plain(cnode, cloc)
-        if not isinstance(choices, list) or not all(isinstance(c, str) for c in choices):
-            raise Bad(cloc.at("choices must be a list of words"))
-        vtype = enum(*choices)
+        vtype = enum(*_choices(*fields["choices"][::2]))
     else:
         vtype = parse_type_name(tnode, tloc, also=("enum",))
     doc = ""
@@ -531,6 +528,28 @@ def param_decl(
     dnode, _, dloc = fields["default"]
     default = resolve(ctx, dnode, dloc, vtype, {}, f"parameter {name}")
     return vtype, default, True, doc
+
+
+def _choices(node: yaml.Node, loc: Loc) -> list[str]:
+    """An enum parameter's ``choices``: a list of different words, at least one. Raises
+    :class:`Bad` naming what was found (``no`` is YAML 1.1's false: say to quote it)."""
+    items = sequence(node, loc, "choices")
+    if not items:
+        raise Bad(loc.at("choices is an empty list: list the words the parameter may take"))
+    words: list[str] = []
+    for item, iloc in items:
+        value = plain(item, iloc)
+        if isinstance(value, bool):
+            raise Bad(iloc.at(
+                f"choices must be a list of words; {item.value!r} was read as the boolean "
+                f"{str(value).lower()} (YAML 1.1): quote it, '{item.value}'"
+            ))  # fmt: skip
+        if not isinstance(value, str):
+            raise Bad(iloc.at(f"choices must be a list of words, got {kind_of(item)}"))
+        if value in words:
+            raise Bad(iloc.at(f"choice {value!r} is listed twice"))
+        words.append(value)
+    return words
 
 
 def key_decl(

@@ -117,12 +117,8 @@ class NodeParser:
         words = [(k, v, kl, vl) for k, v, kl, vl in items if k not in MODIFIERS]
         mods = {k: (v, kl, vl) for k, v, kl, vl in items if k in MODIFIERS}
         if not words:
-            raise Bad(
-                loc.at(
-                    f"a node needs a kind (such as sequence, drive, bump); found only "
-                    f"{', '.join(mods)}"
-                )
-            )
+            found = f"only {', '.join(mods)}" if mods else "an empty mapping"
+            raise Bad(loc.at(f"a node needs a kind (such as sequence, drive, bump); found {found}"))
         word, value, key_loc, value_loc = self._kind(words)
         stray = len(words) > 1  # unknown words beside it: reported, the node is not built
         built = self._word(word, Written(value, key_loc, value_loc, env))
