@@ -70,6 +70,11 @@ class BareNumber(UnitError):
 
     def _message(self, lo: float | None, hi: float | None) -> str:
         dimension, value = self.dimension, self.value
+        if not math.isfinite(value):  # .inf, .nan: no unit makes one of them a quantity
+            return (
+                f"expected {with_article(dimension)} with a unit such as {EXAMPLES[dimension]}, "
+                f"got {quoted(value)}: it must be a finite number"
+            )
         unit = CANONICAL[dimension]
         units = UNITS[dimension]
         for candidate in (unit, *units):  # the canonical unit first, then the dimension's order

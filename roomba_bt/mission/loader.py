@@ -526,6 +526,13 @@ def param_decl(
     if "default" not in fields:
         return vtype, None, False, doc
     dnode, _, dloc = fields["default"]
+    used = SUBSTITUTION.findall(str(dnode.value)) if isinstance(dnode, yaml.ScalarNode) else []
+    if used:  # no parameter is known where defaults are read: not "unknown parameter ${a}"
+        whom = "itself" if used[0] == name else "a parameter"
+        raise Bad(dloc.at(
+            f"parameter {name}: a default cannot refer to {whom} (${{{used[0]}}}): write its "
+            "value; -p sets it on the command line"
+        ))  # fmt: skip
     default = resolve(ctx, dnode, dloc, vtype, {}, f"parameter {name}")
     return vtype, default, True, doc
 

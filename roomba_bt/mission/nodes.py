@@ -19,6 +19,7 @@ from roomba_bt.mission.ir import Node
 from roomba_bt.mission.leaves import parse_leaf
 from roomba_bt.mission.source import Bad, Loc, kind_of, mapping, plain, scalar_text
 from roomba_bt.mission.values import (
+    SUBSTITUTION,
     UNKNOWN,
     Bound,
     Context,
@@ -234,6 +235,15 @@ class NodeParser:
             name = scalar_text(value, loc, "subtree")
             id_loc = loc
         sub = self.ctx.subtrees.get(name)
+        used = SUBSTITUTION.findall(name)
+        if sub is None and used:  # not "unknown subtree '${x}'"
+            if used[0] not in env:
+                hint = closest(used[0], list(env))
+                raise Bad(id_loc.at(f"subtree id: unknown parameter ${{{used[0]}}}{hint}"))
+            raise Bad(id_loc.at(
+                f"subtree id: a subtree's name is written as it is; ${{{used[0]}}} is not "
+                "replaced there (name the subtree)"
+            ))  # fmt: skip
         if sub is None:
             raise Bad(
                 id_loc.at(f"unknown subtree {name!r}{closest(name, list(self.ctx.subtrees))}")
