@@ -15,6 +15,8 @@ shipped missions' directory.
 
 from __future__ import annotations
 
+import errno
+import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -94,6 +96,12 @@ def in_shipped_library(target: Path) -> bool:
 def find_mission(text: str) -> ShippedLookup:
     """A mission argument as the command line takes it: an existing file; else a shipped
     mission's name (``dock``, ``dock.yaml`` or ``roomba-bt:dock.yaml``)."""
+    if not text.strip():  # Path("") is the current folder: "a directory" said nothing useful
+        return ShippedLookup(None, f"{text!r}: an empty path; give a mission file or a shipped "
+                             "mission's name (`roomba-bt missions` lists them)")  # fmt: skip
+    if text == "-":
+        return ShippedLookup(None, "reading a mission from standard input is not supported: "
+                             "give a file")  # fmt: skip
     given = Path(text)
     try:
         return _find_mission(text, given)
@@ -116,8 +124,13 @@ def _find_mission(text: str, given: Path) -> ShippedLookup:
         return ShippedLookup(None, f"{text}: a directory, not a mission file (a .yaml file)")
     if given.exists():  # a device, a pipe: nothing a mission is read from
         return ShippedLookup(None, f"{text}: not a regular file; a mission is a .yaml file")
+    if given.is_symlink():
+        return ShippedLookup(None, f"{text}: {_broken_link(given)}")
     base = Path(stem).name
-    if base in shipped:  # missions/dock.yaml from a checkout's docs, in an empty folder
+    here = Path(f"{text}.yaml")
+    if "/" not in text and not text.endswith(".yaml") and here.is_file():
+        hint = f"; did you mean ./{here}?"
+    elif base in shipped:  # missions/dock.yaml from a checkout's docs, in an empty folder
         hint = f"; the shipped mission {base!r} is named alone: {base}"
     else:
         hint = closest(base, list(shipped))
@@ -126,6 +139,16 @@ def _find_mission(text: str, given: Path) -> ShippedLookup:
         f"{text}: no such mission file, and no shipped mission of that name "
         f"(shipped: {names}; `roomba-bt missions` lists them){hint}",
     )
+
+
+def _broken_link(link: Path) -> str:
+    """What a symbolic link that leads to no file is: a loop, or a link to nothing."""
+    try:
+        link.stat()
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return "a symbolic link loop (it leads back to itself), not a mission file"
+    return f"a broken symbolic link (to {os.readlink(link)!r}, which does not exist)"
 
 
 _SUBSTITUTION = re.compile(r"\$\{(\w+)\}")

@@ -111,3 +111,28 @@ def test_a_library_reached_through_two_files_is_read_once(tmp_path: Path) -> Non
         "tree: {sequence: [{mode: safe}, {subtree: home}]}\n"
     )
     assert compile_mission(mission)[1] == []
+
+
+def test_command_line_paths_that_are_no_file_say_what_they_are(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
+) -> None:
+    """An empty path was ": a directory"; a broken link or a link loop "no such mission
+    file, and no shipped mission of that name"; ``ok`` beside ok.yaml suggested "dock"."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "ok.yaml").write_text("tree: {wait: 1s}\n")
+    (tmp_path / "broken.yaml").symlink_to("nothere.yaml")
+    (tmp_path / "loop1.yaml").symlink_to("loop2.yaml")
+    (tmp_path / "loop2.yaml").symlink_to("loop1.yaml")
+    assert main(["validate", "", "-", "broken.yaml", "loop1.yaml", "ok"]) == 2
+    out, err = capsys.readouterr()
+    lines = out.splitlines()
+    assert lines[:4] == [
+        "'': an empty path; give a mission file or a shipped mission's name "
+        "(`roomba-bt missions` lists them)",
+        "reading a mission from standard input is not supported: give a file",
+        "broken.yaml: a broken symbolic link (to 'nothere.yaml', which does not exist)",
+        "loop1.yaml: a symbolic link loop (it leads back to itself), not a mission file",
+    ]
+    assert lines[4].startswith("ok: no such mission file")
+    assert lines[4].endswith("; did you mean ./ok.yaml?")
+    assert "Traceback" not in out + err
