@@ -511,6 +511,9 @@ def _coverage(simulator: Simulator, area: str) -> Coverage | None:
             curve.append((round(t, 3), cleaned / total if total else 0.0))
     by_area = swept.coverage_by_area()
     final = by_area.get(area, 0.0) if index is not None else swept.coverage()
+    end = round(simulator.time, 3)
+    if curve and curve[-1][0] < end:  # the last sample: an episode that ended between two
+        curve.append((end, final))  # read its sample before the end at any later time
     return Coverage(
         area=area,
         final=final,

@@ -86,3 +86,22 @@ def test_areas_an_episode_could_not_reach_are_said_not_dropped(tmp_path: Path) -
     assert summary.to_dict()["reached"] == {"living-room": 2, "bedroom": 2, "kitchen": 3}
     alike = summarize_coverage([whole, whole])
     assert alike is not None and alike.partial == 0 and "reached it" not in str(alike)
+
+
+def test_an_episode_that_ended_between_samples_reads_its_final_coverage_later(
+    tmp_path: Path,
+) -> None:
+    """The curve is sampled every 30 s: an episode that ended at 40 s read, at any later
+    report time, its 30-s sample (the last 10 s of cleaning left out of "at 20 min" for a
+    run whose map said the floor was done early)."""
+    mission = tmp_path / "cover.yaml"
+    mission.write_text(
+        "tree:\n  sequence:\n    - mode: full\n"
+        "    - motors: {main_brush: true, side_brush: true, vacuum: true}\n"
+        "    - cover: {}\n"
+    )
+    result = run_episode(EpisodeSpec(str(mission), "empty-room", seed=1, timeout_s=45))
+    coverage = result.coverage
+    assert coverage is not None and 40.0 <= result.time_s < 60.0, result.reason
+    assert coverage.at(30.0) < coverage.final
+    assert coverage.at(60.0) == coverage.at(1200.0) == coverage.final
