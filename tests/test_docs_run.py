@@ -5,7 +5,8 @@ block that starts with one of :data:`PROGRAMS` (a leading ``$ `` and a trailing 
 are dropped, ``\\`` continues a line, ``&&`` chains); other lines of plain blocks are output,
 diagrams or byte layouts. A *mission* is a ``yaml`` block with a ``tree:`` or ``subtrees:``
 key; it is written to ``<its mission name>.yaml`` (``mission:``, else ``doc-N``) in the
-directory the commands run in, so ``roomba-bt run square.yaml`` runs the block above it. A
+directory the commands run in, so ``roomba-bt run square.yaml`` runs the block above it; a
+*world* is a ``yaml`` block with a ``rooms:`` key, written to ``<its name>.yaml``. A
 block that names ``plugins:`` by a path relative to itself is the text of a shipped mission
 (``missions/examples/custom_condition.yaml``): it is written over a copy of that file, so
 its paths resolve where the docs say, and is validated with ``--allow-plugin-files`` as the
@@ -141,6 +142,19 @@ def missions() -> list[tuple[str, str, str]]:
     return found
 
 
+def worlds() -> list[tuple[str, str, str]]:
+    """(where, file name, text) of every world block: a ``yaml`` block with a ``rooms:``
+    key, written to ``<its name>.yaml`` (``docs/simulator.md``: a world of your own)."""
+    found = []
+    for block in blocks():
+        if block.lang != "yaml" or not re.search(r"^rooms:", block.text, re.M):
+            continue
+        name = yaml.safe_load(block.text).get("name")
+        assert name, f"{block.doc}:{block.line}: a world block needs a name: to be written"
+        found.append((f"{block.doc}:{block.line}", f"{name}.yaml", block.text))
+    return found
+
+
 def make_run_command() -> str:
     """What ``make run`` runs: the recipe's command with its RUN_ARGS."""
     makefile = (ROOT / "Makefile").read_text()
@@ -188,6 +202,7 @@ def fast_variant(command: str) -> list[str]:
 
 COMMANDS = commands()
 MISSIONS = missions()
+WORLDS = worlds()
 
 
 @pytest.fixture
@@ -195,7 +210,7 @@ def workdir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
     shutil.copytree(ROOT / "missions", tmp_path / "missions")
     for name in ("plugins", "worlds"):
         (tmp_path / name).symlink_to(ROOT / name)
-    for _, file, text in MISSIONS:
+    for _, file, text in (*MISSIONS, *WORLDS):
         (tmp_path / file).write_text(text)
     monkeypatch.chdir(tmp_path)
     return tmp_path
@@ -228,6 +243,13 @@ def test_every_mission_in_the_docs_validates(
     # A mission that names plugin files is validated as the docs show it: with the permission.
     allow = ["--allow-plugin-files"] if (yaml.safe_load(text) or {}).get("plugins") else []
     assert main(["validate", file, *allow]) == 0, f"{where}: {capsys.readouterr()}"
+
+
+@pytest.mark.parametrize(("where", "file", "text"), WORLDS, ids=[w[0] for w in WORLDS])
+def test_every_world_in_the_docs_loads(where: str, file: str, text: str) -> None:
+    from roomba_bt.sim import parse_world
+
+    parse_world(text, file)  # WorldError (its problems) if the docs' world does not load
 
 
 RUN = [(w, c) for w, c in COMMANDS if c not in NOT_RUN and not c.startswith("make test")]

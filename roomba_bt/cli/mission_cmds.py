@@ -68,17 +68,23 @@ def register(sub: Any) -> None:
     show.add_argument("--svg", metavar="OUT.svg", type=output_with_suffix(".svg"),
                       help="also write the tree as SVG (needs Graphviz's dot program)")  # fmt: skip
 
-    add_command(
+    missions = add_command(
         sub,
         "missions",
         missions_command,
-        """list the shipped missions with their parameters
+        """list the shipped missions with their parameters, or print one
 
         List the missions shipped with roomba-bt (run one by name: roomba-bt run dock), each with
         its description and parameters (type, default, doc), and the shipped library a mission can
-        include (include: [roomba-bt:lib/docking.yaml]).
+        include (include: [roomba-bt:lib/docking.yaml]). With NAME, print that mission's file
+        (or a library file's, lib/docking.yaml) as shipped, its comments included: a start for
+        one of your own.
         """,
     )
+    missions.add_argument(
+        "name", nargs="?", metavar="NAME",
+        help="print this shipped mission (dock) or library file (lib/docking.yaml)",
+    )  # fmt: skip
 
     behaviours = add_command(
         sub,
@@ -225,8 +231,29 @@ def show_command(args: argparse.Namespace) -> int:
 
 
 def missions_command(args: argparse.Namespace) -> int:
-    from roomba_bt.mission.shipped import describe_shipped, shipped_library_files
+    from roomba_bt.mission.shipped import (
+        describe_shipped,
+        shipped_file,
+        shipped_library_files,
+        shipped_missions,
+    )
 
+    if args.name is not None:
+        name = args.name.removeprefix("roomba-bt:").removesuffix(".yaml")
+        path = shipped_missions().get(name) or shipped_file(f"roomba-bt:{name}.yaml")
+        if path is None:
+            from roomba_bt.behaviours.units import closest
+
+            known = [*shipped_missions(), *(f.removeprefix("roomba-bt:").removesuffix(".yaml")
+                                            for f in shipped_library_files())]  # fmt: skip
+            print(
+                f"roomba-bt missions: no shipped mission or library file {args.name!r}"
+                f"{closest(name, known)}; shipped: {', '.join(known)}",
+                file=sys.stderr,
+            )
+            return ExitCode.INVALID
+        sys.stdout.write(path.read_text(encoding="utf-8"))
+        return ExitCode.OK
     for entry in describe_shipped():
         print(f"{entry.name}  {entry.description}")
         for param in entry.parameters:

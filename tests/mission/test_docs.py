@@ -47,3 +47,17 @@ def test_every_option_of_every_word_is_documented_in_its_row() -> None:
         if kind.shape is Shape.CHILDREN:
             for option in kind.options:
                 assert f"  {option.name}:" in DOC, f"{kind.word}.{option.name}"
+
+
+def test_every_sensor_packet_a_comparison_takes_is_listed_with_its_range() -> None:
+    """``sensor: cliff_left == 0`` in a shipped mission used a name no page listed: the
+    table under Comparisons has every packet, its range on each model."""
+    from roomba_bt.oi.packets import PACKETS
+    from roomba_bt.oi.profiles import PROFILES
+
+    table = DOC.split("### Comparisons")[1].split("\n## ")[0]
+    for pid, spec in PACKETS.items():
+        [row] = [r for r in table.splitlines() if r.startswith(f"| {pid} | `{spec.name}` |")]
+        for profile in PROFILES.values():
+            bounds = profile.packet(pid)
+            assert f"{bounds.minimum}..{bounds.maximum}" in row, (spec.name, profile.name)
