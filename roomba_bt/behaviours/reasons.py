@@ -44,6 +44,13 @@ def failure_reason(root: Behaviour) -> str:
         elif node.feedback_message and not isinstance(node, _FLIPS):
             with_message = node
     best = leaf or with_message or node
+    if best is node and isinstance(node, py_trees.decorators.Inverter):
+        # an inverter fails because its condition held: that condition is the cause
+        # (``while: {inverter: {cliff: any}}`` said only "inverter")
+        held = _deepest_success(node)
+        if held is not None:  # a name the mission gave it says what it means: kept
+            said = f"{held.name} held"
+            return said if node.name == "inverter" else f"{node.name} ({said})"
     if best is node and isinstance(node, py_trees.decorators.SuccessIsFailure):
         # a forced failure ("back away, then fail"): what held just before it is the cause
         # (the patrol's cliff that ended the drive before the back-off)
@@ -52,6 +59,17 @@ def failure_reason(root: Behaviour) -> str:
             return held
     message = "" if isinstance(best, _FLIPS) else best.feedback_message
     return f"{best.name}: {message}" if message else best.name
+
+
+def _deepest_success(node: Behaviour) -> Behaviour | None:
+    """The leaf whose success decided ``node``'s child's: the last succeeded child, down."""
+    success = py_trees.common.Status.SUCCESS
+    while node.children:
+        held = [c for c in node.children if c.status == success]
+        if not held:
+            return None
+        node = held[-1]
+    return node
 
 
 def _held_before(path: list[Behaviour]) -> str | None:

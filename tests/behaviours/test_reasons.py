@@ -59,7 +59,8 @@ def test_a_flipped_status_is_named_without_its_canned_message() -> None:
     root = py_trees.composites.Sequence("mission", memory=True, children=[inverter])
     root.tick_once()
     assert root.status == FAILURE
-    assert failure_reason(root) == "nothing may be ahead"
+    # its name, and the condition that held under it
+    assert failure_reason(root) == "nothing may be ahead (wall held)"
 
 
 def test_a_forced_failure_after_a_condition_names_the_condition() -> None:
