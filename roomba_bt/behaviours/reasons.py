@@ -47,9 +47,9 @@ def failure_reason(root: Behaviour) -> str:
     if best is node and isinstance(node, py_trees.decorators.Inverter):
         # an inverter fails because its condition held: that condition is the cause
         # (``while: {inverter: {cliff: any}}`` said only "inverter")
-        held = _deepest_success(node)
-        if held is not None:  # a name the mission gave it says what it means: kept
-            said = f"{held.name} held"
+        condition = _deepest_success(node)
+        if condition is not None:  # a name the mission gave it says what it means: kept
+            said = f"{condition.name} held"
             return said if node.name == "inverter" else f"{node.name} ({said})"
     if best is node and isinstance(node, py_trees.decorators.SuccessIsFailure):
         # a forced failure ("back away, then fail"): what held just before it is the cause

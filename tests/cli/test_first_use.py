@@ -284,6 +284,15 @@ def test_eval_names_the_stage_that_was_running_when_time_ran_out(
         "dock_approach"
     )
     assert failure_stage("find_dock(speed=1): lost the beam") == "find_dock"
+    # a wait running beside an action is a parallel's timer: the action is named (clean's
+    # "clean for the duration" said "ran out in wait" while the robot was cleaning)
+    path.write_text(
+        "tree:\n  sequence:\n    - mode: safe\n    - parallel:\n        policy: one\n"
+        "        children:\n          - wait: 10s\n          - drive: {velocity: 50 mm/s}\n"
+    )
+    main(["eval", str(path), "--runs", "1", "--jobs", "1", "--timeout", "2s"])
+    out = capsys.readouterr().out
+    assert "--timeout 2 s of mission time ran out in drive" in out, out
 
 
 def test_a_robot_that_never_answers_is_no_connection_and_doctor_is_named(
