@@ -17,6 +17,7 @@ from roomba_bt.behaviours.units import STR, closest
 from roomba_bt.mission.control import parse_composite, parse_decorator
 from roomba_bt.mission.ir import Node
 from roomba_bt.mission.leaves import parse_leaf
+from roomba_bt.mission.shipped import library_defining
 from roomba_bt.mission.source import Bad, Loc, kind_of, mapping, plain, scalar_text
 from roomba_bt.mission.values import (
     SUBSTITUTION,
@@ -245,9 +246,11 @@ class NodeParser:
                 "replaced there (name the subtree)"
             ))  # fmt: skip
         if sub is None:
-            raise Bad(
-                id_loc.at(f"unknown subtree {name!r}{closest(name, list(self.ctx.subtrees))}")
-            )
+            hint = closest(name, list(self.ctx.subtrees))
+            library = None if hint else library_defining(name)
+            if library is not None:  # the shipped docking subtree, used without its include
+                hint = f" (the shipped {library} defines it: include: [{library}])"
+            raise Bad(id_loc.at(f"unknown subtree {name!r}{hint}"))
         if name in self._use_stack:
             chain = self._use_stack[self._use_stack.index(name) :]
             raise Bad(id_loc.at(f"recursive subtree: {' -> '.join([*chain, name])}"))

@@ -77,6 +77,23 @@ def shipped_library_files() -> tuple[str, ...]:
     )
 
 
+def library_defining(subtree: str) -> str | None:
+    """The include name of the shipped library file that defines ``subtree`` (``dock`` ->
+    ``roomba-bt:lib/docking.yaml``), or None: what an unknown subtree's error suggests."""
+    for name in shipped_library_files():
+        path = shipped_file(name)
+        if path is None:
+            continue
+        try:
+            data = yaml.safe_load(path.read_text(encoding="utf-8")) or {}
+        except (OSError, yaml.YAMLError):
+            continue
+        subtrees = data.get("subtrees") if isinstance(data, dict) else None
+        if isinstance(subtrees, dict) and subtree in subtrees:
+            return name
+    return None
+
+
 def shipped_file(text: str) -> Path | None:
     """The file a ``roomba-bt:PATH`` name designates, or None if ``text`` is no such name or
     the file does not exist (a name may not climb out of the shipped directory)."""
