@@ -61,34 +61,47 @@ assert tuple(_RADIUS_WORDS) == RADIUS_WORDS
 
 
 def _parse_notes(value: object) -> tuple[tuple[int, int], ...]:
-    """``["C4 250ms", "rest 125ms", "A#4 1s"]`` -> ((60, 16), (0, 8), (70, 64))."""
+    """``["C4 250ms", "rest 125ms", "A#4 1s"]`` -> ((60, 16), (0, 8), (70, 64)). Every bad
+    note is said, each with its place in the list (the position is the list's)."""
     if not isinstance(value, list) or not value:
         raise UnitError('expected a list of notes such as ["C4 250ms", "rest 125ms"]')
     notes: list[tuple[int, int]] = []
+    problems: list[str] = []
     for index, item in enumerate(value, 1):
         at = f"note {index} of {len(value)}: " if len(value) > 1 else ""
-        parts = item.split() if isinstance(item, str) else []
-        if len(parts) != 2:
-            raise UnitError(f'{at}expected a note such as "C4 250ms" or "rest 125ms", got {item!r}')
         try:
-            number = note_number(parts[0])
-        except ValueError:
-            raise UnitError(f"{at}unknown note {parts[0]!r}: write A4, C#5 or rest") from None
-        if number and number not in PLAYABLE_NOTES:
-            lo, hi = note_name(PLAYABLE_NOTES[0]), note_name(PLAYABLE_NOTES[-1])
-            raise UnitError(
-                f"{at}note {parts[0]} ({number}) is outside the notes the robot plays, {lo} to "
-                f"{hi}: it would sound as a rest (write rest for one)"
-            )
-        sixty_fourths = round(parse_quantity("duration", parts[1]) * 64)
-        if not 1 <= sixty_fourths <= 255:
-            raise UnitError(
-                f"{at}note duration {parts[1]!r} is out of range: 16ms..3.98s (1..255 of 1/64 s)"
-            )
-        notes.append((number, sixty_fourths))
+            notes.append(_note(item))
+        except UnitError as exc:
+            problems.append(f"{at}{exc}")
+    if problems:
+        raise UnitError("; ".join(problems))
     if len(notes) > _SONG_LENGTH.maximum:
         raise UnitError(f"a song has at most {_SONG_LENGTH.maximum} notes, got {len(notes)}")
     return tuple(notes)
+
+
+def _note(item: object) -> tuple[int, int]:
+    """One note, ``"C4 250ms"`` -> (60, 16): a name the robot plays (or ``rest``) and a
+    duration in 1/64 s."""
+    parts = item.split() if isinstance(item, str) else []
+    if len(parts) != 2:
+        raise UnitError(f'expected a note such as "C4 250ms" or "rest 125ms", got {item!r}')
+    try:
+        number = note_number(parts[0])
+    except ValueError:
+        raise UnitError(f"unknown note {parts[0]!r}: write A4, C#5 or rest") from None
+    if number and number not in PLAYABLE_NOTES:
+        lo, hi = note_name(PLAYABLE_NOTES[0]), note_name(PLAYABLE_NOTES[-1])
+        raise UnitError(
+            f"note {parts[0]} ({number}) is outside the notes the robot plays, {lo} to "
+            f"{hi}: it would sound as a rest (write rest for one)"
+        )
+    sixty_fourths = round(parse_quantity("duration", parts[1]) * 64)
+    if not 1 <= sixty_fourths <= 255:
+        raise UnitError(
+            f"note duration {parts[1]!r} is out of range: 16ms..3.98s (1..255 of 1/64 s)"
+        )
+    return number, sixty_fourths
 
 
 NOTES = ValueType(
