@@ -302,7 +302,7 @@ def _simulator(args: argparse.Namespace, profile: RobotProfile) -> Simulator | s
     from roomba_bt.sim import WorldError
 
     try:
-        return make_simulator(
+        simulator = make_simulator(
             args.world,
             profile,
             args.seed,
@@ -313,6 +313,16 @@ def _simulator(args: argparse.Namespace, profile: RobotProfile) -> Simulator | s
         )
     except WorldError as exc:
         return str(exc)
+    world = simulator.world
+    if args.random_start and world.start_region is None:  # eval says it too
+        x, y = world.start.x / 1000.0, world.start.y / 1000.0
+        print(
+            f"roomba-bt run: warning: --random-start: world {world.name!r} has no "
+            f"robot.start_region: the robot starts at its start pose ({x:.2f}, {y:.2f}) m "
+            "whatever the seed",
+            file=sys.stderr,
+        )
+    return simulator
 
 
 def _live_monitor(

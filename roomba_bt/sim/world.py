@@ -27,6 +27,7 @@ traceback to a user: it raises :class:`WorldError`, which the CLI prints.
 
 from __future__ import annotations
 
+import contextlib
 import difflib
 import math
 import os
@@ -966,9 +967,24 @@ def _robot(c: _Checker, top: dict[str, Any]) -> tuple[Pose | None, StartRegion |
             c.error(("robot", "start_region", "near_dock"), "no dock in this world",
                     "near_dock only in a world with a dock")  # fmt: skip
     if "battery" in robot:
-        level = c.number(robot["battery"], ("robot", "battery"), 0.0, 1.0, "(fraction)")
+        given = robot["battery"]
+        level: float | None = None
+        percent = _percent(given)
+        if percent is not None and 0.0 <= percent <= 1.0:  # 80%, as --battery takes it
+            level = percent
+        else:
+            level = c.number(given, ("robot", "battery"), 0.0, 1.0, "(or a percent, 0%..100%)")
         battery = 0.8 if level is None else level
     return start, region, battery
+
+
+def _percent(value: object) -> float | None:
+    """``"80%"`` -> 0.8; None for anything else."""
+    if isinstance(value, str) and value.strip().endswith("%"):
+        with contextlib.suppress(ValueError):
+            number = float(value.strip()[:-1]) / 100.0
+            return number if math.isfinite(number) else None
+    return None
 
 
 def _default_start(dock: DockSpec | None, rooms: tuple[Polygon, ...]) -> Pose:

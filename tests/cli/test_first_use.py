@@ -326,3 +326,17 @@ def test_a_world_file_given_as_a_mission_is_said_to_be_a_world(
     said = "".join(capsys.readouterr())
     assert said.count("\n") == 1, said
     assert "this file is a world (rooms:, no tree:), not a mission: run a mission on it" in said
+
+
+def test_random_start_in_a_world_without_a_start_region_is_said(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``run --random-start --seed 5`` in a world with no start region ran from the same
+    pose whatever the seed, without a word (eval warns of the same)."""
+    world = tmp_path / "plain.yaml"
+    world.write_text("rooms: [[[0, 0], [4, 0], [4, 3], [0, 3]]]\nrobot: {start: {at: [1, 1]}}\n")
+    argv = ["run", "bump-and-turn", "-p", "duration=1s", "--fast", "--display", "none"]
+    assert main([*argv, "--world", str(world), "--random-start", "--seed", "5"]) == 0
+    assert "--random-start: world 'plain' has no robot.start_region" in capsys.readouterr().err
+    assert main([*argv, "--world", "apartment", "--random-start", "--seed", "5"]) == 0
+    assert "start_region" not in capsys.readouterr().err

@@ -516,3 +516,14 @@ def test_keys_one_true_and_one_point_oh_are_three_keys_of_a_world() -> None:
         "w.yaml:3:1: true: found unknown key 'true'",
         "w.yaml:4:1: 1.0: found unknown key '1.0'",
     ]
+
+
+def test_a_world_s_battery_may_be_a_percent_as_the_command_line_s() -> None:
+    """``--battery 80%`` was taken and ``robot: {battery: 80%}`` refused."""
+    rooms = "rooms: [[[0, 0], [4, 0], [4, 3], [0, 3]]]\n"
+    assert parse_world(rooms + "robot: {battery: 80%}\n", "w.yaml").battery == 0.8
+    [found] = problems(rooms + "robot: {battery: 120%}\n")
+    assert found == (
+        "w.yaml:2:18: robot.battery: found '120%'; allowed: a number in 0..1 (or a percent, "
+        "0%..100%)"
+    )
