@@ -33,6 +33,7 @@ import math
 import os
 import pathlib
 import random
+import re
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
@@ -806,9 +807,13 @@ def _build_world(c: _Checker, data: object, source: str) -> World:
     if region is not None and region.area is not None and region.area not in names:
         allowed = f"one of the world's areas ({', '.join(names) or 'none'})"
         c.error(("robot", "start_region", "area"), repr(region.area), allowed)
-    if c.problems:
-        raise WorldError(c.problems)
+    # Where the rooms stand, what else is wrong is checked for its place too (every problem
+    # at once: a shape outside every room was said only once the rest was mended); a check
+    # that leans on a part in error is left for the next reading (no error of its own).
+    broken = {re.split(r"[.\[]", p.field, maxsplit=1)[0] for p in c.problems}
     room_polys = tuple(r for r in rooms if r is not None)
+    if c.problems and ("rooms" in broken or "(document)" in broken or not room_polys):
+        raise WorldError(c.problems)
     world = World(
         name=name,
         rooms=room_polys,
@@ -827,7 +832,7 @@ def _build_world(c: _Checker, data: object, source: str) -> World:
         description=description,
         areas=areas,
     )
-    _check_placement(c, world, start is not None)
+    _check_placement(c, world, start is not None, broken)
     if c.problems:
         raise WorldError(c.problems)
     return world
@@ -999,10 +1004,15 @@ def _default_start(dock: DockSpec | None, rooms: tuple[Polygon, ...]) -> Pose:
     return Pose(sum(xs) / len(xs), sum(ys) / len(ys), 0.0)
 
 
-def _check_placement(c: _Checker, world: World, start_given: bool) -> None:
+def _check_placement(
+    c: _Checker, world: World, start_given: bool, broken: set[str] | frozenset[str] = frozenset()
+) -> None:
     """The dock stands on the floor, the robot fits where it starts and its start region
     has room for it. A start not given is said to be the default one, where it comes from
-    (a dock off the floor puts it off the floor too: that is said once, at the dock)."""
+    (a dock off the floor puts it off the floor too: that is said once, at the dock).
+    ``broken``: the top-level keys already in error; the start is not judged beside a
+    robot, dock or areas in error (it leans on them)."""
+    _check_inside_rooms(c, world)
     dock = world.dock
     dock_off = dock is not None and not world.on_floor(
         dock.x + 10 * math.cos(dock.facing), dock.y + 10 * math.sin(dock.facing)
@@ -1012,7 +1022,8 @@ def _check_placement(c: _Checker, world: World, start_given: bool) -> None:
     elif dock is not None and world.over_drop(dock.docked_pose.x, dock.docked_pose.y):
         c.error(("dock", "at"), "a dock whose docked robot stands over a drop",
                 "floor in front of the dock (a docked robot's centre is 0.17 m out)")  # fmt: skip
-    _check_inside_rooms(c, world)
+    if broken & {"robot", "dock", "areas"}:
+        return
     if not world.pose_is_free(world.start) and not (dock_off and not start_given):
         where = f"({world.start.x / 1000:.2f}, {world.start.y / 1000:.2f}) m"
         fits = "a pose on the floor with 0.17 m clear of every wall, obstacle and drop"

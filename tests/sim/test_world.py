@@ -527,3 +527,22 @@ def test_a_world_s_battery_may_be_a_percent_as_the_command_line_s() -> None:
         "w.yaml:2:18: robot.battery: found '120%'; allowed: a number in 0..1 (or a percent, "
         "0%..100%)"
     )
+
+
+def test_where_things_stand_is_said_with_the_other_problems_at_once() -> None:
+    """A drop outside every room was said only after the file's other problems were mended
+    (a second reading); with the rooms whole it is said beside them. A start is not judged
+    beside a dock in error (the default start leans on it): no error of its own."""
+    found = problems(
+        "rooms: [[[0, 0], [4, 0], [4, 3], [0, 3]]]\n"
+        "drops: [{rect: [10, 10, 11, 11]}]\n"
+        "dock: {at: [2, 0], facing: north}\n"
+        "areas: [{name: a, rect: [0, 0, 2, 3]}, {name: a, rect: [2, 0, 4, 3]}]\n"
+    )
+    assert [f.split(": found")[0] for f in found] == [
+        "w.yaml:2:9: drops[0]",
+        "w.yaml:3:28: dock.facing",
+        "w.yaml:4:47: areas[1].name",
+    ], found
+    # rooms in error: nothing is placed against them
+    assert len(problems("rooms: [[[0, 0], [4, 0]]]\ndrops: [{rect: [10, 10, 11, 11]}]\n")) == 1
