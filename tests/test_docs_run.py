@@ -67,7 +67,7 @@ NOT_RUN: dict[str, str] = {
     "--scheduler tcp://HOST:8786 --out apartment.jsonl": "needs the Dask cluster the two "
     "commands above start (HOST is the user's); the Dask engine itself is tested in "
     "tests/evaluate",
-    "roomba-bt eval MISSION --world W --runs N --seed S [--jobs J] [--plot FILE]": (
+    "roomba-bt eval MISSION [MISSION_B ...] [--world W] [--runs N] [--seed S] [--jobs J]": (
         "a synopsis (every word a placeholder), not a command; the eval commands above it are run"
     ),
     "pip install roomba-bt": "an install from the package index (network, and a new venv); "
