@@ -66,8 +66,12 @@ _TURN_S = 4.0
 class WallFollow(Action):
     """Follow a wall on the right at a steady light-bumper signal (PD on wheel speeds).
 
-    RUNNING until ``duration`` (SUCCESS) or until a guard or a higher branch preempts it;
-    the wheels are halted in both cases.
+    It does not look for a wall: started with none on its right it turns right at full
+    correction and circles in open floor. Put it beside one first, as
+    ``missions/wall-follow.yaml`` does: ``drive`` until the light bumper or the bumper sees a
+    wall, then ``turn: 75deg`` (left) to have it on the right. RUNNING until ``duration``
+    (SUCCESS) or until a guard or a higher branch preempts it; the wheels are halted in both
+    cases.
     """
 
     moves = True
