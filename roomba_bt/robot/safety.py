@@ -103,14 +103,23 @@ def sigterm_raises() -> Iterator[None]:
 
 
 #: What a Ctrl-C or SIGTERM during the safe stop prints (straight to stderr: a handler may
-#: run while the main thread is inside a write to it).
+#: run while the main thread is inside a write to it): what comes after it, the summary (the
+#: CLI prints it) or the interrupt raised in the program that started the run
 _WAITING = b"roomba-bt: the safe stop is under way; waiting for it to end (the summary follows)\n"
+_WAITING_THEN_RAISED = (
+    b"roomba-bt: the safe stop is under way; waiting for it to end (then the interrupt is raised)\n"
+)
 
 
 class InterruptGuard:
     """Ctrl-C and SIGTERM end a run once: the first raises (:class:`KeyboardInterrupt`,
     :class:`Terminated`), and once :meth:`stopping` was called (the safe stop began) every
     further one is noted and ignored, so the stop is written whole and the summary printed.
+    The first one to come during the stop of a run no signal had ended is kept
+    (:attr:`late`): the runner raises it, or reports it, once the stop is done, so an
+    operator's Ctrl-C is never lost because it came late (a program would drive its next
+    mission). ``raises``: the interrupt is raised in the program after the stop (what the
+    message printed meanwhile says), not only summarised.
 
     Used as a context manager around a run; the previous handlers come back on the way out,
     or with ``hold`` both signals stay ignored until :meth:`release` (the CLI: its summary is
@@ -118,9 +127,15 @@ class InterruptGuard:
     """
 
     def __init__(
-        self, *, hold: bool = False, wall_clock: bool = True, enabled: bool = True
+        self,
+        *,
+        hold: bool = False,
+        wall_clock: bool = True,
+        enabled: bool = True,
+        raises: bool = False,
     ) -> None:
         self.hold = hold
+        self._waiting = _WAITING_THEN_RAISED if raises else _WAITING
         #: False: no handler at all (an evaluation's worker process: its parent takes Ctrl-C
         #: and ends the workers, which have nothing driving to stop)
         self.enabled = enabled
@@ -133,6 +148,11 @@ class InterruptGuard:
         #: :data:`TERMINAL_STOP_SIGNALS`, ignored on the wall clock
         self.ignoring = TERMINAL_STOP_SIGNALS if wall_clock else ()
         self.stop_begun = False
+        #: a handler raised: the run unwinds into its stop because of a signal
+        self.raised = False
+        #: the first signal that came during the stop of a run no signal had ended (None:
+        #: none did), for the runner to raise or report once the stop is done
+        self.late: int | None = None
         self.ignored = 0
         self._previous: dict[int, object] = {}
 
@@ -143,14 +163,23 @@ class InterruptGuard:
     def _handle(self, signum: int, frame: FrameType | None) -> None:
         if self.stop_begun:
             self.ignored += 1
+            if not self.raised and self.late is None:
+                self.late = signum  # not lost: raised or reported once the stop is done
             if self.ignored == 1:
                 with contextlib.suppress(OSError):
-                    os.write(2, _WAITING)
+                    os.write(2, self._waiting)
             return
-        self.stop_begun = True  # the run now unwinds into its safe stop
+        self.stop_begun = self.raised = True  # the run now unwinds into its safe stop
         if signum == signal.SIGINT:
             raise KeyboardInterrupt
         raise Terminated(signum)
+
+    def late_interrupt(self) -> KeyboardInterrupt | None:
+        """The interrupt a signal that came during the stop stands for (:attr:`late`), or
+        None."""
+        if self.late is None:
+            return None
+        return KeyboardInterrupt() if self.late == signal.SIGINT else Terminated(self.late)
 
     def __enter__(self) -> InterruptGuard:
         if self.enabled and threading.current_thread() is threading.main_thread():

@@ -49,6 +49,7 @@ from roomba_bt.runtime.stall import StallRide
 from roomba_bt.runtime.summary import DEFAULT_GRACE, Outcome, RunSummary, profile_shown
 from roomba_bt.runtime.teardown import (
     behaviour_error,
+    note_late_interrupt,
     note_stop_failures,
     shutdown_nodes,
     stop_nodes,
@@ -239,12 +240,17 @@ class MissionRunner(BaseHandle):
         """The mission to its end; on every ending the tree stopped and the safe stop sent.
         A Ctrl-C or SIGTERM is then raised again, the summary as its ``summary`` (a program's
         next mission must not drive after its operator's Ctrl-C), unless ``raise_interrupts``
-        is False: the CLI and the evaluation read Outcome.INTERRUPTED (exit 130)."""
+        is False: the CLI and the evaluation read Outcome.INTERRUPTED (exit 130). One that
+        came during the safe stop or a node's ``shutdown()`` is raised too, once they are
+        done (:func:`~roomba_bt.runtime.teardown.note_late_interrupt` says it)."""
         summary = self.summary
         wall_start = time.perf_counter()
         root = self.mission.root
         guard = self._guard = InterruptGuard(
-            hold=self.hold_interrupts, wall_clock=self.on_wall_clock, enabled=self.guards_signals
+            hold=self.hold_interrupts,
+            wall_clock=self.on_wall_clock,
+            enabled=self.guards_signals,
+            raises=raise_interrupts,
         )
         tick_guard = self.tick_guard
         interrupt: KeyboardInterrupt | None = None
@@ -272,6 +278,10 @@ class MissionRunner(BaseHandle):
                     tick_guard.close()  # it writes nothing more: the safe stop is ours
                 guard.stopping()  # a further Ctrl-C or SIGTERM waits for the safe stop
                 self._finish(summary, wall_start)
+        late = guard.late_interrupt()  # a signal during the stop and shutdown: not lost
+        if interrupt is None and late is not None:
+            interrupt = late
+            note_late_interrupt(summary, late)
         if interrupt is not None and raise_interrupts:  # the robot is stopped: now the caller
             interrupt.summary = summary  # type: ignore[attr-defined]
             raise interrupt
@@ -505,7 +515,7 @@ class MissionRunner(BaseHandle):
             except ModeError as exc:
                 self.summary.refused_commands += 1
                 if len(self.refusals) < 100:
-                    self.refusals.append(self._refusal(command, exc))
+                    self.refusals.append(refusal(self, command, exc))
 
     def count_written(self) -> int:
         """``summary.commands_written`` brought up to date (at the end, by the monitor's feed):
@@ -514,21 +524,6 @@ class MissionRunner(BaseHandle):
         written = 0 if start is None else self.connection.writer.sent - start
         self.summary.commands_written = written
         return written
-
-    def _refusal(self, command: Command, exc: ModeError) -> str:
-        """``t=12.345 drive_straight: drive needs Safe or Full; the robot is in Passive since
-        t=12.300, after a cliff``: when, who sent it, and the mode's start in mission time
-        (the error's own words give the time of day, which a ``--fast`` run never saw)."""
-        when = self.snapshot.time if self.has_snapshot else 0.0
-        sender = getattr(self._outbox.sender_of(command), "name", None)
-        by = f" {sender}:" if isinstance(sender, str) else ""
-        text = str(exc)
-        if exc.since is not None and self.has_snapshot:
-            # the link's clock and mission time advance together: the mode began as long
-            # before this tick as the link's newest arrival is after its start
-            ago = max(0.0, self.connection.link.arrival - exc.since)
-            text = exc.worded(f"t={max(0.0, when - ago):.3f}")
-        return f"t={when:.3f}{by} {text}"
 
     def _bump_reflex(self) -> None:
         """While a bump onset waits for its confirming frame, forward motion is held at 0
@@ -541,6 +536,22 @@ class MissionRunner(BaseHandle):
             held = connection.release_forward()
             if held is not None and all(c.spec.channel != "wheels" for c in self._outbox):
                 self._outbox.send(held, self)
+
+
+def refusal(runner: MissionRunner, command: Command, exc: ModeError) -> str:
+    """``t=12.345 drive_straight: drive needs Safe or Full; the robot is in Passive since
+    t=12.300, after a cliff``: when, who sent it, and the mode's start in mission time
+    (the error's own words give the time of day, which a ``--fast`` run never saw)."""
+    when = runner.snapshot.time if runner.has_snapshot else 0.0
+    sender = getattr(runner._outbox.sender_of(command), "name", None)
+    by = f" {sender}:" if isinstance(sender, str) else ""
+    text = str(exc)
+    if exc.since is not None and runner.has_snapshot:
+        # the link's clock and mission time advance together: the mode began as long
+        # before this tick as the link's newest arrival is after its start
+        ago = max(0.0, runner.connection.link.arrival - exc.since)
+        text = exc.worded(f"t={max(0.0, when - ago):.3f}")
+    return f"t={when:.3f}{by} {text}"
 
 
 def ended_by(exc: Exception, summary: RunSummary, *, answered: bool) -> None:

@@ -26,6 +26,7 @@ import py_trees
 
 from roomba_bt.behaviours.lean import InvalidStatus
 from roomba_bt.oi.frames import MissingPacket
+from roomba_bt.robot.safety import Terminated, signal_reason
 from roomba_bt.runtime.summary import Outcome, RunSummary
 
 log = logging.getLogger(__name__)
@@ -141,6 +142,22 @@ def note_stop_failures(summary: RunSummary, failures: list[str]) -> None:
     if summary.outcome in _CLEAN_ENDINGS:
         was = summary.outcome.value + (f": {summary.reason}" if summary.reason else "")
         summary.outcome, summary.reason = Outcome.ERROR, f"{said} (the run had ended: {was})"
+    else:
+        summary.reason = f"{summary.reason}; then {said}" if summary.reason else said
+
+
+def note_late_interrupt(summary: RunSummary, interrupt: KeyboardInterrupt) -> None:
+    """A Ctrl-C or SIGTERM that came during the safe stop or a node's ``shutdown()`` of a run
+    no signal had ended (decided, ``docs/runtime.md``): a run that had ended well (success,
+    failure, timeout, a replay's end) is INTERRUPTED, exit 130, its reason saying how it had
+    ended, so that ``roomba-bt run a && roomba-bt run b`` does not start ``b`` after the
+    operator's Ctrl-C; one that had ended otherwise (an error, a lost link, the monitor's
+    stop) keeps its outcome and exit code, its reason followed by ``; then Ctrl-C ...``."""
+    why = signal_reason(interrupt.signum) if isinstance(interrupt, Terminated) else "Ctrl-C"
+    said = f"{why} during the safe stop"
+    if summary.outcome in _CLEAN_ENDINGS:
+        was = summary.outcome.value + (f": {summary.reason}" if summary.reason else "")
+        summary.outcome, summary.reason = Outcome.INTERRUPTED, f"{said} (the run had ended: {was})"
     else:
         summary.reason = f"{summary.reason}; then {said}" if summary.reason else said
 

@@ -13,15 +13,17 @@ import sys
 import textwrap
 from pathlib import Path
 
+import py_trees
 import pytest
 
+from roomba_bt.behaviours.actions import Drive, Mode
 from roomba_bt.mission import load_mission
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.safety import Terminated
 from roomba_bt.runtime.loop import MissionRunner
-from roomba_bt.runtime.stack import RunStack
+from roomba_bt.runtime.stack import RunStack, TreeMission
 from roomba_bt.runtime.summary import Outcome
 from roomba_bt.sim import Simulator, load_world
 
@@ -104,3 +106,91 @@ def test_a_kill_ends_a_program_that_runs_two_missions(tmp_path: Path) -> None:
     assert done.stdout.split("\n")[:2] == ["mission 1", ""], done.stdout + done.stderr
     assert done.returncode != 0
     assert "Terminated: terminated by signal SIGTERM" in done.stderr
+
+
+class _SignalsAt(py_trees.behaviour.Behaviour):
+    """Succeeds at once; its ``shutdown()`` signals the process (the operator's Ctrl-C or a
+    ``kill`` coming while the run shuts its nodes down) and then finishes its work."""
+
+    def __init__(self, signum: int | None, done: list[str]) -> None:
+        super().__init__("closer")
+        self.signum, self.done = signum, done
+
+    def update(self) -> py_trees.common.Status:
+        return py_trees.common.Status.SUCCESS
+
+    def shutdown(self) -> None:
+        if self.signum is not None:
+            os.kill(os.getpid(), self.signum)
+        self.done.append("shut down")  # the rest of its shutdown ran: the signal waited
+
+
+class _SignalOnSafeStop(TapLink):
+    """Signals the process when the safe stop's drive 0 and motors off are written."""
+
+    def __init__(self, simulator: Simulator, signum: int) -> None:
+        super().__init__(simulator)
+        self.signum = signum
+
+    def write(self, data: bytes) -> None:
+        super().write(data)
+        if oi.halt().data + oi.motors_off().data in data:
+            os.kill(os.getpid(), self.signum)
+
+
+def _late_stack(signum: int, during: str, done: list[str]) -> tuple[RunStack, TapLink]:
+    simulator = Simulator(load_world("empty-room"), CREATE2, 0)
+    link = _SignalOnSafeStop(simulator, signum) if during == "safe stop" else TapLink(simulator)
+    root = py_trees.composites.Sequence("root", memory=True, children=[
+        Mode("safe", {"to": "safe"}),
+        Drive("forward", {"velocity": "100 mm/s", "duration": "0.3 s"}),
+        _SignalsAt(signum if during == "shutdown" else None, done),
+    ])  # fmt: skip
+    return RunStack(TreeMission(root, "late"), link, profile=CREATE2, timeout_s=5.0), link
+
+
+@pytest.mark.parametrize("during", ["shutdown", "safe stop"])
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_during_the_stop_is_raised_once_the_stop_is_done(
+    during: str, signum: int, capfd: pytest.CaptureFixture[str]
+) -> None:
+    done: list[str] = []
+    first, link = _late_stack(signum, during, done)
+    second, second_link = _late_stack(signum, "nothing", [])
+    with pytest.raises(KeyboardInterrupt) as caught:
+        first.run()
+        second.run()  # the program's next mission: never started
+    assert second_link.writes == []
+    assert isinstance(caught.value, Terminated) == (signum == signal.SIGTERM)
+    summary = caught.value.summary  # type: ignore[attr-defined]
+    assert summary.outcome is Outcome.INTERRUPTED and summary.exit_code == 130
+    why = "Ctrl-C" if signum == signal.SIGINT else "SIGTERM"
+    assert summary.reason == f"{why} during the safe stop (the run had ended: success)"
+    assert done == ["shut down"]  # the stop and the shutdown were finished first
+    assert link.written.endswith(SAFE_END) and summary.safe_stop.startswith("sent ")
+    err = capfd.readouterr().err
+    assert "waiting for it to end (then the interrupt is raised)" in err
+    assert "summary follows" not in err
+
+
+@pytest.mark.parametrize("during", ["shutdown", "safe stop"])
+def test_the_cli_reports_a_signal_during_the_stop_as_interrupted(
+    during: str, capfd: pytest.CaptureFixture[str]
+) -> None:
+    done: list[str] = []
+    stack, _link = _late_stack(signal.SIGINT, during, done)
+    summary = stack.run(raise_interrupts=False)
+    assert summary.outcome is Outcome.INTERRUPTED and summary.exit_code == 130
+    assert summary.reason == "Ctrl-C during the safe stop (the run had ended: success)"
+    assert done == ["shut down"]
+    assert "waiting for it to end (the summary follows)" in capfd.readouterr().err
+
+
+def test_a_signal_during_the_stop_of_a_failed_run_keeps_its_outcome() -> None:
+    from roomba_bt.runtime.summary import RunSummary
+    from roomba_bt.runtime.teardown import note_late_interrupt
+
+    summary = RunSummary("m", outcome=Outcome.ERROR, reason="behaviour x raised E: e")
+    note_late_interrupt(summary, Terminated(signal.SIGTERM))
+    assert summary.outcome is Outcome.ERROR and summary.exit_code == 4
+    assert summary.reason == "behaviour x raised E: e; then SIGTERM during the safe stop"
