@@ -145,6 +145,25 @@ class StopRequested(Exception):
     """An operator ended the run (the monitor's stop): it ends as on Ctrl-C, exit 130."""
 
 
+class _StopGate:
+    """What :meth:`MissionRunner.request_stop` puts before the run's gate: the next frame
+    ends the run with :class:`StopRequested` (the monitor's stop, from any thread). A gate,
+    so that the tick path reads nothing more than it did."""
+
+    def __init__(self, reason: str, inner: TickGate | None) -> None:
+        self.reason, self.inner = reason, inner
+
+    def before_tick(self, runner: MissionRunner) -> bool:
+        raise StopRequested(self.reason)
+
+    def after_tick(self, runner: MissionRunner) -> None:
+        if self.inner is not None:
+            self.inner.after_tick(runner)
+
+    def holds(self, runner: MissionRunner) -> bool:
+        return self.inner is not None and self.inner.holds(runner)
+
+
 class MissionRunner(BaseHandle):
     """Runs one compiled mission on one connection; is the behaviours' ``RobotHandle``."""
 
@@ -287,6 +306,13 @@ class MissionRunner(BaseHandle):
             raise interrupt
         return summary
 
+    def request_stop(self, reason: str = "stopped by the program") -> None:
+        """End the run as the monitor's stop does: at the next frame (or empty read) the tree
+        is stopped, the safe stop sent and the nodes shut down; the outcome is INTERRUPTED,
+        ``reason`` its reason, and nothing is raised. Safe from any thread: the way to stop
+        a run in a worker thread, which signals never reach (``docs/runtime.md``)."""
+        self.gate = _StopGate(reason, self.gate)
+
     def release_interrupts(self) -> None:
         """Ctrl-C and SIGTERM as they were before :meth:`run` (after a held run's summary)."""
         if self._guard is not None:
@@ -336,6 +362,8 @@ class MissionRunner(BaseHandle):
             if ride.stall is not None:
                 ride.carry_on(batch)
             if not batch:
+                if isinstance(self.gate, _StopGate):  # no frame: the stop goes on all the same
+                    raise StopRequested(self.gate.reason)
                 if self.input_ended is not None and (why := self.input_ended()):
                     summary.outcome, summary.reason = Outcome.INPUT_ENDED, why
                     return

@@ -163,6 +163,14 @@ class RunStack:
                 self.transport.flush()
                 self.runner.summary.record_stopped = self.transport.stopped or ""
 
+    def stop(self, reason: str = "stopped by the program") -> None:
+        """Stop the run from another thread (a run in a worker thread, which Ctrl-C and
+        SIGTERM do not reach): its tree stopped, the safe stop sent, the outcome INTERRUPTED
+        with ``reason``; :meth:`run` returns it (see
+        :meth:`~roomba_bt.runtime.loop.MissionRunner.request_stop`). Then join the thread,
+        and :meth:`close`: closing first cuts the link under the safe stop."""
+        self.runner.request_stop(reason)
+
     def close(self) -> None:
         """Close the connection (and the record); a link already gone is no error here: the
         run's summary has said what happened to it."""

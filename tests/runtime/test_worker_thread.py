@@ -1,0 +1,63 @@
+"""A run in a worker thread: signals reach only the main thread, so the program's main thread
+catches Ctrl-C or SIGTERM and calls ``RunStack.stop``; the run ends INTERRUPTED with its safe
+stop delivered (``stack.close()`` from the main thread had cut the link under it: connection
+lost, the stop not delivered)."""
+
+from __future__ import annotations
+
+import threading
+
+import py_trees
+
+from roomba_bt.behaviours.actions import Drive, Mode
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.runtime.loop import MissionRunner
+from roomba_bt.runtime.stack import RunStack, TreeMission
+from roomba_bt.runtime.summary import Outcome, RunSummary
+from roomba_bt.sim import Simulator, load_world
+
+from .simrun import TapLink
+
+SAFE_END = oi.halt().data + oi.motors_off().data + oi.pause_stream().data + oi.start().data
+
+
+def test_a_run_in_a_worker_thread_is_stopped_by_the_main_thread() -> None:
+    driving, stopped = threading.Event(), threading.Event()
+
+    def observer(runner: MissionRunner) -> None:
+        if runner.snapshot.tick == 40:  # driving: the main thread stops it now
+            driving.set()
+            assert stopped.wait(10.0)
+
+    root = py_trees.composites.Sequence("w", memory=True, children=[
+        Mode("safe", {"to": "safe"}), Drive("forward", {"velocity": "100 mm/s"}),
+    ])  # fmt: skip
+    link = TapLink(Simulator(load_world("empty-room"), CREATE2, 0))
+    stack = RunStack(TreeMission(root, "worker"), link, profile=CREATE2, observer=observer)
+    result: list[RunSummary | BaseException] = []
+
+    def work() -> None:
+        try:
+            result.append(stack.run())
+        except BaseException as exc:  # the test says what it was
+            result.append(exc)
+
+    worker = threading.Thread(target=work)
+    worker.start()
+    assert driving.wait(10.0)
+    assert link.simulator.requested_left > 0  # the robot drives
+    stack.stop("the operator pressed Ctrl-C")  # what the main thread's handler does
+    stopped.set()
+    worker.join(10.0)
+    assert not worker.is_alive()
+    stack.close()
+    [summary] = result
+    assert isinstance(summary, RunSummary), summary
+    assert summary.outcome is Outcome.INTERRUPTED and summary.exit_code == 130
+    assert summary.reason == "the operator pressed Ctrl-C"
+    assert summary.safe_stop.startswith("sent ") and summary.stop_delivered
+    assert link.written.endswith(SAFE_END)
+    assert link.simulator.mode is OIMode.PASSIVE
+    assert link.simulator.requested_left == link.simulator.requested_right == 0
