@@ -584,8 +584,9 @@ def refusal(runner: MissionRunner, command: Command, exc: ModeError) -> str:
 
 def ended_by(exc: Exception, summary: RunSummary, *, answered: bool) -> None:
     """The outcome and reason of a run that ``exc`` ended (Ctrl-C aside): the operator's
-    stop, the link (``answered``: the robot had streamed, so it was not merely never
-    there), or a bug in a behaviour (its path and file:line, and the traceback)."""
+    stop, the link (its own errors, :class:`LinkDown` and :class:`ConnectionFailed`;
+    ``answered``: the robot had streamed, so it was not merely never there), or an
+    exception in a behaviour, an ``OSError`` too (its path and file:line, the traceback)."""
     if isinstance(exc, StopRequested):
         summary.outcome, summary.reason = Outcome.INTERRUPTED, str(exc)
     elif isinstance(exc, ConnectionFailed):
@@ -593,10 +594,10 @@ def ended_by(exc: Exception, summary: RunSummary, *, answered: bool) -> None:
         summary.reason = str(exc)
     elif isinstance(exc, LinkDown):
         summary.outcome, summary.reason = Outcome.CONNECTION_LOST, str(exc)
-    elif isinstance(exc, OSError | ConnectionError):
-        summary.outcome = Outcome.CONNECTION_LOST
-        summary.reason = f"{type(exc).__name__}: {exc}"
-    else:  # a bug in a behaviour must still end in a safe stop
+    else:  # a bug in a behaviour must still end in a safe stop. An OSError is one too: the
+        # link turns its own I/O errors into LinkDown (PortLost) and ConnectionFailed where
+        # it reads and writes (robot/link.py), so a bare one came from a behaviour's code
+        # (a plugin's log file, a socket of its own), not from the robot's port
         summary.outcome, summary.reason = Outcome.ERROR, behaviour_error(exc)
         summary.traceback = "".join(traceback.format_exception(exc))
 

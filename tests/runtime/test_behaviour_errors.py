@@ -6,10 +6,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import py_trees
 import pytest
 
+from roomba_bt.behaviours.actions import Drive, Mode
 from roomba_bt.cli import main
-from roomba_bt.runtime.summary import ExitCode
+from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.runtime.stack import RunStack, TreeMission
+from roomba_bt.runtime.summary import ExitCode, Outcome
+from roomba_bt.sim import SimLink, Simulator, load_world
 
 PLUGIN = '''
 from roomba_bt.behaviours import Condition, declare
@@ -170,3 +175,66 @@ def test_a_plugin_that_breaks_the_contract_ends_the_run_as_its_error(
     assert "ticks        1 " in out  # ended on the tick it happened
     assert "safe stop    sent drive, motors" in out
     assert "invalid status" not in out + err
+
+
+class _Raises(py_trees.behaviour.Behaviour):
+    """RUNNING, and raises ``exc`` in ``where`` (setup, initialise, update or terminate)."""
+
+    def __init__(self, exc: BaseException, where: str) -> None:
+        super().__init__("telemetry")
+        self.exc, self.where, self.ticks = exc, where, 0
+
+    def _maybe(self, where: str) -> None:
+        if where == self.where:
+            raise self.exc
+
+    def setup(self, **kwargs: object) -> None:
+        self._maybe("setup")
+
+    def initialise(self) -> None:
+        self._maybe("initialise")
+
+    def update(self) -> py_trees.common.Status:
+        self.ticks += 1
+        if self.ticks == 10:
+            self._maybe("update")
+            return py_trees.common.Status.SUCCESS  # ends the parallel: terminate comes
+        return py_trees.common.Status.RUNNING
+
+    def terminate(self, new_status: py_trees.common.Status) -> None:
+        if new_status is not py_trees.common.Status.INVALID:
+            self._maybe("terminate")
+
+
+OS_ERRORS = [
+    OSError("cannot open the log device"),
+    FileNotFoundError(2, "No such file or directory", "/tmp/calibration.json"),
+    TimeoutError("mqtt publish timed out"),
+    ConnectionRefusedError(111, "Connection refused"),
+]
+
+
+@pytest.mark.parametrize("where", ["setup", "initialise", "update", "terminate"])
+@pytest.mark.parametrize("exc", OS_ERRORS, ids=lambda e: type(e).__name__)
+def test_an_oserror_a_behaviour_raises_is_its_error_not_a_lost_link(
+    exc: OSError, where: str
+) -> None:
+    root = py_trees.composites.Sequence("root", memory=True, children=[
+        Mode("safe", {"to": "safe"}),
+        py_trees.composites.Parallel(
+            "par", policy=py_trees.common.ParallelPolicy.SuccessOnOne(),
+            children=[Drive("d", {"velocity": "200 mm/s"}), _Raises(exc, where)],
+        ),
+    ])  # fmt: skip
+    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
+    stack = RunStack(TreeMission(root, "os"), link, profile=CREATE2, timeout_s=5.0)
+    try:
+        summary = stack.run()
+    finally:
+        stack.close()
+    assert summary.outcome is Outcome.ERROR and summary.exit_code == 4, summary.reason
+    said = f"behaviour root / par / telemetry raised {type(exc).__name__}"
+    assert summary.reason.startswith(said)
+    assert f"(at {__file__}:" in summary.reason
+    assert summary.traceback
+    assert summary.safe_stop.startswith("sent ")
