@@ -122,6 +122,38 @@ def checked_status(node: Behaviour, status: object) -> Status:
     raise InvalidStatus(node, status)
 
 
+def check_updates(root: Behaviour) -> list[Behaviour]:
+    """Every node under ``root`` whose ``update`` is no roomba-bt's or py_trees' own (a plain
+    py_trees behaviour of the user's) gets an ``update`` that raises :class:`InvalidStatus`
+    when the usual one returns no Status, as a roomba-bt leaf's tick does (py_trees logged
+    an error every tick and the tree went on). Done once per node (a tree run again keeps
+    it); a lean node checks in its own tick (:func:`tick_ended`), and a compiled mission
+    holds only those and py_trees' composites: nothing there is wrapped. Returns the nodes
+    given one."""
+    wrapped = []
+    for node in root.iterate():
+        update: Any = node.update
+        home = getattr(type(node).update, "__module__", None) or ""
+        if isinstance(node, Direct) or getattr(update, "checks_status", False):
+            continue
+        if "update" not in vars(node) and home.split(".", 1)[0] in ("py_trees", "roomba_bt"):
+            continue
+        node.update = _checking(node, update)  # type: ignore[method-assign]
+        wrapped.append(node)
+    return wrapped
+
+
+def _checking(node: Behaviour, update: Callable[[], object]) -> Callable[[], Status]:
+    """``update`` with its result checked (:func:`checked_status`)."""
+
+    def checked_update() -> Status:
+        status = update()
+        return status if type(status) is Status else checked_status(node, status)
+
+    checked_update.checks_status = True  # type: ignore[attr-defined]
+    return checked_update
+
+
 def tick_generator(node: Behaviour) -> None:
     """py_trees' ``tick_once``: run the node's ``tick`` generator to its end."""
     for _ in node.tick():

@@ -25,6 +25,7 @@ from typing import Any
 from py_trees.behaviour import Behaviour
 
 from roomba_bt.behaviours.declare import Declaration
+from roomba_bt.behaviours.lean import check_updates
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.robot.connection import Connection, EndMode
 from roomba_bt.runtime.loop import (
@@ -65,6 +66,10 @@ class TreeMission:
         return tuple(sorted(read))
 
     def setup(self, robot: Any, **kwargs: Any) -> None:
+        """Every node's ``setup(robot=...)``; and a plain behaviour whose ``update`` returns
+        no Status (a forgotten ``return``) ends the run as an error, exit 4, as a roomba-bt
+        leaf's does (:func:`~roomba_bt.behaviours.lean.check_updates`)."""
+        check_updates(self.root)
         for node in self.root.iterate():
             node.setup(robot=robot, **kwargs)
 

@@ -238,3 +238,43 @@ def test_an_oserror_a_behaviour_raises_is_its_error_not_a_lost_link(
     assert f"(at {__file__}:" in summary.reason
     assert summary.traceback
     assert summary.safe_stop.startswith("sent ")
+
+
+class _Forgets(py_trees.behaviour.Behaviour):
+    """A plain py_trees behaviour whose update forgets its ``return`` after a few ticks."""
+
+    def __init__(self, returns: object) -> None:
+        super().__init__("forgetful")
+        self.returns, self.ticks = returns, 0
+
+    def update(self) -> py_trees.common.Status:
+        self.ticks += 1
+        if self.ticks < 5:
+            return py_trees.common.Status.RUNNING
+        return self.returns  # type: ignore[return-value]
+
+
+@pytest.mark.parametrize("returns", [None, "SUCCESS"])
+def test_a_plain_behaviour_returning_no_status_ends_a_hand_built_run_as_an_error(
+    returns: object,
+) -> None:
+    root = py_trees.composites.Sequence("root", memory=True, children=[
+        Mode("safe", {"to": "safe"}), _Forgets(returns), Drive("d", {"velocity": "200 mm/s"}),
+    ])  # fmt: skip
+    mission = TreeMission(root, "forgot")
+    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
+    stack = RunStack(mission, link, profile=CREATE2, timeout_s=3.0)
+    try:
+        summary = stack.run()
+    finally:
+        stack.close()
+    assert summary.outcome is Outcome.ERROR and summary.exit_code == 4, summary.reason
+    assert summary.reason.startswith(
+        f"behaviour root / forgetful raised InvalidStatus: _Forgets.update() returned {returns!r}"
+        if returns is None else "behaviour root / forgetful raised InvalidStatus"
+    )  # fmt: skip
+    assert summary.safe_stop.startswith("sent ")
+    # the same tree run again is checked once, not wrapped twice
+    update = root.children[1].update
+    mission.setup(None)
+    assert root.children[1].update is update
