@@ -87,17 +87,24 @@ def _hint(exc: BaseException, behaviour: py_trees.behaviour.Behaviour) -> str:
 
 def stop_nodes(root: py_trees.behaviour.Behaviour) -> list[str]:
     """Stop the tree at ``root`` (``root.stop(INVALID)``, py_trees' order and each class's
-    own ``stop``) with every node's ``terminate`` guarded: one that raises is caught where
-    it raised, so py_trees goes on to the nodes after it. Every node ends INVALID, each
+    own ``stop``; then each node still RUNNING under one that is not: :func:`_topmost_running`)
+    with every node's ``terminate`` guarded: one that raises is caught where
+    it raised, so py_trees goes on to the nodes after it. Every node stopped ends INVALID, each
     ``terminate`` called once. Returns what each failure says (:func:`behaviour_error`, its
     file:line), each also logged as a warning."""
     failures: list[str] = []
-    if root.status is not _RUNNING:
+    stopped: set[int] = set()
+    running = _topmost_running(root, stopped)
+    if not running:
         return failures
     nodes = list(root.iterate())
     own = [(node, _guard_terminate(node, failures)) for node in nodes]
     try:
-        root.stop(_INVALID)
+        while running:  # py_trees' stop passes by a node INVALID: what runs under it is next
+            for node in running:
+                stopped.add(id(node))
+                node.stop(_INVALID)
+            running = _topmost_running(root, stopped)
     except Exception as exc:  # a stop() of its own raised, not a terminate: said, and
         failures.append(f"stopping the tree: {behaviour_error(exc)}")  # the rest marked
         for node in nodes:
@@ -111,6 +118,24 @@ def stop_nodes(root: py_trees.behaviour.Behaviour) -> list[str]:
     for failure in failures:
         log.warning("%s; the other nodes were stopped all the same", failure)
     return failures
+
+
+def _topmost_running(
+    root: py_trees.behaviour.Behaviour, stopped: set[int]
+) -> list[py_trees.behaviour.Behaviour]:
+    """The RUNNING nodes with no RUNNING node above them, none of them ``stopped`` already
+    (their ids): ``[root]`` when it runs. A tick that raised (or was interrupted) leaves the
+    nodes it had ticked RUNNING under parents whose status was not set yet (INVALID: the root
+    on its first tick, a composite on its own first), which py_trees' ``stop`` passes by:
+    each is stopped from where it runs."""
+    found, todo = [], [root]
+    while todo:
+        node = todo.pop()
+        if node.status is _RUNNING and id(node) not in stopped:
+            found.append(node)
+        else:
+            todo.extend(reversed(node.children))
+    return found
 
 
 def _guard_terminate(

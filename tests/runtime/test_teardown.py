@@ -192,3 +192,45 @@ def test_a_run_that_never_started_sets_up_and_shuts_down_nothing() -> None:
     summary = stack.run()
     assert summary.outcome is Outcome.NO_CONNECTION
     assert log == []
+
+
+class _FirstTick(py_trees.behaviour.Behaviour):
+    """Raises ``exc`` on its first tick: the root's own first tick never ends."""
+
+    def __init__(self, exc: BaseException) -> None:
+        super().__init__("boom")
+        self.exc = exc
+
+    def update(self) -> Status:
+        raise self.exc
+
+
+@pytest.mark.parametrize(
+    "exc, outcome",
+    [(RuntimeError("first tick"), Outcome.ERROR), (KeyboardInterrupt(), Outcome.INTERRUPTED)],
+)
+def test_a_first_tick_that_raises_leaves_no_node_running(
+    exc: BaseException, outcome: Outcome
+) -> None:
+    calls: Counter[str] = Counter()
+    parallel = py_trees.composites.Parallel(
+        "together",
+        policy=py_trees.common.ParallelPolicy.SuccessOnAll(),
+        children=[
+            Drive("spin", {"velocity": 100.0, "radius": "spin_left"}),
+            py_trees.decorators.Inverter("not", Counting("a", calls)),
+            Counting("b", calls),
+            _FirstTick(exc),
+        ],
+    )
+    root = py_trees.composites.Sequence(
+        "root", memory=True, children=[Mode("safe", {"to": "safe"}), parallel]
+    )
+    link = TapLink(Simulator(load_world("empty-room"), CREATE2, 0))
+    summary = RunStack(HandBuilt(root), link, profile=CREATE2, timeout_s=1.0).run(
+        raise_interrupts=False
+    )
+    assert summary.outcome is outcome, summary.reason
+    assert calls == {"terminate a": 1, "terminate b": 1}  # each stopped once
+    assert [n.name for n in root.iterate() if n.status is Status.RUNNING] == []
+    assert link.written.endswith(SAFE_END)
