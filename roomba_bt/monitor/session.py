@@ -34,7 +34,7 @@ from roomba_bt.oi.encode import Command
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.robot.interface import SLOT_SECONDS
 from roomba_bt.runtime.loop import StopRequested
-from roomba_bt.runtime.teardown import shutdown_nodes
+from roomba_bt.runtime.teardown import setup_tree, shutdown_nodes
 
 if TYPE_CHECKING:
     from roomba_bt.runtime.loop import MissionRunner
@@ -352,7 +352,7 @@ class MonitorSession:
         runner.mission = mission
         # its name too, where a renamed one is shown: the page's header and the summary
         runner.summary.mission = self.feed.mission_name = mission.name
-        mission.setup(runner)
+        setup_tree(mission.root, lambda: mission.setup(runner))  # what shutdown_nodes closes
         self.state.forced.clear()
         self.state.breakpoints.clear()
         self._held_end = None

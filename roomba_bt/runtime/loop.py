@@ -51,6 +51,7 @@ from roomba_bt.runtime.teardown import (
     behaviour_error,
     note_late_interrupt,
     note_stop_failures,
+    setup_tree,
     shutdown_nodes,
     stop_nodes,
 )
@@ -279,7 +280,7 @@ class MissionRunner(BaseHandle):
                 self._sent_at_start = self.connection.writer.sent
                 self._blackboard = py_trees.blackboard.Client(name="roomba-bt runtime")
                 self._blackboard.register_key(key=SNAPSHOT_KEY, access=py_trees.common.Access.WRITE)
-                self.mission.setup(self)
+                setup_tree(self.mission.root, lambda: self.mission.setup(self))
                 virtual = not getattr(self.connection.transport, "wall_clock", True)
                 if virtual or not self.on_wall_clock:  # py_trees' Timeout would never fire
                     warn_of_wall_clock_timeouts(root)

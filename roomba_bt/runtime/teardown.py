@@ -19,6 +19,7 @@ import contextlib
 import inspect
 import logging
 import traceback
+import weakref
 from collections.abc import Callable
 from typing import Any
 
@@ -187,12 +188,47 @@ def note_late_interrupt(summary: RunSummary, interrupt: KeyboardInterrupt) -> No
         summary.reason = f"{summary.reason}; then {said}" if summary.reason else said
 
 
+#: the nodes whose ``setup()`` returned (:func:`setup_tree`) and that are not shut down yet:
+#: weak, so a tree let go is forgotten
+_SET_UP: weakref.WeakSet[py_trees.behaviour.Behaviour] = weakref.WeakSet()
+
+
+def setup_tree(root: py_trees.behaviour.Behaviour, setup: Callable[[], None]) -> None:
+    """Run ``setup`` (a mission's ``setup(robot)``: every node's ``setup()``), noting each
+    node whose ``setup()`` returned: :func:`shutdown_nodes` shuts down those alone (one that
+    raised, or was never reached, has nothing to close: its ``shutdown()`` would find
+    attributes its setup never made). Each node's ``setup`` is its own again afterwards."""
+    patched = []
+    for node in root.iterate():
+        usual = node.setup
+        own = "setup" in vars(node)
+
+        def noted(*args: Any, _node: Any = node, _usual: Any = usual, **kwargs: Any) -> None:
+            _usual(*args, **kwargs)
+            _SET_UP.add(_node)
+
+        node.setup = noted  # type: ignore[method-assign]
+        patched.append((node, own, usual))
+    try:
+        setup()
+    finally:
+        for node, own, usual in patched:
+            if own:
+                node.setup = usual  # type: ignore[method-assign]
+            else:
+                del node.setup
+
+
 def shutdown_nodes(root: py_trees.behaviour.Behaviour) -> list[str]:
     """Every node's ``shutdown()`` (py_trees' ``BehaviourTree.shutdown``: what a node opened
     in ``setup`` closed), each once and guarded: one that raises is logged with its
-    behaviour's name and the others still run. Returns what each failure says."""
+    behaviour's name and the others still run. Only the nodes whose ``setup()`` completed
+    (:func:`setup_tree`) are shut down. Returns what each failure says."""
     failures = []
     for node in root.iterate():
+        if node not in _SET_UP:
+            continue
+        _SET_UP.discard(node)
         try:
             node.shutdown()
         except Exception as exc:

@@ -18,7 +18,7 @@ from roomba_bt.behaviours.actions import Drive, Mode
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
-from roomba_bt.runtime.stack import RunStack
+from roomba_bt.runtime.stack import RunStack, TreeMission
 from roomba_bt.runtime.summary import Outcome
 from roomba_bt.sim import Simulator, load_world
 
@@ -234,3 +234,39 @@ def test_a_first_tick_that_raises_leaves_no_node_running(
     assert calls == {"terminate a": 1, "terminate b": 1}  # each stopped once
     assert [n.name for n in root.iterate() if n.status is Status.RUNNING] == []
     assert link.written.endswith(SAFE_END)
+
+
+class _Opens(py_trees.behaviour.Behaviour):
+    """Opens something in setup() (or raises there) and closes it in shutdown(): a node never
+    set up has nothing to close (its shutdown raised AttributeError)."""
+
+    def __init__(self, name: str, log: list[str], *, fails: bool = False) -> None:
+        super().__init__(name)
+        self.log, self.fails = log, fails
+
+    def setup(self, **kwargs: object) -> None:
+        if self.fails:
+            raise OSError(f"{self.name}: cannot open the log device")
+        self.handle = object()
+
+    def update(self) -> Status:
+        return Status.SUCCESS
+
+    def shutdown(self) -> None:
+        del self.handle  # AttributeError if setup never made it
+        self.log.append(self.name)
+
+
+def test_only_the_nodes_set_up_are_shut_down(caplog: pytest.LogCaptureFixture) -> None:
+    log: list[str] = []
+    root = py_trees.composites.Sequence("root", memory=True, children=[
+        _Opens("first", log), _Opens("broken", log, fails=True), _Opens("never", log),
+    ])  # fmt: skip
+    link = TapLink(Simulator(load_world("empty-room"), CREATE2, 0))
+    with caplog.at_level(logging.WARNING):
+        summary = RunStack(TreeMission(root, "setup"), link, profile=CREATE2).run()
+    assert summary.outcome is Outcome.ERROR
+    assert "behaviour root / broken raised OSError: broken: cannot open" in summary.reason
+    assert log == ["first"]  # the node whose setup() completed, and it alone
+    assert not [r for r in caplog.records if "shutdown()" in r.getMessage()]
+    assert all("setup" not in vars(node) for node in root.iterate())  # nothing patched left
