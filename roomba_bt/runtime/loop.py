@@ -20,6 +20,7 @@ import logging
 import time
 import traceback
 from collections.abc import Callable, Iterable, Sequence
+from functools import partial
 from typing import Any, NoReturn, Protocol, cast
 
 import py_trees
@@ -54,6 +55,7 @@ from roomba_bt.runtime.teardown import (
     setup_tree,
     shutdown_nodes,
     stop_nodes,
+    terminate_raised,
 )
 from roomba_bt.runtime.tick_guard import TickGuardLike
 
@@ -274,6 +276,7 @@ class MissionRunner(BaseHandle):
         )
         tick_guard = self.tick_guard
         interrupt: KeyboardInterrupt | None = None
+        raised_in: py_trees.behaviour.Behaviour | None = None  # its terminate raised: said
         with guard:
             try:
                 self.connection.start(OIMode.PASSIVE, self.packets)
@@ -293,11 +296,12 @@ class MissionRunner(BaseHandle):
                 summary.outcome, summary.reason = Outcome.INTERRUPTED, why
             except Exception as exc:  # the operator's stop, a lost link, a bug: the safe stop
                 ended_by(exc, summary, answered=self.has_snapshot)
+                raised_in = terminate_raised(exc)
             finally:
                 if tick_guard is not None:
                     tick_guard.close()  # it writes nothing more: the safe stop is ours
                 guard.stopping()  # a further Ctrl-C or SIGTERM waits for the safe stop
-                self._finish(summary, wall_start)
+                self._finish(summary, wall_start, raised_in)
         late = guard.late_interrupt()  # a signal during the stop and shutdown: not lost
         if interrupt is None and late is not None:
             interrupt = late
@@ -319,20 +323,24 @@ class MissionRunner(BaseHandle):
         if self._guard is not None:
             self._guard.release()
 
-    def stop_tree(self) -> list[str]:
+    def stop_tree(self, raised_in: py_trees.behaviour.Behaviour | None = None) -> list[str]:
         """Stop the running tree (each running node's ``terminate``, every node even when one
         raises: :func:`~roomba_bt.runtime.teardown.stop_nodes`) and drop what its leaves
         queued on the way out: the safe stop that comes with it (the run's end, a reload from
         the monitor) supersedes their halts, which Passive would refuse anyway. Its commands
         no longer stand: nothing sends them again (a resume, the watchdog's recovery).
-        Returns what each ``terminate`` that raised says (each logged as a warning)."""
-        failures = stop_nodes(self.mission.root)
+        Returns what each ``terminate`` that raised says (each logged as a warning);
+        ``raised_in``: the node whose ``terminate`` raised in the tick that ended the run,
+        already said, is stopped without calling it again."""
+        failures = stop_nodes(self.mission.root, raised_in)
         self._outbox.clear()
         self.last_sent.clear()
         return failures
 
-    def _finish(self, summary: RunSummary, wall_start: float) -> None:
-        note_stop_failures(summary, self.stop_tree())
+    def _finish(
+        self, summary: RunSummary, wall_start: float, raised_in: py_trees.behaviour.Behaviour | None
+    ) -> None:
+        note_stop_failures(summary, self.stop_tree(raised_in))
         self.count_written()  # the safe stop's are said apart
         stop_robot(self.connection, summary)
         if self._sent_at_start is not None:  # set up: what its setup() opened, closed
@@ -423,22 +431,7 @@ class MissionRunner(BaseHandle):
         tick = tick_of(root)
         if tick_guard is None:
             return tick
-        return tick_guard.guarded(tick, self._tick_halted, lambda: self.snapshot.tick)
-
-    def _tick_halted(self, seconds: float, where: str) -> None:
-        """The tick guard stopped the wheels during the tick that just returned: counted,
-        said, and, as after a watchdog stall, the last wheel command goes out again unless
-        this tick queued another (the mission goes on where it was)."""
-        summary = self.summary
-        summary.tick_halts += 1
-        summary.tick_halt_last = where or "unknown"
-        if not summary.tick_halt_first:
-            summary.tick_halt_first = summary.tick_halt_last
-        log.warning(
-            "a tick ran over %g s (%s): the tick guard sent drive 0",
-            self.tick_guard.limit_s if self.tick_guard else 0.0, where or "where: unknown",
-        )  # fmt: skip
-        self._send_wheels_again()
+        return tick_guard.guarded(tick, partial(tick_halted, self), lambda: self.snapshot.tick)
 
     def _send_wheels_again(self) -> None:
         """After a drive 0 the runtime sent on its own (the watchdog's, the tick guard's): the
@@ -565,6 +558,22 @@ class MissionRunner(BaseHandle):
             held = connection.release_forward()
             if held is not None and all(c.spec.channel != "wheels" for c in self._outbox):
                 self._outbox.send(held, self)
+
+
+def tick_halted(runner: MissionRunner, seconds: float, where: str) -> None:
+    """The tick guard stopped the wheels during the tick that just returned: counted,
+    said, and, as after a watchdog stall, the last wheel command goes out again unless
+    this tick queued another (the mission goes on where it was)."""
+    summary = runner.summary
+    summary.tick_halts += 1
+    summary.tick_halt_last = where or "unknown"
+    if not summary.tick_halt_first:
+        summary.tick_halt_first = summary.tick_halt_last
+    log.warning(
+        "a tick ran over %g s (%s): the tick guard sent drive 0",
+        runner.tick_guard.limit_s if runner.tick_guard else 0.0, where or "where: unknown",
+    )  # fmt: skip
+    runner._send_wheels_again()
 
 
 def refusal(runner: MissionRunner, command: Command, exc: ModeError) -> str:

@@ -86,20 +86,23 @@ def _hint(exc: BaseException, behaviour: py_trees.behaviour.Behaviour) -> str:
     )
 
 
-def stop_nodes(root: py_trees.behaviour.Behaviour) -> list[str]:
+def stop_nodes(
+    root: py_trees.behaviour.Behaviour, raised_in: py_trees.behaviour.Behaviour | None = None
+) -> list[str]:
     """Stop the tree at ``root`` (``root.stop(INVALID)``, py_trees' order and each class's
     own ``stop``; then each node still RUNNING under one that is not: :func:`_topmost_running`)
     with every node's ``terminate`` guarded: one that raises is caught where
     it raised, so py_trees goes on to the nodes after it. Every node stopped ends INVALID, each
-    ``terminate`` called once. Returns what each failure says (:func:`behaviour_error`, its
-    file:line), each also logged as a warning."""
+    ``terminate`` called once: ``raised_in``'s (:func:`terminate_raised`) is not called again,
+    its failure being the run's reason already. Returns what each failure says
+    (:func:`behaviour_error`, its file:line), each also logged as a warning."""
     failures: list[str] = []
     stopped: set[int] = set()
     running = _topmost_running(root, stopped)
     if not running:
         return failures
     nodes = list(root.iterate())
-    own = [(node, _guard_terminate(node, failures)) for node in nodes]
+    own = [(node, _guard_terminate(node, failures, node is raised_in)) for node in nodes]
     try:
         while running:  # py_trees' stop passes by a node INVALID: what runs under it is next
             for node in running:
@@ -139,15 +142,28 @@ def _topmost_running(
     return found
 
 
+def terminate_raised(exc: BaseException) -> py_trees.behaviour.Behaviour | None:
+    """The node whose ``terminate`` raised ``exc`` (the innermost on its traceback), if one
+    did: a tick that stopped it (a parallel ending, a sequence moving on) raised there."""
+    for frame, _ in reversed(list(traceback.walk_tb(exc.__traceback__))):
+        node = frame.f_locals.get("self")
+        if frame.f_code.co_name == "terminate" and isinstance(node, py_trees.behaviour.Behaviour):
+            return node
+    return None
+
+
 def _guard_terminate(
-    node: py_trees.behaviour.Behaviour, failures: list[str]
+    node: py_trees.behaviour.Behaviour, failures: list[str], raised: bool = False
 ) -> Callable[..., None] | None:
-    """Give ``node`` a ``terminate`` of its own that catches what its usual one raises;
-    returns the ``terminate`` that was patched into the node before (None: the class's)."""
+    """Give ``node`` a ``terminate`` of its own that catches what its usual one raises
+    (``raised``: its terminate raised already, in the tick: not called again); returns the
+    ``terminate`` that was patched into the node before (None: the class's)."""
     usual = node.terminate
     class_own = getattr(usual, "__func__", None) is getattr(type(node), "terminate", None)
 
     def guarded(new_status: py_trees.common.Status) -> None:
+        if raised:
+            return
         try:
             usual(new_status)
         except Exception as exc:

@@ -270,3 +270,26 @@ def test_only_the_nodes_set_up_are_shut_down(caplog: pytest.LogCaptureFixture) -
     assert log == ["first"]  # the node whose setup() completed, and it alone
     assert not [r for r in caplog.records if "shutdown()" in r.getMessage()]
     assert all("setup" not in vars(node) for node in root.iterate())  # nothing patched left
+
+
+def test_a_terminate_that_raises_in_a_tick_is_called_once_and_said_once() -> None:
+    calls: Counter[str] = Counter()
+    parallel = py_trees.composites.Parallel(
+        "together",
+        policy=py_trees.common.ParallelPolicy.SuccessOnOne(),
+        children=[
+            Drive("forward", {"velocity": "100 mm/s", "duration": "0.3 s"}),
+            Counting("bad", calls, raises=True),  # stopped by the tick the drive ends in
+            Counting("b", calls),
+        ],
+    )
+    root = py_trees.composites.Sequence(
+        "root", memory=True, children=[Mode("safe", {"to": "safe"}), parallel]
+    )
+    summary, link = _run(root)
+    assert summary.outcome is Outcome.ERROR and summary.exit_code == 4
+    assert calls == {"terminate bad": 1, "terminate b": 1}
+    assert summary.reason.count("bad could not let go") == 1, summary.reason
+    assert summary.reason.startswith("behaviour root / together / bad raised RuntimeError")
+    assert [n.name for n in root.iterate() if n.status is Status.RUNNING] == []
+    assert link.written.endswith(SAFE_END)
