@@ -148,6 +148,13 @@ class StopRequested(Exception):
     """An operator ended the run (the monitor's stop): it ends as on Ctrl-C, exit 130."""
 
 
+#: what a second run() of one runner says
+RUN_TWICE = (
+    "this run has ended: a RunStack (a MissionRunner) runs once; build a new RunStack for "
+    "the next run (the same tree and link may be given again)"
+)
+
+
 class _StopGate:
     """What :meth:`MissionRunner.request_stop` puts before the run's gate: the next frame
     ends the run with :class:`StopRequested` (the monitor's stop, from any thread). A gate,
@@ -264,7 +271,12 @@ class MissionRunner(BaseHandle):
         next mission must not drive after its operator's Ctrl-C), unless ``raise_interrupts``
         is False: the CLI and the evaluation read Outcome.INTERRUPTED (exit 130). One that
         came during the safe stop or a node's ``shutdown()`` is raised too, once they are
-        done (:func:`~roomba_bt.runtime.teardown.note_late_interrupt` says it)."""
+        done (:func:`~roomba_bt.runtime.teardown.note_late_interrupt` says it).
+
+        One run per runner (decided): a second raises RuntimeError (its summary, counters
+        and clock would have added up the two)."""
+        if self._guard is not None:
+            raise RuntimeError(RUN_TWICE)
         summary = self.summary
         wall_start = time.perf_counter()
         root = self.mission.root

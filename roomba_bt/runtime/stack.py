@@ -160,7 +160,8 @@ class RunStack:
 
         Ctrl-C or SIGTERM: after the safe stop the interrupt is raised again, the summary as
         its ``summary`` attribute, unless ``raise_interrupts`` is False (the CLI, the
-        evaluation: the summary's outcome is then INTERRUPTED, exit 130)."""
+        evaluation: the summary's outcome is then INTERRUPTED, exit 130). A stack runs once:
+        a second call raises RuntimeError (build a new RunStack)."""
         try:
             return self.runner.run(raise_interrupts=raise_interrupts)
         finally:  # an interrupt raised again too: its summary says how the record ended

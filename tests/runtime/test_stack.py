@@ -134,3 +134,26 @@ def test_the_arrival_the_link_reads_after_a_read_is_the_time_the_record_holds(
     recorded = [t for t, d, _ in record.chunks if d == "in"]
     assert second_arrival - first_arrival == pytest.approx(recorded[1] - recorded[0], abs=1e-6)
     assert recording.now() > second_arrival  # only the read's own arrival is the stamp
+
+
+def test_a_stack_runs_once() -> None:
+    """A second run() on the same stack added up the two (duration, ticks, distance, lost
+    frames): refused, saying to build a new RunStack; the tree and link may be used again."""
+    import py_trees
+
+    from roomba_bt.behaviours.actions import Drive, Mode
+    from roomba_bt.runtime.stack import TreeMission
+
+    root = py_trees.composites.Sequence("again", memory=True, children=[
+        Mode("safe", {"to": "safe"}), Drive("d", {"velocity": "200 mm/s", "distance": "0.2 m"}),
+    ])  # fmt: skip
+    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
+    stack = RunStack(TreeMission(root, "again"), link, profile=CREATE2, timeout_s=10.0)
+    first = stack.run()
+    assert first.outcome is Outcome.SUCCESS
+    ticks = first.ticks
+    with pytest.raises(RuntimeError, match="runs once; build a new RunStack"):
+        stack.run()
+    assert stack.runner.summary.ticks == ticks  # nothing added
+    again = RunStack(TreeMission(root, "again"), link, profile=CREATE2, timeout_s=10.0).run()
+    assert again.outcome is Outcome.SUCCESS and again.ticks <= ticks + 5
