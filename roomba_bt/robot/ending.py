@@ -141,6 +141,9 @@ class SafeStop:
         """Stop the robot and leave it in Passive (or Off with ``end_in="stop"``); never
         raises for a dead link (False, and the stop report logged)."""
         link = self.writer.link
+        if self.writer.modes.mode is OIMode.OFF:  # never started (or ended in Off by Stop):
+            self.safe_stopped = True  # nothing written, nothing to stop; not "unconfirmed"
+            return True
         if not link.transport.is_open:
             return self._undelivered("the stop was not delivered: the port is gone")
         lost = link.status is LinkStatus.LOST

@@ -630,7 +630,13 @@ def stop_robot(connection: Connection, summary: RunSummary) -> None:
     try:
         sequence = [c.name for c in connection.stop_sequence()]
         if connection.safe_stop():
-            summary.safe_stop = "sent " + ", ".join(sequence) if sequence else "nothing to send"
+            summary.safe_stop = (
+                "sent " + ", ".join(sequence)
+                if sequence
+                else "nothing to stop: the robot was never started"
+                if connection.mode is OIMode.OFF and connection.writer.sent == 0
+                else "nothing to send"
+            )
             return
         report = getattr(connection, "stop_report", None)
         summary.safe_stop = "NOT DELIVERED: " + (report or "the stop sequence could not be written")

@@ -194,3 +194,24 @@ def test_a_signal_during_the_stop_of_a_failed_run_keeps_its_outcome() -> None:
     note_late_interrupt(summary, Terminated(signal.SIGTERM))
     assert summary.outcome is Outcome.ERROR and summary.exit_code == 4
     assert summary.reason == "behaviour x raised E: e; then SIGTERM during the safe stop"
+
+
+class _CtrlCBeforeTheFirstByte(TapLink):
+    """Ctrl-C comes as the run's first write is about to go: nothing reaches the robot."""
+
+    def write(self, data: bytes) -> None:
+        os.kill(os.getpid(), signal.SIGINT)  # the handler raises here, before the write
+        super().write(data)
+
+
+def test_a_ctrl_c_before_the_first_byte_says_nothing_needed_stopping() -> None:
+    link = _CtrlCBeforeTheFirstByte(Simulator(load_world("empty-room"), CREATE2, 0))
+    root = Drive("forward", {"velocity": "100 mm/s"})
+    stack = RunStack(TreeMission(root, "early"), link, profile=CREATE2, timeout_s=5.0)
+    summary = stack.run(raise_interrupts=False)
+    stack.close()
+    assert link.writes == []  # not a byte written
+    assert summary.outcome is Outcome.INTERRUPTED
+    assert summary.safe_stop == "nothing to stop: the robot was never started"
+    assert summary.stop_delivered
+    assert "NOT DELIVERED" not in str(summary)
