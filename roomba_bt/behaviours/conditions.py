@@ -478,6 +478,31 @@ class Sensor(Condition):
         return compare(snapshot.frame[pid], number)
 
 
+#: the operators that order (a number with a number, a text with a text)
+_ORDERING = frozenset({"<", "<=", ">=", ">"})
+_NUMERIC_TEXT = re.compile(r"\s*[-+]?(\d|\.\d)")
+
+
+def _comparable(params: Mapping[str, Any]) -> list[str]:
+    """``check``'s constraint: a value that ``op`` can order. From Python ``value="200 mm"``
+    is text, which a number is never less or greater than: the check was False on every
+    tick, silently (the compiler types a mission's value by the key's declaration)."""
+    value, op = params.get("value"), params.get("op", "==")
+    if op not in _ORDERING or isinstance(value, BlackboardRef):
+        return []
+    if isinstance(value, str) and _NUMERIC_TEXT.match(value):
+        return [
+            f"value {value!r} is text, and {op} orders a number only with a number: give the "
+            "number in the key's unit (mm, mm/s, s, deg), e.g. 200.0"
+        ]
+    if isinstance(value, bool) or not isinstance(value, int | float | str):
+        return [
+            f"value {value!r} ({type(value).__name__}) cannot be ordered with {op}: give a "
+            "number or a text"
+        ]
+    return []
+
+
 @declare(
     "check",
     kind="condition",
@@ -487,16 +512,25 @@ class Sensor(Condition):
         Param("value", ANY, required=True, doc="typed by the key's declaration"),
     ),
     reads_keys=("key",),
+    constraints=_comparable,
 )
 class CheckKey(Condition):
-    """Compare a blackboard key with a value."""
+    """Compare a blackboard key with a value. A key never written is None: the check is
+    False; a value the key's cannot be compared with raises (a bug, not a False)."""
 
     def check(self, snapshot: Snapshot) -> bool:
-        current = read_key(str(self.value("key")))
+        key = str(self.value("key"))
+        current = read_key(key)
+        op, value = self.value("op"), self.value("value")
         try:
-            return bool(OPERATORS[self.value("op")](current, self.value("value")))
+            return bool(OPERATORS[op](current, value))
         except TypeError:
-            return False
+            if current is None:  # not written yet
+                return False
+            raise TypeError(
+                f"check: key {key!r} holds {current!r} ({type(current).__name__}), which "
+                f"cannot be compared with {value!r} ({type(value).__name__}) by {op}"
+            ) from None
 
 
 CONDITIONS: tuple[type[Condition], ...] = (

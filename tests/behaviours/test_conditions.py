@@ -212,7 +212,8 @@ def test_check_blackboard_key(robot: StubRobot, make: Make) -> None:
     assert holds(make(c.CheckKey, key="count", op="<", value=3))
     assert not holds(make(c.CheckKey, key="count", op=">=", value=3))
     write_key("count", "text")
-    assert not holds(make(c.CheckKey, key="count", op="<", value=3))  # incomparable: false
+    with pytest.raises(TypeError, match="cannot be compared"):  # incomparable: no silent False
+        holds(make(c.CheckKey, key="count", op="<", value=3))
 
 
 def test_a_condition_with_a_lifecycle_of_its_own_gets_every_call_of_the_leaf_tick(

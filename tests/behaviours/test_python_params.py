@@ -63,3 +63,27 @@ def test_the_compiler_s_leaves_are_not_checked_twice(monkeypatch: pytest.MonkeyP
         assert plans and len(plans) == len(leaves), path
         for plan, leaf in zip(plans, leaves, strict=True):
             assert all(leaf.params[k] is v for k, v in plan.params.items())  # type: ignore[attr-defined]
+
+
+def test_check_refuses_a_value_it_could_never_order() -> None:
+    """``value="200 mm"`` from Python is text: 250.0 > "200 mm" raised TypeError, which the
+    check turned into False on every tick."""
+    from roomba_bt.behaviours.conditions import CheckKey
+
+    with pytest.raises(ParamError, match=r"check 'leg': value '200 mm' is text.*200\.0"):
+        CheckKey("leg", {"key": "leg", "op": ">", "value": "200 mm"})
+    with pytest.raises(ParamError, match=r"value None \(NoneType\) cannot be ordered with <"):
+        CheckKey("leg", {"key": "leg", "op": "<", "value": None})
+    CheckKey("leg", {"key": "leg", "op": ">", "value": 200.0})  # a number: fine
+    CheckKey("name", {"key": "name", "op": "==", "value": "home"})  # equality: anything
+
+
+def test_check_raises_when_the_key_holds_what_cannot_be_compared() -> None:
+    from roomba_bt.behaviours.conditions import CheckKey
+    from roomba_bt.behaviours.declare import write_key
+
+    node = CheckKey("leg", {"key": "leg_to_compare", "op": ">", "value": 200.0})
+    assert node.check(None) is False  # type: ignore[arg-type]  # never written: False
+    write_key("leg_to_compare", "long")
+    with pytest.raises(TypeError, match=r"key 'leg_to_compare' holds 'long' \(str\)"):
+        node.check(None)  # type: ignore[arg-type]
