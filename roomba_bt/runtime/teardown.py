@@ -75,8 +75,15 @@ def behaviour_error(exc: BaseException) -> str:
 
 def _hint(exc: BaseException, behaviour: py_trees.behaviour.Behaviour) -> str:
     """What to do about a packet the behaviour read without declaring it, where it can be
-    told: the declaration that should list it."""
+    told: the declaration that should list it, or, for a plain py_trees behaviour (only a
+    tree built in Python holds one), the packets to give the RunStack."""
     declaration: Any = getattr(behaviour, "declaration", None)
+    if isinstance(exc, MissingPacket) and declaration is None:  # a plain py_trees behaviour
+        return (
+            f"; a plain behaviour declares nothing, so stream the packet yourself: RunStack("
+            f"mission, ..., packets=stream_request({{{exc.packet_id}, *mission.packets}}, baud)) "
+            "(stream_request from roomba_bt.runtime.loop adds what the runtime needs)"
+        )
     if not isinstance(exc, MissingPacket) or declaration is None or callable(declaration.reads):
         return ""
     listed = ", ".join(str(pid) for pid in declaration.reads) or "nothing"

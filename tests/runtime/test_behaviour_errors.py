@@ -278,3 +278,29 @@ def test_a_plain_behaviour_returning_no_status_ends_a_hand_built_run_as_an_error
     update = root.children[1].update
     mission.setup(None)
     assert root.children[1].update is update
+
+
+class _ReadsTheWall(py_trees.behaviour.Behaviour):
+    """A plain behaviour reading a packet no leaf declares (27, the wall signal)."""
+
+    def setup(self, **kwargs: object) -> None:
+        self.robot = kwargs["robot"]
+
+    def update(self) -> py_trees.common.Status:
+        self.robot.snapshot.frame[27]  # type: ignore[attr-defined]
+        return py_trees.common.Status.SUCCESS
+
+
+def test_a_plain_behaviour_reading_an_undeclared_packet_is_told_how_to_stream_it() -> None:
+    from roomba_bt.runtime.loop import stream_request
+
+    mission = TreeMission(_ReadsTheWall("wall"), "wall")
+    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
+    summary = RunStack(mission, link, profile=CREATE2, timeout_s=2.0).run()
+    assert summary.outcome is Outcome.ERROR
+    assert "packets=stream_request({27, *mission.packets}, baud)" in summary.reason
+    # the way out it names works
+    packets = stream_request({27, *mission.packets}, 115200)
+    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
+    stack = RunStack(mission, link, profile=CREATE2, timeout_s=2.0, packets=packets)
+    assert stack.run().outcome is Outcome.SUCCESS
