@@ -44,6 +44,7 @@ from roomba_bt.oi.modes import ALL_MODES, DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.robot.interface import RobotHandle, Snapshot
+from roomba_bt.yamlsource import CONTROL, character_name, quoted
 
 #: The blackboard key the runtime mirrors the snapshot under (for plugins that prefer it).
 SNAPSHOT_KEY = "/roomba/snapshot"
@@ -104,6 +105,47 @@ class Param:
         elif self.default is not None:
             parts.append(f"default {self.default}")
         return ", ".join(parts)
+
+
+#: the types whose number from Python is a quantity in the type's unit
+_QUANTITIES = frozenset({"duration", "speed", "distance", "angle", "percent", "radius"})
+
+
+def from_python(param: Param, value: Any) -> Any:
+    """``value`` as a leaf built in Python gives it, checked by ``param``'s declared type:
+    a quantity is a finite real number in the type's unit (not a bool) or a text with its
+    unit; a bool a bool, an int an int, an enum one of its words, a text a text without
+    control characters (as the YAML reader has it: a text reaches the terminal). A
+    :class:`BlackboardRef` passes as it is, and so does what is no text for a type of a
+    behaviour's own (its parsed form: song notes as (note, 64ths) pairs). Raises
+    :class:`UnitError` saying what was found and what is allowed."""
+    kind = param.type
+    if isinstance(value, BlackboardRef) or kind.name == "any":
+        return value
+    if value is None:
+        raise UnitError(f"required: None gives no value ({kind.describe()})")
+    if kind.name == "str":
+        if not isinstance(value, str):
+            raise UnitError(f"expected a text, got {quoted(value)} ({type(value).__name__})")
+        control = CONTROL.search(value)
+        if control is not None:
+            raise UnitError(
+                f"control character {character_name(control.group())} is not allowed in a "
+                "text: it may hold printable characters, tabs and line breaks only"
+            )
+        return value
+    if isinstance(value, str) or kind.choices or kind.name in ("int", "bool"):
+        return kind.parse(value)  # a text with its unit, an enum's word, a bool, an int
+    if kind.name not in _QUANTITIES and kind.name != "float":
+        return value  # a type of its own (song notes, a sensor test): its parsed form as is
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise UnitError(
+            f"expected {kind.describe()}: a number in {kind.unit or 'its unit'} or a text with "
+            f"its unit, got {quoted(value)} ({type(value).__name__})"
+        )
+    if not math.isfinite(value):
+        raise UnitError(f"must be a finite number, got {value!r}")
+    return value
 
 
 def _bound(value: float | None) -> str:
@@ -195,6 +237,11 @@ class Declaration:
         cross-parameter rules. :class:`BlackboardRef` values pass as they are. Raises
         :class:`ParamError` naming the behaviour, the node and the parameter."""
         what = f"{self.name} {node!r}"
+        if not isinstance(params, Mapping):
+            raise ParamError(
+                f"{what}: the parameters are a mapping of name to value, such as "
+                f"{{'duration': '2 s'}}; got {quoted(params)}"
+            )
         out: dict[str, Any] = {}
         for pname, value in params.items():
             param = self.param(pname)
@@ -204,11 +251,12 @@ class Declaration:
                     f"{what}: unknown parameter {pname!r}{closest(str(pname), names)}; "
                     f"{self.name} takes: {', '.join(names) or 'no parameters'}"
                 )
-            if isinstance(value, str) and param.type.name != "any":
-                try:
-                    value = param.type.parse(value)
-                except UnitError as exc:
-                    raise ParamError(f"{what}: {pname}: {exc}") from None
+            if value is None and not param.required:
+                continue  # not given: its default
+            try:
+                value = from_python(param, value)
+            except (UnitError, TypeError, ValueError, KeyError, AttributeError) as exc:
+                raise ParamError(f"{what}: {pname}: {exc}") from None
             problem = param.check_range(value)
             if problem is not None:
                 raise ParamError(f"{what}: {problem}")
@@ -404,7 +452,9 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
             defaults = cls.declaration.defaults
             cls._defaults = defaults
         values = dict(defaults)
-        if params:  # the compiler's are checked (at file:line:col); Python's are checked here
+        # the compiler's are checked (at file:line:col); Python's are checked here, a
+        # non-mapping too (Wait("n", "2s"))
+        if params or (params is not None and not isinstance(params, Mapping)):
             checked = type(params) is CheckedParams
             values.update(params if checked else cls.declaration.checked(name, params))
         self.params: dict[str, Any] = values

@@ -7,6 +7,7 @@ same decisions. These decorators receive the robot in ``setup(robot=...)`` like 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator, Sequence
 from typing import Any, Literal
 
@@ -14,7 +15,7 @@ import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import FrameInputs, write_key
+from roomba_bt.behaviours.declare import FrameInputs, ParamError, write_key
 from roomba_bt.behaviours.lean import (
     DONE,
     DecoratorTick,
@@ -24,7 +25,8 @@ from roomba_bt.behaviours.lean import (
     tick_generator,
 )
 from roomba_bt.behaviours.reasons import failure_reason
-from roomba_bt.robot.interface import RobotHandle
+from roomba_bt.behaviours.units import DURATION, UnitError
+from roomba_bt.robot.interface import SLOT_SECONDS, RobotHandle
 
 #: the statuses as module constants: ``Status.RUNNING`` goes through the Enum metaclass's
 #: ``__getattr__`` hook on every read (several times a global's cost), and guards and
@@ -61,12 +63,38 @@ class _MissionClock:
         return self.now() - self._started >= duration - 1e-9
 
 
+def _seconds(decorator: str, name: str, what: str, value: object, minimum: float) -> float:
+    """A decorator's time as built from Python, checked as the compiler checks a mission's:
+    a finite number of seconds (not a bool) or a text with its unit (``"5 s"``), at least
+    ``minimum``. Raises :class:`ParamError` (the leaves' error) naming the decorator, the
+    node and what was found: a negative, NaN or missing time ran ('timed out after -5 s',
+    a Timeout that never fired) or failed at the first tick."""
+    where = f"{decorator} {name!r}: {what}"
+    if isinstance(value, str):
+        try:
+            value = DURATION.parse(value)
+        except UnitError as exc:
+            raise ParamError(f"{where}: {exc}") from None
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ParamError(
+            f"{where}: expected seconds (a number, or a text with its unit such as '5 s'), "
+            f"got {value!r} ({type(value).__name__})"
+        )
+    if not math.isfinite(value) or value < minimum:
+        shown = f"at least {minimum:g} s (one 15 ms tick)" if minimum else "at least 0 s"
+        raise ParamError(f"{where}: {value!r} s is out of range: {shown}")
+    return float(value)
+
+
 class _Lasting(_MissionClock, DecoratorTick, py_trees.decorators.Decorator):
     """A decorator that lasts ``duration`` seconds of mission time from its first tick."""
 
+    #: the shortest ``duration`` (the language's: ``timeout.after`` one tick, ``delay.for`` 0)
+    shortest = SLOT_SECONDS
+
     def __init__(self, name: str, child: Behaviour, duration: float) -> None:
         super().__init__(name=name, child=child)
-        self.duration = duration
+        self.duration = _seconds(type(self).__name__, name, "duration", duration, self.shortest)
 
     def initialise(self) -> None:
         self.start_clock()
@@ -88,6 +116,8 @@ class Delay(_Lasting):
     """RUNNING for ``duration`` seconds of mission time, then ticks the child (BT.CPP's
     ``Delay``)."""
 
+    shortest = 0.0
+
     def tick_start(self) -> int:
         """Waiting: RUNNING without ticking the child; then a decorator's tick."""
         first = super().tick_start()
@@ -108,8 +138,17 @@ class Repeat(_MissionClock, DecoratorTick, py_trees.decorators.Decorator):
         self, name: str, child: Behaviour, times: int | None = None, duration: float | None = None
     ) -> None:
         super().__init__(name=name, child=child)
+        if times is not None and (isinstance(times, bool) or not isinstance(times, int)
+                                  or times < 1):  # fmt: skip
+            raise ParamError(
+                f"Repeat {name!r}: times: expected a whole number of at least 1 (None: no "
+                f"count), got {times!r}"
+            )
         self.times = times
-        self.duration = duration
+        self.duration = (
+            None if duration is None
+            else _seconds("Repeat", name, "duration", duration, SLOT_SECONDS)
+        )  # fmt: skip
         self.count = 0
 
     def initialise(self) -> None:

@@ -3,6 +3,7 @@ names, texts with units, ranges; the compiler's own (already checked) pass untou
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -87,3 +88,82 @@ def test_check_raises_when_the_key_holds_what_cannot_be_compared() -> None:
     write_key("leg_to_compare", "long")
     with pytest.raises(TypeError, match=r"key 'leg_to_compare' holds 'long' \(str\)"):
         node.check(None)  # type: ignore[arg-type]
+
+
+NAN = float("nan")
+
+
+@pytest.mark.parametrize(
+    "leaf, params, said",
+    [
+        ("drive", {"velocity": [200]}, "velocity: expected speed (mm/s): a number in mm/s"),
+        ("drive", {"velocity": NAN}, "velocity: must be a finite number, got nan"),
+        ("drive", {"velocity": True}, "velocity: expected speed (mm/s)"),
+        ("drive", {"velocity": 200, "duration": [1]}, "duration: expected duration (s)"),
+        ("drive", {"velocity": 200, "distance": NAN}, "distance: must be a finite number"),
+        ("wait", {"duration": True}, "duration: expected duration (s)"),
+        ("motors", {"vacuum": 2}, "vacuum: expected true or false, got 2"),
+        ("mode", {"to": 1}, "to: expected one of passive, safe, full, got 1"),
+        ("log", {"message": 5}, "message: expected a text, got 5 (int)"),
+        ("log", {"message": "\x1b[2J hi"}, "message: control character U+001B is not allowed"),
+        ("drive", {"velocity": None, "distance": None}, None),  # optional None: not given
+        ("wait", {"duration": None}, "duration: required: None gives no value"),
+    ],
+)
+def test_every_value_is_checked_by_its_declared_type(
+    leaf: str, params: dict[str, object], said: str | None
+) -> None:
+    """Only texts went through the type: numbers were only range-checked, so True, NaN,
+    lists, a bool parameter given 2 or an enum given 1 passed (NaN drove until a bump), and
+    None, lists and NaN raised raw TypeError/ValueError."""
+    from roomba_bt.behaviours.registry import default_registry
+
+    cls = default_registry().get(leaf).cls
+    if said is None:
+        assert cls("n", params).params["velocity"] == 200.0  # the default
+        return
+    with pytest.raises(ParamError) as caught:
+        cls("n", params)
+    assert str(caught.value).startswith(f"{leaf} 'n': "), caught.value
+    assert said in str(caught.value)
+
+
+def test_parameters_that_are_no_mapping_are_refused() -> None:
+    from roomba_bt.behaviours.actions import Wait
+
+    with pytest.raises(ParamError, match=r"wait 'n': the parameters are a mapping .* got '2s'"):
+        Wait("n", "2s")  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    "build, said",
+    [
+        (lambda c: ("Timeout", -1.0), "-1.0 s is out of range"),
+        (lambda c: ("Timeout", NAN), "nan s is out of range"),
+        (lambda c: ("Timeout", None), "expected seconds"),
+        (lambda c: ("Timeout", "soon"), "expected a duration"),
+        (lambda c: ("Delay", -2.0), "-2.0 s is out of range: at least 0 s"),
+    ],
+)
+def test_the_language_s_decorators_check_their_times(build: object, said: str) -> None:
+    import py_trees
+
+    from roomba_bt.behaviours import decorators
+
+    kind, value = build(None)  # type: ignore[operator]
+    cls = getattr(decorators, kind)
+    with pytest.raises(ParamError, match=rf"{kind} 't': duration: .*{re.escape(said)}"):
+        cls("t", py_trees.behaviours.Success("c"), value)
+    assert cls("t", py_trees.behaviours.Success("c"), "5 s").duration == 5.0
+
+
+def test_repeat_checks_its_count_and_time() -> None:
+    import py_trees
+
+    from roomba_bt.behaviours.decorators import Repeat
+
+    with pytest.raises(ParamError, match=r"Repeat 'r': times: .* got 0"):
+        Repeat("r", py_trees.behaviours.Success("c"), times=0)
+    with pytest.raises(ParamError, match=r"Repeat 'r': duration: -1 s"):
+        Repeat("r", py_trees.behaviours.Success("c"), duration=-1)
+    assert Repeat("r", py_trees.behaviours.Success("c"), times=3).times == 3
