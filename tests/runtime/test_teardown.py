@@ -293,3 +293,45 @@ def test_a_terminate_that_raises_in_a_tick_is_called_once_and_said_once() -> Non
     assert summary.reason.startswith("behaviour root / together / bad raised RuntimeError")
     assert [n.name for n in root.iterate() if n.status is Status.RUNNING] == []
     assert link.written.endswith(SAFE_END)
+
+
+def test_setting_a_tree_up_patches_nothing_into_its_nodes() -> None:
+    """Noting which nodes were set up once patched each node's ``setup`` and took it away
+    again: the nodes' attribute tables stopped being their class's shared one, and every
+    later tick cost 12 % more instructions (``python -m bench.icount``, dock and
+    bump-and-turn). The nodes set up are found without touching them; one whose setup
+    raised, and those after it, are not set up."""
+    from roomba_bt.runtime.teardown import setup_tree, shutdown_nodes
+
+    touched: list[str] = []
+    closed: list[str] = []
+
+    class Watched(py_trees.behaviours.Success):
+        def __setattr__(self, name: str, value: Any) -> None:
+            touched.append(name)
+            super().__setattr__(name, value)
+
+        def __delattr__(self, name: str) -> None:
+            touched.append(name)
+            super().__delattr__(name)
+
+        def shutdown(self) -> None:
+            closed.append(self.name)
+
+    class Broken(Watched):
+        def setup(self, **kwargs: Any) -> None:
+            raise OSError("no device")
+
+    nodes = [Watched(name="a"), Broken(name="b"), Watched(name="c")]
+    root = py_trees.composites.Sequence("root", memory=True, children=nodes)
+    touched.clear()
+
+    def setup() -> None:
+        for node in root.iterate():
+            node.setup()
+
+    with pytest.raises(OSError, match="no device"):
+        setup_tree(root, setup)
+    assert touched == []
+    shutdown_nodes(root)
+    assert closed == ["a"]
