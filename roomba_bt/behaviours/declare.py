@@ -116,11 +116,20 @@ def from_python(param: Param, value: Any) -> Any:
     a quantity is a finite real number in the type's unit (not a bool) or a text with its
     unit; a bool a bool, an int an int, an enum one of its words, a text a text without
     control characters (as the YAML reader has it: a text reaches the terminal). A
-    :class:`BlackboardRef` passes as it is, and so does what is no text for a type of a
+    :class:`BlackboardRef`, or a text ``"@key"`` / ``"@key.field"`` as YAML writes one, is a
+    value read from the blackboard where the parameter allows it (``from_blackboard``), its
+    key not checked until the run (no mission declares keys from Python); what is no text
+    for a type of a
     behaviour's own (its parsed form: song notes as (note, 64ths) pairs). Raises
     :class:`UnitError` saying what was found and what is allowed."""
     kind = param.type
-    if isinstance(value, BlackboardRef) or kind.name == "any":
+    if isinstance(value, str) and value.startswith("@"):
+        value = blackboard_ref(value)  # "@leg" as in YAML
+    if isinstance(value, BlackboardRef):
+        if not param.from_blackboard:
+            raise UnitError(f"a blackboard value ({value}) is not allowed here")
+        return value
+    if kind.name == "any":
         return value
     if value is None:
         raise UnitError(f"required: None gives no value ({kind.describe()})")
@@ -150,6 +159,19 @@ def from_python(param: Param, value: Any) -> Any:
 
 def _bound(value: float | None) -> str:
     return "" if value is None else f"{value:g}"
+
+
+#: ``@key`` or ``@key.field``: a value read from the blackboard, in YAML and from Python
+BLACKBOARD_REF = re.compile(r"^@([a-z_][a-z0-9_]*)(?:\.([a-z_][a-z0-9_]*))?$")
+
+
+def blackboard_ref(text: str) -> BlackboardRef:
+    """``"@leg"`` -> ``BlackboardRef("leg")``; raises :class:`UnitError` for a text that is
+    not one (``@Leg``, ``@a.b.c``)."""
+    match = BLACKBOARD_REF.match(text)
+    if match is None:
+        raise UnitError(f"{text!r} is not a blackboard reference (@key or @key.field)")
+    return BlackboardRef(*match.groups())
 
 
 @dataclass(frozen=True, slots=True)
@@ -535,12 +557,24 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
                 raw = read_key(ref.key)
                 if ref.field is not None:
                     raw = raw.get(ref.field) if isinstance(raw, Mapping) else None
+                if raw is None:  # only a tree built in Python: a mission's reads are proved
+                    raise UnwrittenKey(
+                        f"{pname} is {ref}, but nothing has written blackboard key "
+                        f"{str(ref)[1:]!r} before {self.name!r} started (write it first: a "
+                        "SetKey node, or write_key from roomba_bt.behaviours.declare)"
+                    )
                 resolved[pname] = raw
             self._resolved = resolved
         self.start()
 
     def start(self) -> None:
         """Called once each time the behaviour starts (after ``@key`` values are read)."""
+
+
+class UnwrittenKey(LookupError):
+    """A behaviour started with a parameter ``@key`` whose key nothing had written. A
+    mission's validator proves every read comes after a write; a tree built in Python has
+    no such proof, and None read as a drive's distance would drive without one."""
 
 
 def read_key(key: str) -> Any:

@@ -15,7 +15,7 @@ from typing import Any
 
 import yaml
 
-from roomba_bt.behaviours.declare import BlackboardRef, Param
+from roomba_bt.behaviours.declare import BLACKBOARD_REF, BlackboardRef, Param
 from roomba_bt.behaviours.registry import Registry
 from roomba_bt.behaviours.units import (
     CANONICAL,
@@ -36,7 +36,6 @@ from roomba_bt.mission.source import Bad, Loc, mapping, plain, scalar_text
 
 SUBSTITUTION = re.compile(r"\$\{([A-Za-z_][A-Za-z0-9_]*)\}")
 _FULL_SUBSTITUTION = re.compile(r"^\s*(-?)\$\{([A-Za-z_][A-Za-z0-9_]*)\}\s*$")
-_REF = re.compile(r"^@([a-z_][a-z0-9_]*)(?:\.([a-z_][a-z0-9_]*))?$")
 
 
 def unknown(what: str, name: str, known: list[str]) -> str:
@@ -301,7 +300,7 @@ def origin_of(node: yaml.Node, env: Mapping[str, Bound]) -> str:
 
 
 def _reference(ctx: Context, raw: str, loc: Loc, vtype: ValueType, what: str) -> BlackboardRef:
-    match = _REF.match(raw)
+    match = BLACKBOARD_REF.match(raw)
     if match is None:
         raise Bad(loc.at(f"{what}: {raw!r} is not a blackboard reference (@key or @key.field)"))
     key, fname = match.groups()

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from roomba_bt.behaviours import BlackboardRef, ParamError
-from roomba_bt.behaviours.actions import Drive, Turn
+from roomba_bt.behaviours.actions import Drive, Mode, Turn
 from roomba_bt.behaviours.declare import Declaration
 from roomba_bt.mission import load_mission
 
@@ -49,6 +49,23 @@ def test_a_required_parameter_missing_is_refused() -> None:
 def test_blackboard_references_pass_as_they_are() -> None:
     ref = BlackboardRef("leg")
     assert Drive("d", {"distance": ref}).params["distance"] is ref
+
+
+def test_a_text_at_key_is_a_blackboard_reference_as_in_yaml() -> None:
+    """``"@leg"`` from Python was refused as "expected a distance": YAML's spelling of a
+    blackboard value did not work where the docs say values are written as in YAML."""
+    assert Drive("d", {"distance": "@leg"}).params["distance"] == BlackboardRef("leg")
+    assert Turn("t", {"angle": "@wp.turn"}).params["angle"] == BlackboardRef("wp", "turn")
+    with pytest.raises(ParamError, match=r"distance: '@Leg' is not a blackboard reference"):
+        Drive("d", {"distance": "@Leg"})
+
+
+@pytest.mark.parametrize("value", ["@mode", BlackboardRef("mode")], ids=["text", "ref"])
+def test_a_parameter_that_takes_no_blackboard_value_refuses_one(value: object) -> None:
+    """A mode from the blackboard cannot be proved statically: YAML refuses it, and now so
+    does Python (a BlackboardRef used to pass for any parameter)."""
+    with pytest.raises(ParamError, match=r"to: a blackboard value \(@mode\) is not allowed"):
+        Mode("m", {"to": value})
 
 
 def test_the_compiler_s_leaves_are_not_checked_twice(monkeypatch: pytest.MonkeyPatch) -> None:

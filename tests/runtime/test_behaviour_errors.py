@@ -9,7 +9,7 @@ from pathlib import Path
 import py_trees
 import pytest
 
-from roomba_bt.behaviours.actions import Drive, Mode
+from roomba_bt.behaviours.actions import Drive, Mode, SetKey
 from roomba_bt.cli import main
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.runtime.stack import RunStack, TreeMission
@@ -304,3 +304,43 @@ def test_a_plain_behaviour_reading_an_undeclared_packet_is_told_how_to_stream_it
     link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
     stack = RunStack(mission, link, profile=CREATE2, timeout_s=2.0, packets=packets)
     assert stack.run().outcome is Outcome.SUCCESS
+
+
+@pytest.mark.parametrize("written", ["other", None])
+def test_a_blackboard_value_nothing_wrote_is_an_error_not_a_drive_without_a_distance(
+    written: str | None,
+) -> None:
+    """A tree built in Python has no proof that a key is written before it is read: the
+    unwritten ``@leg`` was read as None, and the drive went on without a distance until the
+    robot met the dock (0.79 m). Now the run ends at once, an ERROR naming the key."""
+    before = [SetKey("other", {"key": written, "value": 120.0})] if written else []
+    root = py_trees.composites.Sequence("root", memory=True, children=[
+        Mode("safe", {"to": "safe"}), *before,
+        Drive("forward", {"velocity": "200 mm/s", "distance": "@leg"}),
+    ])  # fmt: skip
+    py_trees.blackboard.Blackboard.storage.pop("/mission/leg", None)
+    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
+    stack = RunStack(TreeMission(root, "unwritten"), link, profile=CREATE2, timeout_s=10.0)
+    try:
+        summary = stack.run()
+    finally:
+        stack.close()
+    assert summary.outcome is Outcome.ERROR and summary.exit_code == 4, summary.reason
+    assert "raised UnwrittenKey: distance is @leg, but nothing has written blackboard key " \
+        "'leg' before 'forward' started" in summary.reason  # fmt: skip
+    assert summary.distance_mm < 1.0
+
+
+def test_a_blackboard_value_written_first_is_read_from_python() -> None:
+    root = py_trees.composites.Sequence("root", memory=True, children=[
+        Mode("safe", {"to": "safe"}), SetKey("leg", {"key": "leg", "value": 120.0}),
+        Drive("forward", {"velocity": "200 mm/s", "distance": "@leg"}),
+    ])  # fmt: skip
+    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
+    stack = RunStack(TreeMission(root, "written"), link, profile=CREATE2, timeout_s=10.0)
+    try:
+        summary = stack.run()
+    finally:
+        stack.close()
+    assert summary.outcome is Outcome.SUCCESS, summary.reason
+    assert 110.0 < summary.distance_mm < 140.0
