@@ -19,7 +19,14 @@ from operator import attrgetter
 from types import MappingProxyType
 from typing import Any, ClassVar
 
-from roomba_bt.behaviours.declare import BlackboardRef, Condition, Param, declare, read_key
+from roomba_bt.behaviours.declare import (
+    BlackboardRef,
+    Condition,
+    Param,
+    UnwrittenKey,
+    declare,
+    read_key,
+)
 from roomba_bt.behaviours.units import (
     ANGLE,
     ANY,
@@ -333,6 +340,11 @@ class OdometrySince(Condition):
     def check(self, snapshot: Snapshot) -> bool:
         since = self.value("since")
         mark = read_key(since) if since else None
+        if since and mark is None:  # only a tree built in Python: a mission's are proved
+            raise UnwrittenKey(
+                f"since is {since!r}, but nothing has marked blackboard key {since!r} before "
+                f"{self.name!r} was checked (a Mark node first, or it counts from nothing)"
+            )
         base = mark if isinstance(mark, Odometry) else Odometry()
         now = snapshot.odometry
         distance = self.value("distance")

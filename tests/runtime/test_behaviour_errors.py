@@ -10,6 +10,7 @@ import py_trees
 import pytest
 
 from roomba_bt.behaviours.actions import Drive, Mode, SetKey
+from roomba_bt.behaviours.conditions import OdometrySince
 from roomba_bt.cli import main
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.runtime.stack import RunStack, TreeMission
@@ -344,3 +345,25 @@ def test_a_blackboard_value_written_first_is_read_from_python() -> None:
         stack.close()
     assert summary.outcome is Outcome.SUCCESS, summary.reason
     assert 110.0 < summary.distance_mm < 140.0
+
+
+def test_odometry_since_a_mark_nothing_made_is_an_error_not_a_count_from_the_start() -> None:
+    """``since: start`` unmarked counted from the run's start: the condition held at once for
+    a robot that had already driven, from a tree built in Python."""
+    py_trees.blackboard.Blackboard.storage.pop("/mission/start", None)
+    root = py_trees.composites.Sequence("root", memory=True, children=[
+        Mode("safe", {"to": "safe"}),
+        Drive("out", {"velocity": "200 mm/s", "distance": "20 cm"}),
+        py_trees.composites.Selector("until", memory=False, children=[
+            OdometrySince("far", {"since": "start", "distance": "10 cm"}),
+            Drive("on", {"velocity": "200 mm/s"}),
+        ]),
+    ])  # fmt: skip
+    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
+    stack = RunStack(TreeMission(root, "unmarked"), link, profile=CREATE2, timeout_s=10.0)
+    try:
+        summary = stack.run()
+    finally:
+        stack.close()
+    assert summary.outcome is Outcome.ERROR and summary.exit_code == 4, summary.reason
+    assert "raised UnwrittenKey: since is 'start', but nothing has marked" in summary.reason
