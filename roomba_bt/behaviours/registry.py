@@ -19,7 +19,9 @@ from __future__ import annotations
 import importlib
 import importlib.util
 import inspect
+import logging
 import sys
+import traceback
 import types
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, replace
@@ -30,6 +32,37 @@ from roomba_bt.behaviours.declare import Declaration, DeclarationError, RobotBeh
 from roomba_bt.behaviours.language import RESERVED
 
 ENTRY_POINT_GROUP = "roomba_bt.behaviours"
+
+#: a plugin's import traceback is logged here at DEBUG: ``roomba-bt -v`` shows it
+log = logging.getLogger("roomba_bt.plugins")
+
+
+class NameClash(DeclarationError):
+    """A behaviour declares a name another class (a built-in or another plugin's) took
+    first: not a mistake in its declaration, a clash between the two. ``existing``: the
+    declaration that holds the name."""
+
+    def __init__(self, name: str, existing: Declaration) -> None:
+        super().__init__(
+            f"name {name!r} is already taken by {_qualname(existing.cls)} ({existing.origin})"
+        )
+        self.name = name
+        self.existing = existing
+
+    def clash(self) -> str:
+        """What a plugin's class that lost the name is told: not that it declared itself
+        wrongly, but who else declares the name and what becomes of it."""
+        other = f"{_where(self.existing.cls)}"
+        if self.existing.origin == "builtin":
+            return (
+                f"declares {self.name!r}, the name of the built-in {other}: a name clash; the "
+                "built-in is used and this behaviour is not (rename it)"
+            )
+        return (
+            f"declares {self.name!r}, as {other} of plugin {self.existing.origin} does: a name "
+            f"clash between two plugins; a mission that uses {self.name!r} is refused (exit 2) "
+            "until one is uninstalled or renames its behaviour"
+        )
 
 
 @dataclass(frozen=True, slots=True)
@@ -86,10 +119,7 @@ class Registry:
         if existing is not None and existing.cls is not cls:
             existing = self._named(existing)
             self._note_clash(declaration.name, existing, f"{_qualname(cls)} ({origin})")
-            raise DeclarationError(
-                f"name {declaration.name!r} is already taken by {_qualname(existing.cls)} "
-                f"({existing.origin})"
-            )
+            raise NameClash(declaration.name, existing)
         if declaration.origin != origin:  # a built-in's own declaration says "builtin"
             declaration = replace(declaration, origin=origin)
         self._declarations[declaration.name] = declaration
@@ -138,7 +168,16 @@ class Registry:
         registered: list[Declaration] = []
         for cls in classes:
             try:
+                if not issubclass(cls, RobotBehaviour):  # @declare on a plain class
+                    raise _NotABehaviour(
+                        f"class {cls.__qualname__} is decorated with @declare but is not a "
+                        "behaviour: derive it from roomba_bt.behaviours.Action or Condition"
+                    )
                 registered.append(self.register(cls, origin))
+            except NameClash as exc:  # it declared nothing wrongly: two classes want a name
+                self._errors.append(PluginError(said, f"{_where(cls)} {exc.clash()}"))
+            except _NotABehaviour as exc:
+                self._errors.append(PluginError(said, f"{_where(cls)}: {exc}"))
             except DeclarationError as exc:
                 wrong = f"{_where(cls)} declares itself wrongly: {exc}"
                 self._errors.append(PluginError(said, wrong))
@@ -167,7 +206,7 @@ class Registry:
         try:
             provider = ep.load()
         except (Exception, SystemExit) as exc:  # any import-time failure of third-party code
-            failed = f"failed to import: {_cause(exc)}"
+            failed = _import_failed(exc, _package_of(ep), _origin(ep))
             self._errors.append(PluginError(_origin(ep), failed, imported=False))
             return []
         registered = self.register_provider(provider, _origin(ep, named=False), said_as=_origin(ep))
@@ -185,8 +224,10 @@ class Registry:
         self._declarations[declaration.name] = declaration
         return declaration
 
-    def with_file(self, path: Path) -> tuple[Registry, PluginError | None]:
-        """A copy of this registry plus the behaviours of the module at ``path``."""
+    def with_file(self, path: Path) -> tuple[Registry, list[PluginError]]:
+        """A copy of this registry plus the behaviours of the module at ``path``, and what
+        went wrong loading it: one error if it did not import, else one for each of its
+        classes that did not register (the others did)."""
         copy = self.copy()
         origin = str(path)
         module_name = "roomba_bt_mission_plugin_" + "".join(
@@ -207,12 +248,11 @@ class Registry:
                 spec.loader.exec_module(module)
             except (Exception, SystemExit) as exc:  # sys.exit() in it: not ours to exit
                 sys.modules.pop(module_name, None)
-                failed = f"failed to import: {_cause(exc)}"
-                return copy, PluginError(origin, failed, imported=False)
+                failed = _import_failed(exc, [path.resolve()], origin)
+                return copy, [PluginError(origin, failed, imported=False)]
         before = len(copy._errors)
         copy.register_provider(module, origin)
-        error = copy._errors[before] if len(copy._errors) > before else None
-        return copy, error
+        return copy, copy._errors[before:]
 
     def copy(self) -> Registry:
         self._ensure_loaded()
@@ -314,35 +354,81 @@ def _qualname(cls: object) -> str:
     return f"{getattr(cls, '__module__', '?')}.{getattr(cls, '__qualname__', repr(cls))}"
 
 
+def _import_failed(exc: BaseException, home: list[Path], origin: str) -> str:
+    """What a plugin's failed import says: the exception and the file:line where it raised
+    in the plugin's own code (``home``: its file, or its package's folders), as a behaviour's
+    run-time error does; the traceback is logged at DEBUG (``roomba-bt -v`` shows it)."""
+    log.debug("plugin %s failed to import:\n%s", origin, "".join(traceback.format_exception(exc)))
+    where = _raised_at(exc, home)
+    return f"failed to import: {_cause(exc)}" + (f" (at {where})" if where else "")
+
+
+def _raised_at(exc: BaseException, home: list[Path]) -> str | None:
+    """The innermost frame of ``exc``'s traceback in a file under ``home``; for a syntax
+    error there, its line. None if the plugin's own code is not on it (the entry point names
+    a module that does not exist)."""
+    for frame, line in reversed(list(traceback.walk_tb(exc.__traceback__))):
+        if _within(frame.f_code.co_filename, home):
+            return f"{frame.f_code.co_filename}:{line}"
+    if isinstance(exc, SyntaxError) and exc.filename and _within(exc.filename, home):
+        return f"{exc.filename}:{exc.lineno}"
+    return None
+
+
+def _within(filename: str, home: list[Path]) -> bool:
+    if filename.startswith("<"):  # <frozen importlib._bootstrap>, <string>
+        return False
+    try:
+        file = Path(filename).resolve()
+    except (OSError, RuntimeError):
+        return False
+    return any(file == place or file.is_relative_to(place) for place in home)
+
+
+def _package_of(ep: EntryPoint) -> list[Path]:
+    """Where an entry point's code is: the folders of its top-level package (or its
+    module's file), found without importing it; empty when not found."""
+    top = ep.module.partition(".")[0]
+    try:
+        spec = importlib.util.find_spec(top)
+    except (ImportError, ValueError):
+        return []
+    if spec is None:
+        return []
+    if spec.submodule_search_locations:
+        return [Path(place).resolve() for place in spec.submodule_search_locations]
+    return [Path(spec.origin).resolve()] if spec.origin else []
+
+
 def _cause(exc: BaseException) -> str:
     if isinstance(exc, SystemExit):  # its exit code would have passed for one of ours
         return f"it called sys.exit({exc.code!r})"
     return f"{type(exc).__name__}: {exc}"
 
 
-def _provided(provider: object) -> list[type[RobotBehaviour]]:
-    """The behaviour classes an entry point or a plugin file provides; raises
-    :class:`DeclarationError` when it provides none, or something else."""
+class _NotABehaviour(DeclarationError):
+    """A module's class decorated with @declare that is no behaviour: said on its own, the
+    module's other classes still load."""
+
+
+def _provided(provider: object) -> list[type]:
+    """The classes an entry point or a plugin file provides: behaviour classes, and a
+    module's classes decorated with @declare that are not behaviours (each is an error of
+    its own, :meth:`Registry.register_provider`); raises :class:`DeclarationError` when it
+    provides none, or something else."""
     classes = list(_classes_of(provider))
     if not classes:
         raise DeclarationError("it provides no behaviour class (decorated with @declare)")
     return classes
 
 
-def _classes_of(provider: object) -> Iterable[type[RobotBehaviour]]:
+def _classes_of(provider: object) -> Iterable[type]:
     if isinstance(provider, types.ModuleType):
-        declared = [
+        return [
             obj
             for _, obj in inspect.getmembers(provider, inspect.isclass)
             if obj.__module__ == provider.__name__ and "declaration" in obj.__dict__
         ]
-        for obj in declared:
-            if not issubclass(obj, RobotBehaviour):
-                raise DeclarationError(
-                    f"class {obj.__qualname__} is decorated with @declare but is not a "
-                    "behaviour: derive it from roomba_bt.behaviours.Action or Condition"
-                )
-        return [obj for obj in declared if issubclass(obj, RobotBehaviour)]
     if isinstance(provider, type):
         if not issubclass(provider, RobotBehaviour):
             raise DeclarationError(f"{_qualname(provider)} is not a RobotBehaviour subclass")

@@ -134,9 +134,10 @@ def _registry_with_files(command: str, files: list[str]) -> Registry | int:
         if not Path(file).is_file():
             print(f"roomba-bt {command}: --plugin-file {file}: no such file", file=sys.stderr)
             return ExitCode.INVALID
-        registry, error = registry.with_file(Path(file))
-        if error is not None:
+        registry, errors = registry.with_file(Path(file))
+        for error in errors:
             print(f"roomba-bt {command}: --plugin-file {file}: {error}", file=sys.stderr)
+        if errors:
             return ExitCode.INVALID
     return registry
 

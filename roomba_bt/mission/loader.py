@@ -294,8 +294,8 @@ class Loader:
                 )
                 continue
             self.files.append(target)  # read like an include: run --watch watches it too
-            registry, error = self.ctx.registry.with_file(target)
-            if error is not None:
+            registry, errors = self.ctx.registry.with_file(target)
+            for error in errors:  # each class that did not register: the others did
                 self.ctx.error(iloc.at(str(error)))
                 if not error.imported:  # as a file not allowed: its nodes say it
                     self.ctx.unloaded_plugins.append(text)

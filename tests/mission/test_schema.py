@@ -79,8 +79,8 @@ def _schema_for(mission: dict[str, Any], path: Path) -> dict[str, Any]:
 
     registry = default_registry()
     for plugin in mission["plugins"]:
-        registry, error = registry.with_file(path.parent / plugin)
-        assert error is None, error
+        registry, errors = registry.with_file(path.parent / plugin)
+        assert errors == [], errors
     return mission_schema(registry)
 
 

@@ -1,0 +1,158 @@
+"""What a broken plugin is told: each class on its own, where an import raised, and a name
+two plugins declare said as a clash (session 24's field test of plugin packages)."""
+
+from __future__ import annotations
+
+import logging
+from importlib.metadata import EntryPoint
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.behaviours import Condition, Registry, builtin_registry, declare
+from roomba_bt.robot.interface import Snapshot
+
+GROUP = "roomba_bt.behaviours"
+
+MIXED = """\
+from roomba_bt.behaviours import Condition, Param, declare
+
+
+@declare("not_leaf", kind="action")
+class NotLeaf:
+    '''not a behaviour'''
+
+
+@declare("bad_one", kind="condition", params=(Param("level", int, default=3),))
+class BadOne(Condition):
+    def check(self, snapshot):
+        return True
+
+
+@declare("ok_one", kind="condition")
+class OkOne(Condition):
+    def check(self, snapshot):
+        return True
+"""
+
+
+def _package(root: Path, name: str, files: dict[str, str]) -> Path:
+    """A package ``name`` under ``root`` (put on sys.path by the caller) with ``files``."""
+    folder = root / name
+    folder.mkdir(parents=True)
+    (folder / "__init__.py").write_text("")
+    for file, text in files.items():
+        (folder / file).write_text(text)
+    return folder
+
+
+def _assert_mixed(registry: Registry, errors: list[str], where: Path) -> None:
+    assert "ok_one" in registry.names() and "not_leaf" not in registry.names()
+    [bad, plain] = errors
+    assert f"BadOne ({where}:9) declares itself wrongly: parameter 'level'" in bad
+    assert f"NotLeaf ({where}:4): class NotLeaf is decorated with @declare but is not" in plain
+
+
+def test_a_declared_plain_class_leaves_its_entry_point_module_s_others(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """One @declare'd plain class dropped its whole module: the module's good ok_one was
+    missing and its other declaration errors were not said."""
+    folder = _package(tmp_path, "s24_mixed_ep", {"baddecl.py": MIXED})
+    monkeypatch.syspath_prepend(str(tmp_path))
+    registry = builtin_registry()
+    registry.load_entry_point(EntryPoint("bad", "s24_mixed_ep.baddecl", GROUP))
+    _assert_mixed(registry, [str(e) for e in registry.errors], folder / "baddecl.py")
+
+
+def test_a_declared_plain_class_leaves_its_plugin_file_s_others(tmp_path: Path) -> None:
+    """A plugin file: every error of it is handed back, not the first alone."""
+    path = tmp_path / "mixed.py"
+    path.write_text(MIXED)
+    registry, errors = builtin_registry().with_file(path)
+    _assert_mixed(registry, [str(e) for e in errors], path)
+
+
+def test_a_plugin_file_that_fails_to_import_says_where(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """``failed to import: KeyError: 'X'`` named no line of the plugin, even with -v."""
+    path = tmp_path / "nameerr.py"
+    path.write_text("import os\n\nos.environ['ROOMBA_BT_S24_NOPE']\n")
+    with caplog.at_level(logging.DEBUG, logger="roomba_bt.plugins"):
+        _, [error] = builtin_registry().with_file(path)
+    assert str(error) == (
+        f"plugin {path}: failed to import: KeyError: 'ROOMBA_BT_S24_NOPE' (at {path}:3)"
+    )
+    [record] = caplog.records
+    assert "Traceback (most recent call last)" in record.getMessage()
+    assert f'File "{path}", line 3' in record.getMessage()
+
+
+def test_an_entry_point_that_fails_to_import_says_where_in_its_package(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The innermost frame in the plugin's own package, not the os module's where the
+    KeyError was raised, nor the import machinery's."""
+    folder = _package(
+        tmp_path,
+        "s24_raising_ep",
+        {"helpers.py": "import os\n\n\ndef setting():\n    return os.environ['S24_NOPE']\n",
+         "behaviours.py": "from s24_raising_ep.helpers import setting\n\nSET = setting()\n"},
+    )  # fmt: skip
+    monkeypatch.syspath_prepend(str(tmp_path))
+    registry = Registry(entry_point_group=None)
+    registry.load_entry_point(EntryPoint("raising", "s24_raising_ep.behaviours", GROUP))
+    registry.load_entry_point(EntryPoint("gone", "s24_no_such_package_xyz", GROUP))
+    [raising, gone] = [str(e) for e in registry.errors]
+    assert raising.endswith(
+        f"failed to import: KeyError: 'S24_NOPE' (at {folder / 'helpers.py'}:5)"
+    )
+    # nothing of its own ran: no line to name
+    assert gone.endswith("failed to import: ModuleNotFoundError: No module named "
+                         "'s24_no_such_package_xyz'")  # fmt: skip
+
+
+@declare("s24_spiral", kind="condition")
+class FirstSpiral(Condition):
+    """One plugin's ``s24_spiral``."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        return True
+
+
+@declare("s24_spiral", kind="condition")
+class SecondSpiral(Condition):
+    """Another plugin's ``s24_spiral``."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        return False
+
+
+@declare("wait", kind="condition")
+class MyWait(Condition):
+    """A plugin's behaviour that takes a built-in's name."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        return True
+
+
+def test_a_name_two_plugins_declare_is_said_as_a_clash_not_a_wrong_declaration() -> None:
+    """The plugin whose entry point sorted second was told it "declares itself wrongly":
+    it declared nothing wrongly."""
+    registry = builtin_registry()
+    registry.load_entry_point(EntryPoint("first", f"{__name__}:FirstSpiral", GROUP))
+    registry.load_entry_point(EntryPoint("second", f"{__name__}:SecondSpiral", GROUP))
+    registry.load_entry_point(EntryPoint("mine", f"{__name__}:MyWait", GROUP))
+    [second, mine] = [str(e) for e in registry.errors]
+    assert "wrongly" not in second and "wrongly" not in mine
+    here = Path(__file__)
+    assert second.startswith(f"plugin 'second' ({__name__}:SecondSpiral): SecondSpiral ({here}:")
+    assert (
+        f"declares 's24_spiral', as FirstSpiral ({here}:" in second
+        and f"of plugin 'first' ({__name__}:FirstSpiral) does: a name clash between two "
+        "plugins; a mission that uses 's24_spiral' is refused (exit 2)"
+        in second
+    )
+    assert "declares 'wait', the name of the built-in Wait (" in mine
+    assert "the built-in is used and this behaviour is not (rename it)" in mine
