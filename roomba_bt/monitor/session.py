@@ -45,6 +45,8 @@ BREAK_ON = ("start", "success", "failure", "end")
 log = logging.getLogger(__name__)
 
 FORCEABLE = {"success": Status.SUCCESS, "failure": Status.FAILURE}
+#: the channels the robot stops by itself when it falls to Passive (a cliff, a wheel drop)
+FALL_DROPS = ("wheels", "motors")
 
 
 class ControlRefused(ValueError):
@@ -114,6 +116,11 @@ class MonitorSession:
         self._held_end: str | None = None
         self._stop: str | None = None
         self._pending_mission: Any = None
+        #: the robot's own fall to Passive (a cliff, a wheel drop) last seen, and the wheel
+        #: and motor commands that stood before it: the robot dropped them when it fell, so
+        #: a resume does not send them again (the tree, which saw the fall, decides anew)
+        self._fall_seen: object = None
+        self._before_fall: dict[str, Command] = {}
         self.listeners: list[Callable[[str], None]] = []  # told of pauses (the terminal)
 
     # ---------------------------------------------------------------- any thread
@@ -155,6 +162,11 @@ class MonitorSession:
     # ---------------------------------------------------------------- tick thread
     def before_tick(self, runner: MissionRunner) -> bool:
         """Apply requests; False when the tree must not tick this frame (paused)."""
+        fall = runner.snapshot.last_fallback
+        if fall is not self._fall_seen:  # seen before this frame's tick writes anything
+            self._fall_seen = fall
+            sent = runner.last_sent
+            self._before_fall = {c: sent[c] for c in FALL_DROPS if c in sent}
         if not self._requests.empty():
             self._apply(runner)
         if self._stop is not None:
@@ -263,8 +275,7 @@ class MonitorSession:
         again: list[Command] = []
         if mode in (OIMode.SAFE, OIMode.FULL):
             again.append(oi.safe() if mode is OIMode.SAFE else oi.full())
-            # the actuators as the tree left them: its actions sent their commands once
-            again += [c for c in runner.last_sent.values() if c.spec.sets_state]
+            again += self._standing(runner)
         elif self._cycle_before_pause is not None:  # its leaf waits on it: started again
             again.append(self._cycle_before_pause)
         if again:
@@ -277,7 +288,23 @@ class MonitorSession:
         resent = again[1:] if mode is not None else again
         if resent:
             back += ", " + ", ".join(c.name for c in resent) + " sent again"
+        fallen = [c.name for ch, c in runner.last_sent.items() if self._before_fall.get(ch) is c]
+        if mode is not None and fallen:
+            back += f" ({', '.join(fallen)} not: from before the robot's own fall to Passive)"
         self._said("control", f"resume ({why}): {back}; the tree goes on")
+
+    def _standing(self, runner: MissionRunner) -> list[Command]:
+        """The actuators' commands as the tree left them (its actions sent theirs once), to
+        send again on a resume: not Play or Buttons (they would play or press again), nor a
+        wheel or motor command from before the robot's own fall to Passive (a cliff, a wheel
+        drop: the robot stopped them then; the tree, which saw the fall, decides anew: a
+        resume sent the forward drive that took the robot over the edge)."""
+        before_fall = self._before_fall
+        return [
+            c
+            for channel, c in runner.last_sent.items()
+            if c.spec.sets_state and before_fall.get(channel) is not c
+        ]
 
     def _said(self, kind: str, text: str) -> None:
         """An operator's act (or what it caused) into the page's event log, and the run's

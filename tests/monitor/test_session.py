@@ -53,10 +53,15 @@ class Rig:
     """A shuttle run on the virtual clock with the monitor's session as its gate."""
 
     def __init__(
-        self, *, simulator: bool = True, record: Path | None = None, mission: Path = SHUTTLE
+        self,
+        *,
+        simulator: bool = True,
+        record: Path | None = None,
+        mission: Path = SHUTTLE,
+        world: str | Path = "empty-room",
     ) -> None:
         self.mission = load_mission(mission, {}, profile=CREATE2)
-        self.sim = Simulator(load_world("empty-room"), CREATE2, 0)
+        self.sim = Simulator(load_world(world), CREATE2, 0)
         recording = Recording(record, str(SHUTTLE)) if record is not None else None
         self.stack = RunStack(
             self.mission,
@@ -513,3 +518,72 @@ def test_a_reload_shuts_the_old_tree_down_and_the_run_s_end_the_new_one(
     old = [f"old {node.name}" for node in rig.mission.root.iterate()]
     # the run's end shuts down its tree then, the new one: the old one's came at the reload
     assert shut == old + [f"new {node.name}" for node in new.root.iterate()]
+
+
+LEDGE = """\
+name: ledge
+description: a room whose east half is a drop, the robot facing it
+rooms:
+  - [[0.0, 0.0], [4.0, 0.0], [4.0, 3.5], [0.0, 3.5]]
+drops:
+  - {name: ledge, rect: [2.0, 0.0, 4.0, 3.5]}
+robot:
+  start: {at: [1.2, 1.75], heading: 0}
+  battery: 0.6
+"""
+OVER_THE_EDGE = """\
+mission: over the edge
+tree:
+  fallback:
+    - sequence:
+        - mode: safe
+        - drive: {velocity: 200 mm/s, distance: 2 m}
+    - sequence:
+        name: after the cliff
+        children:
+          - cliff: any
+          - {name: safe again, mode: safe}
+          - wait: 1s
+"""
+
+
+def test_a_resume_after_the_robot_s_own_fall_does_not_send_the_drive_from_before_it(
+    until: Callable[..., None], tmp_path: Path
+) -> None:
+    """Forward into a drop: the robot falls to Passive by itself (the cliff), the tree sees
+    it and enters Safe again, a breakpoint pauses there. The resume sent Safe and then the
+    forward Drive the tree had sent before the fall (the robot's last wheel command), so the
+    robot drove on over the edge before the tree's next tick. Only Safe is sent again."""
+    (tmp_path / "ledge.yaml").write_text(LEDGE)
+    (tmp_path / "edge.yaml").write_text(OVER_THE_EDGE)
+    rig = Rig(mission=tmp_path / "edge.yaml", world=tmp_path / "ledge.yaml")
+    safe_again = rig.node("safe again")
+    rig.session.request("break", safe_again, "success")
+    written: list[str] = []
+    send_many = rig.connection.send_many
+    seen: dict[str, object] = {}
+
+    def noting(commands: Any) -> None:
+        written.extend(c.name for c in commands)
+        send_many(commands)
+
+    def operator(rig: Rig) -> None:
+        until(lambda: rig.session.state.paused)
+        seen["fell"] = rig.connection.last_fallback
+        rig.connection.send_many = noting  # type: ignore[method-assign]
+        rig.session.request("resume")
+        until(lambda: not rig.session.state.paused)
+        resumed = rig.ticks(ticked=True)
+        until(lambda: rig.ticks(ticked=True) > resumed + 5 or rig.ended.is_set())
+        seen["after"] = (rig.sim.mode, rig.sim.left_speed, rig.sim.right_speed)
+
+    summary = rig.run_with(operator)
+    assert seen["fell"] is not None  # the robot's own fall, to Passive
+    assert written == ["safe"], written
+    assert seen["after"] == (OIMode.SAFE, 0.0, 0.0)
+    assert summary.outcome is Outcome.SUCCESS, summary.reason
+    resumes = [e.text for e in rig.feed.events if e.text.startswith("resume")]
+    assert resumes == [
+        "resume (resumed by the operator): back to Safe (drive not: from before the robot's "
+        "own fall to Passive); the tree goes on"
+    ]
