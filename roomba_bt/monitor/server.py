@@ -25,10 +25,13 @@ Routes (all behind the token when one is set)::
     POST /api/control     {"action": "pause"|"resume"|"step"|"stop"|"break"|"force",
                            "node": INDEX, "value": ...}  -> 202, or 400/401/403/409
 
-Safety: on a loopback address no token is needed; on any other, every request must carry the
-token printed in the URL at start (``?token=``, the ``X-Monitor-Token`` header, or the cookie
-the page is given), else 401 (none given) or 403 (wrong). A control whose ``Origin`` is not
-this server is refused (403), so another site open in the same browser cannot drive the robot.
+Safety: on a loopback address no token is needed, and a request whose ``Host`` is not
+127.0.0.1, localhost or [::1] with this port is refused (403: another site's name its DNS
+points at 127.0.0.1, DNS rebinding); on any other, every request must carry the token printed
+in the URL at start (``?token=``, the ``X-Monitor-Token`` header, or the cookie the page is
+given), else 401 (none given) or 403 (wrong). On either, a request whose ``Origin`` is not this
+server (a WebSocket, a control, a fetch from another site's page) is refused (403), so another
+site open in the same browser can neither drive the robot nor read the run.
 """
 
 from __future__ import annotations
@@ -230,6 +233,9 @@ class MonitorServer:
 
     @web.middleware
     async def _guard(self, request: web.Request, handler: Handler) -> web.StreamResponse:
+        refused = self._foreign(request)
+        if refused is not None:
+            return refused
         if self.token is not None:
             given = (
                 request.query.get("token")
@@ -245,6 +251,37 @@ class MonitorServer:
             if not hmac.compare_digest(given.encode(), self.token.encode()):
                 return _error(403, "wrong token: open the URL printed when the run started")
         return await handler(request)
+
+    def _foreign(self, request: web.Request) -> web.Response | None:
+        """403 for a request another site's page made: on a loopback address, one whose
+        ``Host`` is not this machine (``127.0.0.1``, ``localhost``, ``[::1]`` with this port):
+        a name of another site that its DNS turned to 127.0.0.1 (DNS rebinding) makes the
+        browser treat this server as that site; on any address, one whose ``Origin`` (the
+        page that made it: every WebSocket and control has one) is not this server."""
+        host = request.headers.get("Host", "")
+        if host and is_loopback(self.host) and not self._local_host(host):
+            names = ", ".join(f"{n}:{self.port}" for n in ("127.0.0.1", "localhost", "[::1]"))
+            return _error(
+                403,
+                f"this monitor listens on {self.host} and answers only requests addressed "
+                f"to {names}; Host {host!r} refused (another site's name pointed at this "
+                "machine: DNS rebinding)",
+            )
+        origin = request.headers.get("Origin")
+        if origin is not None and urlsplit(origin).netloc.lower() != host.lower():
+            return _error(403, f"a request from another site ({origin}) is refused")
+        return None
+
+    def _local_host(self, host: str) -> bool:
+        """``host`` (a ``Host`` header) names this machine's loopback and this port."""
+        try:
+            parts = urlsplit(f"//{host}")
+            port = parts.port
+        except ValueError:
+            return False
+        name = (parts.hostname or "").lower()
+        local = {"127.0.0.1", "localhost", "::1", self.host.strip("[]").lower()}
+        return name in local and (port == self.port or (port is None and self.port == 80))
 
     async def _page(self, request: web.Request) -> web.StreamResponse:
         html = resources.files("roomba_bt.monitor").joinpath("static/index.html").read_text("utf-8")
@@ -316,9 +353,6 @@ class MonitorServer:
         return web.json_response(body)
 
     async def _control(self, request: web.Request) -> web.StreamResponse:
-        origin = request.headers.get("Origin")
-        if origin and urlsplit(origin).netloc != request.host:
-            return _error(403, f"a control from another site ({origin}) is refused")
         if self.session is None:
             return _error(409, "a recorded run has no controls: it can only be watched")
         if self.readonly:

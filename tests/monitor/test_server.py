@@ -97,6 +97,83 @@ def test_a_control_from_another_site_is_refused(server: MonitorServer) -> None:
     got, body = _control(server, {"action": "pause"}, Origin="http://evil.example")
     assert got == 403 and "another site" in body["error"]
     assert server.session is not None and server.session._requests.empty()
+    got, _ = _control(server, {"action": "pause"}, Origin=f"http://127.0.0.1:{server.port}")
+    assert got == 202
+
+
+def test_a_page_of_another_site_reaching_the_loopback_by_dns_rebinding_is_refused(
+    server: MonitorServer,
+) -> None:
+    """evil.example's DNS turns to 127.0.0.1: its page's requests reach the local monitor as
+    same-origin ones (Host and Origin both evil.example:PORT). The control's Origin check
+    compared only the two, so pause, resume, step, stop and force were accepted (202), and
+    the state and the WebSocket answered any Host: the mission, the pose, the map."""
+    evil = f"evil.example:{server.port}"
+    got, body = _control(server, {"action": "pause"}, Host=evil, Origin=f"http://{evil}")
+    assert got == 403 and "DNS rebinding" in body["error"], body
+    assert server.session is not None and server.session._requests.empty()
+    base = f"http://127.0.0.1:{server.port}"
+    for path in ("/", "/api/state", "/ws"):
+        status, body = _call(base + path, headers={"Host": evil})
+        assert status == 403 and "evil.example" in body["error"], path
+    # another port of this machine's names is another origin too
+    assert _call(base + "/", headers={"Host": "localhost:1"})[0] == 403
+    for host in ("localhost", "LOCALHOST", "127.0.0.1", "[::1]"):
+        status, _ = _call(base + "/", headers={"Host": f"{host}:{server.port}"})
+        assert status == 200, host
+    got, _ = _control(server, {"action": "pause"}, Origin=f"http://localhost:{server.port}",
+                      Host=f"localhost:{server.port}")  # fmt: skip
+    assert got == 202
+
+
+def _ws_status(port: int, origin: str | None, host: str | None = None) -> int:
+    """The status of a WebSocket handshake with ``origin`` (101: accepted)."""
+    headers = {"Connection": "Upgrade", "Upgrade": "websocket", "Sec-WebSocket-Version": "13",
+               "Sec-WebSocket-Key": "dGhlIHNhbXBsZSBub25jZQ=="}  # fmt: skip
+    if origin is not None:
+        headers["Origin"] = origin
+    with socket.create_connection(("127.0.0.1", port), timeout=10) as sock:
+        lines = ["GET /ws HTTP/1.1", f"Host: {host or f'127.0.0.1:{port}'}"]
+        lines += [f"{k}: {v}" for k, v in headers.items()]
+        sock.sendall(("\r\n".join(lines) + "\r\n\r\n").encode())
+        return int(sock.recv(200).split()[1])
+
+
+def test_the_websocket_and_the_state_refuse_another_site_s_page(server: MonitorServer) -> None:
+    """Any site open in the browser could open the WebSocket (it checked no Origin) and read
+    the run: the mission, the robot's pose, the map."""
+    port = server.port
+    assert _ws_status(port, "http://evil.example") == 403
+    assert _ws_status(port, "null") == 403
+    assert _ws_status(port, f"http://127.0.0.1:{port}") == 101  # the page itself
+    assert _ws_status(port, None) == 101  # not a browser: no Origin
+    status, body = _call(
+        f"http://127.0.0.1:{port}/api/state", headers={"Origin": "http://evil.example"}
+    )
+    assert status == 403 and "another site" in body["error"]
+
+
+def test_a_token_protected_address_answers_the_machine_s_own_name() -> None:
+    """On 0.0.0.0 the page is opened by this machine's name or address (any Host): the
+    token guards it; a page of another site is refused by its Origin all the same."""
+    served = _serve(host="0.0.0.0")
+    try:
+        base, token = f"http://127.0.0.1:{served.port}", served.token
+        name = f"robot-laptop.local:{served.port}"
+        assert _call(f"{base}/?token={token}", headers={"Host": name})[0] == 200
+        got, _ = _control(
+            served, {"action": "pause"}, Host=name, Origin=f"http://{name}",
+            **{"X-Monitor-Token": str(token)},
+        )  # fmt: skip
+        assert got == 202
+        got, _ = _control(
+            served, {"action": "pause"}, Origin="http://evil.example",
+            **{"X-Monitor-Token": str(token)},
+        )  # fmt: skip
+        assert got == 403
+        assert _call(f"{base}/?token={token}", headers={"Host": "evil.example"})[0] == 200
+    finally:
+        served.close()
 
 
 def test_readonly_and_recorded_runs_have_no_controls() -> None:
