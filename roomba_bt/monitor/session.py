@@ -202,12 +202,27 @@ class MonitorSession:
         """The tree's root has just ended: True while the run is held there, paused by a
         breakpoint on the last tick or by a step that was that tick, so the operator sees the
         end before the run's own; the resume (or a stop) then ends the run."""
+        if self.state.forced and runner.mission.root.status is Status.SUCCESS:
+            self._forced_success(runner)
         held = self.state.paused or self._steps_left == 0
         if held and self._held_end is None:
             ended = runner.mission.root.status.value
             self._held_end = ended
             self._said("control", f"the mission ended: {ended}; held until resumed or stopped")
         return held
+
+    def _forced_success(self, runner: MissionRunner) -> None:
+        """A mission that ends in SUCCESS with a condition forced (still returning what the
+        operator chose): its summary says so, as a failure's reason does ("battery(below=15%):
+        forced to SUCCESS by the operator"); it read as the mission's own success."""
+        nodes, infos = self.feed.nodes, self.feed.infos
+        forced = [
+            f"{infos[i].name}: forced to {FORCEABLE[v].value} by the operator"
+            for i, v in sorted(self.state.forced.items())
+            if nodes[i].status is FORCEABLE[v]
+        ]
+        if forced:
+            runner.summary.reason = "; ".join(forced)
 
     def _apply(self, runner: MissionRunner) -> None:
         while True:

@@ -587,3 +587,20 @@ def test_a_resume_after_the_robot_s_own_fall_does_not_send_the_drive_from_before
         "resume (resumed by the operator): back to Safe (drive not: from before the robot's "
         "own fall to Passive); the tree goes on"
     ]
+
+
+def test_a_success_a_forced_condition_caused_says_so_in_the_summary(tmp_path: Path) -> None:
+    """A forced FAILURE was named in the summary's reason, a forced SUCCESS not: a patrol
+    with its battery check forced to SUCCESS ended SUCCESS after one tick, as if it were its
+    own."""
+    low = tmp_path / "low.yaml"
+    low.write_text(
+        "mission: low\ntree:\n  fallback:\n    - {name: low battery, battery: {below: 15%}}\n"
+        "    - wait: 30s\n"
+    )
+    rig = Rig(mission=low)
+    rig.session.request("force", rig.node("low battery"), "success")
+    summary = rig.run_with(lambda rig: None)
+    assert summary.outcome is Outcome.SUCCESS
+    assert summary.reason == "low battery: forced to SUCCESS by the operator"
+    assert "outcome      SUCCESS (low battery: forced to SUCCESS by the operator)" in str(summary)
