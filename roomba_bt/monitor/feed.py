@@ -418,14 +418,19 @@ class RunFeed:
         )
 
     # ---------------------------------------------------------------- any thread
-    def event(self, kind: str, text: str, time: float | None = None) -> None:
-        """Append to the event log (mission time; the newest tick's when ``time`` is None)."""
+    def event(
+        self, kind: str, text: str, time: float | None = None, tick: int | None = None
+    ) -> None:
+        """Append to the event log (mission time, to the ms: ``21.69``, not the sum of
+        15 ms steps ``21.689999999999998``; the newest tick's when ``time`` or ``tick`` is
+        None)."""
         newest = self.ring.newest()
-        tick = newest.tick if newest is not None else 0
+        if tick is None:
+            tick = newest.tick if newest is not None else 0
         if time is None:
             time = newest.time if newest is not None else 0.0
         with self._event_lock:
-            self.events.append(Event(self._event_seq, time, kind, text, tick))
+            self.events.append(Event(self._event_seq, round(time, 3), kind, text, tick))
             self._event_seq += 1
 
     def events_after(self, seq: int) -> list[Event]:

@@ -208,7 +208,9 @@ class MonitorSession:
         if held and self._held_end is None:
             ended = runner.mission.root.status.value
             self._held_end = ended
-            self._said("control", f"the mission ended: {ended}; held until resumed or stopped")
+            self._said(
+                runner, "control", f"the mission ended: {ended}; held until resumed or stopped"
+            )
         return held
 
     def _forced_success(self, runner: MissionRunner) -> None:
@@ -240,15 +242,15 @@ class MonitorSession:
                 self._steps_left = 1  # the next frame's tick, then pause before the one after
             elif req.action == "stop":
                 self._stop = "stopped by the operator"
-                self._said("control", "stop: the run ends (as on Ctrl-C)")
+                self._said(runner, "control", "stop: the run ends (as on Ctrl-C)")
             elif req.action == "break" and req.node is not None:
                 name = self.feed.infos[req.node].name
                 if req.value == "none":
                     state.breakpoints.pop(req.node, None)
-                    self._said("breakpoint", f"breakpoint on {name} cleared")
+                    self._said(runner, "breakpoint", f"breakpoint on {name} cleared")
                 else:
                     state.breakpoints[req.node] = str(req.value)
-                    self._said("breakpoint", f"break when {name} {_on(req.value)}")
+                    self._said(runner, "breakpoint", f"break when {name} {_on(req.value)}")
             elif req.action == "force" and req.node is not None:
                 self._force(runner, req.node, str(req.value))
             elif req.action == "reload":
@@ -273,7 +275,7 @@ class MonitorSession:
         self.state.paused, self.state.pause_reason = True, why
         runner.clock_held = True  # mission time stands still until the resume
         sent = ", ".join(c.name for c in commands) or "nothing to send"
-        self._said("control", f"pause ({why}): safe stop sent {sent}; tree frozen")
+        self._said(runner, "control", f"pause ({why}): safe stop sent {sent}; tree frozen")
         for listener in self.listeners:
             with contextlib.suppress(Exception):
                 listener(why)
@@ -283,7 +285,7 @@ class MonitorSession:
         if self._held_end is not None:  # nothing to go on with: no mode, no wheels again
             self.state.paused, self.state.pause_reason = False, ""
             self._steps_left = None
-            self._said("control", f"resume ({why}): the mission ended ({self._held_end}); "
+            self._said(runner, "control", f"resume ({why}): the mission ended ({self._held_end}); "
                        "the run ends")  # fmt: skip
             return
         mode = self._mode_before_pause
@@ -306,7 +308,7 @@ class MonitorSession:
         fallen = [c.name for ch, c in runner.last_sent.items() if self._before_fall.get(ch) is c]
         if mode is not None and fallen:
             back += f" ({', '.join(fallen)} not: from before the robot's own fall to Passive)"
-        self._said("control", f"resume ({why}): {back}; the tree goes on")
+        self._said(runner, "control", f"resume ({why}): {back}; the tree goes on")
 
     def _standing(self, runner: MissionRunner) -> list[Command]:
         """The actuators' commands as the tree left them (its actions sent theirs once), to
@@ -321,11 +323,17 @@ class MonitorSession:
             if c.spec.sets_state and before_fall.get(channel) is not c
         ]
 
-    def _said(self, kind: str, text: str) -> None:
+    def _said(self, runner: MissionRunner, kind: str, text: str) -> None:
         """An operator's act (or what it caused) into the page's event log, and the run's
         log on the terminal: a key pressed there (p, r, n) said nothing, and ``--display
-        log`` showed no pause."""
-        self.feed.event(kind, text)
+        log`` showed no pause. At the frame it was done in (as the log and the record say):
+        a request applied before this frame's tick is not the previous tick's (the feed's
+        newest record), which put it 15 ms earlier on the page."""
+        if runner.has_snapshot:
+            snapshot = runner.snapshot
+            self.feed.event(kind, text, snapshot.time, snapshot.tick)
+        else:
+            self.feed.event(kind, text)
         log.info("monitor: %s", text)
 
     def _force(self, runner: MissionRunner, index: int, value: str) -> None:
@@ -350,7 +358,7 @@ class MonitorSession:
             node.__dict__["update"] = forced
             self.state.forced[index] = value
             text = f"{name} forced to {status.value}"
-        self._said("force", text)
+        self._said(runner, "force", text)
         _note(runner, {"force": name, "node": index, "to": value, "at": "before"})
 
     def _check_breakpoints(self, runner: MissionRunner, changed: tuple[int, ...]) -> None:
@@ -373,7 +381,9 @@ class MonitorSession:
             )
             if hit:
                 name = self.feed.infos[index].name
-                self._said("breakpoint", f"breakpoint: {name} {_on(on)} at tick {record.tick}")
+                self._said(
+                    runner, "breakpoint", f"breakpoint: {name} {_on(on)} at tick {record.tick}"
+                )
                 self._steps_left = None
                 self._pause(runner, f"breakpoint: {name} {_on(on)}", at="after")
                 return
@@ -399,7 +409,7 @@ class MonitorSession:
         self.state.breakpoints.clear()
         self._held_end = None
         self.feed.set_tree(mission.root)
-        self._said("reload", f"reloaded {mission.name}: the new tree starts from its root")
+        self._said(runner, "reload", f"reloaded {mission.name}: the new tree starts from its root")
         self.state.paused = was_paused
         runner.clock_held = was_paused
         self._skip_tick = True

@@ -604,3 +604,33 @@ def test_a_success_a_forced_condition_caused_says_so_in_the_summary(tmp_path: Pa
     assert summary.outcome is Outcome.SUCCESS
     assert summary.reason == "low battery: forced to SUCCESS by the operator"
     assert "outcome      SUCCESS (low battery: forced to SUCCESS by the operator)" in str(summary)
+
+
+def test_the_operator_s_acts_are_on_the_page_at_the_tick_the_log_and_the_record_say(
+    until: Callable[..., None], tmp_path: Path
+) -> None:
+    """A control is applied before a frame's tick: the page's event log stamped it with the
+    feed's newest record, the tick before (page "time 3.15, tick 210"; the log t=3.165, the
+    record tick 211). Event times are to the ms (21.689999999999998 was sent)."""
+    record_path = tmp_path / "acts.jsonl"
+    rig = Rig(record=record_path)
+    no_bump = rig.node("no bump")
+
+    def operator(rig: Rig) -> None:
+        until(lambda: rig.ticks(ticked=True) > 1447)  # past 21.69 s
+        rig.session.request("pause")
+        until(lambda: rig.session.state.paused)
+        rig.session.request("force", no_bump, "failure")
+        rig.session.request("resume")
+        rig.ended.wait(30)
+
+    rig.run_with(operator)
+    notes = [note for _, note in load_record(record_path).notes]
+    acts = {("pause" if "pause" in n else "resume" if "resume" in n else "force"): n for n in notes}
+    events = {e.text.split(" ")[0]: e for e in rig.feed.events if e.kind in ("control", "force")}
+    for act, word in (("pause", "pause"), ("resume", "resume"), ("force", "no")):
+        assert events[word].tick == acts[act]["tick"], (act, events[word], acts[act])
+    pause_tick = acts["pause"]["tick"]
+    paused_at = next(r.time for r in rig.feed.since(0)[0] if r.tick == pause_tick)
+    assert events["pause"].time == round(paused_at, 3)
+    assert all(e.time == round(e.time, 3) for e in rig.feed.events)
