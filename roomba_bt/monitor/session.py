@@ -285,8 +285,8 @@ class MonitorSession:
         if self._held_end is not None:  # nothing to go on with: no mode, no wheels again
             self.state.paused, self.state.pause_reason = False, ""
             self._steps_left = None
-            self._said(runner, "control", f"resume ({why}): the mission ended ({self._held_end}); "
-                       "the run ends")  # fmt: skip
+            self._said(runner, "control", f"resume ({why}): the mission ended "
+                       f"({self._held_end}); the run ends")  # fmt: skip
             return
         mode = self._mode_before_pause
         again: list[Command] = []
