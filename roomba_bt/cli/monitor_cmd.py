@@ -13,6 +13,7 @@ import errno
 import logging
 import os
 import select
+import signal
 import socket
 import sys
 import threading
@@ -333,11 +334,17 @@ def monitor_command(args: argparse.Namespace) -> int:
         print(f"roomba-bt: {address_problem(host, port, exc)}", file=sys.stderr)
         return ExitCode.INVALID
     print(f"{args.record}: {summary.ticks} ticks, {summary.outcome.value}")
+    ended = threading.Event()
+    # SIGTERM (a service manager, `kill`) ends it as Ctrl-C does: the pages told, exit 0; it
+    # killed the process before (exit 143, no word)
+    previous = signal.signal(signal.SIGTERM, lambda *_: ended.set())
     print(f"monitor: {url}  (Ctrl-C ends)", flush=True)
     try:
-        threading.Event().wait()
+        ended.wait()
+        print("monitor: ended by SIGTERM", flush=True)
     except KeyboardInterrupt:
         pass
     finally:
+        signal.signal(signal.SIGTERM, previous)
         server.close()
     return ExitCode.OK

@@ -64,7 +64,10 @@ def _note_text(note: dict[str, Any]) -> str:
 
 class ReplayedActs(MonitorSession):
     """The live run's session, its requests taken from the record's notes instead of a page:
-    each act is done in the frame (and the half of it) it was done in live."""
+    each act is done in the frame (and the half of it) it was done in live. Its commands go
+    to the record's check, never to a robot: the event log says "replayed", not "sent"."""
+
+    SENT, WHERE = "replayed", " (the record's: checked against it, sent to no robot)"
 
     def __init__(self, feed: RunFeed, acts: list[dict[str, Any]]) -> None:
         super().__init__(feed, simulator=False, allow_force=True)

@@ -87,6 +87,9 @@ def pause_sequence(connection: Any) -> list[Command]:
 class MonitorSession:
     """The tick gate the runner calls around each tick (see the module docstring)."""
 
+    #: what the event log says the pause and the resume did with their commands, and where
+    SENT, WHERE = "sent", ""
+
     def __init__(
         self,
         feed: RunFeed,
@@ -129,6 +132,8 @@ class MonitorSession:
         ValueError (bad request) without changing anything."""
         infos = self.feed.infos
         if action in ("pause", "resume", "step", "stop"):
+            if action == "pause" and self.state.paused:
+                raise ControlRefused("the run is already paused")
             if action == "resume" and not self.state.paused:
                 raise ControlRefused("the run is not paused")
             if action == "step" and not self.state.paused:
@@ -145,6 +150,8 @@ class MonitorSession:
                 if not infos[node].condition:
                     raise ControlRefused(f"{infos[node].name} is not a condition: only "
                                          "conditions can be forced")  # fmt: skip
+                if value == "none" and node not in self.state.forced:
+                    raise ControlRefused(f"{infos[node].name} is not forced: nothing to release")
                 if not self.allow_force:
                     raise ControlRefused(
                         "forcing a condition on a real robot is off; run with --monitor-force"
@@ -274,8 +281,12 @@ class MonitorSession:
         runner.count_written()
         self.state.paused, self.state.pause_reason = True, why
         runner.clock_held = True  # mission time stands still until the resume
-        sent = ", ".join(c.name for c in commands) or "nothing to send"
-        self._said(runner, "control", f"pause ({why}): safe stop sent {sent}; tree frozen")
+        sent = ", ".join(c.name for c in commands) or "nothing"
+        self._said(
+            runner,
+            "control",
+            f"pause ({why}): safe stop {self.SENT} {sent}{self.WHERE}; tree frozen",
+        )
         for listener in self.listeners:
             with contextlib.suppress(Exception):
                 listener(why)
@@ -304,10 +315,12 @@ class MonitorSession:
         back = f"back to {mode.label}" if mode is not None else "mode unchanged"
         resent = again[1:] if mode is not None else again
         if resent:
-            back += ", " + ", ".join(c.name for c in resent) + " sent again"
+            back += ", " + ", ".join(c.name for c in resent) + f" {self.SENT} again"
         fallen = [c.name for ch, c in runner.last_sent.items() if self._before_fall.get(ch) is c]
         if mode is not None and fallen:
             back += f" ({', '.join(fallen)} not: from before the robot's own fall to Passive)"
+        if again:
+            back += self.WHERE
         self._said(runner, "control", f"resume ({why}): {back}; the tree goes on")
 
     def _standing(self, runner: MissionRunner) -> list[Command]:
@@ -340,6 +353,8 @@ class MonitorSession:
         node = self.feed.nodes[index]
         name = self.feed.infos[index].name
         if value == "none":
+            if index not in self.state.forced:  # two releases queued: the first did it
+                return
             node.__dict__.pop("update", None)
             node.feedback_message = ""
             self.state.forced.pop(index, None)

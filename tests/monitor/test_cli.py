@@ -300,3 +300,27 @@ def test_a_wildcard_address_and_the_virtual_clock_are_said(
     assert lines[1].startswith(f"monitor: it listens on every address of this machine: "
                                f"http://{socket.gethostname()}:")  # fmt: skip
     assert "--fast runs the mission on the virtual clock: it may end before a page opens" in err
+
+
+def test_monitor_of_a_record_ends_on_sigterm_as_on_ctrl_c(tmp_path: Path) -> None:
+    """SIGTERM killed ``roomba-bt monitor RECORD``: exit 143 and no word (Ctrl-C gave 0)."""
+    record = tmp_path / "run.jsonl"
+    argv = ["run", str(SHUTTLE), "--fast", "--display", "none", "--timeout", "2"]
+    main([*argv, "--record", str(record)])
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "roomba_bt.cli", "monitor", str(record), "--monitor", "0"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        assert proc.stdout is not None
+        for line in proc.stdout:
+            if line.startswith("monitor: http"):
+                break
+        proc.send_signal(signal.SIGTERM)
+        out, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 0, err
+    assert "monitor: ended by SIGTERM" in out

@@ -89,6 +89,22 @@ def test_a_bad_control_gets_a_clear_error_and_changes_nothing(
     assert server.session is not None and server.session._requests.empty()
 
 
+def test_a_pause_when_paused_and_a_release_of_what_is_not_forced_are_refused(
+    server: MonitorServer,
+) -> None:
+    """A pause of a paused run was 202 and did nothing (a resume of a running one is 409);
+    a release of a condition not forced was 202 and said "no longer forced"."""
+    assert server.session is not None
+    server.session.state.paused = True
+    got, body = _control(server, {"action": "pause"})
+    assert got == 409 and body["error"] == "the run is already paused"
+    condition = next(i for i, info in enumerate(server.feed.infos) if info.condition)
+    got, body = _control(server, {"action": "force", "node": condition, "value": "none"})
+    assert got == 409 and "is not forced: nothing to release" in body["error"]
+    assert server.session._requests.empty()
+    assert _control(server, {"action": "resume"}) == (202, {"accepted": "resume"})
+
+
 def test_a_good_control_is_accepted(server: MonitorServer) -> None:
     assert _control(server, {"action": "pause"}) == (202, {"accepted": "pause"})
 

@@ -634,3 +634,33 @@ def test_the_operator_s_acts_are_on_the_page_at_the_tick_the_log_and_the_record_
     paused_at = next(r.time for r in rig.feed.since(0)[0] if r.tick == pause_tick)
     assert events["pause"].time == round(paused_at, 3)
     assert all(e.time == round(e.time, 3) for e in rig.feed.events)
+
+
+def test_a_replayed_pause_says_its_safe_stop_was_replayed_not_sent(
+    until: Callable[..., None], tmp_path: Path
+) -> None:
+    """``roomba-bt monitor RECORD`` said "safe stop sent drive, motors, start" though it
+    sends nothing to any robot."""
+    record_path = tmp_path / "paused.jsonl"
+    rig = Rig(record=record_path)
+
+    def operator(rig: Rig) -> None:
+        until(lambda: rig.ticks(ticked=True) > 100)
+        rig.session.request("pause")
+        until(lambda: rig.session.state.paused)
+        rig.session.request("resume")
+        until(lambda: not rig.session.state.paused)
+        rig.session.request("stop")
+
+    rig.run_with(operator)
+    live = [e.text for e in rig.feed.events if e.kind == "control"]
+    assert any(t.startswith("pause (paused by the operator): safe stop sent drive") for t in live)
+    replayed, _ = replay_into_feed(
+        load_record(record_path), load_mission(SHUTTLE, {}, profile=CREATE2), CREATE2,
+        rig.packets, 115200, "x",
+    )  # fmt: skip
+    texts = [e.text for e in replayed.events if e.kind == "control"]
+    pause = next(t for t in texts if t.startswith("pause"))
+    resume = next(t for t in texts if t.startswith("resume"))
+    assert "safe stop sent" not in pause and "safe stop replayed drive" in pause, pause
+    assert "sent to no robot" in pause and "sent to no robot" in resume, resume
