@@ -68,6 +68,7 @@ class ReplayedActs(MonitorSession):
     to the record's check, never to a robot: the event log says "replayed", not "sent"."""
 
     SENT, WHERE = "replayed", " (the record's: checked against it, sent to no robot)"
+    WARN_OF_SLEEP = False  # the run's own warning is not in the record; no robot sleeps here
 
     def __init__(self, feed: RunFeed, acts: list[dict[str, Any]]) -> None:
         super().__init__(feed, simulator=False, allow_force=True)

@@ -45,6 +45,10 @@ BREAK_ON = ("start", "success", "failure", "end")
 log = logging.getLogger(__name__)
 
 FORCEABLE = {"success": Status.SUCCESS, "failure": Status.FAILURE}
+#: an OI robot's sleep after this long in Passive (keep-awake's BRC pulses prevent it)
+ROBOT_SLEEPS_S = 300.0
+#: how long into a pause a robot that will sleep is warned of
+SLEEP_WARNING_S = 240.0
 #: the channels the robot stops by itself when it falls to Passive (a cliff, a wheel drop)
 FALL_DROPS = ("wheels", "motors")
 
@@ -89,6 +93,9 @@ class MonitorSession:
 
     #: what the event log says the pause and the resume did with their commands, and where
     SENT, WHERE = "sent", ""
+    #: warn of the robot's sleep in a long pause (not in a replay: the record's robot slept
+    #: or not, and its link is not the run's)
+    WARN_OF_SLEEP = True
 
     def __init__(
         self,
@@ -122,6 +129,9 @@ class MonitorSession:
         #: the robot's own fall to Passive (a cliff, a wheel drop) last seen, and the wheel
         #: and motor commands that stood before it: the robot dropped them when it fell, so
         #: a resume does not send them again (the tree, which saw the fall, decides anew)
+        #: the stream's tick at which a paused robot that sleeps in Passive (no keep-awake)
+        #: is warned of (None: not paused, warned already, or it does not sleep)
+        self._sleep_warn_tick: int | None = None
         self._fall_seen: object = None
         self._before_fall: dict[str, Command] = {}
         self.listeners: list[Callable[[str], None]] = []  # told of pauses (the terminal)
@@ -194,6 +204,8 @@ class MonitorSession:
                 return True
         if self.state.paused:
             self.feed.observe(runner, ticked=False)
+            if self._sleep_warn_tick is not None and runner.snapshot.tick >= self._sleep_warn_tick:
+                self._warn_of_sleep(runner)
             if self.paced:
                 self._wake.wait(SLOT_SECONDS)
                 self._wake.clear()
@@ -281,6 +293,11 @@ class MonitorSession:
         runner.count_written()
         self.state.paused, self.state.pause_reason = True, why
         runner.clock_held = True  # mission time stands still until the resume
+        self._sleep_warn_tick = (
+            runner.snapshot.tick + round(SLEEP_WARNING_S / SLOT_SECONDS)
+            if self.WARN_OF_SLEEP and _sleeps_in_passive(connection) and runner.has_snapshot
+            else None
+        )
         sent = ", ".join(c.name for c in commands) or "nothing"
         self._said(
             runner,
@@ -290,6 +307,22 @@ class MonitorSession:
         for listener in self.listeners:
             with contextlib.suppress(Exception):
                 listener(why)
+
+    def _warn_of_sleep(self, runner: MissionRunner) -> None:
+        """The pause has lasted :data:`SLEEP_WARNING_S` on a link without keep-awake: an OI
+        robot sleeps after 5 minutes in Passive, and the run then ends (CONNECTION LOST, "the
+        robot fell asleep") with nothing said before: said now, on the page (its event log
+        and the pause's reason) and in the terminal's log."""
+        self._sleep_warn_tick = None
+        left = ROBOT_SLEEPS_S - SLEEP_WARNING_S
+        text = (
+            f"paused {SLEEP_WARNING_S / 60:g} min without keep-awake: the robot sleeps after "
+            f"{ROBOT_SLEEPS_S / 60:g} min paused in Passive (in about {left:g} s; the run then "
+            "ends, connection lost); resume or stop"
+        )
+        self.state.pause_reason += f" - {text}"
+        self.feed.event("warning", text)
+        log.warning("monitor: %s", text)
 
     def _resume(self, runner: MissionRunner, why: str) -> None:
         _note(runner, {"resume": why, "at": "before"})
@@ -310,6 +343,7 @@ class MonitorSession:
             runner.connection.send_many(again)
             runner.count_written()
         self.state.paused, self.state.pause_reason = False, ""
+        self._sleep_warn_tick = None
         runner.clock_held = False
         self._skip_tick = True  # the tree next ticks on a frame that shows the new mode
         back = f"back to {mode.label}" if mode is not None else "mode unchanged"
@@ -443,6 +477,16 @@ class MonitorSession:
                 "to use it"
             )
         return None
+
+
+def _sleeps_in_passive(connection: Any) -> bool:
+    """Whether the robot falls asleep in a long pause: a robot that sleeps after 5 minutes in
+    Passive, on a link without keep-awake (off, ``--no-keep-awake``, or a pty or plain socket
+    that has no line to pulse)."""
+    if not getattr(connection.profile, "sleeps_in_passive", False):
+        return False
+    wake = getattr(connection, "wake", None)
+    return wake is None or wake.unavailable is not None
 
 
 def _on_home_base(runner: MissionRunner) -> bool:

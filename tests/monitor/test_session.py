@@ -12,6 +12,7 @@ from typing import Any
 import pytest
 
 from roomba_bt.mission import load_mission
+from roomba_bt.monitor import session as session_module
 from roomba_bt.monitor.feed import Ring, RunFeed
 from roomba_bt.monitor.recorded import replay_into_feed
 from roomba_bt.monitor.session import ControlRefused, MonitorSession
@@ -59,6 +60,7 @@ class Rig:
         record: Path | None = None,
         mission: Path = SHUTTLE,
         world: str | Path = "empty-room",
+        keep_awake: bool | None = None,
     ) -> None:
         self.mission = load_mission(mission, {}, profile=CREATE2)
         self.sim = Simulator(load_world(world), CREATE2, 0)
@@ -70,6 +72,7 @@ class Rig:
             watchdog=0.5,
             timeout_s=60.0,
             record=recording,
+            keep_awake=keep_awake,
         )
         self.packets = self.stack.packets
         self.connection = self.stack.connection
@@ -664,3 +667,33 @@ def test_a_replayed_pause_says_its_safe_stop_was_replayed_not_sent(
     resume = next(t for t in texts if t.startswith("resume"))
     assert "safe stop sent" not in pause and "safe stop replayed drive" in pause, pause
     assert "sent to no robot" in pause and "sent to no robot" in resume, resume
+
+
+@pytest.mark.parametrize("keep_awake", [False, None])
+def test_a_long_pause_without_keep_awake_is_warned_of_before_the_robot_sleeps(
+    until: Callable[..., None], monkeypatch: pytest.MonkeyPatch, keep_awake: bool | None
+) -> None:
+    """A robot paused in Passive on a link without keep-awake falls asleep after 5 minutes
+    and the run ends (connection lost), with no word before. Warned of on the page (its
+    event log, the pause's reason) and in the log 4 minutes into the pause (here 1.5 s);
+    not with keep-awake on, which keeps the robot awake."""
+    monkeypatch.setattr(session_module, "SLEEP_WARNING_S", 1.5, raising=False)
+    rig = Rig(keep_awake=keep_awake)
+    seen: dict[str, object] = {}
+
+    def operator(rig: Rig) -> None:
+        until(lambda: rig.ticks(ticked=True) > 50)
+        rig.session.request("pause")
+        until(lambda: rig.session.state.paused)
+        until(lambda: rig.ticks(ticked=False) > 200)  # 3 s of stream, paused
+        seen["reason"] = rig.session.state.pause_reason
+        rig.session.request("stop")
+
+    rig.run_with(operator)
+    warnings = [e.text for e in rig.feed.events if "without keep-awake" in e.text]
+    if keep_awake is False:
+        assert len(warnings) == 1 and "resume or stop" in warnings[0], warnings
+        assert "the robot sleeps after 5 min paused in Passive" in warnings[0]
+        assert "without keep-awake" in str(seen["reason"])
+    else:
+        assert warnings == [] and seen["reason"] == "paused by the operator"
