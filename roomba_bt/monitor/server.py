@@ -26,7 +26,7 @@ Routes (all behind the token when one is set)::
                            "node": INDEX, "value": ...}  -> 202, or 400/401/403/409
 
 Safety: on a loopback address no token is needed, and a request whose ``Host`` is not
-127.0.0.1, localhost or [::1] with this port is refused (403: another site's name its DNS
+127.0.0.1, localhost or [::1] (any port: a tunnel's) is refused (403: another site's name its DNS
 points at 127.0.0.1, DNS rebinding); on any other, every request must carry the token printed
 in the URL at start (``?token=``, the ``X-Monitor-Token`` header, or the cookie the page is
 given), else 401 (none given) or 403 (wrong). On either, a request whose ``Origin`` is not this
@@ -254,18 +254,17 @@ class MonitorServer:
 
     def _foreign(self, request: web.Request) -> web.Response | None:
         """403 for a request another site's page made: on a loopback address, one whose
-        ``Host`` is not this machine (``127.0.0.1``, ``localhost``, ``[::1]`` with this port):
+        ``Host`` is not this machine (``127.0.0.1``, ``localhost``, ``[::1]``, any port):
         a name of another site that its DNS turned to 127.0.0.1 (DNS rebinding) makes the
         browser treat this server as that site; on any address, one whose ``Origin`` (the
         page that made it: every WebSocket and control has one) is not this server."""
         host = request.headers.get("Host", "")
         if host and is_loopback(self.host) and not self._local_host(host):
-            names = ", ".join(f"{n}:{self.port}" for n in ("127.0.0.1", "localhost", "[::1]"))
             return _error(
                 403,
                 f"this monitor listens on {self.host} and answers only requests addressed "
-                f"to {names}; Host {host!r} refused (another site's name pointed at this "
-                "machine: DNS rebinding)",
+                f"to 127.0.0.1, localhost or [::1] (http://127.0.0.1:{self.port}/); Host "
+                f"{host!r} refused (another site's name pointed at this machine: DNS rebinding)",
             )
         origin = request.headers.get("Origin")
         if origin is not None and urlsplit(origin).netloc.lower() != host.lower():
@@ -273,15 +272,16 @@ class MonitorServer:
         return None
 
     def _local_host(self, host: str) -> bool:
-        """``host`` (a ``Host`` header) names this machine's loopback and this port."""
+        """``host`` (a ``Host`` header) names this machine's loopback, with any port or none:
+        the name is what a rebinding page cannot fake (its own is in its URL); the port may
+        be another than this one (``ssh -L 9000:127.0.0.1:8765``, then localhost:9000)."""
         try:
             parts = urlsplit(f"//{host}")
-            port = parts.port
+            parts.port  # noqa: B018 - a port that is not a number raises here
         except ValueError:
             return False
         name = (parts.hostname or "").lower()
-        local = {"127.0.0.1", "localhost", "::1", self.host.strip("[]").lower()}
-        return name in local and (port == self.port or (port is None and self.port == 80))
+        return name in {"127.0.0.1", "localhost", "::1", self.host.strip("[]").lower()}
 
     async def _page(self, request: web.Request) -> web.StreamResponse:
         html = resources.files("roomba_bt.monitor").joinpath("static/index.html").read_text("utf-8")

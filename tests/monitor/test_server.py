@@ -132,11 +132,12 @@ def test_a_page_of_another_site_reaching_the_loopback_by_dns_rebinding_is_refuse
     for path in ("/", "/api/state", "/ws"):
         status, body = _call(base + path, headers={"Host": evil})
         assert status == 403 and "evil.example" in body["error"], path
-    # another port of this machine's names is another origin too
-    assert _call(base + "/", headers={"Host": "localhost:1"})[0] == 403
+    assert _call(base + "/", headers={"Host": "localhost.evil.example"})[0] == 403
+    # this machine's names, with this port, none, or a tunnel's (ssh -L 9000:127.0.0.1:PORT)
     for host in ("localhost", "LOCALHOST", "127.0.0.1", "[::1]"):
-        status, _ = _call(base + "/", headers={"Host": f"{host}:{server.port}"})
-        assert status == 200, host
+        for port in (f":{server.port}", "", ":9000"):
+            status, _ = _call(base + "/", headers={"Host": f"{host}{port}"})
+            assert status == 200, host + port
     got, _ = _control(server, {"action": "pause"}, Origin=f"http://localhost:{server.port}",
                       Host=f"localhost:{server.port}")  # fmt: skip
     assert got == 202
