@@ -448,7 +448,8 @@ class MissionRunner(BaseHandle):
     def _send_wheels_again(self) -> None:
         """After a drive 0 the runtime sent on its own (the watchdog's, the tick guard's): the
         last wheel command the tree wrote goes out again, if it turns a wheel and the robot
-        obeys it, unless this tick queued another wheel command (the tree's newer word)."""
+        obeys it, unless this tick queued another wheel command (the tree's newer word). A
+        fall to Passive by itself (:meth:`_advance`) forgets that command: the robot stopped."""
         wheels = self.last_sent.get("wheels")
         if (
             wheels is not None
@@ -479,6 +480,8 @@ class MissionRunner(BaseHandle):
         else:
             self._fallback_seen = fallback
             frame = self._hazards.frame(frame, True)
+            if fallback is not None:  # the robot stopped its wheels as it fell: the tree's
+                self.last_sent.pop("wheels", None)  # last word no longer stands
         summary = self.summary
         last = self._last_arrival
         self._last_arrival = arrival

@@ -116,3 +116,48 @@ def test_grace_0_ends_when_the_watchdog_trips(tmp_path: Path) -> None:
     assert summary.outcome is Outcome.CONNECTION_LOST
     assert "no valid sensor frame for" in summary.reason
     assert link.simulator.time < 1.3
+
+
+LEDGE = """\
+name: ledge
+description: a room whose east half is a drop, the robot facing it
+rooms:
+  - [[0.0, 0.0], [4.0, 0.0], [4.0, 3.5], [0.0, 3.5]]
+drops:
+  - {name: ledge, rect: [2.0, 0.0, 4.0, 3.5]}
+robot:
+  start: {at: [1.2, 1.75], heading: 0}
+  battery: 0.6
+"""
+OVER_THE_EDGE = """\
+mission: over the edge
+tree:
+  fallback:
+    - sequence:
+        - mode: safe
+        - drive: {velocity: 200 mm/s, distance: 2 m}
+    - sequence:
+        - cliff: any
+        - mode: safe
+        - wait: 4s
+"""
+FORWARD = oi.drive(200, oi.Radius.STRAIGHT).data
+
+
+def test_a_stall_after_the_robot_s_own_fall_does_not_send_the_drive_from_before_it(
+    tmp_path: Path,
+) -> None:
+    """Forward into a drop: the robot falls to Passive by itself (4.3 s), the tree enters
+    Safe again and waits; a garbled half second follows. After the ride-through the runtime
+    sent the tree's last wheel command again, the forward Drive from before the fall, and
+    the robot drove back over the edge (a second fall). The fall ended that command."""
+    (tmp_path / "ledge.yaml").write_text(LEDGE)
+    (tmp_path / "edge.yaml").write_text(OVER_THE_EDGE)
+    mission = load_mission(tmp_path / "edge.yaml", {}, profile=CREATE2)
+    link = BadPatchLink(Simulator(load_world(tmp_path / "ledge.yaml"), CREATE2, 0), 5.0, 5.5)
+    summary = RunStack(mission, link, profile=CREATE2, timeout_s=12.0).run()
+    assert summary.outcome is Outcome.SUCCESS, summary.reason
+    assert summary.stalls == summary.stalls_ridden == 1
+    falls = [t for t, b in link.writes if b == FORWARD]
+    assert len(falls) == 1 and falls[0] < 1.0, link.writes  # only the tree's own, at its start
+    assert [b for t, b in link.writes if 5.0 <= t < 8.0] == [HALT]  # the watchdog's, no more
