@@ -25,13 +25,15 @@ import contextlib
 import logging
 import signal
 from collections.abc import Iterator
-from typing import Literal
+from typing import Any, Literal
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import STRAIGHT_RADII, Command
-from roomba_bt.oi.modes import DRIVING_MODES, OIMode
+from roomba_bt.oi.frames import SensorFrame
+from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
 from roomba_bt.oi.opcodes import Effect
 from roomba_bt.oi.profiles import RobotProfile
+from roomba_bt.oi.stream import StreamParser
 from roomba_bt.robot.errors import PortLost, RobotError
 from roomba_bt.robot.link import LINK_ERRORS, LinkStatus
 from roomba_bt.robot.safety import ENDING_SIGNALS
@@ -41,6 +43,19 @@ from roomba_bt.robot.writer import CommandWriter
 log = logging.getLogger(__name__)
 
 EndMode = Literal["passive", "stop"]
+
+#: Seconds the safe stop listens, once written while a stream ran, for frames that should no
+#: longer come: ten stream periods (15 ms each).
+STOP_LISTEN = 0.15
+#: Frames a robot that heard Pause Stream may still be seen to send after it was written: the
+#: one in flight and what the port's buffers held (a robot that did not hear it sends ten).
+PAUSE_SLACK = 3
+#: How many times a stop the stream contradicts is written (the first, and once more).
+STOP_ATTEMPTS = 2
+
+#: Requested wheel velocities (packets 42 left, 41 right) and the encoders (43 left, 44
+#: right): what a stop the robot streams on after says of its wheels.
+_LEFT_VELOCITY, _RIGHT_VELOCITY, _ENCODERS = 42, 41, (43, 44)
 
 #: What a stop may meet and must survive.
 _RECOVERABLE: tuple[type[Exception], ...] = (RobotError, *LINK_ERRORS)
@@ -89,6 +104,22 @@ def describe_activity(command: Command | None) -> str:
     return f"after {spec.name} ({values})"
 
 
+def wheels_seen(frames: list[SensorFrame]) -> str:
+    """What the wheels did over ``frames`` (two or more) as far as they show it: the
+    requested velocities (packets 42, 41) if carried, else the encoders' counts (43, 44)
+    from the first to the last; "" if they carry neither."""
+    first, last = frames[0], frames[-1]
+    if _LEFT_VELOCITY in last and _RIGHT_VELOCITY in last:
+        left, right = last[_LEFT_VELOCITY], last[_RIGHT_VELOCITY]
+        return f", the wheels at {left}/{right} mm/s (left/right)"
+    if not all(pid in frame for pid in _ENCODERS for frame in (first, last)):
+        return ""
+    left, right = (((last[pid] - first[pid] + 0x8000) & 0xFFFF) - 0x8000 for pid in _ENCODERS)
+    if left == right == 0:
+        return ", the wheels still"
+    return f", the wheels turning ({left:+d}/{right:+d} encoder counts, left/right)"
+
+
 @contextlib.contextmanager
 def signals_deferred() -> Iterator[None]:
     """Hold the signals that end a run (:data:`~roomba_bt.robot.safety.ENDING_SIGNALS`)
@@ -122,6 +153,9 @@ class SafeStop:
         self.stop_report: str | None = None
         self.unheard: str | None = None
         self.closed = False
+        #: the mode and the last wheel command before the stop was written (what is said
+        #: of a stop that did not arrive)
+        self._before: tuple[OIMode, Command | None] = (writer.modes.mode, writer.last_wheels)
 
     def begin(self) -> None:
         """A session starts (again): nothing has ended."""
@@ -139,35 +173,112 @@ class SafeStop:
 
     def stop(self) -> bool:
         """Stop the robot and leave it in Passive (or Off with ``end_in="stop"``); never
-        raises for a dead link (False, and the stop report logged)."""
-        link = self.writer.link
-        if self.writer.modes.mode is OIMode.OFF:  # never started (or ended in Off by Stop):
+        raises for a dead link (False, and the stop report logged). A stop written while a
+        stream ran is checked against it (:meth:`_contradicted`) and written once more if the
+        robot streams on."""
+        writer = self.writer
+        link = writer.link
+        if writer.modes.mode is OIMode.OFF:  # never started (or ended in Off by Stop):
             self.safe_stopped = True  # nothing written, nothing to stop; not "unconfirmed"
             return True
+        # what the robot was last seen or told to do, before the stop moves the model on
+        self._before = (writer.modes.mode, writer.last_wheels)
         if not link.transport.is_open:
             return self._undelivered("the stop was not delivered: the port is gone")
-        lost = link.status is LinkStatus.LOST
-        try:
-            with signals_deferred():
-                self.writer.send_many(self.sequence())
-        except PortLost:
-            return self._undelivered("the stop was not delivered: the port is gone")
-        except _RECOVERABLE as exc:
-            return self._undelivered(f"the stop was not delivered: {exc}")
-        if lost:
-            return self._undelivered(
-                "the stop was written but is unconfirmed: the port had failed before it"
-            )
-        if self.unheard is not None:
-            return self._undelivered(f"the stop was written but is unconfirmed: {self.unheard}")
-        if link.bytes_read == 0:  # written for a robot that may hear and not answer (TX cut)
-            return self._undelivered(
-                "the stop was written but is unconfirmed: the robot never answered"
-            )
+        unconfirmed = None
+        if link.status is LinkStatus.LOST:
+            unconfirmed = "the port had failed before it"
+        elif self.unheard is not None:  # the silence's diagnosis: the line, the robot
+            unconfirmed = self.unheard
+        elif link.status is LinkStatus.STALLED and link.streaming:  # the watchdog tripped
+            # and nothing was heard since (no diagnosis yet: it pauses the stream and asks)
+            silent = link.transport.now() - link.silent_since
+            unconfirmed = f"the robot had sent no valid frame for {silent:.2f} s before it"
+        # checked against the stream on the wall clock only: on a virtual clock (the
+        # simulator's SimLink, a replay) listening would only move the simulated time on,
+        # and no cable can be cut there
+        checked = (
+            link.streaming
+            and link.status is LinkStatus.STREAMING
+            and getattr(link.transport, "wall_clock", True)
+        )
+        failed = self._write_heard(checked)
+        if failed is not None:
+            return self._undelivered(failed)
+        if unconfirmed is None and link.bytes_read == 0:  # a robot that may hear and not
+            unconfirmed = "the robot never answered"  # answer (its TX line cut)
+        if unconfirmed is not None:
+            return self._undelivered(f"the stop was written but is unconfirmed: {unconfirmed}")
         link.streaming = False
         link.status = LinkStatus.STOPPED
         self.safe_stopped = True
         return True
+
+    def _write_heard(self, checked: bool) -> str | None:
+        """Write the stop; ``checked``: listen after it (:meth:`_contradicted`), and write it
+        once more if the robot streams on. Why it did not reach the robot, or None. A stop
+        the robot streamed on after leaves the model where it was (as the robot is, as far
+        as it was seen), so that a later stop (``close()``) sends it whole again."""
+        writer = self.writer
+        saved = writer.modes.snapshot(), writer.last_wheels, writer.builtin_may_run
+        contradiction = None
+        for attempt in range(STOP_ATTEMPTS if checked else 1):
+            if attempt:  # the robot did not hear it: the model back where it was, again
+                self._restore(saved)
+            failed = self._write()
+            if failed is not None:
+                return failed
+            contradiction = self._contradicted() if checked else None
+            if contradiction is None:
+                return None
+        self._restore(saved)
+        return f"the stop was written {STOP_ATTEMPTS} times but not received: {contradiction}"
+
+    def _restore(self, saved: tuple[tuple[Any, ...], Command | None, bool]) -> None:
+        """The model, the wheels and the stream as they were before a stop not heard."""
+        writer = self.writer
+        writer.modes.restore(saved[0])
+        writer.last_wheels, writer.builtin_may_run = saved[1], saved[2]
+        writer.link.pause_resume(True, writer.link.transport.now())
+
+    def _write(self) -> str | None:
+        """Write the stop sequence whole; why it could not be, or None."""
+        try:
+            with signals_deferred():
+                self.writer.send_many(self.sequence())
+        except PortLost:
+            return "the stop was not delivered: the port is gone"
+        except _RECOVERABLE as exc:
+            return f"the stop was not delivered: {exc}"
+        return None
+
+    def _contradicted(self) -> str | None:
+        """What the stream says of a stop just written (Pause Stream in it): a robot that
+        heard it sends no more than :data:`PAUSE_SLACK` frames (in flight, in the port's
+        buffers) in the :data:`STOP_LISTEN` s after; more, and it did not hear it (the
+        host-to-robot wire dead, the robot still in Safe and driving): what they showed,
+        or None (quiet: the stop was heard)."""
+        link, modes = self.writer.link, self.writer.modes
+        parser = StreamParser(link.stream_ids, link.profile, mode_plus_one=link.mode_plus_one)
+        clock = link.transport.now
+        deadline = clock() + STOP_LISTEN
+        frames: list[SensorFrame] = []
+        try:
+            while (remaining := deadline - clock()) > 0:
+                data = link.read(remaining)
+                if data:
+                    frames += parser.feed(data, clock())
+        except PortLost:
+            return None  # the stop was written; the port's failure is said by the caller
+        if len(frames) <= PAUSE_SLACK:
+            return None
+        said = f"{len(frames)} sensor frames came in the {STOP_LISTEN:.2f} s after Pause Stream"
+        last = frames[-1]
+        if OI_MODE_PACKET in last:
+            mode = modes.detector.interpret(last[OI_MODE_PACKET])
+            if mode is not None:
+                said += f", packet 35 still reading {mode.label}"
+        return said + wheels_seen(frames)
 
     def activity(self) -> str:
         """What the last wheel command written had the robot doing (:func:`describe_activity`)."""
@@ -175,18 +286,18 @@ class SafeStop:
 
     def _undelivered(self, why: str) -> bool:
         """The stop did not reach the robot: say so, with what the robot was last seen
-        doing; False (what :meth:`stop` returns)."""
+        doing before the stop was written (the mode and the wheels the model held then, not
+        the Passive and drive 0 of the stop itself); False (what :meth:`stop` returns)."""
         writer = self.writer
+        mode, wheels = self._before
         # never told to move and seen in Passive, or never seen at all: nothing was left
         # driving (``sensors``, ``doctor``); the summary or the error says the port's fate
-        idle = writer.last_wheels is None and (
-            writer.link.bytes_read == 0 or writer.modes.mode is OIMode.PASSIVE
-        )
+        idle = wheels is None and (writer.link.bytes_read == 0 or mode is OIMode.PASSIVE)
         level = logging.DEBUG if idle else logging.ERROR
         if writer.link.bytes_read == 0:  # nothing was ever seen of it
             report = why
         else:
-            report = f"last seen in {writer.modes.mode.label} {self.activity()}; {why}"
+            report = f"last seen in {mode.label} {describe_activity(wheels)}; {why}"
         if report != self.stop_report:  # close() tries once more: said once, not twice
             log.log(level, "%s: %s", self.writer.link.name, report)
         self.stop_report = report

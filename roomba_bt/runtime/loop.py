@@ -52,6 +52,7 @@ from roomba_bt.runtime.teardown import (
     behaviour_error,
     note_late_interrupt,
     note_stop_failures,
+    note_undelivered_stop,
     setup_tree,
     shutdown_nodes,
     stop_nodes,
@@ -644,6 +645,7 @@ def stop_robot(connection: Connection, summary: RunSummary) -> None:
         report = getattr(connection, "stop_report", None)
         summary.safe_stop = "NOT DELIVERED: " + (report or "the stop sequence could not be written")
         summary.stop_delivered = False
+        note_undelivered_stop(summary)
     except KeyboardInterrupt:
         summary.safe_stop = "interrupted during the safe stop"
     except Exception as exc:

@@ -31,7 +31,8 @@ class ExitCode(IntEnum):
     INVALID = 2  # invalid mission, world or command-line usage
     #: port could not be opened, robot did not answer, stream lost; the summary's "safe stop"
     #: line says whether the stop reached the robot ("NOT DELIVERED: last seen in Safe at
-    #: 200 mm/s; the stop was not delivered: the port is gone")
+    #: 200 mm/s; the stop was not delivered: the port is gone"); also a run whose tree ended
+    #: well but whose stop did not reach the robot (``note_undelivered_stop``)
     CONNECTION = 3
     BEHAVIOUR_ERROR = 4  # a behaviour raised an exception (a bug in it or its plugin)
     INTERRUPTED = 130  # Ctrl-C or SIGTERM, after the safe stop

@@ -194,6 +194,18 @@ def note_stop_failures(summary: RunSummary, failures: list[str]) -> None:
         summary.reason = f"{summary.reason}; then {said}" if summary.reason else said
 
 
+def note_undelivered_stop(summary: RunSummary) -> None:
+    """The safe stop did not reach the robot (or is unconfirmed): a run that had ended well
+    (success, failure, timeout, a replay's end) is a lost connection, exit 3, its reason
+    saying how it had ended (decided, ``docs/runtime.md``: a robot that may still be driving
+    is no success); one that had ended otherwise keeps its outcome and exit code."""
+    if summary.outcome not in _CLEAN_ENDINGS:
+        return
+    was = summary.outcome.value + (f": {summary.reason}" if summary.reason else "")
+    summary.outcome = Outcome.CONNECTION_LOST
+    summary.reason = f"the safe stop did not reach the robot (the run had ended: {was})"
+
+
 def note_late_interrupt(summary: RunSummary, interrupt: KeyboardInterrupt) -> None:
     """A Ctrl-C or SIGTERM that came during the safe stop or a node's ``shutdown()`` of a run
     no signal had ended (decided, ``docs/runtime.md``): a run that had ended well (success,

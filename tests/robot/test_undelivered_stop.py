@@ -12,7 +12,7 @@ from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.ending import describe_activity
-from roomba_bt.robot.errors import PortLost
+from roomba_bt.robot.errors import PortLost, StreamStalled
 from roomba_bt.sim import SimLink, Simulator, parse_world
 
 BOX = """
@@ -109,3 +109,107 @@ def test_driving_straight_is_said_without_a_radius(straight: int) -> None:
     """``radius: straight`` is sent as 0x8000: it was said "radius 32768 mm"."""
     assert describe_activity(oi.drive(200, straight)) == "at 200 mm/s"
     assert describe_activity(oi.drive(200, -1000)) == "at 200 mm/s, radius -1000 mm"
+
+
+class CutTx:
+    """A simulator link as a cable whose host-to-robot wire can die: once ``cut``, every
+    write is dropped without an error (the port cannot tell), while the robot's frames
+    still come. On the wall clock as a port is (the stop is checked against the stream
+    there); ``mute`` drops what the robot sends instead (it falls silent)."""
+
+    wall_clock = True
+
+    def __init__(self, link: SimLink) -> None:
+        self.link = link
+        self.cut = False
+        self.mute = False
+        self.dropped: list[bytes] = []
+
+    def write(self, data: bytes) -> None:
+        if self.cut:
+            self.dropped.append(bytes(data))
+        else:
+            self.link.write(data)
+
+    def read(self, timeout: float) -> bytes:
+        data = self.link.read(timeout)
+        return b"" if self.mute else data
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.link, name)
+
+
+def spinning() -> tuple[Connection, CutTx, Simulator]:
+    simulator = Simulator(parse_world(BOX, "<test>"), profile=CREATE2)
+    link = CutTx(SimLink(simulator))
+    connection = Connection(link, CREATE2)
+    connection.start("safe", PACKETS)
+    connection.send_many([oi.drive(100, 1)])
+    while connection.counters.frames < 10:
+        connection.poll(0.05)
+    return connection, link, simulator
+
+
+STOP = oi.halt().data + oi.motors_off().data + oi.pause_stream().data + oi.start().data
+
+
+def test_a_stop_the_robot_streams_on_after_is_not_received_and_is_written_again() -> None:
+    """The host-to-robot wire dead, the robot's still fine: the stop was said ``sent`` and the
+    final mode Passive while the robot spun on in Safe. Frames still coming after Pause
+    Stream say it was not heard: the stop is written once more, then reported not received,
+    with what the robot was last seen doing (before the stop), and the model stays in Safe."""
+    connection, link, simulator = spinning()
+    link.cut = True
+    assert connection.safe_stop() is False
+    assert link.dropped == [STOP, STOP]  # the whole stop, twice
+    report = connection.stop_report or ""
+    assert report.startswith(
+        "last seen in Safe spinning left at 100 mm/s; the stop was written 2 times but not "
+        "received: "
+    ), report
+    assert "sensor frames came in the 0.15 s after Pause Stream" in report
+    assert "packet 35 still reading Safe, the wheels turning (-" in report  # spinning left
+    assert connection.mode is OIMode.SAFE
+    assert connection.safe_stopped is False
+    assert simulator.mode is OIMode.SAFE  # as the robot truly is
+
+
+def test_a_stop_the_robot_heard_is_confirmed_by_the_stream_going_quiet() -> None:
+    connection, _, simulator = spinning()
+    assert connection.safe_stop() is True
+    assert connection.stop_report is None
+    assert connection.mode is OIMode.PASSIVE and simulator.mode is OIMode.PASSIVE
+    assert simulator.requested_left == simulator.requested_right == 0
+
+
+def test_a_stop_after_the_robot_fell_silent_is_unconfirmed() -> None:
+    """Ctrl-C a second into a silence (the watchdog tripped, the grace not yet out): it said
+    ``sent`` and the final mode Passive, nothing having been heard for over a second."""
+    connection, link, _ = spinning()
+    link.mute = True
+    stalled = 0
+    start = link.now()
+    while link.now() - start < 1.2:
+        try:
+            connection.poll(0.05)
+        except StreamStalled:
+            stalled += 1
+    assert stalled == 1
+    assert connection.safe_stop() is False
+    report = connection.stop_report or ""
+    assert report.startswith(  # "stopped": the watchdog's drive 0, the last command written
+        "last seen in Safe stopped; the stop was written but is unconfirmed: the robot had "
+        "sent no valid frame for 1."
+    ), report
+
+
+def test_an_unconfirmed_stop_says_what_was_seen_before_it_not_the_stop_itself() -> None:
+    """``last seen in Passive stopped``: read off the model after the stop's own Start and
+    drive 0 had moved it; the robot was last seen in Safe, spinning."""
+    connection, _, _ = spinning()
+    connection.unheard = "the robot answers nothing"
+    assert connection.safe_stop() is False
+    assert connection.stop_report == (
+        "last seen in Safe spinning left at 100 mm/s; the stop was written but is "
+        "unconfirmed: the robot answers nothing"
+    )

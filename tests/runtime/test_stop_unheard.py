@@ -1,0 +1,75 @@
+"""The end of a run on a cable whose host-to-robot wire died: the tree ends well, the robot
+never hears the stop and streams on; the run must not say it stopped it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from roomba_bt.mission import load_mission
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.runtime.stack import RunStack
+from roomba_bt.runtime.summary import Outcome
+from roomba_bt.sim import SimLink, Simulator, load_world
+
+SPIN_A_WHILE = """
+mission: spin-a-while
+tree:
+  sequence:
+    - mode: safe
+    - parallel:
+        policy: one
+        children:
+          - wait: 2s
+          - drive: {velocity: 100 mm/s, radius: spin_left}
+"""
+
+
+class CutTxAt:
+    """The simulator's link through a relay that drops every host-to-robot byte from
+    ``cut_at`` (simulated seconds) on, silently; the robot's frames still come. On the wall
+    clock as a port is (where the stop is checked against the stream)."""
+
+    wall_clock = True
+
+    def __init__(self, simulator: Simulator, cut_at: float) -> None:
+        self.link = SimLink(simulator)
+        self.simulator = simulator
+        self.cut_at = cut_at
+        self.dropped = 0
+
+    def write(self, data: bytes) -> None:
+        if self.simulator.time >= self.cut_at:
+            self.dropped += len(data)
+        else:
+            self.link.write(data)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.link, name)
+
+
+def test_a_run_whose_stop_the_robot_never_heard_is_no_success(tmp_path: Path) -> None:
+    """It said ``outcome SUCCESS``, ``final mode Passive``, ``safe stop sent ...``, exit 0,
+    with the robot still in Safe, spinning."""
+    path = tmp_path / "m.yaml"
+    path.write_text(SPIN_A_WHILE)
+    simulator = Simulator(load_world("empty-room"), CREATE2, 0, trace=False)
+    link = CutTxAt(simulator, cut_at=1.0)
+    stack = RunStack(load_mission(path, {}, profile=CREATE2), link, profile=CREATE2)
+    summary = stack.run()
+    stack.close()
+    assert link.dropped > 0
+    assert (
+        simulator.mode is OIMode.SAFE and simulator.requested_left < 0 < simulator.requested_right
+    )
+    assert summary.outcome is Outcome.CONNECTION_LOST and summary.exit_code == 3
+    assert summary.reason.startswith("the safe stop did not reach the robot")
+    assert summary.reason.endswith("(the run had ended: success)")
+    assert summary.safe_stop.startswith(
+        "NOT DELIVERED: last seen in Safe stopped; the stop was written 2 times but not "
+        "received: "  # "stopped": the tree's own drive 0 at its end, never heard either
+    ), summary.safe_stop
+    # what the frames after the stop showed: still in Safe, still spinning
+    assert "packet 35 still reading Safe, the wheels turning (-" in summary.safe_stop
+    assert "final mode   unknown: last seen in Safe, the stop was not delivered" in str(summary)
