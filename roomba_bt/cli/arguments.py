@@ -145,6 +145,25 @@ def seconds(text: str) -> float:
     return value
 
 
+#: ``run --watchdog``'s least, seconds: two stream periods (15 ms each). Less trips between
+#: two frames that come on time; 0 turned off the watchdog, and with it every stall and
+#: stream-loss check: a stopped stream froze the mission clock and the run hung, the robot
+#: driving on with its last command, until Ctrl-C.
+MIN_WATCHDOG = 0.03
+
+
+def watchdog_seconds(text: str) -> float:
+    """``run --watchdog``: seconds, :data:`MIN_WATCHDOG` or more (it cannot be turned off)."""
+    allowed = f"seconds, {MIN_WATCHDOG:g} or more (two stream frames; the watchdog cannot be off)"
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"found {text!r}; allowed: {allowed}") from None
+    if not math.isfinite(value) or value < MIN_WATCHDOG:
+        raise argparse.ArgumentTypeError(f"found {text}; allowed: {allowed}")
+    return value
+
+
 def metres(text: str, lo: float, hi: float) -> float:
     """A distance in metres, ``lo..hi``: a plain number (metres) or a distance as missions
     write it (``1.5m``, ``150cm``, ``300 mm``)."""

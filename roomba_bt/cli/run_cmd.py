@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 from roomba_bt.cli.arguments import (
+    MIN_WATCHDOG,
     add_command,
     add_far_end_options,
     add_param_option,
@@ -22,6 +23,7 @@ from roomba_bt.cli.arguments import (
     plot_file,
     record_file,
     seconds,
+    watchdog_seconds,
 )
 from roomba_bt.cli.monitor_cmd import LiveMonitor
 from roomba_bt.cli.monitor_cmd import add_run_arguments as add_monitor_arguments
@@ -102,7 +104,11 @@ def _add_session_options(run: argparse.ArgumentParser) -> None:
         "--end-in", choices=("passive", "stop"), default="passive",
         help="leave the robot in Passive (Start) or, where the profile has it, Stop (173)",
     )  # fmt: skip
-    run.add_argument("--watchdog", type=seconds, default=0.1, help="stream watchdog, seconds")
+    run.add_argument(
+        "--watchdog", type=watchdog_seconds, default=0.1, metavar="SECONDS",
+        help="stop the wheels (drive 0) when no valid sensor frame came for this long "
+        f"(default 0.1; {MIN_WATCHDOG:g} or more: it cannot be turned off)",
+    )  # fmt: skip
     run.add_argument(
         "--grace", type=seconds, default=DEFAULT_GRACE, metavar="SECONDS",
         help="after the watchdog stopped the wheels, wait this long for valid frames before "

@@ -50,6 +50,13 @@ def test_bad_seconds(text: str) -> None:
     ("argv", "message"),
     [
         (["run", "missions/dock.yaml", "--watchdog", "-1"], "--watchdog: found -1"),
+        # 0 turned the watchdog off, and with it stall and stream-loss detection: a stopped
+        # stream froze the mission clock and the run hung, the robot driving on
+        (
+            ["run", "missions/dock.yaml", "--watchdog", "0"],
+            "--watchdog: found 0; allowed: seconds, 0.03 or more",
+        ),
+        (["run", "missions/dock.yaml", "--watchdog", "0.02"], "--watchdog: found 0.02"),
         (["run", "missions/dock.yaml", "--baud", "12"], "--baud: found 12"),
         (["validate", "missions/dock.yaml", "--baud", "0"], "--baud: found 0"),
         (["sensors", "--baud", "-1"], "--baud: found -1"),
