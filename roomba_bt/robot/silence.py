@@ -255,6 +255,10 @@ def answers_elsewhere(connection: Connection, silent: NoAnswer) -> ConnectionFai
     except LINK_ERRORS:
         return silent
     connection.baud = found.baud
+    # it answered, on this port: its bytes count as heard (the summary's final mode, the
+    # stop's confirmation), as the link's own reads would; the probe read them itself
+    answer = found.found
+    connection.link.bytes_read += len(answer.reply) if answer is not None else 0
     return ConnectionFailed(
         connection.name,
         f"the robot answers at {found.baud} baud, not at the {run_rate} of the run: it answered "

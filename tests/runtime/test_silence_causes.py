@@ -247,3 +247,16 @@ def test_the_listen_is_long_enough_for_two_whole_frames_at_the_rate() -> None:
     assert listen_window((100,), 19200) > 0.14
     assert listen_window((7, 9, 10, 11, 12, 25, 26, 34, 35, 43, 44), 19200) == LISTEN_S
     assert listen_window((100,), 115200) == LISTEN_S
+
+
+def test_a_robot_found_at_another_rate_is_said_to_have_answered(tmp_path: Path) -> None:
+    """It answered Start and a Query List at 19200: the summary said ``final mode unknown:
+    the robot never answered`` and the stop (written at 19200, where it listens) ``NOT
+    DELIVERED: ... the robot never answered``, against the outcome's own words."""
+    summary, simulator = run(tmp_path, SPIN, Faults(), robot_baud=19200)
+    assert "and Start and a Query List at 19200" in summary.reason
+    assert summary.robot_answered
+    assert "never answered" not in str(summary)
+    assert "final mode   Passive" in str(summary)  # the probe's Start, at 19200
+    assert summary.safe_stop == "sent pause_resume_stream, start"
+    assert simulator.mode is OIMode.PASSIVE
