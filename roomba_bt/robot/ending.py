@@ -156,6 +156,8 @@ class SafeStop:
         #: the mode and the last wheel command before the stop was written (what is said
         #: of a stop that did not arrive)
         self._before: tuple[OIMode, Command | None] = (writer.modes.mode, writer.last_wheels)
+        #: the mode packet 35 read in frames that came after a stop (it was not heard)
+        self._seen: OIMode | None = None
 
     def begin(self) -> None:
         """A session starts (again): nothing has ended."""
@@ -183,6 +185,7 @@ class SafeStop:
             return True
         # what the robot was last seen or told to do, before the stop moves the model on
         self._before = (writer.modes.mode, writer.last_wheels)
+        self._seen = None
         if not link.transport.is_open:
             return self._undelivered("the stop was not delivered: the port is gone")
         unconfirmed = None
@@ -235,11 +238,16 @@ class SafeStop:
         return f"the stop was written {STOP_ATTEMPTS} times but not received: {contradiction}"
 
     def _restore(self, saved: tuple[tuple[Any, ...], Command | None, bool]) -> None:
-        """The model, the wheels and the stream as they were before a stop not heard."""
+        """The model, the wheels and the stream as they were before a stop not heard, the
+        model in the mode packet 35 read after it if that is another (a ``mode: passive``
+        the robot never heard either: the stop is sent again from Safe, drive 0 in it)."""
         writer = self.writer
+        now = writer.link.transport.now()
         writer.modes.restore(saved[0])
         writer.last_wheels, writer.builtin_may_run = saved[1], saved[2]
-        writer.link.pause_resume(True, writer.link.transport.now())
+        if self._seen is not None and self._seen is not writer.modes.mode:
+            writer.modes.force(self._seen, now)
+        writer.link.pause_resume(True, now)
 
     def _write(self) -> str | None:
         """Write the stop sequence whole; why it could not be, or None."""
@@ -278,6 +286,7 @@ class SafeStop:
             mode = modes.detector.interpret(last[OI_MODE_PACKET])
             if mode is not None:
                 said += f", packet 35 still reading {mode.label}"
+                self._seen = mode
         return said + wheels_seen(frames)
 
     def activity(self) -> str:
@@ -292,10 +301,17 @@ class SafeStop:
         mode, wheels = self._before
         # never told to move and seen in Passive, or never seen at all: nothing was left
         # driving (``sensors``, ``doctor``); the summary or the error says the port's fate
+        if self._seen is not None:  # in the frames after the stop: what the robot is in
+            mode = self._seen
         idle = wheels is None and (writer.link.bytes_read == 0 or mode is OIMode.PASSIVE)
         level = logging.DEBUG if idle else logging.ERROR
         if writer.link.bytes_read == 0:  # nothing was ever seen of it
             report = why
+        elif self._seen is not None:
+            report = (
+                f"last seen in {mode.label} (the last wheel command written: "
+                f"{describe_activity(wheels)}); {why}"
+            )
         else:
             report = f"last seen in {mode.label} {describe_activity(wheels)}; {why}"
         if report != self.stop_report:  # close() tries once more: said once, not twice

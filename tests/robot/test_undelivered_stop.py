@@ -164,8 +164,8 @@ def test_a_stop_the_robot_streams_on_after_is_not_received_and_is_written_again(
     assert link.dropped == [STOP, STOP]  # the whole stop, twice
     report = connection.stop_report or ""
     assert report.startswith(
-        "last seen in Safe spinning left at 100 mm/s; the stop was written 2 times but not "
-        "received: "
+        "last seen in Safe (the last wheel command written: spinning left at 100 mm/s); the "
+        "stop was written 2 times but not received: "
     ), report
     assert "sensor frames came in the 0.15 s after Pause Stream" in report
     assert "packet 35 still reading Safe, the wheels turning (-" in report  # spinning left

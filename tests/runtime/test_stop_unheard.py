@@ -7,11 +7,15 @@ from pathlib import Path
 from typing import Any
 
 from roomba_bt.mission import load_mission
+from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome
 from roomba_bt.sim import SimLink, Simulator, load_world
+
+PAUSE_START = oi.pause_stream().data + oi.start().data
+HALT, MOTORS_OFF = oi.halt().data, oi.motors_off().data
 
 SPIN_A_WHILE = """
 mission: spin-a-while
@@ -23,6 +27,7 @@ tree:
         children:
           - wait: 2s
           - drive: {velocity: 100 mm/s, radius: spin_left}
+    - mode: passive
 """
 
 
@@ -38,10 +43,12 @@ class CutTxAt:
         self.simulator = simulator
         self.cut_at = cut_at
         self.dropped = 0
+        self.tail = b""  # what was dropped
 
     def write(self, data: bytes) -> None:
         if self.simulator.time >= self.cut_at:
             self.dropped += len(data)
+            self.tail += data
         else:
             self.link.write(data)
 
@@ -51,7 +58,9 @@ class CutTxAt:
 
 def test_a_run_whose_stop_the_robot_never_heard_is_no_success(tmp_path: Path) -> None:
     """It said ``outcome SUCCESS``, ``final mode Passive``, ``safe stop sent ...``, exit 0,
-    with the robot still in Safe, spinning."""
+    with the robot still in Safe, spinning. The tree's own ``mode: passive`` went unheard
+    too: the model's Passive is what was written; packet 35 after the stop reads Safe, and
+    the stop is written again from Safe, drive 0 in it."""
     path = tmp_path / "m.yaml"
     path.write_text(SPIN_A_WHILE)
     simulator = Simulator(load_world("empty-room"), CREATE2, 0, trace=False)
@@ -66,10 +75,12 @@ def test_a_run_whose_stop_the_robot_never_heard_is_no_success(tmp_path: Path) ->
     assert summary.outcome is Outcome.CONNECTION_LOST and summary.exit_code == 3
     assert summary.reason.startswith("the safe stop did not reach the robot")
     assert summary.reason.endswith("(the run had ended: success)")
-    assert summary.safe_stop.startswith(
-        "NOT DELIVERED: last seen in Safe stopped; the stop was written 2 times but not "
-        "received: "  # "stopped": the tree's own drive 0 at its end, never heard either
+    assert summary.safe_stop.startswith(  # "stopped": the tree's own drive 0, unheard too
+        "NOT DELIVERED: last seen in Safe (the last wheel command written: stopped); the stop "
+        "was written 2 times but not received: "
     ), summary.safe_stop
+    # the first stop from the Passive written ([150 0][128]), the second from the Safe seen
+    assert link.tail.endswith(PAUSE_START + HALT + MOTORS_OFF + PAUSE_START)
     # what the frames after the stop showed: still in Safe, still spinning
     assert "packet 35 still reading Safe, the wheels turning (-" in summary.safe_stop
     assert "final mode   unknown: last seen in Safe, the stop was not delivered" in str(summary)
