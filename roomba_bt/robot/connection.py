@@ -64,7 +64,7 @@ from roomba_bt.robot.startup import (
     not_a_mode,
     port_not_opened,
 )
-from roomba_bt.robot.wake import keep_awake_for
+from roomba_bt.robot.wake import keep_awake_for, named_stall
 from roomba_bt.robot.writer import CommandWriter
 from roomba_bt.transport.base import Transport, TransportError
 from roomba_bt.transport.serial_port import DEFAULT_BAUD, SerialTransport
@@ -360,7 +360,11 @@ class Connection:
         except StreamStalled as exc:
             if self.link.banner_seen():
                 raise RobotReset(self.name, exc.halted) from exc
-            cause = asleep_by_idle(self) or follow_baud(self)
+            cause = (
+                asleep_by_idle(self)
+                or follow_baud(self)
+                or named_stall(exc, wake, link.silent_since)
+            )
             if cause is None:
                 raise
             raise cause from exc

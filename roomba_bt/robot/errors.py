@@ -152,14 +152,18 @@ class StreamStalled(LinkDown):
 
     def __init__(
         self, port: str, silent_for: float, watchdog: float, halted: bool,
-        mismatch: ChecksumMismatch | None = None,
+        mismatch: ChecksumMismatch | None = None, held: str | None = None,
     ) -> None:  # fmt: skip
         self.silent_for = silent_for
         self.watchdog = watchdog
         self.halted = halted
         self.mismatch = mismatch
+        #: what held this process's reads meanwhile, if known (a keep-awake pulse's line
+        #: change that took long): then the stall is ours, not the line's
+        self.held = held
         action = "drive 0 sent" if halted else "the robot was not driving (drive 0 not needed)"
         why = f"; {wrong_profile(mismatch)}" if mismatch is not None else ""
+        why += f"; {held}" if held is not None else ""
         super().__init__(
             port,
             f"no valid sensor frame for {silent_for * 1000:.0f} ms (watchdog "

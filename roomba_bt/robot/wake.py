@@ -25,8 +25,12 @@ from __future__ import annotations
 
 import logging
 import math
+import time
+from collections.abc import Callable
 from contextlib import AbstractContextManager
 from typing import Protocol, runtime_checkable
+
+from roomba_bt.robot.errors import StreamStalled
 
 log = logging.getLogger(__name__)
 
@@ -36,6 +40,9 @@ SLEEP_AFTER_S = 300.0
 PULSE_PERIOD_S = 60.0
 #: Seconds BRC is held low: short enough not to be read as the baud-change gesture.
 PULSE_LENGTH_S = 1.0
+#: A line change that takes this long is remembered, to name a stall it caused
+#: (:func:`named_stall`): a USB cable's ioctl takes microseconds.
+HELD_S = 0.01
 
 
 @runtime_checkable
@@ -64,10 +71,15 @@ class KeepAwake:
         *,
         period: float = PULSE_PERIOD_S,
         length: float = PULSE_LENGTH_S,
+        clock: Callable[[], float] = time.monotonic,
     ) -> None:
         if not 0.0 < length < period:
             raise ValueError(f"pulse length {length} s must be in 0..period ({period} s)")
         self.line = line
+        self._clock = clock
+        #: the last line change that took :data:`HELD_S` or more: when it ended (``clock``)
+        #: and how long it took, or None
+        self.held: tuple[float, float] | None = None
         self.period = period
         self.length = length
         self.pulses = 0
@@ -89,12 +101,12 @@ class KeepAwake:
         try:
             if self._low_until is not None:
                 if now >= self._low_until:
-                    self.line.set_wake_line(False)
+                    self._set(False)
                     self._low_until = None
                     self.due = self._next if self._next is not None else -math.inf
                 return
             if self._next is None or now >= self._next:
-                self.line.set_wake_line(True)
+                self._set(True)
                 self.pulses += 1
                 self.last_pulse = now
                 self._low_until = self.due = now + self.length
@@ -111,12 +123,40 @@ class KeepAwake:
                 exc,
             )
 
+    def _set(self, low: bool) -> None:
+        """Drive the line, remembering a change that held the caller (:attr:`held`)."""
+        clock = self._clock
+        began = clock()
+        self.line.set_wake_line(low)
+        ended = clock()
+        if ended - began >= HELD_S:
+            self.held = (ended, ended - began)
+
     def release(self) -> None:
         """Leave BRC high (end of a run)."""
         if self._low_until is not None and self.unavailable is None:
             self.line.set_wake_line(False)
             self._low_until = None
             self.due = self._next if self._next is not None else -math.inf
+
+
+def named_stall(
+    stalled: StreamStalled, wake: KeepAwake | None, since: float
+) -> StreamStalled | None:
+    """The stall ``stalled`` naming the keep-awake line change that held the reads during it
+    (one that ended after ``since``, the last valid frame: the stall is then this process's
+    own, not the line's), or None if none did."""
+    held = wake.held if wake is not None else None
+    if held is None or held[0] <= since:
+        return None
+    note = (
+        f"a keep-awake BRC pulse held this process's reads for {held[1] * 1000:.0f} ms "
+        "(setting the modem lines)"
+    )
+    return StreamStalled(
+        stalled.port, stalled.silent_for, stalled.watchdog, stalled.halted, stalled.mismatch,
+        held=note,
+    )  # fmt: skip
 
 
 def keep_awake_for(transport: object, name: str, enabled: bool) -> KeepAwake | None:
@@ -131,4 +171,5 @@ def keep_awake_for(transport: object, name: str, enabled: bool) -> KeepAwake | N
             name,
         )
         return None
-    return KeepAwake(transport)
+    now = getattr(transport, "now", None)
+    return KeepAwake(transport, clock=now) if callable(now) else KeepAwake(transport)

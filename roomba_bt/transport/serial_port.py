@@ -45,6 +45,9 @@ DEFAULT_WRITE_TIMEOUT = 0.5
 NO_WRITE_TIMEOUT_SCHEMES = ("rfc2217://",)
 #: How often a polled port (RFC 2217) is looked at while a read waits.
 POLL_INTERVAL = 0.001
+#: A polled port's own read timeout: it reads only what is already queued, so it never waits
+#: this long (a read at timeout 0 would end after one byte: ``SerialTransport._queued``).
+QUEUED_READ_TIMEOUT = 1.0
 
 
 try:  # a pty whose other side closed while it was being set up: termios.error, no OSError
@@ -64,12 +67,15 @@ class SerialTransport:
     def __init__(self, port: serial.SerialBase, name: str | None = None) -> None:
         self._port = port
         self.name: str = name if name is not None else str(port.port)
-        port.timeout = 0
-        self._port_timeout: float = 0.0
         self._wait_handle: Any = getattr(port, "fd", None) or getattr(port, "_socket", None)
         # pyserial's RFC 2217 port reads its socket in a thread of its own: a select on the
         # socket would race that thread, so its reads poll the port's queue instead.
         self._polled = isinstance(port, rfc2217.Serial)
+        # A polled port's read takes one byte and returns when its timeout is 0 (its queue
+        # holds single bytes, and a read ends as soon as the timeout has expired): it reads
+        # what is queued (``in_waiting``, there at once) with a timeout that never elapses.
+        port.timeout = QUEUED_READ_TIMEOUT if self._polled else 0
+        self._port_timeout: float = port.timeout
         if self._polled:
             self._wait_handle = None
         self._hung_up = False
@@ -149,7 +155,10 @@ class SerialTransport:
 
     def read(self, timeout: float) -> bytes:
         try:
-            data: bytes = self._port.read(READ_CHUNK)
+            if self._polled:
+                data = self._queued()
+                return data if data or timeout <= 0 else self._poll(timeout)
+            data = self._port.read(READ_CHUNK)
             if not data and timeout > 0:
                 data = self._wait(timeout)
             return data if len(data) < BACKLOG_SIGN else self._drained(data)
@@ -161,8 +170,6 @@ class SerialTransport:
         if self._wait_handle is not None:
             ready, _, _ = select.select([self._wait_handle], [], [], timeout)
             return self._port.read(READ_CHUNK) if ready else b""
-        if self._polled:
-            return self._poll(timeout)
         self._set_timeout(timeout)
         try:
             first: bytes = self._port.read(1)
@@ -187,11 +194,25 @@ class SerialTransport:
             total += len(data)
         return b"".join(chunks)
 
+    def _queued(self) -> bytes:
+        """All a polled port's queue holds, in one read (on ``timeout = 0`` pyserial's RFC
+        2217 read gives one byte: a tick whose read came past the watchdog's deadline took
+        one byte of a queued frame and tripped, the rest of it counted as garbage)."""
+        port = self._port
+        assert isinstance(port, rfc2217.Serial)
+        waiting = port.in_waiting
+        if waiting:
+            return bytes(port.read(waiting))
+        reader = getattr(port, "_thread", None)  # what pyserial's own read checks first
+        if reader is None or not reader.is_alive():
+            raise serial.SerialException("connection failed (reader thread died)")
+        return b""
+
     def _poll(self, timeout: float) -> bytes:
         deadline = time.monotonic() + timeout
         while (remaining := deadline - time.monotonic()) > 0:
             time.sleep(min(POLL_INTERVAL, remaining))
-            data: bytes = self._port.read(READ_CHUNK)
+            data = self._queued()
             if data:
                 return data
         return b""
@@ -210,12 +231,32 @@ class SerialTransport:
     def set_wake_line(self, low: bool) -> None:
         """Drive the robot's BRC pin through the modem lines: RTS and DTR together (cables
         wire one or the other), asserted = BRC low. ``rfc2217://`` carries them to the far
-        end; a raw ``socket://`` bridge ignores them; ``loop://`` keeps them."""
+        end without waiting for its answer (:meth:`_send_control`); a raw ``socket://``
+        bridge ignores them; ``loop://`` keeps them."""
         try:
-            self._port.rts = low
-            self._port.dtr = low
+            if self._polled:
+                self._send_control(low)
+            else:
+                self._port.rts = low
+                self._port.dtr = low
         except (serial.SerialException, OSError, ValueError) as exc:
             raise TransportError(self.name, "set the modem lines (BRC)", exc) from exc
+
+    def _send_control(self, low: bool) -> None:
+        """RTS and DTR of an ``rfc2217://`` port, sent without waiting for the server's
+        acknowledgement. pyserial's ``port.rts = ...`` waits for it, polling every 50 ms: two
+        lines took 100-107 ms each pulse, on the tick thread, which held the stream's reads
+        past the 100 ms watchdog at every keep-awake pulse (drive 0 mid-mission once a
+        minute). The request is the same Telnet subnegotiation pyserial sends, written through
+        the port's own write lock, on the socket that carries the commands, so it is never
+        cut into a command's bytes and reaches the far end in the order it was written. A
+        server that refuses it is not told (nor was the robot's BRC pin ever confirmed)."""
+        on = (rfc2217.SET_CONTROL_RTS_ON, rfc2217.SET_CONTROL_DTR_ON)
+        off = (rfc2217.SET_CONTROL_RTS_OFF, rfc2217.SET_CONTROL_DTR_OFF)
+        port = self._port
+        assert isinstance(port, rfc2217.Serial)
+        for value in on if low else off:
+            port.rfc2217_send_subnegotiation(rfc2217.SET_CONTROL, value)
 
     @contextlib.contextmanager
     def hung_up(self) -> Iterator[None]:

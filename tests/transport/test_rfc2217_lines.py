@@ -1,0 +1,118 @@
+"""The modem lines of an ``rfc2217://`` port: set without waiting for the server's answer.
+
+pyserial's ``port.rts = ...`` on RFC 2217 waits for the server's acknowledgement, polling
+every 50 ms: a keep-awake pulse (RTS and DTR) held the tick thread 100-107 ms, past the
+100 ms watchdog, once a minute. :meth:`SerialTransport.set_wake_line` sends the same request
+and returns; the simulator's server still sees BRC go low and high (a pulse)."""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable, Iterator
+
+import pytest
+from serial import rfc2217
+
+from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.sim import Simulator, load_world
+from roomba_bt.sim.server import Rfc2217Endpoint, serve
+from roomba_bt.transport import SerialTransport, TransportError
+
+pytestmark = pytest.mark.filterwarnings(
+    "ignore:set(Daemon|Name)\\(\\) is deprecated:DeprecationWarning"
+)
+
+
+class Served:
+    """The simulator served over RFC 2217 in a thread, until :meth:`close`."""
+
+    def __init__(self) -> None:
+        self.simulator = Simulator(load_world("empty-room"), CREATE2, 0)
+        self.endpoint = Rfc2217Endpoint("127.0.0.1", 0, 115200)
+        self._stop = threading.Event()
+        self._thread = threading.Thread(
+            target=serve, args=(self.simulator, self.endpoint, self._stop.is_set), daemon=True
+        )
+        self._thread.start()
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=5)
+        self.endpoint.close()
+
+
+@pytest.fixture
+def served() -> Iterator[Served]:
+    one = Served()
+    yield one
+    one.close()
+
+
+def _until(check: Callable[[], bool]) -> bool:
+    """Whether ``check()`` comes true within 5 s (the server's thread applies the lines)."""
+    waiter = threading.Event()
+    for _ in range(500):
+        if check():
+            return True
+        waiter.wait(0.01)
+    return False
+
+
+def test_set_wake_line_does_not_wait_for_the_servers_answer(
+    served: Served, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    simulator, endpoint = served.simulator, served.endpoint
+    transport = SerialTransport.open(endpoint.address, brc_high=True)
+    try:
+        waited: list[str] = []
+        real_wait = rfc2217.TelnetSubnegotiation.wait
+
+        def wait(self: rfc2217.TelnetSubnegotiation, timeout: float = 3) -> None:
+            waited.append(self.name)
+            real_wait(self, timeout)
+
+        monkeypatch.setattr(rfc2217.TelnetSubnegotiation, "wait", wait)
+        transport.set_wake_line(True)
+        assert waited == [], "the tick thread waited for the server's acknowledgement"
+        assert _until(lambda: endpoint.wake_line() is True), "BRC never went low"
+        transport.set_wake_line(False)
+        assert waited == []
+        assert _until(lambda: endpoint.wake_line() is False), "BRC never went high"
+        assert _until(lambda: simulator.brc_pulses == 1)
+        transport.write(b"\x80")  # the port still carries bytes after the lines
+        assert _until(lambda: simulator.mode.name == "PASSIVE")
+    finally:
+        transport.close()
+
+
+def test_a_read_takes_everything_queued_not_one_byte(
+    served: Served,
+) -> None:
+    """pyserial's RFC 2217 read at timeout 0 gives one byte: a tick that came past the
+    watchdog's deadline read one byte of a queued frame and tripped the watchdog, the rest
+    counted as garbage (a false baud change followed from it)."""
+    endpoint = served.endpoint
+    transport = SerialTransport.open(endpoint.address)
+    try:
+        transport.write(bytes([128, 148, 1, 7]))  # Start, stream packet 7 (5-byte frames)
+        port = transport.port
+        assert _until(lambda: port.in_waiting >= 20), "no stream"
+        queued = port.in_waiting
+        assert len(transport.read(0.0)) >= queued
+        transport.write(bytes([150, 0]))
+    finally:
+        transport.close()
+
+
+def test_a_server_gone_is_a_transport_error_not_silence(
+    served: Served,
+) -> None:
+    endpoint = served.endpoint
+    transport = SerialTransport.open(endpoint.address)
+    try:
+        served.close()
+        with pytest.raises(TransportError):
+            for _ in range(500):
+                transport.read(0.01)
+    finally:
+        transport.close()
