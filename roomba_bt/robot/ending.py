@@ -24,7 +24,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import signal
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import Any, Literal
 
 from roomba_bt.oi import commands as oi
@@ -143,7 +143,10 @@ class SafeStop:
     ``safe_stopped``: True once a stop is known sent, False when one failed (``stop_report``
     then says why, with what the robot was last seen doing), None before any ending.
     ``unheard``: why a stop written now could not be known to arrive (the robot no longer
-    answers, or the line is garbled), or None.
+    answers, or the line is garbled), or None. ``confirm``: asked after the stop is written
+    while ``unheard`` is set, whether the robot answers after all (then the stop is known
+    delivered): the port followed the robot to another rate on its frames alone, and only an
+    answer there shows it hears at that rate.
     """
 
     def __init__(self, writer: CommandWriter, end_in: EndMode) -> None:
@@ -152,6 +155,7 @@ class SafeStop:
         self.safe_stopped: bool | None = None
         self.stop_report: str | None = None
         self.unheard: str | None = None
+        self.confirm: Callable[[], bool] | None = None
         self.closed = False
         #: the mode and the last wheel command before the stop was written (what is said
         #: of a stop that did not arrive)
@@ -164,6 +168,7 @@ class SafeStop:
         self.closed = False
         self.safe_stopped = None
         self.unheard = None
+        self.confirm = None
 
     def sequence(self) -> list[Command]:
         """What :meth:`stop` sends from the current mode (:func:`stop_sequence`)."""
@@ -192,7 +197,7 @@ class SafeStop:
         if link.status is LinkStatus.LOST:
             unconfirmed = "the port had failed before it"
         elif self.unheard is not None:  # the silence's diagnosis: the line, the robot
-            unconfirmed = self.unheard
+            unconfirmed = self.unheard  # (unless :attr:`confirm` says it heard the stop)
         elif link.status is LinkStatus.STALLED and link.streaming:  # the watchdog tripped
             # and nothing was heard since (no diagnosis yet: it pauses the stream and asks)
             silent = link.transport.now() - link.silent_since
@@ -208,6 +213,8 @@ class SafeStop:
         failed = self._write_heard(checked)
         if failed is not None:
             return self._undelivered(failed)
+        if unconfirmed is not None and unconfirmed is self.unheard and self._confirmed():
+            self.unheard = unconfirmed = None
         if unconfirmed is None and link.bytes_read == 0:  # a robot that may hear and not
             unconfirmed = "the robot never answered"  # answer (its TX line cut)
         if unconfirmed is not None:
@@ -288,6 +295,17 @@ class SafeStop:
                 said += f", packet 35 still reading {mode.label}"
                 self._seen = mode
         return said + wheels_seen(frames)
+
+    def _confirmed(self) -> bool:
+        """Whether :attr:`confirm` says the robot heard the stop (False if there is none, or
+        asking failed)."""
+        confirm = self.confirm
+        if confirm is None:
+            return False
+        try:
+            return confirm()
+        except _RECOVERABLE:
+            return False
 
     def activity(self) -> str:
         """What the last wheel command written had the robot doing (:func:`describe_activity`)."""

@@ -162,33 +162,54 @@ class StreamLink:
             self.new_stream(self.stream_ids, self.transport.now())
 
     def listen_at(self, rate: int, seconds: float, enough: int) -> bool:
-        """Whether ``enough`` valid frames of the running stream come within ``seconds`` with
-        the port at ``rate``. The port is left at ``rate`` if they do, put back if not; the
-        link's own parser and its watchdog times are not touched (what is read meanwhile is
-        only counted). What came by the deadline is read even if the wait overran it (a
-        host starved past the whole window still finds the frames sent meanwhile)."""
+        """Whether the stream's frames come at ``rate``: the port is set there, what it holds
+        is discarded (read before the switch took effect: the old rate's bytes, valid frames
+        at the old rate), and it listens ``seconds`` (:meth:`_heard`). The port is left at
+        ``rate`` if they do, put back if not; the link's own parser and its watchdog times
+        are not touched (what is read meanwhile is only counted)."""
         was = self.transport.baud if hasattr(self.transport, "baud") else None
         parser = StreamParser(self.stream_ids, self.profile, mode_plus_one=self.mode_plus_one)
         try:
             self.transport.set_baud(rate)
         except LINK_ERRORS as exc:
             raise self.lost("baud change", exc) from exc
-        clock = self.transport.now
-        deadline = clock() + seconds
-        frames = 0
-        while frames < enough:
-            remaining = deadline - clock()
-            data = self.read(max(0.0, remaining))
-            if data:
-                frames += len(parser.feed(data, clock()))
-            if remaining <= 0:
-                break
-        if frames < enough and was is not None:
+        deadline = self.transport.now() + seconds
+        self.read(0.0)  # queued before the switch: the old rate's (an RFC 2217 port's queue)
+        heard = self._heard(parser, deadline, enough)
+        if not heard and was is not None:
             try:
                 self.transport.set_baud(int(was))
             except LINK_ERRORS as exc:
                 raise self.lost("baud change", exc) from exc
-        return frames >= enough
+        return heard
+
+    def _heard(self, parser: StreamParser, deadline: float, enough: int) -> bool:
+        """Whether, reading into ``parser`` until ``deadline``, the last ``enough`` or more
+        frames came one after the other with nothing invalid after them. The whole window is
+        read: the old rate's frames still in flight when the port switched (the network's,
+        a USB adapter's FIFO) come first and pass, and the robot's bytes at its real rate
+        follow as garbage, which voids them; a robot that did change its rate keeps sending
+        valid frames to the end. A read with invalid bytes (checksum failures, skipped or
+        out-of-range bytes) voids the frames counted so far, its own too. What came by the
+        deadline is read even if the wait overran it (a host starved past the whole window
+        still finds the frames sent meanwhile)."""
+        clock = self.transport.now
+        counters = parser.counters
+        invalid = 0
+        run = 0
+        while True:
+            remaining = deadline - clock()
+            data = self.read(max(0.0, remaining))
+            if data:
+                run += len(parser.feed(data, clock()))
+                now_invalid = (
+                    counters.checksum_failures + counters.skipped_bytes + counters.implausible
+                )
+                if now_invalid != invalid:
+                    invalid, run = now_invalid, 0
+            if remaining <= 0:
+                break
+        return run >= enough
 
     def lost(self, action: str, exc: BaseException) -> PortLost:
         """Mark the link lost; the error to raise."""
@@ -213,6 +234,14 @@ class StreamLink:
     def bytes_since_frame(self) -> int:
         """Bytes read since the last valid frame (garbage, if a stall has any)."""
         return self.bytes_read - self._bytes_at_frame
+
+    @property
+    def garbage_since_frame(self) -> int:
+        """:attr:`bytes_since_frame` less the bytes the parser holds as the start of a frame
+        still to come (a frame cut by a late read is not garbage yet)."""
+        parser = self._parser
+        pending = parser.pending if parser is not None else 0
+        return max(0, self.bytes_since_frame - pending)
 
     # ------------------------------------------------------------------ the stream
     def new_stream(self, ids: tuple[int, ...], now: float) -> None:

@@ -214,7 +214,7 @@ def follow_baud(connection: Connection) -> BaudChanged | None:
     if last is not None and last[0] > link.silent_since:  # a listen in this stall
         if now - last[0] < RETRY_AFTER_S or link.bytes_read - last[1] < GARBAGE_BYTES:
             return None
-    elif link.bytes_since_frame < GARBAGE_BYTES:
+    elif link.garbage_since_frame < GARBAGE_BYTES:  # a frame cut by a late read is not
         return None
     was = connection.baud
     garbage_s = now - link.silent_since
@@ -226,11 +226,46 @@ def follow_baud(connection: Connection) -> BaudChanged | None:
                 continue
             link.set_baud(rate)  # the link's parser starts again at the new rate
             connection.baud = rate
+            _confirm_at(connection, rate)
             halted = connection.halt()
             return BaudChanged(connection.name, rate, was, garbage_s, garbage_bytes, halted=halted)
     finally:
         connection.baud_listened = (link.transport.now(), link.bytes_read)
     return None
+
+
+def _confirm_at(connection: Connection, rate: int) -> None:
+    """The port followed the robot to ``rate`` on its frames alone: the stop written there is
+    unconfirmed until the robot answers a Query List there (asked after the stop, the stream
+    paused; the answer's mode is the final mode seen)."""
+    connection.unheard = (
+        f"the port followed the robot to {rate} baud on its frames alone, and it answered no "
+        f"query at {rate} after the stop (it may not hear there)"
+    )
+    connection.ending.confirm = lambda: _stop_heard(connection)
+
+
+#: After a stop at a followed rate: how long the line must stay quiet (the stream's pause
+#: heard), and how long bytes may keep coming before it is taken as not heard.
+QUIET_S = 0.1
+QUIET_WITHIN_S = 0.5
+
+
+def _stop_heard(connection: Connection) -> bool:
+    """Whether the robot heard the stop just written: its stream stopped (nothing for
+    :data:`QUIET_S`, within :data:`QUIET_WITHIN_S`: a robot that did not hear the pause
+    streams on, and its frames' first byte would pass for a reply) and it answers a Query
+    List."""
+    link = connection.link
+    clock = link.transport.now
+    give_up = clock() + QUIET_WITHIN_S
+    quiet_from = clock()
+    while (now := clock()) - quiet_from < QUIET_S:
+        if now >= give_up:
+            return False
+        if link.read(min(QUIET_S - (now - quiet_from), give_up - now)):
+            quiet_from = clock()
+    return _answers(connection)
 
 
 def answers_elsewhere(connection: Connection, silent: NoAnswer) -> ConnectionFailed:

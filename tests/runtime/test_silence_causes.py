@@ -179,6 +179,34 @@ def test_a_baud_change_mid_run_is_named_followed_and_the_robot_stopped(tmp_path:
     assert_followed_and_stopped(summary, simulator, 3.0, 0.1 + 0.1 + 0.06)
 
 
+class DeafAtTheNewRate(SimLink):
+    """A link whose robot talks at its new rate after a change but hears nothing written
+    there (its frames read valid at 19200, what is sent at 19200 is lost): the port followed
+    it on its frames alone, and the stop sent there does not arrive."""
+
+    def write(self, data: bytes) -> None:
+        if self.baud != self.simulator.profile.default_baud:
+            self.simulator.ignored_bytes += len(data)
+            return
+        super().write(data)
+
+
+def test_a_stop_at_a_followed_rate_the_robot_does_not_answer_is_unconfirmed(
+    tmp_path: Path,
+) -> None:
+    """The summary must not claim a delivered stop and a Passive it did not see: the stop at
+    the followed rate is confirmed by the robot's answer to a Query List there, or not."""
+    summary, simulator = run(
+        tmp_path, SPIN, Faults(baud_change_at=3.0), DeafAtTheNewRate, timeout=10.0
+    )
+    assert "the robot now talks at another baud rate: 19200" in summary.reason
+    assert not summary.stop_delivered
+    assert summary.safe_stop.startswith("NOT DELIVERED"), summary.safe_stop
+    assert "unconfirmed: the port followed the robot to 19200 baud" in summary.safe_stop
+    assert summary.final_mode_text().startswith("unknown"), summary.final_mode_text()
+    assert simulator.mode is not OIMode.PASSIVE, "it never heard the stop"
+
+
 def test_a_robot_at_another_rate_from_the_start_is_named_and_left_in_passive(
     tmp_path: Path,
 ) -> None:
