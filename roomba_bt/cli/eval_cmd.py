@@ -267,7 +267,6 @@ def variants(args: argparse.Namespace, params: dict[str, str]) -> list[Variant] 
 
 
 def eval_command(args: argparse.Namespace) -> int:
-    from roomba_bt.evaluate import summarize
     from roomba_bt.evaluate.parallel import Engine
 
     problem = _check_arguments(args)
@@ -289,35 +288,22 @@ def eval_command(args: argparse.Namespace) -> int:
         if partial is not None:
             partial.done()
         return done
-    shown = profile_shown(PROFILES[args.profile])
-    summaries = [
-        summarize(v.mission, world.name, e.results, shown)
-        for v, e in zip(chosen, done, strict=True)
-    ]
+    # the records first: a summary that fails (a bug in the statistics) loses no episode
+    unwritten = _save(args.out, done, partial)
+    try:
+        summaries, comparisons = _statistics(args, chosen, done, world.name)
+        _report(args, engine.describe(), chosen, summaries, comparisons, done)
+    except Exception:
+        kept = args.out if unwritten is None else partial.path if partial else None
+        if kept is not None:
+            print(f"roomba-bt eval: the summary failed; the {_count(done)} episode(s) that "
+                  f"finished are in {kept}", file=sys.stderr)  # fmt: skip
+        raise
+    if unwritten is not None:
+        return _error(unwritten)
     interrupted = any(e.interrupted for e in done)
-    comparisons = []
-    if len(chosen) > 1 and not interrupted:
-        from roomba_bt.evaluate.stats import compare
-
-        comparisons = [compare(chosen[0].label, v.label, done[0].results, e.results)
-                       for v, e in zip(chosen[1:], done[1:], strict=True)]  # fmt: skip
-    _report(args, engine.describe(), chosen, summaries, comparisons, done)
-    if args.out is not None:  # after the report: a disk that filled meanwhile loses only this
-        from roomba_bt.evaluate.records import write_results
-
-        try:
-            write_results(args.out, [r for e in done for r in e.results])
-        except OSError as exc:
-            assert partial is not None
-            partial.done(keep=True)
-            return _error(f"--out {args.out}: {exc.strerror or exc}; the summary is above, "
-                          f"the records in {partial.path}")  # fmt: skip
-        if partial is not None:
-            partial.done()
-        print(f"results written to {args.out}", file=sys.stderr)
     if interrupted:
-        finished = sum(len(e.results) for e in done)
-        print(f"roomba-bt eval: interrupted; {finished} episode(s) finished, summarised above",
+        print(f"roomba-bt eval: interrupted; {_count(done)} episode(s) finished, summarised above",
               file=sys.stderr)  # fmt: skip
         return ExitCode.INTERRUPTED
     if args.plot:
@@ -325,6 +311,48 @@ def eval_command(args: argparse.Namespace) -> int:
         if plotted is not None:
             return plotted
     return _verdict(args, summaries, done)
+
+
+def _count(done: list[Evaluation]) -> int:
+    return sum(len(e.results) for e in done)
+
+
+def _save(out: str | None, done: list[Evaluation], partial: PartialResults | None) -> str | None:
+    """``--out``'s records written (before any statistics); the problem when they could
+    not be (the partial file is then kept, and the message names it)."""
+    if out is None:
+        return None
+    from roomba_bt.evaluate.records import write_results
+
+    assert partial is not None
+    try:
+        write_results(out, [r for e in done for r in e.results])
+    except OSError as exc:
+        partial.done(keep=True)
+        problem = exc.strerror or exc
+        return f"--out {out}: {problem}; the summary is above, the records in {partial.path}"
+    partial.done()
+    print(f"results written to {out}", file=sys.stderr)
+    return None
+
+
+def _statistics(
+    args: argparse.Namespace, chosen: list[Variant], done: list[Evaluation], world: str
+) -> tuple[list[Summary], list[Comparison]]:
+    """Each variant's summary, and each later variant compared with the first."""
+    from roomba_bt.evaluate import summarize
+
+    shown = profile_shown(PROFILES[args.profile])
+    summaries = [
+        summarize(v.mission, world, e.results, shown) for v, e in zip(chosen, done, strict=True)
+    ]
+    comparisons = []
+    if len(chosen) > 1 and not any(e.interrupted for e in done):
+        from roomba_bt.evaluate.stats import compare
+
+        comparisons = [compare(chosen[0].label, v.label, done[0].results, e.results)
+                       for v, e in zip(chosen[1:], done[1:], strict=True)]  # fmt: skip
+    return summaries, comparisons
 
 
 def rerun_command(args: argparse.Namespace, result: Any) -> str:

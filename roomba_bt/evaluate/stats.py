@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 import re
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 from roomba_bt.evaluate.episode import EpisodeResult
@@ -165,28 +165,41 @@ def mcnemar_exact(only_a: int, only_b: int) -> float:
     """The two-sided exact McNemar p-value: under "the change makes no difference" each
     discordant pair (success with one variant only) is a fair coin, so it is the binomial
     test of ``only_a`` out of ``only_a + only_b`` at 1/2 (1.0 when there is no discordant
-    pair). Exact at any size, hence no normal or chi-square approximation (those are poor
-    for the few discordant pairs a 98 % mission leaves)."""
+    pair). Exact at any size (integer sums, one rounding at the end), hence no normal or
+    chi-square approximation (those are poor for the few discordant pairs a 98 % mission
+    leaves)."""
     n = only_a + only_b
     if n == 0:
         return 1.0
-    k = min(only_a, only_b)
-    tail = sum(math.comb(n, i) for i in range(k + 1)) / float(2**n)
-    return min(1.0, 2.0 * tail)
+    tail = sum(_binomial_coefficients(n, min(only_a, only_b) + 1))
+    # int / int divides exactly and rounds once: no float(2**n), which overflows past 1023
+    p: float = 2 * tail / 2**n
+    return min(1.0, p)
+
+
+def _binomial_coefficients(n: int, count: int) -> Iterator[int]:
+    """``comb(n, 0), comb(n, 1), ...``: the first ``count`` of them, each from the last
+    (one multiplication and one exact division; ``math.comb`` each time is quadratic)."""
+    c = 1
+    for i in range(min(count, n + 1)):
+        yield c
+        c = c * (n - i) // (i + 1)
 
 
 def median_interval(values: Sequence[float]) -> tuple[float, float] | None:
     """A distribution-free interval for the median (at least 95 % coverage): the order
     statistics ``(k, n + 1 - k)`` with ``k`` the largest rank whose binomial tail
     ``2 P(Bin(n, 1/2) <= k - 1)`` stays within 5 %. None when fewer than 6 values (no such
-    ``k``: even the extremes cover the median with less than 95 %)."""
+    ``k``: even the extremes cover the median with less than 95 %). Compared in integers
+    (``2 P <= 0.05`` as ``40 * cumulative <= 2**n``): exact at any ``n``."""
     n = len(values)
     ordered = sorted(values)
     k = 0
-    cumulative = 0
-    for rank in range(1, n + 1):
-        cumulative += math.comb(n, rank - 1)  # P(Bin <= rank - 1) * 2**n
-        if 2 * cumulative > 0.05 * float(2**n):
+    cumulative = 0  # P(Bin(n, 1/2) <= rank - 1) * 2**n
+    bound = 2**n // 40  # 40 * cumulative > 2**n exactly when cumulative > bound (integers)
+    for rank, coefficient in enumerate(_binomial_coefficients(n, n), start=1):
+        cumulative += coefficient
+        if cumulative > bound:
             break
         k = rank
     if k == 0:

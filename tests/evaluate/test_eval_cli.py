@@ -376,6 +376,27 @@ def test_a_failed_results_write_keeps_the_summary(
     assert "No space left on device; the summary is above" in err
 
 
+def test_a_summary_that_fails_loses_no_episode(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A 1000-episode A/B sweep ended in an OverflowError in the statistics, and --out was
+    never written (only the partial file survived, unmentioned): the records are written
+    before any statistics, and the error says where they are."""
+    import roomba_bt.evaluate as evaluate
+    from roomba_bt.evaluate.records import read_results
+
+    def broken(*args: object, **kwargs: object) -> None:
+        raise OverflowError("int too large to convert to float")
+
+    monkeypatch.setattr(evaluate, "summarize", broken)
+    out = tmp_path / "r.jsonl"
+    with pytest.raises(OverflowError):
+        main(["eval", BUMP, "-p", "duration=1s", "--runs", "3", "--no-progress",
+              "--out", str(out)])  # fmt: skip
+    assert [r.seed for r in read_results(out)] == [0, 1, 2]
+    assert f"the 3 episode(s) that finished are in {out}" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize(
     "engine", [["--jobs", "1"], ["--jobs", "2"], ["--engine", "dask", "--jobs", "2"]]
 )

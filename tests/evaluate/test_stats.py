@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from roomba_bt.evaluate.episode import EpisodeResult
-from roomba_bt.evaluate.stats import percentile, reason_group, summarize, wilson_interval
+from roomba_bt.evaluate.stats import Z95, percentile, reason_group, summarize, wilson_interval
 
 
 def result(seed: int, outcome: str = "success", time_s: float = 10.0, reason: str = "",
@@ -92,6 +92,57 @@ def test_median_interval_uses_the_binomial_order_statistics() -> None:
     assert median_interval([float(v) for v in range(6)]) == (0.0, 5.0)  # 2/64 <= 5 %
     # n = 20: k = 6 (2 P(Bin(20, 1/2) <= 5) = 0.041; k = 7 gives 0.115)
     assert median_interval([float(v) for v in range(20)]) == (5.0, 14.0)
+
+
+def _log_binomial_cdf(k: int, n: int) -> float:
+    """log P(Bin(n, 1/2) <= k) in floats (lgamma and a log-sum-exp): an independent check
+    of the integer sums, with no 2**n anywhere."""
+    import math
+
+    logs = [math.lgamma(n + 1) - math.lgamma(i + 1) - math.lgamma(n - i + 1) for i in range(k + 1)]
+    top = max(logs)
+    return top + math.log(sum(math.exp(v - top) for v in logs)) - n * math.log(2)
+
+
+@pytest.mark.parametrize(("only_a", "only_b"), [(600, 500), (2600, 2400), (2500, 2500), (1024, 0)])
+def test_exact_mcnemar_holds_for_thousands_of_discordant_pairs(only_a: int, only_b: int) -> None:
+    """``float(2**n)`` overflowed from 1024 discordant pairs: an A/B sweep of 1000 episodes
+    with 1100 discordant ones ended in OverflowError instead of its report."""
+    import math
+
+    from roomba_bt.evaluate.stats import mcnemar_exact
+
+    n, k = only_a + only_b, min(only_a, only_b)
+    expected = min(1.0, 2 * math.exp(_log_binomial_cdf(k, n)))
+    assert mcnemar_exact(only_a, only_b) == pytest.approx(expected, rel=1e-9, abs=1e-300)
+    if (only_a, only_b) == (600, 500):  # the normal approximation agrees roughly: p ~ 0.0028
+        z = (k + 0.5 - n / 2) / math.sqrt(n / 4)
+        assert mcnemar_exact(only_a, only_b) == pytest.approx(
+            math.erfc(-z / math.sqrt(2)), rel=0.05
+        )
+
+
+@pytest.mark.parametrize("n", [1024, 5000])
+def test_median_interval_holds_for_thousands_of_values(n: int) -> None:
+    """``float(2**n)`` overflowed from 1024 values (both variants succeeding in 1024
+    episodes); the ranks are the largest ``k`` with ``2 P(Bin(n, 1/2) <= k - 1) <= 5 %``."""
+    import math
+
+    from roomba_bt.evaluate.stats import median_interval
+
+    lo, hi = median_interval([float(v) for v in range(n)]) or (None, None)
+    assert lo is not None and hi == n - 1 - lo
+    k = int(lo) + 1  # the order statistic (k, n + 1 - k), ranks from 1
+    assert 2 * math.exp(_log_binomial_cdf(k - 1, n)) <= 0.05 < 2 * math.exp(_log_binomial_cdf(k, n))
+    assert abs(k - (n / 2 - Z95 * math.sqrt(n) / 2)) <= 2  # the normal approximation's rank
+
+
+def test_the_exact_statistics_are_exact_at_a_hundred_thousand() -> None:
+    """Thousands of pairs take milliseconds; at 100 000 the sums still end (integers)."""
+    from roomba_bt.evaluate.stats import mcnemar_exact, median_interval
+
+    assert median_interval(range(100_000)) == (49689, 50310)
+    assert mcnemar_exact(50_000, 50_000) == 1.0
 
 
 def test_compare_pairs_episodes_by_seed() -> None:
