@@ -4,17 +4,23 @@
 Every episode is decided by its :class:`~roomba_bt.evaluate.episode.EpisodeSpec` alone (the
 seed picks the start pose and the simulator's random draws), so ``--jobs 1`` and ``--jobs 2``
 give the same results in the same order; only the wall time differs. Workers are forked
-(on Linux) so the mission and world modules are imported once, in the parent.
+(on Linux) so the mission and world modules are imported once, in the parent. Results are
+taken as they finish (``progress`` sees that order; the list returned is in spec order), and
+a worker that dies breaks the pool (``concurrent.futures``' BrokenProcessPool) instead of
+hanging it: its unfinished episodes run again in a new one.
 """
 
 from __future__ import annotations
 
+import itertools
 import multiprocessing
 import signal
 import sys
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass, field
 from typing import TextIO
 
 from roomba_bt.evaluate import episode
@@ -23,26 +29,136 @@ from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec, run_episode
 Progress = Callable[[int, int, EpisodeResult], None]
 
 
+#: How many times a local evaluation starts its workers again after one died (killed by the
+#: OOM killer or a ``kill -9``); after that it stops with :class:`WorkersLostError`.
+POOL_RESTARTS = 2
+
+
+class WorkersLostError(RuntimeError):
+    """A local worker process died more often than :data:`POOL_RESTARTS`: the episodes
+    that finished (``finished``, in spec order) and a message naming those that did not."""
+
+    def __init__(self, message: str, finished: list[EpisodeResult], retried: int) -> None:
+        super().__init__(message)
+        self.finished = finished
+        self.retried = retried
+
+
+@dataclass
+class LocalRun:
+    """A local evaluation as it goes: results by spec index, the episodes run again."""
+
+    results: dict[int, EpisodeResult] = field(default_factory=dict)
+    retried: int = 0
+
+    def in_order(self) -> list[EpisodeResult]:
+        return [self.results[i] for i in sorted(self.results)]
+
+
 def run_episodes(
-    specs: Sequence[EpisodeSpec], jobs: int = 1, progress: Progress | None = None
+    specs: Sequence[EpisodeSpec],
+    jobs: int = 1,
+    progress: Progress | None = None,
+    run: LocalRun | None = None,
 ) -> list[EpisodeResult]:
-    """Run every spec; ``progress(done, total, result)`` after each one finishes."""
+    """Run every spec; results in spec order, ``progress(done, total, result)`` after each
+    one finishes (in the order they finish). With ``jobs`` > 1 a worker that dies does not
+    hang the evaluation: the episodes its pool had not finished run again in new workers
+    (counted in ``run.retried``), up to :data:`POOL_RESTARTS` times, then
+    :class:`WorkersLostError`. ``run`` holds what finished (also after a Ctrl-C)."""
+    run = run if run is not None else LocalRun()
     total = len(specs)
-    results: list[EpisodeResult] = []
+
+    def finished(index: int, result: EpisodeResult) -> None:
+        run.results[index] = result
+        if progress is not None:
+            progress(len(run.results), total, result)
+
     if jobs <= 1 or total <= 1:
-        for spec in specs:
-            results.append(run_episode(spec))
-            if progress is not None:
-                progress(len(results), total, results[-1])
-        return results
+        for index, spec in enumerate(specs):
+            finished(index, run_episode(spec))
+        return run.in_order()
+    todo = list(range(total))
+    for restart in range(POOL_RESTARTS + 1):
+        todo = _pool_round(specs, todo, jobs, finished)
+        if not todo:
+            return run.in_order()
+        seeds = _seeds(specs, todo)
+        if restart == POOL_RESTARTS:
+            raise WorkersLostError(
+                f"a worker process died {POOL_RESTARTS + 1} times (killed: the OOM killer?); "
+                f"{len(todo)} episode(s) did not finish: seeds {seeds}",
+                run.in_order(),
+                run.retried,
+            )
+        run.retried += len(todo)
+        print(f"roomba-bt eval: a worker process died (killed: the OOM killer?); "
+              f"{len(todo)} unfinished episode(s) run again in new workers: seeds {seeds}",
+              file=sys.stderr)  # fmt: skip
+    return run.in_order()  # not reached: the last round returns or raises
+
+
+def _seeds(specs: Sequence[EpisodeSpec], indices: Sequence[int], shown: int = 10) -> str:
+    seeds = [str(specs[i].seed) for i in indices]
+    more = f" and {len(seeds) - shown} more" if len(seeds) > shown else ""
+    return ", ".join(seeds[:shown]) + more
+
+
+def _pool_round(
+    specs: Sequence[EpisodeSpec],
+    todo: Sequence[int],
+    jobs: int,
+    finished: Callable[[int, EpisodeResult], None],
+) -> list[int]:
+    """``specs[i]`` for each ``i`` in ``todo`` on ``jobs`` worker processes, each result to
+    ``finished`` as it comes; the indices left unfinished when a worker died ([] if none).
+    A few episodes are queued ahead per worker, not all: a million futures would fill memory."""
     method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
-    context = multiprocessing.get_context(method)
-    with context.Pool(processes=min(jobs, total), initializer=_worker_started) as pool:
-        for result in pool.imap(run_episode, specs, chunksize=1):
-            results.append(result)
-            if progress is not None:
-                progress(len(results), total, result)
-    return results
+    executor = ProcessPoolExecutor(
+        max_workers=min(jobs, len(todo)),
+        mp_context=multiprocessing.get_context(method),
+        initializer=_worker_started,
+    )
+    queue = iter(todo)
+    running: dict[Future[EpisodeResult], int] = {}
+    lost: list[int] = []
+
+    def submit(index: int) -> None:
+        try:
+            running[executor.submit(run_episode, specs[index])] = index
+        except BrokenProcessPool:  # a worker died since the last result
+            lost.append(index)
+
+    try:
+        for index in itertools.islice(queue, 2 * jobs):
+            submit(index)
+        while running:
+            ready, _ = wait(running, return_when=FIRST_COMPLETED)
+            for future in ready:
+                index = running.pop(future)
+                if isinstance(future.exception(), BrokenProcessPool):
+                    lost.append(index)
+                    continue
+                finished(index, future.result())
+                nxt = None if lost else next(queue, None)
+                if nxt is not None:
+                    submit(nxt)
+        return sorted([*lost, *queue])
+    except BaseException:  # Ctrl-C (or an episode's bug): no worker left running
+        _terminate(executor)
+        raise
+    finally:
+        executor.shutdown(wait=True, cancel_futures=True)
+
+
+def _terminate(executor: ProcessPoolExecutor) -> None:
+    """End the workers at once (an episode on the simulator drives nothing)."""
+    terminate = getattr(executor, "terminate_workers", None)  # Python 3.14
+    if terminate is not None:
+        terminate()
+        return
+    for process in list(getattr(executor, "_processes", {}).values()):
+        process.terminate()
 
 
 def _worker_started() -> None:
@@ -95,13 +211,17 @@ def evaluate(
             if out and out[-1].interrupted:
                 out.append(Evaluation([], 0, True, "local"))
                 continue
-            done: list[EpisodeResult] = []
+            run = LocalRun()
             try:
-                run_episodes(specs, engine.jobs, _collect(done, bar))
+                run_episodes(specs, engine.jobs, bar, run)
             except KeyboardInterrupt:
-                out.append(Evaluation(done, 0, True, "local"))
+                out.append(Evaluation(run.in_order(), run.retried, True, "local"))
                 continue
-            out.append(Evaluation(done, 0, False, "local"))
+            except WorkersLostError as exc:
+                print(f"roomba-bt eval: {exc}; stopped", file=sys.stderr)
+                out.append(Evaluation(run.in_order(), run.retried, True, "local"))
+                continue
+            out.append(Evaluation(run.in_order(), run.retried, False, "local"))
         return out
     from roomba_bt.evaluate.cluster import dask_client, run_on_client
 
@@ -114,15 +234,6 @@ def evaluate(
             finished = [r for r in results if r is not None]
             out.append(Evaluation(finished, retried, interrupted, "dask"))
     return out
-
-
-def _collect(into: list[EpisodeResult], bar: Progress | None) -> Progress:
-    def progress(done: int, total: int, result: EpisodeResult) -> None:
-        into.append(result)
-        if bar is not None:
-            bar(done, total, result)
-
-    return progress
 
 
 class ProgressBar:

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from roomba_bt.evaluate import EpisodeSpec, EvaluationError, episode_specs, run_episode
-from roomba_bt.evaluate.episode import build_world, start_pose
+from roomba_bt.evaluate.episode import EpisodeResult, build_world, start_pose
 from roomba_bt.evaluate.parallel import ProgressBar, run_episodes
 from roomba_bt.evaluate.testing import assert_success_rate
 
@@ -161,3 +161,110 @@ def test_a_self_contained_spec_needs_none_of_its_files(
     assert sorted(n for n, _ in travelling.sources.files) == sorted([mission, named])
     shutil.rmtree(folder)
     assert _without_wall_time([run_episode(travelling)]) == _without_wall_time([from_files])
+
+
+# A worker's episode that misbehaves on purpose, set in the parent before the pool forks: the
+# worker running ``seed`` kills itself with SIGKILL (``every`` time, or once: a marker file),
+# or waits for the marker (made by the parent) before running it.
+_HOOK: dict[str, object] = {}
+
+
+def _hooked_episode(spec: EpisodeSpec):  # type: ignore[no-untyped-def]
+    import os
+    import signal
+    import time
+
+    mark = Path(str(_HOOK["mark"]))
+    if spec.seed == _HOOK["seed"]:
+        if _HOOK["what"] == "wait":
+            while not mark.exists():  # a file the parent makes: no event crosses processes
+                time.sleep(0.01)
+        elif _HOOK["what"] == "kill-always" or not mark.exists():
+            mark.touch()
+            os.kill(os.getpid(), signal.SIGKILL)
+    return run_episode(spec)
+
+
+@pytest.fixture
+def hooked(tmp_path: Path, monkeypatch: pytest.MonkeyPatch):  # type: ignore[no-untyped-def]
+    """Sets the hook; the pool's old code hung for ever on a dead worker: 120 s, then fail."""
+    import signal
+
+    import roomba_bt.evaluate.parallel as parallel
+
+    def hook(seed: int, what: str) -> Path:
+        _HOOK.update(seed=seed, what=what, mark=str(tmp_path / "mark"))
+        return tmp_path / "mark"
+
+    def hung(signum: int, frame: object) -> None:
+        raise TimeoutError("the evaluation hung")
+
+    monkeypatch.setattr(parallel, "run_episode", _hooked_episode)
+    previous = signal.signal(signal.SIGALRM, hung)
+    signal.alarm(120)
+    yield hook
+    signal.alarm(0)
+    signal.signal(signal.SIGALRM, previous)
+    _HOOK.clear()
+
+
+def _short_specs(runs: int = 8) -> list[EpisodeSpec]:
+    return episode_specs(BUMP, world="corridor", runs=runs, seed=0,
+                         params=(("duration", "2s"),), timeout_s=10)  # fmt: skip
+
+
+def test_a_worker_killed_mid_evaluation_loses_no_episode_and_hangs_nothing(hooked) -> None:  # type: ignore[no-untyped-def]
+    """A worker killed (kill -9, the OOM killer) hung the pool for ever, silently: now the
+    unfinished episodes run again in new workers, counted, with the same results."""
+    from roomba_bt.evaluate.parallel import Engine, evaluate
+
+    specs = _short_specs()
+    alone = run_episode  # the hook is only in the pool: --jobs 1 is the reference
+    expected = _without_wall_time([alone(s) for s in specs])
+    hooked(3, "kill-once")
+    (done,) = evaluate([specs], Engine("local", 2))
+    assert not done.interrupted
+    assert _without_wall_time(done.results) == expected
+    assert done.retried >= 1  # seed 3 at least: it was running when its worker died
+
+
+def test_a_worker_that_always_dies_ends_with_the_finished_episodes_and_a_message(
+    hooked,  # type: ignore[no-untyped-def]
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    from roomba_bt.evaluate.parallel import POOL_RESTARTS, LocalRun, WorkersLostError
+
+    specs = _short_specs()
+    hooked(3, "kill-always")
+    run = LocalRun()
+    with pytest.raises(WorkersLostError, match=r"did not finish: seeds .*\b3\b") as raised:
+        run_episodes(specs, 2, None, run)
+    kept = [r.seed for r in raised.value.finished]
+    assert 3 not in kept and kept == sorted(kept) and len(kept) >= 1
+    assert _without_wall_time(raised.value.finished) == _without_wall_time(
+        [run_episode(specs[s]) for s in kept]
+    )
+    assert capsys.readouterr().err.count("run again in new workers") == POOL_RESTARTS
+
+
+def test_results_are_taken_as_they_finish_and_a_ctrl_c_keeps_them(hooked) -> None:  # type: ignore[no-untyped-def]
+    """pool.imap handed results back in seed order: episodes finished after a slow one were
+    neither in the partial file nor kept by a Ctrl-C. Seed 0 waits here until three later
+    episodes have reached the parent, which then stops the evaluation (as Ctrl-C does)."""
+    from roomba_bt.evaluate.parallel import LocalRun
+
+    specs = _short_specs()
+    mark = hooked(0, "wait")
+    seen: list[int] = []
+
+    def progress(done: int, total: int, result: EpisodeResult) -> None:
+        seen.append(result.seed)
+        if len(seen) == 3:
+            raise KeyboardInterrupt
+
+    run = LocalRun()
+    with pytest.raises(KeyboardInterrupt):
+        run_episodes(specs, 2, progress, run)
+    assert 0 not in seen and len(seen) == 3
+    assert [r.seed for r in run.in_order()] == sorted(seen)
+    mark.touch()
