@@ -27,7 +27,7 @@ from __future__ import annotations
 import argparse
 import shlex
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -338,20 +338,24 @@ def _save(out: str | None, done: list[Evaluation], partial: PartialResults | Non
 
 def _statistics(
     args: argparse.Namespace, chosen: list[Variant], done: list[Evaluation], world: str
-) -> tuple[list[Summary], list[Comparison]]:
-    """Each variant's summary, and each later variant compared with the first."""
+) -> tuple[list[Summary], list[Comparison | str]]:
+    """Each variant's summary, and each later variant compared with the first: over the
+    seeds both finished when interrupted, or a line saying why there is no comparison."""
     from roomba_bt.evaluate import summarize
+    from roomba_bt.evaluate.stats import compare_finished
 
     shown = profile_shown(PROFILES[args.profile])
     summaries = [
         summarize(v.mission, world, e.results, shown) for v, e in zip(chosen, done, strict=True)
     ]
-    comparisons = []
-    if len(chosen) > 1 and not any(e.interrupted for e in done):
-        from roomba_bt.evaluate.stats import compare
-
-        comparisons = [compare(chosen[0].label, v.label, done[0].results, e.results)
-                       for v, e in zip(chosen[1:], done[1:], strict=True)]  # fmt: skip
+    comparisons: list[Comparison | str] = []
+    for v, e in zip(chosen[1:], done[1:], strict=True):
+        c = compare_finished(chosen[0].label, v.label, done[0].results, e.results)
+        if c is None:
+            comparisons.append(f"A/B          {chosen[0].label} against {v.label}: no "
+                               "comparison, no seed finished with both (interrupted)")  # fmt: skip
+        else:
+            comparisons.append(replace(c, interrupted=e.interrupted or done[0].interrupted))
     return summaries, comparisons
 
 
@@ -567,7 +571,7 @@ def _report(
     engine: str,
     chosen: list[Variant],
     summaries: list[Summary],
-    comparisons: list[Comparison],
+    comparisons: list[Comparison | str],
     done: list[Evaluation],
 ) -> None:
     """The summaries, coverage and comparisons on stdout: as JSON with ``--json``, else text."""
@@ -588,7 +592,7 @@ def _report(
             "variants": [{"label": v.label, "params": dict(v.params), **s.to_dict(),
                           "coverage": c.to_dict() if c is not None else None}
                          for v, s, c in zip(chosen, summaries, coverages, strict=True)],
-            "comparisons": [c.to_dict() for c in comparisons],
+            "comparisons": [c.to_dict() for c in comparisons if not isinstance(c, str)],
         }), indent=2))  # fmt: skip
         return
     for v, s, e in zip(chosen, summaries, done, strict=True):

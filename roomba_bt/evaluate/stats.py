@@ -80,6 +80,12 @@ class Summary:
         return self.successes / self.runs if self.runs else 0.0
 
     def lines(self) -> list[str]:
+        if not self.runs:  # interrupted before its first episode finished: no rate at all
+            return [
+                f"mission      {self.mission} in {self.world}",
+                *([f"profile      {self.profile}"] if self.profile else []),
+                "success      no episode finished",
+            ]
         lo, hi = self.interval
         med = "n/a" if self.median_time_s is None else f"{self.median_time_s:.1f} s"
         p90 = "n/a" if self.p90_time_s is None else f"{self.p90_time_s:.1f} s"
@@ -104,14 +110,15 @@ class Summary:
         return "\n".join(self.lines())
 
     def to_dict(self) -> dict[str, object]:
-        """The summary for scripts (``eval --json``): rates as fractions, times in seconds."""
+        """The summary for scripts (``eval --json``): rates as fractions, times in seconds;
+        ``rate`` and ``interval`` null when no episode finished."""
         return {
             "mission": self.mission,
             "world": self.world,
             "runs": self.runs,
             "successes": self.successes,
-            "rate": self.rate,
-            "interval": list(self.interval),
+            "rate": self.rate if self.runs else None,
+            "interval": list(self.interval) if self.runs else None,
             "median_time": self.median_time_s,
             "p90_time": self.p90_time_s,
             "mean_bumps": self.mean_bumps,
@@ -227,6 +234,8 @@ class Comparison:
     coverage_pairs: int = 0
     median_coverage_difference: float | None = None
     coverage_difference_interval: tuple[float, float] | None = None
+    #: the evaluation was interrupted: the pairs are the seeds both variants finished
+    interrupted: bool = False
 
     def lines(self) -> list[str]:
         med = self.median_difference_s
@@ -243,7 +252,8 @@ class Comparison:
             f"A/B          A = {self.a}",
             f"             B = {self.b}",
             f"paired       {self.pairs} episode{'s' if self.pairs != 1 else ''}, same seeds "
-            "and start poses",
+            "and start poses"
+            + (" (interrupted: the seeds both variants finished)" if self.interrupted else ""),
             f"success      both {self.both}, only A {self.only_a}, only B {self.only_b}, "
             f"neither {self.neither}; exact McNemar p = {self.p_value:.3g}",
             f"time B - A   {time}",
@@ -282,6 +292,7 @@ class Comparison:
             "time_difference_interval": (
                 None if self.difference_interval is None else list(self.difference_interval)
             ),
+            "interrupted": self.interrupted,
             "coverage_pairs": self.coverage_pairs,
             "median_coverage_difference": self.median_coverage_difference,
             "coverage_difference_interval": (
@@ -290,6 +301,19 @@ class Comparison:
                 else list(self.coverage_difference_interval)
             ),
         }
+
+
+def compare_finished(
+    a: str, b: str, results_a: Sequence[EpisodeResult], results_b: Sequence[EpisodeResult]
+) -> Comparison | None:
+    """:func:`compare` over the seeds both variants finished (an interrupted evaluation);
+    None when there is no such seed."""
+    common = {r.seed for r in results_a} & {r.seed for r in results_b}
+    if not common:
+        return None
+    return compare(
+        a, b, [r for r in results_a if r.seed in common], [r for r in results_b if r.seed in common]
+    )
 
 
 def compare(

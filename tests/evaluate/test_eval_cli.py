@@ -397,6 +397,33 @@ def test_a_summary_that_fails_loses_no_episode(
     assert f"the 3 episode(s) that finished are in {out}" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("b_finished", [2, 0])
+def test_an_interrupted_ab_compares_the_seeds_both_finished(
+    b_finished: int, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Ctrl-C during B of an A/B run: B read "success 0/0 = 0.0 % (95 % Wilson interval
+    0.0 %..100.0 %)" and the comparison was dropped without a word, even over seeds both
+    finished. Now a variant with no episode says so, and the comparison is over the pairs
+    that finished (or a line says why there is none)."""
+    import roomba_bt.evaluate.parallel as parallel
+    from roomba_bt.evaluate.parallel import Evaluation
+
+    def interrupted_in_b(batches: list, engine: object, progress: object) -> list:  # type: ignore[type-arg]
+        a = parallel.run_episodes(batches[0])
+        return [Evaluation(a), Evaluation(parallel.run_episodes(batches[1][:b_finished]), 0, True)]
+
+    monkeypatch.setattr(parallel, "evaluate", interrupted_in_b)
+    code = main(["eval", BUMP, "--sweep", "duration=1s,2s", "--runs", "3", "--no-progress"])
+    out = capsys.readouterr().out
+    assert code == 130
+    assert "0/0" not in out and "Wilson interval 0.0 %..100.0 %" not in out
+    if b_finished:
+        assert "paired       2 episodes, same seeds and start poses (interrupted" in out
+    else:
+        assert "success      no episode finished" in out
+        assert "no comparison, no seed finished with both (interrupted)" in out
+
+
 @pytest.mark.parametrize(
     "engine", [["--jobs", "1"], ["--jobs", "2"], ["--engine", "dask", "--jobs", "2"]]
 )

@@ -197,3 +197,11 @@ def test_the_json_summary_is_tidied_of_binary_noise() -> None:
             "inf": math.inf, "none": None, "deep": [{"w": 0.10208152500126744}]}  # fmt: skip
     assert tidy(data) == {"t": 27.885, "i": [0.4385029682, 1.0], "n": 3, "s": "x",
                           "inf": math.inf, "none": None, "deep": [{"w": 0.102081525}]}  # fmt: skip
+
+
+def test_a_variant_with_no_episode_says_so_instead_of_a_rate() -> None:
+    """ "success 0/0 = 0.0 % (95 % Wilson interval 0.0 %..100.0 %)" for a variant Ctrl-C
+    stopped before its first episode finished: no rate is a rate of none."""
+    empty = summarize("dock.yaml", "apartment", [])
+    assert "success      no episode finished" in str(empty) and "0/0" not in str(empty)
+    assert empty.to_dict()["rate"] is None and empty.to_dict()["interval"] is None
