@@ -22,6 +22,7 @@ import math
 import os
 import re
 import socket
+import time
 from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -197,6 +198,10 @@ class EpisodeResult:
     #: where it ran (host:pid, or the Dask worker's address); not part of the episode
     worker: str = field(default="", compare=False)
     coverage: Coverage | None = field(repr=False, default=None)
+    #: CPU seconds of the thread that ran the episode (``time.thread_time``: compiling the
+    #: mission, building the world, the run), where ``wall_s`` is the run's wall-clock time,
+    #: which also counts the time waiting for a core; not part of the episode
+    cpu_s: float = field(default=0.0, compare=False)
 
     @property
     def succeeded(self) -> bool:
@@ -377,10 +382,17 @@ def run_episode(spec: EpisodeSpec) -> EpisodeResult:
     logger = logging.getLogger("roomba_bt")
     level = logger.level
     logger.setLevel(logging.CRITICAL)
+    started = _cpu_clock()
     try:
-        return _run_episode(spec)
+        result = _run_episode(spec)
     finally:
         logger.setLevel(level)
+    return replace(result, cpu_s=_cpu_clock() - started)
+
+
+#: The CPU seconds of the calling thread: an episode's, in whichever process or Dask
+#: worker thread runs it (``time.process_time`` would add the worker's other threads).
+_cpu_clock = time.thread_time
 
 
 #: Missions compiled in this process, by what decides the compiled mission (the file, the

@@ -69,6 +69,7 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "loops": ("loops", "float"),
     "longest_stall": ("longest_stall_s", "float"),
     "worker": ("worker", "str"),
+    "cpu_time": ("cpu_s", "float?"),
 }
 
 #: the coverage columns (empty when the episode did not clean): name -> Coverage field
@@ -159,6 +160,10 @@ def from_record(record: dict[str, Any]) -> EpisodeResult:
     strings (CSV). KeyError/ValueError on a missing column or a bad value."""
     values: dict[str, Any] = {"start": [0.0] * 3, "end": [0.0] * 3}
     for column, (name, kind) in COLUMNS.items():
+        if kind == "float?":  # a column later versions added: absent from older files
+            raw = record.get(column)
+            values[name] = 0.0 if raw is None or raw == "" else float(raw)
+            continue
         raw = record[column]
         if kind == "str":
             values[name] = "" if raw is None else str(raw)

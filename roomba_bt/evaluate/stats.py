@@ -69,8 +69,11 @@ class Summary:
     #: episodes that ended on the dock's contacts (measured by the simulator)
     docked: int
     failures: tuple[tuple[str, int], ...]
+    #: the episodes' wall-clock time summed (each counts the time it waited for a core)
     wall_s: float
     simulated_s: float
+    #: the episodes' CPU time summed (:attr:`EpisodeResult.cpu_s`)
+    cpu_s: float = 0.0
     #: the robot profile, said when not the default (``runtime.summary.profile_shown``: "" for
     #: create2); ``eval --json`` has it in its conditions
     profile: str = ""
@@ -89,7 +92,7 @@ class Summary:
         lo, hi = self.interval
         med = "n/a" if self.median_time_s is None else f"{self.median_time_s:.1f} s"
         p90 = "n/a" if self.p90_time_s is None else f"{self.p90_time_s:.1f} s"
-        speed = self.simulated_s / self.wall_s if self.wall_s > 0 else 0.0
+        speed = self.simulated_s / self.cpu_s if self.cpu_s > 0 else 0.0
         out = [
             f"mission      {self.mission} in {self.world}",
             *([f"profile      {self.profile}"] if self.profile else []),
@@ -98,8 +101,9 @@ class Summary:
             f"time         median {med}, p90 {p90} (successful episodes, mission time)",
             f"bumps        {self.mean_bumps:.1f} per episode (bumper onsets in the simulator)",
             f"docked       {self.docked} of {self.runs} episodes ended on the dock's contacts",
-            f"simulated    {self.simulated_s:.0f} s of mission time in {self.wall_s:.1f} s of "
-            f"CPU time ({speed:.0f}x real time per process)",
+            f"simulated    {self.simulated_s:.0f} s of mission time in {self.cpu_s:.1f} s of "
+            f"CPU time ({speed:.0f}x real time per CPU second); {self.wall_s:.1f} s of "
+            "wall-clock time summed over the episodes",
         ]
         if self.failures:
             out.append("failures")
@@ -125,6 +129,7 @@ class Summary:
             "docked": self.docked,
             "failures": {reason: count for reason, count in self.failures},
             "wall_time": self.wall_s,
+            "cpu_time": self.cpu_s,
             "mission_time": self.simulated_s,
         }
 
@@ -164,6 +169,7 @@ def summarize(
         failures=tuple(sorted(groups.items(), key=lambda kv: (-kv[1], kv[0]))),
         wall_s=sum(r.wall_s for r in results),
         simulated_s=sum(r.time_s for r in results),
+        cpu_s=sum(r.cpu_s for r in results),
         profile=profile,
     )
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from roomba_bt.evaluate.episode import EpisodeResult
@@ -205,3 +207,33 @@ def test_a_variant_with_no_episode_says_so_instead_of_a_rate() -> None:
     empty = summarize("dock.yaml", "apartment", [])
     assert "success      no episode finished" in str(empty) and "0/0" not in str(empty)
     assert empty.to_dict()["rate"] is None and empty.to_dict()["interval"] is None
+
+
+def test_cpu_time_is_cpu_time_and_wall_time_is_said_to_be_wall_clock(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """ "N s of CPU time" summed the episodes' wall-clock times: 500 jobs on 2 cores said
+    18846.9 s of CPU time. An episode's CPU time is its thread's (``time.thread_time``), the
+    summary says both, each by its name, and the record has a ``cpu_time`` column."""
+    from dataclasses import replace
+
+    import roomba_bt.evaluate.episode as episode
+    from roomba_bt.evaluate import EpisodeSpec
+    from roomba_bt.evaluate.records import from_record, to_record
+
+    clock = iter([10.0, 12.5])
+    monkeypatch.setattr(episode, "_cpu_clock", lambda: next(clock))
+    bump = Path(__file__).resolve().parents[2] / "missions" / "bump-and-turn.yaml"
+    spec = EpisodeSpec(str(bump), "corridor", seed=1, params=(("duration", "1s"),), timeout_s=5)
+    ran = episode.run_episode(spec)
+    assert ran.cpu_s == 2.5
+    record = to_record(ran)
+    assert record["cpu_time"] == 2.5 and from_record(record).cpu_s == 2.5
+    del record["cpu_time"]  # a file written before the column
+    assert from_record(record).cpu_s == 0.0
+
+    waited = [replace(result(s, time_s=10.0), wall_s=5.0, cpu_s=2.0) for s in range(2)]
+    text = str(summarize("m", "w", waited))
+    assert "20 s of mission time in 4.0 s of CPU time (5x real time per CPU second); " in text
+    assert "10.0 s of wall-clock time summed over the episodes" in text
+    assert summarize("m", "w", waited).to_dict()["cpu_time"] == 4.0
