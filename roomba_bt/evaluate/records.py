@@ -20,10 +20,12 @@ rename or drop one.
 Coverage (:data:`COVERAGE_COLUMNS`, after the others) is empty (``null`` / an empty cell) for
 an episode whose brushes never ran: ``coverage`` is the fraction of the start area (or of all
 the reachable floor: ``coverage_area`` empty) cleaned at the end, ``coverage_5min`` ...
-``coverage_20min`` the same at those mission times, ``coverage_overall`` of all the reachable
-floor, ``coverage_by_area`` per named room, ``coverage_curve`` the samples every 30 s
-(``[[t, c], ...]``; in CSV ``t:c;t:c``), ``longest_idle`` the longest brush time (s) without
-new floor. In pandas, ``df.groupby("mission").coverage_10min.describe()``.
+``coverage_20min`` the same at those mission times (after an episode's end: its final
+coverage if it succeeded, empty if it was cut short or failed: :func:`coverage_at`),
+``coverage_overall`` of all the reachable floor, ``coverage_by_area`` per named room,
+``coverage_curve`` the samples every 30 s (``[[t, c], ...]``; in CSV ``t:c;t:c``),
+``longest_idle`` the longest brush time (s) without new floor. In pandas,
+``df.groupby("mission").coverage_10min.describe()`` (NaN, not counted, where cut short).
 """
 
 from __future__ import annotations
@@ -112,17 +114,31 @@ def to_record(result: EpisodeResult) -> dict[str, Any]:
         elif kind == "params":
             value = dict(value)
         out[column] = value
-    out.update(_coverage_record(result.coverage))
+    out.update(_coverage_record(result))
     return out
 
 
-def _coverage_record(coverage: Coverage | None) -> dict[str, Any]:
+def coverage_at(result: EpisodeResult, seconds: float) -> float | None:
+    """The floor cleaned at ``seconds`` of mission time (None: the brushes never ran). After
+    the episode's end: its final coverage if it succeeded (the mission was done, the floor
+    would not change), None otherwise (cut by the timeout, failed, an error: what it would
+    have cleaned is unknown, and carrying its last value mixed it with measured ones)."""
+    coverage = result.coverage
+    if coverage is None:
+        return None
+    if result.time_s < seconds - 1e-6:
+        return coverage.final if result.succeeded else None
+    return coverage.at(seconds)
+
+
+def _coverage_record(result: EpisodeResult) -> dict[str, Any]:
+    coverage = result.coverage
     out: dict[str, Any] = {}
     for column, name in COVERAGE_COLUMNS.items():
         if coverage is None:
             out[column] = None
         elif name.startswith("at:"):
-            out[column] = coverage.at(float(name[3:]))
+            out[column] = coverage_at(result, float(name[3:]))
         elif name in ("by_area", "curve"):
             out[column] = (
                 {a: c for a, c in coverage.by_area}

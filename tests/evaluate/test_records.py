@@ -11,6 +11,7 @@ from roomba_bt.evaluate import EpisodeResult, episode_specs, run_episodes, summa
 from roomba_bt.evaluate.records import (
     COLUMNS,
     ResultsFileError,
+    from_record,
     read_results,
     results_format,
     to_record,
@@ -99,5 +100,34 @@ def test_coverage_is_in_the_records_and_reads_back(tmp_path: Path, suffix: str) 
     record = to_record(cleaned[0])
     assert list(record) == [*COLUMNS, *COVERAGE_COLUMNS]
     assert record["coverage"] is not None and 0 < record["coverage"] <= 1
-    assert 0 < record["coverage_5min"] <= record["coverage"] + 1e-9
+    # cut by the 40 s timeout: what it would have cleaned by 5 min is unknown, not carried
+    assert cleaned[0].outcome == "timeout" and record["coverage_5min"] is None
     assert to_record(again[2])["coverage"] is None
+
+
+@pytest.mark.parametrize(
+    ("outcome", "expected"),
+    [
+        ("timeout", (0.15, None, None)),
+        ("failure", (0.15, None, None)),
+        ("success", (0.15, 0.18, 0.18)),
+    ],
+)
+def test_coverage_after_the_end_is_empty_unless_the_mission_was_done(
+    results: list[EpisodeResult], outcome: str, expected: tuple[float | None, ...]
+) -> None:
+    """An episode cut by --timeout 6min had coverage_10min == coverage_20min == its last
+    value, which pandas then mixed with measured 10-minute values: after the end it is empty,
+    unless the mission succeeded (done: its final coverage would not change)."""
+    from dataclasses import replace
+
+    from roomba_bt.evaluate.episode import Coverage
+
+    curve = tuple((30.0 * i, 0.015 * i) for i in range(13))  # 0..360 s: 0.15 at 5 min
+    cleaned = Coverage("", 0.18, curve, 0.18, (), 0.0, 360.0)
+    ended = replace(results[0], outcome=outcome, time_s=360.0, coverage=cleaned)
+    record = to_record(ended)
+    got = (record["coverage_5min"], record["coverage_10min"], record["coverage_20min"])
+    assert tuple(None if v is None else round(v, 9) for v in got) == expected
+    # and it reads back, and writes again, the same (JSON null, an empty CSV cell)
+    assert to_record(from_record(json.loads(json.dumps(record)))) == record
