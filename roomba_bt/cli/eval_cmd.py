@@ -280,6 +280,8 @@ def eval_command(args: argparse.Namespace) -> int:
     jobs = min(args.jobs, sum(len(batch) for batch in batches))
     engine = Engine("dask" if args.scheduler or args.engine == "dask" else "local", jobs,
                     args.scheduler)  # fmt: skip
+    if engine.scheduler is None:
+        _warn_if_more_jobs_than_cores(jobs)
     partial = _partial(args.out)
     if isinstance(partial, int):
         return partial
@@ -499,6 +501,20 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
         return _error(str(exc))
     _warn_if_one_start(args, world)
     return chosen, batches, world
+
+
+def _warn_if_more_jobs_than_cores(jobs: int) -> None:
+    """``--jobs 500`` on 2 cores started 500 processes that took turns on them: no faster,
+    the memory of 500 interpreters, and each episode's wall time 250 times its CPU time."""
+    import os
+
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    if cores and jobs > cores:
+        print(
+            f"roomba-bt eval: warning: --jobs {jobs} on {cores} core(s): the processes take "
+            f"turns on the cores (no faster than --jobs {cores}, and each one's memory)",
+            file=sys.stderr,
+        )
 
 
 def _warn_if_one_start(args: argparse.Namespace, world: World) -> None:

@@ -616,3 +616,18 @@ def test_a_finished_evaluation_leaves_no_partial_file(tmp_path: Path) -> None:
                  "--out", str(out)]) == 0  # fmt: skip
     assert len(out.read_text().splitlines()) == 2
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r.jsonl"]
+
+
+def test_more_jobs_than_cores_is_warned_about(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """--jobs 500 on 2 cores ran 500 processes without a word."""
+    import os
+
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0}, raising=False)
+    monkeypatch.setattr(os, "cpu_count", lambda: 1)
+    assert main(["eval", BUMP, "-p", "duration=1s", "--runs", "2", "--jobs", "2",
+                 "--no-progress"]) == 0  # fmt: skip
+    assert "warning: --jobs 2 on 1 core(s)" in capsys.readouterr().err
+    assert main(["eval", BUMP, "-p", "duration=1s", "--runs", "2", "--no-progress"]) == 0
+    assert "warning: --jobs" not in capsys.readouterr().err
