@@ -20,6 +20,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import signal
+import sys
 import threading
 import uuid
 from collections.abc import Callable, Iterator, Sequence
@@ -127,6 +128,7 @@ def dask_client(scheduler: str | None = None, workers: int = 2) -> Iterator[Any]
                 f"--scheduler {scheduler}: cannot connect ({exc})"
             ) from None
         with client:
+            say_when_no_worker(client, scheduler)
             yield client
         return
     import dask
@@ -145,6 +147,28 @@ def dask_client(scheduler: str | None = None, workers: int = 2) -> Iterator[Any]
             )
         with cluster, distributed.Client(cluster) as client:
             yield client
+
+
+#: How long an evaluation waits for a worker of a ``--scheduler`` cluster before saying so.
+NO_WORKER_AFTER_S = 5.0
+
+
+def say_when_no_worker(client: Any, scheduler: str, after_s: float = NO_WORKER_AFTER_S) -> None:
+    """A scheduler with no worker takes the futures and waits for one for ever: after
+    ``after_s`` without a worker, say so on stderr (once; the evaluation goes on waiting,
+    Ctrl-C ends it). A scheduler that answers about nothing else is left to the futures."""
+    with contextlib.suppress(TimeoutError):
+        client.wait_for_workers(1, timeout=after_s)
+        return
+    with contextlib.suppress(Exception):
+        workers = len(client.scheduler_info().get("workers", {}))
+        if workers:  # one joined as the wait ended
+            return
+    print(
+        f"roomba-bt eval: the cluster at {scheduler} has 0 workers; waiting for one (start "
+        f"`dask worker {scheduler} --nthreads 1` on a machine; Ctrl-C to stop)...",
+        file=sys.stderr,
+    )
 
 
 @contextlib.contextmanager

@@ -202,3 +202,27 @@ def test_a_local_clusters_workers_run_without_what_only_a_dashboard_shows() -> N
         assert scheduler.periodic_callbacks["tick"].callback_time == 500
         assert scheduler.periodic_callbacks["monitor"].callback_time == 2000
     assert [dask.config.get(key) for key in keys] == before
+
+
+def test_a_scheduler_without_workers_is_said_to_have_none(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """--scheduler at a cluster with no worker waited for ever without a word."""
+    distributed = pytest.importorskip("distributed")
+    from roomba_bt.evaluate.cluster import say_when_no_worker
+
+    with (
+        distributed.LocalCluster(
+            n_workers=0,
+            processes=False,
+            dashboard_address=None,
+            scheduler_kwargs={"dashboard": False, "dashboard_address": ":0"},  # no port 8787
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        say_when_no_worker(client, "tcp://example:8786", after_s=0.2)
+        assert "the cluster at tcp://example:8786 has 0 workers; waiting" in capsys.readouterr().err
+        cluster.scale(1)
+        client.wait_for_workers(1, timeout=120)
+        say_when_no_worker(client, "tcp://example:8786", after_s=5.0)
+        assert "0 workers" not in capsys.readouterr().err
