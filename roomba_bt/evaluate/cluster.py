@@ -6,9 +6,11 @@ of :func:`run_on_worker` on a :func:`~roomba_bt.evaluate.episode.self_contained`
 mission's texts travel with it, so workers need only ``pip install roomba-bt[cluster]``, no
 shared file system). A worker that dies mid-episode loses nothing: the scheduler hands its
 episodes to another worker (Dask's own resubmission, up to its ``allowed-failures``), and
-since an episode is decided by its spec alone the rerun gives the same result. How many
-episodes were run again is read from the scheduler (each task's ``suspicious`` count: the
-times a worker died while holding it) before the futures are released.
+since an episode is decided by its spec alone the rerun gives the same result. Each result
+is released as it is gathered (in batches), so a dead worker's finished episodes are not
+computed again; how many episodes were run again is read from the scheduler (each task's
+``suspicious`` count: the times a worker died while holding it) just before each batch is
+released.
 
 Results come back in spec order; progress is reported as futures complete, in completion
 order. Ctrl-C (KeyboardInterrupt) cancels the futures still pending and returns what
@@ -187,38 +189,63 @@ def _ctrl_c_left_to_this_process() -> Iterator[None]:
         signal.signal(signal.SIGINT, previous)
 
 
+#: Gathered results are released in batches of this many, each after reading how many of
+#: them were run again (one scheduler round trip per batch).
+RELEASE_EVERY = 16
+
+
 def run_on_client(
     client: Any,
     specs: Sequence[EpisodeSpec],
     progress: Callable[[int, int, EpisodeResult], None] | None = None,
 ) -> tuple[list[EpisodeResult | None], int, bool]:
-    """``(results in spec order (None where cancelled), episodes retried, interrupted)``."""
+    """``(results in spec order (None where cancelled), episodes retried, interrupted)``.
+
+    Each result is released once gathered (in batches of :data:`RELEASE_EVERY`, after the
+    scheduler says which of them a dead worker held): futures kept to the end made the
+    scheduler compute again what a dead worker had finished, and the count missed those."""
     distributed = _import_distributed()
     total = len(specs)
     batch = uuid.uuid4().hex[:12]  # keys unique on a cluster shared by many evaluations
-    futures = [
-        client.submit(run_on_worker, spec, key=f"episode-{batch}-{i}", pure=False)
+    futures = {
+        f"episode-{batch}-{i}": client.submit(
+            run_on_worker, spec, key=f"episode-{batch}-{i}", pure=False
+        )
         for i, spec in enumerate(all_self_contained(specs))
-    ]
-    index = {future.key: i for i, future in enumerate(futures)}
+    }
+    index = {key: i for i, key in enumerate(futures)}
     results: list[EpisodeResult | None] = [None] * total
-    done = 0
+    gathered: list[Any] = []
+    retried = done = 0
     interrupted = False
     try:
         # results gathered on the client's event loop as they complete, not one blocking
         # round trip from this thread each
-        for future, result in distributed.as_completed(futures, with_results=True):
+        for future, result in distributed.as_completed(list(futures.values()), with_results=True):
             results[index[future.key]] = result
+            gathered.append(futures.pop(future.key))
+            if len(gathered) >= RELEASE_EVERY:
+                retried += _count_and_release(client, gathered)
             done += 1
             if progress is not None:
                 progress(done, total, result)
     except KeyboardInterrupt:
         interrupted = True
-        client.cancel([f for f in futures if not f.done()])
+        client.cancel([f for f in futures.values() if not f.done()])
+    retried += _count_and_release(client, [*gathered, *futures.values()])
+    return results, retried, interrupted
+
+
+def _count_and_release(client: Any, futures: list[Any]) -> int:
+    """How many of ``futures`` a dead worker held (read from the scheduler), then each
+    released (``futures`` emptied): the scheduler forgets them."""
     retried = 0
     with contextlib.suppress(Exception):  # the count is a report, never a reason to fail
-        retried = int(client.run_on_scheduler(_retried, keys=list(index)))
-    return results, retried, interrupted
+        retried = int(client.run_on_scheduler(_retried, keys=[f.key for f in futures]))
+    for future in futures:
+        future.release()
+    futures.clear()
+    return retried
 
 
 def warm_up(client: Any) -> None:

@@ -226,3 +226,34 @@ def test_a_scheduler_without_workers_is_said_to_have_none(
         client.wait_for_workers(1, timeout=120)
         say_when_no_worker(client, "tcp://example:8786", after_s=5.0)
         assert "0 workers" not in capsys.readouterr().err
+
+
+def test_results_are_released_as_they_are_gathered(
+    one_job: list[EpisodeResult], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Every future was kept to the end: the scheduler held each finished episode (a dead
+    worker's finished ones were computed again, and the retried count missed them). By the
+    last result, the scheduler has forgotten the earlier ones."""
+    pytest.importorskip("distributed")
+    import roomba_bt.evaluate.cluster as cluster
+
+    monkeypatch.setattr(cluster, "RELEASE_EVERY", 1, raising=False)  # (none in old code)
+    held: list[int] = []
+
+    def episodes_held(dask_scheduler: Any) -> int:
+        return sum(1 for key in dask_scheduler.tasks if str(key).startswith("episode-"))
+
+    with dask_client(None, 1) as client:
+
+        def at_the_last(done: int, total: int, result: EpisodeResult) -> None:
+            if done < total:
+                return
+            for _ in range(3000):  # release is asynchronous: until the scheduler forgot them
+                held.append(client.run_on_scheduler(episodes_held))
+                if held[-1] == 0:
+                    return
+                time.sleep(0.01)
+
+        results, retried, _ = run_on_client(client, SPECS[:4], at_the_last)
+    assert held and held[-1] == 0, f"still held at the last result: {held[-1:]}"
+    assert _episodes([r for r in results if r is not None]) == one_job[:4] and retried == 0
