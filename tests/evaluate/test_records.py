@@ -131,3 +131,19 @@ def test_coverage_after_the_end_is_empty_unless_the_mission_was_done(
     assert tuple(None if v is None else round(v, 9) for v in got) == expected
     # and it reads back, and writes again, the same (JSON null, an empty CSV cell)
     assert to_record(from_record(json.loads(json.dumps(record)))) == record
+
+
+def test_records_carry_no_binary_noise(tmp_path: Path) -> None:
+    """--json was tidied (27.885) but the records said 27.884999999999998: every measured
+    float is cut to ten significant digits where the episode is measured, so the JSONL and
+    CSV files read like the summary and still read back to the same episodes."""
+    specs = episode_specs(BUMP, world="corridor", runs=4, seed=0,
+                          params=(("duration", "5s"),), timeout_s=10)  # fmt: skip
+    ran = run_episodes(specs)
+    path = tmp_path / "r.jsonl"
+    write_results(path, ran)
+    for line in path.read_text().splitlines():
+        for column, value in json.loads(line).items():
+            if isinstance(value, float):
+                assert len(repr(abs(value)).replace(".", "").lstrip("0")) <= 10, (column, value)
+    assert [to_record(r) for r in read_results(path)] == [to_record(r) for r in ran]
