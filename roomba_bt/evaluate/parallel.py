@@ -80,21 +80,21 @@ def run_episodes(
         return run.in_order()
     todo = list(range(total))
     for restart in range(POOL_RESTARTS + 1):
-        todo = _pool_round(specs, todo, jobs, finished)
+        lost, unstarted = _pool_round(specs, todo, jobs, finished)
+        todo = sorted([*lost, *unstarted])
         if not todo:
             return run.in_order()
-        seeds = _seeds(specs, todo)
         if restart == POOL_RESTARTS:
             raise WorkersLostError(
                 f"a worker process died {POOL_RESTARTS + 1} times (killed: the OOM killer?); "
-                f"{len(todo)} episode(s) did not finish: seeds {seeds}",
+                f"{len(todo)} episode(s) did not finish: seeds {_seeds(specs, todo)}",
                 run.in_order(),
                 run.retried,
             )
-        run.retried += len(todo)
-        print(f"roomba-bt eval: a worker process died (killed: the OOM killer?); "
-              f"{len(todo)} unfinished episode(s) run again in new workers: seeds {seeds}",
-              file=sys.stderr)  # fmt: skip
+        run.retried += len(lost)
+        print(f"roomba-bt eval: a worker process died (killed: the OOM killer?); the "
+              f"{len(lost)} episode(s) its pool had taken run again in new workers: seeds "
+              f"{_seeds(specs, lost)}", file=sys.stderr)  # fmt: skip
     return run.in_order()  # not reached: the last round returns or raises
 
 
@@ -109,9 +109,10 @@ def _pool_round(
     todo: Sequence[int],
     jobs: int,
     finished: Callable[[int, EpisodeResult], None],
-) -> list[int]:
+) -> tuple[list[int], list[int]]:
     """``specs[i]`` for each ``i`` in ``todo`` on ``jobs`` worker processes, each result to
-    ``finished`` as it comes; the indices left unfinished when a worker died ([] if none).
+    ``finished`` as it comes; when a worker died, the indices the pool had taken and lost
+    (running or queued in it: a broken pool ends every worker) and those never handed to it.
     A few episodes are queued ahead per worker, not all: a million futures would fill memory."""
     method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
     executor = ProcessPoolExecutor(
@@ -143,7 +144,7 @@ def _pool_round(
                 nxt = None if lost else next(queue, None)
                 if nxt is not None:
                     submit(nxt)
-        return sorted([*lost, *queue])
+        return sorted(lost), list(queue)
     except BaseException:  # Ctrl-C (or an episode's bug): no worker left running
         _terminate(executor)
         raise

@@ -225,7 +225,9 @@ def test_a_worker_killed_mid_evaluation_loses_no_episode_and_hangs_nothing(hooke
     (done,) = evaluate([specs], Engine("local", 2))
     assert not done.interrupted
     assert _without_wall_time(done.results) == expected
-    assert done.retried >= 1  # seed 3 at least: it was running when its worker died
+    # seed 3 at least (it was running when its worker died), at most what the pool had
+    # taken (2 x jobs in flight), not every episode still to run
+    assert 1 <= done.retried <= 2 * 2
 
 
 def test_a_worker_that_always_dies_ends_with_the_finished_episodes_and_a_message(
