@@ -102,13 +102,18 @@ def sigterm_raises() -> Iterator[None]:
             signal.signal(signum, handler)
 
 
-#: What a Ctrl-C or SIGTERM during the safe stop prints (straight to stderr: a handler may
-#: run while the main thread is inside a write to it): what comes after it, the summary (the
-#: CLI prints it) or the interrupt raised in the program that started the run
-_WAITING = b"roomba-bt: the safe stop is under way; waiting for it to end (the summary follows)\n"
-_WAITING_THEN_RAISED = (
-    b"roomba-bt: the safe stop is under way; waiting for it to end (then the interrupt is raised)\n"
-)
+#: What the run is doing while it stops, as a Ctrl-C or SIGTERM meanwhile says it
+#: (:meth:`InterruptGuard.stopping`): the safe stop itself (the default)
+SAFE_STOP_UNDER_WAY = "the safe stop is under way"
+
+
+def _waiting(doing: str, raises: bool) -> bytes:
+    """What a Ctrl-C or SIGTERM while the run stops prints (straight to stderr: a handler may
+    run while the main thread is inside a write to it): what the run is doing, and what comes
+    after it, the summary (the CLI prints it) or the interrupt raised in the program that
+    started the run. Made before it is needed: a handler formats nothing."""
+    then = "then the interrupt is raised" if raises else "the summary follows"
+    return f"roomba-bt: {doing}; waiting for it to end ({then})\n".encode()
 
 
 class InterruptGuard:
@@ -135,7 +140,8 @@ class InterruptGuard:
         raises: bool = False,
     ) -> None:
         self.hold = hold
-        self._waiting = _WAITING_THEN_RAISED if raises else _WAITING
+        self.raises = raises
+        self._waiting = _waiting(SAFE_STOP_UNDER_WAY, raises)
         #: False: no handler at all (an evaluation's worker process: its parent takes Ctrl-C
         #: and ends the workers, which have nothing driving to stop)
         self.enabled = enabled
@@ -156,8 +162,11 @@ class InterruptGuard:
         self.ignored = 0
         self._previous: dict[int, object] = {}
 
-    def stopping(self) -> None:
-        """The safe stop begins: from now on a signal waits for it."""
+    def stopping(self, doing: str = SAFE_STOP_UNDER_WAY) -> None:
+        """The run's stop begins, or its next step: from now on a signal waits for it, and
+        the first one says ``doing`` (what the run does now: the tree's stop, the safe stop,
+        the nodes' shutdown)."""
+        self._waiting = _waiting(doing, self.raises)
         self.stop_begun = True
 
     def _handle(self, signum: int, frame: FrameType | None) -> None:

@@ -45,7 +45,12 @@ from roomba_bt.robot.interface import (
     Odometer,
     Snapshot,
 )
-from roomba_bt.robot.safety import InterruptGuard, Terminated, signal_reason
+from roomba_bt.robot.safety import (
+    SAFE_STOP_UNDER_WAY,
+    InterruptGuard,
+    Terminated,
+    signal_reason,
+)
 from roomba_bt.runtime.stall import StallRide
 from roomba_bt.runtime.summary import DEFAULT_GRACE, Outcome, RunSummary, profile_shown
 from roomba_bt.runtime.teardown import (
@@ -57,11 +62,20 @@ from roomba_bt.runtime.teardown import (
     shutdown_nodes,
     stop_nodes,
     terminate_raised,
+    tree_running,
 )
 from roomba_bt.runtime.tick_guard import TickGuardLike
 
 log = logging.getLogger(__name__)
 
+#: what a Ctrl-C says while the run's tree is stopped (each running node's ``terminate()``),
+#: after what the wheels do meanwhile
+STOPPING_THE_TREE = (
+    "the run is ending: {wheels}; its tree is being stopped (each running behaviour's "
+    "terminate()), the safe stop after it"
+)
+#: ... and while the nodes' ``shutdown()`` runs
+SHUTTING_DOWN = "the robot is stopped; the behaviours' shutdown() is under way"
 #: a gap between frames read this long, not a stall the watchdog saw, is said (``unread_gap``)
 UNREAD_GAP_SECONDS = 1.0
 _new_tuple = tuple.__new__
@@ -353,10 +367,13 @@ class MissionRunner(BaseHandle):
     def _finish(
         self, summary: RunSummary, wall_start: float, raised_in: py_trees.behaviour.Behaviour | None
     ) -> None:
-        note_stop_failures(summary, self.stop_tree(raised_in))
+        guard = cast(InterruptGuard, self._guard)  # run()'s: told what the stop does
+        first = end_the_tree(self, guard, raised_in)
         self.count_written()  # the safe stop's are said apart
-        stop_robot(self.connection, summary)
+        guard.stopping(SAFE_STOP_UNDER_WAY)
+        stop_robot(self.connection, summary, first)
         if self._sent_at_start is not None:  # set up: what its setup() opened, closed
+            guard.stopping(SHUTTING_DOWN)
             shutdown_nodes(self.mission.root)
         if self._blackboard is not None:
             with contextlib.suppress(Exception):
@@ -592,6 +609,57 @@ def tick_halted(runner: MissionRunner, seconds: float, where: str) -> None:
     runner._send_wheels_again()
 
 
+def stop_wheels_first(runner: MissionRunner, guard: InterruptGuard) -> bool:
+    """Before the tree's stop, whose ``terminate()`` calls may block (a plugin's
+    ``time.sleep``): drive 0 and motors off, the first half of the safe stop, through the
+    run's tick guard (a run on the wall clock; a replay's, as its record says), when a node
+    still runs and the wheels move. True if they were sent. ``guard`` is told what the run
+    does meanwhile, for a Ctrl-C that comes then."""
+    tick_guard = runner.tick_guard
+    first = (
+        tick_guard is not None
+        and tree_running(runner.mission.root)
+        and tick_guard.halt_before_stop()
+    )
+    wheels = (
+        "drive 0 and motors off were sent"
+        if first
+        else f"the robot keeps its last wheel command ({runner.connection.activity()})"
+    )
+    guard.stopping(STOPPING_THE_TREE.format(wheels=wheels))
+    return first
+
+
+def end_the_tree(
+    runner: MissionRunner, guard: InterruptGuard, raised_in: py_trees.behaviour.Behaviour | None
+) -> bool:
+    """The tree's stop at the run's end (:meth:`MissionRunner.stop_tree`, its failures in the
+    summary), drive 0 and motors off before it if the wheels move (:func:`stop_wheels_first`:
+    True if they were sent), and a warning if it blocked (:func:`said_slow_stop`)."""
+    first = stop_wheels_first(runner, guard)
+    began = time.monotonic()
+    note_stop_failures(runner.summary, runner.stop_tree(raised_in))
+    said_slow_stop(runner, time.monotonic() - began, first)
+    return first
+
+
+def said_slow_stop(runner: MissionRunner, seconds: float, first: bool) -> None:
+    """A tree's stop that took longer than a tick may (a ``terminate()`` that blocked):
+    warned, with what the wheels did meanwhile (``first``: drive 0 went out before it)."""
+    limit = runner.tick_guard.limit_s if runner.tick_guard is not None else None
+    if not limit or seconds <= limit:
+        return
+    activity = runner.connection.activity()
+    wheels = (
+        "drive 0 and motors off had been sent before it"
+        if first
+        else f"the robot kept its last wheel command ({activity}) meanwhile"
+    )
+    log.warning(
+        "stopping the tree took %.2f s (a behaviour's terminate() blocked); %s", seconds, wheels
+    )
+
+
 def refusal(runner: MissionRunner, command: Command, exc: ModeError) -> str:
     """``t=12.345 drive_straight: drive needs Safe or Full; the robot is in Passive since
     t=12.300, after a cliff``: when, who sent it, and the mode's start in mission time
@@ -628,14 +696,16 @@ def ended_by(exc: Exception, summary: RunSummary, *, answered: bool) -> None:
         summary.traceback = "".join(traceback.format_exception(exc))
 
 
-def stop_robot(connection: Connection, summary: RunSummary) -> None:
+def stop_robot(connection: Connection, summary: RunSummary, first: bool = False) -> None:
     """The safe stop, and the summary's word on it: what was sent, or why it was not
-    delivered (the connection's report)."""
+    delivered (the connection's report); ``first``: drive 0 and motors off went out before
+    the tree's stop (:func:`stop_wheels_first`), said before it."""
     try:
         sequence = [c.name for c in connection.stop_sequence()]
         if connection.safe_stop():
+            before = "drive 0, motors off before the tree's stop, then " if first else ""
             summary.safe_stop = (
-                "sent " + ", ".join(sequence)
+                before + "sent " + ", ".join(sequence)
                 if sequence
                 else "nothing to stop: the robot was never started"
                 if connection.mode is OIMode.OFF and connection.writer.sent == 0

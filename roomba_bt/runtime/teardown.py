@@ -2,6 +2,9 @@
 
 A run (and the monitor's reload, which retires a tree) ends its tree in this order::
 
+    (drive 0, motors off)   a run's end on the wall clock, while a node still runs: the first
+                            half of the safe stop, before any terminate() (one may block);
+                            the tick guard's (runtime/tick_guard.py, halt_before_stop)
     stop_nodes(root)        every node stopped: its terminate() once, in py_trees' order;
                             one that raises is noted, and the others are stopped all the same
     the safe stop           the runner's (drive 0, motors off, pause, Passive)
@@ -128,6 +131,11 @@ def stop_nodes(
     for failure in failures:
         log.warning("%s; the other nodes were stopped all the same", failure)
     return failures
+
+
+def tree_running(root: py_trees.behaviour.Behaviour) -> bool:
+    """Whether a node of the tree at ``root`` runs: its stop will call a ``terminate``."""
+    return bool(_topmost_running(root, set()))
 
 
 def _topmost_running(

@@ -17,10 +17,16 @@ commanded to move in Safe or Full, the guard sends drive 0 (the watchdog's actio
 the runner counts it and, as after a watchdog stall, sends the last wheel command again
 unless the tick queued another: the mission goes on where it was.
 
+The run's end is guarded too (:meth:`TickGuard.halt_before_stop`): before the tree's stop,
+whose ``terminate()`` calls may block as an ``update`` may, the runner has the guard send the
+first half of the safe stop (drive 0, motors off) at once, in the main thread; the whole safe
+stop still follows the tree's stop (a ``terminate`` may itself write a command).
+
 Only a run on the wall clock has one (a robot's port, the real-time simulator); on the
 virtual clock the robot does not move while the host thinks. With ``--record`` each act is a
-note in the record (its tick, how long the tick had run, where), and a replay does it again
-in the same tick (:class:`RecordedTickGuard`): the bytes stay the recorded ones.
+note in the record (its tick, how long the tick had run, where; ``"at": "end"`` for the
+halt before the tree's stop), and a replay does it again in the same tick
+(:class:`RecordedTickGuard`): the bytes stay the recorded ones.
 """
 
 from __future__ import annotations
@@ -36,6 +42,8 @@ from typing import Any, Protocol
 
 import py_trees
 
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.encode import Command
 from roomba_bt.oi.modes import DRIVING_MODES
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.hazards import turns_a_wheel
@@ -47,6 +55,34 @@ log = logging.getLogger(__name__)
 #: ``halted(seconds, where)``: the runner's reaction, in the ticking thread, lock held
 Halted = Callable[[float, str], None]
 
+#: where the halt before the tree's stop is noted as done (the record's ``where``)
+AT_THE_END = "the run's end, before the tree's stop"
+
+
+def wheels_moving(connection: Connection) -> bool:
+    """The last wheel command drives, in a mode where the robot obeys it."""
+    wheels = connection.writer.last_wheels
+    return wheels is not None and turns_a_wheel(wheels) and connection.mode in DRIVING_MODES
+
+
+def stop_first() -> list[Command]:
+    """What the run's end sends before the tree's stop: the first half of the safe stop
+    (robot/ending.py), in one write."""
+    return [oi.halt(), oi.motors_off()]
+
+
+def _send_stop_first(connection: Connection) -> bool:
+    """:func:`stop_first` if the wheels move (:func:`wheels_moving`); True if it was written.
+    A link already gone is no error here: the safe stop that follows says what became of it."""
+    if not wheels_moving(connection):
+        return False
+    try:
+        connection.send_many(stop_first())
+    except Exception as exc:
+        log.debug("drive 0 before the tree's stop not sent: %s", exc)
+        return False
+    return True
+
 
 class TickGuardLike(Protocol):
     """What the runner asks of a tick guard: the live one or a record's."""
@@ -55,6 +91,7 @@ class TickGuardLike(Protocol):
 
     def start(self) -> None: ...
     def close(self) -> None: ...
+    def halt_before_stop(self) -> bool: ...
     def guarded(
         self, tick: Callable[[], object], halted: Halted, index: Callable[[], int]
     ) -> Callable[[], None]: ...
@@ -103,6 +140,21 @@ class TickGuard:
         self._done.set()
         if self._thread.is_alive():
             self._thread.join()
+
+    def halt_before_stop(self) -> bool:
+        """The run ends with nodes still running and the wheels moving: drive 0 and motors off now
+        (:func:`stop_first`), before their ``terminate()``, which may block as a tick may (a
+        plugin's ``time.sleep``); called in the main thread once the guard is closed. Noted
+        in the record (``"at": "end"``) for a replay to do it again. True if it was sent."""
+        if not _send_stop_first(self.connection):
+            return False
+        note = getattr(self.connection.transport, "note", None)
+        if callable(note):
+            note({
+                "tick_guard": 0.0, "limit": self.limit_s, "where": AT_THE_END,
+                "tick": self._index(), "at": "end",
+            })  # fmt: skip
+        return True
 
     def guarded(
         self, tick: Callable[[], object], halted: Halted, index: Callable[[], int]
@@ -160,11 +212,7 @@ class TickGuard:
             })  # fmt: skip
 
     def _moving(self) -> bool:
-        """The last wheel command drives, in a mode where the robot obeys it."""
-        wheels = self.connection.writer.last_wheels
-        return (
-            wheels is not None and turns_a_wheel(wheels) and self.connection.mode in DRIVING_MODES
-        )
+        return wheels_moving(self.connection)
 
     def _where(self) -> str:
         """Where the ticking thread is: the innermost frame of a py_trees behaviour's method
@@ -194,14 +242,22 @@ class RecordedTickGuard:
     def __init__(self, connection: Connection, notes: Iterable[dict[str, Any]]) -> None:
         self.connection = connection
         acts = [n for n in notes if "tick_guard" in n and isinstance(n.get("tick"), int)]
-        self._acts = deque(sorted(acts, key=lambda n: int(n["tick"])))
+        #: the recorded run sent drive 0 before its tree's stop (:meth:`halt_before_stop`)
+        self._at_end = any(n.get("at") == "end" for n in acts)
         self.limit_s = float(acts[0].get("limit", DEFAULT_TICK_LIMIT)) if acts else 0.0
+        acts = [n for n in acts if n.get("at") != "end"]
+        self._acts = deque(sorted(acts, key=lambda n: int(n["tick"])))
 
     def start(self) -> None:
         pass
 
     def close(self) -> None:
         pass
+
+    def halt_before_stop(self) -> bool:
+        """As the recorded run did at its end: drive 0 and motors off before the tree's stop
+        when its record says so (its ``"at": "end"`` note)."""
+        return self._at_end and _send_stop_first(self.connection)
 
     def guarded(
         self, tick: Callable[[], object], halted: Halted, index: Callable[[], int]
@@ -226,4 +282,4 @@ def recorded_tick_guard(
 ) -> RecordedTickGuard | None:
     """The record's tick guard, or None when the recorded run's guard never acted."""
     guard = RecordedTickGuard(connection, notes)
-    return guard if guard._acts else None
+    return guard if guard._acts or guard._at_end else None

@@ -127,7 +127,11 @@ def test_a_second_ctrl_c_waits_for_the_safe_stop_and_the_summary(
     out, err = proc.communicate(timeout=10)
     assert proc.returncode == 130, out + err
     assert "outcome      INTERRUPTED (Ctrl-C)" in out
-    assert "safe stop    sent drive, motors, pause_resume_stream, start" in out
+    # a spinning run on the wall clock: drive 0 and motors off went out before the tree's stop
+    assert (
+        "safe stop    drive 0, motors off before the tree's stop, then sent drive, motors, "
+        "pause_resume_stream, start"
+    ) in out
     assert "Traceback" not in err
     assert load_record(record).outbound.endswith(SAFE_END)
 

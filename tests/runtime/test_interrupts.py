@@ -215,3 +215,51 @@ def test_a_ctrl_c_before_the_first_byte_says_nothing_needed_stopping() -> None:
     assert summary.safe_stop == "nothing to stop: the robot was never started"
     assert summary.stop_delivered
     assert "NOT DELIVERED" not in str(summary)
+
+
+class _SignalsOnTerminate(py_trees.behaviour.Behaviour):
+    """Runs until stopped; its ``terminate()`` at the run's end signals the process (the
+    operator's second Ctrl-C while a plugin's terminate blocks) and notes the wheels."""
+
+    def __init__(self, runner: list[MissionRunner], seen: list[object]) -> None:
+        super().__init__("slow_term")
+        self.runner, self.seen = runner, seen
+
+    def update(self) -> py_trees.common.Status:
+        return py_trees.common.Status.RUNNING
+
+    def terminate(self, new_status: py_trees.common.Status) -> None:
+        if new_status is py_trees.common.Status.INVALID and self.runner:
+            os.kill(os.getpid(), signal.SIGINT)
+            self.seen.append(self.runner[0].connection.writer.last_wheels.args)  # type: ignore[union-attr]
+
+
+def test_a_signal_during_the_trees_stop_says_the_tree_is_stopping(
+    capfd: pytest.CaptureFixture[str],
+) -> None:
+    """A Ctrl-C while the tree's stop runs (a terminate that blocks) says so, and that drive
+    0 and motors off went out before it: not "the safe stop is under way", which was not."""
+    runners: list[MissionRunner] = []
+    seen: list[object] = []
+    root = py_trees.composites.Sequence("root", memory=True, children=[
+        Mode("safe", {"to": "safe"}),
+        py_trees.composites.Parallel(
+            "both", policy=py_trees.common.ParallelPolicy.SuccessOnAll(), children=[
+                Drive("forward", {"velocity": "100 mm/s"}), _SignalsOnTerminate(runners, seen),
+            ],
+        ),
+    ])  # fmt: skip
+    link = TapLink(Simulator(load_world("empty-room"), CREATE2, 0))
+    stack = RunStack(TreeMission(root, "t"), link, profile=CREATE2, timeout_s=0.3, tick_limit=0.25)
+    runners.append(stack.runner)
+    summary = stack.run(raise_interrupts=False)
+    assert summary.outcome is Outcome.INTERRUPTED
+    assert seen == [(0, 0)]
+    err = capfd.readouterr().err
+    assert (
+        "roomba-bt: the run is ending: drive 0 and motors off were sent; its tree is being "
+        "stopped (each running behaviour's terminate()), the safe stop after it; waiting for "
+        "it to end (the summary follows)"
+    ) in err, err
+    assert "the safe stop is under way" not in err
+    assert link.written.endswith(oi.halt().data + oi.motors_off().data + SAFE_END)

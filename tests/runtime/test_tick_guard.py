@@ -210,3 +210,120 @@ def test_the_monitor_shows_each_act_of_a_recorded_run(
     notes = [e.text for e in feed.events if e.kind == "note"]
     assert len(notes) == 1 and notes[0].startswith("tick guard: drive 0 while a tick ran over")
     assert "stuck (Stuck.update at " in notes[0] and "(1 so far)" in notes[0]
+
+
+#: drives at 300 mm/s, and its terminate notes the wheel command the robot last had
+SLOW_TERM = '''
+from py_trees.common import Status
+
+from roomba_bt.behaviours import Action, declare
+from roomba_bt.oi import commands
+from roomba_bt.oi.opcodes import opcodes
+
+@declare("slow_term", kind="action", sends=opcodes("drive"))
+class SlowTerm(Action):
+    """Drives; its terminate would block (a plugin's time.sleep): it notes the wheels then."""
+
+    SEEN = []  # the class's: nothing is set on a node
+
+    def start(self):
+        self.send(commands.drive(300, 32767))
+
+    def update(self):
+        return Status.RUNNING
+
+    def terminate(self, new_status):
+        if new_status == Status.INVALID:
+            self.SEEN.append(getattr(self.robot.connection.writer.last_wheels, "args", None))
+        super().terminate(new_status)
+'''
+
+
+def test_the_wheels_stop_before_a_terminate_at_the_runs_end(
+    run_mission: RunMission, tmp_path: Path
+) -> None:
+    """A run that ends (here its --timeout) with a node running: drive 0 and motors off go
+    out before any terminate() runs (one that blocks left the robot driving for as long);
+    then the tree's stop, then the whole safe stop. A record holds it, and a replay does it
+    again: the same bytes."""
+    from roomba_bt.mission import load_mission
+    from roomba_bt.oi.profiles import CREATE2
+    from roomba_bt.runtime.recording import load_record
+    from roomba_bt.runtime.stack import replay_record
+
+    (tmp_path / "slowterm.py").write_text(SLOW_TERM)
+    allowed = Permissions(plugin_files=True)
+    mission = "plugins: [./slowterm.py]\ntree:\n  sequence:\n    - mode: safe\n    - slow_term\n"
+    record_path = tmp_path / "run.rec"
+    run = run_mission(
+        mission, tick_limit=0.25, permissions=allowed, timeout=0.5, record=record_path
+    )
+    leaf = next(n for n in run.runner.mission.root.iterate() if type(n).__name__ == "SlowTerm")
+    seen = type(leaf).SEEN  # type: ignore[attr-defined]
+    assert run.summary.outcome.value == "timeout"
+    assert seen == [(0, 0)], seen  # drive 0 was written before the terminate ran
+    written = b"".join(d for _, d in run.link.writes)
+    first = C.drive(0, 0).data + C.motors_off().data
+    stop = first + C.pause_stream().data + C.start().data
+    assert written.endswith(first + stop), written[-40:]
+    assert run.summary.safe_stop.startswith("drive 0, motors off before the tree's stop, then sent")
+    assert run.summary.tick_halts == 0
+
+    record = load_record(record_path)
+    assert [n.get("at") for _, n in record.notes] == ["end"]
+    summary, transport = replay_record(
+        record, load_mission(tmp_path / "mission.yaml", permissions=allowed), profile=CREATE2,
+        packets=record.header["packets"], baud=record.header["baud"], name="run.rec",
+    )  # fmt: skip
+    assert transport.first_difference() is None
+    assert bytes(transport.written) == record.outbound
+    assert summary.tick_halts == 0
+
+
+def test_a_run_that_ended_with_its_tree_sends_no_drive_0_before_the_stop(
+    run_mission: RunMission,
+) -> None:
+    """Nothing runs at a tree's own end (success): no terminate to wait for, nothing more
+    written than the safe stop."""
+    run = run_mission(
+        "tree:\n  sequence:\n    - mode: safe\n    - drive: {velocity: 100 mm/s, distance: 2 cm}\n",
+        tick_limit=0.25,
+    )
+    assert run.summary.outcome.value == "success"
+    assert run.summary.safe_stop.startswith("sent ")
+    assert not run.link.written.endswith(C.motors_off().data + C.drive(0, 0).data
+                                         + C.motors_off().data + C.pause_stream().data
+                                         + C.start().data)  # fmt: skip
+
+
+def test_a_terminate_that_blocks_mid_run_is_the_tick_guards(
+    run_mission: RunMission, tmp_path: Path
+) -> None:
+    """A time limit that preempts a driving leaf mid-run calls its terminate() inside a
+    tick: the tick guard covers it as it covers an update() (drive 0 behind its back), and
+    the leaf's own halt, queued in that tick, stands: the wheels are not sent on again while
+    the next branch runs."""
+    blocking = SLOW_TERM.replace(
+        "    def terminate(self, new_status):\n",
+        "    def terminate(self, new_status):\n"
+        "        import time\n"
+        "        writer = self.robot.connection.writer\n"
+        "        deadline = time.monotonic() + 10.0\n"
+        "        while getattr(writer.last_wheels, 'args', None) != (0, 0):\n"
+        "            if time.monotonic() > deadline:\n"
+        "                break\n"
+        "            time.sleep(0.002)\n",
+    )
+    (tmp_path / "slowterm.py").write_text(blocking)
+    run = run_mission(
+        "plugins: [./slowterm.py]\ntree:\n  sequence:\n    - mode: safe\n    - fallback:\n"
+        "        - timeout: {after: 150ms, do: slow_term}\n        - wait: 300ms\n",
+        tick_limit=0.02, permissions=Permissions(plugin_files=True), timeout=20.0,
+    )  # fmt: skip
+    assert run.summary.outcome.value == "success", run.summary
+    assert run.summary.tick_halts == 1
+    assert run.summary.tick_halt_first.startswith("slow_term (SlowTerm.terminate at ")
+    drives = [data for _, data in run.link.writes if data[:1] == HALT[:1]]
+    # forward, the guard's drive 0, the leaf's own halt; then the safe stop's: no forward again
+    assert drives[:3] == [C.drive(300, 32767).data, HALT, HALT], drives
+    assert len(drives) == 4 and drives[3].startswith(HALT)
