@@ -549,8 +549,9 @@ class MissionRunner(BaseHandle):
         gap = arrival - last
         ride = self._ride
         if gap >= UNREAD_GAP_SECONDS and not ride.gap_explained:
-            unread_gap(self.summary, self.connection.name, gap)
+            unread_gap(self.summary, self.connection.name, gap, ride.blocked)
         ride.gap_explained = False
+        ride.blocked = None
         slots = max(count, round(gap / SLOT_SECONDS))
         if slots != count:
             self.summary.frames_lost += slots - count
@@ -606,6 +607,7 @@ def tick_halted(runner: MissionRunner, seconds: float, where: str) -> None:
         "a tick ran over %g s (%s): the tick guard sent drive 0",
         runner.tick_guard.limit_s if runner.tick_guard else 0.0, where or "where: unknown",
     )  # fmt: skip
+    runner._ride.blocked = (seconds, summary.tick_halt_last)  # the frames it left unread
     runner._send_wheels_again()
 
 
@@ -722,11 +724,25 @@ def stop_robot(connection: Connection, summary: RunSummary, first: bool = False)
         summary.safe_stop = f"FAILED: {type(exc).__name__}: {exc}"
 
 
-def unread_gap(summary: RunSummary, link: str, gap: float) -> None:
+def unread_gap(
+    summary: RunSummary, link: str, gap: float, blocked: tuple[float, str] | None = None
+) -> None:
     """No frame was read for ``gap`` seconds and the watchdog did not trip: the process did
     not run (a laptop suspended, SIGSTOP, a host starved of CPU), or the watchdog is off and
     the robot was silent. Either way the robot went on with its last command, unwatched:
-    counted and said (the frames that waited are dropped as stale)."""
+    counted and said (the frames that waited are dropped as stale).
+
+    ``blocked``: the tick before the gap blocked, and the tick guard sent drive 0 in it
+    (``(seconds it had run then, where)``, :func:`tick_halted`): the gap is that tick's, the
+    wheels at rest from then on. Said as such, and not counted as unread (the summary's tick
+    guard line counts it): it said the process was suspended and the robot went on."""
+    if blocked is not None:
+        log.warning(
+            "%s: no frame was read for %.2f s: a tick blocked (%s); the tick guard had sent "
+            "drive 0 once it had run %.2f s, and the wheels stood still until it returned",
+            link, gap, blocked[1], blocked[0],
+        )  # fmt: skip
+        return
     summary.unread_gaps += 1
     summary.longest_unread_s = max(summary.longest_unread_s, gap)
     log.warning(

@@ -43,6 +43,10 @@ class StallRide:
         #: the next batch's gap is a stall ridden through, not a gap nobody read (read once
         #: by the runner's count of the slots a batch spans)
         self.gap_explained = False
+        #: the tick before the next batch blocked and the tick guard stopped the wheels in it
+        #: (how long it had run then, where): the next batch's gap is that tick's, the robot
+        #: at rest (set by the runner's ``tick_halted``, read once as ``gap_explained``)
+        self.blocked: tuple[float, str] | None = None
 
     def tripped(self, stalled: StreamStalled) -> Sequence[SensorFrame]:
         """The watchdog tripped (drive 0 sent): the ride begins, no frames this read; or,

@@ -327,3 +327,32 @@ def test_a_terminate_that_blocks_mid_run_is_the_tick_guards(
     # forward, the guard's drive 0, the leaf's own halt; then the safe stop's: no forward again
     assert drives[:3] == [C.drive(300, 32767).data, HALT, HALT], drives
     assert len(drives) == 4 and drives[3].startswith(HALT)
+
+
+def test_the_gap_a_blocked_tick_leaves_is_said_as_the_guards(
+    run_mission: RunMission, plugin_dir: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """A tick that blocks 2 s leaves 2 s of frames unread; the tick guard stopped the wheels
+    meanwhile. The gap is said as what it was (a tick that blocked, drive 0 from the guard),
+    not as a process suspended while the robot went on with its last command, and it is not
+    an unread gap in the summary (the tick guard's line counts it)."""
+    (plugin_dir / "stuck.py").write_text(
+        PLUGIN.replace(
+            "        return Status.SUCCESS",
+            "            self.robot.connection.transport.advance(2.0)  # the robot streams on\n"
+            "        return Status.SUCCESS",
+        )
+    )
+    run = run_mission(
+        MISSION, tick_limit=0.02, permissions=Permissions(plugin_files=True), timeout=20.0
+    )
+    summary = run.summary
+    assert summary.outcome.value == "success", summary
+    assert summary.tick_halts == 1
+    assert summary.unread_gaps == 0 and "unread" not in str(summary), str(summary)
+    said = [r.getMessage() for r in caplog.records if "no frame was read" in r.getMessage()]
+    assert len(said) == 1, caplog.text
+    assert "no frame was read for 2.0" in said[0]
+    assert "a tick blocked (stuck (Stuck.update at " in said[0]
+    assert "the tick guard had sent drive 0" in said[0]
+    assert "suspended" not in said[0] and "went on with its last command" not in said[0]
