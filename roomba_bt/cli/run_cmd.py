@@ -40,6 +40,9 @@ if TYPE_CHECKING:
     from roomba_bt.sim import Simulator
     from roomba_bt.transport import Transport
 
+#: the mode guard's refusals printed after the summary; a line says how many more there were
+SHOWN_REFUSALS = 5
+
 
 def register(sub: Any) -> None:
     _add_run_parser(sub)
@@ -424,8 +427,11 @@ def _report(
             print(summary.traceback, file=sys.stderr, end="")
         else:
             print("roomba-bt: run with -v for the traceback", file=sys.stderr)
-    for refusal in stack.runner.refusals[:5]:
+    for refusal in stack.runner.refusals[:SHOWN_REFUSALS]:
         print(f"refused: {refusal}", file=sys.stderr)
+    if summary.refused_commands > SHOWN_REFUSALS:  # the count is all of them: say the rest
+        more = summary.refused_commands - SHOWN_REFUSALS
+        print(f"refused: ... and {more} more (the summary counts them)", file=sys.stderr)
     if args.plot and simulator is not None:
         plotted = _plot(simulator, args.plot)
         if plotted:

@@ -340,3 +340,33 @@ def test_random_start_in_a_world_without_a_start_region_is_said(
     assert "--random-start: world 'plain' has no robot.start_region" in capsys.readouterr().err
     assert main([*argv, "--world", "apartment", "--random-start", "--seed", "5"]) == 0
     assert "start_region" not in capsys.readouterr().err
+
+
+def test_refusals_past_the_first_five_are_said_as_a_count(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Five refusals are printed; the rest are one line, ``... and N more``, N the summary's
+    count less five (a run with 167 refusals printed five and said nothing of the others)."""
+    (tmp_path / "rogue.py").write_text(
+        ROGUE.replace("return Status.SUCCESS", "return Status.RUNNING")
+    )
+    path = tmp_path / "refused.yaml"
+    path.write_text("plugins: [./rogue.py]\ntree:\n  sequence: [rogue]\n")
+    main(["run", str(path), "--fast", "--display", "none", "--allow-plugin-files",
+          "--timeout", "0.3s"])  # fmt: skip
+    out, err = capsys.readouterr()
+    count = int(re.search(r"(\d+) refused by the mode guard", out).group(1))  # type: ignore[union-attr]
+    assert count > 5, out
+    assert len(re.findall(r"^refused: t=", err, re.M)) == 5, err
+    assert f"refused: ... and {count - 5} more (the summary counts them)\n" in err, err
+
+
+def test_five_refusals_or_fewer_say_no_more(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    (tmp_path / "rogue.py").write_text(ROGUE)
+    path = tmp_path / "refused.yaml"
+    path.write_text("plugins: [./rogue.py]\ntree:\n  sequence: [rogue]\n")
+    main(["run", str(path), "--fast", "--display", "none", "--allow-plugin-files"])
+    err = capsys.readouterr().err
+    assert len(re.findall(r"^refused: t=", err, re.M)) == 1 and "more" not in err, err
