@@ -152,7 +152,9 @@ def test_stop_ends_the_run_as_ctrl_c_with_the_safe_stop(page: Any, child: Child)
     out, err = proc.communicate(timeout=30)
     assert proc.returncode == 130, err
     assert "outcome      INTERRUPTED (stopped by the operator)" in out
-    assert re.search(r"safe stop    sent drive, motors, pause_resume_stream, start", out), out
+    # a robot still driving got drive 0 and motors off before the tree's stop (the wall clock)
+    stopped = r"safe stop    (drive 0, motors off before the tree's stop, then )?sent drive, motors"
+    assert re.search(stopped + r", pause_resume_stream, start", out), out
     assert "Traceback" not in err
 
 

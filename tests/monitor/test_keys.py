@@ -81,4 +81,6 @@ def test_p_pauses_r_resumes_q_stops_and_the_terminal_is_given_back(tmp_path: Pat
     assert run.wait() == 130
     settings = termios.tcgetattr(run.fd)[3]  # the terminal as the run found it: cooked
     assert settings & termios.ICANON and settings & termios.ECHO
-    assert _acts(record) == ["pause", "resume"]
+    # the operator's acts; the tick guard's drive 0 before the tree's stop, if the wheels
+    # turned at the stop, is a note of its own
+    assert [act for act in _acts(record) if act != "tick_guard"] == ["pause", "resume"]
