@@ -8,9 +8,10 @@ Per batch of frames read from the connection::
       outbox.drain() -> mode guard -> written once, right after the tick
 
 The stream is the clock. Each frame is one 15 ms slot; the tick index advances by the number of
-frames read, or by the slots the arrival times span when frames were lost in transit (a gap is
-measured, not ignored). Mission time is ``tick * 0.015`` s: the same bytes replayed at any
-speed, or a simulation on the virtual clock, make the same decisions. See ``docs/runtime.md``.
+frames read, plus the slots the schedule says passed with no frame (frames lost in transit:
+a gap is measured, not ignored; jitter makes none: :mod:`roomba_bt.runtime.schedule`).
+Mission time is ``tick * 0.015`` s: the same bytes replayed at any speed, or a simulation on
+the virtual clock, make the same decisions. See ``docs/runtime.md``.
 """
 
 from __future__ import annotations
@@ -50,6 +51,13 @@ from roomba_bt.robot.safety import (
     InterruptGuard,
     Terminated,
     signal_reason,
+)
+from roomba_bt.runtime.schedule import (
+    DRIFT,
+    LOST_LATE,
+    NO_FRAME_YET,
+    SPREAD_DECAY,
+    SlotSchedule,
 )
 from roomba_bt.runtime.stall import StallRide
 from roomba_bt.runtime.summary import DEFAULT_GRACE, Outcome, RunSummary, profile_shown
@@ -230,7 +238,8 @@ class MissionRunner(BaseHandle):
         self.snapshot = NO_SNAPSHOT_YET
         self._odometer = Odometer(profile.wheel_base_mm)
         self._tick = -1
-        self._last_arrival: float | None = None
+        #: when the robot's frames are due on the link's clock: the slots a batch spans
+        self._schedule = SlotSchedule()
         self.refusals: list[str] = []
         #: the last command written on each actuator channel ("wheels", "motors", ...): what
         #: a resume after the monitor's pause sends again
@@ -501,13 +510,18 @@ class MissionRunner(BaseHandle):
             if fallback is not None:  # the robot stopped its wheels as it fell: the tree's
                 self.last_sent.pop("wheels", None)  # last word no longer stands
         summary = self.summary
-        last = self._last_arrival
-        self._last_arrival = arrival
-        # round(x) <= 1 exactly when x < 1.5 (round(1.5) is 2): one slot, nothing lost
-        if count == 1 and last is not None and (arrival - last) / SLOT_SECONDS < 1.5:
+        # SlotSchedule.slots' common case, inline: one frame, early or less than LOST_LATE
+        # late: one slot; the schedule follows it (up to DRIFT), its lateness kept (spread)
+        schedule = self._schedule
+        due = schedule.due + SLOT_SECONDS
+        late = arrival - due
+        if count == 1 and late < LOST_LATE:
+            schedule.due = arrival if late < DRIFT else due + DRIFT
+            spread = schedule.spread
+            schedule.spread = late if late > spread else spread - SPREAD_DECAY
             slots = 1
         else:
-            slots = self._slots_spanned(count, arrival, last)
+            slots = slots_spanned(self, count, arrival)
         tick = self._tick = self._tick + slots
         if self.clock_held:
             self._held_slots += slots
@@ -540,22 +554,6 @@ class MissionRunner(BaseHandle):
         for older in batch[:-1]:
             confirm(older)
         self.summary.stale_frames_dropped += len(batch) - 1
-
-    def _slots_spanned(self, count: int, arrival: float, last: float | None) -> int:
-        """The slots a batch of ``count`` frames spans (the first frame: one); more than
-        ``count`` when frames were lost in transit (counted)."""
-        if last is None:
-            return 1
-        gap = arrival - last
-        ride = self._ride
-        if gap >= UNREAD_GAP_SECONDS and not ride.gap_explained:
-            unread_gap(self.summary, self.connection.name, gap, ride.blocked)
-        ride.gap_explained = False
-        ride.blocked = None
-        slots = max(count, round(gap / SLOT_SECONDS))
-        if slots != count:
-            self.summary.frames_lost += slots - count
-        return slots
 
     def _flush(self) -> None:
         if self._hazards.pending or self.connection.writer.forward_held:
@@ -592,6 +590,26 @@ class MissionRunner(BaseHandle):
             held = connection.release_forward()
             if held is not None and all(c.spec.channel != "wheels" for c in self._outbox):
                 self._outbox.send(held, self)
+
+
+def slots_spanned(runner: MissionRunner, count: int, arrival: float) -> int:
+    """The slots a batch of ``count`` frames spans by the runner's schedule (the first frame:
+    one); more than ``count`` when frames were lost in transit (counted). After a gap of a
+    second or more, or a stall ridden through, the schedule starts again from this batch."""
+    schedule = runner._schedule
+    if schedule.due == NO_FRAME_YET:
+        return schedule.late_batch(count, arrival, runner._tick, False)  # the first: one
+    gap = arrival - schedule.due  # since the last frame's slot was due: the gap, to a ms
+    ride = runner._ride
+    restart = gap >= UNREAD_GAP_SECONDS or ride.gap_explained
+    if gap >= UNREAD_GAP_SECONDS and not ride.gap_explained:
+        unread_gap(runner.summary, runner.connection.name, gap, ride.blocked)
+    ride.gap_explained = False
+    ride.blocked = None
+    slots = schedule.late_batch(count, arrival, runner._tick, restart)
+    if slots > count:
+        runner.summary.frames_lost += slots - count
+    return slots
 
 
 def tick_halted(runner: MissionRunner, seconds: float, where: str) -> None:

@@ -37,12 +37,13 @@ def run_mission(tmp_path: Path) -> RunMission:
         tick_limit: float | None = None,
         permissions: Permissions = NO_PERMISSIONS,
         record: Path | None = None,
+        jitter: float = 0.0,
     ) -> Run:
         path = tmp_path / "mission.yaml"
         path.write_text(textwrap.dedent(text))
         mission = load_mission(path, params or {}, profile=profile, permissions=permissions)
         simulator = Simulator(load_world(world), profile, seed, faults)
-        link = TapLink(simulator, stall_after, burst, freeze)
+        link = TapLink(simulator, stall_after, burst, freeze, jitter)
         stack = RunStack(
             mission,
             link,

@@ -3,6 +3,7 @@ byte tapped."""
 
 from __future__ import annotations
 
+import random
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -42,6 +43,7 @@ class TapLink(SimLink):
         stall_after: float | None = None,
         burst: int = 1,
         freeze: tuple[float, float] | None = None,
+        jitter: float = 0.0,
     ) -> None:
         super().__init__(simulator)
         self.stall_after = stall_after
@@ -52,6 +54,11 @@ class TapLink(SimLink):
         self.freeze = freeze
         self.writes: list[tuple[float, bytes]] = []
         self.reads: list[tuple[float, bytes]] = []
+        #: each read's bytes are seen up to ``jitter`` seconds late (seeded): the arrival
+        #: times (``now``) of a real-time link, a few ms late and then on time again
+        self.jitter = jitter
+        self._late = 0.0
+        self._draws = random.Random(7)
 
     def write(self, data: bytes) -> None:
         self.writes.append((self.simulator.time, bytes(data)))
@@ -72,7 +79,12 @@ class TapLink(SimLink):
             return b""  # the stream stalls; the port stays open
         if data:
             self.reads.append((self.simulator.time, data))
+            if self.jitter:
+                self._late = self._draws.uniform(0.0, self.jitter)
         return data
+
+    def now(self) -> float:
+        return self.simulator.time + self._late
 
     @property
     def written(self) -> bytes:

@@ -303,3 +303,33 @@ def test_the_summary_counts_every_command_the_run_wrote(run_mission: RunMission)
     ran = names[names.index("stream") + 1 : -stop]  # after the start-up, before the safe stop
     assert ran.count("drive") >= 3  # forward, the reflex's drive 0, backing off (and its halt)
     assert run.summary.commands_written == len(ran), ran
+
+
+def test_jitter_makes_no_lost_frames_and_the_clock_keeps_the_robots_slots(
+    run_mission: RunMission,
+) -> None:
+    # Every frame is read, each up to 10 ms late (then on time again): late+early pairs of
+    # 5..25 ms gaps. No frame was lost, so none is counted, and mission time is the frames'
+    # slots. (Before: a gap of 22.5 ms or more took two slots, an early frame none back:
+    # frames "lost" and a clock running fast.)
+    run = run_mission(WAIT_3S, jitter=0.010)
+    summary = run.summary
+    assert summary.outcome is Outcome.SUCCESS
+    assert summary.frames_lost == 0
+    assert summary.stale_frames_dropped == 0
+    parser = StreamParser(run.runner.packets)
+    frames = sum(len(parser.feed(data)) for _, data in run.link.reads)
+    assert summary.ticks == frames
+    assert summary.mission_time_s == pytest.approx((summary.ticks - 1) * 0.015, abs=1e-9)
+
+
+def test_jitter_does_not_hide_frames_really_lost(run_mission: RunMission) -> None:
+    # Frames dropped by the robot's side and every frame read up to 10 ms late: the lost
+    # ones are counted all the same (on a jittery link two frames late: the last may still
+    # wait when the run ends), and mission time is the slots the robot sent.
+    run = run_mission(WAIT_3S, faults=Faults(drop_rate=0.2), watchdog=1.0, jitter=0.010)
+    exact = run_mission(WAIT_3S, faults=Faults(drop_rate=0.2), watchdog=1.0)
+    assert run.summary.outcome is Outcome.SUCCESS
+    assert exact.summary.frames_lost - 1 <= run.summary.frames_lost <= exact.summary.frames_lost
+    assert exact.summary.frames_lost > 0
+    assert run.summary.mission_time_s == pytest.approx(3.0, abs=0.1)
