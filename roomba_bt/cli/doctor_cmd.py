@@ -75,6 +75,24 @@ SILENT_FIX = (
 )
 
 
+GARBLED_FIX = (
+    "the robot may be there, but what it sends arrives garbled: check the cable and the "
+    "adapter (noise on a long or loose cable, a bad adapter, a 3.3 V adapter on the 5 V "
+    "line), and the port's serial settings (8N1, no flow control; a robot set to a rate "
+    "other than 115200 or 19200 by Baud (129) answers at neither: power it off and on)"
+)
+
+
+def _garbled(probes: Any) -> str:
+    """The rates at which bytes came that were no answer ("115200: 3 bytes"), or ""."""
+    seen: dict[int, int] = {}
+    for probe in probes:
+        count = len(probe.reply) + probe.noise
+        if count and not probe.answered and not probe.echoed:
+            seen[probe.baud] = seen.get(probe.baud, 0) + count
+    return ", ".join(f"{baud}: {count} bytes" for baud, count in seen.items())
+
+
 class DoctorExit(IntEnum):
     """``roomba-bt doctor``'s exit codes (docs/doctor.md)."""
 
@@ -230,9 +248,19 @@ def _examine(transport: Any, rates: tuple[int, ...], allow_reset: bool, report: 
             )
             raise _Failed(DoctorExit.SILENT)
         report.ok("wake", f"silent at every rate: {pulse.how}")
-        found = _search(transport, rates, report, " after the pulse").found
+        again = _search(transport, rates, report, " after the pulse")
+        found = again.found
         if found is None:
-            report.fail("baud", "silent at every OI rate, even after a BRC pulse", SILENT_FIX)
+            garbled = _garbled(searched.probes + again.probes)
+            if garbled:  # bytes came, none an answer: not a silent robot
+                report.fail(
+                    "baud",
+                    f"bytes came but none was an answer at any OI rate, even after a BRC "
+                    f"pulse ({garbled}): the line garbles them",
+                    GARBLED_FIX,
+                )
+            else:
+                report.fail("baud", "silent at every OI rate, even after a BRC pulse", SILENT_FIX)
             raise _Failed(DoctorExit.SILENT)
         report.ok("wake", "it answered after the pulse: the robot was asleep")
     else:
@@ -318,10 +346,13 @@ def _stream(transport: Any, baud: int, report: Report) -> tuple[bool | None, dic
     size = stream_frame_size(ids)
     transport.write(oi.stream(ids).data)
     clock = transport.now
-    deadline = clock() + STREAM_CHECK_S
+    sent = clock()
+    deadline = sent + STREAM_CHECK_S
     data = b""
     while (remaining := deadline - clock()) > 0:
         data += transport.read(remaining)
+        if data and "latency" not in report.facts:  # the first frame's bytes: the line's
+            report.facts["latency"] = f"{clock() - sent:.3f}"  # delay, a slot at most more
     transport.write(oi.pause_stream().data)
     conventions: list[bool] = []
     readings: dict[int, int] = {}
@@ -338,11 +369,14 @@ def _stream(transport: Any, baud: int, report: Report) -> tuple[bool | None, dic
         for pid, value in stream_readings(frame).items():
             readings[pid] = max(value, readings.get(pid, value))
         at += size
-    expected = round(STREAM_CHECK_S / 0.015)
+    delay = _latency(report)  # the frames of the window's last `delay` s are still on the way
+    expected = round(max(0.0, STREAM_CHECK_S - delay) / 0.015)
     frames = len(conventions)
     text = (
         f"Stream (148) of {list(ids)}: {frames} frames of {size} bytes in {STREAM_CHECK_S:g} s "
-        f"(one per 15 ms: {expected}), {skipped} bytes skipped"
+        f"(one per 15 ms: {expected}"
+        + (f", the first {delay * 1000:.0f} ms after the request" if delay >= 0.05 else "")
+        + f"), {skipped} bytes skipped"
     )
     if frames == 0:
         report.fail(
@@ -411,62 +445,125 @@ def _agree(first: SensorFrame, second: SensorFrame) -> bool:
     )
 
 
-def _agreed_status(transport: Any, profile: Any, report: Report) -> SensorFrame:
-    """The status Query List's reply, asked until two in a row agree (:func:`_agree`); a
-    failure (no answer, or replies that never agree) is reported and ends the doctor."""
+def _latency(report: Report) -> float:
+    """The line's delay the stream check measured (its first frame's), 0 if none came."""
+    return float(report.facts.get("latency", "0"))
+
+
+def _drain_quiet(transport: Any, latency: float) -> None:
+    """Read and drop until the line is quiet for longer than its delay: a paused stream's
+    frames still on their way come ``latency`` s after the pause (at 0.2 s, the 30 ms of
+    handshake.drain ended before them, and a stale frame was read as the status reply)."""
+    from roomba_bt.robot.handshake import QUIET_S, drain
+
+    if latency <= QUIET_S / 2:
+        drain(transport)
+        return
+    quiet = 1.5 * latency + QUIET_S
+    clock = transport.now
+    started = quiet_since = clock()
+    while clock() - quiet_since < quiet and clock() - started < 4 * quiet + 1.0:
+        if transport.read(quiet / 4):
+            quiet_since = clock()
+
+
+def _implausible(frame: SensorFrame, plus_one: bool) -> str:
+    """What in a status reply cannot be the robot's ("" if nothing): a reading out of its
+    packet's range, a charge above the capacity, a mode other than Passive (Start came just
+    before). A reply has no checksum: stale stream bytes read as one give such values."""
+    from roomba_bt.oi.modes import OIMode, mode_from_packet
+    from roomba_bt.oi.packets import PACKETS
+
+    wrong = [
+        f"{PACKETS[pid].name} {frame[pid]} (allowed {PACKETS[pid].minimum}..{PACKETS[pid].maximum})"
+        for pid in STATUS_PACKETS
+        if pid != OI_MODE_PACKET and not PACKETS[pid].minimum <= frame[pid] <= PACKETS[pid].maximum
+    ]
+    if frame.battery_charge_mah > frame.battery_capacity_mah:
+        wrong.append(
+            f"a charge of {frame.battery_charge_mah} mAh above the capacity, "
+            f"{frame.battery_capacity_mah} mAh"
+        )
+    if mode_from_packet(frame.oi_mode_raw, plus_one) is not OIMode.PASSIVE:
+        wrong.append(f"oi_mode {frame.oi_mode_raw} (Passive right after Start)")
+    return "; ".join(wrong)
+
+
+def _ask_status(transport: Any, profile: Any, latency: float) -> SensorFrame | None:
+    """One status Query List and its reply, or None if none came in 0.5 s past the delay."""
     from roomba_bt.oi import commands as oi
     from roomba_bt.oi.stream import ReplyParser
-    from roomba_bt.robot.handshake import drain
 
-    ids = STATUS_PACKETS
-    drain(transport)  # the paused stream's last frames may still be on the way
     clock = transport.now
+    parser = ReplyParser(STATUS_PACKETS, profile)
+    transport.write(oi.query_list(STATUS_PACKETS).data)
+    deadline = clock() + 0.5 + 2 * latency
+    frame = None
+    while frame is None and (remaining := deadline - clock()) > 0:
+        frame = parser.feed(transport.read(remaining))
+    return frame
 
-    def ask() -> SensorFrame | None:
-        parser = ReplyParser(ids, profile)
-        transport.write(oi.query_list(ids).data)
-        deadline = clock() + 0.5
-        frame = None
-        while frame is None and (remaining := deadline - clock()) > 0:
-            frame = parser.feed(transport.read(remaining))
-        return frame
 
-    # A reply has no checksum: one garbled byte read "65105 of 2696 mAh (2415 %)" as [ok].
-    # Two replies in a row that agree on what changes slowly are the robot's.
+def _agreed_status(transport: Any, profile: Any, plus_one: bool, report: Report) -> SensorFrame:
+    """The status Query List's reply, asked until two in a row agree (:func:`_agree`) and
+    are plausible (:func:`_implausible`); a failure (no answer, replies that never agree,
+    implausible ones) is reported and ends the doctor."""
+    ids = STATUS_PACKETS
+    latency = _latency(report)
+    # A reply has no checksum: one garbled byte read "65105 of 2696 mAh (2415 %)" as [ok],
+    # a stale stream frame "277 of 27 mAh (1026 %)". Two replies in a row that agree on what
+    # changes slowly, with plausible values, are the robot's.
     replies: list[SensorFrame] = []
+    wrong = ""
+    agreed = False  # two in a row agreed, and were implausible all the same
     for _ in range(STATUS_QUERIES):
-        frame = ask()
+        _drain_quiet(transport, latency)  # the paused stream's last frames, a stale reply
+        frame = _ask_status(transport, profile, latency)
         if frame is None:
             report.fail(
                 "battery",
-                f"no answer to Query List {list(ids)} within 0.5 s",
+                f"no answer to Query List {list(ids)} within {0.5 + 2 * latency:.2g} s",
                 "the line drops bytes or another program talks to the robot: run doctor again",
             )
             raise _Failed(DoctorExit.UNHEALTHY)
+        wrong = _implausible(frame, plus_one)
         replies.append(frame)
         if len(replies) >= 2 and _agree(replies[-2], frame):
-            break
-    else:
-        shown = "; ".join(
-            f"{r.battery_charge_mah} of {r.battery_capacity_mah} mAh, {r.voltage_mv} mV"
-            for r in replies
-        )
+            if not wrong:
+                return frame
+            agreed = True
+    _status_failed(report, replies, wrong if agreed else "", latency)
+    raise _Failed(DoctorExit.UNHEALTHY)
+
+
+def _status_failed(report: Report, replies: list[SensorFrame], wrong: str, latency: float) -> None:
+    ids = list(STATUS_PACKETS)
+    if wrong:
         report.fail(
             "battery",
-            f"{STATUS_QUERIES} replies to Query List {list(ids)} never agreed twice in a row "
-            f"({shown})",
-            "the line garbles bytes (a loose or long cable, a wrong baud rate): check the "
-            "cable and run doctor again",
+            f"the reply to Query List {ids} cannot be the robot's: {wrong} (stale stream "
+            f"bytes or a garbled line; the line's delay: {latency * 1000:.0f} ms)",
+            "the line garbles or delays bytes (a long cable, a bad adapter, a relay), or "
+            "another program talks to the robot: check the cable and run doctor again",
         )
-        raise _Failed(DoctorExit.UNHEALTHY)
-    return frame
+        return
+    shown = "; ".join(
+        f"{r.battery_charge_mah} of {r.battery_capacity_mah} mAh, {r.voltage_mv} mV"
+        for r in replies
+    )
+    report.fail(
+        "battery",
+        f"{STATUS_QUERIES} replies to Query List {ids} never agreed twice in a row ({shown})",
+        "the line garbles bytes (a loose or long cable, a wrong baud rate): check the "
+        "cable and run doctor again",
+    )
 
 
 def _status(transport: Any, profile: Any, plus_one: bool, report: Report) -> None:
     from roomba_bt.oi.bits import ChargingState
     from roomba_bt.oi.modes import mode_from_packet
 
-    frame = _agreed_status(transport, profile, report)
+    frame = _agreed_status(transport, profile, plus_one, report)
     charge, capacity = frame.battery_charge_mah, frame.battery_capacity_mah
     percent = f"{100 * charge / capacity:.0f} %" if capacity else "capacity 0 (no battery?)"
     report.facts["battery"] = percent

@@ -306,3 +306,66 @@ def test_a_garbled_status_reply_is_asked_again_not_reported_ok(garbled: int, sho
         assert int(battery.split(" of ")[0].split()[-1]) <= 2696
     else:
         assert "never agreed twice in a row" in battery
+
+
+@pytest.mark.parametrize("latency", [0.2, 0.3])
+def test_a_slow_line_s_stale_stream_is_not_read_as_the_status_reply(latency: float) -> None:
+    """At 0.2 s of latency the paused stream's last frames came after handshake.drain's
+    30 ms of quiet: "[ok] battery 277 of 27 mAh (1026 %)", "[ok] charging unknown state
+    19" (the stream's header byte), "[ok] mode Off"."""
+    import io
+
+    from roomba_bt.cli.doctor_cmd import Report, _status, _stream
+    from roomba_bt.oi import commands as oi
+    from roomba_bt.oi.profiles import CREATE2
+    from roomba_bt.sim import Faults, SimLink, Simulator, load_world
+
+    simulator = Simulator(load_world("empty-room"), CREATE2, seed=1, faults=Faults(latency=latency))
+    link = SimLink(simulator)
+    link.write(oi.start().data)
+    report = Report(io.StringIO())
+    _stream(link, 115200, report)
+    _status(link, CREATE2, False, report)
+    lines = report.out.getvalue().splitlines()
+    battery = next(line for line in lines if line[7:].startswith("battery"))
+    assert battery.startswith("[ok]") and " of 2696 mAh (" in battery, battery
+    assert any(line.startswith("[ok]   charging  not charging (21 = 0)") for line in lines)
+    assert any(line.startswith("[ok]   mode      Passive (35 = 1") for line in lines)
+
+
+def test_an_implausible_status_reply_is_named_not_ok() -> None:
+    """A reply has no checksum: a stale stream frame read as one is out of the packet table's
+    ranges (charging state 19), a charge above the capacity, a mode other than Passive."""
+    import struct
+
+    from roomba_bt.cli.doctor_cmd import STATUS_PACKETS, _implausible
+    from roomba_bt.oi.profiles import CREATE2
+    from roomba_bt.oi.stream import ReplyParser
+
+    # charging state, voltage, current, charge, capacity, sources, mode
+    reply = struct.pack(">BHhHHBB", 19, 2820, 0, 277, 27, 0, 0)
+    frame = ReplyParser(STATUS_PACKETS, CREATE2).feed(reply)
+    assert frame is not None
+    wrong = _implausible(frame, False)
+    assert "charging_state 19 (allowed 0..5)" in wrong
+    assert "a charge of 277 mAh above the capacity, 27 mAh" in wrong
+    assert "oi_mode 0 (Passive right after Start)" in wrong
+    good = ReplyParser(STATUS_PACKETS, CREATE2).feed(
+        struct.pack(">BHhHHBB", 0, 15120, -150, 1617, 2696, 0, 1)
+    )
+    assert good is not None and _implausible(good, False) == ""
+
+
+def test_a_line_that_garbles_every_byte_is_called_garbled_not_silent(
+    served_sim: Callable[..., Any],
+) -> None:
+    """It said "silent at every OI rate, even after a BRC pulse" with advice on the power and
+    swapped TX/RX, though it had seen bytes that were no answer at 115200."""
+    sim = served_sim("--pty", "--corrupt-rate", "1.0")
+    done = _doctor(sim.address)
+    assert done.returncode == DoctorExit.SILENT, done.stdout
+    failed = [line for line in done.stdout.splitlines() if line.startswith("[FAIL]")]
+    assert len(failed) == 1 and "the line garbles them" in failed[0], done.stdout
+    assert "silent at every OI rate" not in done.stdout
+    assert "TX and RX not swapped" not in done.stdout
+    assert "check the cable and the adapter" in done.stdout
