@@ -228,6 +228,25 @@ def _search(transport: Any, rates: tuple[int, ...], report: Report, when: str) -
     return result
 
 
+def _after_pulse(transport: Any, rates: tuple[int, ...], before: Search, report: Report) -> Any:
+    """Every rate again after the BRC pulse: the probe that answered, or the verdict (silent,
+    or a line that garbles: bytes came, none an answer) and the doctor ends."""
+    again = _search(transport, rates, report, " after the pulse")
+    if again.found is not None:
+        return again.found
+    garbled = _garbled(before.probes + again.probes)
+    if garbled:  # bytes came, none an answer: not a silent robot
+        report.fail(
+            "baud",
+            f"bytes came but none was an answer at any OI rate, even after a BRC pulse "
+            f"({garbled}): the line garbles them",
+            GARBLED_FIX,
+        )
+    else:
+        report.fail("baud", "silent at every OI rate, even after a BRC pulse", SILENT_FIX)
+    raise _Failed(DoctorExit.SILENT)
+
+
 def _examine(transport: Any, rates: tuple[int, ...], allow_reset: bool, report: Report) -> int:
     from roomba_bt.robot.handshake import wake_pulse
 
@@ -248,20 +267,7 @@ def _examine(transport: Any, rates: tuple[int, ...], allow_reset: bool, report: 
             )
             raise _Failed(DoctorExit.SILENT)
         report.ok("wake", f"silent at every rate: {pulse.how}")
-        again = _search(transport, rates, report, " after the pulse")
-        found = again.found
-        if found is None:
-            garbled = _garbled(searched.probes + again.probes)
-            if garbled:  # bytes came, none an answer: not a silent robot
-                report.fail(
-                    "baud",
-                    f"bytes came but none was an answer at any OI rate, even after a BRC "
-                    f"pulse ({garbled}): the line garbles them",
-                    GARBLED_FIX,
-                )
-            else:
-                report.fail("baud", "silent at every OI rate, even after a BRC pulse", SILENT_FIX)
-            raise _Failed(DoctorExit.SILENT)
+        found = _after_pulse(transport, rates, searched, report)
         report.ok("wake", "it answered after the pulse: the robot was asleep")
     else:
         report.skip("wake", "not needed: the robot answered")
