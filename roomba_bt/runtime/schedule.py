@@ -21,7 +21,9 @@ rule (docs/runtime.md, "The stream is the clock"):
   is late too (a lost frame delays every frame after it; a late one does not: the next comes
   on time), and then the slots both agree on are counted, one batch late.
 * After a gap of a second or more, or a stall ridden through, the stream may have started
-  again at another phase: the gap is counted by its length and the schedule starts again.
+  again at another phase: the gap is counted at once by its length, less the link's
+  tolerance (a stalled host or relay delivers the backlog in one read, late), and the
+  schedule starts again.
 
 The common frame (on time, alone in its batch) is the runner's inline copy of :meth:`slots`'
 first branch (``MissionRunner._advance``): keep the two alike.
@@ -93,13 +95,15 @@ class SlotSchedule:
             return 1
         on_time = self.due + count * SLOT_SECONDS
         late = arrival - on_time
-        calm = restart or self.spread < CALM
+        calm = self.spread < CALM
         # calm: what the arrival says (the old gap rule's count, to the frame, on the virtual
         # clock); jittery: 0.9 slot, a slot more for a batch a busy host may have read late
+        # (after a stall ridden through, the backlog came in one read: a stalled relay or
+        # host, not a lost frame, counted 6 in 20 s at the calm tolerance)
         tolerance = LOST_LATE if calm else JITTER_LATE + (count > 1) * SLOT_SECONDS
         lost = 0
         if late >= tolerance:
-            agreed = late if calm else self._agreed(count, arrival, tick, late)
+            agreed = late if calm or restart else self._agreed(count, arrival, tick, late)
             if agreed is None:  # jitter, until a later batch says otherwise: the schedule
                 self.due = on_time  # waits for it
                 return count
