@@ -33,6 +33,7 @@ import py_trees
 
 from roomba_bt.behaviours.lean import (
     DirectLeaf,
+    InvalidStatus,
     Selector,
     Sequence,
     behaviour_tick,
@@ -474,11 +475,12 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
             defaults = cls.declaration.defaults
             cls._defaults = defaults
         values = dict(defaults)
-        # the compiler's are checked (at file:line:col); Python's are checked here, a
-        # non-mapping too (Wait("n", "2s"))
-        if params or (params is not None and not isinstance(params, Mapping)):
-            checked = type(params) is CheckedParams
-            values.update(params if checked else cls.declaration.checked(name, params))
+        # the compiler's are checked (at file:line:col); Python's are checked here: none
+        # given ({} or None) too, for the required ones, and a non-mapping (Wait("n", "2s"))
+        if type(params) is CheckedParams:
+            values.update(params)
+        else:
+            values.update(cls.declaration.checked(name, {} if params is None else params))
         self.params: dict[str, Any] = values
         self.robot: RobotHandle | None = None
         self._resolved: dict[str, Any] = values
@@ -537,10 +539,17 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
         try:
             return float(self._resolved[name])
         except KeyError:
-            declared = ", ".join(p.name for p in self.declaration.params) or "none"
+            declaration = self.declaration
+            if declaration.param(name) is not None:  # declared, with no default, not given
+                raise KeyError(
+                    f"{type(self).__name__} reads parameter {name!r}, which {self.name!r} was "
+                    f"not given and {declaration.name!r} declares with no default (give it "
+                    "one, or make it required)"
+                ) from None
+            declared = ", ".join(p.name for p in declaration.params) or "none"
             raise KeyError(
                 f"{type(self).__name__} reads parameter {name!r}, which its declaration "
-                f"{self.declaration.name!r} does not have; it declares: {declared}"
+                f"{declaration.name!r} does not have; it declares: {declared}"
             ) from None
 
     def initialise(self) -> None:
@@ -563,6 +572,10 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
                         f"{str(ref)[1:]!r} before {self.name!r} started (write it first: a "
                         "SetKey node, or write_key from roomba_bt.behaviours.declare)"
                     )
+                param = self.declaration.param(pname)
+                problem = param.check_range(raw) if param is not None else None
+                if problem is not None:
+                    raise KeyRange(self, pname, ref, problem)
                 resolved[pname] = raw
             self._resolved = resolved
         self.start()
@@ -575,6 +588,20 @@ class UnwrittenKey(LookupError):
     """A behaviour started with a parameter ``@key`` whose key nothing had written. A
     mission's validator proves every read comes after a write; a tree built in Python has
     no such proof, and None read as a drive's distance would drive without one."""
+
+
+class KeyRange(ValueError):
+    """A behaviour started with a parameter ``@key`` whose key holds a value out of the
+    parameter's declared range (written by a plugin or a ``for_each`` item, which the
+    validator cannot see; it checks ``initial`` and ``set`` values). It would otherwise
+    reach the robot, or a command's encoder, as the behaviour's own bug."""
+
+    def __init__(self, node: RobotBehaviour, pname: str, ref: BlackboardRef, problem: str):
+        self.node, self.param, self.ref = node, pname, ref
+        super().__init__(
+            f"{node.declaration.name} {node.name!r}: {pname} is {ref}, and blackboard key "
+            f"{str(ref)[1:]!r} holds a value out of its range: {problem}"
+        )
 
 
 def read_key(key: str) -> Any:
@@ -709,7 +736,11 @@ class Condition(RobotBehaviour):
 
     def update(self) -> py_trees.common.Status:
         ok = self.check(self.snapshot)
-        return py_trees.common.Status.SUCCESS if ok else py_trees.common.Status.FAILURE
+        if ok is True:
+            return _SUCCESS
+        if ok is False:
+            return _FAILURE
+        return _SUCCESS if checked_truth(self, ok) else _FAILURE
 
     def tick_direct(self, started: bool = False) -> None:
         """The leaf tick (:func:`~roomba_bt.behaviours.lean.behaviour_tick`) of a condition
@@ -741,12 +772,47 @@ class Condition(RobotBehaviour):
         if getattr(update, "__func__", None) is _CONDITION_UPDATE:  # update is check
             robot = self.robot
             ok = self.check(robot.snapshot if robot is not None else self.snapshot)
-            self.status = _SUCCESS if ok else _FAILURE
+            if ok is True:
+                self.status = _SUCCESS
+            elif ok is False:
+                self.status = _FAILURE
+            else:
+                self.status = _SUCCESS if checked_truth(self, ok) else _FAILURE
             return
         status = update()
-        if type(status) is not py_trees.common.Status:
+        if status is not _SUCCESS and status is not _FAILURE:
             status = checked_status(self, status)
         self.status = status
+
+
+class InvalidCheck(InvalidStatus):
+    """A condition's ``check`` returned no truth value: None (a forgotten ``return``), a
+    text (``"no"`` was true), a Status (``check`` written as ``update``: FAILURE was true),
+    or anything else that is not a bool or a number. Raised as :class:`InvalidStatus` is
+    (the run ends as the behaviour's error, exit 4)."""
+
+    method = "check"
+
+    @staticmethod
+    def describe(node: py_trees.behaviour.Behaviour, status: object) -> str:
+        hint = ""
+        if isinstance(status, py_trees.common.Status):
+            hint = " (check says whether the condition holds; update returns a Status)"
+        return (
+            f"{type(node).__name__}.check() returned {quoted(status)}, not a bool: it must "
+            f"return True or False{hint}"
+        )
+
+
+def checked_truth(node: Condition, ok: object) -> bool:
+    """What ``check`` returned (neither True nor False) as a truth: a bool or a number
+    (anything with ``__float__``, such as numpy's ``bool_`` and numbers: 0 is false);
+    anything else (None, a text, a Status, a list) raises :class:`InvalidCheck`."""
+    if isinstance(ok, bool) or (
+        hasattr(type(ok), "__float__") and not isinstance(ok, str | bytes | bytearray)
+    ):
+        return bool(ok)
+    raise InvalidCheck(node, ok)
 
 
 #: the lifecycle steps a condition's short tick stands for (:meth:`Condition.tick_direct`)

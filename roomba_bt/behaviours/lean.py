@@ -78,7 +78,6 @@ _DEBUG = py_trees.logging.Level.DEBUG
 #: py_trees' logging module, whose ``level`` every node's tick reads (``py_trees.logging``
 #: is one attribute read more each time, about 40 instructions, several nodes a tick)
 _LOGGING = py_trees.logging
-_STATUSES = frozenset(Status)
 _RUNNING, _SUCCESS, _FAILURE, _INVALID = (
     Status.RUNNING, Status.SUCCESS, Status.FAILURE, Status.INVALID
 )  # fmt: skip
@@ -94,31 +93,39 @@ _VALIDATE_POLICY = py_trees.composites.Parallel.validate_policy_configuration
 
 
 class InvalidStatus(TypeError):
-    """A node's ``update`` returned something that is not a py_trees Status (``None``: a
-    forgotten ``return``). Decided: py_trees logs an error and sets INVALID, on every tick,
-    and the tree around it goes on (a sequence stays INVALID, a selector fails, a parallel
-    runs on), so a run drove on until its timeout printing one line a tick; here it is the
-    node's bug, raised, and the run ends as an error with its safe stop (exit 4)."""
+    """A node's ``update`` returned something that is not a final or running py_trees
+    Status (``None``: a forgotten ``return``; ``Status.INVALID``, which py_trees keeps for a
+    node not ticked yet or stopped). Decided: py_trees logs an error and sets INVALID, on
+    every tick, and the tree around it goes on (a sequence stays INVALID, a selector fails,
+    a parallel runs on; a sequence met INVALID as "not started" and began again from its
+    first child), so a run drove on until its timeout printing one line a tick; here it is
+    the node's bug, raised, and the run ends as an error with its safe stop (exit 4)."""
+
+    #: the method whose result was wrong (the run's report points at its source line)
+    method = "update"
 
     def __init__(self, node: Behaviour, status: object) -> None:
         self.node = node
         self.status = status
-        super().__init__(
-            f"{type(node).__name__}.update() returned {quoted(status)}, not a Status: it must "
-            "return "
-            "py_trees.common.Status.SUCCESS, FAILURE or RUNNING"
-        )
+        super().__init__(self.describe(node, status))
+
+    @staticmethod
+    def describe(node: Behaviour, status: object) -> str:
+        name = type(node).__name__
+        must = "it must return py_trees.common.Status.SUCCESS, FAILURE or RUNNING"
+        if status is _INVALID:
+            return (
+                f"{name}.update() returned Status.INVALID, which py_trees keeps for a node that "
+                f"has not run (or was stopped), not for a result: {must}"
+            )
+        return f"{name}.update() returned {quoted(status)}, not a Status: {must}"
 
 
 def checked_status(node: Behaviour, status: object) -> Status:
-    """``status`` if it is a Status; otherwise :class:`InvalidStatus` is raised."""
-    if type(status) is Status:  # members only: an Enum with members cannot be subclassed
+    """``status`` if it is SUCCESS, FAILURE or RUNNING; otherwise (INVALID too: a parent
+    sequence read it as "not started" and began again) :class:`InvalidStatus` is raised."""
+    if status is _SUCCESS or status is _FAILURE or status is _RUNNING:
         return status
-    try:
-        if status in _STATUSES:
-            return status
-    except TypeError:  # unhashable: not a Status either
-        pass
     raise InvalidStatus(node, status)
 
 
@@ -147,8 +154,7 @@ def _checking(node: Behaviour, update: Callable[[], object]) -> Callable[[], Sta
     """``update`` with its result checked (:func:`checked_status`)."""
 
     def checked_update() -> Status:
-        status = update()
-        return status if type(status) is Status else checked_status(node, status)
+        return checked_status(node, update())
 
     checked_update.checks_status = True  # type: ignore[attr-defined]
     return checked_update
@@ -218,11 +224,11 @@ def tick_ended(node: Behaviour, new_status: object) -> None:
     ``behaviour_tick`` ticks the running leaf on every tick; a decorator or a leaf ticked
     beside it there too (the retry and ``dock_time_limit`` of a docking run) made its reads
     switch class two or three times a tick."""
-    if type(new_status) is not Status:
-        new_status = checked_status(node, new_status)
-    if new_status is not _RUNNING:
+    if new_status is _SUCCESS or new_status is _FAILURE:
         node.stop(new_status)
-    node.status = new_status
+    elif new_status is not _RUNNING:
+        checked_status(node, new_status)  # raises: INVALID, or no Status at all
+    node.status = new_status  # type: ignore[assignment]
 
 
 class DirectLeaf(Direct):

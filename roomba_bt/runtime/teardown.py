@@ -52,9 +52,9 @@ def behaviour_error(exc: BaseException) -> str:
             behaviour = candidate
             break
     where = f"{frames[-1][0].f_code.co_filename}:{frames[-1][1]}" if frames else ""
-    if isinstance(exc, InvalidStatus):  # raised after its update returned: where update is
+    if isinstance(exc, InvalidStatus):  # raised after its update (check) returned: where it is
         behaviour, frames = exc.node, []
-        update: Any = getattr(type(behaviour), "update", None)
+        update: Any = getattr(type(behaviour), exc.method, None)
         with contextlib.suppress(TypeError, OSError):
             where = f"{inspect.getsourcefile(update)}:{inspect.getsourcelines(update)[1]}"
     if behaviour is None:

@@ -137,11 +137,50 @@ class Near(Condition):
 '''
 
 
+RET_INVALID = '''
+from py_trees.common import Status
+
+from roomba_bt.behaviours import Action, declare
+
+
+@declare("ret_invalid", kind="action")
+class RetInvalid(Action):
+    """Returns INVALID."""
+
+    def update(self):
+        return Status.INVALID
+'''
+
+
+def _says(returns: str) -> str:
+    return f'''
+from py_trees.common import Status
+
+from roomba_bt.behaviours import Condition, declare
+
+
+@declare("says", kind="condition")
+class Says(Condition):
+    """Forgets what a check returns."""
+
+    def check(self, snapshot):
+        return {returns}
+'''
+
+
 @pytest.mark.parametrize(
     ("word", "source", "said", "line"),
     [
         ("forgetful", FORGETFUL,
          "raised InvalidStatus: Forgetful.update() returned None, not a Status", 10),
+        ("ret_invalid", RET_INVALID,  # a sequence began again: the run drove to its timeout
+         "raised InvalidStatus: RetInvalid.update() returned Status.INVALID, which py_trees", 11),
+        ("says", _says("None"),  # silently FAILURE
+         "raised InvalidCheck: Says.check() returned None, not a bool", 11),
+        ("says", _says("'no'"),  # SUCCESS
+         "raised InvalidCheck: Says.check() returned 'no', not a bool", 11),
+        ("says", _says("Status.FAILURE"),  # SUCCESS
+         "raised InvalidCheck: Says.check() returned", 11),
         ("raw_bytes", RAW,
          "raised TypeError: send() takes a Command from roomba_bt.oi.commands", 12),
         ("sneaky", UNDECLARED,

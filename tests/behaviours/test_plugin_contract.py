@@ -1,0 +1,157 @@
+"""What a plugin's leaf returns and is given is held to its contract: ``update`` returns
+SUCCESS, FAILURE or RUNNING (not INVALID), ``check`` returns a truth value, a ``@key``
+value is within the parameter's range when the leaf starts, and a leaf built in Python
+without its required parameters is refused when built (field test, session 24)."""
+
+from __future__ import annotations
+
+import typing
+
+import numpy
+import py_trees
+import pytest
+from py_trees.common import Status
+
+from roomba_bt.behaviours import Action, Condition, ParamError, declare, lean
+from roomba_bt.behaviours.actions import Drive, Wait
+from roomba_bt.behaviours.declare import InvalidCheck, KeyRange, Param, write_key
+from roomba_bt.behaviours.units import DURATION, SPEED
+from roomba_bt.robot.interface import Snapshot
+from roomba_bt.robot.testing import StubRobot
+
+
+@declare("returns_invalid", kind="action")
+class ReturnsInvalid(Action):
+    """Returns INVALID."""
+
+    def update(self) -> Status:
+        return Status.INVALID
+
+
+def test_update_returning_invalid_is_the_node_s_error() -> None:
+    """INVALID passed the status check: a sequence read it as "not started" and began again
+    from its first child, so the drive before it was repeated until the run's timeout."""
+    leaf = ReturnsInvalid("r")
+    with pytest.raises(
+        lean.InvalidStatus,
+        match=r"ReturnsInvalid.update\(\) returned "
+        r"Status.INVALID, which py_trees keeps for a node that has not run",
+    ):
+        leaf.tick_once()
+    ok = py_trees.behaviours.Success("ok")
+    root = lean.Sequence("root", True, [ok, ReturnsInvalid("r")])
+    with pytest.raises(lean.InvalidStatus) as raised:
+        root.tick_once()
+    assert raised.value.node.name == "r" and raised.value.status is Status.INVALID
+
+
+class _Returns(Condition):
+    """A condition whose check returns what it is given."""
+
+    returns: object = None
+
+    def check(self, snapshot: Snapshot) -> bool:
+        return typing.cast(bool, self.returns)
+
+
+def _condition(returns: object) -> Condition:
+    cls = type("Says", (_Returns,), {"returns": returns})
+    declared = declare("says", kind="condition")(cls)
+    node = declared("says")
+    node.setup(robot=StubRobot())
+    return node
+
+
+@pytest.mark.parametrize(
+    "returns", [None, "no", b"", "", Status.FAILURE, Status.SUCCESS, [], {"a": 1}]
+)
+def test_check_returning_no_truth_value_is_the_node_s_error(returns: object) -> None:
+    """None (a forgotten ``return``) was FAILURE silently, "no" and Status.FAILURE were
+    SUCCESS."""
+    node = _condition(returns)
+    with pytest.raises(InvalidCheck, match=r"Says.check\(\) returned .*, not a bool") as caught:
+        node.tick_once()
+    assert isinstance(caught.value, lean.InvalidStatus) and caught.value.method == "check"
+    with pytest.raises(InvalidCheck):
+        node.update()  # the update of the full leaf tick (a class with a lifecycle of its own)
+    if isinstance(returns, Status):
+        assert "update returns a Status" in str(caught.value)
+
+
+@pytest.mark.parametrize(
+    ("returns", "holds"),
+    [(True, True), (False, False), (numpy.bool_(True), True), (numpy.bool_(False), False),
+     (1, True), (0, False), (0.5, True), (numpy.float64(0.0), False)],
+)  # fmt: skip
+def test_check_returning_a_bool_or_a_number_is_its_truth(returns: object, holds: bool) -> None:
+    node = _condition(returns)
+    node.tick_once()
+    assert node.status is (Status.SUCCESS if holds else Status.FAILURE)
+    assert node.update() is node.status
+
+
+def test_a_key_out_of_the_parameter_s_range_is_refused_when_the_leaf_starts() -> None:
+    """900 mm/s written by a plugin reached the drive's encoder: "drive raised EncodeError",
+    blamed on the built-in's code."""
+    drive = Drive("fast", {"velocity": "@v", "duration": 1.0})
+    drive.setup(robot=StubRobot())
+    write_key("v", 900.0)
+    with pytest.raises(KeyRange) as caught:
+        drive.initialise()
+    assert str(caught.value) == (
+        "drive 'fast': velocity is @v, and blackboard key 'v' holds a value out of its range: "
+        "velocity 900 mm/s is out of range: allowed -500..500 mm/s"
+    )
+    write_key("v", 300.0)
+    drive.initialise()
+    assert drive.value("velocity") == 300.0
+
+
+@declare(
+    "grows",
+    kind="action",
+    params=(
+        Param("velocity", SPEED, default="100 mm/s", minimum=0, maximum=500),
+        Param("duration", DURATION, required=True, minimum=0.1),
+        Param("pause", DURATION, minimum=0),
+    ),
+)
+class Grows(Action):
+    """Grows for a while."""
+
+    def update(self) -> Status:
+        return Status.SUCCESS if self.number("pause") else Status.RUNNING
+
+
+@pytest.mark.parametrize("params", [{}, None], ids=["{}", "None"])
+def test_no_parameters_from_python_still_checks_the_required_ones(params: object) -> None:
+    """``{}`` and None skipped the check (it ran only for a non-empty mapping)."""
+    with pytest.raises(ParamError, match=r"^wait 'w': missing required parameter\(s\) duration$"):
+        Wait("w", params)  # type: ignore[arg-type]
+    with pytest.raises(ParamError, match=r"^grows 'g': missing required parameter\(s\) duration"):
+        Grows("g", params)  # type: ignore[arg-type]
+    assert Drive("d", params).params["velocity"] == 200.0  # type: ignore[arg-type]
+
+
+def test_a_declared_parameter_not_given_is_said_so() -> None:
+    """It said the declaration "does not have" the parameter, then listed it."""
+    node = Grows("g", {"duration": 1.0})
+    with pytest.raises(
+        KeyError,
+        match=r"Grows reads parameter 'pause', which 'g' was not given "
+        r"and 'grows' declares with no default",
+    ):
+        node.update()
+    with pytest.raises(KeyError, match=r"which its declaration 'grows' does not have"):
+        node.number("speed")
+
+
+def test_a_plain_py_trees_behaviour_returning_invalid_is_caught_too() -> None:
+    class Plain(py_trees.behaviour.Behaviour):
+        def update(self) -> Status:
+            return Status.INVALID
+
+    root = py_trees.composites.Sequence("root", memory=True, children=[Plain("p")])
+    assert lean.check_updates(root)
+    with pytest.raises(lean.InvalidStatus, match=r"Plain.update\(\) returned Status.INVALID"):
+        root.tick_once()
