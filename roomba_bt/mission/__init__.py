@@ -21,6 +21,7 @@ from roomba_bt.mission.checks import (
     ModeCheck,
     blind_in_full,
     check_stream,
+    key_ranges,
     profile_commands,
     restarted_limits,
     sensor_ranges,
@@ -95,9 +96,8 @@ def _compile(
     keys.run(tree, frozenset(k for k, d in ctx.keys.items() if d.has_initial))
     packets, sends, needed = _what_leaves_use(tree)
     unavailable, ignored = profile_commands(tree, profile)
-    diagnostics = (
-        ctx.diagnostics + modes.errors + keys.errors + restarted_limits(tree) + unavailable
-    )
+    diagnostics = ctx.diagnostics + modes.errors + keys.errors + key_ranges(tree, ctx.keys)
+    diagnostics += restarted_limits(tree) + unavailable
     problem = check_stream(tuple(sorted(packets)), baud or profile.default_baud)
     if problem is not None:
         assert parsed.tree_loc is not None

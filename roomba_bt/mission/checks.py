@@ -34,11 +34,14 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
+from typing import Any
 
 from roomba_bt.behaviours.conditions import COMPARISON, comparison_problem
+from roomba_bt.behaviours.declare import BlackboardRef, Param
 from roomba_bt.mission.diagnostics import Diagnostic
-from roomba_bt.mission.ir import Node
+from roomba_bt.mission.ir import KeyDecl, Node
+from roomba_bt.mission.source import Loc
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.frames import (
     CHARGING_SOURCES_PACKETS,
@@ -261,6 +264,69 @@ class KeyCheck:
         if kind in ("inverter", "force_success", "force_failure", "oneshot"):
             return written
         return inner
+
+
+#: a parameter reading a key as ``@key``: the behaviour's name, the parameter, the reference,
+#: and where it is written
+_Reader = tuple[str, Param, BlackboardRef, Loc]
+
+
+def key_ranges(root: Node, keys: Mapping[str, KeyDecl]) -> list[Diagnostic]:
+    """Each ``initial`` value and each ``set`` value (the mission's constants written to a
+    key) checked against the range of every parameter that reads the key as ``@key``: 900
+    mm/s in a key a drive reads was the drive's EncodeError at run time, blamed on the
+    built-in. Said where the value is written, naming the reader and where it reads it.
+    (``for_each`` items and plugins' writes are checked when the reader starts.)"""
+    readers, writes = _ranged_key_uses(root)
+    out: list[Diagnostic] = []
+    for key, reads in readers.items():
+        declared = keys.get(key)
+        written = list(writes.get(key, ()))
+        if declared is not None and declared.has_initial:
+            where = declared.initial_loc or declared.loc
+            written.insert(0, ("initial value", declared.initial, where))
+        for what, value, where in written:
+            for behaviour, param, ref, use in reads:
+                read = value.get(ref.field) if ref.field and isinstance(value, dict) else value
+                problem = None if ref.field and read is value else param.check_range(read)
+                if problem is None:
+                    continue
+                at = f"{use.line}:{use.column}"
+                at = at if use.file == where.file else f"{use.file}:{at}"
+                out.append(
+                    where.at(
+                        f"{what} of blackboard key {key!r}: {behaviour}'s {param.name} reads it "
+                        f"as {ref} (at {at}): {problem}"
+                    )
+                )
+    return out
+
+
+def _ranged_key_uses(
+    root: Node,
+) -> tuple[dict[str, list[_Reader]], dict[str, list[tuple[str, Any, Loc]]]]:
+    """The parameters with a declared range that read a key as ``@key``, and the values the
+    mission's ``set`` leaves write (with where each is written), by key."""
+    readers: dict[str, list[_Reader]] = {}
+    writes: dict[str, list[tuple[str, Any, Loc]]] = {}
+    for node in root.walk():
+        decl = node.decl
+        if node.kind != "leaf" or decl is None:
+            continue
+        for pname, value in node.params.items():
+            param = decl.param(pname)
+            if (
+                isinstance(value, BlackboardRef)
+                and param is not None
+                and (param.minimum is not None or param.maximum is not None)
+            ):
+                use = node.options.get(f"loc:{pname}", node.loc)
+                readers.setdefault(value.key, []).append((decl.name, param, value, use))
+        key = node.params.get("key")
+        if decl.name == "set" and isinstance(key, str):
+            where = node.options.get("loc:value", node.loc)
+            writes.setdefault(key, []).append(("set value", node.params.get("value"), where))
+    return readers, writes
 
 
 #: Leaves that fail when their time is up (the ``timeout`` decorator is the other limit).

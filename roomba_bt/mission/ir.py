@@ -67,3 +67,5 @@ class KeyDecl:
     initial: Any = None
     has_initial: bool = False
     doc: str = ""
+    #: where the initial value is written (the range check of its readers says it there)
+    initial_loc: Loc | None = None

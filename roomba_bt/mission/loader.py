@@ -566,6 +566,7 @@ def key_decl(
     mission's parameters, ``env``). Raises :class:`Bad`."""
     initial: Any = None
     has_initial = False
+    initial_loc: Loc | None = None
     doc = ""
     if isinstance(node, yaml.ScalarNode):
         vtype = parse_type_name(node, loc, allow_mark=True)
@@ -586,10 +587,10 @@ def key_decl(
         if "initial" in fields:
             inode, _, iloc = fields["initial"]
             initial = resolve(ctx, inode, iloc, vtype, env, f"initial value of {name}")
-            has_initial = True
+            has_initial, initial_loc = True, iloc
         if "doc" in fields:
             doc = scalar_text(fields["doc"][0], fields["doc"][2], "doc")
-    ctx.keys[name] = KeyDecl(name, vtype, key_loc, initial, has_initial, doc)
+    ctx.keys[name] = KeyDecl(name, vtype, key_loc, initial, has_initial, doc, initial_loc)
 
 
 def _not_a_file(path: Path, text: str, target: Path) -> str:

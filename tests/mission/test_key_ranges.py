@@ -1,0 +1,111 @@
+"""A ``@key`` value is held to the declared range of the parameter that reads it: the
+validator checks the mission's constants (``initial``, ``set``) where they are written, and
+the leaf checks what it reads when it starts (a plugin's or a ``for_each`` item's write).
+900 mm/s in a key validated, and the run ended "drive raised EncodeError", blamed on the
+built-in (field test, session 24)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.cli import main
+from roomba_bt.runtime.summary import ExitCode
+
+Errors = Callable[..., list[str]]
+
+OUT_OF_RANGE = """
+blackboard:
+  v: {type: speed, initial: 900 mm/s}
+  d: {type: duration, initial: -5s}
+  w: {type: speed}
+  wp: {fields: {distance: distance, turn: angle}, initial: {distance: 1 m, turn: 4000 deg}}
+tree:
+  sequence:
+    - mode: safe
+    - set: {key: w, value: -600 mm/s}
+    - drive: {velocity: "@v", duration: 1s}
+    - drive: {velocity: "@w", duration: "@d"}
+    - turn: {angle: "@wp.turn"}
+    - mode: passive
+"""
+
+
+def test_initial_and_set_values_are_checked_against_their_readers(errors_of: Errors) -> None:
+    assert errors_of(OUT_OF_RANGE) == [
+        "2:29: initial value of blackboard key 'v': drive's velocity reads it as @v (at 10:25): "
+        "velocity 900 mm/s is out of range: allowed -500..500 mm/s",
+        "3:32: initial value of blackboard key 'd': drive's duration reads it as @d (at 11:41): "
+        "duration -5 s is out of range: allowed 0.. s",
+        "5:60: initial value of blackboard key 'wp': turn's angle reads it as @wp.turn (at 12:21): "
+        "angle 4000 deg is out of range: allowed -3600..3600 deg",
+        "9:28: set value of blackboard key 'w': drive's velocity reads it as @w (at 11:25): "
+        "velocity -600 mm/s is out of range: allowed -500..500 mm/s",
+    ]
+
+
+def test_values_within_the_range_pass(errors_of: Errors) -> None:
+    within = OUT_OF_RANGE.replace("900", "300").replace("-5s", "5s").replace("-600", "-100")
+    assert errors_of(within.replace("4000", "40")) == []
+
+
+PLUGIN = '''
+from py_trees.common import Status
+
+from roomba_bt.behaviours import DURATION, Action, Param, declare
+
+
+@declare("pause", kind="action", params=(Param("duration", DURATION, minimum=0.1),))
+class Pause(Action):
+    """Waits."""
+
+    def update(self):
+        return Status.SUCCESS
+'''
+
+
+def _run(mission: Path) -> list[str]:
+    return ["run", str(mission), "--fast", "--display", "none", "--timeout", "10s",
+            "--allow-plugin-files"]  # fmt: skip
+
+
+def test_a_plugin_s_range_is_checked_too(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A plugin's duration with minimum 0.1 got -5 s silently."""
+    (tmp_path / "pause.py").write_text(PLUGIN)
+    mission = tmp_path / "m.yaml"
+    mission.write_text(
+        "plugins: [./pause.py]\nblackboard:\n  d: {type: duration, initial: -5s}\n"
+        "tree:\n  sequence: [{mode: safe}, {pause: {duration: '@d'}}, {mode: passive}]\n"
+    )
+    assert main(["validate", str(mission), "--allow-plugin-files"]) == 2
+    out = capsys.readouterr().out
+    assert (
+        "m.yaml:3:32: initial value of blackboard key 'd': pause's duration reads it as @d "
+        "(at 5:47): duration -5 s is out of range: allowed 0.1.. s" in out
+    ), out
+
+
+def test_a_for_each_item_out_of_range_ends_the_run_naming_the_reader(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """What the validator does not check (a for_each item) is checked when the leaf
+    starts: the run ends as an error naming the behaviour, the parameter and the key, not
+    as the built-in's EncodeError."""
+    mission = tmp_path / "m.yaml"
+    mission.write_text(
+        "blackboard:\n  v: {type: speed}\ntree:\n  sequence:\n    - mode: safe\n"
+        "    - for_each: {key: v, in: [100 mm/s, 900 mm/s], "
+        "do: {drive: {velocity: '@v', duration: 0.5s}}}\n    - mode: passive\n"
+    )
+    assert main(_run(mission)) == ExitCode.BEHAVIOUR_ERROR
+    err = capsys.readouterr().err
+    assert "EncodeError" not in err
+    assert (
+        "raised KeyRange: drive 'drive(velocity=@v, duration=0.5s)': velocity is @v, and "
+        "blackboard key 'v' holds a value out of its range: velocity 900 mm/s is out of "
+        "range: allowed -500..500 mm/s" in err
+    ), err
