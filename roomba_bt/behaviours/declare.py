@@ -800,7 +800,7 @@ class InvalidCheck(InvalidStatus):
             hint = " (check says whether the condition holds; update returns a Status)"
         return (
             f"{type(node).__name__}.check() returned {quoted(status)}, not a bool: it must "
-            f"return True or False{hint}"
+            f"return True or False (a number is taken by its truth){hint}"
         )
 
 
