@@ -136,12 +136,18 @@ def add_far_end_options(parser: Any, *, port_help: str, world_help: str) -> None
 
 def seconds(text: str) -> float:
     """A time in seconds, 0 or more (``0.1``)."""
+    return _real(text, "seconds, 0 or more", lambda value: value >= 0)
+
+
+def _real(text: str, allowed: str, fits: Callable[[float], bool]) -> float:
+    """``text`` as a finite number that ``fits``; else the usage error saying what was found
+    and what is ``allowed``."""
     try:
         value = float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"found {text!r}; allowed: seconds, 0 or more") from None
-    if not math.isfinite(value) or value < 0:
-        raise argparse.ArgumentTypeError(f"found {text}; allowed: seconds, 0 or more")
+        raise argparse.ArgumentTypeError(f"found {text!r}; allowed: {allowed}") from None
+    if not (math.isfinite(value) and fits(value)):
+        raise argparse.ArgumentTypeError(f"found {text}; allowed: {allowed}")
     return value
 
 
@@ -155,13 +161,7 @@ MIN_WATCHDOG = 0.03
 def watchdog_seconds(text: str) -> float:
     """``run --watchdog``: seconds, :data:`MIN_WATCHDOG` or more (it cannot be turned off)."""
     allowed = f"seconds, {MIN_WATCHDOG:g} or more (two stream frames; the watchdog cannot be off)"
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"found {text!r}; allowed: {allowed}") from None
-    if not math.isfinite(value) or value < MIN_WATCHDOG:
-        raise argparse.ArgumentTypeError(f"found {text}; allowed: {allowed}")
-    return value
+    return _real(text, allowed, lambda value: value >= MIN_WATCHDOG)
 
 
 def metres(text: str, lo: float, hi: float) -> float:
@@ -216,13 +216,7 @@ MAX_REFRESH_RATE = 66.0
 def refresh_rate(text: str) -> float:
     """Refreshes a second (``sensors --rate``): above 0, at most one a stream frame."""
     allowed = f"refreshes a second, above 0 and at most {MAX_REFRESH_RATE:g}"
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"found {text!r}; allowed: {allowed}") from None
-    if not (math.isfinite(value) and 0 < value <= MAX_REFRESH_RATE):
-        raise argparse.ArgumentTypeError(f"found {text}; allowed: {allowed}")
-    return value
+    return _real(text, allowed, lambda value: 0 < value <= MAX_REFRESH_RATE)
 
 
 def output_file(text: str) -> str:

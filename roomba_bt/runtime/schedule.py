@@ -25,8 +25,10 @@ rule (docs/runtime.md, "The stream is the clock"):
   tolerance (a stalled host or relay delivers the backlog in one read, late), and the
   schedule starts again.
 
-The common frame (on time, alone in its batch) is the runner's inline copy of :meth:`slots`'
-first branch (``MissionRunner._advance``): keep the two alike.
+The common frame (alone in its batch, less than half a slot late) takes :meth:`late_batch`
+with nothing lost: the schedule follows it (up to :data:`DRIFT`) and its lateness is kept in
+:attr:`spread`. ``MissionRunner._advance`` does exactly that inline, a call less a tick; a
+change to that case changes both (``tests/runtime/test_schedule.py`` holds them alike).
 """
 
 from __future__ import annotations
@@ -73,17 +75,9 @@ class SlotSchedule:
         self._suspect_run = 0  # late batches in a row
 
     def slots(self, count: int, arrival: float) -> int:
-        """The slots a batch of ``count`` frames read at ``arrival`` spans (the schedule's
-        whole rule: the runner inlines its first branch)."""
-        due = self.due + SLOT_SECONDS
-        late = arrival - due
-        if count == 1 and late < LOST_LATE:
-            self.due = arrival if late < DRIFT else due + DRIFT
-            spread = self.spread
-            self.spread = late if late > spread else spread - SPREAD_DECAY
-            slots = 1
-        else:
-            slots = self.late_batch(count, arrival, self.tick, False)
+        """The slots a batch of ``count`` frames read at ``arrival`` spans: the schedule's
+        whole rule, :meth:`late_batch` (whose on-time frame the runner inlines)."""
+        slots = self.late_batch(count, arrival, self.tick, False)
         self.tick += slots
         return slots
 

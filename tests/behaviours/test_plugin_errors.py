@@ -9,8 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from roomba_bt.behaviours import Condition, Registry, builtin_registry, declare
-from roomba_bt.robot.interface import Snapshot
+from roomba_bt.behaviours import Registry, builtin_registry
 
 GROUP = "roomba_bt.behaviours"
 
@@ -111,48 +110,3 @@ def test_an_entry_point_that_fails_to_import_says_where_in_its_package(
     # nothing of its own ran: no line to name
     assert gone.endswith("failed to import: ModuleNotFoundError: No module named "
                          "'s24_no_such_package_xyz'")  # fmt: skip
-
-
-@declare("s24_spiral", kind="condition")
-class FirstSpiral(Condition):
-    """One plugin's ``s24_spiral``."""
-
-    def check(self, snapshot: Snapshot) -> bool:
-        return True
-
-
-@declare("s24_spiral", kind="condition")
-class SecondSpiral(Condition):
-    """Another plugin's ``s24_spiral``."""
-
-    def check(self, snapshot: Snapshot) -> bool:
-        return False
-
-
-@declare("wait", kind="condition")
-class MyWait(Condition):
-    """A plugin's behaviour that takes a built-in's name."""
-
-    def check(self, snapshot: Snapshot) -> bool:
-        return True
-
-
-def test_a_name_two_plugins_declare_is_said_as_a_clash_not_a_wrong_declaration() -> None:
-    """The plugin whose entry point sorted second was told it "declares itself wrongly":
-    it declared nothing wrongly."""
-    registry = builtin_registry()
-    registry.load_entry_point(EntryPoint("first", f"{__name__}:FirstSpiral", GROUP))
-    registry.load_entry_point(EntryPoint("second", f"{__name__}:SecondSpiral", GROUP))
-    registry.load_entry_point(EntryPoint("mine", f"{__name__}:MyWait", GROUP))
-    [second, mine] = [str(e) for e in registry.errors]
-    assert "wrongly" not in second and "wrongly" not in mine
-    here = Path(__file__)
-    assert second.startswith(f"plugin 'second' ({__name__}:SecondSpiral): SecondSpiral ({here}:")
-    assert (
-        f"declares 's24_spiral', as FirstSpiral ({here}:" in second
-        and f"of plugin 'first' ({__name__}:FirstSpiral) does: a name clash between two "
-        "plugins; a mission that uses 's24_spiral' is refused (exit 2)"
-        in second
-    )
-    assert "declares 'wait', the name of the built-in Wait (" in mine
-    assert "the built-in is used and this behaviour is not (rename it)" in mine

@@ -286,6 +286,27 @@ def test_a_name_two_plugins_declare_is_an_error_where_a_mission_uses_it(tmp_path
     assert "Always ('first'" in error.message and "AlwaysToo ('second'" in error.message
 
 
+def test_a_name_two_plugins_declare_is_said_as_a_clash_not_a_wrong_declaration() -> None:
+    """The plugin whose entry point sorted second was told it "declares itself wrongly":
+    it declared nothing wrongly."""
+    registry = builtin_registry()
+    _plugin(registry, "first", "Always")
+    _plugin(registry, "second", "AlwaysToo")
+    _plugin(registry, "mine", "DriveToo")
+    [second, mine] = [str(e) for e in registry.errors]
+    assert "wrongly" not in second and "wrongly" not in mine
+    here = Path(__file__)
+    assert second.startswith(f"plugin 'second' ({__name__}:AlwaysToo): AlwaysToo ({here}:")
+    assert (
+        f"declares 'always', as Always ({here}:" in second
+        and f"of plugin 'first' ({__name__}:Always) does: a name clash between two "
+        "plugins; a mission that uses 'always' is refused (exit 2)"
+        in second
+    )
+    assert "declares 'drive', the name of the built-in Drive (" in mine
+    assert "the built-in is used and this behaviour is not (rename it)" in mine
+
+
 def test_a_plugin_that_takes_a_builtins_name_is_a_warning_where_it_is_used(
     tmp_path: Path,
 ) -> None:

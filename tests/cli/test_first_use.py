@@ -179,14 +179,27 @@ class Rogue(Action):
 '''
 
 
+def run_rogue(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    sequence: str,
+    *extra: str,
+    plugin: str = ROGUE,
+) -> tuple[str, str]:
+    """``run`` a mission of ``sequence`` (a YAML flow list) with the rogue plugin, which
+    drives without entering Safe: its stdout and stderr."""
+    (tmp_path / "rogue.py").write_text(plugin)
+    path = tmp_path / "refused.yaml"
+    path.write_text(f"plugins: [./rogue.py]\ntree:\n  sequence: {sequence}\n")
+    main(["run", str(path), "--fast", "--display", "none", "--allow-plugin-files", *extra])
+    out, err = capsys.readouterr()
+    return out, err
+
+
 def test_refusals_are_stamped_with_mission_time(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    (tmp_path / "rogue.py").write_text(ROGUE)
-    path = tmp_path / "refused.yaml"
-    path.write_text("plugins: [./rogue.py]\ntree:\n  sequence: [{wait: 0.3s}, rogue]\n")
-    main(["run", str(path), "--fast", "--display", "none", "--allow-plugin-files"])
-    err = capsys.readouterr().err
+    _, err = run_rogue(tmp_path, capsys, "[{wait: 0.3s}, rogue]")
     assert re.search(r"^refused: t=0\.3\d\d ", err, re.M), err
     assert re.search(r"^refused: t=0\.3\d\d rogue: drive needs Safe or Full", err, re.M), err
     assert re.search(r"the robot is in Passive since t=0\.000 ", err), err
@@ -196,14 +209,9 @@ def test_a_refusal_says_when_the_mode_began_in_mission_time(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """Not the time of day, which a ``--fast`` run never saw beside its ``t=``."""
-    (tmp_path / "rogue.py").write_text(ROGUE)
-    path = tmp_path / "refused.yaml"
-    path.write_text(
-        "plugins: [./rogue.py]\ntree:\n  sequence: [{mode: safe}, {wait: 0.3s}, "
-        "{mode: passive}, {wait: 0.45s}, rogue]\n"
+    _, err = run_rogue(
+        tmp_path, capsys, "[{mode: safe}, {wait: 0.3s}, {mode: passive}, {wait: 0.45s}, rogue]"
     )
-    main(["run", str(path), "--fast", "--display", "none", "--allow-plugin-files"])
-    err = capsys.readouterr().err
     assert re.search(
         r"^refused: t=0\.7\d\d rogue: .* in Passive since t=0\.3[0-2]\d ", err, re.M
     ), err
@@ -347,14 +355,8 @@ def test_refusals_past_the_first_five_are_said_as_a_count(
 ) -> None:
     """Five refusals are printed; the rest are one line, ``... and N more``, N the summary's
     count less five (a run with 167 refusals printed five and said nothing of the others)."""
-    (tmp_path / "rogue.py").write_text(
-        ROGUE.replace("return Status.SUCCESS", "return Status.RUNNING")
-    )
-    path = tmp_path / "refused.yaml"
-    path.write_text("plugins: [./rogue.py]\ntree:\n  sequence: [rogue]\n")
-    main(["run", str(path), "--fast", "--display", "none", "--allow-plugin-files",
-          "--timeout", "0.3s"])  # fmt: skip
-    out, err = capsys.readouterr()
+    always = ROGUE.replace("return Status.SUCCESS", "return Status.RUNNING")
+    out, err = run_rogue(tmp_path, capsys, "[rogue]", "--timeout", "0.3s", plugin=always)
     count = int(re.search(r"(\d+) refused by the mode guard", out).group(1))  # type: ignore[union-attr]
     assert count > 5, out
     assert len(re.findall(r"^refused: t=", err, re.M)) == 5, err
@@ -364,9 +366,5 @@ def test_refusals_past_the_first_five_are_said_as_a_count(
 def test_five_refusals_or_fewer_say_no_more(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    (tmp_path / "rogue.py").write_text(ROGUE)
-    path = tmp_path / "refused.yaml"
-    path.write_text("plugins: [./rogue.py]\ntree:\n  sequence: [rogue]\n")
-    main(["run", str(path), "--fast", "--display", "none", "--allow-plugin-files"])
-    err = capsys.readouterr().err
+    _, err = run_rogue(tmp_path, capsys, "[rogue]")
     assert len(re.findall(r"^refused: t=", err, re.M)) == 1 and "more" not in err, err

@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from runtime.simrun import LEDGE, over_the_edge  # tests/runtime: a room with a drop
 
 from roomba_bt.mission import load_mission
 from roomba_bt.monitor import session as session_module
@@ -523,33 +524,6 @@ def test_a_reload_shuts_the_old_tree_down_and_the_run_s_end_the_new_one(
     assert shut == old + [f"new {node.name}" for node in new.root.iterate()]
 
 
-LEDGE = """\
-name: ledge
-description: a room whose east half is a drop, the robot facing it
-rooms:
-  - [[0.0, 0.0], [4.0, 0.0], [4.0, 3.5], [0.0, 3.5]]
-drops:
-  - {name: ledge, rect: [2.0, 0.0, 4.0, 3.5]}
-robot:
-  start: {at: [1.2, 1.75], heading: 0}
-  battery: 0.6
-"""
-OVER_THE_EDGE = """\
-mission: over the edge
-tree:
-  fallback:
-    - sequence:
-        - mode: safe
-        - drive: {velocity: 200 mm/s, distance: 2 m}
-    - sequence:
-        name: after the cliff
-        children:
-          - cliff: any
-          - {name: safe again, mode: safe}
-          - wait: 1s
-"""
-
-
 def test_a_resume_after_the_robot_s_own_fall_does_not_send_the_drive_from_before_it(
     until: Callable[..., None], tmp_path: Path
 ) -> None:
@@ -558,7 +532,7 @@ def test_a_resume_after_the_robot_s_own_fall_does_not_send_the_drive_from_before
     forward Drive the tree had sent before the fall (the robot's last wheel command), so the
     robot drove on over the edge before the tree's next tick. Only Safe is sent again."""
     (tmp_path / "ledge.yaml").write_text(LEDGE)
-    (tmp_path / "edge.yaml").write_text(OVER_THE_EDGE)
+    (tmp_path / "edge.yaml").write_text(over_the_edge())
     rig = Rig(mission=tmp_path / "edge.yaml", world=tmp_path / "ledge.yaml")
     safe_again = rig.node("safe again")
     rig.session.request("break", safe_again, "success")

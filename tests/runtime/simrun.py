@@ -57,6 +57,8 @@ class TapLink(SimLink):
         #: each read's bytes are seen up to ``jitter`` seconds late (seeded): the arrival
         #: times (``now``) of a real-time link, a few ms late and then on time again
         self.jitter = jitter
+        #: each read's arrival, as the link reads it (``now()`` after the read), as ``reads``
+        self.arrivals: list[float] = []
         self._late = 0.0
         self._draws = random.Random(7)
 
@@ -81,6 +83,7 @@ class TapLink(SimLink):
             self.reads.append((self.simulator.time, data))
             if self.jitter:
                 self._late = self._draws.uniform(0.0, self.jitter)
+            self.arrivals.append(self.now())  # what the link takes for the bytes' arrival
         return data
 
     def now(self) -> float:
@@ -101,3 +104,36 @@ class Run:
 
 
 RunMission = Callable[..., Run]
+
+
+#: a room whose east half is a drop, the robot 0.8 m from its edge and facing it
+LEDGE = """\
+name: ledge
+description: a room whose east half is a drop, the robot facing it
+rooms:
+  - [[0.0, 0.0], [4.0, 0.0], [4.0, 3.5], [0.0, 3.5]]
+drops:
+  - {name: ledge, rect: [2.0, 0.0, 4.0, 3.5]}
+robot:
+  start: {at: [1.2, 1.75], heading: 0}
+  battery: 0.6
+"""
+
+
+def over_the_edge(wait: str = "1s") -> str:
+    """A mission for :data:`LEDGE`: forward until the robot falls to Passive by itself (at
+    about 4.3 s), then, having seen the cliff, Safe again (``safe again``) and ``wait``."""
+    return f"""\
+mission: over the edge
+tree:
+  fallback:
+    - sequence:
+        - mode: safe
+        - drive: {{velocity: 200 mm/s, distance: 2 m}}
+    - sequence:
+        name: after the cliff
+        children:
+          - cliff: any
+          - {{name: safe again, mode: safe}}
+          - wait: {wait}
+"""

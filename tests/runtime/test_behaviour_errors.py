@@ -5,6 +5,7 @@ that failed), after the safe stop."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import py_trees
 import pytest
@@ -14,7 +15,7 @@ from roomba_bt.behaviours.conditions import OdometrySince
 from roomba_bt.cli import main
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.runtime.stack import RunStack, TreeMission
-from roomba_bt.runtime.summary import ExitCode, Outcome
+from roomba_bt.runtime.summary import ExitCode, Outcome, RunSummary
 from roomba_bt.sim import SimLink, Simulator, load_world
 
 PLUGIN = '''
@@ -47,6 +48,20 @@ def mission(tmp_path: Path) -> Path:
     path = tmp_path / "m.yaml"
     path.write_text(MISSION)
     return path
+
+
+def run_tree(
+    mission: TreeMission | py_trees.behaviour.Behaviour, timeout_s: float, **stack: Any
+) -> RunSummary:
+    """A tree built in Python (or its TreeMission) run on the simulator's empty room."""
+    if not isinstance(mission, TreeMission):
+        mission = TreeMission(mission, mission.name)
+    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
+    runner = RunStack(mission, link, profile=CREATE2, timeout_s=timeout_s, **stack)
+    try:
+        return runner.run()
+    finally:
+        runner.close()
 
 
 def _run(mission: Path, *extra: str) -> list[str]:
@@ -266,12 +281,7 @@ def test_an_oserror_a_behaviour_raises_is_its_error_not_a_lost_link(
             children=[Drive("d", {"velocity": "200 mm/s"}), _Raises(exc, where)],
         ),
     ])  # fmt: skip
-    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
-    stack = RunStack(TreeMission(root, "os"), link, profile=CREATE2, timeout_s=5.0)
-    try:
-        summary = stack.run()
-    finally:
-        stack.close()
+    summary = run_tree(TreeMission(root, "os"), timeout_s=5.0)
     assert summary.outcome is Outcome.ERROR and summary.exit_code == 4, summary.reason
     said = f"behaviour root / par / telemetry raised {type(exc).__name__}"
     assert summary.reason.startswith(said)
@@ -302,12 +312,7 @@ def test_a_plain_behaviour_returning_no_status_ends_a_hand_built_run_as_an_error
         Mode("safe", {"to": "safe"}), _Forgets(returns), Drive("d", {"velocity": "200 mm/s"}),
     ])  # fmt: skip
     mission = TreeMission(root, "forgot")
-    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
-    stack = RunStack(mission, link, profile=CREATE2, timeout_s=3.0)
-    try:
-        summary = stack.run()
-    finally:
-        stack.close()
+    summary = run_tree(mission, timeout_s=3.0)
     assert summary.outcome is Outcome.ERROR and summary.exit_code == 4, summary.reason
     assert summary.reason.startswith(
         f"behaviour root / forgetful raised InvalidStatus: _Forgets.update() returned {returns!r}"
@@ -335,15 +340,12 @@ def test_a_plain_behaviour_reading_an_undeclared_packet_is_told_how_to_stream_it
     from roomba_bt.runtime.loop import stream_request
 
     mission = TreeMission(_ReadsTheWall("wall"), "wall")
-    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
-    summary = RunStack(mission, link, profile=CREATE2, timeout_s=2.0).run()
+    summary = run_tree(mission, timeout_s=2.0)
     assert summary.outcome is Outcome.ERROR
     assert "packets=stream_request({27, *mission.packets}, baud)" in summary.reason
     # the way out it names works
     packets = stream_request({27, *mission.packets}, 115200)
-    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
-    stack = RunStack(mission, link, profile=CREATE2, timeout_s=2.0, packets=packets)
-    assert stack.run().outcome is Outcome.SUCCESS
+    assert run_tree(mission, timeout_s=2.0, packets=packets).outcome is Outcome.SUCCESS
 
 
 @pytest.mark.parametrize("written", ["other", None])
@@ -359,12 +361,7 @@ def test_a_blackboard_value_nothing_wrote_is_an_error_not_a_drive_without_a_dist
         Drive("forward", {"velocity": "200 mm/s", "distance": "@leg"}),
     ])  # fmt: skip
     py_trees.blackboard.Blackboard.storage.pop("/mission/leg", None)
-    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
-    stack = RunStack(TreeMission(root, "unwritten"), link, profile=CREATE2, timeout_s=10.0)
-    try:
-        summary = stack.run()
-    finally:
-        stack.close()
+    summary = run_tree(TreeMission(root, "unwritten"), timeout_s=10.0)
     assert summary.outcome is Outcome.ERROR and summary.exit_code == 4, summary.reason
     assert "raised UnwrittenKey: distance is @leg, but nothing has written blackboard key " \
         "'leg' before 'forward' started" in summary.reason  # fmt: skip
@@ -376,12 +373,7 @@ def test_a_blackboard_value_written_first_is_read_from_python() -> None:
         Mode("safe", {"to": "safe"}), SetKey("leg", {"key": "leg", "value": 120.0}),
         Drive("forward", {"velocity": "200 mm/s", "distance": "@leg"}),
     ])  # fmt: skip
-    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
-    stack = RunStack(TreeMission(root, "written"), link, profile=CREATE2, timeout_s=10.0)
-    try:
-        summary = stack.run()
-    finally:
-        stack.close()
+    summary = run_tree(TreeMission(root, "written"), timeout_s=10.0)
     assert summary.outcome is Outcome.SUCCESS, summary.reason
     assert 110.0 < summary.distance_mm < 140.0
 
@@ -398,11 +390,6 @@ def test_odometry_since_a_mark_nothing_made_is_an_error_not_a_count_from_the_sta
             Drive("on", {"velocity": "200 mm/s"}),
         ]),
     ])  # fmt: skip
-    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
-    stack = RunStack(TreeMission(root, "unmarked"), link, profile=CREATE2, timeout_s=10.0)
-    try:
-        summary = stack.run()
-    finally:
-        stack.close()
+    summary = run_tree(TreeMission(root, "unmarked"), timeout_s=10.0)
     assert summary.outcome is Outcome.ERROR and summary.exit_code == 4, summary.reason
     assert "raised UnwrittenKey: since is 'start', but nothing has marked" in summary.reason

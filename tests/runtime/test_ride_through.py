@@ -15,7 +15,7 @@ from roomba_bt.runtime.summary import Outcome, RunSummary
 from roomba_bt.sim import Simulator, load_world
 from roomba_bt.sim.protocol import DEFAULT_FIRMWARE, reset_banner
 
-from .simrun import SPIN, TapLink
+from .simrun import LEDGE, SPIN, TapLink, over_the_edge
 
 SPIN_COMMAND = oi.drive(100, oi.Radius.TURN_COUNTER_CLOCKWISE).data
 HALT = oi.halt().data
@@ -118,29 +118,6 @@ def test_grace_0_ends_when_the_watchdog_trips(tmp_path: Path) -> None:
     assert link.simulator.time < 1.3
 
 
-LEDGE = """\
-name: ledge
-description: a room whose east half is a drop, the robot facing it
-rooms:
-  - [[0.0, 0.0], [4.0, 0.0], [4.0, 3.5], [0.0, 3.5]]
-drops:
-  - {name: ledge, rect: [2.0, 0.0, 4.0, 3.5]}
-robot:
-  start: {at: [1.2, 1.75], heading: 0}
-  battery: 0.6
-"""
-OVER_THE_EDGE = """\
-mission: over the edge
-tree:
-  fallback:
-    - sequence:
-        - mode: safe
-        - drive: {velocity: 200 mm/s, distance: 2 m}
-    - sequence:
-        - cliff: any
-        - mode: safe
-        - wait: 4s
-"""
 FORWARD = oi.drive(200, oi.Radius.STRAIGHT).data
 
 
@@ -152,7 +129,7 @@ def test_a_stall_after_the_robot_s_own_fall_does_not_send_the_drive_from_before_
     sent the tree's last wheel command again, the forward Drive from before the fall, and
     the robot drove back over the edge (a second fall). The fall ended that command."""
     (tmp_path / "ledge.yaml").write_text(LEDGE)
-    (tmp_path / "edge.yaml").write_text(OVER_THE_EDGE)
+    (tmp_path / "edge.yaml").write_text(over_the_edge("4s"))
     mission = load_mission(tmp_path / "edge.yaml", {}, profile=CREATE2)
     link = BadPatchLink(Simulator(load_world(tmp_path / "ledge.yaml"), CREATE2, 0), 5.0, 5.5)
     summary = RunStack(mission, link, profile=CREATE2, timeout_s=12.0).run()

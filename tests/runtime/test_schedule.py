@@ -6,9 +6,17 @@ from __future__ import annotations
 import random
 from collections.abc import Iterable
 
+import pytest
+
+from roomba_bt.oi.stream import StreamParser
 from roomba_bt.runtime.schedule import SlotSchedule
+from roomba_bt.sim import Faults
+
+from .simrun import RunMission
 
 T = 0.015
+#: a mission that only waits, three seconds of stream
+WAIT_3S = "tree:\n  sequence:\n    - mode: safe\n    - wait: {duration: 3s}\n"
 
 
 def slots_of(batches: Iterable[tuple[int, float]]) -> list[int]:
@@ -126,3 +134,21 @@ def test_a_stalled_senders_backlog_read_a_frame_at_a_time_makes_no_slot() -> Non
     for i, k in enumerate(range(60, 64)):
         arrivals[k] = (1, 63 * T + 0.002 + i * 0.0003)
     assert sum(slots_of(arrivals)) == 100
+
+
+@pytest.mark.parametrize("jitter", [0.0, 0.010], ids=["exact", "jittery"])
+def test_the_runner_s_inline_on_time_frame_keeps_the_schedule_s_rule(
+    run_mission: RunMission, jitter: float
+) -> None:
+    """``MissionRunner._advance`` takes the common frame inline; its slots, over a whole run
+    with frames lost and read late, are those :meth:`SlotSchedule.slots` gives for the same
+    reads (each read's frames, at its arrival)."""
+    run = run_mission(WAIT_3S, faults=Faults(drop_rate=0.2), watchdog=1.0, jitter=jitter)
+    parser = StreamParser(run.runner.packets)
+    schedule = SlotSchedule()
+    for (_, data), arrival in zip(run.link.reads, run.link.arrivals, strict=True):
+        count = len(parser.feed(data))
+        if count:
+            schedule.slots(count, arrival)
+    assert run.summary.frames_lost > 0
+    assert schedule.tick * T == pytest.approx(run.summary.mission_time_s, abs=1e-9)

@@ -4,7 +4,6 @@ garbage), and the modem lines that RFC 2217 carries to the BRC pin."""
 
 from __future__ import annotations
 
-import threading
 from collections.abc import Callable, Iterator
 
 import pytest
@@ -12,37 +11,11 @@ import serial
 
 from roomba_bt.oi import commands as C
 from roomba_bt.oi.modes import OIMode
-from roomba_bt.oi.profiles import CREATE2
-from roomba_bt.sim import Faults, Simulator, load_world
+from roomba_bt.sim import Faults
 from roomba_bt.sim.link import at_wrong_baud
-from roomba_bt.sim.server import Endpoint, PtyEndpoint, Rfc2217Endpoint, serve
+from roomba_bt.sim.server import PtyEndpoint, Rfc2217Endpoint
 
-
-class Served:
-    """A simulator served on ``endpoint`` in a thread, until the test ends."""
-
-    def __init__(
-        self,
-        endpoint: Endpoint,
-        baud: int = 115200,
-        asleep: bool = False,
-        faults: Faults | None = None,
-    ) -> None:
-        self.simulator = Simulator(load_world("empty-room"), CREATE2, 0, faults)
-        self.simulator.baud = baud
-        if asleep:
-            self.simulator.fall_asleep("test")
-        self.endpoint = endpoint
-        self._stop = threading.Event()
-        self._thread = threading.Thread(
-            target=serve, args=(self.simulator, endpoint, self._stop.is_set), daemon=True
-        )
-        self._thread.start()
-
-    def close(self) -> None:
-        self._stop.set()
-        self._thread.join(timeout=5)
-        self.endpoint.close()
+from .served import Served
 
 
 @pytest.fixture

@@ -12,10 +12,9 @@ from collections.abc import Callable, Iterator
 
 import pytest
 from serial import rfc2217
+from sim.served import Served  # tests/sim: the simulator served in a thread
 
-from roomba_bt.oi.profiles import CREATE2
-from roomba_bt.sim import Simulator, load_world
-from roomba_bt.sim.server import Rfc2217Endpoint, serve
+from roomba_bt.sim.server import Rfc2217Endpoint
 from roomba_bt.transport import SerialTransport, TransportError
 
 pytestmark = pytest.mark.filterwarnings(
@@ -23,27 +22,9 @@ pytestmark = pytest.mark.filterwarnings(
 )
 
 
-class Served:
-    """The simulator served over RFC 2217 in a thread, until :meth:`close`."""
-
-    def __init__(self) -> None:
-        self.simulator = Simulator(load_world("empty-room"), CREATE2, 0)
-        self.endpoint = Rfc2217Endpoint("127.0.0.1", 0, 115200)
-        self._stop = threading.Event()
-        self._thread = threading.Thread(
-            target=serve, args=(self.simulator, self.endpoint, self._stop.is_set), daemon=True
-        )
-        self._thread.start()
-
-    def close(self) -> None:
-        self._stop.set()
-        self._thread.join(timeout=5)
-        self.endpoint.close()
-
-
 @pytest.fixture
 def served() -> Iterator[Served]:
-    one = Served()
+    one = Served(Rfc2217Endpoint("127.0.0.1", 0, 115200))
     yield one
     one.close()
 
