@@ -26,6 +26,7 @@ for that second instead (speed 0 drops DTR and RTS; the rate's return raises the
 
 from __future__ import annotations
 
+import errno
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -174,10 +175,25 @@ def search(transport: Transport, rates: Sequence[int]) -> Search:
 
 @dataclass(frozen=True, slots=True)
 class WakePulse:
-    """How a BRC pulse was given, in words (``how``), or why none could be (``problem``)."""
+    """How a BRC pulse was given, in words (``how``), or why none could be (``problem``);
+    ``gone``: the port's own error, when it said the device is no longer there (an
+    unplugged USB adapter: EIO, ENXIO, ENODEV), not that it cannot pulse."""
 
     how: str | None
     problem: str | None = None
+    gone: OSError | None = None
+
+
+#: what a port's device answers once it is unplugged (a USB adapter pulled out, a pty whose
+#: other end closed): the device is gone, not a line that cannot be pulsed
+GONE_ERRNOS = frozenset({errno.EIO, errno.ENXIO, errno.ENODEV})
+
+
+def _gone(exc: OSError) -> OSError | None:
+    """``exc`` (or the port error a transport's error wraps) if it says the device is gone."""
+    cause = getattr(exc, "cause", None)
+    error = cause if isinstance(cause, OSError) else exc
+    return error if error.errno in GONE_ERRNOS else None
 
 
 def wake_pulse(transport: Transport, length: float = PULSE_LENGTH_S) -> WakePulse:
@@ -192,13 +208,14 @@ def wake_pulse(transport: Transport, length: float = PULSE_LENGTH_S) -> WakePuls
     try:
         transport.set_wake_line(True)
     except OSError as exc:
-        if not isinstance(transport, HangUpLine):
-            return WakePulse(None, str(exc))
+        if _gone(exc) is not None or not isinstance(transport, HangUpLine):
+            return WakePulse(None, str(exc), _gone(exc))
         try:
             with transport.hung_up():
                 _wait(transport, length)
         except OSError as hang_up_exc:
-            return WakePulse(None, f"{exc}; nor by a hang-up: {hang_up_exc}")
+            problem = f"{exc}; nor by a hang-up: {hang_up_exc}"
+            return WakePulse(None, problem, _gone(hang_up_exc))
         how = (
             f"pulsed BRC by a {length:g} s hang-up (the modem lines cannot be set here: "
             "speed 0 drops DTR and RTS, the rate's return raises them)"
@@ -210,7 +227,7 @@ def wake_pulse(transport: Transport, length: float = PULSE_LENGTH_S) -> WakePuls
             finally:
                 transport.set_wake_line(False)  # BRC let go on every exit, Ctrl-C too
         except OSError as exc:
-            return WakePulse(None, str(exc))
+            return WakePulse(None, str(exc), _gone(exc))
         how = f"pulsed BRC low for {length:g} s (RTS and DTR)"
     _wait(transport, WAKE_SETTLE_S)
     return WakePulse(how)

@@ -114,6 +114,8 @@ def explain_silence(
     if not connection.profile.sleeps_in_passive:
         return lost("it answered no query either (switched off, a flat battery, or the cable)")
     pulse = wake_pulse(connection.transport)
+    if pulse.gone is not None:  # unplugged meanwhile: the silence was the cable's
+        return connection.link.lost("a BRC pulse", pulse.gone)
     if pulse.problem is not None:
         return lost(
             "it answered no query either, and no BRC pulse could wake it to tell sleep from "

@@ -9,7 +9,10 @@ at the new rate, and noise at the run's rate is not taken for one."""
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import re
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -153,6 +156,28 @@ def test_a_robot_that_cannot_be_pulsed_is_not_called_asleep(tmp_path: Path) -> N
     assert [e.kind for e in simulator.events if e.kind == "wake"] == []  # no pulse woke it
     assert not summary.stop_delivered  # a robot that answers nothing: the stop not known
     assert "unconfirmed: the robot answers nothing" in summary.safe_stop
+
+
+class UnpluggedInTheSilence(NoModemLines):
+    """A pty whose device is gone by the time the silence is asked about: the hang-up that
+    pulses BRC fails as an unplugged adapter's port does (EIO)."""
+
+    @contextlib.contextmanager
+    def hung_up(self) -> Iterator[None]:
+        raise OSError(errno.EIO, "Input/output error")
+        yield  # a context manager's shape
+
+
+def test_a_port_that_vanished_in_the_silence_is_said_gone_not_unpulsed(tmp_path: Path) -> None:
+    """The robot went quiet, then the cable was pulled: the hang-up's EIO was said as "no BRC
+    pulse could wake it ... Input/output error", the advice of a robot asleep or off."""
+    summary, _ = run(tmp_path, WAIT_IN_PASSIVE, Faults(sleep_at=5.0), UnpluggedInTheSilence)
+    assert summary.outcome is Outcome.CONNECTION_LOST
+    assert "the port is gone: it failed on a BRC pulse ([Errno 5] Input/output error)" in (
+        summary.reason
+    )
+    assert "no BRC pulse could wake it" not in summary.reason
+    assert not summary.stop_delivered and "the port had failed before it" in summary.safe_stop
 
 
 def assert_followed_and_stopped(
