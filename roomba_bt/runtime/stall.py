@@ -54,6 +54,7 @@ class StallRide:
         if self.grace <= 0:
             raise stalled
         self.summary.stalls += 1
+        self.summary.stall_halts += stalled.halted
         link = self.connection.link
         self.stall = (link.bytes_read, stalled.halted, link.silent_since)
         log.warning("%s; waiting up to %g s for valid frames", stalled, self.grace)

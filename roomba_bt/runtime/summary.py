@@ -75,6 +75,12 @@ _EXIT = {
 }
 
 
+#: the share of the robot's frames lost from which the summary calls the link poor
+POOR_LINK = 0.05
+#: the frames a run must span (3 s) before the summary judges its link
+LINK_VERDICT_SLOTS = 200
+
+
 @dataclass
 class RunSummary:
     """The end-of-run report; every field is measured, none is assumed."""
@@ -99,6 +105,9 @@ class RunSummary:
     #: of those the frames came back from within the grace
     stalls: int = 0
     stalls_ridden: int = 0
+    #: of the stalls, those whose drive 0 was sent (the wheels turning; the others found
+    #: them at rest, and nothing was sent)
+    stall_halts: int = 0
     #: gaps of a second or more with no frame read and no watchdog trip (the process
     #: suspended or starved: runtime/loop.py ``unread_gap``), and the longest
     unread_gaps: int = 0
@@ -173,14 +182,8 @@ class RunSummary:
             f"{self.checksum_failures} checksum failures, "
             f"{self.implausible_frames} out of range, {self.skipped_bytes} bytes skipped, "
             f"{self.unconfirmed_hazards} unconfirmed hazards",
-            *(
-                [
-                    f"stalls       {self.stalls} (watchdog drive 0), {self.stalls_ridden} ridden "
-                    "through"
-                ]
-                if self.stalls
-                else []
-            ),
+            *([f"stalls       {self.stall_text()}"] if self.stalls else []),
+            *([f"link         {self.link_verdict()}"] if self.link_verdict() else []),
             *(
                 [
                     f"unread       {self.unread_gaps} gap(s) with no frame read, the longest "
@@ -208,3 +211,26 @@ class RunSummary:
 
     def __str__(self) -> str:
         return "\n".join(self.lines())
+
+    def stall_text(self) -> str:
+        """The watchdog's trips: how many sent drive 0 (a trip with the wheels at rest, on
+        the dock say, sends nothing) and how many the frames came back from."""
+        halts = (
+            "watchdog drive 0"
+            if self.stall_halts == self.stalls
+            else f"watchdog drive 0 in {self.stall_halts}, the wheels at rest in the others"
+        )
+        return f"{self.stalls} ({halts}), {self.stalls_ridden} ridden through"
+
+    def link_verdict(self) -> str:
+        """A line that lost :data:`POOR_LINK` or more of the robot's frames, over a run long
+        enough to tell (:data:`LINK_VERDICT_SLOTS`), said as such: the run may end well on
+        it, the tree seeing the robot late. "" for a line that did not."""
+        sent = self.ticks + self.stale_frames_dropped + self.frames_lost
+        if sent < LINK_VERDICT_SLOTS or self.frames_lost < POOR_LINK * sent:
+            return ""
+        return (
+            f"poor: {100 * self.frames_lost / sent:.0f} % of the robot's frames lost "
+            f"({self.frames_lost} of {sent}), {self.checksum_failures} checksum failures: the "
+            "tree saw the robot late; check the cable and its adapter (roomba-bt doctor)"
+        )

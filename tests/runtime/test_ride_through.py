@@ -12,10 +12,10 @@ from roomba_bt.oi import commands as oi
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome, RunSummary
-from roomba_bt.sim import Simulator, load_world
+from roomba_bt.sim import Faults, Simulator, load_world
 from roomba_bt.sim.protocol import DEFAULT_FIRMWARE, reset_banner
 
-from .simrun import LEDGE, SPIN, TapLink, over_the_edge
+from .simrun import LEDGE, SPIN, RunMission, TapLink, over_the_edge
 
 SPIN_COMMAND = oi.drive(100, oi.Radius.TURN_COUNTER_CLOCKWISE).data
 HALT = oi.halt().data
@@ -138,3 +138,32 @@ def test_a_stall_after_the_robot_s_own_fall_does_not_send_the_drive_from_before_
     falls = [t for t, b in link.writes if b == FORWARD]
     assert len(falls) == 1 and falls[0] < 1.0, link.writes  # only the tree's own, at its start
     assert [b for t, b in link.writes if 5.0 <= t < 8.0] == [HALT]  # the watchdog's, no more
+
+
+def test_a_run_that_lost_many_of_the_robot_s_frames_says_the_link_is_poor(
+    run_mission: RunMission,
+) -> None:
+    """A line that lost 13,395 of 16,014 frames ended SUCCESS with no word of the line (the
+    flaky-cable trial): the summary now judges it, from 5 % of the frames lost."""
+    mission = "tree:\n  sequence:\n    - mode: safe\n    - wait: 5s\n"
+    poor = run_mission(mission, faults=Faults(drop_rate=0.3), watchdog=1.0).summary
+    assert poor.outcome is Outcome.SUCCESS
+    [line] = [line for line in poor.lines() if line.startswith("link ")]
+    sent = poor.ticks + poor.stale_frames_dropped + poor.frames_lost
+    assert line == (
+        f"link         poor: {100 * poor.frames_lost / sent:.0f} % of the robot's frames lost "
+        f"({poor.frames_lost} of {sent}), 0 checksum failures: the tree saw the robot late; "
+        "check the cable and its adapter (roomba-bt doctor)"
+    )
+    clean = run_mission(mission).summary
+    assert clean.frames_lost == 0 and not any(line.startswith("link ") for line in clean.lines())
+
+
+def test_a_stall_with_the_wheels_at_rest_is_not_said_to_have_sent_drive_0() -> None:
+    """553 stalls "(watchdog drive 0)" on a robot resting on its dock: 11 had sent one."""
+    assert RunSummary("m", stalls=3, stall_halts=3, stalls_ridden=3).stall_text() == (
+        "3 (watchdog drive 0), 3 ridden through"
+    )
+    assert RunSummary("m", stalls=553, stall_halts=11, stalls_ridden=553).stall_text() == (
+        "553 (watchdog drive 0 in 11, the wheels at rest in the others), 553 ridden through"
+    )
