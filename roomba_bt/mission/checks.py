@@ -51,7 +51,7 @@ from roomba_bt.oi.frames import (
 )
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.oi.opcodes import COMMANDS
-from roomba_bt.oi.profiles import RobotProfile
+from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
 
 #: Packets the runtime always streams, whatever the mission reads: bumps and wheel drops (7),
@@ -504,8 +504,15 @@ def check_stream(packets: tuple[int, ...], baud: int) -> str | None:
         check_bandwidth(ids, baud)
     except BandwidthError as exc:
         extra = sorted(set(packets) - set(RUNTIME_PACKETS))
+        fix, usual = "", DEFAULT_PROFILE.default_baud  # every model's rate after power-up
+        if baud < usual and check_stream(packets, usual) is None:
+            fix = (
+                f"; it fits at {usual}: a robot talking at {baud} (its Clean button "
+                "held at power-off) stays there until it loses power: power-cycle it, or send "
+                "Baud (129) (roomba-bt doctor)"
+            )
         return (
             f"the sensor packets this mission reads ({extra} plus the runtime's "
-            f"{list(RUNTIME_PACKETS)}) do not fit the stream: {exc}"
+            f"{list(RUNTIME_PACKETS)}) do not fit the stream: {exc}{fix}"
         )
     return None

@@ -131,6 +131,11 @@ def test_runtime_packets_and_stream_budget() -> None:
     assert check_stream((8,), 115200) is None
     problem = check_stream(tuple(range(46, 52)), 19200)
     assert problem is not None and "at 19200 baud" in problem
+    # how to get the robot to the rate where it fits: it cannot be told from --baud alone
+    assert problem.endswith(
+        "; it fits at 115200: a robot talking at 19200 (its Clean button held at power-off) "
+        "stays there until it loses power: power-cycle it, or send Baud (129) (roomba-bt doctor)"
+    )
 
 
 def test_baud_is_checked_per_mission(errors_of: Errors) -> None:
