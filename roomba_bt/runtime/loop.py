@@ -43,6 +43,7 @@ from roomba_bt.robot.hazards import HazardConfirmation, turns_a_wheel
 from roomba_bt.robot.interface import (
     SLOT_SECONDS,
     BaseHandle,
+    ModeChange,
     Odometer,
     Snapshot,
 )
@@ -493,8 +494,8 @@ class MissionRunner(BaseHandle):
         generic attribute read in CPython 3.11, about 170 instructions).
 
         The common frame (the only one of its batch, one slot after the one before) takes
-        the first branch of each test: no stale frame to confirm hazards with, no gap to
-        measure (``round``, ``max``)."""
+        the first branch of each test: no stale frame to confirm hazards with, no fall to
+        Passive new since the last, no slot lost (the schedule's slow path)."""
         count = len(batch)
         if count > 1:
             self._stale(batch)
@@ -505,10 +506,7 @@ class MissionRunner(BaseHandle):
         if fallback is self._fallback_seen:
             frame = self._hazards.frame(frame)
         else:
-            self._fallback_seen = fallback
-            frame = self._hazards.frame(frame, True)
-            if fallback is not None:  # the robot stopped its wheels as it fell: the tree's
-                self.last_sent.pop("wheels", None)  # last word no longer stands
+            frame = self._fallback_changed(frame, fallback)
         summary = self.summary
         # SlotSchedule.slots' common case, inline: one frame, early or less than LOST_LATE
         # late: one slot; the schedule follows it (up to DRIFT), its lateness kept (spread)
@@ -547,6 +545,16 @@ class MissionRunner(BaseHandle):
             else:  # someone is watching the blackboard's activity: tell it
                 self._blackboard.set(SNAPSHOT_KEY, snapshot, overwrite=True)
         return mission_time
+
+    def _fallback_changed(self, frame: SensorFrame, fallback: ModeChange | None) -> SensorFrame:
+        """A fall to Passive by itself new since the last frame (or the robot back in a
+        driving mode): the hazards see the frame afresh. The robot stopped its wheels as it
+        fell, so the tree's last wheel command no longer stands: a stall's ride-through
+        does not send it again (:meth:`_send_wheels_again`)."""
+        self._fallback_seen = fallback
+        if fallback is not None:
+            self.last_sent.pop("wheels", None)
+        return self._hazards.frame(frame, True)
 
     def _stale(self, batch: Sequence[SensorFrame]) -> None:
         """The frames of a batch before its newest: dropped (counted), their hazards seen."""
