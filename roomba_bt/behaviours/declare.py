@@ -120,9 +120,8 @@ def from_python(param: Param, value: Any) -> Any:
     :class:`BlackboardRef`, or a text ``"@key"`` / ``"@key.field"`` as YAML writes one, is a
     value read from the blackboard where the parameter allows it (``from_blackboard``), its
     key not checked until the run (no mission declares keys from Python); what is no text
-    for a type of a
-    behaviour's own (its parsed form: song notes as (note, 64ths) pairs). Raises
-    :class:`UnitError` saying what was found and what is allowed."""
+    for a type of a behaviour's own passes as it is (its parsed form: song notes as (note,
+    64ths) pairs). Raises :class:`UnitError` saying what was found and what is allowed."""
     kind = param.type
     if isinstance(value, str) and value.startswith("@"):
         value = blackboard_ref(value)  # "@leg" as in YAML
