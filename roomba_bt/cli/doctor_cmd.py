@@ -466,11 +466,7 @@ def _drain_quiet(transport: Any, latency: float) -> None:
         drain(transport)
         return
     quiet = 1.5 * latency + QUIET_S
-    clock = transport.now
-    started = quiet_since = clock()
-    while clock() - quiet_since < quiet and clock() - started < 4 * quiet + 1.0:
-        if transport.read(quiet / 4):
-            quiet_since = clock()
+    drain(transport, quiet=quiet, limit=4 * quiet + 1.0)
 
 
 def _implausible(frame: SensorFrame, plus_one: bool) -> str:

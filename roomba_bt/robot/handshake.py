@@ -117,17 +117,23 @@ def _wait(transport: Transport, seconds: float) -> int:
     return seen
 
 
-def drain(transport: Transport, read: Callable[[float], bytes] | None = None) -> int:
-    """Read and drop until the line stays quiet for :data:`QUIET_S` (at most
-    :data:`DRAIN_LIMIT_S`) on the transport's clock; the bytes dropped. ``read``: read
-    through this instead of the transport (a link's, which counts the bytes and turns a
-    failing port into ``PortLost``)."""
+def drain(
+    transport: Transport,
+    read: Callable[[float], bytes] | None = None,
+    *,
+    quiet: float = QUIET_S,
+    limit: float = DRAIN_LIMIT_S,
+) -> int:
+    """Read and drop until the line stays quiet for ``quiet`` s (at most ``limit`` s) on
+    the transport's clock; the bytes dropped. ``read``: read through this instead of the
+    transport (a link's, which counts the bytes and turns a failing port into
+    ``PortLost``). A slow line wants a longer ``quiet``: its bytes come that late."""
     clock = transport.now
     read = transport.read if read is None else read
     started = quiet_since = clock()
     seen = 0
-    while clock() - quiet_since < QUIET_S and clock() - started < DRAIN_LIMIT_S:
-        data = read(QUIET_S / 2)
+    while clock() - quiet_since < quiet and clock() - started < limit:
+        data = read(quiet / 2)
         if data:
             seen += len(data)
             quiet_since = clock()
