@@ -49,10 +49,9 @@ FORCEABLE = {"success": Status.SUCCESS, "failure": Status.FAILURE}
 ROBOT_SLEEPS_S = 300.0
 #: how long into a pause a robot that will sleep is warned of
 SLEEP_WARNING_S = 240.0
+
+
 #: the channels the robot stops by itself when it falls to Passive (a cliff, a wheel drop)
-FALL_DROPS = ("wheels", "motors")
-
-
 class ControlRefused(ValueError):
     """A request that cannot be carried out as asked (the page gets HTTP 409 with this text)."""
 
@@ -126,14 +125,9 @@ class MonitorSession:
         self._held_end: str | None = None
         self._stop: str | None = None
         self._pending_mission: Any = None
-        #: the robot's own fall to Passive (a cliff, a wheel drop) last seen, and the wheel
-        #: and motor commands that stood before it: the robot dropped them when it fell, so
-        #: a resume does not send them again (the tree, which saw the fall, decides anew)
         #: the stream's tick at which a paused robot that sleeps in Passive (no keep-awake)
         #: is warned of (None: not paused, warned already, or it does not sleep)
         self._sleep_warn_tick: int | None = None
-        self._fall_seen: object = None
-        self._before_fall: dict[str, Command] = {}
         self.listeners: list[Callable[[str], None]] = []  # told of pauses (the terminal)
 
     # ---------------------------------------------------------------- any thread
@@ -179,11 +173,6 @@ class MonitorSession:
     # ---------------------------------------------------------------- tick thread
     def before_tick(self, runner: MissionRunner) -> bool:
         """Apply requests; False when the tree must not tick this frame (paused)."""
-        fall = runner.snapshot.last_fallback
-        if fall is not self._fall_seen:  # seen before this frame's tick writes anything
-            self._fall_seen = fall
-            sent = runner.last_sent
-            self._before_fall = {c: sent[c] for c in FALL_DROPS if c in sent}
         if not self._requests.empty():
             self._apply(runner)
         if self._stop is not None:
@@ -350,25 +339,17 @@ class MonitorSession:
         resent = again[1:] if mode is not None else again
         if resent:
             back += ", " + ", ".join(c.name for c in resent) + f" {self.SENT} again"
-        fallen = [c.name for ch, c in runner.last_sent.items() if self._before_fall.get(ch) is c]
-        if mode is not None and fallen:
-            back += f" ({', '.join(fallen)} not: from before the robot's own fall to Passive)"
         if again:
             back += self.WHERE
         self._said(runner, "control", f"resume ({why}): {back}; the tree goes on")
 
     def _standing(self, runner: MissionRunner) -> list[Command]:
         """The actuators' commands as the tree left them (its actions sent theirs once), to
-        send again on a resume: not Play or Buttons (they would play or press again), nor a
-        wheel or motor command from before the robot's own fall to Passive (a cliff, a wheel
-        drop: the robot stopped them then; the tree, which saw the fall, decides anew: a
-        resume sent the forward drive that took the robot over the edge)."""
-        before_fall = self._before_fall
-        return [
-            c
-            for channel, c in runner.last_sent.items()
-            if c.spec.sets_state and before_fall.get(channel) is not c
-        ]
+        send again on a resume: not Play or Buttons (they would play or press again). A wheel
+        or motor command from before the robot's own fall to Passive is not among them: the
+        run forgets it at the fall (runtime/loop.py ``FALL_STOPS``; a resume sent the forward
+        drive that took the robot over the edge)."""
+        return [c for c in runner.last_sent.values() if c.spec.sets_state]
 
     def _said(self, runner: MissionRunner, kind: str, text: str) -> None:
         """An operator's act (or what it caused) into the page's event log, and the run's

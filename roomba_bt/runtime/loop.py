@@ -85,6 +85,9 @@ STOPPING_THE_TREE = (
 )
 #: ... and while the nodes' ``shutdown()`` runs
 SHUTTING_DOWN = "the robot is stopped; the behaviours' shutdown() is under way"
+#: the actuator channels the robot stops when it falls to Passive by itself (a cliff, a wheel
+#: drop): their last commands no longer stand (:meth:`MissionRunner._fallback_changed`)
+FALL_STOPS = ("wheels", "motors")
 #: a gap between frames read this long, not a stall the watchdog saw, is said (``unread_gap``)
 UNREAD_GAP_SECONDS = 1.0
 _new_tuple = tuple.__new__
@@ -547,13 +550,13 @@ class MissionRunner(BaseHandle):
         return mission_time
 
     def _fallback_changed(self, frame: SensorFrame, fallback: ModeChange | None) -> SensorFrame:
-        """A fall to Passive by itself new since the last frame (or the robot back in a
-        driving mode): the hazards see the frame afresh. The robot stopped its wheels as it
-        fell, so the tree's last wheel command no longer stands: a stall's ride-through
-        does not send it again (:meth:`_send_wheels_again`)."""
+        """A fall to Passive by itself new since the last frame (or its end): the hazards see
+        the frame afresh, and the commands of :data:`FALL_STOPS` no longer stand (a stall's
+        ride-through and the monitor's resume do not send them again)."""
         self._fallback_seen = fallback
         if fallback is not None:
-            self.last_sent.pop("wheels", None)
+            for channel in FALL_STOPS:
+                self.last_sent.pop(channel, None)
         return self._hazards.frame(frame, True)
 
     def _stale(self, batch: Sequence[SensorFrame]) -> None:
