@@ -31,7 +31,9 @@ from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import STRAIGHT_RADII, Command
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
+from roomba_bt.oi.odometry import encoder_delta
 from roomba_bt.oi.opcodes import Effect
+from roomba_bt.oi.packets import packet_ids
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import StreamParser
 from roomba_bt.robot.errors import PortLost, RobotError
@@ -53,9 +55,10 @@ PAUSE_SLACK = 3
 #: How many times a stop the stream contradicts is written (the first, and once more).
 STOP_ATTEMPTS = 2
 
-#: Requested wheel velocities (packets 42 left, 41 right) and the encoders (43 left, 44
-#: right): what a stop the robot streams on after says of its wheels.
-_LEFT_VELOCITY, _RIGHT_VELOCITY, _ENCODERS = 42, 41, (43, 44)
+#: Requested wheel velocities (left, right) and the encoders (left, right): what a stop the
+#: robot streams on after says of its wheels.
+_LEFT_VELOCITY, _RIGHT_VELOCITY = packet_ids("requested_left_velocity", "requested_right_velocity")
+_ENCODERS = packet_ids("left_encoder_counts", "right_encoder_counts")
 
 #: What a stop may meet and must survive.
 _RECOVERABLE: tuple[type[Exception], ...] = (RobotError, *LINK_ERRORS)
@@ -114,7 +117,7 @@ def wheels_seen(frames: list[SensorFrame]) -> str:
         return f", the wheels at {left}/{right} mm/s (left/right)"
     if not all(pid in frame for pid in _ENCODERS for frame in (first, last)):
         return ""
-    left, right = (((last[pid] - first[pid] + 0x8000) & 0xFFFF) - 0x8000 for pid in _ENCODERS)
+    left, right = (encoder_delta(first[pid], last[pid]) for pid in _ENCODERS)
     if left == right == 0:
         return ", the wheels still"
     return f", the wheels turning ({left:+d}/{right:+d} encoder counts, left/right)"

@@ -183,7 +183,7 @@ class RunSummary:
             f"{self.implausible_frames} out of range, {self.skipped_bytes} bytes skipped, "
             f"{self.unconfirmed_hazards} unconfirmed hazards",
             *([f"stalls       {self.stall_text()}"] if self.stalls else []),
-            *([f"link         {self.link_verdict()}"] if self.link_verdict() else []),
+            *([f"link         {link}"] if (link := self.link_verdict()) else []),
             *(
                 [
                     f"unread       {self.unread_gaps} gap(s) with no frame read, the longest "
