@@ -48,6 +48,7 @@ from operator import itemgetter
 from roomba_bt.oi.bits import BUMP_BITS, WHEEL_DROP_BITS
 from roomba_bt.oi.encode import Command
 from roomba_bt.oi.frames import BUMPS_PACKETS, CLIFF_PACKETS, FrameLayout, SensorFrame
+from roomba_bt.oi.opcodes import Effect
 
 _BUMP_PACKET = BUMPS_PACKETS[0]
 _PACKET_7_HAZARDS = BUMP_BITS | WHEEL_DROP_BITS  # 0b1111
@@ -86,6 +87,18 @@ def turns_a_wheel(command: Command) -> bool:
     if name in ("drive_direct", "drive_pwm"):
         return any(command.args)
     return False
+
+
+def sets_going(command: Command) -> bool:
+    """Whether a command sets the robot or a motor of it going: a wheel command that turns a
+    wheel (:func:`turns_a_wheel`), a built-in cycle (Clean, Spot, Max, Seek Dock: it drives
+    by itself, in Passive too), a Motors (138) or PWM Motors (144) that runs a brush or the
+    vacuum. What a tree's stop may not write (:meth:`CommandWriter.hold_motion
+    <roomba_bt.robot.writer.CommandWriter.hold_motion>`)."""
+    spec = command.spec
+    if spec.channel == "motors":
+        return any(command.args)
+    return turns_a_wheel(command) or spec.effect is Effect.BUILTIN_CYCLE
 
 
 class HazardConfirmation:

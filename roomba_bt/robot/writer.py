@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import logging
 from collections import deque
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import BAUD_RATES, Command
@@ -29,7 +29,7 @@ from roomba_bt.oi.opcodes import Effect
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
 from roomba_bt.robot.errors import ModeError, PortLost
-from roomba_bt.robot.hazards import drives_forward
+from roomba_bt.robot.hazards import drives_forward, sets_going
 from roomba_bt.robot.link import StreamLink
 from roomba_bt.robot.modes import ModeModel
 
@@ -75,6 +75,9 @@ class CommandWriter:
         #: frame, forward wheel commands are kept, not written; the one to send again after
         self.forward_held = False
         self.held_wheels: Command | None = None
+        #: while a tree is stopped (:meth:`hold_motion`): what is told of each command that
+        #: would set the robot going, which is not written; None: no such hold
+        self.motion_held: Callable[[Command], None] | None = None
 
     def send(self, command: Command) -> None:
         """Guard, then write ``command``'s bytes, then update the mode model.
@@ -125,6 +128,9 @@ class CommandWriter:
                 self.held_wheels = command
                 return
             self.held_wheels = None  # the tree wants something else now
+        if self.motion_held is not None and sets_going(command):
+            self.motion_held(command)  # a tree's stop sets nothing going: not written
+            return
         effect = spec.effect
         if effect is _STREAM:
             check_bandwidth(command.args[1:], self.baud)
@@ -214,6 +220,23 @@ class CommandWriter:
         if wheels is not None and drives_forward(wheels) and self.modes.mode in DRIVING_MODES:
             self.send(oi.halt())
             self.held_wheels = wheels
+
+    def hold_motion(self, held: Callable[[Command], None] | None) -> None:
+        """While a behaviour tree is stopped (each running node's ``terminate()``, before the
+        safe stop), a command that would set the robot going (:func:`sets_going
+        <roomba_bt.robot.hazards.sets_going>`: a wheel turning, a built-in cycle, a brush or
+        the vacuum) is not written, whichever way it came (``Connection.send`` straight from a
+        plugin's ``terminate``, a batch); ``held(command)`` is told of it. Drive 0, motors
+        off, a mode, a song, the LEDs are written as ever. ``None`` ends the hold.
+
+        Decided: held, not written and undone later. py_trees' ``terminate()`` is where a
+        behaviour stops what it started; a drive written there could only last until the
+        safe stop that follows the tree's stop, which is as long as the slowest terminate
+        blocks (a plugin's ``time.sleep``, a network call): the Open Interface has no
+        command timeout, so the robot drove on, unwatched, for that long. A tick guard
+        watching the stop would have stopped it only after its limit, and raising in the
+        terminate would skip the rest of its clean-up (its file, its socket)."""
+        self.motion_held = held
 
     def release_forward(self) -> Command | None:
         """The onset was confirmed or cleared: the hold ends. The forward command it kept (the

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import sys
 import time
 import traceback
 from collections.abc import Callable, Iterable, Sequence
@@ -72,6 +73,7 @@ from roomba_bt.runtime.teardown import (
     stop_nodes,
     terminate_raised,
     tree_running,
+    where_in,
 )
 from roomba_bt.runtime.tick_guard import TickGuardLike
 
@@ -364,18 +366,8 @@ class MissionRunner(BaseHandle):
             self._guard.release()
 
     def stop_tree(self, raised_in: py_trees.behaviour.Behaviour | None = None) -> list[str]:
-        """Stop the running tree (each running node's ``terminate``, every node even when one
-        raises: :func:`~roomba_bt.runtime.teardown.stop_nodes`) and drop what its leaves
-        queued on the way out: the safe stop that comes with it (the run's end, a reload from
-        the monitor) supersedes their halts, which Passive would refuse anyway. Its commands
-        no longer stand: nothing sends them again (a resume, the watchdog's recovery).
-        Returns what each ``terminate`` that raised says (each logged as a warning);
-        ``raised_in``: the node whose ``terminate`` raised in the tick that ended the run,
-        already said, is stopped without calling it again."""
-        failures = stop_nodes(self.mission.root, raised_in)
-        self._outbox.clear()
-        self.last_sent.clear()
-        return failures
+        """The running tree stopped (:func:`stop_running_tree`): the run's end, a reload."""
+        return stop_running_tree(self, raised_in)
 
     def _finish(
         self, summary: RunSummary, wall_start: float, raised_in: py_trees.behaviour.Behaviour | None
@@ -638,6 +630,42 @@ def tick_halted(runner: MissionRunner, seconds: float, where: str) -> None:
     )  # fmt: skip
     runner._ride.blocked = (seconds, summary.tick_halt_last)  # the frames it left unread
     runner._send_wheels_again()
+
+
+def stop_running_tree(
+    runner: MissionRunner, raised_in: py_trees.behaviour.Behaviour | None = None
+) -> list[str]:
+    """Stop the running tree (each running node's ``terminate``, every node even when one
+    raises: :func:`~roomba_bt.runtime.teardown.stop_nodes`) and drop what its leaves queued
+    on the way out: the safe stop that comes with it (the run's end, a reload from the
+    monitor) supersedes their halts, which Passive would refuse anyway. Meanwhile nothing
+    written sets the robot going (:meth:`CommandWriter.hold_motion
+    <roomba_bt.robot.writer.CommandWriter.hold_motion>`, :func:`held_in_stop`): a plugin's
+    terminate that wrote a drive straight to the connection and then blocked drove the robot
+    until the safe stop. Its commands no longer stand: nothing sends them again (a resume,
+    the watchdog's recovery). Returns what each ``terminate`` that raised says (each logged
+    as a warning); ``raised_in``: the node whose ``terminate`` raised in the tick that ended
+    the run, already said, is stopped without calling it again."""
+    writer = runner.connection.writer
+    writer.hold_motion(held_in_stop)
+    try:
+        failures = stop_nodes(runner.mission.root, raised_in)
+    finally:
+        writer.hold_motion(None)
+    runner._outbox.clear()
+    runner.last_sent.clear()
+    return failures
+
+
+def held_in_stop(command: Command) -> None:
+    """A command written while the tree was stopped that would have set the robot going: not
+    written (:func:`stop_running_tree`); said, with the behaviour that wrote it and where."""
+    who = where_in(sys._getframe(1)) or "a behaviour"
+    log.warning(
+        "%s sent %s (%d) %s while the tree was being stopped: not written (the tree's stop "
+        "sets nothing going: it would run on, unwatched, until the safe stop)",
+        who, command.spec.title, command.opcode, command.data.hex(" "),
+    )  # fmt: skip
 
 
 def stop_wheels_first(runner: MissionRunner, guard: InterruptGuard) -> bool:

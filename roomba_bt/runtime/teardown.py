@@ -6,7 +6,9 @@ A run (and the monitor's reload, which retires a tree) ends its tree in this ord
                             half of the safe stop, before any terminate() (one may block);
                             the tick guard's (runtime/tick_guard.py, halt_before_stop)
     stop_nodes(root)        every node stopped: its terminate() once, in py_trees' order;
-                            one that raises is noted, and the others are stopped all the same
+                            one that raises is noted, and the others are stopped all the same;
+                            nothing written meanwhile sets the robot going (the runner's
+                            stop_running_tree: CommandWriter.hold_motion)
     the safe stop           the runner's (drive 0, motors off, pause, Passive)
     shutdown_nodes(root)    every node's shutdown() (py_trees' BehaviourTree.shutdown), each
                             guarded: one that raises is logged, the others still run
@@ -23,6 +25,7 @@ import inspect
 import logging
 import traceback
 from collections.abc import Callable
+from types import FrameType
 from typing import Any
 
 import py_trees
@@ -185,6 +188,30 @@ def _guard_terminate(
 
     node.terminate = guarded  # type: ignore[method-assign]
     return None if class_own else usual
+
+
+def where_in(frame: FrameType | None) -> str:
+    """Where a thread whose innermost frame is ``frame`` is: in a behaviour
+    (:func:`behaviour_at`), else the innermost frame's line; "" without a frame."""
+    if frame is None:
+        return ""
+    return behaviour_at(frame) or f"at {frame.f_code.co_filename}:{frame.f_lineno}"
+
+
+def behaviour_at(frame: FrameType | None) -> str:
+    """The innermost frame from ``frame`` out that is a py_trees behaviour's method (its
+    ``self``), named, at its line: ``slow (Slow.terminate at plugin.py:12)``, the call that
+    blocks or writes, in the behaviour's own code; "" when none is."""
+    while frame is not None:
+        owner = frame.f_locals.get("self")
+        if isinstance(owner, py_trees.behaviour.Behaviour):
+            code = frame.f_code
+            return (
+                f"{owner.name} ({type(owner).__name__}.{code.co_name} at "
+                f"{code.co_filename}:{frame.f_lineno})"
+            )
+        frame = frame.f_back
+    return ""
 
 
 def note_stop_failures(summary: RunSummary, failures: list[str]) -> None:

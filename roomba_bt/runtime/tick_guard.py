@@ -20,7 +20,8 @@ unless the tick queued another: the mission goes on where it was.
 The run's end is guarded too (:meth:`TickGuard.halt_before_stop`): before the tree's stop,
 whose ``terminate()`` calls may block as an ``update`` may, the runner has the guard send the
 first half of the safe stop (drive 0, motors off) at once, in the main thread; the whole safe
-stop still follows the tree's stop (a ``terminate`` may itself write a command).
+stop still follows the tree's stop (a ``terminate`` may itself write a command, though none
+that sets the robot going again: ``CommandWriter.hold_motion``).
 
 Only a run on the wall clock has one (a robot's port, the real-time simulator); on the
 virtual clock the robot does not move while the host thinks. With ``--record`` each act is a
@@ -37,10 +38,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable, Iterable
-from types import FrameType
 from typing import Any, Protocol
-
-import py_trees
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import Command
@@ -48,6 +46,7 @@ from roomba_bt.oi.modes import DRIVING_MODES
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.hazards import turns_a_wheel
 from roomba_bt.runtime.summary import DEFAULT_TICK_LIMIT
+from roomba_bt.runtime.teardown import where_in
 
 log = logging.getLogger(__name__)
 
@@ -215,23 +214,8 @@ class TickGuard:
         return wheels_moving(self.connection)
 
     def _where(self) -> str:
-        """Where the ticking thread is: the innermost frame of a py_trees behaviour's method
-        (``self``), named, at its line (the call that blocks, in the behaviour's own code);
-        else the innermost frame's line; "" if the thread is gone."""
-        frame: FrameType | None = sys._current_frames().get(self._owner)
-        innermost = frame
-        while frame is not None:
-            owner = frame.f_locals.get("self")
-            if isinstance(owner, py_trees.behaviour.Behaviour):
-                code = frame.f_code
-                return (
-                    f"{owner.name} ({type(owner).__name__}.{code.co_name} at "
-                    f"{code.co_filename}:{frame.f_lineno})"
-                )
-            frame = frame.f_back
-        if innermost is None:
-            return ""
-        return f"at {innermost.f_code.co_filename}:{innermost.f_lineno}"
+        """Where the ticking thread is (:func:`where_in`); "" if the thread is gone."""
+        return where_in(sys._current_frames().get(self._owner))
 
 
 class RecordedTickGuard:

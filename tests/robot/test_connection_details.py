@@ -140,3 +140,26 @@ def test_counters_run_across_a_new_stream_request() -> None:
         while len(after) < 5:
             after += connection.poll(0.1)
         assert connection.counters.frames >= before + 5
+
+
+def test_a_hold_on_motion_writes_no_command_that_sets_the_robot_going() -> None:
+    """While a tree is stopped (CommandWriter.hold_motion), a wheel command that turns a
+    wheel, a built-in cycle and a motor turned on are not written, whichever way they come;
+    drive 0, motors off, a mode and the LEDs are; the hold's end writes them again."""
+    transport = SerialTransport.open("loop://")
+    connection = Connection(transport)
+    connection.send_many([oi.start(), oi.safe()])
+    held: list[oi.Command] = []
+    connection.writer.hold_motion(held.append)
+    going = [oi.drive(300, 32767), oi.drive_direct(0, 50), oi.motors(7), oi.pwm_motors(0, 0, 9)]
+    for command in going:
+        connection.send(command)
+    connection.send_many([oi.leds(0, 0, 0), oi.clean(), oi.halt(), oi.motors_off(), oi.full()])
+    assert held == [*going, oi.clean()]
+    assert connection.writer.last_wheels == oi.halt()
+    connection.writer.hold_motion(None)
+    connection.send(oi.drive(100, 32767))
+    sent = [oi.start(), oi.safe(), oi.leds(0, 0, 0), oi.halt(), oi.motors_off(), oi.full()]
+    expected = b"".join(c.data for c in [*sent, oi.drive(100, 32767)])
+    assert transport.read(0.1) == expected
+    connection.close()

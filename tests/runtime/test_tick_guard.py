@@ -280,6 +280,51 @@ def test_the_wheels_stop_before_a_terminate_at_the_runs_end(
     assert summary.tick_halts == 0
 
 
+#: SLOW_TERM whose terminate writes a drive and the brushes straight to the connection and
+#: then blocks 2 s (the simulator's robot streams on meanwhile)
+DRIVING_TERM = SLOW_TERM.replace(
+    "            self.SEEN.append(",
+    "            connection = self.robot.connection\n"
+    "            connection.send(commands.drive(300, 32767))\n"
+    "            connection.send(commands.motors(7))\n"
+    "            x, y = connection.transport.simulator.x, connection.transport.simulator.y\n"
+    "            connection.transport.advance(2.0)\n"
+    "            self.MOVED.append(abs(connection.transport.simulator.x - x)\n"
+    "                              + abs(connection.transport.simulator.y - y))\n"
+    "            self.SEEN.append(",
+).replace("    SEEN = []", "    SEEN, MOVED = [], []")
+
+
+@pytest.mark.parametrize("tick_limit", [0.25, None])
+def test_a_terminate_that_writes_a_drive_and_blocks_sets_nothing_going(
+    run_mission: RunMission,
+    tmp_path: Path,
+    caplog: pytest.LogCaptureFixture,
+    tick_limit: float | None,
+) -> None:
+    """A plugin's terminate() at the run's end writes a drive and the brushes straight to
+    the connection, then blocks 2 s: neither is written (the tree's stop sets nothing going,
+    CommandWriter.hold_motion), so the robot does not move meanwhile (it drove 0.6 m into
+    whatever was there), and the warning names the behaviour and its line."""
+    (tmp_path / "slowterm.py").write_text(DRIVING_TERM)
+    mission = "plugins: [./slowterm.py]\ntree:\n  sequence:\n    - mode: safe\n    - slow_term\n"
+    run = run_mission(
+        mission, tick_limit=tick_limit, permissions=Permissions(plugin_files=True), timeout=0.5
+    )
+    leaf = next(n for n in run.runner.mission.root.iterate() if type(n).__name__ == "SlowTerm")
+    assert run.summary.outcome.value == "timeout"
+    if tick_limit is not None:  # drive 0 went out before the terminate: the robot stood
+        assert type(leaf).MOVED == [0.0] and type(leaf).SEEN == [(0, 0)]  # type: ignore[attr-defined]
+    written = run.link.written
+    assert written.count(C.drive(300, 32767).data) == 1  # the leaf's own, at its start
+    assert C.motors(7).data not in written
+    assert written.endswith(C.drive(0, 0).data + C.motors_off().data + C.pause_stream().data
+                            + C.start().data)  # fmt: skip
+    held = [r.getMessage() for r in caplog.records if "not written" in r.getMessage()]
+    assert len(held) == 2 and all(h.startswith("slow_term (SlowTerm.terminate at ") for h in held)
+    assert "Drive (137) 89 01 2c 7f ff" in held[0] and "Motors (138) 8a 07" in held[1]
+
+
 def test_a_run_that_ended_with_its_tree_sends_no_drive_0_before_the_stop(
     run_mission: RunMission,
 ) -> None:
