@@ -19,7 +19,7 @@ import logging
 import os
 import signal
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from types import FrameType
 
 log = logging.getLogger(__name__)
@@ -105,6 +105,12 @@ def sigterm_raises() -> Iterator[None]:
 #: What the run is doing while it stops, as a Ctrl-C or SIGTERM meanwhile says it
 #: (:meth:`InterruptGuard.stopping`): the safe stop itself (the default)
 SAFE_STOP_UNDER_WAY = "the safe stop is under way"
+#: ... and what the run's reason says such a signal came during (``... during the safe stop``)
+THE_SAFE_STOP = "the safe stop"
+
+#: What a signal came during, as the run's reason says it: a text, or what makes it from the
+#: main thread's frame when the signal came (the behaviour it was in: a ``terminate()``)
+During = str | Callable[[FrameType | None], str]
 
 
 def _waiting(doing: str, raises: bool) -> bytes:
@@ -142,6 +148,7 @@ class InterruptGuard:
         self.hold = hold
         self.raises = raises
         self._waiting = _waiting(SAFE_STOP_UNDER_WAY, raises)
+        self._during: During = THE_SAFE_STOP
         #: False: no handler at all (an evaluation's worker process: its parent takes Ctrl-C
         #: and ends the workers, which have nothing driving to stop)
         self.enabled = enabled
@@ -159,14 +166,18 @@ class InterruptGuard:
         #: the first signal that came during the stop of a run no signal had ended (None:
         #: none did), for the runner to raise or report once the stop is done
         self.late: int | None = None
+        #: what the run was doing when :attr:`late` came (:meth:`stopping`'s ``during``)
+        self.late_during = THE_SAFE_STOP
         self.ignored = 0
         self._previous: dict[int, object] = {}
 
-    def stopping(self, doing: str = SAFE_STOP_UNDER_WAY) -> None:
+    def stopping(self, doing: str = SAFE_STOP_UNDER_WAY, during: During = THE_SAFE_STOP) -> None:
         """The run's stop begins, or its next step: from now on a signal waits for it, and
         the first one says ``doing`` (what the run does now: the tree's stop, the safe stop,
-        the nodes' shutdown)."""
+        the nodes' shutdown); ``during``: what the run's reason says a late one came during
+        (:attr:`late_during`; a callable is given the main thread's frame then)."""
         self._waiting = _waiting(doing, self.raises)
+        self._during = during
         self.stop_begun = True
 
     def _handle(self, signum: int, frame: FrameType | None) -> None:
@@ -174,6 +185,8 @@ class InterruptGuard:
             self.ignored += 1
             if not self.raised and self.late is None:
                 self.late = signum  # not lost: raised or reported once the stop is done
+                during = self._during
+                self.late_during = during(frame) if callable(during) else during
             if self.ignored == 1:
                 with contextlib.suppress(OSError):
                     os.write(2, self._waiting)

@@ -65,6 +65,7 @@ from roomba_bt.runtime.stall import StallRide
 from roomba_bt.runtime.summary import DEFAULT_GRACE, Outcome, RunSummary, profile_shown
 from roomba_bt.runtime.teardown import (
     behaviour_error,
+    during,
     note_late_interrupt,
     note_stop_failures,
     note_undelivered_stop,
@@ -87,6 +88,9 @@ STOPPING_THE_TREE = (
 )
 #: ... and while the nodes' ``shutdown()`` runs
 SHUTTING_DOWN = "the robot is stopped; the behaviours' shutdown() is under way"
+#: what the run's reason says a late signal came during (``Ctrl-C during the tree's stop, in
+#: slow (Slow.terminate at plugin.py:12)``; the safe stop's is ``THE_SAFE_STOP``)
+THE_TREES_STOP, THE_SHUTDOWN = "the tree's stop", "the behaviours' shutdown()"
 #: the actuator channels the robot stops when it falls to Passive by itself (a cliff, a wheel
 #: drop): their last commands no longer stand (:meth:`MissionRunner._fallback_changed`)
 FALL_STOPS = ("wheels", "motors")
@@ -300,7 +304,7 @@ class MissionRunner(BaseHandle):
         A Ctrl-C or SIGTERM is then raised again, the summary as its ``summary`` (a program's
         next mission must not drive after its operator's Ctrl-C), unless ``raise_interrupts``
         is False: the CLI and the evaluation read Outcome.INTERRUPTED (exit 130). One that
-        came during the safe stop or a node's ``shutdown()`` is raised too, once they are
+        came during the tree's stop, the safe stop or a ``shutdown()`` is raised too, once they are
         done (:func:`~roomba_bt.runtime.teardown.note_late_interrupt` says it).
 
         One run per runner (decided): a second raises RuntimeError (its summary, counters
@@ -347,7 +351,7 @@ class MissionRunner(BaseHandle):
         late = guard.late_interrupt()  # a signal during the stop and shutdown: not lost
         if interrupt is None and late is not None:
             interrupt = late
-            note_late_interrupt(summary, late)
+            note_late_interrupt(summary, late, guard.late_during)
         if interrupt is not None and raise_interrupts:  # the robot is stopped: now the caller
             interrupt.summary = summary  # type: ignore[attr-defined]
             raise interrupt
@@ -378,7 +382,7 @@ class MissionRunner(BaseHandle):
         guard.stopping(SAFE_STOP_UNDER_WAY)
         stop_robot(self.connection, summary, first)
         if self._sent_at_start is not None:  # set up: what its setup() opened, closed
-            guard.stopping(SHUTTING_DOWN)
+            guard.stopping(SHUTTING_DOWN, during(THE_SHUTDOWN))
             shutdown_nodes(self.mission.root)
         if self._blackboard is not None:
             with contextlib.suppress(Exception):
@@ -685,7 +689,7 @@ def stop_wheels_first(runner: MissionRunner, guard: InterruptGuard) -> bool:
         if first
         else f"the robot keeps its last wheel command ({runner.connection.activity()})"
     )
-    guard.stopping(STOPPING_THE_TREE.format(wheels=wheels))
+    guard.stopping(STOPPING_THE_TREE.format(wheels=wheels), during(THE_TREES_STOP))
     return first
 
 

@@ -32,7 +32,7 @@ import py_trees
 
 from roomba_bt.behaviours.lean import InvalidStatus
 from roomba_bt.oi.frames import MissingPacket
-from roomba_bt.robot.safety import Terminated, signal_reason
+from roomba_bt.robot.safety import THE_SAFE_STOP, Terminated, signal_reason
 from roomba_bt.runtime.summary import Outcome, RunSummary
 
 log = logging.getLogger(__name__)
@@ -214,6 +214,19 @@ def behaviour_at(frame: FrameType | None) -> str:
     return ""
 
 
+def during(phase: str) -> Callable[[FrameType | None], str]:
+    """What a signal that came during ``phase`` of a run's end (the tree's stop, the nodes'
+    ``shutdown()``) came during, as the run's reason says it (``InterruptGuard.stopping``):
+    ``phase``, and the behaviour whose method the main thread was in then, if it was in one
+    (``the tree's stop, in slow (Slow.terminate at plugin.py:12)``)."""
+
+    def said(frame: FrameType | None) -> str:
+        where = behaviour_at(frame)
+        return f"{phase}, in {where}" if where else phase
+
+    return said
+
+
 def note_stop_failures(summary: RunSummary, failures: list[str]) -> None:
     """A ``terminate`` that raised is a bug in a behaviour, as one in ``update`` is: a run
     that had gone well so far (success, failure, timeout, a replay's end) ends as an ERROR
@@ -241,15 +254,19 @@ def note_undelivered_stop(summary: RunSummary) -> None:
     summary.reason = f"the safe stop did not reach the robot (the run had ended: {was})"
 
 
-def note_late_interrupt(summary: RunSummary, interrupt: KeyboardInterrupt) -> None:
-    """A Ctrl-C or SIGTERM that came during the safe stop or a node's ``shutdown()`` of a run
-    no signal had ended (decided, ``docs/runtime.md``): a run that had ended well (success,
-    failure, timeout, a replay's end) is INTERRUPTED, exit 130, its reason saying how it had
-    ended, so that ``roomba-bt run a && roomba-bt run b`` does not start ``b`` after the
-    operator's Ctrl-C; one that had ended otherwise (an error, a lost link, the monitor's
-    stop) keeps its outcome and exit code, its reason followed by ``; then Ctrl-C ...``."""
+def note_late_interrupt(
+    summary: RunSummary, interrupt: KeyboardInterrupt, came_during: str = THE_SAFE_STOP
+) -> None:
+    """A Ctrl-C or SIGTERM that came during the end of a run no signal had ended, the tree's
+    stop, the safe stop or a node's ``shutdown()`` (``came_during`` says which, and in which
+    behaviour: ``InterruptGuard.late_during``; decided, ``docs/runtime.md``): a run that had
+    ended well (success, failure, timeout, a replay's end) is INTERRUPTED, exit 130, its
+    reason saying how it had ended, so that ``roomba-bt run a && roomba-bt run b`` does not
+    start ``b`` after the operator's Ctrl-C; one that had ended otherwise (an error, a lost
+    link, the monitor's stop) keeps its outcome and exit code, its reason followed by ``;
+    then Ctrl-C during ...``."""
     why = signal_reason(interrupt.signum) if isinstance(interrupt, Terminated) else "Ctrl-C"
-    said = f"{why} during the safe stop"
+    said = f"{why} during {came_during}"
     if summary.outcome in _CLEAN_ENDINGS:
         was = summary.outcome.value + (f": {summary.reason}" if summary.reason else "")
         summary.outcome, summary.reason = Outcome.INTERRUPTED, f"{said} (the run had ended: {was})"

@@ -137,3 +137,31 @@ tree:
           - {{name: safe again, mode: safe}}
           - wait: {wait}
 """
+
+
+#: a plugin's leaf: drives at 300 mm/s, and its terminate notes the wheel command the robot
+#: last had (tests/runtime/test_tick_guard.py, test_interrupts.py)
+SLOW_TERM = '''
+from py_trees.common import Status
+
+from roomba_bt.behaviours import Action, declare
+from roomba_bt.oi import commands
+from roomba_bt.oi.opcodes import opcodes
+
+@declare("slow_term", kind="action", sends=opcodes("drive"))
+class SlowTerm(Action):
+    """Drives; its terminate would block (a plugin's time.sleep): it notes the wheels then."""
+
+    SEEN = []  # the class's: nothing is set on a node
+
+    def start(self):
+        self.send(commands.drive(300, 32767))
+
+    def update(self):
+        return Status.RUNNING
+
+    def terminate(self, new_status):
+        if new_status == Status.INVALID:
+            self.SEEN.append(getattr(self.robot.connection.writer.last_wheels, "args", None))
+        super().terminate(new_status)
+'''

@@ -27,7 +27,7 @@ from roomba_bt.runtime.stack import RunStack, TreeMission
 from roomba_bt.runtime.summary import Outcome
 from roomba_bt.sim import Simulator, load_world
 
-from .simrun import SPIN, TapLink
+from .simrun import SLOW_TERM, SPIN, TapLink
 
 SAFE_END = oi.halt().data + oi.motors_off().data + oi.pause_stream().data + oi.start().data
 
@@ -149,6 +149,14 @@ def _late_stack(signum: int, during: str, done: list[str]) -> tuple[RunStack, Ta
     return RunStack(TreeMission(root, "late"), link, profile=CREATE2, timeout_s=5.0), link
 
 
+#: what the reason says a late signal came during: the phase, and the behaviour it came in
+_SAID = {
+    "safe stop": "the safe stop",
+    "shutdown": f"the behaviours' shutdown(), in closer (_SignalsAt.shutdown at {__file__}:"
+    f"{_SignalsAt.shutdown.__code__.co_firstlineno + 2})",
+}
+
+
 @pytest.mark.parametrize("during", ["shutdown", "safe stop"])
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_a_signal_during_the_stop_is_raised_once_the_stop_is_done(
@@ -165,7 +173,7 @@ def test_a_signal_during_the_stop_is_raised_once_the_stop_is_done(
     summary = caught.value.summary  # type: ignore[attr-defined]
     assert summary.outcome is Outcome.INTERRUPTED and summary.exit_code == 130
     why = "Ctrl-C" if signum == signal.SIGINT else "SIGTERM"
-    assert summary.reason == f"{why} during the safe stop (the run had ended: success)"
+    assert summary.reason == f"{why} during {_SAID[during]} (the run had ended: success)"
     assert done == ["shut down"]  # the stop and the shutdown were finished first
     assert link.written.endswith(SAFE_END) and summary.safe_stop.startswith("sent ")
     err = capfd.readouterr().err
@@ -181,7 +189,7 @@ def test_the_cli_reports_a_signal_during_the_stop_as_interrupted(
     stack, _link = _late_stack(signal.SIGINT, during, done)
     summary = stack.run(raise_interrupts=False)
     assert summary.outcome is Outcome.INTERRUPTED and summary.exit_code == 130
-    assert summary.reason == "Ctrl-C during the safe stop (the run had ended: success)"
+    assert summary.reason == f"Ctrl-C during {_SAID[during]} (the run had ended: success)"
     assert done == ["shut down"]
     assert "waiting for it to end (the summary follows)" in capfd.readouterr().err
 
@@ -253,7 +261,15 @@ def test_a_signal_during_the_trees_stop_says_the_tree_is_stopping(
     stack = RunStack(TreeMission(root, "t"), link, profile=CREATE2, timeout_s=0.3, tick_limit=0.25)
     runners.append(stack.runner)
     summary = stack.run(raise_interrupts=False)
-    assert summary.outcome is Outcome.INTERRUPTED
+    assert summary.outcome is Outcome.INTERRUPTED and summary.exit_code == 130
+    line = _SignalsOnTerminate.terminate.__code__.co_firstlineno + 2  # its os.kill
+    assert summary.reason == (
+        "Ctrl-C during the tree's stop, in slow_term (_SignalsOnTerminate.terminate at "
+        f"{__file__}:{line}) (the run had ended: timeout: --timeout 0.3 s of mission time "
+        "ran out in forward)"
+    ), summary.reason  # it said "during the safe stop", which had not begun
+    assert summary.safe_stop.startswith("drive 0, motors off before the tree's stop, then sent")
+    assert summary.stop_delivered
     assert seen == [(0, 0)]
     err = capfd.readouterr().err
     assert (
@@ -263,3 +279,40 @@ def test_a_signal_during_the_trees_stop_says_the_tree_is_stopping(
     ) in err, err
     assert "the safe stop is under way" not in err
     assert link.written.endswith(oi.halt().data + oi.motors_off().data + SAFE_END)
+
+
+#: a plugin leaf that drives until stopped; its terminate() at the run's end is where the
+#: operator's second Ctrl-C comes
+CTRL_C_IN_TERMINATE = SLOW_TERM.replace(
+    "            self.SEEN.append(",
+    "            os.kill(os.getpid(), signal.SIGINT)\n            self.SEEN.append(",
+).replace(
+    "from py_trees.common import Status",
+    "import os\nimport signal\n\nfrom py_trees.common import Status",
+)
+
+
+def test_the_cli_says_a_ctrl_c_in_a_terminate_came_during_the_trees_stop(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``roomba-bt run`` on the wall clock: the run times out, and a Ctrl-C comes while its
+    tree is stopped. The run still ends with its safe stop, exit 130, and its reason names the
+    tree's stop and the terminate() it came in (it said "during the safe stop")."""
+    from roomba_bt.cli import main
+
+    (tmp_path / "slowterm.py").write_text(CTRL_C_IN_TERMINATE)
+    mission = tmp_path / "m.yaml"
+    mission.write_text("plugins: [./slowterm.py]\ntree:\n  sequence: [{mode: safe}, slow_term]\n")
+    run = ["run", str(mission), "--allow-plugin-files", "--timeout", "0.3s", "--display", "none"]
+    assert main(run) == 130
+    said = capsys.readouterr()
+    text = said.out + said.err
+    line = CTRL_C_IN_TERMINATE.splitlines().index("            os.kill(os.getpid(), signal.SIGINT)")
+    assert (
+        f"Ctrl-C during the tree's stop, in slow_term (SlowTerm.terminate at "
+        f"{tmp_path / 'slowterm.py'}:{line + 1}) (the run had ended: timeout: "
+    ) in text, text
+    assert (
+        "safe stop    drive 0, motors off before the tree's stop, then sent drive, motors" in text
+    )
+    assert "during the safe stop" not in text

@@ -16,7 +16,7 @@ from roomba_bt.oi import commands as C
 from roomba_bt.robot.hazards import turns_a_wheel
 from roomba_bt.runtime.tick_guard import TickGuard
 
-from .simrun import RunMission
+from .simrun import SLOW_TERM, RunMission
 
 PLUGIN = '''
 import time
@@ -210,33 +210,6 @@ def test_the_monitor_shows_each_act_of_a_recorded_run(
     notes = [e.text for e in feed.events if e.kind == "note"]
     assert len(notes) == 1 and notes[0].startswith("tick guard: drive 0 while a tick ran over")
     assert "stuck (Stuck.update at " in notes[0] and "(1 so far)" in notes[0]
-
-
-#: drives at 300 mm/s, and its terminate notes the wheel command the robot last had
-SLOW_TERM = '''
-from py_trees.common import Status
-
-from roomba_bt.behaviours import Action, declare
-from roomba_bt.oi import commands
-from roomba_bt.oi.opcodes import opcodes
-
-@declare("slow_term", kind="action", sends=opcodes("drive"))
-class SlowTerm(Action):
-    """Drives; its terminate would block (a plugin's time.sleep): it notes the wheels then."""
-
-    SEEN = []  # the class's: nothing is set on a node
-
-    def start(self):
-        self.send(commands.drive(300, 32767))
-
-    def update(self):
-        return Status.RUNNING
-
-    def terminate(self, new_status):
-        if new_status == Status.INVALID:
-            self.SEEN.append(getattr(self.robot.connection.writer.last_wheels, "args", None))
-        super().terminate(new_status)
-'''
 
 
 def test_the_wheels_stop_before_a_terminate_at_the_runs_end(
