@@ -524,15 +524,18 @@ def test_a_reload_shuts_the_old_tree_down_and_the_run_s_end_the_new_one(
     assert shut == old + [f"new {node.name}" for node in new.root.iterate()]
 
 
+@pytest.mark.parametrize("brushes", [False, True])
 def test_a_resume_after_the_robot_s_own_fall_does_not_send_the_drive_from_before_it(
-    until: Callable[..., None], tmp_path: Path
+    until: Callable[..., None], tmp_path: Path, brushes: bool
 ) -> None:
     """Forward into a drop: the robot falls to Passive by itself (the cliff), the tree sees
     it and enters Safe again, a breakpoint pauses there. The resume sent Safe and then the
     forward Drive the tree had sent before the fall (the robot's last wheel command), so the
-    robot drove on over the edge before the tree's next tick. Only Safe is sent again."""
+    robot drove on over the edge before the tree's next tick. Only Safe is sent again: with
+    the brushes and vacuum on before the fall (``brushes``), not them either (the robot
+    stopped them as it fell)."""
     (tmp_path / "ledge.yaml").write_text(LEDGE)
-    (tmp_path / "edge.yaml").write_text(over_the_edge())
+    (tmp_path / "edge.yaml").write_text(over_the_edge(brushes=brushes))
     rig = Rig(mission=tmp_path / "edge.yaml", world=tmp_path / "ledge.yaml")
     safe_again = rig.node("safe again")
     rig.session.request("break", safe_again, "success")

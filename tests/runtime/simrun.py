@@ -120,15 +120,17 @@ robot:
 """
 
 
-def over_the_edge(wait: str = "1s") -> str:
+def over_the_edge(wait: str = "1s", brushes: bool = False) -> str:
     """A mission for :data:`LEDGE`: forward until the robot falls to Passive by itself (at
-    about 4.3 s), then, having seen the cliff, Safe again (``safe again``) and ``wait``."""
+    about 4.3 s), then, having seen the cliff, Safe again (``safe again``) and ``wait``;
+    ``brushes``: the main brush and the vacuum on before the drive."""
+    motors = "\n        - motors: {main_brush: true, vacuum: true}" if brushes else ""
     return f"""\
 mission: over the edge
 tree:
   fallback:
     - sequence:
-        - mode: safe
+        - mode: safe{motors}
         - drive: {{velocity: 200 mm/s, distance: 2 m}}
     - sequence:
         name: after the cliff

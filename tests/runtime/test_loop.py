@@ -2,16 +2,27 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import py_trees
 import pytest
 
 from roomba_bt.oi import commands as oi
+from roomba_bt.oi.bits import motor_bits
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.stream import StreamParser
+from roomba_bt.runtime.loop import MissionRunner
 from roomba_bt.runtime.summary import Outcome
 from roomba_bt.sim import Faults
 
-from .simrun import DRIVE_TO_WALL, DRIVE_TO_WALL_AND_BACK_OFF, SPIN, RunMission
+from .simrun import (
+    DRIVE_TO_WALL,
+    DRIVE_TO_WALL_AND_BACK_OFF,
+    LEDGE,
+    SPIN,
+    RunMission,
+    over_the_edge,
+)
 
 HALT = oi.halt().data
 MOTORS_OFF = oi.motors_off().data
@@ -333,3 +344,27 @@ def test_jitter_does_not_hide_frames_really_lost(run_mission: RunMission) -> Non
     assert exact.summary.frames_lost - 1 <= run.summary.frames_lost <= exact.summary.frames_lost
     assert exact.summary.frames_lost > 0
     assert run.summary.mission_time_s == pytest.approx(3.0, abs=0.1)
+
+
+def test_the_robot_s_own_fall_forgets_its_wheel_and_motor_commands(
+    run_mission: RunMission, tmp_path: Path
+) -> None:
+    """Brushes and vacuum on, forward into a drop: the robot falls to Passive by itself and
+    stops its wheels and its motors (the OI does both). From the tick that sees the fall the
+    run no longer holds either command as standing (``FALL_STOPS``), so neither a stall's
+    ride-through nor the monitor's resume sends it again; before the fall both stood."""
+    (tmp_path / "ledge.yaml").write_text(LEDGE)
+    mission = over_the_edge(brushes=True)
+    standing: list[tuple[bool, tuple[str, ...]]] = []
+
+    def observer(runner: MissionRunner) -> None:
+        fell = runner.snapshot.last_fallback is not None
+        standing.append((fell, tuple(sorted(c for c in runner.last_sent if c != "mode"))))
+
+    run = run_mission(mission, world=str(tmp_path / "ledge.yaml"), observer=observer)
+    assert run.summary.outcome is Outcome.SUCCESS, run.summary.reason
+    fell_at = next(i for i, (fell, _) in enumerate(standing) if fell)
+    assert standing[fell_at - 1] == (False, ("motors", "wheels"))  # both stood until the fall
+    assert all(channels == () for _, channels in standing[fell_at:]), standing[fell_at:]
+    on = oi.motors(motor_bits(main_brush=True, vacuum=True))
+    assert on.data in run.link.written  # the leaf's brushes and vacuum went out
