@@ -40,7 +40,7 @@ from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.errors import ConnectionFailed, LinkDown, ModeError, StreamStalled
-from roomba_bt.robot.hazards import HazardConfirmation, turns_a_wheel
+from roomba_bt.robot.hazards import HazardConfirmation, sets_going, turns_a_wheel
 from roomba_bt.robot.interface import (
     SLOT_SECONDS,
     BaseHandle,
@@ -676,13 +676,14 @@ def stop_wheels_first(runner: MissionRunner, guard: InterruptGuard) -> bool:
     """Before the tree's stop, whose ``terminate()`` calls may block (a plugin's
     ``time.sleep``): drive 0 and motors off, the first half of the safe stop, through the
     run's tick guard (a run on the wall clock; a replay's, as its record says), when a node
-    still runs and the wheels move. True if they were sent. ``guard`` is told what the run
-    does meanwhile, for a Ctrl-C that comes then."""
+    still runs and the wheels move or the tree's last Motors runs a brush or the vacuum. True
+    if they were sent. ``guard`` is told what the run does meanwhile, for a Ctrl-C then."""
     tick_guard = runner.tick_guard
+    motors = runner.last_sent.get("motors")
     first = (
         tick_guard is not None
         and tree_running(runner.mission.root)
-        and tick_guard.halt_before_stop()
+        and tick_guard.halt_before_stop(motors is not None and sets_going(motors))
     )
     wheels = (
         "drive 0 and motors off were sent"

@@ -70,10 +70,12 @@ def stop_first() -> list[Command]:
     return [oi.halt(), oi.motors_off()]
 
 
-def _send_stop_first(connection: Connection) -> bool:
-    """:func:`stop_first` if the wheels move (:func:`wheels_moving`); True if it was written.
-    A link already gone is no error here: the safe stop that follows says what became of it."""
-    if not wheels_moving(connection):
+def _send_stop_first(connection: Connection, motors_on: bool = False) -> bool:
+    """:func:`stop_first` if the wheels move (:func:`wheels_moving`) or, ``motors_on``, a brush
+    or the vacuum runs, in a mode that takes the stop; True if it was written. A link already
+    gone is no error here: the safe stop that follows says what became of it."""
+    motors = motors_on and connection.mode in DRIVING_MODES
+    if not motors and not wheels_moving(connection):
         return False
     try:
         connection.send_many(stop_first())
@@ -90,7 +92,7 @@ class TickGuardLike(Protocol):
 
     def start(self) -> None: ...
     def close(self) -> None: ...
-    def halt_before_stop(self) -> bool: ...
+    def halt_before_stop(self, motors_on: bool = False) -> bool: ...
     def guarded(
         self, tick: Callable[[], object], halted: Halted, index: Callable[[], int]
     ) -> Callable[[], None]: ...
@@ -140,12 +142,13 @@ class TickGuard:
         if self._thread.is_alive():
             self._thread.join()
 
-    def halt_before_stop(self) -> bool:
-        """The run ends with nodes still running and the wheels moving: drive 0 and motors off now
+    def halt_before_stop(self, motors_on: bool = False) -> bool:
+        """The run ends with nodes still running and the wheels moving (or, ``motors_on``, the
+        tree's last Motors running a brush or the vacuum): drive 0 and motors off now
         (:func:`stop_first`), before their ``terminate()``, which may block as a tick may (a
         plugin's ``time.sleep``); called in the main thread once the guard is closed. Noted
         in the record (``"at": "end"``) for a replay to do it again. True if it was sent."""
-        if not _send_stop_first(self.connection):
+        if not _send_stop_first(self.connection, motors_on):
             return False
         note = getattr(self.connection.transport, "note", None)
         if callable(note):
@@ -238,10 +241,10 @@ class RecordedTickGuard:
     def close(self) -> None:
         pass
 
-    def halt_before_stop(self) -> bool:
+    def halt_before_stop(self, motors_on: bool = False) -> bool:
         """As the recorded run did at its end: drive 0 and motors off before the tree's stop
         when its record says so (its ``"at": "end"`` note)."""
-        return self._at_end and _send_stop_first(self.connection)
+        return self._at_end and _send_stop_first(self.connection, motors_on)
 
     def guarded(
         self, tick: Callable[[], object], halted: Halted, index: Callable[[], int]

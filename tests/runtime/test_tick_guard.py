@@ -298,6 +298,23 @@ def test_a_terminate_that_writes_a_drive_and_blocks_sets_nothing_going(
     assert "Drive (137) 89 01 2c 7f ff" in held[0] and "Motors (138) 8a 07" in held[1]
 
 
+def test_the_brushes_stop_before_a_terminate_at_the_runs_end_with_the_wheels_at_rest(
+    run_mission: RunMission,
+) -> None:
+    """The wheels at rest, the brushes and vacuum on, a node still running when the run
+    ends: drive 0 and motors off go out before the tree's stop too (a terminate that
+    blocked left the brushes running for as long), then the safe stop."""
+    run = run_mission(
+        "tree:\n  sequence:\n    - mode: safe\n"
+        "    - motors: {main_brush: true, vacuum: true}\n    - wait: 10s\n",
+        tick_limit=0.25, timeout=0.5,
+    )  # fmt: skip
+    assert run.summary.outcome.value == "timeout"
+    first = C.drive(0, 0).data + C.motors_off().data
+    assert run.link.written.endswith(first + first + C.pause_stream().data + C.start().data)
+    assert run.summary.safe_stop.startswith("drive 0, motors off before the tree's stop, then")
+
+
 def test_a_run_that_ended_with_its_tree_sends_no_drive_0_before_the_stop(
     run_mission: RunMission,
 ) -> None:
