@@ -286,12 +286,15 @@ _HALT = encode(137, 0, 0)
 
 
 def turns_wheels(command: Command) -> bool:
-    """Whether a wheel command (``spec.drives_wheels``) sets the wheels turning: Drive (137)
-    with a velocity (its radius alone moves nothing: ``[137][0][0][128][0]`` stands still),
-    Drive Direct (145) or Drive PWM (146) with either wheel's value."""
-    if command.spec.opcode == _HALT.opcode:
+    """Whether a command sets the wheels turning: Drive (137) with a velocity (its radius
+    alone moves nothing: ``[137][0][0][128][0]`` stands still), Drive Direct (145) or Drive
+    PWM (146) with either wheel's value; any other command (``spec.drives_wheels`` false)
+    turns none. The one rule for the behaviours' halt, the tick guard, the run's wheels sent
+    again and the tree's stop (``robot.hazards.sets_going``)."""
+    spec = command.spec
+    if spec.opcode == _HALT.opcode:
         return command.args[0] != 0
-    return any(command.args)
+    return any(command.args) and spec.drives_wheels
 
 
 def motors(motor_bits: int) -> Command:

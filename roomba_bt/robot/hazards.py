@@ -46,7 +46,7 @@ from collections.abc import Callable
 from operator import itemgetter
 
 from roomba_bt.oi.bits import BUMP_BITS, WHEEL_DROP_BITS
-from roomba_bt.oi.encode import Command
+from roomba_bt.oi.encode import Command, turns_wheels
 from roomba_bt.oi.frames import BUMPS_PACKETS, CLIFF_PACKETS, FrameLayout, SensorFrame
 from roomba_bt.oi.opcodes import Effect
 
@@ -78,27 +78,16 @@ def drives_forward(command: Command) -> bool:
     return False
 
 
-def turns_a_wheel(command: Command) -> bool:
-    """Whether a wheel command turns a wheel: Drive (137) at a velocity other than 0 (any
-    radius), Drive Direct (145) or Drive PWM (146) with a wheel not at 0."""
-    name = command.spec.name
-    if name == "drive":
-        return command.args[0] != 0
-    if name in ("drive_direct", "drive_pwm"):
-        return any(command.args)
-    return False
-
-
 def sets_going(command: Command) -> bool:
     """Whether a command sets the robot or a motor of it going: a wheel command that turns a
-    wheel (:func:`turns_a_wheel`), a built-in cycle (Clean, Spot, Max, Seek Dock: it drives
-    by itself, in Passive too), a Motors (138) or PWM Motors (144) that runs a brush or the
-    vacuum. What a tree's stop may not write (:meth:`CommandWriter.hold_motion
+    wheel (:func:`~roomba_bt.oi.encode.turns_wheels`), a built-in cycle (Clean, Spot, Max,
+    Seek Dock: it drives by itself, in Passive too), a Motors (138) or PWM Motors (144) that
+    runs a brush or the vacuum. What a tree's stop may not write (:meth:`CommandWriter.hold_motion
     <roomba_bt.robot.writer.CommandWriter.hold_motion>`)."""
     spec = command.spec
     if spec.channel == "motors":
         return any(command.args)
-    return turns_a_wheel(command) or spec.effect is Effect.BUILTIN_CYCLE
+    return turns_wheels(command) or spec.effect is Effect.BUILTIN_CYCLE
 
 
 class HazardConfirmation:

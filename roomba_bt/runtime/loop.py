@@ -32,7 +32,7 @@ from roomba_bt.behaviours.actions import Wait
 from roomba_bt.behaviours.lean import Direct
 from roomba_bt.behaviours.reasons import failure_reason
 from roomba_bt.mission import RUNTIME_PACKETS
-from roomba_bt.oi.encode import Command
+from roomba_bt.oi.encode import Command, turns_wheels
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.frames import BATTERY_PACKETS, SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
@@ -40,7 +40,7 @@ from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.errors import ConnectionFailed, LinkDown, ModeError, StreamStalled
-from roomba_bt.robot.hazards import HazardConfirmation, sets_going, turns_a_wheel
+from roomba_bt.robot.hazards import HazardConfirmation, sets_going
 from roomba_bt.robot.interface import (
     SLOT_SECONDS,
     BaseHandle,
@@ -480,7 +480,7 @@ class MissionRunner(BaseHandle):
         wheels = self.last_sent.get("wheels")
         if (
             wheels is not None
-            and turns_a_wheel(wheels)
+            and turns_wheels(wheels)
             and self.connection.mode in DRIVING_MODES
             and all(c.spec.channel != "wheels" for c in self._outbox)
         ):

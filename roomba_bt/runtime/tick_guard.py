@@ -41,10 +41,9 @@ from collections.abc import Callable, Iterable
 from typing import Any, Protocol
 
 from roomba_bt.oi import commands as oi
-from roomba_bt.oi.encode import Command
+from roomba_bt.oi.encode import Command, turns_wheels
 from roomba_bt.oi.modes import DRIVING_MODES
 from roomba_bt.robot.connection import Connection
-from roomba_bt.robot.hazards import turns_a_wheel
 from roomba_bt.runtime.summary import DEFAULT_TICK_LIMIT
 from roomba_bt.runtime.teardown import where_in
 
@@ -61,7 +60,7 @@ AT_THE_END = "the run's end, before the tree's stop"
 def wheels_moving(connection: Connection) -> bool:
     """The last wheel command drives, in a mode where the robot obeys it."""
     wheels = connection.writer.last_wheels
-    return wheels is not None and turns_a_wheel(wheels) and connection.mode in DRIVING_MODES
+    return wheels is not None and turns_wheels(wheels) and connection.mode in DRIVING_MODES
 
 
 def stop_first() -> list[Command]:

@@ -13,7 +13,7 @@ import pytest
 from roomba_bt.cli import main
 from roomba_bt.mission import Permissions
 from roomba_bt.oi import commands as C
-from roomba_bt.robot.hazards import turns_a_wheel
+from roomba_bt.oi.encode import turns_wheels
 from roomba_bt.runtime.tick_guard import TickGuard
 
 from .simrun import SLOW_TERM, RunMission
@@ -106,11 +106,11 @@ def test_a_slow_tick_with_the_wheels_at_rest_sends_nothing(
     assert not any(data[:1] == HALT[:1] for _, data in run.link.writes[:-4])
 
 
-def test_turns_a_wheel() -> None:
-    assert turns_a_wheel(C.drive(100, 32768)) and turns_a_wheel(C.drive(-50, 1))
-    assert not turns_a_wheel(C.drive(0, 32767)) and not turns_a_wheel(C.drive(0, 0))
-    assert turns_a_wheel(C.drive_direct(0, 10)) and not turns_a_wheel(C.drive_direct(0, 0))
-    assert turns_a_wheel(C.drive_pwm(0, -5)) and not turns_a_wheel(C.safe())
+def test_turns_wheels() -> None:
+    assert turns_wheels(C.drive(100, 32768)) and turns_wheels(C.drive(-50, 1))
+    assert not turns_wheels(C.drive(0, 32767)) and not turns_wheels(C.drive(0, 0))
+    assert turns_wheels(C.drive_direct(0, 10)) and not turns_wheels(C.drive_direct(0, 0))
+    assert turns_wheels(C.drive_pwm(0, -5)) and not turns_wheels(C.safe())
 
 
 def test_the_cli_guards_wall_clock_runs_only(
