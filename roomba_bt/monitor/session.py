@@ -128,6 +128,8 @@ class MonitorSession:
         #: the stream's tick at which a paused robot that sleeps in Passive (no keep-awake)
         #: is warned of (None: not paused, warned already, or it does not sleep)
         self._sleep_warn_tick: int | None = None
+        #: each forced node's entry in the summary's ``forced``, until it is released
+        self._forcing: dict[int, int] = {}
         self.listeners: list[Callable[[str], None]] = []  # told of pauses (the terminal)
 
     # ---------------------------------------------------------------- any thread
@@ -390,6 +392,26 @@ class MonitorSession:
             text = f"{name} forced to {status.value}"
         self._said(runner, "force", text)
         _note(runner, {"force": name, "node": index, "to": value, "at": "before"})
+        self._summarise_force(
+            runner, index, f"{name} to {value.upper()}" if value != "none" else ""
+        )
+
+    def _summarise_force(self, runner: MissionRunner, index: int, forced: str) -> None:
+        """Every force into the summary (``forced``: "NAME to SUCCESS", or "" for a release),
+        with its ticks: it named only one still forced at the end, and a SUCCESS forced and
+        released before it went unsaid, though the run may have turned on it."""
+        entries = runner.summary.forced
+        at = (
+            f"tick {runner.snapshot.tick} (t={runner.snapshot.time:.3f} s)"
+            if runner.has_snapshot
+            else "the start"
+        )
+        was = self._forcing.pop(index, None)
+        if was is not None:
+            entries[was] += f", {'released' if not forced else 'until'} at {at}"
+        if forced:
+            self._forcing[index] = len(entries)
+            entries.append(f"{forced} at {at}")
 
     def _check_breakpoints(self, runner: MissionRunner, changed: tuple[int, ...]) -> None:
         record = self.feed.latest()
@@ -435,6 +457,8 @@ class MonitorSession:
         # its name too, where a renamed one is shown: the page's header and the summary
         runner.summary.mission = self.feed.mission_name = mission.name
         setup_tree(mission.root, lambda: mission.setup(runner))  # what shutdown_nodes closes
+        for index in list(self._forcing):  # the nodes are gone: released with them
+            self._summarise_force(runner, index, "")
         self.state.forced.clear()
         self.state.breakpoints.clear()
         self._held_end = None

@@ -3,7 +3,7 @@ run."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from enum import Enum, IntEnum
 from typing import TYPE_CHECKING
 
@@ -136,6 +136,9 @@ class RunSummary:
     #: the robot profile, said when it is not the default (``roomba500 (Roomba 500 series)``;
     #: "" for the default, whose summary reads as it always did)
     profile: str = ""
+    #: every condition the operator forced from the monitor (what, to what, from which tick,
+    #: until which), released before the end too: the run may have turned on one
+    forced: list[str] = field(default_factory=list)
 
     @property
     def exit_code(self) -> int:
@@ -175,6 +178,7 @@ class RunSummary:
             f"mission      {self.mission}",
             *([f"profile      {self.profile}"] if self.profile else []),
             f"outcome      {self.outcome.value.upper()}{reason}",
+            *([f"forced       by the operator: {'; '.join(self.forced)}"] if self.forced else []),
             f"duration     {self.mission_time_s:.2f} s mission time, {self.wall_time_s:.2f} s wall",
             f"ticks        {self.ticks} ({self.overruns} overruns > 15 ms, "
             f"slowest {self.max_tick_s * 1000:.2f} ms)",

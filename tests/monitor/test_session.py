@@ -584,6 +584,45 @@ def test_a_success_a_forced_condition_caused_says_so_in_the_summary(tmp_path: Pa
     assert "outcome      SUCCESS (low battery: forced to SUCCESS by the operator)" in str(summary)
 
 
+def test_every_force_is_in_the_summary_one_released_before_the_end_too(
+    tmp_path: Path, until: Callable[..., None]
+) -> None:
+    """Only a condition still forced at the end was named in the summary: one forced to
+    SUCCESS and released before it went unsaid, though the run may have turned on it. Each
+    is said, with the ticks the record gives it, and again by the record's replay."""
+    record_path = tmp_path / "released.jsonl"
+    rig = Rig(record=record_path)
+    no_bump, no_cliff = rig.node("no bump"), rig.node("no cliff")
+
+    def operator(rig: Rig) -> None:
+        until(lambda: rig.ticks(ticked=True) > 50)
+        rig.session.request("force", no_bump, "success")
+        until(lambda: no_bump in rig.session.state.forced)
+        until(lambda: rig.ticks(ticked=True) > 100)
+        rig.session.request("force", no_bump, "none")
+        rig.session.request("force", no_cliff, "success")
+        until(lambda: list(rig.session.state.forced) == [no_cliff])
+        until(lambda: rig.ticks(ticked=True) > 150)
+        rig.session.request("stop")
+
+    summary = rig.run_with(operator)
+    rig.stack.close()
+    assert summary.outcome is Outcome.INTERRUPTED
+    record = load_record(record_path)
+    on, off, cliff = (note["tick"] for _, note in record.notes if "force" in note)
+    assert off == cliff and off > on
+    first, second = summary.forced
+    assert first.startswith(f"no bump to SUCCESS at tick {on} (t=")
+    assert f"released at tick {off} (t=" in first
+    assert second.startswith(f"no cliff to SUCCESS at tick {cliff} (t=")
+    assert "released" not in second  # forced to the end
+    assert f"forced       by the operator: {first}; {second}" in str(summary).splitlines()
+    _, replayed = replay_into_feed(
+        record, load_mission(SHUTTLE, {}, profile=CREATE2), CREATE2, rig.packets, 115200, "x"
+    )
+    assert replayed.forced == summary.forced
+
+
 def test_the_operator_s_acts_are_on_the_page_at_the_tick_the_log_and_the_record_say(
     until: Callable[..., None], tmp_path: Path
 ) -> None:
