@@ -260,13 +260,20 @@ class LiveMonitor:
                     key = os.read(fd, 1).decode(errors="replace").lower()
                 except OSError:  # the terminal gone, or read from the background (EIO)
                     return
-                action = actions.get(key)
-                if action is None:
-                    continue
-                with contextlib.suppress(ValueError):  # e.g. resume when not paused
-                    self.session.request(action)
+                self._key(key, actions.get(key))
         finally:
             termios.tcsetattr(fd, termios.TCSADRAIN, saved)
+
+    def _key(self, key: str, action: str | None) -> None:
+        """One key's request; a key that does nothing (one not listed, ``r`` while running)
+        says why on a status line: it was passed over without a word."""
+        if action is None:
+            log.info("monitor: key %r does nothing (%s)", key, KEYS_HELP)
+            return
+        try:
+            self.session.request(action)
+        except ValueError as exc:  # ControlRefused: e.g. resume when not paused
+            log.info("monitor: key %s (%s) refused: %s", key, action, exc)
 
 
 def in_foreground(fd: int) -> bool:

@@ -84,3 +84,23 @@ def test_p_pauses_r_resumes_q_stops_and_the_terminal_is_given_back(tmp_path: Pat
     # the operator's acts; the tick guard's drive 0 before the tree's stop, if the wheels
     # turned at the stop, is a note of its own
     assert [act for act in _acts(record) if act != "tick_guard"] == ["pause", "resume"]
+
+
+def test_a_key_that_does_nothing_says_why(tmp_path: Path) -> None:
+    """``r`` while running and a key that is none of the four were passed over without a
+    word; each gets a status line."""
+    run = Terminal(
+        "run", str(SHUTTLE), "--monitor", "127.0.0.1:0", "--display", "log",
+        "--timeout", "60s", cwd=tmp_path,
+    )  # fmt: skip
+    run.until("keys: p pause, r resume, n step, q stop")
+    run.until("drive(velocity=100 mm/s, distance=3 cm) -> RUNNING")
+    run.type("r")
+    run.until("monitor: key r (resume) refused: the run is not paused")
+    run.type("n")
+    run.until("monitor: key n (step) refused: step needs a paused run: pause first")
+    run.type("x")
+    run.until("monitor: key 'x' does nothing (keys: p pause, r resume, n step, q stop)")
+    run.type("q")
+    run.until("outcome      INTERRUPTED (stopped by the operator)")
+    assert run.wait() == 130
