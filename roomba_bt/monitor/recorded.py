@@ -19,7 +19,7 @@ from collections import deque
 from typing import TYPE_CHECKING, Any
 
 from roomba_bt.monitor.feed import RunFeed
-from roomba_bt.monitor.session import MonitorSession
+from roomba_bt.monitor.session import STEP, MonitorSession
 from roomba_bt.runtime.loop import StopRequested
 from roomba_bt.runtime.recording import Record
 from roomba_bt.runtime.stack import replay_record
@@ -91,7 +91,10 @@ class ReplayedActs(MonitorSession):
             if "pause" in act and not self.state.paused:
                 self._pause(runner, str(act["pause"]), half)
             elif "resume" in act and self.state.paused:
-                self._resume(runner, str(act["resume"]))
+                if act["resume"] == STEP:  # a step, as live: the clock held after its tick
+                    self._step(runner)
+                else:
+                    self._resume(runner, str(act["resume"]))
             elif "force" in act and isinstance(act.get("node"), int):
                 if 0 <= act["node"] < len(self.feed.nodes) and act.get("to") in (
                     "success", "failure", "none",

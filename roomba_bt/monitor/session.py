@@ -44,6 +44,8 @@ BREAK_ON = ("start", "success", "failure", "end")
 
 log = logging.getLogger(__name__)
 
+#: the resume's reason that makes it a step (the record's note says it: a replay steps too)
+STEP = "one step"
 FORCEABLE = {"success": Status.SUCCESS, "failure": Status.FAILURE}
 #: an OI robot's sleep after this long in Passive (keep-awake's BRC pulses prevent it)
 ROBOT_SLEEPS_S = 300.0
@@ -188,7 +190,6 @@ class MonitorSession:
             return False
         if self._steps_left is not None and not self.state.paused:
             if self._steps_left == 0:
-                self._steps_left = None
                 self._pause(runner, "stepped one tick")
             else:
                 self._steps_left -= 1
@@ -204,6 +205,8 @@ class MonitorSession:
         return True
 
     def after_tick(self, runner: MissionRunner) -> None:
+        if self._steps_left == 0:  # a step's tick: its pause comes with the next frame,
+            runner.clock_held = True  # whose 15 ms the tree does not run (one step, one frame)
         changed = self.feed.observe(runner)
         if changed and self.state.breakpoints:
             self._check_breakpoints(runner, changed)
@@ -248,8 +251,7 @@ class MonitorSession:
             elif req.action == "resume" and state.paused:
                 self._resume(runner, "resumed by the operator")
             elif req.action == "step" and state.paused:
-                self._resume(runner, "one step")
-                self._steps_left = 1  # the next frame's tick, then pause before the one after
+                self._step(runner)
             elif req.action == "stop":
                 self._stop = "stopped by the operator"
                 self._said(runner, "control", "stop: the run ends (as on Ctrl-C)")
@@ -273,6 +275,7 @@ class MonitorSession:
         frame (before or after its tick) it happened, for the record's replay."""
         if noted:
             _note(runner, {"pause": why, "at": at})
+        self._steps_left = None  # a step's pause, or one that came first (a breakpoint)
         connection = runner.connection
         mode = connection.mode
         self._mode_before_pause = mode if mode in (OIMode.SAFE, OIMode.FULL) else None
@@ -298,6 +301,13 @@ class MonitorSession:
         for listener in self.listeners:
             with contextlib.suppress(Exception):
                 listener(why)
+
+    def _step(self, runner: MissionRunner) -> None:
+        """Resume, tick once, pause again: the next frame ticks (after the one that shows the
+        mode back) and the pause comes before the one after, which mission time leaves out
+        (:meth:`after_tick`): one step is one 15 ms frame of mission time, not two."""
+        self._resume(runner, STEP)
+        self._steps_left = 1
 
     def _warn_of_sleep(self, runner: MissionRunner) -> None:
         """The pause has lasted :data:`SLEEP_WARNING_S` on a link without keep-awake: an OI
@@ -436,7 +446,6 @@ class MonitorSession:
                 self._said(
                     runner, "breakpoint", f"breakpoint: {name} {_on(on)} at tick {record.tick}"
                 )
-                self._steps_left = None
                 self._pause(runner, f"breakpoint: {name} {_on(on)}", at="after")
                 return
 

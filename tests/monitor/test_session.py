@@ -298,6 +298,46 @@ def test_a_breakpoint_on_an_ending_pauses_after_that_tick_and_step_ticks_once(
     assert "breakpoint: drive(velocity=100 mm/s, distance=3 cm) ends in SUCCESS at tick" in texts[1]
 
 
+def test_a_step_is_one_frame_of_mission_time_live_and_replayed(
+    tmp_path: Path, until: Callable[..., None]
+) -> None:
+    """A step ticks the tree once: mission time moved two frames (0.03 s), the tick's and
+    the one its pause came with, where one step is one 15 ms frame. The record's replay
+    steps alike."""
+    record_path = tmp_path / "stepped.jsonl"
+    rig = Rig(mission=WAIT_THEN_DRIVE, record=record_path)
+    wait = rig.node("one second")
+    rig.session.request("break", wait, "start")
+
+    def stepped() -> int:
+        return sum(e.text.startswith("pause (stepped one tick)") for e in rig.feed.events)
+
+    def operator(rig: Rig) -> None:
+        until(lambda: rig.session.state.paused)
+        for done in range(1, 4):
+            rig.session.request("step")
+            until(lambda done=done: stepped() == done)
+        rig.session.request("resume")
+
+    summary = rig.run_with(operator)
+    rig.stack.close()
+    assert summary.outcome is Outcome.SUCCESS
+    records = rig.feed.since(0)[0]
+    hit = next(r for r in records if r.statuses[wait] == "R")
+    steps = [r for r in records if r.ticked and r.seq > hit.seq][:3]
+    times = [round(r.time - hit.time, 6) for r in (hit, *steps)]
+    assert times == [0.0, 0.015, 0.03, 0.045]
+    held = {
+        round(r.time, 6) for r in records if not r.ticked and steps[0].seq < r.seq < steps[1].seq
+    }
+    assert held == {round(steps[0].time, 6)}  # paused after it: the step's own time
+    replayed, _ = replay_into_feed(
+        load_record(record_path), load_mission(WAIT_THEN_DRIVE, {}, profile=CREATE2), CREATE2,
+        rig.packets, 115200, "x",
+    )  # fmt: skip
+    assert _ticks(replayed)[: len(records) - 1] == _ticks(rig.feed)[:-1]
+
+
 def test_a_breakpoint_on_the_last_tick_holds_the_ended_mission_until_the_resume(
     tmp_path: Path, until: Callable[..., None]
 ) -> None:
