@@ -65,12 +65,18 @@ QUERY_TIMEOUT_S = 0.3
 
 def asleep_by_idle(connection: Connection) -> RobotAsleep | None:
     """Asleep by the OI's rule: Passive, a profile that sleeps, and nothing from us (no
-    command, no BRC pulse) for the five minutes it waits before sleeping."""
+    command, no BRC pulse) for the five minutes it waits before sleeping. A stop written then
+    meets a robot asleep, deaf until a BRC pulse: unconfirmed, said so (it was said as a line
+    silent for half a second, as if the cable had failed)."""
     if not connection.profile.sleeps_in_passive or connection.mode is not OIMode.PASSIVE:
         return None
     idle = connection.transport.now() - connection.idle_since
     if idle < SLEEP_AFTER_S:
         return None
+    connection.unheard = (
+        f"the robot was asleep ({idle:.0f} s in Passive with nothing from us; asleep, it hears "
+        "nothing until a BRC pulse)"
+    )
     return RobotAsleep(
         connection.name, idle, keep_awake=connection.keep_awake, pulses=_pulses(connection)
     )

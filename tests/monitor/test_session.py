@@ -19,11 +19,13 @@ from roomba_bt.monitor.recorded import replay_into_feed
 from roomba_bt.monitor.session import ControlRefused, MonitorSession
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.robot import silence
 from roomba_bt.runtime.loop import MissionRunner
 from roomba_bt.runtime.recording import load_record
 from roomba_bt.runtime.stack import Recording, RunStack
 from roomba_bt.runtime.summary import Outcome, RunSummary
 from roomba_bt.sim import SimLink, Simulator, load_world
+from roomba_bt.sim import robot as sim_robot
 
 HERE = Path(__file__).resolve().parent
 SHUTTLE = HERE / "missions" / "shuttle.yaml"
@@ -751,3 +753,28 @@ def test_a_long_pause_without_keep_awake_is_warned_of_before_the_robot_sleeps(
         assert "without keep-awake" in str(seen["reason"])
     else:
         assert warnings == [] and seen["reason"] == "paused by the operator"
+
+
+def test_a_pause_the_robot_fell_asleep_in_says_the_stop_met_a_sleeping_robot(
+    until: Callable[..., None], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A pause on a link without keep-awake, the robot asleep after its minutes in Passive
+    (here 3 s): the run ends, connection lost (exit 3), and its summary said the stop was
+    unconfirmed because "the robot had sent no valid frame for 0.51 s before it", as if the
+    line had failed. It says what is known: the stop was written to a robot asleep."""
+    monkeypatch.setattr(silence, "SLEEP_AFTER_S", 3.0)
+    monkeypatch.setattr(sim_robot, "PASSIVE_SLEEP_SECONDS", 3.0)
+    rig = Rig(keep_awake=False)
+
+    def operator(rig: Rig) -> None:
+        until(lambda: rig.ticks(ticked=True) > 50)
+        rig.session.request("pause")
+        rig.ended.wait(30)
+
+    summary = rig.run_with(operator)
+    assert rig.sim.asleep
+    assert summary.outcome is Outcome.CONNECTION_LOST and summary.exit_code == 3
+    assert "the robot fell asleep" in summary.reason
+    assert summary.safe_stop.startswith("NOT DELIVERED: last seen in Passive stopped; ")
+    assert "the stop was written but is unconfirmed: the robot was asleep" in summary.safe_stop
+    assert "no valid frame" not in summary.safe_stop

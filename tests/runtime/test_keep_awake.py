@@ -62,6 +62,9 @@ def test_without_keep_awake_it_sleeps_and_is_reported_asleep(tmp_path: Path) -> 
     assert "drop --no-keep-awake" in summary.reason
     assert "release-3.8.2 / release-stm32-3.7.7" in summary.reason
     assert "no valid sensor frame" not in summary.reason
+    # the stop met the robot asleep, and says so (not "no valid frame for 0.5 s")
+    assert "unconfirmed: the robot was asleep (300 s in Passive" in summary.safe_stop
+    assert summary.exit_code == 3
 
 
 def _patrol(keep_awake: bool | None) -> tuple[RunSummary, Simulator]:
