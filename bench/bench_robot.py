@@ -28,11 +28,12 @@ from collections.abc import Callable, Iterator
 import serial
 
 from roomba_bt.oi import commands as oi
-from roomba_bt.oi.encode import Radius
+from roomba_bt.oi.encode import Radius, decode_command
 from roomba_bt.oi.frames import layout_for
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.oi.stream import StreamParser
 from roomba_bt.robot.connection import Connection
+from roomba_bt.transport.base import Transport
 from roomba_bt.transport.serial_port import SerialTransport
 from roomba_bt.transport.testing import NullTransport
 
@@ -98,9 +99,27 @@ def _loop_port() -> Iterator[serial.SerialBase]:
         port.close()
 
 
+@contextlib.contextmanager
+def _robotless(transport: Transport, watchdog: float = 0) -> Iterator[Connection]:
+    """A connection with no robot at the far end, in Safe by the model alone, closed before
+    its port is (closed after, it said "the port is gone"; left open, "dropped without
+    close()"). It ends in Off by the model alone too (Stop): a robot that never answered
+    cannot confirm a stop, and the close said so; a real robot's stop is not this."""
+    connection = Connection(transport, watchdog=watchdog)
+    connection.send_many([oi.start(), oi.safe()])
+    try:
+        yield connection
+    finally:
+        connection.send(oi.stop())
+        connection.close()
+
+
 def _measure(kind: str, port: serial.SerialBase) -> None:
-    connection = Connection(SerialTransport(port, kind), watchdog=0)
-    connection.send_many([oi.start(), oi.safe()])  # no robot: the model alone moves to Safe
+    with _robotless(SerialTransport(port, kind)) as connection:
+        _measure_on(kind, port, connection)
+
+
+def _measure_on(kind: str, port: serial.SerialBase, connection: Connection) -> None:
     drive = oi.drive(100, Radius.STRAIGHT)
     data = drive.data
     tick = [drive, oi.leds(0, 0, 0), oi.play(0)]
@@ -142,17 +161,16 @@ class _NullPort(NullTransport):
 
 
 def _guard_alone() -> None:
-    connection = Connection(_NullPort(), watchdog=0)
-    connection.send_many([oi.start(), oi.safe()])
     drive = oi.drive(100, Radius.STRAIGHT)
-    times = _best_per_call(
-        {
-            "guard": lambda: connection.send(drive),
-            "encode": lambda: oi.drive(100, Radius.STRAIGHT),
-        },
-        CALLS * 4,
-        lambda: None,
-    )
+    with _robotless(_NullPort()) as connection:
+        times = _best_per_call(
+            {
+                "guard": lambda: connection.send(drive),
+                "encode": lambda: oi.drive(100, Radius.STRAIGHT),
+            },
+            CALLS * 4,
+            lambda: None,
+        )
     guard, encode = times["guard"], times["encode"]
     print(f"   no port  guard + bookkeeping        {guard * 1e6:7.2f} us/command")
     print(f"   no port  encode (oi layer)          {encode * 1e6:7.2f} us/command")
@@ -160,13 +178,29 @@ def _guard_alone() -> None:
 
 class _StreamTransport(NullTransport):
     """Hands out the same chunk of stream frames on every read, like a port that always has
-    one frame waiting; its clock moves 15 ms a read."""
+    one frame waiting; its clock moves 15 ms a read. As a robot, it streams from Stream (148)
+    until Pause Stream (150 0) and again from Resume (150 1): it streamed on whatever was
+    written, so the safe stop's check (frames after Pause Stream: not heard) found the stop
+    of the bench's connection not received, twice, and said so."""
 
     def __init__(self, chunk: bytes) -> None:
         super().__init__()
         self.chunk = chunk
+        self.streaming = False
+
+    def write(self, data: bytes) -> None:
+        while decoded := decode_command(data):
+            command, size = decoded
+            if command.name == "stream":
+                self.streaming = True
+            elif command.name == "pause_resume_stream":
+                self.streaming = bool(command.args[0])
+            data = data[size:]
 
     def read(self, timeout: float) -> bytes:
+        if not self.streaming:  # nothing comes: the wait passes
+            self.clock += timeout
+            return b""
         self.clock += 0.015
         return self.chunk
 
@@ -178,14 +212,14 @@ def _poll_against_parser() -> None:
     layout = layout_for(ids, CREATE2, True)
     frame = layout.stream_frame({35: 2})
     parser = StreamParser(ids, CREATE2)
-    connection = Connection(_StreamTransport(frame), watchdog=0.1)
-    connection.send_many([oi.start(), oi.safe(), oi.stream(ids)])
-    connection.modes.detector.offset = 0  # what start()'s query learns on a real robot
-    times = _best_per_call(
-        {"parser": lambda: parser.feed(frame), "poll": lambda: connection.poll(0.0)},
-        CALLS * 4,
-        lambda: None,
-    )
+    with contextlib.closing(Connection(_StreamTransport(frame), watchdog=0.1)) as connection:
+        connection.send_many([oi.start(), oi.safe(), oi.stream(ids)])
+        connection.modes.detector.offset = 0  # what start()'s query learns on a real robot
+        times = _best_per_call(
+            {"parser": lambda: parser.feed(frame), "poll": lambda: connection.poll(0.0)},
+            CALLS * 4,
+            lambda: None,
+        )
     print(f"   no port  StreamParser.feed, 1 frame  {times['parser'] * 1e6:7.2f} us/frame")
     print(
         f"   no port  Connection.poll, 1 frame    {times['poll'] * 1e6:7.2f} us/frame  "
