@@ -402,26 +402,8 @@ class MonitorSession:
             text = f"{name} forced to {status.value}"
         self._said(runner, "force", text)
         _note(runner, {"force": name, "node": index, "to": value, "at": "before"})
-        self._summarise_force(
-            runner, index, f"{name} to {value.upper()}" if value != "none" else ""
-        )
-
-    def _summarise_force(self, runner: MissionRunner, index: int, forced: str) -> None:
-        """Every force into the summary (``forced``: "NAME to SUCCESS", or "" for a release),
-        with its ticks: it named only one still forced at the end, and a SUCCESS forced and
-        released before it went unsaid, though the run may have turned on it."""
-        entries = runner.summary.forced
-        at = (
-            f"tick {runner.snapshot.tick} (t={runner.snapshot.time:.3f} s)"
-            if runner.has_snapshot
-            else "the start"
-        )
-        was = self._forcing.pop(index, None)
-        if was is not None:
-            entries[was] += f", {'released' if not forced else 'until'} at {at}"
-        if forced:
-            self._forcing[index] = len(entries)
-            entries.append(f"{forced} at {at}")
+        entry = f"{name} to {value.upper()}" if value != "none" else ""
+        _summarise_force(runner, self._forcing, index, entry)
 
     def _check_breakpoints(self, runner: MissionRunner, changed: tuple[int, ...]) -> None:
         record = self.feed.latest()
@@ -467,7 +449,7 @@ class MonitorSession:
         runner.summary.mission = self.feed.mission_name = mission.name
         setup_tree(mission.root, lambda: mission.setup(runner))  # what shutdown_nodes closes
         for index in list(self._forcing):  # the nodes are gone: released with them
-            self._summarise_force(runner, index, "")
+            _summarise_force(runner, self._forcing, index, "")
         self.state.forced.clear()
         self.state.breakpoints.clear()
         self._held_end = None
@@ -501,6 +483,27 @@ def _sleeps_in_passive(connection: Any) -> bool:
         return False
     wake = getattr(connection, "wake", None)
     return wake is None or wake.unavailable is not None
+
+
+def _summarise_force(
+    runner: MissionRunner, forcing: dict[int, int], index: int, forced: str
+) -> None:
+    """Every force into the summary (``forced``: "NAME to SUCCESS", or "" for a release),
+    with its ticks: it named only one still forced at the end, and a SUCCESS forced and
+    released before it went unsaid, though the run may have turned on it. ``forcing``: each
+    forced node's entry in the summary's list, until it is released."""
+    entries = runner.summary.forced
+    at = (
+        f"tick {runner.snapshot.tick} (t={runner.snapshot.time:.3f} s)"
+        if runner.has_snapshot
+        else "the start"
+    )
+    was = forcing.pop(index, None)
+    if was is not None:
+        entries[was] += f", {'released' if not forced else 'until'} at {at}"
+    if forced:
+        forcing[index] = len(entries)
+        entries.append(f"{forced} at {at}")
 
 
 def _on_home_base(runner: MissionRunner) -> bool:
