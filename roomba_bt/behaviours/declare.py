@@ -591,8 +591,8 @@ class UnwrittenKey(LookupError):
 
 class KeyRange(ValueError):
     """A behaviour started with a parameter ``@key`` whose key holds a value out of the
-    parameter's declared range (written by a plugin or a ``for_each`` item, which the
-    validator cannot see; it checks ``initial`` and ``set`` values). It would otherwise
+    parameter's declared range (written by a plugin, which the validator cannot see; it
+    checks ``initial`` and ``set`` values and ``for_each`` items). It would otherwise
     reach the robot, or a command's encoder, as the behaviour's own bug."""
 
     def __init__(self, node: RobotBehaviour, pname: str, ref: BlackboardRef, problem: str):

@@ -272,11 +272,11 @@ _Reader = tuple[str, Param, BlackboardRef, Loc]
 
 
 def key_ranges(root: Node, keys: Mapping[str, KeyDecl]) -> list[Diagnostic]:
-    """Each ``initial`` value and each ``set`` value (the mission's constants written to a
-    key) checked against the range of every parameter that reads the key as ``@key``: 900
-    mm/s in a key a drive reads was the drive's EncodeError at run time, blamed on the
-    built-in. Said where the value is written, naming the reader and where it reads it.
-    (``for_each`` items and plugins' writes are checked when the reader starts.)"""
+    """Each ``initial`` value, ``set`` value and ``for_each`` item (the mission's constants
+    written to a key) checked against the range of every parameter that reads the key as
+    ``@key``: 900 mm/s in a key a drive reads was the drive's EncodeError at run time, blamed
+    on the built-in. Said where the value is written, naming the reader and where it reads
+    it. (A plugin's writes are checked by the reader when it starts.)"""
     readers, writes = _ranged_key_uses(root)
     out: list[Diagnostic] = []
     for key, reads in readers.items():
@@ -306,11 +306,17 @@ def _ranged_key_uses(
     root: Node,
 ) -> tuple[dict[str, list[_Reader]], dict[str, list[tuple[str, Any, Loc]]]]:
     """The parameters with a declared range that read a key as ``@key``, and the values the
-    mission's ``set`` leaves write (with where each is written), by key."""
+    mission writes itself (``set`` leaves, ``for_each`` items), with where each is written,
+    by key."""
     readers: dict[str, list[_Reader]] = {}
     writes: dict[str, list[tuple[str, Any, Loc]]] = {}
     for node in root.walk():
         decl = node.decl
+        if node.kind == "for_each":
+            items, locs = node.options.get("items", ()), node.options.get("loc:items", ())
+            writes.setdefault(node.options["key"], []).extend(
+                ("for_each item", item, where) for item, where in zip(items, locs, strict=True)
+            )
         if node.kind != "leaf" or decl is None:
             continue
         for pname, value in node.params.items():

@@ -226,10 +226,12 @@ def _key_items(ctx: Context, kind: NodeKind, options: dict[str, Any], fields: Fi
             continue
         what = f"{kind.word}.{param.name}"
         inode, iloc = fields[param.name]
-        items = []
+        items, locs = [], []
         for item, item_loc in sequence(inode, iloc, what):
             try:
                 items.append(resolve(ctx, item, item_loc, decl.type, env, what))
+                locs.append(item_loc)
             except Bad as bad:
                 ctx.report(bad)
         options["items"] = items
+        options["loc:items"] = locs  # where each is written: the range check of its readers

@@ -89,17 +89,78 @@ def test_a_plugin_s_range_is_checked_too(
     ), out
 
 
-def test_a_for_each_item_out_of_range_ends_the_run_naming_the_reader(
+def test_a_for_each_item_out_of_range_is_refused_where_it_is_written(
+    mission_file: Callable[..., Path], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A for_each item is one of the mission's constants, like a ``set`` value: 900 mm/s
+    in the list validated, and the run ended when the drive started (session 25)."""
+    mission = mission_file(
+        """
+        blackboard:
+          speed: {type: speed}
+        tree:
+          sequence:
+            - mode: safe
+            - for_each: {key: speed, in: [200 mm/s, 900 mm/s], do: {drive: {velocity: "@speed", distance: 1 m}}}
+            - mode: passive
+        """  # noqa: E501
+    )
+    assert main(["validate", str(mission)]) == ExitCode.INVALID
+    out = capsys.readouterr().out
+    assert (
+        f"{mission}:6:45: for_each item of blackboard key 'speed': drive's velocity reads it "
+        "as @speed (at 6:79): velocity 900 mm/s is out of range: allowed -500..500 mm/s "
+        "[tree.sequence[1].for_each.in[1]]" in out
+    ), out
+
+
+def test_for_each_items_within_the_range_and_parameters_pass(errors_of: Errors) -> None:
+    """Every item is checked, ``${parameter}`` ones with their value."""
+    text = """
+        parameters:
+          fast: {type: speed, default: 400 mm/s}
+        blackboard:
+          v: {type: speed}
+        tree:
+          sequence:
+            - mode: safe
+            - for_each: {key: v, in: [100 mm/s, "${fast}"], do: {drive: {velocity: "@v", duration: 1s}}}
+        """  # noqa: E501
+    assert errors_of(text) == []
+    assert errors_of(text, {"fast": "600 mm/s"}) == [
+        "8:41: for_each item of blackboard key 'v': drive's velocity reads it as @v (at 8:76): "
+        "velocity 600 mm/s is out of range: allowed -500..500 mm/s"
+    ]
+
+
+WRITER = '''
+from py_trees.common import Status
+
+from roomba_bt.behaviours import STR, Action, Param, declare, write_key
+
+
+@declare("fast", kind="action", params=(Param("key", STR, required=True),), writes_keys=("key",))
+class Fast(Action):
+    """Writes 900 mm/s, which the validator cannot see."""
+
+    def update(self):
+        write_key(self.value("key"), 900.0, self.name)
+        return Status.SUCCESS
+'''
+
+
+def test_a_plugin_s_write_out_of_range_ends_the_run_naming_the_reader(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """What the validator does not check (a for_each item) is checked when the leaf
-    starts: the run ends as an error naming the behaviour, the parameter and the key, not
-    as the built-in's EncodeError."""
+    """What the validator does not see (a plugin's write) is checked when the leaf starts:
+    the run ends as an error naming the behaviour, the parameter and the key, not as the
+    built-in's EncodeError."""
+    (tmp_path / "fast.py").write_text(WRITER)
     mission = tmp_path / "m.yaml"
     mission.write_text(
-        "blackboard:\n  v: {type: speed}\ntree:\n  sequence:\n    - mode: safe\n"
-        "    - for_each: {key: v, in: [100 mm/s, 900 mm/s], "
-        "do: {drive: {velocity: '@v', duration: 0.5s}}}\n    - mode: passive\n"
+        "plugins: [./fast.py]\nblackboard:\n  v: {type: speed}\ntree:\n  sequence:\n"
+        "    - mode: safe\n    - fast: {key: v}\n"
+        "    - drive: {velocity: '@v', duration: 0.5s}\n    - mode: passive\n"
     )
     assert main(_run(mission)) == ExitCode.BEHAVIOUR_ERROR
     err = capsys.readouterr().err
