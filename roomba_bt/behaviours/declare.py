@@ -39,16 +39,26 @@ from roomba_bt.behaviours.lean import (
     behaviour_tick,
     checked_status,
 )
-from roomba_bt.behaviours.units import SPEED, VALUE_TYPES, UnitError, ValueType, closest
+from roomba_bt.behaviours.units import (
+    MARK,
+    SPEED,
+    VALUE_TYPES,
+    UnitError,
+    ValueType,
+    closest,
+    held,
+)
 from roomba_bt.oi.encode import Command, halt, turns_wheels
 from roomba_bt.oi.modes import ALL_MODES, DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME
 from roomba_bt.oi.packets import PACKETS
-from roomba_bt.robot.interface import RobotHandle, Snapshot
+from roomba_bt.robot.interface import Odometry, RobotHandle, Snapshot
 from roomba_bt.yamlsource import CONTROL, character_name, quoted
 
 #: The blackboard key the runtime mirrors the snapshot under (for plugins that prefer it).
 SNAPSHOT_KEY = "/roomba/snapshot"
+#: The declared type of each mission key, by name (:func:`declare_keys`): not a key of its own.
+KEY_TYPES_KEY = "/roomba/key_types"
 #: Mission blackboard keys live under this namespace: ``leg`` is ``/mission/leg``.
 MISSION_NAMESPACE = "/mission/"
 
@@ -560,8 +570,8 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
         if refs:
             resolved = dict(self.params)
             for pname, ref in refs.items():
-                # typed when written (initial, set, for_each items): the validator proved the
-                # key's type fits this parameter, so no parsing happens during a tick
+                # typed when written (the validator's values; write_key holds a plugin's):
+                # the key's type fits this parameter, so no parsing happens during a tick
                 raw = read_key(ref.key)
                 if ref.field is not None:
                     raw = raw.get(ref.field) if isinstance(raw, Mapping) else None
@@ -614,13 +624,61 @@ def read_key(key: str) -> Any:
 _MISSION_WRITER = uuid.uuid4()
 
 
-def write_key(key: str, value: Any, writer: str = "roomba-bt mission") -> None:
+#: the name write_key gives the mission's own writes in py_trees' activity stream
+_MISSION_WRITER_NAME = "roomba-bt mission"
+
+
+def declare_keys(types: Mapping[str, ValueType]) -> None:
+    """The mission's keys and their declared types (``blackboard:``), which
+    :func:`write_key` holds every write to from now on; they replace those declared before
+    (``declare_keys({})``: none). ``CompiledMission.setup`` calls it before each run. Kept
+    on py_trees' blackboard (:data:`KEY_TYPES_KEY`), with the values: its ``clear()``, which
+    a test calls between missions, forgets them too."""
+    storage = py_trees.blackboard.Blackboard.storage
+    if types:
+        storage[KEY_TYPES_KEY] = dict(types)
+    else:
+        storage.pop(KEY_TYPES_KEY, None)
+
+
+class KeyType(TypeError):
+    """A value written to a mission key (a plugin's ``write_key``) that is not of the
+    key's declared type in its canonical unit: ``"fast"`` in a speed, ``1`` in a bool. The
+    readers take the type for granted; said where it is written, it is not blamed on the
+    leaf that reads it later."""
+
+    def __init__(self, key: str, vtype: ValueType, value: Any, problem: str, writer: str):
+        self.key, self.type, self.value = key, vtype, value
+        by = "" if writer == _MISSION_WRITER_NAME else f" by {writer!r}"
+        super().__init__(
+            f"write_key({key!r}, {quoted(value)}){by}: blackboard key {key!r} is declared "
+            f"{vtype.describe()}: {problem}"
+        )
+
+
+def _write_problem(vtype: ValueType, value: Any) -> str | None:
+    if vtype is not MARK:
+        return held(vtype, value)
+    if isinstance(value, Odometry):  # a mark's form is the robot's, not a written one
+        return None
+    return f"expected an odometry mark (snapshot.odometry), got a {type(value).__name__}"
+
+
+def write_key(key: str, value: Any, writer: str = _MISSION_WRITER_NAME) -> None:
     """Write a mission key. Into the store directly (no py_trees client per node: a client
     registers each key it may touch and checks it on every access), and, when py_trees'
     activity stream is on (``Blackboard.enable_activity_stream()``), said there as a client's
-    write would be: a py_trees user's tools show ``/mission/leg`` changing."""
-    name = MISSION_NAMESPACE + key
+    write would be: a py_trees user's tools show ``/mission/leg`` changing. A key the
+    mission declared (:func:`declare_keys`) takes only a value of its type: else
+    :class:`KeyType`, and nothing is written."""
     blackboard = py_trees.blackboard.Blackboard
+    types = blackboard.storage.get(KEY_TYPES_KEY)
+    vtype = types.get(key) if types is not None else None
+    if vtype is not None:
+        problem = _write_problem(vtype, value)
+        if problem is not None:
+            raise KeyType(key, vtype, value, problem, writer)
+    name = MISSION_NAMESPACE + key
     stream = blackboard.activity_stream
     if stream is not None:
         had = name in blackboard.storage

@@ -16,8 +16,9 @@ m/s, and a robot that drives 1000 times too fast is the error this module exists
 from __future__ import annotations
 
 import math
+import numbers
 import re
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -310,3 +311,67 @@ def _parse_mark(value: object) -> object:
 #: An odometry mark on the blackboard (written by ``mark``, read by ``odometry``).
 MARK = ValueType("mark", _parse_mark, json_schema=(("type", "null"),))
 VALUE_TYPES["mark"] = MARK
+
+
+def _real(value: object) -> bool:
+    """A finite number, not a bool (numpy's numbers too: a plugin computes with them)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        return False
+    return math.isfinite(value)
+
+
+#: what each plain type holds when written in code (``write_key``), and how to say it
+_HELD: dict[str, tuple[Callable[[object], bool], str]] = {
+    "int": (lambda v: isinstance(v, numbers.Integral) and not isinstance(v, bool), "an integer"),
+    "float": (_real, "a finite number"),
+    "bool": (lambda v: isinstance(v, bool), "true or false (a bool)"),
+    "str": (lambda v: isinstance(v, str), "a text"),
+    "str_list": (
+        lambda v: isinstance(v, list | tuple) and all(isinstance(i, str) for i in v),
+        "a list of texts",
+    ),
+    "radius": (
+        lambda v: _real(v) or v in RADIUS_WORDS,
+        f"a number of mm or one of {', '.join(RADIUS_WORDS)}",
+    ),
+}
+
+
+def held(vtype: ValueType, value: object) -> str | None:
+    """None if ``value`` is one of ``vtype`` as the readers of a key of that type take it
+    (its canonical form: a speed is a number of mm/s, not ``"200 mm/s"``), else what was
+    allowed and what was found. A value written in code (``write_key``) has no parser
+    between it and its readers: this is the check a parser would have made. A mark's form
+    is the robot's (``Odometry``): its writer checks that."""
+    if vtype.fields:
+        return _held_record(vtype, value)
+    check: Callable[[object], bool]
+    if vtype.choices:
+        check, allowed = vtype.choices.__contains__, vtype.describe()
+    elif vtype.name in CANONICAL:
+        check, allowed = _real, f"a number of {vtype.unit}"
+    elif vtype.name in _HELD:
+        check, allowed = _HELD[vtype.name]
+    else:  # any, mark
+        return None
+    if check(value):
+        return None
+    return f"expected {allowed}, got {_found(value)}"
+
+
+def _found(value: object) -> str:
+    """What a value is, for a message about code's value: ``'fast' (a str)``."""
+    told = _describe(value)
+    plain = value is None or isinstance(value, bool | list | dict)
+    return told if plain else f"{told} ({with_article(type(value).__name__)})"
+
+
+def _held_record(vtype: ValueType, value: object) -> str | None:
+    fields = dict(vtype.fields)
+    if not isinstance(value, Mapping) or set(value) != set(fields):
+        return f"expected a mapping of {', '.join(fields)}, got {_found(value)}"
+    for name, ftype in fields.items():
+        problem = held(ftype, value[name])
+        if problem is not None:
+            return f"field {name}: {problem}"
+    return None

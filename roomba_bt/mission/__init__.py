@@ -121,7 +121,7 @@ def _compile(
         source=path,
         files=tuple(dict.fromkeys(loader.files)),
         blackboard_initial={k: d.initial for k, d in ctx.keys.items() if d.has_initial},
-        blackboard_keys={k: d.type.describe() for k, d in ctx.keys.items()},
+        blackboard_keys={k: d.type for k, d in ctx.keys.items()},
         sends=frozenset(sends),
         plan=tree,
         warnings=(

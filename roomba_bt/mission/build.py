@@ -18,8 +18,9 @@ from typing import Any
 
 from py_trees.behaviour import Behaviour
 
-from roomba_bt.behaviours.declare import CheckedParams, write_key
+from roomba_bt.behaviours.declare import CheckedParams, declare_keys, write_key
 from roomba_bt.behaviours.language import GUARD, WORDS
+from roomba_bt.behaviours.units import ValueType
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.ir import Node
 from roomba_bt.oi.modes import OIMode
@@ -74,7 +75,8 @@ class CompiledMission:
     #: the mission file and every file it includes (what ``run --watch`` watches)
     files: tuple[Path, ...] = ()
     blackboard_initial: Mapping[str, Any] = field(default_factory=dict)
-    blackboard_keys: Mapping[str, str] = field(default_factory=dict)
+    #: each declared key's type: what ``write_key`` takes for it during a run
+    blackboard_keys: Mapping[str, ValueType] = field(default_factory=dict)
     #: each parameter's value as a mission writes it, with its unit (``side: 50 cm``)
     parameters_shown: Mapping[str, str] = field(default_factory=dict)
     #: the opcodes its leaves may send (their ``sends=``)
@@ -100,6 +102,7 @@ class CompiledMission:
     def setup(self, robot: RobotHandle, **kwargs: Any) -> None:
         """Hand the robot to every node (py_trees idiom: hardware arrives in ``setup``) and
         write the blackboard's initial values. Call again before each run."""
+        declare_keys(self.blackboard_keys)
         for key, value in self.blackboard_initial.items():
             write_key(key, value)
         for node in self.root.iterate():

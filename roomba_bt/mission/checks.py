@@ -276,7 +276,8 @@ def key_ranges(root: Node, keys: Mapping[str, KeyDecl]) -> list[Diagnostic]:
     written to a key) checked against the range of every parameter that reads the key as
     ``@key``: 900 mm/s in a key a drive reads was the drive's EncodeError at run time, blamed
     on the built-in. Said where the value is written, naming the reader and where it reads
-    it. (A plugin's writes are checked by the reader when it starts.)"""
+    it. (A plugin's write is held to the key's type by ``write_key``, and to the range by
+    the reader when it starts.)"""
     readers, writes = _ranged_key_uses(root)
     out: list[Diagnostic] = []
     for key, reads in readers.items():

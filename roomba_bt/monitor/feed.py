@@ -39,7 +39,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import py_trees
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import SNAPSHOT_KEY, Condition
+from roomba_bt.behaviours.declare import KEY_TYPES_KEY, SNAPSHOT_KEY, Condition
 from roomba_bt.behaviours.language import WORDS
 from roomba_bt.behaviours.reasons import failure_reason
 from roomba_bt.oi.frames import FrameLayout, SensorFrame
@@ -321,12 +321,7 @@ class RunFeed:
             self._refused(runner, snapshot)
         if summary.tick_halts != self._tick_halts_seen:
             self._tick_halted(summary, snapshot)
-        storage = py_trees.blackboard.Blackboard.storage
-        if len(storage) > 1 or SNAPSHOT_KEY not in storage:
-            board = storage.copy()  # two C calls: a third of a comprehension's time
-            board.pop(SNAPSHOT_KEY, None)
-            if board != self._blackboard:
-                self._new_board(board)
+        self._watch_board()
         truth = self.truth() if self.truth is not None else None
         if truth is not None and self.truth_start is None:
             self.truth_start = truth
@@ -365,6 +360,17 @@ class RunFeed:
                                 ticked)  # fmt: skip
         ring.append(record)
         return changed
+
+    def _watch_board(self) -> None:
+        """A new version of the blackboard when a key changed (the snapshot's mirror and the
+        keys' declared types are not keys)."""
+        storage = py_trees.blackboard.Blackboard.storage
+        if len(storage) > 1 or SNAPSHOT_KEY not in storage:
+            board = storage.copy()  # two C calls: a third of a comprehension's time
+            board.pop(SNAPSHOT_KEY, None)
+            board.pop(KEY_TYPES_KEY, None)
+            if board != self._blackboard:
+                self._new_board(board)
 
     def _new_board(self, board: Mapping[str, Any]) -> None:
         self._blackboard = board

@@ -14,9 +14,17 @@ from py_trees.common import Status
 
 from roomba_bt.behaviours import Action, Condition, ParamError, declare, lean
 from roomba_bt.behaviours.actions import Drive, Wait
-from roomba_bt.behaviours.declare import InvalidCheck, KeyRange, Param, write_key
-from roomba_bt.behaviours.units import DURATION, SPEED
-from roomba_bt.robot.interface import Snapshot
+from roomba_bt.behaviours.declare import (
+    InvalidCheck,
+    KeyRange,
+    KeyType,
+    Param,
+    declare_keys,
+    read_key,
+    write_key,
+)
+from roomba_bt.behaviours.units import ANGLE, BOOL, DISTANCE, DURATION, INT, MARK, SPEED, ValueType
+from roomba_bt.robot.interface import Odometry, Snapshot
 from roomba_bt.robot.testing import StubRobot
 
 
@@ -155,3 +163,50 @@ def test_a_plain_py_trees_behaviour_returning_invalid_is_caught_too() -> None:
     assert lean.check_updates(root)
     with pytest.raises(lean.InvalidStatus, match=r"Plain.update\(\) returned Status.INVALID"):
         root.tick_once()
+
+
+WAYPOINT = ValueType("record", dict, fields=(("distance", DISTANCE), ("turn", ANGLE)))
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "problem"),
+    [
+        ("v", "0.2 m/s", "speed (mm/s): expected a number of mm/s, got '0.2 m/s' (a str)"),
+        ("on", 1, "bool: expected true or false (a bool), got 1 (an int)"),
+        ("n", 2.0, "int: expected an integer, got 2.0 (a float)"),
+        ("v", True, "speed (mm/s): expected a number of mm/s, got a boolean (true)"),
+        ("v", float("nan"), "speed (mm/s): expected a number of mm/s, got nan (a float)"),
+        ("wp", {"distance": 500.0},
+         "record: expected a mapping of distance, turn, got a mapping"),
+        ("wp", {"distance": "1 m", "turn": 90.0},
+         "record: field distance: expected a number of mm, got '1 m' (a str)"),
+        ("start", 12.0, "mark: expected an odometry mark (snapshot.odometry), got a float"),
+    ],
+)  # fmt: skip
+def test_write_key_refuses_a_value_not_of_the_key_s_declared_type(
+    key: str, value: object, problem: str
+) -> None:
+    """A text in a speed key was stored as given, and blamed on the leaf that read it
+    (``drive raised TypeError: type str doesn't define __round__``)."""
+    declare_keys({"v": SPEED, "on": BOOL, "n": INT, "wp": WAYPOINT, "start": MARK})
+    with pytest.raises(KeyType) as caught:
+        write_key(key, value, "put")
+    assert (
+        str(caught.value)
+        == f"write_key({key!r}, {value!r}) by 'put': blackboard key {key!r} is declared {problem}"
+    )
+    assert read_key(key) is None  # nothing written
+
+
+def test_write_key_takes_values_of_the_declared_type_and_any_undeclared_key() -> None:
+    declare_keys({"v": SPEED, "on": BOOL, "n": INT, "wp": WAYPOINT, "start": MARK})
+    for key, value in [("v", 200.0), ("v", numpy.float64(-3)), ("v", 0), ("on", False),
+                       ("n", numpy.int64(3)), ("wp", {"distance": 1.0, "turn": 90}),
+                       ("start", Odometry()), ("other", "anything")]:  # fmt: skip
+        write_key(key, value)
+        assert read_key(key) == value
+    with pytest.raises(KeyType, match=r"^write_key\('v', 'fast'\): blackboard key 'v'"):
+        write_key("v", "fast")  # the mission's own writer is not named: the runtime names the node
+    py_trees.blackboard.Blackboard.clear()  # a test's fixture: the types go with the keys
+    write_key("v", "fast")
+    assert read_key("v") == "fast"

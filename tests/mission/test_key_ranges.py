@@ -141,10 +141,10 @@ from roomba_bt.behaviours import STR, Action, Param, declare, write_key
 
 @declare("fast", kind="action", params=(Param("key", STR, required=True),), writes_keys=("key",))
 class Fast(Action):
-    """Writes 900 mm/s, which the validator cannot see."""
+    """Writes what the validator cannot see."""
 
     def update(self):
-        write_key(self.value("key"), 900.0, self.name)
+        write_key(self.value("key"), VALUE)
         return Status.SUCCESS
 '''
 
@@ -155,18 +155,39 @@ def test_a_plugin_s_write_out_of_range_ends_the_run_naming_the_reader(
     """What the validator does not see (a plugin's write) is checked when the leaf starts:
     the run ends as an error naming the behaviour, the parameter and the key, not as the
     built-in's EncodeError."""
-    (tmp_path / "fast.py").write_text(WRITER)
-    mission = tmp_path / "m.yaml"
-    mission.write_text(
-        "plugins: [./fast.py]\nblackboard:\n  v: {type: speed}\ntree:\n  sequence:\n"
-        "    - mode: safe\n    - fast: {key: v}\n"
-        "    - drive: {velocity: '@v', duration: 0.5s}\n    - mode: passive\n"
-    )
-    assert main(_run(mission)) == ExitCode.BEHAVIOUR_ERROR
+    assert main(_run(_written_then_driven(tmp_path, "900.0"))) == ExitCode.BEHAVIOUR_ERROR
     err = capsys.readouterr().err
     assert "EncodeError" not in err
     assert (
         "raised KeyRange: drive 'drive(velocity=@v, duration=0.5s)': velocity is @v, and "
         "blackboard key 'v' holds a value out of its range: velocity 900 mm/s is out of "
         "range: allowed -500..500 mm/s" in err
+    ), err
+
+
+def _written_then_driven(folder: Path, value: str) -> Path:
+    """A mission whose plugin writes ``value`` (Python) to a speed key a drive reads."""
+    (folder / "fast.py").write_text(WRITER.replace("VALUE", value))
+    mission = folder / "m.yaml"
+    mission.write_text(
+        "plugins: [./fast.py]\nblackboard:\n  v: {type: speed}\ntree:\n  sequence:\n"
+        "    - mode: safe\n    - fast: {key: v}\n"
+        "    - drive: {velocity: '@v', duration: 0.5s}\n    - mode: passive\n"
+    )
+    return mission
+
+
+def test_a_plugin_s_write_of_the_wrong_type_ends_the_run_naming_the_writer(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A text written to a speed key was stored as given and blamed on the drive that read
+    it: "drive raised TypeError: type str doesn't define __round__ method" (session 25). The
+    mission's declared types hold the plugin's write where it is made."""
+    mission = _written_then_driven(tmp_path, "'fast'")
+    assert main(_run(mission)) == ExitCode.BEHAVIOUR_ERROR
+    err = capsys.readouterr().err
+    assert (
+        "fast(key=v) raised KeyType: write_key('v', 'fast'): blackboard key 'v' is declared "
+        "speed (mm/s): expected a number of mm/s, got 'fast' (a str) "
+        f"(at {tmp_path / 'fast.py'}:12)" in err
     ), err

@@ -778,3 +778,20 @@ def test_a_pause_the_robot_fell_asleep_in_says_the_stop_met_a_sleeping_robot(
     assert summary.safe_stop.startswith("NOT DELIVERED: last seen in Passive stopped; ")
     assert "the stop was written but is unconfirmed: the robot was asleep" in summary.safe_stop
     assert "no valid frame" not in summary.safe_stop
+
+
+def test_the_board_shows_the_mission_s_keys_not_their_declared_types(
+    tmp_path: Path, clean_blackboard: None
+) -> None:
+    """The keys' declared types are kept on py_trees' blackboard (``write_key`` holds a
+    plugin's write to them, session 25); the monitor's board lists the keys only."""
+    mission = tmp_path / "keys.yaml"
+    mission.write_text(
+        "blackboard:\n  n: {type: int, initial: 0}\ntree:\n  sequence:\n"
+        "    - set: {key: n, value: 2}\n    - wait: 0.1s\n"
+    )
+    rig = Rig(mission=mission)
+    assert rig.run_with(lambda rig: None).outcome is Outcome.SUCCESS
+    latest = rig.feed.latest()
+    assert latest is not None
+    assert dict(rig.feed.blackboard(latest)) == {"/mission/n": 2}
