@@ -31,6 +31,7 @@ from typing import Any
 import py_trees
 
 from roomba_bt.behaviours.lean import InvalidStatus
+from roomba_bt.behaviours.returned import returned_from
 from roomba_bt.oi.frames import MissingPacket
 from roomba_bt.robot.safety import THE_SAFE_STOP, Terminated, signal_reason
 from roomba_bt.runtime.summary import Outcome, RunSummary
@@ -45,7 +46,9 @@ _CLEAN_ENDINGS = frozenset({Outcome.SUCCESS, Outcome.FAILURE, Outcome.TIMEOUT, O
 def behaviour_error(exc: BaseException) -> str:
     """What a behaviour's exception says to the user: the behaviour's path in the tree (the
     innermost behaviour on the traceback) and the file:line where it raised in that
-    behaviour's own module (a plugin's file), else the line the exception came from."""
+    behaviour's own module (a plugin's file), else the line the exception came from; for
+    a wrong value returned (:class:`InvalidStatus`), the ``return`` that gave it when its
+    source tells (:func:`returned_from`), else where the method is defined, said so."""
     frames = list(traceback.walk_tb(exc.__traceback__))
     what = f"{type(exc).__name__}: {exc}"
     behaviour = None
@@ -54,28 +57,26 @@ def behaviour_error(exc: BaseException) -> str:
         if isinstance(candidate, py_trees.behaviour.Behaviour):
             behaviour = candidate
             break
-    where = f"{frames[-1][0].f_code.co_filename}:{frames[-1][1]}" if frames else ""
+    where = f"at {frames[-1][0].f_code.co_filename}:{frames[-1][1]}" if frames else ""
     if isinstance(exc, InvalidStatus):  # raised after its update (check) returned: where it is
         behaviour, frames = exc.node, []
         update: Any = getattr(type(behaviour), exc.method, None)
-        with contextlib.suppress(TypeError, OSError):
-            where = f"{inspect.getsourcefile(update)}:{inspect.getsourcelines(update)[1]}"
+        with contextlib.suppress(TypeError, OSError, SyntaxError):
+            where = returned_from(update, exc.status)
     if behaviour is None:
-        return f"{what} (at {where})" if where else what
+        return f"{what} ({where})" if where else what
     with contextlib.suppress(TypeError, OSError):
         home = inspect.getfile(type(behaviour))
         for frame, line in reversed(frames):
             if frame.f_code.co_filename == home:
-                where = f"{home}:{line}"
+                where = f"at {home}:{line}"
                 break
     path = []
     node: py_trees.behaviour.Behaviour | None = behaviour
     while node is not None:
         path.append(node.name)
         node = node.parent
-    return (
-        f"behaviour {' / '.join(reversed(path))} raised {what} (at {where}){_hint(exc, behaviour)}"
-    )
+    return f"behaviour {' / '.join(reversed(path))} raised {what} ({where}){_hint(exc, behaviour)}"
 
 
 def _hint(exc: BaseException, behaviour: py_trees.behaviour.Behaviour) -> str:

@@ -184,25 +184,28 @@ class Says(Condition):
 
 
 @pytest.mark.parametrize(
-    ("word", "source", "said", "line"),
+    ("word", "source", "said", "where"),
     [
         ("forgetful", FORGETFUL,
-         "raised InvalidStatus: Forgetful.update() returned None, not a Status", 10),
+         "raised InvalidStatus: Forgetful.update() returned None, not a Status",
+         "update() defined at {plugin}:10, which ends without a return"),
         ("ret_invalid", RET_INVALID,  # a sequence began again: the run drove to its timeout
-         "raised InvalidStatus: RetInvalid.update() returned Status.INVALID, which py_trees", 11),
+         "raised InvalidStatus: RetInvalid.update() returned Status.INVALID, which py_trees",
+         "at {plugin}:12"),  # its return, not its def
         ("says", _says("None"),  # silently FAILURE
-         "raised InvalidCheck: Says.check() returned None, not a bool", 11),
+         "raised InvalidCheck: Says.check() returned None, not a bool", "at {plugin}:12"),
         ("says", _says("'no'"),  # SUCCESS
-         "raised InvalidCheck: Says.check() returned 'no', not a bool", 11),
+         "raised InvalidCheck: Says.check() returned 'no', not a bool", "at {plugin}:12"),
         ("says", _says("Status.FAILURE"),  # SUCCESS
-         "raised InvalidCheck: Says.check() returned", 11),
+         "raised InvalidCheck: Says.check() returned", "at {plugin}:12"),
         ("raw_bytes", RAW,
-         "raised TypeError: send() takes a Command from roomba_bt.oi.commands", 12),
+         "raised TypeError: send() takes a Command from roomba_bt.oi.commands", "at {plugin}:12"),
         ("sneaky", UNDECLARED,
          "raised UndeclaredCommand: sneaky sent drive (137), which its declaration does not "
-         "list: add 137 to @declare(sends=...) (it lists leds (139))", 13),
+         "list: add 137 to @declare(sends=...) (it lists leds (139))", "at {plugin}:13"),
         ("near", UNREAD,  # the KeyError did not say where to declare it
-         "raised MissingPacket: 'packet 27 (wall_signal) is not in this frame", 10),
+         "raised MissingPacket: 'packet 27 (wall_signal) is not in this frame",
+         "at {plugin}:10"),
     ],
 )  # fmt: skip
 def test_a_plugin_that_breaks_the_contract_ends_the_run_as_its_error(
@@ -211,20 +214,22 @@ def test_a_plugin_that_breaks_the_contract_ends_the_run_as_its_error(
     word: str,
     source: str,
     said: str,
-    line: int,
+    where: str,
 ) -> None:
     """``update`` returning None (a forgotten ``return``) was py_trees' "invalid status" on
     stdout every tick, with the robot driving on to the timeout; raw bytes passed to
     ``send`` were an AttributeError deep in the outbox; a Drive its declaration did not list
     escaped the compiler's mode check and Full-mode warning, which read the declaration.
-    Each now ends the run at once as the plugin's error, with the safe stop, naming where."""
+    Each now ends the run at once as the plugin's error, with the safe stop, naming where:
+    a wrong value returned, at its ``return`` when the source shows which (it named the
+    ``def`` line, session 25)."""
     (tmp_path / "plugin.py").write_text(source)
     mission = tmp_path / "m.yaml"
     mission.write_text(f"plugins: [./plugin.py]\ntree:\n  sequence: [{{mode: safe}}, {word}]\n")
     assert main(_run(mission)) == ExitCode.BEHAVIOUR_ERROR
     out, err = capsys.readouterr()
     assert f"behaviour sequence / {word} {said}" in err
-    assert f"(at {tmp_path / 'plugin.py'}:{line})" in err
+    assert f"({where.format(plugin=tmp_path / 'plugin.py')})" in err
     if word == "near":
         assert "; add 27 to @declare(reads=...) of 'near' (it lists 7)" in err
     assert "ticks        1 " in out  # ended on the tick it happened
