@@ -42,6 +42,10 @@ if TYPE_CHECKING:
 
 #: the mode guard's refusals printed after the summary; a line says how many more there were
 SHOWN_REFUSALS = 5
+#: ``--fast``'s time limit when no ``--timeout`` is given, s of mission time (2 h: a battery
+#: of cleaning). On the virtual clock a mission that never ends ran until the simulated
+#: battery was flat (hours, then "connection lost"), or for ever on the charger.
+FAST_TIMEOUT_S = 7200.0
 
 
 def register(sub: Any) -> None:
@@ -77,7 +81,12 @@ def _add_run_parser(sub: Any) -> None:
         "--random-start", action="store_true", help="start in the world's start region"
     )
     add_param_option(run, "set a mission parameter, e.g. -p speed=250mm/s (repeatable)")
-    run.add_argument("--timeout", help="give up after this much mission time, e.g. 90s or 5min")
+    run.add_argument(
+        "--timeout",
+        help="give up after this much mission time, e.g. 90s or 5min (default: none; with "
+        f"--fast and no --monitor/--watch {FAST_TIMEOUT_S / 3600:g}h, else a mission that never "
+        "ends would run until the simulated battery is flat, or for ever on the dock)",
+    )
     run.add_argument(
         "--record",
         metavar="FILE",
@@ -278,6 +287,8 @@ def _checked_arguments(args: argparse.Namespace) -> tuple[dict[str, str], float 
     timeout = parse_timeout(args.timeout)
     if isinstance(timeout, str):
         return _error(timeout)
+    if _fast_limit(args):
+        timeout = FAST_TIMEOUT_S
     if args.port and (args.world or args.plot or args.fast or args.battery is not None):
         return _error(
             "--world, --plot, --fast and --battery are for the simulator: drop them or --port"
@@ -290,6 +301,14 @@ def _checked_arguments(args: argparse.Namespace) -> tuple[dict[str, str], float 
         return _error(found[0])
     args.mission = found
     return params, timeout
+
+
+def _fast_limit(args: argparse.Namespace) -> bool:
+    """Whether the run takes ``--fast``'s own limit (:data:`FAST_TIMEOUT_S`): on the virtual
+    clock with no ``--timeout``, and nobody watching (``--monitor``, ``--watch``: the page
+    stops it, and a paused run's clock goes on)."""
+    watched = args.monitor is not None or args.watch
+    return bool(args.fast) and args.timeout is None and not watched
 
 
 def end_in_problem(end_in: str, profile: RobotProfile) -> str | None:
@@ -418,6 +437,12 @@ def _report(
         and summary.reason
     ):
         print(f"roomba-bt: {summary.outcome.value}: {summary.reason}", file=sys.stderr)
+    if summary.outcome is Outcome.TIMEOUT and _fast_limit(args):
+        print(
+            f"roomba-bt: that is --fast's own limit, {FAST_TIMEOUT_S:g} s of mission time, as "
+            "no --timeout was given: give one (--timeout 10h) for a longer run",
+            file=sys.stderr,
+        )
     if summary.outcome is Outcome.NO_CONNECTION and args.port:
         # doctor tries what start-up does not: each rate, a BRC pulse or a hang-up to wake it
         print(f"roomba-bt: `roomba-bt doctor --port {args.port}` finds the robot's rate, wakes "

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 import logging
 import re
@@ -12,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from roomba_bt.cli import main
+from roomba_bt.cli import main, run_cmd
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.runtime.recording import load_record
 
@@ -391,3 +392,41 @@ def test_the_summary_says_where_the_simulated_robot_ended(
     assert "simulator    the robot FELL off a drop at (3." in out
     assert main(["run", "dock", "--fast", "--display", "none"]) == 0
     assert "simulator    ended on the dock's contacts, charging" in capsys.readouterr().out
+
+
+FOREVER = "tree:\n  repeat:\n    do: {wait: 1s}\n"
+
+
+def test_fast_without_a_timeout_stops_at_its_own_limit_and_says_how_to_change_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """On the virtual clock a mission that never ends ran until the simulated battery was
+    flat (10.8 h of mission time, then "connection lost", exit 3), or for ever on the
+    charger (session 25). The limit is patched to 30 s here: the run is the same."""
+    monkeypatch.setattr(run_cmd, "FAST_TIMEOUT_S", 30.0)
+    forever = tmp_path / "forever.yaml"
+    forever.write_text(FOREVER)
+    assert main(["run", str(forever), "--fast", "--display", "none"]) == 1
+    out, err = capsys.readouterr()
+    assert "outcome      TIMEOUT (--timeout 30 s of mission time ran out in wait)" in out
+    assert "duration     30.00 s mission time" in out
+    assert (
+        "roomba-bt: that is --fast's own limit, 30 s of mission time, as no --timeout was "
+        "given: give one (--timeout 10h) for a longer run" in err
+    ), err
+    assert main(["run", str(forever), "--fast", "--display", "none", "--timeout", "20s"]) == 1
+    out, err = capsys.readouterr()
+    assert "(--timeout 20 s of mission time ran out in wait)" in out and "own limit" not in err
+
+
+@pytest.mark.parametrize(
+    ("given", "limited"),
+    [({}, True), ({"fast": False}, False), ({"timeout": "1h"}, False),
+     ({"monitor": 8080}, False), ({"watch": True}, False)],
+)  # fmt: skip
+def test_the_fast_limit_is_for_unwatched_fast_runs_without_a_timeout(
+    given: dict[str, object], limited: bool
+) -> None:
+    """With ``--monitor`` or ``--watch`` someone watches, and stops it from the page."""
+    args = {"fast": True, "timeout": None, "monitor": None, "watch": False, **given}
+    assert run_cmd._fast_limit(argparse.Namespace(**args)) is limited
