@@ -24,7 +24,7 @@ from roomba_bt.behaviours.lean import (
     composite_stop,
     tick_generator,
 )
-from roomba_bt.behaviours.reasons import failure_reason
+from roomba_bt.behaviours.reasons import failure_reason, running_in
 from roomba_bt.behaviours.units import DURATION, UnitError
 from roomba_bt.robot.interface import SLOT_SECONDS, RobotHandle
 
@@ -102,12 +102,15 @@ class _Lasting(_MissionClock, DecoratorTick, py_trees.decorators.Decorator):
 
 class Timeout(_Lasting):
     """FAILURE (and the child stopped) if the child is still RUNNING after ``duration``
-    seconds of mission time; otherwise the child's status."""
+    seconds of mission time; otherwise the child's status. Its message names the tree's
+    limit and the leaf it stopped (``the tree's 8 s limit ran out in dock_approach``): "timed
+    out after 8 s" read, in an evaluation's failures, like the run's own --timeout."""
 
     def update(self) -> Status:
         status: Status = self.decorated.status
         if status is _RUNNING and self.lasted(self.duration):
-            self.feedback_message = f"timed out after {self.duration:g} s"
+            where = running_in(self.decorated)
+            self.feedback_message = f"the tree's {self.duration:g} s limit ran out{where}"
             return _FAILURE
         return status
 
@@ -298,9 +301,9 @@ class Guard(Stepped, py_trees.composites.Composite):
             holds = self.condition.status is _SUCCESS
             if holds == self.until:
                 new_status = _SUCCESS if self.until else _FAILURE
+                self.feedback_message = self._why()  # before the child's stop: its stage
                 if self.child.status is _RUNNING:
                     self.child.stop(_INVALID)
-                self.feedback_message = self._why()
                 self.stop(new_status)
                 return DONE
             self.current_child = self.child
@@ -313,10 +316,13 @@ class Guard(Stepped, py_trees.composites.Composite):
 
     def _why(self) -> str:
         """The guard's message, read before its children are reset: for ``while``, which
-        part of the condition failed (``condition no longer holds: oi_mode(safe)``)."""
+        part of the condition failed and the leaf it stopped (``condition no longer holds:
+        bump(any) held (stage drive was running)``: an evaluation's stage)."""
         if self.until:
             return "condition met"
-        return f"condition no longer holds: {failure_reason(self.condition)}"
+        stage = running_in(self.child).removeprefix(" in ")
+        running = f" (stage {stage} was running)" if stage else ""
+        return f"condition no longer holds: {failure_reason(self.condition)}{running}"
 
     def stop(self, new_status: Status = _INVALID) -> None:
         if self.child.status is _RUNNING:

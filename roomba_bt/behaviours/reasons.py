@@ -91,3 +91,21 @@ def _held_before(path: list[Behaviour]) -> str | None:
             node = held[-1]
         return node.name if node.status == success and not node.children else None
     return None
+
+
+def running_in(root: Behaviour) -> str:
+    """`` in dock_approach`` when a time limit runs out under ``root`` (the run's --timeout,
+    a ``timeout`` decorator's): the leaf still running (the stage it was in, without its
+    parameters, so equal stages group together), or "". A ``wait`` running beside another
+    leaf is a parallel's timer (``clean for the duration``: the timer and ``cover``): the
+    other is what the robot was doing, and is named."""
+    from roomba_bt.behaviours.actions import Wait  # here: actions -> lean -> this module
+
+    running = [
+        node
+        for node in root.iterate()
+        if node.status is py_trees.common.Status.RUNNING and not node.children
+    ]
+    doing = [n for n in running if getattr(n, "declaration", None) is not Wait.declaration]
+    doing = doing or running
+    return " in " + doing[0].name.split("(", 1)[0] if doing else ""

@@ -564,18 +564,25 @@ def _coverage(simulator: Simulator, area: str) -> Coverage | None:
     )
 
 
-_STAGE = re.compile(r"^([a-z_][a-z0-9_]*)\(")
+_STAGE = re.compile(r"^([a-z_][a-z0-9_]*)(?:\(|: |$)")
 _RUNNING_STAGE = re.compile(r"\(stage ([^)]+) was running\)|ran out in ([a-z_][a-z0-9_]*)$")
+#: ``behaviour sequence / boom(x=1) raised RuntimeError: ...`` (runtime/teardown.py)
+_RAISED_IN = re.compile(r"^behaviour (.+?) raised ")
 
 
 def failure_stage(reason: str) -> str:
     """The stage a failure reason names: the one it says was running (``... (stage search
-    was running)`` -> ``search``; a --timeout that ``... ran out in dock_approach`` ->
-    ``dock_approach``), else the leaf it starts with (``find_dock(...): lost the beam`` ->
-    ``find_dock``); "" when it names none."""
+    was running)`` -> ``search``; a --timeout or a ``timeout`` decorator that ``... ran out
+    in dock_approach`` -> ``dock_approach``), the behaviour that raised (``behaviour
+    sequence / boom(x=1) raised ...`` -> ``boom``), else the leaf it starts with
+    (``find_dock(...): lost the beam`` -> ``find_dock``, ``charging`` -> ``charging``); ""
+    when it names none."""
     running = _RUNNING_STAGE.search(reason)
     if running:
         return running.group(1) or running.group(2)
+    raised = _RAISED_IN.match(reason)
+    if raised:
+        return raised.group(1).rsplit(" / ", 1)[-1].split("(", 1)[0]
     match = _STAGE.match(reason)
     return match.group(1) if match else ""
 

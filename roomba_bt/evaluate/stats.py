@@ -48,10 +48,14 @@ _LEAF_PREFIX = re.compile(r"^[a-z_][a-z0-9_]*\([^)]*\): ")
 
 
 def reason_group(result: EpisodeResult) -> str:
-    """A failure reason without the leaf's parameters, so equal causes group together."""
+    """A failure reason without the leaf's parameters, so equal causes group together. An
+    ending other than the tree's FAILURE is said first, in capitals as the run's summary and
+    the records say it (``TIMEOUT: --timeout 3 s of mission time ran out in drive``): its
+    lower-case word read like the tree's own ``timeout`` decorator that failed a branch
+    (``timeout: the tree's 8 s limit ran out in drive``)."""
     reason = result.reason or result.outcome
     stripped = _LEAF_PREFIX.sub("", reason)
-    return f"{result.outcome}: {stripped}" if result.outcome != "failure" else stripped
+    return f"{result.outcome.upper()}: {stripped}" if result.outcome != "failure" else stripped
 
 
 @dataclass(frozen=True)

@@ -28,9 +28,8 @@ from typing import Any, NoReturn, Protocol, cast
 import py_trees
 
 from roomba_bt.behaviours import SNAPSHOT_KEY
-from roomba_bt.behaviours.actions import Wait
 from roomba_bt.behaviours.lean import Direct
-from roomba_bt.behaviours.reasons import failure_reason
+from roomba_bt.behaviours.reasons import failure_reason, running_in
 from roomba_bt.mission import RUNTIME_PACKETS
 from roomba_bt.oi.encode import Command, turns_wheels
 from roomba_bt.oi.errors import BandwidthError
@@ -828,24 +827,6 @@ def tick_of(root: py_trees.behaviour.Behaviour) -> Callable[[], None]:
     if getattr(type(root), "tick_once", None) is _DIRECT_TICK_ONCE:
         return cast(Direct, root).tick_direct
     return root.tick_once
-
-
-#: a ``wait`` leaf's declaration: a timer, not what the robot was doing (:func:`running_in`)
-_WAIT = Wait.declaration
-
-
-def running_in(root: py_trees.behaviour.Behaviour) -> str:
-    """`` in dock_approach`` when a mission's time runs out: the leaf still running (the
-    stage it was in, without its parameters, so equal stages group together), or "". A
-    ``wait`` running beside another leaf is a parallel's timer (``clean for the duration``:
-    the timer and ``cover``): the other is what the robot was doing, and is named."""
-    running = [
-        node
-        for node in root.iterate()
-        if node.status is py_trees.common.Status.RUNNING and not node.children
-    ]
-    doing = [n for n in running if getattr(n, "declaration", None) is not _WAIT] or running
-    return " in " + doing[0].name.split("(", 1)[0] if doing else ""
 
 
 def warn_of_wall_clock_timeouts(root: py_trees.behaviour.Behaviour) -> list[str]:

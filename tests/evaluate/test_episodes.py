@@ -270,3 +270,45 @@ def test_results_are_taken_as_they_finish_and_a_ctrl_c_keeps_them(hooked) -> Non
     assert 0 not in seen and len(seen) == 3
     assert [r.seed for r in run.in_order()] == sorted(seen)
     mark.touch()
+
+
+_BOOM = """\
+from roomba_bt.behaviours import Condition, declare
+
+
+@declare("boom", kind="condition", reads=(27,))
+class Boom(Condition):
+    \"\"\"Raises.\"\"\"
+
+    def check(self, snapshot):
+        raise RuntimeError("kaboom")
+"""
+
+
+@pytest.mark.parametrize(
+    ("tree", "outcome", "stage"),
+    [
+        # a behaviour that raised: the node its path ends in (the stage was empty)
+        ("    - boom\n", "error", "boom"),
+        # a timeout decorator: the leaf it stopped (empty: "timeout: timed out after 1 s")
+        ("    - timeout:\n        after: 1s\n        do: {drive: {velocity: 50 mm/s, "
+         "distance: 5 m}}\n", "failure", "drive"),
+        # a while guard: the leaf it stopped
+        ("    - drive: {velocity: 100 mm/s, distance: 5 m}\n"
+         "      while: {inverter: {odometry: {distance: 5 cm}}}\n", "failure", "drive"),
+        # a leaf without parameters that failed: its name is its reason, and its stage
+        ("    - charging\n", "failure", "charging"),
+    ],
+)  # fmt: skip
+def test_the_stage_names_the_node_of_an_error_or_a_decorator_failure(
+    tmp_path: Path, tree: str, outcome: str, stage: str
+) -> None:
+    from roomba_bt.mission import Permissions
+
+    (tmp_path / "boom.py").write_text(_BOOM)
+    mission = tmp_path / "m.yaml"
+    mission.write_text(f"plugins: [./boom.py]\ntree:\n  sequence:\n    - mode: safe\n{tree}")
+    spec = EpisodeSpec(str(mission), seed=1, timeout_s=3.0,
+                       permissions=Permissions(plugin_files=True))  # fmt: skip
+    result = run_episode(spec)
+    assert (result.outcome, result.stage) == (outcome, stage), result.reason

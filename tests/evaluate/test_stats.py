@@ -58,7 +58,7 @@ def test_reasons_group_without_leaf_parameters() -> None:
     b = result(2, "failure", reason="dock_time_limit(600 s): search: gave up")
     c = result(3, "timeout", reason="--timeout 60 s of mission time ran out")
     assert reason_group(a) == reason_group(b) == "search: gave up"
-    assert reason_group(c).startswith("timeout: ")
+    assert reason_group(c) == "TIMEOUT: --timeout 60 s of mission time ran out"
 
 
 def test_summary_counts_rates_times_and_failures() -> None:
@@ -237,3 +237,26 @@ def test_cpu_time_is_cpu_time_and_wall_time_is_said_to_be_wall_clock(
     assert "20 s of mission time in 4.0 s of CPU time (5x real time per CPU second); " in text
     assert "10.0 s of wall-clock time summed over the episodes" in text
     assert summarize("m", "w", waited).to_dict()["cpu_time"] == 4.0
+
+
+def test_a_timeout_decorator_and_the_episode_s_timeout_group_apart(tmp_path: Path) -> None:
+    """ "timeout: timed out after 2 s" (a decorator in the tree) and "timeout: --timeout 3 s
+    of mission time ran out" (the episode's limit) read alike in a report's failures."""
+    from roomba_bt.evaluate import episode_specs, run_episodes
+
+    mission = tmp_path / "limit.yaml"
+    mission.write_text(
+        "parameters: {limit: {type: duration, default: 8 s}}\n"
+        "tree:\n  sequence:\n    - mode: safe\n    - timeout:\n        after: '${limit}'\n"
+        "        do: {drive: {velocity: 50 mm/s, distance: 5 m}}\n"
+    )
+    tight = (("limit", "2s"),)
+    results = [
+        *run_episodes(episode_specs(str(mission), runs=1, timeout_s=3.0)),
+        *run_episodes(episode_specs(str(mission), runs=1, timeout_s=3.0, params=tight)),
+    ]
+    groups = [group for group, _ in summarize("limit.yaml", "empty-room", results).failures]
+    assert sorted(groups) == [
+        "TIMEOUT: --timeout 3 s of mission time ran out in drive",
+        "timeout: the tree's 2 s limit ran out in drive",
+    ]

@@ -454,7 +454,7 @@ def test_a_while_guard_says_which_condition_failed(compile_text: Compile) -> Non
     assert reason.startswith("while reactive_sequence: condition no longer holds: "), reason
     # the inverted condition that held is named (it said "inverter", as in the docs' own
     # while: {inverter: {cliff: any}})
-    assert reason.endswith("no longer holds: bump(any) held"), reason
+    assert reason.endswith("no longer holds: bump(any) held (stage wait was running)"), reason
 
 
 def test_the_mission_s_writes_show_in_py_trees_activity_stream(compile_text: Compile) -> None:
