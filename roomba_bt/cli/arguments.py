@@ -361,9 +361,9 @@ def parse_params(items: list[str]) -> dict[str, str] | str:
     return params
 
 
-def parse_timeout(text: str | None) -> float | str | None:
-    """``--timeout``: seconds (``90``) or a duration (``5min``), above 0; a message string on
-    error, None if not given."""
+def parse_timeout(text: str | None, option: str = "--timeout") -> float | str | None:
+    """``--timeout`` (or ``option``): seconds (``90``) or a duration (``5min``), above 0; a
+    message string on error, None if not given."""
     if text is None:
         return None
     from roomba_bt.behaviours.units import UnitError, parse_quantity
@@ -374,9 +374,9 @@ def parse_timeout(text: str | None) -> float | str | None:
         try:
             value = parse_quantity("duration", text)
         except UnitError as exc:
-            return f"--timeout {text!r}: {exc}"
+            return f"{option} {text!r}: {exc}"
     if not math.isfinite(value) or value <= 0:  # float() takes "nan" and "inf"
-        return f"--timeout {text!r}: must be a finite duration, more than 0 s"
+        return f"{option} {text!r}: must be a finite duration, more than 0 s"
     return value
 
 

@@ -19,7 +19,8 @@ floor covered at 5, 10 and 20 minutes and at the end (mean, sd, min..max; of ``-
 if given; per area at the end) and how many episodes went a minute of brush time without
 new floor. Ctrl-C prints what finished (exit 130). Exit codes: 0 (and 1 when
 ``--min-rate`` is given and not reached), 2 for invalid input, 3 when the ``--scheduler``
-does not answer, 4 when a behaviour raised in an episode (a bug, not a mission outcome).
+does not answer, 4 when a behaviour raised in an episode or one ran past ``--wall-limit`` (a
+bug, not a mission outcome).
 """
 
 from __future__ import annotations
@@ -66,7 +67,8 @@ def register(sub: Any) -> None:
         Run MISSION in N seeded episodes on the simulator's virtual clock and report the success
         rate (95% Wilson interval), median and p90 time, bumps and the failure reasons. Exit codes:
         0 done, 1 --min-rate not reached, 2 invalid input, 3 --scheduler unreachable, 4 a behaviour
-        raised in an episode, 130 interrupted (what finished is summarised).
+        raised in an episode or one hung (--wall-limit), 130 interrupted (what finished is
+        summarised).
         """,
     )
     ev.add_argument(
@@ -165,6 +167,13 @@ def _add_start_options(ev: argparse.ArgumentParser) -> None:
         "heading drift of up to 0.9 deg/min; seeded; default 0: exact)",
     )
     ev.add_argument("--timeout", default="15min", help="mission time per episode (default 15min)")
+    ev.add_argument(
+        "--wall-limit",
+        metavar="DURATION",
+        help="wall-clock time per episode, after which it is recorded as HUNG (stuck: an "
+        "endless loop in a behaviour) and its worker process ended; default 60 s plus a tenth "
+        "of --timeout; none: no limit, and --jobs 1 runs the episodes in this process",
+    )
     add_profile_option(ev, "the simulated robot's model")
     ev.add_argument("--min-rate", type=fraction, metavar="FRACTION",
                     help="exit 1 if the success rate is below this, a fraction (0.9) or a "
@@ -278,8 +287,9 @@ def eval_command(args: argparse.Namespace) -> int:
     chosen, batches, world = plan
     # no more workers than episodes: a local Dask cluster would start each one's process
     jobs = min(args.jobs, sum(len(batch) for batch in batches))
+    limit = wall_limit(args)  # checked: a number or None
     engine = Engine("dask" if args.scheduler or args.engine == "dask" else "local", jobs,
-                    args.scheduler)  # fmt: skip
+                    args.scheduler, limit if isinstance(limit, float) else None)  # fmt: skip
     if engine.scheduler is None:
         _warn_if_more_jobs_than_cores(jobs)
     partial = _partial(args.out)
@@ -394,7 +404,8 @@ def rerun_command(args: argparse.Namespace, result: Any) -> str:
 
 def _verdict(args: argparse.Namespace, summaries: list[Summary], done: list[Evaluation]) -> int:
     """The exit code of a finished evaluation, with what decided it on stderr: 4 when a
-    behaviour raised in an episode, 1 when a success rate is below ``--min-rate``, else 0."""
+    behaviour raised in an episode or one ran past ``--wall-limit`` (HUNG), 1 when a success
+    rate is below ``--min-rate``, else 0."""
     min_rate: float | None = args.min_rate
     low = [s for s in summaries if min_rate is not None and s.rate < min_rate]
     for s in low:
@@ -403,15 +414,24 @@ def _verdict(args: argparse.Namespace, summaries: list[Summary], done: list[Eval
             f"--min-rate {100 * (min_rate or 0.0):.1f} %",
             file=sys.stderr,
         )
-    errors = [r for e in done for r in e.results if r.outcome == Outcome.ERROR.value]
-    if errors:
-        first = errors[0]
-        print(
-            f"roomba-bt eval: {len(errors)} episode(s) ended with a behaviour's exception "
-            f"(a bug in it or its plugin), the first: seed {first.seed}: {first.reason}; "
-            f"see its traceback with: {rerun_command(args, first)}",
-            file=sys.stderr,
-        )
+    from roomba_bt.evaluate.episode import HUNG
+
+    bug = False
+    for ending, how, then in (
+        (Outcome.ERROR.value, "ended with a behaviour's exception (a bug in it or its plugin)",
+         "see its traceback with"),
+        (HUNG, "ran past --wall-limit (stuck: an endless loop in a behaviour?)",
+         "run it alone with"),
+    ):  # fmt: skip
+        found = [r for e in done for r in e.results if r.outcome == ending]
+        if found:
+            bug = True
+            print(
+                f"roomba-bt eval: {len(found)} episode(s) {how}, the first: seed "
+                f"{found[0].seed}: {found[0].reason}; {then}: {rerun_command(args, found[0])}",
+                file=sys.stderr,
+            )
+    if bug:
         return ExitCode.BEHAVIOUR_ERROR
     return ExitCode.MISSION_FAILED if low else ExitCode.OK
 
@@ -439,6 +459,9 @@ def _check_arguments(args: argparse.Namespace) -> str | None:
     # --within, --battery and --min-rate: read and checked by argparse (their types)
     if not 0.0 <= args.odometry_error <= 0.2:
         return f"--odometry-error {args.odometry_error}: expected a fraction in 0..0.2"
+    limit = wall_limit(args)
+    if isinstance(limit, str):
+        return limit
     if args.out is not None:
         from roomba_bt.evaluate.records import results_format
 
@@ -447,6 +470,21 @@ def _check_arguments(args: argparse.Namespace) -> str | None:
         except ValueError as exc:
             return f"--out {exc}"
     return None
+
+
+def wall_limit(args: argparse.Namespace) -> float | str | None:
+    """``--wall-limit`` in seconds (None: ``none``), by default
+    :func:`~roomba_bt.evaluate.episode.default_wall_limit` of ``--timeout``; a message when
+    either is not a duration."""
+    from roomba_bt.evaluate.episode import default_wall_limit
+
+    if args.wall_limit is not None and args.wall_limit.strip().lower() == "none":
+        return None
+    if args.wall_limit is not None:
+        limit = parse_timeout(args.wall_limit, "--wall-limit")
+        return f"{limit}, or none" if isinstance(limit, str) else limit
+    timeout = parse_timeout(args.timeout)
+    return default_wall_limit(timeout) if isinstance(timeout, float) else timeout
 
 
 def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpec]], World] | int:
@@ -643,6 +681,7 @@ def run_conditions(args: argparse.Namespace) -> dict[str, Any]:
     )
     return {
         "timeout": parse_timeout(args.timeout),
+        "wall_limit": wall_limit(args),
         "seed": args.seed,
         "runs": args.runs,
         "world": args.world,

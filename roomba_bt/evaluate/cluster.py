@@ -20,10 +20,12 @@ finished, marked ``interrupted``.
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import logging
 import signal
 import sys
 import threading
+import traceback
 import uuid
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
@@ -32,6 +34,7 @@ from roomba_bt.evaluate.episode import (
     EpisodeResult,
     EpisodeSpec,
     all_self_contained,
+    hung_result,
     run_episode,
 )
 
@@ -71,16 +74,53 @@ def check_scheduler_address(scheduler: str) -> None:
         ) from None
 
 
-def run_on_worker(spec: EpisodeSpec) -> EpisodeResult:
-    """One episode on a Dask worker; the result names the worker."""
+def run_on_worker(spec: EpisodeSpec, wall_limit_s: float | None = None) -> EpisodeResult:
+    """One episode on a Dask worker, within ``wall_limit_s`` (:func:`within_wall_limit`);
+    the result names the worker."""
     from dataclasses import replace
 
     from distributed import get_worker
 
-    result = run_episode(spec)
+    result = run_episode(spec) if wall_limit_s is None else within_wall_limit(spec, wall_limit_s)
     with contextlib.suppress(ValueError):
         return replace(result, worker=get_worker().address)
     return result
+
+
+class WallLimitReached(BaseException):
+    """Raised in an episode's thread at its wall-clock limit: no ``except Exception`` (a
+    behaviour's, the runner's) takes it for the episode's own error."""
+
+
+def within_wall_limit(spec: EpisodeSpec, limit_s: float) -> EpisodeResult:
+    """:func:`run_episode`, or its HUNG result when it is still running after ``limit_s``
+    of wall-clock time. A Dask worker runs its tasks in threads, and a thread cannot be
+    ended: :class:`WallLimitReached` is raised in it instead, between two bytecodes (the
+    interpreter's asynchronous exception), so a loop in Python ends there, the robot's safe
+    stop runs, and the worker goes on. A loop in C code never sees it, and one that catches
+    BaseException swallows it: either holds its worker until it is restarted (a local pool,
+    ``--engine local``, ends its worker process whatever it runs)."""
+    thread, lock, done = threading.get_ident(), threading.Lock(), threading.Event()
+
+    def expire() -> None:
+        with lock:
+            if not done.is_set():
+                ctypes.pythonapi.PyThreadState_SetAsyncExc(
+                    ctypes.c_ulong(thread), ctypes.py_object(WallLimitReached)
+                )
+
+    timer = threading.Timer(limit_s, expire)
+    timer.daemon = True
+    timer.start()
+    try:
+        try:
+            return run_episode(spec)
+        finally:
+            with lock:  # no exception is raised in this thread after this
+                done.set()
+            timer.cancel()
+    except WallLimitReached as exc:
+        return hung_result(spec, limit_s, list(traceback.walk_tb(exc.__traceback__)))
 
 
 def _import_distributed() -> Any:
@@ -198,8 +238,10 @@ def run_on_client(
     client: Any,
     specs: Sequence[EpisodeSpec],
     progress: Callable[[int, int, EpisodeResult], None] | None = None,
+    wall_limit_s: float | None = None,
 ) -> tuple[list[EpisodeResult | None], int, bool]:
-    """``(results in spec order (None where cancelled), episodes retried, interrupted)``.
+    """``(results in spec order (None where cancelled), episodes retried, interrupted)``;
+    each episode within ``wall_limit_s`` (:func:`within_wall_limit`).
 
     Each result is released once gathered (in batches of :data:`RELEASE_EVERY`, after the
     scheduler says which of them a dead worker held): futures kept to the end made the
@@ -209,7 +251,7 @@ def run_on_client(
     batch = uuid.uuid4().hex[:12]  # keys unique on a cluster shared by many evaluations
     futures = {
         f"episode-{batch}-{i}": client.submit(
-            run_on_worker, spec, key=f"episode-{batch}-{i}", pure=False
+            run_on_worker, spec, wall_limit_s, key=f"episode-{batch}-{i}", pure=False
         )
         for i, spec in enumerate(all_self_contained(specs))
     }

@@ -26,6 +26,7 @@ import time
 from collections.abc import Iterable
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
+from types import FrameType
 from typing import Any
 
 from roomba_bt.evaluate.sources import MissionSources, bundle_mission, bundle_world
@@ -41,7 +42,8 @@ from roomba_bt.oi.frames import BUMPS_PACKETS
 from roomba_bt.oi.opcodes import opcodes
 from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.runtime.stack import RunStack
-from roomba_bt.runtime.summary import Outcome
+from roomba_bt.runtime.summary import Outcome, RunSummary
+from roomba_bt.runtime.teardown import innermost_behaviour, tree_path
 from roomba_bt.sim import Faults, SimLink, Simulator, World
 from roomba_bt.sim.world import (
     DOCK_BEAM_LIMIT,
@@ -487,11 +489,26 @@ def _run_episode(spec: EpisodeSpec) -> EpisodeResult:
     summary = stack.run(raise_interrupts=False)
     if summary.outcome is Outcome.INTERRUPTED:  # Ctrl-C (or SIGTERM) stops the evaluation,
         raise KeyboardInterrupt(summary.reason)  # not just this episode
+    stage = failure_stage(summary.reason)
+    return _measured(spec, world, pose, simulator, summary, summary.outcome.value, stage)
+
+
+def _measured(
+    spec: EpisodeSpec,
+    world: World,
+    pose: Any,
+    simulator: _MeasuredSimulator,
+    summary: RunSummary,
+    outcome: str,
+    stage: str,
+) -> EpisodeResult:
+    """The result of an episode that ran (to its end, or until its wall-clock limit): its
+    summary's words and counts, and what its simulator measured."""
     trace = simulator.trace[:: max(1, spec.trace_every)]
     events = simulator.events
     return EpisodeResult(
         seed=spec.seed,
-        outcome=summary.outcome.value,
+        outcome=outcome,
         reason=summary.reason,
         time_s=summary.mission_time_s,
         wall_s=summary.wall_time_s,
@@ -517,13 +534,63 @@ def _run_episode(spec: EpisodeSpec) -> EpisodeResult:
         mission=spec.mission,
         world=world.name,
         params=spec.params,
-        stage=failure_stage(summary.reason),
+        stage=stage,
         distance_m=summary.distance_mm / 1000.0,
         commands_sent=summary.commands_written,
         commands_refused=summary.refused_commands,
         worker=f"{socket.gethostname()}:{os.getpid()}",
         coverage=_coverage(simulator, spec.start_area or ""),
     )
+
+
+#: The outcome of an episode stopped at its wall-clock limit (``eval --wall-limit``): stuck
+#: (a behaviour's endless loop, most often), not a way the mission ended.
+HUNG = "hung"
+
+#: ``--wall-limit``'s default: this, plus a tenth of the episode's --timeout. Episodes run
+#: 200-900x real time (docs/performance.md), so one still running at a tenth of its mission
+#: time, after a minute for its set-up and a busy machine, is stuck.
+WALL_LIMIT_GRACE_S = 60.0
+WALL_LIMIT_SPEED = 10.0
+
+
+def default_wall_limit(timeout_s: float) -> float:
+    """The wall-clock seconds an episode of ``timeout_s`` mission time gets by default."""
+    return WALL_LIMIT_GRACE_S + timeout_s / WALL_LIMIT_SPEED
+
+
+def hung_result(
+    spec: EpisodeSpec, limit_s: float, frames: list[tuple[FrameType, int]] | None
+) -> EpisodeResult:
+    """The record of an episode stopped at its wall-clock limit: where it was stuck, from the
+    stack it was on (``frames``, outermost first; None: none could be read, a loop in C code),
+    the behaviour (its path in the tree, file:line, the stage) and what the episode had
+    measured by then (the locals of its :func:`_run_episode`); all zero when it was stuck
+    before its run began (compiling the mission: a plugin's import)."""
+    behaviour, where = innermost_behaviour(frames) if frames else (None, "")
+    if behaviour is not None:
+        where = f" in behaviour {tree_path(behaviour)} ({where})"
+    elif where:
+        where = f" {where}"
+    else:
+        where = ": no Python frame answered (a loop in C code?)"
+    reason = f"--wall-limit {limit_s:g} s of wall-clock time ran out{where}"
+    stage = behaviour.name.split("(", 1)[0] if behaviour is not None else ""
+    run = next((f.f_locals for f, _ in frames or () if f.f_code is _run_episode.__code__), {})
+    stack = run.get("stack")
+    if not isinstance(stack, RunStack):
+        zero = (0.0, 0.0, 0.0)
+        return EpisodeResult(
+            spec.seed, HUNG, reason, 0.0, limit_s, 0, zero, zero, 0, (), False, False, 0,
+            False, 0, 0.0, 0.0, mission=spec.mission, world=spec.world, params=spec.params,
+            stage=stage,
+        )  # fmt: skip
+    runner = stack.runner
+    runner.count_written()
+    summary = replace(runner.summary, reason=reason, wall_time_s=limit_s)
+    summary.take_last(runner.snapshot if runner.has_snapshot else None)
+    measured = _measured(spec, run["world"], run["pose"], run["simulator"], summary, HUNG, stage)
+    return tidied(measured)
 
 
 #: What runs the brushes (Motors, PWM Motors, the firmware's Clean, Spot and Max): a mission

@@ -12,19 +12,25 @@ hanging it: its unfinished episodes run again in a new one.
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import multiprocessing
+import os
 import signal
 import sys
+import threading
 import time
+import traceback
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
-from typing import TextIO
+from queue import Empty
+from types import FrameType
+from typing import Any, TextIO, cast
 
 from roomba_bt.evaluate import episode
-from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec, run_episode
+from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec, hung_result, run_episode
 
 Progress = Callable[[int, int, EpisodeResult], None]
 
@@ -60,12 +66,20 @@ def run_episodes(
     jobs: int = 1,
     progress: Progress | None = None,
     run: LocalRun | None = None,
+    wall_limit_s: float | None = None,
 ) -> list[EpisodeResult]:
     """Run every spec; results in spec order, ``progress(done, total, result)`` after each
-    one finishes (in the order they finish). With ``jobs`` > 1 a worker that dies does not
-    hang the evaluation: the episodes its pool had not finished run again in new workers
+    one finishes (in the order they finish). In worker processes, a worker that dies does
+    not hang the evaluation: the episodes its pool had not finished run again in new workers
     (counted in ``run.retried``), up to :data:`POOL_RESTARTS` times, then
-    :class:`WorkersLostError`. ``run`` holds what finished (also after a Ctrl-C)."""
+    :class:`WorkersLostError`. ``run`` holds what finished (also after a Ctrl-C).
+
+    ``wall_limit_s``: an episode still running after that many seconds of wall-clock time
+    is recorded as :data:`~roomba_bt.evaluate.episode.HUNG` (where it was stuck: its worker
+    is asked, :func:`_say_where_stuck`) and its worker is ended, the pool's other episodes
+    run again as after a death (not counted as one). Only a process can be ended whatever
+    it runs, so with a limit even ``jobs`` 1 runs in a worker process; without one (None),
+    ``jobs`` 1 runs in this process, and an endless loop in a behaviour hangs it."""
     run = run if run is not None else LocalRun()
     total = len(specs)
 
@@ -74,28 +88,33 @@ def run_episodes(
         if progress is not None:
             progress(len(run.results), total, result)
 
-    if jobs <= 1 or total <= 1:
+    if wall_limit_s is None and (jobs <= 1 or total <= 1):
         for index, spec in enumerate(specs):
             finished(index, run_episode(spec))
         return run.in_order()
-    todo = list(range(total))
-    for restart in range(POOL_RESTARTS + 1):
-        lost, unstarted = _pool_round(specs, todo, jobs, finished)
+    todo, deaths = list(range(total)), 0
+    while todo:
+        lost, unstarted, hung = _pool_round(specs, todo, jobs, finished, wall_limit_s)
         todo = sorted([*lost, *unstarted])
         if not todo:
-            return run.in_order()
-        if restart == POOL_RESTARTS:
+            break
+        if hung:  # ended here: no death
+            why = "; ".join(f"seed {specs[i].seed}: {run.results[i].reason}" for i in hung)
+            what = f"an episode ran past its wall-clock limit, its worker ended ({why})"
+        elif deaths == POOL_RESTARTS:
             raise WorkersLostError(
                 f"a worker process died {POOL_RESTARTS + 1} times (killed: the OOM killer?); "
                 f"{len(todo)} episode(s) did not finish: seeds {_seeds(specs, todo)}",
                 run.in_order(),
                 run.retried,
             )
+        else:
+            deaths += 1
+            what = "a worker process died (killed: the OOM killer?)"
         run.retried += len(lost)
-        print(f"roomba-bt eval: a worker process died (killed: the OOM killer?); the "
-              f"{len(lost)} episode(s) its pool had taken run again in new workers: seeds "
-              f"{_seeds(specs, lost)}", file=sys.stderr)  # fmt: skip
-    return run.in_order()  # not reached: the last round returns or raises
+        print(f"roomba-bt eval: {what}; the {len(lost)} episode(s) its pool had taken run "
+              f"again in new workers: seeds {_seeds(specs, lost)}", file=sys.stderr)  # fmt: skip
+    return run.in_order()
 
 
 def _seeds(specs: Sequence[EpisodeSpec], indices: Sequence[int], shown: int = 10) -> str:
@@ -109,16 +128,21 @@ def _pool_round(
     todo: Sequence[int],
     jobs: int,
     finished: Callable[[int, EpisodeResult], None],
-) -> tuple[list[int], list[int]]:
+    wall_limit_s: float | None = None,
+) -> tuple[list[int], list[int], list[int]]:
     """``specs[i]`` for each ``i`` in ``todo`` on ``jobs`` worker processes, each result to
     ``finished`` as it comes; when a worker died, the indices the pool had taken and lost
-    (running or queued in it: a broken pool ends every worker) and those never handed to it.
-    A few episodes are queued ahead per worker, not all: a million futures would fill memory."""
+    (running or queued in it: a broken pool ends every worker) and those never handed to it;
+    and those ended at ``wall_limit_s`` (their HUNG results given to ``finished``). A few
+    episodes are queued ahead per worker, not all: a million futures would fill memory."""
     method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
+    context = multiprocessing.get_context(method)
+    watch = _Watch(context, wall_limit_s)
     executor = ProcessPoolExecutor(
         max_workers=min(jobs, len(todo)),
-        mp_context=multiprocessing.get_context(method),
+        mp_context=context,
         initializer=_worker_started,
+        initargs=(watch.reports, wall_limit_s or 0.0),
     )
     queue = iter(todo)
     running: dict[Future[EpisodeResult], int] = {}
@@ -126,7 +150,7 @@ def _pool_round(
 
     def submit(index: int) -> None:
         try:
-            running[executor.submit(run_episode, specs[index])] = index
+            running[executor.submit(_watched_episode, index, specs[index])] = index
         except BrokenProcessPool:  # a worker died since the last result
             lost.append(index)
 
@@ -134,22 +158,104 @@ def _pool_round(
         for index in itertools.islice(queue, 2 * jobs):
             submit(index)
         while running:
-            ready, _ = wait(running, return_when=FIRST_COMPLETED)
+            ready, _ = wait(running, timeout=watch.next_check(), return_when=FIRST_COMPLETED)
             for future in ready:
                 index = running.pop(future)
+                if index in watch.hung:
+                    continue  # its HUNG result is in
                 if isinstance(future.exception(), BrokenProcessPool):
                     lost.append(index)
                     continue
                 finished(index, future.result())
-                nxt = None if lost else next(queue, None)
+                nxt = None if lost or watch.hung else next(queue, None)
                 if nxt is not None:
                     submit(nxt)
-        return sorted(lost), list(queue)
+            for index, result in watch.overdue(specs, running):
+                finished(index, result)
+        return sorted(lost), list(queue), sorted(watch.hung)
     except BaseException:  # Ctrl-C (or an episode's bug): no worker left running
         _terminate(executor)
         raise
     finally:
         executor.shutdown(wait=True, cancel_futures=True)
+        if watch.reports is not None:
+            watch.reports.close()
+
+
+#: How long the parent waits for a stuck worker to say where it is before ending it, and
+#: the longest wait between two looks at the episodes' wall-clock times (s).
+STUCK_REPORT_S = 2.0
+WATCH_POLL_S = 1.0
+
+
+class _Watch:
+    """A pool round's wall-clock limit: each worker says on ``reports`` when it starts an
+    episode (index, pid, ``time.monotonic()``: one clock for every process of the machine),
+    and where it is stuck when asked (:func:`_say_where_stuck`)."""
+
+    def __init__(self, context: Any, limit_s: float | None) -> None:
+        self.reports: Any = context.Queue() if limit_s is not None else None
+        self.limit_s = limit_s
+        self.started: dict[int, tuple[int, float]] = {}
+        self.hung: set[int] = set()
+
+    def _read(self, stuck: int | None = None) -> EpisodeResult | None:
+        """Every report waiting; with ``stuck``, that episode's HUNG result, waited for up
+        to :data:`STUCK_REPORT_S` (None: it did not come)."""
+        deadline = time.monotonic() + STUCK_REPORT_S
+        while True:
+            left = deadline - time.monotonic()
+            try:
+                if stuck is None:
+                    index, pid, started, result = self.reports.get_nowait()
+                elif left > 0:
+                    index, pid, started, result = self.reports.get(timeout=left)
+                else:
+                    return None
+            except Empty:
+                return None
+            if result is None:
+                self.started[index] = (pid, started)
+            elif index == stuck:
+                return cast(EpisodeResult, result)
+
+    def next_check(self) -> float | None:
+        """How long the round may wait for a result before looking again (None: no limit)."""
+        if self.limit_s is None:
+            return None
+        self._read()
+        now = time.monotonic()
+        ends = [t + self.limit_s - now for _, t in self.started.values()]
+        return max(0.01, min([WATCH_POLL_S, *ends]))
+
+    def overdue(
+        self, specs: Sequence[EpisodeSpec], running: dict[Future[EpisodeResult], int]
+    ) -> list[tuple[int, EpisodeResult]]:
+        """Each running episode past the limit, its HUNG result, its worker ended (the pool
+        breaks: the round ends as after a death). One at a time: the others are lost with
+        the pool, and run again."""
+        if self.limit_s is None:
+            return []
+        self._read()
+        taken = {i for f, i in running.items() if not f.done()}
+        for index in [i for i in self.started if i not in taken]:
+            del self.started[index]
+        now = time.monotonic()
+        limit = self.limit_s
+        late = [i for i, (_, t) in self.started.items() if now - t >= limit]
+        if not late or self.hung:
+            return []
+        index = late[0]
+        pid, _ = self.started.pop(index)
+        result = None
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(pid, signal.SIGUSR1)
+            result = self._read(stuck=index)
+            os.kill(pid, signal.SIGKILL)
+        if result is None:
+            result = hung_result(specs[index], limit, None)
+        self.hung.add(index)
+        return [(index, result)]
 
 
 def _terminate(executor: ProcessPoolExecutor) -> None:
@@ -162,12 +268,59 @@ def _terminate(executor: ProcessPoolExecutor) -> None:
         process.terminate()
 
 
-def _worker_started() -> None:
+def _worker_started(reports: Any = None, limit_s: float = 0.0) -> None:
     """A pool worker leaves Ctrl-C to its parent, which ends the pool (SIGTERM ends a worker
     at once: on the simulator nothing drives): each worker raising KeyboardInterrupt printed
-    its traceback under the summary."""
+    its traceback under the summary. With a wall-clock limit, ``reports`` is the queue to
+    the parent, and SIGUSR1 asks where the episode is stuck."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     episode.IN_POOL_WORKER = True
+    threading.Thread(target=_end_with, args=(os.getppid(),), daemon=True).start()
+    if reports is not None:
+        _WORKER.update(reports=reports, limit_s=limit_s, running=None)
+        signal.signal(signal.SIGUSR1, _say_where_stuck)
+
+
+def _end_with(parent: int) -> None:
+    """A worker ends when its parent does: an evaluation killed (``kill -9``, the OOM killer)
+    left its workers running their episodes, then waiting for more for ever, holding its
+    terminal's pipes (a worker's parent is the evaluation: a new one once it is gone)."""
+    while os.getppid() == parent:
+        time.sleep(PARENT_POLL_S)
+    os._exit(1)
+
+
+#: How often a worker looks whether its evaluation is still there (s).
+PARENT_POLL_S = 0.5
+
+#: A watched worker's queue to its parent, its limit, and the episode running (index, spec).
+_WORKER: dict[str, Any] = {}
+
+
+def _watched_episode(index: int, spec: EpisodeSpec) -> EpisodeResult:
+    """:func:`run_episode` in a pool worker; in a watched one, its start said to the parent
+    first."""
+    reports = _WORKER.get("reports")
+    if reports is None:
+        return run_episode(spec)
+    _WORKER["running"] = (index, spec)
+    reports.put((index, os.getpid(), time.monotonic(), None))
+    try:
+        return run_episode(spec)
+    finally:
+        _WORKER["running"] = None
+
+
+def _say_where_stuck(signum: int, frame: FrameType | None) -> None:
+    """SIGUSR1 in a watched worker: the running episode's HUNG result, read from the stack
+    it is stuck on (a signal's handler runs between two bytecodes of the main thread: in
+    the loop itself), to the parent, which then ends this process."""
+    running = _WORKER.get("running")
+    if running is None or frame is None:  # between two episodes: nothing is stuck
+        return
+    index, spec = running
+    frames = list(traceback.walk_stack(frame))[::-1]
+    _WORKER["reports"].put((index, os.getpid(), 0.0, hung_result(spec, _WORKER["limit_s"], frames)))
 
 
 @dataclass(frozen=True)
@@ -184,11 +337,14 @@ class Evaluation:
 @dataclass(frozen=True)
 class Engine:
     """Where episodes run: ``local`` processes (``jobs``), or ``dask`` (a local cluster of
-    ``jobs`` workers, or the cluster at ``scheduler``)."""
+    ``jobs`` workers, or the cluster at ``scheduler``); each episode's wall-clock limit
+    (s; None: none, :func:`run_episodes` and :func:`~roomba_bt.evaluate.cluster.run_on_worker`
+    say what it does where)."""
 
     kind: str = "local"
     jobs: int = 1
     scheduler: str | None = None
+    wall_limit_s: float | None = None
 
     def describe(self) -> str:
         if self.kind == "local":
@@ -214,7 +370,7 @@ def evaluate(
                 continue
             run = LocalRun()
             try:
-                run_episodes(specs, engine.jobs, bar, run)
+                run_episodes(specs, engine.jobs, bar, run, engine.wall_limit_s)
             except KeyboardInterrupt:
                 out.append(Evaluation(run.in_order(), run.retried, True, "local"))
                 continue
@@ -231,7 +387,7 @@ def evaluate(
             if out and out[-1].interrupted:
                 out.append(Evaluation([], 0, True, "dask"))
                 continue
-            results, retried, interrupted = run_on_client(client, specs, bar)
+            results, retried, interrupted = run_on_client(client, specs, bar, engine.wall_limit_s)
             finished = [r for r in results if r is not None]
             out.append(Evaluation(finished, retried, interrupted, "dask"))
     return out

@@ -51,32 +51,46 @@ def behaviour_error(exc: BaseException) -> str:
     source tells (:func:`returned_from`), else where the method is defined, said so."""
     frames = list(traceback.walk_tb(exc.__traceback__))
     what = f"{type(exc).__name__}: {exc}"
-    behaviour = None
-    for frame, _ in reversed(frames):
-        candidate = frame.f_locals.get("self")
-        if isinstance(candidate, py_trees.behaviour.Behaviour):
-            behaviour = candidate
-            break
-    where = f"at {frames[-1][0].f_code.co_filename}:{frames[-1][1]}" if frames else ""
+    behaviour, where = innermost_behaviour(frames)
     if isinstance(exc, InvalidStatus):  # raised after its update (check) returned: where it is
-        behaviour, frames = exc.node, []
+        behaviour, where = exc.node, _top_line(frames)
         update: Any = getattr(type(behaviour), exc.method, None)
         with contextlib.suppress(TypeError, OSError, SyntaxError):
             where = returned_from(update, exc.status)
     if behaviour is None:
         return f"{what} ({where})" if where else what
+    return f"behaviour {tree_path(behaviour)} raised {what} ({where}){_hint(exc, behaviour)}"
+
+
+def innermost_behaviour(
+    frames: list[tuple[FrameType, int]],
+) -> tuple[py_trees.behaviour.Behaviour | None, str]:
+    """The innermost behaviour on a stack (``frames`` outermost first, a traceback's or a
+    running thread's) and ``at file:line`` in its own module (a plugin's file) nearest the
+    top, else the top frame's; (None, the top frame's) when no behaviour is on it."""
+    found = _behaviour_frame(frames)
+    if found is None:
+        return None, _top_line(frames)
+    behaviour = found[0]
     with contextlib.suppress(TypeError, OSError):
         home = inspect.getfile(type(behaviour))
         for frame, line in reversed(frames):
             if frame.f_code.co_filename == home:
-                where = f"at {home}:{line}"
-                break
+                return behaviour, f"at {home}:{line}"
+    return behaviour, _top_line(frames)
+
+
+def _top_line(frames: list[tuple[FrameType, int]]) -> str:
+    return f"at {frames[-1][0].f_code.co_filename}:{frames[-1][1]}" if frames else ""
+
+
+def tree_path(node: py_trees.behaviour.Behaviour | None) -> str:
+    """``sequence / boom(x=1)``: the names from the root down to ``node``."""
     path = []
-    node: py_trees.behaviour.Behaviour | None = behaviour
     while node is not None:
         path.append(node.name)
         node = node.parent
-    return f"behaviour {' / '.join(reversed(path))} raised {what} ({where}){_hint(exc, behaviour)}"
+    return " / ".join(reversed(path))
 
 
 def _hint(exc: BaseException, behaviour: py_trees.behaviour.Behaviour) -> str:
@@ -203,16 +217,24 @@ def behaviour_at(frame: FrameType | None) -> str:
     """The innermost frame from ``frame`` out that is a py_trees behaviour's method (its
     ``self``), named, at its line: ``slow (Slow.terminate at plugin.py:12)``, the call that
     blocks or writes, in the behaviour's own code; "" when none is."""
-    while frame is not None:
+    found = _behaviour_frame(list(traceback.walk_stack(frame))[::-1]) if frame else None
+    if found is None:
+        return ""
+    owner, frame, line = found
+    code = frame.f_code
+    return f"{owner.name} ({type(owner).__name__}.{code.co_name} at {code.co_filename}:{line})"
+
+
+def _behaviour_frame(
+    frames: list[tuple[FrameType, int]],
+) -> tuple[py_trees.behaviour.Behaviour, FrameType, int] | None:
+    """The innermost of ``frames`` (outermost first) that is a py_trees behaviour's method:
+    the behaviour (its ``self``), the frame and its line."""
+    for frame, line in reversed(frames):
         owner = frame.f_locals.get("self")
         if isinstance(owner, py_trees.behaviour.Behaviour):
-            code = frame.f_code
-            return (
-                f"{owner.name} ({type(owner).__name__}.{code.co_name} at "
-                f"{code.co_filename}:{frame.f_lineno})"
-            )
-        frame = frame.f_back
-    return ""
+            return owner, frame, line
+    return None
 
 
 def during(phase: str) -> Callable[[FrameType | None], str]:

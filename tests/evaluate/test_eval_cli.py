@@ -273,6 +273,7 @@ def test_the_json_summary_records_how_the_episodes_were_made(
                            "comparisons"}  # fmt: skip
     assert report["conditions"] == {
         "timeout": 120.0,
+        "wall_limit": 72.0,  # by default a minute and a tenth of --timeout
         "seed": 7,
         "runs": 2,
         "world": "empty-room",
@@ -290,6 +291,7 @@ def test_the_json_summary_records_how_the_episodes_were_made(
     assert conditions["start_area"] == "kitchen" and conditions["world"] == "apartment"
     assert conditions["within"] is None and conditions["battery"] is None
     assert conditions["dock"] == {} and conditions["timeout"] == 900.0
+    assert conditions["wall_limit"] == 150.0
 
 
 def test_two_missions_are_compared_and_the_text_report_says_so(
@@ -577,7 +579,7 @@ def test_episodes_whose_robot_switched_off_are_failures_not_log_lines(
                  "--no-progress"])  # fmt: skip
     assert code == 0  # an evaluation that ran (--min-rate makes a low rate exit 1)
     out, err = capsys.readouterr()
-    assert "2  connection lost:" in out and "most likely a flat battery" in out
+    assert "2  CONNECTION LOST:" in out and "most likely a flat battery" in out
     assert "unconfirmed" not in err
     assert not [r for r in caplog.records if r.name.startswith("roomba_bt")]
 

@@ -1,0 +1,121 @@
+"""An episode stuck in a behaviour's endless loop is recorded as HUNG at its wall-clock
+limit, where it was stuck, and the sweep goes on (its worker process ended and replaced)."""
+
+from __future__ import annotations
+
+import re
+import threading
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.cli import main
+from roomba_bt.evaluate import EpisodeResult, EpisodeSpec, episode_specs, parallel
+from roomba_bt.evaluate.episode import HUNG
+from roomba_bt.evaluate.parallel import LocalRun, run_episodes
+from roomba_bt.mission import Permissions
+
+MISSIONS = Path(__file__).resolve().parents[2] / "missions"
+BUMP = str(MISSIONS / "bump-and-turn.yaml")
+
+_STUCK = """\
+import re
+
+from roomba_bt.behaviours import Condition, declare
+
+
+@declare("stuck", kind="condition", reads=(27,))
+class Stuck(Condition):
+    \"\"\"Never returns: a loop in Python.\"\"\"
+
+    def check(self, snapshot):
+        while True:
+            pass
+
+
+@declare("stuck_in_c", kind="condition", reads=(27,))
+class StuckInC(Condition):
+    \"\"\"Never returns: a regular expression that backtracks for ever, in C.\"\"\"
+
+    def check(self, snapshot):
+        return re.match(r"(a+)+$", "a" * 60 + "b") is not None
+"""
+
+
+def _stuck(tmp_path: Path, leaf: str = "stuck") -> EpisodeSpec:
+    (tmp_path / "stuck.py").write_text(_STUCK)
+    mission = tmp_path / f"{leaf}.yaml"
+    mission.write_text(
+        f"plugins: [./stuck.py]\ntree:\n  sequence:\n    - mode: safe\n    - wait: 1s\n"
+        f"    - {leaf}\n"
+    )
+    (spec,) = episode_specs(str(mission), runs=1, seed=5, timeout_s=5.0,
+                            permissions=Permissions(plugin_files=True))  # fmt: skip
+    return spec
+
+
+def _quick(runs: int) -> list[EpisodeSpec]:
+    return episode_specs(BUMP, runs=runs, seed=1, timeout_s=3.0, params=(("duration", "1s"),))
+
+
+def test_a_stuck_episode_is_hung_where_it_was_and_the_others_run(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The sweep hung until Ctrl-C. With --jobs 1 too (a worker process: only a process can
+    be ended whatever it runs), and the ended worker is no death: with no restart allowed
+    the episodes queued behind it still run."""
+    monkeypatch.setattr(parallel, "POOL_RESTARTS", 0)
+    run = LocalRun()
+    results = run_episodes([_stuck(tmp_path), *_quick(3)], jobs=1, run=run, wall_limit_s=2.0)
+    hung, *others = results
+    assert hung.outcome == HUNG and hung.seed == 5
+    assert hung.stage == "stuck"
+    assert hung.reason.startswith("--wall-limit 2 s of wall-clock time ran out in behaviour ")
+    assert re.search(rf"stuck \(at {re.escape(str(tmp_path))}/stuck.py:1[12]\)$", hung.reason)
+    assert hung.time_s == pytest.approx(1.02)  # the mission time it was stuck at
+    assert [r.outcome for r in others] == ["success"] * 3
+    assert run.retried >= 1  # queued in the pool behind it
+
+
+def test_a_loop_in_c_code_is_ended_all_the_same(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """No Python frame can say where it is (the signal's handler never runs): the worker is
+    ended after a wait, and the record says why it has no stage."""
+    monkeypatch.setattr(parallel, "STUCK_REPORT_S", 0.2)
+    (hung,) = run_episodes([_stuck(tmp_path, "stuck_in_c")], wall_limit_s=1.0)
+    assert hung.outcome == HUNG and hung.stage == ""
+    assert hung.reason == (
+        "--wall-limit 1 s of wall-clock time ran out: no Python frame answered (a loop in C code?)"
+    )
+
+
+def test_on_a_dask_worker_the_limit_raises_in_the_episode_s_thread(tmp_path: Path) -> None:
+    """A Dask worker runs episodes in threads, which cannot be ended: the limit raises in
+    the thread, the robot's safe stop runs, the result is HUNG with where it was."""
+    from roomba_bt.evaluate.cluster import within_wall_limit
+
+    out: list[EpisodeResult] = []
+    thread = threading.Thread(target=lambda: out.append(within_wall_limit(_stuck(tmp_path), 1.0)))
+    thread.start()
+    thread.join(30.0)
+    (hung,) = out
+    assert (hung.outcome, hung.stage) == (HUNG, "stuck")
+    assert "ran out in behaviour sequence / stuck (at " in hung.reason
+    assert hung.commands_sent > 0  # the start-up's and the safe stop's
+    (quick,) = _quick(1)
+    assert within_wall_limit(quick, 30.0).outcome == "success"
+
+
+def test_eval_reports_hung_episodes_and_exits_4(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    spec = _stuck(tmp_path)
+    code = main(["eval", spec.mission, "--runs", "1", "--seed", "5", "--timeout", "5s",
+                 "--wall-limit", "1s", "--allow-plugin-files", "--no-progress"])  # fmt: skip
+    out, err = capsys.readouterr()
+    assert code == 4
+    assert "HUNG: --wall-limit 1 s of wall-clock time ran out in behaviour sequence / stuck" in out
+    assert "1 episode(s) ran past --wall-limit (stuck: an endless loop in a behaviour?)" in err
+    assert main(["eval", BUMP, "--wall-limit", "soon"]) == 2
+    assert "--wall-limit 'soon': expected a duration" in capsys.readouterr().err
