@@ -25,7 +25,6 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
-from queue import Empty
 from types import FrameType
 from typing import Any, TextIO, cast
 
@@ -194,7 +193,9 @@ class _Watch:
     and where it is stuck when asked (:func:`_say_where_stuck`)."""
 
     def __init__(self, context: Any, limit_s: float | None) -> None:
-        self.reports: Any = context.Queue() if limit_s is not None else None
+        # a SimpleQueue writes in the worker's own thread: a Queue's feeder thread might
+        # never send the start of an episode stuck in C code, holding the GIL
+        self.reports: Any = context.SimpleQueue() if limit_s is not None else None
         self.limit_s = limit_s
         self.started: dict[int, tuple[int, float]] = {}
         self.hung: set[int] = set()
@@ -204,16 +205,12 @@ class _Watch:
         to :data:`STUCK_REPORT_S` (None: it did not come)."""
         deadline = time.monotonic() + STUCK_REPORT_S
         while True:
-            left = deadline - time.monotonic()
-            try:
-                if stuck is None:
-                    index, pid, started, result = self.reports.get_nowait()
-                elif left > 0:
-                    index, pid, started, result = self.reports.get(timeout=left)
-                else:
+            if self.reports.empty():
+                if stuck is None or time.monotonic() >= deadline:
                     return None
-            except Empty:
-                return None
+                time.sleep(0.01)  # a pipe another process writes: no event to wait on
+                continue
+            index, pid, started, result = self.reports.get()
             if result is None:
                 self.started[index] = (pid, started)
             elif index == stuck:

@@ -19,7 +19,7 @@ MISSIONS = Path(__file__).resolve().parents[2] / "missions"
 BUMP = str(MISSIONS / "bump-and-turn.yaml")
 
 _STUCK = """\
-import re
+import hashlib
 
 from roomba_bt.behaviours import Condition, declare
 
@@ -35,10 +35,11 @@ class Stuck(Condition):
 
 @declare("stuck_in_c", kind="condition", reads=(27,))
 class StuckInC(Condition):
-    \"\"\"Never returns: a regular expression that backtracks for ever, in C.\"\"\"
+    \"\"\"Never returns while a test runs: two billion rounds of a hash in C (OpenSSL's),
+    which does not go back to Python, where a signal's handler would run.\"\"\"
 
     def check(self, snapshot):
-        return re.match(r"(a+)+$", "a" * 60 + "b") is not None
+        return bool(hashlib.pbkdf2_hmac("sha256", b"x", b"y", 2**31 - 1))
 """
 
 
@@ -119,3 +120,14 @@ def test_eval_reports_hung_episodes_and_exits_4(
     assert "1 episode(s) ran past --wall-limit (stuck: an endless loop in a behaviour?)" in err
     assert main(["eval", BUMP, "--wall-limit", "soon"]) == 2
     assert "--wall-limit 'soon': expected a duration" in capsys.readouterr().err
+
+
+def test_a_dask_worker_goes_on_after_a_hung_episode(tmp_path: Path) -> None:
+    """On a real (local) cluster of one worker: the episode after the stuck one runs there."""
+    pytest.importorskip("distributed")
+    from roomba_bt.evaluate.parallel import Engine, evaluate
+
+    (done,) = evaluate([[_stuck(tmp_path), *_quick(1)]], Engine("dask", 1, wall_limit_s=2.0))
+    hung, quick = done.results
+    assert (hung.outcome, hung.stage, quick.outcome) == (HUNG, "stuck", "success")
+    assert hung.worker == quick.worker and not done.interrupted
