@@ -17,7 +17,9 @@ time difference with its interval. ``--out`` writes one record per episode (JSON
 CSV), ``--json`` prints the summary as JSON. For a mission that runs the brushes, the
 floor covered at 5, 10 and 20 minutes and at the end (mean, sd, min..max; of ``--start-area``
 if given; per area at the end) and how many episodes went a minute of brush time without
-new floor. Ctrl-C prints what finished (exit 130). Exit codes: 0 (and 1 when
+new floor. An episode still running after ``--wall-limit`` of wall-clock time (stuck in a
+behaviour's loop: the virtual clock does not move) is recorded as HUNG, where it was stuck,
+and its worker process replaced. Ctrl-C prints what finished (exit 130). Exit codes: 0 (and 1 when
 ``--min-rate`` is given and not reached), 2 for invalid input, 3 when the ``--scheduler``
 does not answer, 4 when a behaviour raised in an episode or one ran past ``--wall-limit`` (a
 bug, not a mission outcome).
