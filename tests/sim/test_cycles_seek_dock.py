@@ -117,3 +117,18 @@ def test_builtin_seek_dock_docks_from_random_starts_in_the_shipped_worlds(
             break
     assert sim.docked, (world_name, seed, sim.pose)
     assert sim.violations == [] and sim.mode is OIMode.PASSIVE
+
+
+def test_the_simulator_doc_gives_each_seek_dock_quote_to_its_own_spec() -> None:
+    """The 600 / Create 2 spec says "directs Roomba to drive onto the dock the next time it
+    encounters the docking beams", the 500 spec "sends Roomba to the dock" (the doc had them
+    the other way round)."""
+    import re
+    from pathlib import Path
+
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "simulator.md").read_text()
+    said = " ".join(doc.split("#### Seek Dock (143)")[1].split("\n\n")[1].split())
+    quotes = dict(re.findall(r"the (Roomba 500|Roomba 600 / Create 2) OI, \"([^\"]+)\"", said))
+    assert "sends Roomba to the dock" in quotes["Roomba 500"]
+    assert "drive onto the dock" in quotes["Roomba 600 / Create 2"]
+    assert "drive onto" not in quotes["Roomba 500"]
