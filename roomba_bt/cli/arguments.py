@@ -118,7 +118,7 @@ def add_profile_option(parser: Any, what: str = "the robot's model") -> None:
         help=f"{what}: {models}. It sets the stream checksum (a Roomba 500's leaves the "
         "header out), how packet 35 reports the OI mode (a Roomba 600's reads the mode + 1) "
         "and the commands there are (a Roomba 500 has no Reset 7 or Stop 173; Digit LEDs "
-        "Raw 163 does not work on a 600 or a Create 2); roomba-bt doctor tells which",
+        "Raw 163 does not work on current firmware of any of them); roomba-bt doctor tells which",
     )  # fmt: skip
 
 

@@ -28,8 +28,9 @@
   it meets them: compiled, with a warning (:func:`blind_in_full`).
 * **Commands the robot has.** Each leaf whose declared ``sends`` include a command the chosen
   profile lacks (Reset 7 and Stop 173 on the Roomba 500) is an error at that leaf; one the
-  profile has but whose firmware does not honour it (Digit LEDs Raw 163 on the 600 / Create
-  2: the 600 spec's Appendix B) is a warning: it is still sent (:func:`profile_commands`).
+  profile has but whose firmware does not honour it (Digit LEDs Raw 163: the 600 spec says
+  it does not work on current Create 2 and Roomba 500/600 firmware) is a warning: it is
+  still sent (:func:`profile_commands`).
 """
 
 from __future__ import annotations

@@ -328,8 +328,8 @@ def _int_sequence(command: str, argument: str, values: object, length: int) -> l
 
 
 def digit_leds_raw(digits: Sequence[int]) -> Command:
-    """Digit LEDs Raw (163): four segment masks, digit 3 (left) first. Broken on Create 2 /
-    Roomba 600 firmware: see :func:`roomba_bt.oi.profiles.command_warning`."""
+    """Digit LEDs Raw (163): four segment masks, digit 3 (left) first. Broken on current Create 2
+    and Roomba 500/600 firmware: see :func:`roomba_bt.oi.profiles.command_warning`."""
     return encode(163, *_int_sequence("digit_leds_raw", "digits", digits, 4))
 
 

@@ -11,7 +11,11 @@ A difference is a field here, never an ``if`` elsewhere. Each decision is explai
 * ``encoders_signed``: packets 43/44 are signed on the 600 / Create 2, unsigned on the 500.
   Odometry takes deltas modulo 2**16, so either gives the same distance.
 * ``stasis_maximum``: 0-3 on the 600 (2 = stasis wheel too dirty), 0-1 on the 500.
-* ``digit_leds_raw_works``: opcode 163 is broken on 600 / Create 2 firmware (Appendix B).
+* ``digit_leds_raw_works``: opcode 163 does not work on current firmware of any of them: the
+  600 / Create 2 spec, the newer of the two, says so of "current Create 2 and Roomba 500/600
+  firmware versions" (its Appendix B calls the bug open). The 500 spec describes 163 without
+  that note, as the older document would; the newer one names the 500's firmware, so the
+  ``roomba500`` profile warns too.
 * ``reports_mode_plus_one``: some 600-series firmware reports OI mode + 1 in packet 35.
 * ``sleeps_in_passive``: the robot sleeps after 5 minutes in Passive (keep-awake's default).
 """
@@ -111,15 +115,17 @@ class RobotProfile:
     def command_warning(self, command: CommandSpec | int | str) -> str | None:
         """A sentence to log before sending ``command`` to this robot, or ``None``.
 
-        Only Digit LEDs Raw (163) has one: the 600 spec (Appendix B) says it does not work on
-        current Create 2 / Roomba 600 firmware. It is still sent (a user may have firmware
-        where it works); the robot layer logs this so that a blank display is explained."""
+        Only Digit LEDs Raw (163) has one: the 600 / Create 2 spec says it does not work on
+        current Create 2 and Roomba 500/600 firmware. It is still sent (a user may have
+        firmware where it works); the robot layer logs this so that a blank display is
+        explained."""
         spec = _lookup(command)
         if spec.opcode == 163 and not self.digit_leds_raw_works:
             return (
-                f"digit_leds_raw (163) does not work on {self.title} firmware (OI spec "
-                "Appendix B, 'LEDs Raw: open'); the display may stay blank. "
-                "Use digit_leds_ascii (164) instead."
+                f"digit_leds_raw (163) does not work on current {self.title} firmware (the "
+                "Roomba 600 / Create 2 OI spec: 'This opcode does not work in current Create 2 "
+                "and Roomba 500/600 firmware versions'; its Appendix B: 'LEDs Raw: open'); the "
+                "display may stay blank. Use digit_leds_ascii (164) instead."
             )
         return None
 
@@ -173,7 +179,7 @@ ROOMBA500 = RobotProfile(
     encoders_signed=False,
     stasis_maximum=1,
     wall_signal_maximum=4095,
-    digit_leds_raw_works=True,
+    digit_leds_raw_works=False,
     reports_mode_plus_one=False,
 )
 

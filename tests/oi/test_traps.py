@@ -242,11 +242,14 @@ def test_command_unavailable_names_the_model_and_where_it_exists() -> None:
 
 
 def test_digit_leds_raw_warning_text() -> None:
-    for profile in (CREATE2, ROOMBA600):
+    """Every profile warns, the Roomba 500 too: the 600 / Create 2 spec (the newer) says 163
+    "does not work in current Create 2 and Roomba 500/600 firmware versions"."""
+    for profile in (CREATE2, ROOMBA600, ROOMBA500):
         text = command_warning(163, profile)
-        assert text is not None and "163" in text and "164" in text
+        assert text is not None and "163" in text and "164" in text, profile.name
+        assert f"does not work on current {profile.title} firmware" in text
+        assert "Roomba 500/600 firmware versions" in text
         assert profile.command_warning("digit_leds_raw") == text
-    assert command_warning(163, ROOMBA500) is None
     assert all(command_warning(op, CREATE2) is None for op in (137, 164, 128))
 
 
