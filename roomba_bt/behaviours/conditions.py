@@ -227,8 +227,14 @@ _IR_WHAT = ("red_buoy", "green_buoy", "force_field", "virtual_wall", "any_buoy",
     primary="sees",
 )  # fmt: skip
 class InfraRed(Condition):
-    """An IR character on the omni (17), left (52) or right (53) receiver: a dock buoy, the
-    force field, a virtual wall, a remote button."""
+    """An IR character on the omni (17), left (52) or right (53) receiver: a dock's red or
+    green buoy or force field, a virtual wall (162, or a Virtual Wall Lighthouse's fence), a
+    remote button.
+
+    The buoys and the force field are a dock's alone: a 560/570's Virtual Wall Lighthouse
+    sends beams of the same names, but as other characters (the 500 spec's ``0LLLL0BB``,
+    8-91, against the docks' 160-173 and 240-254), so ``any_buoy`` never fires at one. Its
+    fence keeps the robot out as a virtual wall does, and counts as one."""
 
     frame_pure = True
 
@@ -242,7 +248,9 @@ class InfraRed(Condition):
         if sees == "remote":
             button = self.value("button")
             return char.remote_button is not None and button in (None, char.remote_button)
-        return bool(getattr(char, sees))
+        if sees == "virtual_wall":
+            return char.virtual_wall
+        return char.from_dock and bool(getattr(char, sees))
 
 
 _CHARGING: dict[str, Callable[[ChargingState], bool]] = {

@@ -12,6 +12,10 @@
 The 500 and the 600 specifications both give 160-173 to the drive-on charger sold with those
 robots and 240-254 to the older "Discovery" charger; both families decode on every profile,
 since any robot may meet either dock. All 256 values are decoded once at import.
+
+A lighthouse's beams carry the spec's names (``red_buoy``, ``green_buoy``, ``force_field``
+set from BB, ``virtual_wall`` for the fence) but its characters, 8-91, are none of a dock's:
+``from_dock`` tells them apart (the ``ir`` condition's buoy words read docks only).
 """
 
 from __future__ import annotations

@@ -98,6 +98,15 @@ def test_light_bumper_bits_and_signals(robot: StubRobot, make: Make) -> None:
         (136, "remote", True),
         (0, "anything", False),
         (136, "anything", True),
+        # a 560/570 Virtual Wall Lighthouse (500 spec: 0LLLL0BB): its buoys and force field
+        # are not a dock's; its fence (BB = 00) is a virtual wall
+        (0b0_0011_0_11, "red_buoy", False),  # lighthouse 3, red buoy beam (27)
+        (0b0_0011_0_10, "green_buoy", False),
+        (0b0_0011_0_01, "force_field", False),  # 25
+        (0b0_0011_0_11, "any_buoy", False),
+        (0b0_0011_0_11, "dock", False),
+        (0b0_0011_0_00, "virtual_wall", True),  # its fence
+        (0b0_0011_0_11, "anything", True),
     ],
 )
 def test_ir_characters(robot: StubRobot, make: Make, code: int, sees: str, expected: bool) -> None:
