@@ -21,6 +21,7 @@ from typing import Any, ClassVar
 
 from roomba_bt.behaviours.declare import (
     BlackboardRef,
+    Comparison,
     Condition,
     Param,
     UnwrittenKey,
@@ -362,11 +363,20 @@ class OdometrySince(Condition):
 
 
 _STASIS = {"moving": Stasis.FORWARD_PROGRESS, "stuck": Stasis.NO_PROGRESS, "dirty": Stasis.DIRTY}
+(_STASIS_PACKET,) = packet_ids("stasis")
+
+
+def _stasis_compares(params: Mapping[str, Any]) -> tuple[tuple[str, Comparison], ...]:
+    """``stasis: dirty`` is ``stasis == 2``: a test a Roomba 500 (stasis 0..1) never passes."""
+    state = params.get("state", "stuck")
+    if not isinstance(state, str):  # from the blackboard: known only at run time
+        return ()
+    return (("state", (_STASIS_PACKET, "==", float(_STASIS[state]))),)
 
 
 @declare("stasis", kind="condition",
          params=(Param("state", enum(*_STASIS), default="stuck"),),
-         reads=packet_ids("stasis"), primary="state")  # fmt: skip
+         reads=packet_ids("stasis"), primary="state", compares=_stasis_compares)  # fmt: skip
 class StasisIs(Condition):
     """The stasis caster (58) reports forward progress, none, or (600 series) too dirty."""
 
@@ -412,7 +422,7 @@ def comparison_verdict(op: str, number: float, lo: int, hi: int) -> str | None:
 
 
 def comparison_problem(
-    test: tuple[int, str, float], packets: Mapping[int, PacketSpec], where: str = ""
+    test: Comparison, packets: Mapping[int, PacketSpec], where: str = ""
 ) -> str | None:
     """Why ``test`` cannot tell anything apart with these packets' ranges (``stasis == 7``:
     never true, stasis reads 0..3), or None."""
@@ -436,7 +446,7 @@ def _widest(pid: int) -> PacketSpec:
     return replace(specs[0], minimum=lo, maximum=hi)
 
 
-def _parse_comparison(value: object) -> tuple[int, str, float]:
+def _parse_comparison(value: object) -> Comparison:
     """The whole expression grammar: ``packet_name op number``; never ``eval``. A test no
     robot's reading can change the answer of (``stasis == 7``, ``wall_signal >= 0``) is an
     error: a loop until it never ends, or ends at once (a test true or false only on the

@@ -198,6 +198,11 @@ class BlackboardRef:
 
 PacketsOf = Callable[[Mapping[str, Any]], tuple[int, ...]]
 ModeOf = Callable[[Mapping[str, Any]], "OIMode | None"]
+#: A packet test ``(packet id, operator, number)``: ``stasis == 2`` is ``(58, "==", 2.0)``.
+Comparison = tuple[int, str, float]
+#: The packet tests a condition's answer is, by the parameter that sets each
+#: (``stasis: dirty`` -> ``(("state", (58, "==", 2.0)),)``).
+ComparesOf = Callable[[Mapping[str, Any]], tuple[tuple[str, Comparison], ...]]
 
 
 @dataclass(frozen=True, slots=True)
@@ -222,6 +227,10 @@ class Declaration:
     reads_keys: tuple[str, ...] = field(default=())  # params naming keys it reads
     #: its wheel commands only stop the wheels (``stop``: Drive 0), so it turns none
     halts_only: bool = False
+    #: the packet tests its answer is, where a parameter names one by a word (``stasis:
+    #: dirty`` is ``stasis == 2``): the per-profile range check reads them as it reads a
+    #: ``sensor:`` test's, so a test the chosen robot cannot pass is said either way
+    compares: ComparesOf | None = None
 
     @property
     def defaults(self) -> dict[str, Any]:
@@ -406,6 +415,7 @@ def declare(
     reads_keys: tuple[str, ...] = (),
     constraints: Callable[[Mapping[str, Any]], list[str]] | None = None,
     halts_only: bool = False,
+    compares: ComparesOf | None = None,
 ) -> Callable[[B], B]:
     """Class decorator: attach the :class:`Declaration` as ``cls.declaration``; the doc is
     the class docstring's first paragraph. ``leads_to`` defaults to what the opcode table
@@ -419,7 +429,7 @@ def declare(
         cls.declaration = Declaration(
             name, kind, cls, params, reads, sends, after, doc, primary,
             constraints=constraints, writes_keys=writes_keys, reads_keys=reads_keys,
-            halts_only=halts_only,
+            halts_only=halts_only, compares=compares,
         )  # fmt: skip
         return cls
 

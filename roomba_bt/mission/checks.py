@@ -39,7 +39,7 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from roomba_bt.behaviours.conditions import COMPARISON, comparison_problem
-from roomba_bt.behaviours.declare import BlackboardRef, Param
+from roomba_bt.behaviours.declare import BlackboardRef, Comparison, Param
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.ir import KeyDecl, Node
 from roomba_bt.mission.source import Loc
@@ -484,25 +484,42 @@ def profile_commands(
 
 
 def sensor_ranges(root: Node, profile: RobotProfile) -> list[Diagnostic]:
-    """Warnings: each comparison parameter (``sensor: stasis == 2``) whose answer cannot
-    change on the chosen robot, whose packet reads a narrower range than another model's
-    (a Roomba 500's stasis is 0..1, a 600's wall signal 0..1023, a 500's encoders unsigned).
-    A warning, not an error: the same mission may be meant for another model too; a test no
-    model can change is already an error where it is written."""
+    """Warnings: each packet test (``sensor: stasis == 2``, or a word that is one: ``stasis:
+    dirty``, the declaration's ``compares``) whose answer cannot change on the chosen robot,
+    whose packet reads a narrower range than another model's (a Roomba 500's stasis is 0..1,
+    a 600's wall signal 0..1023, a 500's encoders unsigned): one check, the profile's packet
+    table. A warning, not an error: the same mission may be meant for another model too; a
+    test no model can change is already an error where it is written."""
     warnings: list[Diagnostic] = []
     for node in root.walk():
-        decl = node.decl
-        if decl is None:
-            continue
-        for param in decl.params:
-            test = node.params.get(param.name)
-            if param.type is not COMPARISON or not isinstance(test, tuple):
-                continue
+        for name, said, test in _packet_tests(node):
             problem = comparison_problem(test, profile.packets, f" on the {profile.title}")
             if problem is not None:
-                loc = node.options.get(f"loc:{param.name}", node.loc)
-                warnings.append(loc.at(f"{decl.name}.{param.name}: {problem}").as_warning())
+                loc = node.options.get(f"loc:{name}", node.loc)
+                warnings.append(loc.at(f"{said}: {problem}").as_warning())
     return warnings
+
+
+def _default(param: Param | None) -> object:
+    return None if param is None else param.default
+
+
+def _packet_tests(node: Node) -> list[tuple[str, str, Comparison]]:
+    """A leaf's packet tests: (the parameter, how to name it, the test)."""
+    decl = node.decl
+    if decl is None:
+        return []
+    found = [
+        (param.name, f"{decl.name}.{param.name}", test)
+        for param in decl.params
+        if param.type is COMPARISON and isinstance(test := node.params.get(param.name), tuple)
+    ]
+    if decl.compares is not None:
+        found += [
+            (name, f"{decl.name}: {node.params.get(name, _default(decl.param(name)))}", test)
+            for name, test in decl.compares(node.params)
+        ]
+    return found
 
 
 def check_stream(packets: tuple[int, ...], baud: int) -> str | None:

@@ -333,3 +333,27 @@ def test_a_sensor_test_the_chosen_robot_cannot_change_is_a_warning(
         assert len(found) == 1 and found[0].startswith(f"5:23: sensor.test: '{test}' {warned}")
     else:
         assert found == []
+
+
+@pytest.mark.parametrize(
+    ("state", "profile", "warned"),
+    [
+        ("dirty", "roomba500", "'stasis == 2' can never be true on the Roomba 500 series: "
+         "stasis reads 0..1"),
+        ("dirty", "create2", ""),
+        ("stuck", "roomba500", ""),
+        ("moving", "roomba500", ""),
+    ],
+)  # fmt: skip
+def test_stasis_dirty_is_warned_of_on_the_500_as_stasis_equals_2_is(
+    mission_file: Callable[..., Path], state: str, profile: str, warned: str
+) -> None:
+    """``until: {stasis: dirty}`` validated silently on roomba500 (stasis reads 0..1: it never
+    fires) while ``sensor: stasis == 2`` warned: the word is the same test, one check."""
+    from roomba_bt.mission import load_mission
+    from roomba_bt.oi.profiles import get_profile
+
+    text = SENSOR_UNTIL.format(test="x").replace("{sensor: 'x'}", f"{{stasis: {state}}}")
+    mission = load_mission(mission_file(text), profile=get_profile(profile))
+    found = [f"{w.line}:{w.column}: {w.message}" for w in mission.warnings]
+    assert found == ([f"5:23: stasis: {state}: {warned}"] if warned else [])
