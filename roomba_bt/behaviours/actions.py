@@ -121,6 +121,16 @@ def _mode_target(params: Mapping[str, Any]) -> OIMode:
     return OIMode[str(params.get("to", "safe")).upper()]
 
 
+#: The command that enters each mode a ``mode`` leaf may ask for.
+_MODE_COMMANDS = {OIMode.PASSIVE: oi.start, OIMode.SAFE: oi.safe, OIMode.FULL: oi.full}
+_MODE_OPCODES = {mode: command().opcode for mode, command in _MODE_COMMANDS.items()}
+
+
+def _mode_sends(params: Mapping[str, Any]) -> tuple[int, ...]:
+    """``mode: passive`` sends Start (128) alone: accepted in Off, the one way back there."""
+    return (_MODE_OPCODES[_mode_target(params)],)
+
+
 @declare(
     "mode",
     kind="action",
@@ -131,6 +141,7 @@ def _mode_target(params: Mapping[str, Any]) -> OIMode:
               doc="FAILURE if packet 35 does not show the mode by then"),
     ),
     sends=opcodes("start", "safe", "full"),
+    sends_by=_mode_sends,
     leads_to=_mode_target,
     primary="to",
 )  # fmt: skip
@@ -153,8 +164,7 @@ class Mode(Action):
             self.feedback_message = f"robot did not enter {self._target.label}"
             return _FAIL
         if snap.time - self._last_sent >= 0.5:
-            command = {OIMode.PASSIVE: oi.start, OIMode.SAFE: oi.safe, OIMode.FULL: oi.full}
-            self.send(command[self._target]())
+            self.send(_MODE_COMMANDS[self._target]())
             self._last_sent = snap.time
         return _RUN
 

@@ -231,6 +231,9 @@ class Declaration:
     #: dirty`` is ``stasis == 2``): the per-profile range check reads them as it reads a
     #: ``sensor:`` test's, so a test the chosen robot cannot pass is said either way
     compares: ComparesOf | None = None
+    #: the commands it sends with given parameters, where fewer than ``sends`` (``mode:
+    #: passive`` sends Start alone): the static mode check holds the leaf to those
+    sends_by: Callable[[Mapping[str, Any]], tuple[int, ...]] | None = None
 
     @property
     def defaults(self) -> dict[str, Any]:
@@ -244,10 +247,16 @@ class Declaration:
     @property
     def modes(self) -> frozenset[OIMode]:
         """Modes in which every command it sends is accepted (all modes if it sends none)."""
-        modes = ALL_MODES
-        for opcode in self.sends:
-            modes = modes & COMMANDS[opcode].modes
-        return modes
+        return _accepted_in(self.sends)
+
+    def sent(self, params: Mapping[str, Any]) -> tuple[int, ...]:
+        """The commands it sends with ``params``: ``sends``, or fewer (``sends_by``)."""
+        return self.sends if self.sends_by is None else self.sends_by(params)
+
+    def modes_for(self, params: Mapping[str, Any]) -> frozenset[OIMode]:
+        """Modes in which every command it sends with ``params`` is accepted (``mode:
+        passive`` sends Start alone, accepted in Off too)."""
+        return _accepted_in(self.sent(params))
 
     @property
     def turns_wheels(self) -> bool:
@@ -402,6 +411,13 @@ def mode_after_sending(sends: tuple[int, ...]) -> OIMode | None:
     return after.pop() if len(after) == 1 else None
 
 
+def _accepted_in(opcodes: tuple[int, ...]) -> frozenset[OIMode]:
+    modes = ALL_MODES
+    for opcode in opcodes:
+        modes = modes & COMMANDS[opcode].modes
+    return modes
+
+
 def declare(
     name: str,
     *,
@@ -416,6 +432,7 @@ def declare(
     constraints: Callable[[Mapping[str, Any]], list[str]] | None = None,
     halts_only: bool = False,
     compares: ComparesOf | None = None,
+    sends_by: Callable[[Mapping[str, Any]], tuple[int, ...]] | None = None,
 ) -> Callable[[B], B]:
     """Class decorator: attach the :class:`Declaration` as ``cls.declaration``; the doc is
     the class docstring's first paragraph. ``leads_to`` defaults to what the opcode table
@@ -429,7 +446,7 @@ def declare(
         cls.declaration = Declaration(
             name, kind, cls, params, reads, sends, after, doc, primary,
             constraints=constraints, writes_keys=writes_keys, reads_keys=reads_keys,
-            halts_only=halts_only, compares=compares,
+            halts_only=halts_only, compares=compares, sends_by=sends_by,
         )  # fmt: skip
         return cls
 

@@ -76,6 +76,19 @@ def _label(modes: frozenset[OIMode]) -> str:
     return " or ".join(m.label for m in sorted(modes))
 
 
+def _mode_advice(allowed: Modes, bad: Modes) -> str:
+    """What brings the robot into a mode of ``allowed`` from every mode of ``bad``: from Off
+    (after Reset 7 or Stop 173) only Start (128) leads back, which ``mode: passive`` sends;
+    Safe and Full are refused there."""
+    if OIMode.OFF not in bad:
+        return "put a mode change (mode: safe or mode: full) before it on every path"
+    then = "" if OIMode.PASSIVE in allowed else ", then mode: safe or mode: full,"
+    return (
+        f"put mode: passive{then} before it on every path (from Off, where Reset (7) and "
+        "Stop (173) leave the robot, only Start (128), which mode: passive sends, leads back)"
+    )
+
+
 class ModeCheck:
     """The static mode pass; ``errors`` after :meth:`run`."""
 
@@ -99,17 +112,17 @@ class ModeCheck:
         assert decl is not None
         seen = self.entered.get(id(node))
         self.entered[id(node)] = (node, entry if seen is None else seen[1] | entry)
-        allowed = decl.modes
+        allowed = decl.modes_for(node.params)
         bad = entry - allowed
         if bad and id(node) not in self._reported:
             self._reported.add(id(node))
-            refused = [COMMANDS[op] for op in decl.sends if bad - COMMANDS[op].modes]
+            sent = decl.sent(node.params)
+            refused = [COMMANDS[op] for op in sent if bad - COMMANDS[op].modes]
             sends = ", ".join(f"{c.title} ({c.opcode})" for c in refused)
             self.errors.append(
                 node.loc.at(
                     f"{decl.name} sends {sends}, accepted only in {_label(allowed)} mode, "
-                    f"but it can be reached in {_label(bad)} mode: put a mode change "
-                    "(mode: safe or mode: full) before it on every path"
+                    f"but it can be reached in {_label(bad)} mode: {_mode_advice(allowed, bad)}"
                 )
             )
         after = decl.mode_after(node.params)

@@ -97,3 +97,35 @@ def test_digit_leds_raw_is_a_warning_on_every_profile_the_500_too(tmp_path: Path
         assert [d.severity for d in found] == ["warning"], (name, found)
         assert (found[0].line, found[0].column) == (6, 7)
         assert "raw_digits sends digit_leds_raw (163) does not work on" in found[0].message
+
+
+def _after_reboot(tmp_path: Path, *steps: str) -> Path:
+    (tmp_path / "extra.py").write_text(PLUGIN)
+    path = tmp_path / "back.yaml"
+    path.write_text(
+        "mission: back\nplugins: [./extra.py]\ntree:\n  sequence:\n    - mode: safe\n"
+        "    - reboot\n" + "".join(f"    - {step}\n" for step in steps)
+    )
+    return path
+
+
+def test_after_a_reset_mode_passive_leads_back_and_the_advice_says_so(tmp_path: Path) -> None:
+    """From Off (after Reset 7 or Stop 173) only Start (128) leads back. ``mode: passive``
+    sends Start alone, yet was held to Safe's and Full's modes too: an error that advised a
+    ``mode: safe`` before it, which Off refuses as well; on create2 no mission could come
+    back from a Reset."""
+    allowed = Permissions(plugin_files=True)
+    back = _after_reboot(tmp_path, "mode: passive", "mode: safe", "drive: {velocity: 0 mm/s}")
+    assert validate_files([back], profile=PROFILES["create2"], permissions=allowed) == []
+    for step, needs in (
+        ("mode: safe", ""),
+        ("leds: {dock: true}", ", then mode: safe or mode: full,"),
+    ):
+        found = validate_files(
+            [_after_reboot(tmp_path, step)], profile=PROFILES["create2"], permissions=allowed
+        )
+        assert len(found) == 1 and found[0].line == 7, found
+        message = found[0].message
+        assert "it can be reached in Off mode" in message
+        assert f": put mode: passive{needs} before it on every path (from Off" in message
+        assert "only Start (128), which mode: passive sends, leads back" in message
