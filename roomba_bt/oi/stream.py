@@ -20,12 +20,16 @@ How garbage is handled (the parser never raises on bad bytes):
   either: counted in ``implausible`` and, like a checksum failure, only its header byte is
   skipped. The OI checksum is an 8-bit sum: two flips of the same bit in opposite directions
   cancel (1 pair in 16), and a truncated frame completed by the next one's bytes passes about
-  1 time in 256; the ranges catch most of those. Out of range means: a reserved bit set
-  (packet 7 bits 4-7, 14 bits 5-7, 45 bit 7, the high nibble of a 12-bit signal...), a value
-  past its table limit (charging state 0-5, requested velocities -500..500, packet 35 0-3, or
-  1-4 on firmware that reports the mode + 1), or an encoder step larger than the wheels turn
-  in the frames since the last accepted one (:data:`~roomba_bt.oi.odometry.MAX_COUNTS_PER_SLOT`
-  each; two consecutive frames that agree re-anchor the encoders after a real gap);
+  1 time in 256; the ranges catch most of those. The checksum is judged first, even where a
+  reserved bit already rules the candidate out: one that fails it is a checksum failure, and
+  one that passes the other model's rule counts in ``other_checksum`` too (a Roomba 500's wall
+  signal over 1023, read with a 600's profile, is its own model's frame, not noise). Out of
+  range means: a reserved bit set (packet 7 bits 4-7, 14 bits 5-7, 45 bit 7, the high nibble
+  of a 12-bit signal...), a value past its table limit (charging state 0-5, requested
+  velocities -500..500, packet 35 0-3, or 1-4 on firmware that reports the mode + 1), or an
+  encoder step larger than the wheels turn in the frames since the last accepted one
+  (:data:`~roomba_bt.oi.odometry.MAX_COUNTS_PER_SLOT` each; two consecutive frames that agree
+  re-anchor the encoders after a real gap);
 * a frame cut at the end of a chunk waits for the next ``feed``.
 """
 
@@ -334,7 +338,16 @@ class StreamParser:
             bits = from_bytes(window, "big")
             if bits & mask != template:
                 if bits & id_mask == template:  # a frame, but a reserved bit is set
-                    counters.implausible += 1
+                    # its checksum judged first, as for any frame: one failing ours and
+                    # passing the other rule is another model's (a 500's wall signal over
+                    # 1023 sets bits the 600's range leaves clear)
+                    total = byte_sum(window) & 0xFF
+                    if total in ok_sums:
+                        counters.implausible += 1
+                    else:
+                        counters.checksum_failures += 1
+                        if total in self._other_sums:
+                            counters.other_checksum += 1
                 elif window[1] == n:
                     counters.cut_frames += 1
                 skipped += 1

@@ -105,3 +105,28 @@ def test_the_parser_counts_frames_passing_the_other_checksum_rule() -> None:
     both = StreamParser((7, 35), ROOMBA500)
     assert len(both.feed(frames)) == 5 and both.counters.other_checksum == 0
     assert CREATE2.checksum_sums == {0} and ROOMBA500.checksum_sums == {0, 19}
+
+
+def test_a_500_beside_a_wall_read_as_a_create2_is_still_named_by_its_checksum() -> None:
+    """Its wall signal (27) over 1023 sets bits the 600's range leaves clear: the frames
+    were counted implausible before their checksum was judged, so the "most likely a Roomba
+    500" hint never came and the user was told the line was garbled."""
+    from roomba_bt.oi.identify import checksum_mismatch
+    from roomba_bt.oi.stream import StreamParser
+
+    layout = layout_for((100,), ROOMBA500, True)
+    frames = b"".join(layout.stream_frame({27: 2263, 35: 1, 43: i, 44: i}, False) for i in range(6))
+    parser = StreamParser((100,), CREATE2)
+    assert parser.feed(frames) == []
+    counters = parser.counters
+    assert counters.checksum_failures == counters.other_checksum == 6
+    mismatch = checksum_mismatch(
+        CREATE2, frames=counters.frames, failures=counters.checksum_failures,
+        other_checksum=counters.other_checksum,
+    )  # fmt: skip
+    assert mismatch is not None and mismatch.likely == (ROOMBA500,)
+    # a 600's own frame with a reserved bit set (its checksum right) is still implausible
+    wrong = layout_for((100,), CREATE2, True).stream_frame({27: 2263, 35: 1})
+    refused = StreamParser((100,), CREATE2)
+    assert refused.feed(wrong) == [] and refused.counters.implausible == 1
+    assert refused.counters.checksum_failures == 0

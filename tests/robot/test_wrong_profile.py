@@ -56,3 +56,31 @@ def test_noise_is_not_a_wrong_profile() -> None:
     assert checksum_mismatch(ROOMBA500, frames=0, failures=60, other_checksum=60) is None
     found = checksum_mismatch(CREATE2, frames=0, failures=60, other_checksum=58)
     assert found is not None and found.likely == (ROOMBA500,)
+
+
+#: A room whose south wall is 30 mm from the robot's right side: the wall sensor reads a
+#: signal only a Roomba 500 sends (over the 600's 1023).
+BESIDE_A_WALL = """
+name: beside-a-wall
+rooms: [[[0, 0], [4, 0], [4, 4], [0, 4]]]
+robot: {start: {at: [2, 0.2], heading: 0}}
+"""
+
+
+@pytest.mark.parametrize("profile", [CREATE2, ROOMBA600])
+def test_a_roomba500_beside_a_wall_is_named_not_called_noise(profile: RobotProfile) -> None:
+    """Its frames set bits the 600's wall-signal range leaves clear; they were counted as
+    out of range before their checksum was judged, and the stall said "noise on the line,
+    or a wrong baud rate" instead of naming the Roomba 500."""
+    from roomba_bt.sim import parse_world
+
+    simulator = Simulator(parse_world(BESIDE_A_WALL), ROOMBA500, seed=1)
+    connection = Connection(SimLink(simulator), profile)
+    connection.start("passive", (100,))
+    with pytest.raises(StreamStalled) as stalled:
+        for _ in range(20):
+            connection.poll(0.05)
+    assert simulator.values[27] > 1023, "the robot sees the wall"
+    assert stalled.value.mismatch is not None
+    assert "--profile roomba500" in str(stalled.value)
+    connection.close()
