@@ -623,10 +623,12 @@ def _missions(profile: Any, baud: int, report: Report) -> None:
         (fits if size <= budget else too_big).append(f"{name} {size}")
     text = f"a 15 ms slot carries {budget} bytes at {baud} baud; frames: " + ", ".join(fits)
     if too_big:
+        from roomba_bt.robot.handshake import SEND_BAUD
+
         report.warn(
             "missions",
             text + "; too big: " + ", ".join(too_big),
-            "switch the robot to 115200 (power-cycle it, or Baud 129) to run those",
+            f"switch the robot to 115200 to run those: {profile.at_19200} ({SEND_BAUD})",
         )
     else:
         report.ok("missions", text + ": all fit")

@@ -71,7 +71,8 @@ def register(sub: Any) -> None:
     )  # fmt: skip
     parser.add_argument(
         "--baud", type=int, choices=(19200, 115200), default=None,
-        help="the robot's baud rate: 115200 (the default) or 19200 (Clean held at power-off)",
+        help="the robot's baud rate: 115200 (the default) or 19200 (Clean held at power-on on a "
+        "Roomba 500, at power-off on a 600 or Create 2)",
     )  # fmt: skip
     parser.add_argument(
         "--asleep", action="store_true",

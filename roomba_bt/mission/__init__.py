@@ -98,7 +98,7 @@ def _compile(
     unavailable, ignored = profile_commands(tree, profile)
     diagnostics = ctx.diagnostics + modes.errors + keys.errors + key_ranges(tree, ctx.keys)
     diagnostics += restarted_limits(tree) + unavailable
-    problem = check_stream(tuple(sorted(packets)), baud or profile.default_baud)
+    problem = check_stream(tuple(sorted(packets)), baud or profile.default_baud, profile)
     if problem is not None:
         assert parsed.tree_loc is not None
         diagnostics.append(parsed.tree_loc.at(problem))

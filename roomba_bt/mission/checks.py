@@ -54,6 +54,7 @@ from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.oi.opcodes import COMMANDS
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
+from roomba_bt.robot.handshake import SEND_BAUD
 
 #: Packets the runtime always streams, whatever the mission reads: bumps and wheel drops (7),
 #: the four cliffs (9-12) for its safety stop, charging sources (34), OI mode (35) for the
@@ -535,8 +536,11 @@ def _packet_tests(node: Node) -> list[tuple[str, str, Comparison]]:
     return found
 
 
-def check_stream(packets: tuple[int, ...], baud: int) -> str | None:
-    """The bandwidth error message for a mission reading ``packets``, or None."""
+def check_stream(
+    packets: tuple[int, ...], baud: int, profile: RobotProfile = DEFAULT_PROFILE
+) -> str | None:
+    """The bandwidth error message for a mission reading ``packets`` on ``profile``'s robot,
+    or None; where it fits at the usual rate, how that robot comes back to it."""
     ids = tuple(sorted(set(packets) | set(RUNTIME_PACKETS)))
     try:
         check_bandwidth(ids, baud)
@@ -544,11 +548,7 @@ def check_stream(packets: tuple[int, ...], baud: int) -> str | None:
         extra = sorted(set(packets) - set(RUNTIME_PACKETS))
         fix, usual = "", DEFAULT_PROFILE.default_baud  # every model's rate after power-up
         if baud < usual and check_stream(packets, usual) is None:
-            fix = (
-                f"; it fits at {usual}: a robot talking at {baud} (its Clean button "
-                "held at power-off) stays there until it loses power: power-cycle it, or send "
-                "Baud (129) (roomba-bt doctor)"
-            )
+            fix = f"; it fits at {usual}: {profile.at_19200} ({SEND_BAUD})"
         return (
             f"the sensor packets this mission reads ({extra} plus the runtime's "
             f"{list(RUNTIME_PACKETS)}) do not fit the stream: {exc}{fix}"

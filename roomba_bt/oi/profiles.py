@@ -18,6 +18,10 @@ A difference is a field here, never an ``if`` elsewhere. Each decision is explai
   ``roomba500`` profile warns too.
 * ``reports_mode_plus_one``: some 600-series firmware reports OI mode + 1 in packet 35.
 * ``sleeps_in_passive``: the robot sleeps after 5 minutes in Passive (keep-awake's default).
+* ``slow_baud_how`` / ``slow_baud_until``: how the robot comes to talk at 19200 and what
+  ends it, each spec's own procedure ("Serial Port Settings"): the 500 spec holds Clean
+  "when powering on", the 600 spec "while powering off"; the 500 stays there until "the
+  power is turned off", the 600 until "the processor loses battery power".
 """
 
 from __future__ import annotations
@@ -78,6 +82,23 @@ class RobotProfile:
     max_velocity_mm_s: int = 500
     max_radius_mm: int = 2000
     all_sensors_group: int = 100
+    #: how it comes to talk at 19200 (its spec's "Serial Port Settings"), and what ends it
+    slow_baud_how: str = (
+        "its Clean button was held while it powered off, until a descending tune, or three "
+        "BRC pulses 2 s after power-on"
+    )
+    slow_baud_until: str = (
+        "until its processor loses battery power (take the battery out) or Baud (129) sets "
+        "another rate"
+    )
+
+    @property
+    def at_19200(self) -> str:
+        """How this robot comes to talk at 19200 and what brings it back, in a sentence."""
+        return (
+            f"on the {self.title}, 19200 comes after {self.slow_baud_how}, and lasts "
+            f"{self.slow_baud_until}"
+        )
 
     @property
     def checksum_sums(self) -> frozenset[int]:
@@ -181,6 +202,13 @@ ROOMBA500 = RobotProfile(
     wall_signal_maximum=4095,
     digit_leds_raw_works=False,
     reports_mode_plus_one=False,
+    slow_baud_how=(
+        "its Clean button was held while it powered on, until a descending tune, or three "
+        "BRC pulses 2 s after power-on"
+    ),
+    slow_baud_until=(
+        "until it is powered off or its battery is taken out, or Baud (129) sets another rate"
+    ),
 )
 
 PROFILES: Mapping[str, RobotProfile] = MappingProxyType(

@@ -192,7 +192,7 @@ class Connection:
         write_timeout: float = 0.5,
     ) -> Connection:
         """Open ``url`` (device path, ``socket://``, ``rfc2217://``, ``loop://``) at ``baud``,
-        one of the OI's rates (115200 by default; 19200 after Clean was held at power-on)."""
+        one of the OI's rates (115200 by default; 19200: ``profile.at_19200``)."""
         if baud not in BAUD_CODES:
             rates = ", ".join(str(rate) for rate in BAUD_CODES)
             raise ValueError(f"baud {baud!r}: the OI talks at {rates}")

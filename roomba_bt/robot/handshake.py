@@ -3,8 +3,9 @@
 One function for ``roomba-bt doctor`` and ``--baud auto`` (``run``, ``sensors``), so both try
 the same rates in the same order and read an answer the same way.
 
-The OI talks at 115200 (its default) or 19200 (after Clean is held at power-off, or three BRC
-pulses at power-on); those are the rates tried, 115200 first because it is the default and
+The OI talks at 115200 (its default) or 19200 (after Clean is held at power-on on a Roomba
+500, at power-off on a 600 / Create 2, or three BRC pulses after power-on:
+``RobotProfile.at_19200``); those are the rates tried, 115200 first because it is the default and
 so the likeliest (a rate the user names goes first). At each rate the probe sends::
 
     [128]                 Start: Passive, from any mode (Off included)
@@ -36,8 +37,11 @@ from roomba_bt.oi.packets import PACKETS, packet_ids
 from roomba_bt.robot.wake import PULSE_LENGTH_S, HangUpLine, WakeLine
 from roomba_bt.transport.base import Transport
 
-#: The OI's rates, likeliest first: the default, then the rate of the Clean-held power-off.
+#: The OI's rates, likeliest first: the default, then the rate Clean held at power-on (500)
+#: or power-off (600 / Create 2) sets.
 OI_RATES: tuple[int, ...] = (115200, 19200)
+#: Where Baud (129) can be sent from: no ``roomba-bt`` command sends it.
+SEND_BAUD = "in Python, Connection.set_baud(115200) sends Baud (129); no roomba-bt command does"
 #: OI mode, charging state, charging sources: one byte each, each with a narrow range.
 PROBE_PACKETS: tuple[int, ...] = packet_ids("oi_mode", "charging_state", "charging_sources")
 #: The probe's question, ``[149][3][35][21][34]``.

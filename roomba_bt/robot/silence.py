@@ -305,8 +305,7 @@ def answers_elsewhere(connection: Connection, silent: NoAnswer) -> ConnectionFai
     return ConnectionFailed(
         connection.name,
         f"the robot answers at {found.baud} baud, not at the {run_rate} of the run: it answered "
-        f"no Query List at {run_rate}, and Start and a Query List at {found.baud} (a Create 2 "
-        f"talks at 19200 after Clean was held at power-off, or three BRC pulses at power-on, "
-        f"until its battery is out); open it at {found.baud} (--baud {found.baud} or --baud auto; "
-        f"in Python, Connection.open(port, baud={found.baud}))",
+        f"no Query List at {run_rate}, and Start and a Query List at {found.baud} "
+        f"({connection.profile.at_19200}); open it at {found.baud} (--baud {found.baud} or "
+        f"--baud auto; in Python, Connection.open(port, baud={found.baud}))",
     )

@@ -30,7 +30,8 @@ log = logging.getLogger(__name__)
 #: Most Query Lists of packet 35 at start-up, looking for two consecutive replies that agree.
 START_QUERIES = 4
 NO_ANSWER_CAUSES = (
-    "wrong baud rate (115200 by default; 19200 after holding Clean at power-off or a BRC pulse)",
+    "wrong baud rate (115200 by default; 19200 after Clean held at power-on on a Roomba 500, "
+    "at power-off on a 600 or Create 2, or three BRC pulses after power-on)",
     "no power or the robot asleep (press Clean or the power button)",
     "wrong cable or wiring (TX/RX swapped, adapter not a 5 V TTL serial)",
 )

@@ -133,9 +133,35 @@ def test_runtime_packets_and_stream_budget() -> None:
     assert problem is not None and "at 19200 baud" in problem
     # how to get the robot to the rate where it fits: it cannot be told from --baud alone
     assert problem.endswith(
-        "; it fits at 115200: a robot talking at 19200 (its Clean button held at power-off) "
-        "stays there until it loses power: power-cycle it, or send Baud (129) (roomba-bt doctor)"
+        "; it fits at 115200: on the iRobot Create 2, 19200 comes after its Clean button was "
+        "held while it powered off, until a descending tune, or three BRC pulses 2 s after "
+        "power-on, and lasts until its processor loses battery power (take the battery out) or "
+        "Baud (129) sets another rate (in Python, Connection.set_baud(115200) sends Baud (129); "
+        "no roomba-bt command does)"
     )
+
+
+@pytest.mark.parametrize(
+    ("profile", "held", "back"),
+    [
+        ("roomba500", "held while it powered on", "until it is powered off or its battery is "
+         "taken out"),
+        ("roomba600", "held while it powered off", "until its processor loses battery power"),
+    ],
+)  # fmt: skip
+def test_the_19200_advice_is_the_profiles_own(profile: str, held: str, back: str) -> None:
+    """The 500 spec holds Clean "when powering on", the 600 spec "while powering off"; the
+    advice gave the 600's to a 500, named "a Create 2", and sent the user to roomba-bt
+    doctor for a Baud (129) no roomba-bt command sends."""
+    from roomba_bt.oi.profiles import get_profile
+
+    robot = get_profile(profile)
+    problem = check_stream(tuple(range(46, 52)), 19200, robot)
+    assert problem is not None
+    assert f"on the {robot.title}, 19200 comes after its Clean button was {held}" in problem
+    assert back in problem and "Connection.set_baud(115200) sends Baud (129)" in problem
+    assert profile != "roomba500" or "Create 2" not in problem
+    assert "roomba-bt doctor" not in problem
 
 
 def test_baud_is_checked_per_mission(errors_of: Errors) -> None:

@@ -20,7 +20,7 @@ import pytest
 from roomba_bt.mission import load_mission
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
-from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.oi.profiles import CREATE2, ROOMBA500, RobotProfile
 from roomba_bt.robot.silence import LISTEN_S, listen_window
 from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome, RunSummary
@@ -71,14 +71,15 @@ def run(
     link_type: type[SimLink] = SimLink,
     timeout: float = 60.0,
     robot_baud: int | None = None,
+    profile: RobotProfile = CREATE2,
 ) -> tuple[RunSummary, Simulator]:
     path = tmp_path / "m.yaml"
     path.write_text(text)
-    mission = load_mission(path, {}, profile=CREATE2)
-    simulator = Simulator(load_world("empty-room"), CREATE2, 0, faults, trace=False)
+    mission = load_mission(path, {}, profile=profile)
+    simulator = Simulator(load_world("empty-room"), profile, 0, faults, trace=False)
     if robot_baud is not None:
         simulator.baud = robot_baud  # the robot's port (sim --baud), the run at 115200
-    stack = RunStack(mission, link_type(simulator), profile=CREATE2, timeout_s=timeout)
+    stack = RunStack(mission, link_type(simulator), profile=profile, timeout_s=timeout)
     summary = stack.run()
     stack.close()
     return summary, simulator
@@ -248,6 +249,16 @@ def test_a_robot_at_another_rate_from_the_start_is_named_and_left_in_passive(
     assert "likely causes" not in summary.reason
     assert simulator.mode is OIMode.PASSIVE  # never driven; the stop went at 19200
     assert simulator.requested_left == simulator.requested_right == 0
+
+
+def test_a_roomba500_at_19200_is_given_its_own_procedure_not_a_create2_s(tmp_path: Path) -> None:
+    """The 500 spec: Clean held "when powering on"; it said "a Create 2 talks at 19200 after
+    Clean was held at power-off" to a run with --profile roomba500."""
+    summary, _ = run(tmp_path, SPIN, Faults(), robot_baud=19200, profile=ROOMBA500)
+    assert summary.exit_code == 3
+    assert "on the Roomba 500 series, 19200 comes after its Clean button was held while it " \
+        "powered on" in summary.reason  # fmt: skip
+    assert "Create 2" not in summary.reason and "power-off" not in summary.reason
 
 
 def test_a_robot_silent_at_every_rate_keeps_the_likely_causes(tmp_path: Path) -> None:
