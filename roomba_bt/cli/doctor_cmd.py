@@ -31,6 +31,7 @@ from enum import IntEnum
 from typing import TYPE_CHECKING, Any, TextIO
 
 from roomba_bt.cli.arguments import add_command, baud_or_auto, port_name
+from roomba_bt.oi.identify import MODEL_RANGE_PACKETS
 from roomba_bt.oi.modes import OI_MODE_PACKET
 from roomba_bt.oi.packets import packet_ids
 
@@ -40,8 +41,6 @@ if TYPE_CHECKING:
 
 #: Seconds of stream the round-trip reads (33 frames at one per 15 ms).
 STREAM_CHECK_S = 0.5
-#: The round-trip's packets whose ranges differ between the models (the profile's evidence).
-MODEL_RANGE_PACKETS = packet_ids("wall_signal", "stasis")
 #: The round-trip's packets: bumps, mode, charging state, and the two above (a 14-byte frame:
 #: fits the 28 bytes of 19200).
 STREAM_CHECK_PACKETS = (
@@ -128,7 +127,9 @@ def register(sub: Any) -> None:
     )  # fmt: skip
     parser.add_argument(
         "--allow-reset", action="store_true",
-        help="send Reset (7) to read the firmware version from the banner (restarts the OI)",
+        help="send Reset (7) to read the firmware version from its banner (restarts the OI of "
+        "a 600 or a Create 2; the Roomba 500 has no Reset 7: its spec says nothing of what a "
+        "500 does with the byte)",
     )  # fmt: skip
 
 
@@ -140,6 +141,8 @@ class Report:
     out: TextIO
     failed: bool = False
     facts: dict[str, str] = field(default_factory=dict)
+    #: the models the profile step found fitting (several when it could not tell which)
+    models: tuple[Any, ...] = ()
 
     def line(self, mark: str, step: str, text: str, fix: str = "") -> None:
         print(f"[{mark}]".ljust(7) + f"{step:<10}{text}", file=self.out, flush=True)
@@ -289,7 +292,7 @@ def _examine(transport: Any, rates: tuple[int, ...], allow_reset: bool, report: 
     _firmware(banner, reset_tried, report)
     facts = report.facts
     print(
-        f"found: {profile.title} on {transport.name} at {baud} baud, "
+        f"found: {facts.get('model', profile.title)} on {transport.name} at {baud} baud, "
         f"{facts.get('mode', '?')}, battery {facts.get('battery', '?')}, "
         f"{facts.get('charging', '?')}",
         flush=True,
@@ -419,16 +422,43 @@ def _profile(
         readings={pid: readings[pid] for pid in MODEL_RANGE_PACKETS if pid in readings},
     )
     why = "; ".join(found.evidence)
-    best = found.best
+    best = found.cautious
+    report.models = found.candidates
     if best is None:
         report.warn(
             "profile",
             f"no profile fits: {why}; using {DEFAULT_PROFILE.title}",
-            "report this robot's banner (doctor --allow-reset) and model with an issue",
+            "report this robot's model and this output with an issue"
+            + ("" if reset_tried else " (its banner too: doctor --allow-reset)"),
         )
         return DEFAULT_PROFILE
-    names = " or ".join(p.name for p in found.candidates)
-    report.ok("profile", f"{best.title} (--profile {names}): {why}")
+    if found.decided:
+        report.ok("profile", f"{best.title} (--profile {best.name}): {why}")
+        return best
+    return _undecided(found, why, reset_tried, report)
+
+
+def _undecided(found: Any, why: str, reset_tried: bool, report: Report) -> Any:
+    """Several models fit: each named, none called the robot; the one that sends nothing
+    another lacks to use until it is known, and what would tell them apart."""
+    from roomba_bt.oi.identify import telling_apart
+
+    best = found.cautious
+    candidates = found.candidates
+    names = " or ".join(f"{p.title} (--profile {p.name})" for p in candidates)
+    ways = [*telling_apart(candidates), "the model on its label"]
+    if not reset_tried and len({p.has_command("reset") for p in candidates}) > 1:
+        ways.append(
+            "the banner a 600 or a Create 2 prints after Reset (7): doctor --allow-reset "
+            "(Reset is not in the Roomba 500 spec: what a 500 does with it is written nowhere)"
+        )
+    report.warn(
+        "profile",
+        f"{names}: not told apart: {why}; until it is known, --profile {best.name} sends "
+        "no command the others lack",
+        "tell them apart by " + "; or by ".join(ways),
+    )
+    report.facts["model"] = " or ".join(p.title for p in found.candidates)
     return best
 
 
@@ -628,7 +658,9 @@ def _missions(profile: Any, baud: int, report: Report) -> None:
         report.warn(
             "missions",
             text + "; too big: " + ", ".join(too_big),
-            f"switch the robot to 115200 to run those: {profile.at_19200} ({SEND_BAUD})",
+            "switch the robot to 115200 to run those: "
+            + "; ".join(p.at_19200 for p in report.models or (profile,))
+            + f" ({SEND_BAUD})",
         )
     else:
         report.ok("missions", text + ": all fit")

@@ -16,7 +16,9 @@ them; the simulator produces them from its profile):
   The 600 spec (Appendix B, "Dock wakeup"): firmware older than release-3.8.2 /
   release-stm32-3.7.7 does not wake by a BRC pulse while on the dock.
 * **The stream checksum.** The 600 / Create 2 sum the header byte 19 into the checksum, the
-  500 leaves it out (``docs/protocol.md``): one frame of a stream says which.
+  500 spec's example leaves it out (``docs/protocol.md``): a checksum that leaves it out is a
+  500's. One that covers it rules nothing out: the 500 shares the 600's firmware, so which
+  rule a real 500 follows is not certain, and the ``roomba500`` profile takes both.
 * **The mode reading right after Start.** Passive is 1; firmware that reports mode + 1 reads
   2. Of the profiles only the Roomba 600 has that bug (``reports_mode_plus_one``).
 * **Values only one model's ranges allow.** The 500's wall signal (27) reaches 4095, the 600's
@@ -32,9 +34,11 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from roomba_bt.oi.frames import STREAM_HEADER
-from roomba_bt.oi.packets import PACKETS
+from roomba_bt.oi.packets import PACKETS, packet_ids
 from roomba_bt.oi.profiles import PROFILES, RobotProfile
 
+#: The packets whose ranges differ between the models: a reading only one allows tells it.
+MODEL_RANGE_PACKETS: tuple[int, ...] = packet_ids("wall_signal", "stasis")
 #: The first release of each firmware line that wakes by BRC on the dock (600 spec, App. B).
 BRC_DOCK_WAKE_FIXED: dict[str, tuple[int, int, int]] = {
     "release": (3, 8, 2),
@@ -113,6 +117,21 @@ class Identification:
     def best(self) -> RobotProfile | None:
         return self.candidates[0] if self.candidates else None
 
+    @property
+    def decided(self) -> bool:
+        """One model fits: the evidence told it (several: it did not tell which)."""
+        return len(self.candidates) == 1
+
+    @property
+    def cautious(self) -> RobotProfile | None:
+        """Of several that fit, the one that sends no command another of them lacks (the
+        ``roomba500``: no Reset 7, no Stop 173, whose effect on a 500 is written nowhere);
+        the best when one fits, None when none does or none is so."""
+        for profile in self.candidates:
+            if all(set(profile.commands) <= set(other.commands) for other in self.candidates):
+                return profile
+        return self.best
+
 
 def identify(
     *,
@@ -143,17 +162,21 @@ def identify(
             if has_reset
             else "it ignored Reset (7): the Roomba 500 has none"
         )
-    keep(
-        header_in_checksum, True, "checksum_includes_header",
-        "its stream checksum covers the header (600 / Create 2)"
-        if header_in_checksum
-        else "its stream checksum leaves the header out (Roomba 500)",
-    )  # fmt: skip
+    if header_in_checksum is not None:
+        total = 0 if header_in_checksum else STREAM_HEADER
+        candidates = [p for p in candidates if total in p.checksum_sums]
+        evidence.append(
+            "its stream checksum covers the header (a 600 or a Create 2, or a Roomba 500: "
+            "which rule a 500 follows is not certain)"
+            if header_in_checksum
+            else "its stream checksum leaves the header out (Roomba 500)"
+        )
     keep(
         mode_plus_one, True, "reports_mode_plus_one",
         "it reports the OI mode + 1 (the Roomba 600 firmware bug)"
         if mode_plus_one
-        else "it reports the OI mode as is (Create 2 or Roomba 500; a 600 on fixed firmware too)",
+        else "it reports the OI mode as is (a Create 2 or a Roomba 500; a 600 on fixed firmware "
+        "too)",
     )  # fmt: skip
     for pid, value in sorted((readings or {}).items()):
         fits = [p for p in candidates if p.packet(pid).minimum <= value <= p.packet(pid).maximum]
@@ -165,6 +188,22 @@ def identify(
                 f"{' and '.join(p.name for p in fits) or 'no profile'}"
             )
     return Identification(tuple(candidates), tuple(evidence))
+
+
+def telling_apart(candidates: tuple[RobotProfile, ...]) -> list[str]:
+    """The readings that would tell ``candidates`` apart: a value only one model's range
+    allows (the banner after Reset 7 tells them too, but sends the 500 a byte its spec does
+    not have: the caller offers it, if it may)."""
+    ways: list[str] = []
+    for pid in MODEL_RANGE_PACKETS:
+        tops = {p.packet(pid).maximum: p for p in candidates}
+        if len(tops) > 1:
+            low, high = min(tops), max(tops)
+            ways.append(
+                f"a {PACKETS[pid].title.lower()} ({pid}) over {low}, which only the "
+                f"{tops[high].title} reads"
+            )
+    return ways
 
 
 def stream_readings(frame: bytes) -> dict[int, int]:

@@ -22,6 +22,9 @@ from roomba_bt.transport import SerialTransport, TransportError
 
 #: The acceptance bar: nothing behind the port, the answer comes within 10 s.
 DOCTOR_TIMEOUT_S = 10.0
+#: What a robot whose checksum covers the header and reports the mode as is may be, with no
+#: Reset tried: the 500 may sum the header too (its profile takes both rules).
+CREATE2_OR_500 = "iRobot Create 2 or Roomba 500 series"
 
 
 def _cli(*args: str, timeout: float = DOCTOR_TIMEOUT_S) -> subprocess.CompletedProcess[str]:
@@ -52,19 +55,24 @@ def test_doctor_finds_an_awake_create2_on_a_pty_at_either_rate(
     done = _doctor(sim.address)
     assert done.returncode == DoctorExit.FOUND, done.stdout
     out = done.stdout
-    assert f"found: iRobot Create 2 on {sim.address} at {baud} baud, Passive, battery " in out
+    assert f"found: {CREATE2_OR_500} on {sim.address} at {baud} baud, Passive, battery " in out
     assert "not charging" in out.splitlines()[-1]
     assert _step(out, "wake") == ["[--]   wake      not needed: the robot answered"]
     if baud == 19200:
         assert "[--]   baud      115200: nothing" in out, "115200 is tried first"
     assert f"[ok]   baud      {baud}: answered [1, 0, 0]" in out
-    assert "[ok]   profile   iRobot Create 2 (--profile create2)" in out
+    assert "[warn] profile   iRobot Create 2 (--profile create2) or Roomba 500 series " \
+        "(--profile roomba500): not told apart" in out  # fmt: skip
     assert "[ok]   mode      Passive (35 = 1, as is)" in out
     assert any(" 0 bytes skipped" in line for line in _step(out, "stream"))
     missions = _step(out, "missions")[0]
     if baud == 19200:
         assert missions.startswith("[warn]") and "carries 28 bytes at 19200 baud" in missions
         assert "too big: " in missions and "patrol 59" in missions
+        # the robot's own way back to 115200, and where Baud (129) can be sent from
+        fix = out.split(missions)[1].splitlines()[1]
+        assert "on the iRobot Create 2, 19200 comes after its Clean button was held" in fix
+        assert "Connection.set_baud(115200) sends Baud (129); no roomba-bt command does" in fix
     else:
         assert missions.startswith("[ok]") and missions.endswith("all fit")
     assert "mode Passive" in sim.stop()[1], "the robot is left in Passive"
@@ -81,7 +89,7 @@ def test_doctor_wakes_an_asleep_robot_by_brc_over_rfc2217_and_names_it(
     assert "[--]   baud      115200: nothing" in out and "[--]   baud      19200: nothing" in out
     assert "[ok]   wake      silent at every rate: pulsed BRC low for 1 s (RTS and DTR)" in out
     assert "[ok]   wake      it answered after the pulse: the robot was asleep" in out
-    assert f"found: iRobot Create 2 on {sim.address} at {baud} baud, Passive, battery " in out
+    assert f"found: {CREATE2_OR_500} on {sim.address} at {baud} baud, Passive, battery " in out
 
 
 @pytest.mark.parametrize("baud", [19200, 115200])
@@ -99,7 +107,7 @@ def test_doctor_wakes_an_asleep_robot_on_a_pty_by_a_hang_up_and_names_it(
         "cannot be set here: speed 0 drops DTR and RTS, the rate's return raises them)"
     ) in out
     assert "[ok]   wake      it answered after the pulse: the robot was asleep" in out
-    assert f"found: iRobot Create 2 on {sim.address} at {baud} baud, Passive, battery " in out
+    assert f"found: {CREATE2_OR_500} on {sim.address} at {baud} baud, Passive, battery " in out
     assert "mode Passive" in sim.stop()[1], "the robot is left in Passive"
 
 
@@ -369,3 +377,65 @@ def test_a_line_that_garbles_every_byte_is_called_garbled_not_silent(
     assert "silent at every OI rate" not in done.stdout
     assert "TX and RX not swapped" not in done.stdout
     assert "check the cable and the adapter" in done.stdout
+
+
+def _doctor_in_process(robot: Any, allow_reset: bool) -> tuple[int, str]:
+    """``_examine`` on a simulated ``robot`` (any profile, even one no ``sim --profile``
+    names): its exit code and its report."""
+    import io
+
+    from roomba_bt.cli.doctor_cmd import Report, _examine
+    from roomba_bt.sim import SimLink, Simulator, load_world
+
+    report = Report(io.StringIO())
+    link = SimLink(Simulator(load_world("empty-room"), robot, seed=1))
+    code = _examine(link, (115200, 19200), allow_reset, report)
+    return code, report.out.getvalue()
+
+
+def test_a_500_whose_checksum_covers_the_header_is_not_called_a_create2(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The roomba500 profile takes both checksum rules (which a real 500 follows is not
+    certain): doctor named such a robot "iRobot Create 2 (--profile create2)" on its checksum
+    alone, which allows Reset and Stop; with --allow-reset it said no profile fits and told
+    the user to run doctor --allow-reset, which they just had."""
+    import dataclasses
+
+    from roomba_bt.oi.profiles import ROOMBA500
+
+    robot = dataclasses.replace(ROOMBA500, checksum_includes_header=True)
+    code, out = _doctor_in_process(robot, allow_reset=False)
+    assert code == DoctorExit.FOUND, out
+    [profile] = _step(out, "profile")
+    assert profile.startswith("[warn] profile   iRobot Create 2 (--profile create2) or Roomba 500")
+    assert "not told apart" in profile and "--profile roomba500 sends no command" in profile
+    fix = out.split(profile)[1].splitlines()[1]
+    assert "a wall signal (27) over 1023, which only the Roomba 500 series reads" in fix
+    assert "doctor --allow-reset (Reset is not in the Roomba 500 spec" in fix
+    assert f"found: {CREATE2_OR_500} on " in capsys.readouterr().out
+    code, out = _doctor_in_process(robot, allow_reset=True)
+    assert code == DoctorExit.FOUND, out
+    [profile] = _step(out, "profile")
+    assert profile.startswith("[ok]   profile   Roomba 500 series (--profile roomba500): "), out
+    assert "it ignored Reset (7)" in profile
+    assert "found: Roomba 500 series on " in capsys.readouterr().out
+
+
+def test_no_profile_fits_does_not_advise_the_reset_just_sent() -> None:
+    import io
+
+    from roomba_bt.cli.doctor_cmd import Report, _profile
+
+    for reset_tried in (True, False):
+        report = Report(io.StringIO())
+        _profile(True, False, None, reset_tried, {}, report)  # mode + 1, header left out
+        out = report.out.getvalue()
+        assert "no profile fits" in out and "fix: report this robot's model" in out
+        assert ("--allow-reset" in out) is not reset_tried, out
+
+
+def test_allow_reset_s_help_says_it_sends_reset_which_the_500_lacks() -> None:
+    done = _cli("doctor", "--help")
+    assert "send Reset (7)" in done.stdout
+    assert "the Roomba 500 has no Reset 7" in " ".join(done.stdout.split())

@@ -62,7 +62,9 @@ def test_the_checksum_convention_of_a_frame() -> None:
 
 def test_the_evidence_narrows_the_profiles() -> None:
     assert identify(mode_plus_one=True, header_in_checksum=True).candidates == (ROOMBA600,)
-    assert identify(mode_plus_one=False, header_in_checksum=True).candidates == (CREATE2,)
+    # a checksum over the header: a Create 2, or a 500 that sums it (its profile takes both)
+    either = identify(mode_plus_one=False, header_in_checksum=True)
+    assert either.candidates == (CREATE2, ROOMBA500) and not either.decided
     assert identify(mode_plus_one=False, header_in_checksum=False).candidates == (ROOMBA500,)
     silent = identify(mode_plus_one=None, header_in_checksum=None, reset_tried=True)
     assert silent.candidates == (ROOMBA500,)
@@ -70,6 +72,24 @@ def test_the_evidence_narrows_the_profiles() -> None:
     printed = identify(mode_plus_one=None, header_in_checksum=None, banner=banner, reset_tried=True)
     assert set(printed.candidates) == {CREATE2, ROOMBA600}
     assert identify(mode_plus_one=True, header_in_checksum=False).best is None
+
+
+def test_a_checksum_over_the_header_does_not_make_a_robot_a_create2() -> None:
+    """Which checksum rule a real 500 follows is not certain (the roomba500 profile takes
+    both): a checksum that covers the header ruled the 500 out, and a 500 that had ignored
+    Reset then fitted no profile. What is not known is said, with what would tell it."""
+    from roomba_bt.oi.identify import telling_apart
+
+    either = identify(mode_plus_one=False, header_in_checksum=True)
+    assert "or a Roomba 500" in either.evidence[0]
+    assert either.cautious is ROOMBA500  # sends no Reset or Stop, which a 500 lacks
+    assert telling_apart(either.candidates) == [
+        "a wall signal (27) over 1023, which only the Roomba 500 series reads",
+        "a stasis (58) over 1, which only the iRobot Create 2 reads",
+    ]
+    ignored = identify(mode_plus_one=False, header_in_checksum=True, reset_tried=True)
+    assert ignored.candidates == (ROOMBA500,) and ignored.decided
+    assert telling_apart((CREATE2,)) == []
 
 
 def test_a_reading_only_one_models_range_allows_rules_the_others_out() -> None:
