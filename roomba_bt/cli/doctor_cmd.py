@@ -653,7 +653,7 @@ def _missions(profile: Any, baud: int, report: Report) -> None:
         (fits if size <= budget else too_big).append(f"{name} {size}")
     text = f"a 15 ms slot carries {budget} bytes at {baud} baud; frames: " + ", ".join(fits)
     if too_big:
-        from roomba_bt.robot.handshake import SEND_BAUD
+        from roomba_bt.oi.profiles import SEND_BAUD
 
         report.warn(
             "missions",

@@ -52,9 +52,8 @@ from roomba_bt.oi.frames import (
 )
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.oi.opcodes import COMMANDS
-from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
+from roomba_bt.oi.profiles import DEFAULT_PROFILE, SEND_BAUD, RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
-from roomba_bt.robot.handshake import SEND_BAUD
 
 #: Packets the runtime always streams, whatever the mission reads: bumps and wheel drops (7),
 #: the four cliffs (9-12) for its safety stop, charging sources (34), OI mode (35) for the

@@ -56,6 +56,10 @@ OMNI_AHEAD_MM = 130.0
 LIGHT_BUMP_ANGLES_DEG = (65.0, 38.0, 12.0, -12.0, -38.0, -65.0)
 LIGHT_BUMP_RANGE_MM = 150.0
 
+#: Where Baud (129) can be sent from, for advice on a robot at the wrong rate: the robot
+#: layer's ``Connection.set_baud``; no ``roomba-bt`` command sends it.
+SEND_BAUD = "in Python, Connection.set_baud(115200) sends Baud (129); no roomba-bt command does"
+
 #: The stream frame's header byte (``frames.STREAM_HEADER``; frames imports this module), as
 #: the sum of a frame that leaves it out of its checksum reads.
 STREAM_CHECKSUM_HEADER = 19

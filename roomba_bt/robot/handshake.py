@@ -40,8 +40,6 @@ from roomba_bt.transport.base import Transport
 #: The OI's rates, likeliest first: the default, then the rate Clean held at power-on (500)
 #: or power-off (600 / Create 2) sets.
 OI_RATES: tuple[int, ...] = (115200, 19200)
-#: Where Baud (129) can be sent from: no ``roomba-bt`` command sends it.
-SEND_BAUD = "in Python, Connection.set_baud(115200) sends Baud (129); no roomba-bt command does"
 #: OI mode, charging state, charging sources: one byte each, each with a narrow range.
 PROBE_PACKETS: tuple[int, ...] = packet_ids("oi_mode", "charging_state", "charging_sources")
 #: The probe's question, ``[149][3][35][21][34]``.
