@@ -327,6 +327,15 @@ def test_a_sensor_test_no_reading_can_change_is_an_error(
     assert errors_of(SENSOR_UNTIL.format(test=test)) == [f"5:23: sensor.test: {message}"]
 
 
+def _warnings_on(path: Path, profile: str) -> list[str]:
+    """The warnings of compiling ``path`` for ``profile``, as ``line:column: message``."""
+    from roomba_bt.mission import load_mission
+    from roomba_bt.oi.profiles import get_profile
+
+    mission = load_mission(path, profile=get_profile(profile))
+    return [f"{w.line}:{w.column}: {w.message}" for w in mission.warnings]
+
+
 @pytest.mark.parametrize(
     ("test", "profile", "warned"),
     [
@@ -348,13 +357,7 @@ def test_a_sensor_test_the_chosen_robot_cannot_change_is_a_warning(
     """A range narrower on one model (a Roomba 500's stasis 0..1, its unsigned encoders, a
     600's wall signal 0..1023) is warned of under that ``--profile``: the mission compiles
     (it may be meant for another model too)."""
-    from roomba_bt.mission import load_mission
-    from roomba_bt.oi.profiles import get_profile
-
-    mission = load_mission(
-        mission_file(SENSOR_UNTIL.format(test=test)), profile=get_profile(profile)
-    )
-    found = [f"{w.line}:{w.column}: {w.message}" for w in mission.warnings]
+    found = _warnings_on(mission_file(SENSOR_UNTIL.format(test=test)), profile)
     if warned:
         assert len(found) == 1 and found[0].startswith(f"5:23: sensor.test: '{test}' {warned}")
     else:
@@ -376,10 +379,6 @@ def test_stasis_dirty_is_warned_of_on_the_500_as_stasis_equals_2_is(
 ) -> None:
     """``until: {stasis: dirty}`` validated silently on roomba500 (stasis reads 0..1: it never
     fires) while ``sensor: stasis == 2`` warned: the word is the same test, one check."""
-    from roomba_bt.mission import load_mission
-    from roomba_bt.oi.profiles import get_profile
-
     text = SENSOR_UNTIL.format(test="x").replace("{sensor: 'x'}", f"{{stasis: {state}}}")
-    mission = load_mission(mission_file(text), profile=get_profile(profile))
-    found = [f"{w.line}:{w.column}: {w.message}" for w in mission.warnings]
+    found = _warnings_on(mission_file(text), profile)
     assert found == ([f"5:23: stasis: {state}: {warned}"] if warned else [])
