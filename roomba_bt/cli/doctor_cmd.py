@@ -446,7 +446,7 @@ def _undecided(found: Any, why: str, reset_tried: bool, report: Report) -> Any:
     best = found.cautious
     candidates = found.candidates
     names = " or ".join(f"{p.title} (--profile {p.name})" for p in candidates)
-    ways = [*telling_apart(candidates), "the model on its label"]
+    ways = ["the model on its label", *telling_apart(candidates)]
     if not reset_tried and len({p.has_command("reset") for p in candidates}) > 1:
         ways.append(
             "the banner a 600 or a Create 2 prints after Reset (7): doctor --allow-reset "
