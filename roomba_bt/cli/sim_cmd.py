@@ -127,6 +127,11 @@ def run_sim(args: argparse.Namespace) -> int:
         f"wheels {simulator.requested_left:.0f}/{simulator.requested_right:.0f} mm/s",
         file=sys.stderr,
     )
+    from roomba_bt.sim.narrate import after_the_cut
+
+    cut = after_the_cut(simulator)
+    if cut is not None:
+        print(f"roomba-bt sim: {cut}", file=sys.stderr)
     if args.plot:
         try:
             from roomba_bt.sim.plot import plot_run

@@ -26,7 +26,8 @@ class Faults:
     ``drop_rate``      probability that a stream frame is never sent (its distance/angle lost)
     ``latency``        seconds added before robot->host bytes become readable
     ``inject_text``    ASCII the "firmware" prints into the stream, every ``inject_every`` s
-    ``disconnect_at``  simulated time (s) at which the link goes away for good
+    ``disconnect_at``  simulated time (s) at which the link goes away for good (the robot
+                       goes on with its last command: robot.py, ``_cut_link``)
     ``reset_at``       simulated time (s) at which the robot resets (as Reset, 7, does: the
                        firmware banner, the OI Off, the stream ended)
     ``stream_stop_at`` simulated time (s) at which the robot stops streaming (the port open,

@@ -20,6 +20,7 @@ robot and is heard without a line (a client that sends one a frame would fill th
 
 from __future__ import annotations
 
+import math
 import struct
 from collections.abc import Callable
 
@@ -83,3 +84,41 @@ class Narrator:
     def _line(self, text: str, time: float | None = None) -> None:
         at = self.simulator.time if time is None else time
         self.write(f"{at:10.3f} s  {text}")
+
+
+#: the events that end what the robot did on its own after the link was cut
+_ENDINGS = ("fell", "mode", "docked", "sleep")
+
+
+def after_the_cut(simulator: Simulator) -> str | None:
+    """What the robot did after ``Faults.disconnect_at`` cut its link, for the summary at
+    exit (None if the link was not cut): a robot whose host is gone goes on with its last
+    command, and a summary of the state at exit alone ("mode Full, wheels 314/314 mm/s")
+    read as if it had stopped where the plot's line stopped.
+
+    ``link cut at 4.0 s in Full, wheels 314/314 mm/s; the OI has no command timeout, so it
+    went on: at 7.9 s it fell: drove off a drop``."""
+    events = simulator.events
+    cut = next((i for i, e in enumerate(events) if e.kind == "disconnect"), None)
+    if cut is None:
+        return None
+    at = events[cut]
+    said = f"link cut at {at.time:.1f} s {at.detail.removeprefix('link lost ')}"
+    bumps = sum(1 for e in events[cut + 1 :] if e.kind == "bump")
+    ended = next((e for e in events[cut + 1 :] if e.kind in _ENDINGS), None)
+    if ended is not None:
+        went = f"at {ended.time:.1f} s {ended.kind}: {ended.detail}"
+    elif simulator.requested_left or simulator.requested_right:
+        went = (
+            f"still driving {simulator.requested_left:.0f}/{simulator.requested_right:.0f} "
+            f"mm/s in {simulator.mode.label} at the end ({simulator.time:.1f} s)"
+        )
+    else:
+        went = f"still in {simulator.mode.label} at the end ({simulator.time:.1f} s)"
+    if bumps:
+        went += f" ({bumps} bump{'s' if bumps > 1 else ''} on the way)"
+    moved = math.hypot(simulator.x - at.x, simulator.y - at.y) / 1000
+    return (
+        f"{said}; the OI has no command timeout, so it went on with its last command: {went}; "
+        f"it ended {moved:.2f} m from where the link was cut"
+    )

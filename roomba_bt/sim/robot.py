@@ -119,14 +119,10 @@ class Simulator(OIProtocol):
         # than a third of a microsecond, the integer sum a tenth of that).
         self._time_ns += _STEP_NS if dt == STEP_SECONDS else round(dt * 1e9)
         now = self.time = self._time_ns / 1e9
-        if self.disconnected:
-            return
         if now >= self._fault_at:  # the link lost, or a timed fault due
             if now >= self._disconnect_at:
-                self.disconnected = True
-                self._discard_output()
-                self._event("disconnect", "link lost")
-                return
+                self._cut_link()
+                return  # this step is the link's; the robot goes on from the next
             self._timed_fault()
         timeline = self._timeline
         if timeline is not None:
@@ -206,7 +202,9 @@ class Simulator(OIProtocol):
 
     def _send_frame(self, frame: bytes) -> None:
         """A stream frame through the faults of the link: dropped, cut short, then
-        corrupted, flipped or delayed (:meth:`_emit`)."""
+        corrupted, flipped or delayed (:meth:`_emit`); none once the link is cut."""
+        if self.disconnected:
+            return
         faults = self.faults
         if faults.drop_rate and self._fault_rng.random() < faults.drop_rate:
             return
@@ -222,6 +220,26 @@ class Simulator(OIProtocol):
             self.step()
             out += self.read()
         return bytes(out)
+
+    def _cut_link(self) -> None:
+        """``Faults.disconnect_at``: the link goes, the robot does not. The OI has no command
+        timeout, so the robot goes on with the last command it heard (a drive in Full until
+        it falls or its battery is flat; in Safe until a cliff or wheel drop stops it), and the
+        simulator goes on simulating it: nothing more is heard or sent (frames go nowhere, not
+        counted), and no other fault comes (they are the session's, which is over). The event
+        says what the robot was doing (:func:`roomba_bt.sim.narrate.after_the_cut` reads it)."""
+        self.disconnected = True
+        self._discard_output()
+        self._plain_output = False  # frames through _send_frame, which drops them
+        self._disconnect_at = self._next_timed = self._fault_at = math.inf
+        self._timed_faults.clear()
+        if self.mode is _SAFE or self.mode is _FULL:
+            doing = f"wheels {self.requested_left:.0f}/{self.requested_right:.0f} mm/s"
+        elif self.builtin is not None:
+            doing = f"its own {self.builtin.name} cycle"
+        else:
+            doing = "wheels not driven"
+        self._event("disconnect", f"link lost in {self.mode.label}, {doing}")
 
     def _timed_fault(self) -> None:
         """The one-off faults due now (``Faults.reset_at``, ``stream_stop_at``, ``sleep_at``,

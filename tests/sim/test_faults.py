@@ -8,6 +8,7 @@ from roomba_bt.oi import commands as C
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.stream import StreamParser
 from roomba_bt.sim import Faults, SimLink, Simulator
+from roomba_bt.sim.narrate import after_the_cut
 
 from .helpers import BOX, make, world
 
@@ -182,6 +183,39 @@ def test_fault_times_and_rates_are_checked() -> None:
         Faults(reset_at=-1)
     with pytest.raises(ValueError, match=r"faults.bit_flip_rate: found 2"):
         Faults(bit_flip_rate=2)
+
+
+STAIRS = """
+rooms: [[[0, 0], [4, 0], [4, 4], [0, 4]]]
+drops: [{rect: [3.0, 0, 4, 4]}]
+robot: {start: {at: [1, 2], heading: 0}}
+"""
+
+
+@pytest.mark.parametrize(
+    ("mode", "went_on"),
+    [
+        (C.full(), "fell: drove off a drop"),
+        (C.safe(), "mode: Safe->Passive (safety: cliff while driving forward)"),
+    ],
+)
+def test_a_cut_link_leaves_the_robot_on_its_last_command(mode: C.Command, went_on: str) -> None:
+    # The OI has no command timeout: the host gone, the robot drives on. In Full nothing
+    # stops it before the drop; in Safe the cliff does. The simulator froze it where the
+    # link went, and its summary read "mode Full, wheels 200/200 mm/s" beside a parked robot.
+    sim = Simulator(world(STAIRS), faults=Faults(disconnect_at=1.0))
+    sim.receive(C.start().data + mode.data + C.stream([35]).data + C.drive_direct(200, 200).data)
+    sim.run(1.0)
+    cut_x = sim.x
+    assert sim.disconnected and sim.read() == b""
+    sim.run(14.0)
+    assert sim.x > cut_x + 1500  # from x = 1.2 m to the drop's edge at 3 m
+    assert sim.read() == b"" and sim.frames_sent == 66  # nothing heard after the cut
+    said = after_the_cut(sim)
+    assert said is not None
+    assert said.startswith("link cut at 1.0 s in ") and "wheels 200/200 mm/s" in said
+    assert "went on with its last command: at " in said and went_on in said
+    assert after_the_cut(Simulator(world(STAIRS))) is None
 
 
 @pytest.mark.parametrize(("reset_at", "disconnect_at"), [(1.0, 2.0), (2.0, 1.0), (1.5, 1.5)])
