@@ -164,6 +164,26 @@ def watchdog_seconds(text: str) -> float:
     return _real(text, allowed, lambda value: value >= MIN_WATCHDOG)
 
 
+def odometry_error(text: str) -> float:
+    """``--odometry-error``: the simulated encoders' error, a fraction 0..0.2
+    (``Faults.odometry_error``)."""
+    from roomba_bt.sim.faults import MAX_ODOMETRY_ERROR
+
+    return _real(
+        text, f"a fraction in 0..{MAX_ODOMETRY_ERROR:g} (0.015: 1.5 %)",
+        lambda value: 0.0 <= value <= MAX_ODOMETRY_ERROR,
+    )  # fmt: skip
+
+
+def add_odometry_error_option(parser: Any, what: str = "") -> None:
+    """``--odometry-error`` (``eval``, ``run``): one definition, read by :func:`odometry_error`."""
+    parser.add_argument(
+        "--odometry-error", type=odometry_error, default=0.0, metavar="FRACTION",
+        help=f"{what}the encoders' error (0..0.2; e.g. 0.015: wheel scales off by up to 1.5 %%, "
+        "a heading drift of up to 0.9 deg/min; seeded; default 0: exact)",
+    )  # fmt: skip
+
+
 def metres(text: str, lo: float, hi: float) -> float:
     """A distance in metres, ``lo..hi``: a plain number (metres) or a distance as missions
     write it (``1.5m``, ``150cm``, ``300 mm``)."""

@@ -36,6 +36,7 @@ from typing import TYPE_CHECKING, Any
 
 from roomba_bt.cli.arguments import (
     add_command,
+    add_odometry_error_option,
     add_param_option,
     add_permission_options,
     add_profile_option,
@@ -160,14 +161,7 @@ def _add_start_options(ev: argparse.ArgumentParser) -> None:
     )
     ev.add_argument("--battery", type=fraction, metavar="FRACTION",
                     help="initial charge: a fraction 0..1 (0.5) or a percent (50%%)")  # fmt: skip
-    ev.add_argument(
-        "--odometry-error",
-        type=float,
-        default=0.0,
-        metavar="FRACTION",
-        help="the encoders' error (0..0.2; e.g. 0.015: wheel scales off by up to 1.5 %%, a "
-        "heading drift of up to 0.9 deg/min; seeded; default 0: exact)",
-    )
+    add_odometry_error_option(ev)
     ev.add_argument("--timeout", default="15min", help="mission time per episode (default 15min)")
     ev.add_argument(
         "--wall-limit",
@@ -458,9 +452,7 @@ def _check_arguments(args: argparse.Namespace) -> str | None:
         return f"--jobs {args.jobs}: expected at least 1"
     if args.scheduler is not None and not args.scheduler.strip():
         return "--scheduler '': expected the scheduler's address, e.g. tcp://HOST:8786"
-    # --within, --battery and --min-rate: read and checked by argparse (their types)
-    if not 0.0 <= args.odometry_error <= 0.2:
-        return f"--odometry-error {args.odometry_error}: expected a fraction in 0..0.2"
+    # --within, --battery, --min-rate and --odometry-error: read and checked by argparse
     limit = wall_limit(args)
     if isinstance(limit, str):
         return limit

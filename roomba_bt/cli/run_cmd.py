@@ -13,6 +13,7 @@ from roomba_bt.cli.arguments import (
     MIN_WATCHDOG,
     add_command,
     add_far_end_options,
+    add_odometry_error_option,
     add_param_option,
     add_permission_options,
     fraction,
@@ -80,6 +81,7 @@ def _add_run_parser(sub: Any) -> None:
     run.add_argument(
         "--random-start", action="store_true", help="start in the world's start region"
     )
+    add_odometry_error_option(run, "simulator only: ")
     add_param_option(run, "set a mission parameter, e.g. -p speed=250mm/s (repeatable)")
     run.add_argument(
         "--timeout",
@@ -289,9 +291,11 @@ def _checked_arguments(args: argparse.Namespace) -> tuple[dict[str, str], float 
         return _error(timeout)
     if _fast_limit(args):
         timeout = FAST_TIMEOUT_S
-    if args.port and (args.world or args.plot or args.fast or args.battery is not None):
+    simulated = (args.world, args.plot, args.fast, args.battery is not None, args.odometry_error)
+    if args.port and any(simulated):
         return _error(
-            "--world, --plot, --fast and --battery are for the simulator: drop them or --port"
+            "--world, --plot, --fast, --battery and --odometry-error are for the simulator: "
+            "drop them or --port"
         )
     ending = end_in_problem(args.end_in, get_profile(args.profile))
     if ending is not None:
@@ -327,7 +331,7 @@ def _simulator(args: argparse.Namespace, profile: RobotProfile) -> Simulator | s
     if args.port:
         return None
     from roomba_bt.cli.links import make_simulator
-    from roomba_bt.sim import WorldError
+    from roomba_bt.sim import Faults, WorldError
 
     try:
         simulator = make_simulator(
@@ -335,6 +339,7 @@ def _simulator(args: argparse.Namespace, profile: RobotProfile) -> Simulator | s
             profile,
             args.seed,
             random_start=args.random_start,
+            faults=Faults(odometry_error=args.odometry_error) if args.odometry_error else None,
             coverage=True,
             battery=args.battery,
             trace=bool(args.plot),  # only a plot reads the trajectory

@@ -12,6 +12,9 @@ from dataclasses import dataclass
 
 from roomba_bt.oi.encode import BAUD_RATES
 
+#: the largest ``Faults.odometry_error`` (20 %: far worse than any encoder in use)
+MAX_ODOMETRY_ERROR = 0.2
+
 
 @dataclass(frozen=True, slots=True)
 class Faults:
@@ -75,7 +78,7 @@ class Faults:
             ("latency", 0.0, 10.0),
             ("inject_every", 0.015, 3600.0),
             ("noise", 0.0, 4095.0),
-            ("odometry_error", 0.0, 0.2),
+            ("odometry_error", 0.0, MAX_ODOMETRY_ERROR),
             ("stream_gap_s", 0.0, 3600.0),
         ):
             value = getattr(self, name)

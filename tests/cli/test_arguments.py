@@ -69,6 +69,13 @@ def test_bad_seconds(text: str) -> None:
         # argparse takes "-3s" for an option: it said only "expected one argument"
         (["run", "dock", "--timeout", "-3s"], "write --timeout=VALUE"),
         (["run", "dock", "-p"], "write --param=VALUE"),
+        # one definition for run and eval (arguments.py), the range Faults allows
+        (
+            ["run", "dock", "--odometry-error", "0.3"],
+            "--odometry-error: found 0.3; allowed: a fraction in 0..0.2",
+        ),
+        (["eval", "dock", "--odometry-error", "-0.1"], "--odometry-error: found -0.1"),
+        (["run", "dock", "--odometry-error", "much"], "--odometry-error: found 'much'"),
     ],
 )
 def test_commands_refuse_them_with_exit_2(

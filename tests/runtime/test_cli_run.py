@@ -80,6 +80,31 @@ def test_bad_input_is_exit_2_with_a_message(
     assert "Traceback" not in err
 
 
+def test_run_takes_the_simulated_encoders_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """eval had --odometry-error and run did not: a bad episode under encoder error could be
+    looked at only through eval --runs 1 --plot. With it the mission's odometry is off, so a
+    drive of 1 m by the encoders ends elsewhere; with --port it is a usage error."""
+    drive = tmp_path / "metre.yaml"
+    drive.write_text("tree:\n  sequence:\n    - mode: safe\n    - drive: {distance: 1 m}\n")
+    world = tmp_path / "room.yaml"
+    world.write_text("rooms: [{rect: [0, 0, 4, 3]}]\nrobot: {start: {at: [1, 1.5], heading: 0}}\n")
+    ended = []
+    for error in ("0", "0.2"):
+        argv = ["run", str(drive), "--fast", "--display", "none", "--world", str(world),
+                "--seed", "4"]  # fmt: skip
+        assert main([*argv, "--odometry-error", error]) == 0
+        out = capsys.readouterr().out
+        ended.append(next(line for line in out.splitlines() if "simulator    ended" in line))
+    assert ended[0] == "simulator    ended at (2.00, 1.50) m, off the dock"
+    assert ended[1] != ended[0], ended  # the seed's encoders count 13 % short
+    code = main(["run", str(drive), "--port", "loop://", "--odometry-error", "0.01"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "--battery and --odometry-error are for the simulator: drop them or --port" in err
+
+
 def test_invalid_mission_reports_file_line_col(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
