@@ -120,7 +120,8 @@ class Bump(_Flag):
          params=(Param("side", enum(*_WHEEL_DROP), default="any"),),
          reads=BUMPS_PACKETS, primary="side")  # fmt: skip
 class WheelDrop(_Flag):
-    """A wheel has dropped (packet 7: bit 2 right, bit 3 left)."""
+    """A wheel has dropped, as when the robot is lifted or a wheel goes over an edge (packet
+    7: bit 2 right, bit 3 left)."""
 
     choice, flags = "side", _WHEEL_DROP
 

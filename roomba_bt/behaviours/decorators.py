@@ -24,7 +24,7 @@ from roomba_bt.behaviours.lean import (
     composite_stop,
     tick_generator,
 )
-from roomba_bt.behaviours.reasons import failure_reason, running_in
+from roomba_bt.behaviours.reasons import SaysWhy, running_in, while_stopped
 from roomba_bt.behaviours.units import DURATION, UnitError
 from roomba_bt.robot.interface import SLOT_SECONDS, RobotHandle
 
@@ -208,7 +208,7 @@ class ForEach(DecoratorTick, py_trees.decorators.Decorator):
         return _RUNNING
 
 
-class Guard(Stepped, py_trees.composites.Composite):
+class Guard(SaysWhy, Stepped, py_trees.composites.Composite):
     """``while:`` / ``until:`` on any node: the condition subtree is ticked before the child
     on every tick (BT.CPP's ``_while``, py_trees' EternalGuard, with a subtree as condition).
 
@@ -229,6 +229,11 @@ class Guard(Stepped, py_trees.composites.Composite):
         self._inputs: FrameInputs | Literal[False] | None = None
         #: the condition's status after its last tick, and the inputs' values it had then
         self._seen: tuple[Status, object] | None = None
+
+    def initialise(self) -> None:
+        """No message from a run before (:class:`SaysWhy`: one only when the condition
+        ended this run)."""
+        self.feedback_message = ""
 
     def tick(self) -> Iterator[Behaviour]:
         """py_trees' generator (:class:`Stepped`): ticks the condition, which is then no
@@ -315,14 +320,15 @@ class Guard(Stepped, py_trees.composites.Composite):
         return DONE
 
     def _why(self) -> str:
-        """The guard's message, read before its children are reset: for ``while``, which
-        part of the condition failed and the leaf it stopped (``condition no longer holds:
-        bump(any) held (stage drive was running)``: an evaluation's stage)."""
+        """The guard's message, read before its children are reset: for ``while``, what
+        stopped which node, in the words of the part of the condition that decided it
+        (:func:`~roomba_bt.behaviours.reasons.while_stopped`), and the leaf it stopped
+        (``(stage drive was running)``: an evaluation's stage)."""
         if self.until:
             return "condition met"
         stage = running_in(self.child).removeprefix(" in ")
         running = f" (stage {stage} was running)" if stage else ""
-        return f"condition no longer holds: {failure_reason(self.condition)}{running}"
+        return while_stopped(self.condition, self.child.name) + running
 
     def stop(self, new_status: Status = _INVALID) -> None:
         if self.child.status is _RUNNING:

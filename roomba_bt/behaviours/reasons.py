@@ -7,6 +7,8 @@ the tree the same way.
 
 from __future__ import annotations
 
+import re
+
 import py_trees
 from py_trees.behaviour import Behaviour
 
@@ -16,6 +18,13 @@ _FLIPS = (
     py_trees.decorators.SuccessIsFailure,
     py_trees.decorators.FailureIsSuccess,
 )
+
+
+class SaysWhy:
+    """A node whose message, when it failed, is the whole reason in the user's words (the
+    ``while`` guard's "stopped: ... while 'clean' ran"; it has none when it failed
+    otherwise): :func:`failure_reason` gives it as it is, not the leaf below it nor after
+    the node's name ("while inverter: ...")."""
 
 
 def failure_reason(root: Behaviour) -> str:
@@ -28,12 +37,20 @@ def failure_reason(root: Behaviour) -> str:
     Following the path matters where a tree fails in one branch and other branches hold
     failed leaves too: a patrol that gave up at a staircase is not explained by the
     low-battery check tried beside it."""
+    return _explain(root)[0]
+
+
+def _explain(root: Behaviour) -> tuple[str, Behaviour | None]:
+    """:func:`failure_reason`'s text, and the condition leaf that decided it by holding
+    when the failure is an inverter's (else None)."""
     failure = py_trees.common.Status.FAILURE
     node = root
     path = [root]
     leaf: Behaviour | None = None
     with_message: Behaviour | None = None
     while True:
+        if isinstance(node, SaysWhy) and node.feedback_message and node.status == failure:
+            return node.feedback_message, None  # its message says what failed below it
         failed = [child for child in node.children if child.status == failure]
         if not failed:
             break
@@ -50,15 +67,49 @@ def failure_reason(root: Behaviour) -> str:
         condition = _deepest_success(node)
         if condition is not None:  # a name the mission gave it says what it means: kept
             said = f"{condition.name} held"
-            return said if node.name == "inverter" else f"{node.name} ({said})"
+            return (said if node.name == "inverter" else f"{node.name} ({said})"), condition
     if best is node and isinstance(node, py_trees.decorators.SuccessIsFailure):
         # a forced failure ("back away, then fail"): what held just before it is the cause
         # (the patrol's cliff that ended the drive before the back-off)
         held = _held_before(path)
         if held is not None:
-            return held
+            return held, None
     message = "" if isinstance(best, _FLIPS) else best.feedback_message
-    return f"{best.name}: {message}" if message else best.name
+    return (f"{best.name}: {message}" if message else best.name), None
+
+
+def while_stopped(condition: Behaviour, guarded: str) -> str:
+    """A ``while`` guard's message when its ``condition`` no longer holds and it stopped the
+    node named ``guarded``: what happened in the words of the condition that decided it (a
+    name the mission gave it, else the first sentence of its behaviour's description), then
+    the condition as written. ``while: {inverter: {wheel_drop: any}}`` around ``clean``::
+
+        stopped: a wheel has dropped, as when the robot is lifted or a wheel goes over an
+        edge, while 'clean' ran (wheel_drop(any) held)
+
+    It said "condition no longer holds: wheel_drop(any) held", under the guard's own name
+    ("while inverter")."""
+    said, held = _explain(condition)
+    if held is None:
+        return f"stopped: {said} no longer holds while {guarded!r} ran"
+    meaning = _meaning(held) if said == f"{held.name} held" else None
+    if meaning is None:  # the mission's own name for it (or no description): as it is
+        return f"stopped: {said} while {guarded!r} ran"
+    return f"stopped: {meaning}, while {guarded!r} ran ({said})"
+
+
+def _meaning(leaf: Behaviour) -> str | None:
+    """The first sentence of ``leaf``'s behaviour's description (its declaration's doc, the
+    class docstring), its asides in parentheses left out (the packets it reads), as a
+    clause: "A bumper is pressed (packet 7: ...)." -> "a bumper is pressed"."""
+    declaration = getattr(type(leaf), "declaration", None)
+    doc = getattr(declaration, "doc", "") or ""
+    sentence = re.sub(r"\s*\([^()]*\)", "", doc.split(". ")[0]).strip().rstrip(".")
+    if not sentence:
+        return None
+    if sentence[1:2].isupper():  # "OI mode ...": an acronym kept
+        return sentence
+    return sentence[0].lower() + sentence[1:]
 
 
 def _deepest_success(node: Behaviour) -> Behaviour | None:

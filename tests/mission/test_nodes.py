@@ -450,11 +450,56 @@ def test_a_while_guard_says_which_condition_failed(compile_text: Compile) -> Non
     )
     assert r.tick() is R
     assert r.tick(bump=1) is F
-    reason = failure_reason(r.mission.root)
-    assert reason.startswith("while reactive_sequence: condition no longer holds: "), reason
     # the inverted condition that held is named (it said "inverter", as in the docs' own
-    # while: {inverter: {cliff: any}})
-    assert reason.endswith("no longer holds: bump(any) held (stage wait was running)"), reason
+    # while: {inverter: {cliff: any}}), in the words of its description first
+    assert failure_reason(r.mission.root) == (
+        "stopped: a bumper is pressed, while 'wait(1s)' ran (bump(any) held)"
+        " (stage wait was running)"
+    )
+
+
+@pytest.mark.parametrize(
+    ("condition", "said"),
+    [
+        # the robot lifted: it said "while inverter: condition no longer holds:
+        # wheel_drop(any) held"
+        (
+            "{inverter: {wheel_drop: any}}",
+            "stopped: a wheel has dropped, as when the robot is lifted or a wheel goes over an "
+            "edge, while 'clean' ran (wheel_drop(any) held)",
+        ),
+        # a name the mission gave the condition is its own words: kept
+        (
+            "{name: on the floor, inverter: {wheel_drop: any}}",
+            "stopped: on the floor (wheel_drop(any) held) while 'clean' ran",
+        ),
+        # a condition that stopped holding, not one that held: named as written
+        (
+            "{sensor: bumps_wheel_drops < 4}",
+            "stopped: sensor(bumps_wheel_drops < 4) no longer holds while 'clean' ran",
+        ),
+    ],
+)
+def test_a_while_guard_says_what_stopped_which_node_in_the_condition_s_words(
+    compile_text: Compile, condition: str, said: str
+) -> None:
+    from roomba_bt.behaviours.reasons import failure_reason
+
+    r = run(
+        compile_text,
+        f"""
+        tree:
+          sequence:
+            - mode: safe
+            - sequence:
+                name: clean
+                children: [{{wait: 1s}}]
+              while: {condition}
+        """,
+    )
+    assert r.tick() is R
+    assert r.tick(bump=0b1100) is F  # both wheels dropped (packet 7, bits 2 and 3)
+    assert failure_reason(r.mission.root) == said + " (stage wait was running)"  # eval's stage
 
 
 def test_the_mission_s_writes_show_in_py_trees_activity_stream(compile_text: Compile) -> None:
