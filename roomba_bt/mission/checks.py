@@ -39,7 +39,7 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from roomba_bt.behaviours.conditions import COMPARISON, comparison_problem
-from roomba_bt.behaviours.declare import BlackboardRef, Comparison, Param
+from roomba_bt.behaviours.declare import BlackboardRef, Comparison, Declaration, Param
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.ir import KeyDecl, Node
 from roomba_bt.mission.source import Loc
@@ -110,6 +110,29 @@ class ModeCheck:
     def _leaf(self, node: Node, entry: Modes) -> tuple[Modes, Modes]:
         decl = node.decl
         assert decl is not None
+        self._entered(node, decl, entry)
+        after = decl.mode_after(node.params)
+        success = frozenset({after}) if after is not None else entry
+        return success, entry
+
+    def _unbuilt(self, node: Node, entry: Modes) -> tuple[Modes, Modes]:
+        """A node that could not be built: a behaviour whose parameters were wrong is judged
+        where it is reached (what it sends does not depend on them), and the modes go on
+        past it when the mode it leads to does not depend on them either; after a ``mode``
+        whose mode did not parse nothing is judged (which mode would follow is not known).
+        A node not parsed at all (an unknown word) is passed over, as if it were not there."""
+        decl = node.partial
+        if decl is None:
+            return entry, entry
+        if callable(decl.leads_to):
+            return _EMPTY, _EMPTY
+        self._entered(node, decl, entry)
+        after = decl.leads_to
+        return (frozenset({after}) if after is not None else entry), entry
+
+    def _entered(self, node: Node, decl: Declaration, entry: Modes) -> None:
+        """``node`` (of behaviour ``decl``) reached in ``entry``: an error, once, if one of
+        those modes refuses a command it sends."""
         seen = self.entered.get(id(node))
         self.entered[id(node)] = (node, entry if seen is None else seen[1] | entry)
         allowed = decl.modes_for(node.params)
@@ -125,9 +148,6 @@ class ModeCheck:
                     f"but it can be reached in {_label(bad)} mode: {_mode_advice(allowed, bad)}"
                 )
             )
-        after = decl.mode_after(node.params)
-        success = frozenset({after}) if after is not None else entry
-        return success, entry
 
     def _chain(self, node: Node, entry: Modes, *, on_success: bool) -> tuple[Modes, Modes]:
         """Children in order: a sequence goes on after a success, a selector after a
@@ -216,6 +236,7 @@ _MODE_HANDLERS: dict[str, Callable[[ModeCheck, Node, Modes], tuple[Modes, Modes]
     "reactive_fallback": ModeCheck._selector,
     "reactive_selector": ModeCheck._selector,
     "parallel": ModeCheck._parallel,
+    "unbuilt": ModeCheck._unbuilt,
 }
 
 
@@ -237,11 +258,18 @@ class KeyCheck:
         self._reported: set[tuple[int, str]] = set()
 
     def run(self, root: Node, initial: frozenset[str]) -> None:
+        """Unless a node that could not be built may have written a key (a ``set`` or
+        ``for_each`` not parsed, a behaviour that writes one): its readers are judged in the
+        pass after it is fixed, not said unwritten because of it."""
+        if any(_may_write(node) for node in root.walk()):
+            return
         self.visit(root, initial)
 
     def visit(self, node: Node, written: frozenset[str]) -> frozenset[str]:
         """Keys certainly written after ``node`` succeeds."""
         kind = node.kind
+        if kind == "unbuilt":  # none that writes a key (run): it reads none either
+            return written
         if kind == "leaf":
             for key, loc in node.keys_read():
                 if key not in written and (id(node), key) not in self._reported:
@@ -278,6 +306,11 @@ class KeyCheck:
         if kind in ("inverter", "force_success", "force_failure", "oneshot"):
             return written
         return inner
+
+
+def _may_write(node: Node) -> bool:
+    """Whether ``node`` could not be built and may have written a blackboard key."""
+    return node.kind == "unbuilt" and (node.partial is None or bool(node.partial.writes_keys))
 
 
 #: a parameter reading a key as ``@key``: the behaviour's name, the parameter, the reference,
@@ -361,7 +394,7 @@ def _limits(node: Node) -> list[Node]:
         n
         for n in node.walk()
         if n.kind in ("timeout", "retry")
-        or (n.decl is not None and n.decl.name in TIME_LIMIT_LEAVES)
+        or (n.declared is not None and n.declared.name in TIME_LIMIT_LEAVES)
     ]
 
 
@@ -374,7 +407,7 @@ def restarted_limits(root: Node) -> list[Diagnostic]:
             continue
         for child in node.children[:-1]:
             for limit in _limits(child):
-                word = limit.decl.name if limit.decl is not None else limit.kind
+                word = limit.declared.name if limit.declared is not None else limit.kind
                 where = f"{limit.loc.file}:{limit.loc.line}"
                 if limit.loc.file == child.loc.file:
                     where = f"line {limit.loc.line}"

@@ -93,14 +93,17 @@ def parse_composite(parser: NodeParser, kind: NodeKind, at: Written) -> Node | N
         raise Bad(key_loc.at(f"{word} needs at least one child; it has none"))
     for child_node, child_loc in entries:
         child = parser.node(child_node, child_loc, env)
-        if child is not None:
-            children.append(child)
+        # one that could not be built keeps its place (its errors are reported): the
+        # checks judge its siblings where they are written (ir.Node)
+        children.append(child if child is not None else Node("unbuilt", child_loc, "unbuilt"))
     result = Node(word, key_loc, options.pop("name", word), children, options=options)
     names = [c.name for c in children]
+    # a child that could not be parsed at all has lost its name: not said unknown for that
+    nameless = any(c.kind == "unbuilt" and c.partial is None for c in children)
     for param in kind.options:
         if param.type is CHILD_NAMES and param.name in options:
             for chosen in options[param.name]:
-                if chosen not in names:
+                if chosen not in names and not nameless:
                     ctx.error(
                         options[f"{param.name}_loc"].at(
                             f"{word}.{param.name}: " + unknown("child name", chosen, names)

@@ -18,15 +18,29 @@ from roomba_bt.mission.source import Loc
 
 @dataclass(eq=False)
 class Node:
-    """One node of the checked tree."""
+    """One node of the checked tree.
 
-    kind: str  # "leaf", a word of behaviours.language.WORDS, or "guard"
+    A node that could not be built (its errors reported) stays in its place as an
+    ``unbuilt`` node, so that the checks of the whole tree judge what was written around it
+    in the same pass (a limit under a reactive fallback is still not its last child when a
+    sibling after it is misspelt). It has no ``decl`` and no parameters: the checks that
+    read a behaviour's parameters pass it by. ``partial`` is the behaviour it names when
+    only its parameters were wrong: what it sends is known, so where it is reached is still
+    judged (:mod:`roomba_bt.mission.checks`)."""
+
+    kind: str  # "leaf", a word of behaviours.language.WORDS, "guard" or "unbuilt"
     loc: Loc
     name: str
     children: list[Node] = field(default_factory=list)
     decl: Declaration | None = None
     params: dict[str, Any] = field(default_factory=dict)
     options: dict[str, Any] = field(default_factory=dict)
+    partial: Declaration | None = None
+
+    @property
+    def declared(self) -> Declaration | None:
+        """The behaviour this node names, built (``decl``) or not (``partial``)."""
+        return self.decl or self.partial
 
     def walk(self) -> Iterator[Node]:
         yield self

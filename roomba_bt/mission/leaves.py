@@ -28,8 +28,9 @@ from roomba_bt.mission.values import (
 )
 
 
-def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node | None:
-    """The leaf, or None with every problem recorded in ``ctx``."""
+def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node:
+    """The leaf, or with every problem recorded in ``ctx`` an ``unbuilt`` node naming
+    ``decl`` (:class:`~roomba_bt.mission.ir.Node`)."""
     key_loc, env = at.key_loc, at.env
     given = _given(decl, at.value, at.loc)
     params: dict[str, Any] = {}
@@ -71,8 +72,8 @@ def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node | None:
         for problem in decl.constraints(params):
             ctx.error(key_loc.at(f"{decl.name}: {problem}"))
             ok = False
-    if not ok:
-        return None
+    if not ok:  # kept in its place, unbuilt: the checks of the tree still judge around it
+        return Node("unbuilt", key_loc, decl.name, partial=decl)
     return Node("leaf", key_loc, leaf_name(decl.name, given, env), decl=decl, params=params,
                 options=options)  # fmt: skip
 

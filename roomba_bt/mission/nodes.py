@@ -189,11 +189,10 @@ class NodeParser:
 
     def _check_guard(self, condition: Node, guard: str) -> None:
         for n in condition.walk():
-            if n.decl is not None and n.decl.kind == "action":
+            decl = n.declared
+            if decl is not None and decl.kind == "action":
                 self.ctx.error(
-                    n.loc.at(
-                        f"{guard}: a guard is made of conditions; {n.decl.name!r} is an action"
-                    )
+                    n.loc.at(f"{guard}: a guard is made of conditions; {decl.name!r} is an action")
                 )
 
     def _word(self, word: str, at: Written) -> Node | None:
