@@ -159,7 +159,7 @@ def _params(items: list[str]) -> dict[str, str] | None:
 
 
 def validate_command(args: argparse.Namespace) -> int:
-    from roomba_bt.mission import validate_files
+    from roomba_bt.mission import reported, validate_files
 
     params = _params(args.param)
     if params is None:
@@ -178,8 +178,8 @@ def validate_command(args: argparse.Namespace) -> int:
             baud=args.baud,
             permissions=permissions(args),
         )
-        for d in diagnostics:
-            print(d)
+        for line in reported(diagnostics):
+            print(line)
         if any(d.severity == "error" for d in diagnostics):
             status = ExitCode.INVALID
         else:
@@ -190,7 +190,7 @@ def validate_command(args: argparse.Namespace) -> int:
 def show_command(args: argparse.Namespace) -> int:
     import py_trees
 
-    from roomba_bt.mission import compile_mission
+    from roomba_bt.mission import compile_mission, reported
 
     params = _params(args.param)
     if params is None:
@@ -211,8 +211,8 @@ def show_command(args: argparse.Namespace) -> int:
         permissions=permissions(args),
     )
     if mission is None:
-        for d in diagnostics:
-            print(d)
+        for line in reported(diagnostics):
+            print(line)
         return ExitCode.INVALID
     print(f"{mission.name}: {mission.description}".rstrip(": "))
     print(py_trees.display.unicode_tree(mission.root))

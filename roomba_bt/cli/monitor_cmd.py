@@ -214,7 +214,7 @@ class LiveMonitor:
 
     def _reload(self, path: Path, changed: list[Path]) -> Any:
         """The new mission once it is handed to the session, or None (refused)."""
-        from roomba_bt.mission import MissionError
+        from roomba_bt.mission import MissionError, reported
 
         names = ", ".join(_shown(f) for f in changed)
         self.feed.event("reload", f"changed: {names}; checking {path}")
@@ -222,7 +222,7 @@ class LiveMonitor:
         try:
             mission = self.loader(path)
         except MissionError as exc:
-            lines = [str(d) for d in exc.diagnostics]
+            lines = reported(exc.diagnostics)
             for line in lines:
                 print(f"reload refused: {line}", file=sys.stderr, flush=True)
             self.feed.event("error", "reload refused, the run goes on: " + "; ".join(lines))

@@ -176,15 +176,15 @@ def load(
 ) -> Any:
     """The compiled mission, or an int exit code after printing every diagnostic (``run``,
     ``replay``, and ``eval`` before its workers start)."""
-    from roomba_bt.mission import MissionError, Permissions, load_mission
+    from roomba_bt.mission import MissionError, Permissions, load_mission, reported
 
     try:
         mission = load_mission(
             path, params, profile=profile, baud=baud, permissions=granted or Permissions()
         )
     except MissionError as exc:
-        for diagnostic in exc.diagnostics:
-            print(str(diagnostic), file=sys.stderr)
+        for line in reported(exc.diagnostics):
+            print(line, file=sys.stderr)
         return ExitCode.INVALID
     for warning in mission.warnings:
         print(str(warning), file=sys.stderr)

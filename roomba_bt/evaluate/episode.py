@@ -36,6 +36,7 @@ from roomba_bt.mission import (
     MissionError,
     Permissions,
     load_mission,
+    reported,
 )
 from roomba_bt.oi.bits import BUMP_BITS
 from roomba_bt.oi.frames import BUMPS_PACKETS
@@ -448,7 +449,7 @@ def _mission(
     try:
         mission = load_mission(path, dict(params), profile=profile, permissions=granted)
     except MissionError as exc:
-        raise EvaluationError("\n".join(str(d) for d in exc.diagnostics)) from None
+        raise EvaluationError("\n".join(reported(exc.diagnostics))) from None
     if len(_COMPILED) >= _COMPILED_KEPT:
         del _COMPILED[next(iter(_COMPILED))]  # the oldest
     _COMPILED[key] = (mission, tuple((file, _text_of(file)) for file in mission.files))

@@ -26,7 +26,7 @@ from roomba_bt.mission.checks import (
     restarted_limits,
     sensor_ranges,
 )
-from roomba_bt.mission.diagnostics import Diagnostic, MissionError
+from roomba_bt.mission.diagnostics import Diagnostic, MissionError, reported
 from roomba_bt.mission.ir import Node
 from roomba_bt.mission.loader import NO_PERMISSIONS, SHIPPED_LIBRARY, Loader, Permissions
 from roomba_bt.mission.values import Context, shown
@@ -43,6 +43,7 @@ __all__ = [
     "SHIPPED_LIBRARY",
     "compile_mission",
     "load_mission",
+    "reported",
     "validate_files",
 ]
 

@@ -70,11 +70,32 @@ def shortened_path(path: str, ends: int = 3) -> str:
     return f"{'.'.join(steps[:ends])} ... ({hidden} more) ... {'.'.join(steps[-ends:])}"
 
 
+#: How many diagnostics a command prints of one file (decided): a compiler's convention. A
+#: stranger's file of 1 MiB can hold 350,000 errors (an alias, a duplicate key, repeated):
+#: the first hundred say what is wrong, the rest would only scroll them away.
+MAX_REPORTED = 100
+
+
+def reported(diagnostics: Iterable[Diagnostic], limit: int = MAX_REPORTED) -> list[str]:
+    """The lines a command prints for ``diagnostics``: the first ``limit``, then how many
+    more there are (``... and 19,900 more errors (the first 100 are listed)``)."""
+    every = list(diagnostics)
+    lines = [str(d) for d in every[:limit]]
+    hidden = every[limit:]
+    if hidden:
+        errors = sum(d.severity == "error" for d in hidden)
+        noun = ("errors" if errors == len(hidden) else
+                "warnings" if not errors else "errors and warnings")  # fmt: skip
+        lines.append(f"... and {len(hidden):,} more {noun} (the first {limit} are listed)")
+    return lines
+
+
 class MissionError(Exception):
-    """A mission that cannot be compiled; ``diagnostics`` holds every error found."""
+    """A mission that cannot be compiled; ``diagnostics`` holds every error found (its
+    message, the first :data:`MAX_REPORTED`)."""
 
     def __init__(self, diagnostics: Iterable[Diagnostic]) -> None:
         self.diagnostics: list[Diagnostic] = list(diagnostics)
         count = len(self.diagnostics)
-        head = f"{count} error{'s' if count != 1 else ''} in mission"
-        super().__init__("\n".join([head, *(str(d) for d in self.diagnostics)]))
+        head = f"{count:,} error{'s' if count != 1 else ''} in mission"
+        super().__init__("\n".join([head, *reported(self.diagnostics)]))

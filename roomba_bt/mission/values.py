@@ -103,9 +103,13 @@ class Context:
     #: what compiles but is likely a mistake, found while parsing (a plugin's behaviour of a
     #: built-in's name): the compiled mission's warnings, with the whole-tree checks' own
     warnings: list[Diagnostic] = field(default_factory=list)
+    #: ``diagnostics`` as a set: an error is reported once, and looking it up in the list
+    #: made N errors cost N**2/2 comparisons (20,000 aliases took 40 s to validate)
+    _reported: set[Diagnostic] = field(default_factory=set, init=False, repr=False)
 
     def error(self, diagnostic: Diagnostic) -> None:
-        if diagnostic not in self.diagnostics:
+        if diagnostic not in self._reported:
+            self._reported.add(diagnostic)
             self.diagnostics.append(diagnostic)
 
     def report(self, bad: Bad) -> None:
