@@ -29,6 +29,7 @@ from pathlib import Path
 from types import FrameType
 from typing import Any
 
+from roomba_bt import yamlsource
 from roomba_bt.evaluate.sources import MissionSources, bundle_mission, bundle_world
 from roomba_bt.mission import (
     NO_PERMISSIONS,
@@ -457,10 +458,11 @@ def _mission(
 
 
 def _text_of(path: Path) -> str | None:
-    """A mission's file as it is now (None: unreadable, which never matches a text)."""
+    """A mission's file as it is now (None: unreadable or grown past the limit, which never
+    matches a text)."""
     try:
-        return path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError):
+        return yamlsource.read_text(path)
+    except (OSError, UnicodeDecodeError, yamlsource.FileTooLarge):
         return None
 
 

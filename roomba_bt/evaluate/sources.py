@@ -30,6 +30,7 @@ from pathlib import Path
 
 import yaml
 
+from roomba_bt import yamlsource
 from roomba_bt.mission.shipped import SHIPPED_PREFIX
 
 #: The sections of a mission (or included) file that name other files to bring along.
@@ -79,8 +80,8 @@ def _named_files(path: Path) -> list[Path]:
     """The files ``path`` names in its include/plugins lists (unreadable ones are skipped:
     the loader reports them when the mission is checked)."""
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, yaml.YAMLError):
+        data = yaml.safe_load(yamlsource.read_text(path))
+    except (OSError, UnicodeDecodeError, yaml.YAMLError, yamlsource.FileTooLarge):
         return []
     if not isinstance(data, dict):
         return []

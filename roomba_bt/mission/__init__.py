@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 
+from roomba_bt import yamlsource
 from roomba_bt.behaviours.registry import Registry, default_registry
 from roomba_bt.mission.build import BuildError, CompiledMission, build
 from roomba_bt.mission.checks import (
@@ -197,10 +198,13 @@ def validate_files(
 
 
 def _has_tree(path: Path) -> bool:
-    """A library file (no top-level ``tree:`` and some ``subtrees:``) needs no tree."""
+    """A library file (no top-level ``tree:`` and some ``subtrees:``) needs no tree. Read as
+    the compiler reads it, the size checked first: a 4 GB file took 8 GB of memory here
+    before the compiler refused it. A file that cannot be read is left to the compiler to
+    say so."""
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError):
+        text = yamlsource.read_text(path)
+    except (OSError, UnicodeDecodeError, yamlsource.FileTooLarge):
         return True
     lines = [line for line in text.splitlines() if line and not line[0].isspace()]
     has_subtrees = any(line.startswith("subtrees:") for line in lines)

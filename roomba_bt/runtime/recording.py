@@ -29,6 +29,8 @@ import contextlib
 import json
 import logging
 import math
+import stat
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
@@ -38,7 +40,6 @@ from roomba_bt.oi.errors import EncodeError
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import PROFILES
 from roomba_bt.transport.base import Transport
-from roomba_bt.yamlsource import undecodable_position
 
 log = logging.getLogger(__name__)
 
@@ -223,18 +224,17 @@ def load_record(path: str | Path) -> Record:
     was refused (``malformed chunk``). A malformed line anywhere else is an error."""
     path = Path(path)
     lines = _record_lines(path)
-    record = Record(_header(path, lines[0].rstrip("\r\n")))
+    record = Record(_header(path, next(lines)[1]))
     last = 0.0
-    cut = len(lines) if not lines[-1].endswith(("\n", "\r")) else None
-    for number, line in enumerate(lines[1:], start=2):
+    for number, line, whole in lines:
         if not line.strip():
             continue
         if record.ended:
             raise RecordError(f"{path}:{number}: a line after the run's end line")
         try:
-            item = _chunk(path, number, line.rstrip("\r\n"))
+            item = _chunk(path, number, line)
         except RecordError:
-            if number != cut:
+            if whole:  # only the last line can lack its newline
                 raise
             log.warning(
                 "%s:%d: the last line is cut short (no newline at its end: the run killed, "
@@ -260,22 +260,44 @@ def load_record(path: str | Path) -> Record:
     return record
 
 
-def _record_lines(path: Path) -> list[str]:
-    """The lines of the record file ``path``, each with its line end, at least one."""
+#: The longest line of a record (decided): a chunk is one read of the port in hex, a few KB;
+#: a longer line is no record's (a file of zeros), refused before more of it is read.
+MAX_RECORD_LINE = 1 << 20
+
+
+def _record_lines(path: Path) -> Iterator[tuple[int, str, bool]]:
+    """Each line of the record file ``path``: its number, its text without its line end and
+    whether it had one (only the last line may not); at least one. Read a line at a time,
+    each at most :data:`MAX_RECORD_LINE` bytes: the file was read whole first, and
+    ``replay /dev/zero`` ran out of memory (a MemoryError traceback). A device or a pipe is
+    refused before it is opened, as a mission is."""
     try:
-        lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
-    except UnicodeDecodeError as exc:  # a damaged copy, or not a record at all
-        row, column = undecodable_position(exc)
-        byte = bytes(exc.object)[exc.start]
-        raise RecordError(
-            f"{path}:{row}:{column}: byte 0x{byte:02x}, not UTF-8 text; expected the JSON "
-            f"lines of a {RECORD_FORMAT} file (run --record)"
-        ) from None
+        if not stat.S_ISREG(path.stat().st_mode):
+            raise RecordError(f"{path}: not a regular file; a record is a file run --record wrote")
+        with path.open("rb") as file:
+            number = 0
+            for number, data in enumerate(iter(lambda: file.readline(MAX_RECORD_LINE + 1), b""), 1):
+                yield number, _line_text(path, number, data), data.endswith(b"\n")
     except OSError as exc:
         raise RecordError(f"{path}: cannot read record: {exc.strerror or exc}") from None
-    if not lines:
+    if number == 0:
         raise RecordError(f"{path}:1: empty file; expected a {RECORD_FORMAT} header line")
-    return lines
+
+
+def _line_text(path: Path, number: int, data: bytes) -> str:
+    """Line ``number`` of a record as text, without its line end."""
+    if len(data) > MAX_RECORD_LINE:
+        raise RecordError(
+            f"{path}:{number}: a line of more than {MAX_RECORD_LINE:,} bytes; a {RECORD_FORMAT} "
+            "file's lines are a few KB (run --record writes them)"
+        )
+    try:
+        return data.decode("utf-8").rstrip("\r\n")
+    except UnicodeDecodeError as exc:  # a damaged copy, or not a record at all
+        raise RecordError(
+            f"{path}:{number}:{exc.start + 1}: byte 0x{data[exc.start]:02x}, not UTF-8 text; "
+            f"expected the JSON lines of a {RECORD_FORMAT} file (run --record)"
+        ) from None
 
 
 def _header(path: Path, line: str) -> dict[str, Any]:

@@ -180,3 +180,22 @@ def test_a_file_of_thousands_of_errors_lists_the_first_hundred_and_counts_the_re
         assert len(lines) == 101, command
         assert all("alias *a is not allowed" in line for line in lines[:100])
         assert lines[100] == "... and 150 more errors (the first 100 are listed)"
+
+
+def test_a_file_over_the_limit_is_refused_before_it_is_read(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
+) -> None:
+    """``validate`` read the whole file to see whether it was a library (a 4 GB file took
+    8 GB of memory) before the compiler refused it by its size; ``show`` and ``run`` did not."""
+    monkeypatch.chdir(tmp_path)
+    with (tmp_path / "big.yaml").open("wb") as file:
+        file.truncate(1 << 30)  # sparse: no disk used
+    monkeypatch.setattr(Path, "read_text", None)  # never read whole
+    monkeypatch.setattr(Path, "read_bytes", None)
+    for command in ("validate", "show", "run"):
+        assert main([command, "big.yaml", *(["--fast"] if command == "run" else [])]) == 2
+        out, err = capsys.readouterr()
+        assert (out + err).splitlines() == [
+            "big.yaml:1:1: mission file of 1,073,741,824 bytes; at most 1,048,576 are read (a "
+            "mission or a world is a few KB: a file generated wrong?)"
+        ], command

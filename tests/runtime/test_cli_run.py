@@ -268,13 +268,35 @@ def test_a_time_that_is_not_finite_or_goes_back_is_placed(
 def test_a_record_with_a_byte_that_is_not_utf8_is_placed_not_a_traceback(
     command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    record = tmp_path / "damaged.jsonl"
-    record.write_bytes(b'{"format": "roomba-bt-record", "version": 1}\n{"t": 0.0, \xff}\n')
+    record = tmp_path / "damaged.jsonl"  # (the header whole: it is read first)
+    record.write_bytes(json.dumps(HEADER).encode() + b'\n{"t": 0.0, \xff}\n')
     assert main([command, str(record)]) == 2
     assert capsys.readouterr().err.strip() == (
         f"roomba-bt: {record}:2:12: byte 0xff, not UTF-8 text; expected the JSON lines of a "
         "roomba-bt-record file (run --record)"
     )
+
+
+def test_a_record_is_read_a_line_at_a_time_and_a_device_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``replay /dev/zero`` was a MemoryError traceback, and a 1 GB file of zeros took 2 GB of
+    memory: the file was read whole before its first line was looked at. A device is refused
+    before it is opened, a line longer than any record's before more of it is read."""
+    from roomba_bt.runtime import recording
+
+    monkeypatch.setattr(recording, "MAX_RECORD_LINE", 1000)
+    zeros = tmp_path / "zeros.jsonl"
+    with zeros.open("wb") as file:
+        file.truncate(1 << 30)  # sparse: no disk used
+    monkeypatch.setattr(Path, "read_text", None)  # the whole file is never read
+    assert main(["replay", str(zeros)]) == 2
+    assert main(["replay", "/dev/zero"]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        f"roomba-bt: {zeros}:1: a line of more than 1,000 bytes; a roomba-bt-record file's "
+        "lines are a few KB (run --record writes them)",
+        "roomba-bt: /dev/zero: not a regular file; a record is a file run --record wrote",
+    ]
 
 
 def test_summary_packets_are_dropped_when_they_do_not_fit_the_baud() -> None:
