@@ -76,6 +76,7 @@ from roomba_bt.mission.values import (
     resolve,
     unknown,
 )
+from roomba_bt.yamlsource import too_many_digits
 
 TOP_LEVEL = ("mission", "description", "parameters", "blackboard", "plugins", "include",
              "subtrees", "tree")  # fmt: skip
@@ -698,4 +699,6 @@ def _cli_value(text: str, vtype: ValueType) -> object:
             return yaml.safe_load(text)
         except yaml.YAMLError:
             return text
+        except ValueError:  # an integer too long to read: "internal error" at 1:1
+            raise UnitError(too_many_digits(text)) from None
     return text

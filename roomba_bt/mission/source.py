@@ -145,7 +145,10 @@ def plain(node: yaml.Node, loc: Loc) -> Any:
     if isinstance(node, yaml.ScalarNode):
         if node.tag in yamlsource.TEXT_SCALARS:
             return str(node.value)
-        return yamlsource.scalar(node)
+        try:
+            return yamlsource.scalar(node)
+        except yamlsource.Refused as exc:  # an integer too long to read
+            raise Bad(loc.at(str(exc.problem))) from None
     if isinstance(node, yaml.SequenceNode):
         return [plain(item, loc.child(item, f"[{i}]")) for i, item in enumerate(node.value)]
     out: dict[Any, Any] = {}

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import os
 import re
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any, NoReturn
@@ -431,14 +432,33 @@ def scalar(node: yaml.Node) -> Any:
     ``2s`` -> "2s"); a tag it has no constructor for raises
     :class:`yaml.constructor.ConstructorError`. A text is its value, as the constructor
     would return it, without the constructor's dispatch and caches (most scalars of a
-    mission are texts)."""
+    mission are texts). An integer too long for Python to read (over 4,300 digits) raises
+    :class:`Refused` at its place: it was a ValueError far from it, "internal error" at 1:1
+    of a mission and a traceback for a world."""
     if node.tag == STR and isinstance(node, yaml.ScalarNode):
         return node.value
     try:
         return _CONSTRUCTOR.construct_object(node, deep=True)
+    except ValueError:
+        if node.tag != CORE + "int":
+            raise
+        raise _too_many_digits(node) from None
     finally:  # its caches would keep every node alive and remember a failed one
         _CONSTRUCTOR.constructed_objects.clear()
         _CONSTRUCTOR.recursive_objects.clear()
+
+
+def _too_many_digits(node: yaml.Node) -> Refused:
+    return Refused(problem=too_many_digits(str(node.value)), problem_mark=node.start_mark)
+
+
+def too_many_digits(text: str) -> str:
+    """What is wrong with ``text``, an integer too long for Python to read."""
+    digits = sum(c.isdigit() for c in text)
+    return (
+        f"an integer of {digits:,} digits is too large a number: at most "
+        f"{sys.get_int_max_str_digits():,} digits are read (a file generated wrong?)"
+    )
 
 
 class DuplicateKey(Exception):
@@ -524,7 +544,10 @@ def _key(key_node: yaml.Node) -> Any:
     refuse)."""
     if key_node.tag == STR:
         return key_node.value
-    key = scalar(key_node) if is_plain(key_node) else key_node
+    try:
+        key = scalar(key_node) if is_plain(key_node) else key_node
+    except Refused:  # too long a number: a key by its text (no mission or world key is one)
+        return str(key_node.value)
     return key if isinstance(key, str | int | float | bool) else str(key)
 
 

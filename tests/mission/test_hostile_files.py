@@ -199,3 +199,35 @@ def test_a_file_over_the_limit_is_refused_before_it_is_read(
             "big.yaml:1:1: mission file of 1,073,741,824 bytes; at most 1,048,576 are read (a "
             "mission or a world is a few KB: a file generated wrong?)"
         ], command
+
+
+def test_an_integer_too_long_to_read_is_placed_in_a_mission_a_world_and_a_parameter(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
+) -> None:
+    """Over 4,300 digits: "internal error while compiling (ValueError ...)" at 1:1 of a
+    mission or for ``-p``; a world's was a traceback, exit 1, from ``run`` and ``sim``."""
+    monkeypatch.chdir(tmp_path)
+    digits = "9" * 5000
+    too_long = (
+        "an integer of 5,000 digits is too large a number: at most 4,300 digits are read "
+        "(a file generated wrong?)"
+    )
+    (tmp_path / "m.yaml").write_text(
+        f"mission: m\ntree:\n  repeat: {{times: {digits}, do: stop}}\n"
+    )
+    (tmp_path / "p.yaml").write_text(
+        "parameters: {n: {type: int, default: 1}}\n"
+        "tree: {sequence: [{mode: safe}, {repeat: {times: '${n}', do: stop}}]}\n"
+    )
+    (tmp_path / "w.yaml").write_text(f"name: w\nrooms: [[[0, 0], [{digits}, 0], [1, 1]]]\n")
+    assert main(["validate", "m.yaml"]) == 2
+    assert main(["validate", "p.yaml", "-p", f"n={digits}"]) == 2
+    assert capsys.readouterr().out.splitlines() == [
+        f"m.yaml:3:19: {too_long} [tree.repeat.times]",
+        f"p.yaml:1:14: parameter n={digits} (from the command line): {too_long} [parameters.n]",
+    ]
+    assert main(["run", "dock", "--fast", "--world", "w.yaml"]) == 2
+    assert main(["sim", "--pty", "--world", "w.yaml"]) == 2
+    out, err = capsys.readouterr()
+    assert err.count(f"w.yaml:2:19: {too_long}") == 2
+    assert "Traceback" not in out + err

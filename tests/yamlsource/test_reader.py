@@ -368,3 +368,19 @@ def test_keys_are_compared_by_type_and_value() -> None:
     second and third "duplicate key 'True'"); ``0x1`` is ``1`` written again."""
     root = yamlsource.compose("1: a\ntrue: b\n1.0: c\n0x1: d\n")
     assert [yamlsource.position(d.node) for d in yamlsource.every_duplicate_key(root)] == [(4, 1)]
+
+
+def test_an_integer_too_long_to_read_is_refused_where_it_is_written() -> None:
+    """Python reads at most 4,300 digits: the ValueError came from far away, "internal error
+    while compiling" at 1:1 of a mission, a traceback (exit 1) for a world."""
+    digits = "9" * 5000
+    root = yamlsource.compose(f"a: 1\nb: [2, {digits}]\n? {digits}\n: 3\n")
+    assert root is not None
+    with pytest.raises(yamlsource.Refused) as refused:
+        yamlsource.to_data(root, "{tag}")
+    assert yamlsource.error_position(refused.value) == (2, 8)
+    assert refused.value.problem == (
+        "an integer of 5,000 digits is too large a number: at most 4,300 digits are read "
+        "(a file generated wrong?)"
+    )
+    assert yamlsource.every_duplicate_key(root) == []  # a key of as many: read as its text
