@@ -38,6 +38,7 @@ from roomba_bt.behaviours.units import (
     UnitError,
     ValueType,
     enum,
+    not_ascii,
 )
 from roomba_bt.oi.bits import BUTTON_NAMES, LIGHT_BUMPER_NAMES, ChargingState, Stasis
 from roomba_bt.oi.frames import (
@@ -404,7 +405,9 @@ class Button(_Flag):
     choice, flags = "name", _BUTTON
 
 
-_COMPARISON = re.compile(r"^\s*([a-z_][a-z0-9_]*)\s*(<=|>=|==|!=|<|>)\s*(-?\d+(?:\.\d+)?)\s*$")
+_COMPARISON = re.compile(
+    r"^\s*([a-z_][a-z0-9_]*)\s*(<=|>=|==|!=|<|>)\s*(-?[0-9]+(?:\.[0-9]+)?)\s*$", re.ASCII
+)
 
 
 def comparison_verdict(op: str, number: float, lo: int, hi: int) -> str | None:
@@ -456,6 +459,7 @@ def _parse_comparison(value: object) -> Comparison:
     if match is None:
         raise UnitError(
             f"expected a comparison such as 'wall_signal > 100' (packet op number), got {value!r}"
+            + (not_ascii(value) if isinstance(value, str) else "")
         )
     name, op, number = match.groups()
     spec = PACKETS_BY_NAME.get(name)

@@ -18,14 +18,17 @@ from __future__ import annotations
 import math
 import numbers
 import re
+import unicodedata
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 from roomba_bt.yamlsource import quoted
 
-_NUMBER = r"[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?"
-_QUANTITY = re.compile(rf"^\s*({_NUMBER})\s*([A-Za-z°%/]*)\s*$")
+_NUMBER = r"[-+]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][-+]?[0-9]+)?"
+#: ASCII digits and spaces only: ``\d`` took any script's (``1\u09ea0 mm/s``, whose Bengali 4
+#: reads like an 8, was 140 mm/s) and ``\s`` a no-break space (:func:`not_ascii`)
+_QUANTITY = re.compile(rf"^\s*({_NUMBER})\s*([A-Za-z°%/]*)\s*$", re.ASCII)
 
 #: unit -> factor to the canonical unit, per dimension.
 UNITS: dict[str, dict[str, float]] = {
@@ -113,7 +116,9 @@ def parse_quantity(dimension: str, value: object) -> float:
         raise UnitError(f"expected {what} such as {EXAMPLES[dimension]}, got {_describe(value)}")
     match = _QUANTITY.match(value)
     if match is None:
-        raise UnitError(f"expected {what} such as {EXAMPLES[dimension]}, got {quoted(value)}")
+        raise UnitError(
+            f"expected {what} such as {EXAMPLES[dimension]}, got {quoted(value)}" + not_ascii(value)
+        )
     number, unit = float(match.group(1)), match.group(2)
     if not math.isfinite(number):  # 1e400 overflows to inf
         raise UnitError(f"{value!r}: {match.group(1)} is too large a number for {what}")
@@ -127,6 +132,21 @@ def parse_quantity(dimension: str, value: object) -> float:
             )
         raise UnitError(f"unknown {dimension} unit {unit!r} in {value!r}; use one of: {known}")
     return number * units[unit]
+
+
+def not_ascii(text: str) -> str:
+    r"""What to add to an error for a number that does not read: the first digit that is not
+    0-9 (fullwidth, Devanagari, bold: Python's ``float`` and ``\d`` take them) or space that is not
+    a plain one (a no-break space), named: it looks like what it is not. Empty if none."""
+    for char in text:
+        if char.isascii() or not (char.isdigit() or char.isspace()):
+            continue
+        name = unicodedata.name(char, "")
+        shown = f"{char!r} (U+{ord(char):04X}{' ' + name if name else ''})"
+        if char.isdigit():
+            return f": {shown} is not an ASCII digit; digits must be 0-9"
+        return f": {shown} is not a plain space; write a space ' ' or nothing"
+    return ""
 
 
 def _describe(value: object) -> str:
@@ -192,9 +212,25 @@ def _parse_int(value: object) -> int:
     return value
 
 
+#: a number YAML 1.1 reads as text: an exponent without a decimal point and a sign (``1e400``,
+#: ``2e3``, ``1.0e3``; ``1.0e+3`` is a number)
+_NUMBER_TEXT = re.compile(rf"\s*{_NUMBER}\s*", re.ASCII)
+
+
 def _parse_float(value: object) -> float:
+    """A number, finite: ``1e400`` (text to YAML) was "expected a number", ``1.0e400`` and
+    ``.inf`` were taken as infinity."""
+    if isinstance(value, str) and _NUMBER_TEXT.fullmatch(value):
+        if not math.isfinite(float(value)):
+            raise UnitError(f"{value.strip()} is too large a number: out of range (not finite)")
+        raise UnitError(
+            f"expected a number, got the text {quoted(value)}: YAML reads an exponent as a "
+            "number only with a decimal point and a sign (1.0e+3)"
+        )
     if not _is_number(value):
         raise UnitError(f"expected a number, got {_describe(value)}")
+    if not math.isfinite(value):  # type: ignore[arg-type]
+        raise UnitError(f"expected a finite number, got {value}")
     return float(value)  # type: ignore[arg-type]
 
 

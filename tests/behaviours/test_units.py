@@ -9,6 +9,7 @@ from roomba_bt.behaviours.units import (
     BOOL,
     DISTANCE,
     DURATION,
+    FLOAT,
     INT,
     PERCENT,
     SPEED,
@@ -132,3 +133,46 @@ def test_a_noun_takes_the_article_its_first_sound_wants() -> None:
         "a speed", "an angle", "an int", "a duration"
     ]  # fmt: skip
     assert with_article("one of left, right") == "one of left, right"
+
+
+@pytest.mark.parametrize(
+    ("text", "found"),
+    [("1\u09ea0 mm/s", "'\u09ea' (U+09EA BENGALI DIGIT FOUR) is not an ASCII digit"),
+     ("\uff12\uff10\uff10 mm/s", "'\uff12' (U+FF12 FULLWIDTH DIGIT TWO) is not an ASCII digit"),
+     ("\U0001d7d0\U0001d7ce\U0001d7ce mm/s",
+      "'\U0001d7d0' (U+1D7D0 MATHEMATICAL BOLD DIGIT TWO) is not an ASCII digit"),
+     ("200\xa0mm/s", "'\\xa0' (U+00A0 NO-BREAK SPACE) is not a plain space")],
+)  # fmt: skip
+def test_a_digit_or_space_that_is_not_ascii_is_refused_and_named(text: str, found: str) -> None:
+    """``\\d`` and ``\\s`` took any script's: ``1\u09ea0 mm/s`` (a Bengali 4, which reads like an 8)
+    was 140 mm/s, the tree showing the text as written."""
+    with pytest.raises(UnitError) as caught:
+        SPEED.parse(text)
+    assert str(caught.value) == (
+        f"expected a speed such as 200 mm/s or 0.2 m/s, got {text!r}: {found}"
+        + ("; digits must be 0-9" if "digit" in found else "; write a space ' ' or nothing")
+    )
+
+
+def test_a_comparisons_number_must_be_ascii_digits() -> None:
+    from roomba_bt.behaviours.conditions import _parse_comparison
+
+    with pytest.raises(
+        UnitError, match=r"'\u0968' \(U\+0968 DEVANAGARI DIGIT TWO\) is not an ASCII"
+    ):
+        _parse_comparison("battery_charge < \u0968\u0966\u0966")
+
+
+@pytest.mark.parametrize(
+    ("value", "message"),
+    [("1e400", "1e400 is too large a number: out of range (not finite)"),
+     (math.inf, "expected a finite number, got inf"),
+     ("2e3", "expected a number, got the text '2e3': YAML reads an exponent as a number only "
+             "with a decimal point and a sign (1.0e+3)")],
+)  # fmt: skip
+def test_a_float_too_large_or_written_as_text_says_so(value: object, message: str) -> None:
+    """``1e400`` (text to YAML 1.1) was "expected a number"; ``1.0e+400`` was infinity."""
+    with pytest.raises(UnitError) as caught:
+        FLOAT.parse(value)
+    assert str(caught.value) == message
+    assert FLOAT.parse(1.5) == 1.5
