@@ -427,7 +427,8 @@ def add_permission_options(parser: argparse.ArgumentParser) -> None:
         default=[],
         metavar="DIR",
         type=include_dir,
-        help="a folder the mission may also include from (repeatable)",
+        help="a folder the mission may also include from, and import plugin files from with "
+        "--allow-plugin-files (repeatable)",
     )
 
 

@@ -28,9 +28,9 @@ stops at the first error: each problem becomes a
 
 A mission file is data, never code: a plugin file it names is imported only when the caller
 grants :attr:`Permissions.plugin_files` (the command line's ``--allow-plugin-files``), and an
-include resolves only inside the top mission's folder tree, the shipped library
-(:data:`SHIPPED_LIBRARY`) and the folders the caller adds (``--include-dir``). A file that is
-not a mission is reported as such, never quoted back.
+include or a plugin file resolves only inside the top mission's folder tree, the shipped
+library (:data:`SHIPPED_LIBRARY`) and the folders the caller adds (``--include-dir``). A file
+that is not a mission is reported as such, never quoted back.
 """
 
 from __future__ import annotations
@@ -95,8 +95,8 @@ class Permissions:
     command line), never by the file.
 
     ``plugin_files``: import the Python files its ``plugins:`` names (``--allow-plugin-files``).
-    ``include_dirs``: folders it may include from besides its own folder tree and the shipped
-    library (``--include-dir``)."""
+    ``include_dirs``: folders it may include from (and import plugin files from, when allowed)
+    besides its own folder tree and the shipped library (``--include-dir``)."""
 
     plugin_files: bool = False
     include_dirs: tuple[Path, ...] = ()
@@ -282,6 +282,9 @@ class Loader:
                 )
                 self.ctx.unloaded_plugins.append(text)
                 continue
+            if self._outside(text, target, iloc, "plugin file"):
+                self.ctx.unloaded_plugins.append(text)
+                continue
             unreadable = _unreadable(target)
             if unreadable is not None or not target.is_file():
                 self.ctx.unloaded_plugins.append(text)
@@ -304,13 +307,7 @@ class Loader:
 
     def _includes(self, path: Path, node: yaml.Node, loc: Loc) -> None:
         for text, target, iloc in self._files(path, node, loc, "include", "an include"):
-            if not any(target.is_relative_to(root) for root in self._include_roots):
-                self.ctx.error(
-                    iloc.at(
-                        f"include {text!r} is outside the mission's folder and the shipped "
-                        "library; allow its folder with --include-dir DIR"
-                    )
-                )
+            if self._outside(text, target, iloc, "include"):
                 continue
             if target in self._include_stack:
                 chain = [p.name for p in self._include_stack[self._include_stack.index(target) :]]
@@ -335,6 +332,21 @@ class Loader:
                 continue
             self._included[target] = iloc
             self._include(target, text, iloc)
+
+    def _outside(self, text: str, target: Path, iloc: Loc, what: str) -> bool:
+        """``target`` (resolved: a link out is out) lies outside the top mission's folder
+        tree, the shipped library and the ``--include-dir`` folders: reported. An include and
+        a plugin file alike: ``plugins: [/tmp/x.py]`` or ``../../x.py`` imported a file from
+        anywhere once ``--allow-plugin-files`` was given for the mission's own folder."""
+        if any(target.is_relative_to(root) for root in self._include_roots):
+            return False
+        self.ctx.error(
+            iloc.at(
+                f"{what} {text!r} is outside the mission's folder and the shipped library; "
+                "allow its folder with --include-dir DIR"
+            )
+        )
+        return True
 
     def _again(self, target: Path, text: str, iloc: Loc) -> bool:
         """``target`` was included already: read once. Named twice by one file, an error at

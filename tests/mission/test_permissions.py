@@ -119,6 +119,35 @@ def test_an_include_outside_the_mission_folder_is_refused(
     assert "hunter2" not in out + err and "root:" not in out + err
 
 
+@pytest.mark.parametrize("where", ["absolute", "../", "symlink"])
+def test_an_allowed_plugin_file_outside_the_mission_folder_is_refused_as_an_include(
+    tmp_path: Path, where: str, capsys: Capsys
+) -> None:
+    """``--allow-plugin-files`` imported ``plugins: [/tmp/x.py]`` or ``../../x.py`` from
+    anywhere, where an include is held to the mission's folder: the user who read the
+    ``.py`` files of an emailed folder ran whatever another user left elsewhere. The same
+    rule, the same message, the same ``--include-dir``."""
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    (elsewhere / "evil.py").write_text(PLUGIN)
+    folder = tmp_path / "mail"
+    folder.mkdir()
+    (folder / "link.py").symlink_to(elsewhere / "evil.py")
+    target = {"absolute": str(elsewhere / "evil.py"), "../": "../elsewhere/evil.py",
+              "symlink": "link.py"}[where]  # fmt: skip
+    path = folder / "m.yaml"
+    path.write_text(f"plugins: ['{target}']\ntree: {{sequence: [always_true, {{wait: 1s}}]}}\n")
+    assert main(["validate", str(path), "--allow-plugin-files"]) == 2
+    assert capsys.readouterr().out.splitlines()[0] == (
+        f"{path}:1:11: plugin file {target!r} is outside the mission's folder and the shipped "
+        "library; allow its folder with --include-dir DIR [plugins[0]]"
+    )
+    assert not (elsewhere / "imported.txt").exists()
+    allowed = ["--allow-plugin-files", "--include-dir", str(elsewhere)]
+    assert main(["validate", str(path), *allowed]) == 0
+    assert (elsewhere / "imported.txt").exists()
+
+
 def test_include_dir_allows_a_folder(tmp_path: Path, capsys: Capsys) -> None:
     shared = tmp_path / "shared"
     shared.mkdir()
