@@ -215,7 +215,8 @@ def show_command(args: argparse.Namespace) -> int:
             print(line)
         return ExitCode.INVALID
     print(f"{mission.name}: {mission.description}".rstrip(": "))
-    print(py_trees.display.unicode_tree(mission.root))
+    reviewed = mission.reviewed()  # a node's name: beside what it is
+    print(py_trees.display.unicode_tree(reviewed))
     print(f"sensor packets: {list(mission.packets)}")
     if mission.parameters_shown:
         shown = ", ".join(f"{k}={v}" for k, v in mission.parameters_shown.items())
@@ -224,7 +225,7 @@ def show_command(args: argparse.Namespace) -> int:
         target = getattr(args, option)
         if target is None:
             continue
-        problem = write_graph(mission.root, Path(target), fmt)
+        problem = write_graph(reviewed, Path(target), fmt)
         if problem is not None:
             print(f"roomba-bt show: {problem}", file=sys.stderr)
             return ExitCode.INVALID

@@ -99,6 +99,16 @@ class CompiledMission:
             blackboard_initial=copy.deepcopy(dict(self.blackboard_initial)),
         )
 
+    def reviewed(self) -> Behaviour:
+        """A tree to review the mission by (``show``, its ``--dot`` and ``--svg``): ``root``
+        built again with each node ``name:`` renamed said by what it is first, the name after
+        (``drive(velocity=500 mm/s, duration=10s) named 'gentle'``). A name replaced the
+        label whole, and ``drive(velocity=50 mm/s, distance=10cm)`` could name a drive at
+        500 mm/s; the live tree, the log and the outcome keep the name."""
+        if self.plan is None:
+            return self.root
+        return build(_as_reviewed(self.plan))
+
     def setup(self, robot: RobotHandle, **kwargs: Any) -> None:
         """Hand the robot to every node (py_trees idiom: hardware arrives in ``setup``) and
         write the blackboard's initial values. Call again before each run."""
@@ -107,3 +117,9 @@ class CompiledMission:
             write_key(key, value)
         for node in self.root.iterate():
             node.setup(robot=robot, **kwargs)
+
+
+def _as_reviewed(node: Node) -> Node:
+    """``node`` and its children, each renamed by ``name:`` named by what it is first."""
+    name = f"{node.label} named {node.name!r}" if node.label else node.name
+    return replace(node, name=name, children=[_as_reviewed(child) for child in node.children])

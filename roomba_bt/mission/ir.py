@@ -36,6 +36,9 @@ class Node:
     params: dict[str, Any] = field(default_factory=dict)
     options: dict[str, Any] = field(default_factory=dict)
     partial: Declaration | None = None
+    #: what the node is, as its name says it without ``name:`` (``drive(velocity=500 mm/s,
+    #: duration=10s)``), when ``name:`` replaced that; "" otherwise
+    label: str = ""
 
     @property
     def declared(self) -> Declaration | None:

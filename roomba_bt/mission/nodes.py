@@ -127,7 +127,9 @@ class NodeParser:
         if built is None:
             return None
         if "name" in mods:
-            built.name = scalar_text(mods["name"][0], mods["name"][2], "name")
+            name = scalar_text(mods["name"][0], mods["name"][2], "name")
+            if name != built.name:
+                built.label, built.name = built.name, name
         for guard in ("until", "while"):
             if guard in mods:
                 gnode, gkloc, gvloc = mods[guard]

@@ -73,6 +73,44 @@ def test_show_writes_dot(capsys: Capsys, tmp_path: Path) -> None:
     assert target.read_text().startswith("digraph")
 
 
+SPOOF = """\
+mission: spoof
+description: Gently drives 10 cm forward at 50 mm/s.
+tree:
+  sequence:
+    - mode: safe
+    - drive: {velocity: 500 mm/s, duration: 10s}
+      name: "drive(velocity=50 mm/s, distance=10cm)"
+    - sequence: [stop]
+      name: "tidy\\n    --> wait(1s)"
+"""
+
+
+def test_show_says_what_a_renamed_node_is_before_its_name(
+    mission_file: Callable[..., Path], capsys: Capsys, tmp_path: Path
+) -> None:
+    """``name:`` replaced the label whole in ``show`` and ``--dot``: a drive at 500 mm/s could
+    be named ``drive(velocity=50 mm/s, distance=10cm)``, and a review saw only that. What the
+    node is comes first, then its name (quoted: a newline in it cannot make a line of its
+    own); the live tree keeps the name."""
+    from roomba_bt.mission import load_mission
+
+    path = mission_file(SPOOF)
+    target = tmp_path / "tree.dot"
+    assert main(["show", str(path), "--dot", str(target)]) == 0
+    out = capsys.readouterr().out
+    assert out.splitlines()[1:5] == [
+        "{-} sequence",
+        "    --> mode(safe)",
+        "    --> drive(velocity=500 mm/s, duration=10s) named "
+        "'drive(velocity=50 mm/s, distance=10cm)'",
+        "    {-} sequence named 'tidy\\n    --> wait(1s)'",
+    ]
+    assert "named 'drive(velocity=50 mm/s, distance=10cm)'" in target.read_text()
+    live = [node.name for node in load_mission(path).root.iterate()]
+    assert "drive(velocity=50 mm/s, distance=10cm)" in live
+
+
 def test_show_svg_without_graphviz_is_a_clear_error(
     capsys: Capsys, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
