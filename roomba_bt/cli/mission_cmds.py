@@ -131,8 +131,11 @@ def _registry_with_files(command: str, files: list[str]) -> Registry | int:
 
     registry = default_registry()
     for file in files:
-        if not Path(file).is_file():
-            print(f"roomba-bt {command}: --plugin-file {file}: no such file", file=sys.stderr)
+        path = Path(file)
+        if not path.is_file():
+            what = ("a directory, not a file" if path.is_dir() else
+                    "not a regular file" if path.exists() else "no such file")  # fmt: skip
+            print(f"roomba-bt {command}: --plugin-file {file}: {what}", file=sys.stderr)
             return ExitCode.INVALID
         registry, errors = registry.with_file(Path(file))
         for error in errors:
@@ -167,8 +170,8 @@ def validate_command(args: argparse.Namespace) -> int:
     status = ExitCode.OK
     for file in args.files:
         found = mission_file(file)
-        if isinstance(found, tuple):
-            print(found[0])
+        if isinstance(found, tuple):  # as show and run say it: stderr, the command named
+            print(f"roomba-bt validate: {found[0]}", file=sys.stderr)
             status = ExitCode.INVALID
             continue
         diagnostics = validate_files(

@@ -264,6 +264,9 @@ class Loader:
             except Bad as bad:
                 self.ctx.report(bad)
                 continue
+            if not text.strip():  # the folder of the file naming it: "is a directory"
+                self.ctx.error(iloc.at(f"{each} is an empty path: name a file"))
+                continue
             if text.startswith(SHIPPED_PREFIX):
                 out.append((text, (SHIPPED_DIR / text[len(SHIPPED_PREFIX) :]).resolve(), iloc))
             else:
@@ -367,13 +370,16 @@ class Loader:
         if read is None:
             return
         root, root_loc = read
+        # a whole mission, not a library: said at the include, whatever else it holds (one
+        # with a description: was three errors at lines of the included file, none here); a
+        # library with a stray tree: is a library, its subtrees read, the tree: an error there
+        if _is_mission(root, ("mission", "tree")) and not _is_mission(root, ("subtrees",)):
+            self.ctx.error(iloc.at(
+                f"included file {text!r} is a mission (it has mission: or tree:), not a "
+                f"library: an included file may hold only {', '.join(_INCLUDED_KEYS)}"
+            ))  # fmt: skip
+            return
         if not _is_mission(root, _INCLUDED_KEYS):
-            if _is_mission(root, ("mission", "tree")):  # a whole mission, not a library
-                self.ctx.error(iloc.at(
-                    f"included file {text!r} is a mission (it has mission: or tree:), not a "
-                    f"library: an included file may hold only {', '.join(_INCLUDED_KEYS)}"
-                ))  # fmt: skip
-                return
             self.ctx.error(iloc.at(_not_a_mission(f"included file {text!r}", _INCLUDED_KEYS)))
             return
         try:
@@ -612,6 +618,8 @@ def _not_a_file(path: Path, text: str, target: Path) -> str:
     case: both found on Windows, not here)."""
     if target.is_dir():
         return f"included file {text!r} is a directory, not a file: name a .yaml file in it"
+    if target.exists():  # a pipe, a device: no file to read (it "was not found")
+        return f"included file {text!r} is not a regular file; an include is a .yaml file"
     slashed = text.replace("\\", "/")
     if slashed != text and (path.parent / slashed).is_file():
         return (

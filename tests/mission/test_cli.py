@@ -55,7 +55,7 @@ def test_validate_prints_warnings_and_still_exits_0(
 
 def test_validate_a_missing_file(capsys: Capsys, tmp_path: Path) -> None:
     assert main(["validate", str(tmp_path / "nope.yaml")]) == 2
-    assert "nope.yaml: no such mission file, and no shipped mission" in capsys.readouterr().out
+    assert "nope.yaml: no such mission file, and no shipped mission" in capsys.readouterr().err
 
 
 def test_show_prints_the_tree(capsys: Capsys) -> None:

@@ -52,7 +52,7 @@ def test_a_mission_in_a_folder_the_user_cannot_enter_is_rc_2(
     lock(monkeypatch, "np")
     assert main(["validate", "np/a.yaml"]) == 2
     out, err = capsys.readouterr()
-    assert out.splitlines() == ["cannot read np/a.yaml: Permission denied"]
+    assert err.splitlines() == ["roomba-bt validate: cannot read np/a.yaml: Permission denied"]
     assert "Traceback" not in out + err
 
 
@@ -117,7 +117,9 @@ def test_command_line_paths_that_are_no_file_say_what_they_are(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
 ) -> None:
     """An empty path was ": a directory"; a broken link or a link loop "no such mission
-    file, and no shipped mission of that name"; ``ok`` beside ok.yaml suggested "dock"."""
+    file, and no shipped mission of that name"; ``ok`` beside ok.yaml suggested "dock".
+    Said as ``show`` and ``run`` say them: on stderr, the command named (``validate -`` was
+    on stdout, unprefixed, among the diagnostics)."""
     monkeypatch.chdir(tmp_path)
     (tmp_path / "ok.yaml").write_text("tree: {wait: 1s}\n")
     (tmp_path / "broken.yaml").symlink_to("nothere.yaml")
@@ -125,7 +127,9 @@ def test_command_line_paths_that_are_no_file_say_what_they_are(
     (tmp_path / "loop2.yaml").symlink_to("loop1.yaml")
     assert main(["validate", "", "-", "broken.yaml", "loop1.yaml", "ok"]) == 2
     out, err = capsys.readouterr()
-    lines = out.splitlines()
+    assert out == ""
+    lines = [line.removeprefix("roomba-bt validate: ") for line in err.splitlines()]
+    assert len(lines) == len(err.split("roomba-bt validate: ")) - 1 == 5
     assert lines[:4] == [
         "'': an empty path; give a mission file or a shipped mission's name "
         "(`roomba-bt missions` lists them)",
@@ -231,3 +235,34 @@ def test_an_integer_too_long_to_read_is_placed_in_a_mission_a_world_and_a_parame
     out, err = capsys.readouterr()
     assert err.count(f"w.yaml:2:19: {too_long}") == 2
     assert "Traceback" not in out + err
+
+
+def test_includes_that_are_no_library_say_what_they_are_at_the_include(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
+) -> None:
+    """A pipe was "not found"; ``""`` "a directory" (the including file's folder); the shipped
+    mission ``dock`` (it has a description:) three errors at lines of the installed file and
+    none at the include; ``schema --plugin-file`` of a folder "no such file"."""
+    import os
+
+    monkeypatch.chdir(tmp_path)
+    os.mkfifo(tmp_path / "pipe.yaml")
+    (tmp_path / "m.yaml").write_text(
+        'include: ["roomba-bt:dock.yaml", "", pipe.yaml]\nplugins: [" "]\ntree: {wait: 1s}\n'
+    )
+    assert main(["validate", "m.yaml", "--allow-plugin-files"]) == 2
+    assert capsys.readouterr().out.splitlines() == [
+        "m.yaml:1:11: included file 'roomba-bt:dock.yaml' is a mission (it has mission: or "
+        "tree:), not a library: an included file may hold only description, plugins, include, "
+        "blackboard, subtrees [include[0]]",
+        "m.yaml:1:34: an include is an empty path: name a file [include[1]]",
+        "m.yaml:1:38: included file 'pipe.yaml' is not a regular file; an include is a .yaml "
+        "file [include[2]]",
+        "m.yaml:2:11: a plugin is an empty path: name a file [plugins[0]]",
+    ]
+    assert main(["schema", "--plugin-file", str(tmp_path)]) == 2
+    assert main(["schema", "--plugin-file", "pipe.yaml"]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        f"roomba-bt schema: --plugin-file {tmp_path}: a directory, not a file",
+        "roomba-bt schema: --plugin-file pipe.yaml: not a regular file",
+    ]

@@ -142,7 +142,7 @@ def test_validate_and_show_take_names(
     assert main(["show", "dock-builtin"]) == 0
     assert capsys.readouterr().out.startswith("dock-builtin: Seek Dock (143)")
     assert main(["validate", "nothing-like-it"]) == 2
-    assert "nothing-like-it: no such mission file" in capsys.readouterr().out
+    assert "nothing-like-it: no such mission file" in capsys.readouterr().err
 
 
 def test_run_takes_a_name(capsys: Capsys, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
