@@ -40,9 +40,10 @@ def failure_reason(root: Behaviour) -> str:
     return _explain(root)[0]
 
 
-def _explain(root: Behaviour) -> tuple[str, Behaviour | None]:
-    """:func:`failure_reason`'s text, and the condition leaf that decided it by holding
-    when the failure is an inverter's (else None)."""
+def _explain(root: Behaviour) -> tuple[str, Behaviour | None, bool]:
+    """:func:`failure_reason`'s text; the condition leaf that decided it by holding when the
+    failure is an inverter's (else None); whether the text carries a node's own message (a
+    leaf's ``feedback_message``: "no bump: forced to FAILURE by the operator")."""
     failure = py_trees.common.Status.FAILURE
     node = root
     path = [root]
@@ -50,7 +51,7 @@ def _explain(root: Behaviour) -> tuple[str, Behaviour | None]:
     with_message: Behaviour | None = None
     while True:
         if isinstance(node, SaysWhy) and node.feedback_message and node.status == failure:
-            return node.feedback_message, None  # its message says what failed below it
+            return node.feedback_message, None, True  # its message says what failed below
         failed = [child for child in node.children if child.status == failure]
         if not failed:
             break
@@ -67,15 +68,15 @@ def _explain(root: Behaviour) -> tuple[str, Behaviour | None]:
         condition = _deepest_success(node)
         if condition is not None:  # a name the mission gave it says what it means: kept
             said = f"{condition.name} held"
-            return (said if node.name == "inverter" else f"{node.name} ({said})"), condition
+            return (said if node.name == "inverter" else f"{node.name} ({said})"), condition, False
     if best is node and isinstance(node, py_trees.decorators.SuccessIsFailure):
         # a forced failure ("back away, then fail"): what held just before it is the cause
         # (the patrol's cliff that ended the drive before the back-off)
         held = _held_before(path)
         if held is not None:
-            return held, None
+            return held, None, True
     message = "" if isinstance(best, _FLIPS) else best.feedback_message
-    return (f"{best.name}: {message}" if message else best.name), None
+    return (f"{best.name}: {message}" if message else best.name), None, bool(message)
 
 
 def while_stopped(condition: Behaviour, guarded: str) -> str:
@@ -89,7 +90,9 @@ def while_stopped(condition: Behaviour, guarded: str) -> str:
 
     It said "condition no longer holds: wheel_drop(any) held", under the guard's own name
     ("while inverter")."""
-    said, held = _explain(condition)
+    said, held, told = _explain(condition)
+    if held is None and told:  # its own message says what happened (the monitor's force)
+        return f"stopped: {said}, while {guarded!r} ran"
     if held is None:
         return f"stopped: {said} no longer holds while {guarded!r} ran"
     meaning = _meaning(held) if said == f"{held.name} held" else None

@@ -222,7 +222,10 @@ def test_a_forced_condition_decides_the_branch_and_is_marked_in_the_events_and_t
     summary = rig.run_with(operator)
     assert summary.outcome is Outcome.FAILURE
     # the operator's, said so: it read "no bump", as if the bumper had failed the mission
-    assert summary.reason == "no bump: forced to FAILURE by the operator"
+    assert summary.reason == (
+        "stopped: no bump: forced to FAILURE by the operator, while 'repeat' ran"
+        " (stage drive was running)"
+    )
     assert any(e.kind == "force" and "no bump forced to FAILURE" in e.text for e in rig.feed.events)
     record = load_record(record_path)
     assert record.notes
