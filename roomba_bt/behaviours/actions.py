@@ -372,6 +372,7 @@ class Turn(Drive):
 @declare(
     "stop",
     kind="action",
+    at_once=True,
     params=(Param("motors", BOOL, default=False, doc="also switch the brushes and vacuum off"),),
     sends=opcodes("drive", "motors"),
     halts_only=True,  # Drive 0
@@ -397,21 +398,21 @@ class _BuiltIn(Action):
         return _OK
 
 
-@declare("clean", kind="action", sends=opcodes("clean"))
+@declare("clean", kind="action", at_once=True, sends=opcodes("clean"))
 class Clean(_BuiltIn):
     """Start the robot's own cleaning cycle (Clean 135); the OI drops to Passive."""
 
     opcode_helper = staticmethod(oi.clean)
 
 
-@declare("spot", kind="action", sends=opcodes("spot"))
+@declare("spot", kind="action", at_once=True, sends=opcodes("spot"))
 class Spot(_BuiltIn):
     """Start spot cleaning (Spot 134); the OI drops to Passive."""
 
     opcode_helper = staticmethod(oi.spot)
 
 
-@declare("max", kind="action", sends=opcodes("max"))
+@declare("max", kind="action", at_once=True, sends=opcodes("max"))
 class MaxClean(_BuiltIn):
     """Start a Max cleaning cycle (Max 136), until the battery runs out; Passive."""
 
@@ -464,6 +465,7 @@ _MOTORS = ("main_brush", "side_brush", "vacuum", "side_brush_clockwise", "main_b
 @declare(
     "motors",
     kind="action",
+    at_once=True,
     params=tuple(Param(name, BOOL, default=False) for name in _MOTORS),
     sends=opcodes("motors"),
 )
@@ -479,6 +481,7 @@ class Motors(Action):
 @declare(
     "vacuum",
     kind="action",
+    at_once=True,
     params=(Param("on", BOOL, required=True, doc="vacuum on or off (other motors go off)"),),
     sends=opcodes("motors"),
     primary="on",
@@ -494,6 +497,7 @@ class Vacuum(Action):
 @declare(
     "leds",
     kind="action",
+    at_once=True,
     params=(
         *(Param(name, BOOL, default=False) for name in LED_NAMES),
         Param("power_color", INT, default=0, minimum=_LED_COLOR.minimum,
@@ -521,6 +525,7 @@ _SONG_SLOT = Param("number", INT, default=0, minimum=_SONG_NUMBER.minimum,
 @declare(
     "song",
     kind="action",
+    at_once=True,
     params=(
         _SONG_SLOT,
         Param("notes", NOTES, required=True,
@@ -540,6 +545,7 @@ class Song(Action):
 @declare(
     "play",
     kind="action",
+    at_once=True,
     params=(_SONG_SLOT,),
     sends=opcodes("play"),
     primary="number",
@@ -577,6 +583,7 @@ class Wait(Action):
 @declare(
     "log",
     kind="action",
+    at_once=True,
     params=(
         Param("message", STR, required=True),
         Param("level", enum("debug", "info", "warning", "error"), default="info"),
@@ -596,6 +603,7 @@ class Log(Action):
 @declare(
     "set",
     kind="action",
+    at_once=True,
     params=(
         Param("key", STR, required=True, from_blackboard=False, doc="a declared key"),
         Param("value", ANY, required=True, doc="typed by the key's declaration"),
@@ -613,6 +621,7 @@ class SetKey(Action):
 @declare(
     "mark",
     kind="action",
+    at_once=True,
     params=(Param("key", STR, required=True, from_blackboard=False,
                   doc="a key declared with type mark"),),
     reads=ENCODER_PACKETS,

@@ -135,12 +135,19 @@ def _cliff_reads(params: Mapping[str, Any]) -> tuple[int, ...]:
     return tuple(_CLIFFS.values()) if sensor == "any" else (_CLIFFS[sensor],)
 
 
+def _cliff_compares(params: Mapping[str, Any]) -> tuple[tuple[str, Comparison], ...]:
+    """A drop is 1 on each sensor it reads (any one of them, for ``any``): the Full-mode
+    check reads from this that a cliff makes it succeed."""
+    return tuple(("sensor", (packet, "==", 1.0)) for packet in _cliff_reads(params))
+
+
 @declare(
     "cliff",
     kind="condition",
     params=(Param("sensor", enum(*_CLIFFS, "any"), default="any", from_blackboard=False),),
     reads=_cliff_reads,
     primary="sensor",
+    compares=_cliff_compares,
 )
 class Cliff(Condition):
     """A cliff sensor sees a drop (packets 9-12), one sensor or any."""

@@ -234,6 +234,10 @@ class Declaration:
     #: the commands it sends with given parameters, where fewer than ``sends`` (``mode:
     #: passive`` sends Start alone): the static mode check holds the leaf to those
     sends_by: Callable[[Mapping[str, Any]], tuple[int, ...]] | None = None
+    #: SUCCESS on the tick it starts, every time (``stop``, ``set``, ``log``): the static
+    #: checks take what it does as done within that tick (a condition, never RUNNING, is
+    #: done within it too, but may fail)
+    at_once: bool = False
 
     @property
     def defaults(self) -> dict[str, Any]:
@@ -433,12 +437,15 @@ def declare(
     halts_only: bool = False,
     compares: ComparesOf | None = None,
     sends_by: Callable[[Mapping[str, Any]], tuple[int, ...]] | None = None,
+    at_once: bool = False,
 ) -> Callable[[B], B]:
     """Class decorator: attach the :class:`Declaration` as ``cls.declaration``; the doc is
     the class docstring's first paragraph. ``leads_to`` defaults to what the opcode table
     says of the commands in ``sends`` (:func:`mode_after_sending`): Spot (134) leads to
     Passive, so ``spot`` need not say it. ``halts_only=True`` says that its wheel commands
-    only stop the wheels (``stop``): the Full-mode warning passes it by."""
+    only stop the wheels (``stop``): the Full-mode warning passes it by. ``at_once=True``
+    says that it returns SUCCESS on the tick it starts, every time (the static checks rely
+    on it: a test ticks every built-in that says so)."""
     after = mode_after_sending(sends) if leads_to is None else leads_to
 
     def attach(cls: B) -> B:
@@ -446,7 +453,7 @@ def declare(
         cls.declaration = Declaration(
             name, kind, cls, params, reads, sends, after, doc, primary,
             constraints=constraints, writes_keys=writes_keys, reads_keys=reads_keys,
-            halts_only=halts_only, compares=compares, sends_by=sends_by,
+            halts_only=halts_only, compares=compares, sends_by=sends_by, at_once=at_once,
         )  # fmt: skip
         return cls
 

@@ -156,7 +156,7 @@ _PARALLEL = NodeKind(
         ),
         Param("selected", CHILD_NAMES, doc="child names, for policy: selected"),
     ),
-    "py_trees Parallel: ticks every child each tick",
+    "py_trees Parallel: ticks every child each tick (with synchronise, not one that succeeded)",
     required_if=(("selected", "policy", "selected"),),
 )
 

@@ -23,9 +23,10 @@
   (:data:`RUNTIME_PACKETS`), must fit one 15 ms stream frame at the chosen baud.
 * **Blind in Full (a warning).** In Full mode the robot's firmware does not stop at a cliff
   or a wheel drop (it does in Safe, by falling to Passive). A leaf that turns the wheels and
-  can run in Full, with no cliff sensor read while it runs (by itself, a guard around it, an
-  earlier child of a reactive parent, a parallel branch beside it), drives down the stairs if
-  it meets them: compiled, with a warning (:func:`blind_in_full`).
+  can run in Full, with no cliff sensor read on every tick it runs with a result that ends
+  it (by itself, a guard around it, an earlier child of a reactive parent, a parallel branch
+  ticked on every tick: :mod:`roomba_bt.mission.ticks`), drives down the stairs if it meets
+  them: compiled, with a warning (:func:`blind_in_full`).
 * **Commands the robot has.** Each leaf whose declared ``sends`` include a command the chosen
   profile lacks (Reset 7 and Stop 173 on the Roomba 500) is an error at that leaf; one the
   profile has but whose firmware does not honour it (Digit LEDs Raw 163: the 600 spec says
@@ -38,15 +39,20 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from typing import Any
 
-from roomba_bt.behaviours.conditions import COMPARISON, comparison_problem
-from roomba_bt.behaviours.declare import BlackboardRef, Comparison, Declaration, Param
+from roomba_bt.behaviours.conditions import comparison_problem
+from roomba_bt.behaviours.declare import BlackboardRef, Declaration, Param
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.ir import KeyDecl, Node
 from roomba_bt.mission.source import Loc
+from roomba_bt.mission.ticks import (
+    SELECTORS,
+    packet_tests,
+    reads_cliffs,
+    watched_children,
+)
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.frames import (
     CHARGING_SOURCES_PACKETS,
-    CLIFF_PACKETS,
     ENCODER_PACKETS,
     HAZARD_PACKETS,
 )
@@ -385,7 +391,6 @@ def _ranged_key_uses(
 
 #: Leaves that fail when their time is up (the ``timeout`` decorator is the other limit).
 TIME_LIMIT_LEAVES = frozenset({"dock_time_limit"})
-_REACTIVE_SELECTORS = frozenset({"fallback", "selector", "reactive_fallback", "reactive_selector"})
 
 
 def _limits(node: Node) -> list[Node]:
@@ -403,7 +408,7 @@ def restarted_limits(root: Node) -> list[Diagnostic]:
     run, and the next tick starts it again with a fresh clock or count."""
     errors = []
     for node in root.walk():
-        if node.kind not in _REACTIVE_SELECTORS or node.options.get("memory", True):
+        if node.kind not in SELECTORS or node.options.get("memory", True):
             continue
         for child in node.children[:-1]:
             for limit in _limits(child):
@@ -423,54 +428,20 @@ def restarted_limits(root: Node) -> list[Diagnostic]:
     return errors
 
 
-CLIFF_PACKETS_SET = frozenset(CLIFF_PACKETS)
-#: the composites that tick children in order (a sequence or a fallback)
-_CHAINS = frozenset({"sequence", "reactive_sequence"}) | _REACTIVE_SELECTORS
-
-
-def _reads_cliffs(node: Node) -> bool:
-    """Whether a leaf of ``node``'s subtree reads a cliff sensor (packets 9-12)."""
-    return any(
-        n.decl is not None and not CLIFF_PACKETS_SET.isdisjoint(n.decl.packets(n.params))
-        for n in node.walk()
-    )
-
-
-def _watched_children(node: Node, watched: bool) -> list[tuple[Node, bool]]:
-    """Each child of ``node`` and whether a cliff sensor is read on every tick it runs:
-    by the condition of an ``until``/``while`` around it, by an earlier child of a reactive
-    composite (ticked again every tick, it can end the later one), or by another branch
-    of a parallel (ticked beside it). A sequence or fallback with memory ticks an earlier
-    child once, not while the later one runs: no watch."""
-    children = node.children
-    if watched:
-        return [(child, True) for child in children]
-    if node.kind == "guard":  # children: the condition, the guarded node
-        return [(children[0], False), (children[1], _reads_cliffs(children[0]))]
-    if node.kind == "parallel":
-        reads = [_reads_cliffs(child) for child in children]
-        return [(c, any(r for j, r in enumerate(reads) if j != i)) for i, c in enumerate(children)]
-    if node.kind in _CHAINS and not node.options.get("memory", True):
-        out, before = [], False
-        for child in children:
-            out.append((child, before))
-            before = before or _reads_cliffs(child)
-        return out
-    return [(child, False) for child in children]
-
-
 def blind_in_full(root: Node, modes: ModeCheck) -> list[Diagnostic]:
     """Warnings (see the module docstring): each leaf that turns the wheels, can run in Full,
     reads no cliff sensor itself, and runs with nothing around it that reads one on every
-    tick (:func:`_watched_children`). A cliff read elsewhere (a check before a drive, another
-    branch) does not stop this drive at the stairs."""
+    tick with a result that ends it (:func:`~roomba_bt.mission.ticks.watched_children`). A
+    cliff read elsewhere (a check before a drive, a parallel branch that succeeded and is
+    not ticked again, a ``oneshot``, a ``force_success``) does not stop this drive at the
+    stairs."""
     warnings: list[Diagnostic] = []
     seen: set[tuple[str, int, int]] = set()  # a subtree used twice is one place in its file
     pending = [(root, False)]
     while pending:
         node, watched = pending.pop()
         if node.kind != "leaf":
-            pending.extend(reversed(_watched_children(node, watched)))
+            pending.extend(reversed(watched_children(node, watched)))
             continue
         decl = node.decl
         entered = modes.entered.get(id(node))
@@ -480,7 +451,7 @@ def blind_in_full(root: Node, modes: ModeCheck) -> list[Diagnostic]:
             or entered is None
             or OIMode.FULL not in entered[1]
             or not decl.turns_wheels
-            or _reads_cliffs(node)
+            or reads_cliffs(node)
         ):
             continue
         where = (str(node.loc.file), node.loc.line, node.loc.column)
@@ -538,34 +509,12 @@ def sensor_ranges(root: Node, profile: RobotProfile) -> list[Diagnostic]:
     test no model can change is already an error where it is written."""
     warnings: list[Diagnostic] = []
     for node in root.walk():
-        for name, said, test in _packet_tests(node):
+        for name, said, test in packet_tests(node):
             problem = comparison_problem(test, profile.packets, f" on the {profile.title}")
             if problem is not None:
                 loc = node.options.get(f"loc:{name}", node.loc)
                 warnings.append(loc.at(f"{said}: {problem}").as_warning())
     return warnings
-
-
-def _default(param: Param | None) -> object:
-    return None if param is None else param.default
-
-
-def _packet_tests(node: Node) -> list[tuple[str, str, Comparison]]:
-    """A leaf's packet tests: (the parameter, how to name it, the test)."""
-    decl = node.decl
-    if decl is None:
-        return []
-    found = [
-        (param.name, f"{decl.name}.{param.name}", test)
-        for param in decl.params
-        if param.type is COMPARISON and isinstance(test := node.params.get(param.name), tuple)
-    ]
-    if decl.compares is not None:
-        found += [
-            (name, f"{decl.name}: {node.params.get(name, _default(decl.param(name)))}", test)
-            for name, test in decl.compares(node.params)
-        ]
-    return found
 
 
 def check_stream(

@@ -12,6 +12,7 @@ from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
 from roomba_bt.behaviours import actions as a
+from roomba_bt.behaviours import builtin_registry
 from roomba_bt.behaviours.declare import Action, BlackboardRef, declare, read_key, write_key
 from roomba_bt.oi.encode import drive, drive_direct, drive_straight, turns_wheels
 from roomba_bt.oi.modes import OIMode
@@ -386,3 +387,24 @@ def test_an_action_that_set_the_wheels_turning_halts_them_when_it_ends_unasked(
 def test_a_wheel_command_that_moves_nothing_leaves_nothing_to_halt() -> None:
     assert not turns_wheels(drive(0, 0x8000)) and not turns_wheels(drive_direct(0, 0))
     assert turns_wheels(drive(-1, 1)) and turns_wheels(drive_direct(0, 5))
+
+
+#: the parameters a built-in needs to be ticked at all (its required ones)
+_REQUIRED: dict[str, dict[str, Any]] = {
+    "vacuum": {"on": True},
+    "song": {"number": 1, "notes": ((60, 16),)},
+    "log": {"message": "hello"},
+    "set": {"key": "k", "value": 1},
+    "mark": {"key": "here"},
+}
+
+
+def test_what_declares_it_succeeds_at_once_succeeds_on_its_first_tick(make: Make) -> None:
+    """``at_once``: the static checks take what such a leaf does as done within the tick it
+    starts (a limit under a reactive fallback, a parallel's writes), so it must be true."""
+    declared = [d for d in builtin_registry() if d.at_once]
+    assert {d.name for d in declared} >= {"stop", "set", "log", "mark", "leds", "motors"}
+    for declaration in declared:
+        behaviour = make(declaration.cls, **_REQUIRED.get(declaration.name, {}))
+        assert tick(behaviour) is Status.SUCCESS, declaration.name
+    assert not a.Wait.declaration.at_once and not a.Drive.declaration.at_once

@@ -244,15 +244,47 @@ def test_driving_in_full_with_no_cliff_sensor_read_is_a_warning(
     ("tree", "warned"),
     [
         # watched on every tick: a guard, an earlier child of a reactive composite, a
-        # parallel branch, or the leaf itself
+        # parallel branch ticked on every tick, or the leaf itself
         ("- drive: {velocity: 200 mm/s}\n  until: {cliff: any}", False),
         ("- drive: {velocity: 200 mm/s}\n  while: {inverter: {cliff: any}}", False),
         ("- reactive_sequence: [{inverter: {cliff: any}}, {drive: {velocity: 200 mm/s}}]", False),
         ("- reactive_fallback: [{cliff: any}, {drive: {velocity: 200 mm/s}}]", False),
-        ("- parallel: [{drive: {velocity: 200 mm/s}}, {inverter: {cliff: any}}]", False),
+        ("- parallel: {synchronise: false,"
+         " children: [{drive: {velocity: 200 mm/s}}, {inverter: {cliff: any}}]}", False),
+        ("- parallel: {policy: one, children: [{drive: {velocity: 200 mm/s}}, {cliff: any}]}",
+         False),
+        # a branch that never succeeds is ticked every tick, synchronised or not
+        ("- parallel: [{drive: {velocity: 200 mm/s}}, {repeat: {do: {inverter: {cliff: any}}}}]",
+         False),
+        ("- parallel: [{drive: {velocity: 200 mm/s}},"
+         " {wait: 1h, while: {inverter: {cliff: any}}, name: w}]", True),  # ends after 1 h
         ("- until: {cliff: any}\n  sequence: [{turn: 90deg}, {drive: {velocity: 200 mm/s}}]",
          False),
+        ("- drive: {velocity: 200 mm/s}\n  while: {sensor: cliff_left == 0}", False),
+        ("- drive: {velocity: 200 mm/s}\n  while: {sequence: [{inverter: {bump: any}},"
+         " {inverter: {cliff: any}}]}", False),
+        ("- drive: {velocity: 200 mm/s}\n  while: {timeout: {after: 1s, do: {inverter: {cliff: any}}}}",
+         False),
         ("- cover: {}", False),
+        # the cliff branch of a synchronised parallel succeeds on the first tick and is not
+        # ticked again: the drive ran off the stairs with this (session 25)
+        ("- parallel: [{drive: {velocity: 200 mm/s}}, {inverter: {cliff: any}}]", True),
+        ("- parallel: {policy: selected, selected: [go], children:"
+         " [{drive: {velocity: 200 mm/s}, name: go}, {inverter: {cliff: any}}]}", True),
+        # read once, or read with a result that ends nothing
+        ("- reactive_sequence: [{oneshot: {inverter: {cliff: any}}},"
+         " {drive: {velocity: 200 mm/s}}]", True),
+        ("- drive: {velocity: 200 mm/s}\n  while: {oneshot: {inverter: {cliff: any}}}", True),
+        ("- parallel: {synchronise: false,"
+         " children: [{drive: {velocity: 200 mm/s}}, {force_success: {cliff: any}}]}", True),
+        ("- drive: {velocity: 200 mm/s}\n  until: {force_failure: {cliff: any}}", True),
+        # read only when the sequence gets past its wait: not on every tick
+        ("- parallel: {synchronise: false, children: [{drive: {velocity: 200 mm/s}},"
+         " {sequence: [{wait: 100ms}, {inverter: {cliff: any}}]}]}", True),
+        # a cliff that ends it the wrong way: runs only while a cliff is seen
+        ("- drive: {velocity: 200 mm/s}\n  while: {cliff: any}", True),
+        ("- drive: {velocity: 200 mm/s}\n  until: {inverter: {cliff: any}}", True),
+        ("- reactive_sequence: [{cliff: any}, {drive: {velocity: 200 mm/s}}]", True),
         # not watched: a cliff read elsewhere, once, or after the drive
         ("- reactive_sequence: [{drive: {velocity: 200 mm/s}}, {inverter: {cliff: any}}]", True),
         ("- fallback: [{cliff: any}, {drive: {velocity: 200 mm/s}}]", True),

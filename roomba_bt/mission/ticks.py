@@ -1,0 +1,218 @@
+"""What the static checks know of how a tree is ticked (py_trees' semantics, on the checked
+tree :class:`~roomba_bt.mission.ir.Node`): which nodes end on the tick they start, and which
+cliff reads are ticked on every tick of a leaf with a result that can end it.
+
+Each answer is conservative: where it is not sure, it says "no" (not at once, no cliff
+watch), and the check that asks errs on the side it must (a warning given, a write not
+counted). The facts it rests on:
+
+* A sequence or fallback *with* memory resumes a RUNNING child without ticking the ones
+  before it; one without (reactive) ticks them all again, from the first, every tick.
+* A ``parallel`` ticks its children in order, every tick, but with ``synchronise: true`` (the
+  default, policies ``all`` and ``selected``) not a child that has already succeeded: a
+  branch that succeeded on the first tick is never ticked again while the others run.
+* ``oneshot`` ticks its child only until it succeeds (or completes); ``force_success`` and
+  ``force_failure`` answer the same whatever the child said.
+* A guard (``while:``/``until:``) ticks its condition before its child on every tick.
+"""
+
+from __future__ import annotations
+
+from roomba_bt.behaviours.conditions import COMPARISON, OPERATORS
+from roomba_bt.behaviours.declare import Comparison, Declaration
+from roomba_bt.mission.ir import Node
+from roomba_bt.oi.frames import CLIFF_PACKETS
+
+SUCCESS, FAILURE = "success", "failure"
+#: the results a node may be made to give
+Outcomes = frozenset[str]
+_NONE: Outcomes = frozenset()
+_BOTH: Outcomes = frozenset({SUCCESS, FAILURE})
+
+SEQUENCES = frozenset({"sequence", "reactive_sequence"})
+SELECTORS = frozenset({"fallback", "selector", "reactive_fallback", "reactive_selector"})
+CLIFFS = frozenset(CLIFF_PACKETS)
+
+
+def at_once(node: Node) -> bool:
+    """Whether ``node`` ends (SUCCESS or FAILURE) on every tick it starts: a condition, a
+    leaf declared ``at_once`` (``stop``, ``set``, ``log``), and what is built of them alone."""
+    kind = node.kind
+    if kind == "leaf":
+        decl = node.decl
+        return decl is not None and (decl.kind == "condition" or decl.at_once)
+    if kind in SEQUENCES or kind in SELECTORS or kind == "parallel" or kind == "guard":
+        return all(at_once(child) for child in node.children)
+    if kind in ("inverter", "force_success", "force_failure", "timeout", "oneshot"):
+        return at_once(node.children[0])
+    return False  # retry, repeat, for_each and delay run on; an unbuilt node is not known
+
+
+def succeeds_at_once(node: Node) -> bool:
+    """Whether ``node`` returns SUCCESS on the tick it starts, every time (what it writes
+    is written by the end of that tick): a leaf declared ``at_once``, a sequence or parallel
+    of such, a ``force_success`` of what ends at once."""
+    kind = node.kind
+    if kind == "leaf":
+        return node.decl is not None and node.decl.at_once
+    if kind in SEQUENCES or kind == "parallel":
+        return all(succeeds_at_once(child) for child in node.children)
+    if kind in SELECTORS or kind in ("timeout", "oneshot"):
+        return succeeds_at_once(node.children[0])
+    if kind == "force_success":
+        return at_once(node.children[0])
+    return False
+
+
+def never_succeeds(node: Node) -> bool:
+    """Whether ``node`` can only end in FAILURE (stays RUNNING until then): a ``repeat``
+    without ``times`` or ``for``, a ``force_failure``, a sequence with such a child, a
+    ``while:`` or ``timeout`` around one."""
+    kind = node.kind
+    if kind == "repeat":
+        return node.options.get("times") is None and node.options.get("for") is None
+    if kind == "force_failure":
+        return True
+    if kind in SEQUENCES:
+        return any(never_succeeds(child) for child in node.children)
+    if kind in SELECTORS:
+        return all(never_succeeds(child) for child in node.children)
+    if kind == "guard":
+        return not node.options["until"] and never_succeeds(node.children[1])
+    if kind == "timeout":
+        return never_succeeds(node.children[0])
+    return False
+
+
+def reads_cliffs(node: Node) -> bool:
+    """Whether a leaf of ``node``'s subtree reads a cliff sensor (packets 9-12)."""
+    return any(
+        n.decl is not None and not CLIFFS.isdisjoint(n.decl.packets(n.params)) for n in node.walk()
+    )
+
+
+def packet_tests(node: Node) -> list[tuple[str, str, Comparison]]:
+    """A leaf's packet tests: (the parameter, how to name it, the test); the ``sensor:``
+    test written, or those its declaration says its answer is (``compares``)."""
+    decl = node.decl
+    if decl is None:
+        return []
+    found = [
+        (param.name, f"{decl.name}.{param.name}", test)
+        for param in decl.params
+        if param.type is COMPARISON and isinstance(test := node.params.get(param.name), tuple)
+    ]
+    if decl.compares is not None:
+        found += [
+            (name, f"{decl.name}: {node.params.get(name, _default(decl, name))}", test)
+            for name, test in decl.compares(node.params)
+        ]
+    return found
+
+
+def _default(decl: Declaration, name: str) -> object:
+    param = decl.param(name)
+    return None if param is None else param.default
+
+
+def _leaf_cliff_ends(node: Node) -> Outcomes:
+    """What a cliff seen by a leaf's cliff sensors makes it answer: SUCCESS for ``cliff``
+    (its tests say a drop is 1), FAILURE for ``sensor: cliff_left == 0``; either where its
+    tests do not say (``cover``, a plugin, a test of a signal strength)."""
+    if not reads_cliffs(node):
+        return _NONE
+    tests = [test for _, _, test in packet_tests(node) if test[0] in CLIFFS]
+    if not tests:
+        return _BOTH
+    out: set[str] = set()
+    for _, op, number in tests:
+        seen, clear = OPERATORS[op](1, number), OPERATORS[op](0, number)
+        out |= {SUCCESS} if seen and not clear else {FAILURE} if clear and not seen else _BOTH
+    return frozenset(out)
+
+
+def cliff_ends(node: Node) -> Outcomes:
+    """The results a cliff makes ``node`` give, read on *every* tick ``node`` is ticked;
+    empty where a tick may pass without a cliff read that counts (``oneshot``, a check
+    after a ``wait`` in a sequence) or whose result nothing passes on (``force_success``)."""
+    kind = node.kind
+    if kind == "leaf":
+        return _leaf_cliff_ends(node)
+    if kind == "inverter":
+        inner = cliff_ends(node.children[0])
+        return frozenset({SUCCESS: FAILURE, FAILURE: SUCCESS}[r] for r in inner)
+    if kind == "timeout":
+        return cliff_ends(node.children[0])
+    if kind == "repeat":  # a success starts the child again
+        return cliff_ends(node.children[0]) & {FAILURE}
+    if kind == "retry":  # a failure starts the child again
+        return cliff_ends(node.children[0]) & {SUCCESS}
+    if kind == "guard":
+        ends = SUCCESS if node.options["until"] else FAILURE
+        by_condition = {ends} if ends in cliff_ends(node.children[0]) else set()
+        return frozenset(by_condition) | cliff_ends(node.children[1])
+    if kind in SEQUENCES:
+        return _chain_ends(node, FAILURE)
+    if kind in SELECTORS:
+        return _chain_ends(node, SUCCESS)
+    if kind == "parallel":
+        return frozenset().union(*(branch_ends(node, child) for child in node.children))
+    return _NONE  # oneshot, force_*, delay, for_each, unbuilt
+
+
+def _chain_ends(node: Node, stops: str) -> Outcomes:
+    """A sequence (``stops`` FAILURE) or fallback (SUCCESS): a child whose cliff result
+    ``stops`` it, reached on every tick (every child before it ends at once) and, with
+    memory, not skipped for a later child still running (every child after it ends at
+    once); a chain of one child answers as that child."""
+    children = node.children
+    if len(children) == 1:
+        return cliff_ends(children[0])
+    reactive = not node.options.get("memory", True)
+    for index, child in enumerate(children):
+        if stops in cliff_ends(child) and (
+            reactive or all(at_once(later) for later in children[index + 1 :])
+        ):
+            return frozenset({stops})
+        if not at_once(child):
+            break
+    return _NONE
+
+
+def branch_ends(parallel: Node, branch: Node) -> Outcomes:
+    """What a cliff read in ``branch`` ends ``parallel`` with, if the branch is ticked on
+    every tick the parallel runs: a failure always ends it, a success with ``policy:
+    one``. With ``synchronise: true`` (policies ``all`` and ``selected``) a branch that
+    succeeded is not ticked again, so it counts only if it never succeeds."""
+    one = parallel.options.get("policy") == "one"
+    ticked = one or not parallel.options.get("synchronise", True) or never_succeeds(branch)
+    if not ticked:
+        return _NONE
+    return cliff_ends(branch) & (_BOTH if one else {FAILURE})
+
+
+def watched_children(node: Node, watched: bool) -> list[tuple[Node, bool]]:
+    """Each child of ``node`` and whether a cliff is read on every tick it runs, with a
+    result that ends it: the condition of a ``while`` (a failure) or ``until`` (a
+    success) around it; an earlier child of a reactive sequence (a failure) or reactive
+    fallback (a success), ticked again every tick; another branch of a parallel ticked on
+    every tick (:func:`branch_ends`). A sequence or fallback with memory ticks an earlier
+    child once, not while the later one runs: no watch."""
+    children = node.children
+    if watched:
+        return [(child, True) for child in children]
+    kind = node.kind
+    if kind == "guard":  # children: the condition, the guarded node
+        stop = SUCCESS if node.options["until"] else FAILURE
+        return [(children[0], False), (children[1], stop in cliff_ends(children[0]))]
+    if kind == "parallel":
+        watch = [bool(branch_ends(node, child)) for child in children]
+        return [(c, any(w for j, w in enumerate(watch) if j != i)) for i, c in enumerate(children)]
+    if (kind in SEQUENCES or kind in SELECTORS) and not node.options.get("memory", True):
+        stops = FAILURE if kind in SEQUENCES else SUCCESS
+        out, before = [], False
+        for child in children:
+            out.append((child, before))
+            before = before or stops in cliff_ends(child)
+        return out
+    return [(child, False) for child in children]
