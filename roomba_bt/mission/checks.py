@@ -18,7 +18,8 @@
   first on every tick: a child that failed while a later one runs starts again, fresh, on the
   next tick. A time limit (``timeout``, ``dock_time_limit``) or a ``retry`` in such a child
   would never end anything (it fails, and its count or clock starts over for ever), so it is
-  an error unless it sits in the last child, whose failure fails the parent.
+  an error unless it sits in the last child, whose failure fails the parent, or every child
+  after it ends on the tick it starts (``stop``, a condition): then the parent ends too.
 * **Bandwidth.** The packets the leaves read, plus the runtime's own
   (:data:`RUNTIME_PACKETS`), must fit one 15 ms stream frame at the chosen baud.
 * **Blind in Full (a warning).** In Full mode the robot's firmware does not stop at a cliff
@@ -46,8 +47,10 @@ from roomba_bt.mission.ir import KeyDecl, Node
 from roomba_bt.mission.source import Loc
 from roomba_bt.mission.ticks import (
     SELECTORS,
+    at_once,
     packet_tests,
     reads_cliffs,
+    succeeds_at_once,
     watched_children,
 )
 from roomba_bt.oi.errors import BandwidthError
@@ -403,14 +406,30 @@ def _limits(node: Node) -> list[Node]:
     ]
 
 
+def _runs_on_after(children: list[Node]) -> bool:
+    """Whether the reactive fallback may still run after its child before ``children``
+    fails: the next that ends at once with a failure hands on, one that succeeds at once
+    ends the fallback, one that may be RUNNING keeps it running (and it is ticked again)."""
+    for child in children:
+        if succeeds_at_once(child):
+            return False
+        if not at_once(child):
+            return True
+    return False
+
+
 def restarted_limits(root: Node) -> list[Diagnostic]:
     """A limit under a reactive fallback's non-last child: its failure lets a later child
-    run, and the next tick starts it again with a fresh clock or count."""
+    run, and the next tick starts it again with a fresh clock or count. Not when every
+    child after it ends on the tick it starts (``stop``, a condition): the fallback ends
+    then, and the limit did end it."""
     errors = []
     for node in root.walk():
         if node.kind not in SELECTORS or node.options.get("memory", True):
             continue
-        for child in node.children[:-1]:
+        for index, child in enumerate(node.children[:-1]):
+            if not _runs_on_after(node.children[index + 1 :]):
+                continue
             for limit in _limits(child):
                 word = limit.declared.name if limit.declared is not None else limit.kind
                 where = f"{limit.loc.file}:{limit.loc.line}"

@@ -414,3 +414,35 @@ def test_stasis_dirty_is_warned_of_on_the_500_as_stasis_equals_2_is(
     text = SENSOR_UNTIL.format(test="x").replace("{sensor: 'x'}", f"{{stasis: {state}}}")
     found = _warnings_on(mission_file(text), profile)
     assert found == ([f"5:23: stasis: {state}: {warned}"] if warned else [])
+
+
+RESTARTED = "which starts it again on the next tick when it fails and a later child runs"
+
+
+@pytest.mark.parametrize(
+    ("children", "refused"),
+    [
+        # a later child that keeps running: the fallback is ticked again, the limit starts over
+        ("[{timeout: {after: 1s, do: {drive: {velocity: 200 mm/s}}}}, {wait: 1s}]", True),
+        ("[{timeout: {after: 1s, do: {drive: {velocity: 200 mm/s}}}}, bump,"
+         " {drive: {velocity: 100 mm/s}}]", True),  # the bump fails at once: the drive runs
+        ("[{retry: {times: 2, do: {drive: {velocity: 200 mm/s}}}}, {wait: 1s}]", True),
+        # every later child ends on the tick it starts: the fallback ends when the limit
+        # fails, and is not started again (r_nested, session 25: refused before)
+        ("[{sequence: [{inverter: {bump: any}},"
+         " {timeout: {after: 1s, do: {drive: {velocity: 200 mm/s}}}}]}, stop]", False),
+        ("[{timeout: {after: 1s, do: {drive: {velocity: 200 mm/s}}}}, bump, {log: gave up}]",
+         False),
+        ("[{timeout: {after: 1s, do: {drive: {velocity: 200 mm/s}}}}, stop,"
+         " {drive: {velocity: 100 mm/s}}]", False),  # stop succeeds: the drive is never reached
+        ("[{retry: {times: 2, do: {drive: {velocity: 200 mm/s, duration: 1s}}}}, bump]", False),
+    ],
+)  # fmt: skip
+def test_a_limit_a_reactive_fallback_restarts_is_refused_only_when_a_later_child_runs_on(
+    errors_of: Errors, children: str, refused: bool
+) -> None:
+    for fallback in ("reactive_fallback: ", "fallback: {memory: false, children: "):
+        close = "}" if "children" in fallback else ""
+        text = f"tree:\n  sequence:\n    - mode: safe\n    - {fallback}{children}{close}\n"
+        errors = errors_of(text)
+        assert [RESTARTED in e for e in errors] == ([True] if refused else []), (text, errors)

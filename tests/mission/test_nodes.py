@@ -162,6 +162,28 @@ def test_parallel_selected_names_its_children(compile_text: Compile) -> None:
     assert r.ticks(3) == [R, R, S]
 
 
+def test_a_timeout_under_a_reactive_fallback_whose_later_child_ends_at_once_ends_it(
+    compile_text: Compile,
+) -> None:
+    """What the validator accepts since session 25 (it refused it, saying the limit would
+    never end the mission): the timeout fails, ``stop`` succeeds at once, the fallback ends."""
+    r = run(
+        compile_text,
+        """
+        tree:
+          sequence:
+            - mode: safe
+            - reactive_fallback:
+                - sequence:
+                    - inverter: {bump: any}
+                    - timeout: {after: 60ms, do: {drive: {velocity: 200 mm/s}}}
+                - stop
+        """,
+    )
+    assert r.ticks(5) == [R, R, R, R, S]  # the timeout at 60 ms, then stop
+    assert r.sent()[-1] == [137, 0, 0, 0, 0]
+
+
 def test_parallel_short_form_is_policy_all(compile_text: Compile) -> None:
     r = run(compile_text, "tree: {parallel: [{wait: 15ms}, wall]}")
     assert r.ticks(2, wall=1) == [R, S]
