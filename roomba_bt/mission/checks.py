@@ -13,7 +13,9 @@
 * **Blackboard.** Every key read (``@key`` values, ``check``, ``odometry.since``) must be
   written on every path before it: by an ``initial`` value, a ``set``/``mark`` earlier in a
   sequence, or the ``for_each`` that owns it. Fallback alternatives and parallel branches
-  guarantee only what all of them write.
+  guarantee only what all of them write. A parallel ticks its branches in order, so a
+  branch that succeeds on the tick it starts (``set``) has written its keys before the
+  branches after it start: they may read them (not the branches before it).
 * **Limits a reactive parent resets.** A reactive fallback re-ticks its children from the
   first on every tick: a child that failed while a later one runs starts again, fresh, on the
   next tick. A time limit (``timeout``, ``dock_time_limit``) or a ``retry`` in such a child
@@ -300,7 +302,10 @@ class KeyCheck:
             outs = [self.visit(child, written) for child in node.children]
             return frozenset.intersection(*outs) if outs else written
         if kind == "parallel":
-            outs = [self.visit(child, written) for child in node.children]
+            outs, current = [], written
+            for child in node.children:  # in order: a set before a reader has written
+                outs.append(self.visit(child, current))
+                current = outs[-1] if succeeds_at_once(child) else current
             if node.options.get("policy") == "all":
                 return frozenset().union(*outs)
             return frozenset.intersection(*outs) if outs else written

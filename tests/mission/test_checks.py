@@ -83,6 +83,18 @@ def test_paths_without_the_mode_change_are_found(errors_of: Errors, tree: str) -
             """,
             id="mark then odometry",
         ),
+        pytest.param(
+            """
+            blackboard: {d: distance}
+            tree:
+              sequence:
+                - mode: safe
+                - parallel:
+                    - set: {key: d, value: 10cm}
+                    - drive: {velocity: 200 mm/s, distance: "@d"}
+            """,
+            id="a parallel ticks its branches in order: the set before the drive",
+        ),
     ],
 )
 def test_blackboard_keys_accepted(errors_of: Errors, text: str) -> None:
@@ -102,6 +114,45 @@ def test_blackboard_keys_accepted(errors_of: Errors, text: str) -> None:
             """,
             "reads blackboard key 'n' before anything writes it on some path",
             id="a key not written on every path",
+        ),
+        pytest.param(
+            """
+            blackboard: {d: distance}
+            tree:
+              sequence:
+                - mode: safe
+                - parallel:
+                    - drive: {velocity: 200 mm/s, distance: "@d"}
+                    - set: {key: d, value: 10cm}
+            """,
+            "reads blackboard key 'd' before anything writes it on some path",
+            id="a parallel branch after the reader",
+        ),
+        pytest.param(
+            """
+            blackboard: {d: distance}
+            tree:
+              sequence:
+                - mode: safe
+                - parallel:
+                    - sequence: [{wait: 1s}, {set: {key: d, value: 10cm}}]
+                    - drive: {velocity: 200 mm/s, distance: "@d"}
+            """,
+            "reads blackboard key 'd' before anything writes it on some path",
+            id="a parallel branch before the reader that writes later",
+        ),
+        pytest.param(
+            """
+            blackboard: {d: distance}
+            tree:
+              sequence:
+                - mode: safe
+                - parallel:
+                    - sequence: [wall, {set: {key: d, value: 10cm}}]
+                    - drive: {velocity: 200 mm/s, distance: "@d"}
+            """,
+            "reads blackboard key 'd' before anything writes it on some path",
+            id="a parallel branch before the reader that may fail before it writes",
         ),
         pytest.param(
             """
@@ -263,8 +314,8 @@ def test_driving_in_full_with_no_cliff_sensor_read_is_a_warning(
         ("- drive: {velocity: 200 mm/s}\n  while: {sensor: cliff_left == 0}", False),
         ("- drive: {velocity: 200 mm/s}\n  while: {sequence: [{inverter: {bump: any}},"
          " {inverter: {cliff: any}}]}", False),
-        ("- drive: {velocity: 200 mm/s}\n  while: {timeout: {after: 1s, do: {inverter: {cliff: any}}}}",
-         False),
+        ("- drive: {velocity: 200 mm/s}\n"
+         "  while: {timeout: {after: 1s, do: {inverter: {cliff: any}}}}", False),
         ("- cover: {}", False),
         # the cliff branch of a synchronised parallel succeeds on the first tick and is not
         # ticked again: the drive ran off the stairs with this (session 25)

@@ -184,6 +184,28 @@ def test_a_timeout_under_a_reactive_fallback_whose_later_child_ends_at_once_ends
     assert r.sent()[-1] == [137, 0, 0, 0, 0]
 
 
+def test_a_parallel_branch_reads_what_an_earlier_branch_set_on_the_same_tick(
+    compile_text: Compile,
+) -> None:
+    """The order the validator relies on since session 25 (it refused this): the ``set``
+    is ticked before the drive starts, which drives the distance it wrote."""
+    r = run(
+        compile_text,
+        """
+        blackboard: {d: distance}
+        tree:
+          sequence:
+            - mode: safe
+            - parallel:
+                - set: {key: d, value: 10cm}
+                - drive: {velocity: 200 mm/s, distance: "@d"}
+        """,
+    )
+    assert r.tick() is R
+    assert r.sent() == [[137, 0, 200, 128, 0]]
+    assert read_key("d") == 100
+
+
 def test_parallel_short_form_is_policy_all(compile_text: Compile) -> None:
     r = run(compile_text, "tree: {parallel: [{wait: 15ms}, wall]}")
     assert r.ticks(2, wall=1) == [R, S]
