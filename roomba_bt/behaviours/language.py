@@ -122,8 +122,7 @@ def _parallel(name: str, kids: Sequence[Behaviour], o: Mapping[str, Any]) -> Beh
     if o["policy"] == "one":
         policy = py_trees.common.ParallelPolicy.SuccessOnOne()
     elif o["policy"] == "selected":
-        wanted = set(o.get("selected", ()))
-        chosen = [c for c in kids if c.name in wanted]
+        chosen = [kids[i] for i in o["selected_at"]]  # by place: mission.control
         policy = py_trees.common.ParallelPolicy.SuccessOnSelected(chosen, synchronise)
     else:
         policy = py_trees.common.ParallelPolicy.SuccessOnAll(synchronise)

@@ -97,19 +97,36 @@ def parse_composite(parser: NodeParser, kind: NodeKind, at: Written) -> Node | N
         # checks judge its siblings where they are written (ir.Node)
         children.append(child if child is not None else Node("unbuilt", child_loc, "unbuilt"))
     result = Node(word, key_loc, options.pop("name", word), children, options=options)
-    names = [c.name for c in children]
+    answers = [_names_of(c) for c in children]
     # a child that could not be parsed at all has lost its name: not said unknown for that
     nameless = any(c.kind == "unbuilt" and c.partial is None for c in children)
     for param in kind.options:
         if param.type is CHILD_NAMES and param.name in options:
             for chosen in options[param.name]:
-                if chosen not in names and not nameless:
+                if not any(chosen in names for names in answers) and not nameless:
                     ctx.error(
                         options[f"{param.name}_loc"].at(
-                            f"{word}.{param.name}: " + unknown("child name", chosen, names)
+                            f"{word}.{param.name}: "
+                            + unknown("child name", chosen, [names[-1] for names in answers])
                         )
                     )
+            # the builder picks them by place: two guards may share a name, and show
+            # renames the nodes it reviews (build.CompiledMission.reviewed)
+            options[f"{param.name}_at"] = [
+                i for i, names in enumerate(answers) if set(names) & set(options[param.name])
+            ]
     return result
+
+
+def _names_of(child: Node) -> list[str]:
+    """The names a child answers to in ``selected:``: its own and, through the guards
+    ``while:``/``until:`` wrap it in (named ``until bump(any)``), the name of the node they
+    guard, which carries the ``name:`` written beside them; that one last."""
+    names = [child.name]
+    while child.kind == "guard":
+        child = child.children[1]
+        names.append(child.name)
+    return names
 
 
 def _required_if(kind: NodeKind, options: dict[str, Any], key_loc: Loc) -> None:

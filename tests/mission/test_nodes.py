@@ -206,6 +206,35 @@ def test_a_parallel_branch_reads_what_an_earlier_branch_set_on_the_same_tick(
     assert read_key("d") == 100
 
 
+def test_parallel_selected_names_a_guarded_child_by_the_name_written_beside_its_guard(
+    compile_text: Compile,
+) -> None:
+    """``name: patrol`` beside ``until:`` names the drive the guard wraps; ``selected:
+    [patrol]`` picks the guarded child (it was 'unknown child name', the only name the
+    parallel knew being the guard's, ``until bump(any)``). The name stays on the drive,
+    in the live tree and the guard's reasons."""
+    r = run(
+        compile_text,
+        """
+        tree:
+          parallel:
+            policy: selected
+            selected: [patrol]
+            children:
+              - {wait: 1s, name: slow}
+              - name: patrol
+                wait: 30ms
+                until: {bump: any}
+              - name: other
+                wait: 1s
+                until: {bump: any}
+        """,
+    )
+    guard = r.mission.root.children[1]
+    assert guard.name == "until bump(any)" and guard.children[1].name == "patrol"
+    assert r.ticks(3) == [R, R, S]
+
+
 def test_parallel_short_form_is_policy_all(compile_text: Compile) -> None:
     r = run(compile_text, "tree: {parallel: [{wait: 15ms}, wall]}")
     assert r.ticks(2, wall=1) == [R, S]
