@@ -23,6 +23,7 @@ from roomba_bt.mission.checks import (
     blind_in_full,
     check_stream,
     key_ranges,
+    parallel_wheels,
     profile_commands,
     restarted_limits,
     sensor_ranges,
@@ -129,6 +130,7 @@ def _compile(
         warnings=(
             *ctx.warnings,
             *blind_in_full(tree, modes),
+            *parallel_wheels(tree),
             *ignored,
             *sensor_ranges(tree, profile),
         ),

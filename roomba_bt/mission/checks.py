@@ -423,6 +423,12 @@ def _runs_on_after(children: list[Node]) -> bool:
     return False
 
 
+def _line_of(loc: Loc, said_at: Loc) -> str:
+    """``loc`` named in a message said at ``said_at``: ``line 7``, with its file when that
+    is another (a subtree of an included file)."""
+    return f"line {loc.line}" if loc.file == said_at.file else f"{loc.file}:{loc.line}"
+
+
 def restarted_limits(root: Node) -> list[Diagnostic]:
     """A limit under a reactive fallback's non-last child: its failure lets a later child
     run, and the next tick starts it again with a fresh clock or count. Not when every
@@ -437,9 +443,7 @@ def restarted_limits(root: Node) -> list[Diagnostic]:
                 continue
             for limit in _limits(child):
                 word = limit.declared.name if limit.declared is not None else limit.kind
-                where = f"{limit.loc.file}:{limit.loc.line}"
-                if limit.loc.file == child.loc.file:
-                    where = f"line {limit.loc.line}"
+                where = _line_of(limit.loc, child.loc)
                 errors.append(
                     child.loc.at(
                         f"{word} ({where}) is under {node.kind} ({node.loc.line}:"
@@ -450,6 +454,48 @@ def restarted_limits(root: Node) -> list[Diagnostic]:
                     )
                 )
     return errors
+
+
+def parallel_wheels(root: Node) -> list[Diagnostic]:
+    """Warnings: a leaf that turns the wheels in a branch of a ``parallel`` after another
+    branch with one. The outbox keeps the last wheel command of a tick, so of two drives
+    started in the same tick only the later one reaches the robot; the other runs on
+    without ever having moved it (a ``distance`` drive never ends) and the later one's halt
+    stops the wheels under it. A warning, not an error: whether the two run at the same
+    time is not known here (a branch may finish its drive before the other starts one).
+    Said at the later leaf, naming the first; a subtree used twice is one place."""
+    warnings: list[Diagnostic] = []
+    seen: set[tuple[str, int, int]] = set()
+    for node in root.walk():
+        if node.kind != "parallel":
+            continue
+        first: Node | None = None
+        for branch in node.children:
+            wheels = [n for n in branch.walk() if n.decl is not None and n.decl.turns_wheels]
+            if not wheels:
+                continue
+            if first is None:
+                first = wheels[0]
+                continue
+            leaf, where = (
+                wheels[0],
+                (str(wheels[0].loc.file), wheels[0].loc.line, wheels[0].loc.column),
+            )
+            if where in seen:
+                continue
+            seen.add(where)
+            assert leaf.decl is not None and first.decl is not None
+            warnings.append(
+                leaf.loc.at(
+                    f"{leaf.decl.name} turns the wheels in one branch of the parallel "
+                    f"({node.loc.line}:{node.loc.column}) and {first.decl.name} "
+                    f"({_line_of(first.loc, leaf.loc)}) in another: when both run, only the "
+                    "last wheel command of a tick reaches the robot, so one of them never "
+                    "moves it (a distance drive never ends); run them one after the other "
+                    "(a sequence)"
+                ).as_warning()
+            )
+    return warnings
 
 
 def blind_in_full(root: Node, modes: ModeCheck) -> list[Diagnostic]:

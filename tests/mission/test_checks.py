@@ -497,3 +497,37 @@ def test_a_limit_a_reactive_fallback_restarts_is_refused_only_when_a_later_child
         text = f"tree:\n  sequence:\n    - mode: safe\n    - {fallback}{children}{close}\n"
         errors = errors_of(text)
         assert [RESTARTED in e for e in errors] == ([True] if refused else []), (text, errors)
+
+
+@pytest.mark.parametrize(
+    ("branches", "warned"),
+    [
+        # two_drives (session 25): only the spin reached the robot; the distance drive ran on,
+        # stopped, until --timeout
+        (["{drive: {velocity: 200 mm/s, distance: 50cm}}",
+          "{drive: {velocity: 100 mm/s, radius: spin_left, duration: 1s}}"],
+         ["6:12 drive (line 5)"]),
+        (["{sequence: [{wait: 1s}, {turn: 90deg}]}", "{wait: 1s}",
+          "{drive: {velocity: 100 mm/s}, until: {bump: any}}"], ["7:12 turn (line 5)"]),
+        (["{turn: 90deg}", "{drive: {velocity: 100 mm/s}}", "{drive: {velocity: 50 mm/s}}"],
+         ["6:12 turn (line 5)", "7:12 turn (line 5)"]),
+        # one wheel branch; a stop only halts; a sequence runs its drives one after the other
+        (["{drive: {velocity: 200 mm/s, duration: 1s}}", "{leds: {dock: true}}", "wall"], []),
+        (["{drive: {velocity: 200 mm/s, duration: 1s}}", "stop"], []),
+        (["{sequence: [{turn: 90deg}, {drive: {velocity: 200 mm/s, duration: 1s}}]}", "wall"],
+         []),
+    ],
+)  # fmt: skip
+def test_two_branches_of_a_parallel_that_turn_the_wheels_are_warned_of(
+    compile_text: Callable[..., CompiledMission], branches: list[str], warned: list[str]
+) -> None:
+    items = "".join(f"\n        - {branch}" for branch in branches)
+    mission = compile_text(f"tree:\n  sequence:\n    - mode: safe\n    - parallel:{items}\n")
+    said = [
+        f"{w.line}:{w.column} " + w.message.split(" and ", 1)[1].split(" in another")[0]
+        for w in mission.warnings
+    ]
+    assert said == warned
+    for w in mission.warnings:
+        assert "turns the wheels in one branch of the parallel (4:7)" in w.message
+        assert w.severity == "warning"
