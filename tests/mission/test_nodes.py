@@ -169,16 +169,8 @@ def test_a_timeout_under_a_reactive_fallback_whose_later_child_ends_at_once_ends
     never end the mission): the timeout fails, ``stop`` succeeds at once, the fallback ends."""
     r = run(
         compile_text,
-        """
-        tree:
-          sequence:
-            - mode: safe
-            - reactive_fallback:
-                - sequence:
-                    - inverter: {bump: any}
-                    - timeout: {after: 60ms, do: {drive: {velocity: 200 mm/s}}}
-                - stop
-        """,
+        "tree: {sequence: [{mode: safe}, {reactive_fallback: [{sequence: [{inverter: {bump: "
+        "any}}, {timeout: {after: 60ms, do: {drive: {velocity: 200 mm/s}}}}]}, stop]}]}",
     )
     assert r.ticks(5) == [R, R, R, R, S]  # the timeout at 60 ms, then stop
     assert r.sent()[-1] == [137, 0, 0, 0, 0]
@@ -191,15 +183,8 @@ def test_a_parallel_branch_reads_what_an_earlier_branch_set_on_the_same_tick(
     is ticked before the drive starts, which drives the distance it wrote."""
     r = run(
         compile_text,
-        """
-        blackboard: {d: distance}
-        tree:
-          sequence:
-            - mode: safe
-            - parallel:
-                - set: {key: d, value: 10cm}
-                - drive: {velocity: 200 mm/s, distance: "@d"}
-        """,
+        "blackboard: {d: distance}\ntree: {sequence: [{mode: safe}, {parallel: [{set: {key: d, "
+        'value: 10cm}}, {drive: {velocity: 200 mm/s, distance: "@d"}}]}]}',
     )
     assert r.tick() is R
     assert r.sent() == [[137, 0, 200, 128, 0]]
