@@ -30,6 +30,8 @@
   it (by itself, a guard around it, an earlier child of a reactive parent, a parallel branch
   ticked on every tick: :mod:`roomba_bt.mission.ticks`), drives down the stairs if it meets
   them: compiled, with a warning (:func:`blind_in_full`).
+* **Two wheel branches (a warning).** Two branches of a ``parallel`` with a leaf that turns
+  the wheels: the robot gets the last wheel command of a tick only (:func:`parallel_wheels`).
 * **Commands the robot has.** Each leaf whose declared ``sends`` include a command the chosen
   profile lacks (Reset 7 and Stop 173 on the Roomba 500) is an error at that leaf; one the
   profile has but whose firmware does not honour it (Digit LEDs Raw 163: the 600 spec says
