@@ -83,8 +83,11 @@ def start_live_run(
     write = link.write
 
     def logged_write(data: bytes) -> None:
-        writes.append((simulator.time, bytes(data)))
+        # the time the robot got the bytes: a real-time link first steps the simulator
+        # through the slots that passed while the host was busy (under load, several), so
+        # the simulator's time before the write is not when they acted
         write(data)
+        writes.append((simulator.time, bytes(data)))
 
     link.write = logged_write  # type: ignore[method-assign]
     stack = RunStack(compiled, link, profile=CREATE2, watchdog=0.5, timeout_s=600.0)
