@@ -79,6 +79,11 @@ def _explain(root: Behaviour) -> tuple[str, Behaviour | None, bool]:
     return (f"{best.name}: {message}" if message else best.name), None, bool(message)
 
 
+#: How a ``while`` guard's message begins (:func:`while_stopped`): a guard, not a stage
+#: (an evaluation's ``failure_stage`` must not read "stopped" as a leaf's name)
+GUARD_STOPPED = "stopped: "
+
+
 def while_stopped(condition: Behaviour, guarded: str) -> str:
     """A ``while`` guard's message when its ``condition`` no longer holds and it stopped the
     node named ``guarded``: what happened in the words of the condition that decided it (a
@@ -92,13 +97,13 @@ def while_stopped(condition: Behaviour, guarded: str) -> str:
     ("while inverter")."""
     said, held, told = _explain(condition)
     if held is None and told:  # its own message says what happened (the monitor's force)
-        return f"stopped: {said}, while {guarded!r} ran"
+        return f"{GUARD_STOPPED}{said}, while {guarded!r} ran"
     if held is None:
-        return f"stopped: {said} no longer holds while {guarded!r} ran"
+        return f"{GUARD_STOPPED}{said} no longer holds while {guarded!r} ran"
     meaning = _meaning(held) if said == f"{held.name} held" else None
     if meaning is None:  # the mission's own name for it (or no description): as it is
-        return f"stopped: {said} while {guarded!r} ran"
-    return f"stopped: {meaning}, while {guarded!r} ran ({said})"
+        return f"{GUARD_STOPPED}{said} while {guarded!r} ran"
+    return f"{GUARD_STOPPED}{meaning}, while {guarded!r} ran ({said})"
 
 
 def _meaning(leaf: Behaviour) -> str | None:

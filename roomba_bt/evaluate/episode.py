@@ -30,6 +30,7 @@ from types import FrameType
 from typing import Any
 
 from roomba_bt import yamlsource
+from roomba_bt.behaviours.reasons import GUARD_STOPPED
 from roomba_bt.evaluate.sources import MissionSources, bundle_mission, bundle_world
 from roomba_bt.mission import (
     NO_PERMISSIONS,
@@ -650,6 +651,8 @@ def failure_stage(reason: str) -> str:
     running = _RUNNING_STAGE.search(reason)
     if running:
         return running.group(1) or running.group(2)
+    if reason.startswith(GUARD_STOPPED):  # a while guard that stopped before a leaf ran
+        return ""
     raised = _RAISED_IN.match(reason)
     if raised:
         return raised.group(1).rsplit(" / ", 1)[-1].split("(", 1)[0]

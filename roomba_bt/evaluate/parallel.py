@@ -246,13 +246,21 @@ class _Watch:
         pid, _ = self.started.pop(index)
         result = None
         with contextlib.suppress(ProcessLookupError):
-            os.kill(pid, signal.SIGUSR1)
-            result = self._read(stuck=index)
-            os.kill(pid, signal.SIGKILL)
+            if ASK_WHERE is not None:  # POSIX: the worker says where it is stuck first
+                os.kill(pid, ASK_WHERE)
+                result = self._read(stuck=index)
+            os.kill(pid, END_AT_ONCE)
         if result is None:
             result = hung_result(specs[index], limit, None)
         self.hung.add(index)
         return [(index, result)]
+
+
+#: The signal that asks a stuck worker where it is (POSIX's SIGUSR1; Windows has none: a
+#: hung episode there is recorded without its place), and the one that ends it (SIGKILL;
+#: Windows' os.kill with SIGTERM is TerminateProcess, as final)
+ASK_WHERE: signal.Signals | None = getattr(signal, "SIGUSR1", None)
+END_AT_ONCE: signal.Signals = getattr(signal, "SIGKILL", signal.SIGTERM)
 
 
 def _terminate(executor: ProcessPoolExecutor) -> None:
@@ -275,7 +283,8 @@ def _worker_started(reports: Any = None, limit_s: float = 0.0) -> None:
     threading.Thread(target=_end_with, args=(os.getppid(),), daemon=True).start()
     if reports is not None:
         _WORKER.update(reports=reports, limit_s=limit_s, running=None)
-        signal.signal(signal.SIGUSR1, _say_where_stuck)
+        if ASK_WHERE is not None:
+            signal.signal(ASK_WHERE, _say_where_stuck)
 
 
 def _end_with(parent: int) -> None:

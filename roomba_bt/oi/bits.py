@@ -289,6 +289,11 @@ def motor_bits(
     )
 
 
+#: Motors (138)'s bits that run a motor (side brush, vacuum, main brush: bits 0-2); bits 3-4
+#: only set the brushes' directions
+MOTOR_RUN_BITS = 0b00111
+
+
 SEGMENT_NAMES: tuple[str, ...] = ("a", "b", "c", "d", "e", "f", "g")
 
 

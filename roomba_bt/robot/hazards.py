@@ -45,7 +45,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from operator import itemgetter
 
-from roomba_bt.oi.bits import BUMP_BITS, WHEEL_DROP_BITS
+from roomba_bt.oi.bits import BUMP_BITS, MOTOR_RUN_BITS, WHEEL_DROP_BITS
 from roomba_bt.oi.encode import Command, turns_wheels
 from roomba_bt.oi.frames import BUMPS_PACKETS, CLIFF_PACKETS, FrameLayout, SensorFrame
 from roomba_bt.oi.opcodes import Effect
@@ -85,8 +85,10 @@ def sets_going(command: Command) -> bool:
     runs a brush or the vacuum. What a tree's stop may not write (:meth:`CommandWriter.hold_motion
     <roomba_bt.robot.writer.CommandWriter.hold_motion>`)."""
     spec = command.spec
-    if spec.channel == "motors":
-        return any(command.args)
+    if spec.channel == "motors":  # Motors (138): a run bit, not a direction bit alone
+        return (
+            bool(command.args[0] & MOTOR_RUN_BITS) if spec.name == "motors" else any(command.args)
+        )
     return turns_wheels(command) or spec.effect is Effect.BUILTIN_CYCLE
 
 

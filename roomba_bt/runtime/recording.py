@@ -260,9 +260,12 @@ def load_record(path: str | Path) -> Record:
     return record
 
 
-#: The longest line of a record (decided): a chunk is one read of the port in hex, a few KB;
-#: a longer line is no record's (a file of zeros), refused before more of it is read.
-MAX_RECORD_LINE = 1 << 20
+#: The longest line of a record (decided): a chunk is one read of the port in hex, a few KB
+#: as a rule; a serial read is at most 256 KiB (512 KiB of hex), but the real-time
+#: simulator's read after a stalled host returns all it stepped through (1 MiB of hex after
+#: 5.7 minutes with the smallest frame). 64 MiB holds hours of such a stall and bounds what a
+#: file of zeros costs; a longer line is refused before more of it is read.
+MAX_RECORD_LINE = 64 << 20
 
 
 def _record_lines(path: Path) -> Iterator[tuple[int, str, bool]]:

@@ -49,6 +49,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 
+from roomba_bt.oi.bits import MOTOR_RUN_BITS
 from roomba_bt.sim.geometry import Polygon, Segment, polygon_edges
 from roomba_bt.sim.world import ROBOT_RADIUS_MM, Pose, World
 
@@ -427,7 +428,7 @@ class SweptArea:
     def update(self, time: float, x: float, y: float, theta: float, motors: int) -> None:
         """The robot is at ``(x, y, theta)`` at ``time`` with ``motors`` on (the bits of
         Motors, 138: side brush 1, vacuum 2, main brush 4)."""
-        footprint = FOOTPRINTS[motors & 7]
+        footprint = FOOTPRINTS[motors & MOTOR_RUN_BITS]
         if footprint is not None:
             self.cleaning_time += time - self.last_time
             mark = self._mark

@@ -59,6 +59,10 @@ def test_a_failure_names_its_stage() -> None:
     assert failure_stage("deadline of 10 s reached") == ""
     reason = "dock_time_limit(600 s): search: gave up after 600 s (stage search was running)"
     assert failure_stage(reason) == "search"
+    # a while guard that stopped its node before a leaf ran names no stage (it read "stopped")
+    assert failure_stage("stopped: a bumper is pressed no longer holds while 'clean' ran") == ""
+    guarded = "stopped: a wheel has dropped, while 'clean' ran (stage cover was running)"
+    assert failure_stage(guarded) == "cover"
 
 
 def test_bad_results_files_say_where(tmp_path: Path) -> None:

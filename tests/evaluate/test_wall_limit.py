@@ -131,3 +131,18 @@ def test_a_dask_worker_goes_on_after_a_hung_episode(tmp_path: Path) -> None:
     hung, quick = done.results
     assert (hung.outcome, hung.stage, quick.outcome) == (HUNG, "stuck", "success")
     assert hung.worker == quick.worker and not done.interrupted
+
+
+def test_without_a_signal_to_ask_where_a_stuck_episode_is_still_hung_and_ended(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Windows has no SIGUSR1 (nor SIGKILL): the worker is not asked where it is stuck, only
+    ended; the episode is HUNG without its place and the sweep goes on (every worker looked
+    dead when SIGUSR1 was taken for granted)."""
+    monkeypatch.setattr(parallel, "ASK_WHERE", None)
+    monkeypatch.setattr(parallel, "POOL_RESTARTS", 0)
+    results = run_episodes([_stuck(tmp_path), *_quick(1)], jobs=1, run=LocalRun(), wall_limit_s=2.0)
+    hung, other = results
+    assert hung.outcome == HUNG and hung.stage == ""
+    assert hung.reason.startswith("--wall-limit 2 s of wall-clock time ran out")
+    assert other.outcome == "success"

@@ -203,3 +203,18 @@ def test_a_new_layout_is_compared_afresh() -> None:
     assert confirm.frame(left.decode(left.pack({7: 0, 9: 1, 35: 2}))).cliff_left  # confirmed
     switched = confirm.frame(right.decode(right.pack({7: 0, 12: 1, 35: 2})))
     assert not switched.cliff_right and confirm.held == 2
+
+
+def test_what_sets_the_robot_going_reads_the_motors_run_bits_not_their_directions() -> None:
+    """Motors (138) bits 3-4 only set the brushes' directions: a terminate writing them alone
+    is not held as setting the robot going (it was: 'would set the robot going')."""
+    from roomba_bt.oi import commands as C
+    from roomba_bt.oi.bits import motor_bits
+    from roomba_bt.robot.hazards import sets_going
+
+    directions = motor_bits(side_brush_clockwise=True, main_brush_outward=True)
+    assert not sets_going(C.motors(directions))
+    assert sets_going(C.motors(directions | motor_bits(vacuum=True)))
+    assert not sets_going(C.motors_off()) and not sets_going(C.pwm_motors(0, 0, 0))
+    assert sets_going(C.pwm_motors(0, 0, 40)) and sets_going(C.clean())
+    assert sets_going(C.drive(100, 32767)) and not sets_going(C.drive(0, 1))
