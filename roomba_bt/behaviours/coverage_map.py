@@ -33,8 +33,13 @@ of wall (a metre with the heading within 2 deg), the wall's heading by odometry 
 lanes' axis, so lanes stay parallel to the walls however the heading has drifted.
 
 Every driving step stops for hazards in the tick that shows them (bump, cliff, virtual wall),
-backs off and goes on with the next decision, so it runs in Full mode (a cliff then does not
-drop the robot to Passive, which would stop the brushes). A wheel drop fails it.
+backs off and goes on with the next decision. In Safe mode the firmware stops first at a
+cliff and drops to Passive (the brushes stop too); waiting there longer than a second fails
+``cover`` (``Action.stranded``), and the mission re-enters Safe, turns the motors on and
+starts it again (missions/clean.yaml: a ``retry``). Started again in the same run it goes
+on with what it knew: its map and pose are kept on the blackboard (:data:`MAP_KEY`, dropped
+by each run's ``setup``), it backs off from the hazard and makes for the nearest unswept
+floor. A wheel drop fails it.
 """
 
 from __future__ import annotations
@@ -43,7 +48,9 @@ import math
 from collections import deque
 from collections.abc import Callable
 from functools import partial
+from typing import Any
 
+import py_trees
 from py_trees.common import Status
 
 from roomba_bt.behaviours import driving
@@ -60,7 +67,7 @@ from roomba_bt.oi.profiles import (
 )
 from roomba_bt.robot.interface import Odometry
 
-__all__ = ["COVERAGE", "Bearings", "Cover", "FloorMap"]
+__all__ = ["COVERAGE", "MAP_KEY", "Bearings", "Cover", "FloorMap"]
 
 _OK, _RUN = Status.SUCCESS, Status.RUNNING
 
@@ -97,6 +104,11 @@ _SNAP = math.radians(25.0)
 _EDGE_NEW_CELLS = 20
 
 Cell = int
+
+#: Where ``cover`` keeps what it knows between its starts in one run: its :class:`Bearings`
+#: (the map and its own pose) on py_trees' blackboard, shared by every ``cover`` of the
+#: mission (one floor, one odometry frame); each run's ``setup`` drops it.
+MAP_KEY = "/roomba/cover/map"
 
 
 def _distance_of(signal: int) -> float:
@@ -237,7 +249,8 @@ class Bearings:
         self.map = fmap
         #: its own pose: the odometry's increments, the heading re-anchored on walls
         self.pose = odo
-        self._last = (odo.distance_mm, odo.angle_rad)
+        #: the odometry as the last tick saw it
+        self._odo = odo
         #: the lanes' axis (rad, mod 90 deg), from the walls; None before the first one
         self.axis: float | None = None
         #: (path mm, heading) along the straight stretch of wall followed now
@@ -248,9 +261,9 @@ class Bearings:
     def integrate(self, odo: Odometry) -> Odometry:
         """Its pose after this tick: the odometry's travel and turn since the last, from
         its own (re-anchored) pose."""
-        pose = self.pose
-        distance, angle = odo.distance_mm - self._last[0], odo.angle_rad - self._last[1]
-        self._last = (odo.distance_mm, odo.angle_rad)
+        pose, last = self.pose, self._odo
+        distance, angle = odo.distance_mm - last.distance_mm, odo.angle_rad - last.angle_rad
+        self._odo = odo
         mid = pose.theta_rad + angle / 2.0
         self.pose = pose = odo._replace(
             x_mm=pose.x_mm + distance * math.cos(mid),
@@ -258,6 +271,41 @@ class Bearings:
             theta_rad=pose.theta_rad + angle,
         )
         return pose
+
+    @staticmethod
+    def of_run(odo: Odometry) -> tuple[Bearings, bool]:
+        """The run's bearings kept under :data:`MAP_KEY`, resumed at ``odo`` (True), or new
+        ones from ``odo``, kept there (False)."""
+        storage = py_trees.blackboard.Blackboard.storage
+        kept = storage.get(MAP_KEY)
+        if isinstance(kept, Bearings):
+            kept.resume(odo)
+            return kept, True
+        bearings = storage[MAP_KEY] = Bearings(FloorMap(), odo)
+        return bearings, False
+
+    def resume(self, odo: Odometry) -> None:
+        """``cover`` starts again in the same run (after the firmware's drop to Passive at a
+        cliff, say): the robot's move since the last tick it saw is the odometry's, turned
+        into its own frame (whose heading walls may have re-anchored), as one rigid move."""
+        pose, last = self.pose, self._odo
+        turn = pose.theta_rad - last.theta_rad
+        dx, dy = odo.x_mm - last.x_mm, odo.y_mm - last.y_mm
+        c, s = math.cos(turn), math.sin(turn)
+        self.pose = odo._replace(
+            x_mm=pose.x_mm + dx * c - dy * s,
+            y_mm=pose.y_mm + dx * s + dy * c,
+            theta_rad=odo.theta_rad + turn,
+        )
+        self._odo = odo
+        self._straight.clear()
+
+    def __repr__(self) -> str:  # the monitor's blackboard shows it
+        pose = self.pose
+        return (
+            f"<cover's map: {self.map.swept} cells swept, at x {pose.x_mm:.0f} mm "
+            f"y {pose.y_mm:.0f} mm, {math.degrees(pose.theta_rad):.0f} deg>"
+        )
 
     def observe(self, frame: SensorFrame) -> None:
         """Mark what this tick shows from the pose: the strip swept (while the wheels
@@ -354,32 +402,46 @@ class Cover(Action):
     """Cover the floor with a map of its own (odometry and bumps, 10 cm cells): an edge,
     lanes where the floor is open, the nearest unswept floor next (a breadth-first search
     on its map), edges where the frontier is a wall. SUCCESS when nothing reachable is left
-    unswept; FAILURE on a wheel drop or when the robot leaves Safe/Full. Drive Direct (145)."""
+    unswept; FAILURE on a wheel drop or when the robot leaves Safe/Full (started again, it
+    goes on with its map). Drive Direct (145)."""
 
     moves = True
 
+    def setup(self, **kwargs: Any) -> None:
+        super().setup(**kwargs)  # a new run: its floor is not known yet
+        py_trees.blackboard.Blackboard.storage.pop(MAP_KEY, None)
+
     def start(self) -> None:
-        self._map = FloorMap()
-        odo = self.snapshot.odometry
-        self._bearings = Bearings(self._map, odo)
+        """The first start in a run: ahead to a wall, an edge. A later one (a ``retry``
+        after a drop to Passive) goes on with :data:`MAP_KEY`'s map and pose: off the
+        hazard that ended it, then the nearest unswept floor."""
+        bearings, kept = Bearings.of_run(odo := self.snapshot.odometry)
+        self._bearings, self._map = bearings, bearings.map
         self._plan: list[Callable[[], None]] = []
         self._edge_found = 0  # new cells the last edge found
         self._idle_edges = 0  # edges in a row that followed no frontier
         self._line: driving.Line = (odo.x_mm, odo.y_mm, odo.theta_rad)
         self._phase = ""
-        self._seek(then_edge=True)
+        why = driving.blocked(self.snapshot.frame) if kept else None
+        if not kept:
+            self._seek(then_edge=True)
+        elif why in _BACK_MM:
+            self._plan.append(self._decide)
+            self._back(_BACK_MM[why])
+        else:
+            self._decide()
 
     # ------------------------------------------------------------------ the tick
 
     def update(self) -> Status:
-        waiting = driving.held(self)
-        if waiting is not None:
-            return waiting
         snap = self.snapshot
         frame = snap.frame
         bearings = self._bearings
         bearings.integrate(snap.odometry)
-        bearings.observe(frame)
+        bearings.observe(frame)  # a cliff is mapped in the tick it shows, in Passive too
+        waiting = driving.held(self)
+        if waiting is not None:
+            return waiting
         for _ in range(6):
             if self._phase == "done":
                 self.send(oi.halt())

@@ -8,10 +8,18 @@ import itertools
 import math
 from collections.abc import Callable
 
-from roomba_bt.behaviours.coverage_map import BLOCKED, CELL_MM, SWEPT, VISITED, FloorMap
+import py_trees
+from py_trees.common import Status
+
+from roomba_bt.behaviours import coverage_map, driving
+from roomba_bt.behaviours.coverage_map import BLOCKED, CELL_MM, SWEPT, VISITED, Cover, FloorMap
 from roomba_bt.evaluate.episode import EpisodeResult
+from roomba_bt.oi.frames import LIGHT_BUMP_SIGNAL_PACKETS
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.robot.testing import StubRobot
 
 Sweep = Callable[..., EpisodeResult]
+Make = Callable[..., Cover]
 #: ``cover`` starts in the middle of the room, at an angle to its walls
 MIDDLE = (1.2, 1.0, 20)
 
@@ -149,3 +157,42 @@ def test_cover_holds_up_with_the_encoders_error(sweep: Sweep) -> None:
     assert result.coverage is not None and result.coverage.overall >= 0.85
     assert result.outcome in ("success", "timeout"), result.reason
     assert not math.isnan(result.coverage.overall)
+
+
+def _frame(robot: StubRobot, counts: int, mode: OIMode = OIMode.SAFE, cliff: int = 0) -> None:
+    """A frame with both encoders at ``counts`` (straight ahead), ``cliff`` on the front left."""
+    values = dict.fromkeys((*driving.BLOCKED_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS), 0)
+    values.update({43: counts % 65536, 44: counts % 65536, 35: int(mode), 10: cliff})
+    robot.set_frame(values)
+
+
+def test_cover_started_again_in_a_run_goes_on_with_its_map_and_pose(
+    make: Make, robot: StubRobot
+) -> None:
+    """The firmware's drop to Passive at a cliff (Safe mode) fails ``cover`` after a second; the
+    mission's ``retry`` starts it again. It goes on with the map (it swept the floor anew, and
+    ended as if done on floor it had cleaned, before session 25) and its own pose, the move
+    meanwhile added; it backs off the cliff first. A new run's ``setup`` starts afresh."""
+    cover = make(Cover)
+    counts = 0
+    _frame(robot, counts)
+    for _ in range(150):  # about 1.3 m straight ahead
+        counts += 20
+        _frame(robot, counts)
+        cover.tick_once()
+    _frame(robot, counts, OIMode.PASSIVE, cliff=1)  # the firmware stopped at a drop
+    cover.tick_once()
+    swept = cover._map.swept
+    before = py_trees.blackboard.Blackboard.storage[coverage_map.MAP_KEY].pose
+    cover.stop(Status.FAILURE)
+    counts -= 100  # the robot was pushed back 14 cm meanwhile
+    _frame(robot, counts, cliff=1)
+    cover.tick_once()  # started again, in Safe
+    bearings = py_trees.blackboard.Blackboard.storage[coverage_map.MAP_KEY]
+    assert cover._map is bearings.map and bearings.map.swept >= swept
+    assert abs(bearings.pose.x_mm - (before.x_mm - 100 * 72.0 * math.pi / 508.8)) < 1.0
+    assert cover._phase == "back"  # off the cliff first
+    ahead = [bearings.map.cell(before.x_mm + d, before.y_mm) for d in range(150, 320, 10)]
+    assert any(c is not None and bearings.map.cells[c] & BLOCKED for c in ahead)  # mapped
+    cover.setup(robot=robot)  # the next run
+    assert coverage_map.MAP_KEY not in py_trees.blackboard.Blackboard.storage
