@@ -10,6 +10,11 @@ import pytest
 
 from roomba_bt.evaluate import EpisodeSpec, run_episode
 from roomba_bt.evaluate.episode import EpisodeResult
+from roomba_bt.mission import load_mission
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.runtime.stack import RunStack
+from roomba_bt.runtime.summary import RunSummary
+from roomba_bt.sim import Pose, SimLink, Simulator, load_world
 
 from .conftest import MISSIONS
 
@@ -58,11 +63,11 @@ def test_clean_in_a_small_room_ends_when_the_floor_is_done_and_goes_home() -> No
     assert result.docked and result.charging
 
 
-def test_clean_without_going_home_or_without_a_dock_ends_where_it_stopped(
-    tmp_path: Path,
-) -> None:
-    """``-p go_home=false`` stays; in a world with no dock the way home fails after its
-    time limit, and the cleaning done is still a success (the log says why it stayed)."""
+def test_clean_without_going_home_succeeds_and_without_a_dock_fails(tmp_path: Path) -> None:
+    """``-p go_home=false`` stays where it stopped: a success. In a world with no dock the way
+    home fails after its time limit: the floor was cleaned, but the robot is not home (its
+    battery running down mid-floor), and the mission fails (exit 1) saying why; until
+    session 25 it was a success, said in an INFO log line that ``--display none`` hid."""
     stay = run_episode(
         EpisodeSpec(str(MISSIONS / "clean.yaml"), "empty-room", seed=1, timeout_s=1300.0,
                     params=(("go_home", "false"),))
@@ -75,5 +80,91 @@ def test_clean_without_going_home_or_without_a_dock_ends_where_it_stopped(
         EpisodeSpec(str(MISSIONS / "clean.yaml"), str(world), seed=1, timeout_s=600.0,
                     params=(("duration", "1min"), ("dock_time_limit", "1min")))
     )  # fmt: skip
-    assert homeless.outcome == "success", homeless.reason
+    assert homeless.outcome == "failure"
+    assert "dock_time_limit(60 s)" in homeless.reason
+    assert homeless.coverage is not None and homeless.coverage.overall > 0.3  # it cleaned
     assert not homeless.docked and 120.0 <= homeless.time_s < 200.0
+
+
+def _clean_on_the_simulator(
+    world: str,
+    start: Pose | None,
+    params: dict[str, str],
+    timeout_s: float,
+    link: type[SimLink] = SimLink,
+) -> tuple[Simulator, RunSummary]:
+    """clean.yaml through the real runtime on the simulator's virtual clock; the simulator
+    kept, for its events (the mode changes) and its coverage."""
+    compiled = load_mission(str(MISSIONS / "clean.yaml"), params)
+    sim = Simulator(load_world(world), start=start, coverage=True, trace=False)
+    summary = RunStack(compiled, link(sim), profile=sim.profile, timeout_s=timeout_s).run()
+    return sim, summary
+
+
+def _modes(sim: Simulator) -> list[str]:
+    return [e.detail for e in sim.events if e.kind == "mode"]
+
+
+def test_clean_runs_in_safe_mode_and_cleans_on_after_the_firmware_stops_at_a_cliff(
+    cliff_world: str,
+) -> None:
+    """The firmware's own cliff stop stays on (Safe): at the drop it stops the robot and
+    falls to Passive (the brushes stop too); the mission enters Safe again, turns the motors
+    on and ``cover`` goes on with the map it had, to the whole floor before the drop. In
+    Full (until session 25) a host that died mid-lane left it driving down the stairs."""
+    sim, summary = _clean_on_the_simulator(
+        cliff_world, None, {"duration": "4min", "go_home": "false"}, 400.0
+    )
+    assert summary.outcome.value == "success", summary.reason
+    modes = _modes(sim)
+    assert not any("Full" in m for m in modes), modes
+    drops = [i for i, m in enumerate(modes) if "safety: cliff" in m]
+    assert drops, modes
+    assert any("->Safe" in m for m in modes[drops[-1] :]), modes  # Safe again after the last
+    assert not sim.fallen
+    assert sim.swept is not None and sim.swept.coverage() >= 0.85  # the floor before the drop
+
+
+class _HostDiesLink(SimLink):
+    """The host dies (kill -9, a cable pulled) 3 s into the run: nothing it writes from then on
+    reaches the robot, which keeps its last command (the OI has no command timeout)."""
+
+    def write(self, data: bytes) -> None:
+        if self.simulator.time < 3.0:
+            super().write(data)
+
+
+def test_clean_stops_at_the_stairs_when_the_host_dies_mid_lane() -> None:
+    """The stairs ahead, the host gone while the robot drives at them: in Safe the firmware
+    stops it at the edge (Passive); in Full it went down the stairs ("fell")."""
+    stairs = Pose(4600.0, 800.0, 0.0)  # the apartment, 1.6 m from its stairs, facing them
+    sim, _ = _clean_on_the_simulator("apartment", stairs, {}, 5.0, _HostDiesLink)
+    assert sim.left_speed > 0 or sim.mode is OIMode.PASSIVE  # driving when the host died
+    for _ in range(round(30.0 / 0.015)):  # the robot alone for 30 s
+        sim.step()
+        sim.read()
+    assert not sim.fallen
+    assert sim.mode is OIMode.PASSIVE
+    assert any("safety: cliff" in m for m in _modes(sim))
+
+
+def test_clean_with_mode_full_is_the_owners_choice(cliff_world: str) -> None:
+    """``-p mode=full`` keeps the brushes running at a cliff (no drop to Passive): for an
+    owner who accepts that a dead host leaves the robot driving with no cliff stop."""
+    sim, summary = _clean_on_the_simulator(
+        cliff_world, None, {"duration": "1min", "go_home": "false", "mode": "full"}, 200.0
+    )
+    assert summary.outcome.value == "success", summary.reason
+    assert any("Full" in m for m in _modes(sim)) and not sim.fallen
+
+
+def test_clean_started_on_the_dock_backs_off_it_before_safe() -> None:
+    """Safe on a powered charger drops to Passive at once: off the dock first (in Full, 25 cm
+    back), then Safe and cleaning."""
+    dock = load_world("empty-room").dock
+    assert dock is not None
+    sim, summary = _clean_on_the_simulator(
+        "empty-room", dock.docked_pose, {"duration": "1min", "go_home": "false"}, 200.0
+    )
+    assert summary.outcome.value == "success", summary.reason
+    assert sim.swept is not None and sim.swept.coverage() >= 0.2
