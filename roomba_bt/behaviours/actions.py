@@ -42,6 +42,7 @@ from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS, ENCODER_PACKETS
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import COMMANDS_BY_NAME, opcodes
 from roomba_bt.oi.stream import SLOT_SECONDS
+from roomba_bt.robot.hazards import sets_going
 
 log = logging.getLogger("roomba_bt.mission")
 
@@ -149,6 +150,11 @@ class Mode(Action):
     """Enter an OI mode (Start 128 for passive, Safe 131, Full 132) and wait for packet 35.
 
     Succeeds once the robot reports the mode; re-sends every 0.5 s; fails after ``timeout``.
+    Leaving Safe or Full for Passive while the run's last Motors command runs a brush or the
+    vacuum, it sends Motors 0 (``[138][0]``) before Start: the OI spec says only that Passive
+    cannot change the actuators' parameters, not that Start stops the motors (decided: stop
+    them while they can still be stopped). Not in its ``sends=``, which the compiler reads as
+    the modes it needs (Motors only in Safe/Full): a stop, as an action's ending halt is.
     """
 
     def start(self) -> None:
@@ -164,9 +170,18 @@ class Mode(Action):
             self.feedback_message = f"robot did not enter {self._target.label}"
             return _FAIL
         if snap.time - self._last_sent >= 0.5:
+            if self._target is OIMode.PASSIVE and snap.mode in DRIVING_MODES:
+                self._motors_off_first()
             self.send(_MODE_COMMANDS[self._target]())
             self._last_sent = snap.time
         return _RUN
+
+    def _motors_off_first(self) -> None:
+        robot = self.robot
+        assert robot is not None  # the snapshot was read
+        motors = robot.outbox.last_on("motors")
+        if motors is not None and sets_going(motors):
+            robot.outbox.send(oi.motors_off(), self)
 
 
 # --------------------------------------------------------------------------- driving

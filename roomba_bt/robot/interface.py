@@ -200,11 +200,12 @@ class Outbox:
     stood still while the new branch believed it was turning).
     """
 
-    __slots__ = ("_queue", "_senders", "queued")
+    __slots__ = ("_last", "_queue", "_senders", "queued")
 
     def __init__(self) -> None:
         self._queue: dict[object, Command] = {}
         self._senders: dict[object, object] = {}
+        self._last: dict[object, Command] = {}
         #: the queue itself, read-only: true while a command waits (the runtime asks after
         #: every tick, and most ticks queue nothing: a dict's truth is no call, ``len`` is)
         self.queued: Mapping[object, Command] = self._queue
@@ -215,6 +216,7 @@ class Outbox:
         self._queue[key] = command
         if channel is not None:
             self._senders[channel] = sender
+            self._last[channel] = command
 
     def send_stop(self, command: Command, sender: object) -> None:
         """Queue ``command`` (a halt) from ``sender``, which is ending, unless another sender
@@ -239,6 +241,11 @@ class Outbox:
         channel = command.spec.channel
         return self._senders.get(channel) if channel is not None else None
 
+    def last_on(self, channel: str) -> Command | None:
+        """The last command queued on ``channel`` (``"motors"``) in this run, None before
+        any: what a leaf that leaves Safe or Full stops first (``mode: passive``)."""
+        return self._last.get(channel)
+
     def pending(self) -> list[Command]:
         return list(self._queue.values())
 
@@ -251,6 +258,7 @@ class Outbox:
     def clear(self) -> None:
         self._queue.clear()
         self._senders.clear()
+        self._last.clear()
 
 
 class BaseHandle:

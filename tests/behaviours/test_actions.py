@@ -14,7 +14,7 @@ from py_trees.common import Status
 from roomba_bt.behaviours import actions as a
 from roomba_bt.behaviours import builtin_registry
 from roomba_bt.behaviours.declare import Action, BlackboardRef, declare, read_key, write_key
-from roomba_bt.oi.encode import drive, drive_direct, drive_straight, turns_wheels
+from roomba_bt.oi.encode import drive, drive_direct, drive_straight, motors, turns_wheels
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.odometry import mm_to_counts
 from roomba_bt.robot.interface import Odometry
@@ -408,3 +408,22 @@ def test_what_declares_it_succeeds_at_once_succeeds_on_its_first_tick(make: Make
         behaviour = make(declaration.cls, **_REQUIRED.get(declaration.name, {}))
         assert tick(behaviour) is Status.SUCCESS, declaration.name
     assert not a.Wait.declaration.at_once and not a.Drive.declaration.at_once
+
+
+@pytest.mark.parametrize(("bits", "expected"), [(0b111, [[138, 0], [128]]), (0, [[128]])])
+def test_mode_passive_stops_the_motors_the_run_left_running_before_start(
+    make: Make, bits: int, expected: list[list[int]]
+) -> None:
+    """Start (128) from Safe with the brushes on: Motors 0 first (the OI spec does not say
+    Start stops them; before session 25 they were left to the firmware). Motors already off,
+    only Start (the shipped missions' bytes are unchanged)."""
+    robot = StubRobot(mode=OIMode.SAFE)
+    robot.outbox.send(motors(bits))
+    robot.flush()
+    behaviour = make(a.Mode, robot=robot, to="passive", timeout=2.0)
+    robot.set_frame({35: int(OIMode.SAFE)})
+    assert tick(behaviour) is Status.RUNNING
+    assert data(robot) == expected
+    robot.set_frame({35: int(OIMode.SAFE)}, ticks=40)  # Start again after 0.5 s: no Motors
+    assert tick(behaviour) is Status.RUNNING
+    assert data(robot) == [[128]]
