@@ -38,8 +38,10 @@ cliff and drops to Passive (the brushes stop too); waiting there longer than a s
 ``cover`` (``Action.stranded``), and the mission re-enters Safe, turns the motors on and
 starts it again (missions/clean.yaml: a ``retry``). Started again in the same run it goes
 on with what it knew: its map and pose are kept on the blackboard (:data:`MAP_KEY`, dropped
-by each run's ``setup``), it backs off from the hazard and makes for the nearest unswept
-floor. A wheel drop fails it.
+by each run's ``setup``), and its plan: the move the firmware stopped meets the hazard in
+its first tick and reacts as in Full mode (backs off, and the lane, edge or path goes on as
+it would have). A ``cover`` that another one's map is handed to backs off, turns and makes
+for the nearest unswept floor. A wheel drop fails it.
 """
 
 from __future__ import annotations
@@ -221,6 +223,18 @@ class FloorMap:
             if cell is None or self.near[cell]:
                 return False
         return True
+
+    def waypoints(self, path: list[Cell]) -> list[Cell]:
+        """The path's corners: the farthest cell reachable in a straight line, and on."""
+        points: list[Cell] = []
+        i = 0
+        while i < len(path) - 1:
+            j = len(path) - 1
+            while j > i + 1 and not self.line_free(path[i], path[j]):
+                j -= 1
+            points.append(path[j])
+            i = j
+        return points
 
     def open_along(self, x: float, y: float, heading: float, length: float) -> int:
         """Open-floor cells on the line from (x, y) along ``heading`` for ``length`` mm,
@@ -407,16 +421,26 @@ class Cover(Action):
 
     moves = True
 
+    #: a drop to Passive ended it: started again, its phase meets the hazard (as in Full)
+    _interrupted = False
+    _progress: tuple[float, float] = (0.0, 0.0)  # along a line (mm), when it last grew
+
     def setup(self, **kwargs: Any) -> None:
         super().setup(**kwargs)  # a new run: its floor is not known yet
         py_trees.blackboard.Blackboard.storage.pop(MAP_KEY, None)
+        self._interrupted = False
 
     def start(self) -> None:
-        """The first start in a run: ahead to a wall, an edge. A later one (a ``retry``
-        after a drop to Passive) goes on with :data:`MAP_KEY`'s map and pose: off the
-        hazard that ended it, then the nearest unswept floor."""
+        """The first start in a run: ahead to a wall, an edge. A later one goes on with
+        :data:`MAP_KEY`'s map and pose; after a drop to Passive, with its plan too (else
+        off the hazard it meets, a turn, and the nearest unswept floor)."""
         bearings, kept = Bearings.of_run(odo := self.snapshot.odometry)
         self._bearings, self._map = bearings, bearings.map
+        if kept and self._interrupted:
+            self._interrupted = False
+            self._since = now = self.snapshot.time  # its timers skip the time in Passive
+            self._progress = (self._progress[0], now)
+            return
         self._plan: list[Callable[[], None]] = []
         self._edge_found = 0  # new cells the last edge found
         self._idle_edges = 0  # edges in a row that followed no frontier
@@ -425,8 +449,8 @@ class Cover(Action):
         why = driving.blocked(self.snapshot.frame) if kept else None
         if not kept:
             self._seek(then_edge=True)
-        elif why in _BACK_MM:
-            self._plan.append(self._decide)
+        elif why in _BACK_MM:  # ahead again, it met the same hazard again
+            self._plan.extend((self._onto_right, self._decide))
             self._back(_BACK_MM[why])
         else:
             self._decide()
@@ -441,6 +465,7 @@ class Cover(Action):
         bearings.observe(frame)  # a cliff is mapped in the tick it shows, in Passive too
         waiting = driving.held(self)
         if waiting is not None:
+            self._interrupted = waiting is Status.FAILURE and not frame.any_wheel_drop
             return waiting
         for _ in range(6):
             if self._phase == "done":
@@ -767,24 +792,12 @@ class Cover(Action):
             self._seek(then_edge=True)
             return
         target = path[-1]
-        waypoints = self._waypoints(path)
+        waypoints = self._map.waypoints(path)
         self._map.cells[target] |= TRIED  # once reached, its lanes decide; never again
         for cell in waypoints:
             self._plan.append(partial(self._go, cell))
         self._plan.append(self._lanes)
         self._next()
-
-    def _waypoints(self, path: list[Cell]) -> list[Cell]:
-        """The path's corners: the farthest cell reachable in a straight line, and on."""
-        points: list[Cell] = []
-        i = 0
-        while i < len(path) - 1:
-            j = len(path) - 1
-            while j > i + 1 and not self._map.line_free(path[i], path[j]):
-                j -= 1
-            points.append(path[j])
-            i = j
-        return points
 
     def _go(self, cell: Cell) -> None:
         self._goto_cell = cell

@@ -172,7 +172,9 @@ def test_cover_started_again_in_a_run_goes_on_with_its_map_and_pose(
     """The firmware's drop to Passive at a cliff (Safe mode) fails ``cover`` after a second; the
     mission's ``retry`` starts it again. It goes on with the map (it swept the floor anew, and
     ended as if done on floor it had cleaned, before session 25) and its own pose, the move
-    meanwhile added; it backs off the cliff first. A new run's ``setup`` starts afresh."""
+    meanwhile added, and its plan: the drive the firmware stopped meets the cliff and backs
+    off, as it does in Full (a new decision drove into the same cliff, again and again). A new
+    run's ``setup`` starts afresh."""
     cover = make(Cover)
     counts = 0
     _frame(robot, counts)
@@ -180,18 +182,29 @@ def test_cover_started_again_in_a_run_goes_on_with_its_map_and_pose(
         counts += 20
         _frame(robot, counts)
         cover.tick_once()
-    _frame(robot, counts, OIMode.PASSIVE, cliff=1)  # the firmware stopped at a drop
-    cover.tick_once()
+    for _ in range(80):  # the firmware stopped at a drop: Passive, for more than a second
+        _frame(robot, counts, OIMode.PASSIVE, cliff=1)
+        cover.tick_once()
+        if cover.status is not Status.RUNNING:
+            break
+    assert cover.status is Status.FAILURE
     swept = cover._map.swept
     before = py_trees.blackboard.Blackboard.storage[coverage_map.MAP_KEY].pose
-    cover.stop(Status.FAILURE)
     counts -= 100  # the robot was pushed back 14 cm meanwhile
     _frame(robot, counts, cliff=1)
-    cover.tick_once()  # started again, in Safe
+    cover.tick_once()  # started again (the mission's retry), in Safe
     bearings = py_trees.blackboard.Blackboard.storage[coverage_map.MAP_KEY]
     assert cover._map is bearings.map and bearings.map.swept >= swept
     assert abs(bearings.pose.x_mm - (before.x_mm - 100 * 72.0 * math.pi / 508.8)) < 1.0
-    assert cover._phase == "back"  # off the cliff first
+    assert cover._phase == "back"  # the drive that met the cliff backs off, as in Full
+    while cover._phase == "back":  # 6 cm back, off the edge
+        counts -= 8
+        _frame(robot, counts)
+        cover.tick_once()
+    # the seek's own end, as in Full: turn the drop onto the right (75 deg left), then an
+    # edge along it (a new decision drove straight at the drop again, for minutes)
+    assert cover._phase == "turn" and cover._plan == [cover._edge]
+    assert abs(cover._heading - (bearings.pose.theta_rad + math.radians(75.0))) < 0.02
     ahead = [bearings.map.cell(before.x_mm + d, before.y_mm) for d in range(150, 320, 10)]
     assert any(c is not None and bearings.map.cells[c] & BLOCKED for c in ahead)  # mapped
     cover.setup(robot=robot)  # the next run
