@@ -117,7 +117,9 @@ def run(count: int, seed: int, *, measure_time: bool = False) -> Tally:
             for d in diagnostics:
                 if "internal error" in d.message:
                     tally.internal_errors.append(f"{name} #{n}: {d.message}\n{text}")
-            del mission, diagnostics
+            # the mutant's text too: alive at a measurement, its size (a few KB, another
+            # mission's each time) counted as growth
+            del mission, diagnostics, text
             if n + 1 == count // 2:
                 tally.memory_early = _kept()
         tally.memory_late = _kept()
