@@ -26,8 +26,9 @@ import atexit
 import contextlib
 import logging
 import weakref
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
+from typing import ParamSpec, TypeVar
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import BAUD_CODES, Command
@@ -64,7 +65,7 @@ from roomba_bt.robot.startup import (
     not_a_mode,
     port_not_opened,
 )
-from roomba_bt.robot.wake import keep_awake_for, named_stall
+from roomba_bt.robot.wake import KeepAwake, keep_awake_for, named_stall
 from roomba_bt.robot.writer import CommandWriter
 from roomba_bt.transport.base import Transport, TransportError
 from roomba_bt.transport.serial_port import DEFAULT_BAUD, SerialTransport
@@ -80,6 +81,9 @@ __all__ = [
 ]
 
 log = logging.getLogger(__name__)
+
+P = ParamSpec("P")
+R = TypeVar("R")
 
 
 @dataclass(frozen=True, slots=True)
@@ -107,23 +111,51 @@ _LIVE: weakref.WeakSet[Connection] = weakref.WeakSet()
 def _close_at_exit() -> None:
     for connection in list(_LIVE):
         with contextlib.suppress(Exception):
-            _close_left_open(connection, "the program ended without close()")
+            stop_left_open(connection.ending, "the program ended without close()")
 
 
-def _close_left_open(connection: Connection, why: str) -> None:
+def stop_left_open(ending: SafeStop, why: str) -> None:
     """The safe stop and close for a started session nobody closed: a library user's
-    script that ended, or dropped its connection, left the robot driving in Safe."""
-    if connection.ending.closed:
+    script that ended, or dropped its connection, left the robot driving in Safe.
+
+    It takes the session's ending alone (its writer, link and port), never the connection:
+    run when the connection is garbage, by a :func:`weakref.finalize` that holds ``ending``,
+    the port is still referenced and open. From the connection's ``__del__`` in a collector
+    pass, pyserial's own finalizer had closed the port first ("the stop was not delivered:
+    the port is gone") and the robot drove on."""
+    if ending.closed:
         return
-    if connection.mode not in DRIVING_MODES and connection.running_cycle is None:
+    writer = ending.writer
+    if writer.modes.mode not in DRIVING_MODES and writer.running_cycle is None:
         return  # never started, or stopped in Passive: nothing of ours can be moving
-    doing = connection.activity()
-    stopped = connection.close()
+    doing = ending.activity()
+    stopped = ending.close()
     log.warning(
         "%s: %s (the robot %s); %s (use `with Connection.open(...)` or call close())",
-        connection.name, why, doing,
+        writer.link.name, why, doing,
         "the safe stop was sent" if stopped else "the safe stop could not be delivered",
     )  # fmt: skip
+
+
+def _stop_dropped(ending: SafeStop) -> None:
+    """A connection became garbage (its finalizer, :func:`stop_left_open`); it may run in
+    any thread, and a finalizer's error could only be printed, never handled."""
+    with contextlib.suppress(Exception):
+        stop_left_open(ending, "the connection was dropped without close()")
+
+
+def _weakly(method: Callable[P, R], dead: R) -> Callable[P, R]:
+    """``method`` called through a weak reference (``dead`` once its object is gone): a
+    part's callback into the connection (the link's halt and mode report) would make a
+    cycle, and a connection in one is freed only by the collector, not when its last
+    reference goes: a dropped connection drove on until a collector pass."""
+    ref = weakref.WeakMethod(method)
+
+    def call(*args: P.args, **kwargs: P.kwargs) -> R:
+        bound = ref()
+        return dead if bound is None else bound(*args, **kwargs)
+
+    return call
 
 
 class Connection:
@@ -159,7 +191,7 @@ class Connection:
         self.modes = ModeModel(self.profile, settle=settle)
         self.link = StreamLink(
             transport, self.profile, watchdog=watchdog, reconcile=self.modes.reconcile,
-            report=self._report_change, halt=self.halt,
+            report=_weakly(self._report_change, None), halt=_weakly(self.halt, False),
         )  # fmt: skip
         if baud is None:
             baud = int(getattr(transport, "baud", DEFAULT_BAUD))
@@ -168,16 +200,13 @@ class Connection:
         self.ending = SafeStop(self.writer, end_in)
         # Keep-awake (robot/wake.py): on by default where the profile sleeps in Passive.
         self.keep_awake = self.profile.sleeps_in_passive if keep_awake is None else keep_awake
-        self.wake = keep_awake_for(transport, self.link.name, self.keep_awake)
+        self.ending.wake = keep_awake_for(transport, self.link.name, self.keep_awake)
         #: when the port last listened at other rates and the bytes read by then (link
         #: clock; silence.follow_baud tries again while garbage keeps coming)
         self.baud_listened: tuple[float, int] | None = None
         _LIVE.add(self)
-
-    def __del__(self) -> None:
-        # a program that forgot close() (pycreate2 stops in its __del__ too)
-        with contextlib.suppress(Exception):
-            _close_left_open(self, "the connection was dropped without close()")
+        # a program that dropped it unclosed (at its end: _close_at_exit, which says so)
+        weakref.finalize(self, _stop_dropped, self.ending).atexit = False
 
     # ------------------------------------------------------------------ opening
     @classmethod
@@ -288,6 +317,15 @@ class Connection:
         self.link.transport = transport
 
     @property
+    def wake(self) -> KeepAwake | None:
+        """The BRC pulses (robot/wake.py), or None; kept by the endings, which release it."""
+        return self.ending.wake
+
+    @wake.setter
+    def wake(self, wake: KeepAwake | None) -> None:
+        self.ending.wake = wake
+
+    @property
     def watchdog(self) -> float:
         return self.link.watchdog
 
@@ -393,15 +431,6 @@ class Connection:
             raise explain_silence(self, now - since, grace, halted=halted)
         raise garbled_line(self, now - since, grace, garbled, halted=halted)
 
-    @property
-    def idle_since(self) -> float:
-        """When we last gave the robot a reason to stay awake: a command or a BRC pulse
-        (link clock)."""
-        last = self.writer.last_command_at
-        if self.wake is not None and self.wake.last_pulse is not None:
-            last = max(last, self.wake.last_pulse)
-        return last
-
     def _report_change(self, change: ModeChange) -> None:
         """A warning, unless the charger alone was the cause: docking ends that way (the OI
         drops to Passive on the home base's contacts), which a successful dock run reported
@@ -489,7 +518,7 @@ class Connection:
     def close(self) -> bool:
         """Safe stop (once), close the port. True if the robot was stopped (or never
         started); idempotent."""
-        return self.ending.close(self.wake)
+        return self.ending.close()
 
     def activity(self) -> str:
         """What the last wheel command written had the robot doing: ``at 200 mm/s``,

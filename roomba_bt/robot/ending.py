@@ -149,12 +149,15 @@ class SafeStop:
     answers, or the line is garbled), or None. ``confirm``: asked after the stop is written
     while ``unheard`` is set, whether the robot answers after all (then the stop is known
     delivered): the port followed the robot to another rate on its frames alone, and only an
-    answer there shows it hears at that rate.
+    answer there shows it hears at that rate. ``wake``: the session's keep-awake, released
+    at :meth:`close` (here, not on the connection: a connection dropped without ``close()``
+    is ended from this part alone, :func:`~roomba_bt.robot.connection.stop_when_dropped`).
     """
 
     def __init__(self, writer: CommandWriter, end_in: EndMode) -> None:
         self.writer = writer
         self.end_in: EndMode = end_in
+        self.wake: KeepAwake | None = None
         self.safe_stopped: bool | None = None
         self.stop_report: str | None = None
         self.unheard: str | None = None
@@ -341,7 +344,7 @@ class SafeStop:
         self.safe_stopped = False
         return False
 
-    def close(self, wake: KeepAwake | None) -> bool:
+    def close(self) -> bool:
         """Stop (once), release keep-awake, close the port. True if the robot was stopped
         (or never started); idempotent."""
         if self.closed:
@@ -352,9 +355,9 @@ class SafeStop:
             pass  # already stopped: a second stop sequence would only add bytes
         elif self.writer.modes.mode is not OIMode.OFF:  # stop() reports a port already gone
             stopped = self.stop()
-        if wake is not None:
+        if self.wake is not None:
             with contextlib.suppress(*LINK_ERRORS):
-                wake.release()
+                self.wake.release()
         link = self.writer.link
         link.transport.close()
         link.status = LinkStatus.CLOSED

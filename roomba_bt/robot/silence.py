@@ -27,6 +27,7 @@ left among the likely causes.
 
 from __future__ import annotations
 
+import weakref
 from typing import TYPE_CHECKING
 
 from roomba_bt.oi import commands as oi
@@ -63,6 +64,16 @@ if TYPE_CHECKING:
 QUERY_TIMEOUT_S = 0.3
 
 
+def idle_since(connection: Connection) -> float:
+    """When we last gave the robot a reason to stay awake: a command or a BRC pulse
+    (link clock)."""
+    last = connection.writer.last_command_at
+    wake = connection.wake
+    if wake is not None and wake.last_pulse is not None:
+        last = max(last, wake.last_pulse)
+    return last
+
+
 def asleep_by_idle(connection: Connection) -> RobotAsleep | None:
     """Asleep by the OI's rule: Passive, a profile that sleeps, and nothing from us (no
     command, no BRC pulse) for the five minutes it waits before sleeping. A stop written then
@@ -70,7 +81,7 @@ def asleep_by_idle(connection: Connection) -> RobotAsleep | None:
     silent for half a second, as if the cable had failed)."""
     if not connection.profile.sleeps_in_passive or connection.mode is not OIMode.PASSIVE:
         return None
-    idle = connection.transport.now() - connection.idle_since
+    idle = connection.transport.now() - idle_since(connection)
     if idle < SLEEP_AFTER_S:
         return None
     connection.unheard = (
@@ -250,7 +261,10 @@ def _confirm_at(connection: Connection, rate: int) -> None:
         f"the port followed the robot to {rate} baud on its frames alone, and it answered no "
         f"query at {rate} after the stop (it may not hear there)"
     )
-    connection.ending.confirm = lambda: _stop_heard(connection)
+    # weakly: the ending outlives a dropped connection (its finalizer holds it), and a
+    # connection it held would never become garbage
+    held = weakref.ref(connection)
+    connection.ending.confirm = lambda: (alive := held()) is not None and _stop_heard(alive)
 
 
 #: After a stop at a followed rate: how long the line must stay quiet (the stream's pause
