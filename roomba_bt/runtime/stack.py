@@ -17,10 +17,12 @@ code on a robot, on the simulator and in a replay.
 from __future__ import annotations
 
 import contextlib
+import logging
+import threading
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 from py_trees.behaviour import Behaviour
 
@@ -36,9 +38,18 @@ from roomba_bt.runtime.loop import (
     stream_request,
 )
 from roomba_bt.runtime.recording import Record, RecordingTransport, ReplayTransport
-from roomba_bt.runtime.summary import DEFAULT_GRACE, RunSummary
-from roomba_bt.runtime.tick_guard import TickGuard, recorded_tick_guard
+from roomba_bt.runtime.summary import DEFAULT_GRACE, DEFAULT_TICK_LIMIT, RunSummary
+from roomba_bt.runtime.tick_guard import TickGuard, TickGuardLike, recorded_tick_guard
 from roomba_bt.transport.base import Transport
+
+log = logging.getLogger(__name__)
+
+#: ``RunStack(tick_limit=...)``'s default: the CLI's (``run --tick-limit``)
+TickLimit = float | None | Literal["default"]
+
+#: Seconds :meth:`RunStack.close` from another thread waits for the run it stopped to end
+#: (its safe stop written) before it closes the connection anyway, a stop of its own first.
+CLOSE_WAIT_S = 5.0
 
 
 @dataclass
@@ -91,6 +102,12 @@ class RunStack:
     ``packets`` defaults to :func:`~roomba_bt.runtime.loop.stream_request` at ``baud`` (a
     replay passes the recorded ones). Building it writes nothing to the link (a record's
     header aside); :meth:`run` does the start-up, the ticks and the safe stop.
+
+    ``tick_limit``: seconds a tick may run while the wheels move before the tick guard sends
+    drive 0 (``runtime/tick_guard.py``). ``"default"``, as ``roomba-bt run`` has it:
+    :data:`~roomba_bt.runtime.summary.DEFAULT_TICK_LIMIT` on a link on the wall clock (a
+    robot's port, the real-time simulator), none on the virtual clock (the robot does not
+    move while the host thinks); None or 0: no guard.
     """
 
     def __init__(
@@ -109,7 +126,7 @@ class RunStack:
         input_ended: Callable[[], str | None] | None = None,
         record: Recording | None = None,
         keep_awake: bool | None = None,
-        tick_limit: float | None = None,
+        tick_limit: TickLimit = "default",
         replayed_notes: Sequence[dict[str, Any]] | None = None,
     ) -> None:
         self.packets = tuple(
@@ -139,14 +156,11 @@ class RunStack:
             observer=observer,
             input_ended=input_ended,
             grace=grace,
-            tick_guard=(
-                recorded_tick_guard(self.connection, replayed_notes)
-                if replayed_notes is not None
-                else TickGuard(self.connection, tick_limit)
-                if tick_limit
-                else None
-            ),
+            tick_guard=_tick_guard(self.connection, link, tick_limit, replayed_notes),
         )
+        #: the thread :meth:`run` runs in, while it runs; set when it has ended
+        self._running_in: threading.Thread | None = None
+        self._ended = threading.Event()
 
     @property
     def mission(self) -> MissionLike:
@@ -161,27 +175,79 @@ class RunStack:
         Ctrl-C or SIGTERM: after the safe stop the interrupt is raised again, the summary as
         its ``summary`` attribute, unless ``raise_interrupts`` is False (the CLI, the
         evaluation: the summary's outcome is then INTERRUPTED, exit 130). A stack runs once:
-        a second call raises RuntimeError (build a new RunStack)."""
+        a second call raises RuntimeError (build a new RunStack).
+
+        Off the main thread (a worker thread, ``asyncio.to_thread``) no signal reaches the
+        run: it says so, and the program ends it with :meth:`stop` or :meth:`close`."""
+        self._running_in = threading.current_thread()
+        if self._running_in is not threading.main_thread():
+            self._warn_off_the_main_thread()
         try:
             return self.runner.run(raise_interrupts=raise_interrupts)
         finally:  # an interrupt raised again too: its summary says how the record ended
             if isinstance(self.transport, RecordingTransport):
                 self.transport.flush()
                 self.runner.summary.record_stopped = self.transport.stopped or ""
+            self._ended.set()
+
+    def _warn_off_the_main_thread(self) -> None:
+        """A run that drives (a link on the wall clock) in a thread Ctrl-C never reaches: a
+        program that does not stop it itself leaves its robot driving after Ctrl-C (and hangs
+        joining the thread). An evaluation's worker, which guards no signal, is its pool's."""
+        if not self.runner.guards_signals or not getattr(self.link, "wall_clock", True):
+            return
+        log.warning(
+            "%s: this run is in thread %r, not the main thread: Ctrl-C and SIGTERM do not reach "
+            "it, and the robot would drive on after them; end it from the main thread with "
+            "stack.stop() or stack.close() (in a finally:, see docs/runtime.md, From Python: a "
+            "run in a worker thread)",
+            self.connection.name, self._running_in.name if self._running_in else "?",
+        )  # fmt: skip
 
     def stop(self, reason: str = "stopped by the program") -> None:
         """Stop the run from another thread (a run in a worker thread, which Ctrl-C and
         SIGTERM do not reach): its tree stopped, the safe stop sent, the outcome INTERRUPTED
         with ``reason``; :meth:`run` returns it (see
         :meth:`~roomba_bt.runtime.loop.MissionRunner.request_stop`). Then join the thread,
-        and :meth:`close`: closing first cuts the link under the safe stop."""
+        and :meth:`close` (which, called while the run goes on, stops it and waits itself)."""
         self.runner.request_stop(reason)
 
     def close(self) -> None:
         """Close the connection (and the record); a link already gone is no error here: the
-        run's summary has said what happened to it."""
+        run's summary has said what happened to it.
+
+        Called from another thread while :meth:`run` goes on (a ``finally:`` in the main
+        thread or an asyncio coroutine): :meth:`stop` first, and the run's end awaited (up to
+        :data:`CLOSE_WAIT_S`: its own safe stop, then the close), so the robot is stopped and
+        the run ends INTERRUPTED. Closing under a running run had cut the link beneath its safe
+        stop: "the stop was not delivered"."""
+        running_in = self._running_in
+        if running_in not in (None, threading.current_thread()) and not self._ended.is_set():
+            self.stop("stack.close() from another thread, while the run went on")
+            if not self._ended.wait(CLOSE_WAIT_S):
+                log.warning(
+                    "%s: the run did not end within %.0f s of stack.close() (a tick that "
+                    "blocks?): the connection is closed under it, its safe stop sent from here",
+                    self.connection.name, CLOSE_WAIT_S,
+                )  # fmt: skip
         with contextlib.suppress(Exception):
             self.connection.close()
+
+
+def _tick_guard(
+    connection: Connection,
+    link: Transport,
+    tick_limit: TickLimit,
+    replayed_notes: Sequence[dict[str, Any]] | None,
+) -> TickGuardLike | None:
+    """The run's tick guard: a replay's does the record's acts again; else ``tick_limit``
+    as :class:`RunStack` says (``"default"``: the CLI's on the wall clock, none on the
+    virtual clock)."""
+    if replayed_notes is not None:
+        return recorded_tick_guard(connection, replayed_notes)
+    if tick_limit == "default":
+        tick_limit = DEFAULT_TICK_LIMIT if getattr(link, "wall_clock", True) else None
+    return TickGuard(connection, tick_limit) if tick_limit else None
 
 
 def replay_record(

@@ -62,3 +62,73 @@ def test_the_worker_thread_example_runs(capsys: pytest.CaptureFixture[str]) -> N
     finally:
         signal.signal(signal.SIGTERM, previous)
     assert "outcome      SUCCESS" in capsys.readouterr().out
+
+
+ASYNCIO = "## From Python: asyncio"
+
+
+def _asyncio_recipe() -> str:
+    section = DOC.read_text(encoding="utf-8").split(ASYNCIO, 1)[1].split("\n## ", 1)[0]
+    [block] = re.findall(r"```python\n(.*?)```", section, flags=re.DOTALL)
+    return str(block)
+
+
+def test_the_asyncio_recipe_runs(capsys: pytest.CaptureFixture[str]) -> None:
+    import py_trees
+
+    from roomba_bt.behaviours.actions import Drive, Mode
+    from roomba_bt.oi.profiles import CREATE2
+    from roomba_bt.runtime.stack import RunStack, TreeMission
+    from roomba_bt.sim import SimLink, Simulator, load_world
+
+    root = py_trees.composites.Sequence("a", memory=True, children=[
+        Mode("safe", {"to": "safe"}), Drive("fwd", {"velocity": "200 mm/s", "distance": "0.2 m"}),
+    ])  # fmt: skip
+    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
+    stack = RunStack(TreeMission(root, "async"), link, profile=CREATE2, timeout_s=10.0)
+    exec(compile(_asyncio_recipe(), f"{DOC}:asyncio", "exec"), {"stack": stack})
+    assert "outcome      SUCCESS" in capsys.readouterr().out
+
+
+def test_the_asyncio_recipe_stops_the_robot_on_ctrl_c() -> None:
+    """Ctrl-C while the robot drives (in real time): ``asyncio.run`` cancels the coroutine, its
+    ``finally`` closes the stack, and the run ends INTERRUPTED with its safe stop delivered
+    (without it the mission drove on to its end, and the program waited for it)."""
+    import os
+    import signal
+    import threading
+
+    import py_trees
+
+    from roomba_bt.behaviours.actions import Drive, Mode
+    from roomba_bt.oi.modes import OIMode
+    from roomba_bt.oi.profiles import CREATE2
+    from roomba_bt.runtime.loop import MissionRunner
+    from roomba_bt.runtime.stack import RunStack, TreeMission
+    from roomba_bt.runtime.summary import Outcome
+    from roomba_bt.sim import RealtimeSimLink, Simulator, load_world
+
+    assert threading.current_thread() is threading.main_thread()  # where Ctrl-C lands
+    pressed = threading.Event()
+
+    def ctrl_c_while_driving(runner: MissionRunner) -> None:
+        if runner.snapshot.tick >= 20 and not pressed.is_set():
+            pressed.set()
+            os.kill(os.getpid(), signal.SIGINT)
+
+    root = py_trees.composites.Sequence("a", memory=True, children=[
+        Mode("safe", {"to": "safe"}), Drive("fwd", {"velocity": "150 mm/s"}),
+    ])  # fmt: skip
+    simulator = Simulator(load_world("empty-room"), CREATE2, seed=0)
+    stack = RunStack(
+        TreeMission(root, "async"), RealtimeSimLink(simulator), profile=CREATE2,
+        timeout_s=60.0, observer=ctrl_c_while_driving,
+    )  # fmt: skip
+    with pytest.raises(KeyboardInterrupt):
+        exec(compile(_asyncio_recipe(), f"{DOC}:asyncio", "exec"), {"stack": stack})
+    assert pressed.is_set()
+    summary = stack.runner.summary
+    assert summary.outcome is Outcome.INTERRUPTED, summary
+    assert summary.stop_delivered, summary.safe_stop
+    assert simulator.mode is OIMode.PASSIVE
+    assert simulator.requested_left == simulator.requested_right == 0
