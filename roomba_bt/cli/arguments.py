@@ -7,18 +7,17 @@ it."""
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import inspect
 import json
 import math
 import os
-import re
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from roomba_bt.oi.encode import BAUD_CODES
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, PROFILES
+from roomba_bt.transport.open_failure import url_problem
 
 if TYPE_CHECKING:
     from roomba_bt.mission import Permissions
@@ -75,33 +74,14 @@ def baud_or_auto(text: str) -> int | None:
         raise argparse.ArgumentTypeError(f"{exc}, or auto") from None
 
 
-#: the network URLs, whose rest must be HOST:PORT
-_NETWORK_SCHEMES = ("socket", "rfc2217")
-_PORT_ALLOWED = (
-    "a device path (/dev/ttyUSB0, COM3) or a URL: socket://HOST:PORT, rfc2217://HOST:PORT"
-)
-
-
 def port_name(text: str) -> str:
-    """``--port``: a device path as given, or a URL of a scheme pyserial has a handler for
-    (``serial.urlhandler.protocol_<scheme>``), HOST:PORT after the network ones. A typo in a
-    URL is a usage error here; it was "could not open" (exit 3) with a fix about the device's
-    group."""
-    scheme, sep, rest = text.partition("://")
-    if not sep:
-        return text
-    scheme = scheme.lower()  # as pyserial reads it
-    handler = f"serial.urlhandler.protocol_{scheme}"
-    if not re.fullmatch(r"[a-z0-9]+", scheme) or importlib.util.find_spec(handler) is None:
-        raise argparse.ArgumentTypeError(
-            f"found {text!r}, a URL of no scheme pyserial knows; allowed: {_PORT_ALLOWED}"
-        )
-    if scheme in _NETWORK_SCHEMES:
-        host, colon, port = rest.partition("?")[0].rstrip("/").rpartition(":")
-        if not (host and colon and port.isdigit() and 0 < int(port) < 65536):
-            raise argparse.ArgumentTypeError(
-                f"found {text!r}; allowed: {scheme}://HOST:PORT, a port in 1..65535"
-            )
+    """``--port``: a device path as given, or a URL pyserial opens
+    (:func:`~roomba_bt.transport.open_failure.url_problem`, which ``Connection.open`` asks
+    too). A typo in a URL is a usage error here; it was "could not open" (exit 3) with a fix
+    about the device's group."""
+    problem = url_problem(text)
+    if problem is not None:
+        raise argparse.ArgumentTypeError(problem)
     return text
 
 

@@ -219,9 +219,10 @@ class Connection:
         watchdog: float = 0.1,
         end_in: EndMode = "passive",
         write_timeout: float = 0.5,
+        keep_awake: bool | None = None,
     ) -> Connection:
-        """Open ``url`` (device path, ``socket://``, ``rfc2217://``, ``loop://``) at ``baud``,
-        one of the OI's rates (115200 by default; 19200: ``profile.at_19200``)."""
+        """Open ``url`` (device path, ``socket://``, ``rfc2217://``, ``loop://``) at ``baud``, an
+        OI rate (19200: ``profile.at_19200``); ``keep_awake`` as ``Connection``'s (wake.py)."""
         if baud not in BAUD_CODES:
             rates = ", ".join(str(rate) for rate in BAUD_CODES)
             raise ValueError(f"baud {baud!r}: the OI talks at {rates}")
@@ -229,7 +230,9 @@ class Connection:
             transport = SerialTransport.open(url, baud, write_timeout=write_timeout)
         except TransportError as exc:
             raise port_not_opened(url, exc) from exc
-        return cls(transport, profile, watchdog=watchdog, end_in=end_in, baud=baud)
+        return cls(
+            transport, profile, watchdog=watchdog, end_in=end_in, baud=baud, keep_awake=keep_awake
+        )
 
     def start(
         self,

@@ -119,7 +119,8 @@ class KeepAwake:
                 "keep-awake off: %s; a robot left in Passive sleeps after 5 minutes (no "
                 "hang-up pulse instead: it would blank the stream for its second). A pty or a "
                 "plain socket has no modem lines: the simulator serves them with --rfc2217; "
-                "run --no-keep-awake says it is meant",
+                "run --no-keep-awake (from Python: Connection.open(..., keep_awake=False) or "
+                "RunStack(..., keep_awake=False)) says it is meant",
                 exc,
             )
 

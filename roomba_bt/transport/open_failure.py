@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import importlib.util
 import os
 import re
 import stat
@@ -21,10 +22,47 @@ IN_USE = (
     "another program has it open (another roomba-bt run, sensors, doctor or sim client?); "
     "two programs on one robot would each read half of its stream and mix their commands"
 )
+#: why a device that this process holds already was not opened: an earlier connection of
+#: its own, not closed (a notebook cell run again while the first one's robot drives)
+IN_USE_HERE = (
+    "this process has it open already: an earlier Connection.open (or SerialTransport.open) "
+    "of it that was not closed, a notebook cell run again? Its robot may still be driving: "
+    "call that connection's close() (it stops the robot), or open it with "
+    "`with Connection.open(...) as robot:`, which closes it at the block's end"
+)
+#: the network URLs, whose rest must be HOST:PORT
+NETWORK_SCHEMES = ("socket", "rfc2217")
+#: what a port may be named
+PORT_ALLOWED = (
+    "a device path (/dev/ttyUSB0, COM3) or a URL: socket://HOST:PORT, rfc2217://HOST:PORT"
+)
 #: ``HOST:PORT`` without a scheme (pyserial would take it for a device path)
 _ADDRESS = re.compile(r"[A-Za-z0-9.-]+:[0-9]{1,5}")
 #: most ports named where a device path named none
 LISTED_PORTS = 6
+
+
+def url_problem(text: str) -> str | None:
+    """What is wrong with ``text`` as a port, before pyserial is asked (``run --port``, and
+    :meth:`~roomba_bt.transport.serial_port.SerialTransport.open` from Python): a device path
+    is taken as given; a URL needs a scheme pyserial has a handler for
+    (``serial.urlhandler.protocol_<scheme>``), and HOST:PORT after the network ones. None:
+    nothing. A typo in a URL had pyserial's own words ("'<=' not supported between instances
+    of 'int' and 'NoneType'"), or "could not open" with a fix about the device's group."""
+    if not text:
+        return f"found {text!r}, an empty port name; allowed: {PORT_ALLOWED}"
+    scheme, sep, rest = text.partition("://")
+    if not sep:
+        return None
+    scheme = scheme.lower()  # as pyserial reads it
+    handler = f"serial.urlhandler.protocol_{scheme}"
+    if not re.fullmatch(r"[a-z0-9]+", scheme) or importlib.util.find_spec(handler) is None:
+        return f"found {text!r}, a URL of no scheme pyserial knows; allowed: {PORT_ALLOWED}"
+    if scheme in NETWORK_SCHEMES:
+        host, colon, port = rest.partition("?")[0].rstrip("/").rpartition(":")
+        if not (host and colon and port.isdigit() and 0 < int(port) < 65536):
+            return f"found {text!r}; allowed: {scheme}://HOST:PORT, a port in 1..65535"
+    return None
 
 
 def open_failure(device: str, code: int | None) -> str | None:

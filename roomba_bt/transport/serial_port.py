@@ -17,8 +17,10 @@ of hanging.
 from __future__ import annotations
 
 import contextlib
+import os
 import select
 import time
+import weakref
 from collections.abc import Iterator
 from typing import Any
 
@@ -26,7 +28,14 @@ import serial
 from serial import rfc2217
 
 from roomba_bt.transport.base import TransportError
-from roomba_bt.transport.open_failure import error_number, open_failure
+from roomba_bt.transport.open_failure import (
+    IN_USE,
+    IN_USE_HERE,
+    PORT_ALLOWED,
+    error_number,
+    open_failure,
+    url_problem,
+)
 
 #: Bytes taken from the port in one read; a 115200 baud link carries 172 bytes per 15 ms.
 READ_CHUNK = 4096
@@ -59,6 +68,28 @@ except ImportError:  # not POSIX
 _OPEN_ERRORS: tuple[type[Exception], ...] = (
     serial.SerialException, OSError, ValueError, *TERMIOS_ERRORS
 )  # fmt: skip
+#: The ports this process opened and has not yet let go of: a device it holds already is
+#: refused by its own lock, said as its own (an earlier connection), not another program's.
+_OPENED: weakref.WeakSet[SerialTransport] = weakref.WeakSet()
+
+
+def _port_text(url: object) -> str:
+    """``url`` as the text of a port: a str, or a path object (``pathlib.Path``)."""
+    if isinstance(url, os.PathLike):
+        url = os.fspath(url)
+    if not isinstance(url, str):
+        raise TypeError(f"the port must be {PORT_ALLOWED}, as a str; got {url!r}")
+    return url
+
+
+def _held_here(url: str) -> bool:
+    """Whether this process has the device ``url`` open already (:data:`_OPENED`, a link by
+    another of its names too: /dev/serial/by-id/...), its lock what refused ``url``."""
+    try:
+        wanted = os.path.realpath(url)
+        return any(t.is_open and os.path.realpath(t.name) == wanted for t in list(_OPENED))
+    except (OSError, ValueError):
+        return False
 
 
 class SerialTransport:
@@ -99,7 +130,15 @@ class SerialTransport:
         pyserial asserts RTS and DTR when it opens a port, which on the usual cables pulls
         BRC low (a wake pulse). ``brc_high``: open with both released, so that the robot
         sees no pulse until :meth:`set_wake_line` gives one (``doctor`` says when it wakes
-        the robot instead of waking it unknowingly)."""
+        the robot instead of waking it unknowingly).
+
+        A ``url`` that names no port (not a str, an empty one, a URL pyserial cannot read:
+        :func:`~roomba_bt.transport.open_failure.url_problem`) is refused before pyserial
+        is asked; its own words were a TypeError or an AttributeError."""
+        url = _port_text(url)
+        problem = url_problem(url)
+        if problem is not None:
+            raise TransportError(url, "open the port", problem)
         if url.startswith(NO_WRITE_TIMEOUT_SCHEMES):
             write_timeout = None  # type: ignore[assignment]  # the handler refuses one
         try:
@@ -114,8 +153,12 @@ class SerialTransport:
             port.open()
         except _OPEN_ERRORS as exc:
             known = open_failure(url, error_number(exc))
+            if known is IN_USE and _held_here(url):
+                known = IN_USE_HERE
             raise TransportError(url, "open the port", known or exc) from exc
-        return cls(port, url)
+        opened = cls(port, url)
+        _OPENED.add(opened)
+        return opened
 
     @property
     def port(self) -> serial.SerialBase:

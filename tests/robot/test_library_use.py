@@ -10,6 +10,7 @@ import gc
 import subprocess
 import sys
 import textwrap
+from typing import Any
 
 import pytest
 
@@ -114,3 +115,43 @@ def test_open_takes_only_the_ois_rates_and_a_mode_prints_its_name() -> None:
         Connection.open("loop://", baud=9999)
     assert str(OIMode.SAFE) == "Safe" and f"{OIMode.PASSIVE}" == "Passive"  # printed 2, 1
     assert f"{OIMode.FULL:d}" == "3" and OIMode.SAFE == 2
+
+
+def test_open_says_what_is_wrong_with_a_port_named_wrongly_or_not_at_all() -> None:
+    """Connection.open(None) (an unset environment variable) was an AttributeError from inside
+    pyserial; a URL without its port was pyserial's "'<=' not supported between instances of
+    'int' and 'NoneType'" with guesses about permissions."""
+    from roomba_bt.robot import ConnectionFailed
+
+    with pytest.raises(TypeError, match=r"the port must be a device path .*socket://HOST:PORT"):
+        Connection.open(None)  # type: ignore[arg-type]
+    with pytest.raises(ConnectionFailed) as failed:
+        Connection.open("socket://localhost")
+    assert str(failed.value) == (
+        "socket://localhost: could not open the port: found 'socket://localhost'; allowed: "
+        "socket://HOST:PORT, a port in 1..65535"
+    )
+
+
+def test_a_second_open_in_this_process_names_its_own_connection(fake_links: Any) -> None:
+    """A notebook cell run again while the first connection drives: "another program has it
+    open" sent its user looking for one; it is this process's own, with how to close it."""
+    from roomba_bt.robot import ConnectionFailed
+
+    link = fake_links("pty")
+    with Connection.open(link.url, profile=CREATE2, watchdog=1.0) as first:
+        first.start("safe", (7, 35))
+        with pytest.raises(ConnectionFailed) as again:
+            Connection.open(link.url, profile=CREATE2)
+    said = str(again.value)
+    assert said.startswith(f"{link.url}: could not open the port: this process has it open")
+    assert "close()" in said and "another program" not in said
+
+
+def test_open_takes_keep_awake_as_the_cli_option_does(fake_links: Any) -> None:
+    """``run --no-keep-awake`` from Python: the keep-awake warning names this argument."""
+    link = fake_links("pty")
+    with Connection.open(link.url, profile=CREATE2, keep_awake=False) as quiet:
+        assert quiet.keep_awake is False and quiet.wake is None
+    with Connection.open(link.url, profile=CREATE2) as default:
+        assert default.keep_awake is True and default.wake is not None  # a Create 2 sleeps

@@ -165,6 +165,8 @@ def test_a_port_without_modem_lines_turns_keep_awake_off_once(
     # said once, with what to do (it named only the ioctl's error)
     [said] = [r.getMessage() for r in caplog.records if "keep-awake off" in r.getMessage()]
     assert "--rfc2217" in said and "--no-keep-awake" in said
+    # and what a Python program passes for it (a real argument: the connection's own)
+    assert "Connection.open(..., keep_awake=False)" in said
 
 
 class _Levels:

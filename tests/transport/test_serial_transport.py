@@ -5,11 +5,14 @@ from __future__ import annotations
 import contextlib
 import os
 import socket
+import subprocess
+import sys
 import termios
 import threading
 import tty
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from pathlib import Path
 
 import pytest
 
@@ -173,13 +176,75 @@ def test_a_device_is_opened_for_one_program_at_a_time() -> None:
     from roomba_bt.transport.open_failure import IN_USE
 
     with pty_far_end() as end:
-        first = SerialTransport.open(end.url)
-        with pytest.raises(TransportError) as refused:
-            SerialTransport.open(end.url)
+        holder = subprocess.Popen(
+            [sys.executable, "-c", HOLD_THE_LOCK, end.url], stdout=subprocess.PIPE,
+            stdin=subprocess.PIPE, text=True,
+        )  # fmt: skip
+        try:
+            assert holder.stdout is not None and holder.stdout.readline() == "held\n"
+            with pytest.raises(TransportError) as refused:
+                SerialTransport.open(end.url)
+        finally:
+            holder.communicate("", timeout=30)
         assert refused.value.cause == IN_USE
         assert str(refused.value).startswith(f"{end.url}: could not open the port: another ")
+        SerialTransport.open(end.url).close()
+
+
+#: another program holding a device: pyserial's ``exclusive`` lock
+HOLD_THE_LOCK = """
+import fcntl, os, sys
+fd = os.open(sys.argv[1], os.O_RDWR | os.O_NOCTTY)
+fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+print("held", flush=True)
+sys.stdin.read()
+"""
+
+
+def test_a_device_this_process_holds_is_said_to_be_its_own(tmp_path: Path) -> None:
+    """Opened twice by one program (a notebook cell run again while the first connection's
+    robot drives): not "another program has it open", which sent its user looking for one;
+    this process's own earlier connection, and how to close it. By another of its names too
+    (a /dev/serial/by-id/ link)."""
+    from roomba_bt.transport.open_failure import IN_USE_HERE
+
+    with pty_far_end() as end:
+        first = SerialTransport.open(end.url)
+        link = tmp_path / "by-id-robot"
+        link.symlink_to(end.url)
+        for name in (end.url, str(link)):
+            with pytest.raises(TransportError) as refused:
+                SerialTransport.open(name)
+            assert refused.value.cause == IN_USE_HERE, refused.value
+            assert "this process has it open already" in str(refused.value)
+            assert "close()" in str(refused.value)
         first.close()
         SerialTransport.open(end.url).close()
+
+
+@pytest.mark.parametrize(
+    ("url", "said"),
+    [
+        ("socket://localhost", "found 'socket://localhost'; allowed: socket://HOST:PORT, a port"),
+        ("rfc2217://h:99999", "a port in 1..65535"),
+        ("nosuchscheme://x", "a URL of no scheme pyserial knows; allowed: a device path"),
+        ("", "an empty port name"),
+    ],
+)
+def test_a_url_that_names_no_port_is_said_before_pyserial(url: str, said: str) -> None:
+    """From Python as ``--port`` says it: pyserial's own words were "'<=' not supported
+    between instances of 'int' and 'NoneType'"."""
+    with pytest.raises(TransportError) as refused:
+        SerialTransport.open(url)
+    assert str(refused.value).startswith(f"{url}: could not open the port: found ")
+    assert said in str(refused.value)
+
+
+def test_a_port_that_is_no_text_is_a_type_error_naming_what_is_allowed() -> None:
+    """``Connection.open(None)`` (an unset environment variable): it was "'NoneType' object
+    has no attribute 'startswith'"."""
+    with pytest.raises(TypeError, match=r"the port must be a device path .*; got None"):
+        SerialTransport.open(None)  # type: ignore[arg-type]
 
 
 def test_socket_urls_may_be_opened_twice() -> None:
