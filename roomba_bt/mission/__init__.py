@@ -31,6 +31,7 @@ from roomba_bt.mission.checks import (
 from roomba_bt.mission.diagnostics import Diagnostic, MissionError, reported
 from roomba_bt.mission.ir import Node
 from roomba_bt.mission.loader import NO_PERMISSIONS, SHIPPED_LIBRARY, Loader, Permissions
+from roomba_bt.mission.shipped import find_mission
 from roomba_bt.mission.values import Context, shown
 from roomba_bt.oi.modes import ALL_MODES, OIMode
 from roomba_bt.oi.profiles import CREATE2, RobotProfile
@@ -165,9 +166,12 @@ def load_mission(
     permissions: Permissions = NO_PERMISSIONS,
 ) -> CompiledMission:
     """Compile the mission at ``path`` with ``params`` (``-p name=value`` strings); raises
-    :class:`MissionError` carrying every diagnostic."""
+    :class:`MissionError` carrying every diagnostic. ``path`` is read as ``roomba-bt run``
+    reads its argument (:func:`~roomba_bt.mission.shipped.find_mission`): a file, else a
+    shipped mission's name (``"dock"``, ``"roomba-bt:dock.yaml"``)."""
+    found = find_mission(str(path)).path or path
     mission, diagnostics = compile_mission(
-        path, params, profile=profile, baud=baud, registry=registry, permissions=permissions
+        found, params, profile=profile, baud=baud, registry=registry, permissions=permissions
     )
     if mission is None:
         raise MissionError(diagnostics)

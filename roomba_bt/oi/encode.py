@@ -311,7 +311,13 @@ def pwm_motors(main_brush_pwm: int, side_brush_pwm: int, vacuum_pwm: int) -> Com
 
 
 def leds(led_bits: int, power_color: int, power_intensity: int) -> Command:
-    """LEDs (139): ``leds(led_bits("dock"), 0, 128) -> [139][4][0][128]``."""
+    """LEDs (139), by name with ``led_bits``, which lives in :mod:`roomba_bt.oi.bits` (not
+    here: ``oi.led_bits`` is no name)::
+
+        from roomba_bt.oi.bits import led_bits
+
+        leds(led_bits("dock"), 0, 128)  # [139][4][0][128]
+    """
     return encode(139, led_bits, power_color, power_intensity)
 
 

@@ -150,3 +150,22 @@ def test_run_takes_a_name(capsys: Capsys, tmp_path: Path, monkeypatch: pytest.Mo
     assert main(["run", "dock-builtin", "--fast", "--display", "none"]) == 0
     assert main(["run", "dok", "--fast"]) == 2
     assert "dok: no such mission file, and no shipped mission" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("name", ["dock", "dock.yaml", "roomba-bt:dock.yaml"])
+def test_load_mission_takes_a_shipped_name_as_the_cli_does(name: str) -> None:
+    """From Python as ``roomba-bt run dock``: it was "cannot read mission file: No such file
+    or directory" (the one way in was ``shipped_missions()["dock"]``)."""
+    from roomba_bt.mission import load_mission
+
+    assert load_mission(name).name == "dock"
+
+
+def test_load_mission_reads_a_file_before_a_shipped_name(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from roomba_bt.mission import load_mission
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "dock").write_text("mission: mine\ntree:\n  sequence:\n    - mode: safe\n")
+    assert load_mission("dock").name == "mine"

@@ -241,3 +241,15 @@ def test_the_commands_module_is_importable_by_the_name_the_docs_give_it() -> Non
     from roomba_bt.oi.commands import drive
 
     assert module is sys.modules["roomba_bt.oi.encode"] and module.drive is drive
+
+
+def test_the_leds_example_runs_as_its_docstring_writes_it() -> None:
+    """``oi.leds``'s example named ``led_bits`` as if it were beside it: ``oi.led_bits`` was an
+    AttributeError, and nothing said where it lives."""
+    from roomba_bt.oi import commands as oi
+
+    doc = oi.leds.__doc__ or ""
+    example = "\n".join(line.strip() for line in doc.split("::", 1)[1].splitlines())
+    namespace: dict[str, object] = {"leds": oi.leds}
+    exec(example.replace("\nleds(", "\nresult = leds(", 1), namespace)  # its imports too
+    assert namespace["result"].data == bytes([139, 4, 0, 128])  # type: ignore[attr-defined]
