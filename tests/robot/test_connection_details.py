@@ -75,8 +75,9 @@ def test_open_failure_names_the_port_and_causes() -> None:
         Connection.open("/dev/no-such-roomba")
 
 
-def test_a_port_another_program_holds_is_named_as_such_alone() -> None:
-    """The cause is known: no list of what else to check."""
+def test_a_port_held_already_is_named_as_such_alone() -> None:
+    """The cause is known: no list of what else to check. Held by this same process, it is
+    said as its own (another program's: tests/transport/test_serial_transport.py)."""
     import os
 
     master, slave = os.openpty()
@@ -84,7 +85,7 @@ def test_a_port_another_program_holds_is_named_as_such_alone() -> None:
         holder = SerialTransport.open(os.ttyname(slave))
         with pytest.raises(ConnectionFailed) as failed:
             Connection.open(os.ttyname(slave))
-        assert "another program has it open" in str(failed.value)
+        assert "this process has it open already" in str(failed.value)
         assert failed.value.likely_causes == ()
         holder.close()
     finally:

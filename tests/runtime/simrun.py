@@ -4,13 +4,17 @@ byte tapped."""
 from __future__ import annotations
 
 import random
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from roomba_bt.runtime.loop import MissionRunner
 from roomba_bt.runtime.summary import RunSummary
 from roomba_bt.sim import SimLink, Simulator
+
+if TYPE_CHECKING:
+    from roomba_bt.runtime.stack import RunStack
 
 #: Safe, then forward at 200 mm/s until a bump ends the drive.
 DRIVE_TO_WALL = """
@@ -167,3 +171,19 @@ class SlowTerm(Action):
             self.SEEN.append(getattr(self.robot.connection.writer.last_wheels, "args", None))
         super().terminate(new_status)
 '''
+
+
+def run_in_a_worker(stack: RunStack) -> tuple[threading.Thread, list[RunSummary | BaseException]]:
+    """``stack.run()`` in a thread of its own, started; what it returned or raised lands in
+    the list (the test says what it was)."""
+    result: list[RunSummary | BaseException] = []
+
+    def work() -> None:
+        try:
+            result.append(stack.run())
+        except BaseException as exc:
+            result.append(exc)
+
+    worker = threading.Thread(target=work, name="worker")
+    worker.start()
+    return worker, result

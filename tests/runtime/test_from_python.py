@@ -21,6 +21,8 @@ from roomba_bt.runtime.summary import DEFAULT_TICK_LIMIT, Outcome, RunSummary
 from roomba_bt.runtime.tick_guard import TickGuard
 from roomba_bt.sim import RealtimeSimLink, SimLink, Simulator, load_world
 
+from .simrun import run_in_a_worker
+
 
 class Blocks(py_trees.behaviour.Behaviour):
     """A plain behaviour that blocks its 10th tick until the wheels were stopped behind its
@@ -83,20 +85,6 @@ def test_the_virtual_clock_has_none_by_default_and_a_limit_given_is_kept() -> No
     assert wall.runner.tick_guard.limit_s == DEFAULT_TICK_LIMIT
 
 
-def _run_in_a_worker(stack: RunStack) -> tuple[threading.Thread, list[RunSummary | BaseException]]:
-    result: list[RunSummary | BaseException] = []
-
-    def work() -> None:
-        try:
-            result.append(stack.run())
-        except BaseException as exc:  # the test says what it was
-            result.append(exc)
-
-    worker = threading.Thread(target=work, name="worker")
-    worker.start()
-    return worker, result
-
-
 def test_a_run_in_a_worker_thread_warns_and_close_from_the_main_thread_stops_it(
     caplog: pytest.LogCaptureFixture,
 ) -> None:
@@ -113,7 +101,7 @@ def test_a_run_in_a_worker_thread_warns_and_close_from_the_main_thread_stops_it(
     stack = RunStack(
         TreeMission(root, "worker"), RealtimeSimLink(simulator), profile=CREATE2, observer=observer
     )
-    worker, result = _run_in_a_worker(stack)
+    worker, result = run_in_a_worker(stack)
     try:
         assert driving.wait(20.0)
         assert simulator.requested_left > 0  # the robot drives

@@ -18,7 +18,7 @@ from roomba_bt.runtime.stack import RunStack, TreeMission
 from roomba_bt.runtime.summary import Outcome, RunSummary
 from roomba_bt.sim import Simulator, load_world
 
-from .simrun import TapLink
+from .simrun import TapLink, run_in_a_worker
 
 SAFE_END = oi.halt().data + oi.motors_off().data + oi.pause_stream().data + oi.start().data
 
@@ -36,16 +36,7 @@ def test_a_run_in_a_worker_thread_is_stopped_by_the_main_thread() -> None:
     ])  # fmt: skip
     link = TapLink(Simulator(load_world("empty-room"), CREATE2, 0))
     stack = RunStack(TreeMission(root, "worker"), link, profile=CREATE2, observer=observer)
-    result: list[RunSummary | BaseException] = []
-
-    def work() -> None:
-        try:
-            result.append(stack.run())
-        except BaseException as exc:  # the test says what it was
-            result.append(exc)
-
-    worker = threading.Thread(target=work)
-    worker.start()
+    worker, result = run_in_a_worker(stack)
     assert driving.wait(10.0)
     assert link.simulator.requested_left > 0  # the robot drives
     stack.stop("the operator pressed Ctrl-C")  # what the main thread's handler does
