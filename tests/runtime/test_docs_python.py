@@ -4,7 +4,11 @@ simulator, to SUCCESS."""
 
 from __future__ import annotations
 
+import json
 import re
+import signal
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -66,69 +70,79 @@ def test_the_worker_thread_example_runs(capsys: pytest.CaptureFixture[str]) -> N
 
 ASYNCIO = "## From Python: asyncio"
 
+#: The recipe in a program of its own (``asyncio.run`` wants a main thread without a loop,
+#: and Ctrl-C is a signal to the process): its ``stack`` given, a mission that drives on the
+#: real-time simulator (``wall``: until Ctrl-C, "driving" said once it drives) or one that
+#: ends on the virtual clock; how it ended printed last, as JSON.
+RECIPE_HOST = """
+import json, re, sys
+import py_trees
+from roomba_bt.behaviours.actions import Drive, Mode
+from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.runtime.stack import RunStack, TreeMission
+from roomba_bt.sim import RealtimeSimLink, SimLink, Simulator, load_world
 
-def _asyncio_recipe() -> str:
-    section = DOC.read_text(encoding="utf-8").split(ASYNCIO, 1)[1].split("\n## ", 1)[0]
-    [block] = re.findall(r"```python\n(.*?)```", section, flags=re.DOTALL)
-    return str(block)
+doc, section, kind = sys.argv[1:]
+text = open(doc, encoding="utf-8").read().split(section, 1)[1].split("\\n## ", 1)[0]
+[recipe] = re.findall(r"```python\\n(.*?)```", text, flags=re.DOTALL)
+wall = kind == "wall"
+drive = {"velocity": "150 mm/s"} if wall else {"velocity": "200 mm/s", "distance": "0.2 m"}
+root = py_trees.composites.Sequence("a", memory=True, children=[
+    Mode("safe", {"to": "safe"}), Drive("fwd", drive),
+])
+simulator = Simulator(load_world("empty-room"), CREATE2, seed=0)
+link = RealtimeSimLink(simulator) if wall else SimLink(simulator)
+
+def driving(runner):
+    if runner.snapshot.tick == 20:
+        print("driving", flush=True)
+
+stack = RunStack(TreeMission(root, "async"), link, profile=CREATE2, timeout_s=60.0,
+                 observer=driving if wall else None)
+ended = "returned"
+try:
+    exec(compile(recipe, doc + ":asyncio", "exec"), {"stack": stack})
+except KeyboardInterrupt:
+    ended = "KeyboardInterrupt"
+summary = stack.runner.summary
+print(json.dumps({
+    "ended": ended, "outcome": summary.outcome.value, "delivered": summary.stop_delivered,
+    "mode": simulator.mode.label,
+    "wheels": [simulator.requested_left, simulator.requested_right],
+}), flush=True)
+"""
 
 
-def test_the_asyncio_recipe_runs(capsys: pytest.CaptureFixture[str]) -> None:
-    import py_trees
+def _host_the_recipe(kind: str) -> subprocess.Popen[str]:
+    return subprocess.Popen(
+        [sys.executable, "-c", RECIPE_HOST, str(DOC), ASYNCIO, kind],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
 
-    from roomba_bt.behaviours.actions import Drive, Mode
-    from roomba_bt.oi.profiles import CREATE2
-    from roomba_bt.runtime.stack import RunStack, TreeMission
-    from roomba_bt.sim import SimLink, Simulator, load_world
 
-    root = py_trees.composites.Sequence("a", memory=True, children=[
-        Mode("safe", {"to": "safe"}), Drive("fwd", {"velocity": "200 mm/s", "distance": "0.2 m"}),
-    ])  # fmt: skip
-    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
-    stack = RunStack(TreeMission(root, "async"), link, profile=CREATE2, timeout_s=10.0)
-    exec(compile(_asyncio_recipe(), f"{DOC}:asyncio", "exec"), {"stack": stack})
-    assert "outcome      SUCCESS" in capsys.readouterr().out
+def test_the_asyncio_recipe_runs() -> None:
+    out, err = _host_the_recipe("virtual").communicate(timeout=120)
+    assert "outcome      SUCCESS" in out, err
+    assert json.loads(out.splitlines()[-1])["ended"] == "returned"
 
 
 def test_the_asyncio_recipe_stops_the_robot_on_ctrl_c() -> None:
     """Ctrl-C while the robot drives (in real time): ``asyncio.run`` cancels the coroutine, its
     ``finally`` closes the stack, and the run ends INTERRUPTED with its safe stop delivered
     (without it the mission drove on to its end, and the program waited for it)."""
-    import os
-    import signal
-    import threading
-
-    import py_trees
-
-    from roomba_bt.behaviours.actions import Drive, Mode
-    from roomba_bt.oi.modes import OIMode
-    from roomba_bt.oi.profiles import CREATE2
-    from roomba_bt.runtime.loop import MissionRunner
-    from roomba_bt.runtime.stack import RunStack, TreeMission
-    from roomba_bt.runtime.summary import Outcome
-    from roomba_bt.sim import RealtimeSimLink, Simulator, load_world
-
-    assert threading.current_thread() is threading.main_thread()  # where Ctrl-C lands
-    pressed = threading.Event()
-
-    def ctrl_c_while_driving(runner: MissionRunner) -> None:
-        if runner.snapshot.tick >= 20 and not pressed.is_set():
-            pressed.set()
-            os.kill(os.getpid(), signal.SIGINT)
-
-    root = py_trees.composites.Sequence("a", memory=True, children=[
-        Mode("safe", {"to": "safe"}), Drive("fwd", {"velocity": "150 mm/s"}),
-    ])  # fmt: skip
-    simulator = Simulator(load_world("empty-room"), CREATE2, seed=0)
-    stack = RunStack(
-        TreeMission(root, "async"), RealtimeSimLink(simulator), profile=CREATE2,
-        timeout_s=60.0, observer=ctrl_c_while_driving,
-    )  # fmt: skip
-    with pytest.raises(KeyboardInterrupt):
-        exec(compile(_asyncio_recipe(), f"{DOC}:asyncio", "exec"), {"stack": stack})
-    assert pressed.is_set()
-    summary = stack.runner.summary
-    assert summary.outcome is Outcome.INTERRUPTED, summary
-    assert summary.stop_delivered, summary.safe_stop
-    assert simulator.mode is OIMode.PASSIVE
-    assert simulator.requested_left == simulator.requested_right == 0
+    host = _host_the_recipe("wall")
+    assert host.stdout is not None
+    try:
+        assert host.stdout.readline() == "driving\n"
+        host.send_signal(signal.SIGINT)
+        out, err = host.communicate(timeout=120)
+    finally:
+        host.kill()
+    assert json.loads(out.splitlines()[-1]) == {
+        "ended": "KeyboardInterrupt",
+        "outcome": "interrupted",
+        "delivered": True,
+        "mode": "Passive",
+        "wheels": [0, 0],
+    }, err
+    assert "not the main thread: Ctrl-C and SIGTERM do not reach it" in err
