@@ -17,7 +17,6 @@ from typing import TYPE_CHECKING, Any
 
 from roomba_bt.oi.encode import BAUD_CODES
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, PROFILES
-from roomba_bt.transport.open_failure import url_problem
 
 if TYPE_CHECKING:
     from roomba_bt.mission import Permissions
@@ -78,7 +77,10 @@ def port_name(text: str) -> str:
     """``--port``: a device path as given, or a URL pyserial opens
     (:func:`~roomba_bt.transport.open_failure.url_problem`, which ``Connection.open`` asks
     too). A typo in a URL is a usage error here; it was "could not open" (exit 3) with a fix
-    about the device's group."""
+    about the device's group. Imported here: ``validate`` and ``show`` load no serial port
+    (tests/cli/test_imports)."""
+    from roomba_bt.transport.open_failure import url_problem
+
     problem = url_problem(text)
     if problem is not None:
         raise argparse.ArgumentTypeError(problem)
