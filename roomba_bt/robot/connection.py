@@ -392,7 +392,7 @@ class Connection:
         They came in one read, at ``link.arrival``; the newest is number ``link.index``."""
         link = self.link
         now = link.transport.now()  # the read's start too: read_checked need not ask again
-        wake = self.wake
+        wake = self.ending.wake  # the attribute, not the property: once a tick
         if wake is not None and now >= wake.due:  # most polls: no pulse to start or end
             wake.tick(now)
             now = link.transport.now()  # driving the line may take time on a real port
