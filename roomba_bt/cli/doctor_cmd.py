@@ -144,13 +144,13 @@ class Report:
     #: the models the profile step found fitting (several when it could not tell which)
     models: tuple[Any, ...] = ()
 
-    def line(self, mark: str, step: str, text: str, fix: str = "") -> None:
+    def line(self, mark: str, step: str, text: str, fix: str = "", label: str = "fix") -> None:
         print(f"[{mark}]".ljust(7) + f"{step:<10}{text}", file=self.out, flush=True)
         if fix:
-            print(" " * 17 + f"fix: {fix}", file=self.out, flush=True)
+            print(" " * 17 + f"{label}: {fix}", file=self.out, flush=True)
 
-    def ok(self, step: str, text: str) -> None:
-        self.line("ok", step, text)
+    def ok(self, step: str, text: str, note: str = "") -> None:
+        self.line("ok", step, text, note, label="note")
 
     def skip(self, step: str, text: str) -> None:
         self.line("--", step, text)
@@ -439,9 +439,14 @@ def _profile(
 
 
 def _undecided(found: Any, why: str, reset_tried: bool, report: Report) -> Any:
-    """Several models fit: each named, none called the robot; the one that sends nothing
-    another lacks to use until it is known, and what would tell them apart."""
+    """Several models fit: each named, and what would tell them apart. Where the default
+    profile (the Create 2) is one of them, it is [ok] and the default's, the others named
+    for an owner whose label says so: the evidence cannot tell a Create 2 from a Roomba 500
+    whose checksum covers the header, and a [warn] advising --profile roomba500 met every
+    Create 2 owner (the most of them) for a doubt their label settles. Otherwise a [warn], and
+    the one that sends nothing another lacks, to use until it is known."""
     from roomba_bt.oi.identify import telling_apart
+    from roomba_bt.oi.profiles import DEFAULT_PROFILE
 
     best = found.cautious
     candidates = found.candidates
@@ -452,6 +457,19 @@ def _undecided(found: Any, why: str, reset_tried: bool, report: Report) -> Any:
             "the banner a 600 or a Create 2 prints after Reset (7): doctor --allow-reset "
             "(Reset is not in the Roomba 500 spec: what a 500 does with it is written nowhere)"
         )
+    if DEFAULT_PROFILE in candidates:
+        others = " or ".join(
+            f"a {p.title} (--profile {p.name})" for p in candidates if p is not DEFAULT_PROFILE
+        )
+        report.ok(
+            "profile",
+            f"{DEFAULT_PROFILE.title} (--profile {DEFAULT_PROFILE.name}, the default), or "
+            f"{others} if its label says so: {why}",
+            "tell them apart by " + "; or by ".join(ways),
+        )
+        titles = " or ".join(p.title for p in candidates if p is not DEFAULT_PROFILE)
+        report.facts["model"] = f"{DEFAULT_PROFILE.title} (or a {titles}, by its label)"
+        return DEFAULT_PROFILE
     report.warn(
         "profile",
         f"{names}: not told apart: {why}; until it is known, --profile {best.name} sends "

@@ -24,7 +24,7 @@ from roomba_bt.transport import SerialTransport, TransportError
 DOCTOR_TIMEOUT_S = 10.0
 #: What a robot whose checksum covers the header and reports the mode as is may be, with no
 #: Reset tried: the 500 may sum the header too (its profile takes both rules).
-CREATE2_OR_500 = "iRobot Create 2 or Roomba 500 series"
+CREATE2_OR_500 = "iRobot Create 2 (or a Roomba 500 series, by its label)"
 
 
 def _cli(*args: str, timeout: float = DOCTOR_TIMEOUT_S) -> subprocess.CompletedProcess[str]:
@@ -61,8 +61,10 @@ def test_doctor_finds_an_awake_create2_on_a_pty_at_either_rate(
     if baud == 19200:
         assert "[--]   baud      115200: nothing" in out, "115200 is tried first"
     assert f"[ok]   baud      {baud}: answered [1, 0, 0]" in out
-    assert "[warn] profile   iRobot Create 2 (--profile create2) or Roomba 500 series " \
-        "(--profile roomba500): not told apart" in out  # fmt: skip
+    # a Create 2 owner is not warned: the default, the 500 named for an owner whose label
+    # says so (a [warn] advising --profile roomba500 met every Create 2)
+    assert "[ok]   profile   iRobot Create 2 (--profile create2, the default), or a Roomba 500 " \
+        "series (--profile roomba500) if its label says so: " in out  # fmt: skip
     assert "[ok]   mode      Passive (35 = 1, as is)" in out
     assert any(" 0 bytes skipped" in line for line in _step(out, "stream"))
     missions = _step(out, "missions")[0]
@@ -408,9 +410,12 @@ def test_a_500_whose_checksum_covers_the_header_is_not_called_a_create2(
     code, out = _doctor_in_process(robot, allow_reset=False)
     assert code == DoctorExit.FOUND, out
     [profile] = _step(out, "profile")
-    assert profile.startswith("[warn] profile   iRobot Create 2 (--profile create2) or Roomba 500")
-    assert "not told apart" in profile and "--profile roomba500 sends no command" in profile
+    assert profile.startswith(
+        "[ok]   profile   iRobot Create 2 (--profile create2, the default), "
+        "or a Roomba 500 series (--profile roomba500) if its label says so"
+    )
     fix = out.split(profile)[1].splitlines()[1]
+    assert fix.lstrip().startswith("note: tell them apart by the model on its label; ")
     assert "a wall signal (27) over 1023, which only the Roomba 500 series reads" in fix
     assert "doctor --allow-reset (Reset is not in the Roomba 500 spec" in fix
     assert f"found: {CREATE2_OR_500} on " in capsys.readouterr().out
