@@ -26,6 +26,7 @@ import atexit
 import contextlib
 import logging
 import weakref
+from collections import Counter
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from typing import ParamSpec, TypeVar
@@ -204,6 +205,7 @@ class Connection:
         #: when the port last listened at other rates and the bytes read by then (link
         #: clock; silence.follow_baud tries again while garbage keeps coming)
         self.baud_listened: tuple[float, int] | None = None
+        self._changes_said: Counter[str] = Counter()  # the robot's own falls, by cause
         _LIVE.add(self)
         # a program that dropped it unclosed (at its end: _close_at_exit, which says so)
         weakref.finalize(self, _stop_dropped, self.ending).atexit = False
@@ -435,18 +437,7 @@ class Connection:
         raise garbled_line(self, now - since, grace, garbled, halted=halted)
 
     def _report_change(self, change: ModeChange) -> None:
-        """A warning, unless the charger alone was the cause: docking ends that way (the OI
-        drops to Passive on the home base's contacts), which a successful dock run reported
-        as a WARNING."""
-        level = logging.INFO if change.cause == "charger" else logging.WARNING
-        log.log(
-            level,
-            "%s: the robot went from %s to %s by itself (%s)",
-            self.name,
-            change.previous.label,
-            change.current.label,
-            change.cause,
-        )
+        _say_change(self.name, change, self._changes_said)
 
     def halt(self) -> bool:
         """Drive 0 if the model says the robot may be driving; True if it was sent (the
@@ -558,6 +549,23 @@ class Connection:
 
     def __exit__(self, *exc_info: object) -> None:
         self.close()
+
+
+def _say_change(name: str, change: ModeChange, said: Counter[str]) -> None:
+    """The robot's own fall to Passive, logged: a warning the first time a cause brings it
+    in a connection's life, an INFO after it with the count (the shipped ``clean``, in Safe,
+    meets each cliff it cleans up to through the firmware's stop: 18 warnings a run read as
+    18 alarms); the charger's always an INFO (docking ends so, the OI dropping to Passive on
+    the home base's contacts: a successful dock run had reported it as a WARNING)."""
+    said[change.cause] += 1
+    times = said[change.cause]
+    first = times == 1 and change.cause != "charger"
+    log.log(
+        logging.WARNING if first else logging.INFO,
+        "%s: the robot went from %s to %s by itself (%s)%s",
+        name, change.previous.label, change.current.label, change.cause,
+        "" if times == 1 else f", {times} times so far",
+    )  # fmt: skip
 
 
 def _refusal(connection: Connection, command: object) -> Exception:

@@ -3,6 +3,7 @@ batches, start-up refusals, firmware text in the stream, the simulator for every
 
 from __future__ import annotations
 
+import logging
 from typing import Any
 
 import pytest
@@ -164,3 +165,27 @@ def test_a_hold_on_motion_writes_no_command_that_sets_the_robot_going() -> None:
     expected = b"".join(c.data for c in [*sent, oi.drive(100, 32767)])
     assert transport.read(0.1) == expected
     connection.close()
+
+
+def test_the_robot_s_own_falls_warn_once_a_cause_then_count(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """The shipped clean, in Safe, meets each cliff through the firmware's stop: 18 warnings
+    a run, each read as an alarm. The first fall of a cause warns, later ones are INFO with
+    their count; the charger's is never a warning (docking ends so)."""
+    from collections import Counter
+
+    from roomba_bt.robot.connection import _say_change
+    from roomba_bt.robot.interface import ModeChange
+
+    said: Counter[str] = Counter()
+    caplog.set_level(logging.INFO, logger="roomba_bt.robot.connection")
+    for cause in ("cliff", "cliff", "charger", "wheel drop", "cliff"):
+        _say_change("sim://", ModeChange(OIMode.SAFE, OIMode.PASSIVE, 0, 0.0, cause), said)
+    assert [(r.levelname, r.getMessage().split("by itself ")[1]) for r in caplog.records] == [
+        ("WARNING", "(cliff)"),
+        ("INFO", "(cliff), 2 times so far"),
+        ("INFO", "(charger)"),
+        ("WARNING", "(wheel drop)"),
+        ("INFO", "(cliff), 3 times so far"),
+    ]
