@@ -43,6 +43,7 @@ from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import COMMANDS_BY_NAME, opcodes
 from roomba_bt.oi.stream import SLOT_SECONDS
 from roomba_bt.robot.hazards import sets_going
+from roomba_bt.yamlsource import ANY_CONTROL, escaped
 
 log = logging.getLogger("roomba_bt.mission")
 
@@ -611,7 +612,8 @@ class Log(Action):
     def update(self) -> Status:
         level = getattr(logging, str(self.value("level")).upper())
         log.log(level, "%s", self.value("message"))
-        self.feedback_message = str(self.value("message"))
+        # one line: the tree shown at the end puts it on the leaf's own
+        self.feedback_message = escaped(str(self.value("message")), ANY_CONTROL)
         return _OK
 
 

@@ -12,6 +12,8 @@ import re
 import py_trees
 from py_trees.behaviour import Behaviour
 
+from roomba_bt.yamlsource import ANY_CONTROL, escaped
+
 #: decorators whose message only restates the status they flipped ("success -> failure")
 _FLIPS = (
     py_trees.decorators.Inverter,
@@ -36,8 +38,11 @@ def failure_reason(root: Behaviour) -> str:
 
     Following the path matters where a tree fails in one branch and other branches hold
     failed leaves too: a patrol that gave up at a staircase is not explained by the
-    low-battery check tried beside it."""
-    return _explain(root)[0]
+    low-battery check tried beside it.
+
+    A reason is one line: the names and messages it quotes are escaped (a name holding
+    ``"\\n[ok] robot stopped"`` faked a line of the summary, the log and eval's report)."""
+    return escaped(_explain(root)[0], ANY_CONTROL)
 
 
 def _explain(root: Behaviour) -> tuple[str, Behaviour | None, bool]:
@@ -96,6 +101,7 @@ def while_stopped(condition: Behaviour, guarded: str) -> str:
     It said "condition no longer holds: wheel_drop(any) held", under the guard's own name
     ("while inverter")."""
     said, held, told = _explain(condition)
+    said = escaped(said, ANY_CONTROL)  # one line, as failure_reason's
     if held is None and told:  # its own message says what happened (the monitor's force)
         return f"{GUARD_STOPPED}{said}, while {guarded!r} ran"
     if held is None:
@@ -167,4 +173,4 @@ def running_in(root: Behaviour) -> str:
     ]
     doing = [n for n in running if getattr(n, "declaration", None) is not Wait.declaration]
     doing = doing or running
-    return " in " + doing[0].name.split("(", 1)[0] if doing else ""
+    return " in " + escaped(doing[0].name.split("(", 1)[0], ANY_CONTROL) if doing else ""

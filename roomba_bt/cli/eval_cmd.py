@@ -51,6 +51,7 @@ from roomba_bt.cli.arguments import (
 )
 from roomba_bt.oi.profiles import PROFILES
 from roomba_bt.runtime.summary import ExitCode, Outcome, profile_shown
+from roomba_bt.yamlsource import ANY_CONTROL, escaped
 
 if TYPE_CHECKING:  # the evaluation is imported when it runs: the CLI starts faster
     from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec
@@ -424,7 +425,8 @@ def _verdict(args: argparse.Namespace, summaries: list[Summary], done: list[Eval
             bug = True
             print(
                 f"roomba-bt eval: {len(found)} episode(s) {how}, the first: seed "
-                f"{found[0].seed}: {found[0].reason}; {then}: {rerun_command(args, found[0])}",
+                f"{found[0].seed}: {escaped(found[0].reason, ANY_CONTROL)}; {then}: "
+                f"{rerun_command(args, found[0])}",
                 file=sys.stderr,
             )
     if bug:

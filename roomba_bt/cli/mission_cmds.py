@@ -27,6 +27,7 @@ from roomba_bt.cli.arguments import (
 )
 from roomba_bt.oi.profiles import get_profile
 from roomba_bt.runtime.summary import ExitCode
+from roomba_bt.yamlsource import ANY_CONTROL, escaped
 
 if TYPE_CHECKING:
     from roomba_bt.behaviours.registry import Registry
@@ -217,13 +218,14 @@ def show_command(args: argparse.Namespace) -> int:
         for line in reported(diagnostics):
             print(line)
         return ExitCode.INVALID
-    print(f"{mission.name}: {mission.description}".rstrip(": "))
+    header = f"{mission.name}: {mission.description.strip()}".rstrip(": ")
+    print(escaped(header, ANY_CONTROL))  # one line: "\n[ok] ..." in a text faked one
     reviewed = mission.reviewed()  # a node's name: beside what it is
     print(py_trees.display.unicode_tree(reviewed))
     print(f"sensor packets: {list(mission.packets)}")
     if mission.parameters_shown:
         shown = ", ".join(f"{k}={v}" for k, v in mission.parameters_shown.items())
-        print(f"parameters: {shown}")
+        print(escaped(f"parameters: {shown}", ANY_CONTROL))
     for option, fmt in (("dot", "dot"), ("svg", "svg")):
         target = getattr(args, option)
         if target is None:

@@ -31,6 +31,7 @@ from roomba_bt.cli.monitor_cmd import add_run_arguments as add_monitor_arguments
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.runtime.summary import DEFAULT_GRACE, DEFAULT_TICK_LIMIT, ExitCode, Outcome
+from roomba_bt.yamlsource import ANY_CONTROL, escaped
 
 if TYPE_CHECKING:
     from roomba_bt.mission import Permissions
@@ -441,7 +442,8 @@ def _report(
         in (ExitCode.CONNECTION, ExitCode.MISSION_FAILED, ExitCode.BEHAVIOUR_ERROR)
         and summary.reason
     ):
-        print(f"roomba-bt: {summary.outcome.value}: {summary.reason}", file=sys.stderr)
+        reason = escaped(summary.reason, ANY_CONTROL)  # a node's name in it: one line
+        print(f"roomba-bt: {summary.outcome.value}: {reason}", file=sys.stderr)
     if summary.outcome is Outcome.TIMEOUT and _fast_limit(args):
         print(
             f"roomba-bt: that is --fast's own limit, {FAST_TIMEOUT_S:g} s of mission time, as "

@@ -16,6 +16,7 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 from roomba_bt.evaluate.episode import EpisodeResult
+from roomba_bt.yamlsource import ANY_CONTROL, escaped
 
 Z95 = 1.959963984540054
 
@@ -87,19 +88,21 @@ class Summary:
         return self.successes / self.runs if self.runs else 0.0
 
     def lines(self) -> list[str]:
+        """The report's lines, each one line: a mission's file name and the names its failure
+        reasons quote are escaped (``"\\n[ok] fake"`` made a line of its own)."""
+        head = [
+            f"mission      {self.mission} in {self.world}",
+            *([f"profile      {self.profile}"] if self.profile else []),
+        ]
         if not self.runs:  # interrupted before its first episode finished: no rate at all
-            return [
-                f"mission      {self.mission} in {self.world}",
-                *([f"profile      {self.profile}"] if self.profile else []),
-                "success      no episode finished",
-            ]
+            head.append("success      no episode finished")
+            return [escaped(line, ANY_CONTROL) for line in head]
         lo, hi = self.interval
         med = "n/a" if self.median_time_s is None else f"{self.median_time_s:.1f} s"
         p90 = "n/a" if self.p90_time_s is None else f"{self.p90_time_s:.1f} s"
         speed = self.simulated_s / self.cpu_s if self.cpu_s > 0 else 0.0
         out = [
-            f"mission      {self.mission} in {self.world}",
-            *([f"profile      {self.profile}"] if self.profile else []),
+            *head,
             f"success      {self.successes}/{self.runs} = {100 * self.rate:.1f} % "
             f"(95 % Wilson interval {100 * lo:.1f} %..{100 * hi:.1f} %)",
             f"time         median {med}, p90 {p90} (successful episodes, mission time)",
@@ -112,7 +115,7 @@ class Summary:
         if self.failures:
             out.append("failures")
             out += [f"  {count:4d}  {reason}" for reason, count in self.failures]
-        return out
+        return [escaped(line, ANY_CONTROL) for line in out]
 
     def __str__(self) -> str:
         return "\n".join(self.lines())

@@ -8,9 +8,10 @@
 
 from __future__ import annotations
 
-import re
 from collections.abc import Iterable
 from dataclasses import dataclass, replace
+
+from roomba_bt.yamlsource import ANY_CONTROL, CONTROL, escaped
 
 
 @dataclass(frozen=True, slots=True, order=True)
@@ -27,29 +28,14 @@ class Diagnostic:
 
     def __str__(self) -> str:
         where = (
-            f" [{escaped(shortened_path(self.yaml_path), _ANY_CONTROL)}]" if self.yaml_path else ""
+            f" [{escaped(shortened_path(self.yaml_path), ANY_CONTROL)}]" if self.yaml_path else ""
         )
         kind = "warning: " if self.severity == "warning" else ""
         text = f"{self.file}:{self.line}:{self.column}: {kind}{self.message}"
-        return escaped(text, _CONTROL) + where
+        return escaped(text, CONTROL) + where
 
     def as_warning(self) -> Diagnostic:
         return replace(self, severity="warning")
-
-
-#: control characters (tab and newline aside): the reader refuses them in a file's texts, and
-#: what else reaches an error line (a file's name, a value from elsewhere) is escaped
-_CONTROL = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f]")
-#: a YAML path is one line: a key holding a tab or a newline is escaped too
-_ANY_CONTROL = re.compile("[\x00-\x1f\x7f-\x9f]")
-
-
-def escaped(text: str, which: re.Pattern[str] = _CONTROL) -> str:
-    """``text`` with each character ``which`` matches written as ``\\x1b``: an error line
-    is printed to a terminal, where a raw ``ESC [2J`` would clear the screen."""
-    if which.search(text) is None:
-        return text
-    return which.sub(lambda found: f"\\x{ord(found.group()):02x}", text)
 
 
 #: a YAML path longer than this is shown by its ends (:func:`shortened_path`)

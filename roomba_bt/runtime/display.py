@@ -27,6 +27,7 @@ from roomba_bt.oi.frames import (
     IR_PACKETS,
 )
 from roomba_bt.oi.ir import IRCharacter
+from roomba_bt.yamlsource import ANY_CONTROL, escaped
 
 if TYPE_CHECKING:
     from roomba_bt.robot.interface import Snapshot
@@ -41,23 +42,38 @@ class MissionClockFormatter(logging.Formatter):
     What happened when, in a mission, is a question about mission time: on the virtual clock
     (``--fast``) the wall clock says nothing, and a refusal or a warning is compared with the
     tree's status lines (``t=12.345s ...``) and a recording's timestamps. Before a mission has
-    a clock (or outside one: ``validate``, ``sim``) a line has no time at all."""
+    a clock (or outside one: ``validate``, ``sim``) a line has no time at all.
+
+    What a line quotes is escaped (:func:`~roomba_bt.yamlsource.escaped`): a node's name, a
+    ``log`` leaf's text, anything a mission's author wrote, passed as an argument, stays on
+    its line (``"\\n[ok] robot stopped"`` faked a line of its own); no control character
+    (``ESC [2J`` clears the screen) reaches the terminal from a message or a traceback."""
 
     clock: Callable[[], float | None] | None = None
 
     def format(self, record: logging.LogRecord) -> str:
         """``t=12.345 LEVEL logger: message``: the record's own ``mission_time`` (passed as
         ``extra``) if it has one, else the mission clock's now."""
-        line = f"{record.levelname} {record.name}: {record.getMessage()}"
+        line = f"{record.levelname} {record.name}: {escaped(_quoted_message(record))}"
         if record.exc_info and not record.exc_text:
             record.exc_text = self.formatException(record.exc_info)
         if record.exc_text:
-            line += "\n" + record.exc_text
+            line += "\n" + escaped(record.exc_text)
         now: float | None = getattr(record, "mission_time", None)
         clock = type(self).clock
         if now is None and clock is not None:
             now = clock()
         return line if now is None else f"t={now:.3f} {line}"
+
+
+def _quoted_message(record: logging.LogRecord) -> str:
+    """``record``'s message, each text it quotes (an argument) on one line: the format is the
+    program's, and may span lines; the arguments are data, a mission's names among them."""
+    args = record.args
+    if not isinstance(args, tuple) or not args:
+        return record.getMessage()
+    one_line = tuple(escaped(a, ANY_CONTROL) if isinstance(a, str) else a for a in args)
+    return str(record.msg) % one_line
 
 
 def use_mission_clock(runner: MissionRunner | None) -> None:
@@ -125,7 +141,8 @@ def fitted_tree(root: py_trees.behaviour.Behaviour, rows: int, columns: int) -> 
         folded = not running and children and depth > 0
         hidden = sum(1 for _ in node.iterate()) - 1 if folded else 0
         more = f" +{hidden}" if hidden else ""
-        lines.append((f"{'  ' * depth}{node.name} [{_MARKS[node.status]}]{more}", running))
+        name = escaped(node.name, ANY_CONTROL)
+        lines.append((f"{'  ' * depth}{name} [{_MARKS[node.status]}]{more}", running))
         if running or depth == 0:
             for child in children:
                 walk(child, depth + 1)

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 from roomba_bt.oi.frames import BATTERY_PACKETS
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
+from roomba_bt.yamlsource import ANY_CONTROL, escaped
 
 if TYPE_CHECKING:
     from roomba_bt.robot.interface import Snapshot
@@ -171,10 +172,12 @@ class RunSummary:
         return mode
 
     def lines(self) -> list[str]:
+        """The summary's lines, each one line: what a mission's author wrote (its name, a
+        node's in the reason) is escaped (``"\\n[ok] robot stopped"`` faked a line)."""
         mode = self.final_mode_text()
         battery = f"{self.battery_percent:.0f}%" if self.battery_percent is not None else "n/a"
         reason = f" ({self.reason})" if self.reason else ""
-        return [
+        lines = [
             f"mission      {self.mission}",
             *([f"profile      {self.profile}"] if self.profile else []),
             f"outcome      {self.outcome.value.upper()}{reason}",
@@ -212,6 +215,7 @@ class RunSummary:
             f"safe stop    {self.safe_stop}",
             *([f"record       {self.record_stopped}"] if self.record_stopped else []),
         ]
+        return [escaped(line, ANY_CONTROL) for line in lines]
 
     def __str__(self) -> str:
         return "\n".join(self.lines())

@@ -6,7 +6,7 @@ from __future__ import annotations
 import py_trees
 
 from roomba_bt.behaviours.lean import Retry
-from roomba_bt.behaviours.reasons import failure_reason
+from roomba_bt.behaviours.reasons import failure_reason, running_in, while_stopped
 
 FAILURE = py_trees.common.Status.FAILURE
 
@@ -84,3 +84,23 @@ def test_a_forced_failure_after_a_condition_names_the_condition() -> None:
     root.tick_once()
     assert root.status == FAILURE
     assert failure_reason(root) == "retry: gave up after 2 failed attempts; the last: cliff(any)"
+
+
+def test_a_reason_is_one_line_whatever_the_names_it_quotes() -> None:
+    """A mission's name for a node ("\\n[ok] fake") went raw into the reason, and so into the
+    summary, the log, the monitor and eval's report, where it started a line of its own; a
+    control character ("\\x1b[2J": a cleared screen) too. They are escaped."""
+    leaf = py_trees.behaviours.Failure(name="never\n[ok] fake")
+    root = py_trees.composites.Sequence("\x1b[2J", memory=True, children=[leaf])
+    root.tick_once()
+    leaf.feedback_message = "held \x1b[2J"
+    assert failure_reason(root) == "never\\x0a[ok] fake: held \\x1b[2J"
+    condition = py_trees.decorators.Inverter(
+        "inverter", child=py_trees.behaviours.Success(name="cliff\n[ok] fake")
+    )
+    condition.tick_once()
+    said = while_stopped(condition, "clean\n[ok] fake")
+    assert "\n" not in said and said.startswith("stopped: cliff\\x0a[ok] fake held"), said
+    running = py_trees.behaviours.Running(name="drive\n[ok] fake(speed=1)")
+    running.tick_once()
+    assert running_in(running) == " in drive\\x0a[ok] fake"

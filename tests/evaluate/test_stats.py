@@ -260,3 +260,20 @@ def test_a_timeout_decorator_and_the_episode_s_timeout_group_apart(tmp_path: Pat
         "TIMEOUT: --timeout 3 s of mission time ran out in drive",
         "timeout: the tree's 2 s limit ran out in drive",
     ]
+
+
+def test_a_report_fakes_no_line_with_what_a_mission_wrote() -> None:
+    """A failure reason quoting a node's name ("\\n[ok] fake", "\\x1b[2J") and a mission
+    file's name were printed raw in the failure groups: a line of their own, a cleared
+    screen. Each stays on its line, escaped; ``eval --json`` keeps them as they are."""
+    reason = "steps\n[ok] fake: \x1b[2J"
+    results = [result(1), result(2, "failure", reason=reason)]
+    summary = summarize("m\n[ok] fake.yaml", "room", results)
+    lines = summary.lines()
+    assert str(summary).splitlines() == lines
+    assert not [line for line in lines if line.startswith("[ok]") or "\x1b" in line]
+    assert "     1  steps\\x0a[ok] fake: \\x1b[2J" in lines
+    assert lines[0] == "mission      m\\x0a[ok] fake.yaml in room"
+    assert summary.to_dict()["failures"] == {reason: 1}
+    unfinished = summarize("m\n[ok] fake.yaml", "room", [])
+    assert unfinished.lines()[0] == "mission      m\\x0a[ok] fake.yaml in room"

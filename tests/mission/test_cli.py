@@ -273,3 +273,23 @@ def test_a_plugin_that_did_not_load_is_said_by_behaviours_name_and_by_schema(
     assert main(["schema"]) == 0
     out, err = capsys.readouterr()
     assert json.loads(out) and "warning: plugin 'typo' (typo_mdo): failed to import" in err
+
+
+def test_show_prints_what_a_mission_wrote_each_on_its_line(capsys: Capsys, tmp_path: Path) -> None:
+    """The mission's name, its description and a parameter's value went raw into show's
+    first and last lines: "\\n[ok] fake" started a line of its own. Escaped; the tree's
+    names as before (py_trees draws a newline as a space, a renamed node quotes it)."""
+    path = tmp_path / "faked.yaml"
+    path.write_text(
+        'mission: "faked\\n[ok] mission"\n'
+        'description: "says ${word}"\n'
+        "parameters:\n"
+        "  word: {type: str, default: hi}\n"
+        "tree:\n"
+        '  wait: 1s\n  name: "waited\\n[ok] fake"\n'
+    )
+    assert main(["show", str(path), "-p", "word=x\n[ok] word"]) == 0
+    out, _ = capsys.readouterr()
+    assert not [line for line in out.splitlines() if line.startswith("[ok]")], out
+    assert "faked\\x0a[ok] mission: says x\\x0a[ok] word" in out
+    assert "parameters: word=x\\x0a[ok] word" in out

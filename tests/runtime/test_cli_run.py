@@ -15,6 +15,7 @@ import pytest
 
 from roomba_bt.cli import main, run_cmd
 from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.runtime.display import MissionClockFormatter
 from roomba_bt.runtime.recording import load_record
 
 from .simrun import SPIN
@@ -477,3 +478,60 @@ def test_the_fast_limit_is_for_unwatched_fast_runs_without_a_timeout(
     """With ``--monitor`` or ``--watch`` someone watches, and stops it from the page."""
     args = {"fast": True, "timeout": None, "monitor": None, "watch": False, **given}
     assert run_cmd._fast_limit(argparse.Namespace(**args)) is limited
+
+
+#: names, a log leaf's text and a failure that fake lines: "[ok] ..." at a line's start
+FAKING = r"""
+mission: "faked\n[ok] mission"
+description: "faked\n[ok] robot stopped"
+tree:
+  sequence:
+    - sequence:
+        name: "steps\n[ok] robot stopped"
+        children:
+          - log: "said\n[ok] said"
+          - wait: 0.1s
+            name: "waited\n[ok] waited"
+    - sensor: oi_mode == 0
+      name: "never\n[ok] never"
+"""
+
+
+@pytest.mark.parametrize("display", ["log", "tree"])
+def test_what_a_mission_wrote_fakes_no_line_of_the_run(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    caplog: pytest.LogCaptureFixture,
+    display: str,
+) -> None:
+    """A name, a ``log`` leaf's text and the mission's name printed raw: a "\\n" in them
+    started a line of its own ("[ok] robot stopped") in the status-change log, the tree at
+    the end, the summary and the failure's line on stderr. Each stays on its line, escaped
+    (the log as the run's formatter writes it: pytest's handler holds the records)."""
+    caplog.set_level(logging.INFO)
+    faking = tmp_path / "faking.yaml"
+    faking.write_text(FAKING)
+    assert main(["run", str(faking), "--fast", "--display", display]) == 1
+    out, err = capsys.readouterr()
+    logged = "\n".join(MissionClockFormatter().format(r) for r in caplog.records)
+    faked = [line for line in (out + err + logged).splitlines() if line.startswith("[ok]")]
+    assert not faked, out + err + logged
+    assert "mission      faked\\x0a[ok] mission" in out
+    assert "outcome      FAILURE (never\\x0a[ok] never)" in out
+    assert "roomba-bt: failure: never\\x0a[ok] never" in err
+    if display == "log":
+        assert "INFO roomba_bt.run: steps\\x0a[ok] robot stopped -> SUCCESS" in logged
+    assert "INFO roomba_bt.mission: said\\x0a[ok] said" in logged
+    assert "-- said\\x0a[ok] said" in out  # the log leaf's text, in the tree at the end
+
+
+def test_a_control_character_never_reaches_the_run(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``"\\e[2J"`` in a name (it clears the screen) is refused with the file, before a run."""
+    faking = tmp_path / "faking.yaml"
+    faking.write_text('tree:\n  wait: 0.1s\n  name: "\\e[2J[ok] cleared"\n')
+    assert main(["run", str(faking), "--fast"]) == 2
+    out, err = capsys.readouterr()
+    assert "\x1b" not in out + err
+    assert "control character U+001B" in err and "faking.yaml:3:" in err

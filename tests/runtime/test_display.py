@@ -6,11 +6,13 @@ import io
 import logging
 import threading
 
+import py_trees
 import pytest
 
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.robot.testing import StubRobot
 from roomba_bt.runtime.display import (
+    MissionClockFormatter,
     OffTickHandler,
     OffTickWriter,
     StatusChangeLogger,
@@ -216,3 +218,21 @@ def test_log_lines_the_terminal_did_not_take_are_counted_after_the_run(
         root.removeHandler(handler)
     assert off.writer.dropped > 0
     assert f"{off.writer.dropped} log line(s) of the run were dropped" in caplog.text
+
+
+def test_a_name_stays_on_its_line_in_the_live_tree_and_the_log() -> None:
+    """A node's name printed raw: "\\n[ok] fake" drew a line of its own in the live tree and
+    in a status-change log line, "\\x1b[2J" cleared the screen. Escaped, one line each; a
+    message the program wrote on several lines keeps them, its arguments do not."""
+    leaf = py_trees.behaviours.Success(name="\x1b[2J")
+    root = py_trees.composites.Sequence("steps\n[ok] fake", memory=True, children=[leaf])
+    root.tick_once()
+    lines = fitted_tree(root, rows=10, columns=80)
+    assert lines == ["steps\\x0a[ok] fake [✓]", "  \\x1b[2J [✓]"]
+    formatter = MissionClockFormatter()
+    record = logging.LogRecord("roomba_bt.run", logging.INFO, __file__, 1, "%s -> %s",
+                               (root.name, "SUCCESS"), None)  # fmt: skip
+    assert formatter.format(record) == "INFO roomba_bt.run: steps\\x0a[ok] fake -> SUCCESS"
+    raw = logging.LogRecord("roomba_bt.run", logging.WARNING, __file__, 1, "a\n\x1b[2Jb %d",
+                            (3,), None)  # fmt: skip
+    assert formatter.format(raw) == "WARNING roomba_bt.run: a\n\\x1b[2Jb 3"
