@@ -264,7 +264,7 @@ def _stack(
     record = None
     if args.record:
         record = Recording(args.record, str(Path(args.mission).resolve()), params)
-    return RunStack(
+    stack = RunStack(
         mission,
         link,
         profile=get_profile(args.profile),
@@ -279,6 +279,9 @@ def _stack(
         observer=observer,
         record=record,
     )
+    if _fast_limit(args):  # no user gave it: its reason says whose it is
+        stack.runner.summary.time_limit = f"--fast's own limit of {FAST_TIMEOUT_S:g} s"
+    return stack
 
 
 def _checked_arguments(args: argparse.Namespace) -> tuple[dict[str, str], float | None] | int:
@@ -445,11 +448,8 @@ def _report(
         reason = escaped(summary.reason, ANY_CONTROL)  # a node's name in it: one line
         print(f"roomba-bt: {summary.outcome.value}: {reason}", file=sys.stderr)
     if summary.outcome is Outcome.TIMEOUT and _fast_limit(args):
-        print(
-            f"roomba-bt: that is --fast's own limit, {FAST_TIMEOUT_S:g} s of mission time, as "
-            "no --timeout was given: give one (--timeout 10h) for a longer run",
-            file=sys.stderr,
-        )
+        print("roomba-bt: no --timeout was given; give one to change the limit (--timeout 10h "
+              "for a longer run)", file=sys.stderr)  # fmt: skip
     if summary.outcome is Outcome.NO_CONNECTION and args.port:
         # doctor tries what start-up does not: each rate, a BRC pulse or a hang-up to wake it
         print(f"roomba-bt: `roomba-bt doctor --port {args.port}` finds the robot's rate, wakes "

@@ -448,10 +448,7 @@ class MissionRunner(BaseHandle):
                 self._ended(root, summary)
                 return
             if self.timeout_s is not None and mission_time >= self.timeout_s:
-                summary.outcome = Outcome.TIMEOUT
-                summary.reason = (
-                    f"--timeout {self.timeout_s:g} s of mission time ran out{running_in(root)}"
-                )
+                summary.timed_out(self.timeout_s, running_in(root))
                 return
 
     @staticmethod

@@ -140,6 +140,9 @@ class RunSummary:
     #: every condition the operator forced from the monitor (what, to what, from which tick,
     #: until which), released before the end too: the run may have turned on one
     forced: list[str] = field(default_factory=list)
+    #: how a TIMEOUT's reason names the run's time limit when no user gave it (``run
+    #: --fast``'s own: ``--fast's own limit of 7200 s``); "" names it ``--timeout 90 s``
+    time_limit: str = ""
 
     @property
     def exit_code(self) -> int:
@@ -161,6 +164,14 @@ class RunSummary:
             self.checksum_failures = int(getattr(counters, "checksum_failures", 0))
             self.skipped_bytes = int(getattr(counters, "skipped_bytes", 0))
             self.implausible_frames = int(getattr(counters, "implausible_frames", 0))
+
+    def timed_out(self, limit_s: float, where: str) -> None:
+        """The run's time limit of ``limit_s`` s ran out (``where``: `` in drive``, the leaf
+        running). The reason keeps its end, ``... of mission time ran out in drive``, which
+        :func:`~roomba_bt.evaluate.episode.failure_stage` reads."""
+        self.outcome = Outcome.TIMEOUT
+        limit = self.time_limit or f"--timeout {limit_s:g} s"
+        self.reason = f"{limit} of mission time ran out{where}"
 
     def final_mode_text(self) -> str:
         """The summary's ``final mode``: the mode after the safe stop, or why it is unknown."""

@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 
 from roomba_bt.cli import main, run_cmd
+from roomba_bt.evaluate.episode import failure_stage
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.runtime.display import MissionClockFormatter
 from roomba_bt.runtime.recording import load_record
@@ -450,21 +451,29 @@ def test_fast_without_a_timeout_stops_at_its_own_limit_and_says_how_to_change_it
 ) -> None:
     """On the virtual clock a mission that never ends ran until the simulated battery was
     flat (10.8 h of mission time, then "connection lost", exit 3), or for ever on the
-    charger (session 25). The limit is patched to 30 s here: the run is the same."""
+    charger (session 25). The limit is patched to 30 s here: the run is the same. Its reason
+    names it as --fast's, not as a --timeout the user never gave ("--timeout 30 s ... ran
+    out", then a note saying it was not one); the end a script reads is kept ("... of
+    mission time ran out in wait": the stage)."""
     monkeypatch.setattr(run_cmd, "FAST_TIMEOUT_S", 30.0)
     forever = tmp_path / "forever.yaml"
     forever.write_text(FOREVER)
     assert main(["run", str(forever), "--fast", "--display", "none"]) == 1
     out, err = capsys.readouterr()
-    assert "outcome      TIMEOUT (--timeout 30 s of mission time ran out in wait)" in out
+    reason = "--fast's own limit of 30 s of mission time ran out in wait"
+    assert f"outcome      TIMEOUT ({reason})" in out
     assert "duration     30.00 s mission time" in out
-    assert (
-        "roomba-bt: that is --fast's own limit, 30 s of mission time, as no --timeout was "
-        "given: give one (--timeout 10h) for a longer run" in err
-    ), err
+    assert err.splitlines() == [
+        f"roomba-bt: timeout: {reason}",
+        "roomba-bt: no --timeout was given; give one to change the limit (--timeout 10h for a "
+        "longer run)",
+    ], err
+    assert "--timeout 30" not in out + err
+    assert failure_stage(reason) == "wait"
     assert main(["run", str(forever), "--fast", "--display", "none", "--timeout", "20s"]) == 1
     out, err = capsys.readouterr()
-    assert "(--timeout 20 s of mission time ran out in wait)" in out and "own limit" not in err
+    assert "(--timeout 20 s of mission time ran out in wait)" in out
+    assert "own limit" not in out + err and "no --timeout" not in err
 
 
 @pytest.mark.parametrize(
