@@ -130,6 +130,12 @@ class FrameLayout:
         self.frame_mask = int.from_bytes(mask, "big")
         self.frame_template = int.from_bytes(template, "big")
 
+    def __reduce__(self) -> tuple[Callable[..., FrameLayout], tuple[object, ...]]:
+        """Pickled (and copied) as what it is made from: unpickled through
+        :func:`layout_for`, so a process gets its own cached layout back (the compiled
+        ``struct.Struct`` does not pickle, and one layout a packet list is shared)."""
+        return layout_for, (self.packet_ids, self.profile, self.with_ids)
+
     @property
     def frame_size(self) -> int:
         """Bytes of one stream frame on the wire: header, n-bytes, payload, checksum."""
@@ -358,6 +364,11 @@ class SensorFrame:
     def __init__(self, layout: FrameLayout, values: tuple[int, ...]) -> None:
         self.layout = layout
         self.values = values
+
+    def __reduce__(self) -> tuple[type[SensorFrame], tuple[FrameLayout, tuple[int, ...]]]:
+        """Pickled as ``SensorFrame(layout, values)`` (multiprocessing, Dask, a saved frame);
+        ``copy.copy`` and ``deepcopy`` make an equal frame on the same layout."""
+        return SensorFrame, (self.layout, self.values)
 
     @property
     def packet_ids(self) -> tuple[int, ...]:
