@@ -64,6 +64,31 @@ from roomba_bt.robot.interface import ModeChange
 
 log = logging.getLogger(__name__)
 
+#: The mode machine's name: ``transitions`` puts ``"<name>: "`` first in each of its log
+#: records, which is how :data:`QUIET_MACHINE` knows this library's records from others'.
+MACHINE_NAME = "roomba-bt OI modes"
+
+
+class _QuietMachine(logging.Filter):
+    """Drops the INFO and DEBUG records ``transitions`` logs for this library's mode machine
+    ("Finished processing state Safe enter callbacks", four a start-up): a program that calls
+    ``logging.basicConfig(level=logging.INFO)`` saw them as if they were its own. A filter on
+    ``transitions.core`` (the logger it logs to; it has no per-machine logger), not a level:
+    a program's own machines log as ``transitions`` documents, the root logger and the
+    levels are left as the program set them, and a WARNING or an error still shows. The mode
+    changes that matter are this library's own records (``roomba_bt.robot``)."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        args = record.args
+        ours = isinstance(args, tuple) and bool(args) and args[0] == f"{MACHINE_NAME}: "
+        return record.levelno >= logging.WARNING or not ours
+
+
+#: On ``transitions.core`` from this module's import; remove it there to see the machine's
+#: records again (``docs/robot.md``, Logging).
+QUIET_MACHINE = _QuietMachine()
+logging.getLogger("transitions.core").addFilter(QUIET_MACHINE)
+
 FALL_BACK = "fall_back"
 RESYNC_PREFIX = "resync_"
 #: Seconds after a mode command during which packet 35 may still show the old mode.
@@ -123,6 +148,7 @@ def _machine(profile: RobotProfile, model: _MachineModel | None, initial: OIMode
         initial=_label(initial),
         auto_transitions=False,
         ignore_invalid_triggers=False,
+        name=MACHINE_NAME,
     )
 
 
