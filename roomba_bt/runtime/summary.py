@@ -76,6 +76,26 @@ _EXIT = {
 }
 
 
+class RunFailed(Exception):
+    """A run that did not succeed, raised by :meth:`RunSummary.raise_for_outcome` (as
+    requests' ``raise_for_status``): for a program that would rather have an exception than
+    read the outcome. ``outcome``, ``reason`` and ``exit_code`` (what ``roomba-bt run`` would
+    exit with) say how it ended; ``summary`` is the whole report. The robot was stopped
+    before it was raised: the run had ended."""
+
+    def __init__(self, summary: RunSummary) -> None:
+        self.summary = summary
+        self.outcome = summary.outcome
+        self.reason = summary.reason
+        self.exit_code = summary.outcome.exit_code
+        reason = f": {summary.reason}" if summary.reason else ""
+        message = (
+            f"mission {summary.mission} ended {summary.outcome.value.upper()}{reason} "
+            f"(exit code {int(self.exit_code)})"
+        )
+        super().__init__(escaped(message, ANY_CONTROL))  # on one line, as the summary's
+
+
 #: the share of the robot's frames lost from which the summary calls the link poor
 POOR_LINK = 0.05
 #: the frames a run must span (3 s) before the summary judges its link
@@ -147,6 +167,13 @@ class RunSummary:
     @property
     def exit_code(self) -> int:
         return self.outcome.exit_code
+
+    def raise_for_outcome(self) -> RunSummary:
+        """This summary, if the run succeeded; else :class:`RunFailed` carrying it (its
+        outcome, reason and exit code): ``stack.run().raise_for_outcome()``."""
+        if self.outcome is not Outcome.SUCCESS:
+            raise RunFailed(self)
+        return self
 
     def take_last(self, snapshot: Snapshot | None) -> None:
         """Mission time, distance and charge as the last snapshot had them (None: the run

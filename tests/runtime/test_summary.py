@@ -1,9 +1,18 @@
-"""The summary printed at the end of every run: its lines, and the reason a time limit gives."""
+"""The summary printed at the end of every run: its lines, and the reason a time limit gives;
+a run's outcome as an exception, for a program that would rather not read it:
+``stack.run().raise_for_outcome()``, as requests' ``raise_for_status``."""
 
 from __future__ import annotations
 
+import py_trees
+import pytest
+
+from roomba_bt.behaviours.actions import Mode
 from roomba_bt.evaluate.episode import failure_stage
-from roomba_bt.runtime.summary import Outcome, RunSummary
+from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.runtime.stack import RunStack, TreeMission
+from roomba_bt.runtime.summary import ExitCode, Outcome, RunFailed, RunSummary
+from roomba_bt.sim import SimLink, Simulator, load_world
 
 
 def test_each_line_of_the_summary_stays_one_line() -> None:
@@ -37,3 +46,49 @@ def test_a_time_limit_says_whose_it_is_and_keeps_the_stage_a_script_reads() -> N
     assert own.outcome is Outcome.TIMEOUT and own.exit_code == 1
     assert own.reason == "--fast's own limit of 7200 s of mission time ran out in drive"
     assert failure_stage(given.reason) == failure_stage(own.reason) == "drive"
+
+
+def test_a_success_is_returned() -> None:
+    summary = RunSummary("dock", Outcome.SUCCESS)
+    assert summary.raise_for_outcome() is summary
+
+
+@pytest.mark.parametrize("outcome", [o for o in Outcome if o is not Outcome.SUCCESS])
+def test_every_other_outcome_raises_with_its_reason_and_exit_code(outcome: Outcome) -> None:
+    summary = RunSummary("dock", outcome, reason="because")
+    with pytest.raises(RunFailed) as raised:
+        summary.raise_for_outcome()
+    failed = raised.value
+    assert failed.summary is summary and failed.outcome is outcome
+    assert failed.reason == "because" and failed.exit_code == outcome.exit_code
+    assert str(failed) == (
+        f"mission dock ended {outcome.value.upper()}: because (exit code {int(outcome.exit_code)})"
+    )
+
+
+def test_a_run_that_fails_raises_after_the_robot_is_stopped() -> None:
+    root = py_trees.composites.Sequence("s", memory=True, children=[
+        Mode("safe", {"to": "safe"}), py_trees.behaviours.Failure("refuses"),
+    ])  # fmt: skip
+    simulator = Simulator(load_world("empty-room"), CREATE2, seed=0)
+    stack = RunStack(TreeMission(root, "fails"), SimLink(simulator), profile=CREATE2)
+    try:
+        with pytest.raises(RunFailed) as raised:
+            stack.run().raise_for_outcome()
+    finally:
+        stack.close()
+    assert raised.value.outcome is Outcome.FAILURE
+    assert raised.value.exit_code is ExitCode.MISSION_FAILED
+    assert raised.value.summary.stop_delivered and simulator.mode.label == "Passive"
+    assert str(raised.value) == "mission fails ended FAILURE: refuses: failure (exit code 1)"
+
+
+def test_the_exception_says_the_outcome_on_one_line() -> None:
+    """As the summary's lines: a name holding a newline fakes no line of its own."""
+    summary = RunSummary("faked\n[ok] robot stopped", Outcome.FAILURE, reason="x\x1b[2J")
+    with pytest.raises(RunFailed) as raised:
+        summary.raise_for_outcome()
+    assert str(raised.value) == (
+        "mission faked\\x0a[ok] robot stopped ended FAILURE: x\\x1b[2J (exit code 1)"
+    )
+    assert raised.value.reason == "x\x1b[2J"  # the field as it is
