@@ -1,3 +1,111 @@
-"""roomba-bt: declarative behaviour-tree missions for iRobot Open Interface robots."""
+"""roomba-bt: declarative behaviour-tree missions for iRobot Open Interface robots.
+
+The names a Python program needs, from one place (``docs/runtime.md``, The Python API)::
+
+    import roomba_bt
+
+    mission = roomba_bt.load_mission("dock")
+    link = roomba_bt.SimLink(roomba_bt.Simulator(roomba_bt.load_world("apartment")))
+    stack = roomba_bt.RunStack(mission, link, profile=roomba_bt.CREATE2)
+    try:
+        stack.run().raise_for_outcome()
+    finally:
+        stack.close()
+
+This package sits above every layer (``tests/test_layers.py``): it names things from all of
+them. Each name is imported from its module when first asked for (a module ``__getattr__``,
+PEP 562), so ``import roomba_bt`` (which every ``roomba-bt`` command runs first) loads none
+of them: the CLI's start-up and what each command imports (``tests/cli/test_imports.py``)
+stay as they were. Type checkers read the imports below.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from roomba_bt._lazy import lazy_exports
+
+if TYPE_CHECKING:
+    from roomba_bt.mission import CompiledMission, MissionError, load_mission, validate_files
+    from roomba_bt.oi import OIMode, SensorFrame, commands
+    from roomba_bt.oi.profiles import (
+        CREATE2,
+        PROFILES,
+        ROOMBA500,
+        ROOMBA600,
+        RobotProfile,
+        get_profile,
+    )
+    from roomba_bt.robot import (
+        Connection,
+        ConnectionFailed,
+        LinkDown,
+        ModeError,
+        RobotError,
+        StreamStalled,
+        Terminated,
+        sigterm_raises,
+    )
+    from roomba_bt.runtime.loop import stream_request
+    from roomba_bt.runtime.stack import RunStack, TreeMission
+    from roomba_bt.runtime.summary import ExitCode, Outcome, RunFailed, RunSummary
+    from roomba_bt.sim import RealtimeSimLink, SimLink, Simulator, load_world
+    from roomba_bt.transport import SerialTransport, Transport
 
 __version__ = "0.1.0"
+
+__all__ = [
+    "CREATE2",
+    "PROFILES",
+    "ROOMBA500",
+    "ROOMBA600",
+    "CompiledMission",
+    "Connection",
+    "ConnectionFailed",
+    "ExitCode",
+    "LinkDown",
+    "MissionError",
+    "ModeError",
+    "OIMode",
+    "Outcome",
+    "RealtimeSimLink",
+    "RobotError",
+    "RobotProfile",
+    "RunFailed",
+    "RunStack",
+    "RunSummary",
+    "SensorFrame",
+    "SerialTransport",
+    "SimLink",
+    "Simulator",
+    "StreamStalled",
+    "Terminated",
+    "Transport",
+    "TreeMission",
+    "__version__",
+    "commands",
+    "get_profile",
+    "load_mission",
+    "load_world",
+    "sigterm_raises",
+    "stream_request",
+    "validate_files",
+]
+
+#: the module (below this package) that each name of :data:`__all__` is taken from
+_MODULE_OF: dict[str, str] = {
+    **dict.fromkeys(("CompiledMission", "MissionError", "load_mission", "validate_files"),
+                    "mission"),
+    **dict.fromkeys(("OIMode", "SensorFrame", "commands"), "oi"),
+    **dict.fromkeys(("CREATE2", "PROFILES", "ROOMBA500", "ROOMBA600", "RobotProfile",
+                     "get_profile"), "oi.profiles"),
+    **dict.fromkeys(("Connection", "ConnectionFailed", "LinkDown", "ModeError", "RobotError",
+                     "StreamStalled", "Terminated", "sigterm_raises"), "robot"),
+    "stream_request": "runtime.loop",
+    **dict.fromkeys(("RunStack", "TreeMission"), "runtime.stack"),
+    **dict.fromkeys(("ExitCode", "Outcome", "RunFailed", "RunSummary"), "runtime.summary"),
+    **dict.fromkeys(("RealtimeSimLink", "SimLink", "Simulator", "load_world"), "sim"),
+    **dict.fromkeys(("SerialTransport", "Transport"), "transport"),
+}  # fmt: skip
+
+__getattr__, __dir__ = lazy_exports(__name__, _MODULE_OF)

@@ -3,7 +3,15 @@
 Lowest first: oi -> transport -> robot -> behaviours -> mission -> runtime -> cli; sim imports
 only oi; evaluate sits at the top beside cli; monitor (the live page) below cli, beside sim.
 Nothing in the main stack imports sim. Below them all, yamlsource (the shared YAML reader)
-imports nothing of ours and any layer may use it.
+imports nothing of ours and any layer may use it; so does ``_lazy`` (a package's names
+imported when first asked for), which the protocol layer may use too.
+
+Above them all, the top package ``roomba_bt`` (its ``__init__.py``): it names what a Python
+program needs from every layer, each imported from its module when first asked for, so it
+imports nothing of theirs when it runs (:func:`test_the_top_package_imports_no_layer`). No
+layer takes those names from it (``from roomba_bt import Connection`` in the robot layer is
+an import from above); ``from roomba_bt import yamlsource`` is the module, and
+``__version__`` is the top package's own.
 """
 
 from __future__ import annotations
@@ -19,19 +27,29 @@ MAIN_STACK = ("oi", "transport", "robot", "behaviours", "mission", "runtime")
 #: below every layer: the one YAML-with-positions reader (missions, worlds); imports none of
 #: ours, and every layer but the standard-library-only protocol may use it
 BOTTOM = "yamlsource"
+#: below every layer too, the protocol's included: lazy exports (PEP 562), standard library only
+LAZY = "_lazy"
 ALLOWED: dict[str, set[str]] = {
     BOTTOM: {BOTTOM},
-    "oi": {"oi"},  # the protocol stays standard-library only, so no YAML
-    "transport": {"transport", BOTTOM},
-    "robot": {"oi", "transport", "robot", BOTTOM},
-    "behaviours": {"oi", "transport", "robot", "behaviours", BOTTOM},
-    "mission": {"oi", "transport", "robot", "behaviours", "mission", BOTTOM},
-    "runtime": {"oi", "transport", "robot", "behaviours", "mission", "runtime", BOTTOM},
-    "sim": {"oi", "sim", BOTTOM},
-    "monitor": {*MAIN_STACK, "sim", "monitor", BOTTOM},
-    "cli": {*MAIN_STACK, "sim", "cli", "evaluate", "monitor", BOTTOM},
-    "evaluate": {*MAIN_STACK, "sim", "cli", "evaluate", BOTTOM},
+    "oi": {"oi", LAZY},  # the protocol stays standard-library only, so no YAML
+    "transport": {"transport", BOTTOM, LAZY},
+    "robot": {"oi", "transport", "robot", BOTTOM, LAZY},
+    "behaviours": {"oi", "transport", "robot", "behaviours", BOTTOM, LAZY},
+    "mission": {"oi", "transport", "robot", "behaviours", "mission", BOTTOM, LAZY},
+    "runtime": {"oi", "transport", "robot", "behaviours", "mission", "runtime", BOTTOM, LAZY},
+    "sim": {"oi", "sim", BOTTOM, LAZY},
+    "monitor": {*MAIN_STACK, "sim", "monitor", BOTTOM, LAZY},
+    "cli": {*MAIN_STACK, "sim", "cli", "evaluate", "monitor", BOTTOM, LAZY},
+    "evaluate": {*MAIN_STACK, "sim", "cli", "evaluate", BOTTOM, LAZY},
 }
+
+
+def _top_package_name(name: str) -> str:
+    """What ``from roomba_bt import <name>`` takes: a layer's package or module (``name``),
+    else a name of the top package's own (``roomba_bt.<name>``)."""
+    if (PACKAGE / name).is_dir() or (PACKAGE / f"{name}.py").is_file():
+        return name
+    return f"roomba_bt.{name}"
 
 
 def _layer_imports(path: Path) -> set[str]:
@@ -41,6 +59,8 @@ def _layer_imports(path: Path) -> set[str]:
         names: list[str] = []
         if isinstance(node, ast.Import):
             names = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.module == "roomba_bt" and not node.level:
+            found.update(_top_package_name(alias.name) for alias in node.names)
         elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
             names = [node.module]
         for name in names:
@@ -61,9 +81,47 @@ def test_every_package_has_a_layer() -> None:
 @pytest.mark.parametrize("path", MODULES, ids=lambda p: str(p.relative_to(PACKAGE)))
 def test_imports_respect_the_layers(path: Path) -> None:
     layer = path.relative_to(PACKAGE).parts[0]
-    imported = _layer_imports(path) - {"__version__"}
+    imported = _layer_imports(path) - {"roomba_bt.__version__"}
     forbidden = imported - ALLOWED[layer]
     assert not forbidden, f"{path.relative_to(PACKAGE)} ({layer}) imports {sorted(forbidden)}"
+
+
+def _runtime_imports(path: Path) -> set[str]:
+    """The modules of ours ``path`` imports when it runs: those under ``if TYPE_CHECKING:``
+    (for type checkers only) left out."""
+    tree = ast.parse(path.read_text(), filename=str(path))
+    checking = [
+        node
+        for node in ast.walk(tree)
+        if isinstance(node, ast.If) and ast.unparse(node.test) == "TYPE_CHECKING"
+    ]
+    skipped = {id(inner) for node in checking for inner in ast.walk(node)}
+    found = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module and id(node) not in skipped:
+            found.add(node.module)
+        elif isinstance(node, ast.Import) and id(node) not in skipped:
+            found.update(alias.name for alias in node.names)
+    return {name for name in found if name.startswith("roomba_bt")}
+
+
+def test_the_top_package_imports_no_layer() -> None:
+    """``roomba_bt/__init__.py`` names every layer's exports but imports none of them when
+    it runs (each when first asked for): only the lazy-export helper below them all."""
+    assert _runtime_imports(PACKAGE / "__init__.py") == {f"roomba_bt.{LAZY}"}
+
+
+def test_the_lazy_export_helper_imports_nothing_of_ours() -> None:
+    assert _runtime_imports(PACKAGE / f"{LAZY}.py") == set()
+
+
+def test_a_layer_takes_no_name_from_the_top_package() -> None:
+    """The rule :func:`test_imports_respect_the_layers` applies: ``from roomba_bt import X``
+    in a layer is the module X, or an import from above it."""
+    assert _top_package_name("yamlsource") == "yamlsource"
+    assert _top_package_name(LAZY) == LAZY
+    assert _top_package_name("Connection") == "roomba_bt.Connection"
+    assert "roomba_bt.Connection" not in set().union(*ALLOWED.values())
 
 
 def test_the_protocol_layer_uses_the_standard_library_only() -> None:

@@ -15,8 +15,9 @@ mission's compile never use.
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from roomba_bt._lazy import lazy_exports
 
 if TYPE_CHECKING:
     from roomba_bt.robot.connection import Connection, LinkCounters
@@ -80,16 +81,4 @@ _MODULE_OF: dict[str, str] = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    """``roomba_bt.robot.Connection`` and the other names of :data:`__all__`, from their
-    module (imported now if it was not); kept here, so asked for once."""
-    module = _MODULE_OF.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted({*globals(), *__all__})
+__getattr__, __dir__ = lazy_exports(__name__, _MODULE_OF)

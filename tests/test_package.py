@@ -1,0 +1,72 @@
+"""``import roomba_bt``: the names a Python program needs, each imported from its module when
+first asked for (``roomba_bt/__init__.py``); ``import roomba_bt`` gave nothing but
+``__version__``."""
+
+from __future__ import annotations
+
+import ast
+import importlib
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import roomba_bt
+
+INIT = Path(roomba_bt.__file__)
+EXPORTS = [name for name in roomba_bt.__all__ if name != "__version__"]
+
+
+NEEDED = ("load_mission", "Connection", "RunStack", "TreeMission", "RunSummary", "Outcome",
+          "RunFailed", "CREATE2", "PROFILES", "SimLink", "Simulator")  # fmt: skip
+
+
+def test_the_names_a_program_needs_are_there() -> None:
+    for name in NEEDED:
+        assert name in roomba_bt.__all__ and name in dir(roomba_bt), name
+
+
+@pytest.mark.parametrize("name", EXPORTS)
+def test_every_name_is_kept_once_asked_for(name: str) -> None:
+    value = getattr(roomba_bt, name)
+    assert vars(roomba_bt)[name] is value  # the module __getattr__ is not asked again
+
+
+def test_type_checkers_see_the_same_names() -> None:
+    """The ``if TYPE_CHECKING:`` imports name every export, from the module it is taken from
+    when asked for (a name added to one and not the other fails here)."""
+    tree = ast.parse(INIT.read_text())
+    [checking] = [n for n in tree.body if isinstance(n, ast.If)]
+    seen = {
+        alias.name: node.module
+        for node in checking.body
+        if isinstance(node, ast.ImportFrom)
+        for alias in node.names
+    }
+    assert sorted(seen) == sorted(EXPORTS)
+    for name, module in seen.items():
+        assert getattr(importlib.import_module(str(module)), name) is getattr(roomba_bt, name)
+
+
+def test_an_unknown_name_is_an_attribute_error() -> None:
+    with pytest.raises(AttributeError) as raised:
+        roomba_bt.nope  # noqa: B018
+    assert str(raised.value) == "module 'roomba_bt' has no attribute 'nope'"
+
+
+def test_import_roomba_bt_loads_no_layer() -> None:
+    """Every ``roomba-bt`` command imports the package first: it loads none of the exports'
+    modules (nor py_trees, transitions, pyserial, YAML) until a name is asked for."""
+    script = (
+        "import sys\n"
+        "import roomba_bt\n"
+        "print(sorted(m for m in sys.modules if m.startswith(('roomba_bt', 'py_trees', "
+        "'transitions', 'serial', 'yaml'))))\n"
+        "from roomba_bt import RunFailed\n"
+        "print(RunFailed.__module__, 'roomba_bt.runtime.stack' in sys.modules)\n"
+    )
+    output = subprocess.check_output([sys.executable, "-c", script], text=True, timeout=60)
+    loaded, taken = output.splitlines()
+    assert loaded == "['roomba_bt', 'roomba_bt._lazy']"
+    assert taken == "roomba_bt.runtime.summary False"
