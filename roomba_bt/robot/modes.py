@@ -75,17 +75,27 @@ class _QuietMachine(logging.Filter):
     ``logging.basicConfig(level=logging.INFO)`` saw them as if they were its own. A filter on
     ``transitions.core`` (the logger it logs to; it has no per-machine logger), not a level:
     a program's own machines log as ``transitions`` documents, the root logger and the
-    levels are left as the program set them, and a WARNING or an error still shows. The mode
-    changes that matter are this library's own records (``roomba_bt.robot``)."""
+    levels are left as the program set them, and a WARNING or an error still shows. A
+    program that sets a level on ``transitions`` itself (its README's way to see them, and
+    ``roomba-bt -vv``'s) asked for them: it gets this machine's too. The mode changes that
+    matter are this library's own records (``roomba_bt.robot``)."""
 
     def filter(self, record: logging.LogRecord) -> bool:
         args = record.args
         ours = isinstance(args, tuple) and bool(args) and args[0] == f"{MACHINE_NAME}: "
-        return record.levelno >= logging.WARNING or not ours
+        return record.levelno >= logging.WARNING or not ours or _asked_for_by_name()
 
 
-#: On ``transitions.core`` from this module's import; remove it there to see the machine's
-#: records again (``docs/robot.md``, Logging).
+def _asked_for_by_name() -> bool:
+    """A level set on ``transitions`` or ``transitions.core``: the program wants their
+    records (the root logger's level alone says nothing of them)."""
+    return any(
+        logging.getLogger(name).level != logging.NOTSET
+        for name in ("transitions", "transitions.core")
+    )
+
+
+#: On ``transitions.core`` from this module's import (``docs/robot.md``, Logging).
 QUIET_MACHINE = _QuietMachine()
 logging.getLogger("transitions.core").addFilter(QUIET_MACHINE)
 

@@ -12,21 +12,35 @@ import pytest
 from transitions import Machine
 
 from roomba_bt.oi import commands as oi
-from roomba_bt.robot.modes import ModeModel
+from roomba_bt.robot.modes import MACHINE_NAME, ModeModel
+
+
+def _start_up(model: ModeModel) -> None:
+    model.apply(oi.start(), 0.0)
+    model.apply(oi.safe(), 0.1)
 
 
 def test_the_mode_machine_says_nothing_at_info(caplog: pytest.LogCaptureFixture) -> None:
+    """The root logger at DEBUG, no level on ``transitions`` (the CLI sets one: not here)."""
     caplog.set_level(logging.DEBUG)
+    caplog.set_level(logging.NOTSET, logger="transitions")
     model = ModeModel()
-    model.apply(oi.start(), 0.0)
-    model.apply(oi.safe(), 0.1)
+    _start_up(model)
     assert model.machine.get_model_state(model._model).name == "Safe"  # it moved
     assert [r.getMessage() for r in caplog.records if r.name.startswith("transitions")] == []
+
+
+def test_asked_for_by_name_its_records_show(caplog: pytest.LogCaptureFixture) -> None:
+    """A level on ``transitions`` (its README's way, ``roomba-bt -vv``'s): they are wanted."""
+    caplog.set_level(logging.INFO, logger="transitions")
+    _start_up(ModeModel())
+    assert f"{MACHINE_NAME}: Finished processing state Safe enter callbacks." in caplog.messages
 
 
 def test_a_programs_own_machine_still_logs(caplog: pytest.LogCaptureFixture) -> None:
     """Only this library's machine is quiet: ``transitions`` is the program's too."""
     caplog.set_level(logging.INFO)
+    caplog.set_level(logging.NOTSET, logger="transitions")
 
     class Door:
         pass
