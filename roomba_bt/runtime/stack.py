@@ -28,7 +28,7 @@ from py_trees.behaviour import Behaviour
 
 from roomba_bt.behaviours.declare import Declaration
 from roomba_bt.behaviours.lean import check_updates
-from roomba_bt.oi.profiles import RobotProfile
+from roomba_bt.oi.profiles import PROFILES, RobotProfile
 from roomba_bt.robot.connection import Connection, EndMode
 from roomba_bt.runtime.loop import (
     MissionLike,
@@ -41,6 +41,7 @@ from roomba_bt.runtime.recording import Record, RecordingTransport, ReplayTransp
 from roomba_bt.runtime.summary import DEFAULT_GRACE, DEFAULT_TICK_LIMIT, RunSummary
 from roomba_bt.runtime.tick_guard import TickGuard, TickGuardLike, recorded_tick_guard
 from roomba_bt.transport.base import Transport
+from roomba_bt.transport.serial_port import DEFAULT_BAUD
 
 log = logging.getLogger(__name__)
 
@@ -103,6 +104,15 @@ class RunStack:
     replay passes the recorded ones). Building it writes nothing to the link (a record's
     header aside); :meth:`run` does the start-up, the ticks and the safe stop.
 
+    ``link`` is a :class:`~roomba_bt.transport.Transport` (the stack makes its connection:
+    ``profile=`` needed, ``watchdog``, ``end_in``, ``baud``, ``keep_awake`` its settings), or
+    a :class:`~roomba_bt.robot.connection.Connection` a program opened and drove by hand:
+    the run takes it over as it was made (its profile, watchdog, ending, baud, keep-awake:
+    giving them here too is a ValueError), starts it again (:meth:`Connection.start`: Start,
+    the mode asked, the mission's stream) and leaves it stopped, in Passive, and open:
+    :meth:`close` closes it, or the program drives on and closes it itself
+    (``docs/runtime.md``, From Python: a connection driven by hand, then a mission).
+
     ``tick_limit``: seconds a tick may run while the wheels move before the tick guard sends
     drive 0 (``runtime/tick_guard.py``). ``"default"``, as ``roomba-bt run`` has it:
     :data:`~roomba_bt.runtime.summary.DEFAULT_TICK_LIMIT` on a link on the wall clock (a
@@ -113,14 +123,14 @@ class RunStack:
     def __init__(
         self,
         mission: MissionLike,
-        link: Transport,
+        link: Transport | Connection,
         *,
-        profile: RobotProfile,
-        baud: int = 115200,
+        profile: RobotProfile | None = None,
+        baud: int | None = None,
         packets: Sequence[int] | None = None,
-        watchdog: float = 0.1,
+        watchdog: float | None = None,
         grace: float = DEFAULT_GRACE,
-        end_in: EndMode = "passive",
+        end_in: EndMode | None = None,
         timeout_s: float | None = None,
         observer: TickObserver | None = None,
         input_ended: Callable[[], str | None] | None = None,
@@ -129,6 +139,10 @@ class RunStack:
         tick_limit: TickLimit = "default",
         replayed_notes: Sequence[dict[str, Any]] | None = None,
     ) -> None:
+        made: dict[str, Any] = dict(
+            watchdog=watchdog, end_in=end_in, baud=baud, keep_awake=keep_awake
+        )
+        connection, profile, baud, link = _given(link, profile, made)
         self.packets = tuple(
             packets if packets is not None else stream_request(mission.packets, baud)
         )
@@ -144,9 +158,12 @@ class RunStack:
             transport = RecordingTransport(link, record.path, header)  # OSError: the file
         self.link = link
         self.transport = transport
-        self.connection = Connection(
-            transport, profile, watchdog=watchdog, end_in=end_in, baud=baud, keep_awake=keep_awake
-        )
+        if connection is None:
+            settings = {name: value for name, value in made.items() if value is not None}
+            connection = Connection(transport, profile, **{**settings, "baud": baud})
+        elif record is not None:
+            connection.transport = transport  # the record's tap under the taken-over link
+        self.connection = connection
         self.runner = MissionRunner(
             self.connection,
             mission,
@@ -232,6 +249,42 @@ class RunStack:
                 )  # fmt: skip
         with contextlib.suppress(Exception):
             self.connection.close()
+
+
+def _given(
+    link: Transport | Connection, profile: RobotProfile | None, made: Mapping[str, Any]
+) -> tuple[Connection | None, RobotProfile, int, Transport]:
+    """What :class:`RunStack` was given: a connection to take over (None: a link, the stack
+    makes its own), the profile, the baud and the link under it."""
+    if isinstance(link, Connection):
+        connection = _taken_over(link, profile, made)
+        return connection, connection.profile, connection.baud, connection.transport
+    if profile is None:
+        raise TypeError(
+            "RunStack(mission, link) needs profile=, the robot's model: "
+            f"roomba_bt.PROFILES has {', '.join(PROFILES)}"
+        )
+    baud = made["baud"]
+    return None, profile, DEFAULT_BAUD if baud is None else baud, link
+
+
+def _taken_over(
+    connection: Connection, profile: RobotProfile | None, made: Mapping[str, object]
+) -> Connection:
+    """``connection``, which a :class:`RunStack` runs as it was made: the settings given to
+    the stack as well would have been silently another's (its watchdog, say)."""
+    given = sorted(name for name, value in made.items() if value is not None)
+    if given:
+        raise ValueError(
+            f"RunStack(mission, connection, {'=..., '.join(given)}=...): a Connection is run "
+            "as it was made; give these to Connection(...) or Connection.open(...)"
+        )
+    if profile is not None and profile != connection.profile:
+        raise ValueError(
+            f"RunStack(mission, connection, profile={profile.name}): the connection speaks "
+            f"to a {connection.profile.name}; leave profile= out (the connection's is used)"
+        )
+    return connection
 
 
 def _tick_guard(

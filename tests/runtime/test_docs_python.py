@@ -38,6 +38,27 @@ def test_the_hand_built_tree_example_runs(capsys: pytest.CaptureFixture[str]) ->
     assert set(mission.packets) >= {43, 44}  # type: ignore[attr-defined]  # the encoders
 
 
+BY_HAND = "## From Python: a connection driven by hand, then a mission"
+
+
+def test_the_connection_driven_by_hand_example_runs(capsys: pytest.CaptureFixture[str]) -> None:
+    """Driven by hand, handed to a RunStack for a mission, taken back: the robot moved by
+    hand, the mission succeeded on the same connection, and the program started it again."""
+    section = DOC.read_text(encoding="utf-8").split(BY_HAND, 1)[1].split("\n## ", 1)[0]
+    [block] = re.findall(r"```python\n(.*?)```", section, flags=re.DOTALL)
+    namespace: dict[str, object] = {"__name__": "docs_example"}
+    exec(compile(block, f"{DOC}:by-hand", "exec"), namespace)
+    out = capsys.readouterr().out
+    counts = re.search(r"by hand: (\d+) encoder counts", out)
+    assert counts is not None and int(counts[1]) > 50, out  # it drove before the mission
+    assert "outcome      SUCCESS" in out and "after the mission: Passive" in out, out
+    stack, robot = namespace["stack"], namespace["robot"]
+    assert stack.connection is robot  # type: ignore[attr-defined]  # taken over, not copied
+    simulator = namespace["simulator"]
+    assert simulator.mode.label == "Passive"  # type: ignore[attr-defined]
+    assert (simulator.requested_left, simulator.requested_right) == (0, 0)  # type: ignore[attr-defined]
+
+
 WORKER = "## From Python: a run in a worker thread"
 
 

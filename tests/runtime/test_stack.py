@@ -4,13 +4,16 @@
 from __future__ import annotations
 
 import io
+import re
 import textwrap
 from pathlib import Path
+from typing import Any
 
 import pytest
 
-from roomba_bt.mission import load_mission
-from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.mission import CompiledMission, load_mission
+from roomba_bt.oi.profiles import CREATE2, ROOMBA500
+from roomba_bt.robot.connection import Connection
 from roomba_bt.runtime.display import StatusChangeLogger, TerminalDisplay, observer_for
 from roomba_bt.runtime.loop import stream_request
 from roomba_bt.runtime.recording import ReplayTransport, load_record
@@ -157,3 +160,55 @@ def test_a_stack_runs_once() -> None:
     assert stack.runner.summary.ticks == ticks  # nothing added
     again = RunStack(TreeMission(root, "again"), link, profile=CREATE2, timeout_s=10.0).run()
     assert again.outcome is Outcome.SUCCESS and again.ticks <= ticks + 5
+
+
+def _connection() -> Connection:
+    simulator = Simulator(load_world("empty-room"), CREATE2, seed=0)
+    return Connection(SimLink(simulator), CREATE2, watchdog=0.2)
+
+
+def _mission(tmp_path: Path) -> CompiledMission:
+    path = tmp_path / "to-the-wall.yaml"
+    path.write_text(textwrap.dedent(DRIVE_TO_WALL))
+    return load_mission(path, {"speed": "400 mm/s"}, profile=CREATE2)
+
+
+@pytest.mark.parametrize(
+    ("given", "said"),
+    [
+        ({"watchdog": 0.1}, "watchdog=...): a Connection is run as it was made"),
+        ({"end_in": "stop", "baud": 115200}, "baud=..., end_in=...): a Connection"),
+        ({"profile": ROOMBA500}, "the connection speaks to a create2; leave profile= out"),
+    ],
+)
+def test_a_connection_is_run_as_it_was_made(
+    given: dict[str, Any], said: str, tmp_path: Path
+) -> None:
+    """Its settings given to the stack as well are refused, not silently dropped."""
+    connection = _connection()
+    try:
+        with pytest.raises(ValueError, match=re.escape(said)):
+            RunStack(_mission(tmp_path), connection, **given)
+    finally:
+        connection.close()
+
+
+def test_a_connection_taken_over_keeps_its_settings_and_records(tmp_path: Path) -> None:
+    connection = _connection()
+    path = tmp_path / "run.jsonl"
+    stack = RunStack(_mission(tmp_path), connection, timeout_s=60.0,
+                     record=Recording(path, "to-the-wall.yaml"))  # fmt: skip
+    try:
+        summary = stack.run()
+    finally:
+        stack.close()
+    assert summary.outcome is Outcome.SUCCESS, summary
+    assert stack.connection is connection and connection.watchdog == 0.2
+    record = load_record(path)
+    assert record.header["packets"] == list(stack.packets) and record.outbound
+
+
+def test_a_link_needs_its_profile(tmp_path: Path) -> None:
+    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
+    with pytest.raises(TypeError, match=r"needs profile=, the robot's model: .*create2"):
+        RunStack(_mission(tmp_path), link)
