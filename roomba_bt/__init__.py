@@ -1,16 +1,8 @@
 """roomba-bt: declarative behaviour-tree missions for iRobot Open Interface robots.
 
-The names a Python program needs, from one place (``docs/runtime.md``, The Python API)::
-
-    import roomba_bt
-
-    mission = roomba_bt.load_mission("dock")
-    link = roomba_bt.SimLink(roomba_bt.Simulator(roomba_bt.load_world("apartment")))
-    stack = roomba_bt.RunStack(mission, link, profile=roomba_bt.CREATE2)
-    try:
-        stack.run().raise_for_outcome()
-    finally:
-        stack.close()
+The names a Python program needs, from one place: ``roomba_bt.load_mission``,
+``roomba_bt.Connection``, ``roomba_bt.RunStack``, ``roomba_bt.CREATE2``... (``docs/runtime.md``,
+From Python: a connection driven by hand, then a mission, whose example a test runs).
 
 This package sits above every layer (``tests/test_layers.py``): it names things from all of
 them. Each name is imported from its module when first asked for (a module ``__getattr__``,
