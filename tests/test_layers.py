@@ -3,8 +3,9 @@
 Lowest first: oi -> transport -> robot -> behaviours -> mission -> runtime -> cli; sim imports
 only oi; evaluate sits at the top beside cli; monitor (the live page) below cli, beside sim.
 Nothing in the main stack imports sim. Below them all, yamlsource (the shared YAML reader)
-imports nothing of ours and any layer may use it; so does ``_lazy`` (a package's names
-imported when first asked for), which the protocol layer may use too.
+imports nothing of ours and any layer may use it; so do ``_lazy`` (a package's names
+imported when first asked for) and ``printable`` (a text's control characters escaped for a
+terminal), which the protocol layer may use too.
 
 Above them all, the top package ``roomba_bt`` (its ``__init__.py``): it names what a Python
 program needs from every layer, each imported from its module when first asked for, so it
@@ -29,18 +30,32 @@ MAIN_STACK = ("oi", "transport", "robot", "behaviours", "mission", "runtime")
 BOTTOM = "yamlsource"
 #: below every layer too, the protocol's included: lazy exports (PEP 562), standard library only
 LAZY = "_lazy"
+#: below every layer too: what of a text may be printed as it is (control characters
+#: escaped), standard library only, so the command line's parser loads no YAML to say a name
+PRINTABLE = "printable"
+#: what every layer may import, the protocol's included
+STDLIB_ONLY = {LAZY, PRINTABLE}
 ALLOWED: dict[str, set[str]] = {
-    BOTTOM: {BOTTOM},
-    "oi": {"oi", LAZY},  # the protocol stays standard-library only, so no YAML
-    "transport": {"transport", BOTTOM, LAZY},
-    "robot": {"oi", "transport", "robot", BOTTOM, LAZY},
-    "behaviours": {"oi", "transport", "robot", "behaviours", BOTTOM, LAZY},
-    "mission": {"oi", "transport", "robot", "behaviours", "mission", BOTTOM, LAZY},
-    "runtime": {"oi", "transport", "robot", "behaviours", "mission", "runtime", BOTTOM, LAZY},
-    "sim": {"oi", "sim", BOTTOM, LAZY},
-    "monitor": {*MAIN_STACK, "sim", "monitor", BOTTOM, LAZY},
-    "cli": {*MAIN_STACK, "sim", "cli", "evaluate", "monitor", BOTTOM, LAZY},
-    "evaluate": {*MAIN_STACK, "sim", "cli", "evaluate", BOTTOM, LAZY},
+    BOTTOM: {BOTTOM, PRINTABLE},
+    "oi": {"oi", *STDLIB_ONLY},  # the protocol stays standard-library only, so no YAML
+    "transport": {"transport", BOTTOM, *STDLIB_ONLY},
+    "robot": {"oi", "transport", "robot", BOTTOM, *STDLIB_ONLY},
+    "behaviours": {"oi", "transport", "robot", "behaviours", BOTTOM, *STDLIB_ONLY},
+    "mission": {"oi", "transport", "robot", "behaviours", "mission", BOTTOM, *STDLIB_ONLY},
+    "runtime": {
+        "oi",
+        "transport",
+        "robot",
+        "behaviours",
+        "mission",
+        "runtime",
+        BOTTOM,
+        *STDLIB_ONLY,
+    },
+    "sim": {"oi", "sim", BOTTOM, *STDLIB_ONLY},
+    "monitor": {*MAIN_STACK, "sim", "monitor", BOTTOM, *STDLIB_ONLY},
+    "cli": {*MAIN_STACK, "sim", "cli", "evaluate", "monitor", BOTTOM, *STDLIB_ONLY},
+    "evaluate": {*MAIN_STACK, "sim", "cli", "evaluate", BOTTOM, *STDLIB_ONLY},
 }
 
 
@@ -111,8 +126,9 @@ def test_the_top_package_imports_no_layer() -> None:
     assert _runtime_imports(PACKAGE / "__init__.py") == {f"roomba_bt.{LAZY}"}
 
 
-def test_the_lazy_export_helper_imports_nothing_of_ours() -> None:
-    assert _runtime_imports(PACKAGE / f"{LAZY}.py") == set()
+@pytest.mark.parametrize("module", [LAZY, PRINTABLE])
+def test_the_modules_below_every_layer_import_nothing_of_ours(module: str) -> None:
+    assert _runtime_imports(PACKAGE / f"{module}.py") == set()
 
 
 def test_a_layer_takes_no_name_from_the_top_package() -> None:

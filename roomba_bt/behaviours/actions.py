@@ -42,8 +42,8 @@ from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS, ENCODER_PACKETS
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import COMMANDS_BY_NAME, opcodes
 from roomba_bt.oi.stream import SLOT_SECONDS
+from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.robot.hazards import sets_going
-from roomba_bt.yamlsource import ANY_CONTROL, escaped
 
 log = logging.getLogger("roomba_bt.mission")
 

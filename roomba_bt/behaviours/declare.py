@@ -52,8 +52,9 @@ from roomba_bt.oi.encode import Command, halt, turns_wheels
 from roomba_bt.oi.modes import ALL_MODES, DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME
 from roomba_bt.oi.packets import PACKETS
+from roomba_bt.printable import CONTROL
 from roomba_bt.robot.interface import Odometry, RobotHandle, Snapshot
-from roomba_bt.yamlsource import CONTROL, character_name, quoted
+from roomba_bt.yamlsource import character_name, quoted
 
 #: The blackboard key the runtime mirrors the snapshot under (for plugins that prefer it).
 SNAPSHOT_KEY = "/roomba/snapshot"

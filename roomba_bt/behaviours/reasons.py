@@ -12,7 +12,7 @@ import re
 import py_trees
 from py_trees.behaviour import Behaviour
 
-from roomba_bt.yamlsource import ANY_CONTROL, escaped
+from roomba_bt.printable import ANY_CONTROL, escaped
 
 #: decorators whose message only restates the status they flipped ("success -> failure")
 _FLIPS = (

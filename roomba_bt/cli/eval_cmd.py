@@ -50,8 +50,8 @@ from roomba_bt.cli.arguments import (
     results_file,
 )
 from roomba_bt.oi.profiles import PROFILES
+from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.runtime.summary import ExitCode, Outcome, profile_shown
-from roomba_bt.yamlsource import ANY_CONTROL, escaped
 
 if TYPE_CHECKING:  # the evaluation is imported when it runs: the CLI starts faster
     from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec

@@ -26,8 +26,8 @@ from roomba_bt.cli.arguments import (
     permissions,
 )
 from roomba_bt.oi.profiles import get_profile
+from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.runtime.summary import ExitCode
-from roomba_bt.yamlsource import ANY_CONTROL, escaped
 
 if TYPE_CHECKING:
     from roomba_bt.behaviours.registry import Registry

@@ -30,8 +30,8 @@ from roomba_bt.cli.monitor_cmd import LiveMonitor
 from roomba_bt.cli.monitor_cmd import add_run_arguments as add_monitor_arguments
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.profiles import RobotProfile, get_profile
+from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.runtime.summary import DEFAULT_GRACE, DEFAULT_TICK_LIMIT, ExitCode, Outcome
-from roomba_bt.yamlsource import ANY_CONTROL, escaped
 
 if TYPE_CHECKING:
     from roomba_bt.mission import Permissions

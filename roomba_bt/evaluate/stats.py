@@ -16,7 +16,7 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 from roomba_bt.evaluate.episode import EpisodeResult
-from roomba_bt.yamlsource import ANY_CONTROL, escaped
+from roomba_bt.printable import ANY_CONTROL, escaped
 
 Z95 = 1.959963984540054
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass, replace
 
-from roomba_bt.yamlsource import ANY_CONTROL, CONTROL, escaped
+from roomba_bt.printable import ANY_CONTROL, CONTROL, escaped
 
 
 @dataclass(frozen=True, slots=True, order=True)

@@ -27,7 +27,7 @@ from roomba_bt.oi.frames import (
     IR_PACKETS,
 )
 from roomba_bt.oi.ir import IRCharacter
-from roomba_bt.yamlsource import ANY_CONTROL, escaped
+from roomba_bt.printable import ANY_CONTROL, escaped
 
 if TYPE_CHECKING:
     from roomba_bt.robot.interface import Snapshot
@@ -44,7 +44,7 @@ class MissionClockFormatter(logging.Formatter):
     tree's status lines (``t=12.345s ...``) and a recording's timestamps. Before a mission has
     a clock (or outside one: ``validate``, ``sim``) a line has no time at all.
 
-    What a line quotes is escaped (:func:`~roomba_bt.yamlsource.escaped`): a node's name, a
+    What a line quotes is escaped (:func:`~roomba_bt.printable.escaped`): a node's name, a
     ``log`` leaf's text, anything a mission's author wrote, passed as an argument, stays on
     its line (``"\\n[ok] robot stopped"`` faked a line of its own); no control character
     (``ESC [2J`` clears the screen) reaches the terminal from a message or a traceback."""

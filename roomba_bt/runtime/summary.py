@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 from roomba_bt.oi.frames import BATTERY_PACKETS
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
-from roomba_bt.yamlsource import ANY_CONTROL, escaped
+from roomba_bt.printable import ANY_CONTROL, escaped
 
 if TYPE_CHECKING:
     from roomba_bt.robot.interface import Snapshot

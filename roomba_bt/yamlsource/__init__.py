@@ -25,6 +25,8 @@ from typing import Any, NoReturn
 
 import yaml
 
+from roomba_bt.printable import CONTROL
+
 #: libyaml's parser where installed (much faster on large missions), else PyYAML's own
 FAST_LOADER: type[Any] = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 #: PyYAML's own parser: its syntax messages do not depend on libyaml being installed
@@ -234,24 +236,6 @@ def refuse_hidden_breaks(text: str) -> None:
         mark = yaml.Mark("<text>", index, line, column, None, 0)
         found.append(Refused(problem=problem, problem_mark=mark))
     raise_every(found)
-
-
-#: Characters no text of a data file may hold (C0 but tab and newline, DEL, C1): a file
-#: travels between strangers, and its texts reach the terminal (``show``, the live tree, the
-#: log, error lines), where ``"\e[2J"`` clears the screen and ``"\e]0;...\a"`` retitles it
-CONTROL = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f]")
-#: every control character, tab and newline too: what must stay on one line (a node's name in
-#: the live tree, the log and a run's summary, where "\n[ok] robot stopped" would fake a line)
-ANY_CONTROL = re.compile("[\x00-\x1f\x7f-\x9f]")
-
-
-def escaped(text: str, which: re.Pattern[str] = CONTROL) -> str:
-    """``text`` with each character ``which`` matches written as ``\\x1b``: an error line,
-    a node's name or a mission's text is printed to a terminal, where a raw ``ESC [2J``
-    would clear the screen (:data:`ANY_CONTROL`: a newline too, for what is one line)."""
-    if which.search(text) is None:
-        return text
-    return which.sub(lambda found: f"\\x{ord(found.group()):02x}", text)
 
 
 def refuse_control_characters(root: yaml.Node) -> None:
