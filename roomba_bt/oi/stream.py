@@ -40,7 +40,13 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
 from roomba_bt.oi.errors import BandwidthError
-from roomba_bt.oi.frames import STREAM_HEADER, FrameLayout, SensorFrame, layout_for
+from roomba_bt.oi.frames import (
+    STREAM_HEADER,
+    FrameLayout,
+    SensorFrame,
+    layout_for,
+    stream_frame_size,
+)
 from roomba_bt.oi.modes import OI_MODE_PACKET
 from roomba_bt.oi.odometry import MAX_COUNTS_PER_SLOT
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
@@ -422,6 +428,13 @@ def _compile_checks(
 _EncoderMark = tuple[int, int, int, float | None, int]
 #: A stream frame every 15 ms.
 SLOT_SECONDS = 0.015
+
+
+def stream_period(packet_ids: Iterable[int], rate: int) -> float:
+    """Seconds from one stream frame of ``packet_ids`` to the next at ``rate`` baud: the
+    15 ms slot, or the frame's own transfer time where that is longer (10 bits a byte:
+    group 100, 84 bytes, takes 44 ms at 19200)."""
+    return max(SLOT_SECONDS, stream_frame_size(packet_ids) * 10 / rate)
 
 
 def _steps_within(anchor: _EncoderMark, left: int, right: int, limit: int) -> bool:

@@ -35,7 +35,7 @@ from roomba_bt.oi.odometry import encoder_delta
 from roomba_bt.oi.opcodes import Effect
 from roomba_bt.oi.packets import packet_ids
 from roomba_bt.oi.profiles import RobotProfile
-from roomba_bt.oi.stream import StreamParser
+from roomba_bt.oi.stream import StreamParser, stream_period
 from roomba_bt.robot.errors import PortLost, RobotError
 from roomba_bt.robot.link import LINK_ERRORS, LinkStatus
 from roomba_bt.robot.safety import ENDING_SIGNALS
@@ -54,6 +54,12 @@ STOP_LISTEN = 0.15
 PAUSE_SLACK = 3
 #: How many times a stop the stream contradicts is written (the first, and once more).
 STOP_ATTEMPTS = 2
+#: Stream periods the robot may have been silent when a stop is written for the quiet after
+#: it to show the stop heard: a robot that heard Pause Stream had sent its last frame under a
+#: period before it (a later one would come while the stop is listened after); the rest is
+#: the robot's and the port's jitter. Longer, and the quiet began before the stop and shows
+#: nothing of it (a cable pulled a moment before Ctrl-C, the watchdog not yet tripped).
+QUIET_BEFORE_PERIODS = 3
 
 #: Requested wheel velocities (left, right) and the encoders (left, right): what a stop the
 #: robot streams on after says of its wheels.
@@ -168,6 +174,11 @@ class SafeStop:
         self._before: tuple[OIMode, Command | None] = (writer.modes.mode, writer.last_wheels)
         #: the mode packet 35 read in frames that came after a stop (it was not heard)
         self._seen: OIMode | None = None
+        #: when a valid frame of the running stream last came (link clock), as the stop is
+        #: written and listened after; None before its first
+        self._heard_at: float | None = None
+        #: why the quiet after a stop shows nothing (:meth:`_quiet_unproven`), or None
+        self._unproven: str | None = None
 
     def begin(self) -> None:
         """A session starts (again): nothing has ended."""
@@ -196,7 +207,11 @@ class SafeStop:
             return True
         # what the robot was last seen or told to do, before the stop moves the model on
         self._before = (writer.modes.mode, writer.last_wheels)
-        self._seen = None
+        self._seen = self._unproven = None
+        # before the stream's first frame the wait is the stream request's way to the robot
+        # and a slot (over TCP, 40 ms and more of Nagle's delay): no silence, the watchdog's
+        streamed = link.frame is not None and link.arrival >= link.silent_since
+        self._heard_at = link.arrival if streamed else None
         if not link.transport.is_open:
             return self._undelivered("the stop was not delivered: the port is gone")
         unconfirmed = None
@@ -220,7 +235,9 @@ class SafeStop:
         if failed is not None:
             return self._undelivered(failed)
         if unconfirmed is not None and unconfirmed is self.unheard and self._confirmed():
-            self.unheard = unconfirmed = None
+            self.unheard = unconfirmed = None  # it answered after the stop: it heard it
+        elif unconfirmed is None:  # a quiet after the stop that began before it
+            unconfirmed = self._unproven
         if unconfirmed is None and link.bytes_read == 0:  # a robot that may hear and not
             unconfirmed = "the robot never answered"  # answer (its TX line cut)
         if unconfirmed is not None:
@@ -241,11 +258,13 @@ class SafeStop:
         for attempt in range(STOP_ATTEMPTS if checked else 1):
             if attempt:  # the robot did not hear it: the model back where it was, again
                 self._restore(saved)
+            written_at = writer.link.transport.now()
             failed = self._write()
             if failed is not None:
                 return failed
             contradiction = self._contradicted() if checked else None
             if contradiction is None:
+                self._unproven = self._quiet_unproven(written_at) if checked else None
                 return None
         self._restore(saved)
         return f"the stop was written {STOP_ATTEMPTS} times but not received: {contradiction}"
@@ -287,10 +306,12 @@ class SafeStop:
         try:
             while (remaining := deadline - clock()) > 0:
                 data = link.read(remaining)
-                if data:
-                    frames += parser.feed(data, clock())
-        except PortLost:
-            return None  # the stop was written; the port's failure is said by the caller
+                new = parser.feed(data, clock()) if data else []
+                if new:
+                    frames += new
+                    self._heard_at = clock()
+        except PortLost:  # the stop was written; the quiet it cut short shows nothing
+            return None  # (:meth:`_quiet_unproven` says so)
         if len(frames) <= PAUSE_SLACK:
             return None
         said = f"{len(frames)} sensor frames came in the {STOP_LISTEN:.2f} s after Pause Stream"
@@ -302,6 +323,22 @@ class SafeStop:
                 self._seen = mode
         return said + wheels_seen(frames)
 
+    def _quiet_unproven(self, written_at: float) -> str | None:
+        """Why the quiet after a stop written at ``written_at`` does not show it heard: the
+        port failed while it was listened after, or no valid frame came after it and none
+        for over :data:`QUIET_BEFORE_PERIODS` stream periods before it (the robot fell
+        silent first); None if the robot was heard after it, or up to it."""
+        link = self.writer.link
+        if link.status is LinkStatus.LOST:
+            return "the port failed while the robot was listened to after it"
+        if self._heard_at is None:  # no frame of this stream yet: no silence to measure
+            return None
+        silent = written_at - self._heard_at
+        period = stream_period(link.stream_ids, self.writer.baud)
+        if silent <= QUIET_BEFORE_PERIODS * period:  # heard after it (< 0), or up to it
+            return None
+        return f"the robot had sent no valid frame for {silent:.2f} s before it, and none after it"
+
     def _confirmed(self) -> bool:
         """Whether :attr:`confirm` says the robot heard the stop (False if there is none, or
         asking failed)."""
@@ -312,6 +349,13 @@ class SafeStop:
             return confirm()
         except _RECOVERABLE:
             return False
+
+    @property
+    def last_seen(self) -> OIMode:
+        """The mode the robot was last seen in as the last stop was written (or packet 35
+        read after it): what is known of a robot the stop did not reach, whose model may
+        have moved on with a stop written but unconfirmed."""
+        return self._seen if self._seen is not None else self._before[0]
 
     def activity(self) -> str:
         """What the last wheel command written had the robot doing (:func:`describe_activity`)."""

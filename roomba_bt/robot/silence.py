@@ -31,8 +31,9 @@ import weakref
 from typing import TYPE_CHECKING
 
 from roomba_bt.oi import commands as oi
-from roomba_bt.oi.frames import BATTERY_PACKETS, stream_frame_size
+from roomba_bt.oi.frames import BATTERY_PACKETS
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
+from roomba_bt.oi.stream import stream_period
 from roomba_bt.robot.errors import (
     BaudChanged,
     ConnectionFailed,
@@ -207,7 +208,7 @@ def listen_window(packet_ids: tuple[int, ...], rate: int) -> float:
         |▒▒▒[ frame ][ frame ][ frame ]|     (frames to follow + 1) transfers + a slot
 
     Group 100 (84 bytes) at 19200: 44 ms a frame, a window of 146 ms, not 100."""
-    transfer = max(SLOT_S, stream_frame_size(packet_ids) * 10 / rate)
+    transfer = stream_period(packet_ids, rate)
     return max(LISTEN_S, (FRAMES_TO_FOLLOW + 1) * transfer + SLOT_S)
 
 

@@ -38,6 +38,7 @@ from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
 from roomba_bt.robot.connection import Connection
+from roomba_bt.robot.ending import SafeStop
 from roomba_bt.robot.errors import ConnectionFailed, LinkDown, ModeError, StreamStalled
 from roomba_bt.robot.hazards import HazardConfirmation, sets_going
 from roomba_bt.robot.interface import (
@@ -811,7 +812,12 @@ def unread_gap(
 
 
 def mode_of(connection: object) -> OIMode | None:
-    """The OI mode ``connection``'s model holds, if it has one."""
+    """The OI mode ``connection``'s model holds, if it has one; after a stop that did not
+    reach the robot, the mode it was last seen in (a stop written but unconfirmed moved the
+    model to Passive: ``last seen in Passive`` was said of a robot last seen in Safe)."""
+    ending = getattr(connection, "ending", None)
+    if isinstance(ending, SafeStop) and ending.safe_stopped is False:
+        return ending.last_seen
     mode = getattr(connection, "mode", None)
     return mode if isinstance(mode, OIMode) else None
 

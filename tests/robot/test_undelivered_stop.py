@@ -13,6 +13,7 @@ from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.ending import describe_activity
 from roomba_bt.robot.errors import PortLost, StreamStalled
+from roomba_bt.robot.link import LinkStatus
 from roomba_bt.sim import SimLink, Simulator, parse_world
 
 BOX = """
@@ -139,9 +140,9 @@ class CutTx:
         return getattr(self.link, name)
 
 
-def spinning() -> tuple[Connection, CutTx, Simulator]:
+def spinning(relay: type[CutTx] = CutTx) -> tuple[Connection, CutTx, Simulator]:
     simulator = Simulator(parse_world(BOX, "<test>"), profile=CREATE2)
-    link = CutTx(SimLink(simulator))
+    link = relay(SimLink(simulator))
     connection = Connection(link, CREATE2)
     connection.start("safe", PACKETS)
     connection.send_many([oi.drive(100, 1)])
@@ -213,3 +214,51 @@ def test_an_unconfirmed_stop_says_what_was_seen_before_it_not_the_stop_itself() 
         "last seen in Safe spinning left at 100 mm/s; the stop was written but is "
         "unconfirmed: the robot answers nothing"
     )
+
+
+def test_a_stop_soon_after_the_robot_fell_silent_is_unconfirmed() -> None:
+    """The cable pulled 0.05 s before Ctrl-C: the watchdog (0.1 s) had not tripped, the link
+    still read STREAMING, and the quiet after the stop was taken for the robot hearing it (a
+    confirmed safe stop of a robot nothing had been heard from since before it)."""
+    connection, link, _ = spinning()
+    link.mute = True
+    while link.now() - connection.link.silent_since < 0.05:
+        connection.poll(0.01)
+    assert connection.status is LinkStatus.STREAMING  # the watchdog has not tripped
+    silent = link.now() - connection.link.silent_since
+    assert connection.safe_stop() is False
+    assert connection.stop_report == (
+        "last seen in Safe spinning left at 100 mm/s; the stop was written but is unconfirmed: "
+        f"the robot had sent no valid frame for {silent:.2f} s before it, and none after it"
+    )
+
+
+class Unplugged(CutTx):
+    """A link whose port fails on every read after the next write, once ``armed`` (the USB
+    adapter pulled as the stop went out)."""
+
+    armed = False
+
+    def write(self, data: bytes) -> None:
+        super().write(data)
+        self.cut = self.armed
+
+    def read(self, timeout: float) -> bytes:
+        if self.cut:
+            raise OSError(5, "Input/output error")
+        return super().read(timeout)
+
+
+def test_a_stop_whose_listening_the_port_failed_in_is_unconfirmed() -> None:
+    """The port failed in the 0.15 s the stop is listened after: nothing showed it heard,
+    yet it was a confirmed stop (the quiet cut short taken for the robot's), the link said
+    stopped, not lost."""
+    connection, link, _ = spinning(Unplugged)
+    assert isinstance(link, Unplugged)
+    link.armed = True
+    assert connection.safe_stop() is False
+    assert connection.stop_report == (
+        "last seen in Safe spinning left at 100 mm/s; the stop was written but is unconfirmed: "
+        "the port failed while the robot was listened to after it"
+    )
+    assert connection.status is LinkStatus.LOST

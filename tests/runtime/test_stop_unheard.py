@@ -3,8 +3,12 @@ never hears the stop and streams on; the run must not say it stopped it."""
 
 from __future__ import annotations
 
+import os
+import signal
 from pathlib import Path
 from typing import Any
+
+import pytest
 
 from roomba_bt.mission import load_mission
 from roomba_bt.oi import commands as oi
@@ -83,4 +87,55 @@ def test_a_run_whose_stop_the_robot_never_heard_is_no_success(tmp_path: Path) ->
     assert link.tail.endswith(PAUSE_START + HALT + MOTORS_OFF + PAUSE_START)
     # what the frames after the stop showed: still in Safe, still spinning
     assert "packet 35 still reading Safe, the wheels turning (-" in summary.safe_stop
+    assert "final mode   unknown: last seen in Safe, the stop was not delivered" in str(summary)
+
+
+class SilentThenCtrlC(SimLink):
+    """The simulator's link, the robot's frames lost from ``mute_at`` (simulated seconds) on
+    (a cable pulled), and Ctrl-C pressed ``after`` seconds later, before the watchdog trips.
+    On the wall clock as a port is."""
+
+    wall_clock = True
+
+    def __init__(self, simulator: Simulator, mute_at: float, after: float) -> None:
+        super().__init__(simulator)
+        self.mute_at = mute_at
+        self.press_at: float | None = mute_at + after
+
+    def read(self, timeout: float) -> bytes:
+        data = super().read(timeout)
+        if self.press_at is not None and self.simulator.time >= self.press_at:
+            self.press_at = None
+            os.kill(os.getpid(), signal.SIGINT)
+        return b"" if self.simulator.time >= self.mute_at else data
+
+
+@pytest.mark.parametrize(
+    ("after", "said"),
+    [
+        (0.05, "for 0.06 s before it, and none after it"),  # the watchdog not yet tripped
+        (0.5, "for 0.51 s before it"),  # tripped: its drive 0 sent, the grace not yet out
+    ],
+)
+def test_ctrl_c_after_the_robot_fell_silent_is_no_confirmed_stop(
+    tmp_path: Path, after: float, said: str
+) -> None:
+    """Ctrl-C 0.05 s into a silence (the watchdog's 0.1 s not yet out): the summary said
+    ``safe stop sent ...``, ``final mode Passive``, of a robot nothing was heard from after
+    the stop, nor for 0.05 s before it. Half a second into it the stop was unconfirmed, but
+    ``final mode`` read ``last seen in Passive``: the model after the stop written, not the
+    Safe the robot was last seen in."""
+    path = tmp_path / "m.yaml"
+    path.write_text(SPIN_A_WHILE)
+    simulator = Simulator(load_world("empty-room"), CREATE2, 0, trace=False)
+    link = SilentThenCtrlC(simulator, mute_at=1.0, after=after)
+    stack = RunStack(load_mission(path, {}, profile=CREATE2), link, profile=CREATE2)
+    summary = stack.run(raise_interrupts=False)
+    stack.close()
+    assert summary.outcome is Outcome.INTERRUPTED and summary.exit_code == 130
+    assert summary.stalls == (after > 0.1)
+    assert summary.safe_stop == (
+        "NOT DELIVERED: last seen in Safe stopped; the stop was written but is unconfirmed: "
+        f"the robot had sent no valid frame {said}"
+    )
     assert "final mode   unknown: last seen in Safe, the stop was not delivered" in str(summary)
