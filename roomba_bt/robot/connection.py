@@ -206,6 +206,7 @@ class Connection:
         #: clock; silence.follow_baud tries again while garbage keeps coming)
         self.baud_listened: tuple[float, int] | None = None
         self._changes_said: Counter[str] = Counter()  # the robot's own falls, by cause
+        self._falls: Counter[str] = Counter()  # ... this session's (:attr:`falls`)
         _LIVE.add(self)
         # a program that dropped it unclosed (at its end: _close_at_exit, which says so)
         weakref.finalize(self, _stop_dropped, self.ending).atexit = False
@@ -256,6 +257,7 @@ class Connection:
         if ids:
             check_bandwidth(ids, self.baud)
         self.ending.begin()
+        self._falls = Counter()
         self.release_forward()
         self.send(oi.start())
         self.send(oi.pause_stream())
@@ -437,7 +439,14 @@ class Connection:
         raise garbled_line(self, now - since, grace, garbled, halted=halted)
 
     def _report_change(self, change: ModeChange) -> None:
+        if change.fall:
+            self._falls[change.cause] += 1
         _say_change(self.name, change, self._changes_said)
+
+    @property
+    def falls(self) -> dict[str, int]:
+        """The robot's own falls to Passive since :meth:`start` by cause: ``{"cliff": 20}``."""
+        return dict(self._falls)
 
     def halt(self) -> bool:
         """Drive 0 if the model says the robot may be driving; True if it was sent (the

@@ -23,7 +23,7 @@ from typing import NamedTuple, Protocol
 
 from roomba_bt.oi.encode import Command
 from roomba_bt.oi.frames import FrameLayout, SensorFrame
-from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.odometry import MM_PER_COUNT
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
 
@@ -167,6 +167,12 @@ class ModeChange:
     time: float
     cause: str  # "cliff", "wheel drop", "charger", "unknown", ...
     wall_time: float = 0.0  # time.time() when seen, for messages only
+
+    @property
+    def fall(self) -> bool:
+        """A fall from Safe or Full to Passive (a cliff, a wheel drop, the charger in Safe),
+        not a resync to what packet 35 reports."""
+        return self.current is OIMode.PASSIVE and self.previous in DRIVING_MODES
 
 
 class Snapshot(NamedTuple):

@@ -394,6 +394,7 @@ class MissionRunner(BaseHandle):
         summary.robot_answered = getattr(link, "bytes_read", 1) > 0
         summary.unconfirmed_hazards = self._hazards.unconfirmed
         summary.take_counters(getattr(self.connection, "counters", None))
+        summary.falls = dict(getattr(self.connection, "falls", {}))
 
     def _loop(self, root: py_trees.behaviour.Behaviour, summary: RunSummary) -> None:
         success, failure = py_trees.common.Status.SUCCESS, py_trees.common.Status.FAILURE

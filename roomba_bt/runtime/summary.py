@@ -157,6 +157,9 @@ class RunSummary:
     #: the robot profile, said when it is not the default (``roomba500 (Roomba 500 series)``;
     #: "" for the default, whose summary reads as it always did)
     profile: str = ""
+    #: the robot's own falls to Passive (a cliff, a wheel drop, the charger in Safe), by
+    #: cause: each stopped the wheels and the tree's drive (``Connection.falls``)
+    falls: dict[str, int] = field(default_factory=dict)
     #: every condition the operator forced from the monitor (what, to what, from which tick,
     #: until which), released before the end too: the run may have turned on one
     forced: list[str] = field(default_factory=list)
@@ -228,6 +231,7 @@ class RunSummary:
             f"{self.implausible_frames} out of range, {self.skipped_bytes} bytes skipped, "
             f"{self.unconfirmed_hazards} unconfirmed hazards",
             *([f"stalls       {self.stall_text()}"] if self.stalls else []),
+            *([f"falls        {self.falls_text()}"] if self.falls else []),
             *([f"link         {link}"] if (link := self.link_verdict()) else []),
             *(
                 [
@@ -267,6 +271,19 @@ class RunSummary:
             else f"watchdog drive 0 in {self.stall_halts}, the wheels at rest in the others"
         )
         return f"{self.stalls} ({halts}), {self.stalls_ridden} ridden through"
+
+    def falls_text(self) -> str:
+        """The robot's own falls to Passive, the commonest cause first: ``the robot fell to
+        Passive by itself 21 times (cliff 20, wheel drop 1)``."""
+        total = sum(self.falls.values())
+        causes = sorted(self.falls.items(), key=lambda item: (-item[1], item[0]))
+        said = (
+            causes[0][0]
+            if len(causes) == 1
+            else ", ".join(f"{cause} {times}" for cause, times in causes)
+        )
+        times = "once" if total == 1 else f"{total} times"
+        return f"the robot fell to Passive by itself {times} ({said})"
 
     def link_verdict(self) -> str:
         """A line that lost :data:`POOR_LINK` or more of the robot's frames, over a run long

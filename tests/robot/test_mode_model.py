@@ -19,6 +19,7 @@ from roomba_bt.oi.opcodes import COMMANDS, MODE_COMMANDS
 from roomba_bt.oi.profiles import CREATE2, PROFILES, ROOMBA500, ROOMBA600
 from roomba_bt.robot.docgen import mermaid, render_modes_doc
 from roomba_bt.robot.errors import ModeError, format_wall_time
+from roomba_bt.robot.interface import ModeChange
 from roomba_bt.robot.modes import ModeModel, infer_cause
 
 DOCS = pathlib.Path(__file__).resolve().parents[2] / "docs" / "modes.md"
@@ -328,3 +329,11 @@ def test_diagram_draws_every_command_transition() -> None:
 
 def test_wall_time_format() -> None:
     assert format_wall_time(NOON) == "12:01:03.120"
+
+
+def test_a_fall_is_to_passive_from_safe_or_full_not_a_resync() -> None:
+    """What ``Connection.falls`` (and a run's summary) counts: packet 35 read Safe while the
+    model held Passive is followed (a resync), but is no fall."""
+    assert ModeChange(OIMode.SAFE, OIMode.PASSIVE, 1, 0.0, "cliff").fall
+    assert ModeChange(OIMode.FULL, OIMode.PASSIVE, 1, 0.0, "unknown").fall
+    assert not ModeChange(OIMode.PASSIVE, OIMode.SAFE, 1, 0.0, "unexpected report").fall

@@ -1,8 +1,11 @@
-"""The summary printed at the end of every run: its lines, and the reason a time limit gives;
-a run's outcome as an exception, for a program that would rather not read it:
-``stack.run().raise_for_outcome()``, as requests' ``raise_for_status``."""
+"""The summary printed at the end of every run: its lines, the reason a time limit gives, and
+what it says of the robot's own falls to Passive; a run's outcome as an exception, for a
+program that would rather not read it: ``stack.run().raise_for_outcome()``, as requests'
+``raise_for_status``."""
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import py_trees
 import pytest
@@ -13,6 +16,8 @@ from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.runtime.stack import RunStack, TreeMission
 from roomba_bt.runtime.summary import ExitCode, Outcome, RunFailed, RunSummary
 from roomba_bt.sim import SimLink, Simulator, load_world
+
+from .simrun import DRIVE_TO_WALL, LEDGE, RunMission
 
 
 def test_each_line_of_the_summary_stays_one_line() -> None:
@@ -92,3 +97,47 @@ def test_the_exception_says_the_outcome_on_one_line() -> None:
         "mission faked\\x0a[ok] robot stopped ended FAILURE: x\\x1b[2J (exit code 1)"
     )
     assert raised.value.reason == "x\x1b[2J"  # the field as it is
+
+
+#: Over the edge, then Safe again and on over it: the robot falls to Passive twice.
+TWICE_OVER_THE_EDGE = """\
+mission: twice over the edge
+tree:
+  fallback:
+    - sequence:
+        - mode: safe
+        - drive: {velocity: 200 mm/s, distance: 2 m}
+    - sequence:
+        - cliff: any
+        - mode: safe
+        - drive: {velocity: 100 mm/s, distance: 1 m}
+"""
+
+
+def test_the_robot_s_own_falls_are_counted_by_cause(
+    run_mission: RunMission, tmp_path: Path
+) -> None:
+    """The connection logs the first fall of a cause as a WARNING and the rest at INFO
+    ('..., 7 times so far'); the summary said none of them."""
+    (tmp_path / "ledge.yaml").write_text(LEDGE)
+    run = run_mission(TWICE_OVER_THE_EDGE, world=str(tmp_path / "ledge.yaml"))
+    assert run.summary.outcome is Outcome.FAILURE  # the second drive: over the edge again
+    assert run.summary.falls == {"cliff": 2}
+    assert "falls        the robot fell to Passive by itself 2 times (cliff)" in str(run.summary)
+
+
+def test_a_run_without_falls_has_no_falls_line(run_mission: RunMission) -> None:
+    run = run_mission(DRIVE_TO_WALL)
+    assert run.summary.outcome is Outcome.SUCCESS
+    assert run.summary.falls == {}
+    assert "falls" not in str(run.summary)
+
+
+def test_falls_of_several_causes_are_said_the_commonest_first() -> None:
+    summary = RunSummary("m", falls={"wheel drop": 1, "cliff": 20})
+    assert "falls        the robot fell to Passive by itself 21 times (cliff 20, wheel drop 1)" in (
+        summary.lines()
+    )
+    assert RunSummary("m", falls={"charger": 1}).falls_text() == (
+        "the robot fell to Passive by itself once (charger)"
+    )
