@@ -187,6 +187,15 @@ class CommandSpec:
         themselves lead to Passive, where a cycle may still drive."""
         return self.leads_to is not None and self.leads_to is not OIMode.PASSIVE
 
+    def cycle_may_run_after(self, before: bool) -> bool:
+        """Whether a built-in cycle may be driving the robot once this command is written;
+        ``before``: whether one could before it. A cycle command starts one; a command that
+        :attr:`ends_cycle` ends it; any other leaves it as it was (Start too: Passive is
+        where the cycle drives). The one rule of the session's writer and the tests' stub."""
+        if self.effect is Effect.BUILTIN_CYCLE:
+            return True
+        return before and not self.ends_cycle
+
 
 def _c(
     opcode: int,

@@ -21,10 +21,12 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from typing import NamedTuple, Protocol
 
+from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import Command
 from roomba_bt.oi.frames import FrameLayout, SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.odometry import MM_PER_COUNT
+from roomba_bt.oi.opcodes import Effect
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
 
 _new_tuple = tuple.__new__
@@ -189,6 +191,22 @@ class Snapshot(NamedTuple):
     last_fallback: ModeChange | None = None
     profile: RobotProfile = DEFAULT_PROFILE
     frames_lost: int = 0
+    #: a Clean/Spot/Max/Seek Dock cycle may be driving the robot: one was written and no
+    #: command that ends it since (the session writer's ``builtin_may_run``); its leaf ends
+    #: it when it is halted (:meth:`Outbox.end_cycle`)
+    cycle_may_run: bool = False
+
+
+#: What ends a built-in cycle that may still drive the robot, and leaves it stopped in the
+#: Passive the cycle had it in: Safe (131) ends the cycle and makes the actuators take
+#: commands, drive 0 ``[137][0][0][0][0]`` and motors off ``[138][0]`` (Clean, Spot and Max
+#: run the brushes and the vacuum), Start (128) back to Passive. On a powered home base
+#: Safe drops to Passive at once: harmless, and Start leaves the model where the robot is.
+CYCLE_END: tuple[Command, ...] = (oi.safe(), oi.halt(), oi.motors_off(), oi.start())
+#: the outbox's key of a cycle's end asked for (no channel's, no opcode's), and who asked
+#: when nobody did (a sender may be None)
+_CYCLE_END_KEY = object()
+_NOBODY = object()
 
 
 class Outbox:
@@ -206,7 +224,7 @@ class Outbox:
     stood still while the new branch believed it was turning).
     """
 
-    __slots__ = ("_last", "_queue", "_senders", "queued")
+    __slots__ = ("_ender", "_last", "_queue", "_senders", "queued")
 
     def __init__(self) -> None:
         self._queue: dict[object, Command] = {}
@@ -215,6 +233,8 @@ class Outbox:
         #: the queue itself, read-only: true while a command waits (the runtime asks after
         #: every tick, and most ticks queue nothing: a dict's truth is no call, ``len`` is)
         self.queued: Mapping[object, Command] = self._queue
+        #: who asked, this tick, for the end of a built-in cycle (:meth:`end_cycle`)
+        self._ender: object = _NOBODY
 
     def send(self, command: Command, sender: object = None) -> None:
         channel = command.spec.channel
@@ -234,12 +254,45 @@ class Outbox:
                 return
         self.send(command, sender)
 
+    def end_cycle(self, sender: object, *, running: bool = True) -> None:
+        """End a built-in cycle (Clean, Spot, Max, Seek Dock): ``sender``, the leaf that
+        started it, is halted or failed. Its own cycle command still queued (started and
+        halted in one tick: a parallel's other branch ended it) is not written at all;
+        ``running``: a cycle written before may still drive the robot in Passive, where
+        drive 0 is refused. Then :data:`CYCLE_END` is written before this tick's other
+        commands (a higher branch's ``mode: safe`` then still leaves the robot in Safe),
+        unless this tick starts a cycle after all (the firmware goes over to that one: a
+        repeat's ``clean`` sent again, ``mode: passive`` then ``seek_dock``)."""
+        queue = self._queue
+        wheels = queue.get("wheels")
+        if (
+            wheels is not None
+            and wheels.spec.effect is Effect.BUILTIN_CYCLE
+            and self._senders.get("wheels") is sender
+        ):
+            del queue["wheels"]
+        if running and self._ender is _NOBODY:
+            self._ender = sender
+            queue[_CYCLE_END_KEY] = CYCLE_END[0]  # ``queued`` is true: the flush comes
+
     def drain(self) -> list[Command]:
         """The commands to write, in order; empties the outbox. Who sent each channel's
         last command is kept until that channel is sent on again (:meth:`sender_of`: a
         refusal names it); :meth:`send_stop` looks at it only while its channel is queued."""
-        out = list(self._queue.values())
-        self._queue.clear()
+        queue = self._queue
+        ender = self._ender
+        if ender is not _NOBODY:
+            del queue[_CYCLE_END_KEY]
+            self._ender = _NOBODY
+        out = list(queue.values())
+        queue.clear()
+        if ender is not _NOBODY and not any(c.spec.effect is Effect.BUILTIN_CYCLE for c in out):
+            for command in CYCLE_END:
+                channel = command.spec.channel
+                if channel is not None:
+                    self._senders[channel] = ender
+                    self._last[channel] = command
+            out[:0] = CYCLE_END
         return out
 
     def sender_of(self, command: Command) -> object:
@@ -263,6 +316,7 @@ class Outbox:
 
     def clear(self) -> None:
         self._queue.clear()
+        self._ender = _NOBODY
         self._senders.clear()
         self._last.clear()
 

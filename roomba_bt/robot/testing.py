@@ -45,6 +45,7 @@ class StubRobot(BaseHandle):
             profile=profile,
         )
         self.sent: list[Command] = []
+        self._cycle_may_run = False
 
     @property
     def snapshot(self) -> Snapshot:
@@ -73,11 +74,16 @@ class StubRobot(BaseHandle):
             mode=self._mode,
             odometry=self._odometry,
             profile=self._profile,
+            cycle_may_run=self._cycle_may_run,
         )
         return self._snapshot
 
     def flush(self) -> list[Command]:
-        """What the runtime would write after this tick (no guard): recorded in ``sent``."""
+        """What the runtime would write after this tick (no guard): recorded in ``sent``.
+        A built-in cycle among them may drive until a command ends it, as the runtime's
+        writer keeps it (the next frame's ``snapshot.cycle_may_run``)."""
         out = self._outbox.drain()
         self.sent.extend(out)
+        for command in out:
+            self._cycle_may_run = command.spec.cycle_may_run_after(self._cycle_may_run)
         return out

@@ -165,11 +165,8 @@ class CommandWriter:
             self.link.pause_resume(bool(command.args[0]), now)
         elif effect is Effect.SILENCES:
             self.link.streaming = False
-        if effect is Effect.BUILTIN_CYCLE:
-            self.builtin_may_run = True
-        elif spec.ends_cycle:
-            self.builtin_may_run = False
-        elif effect is Effect.BAUD:
+        self.builtin_may_run = spec.cycle_may_run_after(self.builtin_may_run)
+        if effect is Effect.BAUD:
             self._change_baud(BAUD_RATES[command.args[0]])
 
     def _change_baud(self, rate: int) -> None:

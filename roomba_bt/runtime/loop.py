@@ -532,6 +532,7 @@ class MissionRunner(BaseHandle):
             fallback,
             self._profile,
             summary.frames_lost,
+            self.connection.writer.builtin_may_run,
         ))  # fmt: skip
         self.snapshot = snapshot
         if self._blackboard is not None:

@@ -3,8 +3,10 @@ to another behaviour's command on that channel."""
 
 from __future__ import annotations
 
+import pytest
+
 from roomba_bt.oi import commands
-from roomba_bt.robot.interface import Outbox
+from roomba_bt.robot.interface import CYCLE_END, Outbox
 
 OLD, NEW = object(), object()  # two behaviours
 
@@ -48,3 +50,48 @@ def test_the_senders_are_forgotten_with_the_tick() -> None:
     box.drain()
     box.send_stop(commands.halt(), OLD)
     assert [c.name for c in box.drain()] == ["drive"]
+
+
+# ------------------------------------------------------------------ a built-in cycle's end
+END = [c.name for c in CYCLE_END]
+
+
+def test_a_cycles_end_goes_before_the_ticks_other_commands() -> None:
+    # the higher branch's mode: safe, queued before the halted leaf asked: Safe at the end
+    box = Outbox()
+    box.send(commands.safe(), NEW)
+    box.end_cycle(OLD)
+    box.end_cycle(NEW)  # asked twice in one tick: sent once
+    assert END == ["safe", "drive", "motors", "start"]
+    assert [c.name for c in box.drain()] == [*END, "safe"]
+    assert box.sender_of(commands.halt()) is OLD
+    assert box.drain() == []
+
+
+@pytest.mark.parametrize("first", [True, False], ids=["cycle after", "cycle before"])
+def test_a_cycle_started_in_the_same_tick_by_another_leaf_stands(first: bool) -> None:
+    box = Outbox()
+    if not first:
+        box.send(commands.seek_dock(), NEW)
+    box.end_cycle(OLD)
+    if first:
+        box.send(commands.seek_dock(), NEW)
+    assert [c.name for c in box.drain()] == ["seek_dock"]
+
+
+def test_a_cycle_started_and_halted_in_one_tick_is_not_written() -> None:
+    box = Outbox()
+    box.send(commands.clean(), OLD)
+    box.end_cycle(OLD, running=False)  # no cycle was driving before it
+    assert box.drain() == []
+    box.send(commands.clean(), OLD)
+    box.end_cycle(OLD)  # one was: it is ended
+    assert [c.name for c in box.drain()] == END
+
+
+def test_a_cycles_end_is_dropped_with_the_rest() -> None:
+    box = Outbox()
+    box.end_cycle(OLD)
+    assert box.queued
+    box.clear()
+    assert not box.queued and box.drain() == []
