@@ -17,7 +17,15 @@ from typing import Any
 
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import WHEEL, Action, Param, declare, write_key
+from roomba_bt.behaviours.declare import (
+    WHEEL,
+    Action,
+    Param,
+    cycle_may_run,
+    declare,
+    on_home_base,
+    write_key,
+)
 from roomba_bt.behaviours.units import (
     ANGLE,
     ANY,
@@ -156,6 +164,10 @@ class Mode(Action):
     cannot change the actuators' parameters, not that Start stops the motors (decided: stop
     them while they can still be stopped). Not in its ``sends=``, which the compiler reads as
     the modes it needs (Motors only in Safe/Full): a stop, as an action's ending halt is.
+    ``mode: passive`` in the Passive of a built-in cycle that may still drive (Clean, Seek
+    Dock: the OI is in Passive while the firmware drives) ends it, Safe, drive 0, motors off,
+    Start (:meth:`~roomba_bt.robot.interface.Outbox.end_cycle`): it sent nothing there, and
+    the cycle drove on after it. Not in ``sends=`` either, for the same reason.
     """
 
     def start(self) -> None:
@@ -166,6 +178,9 @@ class Mode(Action):
     def update(self) -> Status:
         snap = self.snapshot
         if snap.mode == self._target:
+            robot = self.robot
+            if snap.mode is OIMode.PASSIVE and robot is not None and cycle_may_run(robot):
+                robot.outbox.end_cycle(self)  # Passive, but a cycle drives: stopped in it
             return _OK
         if snap.time - self._started >= float(self.value("timeout")):
             self.feedback_message = f"robot did not enter {self._target.label}"
@@ -460,10 +475,7 @@ class SeekDock(Action):
             if not self.value("wait"):
                 return _OK
         snap = self.snapshot
-        frame = snap.frame
-        if all(pid in frame for pid in CHARGING_SOURCES_PACKETS) and (
-            frame.charging_sources.home_base
-        ):
+        if on_home_base(snap.frame):
             return _OK
         timeout = self.value("timeout")
         if timeout is not None and snap.time - self._start_time >= timeout:

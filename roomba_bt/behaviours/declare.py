@@ -49,8 +49,9 @@ from roomba_bt.behaviours.units import (
     held,
 )
 from roomba_bt.oi.encode import Command, halt, turns_wheels
+from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS, SensorFrame
 from roomba_bt.oi.modes import ALL_MODES, DRIVING_MODES, OIMode
-from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME
+from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME, Effect
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.printable import CONTROL
 from roomba_bt.robot.interface import Odometry, RobotHandle, Snapshot
@@ -65,6 +66,8 @@ MISSION_NAMESPACE = "/mission/"
 
 Kind = Literal["action", "condition"]
 _NAME = re.compile(r"^[a-z][a-z0-9_]*$")
+_BUILTIN_CYCLE = Effect.BUILTIN_CYCLE  # read once: send() asks on every command
+_SEEK_DOCK = COMMANDS_BY_NAME["seek_dock"]
 
 
 class DeclarationError(ValueError):
@@ -271,6 +274,13 @@ class Declaration:
     @property
     def is_actuator(self) -> bool:
         return any(COMMANDS[op].is_actuator for op in self.sends)
+
+    @property
+    def starts_cycle(self) -> bool:
+        """Whether it may start a built-in cycle (Clean, Spot, Max, Seek Dock): the robot
+        is in Passive after it, whichever way it ends (a halt or a failure ends the cycle
+        with Start: :meth:`Action.terminate`)."""
+        return any(COMMANDS[op].effect is _BUILTIN_CYCLE for op in self.sends)
 
     def packets(self, params: Mapping[str, Any]) -> tuple[int, ...]:
         return self.reads(params) if callable(self.reads) else self.reads
@@ -567,10 +577,14 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
             raise UndeclaredCommand(self, command)
         if spec.drives_wheels:  # what it set turning is stopped when it ends (terminate)
             self._started_motion = turns_wheels(command)
+        elif spec.effect is _BUILTIN_CYCLE:  # ended when it is halted or fails (terminate)
+            self._started_cycle = True
         robot.outbox.send(command, self)
 
     #: whether the last wheel command it sent set them turning (:meth:`send` notes it)
     _started_motion = False
+    #: whether it sent a built-in cycle (Clean, Spot, Max, Seek Dock) not yet ended by it
+    _started_cycle = False
 
     def value(self, name: str) -> Any:
         """The parameter ``name`` for this run (blackboard references resolved at start)."""
@@ -793,12 +807,46 @@ class Action(RobotBehaviour):
         another behaviour already queued a wheel command in this tick (the branch that
         preempted this one: its Drive stands), or the robot is out of Safe and Full: it
         stopped its wheels when it fell to Passive (a cliff, a wheel drop, the charger),
-        and the mode guard would refuse the halt."""
+        and the mode guard would refuse the halt.
+
+        A built-in cycle it started is ended when it fails or is halted (INVALID: preempted,
+        or its parent halted or started over after it succeeded) while the cycle may still
+        drive (:func:`cycle_may_run`): Safe, drive 0, motors off, Start
+        (:meth:`~roomba_bt.robot.interface.Outbox.end_cycle`; its cycle command queued in
+        this very tick is not written). In Passive nothing else the
+        tree sends stops it, and the firmware drove on while the tree showed the leaf
+        halted. Its SUCCESS ends nothing: ``clean`` succeeds as its cycle starts,
+        ``seek_dock`` once docked."""
         robot = self.robot
         if self._started_motion and robot is not None and robot.snapshot.mode in DRIVING_MODES:
             robot.outbox.send_stop(halt(), self)
+        if self._started_cycle and new_status is not _SUCCESS:
+            self._started_cycle = False
+            if robot is not None:
+                robot.outbox.end_cycle(self, running=cycle_may_run(robot))
         self._started_motion = False
         self._out_of_driving_since = None
+
+
+def on_home_base(frame: SensorFrame) -> bool:
+    """Whether ``frame`` carries packet 34 and it shows the home base's power."""
+    return all(pid in frame for pid in CHARGING_SOURCES_PACKETS) and (
+        frame.charging_sources.home_base
+    )
+
+
+def cycle_may_run(robot: RobotHandle) -> bool:
+    """Whether a built-in cycle may still be driving the robot: one was written and nothing
+    has ended it since (:attr:`Snapshot.cycle_may_run
+    <roomba_bt.robot.interface.Snapshot.cycle_may_run>`), the robot is in Passive, and it is
+    not a Seek Dock on its home base (docked: that cycle ended there). Any other cycle on the
+    home base may be about to drive off it (Clean sent on the dock); ending it there is
+    harmless, as Safe on a powered dock drops to Passive at once."""
+    snap = robot.snapshot
+    if not snap.cycle_may_run or snap.mode is not OIMode.PASSIVE:
+        return False
+    cycle = robot.outbox.last_on("wheels")
+    return cycle is None or cycle.spec is not _SEEK_DOCK or not on_home_base(snap.frame)
 
 
 _RUNNING, _SUCCESS, _FAILURE = (

@@ -249,6 +249,72 @@ def test_seek_dock_without_waiting(robot: StubRobot, make: Make) -> None:
     assert tick(make(a.SeekDock, wait=False)) is Status.SUCCESS
 
 
+#: Safe, drive 0, motors off, Start: a built-in cycle's end
+CYCLE_END = [[131], HALT, [138, 0], [128]]
+PASSIVE, HOME_BASE = {35: int(OIMode.PASSIVE), 34: 0}, {35: int(OIMode.PASSIVE), 34: 2}
+
+
+@pytest.mark.parametrize("cls", [a.Clean, a.Spot, a.MaxClean])
+def test_a_cleaning_cycle_is_ended_when_its_leaf_is_stopped_after_it_succeeded(
+    robot: StubRobot, make: Make, cls: type[a.Action]
+) -> None:
+    """Its SUCCESS (the cycle started) sends nothing more; stopped later (its parent
+    halted by a guard, a timeout, a higher branch), it ends the cycle: on the home base
+    too, which a Clean sent from the dock is about to leave."""
+    behaviour = make(cls)
+    assert tick(behaviour) is Status.SUCCESS
+    assert len(data(robot)) == 1
+    robot.set_frame(HOME_BASE)
+    assert data(robot) == []
+    behaviour.stop(Status.INVALID)
+    assert data(robot) == CYCLE_END
+    robot.set_frame(PASSIVE)
+    behaviour.stop(Status.INVALID)  # ended once: nothing more
+    assert data(robot) == []
+
+
+@pytest.mark.parametrize(
+    ("frame", "ending", "sent"),
+    [
+        (PASSIVE, Status.INVALID, CYCLE_END),
+        (PASSIVE, Status.FAILURE, CYCLE_END),
+        (HOME_BASE, Status.INVALID, []),  # docked: Seek Dock's cycle ended there
+    ],
+    ids=["halted", "failed", "halted on the home base"],
+)
+def test_seek_dock_ends_its_cycle_unless_docked(
+    robot: StubRobot, make: Make, frame: dict[int, int], ending: Status, sent: list[list[int]]
+) -> None:
+    behaviour = make(a.SeekDock, wait=True)
+    robot.set_frame({34: 0})
+    assert tick(behaviour) is Status.RUNNING
+    assert data(robot) == [[143]]
+    robot.set_frame(frame)
+    behaviour.stop(ending)
+    assert data(robot) == sent
+
+
+def test_a_cycle_started_and_stopped_in_one_tick_is_not_written(
+    robot: StubRobot, make: Make
+) -> None:
+    # a parallel's other branch ended it in the tick it started: nothing ever drove
+    behaviour = make(a.Clean)
+    assert tick(behaviour) is Status.SUCCESS
+    behaviour.stop(Status.INVALID)
+    assert data(robot) == []
+
+
+def test_mode_passive_ends_a_cycle_that_may_still_drive(robot: StubRobot, make: Make) -> None:
+    tick(make(a.Clean))
+    data(robot)
+    robot.set_frame(PASSIVE)
+    assert tick(make(a.Mode, to="passive")) is Status.SUCCESS
+    assert data(robot) == CYCLE_END
+    robot.set_frame(PASSIVE)  # no cycle now: Passive already, nothing to send
+    assert tick(make(a.Mode, to="passive")) is Status.SUCCESS
+    assert data(robot) == []
+
+
 # ------------------------------------------------------------------ actuators
 
 

@@ -1,0 +1,178 @@
+"""A leaf that started a built-in cycle ends it when it is halted or fails (its cycle drove
+on in Passive, where nothing else the tree sends stops it), and so does ``mode: passive``;
+on the simulator's virtual clock, every byte tapped."""
+
+from __future__ import annotations
+
+import logging
+
+import pytest
+
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.runtime.loop import MissionRunner
+from roomba_bt.runtime.summary import Outcome
+
+from .simrun import Run, RunMission
+
+#: Safe, drive 0, motors off, Start: the cycle's end, in one write
+END = b"".join(c.data for c in (oi.safe(), oi.halt(), oi.motors_off(), oi.start()))
+#: after the cycle's end the robot is still: the mission checks its own odometry
+STILL_AFTER = """
+    - mark: s
+    - wait: 3s
+    - inverter: {odometry: {since: s, distance: 2cm}}
+"""
+#: the seek_dock halted by a timeout around it (the report's m/seek.yaml)
+HALTED_SEEK = """
+mission: seek halted
+blackboard: {s: mark}
+tree:
+  sequence:
+    - mode: safe
+    - turn: 180deg
+    - force_success:
+        timeout:
+          after: 2s
+          do: seek_dock
+"""
+#: the seek_dock that fails by its own timeout (the report's m/seek2.yaml)
+FAILED_SEEK = """
+mission: seek failed
+blackboard: {s: mark}
+tree:
+  sequence:
+    - mode: safe
+    - turn: 180deg
+    - fallback:
+        - seek_dock: {timeout: 2s}
+        - log: gave up docking
+"""
+#: a clean its `while:` guard stops at the first bump (the sim's Clean drives until one)
+GUARDED_CLEAN = """
+mission: clean until a bump
+blackboard: {s: mark}
+tree:
+  sequence:
+    - force_success:
+        sequence:
+          children:
+            - mode: passive
+            - clean
+            - wait: 60s
+        while: {inverter: {bump: any}}
+"""
+#: a Clean that runs on after its leaf succeeded, then `mode: passive`
+PASSIVE_AFTER_CLEAN = """
+mission: clean then passive
+blackboard: {s: mark}
+tree:
+  sequence:
+    - mode: passive
+    - clean
+    - wait: 2s
+    - mode: passive
+"""
+
+
+def _run(run_mission: RunMission, mission: str) -> Run:
+    return run_mission(mission + STILL_AFTER, world="apartment", timeout=90.0)
+
+
+def _written_after(run: Run, opcode: int) -> list[tuple[float, bytes]]:
+    """What was written after the first write of ``opcode``, by the time it was written
+    at (the commands of one tick together)."""
+    at_times: dict[float, bytes] = {}
+    seen = False
+    for at, data in run.link.writes:
+        if seen:
+            at_times[at] = at_times.get(at, b"") + data
+        seen = seen or data[:1] == bytes((opcode,))
+    return list(at_times.items())
+
+
+@pytest.mark.parametrize(
+    ("mission", "ended_at"),
+    [(HALTED_SEEK, 2.0), (FAILED_SEEK, 2.0)],
+    ids=["halted by a timeout", "failed by its own timeout"],
+)
+def test_a_seek_dock_that_does_not_dock_ends_its_cycle(
+    run_mission: RunMission, caplog: pytest.LogCaptureFixture, mission: str, ended_at: float
+) -> None:
+    caplog.set_level(logging.INFO)
+    run = _run(run_mission, mission)
+    # the robot stood still after the halt (it drove 1.4 m in 5 s before: the firmware's
+    # dock search in Passive, the tree waiting)
+    assert run.summary.outcome is Outcome.SUCCESS, run.summary.reason
+    sent_at = next(t for t, data in run.link.writes if data == oi.seek_dock().data)
+    (at, data), *later = _written_after(run, oi.seek_dock().opcode)
+    assert data == END
+    assert at - sent_at == pytest.approx(ended_at, abs=0.05)
+    # nothing more until the run's own end: the safe stop finds no cycle to end
+    assert [d for _, d in later] == [oi.pause_stream().data + oi.start().data]
+    assert run.summary.refused_commands == 0
+    assert "packet 35 reports" not in caplog.text and "left Safe" not in caplog.text
+
+
+def test_a_clean_its_guard_stops_ends_its_cycle(run_mission: RunMission) -> None:
+    run = _run(run_mission, GUARDED_CLEAN)
+    assert run.summary.outcome is Outcome.SUCCESS, run.summary.reason
+    [(_, data), *_] = _written_after(run, oi.clean().opcode)
+    assert data == END
+    assert run.simulator.builtin is None and run.simulator.motor_bits == 0
+
+
+def test_mode_passive_ends_a_cycle_that_may_still_drive(run_mission: RunMission) -> None:
+    run = _run(run_mission, PASSIVE_AFTER_CLEAN)
+    assert run.summary.outcome is Outcome.SUCCESS, run.summary.reason
+    sent_at = next(t for t, data in run.link.writes if data == oi.clean().data)
+    [(at, data), *_] = _written_after(run, oi.clean().opcode)
+    assert data == END and at - sent_at == pytest.approx(2.0, abs=0.05)
+
+
+def test_a_docked_seek_dock_sends_nothing_more(run_mission: RunMission) -> None:
+    """Docked, Seek Dock's cycle has ended: neither its SUCCESS nor a ``mode: passive``
+    after it (nor a parent started over on the dock) sends the cycle's end."""
+    run = run_mission(
+        """
+        mission: dock twice
+        tree:
+          repeat:
+            times: 2
+            do:
+              sequence: [{mode: passive}, seek_dock, {wait: 1s}, {mode: passive}]
+        """,
+        world="empty-room",
+        timeout=600.0,
+    )
+    assert run.summary.outcome is Outcome.SUCCESS, run.summary.reason
+    assert END not in run.link.written
+
+
+def test_a_cycle_ended_on_a_powered_dock_says_no_fall(
+    run_mission: RunMission, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Safe on the home base's contacts drops the OI to Passive at once; the Start sent
+    after it leaves the model there: no fall to Passive, no resync is said, and the run
+    ends in Passive with nothing refused. (Seek Dock's own end on the dock is never sent:
+    the test asks for the end once docked, as a Clean sent there and halted would.)"""
+    caplog.set_level(logging.INFO)
+    asked: list[float] = []
+
+    def end_once_docked(runner: MissionRunner) -> None:
+        snap = runner.snapshot
+        if not asked and snap.cycle_may_run and snap.frame.charging_sources.home_base:
+            asked.append(snap.time)
+            runner.outbox.end_cycle(None)
+
+    run = run_mission(
+        "tree: {sequence: [{mode: passive}, seek_dock, {wait: 2s}]}",
+        world="empty-room",
+        timeout=600.0,
+        observer=end_once_docked,
+    )
+    assert run.summary.outcome is Outcome.SUCCESS, run.summary.reason
+    assert asked and END in run.link.written
+    assert run.simulator.docked
+    assert "by itself" not in caplog.text and "packet 35 reports" not in caplog.text
+    assert run.summary.refused_commands == 0 and run.summary.final_mode is OIMode.PASSIVE
