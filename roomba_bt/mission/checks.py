@@ -121,12 +121,15 @@ class ModeCheck:
         return _MODE_HANDLERS.get(node.kind, ModeCheck._decorator)(self, node, entry)
 
     def _leaf(self, node: Node, entry: Modes) -> tuple[Modes, Modes]:
+        """A leaf fails in the modes it was entered in; one that starts a built-in cycle
+        (``seek_dock: {timeout: ...}``) may fail after it sent it, and its failure ends the
+        cycle in Passive (Start): a ``drive`` on its fallback needs a ``mode: safe`` first."""
         decl = node.decl
         assert decl is not None
         self._entered(node, decl, entry)
         after = decl.mode_after(node.params)
         success = frozenset({after}) if after is not None else entry
-        return success, entry
+        return success, (entry | success if decl.starts_cycle else entry)
 
     def _unbuilt(self, node: Node, entry: Modes) -> tuple[Modes, Modes]:
         """A node that could not be built: a behaviour whose parameters were wrong is judged

@@ -40,6 +40,9 @@ def test_actuators_after_a_mode_change_on_every_path(errors_of: Errors, tree: st
         " {repeat: {times: 2, do: {sequence: [{stop: {}}, {seek_dock: {wait: false}}]}}}]}",
         # a parallel branch may change the mode under its sibling
         "{sequence: [{mode: safe}, {parallel: [{clean: {}}, {drive: {duration: 1s}}]}]}",
+        # seek_dock fails by its own timeout after it sent Seek Dock: its end leaves Passive
+        "{sequence: [{mode: safe},"
+        " {fallback: [{seek_dock: {timeout: 2s}}, {drive: {duration: 1s}}]}]}",
         # a timeout may cut a sequence after clean and before safe
         "{sequence: [{mode: safe},"
         " {force_success: {timeout: {after: 1s, do: {sequence: [clean, {mode: safe}]}}}}, stop]}",
