@@ -328,7 +328,10 @@ class Guard(SaysWhy, Stepped, py_trees.composites.Composite):
             return "condition met"
         stage = running_in(self.child).removeprefix(" in ")
         running = f" (stage {stage} was running)" if stage else ""
-        return while_stopped(self.condition, self.child.name) + running
+        guarded = self.child
+        while isinstance(guarded, Guard):  # an until: inside: the name is on what it wraps
+            guarded = guarded.child
+        return while_stopped(self.condition, guarded.name) + running
 
     def stop(self, new_status: Status = _INVALID) -> None:
         if self.child.status is _RUNNING:

@@ -516,6 +516,34 @@ def test_a_while_guard_says_which_condition_failed(compile_text: Compile) -> Non
     )
 
 
+def test_a_while_guard_names_the_node_it_wraps_through_an_until_inside_it(
+    compile_text: Compile,
+) -> None:
+    """With both ``while:`` and ``until:``, the ``until`` is inside the ``while``: the reason
+    names the node they wrap (``'outbound'``), as without the ``until``; it named the inner
+    guard, ``'until bump(any)'``."""
+    from roomba_bt.behaviours.reasons import failure_reason
+
+    r = run(
+        compile_text,
+        """
+        tree:
+          sequence:
+            - mode: safe
+            - name: outbound
+              wait: 1s
+              while: {inverter: {wall: {}}}
+              until: {bump: any}
+        """,
+    )
+    assert r.tick() is R
+    assert r.tick(wall=1) is F
+    assert failure_reason(r.mission.root) == (
+        "stopped: the right-side wall sensor sees a wall, while 'outbound' ran (wall held)"
+        " (stage outbound was running)"
+    )
+
+
 @pytest.mark.parametrize(
     ("condition", "said"),
     [
