@@ -22,8 +22,8 @@ from roomba_bt.mission.values import (
     Bound,
     Context,
     Written,
-    origin_of,
     resolve,
+    said_origin,
     unknown,
 )
 
@@ -212,12 +212,10 @@ def _decorator_options(
         value = options.get(param.name)
         if param.minimum is not None and value is not None and value < param.minimum:
             written, where = fields[param.name]
-            origin = origin_of(written, env)
             raise Bad(
                 where.at(
                     f"{word}.{param.name} must be at least {_amount(param, param.minimum)}, "
-                    f"got {_amount(param, value)}"
-                    + (f" ({written.value.strip()} is {origin})" if origin else "")
+                    f"got {_amount(param, value)}" + said_origin(written, env)
                 )
             )
     return options

@@ -24,6 +24,7 @@ from roomba_bt.mission.values import (
     Context,
     Written,
     resolve,
+    said_origin,
     unknown,
 )
 
@@ -67,7 +68,8 @@ def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node:
                 key_loc.at(f"{decl.name}: missing required parameter {p.name!r} ({p.describe()})")
             )
             ok = False
-    ok = _key_params(ctx, decl, params, key_typed, options, env) and ok
+    written = {pname: pnode for pname, pnode, _, _ in given}
+    ok = _key_params(ctx, decl, params, key_typed, options, (env, written)) and ok
     if ok and decl.constraints is not None and UNKNOWN not in params.values():
         for problem in decl.constraints(params):
             ctx.error(key_loc.at(f"{decl.name}: {problem}"))
@@ -103,10 +105,12 @@ def _key_params(
     params: dict[str, Any],
     key_typed: dict[str, tuple[yaml.Node, Loc]],
     options: dict[str, Any],
-    env: Mapping[str, Bound],
+    scope: tuple[Mapping[str, Bound], Mapping[str, yaml.Node]],
 ) -> bool:
     """Parameters that name blackboard keys must name declared keys; ``any`` values take
-    the type of the key (``set: {key: leg, value: 2 m}``)."""
+    the type of the key (``set: {key: leg, value: 2 m}``). ``scope``: the parameters in
+    scope and the values as written (a key given as a subtree's ``${out}`` names its use)."""
+    env, written = scope
     ok = True
     key_decl: KeyDecl | None = None
     for pname in (*decl.reads_keys, *decl.writes_keys):
@@ -118,7 +122,10 @@ def _key_params(
         if found is None:
             assert isinstance(where, Loc)
             ctx.error(
-                where.at(f"{decl.name}.{pname}: " + unknown("blackboard key", key, list(ctx.keys)))
+                where.at(
+                    f"{decl.name}.{pname}{said_origin(written[pname], env)}: "
+                    + unknown("blackboard key", key, list(ctx.keys))
+                )
             )
             ok = False
             continue

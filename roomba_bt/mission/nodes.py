@@ -26,6 +26,7 @@ from roomba_bt.mission.values import (
     Context,
     SubtreeDef,
     Written,
+    given_to,
     origin_of,
     resolve,
     shown,
@@ -300,7 +301,7 @@ class NodeParser:
                 vtype,
                 resolved,
                 shown(vtype, resolved) if resolved is not UNKNOWN else "?",
-                origin_of(pvalue, env),
+                origin_of(pvalue, env) or given_to(pvalue, pvloc, name),
             )
         given = {a[0] for a in args}
         for pname, (vtype, default, _) in sub.params.items():

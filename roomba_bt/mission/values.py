@@ -303,6 +303,20 @@ def origin_of(node: yaml.Node, env: Mapping[str, Bound]) -> str:
     return ""
 
 
+def said_origin(node: yaml.Node, env: Mapping[str, Bound]) -> str:
+    """`` (${speed} is 900 mm/s, given at m.yaml:15:31 to subtree go)``: where the value of
+    ``node`` was set (:func:`origin_of`), said after an error at its use; or ""."""
+    origin = origin_of(node, env)
+    return f" ({str(node.value).strip()} is {origin})" if origin else ""
+
+
+def given_to(node: yaml.Node, loc: Loc, subtree: str) -> str:
+    """A subtree argument's origin (:attr:`Bound.origin`): the value as the use writes it,
+    and where, so that an error its value makes in the subtree's body names the use too."""
+    text = str(node.value).strip() if isinstance(node, yaml.ScalarNode) else "{...}"
+    return f"{text}, given at {loc.file}:{loc.line}:{loc.column} to subtree {subtree}"
+
+
 def _reference(ctx: Context, raw: str, loc: Loc, vtype: ValueType, what: str) -> BlackboardRef:
     match = BLACKBOARD_REF.match(raw)
     if match is None:

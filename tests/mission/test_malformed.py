@@ -218,6 +218,39 @@ def test_a_value_out_of_range_from_the_command_line_says_so_where_it_is_used(
     assert compile_mission(path, {"speed": "400mm/s"})[1] == []
 
 
+def test_a_bad_value_a_subtree_use_passes_names_that_use(tmp_path: Path) -> None:
+    """``subtree: {id: go, speed: 900 mm/s}`` was refused only in the subtree's body (its
+    line and YAML path), naming none of the uses: each use that gives a bad value is named
+    now, as a ``-p`` value is; one given a good value is not. A key given as a ``str``
+    parameter (an output "port") names its use too."""
+    path = tmp_path / "m.yaml"
+    path.write_text(
+        "blackboard: {out: int}\n"
+        "subtrees:\n"
+        "  go:\n"
+        "    parameters: {speed: {type: speed}, result: {type: str, default: out}}\n"
+        "    tree:\n"
+        "      sequence:\n"
+        "        - drive: {velocity: '${speed}', distance: 10cm}\n"
+        "        - set: {key: '${result}', value: 1}\n"
+        "tree:\n"
+        "  sequence:\n"
+        "    - mode: safe\n"
+        "    - subtree: {id: go, speed: 100 mm/s}\n"
+        "    - subtree: {id: go, speed: 900 mm/s}\n"
+        "    - subtree: {id: go, speed: -600 mm/s, result: nokey}\n"
+    )
+    _, problems = compile_mission(path)
+    assert [(p.line, p.column, p.message) for p in problems] == [
+        (7, 29, "drive: velocity -600 mm/s is out of range: allowed -500..500 mm/s "
+                f"(${{speed}} is -600 mm/s, given at {path}:14:32 to subtree go)"),
+        (7, 29, "drive: velocity 900 mm/s is out of range: allowed -500..500 mm/s "
+                f"(${{speed}} is 900 mm/s, given at {path}:13:32 to subtree go)"),
+        (8, 22, f"set.key (${{result}} is nokey, given at {path}:14:51 to subtree go): "
+                "unknown blackboard key 'nokey'; known: out"),
+    ]  # fmt: skip
+
+
 def test_a_mission_or_include_over_a_mebibyte_is_named_not_read(tmp_path: Path) -> None:
     from roomba_bt.yamlsource import MAX_FILE_BYTES
 
