@@ -72,7 +72,7 @@ def parse_composite(parser: NodeParser, kind: NodeKind, at: Written) -> Node | N
         fields = {}
         for k, v, kl, vl in mapping(value, loc, word):
             if k not in allowed:
-                ctx.error(kl.at(f"{word}: " + unknown("option", k, allowed)))
+                ctx.error(kl.at(f"{word}: " + unknown("option", k, allowed, word)))
                 continue
             fields[k] = (v, vl)
         for param in kind.options:
@@ -157,7 +157,7 @@ def parse_decorator(parser: NodeParser, kind: NodeKind, at: Written) -> Node | N
         else:
             for k, v, kl, vl in items:
                 if k != "do" and k not in spec:
-                    raise Bad(kl.at(f"{word}: " + unknown("option", k, ["do", *spec])))
+                    raise Bad(kl.at(f"{word}: " + unknown("option", k, ["do", *spec], word)))
                 fields[k] = (v, vl)
             if "do" not in fields:
                 raise Bad(key_loc.at(f"{word} needs a child under do:"))
@@ -169,12 +169,13 @@ def parse_decorator(parser: NodeParser, kind: NodeKind, at: Written) -> Node | N
             loc.at(f"{word} takes options and a child: {word}: {{{', '.join([*spec, 'do'])}: ...}}")
         )
     if isinstance(child_node, yaml.SequenceNode):
-        raise Bad(
-            child_loc.at(
-                f"{word} takes exactly one child, got a list of {len(child_node.value)} "
-                "(wrap them in a sequence)"
-            )
+        count = len(child_node.value)
+        fix = (
+            "wrap them in a sequence"
+            if count != 1
+            else (f"drop the list: {word}: NODE" if child_loc is loc else "drop the list: do: NODE")
         )
+        raise Bad(child_loc.at(f"{word} takes exactly one child, got a list of {count} ({fix})"))
     options = _decorator_options(parser.ctx, kind, fields, key_loc, env)
     if kind.writes_key is not None:
         _key_items(parser.ctx, kind, options, fields, env)

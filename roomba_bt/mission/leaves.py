@@ -42,7 +42,7 @@ def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node:
         param = decl.param(pname)
         if param is None:
             pnames = [p.name for p in decl.params]
-            ctx.error(pkloc.at(f"{decl.name}: " + unknown("parameter", pname, pnames)))
+            ctx.error(pkloc.at(f"{decl.name}: " + unknown("parameter", pname, pnames, decl.name)))
             ok = False
             continue
         options[f"loc:{pname}"] = pvloc

@@ -15,6 +15,8 @@ import yaml
 from roomba_bt.behaviours.language import MODIFIERS, WORDS, Shape
 from roomba_bt.behaviours.units import STR, closest
 from roomba_bt.mission.control import parse_composite, parse_decorator
+from roomba_bt.mission.diagnostics import Diagnostic
+from roomba_bt.mission.foreign import foreign_hint, suggestion
 from roomba_bt.mission.ir import Node
 from roomba_bt.mission.leaves import parse_leaf
 from roomba_bt.mission.shipped import library_defining
@@ -44,6 +46,23 @@ MAX_TREE_DEPTH = 100
 #: uses another twice, ... doubles at each level: 30 levels in a 1.9 KB file hung ``validate``
 #: past 1.3 GB. Counted while expanding, so the blow-up stops here, not after.
 MAX_TREE_NODES = 10_000
+
+
+#: why a subtree's parameter takes no ``@key`` (BT.CPP's ``{key}`` port)
+_FIXED = (
+    ": a subtree's parameters are fixed when the mission is compiled, before any key holds a "
+    "value; read the key inside the subtree (@key): keys are the whole mission's"
+)
+
+
+def _without_id(items: list[tuple[str, yaml.Node, Loc, Loc]], key_loc: Loc) -> Diagnostic:
+    """``subtree needs id: NAME``; at a key that stands for it when there is one (BT.CPP's
+    ``ID``), saying so."""
+    for key, _, kloc, _ in items:
+        hint = foreign_hint(key, ["id"])
+        if hint is not None:
+            return kloc.at(f"subtree needs id: NAME; found {key!r}{hint}")
+    return key_loc.at("subtree needs id: NAME")
 
 
 class NodeParser:
@@ -175,7 +194,7 @@ class NodeParser:
             files = ", ".join(repr(text) for text in unloaded)
             return f"unknown node {word!r}{where} (the plugin file {files} was not loaded)"
         names = [*WORDS, *self.ctx.registry.names(), *MODIFIERS]
-        message = f"unknown node {word!r}{where}{closest(word, names)}"
+        message = f"unknown node {word!r}{where}{suggestion(word, names)}"
         errors = self.ctx.registry.errors
         # the plugins that may have meant this word: one whose error names it, else those
         # that did not import at all (any name could have been theirs); a few, not every
@@ -230,7 +249,7 @@ class NodeParser:
             items = mapping(value, loc, "subtree")
             ids = [i for i in items if i[0] == "id"]
             if not ids:
-                raise Bad(key_loc.at("subtree needs id: NAME"))
+                raise Bad(_without_id(items, key_loc))
             name = scalar_text(ids[0][1], ids[0][3], "subtree id")
             id_loc = ids[0][3]
             args = [i for i in items if i[0] != "id"]
@@ -293,7 +312,8 @@ class NodeParser:
                 continue
             vtype = sub.params[pname][0]
             try:
-                resolved = resolve(self.ctx, pvalue, pvloc, vtype, env, f"{name}.{pname}")
+                resolved = resolve(self.ctx, pvalue, pvloc, vtype, env, f"{name}.{pname}",
+                                   no_ref=_FIXED)  # fmt: skip
             except Bad as bad:
                 self.ctx.report(bad)
                 resolved = UNKNOWN

@@ -31,6 +31,7 @@ from roomba_bt.behaviours.units import (
     with_article,
 )
 from roomba_bt.mission.diagnostics import Diagnostic
+from roomba_bt.mission.foreign import port_remapping, suggestion
 from roomba_bt.mission.ir import KeyDecl
 from roomba_bt.mission.source import Bad, Loc, mapping, plain, scalar_text
 
@@ -38,10 +39,14 @@ SUBSTITUTION = re.compile(r"\$\{([A-Za-z_][A-Za-z0-9_]*)\}")
 _FULL_SUBSTITUTION = re.compile(r"^\s*(-?)\$\{([A-Za-z_][A-Za-z0-9_]*)\}\s*$")
 
 
-def unknown(what: str, name: str, known: list[str]) -> str:
-    """``unknown parameter 'velocty' (did you mean 'velocity'?); known: ...``"""
+def unknown(what: str, name: str, known: list[str], owner: str | None = None) -> str:
+    """``unknown parameter 'velocty' (did you mean 'velocity'?); known: ...``; ``owner``:
+    the word whose option or parameter it is, for the hints of
+    :func:`~roomba_bt.mission.foreign.suggestion` (a modifier inside a value, BT.CPP's
+    ``num_attempts``), which names of the mission's own (keys, fields) never get."""
     listing = ", ".join(known) if known else "none"
-    return f"unknown {what} {name!r}{closest(name, known)}; known: {listing}"
+    hint = closest(name, known) if owner is None else suggestion(name, known, owner)
+    return f"unknown {what} {name!r}{hint}; known: {listing}"
 
 
 class _Unknown:
@@ -182,9 +187,11 @@ def resolve(
     *,
     param: Param | None = None,
     allow_ref: bool = False,
+    no_ref: str = "",
 ) -> Any:
     """One value of type ``vtype``: ``${param}`` substituted, ``@key`` resolved to a
-    :class:`BlackboardRef` (where allowed), units parsed, range checked. Raises :class:`Bad`."""
+    :class:`BlackboardRef` (where allowed), units parsed, range checked. Raises :class:`Bad`.
+    ``no_ref``: why a blackboard value is not allowed here, said when one is written."""
     fields = record_fields(vtype)
     if fields is not None and isinstance(node, yaml.MappingNode):
         return _record(ctx, node, loc, fields, env, what)
@@ -195,9 +202,8 @@ def resolve(
             negative, pname = full.groups()
             bound = env.get(pname)
             if bound is None:
-                raise Bad(
-                    loc.at(f"{what}: unknown parameter ${{{pname}}}{closest(pname, list(env))}")
-                )
+                hint = _not_a_parameter(ctx, pname, env, allow_ref, no_ref)
+                raise Bad(loc.at(f"{what}: unknown parameter ${{{pname}}}{hint}"))
             if bound.value is UNKNOWN:
                 return UNKNOWN
             if compatible(bound.type, vtype):
@@ -222,11 +228,27 @@ def resolve(
             raw = _substitute(raw, loc, env, what)
             if raw is UNKNOWN:
                 return UNKNOWN
-        if raw.startswith("@"):
-            if not allow_ref:
-                raise Bad(loc.at(f"{what}: a blackboard value (@key) is not allowed here"))
-            return _reference(ctx, raw, loc, vtype, what)
+        if raw.startswith("@") or (port_remapping(raw) and vtype.name not in ("str", "any")):
+            return _reference(ctx, raw, loc, vtype, what, (allow_ref, no_ref))
     return _check_range(_parsed(vtype, raw, loc, what, param), loc, what, param)
+
+
+def _not_a_parameter(
+    ctx: Context, name: str, env: Mapping[str, Bound], allowed: bool, no_ref: str
+) -> str:
+    """What follows "unknown parameter ${x}": that x is a blackboard key (BT.CPP's script
+    ``${key}``) and how a key is read here, else difflib's guess among the parameters."""
+    if name in ctx.keys:
+        return f": {name!r} is a blackboard key, and {_reference_here(ctx, name, allowed)}{no_ref}"
+    return closest(name, list(env))
+
+
+def _reference_here(ctx: Context, key: str | None, allowed: bool) -> str:
+    """How a blackboard value of ``key`` is written, or that none is allowed here."""
+    if not allowed:
+        return "a blackboard value (@key) is not allowed here"
+    declared = "" if key in ctx.keys else f" (no key {key!r} is declared)"
+    return f'a blackboard value is written "@{key}" here{declared}'
 
 
 def _parsed(vtype: ValueType, raw: object, loc: Loc, what: str, param: Param | None) -> Any:
@@ -317,7 +339,19 @@ def given_to(node: yaml.Node, loc: Loc, subtree: str) -> str:
     return f"{text}, given at {loc.file}:{loc.line}:{loc.column} to subtree {subtree}"
 
 
-def _reference(ctx: Context, raw: str, loc: Loc, vtype: ValueType, what: str) -> BlackboardRef:
+def _reference(
+    ctx: Context, raw: str, loc: Loc, vtype: ValueType, what: str, allowed: tuple[bool, str]
+) -> BlackboardRef:
+    """``@key`` (or ``@key.field``) checked against the key's declaration; ``allowed``:
+    whether a blackboard value may be written here, and if not, why. BT.CPP's ``{key}``
+    is said to be written ``@key``."""
+    allow_ref, no_ref = allowed
+    port = port_remapping(raw)
+    if port is not None:
+        said = _reference_here(ctx, port, allow_ref)
+        raise Bad(loc.at(f"{what}: {raw!r} is BehaviorTree.CPP's port remapping; {said}{no_ref}"))
+    if not allow_ref:
+        raise Bad(loc.at(f"{what}: {_reference_here(ctx, None, False)}{no_ref}"))
     match = BLACKBOARD_REF.match(raw)
     if match is None:
         raise Bad(loc.at(f"{what}: {raw!r} is not a blackboard reference (@key or @key.field)"))
