@@ -92,6 +92,12 @@ class NodeKind:
     writes_key: str | None = None
     #: ``(option, other, value)``: the option is required when ``other`` is ``value``
     required_if: tuple[tuple[str, str, str], ...] = ()
+    #: ``(option, other, value)``: the option may be given only when ``other`` is ``value``
+    #: (``parallel``'s ``selected:``, read by no other policy)
+    only_if: tuple[tuple[str, str, str], ...] = ()
+    #: ``(option, value, why)``: a value the word refuses, and why (``reactive_sequence``
+    #: with ``memory: true`` is a ``sequence``)
+    refused: tuple[tuple[str, object, str], ...] = ()
 
     def option(self, name: str) -> Param | None:
         for p in self.options:
@@ -132,9 +138,18 @@ def _parallel(name: str, kids: Sequence[Behaviour], o: Mapping[str, Any]) -> Beh
 _NAME = Param("name", TEXT, doc="the node's name (same as the name modifier)")
 
 
+#: why a reactive composite takes no ``memory: true``
+_NO_MEMORY = (
+    "a {word} ticks every child from the first on every tick: it has no memory "
+    "(write {memory} for one that resumes its RUNNING child)"
+)
+
+
 def _composite(word: str, build: Build, memory: bool, doc: str) -> NodeKind:
     remembers = Param("memory", BOOL, default=memory, doc="resume a RUNNING child")
-    return NodeKind(word, Shape.CHILDREN, build, (remembers, _NAME), doc)
+    why = _NO_MEMORY.format(word=word, memory=word.removeprefix("reactive_"))
+    refused = () if memory else (("memory", True, why),)
+    return NodeKind(word, Shape.CHILDREN, build, (remembers, _NAME), doc, refused=refused)
 
 
 _PARALLEL = NodeKind(
@@ -157,6 +172,7 @@ _PARALLEL = NodeKind(
     ),
     "py_trees Parallel: ticks every child each tick (with synchronise, not one that succeeded)",
     required_if=(("selected", "policy", "selected"),),
+    only_if=(("selected", "policy", "selected"),),
 )
 
 # ----------------------------------------------------------------------------- decorators

@@ -79,7 +79,7 @@ def parse_composite(parser: NodeParser, kind: NodeKind, at: Written) -> Node | N
             if param.name in fields:
                 options[param.name] = option_value(ctx, kind, param, *fields[param.name], env,
                                                    options)  # fmt: skip
-        _required_if(kind, options, key_loc)
+        _option_rules(kind, options, fields, key_loc)
         if "children" not in fields:
             raise Bad(key_loc.at(f"{word} needs children: [...]"))
         children_node, children_loc = fields["children"]
@@ -97,25 +97,36 @@ def parse_composite(parser: NodeParser, kind: NodeKind, at: Written) -> Node | N
         # checks judge its siblings where they are written (ir.Node)
         children.append(child if child is not None else Node("unbuilt", child_loc, "unbuilt"))
     result = Node(word, key_loc, options.pop("name", word), children, options=options)
+    for param in kind.options:
+        if param.type is CHILD_NAMES and param.name in options:
+            _chosen(ctx, f"{word}.{param.name}", options, children, [e[1] for e in entries])
+    return result
+
+
+def _chosen(ctx: Context, what: str, options: dict[str, Any], children: list[Node],
+            places: list[Loc]) -> None:  # fmt: skip
+    """The children an option of child names (``parallel.selected``) picks, by place in
+    ``options[<option>_at]``: the builder picks them by place, since show renames the nodes
+    it reviews (build.CompiledMission.reviewed). A name no child answers to is an error,
+    and so is one that two answer to (two ``name: timer``, or two guards ``until
+    bump(any)``): it picked both."""
+    option = what.rsplit(".", 1)[1]
+    where: Loc = options[f"{option}_loc"]
     answers = [_names_of(c) for c in children]
     # a child that could not be parsed at all has lost its name: not said unknown for that
     nameless = any(c.kind == "unbuilt" and c.partial is None for c in children)
-    for param in kind.options:
-        if param.type is CHILD_NAMES and param.name in options:
-            for chosen in options[param.name]:
-                if not any(chosen in names for names in answers) and not nameless:
-                    ctx.error(
-                        options[f"{param.name}_loc"].at(
-                            f"{word}.{param.name}: "
-                            + unknown("child name", chosen, [names[-1] for names in answers])
-                        )
-                    )
-            # the builder picks them by place: two guards may share a name, and show
-            # renames the nodes it reviews (build.CompiledMission.reviewed)
-            options[f"{param.name}_at"] = [
-                i for i, names in enumerate(answers) if set(names) & set(options[param.name])
-            ]
-    return result
+    for chosen in options[option]:
+        picked = [places[i] for i, names in enumerate(answers) if chosen in names]
+        if not picked and not nameless:
+            known = list(dict.fromkeys(names[-1] for names in answers))
+            ctx.error(where.at(f"{what}: " + unknown("child name", chosen, known)))
+        elif len(picked) > 1:
+            at = " and ".join(f"{p.line}:{p.column}" for p in picked)
+            ctx.error(where.at(f"{what}: {chosen!r} names {len(picked)} children, at {at}; "
+                               "give each its own name (name: ...)"))  # fmt: skip
+    options[f"{option}_at"] = [
+        i for i, names in enumerate(answers) if set(names) & set(options[option])
+    ]
 
 
 def _names_of(child: Node) -> list[str]:
@@ -129,14 +140,25 @@ def _names_of(child: Node) -> list[str]:
     return names
 
 
-def _required_if(kind: NodeKind, options: dict[str, Any], key_loc: Loc) -> None:
-    """``parallel`` with ``policy: selected`` needs ``selected:``."""
+def _option_rules(kind: NodeKind, options: dict[str, Any], fields: Fields, key_loc: Loc) -> None:
+    """The table's rules between a word's options (:class:`NodeKind`): ``parallel`` with
+    ``policy: selected`` needs ``selected:``, which no other policy reads; a reactive
+    composite refuses ``memory: true``. Not judged on an unused subtree's unknown value."""
     for name, other, value in kind.required_if:
         if name not in options and options.get(other) == value:
             param = kind.option(name)
             assert param is not None
             raise Bad(key_loc.at(f"{kind.word} with {other} {value} needs {name}: "
                                  f"[{param.type.name}]"))  # fmt: skip
+    for name, other, value in kind.only_if:
+        given = options.get(other)
+        if name in fields and given != value and given is not UNKNOWN:
+            raise Bad(fields[name][1].at(f"{kind.word}: {name}: only goes with {other}: "
+                                         f"{value} ({other} is {given})"))  # fmt: skip
+    for name, bad, why in kind.refused:
+        if name in fields and options.get(name) == bad:
+            said = str(bad).lower() if isinstance(bad, bool) else str(bad)
+            raise Bad(fields[name][1].at(f"{kind.word}: {name}: {said} is refused: {why}"))
 
 
 def parse_decorator(parser: NodeParser, kind: NodeKind, at: Written) -> Node | None:

@@ -220,6 +220,47 @@ def test_parallel_selected_names_a_guarded_child_by_the_name_written_beside_its_
     assert r.ticks(3) == [R, R, S]
 
 
+@pytest.mark.parametrize(
+    ("text", "said"),
+    [
+        # two children named alike: selected: picked both, and 'known: timer, timer'
+        ("parallel:\n  policy: selected\n  selected: [timer]\n  children:\n"
+         "    - {name: timer, wait: 1s}\n    - {name: timer, wait: 2s}\n",
+         "4:15: parallel.selected: 'timer' names 2 children, at 6:9 and 7:9; give each its "
+         "own name (name: ...)"),
+        # two guards of the same condition answer to the same name
+        ("parallel:\n  policy: selected\n  selected: [until bump(any)]\n  children:\n"
+         "    - {wait: 1s, until: {bump: any}}\n    - {wait: 2s, until: {bump: any}}\n",
+         "4:15: parallel.selected: 'until bump(any)' names 2 children, at 6:9 and 7:9"),
+        # selected: under another policy was ignored, or 'unknown child name'
+        ("parallel:\n  policy: one\n  selected: [t]\n  children: [{name: t, wait: 1s}]\n",
+         "4:15: parallel: selected: only goes with policy: selected (policy is one)"),
+        ("parallel:\n  selected: [t]\n  children: [{name: t, wait: 1s}]\n",
+         "3:15: parallel: selected: only goes with policy: selected (policy is all)"),
+        # a reactive composite with memory is a plain one: it was accepted silently
+        ("reactive_sequence: {memory: true, children: [wall]}",
+         "2:31: reactive_sequence: memory: true is refused: a reactive_sequence ticks every "
+         "child from the first on every tick: it has no memory (write sequence for one that "
+         "resumes its RUNNING child)"),
+        ("reactive_fallback: {memory: true, children: [wall]}",
+         "(write fallback for one that resumes its RUNNING child)"),
+    ],
+)  # fmt: skip
+def test_options_that_contradict_each_other_are_refused(
+    errors_of: Callable[..., list[str]], text: str, said: str
+) -> None:
+    errors = errors_of("tree:\n" + "".join(f"  {line}\n" for line in text.splitlines()))
+    assert [e for e in errors if said in e] != [], errors
+    assert len(errors) == 1, errors
+
+
+def test_reactive_composites_without_memory_and_a_sequence_without_it_are_accepted(
+    errors_of: Callable[..., list[str]],
+) -> None:
+    assert errors_of("tree: {reactive_sequence: {memory: false, children: [wall]}}") == []
+    assert errors_of("tree: {sequence: {memory: false, children: [wall]}}") == []
+
+
 def test_parallel_short_form_is_policy_all(compile_text: Compile) -> None:
     r = run(compile_text, "tree: {parallel: [{wait: 15ms}, wall]}")
     assert r.ticks(2, wall=1) == [R, S]
