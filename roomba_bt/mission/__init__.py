@@ -26,6 +26,7 @@ from roomba_bt.mission.checks import (
     parallel_wheels,
     profile_commands,
     restarted_limits,
+    restarted_runs,
     sensor_ranges,
 )
 from roomba_bt.mission.diagnostics import Diagnostic, MissionError, reported
@@ -132,6 +133,7 @@ def _compile(
             *ctx.warnings,
             *blind_in_full(tree, modes),
             *parallel_wheels(tree),
+            *restarted_runs(tree),
             *ignored,
             *sensor_ranges(tree, profile),
         ),

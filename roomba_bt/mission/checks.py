@@ -32,6 +32,9 @@
   them: compiled, with a warning (:func:`blind_in_full`).
 * **Two wheel branches (a warning).** Two branches of a ``parallel`` with a leaf that turns
   the wheels: the robot gets the last wheel command of a tick only (:func:`parallel_wheels`).
+* **A reactive sequence's restarts (a warning).** A child that is not the last and may be
+  RUNNING starts again after it succeeded, stopping a later running child each time
+  (:func:`restarted_runs`).
 * **Commands the robot has.** Each leaf whose declared ``sends`` include a command the chosen
   profile lacks (Reset 7 and Stop 173 on the Roomba 500) is an error at that leaf; one the
   profile has but whose firmware does not honour it (Digit LEDs Raw 163: the 600 spec says
@@ -51,6 +54,7 @@ from roomba_bt.mission.ir import KeyDecl, Node
 from roomba_bt.mission.source import Loc
 from roomba_bt.mission.ticks import (
     SELECTORS,
+    SEQUENCES,
     at_once,
     packet_tests,
     reads_cliffs,
@@ -459,6 +463,48 @@ def restarted_limits(root: Node) -> list[Diagnostic]:
                     )
                 )
     return errors
+
+
+def restarted_runs(root: Node) -> list[Diagnostic]:
+    """Warnings: a child of a reactive sequence that is not the last and may be RUNNING
+    (``wait``, ``drive``), with a later child that may be RUNNING too. The sequence ticks
+    every child from the first on every tick, so once the first has succeeded and a later
+    one runs, the next tick starts the first again: RUNNING, it stops the later one, which
+    starts again when it succeeds (``[wait 300ms, drive 30cm]`` restarts the drive every
+    315 ms, for ever; BT.CPP's ReactiveSequence does the same). Not for a child that ends
+    on the tick it starts again (a condition, ``stop``, ``mode``, a ``oneshot``). A
+    warning: whether a later child ends before the first starts again is not known here."""
+    warnings: list[Diagnostic] = []
+    for node in root.walk():
+        if node.kind not in SEQUENCES or node.options.get("memory", True):
+            continue
+        for index, child in enumerate(node.children[:-1]):
+            later = [c for c in node.children[index + 1 :] if not _ends_again_at_once(c)]
+            if _ends_again_at_once(child) or not later:
+                continue
+            warnings.append(
+                child.loc.at(
+                    f"{child.name} may be RUNNING and is not the last child of the "
+                    f"{node.kind} ({node.loc.line}:{node.loc.column}), which ticks it again "
+                    f"from the start on every tick after it succeeds: it stops "
+                    f"{later[0].name} ({_line_of(later[0].loc, child.loc)}) and starts it "
+                    "again each time, for ever; put the two in a sequence (with memory), or "
+                    "keep only conditions before the last child"
+                ).as_warning()
+            )
+    return warnings
+
+
+#: Leaves that, ticked again after they succeeded, succeed on that tick: ``mode`` (the robot
+#: is in the mode already; nothing is sent)
+SETTLED_LEAVES = frozenset({"mode"})
+
+
+def _ends_again_at_once(node: Node) -> bool:
+    """Whether ``node``, ticked again after it succeeded, ends on that tick: what ends at
+    once, a ``oneshot`` (it answers as the first time), a :data:`SETTLED_LEAVES` leaf."""
+    settled = node.decl is not None and node.decl.name in SETTLED_LEAVES
+    return at_once(node) or node.kind == "oneshot" or settled
 
 
 def parallel_wheels(root: Node) -> list[Diagnostic]:

@@ -504,3 +504,40 @@ def test_two_branches_of_a_parallel_that_turn_the_wheels_are_warned_of(
     for w in mission.warnings:
         assert "turns the wheels in one branch of the parallel (4:7)" in w.message
         assert w.severity == "warning"
+
+
+@pytest.mark.parametrize(
+    ("children", "warned"),
+    [
+        # stutter (session 26): the drive started again every 315 ms, for ever
+        ("[{wait: 300ms}, {drive: {velocity: 200 mm/s, distance: 30cm}}]",
+         ["wait(300ms) ... stops drive(velocity=200 mm/s, distance=30cm) (line 4)"]),
+        ("[{inverter: {bump: any}}, {turn: 90deg}, {wait: 1s}, wall]",
+         ["turn(90deg) ... stops wait(1s) (line 4)"]),
+        # conditions, stop, a mode already entered, a oneshot end at once when ticked again;
+        # a running child whose later ones all end at once ends the sequence with them
+        ("[{inverter: {bump: any}}, {drive: {velocity: 200 mm/s, distance: 30cm}}]", []),
+        ("[stop, {mode: safe}, {oneshot: {wait: 1s}}, {drive: {velocity: 200 mm/s}}]", []),
+        ("[{drive: {velocity: 200 mm/s}}, {inverter: {cliff: any}}, {log: done}]", []),
+    ],
+)  # fmt: skip
+def test_a_child_a_reactive_sequence_restarts_before_a_running_one_is_warned_of(
+    compile_text: Callable[..., CompiledMission], children: str, warned: list[str]
+) -> None:
+    for sequence in ("reactive_sequence: ", "sequence: {memory: false, children: "):
+        close = "}" if "children" in sequence else ""
+        text = f"tree:\n  sequence:\n    - mode: safe\n    - {sequence}{children}{close}\n"
+        mission = compile_text(text)
+        said = [
+            f"{w.message.split(' may be RUNNING')[0]} ... "
+            + w.message.split("succeeds: it ")[1].split(" and starts")[0]
+            for w in mission.warnings
+        ]
+        assert said == warned, text
+        for w in mission.warnings:
+            assert (
+                w.line == 4
+                and f"not the last child of the {sequence.split(':')[0]} (4:7)" in w.message
+            )
+            assert "from the start on every tick after it succeeds" in w.message
+            assert w.severity == "warning"
