@@ -473,7 +473,8 @@ def restarted_runs(root: Node) -> list[Diagnostic]:
     starts again when it succeeds (``[wait 300ms, drive 30cm]`` restarts the drive every
     315 ms, for ever; BT.CPP's ReactiveSequence does the same). Not for a child that ends
     on the tick it starts again (a condition, ``stop``, ``mode``, a ``oneshot``). A
-    warning: whether a later child ends before the first starts again is not known here."""
+    warning: whether a later child ends before the first starts again is not known here.
+    Said once for a subtree used twice."""
     warnings: list[Diagnostic] = []
     for node in root.walk():
         if node.kind not in SEQUENCES or node.options.get("memory", True):
@@ -492,7 +493,7 @@ def restarted_runs(root: Node) -> list[Diagnostic]:
                     "keep only conditions before the last child"
                 ).as_warning()
             )
-    return warnings
+    return list(dict.fromkeys(warnings))  # a subtree used twice is one place
 
 
 #: Leaves that, ticked again after they succeeded, succeed on that tick: ``mode`` (the robot

@@ -541,3 +541,18 @@ def test_a_child_a_reactive_sequence_restarts_before_a_running_one_is_warned_of(
             )
             assert "from the start on every tick after it succeeds" in w.message
             assert w.severity == "warning"
+
+
+def test_a_restarting_child_in_a_subtree_used_twice_is_warned_of_once(
+    mission_file: Callable[..., Path],
+) -> None:
+    """Each use compiles the body again: the same place, said once."""
+    from roomba_bt.mission import load_mission
+
+    body = "[{wait: 300ms}, {drive: {velocity: 100 mm/s, distance: 10cm}}]"
+    path = mission_file(
+        f"subtrees: {{s: {{tree: {{reactive_sequence: {body}}}}}}}\n"
+        "tree: {sequence: [{mode: safe}, {subtree: s}, {subtree: s}]}\n"
+    )
+    warned = [(w.line, w.message.split(" ", 1)[0]) for w in load_mission(path).warnings]
+    assert warned == [(1, "wait(300ms)")]
