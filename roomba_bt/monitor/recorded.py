@@ -56,6 +56,8 @@ def replay_into_feed(
 
 
 def _note_text(note: dict[str, Any]) -> str:
+    if "watchdog" in note and isinstance(note["watchdog"], int | float):  # a trip, replayed
+        return f"watchdog: no valid sensor frame for {note['watchdog'] * 1000:.0f} ms"
     if "force" in note:
         to = note.get("to")
         return f"{note['force']} forced to {to}" if to != "none" else f"{note['force']} released"

@@ -49,7 +49,7 @@ from roomba_bt.robot.errors import (
 )
 from roomba_bt.robot.handshake import drain
 from roomba_bt.robot.interface import ModeChange
-from roomba_bt.robot.link import LinkStatus, StreamLink, TimedFrame
+from roomba_bt.robot.link import DEFAULT_WATCHDOG, LinkStatus, StreamLink, TimedFrame
 from roomba_bt.robot.modes import DEFAULT_SETTLE, ModeModel
 from roomba_bt.robot.silence import (
     answers_elsewhere,
@@ -172,7 +172,7 @@ class Connection:
         transport: Transport,
         profile: RobotProfile | str = DEFAULT_PROFILE,
         *,
-        watchdog: float = 0.1,
+        watchdog: float = DEFAULT_WATCHDOG,
         end_in: EndMode = "passive",
         settle: float = DEFAULT_SETTLE,
         baud: int | None = None,
@@ -219,7 +219,7 @@ class Connection:
         baud: int = DEFAULT_BAUD,
         profile: RobotProfile | str = DEFAULT_PROFILE,
         *,
-        watchdog: float = 0.1,
+        watchdog: float = DEFAULT_WATCHDOG,
         end_in: EndMode = "passive",
         write_timeout: float = 0.5,
         keep_awake: bool | None = None,

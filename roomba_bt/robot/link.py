@@ -11,12 +11,19 @@ virtual clock the caller's reads are what move time::
 
     no valid frame for ``watchdog`` s while a stream runs ──► halt() ──► StreamStalled
                                                       (once; frames coming back clear it)
+
+Each trip is noted in the run's record when the transport keeps one (``note``: the runtime's
+``RecordingTransport``), at the link time it tripped at; a replay's link trips at those
+times and nowhere else (:attr:`StreamLink.replayed_trips`): its clock is the record's, and a
+read that woke late on the live run's loaded machine took frames the record stamps past the
+watchdog, where the live run had no trip.
 """
 
 from __future__ import annotations
 
 import enum
 import logging
+import math
 from collections import deque
 from collections.abc import Callable, Sequence
 from typing import NamedTuple
@@ -42,6 +49,9 @@ RECENT_CHUNKS = 16
 
 #: How far past its limit the watchdog's wait ends (the check is "silent for more than").
 WATCHDOG_MARGIN = 0.001
+
+#: Seconds without a valid frame before the watchdog trips, unless told (``run --watchdog``).
+DEFAULT_WATCHDOG = 0.1
 
 #: The session's mode model, told of every frame: the change the robot made by itself, if any.
 Reconcile = Callable[[SensorFrame, int, float], ModeChange | None]
@@ -129,6 +139,10 @@ class StreamLink:
         self._bytes_at_frame = 0  # bytes_read when the last valid frame came
         #: the last chunks read (a reset's banner comes just before the stream stops)
         self._recent: deque[bytes] = deque(maxlen=RECENT_CHUNKS)
+        #: a replay's watchdog: the link times its recorded run's watchdog tripped at, in
+        #: order; it trips there (while a stream runs) and nowhere else. None: it trips on
+        #: the silence, as on a robot
+        self.replayed_trips: deque[float] | None = None
 
     @property
     def name(self) -> str:
@@ -320,7 +334,11 @@ class StreamLink:
         # When the watchdog trips if no valid frame comes: a margin past its limit, so the
         # check after the wait finds it tripped. Most polls come well before it: the
         # conditions under which it can trip are read only when it would cut the wait.
-        due = self._silent_since + self.watchdog + WATCHDOG_MARGIN
+        trips = self.replayed_trips
+        if trips is None:
+            due = self._silent_since + self.watchdog + WATCHDOG_MARGIN
+        else:
+            due = replayed_due(trips, now)
         if due < deadline and self.streaming and self.watchdog > 0 and self.status is _STREAMING:
             deadline = due if due > now else now
         while True:
@@ -399,9 +417,27 @@ class StreamLink:
         if not self.streaming or self.watchdog <= 0 or self.status is not _STREAMING:
             return
         silent = now - self._silent_since
-        if silent <= self.watchdog:
+        trips = self.replayed_trips
+        if trips is None:
+            if silent <= self.watchdog:
+                return
+        elif trips and trips[0] <= now:
+            trips.popleft()
+        else:
             return
         self.status = LinkStatus.STALLED
         self.watchdog_trips += 1
+        note = getattr(self.transport, "note", None)  # a record's (run --record), for a replay
+        if callable(note):
+            note({"watchdog": round(silent, 6), "limit": self.watchdog}, at=now)
         halted = self._halt()
         raise StreamStalled(self.name, silent, self.watchdog, halted, self.checksum_mismatch())
+
+
+def replayed_due(trips: deque[float], now: float) -> float:
+    """When a replay's watchdog trips next (:attr:`StreamLink.replayed_trips`): the recorded
+    run's next trip after ``now``; those up to ``now`` that it did not trip at (the replay
+    went elsewhere: no stream running then) are dropped."""
+    while trips and trips[0] <= now:
+        trips.popleft()
+    return trips[0] if trips else math.inf

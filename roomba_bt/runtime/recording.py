@@ -6,8 +6,21 @@ A record is JSON Lines, one object a line::
      "mission": "missions/dock.yaml", "parameters": {...}, "packets": [7, 9, ...]}
     {"t": 0.000000, "d": "out", "b": "80"}          <- host -> robot, hex
     {"t": 0.015012, "d": "in",  "b": "1305..."}     <- robot -> host, hex
-    {"t": 3.120000, "d": "note", "note": {...}}     <- an operator's act (the monitor's force)
+    {"t": 3.120000, "d": "note", "note": {...}}     <- an act: the monitor's force, the tick
+                                                       guard's or the watchdog's drive 0
     {"t": 9.075000, "d": "end"}                     <- the run's end (version 2 on)
+
+The header also holds the run's ``watchdog`` and ``grace`` (seconds), and each watchdog trip
+is a note (``{"watchdog": 0.101, "limit": 0.1}``, at the link time it tripped): a replay's
+link trips where the record's did, and nowhere else (``StreamLink.replayed_trips``), so a
+run whose watchdog stopped the wheels (a stall ridden through: a noisy cable, a paused
+stream) replays byte for byte. A record made before (no ``watchdog`` in its header) is
+replayed with the watchdog on the record's clock, at the default 100 ms and grace 2 s: its
+stalls replay too, unless the run had another ``--watchdog`` or ``--grace``, or a read that
+woke late (a loaded machine) took frames the record stamps past the watchdog, where the
+live run did not trip (the replay does: a difference). Before, a replay ran no watchdog, and
+the first stall of a record was its first difference ("expected Drive (137) 89 00 00 00 00,
+sent nothing").
 
 ``t`` is the link's own clock (``transport.now()``) relative to the first byte, so a record
 made on the virtual clock replays identically, and one made on a robot replays with the
@@ -112,12 +125,15 @@ class RecordingTransport:
         self._put(f'{{"t": {now - self._t0:.6f}, "d": "{direction}", "b": "{data.hex()}"}}\n', now)
         return now
 
-    def note(self, payload: dict[str, Any]) -> None:
-        """Mark an operator's act in the record (replay skips it; the monitor shows it)."""
+    def note(self, payload: dict[str, Any], at: float | None = None) -> None:
+        """Mark an act in the record: an operator's, the tick guard's or the watchdog's (a
+        replay does the runtime's again; the monitor shows each). ``at``: the link time it
+        was done at (the watchdog's trip, which a replay's link trips at); else now."""
         if self._file.closed:
             return
         now = self._inner.now()
-        t = now - (self._t0 if self._t0 is not None else now)
+        at = now if at is None else at
+        t = at - (self._t0 if self._t0 is not None else at)
         self._put(json.dumps({"t": round(t, 6), "d": "note", "note": payload}) + "\n", now)
 
     def write(self, data: bytes) -> None:
@@ -197,6 +213,15 @@ class Record:
         if self.header.get("version") == 1:
             return "version 1 records have no end line, or the run was killed"
         return "the run was killed?"
+
+    @property
+    def watchdog_trips(self) -> list[float] | None:
+        """When the recorded run's watchdog tripped (its notes), or None for a record made
+        before they were noted (no ``watchdog`` in its header): the replay's own watchdog
+        trips on the record's silence then."""
+        if "watchdog" not in self.header:
+            return None
+        return [t for t, note in self.notes if "watchdog" in note]
 
     @property
     def inbound_after_writes(self) -> list[tuple[float, bytes, int]]:
@@ -370,6 +395,10 @@ def header_problem(header: dict[str, Any]) -> str | None:
         isinstance(k, str) and isinstance(v, str | int | float) for k, v in parameters.items()
     ):
         return f"header field 'parameters' is {parameters!r}; expected {{name: value}}"
+    for name in ("watchdog", "grace"):  # the run's, read by replay (absent before)
+        seconds = header.get(name, 0.0)
+        if type(seconds) not in (int, float) or not 0.0 <= seconds < math.inf:
+            return f"header field {name!r} is {seconds!r}; expected seconds, 0 or more"
     packets = header.get("packets")
     if not isinstance(packets, list) or not packets:
         return 'the header lists no stream packets ("packets")'

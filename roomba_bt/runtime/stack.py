@@ -19,6 +19,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import threading
+from collections import deque
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -30,6 +31,7 @@ from roomba_bt.behaviours.declare import Declaration
 from roomba_bt.behaviours.lean import check_updates
 from roomba_bt.oi.profiles import PROFILES, RobotProfile
 from roomba_bt.robot.connection import Connection, EndMode
+from roomba_bt.robot.link import DEFAULT_WATCHDOG
 from roomba_bt.runtime.loop import (
     MissionLike,
     MissionRunner,
@@ -96,6 +98,22 @@ class Recording:
     #: the ``-p`` values as given (text), replayed with the same mission
     parameters: Mapping[str, str] = field(default_factory=dict)
 
+    def header(
+        self, profile: RobotProfile, baud: int, packets: Sequence[int], watchdog: float,
+        grace: float,
+    ) -> dict[str, Any]:  # fmt: skip
+        """The record's header: what ``replay`` runs it again with (``watchdog`` and
+        ``grace``: the run's, for the replay's watchdog and ride-through)."""
+        return {
+            "profile": profile.name,
+            "baud": baud,
+            "mission": self.mission,
+            "parameters": dict(self.parameters),
+            "packets": list(packets),
+            "watchdog": watchdog,
+            "grace": grace,
+        }
+
 
 class RunStack:
     """One mission on one link: the connection, the runner and, if asked, the record.
@@ -148,13 +166,8 @@ class RunStack:
         )
         transport: Transport = link
         if record is not None:
-            header = {
-                "profile": profile.name,
-                "baud": baud,
-                "mission": record.mission,
-                "parameters": dict(record.parameters),
-                "packets": list(self.packets),
-            }
+            watchdog_s = connection.link.watchdog if connection else _made_watchdog(made)
+            header = record.header(profile, baud, self.packets, watchdog_s, grace)
             transport = RecordingTransport(link, record.path, header)  # OSError: the file
         self.link = link
         self.transport = transport
@@ -287,6 +300,12 @@ def _taken_over(
     return connection
 
 
+def _made_watchdog(made: Mapping[str, Any]) -> float:
+    """The watchdog of the connection :class:`RunStack` makes (``made``: its settings)."""
+    watchdog = made["watchdog"]
+    return DEFAULT_WATCHDOG if watchdog is None else float(watchdog)
+
+
 def _tick_guard(
     connection: Connection,
     link: Transport,
@@ -320,6 +339,7 @@ def replay_record(
     differs from the recorded ones; the transport holds what the tree wrote. Ctrl-C is
     raised again unless ``raise_interrupts`` is False (see :meth:`RunStack.run`)."""
     transport = ReplayTransport(record, name=f"replay:{name}")
+    header, trips = record.header, record.watchdog_trips
 
     def input_ended() -> str | None:
         if transport.difference is not None or transport.starved():
@@ -332,12 +352,15 @@ def replay_record(
         profile=profile,
         baud=baud,
         packets=packets,
-        watchdog=0.0,
+        watchdog=float(header.get("watchdog", DEFAULT_WATCHDOG)),  # as the recorded run's
+        grace=float(header.get("grace", DEFAULT_GRACE)),
         keep_awake=False,  # no robot to keep awake (it said a robot "sleeps after 5 minutes")
         observer=observer,
         input_ended=input_ended,
         replayed_notes=[note for _, note in record.notes],  # the tick guard's acts
     )
+    if trips is not None:  # it trips where the record's did (None: on the record's silence)
+        stack.connection.link.replayed_trips = deque(trips)
     stack.runner.gate = gate  # the monitor's replay of the operator's acts
     stack.runner.on_wall_clock = False  # a record's clock: Ctrl-Z suspends, Ctrl-\ quits
     return stack.run(raise_interrupts=raise_interrupts), transport

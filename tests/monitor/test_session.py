@@ -10,7 +10,12 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from runtime.simrun import LEDGE, over_the_edge  # tests/runtime: a room with a drop
+from runtime.simrun import (  # tests/runtime: a room with a drop, a recorded stall
+    LEDGE,
+    over_the_edge,
+    record_run,
+    stream_gap_link,
+)
 
 from roomba_bt.mission import load_mission
 from roomba_bt.monitor import session as session_module
@@ -798,3 +803,22 @@ def test_the_board_shows_the_mission_s_keys_not_their_declared_types(
     latest = rig.feed.latest()
     assert latest is not None
     assert dict(rig.feed.blackboard(latest)) == {"/mission/n": 2}
+
+
+def test_the_record_of_a_stall_is_shown_whole_the_watchdogs_trip_among_its_events(
+    tmp_path: Path,
+) -> None:
+    """``roomba-bt monitor RECORD``: a run whose watchdog stopped the wheels is replayed past
+    the stall to its end. Before, the replay ran no watchdog and stopped at the stall as a
+    difference: a 90 s noisy run showed '6 ticks, input ended'."""
+    path = record_run(tmp_path, stream_gap_link())
+    record = load_record(path)
+    mission = load_mission(record.header["mission"], {}, profile=CREATE2)
+    feed, summary = replay_into_feed(
+        record, mission, CREATE2, tuple(record.header["packets"]), 115200, str(path)
+    )
+    assert summary.reason == "end of the record"  # not its first difference
+    assert summary.mission_time_s >= 3.0  # the run's 3 s, as recorded
+    assert summary.stalls == summary.stalls_ridden == 1
+    notes = [e.text for e in feed.events if e.kind == "note"]
+    assert notes == ["watchdog: no valid sensor frame for 105 ms"]

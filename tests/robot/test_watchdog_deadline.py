@@ -4,6 +4,8 @@ virtual clock: each read moves the simulator's time, so the figure is exact)."""
 
 from __future__ import annotations
 
+from collections import deque
+
 import pytest
 
 from roomba_bt.oi import commands as oi
@@ -37,3 +39,26 @@ def test_a_long_poll_still_stops_the_wheels_when_the_watchdog_is_due(
     assert WATCHDOG < stalled.value.silent_for <= WATCHDOG + SLOT_SECONDS
     assert simulator.time - latest.time <= WATCHDOG + SLOT_SECONDS
     assert simulator.requested_left == simulator.requested_right == 0  # drive 0 arrived
+
+
+def test_a_replays_watchdog_trips_at_the_recorded_time_and_nowhere_else() -> None:
+    """``replayed_trips``: a replay's link trips where its record's did (here 0.3 s after the
+    last frame, a run whose read woke late), not on the silence at 100 ms; a recorded trip
+    passed with no stream to trip is dropped, not done late."""
+    simulator = Simulator(
+        load_world("empty-room"), CREATE2, 0, Faults(stream_stop_at=1.0), trace=False
+    )
+    connection = Connection(SimLink(simulator), CREATE2, watchdog=WATCHDOG)
+    connection.link.replayed_trips = deque([0.01])  # before the stream: never tripped
+    connection.start("safe", PACKETS)
+    connection.send(oi.drive(200, 32767))
+    while simulator.time < 1.0:
+        connection.poll(0.05)
+    last = connection.link.silent_since
+    connection.link.replayed_trips.append(last + 0.3)
+    with pytest.raises(StreamStalled) as stalled:
+        for _ in range(1000):
+            connection.poll(0.05)
+    assert stalled.value.silent_for == pytest.approx(0.3)
+    assert not connection.link.replayed_trips
+    assert simulator.requested_left == simulator.requested_right == 0  # its drive 0

@@ -7,11 +7,13 @@ import random
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.runtime.loop import MissionRunner
 from roomba_bt.runtime.summary import RunSummary
-from roomba_bt.sim import SimLink, Simulator
+from roomba_bt.sim import Faults, SimLink, Simulator, load_world
 
 if TYPE_CHECKING:
     from roomba_bt.runtime.stack import RunStack
@@ -187,3 +189,25 @@ def run_in_a_worker(stack: RunStack) -> tuple[threading.Thread, list[RunSummary 
     worker = threading.Thread(target=work, name="worker")
     worker.start()
     return worker, result
+
+
+def stream_gap_link() -> SimLink:
+    """The simulator's stream pauses 0.5 s at 1 s (``sim --stream-gap-at 1``): the watchdog
+    stops the wheels, and the stall is ridden through."""
+    faults = Faults(stream_gap_at=1.0, stream_gap_s=0.5)
+    return SimLink(Simulator(load_world("empty-room"), CREATE2, 0, faults))
+
+
+def record_run(tmp_path: Path, link: SimLink, mission: str = SPIN) -> Path:
+    """The record (``run --record``) of ``mission`` run 3 s on ``link``."""
+    from roomba_bt.mission import load_mission
+    from roomba_bt.runtime.stack import Recording, RunStack
+
+    source, path = tmp_path / "m.yaml", tmp_path / "run.jsonl"
+    source.write_text(mission)
+    loaded = load_mission(source, {}, profile=CREATE2)
+    stack = RunStack(loaded, link, profile=CREATE2, timeout_s=3.0,
+                     record=Recording(path, str(source)))  # fmt: skip
+    stack.run()
+    stack.close()  # the record's end line
+    return path

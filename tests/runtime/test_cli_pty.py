@@ -161,6 +161,26 @@ def test_success_over_the_pty(sim_port: str, tmp_path: Path) -> None:
     assert "the tree wrote the same" in replay.stdout
 
 
+def test_a_run_whose_watchdog_stopped_the_wheels_over_the_pty_replays_byte_for_byte(
+    served_sim: Callable[..., Any], tmp_path: Path
+) -> None:
+    """The robot's stream pauses half a second: the watchdog's drive 0, the stall ridden
+    through, the spin again. The replay does each again and writes the same bytes; before,
+    it ran no watchdog: 'first difference ... expected Drive (137) 89 00 00 00 00, sent
+    nothing', exit 1, for every run with a stall (every run over a noisy cable)."""
+    sim = served_sim("--pty", "--stream-gap-at", "1.5", "--stream-gap-s", "0.5")
+    record = tmp_path / "run.jsonl"
+    proc = _start_run(sim.address, _mission(tmp_path, SPIN), record, "--timeout", "3s")
+    out, err = proc.communicate(timeout=30)
+    assert proc.returncode == 1, err  # its timeout
+    assert "stalls       1 (watchdog drive 0), 1 ridden through" in out
+    replay = subprocess.run(
+        [*CLI, "replay", str(record)], capture_output=True, text=True, timeout=30
+    )
+    assert replay.returncode == 0, replay.stdout + replay.stderr
+    assert "the tree wrote the same" in replay.stdout
+
+
 def test_timeout_over_the_pty_is_exit_1(sim_port: str, tmp_path: Path) -> None:
     record = tmp_path / "run.jsonl"
     proc = _start_run(sim_port, _mission(tmp_path, SPIN), record, "--timeout", "1s")

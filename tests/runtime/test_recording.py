@@ -9,7 +9,14 @@ from pathlib import Path
 import pytest
 
 from roomba_bt.cli import main
-from roomba_bt.runtime.recording import RecordingTransport
+from roomba_bt.mission import load_mission
+from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.runtime.recording import RecordingTransport, load_record
+from roomba_bt.runtime.stack import replay_record
+from roomba_bt.runtime.summary import RunSummary
+from roomba_bt.sim import SimLink, Simulator, load_world
+
+from .simrun import record_run, stream_gap_link
 
 FRAME = bytes.fromhex("131a070009000a000b000c001906511a0a88220023022b020d2c020dca")
 HEADER = {"profile": "create2", "baud": 115200, "mission": "bump-and-turn", "packets": [7]}
@@ -163,3 +170,77 @@ def test_a_malformed_line_before_the_last_or_ended_is_still_an_error(
                                     lines[50][:20]]), encoding="utf-8")  # fmt: skip
     assert main(["replay", str(damaged)]) == 2
     assert f"{damaged}:41: malformed chunk" in capsys.readouterr().err
+
+
+def _replayed(path: Path) -> tuple[RunSummary, tuple[int, str, str] | None, int]:
+    """``path`` replayed as ``roomba-bt replay`` does: its summary, its first difference and
+    the bytes the tree wrote."""
+    record = load_record(path)
+    mission = load_mission(record.header["mission"], {}, profile=CREATE2)
+    summary, transport = replay_record(
+        record, mission, profile=CREATE2, packets=record.header["packets"], baud=115200,
+        name=str(path),
+    )  # fmt: skip
+    return summary, transport.first_difference(), len(transport.written)
+
+
+def test_a_run_whose_watchdog_stopped_the_wheels_replays_byte_for_byte(tmp_path: Path) -> None:
+    """The watchdog's drive 0 in a stream gap, the stall ridden through and the wheels' command
+    again: the replay does each at the same time. Before, a replay ran no watchdog and the
+    stall was its first difference ('expected Drive (137) 89 00 00 00 00, sent nothing'),
+    exit 1: every record of a noisy cable, and the monitor's view of it, stopped there."""
+    path = record_run(tmp_path, stream_gap_link())
+    record = load_record(path)
+    assert record.header["watchdog"] == 0.1 and record.header["grace"] == 2.0
+    [trip] = record.watchdog_trips or []
+    assert 1.0 < trip < 1.2  # noted at the link time it tripped
+    assert bytes.fromhex("8900000000") in record.outbound  # the stall's drive 0
+    summary, difference, written = _replayed(path)
+    assert difference is None, difference
+    assert written == len(record.outbound)
+    assert summary.stalls == summary.stalls_ridden == 1
+
+
+def test_a_record_made_before_the_trips_were_noted_replays_its_stall_on_its_silence(
+    tmp_path: Path,
+) -> None:
+    """A record without ``watchdog`` in its header (made before, as the soak's were): the
+    replay's watchdog trips on the record's silence, at the default 100 ms."""
+    path = record_run(tmp_path, stream_gap_link())
+    lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
+    header = {k: v for k, v in json.loads(lines[0]).items() if k not in ("watchdog", "grace")}
+    old = [json.dumps(header) + "\n", *(x for x in lines[1:] if '"watchdog"' not in x)]
+    path.write_text("".join(old), encoding="utf-8")
+    assert load_record(path).watchdog_trips is None
+    summary, difference, _ = _replayed(path)
+    assert difference is None, difference
+    assert summary.stalls == 1
+
+
+class _WokeLate(SimLink):
+    """The host wakes late once, at 1 s: its read returns 0.2 s later with the frames sent
+    meanwhile (a loaded machine), stamped then: past the watchdog's time, with no trip."""
+
+    def __init__(self, simulator: Simulator) -> None:
+        super().__init__(simulator)
+        self.late = True
+
+    def read(self, timeout: float) -> bytes:
+        data = super().read(timeout)
+        if self.late and self.simulator.time >= 1.0:
+            self.late = False
+            for _ in range(round(0.2 / 0.015)):
+                self.simulator.step()
+                data += self.simulator.read()
+        return data
+
+
+def test_a_read_that_woke_late_is_no_trip_in_the_replay(tmp_path: Path) -> None:
+    """The replay's watchdog trips where the record's did, not on the record's silence: the
+    frames of a late read are stamped past the watchdog's time, and a replay that tripped on
+    them sent a drive 0 the run never sent."""
+    path = record_run(tmp_path, _WokeLate(Simulator(load_world("empty-room"), CREATE2, 0)))
+    assert load_record(path).watchdog_trips == []
+    summary, difference, _ = _replayed(path)
+    assert difference is None, difference
+    assert summary.stalls == 0
