@@ -32,16 +32,18 @@ curve). The lanes' direction is re-anchored on the walls: while it follows a str
 of wall (a metre with the heading within 2 deg), the wall's heading by odometry becomes the
 lanes' axis, so lanes stay parallel to the walls however the heading has drifted.
 
-Every driving step stops for hazards in the tick that shows them (bump, cliff, virtual wall),
-backs off and goes on with the next decision. In Safe mode the firmware stops first at a
-cliff and drops to Passive (the brushes stop too); waiting there longer than a second fails
-``cover`` (``Action.stranded``), and the mission re-enters Safe, turns the motors on and
-starts it again (missions/clean.yaml: a ``retry``). Started again in the same run it goes
-on with what it knew: its map and pose are kept on the blackboard (:data:`MAP_KEY`, dropped
-by each run's ``setup``), and its plan: the move the firmware stopped meets the hazard in
-its first tick and reacts as in Full mode (backs off, and the lane, edge or path goes on as
-it would have). A ``cover`` that another one's map is handed to backs off, turns and makes
-for the nearest unswept floor. A wheel drop fails it.
+Every driving step stops for hazards in the tick that shows them (bump, cliff, virtual
+wall), backs off and goes on with the next decision. In Safe mode the firmware stops first
+at a cliff and drops to Passive (the brushes stop too); that fails ``cover`` in the tick it
+shows (``Action.stranded`` with no grace: the cliff is mapped, and nothing brings the robot
+back while it waits; it waited a second, 21 a run by the apartment's stairs), and the
+mission re-enters Safe, turns the motors on and starts it again (missions/clean.yaml: a
+``retry``). Started again in the same run it goes on with what it knew: its map and pose are
+kept on the blackboard (:data:`MAP_KEY`, dropped by each run's ``setup``), and its plan: the
+move the firmware stopped meets the hazard in its first tick and reacts as in Full mode
+(backs off, and the lane, edge or path goes on as it would have). A ``cover`` that another
+one's map is handed to backs off, turns and makes for the nearest unswept floor. A wheel
+drop fails it.
 """
 
 from __future__ import annotations
@@ -463,7 +465,7 @@ class Cover(Action):
         bearings = self._bearings
         bearings.integrate(snap.odometry)
         bearings.observe(frame)  # a cliff is mapped in the tick it shows, in Passive too
-        waiting = driving.held(self)
+        waiting = driving.held(self, 0.0 if frame.any_cliff else None)  # module doc: Safe
         if waiting is not None:
             self._interrupted = waiting is Status.FAILURE and not frame.any_wheel_drop
             return waiting

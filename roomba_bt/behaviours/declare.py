@@ -769,32 +769,32 @@ class Action(RobotBehaviour):
     PASSIVE_GRACE_S = 1.0
     _out_of_driving_since: float | None = None
 
-    def stranded(self) -> str | None:
+    def stranded(self, grace: float | None = None) -> str | None:
         """A failure message once the robot has been out of Safe/Full for longer than
-        :attr:`PASSIVE_GRACE_S` while this action was driving it, else None. Waiting on
-        silently left the robot in Passive until it slept (5 minutes) and the run ended as a
-        lost connection; failing lets the tree recover (``retry`` with ``mode: safe``) or
-        end with the cause."""
+        ``grace`` (s; :attr:`PASSIVE_GRACE_S` unless given; 0: in the tick it shows) while
+        this action was driving it, else None. Waiting on silently left the robot in Passive
+        until it slept (5 minutes) and the run ended as a lost connection; failing lets the
+        tree recover (``retry`` with ``mode: safe``) or end with the cause."""
         snap = self.snapshot
         if snap.mode in DRIVING_MODES:
             self._out_of_driving_since = None
             return None
         if self._out_of_driving_since is None:
             self._out_of_driving_since = snap.time
-            return None
-        if snap.time - self._out_of_driving_since < self.PASSIVE_GRACE_S - 1e-9:
+        if grace is None:
+            grace = self.PASSIVE_GRACE_S
+        if snap.time - self._out_of_driving_since < grace - 1e-9:
             return None
         change = snap.last_fallback
         cause = f" ({change.cause})" if change is not None else ""
-        return (
-            f"the robot left Safe/Full mode{cause} and was not brought back within "
-            f"{self.PASSIVE_GRACE_S:g} s"
-        )
+        waited = f" and was not brought back within {grace:g} s" if grace > 0 else ""
+        return f"the robot left Safe/Full mode{cause}{waited}"
 
-    def wait_for_driving_mode(self) -> py_trees.common.Status:
+    def wait_for_driving_mode(self, grace: float | None = None) -> py_trees.common.Status:
         """Out of Safe/Full, where the mode model would refuse a drive command: RUNNING
-        while it waits for them, FAILURE once :meth:`stranded` after it began to move."""
-        stranded = self.stranded() if self._started_motion else None
+        while it waits for them, FAILURE once :meth:`stranded` (``grace``) after it began
+        to move."""
+        stranded = self.stranded(grace) if self._started_motion else None
         if stranded is not None:
             self._started_motion = False
             self.feedback_message = stranded

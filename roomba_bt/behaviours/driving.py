@@ -114,16 +114,17 @@ def near_ahead(frame: SensorFrame) -> bool:
     return max(signals[1], signals[2], signals[3], signals[4]) >= NEAR_SIGNAL
 
 
-def held(action: Action) -> Status | None:
+def held(action: Action, grace: float | None = None) -> Status | None:
     """Why a driving leaf cannot drive this tick: a wheel drop fails it; out of Safe/Full it
-    waits, and fails once stranded there after it began to move. None: it may drive (back
-    in Safe/Full, the wait is over: the next time out of them has its own grace)."""
+    waits, and fails once stranded there after it began to move (after ``grace`` s, the
+    action's :attr:`~.Action.PASSIVE_GRACE_S` unless given). None: it may drive (back in
+    Safe/Full, the wait is over: the next time out of them has its own grace)."""
     snap = action.snapshot
     if snap.frame.any_wheel_drop:
         action.feedback_message = "wheel drop"
         return Status.FAILURE
     if snap.mode not in DRIVING_MODES:
-        return action.wait_for_driving_mode()
+        return action.wait_for_driving_mode(grace)
     action.stranded()  # in Safe/Full: clears the time it left them, returns None
     return None
 

@@ -169,7 +169,7 @@ def _frame(robot: StubRobot, counts: int, mode: OIMode = OIMode.SAFE, cliff: int
 def test_cover_started_again_in_a_run_goes_on_with_its_map_and_pose(
     make: Make, robot: StubRobot
 ) -> None:
-    """The firmware's drop to Passive at a cliff (Safe mode) fails ``cover`` after a second; the
+    """The firmware's drop to Passive at a cliff (Safe mode) fails ``cover`` at once; the
     mission's ``retry`` starts it again. It goes on with the map (it swept the floor anew, and
     ended as if done on floor it had cleaned, before session 25) and its own pose, the move
     meanwhile added, and its plan: the drive the firmware stopped meets the cliff and backs
@@ -209,3 +209,30 @@ def test_cover_started_again_in_a_run_goes_on_with_its_map_and_pose(
     assert any(c is not None and bearings.map.cells[c] & BLOCKED for c in ahead)  # mapped
     cover.setup(robot=robot)  # the next run
     assert coverage_map.MAP_KEY not in py_trees.blackboard.Blackboard.storage
+
+
+def test_cover_fails_at_once_at_the_firmwares_cliff_stop_and_waits_otherwise(
+    make: Make, robot: StubRobot
+) -> None:
+    """At a cliff the firmware stops the wheels and drops to Passive; ``cover`` has mapped it
+    and, started again, backs off it, so it fails in that tick: it waited a second each time
+    (about 21 times a 20-minute apartment run, by the stairs), which nothing in the mission
+    could use. Out of Safe with no cliff showing (the charger, say) it still waits the
+    grace for something to bring the robot back."""
+    counts = 0
+    for cliff, ticks in ((1, 1), (0, round(Cover.PASSIVE_GRACE_S / 0.015) + 1)):
+        cover = make(Cover)
+        _frame(robot, counts)
+        for _ in range(20):  # driving ahead
+            counts += 20
+            _frame(robot, counts)
+            cover.tick_once()
+        statuses = []
+        for _ in range(ticks):
+            _frame(robot, counts, OIMode.PASSIVE, cliff=cliff)
+            cover.tick_once()
+            statuses.append(cover.status)
+        assert statuses[-1] is Status.FAILURE, (cliff, statuses)
+        assert Status.FAILURE not in statuses[:-1], cliff
+        if cliff:
+            assert "left Safe/Full mode" in cover.feedback_message

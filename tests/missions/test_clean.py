@@ -126,6 +126,13 @@ def test_clean_runs_in_safe_mode_and_cleans_on_after_the_firmware_stops_at_a_cli
     # each drop handled as in Full (back off, the lane or edge goes on): a fresh decision
     # after each drove at the same edge again (90 drops, the floor not done in 4 minutes)
     assert len(drops) <= 30 and summary.mission_time_s < 230.0, (len(drops), summary)
+    # each drop: Safe again within a few ticks (``cover`` fails at once, the cliff mapped;
+    # it waited a second in Passive each time, about 21 times a run in the apartment)
+    events = [e for e in sim.events if e.kind == "mode"]
+    for i, event in enumerate(events):
+        if "safety: cliff" in event.detail:
+            back = next(e for e in events[i:] if "->Safe" in e.detail)
+            assert back.time - event.time < 0.1, (event, back)
 
 
 class _HostDiesLink(SimLink):
