@@ -379,17 +379,21 @@ def start_pose(world: World, spec: EpisodeSpec) -> Any:
         raise EvaluationError(f"{given}{exc}") from None
 
 
-def run_episode(spec: EpisodeSpec) -> EpisodeResult:
+def run_episode(
+    spec: EpisodeSpec, simulator: type[_MeasuredSimulator] | None = None
+) -> EpisodeResult:
     """Run one episode to its end (success, failure, or the spec's timeout). The robot
     layer's log lines (stream started, mode fell back, a stop a robot that switched itself
     off could not confirm) are silenced: the result's outcome and reason say what happened,
-    and a thousand episodes' lines would scroll over the progress bar."""
+    and a thousand episodes' lines would scroll over the progress bar. ``simulator``: a
+    subclass that measures more (:mod:`roomba_bt.evaluate.wheels`), for a caller that keeps
+    its instance; the episode is the same."""
     logger = logging.getLogger("roomba_bt")
     level = logger.level
     logger.setLevel(logging.CRITICAL)
     started = _cpu_clock()
     try:
-        result = _run_episode(spec)
+        result = _run_episode(spec, simulator or _MeasuredSimulator)
     finally:
         logger.setLevel(level)
     return tidied(replace(result, cpu_s=_cpu_clock() - started))
@@ -471,7 +475,7 @@ def _text_of(path: Path) -> str | None:
 IN_POOL_WORKER = False
 
 
-def _run_episode(spec: EpisodeSpec) -> EpisodeResult:
+def _run_episode(spec: EpisodeSpec, measured: type[_MeasuredSimulator]) -> EpisodeResult:
     profile = get_profile(spec.profile)
     path = spec.sources.materialise() if spec.sources is not None else spec.mission
     granted = spec.permissions
@@ -482,7 +486,7 @@ def _run_episode(spec: EpisodeSpec) -> EpisodeResult:
     world = build_world(spec)
     pose = start_pose(world, spec)
     faults = Faults(odometry_error=spec.odometry_error) if spec.odometry_error else None
-    simulator = _MeasuredSimulator(
+    simulator = measured(
         world, profile, spec.seed, faults, start=pose, coverage=bool(mission.sends & BRUSHES),
         trace=spec.trace_every > 0,
     )  # fmt: skip
