@@ -59,6 +59,7 @@ from py_trees.common import Status
 
 from roomba_bt.behaviours import driving
 from roomba_bt.behaviours.declare import WHEEL, Action, Param, declare, wheel_speed_param
+from roomba_bt.behaviours.edging import EdgeSteering, signal_distance_mm
 from roomba_bt.behaviours.units import DISTANCE, DURATION
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import ENCODER_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS, SensorFrame
@@ -66,7 +67,6 @@ from roomba_bt.oi.opcodes import opcodes
 from roomba_bt.oi.profiles import (
     BODY_RADIUS_MM,
     LIGHT_BUMP_ANGLES_DEG,
-    LIGHT_BUMP_RANGE_MM,
     WHEEL_BASE_MM,
 )
 from roomba_bt.robot.interface import Odometry
@@ -85,10 +85,9 @@ SWEPT, BLOCKED, VISITED, TRIED = 1, 2, 4, 8
 #: brush 90 mm to the left, the side brush 185 mm to the right (kept a little inside both)
 _STRIP = (*((0.0, y) for y in (80.0, 40.0, 0.0, -40.0, -80.0)), (40.0, -120.0), (50.0, -160.0))
 #: the body's radius and the light bumper: rays from the centre at these angles, starting on
-#: the bumper, 150 mm long, signal = 4095 (1 - d / 150) ** 2
+#: the bumper, 150 mm long (:func:`~roomba_bt.behaviours.edging.signal_distance_mm`)
 _RADIUS_MM = BODY_RADIUS_MM
 _RAY_ANGLES = tuple(math.radians(a) for a in LIGHT_BUMP_ANGLES_DEG)
-_RAY_RANGE_MM = LIGHT_BUMP_RANGE_MM
 #: a ray's signal from which the surface it sees is marked (about 13 cm from the bumper)
 _RAY_MARK = 60
 #: back off this far (mm) from a bump, a cliff, a virtual wall's beam
@@ -113,11 +112,6 @@ Cell = int
 #: (the map and its own pose) on py_trees' blackboard, shared by every ``cover`` of the
 #: mission (one floor, one odometry frame); each run's ``setup`` drops it.
 MAP_KEY = "/roomba/cover/map"
-
-
-def _distance_of(signal: int) -> float:
-    """A light-bumper signal as the distance (mm) from the bumper along its ray."""
-    return _RAY_RANGE_MM * (1.0 - math.sqrt(min(signal, 4095) / 4095.0))
 
 
 class FloorMap:
@@ -333,7 +327,7 @@ class Bearings:
         signals = frame.light_bump_signals
         for angle, signal in zip(_RAY_ANGLES, signals, strict=True):
             if signal >= _RAY_MARK:
-                reach = _RADIUS_MM + _distance_of(signal) + 20.0
+                reach = _RADIUS_MM + signal_distance_mm(signal) + 20.0
                 a = theta + angle
                 fmap.block(x + reach * math.cos(a), y + reach * math.sin(a))
         if frame.any_bump:
@@ -611,7 +605,7 @@ class Cover(Action):
         self._edge_start = (snap.time, self._map.swept)
         self._edge_yield = (self._map.swept, self._pose.path_mm)
         self._edge_recovery: tuple[str, float, float, str] | None = None
-        self._edge_previous: float | None = None
+        self._steering = EdgeSteering()
         self._bearings.off_wall()
 
     def _edging(self, frame: SensorFrame) -> tuple[float, float] | None:
@@ -643,29 +637,15 @@ class Cover(Action):
             if odo.angle_rad - mark < turn and snap.time - since < 3.0:
                 return (-150.0, 150.0)
             self._edge_recovery = None
-            self._edge_previous = None
-        signals = frame.light_bump_signals
-        front = max(signals[2], signals[3])
-        if front >= 900:  # a wall ahead: turn left in place
-            self._edge_previous = None
+            self._steering.reset()
+        left, right, error = self._steering.wheels(
+            frame.light_bump_signals, speed, self.number("edge_distance"), snap.time
+        )
+        if error is None:  # turning at a wall ahead, or no wall on the right
             self._bearings.off_wall()
-            return (-150.0, 150.0)
-        right = signals[5]
-        if right == 0 and signals[4] == 0:
-            # no wall on the right: curve right (around an outside corner, or to find it)
-            self._bearings.off_wall()
-            self._edge_previous = None
-            return (speed, speed * 0.35)
-        distance = 0.906 * (_RADIUS_MM + _distance_of(max(right, 1)))
-        error = distance - self.number("edge_distance")  # > 0: too far, turn right
-        derivative = 0.0
-        if self._edge_previous is not None:
-            derivative = (error - self._edge_previous) / 0.015
-        self._edge_previous = error
-        turn = max(-0.6 * speed, min(0.6 * speed, 4.0 * error + 0.15 * derivative))
-        self._bearings.anchor(odo.path_mm, odo.theta_rad, abs(error) < 15.0)
-        slow = speed if front < 200 else min(speed, 150.0)
-        return slow + turn, slow - turn
+        else:
+            self._bearings.anchor(odo.path_mm, odo.theta_rad, abs(error) < 15.0)
+        return left, right
 
     def _edge_done(self) -> None:
         """An edge ends: how much new floor it found decides whether another is worth it."""

@@ -40,6 +40,8 @@ __all__ = [
     "BLOCKED_PACKETS",
     "NEAR_SIGNAL",
     "Line",
+    "WALL_AHEAD_CLOSE",
+    "WallAhead",
     "along_line",
     "arc_wheels",
     "blocked",
@@ -61,6 +63,10 @@ NEAR_SIGNAL = 150
 LINE_OFFSET_MM = 300.0
 LINE_TURN_MM_S_PER_RAD = 600.0
 LINE_TURN_SHARE = 0.5
+
+#: a centre light-bump signal this high (a wall about 3 cm ahead) turns a :class:`WallAhead`
+#: in place even within its hold
+WALL_AHEAD_CLOSE = 2000
 
 #: What :func:`blocked` and :func:`held` read: packets 7 (bumps, wheel drops), 9-12 (cliffs)
 #: and 13 (a virtual wall), for the ``reads`` of a leaf that calls them.
@@ -164,3 +170,33 @@ def arc_wheels(speed: float, radius: float, half_base: float) -> tuple[float, fl
     """(inner, outer) wheel speeds (mm/s) of an arc of ``radius`` (mm, of the centre's
     path) at ``speed`` along it: each wheel on its own radius, ``radius -+ half_base``."""
     return speed * (radius - half_base) / radius, speed * (radius + half_base) / radius
+
+
+class WallAhead:
+    """Whether to turn in place at a wall ahead, as a decision that holds: in at ``enter``
+    (a centre light-bumper signal), out once it is below ``leave``, and neither change
+    sooner than ``hold_s`` after the last one, unless the signal reaches ``close`` (a wall
+    a few centimetres ahead turns it at once). One threshold and no hold (``leave`` =
+    ``enter``, ``hold_s`` = 0) is a decision taken afresh every tick: along a wall met at a
+    shallow angle the signal hovers at the threshold, and the wheels flip every tick or two
+    between the turn and driving on (a wheel motor reversed each time, on a real robot)."""
+
+    def __init__(self, enter: int, leave: int, hold_s: float, close: int) -> None:
+        self.enter, self.leave, self.hold_s, self.close = enter, leave, hold_s, close
+        self._decision = (False, -math.inf)  # turning, since when (s)
+
+    def reset(self) -> None:
+        """No turn under way, and no hold: the next tick decides afresh."""
+        self._decision = (False, -math.inf)
+
+    def turning(self, front: int, now: float) -> bool:
+        """This tick's decision for the centre signal ``front`` at ``now`` (s)."""
+        turning, since = self._decision
+        held = now - since < self.hold_s - 1e-9
+        if turning:
+            change = front < self.leave and not held
+        else:
+            change = front >= self.close or (front >= self.enter and not held)
+        if change:
+            self._decision = (not turning, now)
+        return turning != change

@@ -59,28 +59,39 @@ tree:
 
 
 Sweep = Callable[..., EpisodeResult]
+SweepSpec = Callable[..., EpisodeSpec]
 
 
 @pytest.fixture
-def sweep(tmp_path: Path) -> Sweep:
-    """``sweep(leaf, (x m, y m, heading deg), extra, timeout_s, **spec)``: an episode of the
-    mission :data:`SWEEP` around ``leaf`` in the room :data:`BOX` on the simulator, from that
-    start (``spec``: more :class:`EpisodeSpec` fields, such as ``seed``)."""
+def sweep_spec(tmp_path: Path) -> SweepSpec:
+    """``sweep_spec(leaf, (x m, y m, heading deg), extra, timeout_s, **spec)``: the episode of
+    the mission :data:`SWEEP` around ``leaf`` in the room :data:`BOX` on the simulator, from
+    that start (``spec``: more :class:`EpisodeSpec` fields, such as ``seed``)."""
 
-    def run(
+    def build(
         leaf: str,
         start: tuple[float, float, int],
         extra: str = "",
         timeout_s: float = 300.0,
         **spec: Any,
-    ) -> EpisodeResult:
+    ) -> EpisodeSpec:
         x, y, heading = start
         world = tmp_path / "box.yaml"
         world.write_text(BOX.format(x=x, y=y, heading=heading, extra=extra))
         mission = tmp_path / "sweep.yaml"
         mission.write_text(SWEEP.format(leaf=leaf))
-        return run_episode(
-            EpisodeSpec(str(mission), str(world), random_start=False, timeout_s=timeout_s, **spec)
+        return EpisodeSpec(
+            str(mission), str(world), random_start=False, timeout_s=timeout_s, **spec
         )
+
+    return build
+
+
+@pytest.fixture
+def sweep(sweep_spec: SweepSpec) -> Sweep:
+    """``sweep(...)``: :func:`sweep_spec`'s episode, run."""
+
+    def run(*args: Any, **kwargs: Any) -> EpisodeResult:
+        return run_episode(sweep_spec(*args, **kwargs))
 
     return run
