@@ -10,11 +10,17 @@ controller turns the error ``target - signal`` into a difference of wheel speeds
 
 and sends them as Drive Direct (145) ``[145][right hi][right lo][left hi][left lo]``. An
 obstacle ahead (the centre signals 48 / 49 above ``front_threshold``) turns it left in
-place, so it follows an inside corner. A bump (packet 7) that the light bumper did not see
-coming (a gap narrower than the robot, a chair leg) backs it off 5 cm and turns it left by
-``bump_turn`` before the controller takes over again: without that, it pushed into the
-wedge for as long as the mission ran. Time is the mission clock (``snapshot.time``); the
-behaviour never blocks and halts the wheels when it ends or is preempted.
+place, so it follows an inside corner. By default that turn is decided afresh every tick,
+as it always was (the golden recordings hold it): along a wall met at a shallow angle the
+signal hovers at the threshold and the left wheel reverses every 15-45 ms (49 reversals a
+minute in the empty room, nearly all within 0.1 s of the last; ``bench/wheel_reversals.py``).
+``front_clear: 300, turn_hold: 0.3s`` make it a decision that holds, as ``cover``'s edge
+does (:class:`~roomba_bt.behaviours.driving.WallAhead`). A bump (packet 7) that the light
+bumper did not see coming (a gap narrower than the robot, a chair leg) backs it off 5 cm
+and turns it left by ``bump_turn`` before the controller takes over again: without that,
+it pushed into the wedge for as long as the mission ran. Time is the mission clock
+(``snapshot.time``); the behaviour never blocks and halts the wheels when it ends or is
+preempted.
 """
 
 from __future__ import annotations
@@ -23,6 +29,7 @@ import math
 
 from py_trees.common import Status
 
+from roomba_bt.behaviours import driving
 from roomba_bt.behaviours.declare import Action, Param, declare, wheel_speed_param
 from roomba_bt.behaviours.driving import wheel_speeds
 from roomba_bt.behaviours.units import ANGLE, DURATION, FLOAT, INT
@@ -56,6 +63,12 @@ _TURN_S = 4.0
               doc="mm/s per unit of signal error change per second"),
         Param("front_threshold", INT, default=800, minimum=1, maximum=_SIGNAL_MAX,
               doc="centre signal (48/49) above which it turns away from a wall ahead"),
+        Param("front_clear", INT, minimum=1, maximum=_SIGNAL_MAX,
+              doc="centre signal below which that turn ends (hysteresis; 300 suits it); "
+                  "default: front_threshold"),
+        Param("turn_hold", DURATION, default="0s", minimum=0, maximum=5,
+              doc="the shortest time that turn, or the following after it, holds (0.3s "
+                  "suits it); 0: decided afresh every tick"),
         Param("bump_turn", ANGLE, default="45deg", minimum=0, maximum=180,
               doc="on a bump: back off 5 cm, then turn left (away from the wall) this far"),
         Param("duration", DURATION, minimum=0, doc="SUCCESS after this long; default: never"),
@@ -81,6 +94,14 @@ class WallFollow(Action):
         self._previous_error: float | None = None
         self._previous_time = self._start_time
         self._recovery: tuple[str, float, float] | None = None  # phase, odometry mark, time
+        enter = round(self.number("front_threshold"))
+        leave = self.value("front_clear")
+        self._ahead = driving.WallAhead(
+            enter,
+            enter if leave is None else min(enter, int(leave)),
+            self.number("turn_hold"),
+            max(enter, driving.WALL_AHEAD_CLOSE),
+        )
 
     def recovery_speeds(self, bumped: bool) -> tuple[int, int] | None:
         """(left, right) while getting away from a bump (back off, then turn left), or
@@ -102,12 +123,13 @@ class WallFollow(Action):
             return -speed, speed
         self._recovery = None
         self._previous_error = None  # the controller starts afresh
+        self._ahead.reset()
         return None
 
     def wheel_speeds(self, signal: int, front: int, now: float) -> tuple[int, int]:
         """(left, right) in mm/s for this tick's signals: the controller, testable alone."""
         speed = self.number("speed")
-        if front >= self.number("front_threshold"):
+        if self._ahead.turning(front, now):
             self._previous_error = None
             return -round(speed), round(speed)  # wall ahead: spin left in place
         error = self.number("target") - signal
