@@ -13,6 +13,7 @@
 * :mod:`~roomba_bt.evaluate.stats`: success rate with a Wilson interval, percentiles, grouped
   failure reasons; paired A/B comparison (exact McNemar, median time difference);
 * :mod:`~roomba_bt.evaluate.plot`: every trajectory on one picture (matplotlib, optional);
+* :mod:`~roomba_bt.evaluate.wheels`: an episode's wheel reversals (``bench.wheel_reversals``);
 * :mod:`~roomba_bt.evaluate.report`: the figures of ``docs/routines.md``, by one command.
 
 This package sits at the top of the stack beside the CLI: it imports the runtime, the mission
