@@ -26,6 +26,7 @@ import struct
 from math import trunc
 
 from roomba_bt.oi.odometry import MM_PER_COUNT
+from roomba_bt.oi.opcodes import COMMANDS_BY_NAME
 from roomba_bt.sim.geometry import closest_point, wrap_angle
 from roomba_bt.sim.sensing import Sensing
 from roomba_bt.sim.state import EXACT_ODOMETRY, STEP_SECONDS, OdometryError, TracePoint
@@ -37,7 +38,10 @@ MAX_WHEEL_SPEED_MM_S = 500.0
 #: Pushed against the dock within this angle of the contacts, its guides align the robot.
 DOCK_GUIDE_ANGLE = math.radians(20.0)
 _GUIDE_STEP = math.radians(1.0)
-_DRIVE = bytes((137,))
+#: each wheel command's opcode byte, from the table: what ``_last_drive`` starts with
+_DRIVE, _DRIVE_DIRECT, _DRIVE_PWM = (
+    bytes((COMMANDS_BY_NAME[name].opcode,)) for name in ("drive", "drive_direct", "drive_pwm")
+)
 _PI = math.pi
 _TWO_PI = 2.0 * math.pi
 _new_tuple = tuple.__new__
@@ -158,7 +162,8 @@ class Motion(Sensing):
         #: travel and turn not yet reported in packets 19 and 20 (replies.py reads them)
         self._distance_acc = 0.0
         self._angle_acc = 0.0
-        #: the last Drive (137) command, whole: the same bytes again change nothing
+        #: the wheel command in force (Drive, Drive Direct or Drive PWM), whole: the same
+        #: bytes again change nothing (protocol.py hears them without executing them)
         self._last_drive = b""
         self._half_base = self.profile.wheel_base_mm / 2.0
         self._motion: _Motion = _motion_of(0.0, 0.0, STEP_SECONDS, self._half_base)
@@ -181,10 +186,7 @@ class Motion(Sensing):
         v[40] = -32768
 
     def _on_drive(self, args: bytes) -> None:
-        command = _DRIVE + args
-        if command == self._last_drive:
-            return  # the same Drive again: nothing changes
-        self._last_drive = command
+        self._last_drive = _DRIVE + args
         velocity, radius = _unpack_two(args)
         # The speed controller steps the commanded velocity; the radius sets the wheel ratio.
         speed = _quantise(velocity)
@@ -198,7 +200,7 @@ class Motion(Sensing):
         v[42] = round(asked_left)
 
     def _on_drive_direct(self, args: bytes) -> None:
-        self._last_drive = b""
+        self._last_drive = _DRIVE_DIRECT + args
         right, left = _unpack_two(args)
         right = -500 if right < -500 else 500 if right > 500 else right
         left = -500 if left < -500 else 500 if left > 500 else left
@@ -210,7 +212,7 @@ class Motion(Sensing):
         v[42] = left
 
     def _on_drive_pwm(self, args: bytes) -> None:
-        self._last_drive = b""
+        self._last_drive = _DRIVE_PWM + args
         right, left = _unpack_two(args)
         scale = MAX_WHEEL_SPEED_MM_S / 255.0
         self.requested_right = _quantise(max(-255, min(255, right)) * scale)

@@ -14,8 +14,9 @@ Each command is named from the opcode table with its arguments as the robot read
 (two-byte ones signed or not as the table says) and its bytes; the events are the
 simulator's own (:attr:`Simulator.events`: modes, bumps, cliffs, docking, faults, built-in
 cycles); an actuator command the mode does not accept is one of
-:attr:`Simulator.violations`. A Drive repeated with the same bytes changes nothing on the
-robot and is heard without a line (a client that sends one a frame would fill the log).
+:attr:`Simulator.violations`. A wheel command (Drive, Drive Direct, Drive PWM) repeated with
+the same bytes while in force changes nothing on the robot and has no line (a client that
+sends one a frame would fill the log).
 """
 
 from __future__ import annotations

@@ -53,6 +53,8 @@ def reset_banner(firmware: str) -> bytes:
 #: what Off (and a sleeping robot) answers: the commands the table accepts in Off (Start, Reset)
 _WAKERS = frozenset(c.opcode for c in COMMANDS.values() if OIMode.OFF in c.modes)
 _DRIVE = COMMANDS_BY_NAME["drive"].opcode
+#: Drive, Drive Direct, Drive PWM: sent again with the same bytes, they change nothing
+_WHEEL_COMMANDS = frozenset(c.opcode for c in COMMANDS.values() if c.drives_wheels)
 
 
 def _count_offset(spec: CommandSpec) -> int:
@@ -114,6 +116,7 @@ class OIProtocol(StreamOutput):
             for c in profile.commands
             if c.tail is not None
         }
+        #: where the wheel commands are accepted (drives_wheels: the three are actuators)
         self._drive_modes = self._commands[_DRIVE].modes
 
     # ------------------------------------------------------------------ host -> robot
@@ -128,8 +131,8 @@ class OIProtocol(StreamOutput):
         sizes = self._data_sizes
         tails = self._tails
         if not buf:  # the common case: exactly one whole fixed-size command
-            if data == self._last_drive and not self.asleep and self.mode in self._drive_modes:
-                return  # the same Drive again (a client sends one a frame): nothing changes
+            if self._repeats_wheels(data):
+                return
             spec = commands.get(data[0])
             if spec is not None and spec.tail is None and len(data) == 1 + sizes[data[0]]:
                 self._execute(spec, bytes(data[1:]))
@@ -155,10 +158,17 @@ class OIProtocol(StreamOutput):
             del buf[:need]
             self._execute(spec, args)
 
+    def _repeats_wheels(self, command: bytes | bytearray) -> bool:
+        """The wheel command in force sent again (a client sends one a frame): it changes
+        nothing, so it is neither executed nor told to :attr:`heard` (``sim --log``)."""
+        return command == self._last_drive and not self.asleep and self.mode in self._drive_modes
+
     def _execute(self, spec: CommandSpec, args: bytes) -> None:
         op = spec.opcode
         if self.deaf:
             return  # power saving: the UART is not listening (a BRC pulse wakes it)
+        if op in _WHEEL_COMMANDS and self._repeats_wheels(bytes((op,)) + args):
+            return
         if self.heard is not None:
             self.heard(spec, args)
         if self.asleep or self.mode is OIMode.OFF:

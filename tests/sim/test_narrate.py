@@ -46,6 +46,32 @@ def test_a_drive_sent_again_unchanged_has_no_line_and_stray_bytes_are_counted() 
     assert lines[-1] == "ignored 1 byte(s): no opcode, or sent at another baud rate"
 
 
+def test_every_wheel_command_sent_again_unchanged_has_no_line() -> None:
+    """Drive Direct (145) and Drive PWM (146) as well as Drive: ``clean`` sends a Drive
+    Direct every frame, alone or in one write with other commands."""
+    host, _narrator, lines = narrated()
+    host.send(C.start(), C.safe())
+    for command in (C.drive_direct(200, 150), C.drive_pwm(100, -100)):
+        host.send(command)
+        before = len(lines)
+        for _ in range(5):
+            host.send(command)
+            host.send(C.motors(1), command)  # in one write with another command
+        heard = [line for line in lines[before:] if line.startswith("heard")]
+        assert len(heard) == 5  # the Motors, each heard
+        assert all(line.startswith("heard Motors (138)") for line in heard)
+        assert host.sim.requested_left != 0.0
+
+
+def test_a_wheel_command_sent_again_after_a_stop_has_its_line() -> None:
+    host, _narrator, lines = narrated()
+    host.send(C.start(), C.safe(), C.drive_direct(200, 200))
+    host.send(C.safe())  # a mode command stops the wheels
+    host.send(C.drive_direct(200, 200))
+    assert lines[-1].startswith("heard Drive Direct (145) right_velocity 200")
+    assert host.sim.requested_left > 0.0
+
+
 def test_a_variable_tail_is_listed_after_the_fixed_arguments() -> None:
     assert command_text(C.stream([7, 35]).spec, bytes([2, 7, 35])) == (
         "Stream (148) packet_count 2, then 7, 35"
