@@ -237,7 +237,10 @@ class MissionRunner(BaseHandle):
         self.input_ended = input_ended
         self.gate = gate
         #: the watchdog's trips, ridden through for ``grace`` seconds (0: a trip ends the run)
-        self._ride = StallRide(connection, self.summary, grace, self._send_wheels_again)
+        self._ride = StallRide(
+            connection, self.summary, grace, self._send_wheels_again,
+            partial(mission_time_after, self),
+        )  # fmt: skip
         #: Ctrl-C and SIGTERM stay ignored after :meth:`run` returns, until
         #: :meth:`release_interrupts` (the CLI: its summary is still to be printed); else the
         #: previous handlers come back when it returns
@@ -616,6 +619,15 @@ def slots_spanned(runner: MissionRunner, count: int, arrival: float) -> int:
     if slots > count:
         runner.summary.frames_lost += slots - count
     return slots
+
+
+def mission_time_after(runner: MissionRunner, seconds: float) -> float | None:
+    """The mission time ``seconds`` after the last tick's frame, for what happens between
+    ticks (a stall's trip and end); None before the first tick. A clock the monitor holds
+    stands still."""
+    if not runner.has_snapshot:
+        return None
+    return runner.snapshot.time + (0.0 if runner.clock_held else seconds)
 
 
 def tick_halted(runner: MissionRunner, seconds: float, where: str) -> None:

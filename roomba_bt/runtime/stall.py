@@ -24,7 +24,10 @@ log = logging.getLogger("roomba_bt.runtime.loop")
 class StallRide:
     """The run's reads, each trip counted in ``summary`` and ridden through for ``grace``
     seconds (0: the trip ends the run); ``wheels_again`` sends the tree's last wheel command
-    once frames are back (the watchdog's drive 0 had replaced it)."""
+    once frames are back (the watchdog's drive 0 had replaced it). ``clock`` is the mission
+    time so many seconds after the last valid frame (None before the first): no tick moves
+    the mission clock during a stall, so the trip and the frames' return are stamped with
+    their own times, not both with the last frame's."""
 
     def __init__(
         self,
@@ -32,11 +35,13 @@ class StallRide:
         summary: RunSummary,
         grace: float,
         wheels_again: Callable[[], None],
+        clock: Callable[[float], float | None],
     ) -> None:
         self.connection = connection
         self.summary = summary
         self.grace = grace
         self._wheels_again = wheels_again
+        self._clock = clock
         #: while a stall is ridden through: (bytes read when it began, drive 0 sent, the
         #: last valid frame's time)
         self.stall: tuple[int, bool, float] | None = None
@@ -57,7 +62,10 @@ class StallRide:
         self.summary.stall_halts += stalled.halted
         link = self.connection.link
         self.stall = (link.bytes_read, stalled.halted, link.silent_since)
-        log.warning("%s; waiting up to %g s for valid frames", stalled, self.grace)
+        log.warning(
+            "%s; waiting up to %g s for valid frames", stalled, self.grace,
+            extra={"mission_time": self._clock(stalled.silent_for)},
+        )  # fmt: skip
         return ()
 
     def carry_on(self, batch: Sequence[SensorFrame]) -> None:
@@ -81,6 +89,6 @@ class StallRide:
         gap = connection.link.silent_since - silent_since
         log.warning(
             "%s: valid frames are back after %.0f ms; the mission goes on", connection.name,
-            gap * 1000,
+            gap * 1000, extra={"mission_time": self._clock(gap)},
         )  # fmt: skip
         self._wheels_again()

@@ -5,11 +5,15 @@ wheels get their command again; a loss longer than the grace ends as exit 3, its
 
 from __future__ import annotations
 
+import logging
 from pathlib import Path
+
+import pytest
 
 from roomba_bt.mission import load_mission
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.runtime.display import MissionClockFormatter
 from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome, RunSummary
 from roomba_bt.sim import Faults, Simulator, load_world
@@ -79,6 +83,23 @@ def test_a_garbled_second_is_ridden_through_and_the_wheels_get_their_command_aga
     back = [(t, b) for t, b in link.writes if t >= 2.0]
     assert back[0][1] == SPIN_COMMAND and back[0][0] < 2.0 + 0.05
     assert link.simulator.time >= 4.0
+
+
+def test_the_trip_and_the_frames_return_are_stamped_each_with_its_own_mission_time(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """No tick moves the mission clock during a stall: both lines read the last frame's
+    time, and the log did not show when the wheels stopped or how long they stood."""
+    caplog.set_level(logging.WARNING, logger="roomba_bt.runtime.loop")
+    run(tmp_path, BadPatchLink, 1.0, 2.0)
+    formatter = MissionClockFormatter()  # no clock: a line is stamped with its own time
+    lines = [formatter.format(r) for r in caplog.records if "valid frame" in r.getMessage()]
+    assert len(lines) == 2, lines
+    tripped, back = (float(line.split()[0].removeprefix("t=")) for line in lines)
+    assert "waiting up to 2 s" in lines[0] and "are back after" in lines[1]
+    # garbled from 1.0 s to 2.0 s of the robot's time: drive 0 about 0.1 s in, frames back
+    # at its end (the mission's clock began a little after the robot's)
+    assert back - tripped == pytest.approx(0.9, abs=0.05)
 
 
 def test_a_stream_stopped_past_the_grace_is_exit_3_named_stopped(tmp_path: Path) -> None:
