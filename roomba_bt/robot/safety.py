@@ -9,7 +9,8 @@ window closed) would end the process without unwinding anything, SIGQUIT (Ctrl-\
 pressed when Ctrl-C seems slow) would end it at once with a core dump, and SIGTSTP (Ctrl-Z)
 would suspend it, each leaving the robot driving in Safe mode: the Open Interface has no
 command timeout. Inside :func:`sigterm_raises` they raise :class:`Terminated` instead; the
-previous handlers come back on the way out.
+previous handlers come back on the way out. A signal the process was started with ignored
+(``nohup``'s SIGHUP) stays ignored: :data:`IGNORED_AT_START`.
 """
 
 from __future__ import annotations
@@ -49,6 +50,26 @@ ENDING_SIGNALS: tuple[int, ...] = (
     *(getattr(signal, name) for name in ("SIGHUP",) if hasattr(signal, name)),
     *WALL_CLOCK_SIGNALS,
 )
+
+
+#: The ending signals this process was started with ignored, which stay so (decided): ``nohup``
+#: starts a run with SIGHUP ignored, so that a multi-hour run outlives the SSH session that
+#: started it, and a shell without job control (a script's ``roomba-bt run ... &``) starts a
+#: background job with SIGINT and SIGQUIT ignored, so that the keys typed for the foreground
+#: do not reach it. Ignored, such a signal leaves the run going, its robot still under
+#: control. Never SIGTERM: ``kill``, systemd and a container's stop end a process with it,
+#: and their next word is SIGKILL, which would leave the robot driving. Read when this module
+#: is first imported, before any handler of ours (a run puts its previous handlers back).
+IGNORED_AT_START: frozenset[int] = frozenset(
+    signum
+    for signum in ENDING_SIGNALS
+    if signum != signal.SIGTERM and signal.getsignal(signum) is signal.SIG_IGN
+)
+
+
+def _taken(signals: tuple[int, ...]) -> tuple[int, ...]:
+    """``signals`` less those the process keeps ignored (:data:`IGNORED_AT_START`)."""
+    return tuple(signum for signum in signals if signum not in IGNORED_AT_START)
 
 
 class Terminated(KeyboardInterrupt):
@@ -92,7 +113,7 @@ def sigterm_raises() -> Iterator[None]:
         return
     previous = {
         signum: signal.signal(signum, _raise_terminated)
-        for signum in ENDING_SIGNALS
+        for signum in _taken(ENDING_SIGNALS)
         if signum != signal.SIGINT
     }
     try:
@@ -155,8 +176,9 @@ class InterruptGuard:
         #: Ctrl-Z and Ctrl-\ (:data:`WALL_CLOCK_SIGNALS`) end the run too; ``wall_clock``
         #: False where no robot moves on the wall clock (an evaluation, ``--fast``): there a
         #: suspended or quit process leaves nothing driving
-        self.signals = tuple(
-            signum for signum in ENDING_SIGNALS if wall_clock or signum not in WALL_CLOCK_SIGNALS
+        #: those :data:`IGNORED_AT_START` stay ignored (``nohup``'s SIGHUP)
+        self.signals = _taken(
+            tuple(s for s in ENDING_SIGNALS if wall_clock or s not in WALL_CLOCK_SIGNALS)
         )
         #: :data:`TERMINAL_STOP_SIGNALS`, ignored on the wall clock
         self.ignoring = TERMINAL_STOP_SIGNALS if wall_clock else ()

@@ -52,6 +52,26 @@ def test_signal_to_a_child_leaves_the_robot_stopped_in_passive(
         assert robot.actuator_commands_outside_safe_or_full() == []
 
 
+def test_the_signals_ignored_at_start_but_sigterm_stay_ignored(
+    child: Callable[[Sequence[str]], subprocess.Popen[str]],
+) -> None:
+    """``nohup`` (SIGHUP) and a shell's background job without job control (SIGINT,
+    SIGQUIT) start a process with them ignored, and they stay so; SIGTERM is always taken
+    (a supervisor's SIGKILL follows an ignored one, and would leave the robot driving)."""
+    ignored = (signal.SIGHUP, signal.SIGINT, signal.SIGQUIT, signal.SIGTERM)
+    script = (
+        "import signal\n"
+        f"for s in {[int(s) for s in ignored]}: signal.signal(s, signal.SIG_IGN)\n"
+        "from roomba_bt.robot.safety import InterruptGuard, sigterm_raises\n"
+        "with InterruptGuard() as guard, sigterm_raises():\n"
+        "    print(sorted(s for s in range(1, 32) if signal.getsignal(s) is signal.SIG_IGN))\n"
+    )
+    out, err = child([sys.executable, "-c", script]).communicate(timeout=30)
+    still_ignored = {int(s) for s in out.strip("[]\n").split(", ")}
+    assert {signal.SIGHUP, signal.SIGINT, signal.SIGQUIT} <= still_ignored, err
+    assert signal.SIGTERM not in still_ignored
+
+
 def test_sigterm_raises_terminated_and_restores_the_old_handler() -> None:
     before = signal.getsignal(signal.SIGTERM)
     with pytest.raises(Terminated) as ended, sigterm_raises():

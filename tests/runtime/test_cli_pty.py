@@ -41,13 +41,17 @@ def _mission(tmp_path: Path, text: str) -> Path:
     return path
 
 
-def _start_run(port: str, mission: Path, record: Path, *extra: str) -> subprocess.Popen[str]:
+def _start_run(
+    port: str, mission: Path, record: Path, *extra: str, ignoring: signal.Signals | None = None
+) -> subprocess.Popen[str]:
+    """The run, started as ``nohup`` starts it when ``ignoring`` is SIGHUP."""
     return subprocess.Popen(
         [*CLI, "run", str(mission), "--port", port, "--record", str(record), "--display", "log",
          *extra],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        preexec_fn=None if ignoring is None else lambda: signal.signal(ignoring, signal.SIG_IGN),
     )  # fmt: skip
 
 
@@ -82,6 +86,34 @@ def test_signal_ends_with_the_safe_stop_and_exit_130(
     out, err = proc.communicate(timeout=10)
     assert proc.returncode == 130, err
     assert "INTERRUPTED" in out
+    assert load_record(record).outbound.endswith(SAFE_END)
+
+
+def _still_running(proc: subprocess.Popen[str], record: Path, timeout: float = 10.0) -> bool:
+    """Whether the run goes on: its record grows by 20 lines (about 0.3 s of the robot's
+    frames) before it ends."""
+    lines = record.read_text().count("\n") + 20
+    deadline = time.monotonic() + timeout
+    while proc.poll() is None and time.monotonic() < deadline:
+        if record.read_text().count("\n") >= lines:
+            return proc.poll() is None
+        time.sleep(0.02)
+    return False
+
+
+def test_a_run_started_by_nohup_outlives_a_hang_up(sim_port: str, tmp_path: Path) -> None:
+    """``nohup roomba-bt run ... &`` over SSH: the hang-up when the session drops is ignored,
+    as nohup set it, and the run goes on (it ended, exit 130, 'SIGHUP: the terminal was
+    closed'); SIGTERM still ends it with the safe stop."""
+    record = tmp_path / "run.jsonl"
+    proc = _start_run(sim_port, _mission(tmp_path, SPIN), record, ignoring=signal.SIGHUP)
+    _wait_for_driving(record)
+    proc.send_signal(signal.SIGHUP)
+    assert _still_running(proc, record), proc.communicate()
+    proc.send_signal(signal.SIGTERM)
+    out, err = proc.communicate(timeout=10)
+    assert proc.returncode == 130, err
+    assert "INTERRUPTED (SIGTERM)" in out and "SIGHUP" not in out + err
     assert load_record(record).outbound.endswith(SAFE_END)
 
 
