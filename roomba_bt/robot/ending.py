@@ -179,6 +179,8 @@ class SafeStop:
         self._heard_at: float | None = None
         #: why the quiet after a stop shows nothing (:meth:`_quiet_unproven`), or None
         self._unproven: str | None = None
+        #: the link's count of valid frames when a stop was last said not delivered
+        self._unseen_from = -1
 
     def begin(self) -> None:
         """A session starts (again): nothing has ended."""
@@ -205,9 +207,13 @@ class SafeStop:
         if writer.modes.mode is OIMode.OFF:  # never started (or ended in Off by Stop):
             self.safe_stopped = True  # nothing written, nothing to stop; not "unconfirmed"
             return True
-        # what the robot was last seen or told to do, before the stop moves the model on
-        self._before = (writer.modes.mode, writer.last_wheels)
-        self._seen = self._unproven = None
+        # what the robot was last seen or told to do, before the stop moves the model on;
+        # once more after a stop not delivered (close()'s), nothing heard since: what was
+        # seen before that one (it moved the model on to Passive without the robot)
+        if self.safe_stopped is not False or link.index != self._unseen_from:
+            self._before = (writer.modes.mode, writer.last_wheels)
+            self._seen = None
+        self._unproven = None
         # before the stream's first frame the wait is the stream request's way to the robot
         # and a slot (over TCP, 40 ms and more of Nagle's delay): no silence, the watchdog's
         streamed = link.frame is not None and link.arrival >= link.silent_since
@@ -386,6 +392,7 @@ class SafeStop:
             log.log(level, "%s: %s", self.writer.link.name, report)
         self.stop_report = report
         self.safe_stopped = False
+        self._unseen_from = writer.link.index
         return False
 
     def close(self) -> bool:

@@ -3,6 +3,7 @@ and the mode model follows only what was written (on the simulator, the port fai
 
 from __future__ import annotations
 
+import logging
 from typing import Any
 
 import pytest
@@ -214,6 +215,24 @@ def test_an_unconfirmed_stop_says_what_was_seen_before_it_not_the_stop_itself() 
         "last seen in Safe spinning left at 100 mm/s; the stop was written but is "
         "unconfirmed: the robot answers nothing"
     )
+
+
+def test_the_stop_tried_again_at_close_says_what_was_seen_before_the_first(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """A flat battery: the run's stop unconfirmed, ``close()`` tries once more and said
+    ``last seen in Passive stopped``, the model moved on by the first stop's Start, beside
+    the summary's ``last seen in Safe``: one robot, two modes."""
+    connection, _, _ = spinning()
+    connection.unheard = "the robot answers nothing"
+    assert connection.safe_stop() is False
+    first = connection.stop_report
+    caplog.set_level(logging.ERROR, logger="roomba_bt.robot.ending")
+    caplog.clear()
+    connection.close()
+    assert connection.stop_report == first
+    assert connection.ending.last_seen is OIMode.SAFE
+    assert [r.getMessage() for r in caplog.records] == []  # said once, by the first stop
 
 
 def test_a_stop_soon_after_the_robot_fell_silent_is_unconfirmed() -> None:
