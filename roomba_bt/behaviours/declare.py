@@ -611,6 +611,9 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
             ) from None
 
     def initialise(self) -> None:
+        # started again (a retry's next attempt): what the last run said is not said of this
+        # one (``cover [✓]`` showed an earlier attempt's cliff failure at the end of a clean)
+        self.feedback_message = ""
         refs = self._refs
         if refs is None:  # the parameters never change: look for @key values once
             refs = self._refs = {

@@ -92,3 +92,20 @@ def test_back_in_safe_the_grace_out_of_it_starts_again(
     assert statuses[:-1] == [Status.RUNNING] * 67  # a second of grace, again
     assert statuses[-1] is Status.FAILURE
     assert node.feedback_message.startswith("the robot left Safe/Full mode")
+
+
+@pytest.mark.parametrize("leaf", [Spiral, Lanes, Cover])
+def test_a_leaf_started_again_after_a_failure_says_nothing_of_it(
+    robot: StubRobot, make: Make, leaf: type[RobotBehaviour]
+) -> None:
+    """A retry starts it again: the last attempt's failure is not its message any more (the
+    tree at the end of a clean showed ``cover [✓] -- the robot left Safe/Full mode (cliff)
+    ...``, from an attempt long before; halted by the time being up, the same)."""
+    node = make(leaf)
+    still = {pid: 0 for pid in leaf.declaration.packets(node.params)}
+    assert tick(node, robot, still, 2) is Status.RUNNING
+    assert tick(node, robot, still, 1) is Status.RUNNING  # Passive: its second begins
+    assert tick(node, robot, still, 1, ticks=68) is Status.FAILURE
+    assert node.feedback_message.startswith("the robot left Safe/Full mode")
+    assert tick(node, robot, still, 2) is Status.RUNNING  # the retry: Safe, started again
+    assert node.feedback_message == ""
