@@ -4,13 +4,17 @@ error."""
 
 from __future__ import annotations
 
+import logging
+import re
 from pathlib import Path
 
 import pytest
+from py_trees.common import Status
 
 from roomba_bt.evaluate import EpisodeSpec, run_episode
 from roomba_bt.evaluate.episode import EpisodeResult
 from roomba_bt.mission import load_mission
+from roomba_bt.mission.build import CompiledMission
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import RunSummary
@@ -92,13 +96,14 @@ def _clean_on_the_simulator(
     params: dict[str, str],
     timeout_s: float,
     link: type[SimLink] = SimLink,
-) -> tuple[Simulator, RunSummary]:
+) -> tuple[Simulator, RunSummary, CompiledMission]:
     """clean.yaml through the real runtime on the simulator's virtual clock; the simulator
-    kept, for its events (the mode changes) and its coverage."""
+    kept, for its events (the mode changes) and its coverage, and the mission, for its tree
+    as it ended."""
     compiled = load_mission(str(MISSIONS / "clean.yaml"), params)
     sim = Simulator(load_world(world), start=start, coverage=True, trace=False)
     summary = RunStack(compiled, link(sim), profile=sim.profile, timeout_s=timeout_s).run()
-    return sim, summary
+    return sim, summary, compiled
 
 
 def _modes(sim: Simulator) -> list[str]:
@@ -112,7 +117,7 @@ def test_clean_runs_in_safe_mode_and_cleans_on_after_the_firmware_stops_at_a_cli
     falls to Passive (the brushes stop too); the mission enters Safe again, turns the motors
     on and ``cover`` goes on with the map it had, to the whole floor before the drop. In
     Full (until session 25) a host that died mid-lane left it driving down the stairs."""
-    sim, summary = _clean_on_the_simulator(
+    sim, summary, _ = _clean_on_the_simulator(
         cliff_world, None, {"duration": "4min", "go_home": "false"}, 400.0
     )
     assert summary.outcome.value == "success", summary.reason
@@ -135,6 +140,44 @@ def test_clean_runs_in_safe_mode_and_cleans_on_after_the_firmware_stops_at_a_cli
             assert back.time - event.time < 0.1, (event, back)
 
 
+def test_clean_says_why_it_stopped_and_a_retried_cover_shows_no_old_failure(
+    cliff_world: str, caplog: pytest.LogCaptureFixture
+) -> None:
+    """At the end of a clean with cliff stops, the tree showed ``cover [✓] -- the robot left
+    Safe/Full mode (cliff) and was not brought back within 1 s``, an earlier attempt's
+    failure, and nothing said why cleaning stopped."""
+    caplog.set_level(logging.INFO, logger="roomba_bt.mission")
+    sim, summary, compiled = _clean_on_the_simulator(
+        cliff_world, None, {"duration": "4min", "go_home": "false"}, 400.0
+    )
+    assert summary.outcome.value == "success", summary.reason
+    assert any("safety: cliff" in m for m in _modes(sim))  # cover failed and was retried
+    cover = next(n for n in compiled.root.iterate() if n.name.startswith("cover("))
+    assert cover.status is Status.SUCCESS
+    assert re.fullmatch(r"floor done: \d+\.\d m² swept by its own map", cover.feedback_message)
+    assert _stopped(caplog) == ["cleaning stopped: the floor is done"]
+
+
+def _stopped(caplog: pytest.LogCaptureFixture) -> list[str]:
+    return [r.getMessage() for r in caplog.records if "cleaning stopped" in r.getMessage()]
+
+
+def test_clean_says_its_time_is_up_or_its_battery_low(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    caplog.set_level(logging.INFO, logger="roomba_bt.mission")
+    _clean_on_the_simulator("empty-room", None, {"duration": "5s", "go_home": "false"}, 30.0)
+    assert _stopped(caplog) == ["cleaning stopped: the time is up (5s)"]
+    caplog.clear()
+    low = tmp_path / "low.yaml"
+    low.write_text(
+        "rooms: [[[0, 0], [3, 0], [3, 2.5], [0, 2.5]]]\n"
+        "robot: {start: {at: [1.5, 1.2], heading: 0}, battery: 0.1}\n"
+    )
+    _clean_on_the_simulator(str(low), None, {}, 2.0)
+    assert _stopped(caplog) == ["cleaning stopped: the battery is below 15%"]
+
+
 class _HostDiesLink(SimLink):
     """The host dies (kill -9, a cable pulled) 3 s into the run: nothing it writes from then on
     reaches the robot, which keeps its last command (the OI has no command timeout)."""
@@ -148,7 +191,7 @@ def test_clean_stops_at_the_stairs_when_the_host_dies_mid_lane() -> None:
     """The stairs ahead, the host gone while the robot drives at them: in Safe the firmware
     stops it at the edge (Passive); in Full it went down the stairs ("fell")."""
     stairs = Pose(4600.0, 800.0, 0.0)  # the apartment, 1.6 m from its stairs, facing them
-    sim, _ = _clean_on_the_simulator("apartment", stairs, {}, 5.0, _HostDiesLink)
+    sim, _, _ = _clean_on_the_simulator("apartment", stairs, {}, 5.0, _HostDiesLink)
     assert sim.left_speed > 0 or sim.mode is OIMode.PASSIVE  # driving when the host died
     for _ in range(round(30.0 / 0.015)):  # the robot alone for 30 s
         sim.step()
@@ -161,7 +204,7 @@ def test_clean_stops_at_the_stairs_when_the_host_dies_mid_lane() -> None:
 def test_clean_with_mode_full_is_the_owners_choice(cliff_world: str) -> None:
     """``-p mode=full`` keeps the brushes running at a cliff (no drop to Passive): for an
     owner who accepts that a dead host leaves the robot driving with no cliff stop."""
-    sim, summary = _clean_on_the_simulator(
+    sim, summary, _ = _clean_on_the_simulator(
         cliff_world, None, {"duration": "1min", "go_home": "false", "mode": "full"}, 200.0
     )
     assert summary.outcome.value == "success", summary.reason
@@ -173,7 +216,7 @@ def test_clean_started_on_the_dock_backs_off_it_before_safe() -> None:
     back), then Safe and cleaning."""
     dock = load_world("empty-room").dock
     assert dock is not None
-    sim, summary = _clean_on_the_simulator(
+    sim, summary, _ = _clean_on_the_simulator(
         "empty-room", dock.docked_pose, {"duration": "1min", "go_home": "false"}, 200.0
     )
     assert summary.outcome.value == "success", summary.reason
