@@ -24,6 +24,25 @@ from pathlib import Path
 import py_trees
 import pytest
 
+
+def _answer_the_signals_the_tests_send() -> None:
+    """A suite started where a script's ``&`` (no job control) or ``nohup`` left SIGINT,
+    SIGQUIT or SIGHUP ignored: roomba-bt keeps a signal ignored at its start ignored
+    (``robot.safety.IGNORED_AT_START``), and every child inherits the ignoring, so the tests
+    that send them (Ctrl-C, a hang-up) would see them ignored. Caught here, they are back
+    to their default in a child after ``exec``; the suite itself still shrugs off a hang-up."""
+    for signum in (signal.SIGINT, signal.SIGQUIT, signal.SIGHUP):
+        if signal.getsignal(signum) is signal.SIG_IGN:
+            handler = signal.default_int_handler if signum == signal.SIGINT else _shrug
+            signal.signal(signum, handler)
+
+
+def _shrug(signum: int, frame: object) -> None:
+    """A hang-up or Ctrl-\\ the suite was started to ignore: still nothing, in the suite."""
+
+
+_answer_the_signals_the_tests_send()
+
 #: the checkout, first on a child's path (its ``roomba_bt``, whatever is installed)
 ROOT = Path(__file__).resolve().parents[1]
 #: skip reasons that mean "a test dependency is not installed"
