@@ -34,6 +34,8 @@ from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.runtime.summary import DEFAULT_GRACE, DEFAULT_TICK_LIMIT, ExitCode, Outcome
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
+
     from roomba_bt.mission import Permissions
     from roomba_bt.runtime.loop import TickObserver
     from roomba_bt.runtime.recording import Record
@@ -568,6 +570,7 @@ def replay_command(args: argparse.Namespace) -> int:
     summary, transport = replay_record(
         record, recorded.mission, profile=recorded.profile, packets=recorded.packets,
         baud=recorded.baud, name=args.record, raise_interrupts=False,
+        progress=replay_progress("replay", record),
     )  # fmt: skip
     print(summary)
     difference = transport.first_difference()
@@ -576,14 +579,14 @@ def replay_command(args: argparse.Namespace) -> int:
         print(f"replay: the record ends at {record.last_t:.3f} s without the run's end ({unended})")
     if difference is None:
         if unended is not None:
-            print(f"replay: the tree wrote the same {len(record.outbound)} bytes up to there")
+            print(f"replay: the tree wrote the same {record.out_bytes} bytes up to there")
             return ExitCode.OK
-        print(f"replay: the tree wrote the same {len(transport.written)} bytes as the recorded run")
+        print(f"replay: the tree wrote the same {transport.written} bytes as the recorded run")
         return ExitCode.OK
     offset, expected, sent = difference
     print(
         f"replay: first difference at mission time {summary.mission_time_s:.3f} s "
-        f"(byte {offset} of {len(record.outbound)} recorded): expected {expected}, sent {sent}"
+        f"(byte {offset} of {record.out_bytes} recorded): expected {expected}, sent {sent}"
     )
     acts = operator_acts(record)
     if acts:
@@ -592,6 +595,34 @@ def replay_command(args: argparse.Namespace) -> int:
             f"not do; roomba-bt monitor {args.record} replays them"
         )
     return ExitCode.MISSION_FAILED
+
+
+#: A record this long (about 20 minutes of a run) says how far its replay has gone.
+PROGRESS_FROM_BYTES = 16 << 20
+
+
+def replay_progress(who: str, record: Record) -> Callable[[float], None] | None:
+    """What says, on stderr, how far the replay of a long record has gone (``replay: 30 %
+    of long.jsonl (36:00 of 2:00:00)``); None for a short one. A 2-hour record took minutes
+    to replay and said nothing meanwhile."""
+    if record.size < PROGRESS_FROM_BYTES:
+        return None
+    total = record.last_t
+
+    def progress(fraction: float) -> None:
+        print(
+            f"{who}: {fraction:.0%} of {record.path} ({_clock(fraction * total)} of "
+            f"{_clock(total)} of the run)",
+            file=sys.stderr, flush=True,
+        )  # fmt: skip
+
+    return progress
+
+
+def _clock(seconds: float) -> str:
+    minutes, secs = divmod(round(seconds), 60)
+    hours, minutes = divmod(minutes, 60)
+    return f"{hours}:{minutes:02d}:{secs:02d}" if hours else f"{minutes}:{secs:02d}"
 
 
 def operator_acts(record: Record) -> str:

@@ -43,7 +43,8 @@ import json
 import logging
 import math
 import stat
-from collections.abc import Iterator
+from collections import deque
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
@@ -198,13 +199,24 @@ class RecordError(ValueError):
 
 @dataclass
 class Record:
+    """A record file, checked whole by :func:`load_record` but not held in memory: its chunks
+    are read again from the file, a line at a time, when asked (:meth:`chunks`). A record
+    is about 45 MB an hour of run, and its chunks held as Python objects took 341 MB for a
+    2-hour run (``replay`` read it whole first); the notes, few, are kept."""
+
     header: dict[str, Any]
-    chunks: list[tuple[float, str, bytes]] = field(default_factory=list)
+    #: the file; :meth:`chunks` reads it again, up to :attr:`size`
+    path: Path
     notes: list[tuple[float, dict[str, Any]]] = field(default_factory=list)
     #: whether the record holds its run's end line (False: it stops short of the run's end)
     ended: bool = False
     #: the time of its last line, seconds of the record's clock
     last_t: float = 0.0
+    #: the bytes of the file that were checked: a line cut short, or lines written after the
+    #: check (a record still being written), are not read again
+    size: int = 0
+    #: how many bytes the host wrote in the recorded run (its "out" chunks' total)
+    out_bytes: int = 0
 
     def unended(self) -> str | None:
         """Why the record holds no end line (``the run was killed?``), or None when it does."""
@@ -223,25 +235,29 @@ class Record:
             return None
         return [t for t, note in self.notes if "watchdog" in note]
 
-    @property
-    def inbound_after_writes(self) -> list[tuple[float, bytes, int]]:
-        """Each "in" chunk with how many bytes the host had written before it was read."""
-        out: list[tuple[float, bytes, int]] = []
-        written = 0
-        for t, d, b in self.chunks:
-            if d == "out":
-                written += len(b)
-            else:
-                out.append((t, b, written))
-        return out
+    def chunks(self) -> Iterator[tuple[float, str, bytes]]:
+        """The "in" and "out" chunks ``(t, direction, bytes)`` in the file's order, read from
+        the file as they are asked for. A file changed since it was checked (cut shorter,
+        replaced) ends them there, said once."""
+        lines = _record_lines(self.path, self.size)
+        try:
+            next(lines)  # the header
+            for number, line, _, _ in lines:
+                item = _chunk(self.path, number, line) if line.strip() else None
+                if isinstance(item, tuple):
+                    yield item
+        except RecordError as exc:
+            log.warning("%s; the record changed since it was read: it ends here", exc)
 
     @property
     def outbound(self) -> bytes:
-        return b"".join(b for _, d, b in self.chunks if d == "out")
+        """Every byte the host wrote in the recorded run (read from the file)."""
+        return b"".join(b for _, d, b in self.chunks() if d == "out")
 
 
 def load_record(path: str | Path) -> Record:
-    """Read a record; :class:`RecordError` names the file and line of anything malformed.
+    """Check a record whole and return it (its chunks are read again when replayed, not
+    kept); :class:`RecordError` names the file and line of anything malformed.
 
     A malformed last line without its newline is a line cut short (the run killed as it was
     written, the disk full): it is dropped with a warning naming it, and the record read up to
@@ -249,9 +265,10 @@ def load_record(path: str | Path) -> Record:
     was refused (``malformed chunk``). A malformed line anywhere else is an error."""
     path = Path(path)
     lines = _record_lines(path)
-    record = Record(_header(path, next(lines)[1]))
+    _, first, _, size = next(lines)
+    record = Record(_header(path, first), path, size=size)
     last = 0.0
-    for number, line, whole in lines:
+    for number, line, whole, end in lines:
         if not line.strip():
             continue
         if record.ended:
@@ -267,6 +284,7 @@ def load_record(path: str | Path) -> Record:
                 path, number, number - 1,
             )  # fmt: skip
             break
+        record.size = end
         if isinstance(item, dict):  # an operator's act (a note), or the run's end
             record.last_t = max(record.last_t, item["t"])
             if item["d"] == "end":
@@ -281,7 +299,8 @@ def load_record(path: str | Path) -> Record:
                 f"before it ({last:g} s)"
             )
         last = record.last_t = t
-        record.chunks.append(item)
+        if item[1] == "out":
+            record.out_bytes += len(item[2])
     return record
 
 
@@ -293,19 +312,23 @@ def load_record(path: str | Path) -> Record:
 MAX_RECORD_LINE = 64 << 20
 
 
-def _record_lines(path: Path) -> Iterator[tuple[int, str, bool]]:
-    """Each line of the record file ``path``: its number, its text without its line end and
-    whether it had one (only the last line may not); at least one. Read a line at a time,
-    each at most :data:`MAX_RECORD_LINE` bytes: the file was read whole first, and
-    ``replay /dev/zero`` ran out of memory (a MemoryError traceback). A device or a pipe is
-    refused before it is opened, as a mission is."""
+def _record_lines(path: Path, size: int | None = None) -> Iterator[tuple[int, str, bool, int]]:
+    """Each line of the record file ``path`` (its first ``size`` bytes, when given): its
+    number, its text without its line end, whether it had one (only the last line may not)
+    and the byte offset of its end; at least one. Read a line at a time, each at most
+    :data:`MAX_RECORD_LINE` bytes: the file was read whole first, and ``replay /dev/zero``
+    ran out of memory (a MemoryError traceback). A device or a pipe is refused before it is
+    opened, as a mission is."""
     try:
         if not stat.S_ISREG(path.stat().st_mode):
             raise RecordError(f"{path}: not a regular file; a record is a file run --record wrote")
         with path.open("rb") as file:
-            number = 0
+            number = end = 0
             for number, data in enumerate(iter(lambda: file.readline(MAX_RECORD_LINE + 1), b""), 1):
-                yield number, _line_text(path, number, data), data.endswith(b"\n")
+                end += len(data)
+                if size is not None and end > size:
+                    break
+                yield number, _line_text(path, number, data), data.endswith(b"\n"), end
     except OSError as exc:
         raise RecordError(f"{path}: cannot read record: {exc.strerror or exc}") from None
     if number == 0:
@@ -408,7 +431,7 @@ def header_problem(header: dict[str, Any]) -> str | None:
     return None
 
 
-def command_at(stream: bytes, offset: int) -> str:
+def command_at(stream: bytes | bytearray, offset: int) -> str:
     """The OI command of ``stream`` (host -> robot bytes, commands back to back) that holds
     byte ``offset``: ``Drive (137) 89 00 c8 80 00``; ``nothing`` past the end."""
     if offset >= len(stream):
@@ -420,12 +443,16 @@ def command_at(stream: bytes, offset: int) -> str:
         except EncodeError:
             decoded = None
         if decoded is None:  # not a command from here: show the bytes themselves
-            return f"bytes {stream[offset : offset + 8].hex(' ')}"
+            return _bytes_at(stream, offset)
         command, size = decoded
         if at + size > offset:
             spec = command.spec
             return f"{spec.title} ({spec.opcode}) {stream[at : at + size].hex(' ')}"
         at += size
+    return _bytes_at(stream, offset)
+
+
+def _bytes_at(stream: bytes | bytearray, offset: int) -> str:
     return f"bytes {stream[offset : offset + 8].hex(' ')}"
 
 
@@ -433,16 +460,27 @@ def command_at(stream: bytes, offset: int) -> str:
 #: the bytes the tree wrote before them (:meth:`ReplayTransport.starved`).
 STARVED_AFTER_S = 1.0
 
+#: Bytes a replay keeps past the first difference, of the recorded bytes and of the tree's,
+#: to name the commands there: the longest OI command (a Script, 152) is 102 bytes.
+DIFFERENCE_CONTEXT = 256
+
 
 class ReplayTransport:
     """A transport that plays back the "in" side of a record on the recorded clock.
 
-    ``read`` returns the next recorded chunk and sets the clock to its time; ``write`` keeps
-    what the host sends, for comparison with the record's "out" side. A chunk is not given
-    before the host has written what it had written when the chunk was recorded: a reply
-    comes after its request. On the virtual clock (``run --fast --record``) a reply and its
-    request share a time stamp, and a read that drains the line before the request (as the
-    start-up does) took the reply away.
+    ``read`` returns the next recorded chunk and sets the clock to its time; ``write``
+    compares what the host sends with the record's "out" side. A chunk is not given before
+    the host has written what it had written when the chunk was recorded: a reply comes
+    after its request. On the virtual clock (``run --fast --record``) a reply and its request
+    share a time stamp, and a read that drains the line before the request (as the start-up
+    does) took the reply away.
+
+    The record is read as the replay goes (:meth:`Record.chunks`), and of either side only
+    the bytes of the command being compared are kept (:attr:`written` counts the tree's),
+    so a replay's memory does not grow with the record's length: it held every chunk, 341 MB
+    for a 2-hour run. The robot's chunks are read ahead of the replay only while the tree
+    has written past the recorded bytes read so far (they wait in a queue, :attr:`pending`).
+    ``progress(fraction)`` is called at each tenth of the record's time replayed.
 
     A record without its end line (:meth:`Record.unended`) is compared up to where it ends:
     what the tree writes once the robot's last recorded bytes are given, past the recorded
@@ -453,48 +491,123 @@ class ReplayTransport:
     #: the recorded clock, as fast as the replay reads it
     wall_clock = False
 
-    def __init__(self, record: Record, name: str = "replay") -> None:
+    def __init__(
+        self,
+        record: Record,
+        name: str = "replay",
+        progress: Callable[[float], None] | None = None,
+    ) -> None:
         self.name = name
-        self._inbound = record.inbound_after_writes
-        self._expected = record.outbound
+        self._chunks = record.chunks()
+        self._more = True  # the file has chunks not read yet
+        self._inbound: deque[tuple[float, bytes, int]] = deque()  # read, not given yet
+        self._out_read = 0  # the recorded "out" bytes read from the file so far
+        self._recorded = record.out_bytes
         self._ended = record.ended
-        self._next = 0
+        self._progress = progress
+        self._last_t = record.last_t
+        self._tenths = 0
+        # the command being compared starts at byte _start of both sides: each side's bytes
+        # from there (the tree's capped past a difference)
+        self._start = 0
+        self._expected = bytearray()
+        self._sent = bytearray()
+        self._parsable = True  # whether the bytes so far are whole OI commands
         self._now = 0.0
         self._open = True
-        self.written = bytearray()
+        #: how many bytes the tree wrote
+        self.written = 0
         #: byte offset of the first difference from the recorded "out" side, once there is one
         self.difference: int | None = None
         self._starved_at: int | None = None  # where the tree stopped short (:meth:`starved`)
 
+    def _read_chunk(self, queue: bool = True) -> bool:
+        """Read the record's next chunk into the queue (``queue``; else the robot's chunk is
+        dropped: the replay is over) or the recorded bytes; False at the record's end."""
+        if self._more:
+            for t, d, b in self._chunks:
+                if d == "out":
+                    self._out_read += len(b)
+                    self._expected += b
+                elif queue:
+                    self._inbound.append((t, b, self._out_read))
+                return True
+            self._more = False
+        return False
+
+    def _recorded_byte(self, offset: int) -> int | None:
+        """The recorded "out" byte at ``offset`` (None: the record has no more)."""
+        while offset >= self._out_read and self._read_chunk():
+            pass
+        at = offset - self._start
+        return self._expected[at] if at < len(self._expected) else None
+
     def write(self, data: bytes) -> None:
+        start = self.written
+        self.written += len(data)
         if self.difference is None:
-            start, expected = len(self.written), self._expected[len(self.written) :]
             for i, byte in enumerate(data):
-                if i >= len(expected) and not self._ended and self.exhausted:
+                recorded = self._recorded_byte(start + i)
+                if recorded is None and not self._ended and self.exhausted:
                     break  # past the end of a record that stops short of its run's end
-                if i >= len(expected) or expected[i] != byte:
+                if recorded != byte:
                     self.difference = start + i
                     break
-        self.written += data
+        self._keep(data)
+
+    def _keep(self, data: bytes) -> None:
+        """Keep the tree's bytes of the command being compared, and drop each command that
+        was the same on both sides (past a difference, :data:`DIFFERENCE_CONTEXT` bytes)."""
+        sent, expected = self._sent, self._expected
+        if self.difference is not None:
+            room = self.difference - self._start + DIFFERENCE_CONTEXT - len(sent)
+            sent += data[: max(room, 0)]
+            return
+        sent += data
+        while sent:
+            size = min(len(sent), len(expected))  # compared and the same
+            if self._parsable:
+                try:
+                    decoded = decode_command(sent)
+                except EncodeError:  # no commands from here: command_at shows bytes
+                    self._parsable = False
+                    continue
+                if decoded is None or decoded[1] > len(expected):
+                    return
+                size = decoded[1]
+            if size == 0:
+                return
+            del sent[:size], expected[:size]
+            self._start += size
 
     def read(self, timeout: float) -> bytes:
-        if self.difference is not None:  # the first difference ends the replay
+        if self.difference is not None or self.exhausted:  # a difference ends the replay
             self._now += timeout
             return b""
-        if self._next >= len(self._inbound):
+        t, data, written_before = self._inbound[0]
+        if t > self._now + timeout or self.written < written_before:
             self._now += timeout
             return b""
-        t, data, written_before = self._inbound[self._next]
-        if t > self._now + timeout or len(self.written) < written_before:
-            self._now += timeout
-            return b""
-        self._next += 1
+        self._inbound.popleft()
         self._now = max(self._now, t)
+        if self._progress is not None and self._last_t > 0:
+            tenths = min(int(10 * t / self._last_t), 10)
+            if tenths > self._tenths:
+                self._tenths = tenths
+                self._progress(tenths / 10)
         return data
 
     @property
     def exhausted(self) -> bool:
-        return self._next >= len(self._inbound)
+        """Whether every chunk the robot sent has been given."""
+        while not self._inbound and self._read_chunk():
+            pass
+        return not self._inbound
+
+    @property
+    def pending(self) -> int:
+        """The robot's chunks read from the record and not given yet."""
+        return len(self._inbound)
 
     def starved(self) -> bool:
         """Whether the replay waits for ever: the robot's next recorded bytes wait for bytes
@@ -502,11 +615,11 @@ class ReplayTransport:
         writes only when it ticks, and ticks only on those bytes' frames: it stopped short of
         the recorded run (a mission changed since, a reload in the run). That is its first
         difference (the command expected, nothing sent)."""
-        if self.difference is not None or self._next >= len(self._inbound):
+        if self.difference is not None or self.exhausted:
             return False
-        t, _, written_before = self._inbound[self._next]
-        if len(self.written) < written_before and self._now > t + STARVED_AFTER_S:
-            self.difference = self._starved_at = len(self.written)
+        t, _, written_before = self._inbound[0]
+        if self.written < written_before and self._now > t + STARVED_AFTER_S:
+            self.difference = self._starved_at = self.written
             return True
         return False
 
@@ -514,12 +627,17 @@ class ReplayTransport:
         """``(byte offset, command expected, command sent)`` of the first difference between
         what the tree wrote and the record's "out" side, or None when they are the same."""
         offset = self.difference
-        if offset is None and len(self.written) < len(self._expected):
-            offset = len(self.written)
+        if offset is None and self.written < self._recorded:
+            offset = self.written
         if offset is None:
             return None
-        sent = "nothing" if offset == self._starved_at else command_at(bytes(self.written), offset)
-        return offset, command_at(self._expected, offset), sent
+        while offset + DIFFERENCE_CONTEXT >= self._out_read and self._read_chunk(queue=False):
+            pass  # the recorded command's bytes
+        at = offset - self._start
+        if not self._parsable:
+            return offset, _bytes_at(self._expected, at), _bytes_at(self._sent, at)
+        sent = "nothing" if offset == self._starved_at else command_at(self._sent, at)
+        return offset, command_at(self._expected, at), sent
 
     def set_baud(self, baud: int) -> None:
         pass

@@ -333,12 +333,14 @@ def replay_record(
     observer: TickObserver | None = None,
     gate: TickGate | None = None,
     raise_interrupts: bool = True,
+    progress: Callable[[float], None] | None = None,
 ) -> tuple[RunSummary, ReplayTransport]:
     """``record``'s sensor bytes through ``mission`` on the recorded clock (``replay`` and the
     monitor's recorded runs): the run ends at the record's end or at the first command that
     differs from the recorded ones; the transport holds what the tree wrote. Ctrl-C is
-    raised again unless ``raise_interrupts`` is False (see :meth:`RunStack.run`)."""
-    transport = ReplayTransport(record, name=f"replay:{name}")
+    raised again unless ``raise_interrupts`` is False (see :meth:`RunStack.run`).
+    ``progress(fraction)``: at each tenth of the record's time replayed."""
+    transport = ReplayTransport(record, name=f"replay:{name}", progress=progress)
     header, trips = record.header, record.watchdog_trips
 
     def input_ended() -> str | None:

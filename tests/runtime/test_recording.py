@@ -181,7 +181,7 @@ def _replayed(path: Path) -> tuple[RunSummary, tuple[int, str, str] | None, int]
         record, mission, profile=CREATE2, packets=record.header["packets"], baud=115200,
         name=str(path),
     )  # fmt: skip
-    return summary, transport.first_difference(), len(transport.written)
+    return summary, transport.first_difference(), transport.written
 
 
 def test_a_run_whose_watchdog_stopped_the_wheels_replays_byte_for_byte(tmp_path: Path) -> None:
@@ -244,3 +244,46 @@ def test_a_read_that_woke_late_is_no_trip_in_the_replay(tmp_path: Path) -> None:
     summary, difference, _ = _replayed(path)
     assert difference is None, difference
     assert summary.stalls == 0
+
+
+def _replay_peak(path: Path) -> int:
+    """The peak of Python's allocations while ``path`` is read and replayed."""
+    import tracemalloc
+
+    from roomba_bt.mission import load_mission
+    from roomba_bt.mission.shipped import shipped_missions
+    from roomba_bt.oi.profiles import get_profile
+    from roomba_bt.runtime.recording import load_record
+    from roomba_bt.runtime.stack import replay_record
+
+    profile = get_profile("create2")
+    tracemalloc.start()
+    try:
+        record = load_record(path)
+        mission = load_mission(
+            shipped_missions()["bump-and-turn"], record.header["parameters"], profile=profile
+        )
+        summary, transport = replay_record(
+            record, mission, profile=profile, packets=record.header["packets"], baud=115200,
+            name=str(path),
+        )  # fmt: skip
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert transport.first_difference() is None and summary.ticks > 1000
+    return peak
+
+
+def test_a_replay_reads_the_record_as_it_goes_its_memory_not_growing_with_it(
+    tmp_path: Path,
+) -> None:
+    """A replay held every chunk of the record (341 MB for a 2-hour run): one four times as
+    long took about four times the memory. Now it reads the record as it replays it."""
+    peaks = []
+    for seconds in (20, 80):
+        path = tmp_path / f"{seconds}.jsonl"
+        argv = ["run", "bump-and-turn", "--fast", "--world", "corridor", "--display", "none"]
+        assert main([*argv, "-p", f"duration={seconds}s", "--record", str(path)]) == 0
+        peaks.append(_replay_peak(path))
+    short, long = peaks
+    assert long - short < 0.1 * short, peaks

@@ -67,7 +67,7 @@ def test_a_record_made_by_the_stack_replays_through_it_byte_for_byte(tmp_path: P
         input_ended=lambda: "end of the record" if replay.exhausted else None,
     )
     assert again.run().outcome is Outcome.SUCCESS
-    assert bytes(replay.written) == record.outbound
+    assert replay.first_difference() is None and replay.written == record.out_bytes
 
 
 class _Terminal(io.StringIO):
@@ -134,7 +134,7 @@ def test_the_arrival_the_link_reads_after_a_read_is_the_time_the_record_holds(
     second_arrival = recording.now()
     recording.close()
     record = load_record(path)
-    recorded = [t for t, d, _ in record.chunks if d == "in"]
+    recorded = [t for t, d, _ in record.chunks() if d == "in"]
     assert second_arrival - first_arrival == pytest.approx(recorded[1] - recorded[0], abs=1e-6)
     assert recording.now() > second_arrival  # only the read's own arrival is the stamp
 
