@@ -320,7 +320,7 @@ def register(sub: Any) -> None:
 
 
 def monitor_command(args: argparse.Namespace) -> int:
-    from roomba_bt.cli.run_cmd import load_recorded
+    from roomba_bt.cli.run_cmd import PROGRESS_FROM_BYTES, load_recorded, replay_progress
 
     if not server_available():
         print(f"roomba-bt: {INSTALL_HINT}", file=sys.stderr)
@@ -328,11 +328,21 @@ def monitor_command(args: argparse.Namespace) -> int:
     from roomba_bt.monitor.recorded import replay_into_feed
     from roomba_bt.monitor.server import MonitorServer
 
+    with contextlib.suppress(OSError):  # load_recorded says what is wrong with the file
+        size = os.stat(args.record).st_size
+        if size >= PROGRESS_FROM_BYTES:  # a long record: a minute or more before the page
+            print(
+                f"monitor: reading {args.record} ({size / 1e6:.1f} MB) before serving it",
+                file=sys.stderr, flush=True,
+            )  # fmt: skip
     recorded = load_recorded(args)
     if isinstance(recorded, int):
         return recorded
     record, mission, profile, baud, packets = recorded
-    feed, summary = replay_into_feed(record, mission, profile, packets, baud, args.record)
+    feed, summary = replay_into_feed(
+        record, mission, profile, packets, baud, args.record,
+        progress=replay_progress("monitor", record),
+    )  # fmt: skip
     host, port = args.monitor or parse_address(None)
     server = MonitorServer(feed, None, host=host, port=port, readonly=True)
     try:

@@ -250,8 +250,16 @@ class RunFeed:
         truth: Callable[[], tuple[float, float, float]] | None = None,
         world: Mapping[str, Any] | None = None,
         mission_name: str = "",
+        packed: bool = False,
     ) -> None:
-        self.ring = Ring(history)
+        #: the frames' layouts (one per stream: a record names its layout by index)
+        self.layouts: list[FrameLayout] = []
+        if packed:  # every tick, packed (a recorded run's: monitor/history.py)
+            from roomba_bt.monitor.history import PackedRing
+
+            self.ring: Ring = PackedRing(self.layouts)
+        else:
+            self.ring = Ring(history)
         self.events: deque[Event] = deque(maxlen=2000)
         self.source = source  # simulator, robot or record
         self.truth = truth
@@ -275,8 +283,6 @@ class RunFeed:
         self.boards: dict[int, Mapping[str, Any]] = {0: self._blackboard}
         self._board = 0
         self._boards_limit = 64
-        #: the frames' layouts (one per stream: a record names its layout by index)
-        self.layouts: list[FrameLayout] = []
         self._layout: FrameLayout | None = None
         self._mode: object = None
         self._refused_seen = 0

@@ -1,8 +1,9 @@
 """``roomba-bt monitor RECORD.jsonl``: a recorded run, replayed into a feed for the page.
 
 The record's sensor bytes go through the same parser, mode model and tree as ``replay`` does
-(:class:`~roomba_bt.runtime.recording.ReplayTransport`), and every tick is kept, so the page's
-timeline covers the whole run. A record holds no simulator truth: the path is the odometry.
+(:class:`~roomba_bt.runtime.recording.ReplayTransport`), and every tick is kept, packed
+(:mod:`roomba_bt.monitor.history`), so the page's timeline covers the whole run. A record
+holds no simulator truth: the path is the odometry.
 
 The operator's acts are in the record as notes, each with the tick it was done at and in which
 half of that frame (before or after the tick): pause, resume, a condition forced. The replay
@@ -16,6 +17,7 @@ without a tick (records made before they had one) are only shown as events.
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from roomba_bt.monitor.feed import RunFeed
@@ -28,15 +30,19 @@ from roomba_bt.runtime.summary import RunSummary
 if TYPE_CHECKING:
     from roomba_bt.runtime.loop import MissionRunner
 
-#: Ticks kept of a recorded run (about 100 min): the whole run, within a bound.
-RECORD_HISTORY = 400_000
-
 
 def replay_into_feed(
-    record: Record, mission: Any, profile: Any, packets: tuple[int, ...], baud: int, name: str
+    record: Record,
+    mission: Any,
+    profile: Any,
+    packets: tuple[int, ...],
+    baud: int,
+    name: str,
+    progress: Callable[[float], None] | None = None,
 ) -> tuple[RunFeed, RunSummary]:
-    """Replay ``record`` through ``mission``; the feed holds every tick."""
-    feed = RunFeed(history=RECORD_HISTORY, source="record", mission_name=mission.name)
+    """Replay ``record`` through ``mission``; the feed holds every tick, packed
+    (``monitor/history.py``). ``progress(fraction)``: at each tenth of the record replayed."""
+    feed = RunFeed(source="record", mission_name=mission.name, packed=True)
     feed.set_tree(mission.root)
     acts = [  # the operator's; the tick guard's are replayed by the runner's own guard
         note
@@ -47,6 +53,7 @@ def replay_into_feed(
         record, mission, profile=profile, packets=packets, baud=baud, name=name,
         gate=ReplayedActs(feed, acts),  # it records each tick in the feed, as live
         raise_interrupts=False,  # Ctrl-C: the monitor shows the summary, as `replay` does
+        progress=progress,
     )  # fmt: skip
     for t, note in record.notes:
         if not isinstance(note.get("tick"), int):  # the tick guard's: shown as the run had it

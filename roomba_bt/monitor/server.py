@@ -347,7 +347,7 @@ class MonitorServer:
             "state": state_view(self.feed, record, earlier),
             "tree": tree_view(self.feed, record.tree),
             "path": path_view(self.feed.path(record.seq)),
-            "events": [e._asdict() for e in self.feed.since(0)[1]],
+            "events": [e._asdict() for e in self.feed.events_after(-1)],  # not the ticks
             "session": self._session_view(),
         }
         return web.json_response(body)
