@@ -287,3 +287,22 @@ def test_a_replay_reads_the_record_as_it_goes_its_memory_not_growing_with_it(
         peaks.append(_replay_peak(path))
     short, long = peaks
     assert long - short < 0.1 * short, peaks
+
+
+def test_the_replay_of_a_long_record_says_how_far_it_has_gone(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A 2-hour record took minutes to replay and said nothing meanwhile."""
+    from roomba_bt.cli import run_cmd
+
+    path = tmp_path / "run.jsonl"
+    argv = ["run", "bump-and-turn", "--fast", "--world", "corridor", "--display", "none"]
+    assert main([*argv, "-p", "duration=20s", "--record", str(path)]) == 0
+    capsys.readouterr()
+    assert main(["replay", str(path)]) == 0
+    assert "% of" not in capsys.readouterr().err  # a short record: nothing to wait for
+    monkeypatch.setattr(run_cmd, "PROGRESS_FROM_BYTES", 0)  # as long as a long one
+    assert main(["replay", str(path)]) == 0
+    said = [line for line in capsys.readouterr().err.splitlines() if "% of" in line]
+    assert said[0].startswith(f"replay: 10% of {path} (0:02 of 0:20 of the run)"), said
+    assert len(said) == 10 and said[-1].startswith(f"replay: 100% of {path}"), said
