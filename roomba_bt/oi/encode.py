@@ -181,22 +181,35 @@ def decode_command(data: bytes | bytearray) -> tuple[Command, int] | None:
     The robot's side of :func:`encode`: the opcode table says how many data bytes follow, and
     for Song / Stream / Query List the count byte says how many more. Raises
     :class:`EncodeError` for an unknown opcode or a value out of range."""
+    size = command_size(data)
+    if size is None:
+        return None
+    spec = _spec(data[0])
+    fixed = spec.fixed_data_bytes
+    values = list(struct.unpack_from(">" + "".join(a.code for a in spec.args), data, 1))
+    if spec.opcode == 137 and values[1] == -0x8000:
+        values[1] = 0x8000
+    return encode(spec, *values, tail=list(data[1 + fixed : size])), size
+
+
+def command_size(data: bytes | bytearray) -> int | None:
+    """How many bytes the first command in ``data`` takes, or ``None`` while it is incomplete:
+    :func:`decode_command`'s reading without the command built and checked (a replay's
+    compare asks only where each command ends, once a command: building it cost a quarter of
+    the replay). Raises :class:`EncodeError` for an unknown opcode or a count out of range."""
     if not data:
         return None
     spec = _spec(data[0])
     fixed = spec.fixed_data_bytes
     if len(data) < 1 + fixed:
         return None
-    values = list(struct.unpack_from(">" + "".join(a.code for a in spec.args), data, 1))
-    if spec.opcode == 137 and values[1] == -0x8000:
-        values[1] = 0x8000
+    size = 1 + fixed
     if spec.tail is not None:  # the count must be valid before it says how much to wait for
+        values = struct.unpack_from(">" + "".join(a.code for a in spec.args), data, 1)
         index = [a.name for a in spec.args].index(spec.tail.count_arg)
         _check(spec, spec.args[index], values[index])
-    size = 1 + fixed + spec.tail_bytes(values)
-    if len(data) < size:
-        return None
-    return encode(spec, *values, tail=list(data[1 + fixed : size])), size
+        size += spec.tail_bytes(list(values))
+    return size if len(data) >= size else None
 
 
 # ----------------------------------------------------------------- named helpers

@@ -18,7 +18,15 @@ from roomba_bt.oi.bits import (
     scheduling_led_bits,
     segment_bits,
 )
-from roomba_bt.oi.encode import Command, Note, Radius, decode_command, encode, note_number
+from roomba_bt.oi.encode import (
+    Command,
+    Note,
+    Radius,
+    command_size,
+    decode_command,
+    encode,
+    note_number,
+)
 from roomba_bt.oi.opcodes import COMMANDS
 
 Case = tuple[str, Callable[[], Command], list[int]]
@@ -195,6 +203,17 @@ def test_an_incomplete_command_waits(
 ) -> None:
     for cut in range(len(wire)):
         assert decode_command(bytes(wire[:cut])) is None
+
+
+@pytest.mark.parametrize(("opcode", "build", "wire"), CASES)
+def test_a_commands_size_is_read_as_the_robot_reads_it(
+    opcode: int, build: Callable[[], Command], wire: list[int]
+) -> None:
+    """command_size: where decode_command's command ends, without building it (a replay's
+    compare)."""
+    assert command_size(bytes(wire) + b"\x80\x83") == len(wire)
+    for cut in range(len(wire)):
+        assert command_size(bytes(wire[:cut])) is None
 
 
 def test_generic_encode_by_name_and_opcode_agree() -> None:

@@ -11,7 +11,7 @@ import pytest
 
 from roomba_bt.oi import commands as c
 from roomba_bt.oi.bits import day_bits, led_bits
-from roomba_bt.oi.encode import decode_command, encode
+from roomba_bt.oi.encode import command_size, decode_command, encode
 from roomba_bt.oi.errors import EncodeError
 from roomba_bt.oi.opcodes import COMMANDS, ArgSpec, CommandSpec
 
@@ -125,6 +125,10 @@ def test_unknown_commands() -> None:
             encode(unknown)  # type: ignore[arg-type]
     with pytest.raises(EncodeError):
         decode_command(bytes([147]))  # Digital Outputs: removed from the OI
+    with pytest.raises(EncodeError):
+        command_size(bytes([147]))
+    with pytest.raises(EncodeError):  # a song of 17 notes: its count is out of range
+        command_size(bytes([140, 0, 17]))
 
 
 HELPER_ERRORS: list[tuple[str, Callable[[], object], str]] = [
