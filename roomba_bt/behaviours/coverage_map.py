@@ -60,10 +60,16 @@ from py_trees.common import Status
 
 from roomba_bt.behaviours import driving
 from roomba_bt.behaviours.declare import WHEEL, Action, Param, declare, wheel_speed_param
+from roomba_bt.behaviours.docking.common import DockView
 from roomba_bt.behaviours.edging import EdgeSteering, signal_distance_mm
 from roomba_bt.behaviours.units import DISTANCE, DURATION
 from roomba_bt.oi import commands as oi
-from roomba_bt.oi.frames import ENCODER_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS, SensorFrame
+from roomba_bt.oi.frames import (
+    ENCODER_PACKETS,
+    IR_PACKETS,
+    LIGHT_BUMP_SIGNAL_PACKETS,
+    SensorFrame,
+)
 from roomba_bt.oi.opcodes import opcodes
 from roomba_bt.oi.profiles import (
     BODY_RADIUS_MM,
@@ -82,6 +88,8 @@ _SIDE = 600
 _HALF_SIDE = _SIDE // 2
 #: cell bits
 SWEPT, BLOCKED, VISITED, TRIED = 1, 2, 4, 8
+#: a cell's four neighbours, as steps in the cell index
+_STEPS = (-_SIDE, _SIDE, -1, 1)
 #: the strip the brushes clean, as points across the body (x forward, y left; mm): the main
 #: brush 90 mm to the left, the side brush 185 mm to the right (kept a little inside both)
 _STRIP = (*((0.0, y) for y in (80.0, 40.0, 0.0, -40.0, -80.0)), (40.0, -120.0), (50.0, -160.0))
@@ -126,6 +134,8 @@ class FloorMap:
         self.avoid: set[Cell] = set()
         #: cells newly swept (a counter: the caller compares)
         self.swept = 0
+        #: cells where a receiver saw a dock's beam: the way home leads to the nearest
+        self.beams: set[Cell] = set()
 
     @staticmethod
     def cell(x: float, y: float) -> Cell | None:
@@ -185,6 +195,21 @@ class FloorMap:
     def frontier(self, start: Cell, through_near: bool = False) -> list[Cell] | None:
         """The path (cells, from ``start``) over cells the robot has been on or swept, to
         the nearest one beside open floor; None when there is none. Breadth-first."""
+        cells, open_floor = self.cells, self.open_floor
+
+        def beside_open(cell: Cell) -> bool:
+            return not cells[cell] & TRIED and any(open_floor(cell + d) for d in _STEPS)
+
+        return self.search(start, beside_open, through_near)
+
+    def search(
+        self, start: Cell, goal: Callable[[Cell], bool], through_near: bool = False
+    ) -> list[Cell] | None:
+        """The path (cells, from ``start``) to the nearest cell other than ``start`` that
+        ``goal`` takes, over the cells the robot has been on, or swept away from anything
+        (or near it too: ``through_near``, a narrow doorway), never blocked ones nor
+        :attr:`avoid`; None when none is reached. Breadth-first: ``frontier`` and
+        ``home_by_map`` plan with it."""
         cells, near, avoid = self.cells, self.near, self.avoid
         parent: dict[Cell, Cell] = {start: start}
         queue = deque((start,))
@@ -195,18 +220,15 @@ class FloorMap:
             if bits & (SWEPT | VISITED) and not bits & BLOCKED and beside not in avoid:
                 parent[beside] = start
                 queue.append(beside)
-        steps = (-_SIDE, _SIDE, -1, 1)
         while queue:
             cell = queue.popleft()
-            if cell != start and not cells[cell] & TRIED:
-                for d in steps:
-                    if self.open_floor(cell + d):
-                        path = [cell]
-                        while path[-1] != start:
-                            path.append(parent[path[-1]])
-                        path.reverse()
-                        return path
-            for d in steps:
+            if cell != start and goal(cell):
+                path = [cell]
+                while path[-1] != start:
+                    path.append(parent[path[-1]])
+                path.reverse()
+                return path
+            for d in _STEPS:
                 nxt = cell + d
                 bits = cells[nxt]
                 passable = bits & VISITED or (bits & SWEPT and (through_near or not near[nxt]))
@@ -264,6 +286,9 @@ class Bearings:
         self.map = fmap
         #: its own pose: the odometry's increments, the heading re-anchored on walls
         self.pose = odo
+        #: where ``cover`` first started (x, y mm, in its own frame): ``home_by_map`` goes
+        #: back there (``clean`` starts off the dock)
+        self.start = (odo.x_mm, odo.y_mm)
         #: the odometry as the last tick saw it
         self._odo = odo
         #: the lanes' axis (rad, mod 90 deg), from the walls; None before the first one
@@ -329,6 +354,10 @@ class Bearings:
         x, y, theta = pose.x_mm, pose.y_mm, pose.theta_rad
         fmap = self.map
         fmap.sweep(x, y, theta)
+        if DockView.of(frame).seen:
+            cell = fmap.cell(x, y)
+            if cell is not None:
+                fmap.beams.add(cell)
         signals = frame.light_bump_signals
         for angle, signal in zip(_RAY_ANGLES, signals, strict=True):
             if signal >= _RAY_MARK:
@@ -410,7 +439,7 @@ class Bearings:
         Param("edge_time", DURATION, default="3min", minimum=5,
               doc="an edge ends after this long even if it still finds new floor"),
     ),
-    reads=(*driving.BLOCKED_PACKETS, *ENCODER_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS),
+    reads=(*driving.BLOCKED_PACKETS, *ENCODER_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS, *IR_PACKETS),
     sends=opcodes("drive_direct", "drive"),
 )  # fmt: skip
 class Cover(Action):

@@ -15,7 +15,7 @@ from roomba_bt.behaviours import coverage_map, driving
 from roomba_bt.behaviours.coverage_map import BLOCKED, CELL_MM, SWEPT, VISITED, Cover, FloorMap
 from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec
 from roomba_bt.evaluate.wheels import count_reversals
-from roomba_bt.oi.frames import LIGHT_BUMP_SIGNAL_PACKETS
+from roomba_bt.oi.frames import IR_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.robot.testing import StubRobot
 
@@ -175,7 +175,7 @@ def test_cover_holds_up_with_the_encoders_error(sweep: Sweep) -> None:
 
 def _frame(robot: StubRobot, counts: int, mode: OIMode = OIMode.SAFE, cliff: int = 0) -> None:
     """A frame with both encoders at ``counts`` (straight ahead), ``cliff`` on the front left."""
-    values = dict.fromkeys((*driving.BLOCKED_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS), 0)
+    values = dict.fromkeys((*driving.BLOCKED_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS, *IR_PACKETS), 0)
     values.update({43: counts % 65536, 44: counts % 65536, 35: int(mode), 10: cliff})
     robot.set_frame(values)
 
