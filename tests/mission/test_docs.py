@@ -8,6 +8,7 @@ from roomba_bt.behaviours.actions import ACTIONS
 from roomba_bt.behaviours.cleaning import CLEANING
 from roomba_bt.behaviours.conditions import CONDITIONS
 from roomba_bt.behaviours.coverage_map import COVERAGE
+from roomba_bt.behaviours.homing import HOMING
 from roomba_bt.behaviours.language import MODIFIERS, WORDS, Shape
 from roomba_bt.behaviours.wall import WALL_FOLLOWING
 from roomba_bt.mission.loader import TOP_LEVEL
@@ -21,7 +22,7 @@ def test_every_language_word_is_documented() -> None:
 
 
 def test_every_builtin_behaviour_and_parameter_is_documented() -> None:
-    for cls in (*ACTIONS, *CONDITIONS, *CLEANING, *COVERAGE, *WALL_FOLLOWING):
+    for cls in (*ACTIONS, *CONDITIONS, *CLEANING, *COVERAGE, *HOMING, *WALL_FOLLOWING):
         decl = cls.declaration
         assert f"**`{decl.name}`**" in DOC, decl.name
         for param in decl.params:

@@ -1,0 +1,245 @@
+"""``home_by_map``: back along ``cover``'s map toward the dock, before the beam search.
+
+The dock search alone (``dock_search``) wanders toward unexplored space until a receiver
+sees a dock character: minutes in a flat (three on average in the simulator's apartment, up
+to seven). The robot already knows the way: ``cover``'s
+:class:`~roomba_bt.behaviours.coverage_map.Bearings` (on the blackboard under ``MAP_KEY``)
+hold its own pose, where it started (``clean`` starts on the dock and backs off it first),
+and a :class:`~.coverage_map.FloorMap` of the floor it has driven on, with the cells where a
+receiver saw a dock's beam while it cleaned. This leaf plans on that map with ``cover``'s
+own breadth-first search (``FloorMap.search``) to the nearest such cell (the start, where
+the robot may have been put down anywhere, only when it saw no beam or cannot reach one),
+and drives the path's straight legs (``FloorMap.waypoints``)::
+
+    plan:   the path from here to the nearest beam cell (else near the start), over cells
+            it has been on
+    turn:   in place toward the next corner of the path
+    drive:  along the line to it; a bump, a cliff or a virtual wall's beam: back off, keep
+            out of that leg's cell (``FloorMap.avoid``, as ``cover`` does) and plan again
+
+It keeps the map and pose up to date as ``cover`` does (the same :class:`Bearings`), so what
+it meets is mapped for the next plan. SUCCESS in the tick any receiver sees a dock character
+(the dock search's own test: the beams take over from there) or when the path's end is
+reached: the odometry may have drifted, so arriving and seeing nothing is no failure; the
+dock search starts from there, near where the beams were. FAILURE with no map (no ``cover``
+ran), no path, too many plans, ``timeout``, a wheel drop, or at once when the firmware stops
+at a cliff and drops to Passive (as ``cover``: the cliff is mapped; a ``retry`` with ``mode:
+safe`` starts it again, and it backs off the edge and plans again).
+"""
+
+from __future__ import annotations
+
+import math
+
+import py_trees
+from py_trees.common import Status
+
+from roomba_bt.behaviours import driving
+from roomba_bt.behaviours.coverage_map import (
+    _BACK_MM,
+    _SIDE,
+    _STALL_S,
+    _TURN_TOLERANCE,
+    MAP_KEY,
+    Bearings,
+    Cell,
+)
+from roomba_bt.behaviours.declare import Action, Param, declare, wheel_speed_param
+from roomba_bt.behaviours.docking.common import DockView
+from roomba_bt.behaviours.units import DURATION
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.frames import ENCODER_PACKETS, IR_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS, SensorFrame
+from roomba_bt.oi.opcodes import opcodes
+from roomba_bt.robot.interface import Odometry
+
+__all__ = ["HOMING", "HomeByMap"]
+
+#: plans (the first, and one after each hazard or stall) before it gives up
+_PLANS = 25
+#: the path ends this many cells (either way) from the start's cell
+_WITHIN_CELLS = 2
+#: a corner closer than this (mm) is taken as reached
+_REACHED_MM = 40.0
+
+
+@declare(
+    "home_by_map",
+    kind="action",
+    params=(
+        wheel_speed_param("speed", "300 mm/s", minimum=50, doc="driving speed along the path"),
+        wheel_speed_param("turn_speed", "200 mm/s", minimum=20,
+                          doc="wheel speed when turning in place"),
+        Param("timeout", DURATION, default="3min", minimum=5,
+              doc="give up (FAILURE) after this long"),
+    ),
+    reads=(*driving.BLOCKED_PACKETS, *ENCODER_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS, *IR_PACKETS),
+    sends=opcodes("drive_direct", "drive"),
+)  # fmt: skip
+class HomeByMap(Action):
+    """Drive back along ``cover``'s map (its own breadth-first search, around what it
+    mapped) to the nearest place a dock beam was seen while it cleaned (none: to where it
+    started): SUCCESS when a dock beam is seen or the path's end is reached;
+    FAILURE with no map or no way there, after ``timeout``, on a wheel drop, or when the
+    robot leaves Safe/Full (started again, it plans again from where it is). Drive Direct
+    (145)."""
+
+    moves = True
+
+    def start(self) -> None:
+        snap = self.snapshot
+        kept = py_trees.blackboard.Blackboard.storage.get(MAP_KEY)
+        self._bearings = kept if isinstance(kept, Bearings) else None
+        if self._bearings is not None:
+            self._bearings.resume(snap.odometry)
+        self._until = snap.time + float(self.value("timeout"))
+        self._plans = 0
+        self._corners: list[Cell] = []
+        self._phase, self._since, self._heading = "plan", snap.time, 0.0
+        self._line: driving.Line = (0.0, 0.0, 0.0)
+        self._limit, self._back_to, self._cell = 0.0, 0.0, 0
+        self._progress = (0.0, snap.time)
+        # started again where the firmware stopped at a hazard: off it first
+        why = driving.blocked(snap.frame)
+        if why in _BACK_MM and self._bearings is not None:
+            self._back(_BACK_MM[why])
+
+    def update(self) -> Status:
+        snap = self.snapshot
+        frame = snap.frame
+        bearings = self._bearings
+        if bearings is None:
+            self.feedback_message = "no map of cover's to go by"
+            return Status.FAILURE
+        bearings.integrate(snap.odometry)
+        bearings.observe(frame)  # what it meets is on the map for the next plan
+        if DockView.of(frame).seen:
+            return self._arrived("a dock beam seen")
+        waiting = driving.held(self, 0.0 if frame.any_cliff else None)
+        if waiting is not None:
+            return waiting
+        if snap.time >= self._until:
+            self.feedback_message = f"not back within {float(self.value('timeout')):g} s"
+            return Status.FAILURE
+        for _ in range(6):
+            step = self._step(frame)
+            if isinstance(step, Status):
+                return step
+            if step is not None:
+                self.send(driving.drive_wheels(*step))
+                return Status.RUNNING
+        self.send(driving.drive_wheels(0.0, 0.0))
+        return Status.RUNNING
+
+    def _arrived(self, why: str) -> Status:
+        self.send(oi.halt())
+        self.feedback_message = why
+        return Status.SUCCESS
+
+    def _step(self, frame: SensorFrame) -> tuple[float, float] | Status | None:
+        """This tick's wheel speeds, or the end; None: the phase changed, look again."""
+        phase = self._phase
+        if phase == "plan":
+            return self._plan()
+        if phase == "turn":
+            return self._turning()
+        if phase == "back":
+            return self._backing()
+        return self._driving(frame)
+
+    def _plan(self) -> Status | None:
+        bearings = self._bearings
+        assert bearings is not None
+        fmap, pose = bearings.map, bearings.pose
+        here = fmap.cell(pose.x_mm, pose.y_mm)
+        goal = fmap.cell(*bearings.start)
+        if here is None or goal is None:
+            self.feedback_message = "off the map"
+            return Status.FAILURE
+        goal_row, goal_col = divmod(goal, _SIDE)
+
+        def near_start(cell: Cell) -> bool:
+            row, col = divmod(cell, _SIDE)
+            return abs(row - goal_row) <= _WITHIN_CELLS and abs(col - goal_col) <= _WITHIN_CELLS
+
+        # the dock's own evidence first; the start is only where cleaning began
+        beams = fmap.beams
+        goals = (beams.__contains__, near_start) if beams else (near_start,)
+        if goals[0](here):
+            return self._arrived("where the dock's beams were seen" if beams else "at the start")
+        self._plans += 1
+        path = None
+        for home in goals:
+            path = fmap.search(here, home) or fmap.search(here, home, through_near=True)
+            if path is not None:
+                break
+        if path is None or self._plans > _PLANS:
+            self.feedback_message = "no way back on the map"
+            return Status.FAILURE
+        self._corners = fmap.waypoints(path)
+        return self._leg()
+
+    def _leg(self) -> Status | None:
+        """Toward the path's next corner (turn, then drive); the last one reached: home."""
+        bearings = self._bearings
+        assert bearings is not None
+        while self._corners:
+            self._cell = cell = self._corners.pop(0)
+            x, y = bearings.map.centre(cell)
+            pose = bearings.pose
+            dx, dy = x - pose.x_mm, y - pose.y_mm
+            distance = math.hypot(dx, dy)
+            if distance >= _REACHED_MM:
+                heading = math.atan2(dy, dx)
+                self._phase, self._heading, self._limit = "turn", heading, distance
+                self._since = self.snapshot.time
+                return None
+        return self._arrived("at the end of its path, no beam seen")
+
+    def _turning(self) -> tuple[float, float] | None:
+        pose = self._pose
+        error = driving.wrap(self._heading - pose.theta_rad)
+        now = self.snapshot.time
+        if abs(error) <= _TURN_TOLERANCE or now - self._since > 6.0:
+            self._phase, self._progress = "drive", (0.0, now)
+            self._line = (pose.x_mm, pose.y_mm, self._heading)
+            return None
+        return driving.turn_toward(error, self.number("turn_speed"), 60.0, 500.0)
+
+    def _driving(self, frame: SensorFrame) -> tuple[float, float] | Status | None:
+        pose, now = self._pose, self.snapshot.time
+        along, _ = driving.along_line(self._line, pose.x_mm, pose.y_mm)
+        if along > self._progress[0] + 10.0:
+            self._progress = (along, now)
+        why = driving.blocked(frame)
+        if why is not None:  # no path through that cell again (as cover's paths)
+            assert self._bearings is not None
+            self._bearings.map.avoid.add(self._cell)
+            self._back(_BACK_MM[why])
+            return None
+        if now - self._progress[1] >= _STALL_S:
+            self._phase = "plan"
+            return None
+        if along >= self._limit:
+            return self._leg()
+        speed = self.number("speed")
+        if driving.near_ahead(frame):
+            speed = min(speed, 150.0)
+        return driving.steer_along(self._line, pose.x_mm, pose.y_mm, pose.theta_rad, speed)
+
+    def _back(self, distance: float) -> None:
+        self._phase, self._back_to = "back", self._pose.distance_mm - distance
+        self._since = self.snapshot.time
+
+    def _backing(self) -> tuple[float, float] | None:
+        if self._pose.distance_mm > self._back_to and self.snapshot.time - self._since < 1.5:
+            return (-250.0, -250.0)
+        self._phase = "plan"
+        return None
+
+    @property
+    def _pose(self) -> Odometry:
+        assert self._bearings is not None
+        return self._bearings.pose
+
+
+HOMING: tuple[type[Action], ...] = (HomeByMap,)

@@ -1,0 +1,109 @@
+"""``home_by_map``: back along ``cover``'s map to where a dock beam was seen or to the start,
+on the simulator (around an obstacle, with and without the encoders' error) and on a stub
+robot (a beam seen on the way ends it, in that tick)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import py_trees
+from py_trees.common import Status
+
+from roomba_bt.behaviours import coverage_map, driving
+from roomba_bt.behaviours.coverage_map import Cover
+from roomba_bt.behaviours.homing import HomeByMap
+from roomba_bt.evaluate.episode import EpisodeResult
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.frames import IR_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.robot.testing import StubRobot
+
+Sweep = Callable[..., EpisodeResult]
+Make = Callable[..., object]
+
+#: a minute of ``cover``, the brushes off, then the way home (the sweep's leaf, flow style)
+CLEAN_THEN_HOME = (
+    "sequence: {children: [{parallel: {policy: one, children: [{wait: 60s}, {cover: {}}]}},"
+    " {motors: {}}, {home_by_map: {}}]}"
+)
+#: a box in the room's middle: the way back from its far side goes round it
+PILLAR = "obstacles: [{name: pillar, rect: [1.3, 0.9, 1.7, 1.5]}]"
+START = (0.5, 0.5, 0)
+#: a dock character (the red buoy) on the omni receiver
+RED_BUOY = 168
+
+
+def _farthest(result: EpisodeResult) -> float:
+    x0, y0, _ = result.start
+    return max(math.dist((x, y), (x0, y0)) for x, y in result.trajectory)
+
+
+def test_the_way_home_reaches_the_start_around_what_cover_mapped(sweep: Sweep) -> None:
+    result = sweep(CLEAN_THEN_HOME, START, PILLAR, seed=1, timeout_s=400.0)
+    assert result.outcome == "success", result.reason
+    assert _farthest(result) > 1.5  # it had gone across the room
+    x0, y0, _ = result.start
+    assert math.dist(result.end[:2], (x0, y0)) < 0.45  # the path ends within 2 cells
+    assert not result.fell and result.violations == 0
+
+
+def test_the_way_home_with_the_encoders_error_still_ends(sweep: Sweep) -> None:
+    """The pose drifts: it ends where its map says the start is (SUCCESS, for the dock
+    search to take over), near the true start."""
+    result = sweep(CLEAN_THEN_HOME, START, PILLAR, seed=1, timeout_s=400.0, odometry_error=0.015)
+    assert result.outcome == "success", result.reason
+    x0, y0, _ = result.start
+    assert math.dist(result.end[:2], (x0, y0)) < 0.8
+
+
+def _frame(robot: StubRobot, counts: int, ir: int = 0) -> None:
+    """Both encoders at ``counts`` (straight ahead); ``ir`` on the omni receiver."""
+    values = dict.fromkeys((*driving.BLOCKED_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS, *IR_PACKETS), 0)
+    values.update({43: counts % 65536, 44: counts % 65536, 35: int(OIMode.SAFE), 17: ir})
+    robot.set_frame(values)
+
+
+def test_a_beam_seen_on_the_way_ends_it_and_the_way_leads_where_one_was_seen(
+    make: Make, robot: StubRobot
+) -> None:
+    """``cover`` drives 1.3 m and sees a dock's beam on the way (its map keeps the cells);
+    the way home plans to the nearest of them, not to the start, and ends in the tick a
+    receiver sees a beam again."""
+    cover = make(Cover)
+    counts = 0
+    _frame(robot, counts)
+    for tick in range(150):
+        counts += 20
+        _frame(robot, counts, RED_BUOY if 40 <= tick < 50 else 0)
+        cover.tick_once()
+    bearings = py_trees.blackboard.Blackboard.storage[coverage_map.MAP_KEY]
+    beams = bearings.map.beams
+    assert beams and all(300.0 < bearings.map.centre(c)[0] < 700.0 for c in beams)
+    cover.stop(Status.INVALID)
+    home = make(HomeByMap)
+    assert isinstance(home, HomeByMap)
+    robot.flush()
+    home.tick_once()
+    assert home.status is Status.RUNNING
+    assert home._corners == [] and home._cell in beams  # one straight leg, to a beam cell
+    assert abs(driving.wrap(home._heading - math.pi)) < 0.1  # back the way it came
+    for _ in range(5):
+        _frame(robot, counts)
+        home.tick_once()
+    assert home.status is Status.RUNNING
+    _frame(robot, counts, RED_BUOY)
+    robot.flush()
+    home.tick_once()
+    assert home.status is Status.SUCCESS
+    assert home.feedback_message == "a dock beam seen"
+    assert oi.halt() in robot.flush()
+
+
+def test_without_cover_s_map_it_fails_at_once(make: Make, robot: StubRobot) -> None:
+    home = make(HomeByMap)
+    assert isinstance(home, HomeByMap)
+    _frame(robot, 0)
+    home.tick_once()
+    assert home.status is Status.FAILURE
+    assert "no map" in home.feedback_message
