@@ -286,9 +286,6 @@ class Bearings:
         self.map = fmap
         #: its own pose: the odometry's increments, the heading re-anchored on walls
         self.pose = odo
-        #: where ``cover`` first started (x, y mm, in its own frame): ``home_by_map`` goes
-        #: back there (``clean`` starts off the dock)
-        self.start = (odo.x_mm, odo.y_mm)
         #: the odometry as the last tick saw it
         self._odo = odo
         #: the lanes' axis (rad, mod 90 deg), from the walls; None before the first one

@@ -1,30 +1,31 @@
-"""``home_by_map``: back along ``cover``'s map toward the dock, before the beam search.
+"""``home_by_map``: back along ``cover``'s map to where it saw the dock, before the search.
 
 The dock search alone (``dock_search``) wanders toward unexplored space until a receiver
-sees a dock character: minutes in a flat (three on average in the simulator's apartment, up
-to seven). The robot already knows the way: ``cover``'s
+sees a dock character: three minutes on average in the simulator's apartment, up to seven.
+The robot already knows the way: ``cover``'s
 :class:`~roomba_bt.behaviours.coverage_map.Bearings` (on the blackboard under ``MAP_KEY``)
-hold its own pose, where it started (``clean`` starts on the dock and backs off it first),
-and a :class:`~.coverage_map.FloorMap` of the floor it has driven on, with the cells where a
-receiver saw a dock's beam while it cleaned. This leaf plans on that map with ``cover``'s
-own breadth-first search (``FloorMap.search``) to the nearest such cell (the start, where
-the robot may have been put down anywhere, only when it saw no beam or cannot reach one),
-and drives the path's straight legs (``FloorMap.waypoints``)::
+hold its own pose and a :class:`~.coverage_map.FloorMap` of the floor it has driven on,
+with the cells where a receiver saw a dock's beam while it cleaned (``FloorMap.beams``;
+``clean`` starts on the dock and backs off it, through its force field, so the cells where
+cleaning started are among them). This leaf plans on that map with ``cover``'s own
+breadth-first search (``FloorMap.search``) to the nearest such cell and drives the path's
+straight legs (``FloorMap.waypoints``)::
 
-    plan:   the path from here to the nearest beam cell (else near the start), over cells
-            it has been on
+    plan:   the path from here to the nearest beam cell, over cells it has been on
     turn:   in place toward the next corner of the path
     drive:  along the line to it; a bump, a cliff or a virtual wall's beam: back off, keep
             out of that leg's cell (``FloorMap.avoid``, as ``cover`` does) and plan again
 
 It keeps the map and pose up to date as ``cover`` does (the same :class:`Bearings`), so what
 it meets is mapped for the next plan. SUCCESS in the tick any receiver sees a dock character
-(the dock search's own test: the beams take over from there) or when the path's end is
-reached: the odometry may have drifted, so arriving and seeing nothing is no failure; the
-dock search starts from there, near where the beams were. FAILURE with no map (no ``cover``
-ran), no path, too many plans, ``timeout``, a wheel drop, or at once when the firmware stops
-at a cliff and drops to Passive (as ``cover``: the cliff is mapped; a ``retry`` with ``mode:
-safe`` starts it again, and it backs off the edge and plans again).
+(the dock search's own test: the beams take over from there), when the path's end is reached
+(the odometry may have drifted: seeing nothing there is no failure, the search starts there,
+near where the beams were), or at once when no beam was seen while it cleaned (a robot put
+down away from the dock: where it started says nothing of the dock; going back there first
+cost a seed of the apartment its dock). FAILURE with no map (no ``cover`` ran), no path,
+too many plans, ``timeout``, a wheel drop, or at once when the firmware stops at a cliff
+and drops to Passive (as ``cover``: the cliff is mapped; a ``retry`` with ``mode: safe``
+starts it again, and it backs off the edge and plans again).
 """
 
 from __future__ import annotations
@@ -37,7 +38,6 @@ from py_trees.common import Status
 from roomba_bt.behaviours import driving
 from roomba_bt.behaviours.coverage_map import (
     _BACK_MM,
-    _SIDE,
     _STALL_S,
     _TURN_TOLERANCE,
     MAP_KEY,
@@ -56,8 +56,6 @@ __all__ = ["HOMING", "HomeByMap"]
 
 #: plans (the first, and one after each hazard or stall) before it gives up
 _PLANS = 25
-#: the path ends this many cells (either way) from the start's cell
-_WITHIN_CELLS = 2
 #: a corner closer than this (mm) is taken as reached
 _REACHED_MM = 40.0
 
@@ -77,8 +75,8 @@ _REACHED_MM = 40.0
 )  # fmt: skip
 class HomeByMap(Action):
     """Drive back along ``cover``'s map (its own breadth-first search, around what it
-    mapped) to the nearest place a dock beam was seen while it cleaned (none: to where it
-    started): SUCCESS when a dock beam is seen or the path's end is reached;
+    mapped) to the nearest place a receiver saw a dock beam while it cleaned: SUCCESS when
+    a dock beam is seen, the path's end is reached, or none was seen while it cleaned;
     FAILURE with no map or no way there, after ``timeout``, on a wheel drop, or when the
     robot leaves Safe/Full (started again, it plans again from where it is). Drive Direct
     (145)."""
@@ -150,30 +148,21 @@ class HomeByMap(Action):
         bearings = self._bearings
         assert bearings is not None
         fmap, pose = bearings.map, bearings.pose
+        beams = fmap.beams
+        if not beams:  # a robot started on the dock sees it backing off: this one did not
+            return self._arrived("no dock beam seen while cleaning: the search starts here")
         here = fmap.cell(pose.x_mm, pose.y_mm)
-        goal = fmap.cell(*bearings.start)
-        if here is None or goal is None:
+        if here is None:
             self.feedback_message = "off the map"
             return Status.FAILURE
-        goal_row, goal_col = divmod(goal, _SIDE)
-
-        def near_start(cell: Cell) -> bool:
-            row, col = divmod(cell, _SIDE)
-            return abs(row - goal_row) <= _WITHIN_CELLS and abs(col - goal_col) <= _WITHIN_CELLS
-
-        # the dock's own evidence first; the start is only where cleaning began
-        beams = fmap.beams
-        goals = (beams.__contains__, near_start) if beams else (near_start,)
-        if goals[0](here):
-            return self._arrived("where the dock's beams were seen" if beams else "at the start")
+        if here in beams:
+            return self._arrived("where the dock's beams were seen")
         self._plans += 1
-        path = None
-        for home in goals:
-            path = fmap.search(here, home) or fmap.search(here, home, through_near=True)
-            if path is not None:
-                break
+        path = fmap.search(here, beams.__contains__) or fmap.search(
+            here, beams.__contains__, through_near=True
+        )
         if path is None or self._plans > _PLANS:
-            self.feedback_message = "no way back on the map"
+            self.feedback_message = "no way on the map to where the dock's beams were seen"
             return Status.FAILURE
         self._corners = fmap.waypoints(path)
         return self._leg()

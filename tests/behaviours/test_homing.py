@@ -27,9 +27,13 @@ CLEAN_THEN_HOME = (
     "sequence: {children: [{parallel: {policy: one, children: [{wait: 60s}, {cover: {}}]}},"
     " {motors: {}}, {home_by_map: {}}]}"
 )
-#: a box in the room's middle: the way back from its far side goes round it
-PILLAR = "obstacles: [{name: pillar, rect: [1.3, 0.9, 1.7, 1.5]}]"
-START = (0.5, 0.5, 0)
+#: a box in the room's middle, and a dock on the south wall whose beams reach 0.5 m
+DOCKED_ROOM = (
+    "obstacles: [{name: pillar, rect: [1.3, 0.9, 1.7, 1.5]}]\n"
+    "dock: {at: [0.6, 0.0], facing: 90, buoy_range: 0.5, force_field: 0.3}"
+)
+#: as ``clean`` leaves the dock: 0.4 m off it, facing away
+START = (0.6, 0.4, 90)
 #: a dock character (the red buoy) on the omni receiver
 RED_BUOY = 168
 
@@ -39,22 +43,24 @@ def _farthest(result: EpisodeResult) -> float:
     return max(math.dist((x, y), (x0, y0)) for x, y in result.trajectory)
 
 
-def test_the_way_home_reaches_the_start_around_what_cover_mapped(sweep: Sweep) -> None:
-    result = sweep(CLEAN_THEN_HOME, START, PILLAR, seed=1, timeout_s=400.0)
+def test_the_way_home_leads_back_to_the_beams_around_what_cover_mapped(sweep: Sweep) -> None:
+    """A minute of ``cover`` takes it across the room; the way home ends within the dock's
+    beams (0.5 m), where the dock search takes over."""
+    result = sweep(CLEAN_THEN_HOME, START, DOCKED_ROOM, seed=1, timeout_s=400.0)
     assert result.outcome == "success", result.reason
     assert _farthest(result) > 1.5  # it had gone across the room
-    x0, y0, _ = result.start
-    assert math.dist(result.end[:2], (x0, y0)) < 0.45  # the path ends within 2 cells
+    assert math.dist(result.end[:2], (0.6, 0.0)) < 0.7  # 1.2 m when cover's minute ends
     assert not result.fell and result.violations == 0
 
 
 def test_the_way_home_with_the_encoders_error_still_ends(sweep: Sweep) -> None:
-    """The pose drifts: it ends where its map says the start is (SUCCESS, for the dock
-    search to take over), near the true start."""
-    result = sweep(CLEAN_THEN_HOME, START, PILLAR, seed=1, timeout_s=400.0, odometry_error=0.015)
+    """The pose drifts: it ends in a beam, or where its map says it saw one (SUCCESS, for
+    the dock search to take over)."""
+    result = sweep(
+        CLEAN_THEN_HOME, START, DOCKED_ROOM, seed=1, timeout_s=400.0, odometry_error=0.015
+    )
     assert result.outcome == "success", result.reason
-    x0, y0, _ = result.start
-    assert math.dist(result.end[:2], (x0, y0)) < 0.8
+    assert math.dist(result.end[:2], (0.6, 0.0)) < 0.7  # 0.9 m when cover's minute ends
 
 
 def _frame(robot: StubRobot, counts: int, ir: int = 0) -> None:
@@ -100,10 +106,27 @@ def test_a_beam_seen_on_the_way_ends_it_and_the_way_leads_where_one_was_seen(
     assert oi.halt() in robot.flush()
 
 
-def test_without_cover_s_map_it_fails_at_once(make: Make, robot: StubRobot) -> None:
+def test_without_cover_s_map_it_fails_and_with_no_beam_seen_it_ends_at_once(
+    make: Make, robot: StubRobot
+) -> None:
+    """No map: FAILURE. A map without a beam seen (a robot put down away from the dock):
+    nothing to go back to, SUCCESS at once, and the search starts where it is (going back
+    to where it was put down first cost a seed of the apartment its dock)."""
     home = make(HomeByMap)
     assert isinstance(home, HomeByMap)
     _frame(robot, 0)
     home.tick_once()
     assert home.status is Status.FAILURE
     assert "no map" in home.feedback_message
+    cover = make(Cover)
+    counts = 0
+    for _ in range(100):
+        counts += 20
+        _frame(robot, counts)
+        cover.tick_once()
+    cover.stop(Status.INVALID)
+    home = make(HomeByMap)
+    assert isinstance(home, HomeByMap)
+    home.tick_once()
+    assert home.status is Status.SUCCESS
+    assert "no dock beam seen" in home.feedback_message
