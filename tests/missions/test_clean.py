@@ -227,13 +227,13 @@ def test_clean_started_on_the_dock_backs_off_it_before_safe() -> None:
 def test_clean_goes_home_by_its_map_before_searching_for_the_beams(
     odometry_error: float,
 ) -> None:
-    """Done cleaning, it drives back along its map to where it saw the dock's beams (or to
-    where it started) before the dock search. Seed 0 in the living room: 43 s from the end of
-    cleaning to the dock by the search alone, 17 s by its map; with the encoders' error the
-    search alone ran out of the run's time (347 s, not docked), by its map 33 s."""
+    """Done cleaning, it drives back along its map to where it saw the dock's beams before
+    the dock search. Seed 0 in the living room: 43 s from the end of cleaning to the dock by
+    the search alone, 20 s by its map; with the encoders' error the search alone ran out of
+    the run's time (347 s, not docked), by its map 81 s."""
     result = _living_room("clean", 0, 20, odometry_error=odometry_error)
     assert result.outcome == "success", result.reason
     assert result.docked and result.charging
     assert result.coverage is not None
     home_s = result.time_s - result.coverage.cleaning_s  # the way home, the drops' ticks
-    assert home_s < (30.0 if odometry_error == 0.0 else 90.0), home_s
+    assert home_s < (30.0 if odometry_error == 0.0 else 150.0), home_s
