@@ -27,10 +27,11 @@ import pytest
 
 def _answer_the_signals_the_tests_send() -> None:
     """A suite started where a script's ``&`` (no job control) or ``nohup`` left SIGINT,
-    SIGQUIT or SIGHUP ignored: roomba-bt keeps a signal ignored at its start ignored
-    (``robot.safety.IGNORED_AT_START``), and every child inherits the ignoring, so the tests
-    that send them (Ctrl-C, a hang-up) would see them ignored. Caught here, they are back
-    to their default in a child after ``exec``; the suite itself still shrugs off a hang-up."""
+    SIGQUIT or SIGHUP ignored: every child inherits the ignoring, roomba-bt keeps a hang-up
+    ignored at its start ignored (``robot.safety.IGNORED_AT_START``), and a child's Python
+    has no KeyboardInterrupt for an ignored SIGINT, so the tests that send them (Ctrl-C, a
+    hang-up) would see them ignored. Caught here, they are back to their default in a child
+    after ``exec``; the suite itself still shrugs off a hang-up."""
     for signum in (signal.SIGINT, signal.SIGQUIT, signal.SIGHUP):
         if signal.getsignal(signum) is signal.SIG_IGN:
             handler = signal.default_int_handler if signum == signal.SIGINT else _shrug

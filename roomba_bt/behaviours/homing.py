@@ -22,7 +22,9 @@ it meets is mapped for the next plan. SUCCESS in the tick any receiver sees a do
 (the odometry may have drifted: seeing nothing there is no failure, the search starts there,
 near where the beams were), or at once when no beam was seen while it cleaned (a robot put
 down away from the dock: where it started says nothing of the dock; going back there first
-cost a seed of the apartment its dock). FAILURE with no map (no ``cover`` ran), no path,
+cost a seed of the apartment its dock) or no map (no ``cover`` ran in this run: the
+battery was low at once; a map of an earlier run in the same process is not this floor's,
+so :meth:`HomeByMap.setup` forgets it, as ``cover``'s does). FAILURE with no path,
 too many plans, ``timeout``, a wheel drop, or at once when the firmware stops at a cliff
 and drops to Passive (as ``cover``: the cliff is mapped; a ``retry`` with ``mode: safe``
 starts it again, and it backs off the edge and plans again).
@@ -31,6 +33,7 @@ starts it again, and it backs off the edge and plans again).
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import py_trees
 from py_trees.common import Status
@@ -76,12 +79,17 @@ _REACHED_MM = 40.0
 class HomeByMap(Action):
     """Drive back along ``cover``'s map (its own breadth-first search, around what it
     mapped) to the nearest place a receiver saw a dock beam while it cleaned: SUCCESS when
-    a dock beam is seen, the path's end is reached, or none was seen while it cleaned;
-    FAILURE with no map or no way there, after ``timeout``, on a wheel drop, or when the
+    a dock beam is seen, the path's end is reached, or none was seen while it cleaned (or
+    no ``cover`` ran in this run: nothing to go by); FAILURE with no way there, after
+    ``timeout``, on a wheel drop, or when the
     robot leaves Safe/Full (started again, it plans again from where it is). Drive Direct
     (145)."""
 
     moves = True
+
+    def setup(self, **kwargs: Any) -> None:
+        super().setup(**kwargs)  # a new run: an earlier run's map (the process's) is not its
+        py_trees.blackboard.Blackboard.storage.pop(MAP_KEY, None)
 
     def start(self) -> None:
         snap = self.snapshot
@@ -106,8 +114,10 @@ class HomeByMap(Action):
         frame = snap.frame
         bearings = self._bearings
         if bearings is None:
-            self.feedback_message = "no map of cover's to go by"
-            return Status.FAILURE
+            # the battery low before cover ran: nothing known, the search starts here (a
+            # FAILURE was retried by clean.yaml's retry, and said "gave up after 5 attempts")
+            self.feedback_message = "no map of cover's to go by: nothing to go back to"
+            return Status.SUCCESS
         bearings.integrate(snap.odometry)
         bearings.observe(frame)  # what it meets is on the map for the next plan
         if DockView.of(frame).seen:

@@ -270,7 +270,8 @@ class Outbox:
             and wheels.spec.effect is Effect.BUILTIN_CYCLE
             and self._senders.get("wheels") is sender
         ):
-            del queue["wheels"]
+            del queue["wheels"]  # never written: no channel's last command either
+            del self._last["wheels"], self._senders["wheels"]
         if running and self._ender is _NOBODY:
             self._ender = sender
             queue[_CYCLE_END_KEY] = CYCLE_END[0]  # ``queued`` is true: the flush comes
@@ -287,9 +288,10 @@ class Outbox:
         out = list(queue.values())
         queue.clear()
         if ender is not _NOBODY and not any(c.spec.effect is Effect.BUILTIN_CYCLE for c in out):
+            later = {c.spec.channel for c in out}  # written after the end: theirs stand
             for command in CYCLE_END:
                 channel = command.spec.channel
-                if channel is not None:
+                if channel is not None and channel not in later:
                     self._senders[channel] = ender
                     self._last[channel] = command
             out[:0] = CYCLE_END

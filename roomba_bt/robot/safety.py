@@ -54,16 +54,19 @@ ENDING_SIGNALS: tuple[int, ...] = (
 
 #: The ending signals this process was started with ignored, which stay so (decided): ``nohup``
 #: starts a run with SIGHUP ignored, so that a multi-hour run outlives the SSH session that
-#: started it, and a shell without job control (a script's ``roomba-bt run ... &``) starts a
-#: background job with SIGINT and SIGQUIT ignored, so that the keys typed for the foreground
-#: do not reach it. Ignored, such a signal leaves the run going, its robot still under
-#: control. Never SIGTERM: ``kill``, systemd and a container's stop end a process with it,
-#: and their next word is SIGKILL, which would leave the robot driving. Read when this module
-#: is first imported, before any handler of ours (a run puts its previous handlers back).
+#: started it. Only SIGHUP: it is the one a program is started with ignored on purpose. A
+#: shell without job control (a script's ``roomba-bt run ... &``) starts its background jobs
+#: with SIGINT and SIGQUIT ignored too, by accident of job control; a script's ``kill -INT``
+#: or ``timeout -s INT`` then asks the run to stop, and a stop asked of a process that
+#: drives a robot is taken (session 26's first version kept them ignored: the robot drove on
+#: for the whole mission, and the run exited 0). Never SIGTERM either: ``kill``, systemd and
+#: a container's stop send it, and their next word is SIGKILL, which would leave the robot
+#: driving. Read when this module is first imported, before any handler of ours (a run puts
+#: its previous handlers back).
 IGNORED_AT_START: frozenset[int] = frozenset(
     signum
     for signum in ENDING_SIGNALS
-    if signum != signal.SIGTERM and signal.getsignal(signum) is signal.SIG_IGN
+    if getattr(signal, "SIGHUP", None) == signum and signal.getsignal(signum) is signal.SIG_IGN
 )
 
 

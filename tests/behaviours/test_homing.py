@@ -76,6 +76,7 @@ def test_a_beam_seen_on_the_way_ends_it_and_the_way_leads_where_one_was_seen(
     """``cover`` drives 1.3 m and sees a dock's beam on the way (its map keeps the cells);
     the way home plans to the nearest of them, not to the start, and ends in the tick a
     receiver sees a beam again."""
+    home = make(HomeByMap)  # set up with the tree, before cover's first tick
     cover = make(Cover)
     counts = 0
     _frame(robot, counts)
@@ -87,7 +88,6 @@ def test_a_beam_seen_on_the_way_ends_it_and_the_way_leads_where_one_was_seen(
     beams = bearings.map.beams
     assert beams and all(300.0 < bearings.map.centre(c)[0] < 700.0 for c in beams)
     cover.stop(Status.INVALID)
-    home = make(HomeByMap)
     assert isinstance(home, HomeByMap)
     robot.flush()
     home.tick_once()
@@ -106,18 +106,34 @@ def test_a_beam_seen_on_the_way_ends_it_and_the_way_leads_where_one_was_seen(
     assert oi.halt() in robot.flush()
 
 
-def test_without_cover_s_map_it_fails_and_with_no_beam_seen_it_ends_at_once(
-    make: Make, robot: StubRobot
-) -> None:
-    """No map: FAILURE. A map without a beam seen (a robot put down away from the dock):
-    nothing to go back to, SUCCESS at once, and the search starts where it is (going back
-    to where it was put down first cost a seed of the apartment its dock)."""
+def test_without_cover_s_map_or_a_beam_seen_it_ends_at_once(make: Make, robot: StubRobot) -> None:
+    """No map (the battery low before cover ran) and a map without a beam seen (a robot put
+    down away from the dock): nothing to go back to, SUCCESS at once, and the search starts
+    where it is (going back to where it was put down first cost a seed of the apartment its
+    dock; a FAILURE with no map was retried by clean.yaml five times, "gave up")."""
     home = make(HomeByMap)
     assert isinstance(home, HomeByMap)
     _frame(robot, 0)
     home.tick_once()
-    assert home.status is Status.FAILURE
+    assert home.status is Status.SUCCESS
     assert "no map" in home.feedback_message
+    home = make(HomeByMap)  # a tree's nodes are all set up before its first tick
+    cover = make(Cover)
+    counts = 0
+    for _ in range(100):
+        counts += 20
+        _frame(robot, counts)
+        cover.tick_once()
+    cover.stop(Status.INVALID)
+    home.tick_once()
+    assert home.status is Status.SUCCESS
+    assert "no dock beam seen" in home.feedback_message
+
+
+def test_a_map_an_earlier_run_left_is_not_gone_by(make: Make, robot: StubRobot) -> None:
+    """The blackboard is the process's: a second run (a program's second RunStack, an
+    evaluation in one process) of a mission without ``cover`` drove on the first run's map
+    (2.27 m in a corridor on the apartment's). Set up for a new run, it forgets it."""
     cover = make(Cover)
     counts = 0
     for _ in range(100):
@@ -126,7 +142,6 @@ def test_without_cover_s_map_it_fails_and_with_no_beam_seen_it_ends_at_once(
         cover.tick_once()
     cover.stop(Status.INVALID)
     home = make(HomeByMap)
-    assert isinstance(home, HomeByMap)
     home.tick_once()
     assert home.status is Status.SUCCESS
-    assert "no dock beam seen" in home.feedback_message
+    assert "no map" in home.feedback_message

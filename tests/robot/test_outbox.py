@@ -95,3 +95,26 @@ def test_a_cycles_end_is_dropped_with_the_rest() -> None:
     assert box.queued
     box.clear()
     assert not box.queued and box.drain() == []
+
+
+def test_the_commands_written_after_a_cycles_end_are_their_channels_last() -> None:
+    """A parallel branch's drive and brushes, queued in the tick a halted leaf ends its cycle,
+    are written after the end: they are the wheels' and the motors' last commands, and their
+    sender is named (the end had taken both: a later ``mode: passive`` skipped its motors
+    off, a refusal named the halted leaf)."""
+    box = Outbox()
+    drive, brushes = commands.drive(200, 0), commands.motors(0b100)
+    box.send(drive, NEW)
+    box.send(brushes, NEW)
+    box.end_cycle(OLD)
+    assert [c.name for c in box.drain()] == [*END, "drive", "motors"]
+    assert box.last_on("wheels") is drive and box.last_on("motors") is brushes
+    assert box.sender_of(drive) is NEW
+
+
+def test_a_cycle_never_written_is_no_channels_last_command() -> None:
+    box = Outbox()
+    box.send(commands.seek_dock(), OLD)
+    box.end_cycle(OLD, running=False)
+    assert box.drain() == []
+    assert box.last_on("wheels") is None and box.sender_of(commands.seek_dock()) is None
