@@ -106,6 +106,18 @@ def test_a_beam_seen_on_the_way_ends_it_and_the_way_leads_where_one_was_seen(
     assert oi.halt() in robot.flush()
 
 
+def _cover_straight_ahead(make: Make, robot: StubRobot) -> None:
+    """``cover`` set up and ticked 100 frames straight ahead (no beam seen), then halted: its
+    map on the blackboard, as a run leaves it."""
+    cover = make(Cover)
+    counts = 0
+    for _ in range(100):
+        counts += 20
+        _frame(robot, counts)
+        cover.tick_once()
+    cover.stop(Status.INVALID)
+
+
 def test_without_cover_s_map_or_a_beam_seen_it_ends_at_once(make: Make, robot: StubRobot) -> None:
     """No map (the battery low before cover ran) and a map without a beam seen (a robot put
     down away from the dock): nothing to go back to, SUCCESS at once, and the search starts
@@ -118,13 +130,7 @@ def test_without_cover_s_map_or_a_beam_seen_it_ends_at_once(make: Make, robot: S
     assert home.status is Status.SUCCESS
     assert "no map" in home.feedback_message
     home = make(HomeByMap)  # a tree's nodes are all set up before its first tick
-    cover = make(Cover)
-    counts = 0
-    for _ in range(100):
-        counts += 20
-        _frame(robot, counts)
-        cover.tick_once()
-    cover.stop(Status.INVALID)
+    _cover_straight_ahead(make, robot)
     home.tick_once()
     assert home.status is Status.SUCCESS
     assert "no dock beam seen" in home.feedback_message
@@ -134,13 +140,7 @@ def test_a_map_an_earlier_run_left_is_not_gone_by(make: Make, robot: StubRobot) 
     """The blackboard is the process's: a second run (a program's second RunStack, an
     evaluation in one process) of a mission without ``cover`` drove on the first run's map
     (2.27 m in a corridor on the apartment's). Set up for a new run, it forgets it."""
-    cover = make(Cover)
-    counts = 0
-    for _ in range(100):
-        counts += 20
-        _frame(robot, counts)
-        cover.tick_once()
-    cover.stop(Status.INVALID)
+    _cover_straight_ahead(make, robot)
     home = make(HomeByMap)
     home.tick_once()
     assert home.status is Status.SUCCESS
