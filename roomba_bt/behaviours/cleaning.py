@@ -43,7 +43,6 @@ _OK, _RUN = Status.SUCCESS, Status.RUNNING
 #: over without touching; from a cliff: the cliff sensors back over the floor)
 _BACK_MM = {"bump": 30.0, "cliff": 60.0}
 #: turning in place: done within this angle of the target
-_TURN_TOLERANCE = math.radians(2.0)
 #: a lane or shift that makes no progress for this long (s) ends: something holds the robot
 _STALL_S = 3.0
 
@@ -195,7 +194,7 @@ class Lanes(_Pattern):
             phase = self._phase
             if phase == "turn":
                 error = driving.wrap(self._target - snap.odometry.theta_rad)
-                if abs(error) > _TURN_TOLERANCE:
+                if abs(error) > driving.TURN_TOLERANCE:
                     return driving.turn_toward(error, self.number("turn_speed"), 40.0, 400.0)
                 self._begin_line(self._then, self._target)
                 continue

@@ -101,7 +101,6 @@ _RAY_ANGLES = tuple(math.radians(a) for a in LIGHT_BUMP_ANGLES_DEG)
 _RAY_MARK = 60
 #: back off this far (mm) from a bump, a cliff, a virtual wall's beam
 _BACK_MM = {"bump": 30.0, "cliff": 60.0, "virtual wall": 100.0}
-_TURN_TOLERANCE = math.radians(2.0)
 _HALF_BASE_MM = WHEEL_BASE_MM / 2.0
 _STALL_S = 3.0
 #: a lane that has swept nothing new for this far (mm) ends: it has reached swept floor
@@ -542,10 +541,11 @@ class Cover(Action):
 
     def _turning(self) -> tuple[float, float] | None:
         error = driving.wrap(self._heading - self._pose.theta_rad)
-        if abs(error) <= _TURN_TOLERANCE or self.snapshot.time - self._since > 6.0:
+        now = self.snapshot.time
+        wheels = driving.turning_to(error, self._since, now, self.number("turn_speed"))
+        if wheels is None:
             self._next()
-            return None
-        return driving.turn_toward(error, self.number("turn_speed"), 60.0, 500.0)
+        return wheels
 
     def _back(self, distance: float) -> None:
         odo = self._pose
@@ -553,8 +553,10 @@ class Cover(Action):
         self._since = self.snapshot.time
 
     def _backing(self) -> tuple[float, float] | None:
-        if self._pose.distance_mm > self._back_to and (self.snapshot.time - self._since < 1.5):
-            return (-250.0, -250.0)
+        if driving.backing_to(
+            self._pose.distance_mm, self._back_to, self._since, self.snapshot.time
+        ):
+            return (-driving.BACK_MM_S, -driving.BACK_MM_S)
         self._next()
         return None
 
@@ -748,7 +750,7 @@ class Cover(Action):
             else:
                 self._decide()
             return None
-        if turned >= math.pi - _TURN_TOLERANCE:
+        if turned >= math.pi - driving.TURN_TOLERANCE:
             self._next()
             return None
         outer = radius + _HALF_BASE_MM

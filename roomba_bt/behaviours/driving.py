@@ -147,6 +147,31 @@ def turn_toward(error: float, top: float, least: float, gain: float) -> tuple[fl
     return spin_toward(error, min(top, max(least, gain * abs(error))))
 
 
+#: a turn in place toward a heading is done within this (rad)
+TURN_TOLERANCE = math.radians(2.0)
+#: a turn in place toward a heading gives up after this long (s): a wheel held by something
+TURN_GIVE_UP_S = 6.0
+#: backing off ends after this long (s) whatever the odometry says (a wheel slipping)
+BACK_GIVE_UP_S = 1.5
+#: the wheels' speed (mm/s) backing off a hazard
+BACK_MM_S = 250.0
+
+
+def turning_to(error: float, started: float, now: float, top: float) -> tuple[float, float] | None:
+    """A map-driven turn in place (``cover``'s, ``home_by_map``'s) this tick: the wheel speeds
+    toward the side of ``error`` (rad), or None when it faces the heading or has turned for
+    :data:`TURN_GIVE_UP_S` since ``started``."""
+    if abs(error) <= TURN_TOLERANCE or now - started > TURN_GIVE_UP_S:
+        return None
+    return turn_toward(error, top, 60.0, 500.0)
+
+
+def backing_to(distance_mm: float, back_to: float, started: float, now: float) -> bool:
+    """Whether a back-off goes on this tick: the odometry's path length still above
+    ``back_to`` (mm), and less than :data:`BACK_GIVE_UP_S` since ``started``."""
+    return distance_mm > back_to and now - started < BACK_GIVE_UP_S
+
+
 def along_line(line: Line, x: float, y: float) -> tuple[float, float]:
     """Where (x, y) is from ``line``: (distance along it, signed offset to its left), mm."""
     x0, y0, heading = line

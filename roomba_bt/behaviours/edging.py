@@ -32,6 +32,7 @@ import math
 
 from roomba_bt.behaviours.driving import WALL_AHEAD_CLOSE, WallAhead
 from roomba_bt.oi.profiles import BODY_RADIUS_MM, LIGHT_BUMP_RANGE_MM
+from roomba_bt.oi.stream import SLOT_SECONDS
 
 __all__ = ["EdgeSteering", "signal_distance_mm"]
 
@@ -50,7 +51,6 @@ FRONT_SLOW = 200
 KP, KD, TURN_SHARE = 4.0, 0.15, 0.6
 #: the light bumper's ray to the right is at 65 deg: the distance across is cos(25 deg) of it
 _ACROSS = 0.906
-_TICK_S = 0.015
 
 
 def signal_distance_mm(signal: int) -> float:
@@ -89,7 +89,7 @@ class EdgeSteering:
             return speed, speed * 0.35, None
         distance = _ACROSS * (BODY_RADIUS_MM + signal_distance_mm(max(right, 1)))
         error = distance - distance_mm
-        derivative = 0.0 if self._previous is None else (error - self._previous) / _TICK_S
+        derivative = 0.0 if self._previous is None else (error - self._previous) / SLOT_SECONDS
         self._previous = error
         forward = speed if front < FRONT_SLOW else min(speed, 150.0)
         limit = min(TURN_SHARE * speed, forward)  # neither wheel backward

@@ -42,7 +42,6 @@ from roomba_bt.behaviours import driving
 from roomba_bt.behaviours.coverage_map import (
     _BACK_MM,
     _STALL_S,
-    _TURN_TOLERANCE,
     MAP_KEY,
     Bearings,
     Cell,
@@ -198,11 +197,11 @@ class HomeByMap(Action):
         pose = self._pose
         error = driving.wrap(self._heading - pose.theta_rad)
         now = self.snapshot.time
-        if abs(error) <= _TURN_TOLERANCE or now - self._since > 6.0:
+        wheels = driving.turning_to(error, self._since, now, self.number("turn_speed"))
+        if wheels is None:
             self._phase, self._progress = "drive", (0.0, now)
             self._line = (pose.x_mm, pose.y_mm, self._heading)
-            return None
-        return driving.turn_toward(error, self.number("turn_speed"), 60.0, 500.0)
+        return wheels
 
     def _driving(self, frame: SensorFrame) -> tuple[float, float] | Status | None:
         pose, now = self._pose, self.snapshot.time
@@ -230,8 +229,10 @@ class HomeByMap(Action):
         self._since = self.snapshot.time
 
     def _backing(self) -> tuple[float, float] | None:
-        if self._pose.distance_mm > self._back_to and self.snapshot.time - self._since < 1.5:
-            return (-250.0, -250.0)
+        if driving.backing_to(
+            self._pose.distance_mm, self._back_to, self._since, self.snapshot.time
+        ):
+            return (-driving.BACK_MM_S, -driving.BACK_MM_S)
         self._phase = "plan"
         return None
 
