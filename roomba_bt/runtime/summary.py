@@ -3,6 +3,7 @@ run."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from enum import Enum, IntEnum
 from typing import TYPE_CHECKING
@@ -94,6 +95,31 @@ class RunFailed(Exception):
             f"(exit code {int(self.exit_code)})"
         )
         super().__init__(escaped(message, ANY_CONTROL))  # on one line, as the summary's
+
+
+def falls_in_order(falls: Mapping[str, int]) -> tuple[tuple[str, int], ...]:
+    """The falls by cause, the commonest first (then by name): the order a summary says
+    them in, and one order for equal counts whichever process counted them."""
+    return tuple(sorted(falls.items(), key=lambda item: (-item[1], item[0])))
+
+
+def falls_said(falls: Mapping[str, int]) -> str:
+    """The robot's own falls to Passive by cause, in the words of the run summary's
+    ``falls`` line: ``the robot fell to Passive by itself 21 times (cliff 20, wheel drop
+    1)``. One wording for a run and for an evaluation's many episodes summed
+    (:class:`roomba_bt.evaluate.stats.Summary`), so a user reads the same line in both; a
+    summary without falls says none, but prints no ``falls`` line at all."""
+    causes = falls_in_order(falls)
+    if not causes:
+        return "the robot never fell to Passive by itself"
+    total = sum(times for _, times in causes)
+    said = (
+        causes[0][0]
+        if len(causes) == 1
+        else ", ".join(f"{cause} {times}" for cause, times in causes)
+    )
+    times = "once" if total == 1 else f"{total} times"
+    return f"the robot fell to Passive by itself {times} ({said})"
 
 
 #: the share of the robot's frames lost from which the summary calls the link poor
@@ -274,16 +300,8 @@ class RunSummary:
 
     def falls_text(self) -> str:
         """The robot's own falls to Passive, the commonest cause first: ``the robot fell to
-        Passive by itself 21 times (cliff 20, wheel drop 1)``."""
-        total = sum(self.falls.values())
-        causes = sorted(self.falls.items(), key=lambda item: (-item[1], item[0]))
-        said = (
-            causes[0][0]
-            if len(causes) == 1
-            else ", ".join(f"{cause} {times}" for cause, times in causes)
-        )
-        times = "once" if total == 1 else f"{total} times"
-        return f"the robot fell to Passive by itself {times} ({said})"
+        Passive by itself 21 times (cliff 20, wheel drop 1)`` (:func:`falls_said`)."""
+        return falls_said(self.falls)
 
     def link_verdict(self) -> str:
         """A line that lost :data:`POOR_LINK` or more of the robot's frames, over a run long
