@@ -8,7 +8,8 @@
 Runs N seeded episodes of the mission on the simulator's virtual clock, from random start
 poses in the world's start region (or within ``--within``, 1.5 or 1.5m, of the dock), in ``--jobs``
 worker processes, with a progress bar on stderr; then prints the success rate with its 95 %
-Wilson interval, the median and p90 time, bumps, and the failure reasons grouped. The same
+Wilson interval, the median and p90 time, bumps, the robot's own falls to Passive (``run``'s
+``falls`` line summed, and in how many episodes), and the failure reasons grouped. The same
 ``--seed`` gives the same episodes whatever ``--jobs`` or engine (``--engine dask``: a local
 Dask cluster of ``--jobs`` workers; ``--scheduler``: an existing one). With two missions, a
 ``--sweep`` or ``--variant`` sets, every variant runs on the same seeds and start poses and
@@ -69,7 +70,8 @@ def register(sub: Any) -> None:
         """run missions many times on the simulator: success rates
 
         Run MISSION in N seeded episodes on the simulator's virtual clock and report the success
-        rate (95% Wilson interval), median and p90 time, bumps and the failure reasons. Exit codes:
+        rate (95% Wilson interval), median and p90 time, bumps, the robot's own falls to
+        Passive and the failure reasons. Exit codes:
         0 done, 1 --min-rate not reached, 2 invalid input, 3 --scheduler unreachable, 4 a behaviour
         raised in an episode or one hung (--wall-limit), 130 interrupted (what finished is
         summarised).

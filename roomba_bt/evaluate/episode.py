@@ -45,7 +45,7 @@ from roomba_bt.oi.frames import BUMPS_PACKETS
 from roomba_bt.oi.opcodes import opcodes
 from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.runtime.stack import RunStack
-from roomba_bt.runtime.summary import Outcome, RunSummary
+from roomba_bt.runtime.summary import Outcome, RunSummary, falls_in_order
 from roomba_bt.runtime.teardown import innermost_behaviour, tree_path
 from roomba_bt.sim import Faults, SimLink, Simulator, World
 from roomba_bt.sim.world import (
@@ -200,6 +200,12 @@ class EpisodeResult:
     distance_m: float = 0.0
     commands_sent: int = 0
     commands_refused: int = 0
+    #: the robot's own falls to Passive by cause, the commonest first (``(("cliff", 4),)``):
+    #: the run summary's ``falls`` (a cliff or wheel drop in Safe, the charger), each one the
+    #: firmware stopping the wheels under the tree; not ``fell``, the simulated robot going
+    #: over a drop. A tuple of pairs, as ``params``: hashable, and pickled to a worker's
+    #: parent or from a Dask worker as it is
+    falls: tuple[tuple[str, int], ...] = ()
     #: where it ran (host:pid, or the Dask worker's address); not part of the episode
     worker: str = field(default="", compare=False)
     coverage: Coverage | None = field(repr=False, default=None)
@@ -546,6 +552,7 @@ def _measured(
         distance_m=summary.distance_mm / 1000.0,
         commands_sent=summary.commands_written,
         commands_refused=summary.refused_commands,
+        falls=falls_in_order(summary.falls),
         worker=f"{socket.gethostname()}:{os.getpid()}",
         coverage=_coverage(simulator, spec.start_area or ""),
     )
@@ -595,7 +602,9 @@ def hung_result(
         )  # fmt: skip
     runner = stack.runner
     runner.count_written()
-    summary = replace(runner.summary, reason=reason, wall_time_s=limit_s)
+    # the falls so far: the runner copies them into its summary only at the run's end
+    falls = stack.connection.falls
+    summary = replace(runner.summary, reason=reason, wall_time_s=limit_s, falls=falls)
     summary.take_last(runner.snapshot if runner.has_snapshot else None)
     measured = _measured(spec, run["world"], run["pose"], run["simulator"], summary, HUNG, stage)
     return tidied(measured)

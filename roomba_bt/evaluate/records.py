@@ -15,7 +15,10 @@ Columns (:data:`COLUMNS`): ``outcome`` is the word the run summary prints (``SUC
 in degrees. ``params`` is an object in JSON Lines and ``name=value;name=value`` in CSV. The
 trajectory (plots) and the per-bump contact steps are not written: they are for figures, not
 tables. Readers should ignore columns they do not know: later versions add columns, never
-rename or drop one.
+rename or drop one. ``falls`` counts the robot's own falls to Passive (the run summary's
+``falls`` line: a cliff or a wheel drop in Safe, the charger) and ``falls_by_cause`` splits
+them (``{"cliff": 4}``; ``cliff=4;wheel drop=1`` in CSV); a file written before they were
+recorded reads back as episodes without a fall.
 
 Coverage (:data:`COVERAGE_COLUMNS`, after the others) is empty (``null`` / an empty cell) for
 an episode whose brushes never ran: ``coverage`` is the fraction of the start area (or of all
@@ -38,6 +41,7 @@ from pathlib import Path
 from typing import Any
 
 from roomba_bt.evaluate.episode import Coverage, EpisodeResult
+from roomba_bt.runtime.summary import falls_in_order
 
 FORMATS = (".jsonl", ".csv")
 
@@ -72,6 +76,8 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "longest_stall": ("longest_stall_s", "float"),
     "worker": ("worker", "str"),
     "cpu_time": ("cpu_s", "float?"),
+    "falls": ("falls", "falls total"),
+    "falls_by_cause": ("falls", "falls by cause"),
 }
 
 #: the coverage columns (empty when the episode did not clean): name -> Coverage field
@@ -112,6 +118,10 @@ def to_record(result: EpisodeResult) -> dict[str, Any]:
         elif kind in ("0", "1", "2"):
             value = value[int(kind)]
         elif kind == "params":
+            value = dict(value)
+        elif kind == "falls total":
+            value = sum(times for _, times in value)
+        elif kind == "falls by cause":
             value = dict(value)
         out[column] = value
     out.update(_coverage_record(result))
@@ -180,6 +190,11 @@ def from_record(record: dict[str, Any]) -> EpisodeResult:
             raw = record.get(column)
             values[name] = 0.0 if raw is None or raw == "" else float(raw)
             continue
+        if kind == "falls total":  # the sum of falls_by_cause, which is read instead
+            continue
+        if kind == "falls by cause":
+            values[name] = _falls(record.get(column))
+            continue
         raw = record[column]
         if kind == "str":
             values[name] = "" if raw is None else str(raw)
@@ -200,6 +215,31 @@ def from_record(record: dict[str, Any]) -> EpisodeResult:
     defaults = {"contact_steps": (), "trajectory": ()}
     values["coverage"] = _coverage_from(record)
     return EpisodeResult(**{**defaults, **{k: v for k, v in values.items() if k in known}})
+
+
+def _falls(raw: Any) -> tuple[tuple[str, int], ...]:
+    """``falls_by_cause`` as :attr:`EpisodeResult.falls`: an object in JSON Lines,
+    ``cliff=4;wheel drop=1`` in CSV; none when the column is empty or absent (a file written
+    before falls were recorded reads as episodes without any); a cause counted 0 is no fall
+    (an episode with ``{"cliff": 0}`` is not one of the summary's episodes with a fall)."""
+    if raw is None or raw == "":
+        return ()
+    if isinstance(raw, dict):
+        pairs = list(raw.items())
+    elif isinstance(raw, str):
+        pairs = [item.partition("=")[::2] for item in raw.split(";") if item]
+    else:
+        raise ValueError(f"falls_by_cause {raw!r}: expected cause=count pairs")
+    counts = {str(cause): _count(times) for cause, times in pairs}
+    return falls_in_order({cause: times for cause, times in counts.items() if times})
+
+
+def _count(raw: Any) -> int:
+    """A fall count: a whole number 0 or more (``int("")`` says only "invalid literal")."""
+    count = int(raw)
+    if count < 0 or isinstance(raw, bool) or (isinstance(raw, float) and raw != count):
+        raise ValueError(f"falls_by_cause: {raw!r} is not a count of falls")
+    return count
 
 
 def _params(raw: Any) -> tuple[tuple[str, str], ...]:
@@ -249,7 +289,10 @@ class PartialResults:
 
 def _csv_cells(record: dict[str, Any]) -> dict[str, str]:
     """The record's structured values as CSV cells (``None`` is an empty cell already)."""
-    cells = {"params": ";".join(f"{k}={v}" for k, v in record["params"].items())}
+    cells = {
+        "params": ";".join(f"{k}={v}" for k, v in record["params"].items()),
+        "falls_by_cause": ";".join(f"{c}={n}" for c, n in record["falls_by_cause"].items()),
+    }
     if record["coverage_by_area"] is not None:
         cells["coverage_by_area"] = ";".join(
             f"{a}={c!r}" for a, c in record["coverage_by_area"].items()

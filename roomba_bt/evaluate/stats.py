@@ -1,5 +1,5 @@
 """Statistics of a batch of episodes: success rate with a Wilson interval, time percentiles,
-bumps, and the failure reasons grouped.
+bumps, the robot's own falls to Passive summed, and the failure reasons grouped.
 
 Why Wilson: with 50 or 200 episodes and rates near 100 %, the textbook normal interval
 (``p +- 1.96 sqrt(p(1-p)/n)``) collapses to zero width at 100 % and can leave [0, 1]; the
@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 from roomba_bt.evaluate.episode import EpisodeResult
 from roomba_bt.printable import ANY_CONTROL, escaped
+from roomba_bt.runtime.summary import falls_in_order, falls_said
 
 Z95 = 1.959963984540054
 
@@ -82,6 +83,13 @@ class Summary:
     #: the robot profile, said when not the default (``runtime.summary.profile_shown``: "" for
     #: create2); ``eval --json`` has it in its conditions
     profile: str = ""
+    #: the robot's own falls to Passive summed over the episodes, by cause, the commonest
+    #: first (:attr:`EpisodeResult.falls`); how many episodes had one or more, and by cause
+    #: in the same order (a dock mission that docks in Safe falls to Passive on the charger
+    #: in every episode: the episodes with a cliff fall are told apart from those)
+    falls: tuple[tuple[str, int], ...] = ()
+    episodes_with_falls: int = 0
+    episodes_with_falls_by_cause: tuple[tuple[str, int], ...] = ()
 
     @property
     def rate(self) -> float:
@@ -108,6 +116,7 @@ class Summary:
             f"time         median {med}, p90 {p90} (successful episodes, mission time)",
             f"bumps        {self.mean_bumps:.1f} per episode (bumper onsets in the simulator)",
             f"docked       {self.docked} of {self.runs} episodes ended on the dock's contacts",
+            *([f"falls        {self.falls_text()}"] if self.falls else []),
             f"simulated    {self.simulated_s:.0f} s of mission time in {self.cpu_s:.1f} s of "
             f"CPU time ({speed:.0f}x real time per CPU second); {self.wall_s:.1f} s of "
             "wall-clock time summed over the episodes",
@@ -119,6 +128,19 @@ class Summary:
 
     def __str__(self) -> str:
         return "\n".join(self.lines())
+
+    def falls_text(self) -> str:
+        """The episodes' falls to Passive in the run summary's words, and how many episodes
+        they were in, by cause when there are several: ``the robot fell to Passive by
+        itself 213 times (charger 200, cliff 13) in 200 of 200 episodes (charger in 200,
+        cliff in 4)``; with one cause, its count of episodes is the one said before."""
+        said = (
+            f"{falls_said(dict(self.falls))} in {self.episodes_with_falls} of {self.runs} episodes"
+        )
+        by_cause = self.episodes_with_falls_by_cause
+        if len(by_cause) < 2:
+            return said
+        return f"{said} ({', '.join(f'{cause} in {episodes}' for cause, episodes in by_cause)})"
 
     def to_dict(self) -> dict[str, object]:
         """The summary for scripts (``eval --json``): rates as fractions, times in seconds;
@@ -135,6 +157,9 @@ class Summary:
             "mean_bumps": self.mean_bumps,
             "docked": self.docked,
             "failures": {reason: count for reason, count in self.failures},
+            "falls": dict(self.falls),
+            "episodes_with_falls": self.episodes_with_falls,
+            "episodes_with_falls_by_cause": dict(self.episodes_with_falls_by_cause),
             "wall_time": self.wall_s,
             "cpu_time": self.cpu_s,
             "mission_time": self.simulated_s,
@@ -163,6 +188,12 @@ def summarize(
     ok = [r for r in results if r.succeeded]
     times = [r.time_s for r in ok]
     groups = Counter(reason_group(r) for r in results if not r.succeeded)
+    falls: Counter[str] = Counter()
+    episodes_by_cause: Counter[str] = Counter()
+    for r in results:
+        falls.update(dict(r.falls))
+        episodes_by_cause.update(cause for cause, _ in r.falls)
+    in_order = falls_in_order(falls)
     return Summary(
         mission=mission,
         world=world,
@@ -178,6 +209,9 @@ def summarize(
         simulated_s=sum(r.time_s for r in results),
         cpu_s=sum(r.cpu_s for r in results),
         profile=profile,
+        falls=in_order,
+        episodes_with_falls=sum(1 for r in results if r.falls),
+        episodes_with_falls_by_cause=tuple((c, episodes_by_cause[c]) for c, _ in in_order),
     )
 
 
