@@ -473,9 +473,11 @@ def _report(
 
 
 def _render_tree(mission: Any, status: bool = False) -> str:
-    import py_trees
+    """The tree as py_trees draws it, each name and message escaped to one line (a plugin's
+    ``feedback_message`` reached the terminal raw: :func:`~roomba_bt.runtime.display.text_tree`)."""
+    from roomba_bt.runtime.display import text_tree
 
-    return str(py_trees.display.unicode_tree(mission.root, show_status=status))
+    return text_tree(mission.root, show_status=status)
 
 
 def _where_it_ended(simulator: Any) -> str:

@@ -44,7 +44,9 @@ from roomba_bt.behaviours.language import WORDS
 from roomba_bt.behaviours.reasons import failure_reason
 from roomba_bt.oi.frames import FrameLayout, SensorFrame
 from roomba_bt.oi.modes import OIMode
+from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.robot.interface import SLOT_SECONDS, Odometry, Snapshot
+from roomba_bt.runtime.display import node_kind
 
 if TYPE_CHECKING:
     from roomba_bt.runtime.loop import MissionRunner
@@ -90,19 +92,6 @@ class NodeInfo:
         }
 
 
-def _kind(node: py_trees.behaviour.Behaviour) -> str:
-    """The symbol ``py_trees.display`` draws before the node's name."""
-    if isinstance(node, py_trees.composites.Parallel):
-        return "parallel"
-    if isinstance(node, py_trees.decorators.Decorator):
-        return "decorator"
-    if isinstance(node, py_trees.composites.Sequence):
-        return "sequence_with_memory" if node.memory else "sequence_without_memory"
-    if isinstance(node, py_trees.composites.Selector):
-        return "selector_with_memory" if node.memory else "selector_without_memory"
-    return "behaviour"
-
-
 def describe_tree(
     root: py_trees.behaviour.Behaviour,
 ) -> tuple[list[py_trees.behaviour.Behaviour], list[NodeInfo]]:
@@ -126,7 +115,7 @@ def describe_tree(
         NodeInfo(
             index=i,
             name=node.name.replace("\n", " "),
-            kind=_kind(node),
+            kind=node_kind(node),
             depth=depths[i],
             parent=parents[i],
             children=tuple(children[i]),
@@ -404,7 +393,13 @@ class RunFeed:
             status = statuses[i]
             node = self._nodes[i]
             if status is Status.FAILURE:
-                reasons[i] = failure_reason(node) if node.children else node.feedback_message
+                # a leaf's own message, escaped as failure_reason's text is: one line on the
+                # page and in the event log (a plugin's "\\n[ok] ..." faked an event)
+                reasons[i] = (
+                    failure_reason(node)
+                    if node.children
+                    else escaped(node.feedback_message, ANY_CONTROL)
+                )
             else:
                 reasons.pop(i, None)
             if i not in self._unnamed and status is not Status.INVALID:

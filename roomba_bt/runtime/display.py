@@ -118,6 +118,54 @@ def sensor_line(snapshot: Snapshot) -> str:
     return "  ".join(parts)
 
 
+def node_kind(node: py_trees.behaviour.Behaviour) -> str:
+    """The symbol ``py_trees.display`` draws before the node's name (its key in
+    ``py_trees.display.unicode_symbols``): ``{-}`` a sequence with memory, ``-->`` a leaf."""
+    if isinstance(node, py_trees.composites.Parallel):
+        return "parallel"
+    if isinstance(node, py_trees.decorators.Decorator):
+        return "decorator"
+    if isinstance(node, py_trees.composites.Sequence):
+        return "sequence_with_memory" if node.memory else "sequence_without_memory"
+    if isinstance(node, py_trees.composites.Selector):
+        return "selector_with_memory" if node.memory else "selector_without_memory"
+    return "behaviour"
+
+
+def text_tree(root: py_trees.behaviour.Behaviour, *, show_status: bool = False) -> str:
+    """The tree as ``py_trees.display.unicode_tree`` draws it (the run's tree before it
+    starts, and with ``show_status`` each node's status and message at its end), each
+    node's name and ``feedback_message`` escaped to one line
+    (:data:`~roomba_bt.printable.ANY_CONTROL`).
+
+    py_trees prints both as they are: a plugin's message ``"\\x1b[2J\\n[ok] robot stopped"``
+    cleared the screen and faked a line under the tree. Drawn here, where the text is
+    printed, so the behaviour keeps its message as it set it (a ``failure_reason`` or the
+    monitor read it too, and escape it where they print it)."""
+    symbols = py_trees.display.unicode_symbols
+    tip = root.tip()
+    tip_id = tip.id if tip is not None else None
+    lines: list[str] = []
+
+    def walk(node: py_trees.behaviour.Behaviour, depth: int) -> None:
+        bold, reset = ("", "") if node.id != tip_id else (symbols["bold"], symbols["bold_reset"])
+        name = escaped(node.name, ANY_CONTROL)
+        line = f"{'    ' * depth}{bold}{symbols[node_kind(node)]}{reset} "
+        if show_status:  # py_trees' three bold spans, so that a terminal shows the same
+            said = escaped(node.feedback_message, ANY_CONTROL)
+            message = f" -- {said}" if said else ""
+            mark = symbols[node.status]
+            line += f"{bold}{name} [{reset}{bold}{mark}{reset}{bold}]{message}{reset}"
+        else:
+            line += f"{bold}{name}{reset}"
+        lines.append(line)
+        for child in node.children:
+            walk(child, depth + 1)
+
+    walk(root, 0)
+    return "".join(f"{line}\n" for line in lines)
+
+
 _MARKS = {
     py_trees.common.Status.RUNNING: "*",
     py_trees.common.Status.SUCCESS: "✓",

@@ -534,6 +534,50 @@ def test_what_a_mission_wrote_fakes_no_line_of_the_run(
     assert "-- said\\x0a[ok] said" in out  # the log leaf's text, in the tree at the end
 
 
+#: a plugin's action whose message clears the screen and fakes a line, then fails
+SAYER = '''
+from py_trees.common import Status
+from roomba_bt.behaviours import Action, declare
+
+
+@declare("sayer", kind="action")
+class Sayer(Action):
+    """Says what no mission file may hold (a file's texts are refused such characters)."""
+
+    def update(self):
+        self.feedback_message = "\\x1b[2J\\n[ok] robot stopped"
+        return Status.FAILURE if self.snapshot.time >= 0.1 else Status.RUNNING
+'''
+
+
+@pytest.mark.parametrize("display", ["log", "tree"])
+def test_a_plugin_s_feedback_message_is_escaped_where_it_is_printed(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    caplog: pytest.LogCaptureFixture,
+    display: str,
+) -> None:
+    """A plugin's ``feedback_message`` is code's text, not a file's: nothing refused its
+    ``ESC [2J`` or its newline, and the tree at the end (py_trees' drawing) printed it raw,
+    clearing the screen and faking a line under it. Escaped where it is printed, on its
+    leaf's line, as the summary and the failure's line on stderr have it."""
+    caplog.set_level(logging.INFO)
+    (tmp_path / "sayer.py").write_text(SAYER)
+    mission = tmp_path / "m.yaml"
+    mission.write_text("plugins: [./sayer.py]\ntree:\n  sequence: [sayer]\n")
+    args = ["run", str(mission), "--fast", "--display", display, "--allow-plugin-files"]
+    assert main(args) == 1
+    out, err = capsys.readouterr()
+    logged = "\n".join(MissionClockFormatter().format(r) for r in caplog.records)
+    shown = out + err + logged
+    assert "\x1b[2J" not in shown, shown  # (the live tree's own redraw is ESC [H ESC [J)
+    assert not [line for line in shown.splitlines() if line.startswith("[ok]")], shown
+    said = "\\x1b[2J\\x0a[ok] robot stopped"
+    assert f"--> sayer [✕] -- {said}" in out  # the tree at the end
+    assert f"outcome      FAILURE (sayer: {said})" in out
+    assert f"roomba-bt: failure: sayer: {said}" in err
+
+
 def test_a_control_character_never_reaches_the_run(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -20,6 +20,7 @@ from roomba_bt.runtime.display import (
     fitted_tree,
     logging_off_the_tick,
     sensor_line,
+    text_tree,
 )
 from roomba_bt.runtime.loop import MissionRunner
 
@@ -236,3 +237,25 @@ def test_a_name_stays_on_its_line_in_the_live_tree_and_the_log() -> None:
     raw = logging.LogRecord("roomba_bt.run", logging.WARNING, __file__, 1, "a\n\x1b[2Jb %d",
                             (3,), None)  # fmt: skip
     assert formatter.format(raw) == "WARNING roomba_bt.run: a\n\\x1b[2Jb 3"
+
+
+def test_the_tree_at_the_end_is_py_trees_drawing_its_texts_escaped(
+    run_mission: RunMission,
+) -> None:
+    """``run`` prints the tree before and after a run as py_trees draws it; drawn by
+    ``text_tree`` so that a leaf's message and a node's name are escaped (py_trees prints
+    them raw): the same text where nothing needs it, the leaf's own line where it does."""
+    run = run_mission(DRIVE)
+    root = run.runner.mission.root
+    for show_status in (False, True):
+        drawn = py_trees.display.unicode_tree(root, show_status=show_status)
+        assert text_tree(root, show_status=show_status) == drawn
+    leaf = py_trees.behaviours.Failure(name="\x1b[2J")
+    root = py_trees.composites.Selector("tries\n[ok] fake", memory=False, children=[leaf])
+    root.tick_once()
+    leaf.feedback_message = "\x1b[2J\n[ok] robot stopped"
+    assert text_tree(root, show_status=True).splitlines() == [
+        "[o] tries\\x0a[ok] fake [✕]",
+        "    --> \\x1b[2J [✕] -- \\x1b[2J\\x0a[ok] robot stopped",
+    ]
+    assert leaf.feedback_message == "\x1b[2J\n[ok] robot stopped"  # the leaf's, as it was
