@@ -15,6 +15,7 @@ import time
 from collections import deque
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from functools import partial
 from typing import TYPE_CHECKING, Literal, TextIO
 
 import py_trees
@@ -77,10 +78,16 @@ def _quoted_message(record: logging.LogRecord) -> str:
 
 
 def use_mission_clock(runner: MissionRunner | None) -> None:
-    """Stamp log lines with ``runner``'s mission time from now on (None: stop stamping)."""
-    MissionClockFormatter.clock = (
-        None if runner is None else lambda: runner.snapshot.time if runner.has_snapshot else None
-    )
+    """Stamp log lines with ``runner``'s mission time from now on (None: stop stamping): the
+    time on the run's clock when the line is written, a stall's lines too
+    (:func:`~roomba_bt.runtime.loop.mission_time_now`), not the last frame's."""
+    if runner is None:
+        MissionClockFormatter.clock = None
+        return
+    # here: every command imports this module (its log formatter), only a run the loop
+    from roomba_bt.runtime.loop import mission_time_now
+
+    MissionClockFormatter.clock = partial(mission_time_now, runner)
 
 
 #: ``run --display``: the live tree, one log line per status change, or nothing; ``auto`` is

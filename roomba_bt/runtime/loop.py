@@ -630,6 +630,22 @@ def mission_time_after(runner: MissionRunner, seconds: float) -> float | None:
     return runner.snapshot.time + (0.0 if runner.clock_held else seconds)
 
 
+def mission_time_now(runner: MissionRunner) -> float | None:
+    """The mission time now on the run's clock, for a log line's stamp: the last tick's, plus
+    what the link's clock (the virtual clock on the simulator and in a replay, the port's on
+    a robot) has counted since that tick's frame arrived, once a slot has passed without the
+    next. No tick moves the mission clock while frames stop: a stall's lines, the grace's and
+    the ending's after it, read the last frame's time, and a 5 s stall showed them all at its
+    start, before the watchdog's own trip. A line of the tick, or of the slot after it, keeps
+    the tick's time, as the status lines have it. None before the first tick; a clock the
+    monitor holds stands still (:func:`mission_time_after`)."""
+    if not runner.has_snapshot:
+        return None
+    link = runner.connection.link
+    since = link.transport.now() - link.arrival
+    return mission_time_after(runner, since if since >= SLOT_SECONDS else 0.0)
+
+
 def tick_halted(runner: MissionRunner, seconds: float, where: str) -> None:
     """The tick guard stopped the wheels during the tick that just returned: counted,
     said, and, as after a watchdog stall, the last wheel command goes out again unless

@@ -145,9 +145,15 @@ def test_run_takes_battery_like_eval(
 
 
 class _Runner:
+    """A run's clock: its last tick's time, its link's clock still at that frame's arrival."""
+
     def __init__(self, time: float | None) -> None:
         self.has_snapshot = time is not None
         self.snapshot = type("Snap", (), {"time": time})()
+        self.clock_held = False
+        transport = type("Transport", (), {"now": lambda _: 5.0})()
+        link = type("Link", (), {"transport": transport, "arrival": 5.0})()
+        self.connection = type("Connection", (), {"link": link})()
 
 
 def test_log_lines_show_mission_time_not_the_wall_clock() -> None:

@@ -13,7 +13,7 @@ import pytest
 from roomba_bt.mission import load_mission
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.profiles import CREATE2
-from roomba_bt.runtime.display import MissionClockFormatter
+from roomba_bt.runtime.display import MissionClockFormatter, use_mission_clock
 from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome, RunSummary
 from roomba_bt.sim import Faults, Simulator, load_world
@@ -100,6 +100,57 @@ def test_the_trip_and_the_frames_return_are_stamped_each_with_its_own_mission_ti
     # garbled from 1.0 s to 2.0 s of the robot's time: drive 0 about 0.1 s in, frames back
     # at its end (the mission's clock began a little after the robot's)
     assert back - tripped == pytest.approx(0.9, abs=0.05)
+
+
+class StampedThen(logging.Handler):
+    """Each line formatted when it is written, as the command line's handler does, beside
+    the virtual clock's time then."""
+
+    def __init__(self, link: BadPatchLink) -> None:
+        super().__init__(logging.WARNING)
+        self.setFormatter(MissionClockFormatter())
+        self.link = link
+        self.lines: list[tuple[float, str]] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.lines.append((self.link.now(), self.format(record)))
+
+
+def test_a_line_logged_during_a_stall_is_stamped_with_the_time_it_was_written(
+    tmp_path: Path,
+) -> None:
+    """Log lines were stamped with the last tick's time: no tick moves the mission clock
+    while frames stop, so the ending's line, written after the 2 s grace and the BRC pulse
+    that asked the robot, read the last frame's time (before the watchdog's own trip). Each
+    is stamped with the mission time on the run's clock (here the virtual clock) when it was
+    written: the last frame's time and the time since it arrived."""
+    path = tmp_path / "m.yaml"
+    path.write_text(SPIN)
+    mission = load_mission(path, {}, profile=CREATE2)
+    link = BadPatchLink(Simulator(load_world("empty-room"), CREATE2, 0), 1.0, 99.0, "silent")
+    stack = RunStack(mission, link, profile=CREATE2, timeout_s=10.0)
+    stamped = StampedThen(link)
+    logger = logging.getLogger("roomba_bt")
+    logger.addHandler(stamped)
+    use_mission_clock(stack.runner)
+    try:
+        summary = stack.run()
+    finally:
+        use_mission_clock(None)
+        logger.removeHandler(stamped)
+    assert summary.outcome is Outcome.CONNECTION_LOST, summary.reason
+
+    def stamp_of(line: str) -> float:
+        return float(line.split()[0].removeprefix("t="))
+
+    tripped = next(stamp_of(line) for _, line in stamped.lines if "waiting up to" in line)
+    ended = [(stamp_of(line), at) for at, line in stamped.lines if "unconfirmed" in line]
+    assert ended, stamped.lines
+    stamp, written_at = ended[0]
+    since_last_frame = written_at - stack.connection.link.arrival
+    assert since_last_frame > 2.0  # the grace waited, then the robot asked
+    assert stamp == pytest.approx(summary.mission_time_s + since_last_frame, abs=0.0011)
+    assert stamp > tripped + 2.0
 
 
 def test_a_stream_stopped_past_the_grace_is_exit_3_named_stopped(tmp_path: Path) -> None:
