@@ -31,6 +31,7 @@ from roomba_bt.cli.monitor_cmd import add_run_arguments as add_monitor_arguments
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.printable import ANY_CONTROL, escaped
+from roomba_bt.robot.errors import DEFAULT_WATCHDOG
 from roomba_bt.runtime.summary import DEFAULT_GRACE, DEFAULT_TICK_LIMIT, ExitCode, Outcome
 
 if TYPE_CHECKING:
@@ -122,9 +123,9 @@ def _add_session_options(run: argparse.ArgumentParser) -> None:
         help="leave the robot in Passive (Start) or, where the profile has it, Stop (173)",
     )  # fmt: skip
     run.add_argument(
-        "--watchdog", type=watchdog_seconds, default=0.1, metavar="SECONDS",
+        "--watchdog", type=watchdog_seconds, default=DEFAULT_WATCHDOG, metavar="SECONDS",
         help="stop the wheels (drive 0) when no valid sensor frame came for this long "
-        f"(default 0.1; {MIN_WATCHDOG:g} or more: it cannot be turned off)",
+        f"(default {DEFAULT_WATCHDOG:g}; {MIN_WATCHDOG:g} or more: it cannot be turned off)",
     )  # fmt: skip
     run.add_argument(
         "--grace", type=seconds, default=DEFAULT_GRACE, metavar="SECONDS",

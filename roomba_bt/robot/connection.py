@@ -39,6 +39,7 @@ from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile, get_profile
 from roomba_bt.oi.stream import ReplyParser, check_bandwidth
 from roomba_bt.robot.ending import EndMode, SafeStop
 from roomba_bt.robot.errors import (
+    DEFAULT_WATCHDOG,
     ConnectionClosed,
     ModeError,
     NoAnswer,
@@ -49,7 +50,7 @@ from roomba_bt.robot.errors import (
 )
 from roomba_bt.robot.handshake import drain
 from roomba_bt.robot.interface import ModeChange
-from roomba_bt.robot.link import DEFAULT_WATCHDOG, LinkStatus, StreamLink, TimedFrame
+from roomba_bt.robot.link import LinkStatus, StreamLink, TimedFrame
 from roomba_bt.robot.modes import DEFAULT_SETTLE, ModeModel
 from roomba_bt.robot.silence import (
     answers_elsewhere,

@@ -146,6 +146,14 @@ def wrong_profile(mismatch: ChecksumMismatch) -> str:
     )
 
 
+#: Seconds without a valid frame before the watchdog trips (drive 0, :class:`StreamStalled`)
+#: unless told (``run --watchdog``, ``Connection(watchdog=...)``). Here beside the trip, not in
+#: :mod:`~roomba_bt.robot.link` where the watchdog runs: ``run --help`` says it, and every
+#: command builds that parser, ``validate`` too, which must not load the link's pyserial
+#: (``tests/cli/test_imports.py``); this module imports only the protocol's.
+DEFAULT_WATCHDOG = 0.1
+
+
 class StreamStalled(LinkDown):
     """No valid stream frame within the watchdog time; drive 0 was sent (if allowed).
     ``mismatch``: the frames that came pass another model's checksum (the profile is wrong)."""

@@ -50,9 +50,6 @@ RECENT_CHUNKS = 16
 #: How far past its limit the watchdog's wait ends (the check is "silent for more than").
 WATCHDOG_MARGIN = 0.001
 
-#: Seconds without a valid frame before the watchdog trips, unless told (``run --watchdog``).
-DEFAULT_WATCHDOG = 0.1
-
 #: The session's mode model, told of every frame: the change the robot made by itself, if any.
 Reconcile = Callable[[SensorFrame, int, float], ModeChange | None]
 

@@ -31,7 +31,7 @@ from roomba_bt.behaviours.declare import Declaration
 from roomba_bt.behaviours.lean import check_updates
 from roomba_bt.oi.profiles import PROFILES, RobotProfile
 from roomba_bt.robot.connection import Connection, EndMode
-from roomba_bt.robot.link import DEFAULT_WATCHDOG
+from roomba_bt.robot.errors import DEFAULT_WATCHDOG
 from roomba_bt.runtime.loop import (
     MissionLike,
     MissionRunner,

@@ -172,3 +172,27 @@ def test_the_help_survives_python_oo(monkeypatch: pytest.MonkeyPatch) -> None:
     for name in commands.choices:
         assert re.search(rf"^    {name} +\S", listing, re.MULTILINE), name
     assert "Exit codes: 0 succeeded" in _help_under_oo("run")
+
+
+def test_run_s_watchdog_default_is_the_connection_s_in_the_value_and_the_help(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """``run --watchdog`` wrote its own 0.1, in its default and again in its help, beside
+    the connection's ``DEFAULT_WATCHDOG``: a change to one reached neither of the others.
+    The option reads the one constant for both (changed here, both follow)."""
+    import inspect
+
+    from roomba_bt.cli import run_cmd
+
+    monkeypatch.setattr(run_cmd, "DEFAULT_WATCHDOG", 0.25, raising=False)
+    parser = build_parser()
+    assert parser.parse_args(["run", "missions/dock.yaml"]).watchdog == 0.25
+    commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    run_help = " ".join(commands.choices["run"].format_help().split())
+    assert "came for this long (default 0.25; 0.03 or more" in run_help
+    monkeypatch.undo()
+    from roomba_bt.robot.connection import Connection
+    from roomba_bt.robot.errors import DEFAULT_WATCHDOG
+
+    assert run_cmd.DEFAULT_WATCHDOG is DEFAULT_WATCHDOG  # the connection's own default
+    assert inspect.signature(Connection).parameters["watchdog"].default is DEFAULT_WATCHDOG
