@@ -99,10 +99,7 @@ _RADIUS_MM = BODY_RADIUS_MM
 _RAY_ANGLES = tuple(math.radians(a) for a in LIGHT_BUMP_ANGLES_DEG)
 #: a ray's signal from which the surface it sees is marked (about 13 cm from the bumper)
 _RAY_MARK = 60
-#: back off this far (mm) from a bump, a cliff, a virtual wall's beam
-_BACK_MM = {"bump": 30.0, "cliff": 60.0, "virtual wall": 100.0}
 _HALF_BASE_MM = WHEEL_BASE_MM / 2.0
-_STALL_S = 3.0
 #: a lane that has swept nothing new for this far (mm) ends: it has reached swept floor
 _NO_YIELD_MM = 400.0
 #: an edge that has swept nothing new for this far (mm) ends (a loop closed, or old floor)
@@ -475,9 +472,9 @@ class Cover(Action):
         why = driving.blocked(self.snapshot.frame) if kept else None
         if not kept:
             self._seek(then_edge=True)
-        elif why in _BACK_MM:  # ahead again, it met the same hazard again
+        elif why in driving.BACK_OFF_MM:  # ahead again, it met the same hazard again
             self._plan.extend((self._onto_right, self._decide))
-            self._back(_BACK_MM[why])
+            self._back(driving.BACK_OFF_MM[why])
         else:
             self._decide()
 
@@ -577,14 +574,14 @@ class Cover(Action):
         snap = self.snapshot
         pose = self._pose
         along, _ = driving.along_line(self._line, pose.x_mm, pose.y_mm)
-        if along > self._progress[0] + 10.0:
+        if along > self._progress[0] + driving.PROGRESS_MM:
             self._progress = (along, snap.time)
         if self._map.swept != self._yield[0]:
             self._yield = (self._map.swept, along)
         why = driving.blocked(frame)
         kind = self._kind
         if why is None:
-            if snap.time - self._progress[1] >= _STALL_S:
+            if snap.time - self._progress[1] >= driving.STALL_S:
                 why = "stalled"
             elif along >= self._limit:
                 why = "limit"
@@ -601,9 +598,9 @@ class Cover(Action):
             return driving.steer_along(self._line, pose.x_mm, pose.y_mm, pose.theta_rad, speed)
         self._achieved = along
         self._why = why
-        if why in _BACK_MM:
+        if why in driving.BACK_OFF_MM:
             self._plan.insert(0, self._ended)
-            self._back(_BACK_MM[why])
+            self._back(driving.BACK_OFF_MM[why])
         else:
             self._ended()
         return None
@@ -621,8 +618,9 @@ class Cover(Action):
                 self._lane(driving.wrap(self._lane_heading + math.pi))
         elif kind == "goto":
             if self._why != "limit":  # blocked on the way: decide again from here
-                if self._why in _BACK_MM:  # met something: no path that way again (it bumped
-                    self._map.avoid.add(self._goto_cell)  # into it, path after path)
+                # met something: no path that way again (it bumped into it, path after path)
+                if self._why in driving.BACK_OFF_MM:
+                    self._map.avoid.add(self._goto_cell)
                 self._plan.clear()
                 self._decide()
             else:
@@ -663,7 +661,7 @@ class Cover(Action):
         if recovery is not None:
             phase, mark, since, cause = recovery
             if phase == "back":
-                if mark - odo.distance_mm < _BACK_MM[cause] and snap.time - since < 1.5:
+                if mark - odo.distance_mm < driving.BACK_OFF_MM[cause] and snap.time - since < 1.5:
                     return (-150.0, -150.0)
                 recovery = self._edge_recovery = ("turn", odo.angle_rad, snap.time, cause)
                 phase, mark, since, cause = recovery
@@ -721,7 +719,7 @@ class Cover(Action):
         the next lane, along ``heading`` through ``through``: a turn in place, a move over and
         another turn took three times as long. An arc needs its radius clear ahead."""
         radius = shift / 2.0
-        room = radius + 20.0 - (_BACK_MM.get(self._why, 0.0) if self._why in _BACK_MM else 0.0)
+        room = radius + 20.0 - driving.BACK_OFF_MM.get(self._why, 0.0)
         if self._why in ("swept", "limit", "stalled"):
             room = 0.0
         self._lane_heading = heading
@@ -744,9 +742,9 @@ class Cover(Action):
         if why is not None or self.snapshot.time - self._since > 6.0:
             self._plan.clear()  # something beside the lane: decide again from here
             self._why = why or "stalled"
-            if why in _BACK_MM:
+            if why in driving.BACK_OFF_MM:
                 self._plan.append(self._decide)
-                self._back(_BACK_MM[why])
+                self._back(driving.BACK_OFF_MM[why])
             else:
                 self._decide()
             return None

@@ -17,7 +17,12 @@ and steer by the odometry of the snapshot. Their moves, as (left, right) wheel s
         turn = 600 mm/s per rad of error, at most half the speed; (speed - turn, speed + turn)
 
 * an arc of a radius around a point on one side (:func:`arc_wheels`): both wheels at the
-  centre's speed scaled by their own radius, ``radius -+ half the wheel base``.
+  centre's speed scaled by their own radius, ``radius -+ half the wheel base``;
+* the map-driven leaves' (``cover``, ``home_by_map``) turn in place (:func:`turning_to`) and
+  back-off from what :func:`blocked` names (:func:`backing_to`): ``(-250, -250)`` for
+  :data:`BACK_OFF_MM` (a bump 30 mm, a cliff 60, a virtual wall's beam 100), at most
+  :data:`BACK_GIVE_UP_S`; and their straight drives' stall: no :data:`PROGRESS_MM` along the
+  line for :data:`STALL_S`.
 """
 
 from __future__ import annotations
@@ -37,13 +42,21 @@ from roomba_bt.oi.frames import (
 from roomba_bt.oi.modes import DRIVING_MODES
 
 __all__ = [
+    "BACK_GIVE_UP_S",
+    "BACK_MM_S",
+    "BACK_OFF_MM",
     "BLOCKED_PACKETS",
     "NEAR_SIGNAL",
+    "PROGRESS_MM",
+    "STALL_S",
+    "TURN_GIVE_UP_S",
+    "TURN_TOLERANCE",
     "Line",
     "WALL_AHEAD_CLOSE",
     "WallAhead",
     "along_line",
     "arc_wheels",
+    "backing_to",
     "blocked",
     "drive_wheels",
     "held",
@@ -51,6 +64,7 @@ __all__ = [
     "spin_toward",
     "steer_along",
     "turn_toward",
+    "turning_to",
     "wheel_speeds",
     "wrap",
 ]
@@ -155,6 +169,18 @@ TURN_GIVE_UP_S = 6.0
 BACK_GIVE_UP_S = 1.5
 #: the wheels' speed (mm/s) backing off a hazard
 BACK_MM_S = 250.0
+#: how far (mm) a map-driven leaf (``cover``, ``home_by_map``) backs off each hazard
+#: :func:`blocked` names before it goes on: a bump, room to turn without touching it again; a
+#: cliff, the cliff sensors back over the floor; a virtual wall's beam, out of it. One table
+#: for both: the way home meets what cleaning met, and reacts alike. A plain dict, not a
+#: read-only mapping: mypy narrows ``why`` (``str | None``) to ``str`` by ``why in`` a dict
+BACK_OFF_MM = {"bump": 30.0, "cliff": 60.0, "virtual wall": 100.0}
+#: a straight drive along a line (``cover``'s lanes, shifts and paths, ``home_by_map``'s
+#: legs) has made progress when it is this much (mm) further along the line than when it last
+#: did; with none for :data:`STALL_S` (s) it is stalled (a wheel held, a bumper pressed on
+#: something the sensors do not report) and ends, for a new decision from where it is
+PROGRESS_MM = 10.0
+STALL_S = 3.0
 
 
 def turning_to(error: float, started: float, now: float, top: float) -> tuple[float, float] | None:

@@ -39,13 +39,7 @@ import py_trees
 from py_trees.common import Status
 
 from roomba_bt.behaviours import driving
-from roomba_bt.behaviours.coverage_map import (
-    _BACK_MM,
-    _STALL_S,
-    MAP_KEY,
-    Bearings,
-    Cell,
-)
+from roomba_bt.behaviours.coverage_map import MAP_KEY, Bearings, Cell
 from roomba_bt.behaviours.declare import Action, Param, declare, wheel_speed_param
 from roomba_bt.behaviours.docking.common import DockView
 from roomba_bt.behaviours.units import DURATION
@@ -105,8 +99,8 @@ class HomeByMap(Action):
         self._progress = (0.0, snap.time)
         # started again where the firmware stopped at a hazard: off it first
         why = driving.blocked(snap.frame)
-        if why in _BACK_MM and self._bearings is not None:
-            self._back(_BACK_MM[why])
+        if why in driving.BACK_OFF_MM and self._bearings is not None:
+            self._back(driving.BACK_OFF_MM[why])
 
     def update(self) -> Status:
         snap = self.snapshot
@@ -206,15 +200,15 @@ class HomeByMap(Action):
     def _driving(self, frame: SensorFrame) -> tuple[float, float] | Status | None:
         pose, now = self._pose, self.snapshot.time
         along, _ = driving.along_line(self._line, pose.x_mm, pose.y_mm)
-        if along > self._progress[0] + 10.0:
+        if along > self._progress[0] + driving.PROGRESS_MM:
             self._progress = (along, now)
         why = driving.blocked(frame)
         if why is not None:  # no path through that cell again (as cover's paths)
             assert self._bearings is not None
             self._bearings.map.avoid.add(self._cell)
-            self._back(_BACK_MM[why])
+            self._back(driving.BACK_OFF_MM[why])
             return None
-        if now - self._progress[1] >= _STALL_S:
+        if now - self._progress[1] >= driving.STALL_S:
             self._phase = "plan"
             return None
         if along >= self._limit:

@@ -8,6 +8,7 @@ import math
 from collections.abc import Callable
 
 import py_trees
+import pytest
 from py_trees.common import Status
 
 from roomba_bt.behaviours import coverage_map, driving
@@ -17,6 +18,8 @@ from roomba_bt.evaluate.episode import EpisodeResult
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import IR_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS
 from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.odometry import MM_PER_COUNT
+from roomba_bt.oi.stream import SLOT_SECONDS
 from roomba_bt.robot.testing import StubRobot
 
 Sweep = Callable[..., EpisodeResult]
@@ -145,3 +148,129 @@ def test_a_map_an_earlier_run_left_is_not_gone_by(make: Make, robot: StubRobot) 
     home.tick_once()
     assert home.status is Status.SUCCESS
     assert "no map" in home.feedback_message
+
+
+class _Wheels:
+    """The stub robot's encoders turned by what the leaves send: each frame moves each wheel
+    at the last Drive Direct's speed for one 15 ms slot (Drive 0 stops them; ``held``: a
+    wheel held by something, nothing moves), so a leaf drives, turns and backs off by its
+    own commands."""
+
+    def __init__(self, robot: StubRobot) -> None:
+        self.robot = robot
+        self.speeds = (0, 0)  # left, right (mm/s)
+        self._counts = [0.0, 0.0]
+
+    def sent(self) -> tuple[int, int]:
+        """The wheel speeds the last tick left (left, right)."""
+        for command in self.robot.flush():
+            if command.opcode == 145:
+                right, left = command.args
+                self.speeds = (left, right)
+            elif command.opcode == 137:
+                self.speeds = (0, 0)
+        return self.speeds
+
+    def frame(self, *, held: bool = False, ir: int = 0, hazard: int = 0) -> None:
+        """The next frame: the wheels moved one slot; ``hazard`` a packet that shows 1."""
+        if not held:
+            for i, speed in enumerate(self.sent()):
+                self._counts[i] += speed * SLOT_SECONDS / MM_PER_COUNT
+        packets = (*driving.BLOCKED_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS, *IR_PACKETS)
+        values = dict.fromkeys(packets, 0)
+        left, right = (round(counts) % 65536 for counts in self._counts)
+        values.update({43: left, 44: right, 35: int(OIMode.SAFE), 17: ir})
+        if hazard:
+            values[hazard] = 1
+        self.robot.set_frame(values)
+
+
+#: a packet that shows each hazard :func:`driving.blocked` names: the right bumper, the front
+#: left cliff sensor, a virtual wall's beam
+HAZARDS = {"bump": 7, "cliff": 10, "virtual wall": 13}
+
+
+def _cover_then_homing(make: Make, wheels: _Wheels) -> tuple[Cover, HomeByMap]:
+    """``cover`` 150 frames straight ahead on its own commands, a beam seen on the way, then
+    ``home_by_map`` ticked until it drives back along its path."""
+    home = make(HomeByMap)
+    cover = make(Cover)
+    for tick in range(150):
+        wheels.frame(ir=RED_BUOY if 40 <= tick < 50 else 0)
+        cover.tick_once()
+    cover.stop(Status.INVALID)
+    assert isinstance(home, HomeByMap)
+    for _ in range(400):  # plan, turn about (some 2 s), drive
+        wheels.frame()
+        home.tick_once()
+        if home._phase == "drive" and wheels.speeds[0] > 0:
+            return cover, home
+    raise AssertionError(f"home_by_map never drove its path: {home._phase}")
+
+
+def _backs_off(leaf: Cover | HomeByMap, wheels: _Wheels, hazard: int) -> tuple[float, set]:
+    """``leaf`` driving straight meets ``hazard`` (one frame): how far (mm) it then backed
+    off, and the wheel speeds it backed at."""
+    for _ in range(10):  # well under way
+        wheels.frame()
+        leaf.tick_once()
+    assert min(wheels.sent()) > 0
+    wheels.frame(hazard=hazard)
+    leaf.tick_once()
+    met = wheels.robot.snapshot.odometry.distance_mm
+    speeds = set()
+    while max(wheels.sent()) < 0:  # both wheels backward
+        speeds.add(wheels.speeds)
+        wheels.frame()
+        leaf.tick_once()
+    return met - wheels.robot.snapshot.odometry.distance_mm, speeds
+
+
+@pytest.mark.parametrize("why", sorted(HAZARDS))
+def test_the_way_home_backs_off_a_hazard_as_cover_does(
+    make: Make, robot: StubRobot, why: str
+) -> None:
+    """The way home meets what cleaning met and reacts alike: both back off each hazard the
+    same distance at the same speed (``driving.BACK_OFF_MM``, ``driving.BACK_MM_S``; homing
+    read cover's private table, and a change to one was not a change to the other)."""
+    wheels = _Wheels(robot)
+    cover = make(Cover)
+    assert isinstance(cover, Cover)
+    cleaning = _backs_off(cover, wheels, HAZARDS[why])
+    py_trees.blackboard.Blackboard.storage.clear()
+    _, home = _cover_then_homing(make, wheels)
+    homing = _backs_off(home, wheels, HAZARDS[why])
+    # one frame's move backing off, and the encoders' count
+    step = driving.BACK_MM_S * SLOT_SECONDS + MM_PER_COUNT
+    for backed, speeds in (cleaning, homing):
+        assert driving.BACK_OFF_MM[why] <= backed < driving.BACK_OFF_MM[why] + step
+        assert speeds == {(-driving.BACK_MM_S, -driving.BACK_MM_S)}
+
+    assert abs(cleaning[0] - homing[0]) < step
+
+
+def _held_until(leaf: Cover | HomeByMap, wheels: _Wheels, gave_up: Callable[[], bool]) -> float:
+    """How long (s) ``leaf`` drives on with its wheels held until ``gave_up()``."""
+    start = wheels.robot.snapshot.time
+    while not gave_up():
+        wheels.frame(held=True)
+        leaf.tick_once()
+        assert wheels.robot.snapshot.time - start < 2 * driving.STALL_S
+    return wheels.robot.snapshot.time - start
+
+
+def test_the_way_home_gives_a_held_leg_up_as_cover_gives_up_a_held_line(
+    make: Make, robot: StubRobot
+) -> None:
+    """A wheel held on a straight drive: both leaves give it up after the same time with no
+    progress along the line (``driving.STALL_S``; cover's own, read by homing): cover ends
+    the line (``stalled``), the way home plans again."""
+    wheels = _Wheels(robot)
+    _, home = _cover_then_homing(make, wheels)
+    plans = home._plans
+    homing = _held_until(home, wheels, lambda: home._plans > plans)
+    cover = make(Cover)  # a new run: ahead from a standstill, the wheels held from the start
+    assert isinstance(cover, Cover)
+    cleaning = _held_until(cover, wheels, lambda: getattr(cover, "_why", None) == "stalled")
+    for after in (homing, cleaning):
+        assert abs(after - driving.STALL_S) <= 2 * SLOT_SECONDS, (homing, cleaning)
