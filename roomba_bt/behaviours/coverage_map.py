@@ -60,7 +60,7 @@ from py_trees.common import Status
 
 from roomba_bt.behaviours import driving
 from roomba_bt.behaviours.declare import WHEEL, Action, Param, declare, wheel_speed_param
-from roomba_bt.behaviours.docking.common import DockView
+from roomba_bt.behaviours.docking.common import DockWatch
 from roomba_bt.behaviours.edging import EdgeSteering, signal_distance_mm
 from roomba_bt.behaviours.units import DISTANCE, DURATION
 from roomba_bt.oi import commands as oi
@@ -290,6 +290,10 @@ class Bearings:
         self._straight: list[tuple[float, float]] = []
         #: re-anchorings of the heading on a wall (for tests and the curious)
         self.anchored = 0
+        #: a receiver saw a dock character in the frame :meth:`observe` last took (the
+        #: beams' cells are kept on the map; ``home_by_map`` ends on it)
+        self.sees_dock = False
+        self._dock = DockWatch()
 
     def integrate(self, odo: Odometry) -> Odometry:
         """Its pose after this tick: the odometry's travel and turn since the last, from
@@ -342,12 +346,13 @@ class Bearings:
 
     def observe(self, frame: SensorFrame) -> None:
         """Mark what this tick shows from the pose: the strip swept (while the wheels
-        turn), surfaces."""
+        turn), surfaces, the cell if a receiver sees the dock (:attr:`sees_dock`)."""
         pose = self.pose
         x, y, theta = pose.x_mm, pose.y_mm, pose.theta_rad
         fmap = self.map
         fmap.sweep(x, y, theta)
-        if DockView.of(frame).seen:
+        self.sees_dock = seen = self._dock.view(frame).seen
+        if seen:
             cell = fmap.cell(x, y)
             if cell is not None:
                 fmap.beams.add(cell)

@@ -41,7 +41,6 @@ from py_trees.common import Status
 from roomba_bt.behaviours import driving
 from roomba_bt.behaviours.coverage_map import MAP_KEY, Bearings, Cell
 from roomba_bt.behaviours.declare import Action, Param, declare, wheel_speed_param
-from roomba_bt.behaviours.docking.common import DockView
 from roomba_bt.behaviours.units import DURATION
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import ENCODER_PACKETS, IR_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS, SensorFrame
@@ -113,7 +112,7 @@ class HomeByMap(Action):
             return Status.SUCCESS
         bearings.integrate(snap.odometry)
         bearings.observe(frame)  # what it meets is on the map for the next plan
-        if DockView.of(frame).seen:
+        if bearings.sees_dock:  # this frame's, as observe read it
             return self._arrived("a dock beam seen")
         waiting = driving.held(self, 0.0 if frame.any_cliff else None)
         if waiting is not None:

@@ -23,6 +23,7 @@ from roomba_bt.behaviours.docking import (
 )
 from roomba_bt.behaviours.docking.common import (
     HAZARD_IN_PACKETS,
+    DockWatch,
     drive_direct,
     hazard_of,
     view_of,
@@ -427,6 +428,23 @@ def test_the_view_of_the_codes_reads_as_the_receivers_do() -> None:
         assert (view.red, view.green, view.force_field) == (red, green, field), codes
         assert view.on_axis == (red and green), codes
         assert view.side == (1 if red and not green else -1 if green and not red else 0), codes
+
+
+def test_a_dock_watch_reads_each_layout_at_its_own_slots(robot: StubRobot) -> None:
+    """``cover``'s and ``home_by_map``'s look at the dock every tick (:class:`DockWatch`,
+    its slots found once per layout) is the frame's own view, whatever the receivers say,
+    on a frame of another layout too (one more packet before them: every slot moves); a
+    frame without the receivers names the packet it lacks."""
+    watch = DockWatch()
+    red = dock_character(red=True, green=False, force_field=False)
+    for codes in itertools.product((0, red, 162), repeat=3):  # nothing, the dock, a wall
+        omni, left, right = codes
+        for extra in ({}, {8: 0}, {}):  # the other layout, and back
+            snap = robot.set_frame({**frame(omni=omni, left=left, right=right), **extra})
+            assert watch.view(snap.frame) is DockView.of(snap.frame), (codes, extra)
+    snap = robot.set_frame(QUIET)
+    with pytest.raises(KeyError, match="packet 17"):
+        watch.view(snap.frame)
 
 
 def test_a_stage_reads_each_layout_at_its_own_slots(robot: StubRobot, make: Make) -> None:

@@ -121,6 +121,34 @@ def view_of(codes: tuple[int, ...]) -> DockView:
     return view
 
 
+class DockWatch:
+    """The tick's :class:`DockView`, for a leaf that looks for the dock on every tick and is
+    no docking stage (``cover``'s map keeps where the beams were seen; ``home_by_map`` ends
+    when one is): the receivers' bytes read by one ``itemgetter`` bound to the frame's
+    layout, bound again only when the layout changes (a new stream), where
+    :meth:`DockView.of` looks each packet up and builds a tuple (about 600 ns against 100)."""
+
+    __slots__ = ("_codes", "_layout")
+
+    def __init__(self) -> None:
+        self._layout: FrameLayout | None = None  # nothing bound yet: the first view binds
+
+    #: the receivers' bytes (packets 17, 52, 53) from a frame's values, in ``_layout``
+    _codes: Callable[[tuple[int, ...]], tuple[int, ...]]
+
+    def view(self, frame: SensorFrame) -> DockView:
+        """The frame's view; a frame without the receivers' packets raises the ``KeyError``
+        naming the first missing one (the leaf's declared reads carry them)."""
+        if frame.layout is not self._layout:
+            index = frame.layout.index
+            for packet in IR_PACKETS:
+                if packet not in index:
+                    frame[packet]  # raises the KeyError naming the packet
+            self._codes = itemgetter(*(index[packet] for packet in IR_PACKETS))
+            self._layout = frame.layout
+        return view_of(self._codes(frame.values))
+
+
 #: By byte of packet 17, 52 or 53: a character sent by a home base.
 FROM_DOCK: tuple[bool, ...] = tuple(character.from_dock for character in IR_CHARACTERS)
 #: By byte of packet 34: the home base powers the robot.
