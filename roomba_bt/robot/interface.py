@@ -17,7 +17,7 @@ or a simulation on a virtual clock makes the same decisions as the live run.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import NamedTuple, Protocol
 
@@ -222,9 +222,19 @@ class Outbox:
     to a higher-priority branch ticks the new branch first and stops the old one after it:
     the old one's halt must not replace the new one's first Drive (it did, and the robot
     stood still while the new branch believed it was turning).
+
+    It is also the one record of each channel's last command, kept two ways because they
+    differ: :meth:`last_on`, what the tree last asked for (its leaves read it), and
+    :attr:`standing`, what the runtime last wrote and the robot still obeys (what the
+    runtime sends again after its own drive 0, and the monitor's resume). After a tick they
+    are the same command unless the mode guard refused it (asked for, not written: the
+    earlier one stands), the robot fell to Passive by itself since (:meth:`robot_stopped`:
+    asked for, no longer standing), or a cycle was ended in the tick it was queued (neither
+    asked for nor written; the command before it may stand). Until session 27 the runner
+    kept its own copy of the second (``last_sent``).
     """
 
-    __slots__ = ("_ender", "_last", "_queue", "_senders", "queued")
+    __slots__ = ("_ender", "_last", "_queue", "_senders", "_standing", "queued", "standing")
 
     def __init__(self) -> None:
         self._queue: dict[object, Command] = {}
@@ -235,6 +245,10 @@ class Outbox:
         self.queued: Mapping[object, Command] = self._queue
         #: who asked, this tick, for the end of a built-in cycle (:meth:`end_cycle`)
         self._ender: object = _NOBODY
+        self._standing: dict[str, Command] = {}
+        #: the last command written on each channel ("wheels", "motors", ...) that the robot
+        #: still obeys, read-only (:meth:`written`, :meth:`robot_stopped`)
+        self.standing: Mapping[str, Command] = self._standing
 
     def send(self, command: Command, sender: object = None) -> None:
         channel = command.spec.channel
@@ -307,6 +321,20 @@ class Outbox:
         any: what a leaf that leaves Safe or Full stops first (``mode: passive``)."""
         return self._last.get(channel)
 
+    def written(self, command: Command) -> None:
+        """The runtime wrote ``command`` (drained, and the mode guard let it through): the
+        robot obeys it now, until the next one on its channel."""
+        channel = command.spec.channel
+        if channel is not None:
+            self._standing[channel] = command
+
+    def robot_stopped(self, channels: Iterable[str]) -> None:
+        """The robot stopped these channels by itself (a fall to Passive stops the wheels and
+        the motors): their last commands no longer stand. What the tree asked for
+        (:meth:`last_on`) is unchanged."""
+        for channel in channels:
+            self._standing.pop(channel, None)
+
     def pending(self) -> list[Command]:
         return list(self._queue.values())
 
@@ -317,10 +345,13 @@ class Outbox:
         return iter(list(self._queue.values()))
 
     def clear(self) -> None:
+        """Nothing queued, asked for or standing: the tree was stopped (its commands no
+        longer stand: nothing sends them again)."""
         self._queue.clear()
         self._ender = _NOBODY
         self._senders.clear()
         self._last.clear()
+        self._standing.clear()
 
 
 class BaseHandle:

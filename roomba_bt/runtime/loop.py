@@ -21,7 +21,7 @@ import logging
 import sys
 import time
 import traceback
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from functools import partial
 from typing import Any, NoReturn, Protocol, cast
 
@@ -254,9 +254,6 @@ class MissionRunner(BaseHandle):
         #: when the robot's frames are due on the link's clock: the slots a batch spans
         self._schedule = SlotSchedule()
         self.refusals: list[str] = []
-        #: the last command written on each actuator channel ("wheels", "motors", ...): what
-        #: a resume after the monitor's pause sends again
-        self.last_sent: dict[str, Command] = {}
         #: True while the monitor holds the run paused: frames still come and make snapshots
         #: (the page shows the robot) and the tick index (the stream's) goes on, but mission
         #: time stands still: a wait, a time limit or the run's timeout does not count the pause
@@ -296,6 +293,14 @@ class MissionRunner(BaseHandle):
     guards_signals: bool = True
     #: the writer's count of commands when the start-up was done (see :meth:`count_written`)
     _sent_at_start: int | None = None
+
+    @property
+    def last_sent(self) -> Mapping[str, Command]:
+        """The last command written on each channel ("wheels", "motors", ...) that still
+        stands: what a stall's ride-through and a resume after the monitor's pause send
+        again. The outbox keeps it (:attr:`Outbox.standing
+        <roomba_bt.robot.interface.Outbox.standing>`, beside what the tree asked for)."""
+        return self._outbox.standing
 
     @property
     def has_snapshot(self) -> bool:
@@ -553,8 +558,7 @@ class MissionRunner(BaseHandle):
         ride-through and the monitor's resume do not send them again)."""
         self._fallback_seen = fallback
         if fallback is not None:
-            for channel in FALL_STOPS:
-                self.last_sent.pop(channel, None)
+            self._outbox.robot_stopped(FALL_STOPS)
         return self._hazards.frame(frame, True)
 
     def _stale(self, batch: Sequence[SensorFrame]) -> None:
@@ -569,12 +573,11 @@ class MissionRunner(BaseHandle):
             self._bump_reflex()
         if not self._outbox.queued:
             return
-        for command in self._outbox.drain():
+        outbox = self._outbox
+        for command in outbox.drain():
             try:
                 self.connection.send(command)
-                channel = command.spec.channel
-                if channel is not None:
-                    self.last_sent[channel] = command
+                outbox.written(command)
             except ModeError as exc:
                 self.summary.refused_commands += 1
                 if len(self.refusals) < 100:
@@ -683,8 +686,7 @@ def stop_running_tree(
         failures = stop_nodes(runner.mission.root, raised_in)
     finally:
         writer.hold_motion(None)
-    runner._outbox.clear()
-    runner.last_sent.clear()
+    runner._outbox.clear()  # what stood too
     return failures
 
 

@@ -118,3 +118,28 @@ def test_a_cycle_never_written_is_no_channels_last_command() -> None:
     box.end_cycle(OLD, running=False)
     assert box.drain() == []
     assert box.last_on("wheels") is None and box.sender_of(commands.seek_dock()) is None
+
+
+def test_what_stands_is_what_was_written_and_not_stopped_by_the_robot_since() -> None:
+    """The outbox keeps each channel's last command two ways: what the tree asked for
+    (``last_on``, the leaves') and what the runtime wrote and the robot still obeys
+    (``standing``, what is sent again after the runtime's own drive 0 or a resume; the
+    runner kept a copy of its own). A refused command was asked for and does not stand; the
+    robot's own fall stops the wheels and the motors, which the tree still asked for."""
+    box = Outbox()
+    drive, brushes = commands.drive(200, 0), commands.motors(0b100)
+    box.send(drive, NEW)
+    box.send(brushes, NEW)
+    assert box.last_on("wheels") is drive and dict(box.standing) == {}  # not written yet
+    for command in box.drain():
+        box.written(command)  # as the runner does for each command the guard lets through
+    assert dict(box.standing) == {"wheels": drive, "motors": brushes}
+    faster = commands.drive(300, 0)
+    box.send(faster, NEW)
+    assert box.drain() == [faster]  # and the mode guard refused it: not written
+    assert box.last_on("wheels") is faster and box.standing["wheels"] is drive
+    box.robot_stopped(("wheels", "motors"))  # a fall to Passive by itself
+    assert dict(box.standing) == {} and box.last_on("motors") is brushes
+    box.written(brushes)
+    box.clear()  # the tree stopped: nothing it sent stands
+    assert dict(box.standing) == {} and box.last_on("motors") is None

@@ -368,3 +368,33 @@ def test_the_robot_s_own_fall_forgets_its_wheel_and_motor_commands(
     assert all(channels == () for _, channels in standing[fell_at:]), standing[fell_at:]
     on = oi.motors(motor_bits(main_brush=True, vacuum=True))
     assert on.data in run.link.written  # the leaf's brushes and vacuum went out
+
+
+def test_after_every_tick_what_stands_is_what_the_tree_asked_for_until_the_fall(
+    run_mission: RunMission, tmp_path: Path
+) -> None:
+    """The runner's standing commands (``last_sent``: what a ride-through and a resume send
+    again) are the outbox's own record, beside what the tree asked for (``last_on``): after
+    every tick both name the same command on each channel, until the robot falls to Passive
+    by itself; from then on the wheels and the motors no longer stand, and the tree's last
+    asks are still known (a ``mode: passive`` stops the motors first by them)."""
+    (tmp_path / "ledge.yaml").write_text(LEDGE)
+    ticks: list[tuple[bool, dict[str, bool], dict[str, bool]]] = []
+
+    def observer(runner: MissionRunner) -> None:
+        fell = runner.snapshot.last_fallback is not None
+        asked = {c: runner.outbox.last_on(c) is not None for c in ("wheels", "motors")}
+        same = {c: runner.outbox.last_on(c) is sent for c, sent in runner.last_sent.items()}
+        assert runner.last_sent is runner.outbox.standing  # one record, not a copy
+        ticks.append((fell, asked, same))
+
+    run = run_mission(
+        over_the_edge(brushes=True), world=str(tmp_path / "ledge.yaml"), observer=observer
+    )
+    assert run.summary.outcome is Outcome.SUCCESS and run.summary.refused_commands == 0
+    fell_at = next(i for i, (fell, _, _) in enumerate(ticks) if fell)
+    for _, asked, same in ticks[:fell_at]:
+        assert all(same.values()) and set(same) == {c for c, a in asked.items() if a}
+    assert ticks[fell_at - 1][2] == {"wheels": True, "motors": True}  # both stood
+    for _, asked, same in ticks[fell_at:]:
+        assert asked == {"wheels": True, "motors": True} and same == {}, (asked, same)
