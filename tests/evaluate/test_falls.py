@@ -11,6 +11,7 @@ import pickle
 from pathlib import Path
 
 import pytest
+from runtime.simrun import LEDGE, TWICE_OVER_THE_EDGE  # tests/runtime: the room with a drop
 
 from roomba_bt.cli import main
 from roomba_bt.evaluate import EpisodeResult, episode_specs, run_episodes, summarize
@@ -28,42 +29,14 @@ from roomba_bt.runtime.summary import falls_said
 
 from .test_wall_limit import _STUCK as STUCK_PLUGIN
 
-#: A room whose east half is a stair edge, the robot starting 0.6..1.6 m from it, facing it
-#: (within 20 degrees): a drive of 1 m reaches the edge from some starts and not from others.
-LEDGE = """\
-name: ledge
-description: a room whose east half is a drop, the robot facing it
-rooms:
-  - [[0.0, 0.0], [4.0, 0.0], [4.0, 3.5], [0.0, 3.5]]
-drops:
-  - {name: ledge, rect: [2.0, 0.0, 4.0, 3.5]}
-robot:
-  start: {at: [1.2, 1.75], heading: 0}
-  start_region: {rect: [0.4, 0.6, 1.4, 2.9], heading: [-20, 20]}
-  battery: 0.6
-"""
-
-#: Safe, then 1 m forward: over the edge (a fall, the drive fails) or short of it (success).
+#: For LEDGE (its starts 0.6..1.6 m from the edge): Safe, then 1 m forward: over the edge
+#: (a fall, the drive fails) or short of it (success).
 TOWARD_THE_EDGE = """\
 mission: toward the edge
 tree:
   sequence:
     - mode: safe
     - drive: {velocity: 200 mm/s, distance: 1 m}
-"""
-
-#: Over the edge, then Safe again and on over it: two falls in every episode.
-TWICE_OVER_THE_EDGE = """\
-mission: twice over the edge
-tree:
-  fallback:
-    - sequence:
-        - mode: safe
-        - drive: {velocity: 200 mm/s, distance: 3 m}
-    - sequence:
-        - cliff: any
-        - mode: safe
-        - drive: {velocity: 100 mm/s, distance: 1 m}
 """
 
 RUNS = 8

@@ -122,7 +122,24 @@ drops:
   - {name: ledge, rect: [2.0, 0.0, 4.0, 3.5]}
 robot:
   start: {at: [1.2, 1.75], heading: 0}
+  # for random starts (an evaluation): 0.6..1.6 m from the edge, facing it within 20 degrees
+  start_region: {rect: [0.4, 0.6, 1.4, 2.9], heading: [-20, 20]}
   battery: 0.6
+"""
+
+#: For :data:`LEDGE`: over the edge, then Safe again and on over it: the robot falls to
+#: Passive twice (from any start of its region).
+TWICE_OVER_THE_EDGE = """\
+mission: twice over the edge
+tree:
+  fallback:
+    - sequence:
+        - mode: safe
+        - drive: {velocity: 200 mm/s, distance: 2 m}
+    - sequence:
+        - cliff: any
+        - mode: safe
+        - drive: {velocity: 100 mm/s, distance: 1 m}
 """
 
 

@@ -17,7 +17,7 @@ from roomba_bt.runtime.stack import RunStack, TreeMission
 from roomba_bt.runtime.summary import ExitCode, Outcome, RunFailed, RunSummary
 from roomba_bt.sim import SimLink, Simulator, load_world
 
-from .simrun import DRIVE_TO_WALL, LEDGE, RunMission
+from .simrun import DRIVE_TO_WALL, LEDGE, TWICE_OVER_THE_EDGE, RunMission
 
 
 def test_each_line_of_the_summary_stays_one_line() -> None:
@@ -97,21 +97,6 @@ def test_the_exception_says_the_outcome_on_one_line() -> None:
         "mission faked\\x0a[ok] robot stopped ended FAILURE: x\\x1b[2J (exit code 1)"
     )
     assert raised.value.reason == "x\x1b[2J"  # the field as it is
-
-
-#: Over the edge, then Safe again and on over it: the robot falls to Passive twice.
-TWICE_OVER_THE_EDGE = """\
-mission: twice over the edge
-tree:
-  fallback:
-    - sequence:
-        - mode: safe
-        - drive: {velocity: 200 mm/s, distance: 2 m}
-    - sequence:
-        - cliff: any
-        - mode: safe
-        - drive: {velocity: 100 mm/s, distance: 1 m}
-"""
 
 
 def test_the_robot_s_own_falls_are_counted_by_cause(
