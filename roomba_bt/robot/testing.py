@@ -54,7 +54,9 @@ class StubRobot(BaseHandle):
     def set_frame(
         self, values: dict[int, int], *, mode: OIMode | None = None, ticks: int = 1
     ) -> Snapshot:
-        """Advance ``ticks`` slots and make a frame of ``values`` the current snapshot."""
+        """Advance ``ticks`` slots and make a frame of ``values`` the current snapshot. The
+        snapshot before it stays the tree's previous tick (``Snapshot.previous_tick``): the
+        slots jumped over are frames lost on the way, not ticks a node missed."""
         ids = tuple(sorted(values))
         layout = layout_for(ids, self._profile, False)
         frame = layout.decode(layout.pack(values))
@@ -75,6 +77,7 @@ class StubRobot(BaseHandle):
             odometry=self._odometry,
             profile=self._profile,
             cycle_may_run=self._cycle_may_run,
+            previous_tick=self._tick - ticks,
         )
         return self._snapshot
 

@@ -541,6 +541,7 @@ class MissionRunner(BaseHandle):
             self._profile,
             summary.frames_lost,
             self.connection.writer.builtin_may_run,
+            tick - slots,
         ))  # fmt: skip
         self.snapshot = snapshot
         if self._blackboard is not None:
