@@ -172,6 +172,60 @@ class Repeat(_MissionClock, DecoratorTick, py_trees.decorators.Decorator):
         return _RUNNING
 
 
+class Held(_MissionClock, DecoratorTick, py_trees.decorators.Decorator):
+    """A debounce: SUCCESS once the child has returned SUCCESS on every tick for ``duration``
+    seconds of mission time, FAILURE otherwise; never RUNNING, so that it reads as a
+    condition (an ``until:`` that stops a drive only after the battery has stayed low for
+    3 s, where one low reading would have).
+
+    The hold starts on the first tick the child succeeds and counts from that tick's time
+    (SUCCESS on the first tick at least ``duration`` later, as ``timeout`` counts). It
+    starts again when the child says anything else, and when the node was not ticked on the
+    tree's previous tick (a guard that held an hour ago, ticked again, must not count its
+    old hold: ``Snapshot.previous_tick``; frames lost on the way are no tick missed): so
+    also after a halt, a run's end, a branch left, once it is ticked again.
+
+    Decided: a stop alone (``stop(INVALID)``, ``terminate``) does not restart it. py_trees
+    stops every child of a composite that starts afresh, and a sequence or fallback of
+    conditions (``until: {sequence: [held, ...]}``) starts afresh on every tick: a reset
+    there never let the hold last past one tick. A node stopped and ticked again on the
+    next tick has seen its child succeed on every tick, which is what it counts; one
+    stopped and left is caught by the gap. (Its own SUCCESS or FAILURE ends every tick,
+    and py_trees' ``initialise`` follows on the next: neither is a restart either.)"""
+
+    def __init__(self, name: str, child: Behaviour, duration: float) -> None:
+        super().__init__(name=name, child=child)
+        self.duration = _seconds("Held", name, "duration", duration, SLOT_SECONDS)
+        #: the mission time the child's run of successes began (None: not succeeding)
+        self.since: float | None = None
+        #: ``snapshot.tick`` of this node's last tick (None: never ticked)
+        self._last_tick: int | None = None
+
+    def update(self) -> Status:
+        if self.robot is None:
+            raise RuntimeError(f"{self.name!r} was ticked before setup(robot=...)")
+        snapshot = self.robot.snapshot
+        tick, previous = snapshot.tick, snapshot.previous_tick
+        if previous is None:
+            previous = tick - 1
+        if self._last_tick != previous:  # the tree ticked without this node: a gap
+            self.since = None
+        self._last_tick = tick
+        if self.decorated.status is not _SUCCESS:
+            self.since = None
+            self.feedback_message = ""  # the child's own failure says why
+            return _FAILURE
+        now = snapshot.time
+        if self.since is None:
+            self.since = now
+        held = now - self.since
+        if held >= self.duration - 1e-9:  # 1 ns of slack, as _MissionClock.lasted
+            self.feedback_message = f"held for {self.duration:g} s"
+            return _SUCCESS
+        self.feedback_message = f"held {held:.3g} s of {self.duration:g} s so far"
+        return _FAILURE
+
+
 class ForEach(DecoratorTick, py_trees.decorators.Decorator):
     """Run the child once per item, writing the item to a blackboard key first (waypoints).
 

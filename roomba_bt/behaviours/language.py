@@ -98,6 +98,10 @@ class NodeKind:
     #: ``(option, value, why)``: a value the word refuses, and why (``reactive_sequence``
     #: with ``memory: true`` is a ``sequence``)
     refused: tuple[tuple[str, object, str], ...] = ()
+    #: the child is ticked as a condition, on every tick, and its RUNNING never waited for
+    #: (``held``): the compiler refuses an action under it, or a node that may be RUNNING
+    #: (the word would halt it and start it again on every tick)
+    condition_child: bool = False
 
     def option(self, name: str) -> Param | None:
         for p in self.options:
@@ -224,6 +228,14 @@ _KINDS: tuple[NodeKind, ...] = (
     NodeKind("delay", Shape.DO, lambda n, k, o: ours.Delay(n, k[0], float(o["for"])),
              (Param("for", DURATION, required=True, minimum=0, doc="mission time"),),
              doc="RUNNING for a while, then ticks the child"),
+    # held.for is at least one tick, as repeat.for: a hold of less is no debounce (the child
+    # holding on one tick would do).
+    NodeKind("held", Shape.DO, lambda n, k, o: ours.Held(n, k[0], float(o["for"])),
+             (Param("for", DURATION, required=True, minimum=SLOT_SECONDS,
+                    doc="mission time the child must hold"),),
+             doc="SUCCESS once the child has succeeded on every tick for a while, else "
+                 "FAILURE (never RUNNING: a debounced condition)",
+             condition_child=True),
     NodeKind("oneshot", Shape.CHILD_OR_DO, _oneshot,
              (Param("policy", enum_type("on_success", "on_completion"),
                     doc="on_success (the default) or on_completion"),),

@@ -240,6 +240,8 @@ class ModeCheck:
             return ok, ko | ok | entry | _leads_to_within(node.children[0])
         if kind == "oneshot":
             return ok | entry, ko | entry
+        if kind == "held":  # fails on a tick its child succeeded on, until the hold is long
+            return ok, ko | ok
         return ok, ko  # delay
 
 

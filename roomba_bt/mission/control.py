@@ -17,6 +17,7 @@ from roomba_bt.behaviours.declare import Param
 from roomba_bt.behaviours.language import CHILD_NAMES, KEY_ITEMS, TEXT, NodeKind, Shape
 from roomba_bt.mission.ir import Node
 from roomba_bt.mission.source import Bad, Loc, kind_of, mapping, plain, scalar_text, sequence
+from roomba_bt.mission.ticks import at_once
 from roomba_bt.mission.values import (
     UNKNOWN,
     Bound,
@@ -204,7 +205,33 @@ def parse_decorator(parser: NodeParser, kind: NodeKind, at: Written) -> Node | N
     child = parser.node(child_node, child_loc, env)
     if child is None:
         return None
+    if kind.condition_child:
+        _condition_child(parser.ctx, word, child)
     return Node(word, key_loc, word, [child], options=options)
+
+
+def _condition_child(ctx: Context, word: str, child: Node) -> None:
+    """A word that ticks its child as a condition (``held``): every action under it is an
+    error (ticked on every tick and halted each time, a drive would jerk and a ``wait``
+    never end), and so is a node that may be RUNNING (a ``delay``, a ``repeat``), the
+    innermost such, which it would halt and start again on every tick. Said at the node."""
+    actions = [n for n in child.walk() if n.declared is not None and n.declared.kind == "action"]
+    for node in actions:
+        assert node.declared is not None
+        ctx.error(node.loc.at(
+            f"{word}: its child is ticked as a condition on every tick; "
+            f"{node.declared.name!r} is an action (put the action beside it: "
+            f"drive: {{...}}, until: {{{word}: {{...}}}})"
+        ))  # fmt: skip
+    if actions or any(n.kind == "unbuilt" for n in child.walk()):
+        return
+    running = [n for n in child.walk() if not at_once(n) and all(map(at_once, n.children))]
+    for node in running:
+        ctx.error(node.loc.at(
+            f"{word}: its child must end on every tick (conditions, and sequences, fallbacks "
+            f"and inverters of them); {node.name} may be RUNNING, and {word} would halt it and "
+            "start it again on every tick"
+        ))  # fmt: skip
 
 
 def _decorator_options(

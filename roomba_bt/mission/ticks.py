@@ -14,6 +14,8 @@ counted). The facts it rests on:
 * ``oneshot`` ticks its child only until it succeeds (or completes); ``force_success`` and
   ``force_failure`` answer the same whatever the child said.
 * A guard (``while:``/``until:``) ticks its condition before its child on every tick.
+* ``held`` ticks its child on every tick and never returns RUNNING: it fails on the tick its
+  child fails, and succeeds only once the child has succeeded for a while.
 """
 
 from __future__ import annotations
@@ -41,6 +43,8 @@ def at_once(node: Node) -> bool:
     if kind == "leaf":
         decl = node.decl
         return decl is not None and (decl.kind == "condition" or decl.at_once)
+    if kind == "held":  # never RUNNING, whatever its child
+        return True
     if kind in SEQUENCES or kind in SELECTORS or kind == "parallel" or kind == "guard":
         return all(at_once(child) for child in node.children)
     if kind in ("inverter", "force_success", "force_failure", "timeout", "oneshot"):
@@ -147,6 +151,8 @@ def cliff_ends(node: Node) -> Outcomes:
         return cliff_ends(node.children[0]) & {FAILURE}
     if kind == "retry":  # a failure starts the child again
         return cliff_ends(node.children[0]) & {SUCCESS}
+    if kind == "held":  # the child's failure fails it at once; its success only in time
+        return cliff_ends(node.children[0]) & {FAILURE}
     if kind == "guard":
         ends = SUCCESS if node.options["until"] else FAILURE
         by_condition = {ends} if ends in cliff_ends(node.children[0]) else set()

@@ -315,6 +315,11 @@ def test_driving_in_full_with_no_cliff_sensor_read_is_a_warning(
         ("- fallback: [{drive: {velocity: 200 mm/s, distance: 1 m}}, {cliff: any}]", True),
         ("- sequence: [{inverter: {cliff: any}}, {drive: {velocity: 200 mm/s}}]", True),
         ("- drive: {velocity: 200 mm/s}\n  until: {bump: any}", True),
+        # held: a cliff ends it only after the hold (no stop at the edge); a cliff that
+        # fails its child fails it at once (a while: ends the drive there)
+        ("- drive: {velocity: 200 mm/s}\n  until: {held: {for: 1s, do: {cliff: any}}}", True),
+        ("- drive: {velocity: 200 mm/s}\n"
+         "  while: {held: {for: 15ms, do: {inverter: {cliff: any}}}}", False),
     ],
 )  # fmt: skip
 def test_the_full_mode_warning_asks_whether_a_cliff_is_read_while_the_wheels_turn(

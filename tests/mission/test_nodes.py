@@ -294,6 +294,103 @@ def test_delay(compile_text: Compile) -> None:
     assert r.ticks(3, wall=1) == [R, R, S]
 
 
+def test_held_until_a_drive_stops_it_only_after_the_hold(compile_text: Compile) -> None:
+    """A bump flickering (pressed, free, pressed...) never holds; pressed on every tick for
+    45 ms it does: the drive is halted then, not at the first press."""
+    r = run(
+        compile_text,
+        """
+        tree:
+          sequence:
+            - mode: safe
+            - drive: {velocity: 100 mm/s}
+              until: {held: {for: 45ms, do: {bump: any}}}
+        """,
+    )
+    assert r.tick() is R  # in Safe already: the drive starts
+    assert r.sent() == [[137, 0, 100, 128, 0]]
+    for _ in range(5):
+        assert r.ticks(2, bump=1) == [R, R]
+        assert r.tick() is R  # free again: the hold starts over
+    assert r.sent() == []  # driving on throughout, no halt
+    assert r.ticks(3, bump=1) == [R, R, R]
+    assert r.tick(bump=1) is S  # 45 ms after the first of the steady presses
+    assert r.sent() == [[137, 0, 0, 0, 0]]
+
+
+def test_held_in_a_fallback_does_not_count_an_old_hold(compile_text: Compile) -> None:
+    """A reactive sequence's ``held`` not ticked while an earlier child fails: when it is
+    ticked again, its hold starts again (the wall it saw before the gap does not count)."""
+    r = run(
+        compile_text,
+        """
+        tree:
+          reactive_sequence:
+            - inverter: {bump: any}
+            - held: {for: 45ms, do: wall}
+        """,
+    )
+    assert r.ticks(3, wall=1) == [F, F, F]  # held 30 ms
+    assert r.tick(wall=1, bump=1) is F  # held not ticked
+    assert r.ticks(4, wall=1) == [F, F, F, S]
+
+
+@pytest.mark.parametrize(
+    ("node", "said"),
+    [
+        ("held: {for: 5ms, do: wall}", "3:17: held.for must be at least 0.015 s, got 0.005 s"),
+        ("held: {for: 0s, do: wall}", "3:17: held.for must be at least 0.015 s, got 0 s"),
+        ("held: {for: -2s, do: wall}", "3:17: held.for must be at least 0.015 s, got -2 s"),
+        ("held: {for: 3 m, do: wall}", "3:17: held.for: unknown duration unit 'm'"),
+        ("held: {for: fast, do: wall}", "3:17: held.for: "),
+        ("held: {do: wall}", "3:5: held needs for:"),
+        ("held: {for: 1s}", "3:5: held needs a child under do:"),
+        ("held: 1s", "3:11: held takes options and a child: held: {for, do: ...}"),
+        ("held: {for: 1s, do: [wall, bump]}", "3:25: held takes exactly one child, got a list"),
+        ("held: {for: 1s, after: 2s, do: wall}", "3:21: held: unknown option 'after'"),
+    ],
+)
+def test_held_bad_options_are_errors_at_their_place(
+    errors_of: Callable[..., list[str]], node: str, said: str
+) -> None:
+    errors = errors_of(f"tree:\n  sequence:\n  - {node}\n")
+    assert len(errors) == 1 and errors[0].startswith(said), errors
+
+
+@pytest.mark.parametrize(
+    ("child", "said"),
+    [
+        ("{drive: {velocity: 100 mm/s}}",
+         "4:26: held: its child is ticked as a condition on every tick; 'drive' is an action"),
+        ("{sequence: [wall, {wait: 1s}]}", "4:44: held: its child is ticked as a condition on "
+         "every tick; 'wait' is an action"),
+        ("{stop: {}}", "4:26: held: its child is ticked as a condition on every tick; 'stop' is "
+         "an action"),
+        ("{delay: {for: 1s, do: wall}}", "4:26: held: its child must end on every tick "
+         "(conditions, and sequences, fallbacks and inverters of them); delay may be RUNNING, "
+         "and held would halt it and start it again on every tick"),
+        ("{repeat: {times: 2, do: wall}}", "4:26: held: its child must end on every tick"),
+    ],
+)  # fmt: skip
+def test_held_refuses_a_child_that_is_no_condition(
+    errors_of: Callable[..., list[str]], child: str, said: str
+) -> None:
+    errors = errors_of(f"tree:\n  sequence:\n  - mode: safe\n  - held: {{for: 1s, do: {child}}}\n")
+    assert len(errors) == 1 and errors[0].startswith(said), errors
+
+
+def test_held_takes_conditions_and_what_ends_at_once(errors_of: Callable[..., list[str]]) -> None:
+    for child in (
+        "wall",
+        "{sequence: [wall, {bump: any}]}",
+        "{reactive_fallback: [wall, {inverter: {bump: any}}]}",
+        "{timeout: {after: 1s, do: wall}}",
+        "{held: {for: 30ms, do: wall}}",
+        "{sensor: bumps_wheel_drops < 4}",
+    ):
+        assert errors_of(f"tree: {{held: {{for: 1s, do: {child}}}}}") == [], child
+
+
 def test_inverter_and_forced_results(compile_text: Compile) -> None:
     assert run(compile_text, "tree: {inverter: wall}").tick(wall=1) is F
     assert run(compile_text, "tree: {inverter: {do: wall}}").tick(wall=0) is S
@@ -514,6 +611,7 @@ MINIMAL = {
     "repeat": ("{repeat: {times: 2, do: wall}}", py_trees.decorators.Decorator),
     "timeout": ("{timeout: {after: 1s, do: wall}}", py_trees.decorators.Decorator),
     "delay": ("{delay: {for: 1s, do: wall}}", py_trees.decorators.Decorator),
+    "held": ("{held: {for: 1s, do: wall}}", py_trees.decorators.Decorator),
     "oneshot": ("{oneshot: wall}", py_trees.decorators.OneShot),
     "for_each": ("{for_each: {key: n, in: [1], do: wall}}", py_trees.decorators.Decorator),
     "subtree": ("{subtree: s}", py_trees.composites.Sequence),

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
+from typing import Any
 
 import py_trees
 import pytest
@@ -185,6 +187,39 @@ def test_lost_frames_are_measured_and_the_clock_keeps_slots(run_mission: RunMiss
     # 3 s of mission time, whatever was lost: the wait counts slots, not frames.
     assert run.summary.mission_time_s == pytest.approx(3.0, abs=0.1)
     assert run.summary.ticks < round(3.0 / 0.015)
+
+
+#: Safe, then a wait that a 1 s hold of Safe ends (``held``: Snapshot.previous_tick)
+HELD_1S = """
+tree:
+  sequence:
+    - mode: safe
+    - wait: 10s
+      until: {held: {for: 1s, do: {oi_mode: safe}}}
+"""
+
+
+@pytest.mark.parametrize(
+    "link",
+    [{}, {"burst": 3}, {"faults": Faults(drop_rate=0.2), "watchdog": 1.0}],
+    ids=["every frame", "stale frames", "lost frames"],
+)
+def test_each_snapshot_names_the_tick_before_it_and_a_hold_spans_missing_frames(
+    run_mission: RunMission, link: dict[str, Any]
+) -> None:
+    """``previous_tick`` is the tick of the snapshot before (the slots between are frames
+    dropped as stale or lost, not ticks the tree missed): a ``held`` ticked on every tick
+    holds through them, 1 s after Safe (it never held with a tick-1 rule, whose every stale
+    batch restarted it), and the wait ends there, not after its 10 s."""
+    seen: list[tuple[int, int | None]] = []
+    run = run_mission(
+        HELD_1S, observer=lambda r: seen.append((r.snapshot.tick, r.snapshot.previous_tick)),
+        **link,
+    )  # fmt: skip
+    assert run.summary.outcome is Outcome.SUCCESS
+    assert all(now[1] == before[0] for before, now in itertools.pairwise(seen))
+    assert seen[0][1] == -1  # the run's first snapshot: no tick before it
+    assert 1.0 <= run.summary.mission_time_s <= 1.2
 
 
 def test_same_seed_same_bytes(run_mission: RunMission) -> None:
