@@ -86,8 +86,9 @@ _OK, _RUN = Status.SUCCESS, Status.RUNNING
 CELL_MM = 100.0
 _SIDE = 600
 _HALF_SIDE = _SIDE // 2
-#: cell bits
-SWEPT, BLOCKED, VISITED, TRIED = 1, 2, 4, 8
+#: cell bits (DROP: blocked where a cliff sensor saw a drop, which ``cover`` treats as any
+#: other blocked cell and ``home_by_map``'s path across blocked cells never crosses)
+SWEPT, BLOCKED, VISITED, TRIED, DROP = 1, 2, 4, 8, 16
 #: a cell's four neighbours, as steps in the cell index
 _STEPS = (-_SIDE, _SIDE, -1, 1)
 #: the strip the brushes clean, as points across the body (x forward, y left; mm): the main
@@ -130,8 +131,9 @@ class FloorMap:
         self.avoid: set[Cell] = set()
         #: cells newly swept (a counter: the caller compares)
         self.swept = 0
-        #: cells where a receiver saw a dock's beam: the way home leads to the nearest
-        self.beams: set[Cell] = set()
+        #: cells where a receiver saw a dock's beam, each with the odometry's path (mm) when
+        #: it last did: the way home leads to the nearest of the latest (``home_by_map``)
+        self.beams: dict[Cell, float] = {}
 
     @staticmethod
     def cell(x: float, y: float) -> Cell | None:
@@ -163,22 +165,27 @@ class FloorMap:
         """What ``cover`` says when it is done: the floor swept, by odometry."""
         return f"floor done: {self.swept * (CELL_MM / 1000.0) ** 2:.1f} m² swept by its own map"
 
-    def block(self, x: float, y: float) -> None:
-        """Something is at (x, y): that cell is blocked, its neighbours no place for the
-        robot's centre."""
+    def block(self, x: float, y: float, also: int = 0) -> None:
+        """Something is at (x, y): that cell is blocked (with the bits ``also``: DROP), its
+        neighbours no place for the robot's centre."""
         cell = self.cell(x, y)
-        if cell is None or self.cells[cell] & BLOCKED:
+        if cell is None:
             return
-        self.cells[cell] |= BLOCKED
+        if self.cells[cell] & BLOCKED:
+            self.cells[cell] |= also
+            return
+        self.cells[cell] |= BLOCKED | also
         near = self.near
         for d in (-_SIDE - 1, -_SIDE, -_SIDE + 1, -1, 0, 1, _SIDE - 1, _SIDE, _SIDE + 1):
             if near[cell + d] < 255:
                 near[cell + d] += 1
 
-    def block_ahead(self, x: float, y: float, theta: float, reach: float, spread: float) -> None:
+    def block_ahead(
+        self, x: float, y: float, theta: float, reach: float, spread: float, also: int = 0
+    ) -> None:
         """Block the points ``reach`` mm from (x, y) at ``theta`` and ``theta +- spread``."""
         for a in (theta - spread, theta, theta + spread):
-            self.block(x + reach * math.cos(a), y + reach * math.sin(a))
+            self.block(x + reach * math.cos(a), y + reach * math.sin(a), also)
 
     def free(self, cell: Cell) -> bool:
         """May the robot's centre be in this cell (nothing known blocks it)?"""
@@ -355,7 +362,7 @@ class Bearings:
         if seen:
             cell = fmap.cell(x, y)
             if cell is not None:
-                fmap.beams.add(cell)
+                fmap.beams[cell] = pose.path_mm
         signals = frame.light_bump_signals
         for angle, signal in zip(_RAY_ANGLES, signals, strict=True):
             if signal >= _RAY_MARK:
@@ -369,7 +376,7 @@ class Bearings:
             )
             fmap.block_ahead(x, y, theta + spread, _RADIUS_MM + 30.0, 0.35)
         if frame.any_cliff:
-            fmap.block_ahead(x, y, theta, _RADIUS_MM + 60.0, 0.5)
+            fmap.block_ahead(x, y, theta, _RADIUS_MM + 60.0, 0.5, DROP)
         if frame.virtual_wall:
             fmap.block_ahead(x, y, theta, _RADIUS_MM + 80.0, 0.5)
 

@@ -6,20 +6,30 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import Any
 
 import py_trees
 import pytest
 from py_trees.common import Status
 
 from roomba_bt.behaviours import coverage_map, driving
-from roomba_bt.behaviours.coverage_map import Cover
-from roomba_bt.behaviours.homing import HomeByMap
+from roomba_bt.behaviours.coverage_map import (
+    DROP,
+    SWEPT,
+    VISITED,
+    Bearings,
+    Cell,
+    Cover,
+    FloorMap,
+)
+from roomba_bt.behaviours.homing import ACROSS_PLANS, HomeByMap
 from roomba_bt.evaluate.episode import EpisodeResult
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import IR_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.odometry import MM_PER_COUNT
 from roomba_bt.oi.stream import SLOT_SECONDS
+from roomba_bt.robot.interface import Odometry
 from roomba_bt.robot.testing import StubRobot
 
 Sweep = Callable[..., EpisodeResult]
@@ -66,10 +76,13 @@ def test_the_way_home_with_the_encoders_error_still_ends(sweep: Sweep) -> None:
     assert math.dist(result.end[:2], (0.6, 0.0)) < 0.7  # 0.9 m when cover's minute ends
 
 
-def _frame(robot: StubRobot, counts: int, ir: int = 0) -> None:
-    """Both encoders at ``counts`` (straight ahead); ``ir`` on the omni receiver."""
+def _frame(
+    robot: StubRobot, counts: int, ir: int = 0, cliff: bool = False, mode: OIMode = OIMode.SAFE
+) -> None:
+    """Both encoders at ``counts`` (straight ahead); ``ir`` on the omni receiver; ``cliff``
+    on the front-left cliff sensor."""
     values = dict.fromkeys((*driving.BLOCKED_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS, *IR_PACKETS), 0)
-    values.update({43: counts % 65536, 44: counts % 65536, 35: int(OIMode.SAFE), 17: ir})
+    values.update({43: counts % 65536, 44: counts % 65536, 35: int(mode), 17: ir, 10: int(cliff)})
     robot.set_frame(values)
 
 
@@ -274,3 +287,113 @@ def test_the_way_home_gives_a_held_leg_up_as_cover_gives_up_a_held_line(
     cleaning = _held_until(cover, wheels, lambda: getattr(cover, "_why", None) == "stalled")
     for after in (homing, cleaning):
         assert abs(after - driving.STALL_S) <= 2 * SLOT_SECONDS, (homing, cleaning)
+
+
+def _cell(fmap: FloorMap, x: float, y: float) -> Cell:
+    cell = fmap.cell(x, y)
+    assert cell is not None
+    return cell
+
+
+def _strip_map(
+    beams: dict[tuple[float, float], float], across_at: float | None = None, also: int = 0
+) -> FloorMap:
+    """``cover``'s map as a run leaves it on the blackboard, the robot at its origin facing
+    +x: a strip 0.3 m wide swept from x -2 m to +2 m; the beams seen at these points (mm),
+    each with the path (mm) driven when last seen there; and at x ``across_at`` a line of
+    blocked cells across the strip (with the bits ``also``: DROP, a drop's)."""
+    fmap = FloorMap()
+    for x in range(-2000, 2000, 100):
+        for y in (-100, 0, 100):
+            fmap.cells[_cell(fmap, x + 50.0, y + 50.0)] |= SWEPT | VISITED
+    for (x, y), path in beams.items():
+        fmap.beams[_cell(fmap, x, y)] = path
+    if across_at is not None:
+        for y in (-100, 0, 100):
+            fmap.block(across_at + 50.0, y + 50.0, also)
+    py_trees.blackboard.Blackboard.storage[coverage_map.MAP_KEY] = Bearings(fmap, Odometry())
+    return fmap
+
+
+def _plan_once(
+    make: Make, robot: StubRobot, beams: dict[tuple[float, float], float], **across: Any
+) -> tuple[HomeByMap, FloorMap]:
+    """A ``home_by_map`` set up (which forgets any earlier map), then :func:`_strip_map`'s
+    map (``across``: its line of blocked cells), then one tick."""
+    home = make(HomeByMap)
+    assert isinstance(home, HomeByMap)
+    fmap = _strip_map(beams, **across)
+    _frame(robot, 0)
+    home.tick_once()
+    return home, fmap
+
+
+def _goal(home: HomeByMap) -> Cell:
+    """The cell its plan ends in (the last corner, or the leg on now when it is the last)."""
+    return home._corners[-1] if home._corners else home._cell
+
+
+def test_the_way_home_leads_to_the_beams_seen_last_not_the_nearest(
+    make: Make, robot: StubRobot
+) -> None:
+    """With the encoders' error a beam cell is where the beams were by the pose of when it
+    was seen: one seen early in the run is metres off by now (the apartment put such cells
+    over the stairs and in the bedroom, 1.5 % error). The way home leads to those seen last
+    (within RECENT_BEAMS_MM of path of the last sighting), here 1.55 m ahead, not to the
+    nearest, 0.45 m behind but seen 19 m of path before."""
+    home, fmap = _plan_once(make, robot, {(-450.0, 50.0): 1000.0, (1550.0, 50.0): 20000.0})
+    assert home.status is Status.RUNNING
+    assert _goal(home) == _cell(fmap, 1550.0, 50.0)
+    assert abs(driving.wrap(home._heading)) < 0.1  # ahead, not back
+
+
+def test_a_map_that_closes_the_robot_in_is_crossed_but_never_a_drop(
+    make: Make, robot: StubRobot
+) -> None:
+    """With the encoders' error a wall met late in the run is drawn across floor swept early
+    (seeds of the apartment found the robot's part of the map closed all round, and the way
+    home failed at once: "no way", the search from the bedroom or the kitchen). With no path
+    that keeps off blocked cells it plans across them; never across a drop's cells (the
+    stairs: each meeting stops the robot in Safe mode)."""
+    beam = {(1550.0, 50.0): 5000.0}
+    home, fmap = _plan_once(make, robot, beam, across_at=500.0)
+    assert home.status is Status.RUNNING
+    assert _goal(home) == _cell(fmap, 1550.0, 50.0)
+    home, fmap = _plan_once(make, robot, beam, across_at=500.0, also=DROP)
+    assert home.status is Status.FAILURE
+    assert home.feedback_message == "no way on the map to where the dock's beams were seen"
+
+
+def test_plans_across_the_map_are_given_up_after_a_few_in_a_run(
+    make: Make, robot: StubRobot
+) -> None:
+    """Where the map has drifted past use, plans across it met real walls over and over for
+    minutes (two seeds of the apartment lost their dock so): after ACROSS_PLANS in a run,
+    counted over the retries that start it again, it ends and the search starts there."""
+    home, _ = _plan_once(make, robot, {(1550.0, 50.0): 5000.0}, across_at=500.0)
+    for _ in range(ACROSS_PLANS - 1):
+        assert home.status is Status.RUNNING
+        home.stop(Status.FAILURE)  # as clean.yaml's retry after a cliff: started again
+        home.tick_once()
+    assert home.status is Status.RUNNING
+    home.stop(Status.FAILURE)
+    home.tick_once()
+    assert home.status is Status.SUCCESS
+    assert "led nowhere" in home.feedback_message
+
+
+def test_a_cliff_on_a_leg_keeps_the_next_plans_off_it(make: Make, robot: StubRobot) -> None:
+    """The firmware stops the robot at a cliff (Safe to Passive) and the leaf fails at once;
+    the leg's cell is avoided from then on, and the drop is on the map as one: the retries
+    of the apartment's seed 19 drove the same leg to the stairs' edge five times in 6 s."""
+    home, fmap = _plan_once(make, robot, {(1550.0, 50.0): 5000.0})
+    leg = home._cell
+    for counts in range(20, 200, 20):  # along the leg
+        _frame(robot, counts)
+        home.tick_once()
+    assert home.status is Status.RUNNING and home._phase == "drive"
+    _frame(robot, 200, cliff=True, mode=OIMode.PASSIVE)
+    home.tick_once()
+    assert home.status is Status.FAILURE
+    assert leg in fmap.avoid
+    assert any(bits & DROP for bits in fmap.cells)
