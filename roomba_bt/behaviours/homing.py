@@ -103,9 +103,11 @@ _ACROSS_NEAR = 3
 )  # fmt: skip
 class HomeByMap(Action):
     """Drive back along ``cover``'s map (its own breadth-first search, around what it
-    mapped) to the nearest place a receiver saw a dock beam while it cleaned: SUCCESS when
-    a dock beam is seen, the path's end is reached, or none was seen while it cleaned (or
-    no ``cover`` ran in this run: nothing to go by); FAILURE with no way there, after
+    mapped; across blocked cells, never a drop, where none keeps off them) to the nearest of
+    the places a receiver saw a dock beam last while it cleaned: SUCCESS when a dock beam is
+    seen, the path's end is reached, after a few plans across the map led nowhere, or none
+    was seen while it cleaned (or no ``cover`` ran in this run: nothing to go by); FAILURE
+    with no way there, after
     ``timeout``, on a wheel drop, or when the
     robot leaves Safe/Full (started again, it plans again from where it is). Drive Direct
     (145)."""
