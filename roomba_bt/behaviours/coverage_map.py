@@ -90,7 +90,7 @@ _HALF_SIDE = _SIDE // 2
 #: other blocked cell and ``home_by_map``'s path across blocked cells never crosses)
 SWEPT, BLOCKED, VISITED, TRIED, DROP = 1, 2, 4, 8, 16
 #: a cell's four neighbours, as steps in the cell index
-_STEPS = (-_SIDE, _SIDE, -1, 1)
+NEIGHBOUR_STEPS = (-_SIDE, _SIDE, -1, 1)
 #: the strip the brushes clean, as points across the body (x forward, y left; mm): the main
 #: brush 90 mm to the left, the side brush 185 mm to the right (kept a little inside both)
 _STRIP = (*((0.0, y) for y in (80.0, 40.0, 0.0, -40.0, -80.0)), (40.0, -120.0), (50.0, -160.0))
@@ -201,7 +201,7 @@ class FloorMap:
         cells, open_floor = self.cells, self.open_floor
 
         def beside_open(cell: Cell) -> bool:
-            return not cells[cell] & TRIED and any(open_floor(cell + d) for d in _STEPS)
+            return not cells[cell] & TRIED and any(open_floor(cell + d) for d in NEIGHBOUR_STEPS)
 
         return self.search(start, beside_open, through_near)
 
@@ -231,7 +231,7 @@ class FloorMap:
                     path.append(parent[path[-1]])
                 path.reverse()
                 return path
-            for d in _STEPS:
+            for d in NEIGHBOUR_STEPS:
                 nxt = cell + d
                 bits = cells[nxt]
                 passable = bits & VISITED or (bits & SWEPT and (through_near or not near[nxt]))

@@ -50,10 +50,10 @@ from py_trees.common import Status
 
 from roomba_bt.behaviours import driving
 from roomba_bt.behaviours.coverage_map import (
-    _STEPS,
     BLOCKED,
     DROP,
     MAP_KEY,
+    NEIGHBOUR_STEPS,
     SWEPT,
     VISITED,
     Bearings,
@@ -315,7 +315,7 @@ def path_across(fmap: FloorMap, start: Cell, goal: set[Cell]) -> list[Cell] | No
                 path.append(parent[path[-1]])
             path.reverse()
             return path
-        for step in _STEPS:
+        for step in NEIGHBOUR_STEPS:
             nxt = cell + step
             bits = cells[nxt]
             if not bits & (SWEPT | VISITED) or bits & DROP or nxt in avoid:
