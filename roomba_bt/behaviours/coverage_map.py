@@ -346,9 +346,13 @@ class Bearings:
 
     def __repr__(self) -> str:  # the monitor's blackboard shows it
         pose = self.pose
+        # the heading as the odometry's panel gives it, -179..180 (it said "900 deg": the
+        # turns summed), never "-0"
+        heading = round(math.degrees(pose.theta_rad)) % 360
+        heading = heading - 360 if heading > 180 else heading
         return (
             f"<cover's map: {self.map.swept} cells swept, at x {pose.x_mm:.0f} mm "
-            f"y {pose.y_mm:.0f} mm, {math.degrees(pose.theta_rad):.0f} deg>"
+            f"y {pose.y_mm:.0f} mm, {heading} deg>"
         )
 
     def observe(self, frame: SensorFrame) -> None:

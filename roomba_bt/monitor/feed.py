@@ -34,6 +34,7 @@ import time
 from collections import deque
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from enum import Enum
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 import py_trees
@@ -65,6 +66,29 @@ UNNAMED = frozenset(WORDS) | {"root"}
 
 _STATUS = operator.attrgetter("status")
 _monotonic = time.monotonic
+_perf_counter = time.perf_counter
+#: blackboard values that cannot change in place: kept as they are
+_PLAIN = frozenset({str, int, float, bool, type(None), bytes, complex})
+#: the longest text a blackboard value is kept (and shown) as
+TEXT_LIMIT = 200
+#: a blackboard value whose text takes longer is shown as it is now, marked so (see
+#: :meth:`RunFeed._text_at_tick`)
+TEXT_BUDGET_S = 0.0002
+
+
+#: a board's entry naming its keys kept as their text at the tick (a tuple of them): plain
+#: strings and a tuple, which the cyclic collector stops tracking, as it does a record (a str
+#: subclass marking them would be tracked: one more tracked object a tick)
+TEXT_KEYS = "\x00kept as text"
+
+
+def _fixed(value: object) -> bool:
+    """An enum member, or a tuple of plain values (``/roomba/docking/run``): it cannot change."""
+    if isinstance(value, Enum):
+        return True
+    return isinstance(value, tuple) and all(type(item) in _PLAIN for item in value)
+
+
 _TUPLE_NEW: Any = tuple.__new__
 
 
@@ -272,6 +296,8 @@ class RunFeed:
         self.boards: dict[int, Mapping[str, Any]] = {0: self._blackboard}
         self._board = 0
         self._boards_limit = 64
+        #: keys whose value's text was too slow to take every tick: kept as the object
+        self.live_keys: set[str] = set()
         self._layout: FrameLayout | None = None
         self._mode: object = None
         self._refused_seen = 0
@@ -358,14 +384,44 @@ class RunFeed:
 
     def _watch_board(self) -> None:
         """A new version of the blackboard when a key changed (the snapshot's mirror and the
-        keys' declared types are not keys)."""
+        keys' declared types are not keys).
+
+        A value that may change in place (the cover's map: one object, changed every tick)
+        is kept as its text at this tick (its key listed under :data:`TEXT_KEYS`): kept as
+        the object, a rewound tick showed its text of the moment the page asked (the whole
+        run's map at tick 100), and no new version was made when it changed. Numbers,
+        strings, enums and tuples of them are kept as they are (they cannot change)."""
         storage = py_trees.blackboard.Blackboard.storage
         if len(storage) > 1 or SNAPSHOT_KEY not in storage:
             board = storage.copy()  # two C calls: a third of a comprehension's time
             board.pop(SNAPSHOT_KEY, None)
             board.pop(KEY_TYPES_KEY, None)
+            texts: tuple[str, ...] = ()
+            for key, value in board.items():
+                if type(value) not in _PLAIN and not _fixed(value):
+                    text = self._text_at_tick(key, value)
+                    if text is not None:
+                        board[key] = text
+                        texts += (key,)
+            if texts:
+                board[TEXT_KEYS] = texts
             if board != self._blackboard:
                 self._new_board(board)
+
+    def _text_at_tick(self, key: str, value: Any) -> str | None:
+        """``value``'s text now, or None (kept as the object) for a key whose text took over
+        :data:`TEXT_BUDGET_S` once (the page marks it as current, not at the tick shown):
+        a plugin's object with a slow ``repr`` does not slow every tick."""
+        if key in self.live_keys:
+            return None
+        began = _perf_counter()
+        try:
+            text = repr(value)
+        except Exception as exc:  # a plugin's repr: never the tick's end
+            text = f"<{type(value).__name__}: its repr failed: {exc!r}>"
+        if _perf_counter() - began > TEXT_BUDGET_S:
+            self.live_keys.add(key)
+        return text if len(text) <= TEXT_LIMIT else text[: TEXT_LIMIT - 3] + "..."
 
     def _new_board(self, board: Mapping[str, Any]) -> None:
         self._blackboard = board

@@ -6,10 +6,10 @@ safe. Lengths are millimetres, angles radians, times seconds of mission time.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from typing import Any
 
-from roomba_bt.monitor.feed import RunFeed, TickRecord
+from roomba_bt.monitor.feed import TEXT_KEYS, TEXT_LIMIT, RunFeed, TickRecord
 from roomba_bt.oi.bits import ChargingState
 from roomba_bt.oi.frames import (
     BATTERY_PACKETS,
@@ -112,15 +112,35 @@ def _rates(record: TickRecord, earlier: list[TickRecord]) -> tuple[float, float]
     )
 
 
-def _value(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 200 else text[:197] + "..."
+def blackboard_view(
+    board: Mapping[str, Any], rewound: bool, live_keys: Collection[str] = ()
+) -> dict[str, str]:
+    """The blackboard as shown, key by key: a value that changes in place as its text at the
+    tick (the feed kept it so: its :data:`TEXT_KEYS` entry, left out here), any other as its
+    repr. A key in ``live_keys`` (its text too slow to take every tick: kept as the object)
+    shows the object as it is now, which a rewound tick says."""
+    texts = board.get(TEXT_KEYS, ())
+    shown: dict[str, str] = {}
+    for key, value in sorted(board.items()):
+        if key == TEXT_KEYS:
+            continue
+        if key in texts:
+            shown[key] = value
+            continue
+        text = repr(value)
+        text = text if len(text) <= TEXT_LIMIT else text[: TEXT_LIMIT - 3] + "..."
+        shown[key] = (
+            f"{text} (its value now, not at this tick)" if rewound and key in live_keys else text
+        )
+    return shown
 
 
 def state_view(feed: RunFeed, record: TickRecord, earlier: list[TickRecord]) -> dict[str, Any]:
     """One tick: statuses, failure reasons, robot, poses, blackboard."""
     snapshot = feed.snapshot(record)
     board = feed.blackboard(record)
+    newest = feed.latest()
+    rewound = newest is not None and newest.seq != record.seq
     out: dict[str, Any] = {
         "seq": record.seq,
         "tick": record.tick,
@@ -131,7 +151,7 @@ def state_view(feed: RunFeed, record: TickRecord, earlier: list[TickRecord]) -> 
         "reasons": {str(k): v for k, v in record.reasons.items()},
         "ticked": record.ticked,
         "truth": list(record.truth) if record.truth is not None else None,
-        "blackboard": {k: _value(v) for k, v in sorted(board.items())},
+        "blackboard": blackboard_view(board, rewound, feed.live_keys),
     }
     if snapshot is not None:
         robot = out["robot"] = robot_view(snapshot, _rates(record, earlier))

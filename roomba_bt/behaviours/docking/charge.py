@@ -13,6 +13,7 @@ from roomba_bt.behaviours.docking.common import (
     RUN_KEY,
     RUNNING,
     STAGE_KEY,
+    DockingRun,
     current_stage,
     note_stage,
 )
@@ -81,7 +82,7 @@ class DockTimeLimit(Action):
         self._t0 = self.snapshot.time
         storage = py_trees.blackboard.Blackboard.storage
         storage.pop(STAGE_KEY, None)  # a new docking run
-        storage[RUN_KEY] = (id(self), self._t0)
+        storage[RUN_KEY] = DockingRun(id(self), self._t0, self.name)
         self._limit = self.number("limit") - 1e-9  # read once a start
 
     def tick_direct(self, started: bool = False) -> None:

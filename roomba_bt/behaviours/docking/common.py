@@ -7,7 +7,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from enum import Enum
 from operator import itemgetter
-from typing import TypeVar
+from typing import NamedTuple, TypeVar
 
 import py_trees
 from py_trees.common import Status
@@ -43,9 +43,23 @@ OK, RUNNING, FAILED = Status.SUCCESS, Status.RUNNING, Status.FAILURE
 
 #: Where the stages note which one is running, for ``dock_time_limit``'s message.
 STAGE_KEY = "/roomba/docking/stage"
-#: When the current docking run began (``dock_time_limit`` notes it): the approach counts
-#: its attempts per run.
+#: When the current docking run began (``dock_time_limit`` notes it, a :class:`DockingRun`):
+#: the approach counts its attempts per run.
 RUN_KEY = "/roomba/docking/run"
+
+
+class DockingRun(NamedTuple):
+    """One docking run: which ``dock_time_limit`` began it, and when. Compared whole (two
+    limits in one tree begin two runs); shown on the monitor's blackboard by its start and
+    limit, not by the node's ``id()`` (a number that told the reader nothing)."""
+
+    owner: int  # id() of the dock_time_limit node
+    started: float  # mission time, s
+    limit: str = ""  # the node's name: dock_time_limit(300 s)
+
+    def __repr__(self) -> str:
+        by = f" ({self.limit})" if self.limit else ""
+        return f"<docking run since t={self.started:.2f} s{by}>"
 
 
 def note_stage(stage: str) -> None:

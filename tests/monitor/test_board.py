@@ -1,0 +1,108 @@
+"""The monitor's blackboard at a rewound tick: a value that changes in place is shown as it was
+at that tick (the cover's map showed the whole run's map at tick 100), and the values the
+missions keep there read as something (a heading of 900 deg, a Python ``id()``)."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import py_trees
+import pytest
+from py_trees.common import Status
+
+from roomba_bt.behaviours.coverage_map import Bearings, FloorMap
+from roomba_bt.behaviours.docking.common import DockingRun
+from roomba_bt.monitor.feed import RunFeed
+from roomba_bt.monitor.views import state_view
+from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.robot.interface import Odometry
+from roomba_bt.runtime.stack import RunStack, TreeMission
+from roomba_bt.sim import SimLink, Simulator, load_world
+
+pytestmark = pytest.mark.usefixtures("clean_blackboard")
+
+
+class Counts:
+    """A mutable blackboard value, as the cover's map is: one object, changed every tick."""
+
+    def __init__(self) -> None:
+        self.ticks = 0
+
+    def __repr__(self) -> str:
+        return f"<counted {self.ticks} ticks>"
+
+
+class SlowCounts(Counts):
+    """One whose text takes longer than the feed takes every tick."""
+
+    def __repr__(self) -> str:
+        time.sleep(0.002)
+        return super().__repr__()
+
+
+class Counter(py_trees.behaviour.Behaviour):
+    """Counts its ticks in the object under ``key`` (the same object every tick)."""
+
+    def __init__(self, key: str, value: Counts) -> None:
+        super().__init__(name="counter")
+        self.key = key
+        py_trees.blackboard.Blackboard.storage[key] = value
+
+    def update(self) -> Status:
+        py_trees.blackboard.Blackboard.storage[self.key].ticks += 1
+        return Status.RUNNING
+
+
+def _run(*counters: Counter) -> RunFeed:
+    root = py_trees.composites.Parallel(
+        "counting", policy=py_trees.common.ParallelPolicy.SuccessOnAll(), children=list(counters)
+    )
+    feed = RunFeed(history=1000, mission_name="counting")
+    feed.set_tree(root)
+    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
+    stack = RunStack(TreeMission(root, "counting"), link, profile=CREATE2, timeout_s=1.0,
+                     observer=feed.observe)  # fmt: skip
+    try:
+        stack.run()
+    finally:
+        stack.close()
+    return feed
+
+
+def test_a_rewound_tick_shows_a_changing_object_as_it_was_at_that_tick() -> None:
+    feed = _run(Counter("/counts", Counts()))
+    records = feed.since(0)[0]
+    assert len(records) > 50
+    shown = [state_view(feed, r, [])["blackboard"]["/counts"] for r in records[10:50:10]]
+    # the count it had then, each different: not the run's last one for all of them
+    assert len(set(shown)) == len(shown), shown
+    assert all(text.startswith("<counted ") for text in shown)
+    last = state_view(feed, records[-1], [])["blackboard"]["/counts"]
+    assert last == repr(py_trees.blackboard.Blackboard.storage["/counts"])
+
+
+def test_a_value_too_slow_to_take_each_tick_says_it_is_the_current_one() -> None:
+    feed = _run(Counter("/slow", SlowCounts()))
+    assert feed.live_keys == {"/slow"}
+    records = feed.since(0)[0]
+    rewound = state_view(feed, records[len(records) // 2], [])["blackboard"]["/slow"]
+    assert rewound.endswith("(its value now, not at this tick)")
+    newest = state_view(feed, records[-1], [])["blackboard"]["/slow"]
+    assert "not at this tick" not in newest
+
+
+def test_the_cover_map_s_heading_is_an_angle_of_a_turn_not_the_turns_summed() -> None:
+    bearings = Bearings(FloorMap(), Odometry(theta_rad=5 * math.pi / 2))  # 900 deg once
+    assert repr(bearings).endswith(", 90 deg>")
+    bearings.pose = Odometry(theta_rad=-0.001)
+    assert repr(bearings).endswith(", 0 deg>")  # not "-0"
+    bearings.pose = Odometry(theta_rad=-3 * math.pi / 4)
+    assert repr(bearings).endswith(", -135 deg>")
+
+
+def test_a_docking_run_reads_as_its_start_not_a_python_id() -> None:
+    run = DockingRun(140000000000, 927.24, "dock_time_limit(300 s)")
+    assert repr(run) == "<docking run since t=927.24 s (dock_time_limit(300 s))>"
+    assert run == DockingRun(140000000000, 927.24, "dock_time_limit(300 s)")
+    assert run != DockingRun(140000000001, 927.24, "dock_time_limit(300 s)")  # another limit
