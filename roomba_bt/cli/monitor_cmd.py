@@ -22,7 +22,7 @@ from typing import Any
 
 from roomba_bt.cli.arguments import add_command, add_param_option, add_permission_options
 from roomba_bt.monitor import INSTALL_HINT, server_available
-from roomba_bt.monitor.address import parse_address
+from roomba_bt.monitor.address import lan_addresses, parse_address
 from roomba_bt.runtime.summary import ExitCode
 
 log = logging.getLogger("roomba_bt.monitor")
@@ -156,8 +156,17 @@ class LiveMonitor:
         another machine (browsers refuse 0.0.0.0), and a run on the virtual clock may be
         over before any page opens."""
         if host in WILDCARD_HOSTS:
-            named = url.replace(f"//{host}:", f"//{socket.gethostname()}:", 1)
-            print(f"monitor: it listens on every address of this machine: {named}", flush=True)
+            bound = f"//[{host}]:" if ":" in host else f"//{host}:"
+            named = url.replace(bound, f"//{socket.gethostname()}:", 1)
+            by_address = [
+                url.replace(bound, f"//[{a}]:" if ":" in a else f"//{a}:", 1)
+                for a in lan_addresses(ipv6=host == "::")
+            ]
+            also = f" or, by address, {' or '.join(by_address)}" if by_address else ""
+            print(
+                f"monitor: it listens on every address of this machine: {named}{also}",
+                flush=True,
+            )
         if getattr(self.args, "fast", False):
             print(
                 "roomba-bt: --fast runs the mission on the virtual clock: it may end before a "
@@ -271,7 +280,7 @@ class LiveMonitor:
             log.info("monitor: key %r does nothing (%s)", key, KEYS_HELP)
             return
         try:
-            self.session.request(action)
+            self.session.request(action, by="the terminal's keys")
         except ValueError as exc:  # ControlRefused: e.g. resume when not paused
             log.info("monitor: key %s (%s) refused: %s", key, action, exc)
 

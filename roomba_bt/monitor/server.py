@@ -23,7 +23,8 @@ Routes (all behind the token when one is set)::
     GET  /ws              WebSocket: {"type": "hello", ...} then {"type": "update", ...}
     GET  /api/state?tick=T  the run at tick T (timeline), with the path up to it
     POST /api/control     {"action": "pause"|"resume"|"step"|"stop"|"break"|"force",
-                           "node": INDEX, "value": ...}  -> 202, or 400/401/403/409
+                           "node": INDEX|NAME|PATH, "value": ...}  -> 202, or 400/401/403/409
+                           (docs/monitor.md, HTTP API)
 
 Safety: on a loopback address no token is needed, and a request whose ``Host`` is not
 127.0.0.1, localhost or [::1] (any port: a tunnel's) is refused (403: another site's name its DNS
@@ -321,11 +322,13 @@ class MonitorServer:
     def _session_view(self) -> dict[str, Any]:
         session = self.session
         if session is None:
-            return {"paused": False, "pause_reason": "", "breakpoints": {}, "forced": {}}
+            return {"paused": False, "pause_reason": "", "paused_tick": None, "breakpoints": {},
+                    "forced": {}}  # fmt: skip
         state = session.state
         return {
             "paused": state.paused,
             "pause_reason": state.pause_reason,
+            "paused_tick": state.paused_tick,
             "breakpoints": {str(k): v for k, v in state.breakpoints.items()},
             "forced": {str(k): v for k, v in state.forced.items()},
         }
@@ -366,13 +369,17 @@ class MonitorServer:
         if not isinstance(body, dict) or not isinstance(body.get("action"), str):
             return _error(400, 'expected a JSON object with "action" (a string)')
         node = body.get("node")
-        if node is not None and (not isinstance(node, int) or isinstance(node, bool)):
-            return _error(400, f"node {node!r}: allowed a node index (a whole number)")
+        if node is not None and (
+            not isinstance(node, int | str) or isinstance(node, bool) or node == ""
+        ):
+            return _error(
+                400, f"node {node!r}: allowed a node's index (a whole number), name or path"
+            )
         value = body.get("value")
         if value is not None and not isinstance(value, str):
             return _error(400, f"value {value!r}: allowed a string")
         try:
-            self.session.request(body["action"], node, value)
+            self.session.request(body["action"], node, value, by=request.remote or None)
         except ControlRefused as exc:
             return _error(409, str(exc))
         except ValueError as exc:

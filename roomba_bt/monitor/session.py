@@ -46,6 +46,8 @@ log = logging.getLogger(__name__)
 
 #: the resume's reason that makes it a step (the record's note says it: a replay steps too)
 STEP = "one step"
+#: the pause's reason after a step's tick
+STEPPED = "stepped one tick"
 FORCEABLE = {"success": Status.SUCCESS, "failure": Status.FAILURE}
 #: an OI robot's sleep after this long in Passive (keep-awake's BRC pulses prevent it)
 ROBOT_SLEEPS_S = 300.0
@@ -64,6 +66,9 @@ class Request:
     node: int | None = None
     value: str | None = None
     payload: Any = None
+    #: who asked: the client's address (``192.0.2.7``) or ``the terminal's keys``; the event
+    #: log says it beside the act (two pages open: whose pause was it?)
+    by: str | None = None
 
 
 @dataclass
@@ -72,6 +77,8 @@ class SessionState:
 
     paused: bool = False
     pause_reason: str = ""
+    #: the stream's tick the pause began at (the page says for how long); None: not paused
+    paused_tick: int | None = None
     breakpoints: dict[int, str] = field(default_factory=dict)
     forced: dict[int, str] = field(default_factory=dict)
     watching: str | None = None  # the mission file under --watch
@@ -133,40 +140,27 @@ class MonitorSession:
         #: each forced node's entry in the summary's ``forced``, until it is released
         self._forcing: dict[int, int] = {}
         self.listeners: list[Callable[[str], None]] = []  # told of pauses (the terminal)
+        #: who asked for the request being applied (:attr:`Request.by`), said by :meth:`_said`
+        self._asker: str | None = None
+        #: the pauses' stream time before the current one's (the summary's ``paused``)
+        self._paused_before_s = 0.0
 
     # ---------------------------------------------------------------- any thread
-    def request(self, action: str, node: int | None = None, value: str | None = None) -> None:
+    def request(
+        self,
+        action: str,
+        node: int | str | None = None,
+        value: str | None = None,
+        by: str | None = None,
+    ) -> None:
         """Queue an operator request after checking it; raises :class:`ControlRefused` or
-        ValueError (bad request) without changing anything."""
+        ValueError (bad request) without changing anything. ``node``: its index, or its name
+        or path (:func:`find_node`); ``by``: who asked, for the event log."""
         infos = self.feed.infos
-        if action in ("pause", "resume", "step", "stop"):
-            if action == "pause" and self.state.paused:
-                raise ControlRefused("the run is already paused")
-            if action == "resume" and not self.state.paused:
-                raise ControlRefused("the run is not paused")
-            if action == "step" and not self.state.paused:
-                raise ControlRefused("step needs a paused run: pause first")
-        elif action in ("break", "force"):
-            if node is None or not 0 <= node < len(infos):
-                raise ValueError(f"node {node!r}: allowed 0..{len(infos) - 1}")
-            if action == "break":
-                if value not in (*BREAK_ON, "none"):
-                    raise ValueError(f"break on {value!r}: allowed {', '.join(BREAK_ON)}, none")
-            else:
-                if value not in (*FORCEABLE, "none"):
-                    raise ValueError(f"force to {value!r}: allowed success, failure, none")
-                if not infos[node].condition:
-                    raise ControlRefused(f"{infos[node].name} is not a condition: only "
-                                         "conditions can be forced")  # fmt: skip
-                if value == "none" and node not in self.state.forced:
-                    raise ControlRefused(f"{infos[node].name} is not forced: nothing to release")
-                if not self.allow_force:
-                    raise ControlRefused(
-                        "forcing a condition on a real robot is off; run with --monitor-force"
-                    )
-        else:
-            raise ValueError(f"action {action!r}: allowed pause, resume, step, stop, break, force")
-        self._requests.put(Request(action, node, value))
+        if isinstance(node, str):
+            node = find_node(infos, node)
+        _check_request(self.state, infos, self.allow_force, action, node, value)
+        self._requests.put(Request(action, node, value, by=by))
         self._wake.set()
 
     def reload(self, mission: Any) -> None:
@@ -190,12 +184,13 @@ class MonitorSession:
             return False
         if self._steps_left is not None and not self.state.paused:
             if self._steps_left == 0:
-                self._pause(runner, "stepped one tick")
+                self._pause(runner, STEPPED)
             else:
                 self._steps_left -= 1
                 return True
         if self.state.paused:
             self.feed.observe(runner, ticked=False)
+            self._tally_pause(runner)
             if self._sleep_warn_tick is not None and runner.snapshot.tick >= self._sleep_warn_tick:
                 self._warn_of_sleep(runner)
             if self.paced:
@@ -203,6 +198,15 @@ class MonitorSession:
                 self._wake.clear()
             return False
         return True
+
+    def _tally_pause(self, runner: MissionRunner) -> None:
+        """The summary's ``paused``: the pauses' stream time so far, this one's included (a
+        run stopped while paused ends here), in the stream's ticks: what a replay counts too."""
+        began = self.state.paused_tick
+        if began is None or not runner.has_snapshot:
+            return
+        this = max(0, runner.snapshot.tick - began) * SLOT_SECONDS
+        runner.summary.paused_s = self._paused_before_s + this
 
     def after_tick(self, runner: MissionRunner) -> None:
         if self._steps_left == 0:  # a step's tick: its pause comes with the next frame,
@@ -216,7 +220,7 @@ class MonitorSession:
         breakpoint on the last tick or by a step that was that tick, so the operator sees the
         end before the run's own; the resume (or a stop) then ends the run."""
         if self.state.forced and runner.mission.root.status is Status.SUCCESS:
-            self._forced_success(runner)
+            _forced_success(runner, self.feed, self.state.forced)
         held = self.state.paused or self._steps_left == 0
         if held and self._held_end is None:
             ended = runner.mission.root.status.value
@@ -226,47 +230,43 @@ class MonitorSession:
             )
         return held
 
-    def _forced_success(self, runner: MissionRunner) -> None:
-        """A mission that ends in SUCCESS with a condition forced (still returning what the
-        operator chose): its summary says so, as a failure's reason does ("battery(below=15%):
-        forced to SUCCESS by the operator"); it read as the mission's own success."""
-        nodes, infos = self.feed.nodes, self.feed.infos
-        forced = [
-            f"{infos[i].name}: forced to {FORCEABLE[v].value} by the operator"
-            for i, v in sorted(self.state.forced.items())
-            if nodes[i].status is FORCEABLE[v]
-        ]
-        if forced:
-            runner.summary.reason = "; ".join(forced)
-
     def _apply(self, runner: MissionRunner) -> None:
         while True:
             try:
                 req = self._requests.get_nowait()
             except queue.Empty:
                 return
-            state = self.state
-            if req.action == "pause" and not state.paused:
-                self._pause(runner, "paused by the operator")
-            elif req.action == "resume" and state.paused:
-                self._resume(runner, "resumed by the operator")
-            elif req.action == "step" and state.paused:
-                self._step(runner)
-            elif req.action == "stop":
-                self._stop = "stopped by the operator"
-                self._said(runner, "control", "stop: the run ends (as on Ctrl-C)")
-            elif req.action == "break" and req.node is not None:
-                name = self.feed.infos[req.node].name
-                if req.value == "none":
-                    state.breakpoints.pop(req.node, None)
-                    self._said(runner, "breakpoint", f"breakpoint on {name} cleared")
-                else:
-                    state.breakpoints[req.node] = str(req.value)
-                    self._said(runner, "breakpoint", f"break when {name} {_on(req.value)}")
-            elif req.action == "force" and req.node is not None:
-                self._force(runner, req.node, str(req.value))
-            elif req.action == "reload":
-                self._pending_mission = req.payload
+            self._asker = req.by
+            try:
+                self._apply_one(runner, req)
+            finally:
+                self._asker = None
+
+    def _apply_one(self, runner: MissionRunner, req: Request) -> None:
+        """One request, in the tick thread (a second pause queued behind the first, say,
+        does nothing: the state is checked again here)."""
+        state = self.state
+        if req.action == "pause" and not state.paused:
+            self._pause(runner, "paused by the operator")
+        elif req.action == "resume" and state.paused:
+            self._resume(runner, "resumed by the operator")
+        elif req.action == "step" and state.paused:
+            self._step(runner)
+        elif req.action == "stop":
+            self._stop = "stopped by the operator"
+            self._said(runner, "control", "stop: the run ends (as on Ctrl-C)")
+        elif req.action == "break" and req.node is not None:
+            name = self.feed.infos[req.node].name
+            if req.value == "none":
+                state.breakpoints.pop(req.node, None)
+                self._said(runner, "breakpoint", f"breakpoint on {name} cleared")
+            else:
+                state.breakpoints[req.node] = str(req.value)
+                self._said(runner, "breakpoint", f"break when {name} {_on(req.value)}")
+        elif req.action == "force" and req.node is not None:
+            self._force(runner, req.node, str(req.value))
+        elif req.action == "reload":
+            self._pending_mission = req.payload
 
     def _pause(
         self, runner: MissionRunner, why: str, at: str = "before", *, noted: bool = True
@@ -286,6 +286,13 @@ class MonitorSession:
         connection.send_many(commands)
         runner.count_written()
         self.state.paused, self.state.pause_reason = True, why
+        self.state.paused_tick = runner.snapshot.tick if runner.has_snapshot else 0
+        if noted:  # a reload's pause lasts no frame: not one the summary counts
+            summary = runner.summary
+            if why == STEPPED:
+                summary.steps += 1
+            else:
+                summary.pauses += 1
         runner.clock_held = True  # mission time stands still until the resume
         self._sleep_warn_tick = (
             runner.snapshot.tick + round(SLEEP_WARNING_S / SLOT_SECONDS)
@@ -327,6 +334,9 @@ class MonitorSession:
 
     def _resume(self, runner: MissionRunner, why: str) -> None:
         _note(runner, {"resume": why, "at": "before"})
+        self._tally_pause(runner)
+        self._paused_before_s = runner.summary.paused_s
+        self.state.paused_tick = None
         if self._held_end is not None:  # nothing to go on with: no mode, no wheels again
             self.state.paused, self.state.pause_reason = False, ""
             self._steps_left = None
@@ -369,6 +379,8 @@ class MonitorSession:
         log`` showed no pause. At the frame it was done in (as the log and the record say):
         a request applied before this frame's tick is not the previous tick's (the feed's
         newest record), which put it 15 ms earlier on the page."""
+        if self._asker is not None:
+            text += f"; from {self._asker}"
         if runner.has_snapshot:
             snapshot = runner.snapshot
             self.feed.event(kind, text, snapshot.time, snapshot.tick)
@@ -456,6 +468,8 @@ class MonitorSession:
         self.feed.set_tree(mission.root)
         self._said(runner, "reload", f"reloaded {mission.name}: the new tree starts from its root")
         self.state.paused = was_paused
+        if not was_paused:
+            self.state.paused_tick = None
         runner.clock_held = was_paused
         self._skip_tick = True
         # the new tree sets its own modes, from Passive: now, or when a paused run resumes
@@ -473,6 +487,90 @@ class MonitorSession:
                 "to use it"
             )
         return None
+
+
+def _forced_success(runner: MissionRunner, feed: RunFeed, forced_nodes: dict[int, str]) -> None:
+    """A mission that ends in SUCCESS with a condition forced (still returning what the
+    operator chose): its summary says so, as a failure's reason does ("battery(below=15%):
+    forced to SUCCESS by the operator"); it read as the mission's own success."""
+    nodes, infos = feed.nodes, feed.infos
+    forced = [
+        f"{infos[i].name}: forced to {FORCEABLE[v].value} by the operator"
+        for i, v in sorted(forced_nodes.items())
+        if nodes[i].status is FORCEABLE[v]
+    ]
+    if forced:
+        runner.summary.reason = "; ".join(forced)
+
+
+def _check_request(
+    state: SessionState,
+    infos: list[Any],
+    allow_force: bool,
+    action: str,
+    node: int | None,
+    value: str | None,
+) -> None:
+    """:meth:`MonitorSession.request`'s check: :class:`ControlRefused` for a request the
+    run's state refuses, ValueError for a bad one; nothing when it may be queued."""
+    if action in ("pause", "resume", "step", "stop"):
+        if action == "pause" and state.paused:
+            raise ControlRefused("the run is already paused")
+        if action == "resume" and not state.paused:
+            raise ControlRefused("the run is not paused")
+        if action == "step" and not state.paused:
+            raise ControlRefused("step needs a paused run: pause first")
+    elif action in ("break", "force"):
+        if node is None or not 0 <= node < len(infos):
+            raise ValueError(f"node {node!r}: allowed 0..{len(infos) - 1}")
+        if action == "break":
+            if value not in (*BREAK_ON, "none"):
+                raise ValueError(f"break on {value!r}: allowed {', '.join(BREAK_ON)}, none")
+        else:
+            if value not in (*FORCEABLE, "none"):
+                raise ValueError(f"force to {value!r}: allowed success, failure, none")
+            if not infos[node].condition:
+                raise ControlRefused(f"{infos[node].name} is not a condition: only "
+                                     "conditions can be forced")  # fmt: skip
+            if value == "none" and node not in state.forced:
+                raise ControlRefused(f"{infos[node].name} is not forced: nothing to release")
+            if not allow_force:
+                raise ControlRefused(
+                    "forcing a condition on a real robot is off; run with --monitor-force"
+                )
+    else:
+        raise ValueError(f"action {action!r}: allowed pause, resume, step, stop, break, force")
+
+
+def node_path(infos: list[Any], index: int) -> str:
+    """A node's names from the root down, joined by ``/`` (``root/dock/search``)."""
+    names: list[str] = []
+    at: int | None = index
+    while at is not None:
+        names.append(infos[at].name)
+        at = infos[at].parent
+    return "/".join(reversed(names))
+
+
+def find_node(infos: list[Any], wanted: str) -> int:
+    """The index of the node ``wanted`` names: its path from the root (:func:`node_path`) or,
+    when only one node has it, its name; ValueError says which nodes were meant or found."""
+    paths = [node_path(infos, i) for i in range(len(infos))]
+    if wanted in paths:
+        return paths.index(wanted)
+    named = [i for i, info in enumerate(infos) if info.name == wanted]
+    if len(named) == 1:
+        return named[0]
+    if named:
+        raise ValueError(
+            f"node {wanted!r}: {len(named)} nodes have that name (indices "
+            f"{', '.join(map(str, named))}); give its index or its path, e.g. "
+            f"{paths[named[0]]!r}"
+        )
+    raise ValueError(
+        f"node {wanted!r}: no node has that name or path; give an index 0..{len(infos) - 1}, "
+        "a node's name or its path from the root (names joined by /)"
+    )
 
 
 def _sleeps_in_passive(connection: Any) -> bool:

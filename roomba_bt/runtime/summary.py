@@ -189,6 +189,11 @@ class RunSummary:
     #: every condition the operator forced from the monitor (what, to what, from which tick,
     #: until which), released before the end too: the run may have turned on one
     forced: list[str] = field(default_factory=list)
+    #: the operator's pauses from the monitor (a breakpoint's too) and their stream time,
+    #: which mission time leaves out; steps (a resume, one tick, a pause) counted apart
+    paused_s: float = 0.0
+    pauses: int = 0
+    steps: int = 0
     #: how a TIMEOUT's reason names the run's time limit when no user gave it (``run
     #: --fast``'s own: ``--fast's own limit of 7200 s``); "" names it ``--timeout 90 s``
     time_limit: str = ""
@@ -250,6 +255,7 @@ class RunSummary:
             f"outcome      {self.outcome.value.upper()}{reason}",
             *([f"forced       by the operator: {'; '.join(self.forced)}"] if self.forced else []),
             f"duration     {self.mission_time_s:.2f} s mission time, {self.wall_time_s:.2f} s wall",
+            *([f"paused       {self.paused_text()}"] if self.pauses or self.steps else []),
             f"ticks        {self.ticks} ({self.overruns} overruns > 15 ms, "
             f"slowest {self.max_tick_s * 1000:.2f} ms)",
             f"frames       {self.stale_frames_dropped} stale dropped, {self.frames_lost} lost, "
@@ -287,6 +293,14 @@ class RunSummary:
 
     def __str__(self) -> str:
         return "\n".join(self.lines())
+
+    def paused_text(self) -> str:
+        """The pauses, in the duration line's units: ``6.15 s in 2 pauses, 3 steps, left out
+        of mission time`` (a user subtracted the wall time from the mission time to know)."""
+        parts = [f"{self.pauses} pause{'' if self.pauses == 1 else 's'}"] if self.pauses else []
+        if self.steps:
+            parts.append(f"{self.steps} step{'' if self.steps == 1 else 's'}")
+        return f"{self.paused_s:.2f} s in {', '.join(parts)}, left out of mission time"
 
     def stall_text(self) -> str:
         """The watchdog's trips: how many sent drive 0 (a trip with the wheels at rest, on

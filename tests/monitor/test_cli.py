@@ -3,6 +3,7 @@ before anything moves."""
 
 from __future__ import annotations
 
+import ipaddress
 import queue
 import re
 import signal
@@ -324,3 +325,30 @@ def test_monitor_of_a_record_ends_on_sigterm_as_on_ctrl_c(tmp_path: Path) -> Non
             proc.wait()
     assert proc.returncode == 0, err
     assert "monitor: ended by SIGTERM" in out
+
+
+def test_a_wildcard_address_is_said_by_the_machine_s_lan_addresses_too(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A bare host name often does not resolve from a phone on a home LAN: the addresses
+    do (``http://192.0.2.2:8765/?token=...``)."""
+    pytest.importorskip("aiohttp")
+    from roomba_bt.cli import monitor_cmd
+
+    monkeypatch.setattr(monitor_cmd, "lan_addresses", lambda ipv6=False: ["192.0.2.77"])
+    argv = ["run", str(SHUTTLE), "--fast", "--display", "none", "--monitor", "0.0.0.0:0",
+            "--timeout", "1s"]  # fmt: skip
+    assert main(argv) == 1
+    lines = capsys.readouterr().out.splitlines()
+    match = re.fullmatch(r"monitor: http://0\.0\.0\.0:(\d+)/\?token=(\S+)", lines[0])
+    assert match, lines[0]
+    port, token = match.groups()
+    assert lines[1].endswith(f" or, by address, http://192.0.2.77:{port}/?token={token}")
+
+
+def test_the_lan_addresses_leave_out_loopback_and_link_local() -> None:
+    from roomba_bt.monitor.address import lan_addresses
+
+    for text in lan_addresses(ipv6=True):
+        address = ipaddress.ip_address(text)
+        assert not (address.is_loopback or address.is_link_local or address.is_unspecified)

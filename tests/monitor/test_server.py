@@ -74,7 +74,8 @@ def _control(server: MonitorServer, payload: object, **headers: str) -> tuple[in
         (b'{"a":' * 5000 + b"1" + b"}" * 5000, 400, "nested too deeply"),  # was a 500, a traceback
         ([1, 2], 400, '"action"'),
         ({"action": "explode"}, 400, "allowed pause, resume, step, stop, break, force"),
-        ({"action": "break", "node": "x", "value": "start"}, 400, "node index"),
+        ({"action": "break", "node": 1.5, "value": "start"}, 400, "a node's index"),
+        ({"action": "break", "node": "x", "value": "start"}, 400, "no node has that name"),
         ({"action": "break", "node": 999, "value": "start"}, 400, "node 999"),
         ({"action": "force", "node": 0, "value": "success"}, 409, "not a condition"),
         ({"action": "resume"}, 409, "not paused"),
