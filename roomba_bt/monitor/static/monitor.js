@@ -1,6 +1,8 @@
 // roomba-bt monitor page: no framework, no external assets (the laptop may be offline).
 // Live: a WebSocket brings at most ~20 updates a second. Timeline: GET /api/state?tick=T.
 // Controls: POST /api/control, answered 202 or with an HTTP error the page shows.
+// A dropped socket (Wi-Fi, a laptop's sleep, a proxy) marks the page stale and turns the
+// controls off; it connects again with backoff (1, 2, 4 ... 10 s) and fetches the run afresh.
 "use strict";
 
 const SYMBOL = {
@@ -14,14 +16,26 @@ const SLOT = 0.015;
 
 const token = new URLSearchParams(location.search).get("token");
 const $ = (id) => document.getElementById(id);
+if (token) {
+  // the server has set its HttpOnly cookie with this page (Path=/), which authorises a reload
+  // and every request after it: the token leaves the address bar (a screen share, a
+  // screenshot, the history), and the page keeps it in memory for its socket
+  const clean = new URL(location.href);
+  clean.searchParams.delete("token");
+  history.replaceState(null, "", clean.pathname + clean.search + clean.hash);
+}
 
 const view = {
   header: null, tree: [], rows: [], shown: "", collapsed: new Set(),
   live: true, liveState: null, session: { paused: false, breakpoints: {}, forced: {} },
   events: [], path: { odometry: [], truth: [] }, pathLive: { odometry: [], truth: [] },
   world: null, fontSize: 13, shownTick: 0, window: [0, 0], playing: null, menuNode: null,
-  finished: null,
+  finished: null, ended: false,
+  // the socket: connected, when it dropped, the next try's delay (ms) and its timer
+  connected: false, droppedAt: null, retryMs: 1000, retryTimer: null, retryAt: 0,
 };
+const RETRY_MAX_MS = 10000;
+const GOING_AWAY = 1001;  // the server's close when the run ended (or the monitor stopped)
 
 function headers() {
   const h = { "Content-Type": "application/json" };
@@ -33,12 +47,19 @@ async function control(action, node, value) {
   const body = { action };
   if (node !== undefined) body.node = node;
   if (value !== undefined) body.value = value;
-  const reply = await fetch("api/control", { method: "POST", headers: headers(), body: JSON.stringify(body) });
+  let reply;
+  try {
+    reply = await fetch("api/control", { method: "POST", headers: headers(), body: JSON.stringify(body) });
+  } catch (e) {
+    // the request never reached the run: say so where the operator looks (it failed silently)
+    showAlert(`${action} NOT sent: no connection to the run (${e.message}); the robot does what it did`);
+    return false;
+  }
   if (!reply.ok) {
     let text = `${reply.status}`;
     try { text += ": " + (await reply.json()).error; } catch (e) { /* not JSON */ }
-    showBanner(`${action} refused (${text})`, true);
-  }
+    showAlert(`${action} refused (${text})`);
+  } else showAlert("");
   return reply.ok;
 }
 
@@ -46,6 +67,13 @@ function showBanner(text, error) {
   const b = $("banner");
   if (!text) { b.hidden = true; return; }
   b.hidden = false; b.textContent = text; b.className = error ? "error" : "";
+}
+
+// a control that failed: red, above the state's banner (which updates 20 times a second and
+// used to overwrite it), until the next control goes through or the operator closes it
+function showAlert(text) {
+  $("alert").hidden = !text;
+  $("alert-text").textContent = text || "";
 }
 
 // ------------------------------------------------------------------ the tree
@@ -139,7 +167,7 @@ function openMenu(i, ev) {
   $("node-menu-title").textContent = n.name + (n.condition ? " (condition)" : "");
   const reason = (view.liveState && view.liveState.reasons || {})[String(i)];
   $("node-menu-reason").textContent = reason ? "failed: " + reason : "";
-  const canControl = view.header && view.header.controls;
+  const canControl = view.connected && view.header && view.header.controls && !view.finished;
   for (const b of menu.querySelectorAll("button")) b.disabled = !canControl;
   $("force-row").hidden = !(n.condition && view.header && view.header.can_force);
   menu.hidden = false;
@@ -153,7 +181,11 @@ for (const b of document.querySelectorAll("[data-force]")) b.addEventListener("c
 
 // ------------------------------------------------------------------ robot panel
 const lamp = (on, label) => `<span class="lamp ${on ? "on" : ""}">${on ? label : "·"}</span> `;
-const degrees = (rad) => { let d = (rad * 180 / Math.PI) % 360; if (d > 180) d -= 360; if (d <= -180) d += 360; return d.toFixed(0); };
+const degrees = (rad) => {
+  let d = Math.round(rad * 180 / Math.PI) % 360;
+  if (d > 180) d -= 360; if (d <= -180) d += 360;
+  return String(d === 0 ? 0 : d);  // never "-0"
+};
 function irText(ir) {
   if (!ir) return "—";
   const parts = [];
@@ -202,10 +234,22 @@ function addEvents(events) {
 }
 function renderEvents() {
   // greyed by the stream's tick, the timeline's own: mission time stands still while paused
-  const list = $("events"), t = view.live ? Infinity : view.shownTick;
-  list.innerHTML = view.events.slice(-400).map((e) =>
+  const list = $("events"), box = list.parentElement, t = view.live ? Infinity : view.shownTick;
+  // rewound: the 400 around the tick shown (the newest 400 left a seek's events out)
+  let end = view.events.length;
+  if (!view.live) {
+    let at = 0;
+    while (at < view.events.length && view.events[at].tick <= t) at++;
+    end = Math.min(view.events.length, Math.max(at + 100, 400));
+  }
+  const shown = view.events.slice(Math.max(0, end - 400), end);
+  list.innerHTML = shown.map((e) =>
     `<li class="kind-${e.kind}${e.tick > t ? " future" : ""}"><span class="k">${e.time.toFixed(3)}s ${e.kind}</span> ${esc(e.text)}</li>`).join("");
-  if (view.live) list.parentElement.scrollTop = list.parentElement.scrollHeight;
+  if (view.live) { box.scrollTop = box.scrollHeight; return; }
+  // the list follows the seek: the last event at or before the tick shown, near the bottom
+  const past = list.querySelectorAll("li:not(.future)");
+  const last = past.length ? past[past.length - 1] : null;
+  box.scrollTop = last ? Math.max(0, last.offsetTop + last.offsetHeight - box.clientHeight + 24) : 0;
 }
 
 // ------------------------------------------------------------------ path
@@ -293,27 +337,58 @@ function render(state) {
   drawPath(state, view.live ? view.pathLive : view.path);
   renderEvents();
   updateTimeline();
+  robotTitle();
+}
+
+// "3 min 12 s": how long a pause has lasted, in the stream's ticks (they go on while paused)
+function duration(seconds) {
+  const s = Math.max(0, Math.round(seconds));
+  if (s < 60) return `${s} s`;
+  const m = Math.floor(s / 60);
+  return m < 60 ? `${m} min ${s % 60} s` : `${Math.floor(m / 60)} h ${m % 60} min`;
 }
 
 function updateControls() {
-  const h = view.header || {}, s = view.session, c = h.controls && !view.finished;
-  $("controls").hidden = !h.controls;
+  const h = view.header || {}, s = view.session;
+  const c = Boolean(view.connected && h.controls && !view.finished);
+  // before the first hello nothing is known: the controls stay off (they looked usable)
+  $("controls").hidden = view.header !== null && !h.controls;
   $("pause").disabled = !c || s.paused;
   $("resume").disabled = !c || !s.paused;
   $("step").disabled = !c || !s.paused;
   $("stop").disabled = !c;
-  if (view.finished) {
-    showBanner("the run ended: " + view.finished, false);
-    $("robot-panel").querySelector("h2").textContent = "Robot: its last tick before the run ended";
+  for (const b of $("node-menu").querySelectorAll("button")) b.disabled = !c;
+  document.body.classList.toggle("stale", !view.connected && !(view.finished && view.ended));
+  if (!view.connected && !view.ended) {
+    const wait = Math.max(0, Math.ceil((view.retryAt - Date.now()) / 1000));
+    const again = view.retryTimer ? (wait ? `connecting again in ${wait} s` : "connecting again now") : "connecting";
+    if (view.droppedAt === null) showBanner("");  // connecting the first time
+    else showBanner(`NO CONNECTION to the run since ${view.droppedAt.toLocaleTimeString()}: what the page shows is `
+      + `stale (its last tick ${view.window[1]}${s.paused ? ", PAUSED then" : ""}) and the controls are off; ${again}`, true);
   }
-  else if (s.paused) showBanner("PAUSED — " + (s.pause_reason || "") + " (robot stopped, in Passive; resume goes back to the mission's mode)", false);
-  else if (!$("banner").classList.contains("error")) showBanner("");
+  else if (view.finished) showBanner("the run ended: " + view.finished, false);
+  else if (s.paused) {
+    const since = s.paused_tick !== undefined && s.paused_tick !== null
+      ? ` for ${duration((view.window[1] - s.paused_tick) * SLOT)}` : "";
+    showBanner(`PAUSED${since} — ` + (s.pause_reason || "") + " (robot stopped, in Passive; resume goes back to the mission's mode)", false);
+  }
+  else showBanner("");
+  robotTitle();
+}
+
+// the robot panel's title says which tick it shows: the last before the end only when it does
+function robotTitle() {
+  let title = view.live ? "Robot" : `Robot at tick ${view.shownTick}`;
+  if (view.finished && (view.live || view.shownTick >= view.window[1])) title = "Robot: its last tick before the run ended";
+  const h2 = $("robot-panel").querySelector("h2");
+  if (h2.textContent !== title) h2.textContent = title;
 }
 
 function updateTimeline() {
   const t = $("timeline");
   t.min = view.window[0]; t.max = view.window[1];
   if (view.live) t.value = view.window[1];
+  t.disabled = view.header === null;
   // the stream's ticks and time (they go on while paused), named so beside the header's
   // mission time (which does not)
   $("timeline-label").textContent = view.live ? `live · tick ${view.window[1]}`
@@ -321,10 +396,19 @@ function updateTimeline() {
   $("live").disabled = view.live || (view.header && view.header.source === "record");
 }
 
+// GET a JSON answer; null when the run cannot be reached or refuses (the socket's close says it)
+async function getJSON(url) {
+  try {
+    const reply = await fetch(url, { headers: headers() });
+    return reply.ok ? await reply.json() : null;
+  } catch (e) {
+    return null;
+  }
+}
+
 async function showTick(tick) {
-  const reply = await fetch(`api/state?tick=${tick}`, { headers: headers() });
-  if (!reply.ok) return;
-  const body = await reply.json();
+  const body = await getJSON(`api/state?tick=${tick}`);
+  if (!body) return;
   if (body.header) { view.window = [body.header.first_tick, body.header.last_tick]; }
   if (JSON.stringify(body.tree) !== JSON.stringify(view.tree)) buildTree(body.tree);
   view.events = body.events; view.session = body.session || view.session;
@@ -336,38 +420,44 @@ function firstTruth() {
   return view.header && view.header.truth_start ? view.header.truth_start : null;
 }
 
-async function loadLivePath() {
-  // the path so far (a page opened mid-run); live updates append to it
-  const reply = await fetch("api/state", { headers: headers() });
-  if (!reply.ok) return;
-  const body = await reply.json();
+async function loadLiveState() {
+  // the run as it is now and the path so far (a page opened mid-run, or connected again after
+  // a drop: what it showed is stale); live updates append to the path
+  const body = await getJSON("api/state");
+  if (!body) return;
   const L = view.pathLive;
   L.odometry = body.path.odometry.concat(L.odometry);
   L.truth = body.path.truth.concat(L.truth);
+  if (body.session) view.session = body.session;
+  if (!view.liveState || view.liveState.tick < body.state.tick) view.liveState = body.state;
   if (view.live && view.liveState) render(view.liveState);
+  updateControls();
 }
 
 // ------------------------------------------------------------------ live socket
+function setBadge(text, on) { $("link").textContent = text; $("link").className = on ? "badge on" : "badge off"; }
+
 function connect() {
+  clearTimeout(view.retryTimer); view.retryTimer = null;
   const proto = location.protocol === "https:" ? "wss:" : "ws:";
   const ws = new WebSocket(`${proto}//${location.host}/ws${token ? "?token=" + encodeURIComponent(token) : ""}`);
-  ws.onopen = () => { $("link").textContent = "connected"; $("link").className = "badge on"; };
-  ws.onclose = () => { $("link").textContent = view.finished ? "ended" : "disconnected"; $("link").className = "badge off"; };
+  ws.onopen = () => {
+    view.connected = true; view.droppedAt = null; view.retryMs = 1000;
+    setBadge("connected", true);
+  };
+  ws.onclose = (ev) => {
+    view.connected = false;
+    if (view.finished && ev.code === GOING_AWAY) {  // the run is over: nothing to connect to
+      view.ended = true; setBadge("ended", false); updateControls(); return;
+    }
+    if (view.droppedAt === null) view.droppedAt = new Date();
+    setBadge("disconnected", false);
+    reconnectLater();
+    updateControls();
+  };
   ws.onmessage = (ev) => {
     const msg = JSON.parse(ev.data);
-    if (msg.type === "hello") {
-      view.header = msg.header; view.world = msg.header.world;
-      $("mission").textContent = msg.header.mission;
-      $("source").textContent = msg.header.source;
-      view.window = [msg.header.first_tick, msg.header.last_tick];
-      buildTree(msg.header.tree);
-      view.pathLive.truthStart = msg.header.truth_start || null;
-      const isRecord = msg.header.source === "record";
-      $("play").hidden = $("speed").hidden = !isRecord;
-      if (isRecord) { view.live = false; showTick(msg.header.first_tick); } else loadLivePath();
-      updateControls();
-      return;
-    }
+    if (msg.type === "hello") { hello(msg.header); return; }
     if (msg.tree && JSON.stringify(msg.tree) !== JSON.stringify(view.tree)) {
       buildTree(msg.tree);  // a reload: a new tree from its root
       if (!view.live) showTick(view.shownTick);
@@ -381,6 +471,32 @@ function connect() {
     else if (view.live && view.liveState) renderStatuses(view.liveState);
     updateControls();
   };
+}
+
+// after a drop: 1 s, then twice as long each failed try, at most 10 s
+function reconnectLater() {
+  if (view.retryTimer) return;
+  const wait = view.retryMs;
+  view.retryAt = Date.now() + wait;
+  view.retryMs = Math.min(RETRY_MAX_MS, view.retryMs * 2);
+  view.retryTimer = setTimeout(connect, wait);
+}
+
+function hello(header) {
+  const again = view.header !== null;  // connected again after a drop
+  view.header = header; view.world = header.world;
+  $("mission").textContent = header.mission;
+  $("source").textContent = header.source;
+  view.window = [header.first_tick, header.last_tick];
+  view.finished = header.finished === undefined ? view.finished : header.finished;
+  if (JSON.stringify(header.tree) !== JSON.stringify(view.tree)) buildTree(header.tree);
+  view.pathLive = { odometry: [], truth: [], truthStart: header.truth_start || null };
+  view.events = [];  // the server sends its whole event log again after the hello
+  const isRecord = header.source === "record";
+  $("play").hidden = $("speed").hidden = !isRecord;
+  if (isRecord) { view.live = false; showTick(again ? view.shownTick : header.first_tick); }
+  else { loadLiveState(); if (!view.live) showTick(view.shownTick); }
+  updateControls();
 }
 
 // ------------------------------------------------------------------ wiring
@@ -416,4 +532,8 @@ document.addEventListener("keydown", (ev) => {
   if (key) control(key);
 });
 window.addEventListener("resize", fitTree);
+window.addEventListener("online", () => { if (!view.connected && !view.ended) connect(); });
+$("alert-close").onclick = () => showAlert("");
+setInterval(() => { if (!view.connected && !view.ended) updateControls(); }, 1000);  // the countdown
+updateControls();
 connect();

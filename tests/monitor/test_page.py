@@ -1,0 +1,194 @@
+"""The monitor page in headless Chromium when things are not as they should be: the link to
+the run drops and comes back, a phone's narrow screen, a recorded run rewound, the token in
+the address bar (tests/monitor/test_browser.py has the page at work)."""
+
+from __future__ import annotations
+
+import json
+import re
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+
+from roomba_bt.cli import main
+from roomba_bt.mission import load_mission
+from roomba_bt.monitor.recorded import replay_into_feed
+from roomba_bt.monitor.server import MonitorServer
+from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.runtime.recording import load_record
+
+from .live import LiveRun, start_live_run
+from .test_browser import SHUTTLE, WAIT_MS
+
+
+@pytest.fixture
+def live() -> Iterator[LiveRun]:
+    run = start_live_run(SHUTTLE)
+    try:
+        yield run
+    finally:
+        if run.thread.is_alive():
+            run.finish()
+        else:
+            run.server.close()
+
+
+def _tick(page: Any) -> int:
+    return int(page.inner_text("#tick"))
+
+
+def test_a_dropped_link_turns_the_controls_off_a_control_says_it_was_not_sent_and_it_comes_back(
+    live: LiveRun, page: Any
+) -> None:
+    """The page never connected again, kept its PAUSED banner and enabled controls, and a
+    control clicked meanwhile failed without a word (an uncaught "Failed to fetch")."""
+    page.goto(live.url)
+    page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+    assert page.is_enabled("#pause")
+    page.click("#pause")
+    page.wait_for_selector('#banner:has-text("PAUSED for")', timeout=WAIT_MS)
+    assert re.search(r"PAUSED for \d+ s — paused by the operator", page.inner_text("#banner"))
+    port = live.server.port
+    live.server.close()  # the link drops; the run goes on, paused
+    page.wait_for_selector('#link:text("disconnected")', timeout=WAIT_MS)
+    page.wait_for_selector('#banner:has-text("NO CONNECTION to the run")', timeout=WAIT_MS)
+    assert "PAUSED then" in page.inner_text("#banner")
+    for control in ("#pause", "#resume", "#step", "#stop"):
+        assert page.is_disabled(control), control
+    assert page.evaluate("document.body.classList.contains('stale')")
+    page.keyboard.press("r")  # the key still asks: it must say it was not sent
+    page.wait_for_selector('#alert:has-text("resume NOT sent: no connection to the run")',
+                           timeout=WAIT_MS)  # fmt: skip
+    assert live.session.state.paused  # nothing reached the run
+    live.server = MonitorServer(live.feed, live.session, port=port)  # the network is back
+    live.server.start()
+    page.wait_for_selector('#link:text("connected")', timeout=WAIT_MS)
+    page.wait_for_selector("#resume:enabled", timeout=WAIT_MS)
+    assert not page.evaluate("document.body.classList.contains('stale')")
+    tick = _tick(page)
+    page.wait_for_function(
+        f"Number(document.getElementById('tick').textContent) > {tick + 10}", timeout=WAIT_MS
+    )  # live again: the stream's ticks go on under the pause
+    assert "PAUSED for" in page.inner_text("#banner")
+    page.click("#resume")
+    page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+    assert not live.session.state.paused
+    assert page.is_hidden("#alert")  # a control went through: the failed one's alert goes
+
+
+def test_the_controls_are_off_until_the_page_knows_the_run(live: LiveRun, page: Any) -> None:
+    """Before the socket's hello the four controls and the player looked usable."""
+    page.route("**/static/monitor.js", lambda route: route.abort())
+    page.goto(live.url)
+    for control in ("#pause", "#resume", "#step", "#stop", "#live", "#timeline"):
+        assert page.is_disabled(control), control
+    assert page.is_hidden("#play") and page.is_hidden("#speed")
+
+
+def test_on_a_phone_pause_and_stop_stay_on_the_screen_and_the_panels_stack(
+    live: LiveRun, browser: Any
+) -> None:
+    context = browser.new_context(viewport={"width": 390, "height": 844}, is_mobile=True)
+    try:
+        page = context.new_page()
+        page.goto(live.url)
+        page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+        assert page.evaluate("document.documentElement.scrollWidth") <= 390  # it was 916
+
+        def on_screen(selector: str) -> bool:
+            box = page.locator(selector).bounding_box()
+            if not box:
+                return False
+            right, bottom = box["x"] + box["width"], box["y"] + box["height"]
+            return box["x"] >= 0 and box["y"] >= 0 and right <= 390 and bottom <= 844
+
+        assert on_screen("#pause") and on_screen("#stop")
+        robot = page.locator("#robot-panel").bounding_box()
+        tree = page.locator("#tree-panel").bounding_box()
+        assert robot and tree and robot["y"] >= tree["y"] + tree["height"]  # below, not beside
+        page.evaluate("window.scrollTo(0, document.body.scrollHeight)")
+        page.wait_for_timeout(100)
+        assert on_screen("#pause") and on_screen("#stop")  # the header sticks
+        page.click("#pause")
+        page.wait_for_selector('#mode:text("Passive")', timeout=WAIT_MS)
+    finally:
+        context.close()
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory: pytest.TempPathFactory) -> Iterator[MonitorServer]:
+    record_path = tmp_path_factory.mktemp("record") / "shuttle.jsonl"
+    assert main(["run", str(SHUTTLE), "--fast", "--timeout", "6s", "--display", "none",
+                 "--record", str(record_path)]) == 1  # fmt: skip
+    record = load_record(record_path)
+    mission = load_mission(SHUTTLE, {}, profile=CREATE2)
+    packets = tuple(record.header["packets"])
+    feed, _ = replay_into_feed(record, mission, CREATE2, packets, 115200, "shuttle")
+    server = MonitorServer(feed, None, port=0)
+    server.start()
+    yield server
+    server.close()
+
+
+def _seek(page: Any, tick: int) -> None:
+    page.eval_on_selector(
+        "#timeline", "(el, v) => { el.value = v; el.dispatchEvent(new Event('input')); }", tick
+    )
+    page.wait_for_selector(f'#tick:text-is("{tick}")', timeout=WAIT_MS)
+
+
+def test_a_rewound_record_s_robot_panel_is_titled_by_the_tick_it_shows(
+    recorded: MonitorServer, page: Any
+) -> None:
+    """It said "its last tick before the run ended" at every tick of a record."""
+    page.goto(recorded.url)
+    page.wait_for_selector('#source:text("record")', timeout=WAIT_MS)
+    first, last = recorded.feed.window()
+    assert first is not None and last is not None
+    middle = recorded.feed.since(0)[0][(last.seq - first.seq) // 2].tick
+    _seek(page, middle)
+    assert page.inner_text("#robot-panel h2").lower() == f"robot at tick {middle}"
+    _seek(page, last.tick)
+    assert "last tick before the run ended" in page.inner_text("#robot-panel h2").lower()
+
+
+def test_a_seek_brings_its_events_into_view(recorded: MonitorServer, page: Any) -> None:
+    """The events list stayed scrolled at 0.000 s whatever the tick shown."""
+    page.goto(recorded.url)
+    page.wait_for_selector('#source:text("record")', timeout=WAIT_MS)
+    events = recorded.feed.events_after(-1)
+    assert len(events) > 20  # more than the panel shows at once
+    late = events[-3]
+    _seek(page, late.tick)
+    visible = page.evaluate(
+        """() => {
+            const box = document.getElementById('events-panel').getBoundingClientRect();
+            const past = document.querySelectorAll('#events li:not(.future)');
+            const last = past[past.length - 1].getBoundingClientRect();
+            return last.top >= box.top && last.bottom <= box.bottom + 1;
+        }"""
+    )
+    assert visible
+    assert late.text in page.inner_text("#events")
+
+
+def test_the_token_leaves_the_address_bar_and_the_cookie_still_opens_the_page(
+    page: Any,
+) -> None:
+    run = start_live_run(SHUTTLE, host="0.0.0.0")
+    try:
+        token = run.server.token
+        assert token
+        page.goto(run.url)
+        page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+        assert "token" not in page.url, page.url  # a screen share showed it
+        response = page.reload()  # the cookie, Path=/, authorises the reload
+        assert response is not None and response.status == 200
+        page.wait_for_selector('#link:text("connected")', timeout=WAIT_MS)
+        page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+        page.click("#pause")
+        page.wait_for_selector('#banner:has-text("PAUSED")', timeout=WAIT_MS)
+        assert json.dumps(run.session.state.paused) == "true"
+    finally:
+        run.finish()
