@@ -20,6 +20,7 @@ Drive (137) needs Safe or Full because the table says so.
 
 from __future__ import annotations
 
+import logging
 import math
 import operator
 import re
@@ -56,6 +57,9 @@ from roomba_bt.oi.packets import PACKETS
 from roomba_bt.printable import CONTROL
 from roomba_bt.robot.interface import Odometry, RobotHandle, Snapshot
 from roomba_bt.yamlsource import character_name, quoted
+
+#: what a behaviour's own mistakes that the runtime mended are said on (as the mission's)
+_log = logging.getLogger("roomba_bt.mission")
 
 #: The blackboard key the runtime mirrors the snapshot under (for plugins that prefer it).
 SNAPSHOT_KEY = "/roomba/snapshot"
@@ -829,6 +833,75 @@ class Action(RobotBehaviour):
                 robot.outbox.end_cycle(self, running=cycle_may_run(robot))
         self._started_motion = False
         self._out_of_driving_since = None
+        self._terminated = True
+
+    #: whether :meth:`terminate` (this class's) ran during the stop under way (:meth:`stop`)
+    _terminated = False
+
+    def stop(self, new_status: py_trees.common.Status) -> None:
+        """py_trees' stop (``terminate``, then the status); then, if the wheels this action
+        set turning are still turning, or a built-in cycle it started still runs, what
+        :meth:`terminate` does for them is done here, and said once per class
+        (:func:`_said_left_going`). py_trees' own ``terminate`` does nothing, so its users
+        override it without calling ``super().terminate()``: the halt was skipped, and the
+        robot drove on after the leaf had ended, with no leaf in charge of it (session 27: at
+        200 mm/s through a whole ``wait: 5s``, and the bump reflex sent the dead action's
+        drive again). Every stop of a leaf comes here: py_trees' ticks and the lean ones
+        (:mod:`~roomba_bt.behaviours.lean`), the composites' and decorators' stops of their
+        children, and the run's end (:func:`~roomba_bt.runtime.teardown.stop_nodes`)."""
+        self._terminated = False
+        super().stop(new_status)
+        if self._started_motion or (self._started_cycle and new_status is not _SUCCESS):
+            self._end_what_terminate_left(new_status)
+
+    def _end_what_terminate_left(self, new_status: py_trees.common.Status) -> None:
+        """The halt (and the cycle's end) that an override of :meth:`terminate` left out, or
+        undid by sending a wheel command after ``super().terminate()``."""
+        robot = self.robot
+        driving = (
+            self._started_motion and robot is not None and robot.snapshot.mode in DRIVING_MODES
+        )
+        cycle = (
+            self._started_cycle
+            and new_status is not _SUCCESS
+            and robot is not None
+            and cycle_may_run(robot)
+        )
+        after_super = self._terminated
+        Action.terminate(self, new_status)
+        # a terminate patched into the node is the run's end guarding one that raised
+        # (runtime/teardown.py): that failure is said already, as what it is
+        if (driving or cycle) and "terminate" not in vars(self):
+            _said_left_going(self, after_super, driving)
+
+
+#: the classes whose terminate left the wheels turning (or a cycle running) already said
+_LEFT_GOING_SAID: set[type] = set()
+
+
+def _said_left_going(node: Action, after_super: bool, driving: bool) -> None:
+    """A warning, once per class, that ``node``'s ``terminate`` left the robot going and that
+    :meth:`Action.stop` stopped it: the behaviour, the class, and the file:line of the
+    ``terminate`` it has (``after_super``: it called ``super().terminate()`` and then sent
+    a wheel command; ``driving``: the wheels, else a built-in cycle)."""
+    cls = type(node)
+    if cls in _LEFT_GOING_SAID:
+        return
+    _LEFT_GOING_SAID.add(cls)
+    code = getattr(cls.terminate, "__code__", None)
+    where = f" at {code.co_filename}:{code.co_firstlineno}" if code is not None else ""
+    what = "the wheels were left turning; halted"
+    if not driving:
+        what = "the built-in cycle it started was left running; ended (Start)"
+    how = (
+        "sent a wheel command after super().terminate()"
+        if after_super
+        else "did not call super().terminate()"
+    )
+    _log.warning(
+        "%s (%s.terminate%s) %s: %s (an action that has ended leaves the robot stopped)",
+        node.name, cls.__name__, where, how, what,
+    )  # fmt: skip
 
 
 def on_home_base(frame: SensorFrame) -> bool:
