@@ -74,6 +74,11 @@ class PluginError:
     plugin: str
     cause: str
     imported: bool = True
+    #: the behaviour names it was to provide: the name a refused class declares, and an entry
+    #: point's own name (``dirt_detect = "roomba_bt_dirt:DirtDetect"``); a mission's unknown
+    #: node of one of them gets this error as its note (mission/nodes.py), not every broken
+    #: plugin's
+    names: tuple[str, ...] = ()
 
     def __str__(self) -> str:
         return f"plugin {self.plugin}: {self.cause}"
@@ -152,21 +157,31 @@ class Registry:
         return None
 
     def register_provider(
-        self, provider: object, origin: str, *, said_as: str | None = None
+        self,
+        provider: object,
+        origin: str,
+        *,
+        said_as: str | None = None,
+        entry_name: str | None = None,
     ) -> list[Declaration]:
         """Register what an entry point or a plugin file provides (class, sequence of
         classes, or module); each class that declares itself wrongly becomes a recorded
         :class:`PluginError` naming it and where it is, and the others still load (one bad
         class dropped the rest of its module). ``said_as``: the origin the errors name, when
-        it is not ``origin``."""
+        it is not ``origin``; ``entry_name``: the entry point's name, among each error's
+        :attr:`PluginError.names`."""
         said = said_as or origin
+        named = () if entry_name is None else (entry_name,)
         try:
             classes = _provided(provider)
         except DeclarationError as exc:
-            self._errors.append(PluginError(said, f"declares itself wrongly: {exc}"))
+            self._errors.append(PluginError(said, f"declares itself wrongly: {exc}", names=named))
             return []
         registered: list[Declaration] = []
         for cls in classes:
+            # what a mission calls it: the name its declaration gives, refused or not
+            declared = cls.__dict__.get("declaration")
+            names = (declared.name, *named) if isinstance(declared, Declaration) else named
             try:
                 if not issubclass(cls, RobotBehaviour):  # @declare on a plain class
                     raise _NotABehaviour(
@@ -175,12 +190,13 @@ class Registry:
                     )
                 registered.append(self.register(cls, origin))
             except NameClash as exc:  # it declared nothing wrongly: two classes want a name
-                self._errors.append(PluginError(said, f"{_where(cls)} {exc.clash()}"))
+                clash = f"{_where(cls)} {exc.clash()}"
+                self._errors.append(PluginError(said, clash, names=names))
             except _NotABehaviour as exc:
-                self._errors.append(PluginError(said, f"{_where(cls)}: {exc}"))
+                self._errors.append(PluginError(said, f"{_where(cls)}: {exc}", names=names))
             except DeclarationError as exc:
                 wrong = f"{_where(cls)} declares itself wrongly: {exc}"
-                self._errors.append(PluginError(said, wrong))
+                self._errors.append(PluginError(said, wrong, names=names))
         return registered
 
     # ------------------------------------------------------------------ lazy plugin loading
@@ -207,9 +223,11 @@ class Registry:
             provider = ep.load()
         except (Exception, SystemExit) as exc:  # any import-time failure of third-party code
             failed = _import_failed(exc, _package_of(ep), _origin(ep))
-            self._errors.append(PluginError(_origin(ep), failed, imported=False))
+            self._errors.append(PluginError(_origin(ep), failed, imported=False, names=(ep.name,)))
             return []
-        registered = self.register_provider(provider, _origin(ep, named=False), said_as=_origin(ep))
+        registered = self.register_provider(
+            provider, _origin(ep, named=False), said_as=_origin(ep), entry_name=ep.name
+        )
         for declaration in registered:
             self._unnamed[declaration.name] = ep
         return registered

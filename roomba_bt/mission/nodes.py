@@ -193,13 +193,16 @@ class NodeParser:
         if unloaded:  # most likely theirs: no "did you mean" a built-in of another name
             files = ", ".join(repr(text) for text in unloaded)
             return f"unknown node {word!r}{where} (the plugin file {files} was not loaded)"
-        names = [*WORDS, *self.ctx.registry.names(), *MODIFIERS]
-        message = f"unknown node {word!r}{where}{suggestion(word, names)}"
         errors = self.ctx.registry.errors
-        # the plugins that may have meant this word: one whose error names it, else those
-        # that did not import at all (any name could have been theirs); a few, not every
-        # broken plugin on the machine (one line of more than 1,000 characters)
-        named = [e for e in errors if word in e.cause or word in e.plugin]
+        # the plugins that may have meant this word: one that declares it (a class refused
+        # for its declaration: the cause, not a misspelling), else those that did not import
+        # at all (any name could have been theirs); a few, not every broken plugin on the
+        # machine (one line of more than 1,000 characters), nor one whose error merely
+        # contains the word (u_metres in u_metres_nodefault's)
+        named = [e for e in errors if word in e.names]
+        message = f"unknown node {word!r}{where}"
+        if not named:  # a misspelling, perhaps: not when a plugin is known to declare it
+            message += suggestion(word, [*WORDS, *self.ctx.registry.names(), *MODIFIERS])
         likely = named or [e for e in errors if not e.imported]
         if likely:
             failed = "; ".join(str(e) for e in likely[: self._PLUGIN_NOTES])

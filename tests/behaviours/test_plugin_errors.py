@@ -110,3 +110,87 @@ def test_an_entry_point_that_fails_to_import_says_where_in_its_package(
     # nothing of its own ran: no line to name
     assert gone.endswith("failed to import: ModuleNotFoundError: No module named "
                          "'s24_no_such_package_xyz'")  # fmt: skip
+
+
+#: the stranger's bt-bad-units, in part: a maximum written in metres (2, taken as 2 mm) with a
+#: default of 1 m, refused; a name that contains it; and a good one
+UNITS = """\
+from py_trees.common import Status
+
+from roomba_bt.behaviours import DISTANCE, SPEED, Action, Param, declare
+from roomba_bt.oi.opcodes import opcodes
+
+
+@declare("u_metres", kind="action",
+         params=(Param("reach", DISTANCE, default="1 m", minimum=0, maximum=2),),
+         sends=opcodes("drive"))
+class UMetres(Action):
+    '''max in metres by mistake: 2 (mm) with a default of 1 m.'''
+    def update(self):
+        return Status.SUCCESS
+
+
+@declare("u_metres_nodefault", kind="action",
+         params=(Param("reach", DISTANCE, minimum=0.1, maximum=2, required=True),),
+         sends=opcodes("drive"))
+class UMetresNoDefault(Action):
+    '''declares itself rightly, if oddly.'''
+    def update(self):
+        return Status.SUCCESS
+
+
+@declare("u_min_str", kind="action",
+         params=(Param("velocity", SPEED, default="100 mm/s", minimum="0 mm/s"),),
+         sends=opcodes("drive"))
+class UMinStr(Action):
+    '''minimum as text: refused too, but it is not what the mission uses.'''
+    def update(self):
+        return Status.SUCCESS
+"""
+
+
+def test_an_unknown_node_a_refused_class_declares_notes_why_it_was_refused(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``unknown node 'u_metres' (did you mean 'u_metres_nodefault'?)``, nothing more (with
+    -v too): the mission's author was told of a misspelling when the plugin was at fault,
+    which docs/plugins.md §5 promised to say."""
+    from roomba_bt.mission import compile_mission
+
+    folder = _package(tmp_path, "s27_bad_units", {"units.py": UNITS})
+    _package(tmp_path, "s27_other_bad", {"other.py": UNITS.replace("u_", "o_")})
+    monkeypatch.syspath_prepend(str(tmp_path))
+    registry = builtin_registry()
+    registry.load_entry_point(EntryPoint("units", "s27_bad_units.units", GROUP))
+    registry.load_entry_point(EntryPoint("other", "s27_other_bad.other", GROUP))
+    path = tmp_path / "m.yaml"
+    path.write_text("tree:\n  sequence:\n    - mode: safe\n    - u_metres: {reach: 50cm}\n")
+    _, [error] = compile_mission(path, {}, registry=registry)
+    assert (error.line, error.column) == (4, 7)
+    assert error.message == (
+        "unknown node 'u_metres' (note: plugin 'units' (s27_bad_units.units): UMetres "
+        f"({folder / 'units.py'}:7) declares itself wrongly: default of 'reach': reach 1000 mm "
+        "is out of range: allowed 0..2 mm)"
+    )
+    # a misspelling still gets its did-you-mean, and no plugin's error beside it
+    path.write_text("tree:\n  sequence:\n    - mode: safe\n    - u_metres_nodefaul: {reach: 1}\n")
+    _, [error] = compile_mission(path, {}, registry=registry)
+    assert error.message == (
+        "unknown node 'u_metres_nodefaul' (did you mean 'u_metres_nodefault'?)"
+    )
+    assert "o_metres" not in error.message
+
+
+def test_a_refused_class_of_a_plugin_file_is_noted_too(tmp_path: Path) -> None:
+    from roomba_bt.mission import Permissions, compile_mission
+
+    (tmp_path / "units.py").write_text(UNITS)
+    path = tmp_path / "m.yaml"
+    path.write_text("plugins: [./units.py]\ntree:\n  sequence:\n    - mode: safe\n    - u_metres\n")
+    _, diagnostics = compile_mission(
+        path, {}, registry=builtin_registry(), permissions=Permissions(plugin_files=True)
+    )
+    [error] = [d for d in diagnostics if "unknown node" in d.message]
+    assert (error.line, error.column) == (5, 7)
+    assert f"UMetres ({tmp_path / 'units.py'}:7) declares itself wrongly" in error.message
+    assert "u_min_str" not in error.message and "UMinStr" not in error.message
