@@ -343,6 +343,9 @@ class Declaration:
             raise DeclarationError(f"name {self.name!r} is not snake_case ([a-z][a-z0-9_]*)")
         if self.kind not in ("action", "condition"):
             raise DeclarationError(f"kind must be 'action' or 'condition', got {self.kind!r}")
+        problem = _kind_problem(self.kind, self.cls)
+        if problem is not None:
+            raise DeclarationError(problem)
         if not (isinstance(self.cls, type) and issubclass(self.cls, RobotBehaviour)):
             raise DeclarationError(f"{self.cls!r} is not a RobotBehaviour subclass")
         seen: set[str] = set()
@@ -376,6 +379,29 @@ class Declaration:
         problem = self.cls.declaration_problem(self)
         if problem is not None:
             raise DeclarationError(problem)
+
+
+def _kind_problem(kind: str, cls: type) -> str | None:
+    """What is wrong with declaring ``cls`` as ``kind``, or None: a condition is a
+    :class:`Condition` and an action an :class:`Action`. The validator believes ``kind``
+    (only conditions in a guard, only actions may send), and the runtime the class (an
+    Action's halt, a Condition's short tick): a class of the other kind passed both and ran
+    as neither (session 27)."""
+    if kind == "condition" and not issubclass(cls, Condition):
+        base = "Action" if issubclass(cls, Action) else "neither Action nor Condition"
+        return (
+            f"kind='condition', but {cls.__qualname__} derives from {base}: a condition derives "
+            "from roomba_bt.behaviours.Condition (its check() says whether it holds); declare "
+            "kind='action' or derive it from Condition"
+        )
+    if kind == "action" and not issubclass(cls, Action):
+        base = "Condition" if issubclass(cls, Condition) else "neither Action nor Condition"
+        return (
+            f"kind='action', but {cls.__qualname__} derives from {base}: an action derives from "
+            "roomba_bt.behaviours.Action (its update() returns a Status); declare "
+            "kind='condition' or derive it from Action"
+        )
+    return None
 
 
 def _param_problem(p: object) -> str | None:

@@ -194,3 +194,60 @@ def test_a_refused_class_of_a_plugin_file_is_noted_too(tmp_path: Path) -> None:
     assert (error.line, error.column) == (5, 7)
     assert f"UMetres ({tmp_path / 'units.py'}:7) declares itself wrongly" in error.message
     assert "u_min_str" not in error.message and "UMinStr" not in error.message
+
+
+#: the stranger's bt-bad-kind: a kind that the class's base says otherwise
+KINDS = """\
+from py_trees.common import Status
+
+from roomba_bt.behaviours import PERCENT, Action, Condition, Param, declare
+from roomba_bt.oi.opcodes import opcodes
+
+
+@declare("k_cond_is_action", kind="condition",
+         params=(Param("below", PERCENT, default="20%", minimum=0, maximum=100),),
+         reads=(25, 26))
+class KCondIsAction(Action):
+    '''kind condition, class Action.'''
+    def update(self):
+        return Status.SUCCESS
+
+
+@declare("k_action_is_cond", kind="action", sends=opcodes("drive"))
+class KActionIsCond(Condition):
+    '''kind action, class Condition.'''
+    def check(self, snapshot):
+        return True
+
+
+@declare("k_fine", kind="condition", reads=(7,))
+class KFine(Condition):
+    '''what it says it is.'''
+    def check(self, snapshot):
+        return True
+"""
+
+
+def test_a_kind_its_class_contradicts_is_refused_where_it_is_declared(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Both loaded; ``behaviours`` listed them under the declared kind, the validator
+    believed it (a guard of an Action, a condition sending Drive) and the mission ran."""
+    folder = _package(tmp_path, "s27_bad_kind", {"kinds.py": KINDS})
+    monkeypatch.syspath_prepend(str(tmp_path))
+    registry = builtin_registry()
+    registry.load_entry_point(EntryPoint("kind", "s27_bad_kind.kinds", GROUP))
+    assert "k_fine" in registry.names()
+    assert "k_cond_is_action" not in registry.names()
+    assert "k_action_is_cond" not in registry.names()
+    where = folder / "kinds.py"
+    assert [e.cause for e in registry.errors] == [
+        f"KActionIsCond ({where}:16) declares itself wrongly: kind='action', but KActionIsCond "
+        "derives from Condition: an action derives from roomba_bt.behaviours.Action (its "
+        "update() returns a Status); declare kind='condition' or derive it from Action",
+        f"KCondIsAction ({where}:7) declares itself wrongly: kind='condition', but "
+        "KCondIsAction derives from Action: a condition derives from "
+        "roomba_bt.behaviours.Condition (its check() says whether it holds); declare "
+        "kind='action' or derive it from Condition",
+    ]
+
