@@ -528,6 +528,15 @@ class UndeclaredCommand(TypeError):
 
     def __init__(self, behaviour: RobotBehaviour, command: Command) -> None:
         declaration = behaviour.declaration
+        if declaration.kind == "condition":  # sends= is refused on a condition: not that
+            super().__init__(
+                f"{declaration.name} sent {command.spec.name} ({command.spec.opcode}), but it "
+                "is a condition, which only reads: a behaviour that sends commands is an "
+                f"action (derive {type(behaviour).__name__} from roomba_bt.behaviours.Action, "
+                f"declare kind='action', sends=opcodes({command.spec.name!r}), and return a "
+                "Status from update())"
+            )
+            return
         listed = ", ".join(f"{COMMANDS[op].name} ({op})" for op in declaration.sends) or "nothing"
         super().__init__(
             f"{declaration.name} sent {command.spec.name} ({command.spec.opcode}), which its "

@@ -30,6 +30,7 @@ from pathlib import Path
 
 from roomba_bt.behaviours.declare import Declaration, DeclarationError, RobotBehaviour
 from roomba_bt.behaviours.language import RESERVED
+from roomba_bt.behaviours.units import closest
 
 ENTRY_POINT_GROUP = "roomba_bt.behaviours"
 
@@ -222,7 +223,9 @@ class Registry:
         try:
             provider = ep.load()
         except (Exception, SystemExit) as exc:  # any import-time failure of third-party code
-            failed = _import_failed(exc, _package_of(ep), _origin(ep))
+            failed = _missing_attribute(ep, exc) or _import_failed(
+                exc, _package_of(ep), _origin(ep)
+            )
             self._errors.append(PluginError(_origin(ep), failed, imported=False, names=(ep.name,)))
             return []
         registered = self.register_provider(
@@ -379,6 +382,30 @@ def _import_failed(exc: BaseException, home: list[Path], origin: str) -> str:
     log.debug("plugin %s failed to import:\n%s", origin, "".join(traceback.format_exception(exc)))
     where = _raised_at(exc, home)
     return f"failed to import: {_cause(exc)}" + (f" (at {where})" if where else "")
+
+
+def _missing_attribute(ep: EntryPoint, exc: BaseException) -> str | None:
+    """What an entry point whose module imported but lacks the attribute it names says
+    (``attr = "bad_attr:NoSuchClass"``): where the entry point is written, and the
+    module's behaviour classes (a did-you-mean, else the list); None for any other failure.
+    It said ``AttributeError: module 'bad_attr' has no attribute 'NoSuchClass'`` alone."""
+    module = sys.modules.get(ep.module)
+    if not isinstance(exc, AttributeError) or not ep.attr or module is None:
+        return None
+    first = ep.attr.split(".")[0]
+    if hasattr(module, first):  # raised by the module's own code, or deeper in the path
+        return None
+    classes = [cls.__name__ for cls in _classes_of(module)]
+    offered = closest(first, classes)
+    if not offered:
+        listed = ", ".join(classes[:5]) + (", ..." if len(classes) > 5 else "")
+        offered = f"; its behaviour classes: {listed}" if classes else "; it has no behaviour class"
+    written = f'[project.entry-points."{ep.group}"] {ep.name} = "{ep.value}"'
+    where = f"in {ep.dist.name}'s pyproject.toml" if ep.dist else "in its distribution's metadata"
+    return (
+        f"the entry point names {ep.value}, but module {ep.module!r} has no attribute "
+        f"{first!r}{offered} (written {where}: {written})"
+    )
 
 
 def _raised_at(exc: BaseException, home: list[Path]) -> str | None:

@@ -354,6 +354,41 @@ def describe_behaviours(
     return out
 
 
+#: what each shape of the language's words is called (docs/missions.md, "Nodes")
+_WORD_KINDS = {
+    "children": "a composite",
+    "do": "a decorator",
+    "child or do": "a decorator",
+    "subtree": "a word (the node that uses a subtree)",
+}
+
+
+def language_word(name: str) -> str | None:
+    """What ``behaviours NAME`` says of a word of the mission language (a composite, a
+    decorator, ``subtree``, a modifier, a file section), which is no behaviour: what it is,
+    its options, and where the language is described; None for any other name. ``behaviours
+    retry`` said ``unknown behaviour 'retry' (did you mean 'odometry'?)``."""
+    from roomba_bt.behaviours.language import MODIFIERS, RESERVED, WORDS
+
+    kind = WORDS.get(name)
+    if kind is not None:
+        what = _WORD_KINDS[kind.shape.value]
+        options = "; ".join(f"{p.name}: {p.describe()}" for p in kind.options)
+        takes = f" (options: {options})" if options else ""
+        return (
+            f"{name!r} is {what} of the mission language, not a behaviour: {kind.doc}{takes}; "
+            'the language\'s words are in docs/missions.md, "Nodes"'
+        )
+    if name in MODIFIERS:
+        return (
+            f"{name!r} is a modifier of the mission language, written beside any node's word, "
+            f'not a behaviour: {MODIFIERS[name]} (docs/missions.md, "Modifiers")'
+        )
+    if name in RESERVED:
+        return f"{name!r} is a section of a mission file, not a behaviour (docs/missions.md)"
+    return None
+
+
 def _leads_to(decl: Any) -> str | None:
     if callable(decl.leads_to):
         return "depends on parameters"
@@ -369,6 +404,10 @@ def behaviours_command(args: argparse.Namespace) -> int:
         from roomba_bt.behaviours.units import closest
 
         for name in unknown:
+            word = language_word(name)
+            if word is not None:
+                print(f"roomba-bt behaviours: {word}", file=sys.stderr)
+                continue
             hint = closest(name, registry.names())
             print(
                 f"roomba-bt behaviours: unknown behaviour {name!r}{hint}; a plugin file's "

@@ -41,6 +41,8 @@ from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
 
 STREAM_HEADER = 19
 PACKET_ID_ARG = COMMANDS[142].args[0]
+#: the single sensor packets a frame may carry, as a message says them ("7-58")
+_PACKET_RANGE = f"{min(PACKETS)}-{max(PACKETS)}"
 
 # Which packets each group of :class:`SensorFrame` accessors reads: for a behaviour's
 # ``reads=`` (the packets its mission must stream), so no layer above names them by number.
@@ -384,11 +386,17 @@ class SensorFrame:
             raise self._missing(packet_id) from None
 
     def _missing(self, packet_id: object) -> MissingPacket:
-        name = PACKETS[packet_id].name if packet_id in PACKETS else "unknown"  # type: ignore[index]
+        carried = list(self.layout.members)
+        if packet_id not in PACKETS:  # no frame carries it: not a packet to declare
+            return MissingPacket(
+                packet_id,
+                f"packet {packet_id!r} does not exist: the Open Interface's sensor packets "
+                f"are {_PACKET_RANGE} (roomba_bt.oi.packets; by name: packet_ids('wall_signal', "
+                f"...)); this frame carries {carried}",
+            )
+        name = PACKETS[packet_id].name  # type: ignore[index]
         return MissingPacket(
-            packet_id,
-            f"packet {packet_id} ({name}) is not in this frame; it carries "
-            f"{list(self.layout.members)}",
+            packet_id, f"packet {packet_id} ({name}) is not in this frame; it carries {carried}"
         )
 
     def carries(self, packet_ids: Iterable[int]) -> bool:

@@ -33,6 +33,7 @@ import py_trees
 from roomba_bt.behaviours.lean import InvalidStatus
 from roomba_bt.behaviours.returned import returned_from
 from roomba_bt.oi.frames import MissingPacket
+from roomba_bt.oi.packets import PACKETS
 from roomba_bt.robot.safety import THE_SAFE_STOP, Terminated, signal_reason
 from roomba_bt.runtime.summary import Outcome, RunSummary
 
@@ -105,6 +106,8 @@ def _hint(exc: BaseException, behaviour: py_trees.behaviour.Behaviour) -> str:
             "(stream_request from roomba_bt.runtime.loop adds what the runtime needs)"
         )
     if not isinstance(exc, MissingPacket) or declaration is None or callable(declaration.reads):
+        return ""
+    if exc.packet_id not in PACKETS:  # @declare refuses it: the message says it does not exist
         return ""
     listed = ", ".join(str(pid) for pid in declaration.reads) or "nothing"
     return (

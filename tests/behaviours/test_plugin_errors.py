@@ -251,3 +251,31 @@ def test_a_kind_its_class_contradicts_is_refused_where_it_is_declared(
         "kind='action' or derive it from Condition",
     ]
 
+
+def test_an_entry_point_naming_an_attribute_its_module_lacks_says_where_it_is_written(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``AttributeError: module 'bad_attr' has no attribute 'NoSuchClass'``, with no word of
+    the class that is there nor of where the entry point is written."""
+    ok = (
+        "from roomba_bt.behaviours import Condition, declare\n\n\n"
+        '@declare("attr_cond", kind="condition", reads=(15,))\n'
+        "class AttrCond(Condition):\n"
+        "    def check(self, snapshot):\n"
+        "        return True\n"
+    )
+    _package(tmp_path, "s27_bad_attr", {"conds.py": ok})
+    monkeypatch.syspath_prepend(str(tmp_path))
+    registry = Registry(entry_point_group=None)
+    for name, target in (("attr", "NoSuchClass"), ("typo", "AttrCnd"), ("deep", "AttrCond.x")):
+        registry.load_entry_point(EntryPoint(name, f"s27_bad_attr.conds:{target}", GROUP))
+    [unlike, typo, deep] = [e.cause for e in registry.errors]
+    assert unlike == (
+        "the entry point names s27_bad_attr.conds:NoSuchClass, but module 's27_bad_attr.conds' "
+        "has no attribute 'NoSuchClass'; its behaviour classes: AttrCond (written in its "
+        'distribution\'s metadata: [project.entry-points."roomba_bt.behaviours"] attr = '
+        '"s27_bad_attr.conds:NoSuchClass")'
+    )
+    assert "has no attribute 'AttrCnd' (did you mean 'AttrCond'?) (written in" in typo
+    # the class is there, its attribute is not: the exception as it is
+    assert deep.startswith("failed to import: AttributeError: type object 'AttrCond' has no")

@@ -275,6 +275,28 @@ def test_a_plugin_that_did_not_load_is_said_by_behaviours_name_and_by_schema(
     assert json.loads(out) and "warning: plugin 'typo' (typo_mdo): failed to import" in err
 
 
+@pytest.mark.parametrize(
+    ("name", "said"),
+    [
+        ("retry", "'retry' is a decorator of the mission language, not a behaviour: re-run "
+         "the child after a failure (options: times: int, 1.., required)"),
+        ("reactive_sequence", "'reactive_sequence' is a composite of the mission language"),
+        ("subtree", "'subtree' is a word (the node that uses a subtree) of the mission"),
+        ("until", "'until' is a modifier of the mission language, written beside any node's "
+         "word, not a behaviour: run until this condition succeeds, then SUCCESS"),
+        ("include", "'include' is a section of a mission file, not a behaviour"),
+    ],
+)  # fmt: skip
+def test_behaviours_of_a_word_of_the_language_says_what_it_is(
+    capsys: Capsys, name: str, said: str
+) -> None:
+    """``behaviours retry`` said ``unknown behaviour 'retry' (did you mean 'odometry'?)``."""
+    assert main(["behaviours", name]) == 2
+    err = capsys.readouterr().err
+    assert f"roomba-bt behaviours: {said}" in err
+    assert "did you mean" not in err and "unknown behaviour" not in err
+
+
 def test_show_prints_what_a_mission_wrote_each_on_its_line(capsys: Capsys, tmp_path: Path) -> None:
     """The mission's name, its description and a parameter's value went raw into show's
     first and last lines: "\\n[ok] fake" started a line of its own. Escaped; the tree's

@@ -152,6 +152,25 @@ class Near(Condition):
 '''
 
 
+#: the stranger's k_cond_drives: a condition that calls send() anyway
+COND_SENDS = '''
+from roomba_bt.behaviours import Condition, declare
+from roomba_bt.oi import commands
+
+
+@declare("k_cond_drives", kind="condition", reads=(7,))
+class KCondDrives(Condition):
+    """A condition that drives."""
+
+    def check(self, snapshot):
+        self.send(commands.drive_straight(200))
+        return True
+'''
+
+#: the stranger's boom_check: a packet that does not exist
+NO_SUCH_PACKET = UNREAD.replace("near", "far").replace("frame[27]", "frame[99]")
+
+
 RET_INVALID = '''
 from py_trees.common import Status
 
@@ -206,6 +225,15 @@ class Says(Condition):
         ("near", UNREAD,  # the KeyError did not say where to declare it
          "raised MissingPacket: 'packet 27 (wall_signal) is not in this frame",
          "at {plugin}:10"),
+        ("k_cond_drives", COND_SENDS,  # it said: add 137 to @declare(sends=...), refused there
+         "raised UndeclaredCommand: k_cond_drives sent drive (137), but it is a condition, "
+         "which only reads: a behaviour that sends commands is an action (derive KCondDrives "
+         "from roomba_bt.behaviours.Action, declare kind='action', sends=opcodes('drive'), "
+         "and return a Status from update())", "at {plugin}:11"),
+        ("far", NO_SUCH_PACKET,  # it said: add 99 to @declare(reads=...), refused there
+         "raised MissingPacket: \"packet 99 does not exist: the Open Interface's sensor "
+         "packets are 7-58 (roomba_bt.oi.packets; by name: packet_ids('wall_signal', ...)); "
+         "this frame carries", "at {plugin}:10"),
     ],
 )  # fmt: skip
 def test_a_plugin_that_breaks_the_contract_ends_the_run_as_its_error(
@@ -232,6 +260,8 @@ def test_a_plugin_that_breaks_the_contract_ends_the_run_as_its_error(
     assert f"({where.format(plugin=tmp_path / 'plugin.py')})" in err
     if word == "near":
         assert "; add 27 to @declare(reads=...) of 'near' (it lists 7)" in err
+    if word in ("k_cond_drives", "far"):  # no advice the declaration would refuse
+        assert "add 99" not in err and "@declare(sends" not in err
     assert "ticks        1 " in out  # ended on the tick it happened
     assert "safe stop    sent drive, motors" in out
     assert "invalid status" not in out + err
