@@ -104,13 +104,20 @@ class Registry:
 
     # ------------------------------------------------------------------ registration
     def register(
-        self, cls: type[RobotBehaviour], origin: str = "builtin", *, validated: bool = False
+        self,
+        cls: type[RobotBehaviour],
+        origin: str = "builtin",
+        *,
+        validated: bool = False,
+        said_as: str | None = None,
     ) -> Declaration:
         """Register one behaviour class; raises :class:`DeclarationError` if it declares
         itself wrongly or takes a name already taken. ``validated``: its declaration is known
         to pass :meth:`Declaration.validate`, which is not run again (the built-ins: the test
         suite validates every one, and running it for the 45 of them was 1.2 M instructions
-        of every process's first mission)."""
+        of every process's first mission). ``said_as``: where it is from as a clash names
+        it, when not ``origin`` (an entry point's with its distribution: the other side of a
+        clash is named so, and which package to uninstall must be read from both)."""
         declaration = getattr(cls, "declaration", None)
         if not isinstance(declaration, Declaration) or declaration.cls is not cls:
             raise DeclarationError(
@@ -124,7 +131,7 @@ class Registry:
         existing = self._declarations.get(declaration.name)
         if existing is not None and existing.cls is not cls:
             existing = self._named(existing)
-            self._note_clash(declaration.name, existing, f"{_qualname(cls)} ({origin})")
+            self._note_clash(declaration.name, existing, f"{_qualname(cls)} ({said_as or origin})")
             raise NameClash(declaration.name, existing)
         if declaration.origin != origin:  # a built-in's own declaration says "builtin"
             declaration = replace(declaration, origin=origin)
@@ -189,7 +196,7 @@ class Registry:
                         f"class {cls.__qualname__} is decorated with @declare but is not a "
                         "behaviour: derive it from roomba_bt.behaviours.Action or Condition"
                     )
-                registered.append(self.register(cls, origin))
+                registered.append(self.register(cls, origin, said_as=said))
             except NameClash as exc:  # it declared nothing wrongly: two classes want a name
                 clash = f"{_where(cls)} {exc.clash()}"
                 self._errors.append(PluginError(said, clash, names=names))

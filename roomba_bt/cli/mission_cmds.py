@@ -418,44 +418,57 @@ def behaviours_command(args: argparse.Namespace) -> int:
         return ExitCode.INVALID
     _plugin_warnings(registry)
     data = describe_behaviours(args.names, registry)
+    # a name two plugins declare is no behaviour a mission can use (it is refused, exit 2):
+    # asked for by name, the answer is that error, not one of the two as if it were in use
+    contested = [e for e in data if e["clash"] and e["clash"]["severity"] == "error"]
+    said = ExitCode.INVALID if args.names and contested else ExitCode.OK
     if args.json:
         print(json.dumps(data, indent=2, default=str))
-        return ExitCode.OK
+        return said
     for entry in data:
-        modes = " or ".join(entry["modes"])
-        head = f"{entry['name']}  ({entry['kind']}"
-        if len(entry["modes"]) < 4:
-            head += f"; needs {modes}"
-        if entry["leads_to"]:
-            head += f"; leads to {entry['leads_to']}"
-        if entry["origin"] != "builtin":
-            head += f"; from {entry['origin']}"
-        print(head + ")")
-        if entry["clash"]:
-            print(f"    {entry['clash']['severity']}: {entry['clash']['why']}")
-        if entry["doc"]:
-            print(f"    {entry['doc']}")
-        for p in entry["parameters"]:
-            parts = [p["type"] if not p["choices"] else "|".join(p["choices"])]
-            if p["unit"]:
-                parts[0] += f" [{p['unit']}]"
-            if p["minimum"] is not None or p["maximum"] is not None:
-                lo = "" if p["minimum"] is None else f"{p['minimum']:g}"
-                hi = "" if p["maximum"] is None else f"{p['maximum']:g}"
-                parts.append(f"range {lo}..{hi}")
-            if p["required"]:
-                parts.append("required")
-            elif p["default"] is not None:
-                parts.append(f"default {p['default']}")
-            else:
-                parts.append("optional")
-            doc = f"  {p['doc']}" if p["doc"] else ""
-            print(f"    {p['name']}: {', '.join(parts)}{doc}")
-        reads = entry["reads"]
-        if reads:
-            print(f"    reads packets: {reads}")
-        print()
-    return ExitCode.OK
+        if entry in contested:
+            print(f"{entry['name']}  (declared by two plugins: a mission that uses it is refused)")
+            print(f"    error: {entry['clash']['why']}\n")
+        else:
+            _print_behaviour(entry)
+    return said
+
+
+def _print_behaviour(entry: dict[str, Any]) -> None:
+    """One behaviour of ``describe_behaviours`` as ``roomba-bt behaviours`` prints it."""
+    modes = " or ".join(entry["modes"])
+    head = f"{entry['name']}  ({entry['kind']}"
+    if len(entry["modes"]) < 4:
+        head += f"; needs {modes}"
+    if entry["leads_to"]:
+        head += f"; leads to {entry['leads_to']}"
+    if entry["origin"] != "builtin":
+        head += f"; from {entry['origin']}"
+    print(head + ")")
+    if entry["clash"]:
+        print(f"    {entry['clash']['severity']}: {entry['clash']['why']}")
+    if entry["doc"]:
+        print(f"    {entry['doc']}")
+    for p in entry["parameters"]:
+        parts = [p["type"] if not p["choices"] else "|".join(p["choices"])]
+        if p["unit"]:
+            parts[0] += f" [{p['unit']}]"
+        if p["minimum"] is not None or p["maximum"] is not None:
+            lo = "" if p["minimum"] is None else f"{p['minimum']:g}"
+            hi = "" if p["maximum"] is None else f"{p['maximum']:g}"
+            parts.append(f"range {lo}..{hi}")
+        if p["required"]:
+            parts.append("required")
+        elif p["default"] is not None:
+            parts.append(f"default {p['default']}")
+        else:
+            parts.append("optional")
+        doc = f"  {p['doc']}" if p["doc"] else ""
+        print(f"    {p['name']}: {', '.join(parts)}{doc}")
+    reads = entry["reads"]
+    if reads:
+        print(f"    reads packets: {reads}")
+    print()
 
 
 def schema_command(args: argparse.Namespace) -> int:

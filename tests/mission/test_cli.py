@@ -315,3 +315,47 @@ def test_show_prints_what_a_mission_wrote_each_on_its_line(capsys: Capsys, tmp_p
     assert not [line for line in out.splitlines() if line.startswith("[ok]")], out
     assert "faked\\x0a[ok] mission: says x\\x0a[ok] word" in out
     assert "parameters: word=x\\x0a[ok] word" in out
+
+
+def _installed(folder: Path, dist: str, module: str, cls: str) -> None:
+    """A distribution ``dist`` on ``folder`` (put on sys.path by the caller) whose entry
+    point ``module`` provides a condition ``cls`` named ``wiggle_s27``."""
+    (folder / f"{module}.py").write_text(
+        "from roomba_bt.behaviours import Condition, declare\n\n\n"
+        f'@declare("wiggle_s27", kind="condition")\nclass {cls}(Condition):\n'
+        f'    """{dist}\'s wiggle."""\n\n    def check(self, snapshot):\n        return True\n'
+    )
+    info = folder / f"{dist.replace('-', '_')}-1.0.dist-info"
+    info.mkdir(parents=True)
+    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {dist}\nVersion: 1.0\n")
+    (info / "entry_points.txt").write_text(f"[roomba_bt.behaviours]\n{module} = {module}\n")
+
+
+def test_behaviours_of_a_name_two_plugins_declare_is_the_clash_and_exit_2(
+    capsys: Capsys, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """It showed one of the two as if it were in use, and exit 0; the clash named one side
+    with its distribution and the other without (which to uninstall was half said)."""
+    import roomba_bt.behaviours as behaviours
+    from roomba_bt.behaviours.registry import ENTRY_POINT_GROUP, Registry
+
+    _installed(tmp_path, "bt-first", "s27_first", "FirstWiggle")
+    _installed(tmp_path, "bt-second", "s27_second", "SecondWiggle")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    registry = Registry(entry_point_group=ENTRY_POINT_GROUP)
+    for cls in behaviours.builtin_registry():
+        registry.register(cls.cls, validated=True)
+    monkeypatch.setattr(behaviours, "default_registry", lambda: registry)
+    assert main(["behaviours", "wiggle_s27"]) == 2
+    out, _ = capsys.readouterr()
+    assert out.startswith("wiggle_s27  (declared by two plugins: a mission that uses it is ")
+    assert "'s wiggle" not in out  # neither doc, as if it were the one in use
+    assert (
+        "error: 'wiggle_s27' is declared by two plugins, s27_first.FirstWiggle ('s27_first' "
+        "(s27_first, from bt-first)) and s27_second.SecondWiggle ('s27_second' (s27_second, "
+        "from bt-second))"
+    ) in out
+    assert main(["behaviours", "wiggle_s27", "--json"]) == 2
+    [entry] = json.loads(capsys.readouterr().out)
+    assert entry["clash"]["severity"] == "error"
+    assert main(["behaviours", "wait"]) == 0  # a name no one contests
