@@ -891,7 +891,15 @@ class Action(RobotBehaviour):
 
     def _end_what_terminate_left(self, new_status: py_trees.common.Status) -> None:
         """The halt (and the cycle's end) that an override of :meth:`terminate` left out, or
-        undid by sending a wheel command after ``super().terminate()``."""
+        undid by sending a wheel command after ``super().terminate()``. Not at a run's end
+        (the tree's stop, each ``terminate`` patched into its node to guard it:
+        runtime/teardown.py): the safe stop that follows stops the robot, the outbox is
+        dropped, and what the terminate queued is said there as not written (a halt queued
+        here would replace it, unsaid)."""
+        if "terminate" in vars(self):
+            self._started_motion = self._started_cycle = False
+            self._out_of_driving_since = None
+            return
         robot = self.robot
         driving = (
             self._started_motion and robot is not None and robot.snapshot.mode in DRIVING_MODES
@@ -904,9 +912,7 @@ class Action(RobotBehaviour):
         )
         after_super = self._terminated
         Action.terminate(self, new_status)
-        # a terminate patched into the node is the run's end guarding one that raised
-        # (runtime/teardown.py): that failure is said already, as what it is
-        if (driving or cycle) and "terminate" not in vars(self):
+        if driving or cycle:
             _said_left_going(self, after_super, driving)
 
 

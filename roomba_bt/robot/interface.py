@@ -264,6 +264,12 @@ class Outbox:
             self._senders[channel] = sender
             self._last[channel] = command
 
+    def queued_by(self) -> list[tuple[Command, object]]:
+        """Each command queued on a channel (the wheels, the motors...) with who queued it:
+        what the runtime says of those it drops (a tree's stop at the run's end)."""
+        senders = self._senders
+        return [(command, senders[key]) for key, command in self._queue.items() if key in senders]
+
     def send_stop(self, command: Command, sender: object) -> None:
         """Queue ``command`` (a halt) from ``sender``, which is ending, unless another sender
         already queued a command on its channel in this tick."""

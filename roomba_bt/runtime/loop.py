@@ -673,7 +673,8 @@ def stop_running_tree(
     """Stop the running tree (each running node's ``terminate``, every node even when one
     raises: :func:`~roomba_bt.runtime.teardown.stop_nodes`) and drop what its leaves queued
     on the way out: the safe stop that comes with it (the run's end, a reload from the
-    monitor) supersedes their halts, which Passive would refuse anyway. Meanwhile nothing
+    monitor) supersedes their halts, which Passive would refuse anyway; one that would have
+    set the robot going is said (:func:`dropped_in_stop`). Meanwhile nothing
     written sets the robot going (:meth:`CommandWriter.hold_motion
     <roomba_bt.robot.writer.CommandWriter.hold_motion>`, :func:`held_in_stop`): a plugin's
     terminate that wrote a drive straight to the connection and then blocked drove the robot
@@ -682,12 +683,18 @@ def stop_running_tree(
     as a warning); ``raised_in``: the node whose ``terminate`` raised in the tick that ended
     the run, already said, is stopped without calling it again."""
     writer = runner.connection.writer
+    outbox = runner._outbox
+    # what a tick that raised had queued is dropped too, but was not sent by the stop
+    before = [(id(command), id(sender)) for command, sender in outbox.queued_by()]
     writer.hold_motion(held_in_stop)
     try:
         failures = stop_nodes(runner.mission.root, raised_in)
     finally:
         writer.hold_motion(None)
-    runner._outbox.clear()  # what stood too
+    for command, sender in outbox.queued_by():
+        if sets_going(command) and (id(command), id(sender)) not in before:
+            dropped_in_stop(command, sender)
+    outbox.clear()  # what stood too
     return failures
 
 
@@ -697,6 +704,24 @@ def held_in_stop(command: Command) -> None:
     who = where_in(sys._getframe(1)) or "a behaviour"
     log.warning(
         "%s sent %s (%d) %s while the tree was being stopped: not written (the tree's stop "
+        "sets nothing going: it would run on, unwatched, until the safe stop)",
+        who, command.spec.title, command.opcode, command.data.hex(" "),
+    )  # fmt: skip
+
+
+def dropped_in_stop(command: Command, sender: object) -> None:
+    """A command queued (``send``) while the tree was stopped that would have set the robot
+    going: dropped with the outbox (:func:`stop_running_tree`); said, with the behaviour that
+    queued it and its ``terminate`` (the method that runs then; the line of the ``send``
+    itself is not kept). It was dropped silently, though docs/runtime.md said otherwise."""
+    who = "the runtime"
+    if isinstance(sender, py_trees.behaviour.Behaviour):
+        cls = type(sender)
+        code = getattr(cls.terminate, "__code__", None)
+        where = f" at {code.co_filename}:{code.co_firstlineno}" if code is not None else ""
+        who = f"{sender.name} ({cls.__name__}.terminate{where})"
+    log.warning(
+        "%s queued %s (%d) %s while the tree was being stopped: not written (the tree's stop "
         "sets nothing going: it would run on, unwatched, until the safe stop)",
         who, command.spec.title, command.opcode, command.data.hex(" "),
     )  # fmt: skip

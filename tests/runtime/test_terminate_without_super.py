@@ -295,3 +295,43 @@ def test_a_built_in_cycle_a_halted_action_left_running_is_ended(
     assert after[0][0] - started == pytest.approx(1.0, abs=0.05)
     [said] = _warnings(caplog)
     assert "the built-in cycle it started was left running; ended (Start)" in said
+
+
+#: the stranger's ``sticky`` (bt-bad-run): its terminate sends a drive of its own
+STICKY = '''
+from py_trees.common import Status
+
+from roomba_bt.behaviours import Action, declare
+from roomba_bt.oi import commands
+from roomba_bt.oi.opcodes import opcodes
+
+
+@declare("sticky", kind="action", sends=opcodes("drive"))
+class Sticky(Action):
+    """Drives; its terminate() does not call super() and re-sends a drive."""
+
+    def update(self):
+        self.send(commands.drive_straight(200))
+        return Status.RUNNING
+
+    def terminate(self, new_status):
+        self.send(commands.drive_straight(300))
+'''
+
+
+def test_a_drive_a_terminate_queues_at_the_run_s_end_is_dropped_with_a_warning(
+    run_mission: RunMission, tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """``m/st.yaml`` with ``--timeout 1``: the drive was not written, as docs/runtime.md
+    says, but the warning naming the behaviour it promises was not given."""
+    (tmp_path / "sticky.py").write_text(STICKY)
+    mission = "plugins: [./sticky.py]\ntree:\n  sequence:\n    - mode: safe\n    - sticky\n"
+    with caplog.at_level(logging.WARNING):
+        run = run_mission(mission, permissions=PERMIT, timeout=1.0)
+    assert run.summary.outcome is Outcome.TIMEOUT
+    assert C.drive_straight(300).data not in b"".join(data for _, data in run.link.writes)
+    [said] = [r.getMessage() for r in caplog.records if "sticky" in r.getMessage()]
+    assert said.startswith(
+        f"sticky (Sticky.terminate at {tmp_path / 'sticky.py'}:17) queued Drive (137) 89 01 2c "
+        "80 00 while the tree was being stopped: not written"
+    ), said
