@@ -62,3 +62,80 @@ def test_the_wait_for_driving_mode_example_fails_once_stranded() -> None:
     node.tick_once()
     assert node.status is Status.FAILURE
     assert "left Safe/Full mode and was not brought back within 1 s" in node.feedback_message
+
+
+def frame_attribute_table() -> str:
+    """The table of ``SensorFrame``'s attributes in docs/plugins.md, from the code: each
+    public property, the packets it reads (found by reading it from frames that lack them:
+    each ``MissingPacket`` names one more; with every value 0, so that ``a or b`` reads both,
+    and every value 1, so that a ratio reads its numerator) and the type it gives. A plugin
+    author found the names with ``help()``; the doc did not list them."""
+    from roomba_bt.oi.frames import SensorFrame
+
+    rows = ["| attribute | packets | gives |", "|---|---|---|"]
+    for name, attr in sorted(vars(SensorFrame).items()):
+        if name.startswith("_") or not isinstance(attr, property) or name == "packet_ids":
+            continue
+        ids: set[int] = set()
+        for fill in (0, 1):
+            value = _read_growing(name, ids, fill)
+        packets = ", ".join(str(pid) for pid in sorted(ids))
+        rows.append(f"| `{name}` | {packets} | {type(value).__name__} |")
+    return "\n".join(rows)
+
+
+def _read_growing(name: str, ids: set[int], fill: int) -> object:
+    """Frame attribute ``name`` read from a frame of ``ids`` (each value ``fill``), each
+    packet it names missing added to ``ids`` until it reads."""
+    from roomba_bt.oi.frames import MissingPacket, layout_for
+    from roomba_bt.oi.profiles import CREATE2
+
+    while True:
+        layout = layout_for(tuple(sorted(ids)), CREATE2, False)
+        frame = layout.decode(layout.pack(dict.fromkeys(ids, fill)))
+        try:
+            return getattr(frame, name)
+        except MissingPacket as exc:
+            assert isinstance(exc.packet_id, int) and exc.packet_id not in ids
+            ids.add(exc.packet_id)
+
+
+def test_the_frame_attributes_listed_are_the_code_s() -> None:
+    """If this fails, the frame's attributes changed: put the table it prints between the
+    ``SensorFrame attributes`` markers of docs/plugins.md."""
+    text = DOC.read_text(encoding="utf-8")
+    listed = text.split("<!-- SensorFrame attributes: begin -->\n", 1)[1].split(
+        "\n<!-- SensorFrame attributes: end -->", 1
+    )[0]
+    assert listed == frame_attribute_table(), frame_attribute_table()
+
+
+def test_the_held_for_condition_counts_only_while_it_is_ticked() -> None:
+    """The example of a condition's state: low for ``held`` while ticked every tick holds,
+    across frames the link lost too; a hold from before a tick it missed (the guard was left)
+    counts for nothing."""
+    example = _blocks("## 2. A condition in a file next to the mission")[-1]
+    cls = _run(example, "battery_low_for")["BatteryLowFor"]
+    robot = StubRobot()
+    node = cls("battery_low_for", {"below": "15%", "held": "3s"})
+    node.setup(robot=robot)
+    low = {25: 100, 26: 1000}  # 10 %
+
+    def tick(ticks: int = 1) -> Status:
+        robot.set_frame(low, ticks=ticks)
+        node.tick_once()
+        return node.status
+
+    assert tick() is Status.FAILURE
+    for _ in range(199):  # 2.985 s later: not yet
+        assert tick() is Status.FAILURE
+    assert tick() is Status.SUCCESS  # 3 s after it was first seen low
+    assert tick(ticks=400) is Status.SUCCESS  # 6 s of frames lost: no tick it missed
+    robot.set_frame(low)  # the tree ticked without it: the hold starts again
+    assert tick() is Status.FAILURE
+    for _ in range(199):
+        assert tick() is Status.FAILURE
+    assert tick() is Status.SUCCESS
+    robot.set_frame({25: 900, 26: 1000})
+    node.tick_once()
+    assert node.status is Status.FAILURE
