@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 from roomba_bt.oi.encode import BAUD_CODES
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, PROFILES
+from roomba_bt.oi.stream import SLOT_SECONDS
 
 if TYPE_CHECKING:
     from roomba_bt.mission import Permissions
@@ -133,11 +134,11 @@ def _real(text: str, allowed: str, fits: Callable[[float], bool]) -> float:
     return value
 
 
-#: ``run --watchdog``'s least, seconds: two stream periods (15 ms each). Less trips between
+#: ``run --watchdog``'s least, seconds: two stream periods (15 ms each: 0.03 s). Less trips between
 #: two frames that come on time; 0 turned off the watchdog, and with it every stall and
 #: stream-loss check: a stopped stream froze the mission clock and the run hung, the robot
 #: driving on with its last command, until Ctrl-C.
-MIN_WATCHDOG = 0.03
+MIN_WATCHDOG = 2 * SLOT_SECONDS
 
 
 def watchdog_seconds(text: str) -> float:
