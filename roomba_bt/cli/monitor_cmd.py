@@ -348,9 +348,10 @@ def monitor_command(args: argparse.Namespace) -> int:
     if isinstance(recorded, int):
         return recorded
     record, mission, profile, baud, packets = recorded
-    feed, summary = replay_into_feed(
+    feed, _ = replay_into_feed(
         record, mission, profile, packets, baud, args.record,
         progress=replay_progress("monitor", record),
+        diverged_at=lambda text: print(f"monitor: {args.record}: {text}", file=sys.stderr),
     )  # fmt: skip
     host, port = args.monitor or parse_address(None)
     server = MonitorServer(feed, None, host=host, port=port, readonly=True)
@@ -359,7 +360,7 @@ def monitor_command(args: argparse.Namespace) -> int:
     except OSError as exc:
         print(f"roomba-bt: {address_problem(host, port, exc)}", file=sys.stderr)
         return ExitCode.INVALID
-    print(f"{args.record}: {summary.ticks} ticks, {summary.outcome.value}")
+    print(f"{args.record}: {feed.finished}")
     ended = threading.Event()
     # SIGTERM (a service manager, `kill`) ends it as Ctrl-C does: the pages told, exit 0; it
     # killed the process before (exit 143, no word)

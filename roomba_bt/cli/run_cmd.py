@@ -564,6 +564,7 @@ def load_recorded(args: argparse.Namespace) -> Recorded | int:
 
 
 def replay_command(args: argparse.Namespace) -> int:
+    from roomba_bt.runtime.recording import ending_text
     from roomba_bt.runtime.stack import replay_record
 
     recorded = load_recorded(args)
@@ -577,14 +578,18 @@ def replay_command(args: argparse.Namespace) -> int:
     )  # fmt: skip
     print(summary)
     difference = transport.first_difference()
+    ending = record.ending  # its end note, said last (a record made before has none)
+    ended = f"replay: {ending_text(ending)}" if ending is not None else None
     unended = record.unended()
     if unended is not None:  # compared up to where it ends
         print(f"replay: the record ends at {record.last_t:.3f} s without the run's end ({unended})")
     if difference is None:
         if unended is not None:
             print(f"replay: the tree wrote the same {record.out_bytes} bytes up to there")
-            return ExitCode.OK
-        print(f"replay: the tree wrote the same {transport.written} bytes as the recorded run")
+        else:
+            print(f"replay: the tree wrote the same {transport.written} bytes as the recorded run")
+        if ended is not None:
+            print(ended)
         return ExitCode.OK
     offset, expected, sent = difference
     print(
@@ -597,6 +602,8 @@ def replay_command(args: argparse.Namespace) -> int:
             f"replay: the recorded run holds its operator's acts ({acts}), which replay does "
             f"not do; roomba-bt monitor {args.record} replays them"
         )
+    if ended is not None:
+        print(ended)
     return ExitCode.MISSION_FAILED
 
 

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 from roomba_bt.monitor.feed import RunFeed
 from roomba_bt.monitor.session import STEP, MonitorSession
 from roomba_bt.runtime.loop import StopRequested
-from roomba_bt.runtime.recording import Record
+from roomba_bt.runtime.recording import ENDED, Record, ReplayTransport, ending_text
 from roomba_bt.runtime.stack import replay_record
 from roomba_bt.runtime.summary import RunSummary
 
@@ -39,9 +39,12 @@ def replay_into_feed(
     baud: int,
     name: str,
     progress: Callable[[float], None] | None = None,
+    diverged_at: Callable[[str], None] | None = None,
 ) -> tuple[RunFeed, RunSummary]:
     """Replay ``record`` through ``mission``; the feed holds every tick, packed
-    (``monitor/history.py``). ``progress(fraction)``: at each tenth of the record replayed."""
+    (``monitor/history.py``). ``progress(fraction)``: at each tenth of the record replayed;
+    ``diverged_at(text)``: where the replay diverged from the record, if it did (the command
+    line says it on stderr, as ``replay`` does)."""
     feed = RunFeed(source="record", mission_name=mission.name, packed=True)
     feed.set_tree(mission.root)
     acts = [  # the operator's; the tick guard's are replayed by the runner's own guard
@@ -49,17 +52,55 @@ def replay_into_feed(
         for _, note in record.notes
         if isinstance(note.get("tick"), int) and "tick_guard" not in note
     ]
-    summary, _ = replay_record(
+    summary, transport = replay_record(
         record, mission, profile=profile, packets=packets, baud=baud, name=name,
         gate=ReplayedActs(feed, acts),  # it records each tick in the feed, as live
         raise_interrupts=False,  # Ctrl-C: the monitor shows the summary, as `replay` does
         progress=progress,
     )  # fmt: skip
     for t, note in record.notes:
-        if not isinstance(note.get("tick"), int):  # the tick guard's: shown as the run had it
+        # the tick guard's: shown as the run had it (the end note: below, with the end)
+        if not isinstance(note.get("tick"), int) and ENDED not in note:
             feed.event("force" if "force" in note else "note", _note_text(note), t)
-    feed.finished = f"{summary.outcome.value} (recorded run, {summary.ticks} ticks)"
+    difference = diverged(summary, transport)
+    if difference is not None and diverged_at is not None:
+        diverged_at(difference)
+    feed.finished = how_the_replay_ended(record, summary, difference, feed)
     return feed, summary
+
+
+def how_the_replay_ended(
+    record: Record, summary: RunSummary, difference: str | None, feed: RunFeed
+) -> str:
+    """What the record view says of the end (its banner, and the event log): where the
+    replay diverged from the record, if it did (``difference``: where, what was expected,
+    what was sent; the timeline ends there, as ``replay`` says it: it said only "input
+    ended"), else how the recorded run ended (its end note: "the recorded run was stopped by
+    the operator at t=44.17 s"), else the replay's outcome (an older record)."""
+    ticks = f"recorded run, {summary.ticks} ticks"
+    if difference is not None:
+        feed.event("warning", difference)
+        return f"{difference} ({ticks})"
+    ending = record.ending
+    if ending is not None:
+        text = ending_text(ending)
+        feed.event("control", text)
+        return f"{text} ({ticks})"
+    return f"{summary.outcome.value} ({ticks})"
+
+
+def diverged(summary: RunSummary, transport: ReplayTransport) -> str | None:
+    """``replay diverged from the record at t=75.36 s: expected Motors (138) 8a 07, sent
+    nothing; the timeline ends there``, or None when the replay wrote what the record holds
+    (up to where it ends)."""
+    difference = transport.first_difference()
+    if difference is None:
+        return None
+    _, expected, sent = difference
+    return (
+        f"replay diverged from the record at t={summary.mission_time_s:.2f} s: expected "
+        f"{expected}, sent {sent}; the timeline ends there"
+    )
 
 
 def _note_text(note: dict[str, Any]) -> str:

@@ -178,7 +178,15 @@ class TickGate(Protocol):
 
 
 class StopRequested(Exception):
-    """An operator ended the run (the monitor's stop): it ends as on Ctrl-C, exit 130."""
+    """An operator ended the run (the monitor's stop): it ends as on Ctrl-C, exit 130.
+
+    ``at``: in which half of the last frame it came, for the record's end note (``"before"``
+    the tree's tick on it, as a gate's stop comes; ``"after"``: a stop that came with no
+    frame, once the last one had ticked)."""
+
+    def __init__(self, reason: str, at: str = "before") -> None:
+        super().__init__(reason)
+        self.at = at
 
 
 #: what a second run() of one runner says
@@ -351,6 +359,7 @@ class MissionRunner(BaseHandle):
             except Exception as exc:  # the operator's stop, a lost link, a bug: the safe stop
                 ended_by(exc, summary, answered=self.has_snapshot)
                 raised_in = terminate_raised(exc)
+                summary.ended_at = (-1, getattr(exc, "at", "after"))  # a stop's: before the tick
             finally:
                 if tick_guard is not None:
                     tick_guard.close()  # it writes nothing more: the safe stop is ours
@@ -384,6 +393,7 @@ class MissionRunner(BaseHandle):
     def _finish(
         self, summary: RunSummary, wall_start: float, raised_in: py_trees.behaviour.Behaviour | None
     ) -> None:
+        summary.ended_at = ended_at(self, summary.ended_at)  # for the record's end note
         guard = cast(InterruptGuard, self._guard)  # run()'s: told what the stop does
         first = end_the_tree(self, guard, raised_in)
         self.count_written()  # the safe stop's are said apart
@@ -420,7 +430,7 @@ class MissionRunner(BaseHandle):
                 ride.carry_on(batch)
             if not batch:
                 if isinstance(self.gate, _StopGate):  # no frame: the stop goes on all the same
-                    raise StopRequested(self.gate.reason)
+                    raise StopRequested(self.gate.reason, at="after")
                 if self.input_ended is not None and (why := self.input_ended()):
                     summary.outcome, summary.reason = Outcome.INPUT_ENDED, why
                     return
@@ -603,6 +613,17 @@ class MissionRunner(BaseHandle):
             held = connection.release_forward()
             if held is not None and all(c.spec.channel != "wheels" for c in self._outbox):
                 self._outbox.send(held, self)
+
+
+def ended_at(runner: MissionRunner, said: tuple[int, str] | None) -> tuple[int, str] | None:
+    """Where the run ended, for the record's end note (``RunSummary.ended_at``): the tick of
+    its last frame, and whether before the tree's tick on it (the monitor's stop, which comes
+    through the gate before the tick: ``said``, from its :class:`StopRequested`) or after (a
+    Ctrl-C is taken as after, where a run waits for its next frame; the tree's own end, a
+    timeout); None before the first frame."""
+    if not runner.has_snapshot:
+        return None
+    return runner.snapshot.tick, said[1] if said is not None else "after"
 
 
 def slots_spanned(runner: MissionRunner, count: int, arrival: float) -> int:

@@ -8,7 +8,17 @@ A record is JSON Lines, one object a line::
     {"t": 0.015012, "d": "in",  "b": "1305..."}     <- robot -> host, hex
     {"t": 3.120000, "d": "note", "note": {...}}     <- an act: the monitor's force, the tick
                                                        guard's or the watchdog's drive 0
+    {"t": 9.060000, "d": "note", "note": {"ended": "interrupted", "reason": "stopped by the
+        operator", "time": 8.91, "tick": 594, "at": "before"}}   <- how the run ended
     {"t": 9.075000, "d": "end"}                     <- the run's end (version 2 on)
+
+The end note (``ended``, written after the safe stop) holds the run's outcome, its reason, its
+mission time and where its end came (the stream tick of its last frame, before or after the
+tree's tick on it): ``replay`` and ``roomba-bt monitor`` say how the recorded run ended, and a
+replay ends an interrupted run (the monitor's stop, Ctrl-C, ``stack.stop()``) or a timed-out
+one where it ended, where before it ticked the tree on past it (the tree wrote a command where
+the record holds the safe stop: a difference at the record's last bytes). A record without it
+(made before) is replayed as before.
 
 The header also holds the run's ``watchdog`` and ``grace`` (seconds), and each watchdog trip
 is a note (``{"watchdog": 0.101, "limit": 0.1}``, at the link time it tripped): a replay's
@@ -194,6 +204,38 @@ class RecordingTransport:
         return getattr(self._inner, name)
 
 
+#: the end note's key: the run's outcome (``Outcome.value``)
+ENDED = "ended"
+#: the outcomes that come from outside the tree (an operator, a signal, the run's time limit),
+#: which a replay, whose tree would go on, brings about where the end note says
+ENDED_FROM_OUTSIDE = ("interrupted", "timeout")
+
+
+def end_note(
+    outcome: str, reason: str, mission_time: float, ended_at: tuple[int, str] | None
+) -> dict[str, Any]:
+    """The record's end note: how its run ended, and where (``ended_at``: the tick and
+    half, ``RunSummary.ended_at``; None: before the first frame)."""
+    note: dict[str, Any] = {ENDED: outcome, "reason": reason, "time": round(mission_time, 3)}
+    if ended_at is not None:
+        note["tick"], note["at"] = ended_at
+    return note
+
+
+def ending_text(note: dict[str, Any]) -> str:
+    """How the recorded run ended, in words: ``the recorded run was stopped by the operator
+    at t=44.17 s``, ``... was interrupted (Ctrl-C) at t=3.20 s``, ``... ended in success at
+    t=12.00 s``."""
+    outcome, reason = str(note.get(ENDED)), str(note.get("reason") or "")
+    time = note.get("time")
+    at = f" at t={time:.2f} s" if isinstance(time, int | float) else ""
+    if outcome == "interrupted" and reason.startswith("stopped by"):
+        return f"the recorded run was {reason}{at}"
+    if outcome == "interrupted":
+        return f"the recorded run was interrupted{f' ({reason})' if reason else ''}{at}"
+    return f"the recorded run ended in {outcome}{at}{f': {reason}' if reason else ''}"
+
+
 class RecordError(ValueError):
     """A record file that cannot be replayed; names the file and line."""
 
@@ -226,6 +268,12 @@ class Record:
         if self.header.get("version") == 1:
             return "version 1 records have no end line, or the run was killed"
         return "the run was killed?"
+
+    @property
+    def ending(self) -> dict[str, Any] | None:
+        """The record's end note (how its run ended: :data:`ENDED`), or None for a record
+        made before it was written, or one whose run was killed before its end."""
+        return next((n for _, n in reversed(self.notes) if isinstance(n.get(ENDED), str)), None)
 
     @property
     def watchdog_trips(self) -> list[float] | None:
@@ -511,6 +559,9 @@ class ReplayTransport:
         self._more = True  # the file has chunks not read yet
         self._inbound: deque[tuple[float, bytes, int]] = deque()  # read, not given yet
         self._out_read = 0  # the recorded "out" bytes read from the file so far
+        #: each recorded "out" chunk read and not yet written by the tree: (the offset of
+        #: its end, its time), for :meth:`write`'s clock
+        self._out_times: deque[tuple[int, float]] = deque()
         self._recorded = record.out_bytes
         self._ended = record.ended
         self._progress = progress
@@ -538,6 +589,7 @@ class ReplayTransport:
                 if d == "out":
                     self._out_read += len(b)
                     self._expected += b
+                    self._out_times.append((self._out_read, t))
                 elif queue:
                     self._inbound.append((t, b, self._out_read))
                 return True
@@ -545,11 +597,14 @@ class ReplayTransport:
         return False
 
     def write(self, data: bytes) -> None:
+        """Compare ``data`` with the record's "out" side, and move the clock to the time the
+        recorded run wrote those bytes (:meth:`_written_at`)."""
         start = self.written
         self.written += len(data)
         if self.difference is None:
             while start + len(data) > self._out_read and self._read_chunk():
                 pass
+            self._written_at(start)
             at = start - self._start
             recorded = self._expected[at : at + len(data)]
             if recorded != data:
@@ -561,6 +616,23 @@ class ReplayTransport:
                 if same < len(recorded) or self._ended or not self.exhausted:
                     self.difference = start + same
         self._keep(data)
+
+    def _written_at(self, start: int) -> None:
+        """The clock moves on to the recorded time of the chunk that holds byte ``start`` of
+        the "out" side: the live run wrote it then, on its link's clock. A tick that wrote
+        late after its frame (a slow tick, the process preempted, a slow write of the record
+        on a loaded machine; the real-time simulator catches up at a write, as the robot's
+        world goes on) stamped the command later than the frame, and the mode model times
+        each mode command by that stamp (``ModeModel.apply``: packet 35 may show the old mode
+        for ``settle`` s after it). The replay wrote it at the frame's time: the frames that
+        had queued meanwhile, still in Passive after a cliff, came past that window and were
+        taken for a second fall, and the tree, in Safe live, starved there (run1.jsonl of
+        session 27: ``expected Motors (138) 8a 07, sent nothing`` at 75.36 s of 92.6 s)."""
+        times = self._out_times
+        while times and times[0][0] <= start:
+            times.popleft()
+        if times and times[0][1] > self._now:
+            self._now = times[0][1]
 
     def _keep(self, data: bytes) -> None:
         """Keep the tree's bytes of the command being compared, and drop each command that

@@ -35,12 +35,21 @@ from roomba_bt.robot.errors import DEFAULT_WATCHDOG
 from roomba_bt.runtime.loop import (
     MissionLike,
     MissionRunner,
+    StopRequested,
     TickGate,
     TickObserver,
     stream_request,
 )
-from roomba_bt.runtime.recording import Record, RecordingTransport, ReplayTransport
-from roomba_bt.runtime.summary import DEFAULT_GRACE, DEFAULT_TICK_LIMIT, RunSummary
+from roomba_bt.runtime.recording import (
+    ENDED,
+    ENDED_FROM_OUTSIDE,
+    Record,
+    RecordingTransport,
+    ReplayTransport,
+    end_note,
+    ending_text,
+)
+from roomba_bt.runtime.summary import DEFAULT_GRACE, DEFAULT_TICK_LIMIT, Outcome, RunSummary
 from roomba_bt.runtime.tick_guard import TickGuard, TickGuardLike, recorded_tick_guard
 from roomba_bt.transport.base import Transport
 from roomba_bt.transport.serial_port import DEFAULT_BAUD
@@ -216,8 +225,13 @@ class RunStack:
             return self.runner.run(raise_interrupts=raise_interrupts)
         finally:  # an interrupt raised again too: its summary says how the record ended
             if isinstance(self.transport, RecordingTransport):
+                summary = self.runner.summary
+                self.transport.note(  # how it ended, for replay and the monitor's record view
+                    end_note(summary.outcome.value, summary.reason, summary.mission_time_s,
+                             summary.ended_at)
+                )  # fmt: skip
                 self.transport.flush()
-                self.runner.summary.record_stopped = self.transport.stopped or ""
+                summary.record_stopped = self.transport.stopped or ""
             self._ended.set()
 
     def _warn_off_the_main_thread(self) -> None:
@@ -322,6 +336,56 @@ def _tick_guard(
     return TickGuard(connection, tick_limit) if tick_limit else None
 
 
+class RecordedEnd:
+    """A replay's gate that ends the run where its record's end note says the recorded run was
+    ended from outside its tree (:data:`~roomba_bt.runtime.recording.ENDED_FROM_OUTSIDE`: the
+    monitor's stop, Ctrl-C, its time limit), before or after the tree's tick on that frame,
+    as live; ``inner``: the monitor's replay of the operator's acts, asked first (live, a
+    frame's acts were done before its stop). Without it the replay ticked the tree on past
+    the run's end, and its next command, where the record holds the safe stop, was the
+    replay's first difference (run1.jsonl of session 27: ``expected Drive (137) 89 00 00 00
+    00, sent Drive Direct ...`` at its last bytes)."""
+
+    def __init__(self, note: dict[str, Any], inner: TickGate | None) -> None:
+        self.tick, self.half = int(note["tick"]), str(note.get("at", "after"))
+        self.reason = ending_text(note)
+        self.inner = inner
+        #: whether the replay ended here (its summary then says how the recorded run did)
+        self.ended = False
+
+    def _end(self) -> None:
+        self.ended = True
+        raise StopRequested(self.reason, at=self.half)
+
+    def before_tick(self, runner: MissionRunner) -> bool:
+        ticks = self.inner.before_tick(runner) if self.inner is not None else True
+        tick = runner.snapshot.tick
+        if tick > self.tick or (tick == self.tick and self.half == "before"):
+            self._end()
+        return ticks
+
+    def after_tick(self, runner: MissionRunner) -> None:
+        if self.inner is not None:
+            self.inner.after_tick(runner)
+        if runner.snapshot.tick >= self.tick:  # "after": the run ended with this tick
+            self._end()
+
+    def holds(self, runner: MissionRunner) -> bool:
+        return self.inner is not None and self.inner.holds(runner)
+
+
+def recorded_end(record: Record, gate: TickGate | None) -> RecordedEnd | None:
+    """The gate that ends ``record``'s replay where its run was ended from outside its tree,
+    ``gate`` inside it; None when the record says no such end (an older record, a run that
+    ended by its tree or its link: the replay ends there by itself)."""
+    note = record.ending
+    if note is None or note[ENDED] not in ENDED_FROM_OUTSIDE:
+        return None
+    if not isinstance(note.get("tick"), int) or note.get("at") not in ("before", "after"):
+        return None
+    return RecordedEnd(note, gate)
+
+
 def replay_record(
     record: Record,
     mission: MissionLike,
@@ -363,6 +427,10 @@ def replay_record(
     )
     if trips is not None:  # it trips where the record's did (None: on the record's silence)
         stack.connection.link.replayed_trips = deque(trips)
-    stack.runner.gate = gate  # the monitor's replay of the operator's acts
+    end = recorded_end(record, gate)
+    stack.runner.gate = end or gate  # the monitor's replay of the operator's acts inside
     stack.runner.on_wall_clock = False  # a record's clock: Ctrl-Z suspends, Ctrl-\ quits
-    return stack.run(raise_interrupts=raise_interrupts), transport
+    summary = stack.run(raise_interrupts=raise_interrupts)
+    if end is not None and end.ended and summary.outcome is Outcome.INTERRUPTED:
+        summary.outcome, summary.reason = Outcome.INPUT_ENDED, f"end of the record: {end.reason}"
+    return summary, transport

@@ -197,6 +197,11 @@ class RunSummary:
     #: how a TIMEOUT's reason names the run's time limit when no user gave it (``run
     #: --fast``'s own: ``--fast's own limit of 7200 s``); "" names it ``--timeout 90 s``
     time_limit: str = ""
+    #: where the run's end came: the stream tick of its last frame and whether the tree had
+    #: ticked on it (``"after"``) or not (``"before"``: the monitor's stop comes before the
+    #: tick); the record's end note holds it, and a replay ends an interrupted run there
+    #: (None: before the first frame)
+    ended_at: tuple[int, str] | None = None
 
     @property
     def exit_code(self) -> int:

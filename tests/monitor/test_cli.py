@@ -352,3 +352,68 @@ def test_the_lan_addresses_leave_out_loopback_and_link_local() -> None:
     for text in lan_addresses(ipv6=True):
         address = ipaddress.ip_address(text)
         assert not (address.is_loopback or address.is_link_local or address.is_unspecified)
+
+
+def _served_record(record: Path, *extra: str) -> tuple[str, str]:
+    """``roomba-bt monitor RECORD`` up to its URL, then ended: its stdout and stderr."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "roomba_bt.cli", "monitor", str(record), "--monitor", "0", *extra],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        assert proc.stdout is not None
+        lines = []
+        for line in proc.stdout:
+            lines.append(line)
+            if line.startswith("monitor: http"):
+                break
+        proc.send_signal(signal.SIGTERM)
+        out, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 0, err
+    return "".join(lines) + out, err
+
+
+def test_a_record_view_whose_replay_diverges_says_where_on_stderr_and_the_page(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A record whose replay diverges (another mission, an older record) ended the view there
+    saying only 'input ended (recorded run, N ticks)'; stderr said nothing. Now it says where,
+    what was expected and what was sent, as ``replay`` does; the page's banner holds the same
+    (``feed.finished``)."""
+    pytest.importorskip("aiohttp")
+    record = tmp_path / "run.jsonl"
+    argv = ["run", str(SHUTTLE), "--fast", "--display", "none", "--timeout", "2"]
+    main([*argv, "--record", str(record)])
+    capsys.readouterr()
+    faster = tmp_path / "faster.yaml"
+    faster.write_text(SHUTTLE.read_text().replace("velocity: 100 mm/s", "velocity: 150 mm/s"))
+    out, err = _served_record(record, "--mission", str(faster))
+    said = (
+        "replay diverged from the record at t=0.01 s: expected Drive (137) 89 00 64 80 00, "
+        "sent Drive (137) 89 00 96 80 00; the timeline ends there"
+    )
+    assert f"monitor: {record}: {said}" in err, err
+    assert out.startswith(f"{record}: {said} (recorded run, "), out
+
+
+def test_a_record_says_how_its_run_ended_and_its_replay_ends_there(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The record's end note: ``replay`` and the record view say how the recorded run ended
+    (they said 'input ended'), and a replay ends a timed-out run where it timed out."""
+    pytest.importorskip("aiohttp")
+    record = tmp_path / "run.jsonl"
+    argv = ["run", str(SHUTTLE), "--fast", "--display", "none", "--timeout", "2"]
+    assert main([*argv, "--record", str(record)]) == 1
+    capsys.readouterr()
+    ended = "the recorded run ended in timeout at t=2.01 s: --timeout 2 s of mission time ran out"
+    assert main(["replay", str(record)]) == 0
+    out = capsys.readouterr().out
+    assert f"replay: {ended}" in out
+    assert "the tree wrote the same" in out
+    out, _ = _served_record(record)
+    assert out.startswith(f"{record}: {ended}"), out

@@ -12,6 +12,8 @@ from typing import Any
 import pytest
 from runtime.simrun import (  # tests/runtime: a room with a drop, a recorded stall
     LEDGE,
+    OVER_THE_EDGE_AND_ON,
+    BusyAfterTheFall,
     over_the_edge,
     record_run,
     stream_gap_link,
@@ -817,8 +819,79 @@ def test_the_record_of_a_stall_is_shown_whole_the_watchdogs_trip_among_its_event
     feed, summary = replay_into_feed(
         record, mission, CREATE2, tuple(record.header["packets"]), 115200, str(path)
     )
-    assert summary.reason == "end of the record"  # not its first difference
+    # not its first difference: the end of the record, where the run's --timeout ended it
+    assert summary.reason.startswith("end of the record: the recorded run ended in timeout")
     assert summary.mission_time_s >= 3.0  # the run's 3 s, as recorded
     assert summary.stalls == summary.stalls_ridden == 1
     notes = [e.text for e in feed.events if e.kind == "note"]
     assert notes == ["watchdog: no valid sensor frame for 105 ms"]
+
+
+class ScriptedOperator:
+    """The monitor's session as the run's gate, its operator's requests made at set stream
+    ticks (the first frame at or past each) through its API, from the tick thread: on the
+    virtual clock a page's thread acts at no tick the test can name."""
+
+    def __init__(self, session: MonitorSession, acts: list[tuple[int, str]]) -> None:
+        self.session = session
+        self.acts = sorted(acts)
+
+    def before_tick(self, runner: MissionRunner) -> bool:
+        while self.acts and self.acts[0][0] <= runner.snapshot.tick:
+            self.session.request(self.acts.pop(0)[1])
+        return self.session.before_tick(runner)
+
+    def after_tick(self, runner: MissionRunner) -> None:
+        self.session.after_tick(runner)
+
+    def holds(self, runner: MissionRunner) -> bool:
+        return self.session.holds(runner)
+
+
+def test_a_run_paused_stepped_stopped_and_late_after_a_fall_replays_byte_for_byte(
+    tmp_path: Path,
+) -> None:
+    """Session 27's run1.jsonl, without a browser: a real-time `clean` run paused, resumed,
+    stepped and stopped from the page, whose host, loaded, wrote its Safe after a cliff fall
+    0.36 s after the fall's frame (stale frames dropped). The record's replay starved at the
+    Motors after that Safe ('input ended' at 75 s of 92 s; the replay wrote Safe at the
+    frame's time), and, past it, ticked the tree on beyond the operator's stop (the stop was
+    not in the record). Now it writes the recorded bytes to the end, and says how the run
+    ended."""
+    (tmp_path / "ledge.yaml").write_text(LEDGE)
+    source, path = tmp_path / "edge.yaml", tmp_path / "run.jsonl"
+    source.write_text(OVER_THE_EDGE_AND_ON)
+    mission = load_mission(source, {"wait": "5s"}, profile=CREATE2)
+    link = BusyAfterTheFall(Simulator(load_world(tmp_path / "ledge.yaml"), CREATE2, 0))
+    stack = RunStack(mission, link, profile=CREATE2, timeout_s=60.0,
+                     record=Recording(path, str(source), {"wait": "5s"}))  # fmt: skip
+    feed = RunFeed(history=5000, mission_name=mission.name)
+    feed.set_tree(mission.root)
+    session = MonitorSession(feed, simulator=True, stream_packets=stack.packets)
+    acts = [(100, "pause"), (150, "step"), (160, "resume"),  # before the fall (at ~4.3 s)
+            (420, "pause"), (440, "resume"), (500, "stop")]  # after it, in the wait  # fmt: skip
+    stack.runner.gate = ScriptedOperator(session, acts)
+    live = stack.run()
+    stack.close()
+    assert live.outcome is Outcome.INTERRUPTED and live.reason == "stopped by the operator"
+    assert live.falls == {"cliff": 1} and live.stale_frames_dropped >= 20
+    record = load_record(path)
+    assert link.busy_s == 0.0  # the host was busy after the fall
+    assert [next(iter(n)) for _, n in record.notes] == [
+        "pause", "resume",  # pause, then the step: its resume and its pause
+        "pause", "resume",  # the resume; after the fall, a pause
+        "pause", "resume",  # and its resume
+        "ended",  # the operator's stop
+    ]  # fmt: skip
+    differences: list[str] = []
+    replayed, summary = replay_into_feed(
+        record, load_mission(source, {"wait": "5s"}, profile=CREATE2), CREATE2, stack.packets,
+        115200, "x", diverged_at=differences.append,
+    )  # fmt: skip
+    assert differences == []  # the same bytes, to the safe stop's
+    assert summary.ticks == live.ticks and summary.falls == live.falls
+    assert _ticks(replayed) == _ticks(feed)
+    assert record.ending is not None and record.ending["time"] == round(live.mission_time_s, 3)
+    ended = f"the recorded run was stopped by the operator at t={record.ending['time']:.2f} s"
+    assert replayed.finished == f"{ended} (recorded run, {live.ticks} ticks)"
+    assert replayed.events[-1].text == ended

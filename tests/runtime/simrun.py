@@ -10,6 +10,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.opcodes import opcodes
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.runtime.loop import MissionRunner
 from roomba_bt.runtime.summary import RunSummary
@@ -38,6 +40,9 @@ tree:
     - mode: safe
     - drive: {velocity: 100 mm/s, radius: spin_left}
 """
+
+
+SAFE, START = bytes(opcodes("safe")), bytes(opcodes("start"))
 
 
 class TapLink(SimLink):
@@ -162,6 +167,51 @@ tree:
           - {{name: safe again, mode: safe}}
           - wait: {wait}
 """
+
+
+#: forward into :data:`LEDGE`'s drop until the robot falls to Passive by itself, then, as
+#: ``clean`` does, Safe again and the brushes on (the command run1's replay starved before)
+OVER_THE_EDGE_AND_ON = """\
+mission: over the edge and on
+parameters:
+  wait: {type: duration, default: 1s}
+tree:
+  fallback:
+    - sequence:
+        - mode: safe
+        - drive: {velocity: 200 mm/s, distance: 2 m}
+    - sequence:
+        name: after the cliff
+        children:
+          - cliff: any
+          - mode: safe
+          - motors: {main_brush: true, vacuum: true}
+          - wait: ${wait}
+"""
+
+
+class BusyAfterTheFall(SimLink):
+    """The host is busy for ``busy_s`` between the frame that shows the robot's own fall to
+    Passive (a cliff) and its tick's Safe: a loaded machine (a browser loading the monitor's
+    page, the record's write). As the real-time simulator does at a write, the robot's world
+    catches up first, so Safe goes out later on the link's clock than the frame it answers,
+    and the frames sent meanwhile (still in Passive) queue up for the next read, where the
+    runtime drops all but the newest as stale."""
+
+    def __init__(self, simulator: Simulator, busy_s: float = 0.36) -> None:
+        super().__init__(simulator)
+        self.busy_s = busy_s
+        #: the robot was in Safe or Full, and the host has sent no Start since (a monitor's
+        #: pause ends in one): a Passive now is the robot's own fall
+        self.driven = False
+
+    def write(self, data: bytes) -> None:
+        if self.driven and self.simulator.mode is OIMode.PASSIVE and data[:1] == SAFE:
+            self.advance(self.busy_s)
+            self.busy_s = 0.0
+        super().write(data)
+        driving = self.simulator.mode in (OIMode.SAFE, OIMode.FULL)
+        self.driven = (self.driven or driving) and data[-1:] != START
 
 
 #: a plugin's leaf: drives at 300 mm/s, and its terminate notes the wheel command the robot

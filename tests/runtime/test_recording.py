@@ -12,11 +12,17 @@ from roomba_bt.cli import main
 from roomba_bt.mission import load_mission
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.runtime.recording import RecordingTransport, load_record
-from roomba_bt.runtime.stack import replay_record
-from roomba_bt.runtime.summary import RunSummary
+from roomba_bt.runtime.stack import Recording, RunStack, replay_record
+from roomba_bt.runtime.summary import Outcome, RunSummary
 from roomba_bt.sim import SimLink, Simulator, load_world
 
-from .simrun import record_run, stream_gap_link
+from .simrun import (
+    LEDGE,
+    OVER_THE_EDGE_AND_ON,
+    BusyAfterTheFall,
+    record_run,
+    stream_gap_link,
+)
 
 FRAME = bytes.fromhex("131a070009000a000b000c001906511a0a88220023022b020d2c020dca")
 HEADER = {"profile": "create2", "baud": 115200, "mission": "bump-and-turn", "packets": [7]}
@@ -306,3 +312,50 @@ def test_the_replay_of_a_long_record_says_how_far_it_has_gone(
     said = [line for line in capsys.readouterr().err.splitlines() if "% of" in line]
     assert said[0].startswith(f"replay: 10% of {path} (0:02 of 0:20 of the run)"), said
     assert len(said) == 10 and said[-1].startswith(f"replay: 100% of {path}"), said
+
+
+def test_a_command_written_late_after_its_frame_replays_at_its_recorded_time(
+    tmp_path: Path,
+) -> None:
+    """A replay wrote each command at the time of the frame its tick ran on, the live run at
+    its own later time: the mode model waits ``settle`` after a mode command for packet 35
+    to follow, from when it was written. After a cliff fall a host busy for 0.36 s wrote Safe
+    0.36 s after the fall's frame, and the frames queued meanwhile (in Passive) came with it;
+    the replay, its Safe 0.36 s earlier, took them for a second fall, and its tree starved
+    where the live one went on (session 27's run1.jsonl: ``expected Motors (138) 8a 07, sent
+    nothing`` at 75 s of 92 s)."""
+    (tmp_path / "ledge.yaml").write_text(LEDGE)
+    source, path = tmp_path / "edge.yaml", tmp_path / "run.jsonl"
+    source.write_text(OVER_THE_EDGE_AND_ON)
+    mission = load_mission(source, {}, profile=CREATE2)
+    link = BusyAfterTheFall(Simulator(load_world(tmp_path / "ledge.yaml"), CREATE2, 0))
+    stack = RunStack(mission, link, profile=CREATE2, timeout_s=20.0,
+                     record=Recording(path, str(source)))  # fmt: skip
+    live = stack.run()
+    stack.close()
+    assert live.outcome is Outcome.SUCCESS, live.reason
+    assert live.falls == {"cliff": 1} and live.stale_frames_dropped >= 20
+    record = load_record(path)
+    summary, difference, written = _replayed(path)
+    assert difference is None, difference
+    assert written == record.out_bytes
+    assert summary.falls == live.falls and summary.ticks == live.ticks
+
+
+def test_a_record_made_before_the_end_note_still_replays_and_says_no_ending(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The end note is new: a record without it is read and replayed as before."""
+    lines = _recorded_run(tmp_path, capsys)
+    [ending] = [line for line in lines if '"ended"' in line]
+    assert json.loads(ending)["note"] == {
+        "ended": "success", "reason": "", "time": 3.03, "tick": 202, "at": "after"
+    }  # fmt: skip
+    older = tmp_path / "older.jsonl"
+    older.write_text("".join(line for line in lines if line != ending), encoding="utf-8")
+    assert load_record(older).ending is None
+    assert main(["replay", str(older)]) == 0
+    out = capsys.readouterr().out
+    assert "the tree wrote the same" in out and "replay: the recorded run" not in out
+    assert main(["replay", str(tmp_path / "run.jsonl")]) == 0
+    assert "replay: the recorded run ended in success at t=3.03 s\n" in capsys.readouterr().out
