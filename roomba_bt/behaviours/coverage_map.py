@@ -6,8 +6,9 @@ coarse grid (10 cm cells) in the odometry frame and marks in it, every tick:
 * **swept** cells: under the strip the brushes clean (90 mm left of the centre to 185 mm
   right, where the side brush reaches past the body), while the robot drives;
 * **blocked** cells: where the bumper met something, where a light-bumper ray sees a surface
-  (its signal gives the distance), ahead of a cliff sensor or a virtual wall's beam; the
-  cells next to a blocked one are no place for the robot's centre.
+  (its signal gives the distance), under a cliff sensor that sees a drop (DROP cells, joined
+  along the drop's edge: :mod:`~roomba_bt.behaviours.drops`), ahead of a virtual wall's
+  beam; the cells next to a blocked one are no place for the robot's centre.
 
 It never reads anything but the snapshot (the encoders and the sensors): no true pose, no
 simulator map. With the grid it decides where to go::
@@ -33,18 +34,20 @@ curve). The lanes' direction is re-anchored on the walls: while it follows a str
 of wall (a metre with the heading within 2 deg), the wall's heading by odometry becomes the
 lanes' axis, so lanes stay parallel to the walls however the heading has drifted.
 
-Every driving step stops for hazards in the tick that shows them (bump, cliff, virtual
-wall), backs off and goes on with the next decision. In Safe mode the firmware stops first
-at a cliff and drops to Passive (the brushes stop too); that fails ``cover`` in the tick it
-shows (``Action.stranded`` with no grace: the cliff is mapped, and nothing brings the robot
-back while it waits; it waited a second, 21 a run by the apartment's stairs), and the
-mission re-enters Safe, turns the motors on and starts it again (missions/clean.yaml: a
-``retry``). Started again in the same run it goes on with what it knew: its map and pose are
-kept on the blackboard (:data:`MAP_KEY`, dropped by each run's ``setup``), and its plan: the
-move the firmware stopped meets the hazard in its first tick and reacts as in Full mode
-(backs off, and the lane, edge or path goes on as it would have). A ``cover`` that another
-one's map is handed to backs off, turns and makes for the nearest unswept floor. A wheel
-drop fails it.
+Every driving step stops for hazards in the tick that shows them (bump, cliff, virtual wall),
+backs off and goes on with the next decision; and short of a drop it knows (a lane, a shift, a
+path's leg, a seek, an arc), slowing near one, while its edge follows a known drop as a wall
+(:mod:`~roomba_bt.behaviours.drops`: it met the apartment's stairs 12-30 times a run, each a
+fall to Passive in Safe mode, until session 27). In Safe mode the firmware stops first at a
+cliff and drops to Passive (the brushes stop too); that fails ``cover`` in the tick it shows
+(``Action.stranded`` with no grace: the cliff is mapped, and nothing brings the robot back
+while it waits; it waited a second, 21 a run by the apartment's stairs), and the mission
+re-enters Safe, turns the motors on and starts it again (missions/clean.yaml: a ``retry``).
+Started again in the same run it goes on with what it knew: its map and pose are kept on the
+blackboard (:data:`MAP_KEY`, dropped by each run's ``setup``), and its plan: the move the
+firmware stopped meets the hazard in its first tick and reacts as in Full mode (backs off, and
+the lane, edge or path goes on as it would have). A ``cover`` that another one's map is handed
+to backs off, turns and makes for the nearest unswept floor. A wheel drop fails it.
 """
 
 from __future__ import annotations
@@ -61,6 +64,7 @@ from py_trees.common import Status
 from roomba_bt.behaviours import driving
 from roomba_bt.behaviours.declare import WHEEL, Action, Param, declare, wheel_speed_param
 from roomba_bt.behaviours.docking.common import DockWatch
+from roomba_bt.behaviours.drops import DROP, DropEdge, KnownDrops
 from roomba_bt.behaviours.edging import EdgeSteering, signal_distance_mm
 from roomba_bt.behaviours.units import DISTANCE, DURATION
 from roomba_bt.oi import commands as oi
@@ -86,9 +90,10 @@ _OK, _RUN = Status.SUCCESS, Status.RUNNING
 CELL_MM = 100.0
 _SIDE = 600
 _HALF_SIDE = _SIDE // 2
-#: cell bits (DROP: blocked where a cliff sensor saw a drop, which ``cover`` treats as any
-#: other blocked cell and ``home_by_map``'s path across blocked cells never crosses)
-SWEPT, BLOCKED, VISITED, TRIED, DROP = 1, 2, 4, 8, 16
+#: cell bits (and DROP, 16: where a cliff sensor saw the floor end, :mod:`.drops`; ``cover``
+#: treats it as any other blocked cell, ``home_by_map``'s path across blocked cells never
+#: crosses it)
+SWEPT, BLOCKED, VISITED, TRIED = 1, 2, 4, 8
 #: a cell's four neighbours, as steps in the cell index
 NEIGHBOUR_STEPS = (-_SIDE, _SIDE, -1, 1)
 #: the strip the brushes clean, as points across the body (x forward, y left; mm): the main
@@ -122,7 +127,11 @@ MAP_KEY = "/roomba/cover/map"
 
 class FloorMap:
     """The robot's own grid: one byte a cell, in the odometry frame (mm), bits SWEPT, BLOCKED,
-    VISITED, TRIED; ``near`` counts the blocked cells around each cell (3 x 3)."""
+    VISITED, TRIED, DROP; ``near`` counts the blocked cells around each cell (3 x 3),
+    ``drops`` keeps the drops (:class:`~roomba_bt.behaviours.drops.KnownDrops`)."""
+
+    #: cells a side
+    SIDE = _SIDE
 
     def __init__(self) -> None:
         self.cells = bytearray(_SIDE * _SIDE)
@@ -134,6 +143,8 @@ class FloorMap:
         #: cells where a receiver saw a dock's beam, each with the odometry's path (mm) when
         #: it last did: the way home leads to the nearest of the latest (``home_by_map``)
         self.beams: dict[Cell, float] = {}
+        #: where the cliff sensors saw drops, and the moves' look at them
+        self.drops = KnownDrops(self)
 
     @staticmethod
     def cell(x: float, y: float) -> Cell | None:
@@ -165,27 +176,22 @@ class FloorMap:
         """What ``cover`` says when it is done: the floor swept, by odometry."""
         return f"floor done: {self.swept * (CELL_MM / 1000.0) ** 2:.1f} m² swept by its own map"
 
-    def block(self, x: float, y: float, also: int = 0) -> None:
-        """Something is at (x, y): that cell is blocked (with the bits ``also``: DROP), its
-        neighbours no place for the robot's centre."""
+    def block(self, x: float, y: float) -> None:
+        """Something is at (x, y): that cell is blocked, its neighbours no place for the
+        robot's centre."""
         cell = self.cell(x, y)
-        if cell is None:
+        if cell is None or self.cells[cell] & BLOCKED:
             return
-        if self.cells[cell] & BLOCKED:
-            self.cells[cell] |= also
-            return
-        self.cells[cell] |= BLOCKED | also
+        self.cells[cell] |= BLOCKED
         near = self.near
         for d in (-_SIDE - 1, -_SIDE, -_SIDE + 1, -1, 0, 1, _SIDE - 1, _SIDE, _SIDE + 1):
             if near[cell + d] < 255:
                 near[cell + d] += 1
 
-    def block_ahead(
-        self, x: float, y: float, theta: float, reach: float, spread: float, also: int = 0
-    ) -> None:
+    def block_ahead(self, x: float, y: float, theta: float, reach: float, spread: float) -> None:
         """Block the points ``reach`` mm from (x, y) at ``theta`` and ``theta +- spread``."""
         for a in (theta - spread, theta, theta + spread):
-            self.block(x + reach * math.cos(a), y + reach * math.sin(a), also)
+            self.block(x + reach * math.cos(a), y + reach * math.sin(a))
 
     def free(self, cell: Cell) -> bool:
         """May the robot's centre be in this cell (nothing known blocks it)?"""
@@ -379,8 +385,8 @@ class Bearings:
                 0.0 if bumps.bump_left == bumps.bump_right else (0.6 if bumps.bump_left else -0.6)
             )
             fmap.block_ahead(x, y, theta + spread, _RADIUS_MM + 30.0, 0.35)
-        if frame.any_cliff:
-            fmap.block_ahead(x, y, theta, _RADIUS_MM + 60.0, 0.5, DROP)
+        if frame.any_cliff:  # under the sensors that see it, joined along its edge
+            fmap.drops.met(frame, pose)
         if frame.virtual_wall:
             fmap.block_ahead(x, y, theta, _RADIUS_MM + 80.0, 0.5)
 
@@ -605,12 +611,15 @@ class Cover(Action):
                 why = "swept"
             elif kind in ("lane", "shift") and self._bearings.blocked_ahead(self._line[2]):
                 why = "map"
+            elif self._map.drops.ahead(pose, pose.theta_rad, guessed=kind != "goto"):
+                why = "drop"  # known: not met again (drops.py)
         if why is None:
             speed = self.number("speed")
             if kind == "shift" or kind == "goto":
                 speed = min(speed, 250.0)
             if driving.near_ahead(frame):
                 speed = min(speed, 150.0)
+            speed = self._map.drops.speed(pose, pose.theta_rad, speed)
             return driving.steer_along(self._line, pose.x_mm, pose.y_mm, pose.theta_rad, speed)
         self._achieved = along
         self._why = why
@@ -633,10 +642,10 @@ class Cover(Action):
             else:
                 self._lane(driving.wrap(self._lane_heading + math.pi))
         elif kind == "goto":
-            if self._why != "limit":  # blocked on the way: decide again from here
-                # met something: no path that way again (it bumped into it, path after path)
-                if self._why in driving.BACK_OFF_MM:
-                    self._map.avoid.add(self._goto_cell)
+            if self._why not in ("limit", "drop"):  # blocked on the way: decide again
+                # from here (a known drop: this leg ends short of it, the path goes on)
+                if self._why in driving.BACK_OFF_MM:  # met something: no path that way again
+                    self._map.avoid.add(self._goto_cell)  # (it bumped into it, path after path)
                 self._plan.clear()
                 self._decide()
             else:
@@ -654,6 +663,7 @@ class Cover(Action):
         self._edge_yield = (self._map.swept, self._pose.path_mm)
         self._edge_recovery: tuple[str, float, float, str] | None = None
         self._steering = EdgeSteering()
+        self._drop_edge = DropEdge(self._map.drops)
         self._bearings.off_wall()
 
     def _edging(self, frame: SensorFrame) -> tuple[float, float] | None:
@@ -682,12 +692,16 @@ class Cover(Action):
                 recovery = self._edge_recovery = ("turn", odo.angle_rad, snap.time, cause)
                 phase, mark, since, cause = recovery
             turn = math.radians(35.0 if cause == "bump" else 60.0)
-            if odo.angle_rad - mark < turn and snap.time - since < 3.0:
+            turned = odo.angle_rad - mark
+            if cause == "cliff" and self._drop_edge.along(odo, turned):
+                turned = turn  # along the drop it just mapped: the steering takes it on
+            if turned < turn and snap.time - since < 3.0:
                 return (-150.0, 150.0)
             self._edge_recovery = None
             self._steering.reset()
+        signals, speed = self._drop_edge.view(frame, odo, speed)  # known drops as walls
         left, right, error = self._steering.wheels(
-            frame.light_bump_signals, speed, self.number("edge_distance"), snap.time
+            signals, speed, self.number("edge_distance"), snap.time
         )
         if error is None:  # turning at a wall ahead, or no wall on the right
             self._bearings.off_wall()
@@ -755,6 +769,8 @@ class Cover(Action):
         radius, side, start = self._arc
         turned = side * (self._pose.angle_rad - start)
         why = driving.blocked(frame)
+        if why is None and self._map.drops.ahead(self._pose, self._pose.theta_rad):
+            why = "drop"  # a known drop in the arc's way: not met again
         if why is not None or self.snapshot.time - self._since > 6.0:
             self._plan.clear()  # something beside the lane: decide again from here
             self._why = why or "stalled"

@@ -55,6 +55,11 @@ OMNI_AHEAD_MM = 130.0
 #: positive), starting at the bumper and seeing this far beyond it.
 LIGHT_BUMP_ANGLES_DEG = (65.0, 38.0, 12.0, -12.0, -38.0, -65.0)
 LIGHT_BUMP_RANGE_MM = 150.0
+#: The four cliff sensors (packets 9-12: left, front left, front right, right): points on the
+#: floor this far from the body's centre, at these angles from the heading (degrees, CCW
+#: positive). ``cover`` marks a drop where the sensors that saw it are.
+CLIFF_SENSOR_ANGLES_DEG = (60.0, 20.0, -20.0, -60.0)
+CLIFF_SENSOR_RADIUS_MM = 150.0
 
 #: Where Baud (129) can be sent from, for advice on a robot at the wrong rate: the robot
 #: layer's ``Connection.set_baud``; no ``roomba-bt`` command sends it.

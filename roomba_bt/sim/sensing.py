@@ -33,7 +33,13 @@ from math import trunc
 
 from roomba_bt.oi.bits import BUMP_BITS, WHEEL_DROP_BITS
 from roomba_bt.oi.ir import LighthouseBeam, dock_character, lighthouse_character
-from roomba_bt.oi.profiles import LIGHT_BUMP_ANGLES_DEG, LIGHT_BUMP_RANGE_MM, OMNI_AHEAD_MM
+from roomba_bt.oi.profiles import (
+    CLIFF_SENSOR_ANGLES_DEG,
+    CLIFF_SENSOR_RADIUS_MM,
+    LIGHT_BUMP_ANGLES_DEG,
+    LIGHT_BUMP_RANGE_MM,
+    OMNI_AHEAD_MM,
+)
 from roomba_bt.sim.geometry import Segment, closest_point, point_in_polygon, wrap_angle
 from roomba_bt.sim.state import RobotState
 from roomba_bt.sim.world import ROBOT_RADIUS_MM, DockSpec
@@ -43,8 +49,7 @@ _LIGHT_BUMP_ANGLES = tuple(math.radians(a) for a in LIGHT_BUMP_ANGLES_DEG)
 _LIGHT_BUMP_DIRECTIONS = tuple((math.cos(a), math.sin(a)) for a in _LIGHT_BUMP_ANGLES)
 _LIGHT_BUMP_RAYS = tuple((i, ca, sa) for i, (ca, sa) in enumerate(_LIGHT_BUMP_DIRECTIONS))
 LIGHT_BUMP_THRESHOLD = 100
-_CLIFF_ANGLES = tuple(math.radians(a) for a in (60.0, 20.0, -20.0, -60.0))
-CLIFF_SENSOR_RADIUS_MM = 150.0
+_CLIFF_ANGLES = tuple(math.radians(a) for a in CLIFF_SENSOR_ANGLES_DEG)
 CLIFF_FLOOR_SIGNAL = 2600
 CLIFF_DROP_SIGNAL = 20
 WALL_SENSOR_RANGE_MM = 120.0

@@ -140,6 +140,37 @@ def test_clean_runs_in_safe_mode_and_cleans_on_after_the_firmware_stops_at_a_cli
             assert back.time - event.time < 0.1, (event, back)
 
 
+#: A room 4 m x 2.5 m whose near 0.8 m is a drop (a landing's edge, 4 m of it), the robot
+#: 0.8 m from it, facing it.
+LEDGE = """
+name: ledge
+rooms: [[[0, 0], [4, 0], [4, 2.5], [0, 2.5]]]
+drops: [{name: landing, rect: [0, 0, 4, 0.8]}]
+robot: {start: {at: [2.0, 1.6], heading: -90}}
+"""
+
+
+def test_clean_meets_a_drop_it_knows_far_less_often(tmp_path: Path) -> None:
+    """Each cliff in Safe mode is a drop to Passive with the front caster over the edge.
+    ``cover`` met this landing's edge 40 times in 4 minutes (the floor not done): its edge,
+    with no wall on its right (the light bumper sees none over a drop), curved right into
+    it every 20 cm and did it again on every later edge along it, and lanes met it wherever
+    the few cells it had marked were not. Now the drop it met is on its map, joined along
+    the edge: the edge follows it as a wall, lanes end short of it (drops.py)."""
+    world = tmp_path / "ledge.yaml"
+    world.write_text(LEDGE)
+    spec = EpisodeSpec(
+        str(MISSIONS / "clean.yaml"), str(world), random_start=False, timeout_s=270.0,
+        params=(("duration", "4min"), ("go_home", "false")), trace_every=0,
+    )  # fmt: skip
+    result = run_episode(spec)
+    assert result.outcome == "success", result.reason
+    assert not result.fell
+    falls = dict(result.falls).get("cliff", 0)
+    assert 0 < falls <= 16, result.falls  # 40 before: at most two fifths of that
+    assert result.coverage is not None and result.coverage.overall >= 0.95  # 0.961 before
+
+
 def test_clean_says_why_it_stopped_and_a_retried_cover_shows_no_old_failure(
     cliff_world: str, caplog: pytest.LogCaptureFixture
 ) -> None:
