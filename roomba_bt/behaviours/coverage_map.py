@@ -64,7 +64,7 @@ from py_trees.common import Status
 from roomba_bt.behaviours import driving
 from roomba_bt.behaviours.declare import WHEEL, Action, Param, declare, wheel_speed_param
 from roomba_bt.behaviours.docking.common import DockWatch
-from roomba_bt.behaviours.drops import DROP, DropEdge, KnownDrops
+from roomba_bt.behaviours.drops import DropEdge, KnownDrops
 from roomba_bt.behaviours.edging import EdgeSteering, signal_distance_mm
 from roomba_bt.behaviours.units import DISTANCE, DURATION
 from roomba_bt.oi import commands as oi

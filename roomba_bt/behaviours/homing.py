@@ -51,7 +51,6 @@ from py_trees.common import Status
 from roomba_bt.behaviours import driving
 from roomba_bt.behaviours.coverage_map import (
     BLOCKED,
-    DROP,
     MAP_KEY,
     NEIGHBOUR_STEPS,
     SWEPT,
@@ -61,6 +60,7 @@ from roomba_bt.behaviours.coverage_map import (
     FloorMap,
 )
 from roomba_bt.behaviours.declare import Action, Param, declare, wheel_speed_param
+from roomba_bt.behaviours.drops import DROP
 from roomba_bt.behaviours.units import DURATION
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import ENCODER_PACKETS, IR_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS, SensorFrame

@@ -14,7 +14,6 @@ from py_trees.common import Status
 
 from roomba_bt.behaviours import coverage_map, driving
 from roomba_bt.behaviours.coverage_map import (
-    DROP,
     SWEPT,
     VISITED,
     Bearings,
@@ -22,6 +21,7 @@ from roomba_bt.behaviours.coverage_map import (
     Cover,
     FloorMap,
 )
+from roomba_bt.behaviours.drops import DROP
 from roomba_bt.behaviours.homing import ACROSS_PLANS, HomeByMap
 from roomba_bt.evaluate.episode import EpisodeResult
 from roomba_bt.oi import commands as oi
@@ -310,7 +310,8 @@ def _strip_map(
         fmap.beams[_cell(fmap, x, y)] = path
     if across_at is not None:
         for y in (-100, 0, 100):
-            fmap.block(across_at + 50.0, y + 50.0, also)
+            fmap.block(across_at + 50.0, y + 50.0)
+            fmap.cells[_cell(fmap, across_at + 50.0, y + 50.0)] |= also
     py_trees.blackboard.Blackboard.storage[coverage_map.MAP_KEY] = Bearings(fmap, Odometry())
     return fmap
 
