@@ -9,9 +9,15 @@ from __future__ import annotations
 import os
 import shutil
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import pytest
+
+from .live import LiveRun, start_live_run
+
+#: the shuttle mission of the live page's tests (tests/monitor/missions)
+SHUTTLE = Path(__file__).parent / "missions" / "shuttle.yaml"
 
 BROWSER_ARGS = [
     "--no-sandbox",
@@ -67,3 +73,16 @@ def page(browser: Any) -> Iterator[Any]:
     finally:
         context.close()
     assert not errors, f"the page raised: {errors}"
+
+
+@pytest.fixture
+def live() -> Iterator[LiveRun]:
+    """The shuttle mission on the simulator, its monitor served (tests/monitor/live.py)."""
+    run = start_live_run(SHUTTLE)
+    try:
+        yield run
+    finally:
+        if run.thread.is_alive():
+            run.finish()
+        else:
+            run.server.close()

@@ -12,11 +12,9 @@ import re
 import subprocess
 import sys
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
-
-import pytest
 
 from roomba_bt.cli import main
 from roomba_bt.mission import load_mission
@@ -27,10 +25,10 @@ from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.runtime.recording import load_record
 
+from .conftest import SHUTTLE
 from .live import LiveRun, start_live_run
 
 HERE = Path(__file__).resolve().parent
-SHUTTLE = HERE / "missions" / "shuttle.yaml"
 WAIT_MS = 15_000
 #: the ``child`` fixture (tests/conftest.py)
 Child = Callable[[Sequence[str]], "subprocess.Popen[str]"]
@@ -40,18 +38,6 @@ def monitored_run(mission: Path) -> list[str]:
     """``roomba-bt run MISSION --monitor 0``: its page on a free port, no terminal display."""
     return [sys.executable, "-m", "roomba_bt.cli", "run", str(mission), "--monitor", "0",
             "--display", "none"]  # fmt: skip
-
-
-@pytest.fixture
-def live() -> Iterator[LiveRun]:
-    run = start_live_run(SHUTTLE)
-    try:
-        yield run
-    finally:
-        if run.thread.is_alive():
-            run.finish()
-        else:
-            run.server.close()
 
 
 def statuses_on_page(page: Any) -> str:

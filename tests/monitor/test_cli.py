@@ -308,22 +308,7 @@ def test_monitor_of_a_record_ends_on_sigterm_as_on_ctrl_c(tmp_path: Path) -> Non
     record = tmp_path / "run.jsonl"
     argv = ["run", str(SHUTTLE), "--fast", "--display", "none", "--timeout", "2"]
     main([*argv, "--record", str(record)])
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "roomba_bt.cli", "monitor", str(record), "--monitor", "0"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
-    try:
-        assert proc.stdout is not None
-        for line in proc.stdout:
-            if line.startswith("monitor: http"):
-                break
-        proc.send_signal(signal.SIGTERM)
-        out, err = proc.communicate(timeout=30)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
-    assert proc.returncode == 0, err
+    out, _ = _served_record(record)  # up to its URL, then SIGTERM
     assert "monitor: ended by SIGTERM" in out
 
 

@@ -18,20 +18,9 @@ from roomba_bt.monitor.server import MonitorServer
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.runtime.recording import load_record
 
+from .conftest import SHUTTLE
 from .live import LiveRun, start_live_run
-from .test_browser import SHUTTLE, WAIT_MS
-
-
-@pytest.fixture
-def live() -> Iterator[LiveRun]:
-    run = start_live_run(SHUTTLE)
-    try:
-        yield run
-    finally:
-        if run.thread.is_alive():
-            run.finish()
-        else:
-            run.server.close()
+from .test_browser import WAIT_MS
 
 
 def _tick(page: Any) -> int:

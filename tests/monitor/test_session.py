@@ -12,7 +12,6 @@ from typing import Any
 import pytest
 from runtime.simrun import (  # tests/runtime: a room with a drop, a recorded stall
     LEDGE,
-    OVER_THE_EDGE_AND_ON,
     BusyAfterTheFall,
     over_the_edge,
     record_run,
@@ -860,11 +859,11 @@ def test_a_run_paused_stepped_stopped_and_late_after_a_fall_replays_byte_for_byt
     ended."""
     (tmp_path / "ledge.yaml").write_text(LEDGE)
     source, path = tmp_path / "edge.yaml", tmp_path / "run.jsonl"
-    source.write_text(OVER_THE_EDGE_AND_ON)
-    mission = load_mission(source, {"wait": "5s"}, profile=CREATE2)
+    source.write_text(over_the_edge("5s", brushes_again=True))
+    mission = load_mission(source, {}, profile=CREATE2)
     link = BusyAfterTheFall(Simulator(load_world(tmp_path / "ledge.yaml"), CREATE2, 0))
     stack = RunStack(mission, link, profile=CREATE2, timeout_s=60.0,
-                     record=Recording(path, str(source), {"wait": "5s"}))  # fmt: skip
+                     record=Recording(path, str(source)))  # fmt: skip
     feed = RunFeed(history=5000, mission_name=mission.name)
     feed.set_tree(mission.root)
     session = MonitorSession(feed, simulator=True, stream_packets=stack.packets)
@@ -885,7 +884,7 @@ def test_a_run_paused_stepped_stopped_and_late_after_a_fall_replays_byte_for_byt
     ]  # fmt: skip
     differences: list[str] = []
     replayed, summary = replay_into_feed(
-        record, load_mission(source, {"wait": "5s"}, profile=CREATE2), CREATE2, stack.packets,
+        record, load_mission(source, {}, profile=CREATE2), CREATE2, stack.packets,
         115200, "x", diverged_at=differences.append,
     )  # fmt: skip
     assert differences == []  # the same bytes, to the safe stop's

@@ -148,11 +148,14 @@ tree:
 """
 
 
-def over_the_edge(wait: str = "1s", brushes: bool = False) -> str:
+def over_the_edge(wait: str = "1s", brushes: bool = False, brushes_again: bool = False) -> str:
     """A mission for :data:`LEDGE`: forward until the robot falls to Passive by itself (at
     about 4.3 s), then, having seen the cliff, Safe again (``safe again``) and ``wait``;
-    ``brushes``: the main brush and the vacuum on before the drive."""
+    ``brushes``: the main brush and the vacuum on before the drive; ``brushes_again``: on
+    after Safe again, as ``clean`` goes on after a fall (the command session 27's run1
+    replay starved before)."""
     motors = "\n        - motors: {main_brush: true, vacuum: true}" if brushes else ""
+    again = "\n          - motors: {main_brush: true, vacuum: true}" if brushes_again else ""
     return f"""\
 mission: over the edge
 tree:
@@ -164,29 +167,8 @@ tree:
         name: after the cliff
         children:
           - cliff: any
-          - {{name: safe again, mode: safe}}
+          - {{name: safe again, mode: safe}}{again}
           - wait: {wait}
-"""
-
-
-#: forward into :data:`LEDGE`'s drop until the robot falls to Passive by itself, then, as
-#: ``clean`` does, Safe again and the brushes on (the command run1's replay starved before)
-OVER_THE_EDGE_AND_ON = """\
-mission: over the edge and on
-parameters:
-  wait: {type: duration, default: 1s}
-tree:
-  fallback:
-    - sequence:
-        - mode: safe
-        - drive: {velocity: 200 mm/s, distance: 2 m}
-    - sequence:
-        name: after the cliff
-        children:
-          - cliff: any
-          - mode: safe
-          - motors: {main_brush: true, vacuum: true}
-          - wait: ${wait}
 """
 
 

@@ -18,8 +18,8 @@ from roomba_bt.sim import SimLink, Simulator, load_world
 
 from .simrun import (
     LEDGE,
-    OVER_THE_EDGE_AND_ON,
     BusyAfterTheFall,
+    over_the_edge,
     record_run,
     stream_gap_link,
 )
@@ -326,7 +326,7 @@ def test_a_command_written_late_after_its_frame_replays_at_its_recorded_time(
     nothing`` at 75 s of 92 s)."""
     (tmp_path / "ledge.yaml").write_text(LEDGE)
     source, path = tmp_path / "edge.yaml", tmp_path / "run.jsonl"
-    source.write_text(OVER_THE_EDGE_AND_ON)
+    source.write_text(over_the_edge(brushes_again=True))
     mission = load_mission(source, {}, profile=CREATE2)
     link = BusyAfterTheFall(Simulator(load_world(tmp_path / "ledge.yaml"), CREATE2, 0))
     stack = RunStack(mission, link, profile=CREATE2, timeout_s=20.0,

@@ -28,13 +28,17 @@ from roomba_bt.oi import commands
 from roomba_bt.oi.opcodes import opcodes
 
 
-@declare("forward_logged", kind="action", sends=opcodes("drive"))
-class ForwardLogged(Action):
-    """Drive forward; terminate() logs (py_trees idiom) without calling super()."""
+class Forward(Action):
+    """Drives forward at 200 mm/s until stopped (each class below ends it its own way)."""
 
     def update(self):
         self.send(commands.drive_straight(200))
         return Status.RUNNING
+
+
+@declare("forward_logged", kind="action", sends=opcodes("drive"))
+class ForwardLogged(Forward):
+    """Drive forward; terminate() logs (py_trees idiom) without calling super()."""
 
     def terminate(self, new_status):
         self.logger.debug(f"terminate {self.status} -> {new_status}")
@@ -55,12 +59,8 @@ class Sticky2(Action):
 
 
 @declare("drives_after_super", kind="action", sends=opcodes("drive"))
-class DrivesAfterSuper(Action):
+class DrivesAfterSuper(Forward):
     """Calls super().terminate(), then sends a drive of its own."""
-
-    def update(self):
-        self.send(commands.drive_straight(200))
-        return Status.RUNNING
 
     def terminate(self, new_status):
         super().terminate(new_status)
@@ -82,15 +82,19 @@ class CleansQuietly(Action):
 
 
 @declare("polite", kind="action", sends=opcodes("drive"))
-class Polite(Action):
+class Polite(Forward):
     """Drives; its terminate calls super()."""
-
-    def update(self):
-        self.send(commands.drive_straight(200))
-        return Status.RUNNING
 
     def terminate(self, new_status):
         super().terminate(new_status)
+
+
+@declare("sticky", kind="action", sends=opcodes("drive"))
+class Sticky(Forward):
+    """Drives; its terminate() does not call super() and re-sends a drive."""
+
+    def terminate(self, new_status):
+        self.send(commands.drive_straight(300))
 '''
 
 HALT = C.drive(0, 0).data
@@ -115,6 +119,13 @@ def _drives(run_writes: list[tuple[float, bytes]]) -> list[tuple[float, bytes]]:
         if drive[:1] == HALT[:1] and (not drives or drives[-1][1] != drive):
             drives.append((t, drive))
     return drives
+
+
+def _line_of(text: str, in_class: str) -> int:
+    """The line (from 1) of :data:`PLUGIN` holding ``text`` first after ``class in_class``."""
+    lines = PLUGIN.splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith(f"class {in_class}("))
+    return next(i for i in range(start, len(lines)) if text in lines[i]) + 1
 
 
 def _warnings(caplog: pytest.LogCaptureFixture) -> list[str]:
@@ -297,41 +308,20 @@ def test_a_built_in_cycle_a_halted_action_left_running_is_ended(
     assert "the built-in cycle it started was left running; ended (Start)" in said
 
 
-#: the stranger's ``sticky`` (bt-bad-run): its terminate sends a drive of its own
-STICKY = '''
-from py_trees.common import Status
-
-from roomba_bt.behaviours import Action, declare
-from roomba_bt.oi import commands
-from roomba_bt.oi.opcodes import opcodes
-
-
-@declare("sticky", kind="action", sends=opcodes("drive"))
-class Sticky(Action):
-    """Drives; its terminate() does not call super() and re-sends a drive."""
-
-    def update(self):
-        self.send(commands.drive_straight(200))
-        return Status.RUNNING
-
-    def terminate(self, new_status):
-        self.send(commands.drive_straight(300))
-'''
-
-
 def test_a_drive_a_terminate_queues_at_the_run_s_end_is_dropped_with_a_warning(
     run_mission: RunMission, tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
     """``m/st.yaml`` with ``--timeout 1``: the drive was not written, as docs/runtime.md
     says, but the warning naming the behaviour it promises was not given."""
-    (tmp_path / "sticky.py").write_text(STICKY)
+    (tmp_path / "sticky.py").write_text(PLUGIN)
     mission = "plugins: [./sticky.py]\ntree:\n  sequence:\n    - mode: safe\n    - sticky\n"
     with caplog.at_level(logging.WARNING):
         run = run_mission(mission, permissions=PERMIT, timeout=1.0)
     assert run.summary.outcome is Outcome.TIMEOUT
     assert C.drive_straight(300).data not in b"".join(data for _, data in run.link.writes)
     [said] = [r.getMessage() for r in caplog.records if "sticky" in r.getMessage()]
+    where = f"{tmp_path / 'sticky.py'}:{_line_of('def terminate', 'Sticky')}"
     assert said.startswith(
-        f"sticky (Sticky.terminate at {tmp_path / 'sticky.py'}:17) queued Drive (137) 89 01 2c "
+        f"sticky (Sticky.terminate at {where}) queued Drive (137) 89 01 2c "
         "80 00 while the tree was being stopped: not written"
     ), said
