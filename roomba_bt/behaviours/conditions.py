@@ -58,6 +58,7 @@ from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.oi.packets import PACKETS, PACKETS_BY_NAME, PacketSpec, packet_ids
 from roomba_bt.oi.profiles import PROFILES
 from roomba_bt.robot.interface import Odometry, Snapshot
+from roomba_bt.yamlsource import quoted
 
 OPERATORS: dict[str, Callable[[Any, Any], bool]] = {
     "<": operator.lt,
@@ -474,6 +475,12 @@ def _parse_comparison(value: object) -> Comparison:
         from roomba_bt.behaviours.units import closest
 
         raise UnitError(f"unknown sensor packet {name!r}{closest(name, list(PACKETS_BY_NAME))}")
+    if not math.isfinite(float(number)):  # 400 digits: "internal error (OverflowError)"
+        widest = _widest(spec.id)
+        raise UnitError(
+            f"{quoted(number)} is too large a number to compare {name} with: {name} reads "
+            f"{widest.minimum}..{widest.maximum}"
+        )
     test = (spec.id, op, float(number))
     problem = comparison_problem(test, {spec.id: _widest(spec.id)}, " on any OI robot")
     if problem is not None:

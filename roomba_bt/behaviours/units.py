@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 import numbers
 import re
+import sys
 import unicodedata
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -104,6 +105,11 @@ def _is_number(value: object) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool)
 
 
+def _number_said(digits: str) -> str:
+    """A number of a message as written, or its length when a page long (a generated file)."""
+    return digits if len(digits) <= 24 else f"a number of {len(digits):,} characters"
+
+
 def parse_quantity(dimension: str, value: object) -> float:
     """``parse_quantity("speed", "0.2 m/s") == 200.0``; raises :class:`UnitError`."""
     units = UNITS[dimension]
@@ -121,7 +127,9 @@ def parse_quantity(dimension: str, value: object) -> float:
         )
     number, unit = float(match.group(1)), match.group(2)
     if not math.isfinite(number):  # 1e400 overflows to inf
-        raise UnitError(f"{value!r}: {match.group(1)} is too large a number for {what}")
+        raise UnitError(
+            f"{quoted(value)}: {_number_said(match.group(1))} is too large a number for {what}"
+        )
     if unit not in units:
         known = ", ".join(units)
         if unit == "":
@@ -131,7 +139,14 @@ def parse_quantity(dimension: str, value: object) -> float:
                 f"{value!r} has no unit; {what} needs one of: {known} (e.g. {EXAMPLES[dimension]})"
             )
         raise UnitError(f"unknown {dimension} unit {unit!r} in {value!r}; use one of: {known}")
-    return number * units[unit]
+    canonical = number * units[unit]
+    if not math.isfinite(canonical):  # 1e308 h overflows to inf in seconds: "internal error"
+        largest = sys.float_info.max / units[unit]
+        raise UnitError(
+            f"{quoted(value)}: {_number_said(match.group(1))} {unit} is too large a number "
+            f"for {what} (it must be finite: at most {largest:.3g} {unit})"
+        )
+    return canonical
 
 
 def not_ascii(text: str) -> str:
@@ -209,6 +224,30 @@ def _quantity_type(dimension: str) -> ValueType:
 def _parse_int(value: object) -> int:
     if isinstance(value, bool) or not isinstance(value, int):
         raise UnitError(f"expected an integer, got {_describe(value)}")
+    return _not_too_large(value)
+
+
+#: the most bits of an integer ``str()`` writes in decimal (4,300 digits by default)
+_BITS_STR_TAKES = int(sys.get_int_max_str_digits() / math.log10(2)) - 8
+
+
+def _not_too_large(value: int) -> int:
+    """``value``, or :class:`UnitError` when no float holds it: a range check, a comparison
+    and a plugin compute with floats, and an integer of 400 digits (or 0xfff... of 300) was
+    "internal error (OverflowError)" at 1:1."""
+    try:
+        float(value)
+    except OverflowError:
+        # str() refuses past 4,300 digits (0xfff... of a page): then the count from its bits
+        size = (
+            f"{len(str(abs(value))):,}"
+            if value.bit_length() <= _BITS_STR_TAKES
+            else f"about {math.floor(value.bit_length() * math.log10(2)) + 1:,}"
+        )
+        raise UnitError(
+            f"an integer of {size} digits is too large a number: at most about "
+            f"{sys.float_info.max:.3g}"
+        ) from None
     return value
 
 
@@ -229,6 +268,8 @@ def _parse_float(value: object) -> float:
         )
     if not _is_number(value):
         raise UnitError(f"expected a number, got {_describe(value)}")
+    if isinstance(value, int):
+        return float(_not_too_large(value))
     if not math.isfinite(value):  # type: ignore[arg-type]
         raise UnitError(f"expected a finite number, got {value}")
     return float(value)  # type: ignore[arg-type]

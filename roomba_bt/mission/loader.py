@@ -76,7 +76,7 @@ from roomba_bt.mission.values import (
     resolve,
     unknown,
 )
-from roomba_bt.yamlsource import too_many_digits
+from roomba_bt.yamlsource import too_many_digits, yaml11_number_problem
 
 TOP_LEVEL = ("mission", "description", "parameters", "blackboard", "plugins", "include",
              "subtrees", "tree")  # fmt: skip
@@ -267,10 +267,20 @@ class Loader:
             if not text.strip():  # the folder of the file naming it: "is a directory"
                 self.ctx.error(iloc.at(f"{each} is an empty path: name a file"))
                 continue
-            if text.startswith(SHIPPED_PREFIX):
-                out.append((text, (SHIPPED_DIR / text[len(SHIPPED_PREFIX) :]).resolve(), iloc))
-            else:
-                out.append((text, (path.parent / text).resolve(), iloc))
+            given = (
+                SHIPPED_DIR / text[len(SHIPPED_PREFIX) :]
+                if text.startswith(SHIPPED_PREFIX)
+                else path.parent / text
+            )
+            try:
+                out.append((text, given.resolve(), iloc))
+            except (RuntimeError, OSError):  # Python 3.11 raises RuntimeError for a loop
+                self.ctx.error(
+                    iloc.at(
+                        f"{each} {text!r} is a symbolic link loop (it leads back to itself), "
+                        "not a file: name the file itself"
+                    )
+                )
         return out
 
     def _plugins(self, path: Path, node: yaml.Node, loc: Loc) -> None:
@@ -715,6 +725,9 @@ def _cli_value(text: str, vtype: ValueType) -> object:
     """A ``-p name=value`` string as the type wants it: numbers and booleans as YAML reads
     them, everything else as written."""
     if vtype.name in ("int", "float", "bool"):
+        octal_or_base_60 = yaml11_number_problem(text, in_a_file=False)
+        if octal_or_base_60 is not None:  # -p c=0200 sent 128: refused as in a file
+            raise UnitError(octal_or_base_60)
         try:
             return yaml.safe_load(text)
         except yaml.YAMLError:

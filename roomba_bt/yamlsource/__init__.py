@@ -433,6 +433,10 @@ def scalar(node: yaml.Node) -> Any:
     of a mission and a traceback for a world."""
     if node.tag == STR and isinstance(node, yaml.ScalarNode):
         return node.value
+    if node.tag in _NUMBER_TAGS and isinstance(node, yaml.ScalarNode):
+        problem = yaml11_number_problem(str(node.value))
+        if problem is not None:
+            raise Refused(problem=problem, problem_mark=node.start_mark)
     try:
         return _CONSTRUCTOR.construct_object(node, deep=True)
     except ValueError:
@@ -442,6 +446,57 @@ def scalar(node: yaml.Node) -> Any:
     finally:  # its caches would keep every node alive and remember a failed one
         _CONSTRUCTOR.constructed_objects.clear()
         _CONSTRUCTOR.recursive_objects.clear()
+
+
+_NUMBER_TAGS = frozenset({CORE + "int", CORE + "float"})
+#: YAML 1.1 numbers that do not mean what they say to a reader: a leading zero is octal
+#: (``0200`` is 128) and ``a:b`` is base 60 (``1:30`` is 90, ``1:30.5`` is 90.5); PyYAML's
+#: own patterns for them (``0:30`` is not an integer to it: a text)
+_OCTAL = re.compile(r"[-+]?0[0-7_]+")
+_BASE_60 = re.compile(
+    r"[-+]?[1-9][0-9_]*(?::[0-5]?[0-9])+|[-+]?[0-9][0-9_]*(?::[0-5]?[0-9])+\.[0-9_]*"
+)
+#: longer than this, YAML's reading is not worked out for a message (base 60 grows a number
+#: quadratically in its length: a generated ``1:59:59:...`` of a megabyte)
+_READING_LIMIT = 40
+
+
+def yaml11_number_problem(text: str, *, in_a_file: bool = True) -> str | None:
+    """What is wrong with ``text`` as a plain scalar, or None: an octal (``0200``) or base-60
+    (``1:30``) number, which YAML 1.1 reads as a number other than the digits written (decided:
+    refused everywhere, a text slot too, never taken silently as 128 or 90; ``0`` is fine).
+    ``in_a_file``: say to quote it for a text (a ``-p`` value is a text unless typed a number)."""
+    text = text.strip()
+    octal = _OCTAL.fullmatch(text) is not None
+    if not octal and _BASE_60.fullmatch(text) is None:
+        return None
+    reading = _yaml11_reading(text, "int" if octal or "." not in text else "float")
+    if octal:
+        digits = text.replace("_", "").lstrip("+")
+        sign = "-" if digits.startswith("-") else ""
+        decimal = sign + (digits.lstrip("-").lstrip("0") or "0")
+        what = f"the octal number {reading} (a leading zero)" if reading else "an octal number"
+        advice = f"write {decimal}"
+        if reading and reading != decimal:
+            advice += f" (or {reading} if octal was meant)"
+    else:
+        what = f"the base-60 number {reading} (a ':')" if reading else "a base-60 number"
+        advice = f"write {reading}" if reading else "write the number in decimal"
+    quote = "; quote it where a text is meant" if in_a_file else ""
+    return f"{quoted(text)} is read by YAML 1.1 as {what}, not as written: {advice}{quote}"
+
+
+def _yaml11_reading(text: str, kind: str) -> str:
+    """What PyYAML makes of ``text`` as a ``kind`` ("int", "float"), for a message; "" when
+    too long to work out."""
+    if len(text) > _READING_LIMIT:
+        return ""
+    try:
+        return str(_CONSTRUCTOR.construct_object(yaml.ScalarNode(CORE + kind, text)))
+    except ValueError:
+        return ""
+    finally:
+        _CONSTRUCTOR.constructed_objects.clear()
 
 
 def _too_many_digits(node: yaml.Node) -> Refused:
