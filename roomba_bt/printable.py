@@ -1,30 +1,48 @@
 """What of a text may reach a terminal or a log line as it is: the control characters a
-stranger's file can carry, and :func:`escaped` to show them as ``\\x1b``.
+stranger's file can carry, the invisible ones that reorder or hide what is shown, and
+:func:`escaped` to show them as ``\\x1b`` or ``\\u202e``.
 
 Standard library only and importing nothing of ours, so that every layer may use it, the
 protocol's included, and the command line's parser can say a name without loading YAML
-(:mod:`roomba_bt.yamlsource` refuses these characters in a file; this module only shows
-them)."""
+(:mod:`roomba_bt.yamlsource` refuses :data:`CONTROL` characters in a file; this module only
+shows them)."""
 
 from __future__ import annotations
 
 import re
 
-__all__ = ["ANY_CONTROL", "CONTROL", "escaped"]
+__all__ = ["ANY_CONTROL", "CONTROL", "INVISIBLE", "UNPRINTABLE", "escaped"]
 
 #: Characters no text of a data file may hold (C0 but tab and newline, DEL, C1): a file
 #: travels between strangers, and its texts reach the terminal (``show``, the live tree, the
 #: log, error lines), where ``"\e[2J"`` clears the screen and ``"\e]0;...\a"`` retitles it
 CONTROL = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f]")
-#: every control character, tab and newline too: what must stay on one line (a node's name in
-#: the live tree, the log and a run's summary, where "\n[ok] robot stopped" would fake a line)
-ANY_CONTROL = re.compile("[\x00-\x1f\x7f-\x9f]")
+#: Characters a terminal does not show but that change what it shows ("Trojan Source"): the
+#: bidi embeddings, overrides and isolates (U+202A-U+202E, U+2066-U+2069), the marks (U+061C,
+#: U+200E, U+200F), and the zero-width characters (U+200B-U+200D, U+2060, U+FEFF). A file may
+#: hold them (a name in Arabic needs them), so they are escaped where printed, never refused:
+#: ``gentle<U+202E> s/mm 005`` rendered as "gentle 500 mm/s" in the live tree and the log
+INVISIBLE_CHARACTERS = "\u061c\u200b-\u200f\u202a-\u202e\u2060\u2066-\u2069\ufeff"
+INVISIBLE = re.compile(f"[{INVISIBLE_CHARACTERS}]")
+#: what is escaped in printed text that may span lines (an error line's message, a log
+#: record): :data:`CONTROL` and :data:`INVISIBLE`
+UNPRINTABLE = re.compile(f"[\x00-\x08\x0b-\x1f\x7f-\x9f{INVISIBLE_CHARACTERS}]")
+#: every control and invisible character, tab and newline too: what must stay on one line (a
+#: node's name in the live tree, the log and a run's summary, where "\n[ok] robot stopped"
+#: would fake a line; a file name in ``validate``'s lines)
+ANY_CONTROL = re.compile(f"[\x00-\x1f\x7f-\x9f{INVISIBLE_CHARACTERS}]")
 
 
-def escaped(text: str, which: re.Pattern[str] = CONTROL) -> str:
-    """``text`` with each character ``which`` matches written as ``\\x1b``: an error line,
-    a node's name or a mission's text is printed to a terminal, where a raw ``ESC [2J``
-    would clear the screen (:data:`ANY_CONTROL`: a newline too, for what is one line)."""
+def escaped(text: str, which: re.Pattern[str] = UNPRINTABLE) -> str:
+    """``text`` with each character ``which`` matches written as ``\\x1b`` (``\\u202e`` past
+    U+00FF): an error line, a node's name or a mission's text is printed to a terminal, where a
+    raw ``ESC [2J`` would clear the screen and a raw U+202E reverse what follows
+    (:data:`ANY_CONTROL`: a newline too, for what is one line)."""
     if which.search(text) is None:
         return text
-    return which.sub(lambda found: f"\\x{ord(found.group()):02x}", text)
+    return which.sub(_escape, text)
+
+
+def _escape(found: re.Match[str]) -> str:
+    code = ord(found.group())
+    return f"\\x{code:02x}" if code <= 0xFF else f"\\u{code:04x}"

@@ -282,7 +282,12 @@ def _parse_bool(value: object) -> bool:
 
 
 def _parse_str(value: object) -> str:
-    if isinstance(value, bool) or not isinstance(value, str | int | float):
+    if isinstance(value, bool):  # `default: no`: the text was meant
+        raise UnitError(
+            f"expected a text, got {_describe(value)}: YAML 1.1 reads yes/no, on/off and "
+            "true/false as booleans: quote the text"
+        )
+    if not isinstance(value, str | int | float):
         raise UnitError(f"expected a text, got {_describe(value)}")
     return str(value)
 

@@ -172,7 +172,7 @@ def validate_command(args: argparse.Namespace) -> int:
     for file in args.files:
         found = mission_file(file)
         if isinstance(found, tuple):  # as show and run say it: stderr, the command named
-            print(f"roomba-bt validate: {found[0]}", file=sys.stderr)
+            print(f"roomba-bt validate: {escaped(found[0], ANY_CONTROL)}", file=sys.stderr)
             status = ExitCode.INVALID
             continue
         diagnostics = validate_files(
@@ -187,7 +187,8 @@ def validate_command(args: argparse.Namespace) -> int:
         if any(d.severity == "error" for d in diagnostics):
             status = ExitCode.INVALID
         else:
-            print(f"{file}: ok" if not diagnostics else f"{file}: ok, with warnings")
+            said = "ok" if not diagnostics else "ok, with warnings"
+            print(f"{escaped(file, ANY_CONTROL)}: {said}")  # one line: its name may hold "\n"
     return status
 
 
@@ -201,7 +202,7 @@ def show_command(args: argparse.Namespace) -> int:
         return ExitCode.INVALID
     found = mission_file(args.file)
     if isinstance(found, tuple):
-        print(f"roomba-bt show: {found[0]}", file=sys.stderr)
+        print(f"roomba-bt show: {escaped(found[0], ANY_CONTROL)}", file=sys.stderr)
         return ExitCode.INVALID
     missing = graph_tools_missing(dot=args.dot is not None, svg=args.svg is not None)
     if missing is not None:  # said before the tree is printed, not after
@@ -221,7 +222,8 @@ def show_command(args: argparse.Namespace) -> int:
     header = f"{mission.name}: {mission.description.strip()}".rstrip(": ")
     print(escaped(header, ANY_CONTROL))  # one line: "\n[ok] ..." in a text faked one
     reviewed = mission.reviewed()  # a node's name: beside what it is
-    print(py_trees.display.unicode_tree(reviewed))
+    # a name or a log message from -p may hold "\e[2J" (each name is one line already)
+    print(escaped(py_trees.display.unicode_tree(reviewed)))
     print(f"sensor packets: {list(mission.packets)}")
     if mission.parameters_shown:
         shown = ", ".join(f"{k}={v}" for k, v in mission.parameters_shown.items())

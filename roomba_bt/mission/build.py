@@ -24,6 +24,7 @@ from roomba_bt.behaviours.units import ValueType
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.ir import Node
 from roomba_bt.oi.modes import OIMode
+from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.robot.interface import RobotHandle
 
 
@@ -122,4 +123,5 @@ class CompiledMission:
 def _as_reviewed(node: Node) -> Node:
     """``node`` and its children, each renamed by ``name:`` named by what it is first."""
     name = f"{node.label} named {node.name!r}" if node.label else node.name
+    name = escaped(name, ANY_CONTROL)  # one line of show's tree: a -p text may hold "\n"
     return replace(node, name=name, children=[_as_reviewed(child) for child in node.children])

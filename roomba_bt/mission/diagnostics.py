@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass, replace
 
-from roomba_bt.printable import ANY_CONTROL, CONTROL, escaped
+from roomba_bt.printable import ANY_CONTROL, UNPRINTABLE, escaped
 
 
 @dataclass(frozen=True, slots=True, order=True)
@@ -31,8 +31,10 @@ class Diagnostic:
             f" [{escaped(shortened_path(self.yaml_path), ANY_CONTROL)}]" if self.yaml_path else ""
         )
         kind = "warning: " if self.severity == "warning" else ""
-        text = f"{self.file}:{self.line}:{self.column}: {kind}{self.message}"
-        return escaped(text, CONTROL) + where
+        # the file's name on one line: a newline in it faked a line of ``validate *.yaml``
+        file = escaped(self.file, ANY_CONTROL)
+        text = f"{self.line}:{self.column}: {kind}{self.message}"
+        return f"{file}:{escaped(text, UNPRINTABLE)}{where}"
 
     def as_warning(self) -> Diagnostic:
         return replace(self, severity="warning")

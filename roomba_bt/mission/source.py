@@ -169,7 +169,7 @@ def mapping(node: yaml.Node, loc: Loc, what: str) -> list[tuple[str, yaml.Node, 
     out = []
     not_names = [
         loc_of(key_node, loc.file, loc.path).at(
-            f"keys of {what} must be names, got {kind_of(key_node)}"
+            f"keys of {what} must be names, got {_key_kind(key_node)}"
         )
         for _, key_node, _ in yamlsource.pairs(node, skip_duplicates=True)
         if not isinstance(key_node, yaml.ScalarNode) or key_node.tag != yamlsource.STR
@@ -181,6 +181,16 @@ def mapping(node: yaml.Node, loc: Loc, what: str) -> list[tuple[str, yaml.Node, 
         key_loc = loc_of(key_node, loc.file, join(loc.path, key))
         out.append((key, value_node, key_loc, loc_of(value_node, loc.file, key_loc.path)))
     return out
+
+
+def _key_kind(key_node: yaml.Node) -> str:
+    """What a key that is no name is; ``on:`` says to quote it, as an enum's ``yes`` does
+    (``vacuum: {on: true}``, the long form of a documented parameter, gave no hint)."""
+    if key_node.tag == _CORE + "bool" and isinstance(key_node, yaml.ScalarNode):
+        read = str(yamlsource.scalar(key_node)).lower()
+        written = key_node.value
+        return f"'{written}', read as the boolean {read} (YAML 1.1): quote it, '{written}'"
+    return kind_of(key_node)
 
 
 def sequence(node: yaml.Node, loc: Loc, what: str) -> list[tuple[yaml.Node, Loc]]:
