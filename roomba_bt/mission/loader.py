@@ -267,20 +267,10 @@ class Loader:
             if not text.strip():  # the folder of the file naming it: "is a directory"
                 self.ctx.error(iloc.at(f"{each} is an empty path: name a file"))
                 continue
-            given = (
-                SHIPPED_DIR / text[len(SHIPPED_PREFIX) :]
-                if text.startswith(SHIPPED_PREFIX)
-                else path.parent / text
-            )
             try:
-                out.append((text, given.resolve(), iloc))
+                out.append((text, _named_file(path, text), iloc))
             except (RuntimeError, OSError):  # Python 3.11 raises RuntimeError for a loop
-                self.ctx.error(
-                    iloc.at(
-                        f"{each} {text!r} is a symbolic link loop (it leads back to itself), "
-                        "not a file: name the file itself"
-                    )
-                )
+                self.ctx.error(iloc.at(_link_loop(each, text)))
         return out
 
     def _plugins(self, path: Path, node: yaml.Node, loc: Loc) -> None:
@@ -712,6 +702,22 @@ def _new_name(
     if name in taken:
         first = taken[name].loc
         raise Bad(key_loc.at(f"{what} {name!r} {verb} twice (first at {first.file}:{first.line})"))
+
+
+def _named_file(path: Path, text: str) -> Path:
+    """The file an include or plugin entry ``text`` of the mission ``path`` names, resolved;
+    a symbolic link loop raises (``RuntimeError`` on Python 3.11, ``OSError`` later)."""
+    if text.startswith(SHIPPED_PREFIX):
+        return (SHIPPED_DIR / text[len(SHIPPED_PREFIX) :]).resolve()
+    return (path.parent / text).resolve()
+
+
+def _link_loop(each: str, text: str) -> str:
+    """An entry naming a symbolic link loop: it was "internal error (RuntimeError)" at 1:1."""
+    return (
+        f"{each} {text!r} is a symbolic link loop (it leads back to itself), not a file: "
+        "name the file itself"
+    )
 
 
 def _text(node: yaml.Node, loc: Loc, default: Any) -> str:

@@ -72,10 +72,8 @@ def compose(
     except UnicodeDecodeError as exc:
         line, column = yamlsource.undecodable_position(exc)
         byte = bytes(exc.object)[exc.start]
-        return None, [
-            Diagnostic(display, line, column,
-                       f"mission file is not UTF-8 text: byte 0x{byte:02x} ({exc.reason})")
-        ]  # fmt: skip
+        said = f"byte 0x{byte:02x} ({exc.reason})" if exc.reason != yamlsource.UTF16 else exc.reason
+        return None, [Diagnostic(display, line, column, f"mission file is not UTF-8 text: {said}")]
     return compose_text(text, display)
 
 
@@ -91,6 +89,8 @@ def compose_text(text: str, display: str) -> tuple[yaml.Node | None, list[Diagno
     except yaml.MarkedYAMLError as exc:
         line, column = yamlsource.error_position(exc) or (1, 1)
         problem = exc.problem or exc.context or "invalid YAML"
+        if problem == "but found another document":  # the composer's sentence, cut in two
+            problem = "a mission file holds one YAML document; a second one (---) starts here"
         problem += yamlsource.tab_hint(text, line, column)
         return None, [Diagnostic(display, line, column, f"YAML syntax error: {problem}")]
     except yaml.YAMLError as exc:
@@ -186,9 +186,9 @@ def mapping(node: yaml.Node, loc: Loc, what: str) -> list[tuple[str, yaml.Node, 
 def _key_kind(key_node: yaml.Node) -> str:
     """What a key that is no name is; ``on:`` says to quote it, as an enum's ``yes`` does
     (``vacuum: {on: true}``, the long form of a documented parameter, gave no hint)."""
-    if key_node.tag == _CORE + "bool" and isinstance(key_node, yaml.ScalarNode):
+    written = str(key_node.value)
+    if key_node.tag == _CORE + "bool" and written.lower() not in ("true", "false"):
         read = str(yamlsource.scalar(key_node)).lower()
-        written = key_node.value
         return f"'{written}', read as the boolean {read} (YAML 1.1): quote it, '{written}'"
     return kind_of(key_node)
 

@@ -107,8 +107,23 @@ def read_text(path: Path) -> str:
         data = file.read(MAX_FILE_BYTES + 1)
     if len(data) > MAX_FILE_BYTES:  # grew since, or a size the file system does not give
         raise FileTooLarge(len(data))
+    if looks_utf16(data):  # Notepad's "Unicode": "byte 0xff" or "U+0000" said nothing of it
+        raise UnicodeDecodeError("utf-8", data, 0, 1, UTF16)
     # as Path.read_text: universal newlines (a CRLF file's columns as a LF file's)
     return data.decode("utf-8").replace("\r\n", "\n").replace("\r", "\n")
+
+
+#: the reason of the :class:`UnicodeDecodeError` :func:`read_text` raises for UTF-16 text
+UTF16 = "this is UTF-16 text: save it as UTF-8"
+
+
+def looks_utf16(data: bytes) -> bool:
+    """``data`` starts as UTF-16 does: its byte-order mark (FF FE, FE FF), or ASCII with a NUL
+    beside each character (no BOM). UTF-8 never holds FF or FE, and a YAML file no NUL."""
+    if data[:2] in (b"\xff\xfe", b"\xfe\xff"):
+        return True
+    head = data[:2]
+    return len(head) == 2 and head.count(0) == 1 and max(head) < 0x80
 
 
 class Refused(yaml.MarkedYAMLError):

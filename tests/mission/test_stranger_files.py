@@ -112,3 +112,24 @@ def test_a_key_yaml_reads_as_a_boolean_says_to_quote_it(tmp_path: Path) -> None:
     ]
     path.write_text("mission: m\ntree:\n  sequence: [mode: safe, vacuum: {'on': true}]\n")
     assert _problems(path) == []
+
+
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-le", "utf-16-be"])
+def test_a_utf16_file_is_named_as_such(tmp_path: Path, encoding: str) -> None:
+    """Notepad's "Unicode" gave "byte 0xff (invalid start byte)" with a BOM and "control
+    character U+0000" without one."""
+    path = tmp_path / "m.yaml"
+    path.write_bytes("mission: m\ntree: {log: x}\n".encode(encoding))
+    assert _problems(path) == [
+        "1:1: mission file is not UTF-8 text: this is UTF-16 text: save it as UTF-8"
+    ]
+
+
+def test_a_second_document_is_named_where_it_starts(tmp_path: Path) -> None:
+    """It was PyYAML's fragment "but found another document"."""
+    path = tmp_path / "m.yaml"
+    path.write_text("mission: m\ntree: {log: x}\n---\nmission: n\n")
+    assert _problems(path) == [
+        "3:1: YAML syntax error: a mission file holds one YAML document; a second one (---) "
+        "starts here"
+    ]
