@@ -22,7 +22,7 @@ from roomba_bt.behaviours.coverage_map import (
     FloorMap,
 )
 from roomba_bt.behaviours.drops import DROP
-from roomba_bt.behaviours.homing import ACROSS_PLANS, HomeByMap
+from roomba_bt.behaviours.homing import ACROSS_PLANS, HomeByMap, path_across
 from roomba_bt.evaluate.episode import EpisodeResult
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import IR_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS
@@ -398,3 +398,21 @@ def test_a_cliff_on_a_leg_keeps_the_next_plans_off_it(make: Make, robot: StubRob
     assert home.status is Status.FAILURE
     assert leg in fmap.avoid
     assert any(bits & DROP for bits in fmap.cells)
+
+
+def test_a_path_across_the_map_keeps_a_cell_off_a_known_drop() -> None:
+    """A landing beside the stairs (their edge met every 25 cm along y = -20 mm) and a ghost
+    wall across it: the path across blocked cells ran along the edge, the robot's centre
+    70 mm from it and a cliff sensor over it (session 27's review); it keeps a cell off."""
+    fmap = FloorMap()
+    for x in range(0, 3000, 100):
+        for y in range(0, 600, 100):
+            fmap.cells[_cell(fmap, x + 50.0, y + 50.0)] |= SWEPT
+    for i, x in enumerate(range(0, 3001, 250)):
+        fmap.drops.mark(float(x), -20.0, -math.pi / 2, i * 50.0)
+    for y in range(100, 600, 100):
+        fmap.block(1550.0, y + 50.0)  # the ghost wall, the landing's first row left open
+    path = path_across(fmap, _cell(fmap, 250.0, 350.0), {_cell(fmap, 2750.0, 350.0)})
+    assert path is not None
+    around = (-601, -600, -599, -1, 0, 1, 599, 600, 601)
+    assert not [c for c in path if any(fmap.cells[c + d] & DROP for d in around)]
