@@ -529,7 +529,15 @@ function stopPlay() { if (view.playing) clearInterval(view.playing); view.playin
 document.addEventListener("keydown", (ev) => {
   if (ev.target.tagName === "INPUT" || ev.target.tagName === "SELECT" || !(view.header && view.header.controls)) return;
   const key = { p: "pause", r: "resume", n: "step" }[ev.key];
-  if (key) control(key);
+  if (!key) return;
+  // a stale page asks nothing: the HTTP side may still reach the run while the socket is down,
+  // and a resume from a page that no longer shows the run would set the robot going unseen
+  if (!view.connected || view.finished) {
+    const why = view.finished ? "the run has ended" : "no connection to the run (the page is stale)";
+    showAlert(`${key} NOT sent: ${why}; the robot does what it did`);
+    return;
+  }
+  control(key);
 });
 window.addEventListener("resize", fitTree);
 window.addEventListener("online", () => { if (!view.connected && !view.ended) connect(); });
