@@ -258,9 +258,16 @@ class HomeByMap(Action):
             return None
         if along >= self._limit:
             return self._leg()
+        assert self._bearings is not None
+        drops = self._bearings.map.drops
+        if drops.ahead(pose, pose.theta_rad, guessed=False):  # known: not met again
+            self._bearings.map.avoid.add(self._cell)  # (cover's legs end there too)
+            self._phase = "plan"
+            return None
         speed = self.number("speed")
         if driving.near_ahead(frame):
             speed = min(speed, 150.0)
+        speed = drops.speed(pose, pose.theta_rad, speed)
         return driving.steer_along(self._line, pose.x_mm, pose.y_mm, pose.theta_rad, speed)
 
     def _back(self, distance: float) -> None:

@@ -416,3 +416,25 @@ def test_a_path_across_the_map_keeps_a_cell_off_a_known_drop() -> None:
     assert path is not None
     around = (-601, -600, -599, -1, 0, 1, 599, 600, 601)
     assert not [c for c in path if any(fmap.cells[c + d] & DROP for d in around)]
+
+
+def test_a_leg_toward_a_known_drop_ends_short_of_it(make: Make, robot: StubRobot) -> None:
+    """A drop ``cover`` met (its map's line) ahead on a leg: the leg ends before a cliff
+    sensor reaches it and the next plans keep off that leg's cell, as ``cover``'s legs do
+    (session 27's review: the way home drove on along a known edge until the firmware's
+    stop, a fall to Passive and one of the mission's retries)."""
+    home, fmap = _plan_once(make, robot, {(1550.0, 50.0): 5000.0})
+    leg = home._cell
+    for counts in range(20, 100, 20):  # along the leg, about 4 cm
+        _frame(robot, counts)
+        home.tick_once()
+    assert home.status is Status.RUNNING and home._phase == "drive"
+    x = home._pose.x_mm
+    for i, y in enumerate((-300.0, -150.0, 0.0, 150.0, 300.0)):  # across the leg, 0.2 m ahead
+        fmap.drops.mark(x + 200.0, y, math.pi / 2, 100.0 * i)
+    robot.flush()
+    _frame(robot, 100)
+    home.tick_once()
+    assert leg in fmap.avoid
+    assert home._phase != "drive"
+    assert not [c for c in robot.flush() if c.spec.name == "drive_direct" and max(c.args) > 0]
