@@ -11,6 +11,7 @@ import signal
 import subprocess
 import sys
 import textwrap
+import threading
 from pathlib import Path
 
 import py_trees
@@ -32,6 +33,14 @@ from .simrun import SLOW_TERM, SPIN, TapLink
 SAFE_END = oi.halt().data + oi.motors_off().data + oi.pause_stream().data + oi.start().data
 
 
+def _signal_main(signum: int) -> None:
+    """``signum`` to the main thread, where the handlers run: ``os.kill`` to the process may
+    be taken by another thread of the suite's (a server a test left, a pool), and under load
+    the main thread then went on past the phase the test sends it in (CI: a signal sent
+    during the safe stop was seen during the shutdown after it)."""
+    signal.pthread_kill(threading.main_thread().ident or 0, signum)
+
+
 def _stack(tmp_path: Path, kill_at_tick: int | None, signum: int) -> tuple[RunStack, TapLink]:
     """A spinning mission on the simulator's virtual clock; with ``kill_at_tick``, the
     process signals itself after that tick (what the operator's Ctrl-C or a ``kill`` does)."""
@@ -41,7 +50,7 @@ def _stack(tmp_path: Path, kill_at_tick: int | None, signum: int) -> tuple[RunSt
 
     def observer(runner: MissionRunner) -> None:
         if runner.snapshot.tick == kill_at_tick:
-            os.kill(os.getpid(), signum)
+            _signal_main(signum)
 
     stack = RunStack(load_mission(path), link, profile=CREATE2, timeout_s=5.0, observer=observer)
     return stack, link
@@ -121,7 +130,7 @@ class _SignalsAt(py_trees.behaviour.Behaviour):
 
     def shutdown(self) -> None:
         if self.signum is not None:
-            os.kill(os.getpid(), self.signum)
+            _signal_main(self.signum)
         self.done.append("shut down")  # the rest of its shutdown ran: the signal waited
 
 
@@ -135,7 +144,7 @@ class _SignalOnSafeStop(TapLink):
     def write(self, data: bytes) -> None:
         super().write(data)
         if oi.halt().data + oi.motors_off().data in data:
-            os.kill(os.getpid(), self.signum)
+            _signal_main(self.signum)
 
 
 def _late_stack(signum: int, during: str, done: list[str]) -> tuple[RunStack, TapLink]:
@@ -208,7 +217,7 @@ class _CtrlCBeforeTheFirstByte(TapLink):
     """Ctrl-C comes as the run's first write is about to go: nothing reaches the robot."""
 
     def write(self, data: bytes) -> None:
-        os.kill(os.getpid(), signal.SIGINT)  # the handler raises here, before the write
+        _signal_main(signal.SIGINT)  # the handler raises here, before the write
         super().write(data)
 
 
@@ -238,7 +247,7 @@ class _SignalsOnTerminate(py_trees.behaviour.Behaviour):
 
     def terminate(self, new_status: py_trees.common.Status) -> None:
         if new_status is py_trees.common.Status.INVALID and self.runner:
-            os.kill(os.getpid(), signal.SIGINT)
+            _signal_main(signal.SIGINT)
             self.seen.append(self.runner[0].connection.writer.last_wheels.args)  # type: ignore[union-attr]
 
 
@@ -262,7 +271,7 @@ def test_a_signal_during_the_trees_stop_says_the_tree_is_stopping(
     runners.append(stack.runner)
     summary = stack.run(raise_interrupts=False)
     assert summary.outcome is Outcome.INTERRUPTED and summary.exit_code == 130
-    line = _SignalsOnTerminate.terminate.__code__.co_firstlineno + 2  # its os.kill
+    line = _SignalsOnTerminate.terminate.__code__.co_firstlineno + 2  # its signal
     assert summary.reason == (
         "Ctrl-C during the tree's stop, in slow_term (_SignalsOnTerminate.terminate at "
         f"{__file__}:{line}) (the run had ended: timeout: --timeout 0.3 s of mission time "
