@@ -86,11 +86,11 @@ class TimedRunner(MissionRunner):
         self.rival_clock = time.CLOCK_THREAD_CPUTIME_ID
         self._started = self._cpu = self._rival = 0.0
 
-    def _advance(self, batch: Sequence[SensorFrame]) -> float:
+    def _advance(self, batch: Sequence[SensorFrame], untick: int | None = None) -> float:
         self._rival = time.clock_gettime(self.rival_clock)
         self._cpu = time.thread_time()
         self._started = time.perf_counter()
-        return super()._advance(batch)
+        return super()._advance(batch, untick)
 
     def _flush(self) -> None:
         super()._flush()

@@ -182,8 +182,10 @@ class Held(_MissionClock, DecoratorTick, py_trees.decorators.Decorator):
     (SUCCESS on the first tick at least ``duration`` later, as ``timeout`` counts). It
     starts again when the child says anything else, and when the node was not ticked on the
     tree's previous tick (a guard that held an hour ago, ticked again, must not count its
-    old hold: ``Snapshot.previous_tick``; frames lost on the way are no tick missed): so
-    also after a halt, a run's end, a branch left, once it is ticked again.
+    old hold: ``Snapshot.previous_tick``; frames lost on the way are no tick missed, nor
+    are the frames of a monitor's pause, when mission time stands still too: a hold goes on
+    after the resume, and counts one frame a single step): so also after a halt, a run's
+    end, a branch left, once it is ticked again.
 
     Decided: a stop alone (``stop(INVALID)``, ``terminate``) does not restart it. py_trees
     stops every child of a composite that starts afresh, and a sequence or fallback of

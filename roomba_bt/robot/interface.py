@@ -195,9 +195,11 @@ class Snapshot(NamedTuple):
     #: command that ends it since (the session writer's ``builtin_may_run``); its leaf ends
     #: it when it is halted (:meth:`Outbox.end_cycle`)
     cycle_may_run: bool = False
-    #: the ``tick`` of the snapshot before this one (the tree's previous tick; ``tick`` less
-    #: the slots this frame's arrival spans: lost or stale frames are no tick of the tree);
-    #: None when not known (a snapshot made by hand: take ``tick - 1``). A node that keeps
+    #: the ``tick`` of the last snapshot the tree ticked on (the tree's previous tick: ``tick``
+    #: less the slots this frame's arrival spans, lost or stale frames being no tick of the
+    #: tree; or, after the monitor held the tree on frames, a pause's or a step's, the tick
+    #: before them: a pause is no gap, and mission time stood still meanwhile); None when
+    #: not known (a snapshot made by hand: take ``tick - 1``). A node that keeps
     #: state across ticks (the ``held`` decorator) compares it with the ``tick`` it last
     #: saw: another one means the tree ticked without it in between
     previous_tick: int | None = None

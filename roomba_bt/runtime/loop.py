@@ -421,6 +421,7 @@ class MissionRunner(BaseHandle):
         tick = self._tick_of(root, tick_guard)
         poll, poll_timeout, ride = self.connection.poll_frames, self.poll_timeout, self._ride
         held = False  # the root ended and the gate holds the run there (the monitor)
+        untick: int | None = None  # the gate held the tree: the tick it last ticked on
         while True:
             try:
                 batch = poll(poll_timeout)
@@ -436,10 +437,11 @@ class MissionRunner(BaseHandle):
                     return
                 continue
             started = perf()
-            mission_time = self._advance(batch)
+            mission_time, untick = self._advance(batch, untick), None
             gate = self.gate
             if gate is not None:
-                if not gate.before_tick(self):
+                if not gate.before_tick(self):  # a pause's frame, a step's, one a mode change
+                    untick = self.snapshot.previous_tick  # made stale: no gap for ``held``
                     continue
                 if self.mission.root is not root:  # a reload replaced it
                     root = self.mission.root
@@ -502,12 +504,12 @@ class MissionRunner(BaseHandle):
         ):
             self._outbox.send(wheels, self)
 
-    def _advance(self, batch: Sequence[SensorFrame]) -> float:
+    def _advance(self, batch: Sequence[SensorFrame], untick: int | None = None) -> float:
         """Newest frame of the batch -> the tick's snapshot; stale frames and gaps counted.
         The frames of a batch came in one read, at the link's ``arrival``. Returns the
         snapshot's mission time, for the loop's timeout (a named tuple's field read is a
-        generic attribute read in CPython 3.11, about 170 instructions).
-
+        generic attribute read in CPython 3.11, about 170 instructions). ``untick``: the
+        tick the tree last ticked on, when the gate held it since (else the frame before).
         The common frame (the only one of its batch, one slot after the one before) takes
         the first branch of each test: no stale frame to confirm hazards with, no fall to
         Passive new since the last, no slot lost (the schedule's slow path)."""
@@ -551,7 +553,7 @@ class MissionRunner(BaseHandle):
             self._profile,
             summary.frames_lost,
             self.connection.writer.builtin_may_run,
-            tick - slots,
+            tick - slots if untick is None else untick,
         ))  # fmt: skip
         self.snapshot = snapshot
         if self._blackboard is not None:

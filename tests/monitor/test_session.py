@@ -894,3 +894,62 @@ def test_a_run_paused_stepped_stopped_and_late_after_a_fall_replays_byte_for_byt
     ended = f"the recorded run was stopped by the operator at t={record.ending['time']:.2f} s"
     assert replayed.finished == f"{ended} (recorded run, {live.ticks} ticks)"
     assert replayed.events[-1].text == ended
+
+
+#: Safe, then a wait a 300 ms hold of Safe ends (20 frames of mission time)
+HELD_300MS = """
+tree:
+  sequence:
+    - mode: safe
+    - wait: 20s
+      until: {held: {for: 300ms, do: {oi_mode: safe}}}
+"""
+
+
+def _held_run(
+    tmp_path: Path, acts: list[tuple[int, str]]
+) -> tuple[RunSummary, list[tuple[int, int | None, int, str]]]:
+    """HELD_300MS on the virtual clock, the operator's acts at their stream ticks; per tree
+    tick: its snapshot's tick and previous_tick, the steps done so far, the root's status."""
+    source = tmp_path / "held.yaml"
+    source.write_text(HELD_300MS)
+    mission = load_mission(source, {}, profile=CREATE2)
+    seen: list[tuple[int, int | None, int, str]] = []
+
+    def observe(runner: MissionRunner) -> None:
+        snapshot = runner.snapshot
+        seen.append((snapshot.tick, snapshot.previous_tick, runner.summary.steps,
+                     runner.mission.root.status.value))  # fmt: skip
+
+    stack = RunStack(mission, SimLink(Simulator(load_world("empty-room"), CREATE2, 0)),
+                     profile=CREATE2, timeout_s=30.0, observer=observe)  # fmt: skip
+    feed = RunFeed(history=5000, mission_name=mission.name)
+    feed.set_tree(mission.root)
+    session = MonitorSession(feed, simulator=True, stream_packets=stack.packets)
+    stack.runner.gate = ScriptedOperator(session, acts)
+    summary = stack.run()
+    stack.close()
+    return summary, seen
+
+
+def test_a_hold_counts_through_single_steps_and_a_pause_is_no_gap(tmp_path: Path) -> None:
+    """Paused 7 ticks into the hold, then stepped: the hold goes on counting a frame of
+    mission time a step (``previous_tick`` is the tick the tree last ticked on, not the
+    paused frame before), so the wait ends on a step, the 12th or so, not after the
+    operator's resume (it restarted on every step's tick, and never held while stepping)."""
+    steps = [(40 + 6 * n, "step") for n in range(30)]
+    summary, seen = _held_run(tmp_path, [(8, "pause"), *steps, (400, "resume")])
+    assert summary.outcome is Outcome.SUCCESS
+    assert all(now[1] == before[0] for before, now in itertools.pairwise(seen))
+    ended = next(steps_done for _, _, steps_done, status in seen if status == "SUCCESS")
+    assert 8 <= ended < 20  # by a step: 20 frames of mission time, 8 of them before the pause
+
+
+def test_a_pause_and_its_resume_do_not_restart_a_hold(tmp_path: Path) -> None:
+    """Paused for 2 s in the middle of the hold: the wait ends 300 ms of mission time after
+    the hold began (the pause's 2 s left out of both), not 300 ms after the resume."""
+    summary, seen = _held_run(tmp_path, [(8, "pause"), (150, "resume")])
+    assert summary.outcome is Outcome.SUCCESS and summary.pauses == 1
+    assert all(now[1] == before[0] for before, now in itertools.pairwise(seen))
+    paused = next(n for n, (tick, *_) in enumerate(seen) if tick > 150)
+    assert len(seen) - paused < 20  # fewer ticks after the resume than the hold is long
