@@ -62,9 +62,20 @@ UPDATE_PERIOD_S = 0.05  # at most 20 updates a second per page
 TICK_WAIT_S = 0.05  # the longest a pump waits for a tick's end before it sends anyway
 TICK_POLL_S = 0.002  # how often it looks for that end when a tick is late
 AFTER_TICK_S = 0.001  # how long after a tick's expected end the pump looks
+#: the login cookie's name, ``_PORT`` added (:func:`cookie_name`)
 COOKIE = "roomba_bt_monitor"
 STATIC_TYPES = {".js": "text/javascript", ".css": "text/css", ".svg": "image/svg+xml"}
 Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
+
+
+def cookie_name(request: web.Request) -> str:
+    """The login cookie's name for the port the browser asked (``roomba_bt_monitor_8765``):
+    a browser keeps one host's cookies together whatever the port, so two monitors on one
+    host (a live run and a record's view, two robots) under one name took each other's
+    cookie, and a reload of the other page got 403. The port of the ``Host`` header, the
+    browser's own (a tunnel's local port, not the one this server bound); its scheme's
+    default when it names none."""
+    return f"{COOKIE}_{request.url.port}"
 
 
 class _StartupFreeze:
@@ -241,7 +252,7 @@ class MonitorServer:
             given = (
                 request.query.get("token")
                 or request.headers.get("X-Monitor-Token")
-                or request.cookies.get(COOKIE)
+                or request.cookies.get(cookie_name(request))
             )
             if not given:
                 return _error(
@@ -289,7 +300,7 @@ class MonitorServer:
         response = web.Response(text=html, content_type="text/html")
         response.headers["Cache-Control"] = "no-store"
         if self.token is not None:
-            response.set_cookie(COOKIE, self.token, httponly=True, samesite="Strict")
+            response.set_cookie(cookie_name(request), self.token, httponly=True, samesite="Strict")
         return response
 
     async def _static(self, request: web.Request) -> web.StreamResponse:

@@ -6,7 +6,10 @@ from __future__ import annotations
 
 import json
 import re
+import socket
+import time
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -181,3 +184,110 @@ def test_the_token_leaves_the_address_bar_and_the_cookie_still_opens_the_page(
         assert json.dumps(run.session.state.paused) == "true"
     finally:
         run.finish()
+
+
+def test_a_node_menu_left_open_across_a_drop_and_a_reload_closes_with_the_old_tree(
+    live: LiveRun, page: Any, tmp_path: Path
+) -> None:
+    """The menu names its node by its index in the tree: left open while the link was down
+    and the mission reloaded (``run --watch``), it came back enabled, and its break or force
+    went to that index, another node of the new tree (here a wait put before ``mode``)."""
+    page.goto(live.url)
+    page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+    page.click('.node[data-name="there and back"] .name')
+    page.wait_for_selector("#node-menu:visible", timeout=WAIT_MS)
+    port = live.server.port
+    live.server.close()
+    page.wait_for_selector('#link:text("disconnected")', timeout=WAIT_MS)
+    changed = tmp_path / "shuttle.yaml"
+    changed.write_text(
+        SHUTTLE.read_text()
+        .replace("there and back", "out and home")
+        .replace("    - mode: safe\n", "    - wait: 10ms\n    - mode: safe\n")
+    )
+    live.session.reload(load_mission(changed, {}, profile=CREATE2))
+    deadline = time.monotonic() + WAIT_MS / 1000
+    while "out and home" not in [info.name for info in live.feed.infos]:
+        assert time.monotonic() < deadline, "the reload was not applied"
+        time.sleep(0.01)
+    live.server = MonitorServer(live.feed, live.session, port=port)
+    live.server.start()
+    page.wait_for_selector('.node[data-name="out and home"]', timeout=WAIT_MS)
+    page.wait_for_selector('#link:text-is("connected")', timeout=WAIT_MS)
+    assert page.is_hidden("#node-menu")
+    assert page.evaluate("view.menuNode") is None
+    assert live.session.state.breakpoints == {}
+
+
+#: counts the page's WebSockets (before its script runs)
+COUNT_SOCKETS = """
+window.sockets = [];
+const NativeSocket = window.WebSocket;
+window.WebSocket = class extends NativeSocket {
+  constructor(...args) { super(...args); window.sockets.push(this); }
+};
+"""
+
+
+def test_the_browser_s_online_while_a_try_is_connecting_opens_no_second_socket(
+    live: LiveRun, page: Any
+) -> None:
+    """A try stuck connecting (a port that takes the connection and never answers, as a
+    half-up Wi-Fi or tunnel does), then the browser's ``online``: it opened a second socket
+    beside the first; two fed the page, and one's close marked a live page stale."""
+    page.add_init_script(COUNT_SOCKETS)
+    page.goto(live.url)
+    page.wait_for_selector('#link:text-is("connected")', timeout=WAIT_MS)
+    port = live.server.port
+    live.server.close()
+    silent = socket.socket()
+    try:
+        silent.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        silent.bind(("127.0.0.1", port))
+        silent.listen(8)  # takes the connection (the kernel's backlog), answers nothing
+        page.wait_for_function(
+            "window.sockets.length >= 2"  # the first try since the drop, stuck connecting
+            " && window.sockets.at(-1).readyState === WebSocket.CONNECTING",
+            timeout=WAIT_MS,
+        )
+        opened = page.evaluate(
+            """() => {
+                const before = window.sockets.length;
+                window.dispatchEvent(new Event("online"));
+                return window.sockets.length - before;
+            }"""
+        )
+        assert opened == 0
+    finally:
+        silent.close()  # the try stuck connecting fails: the page tries again
+    live.server = MonitorServer(live.feed, live.session, port=port)
+    live.server.start()
+    page.wait_for_selector('#link:text-is("connected")', timeout=WAIT_MS)
+    assert (
+        page.evaluate("window.sockets.filter((s) => s.readyState === WebSocket.OPEN).length") == 1
+    )
+
+
+def test_two_monitors_on_one_host_keep_a_cookie_each(page: Any) -> None:
+    """A browser keeps one host's cookies together whatever the port: the second monitor's
+    page overwrote the first's cookie (one name), and the first page's reload got 403."""
+    first = start_live_run(SHUTTLE, host="0.0.0.0")
+    second = start_live_run(SHUTTLE, host="0.0.0.0")
+    try:
+        assert first.server.token != second.server.token
+        page.goto(first.url)
+        page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+        other = page.context.new_page()
+        other.goto(second.url)
+        other.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+        for shown in (page, other):
+            response = shown.reload()  # each by its own cookie
+            assert response is not None and response.status == 200, response.status
+            shown.wait_for_selector('#link:text-is("connected")', timeout=WAIT_MS)
+        names = sorted(cookie["name"] for cookie in page.context.cookies())
+        assert names == sorted(f"roomba_bt_monitor_{run.server.port}" for run in (first, second)), (
+            names
+        )
+    finally:
+        first.finish()
+        second.finish()

@@ -31,8 +31,9 @@ const view = {
   events: [], path: { odometry: [], truth: [] }, pathLive: { odometry: [], truth: [] },
   world: null, fontSize: 13, shownTick: 0, window: [0, 0], playing: null, menuNode: null,
   finished: null, ended: false,
-  // the socket: connected, when it dropped, the next try's delay (ms) and its timer
-  connected: false, droppedAt: null, retryMs: 1000, retryTimer: null, retryAt: 0,
+  // the socket (the page's one: null before the first), connected, when it dropped, the next
+  // try's delay (ms) and its timer
+  socket: null, connected: false, droppedAt: null, retryMs: 1000, retryTimer: null, retryAt: 0,
 };
 const RETRY_MAX_MS = 10000;
 const GOING_AWAY = 1001;  // the server's close when the run ended (or the monitor stopped)
@@ -78,6 +79,10 @@ function showAlert(text) {
 
 // ------------------------------------------------------------------ the tree
 function buildTree(nodes) {
+  // a menu opened on the old tree names a node by its index, which is another node of this
+  // one (a reload, perhaps while the socket was down): closed, so break and force cannot
+  // reach the wrong node
+  closeMenu();
   view.tree = nodes; view.shown = ""; view.rows = [];
   const inner = $("tree-inner");
   inner.textContent = "";
@@ -175,9 +180,16 @@ function openMenu(i, ev) {
   menu.style.top = Math.min(ev.clientY + 8, window.innerHeight - 120) + "px";
   ev.stopPropagation();
 }
-document.addEventListener("click", (ev) => { if (!$("node-menu").contains(ev.target)) $("node-menu").hidden = true; });
-for (const b of document.querySelectorAll("[data-break]")) b.addEventListener("click", () => { control("break", view.menuNode, b.dataset.break); $("node-menu").hidden = true; });
-for (const b of document.querySelectorAll("[data-force]")) b.addEventListener("click", () => { control("force", view.menuNode, b.dataset.force); $("node-menu").hidden = true; });
+function closeMenu() { $("node-menu").hidden = true; view.menuNode = null; }
+// the menu's node, then the menu closed; nothing when it names no node (closed since)
+function menuControl(action, value) {
+  const node = view.menuNode;
+  closeMenu();
+  if (node !== null) control(action, node, value);
+}
+document.addEventListener("click", (ev) => { if (!$("node-menu").contains(ev.target)) closeMenu(); });
+for (const b of document.querySelectorAll("[data-break]")) b.addEventListener("click", () => menuControl("break", b.dataset.break));
+for (const b of document.querySelectorAll("[data-force]")) b.addEventListener("click", () => menuControl("force", b.dataset.force));
 
 // ------------------------------------------------------------------ robot panel
 const lamp = (on, label) => `<span class="lamp ${on ? "on" : ""}">${on ? label : "·"}</span> `;
@@ -438,14 +450,21 @@ async function loadLiveState() {
 function setBadge(text, on) { $("link").textContent = text; $("link").className = on ? "badge on" : "badge off"; }
 
 function connect() {
+  // one socket a page: the browser's "online" comes while a try is still connecting too; a
+  // second socket fed the page twice, and its twin's close marked a live page stale
+  const current = view.socket;
+  if (current && (current.readyState === WebSocket.CONNECTING || current.readyState === WebSocket.OPEN)) return;
   clearTimeout(view.retryTimer); view.retryTimer = null;
   const proto = location.protocol === "https:" ? "wss:" : "ws:";
   const ws = new WebSocket(`${proto}//${location.host}/ws${token ? "?token=" + encodeURIComponent(token) : ""}`);
-  ws.onopen = () => {
+  view.socket = ws;
+  // a socket that was closing when this one opened says nothing more (its close is no drop)
+  const mine = (handler) => (ev) => { if (view.socket === ws) handler(ev); };
+  ws.onopen = mine(() => {
     view.connected = true; view.droppedAt = null; view.retryMs = 1000;
     setBadge("connected", true);
-  };
-  ws.onclose = (ev) => {
+  });
+  ws.onclose = mine((ev) => {
     view.connected = false;
     if (view.finished && ev.code === GOING_AWAY) {  // the run is over: nothing to connect to
       view.ended = true; setBadge("ended", false); updateControls(); return;
@@ -454,8 +473,8 @@ function connect() {
     setBadge("disconnected", false);
     reconnectLater();
     updateControls();
-  };
-  ws.onmessage = (ev) => {
+  });
+  ws.onmessage = mine((ev) => {
     const msg = JSON.parse(ev.data);
     if (msg.type === "hello") { hello(msg.header); return; }
     if (msg.tree && JSON.stringify(msg.tree) !== JSON.stringify(view.tree)) {
@@ -470,7 +489,7 @@ function connect() {
     if (msg.state) { view.liveState = msg.state; if (view.live) render(msg.state); else updateTimeline(); }
     else if (view.live && view.liveState) renderStatuses(view.liveState);
     updateControls();
-  };
+  });
 }
 
 // after a drop: 1 s, then twice as long each failed try, at most 10 s
