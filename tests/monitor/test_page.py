@@ -55,7 +55,7 @@ def test_a_dropped_link_turns_the_controls_off_a_control_says_it_was_not_sent_an
     assert live.session.state.paused  # nothing reached the run
     live.server = MonitorServer(live.feed, live.session, port=port)  # the network is back
     live.server.start()
-    page.wait_for_selector('#link:text("connected")', timeout=WAIT_MS)
+    page.wait_for_selector('#link:text-is("connected")', timeout=WAIT_MS)
     page.wait_for_selector("#resume:enabled", timeout=WAIT_MS)
     assert not page.evaluate("document.body.classList.contains('stale')")
     tick = _tick(page)
@@ -177,7 +177,7 @@ def test_the_token_leaves_the_address_bar_and_the_cookie_still_opens_the_page(
         assert "token" not in page.url, page.url  # a screen share showed it
         response = page.reload()  # the cookie, Path=/, authorises the reload
         assert response is not None and response.status == 200
-        page.wait_for_selector('#link:text("connected")', timeout=WAIT_MS)
+        page.wait_for_selector('#link:text-is("connected")', timeout=WAIT_MS)
         page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
         page.click("#pause")
         page.wait_for_selector('#banner:has-text("PAUSED")', timeout=WAIT_MS)
