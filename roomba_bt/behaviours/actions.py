@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import logging
 import math
+import re
 from collections.abc import Mapping
 from typing import Any
 
@@ -40,12 +41,13 @@ from roomba_bt.behaviours.units import (
     STR,
     UnitError,
     ValueType,
+    described,
     enum,
     parse_quantity,
 )
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.bits import LED_NAMES, led_bits, motor_bits
-from roomba_bt.oi.encode import PLAYABLE_NOTES, Note, Radius, note_name, note_number
+from roomba_bt.oi.encode import NOTE_NAMES, PLAYABLE_NOTES, Note, Radius, note_name, note_number
 from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS, ENCODER_PACKETS
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import COMMANDS_BY_NAME, opcodes
@@ -92,14 +94,18 @@ def _parse_notes(value: object) -> tuple[tuple[int, int], ...]:
 
 def _note(item: object) -> tuple[int, int]:
     """One note, ``"C4 250ms"`` -> (60, 16): a name the robot plays (or ``rest``) and a
-    duration in 1/64 s."""
-    parts = item.split() if isinstance(item, str) else []
+    duration in 1/64 s, spaces between them as many as written (``"C4 250 ms"``: a duration
+    takes a space before its unit everywhere else)."""
+    parts = item.split(None, 1) if isinstance(item, str) else []
     if len(parts) != 2:
-        raise UnitError(f'expected a note such as "C4 250ms" or "rest 125ms", got {item!r}')
+        raise UnitError(
+            f'expected a note such as "C4 250ms" or "rest 125ms", got {described(item)}'
+            + ("" if isinstance(item, str) else ": a note is one text, its name and duration")
+        )
     try:
         number = note_number(parts[0])
     except ValueError:
-        raise UnitError(f"unknown note {parts[0]!r}: write A4, C#5 or rest") from None
+        raise UnitError(f"unknown note {parts[0]!r}: {_note_hint(parts[0])}") from None
     if number and number not in PLAYABLE_NOTES:
         lo, hi = note_name(PLAYABLE_NOTES[0]), note_name(PLAYABLE_NOTES[-1])
         raise UnitError(
@@ -112,6 +118,27 @@ def _note(item: object) -> tuple[int, int]:
             f"note duration {parts[1]!r} is out of range: 16ms..3.98s (1..255 of 1/64 s)"
         )
     return number, sixty_fourths
+
+
+#: a note name as a musician writes it: a letter, a sharp or a flat (``b``, ``♯``, ``♭``), an
+#: octave
+_SPELLED_NOTE = re.compile("([A-Ga-g])([#b\u266f\u266d]?)([0-9])")
+
+
+def _note_hint(name: str) -> str:
+    """What to write for a note name :func:`note_number` refuses: a flat (``Db4``), ``♯``, or
+    ``E#4`` as the same pitch the way the robot's names spell it (``C#4``, ``F4``): flats are
+    common and were refused with only "write A4, C#5 or rest"."""
+    spelled = _SPELLED_NOTE.fullmatch(name)
+    if spelled is None:
+        return "write A4, C#5 or rest"
+    letter, accidental, octave = spelled.groups()
+    shift = {"#": 1, "\u266f": 1, "b": -1, "\u266d": -1}.get(accidental, 0)
+    number = 12 * (int(octave) + 1) + NOTE_NAMES.index(letter.upper()) + shift
+    return (
+        f"write {note_name(number)}, the same pitch (the notes are {', '.join(NOTE_NAMES)}: "
+        "no flats)"
+    )
 
 
 NOTES = ValueType(
@@ -557,7 +584,8 @@ _SONG_SLOT = Param("number", INT, default=0, minimum=_SONG_NUMBER.minimum,
     params=(
         _SONG_SLOT,
         Param("notes", NOTES, required=True,
-              doc='e.g. ["C4 250ms", "rest 125ms", "G4 500ms"]; G1..G9, 16ms..3.98s each'),
+              doc='e.g. ["C4 250ms", "rest 125ms", "G4 500ms"]; G1..G9, sharps (C#4, not '
+                  'Db4), 16ms..3.98s each'),
     ),
     sends=opcodes("song"),
 )  # fmt: skip

@@ -37,8 +37,9 @@ from roomba_bt.behaviours.units import (
     STR,
     UnitError,
     ValueType,
+    described,
     enum,
-    not_ascii,
+    miswritten,
 )
 from roomba_bt.oi.bits import BUTTON_NAMES, LIGHT_BUMPER_NAMES, ChargingState, Stasis
 from roomba_bt.oi.frames import (
@@ -466,8 +467,9 @@ def _parse_comparison(value: object) -> Comparison:
     match = _COMPARISON.match(value) if isinstance(value, str) else None
     if match is None:
         raise UnitError(
-            f"expected a comparison such as 'wall_signal > 100' (packet op number), got {value!r}"
-            + (not_ascii(value) if isinstance(value, str) else "")
+            "expected a comparison such as 'wall_signal > 100' (packet op number), got "
+            + described(value)
+            + (miswritten(value) if isinstance(value, str) else "")
         )
     name, op, number = match.groups()
     spec = PACKETS_BY_NAME.get(name)

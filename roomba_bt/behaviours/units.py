@@ -19,16 +19,21 @@ import math
 import numbers
 import re
 import sys
-import unicodedata
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from roomba_bt.yamlsource import quoted
+from roomba_bt.yamlsource import (
+    QUOTE_LIMIT,
+    TYPOGRAPHIC_QUOTES,
+    named_character,
+    quoted,
+    typographic_quote,
+)
 
 _NUMBER = r"[-+]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][-+]?[0-9]+)?"
 #: ASCII digits and spaces only: ``\d`` took any script's (``1\u09ea0 mm/s``, whose Bengali 4
-#: reads like an 8, was 140 mm/s) and ``\s`` a no-break space (:func:`not_ascii`)
+#: reads like an 8, was 140 mm/s) and ``\s`` a no-break space (:func:`miswritten`)
 _QUANTITY = re.compile(rf"^\s*({_NUMBER})\s*([A-Za-z°%/]*)\s*$", re.ASCII)
 
 #: unit -> factor to the canonical unit, per dimension.
@@ -110,6 +115,27 @@ def _number_said(digits: str) -> str:
     return digits if len(digits) <= 24 else f"a number of {len(digits):,} characters"
 
 
+#: a number and a unit of any characters but digits, spaces, points and commas (any script's:
+#: a no-break space or a Bengali digit is :func:`miswritten`'s to name): what reads as "a unit"
+#: to a person though :data:`_QUANTITY`'s ASCII units do not take it (``100µs``)
+_ANY_UNIT = re.compile(rf"^[ \t]*({_NUMBER})[ \t]*([^\s\d.,]+)[ \t]*$")
+#: durations a person writes that roomba-bt has no unit for, in seconds: said in ms
+_SHORTER_THAN_MS = {"us": 1e-6, "\u00b5s": 1e-6, "\u03bcs": 1e-6, "ns": 1e-9}
+
+
+def _unknown_unit(dimension: str, value: str, number: str, unit: str) -> str:
+    """The message for a unit ``dimension`` has not: the units it has, and a microsecond's
+    duration in milliseconds (``100µs`` is 0.1ms: the shortest unit is ms)."""
+    message = (
+        f"unknown {dimension} unit {unit!r} in {quoted(value)}; use one of: "
+        f"{', '.join(UNITS[dimension])}"
+    )
+    if dimension == "duration" and unit in _SHORTER_THAN_MS:
+        in_ms = float(number) * _SHORTER_THAN_MS[unit] * 1000
+        message += f" ({number.strip()}{unit} is {in_ms:g}ms)"
+    return message
+
+
 def parse_quantity(dimension: str, value: object) -> float:
     """``parse_quantity("speed", "0.2 m/s") == 200.0``; raises :class:`UnitError`."""
     units = UNITS[dimension]
@@ -119,11 +145,15 @@ def parse_quantity(dimension: str, value: object) -> float:
             return 0.0
         raise BareNumber(dimension, value)  # type: ignore[arg-type]
     if not isinstance(value, str):
-        raise UnitError(f"expected {what} such as {EXAMPLES[dimension]}, got {_describe(value)}")
+        raise UnitError(f"expected {what} such as {EXAMPLES[dimension]}, got {described(value)}")
     match = _QUANTITY.match(value)
     if match is None:
+        spelled = _ANY_UNIT.match(value)  # 100µs, 90º: a number and a unit not in ASCII
+        if spelled is not None and math.isfinite(float(spelled.group(1))):
+            raise UnitError(_unknown_unit(dimension, value, *spelled.groups()) + miswritten(value))
         raise UnitError(
-            f"expected {what} such as {EXAMPLES[dimension]}, got {quoted(value)}" + not_ascii(value)
+            f"expected {what} such as {EXAMPLES[dimension]}, got {quoted(value)}"
+            + miswritten(value)
         )
     number, unit = float(match.group(1)), match.group(2)
     if not math.isfinite(number):  # 1e400 overflows to inf
@@ -138,7 +168,7 @@ def parse_quantity(dimension: str, value: object) -> float:
             raise UnitError(
                 f"{value!r} has no unit; {what} needs one of: {known} (e.g. {EXAMPLES[dimension]})"
             )
-        raise UnitError(f"unknown {dimension} unit {unit!r} in {value!r}; use one of: {known}")
+        raise UnitError(_unknown_unit(dimension, value, match.group(1), unit))
     canonical = number * units[unit]
     if not math.isfinite(canonical):  # 1e308 h overflows to inf in seconds: "internal error"
         largest = sys.float_info.max / units[unit]
@@ -149,22 +179,70 @@ def parse_quantity(dimension: str, value: object) -> float:
     return canonical
 
 
-def not_ascii(text: str) -> str:
-    r"""What to add to an error for a number that does not read: the first digit that is not
-    0-9 (fullwidth, Devanagari, bold: Python's ``float`` and ``\d`` take them) or space that is not
-    a plain one (a no-break space), named: it looks like what it is not. Empty if none."""
+#: Characters a chat app, a word processor or a phone keyboard writes for an ASCII one, each
+#: with what it is taken for and what to write instead: a value holding one does not read,
+#: and "expected a speed" did not say why: ``\u2212200 mm/s`` (the Unicode minus), ``90\u00ba``
+#: (an ordinal indicator) and ``\u201c200 mm/s\u201d`` (typographic quotes) look right
+_TYPOGRAPHIC_QUOTES = {quote: "'" if quote < "\u201c" else '"' for quote in TYPOGRAPHIC_QUOTES}
+_MINUS_LOOKALIKES = "\u2212\u2012\u2013\u2014\ufe63\uff0d"
+_DEGREE_LOOKALIKES = "\u00ba\u02da\u2070\u2218"
+DEGREE_SIGN = "\u00b0"
+#: a decimal comma: ``1,5 m`` (ASCII, so :func:`miswritten` looks for it apart)
+_DECIMAL_COMMA = re.compile(r"([0-9]),([0-9])")
+
+
+def miswritten(text: str) -> str:
+    r"""What to add to an error for a value that does not read, when a character in it looks
+    like what it is not, named, with what to write: a typographic quote used as a YAML quote
+    (``\u201c200 mm/s\u201d``), the Unicode minus or a dash (``\u2212200 mm/s``), a degree
+    lookalike (``90\u00ba``, U+00BA, or ``90\u02da``), a digit that is not 0-9 (fullwidth,
+    Devanagari, bold: Python's ``float`` and ``\d`` take them), a space that is not a plain one
+    (a no-break space), a decimal comma (``1,5 m``). Empty if none: the first such character
+    is said."""
     for char in text:
-        if char.isascii() or not (char.isdigit() or char.isspace()):
+        if char.isascii():
             continue
-        name = unicodedata.name(char, "")
-        shown = f"{char!r} (U+{ord(char):04X}{' ' + name if name else ''})"
+        shown = named_character(char)
+        if char in _TYPOGRAPHIC_QUOTES:
+            return f": {typographic_quote(char)} ({_rewritten(text)})"
+        if char in _MINUS_LOOKALIKES:
+            return f": {shown} is not the ASCII minus: write {_rewritten(text)}"
+        if char in _DEGREE_LOOKALIKES:
+            return (
+                f": {shown} is not a degree sign: write {_rewritten(text)} or "
+                f"{_rewritten(text, degree=DEGREE_SIGN)}"
+            )
         if char.isdigit():
             return f": {shown} is not an ASCII digit; digits must be 0-9"
-        return f": {shown} is not a plain space; write a space ' ' or nothing"
+        if char.isspace():
+            return f": {shown} is not a plain space; write a space ' ' or nothing"
+    if _DECIMAL_COMMA.search(text):
+        return f": a decimal comma: write {_rewritten(text)}"
     return ""
 
 
-def _describe(value: object) -> str:
+def _rewritten(text: str, degree: str = "deg") -> str:
+    """``text`` with each character :func:`miswritten` knows written as meant, as it is to be
+    written (no repr: ``"200 mm/s"``, not ``'"200 mm/s"'``), a long one cut."""
+    for wrong, right in _TYPOGRAPHIC_QUOTES.items():
+        text = text.replace(wrong, right)
+    for wrong in _MINUS_LOOKALIKES:
+        text = text.replace(wrong, "-")
+    for wrong in _DEGREE_LOOKALIKES:
+        text = text.replace(wrong, degree)
+    text = _DECIMAL_COMMA.sub(r"\1.\2", text.strip())
+    return text if len(text) <= QUOTE_LIMIT else f"{text[:QUOTE_LIMIT]}..."
+
+
+def _miswritten_text(value: object) -> str:
+    """:func:`miswritten` of a text, "" for another value (an int slot given ``\u22122``, an
+    enum ``\u2018safe\u2019``: the character named, not only difflib's guess)."""
+    return miswritten(value) if isinstance(value, str) else ""
+
+
+def described(value: object) -> str:
+    """What a value the user wrote is, in their terms: "nothing (null)", "a list", a text
+    quoted (never Python's ``None`` or ``['C4', 250]``)."""
     if value is None:
         return "nothing (null)"
     if isinstance(value, bool):
@@ -223,7 +301,7 @@ def _quantity_type(dimension: str) -> ValueType:
 
 def _parse_int(value: object) -> int:
     if isinstance(value, bool) or not isinstance(value, int):
-        raise UnitError(f"expected an integer, got {_describe(value)}")
+        raise UnitError(f"expected an integer, got {described(value)}{_miswritten_text(value)}")
     return _not_too_large(value)
 
 
@@ -267,7 +345,7 @@ def _parse_float(value: object) -> float:
             "number only with a decimal point and a sign (1.0e+3)"
         )
     if not _is_number(value):
-        raise UnitError(f"expected a number, got {_describe(value)}")
+        raise UnitError(f"expected a number, got {described(value)}{_miswritten_text(value)}")
     if isinstance(value, int):
         return float(_not_too_large(value))
     if not math.isfinite(value):  # type: ignore[arg-type]
@@ -277,18 +355,18 @@ def _parse_float(value: object) -> float:
 
 def _parse_bool(value: object) -> bool:
     if not isinstance(value, bool):
-        raise UnitError(f"expected true or false, got {_describe(value)}")
+        raise UnitError(f"expected true or false, got {described(value)}")
     return value
 
 
 def _parse_str(value: object) -> str:
     if isinstance(value, bool):  # `default: no`: the text was meant
         raise UnitError(
-            f"expected a text, got {_describe(value)}: YAML 1.1 reads yes/no, on/off and "
+            f"expected a text, got {described(value)}: YAML 1.1 reads yes/no, on/off and "
             "true/false as booleans: quote the text"
         )
     if not isinstance(value, str | int | float):
-        raise UnitError(f"expected a text, got {_describe(value)}")
+        raise UnitError(f"expected a text, got {described(value)}")
     return str(value)
 
 
@@ -296,7 +374,7 @@ def _parse_str_list(value: object) -> tuple[str, ...]:
     if isinstance(value, str):
         return (value,)
     if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
-        raise UnitError(f"expected a list of texts, got {_describe(value)}")
+        raise UnitError(f"expected a list of texts, got {described(value)}")
     return tuple(value)
 
 
@@ -347,8 +425,10 @@ def enum(*choices: str) -> ValueType:
 
     def parse(value: object) -> str:
         if not isinstance(value, str) or value not in choices:
-            hint = closest(value, choices) if isinstance(value, str) else ""
-            raise UnitError(f"expected one of {', '.join(choices)}, got {_describe(value)}{hint}")
+            hint = _miswritten_text(value)
+            if not hint and isinstance(value, str):
+                hint = closest(value, choices)
+            raise UnitError(f"expected one of {', '.join(choices)}, got {described(value)}{hint}")
         return value
 
     return ValueType("enum", parse, choices=tuple(choices))
@@ -443,7 +523,7 @@ def held(vtype: ValueType, value: object) -> str | None:
 
 def _found(value: object) -> str:
     """What a value is, for a message about code's value: ``'fast' (a str)``."""
-    told = _describe(value)
+    told = described(value)
     plain = value is None or isinstance(value, bool | list | dict)
     return told if plain else f"{told} ({with_article(type(value).__name__)})"
 

@@ -288,17 +288,10 @@ class Loader:
             if self._outside(text, target, iloc, "plugin file"):
                 self.ctx.unloaded_plugins.append(text)
                 continue
-            unreadable = _unreadable(target)
-            if unreadable is not None or not target.is_file():
+            not_a_file = _not_a_plugin_file(text, target)
+            if not_a_file is not None:
                 self.ctx.unloaded_plugins.append(text)
-                self.ctx.error(
-                    iloc.at(
-                        f"cannot read plugin file {text!r}: {unreadable}"
-                        if unreadable is not None
-                        else f"plugin file {text!r} not found (paths are relative to the file "
-                        "naming it)"
-                    )
-                )
+                self.ctx.error(iloc.at(not_a_file))
                 continue
             self.files.append(target)  # read like an include: run --watch watches it too
             registry, errors = self.ctx.registry.with_file(target)
@@ -639,6 +632,22 @@ def _not_a_file(path: Path, text: str, target: Path) -> str:
         f"included file {text!r} not found (paths are relative to the including file; "
         f"the shipped docking library is {DOCKING_LIBRARY})"
     )
+
+
+def _not_a_plugin_file(text: str, target: Path) -> str | None:
+    """Why ``target``, named ``text`` in ``plugins:``, cannot be imported, or None for a
+    regular file: unreadable, a directory, something else that exists (``/dev/zero``, a
+    pipe: it was "not found"), or nothing there."""
+    unreadable = _unreadable(target)
+    if unreadable is not None:
+        return f"cannot read plugin file {text!r}: {unreadable}"
+    if target.is_file():
+        return None
+    if target.is_dir():
+        return f"plugin file {text!r} is a directory, not a file: name a .py file in it"
+    if target.exists():
+        return f"plugin file {text!r} is not a regular file (a device or a pipe); name a .py file"
+    return f"plugin file {text!r} not found (paths are relative to the file naming it)"
 
 
 def _unreadable(target: Path) -> str | None:

@@ -91,7 +91,12 @@ def compose_text(text: str, display: str) -> tuple[yaml.Node | None, list[Diagno
         problem = exc.problem or exc.context or "invalid YAML"
         if problem == "but found another document":  # the composer's sentence, cut in two
             problem = "a mission file holds one YAML document; a second one (---) starts here"
-        problem += yamlsource.tab_hint(text, line, column)
+        tab = yamlsource.tab_hint(text, line, column)
+        problem += tab
+        cause = None if tab else yamlsource.lookalike_cause(text, line, column)
+        if cause is not None:  # the character that looks like YAML's own, at its place
+            problem = f"{cause[2]} ({problem} at {line}:{column})"
+            line, column = cause[0], cause[1]
         return None, [Diagnostic(display, line, column, f"YAML syntax error: {problem}")]
     except yaml.YAMLError as exc:
         return None, [Diagnostic(display, 1, 1, f"YAML error: {exc}")]

@@ -771,8 +771,13 @@ def _yaml_problem(exc: yaml.YAMLError, text: str, source: str) -> WorldProblem:
     sentence after the position."""
     line, col = yamlsource.error_position(exc) or (0, 0)
     problem = getattr(exc, "problem", None) or getattr(exc, "context", None) or str(exc)
-    problem = str(problem) + yamlsource.tab_hint(text, line, col)
+    tab = yamlsource.tab_hint(text, line, col)
+    problem = str(problem) + tab
     kind = "" if isinstance(exc, yamlsource.Refused) else "YAML syntax error"
+    cause = None if kind == "" or tab else yamlsource.lookalike_cause(text, line, col)
+    if cause is not None:  # a typographic quote, a no-break space: named at its place
+        problem = f"{cause[2]} ({problem} at {line}:{col})"
+        line, col = cause[0], cause[1]
     return WorldProblem(source, line, col, kind, problem, "")
 
 

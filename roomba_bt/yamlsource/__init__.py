@@ -19,6 +19,7 @@ from __future__ import annotations
 import os
 import re
 import sys
+import unicodedata
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any, NoReturn
@@ -71,6 +72,56 @@ def tab_hint(text: str, line: int, column: int) -> str:
     if inside and lines[line - 1][column - 1] == "\t":
         return " (a tab: YAML indents with spaces)"
     return ""
+
+
+#: quotes a word processor or a chat app writes for ' and ": YAML reads them as text
+TYPOGRAPHIC_QUOTES = "\u2018\u2019\u201a\u201b\u201c\u201d\u201e\u201f"
+#: one opening a value, where YAML's quote would be: at the line's start or after ``:``, ``-``,
+#: ``[``, ``{`` or ``,`` (one inside a text, ``"he said “hi”"``, is no cause of an error)
+_TYPOGRAPHIC_QUOTE = re.compile(f"(?:^|[-:[{{,])[ \\t]*([{TYPOGRAPHIC_QUOTES}])")
+#: spaces that are not U+0020 (a no-break space, a narrow one, an ideographic one): YAML
+#: reads them as text, so one at the start of a line indents nothing
+_NOT_PLAIN_SPACE = "\u00a0\u1680\u2000-\u200a\u202f\u205f\u3000"
+_SPACE_INDENT = re.compile(f"^[ \t]*([{_NOT_PLAIN_SPACE}])", re.MULTILINE)
+
+
+def named_character(char: str) -> str:
+    """``'\\xa0' (U+00A0 NO-BREAK SPACE)``: a character a diagnostic names because it looks
+    like another one."""
+    name = unicodedata.name(char, "")
+    return f"{char!r} (U+{ord(char):04X}{' ' + name if name else ''})"
+
+
+def lookalike_cause(text: str, line: int, column: int) -> tuple[int, int, str] | None:
+    """Where and what the cause of PyYAML's syntax error at (``line``, ``column``), 1-based,
+    is when it is a character that looks like YAML's own: a typographic quote on that line
+    (YAML reads ``“${speed}”`` as text, and its ``{`` is the error: "did not find expected
+    ','") or a space that is not a plain one indenting that line or the one before (a
+    no-break space indents nothing: "could not find expected ':'" a line later). None
+    otherwise: PyYAML's sentence is all there is to say."""
+    lines = text.split("\n")
+    if 0 < line <= len(lines):
+        quote = _TYPOGRAPHIC_QUOTE.search(lines[line - 1])
+        if quote is not None:
+            return line, quote.start(1) + 1, typographic_quote(quote.group(1))
+    for number in (line, line - 1):
+        indent = _SPACE_INDENT.match(lines[number - 1]) if 0 < number <= len(lines) else None
+        if indent is not None:
+            return number, indent.start(1) + 1, space_indent(indent.group(1))
+    return None
+
+
+def typographic_quote(char: str) -> str:
+    """What is wrong with a typographic quote used as YAML's."""
+    return f"{named_character(char)} is a typographic quote, not a YAML quote: write \" or '"
+
+
+def space_indent(char: str) -> str:
+    """What is wrong with a space that is not a plain one indenting a line."""
+    return (
+        f"{named_character(char)} indents this line: YAML indents with plain spaces only "
+        "(write a space)"
+    )
 
 
 def undecodable_position(exc: UnicodeDecodeError) -> tuple[int, int]:
@@ -159,9 +210,76 @@ def compose(text: str, loader: type[Any] = FAST_LOADER) -> yaml.Node | None:
         raise unprintable(text, exc) from None
     if root is not None:
         refuse_deep_nodes(root)
+        if _SPACE_INDENT.search(text) is not None:
+            refuse_space_indented_keys(root)
+        if _DIGIT_COMMA_DIGIT.search(text) is not None:
+            refuse_decimal_commas(root, text)
         if "\\" in text:  # a control character gets into a text only as a "\e" escape
             refuse_control_characters(root)
     return root
+
+
+def refuse_space_indented_keys(root: yaml.Node) -> None:
+    """Raise :class:`Refused` at each key (in the file's order) that starts a line with a
+    space that is not a plain one: ``\\xa0\\xa0sequence:`` pasted from a chat is the key
+    ``'\\xa0\\xa0sequence'`` one level out, and the file's errors were an empty ``tree:``
+    and an unknown top-level key. No key of a mission or a world starts with a space."""
+    found: list[tuple[int, Refused]] = []
+    for mapping in _mappings(root):
+        for key, _ in mapping.value:
+            plain_key = key.__class__ is yaml.ScalarNode and not key.style
+            indent = _SPACE_INDENT.match(key.value) if plain_key else None
+            if indent is not None and key.start_mark.column == 0:
+                refused = Refused(
+                    problem=space_indent(indent.group(1)), problem_mark=key.start_mark
+                )
+                found.append((key.start_mark.index, refused))
+    if found:
+        raise_every([refused for _, refused in sorted(found, key=lambda each: each[0])])
+
+
+_DIGIT_COMMA_DIGIT = re.compile("[0-9],[0-9]")
+
+
+def refuse_decimal_commas(root: yaml.Node, text: str) -> None:
+    """Raise :class:`Refused` at each number of a flow mapping followed at once by a comma and
+    a key of digits (``{distance: 1,5 m}``): a decimal comma, which YAML reads as the end of
+    the value, and the file's errors were a bare ``1`` and an unknown parameter ``'5 m'``.
+    No key of a mission or a world starts with a digit."""
+    found: list[tuple[int, Refused]] = []
+    for mapping in _mappings(root):
+        if not mapping.flow_style:
+            continue
+        for (_, value), (key, _) in zip(mapping.value, mapping.value[1:], strict=False):
+            end = value.end_mark.index
+            if (
+                value.tag in _NUMBER_TAGS
+                and key.__class__ is yaml.ScalarNode
+                and not key.style
+                and key.value[:1].isdigit()
+                and key.start_mark.index == end + 1
+                and text[end : end + 1] == ","
+            ):
+                written = f"{value.value},{key.value}"
+                problem = (
+                    f"{quoted(written)} holds a decimal comma, which ends the value here: write "
+                    f"{value.value}.{key.value}"
+                )
+                found.append((end, Refused(problem=problem, problem_mark=value.start_mark)))
+    if found:
+        raise_every([refused for _, refused in sorted(found, key=lambda each: each[0])])
+
+
+def _mappings(root: yaml.Node) -> Iterator[yaml.MappingNode]:
+    """Every mapping of the document (a walk with a stack of its own: any depth)."""
+    pending = [root]
+    while pending:
+        node = pending.pop()
+        if node.__class__ is yaml.MappingNode:
+            yield node
+            pending.extend(item for pair in node.value for item in pair)
+        elif node.__class__ is yaml.SequenceNode:
+            pending.extend(node.value)
 
 
 def _compose(text: str, loader: type[Any]) -> yaml.Node | None:

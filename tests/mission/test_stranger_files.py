@@ -133,3 +133,171 @@ def test_a_second_document_is_named_where_it_starts(tmp_path: Path) -> None:
         "3:1: YAML syntax error: a mission file holds one YAML document; a second one (---) "
         "starts here"
     ]
+
+
+# --- what a chat app, a word processor or Windows writes for YAML's own characters -------------
+
+
+def _one_step(tmp_path: Path, step: str) -> Path:
+    """A mission whose second step is ``step``, written as given (a flow or block line)."""
+    path = tmp_path / "m.yaml"
+    path.write_text(f"mission: m\ntree:\n  sequence:\n    - mode: safe\n    - {step}\n")
+    return path
+
+
+@pytest.mark.parametrize(
+    ("opening", "named"),
+    [("\u201c", "'\u201c' (U+201C LEFT DOUBLE QUOTATION MARK)"),
+     ("\u2018", "'\u2018' (U+2018 LEFT SINGLE QUOTATION MARK)")],
+)  # fmt: skip
+def test_typographic_quotes_used_as_yaml_quotes_are_named_at_their_place(
+    tmp_path: Path, opening: str, named: str
+) -> None:
+    """``{velocity: “${speed}”, ...}`` was "did not find expected ',' or '}'" at the ``{``."""
+    closing = chr(ord(opening) + 1)
+    path = _one_step(tmp_path, f"drive: {{velocity: {opening}${{speed}}{closing}, duration: 1s}}")
+    assert _problems(path, {}) == [
+        f'5:25: YAML syntax error: {named} is a typographic quote, not a YAML quote: write " '
+        "or ' (did not find expected ',' or '}' at 5:27)"
+    ]
+
+
+def test_a_typographic_quote_inside_a_text_is_not_blamed_for_a_syntax_error(
+    tmp_path: Path,
+) -> None:
+    """Only a quote where YAML's would open a value is named: one inside a quoted text is
+    text, and PyYAML's sentence stands."""
+    path = _one_step(tmp_path, 'log: "he said \u201chi\u201d" ]')
+    (problem,) = _problems(path)
+    assert problem.startswith("5:27: YAML syntax error: ") and "typographic" not in problem
+
+
+def test_a_value_in_typographic_quotes_says_what_to_write(tmp_path: Path) -> None:
+    """The typographic quotes were quoted back, never named: ``got '\u2018safe\u2019' (did
+    you mean 'safe'?)``."""
+    path = tmp_path / "m.yaml"
+    path.write_text(
+        "mission: m\ntree:\n  sequence:\n    - mode: \u2018safe\u2019\n"
+        "    - drive:\n        velocity: \u201c200 mm/s\u201d\n        duration: 1s\n"
+    )
+    assert _problems(path) == [
+        "4:13: mode.to: expected one of passive, safe, full, got '\u2018safe\u2019': '\u2018' "
+        '(U+2018 LEFT SINGLE QUOTATION MARK) is a typographic quote, not a YAML quote: write " '
+        "or ' ('safe')",
+        "6:19: drive.velocity: expected a speed such as 200 mm/s or 0.2 m/s, got "
+        "'\u201c200 mm/s\u201d': '\u201c' (U+201C LEFT DOUBLE QUOTATION MARK) is a typographic "
+        'quote, not a YAML quote: write " or \' ("200 mm/s")',
+    ]
+
+
+def test_a_no_break_space_indenting_a_key_is_named(tmp_path: Path) -> None:
+    """It was "expected a node, got nothing (null) [tree]" and "unknown top-level key
+    '\\xa0\\xa0sequence'": the character was shown, never named."""
+    path = tmp_path / "m.yaml"
+    path.write_text("mission: m\ntree:\n\xa0\xa0sequence:\n    - mode: safe\n")
+    assert _problems(path) == [
+        "3:1: '\\xa0' (U+00A0 NO-BREAK SPACE) indents this line: YAML indents with plain spaces "
+        "only (write a space)"
+    ]
+
+
+def test_a_no_break_space_indenting_a_line_yaml_cannot_read_is_named(tmp_path: Path) -> None:
+    """PyYAML's "could not find expected ':'" came a line after the pasted one."""
+    path = tmp_path / "m.yaml"
+    path.write_text("mission: m\ntree:\n  sequence:\n    - mode: safe\n    - log: x\n\xa0\xa0\n")
+    assert _problems(path) == [
+        "6:1: YAML syntax error: '\\xa0' (U+00A0 NO-BREAK SPACE) indents this line: YAML indents "
+        "with plain spaces only (write a space) (could not find expected ':' at 7:1)"
+    ]
+
+
+@pytest.mark.parametrize(
+    ("step", "said"),
+    [("drive: {velocity: \u2212200 mm/s, duration: 1s}",
+      "5:25: drive.velocity: expected a speed such as 200 mm/s or 0.2 m/s, got '\u2212200 mm/s': "
+      "'\u2212' (U+2212 MINUS SIGN) is not the ASCII minus: write -200 mm/s"),
+     ("repeat: {times: \u22122, do: {log: x}}",
+      "5:23: repeat.times: expected an integer, got '\u22122': '\u2212' (U+2212 MINUS SIGN) is "
+      "not the ASCII minus: write -2"),
+     ("turn: {angle: 90\u00ba}",
+      "5:21: turn.angle: unknown angle unit '\u00ba' in '90\u00ba'; use one of: deg, \u00b0, rad, "
+      "turn, turns: '\u00ba' (U+00BA MASCULINE ORDINAL INDICATOR) is not a degree sign: write "
+      "90deg or 90\u00b0"),
+     ("turn: {angle: 90\u02da}",
+      "5:21: turn.angle: unknown angle unit '\u02da' in '90\u02da'; use one of: deg, \u00b0, rad, "
+      "turn, turns: '\u02da' (U+02DA RING ABOVE) is not a degree sign: write 90deg or 90\u00b0"),
+     ("wait: 100\u00b5s",
+      "5:13: wait.duration: unknown duration unit '\u00b5s' in '100\u00b5s'; use one of: ms, s, "
+      "sec, min, h (100\u00b5s is 0.1ms)"),
+     ("wait: 100 us",
+      "5:13: wait.duration: unknown duration unit 'us' in '100 us'; use one of: ms, s, sec, min, "
+      "h (100us is 0.1ms)")],
+)  # fmt: skip
+def test_a_lookalike_in_a_number_or_a_unit_is_named(tmp_path: Path, step: str, said: str) -> None:
+    """The Unicode minus and ``90º`` got the generic "expected a speed", ``100µs`` "expected a
+    duration" without the units a duration has."""
+    assert _problems(_one_step(tmp_path, step)) == [said]
+
+
+def test_a_decimal_comma_says_to_write_a_point(tmp_path: Path) -> None:
+    """In a flow mapping ``1,5 m`` was a bare 1 ("write the unit: 1mm") and an unknown
+    parameter '5 m'; as a text, the generic "expected a distance"."""
+    path = _one_step(tmp_path, "drive: {velocity: 100 mm/s, distance: 1,5 m}")
+    assert _problems(path) == [
+        "5:45: '1,5 m' holds a decimal comma, which ends the value here: write 1.5 m"
+    ]
+    path = _one_step(tmp_path, "drive:\n        velocity: 100 mm/s\n        distance: 1,5 m")
+    assert _problems(path) == [
+        "7:19: drive.distance: expected a distance such as 300 mm, 30cm or 1.5 m, got '1,5 m': "
+        "a decimal comma: write 1.5 m"
+    ]
+
+
+def test_a_flat_note_says_its_sharp_and_no_python_repr_leaks(tmp_path: Path) -> None:
+    """``Db4`` got only "write A4, C#5 or rest"; an empty item, a list and a mapping were
+    said as ``None``, ``['C4', 250]`` and ``{'note': 'C4'}``."""
+    path = _one_step(tmp_path, 'song: {number: 0, notes: ["Db4 250ms", "Cb4 1s", ~, [C4, 250]]}')
+    (problem,) = _problems(path)
+    assert problem == (
+        "5:32: song.notes: note 1 of 4: unknown note 'Db4': write C#4, the same pitch (the notes "
+        "are C, C#, D, D#, E, F, F#, G, G#, A, A#, B: no flats); note 2 of 4: unknown note 'Cb4': "
+        "write B3, the same pitch (the notes are C, C#, D, D#, E, F, F#, G, G#, A, A#, B: no "
+        'flats); note 3 of 4: expected a note such as "C4 250ms" or "rest 125ms", got nothing '
+        "(null): a note is one text, its name and duration; note 4 of 4: expected a note such as "
+        '"C4 250ms" or "rest 125ms", got a list: a note is one text, its name and duration'
+    )
+    assert "None" not in problem and "[" not in problem
+
+
+def test_a_note_takes_spaces_before_its_duration_as_a_duration_does(tmp_path: Path) -> None:
+    """``"C4  250 ms"`` was refused, though ``250 ms`` is a duration everywhere else."""
+    path = _one_step(tmp_path, 'song: {number: 0, notes: ["C4  250 ms", "rest 125ms"]}')
+    mission, problems = compile_mission(path)
+    assert problems == [] and mission is not None
+
+
+def test_a_plugin_file_that_is_a_device_is_named_as_such(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``plugins: [/dev/zero]`` with ``--include-dir /dev`` said "not found": it exists."""
+    path = tmp_path / "m.yaml"
+    path.write_text("mission: m\nplugins: [/dev/zero]\ntree: {log: x}\n")
+    args = ["validate", str(path), "--include-dir", "/dev", "--allow-plugin-files"]
+    assert main(args) == 2
+    assert capsys.readouterr().out.splitlines() == [
+        f"{path}:2:11: plugin file '/dev/zero' is not a regular file (a device or a pipe); name "
+        "a .py file [plugins[0]]"
+    ]
+
+
+def test_a_world_file_names_a_typographic_quote_too(tmp_path: Path) -> None:
+    """The world reader words YAML errors as a mission's: the same hint, at the quote."""
+    from roomba_bt.sim.world import WorldError, parse_world
+
+    with pytest.raises(WorldError) as caught:
+        parse_world("name: x\nrooms: [[[0, 0], [4, 0], [4, 3], \u201c{0, 3}\u201d]]\n", "w.yaml")
+    assert str(caught.value) == (
+        "w.yaml:2:34: YAML syntax error: '\u201c' (U+201C LEFT DOUBLE QUOTATION MARK) is a "
+        "typographic quote, not a YAML quote: write \" or ' (expected ',' or ']', but got '{' at "
+        "2:35)"
+    )
