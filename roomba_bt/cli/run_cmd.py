@@ -404,6 +404,7 @@ def _run_and_report(
     stack.runner.hold_interrupts = True  # once the safe stop began: the summary still prints
     # on the virtual clock nothing drives meanwhile: Ctrl-Z suspends, Ctrl-\ quits
     stack.runner.on_wall_clock = not args.fast
+    stack.runner.names_slow_ticks = True  # a plugin's blocking update named, --fast too
     use_mission_clock(stack.runner)
     try:
         with logging_off_the_tick():  # a stalled terminal must not hold up the tick loop

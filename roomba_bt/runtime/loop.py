@@ -77,6 +77,7 @@ from roomba_bt.runtime.teardown import (
     where_in,
 )
 from roomba_bt.runtime.tick_guard import TickGuardLike
+from roomba_bt.runtime.tick_watch import slowest_tick_named
 
 log = logging.getLogger(__name__)
 
@@ -299,6 +300,7 @@ class MissionRunner(BaseHandle):
     #: False: the run installs no signal handler (an evaluation's pool worker: Ctrl-C is
     #: its parent's, which ends the workers)
     guards_signals: bool = True
+    names_slow_ticks: bool = False  #: the slowest tick's behaviour named (runtime/tick_watch.py)
     #: the writer's count of commands when the start-up was done (see :meth:`count_written`)
     _sent_at_start: int | None = None
 
@@ -351,7 +353,8 @@ class MissionRunner(BaseHandle):
                     warn_of_wall_clock_timeouts(root)
                 if tick_guard is not None:
                     tick_guard.start()
-                self._loop(root, summary)
+                with slowest_tick_named(summary, self.names_slow_ticks):
+                    self._loop(root, summary)
             except KeyboardInterrupt as exc:  # Ctrl-C, or Terminated: SIGTERM, SIGHUP, ...
                 interrupt = exc
                 why = signal_reason(exc.signum) if isinstance(exc, Terminated) else "Ctrl-C"

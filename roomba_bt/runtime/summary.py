@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 from roomba_bt.oi.frames import BATTERY_PACKETS
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
+from roomba_bt.oi.stream import SLOT_SECONDS
 from roomba_bt.printable import ANY_CONTROL, escaped
 
 if TYPE_CHECKING:
@@ -176,6 +177,9 @@ class RunSummary:
     #: False when not one byte came from the robot: its mode is then not known at all
     robot_answered: bool = True
     max_tick_s: float = 0.0
+    #: where the slowest tick was, when a watch could tell (runtime/tick_watch.py: ``run``'s,
+    #: on either clock): ``sleepy (Sleepy.update at x.py:98)``; "" otherwise
+    slowest_in: str = ""
     #: the exception's traceback when a behaviour raised one (printed under ``-v``)
     traceback: str = ""
     #: ``--record``: why and when the record stopped before the run's end ("" if it did not)
@@ -262,7 +266,7 @@ class RunSummary:
             f"duration     {self.mission_time_s:.2f} s mission time, {self.wall_time_s:.2f} s wall",
             *([f"paused       {self.paused_text()}"] if self.pauses or self.steps else []),
             f"ticks        {self.ticks} ({self.overruns} overruns > 15 ms, "
-            f"slowest {self.max_tick_s * 1000:.2f} ms)",
+            f"slowest {self.max_tick_s * 1000:.2f} ms{self.slowest_said()})",
             f"frames       {self.stale_frames_dropped} stale dropped, {self.frames_lost} lost, "
             f"{self.checksum_failures} checksum failures, "
             f"{self.implausible_frames} out of range, {self.skipped_bytes} bytes skipped, "
@@ -298,6 +302,14 @@ class RunSummary:
 
     def __str__(self) -> str:
         return "\n".join(self.lines())
+
+    def slowest_said(self) -> str:
+        """`` in sleepy (Sleepy.update at x.py:98)``: the slowest tick's behaviour, for the ticks
+        line, when it ran over the 15 ms slot (a run's ordinary slowest tick is not news) and
+        the watch named it; else ""."""
+        if not self.slowest_in or self.max_tick_s <= SLOT_SECONDS:
+            return ""
+        return f" in {self.slowest_in}"
 
     def paused_text(self) -> str:
         """The pauses, in the duration line's units: ``6.15 s in 2 pauses, 3 steps, left out
