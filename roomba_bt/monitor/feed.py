@@ -572,14 +572,23 @@ class RunFeed:
         return [r for r in out if r is not None]
 
 
+#: ``log.warning(..., extra=IN_THE_EVENT_LOG)``: a warning the monitor put in its event log
+#: itself (its own words, without the logger's prefix), said in the terminal's log too; the
+#: :class:`EventLogHandler` leaves it out, or the page's log showed it twice
+IN_THE_EVENT_LOG = {"in_the_event_log": True}
+
+
 class EventLogHandler(logging.Handler):
-    """Warnings of the roomba_bt loggers into the feed's event log."""
+    """Warnings of the roomba_bt loggers into the feed's event log (but those already there:
+    :data:`IN_THE_EVENT_LOG`)."""
 
     def __init__(self, feed: RunFeed) -> None:
         super().__init__(logging.WARNING)
         self.feed = feed
 
     def emit(self, record: logging.LogRecord) -> None:
+        if getattr(record, "in_the_event_log", False):
+            return
         try:
             self.feed.event("warning", record.getMessage())
         except Exception:  # a log line must never break the run

@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING, Any
 
 from py_trees.common import Status
 
-from roomba_bt.monitor.feed import RunFeed
+from roomba_bt.monitor.feed import IN_THE_EVENT_LOG, RunFeed
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import Command
 from roomba_bt.oi.modes import OIMode
@@ -330,7 +330,7 @@ class MonitorSession:
         )
         self.state.pause_reason += f" - {text}"
         self.feed.event("warning", text)
-        log.warning("monitor: %s", text)
+        log.warning("monitor: %s", text, extra=IN_THE_EVENT_LOG)  # in the terminal's log too
 
     def _resume(self, runner: MissionRunner, why: str) -> None:
         _note(runner, {"resume": why, "at": "before"})

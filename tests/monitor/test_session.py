@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+import logging
 import threading
 import time
 from collections.abc import Callable
@@ -20,7 +21,7 @@ from runtime.simrun import (  # tests/runtime: a room with a drop, a recorded st
 
 from roomba_bt.mission import load_mission
 from roomba_bt.monitor import session as session_module
-from roomba_bt.monitor.feed import Ring, RunFeed
+from roomba_bt.monitor.feed import EventLogHandler, Ring, RunFeed
 from roomba_bt.monitor.recorded import replay_into_feed
 from roomba_bt.monitor.session import ControlRefused, MonitorSession
 from roomba_bt.oi.modes import OIMode
@@ -754,9 +755,15 @@ def test_a_long_pause_without_keep_awake_is_warned_of_before_the_robot_sleeps(
         seen["reason"] = rig.session.state.pause_reason
         rig.session.request("stop")
 
-    rig.run_with(operator)
+    logger = logging.getLogger("roomba_bt")
+    handler = EventLogHandler(rig.feed)  # as the CLI's monitor has it: the log's warnings
+    logger.addHandler(handler)
+    try:
+        rig.run_with(operator)
+    finally:
+        logger.removeHandler(handler)
     warnings = [e.text for e in rig.feed.events if "without keep-awake" in e.text]
-    if keep_awake is False:
+    if keep_awake is False:  # once: it was also there again as "monitor: paused 4 min ..."
         assert len(warnings) == 1 and "resume or stop" in warnings[0], warnings
         assert "the robot sleeps after 5 min paused in Passive" in warnings[0]
         assert "without keep-awake" in str(seen["reason"])
