@@ -15,8 +15,10 @@ import os
 import select
 import signal
 import socket
+import string
 import sys
 import threading
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -27,6 +29,8 @@ from roomba_bt.runtime.summary import ExitCode
 
 log = logging.getLogger("roomba_bt.monitor")
 KEYS_HELP = "keys: p pause, r resume, n step, q stop"
+#: after the page's URL when the token is the operator's (``--monitor-token``)
+CHOSEN_TOKEN = " (add ?token= and your --monitor-token, or open your bookmark)"
 
 
 def address_problem(host: str, port: int, exc: OSError) -> str:
@@ -51,6 +55,57 @@ def monitor_address(text: str) -> tuple[str, int]:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
+#: the environment's ``--monitor-token``, for a bookmark that outlives the run
+TOKEN_VARIABLE = "ROOMBA_BT_MONITOR_TOKEN"
+#: a token's length: as long as the generated one's at least (``secrets.token_urlsafe(18)``,
+#: 24 characters), at most what a URL and a cookie carry without trouble
+TOKEN_LENGTH = (24, 256)
+#: a token's characters: URL-safe base64's, so it goes into the URL and the cookie as it is
+TOKEN_CHARACTERS = frozenset(string.ascii_letters + string.digits + "-_")
+MAKE_ONE = "python -c 'import secrets; print(secrets.token_urlsafe(18))'"
+
+
+def token_problem(token: str) -> str:
+    """What is wrong with a chosen monitor token, or "" (the token itself is never said: it
+    must not end up in a terminal's scrollback or a CI log from a message)."""
+    shortest, longest = TOKEN_LENGTH
+    if not shortest <= len(token) <= longest:
+        said = f"it has {len(token)} character{'' if len(token) == 1 else 's'}"
+    elif not set(token) <= TOKEN_CHARACTERS:
+        said = "it has a character other than A-Z a-z 0-9 - _"
+    else:
+        return ""
+    return (
+        f"{said}; a token is {shortest} to {longest} characters of A-Z a-z 0-9 - _ "
+        f"(make one: {MAKE_ONE})"
+    )
+
+
+def monitor_token(text: str) -> str:
+    """``--monitor-token TOKEN``: checked when the arguments are read (exit 2)."""
+    problem = token_problem(text)
+    if problem:
+        raise argparse.ArgumentTypeError(problem)
+    return text
+
+
+def chosen_token(args: argparse.Namespace, environ: Mapping[str, str] = os.environ) -> str:
+    """``--monitor-token``, else :data:`TOKEN_VARIABLE` from ``environ`` (checked here: its
+    problem names the variable) into ``args.monitor_token``; "" when all is well, else what
+    is wrong. A token on the command line without ``--monitor`` is a mistake said as such;
+    the variable, set once for every run, is left unused then."""
+    if args.monitor_token is not None:
+        return "" if args.monitor is not None else "--monitor-token is for --monitor: add it"
+    from_environment = environ.get(TOKEN_VARIABLE, "")
+    if not from_environment or args.monitor is None:
+        return ""
+    problem = token_problem(from_environment)
+    if problem:
+        return f"{TOKEN_VARIABLE}: {problem}"
+    args.monitor_token = from_environment
+    return ""
+
+
 def add_run_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument(
         "--monitor", nargs="?", const="", type=monitor_address, metavar="[HOST:]PORT",
@@ -58,8 +113,15 @@ def add_run_arguments(run: argparse.ArgumentParser) -> None:
         "token printed in the URL)",
     )  # fmt: skip
     run.add_argument(
-        "--monitor-readonly", action="store_true", help="the monitor page has no controls"
-    )
+        "--monitor-readonly", action="store_true",
+        help="the monitor page has no controls (the terminal's keys still work)",
+    )  # fmt: skip
+    run.add_argument(
+        "--monitor-token", type=monitor_token, metavar="TOKEN",
+        help=f"the page's token instead of a new one each run, so a bookmark keeps working "
+        f"(also {TOKEN_VARIABLE}); {TOKEN_LENGTH[0]} to {TOKEN_LENGTH[1]} of A-Z a-z 0-9 - _; "
+        "not printed",
+    )  # fmt: skip
     run.add_argument(
         "--monitor-force", action="store_true",
         help="allow forcing conditions from the page on a real robot (always on the simulator)",
@@ -130,20 +192,24 @@ class LiveMonitor:
             from roomba_bt.monitor.server import MonitorServer
 
             host, port = self.args.monitor
+            chosen = getattr(self.args, "monitor_token", None)
             self.server = MonitorServer(
-                self.feed, self.session, host=host, port=port, readonly=self.args.monitor_readonly
-            )
+                self.feed, self.session, host=host, port=port,
+                readonly=self.args.monitor_readonly, token=chosen,
+            )  # fmt: skip
             try:
                 url = self.server.start()
             except OSError as exc:
                 print(f"roomba-bt: {address_problem(host, port, exc)}", file=sys.stderr)
                 return ExitCode.INVALID
-            print(f"monitor: {url}", flush=True)
+            if chosen:  # the operator's own: known to them, printed nowhere
+                url = url.split("?token=", 1)[0]
+            print(f"monitor: {url}{CHOSEN_TOKEN if chosen else ''}", flush=True)
             self._say_where(host, url)
         logging.getLogger("roomba_bt").addHandler(self._handler)
         if self.args.watch:
             self._spawn(self._watch, "roomba-bt watch")
-        if sys.stdin.isatty() and not self.args.monitor_readonly:
+        if sys.stdin.isatty():  # the operator's at the keyboard, --monitor-readonly or not
             if in_foreground(sys.stdin.fileno()):
                 print(KEYS_HELP, flush=True)
                 self._spawn(self._keys, "roomba-bt keys")

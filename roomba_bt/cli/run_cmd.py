@@ -26,7 +26,7 @@ from roomba_bt.cli.arguments import (
     seconds,
     watchdog_seconds,
 )
-from roomba_bt.cli.monitor_cmd import LiveMonitor
+from roomba_bt.cli.monitor_cmd import LiveMonitor, chosen_token
 from roomba_bt.cli.monitor_cmd import add_run_arguments as add_monitor_arguments
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.profiles import RobotProfile, get_profile
@@ -304,6 +304,9 @@ def _checked_arguments(args: argparse.Namespace) -> tuple[dict[str, str], float 
             "--world, --plot, --fast, --battery and --odometry-error are for the simulator: "
             "drop them or --port"
         )
+    token = chosen_token(args)
+    if token:
+        return _error(token)
     ending = end_in_problem(args.end_in, get_profile(args.profile))
     if ending is not None:
         return _error(ending)

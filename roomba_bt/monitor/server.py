@@ -30,9 +30,11 @@ Safety: on a loopback address no token is needed, and a request whose ``Host`` i
 127.0.0.1, localhost or [::1] (any port: a tunnel's) is refused (403: another site's name its DNS
 points at 127.0.0.1, DNS rebinding); on any other, every request must carry the token printed
 in the URL at start (``?token=``, the ``X-Monitor-Token`` header, or the cookie the page is
-given), else 401 (none given) or 403 (wrong). On either, a request whose ``Origin`` is not this
-server (a WebSocket, a control, a fetch from another site's page) is refused (403), so another
-site open in the same browser can neither drive the robot nor read the run.
+given), else 401 (none given) or 403 (wrong): a new token each run, or the operator's own
+(``token=``: ``run --monitor-token``), which then guards a loopback address too. On either, a
+request whose ``Origin`` is not this server (a WebSocket, a control, a fetch from another
+site's page) is refused (403), so another site open in the same browser can neither drive the
+robot nor read the run.
 """
 
 from __future__ import annotations

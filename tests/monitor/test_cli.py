@@ -402,3 +402,94 @@ def test_a_record_says_how_its_run_ended_and_its_replay_ends_there(
     assert "the tree wrote the same" in out
     out, _ = _served_record(record)
     assert out.startswith(f"{record}: {ended}"), out
+
+
+#: a token of the operator's own (32 URL-safe characters)
+CHOSEN = "Bookmark-ed_token-0123456789abcd"
+
+
+def _probe_the_page(monkeypatch: pytest.MonkeyPatch) -> dict[str, int]:
+    """Once the run's page is up: the page's HTTP status with the chosen token, with none
+    and with another (``"given"``, ``"none"``, ``"wrong"``)."""
+    import urllib.error
+    import urllib.request
+
+    from roomba_bt.monitor.server import MonitorServer
+
+    statuses: dict[str, int] = {}
+    start = MonitorServer.start
+
+    def probed(server: MonitorServer) -> str:
+        url = start(server)
+        for name, token in (("given", CHOSEN), ("none", ""), ("wrong", "x" * 32)):
+            headers = {"X-Monitor-Token": token} if token else {}
+            request = urllib.request.Request(f"http://127.0.0.1:{server.port}/", headers=headers)
+            try:
+                with urllib.request.urlopen(request, timeout=10) as response:
+                    statuses[name] = response.status
+            except urllib.error.HTTPError as exc:
+                exc.close()
+                statuses[name] = exc.code
+        return url
+
+    monkeypatch.setattr(MonitorServer, "start", probed)
+    return statuses
+
+
+@pytest.mark.parametrize("by", ["option", "environment"])
+def test_a_chosen_token_outlives_the_run_and_is_printed_nowhere(
+    by: str,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """A new token every run broke a bookmark or a phone's shortcut every run.
+    ``--monitor-token`` (or ``ROOMBA_BT_MONITOR_TOKEN``) is the page's token instead; the
+    operator knows it, so the URL printed leaves it out, and neither the log nor the record
+    holds it."""
+    pytest.importorskip("aiohttp")
+    statuses = _probe_the_page(monkeypatch)
+    record = tmp_path / "run.jsonl"
+    argv = ["run", str(SHUTTLE), "--fast", "--display", "log", "--monitor", "0.0.0.0:0",
+            "--timeout", "1s", "--record", str(record)]  # fmt: skip
+    if by == "option":
+        argv += ["--monitor-token", CHOSEN]
+    else:
+        monkeypatch.setenv("ROOMBA_BT_MONITOR_TOKEN", CHOSEN)
+    assert main(argv) == 1
+    assert statuses == {"given": 200, "none": 401, "wrong": 403}
+    out, err = capsys.readouterr()
+    first = out.splitlines()[0]
+    assert re.fullmatch(r"monitor: http://0\.0\.0\.0:\d+/ \(add \?token= and your "
+                        r"--monitor-token, or open your bookmark\)", first), first  # fmt: skip
+    assert CHOSEN not in out + err + caplog.text + record.read_text()
+
+
+@pytest.mark.parametrize(
+    ("token", "said"),
+    [
+        ("short-token", "it has 11 characters; a token is 24 to 256 characters"),
+        ("a token with spaces in it!", "it has a character other than A-Z a-z 0-9 - _"),
+    ],
+)
+def test_a_chosen_token_that_will_not_do_is_a_usage_error_that_does_not_repeat_it(
+    token: str, said: str, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    pytest.importorskip("aiohttp")
+    argv = ["run", str(SHUTTLE), "--fast", "--display", "none", "--monitor", "0"]
+    with pytest.raises(SystemExit) as exited:
+        main([*argv, "--monitor-token", token])
+    assert exited.value.code == 2
+    err = capsys.readouterr().err
+    assert f"argument --monitor-token: {said}" in err and token not in err
+    monkeypatch.setenv("ROOMBA_BT_MONITOR_TOKEN", token)
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert f"roomba-bt: ROOMBA_BT_MONITOR_TOKEN: {said}" in err and token not in err
+    assert "secrets.token_urlsafe(18)" in err
+
+
+def test_a_chosen_token_without_a_page_is_said(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["run", str(SHUTTLE), "--fast", "--monitor-token", CHOSEN]) == 2
+    assert "roomba-bt: --monitor-token is for --monitor: add it" in capsys.readouterr().err

@@ -105,3 +105,34 @@ def test_a_key_that_does_nothing_says_why(tmp_path: Path) -> None:
     run.type("q")
     run.until("outcome      INTERRUPTED (stopped by the operator)")
     assert run.wait() == 130
+
+
+def test_a_read_only_page_leaves_the_keys_to_the_operator(tmp_path: Path) -> None:
+    """``--monitor-readonly`` turned the terminal's keys off too: "LAN viewers read-only, me
+    at the keyboard in control" was not possible. The keys are the local operator's: the
+    page refuses every control (403), and ``p`` still pauses, ``q`` still stops."""
+    import re
+    import urllib.error
+    import urllib.request
+
+    run = Terminal(
+        "run", str(SHUTTLE), "--monitor", "127.0.0.1:0", "--monitor-readonly",
+        "--display", "log", "--timeout", "60s", cwd=tmp_path,
+    )  # fmt: skip
+    run.until("keys: p pause, r resume, n step, q stop")
+    port = re.search(r"monitor: http://127\.0\.0\.1:(\d+)/", run.screen)
+    assert port, run.screen
+    request = urllib.request.Request(
+        f"http://127.0.0.1:{port.group(1)}/api/control", data=b'{"action": "pause"}',
+        headers={"Content-Type": "application/json"}, method="POST",
+    )  # fmt: skip
+    with pytest.raises(urllib.error.HTTPError) as refused:
+        urllib.request.urlopen(request, timeout=10)
+    refused.value.close()
+    assert refused.value.code == 403
+    run.until("drive(velocity=100 mm/s, distance=3 cm) -> RUNNING")
+    run.type("p")
+    run.until("monitor: pause (paused by the operator)")
+    run.type("q")
+    run.until("outcome      INTERRUPTED (stopped by the operator)")
+    assert run.wait() == 130
