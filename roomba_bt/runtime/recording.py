@@ -580,6 +580,9 @@ class ReplayTransport:
         #: byte offset of the first difference from the recorded "out" side, once there is one
         self.difference: int | None = None
         self._starved_at: int | None = None  # where the tree stopped short (:meth:`starved`)
+        #: a write early (:meth:`_early_by`): the robot's chunks not given yet that the recorded
+        #: run had read before it, and the seconds of the record's clock it came before its time
+        self.early: tuple[int, float] | None = None
 
     def _read_chunk(self, queue: bool = True) -> bool:
         """Read the record's next chunk into the queue (``queue``; else the robot's chunk is
@@ -604,18 +607,46 @@ class ReplayTransport:
         if self.difference is None:
             while start + len(data) > self._out_read and self._read_chunk():
                 pass
-            self._written_at(start)
             at = start - self._start
             recorded = self._expected[at : at + len(data)]
+            same = len(data)
             if recorded != data:
                 same = next(
                     (i for i, (a, b) in enumerate(zip(recorded, data, strict=False)) if a != b),
                     len(recorded),
                 )
+            if same > 0 and self._early_by(start):  # the same bytes, before their frames
+                self.difference = start
+            elif same < len(data):
                 # past the end of a record that stops short of its run's end: no difference
                 if same < len(recorded) or self._ended or not self.exhausted:
                     self.difference = start + same
+            if self.difference is None:
+                self._written_at(start)
         self._keep(data)
+
+    def _early_by(self, start: int) -> bool:
+        """Whether the tree writes byte ``start`` of the "out" side before the replay gave it
+        the robot's chunks the recorded run had read before writing it (each queued chunk
+        holds the recorded bytes written before it): the tree decided on fewer frames than
+        the live run did, sooner (a ``wait`` shortened since). Kept for
+        :meth:`first_difference` (:attr:`early`): how many chunks and seconds early. Before,
+        only the bytes were compared: the clock jumped to the write's recorded time over
+        those frames, and the replay made up a gap ("no frame was read for 2.00 s"), lost
+        frames and a poor link, then said "the tree wrote the same bytes", exit 0."""
+        unread = 0
+        for _, _, written_before in self._inbound:
+            if written_before > start:
+                break
+            unread += 1
+        if not unread:
+            return False
+        times = self._out_times
+        while times and times[0][0] <= start:
+            times.popleft()
+        at = times[0][1] if times else self._now
+        self.early = (unread, max(0.0, at - self._now))
+        return True
 
     def _written_at(self, start: int) -> None:
         """The clock moves on to the recorded time of the chunk that holds byte ``start`` of
@@ -627,12 +658,21 @@ class ReplayTransport:
         for ``settle`` s after it). The replay wrote it at the frame's time: the frames that
         had queued meanwhile, still in Passive after a cliff, came past that window and were
         taken for a second fall, and the tree, in Safe live, starved there (run1.jsonl of
-        session 27: ``expected Motors (138) 8a 07, sent nothing`` at 75.36 s of 92.6 s)."""
+        session 27: ``expected Motors (138) 8a 07, sent nothing`` at 75.36 s of 92.6 s).
+
+        The jump goes no further than the robot's next recorded chunk, which the replay has
+        still to give: the frames in between are not skipped (an early write, which would
+        skip them, is a difference before this: :meth:`_early_by`)."""
         times = self._out_times
         while times and times[0][0] <= start:
             times.popleft()
-        if times and times[0][1] > self._now:
-            self._now = times[0][1]
+        if not times:
+            return
+        at = times[0][1]
+        if self._inbound and self._inbound[0][0] < at:
+            at = self._inbound[0][0]
+        if at > self._now:
+            self._now = at
 
     def _keep(self, data: bytes) -> None:
         """Keep the tree's bytes of the command being compared, and drop each command that
@@ -716,6 +756,12 @@ class ReplayTransport:
         if not self._parsable:
             return offset, _bytes_at(self._expected, at), _bytes_at(self._sent, at)
         sent = "nothing" if offset == self._starved_at else command_at(self._sent, at)
+        if self.early is not None:
+            chunks, seconds = self.early
+            sent += (
+                f" {seconds:.2f} s early: the recorded run read {chunks} more of the robot's "
+                "chunks before writing it"
+            )
         return offset, command_at(self._expected, at), sent
 
     def set_baud(self, baud: int) -> None:

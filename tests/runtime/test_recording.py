@@ -359,3 +359,42 @@ def test_a_record_made_before_the_end_note_still_replays_and_says_no_ending(
     assert "the tree wrote the same" in out and "replay: the recorded run" not in out
     assert main(["replay", str(tmp_path / "run.jsonl")]) == 0
     assert "replay: the recorded run ended in success at t=3.03 s\n" in capsys.readouterr().out
+
+
+WAITED = """\
+mission: early
+tree:
+  sequence:
+    - mode: safe
+    - wait: {wait}
+    - drive: {{velocity: 100 mm/s, radius: spin_left, duration: 1s}}
+    - wait: 1s
+"""
+
+
+def test_a_command_the_replayed_tree_writes_before_its_frames_is_a_difference(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A record made with ``wait: 3s``, replayed against the mission changed to ``wait: 1s``:
+    the tree writes the drive 2 s before the live run did, the same bytes. Before, the clock
+    jumped to the drive's recorded time over the 133 frames between, and the replay made up a
+    gap ("no frame was read for 2.00 s"), 198 lost frames and a poor link, then said "the tree
+    wrote the same 43 bytes", exit 0. Now it is the first difference, exit 1, and nothing is
+    made up."""
+    source, path = tmp_path / "early.yaml", tmp_path / "run.jsonl"
+    source.write_text(WAITED.format(wait="3s"))
+    argv = ["run", str(source), "--fast", "--display", "none", "--record", str(path)]
+    assert main(argv) == 0
+    source.write_text(WAITED.format(wait="1s"))
+    capsys.readouterr()
+    assert main(["replay", str(path)]) == 1
+    out = capsys.readouterr().out
+    assert (
+        "expected Drive (137) 89 00 64 00 01, sent Drive (137) 89 00 64 00 01 2.00 s early: "
+        "the recorded run read 133 more of the robot's chunks before writing it"
+    ) in out, out
+    summary, difference, _ = _replayed(path)
+    assert difference is not None
+    assert summary.frames_lost == 0 and summary.unread_gaps == 0
+    source.write_text(WAITED.format(wait="3s"))  # the recorded mission: the same bytes
+    assert main(["replay", str(path)]) == 0
