@@ -417,6 +417,8 @@ class MissionRunner(BaseHandle):
         summary.take_counters(getattr(self.connection, "counters", None))
         summary.falls = dict(getattr(self.connection, "falls", {}))
 
+    # Long on purpose: every frame's path, written out in one loop (a call less a frame),
+    # and the try around it that places a Ctrl-C in its frame (interrupted_at)
     def _loop(self, root: py_trees.behaviour.Behaviour, summary: RunSummary) -> None:
         success, failure = py_trees.common.Status.SUCCESS, py_trees.common.Status.FAILURE
         perf = time.perf_counter
@@ -425,64 +427,62 @@ class MissionRunner(BaseHandle):
         poll, poll_timeout, ride = self.connection.poll_frames, self.poll_timeout, self._ride
         held = False  # the root ended and the gate holds the run there (the monitor)
         untick: int | None = None  # the gate held the tree: the tick it last ticked on
-        while True:
-            try:
-                batch = poll(poll_timeout)
-            except StreamStalled as stalled:
-                batch = ride.tripped(stalled)
-            if ride.stall is not None:
-                ride.carry_on(batch)
-            if not batch:
-                if isinstance(self.gate, _StopGate):  # no frame: the stop goes on all the same
-                    raise StopRequested(self.gate.reason, at="after")
-                if self.input_ended is not None and (why := self.input_ended()):
-                    summary.outcome, summary.reason = Outcome.INPUT_ENDED, why
-                    return
-                continue
-            started = perf()
-            mission_time, untick = self._advance(batch, untick), None
-            gate = self.gate
-            if gate is not None:
-                if not gate.before_tick(self):  # a pause's frame, a step's, one a mode change
-                    untick = self.snapshot.previous_tick  # made stale: no gap for ``held``
+        flushed = -1  # the stream tick of the last tree tick written whole
+        try:
+            while True:
+                try:
+                    batch = poll(poll_timeout)
+                except StreamStalled as stalled:
+                    batch = ride.tripped(stalled)
+                if ride.stall is not None:
+                    ride.carry_on(batch)
+                if not batch:
+                    if isinstance(self.gate, _StopGate):  # no frame: the stop goes on anyway
+                        raise StopRequested(self.gate.reason, at="after")
+                    if self.input_ended is not None and (why := self.input_ended()):
+                        summary.outcome, summary.reason = Outcome.INPUT_ENDED, why
+                        return
                     continue
-                if self.mission.root is not root:  # a reload replaced it
-                    root = self.mission.root
-                    tick = self._tick_of(root, tick_guard)
-                elif held:  # the operator let the ended mission go: the run ends
-                    self._ended(root, summary)
+                started = perf()
+                mission_time, untick = self._advance(batch, untick), None
+                gate = self.gate
+                if gate is not None:
+                    if not gate.before_tick(self):  # a pause's frame, a step's, one a mode
+                        untick = self.snapshot.previous_tick  # change made stale: no gap
+                        continue
+                    if self.mission.root is not root:  # a reload replaced it
+                        root = self.mission.root
+                        tick = self._tick_of(root, tick_guard)
+                    elif held:  # the operator let the ended mission go: the run ends
+                        tree_ended(root, summary)
+                        return
+                    held = False
+                tick()
+                self._flush()
+                flushed = self._tick
+                elapsed = perf() - started
+                summary.ticks += 1
+                if elapsed > SLOT_SECONDS:
+                    summary.overruns += 1
+                if elapsed > summary.max_tick_s:
+                    summary.max_tick_s = elapsed
+                if self.observer is not None:
+                    self.observer(self)
+                if gate is not None:
+                    gate.after_tick(self)
+                status = root.status
+                if status is success or status is failure:
+                    if gate is not None and gate.holds(self):
+                        held = True
+                        continue
+                    tree_ended(root, summary)
                     return
-                held = False
-            tick()
-            self._flush()
-            elapsed = perf() - started
-            summary.ticks += 1
-            if elapsed > SLOT_SECONDS:
-                summary.overruns += 1
-            if elapsed > summary.max_tick_s:
-                summary.max_tick_s = elapsed
-            if self.observer is not None:
-                self.observer(self)
-            if gate is not None:
-                gate.after_tick(self)
-            status = root.status
-            if status is success or status is failure:
-                if gate is not None and gate.holds(self):
-                    held = True
-                    continue
-                self._ended(root, summary)
-                return
-            if self.timeout_s is not None and mission_time >= self.timeout_s:
-                summary.timed_out(self.timeout_s, running_in(root))
-                return
-
-    @staticmethod
-    def _ended(root: py_trees.behaviour.Behaviour, summary: RunSummary) -> None:
-        if root.status is py_trees.common.Status.SUCCESS:
-            summary.outcome = Outcome.SUCCESS
-        else:
-            summary.outcome = Outcome.FAILURE
-            summary.reason = failure_reason(root)
+                if self.timeout_s is not None and mission_time >= self.timeout_s:
+                    summary.timed_out(self.timeout_s, running_in(root))
+                    return
+        except KeyboardInterrupt:  # Ctrl-C, SIGTERM...: in which half of its frame
+            summary.ended_at = interrupted_at(self, flushed)
+            raise
 
     def _tick_of(
         self, root: py_trees.behaviour.Behaviour, tick_guard: TickGuardLike | None
@@ -620,12 +620,36 @@ class MissionRunner(BaseHandle):
                 self._outbox.send(held, self)
 
 
+def tree_ended(root: py_trees.behaviour.Behaviour, summary: RunSummary) -> None:
+    """The run's outcome by its tree's: SUCCESS, or FAILURE and why."""
+    if root.status is py_trees.common.Status.SUCCESS:
+        summary.outcome = Outcome.SUCCESS
+    else:
+        summary.outcome = Outcome.FAILURE
+        summary.reason = failure_reason(root)
+
+
+def interrupted_at(runner: MissionRunner, flushed: int) -> tuple[int, str] | None:
+    """Where a Ctrl-C or SIGTERM came, for the end note (:func:`ended_at`): "after" the tree's
+    tick on the last frame when that tick was written whole (``flushed``: the stream tick of
+    the last one), else "before" it: a tick writes nothing until its flush, so an interrupt
+    inside the tree's tick (or before it, in the gate) left none of it on the wire. It was
+    taken as "after", and the replay ticked that frame in full and wrote a command the live
+    run never sent, where the record holds the safe stop (a false difference, exit 1). An
+    interrupt between two of the flush's writes is still "before": the replay then misses
+    the commands written before it (a partial tick, which no end note places)."""
+    if not runner.has_snapshot:
+        return None
+    tick = runner.snapshot.tick
+    return tick, "after" if tick == flushed else "before"
+
+
 def ended_at(runner: MissionRunner, said: tuple[int, str] | None) -> tuple[int, str] | None:
     """Where the run ended, for the record's end note (``RunSummary.ended_at``): the tick of
     its last frame, and whether before the tree's tick on it (the monitor's stop, which comes
-    through the gate before the tick: ``said``, from its :class:`StopRequested`) or after (a
-    Ctrl-C is taken as after, where a run waits for its next frame; the tree's own end, a
-    timeout); None before the first frame."""
+    through the gate before the tick: ``said``, from its :class:`StopRequested`; a Ctrl-C or
+    SIGTERM inside the tick: :func:`interrupted_at`) or after (one where the run waits for
+    its next frame; the tree's own end, a timeout); None before the first frame."""
     if not runner.has_snapshot:
         return None
     return runner.snapshot.tick, said[1] if said is not None else "after"

@@ -617,10 +617,11 @@ class ReplayTransport:
                 )
             if same > 0 and self._early_by(start):  # the same bytes, before their frames
                 self.difference = start
-            elif same < len(data):
+            elif same < len(data) and (
                 # past the end of a record that stops short of its run's end: no difference
-                if same < len(recorded) or self._ended or not self.exhausted:
-                    self.difference = start + same
+                same < len(recorded) or self._ended or not self.exhausted
+            ):
+                self.difference = start + same
             if self.difference is None:
                 self._written_at(start)
         self._keep(data)

@@ -18,6 +18,7 @@ from roomba_bt.sim import SimLink, Simulator, load_world
 
 from .simrun import (
     LEDGE,
+    SPIN,
     BusyAfterTheFall,
     over_the_edge,
     record_run,
@@ -398,3 +399,87 @@ def test_a_command_the_replayed_tree_writes_before_its_frames_is_a_difference(
     assert summary.frames_lost == 0 and summary.unread_gaps == 0
     source.write_text(WAITED.format(wait="3s"))  # the recorded mission: the same bytes
     assert main(["replay", str(path)]) == 0
+
+
+INTERRUPTING = '''\
+import os
+from roomba_bt.behaviours import Condition, declare
+
+@declare("interrupting", kind="condition")
+class Interrupting(Condition):
+    """A Ctrl-C landing inside a tick: the first tick past 50 whose tree queued a command."""
+
+    def check(self, snapshot):
+        queued = self.robot.outbox.queued
+        if os.environ.get("INTERRUPT_MID_TICK") and snapshot.tick >= 50 and queued:
+            raise KeyboardInterrupt
+        return True
+'''
+SPINS_WHILE = """\
+mission: interrupted
+plugins: [./interrupting.py]
+tree:
+  parallel:
+    - sequence:
+        - mode: safe
+        - drive: {velocity: 200 mm/s, radius: spin_left, duration: 1s}
+        - drive: {velocity: 100 mm/s, radius: spin_right, duration: 1s}
+    - wait: 60s
+      while: {interrupting: {}}
+"""
+
+
+def test_a_ctrl_c_inside_a_tick_is_noted_before_it_and_replays_byte_for_byte(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A Ctrl-C (or SIGTERM) raised inside the tree's tick ends the run before that tick's
+    commands are written. The end note said "after" the tick, so the replay ticked it in full
+    and wrote the spin the live run never sent, where the record holds the safe stop:
+    "expected Drive (137) 89 00 00 00 00, sent Drive (137) 89 00 64 ff ff", exit 1."""
+    (tmp_path / "interrupting.py").write_text(INTERRUPTING)
+    source, path = tmp_path / "interrupted.yaml", tmp_path / "run.jsonl"
+    source.write_text(SPINS_WHILE)
+    monkeypatch.setenv("INTERRUPT_MID_TICK", "1")
+    argv = ["run", str(source), "--fast", "--display", "none", "--allow-plugin-files"]
+    assert main([*argv, "--record", str(path)]) == 130
+    monkeypatch.delenv("INTERRUPT_MID_TICK")
+    ending = load_record(path).ending
+    assert ending is not None
+    assert (ending["reason"], ending["tick"], ending["at"]) == ("Ctrl-C", 68, "before")
+    capsys.readouterr()
+    assert main(["replay", str(path), "--allow-plugin-files"]) == 0
+    out = capsys.readouterr().out
+    assert "replay: the tree wrote the same 38 bytes as the recorded run" in out, out
+    assert "replay: the recorded run was interrupted (Ctrl-C) at t=1.02 s" in out
+
+
+class _CtrlCBetweenFrames(SimLink):
+    """A Ctrl-C that comes while the run waits for its next frame (in the read), after
+    ``after`` reads: the tick before it was written whole."""
+
+    def __init__(self, simulator: Simulator, after: int) -> None:
+        super().__init__(simulator)
+        self.reads_left = after
+
+    def read(self, timeout: float) -> bytes:
+        self.reads_left -= 1
+        if self.reads_left == 0:
+            raise KeyboardInterrupt
+        return super().read(timeout)
+
+
+def test_a_ctrl_c_between_frames_is_still_noted_after_the_last_tick(tmp_path: Path) -> None:
+    """The other half: an interrupt in the wait for a frame comes after the last tick, which
+    the replay then ticks in full, as live."""
+    link = _CtrlCBetweenFrames(Simulator(load_world("empty-room"), CREATE2, 0), after=80)
+    source, path = tmp_path / "m.yaml", tmp_path / "run.jsonl"
+    source.write_text(SPIN)
+    stack = RunStack(load_mission(source, {}, profile=CREATE2), link, profile=CREATE2,
+                     record=Recording(path, str(source)))  # fmt: skip
+    assert stack.run(raise_interrupts=False).outcome is Outcome.INTERRUPTED
+    stack.close()
+    ending = load_record(path).ending
+    assert ending is not None and (ending["reason"], ending["at"]) == ("Ctrl-C", "after")
+    summary, difference, written = _replayed(path)
+    assert difference is None and written == load_record(path).out_bytes
+    assert summary.ticks > 1
