@@ -568,6 +568,7 @@ def load_recorded(args: argparse.Namespace) -> Recorded | int:
 
 
 def replay_command(args: argparse.Namespace) -> int:
+    from roomba_bt.monitor.recorded import operator_replay
     from roomba_bt.runtime.recording import ending_text
     from roomba_bt.runtime.stack import replay_record
 
@@ -579,6 +580,7 @@ def replay_command(args: argparse.Namespace) -> int:
         record, recorded.mission, profile=recorded.profile, packets=recorded.packets,
         baud=recorded.baud, name=args.record, raise_interrupts=False,
         progress=replay_progress("replay", record),
+        gate=operator_replay(record, recorded.mission),  # the monitor's pauses, steps, forces
     )  # fmt: skip
     print(summary)
     difference = transport.first_difference()
@@ -600,11 +602,12 @@ def replay_command(args: argparse.Namespace) -> int:
         f"replay: first difference at mission time {summary.mission_time_s:.3f} s "
         f"(byte {offset} of {record.out_bytes} recorded): expected {expected}, sent {sent}"
     )
-    acts = operator_acts(record)
-    if acts:
+    unplayed = operator_acts(record)
+    if unplayed:
         print(
-            f"replay: the recorded run holds its operator's acts ({acts}), which replay does "
-            f"not do; roomba-bt monitor {args.record} replays them"
+            f"replay: the recorded run holds operator acts replay cannot do again ({unplayed}): "
+            "a reload (the record has no copy of the new mission), or an act a record made "
+            "before noted without its tick"
         )
     if ended is not None:
         print(ended)
@@ -640,13 +643,15 @@ def _clock(seconds: float) -> str:
 
 
 def operator_acts(record: Record) -> str:
-    """The monitor's acts the record notes (``pause at 2.01 s, reload at 5.30 s``), the
-    first few; empty when there are none."""
+    """The monitor's acts the record notes that a replay cannot do again (``reload at 5.30
+    s``), the first few; empty when there are none. A reload (the record has no copy of the
+    mission it loaded), and an act noted without its tick (a record made before they had
+    one); the others replay where they were done (``monitor/recorded.py``)."""
     acts = [
         f"{act} at {t:.2f} s"
         for t, note in record.notes
         for act in ("pause", "resume", "force", "reload")
-        if act in note
+        if act in note and (act == "reload" or not isinstance(note.get("tick"), int))
     ]
     return ", ".join(acts[:4]) + (", ..." if len(acts) > 4 else "")
 

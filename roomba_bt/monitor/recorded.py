@@ -11,7 +11,8 @@ does each at the same place through the same session as the live run (:class:`Re
 so the bytes it writes stay the recorded ones and a pause shows as it happened: the stream's
 ticks go on, the tree is frozen and mission time stands still until the resume. A reload
 (``run --watch``) ends the replay there: the record has no copy of the new mission. Notes
-without a tick (records made before they had one) are only shown as events.
+without a tick (records made before they had one) are only shown as events. ``roomba-bt
+replay`` does the acts through the same session (:func:`operator_replay`), without a page.
 """
 
 from __future__ import annotations
@@ -47,14 +48,9 @@ def replay_into_feed(
     line says it on stderr, as ``replay`` does)."""
     feed = RunFeed(source="record", mission_name=mission.name, packed=True)
     feed.set_tree(mission.root)
-    acts = [  # the operator's; the tick guard's are replayed by the runner's own guard
-        note
-        for _, note in record.notes
-        if isinstance(note.get("tick"), int) and "tick_guard" not in note
-    ]
     summary, transport = replay_record(
         record, mission, profile=profile, packets=packets, baud=baud, name=name,
-        gate=ReplayedActs(feed, acts),  # it records each tick in the feed, as live
+        gate=ReplayedActs(feed, recorded_acts(record)),  # it records each tick in the feed
         raise_interrupts=False,  # Ctrl-C: the monitor shows the summary, as `replay` does
         progress=progress,
     )  # fmt: skip
@@ -67,6 +63,36 @@ def replay_into_feed(
         diverged_at(difference)
     feed.finished = how_the_replay_ended(record, summary, difference, feed)
     return feed, summary
+
+
+def recorded_acts(record: Record) -> list[dict[str, Any]]:
+    """The operator's acts ``record`` notes with the tick they were done at (pause, resume, a
+    step, a force, a reload), in the order they were done; the tick guard's are replayed by
+    the runner's own guard, and the end note by the replay's end."""
+    return [
+        note
+        for _, note in record.notes
+        if isinstance(note.get("tick"), int) and "tick_guard" not in note and ENDED not in note
+    ]
+
+
+#: the ticks a replay without a page keeps in its feed (:func:`operator_replay`)
+OPERATOR_REPLAY_HISTORY = 2
+
+
+def operator_replay(record: Record, mission: Any) -> ReplayedActs | None:
+    """The gate that does ``record``'s operator acts again where the live run did them, for
+    ``replay``, which has no page (its feed keeps the last two ticks: a breakpoint's pause
+    is in the record as a pause, so none is looked for); None for a record without them.
+    Before, ``replay`` did none: a paused run's record differed at its first pause, and the
+    replay pointed to ``roomba-bt monitor RECORD``, which did them. A session of the
+    monitor's, so it lives here; ``replay`` (the command line) is above both."""
+    acts = recorded_acts(record)
+    if not acts:
+        return None
+    feed = RunFeed(source="record", mission_name=mission.name, history=OPERATOR_REPLAY_HISTORY)
+    feed.set_tree(mission.root)
+    return ReplayedActs(feed, acts)
 
 
 def how_the_replay_ended(

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+import json
 import logging
 import threading
 import time
@@ -19,6 +20,7 @@ from runtime.simrun import (  # tests/runtime: a room with a drop, a recorded st
     stream_gap_link,
 )
 
+from roomba_bt.cli import main
 from roomba_bt.mission import load_mission
 from roomba_bt.monitor import session as session_module
 from roomba_bt.monitor.feed import EventLogHandler, Ring, RunFeed
@@ -838,13 +840,14 @@ class ScriptedOperator:
     ticks (the first frame at or past each) through its API, from the tick thread: on the
     virtual clock a page's thread acts at no tick the test can name."""
 
-    def __init__(self, session: MonitorSession, acts: list[tuple[int, str]]) -> None:
+    def __init__(self, session: MonitorSession, acts: list[tuple[Any, ...]]) -> None:
+        """``acts``: ``(tick, action)``, or ``(tick, action, node, value)`` (a force)."""
         self.session = session
         self.acts = sorted(acts)
 
     def before_tick(self, runner: MissionRunner) -> bool:
         while self.acts and self.acts[0][0] <= runner.snapshot.tick:
-            self.session.request(self.acts.pop(0)[1])
+            self.session.request(*self.acts.pop(0)[1:])
         return self.session.before_tick(runner)
 
     def after_tick(self, runner: MissionRunner) -> None:
@@ -960,3 +963,50 @@ def test_a_pause_and_its_resume_do_not_restart_a_hold(tmp_path: Path) -> None:
     assert all(now[1] == before[0] for before, now in itertools.pairwise(seen))
     paused = next(n for n, (tick, *_) in enumerate(seen) if tick > 150)
     assert len(seen) - paused < 20  # fewer ticks after the resume than the hold is long
+
+
+def test_replay_does_the_operators_pauses_steps_and_forces_again(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``roomba-bt replay`` of a run paused, stepped twice, resumed and ended by a forced
+    condition from the monitor writes the recorded bytes to the end, exit 0. Before, replay
+    did none of the operator's acts: it differed at the first pause ("expected Drive (137)
+    89 00 00 00 00, sent Drive (137) 89 00 64 80 00"), exit 1, and pointed to ``roomba-bt
+    monitor``, which does them."""
+    path = tmp_path / "run.jsonl"
+    mission = load_mission(SHUTTLE, {}, profile=CREATE2)
+    link = SimLink(Simulator(load_world("empty-room"), CREATE2, 0))
+    stack = RunStack(mission, link, profile=CREATE2, timeout_s=30.0,
+                     record=Recording(path, str(SHUTTLE)))  # fmt: skip
+    feed = RunFeed(history=5000, mission_name=mission.name)
+    feed.set_tree(mission.root)
+    session = MonitorSession(feed, simulator=True, stream_packets=stack.packets)
+    acts = [(100, "pause"), (150, "step"), (160, "step"), (170, "resume"),
+            (300, "force", "no bump", "failure")]  # fmt: skip
+    stack.runner.gate = ScriptedOperator(session, acts)
+    live = stack.run()
+    stack.close()
+    assert live.outcome is Outcome.FAILURE and "forced to FAILURE" in live.reason, live.reason
+    assert (live.pauses, live.steps) == (1, 2)
+    record = load_record(path)
+    assert [next(iter(n)) for _, n in record.notes] == [
+        "pause", "resume", "pause", "resume", "pause", "resume", "force", "ended",
+    ]  # fmt: skip
+    capsys.readouterr()
+    assert main(["replay", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert f"replay: the tree wrote the same {record.out_bytes} bytes as the recorded run" in out
+    assert "in 1 pause, 2 steps, left out of mission time" in out, out
+    assert "forced       by the operator: no bump to FAILURE at tick 300" in out
+    assert f"ticks        {live.ticks} " in out
+    # a reload is the one act replay cannot do again: the record has no copy of the mission
+    header, *rest = path.read_text().splitlines(keepends=True)
+    reload = {"t": 2.5, "d": "note", "note": {"reload": "shuttle", "at": "before", "tick": 250}}
+    reloaded = tmp_path / "reloaded.jsonl"
+    reloaded.write_text("".join([header, json.dumps(reload) + "\n", *rest]))
+    assert main(["replay", str(reloaded)]) == 1
+    out = capsys.readouterr().out
+    assert (
+        "replay: the recorded run holds operator acts replay cannot do again (reload at "
+        "2.50 s): a reload (the record has no copy of the new mission)" in out
+    ), out
