@@ -155,9 +155,10 @@ def _add_replay_parser(sub: Any) -> None:
         """play a --record file back through the tree
 
         Feed the recorded sensor bytes back through the same parser and tree and compare the
-        commands the tree writes with the recorded ones. Exit codes: 0 the same bytes, 1 at the
-        first difference (its mission time and both commands are printed), 2 invalid record or
-        mission, or a mission reading packets the record lacks.
+        commands the tree writes with the recorded ones; the monitor's pauses, steps and
+        forced conditions in the record are done again where they were done. Exit codes: 0
+        the same bytes, 1 at the first difference (its mission time and both commands are
+        printed), 2 invalid record or mission, or a mission reading packets the record lacks.
         """,
     )
     replay.add_argument("record", help="a file written by run --record")
