@@ -423,7 +423,7 @@ class MissionRunner(BaseHandle):
         success, failure = py_trees.common.Status.SUCCESS, py_trees.common.Status.FAILURE
         perf = time.perf_counter
         tick_guard = self.tick_guard  # started by run()
-        tick = self._tick_of(root, tick_guard)
+        tick = guarded_tick(self, root, tick_guard)
         poll, poll_timeout, ride = self.connection.poll_frames, self.poll_timeout, self._ride
         held = False  # the root ended and the gate holds the run there (the monitor)
         untick: int | None = None  # the gate held the tree: the tick it last ticked on
@@ -452,7 +452,7 @@ class MissionRunner(BaseHandle):
                         continue
                     if self.mission.root is not root:  # a reload replaced it
                         root = self.mission.root
-                        tick = self._tick_of(root, tick_guard)
+                        tick = guarded_tick(self, root, tick_guard)
                     elif held:  # the operator let the ended mission go: the run ends
                         tree_ended(root, summary)
                         return
@@ -483,15 +483,6 @@ class MissionRunner(BaseHandle):
         except KeyboardInterrupt:  # Ctrl-C, SIGTERM...: in which half of its frame
             summary.ended_at = interrupted_at(self, flushed)
             raise
-
-    def _tick_of(
-        self, root: py_trees.behaviour.Behaviour, tick_guard: TickGuardLike | None
-    ) -> Callable[[], object]:
-        """The root's tick, through the tick guard when the run has one."""
-        tick = tick_of(root)
-        if tick_guard is None:
-            return tick
-        return tick_guard.guarded(tick, partial(tick_halted, self), lambda: self.snapshot.tick)
 
     def _send_wheels_again(self) -> None:
         """After a drive 0 the runtime sent on its own (the watchdog's, the tick guard's): the
@@ -682,6 +673,16 @@ def mission_time_after(runner: MissionRunner, seconds: float) -> float | None:
     if not runner.has_snapshot:
         return None
     return runner.snapshot.time + (0.0 if runner.clock_held else seconds)
+
+
+def guarded_tick(
+    runner: MissionRunner, root: py_trees.behaviour.Behaviour, tick_guard: TickGuardLike | None
+) -> Callable[[], object]:
+    """The root's tick, through the tick guard when the run has one."""
+    tick = tick_of(root)
+    if tick_guard is None:
+        return tick
+    return tick_guard.guarded(tick, partial(tick_halted, runner), lambda: runner.snapshot.tick)
 
 
 def mission_time_now(runner: MissionRunner) -> float | None:
