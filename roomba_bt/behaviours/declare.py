@@ -617,6 +617,10 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
         if spec.drives_wheels:  # what it set turning is stopped when it ends (terminate)
             self._started_motion = turns_wheels(command)
         elif spec.effect is _BUILTIN_CYCLE:  # ended when it is halted or fails (terminate)
+            if cycle_may_run(robot):
+                # a cycle command into a running cycle pauses it (600 / Create 2 spec):
+                # end that one first (Safe, drive 0, motors off, Start), then start this
+                robot.outbox.end_cycle(self)
             self._started_cycle = True
         robot.outbox.send(command, self)
 

@@ -73,8 +73,9 @@ def make_simulator(
     if battery is not None:
         loaded = replace(loaded, battery=battery)
     return Simulator(
-        loaded, profile, seed, faults, random_start=random_start, coverage=coverage, trace=trace
-    )
+        loaded, profile, seed, faults, random_start=random_start, coverage=coverage, trace=trace,
+        cycle_commands_pause=True,  # as the OI spec says (docs/simulator.md)
+    )  # fmt: skip
 
 
 def make_link(simulator: Simulator, fast: bool) -> SimLink:

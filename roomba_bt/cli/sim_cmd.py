@@ -169,6 +169,7 @@ def _simulator(args: argparse.Namespace) -> Simulator | int:
             # only --plot reads the trajectory: without it, memory stays flat however long
             # the robot is served (13 MB an hour with it)
             trace=bool(args.plot),
+            cycle_commands_pause=True,  # as the OI spec says (docs/simulator.md)
         )
     except WorldError as exc:
         return _fail(f"invalid world:\n{exc}", ExitCode.INVALID)

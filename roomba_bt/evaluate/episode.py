@@ -494,7 +494,7 @@ def _run_episode(spec: EpisodeSpec, measured: type[_MeasuredSimulator]) -> Episo
     faults = Faults(odometry_error=spec.odometry_error) if spec.odometry_error else None
     simulator = measured(
         world, profile, spec.seed, faults, start=pose, coverage=bool(mission.sends & BRUSHES),
-        trace=spec.trace_every > 0,
+        trace=spec.trace_every > 0, cycle_commands_pause=True,  # as the OI spec says
     )  # fmt: skip
     stack = RunStack(mission, SimLink(simulator), profile=profile, timeout_s=spec.timeout_s)
     stack.runner.on_wall_clock = False  # Ctrl-Z suspends an evaluation, Ctrl-\ quits it

@@ -289,8 +289,10 @@ class Outbox:
         ``running``: a cycle written before may still drive the robot in Passive, where
         drive 0 is refused. Then :data:`CYCLE_END` is written before this tick's other
         commands (a higher branch's ``mode: safe`` then still leaves the robot in Safe),
-        unless this tick starts a cycle after all (the firmware goes over to that one: a
-        repeat's ``clean`` sent again, ``mode: passive`` then ``seek_dock``)."""
+        a cycle this tick starts too (a repeat's ``clean`` sent again, ``mode: passive``
+        then ``seek_dock``) included: the 600 / Create 2 OI spec says Clean, Spot, Max and
+        Seek Dock each "will pause a cleaning cycle if one is already in progress", so the
+        old cycle is ended first and the new command starts a cycle instead of pausing one."""
         queue = self._queue
         wheels = queue.get("wheels")
         if (
@@ -315,7 +317,7 @@ class Outbox:
             self._ender = _NOBODY
         out = list(queue.values())
         queue.clear()
-        if ender is not _NOBODY and not any(c.spec.effect is Effect.BUILTIN_CYCLE for c in out):
+        if ender is not _NOBODY:
             later = {c.spec.channel for c in out}  # written after the end: theirs stand
             for command in CYCLE_END:
                 channel = command.spec.channel

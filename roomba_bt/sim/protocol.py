@@ -74,9 +74,10 @@ class OIProtocol(StreamOutput):
     #: its own state's attributes (state.py: slots, not a dict, on the step's path)
     __slots__ = (
         "_buttons_until", "_commands", "_data_sizes", "_drive_modes", "_held_until", "_inbuf",
-        "_last_activity", "_rng", "_song_until", "_tails", "baud", "brc_low", "brc_pulses",
-        "builtin", "day_time", "deaf", "digits", "firmware", "heard", "ignored_bytes", "leds",
-        "schedule", "scheduling_leds", "songs",
+        "_last_activity", "_paused_at", "_rng", "_song_until", "_tails", "baud", "brc_low",
+        "brc_pulses", "builtin", "cycle_commands_pause", "day_time", "deaf", "digits",
+        "firmware", "heard", "ignored_bytes", "leds", "paused_cycle", "schedule",
+        "scheduling_leds", "songs",
     )  # fmt: skip
 
     def _init_protocol(self) -> None:
@@ -94,6 +95,16 @@ class OIProtocol(StreamOutput):
         #: 18 buttons pressed), else infinity: the step looks at one time, not two packets
         self._held_until = math.inf
         self.builtin: BuiltinCycle | None = None
+        #: whether a cycle command into a running cycle pauses it, as the 600 / Create 2 spec
+        #: says (:meth:`_cycle_command`); off: it starts its own cycle in its place, the
+        #: behaviour the golden recordings were made with (tests/golden builds its simulators
+        #: with the default). Every simulator the CLI builds (run, sim, sensors, eval) turns
+        #: it on.
+        self.cycle_commands_pause = False
+        #: the cycle a cycle command paused (wheels and brushes stopped), until the same
+        #: command resumes it, another cycle command replaces it or a mode command ends it
+        self.paused_cycle: BuiltinCycle | None = None
+        self._paused_at = 0.0
         self._rng = random.Random(f"robot:{self.seed}")  # the built-in cycles' choices
         self._last_activity = 0.0
         self.brc_low = False
@@ -181,6 +192,9 @@ class OIProtocol(StreamOutput):
             if spec.is_actuator:
                 self.violations.append(Violation(self.time, op, spec.name, self.mode))
             return
+        if spec.effect is Effect.BUILTIN_CYCLE and self.cycle_commands_pause:
+            self._cycle_command(spec)
+            return
         if spec.leads_to is not None:
             self._command_mode(spec)
         handler = _HANDLERS.get(op)
@@ -192,7 +206,7 @@ class OIProtocol(StreamOutput):
         target = spec.leads_to
         assert target is not None
         self.asleep = self.deaf = False
-        self.builtin = None
+        self.builtin = self.paused_cycle = None
         self._stop_wheels()
         if target is not OIMode.SAFE and target is not OIMode.FULL:
             self.motor_bits = 0
@@ -257,13 +271,40 @@ class OIProtocol(StreamOutput):
         Off listens for, and a robot asleep answers no byte (robotics.stackexchange.com/q/10666).
         A robot in Safe or Full never sleeps by itself; the fault puts one to sleep all the
         same, as if it had been left in Passive."""
-        self.builtin = None
+        self.builtin = self.paused_cycle = None
         self._stop_wheels()
         self.left_speed = self.right_speed = 0.0
         self.motor_bits = 0
         self.brush_pwm = (0, 0, 0)
         self._set_mode(OIMode.PASSIVE, cause)
         self._fall_asleep(cause, deaf=True)
+
+    def _cycle_command(self, spec: CommandSpec) -> None:
+        """Spot, Clean, Max or Seek Dock with :attr:`cycle_commands_pause` on. The 600 /
+        Create 2 spec says each "will pause a cleaning cycle if one is already in progress"
+        (the 500 spec is silent; a 500's buttons do the same, so every profile does it).
+        Decided, where the spec says no more:
+
+        * a cycle runs (any of the four: Seek Dock drives as the cleaning cycles do): it
+          pauses, wheels and brushes stopped, in Passive; the command starts nothing;
+        * the same command while it is paused resumes it where it was (its time limit
+          counts the running time only), as a second press of the button does;
+        * another cycle command while one is paused starts that cycle (the paused one is
+          dropped); a mode command (Start, Safe, Full, Power, Reset, Stop) ends a paused
+          cycle as it ends a running one.
+        """
+        running, paused = self.builtin, self.paused_cycle
+        self._command_mode(spec)  # Passive; clears both
+        if running is not None:
+            self.paused_cycle, self._paused_at = running, self.time
+            self._event("builtin", f"{running.name} paused ({spec.name})")
+        elif paused is not None and paused.name == spec.name:
+            paused.started += self.time - self._paused_at
+            self._settle_far()
+            self.builtin = paused
+            self._event("builtin", f"{paused.name} resumed")
+        else:
+            _HANDLERS[spec.opcode](self, b"")
 
     def _wakes_on_dock(self) -> bool:
         version = parse_firmware(self.firmware)

@@ -84,6 +84,7 @@ class Simulator(OIProtocol):
         mode: OIMode = OIMode.OFF,
         coverage: bool = False,
         trace: bool = True,
+        cycle_commands_pause: bool = False,
     ) -> None:
         #: keep the trajectory (``trace``: a point every 4th step and at each mode change, for
         #: a plot or an evaluation's record); without it only the start is kept and memory
@@ -97,6 +98,7 @@ class Simulator(OIProtocol):
         self._init_power()
         self._init_output()
         self._init_protocol()
+        self.cycle_commands_pause = cycle_commands_pause
         self._timeline = Timeline(world.events) if world.events else None
         self._disconnect_at = (
             math.inf if self.faults.disconnect_at is None else self.faults.disconnect_at

@@ -38,11 +38,14 @@ def run_mission(tmp_path: Path) -> RunMission:
         permissions: Permissions = NO_PERMISSIONS,
         record: Path | None = None,
         jitter: float = 0.0,
+        cycle_commands_pause: bool = False,
     ) -> Run:
         path = tmp_path / "mission.yaml"
         path.write_text(textwrap.dedent(text))
         mission = load_mission(path, params or {}, profile=profile, permissions=permissions)
-        simulator = Simulator(load_world(world), profile, seed, faults)
+        simulator = Simulator(
+            load_world(world), profile, seed, faults, cycle_commands_pause=cycle_commands_pause
+        )
         link = TapLink(simulator, stall_after, burst, freeze, jitter)
         stack = RunStack(
             mission,

@@ -176,3 +176,57 @@ def test_a_cycle_ended_on_a_powered_dock_says_no_fall(
     assert run.simulator.docked
     assert "by itself" not in caplog.text and "packet 35 reports" not in caplog.text
     assert run.summary.refused_commands == 0 and run.summary.final_mode is OIMode.PASSIVE
+
+
+#: the owner's "spot, then dock" (roomba600-owner finding 2): Seek Dock while the spiral runs
+SPOT_THEN_DOCK = """
+mission: spot then dock
+tree:
+  sequence:
+    - mode: passive
+    - spot
+    - wait: 10s
+    - seek_dock: {timeout: 5min}
+"""
+#: clean-builtin's repeat: Clean again while the first cycle still runs
+CLEAN_AGAIN = """
+mission: clean again
+tree:
+  sequence:
+    - parallel:
+        policy: one
+        children:
+          - wait: 25s
+          - repeat:
+              do:
+                sequence:
+                  - mode: passive
+                  - clean
+                  - wait: 10s
+    - mode: safe
+    - stop: {motors: true}
+    - mode: passive
+"""
+
+
+def test_a_cycle_command_into_a_running_cycle_ends_that_cycle_first(
+    run_mission: RunMission,
+) -> None:
+    """By the spec a cycle command pauses a cycle in progress: the runtime ends the running
+    one (Safe, drive 0, motors off, Start) before it sends the next, so the simulator that
+    pauses as the spec says docks, and a second Clean starts a cycle."""
+    run = run_mission(SPOT_THEN_DOCK, timeout=400.0, cycle_commands_pause=True)
+    assert run.summary.outcome is Outcome.SUCCESS, run.summary.reason
+    [(_, data), *_] = _written_after(run, oi.spot().opcode)
+    assert data == END + oi.seek_dock().data
+    assert not any("paused" in e.detail for e in run.simulator.events if e.kind == "builtin")
+
+    run = run_mission(CLEAN_AGAIN, timeout=60.0, cycle_commands_pause=True)
+    assert run.summary.outcome is Outcome.SUCCESS, run.summary.reason
+    ticks: dict[float, bytes] = {}
+    for at, data in run.link.writes:
+        ticks[at] = ticks.get(at, b"") + data
+    cleans = [data for data in ticks.values() if data.endswith(oi.clean().data)]
+    assert len(cleans) == 3  # at 0, 10 and 20 s
+    assert cleans[1] == cleans[2] == END + oi.clean().data
+    assert not any("paused" in e.detail for e in run.simulator.events if e.kind == "builtin")
