@@ -68,7 +68,7 @@ from roomba_bt.oi.frames import (
     HAZARD_PACKETS,
 )
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
-from roomba_bt.oi.opcodes import COMMANDS
+from roomba_bt.oi.opcodes import COMMANDS, Effect
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, SEND_BAUD, RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
 
@@ -93,17 +93,16 @@ def _label(modes: frozenset[OIMode]) -> str:
     return " or ".join(m.label for m in sorted(modes))
 
 
-def _mode_advice(allowed: Modes, bad: Modes) -> str:
-    """What brings the robot into a mode of ``allowed`` from every mode of ``bad``: from Off
-    (after Reset 7 or Stop 173) only Start (128) leads back, which ``mode: passive`` sends;
-    Safe and Full are refused there."""
-    if OIMode.OFF not in bad:
-        return "put a mode change (mode: safe or mode: full) before it on every path"
-    then = "" if OIMode.PASSIVE in allowed else ", then mode: safe or mode: full,"
-    return (
-        f"put mode: passive{then} before it on every path (from Off, where Reset (7) and "
-        "Stop (173) leave the robot, only Start (128), which mode: passive sends, leads back)"
-    )
+#: The opcodes that end the run when the tree sends them (Reset 7, Stop 173: the opcode
+#: table's :attr:`~roomba_bt.oi.opcodes.Effect.SILENCES`).
+SILENCING = frozenset(op for op, spec in COMMANDS.items() if spec.effect is Effect.SILENCES)
+#: Why nothing may follow a leaf that sends Reset or Stop (the validator's error, docs/runtime.md).
+ENDS_THE_RUN = (
+    "which end the run: the OI is off and streams no more sensor frames, and the frames are "
+    "the run's clock (the runtime ends the run at once when the tree sends either). A leaf "
+    "that sends Reset or Stop must be the last one the tree runs; to leave the robot in Off "
+    "at the end of any mission, use --end-in stop instead"
+)
 
 
 class ModeCheck:
@@ -112,6 +111,8 @@ class ModeCheck:
     def __init__(self) -> None:
         self.errors: list[Diagnostic] = []
         self._reported: set[int] = set()
+        #: the leaves that send Reset (7) or Stop (173), in the order reached
+        self.silencers: list[Node] = []
         #: each leaf reached, and every mode it may be entered in
         self.entered: dict[int, tuple[Node, Modes]] = {}
 
@@ -131,6 +132,12 @@ class ModeCheck:
         decl = node.decl
         assert decl is not None
         self._entered(node, decl, entry)
+        entry = entry - {OIMode.OFF}  # told once (_entered): what follows is judged without it
+        if SILENCING.intersection(decl.sent(node.params)):
+            # whatever else it sends, the run ends once it sent Reset or Stop: a leaf after
+            # it is entered in Off, and told so (_entered)
+            self.silencers.append(node)
+            return frozenset({OIMode.OFF}), entry
         after = decl.mode_after(node.params)
         success = frozenset({after}) if after is not None else entry
         return success, (entry | success if decl.starts_cycle else entry)
@@ -155,6 +162,11 @@ class ModeCheck:
         those modes refuses a command it sends."""
         seen = self.entered.get(id(node))
         self.entered[id(node)] = (node, entry if seen is None else seen[1] | entry)
+        if OIMode.OFF in entry:
+            if id(node) not in self._reported:
+                self._reported.add(id(node))
+                self.errors.append(node.loc.at(self._after_the_end(decl)))
+            return
         allowed = decl.modes_for(node.params)
         bad = entry - allowed
         if bad and id(node) not in self._reported:
@@ -165,9 +177,19 @@ class ModeCheck:
             self.errors.append(
                 node.loc.at(
                     f"{decl.name} sends {sends}, accepted only in {_label(allowed)} mode, "
-                    f"but it can be reached in {_label(bad)} mode: {_mode_advice(allowed, bad)}"
+                    f"but it can be reached in {_label(bad)} mode: put a mode change (mode: "
+                    "safe or mode: full) before it on every path"
                 )
             )
+
+    def _after_the_end(self, decl: Declaration) -> str:
+        """The error of a leaf the tree may run after a leaf that sends Reset or Stop,
+        naming those leaves (where they are)."""
+        senders = ", ".join(dict.fromkeys(f"{s.name} (line {s.loc.line})" for s in self.silencers))
+        return (
+            f"{decl.name} can run after {senders or 'a leaf'} sent Reset (7) or Stop (173), "
+            f"{ENDS_THE_RUN}"
+        )
 
     def _chain(self, node: Node, entry: Modes, *, on_success: bool) -> tuple[Modes, Modes]:
         """Children in order: a sequence goes on after a success, a selector after a

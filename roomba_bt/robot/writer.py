@@ -78,6 +78,9 @@ class CommandWriter:
         #: while a tree is stopped (:meth:`hold_motion`): what is told of each command that
         #: would set the robot going, which is not written; None: no such hold
         self.motion_held: Callable[[Command], None] | None = None
+        #: the Reset (7) or Stop (173) written last: the OI is off and streams nothing more,
+        #: so a run that sees it ends (runtime/loop.py); None before any
+        self.silenced_by: Command | None = None
 
     def send(self, command: Command) -> None:
         """Guard, then write ``command``'s bytes, then update the mode model.
@@ -165,6 +168,7 @@ class CommandWriter:
             self.link.pause_resume(bool(command.args[0]), now)
         elif effect is Effect.SILENCES:
             self.link.streaming = False
+            self.silenced_by = command
         self.builtin_may_run = spec.cycle_may_run_after(self.builtin_may_run)
         if effect is Effect.BAUD:
             self._change_baud(BAUD_RATES[command.args[0]])

@@ -425,6 +425,7 @@ class MissionRunner(BaseHandle):
         tick_guard = self.tick_guard  # started by run()
         tick = guarded_tick(self, root, tick_guard)
         poll, poll_timeout, ride = self.connection.poll_frames, self.poll_timeout, self._ride
+        writer = self.connection.writer
         held = False  # the root ended and the gate holds the run there (the monitor)
         untick: int | None = None  # the gate held the tree: the tick it last ticked on
         flushed = -1  # the stream tick of the last tree tick written whole
@@ -437,6 +438,8 @@ class MissionRunner(BaseHandle):
                 if ride.stall is not None:
                     ride.carry_on(batch)
                 if not batch:
+                    if writer.silenced_by is not None:  # sent past the tick (a thread's)
+                        return silenced(root, summary, writer.silenced_by)
                     if isinstance(self.gate, _StopGate):  # no frame: the stop goes on anyway
                         raise StopRequested(self.gate.reason, at="after")
                     if self.input_ended is not None and (why := self.input_ended()):
@@ -460,6 +463,8 @@ class MissionRunner(BaseHandle):
                 tick()
                 self._flush()
                 flushed = self._tick
+                if writer.silenced_by is not None:  # Reset or Stop: no frame will come
+                    return silenced(root, summary, writer.silenced_by)
                 elapsed = perf() - started
                 summary.ticks += 1
                 if elapsed > SLOT_SECONDS:
@@ -618,6 +623,31 @@ def tree_ended(root: py_trees.behaviour.Behaviour, summary: RunSummary) -> None:
     else:
         summary.outcome = Outcome.FAILURE
         summary.reason = failure_reason(root)
+
+
+def silenced(root: py_trees.behaviour.Behaviour, summary: RunSummary, command: Command) -> None:
+    """The tree sent Reset (7) or Stop (173): the run ends at once, as its own ending. The OI
+    is off and streams no more frames, and the frames are the run's clock: its ticks, its
+    ``--timeout``, every timeout in the tree; the watchdog is off too, since silence is what
+    Stop asks for. Waiting for the tree to go on would wait for ever (a Start after it brings
+    Passive back, but not the stream, and a Reset reboots the robot). Decided: end here, not
+    ask for the stream again: the spec's word for Stop is "when you are finished working with
+    the robot", and a tree that went on would have had its clock stop at the Stop whatever
+    came after. A tree that ended on that tick (the leaf last, as the validator asks) has its
+    outcome; one still running FAILED, and why says so. The safe stop sends nothing from Off:
+    the robot stopped its wheels and motors there (or Start, should the tree have sent one
+    after it in the same tick)."""
+    spec = command.spec
+    status = root.status
+    if status is py_trees.common.Status.SUCCESS or status is py_trees.common.Status.FAILURE:
+        tree_ended(root, summary)
+        return
+    summary.outcome = Outcome.FAILURE
+    summary.reason = (
+        f"the tree sent {spec.title} ({spec.opcode}) while it still ran{running_in(root)}: the OI "
+        "is off and streams no more sensor frames, the run's clock, so the run ended there (a "
+        "leaf that sends Reset or Stop must be the last the tree runs)"
+    )
 
 
 def interrupted_at(runner: MissionRunner, flushed: int) -> tuple[int, str] | None:
@@ -879,6 +909,8 @@ def stop_robot(connection: Connection, summary: RunSummary, first: bool = False)
                 if sequence
                 else "nothing to stop: the robot was never started"
                 if connection.mode is OIMode.OFF and connection.writer.sent == 0
+                else off_by_the_tree(connection.writer.silenced_by)
+                if connection.mode is OIMode.OFF and connection.writer.silenced_by is not None
                 else "nothing to send"
             )
             return
@@ -890,6 +922,13 @@ def stop_robot(connection: Connection, summary: RunSummary, first: bool = False)
         summary.safe_stop = "interrupted during the safe stop"
     except Exception as exc:
         summary.safe_stop = f"FAILED: {type(exc).__name__}: {exc}"
+
+
+def off_by_the_tree(command: Command | None) -> str:
+    """The safe stop's word when the tree's own Reset or Stop left the robot in Off: nothing
+    to send, the robot is stopped there (its wheels and motors stop as the OI turns off)."""
+    name = "Reset or Stop" if command is None else f"{command.spec.title} ({command.spec.opcode})"
+    return f"nothing to send: the tree's {name} left the robot in Off, stopped"
 
 
 def unread_gap(

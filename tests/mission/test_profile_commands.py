@@ -109,23 +109,24 @@ def _after_reboot(tmp_path: Path, *steps: str) -> Path:
     return path
 
 
-def test_after_a_reset_mode_passive_leads_back_and_the_advice_says_so(tmp_path: Path) -> None:
-    """From Off (after Reset 7 or Stop 173) only Start (128) leads back. ``mode: passive``
-    sends Start alone, yet was held to Safe's and Full's modes too: an error that advised a
-    ``mode: safe`` before it, which Off refuses as well; on create2 no mission could come
-    back from a Reset."""
+def test_nothing_may_follow_a_reset_or_a_stop_not_even_mode_passive(tmp_path: Path) -> None:
+    """Reset (7) and Stop (173) end the run: the OI is off and streams no more frames, the
+    run's clock. ``mode: passive`` after them was the validator's advice (Start leads back
+    from Off), and the run then waited for ever (roomba600-owner finding 1): now any leaf
+    the tree may run after them is an error naming the leaf that sent it; last, it is ok."""
     allowed = Permissions(plugin_files=True)
-    back = _after_reboot(tmp_path, "mode: passive", "mode: safe", "drive: {velocity: 0 mm/s}")
-    assert validate_files([back], profile=PROFILES["create2"], permissions=allowed) == []
-    for step, needs in (
-        ("mode: safe", ""),
-        ("leds: {dock: true}", ", then mode: safe or mode: full,"),
+    create2 = PROFILES["create2"]
+    assert validate_files([_after_reboot(tmp_path)], profile=create2, permissions=allowed) == []
+    for steps in (
+        ("mode: passive", "mode: safe", "drive: {velocity: 0 mm/s}"),
+        ("mode: safe",),
+        ("leds: {dock: true}",),
+        ("wait: 1s", "mode: passive"),
     ):
         found = validate_files(
-            [_after_reboot(tmp_path, step)], profile=PROFILES["create2"], permissions=allowed
+            [_after_reboot(tmp_path, *steps)], profile=create2, permissions=allowed
         )
-        assert len(found) == 1 and found[0].line == 7, found
+        assert len(found) == 1 and found[0].line == 7, found  # once, at the first after it
         message = found[0].message
-        assert "it can be reached in Off mode" in message
-        assert f": put mode: passive{needs} before it on every path (from Off" in message
-        assert "only Start (128), which mode: passive sends, leads back" in message
+        assert message.startswith(f"{steps[0].split(':')[0]} can run after reboot (line 6) sent")
+        assert "which end the run" in message and "must be the last one the tree runs" in message
