@@ -49,7 +49,7 @@ from roomba_bt.behaviours.units import (
     closest,
     held,
 )
-from roomba_bt.oi.encode import Command, halt, turns_wheels
+from roomba_bt.oi.encode import Command, halt, motors_off, turns_wheels
 from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS, SensorFrame
 from roomba_bt.oi.modes import ALL_MODES, DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME, Effect
@@ -71,6 +71,7 @@ MISSION_NAMESPACE = "/mission/"
 Kind = Literal["action", "condition"]
 _NAME = re.compile(r"^[a-z][a-z0-9_]*$")
 _BUILTIN_CYCLE = Effect.BUILTIN_CYCLE  # read once: send() asks on every command
+_SILENCES = Effect.SILENCES
 _SEEK_DOCK = COMMANDS_BY_NAME["seek_dock"]
 
 
@@ -622,6 +623,11 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
                 # end that one first (Safe, drive 0, motors off, Start), then start this
                 robot.outbox.end_cycle(self)
             self._started_cycle = True
+        elif spec.effect is _SILENCES and robot.snapshot.mode in DRIVING_MODES:
+            # Stop and Reset say nothing of the wheels and brushes: sent where they may
+            # turn, they go after drive 0 and motors off, as --end-in stop's Stop does
+            robot.outbox.send(halt(), self)
+            robot.outbox.send(motors_off(), self)
         robot.outbox.send(command, self)
 
     #: whether the last wheel command it sent set them turning (:meth:`send` notes it)

@@ -15,6 +15,7 @@ import pytest
 
 from roomba_bt.cli import main
 from roomba_bt.mission import Permissions
+from roomba_bt.oi import commands as C
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.opcodes import opcodes
 from roomba_bt.oi.profiles import PROFILES
@@ -45,6 +46,19 @@ class OffAndWait(Action):
     def start(self) -> None:
         self.send(commands.stop())
     def update(self) -> Status:
+        return Status.RUNNING
+
+@declare("drive_then_off", kind="action", sends=opcodes("drive", "motors", "stop"))
+class DriveThenOff(Action):
+    """Drives with the brushes on, then turns the OI off in the tick it ends."""
+    def start(self) -> None:
+        self.started_at = self.snapshot.time
+        self.send(commands.motors(0b110))  # the main brush and the vacuum
+    def update(self) -> Status:
+        if self.snapshot.time - self.started_at >= 0.3:
+            self.send(commands.stop())
+            return Status.SUCCESS
+        self.send(commands.drive_straight(200))
         return Status.RUNNING
 
 @declare("reboot_and_wait", kind="action", sends=opcodes("reset"))
@@ -157,3 +171,16 @@ def test_the_owners_mission_is_refused_before_anything_is_sent(
     assert "display5.yaml:7:7: mode can run after oi_off (line 6) sent Reset (7) or Stop (173)" in (
         out + err
     )
+
+
+def test_a_tree_s_stop_while_the_wheels_turn_goes_after_drive_0_and_motors_off(
+    run_mission: RunMission, tmp_path: Path
+) -> None:
+    """Stop (173) says nothing of the wheels or the brushes: a tree's own, sent in Safe while
+    they turned, went out alone (its leaf's halt came after it, refused in Off). Now drive 0
+    and motors off go first, as ``--end-in stop``'s do."""
+    run = _run_with_deadline(run_mission, tmp_path, "drive_then_off")
+    written = b"".join(data for _, data in run.link.writes)
+    stop = bytes(opcodes("stop"))
+    assert written.endswith(C.halt().data + C.motors_off().data + stop)
+    assert run.summary.final_mode is OIMode.OFF
