@@ -55,7 +55,7 @@ from roomba_bt.oi.modes import ALL_MODES, DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME, Effect
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.printable import CONTROL
-from roomba_bt.robot.interface import Odometry, RobotHandle, Snapshot
+from roomba_bt.robot.interface import ModeChange, Odometry, RobotHandle, Snapshot
 from roomba_bt.yamlsource import character_name, quoted
 
 #: what a behaviour's own mistakes that the runtime mended are said on (as the mission's)
@@ -809,6 +809,27 @@ def wheel_speed_param(name: str, default: str, *, minimum: float, doc: str = "")
     return Param(name, SPEED, default=default, minimum=minimum, maximum=WHEEL.maximum, doc=doc)
 
 
+#: What to do when Safe was refused on a powered charger: the user's two ways out, the
+#: second by the name the shipped missions use (missions/lib/docking.yaml)
+CHARGER_ADVICE = (
+    "Safe mode on a powered dock drops to Passive at once: start the robot off the dock, or "
+    "begin the mission with the `undock` subtree (`subtree: {id: undock}`, from "
+    "`include: [roomba-bt:lib/docking.yaml]`), which backs off the dock in Full first, as "
+    "missions/clean.yaml does"
+)
+
+
+def left_driving_message(change: ModeChange | None, waited: str = "") -> str:
+    """The failure message of a leaf whose robot left Safe/Full by itself: the cause, and,
+    when the cause is the charger refusing a Safe just sent (the robot started on its
+    dock), what to do about it; the bare "(charger)" left an owner guessing."""
+    cause = f" ({change.cause})" if change is not None else ""
+    message = f"the robot left Safe/Full mode{cause}{waited}"
+    if change is not None and change.refused_on_charger:
+        message += f"; {CHARGER_ADVICE}"
+    return message
+
+
 class Action(RobotBehaviour):
     """An action: puts commands in the outbox. Motion started must stop on every ending."""
 
@@ -837,10 +858,8 @@ class Action(RobotBehaviour):
             grace = self.PASSIVE_GRACE_S
         if snap.time - self._out_of_driving_since < grace - 1e-9:
             return None
-        change = snap.last_fallback
-        cause = f" ({change.cause})" if change is not None else ""
         waited = f" and was not brought back within {grace:g} s" if grace > 0 else ""
-        return f"the robot left Safe/Full mode{cause}{waited}"
+        return left_driving_message(snap.last_fallback, waited)
 
     def wait_for_driving_mode(self, grace: float | None = None) -> py_trees.common.Status:
         """Out of Safe/Full, where the mode model would refuse a drive command: RUNNING

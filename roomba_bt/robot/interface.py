@@ -169,12 +169,34 @@ class ModeChange:
     time: float
     cause: str  # "cliff", "wheel drop", "charger", "unknown", ...
     wall_time: float = 0.0  # time.time() when seen, for messages only
+    #: when the robot entered ``previous`` (link clock: the command that put it there), if
+    #: known; tells a fall right at the Safe command from one met later
+    entered: float | None = None
 
     @property
     def fall(self) -> bool:
         """A fall from Safe or Full to Passive (a cliff, a wheel drop, the charger in Safe),
         not a resync to what packet 35 reports."""
         return self.current is OIMode.PASSIVE and self.previous in DRIVING_MODES
+
+    @property
+    def refused_on_charger(self) -> bool:
+        """Safe entered on a powered charger: the firmware dropped it to Passive at once
+        (within :data:`CHARGER_REFUSAL_S` of the Safe command), the charger named as the
+        cause. The robot started on its dock; a mission that met the charger later (driven
+        onto the contacts) is another case, and its messages say nothing of undocking."""
+        return (
+            self.previous is OIMode.SAFE
+            and self.current is OIMode.PASSIVE
+            and "charger" in self.cause
+            and self.entered is not None
+            and self.time - self.entered <= CHARGER_REFUSAL_S
+        )
+
+
+#: How soon after the Safe command a fall with the charger as its cause counts as the
+#: charger refusing Safe (s): the firmware drops at once, the next frames or two show it
+CHARGER_REFUSAL_S = 1.0
 
 
 class Snapshot(NamedTuple):

@@ -464,7 +464,8 @@ class ModeModel:
                 reported.label,
                 before.label,
             )
+        entered = self.since  # the time the mode it leaves began, before _fire moves it
         self._fire(trigger, reported, time, cause)
-        change = ModeChange(before, reported, tick, time, cause, self.since_wall)
+        change = ModeChange(before, reported, tick, time, cause, self.since_wall, entered)
         self.last_fallback = change
         return change

@@ -12,7 +12,7 @@ from typing import NamedTuple, TypeVar
 import py_trees
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import Action, Declaration, Param, declare
+from roomba_bt.behaviours.declare import Action, Declaration, Param, declare, left_driving_message
 from roomba_bt.behaviours.driving import wheel_speeds
 from roomba_bt.behaviours.units import DURATION
 from roomba_bt.oi import commands as oi
@@ -446,9 +446,7 @@ class DockingAction(Action):
         return self.snapshot.mode not in DRIVING_MODES
 
     def fallback_message(self) -> str:
-        change = self.snapshot.last_fallback
-        cause = f" ({change.cause})" if change is not None else ""
-        return f"the robot left Safe/Full mode{cause}"
+        return left_driving_message(self.snapshot.last_fallback)
 
     def heading(self) -> float:
         return self.snapshot.odometry.theta_rad
