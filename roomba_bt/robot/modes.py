@@ -380,7 +380,10 @@ class ModeModel:
         self._pending = (previous, spec.leads_to, time)
         self._track()
 
-    def _fire(self, trigger: str, dest: OIMode, time: float, cause: str | None) -> None:
+    def _fire(self, trigger: str, dest: OIMode, time: float, cause: str | None) -> float:
+        """Move the machine and the model to ``dest``; returns when the mode it left began
+        (a fall's :attr:`~roomba_bt.robot.interface.ModeChange.entered`)."""
+        left_since = self.since
         event = self.machine.events.get(trigger)
         if event is None:  # what the model's own ``trigger`` raises (Machine._get_trigger)
             raise AttributeError(f"Do not know event named '{trigger}'.")
@@ -391,6 +394,7 @@ class ModeModel:
         self.mode = dest
         self.cause = cause
         self._track()
+        return left_since
 
     def force(self, mode: OIMode, time: float = 0.0) -> None:
         """Set the mode without a command (a robot known to be in ``mode``: tests, replays)."""
@@ -464,8 +468,7 @@ class ModeModel:
                 reported.label,
                 before.label,
             )
-        entered = self.since  # the time the mode it leaves began, before _fire moves it
-        self._fire(trigger, reported, time, cause)
+        entered = self._fire(trigger, reported, time, cause)  # when the mode it left began
         change = ModeChange(before, reported, tick, time, cause, self.since_wall, entered)
         self.last_fallback = change
         return change
