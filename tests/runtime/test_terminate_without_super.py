@@ -44,18 +44,27 @@ class ForwardLogged(Forward):
         self.logger.debug(f"terminate {self.status} -> {new_status}")
 
 
-@declare("sticky2", kind="action", sends=opcodes("drive"))
-class Sticky2(Action):
-    """Starts the wheels once in start(), then only returns RUNNING; terminate does nothing."""
+class StartsOnce(Action):
+    """Sends its COMMAND once in start(), then only returns RUNNING; terminate does nothing
+    (no super())."""
+
+    COMMAND = staticmethod(commands.clean)
 
     def start(self):
-        self.send(commands.drive(200, 500))
+        self.send(self.COMMAND())
 
     def update(self):
         return Status.RUNNING
 
     def terminate(self, new_status):
         return None
+
+
+@declare("sticky2", kind="action", sends=opcodes("drive"))
+class Sticky2(StartsOnce):
+    """Starts the wheels once: an arc."""
+
+    COMMAND = staticmethod(lambda: commands.drive(200, 500))
 
 
 @declare("drives_after_super", kind="action", sends=opcodes("drive"))
@@ -68,17 +77,8 @@ class DrivesAfterSuper(Forward):
 
 
 @declare("cleans_quietly", kind="action", sends=opcodes("clean"))
-class CleansQuietly(Action):
-    """Starts the built-in Clean once; its terminate does nothing."""
-
-    def start(self):
-        self.send(commands.clean())
-
-    def update(self):
-        return Status.RUNNING
-
-    def terminate(self, new_status):
-        return None
+class CleansQuietly(StartsOnce):
+    """Starts the built-in Clean once."""
 
 
 @declare("polite", kind="action", sends=opcodes("drive"))
