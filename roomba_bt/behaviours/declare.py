@@ -810,11 +810,11 @@ def wheel_speed_param(name: str, default: str, *, minimum: float, doc: str = "")
 
 
 #: What to do when Safe was refused on a powered charger: the user's two ways out, the
-#: second by the name the shipped missions use (missions/lib/docking.yaml)
+#: second by the name the shipped missions use (missions/lib/undock.yaml)
 CHARGER_ADVICE = (
     "Safe mode on a powered dock drops to Passive at once: start the robot off the dock, or "
     "begin the mission with the `undock` subtree (`subtree: {id: undock}`, from "
-    "`include: [roomba-bt:lib/docking.yaml]`), which backs off the dock in Full first, as "
+    "`include: [roomba-bt:lib/undock.yaml]`), which backs off the dock in Full first, as "
     "missions/clean.yaml does"
 )
 

@@ -104,7 +104,7 @@ def test_an_unknown_library_name_says_what_the_library_holds(
     _, diagnostics = compile_mission(path)
     assert [d.message for d in diagnostics] == [
         "included file 'roomba-bt:lib/dockin.yaml' is not in the shipped library; "
-        "it holds roomba-bt:lib/docking.yaml"
+        "it holds roomba-bt:lib/docking.yaml, roomba-bt:lib/undock.yaml"
     ]
 
 
@@ -122,7 +122,9 @@ def test_missions_lists_each_with_description_and_parameters(capsys: Capsys) -> 
     assert "dock  Dock on the home base from its beams within 10min; succeed when charging." in out
     assert "    laps: int, default 2" in out
     assert "    time_limit: duration, default 10min  give up after this long" in out
-    assert out.rstrip().endswith("library (include by name): roomba-bt:lib/docking.yaml")
+    assert out.rstrip().endswith(
+        "library (include by name): roomba-bt:lib/docking.yaml, roomba-bt:lib/undock.yaml"
+    )
 
 
 def test_describe_shipped_matches_the_compiled_missions() -> None:

@@ -1,5 +1,5 @@
 """Started on its powered dock, where a Roomba lives between runs, every shipped mission that
-drives backs off it first (the shared ``undock`` subtree of missions/lib/docking.yaml): Safe
+drives backs off it first (the shared ``undock`` subtree of missions/lib/undock.yaml): Safe
 on a powered charger drops the robot to Passive at once, and the missions that began with
 ``mode: safe`` failed "left Safe/Full mode (charger)" without saying what to do. A mission
 that still starts with Safe there fails with a message that says it."""
@@ -62,12 +62,12 @@ def test_a_shipped_driving_mission_started_on_the_dock_backs_off_it_and_runs(
 
 
 def test_the_shipped_driving_missions_share_one_undock_subtree() -> None:
-    """One definition (missions/lib/docking.yaml), used by each: not a copy per mission."""
+    """One definition (missions/lib/undock.yaml), used by each: not a copy per mission."""
     for name in (*SHORT, "clean"):
         text = (MISSIONS / f"{name}.yaml").read_text()
         assert "subtree: {id: undock}" in text, name
         assert "on_home_base" not in text, name
-    assert "undock:" in (MISSIONS / "lib" / "docking.yaml").read_text()
+    assert "undock:" in (MISSIONS / "lib" / "undock.yaml").read_text()
 
 
 def test_safe_refused_on_the_charger_says_what_to_do(tmp_path: Path) -> None:
@@ -83,7 +83,7 @@ def test_safe_refused_on_the_charger_says_what_to_do(tmp_path: Path) -> None:
     assert summary.outcome.value == "failure"
     assert "left Safe/Full mode (charger)" in summary.reason
     assert "start the robot off the dock" in summary.reason
-    assert "`undock` subtree" in summary.reason and "roomba-bt:lib/docking.yaml" in summary.reason
+    assert "`undock` subtree" in summary.reason and "roomba-bt:lib/undock.yaml" in summary.reason
 
 
 def test_only_a_charger_fall_right_at_the_safe_command_counts_as_refused() -> None:
