@@ -125,6 +125,16 @@ Cell = int
 MAP_KEY = "/roomba/cover/map"
 
 
+def path_to(cell: Cell, start: Cell, parent: dict[Cell, Cell]) -> list[Cell]:
+    """The cells from ``start`` to ``cell``, read back through a search's ``parent`` links
+    (:meth:`FloorMap.search`'s breadth-first, ``home_by_map``'s cheapest path)."""
+    path = [cell]
+    while path[-1] != start:
+        path.append(parent[path[-1]])
+    path.reverse()
+    return path
+
+
 class FloorMap:
     """The robot's own grid: one byte a cell, in the odometry frame (mm), bits SWEPT, BLOCKED,
     VISITED, TRIED, DROP; ``near`` counts the blocked cells around each cell (3 x 3),
@@ -232,11 +242,7 @@ class FloorMap:
         while queue:
             cell = queue.popleft()
             if cell != start and goal(cell):
-                path = [cell]
-                while path[-1] != start:
-                    path.append(parent[path[-1]])
-                path.reverse()
-                return path
+                return path_to(cell, start, parent)
             for d in NEIGHBOUR_STEPS:
                 nxt = cell + d
                 bits = cells[nxt]

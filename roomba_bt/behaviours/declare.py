@@ -388,21 +388,21 @@ def _kind_problem(kind: str, cls: type) -> str | None:
     (only conditions in a guard, only actions may send), and the runtime the class (an
     Action's halt, a Condition's short tick): a class of the other kind passed both and ran
     as neither (session 27)."""
-    if kind == "condition" and not issubclass(cls, Condition):
-        base = "Action" if issubclass(cls, Action) else "neither Action nor Condition"
-        return (
-            f"kind='condition', but {cls.__qualname__} derives from {base}: a condition derives "
-            "from roomba_bt.behaviours.Condition (its check() says whether it holds); declare "
-            "kind='action' or derive it from Condition"
-        )
-    if kind == "action" and not issubclass(cls, Action):
-        base = "Condition" if issubclass(cls, Condition) else "neither Action nor Condition"
-        return (
-            f"kind='action', but {cls.__qualname__} derives from {base}: an action derives from "
-            "roomba_bt.behaviours.Action (its update() returns a Status); declare "
-            "kind='condition' or derive it from Action"
-        )
-    return None
+    kinds = {
+        "condition": (Condition, "a condition", "its check() says whether it holds"),
+        "action": (Action, "an action", "its update() returns a Status"),
+    }
+    if kind not in kinds or issubclass(cls, kinds[kind][0]):
+        return None
+    base, a_kind, its_method = kinds[kind]
+    other_kind = "action" if kind == "condition" else "condition"
+    other = kinds[other_kind][0]
+    derives = other.__name__ if issubclass(cls, other) else "neither Action nor Condition"
+    return (
+        f"kind={kind!r}, but {cls.__qualname__} derives from {derives}: {a_kind} derives from "
+        f"roomba_bt.behaviours.{base.__name__} ({its_method}); declare kind={other_kind!r} or "
+        f"derive it from {base.__name__}"
+    )
 
 
 def _param_problem(p: object) -> str | None:

@@ -58,6 +58,7 @@ from roomba_bt.behaviours.coverage_map import (
     Bearings,
     Cell,
     FloorMap,
+    path_to,
 )
 from roomba_bt.behaviours.declare import Action, Param, declare, wheel_speed_param
 from roomba_bt.behaviours.drops import DROP
@@ -318,11 +319,7 @@ def path_across(fmap: FloorMap, start: Cell, goal: set[Cell]) -> list[Cell] | No
         if spent > cost[cell]:
             continue  # reached more cheaply since it was queued
         if cell in goal:
-            path = [cell]
-            while path[-1] != start:
-                path.append(parent[path[-1]])
-            path.reverse()
-            return path
+            return path_to(cell, start, parent)
         for step in NEIGHBOUR_STEPS:
             nxt = cell + step
             bits = cells[nxt]

@@ -782,12 +782,7 @@ def stop_running_tree(
 def held_in_stop(command: Command) -> None:
     """A command written while the tree was stopped that would have set the robot going: not
     written (:func:`stop_running_tree`); said, with the behaviour that wrote it and where."""
-    who = where_in(sys._getframe(1)) or "a behaviour"
-    log.warning(
-        "%s sent %s (%d) %s while the tree was being stopped: not written (the tree's stop "
-        "sets nothing going: it would run on, unwatched, until the safe stop)",
-        who, command.spec.title, command.opcode, command.data.hex(" "),
-    )  # fmt: skip
+    _warn_not_written(where_in(sys._getframe(1)) or "a behaviour", "sent", command)
 
 
 def dropped_in_stop(command: Command, sender: object) -> None:
@@ -801,10 +796,14 @@ def dropped_in_stop(command: Command, sender: object) -> None:
         code = getattr(cls.terminate, "__code__", None)
         where = f" at {code.co_filename}:{code.co_firstlineno}" if code is not None else ""
         who = f"{sender.name} ({cls.__name__}.terminate{where})"
+    _warn_not_written(who, "queued", command)
+
+
+def _warn_not_written(who: str, how: str, command: Command) -> None:
     log.warning(
-        "%s queued %s (%d) %s while the tree was being stopped: not written (the tree's stop "
+        "%s %s %s (%d) %s while the tree was being stopped: not written (the tree's stop "
         "sets nothing going: it would run on, unwatched, until the safe stop)",
-        who, command.spec.title, command.opcode, command.data.hex(" "),
+        who, how, command.spec.title, command.opcode, command.data.hex(" "),
     )  # fmt: skip
 
 

@@ -7,15 +7,20 @@ import threading
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import py_trees
+
+from roomba_bt.cli import main
 from roomba_bt.mission import load_mission
 from roomba_bt.monitor.feed import RunFeed
+from roomba_bt.monitor.recorded import replay_into_feed
 from roomba_bt.monitor.server import MonitorServer
 from roomba_bt.monitor.session import MonitorSession
 from roomba_bt.monitor.views import world_view
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.runtime.loop import MissionRunner
-from roomba_bt.runtime.stack import RunStack
+from roomba_bt.runtime.recording import load_record
+from roomba_bt.runtime.stack import RunStack, TreeMission
 from roomba_bt.runtime.summary import RunSummary
 from roomba_bt.sim import RealtimeSimLink, SimLink, Simulator, load_world
 
@@ -119,3 +124,28 @@ def start_live_run(
     run_ = LiveRun(simulator, runner, feed, session, server, thread, steps, writes, result)
     thread.start()
     return run_
+
+
+def feed_of_run(root: py_trees.behaviour.Behaviour, name: str, history: int) -> RunFeed:
+    """``root`` run to its end (or 1 s) on the empty room with a feed watching every tick."""
+    feed = RunFeed(history=history, mission_name=name)
+    feed.set_tree(root)
+    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
+    stack = RunStack(TreeMission(root, name), link, profile=CREATE2, timeout_s=1.0,
+                     observer=feed.observe)  # fmt: skip
+    try:
+        stack.run()
+    finally:
+        stack.close()
+    return feed
+
+
+def replayed_record(mission: Path, timeout: str, record_path: Path) -> tuple[RunFeed, RunSummary]:
+    """``mission`` run with ``--record`` (it fails at ``timeout``), then replayed into a feed:
+    what ``roomba-bt monitor RECORD`` serves."""
+    assert main(["run", str(mission), "--fast", "--timeout", timeout, "--display", "none",
+                 "--record", str(record_path)]) == 1  # fmt: skip
+    record = load_record(record_path)
+    loaded = load_mission(mission, {}, profile=CREATE2)
+    packets = tuple(record.header["packets"])
+    return replay_into_feed(record, loaded, CREATE2, packets, 115200, mission.stem)

@@ -15,10 +15,9 @@ from roomba_bt.behaviours.coverage_map import Bearings, FloorMap
 from roomba_bt.behaviours.docking.common import DockingRun
 from roomba_bt.monitor.feed import RunFeed
 from roomba_bt.monitor.views import state_view
-from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.interface import Odometry
-from roomba_bt.runtime.stack import RunStack, TreeMission
-from roomba_bt.sim import SimLink, Simulator, load_world
+
+from .live import feed_of_run
 
 pytestmark = pytest.mark.usefixtures("clean_blackboard")
 
@@ -58,16 +57,7 @@ def _run(*counters: Counter) -> RunFeed:
     root = py_trees.composites.Parallel(
         "counting", policy=py_trees.common.ParallelPolicy.SuccessOnAll(), children=list(counters)
     )
-    feed = RunFeed(history=1000, mission_name="counting")
-    feed.set_tree(root)
-    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
-    stack = RunStack(TreeMission(root, "counting"), link, profile=CREATE2, timeout_s=1.0,
-                     observer=feed.observe)  # fmt: skip
-    try:
-        stack.run()
-    finally:
-        stack.close()
-    return feed
+    return feed_of_run(root, "counting", history=1000)
 
 
 def test_a_rewound_tick_shows_a_changing_object_as_it_was_at_that_tick() -> None:

@@ -16,17 +16,12 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from roomba_bt.cli import main
-from roomba_bt.mission import load_mission
-from roomba_bt.monitor.recorded import replay_into_feed
 from roomba_bt.monitor.server import MonitorServer
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
-from roomba_bt.oi.profiles import CREATE2
-from roomba_bt.runtime.recording import load_record
 
 from .conftest import SHUTTLE
-from .live import LiveRun, start_live_run
+from .live import LiveRun, replayed_record, start_live_run
 
 HERE = Path(__file__).resolve().parent
 WAIT_MS = 15_000
@@ -160,12 +155,7 @@ def test_a_recorded_run_on_the_timeline_shows_that_ticks_statuses(
     page: Any, tmp_path: Path
 ) -> None:
     record_path = tmp_path / "shuttle.jsonl"
-    assert main(["run", str(SHUTTLE), "--fast", "--timeout", "4s", "--display", "none",
-                 "--record", str(record_path)]) == 1  # fmt: skip
-    record = load_record(record_path)
-    mission = load_mission(SHUTTLE, {}, profile=CREATE2)
-    packets = tuple(record.header["packets"])
-    feed, summary = replay_into_feed(record, mission, CREATE2, packets, 115200, "shuttle")
+    feed, summary = replayed_record(SHUTTLE, "4s", record_path)
     assert summary.ticks > 200
     records = feed.since(0)[0]
     final = records[-1].statuses

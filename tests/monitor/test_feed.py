@@ -5,10 +5,7 @@ from __future__ import annotations
 import py_trees
 from py_trees.common import Status
 
-from roomba_bt.monitor.feed import RunFeed
-from roomba_bt.oi.profiles import CREATE2
-from roomba_bt.runtime.stack import RunStack, TreeMission
-from roomba_bt.sim import SimLink, Simulator, load_world
+from .live import feed_of_run
 
 #: what a plugin's message may hold: code sets it, no file's check refuses it
 HOSTILE = "\x1b[2J\n[ok] robot stopped"
@@ -28,15 +25,7 @@ def test_a_failed_leaf_s_message_is_one_line_on_the_page_and_in_the_events() -> 
     event line of its own. Escaped where the feed takes it; the leaf keeps its message."""
     sayer = Sayer(name="sayer")
     root = py_trees.composites.Sequence("steps", memory=True, children=[sayer])
-    feed = RunFeed(history=100, mission_name="sayer")
-    feed.set_tree(root)
-    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
-    stack = RunStack(TreeMission(root, "sayer"), link, profile=CREATE2, timeout_s=1.0,
-                     observer=feed.observe)  # fmt: skip
-    try:
-        stack.run()
-    finally:
-        stack.close()
+    feed = feed_of_run(root, "sayer", history=100)
     said = "\\x1b[2J\\x0a[ok] robot stopped"
     newest = feed.latest()
     assert newest is not None

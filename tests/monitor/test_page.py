@@ -14,15 +14,12 @@ from typing import Any
 
 import pytest
 
-from roomba_bt.cli import main
 from roomba_bt.mission import load_mission
-from roomba_bt.monitor.recorded import replay_into_feed
 from roomba_bt.monitor.server import MonitorServer
 from roomba_bt.oi.profiles import CREATE2
-from roomba_bt.runtime.recording import load_record
 
 from .conftest import SHUTTLE
-from .live import LiveRun, start_live_run
+from .live import LiveRun, replayed_record, start_live_run
 from .test_browser import WAIT_MS
 
 
@@ -111,12 +108,7 @@ def test_on_a_phone_pause_and_stop_stay_on_the_screen_and_the_panels_stack(
 @pytest.fixture(scope="module")
 def recorded(tmp_path_factory: pytest.TempPathFactory) -> Iterator[MonitorServer]:
     record_path = tmp_path_factory.mktemp("record") / "shuttle.jsonl"
-    assert main(["run", str(SHUTTLE), "--fast", "--timeout", "6s", "--display", "none",
-                 "--record", str(record_path)]) == 1  # fmt: skip
-    record = load_record(record_path)
-    mission = load_mission(SHUTTLE, {}, profile=CREATE2)
-    packets = tuple(record.header["packets"])
-    feed, _ = replay_into_feed(record, mission, CREATE2, packets, 115200, "shuttle")
+    feed, _ = replayed_record(SHUTTLE, "6s", record_path)
     server = MonitorServer(feed, None, port=0)
     server.start()
     yield server
