@@ -70,11 +70,15 @@ def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node:
             ok = False
     written = {pname: pnode for pname, pnode, _, _ in given}
     ok = _key_params(ctx, decl, params, key_typed, options, (env, written)) and ok
-    if ok and decl.constraints is not None and UNKNOWN not in params.values():
+    known = UNKNOWN not in params.values()
+    if ok and decl.constraints is not None and known:
         for problem in decl.constraints(params):
             ctx.error(key_loc.at(f"{decl.name}: {problem}"))
             ok = False
-    if not ok:  # kept in its place, unbuilt: the checks of the tree still judge around it
+    # A value not known (a parameter declared wrongly, a subtree argument that did not
+    # resolve: reported there) is unbuilt too: what the leaf sends and the mode it leads to
+    # may depend on it (`mode: "${m}"`), and reading them from it was an internal error.
+    if not ok or not known:  # kept in its place, unbuilt: the checks still judge around it
         return Node("unbuilt", key_loc, decl.name, partial=decl)
     return Node("leaf", key_loc, leaf_name(decl.name, given, env), decl=decl, params=params,
                 options=options)  # fmt: skip

@@ -301,3 +301,28 @@ def test_a_world_file_names_a_typographic_quote_too(tmp_path: Path) -> None:
         "typographic quote, not a YAML quote: write \" or ' (expected ',' or ']', but got '{' at "
         "2:35)"
     )
+
+
+@pytest.mark.parametrize(
+    ("text", "said"),
+    [
+        # a subtree's argument that did not resolve
+        ("subtrees:\n  go:\n    parameters: {m: {type: str}}\n    tree: {mode: '${m}'}\n"
+         "tree:\n  sequence:\n    - subtree: {id: go, m: '${nope}'}\n",
+         "8:28: go.m: unknown parameter ${nope}"),
+        # a parameter declared wrongly (seeded mutation 259 of clean.yaml)
+        ("parameters:\n  m: {type: enum, choices: [safe, full], default: safe, doc2s: x}\n"
+         "tree:\n  sequence:\n    - mode: '${m}'\n",
+         "3:57: parameter 'm': unknown key 'doc2s'"),
+    ],
+)  # fmt: skip
+def test_a_mode_whose_value_is_not_known_is_its_error_not_an_internal_one(
+    tmp_path: Path, text: str, said: str
+) -> None:
+    """``mode: "${m}"`` with ``m`` not known (its error said where it was given): the mode
+    check read the mode it leads to from the unknown value, "internal error while compiling
+    (KeyError: '<UNKNOWN>')" at 1:1."""
+    path = tmp_path / "m.yaml"
+    path.write_text("mission: m\n" + text)
+    (problem,) = _problems(path)
+    assert problem.startswith(said), problem
