@@ -7,7 +7,6 @@ required), blackboard keys against the declared keys, then the cross-parameter r
 
 from __future__ import annotations
 
-import re
 from collections.abc import Mapping
 from typing import Any
 
@@ -18,13 +17,13 @@ from roomba_bt.behaviours.units import MARK
 from roomba_bt.mission.ir import KeyDecl, Node
 from roomba_bt.mission.source import Bad, Loc, mapping
 from roomba_bt.mission.values import (
-    SUBSTITUTION,
     UNKNOWN,
     Bound,
     Context,
     Written,
     resolve,
     said_origin,
+    substituted,
     unknown,
 )
 
@@ -166,13 +165,13 @@ def leaf_name(
     if not given:
         return behaviour
 
-    def value_of(match: re.Match[str]) -> str:
-        bound = env.get(match.group(1))
-        return bound.text if bound is not None and bound.value is not UNKNOWN else match.group(0)
+    def value_of(name: str) -> str | None:
+        bound = env.get(name)
+        return bound.text if bound is not None and bound.value is not UNKNOWN else None
 
     parts = []
     for pname, node, key_loc, value_loc in given:
         text = str(node.value) if isinstance(node, yaml.ScalarNode) else "..."
-        text = SUBSTITUTION.sub(value_of, text)
+        text = substituted(text, value_of)
         parts.append(text if key_loc is value_loc else f"{pname}={text}")
     return f"{behaviour}({', '.join(parts)})"

@@ -74,6 +74,7 @@ from roomba_bt.mission.values import (
     parse_type_name,
     record_type,
     resolve,
+    substituted,
     unknown,
 )
 from roomba_bt.yamlsource import too_many_digits, yaml11_number_problem
@@ -155,8 +156,8 @@ class Loader:
         name, description = self._names(path, sections)
         params = self._parameters(sections.get("parameters"), overrides, root_loc)
         self.nodes.global_env = params
-        description = SUBSTITUTION.sub(
-            lambda m: params[m.group(1)].text if m.group(1) in params else m.group(0), description
+        description = substituted(
+            description, lambda name: params[name].text if name in params else None
         )
         tree: Node | None = None
         tree_loc: Loc | None = None
@@ -424,7 +425,9 @@ class Loader:
                     )
                     env[name] = Bound(vtype, UNKNOWN, "?")  # reported once, not at every use
                     continue
-                env[name] = Bound(vtype, default, _text(value, vloc, default))
+                # a text's value as its uses insert it: "$${" already a literal "${"
+                text = default if vtype is STR else _text(value, vloc, default)
+                env[name] = Bound(vtype, default, text)
         for name, text in overrides.items():
             if name in broken:
                 continue

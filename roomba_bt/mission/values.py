@@ -1,5 +1,5 @@
-"""Values in a mission: ``${parameter}`` substitution, ``@key`` references, units and ranges,
-and what one compilation shares (:class:`Context`).
+"""Values in a mission: ``${parameter}`` substitution (``$${`` is a literal ``${``), ``@key``
+references, units and ranges, and what one compilation shares (:class:`Context`).
 
 Every value a mission writes goes through :func:`resolve`: the loader for parameter
 defaults and initial blackboard values, the node parser for options and behaviour
@@ -9,7 +9,7 @@ parameters.
 from __future__ import annotations
 
 import re
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -35,8 +35,42 @@ from roomba_bt.mission.foreign import port_remapping, suggestion
 from roomba_bt.mission.ir import KeyDecl
 from roomba_bt.mission.source import Bad, Loc, mapping, plain, scalar_text
 
-SUBSTITUTION = re.compile(r"\$\{([A-Za-z_][A-Za-z0-9_]*)\}")
+#: ``${name}``, a parameter's use; not ``$${name}``, the escape (:data:`_PLACEHOLDER`): what
+#: finds the parameters a text uses sees the same ones :func:`substituted` replaces
+SUBSTITUTION = re.compile(r"(?<!\$)\$\{([A-Za-z_][A-Za-z0-9_]*)\}")
 _FULL_SUBSTITUTION = re.compile(r"^\s*(-?)\$\{([A-Za-z_][A-Za-z0-9_]*)\}\s*$")
+#: What a text's ``$`` may start, read left to right: ``$${``, a literal ``${`` (the escape,
+#: as docker-compose's, GitHub Actions' and string.Template's ``$$``: without one a log line
+#: could not say ``${``); ``${name}``, a parameter (group 1); or a ``${`` that starts
+#: neither, unterminated or not a name (group 1 None): an error in a value
+_PLACEHOLDER = re.compile(r"\$\$\{|\$\{(?:([A-Za-z_][A-Za-z0-9_]*)\})?")
+_ESCAPE = "$${"
+#: said with every error about a ``${``: the text may have meant one literally
+ESCAPE_HINT = 'a literal "${" is written "$${"'
+
+
+def substituted(text: str, text_of: Callable[[str], str | None]) -> str:
+    """``text`` with each ``$${`` as ``${`` and each ``${name}`` as ``text_of(name)`` (kept
+    as written where that is None: a description or a name shown names an unknown
+    parameter as it was written); a ``${`` that starts no parameter is kept as it is
+    (:func:`_substitute` refuses it first where a value is resolved)."""
+
+    def replaced(match: re.Match[str]) -> str:
+        whole, name = match.group(0), match.group(1)
+        if whole == _ESCAPE:
+            return "${"
+        value = None if name is None else text_of(name)
+        return whole if value is None else value
+
+    return _PLACEHOLDER.sub(replaced, text)
+
+
+def _stray_opening(text: str) -> int | None:
+    """Where in ``text`` the first ``${`` is that is neither a parameter nor escaped."""
+    for match in _PLACEHOLDER.finditer(text):
+        if match.group(0) != _ESCAPE and match.group(1) is None:
+            return match.start()
+    return None
 
 
 def unknown(what: str, name: str, known: list[str], owner: str | None = None) -> str:
@@ -203,7 +237,7 @@ def resolve(
             bound = env.get(pname)
             if bound is None:
                 hint = _not_a_parameter(ctx, pname, env, allow_ref, no_ref)
-                raise Bad(loc.at(f"{what}: unknown parameter ${{{pname}}}{hint}"))
+                raise Bad(loc.at(f"{what}: unknown parameter ${{{pname}}}{hint}; {ESCAPE_HINT}"))
             if bound.value is UNKNOWN:
                 return UNKNOWN
             if compatible(bound.type, vtype):
@@ -287,20 +321,26 @@ def _record(
 
 
 def _substitute(raw: str, loc: Loc, env: Mapping[str, Bound], what: str) -> Any:
-    """``"${a} mm/s"``: each parameter replaced by its text; UNKNOWN if one is unknown."""
-
-    def substitute(match: re.Match[str]) -> str:
-        bound = env.get(match.group(1))
-        if bound is None:
-            name = match.group(1)
-            raise Bad(loc.at(f"{what}: unknown parameter ${{{name}}}{closest(name, list(env))}"))
-        return bound.text
-
+    """``"${a} mm/s"``: each parameter replaced by its text, each ``$${`` by ``${``; UNKNOWN
+    if a parameter's value is unknown. A ``${`` that starts no parameter (``"${speed"``,
+    ``"${ x }"``) is an error: it was passed on as text, so a typo in a use went unseen."""
+    stray = _stray_opening(raw)
+    if stray is not None:
+        raise Bad(
+            loc.at(
+                f'{what}: "${{" at character {stray + 1} of {raw!r} starts no parameter (a '
+                f"parameter is ${{name}}: a letter or _, then letters, digits or _, then }}); "
+                f"{ESCAPE_HINT}"
+            )
+        )
     names = SUBSTITUTION.findall(raw)
-    text = SUBSTITUTION.sub(substitute, raw)
+    for name in names:
+        if name not in env:
+            hint = closest(name, list(env))
+            raise Bad(loc.at(f"{what}: unknown parameter ${{{name}}}{hint}; {ESCAPE_HINT}"))
     if any(env[name].value is UNKNOWN for name in names):
         return UNKNOWN
-    return text
+    return substituted(raw, lambda name: env[name].text)
 
 
 def _check_range(value: Any, loc: Loc, what: str, param: Param | None, origin: str = "") -> Any:
