@@ -39,6 +39,7 @@ from roomba_bt.behaviours.units import (
     RADIUS_WORDS,
     SPEED,
     STR,
+    ItemErrors,
     UnitError,
     ValueType,
     described,
@@ -74,19 +75,18 @@ assert tuple(_RADIUS_WORDS) == RADIUS_WORDS
 
 def _parse_notes(value: object) -> tuple[tuple[int, int], ...]:
     """``["C4 250ms", "rest 125ms", "A#4 1s"]`` -> ((60, 16), (0, 8), (70, 64)). Every bad
-    note is said, each with its place in the list (the position is the list's)."""
+    note is said (:class:`ItemErrors`: a mission says each at the note's own place)."""
     if not isinstance(value, list) or not value:
         raise UnitError('expected a list of notes such as ["C4 250ms", "rest 125ms"]')
     notes: list[tuple[int, int]] = []
-    problems: list[str] = []
-    for index, item in enumerate(value, 1):
-        at = f"note {index} of {len(value)}: " if len(value) > 1 else ""
+    problems: list[tuple[int, str]] = []
+    for index, item in enumerate(value):
         try:
             notes.append(_note(item))
         except UnitError as exc:
-            problems.append(f"{at}{exc}")
+            problems.append((index, str(exc)))
     if problems:
-        raise UnitError("; ".join(problems))
+        raise ItemErrors("note", len(value), problems)
     if len(notes) > _SONG_LENGTH.maximum:
         raise UnitError(f"a song has at most {_SONG_LENGTH.maximum} notes, got {len(notes)}")
     return tuple(notes)
@@ -128,10 +128,24 @@ _SPELLED_NOTE = re.compile("([A-Ga-g])([#b\u266f\u266d]?)([0-9])")
 def _note_hint(name: str) -> str:
     """What to write for a note name :func:`note_number` refuses: a flat (``Db4``), ``♯``, or
     ``E#4`` as the same pitch the way the robot's names spell it (``C#4``, ``F4``): flats are
-    common and were refused with only "write A4, C#5 or rest"."""
+    common and were refused with only "write A4, C#5 or rest". A MIDI number (``200``,
+    ``69``) and German ``H`` (B) are named as what they are; anything else hears what a name
+    is made of."""
+    lo, hi = PLAYABLE_NOTES[0], PLAYABLE_NOTES[-1]
+    plays = f"the robot plays {note_name(lo)} ({lo}) to {note_name(hi)} ({hi})"
+    if name.isdigit():
+        number = int(name)
+        named = f"write {note_name(number)}" if number in PLAYABLE_NOTES else plays
+        return f"a note is written by its name, not its MIDI number: {named}"
+    german = re.fullmatch("[Hh]([0-9])", name)
+    if german is not None:
+        return f"H is B in German names: write B{german.group(1)}"
     spelled = _SPELLED_NOTE.fullmatch(name)
     if spelled is None:
-        return "write A4, C#5 or rest"
+        return (
+            f"a note is a name, one of {', '.join(NOTE_NAMES)}, and an octave 0-9 (A4, C#5; "
+            f"{plays}), or rest"
+        )
     letter, accidental, octave = spelled.groups()
     shift = {"#": 1, "\u266f": 1, "b": -1, "\u266d": -1}.get(accidental, 0)
     number = 12 * (int(octave) + 1) + NOTE_NAMES.index(letter.upper()) + shift

@@ -64,6 +64,22 @@ class UnitError(ValueError):
     """A value that does not parse; the message says what was expected."""
 
 
+class ItemErrors(UnitError):
+    """Items of a list value that do not parse, each with its index in the list (from 0)
+    and what was wrong with it (found, and what is allowed). The message names each item's
+    place (``note 3 of 8: ...``) for a caller that knows the list alone; a mission says
+    each at its item's own line and column (a song's bad note on the third line of its
+    list was said at the list's first)."""
+
+    def __init__(self, noun: str, count: int, problems: Sequence[tuple[int, str]]) -> None:
+        self.noun, self.count, self.problems = noun, count, tuple(problems)
+        super().__init__("; ".join(self.said(index, problem) for index, problem in problems))
+
+    def said(self, index: int, problem: str) -> str:
+        """``note 3 of 8: unknown note 'H4': ...``; a list of one: the problem alone."""
+        return problem if self.count == 1 else f"{self.noun} {index + 1} of {self.count}: {problem}"
+
+
 class BareNumber(UnitError):
     """A bare number where a quantity needs its unit (``max_radius: 1``). The message
     suggests the unit that reads it inside the allowed range, when the caller knows the

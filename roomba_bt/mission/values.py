@@ -22,6 +22,7 @@ from roomba_bt.behaviours.units import (
     MARK,
     VALUE_TYPES,
     BareNumber,
+    ItemErrors,
     UnitError,
     ValueType,
     closest,
@@ -264,7 +265,15 @@ def resolve(
                 return UNKNOWN
         if raw.startswith("@") or (port_remapping(raw) and vtype.name not in ("str", "any")):
             return _reference(ctx, raw, loc, vtype, what, (allow_ref, no_ref))
-    return _check_range(_parsed(vtype, raw, loc, what, param), loc, what, param)
+    return _check_range(_parsed(vtype, raw, loc, what, param, node), loc, what, param)
+
+
+def _item_locs(node: yaml.Node, loc: Loc, raw: object) -> list[Loc] | None:
+    """Where each item of a list value is, when ``raw`` is the list the file wrote there
+    (not one a parameter gave): what an item's error is said at."""
+    if isinstance(node, yaml.SequenceNode) and isinstance(raw, list):
+        return [loc.child(item, f"[{i}]") for i, item in enumerate(node.value)]
+    return None
 
 
 def _not_a_parameter(
@@ -285,15 +294,32 @@ def _reference_here(ctx: Context, key: str | None, allowed: bool) -> str:
     return f'a blackboard value is written "@{key}" here{declared}'
 
 
-def _parsed(vtype: ValueType, raw: object, loc: Loc, what: str, param: Param | None) -> Any:
+def _parsed(
+    vtype: ValueType,
+    raw: object,
+    loc: Loc,
+    what: str,
+    param: Param | None,
+    node: yaml.Node | None = None,
+) -> Any:
     """``raw`` in ``vtype``'s unit; a bare number's hint names the unit that puts it in the
-    parameter's range (``max_radius: 1`` is ``1m``, not ``1mm``)."""
+    parameter's range (``max_radius: 1`` is ``1m``, not ``1mm``). Items of a list that do
+    not parse are each said at their own place in ``node`` (the value as written), all of
+    them."""
     try:
         return vtype.parse(raw)
     except BareNumber as exc:
         if param is not None:
             exc.within(param.minimum, param.maximum)
         raise Bad(loc.at(f"{what}: {exc}")) from None
+    except ItemErrors as exc:
+        items = None if node is None else _item_locs(node, loc, raw)
+        if items is None or len(items) != exc.count:
+            raise Bad(loc.at(f"{what}: {exc}")) from None
+        first, *more = (
+            items[i].at(f"{what}: {exc.said(i, problem)}") for i, problem in exc.problems
+        )
+        raise Bad(first, tuple(more)) from None
     except UnitError as exc:
         raise Bad(loc.at(f"{what}: {exc}")) from None
 

@@ -14,6 +14,7 @@ from py_trees.common import Status
 from roomba_bt.behaviours import actions as a
 from roomba_bt.behaviours import builtin_registry
 from roomba_bt.behaviours.declare import Action, BlackboardRef, declare, read_key, write_key
+from roomba_bt.behaviours.units import ItemErrors
 from roomba_bt.oi.encode import drive, drive_direct, drive_straight, motors, turns_wheels
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.odometry import mm_to_counts
@@ -349,6 +350,32 @@ def test_notes_parse_names_and_durations() -> None:
         a.NOTES.parse(["C4 5s"])
     with pytest.raises(a.UnitError, match="at most 16 notes"):
         a.NOTES.parse(["C4 100ms"] * 17)
+
+
+@pytest.mark.parametrize(
+    ("note", "said"),
+    [
+        ("200 1s", "unknown note '200': a note is written by its name, not its MIDI number: the "
+                   "robot plays G1 (31) to G9 (127)"),
+        ("69 1s", "unknown note '69': a note is written by its name, not its MIDI number: "
+                  "write A4"),
+        ("H4 1s", "unknown note 'H4': H is B in German names: write B4"),
+        ("C#10 1s", "unknown note 'C#10': a note is a name, one of C, C#, D, D#, E, F, F#, G, "
+                    "G#, A, A#, B, and an octave 0-9 (A4, C#5; the robot plays G1 (31) to G9 "
+                    "(127)), or rest"),
+        ("C1 1s", "note C1 (24) is outside the notes the robot plays, G1 to G9"),
+        ("C4 5s", "note duration '5s' is out of range: 16ms..3.98s (1..255 of 1/64 s)"),
+    ],
+)  # fmt: skip
+def test_a_bad_note_says_what_it_found_and_what_is_allowed(note: str, said: str) -> None:
+    """Each problem is the note's own, with its index, for the mission to say at the note
+    (:class:`~roomba_bt.behaviours.units.ItemErrors`): "write A4, C#5 or rest" was all a
+    MIDI number or a German H got."""
+    with pytest.raises(ItemErrors) as caught:
+        a.NOTES.parse(["C4 250ms", "D4 250ms", note])
+    ((index, problem),) = caught.value.problems
+    assert index == 2 and problem.startswith(said), problem
+    assert str(caught.value) == f"note 3 of 3: {problem}"
 
 
 def test_radius_type() -> None:

@@ -257,16 +257,18 @@ def test_a_flat_note_says_its_sharp_and_no_python_repr_leaks(tmp_path: Path) -> 
     """``Db4`` got only "write A4, C#5 or rest"; an empty item, a list and a mapping were
     said as ``None``, ``['C4', 250]`` and ``{'note': 'C4'}``."""
     path = _one_step(tmp_path, 'song: {number: 0, notes: ["Db4 250ms", "Cb4 1s", ~, [C4, 250]]}')
-    (problem,) = _problems(path)
-    assert problem == (
-        "5:32: song.notes: note 1 of 4: unknown note 'Db4': write C#4, the same pitch (the notes "
-        "are C, C#, D, D#, E, F, F#, G, G#, A, A#, B: no flats); note 2 of 4: unknown note 'Cb4': "
-        "write B3, the same pitch (the notes are C, C#, D, D#, E, F, F#, G, G#, A, A#, B: no "
-        'flats); note 3 of 4: expected a note such as "C4 250ms" or "rest 125ms", got nothing '
-        "(null): a note is one text, its name and duration; note 4 of 4: expected a note such as "
-        '"C4 250ms" or "rest 125ms", got a list: a note is one text, its name and duration'
-    )
-    assert "None" not in problem and "[" not in problem
+    problems = _problems(path)
+    assert problems == [
+        "5:33: song.notes: note 1 of 4: unknown note 'Db4': write C#4, the same pitch (the notes "
+        "are C, C#, D, D#, E, F, F#, G, G#, A, A#, B: no flats)",
+        "5:46: song.notes: note 2 of 4: unknown note 'Cb4': write B3, the same pitch (the notes "
+        "are C, C#, D, D#, E, F, F#, G, G#, A, A#, B: no flats)",
+        '5:56: song.notes: note 3 of 4: expected a note such as "C4 250ms" or "rest 125ms", got '
+        "nothing (null): a note is one text, its name and duration",
+        '5:59: song.notes: note 4 of 4: expected a note such as "C4 250ms" or "rest 125ms", got '
+        "a list: a note is one text, its name and duration",
+    ]
+    assert not any("None" in problem or "[" in problem for problem in problems)
 
 
 def test_a_note_takes_spaces_before_its_duration_as_a_duration_does(tmp_path: Path) -> None:
@@ -301,6 +303,32 @@ def test_a_world_file_names_a_typographic_quote_too(tmp_path: Path) -> None:
         "typographic quote, not a YAML quote: write \" or ' (expected ',' or ']', but got '{' at "
         "2:35)"
     )
+
+
+def test_a_bad_note_is_said_at_its_own_line_in_a_list_written_down_the_page(
+    tmp_path: Path,
+) -> None:
+    """A song's notes written one a line: a bad note on the list's third line was said at
+    the list's first (8:11 here), and the reader counted down to it by hand."""
+    path = tmp_path / "m.yaml"
+    path.write_text(
+        "mission: m\n"
+        "tree:\n"
+        "  sequence:\n"
+        "    - mode: safe\n"
+        "    - song:\n"
+        "        number: 0\n"
+        "        notes:\n"
+        "          - C4 250ms\n"
+        "          - E4 250ms\n"
+        "          - H4 250ms\n"
+        "          - G4 9s\n"
+    )
+    assert _problems(path) == [
+        "10:13: song.notes: note 3 of 4: unknown note 'H4': H is B in German names: write B4",
+        "11:13: song.notes: note 4 of 4: note duration '9s' is out of range: 16ms..3.98s "
+        "(1..255 of 1/64 s)",
+    ]
 
 
 @pytest.mark.parametrize(
