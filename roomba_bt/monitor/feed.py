@@ -179,6 +179,10 @@ class TickRecord(NamedTuple):
     board: int  # the blackboard's version: RunFeed.boards[board]
     tree: int  # tree generation (a reload starts a new one)
     ticked: bool  # False while paused: the robot is watched, the tree is frozen
+    #: the bytes of the motors' standing command (Motors (138) or PWM Motors (144): what the
+    #: run last wrote to the brushes and vacuum and the robot still obeys), None before any;
+    #: the command's own bytes object, so a tick that changed nothing shares it
+    motors: bytes | None = None
 
 
 class Event(NamedTuple):
@@ -347,6 +351,8 @@ class RunFeed:
         if truth is not None and self.truth_start is None:
             self.truth_start = truth
         ring = self.ring
+        motors = runner.last_sent.get("motors")
+        motor_bytes = motors.data if motors is not None else None
         if snapshot is not None:
             frame = snapshot.frame
             if frame.layout is not self._layout:
@@ -372,13 +378,14 @@ class RunFeed:
                     self._board,
                     self.generation,
                     ticked,
+                    motor_bytes,
                 ),
             )
         else:
             record = TickRecord(ring.count, 0, 0.0, self._statuses, changed, self._reasons,
                                 None, -1, 0, None, 0, truth, runner.count_written(),
                                 summary.refused_commands, self._board, self.generation,
-                                ticked)  # fmt: skip
+                                ticked, motor_bytes)  # fmt: skip
         ring.append(record)
         return changed
 

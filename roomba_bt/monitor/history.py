@@ -26,8 +26,9 @@ from roomba_bt.robot.interface import Odometry
 _Value = TypeVar("_Value")
 
 #: tick, time, statuses, changed, reasons, frame (payload offset, -1: none), layout, mode,
-#: frames lost, sent, refused, board, tree, ticked, odometry given, its 6 floats, its counts
-_ROW = struct.Struct("<qdiiiqhhiqqii??6dqq")
+#: frames lost, sent, refused, board, tree, ticked, odometry given, its 6 floats, its counts,
+#: the motors' standing command (-1: none)
+_ROW = struct.Struct("<qdiiiqhhiqqii??6dqqi")
 _NO_COUNT = -(1 << 63)  # an odometry without encoder counts (None)
 
 
@@ -60,6 +61,7 @@ class PackedRing(Ring):
         self._statuses: _Interned[str] = _Interned()
         self._changed: _Interned[tuple[int, ...]] = _Interned()
         self._reasons: _Interned[Mapping[int, str]] = _Interned()
+        self._motors: _Interned[bytes] = _Interned()  # a run sets the motors a few ways
         self._truths: dict[int, tuple[float, float, float]] = {}  # a record has none
 
     def append(self, record: TickRecord) -> None:
@@ -77,6 +79,7 @@ class PackedRing(Ring):
             record.odometry is not None, odometry.x_mm, odometry.y_mm, odometry.theta_rad,
             odometry.distance_mm, odometry.angle_rad, odometry.path_mm,
             _NO_COUNT if left is None else left, _NO_COUNT if right is None else right,
+            -1 if record.motors is None else self._motors.number(record.motors, record.motors),
         )  # fmt: skip
         if record.truth is not None:
             self._truths[record.seq] = record.truth
@@ -103,7 +106,7 @@ class PackedRing(Ring):
         (
             tick, time, statuses, changed, reasons, frame_at, layout, mode, frames_lost, sent,
             refused, board, tree, ticked, has_odometry, x, y, theta, distance, angle, path,
-            left, right,
+            left, right, motors,
         ) = _ROW.unpack_from(self._rows, seq * _ROW.size)  # fmt: skip
         frame = (
             self._layouts[layout].struct.unpack_from(self._payloads, frame_at)
@@ -119,6 +122,7 @@ class PackedRing(Ring):
             seq, tick, time, self._statuses.values[statuses], self._changed.values[changed],
             self._reasons.values[reasons], frame, layout, mode, odometry, frames_lost,
             self._truths.get(seq), sent, refused, board, tree, ticked,
+            self._motors.values[motors] if motors >= 0 else None,
         )  # fmt: skip
 
     def since(self, seq: int) -> list[TickRecord]:

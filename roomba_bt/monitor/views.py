@@ -24,7 +24,9 @@ from roomba_bt.oi.frames import (
     REQUESTED_WHEELS_PACKETS,
 )
 from roomba_bt.oi.ir import IRCharacter
+from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.odometry import counts_to_mm, encoder_delta
+from roomba_bt.oi.opcodes import COMMANDS
 from roomba_bt.robot.interface import SLOT_SECONDS, Snapshot
 
 
@@ -37,6 +39,64 @@ def _ir(code: int) -> dict[str, Any]:
         "force_field": ir.force_field,
         "virtual_wall": ir.virtual_wall,
     }
+
+
+#: packet 14's motor bits and the brushes' currents (packets 56, 57), as the page names them
+OVERCURRENT_NAMES = ("main_brush", "side_brush", "left_wheel", "right_wheel")
+BRUSH_CURRENT_PACKETS = {"main_brush": 56, "side_brush": 57}
+_MOTORS = 138  # else PWM Motors (144)
+_PWM_FULL = 127
+
+
+def _motor(percent: int, direction: str | None) -> dict[str, Any]:
+    return {"percent": percent, "direction": direction if percent else None}
+
+
+def _signed(byte: int) -> int:
+    return byte - 256 if byte > 127 else byte
+
+
+def motors_view(command: bytes | None, mode: OIMode, ticked: bool) -> dict[str, Any]:
+    """The brushes and vacuum as the motors' standing command set them (Motors (138): on or
+    off and the brushes' directions; PWM Motors (144): a duty cycle each, a negative one the
+    other way), each a percent of full power; ``note`` says why the robot does not run them
+    (it is in Passive: the run's pause, or a fall) or that no command set them yet. A
+    built-in cycle (Clean, Spot) runs the motors itself in Passive, which no command says:
+    packets 14, 56 and 57, when streamed, show what they draw."""
+    out: dict[str, Any] = {"command": None, "note": ""}
+    if not command:
+        for name in ("main_brush", "side_brush", "vacuum"):
+            out[name] = _motor(0, None)
+        out["note"] = (
+            "off: no motor command stands"
+            if mode in DRIVING_MODES
+            else "off: the robot is in Passive (a built-in cycle runs its own)"
+        )
+        return out
+    out["command"] = f"{COMMANDS[command[0]].title} ({command[0]})"
+    if command[0] == _MOTORS:
+        bits = command[1]
+        main = _motor(100 if bits & 0b100 else 0, "outward" if bits & 0b10000 else "inward")
+        side = _motor(100 if bits & 0b1 else 0,
+                      "clockwise" if bits & 0b1000 else "counter-clockwise")  # fmt: skip
+        vacuum = _motor(100 if bits & 0b10 else 0, None)
+    else:  # PWM Motors: main and side brush -127..127 (negative: the other way), vacuum 0..127
+        main_pwm, side_pwm = _signed(command[1]), _signed(command[2])
+        main = _motor(round(abs(main_pwm) * 100 / _PWM_FULL),
+                      "outward" if main_pwm < 0 else "inward")  # fmt: skip
+        side = _motor(round(abs(side_pwm) * 100 / _PWM_FULL),
+                      "clockwise" if side_pwm < 0 else "counter-clockwise")  # fmt: skip
+        vacuum = _motor(round(command[3] * 100 / _PWM_FULL), None)
+    out.update(main_brush=main, side_brush=side, vacuum=vacuum)
+    if mode not in DRIVING_MODES:  # Passive: the OI runs no motor command there
+        for name in ("main_brush", "side_brush", "vacuum"):
+            out[name] = _motor(0, None)
+        out["note"] = (
+            "off while paused (the pause's safe stop); resume sends it again"
+            if not ticked
+            else "off: the robot is in Passive"
+        )
+    return out
 
 
 def robot_view(snapshot: Snapshot, rates: tuple[float, float] | None) -> dict[str, Any]:
@@ -94,6 +154,12 @@ def robot_view(snapshot: Snapshot, rates: tuple[float, float] | None) -> dict[st
                 "radius": frame.get(radius),
                 "source": f"requested ({velocity})",
             }
+    if 14 in frame:  # the overcurrent bits: which motor the robot found drawing too much
+        over = frame.overcurrents
+        out["overcurrents"] = {name: getattr(over, name) for name in OVERCURRENT_NAMES}
+    for name, pid in BRUSH_CURRENT_PACKETS.items():
+        if pid in frame:
+            out.setdefault("brush_currents_ma", {})[name] = frame[pid]
     odo = snapshot.odometry
     out["odometry"] = {"x": odo.x_mm, "y": odo.y_mm, "theta": odo.theta_rad, "path": odo.path_mm}
     if rates is not None:
@@ -155,6 +221,7 @@ def state_view(feed: RunFeed, record: TickRecord, earlier: list[TickRecord]) -> 
     }
     if snapshot is not None:
         robot = out["robot"] = robot_view(snapshot, _rates(record, earlier))
+        robot["motors"] = motors_view(record.motors, snapshot.mode, record.ticked)
         if "wheels" not in robot and len(earlier) > 1:
             measured = _measured_wheels(record, earlier[1])
             if measured is not None:

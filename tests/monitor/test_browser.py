@@ -21,6 +21,7 @@ from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
 
 from .conftest import SHUTTLE
+from .live import MISSIONS as MISSIONS_DIR
 from .live import LiveRun, replayed_record, start_live_run
 
 HERE = Path(__file__).resolve().parent
@@ -229,5 +230,70 @@ def test_a_non_local_address_refuses_a_page_without_the_token(page: Any) -> None
         assert not run.session.state.paused
         page.goto(f"http://127.0.0.1:{port}/?token={token}")
         page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+    finally:
+        run.finish()
+
+
+BRUSHES = HERE / "missions" / "brushes.yaml"
+
+
+def test_the_robot_panel_shows_the_brushes_and_vacuum_on_and_off_while_paused(
+    page: Any,
+) -> None:
+    """An owner watching a clean could not see whether the brushes were on: the panel had no
+    cleaning motor. It shows what the motors' command set and, streamed, their currents."""
+    run = start_live_run(BRUSHES)
+    try:
+        page.goto(run.url)
+        page.wait_for_selector('#motors:has-text("main brush ON")', timeout=WAIT_MS)
+        motors = page.inner_text("#motors")
+        assert "main brush ON inward" in motors
+        assert "side brush ON clockwise" in motors
+        assert "vacuum ON" in motors
+        label = page.locator("#robot tr", has=page.locator("#motors")).locator("td").first
+        assert label.inner_text() == "motors (Motors (138))"
+        assert "main" in page.inner_text("#brush-currents")
+        page.click("#pause")
+        page.wait_for_selector('#mode:text("Passive")', timeout=WAIT_MS)
+        page.wait_for_selector('#motors:has-text("off while paused")', timeout=WAIT_MS)
+        assert "main brush off" in page.inner_text("#motors")
+    finally:
+        run.finish()
+
+
+#: the deepest RUNNING node's name, and whether it is inside the tree panel's visible box
+DEEPEST_RUNNING_IN_VIEW = """() => {
+  const rows = Array.from(document.querySelectorAll('.node[data-status="R"]'));
+  if (!rows.length) return null;
+  const depth = (row) => parseFloat(row.style.paddingLeft);
+  const deepest = rows.reduce((a, b) => (depth(b) > depth(a) ? b : a));
+  const box = document.getElementById('tree').getBoundingClientRect();
+  const name = deepest.querySelector('.name').getBoundingClientRect();
+  return [deepest.dataset.name, name.top >= box.top && name.bottom <= box.bottom
+          && name.left >= box.left && name.left < box.right];
+}"""
+
+
+def test_a_big_tree_stays_readable_and_its_running_node_in_view(page: Any) -> None:
+    """The page fitted the clean mission's whole tree to the panel: 6 px text. Its labels stay
+    at 12 px or more, the tree scrolls, and the deepest running node is kept in view;
+    "follow" off leaves the scroll to the reader."""
+    run = start_live_run(MISSIONS_DIR / "clean.yaml")
+    try:
+        page.goto(run.url)
+        page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+        size = page.eval_on_selector(
+            ".node .name", "el => parseFloat(getComputedStyle(el).fontSize)"
+        )
+        assert size >= 11, size
+        assert page.eval_on_selector("#tree", "el => el.scrollHeight > el.clientHeight")
+        page.wait_for_function(
+            f"({DEEPEST_RUNNING_IN_VIEW})() && ({DEEPEST_RUNNING_IN_VIEW})()[1]",
+            timeout=WAIT_MS,
+        )
+        page.click("#follow")
+        page.eval_on_selector("#tree", "el => { el.scrollTop = 0; el.scrollLeft = 0; }")
+        page.wait_for_timeout(300)  # several updates: the view stays where the reader put it
+        assert page.eval_on_selector("#tree", "el => el.scrollTop") == 0
     finally:
         run.finish()

@@ -1,9 +1,24 @@
-"""The monitor's feed: what it says of a failed node, on the page and in its event log."""
+"""The monitor's feed: what it says of a failed node, on the page and in its event log; the
+robot panel's cleaning motors."""
 
 from __future__ import annotations
 
+from pathlib import Path
+from typing import Any
+
 import py_trees
 from py_trees.common import Status
+
+from roomba_bt.mission import load_mission
+from roomba_bt.monitor.feed import RunFeed
+from roomba_bt.monitor.recorded import replay_into_feed
+from roomba_bt.monitor.views import motors_view, state_view
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.runtime.recording import load_record
+from roomba_bt.runtime.stack import Recording, RunStack
+from roomba_bt.sim import SimLink, Simulator, load_world
 
 from .live import feed_of_run
 
@@ -34,3 +49,72 @@ def test_a_failed_leaf_s_message_is_one_line_on_the_page_and_in_the_events() -> 
     assert f"sayer -> FAILURE: {said}" in events, events
     assert "steps -> FAILURE: sayer: " + said in events, events
     assert sayer.feedback_message == HOSTILE
+
+
+BRUSHES = Path(__file__).parent / "missions" / "brushes.yaml"
+
+
+def _brushes_run(tmp_path: Path) -> tuple[RunFeed, Path, tuple[int, ...]]:
+    """The brushes mission for 2 s on the virtual clock, recorded, with a live feed of it."""
+    mission = load_mission(BRUSHES, {}, profile=CREATE2)
+    path = tmp_path / "brushes.jsonl"
+    feed = RunFeed(history=None, mission_name=mission.name)
+    feed.set_tree(mission.root)
+    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
+    stack = RunStack(mission, link, profile=CREATE2, timeout_s=2.0, observer=feed.observe,
+                     record=Recording(path, str(BRUSHES)))  # fmt: skip
+    try:
+        stack.run()
+    finally:
+        stack.close()
+    return feed, path, stack.packets
+
+
+def _robot_at_newest(feed: RunFeed) -> dict[str, Any]:
+    newest = feed.latest()
+    assert newest is not None
+    _, earlier = feed.at(newest.tick)
+    return dict(state_view(feed, newest, earlier)["robot"])
+
+
+def test_the_robot_panel_shows_the_brushes_and_vacuum_the_run_switched_on(
+    tmp_path: Path,
+) -> None:
+    """The robot panel showed no cleaning motor: an owner watching a clean could not see
+    whether the brushes were on. It shows what the motors' standing command (Motors (138))
+    set, and what the stream carries of them (packet 14, the brushes' currents 56 and 57);
+    a recorded run's view (every tick packed) shows the same."""
+    feed, path, packets = _brushes_run(tmp_path)
+    robot = _robot_at_newest(feed)
+    assert robot["motors"] == {
+        "command": "Motors (138)",
+        "note": "",
+        "main_brush": {"percent": 100, "direction": "inward"},
+        "side_brush": {"percent": 100, "direction": "clockwise"},
+        "vacuum": {"percent": 100, "direction": None},
+    }
+    assert robot["overcurrents"] == dict.fromkeys(
+        ("main_brush", "side_brush", "left_wheel", "right_wheel"), False
+    )
+    assert robot["brush_currents_ma"]["main_brush"] > 0
+    assert robot["brush_currents_ma"]["side_brush"] > 0
+    first = feed.since(0)[0][0]
+    assert first.motors is None  # before the motors' command: none stands
+    mission = load_mission(BRUSHES, {}, profile=CREATE2)
+    replayed, _ = replay_into_feed(load_record(path), mission, CREATE2, packets, 115200, "b")
+    assert _robot_at_newest(replayed)["motors"] == robot["motors"]
+
+
+def test_pwm_motors_show_each_motor_s_power_and_a_pause_shows_them_off() -> None:
+    """PWM Motors (144): a duty cycle each, a negative brush the other way; in Passive (the
+    pause's safe stop turned them off) none runs, and the panel says why."""
+    pwm = oi.pwm_motors(64, -127, 127).data
+    shown = motors_view(pwm, OIMode.SAFE, ticked=True)
+    assert shown["command"] == "PWM Motors (144)"
+    assert shown["main_brush"] == {"percent": 50, "direction": "inward"}
+    assert shown["side_brush"] == {"percent": 100, "direction": "clockwise"}
+    assert shown["vacuum"] == {"percent": 100, "direction": None}
+    paused = motors_view(pwm, OIMode.PASSIVE, ticked=False)
+    assert all(paused[m]["percent"] == 0 for m in ("main_brush", "side_brush", "vacuum"))
+    assert paused["note"].startswith("off while paused")
+    assert motors_view(None, OIMode.SAFE, ticked=True)["note"].startswith("off: no motor")

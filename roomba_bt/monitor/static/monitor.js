@@ -29,7 +29,7 @@ const view = {
   header: null, tree: [], rows: [], shown: "", collapsed: new Set(),
   live: true, liveState: null, session: { paused: false, breakpoints: {}, forced: {} },
   events: [], path: { odometry: [], truth: [] }, pathLive: { odometry: [], truth: [] },
-  world: null, fontSize: 13, shownTick: 0, window: [0, 0], playing: null, menuNode: null,
+  world: null, fontSize: 13, follow: true, shownTick: 0, window: [0, 0], playing: null, menuNode: null,
   finished: null, ended: false,
   // the socket (the page's one: null before the first), connected, when it dropped, the next
   // try's delay (ms) and its timer
@@ -103,7 +103,7 @@ function buildTree(nodes) {
     row.append(toggle, kind, name, st, marks, reason);
     row.addEventListener("click", (ev) => openMenu(n.i, ev));
     inner.appendChild(row);
-    view.rows.push({ row, st, reason, marks, toggle });
+    view.rows.push({ row, st, reason, marks, toggle, name });
   }
   applyCollapse();
   fitTree();
@@ -126,19 +126,48 @@ function applyCollapse() {
     r.row.hidden = hidden.has(i);
     if (view.tree[i].children.length) r.toggle.textContent = view.collapsed.has(i) ? "▸" : "▾";
   });
+  followRunning();
 }
 
+// the smallest text "fit" and a window's resize go to: a big tree (the clean mission's) fitted
+// whole was 6 px, unreadable; it scrolls instead, the running node kept in view (followRunning)
+const MIN_FONT_PX = 12;
 function fitTree() {
   const box = $("tree"), inner = $("tree-inner");
   let size = 16;
   inner.style.fontSize = size + "px";
-  while (size > 6 && (inner.scrollHeight > box.clientHeight || inner.scrollWidth > box.clientWidth)) {
+  while (size > MIN_FONT_PX && (inner.scrollHeight > box.clientHeight || inner.scrollWidth > box.clientWidth)) {
     size -= 0.5; inner.style.fontSize = size + "px";
   }
   view.fontSize = size;
+  followRunning();
 }
 
-function zoom(by) { view.fontSize = Math.max(5, Math.min(28, view.fontSize + by)); $("tree-inner").style.fontSize = view.fontSize + "px"; }
+function zoom(by) { view.fontSize = Math.max(5, Math.min(28, view.fontSize + by)); $("tree-inner").style.fontSize = view.fontSize + "px"; followRunning(); }
+
+// as Groot follows a running tree: the deepest RUNNING node shown (the leaf at work) is
+// scrolled into the tree's view when it is out of it, a third down and its name from the
+// left; "follow" turns it off for reading elsewhere in the tree
+function followRunning() {
+  if (!view.follow) return;
+  let deepest = null;
+  view.rows.forEach((r, i) => {
+    if (r.row.dataset.status === "R" && !r.row.hidden
+        && (deepest === null || view.tree[i].depth > view.tree[deepest].depth)) deepest = i;
+  });
+  if (deepest === null) return;
+  const box = $("tree"), frame = box.getBoundingClientRect();
+  const at = view.rows[deepest].row.getBoundingClientRect();
+  const name = view.rows[deepest].name.getBoundingClientRect();
+  if (at.top < frame.top || at.bottom > frame.bottom) box.scrollTop += at.top - frame.top - box.clientHeight / 3;
+  if (name.left < frame.left || name.left + 40 > frame.right) box.scrollLeft += name.left - frame.left - 40;
+}
+function setFollow(on) {
+  view.follow = on;
+  $("follow").classList.toggle("active", on);
+  $("follow").setAttribute("aria-pressed", String(on));
+  followRunning();
+}
 
 function renderStatuses(state) {
   const statuses = state.statuses || "";
@@ -163,6 +192,7 @@ function renderStatuses(state) {
     if (r.marks.textContent !== marks) { r.marks.textContent = marks; r.marks.className = "marks " + (bps[String(i)] ? "bp" : "forced-mark"); }
   });
   view.shown = statuses;
+  followRunning();
 }
 
 // ------------------------------------------------------------------ menu (breakpoints, force)
@@ -205,6 +235,26 @@ function irText(ir) {
   if (ir.force_field) parts.push("force field"); if (ir.virtual_wall) parts.push("virtual wall");
   return `${ir.code}${parts.length ? " (" + parts.join(", ") + ")" : ""}`;
 }
+// one motor as the standing Motors (138) / PWM Motors (144) command set it: "main brush ON
+// inward", "side brush ON 40 % clockwise", "vacuum off"
+function motorText(name, m) {
+  const on = m.percent > 0;
+  const power = on && m.percent !== 100 ? ` ${m.percent} %` : "";
+  const way = on && m.direction ? ` ${m.direction}` : "";
+  return `<span class="motor${on ? " motor-on" : ""}">${name} ${on ? "ON" : "off"}${power}${way}</span>`;
+}
+function motorRows(r, rows) {
+  const m = r.motors;
+  if (m) {
+    const note = m.note ? ` <span class="note">(${esc(m.note)})</span>` : "";
+    rows.push([`motors${m.command ? " (" + m.command + ")" : ""}`, `<span id="motors">${motorText("main brush", m.main_brush)} · `
+      + `${motorText("side brush", m.side_brush)} · ${motorText("vacuum", m.vacuum)}${note}</span>`]);
+  }
+  const o = r.overcurrents;
+  if (o) rows.push(["overcurrent (14)", `<span id="overcurrents">${lamp(o.main_brush, "main")}${lamp(o.side_brush, "side")}${lamp(o.left_wheel, "L")}${lamp(o.right_wheel, "R")}</span>`]);
+  const c = r.brush_currents_ma;
+  if (c) rows.push(["brush currents (56, 57)", `<span id="brush-currents">${c.main_brush !== undefined ? `main ${c.main_brush} mA ` : ""}${c.side_brush !== undefined ? `side ${c.side_brush} mA` : ""}</span>`]);
+}
 function renderRobot(state) {
   const r = state.robot;
   const rows = [];
@@ -221,6 +271,7 @@ function renderRobot(state) {
   if (r.battery_percent !== undefined) rows.push(["battery", `<span id="battery">${r.battery_percent.toFixed(1)} %</span>`]);
   if (r.charging !== undefined) rows.push(["charging", `<span id="charging">${r.charging}</span>${r.charging_sources && r.charging_sources.home_base ? " (home base)" : ""}`]);
   if (r.wheels) rows.push([`wheels (mm/s, ${r.wheels.source})`, `<span id="wheels">${r.wheels.left !== undefined ? `L ${r.wheels.left} R ${r.wheels.right}` : `v ${r.wheels.velocity} r ${r.wheels.radius}`}</span>`]);
+  motorRows(r, rows);
   if (r.commands_per_s !== undefined) rows.push(["commands / refused per s", `<span id="rates">${r.commands_per_s} / ${r.refused_per_s}</span>`]);
   const o = r.odometry;
   rows.push(["odometry", `(${(o.x / 1000).toFixed(2)}, ${(o.y / 1000).toFixed(2)}) m, ${degrees(o.theta)}°, ${(o.path / 1000).toFixed(2)} m driven`]);
@@ -524,6 +575,10 @@ $("resume").onclick = () => control("resume");
 $("step").onclick = () => control("step");
 $("stop").onclick = () => control("stop");
 $("fit").onclick = fitTree;
+$("follow").onclick = () => setFollow(!view.follow);
+// reading elsewhere in the tree (the wheel, a finger): following would pull the view back
+$("tree").addEventListener("wheel", () => setFollow(false), { passive: true });
+$("tree").addEventListener("touchmove", () => setFollow(false), { passive: true });
 $("zoom-in").onclick = () => zoom(1);
 $("zoom-out").onclick = () => zoom(-1);
 $("expand").onclick = () => { view.collapsed.clear(); applyCollapse(); };
