@@ -22,6 +22,7 @@ from roomba_bt.oi.frames import (
     LIGHT_BUMPER_PACKETS,
     REQUESTED_DRIVE_PACKETS,
     REQUESTED_WHEELS_PACKETS,
+    SensorFrame,
 )
 from roomba_bt.oi.ir import IRCharacter
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
@@ -99,6 +100,19 @@ def motors_view(command: bytes | None, mode: OIMode, ticked: bool) -> dict[str, 
     return out
 
 
+def _motor_packets(frame: SensorFrame) -> dict[str, Any]:
+    """What the robot reports of its motors, where the stream carries it: the overcurrent
+    bits (packet 14) and the brushes' currents (56, 57)."""
+    out: dict[str, Any] = {}
+    if 14 in frame:
+        over = frame.overcurrents
+        out["overcurrents"] = {name: getattr(over, name) for name in OVERCURRENT_NAMES}
+    for name, pid in BRUSH_CURRENT_PACKETS.items():
+        if pid in frame:
+            out.setdefault("brush_currents_ma", {})[name] = frame[pid]
+    return out
+
+
 def robot_view(snapshot: Snapshot, rates: tuple[float, float] | None) -> dict[str, Any]:
     """The robot panel: whatever the streamed frame carries, and the command rates."""
     frame = snapshot.frame
@@ -154,12 +168,6 @@ def robot_view(snapshot: Snapshot, rates: tuple[float, float] | None) -> dict[st
                 "radius": frame.get(radius),
                 "source": f"requested ({velocity})",
             }
-    if 14 in frame:  # the overcurrent bits: which motor the robot found drawing too much
-        over = frame.overcurrents
-        out["overcurrents"] = {name: getattr(over, name) for name in OVERCURRENT_NAMES}
-    for name, pid in BRUSH_CURRENT_PACKETS.items():
-        if pid in frame:
-            out.setdefault("brush_currents_ma", {})[name] = frame[pid]
     odo = snapshot.odometry
     out["odometry"] = {"x": odo.x_mm, "y": odo.y_mm, "theta": odo.theta_rad, "path": odo.path_mm}
     if rates is not None:
@@ -222,6 +230,7 @@ def state_view(feed: RunFeed, record: TickRecord, earlier: list[TickRecord]) -> 
     if snapshot is not None:
         robot = out["robot"] = robot_view(snapshot, _rates(record, earlier))
         robot["motors"] = motors_view(record.motors, snapshot.mode, record.ticked)
+        robot.update(_motor_packets(snapshot.frame))
         if "wheels" not in robot and len(earlier) > 1:
             measured = _measured_wheels(record, earlier[1])
             if measured is not None:

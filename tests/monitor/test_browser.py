@@ -16,6 +16,8 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
+import pytest
+
 from roomba_bt.monitor.server import MonitorServer
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
@@ -274,6 +276,7 @@ DEEPEST_RUNNING_IN_VIEW = """() => {
 }"""
 
 
+@pytest.mark.usefixtures("clean_blackboard")  # the cover's map left there: other tests saw it
 def test_a_big_tree_stays_readable_and_its_running_node_in_view(page: Any) -> None:
     """The page fitted the clean mission's whole tree to the panel: 6 px text. Its labels stay
     at 12 px or more, the tree scrolls, and the deepest running node is kept in view;

@@ -493,3 +493,32 @@ def test_a_chosen_token_that_will_not_do_is_a_usage_error_that_does_not_repeat_i
 def test_a_chosen_token_without_a_page_is_said(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["run", str(SHUTTLE), "--fast", "--monitor-token", CHOSEN]) == 2
     assert "roomba-bt: --monitor-token is for --monitor: add it" in capsys.readouterr().err
+
+
+def test_a_record_of_a_megabyte_says_at_once_that_it_is_read_before_its_page(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``roomba-bt monitor RECORD`` replays the whole record before it serves the page (its
+    timeline is the whole run's): a 6-minute clean run's record printed nothing for 5 s, and
+    the URL seemed slow to come. From 1 MB on it says so first, before the replay."""
+    pytest.importorskip("aiohttp")
+    from roomba_bt.monitor.server import MonitorServer
+
+    record = tmp_path / "run.jsonl"
+    argv = ["run", str(SHUTTLE), "--fast", "--display", "none", "--timeout", "170s"]
+    main([*argv, "--record", str(record)])
+    assert record.stat().st_size >= 1 << 20
+    capsys.readouterr()
+    replayed: list[bool] = []
+
+    def port_taken(server: MonitorServer) -> str:  # the replay is done: end here
+        replayed.append(True)
+        raise OSError(98, "Address already in use")
+
+    monkeypatch.setattr(MonitorServer, "start", port_taken)
+    assert main(["monitor", str(record), "--monitor", "0"]) == 2
+    assert replayed  # the notice came, then the replay, then the serving
+    first = capsys.readouterr().err.splitlines()[0]
+    assert first.startswith(f"monitor: reading {record} (1."), first
+    assert first.endswith("before serving it: the page's timeline is the whole run's, so "
+                          "every tick is replayed first"), first  # fmt: skip
