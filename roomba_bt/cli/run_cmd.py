@@ -67,7 +67,8 @@ def _add_run_parser(sub: Any) -> None:
 
         Run MISSION. Without --port it runs on the built-in simulator (real time; --fast on the
         virtual clock). Exit codes: 0 succeeded, 1 failed or timed out, 2 invalid mission or usage,
-        3 connection or stream failure, 4 a behaviour raised an exception, 130 interrupted.
+        3 connection or stream failure, 4 a behaviour raised an exception, 7 succeeded but failed
+        --strict, 130 interrupted.
         """,
     )
     run.add_argument("mission", help="mission YAML file, or a shipped mission's name (dock)")
@@ -107,6 +108,7 @@ def _add_run_parser(sub: Any) -> None:
     )
     add_permission_options(run)
     run.add_argument("--fast", action="store_true", help="simulator on the virtual clock")
+    _add_strict_option(run)
     _add_session_options(run)
     run.add_argument(
         "--display", choices=("auto", "tree", "log", "none"), default="auto",
@@ -114,6 +116,17 @@ def _add_run_parser(sub: Any) -> None:
         "summary (none)",
     )  # fmt: skip
     add_monitor_arguments(run)
+
+
+def _add_strict_option(run: argparse.ArgumentParser) -> None:
+    """``--strict``, as pytest's and mypy's: what the run only warned of fails it."""
+    run.add_argument(
+        "--strict", action="store_true",
+        help="a mission that succeeded exits 7 if the mode guard refused any command, a "
+        "command was dropped while the tree was stopped, or the robot fell out of Safe/Full "
+        "by itself (a cliff, a wheel drop; not onto a charger): the summary's strict line "
+        "names each count and its first instance",
+    )  # fmt: skip
 
 
 def _add_session_options(run: argparse.ArgumentParser) -> None:
@@ -282,6 +295,7 @@ def _stack(
         timeout_s=timeout,
         observer=observer,
         record=record,
+        strict=args.strict,
     )
     if _fast_limit(args):  # no user gave it: its reason says whose it is
         stack.runner.summary.time_limit = f"--fast's own limit of {FAST_TIMEOUT_S:g} s"
@@ -455,6 +469,9 @@ def _report(
     ):
         reason = escaped(summary.reason, ANY_CONTROL)  # a node's name in it: one line
         print(f"roomba-bt: {summary.outcome.value}: {reason}", file=sys.stderr)
+    if summary.failed_strict:  # the outcome reads SUCCESS: say why the exit code is not 0
+        findings = escaped("; ".join(summary.strict_findings()), ANY_CONTROL)
+        print(f"roomba-bt: --strict: {findings}", file=sys.stderr)
     if summary.outcome is Outcome.TIMEOUT and _fast_limit(args):
         print("roomba-bt: no --timeout was given; give one to change the limit (--timeout 10h "
               "for a longer run)", file=sys.stderr)  # fmt: skip

@@ -62,7 +62,13 @@ from roomba_bt.runtime.schedule import (
     SlotSchedule,
 )
 from roomba_bt.runtime.stall import StallRide
-from roomba_bt.runtime.summary import DEFAULT_GRACE, Outcome, RunSummary, profile_shown
+from roomba_bt.runtime.summary import (
+    DEFAULT_GRACE,
+    EXPECTED_FALLS,
+    Outcome,
+    RunSummary,
+    profile_shown,
+)
 from roomba_bt.runtime.teardown import (
     behaviour_error,
     during,
@@ -518,12 +524,6 @@ class MissionRunner(BaseHandle):
         frame = batch[-1]
         arrival = self._link.arrival
         modes = self._modes
-        fallback = modes.last_fallback
-        if fallback is self._fallback_seen:
-            frame = self._hazards.frame(frame)
-        else:
-            frame = self._fallback_changed(frame, fallback)
-        summary = self.summary
         # SlotSchedule.slots' common case, inline: one frame, early or less than LOST_LATE
         # late: one slot; the schedule follows it (up to DRIFT), its lateness kept (spread)
         schedule = self._schedule
@@ -540,6 +540,12 @@ class MissionRunner(BaseHandle):
         if self.clock_held:
             self._held_slots += slots
         mission_time = (tick - self._held_slots) * SLOT_SECONDS
+        fallback = modes.last_fallback  # after the clock: a fall is placed in mission time
+        if fallback is self._fallback_seen:
+            frame = self._hazards.frame(frame)
+        else:
+            frame = self._fallback_changed(frame, fallback)
+            noted_fall(self, fallback, mission_time)  # the first, for --strict
         # tuple.__new__: the named tuple's own __new__ is a Python call that binds each
         # field (with keywords, several times the cost of the rest of this method)
         snapshot: Snapshot = _new_tuple(Snapshot, (
@@ -550,7 +556,7 @@ class MissionRunner(BaseHandle):
             self._odometer.frame(frame),
             fallback,
             self._profile,
-            summary.frames_lost,
+            self.summary.frames_lost,
             self.connection.writer.builtin_may_run,
             tick - slots if untick is None else untick,
         ))  # fmt: skip
@@ -591,9 +597,7 @@ class MissionRunner(BaseHandle):
                 self.connection.send(command)
                 outbox.written(command)
             except ModeError as exc:
-                self.summary.refused_commands += 1
-                if len(self.refusals) < 100:
-                    self.refusals.append(refusal(self, command, exc))
+                refused(self, command, exc)
 
     def count_written(self) -> int:
         """``summary.commands_written`` brought up to date (at the end, by the monitor's feed):
@@ -767,25 +771,27 @@ def stop_running_tree(
     outbox = runner._outbox
     # what a tick that raised had queued is dropped too, but was not sent by the stop
     before = [(id(command), id(sender)) for command, sender in outbox.queued_by()]
-    writer.hold_motion(held_in_stop)
+    writer.hold_motion(partial(held_in_stop, runner))
     try:
         failures = stop_nodes(runner.mission.root, raised_in)
     finally:
         writer.hold_motion(None)
     for command, sender in outbox.queued_by():
         if sets_going(command) and (id(command), id(sender)) not in before:
-            dropped_in_stop(command, sender)
+            dropped_in_stop(runner, command, sender)
     outbox.clear()  # what stood too
     return failures
 
 
-def held_in_stop(command: Command) -> None:
+def held_in_stop(runner: MissionRunner, command: Command) -> None:
     """A command written while the tree was stopped that would have set the robot going: not
-    written (:func:`stop_running_tree`); said, with the behaviour that wrote it and where."""
-    _warn_not_written(where_in(sys._getframe(1)) or "a behaviour", "sent", command)
+    written (:func:`stop_running_tree`); said and counted (:func:`_not_written`), with the
+    behaviour that wrote it and where (the frame that called the writer: ``partial`` adds
+    none)."""
+    _not_written(runner, where_in(sys._getframe(1)) or "a behaviour", "sent", command)
 
 
-def dropped_in_stop(command: Command, sender: object) -> None:
+def dropped_in_stop(runner: MissionRunner, command: Command, sender: object) -> None:
     """A command queued (``send``) while the tree was stopped that would have set the robot
     going: dropped with the outbox (:func:`stop_running_tree`); said, with the behaviour that
     queued it and its ``terminate`` (the method that runs then; the line of the ``send``
@@ -796,15 +802,24 @@ def dropped_in_stop(command: Command, sender: object) -> None:
         code = getattr(cls.terminate, "__code__", None)
         where = f" at {code.co_filename}:{code.co_firstlineno}" if code is not None else ""
         who = f"{sender.name} ({cls.__name__}.terminate{where})"
-    _warn_not_written(who, "queued", command)
+    _not_written(runner, who, "queued", command)
 
 
-def _warn_not_written(who: str, how: str, command: Command) -> None:
+def _not_written(runner: MissionRunner, who: str, how: str, command: Command) -> None:
+    """A command that would have set the robot going while the tree was stopped, not
+    written (:func:`held_in_stop`, :func:`dropped_in_stop`): logged, counted, the first kept
+    for the summary and ``--strict`` (``t=1.005 sticky (Sticky.terminate at x.py:31) queued
+    Drive (137) 89 01 2c 80 00``)."""
+    what = f"{command.spec.title} ({command.opcode}) {command.data.hex(' ')}"
     log.warning(
-        "%s %s %s (%d) %s while the tree was being stopped: not written (the tree's stop "
-        "sets nothing going: it would run on, unwatched, until the safe stop)",
-        who, how, command.spec.title, command.opcode, command.data.hex(" "),
+        "%s %s %s while the tree was being stopped: not written (the tree's stop sets nothing "
+        "going: it would run on, unwatched, until the safe stop)", who, how, what,
     )  # fmt: skip
+    summary = runner.summary
+    summary.dropped_in_stop += 1
+    if not summary.first_dropped:
+        when = f"t={runner.snapshot.time:.3f} " if runner.has_snapshot else ""
+        summary.first_dropped = f"{when}{who} {how} {what}"
 
 
 def stop_wheels_first(runner: MissionRunner, guard: InterruptGuard) -> bool:
@@ -857,6 +872,28 @@ def said_slow_stop(runner: MissionRunner, seconds: float, first: bool) -> None:
     log.warning(
         "stopping the tree took %.2f s (a behaviour's terminate() blocked); %s", seconds, wheels
     )
+
+
+def refused(runner: MissionRunner, command: Command, exc: ModeError) -> None:
+    """A command of the tree the mode guard refused: counted, the first 100 said (the CLI
+    prints some after the summary, the monitor the last), the first kept for the summary's
+    warning and ``--strict``'s verdict."""
+    summary = runner.summary
+    summary.refused_commands += 1
+    if len(runner.refusals) < 100:
+        runner.refusals.append(refusal(runner, command, exc))
+    if not summary.first_refusal:
+        summary.first_refusal = runner.refusals[0]
+
+
+def noted_fall(runner: MissionRunner, change: ModeChange | None, mission_time: float) -> None:
+    """The robot's first fall out of Safe/Full by itself onto a hazard (a cliff, a wheel
+    drop; a charger's is a dock run's end: :data:`EXPECTED_FALLS`), placed for ``--strict``:
+    when, why, and the leaf that was driving (the tree has not ticked on this frame yet)."""
+    summary = runner.summary
+    if summary.first_fall or change is None or not change.fall or change.cause in EXPECTED_FALLS:
+        return
+    summary.first_fall = f"t={mission_time:.3f}{running_in(runner.mission.root)}: {change.cause}"
 
 
 def refusal(runner: MissionRunner, command: Command, exc: ModeError) -> str:

@@ -145,6 +145,12 @@ class RunStack:
     :data:`~roomba_bt.runtime.summary.DEFAULT_TICK_LIMIT` on a link on the wall clock (a
     robot's port, the real-time simulator), none on the virtual clock (the robot does not
     move while the host thinks); None or 0: no guard.
+
+    ``strict``, as ``roomba-bt run --strict``: a run whose tree succeeded but in which the
+    mode guard refused a command, a command was dropped while the tree was stopped, or the
+    robot fell out of Safe/Full by itself (but onto a charger) ends with exit code 7
+    (:attr:`RunSummary.exit_code`; :meth:`RunSummary.raise_for_outcome` raises), its
+    summary naming each count and its first instance. The outcome stays the tree's SUCCESS.
     """
 
     def __init__(
@@ -165,6 +171,7 @@ class RunStack:
         keep_awake: bool | None = None,
         tick_limit: TickLimit = "default",
         replayed_notes: Sequence[dict[str, Any]] | None = None,
+        strict: bool = False,
     ) -> None:
         made: dict[str, Any] = dict(
             watchdog=watchdog, end_in=end_in, baud=baud, keep_awake=keep_awake
@@ -197,6 +204,7 @@ class RunStack:
             grace=grace,
             tick_guard=_tick_guard(self.connection, link, tick_limit, replayed_notes),
         )
+        self.runner.summary.strict = strict
         #: the thread :meth:`run` runs in, while it runs; set when it has ended
         self._running_in: threading.Thread | None = None
         self._ended = threading.Event()

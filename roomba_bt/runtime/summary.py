@@ -38,6 +38,11 @@ class ExitCode(IntEnum):
     #: well but whose stop did not reach the robot (``note_undelivered_stop``)
     CONNECTION = 3
     BEHAVIOUR_ERROR = 4  # a behaviour raised an exception (a bug in it or its plugin)
+    #: ``run --strict``: the tree ended in SUCCESS, but the run did what a mission that works
+    #: does not (:meth:`RunSummary.strict_findings`: a command the mode guard refused, one
+    #: dropped while the tree was stopped, a fall out of Safe/Full by itself). 7, not 5: 5
+    #: and 6 are ``roomba-bt doctor``'s (nothing answered; a later step failed)
+    STRICT = 7
     INTERRUPTED = 130  # Ctrl-C or SIGTERM, after the safe stop
 
 
@@ -89,8 +94,14 @@ class RunFailed(Exception):
         self.summary = summary
         self.outcome = summary.outcome
         self.reason = summary.reason
-        self.exit_code = summary.outcome.exit_code
-        reason = f": {summary.reason}" if summary.reason else ""
+        self.exit_code = ExitCode(summary.exit_code)
+        #: what failed ``--strict`` (``RunStack(..., strict=True)``) in a run whose tree
+        #: succeeded; empty for any other failure
+        self.findings = tuple(summary.strict_findings()) if summary.failed_strict else ()
+        if self.findings:
+            reason = f" but failed --strict: {'; '.join(self.findings)}"
+        else:
+            reason = f": {summary.reason}" if summary.reason else ""
         message = (
             f"mission {summary.mission} ended {summary.outcome.value.upper()}{reason} "
             f"(exit code {int(self.exit_code)})"
@@ -121,6 +132,29 @@ def falls_said(falls: Mapping[str, int]) -> str:
     )
     times = "once" if total == 1 else f"{total} times"
     return f"the robot fell to Passive by itself {times} ({said})"
+
+
+#: the falls to Passive by themselves that are a mission's expected end, not a hazard met: on
+#: a powered charger the OI drops Safe to Passive (a dock run ends so), logged as information
+#: and never failing ``--strict``; a cliff, a wheel drop or an unknown cause does
+EXPECTED_FALLS = frozenset({"charger"})
+
+
+def hazard_falls(falls: Mapping[str, int]) -> dict[str, int]:
+    """The falls of ``falls`` by cause that are not :data:`EXPECTED_FALLS` (``cliff and
+    charger`` is a cliff met on the dock: it counts)."""
+    return {cause: times for cause, times in falls.items() if cause not in EXPECTED_FALLS}
+
+
+def times_said(count: int, what: str) -> str:
+    """``1 command``, ``313 commands``."""
+    return f"{count} {what}" if count == 1 else f"{count} {what}s"
+
+
+def first_said(instance: str) -> str:
+    """`` (the first: t=3.330 blind_drive: ...)`` after a count; "" when the first is not
+    known (a summary a program made itself)."""
+    return f" (the first: {instance})" if instance else ""
 
 
 #: the share of the robot's frames lost from which the summary calls the link poor
@@ -167,6 +201,22 @@ class RunSummary:
     tick_halt_first: str = ""
     tick_halt_last: str = ""
     commands_written: int = 0
+    #: the first command the mode guard refused: when, the behaviour that sent it, and why
+    #: (``t=3.330 blind_drive: drive needs Safe or Full; the robot is in Passive since
+    #: t=3.330, after a cliff``)
+    first_refusal: str = ""
+    #: commands that would have set the robot going, sent while the tree was being stopped
+    #: (the run's end, the monitor's reload): not written (runtime/loop.py
+    #: ``stop_running_tree``); the first, with its behaviour and when
+    dropped_in_stop: int = 0
+    first_dropped: str = ""
+    #: the robot's first fall out of Safe/Full by itself that was not its expected end
+    #: (:data:`EXPECTED_FALLS`): when, why and the leaf that was running
+    #: (``t=3.330 in blind_drive: cliff``)
+    first_fall: str = ""
+    #: ``run --strict`` (``RunStack(..., strict=True)``): a run whose tree succeeded exits
+    #: :attr:`ExitCode.STRICT` when :meth:`strict_findings` found anything
+    strict: bool = False
     distance_mm: float = 0.0
     final_mode: OIMode | None = None
     battery_percent: float | None = None
@@ -209,12 +259,43 @@ class RunSummary:
 
     @property
     def exit_code(self) -> int:
-        return self.outcome.exit_code
+        """The outcome's exit code; :attr:`ExitCode.STRICT` for a SUCCESS that failed
+        ``--strict`` (:attr:`failed_strict`)."""
+        return ExitCode.STRICT if self.failed_strict else self.outcome.exit_code
+
+    @property
+    def failed_strict(self) -> bool:
+        """A run under ``--strict`` whose tree succeeded, with something
+        :meth:`strict_findings` names: the SUCCESS hid a mission that did not do what it
+        says (a leaf that drove on, refused, after a cliff dropped the robot to Passive)."""
+        return self.strict and self.outcome is Outcome.SUCCESS and bool(self.strict_findings())
+
+    def strict_findings(self) -> list[str]:
+        """What ``--strict`` fails a successful run for, each with its count and its first
+        instance: commands the mode guard refused, commands dropped while the tree was
+        stopped, the robot's falls out of Safe/Full by itself (but onto a charger:
+        :data:`EXPECTED_FALLS`). Empty for a clean run. A poor link (lost frames, checksum
+        failures, stalls ridden through) is left out on purpose: it is the cable's, not the
+        mission's, and the summary's ``link`` and ``stalls`` lines say it."""
+        found = []
+        if self.refused_commands:
+            refused = times_said(self.refused_commands, "command")
+            found.append(f"the mode guard refused {refused}{first_said(self.first_refusal)}")
+        if self.dropped_in_stop:
+            dropped = times_said(self.dropped_in_stop, "command")
+            found.append(
+                f"{dropped} dropped while the tree was stopped{first_said(self.first_dropped)}"
+            )
+        falls = hazard_falls(self.falls)
+        if falls:
+            found.append(f"{falls_said(falls)}{first_said(self.first_fall)}")
+        return found
 
     def raise_for_outcome(self) -> RunSummary:
-        """This summary, if the run succeeded; else :class:`RunFailed` carrying it (its
-        outcome, reason and exit code): ``stack.run().raise_for_outcome()``."""
-        if self.outcome is not Outcome.SUCCESS:
+        """This summary, if the run succeeded (and passed ``--strict``, when the run was
+        strict); else :class:`RunFailed` carrying it (its outcome, reason and exit code):
+        ``stack.run().raise_for_outcome()``."""
+        if self.exit_code != ExitCode.OK:
             raise RunFailed(self)
         return self
 
@@ -291,14 +372,50 @@ class RunSummary:
                 else []
             ),
             f"commands     {self.commands_written} written, "
-            f"{self.refused_commands} refused by the mode guard",
+            f"{self.refused_commands} refused by the mode guard{self.dropped_said()}",
             f"distance     {self.distance_mm / 1000:.2f} m",
             f"final mode   {mode}",
             f"battery      {battery}",
             f"safe stop    {self.safe_stop}",
             *([f"record       {self.record_stopped}"] if self.record_stopped else []),
+            *self.verdict_lines(),
         ]
         return [escaped(line, ANY_CONTROL) for line in lines]
+
+    def dropped_said(self) -> str:
+        """``, 2 dropped while the tree was stopped`` for the commands line; "" for none."""
+        if not self.dropped_in_stop:
+            return ""
+        return f", {self.dropped_in_stop} dropped while the tree was stopped"
+
+    def verdict_lines(self) -> list[str]:
+        """``--strict``'s verdict, said on every strict run (``strict       FAILED (exit 7):
+        the mode guard refused 313 commands (the first: ...)``, or ``passed``); without it, a
+        warning when the mode guard refused commands: the run's outcome does not show them,
+        and a leaf that drove on after a fall to Passive ended SUCCESS, exit 0."""
+        if self.strict:
+            findings = self.strict_findings()
+            if not findings:
+                docked = " but onto the charger" if self.falls else ""  # the others would fail
+                return [
+                    "strict       passed: no command refused or dropped, no fall to Passive "
+                    f"by itself{docked}"
+                ]
+            if self.outcome is Outcome.SUCCESS:
+                return [f"strict       FAILED (exit {int(ExitCode.STRICT)}): {'; '.join(findings)}"]
+            return [f"strict       also: {'; '.join(findings)}"]  # the outcome fails it anyway
+        if not self.refused_commands:
+            return []
+        refused = times_said(self.refused_commands, "command")
+        strict = (
+            f": --strict fails such a run (exit {int(ExitCode.STRICT)})"
+            if self.outcome is Outcome.SUCCESS
+            else ""
+        )
+        return [
+            f"warning      the mode guard refused {refused} the tree sent"
+            f"{first_said(self.first_refusal)}{strict}"
+        ]
 
     def __str__(self) -> str:
         return "\n".join(self.lines())
