@@ -19,12 +19,13 @@ import string
 import sys
 import threading
 from collections.abc import Mapping
+from datetime import datetime
 from pathlib import Path
 from typing import Any
 
 from roomba_bt.cli.arguments import add_command, add_param_option, add_permission_options
 from roomba_bt.monitor import INSTALL_HINT, server_available
-from roomba_bt.monitor.address import lan_addresses, parse_address
+from roomba_bt.monitor.address import DEFAULT_HOST, lan_addresses, parse_address
 from roomba_bt.runtime.summary import ExitCode
 
 log = logging.getLogger("roomba_bt.monitor")
@@ -33,13 +34,49 @@ KEYS_HELP = "keys: p pause, r resume, n step, q stop"
 CHOSEN_TOKEN = " (add ?token= and your --monitor-token, or open your bookmark)"
 
 
+#: how many ports after a taken one are tried for one free now (:func:`free_port_after`)
+FREE_PORT_TRIES = 32
+
+
+def bind_problem(host: str, port: int) -> OSError | None:
+    """Why ``host:port`` cannot be listened on now (None: it can), found by binding a socket
+    and closing it, with the address reuse the server's own socket has (a port whose last
+    connection waits out TIME_WAIT is free to it)."""
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    try:
+        with socket.socket(family, socket.SOCK_STREAM) as probe:
+            probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            probe.bind((host, port))
+    except OSError as exc:
+        return exc
+    return None
+
+
+def free_port_after(host: str, port: int) -> int | None:
+    """The first port after ``port`` that ``host`` can listen on right now, of the next
+    :data:`FREE_PORT_TRIES`; None if none is. The suggestion was ``port + 1`` unchecked, and
+    a teacher starting several runs was sent to a port another run had."""
+    last = min(port + FREE_PORT_TRIES, 65535)
+    return next((p for p in range(port + 1, last + 1) if bind_problem(host, p) is None), None)
+
+
+def _monitor_option(host: str, port: int) -> str:
+    """``--monitor 8766`` on the default host, else ``--monitor HOST:8766``."""
+    if host == DEFAULT_HOST:
+        return f"--monitor {port}"
+    return f"--monitor [{host}]:{port}" if ":" in host else f"--monitor {host}:{port}"
+
+
 def address_problem(host: str, port: int, exc: OSError) -> str:
     """Why the monitor's page cannot be served at ``host:port``; a port taken (another run's
-    monitor, most likely) says which option picks another."""
+    monitor, most likely) names a port free now and ``--monitor 0``, which takes any free
+    port and prints it: the answer for several runs on one machine."""
     if exc.errno == errno.EADDRINUSE or "address already in use" in str(exc):
+        free = free_port_after(host, port)
+        instead = f"{free} is free now: {_monitor_option(host, free)}; or " if free else ""
         return (
-            f"--monitor {host}:{port}: the port is taken (another run's monitor?); give "
-            f"another: --monitor {port + 1 if port < 65535 else 8765}"
+            f"--monitor {host}:{port}: the port is taken (another run's monitor?); "
+            f"{instead}{_monitor_option(host, 0)} takes any free port (the run prints it)"
         )
     return f"--monitor {host}:{port}: {exc.strerror or exc}"
 
@@ -148,6 +185,8 @@ class LiveMonitor:
         simulator: Any,
         packets: tuple[int, ...],
         loader: Any,
+        robot: str = "",
+        started: datetime | None = None,
     ) -> None:
         from roomba_bt.monitor.feed import EventLogHandler, RunFeed
         from roomba_bt.monitor.session import MonitorSession
@@ -169,6 +208,8 @@ class LiveMonitor:
             truth=truth,
             world=world,
             mission_name=mission.name,
+            robot=robot,
+            started=started,
         )
         self.feed.set_tree(mission.root)
         self.session = MonitorSession(
@@ -186,25 +227,40 @@ class LiveMonitor:
         self._threads: list[threading.Thread] = []
         self._terminal: Any = None
 
-    def start(self) -> int | None:
-        """Serve the page (when asked); an exit code if the address cannot be used."""
+    def bind(self) -> int | None:
+        """Serve the page (when asked), before the robot is opened: an address that cannot
+        be used is an exit code (2) before anything is opened or moved. Its URL is said by
+        :meth:`start`, once the robot's port is open."""
         if self.args.monitor is not None:
             from roomba_bt.monitor.server import MonitorServer
 
             host, port = self.args.monitor
-            chosen = getattr(self.args, "monitor_token", None)
             self.server = MonitorServer(
                 self.feed, self.session, host=host, port=port,
-                readonly=self.args.monitor_readonly, token=chosen,
+                readonly=self.args.monitor_readonly,
+                token=getattr(self.args, "monitor_token", None),
             )  # fmt: skip
             try:
-                url = self.server.start()
+                self.server.start()
             except OSError as exc:
                 print(f"roomba-bt: {address_problem(host, port, exc)}", file=sys.stderr)
                 return ExitCode.INVALID
+        return None
+
+    def start(self) -> None:
+        """The robot's port is open (or the simulator made): say the page's URL, with the
+        mission and the robot it is for, and start the watcher and the keys. The URL was said
+        before the port was opened, and a busy port left a URL in the terminal that never
+        served a page."""
+        if self.server is not None:
+            host = self.args.monitor[0]
+            chosen = getattr(self.args, "monitor_token", None)
+            url = self.server.url
             if chosen:  # the operator's own: known to them, printed nowhere
                 url = url.split("?token=", 1)[0]
-            print(f"monitor: {url}{CHOSEN_TOKEN if chosen else ''}", flush=True)
+            feed = self.feed
+            which = f" ({feed.mission_name} on {feed.robot})" if feed.robot else ""
+            print(f"monitor: {url}{which}{CHOSEN_TOKEN if chosen else ''}", flush=True)
             self._say_where(host, url)
         logging.getLogger("roomba_bt").addHandler(self._handler)
         if self.args.watch:
@@ -215,7 +271,6 @@ class LiveMonitor:
                 self._spawn(self._keys, "roomba-bt keys")
             else:  # setting the terminal from the background (&) stopped the run (SIGTTOU)
                 print("keys: off (started in the background); the page's controls work")
-        return None
 
     def _say_where(self, host: str, url: str) -> None:
         """What the URL alone does not say: a wildcard address is no address to open from
@@ -410,6 +465,11 @@ def monitor_command(args: argparse.Namespace) -> int:
     from roomba_bt.monitor.recorded import replay_into_feed
     from roomba_bt.monitor.server import MonitorServer
 
+    host, port = args.monitor or parse_address(None)
+    taken = bind_problem(host, port) if port else None
+    if taken is not None:  # said before the replay: a long record's took minutes first
+        print(f"roomba-bt: {address_problem(host, port, taken)}", file=sys.stderr)
+        return ExitCode.INVALID
     with contextlib.suppress(OSError):  # load_recorded says what is wrong with the file
         size = os.stat(args.record).st_size
         if size >= READING_NOTICE_BYTES:  # a second or more before the page
@@ -427,7 +487,6 @@ def monitor_command(args: argparse.Namespace) -> int:
         progress=replay_progress("monitor", record),
         diverged_at=lambda text: print(f"monitor: {args.record}: {text}", file=sys.stderr),
     )  # fmt: skip
-    host, port = args.monitor or parse_address(None)
     server = MonitorServer(feed, None, host=host, port=port, readonly=True)
     try:
         url = server.start()

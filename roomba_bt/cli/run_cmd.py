@@ -6,6 +6,7 @@ import argparse
 import contextlib
 import logging
 import sys
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
 
@@ -243,10 +244,12 @@ def run_command(args: argparse.Namespace) -> int:
     simulator = _simulator(args, profile)
     if isinstance(simulator, str):
         return _error(simulator)
+    args.robot = robot_label(args.port, simulator)
+    args.started = datetime.now(UTC)
     monitor = None
     if args.monitor is not None or args.watch:
         monitor = _live_monitor(args, mission, simulator, packets, params, profile)
-        failed = monitor.start()
+        failed = monitor.bind()  # a port taken: exit 2 before the robot is opened
         if failed is not None:
             return failed
     try:
@@ -263,7 +266,19 @@ def run_command(args: argparse.Namespace) -> int:
         if monitor is not None:
             monitor.finish(None)
         return _error(f"--record {args.record}: {exc.strerror or exc}")
+    if monitor is not None:
+        monitor.start()  # the port is open: its URL now, not one a busy port never serves
     return _run_and_report(args, stack, observer, simulator, monitor)
+
+
+def robot_label(port: str | None, simulator: Simulator | None) -> str:
+    """Which robot a run drives, as its summary, monitor line, page and record say it: the
+    port as given (``/dev/ttyUSB0``, ``socket://10.0.0.7:2000``), or ``simulator WORLD``.
+    Several robots run from one laptop, nothing said which one a summary or a page was of."""
+    if port:
+        return escaped(port, ANY_CONTROL)
+    world = simulator.world.name if simulator is not None else ""
+    return f"simulator {world}".strip()
 
 
 def _stack(
@@ -276,11 +291,15 @@ def _stack(
     observer: TickObserver | None,
 ) -> RunStack:
     """The run's stack as the options say (OSError: the --record file cannot be written)."""
+    from roomba_bt.runtime.recording import utc_stamp
     from roomba_bt.runtime.stack import Recording, RunStack
 
     record = None
     if args.record:
-        record = Recording(args.record, str(Path(args.mission).resolve()), params)
+        record = Recording(
+            args.record, str(Path(args.mission).resolve()), params,
+            port=args.robot, started=utc_stamp(args.started),
+        )  # fmt: skip
     stack = RunStack(
         mission,
         link,
@@ -299,6 +318,7 @@ def _stack(
     )
     if _fast_limit(args):  # no user gave it: its reason says whose it is
         stack.runner.summary.time_limit = f"--fast's own limit of {FAST_TIMEOUT_S:g} s"
+    stack.runner.summary.robot = args.robot
     return stack
 
 
@@ -395,7 +415,8 @@ def _live_monitor(
     from roomba_bt.mission import load_mission
 
     return LiveMonitor(
-        args, mission, simulator=simulator, packets=packets,
+        args, mission, simulator=simulator, packets=packets, robot=args.robot,
+        started=args.started,
         loader=lambda path: load_mission(
             path, params, profile=profile, baud=args.baud, permissions=permissions(args)
         ),
@@ -606,7 +627,7 @@ def replay_command(args: argparse.Namespace) -> int:
     ended = f"replay: {ending_text(ending)}" if ending is not None else None
     unended = record.unended()
     if unended is not None:  # compared up to where it ends
-        print(f"replay: the record ends at {record.last_t:.3f} s without the run's end ({unended})")
+        print(f"replay: the record ends at {record.last_t:.3f} s without the run's end: {unended}")
     if difference is None:
         if unended is not None:
             print(f"replay: the tree wrote the same {record.out_bytes} bytes up to there")

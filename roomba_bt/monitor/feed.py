@@ -29,11 +29,13 @@ from __future__ import annotations
 
 import logging
 import operator
+import secrets
 import threading
 import time
 from collections import deque
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from datetime import UTC, datetime
 from enum import Enum
 from typing import TYPE_CHECKING, Any, NamedTuple
 
@@ -268,7 +270,17 @@ class RunFeed:
         world: Mapping[str, Any] | None = None,
         mission_name: str = "",
         packed: bool = False,
+        robot: str = "",
+        started: datetime | None = None,
     ) -> None:
+        #: the run's identity, sent in the page's first message and checked with each
+        #: control: a page left open after its run was killed reconnected to the next run
+        #: served on that port (another robot, perhaps) and its controls drove that one. A
+        #: new random id each feed (each run, each record served); ``robot`` says which robot
+        #: (its port, or ``simulator WORLD``) and ``started`` when (UTC)
+        self.run_id = secrets.token_urlsafe(12)
+        self.robot = robot
+        self.started = started if started is not None else datetime.now(UTC)
         #: the frames' layouts (one per stream: a record names its layout by index)
         self.layouts: list[FrameLayout] = []
         if packed:  # every tick, packed (a recorded run's: monitor/history.py)

@@ -19,12 +19,19 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Callable
+from datetime import datetime
 from typing import TYPE_CHECKING, Any
 
 from roomba_bt.monitor.feed import RunFeed
 from roomba_bt.monitor.session import STEP, MonitorSession
 from roomba_bt.runtime.loop import StopRequested
-from roomba_bt.runtime.recording import ENDED, Record, ReplayTransport, ending_text
+from roomba_bt.runtime.recording import (
+    ENDED,
+    STILL_WRITTEN,
+    Record,
+    ReplayTransport,
+    ending_text,
+)
 from roomba_bt.runtime.stack import replay_record
 from roomba_bt.runtime.summary import RunSummary
 
@@ -46,7 +53,10 @@ def replay_into_feed(
     (``monitor/history.py``). ``progress(fraction)``: at each tenth of the record replayed;
     ``diverged_at(text)``: where the replay diverged from the record, if it did (the command
     line says it on stderr, as ``replay`` does)."""
-    feed = RunFeed(source="record", mission_name=mission.name, packed=True)
+    feed = RunFeed(
+        source="record", mission_name=mission.name, packed=True,
+        robot=record.header.get("port") or "", started=recorded_start(record),
+    )  # fmt: skip
     feed.set_tree(mission.root)
     summary, transport = replay_record(
         record, mission, profile=profile, packets=packets, baud=baud, name=name,
@@ -63,6 +73,16 @@ def replay_into_feed(
         diverged_at(difference)
     feed.finished = how_the_replay_ended(record, summary, difference, feed)
     return feed, summary
+
+
+def recorded_start(record: Record) -> datetime | None:
+    """When the recorded run started (its header's ``started``), for the page's header; None
+    for a record made before it was written, or one whose text is no ISO 8601 time."""
+    text = record.header.get("started")
+    try:
+        return datetime.fromisoformat(text) if isinstance(text, str) else None
+    except ValueError:
+        return None
 
 
 def recorded_acts(record: Record) -> list[dict[str, Any]]:
@@ -107,6 +127,10 @@ def how_the_replay_ended(
     if difference is not None:
         feed.event("warning", difference)
         return f"{difference} ({ticks})"
+    if record.being_written:  # its end is where the run had got to when it was read
+        text = f"{STILL_WRITTEN}: shown up to t={record.last_t:.2f} s"
+        feed.event("warning", text)
+        return f"{text} ({ticks})"
     ending = record.ending
     if ending is not None:
         text = ending_text(ending)

@@ -23,8 +23,9 @@ Routes (all behind the token when one is set)::
     GET  /ws              WebSocket: {"type": "hello", ...} then {"type": "update", ...}
     GET  /api/state?tick=T  the run at tick T (timeline), with the path up to it
     POST /api/control     {"action": "pause"|"resume"|"step"|"stop"|"break"|"force",
-                           "node": INDEX|NAME|PATH, "value": ...}  -> 202, or 400/401/403/409
-                           (docs/monitor.md, HTTP API)
+                           "node": INDEX|NAME|PATH, "value": ..., "run": RUN_ID}
+                           -> 202, or 400/401/403/409 (docs/monitor.md, HTTP API); a control
+                           without the run id served now (the hello's header.run.id) is 409
 
 Safety: on a loopback address no token is needed, and a request whose ``Host`` is not
 127.0.0.1, localhost or [::1] (any port: a tunnel's) is refused (403: another site's name its DNS
@@ -57,7 +58,7 @@ from aiohttp import WSCloseCode, WSMsgType, web
 from roomba_bt.monitor.address import DEFAULT_PORT, is_loopback
 from roomba_bt.monitor.feed import RunFeed
 from roomba_bt.monitor.session import ControlRefused, MonitorSession
-from roomba_bt.monitor.views import header_view, path_view, state_view, tree_view
+from roomba_bt.monitor.views import header_view, path_view, run_view, state_view, tree_view
 from roomba_bt.robot.interface import SLOT_SECONDS
 
 UPDATE_PERIOD_S = 0.05  # at most 20 updates a second per page
@@ -391,6 +392,9 @@ class MonitorServer:
         value = body.get("value")
         if value is not None and not isinstance(value, str):
             return _error(400, f"value {value!r}: allowed a string")
+        other_run = self._other_run(body.get("run"))
+        if other_run is not None:
+            return _error(409, other_run)
         try:
             self.session.request(body["action"], node, value, by=request.remote or None)
         except ControlRefused as exc:
@@ -398,6 +402,30 @@ class MonitorServer:
         except ValueError as exc:
             return _error(400, str(exc))
         return web.json_response({"accepted": body["action"]}, status=202)
+
+    def _other_run(self, given: object) -> str | None:
+        """Why a control for ``given`` (the run id the page was loaded for, the body's
+        ``"run"``) is refused, or None when it names the run served now. A page left open
+        after its run was killed reconnects to whatever run is served on the port next (on
+        loopback, or with a fixed token, nothing else stops it): its Pause paused another
+        robot. So every control names its run, and one that names no run is refused too."""
+        feed = self.feed
+        if given == feed.run_id:
+            return None
+        now = (
+            f"the run served here now is {feed.mission_name}"
+            f"{f' on {feed.robot}' if feed.robot else ''}, started "
+            f"{run_view(feed)['started']} (id {feed.run_id})"
+        )
+        if given is None or given == "":
+            return (
+                f'a control names the run it is for: {{"action": ..., "run": "{feed.run_id}"}} '
+                f"(GET /api/state: header.run.id); {now}; nothing was done"
+            )
+        return (
+            f"this control was for another run ({str(given)[:40]!r}): {now}; nothing was done "
+            "(reload the page to watch this run)"
+        )
 
     async def _socket(self, request: web.Request) -> web.StreamResponse:
         ws = web.WebSocketResponse(heartbeat=20)

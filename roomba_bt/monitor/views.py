@@ -29,6 +29,7 @@ from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.odometry import counts_to_mm, encoder_delta
 from roomba_bt.oi.opcodes import COMMANDS
 from roomba_bt.robot.interface import SLOT_SECONDS, Snapshot
+from roomba_bt.runtime.recording import utc_stamp
 
 
 def _ir(code: int) -> dict[str, Any]:
@@ -298,9 +299,21 @@ def world_view(simulator: Any) -> dict[str, Any]:
     return out
 
 
+def run_view(feed: RunFeed) -> dict[str, str]:
+    """Which run this is: its id (a page loaded for another refuses to take it silently, and
+    sends it with each control), its mission, its robot and when it started (ISO 8601, UTC)."""
+    return {
+        "id": feed.run_id,
+        "mission": feed.mission_name,
+        "robot": feed.robot,
+        "started": utc_stamp(feed.started),
+    }
+
+
 def header_view(feed: RunFeed, extra: Mapping[str, Any]) -> dict[str, Any]:
     first, last = feed.window()
     return {
+        "run": run_view(feed),
         "mission": feed.mission_name,
         "source": feed.source,
         "generation": feed.generation,

@@ -2,8 +2,9 @@
 
 A record is JSON Lines, one object a line::
 
-    {"format": "roomba-bt-record", "version": 1, "profile": "create2", "baud": 115200,
-     "mission": "missions/dock.yaml", "parameters": {...}, "packets": [7, 9, ...]}
+    {"format": "roomba-bt-record", "version": 2, "profile": "create2", "baud": 115200,
+     "mission": "missions/dock.yaml", "parameters": {...}, "packets": [7, 9, ...],
+     "watchdog": 0.1, "grace": 2.0, "port": "/dev/ttyUSB0", "started": "2025-03-04T09:12:05Z"}
     {"t": 0.000000, "d": "out", "b": "80"}          <- host -> robot, hex
     {"t": 0.015012, "d": "in",  "b": "1305..."}     <- robot -> host, hex
     {"t": 3.120000, "d": "note", "note": {...}}     <- an act: the monitor's force, the tick
@@ -54,9 +55,11 @@ import logging
 import math
 import re
 import stat
+import time
 from collections import deque
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import IO, Any
 
@@ -204,6 +207,12 @@ class RecordingTransport:
         return getattr(self._inner, name)
 
 
+def utc_stamp(moment: datetime) -> str:
+    """``2025-03-04T09:12:05Z``: when a run started, as its record's header and the monitor's
+    page say it (ISO 8601, UTC, to the second)."""
+    return moment.astimezone(UTC).isoformat(timespec="seconds").replace("+00:00", "Z")
+
+
 #: the end note's key: the run's outcome (``Outcome.value``)
 ENDED = "ended"
 #: the outcomes that come from outside the tree (an operator, a signal, the run's time limit),
@@ -260,11 +269,16 @@ class Record:
     size: int = 0
     #: how many bytes the host wrote in the recorded run (its "out" chunks' total)
     out_bytes: int = 0
+    #: no end line, and the file changed in the last :data:`STILL_WRITTEN_S` seconds when it
+    #: was read: a run is most likely writing it still (``--record`` takes no lock to ask)
+    being_written: bool = False
 
     def unended(self) -> str | None:
         """Why the record holds no end line (``the run was killed?``), or None when it does."""
         if self.ended:
             return None
+        if self.being_written:  # it was said to be killed, or its replay's end its run's
+            return STILL_WRITTEN
         if self.header.get("version") == 1:
             return "version 1 records have no end line, or the run was killed"
         return "the run was killed?"
@@ -302,6 +316,14 @@ class Record:
     def outbound(self) -> bytes:
         """Every byte the host wrote in the recorded run (read from the file)."""
         return b"".join(b for _, d, b in self.chunks() if d == "out")
+
+
+#: A record without its end line whose file changed this few seconds before it was read is
+#: taken for one a run is still writing: a run flushes its record every
+#: :data:`FLUSH_EVERY_S` of its link's clock while frames come, and a stall rides through
+#: for ``--grace`` (2 s by default) at most before the run ends.
+STILL_WRITTEN_S = 5.0
+STILL_WRITTEN = "the record is still being written (a run in progress?)"
 
 
 def load_record(path: str | Path) -> Record:
@@ -350,6 +372,9 @@ def load_record(path: str | Path) -> Record:
         last = record.last_t = t
         if item[1] == "out":
             record.out_bytes += len(item[2])
+    if not record.ended:
+        with contextlib.suppress(OSError):  # read a moment ago: gone since, it is no run's
+            record.being_written = time.time() - path.stat().st_mtime < STILL_WRITTEN_S
     return record
 
 
@@ -479,6 +504,10 @@ def header_problem(header: dict[str, Any]) -> str | None:
         seconds = header.get(name, 0.0)
         if type(seconds) not in (int, float) or not 0.0 <= seconds < math.inf:
             return f"header field {name!r} is {seconds!r}; expected seconds, 0 or more"
+    for name in ("port", "started"):  # which robot, and when (UTC): said, not replayed
+        text = header.get(name)
+        if text is not None and not isinstance(text, str):
+            return f"header field {name!r} is {text!r}; expected text"
     packets = header.get("packets")
     if not isinstance(packets, list) or not packets:
         return 'the header lists no stream packets ("packets")'

@@ -106,6 +106,11 @@ class Recording:
     mission: str
     #: the ``-p`` values as given (text), replayed with the same mission
     parameters: Mapping[str, str] = field(default_factory=dict)
+    #: which robot: the port as given, or ``simulator WORLD``; and when the run started
+    #: (ISO 8601, UTC): a record copied off the laptop names its robot and its lesson.
+    #: Neither is read by a replay; a header without them (a record made before) loads
+    port: str | None = None
+    started: str | None = None
 
     def header(
         self, profile: RobotProfile, baud: int, packets: Sequence[int], watchdog: float,
@@ -121,6 +126,8 @@ class Recording:
             "packets": list(packets),
             "watchdog": watchdog,
             "grace": grace,
+            **({"port": self.port} if self.port is not None else {}),
+            **({"started": self.started} if self.started is not None else {}),
         }
 
 

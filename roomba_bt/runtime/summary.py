@@ -256,6 +256,10 @@ class RunSummary:
     #: tick); the record's end note holds it, and a replay ends an interrupted run there
     #: (None: before the first frame)
     ended_at: tuple[int, str] | None = None
+    #: which robot ran it: its port as given, or ``simulator WORLD`` (``run`` sets it: two
+    #: runs' summaries in one terminal, of one mission, could not be told apart); "" says
+    #: nothing (a replay, an evaluation's episode)
+    robot: str = ""
 
     @property
     def exit_code(self) -> int:
@@ -342,6 +346,7 @@ class RunSummary:
         lines = [
             f"mission      {self.mission}",
             *([f"profile      {self.profile}"] if self.profile else []),
+            *([f"robot        {self.robot}"] if self.robot else []),
             f"outcome      {self.outcome.value.upper()}{reason}",
             *([f"forced       by the operator: {'; '.join(self.forced)}"] if self.forced else []),
             f"duration     {self.mission_time_s:.2f} s mission time, {self.wall_time_s:.2f} s wall",

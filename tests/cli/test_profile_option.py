@@ -45,7 +45,8 @@ def test_the_run_summary_names_a_profile_other_than_the_default(
     assert lines[:2] == ["mission      sit", "profile      roomba500 (Roomba 500 series)"]
     assert main(["run", str(mission), "--fast", "--display", "none"]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert lines[0] == "mission      sit" and lines[1].startswith("outcome ")
+    assert lines[:2] == ["mission      sit", "robot        simulator empty-room"]  # no profile
+    assert lines[2].startswith("outcome ")
 
 
 def test_the_eval_summary_names_a_profile_other_than_the_default(

@@ -70,6 +70,8 @@ def start_live_run(
     readonly: bool = False,
     realtime: bool = True,
     history: int | None = 20_000,
+    port: int = 0,
+    robot: str = "",
 ) -> LiveRun:
     compiled = load_mission(mission, params or {}, profile=CREATE2)
     steps: list[Step] = []
@@ -107,10 +109,11 @@ def start_live_run(
         truth=truth,
         world=world_view(simulator),
         mission_name=compiled.name,
+        robot=robot,
     )
     feed.set_tree(compiled.root)
     session = MonitorSession(feed, simulator=True, stream_packets=packets)
-    server = MonitorServer(feed, session, host=host, port=0, readonly=readonly)
+    server = MonitorServer(feed, session, host=host, port=port, readonly=readonly)
     server.start()
     runner = stack.runner
     runner.gate = session

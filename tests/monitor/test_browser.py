@@ -300,3 +300,51 @@ def test_a_big_tree_stays_readable_and_its_running_node_in_view(page: Any) -> No
         assert page.eval_on_selector("#tree", "el => el.scrollTop") == 0
     finally:
         run.finish()
+
+
+def test_a_page_left_open_does_not_take_the_next_run_served_on_its_port(page: Any) -> None:
+    """A run killed outright (no clean close of the page's socket), a new run started with
+    the same --monitor port, perhaps on another robot: the page left open reconnected to it
+    and showed it as its own, controls live, and its Pause paused the other robot. Now it
+    names the other run, keeps its controls off, and a control it sends anyway is refused."""
+    first = start_live_run(SHUTTLE, robot="/dev/ttyUSB0")
+    port = first.server.port
+    try:
+        page.goto(first.url)
+        page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+        assert page.title() == "shuttle on /dev/ttyUSB0 · roomba-bt monitor"
+        assert page.inner_text("#robot-name") == "on /dev/ttyUSB0"
+        first.server.close()  # the run's process gone: its socket drops, no "ended" close
+        page.wait_for_selector('#link:text("disconnected")', timeout=WAIT_MS)
+    finally:
+        first.finish()
+    second = start_live_run(SHUTTLE, port=port, robot="/dev/ttyUSB1")
+    try:
+        banner = page.wait_for_selector('#banner:has-text("a different run")', timeout=30_000)
+        assert banner is not None
+        assert re.search(
+            r"a different run is now served here \(shuttle on /dev/ttyUSB1, started "
+            r"\d\d:\d\d:\d\d\): reload to watch it",
+            banner.inner_text(),
+        ), banner.inner_text()
+        assert page.inner_text("#link") == "another run"
+        for control in ("#pause", "#resume", "#step", "#stop"):
+            assert page.is_disabled(control), control
+        page.keyboard.press("p")
+        page.wait_for_selector('#alert:has-text("pause NOT sent: a different run")',
+                               timeout=WAIT_MS)  # fmt: skip
+        # a control sent anyway (an old tab's script, a race with the hello): refused
+        assert page.evaluate("control('pause')") is False
+        assert "pause refused (409: this control was for another run" in page.inner_text("#alert")
+        page.wait_for_timeout(300)  # the page connects no more: still the other run's banner
+        assert "a different run" in page.inner_text("#banner")
+        assert second.session._requests.empty() and not second.session.state.paused
+        assert page.title() == "shuttle on /dev/ttyUSB0 · roomba-bt monitor"  # still A's
+        page.reload()  # the operator's choice: now it is the second run's page
+        page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+        assert page.title() == "shuttle on /dev/ttyUSB1 · roomba-bt monitor"
+        page.click("#pause")
+        page.wait_for_selector('#mode:text("Passive")', timeout=WAIT_MS)
+        assert second.session.state.paused
+    finally:
+        second.finish()

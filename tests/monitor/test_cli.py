@@ -4,6 +4,7 @@ before anything moves."""
 from __future__ import annotations
 
 import ipaddress
+import json
 import queue
 import re
 import signal
@@ -36,19 +37,104 @@ def test_without_the_extra_monitor_says_how_to_install_it_and_exits_2(
     assert exited.value.code == 2
 
 
-def test_a_taken_port_says_so_and_which_option_picks_another(
+def _two_ports_held() -> tuple[socket.socket, socket.socket]:
+    """Two listening sockets on ports one after the other (another run's monitor on one,
+    something else on the next)."""
+    for _ in range(50):
+        first, second = socket.socket(), socket.socket()
+        first.bind(("127.0.0.1", 0))
+        first.listen()
+        try:
+            second.bind(("127.0.0.1", first.getsockname()[1] + 1))
+        except OSError:
+            first.close()
+            second.close()
+            continue
+        second.listen()
+        return first, second
+    raise AssertionError("no two free ports one after the other")
+
+
+def test_a_taken_port_names_one_free_now_and_any_free_port(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
+    """It suggested port + 1 unchecked: a teacher starting several runs was sent to the next
+    run's port. The suggestion is a port free now, and --monitor 0 (any free port)."""
+    pytest.importorskip("aiohttp")
+    from roomba_bt.cli.monitor_cmd import bind_problem
+
+    first, second = _two_ports_held()
+    with first, second:
+        port = first.getsockname()[1]
+        code = main(["run", str(SHUTTLE), "--fast", "--display", "none", "--monitor", str(port)])
+        err = capsys.readouterr().err
+        assert code == 2
+        assert f"--monitor 127.0.0.1:{port}: the port is taken (another run's monitor?)" in err
+        said = re.search(r"; (\d+) is free now: --monitor (\d+); or --monitor 0 takes any free "
+                         r"port \(the run prints it\)", err)  # fmt: skip
+        assert said, err
+        assert said[1] == said[2] and int(said[1]) not in (port, port + 1)
+        assert bind_problem("127.0.0.1", int(said[1])) is None  # free indeed
+
+
+def test_a_record_view_on_a_taken_port_says_so_before_reading_the_record(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`roomba-bt monitor RECORD` replayed the whole record (minutes for a long one) before
+    it found its port taken."""
     pytest.importorskip("aiohttp")
     with socket.socket() as held:
         held.bind(("127.0.0.1", 0))
         held.listen()
         port = held.getsockname()[1]
-        code = main(["run", str(SHUTTLE), "--fast", "--display", "none", "--monitor", str(port)])
+        code = main(["monitor", str(tmp_path / "not-read.jsonl"), "--monitor", str(port)])
     assert code == 2
     err = capsys.readouterr().err
-    assert f"--monitor 127.0.0.1:{port}: the port is taken (another run's monitor?)" in err
-    assert f"--monitor {port + 1}" in err
+    assert f"--monitor 127.0.0.1:{port}: the port is taken" in err
+    assert "not-read.jsonl" not in err  # the record was not read
+
+
+def test_the_url_is_said_once_the_robot_s_port_is_open_with_the_mission_and_robot(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The URL was printed before the port was opened: a busy port left a URL that never
+    served a page. It names the mission and the robot, as the summary does."""
+    pytest.importorskip("aiohttp")
+    missing = str(tmp_path / "no-such-tty")
+    code = main(["run", str(SHUTTLE), "--port", missing, "--monitor", "0", "--display", "none"])
+    out, err = capsys.readouterr()
+    assert code == 3, err
+    assert "monitor: http" not in out and "monitor: http" not in err
+    assert f"roomba-bt: {missing}" in err
+    code = main(["run", str(SHUTTLE), "--fast", "--display", "none", "--monitor", "0",
+                 "--timeout", "1s"])  # fmt: skip
+    out, _ = capsys.readouterr()
+    assert code == 1
+    assert re.fullmatch(
+        r"monitor: http://127\.0\.0\.1:\d+/ \(shuttle on simulator empty-room\)",
+        out.splitlines()[0],
+    ), out
+    assert "mission      shuttle\nrobot        simulator empty-room\noutcome" in out
+
+
+def test_a_record_still_being_written_is_shown_as_such(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A record read while its run wrote it was shown as ended ('input ended (recorded
+    run, 829 ticks)'), on the page and on the first line."""
+    pytest.importorskip("aiohttp")
+    record = tmp_path / "live.jsonl"
+    main(["run", str(SHUTTLE), "--fast", "--display", "none", "--timeout", "2",
+          "--record", str(record)])  # fmt: skip
+    capsys.readouterr()
+    lines = record.read_text(encoding="utf-8").splitlines(keepends=True)
+    record.write_text("".join(lines[: len(lines) // 2]), encoding="utf-8")  # written so far
+    out, _ = _served_record(record)
+    assert re.search(
+        rf"{re.escape(str(record))}: the record is still being written \(a run in progress\?\): "
+        r"shown up to t=\d+\.\d\d s \(recorded run, \d+ ticks\)",
+        out,
+    ), out
 
 
 @pytest.mark.parametrize(
@@ -325,7 +411,10 @@ def test_a_wildcard_address_is_said_by_the_machine_s_lan_addresses_too(
             "--timeout", "1s"]  # fmt: skip
     assert main(argv) == 1
     lines = capsys.readouterr().out.splitlines()
-    match = re.fullmatch(r"monitor: http://0\.0\.0\.0:(\d+)/\?token=(\S+)", lines[0])
+    match = re.fullmatch(
+        r"monitor: http://0\.0\.0\.0:(\d+)/\?token=(\S+) \(shuttle on simulator empty-room\)",
+        lines[0],
+    )
     assert match, lines[0]
     port, token = match.groups()
     assert lines[1].endswith(f" or, by address, http://192.0.2.77:{port}/?token={token}")
@@ -461,8 +550,9 @@ def test_a_chosen_token_outlives_the_run_and_is_printed_nowhere(
     assert statuses == {"given": 200, "none": 401, "wrong": 403}
     out, err = capsys.readouterr()
     first = out.splitlines()[0]
-    assert re.fullmatch(r"monitor: http://0\.0\.0\.0:\d+/ \(add \?token= and your "
-                        r"--monitor-token, or open your bookmark\)", first), first  # fmt: skip
+    assert re.fullmatch(r"monitor: http://0\.0\.0\.0:\d+/ \(shuttle on simulator empty-room\) "
+                        r"\(add \?token= and your --monitor-token, or open your bookmark\)",
+                        first), first  # fmt: skip
     assert CHOSEN not in out + err + caplog.text + record.read_text()
 
 
@@ -522,3 +612,17 @@ def test_a_record_of_a_megabyte_says_at_once_that_it_is_read_before_its_page(
     assert first.startswith(f"monitor: reading {record} (1."), first
     assert first.endswith("before serving it: the page's timeline is the whole run's, so "
                           "every tick is replayed first"), first  # fmt: skip
+
+
+def test_a_record_s_page_names_the_robot_and_start_its_header_gives(tmp_path: Path) -> None:
+    """The record's view named neither: three robots' records of one class mission looked
+    the same."""
+    from roomba_bt.monitor.views import run_view
+
+    from .live import replayed_record
+
+    feed, _ = replayed_record(SHUTTLE, "1s", tmp_path / "shuttle.jsonl")
+    header = json.loads((tmp_path / "shuttle.jsonl").read_text().splitlines()[0])
+    shown = run_view(feed)
+    assert shown["robot"] == "simulator empty-room"
+    assert shown["started"] == header["started"]

@@ -62,9 +62,35 @@ def _call(
 
 
 def _control(server: MonitorServer, payload: object, **headers: str) -> tuple[int, Any]:
+    """POST ``payload`` as a control; a dict naming no run is sent for the run served (as
+    the page sends it: every control names its run)."""
     base = f"http://127.0.0.1:{server.port}/api/control"
+    if isinstance(payload, dict) and "run" not in payload:
+        payload = {**payload, "run": server.feed.run_id}
     body = payload if isinstance(payload, bytes) else json.dumps(payload).encode()
     return _call(base, body, {"Content-Type": "application/json", **headers})
+
+
+def test_a_control_for_another_run_or_for_none_is_refused_and_changes_nothing(
+    server: MonitorServer,
+) -> None:
+    """A page left open after its run was killed reconnected to the next run served on the
+    port (another robot) and its Pause paused that one. A control names its run now: one
+    for another run, or for none, is refused (409) with the run served here named."""
+    assert server.session is not None
+    served = server.feed.run_id
+    got, body = _control(server, {"action": "pause", "run": "the-killed-run-s-id"})
+    assert got == 409
+    assert "this control was for another run ('the-killed-run-s-id')" in body["error"]
+    assert "the run served here now is shuttle, started " in body["error"]
+    assert "reload the page" in body["error"]
+    got, body = _control(server, {"action": "pause", "run": None})
+    assert got == 409
+    assert f'{{"action": ..., "run": "{served}"}}' in body["error"]
+    assert server.session._requests.empty() and not server.session.state.paused
+    state = _call(f"http://127.0.0.1:{server.port}/api/state")
+    assert state[0] in (200, 409)  # no tick yet: 409; the hello's header names the run
+    assert _control(server, {"action": "pause", "run": served}) == (202, {"accepted": "pause"})
 
 
 @pytest.mark.parametrize(
@@ -344,6 +370,7 @@ def test_several_pages_watch_one_run() -> None:
         server.close()
     for received in (first, second):
         assert received[0]["type"] == "hello"
+        assert received[0]["header"]["run"]["id"] == feed.run_id  # which run: sent first
         assert [n["name"] for n in received[0]["header"]["tree"]][:2] == ["sequence", "mode(safe)"]
         assert any(m.get("state", {}).get("robot", {}).get("mode") for m in received[1:])
 

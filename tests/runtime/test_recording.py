@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 import logging
+import os
+import re
 from pathlib import Path
 
 import pytest
@@ -90,6 +92,14 @@ def _killed_at(lines: list[str], t: float) -> list[str]:
     return [lines[0], *(line for line in lines[1:] if json.loads(line)["t"] <= t)]
 
 
+def _left_a_minute(path: Path) -> Path:
+    """``path`` as a killed run left it, read a minute later: no run is writing it (a record
+    without its end line changed in the last seconds is taken for one a run still writes)."""
+    an_hour_ago = path.stat().st_mtime - 3600
+    os.utime(path, (an_hour_ago, an_hour_ago))
+    return path
+
+
 def test_a_record_ends_with_the_runs_end_line_and_replays_whole(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -110,9 +120,9 @@ def test_a_killed_runs_record_is_compared_up_to_where_it_ends(
     lines = _killed_at(_recorded_run(tmp_path, capsys), 1.2)
     killed.write_text("".join(lines), encoding="utf-8")
     outbound = sum(len(json.loads(x)["b"]) // 2 for x in lines[1:] if '"out"' in x)
-    assert main(["replay", str(killed)]) == 0
+    assert main(["replay", str(_left_a_minute(killed))]) == 0
     out = capsys.readouterr().out
-    assert "replay: the record ends at 1.200 s without the run's end (the run was killed?)" in out
+    assert "replay: the record ends at 1.200 s without the run's end: the run was killed?" in out
     assert f"replay: the tree wrote the same {outbound} bytes up to there" in out
     assert "first difference" not in out
 
@@ -126,9 +136,9 @@ def test_a_killed_runs_record_still_shows_a_difference_before_its_end(
     lines = _killed_at(_recorded_run(tmp_path, capsys), 1.2)
     last_out = max(i for i, line in enumerate(lines) if '"out"' in line)
     killed.write_text("".join(lines[:last_out] + lines[last_out + 1 :]), encoding="utf-8")
-    assert main(["replay", str(killed)]) == 1
+    assert main(["replay", str(_left_a_minute(killed))]) == 1
     out = capsys.readouterr().out
-    assert "without the run's end (the run was killed?)" in out
+    assert "without the run's end: the run was killed?" in out
     assert "replay: first difference at mission time" in out and "expected nothing, sent" in out
 
 
@@ -139,9 +149,9 @@ def test_a_record_made_before_the_end_line_is_compared_up_to_where_it_ends(
     old = tmp_path / "v1.jsonl"
     header = {**json.loads(lines[0]), "version": 1}
     old.write_text("".join([json.dumps(header) + "\n", *lines[1:-1]]), encoding="utf-8")
-    assert main(["replay", str(old)]) == 0
+    assert main(["replay", str(_left_a_minute(old))]) == 0
     out = capsys.readouterr().out
-    assert "(version 1 records have no end line, or the run was killed)" in out
+    assert ": version 1 records have no end line, or the run was killed" in out
 
 
 def test_a_record_whose_last_line_is_cut_is_replayed_up_to_it(
@@ -155,11 +165,11 @@ def test_a_record_whose_last_line_is_cut_is_replayed_up_to_it(
     number = whole[:5000].count("\n") + 1  # the line cut short
     assert not whole[:5000].endswith("\n")
     with caplog.at_level(logging.WARNING):
-        assert main(["replay", str(cut)]) == 0
+        assert main(["replay", str(_left_a_minute(cut))]) == 0
     out = capsys.readouterr().out
     assert f"{cut}:{number}: the last line is cut short" in caplog.text
     assert f"the record is read up to line {number - 1}" in caplog.text
-    assert "without the run's end (the run was killed?)" in out
+    assert "without the run's end: the run was killed?" in out
     assert "the tree wrote the same" in out and "up to there" in out
 
 
@@ -483,3 +493,42 @@ def test_a_ctrl_c_between_frames_is_still_noted_after_the_last_tick(tmp_path: Pa
     summary, difference, written = _replayed(path)
     assert difference is None and written == load_record(path).out_bytes
     assert summary.ticks > 1
+
+
+def test_a_record_a_run_is_still_writing_is_said_to_be_so_not_killed(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A record read while its run wrote it was called killed ('the run was killed?'), and
+    its replay's end the run's: no end line, and the file changed a moment ago."""
+    live = tmp_path / "live.jsonl"
+    live.write_text("".join(_killed_at(_recorded_run(tmp_path, capsys), 1.2)), encoding="utf-8")
+    assert load_record(live).being_written
+    assert main(["replay", str(live)]) == 0
+    out = capsys.readouterr().out
+    assert (
+        "replay: the record ends at 1.200 s without the run's end: the record is still being "
+        "written (a run in progress?)" in out
+    )
+    assert "killed" not in out
+    assert not load_record(_left_a_minute(live)).being_written  # a minute on: killed, then
+    assert not load_record(tmp_path / "run.jsonl").being_written  # ended: whatever its age
+
+
+def test_a_record_names_its_robot_and_start_and_one_without_them_still_loads(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The header had no port and no start time: a record copied off the laptop could not
+    be tied to a robot or a lesson. A record made before has neither and replays as ever."""
+    lines = _recorded_run(tmp_path, capsys)
+    header = json.loads(lines[0])
+    assert header["port"] == "simulator empty-room"
+    assert re.fullmatch(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ", header["started"])
+    older = tmp_path / "older.jsonl"
+    before = {k: v for k, v in header.items() if k not in ("port", "started")}
+    older.write_text("".join([json.dumps(before) + "\n", *lines[1:]]), encoding="utf-8")
+    assert main(["replay", str(older)]) == 0
+    assert "as the recorded run" in capsys.readouterr().out
+    wrong = tmp_path / "wrong.jsonl"
+    wrong.write_text("".join([json.dumps({**header, "port": 3}) + "\n", *lines[1:]]))
+    assert main(["replay", str(wrong)]) == 2
+    assert f"{wrong}:1: header field 'port' is 3; expected text" in capsys.readouterr().err

@@ -3,6 +3,10 @@
 // Controls: POST /api/control, answered 202 or with an HTTP error the page shows.
 // A dropped socket (Wi-Fi, a laptop's sleep, a proxy) marks the page stale and turns the
 // controls off; it connects again with backoff (1, 2, 4 ... 10 s) and fetches the run afresh.
+// Each run has an id (the hello's header.run): a page that connects again and finds another
+// run served on its port (its own was killed, a new one started there, perhaps on another
+// robot) does not take it: it says so, keeps its controls off and stops connecting. Every
+// control carries the id the page was loaded for; the server refuses one for another run.
 "use strict";
 
 const SYMBOL = {
@@ -31,6 +35,9 @@ const view = {
   events: [], path: { odometry: [], truth: [] }, pathLive: { odometry: [], truth: [] },
   world: null, fontSize: 13, follow: true, shownTick: 0, window: [0, 0], playing: null, menuNode: null,
   finished: null, ended: false,
+  // the run this page watches (its first hello's header.run.id), and another run found
+  // served here since (its header.run), which the page does not take
+  runId: null, otherRun: null,
   // the socket (the page's one: null before the first), connected, when it dropped, the next
   // try's delay (ms) and its timer
   socket: null, connected: false, droppedAt: null, retryMs: 1000, retryTimer: null, retryAt: 0,
@@ -45,7 +52,7 @@ function headers() {
 }
 
 async function control(action, node, value) {
-  const body = { action };
+  const body = { action, run: view.runId };
   if (node !== undefined) body.node = node;
   if (value !== undefined) body.value = value;
   let reply;
@@ -202,7 +209,8 @@ function openMenu(i, ev) {
   $("node-menu-title").textContent = n.name + (n.condition ? " (condition)" : "");
   const reason = (view.liveState && view.liveState.reasons || {})[String(i)];
   $("node-menu-reason").textContent = reason ? "failed: " + reason : "";
-  const canControl = view.connected && view.header && view.header.controls && !view.finished;
+  const canControl = view.connected && view.header && view.header.controls && !view.finished
+    && !view.otherRun;
   for (const b of menu.querySelectorAll("button")) b.disabled = !canControl;
   $("force-row").hidden = !(n.condition && view.header && view.header.can_force);
   menu.hidden = false;
@@ -413,7 +421,7 @@ function duration(seconds) {
 
 function updateControls() {
   const h = view.header || {}, s = view.session;
-  const c = Boolean(view.connected && h.controls && !view.finished);
+  const c = Boolean(view.connected && h.controls && !view.finished && !view.otherRun);
   // before the first hello nothing is known: the controls stay off (they looked usable)
   $("controls").hidden = view.header !== null && !h.controls;
   $("pause").disabled = !c || s.paused;
@@ -422,7 +430,13 @@ function updateControls() {
   $("stop").disabled = !c;
   for (const b of $("node-menu").querySelectorAll("button")) b.disabled = !c;
   document.body.classList.toggle("stale", !view.connected && !(view.finished && view.ended));
-  if (!view.connected && !view.ended) {
+  if (view.otherRun) {
+    const o = view.otherRun;
+    showBanner(`a different run is now served here (${o.mission || "?"}${o.robot ? " on " + o.robot : ""}, `
+      + `started ${clockOf(o.started)}): reload to watch it. This page showed ${runLabel(view.header)}; `
+      + "its controls are off", true);
+  }
+  else if (!view.connected && !view.ended) {
     const wait = Math.max(0, Math.ceil((view.retryAt - Date.now()) / 1000));
     const again = view.retryTimer ? (wait ? `connecting again in ${wait} s` : "connecting again now") : "connecting";
     if (view.droppedAt === null) showBanner("");  // connecting the first time
@@ -469,9 +483,12 @@ async function getJSON(url) {
   }
 }
 
+// an answer of another run than the page's (its own gone, another served on the port)
+const otherRunsAnswer = (body) => !body || (body.header && body.header.run && body.header.run.id !== view.runId);
+
 async function showTick(tick) {
   const body = await getJSON(`api/state?tick=${tick}`);
-  if (!body) return;
+  if (otherRunsAnswer(body)) return;
   if (body.header) { view.window = [body.header.first_tick, body.header.last_tick]; }
   if (JSON.stringify(body.tree) !== JSON.stringify(view.tree)) buildTree(body.tree);
   view.events = body.events; view.session = body.session || view.session;
@@ -487,7 +504,7 @@ async function loadLiveState() {
   // the run as it is now and the path so far (a page opened mid-run, or connected again after
   // a drop: what it showed is stale); live updates append to the path
   const body = await getJSON("api/state");
-  if (!body) return;
+  if (otherRunsAnswer(body)) return;
   const L = view.pathLive;
   L.odometry = body.path.odometry.concat(L.odometry);
   L.truth = body.path.truth.concat(L.truth);
@@ -552,10 +569,43 @@ function reconnectLater() {
   view.retryTimer = setTimeout(connect, wait);
 }
 
+// "14:03:27": a run's start (ISO 8601, UTC) in this browser's time
+function clockOf(iso) {
+  const d = new Date(iso);
+  if (!iso || isNaN(d)) return "?";
+  const two = (n) => String(n).padStart(2, "0");
+  return `${two(d.getHours())}:${two(d.getMinutes())}:${two(d.getSeconds())}`;
+}
+// "bump-and-turn on /dev/ttyUSB0, started 14:03:27": which run a header is
+function runLabel(header) {
+  const run = (header && header.run) || {};
+  return `${run.mission || (header && header.mission) || "?"}${run.robot ? " on " + run.robot : ""}, started ${clockOf(run.started)}`;
+}
+
+// the socket found another run than the page's: it is not taken (its controls would drive
+// another robot, silently); the page keeps what it showed, stale, and connects no more
+function otherRun(run) {
+  view.otherRun = run;
+  view.connected = false; view.ended = true;
+  clearTimeout(view.retryTimer); view.retryTimer = null;
+  const ws = view.socket;
+  view.socket = null;  // its close and messages are no longer the page's
+  if (ws) ws.close();
+  closeMenu();
+  setBadge("another run", false);
+  updateControls();
+}
+
 function hello(header) {
+  const run = header.run || {};
+  if (view.runId === null) view.runId = run.id;
+  else if (run.id !== view.runId) { otherRun(run); return; }
   const again = view.header !== null;  // connected again after a drop
   view.header = header; view.world = header.world;
   $("mission").textContent = header.mission;
+  $("robot-name").textContent = run.robot ? "on " + run.robot : "";
+  $("robot-name").title = `run started ${clockOf(run.started)} (${run.started})`;
+  document.title = `${header.mission}${run.robot ? " on " + run.robot : ""} · roomba-bt monitor`;
   $("source").textContent = header.source;
   view.window = [header.first_tick, header.last_tick];
   view.finished = header.finished === undefined ? view.finished : header.finished;
@@ -606,8 +656,9 @@ document.addEventListener("keydown", (ev) => {
   if (!key) return;
   // a stale page asks nothing: the HTTP side may still reach the run while the socket is down,
   // and a resume from a page that no longer shows the run would set the robot going unseen
-  if (!view.connected || view.finished) {
-    const why = view.finished ? "the run has ended" : "no connection to the run (the page is stale)";
+  if (!view.connected || view.finished || view.otherRun) {
+    const why = view.otherRun ? "a different run is now served here (reload to watch it)"
+      : view.finished ? "the run has ended" : "no connection to the run (the page is stale)";
     showAlert(`${key} NOT sent: ${why}; the robot does what it did`);
     return;
   }
