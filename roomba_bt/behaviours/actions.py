@@ -312,6 +312,10 @@ def _shown(radius: object) -> str:
     return f"{radius:g} mm" + (f" (sent as {wire}: spinning in place)" if abs(wire) == 1 else "")
 
 
+#: the parameters that end a drive by itself; without one it runs until something ends it
+_DRIVE_ENDS = ("distance", "angle", "duration")
+
+
 def _drive_reads(params: Mapping[str, Any]) -> tuple[int, ...]:
     return ENCODER_PACKETS if ("distance" in params or "angle" in params) else ()
 
@@ -336,6 +340,7 @@ def _drive_reads(params: Mapping[str, Any]) -> tuple[int, ...]:
     reads=_drive_reads,
     sends=opcodes("drive", "drive_direct"),
     constraints=_drive_constraints,
+    may_succeed=lambda params: any(end in params for end in _DRIVE_ENDS),
 )  # fmt: skip
 class Drive(Action):
     """Drive with a velocity and radius, or wheel speeds, for a distance, an angle, a

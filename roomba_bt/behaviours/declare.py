@@ -247,6 +247,11 @@ class Declaration:
     #: checks take what it does as done within that tick (a condition, never RUNNING, is
     #: done within it too, but may fail)
     at_once: bool = False
+    #: whether it can end in SUCCESS by itself with given parameters, where it cannot always
+    #: (``drive`` with no distance, angle or duration is RUNNING until something else ends
+    #: it; ``dock_time_limit`` only fails): the static checks read a branch that never
+    #: succeeds as one a parallel ticks on every tick. None: it can
+    may_succeed: Callable[[Mapping[str, Any]], bool] | None = None
 
     @property
     def defaults(self) -> dict[str, Any]:
@@ -480,6 +485,7 @@ def declare(
     compares: ComparesOf | None = None,
     sends_by: Callable[[Mapping[str, Any]], tuple[int, ...]] | None = None,
     at_once: bool = False,
+    may_succeed: Callable[[Mapping[str, Any]], bool] | None = None,
 ) -> Callable[[B], B]:
     """Class decorator: attach the :class:`Declaration` as ``cls.declaration``; the doc is
     the class docstring's first paragraph. ``leads_to`` defaults to what the opcode table
@@ -487,7 +493,8 @@ def declare(
     Passive, so ``spot`` need not say it. ``halts_only=True`` says that its wheel commands
     only stop the wheels (``stop``): the Full-mode warning passes it by. ``at_once=True``
     says that it returns SUCCESS on the tick it starts, every time (the static checks rely
-    on it: a test ticks every built-in that says so)."""
+    on it: a test ticks every built-in that says so). ``may_succeed`` says, of the
+    parameters, whether it can succeed by itself at all (a ``drive`` with no end cannot)."""
     after = mode_after_sending(sends) if leads_to is None else leads_to
 
     def attach(cls: B) -> B:
@@ -496,6 +503,7 @@ def declare(
             name, kind, cls, params, reads, sends, after, doc, primary,
             constraints=constraints, writes_keys=writes_keys, reads_keys=reads_keys,
             halts_only=halts_only, compares=compares, sends_by=sends_by, at_once=at_once,
+            may_succeed=may_succeed,
         )  # fmt: skip
         return cls
 

@@ -75,6 +75,7 @@ _TURN_S = 4.0
     ),
     reads=(*BUMPS_PACKETS, *_SIGNALS),
     sends=opcodes("drive_direct", "drive"),
+    may_succeed=lambda params: "duration" in params,  # else RUNNING until ended
 )  # fmt: skip
 class WallFollow(Action):
     """Follow a wall on the right at a steady light-bumper signal (PD on wheel speeds).

@@ -25,6 +25,7 @@ from roomba_bt.mission.checks import (
     key_ranges,
     parallel_wheels,
     profile_commands,
+    restarted_branches,
     restarted_limits,
     restarted_runs,
     sensor_ranges,
@@ -102,7 +103,7 @@ def _compile(
     packets, sends, needed = _what_leaves_use(tree)
     unavailable, ignored = profile_commands(tree, profile)
     diagnostics = ctx.diagnostics + modes.errors + keys.errors + key_ranges(tree, ctx.keys)
-    diagnostics += restarted_limits(tree) + unavailable
+    diagnostics += restarted_limits(tree) + restarted_branches(tree) + unavailable
     problem = check_stream(tuple(sorted(packets)), baud or profile.default_baud, profile)
     if problem is not None:
         assert parsed.tree_loc is not None

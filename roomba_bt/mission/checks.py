@@ -32,6 +32,10 @@
   them: compiled, with a warning (:func:`blind_in_full`).
 * **Two wheel branches (a warning).** Two branches of a ``parallel`` with a leaf that turns
   the wheels: the robot gets the last wheel command of a tick only (:func:`parallel_wheels`).
+* **A parallel's restarted branches.** With ``synchronise: false`` (policies ``all`` and
+  ``selected``) a branch that succeeded is ticked again and starts over: one that can
+  succeed and would start an action or a clock again is an error
+  (:func:`restarted_branches`).
 * **A reactive sequence's restarts (a warning).** A child that is not the last and may be
   RUNNING starts again after it succeeded, stopping a later running child each time
   (:func:`restarted_runs`).
@@ -56,8 +60,10 @@ from roomba_bt.mission.ticks import (
     SELECTORS,
     SEQUENCES,
     at_once,
+    never_succeeds,
     packet_tests,
     reads_cliffs,
+    runs_again,
     succeeds_at_once,
     watched_children,
 )
@@ -487,6 +493,53 @@ def restarted_limits(root: Node) -> list[Diagnostic]:
                     )
                 )
     return errors
+
+
+#: the parallel policies that wait for more than one success, where ``synchronise`` counts
+_WAITING_POLICIES = frozenset({"all", "selected"})
+
+
+def restarted_branches(root: Node) -> list[Diagnostic]:
+    """Errors: a branch of a ``parallel`` with ``synchronise: false`` (policy ``all`` or
+    ``selected``) that can succeed and would start something over when ticked again
+    (:func:`~roomba_bt.mission.ticks.runs_again`). py_trees ticks every branch on every
+    tick, and one that succeeded starts again: ``[drive 20 cm, wait 3s]`` drove 20 cm
+    eleven times (2.2 m), and the parallel, which succeeds only on a tick where every
+    branch succeeds, ran until the run's time limit. An error, not a warning: a robot that
+    drives ten times the distance asked is a safety matter. Said at the branch, with the
+    fixes: run it once (``synchronise: true``, or ``oneshot`` to keep the others watched on
+    every tick) or say the re-run (``repeat``). A subtree used twice is one place."""
+    errors: list[Diagnostic] = []
+    for node in root.walk():
+        if (
+            node.kind != "parallel"
+            or node.options.get("synchronise") is not False
+            or node.options.get("policy") not in _WAITING_POLICIES
+        ):
+            continue
+        for branch in node.children:
+            if (
+                never_succeeds(branch)
+                or not runs_again(branch)
+                or any(n.kind == "unbuilt" for n in branch.walk())
+            ):
+                continue
+            named = branch
+            while named.kind == "guard":  # said as the node its while:/until: guards
+                named = named.children[1]
+            errors.append(
+                named.loc.at(
+                    f"{named.name} can succeed, and the parallel ({node.loc.line}:"
+                    f"{node.loc.column}) has synchronise: false: it ticks every branch on "
+                    "every tick, so once this one succeeds it starts again (a drive drives its "
+                    "distance again, a wait waits again), and the parallel succeeds only on a "
+                    "tick where every branch succeeds; write synchronise: true (the default) "
+                    "to run it once, put it under oneshot to run it once and keep its "
+                    "success while the other branches are ticked on every tick, or under "
+                    "repeat (no times or for) if it should run again and again"
+                )
+            )
+    return list(dict.fromkeys(errors))  # a subtree used twice is one place
 
 
 def restarted_runs(root: Node) -> list[Diagnostic]:

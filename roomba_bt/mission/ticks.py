@@ -10,7 +10,9 @@ counted). The facts it rests on:
   before it; one without (reactive) ticks them all again, from the first, every tick.
 * A ``parallel`` ticks its children in order, every tick, but with ``synchronise: true`` (the
   default, policies ``all`` and ``selected``) not a child that has already succeeded: a
-  branch that succeeded on the first tick is never ticked again while the others run.
+  branch that succeeded on the first tick is never ticked again while the others run. With
+  ``synchronise: false`` it is ticked again, and a node ticked after it finished starts
+  over (py_trees initialises it again): a drive drives its distance again.
 * ``oneshot`` ticks its child only until it succeeds (or completes); ``force_success`` and
   ``force_failure`` answer the same whatever the child said.
 * A guard (``while:``/``until:``) ticks its condition before its child on every tick.
@@ -70,9 +72,15 @@ def succeeds_at_once(node: Node) -> bool:
 
 def never_succeeds(node: Node) -> bool:
     """Whether ``node`` can only end in FAILURE (stays RUNNING until then): a ``repeat``
-    without ``times`` or ``for``, a ``force_failure``, a sequence with such a child, a
-    ``while:`` or ``timeout`` around one."""
+    without ``times`` or ``for``, a ``force_failure``, a leaf that says it cannot succeed
+    with its parameters (a ``drive`` with no end, ``dock_time_limit``: ``may_succeed``), a
+    sequence with such a child, a ``while:`` or ``timeout`` around one."""
     kind = node.kind
+    if kind == "leaf":
+        decl = node.decl
+        return (
+            decl is not None and decl.may_succeed is not None and not decl.may_succeed(node.params)
+        )
     if kind == "repeat":
         return node.options.get("times") is None and node.options.get("for") is None
     if kind == "force_failure":
@@ -86,6 +94,21 @@ def never_succeeds(node: Node) -> bool:
     if kind == "timeout":
         return never_succeeds(node.children[0])
     return False
+
+
+def runs_again(node: Node) -> bool:
+    """Whether ticking ``node`` again after it succeeded starts something over: an action
+    leaf (a drive drives its distance again, a ``log`` logs again, a ``mark`` moves its
+    mark), or a node that may be RUNNING again (a ``wait``'s clock, a ``repeat``'s count, a
+    ``delay``). Not a ``oneshot`` (once done it answers as the first time without ticking
+    its child) nor what only reads (conditions, and composites and ``held`` of them); not
+    a node that could not be built (its own errors are said)."""
+    kind = node.kind
+    if kind == "oneshot" or kind == "unbuilt":
+        return False
+    if kind == "leaf":
+        return node.decl is not None and node.decl.kind == "action"
+    return not at_once(node) or any(runs_again(child) for child in node.children)
 
 
 def reads_cliffs(node: Node) -> bool:

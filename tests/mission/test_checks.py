@@ -304,7 +304,7 @@ def test_driving_in_full_with_no_cliff_sensor_read_is_a_warning(
         ("- drive: {velocity: 200 mm/s}\n  until: {force_failure: {cliff: any}}", True),
         # read only when the sequence gets past its wait: not on every tick
         ("- parallel: {synchronise: false, children: [{drive: {velocity: 200 mm/s}},"
-         " {sequence: [{wait: 100ms}, {inverter: {cliff: any}}]}]}", True),
+         " {repeat: {do: {sequence: [{wait: 100ms}, {inverter: {cliff: any}}]}}}]}", True),
         # a cliff that ends it the wrong way: runs only while a cliff is seen
         ("- drive: {velocity: 200 mm/s}\n  while: {cliff: any}", True),
         ("- drive: {velocity: 200 mm/s}\n  until: {inverter: {cliff: any}}", True),
@@ -561,3 +561,56 @@ def test_a_restarting_child_in_a_subtree_used_twice_is_warned_of_once(
     )
     warned = [(w.line, w.message.split(" ", 1)[0]) for w in load_mission(path).warnings]
     assert warned == [(1, "wait(300ms)")]
+
+
+#: the error of a branch a non-synchronised parallel would start over
+RERUN = "can succeed, and the parallel (4:7) has synchronise: false"
+
+
+@pytest.mark.parametrize(
+    ("policy", "branches", "refused"),
+    [
+        # p_sync (session 28): the 20 cm drive drove 20 cm eleven times (2.23 m) and the
+        # parallel ran until --fast's two hours; ps3: two waits of 1 s and 1.5 s took 103 s
+        ("all", ["{drive: {velocity: 200 mm/s, distance: 20cm}}", "{wait: 3s}"],
+         ["8:14 drive(velocity=200 mm/s, distance=20cm)", "9:14 wait(3s)"]),
+        ("all", ["{wait: 1s}", "{inverter: {cliff: any}}"], ["8:14 wait(1s)"]),
+        ("all", ["{log: hi}", "{repeat: {do: {wait: 1s}}}"], ["8:14 log(hi)"]),
+        ("all", ["{repeat: {times: 2, do: {turn: 90deg}}}", "{repeat: {do: {wait: 1s}}}"],
+         ["8:14 repeat"]),
+        ("all", ["{sequence: [{bump: any}, {delay: {for: 1s, do: {bump: any}}}]}",
+                 "{repeat: {do: {wait: 1s}}}"], ["8:14 sequence"]),
+        # a guarded branch is said as the node it guards
+        ("all", ["{wait: 1s, until: {bump: any}, name: w}", "{repeat: {do: {wait: 1s}}}"],
+         ["8:14 w"]),
+        ("all", ["{wait: 1s, while: {inverter: {bump: any}}, name: w}", "{inverter: {cliff: any}}"],
+         ["8:14 w"]),
+        ("selected\n        selected: [w]", ["{wait: 1s, name: w}", "{repeat: {do: {wait: 1s}}}"],
+         ["9:14 w"]),
+        # what starts nothing over: conditions, held, a oneshot (it answers as the first
+        # time), a branch that never succeeds (a drive with no end, a repeat for ever)
+        ("all", ["{oneshot: {drive: {velocity: 200 mm/s, distance: 20cm}}}",
+                 "{inverter: {cliff: any}}", "{held: {for: 1s, do: {inverter: {bump: any}}}}",
+                 "{sequence: [{bump: any}, {inverter: {cliff: any}}]}"], []),
+        ("all", ["{drive: {velocity: 200 mm/s}}", "{repeat: {do: {wait: 1s}}}",
+                 "{drive: {velocity: 200 mm/s}, while: {inverter: {bump: any}}}",
+                 "{wall_follow: {}}", "{dock_time_limit: 1min}"], []),
+        # policy one ends at the first success: nothing is ticked after it
+        ("one", ["{drive: {velocity: 200 mm/s, distance: 20cm}}", "{wait: 3s}"], []),
+    ],
+)  # fmt: skip
+def test_a_branch_a_non_synchronised_parallel_would_start_over_is_refused(
+    errors_of: Errors, policy: str, branches: list[str], refused: list[str]
+) -> None:
+    """py_trees' own semantics are kept (a branch that succeeded is ticked again, and starts
+    over); what would re-run an action or a clock is refused where it is written."""
+    items = "".join(f"\n          - {branch}" for branch in branches)
+    text = (
+        "tree:\n  sequence:\n    - mode: safe\n    - parallel:\n"
+        f"        policy: {policy}\n        synchronise: false\n        children:{items}\n"
+    )
+    errors = errors_of(text)
+    assert [e.split(f" {RERUN}")[0].replace(": ", " ", 1) for e in errors] == refused, errors
+    for error in errors:
+        assert "write synchronise: true (the default) to run it once" in error
+        assert "under oneshot" in error and "repeat (no times or for)" in error

@@ -73,6 +73,7 @@ class DockWaitCharge(Action):
     params=(Param("limit", DURATION, required=True, minimum=1,
                   doc="give up after this much mission time"),),
     primary="limit",
+    may_succeed=lambda params: False,  # RUNNING, then FAILURE
 )  # fmt: skip
 class DockTimeLimit(Action):
     """RUNNING until ``limit`` has passed, then FAILURE: ``gave up after 300 s in stage
