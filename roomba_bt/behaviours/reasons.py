@@ -34,7 +34,9 @@ def failure_reason(root: Behaviour) -> str:
     the root, each time into the child whose failure decided its parent's (a sequence's
     failed child; a fallback's last, after the others failed; a parallel's failed one), and
     report the deepest failed leaf on that path, or else the deepest node on it that left a
-    message (a ``retry`` may have reset its child), or else the path's last node.
+    message (a ``retry`` may have reset its child), or else the path's last node: a
+    decorator that made its child's success a failure is named with its child
+    (``force_failure: wait(15ms) succeeded (success is failure)``), never a leaf before it.
 
     Following the path matters where a tree fails in one branch and other branches hold
     failed leaves too: a patrol that gave up at a staircase is not explained by the
@@ -71,15 +73,21 @@ def _explain(root: Behaviour) -> tuple[str, Behaviour | None, bool]:
         # an inverter fails because its condition held: that condition is the cause
         # (``while: {inverter: {cliff: any}}`` said only "inverter")
         condition = _deepest_success(node)
+        if condition is not None and _is_action(condition):  # it did not hold: it ran
+            return f"{node.name}: {condition.name} succeeded (inverted)", None, True
         if condition is not None:  # a name the mission gave it says what it means: kept
             said = f"{condition.name} held"
             return (said if node.name == "inverter" else f"{node.name} ({said})"), condition, False
     if best is node and isinstance(node, py_trees.decorators.SuccessIsFailure):
-        # a forced failure ("back away, then fail"): what held just before it is the cause
-        # (the patrol's cliff that ended the drive before the back-off)
+        # a forced failure: the decorator failed the run, its child having succeeded; a
+        # condition that held just before it ("back away, then fail": the patrol's cliff
+        # that ended the drive before the back-off) is why it ran, and is said first. An
+        # action that succeeded before it is no cause: ``[drive 100ms, force_failure:
+        # {wait: 15ms}]`` blamed the drive
+        child = node.children[0]
+        said = f"{node.name}: {child.name} succeeded (success is failure)"
         held = _held_before(path)
-        if held is not None:
-            return held, None, True
+        return (said if held is None else f"{held} held, then {said}"), None, True
     message = "" if isinstance(best, _FLIPS) else best.feedback_message
     return (f"{best.name}: {message}" if message else best.name), None, bool(message)
 
@@ -140,7 +148,8 @@ def _deepest_success(node: Behaviour) -> Behaviour | None:
 def _held_before(path: list[Behaviour]) -> str | None:
     """The condition that ended the step before the failure, where the failure's path left a
     sequence: in ``[drive until cliff, fallback[inverter(cliff), force_failure(back off)]]``
-    the cliff (the leaf that succeeded last under the step just before)."""
+    the cliff (the leaf that succeeded last under the step just before); None when that
+    leaf is an action (a ``log`` before the ``force_failure`` is no reason for it)."""
     success = py_trees.common.Status.SUCCESS
     for parent, child in zip(reversed(path[:-1]), reversed(path[1:]), strict=True):
         if not isinstance(parent, py_trees.composites.Sequence):
@@ -154,8 +163,17 @@ def _held_before(path: list[Behaviour]) -> str | None:
             if not held:
                 break
             node = held[-1]
-        return node.name if node.status == success and not node.children else None
+        condition = node.status == success and not node.children and not _is_action(node)
+        return node.name if condition else None
     return None
+
+
+def _is_action(leaf: Behaviour) -> bool:
+    """Whether ``leaf`` is a declared action (a drive, a ``log``): its success is something
+    done, not a condition that held. A leaf declared nowhere (a py_trees behaviour a Python
+    tree holds) is taken as a condition."""
+    declaration = getattr(type(leaf), "declaration", None)
+    return getattr(declaration, "kind", None) == "action"
 
 
 def running_in(root: Behaviour) -> str:

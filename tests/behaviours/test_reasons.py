@@ -63,9 +63,10 @@ def test_a_flipped_status_is_named_without_its_canned_message() -> None:
     assert failure_reason(root) == "nothing may be ahead (wall held)"
 
 
-def test_a_forced_failure_after_a_condition_names_the_condition() -> None:
+def test_a_forced_failure_after_a_condition_names_the_condition_then_the_decorator() -> None:
     """The patrol's pattern: drive until a cliff, then back off and fail on purpose so the
-    retry tries again; its giving up names the cliff, not ``force_failure``."""
+    retry tries again; its giving up names the cliff that held, then the ``force_failure``
+    that failed the attempt (session 28: the cliff alone was said)."""
     cliff = py_trees.behaviours.Success(name="cliff(any)")
     until = py_trees.composites.Selector(
         "until", memory=False, children=[py_trees.behaviours.Failure(name="lap done"), cliff]
@@ -83,7 +84,10 @@ def test_a_forced_failure_after_a_condition_names_the_condition() -> None:
     root.tick_once()
     root.tick_once()
     assert root.status == FAILURE
-    assert failure_reason(root) == "retry: gave up after 2 failed attempts; the last: cliff(any)"
+    assert failure_reason(root) == (
+        "retry: gave up after 2 failed attempts; the last: cliff(any) held, then "
+        "force_failure: back off succeeded (success is failure)"
+    )
 
 
 def test_a_reason_is_one_line_whatever_the_names_it_quotes() -> None:

@@ -281,7 +281,11 @@ def test_a_patrol_that_gives_up_says_why() -> None:
     )  # fmt: skip
     assert result.outcome == "failure"
     assert "retry: gave up after 2 failed attempts; the last: " in result.reason
-    assert result.reason.split("the last: ")[1] in ("cliff(any)", "virtual_wall")
+    held = result.reason.split("the last: ")[1].split(" held, then ")[0]
+    assert held in ("cliff(any)", "virtual_wall"), result.reason
+    assert result.reason.endswith(
+        "force_failure: back away from the cliff or virtual wall succeeded (success is failure)"
+    ), result.reason
     assert "battery" not in result.reason
 
 
