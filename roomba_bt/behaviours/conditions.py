@@ -226,6 +226,19 @@ _IR_WHAT = ("red_buoy", "green_buoy", "force_field", "virtual_wall", "any_buoy",
             "remote", "anything")  # fmt: skip
 
 
+def _ir_constraints(params: Mapping[str, Any]) -> list[str]:
+    """``button`` picks one of the remote's buttons, so it goes with ``sees: remote`` only:
+    without it (``sees`` is ``anything`` by default) it was ignored, and ``ir: {button:
+    spot}`` succeeded at the dock's beams. Refused rather than taken to mean ``sees:
+    remote``: ``sees: dock, button: spot`` says two things, and the reference says the
+    button is for the remote alone. A ``sees`` read from the blackboard is not known here."""
+    sees = params.get("sees", "anything")
+    if "button" not in params or sees == "remote" or isinstance(sees, BlackboardRef):
+        return []
+    return [f"button: only goes with sees: remote (sees is {sees}): write sees: remote, "
+            "button: ... for one button of the remote"]  # fmt: skip
+
+
 @declare(
     "ir",
     kind="condition",
@@ -237,6 +250,7 @@ _IR_WHAT = ("red_buoy", "green_buoy", "force_field", "virtual_wall", "any_buoy",
     ),
     reads=lambda p: (_RECEIVERS[p.get("receiver", "omni")],),
     primary="sees",
+    constraints=_ir_constraints,
 )  # fmt: skip
 class InfraRed(Condition):
     """An IR character on the omni (17), left (52) or right (53) receiver: a dock's red or
