@@ -63,12 +63,16 @@ def _list(value: object) -> list[Any]:
 
 #: An option taken as written (no ``${parameter}``): a node's name.
 TEXT = ValueType("text", _text, json_schema=(("type", "string"),))
-#: An option naming some of the node's own children (by their ``name:``).
+#: An option naming some of the node's own children (by their ``name:``). Never empty:
+#: ``selected: []`` passed the compiler and py_trees refused it when the run began (exit 4).
 CHILD_NAMES = ValueType(
-    "child names", _list, json_schema=(("type", "array"), ("items", {"type": "string"}))
+    "child names",
+    _list,
+    json_schema=(("type", "array"), ("items", {"type": "string"}), ("minItems", 1)),
 )
 #: A list of values of the type of the blackboard key the node writes (``for_each.in``).
-KEY_ITEMS = ValueType("items", _list, json_schema=(("type", "array"),))
+#: Never empty: a loop over nothing never runs its child, and succeeds having done nothing.
+KEY_ITEMS = ValueType("items", _list, json_schema=(("type", "array"), ("minItems", 1)))
 #: Option types the compiler reads itself rather than as a ``${parameter}``-able value.
 STRUCTURAL = (TEXT, CHILD_NAMES, KEY_ITEMS)
 

@@ -52,9 +52,19 @@ def option_value(
         names = plain(node, loc)
         if not isinstance(names, list) or not all(isinstance(s, str) for s in names):
             raise Bad(loc.at(f"{kind.word}.{param.name} must be a list of child names"))
+        if not names:
+            raise Bad(loc.at(_empty_list(kind, param, "child name")))
         options[f"{param.name}_loc"] = loc
         return names
     return resolve(ctx, node, loc, param.type, env, f"{kind.word}.{param.name}")
+
+
+def _empty_list(kind: NodeKind, param: Param, item: str) -> str:
+    """The error of a list option (``CHILD_NAMES``, ``KEY_ITEMS``: the schema says
+    ``minItems: 1`` of both) written empty: ``parallel.selected: []`` passed, and py_trees
+    refused it when the run began (exit 4, "a bug"); ``for_each.in: []`` ran its child
+    never."""
+    return f"{kind.word}.{param.name} is an empty list: give at least one {item}"
 
 
 def _null(node: yaml.Node) -> bool:
@@ -295,7 +305,10 @@ def _key_items(ctx: Context, kind: NodeKind, options: dict[str, Any], fields: Fi
         what = f"{kind.word}.{param.name}"
         inode, iloc = fields[param.name]
         items, locs = [], []
-        for item, item_loc in sequence(inode, iloc, what):
+        entries = sequence(inode, iloc, what)
+        if not entries:
+            raise Bad(iloc.at(_empty_list(kind, param, "item, a value of the key's type")))
+        for item, item_loc in entries:
             try:
                 items.append(resolve(ctx, item, item_loc, decl.type, env, what))
                 locs.append(item_loc)

@@ -139,3 +139,38 @@ def test_jsonschema_rejects_what_the_validator_rejects() -> None:
 def test_the_schema_rejects_what_the_validator_rejects(tree: dict[str, Any]) -> None:
     assert not valid({"tree": tree}, SCHEMA)
     assert valid({"tree": "wall"}, SCHEMA)
+
+
+@pytest.mark.parametrize(
+    "tree",
+    [
+        # e10r (session 28): passed the schema and the validator; py_trees refused it at
+        # the run's start, exit 4
+        {"parallel": {"policy": "selected", "selected": [],
+                      "children": [{"wait": "1s", "name": "a"}, {"wait": "3s"}]}},
+        {"for_each": {"key": "d", "in": [], "do": {"log": "x"}}},
+    ],
+)  # fmt: skip
+def test_the_schema_refuses_an_empty_list_option(tree: dict[str, Any]) -> None:
+    import jsonschema
+
+    mission = {"blackboard": {"d": {"type": "distance"}}, "tree": tree}
+    assert not valid(mission, SCHEMA)
+    with pytest.raises(jsonschema.ValidationError):
+        _published().validate(mission)
+
+
+def test_every_list_option_of_the_language_says_it_is_never_empty() -> None:
+    """Each option of the language table whose value is a list (``parallel.selected``,
+    ``for_each.in``) is refused empty by the compiler: its schema says ``minItems: 1``."""
+    from roomba_bt.behaviours.language import WORDS
+
+    lists = [
+        (kind.word, param.name, dict(param.type.json_schema))
+        for kind in WORDS.values()
+        for param in kind.options
+        if dict(param.type.json_schema).get("type") == "array"
+    ]
+    assert {(word, name) for word, name, _ in lists} == {("parallel", "selected"),
+                                                          ("for_each", "in")}  # fmt: skip
+    assert all(schema.get("minItems") == 1 for _, _, schema in lists), lists
