@@ -371,6 +371,17 @@ class OIModeIs(Condition):
 class OdometrySince(Condition):
     """The robot has travelled a distance, or turned an angle, since a mark (or the start)."""
 
+    def held_means(self) -> str:
+        """What its holding means, for a ``while`` guard's reason: the one of distance or
+        angle it tests, since its mark or, with none, since the run began (the first
+        sentence of the description, "a distance, or turned an angle, since a mark", said
+        a mark that was not there)."""
+        since = self.value("since")
+        what = (
+            "travelled the distance" if self.value("distance") is not None else "turned the angle"
+        )
+        return f"the robot has {what} since " + (f"mark {since!r}" if since else "the run began")
+
     def check(self, snapshot: Snapshot) -> bool:
         since = self.value("since")
         mark = read_key(since) if since else None

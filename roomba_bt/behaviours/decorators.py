@@ -387,7 +387,10 @@ class Guard(SaysWhy, Stepped, py_trees.composites.Composite):
         guarded = self.child
         while isinstance(guarded, Guard):  # an until: inside: the name is on what it wraps
             guarded = guarded.child
-        return while_stopped(self.condition, guarded.name) + running
+        # read before the child's stop: RUNNING once it ran; anything else, the condition
+        # failed on this run's first tick and the child was never ticked
+        started = self.child.status is _RUNNING
+        return while_stopped(self.condition, guarded.name, started) + running
 
     def stop(self, new_status: Status = _INVALID) -> None:
         if self.child.status is _RUNNING:

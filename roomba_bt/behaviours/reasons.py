@@ -97,33 +97,42 @@ def _explain(root: Behaviour) -> tuple[str, Behaviour | None, bool]:
 GUARD_STOPPED = "stopped: "
 
 
-def while_stopped(condition: Behaviour, guarded: str) -> str:
+def while_stopped(condition: Behaviour, guarded: str, started: bool = True) -> str:
     """A ``while`` guard's message when its ``condition`` no longer holds and it stopped the
     node named ``guarded``: what happened in the words of the condition that decided it (a
-    name the mission gave it, else the first sentence of its behaviour's description), then
-    the condition as written. ``while: {inverter: {wheel_drop: any}}`` around ``clean``::
+    name the mission gave it, else what its leaf says its holding means), then the
+    condition as written. ``while: {inverter: {wheel_drop: any}}`` around ``clean``::
 
         stopped: a wheel has dropped, as when the robot is lifted or a wheel goes over an
         edge, while 'clean' ran (wheel_drop(any) held)
 
     It said "condition no longer holds: wheel_drop(any) held", under the guard's own name
-    ("while inverter")."""
+    ("while inverter"). ``started`` False: the condition failed on the guard's first tick,
+    and the node never ran (``before 'drive(...)' started``; it said "while ... ran")."""
     said, held, told = _explain(condition)
     said = escaped(said, ANY_CONTROL)  # one line, as failure_reason's
+    when = f"while {guarded!r} ran" if started else f"before {guarded!r} started"
     if held is None and told:  # its own message says what happened (the monitor's force)
-        return f"{GUARD_STOPPED}{said}, while {guarded!r} ran"
+        return f"{GUARD_STOPPED}{said}, {when}"
     if held is None:
-        return f"{GUARD_STOPPED}{said} no longer holds while {guarded!r} ran"
+        holds = "no longer holds" if started else "does not hold,"
+        return f"{GUARD_STOPPED}{said} {holds} {when}"
     meaning = _meaning(held) if said == f"{held.name} held" else None
     if meaning is None:  # the mission's own name for it (or no description): as it is
-        return f"{GUARD_STOPPED}{said} while {guarded!r} ran"
-    return f"{GUARD_STOPPED}{meaning}, while {guarded!r} ran ({said})"
+        return f"{GUARD_STOPPED}{said} {when}"
+    return f"{GUARD_STOPPED}{meaning}, {when} ({said})"
 
 
 def _meaning(leaf: Behaviour) -> str | None:
-    """The first sentence of ``leaf``'s behaviour's description (its declaration's doc, the
-    class docstring), its asides in parentheses left out (the packets it reads), as a
-    clause: "A bumper is pressed (packet 7: ...)." -> "a bumper is pressed"."""
+    """What ``leaf`` holding means, as a clause: its own words where it has them for its
+    parameters (``held_means()``: ``odometry`` without ``since`` counts from the run's
+    start, and its description's "since a mark" was untrue there), else the first sentence
+    of its behaviour's description (its declaration's doc, the class docstring), its asides
+    in parentheses left out (the packets it reads): "A bumper is pressed (packet 7: ...)."
+    -> "a bumper is pressed"."""
+    own = getattr(leaf, "held_means", None)
+    if callable(own):
+        return str(own())
     declaration = getattr(type(leaf), "declaration", None)
     doc = getattr(declaration, "doc", "") or ""
     sentence = re.sub(r"\s*\([^()]*\)", "", doc.split(". ")[0]).strip().rstrip(".")

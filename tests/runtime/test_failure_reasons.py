@@ -37,3 +37,33 @@ def test_the_failure_names_the_node_that_failed_the_run(
     run = run_mission(f"tree:\n  sequence: {steps}\n")
     assert run.summary.outcome is Outcome.FAILURE
     assert run.summary.reason == reason
+
+
+@pytest.mark.parametrize(
+    ("steps", "reason"),
+    [
+        # h1 (session 28): the guard failed on its first tick, and the reason said the drive
+        # "ran"; it was never started
+        ("[{mode: safe}, {drive: {velocity: 100 mm/s, duration: 300ms},"
+         " while: {held: {for: 1s, do: {inverter: {bump: any}}}}}]",
+         "stopped: held: held 0 s of 1 s so far,"
+         " before 'drive(velocity=100 mm/s, duration=300ms)' started"),
+        ("[{mode: safe}, {wait: 1s, while: {sensor: bumps_wheel_drops > 4}}]",
+         "stopped: sensor(bumps_wheel_drops > 4) does not hold, before 'wait(1s)' started"),
+        # an odometry guard with no mark counts from the run's start: it said "since a mark"
+        ("[{mode: safe}, {drive: {velocity: 200 mm/s, duration: 5s}, name: outbound,"
+         " while: {inverter: {odometry: {distance: 30cm}}}}]",
+         "stopped: the robot has travelled the distance since the run began, while 'outbound'"
+         " ran (odometry(distance=30cm) held) (stage outbound was running)"),
+        ("[{mode: safe}, {mark: m}, {drive: {velocity: 200 mm/s, radius: spin_left,"
+         " duration: 5s}, name: round, while: {inverter: {odometry: {since: m, angle: 90deg}}}}]",
+         "stopped: the robot has turned the angle since mark 'm', while 'round' ran"
+         " (odometry(since=m, angle=90deg) held) (stage round was running)"),
+    ],
+)  # fmt: skip
+def test_a_while_guard_s_reason_says_only_what_happened(
+    run_mission: RunMission, steps: str, reason: str
+) -> None:
+    run = run_mission(f"blackboard: {{m: mark}}\ntree:\n  sequence: {steps}\n")
+    assert run.summary.outcome is Outcome.FAILURE
+    assert run.summary.reason == reason
