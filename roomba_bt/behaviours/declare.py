@@ -630,6 +630,9 @@ class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
                 # a cycle command into a running cycle pauses it (600 / Create 2 spec):
                 # end that one first (Safe, drive 0, motors off, Start), then start this
                 robot.outbox.end_cycle(self)
+            # another leaf's cycle command queued in this tick: written and ended before
+            # this one, not replaced by it (its leaf says SUCCESS for a command it sent)
+            robot.outbox.end_queued_cycle(self)
             self._started_cycle = True
         elif spec.effect is _SILENCES and robot.snapshot.mode in DRIVING_MODES:
             # Stop and Reset say nothing of the wheels and brushes: sent where they may

@@ -328,6 +328,39 @@ class Outbox:
             self._ender = sender
             queue[_CYCLE_END_KEY] = CYCLE_END[0]  # ``queued`` is true: the flush comes
 
+    def end_queued_cycle(self, sender: object) -> None:
+        """Before ``sender`` queues a built-in cycle command (Clean, Spot, Max, Seek Dock):
+        one another leaf queued in this tick (``[spot, seek_dock: {wait: false}]``, both
+        ending on the tick they start) is written where it was asked for, then ended by
+        :data:`CYCLE_END`, and ``sender``'s comes after. One command per channel would
+        have kept only the second, while the first leaf showed SUCCESS for a Spot never
+        sent; written back to back, the second would pause the first's cycle (600 / Create
+        2 spec) instead of starting its own. Each keeps its place in the flush's order;
+        the end's commands on other channels are the tree's last on them (as
+        :meth:`drain`'s end of a cycle)."""
+        queue = self._queue
+        queued = queue.get("wheels")
+        if (
+            queued is None
+            or queued.spec.effect is not Effect.BUILTIN_CYCLE
+            or self._senders.get("wheels") is sender
+        ):
+            return
+        # written in this order, each under a key of its own (no channel's: the wheels'
+        # is the new cycle's, queued next)
+        replaced = {object(): command for command in (queued, *CYCLE_END)}
+        items = list(queue.items())
+        at = next(i for i, (key, _) in enumerate(items) if key == "wheels")
+        queue.clear()
+        queue.update(items[:at])
+        queue.update(replaced)
+        queue.update(items[at + 1 :])
+        for command in CYCLE_END:
+            channel = command.spec.channel
+            if channel is not None and channel != "wheels" and channel not in queue:
+                self._senders[channel] = sender
+                self._last[channel] = command
+
     def drain(self) -> list[Command]:
         """The commands to write, in order; empties the outbox. Who sent each channel's
         last command is kept until that channel is sent on again (:meth:`sender_of`: a

@@ -147,3 +147,21 @@ def test_what_stands_is_what_was_written_and_not_stopped_by_the_robot_since() ->
     box.written(brushes)
     box.clear()  # the tree stopped: nothing it sent stands
     assert dict(box.standing) == {} and box.last_on("motors") is None
+
+
+def test_a_cycle_another_leaf_queued_in_the_tick_is_written_and_ended_before_the_next() -> None:
+    """``[spot, seek_dock]`` in one tick: the channel's last command alone kept Seek Dock,
+    and Spot was never written. Each keeps its place; the first's cycle is ended between."""
+    box = Outbox()
+    box.send(commands.leds(0, 0, 255), OLD)
+    box.end_queued_cycle(OLD)  # nothing queued on the wheels: nothing to end
+    box.send(commands.spot(), OLD)
+    box.send(commands.play(0), OLD)
+    box.end_queued_cycle(OLD)  # its own: not ended
+    box.end_queued_cycle(NEW)
+    box.send(commands.seek_dock(), NEW)
+    assert [c.name for c in box.drain()] == [
+        "leds", "spot", *(c.name for c in CYCLE_END), "play", "seek_dock",
+    ]  # fmt: skip
+    assert box.last_on("wheels") == commands.seek_dock()
+    assert box.last_on("motors") == commands.motors_off()

@@ -230,3 +230,25 @@ def test_a_cycle_command_into_a_running_cycle_ends_that_cycle_first(
     assert len(cleans) == 3  # at 0, 10 and 20 s
     assert cleans[1] == cleans[2] == END + oi.clean().data
     assert not any("paused" in e.detail for e in run.simulator.events if e.kind == "builtin")
+
+
+@pytest.mark.parametrize(
+    ("first", "second"),
+    [("spot", "{seek_dock: {wait: false}}"), ("{seek_dock: {wait: false}}", "max"),
+     ("clean", "spot")],
+)  # fmt: skip
+def test_two_cycle_leaves_in_one_tick_are_both_written_the_first_ended_between(
+    run_mission: RunMission, first: str, second: str
+) -> None:
+    """``[spot, seek_dock: {wait: false}]`` ends both leaves in one tick: one command per
+    channel kept only Seek Dock, and ``spot`` showed SUCCESS for a Spot never sent (session
+    28). Both are written, in the tree's order, the first's cycle ended between them (the
+    second, written straight after, would pause it: 600 / Create 2 spec)."""
+    run = run_mission(f"tree:\n  sequence: [{{mode: safe}}, {first}, {second}, {{wait: 1s}}]\n")
+    assert run.summary.outcome is Outcome.SUCCESS, run.summary.reason
+    cycles = {"spot": oi.spot(), "max": oi.max_clean(), "clean": oi.clean()}
+    one, two = (cycles.get(leaf, oi.seek_dock()).data for leaf in (first, second))
+    at = next(t for t, data in run.link.writes if data == one)
+    written = b"".join(data for t, data in run.link.writes if t == at)
+    assert written == one + END + two
+    assert run.summary.refused_commands == 0
