@@ -246,7 +246,7 @@ def _ir_constraints(params: Mapping[str, Any]) -> list[str]:
         Param("sees", enum(*_IR_WHAT), default="anything"),
         Param("receiver", enum(*_RECEIVERS), default="omni", from_blackboard=False),
         Param("button", enum(*sorted(set(REMOTE_BUTTONS.values()))),
-              doc="with sees: remote, this button only"),
+              doc="this button of the remote only; only with sees: remote (else an error)"),
     ),
     reads=lambda p: (_RECEIVERS[p.get("receiver", "omni")],),
     primary="sees",
