@@ -22,6 +22,13 @@ IN_USE = (
     "another program has it open (another roomba-bt run, sensors, doctor or sim client?); "
     "two programs on one robot would each read half of its stream and mix their commands"
 )
+#: why a device in the kernel's exclusive mode (``TIOCEXCL``, EBUSY) was not opened: held by
+#: another program, or left so by a run killed outright on a simulator's pty (a pty keeps the
+#: mode while its other side is open; a real device forgets it when its last opener closes)
+IN_USE_EXCLUSIVE = (
+    f"{IN_USE} (on a simulator's pty: a run on it that was killed outright leaves it "
+    "refused until the simulator is restarted)"
+)
 #: why a device that this process holds already was not opened: an earlier connection of
 #: its own, not closed (a notebook cell run again while the first one's robot drives)
 IN_USE_HERE = (
@@ -75,6 +82,8 @@ def open_failure(device: str, code: int | None) -> str | None:
         )
     if code in (errno.EAGAIN, errno.EWOULDBLOCK):
         return IN_USE
+    if code == errno.EBUSY:
+        return IN_USE_EXCLUSIVE
     if code == errno.EACCES:
         return IN_USE if os.name == "nt" else no_permission(device)  # Windows: held by another
     with contextlib.suppress(OSError, ValueError):

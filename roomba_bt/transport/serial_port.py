@@ -17,6 +17,7 @@ of hanging.
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import select
 import time
@@ -30,12 +31,15 @@ from serial import rfc2217
 from roomba_bt.transport.base import TransportError
 from roomba_bt.transport.open_failure import (
     IN_USE,
+    IN_USE_EXCLUSIVE,
     IN_USE_HERE,
     PORT_ALLOWED,
     error_number,
     open_failure,
     url_problem,
 )
+
+log = logging.getLogger(__name__)
 
 #: Bytes taken from the port in one read; a 115200 baud link carries 172 bytes per 15 ms.
 READ_CHUNK = 4096
@@ -60,17 +64,61 @@ QUEUED_READ_TIMEOUT = 1.0
 
 
 try:  # a pty whose other side closed while it was being set up: termios.error, no OSError
+    import fcntl
     import termios
 
     TERMIOS_ERRORS: tuple[type[Exception], ...] = (termios.error,)
 except ImportError:  # not POSIX
     TERMIOS_ERRORS = ()
+#: whether a device can be put in the kernel's exclusive mode (:class:`KernelExclusiveSerial`)
+_POSIX = os.name == "posix"
 _OPEN_ERRORS: tuple[type[Exception], ...] = (
     serial.SerialException, OSError, ValueError, *TERMIOS_ERRORS
 )  # fmt: skip
 #: The ports this process opened and has not yet let go of: a device it holds already is
 #: refused by its own lock, said as its own (an earlier connection), not another program's.
 _OPENED: weakref.WeakSet[SerialTransport] = weakref.WeakSet()
+
+
+class KernelExclusiveSerial(serial.Serial):
+    """A device port in the kernel's exclusive mode while it is open (POSIX ``TIOCEXCL``):
+    any other open of the terminal by a user without ``CAP_SYS_ADMIN`` fails with EBUSY.
+
+    pyserial's ``exclusive`` is an advisory ``flock``, which only programs that ask for the
+    same lock heed: a student's ``serial.Serial(port)`` beside a run opened the robot's port
+    and drove it backwards for 7.7 s, the run none the wiser. The mode is cleared before
+    every close (``TIOCNXCL``), however the port is closed (pyserial's own ``__del__``
+    too): a pty's mode outlives its opener while its other side is open (a simulator), and
+    the next run on it was refused. A run killed outright cannot clear it: on a simulator's
+    pty the next open by a user without ``CAP_SYS_ADMIN`` fails until the simulator is
+    restarted (a real device forgets it when its last opener closes)."""
+
+    def open(self) -> None:
+        super().open()
+        try:
+            fcntl.ioctl(self.fileno(), termios.TIOCEXCL)
+        except OSError as exc:  # a terminal that refuses: the advisory lock still holds
+            log.warning(
+                "%s: could not set the exclusive mode (%s): other programs can open it "
+                "beside this one", self.port, exc.strerror or exc,
+            )  # fmt: skip
+
+    def close(self) -> None:
+        if self.is_open and self.fd is not None:
+            with contextlib.suppress(OSError):
+                fcntl.ioctl(self.fd, termios.TIOCNXCL)
+        super().close()
+
+
+def _device_port(url: str, baud: int, write_timeout: float | None) -> serial.Serial:
+    """A closed port for ``url``: a device path in the kernel's exclusive mode where the
+    OS has one (:class:`KernelExclusiveSerial`), anything else as pyserial makes it."""
+    settings: dict[str, Any] = {"baudrate": baud, "timeout": 0, "write_timeout": write_timeout}
+    if "://" in url or not _POSIX:  # a URL (socket://, rfc2217://, loop://), or Windows
+        return serial.serial_for_url(url, do_not_open=True, **settings)
+    port = KernelExclusiveSerial(None, **settings)
+    port.port = url
+    return port
 
 
 def _port_text(url: object) -> str:
@@ -122,10 +170,13 @@ class SerialTransport:
     ) -> SerialTransport:
         """Open ``url`` (device path or pyserial URL) at ``baud``, 8N1, no flow control.
 
-        A device is opened for this process alone (pyserial's ``exclusive``: an advisory
-        ``flock``): a second roomba-bt on the same robot, a ``sensors`` beside a ``run``,
-        would take every other chunk of the stream and interleave its commands with the
-        run's; it is refused at once instead, :data:`~roomba_bt.transport.open_failure.IN_USE`.
+        A device is opened for this process alone: a second roomba-bt on the same robot, a
+        ``sensors`` beside a ``run``, would take every other chunk of the stream and
+        interleave its commands with the run's; it is refused at once instead,
+        :data:`~roomba_bt.transport.open_failure.IN_USE`. Two locks: pyserial's ``exclusive``
+        (an advisory ``flock``, which every roomba-bt takes, root's too) and the kernel's
+        exclusive mode of the terminal (:class:`KernelExclusiveSerial`, which refuses any
+        other program's open, a plain ``serial.Serial(port)`` too, unless it runs as root).
 
         pyserial asserts RTS and DTR when it opens a port, which on the usual cables pulls
         BRC low (a wake pulse). ``brc_high``: open with both released, so that the robot
@@ -142,9 +193,7 @@ class SerialTransport:
         if url.startswith(NO_WRITE_TIMEOUT_SCHEMES):
             write_timeout = None  # type: ignore[assignment]  # the handler refuses one
         try:
-            port = serial.serial_for_url(
-                url, baudrate=baud, timeout=0, write_timeout=write_timeout, do_not_open=True
-            )
+            port = _device_port(url, baud, write_timeout)
             if brc_high:
                 port.rts = False
                 port.dtr = False
@@ -153,7 +202,7 @@ class SerialTransport:
             port.open()
         except _OPEN_ERRORS as exc:
             known = open_failure(url, error_number(exc))
-            if known is IN_USE and _held_here(url):
+            if known in (IN_USE, IN_USE_EXCLUSIVE) and _held_here(url):
                 known = IN_USE_HERE
             raise TransportError(url, "open the port", known or exc) from exc
         opened = cls(port, url)

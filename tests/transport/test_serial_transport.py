@@ -201,6 +201,89 @@ sys.stdin.read()
 """
 
 
+#: Linux's TIOCGEXCL (``_IOR('T', 0x40, int)``, not in Python's termios): whether a
+#: terminal is in the kernel's exclusive mode
+TIOCGEXCL = 0x80045440
+#: whom a test that runs as root opens a device as: root's own open ignores the mode
+NOBODY = 65534
+
+
+def in_exclusive_mode(fd: int) -> bool:
+    import fcntl
+    import struct
+
+    return struct.unpack("i", fcntl.ioctl(fd, TIOCGEXCL, bytes(4)))[0] != 0
+
+
+def plain_open_error(path: str) -> int:
+    """The errno of a plain ``os.open`` of ``path`` by another user's program (a student's
+    ``serial.Serial(port)``), 0 when it opens. Root's opens ignore the exclusive mode, so a
+    test running as root (CI) opens it in a forked child that became nobody, to whom the
+    device is given; skipped where root cannot become nobody."""
+    if os.geteuid() != 0:
+        try:
+            os.close(os.open(path, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK))
+        except OSError as exc:
+            return exc.errno or -1
+        return 0
+    os.chown(path, NOBODY, NOBODY)
+    child = os.fork()
+    if child == 0:  # only os calls here, then _exit: nothing of pytest's runs in the child
+        code = 0
+        try:
+            os.setgid(NOBODY)
+            os.setuid(NOBODY)
+        except OSError:
+            os._exit(255)
+        try:
+            os.close(os.open(path, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK))
+        except OSError as exc:
+            code = exc.errno or 254
+        os._exit(code)
+    _, status = os.waitpid(child, 0)
+    code = os.waitstatus_to_exitcode(status)
+    if code == 255:
+        pytest.skip("running as root, and root could not become nobody: root's opens ignore it")
+    return code
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="TIOCGEXCL is Linux's")
+def test_a_device_is_in_the_kernels_exclusive_mode_while_it_is_open() -> None:
+    """The advisory flock stopped only roomba-bt: a student's pyserial script opened the
+    robot's port beside a run and drove it backwards for 7.7 s. While a transport holds the
+    device the terminal is in the kernel's exclusive mode (TIOCEXCL), so another user's plain
+    open fails with EBUSY; closing clears it (a pty keeps the mode while its other side is
+    open: the next run on a simulator would have been refused)."""
+    import errno
+
+    with pty_far_end() as end:
+        probe = os.open(end.url, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)  # opened before
+        try:
+            assert not in_exclusive_mode(probe)
+            assert plain_open_error(end.url) == 0
+            transport = SerialTransport.open(end.url)
+            assert in_exclusive_mode(probe)
+            assert plain_open_error(end.url) == errno.EBUSY
+            transport.close()
+            assert not in_exclusive_mode(probe)
+            assert plain_open_error(end.url) == 0
+        finally:
+            os.close(probe)
+
+
+def test_a_device_in_exclusive_mode_is_said_to_be_in_use() -> None:
+    """Another roomba-bt run by a user without root meets the kernel's EBUSY, not the flock:
+    it is said as a device in use, with the one case where nothing holds it (a simulator's
+    pty after a run on it was killed outright), not as pyserial's own words."""
+    import errno
+
+    from roomba_bt.transport.open_failure import IN_USE, open_failure
+
+    said = open_failure("/dev/ttyUSB0", errno.EBUSY)
+    assert said is not None and said.startswith(IN_USE)
+    assert "restart" in said
+
+
 def test_a_device_this_process_holds_is_said_to_be_its_own(tmp_path: Path) -> None:
     """Opened twice by one program (a notebook cell run again while the first connection's
     robot drives): not "another program has it open", which sent its user looking for one;
