@@ -39,6 +39,7 @@ if TYPE_CHECKING:
     from collections.abc import Callable
 
     from roomba_bt.mission import Permissions
+    from roomba_bt.runtime.claimed import ClaimedFile
     from roomba_bt.runtime.loop import TickObserver
     from roomba_bt.runtime.recording import Record
     from roomba_bt.runtime.stack import RunStack
@@ -218,14 +219,46 @@ def stream_packets(mission: Any, baud: int) -> tuple[int, ...]:
 
 
 def run_command(args: argparse.Namespace) -> int:
+    checked = _checked_arguments(args)
+    if isinstance(checked, int):
+        return checked
+    claimed = _claimed_record(args.record)
+    if isinstance(claimed, int):
+        return claimed
+    try:
+        return _claimed_run(args, *checked, claimed)
+    finally:
+        if claimed is not None:
+            claimed.release()  # a run that ended before its record began: the file as it was
+
+
+def _claimed_record(path: str | None) -> ClaimedFile | int | None:
+    """``--record``'s file, this run's alone, before the robot is opened: a path another run
+    writes (a class that all typed ``--record run.jsonl`` in a shared folder) is refused
+    here, exit 2, where before the second run emptied it under the first, which lost its
+    record to NUL bytes. Not emptied yet: a run that fails before it starts keeps an earlier
+    record as it was."""
+    if not path:
+        return None
+    from roomba_bt.runtime.claimed import ClaimedFile
+
+    try:
+        return ClaimedFile(path)
+    except OSError as exc:
+        return _error(f"--record {path}: {exc.strerror or exc}")
+
+
+def _claimed_run(
+    args: argparse.Namespace,
+    params: dict[str, str],
+    timeout: float | None,
+    claimed: ClaimedFile | None,
+) -> int:
+    """The run, once its arguments are checked and its record claimed (``claimed``)."""
     from roomba_bt.cli.links import auto_baud, far_end
     from roomba_bt.robot.errors import ConnectionFailed
     from roomba_bt.runtime.display import observer_for
 
-    checked = _checked_arguments(args)
-    if isinstance(checked, int):
-        return checked
-    params, timeout = checked
     profile = get_profile(args.profile)
     opened = None
     if args.baud is None:  # --baud auto: the mission's stream is checked at the rate found
@@ -261,7 +294,7 @@ def run_command(args: argparse.Namespace) -> int:
         return ExitCode.CONNECTION
     observer = observer_for(args.display, sys.stdout)
     try:
-        stack = _stack(args, mission, link, packets, params, timeout, observer)
+        stack = _stack(args, mission, link, packets, params, timeout, observer, claimed)
     except OSError as exc:
         if monitor is not None:
             monitor.finish(None)
@@ -289,8 +322,10 @@ def _stack(
     params: dict[str, str],
     timeout: float | None,
     observer: TickObserver | None,
+    claimed: ClaimedFile | None = None,
 ) -> RunStack:
-    """The run's stack as the options say (OSError: the --record file cannot be written)."""
+    """The run's stack as the options say (OSError: the --record file cannot be written);
+    ``claimed``: the --record file, claimed at the run's start."""
     from roomba_bt.runtime.recording import utc_stamp
     from roomba_bt.runtime.stack import Recording, RunStack
 
@@ -298,7 +333,7 @@ def _stack(
     if args.record:
         record = Recording(
             args.record, str(Path(args.mission).resolve()), params,
-            port=args.robot, started=utc_stamp(args.started),
+            port=args.robot, started=utc_stamp(args.started), claimed=claimed,
         )  # fmt: skip
     stack = RunStack(
         mission,

@@ -41,6 +41,7 @@ from pathlib import Path
 from typing import Any
 
 from roomba_bt.evaluate.episode import Coverage, EpisodeResult
+from roomba_bt.runtime.claimed import ClaimedFile
 from roomba_bt.runtime.summary import falls_in_order
 
 FORMATS = (".jsonl", ".csv")
@@ -251,10 +252,11 @@ def _params(raw: Any) -> tuple[tuple[str, str], ...]:
 
 
 def write_results(path: str | Path, results: Iterable[EpisodeResult]) -> int:
-    """Write the records to ``path`` (format by suffix); the number written."""
+    """Write the records to ``path`` (format by suffix); the number written. A file another
+    roomba-bt writes is refused (FileInUse, an OSError) before it is emptied."""
     fmt = results_format(path)
     records = [to_record(r) for r in results]
-    with open(path, "w", encoding="utf-8", newline="") as out:
+    with ClaimedFile(path).open_text(newline="") as out:
         if fmt == ".jsonl":
             for record in records:
                 out.write(json.dumps(record) + "\n")
@@ -270,11 +272,17 @@ class PartialResults:
     """Each episode's record as it finishes, one JSON line flushed at a time, into
     ``OUT.partial.jsonl`` beside ``--out OUT`` (which is written, in the episodes' order,
     only at the end): a sweep killed by the OOM killer or a ``kill -9`` lost every record.
-    :meth:`done` removes it once ``OUT`` is written; :func:`read_results` reads it."""
+    :meth:`done` removes it once ``OUT`` is written; :func:`read_results` reads it.
+
+    The partial file is the sweep's hold on ``OUT``: claimed (an exclusive ``flock``,
+    :class:`~roomba_bt.runtime.claimed.ClaimedFile`) for the whole sweep, so a second sweep
+    given the same ``--out`` is refused at its start (FileInUse, an OSError) before it
+    empties it; two sweeps both said "results written" and ``OUT`` held one sweep's
+    episodes. ``OUT`` itself is not made before the end: a killed sweep leaves none."""
 
     def __init__(self, out: str | Path) -> None:
         self.path = Path(f"{out}.partial.jsonl")
-        self._file = open(self.path, "w", encoding="utf-8")  # noqa: SIM115 (closed in done)
+        self._file = ClaimedFile(self.path).open_text()  # closed in done: the lock let go
 
     def add(self, result: EpisodeResult) -> None:
         self._file.write(json.dumps(to_record(result)) + "\n")
@@ -282,9 +290,9 @@ class PartialResults:
 
     def done(self, keep: bool = False) -> None:
         """Closed; removed unless ``keep`` (the final file could not be written)."""
-        self._file.close()
-        if not keep:
+        if not keep:  # removed while still locked: a sweep starting now makes its own
             self.path.unlink(missing_ok=True)
+        self._file.close()
 
 
 def _csv_cells(record: dict[str, Any]) -> dict[str, str]:

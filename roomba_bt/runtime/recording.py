@@ -67,6 +67,7 @@ from roomba_bt.oi.encode import BAUD_CODES, command_size, decode_command
 from roomba_bt.oi.errors import EncodeError
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import PROFILES
+from roomba_bt.runtime.claimed import ClaimedFile
 from roomba_bt.transport.base import Transport
 
 log = logging.getLogger(__name__)
@@ -92,13 +93,22 @@ class RecordingTransport:
     port's own errors are the port's. Before, the file's ``OSError`` rose from a read or a
     write of the port, and the run ended as a lost port without its safe stop."""
 
-    def __init__(self, inner: Transport, path: str | Path, header: dict[str, Any]) -> None:
+    def __init__(
+        self,
+        inner: Transport,
+        path: str | Path,
+        header: dict[str, Any],
+        claimed: ClaimedFile | None = None,
+    ) -> None:
+        """``claimed``: ``path`` already claimed (``run`` claims it before it opens the
+        robot); else it is claimed here. Either way a file another run writes is refused
+        (:class:`~roomba_bt.runtime.claimed.FileInUse`, an OSError) before it is emptied."""
         self._inner = inner
         #: the wrapped transport's word on its clock (``Transport``'s note)
         self.wall_clock: bool = getattr(inner, "wall_clock", True)
         self.name = inner.name
         self.path = str(path)
-        self._file: IO[str] = open(path, "w", encoding="utf-8")  # noqa: SIM115
+        self._file: IO[str] = (claimed or ClaimedFile(path)).open_text()
         self._t0: float | None = None
         #: why and when the recording stopped before the run's end (None: it did not)
         self.stopped: str | None = None

@@ -32,6 +32,7 @@ from roomba_bt.behaviours.lean import check_updates
 from roomba_bt.oi.profiles import PROFILES, RobotProfile
 from roomba_bt.robot.connection import Connection, EndMode
 from roomba_bt.robot.errors import DEFAULT_WATCHDOG
+from roomba_bt.runtime.claimed import ClaimedFile
 from roomba_bt.runtime.loop import (
     MissionLike,
     MissionRunner,
@@ -108,9 +109,12 @@ class Recording:
     parameters: Mapping[str, str] = field(default_factory=dict)
     #: which robot: the port as given, or ``simulator WORLD``; and when the run started
     #: (ISO 8601, UTC): a record copied off the laptop names its robot and its lesson.
-    #: Neither is read by a replay; a header without them (a record made before) loads
+    #: Neither is read by a replay; a header without them (a record made before) loads.
     port: str | None = None
     started: str | None = None
+    #: ``path`` claimed already for this run (``run`` does, before it opens the robot, so a
+    #: path another run writes is refused first); None: the record claims it when made
+    claimed: ClaimedFile | None = field(default=None, compare=False)
 
     def header(
         self, profile: RobotProfile, baud: int, packets: Sequence[int], watchdog: float,
@@ -191,7 +195,8 @@ class RunStack:
         if record is not None:
             watchdog_s = connection.link.watchdog if connection else _made_watchdog(made)
             header = record.header(profile, baud, self.packets, watchdog_s, grace)
-            transport = RecordingTransport(link, record.path, header)  # OSError: the file
+            # OSError: the file cannot be written (FileInUse: another run writes it)
+            transport = RecordingTransport(link, record.path, header, record.claimed)
         self.link = link
         self.transport = transport
         if connection is None:
