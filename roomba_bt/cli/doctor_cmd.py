@@ -201,15 +201,24 @@ def doctor_command(args: argparse.Namespace) -> int:
         print("roomba-bt doctor: interrupted", file=sys.stderr)
         return DoctorExit.INTERRUPTED
     except OSError as exc:
-        report.fail(
-            "link",
-            f"the port failed: {exc}",
-            "check the cable and the robot's power, then run doctor again",
-        )
+        report.fail("link", f"the port failed: {exc}", _link_fix(exc))
         return DoctorExit.UNHEALTHY
     finally:
         _leave_passive(transport)
         transport.close()
+
+
+def _link_fix(exc: OSError) -> str:
+    """What to do about a port that failed while doctor used it: a bridge or simulator that
+    turned doctor away (another client holds it) is not a cable to check."""
+    from roomba_bt.transport.open_failure import closed_at_once
+
+    if closed_at_once(exc):
+        return (
+            "end the other client (a run, sensors or doctor on this robot) or wait for it to "
+            "end, then run doctor again"
+        )
+    return "check the cable and the robot's power, then run doctor again"
 
 
 def _leave_passive(transport: Any) -> None:

@@ -219,7 +219,7 @@ class SafeStop:
         streamed = link.frame is not None and link.arrival >= link.silent_since
         self._heard_at = link.arrival if streamed else None
         if not link.transport.is_open:
-            return self._undelivered("the stop was not delivered: the port is gone")
+            return self._undelivered(self._port_gone())
         unconfirmed = None
         if link.status is LinkStatus.LOST:
             unconfirmed = "the port had failed before it"
@@ -293,7 +293,7 @@ class SafeStop:
             with signals_deferred():
                 self.writer.send_many(self.sequence())
         except PortLost:
-            return "the stop was not delivered: the port is gone"
+            return self._port_gone()
         except _RECOVERABLE as exc:
             return f"the stop was not delivered: {exc}"
         return None
@@ -366,6 +366,18 @@ class SafeStop:
     def activity(self) -> str:
         """What the last wheel command written had the robot doing (:func:`describe_activity`)."""
         return describe_activity(self.writer.last_wheels)
+
+    def _port_gone(self) -> str:
+        """Why a stop to a port that failed was not delivered. A far end that closed the
+        connection before it sent a byte turned this run away: the robot there is another
+        client's, fine, and was never this run's to stop (the second client of a
+        simulator's TCP server was told its stop was NOT DELIVERED: the port is gone)."""
+        if self.writer.link.turned_away:
+            return (
+                "not sent: the far end closed the connection at once, and this run reached "
+                "no robot (another client may hold it; its run is not affected)"
+            )
+        return "the stop was not delivered: the port is gone"
 
     def _undelivered(self, why: str) -> bool:
         """The stop did not reach the robot: say so, with what the robot was last seen

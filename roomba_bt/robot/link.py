@@ -37,6 +37,7 @@ from roomba_bt.oi.stream import StreamParser, shows_reset_banner
 from roomba_bt.robot.errors import PortLost, StreamStalled
 from roomba_bt.robot.interface import ModeChange
 from roomba_bt.transport.base import Transport, TransportError
+from roomba_bt.transport.open_failure import CLOSED_AT_ONCE
 from roomba_bt.transport.serial_port import TERMIOS_ERRORS
 
 log = logging.getLogger(__name__)
@@ -115,6 +116,9 @@ class StreamLink:
         self._report = report
         self._halt = halt
         self.status = LinkStatus.OPEN if transport.is_open else LinkStatus.CLOSED
+        #: the far end closed the connection before it sent a byte (another client holds
+        #: it: :data:`~roomba_bt.transport.open_failure.CLOSED_AT_ONCE`): no robot was reached
+        self.turned_away = False
         self.stream_ids: tuple[int, ...] = ()
         self.streaming = False
         #: the newest checked frame (None before the first), when it arrived (link clock)
@@ -227,6 +231,9 @@ class StreamLink:
         self.status = LinkStatus.LOST
         self.streaming = False
         cause = exc.cause if isinstance(exc, TransportError) else exc
+        if cause == CLOSED_AT_ONCE:  # turned away, not gone: the robot may be fine
+            self.turned_away = True
+            return PortLost(self.name, f"{cause}; nothing reached a robot")
         return PortLost(
             self.name, f"the port is gone: it failed on {action} ({cause}); the link is lost"
         )

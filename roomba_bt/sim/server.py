@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import logging
 import os
 import select
 import socket
@@ -55,6 +56,8 @@ from roomba_bt.oi.encode import BAUD_RATES
 from roomba_bt.sim.link import at_wrong_baud
 from roomba_bt.sim.narrate import Narrator
 from roomba_bt.sim.robot import STEP_SECONDS, Simulator
+
+log = logging.getLogger(__name__)
 
 #: If the host falls this far behind the 15 ms cadence (a suspended process), resynchronise
 #: instead of bursting the missed steps.
@@ -201,9 +204,9 @@ class TcpEndpoint:
         for sock in ready:
             if sock is self._listener:
                 with contextlib.suppress(BlockingIOError):
-                    client, _ = self._listener.accept()
+                    client, peer = self._listener.accept()
                     if self._client is not None:
-                        client.close()  # busy: one far end only
+                        self._turn_away(client, peer)
                     else:
                         client.setblocking(False)
                         client.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
@@ -221,6 +224,20 @@ class TcpEndpoint:
                 else:
                     data = self._incoming(data)
         return data
+
+    def _turn_away(self, client: socket.socket, peer: Any) -> None:
+        """A second client, while one is connected: closed at once (a serial line has one
+        far end, and two clients would each read half the stream and mix their commands),
+        and said here. Its own side can only see the close (a raw socket has no channel for
+        a reason beside the robot's bytes): roomba-bt says "the far end closed the
+        connection at once: another client may hold it". Before, the simulator said
+        nothing, and the second run took the robot for dead."""
+        where = f"{peer[0]}:{peer[1]}" if isinstance(peer, tuple) else str(peer)
+        log.warning(
+            "%s: turned a second client away (%s): one client at a time, as on a serial "
+            "line, and the first is still connected", self.address, where,
+        )  # fmt: skip
+        client.close()
 
     def _drop_client(self) -> None:
         if self._client is not None:

@@ -37,6 +37,33 @@ IN_USE_HERE = (
     "call that connection's close() (it stops the robot), or open it with "
     "`with Connection.open(...) as robot:`, which closes it at the block's end"
 )
+#: why a ``socket://`` connection failed that the far end closed before it sent a byte: a
+#: server that takes one client at a time (``roomba-bt sim --tcp``, a Wi-Fi bridge) turns a
+#: second away so, where the run said "the port is gone" and doctor "check the cable"
+CLOSED_AT_ONCE = (
+    "the far end closed the connection at once, before sending a byte: another client may "
+    "hold it (a bridge or roomba-bt sim --tcp serves one client at a time: another run, "
+    "sensors or doctor on this robot?)"
+)
+#: the error numbers of a connection the far end closed (a write after its close, a reset)
+CLOSED_ERRORS = (errno.EPIPE, errno.ECONNRESET, errno.ECONNABORTED)
+#: pyserial's ``socket://`` read of a connection the far end closed (no error number)
+SOCKET_CLOSED_TEXT = "socket disconnected"
+
+
+def closed_at_once(exc: BaseException) -> bool:
+    """Whether ``exc``, or an error it was raised from, is a transport's
+    :data:`CLOSED_AT_ONCE` (a run's lost port, doctor's failed read)."""
+    seen: BaseException | None = exc
+    for _ in range(4):  # the chain, a few links deep
+        if seen is None:
+            return False
+        if getattr(seen, "cause", None) == CLOSED_AT_ONCE:
+            return True
+        seen = seen.__cause__ or seen.__context__
+    return False
+
+
 #: the network URLs, whose rest must be HOST:PORT
 NETWORK_SCHEMES = ("socket", "rfc2217")
 #: what a port may be named

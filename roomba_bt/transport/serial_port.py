@@ -30,10 +30,13 @@ from serial import rfc2217
 
 from roomba_bt.transport.base import TransportError
 from roomba_bt.transport.open_failure import (
+    CLOSED_AT_ONCE,
+    CLOSED_ERRORS,
     IN_USE,
     IN_USE_EXCLUSIVE,
     IN_USE_HERE,
     PORT_ALLOWED,
+    SOCKET_CLOSED_TEXT,
     error_number,
     open_failure,
     url_problem,
@@ -158,6 +161,11 @@ class SerialTransport:
         if self._polled:
             self._wait_handle = None
         self._hung_up = False
+        #: a raw TCP connection (``socket://``), whose far end may close it on a second client
+        self._socket = self.name.lower().startswith("socket://")
+        #: whether a read has given a byte yet: a connection closed before is a far end that
+        #: turned this client away (:data:`~roomba_bt.transport.open_failure.CLOSED_AT_ONCE`)
+        self._heard = False
 
     @classmethod
     def open(
@@ -243,19 +251,34 @@ class SerialTransport:
                 self.name, "write", "timed out: the far end is not reading"
             ) from exc
         except (serial.SerialException, OSError, ValueError, TypeError) as exc:
-            raise TransportError(self.name, "write", exc) from exc
+            raise TransportError(self.name, "write", self._failure(exc)) from exc
 
     def read(self, timeout: float) -> bytes:
         try:
             if self._polled:
                 data = self._queued()
-                return data if data or timeout <= 0 else self._poll(timeout)
-            data = self._port.read(READ_CHUNK)
-            if not data and timeout > 0:
-                data = self._wait(timeout)
-            return data if len(data) < BACKLOG_SIGN else self._drained(data)
+                if not data and timeout > 0:
+                    data = self._poll(timeout)
+            else:
+                data = self._port.read(READ_CHUNK)
+                if not data and timeout > 0:
+                    data = self._wait(timeout)
+                if len(data) >= BACKLOG_SIGN:
+                    data = self._drained(data)
         except (serial.SerialException, OSError, ValueError, TypeError) as exc:
-            raise TransportError(self.name, "read", exc) from exc
+            raise TransportError(self.name, "read", self._failure(exc)) from exc
+        if data:
+            self._heard = True
+        return data
+
+    def _failure(self, exc: BaseException) -> BaseException | str:
+        """The cause a failed read or write is said with: ``exc``, unless the far end of a
+        ``socket://`` closed the connection before it sent a byte. A second client of the
+        simulator's TCP server (or of a bridge that serves one) is closed at once, and was
+        told "the port is gone ... Broken pipe", its stop "NOT DELIVERED", and doctor sent
+        its user to check the cable of a robot that was fine, driven by another run."""
+        closed = error_number(exc) in CLOSED_ERRORS or SOCKET_CLOSED_TEXT in str(exc)
+        return CLOSED_AT_ONCE if self._socket and not self._heard and closed else exc
 
     def _wait(self, timeout: float) -> bytes:
         """What comes within ``timeout`` seconds on a port that had nothing."""
