@@ -270,7 +270,7 @@ class Connection:
             )  # fmt: skip
         except NoAnswer as silent:
             raise answers_elsewhere(self, silent) from None
-        if not self.modes.calibrate(raw, self.link.transport.now()):
+        if not self.modes.calibrate(raw, self.link.transport.now(), self.name):
             raise not_a_mode(self.name, raw)
         self.link.mode_plus_one = self.modes.plus_one
         if target is OIMode.SAFE:

@@ -85,7 +85,14 @@ until it knows:
 - once known, `raw - offset` is the mode; a value that is no mode is ignored and counted.
 
 The connection queries packet 35 right after Start, so the offset is known before the first
-mode command on every robot.
+mode command on every robot. A robot that reads mode + 1 with a profile that does not expect
+it (the default `create2`, or `roomba500`, on a Roomba 600) goes on with every reading
+corrected, and the warning names the port and the fix, as a 500's checksum does:
+`/dev/ttyUSB1: packet 35 reports the OI mode + 1 (read 2), which the create2 profile does not
+expect: the robot is most likely a Roomba 600 series: use --profile roomba600 (in Python,
+Connection.open(port, profile='roomba600')), or roomba-bt doctor to tell the model
+(correcting every reading by -1 meanwhile)`. With `--profile roomba600` it is expected, and
+said at INFO (`-v`).
 """
 
 

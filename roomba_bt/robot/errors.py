@@ -139,10 +139,15 @@ class PortLost(LinkDown):
 def wrong_profile(mismatch: ChecksumMismatch) -> str:
     """The frames pass another model's checksum: what was seen and the fix, for the command
     line and for a Python caller (the ``profile`` argument)."""
-    name = mismatch.likely[0].name
+    return f"{mismatch.explained}: {profile_fix(mismatch.likely[0].name)}"
+
+
+def profile_fix(name: str) -> str:
+    """The fix for a robot read with another model's profile, as every such message says
+    it (a 500's checksum, a 600's mode + 1): the option, the Python argument, doctor."""
     return (
-        f"{mismatch.explained}: use --profile {name} (in Python, Connection.open(port, "
-        f"profile={name!r})), or roomba-bt doctor to tell the model"
+        f"use --profile {name} (in Python, Connection.open(port, profile={name!r})), or "
+        "roomba-bt doctor to tell the model"
     )
 
 

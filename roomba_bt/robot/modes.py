@@ -58,8 +58,8 @@ from roomba_bt.oi.frames import (
 )
 from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
 from roomba_bt.oi.opcodes import MODE_COMMANDS, CommandSpec
-from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
-from roomba_bt.robot.errors import ModeError
+from roomba_bt.oi.profiles import DEFAULT_PROFILE, PROFILES, RobotProfile
+from roomba_bt.robot.errors import ModeError, profile_fix
 from roomba_bt.robot.interface import ModeChange
 
 log = logging.getLogger(__name__)
@@ -200,10 +200,11 @@ _PASSIVE_READINGS = (OIMode.PASSIVE, OIMode.PASSIVE + 1)
 class OffsetDetector:
     """Learns whether packet 35 reads mode + 1 (see the module docstring for the rule)."""
 
-    __slots__ = ("expected_plus_one", "offset")
+    __slots__ = ("expected_plus_one", "offset", "profile")
 
     def __init__(self, profile: RobotProfile = DEFAULT_PROFILE) -> None:
         self.offset: int | None = None
+        self.profile = profile
         self.expected_plus_one = profile.reports_mode_plus_one
 
     def interpret(self, raw: int) -> OIMode | None:
@@ -214,24 +215,41 @@ class OffsetDetector:
             return None
         return OIMode(raw - offset)
 
-    def calibrate(self, raw: int) -> bool:
+    def calibrate(self, raw: int, port: str = "") -> bool:
         """Learn the offset from a reply read right after Start (Passive: 1, or 2 with the
-        bug); False if ``raw`` is neither."""
+        bug); False if ``raw`` is neither. ``port``: the robot's, named in what is said."""
         if raw not in _PASSIVE_READINGS:
             return False
         if self.offset != raw - 1:
-            self._learn(raw - 1, raw)
+            self._learn(raw - 1, raw, port)
         return True
 
-    def _learn(self, offset: int, raw: int) -> None:
+    def _learn(self, offset: int, raw: int, port: str) -> None:
+        """The offset learned, said when it is 1. A profile that does not expect it (the
+        default create2 on a Roomba 600) is most likely the wrong one: the warning names the
+        port and the fix, as the 500's checksum does
+        (:func:`~roomba_bt.robot.errors.wrong_profile`). It said only "packet 35 reports the
+        OI mode + 1 (read 2)", which with several robots named neither which one nor what
+        to do."""
         previous, self.offset = self.offset, offset
-        if offset == 1:
+        if offset != 1:
+            return
+        where = f"{port}: " if port else ""
+        likely = [p for p in PROFILES.values() if p.reports_mode_plus_one]
+        if self.expected_plus_one or not likely:
             level = logging.INFO if self.expected_plus_one and previous is None else logging.WARNING
             log.log(
                 level,
-                "packet 35 reports the OI mode + 1 (read %d); correcting every reading by -1",
-                raw,
-            )
+                "%spacket 35 reports the OI mode + 1 (read %d); correcting every reading by -1",
+                where, raw,
+            )  # fmt: skip
+            return
+        log.warning(
+            "%spacket 35 reports the OI mode + 1 (read %d), which the %s profile does not "
+            "expect: the robot is most likely a %s: %s (correcting every reading by -1 "
+            "meanwhile)", where, raw, self.profile.name, likely[0].title,
+            profile_fix(likely[0].name),
+        )  # fmt: skip
 
 
 def infer_cause(frame: SensorFrame, *earlier: SensorFrame | None) -> str:
@@ -346,11 +364,11 @@ class ModeModel:
         )
 
     # ------------------------------------------------------------------ commands
-    def calibrate(self, raw: int, time: float) -> bool:
+    def calibrate(self, raw: int, time: float, port: str = "") -> bool:
         """The robot answered ``raw`` for packet 35 right after Start (twice, agreeing): learn
         the "mode + 1" offset and take the robot as in Passive. False if ``raw`` is no
-        Passive reading (nothing changes)."""
-        if not self.detector.calibrate(raw):
+        Passive reading (nothing changes). ``port``: the robot's, named in what is said."""
+        if not self.detector.calibrate(raw, port):
             return False
         if self.mode is not OIMode.PASSIVE:
             self.force(OIMode.PASSIVE, time)

@@ -58,3 +58,52 @@ def test_the_right_profile_reads_it(
     code = main(["sensors", "--port", roomba500_port, "--count", "1", "--profile", "roomba500"])
     assert code == 0
     assert "oi_mode" in capsys.readouterr().out
+
+
+def test_run_with_the_default_profile_on_a_roomba600_names_the_port_and_the_profile(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """A 600 reports packet 35 as the mode + 1, which the create2 profile does not expect:
+    the run goes on (every reading corrected), and its warning names the port and the fix
+    as the 500's does. It said only "packet 35 reports the OI mode + 1 (read 2); correcting
+    every reading by -1": with three robots of mixed models, neither which nor what to do."""
+    import logging
+
+    from roomba_bt.oi.profiles import ROOMBA600
+
+    caplog.set_level(logging.INFO, logger="roomba_bt.robot.modes")
+    mission = tmp_path / "sit.yaml"
+    mission.write_text(MISSION)
+    with sim_pty_server(ROOMBA600) as port:
+        code = main(["run", str(mission), "--port", port, "--display", "none",
+                     "--no-keep-awake"])  # fmt: skip
+    assert code == 0
+    (record,) = [r for r in caplog.records if "mode + 1" in r.getMessage()]
+    assert record.levelname == "WARNING"
+    line = record.getMessage()
+    assert f"{port}: packet 35 reports the OI mode + 1 (read 2)" in line
+    assert "which the create2 profile does not expect" in line
+    assert "most likely a Roomba 600 series: use --profile roomba600" in line
+    assert "Connection.open(port, profile='roomba600')" in line and "roomba-bt doctor" in line
+
+
+@pytest.mark.parametrize(
+    ("profile", "level", "fix"),
+    [("create2", "WARNING", True), ("roomba500", "WARNING", True), ("roomba600", "INFO", False)],
+)
+def test_a_mode_plus_one_names_the_profile_where_the_profile_does_not_expect_it(
+    profile: str, level: str, fix: bool, caplog: pytest.LogCaptureFixture
+) -> None:
+    """``--profile roomba500`` on a 600 ran silently with the 500's command set, but for the
+    same bare warning; the 600's own profile expects it: said at INFO, no fix."""
+    import logging
+
+    from roomba_bt.oi.profiles import PROFILES
+    from roomba_bt.robot.modes import ModeModel
+
+    caplog.set_level(logging.INFO, logger="roomba_bt.robot.modes")
+    assert ModeModel(PROFILES[profile]).calibrate(2, 0.0, "/dev/ttyUSB3")
+    (record,) = [r for r in caplog.records if "mode + 1" in r.getMessage()]
+    assert record.levelname == level
+    assert record.getMessage().startswith("/dev/ttyUSB3: packet 35 reports the OI mode + 1")
+    assert ("--profile roomba600" in record.getMessage()) is fix
