@@ -49,10 +49,9 @@ from roomba_bt.behaviours.units import (
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.bits import LED_NAMES, led_bits, motor_bits
 from roomba_bt.oi.encode import NOTE_NAMES, PLAYABLE_NOTES, Note, Radius, note_name, note_number
-from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS, ENCODER_PACKETS
+from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS, ENCODER_PACKETS, SLOT_SECONDS
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import COMMANDS_BY_NAME, opcodes
-from roomba_bt.oi.stream import SLOT_SECONDS
 from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.robot.hazards import sets_going
 

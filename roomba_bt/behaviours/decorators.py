@@ -26,7 +26,8 @@ from roomba_bt.behaviours.lean import (
 )
 from roomba_bt.behaviours.reasons import SaysWhy, running_in, while_stopped
 from roomba_bt.behaviours.units import DURATION, UnitError
-from roomba_bt.robot.interface import SLOT_SECONDS, RobotHandle
+from roomba_bt.oi.frames import SLOT_SECONDS
+from roomba_bt.robot.interface import RobotHandle
 
 #: the statuses as module constants: ``Status.RUNNING`` goes through the Enum metaclass's
 #: ``__getattr__`` hook on every read (several times a global's cost), and guards and

@@ -31,8 +31,8 @@ from __future__ import annotations
 import math
 
 from roomba_bt.behaviours.driving import WALL_AHEAD_CLOSE, WallAhead
+from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.profiles import BODY_RADIUS_MM, LIGHT_BUMP_RANGE_MM
-from roomba_bt.oi.stream import SLOT_SECONDS
 
 __all__ = ["EdgeSteering", "signal_distance_mm"]
 

@@ -33,7 +33,7 @@ from roomba_bt.behaviours import lean
 from roomba_bt.behaviours.declare import Param
 from roomba_bt.behaviours.units import BOOL, DURATION, INT, STR, UnitError, ValueType
 from roomba_bt.behaviours.units import enum as enum_type
-from roomba_bt.oi.stream import SLOT_SECONDS
+from roomba_bt.oi.frames import SLOT_SECONDS
 
 
 class Shape(enum.Enum):

@@ -16,8 +16,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from roomba_bt.oi.encode import BAUD_CODES
+from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, PROFILES
-from roomba_bt.oi.stream import SLOT_SECONDS
 
 if TYPE_CHECKING:
     from roomba_bt.mission import Permissions

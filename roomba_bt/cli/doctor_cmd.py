@@ -31,6 +31,7 @@ from enum import IntEnum
 from typing import TYPE_CHECKING, Any, TextIO
 
 from roomba_bt.cli.arguments import add_command, baud_or_auto, port_name
+from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.identify import MODEL_RANGE_PACKETS
 from roomba_bt.oi.modes import OI_MODE_PACKET
 from roomba_bt.oi.packets import packet_ids
@@ -388,7 +389,7 @@ def _stream(transport: Any, baud: int, report: Report) -> tuple[bool | None, dic
             readings[pid] = max(value, readings.get(pid, value))
         at += size
     delay = _latency(report)  # the frames of the window's last `delay` s are still on the way
-    expected = round(max(0.0, STREAM_CHECK_S - delay) / 0.015)
+    expected = round(max(0.0, STREAM_CHECK_S - delay) / SLOT_SECONDS)
     frames = len(conventions)
     text = (
         f"Stream (148) of {list(ids)}: {frames} frames of {size} bytes in {STREAM_CHECK_S:g} s "

@@ -47,7 +47,7 @@ from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome, RunSummary, falls_in_order
 from roomba_bt.runtime.teardown import innermost_behaviour, tree_path
-from roomba_bt.sim import Faults, SimLink, Simulator, World
+from roomba_bt.sim import STEP_SECONDS, Faults, SimLink, Simulator, World
 from roomba_bt.sim.world import (
     DOCK_BEAM_LIMIT,
     DOCK_FAMILIES,
@@ -248,7 +248,7 @@ class _MeasuredSimulator(Simulator):
         self._since_onset: int | None = None  # steps since the last onset, while awaited
         self._stopped_after = -1
 
-    def step(self, dt: float = 0.015) -> None:
+    def step(self, dt: float = STEP_SECONDS) -> None:
         # Simulator.step named, not super().step: super() builds an object every step
         if self._since_onset is not None:
             self._watch_reaction(self._since_onset)

@@ -18,6 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec, _MeasuredSimulator, run_episode
+from roomba_bt.sim.state import STEP_SECONDS
 
 __all__ = ["WheelReversals", "count_reversals"]
 
@@ -69,7 +70,7 @@ def count_reversals(spec: EpisodeSpec) -> tuple[EpisodeResult, WheelReversals]:
     seen = WheelReversals()
 
     class Counting(_MeasuredSimulator):
-        def step(self, dt: float = 0.015) -> None:
+        def step(self, dt: float = STEP_SECONDS) -> None:
             super().step(dt)
             seen.see(self.time, self.requested_left, self.requested_right)
 

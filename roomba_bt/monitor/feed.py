@@ -45,10 +45,10 @@ from py_trees.common import Status
 from roomba_bt.behaviours.declare import KEY_TYPES_KEY, SNAPSHOT_KEY, Condition
 from roomba_bt.behaviours.language import WORDS
 from roomba_bt.behaviours.reasons import failure_reason
-from roomba_bt.oi.frames import FrameLayout, SensorFrame
+from roomba_bt.oi.frames import SLOT_SECONDS, FrameLayout, SensorFrame
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.printable import ANY_CONTROL, escaped
-from roomba_bt.robot.interface import SLOT_SECONDS, Odometry, Snapshot
+from roomba_bt.robot.interface import Odometry, Snapshot
 from roomba_bt.runtime.display import node_kind
 
 if TYPE_CHECKING:

@@ -59,7 +59,7 @@ from roomba_bt.monitor.address import DEFAULT_PORT, is_loopback
 from roomba_bt.monitor.feed import RunFeed
 from roomba_bt.monitor.session import ControlRefused, MonitorSession
 from roomba_bt.monitor.views import header_view, path_view, run_view, state_view, tree_view
-from roomba_bt.robot.interface import SLOT_SECONDS
+from roomba_bt.oi.frames import SLOT_SECONDS
 
 UPDATE_PERIOD_S = 0.05  # at most 20 updates a second per page
 TICK_WAIT_S = 0.05  # the longest a pump waits for a tick's end before it sends anyway

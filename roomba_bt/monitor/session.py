@@ -31,8 +31,8 @@ from py_trees.common import Status
 from roomba_bt.monitor.feed import IN_THE_EVENT_LOG, RunFeed
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import Command
+from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.modes import OIMode
-from roomba_bt.robot.interface import SLOT_SECONDS
 from roomba_bt.runtime.loop import StopRequested
 from roomba_bt.runtime.teardown import setup_tree, shutdown_nodes
 

@@ -22,13 +22,14 @@ from roomba_bt.oi.frames import (
     LIGHT_BUMPER_PACKETS,
     REQUESTED_DRIVE_PACKETS,
     REQUESTED_WHEELS_PACKETS,
+    SLOT_SECONDS,
     SensorFrame,
 )
 from roomba_bt.oi.ir import IRCharacter
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.odometry import counts_to_mm, encoder_delta
 from roomba_bt.oi.opcodes import COMMANDS
-from roomba_bt.robot.interface import SLOT_SECONDS, Snapshot
+from roomba_bt.robot.interface import Snapshot
 from roomba_bt.runtime.recording import utc_stamp
 
 

@@ -40,6 +40,10 @@ from roomba_bt.oi.packets import PACKETS, PACKETS_BY_NAME, VALID_PACKET_IDS, Pac
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
 
 STREAM_HEADER = 19
+#: One stream slot, the OI's clock: the robot updates its sensors and sends a stream frame
+#: every 15 ms. Defined here once; the stream parser, the odometry bound, the runner's mission
+#: time and the simulator's step all read it.
+SLOT_SECONDS = 0.015
 PACKET_ID_ARG = COMMANDS[142].args[0]
 #: the single sensor packets a frame may carry, as a message says them ("7-58")
 _PACKET_RANGE = f"{min(PACKETS)}-{max(PACKETS)}"

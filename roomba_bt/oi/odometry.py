@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 
+from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.profiles import COUNTS_PER_REVOLUTION, WHEEL_BASE_MM, WHEEL_DIAMETER_MM
 
 MM_PER_COUNT = math.pi * WHEEL_DIAMETER_MM / COUNTS_PER_REVOLUTION
@@ -23,7 +24,7 @@ TOP_WHEEL_SPEED_MM_S = 500
 #: Most counts a wheel can turn between two stream frames (15 ms): 7.5 mm is 16.9 counts at
 #: top speed; half again for the robot's own timing of the frames. A larger step between two
 #: consecutive frames is a corrupted frame, not a motion.
-MAX_COUNTS_PER_SLOT = math.ceil(1.5 * TOP_WHEEL_SPEED_MM_S * 0.015 / MM_PER_COUNT)
+MAX_COUNTS_PER_SLOT = math.ceil(1.5 * TOP_WHEEL_SPEED_MM_S * SLOT_SECONDS / MM_PER_COUNT)
 #: Angle (20) on firmware 3.4.0 and earlier must be divided by this to give degrees.
 OLD_FIRMWARE_ANGLE_FACTOR = 0.324056
 

@@ -41,6 +41,7 @@ from dataclasses import dataclass
 
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.frames import (
+    SLOT_SECONDS,
     STREAM_HEADER,
     FrameLayout,
     SensorFrame,
@@ -426,8 +427,6 @@ def _compile_checks(
 
 #: left and right counts, byte offset in the stream, arrival time, candidates refused so far
 _EncoderMark = tuple[int, int, int, float | None, int]
-#: A stream frame every 15 ms.
-SLOT_SECONDS = 0.015
 
 
 def stream_period(packet_ids: Iterable[int], rate: int) -> float:

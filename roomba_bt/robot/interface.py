@@ -23,6 +23,10 @@ from typing import NamedTuple, Protocol
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import Command
+
+# the 15 ms slot is the protocol's (oi.frames); named here too for the plugins that take it
+# from what a behaviour sees
+from roomba_bt.oi.frames import SLOT_SECONDS as SLOT_SECONDS
 from roomba_bt.oi.frames import FrameLayout, SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.odometry import MM_PER_COUNT
@@ -30,9 +34,6 @@ from roomba_bt.oi.opcodes import Effect
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
 
 _new_tuple = tuple.__new__
-
-#: One stream slot: the robot updates its sensors and sends a frame every 15 ms.
-SLOT_SECONDS = 0.015
 
 
 class Odometry(NamedTuple):

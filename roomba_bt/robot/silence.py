@@ -31,7 +31,7 @@ import weakref
 from typing import TYPE_CHECKING
 
 from roomba_bt.oi import commands as oi
-from roomba_bt.oi.frames import BATTERY_PACKETS
+from roomba_bt.oi.frames import BATTERY_PACKETS, SLOT_SECONDS
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.oi.stream import stream_period
 from roomba_bt.robot.errors import (
@@ -209,11 +209,7 @@ def listen_window(packet_ids: tuple[int, ...], rate: int) -> float:
 
     Group 100 (84 bytes) at 19200: 44 ms a frame, a window of 146 ms, not 100."""
     transfer = stream_period(packet_ids, rate)
-    return max(LISTEN_S, (FRAMES_TO_FOLLOW + 1) * transfer + SLOT_S)
-
-
-#: The OI's stream period.
-SLOT_S = 0.015
+    return max(LISTEN_S, (FRAMES_TO_FOLLOW + 1) * transfer + SLOT_SECONDS)
 
 
 def follow_baud(connection: Connection) -> BaudChanged | None:

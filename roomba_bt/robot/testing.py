@@ -15,10 +15,10 @@ behaviours queued::
 from __future__ import annotations
 
 from roomba_bt.oi.encode import Command
-from roomba_bt.oi.frames import ENCODER_PACKETS, layout_for
+from roomba_bt.oi.frames import ENCODER_PACKETS, SLOT_SECONDS, layout_for
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
-from roomba_bt.robot.interface import SLOT_SECONDS, BaseHandle, Odometry, Snapshot
+from roomba_bt.robot.interface import BaseHandle, Odometry, Snapshot
 
 __all__ = ["StubRobot"]
 

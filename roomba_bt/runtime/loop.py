@@ -33,7 +33,7 @@ from roomba_bt.behaviours.reasons import failure_reason, running_in
 from roomba_bt.mission import RUNTIME_PACKETS
 from roomba_bt.oi.encode import Command, turns_wheels
 from roomba_bt.oi.errors import BandwidthError
-from roomba_bt.oi.frames import BATTERY_PACKETS, SensorFrame
+from roomba_bt.oi.frames import BATTERY_PACKETS, SLOT_SECONDS, SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
@@ -42,7 +42,6 @@ from roomba_bt.robot.ending import SafeStop
 from roomba_bt.robot.errors import ConnectionFailed, LinkDown, ModeError, StreamStalled
 from roomba_bt.robot.hazards import HazardConfirmation, sets_going
 from roomba_bt.robot.interface import (
-    SLOT_SECONDS,
     BaseHandle,
     ModeChange,
     Odometer,

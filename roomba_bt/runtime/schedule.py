@@ -33,7 +33,7 @@ change to that case changes both (``tests/runtime/test_schedule.py`` holds them 
 
 from __future__ import annotations
 
-from roomba_bt.robot.interface import SLOT_SECONDS
+from roomba_bt.oi.frames import SLOT_SECONDS
 
 #: A frame this late on the schedule (half a slot), or later, may have a lost one before it
 LOST_LATE = 0.5 * SLOT_SECONDS

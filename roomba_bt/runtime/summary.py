@@ -8,10 +8,9 @@ from dataclasses import dataclass, field
 from enum import Enum, IntEnum
 from typing import TYPE_CHECKING
 
-from roomba_bt.oi.frames import BATTERY_PACKETS
+from roomba_bt.oi.frames import BATTERY_PACKETS, SLOT_SECONDS
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
-from roomba_bt.oi.stream import SLOT_SECONDS
 from roomba_bt.printable import ANY_CONTROL, escaped
 
 if TYPE_CHECKING:

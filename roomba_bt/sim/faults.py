@@ -11,6 +11,7 @@ import math
 from dataclasses import dataclass
 
 from roomba_bt.oi.encode import BAUD_RATES
+from roomba_bt.oi.frames import SLOT_SECONDS
 
 #: the largest ``Faults.odometry_error`` (20 %: far worse than any encoder in use)
 MAX_ODOMETRY_ERROR = 0.2
@@ -76,7 +77,7 @@ class Faults:
             ("truncate_rate", 0.0, 1.0),
             ("drop_rate", 0.0, 1.0),
             ("latency", 0.0, 10.0),
-            ("inject_every", 0.015, 3600.0),
+            ("inject_every", SLOT_SECONDS, 3600.0),
             ("noise", 0.0, 4095.0),
             ("odometry_error", 0.0, MAX_ODOMETRY_ERROR),
             ("stream_gap_s", 0.0, 3600.0),

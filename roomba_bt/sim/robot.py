@@ -53,7 +53,7 @@ __all__ = [
 #: a step in nanoseconds, a float: the clock (``_time_ns``) counts whole nanoseconds in a float,
 #: exact up to 2**53 ns (104 days), and divided by 1e9 gives the same time as an int would
 #: (an int is made a float first), without converting a big int to a float every step
-_STEP_NS = 15_000_000.0
+_STEP_NS = float(round(STEP_SECONDS * 1e9))
 _from_bytes = int.from_bytes
 _PASSIVE, _SAFE, _FULL = OIMode.PASSIVE, OIMode.SAFE, OIMode.FULL
 

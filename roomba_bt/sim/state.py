@@ -33,13 +33,16 @@ import random
 from dataclasses import dataclass
 from typing import NamedTuple
 
+from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.sim.faults import NO_FAULTS, Faults
 from roomba_bt.sim.world import Pose, World
 
-STEP_SECONDS = 0.015
+#: One simulator step is one stream slot (the protocol's 15 ms,
+#: :data:`~roomba_bt.oi.frames.SLOT_SECONDS`).
+STEP_SECONDS = SLOT_SECONDS
 
 
 class TracePoint(NamedTuple):

@@ -41,6 +41,7 @@ from typing import Any
 import yaml
 
 from roomba_bt import yamlsource
+from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.profiles import BODY_RADIUS_MM
 from roomba_bt.sim.geometry import (
     Point,
@@ -702,7 +703,7 @@ def _event(c: _Checker, value: object, path: PathKey) -> TimelineEvent | None:
         return None
     at = c.number(spec["at"], (*path, "at"), 0, 1e6, "s")
     kind = c.choice(spec["kind"], (*path, "kind"), EVENT_KINDS)
-    duration = c.number(spec.get("duration", 0.5), (*path, "duration"), 0.015, 1e6, "s")
+    duration = c.number(spec.get("duration", 0.5), (*path, "duration"), SLOT_SECONDS, 1e6, "s")
     side = c.choice(spec.get("side", "both"), (*path, "side"), SIDES)
     if at is None or kind is None or duration is None or side is None:
         return None
