@@ -5,26 +5,19 @@ and defaults; the sensor packets it reads; the opcodes it sends (so the OI modes
 the mode it leads to. The :class:`Registry` holds the built-ins and the plugins alike.
 """
 
-from roomba_bt.behaviours.declare import (
+from roomba_bt.behaviours.base import Action, Condition, InvalidCheck, RobotBehaviour
+from roomba_bt.behaviours.blackboard import (
     MISSION_NAMESPACE,
     SNAPSHOT_KEY,
-    Action,
     BlackboardRef,
-    Condition,
-    Declaration,
-    DeclarationError,
-    InvalidCheck,
     KeyRange,
     KeyType,
-    Param,
-    ParamError,
-    RobotBehaviour,
     UnwrittenKey,
-    declare,
     declare_keys,
     read_key,
     write_key,
 )
+from roomba_bt.behaviours.declare import Declaration, DeclarationError, Param, ParamError, declare
 from roomba_bt.behaviours.registry import (
     ENTRY_POINT_GROUP,
     PluginError,

@@ -18,15 +18,10 @@ from typing import Any
 
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import (
-    WHEEL,
-    Action,
-    Param,
-    cycle_may_run,
-    declare,
-    on_home_base,
-    write_key,
-)
+from roomba_bt.behaviours.base import Action
+from roomba_bt.behaviours.blackboard import write_key
+from roomba_bt.behaviours.declare import Param, declare
+from roomba_bt.behaviours.driving import WHEEL, cycle_may_run, on_home_base
 from roomba_bt.behaviours.units import (
     ANGLE,
     ANY,

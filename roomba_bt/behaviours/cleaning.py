@@ -31,7 +31,8 @@ import math
 from py_trees.common import Status
 
 from roomba_bt.behaviours import driving
-from roomba_bt.behaviours.declare import Action, Param, declare, wheel_speed_param
+from roomba_bt.behaviours.base import Action
+from roomba_bt.behaviours.declare import Param, declare, wheel_speed_param
 from roomba_bt.behaviours.units import ANGLE, DISTANCE, INT, enum
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import ENCODER_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS, SensorFrame

@@ -19,15 +19,9 @@ from operator import attrgetter
 from types import MappingProxyType
 from typing import Any, ClassVar
 
-from roomba_bt.behaviours.declare import (
-    BlackboardRef,
-    Comparison,
-    Condition,
-    Param,
-    UnwrittenKey,
-    declare,
-    read_key,
-)
+from roomba_bt.behaviours.base import Condition
+from roomba_bt.behaviours.blackboard import BlackboardRef, UnwrittenKey, read_key
+from roomba_bt.behaviours.declare import Comparison, Param, declare
 from roomba_bt.behaviours.units import (
     ANGLE,
     ANY,

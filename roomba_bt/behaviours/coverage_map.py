@@ -62,8 +62,10 @@ import py_trees
 from py_trees.common import Status
 
 from roomba_bt.behaviours import driving
-from roomba_bt.behaviours.declare import WHEEL, Action, Param, declare, wheel_speed_param
+from roomba_bt.behaviours.base import Action
+from roomba_bt.behaviours.declare import Param, declare, wheel_speed_param
 from roomba_bt.behaviours.docking.common import DockWatch
+from roomba_bt.behaviours.driving import WHEEL
 from roomba_bt.behaviours.drops import DropEdge, KnownDrops
 from roomba_bt.behaviours.edging import EdgeSteering, signal_distance_mm
 from roomba_bt.behaviours.units import DISTANCE, DURATION

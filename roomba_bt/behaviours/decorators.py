@@ -15,7 +15,9 @@ import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import FrameInputs, ParamError, write_key
+from roomba_bt.behaviours.blackboard import write_key
+from roomba_bt.behaviours.declare import ParamError
+from roomba_bt.behaviours.frame_inputs import FrameInputs
 from roomba_bt.behaviours.lean import (
     DONE,
     DecoratorTick,

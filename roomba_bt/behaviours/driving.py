@@ -28,20 +28,31 @@ and steer by the odometry of the snapshot. Their moves, as (left, right) wheel s
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import WHEEL, Action
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import (
     BUMPS_PACKETS,
+    CHARGING_SOURCES_PACKETS,
     CLIFF_PACKETS,
     VIRTUAL_WALL_PACKETS,
     SensorFrame,
 )
-from roomba_bt.oi.modes import DRIVING_MODES
+from roomba_bt.oi.modes import DRIVING_MODES, OIMode
+from roomba_bt.oi.opcodes import COMMANDS_BY_NAME
+from roomba_bt.robot.interface import ModeChange, RobotHandle
+
+if TYPE_CHECKING:  # the leaves' base imports this module: their class for annotations only
+    from roomba_bt.behaviours.base import Action
 
 __all__ = [
+    "CHARGER_ADVICE",
+    "WHEEL",
+    "cycle_may_run",
+    "left_driving_message",
+    "on_home_base",
     "BACK_GIVE_UP_S",
     "BACK_MM_S",
     "BACK_OFF_MM",
@@ -68,6 +79,56 @@ __all__ = [
     "wheel_speeds",
     "wrap",
 ]
+
+#: One wheel's speed as Drive Direct takes it, mm/s (-500..500, from the opcode table): the
+#: bound of every wheel-speed parameter and of what a driving action sends.
+WHEEL = COMMANDS_BY_NAME["drive_direct"].args[0]
+
+
+#: What to do when Safe was refused on a powered charger: the user's two ways out, the
+#: second by the name the shipped missions use (missions/lib/undock.yaml)
+CHARGER_ADVICE = (
+    "Safe mode on a powered dock drops to Passive at once: start the robot off the dock, or "
+    "begin the mission with the `undock` subtree (`subtree: {id: undock}`, from "
+    "`include: [roomba-bt:lib/undock.yaml]`), which backs off the dock in Full first, as "
+    "missions/clean.yaml does"
+)
+
+
+def left_driving_message(change: ModeChange | None, waited: str = "") -> str:
+    """The failure message of a leaf whose robot left Safe/Full by itself: the cause, and,
+    when the cause is the charger refusing a Safe just sent (the robot started on its
+    dock), what to do about it; the bare "(charger)" left an owner guessing."""
+    cause = f" ({change.cause})" if change is not None else ""
+    message = f"the robot left Safe/Full mode{cause}{waited}"
+    if change is not None and change.refused_on_charger:
+        message += f"; {CHARGER_ADVICE}"
+    return message
+
+
+_SEEK_DOCK = COMMANDS_BY_NAME["seek_dock"]
+
+
+def on_home_base(frame: SensorFrame) -> bool:
+    """Whether ``frame`` carries packet 34 and it shows the home base's power."""
+    return all(pid in frame for pid in CHARGING_SOURCES_PACKETS) and (
+        frame.charging_sources.home_base
+    )
+
+
+def cycle_may_run(robot: RobotHandle) -> bool:
+    """Whether a built-in cycle may still be driving the robot: one was written and nothing
+    has ended it since (:attr:`Snapshot.cycle_may_run
+    <roomba_bt.robot.interface.Snapshot.cycle_may_run>`), the robot is in Passive, and it is
+    not a Seek Dock on its home base (docked: that cycle ended there). Any other cycle on the
+    home base may be about to drive off it (Clean sent on the dock); ending it there is
+    harmless, as Safe on a powered dock drops to Passive at once."""
+    snap = robot.snapshot
+    if not snap.cycle_may_run or snap.mode is not OIMode.PASSIVE:
+        return False
+    cycle = robot.outbox.last_on("wheels")
+    return cycle is None or cycle.spec is not _SEEK_DOCK or not on_home_base(snap.frame)
+
 
 #: a centre light-bump signal (packets 47-50) at or above this: something within a few
 #: centimetres ahead, slow down

@@ -49,6 +49,7 @@ import py_trees
 from py_trees.common import Status
 
 from roomba_bt.behaviours import driving
+from roomba_bt.behaviours.base import Action
 from roomba_bt.behaviours.coverage_map import (
     BLOCKED,
     MAP_KEY,
@@ -60,7 +61,7 @@ from roomba_bt.behaviours.coverage_map import (
     FloorMap,
     path_to,
 )
-from roomba_bt.behaviours.declare import Action, Param, declare, wheel_speed_param
+from roomba_bt.behaviours.declare import Param, declare, wheel_speed_param
 from roomba_bt.behaviours.drops import DROP
 from roomba_bt.behaviours.units import DURATION
 from roomba_bt.oi import commands as oi

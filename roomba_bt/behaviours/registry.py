@@ -28,7 +28,8 @@ from dataclasses import dataclass, replace
 from importlib.metadata import Distribution, EntryPoint, distributions, entry_points
 from pathlib import Path
 
-from roomba_bt.behaviours.declare import Declaration, DeclarationError, RobotBehaviour
+from roomba_bt.behaviours.base import RobotBehaviour
+from roomba_bt.behaviours.declare import Declaration, DeclarationError
 from roomba_bt.behaviours.language import RESERVED
 from roomba_bt.behaviours.units import closest
 

@@ -30,7 +30,8 @@ import math
 from py_trees.common import Status
 
 from roomba_bt.behaviours import driving
-from roomba_bt.behaviours.declare import Action, Param, declare, wheel_speed_param
+from roomba_bt.behaviours.base import Action
+from roomba_bt.behaviours.declare import Param, declare, wheel_speed_param
 from roomba_bt.behaviours.driving import wheel_speeds
 from roomba_bt.behaviours.units import ANGLE, DURATION, FLOAT, INT
 from roomba_bt.oi import commands

@@ -18,7 +18,8 @@ from typing import Any
 
 from py_trees.behaviour import Behaviour
 
-from roomba_bt.behaviours.declare import CheckedParams, declare_keys, write_key
+from roomba_bt.behaviours.base import CheckedParams
+from roomba_bt.behaviours.blackboard import declare_keys, write_key
 from roomba_bt.behaviours.language import GUARD, WORDS
 from roomba_bt.behaviours.units import ValueType
 from roomba_bt.mission.diagnostics import Diagnostic

@@ -51,8 +51,9 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from typing import Any
 
+from roomba_bt.behaviours.blackboard import BlackboardRef
 from roomba_bt.behaviours.conditions import comparison_problem
-from roomba_bt.behaviours.declare import BlackboardRef, Declaration, Param
+from roomba_bt.behaviours.declare import Declaration, Param
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.ir import KeyDecl, Node
 from roomba_bt.mission.source import Loc

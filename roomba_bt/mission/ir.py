@@ -11,7 +11,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
-from roomba_bt.behaviours.declare import BlackboardRef, Declaration
+from roomba_bt.behaviours.blackboard import BlackboardRef
+from roomba_bt.behaviours.declare import Declaration
 from roomba_bt.behaviours.units import ValueType
 from roomba_bt.mission.source import Loc
 

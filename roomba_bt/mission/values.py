@@ -15,7 +15,8 @@ from typing import Any
 
 import yaml
 
-from roomba_bt.behaviours.declare import BLACKBOARD_REF, BlackboardRef, Param
+from roomba_bt.behaviours.blackboard import BLACKBOARD_REF, BlackboardRef
+from roomba_bt.behaviours.declare import Param
 from roomba_bt.behaviours.registry import Registry
 from roomba_bt.behaviours.units import (
     CANONICAL,

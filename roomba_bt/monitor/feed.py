@@ -42,7 +42,8 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import py_trees
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import KEY_TYPES_KEY, SNAPSHOT_KEY, Condition
+from roomba_bt.behaviours.base import Condition
+from roomba_bt.behaviours.blackboard import KEY_TYPES_KEY, SNAPSHOT_KEY
 from roomba_bt.behaviours.language import WORDS
 from roomba_bt.behaviours.reasons import failure_reason
 from roomba_bt.oi.frames import SLOT_SECONDS, FrameLayout, SensorFrame

@@ -48,7 +48,7 @@ stages that do not move.
 
 from __future__ import annotations
 
-from roomba_bt.behaviours.declare import Action
+from roomba_bt.behaviours.base import Action
 from roomba_bt.behaviours.docking.approach import ApproachState, DockApproach
 from roomba_bt.behaviours.docking.charge import DockTimeLimit, DockWaitCharge
 from roomba_bt.behaviours.docking.common import (

@@ -6,7 +6,8 @@ from __future__ import annotations
 import py_trees
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import Action, Param, declare
+from roomba_bt.behaviours.base import Action
+from roomba_bt.behaviours.declare import Param, declare
 from roomba_bt.behaviours.docking.common import (
     FAILED,
     OK,

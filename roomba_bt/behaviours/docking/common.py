@@ -12,8 +12,9 @@ from typing import NamedTuple, TypeVar
 import py_trees
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import Action, Declaration, Param, declare, left_driving_message
-from roomba_bt.behaviours.driving import wheel_speeds
+from roomba_bt.behaviours.base import Action
+from roomba_bt.behaviours.declare import Declaration, Param, declare
+from roomba_bt.behaviours.driving import left_driving_message, wheel_speeds
 from roomba_bt.behaviours.units import DURATION
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.bits import (

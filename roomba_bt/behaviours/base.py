@@ -1,0 +1,486 @@
+"""The leaves a behaviour derives from: :class:`RobotBehaviour`, :class:`Action`,
+:class:`Condition`.
+
+py_trees behaviours ticked by the lean tick (:class:`~roomba_bt.behaviours.lean.DirectLeaf`).
+A leaf is configured in ``__init__`` with its declared parameters (checked there when built
+from Python: :meth:`Declaration.checked <roomba_bt.behaviours.declare.Declaration.checked>`),
+gets the robot in ``setup(robot=...)``, reads the tick's :class:`Snapshot
+<roomba_bt.robot.interface.Snapshot>` and queues commands in the outbox (:meth:`send`,
+holding each to its declaration's ``sends=``). An :class:`Action` stops what it set going on
+every ending; a :class:`Condition` says SUCCESS or FAILURE from this tick's frame, by a short
+tick when its lifecycle is its own. How a behaviour declares itself is
+:mod:`roomba_bt.behaviours.declare`; its blackboard, :mod:`roomba_bt.behaviours.blackboard`.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any
+
+import py_trees
+
+from roomba_bt.behaviours.blackboard import BlackboardRef, KeyRange, UnwrittenKey, read_key
+from roomba_bt.behaviours.driving import cycle_may_run, left_driving_message
+from roomba_bt.behaviours.lean import DirectLeaf, InvalidStatus, behaviour_tick, checked_status
+from roomba_bt.oi.encode import Command, halt, motors_off, turns_wheels
+from roomba_bt.oi.modes import DRIVING_MODES
+from roomba_bt.oi.opcodes import COMMANDS, Effect
+from roomba_bt.robot.interface import RobotHandle, Snapshot
+from roomba_bt.yamlsource import quoted
+
+if TYPE_CHECKING:
+    from roomba_bt.behaviours.declare import Declaration
+
+#: what a behaviour's own mistakes that the runtime mended are said on (as the mission's)
+_log = logging.getLogger("roomba_bt.mission")
+
+_BUILTIN_CYCLE = Effect.BUILTIN_CYCLE  # read once: send() asks on every command
+_SILENCES = Effect.SILENCES
+
+_RUNNING, _SUCCESS, _FAILURE = (
+    py_trees.common.Status.RUNNING, py_trees.common.Status.SUCCESS, py_trees.common.Status.FAILURE
+)  # fmt: skip
+_DEBUG = py_trees.logging.Level.DEBUG
+
+
+class CheckedParams(dict[str, Any]):
+    """Parameters the mission compiler has checked and parsed (each problem said at its
+    file:line:col): a leaf built with them takes them as they are, with no second check."""
+
+
+class UndeclaredCommand(TypeError):
+    """A behaviour sent a command its declaration's ``sends=`` does not list. What it sends
+    is what the compiler reads: the modes the mission needs, the mode check, the Full-mode
+    warning about driving blind at a cliff; an undeclared Drive escaped all three (decided:
+    the behaviour's error, at its first such send, before the command is queued)."""
+
+    def __init__(self, behaviour: RobotBehaviour, command: Command) -> None:
+        declaration = behaviour.declaration
+        if declaration.kind == "condition":  # sends= is refused on a condition: not that
+            super().__init__(
+                f"{declaration.name} sent {command.spec.name} ({command.spec.opcode}), but it "
+                "is a condition, which only reads: a behaviour that sends commands is an "
+                f"action (derive {type(behaviour).__name__} from roomba_bt.behaviours.Action, "
+                f"declare kind='action', sends=opcodes({command.spec.name!r}), and return a "
+                "Status from update())"
+            )
+            return
+        listed = ", ".join(f"{COMMANDS[op].name} ({op})" for op in declaration.sends) or "nothing"
+        super().__init__(
+            f"{declaration.name} sent {command.spec.name} ({command.spec.opcode}), which its "
+            f"declaration does not list: add {command.spec.opcode} to @declare(sends=...) "
+            f"(it lists {listed})"
+        )
+
+
+class RobotBehaviour(DirectLeaf, py_trees.behaviour.Behaviour):
+    """Base of every leaf: configuration in ``__init__``, the robot in ``setup(robot=...)``.
+
+    Ticked by :class:`~roomba_bt.behaviours.lean.DirectLeaf` (py_trees' leaf tick without
+    its per-tick debug formatting, and without a generator when ticked by ``tick_once``).
+
+    ``params`` are the validated values in canonical units (``velocity`` in mm/s, ``duration``
+    in s), or :class:`BlackboardRef` for ``@key`` values, resolved by :meth:`value` when the
+    behaviour starts. Subclasses override :meth:`update` (and :meth:`start` for what must
+    happen once when the behaviour starts), never block and never touch a port.
+    """
+
+    declaration: Declaration
+    _defaults: dict[str, Any]
+
+    def __init__(self, name: str, params: Mapping[str, Any] | None = None) -> None:
+        super().__init__(name=name)
+        cls = type(self)
+        defaults = cls.__dict__.get("_defaults")
+        if defaults is None:  # parsed once per class, not once per node
+            defaults = cls.declaration.defaults
+            cls._defaults = defaults
+        values = dict(defaults)
+        # the compiler's are checked (at file:line:col); Python's are checked here: none
+        # given ({} or None) too, for the required ones, and a non-mapping (Wait("n", "2s"))
+        if type(params) is CheckedParams:
+            values.update(params)
+        else:
+            values.update(cls.declaration.checked(name, {} if params is None else params))
+        self.params: dict[str, Any] = values
+        self.robot: RobotHandle | None = None
+        self._resolved: dict[str, Any] = values
+        self._refs: dict[str, BlackboardRef] | None = None
+
+    @classmethod
+    def declaration_problem(cls, declaration: Declaration) -> str | None:
+        """What makes ``declaration`` wrong for this class, beyond what every declaration is
+        checked for (None: nothing). A base class whose subclasses must declare something
+        it relies on says so here, so a plugin's mistake is named when it is declared, not
+        at its first tick on a robot."""
+        return None
+
+    def setup(self, **kwargs: Any) -> None:
+        robot = kwargs.get("robot")
+        if robot is not None:
+            self.robot = robot
+
+    @property
+    def snapshot(self) -> Snapshot:
+        robot = self.robot
+        if robot is None:
+            raise RuntimeError(
+                f"behaviour {self.name!r} was ticked before setup(robot=...): call "
+                "CompiledMission.setup(robot) first"
+            )
+        return robot.snapshot
+
+    def send(self, command: Command) -> None:
+        robot = self.robot
+        if robot is None:
+            raise RuntimeError(f"behaviour {self.name!r} has no robot: call setup(robot=...)")
+        if type(command) is not Command:  # raw bytes would pass no mode guard nor range check
+            raise TypeError(
+                f"send() takes a Command from roomba_bt.oi.commands (such as "
+                f"commands.drive(200, 32767)), not {type(command).__name__} {command!r:.60}"
+            )
+        spec = command.spec
+        if spec.opcode not in self.declaration.sends:  # the compile-time checks read sends=
+            raise UndeclaredCommand(self, command)
+        if spec.drives_wheels:  # what it set turning is stopped when it ends (terminate)
+            self._started_motion = turns_wheels(command)
+        elif spec.effect is _BUILTIN_CYCLE:  # ended when it is halted or fails (terminate)
+            if cycle_may_run(robot):
+                # a cycle command into a running cycle pauses it (600 / Create 2 spec):
+                # end that one first (Safe, drive 0, motors off, Start), then start this
+                robot.outbox.end_cycle(self)
+            # another leaf's cycle command queued in this tick: written and ended before
+            # this one, not replaced by it (its leaf says SUCCESS for a command it sent)
+            robot.outbox.end_queued_cycle(self)
+            self._started_cycle = True
+        elif spec.effect is _SILENCES and robot.snapshot.mode in DRIVING_MODES:
+            # Stop and Reset say nothing of the wheels and brushes: sent where they may
+            # turn, they go after drive 0 and motors off, as --end-in stop's Stop does
+            robot.outbox.send(halt(), self)
+            robot.outbox.send(motors_off(), self)
+        robot.outbox.send(command, self)
+
+    #: whether the last wheel command it sent set them turning (:meth:`send` notes it)
+    _started_motion = False
+    #: whether it sent a built-in cycle (Clean, Spot, Max, Seek Dock) not yet ended by it
+    _started_cycle = False
+
+    def value(self, name: str) -> Any:
+        """The parameter ``name`` for this run (blackboard references resolved at start)."""
+        return self._resolved.get(name)
+
+    def number(self, name: str) -> float:
+        """A numeric parameter as a float (for comparisons). One the declaration lacks (a
+        plugin's subclass that re-declared a stage without its parameters) is named as such,
+        not as a bare ``KeyError: 'speed'``."""
+        try:
+            return float(self._resolved[name])
+        except KeyError:
+            declaration = self.declaration
+            if declaration.param(name) is not None:  # declared, with no default, not given
+                raise KeyError(
+                    f"{type(self).__name__} reads parameter {name!r}, which {self.name!r} was "
+                    f"not given and {declaration.name!r} declares with no default (give it "
+                    "one, or make it required)"
+                ) from None
+            declared = ", ".join(p.name for p in declaration.params) or "none"
+            raise KeyError(
+                f"{type(self).__name__} reads parameter {name!r}, which its declaration "
+                f"{declaration.name!r} does not have; it declares: {declared}"
+            ) from None
+
+    def initialise(self) -> None:
+        # started again (a retry's next attempt): what the last run said is not said of this
+        # one (``cover [✓]`` showed an earlier attempt's cliff failure at the end of a clean)
+        self.feedback_message = ""
+        refs = self._refs
+        if refs is None:  # the parameters never change: look for @key values once
+            refs = self._refs = {
+                k: v for k, v in self.params.items() if isinstance(v, BlackboardRef)
+            }
+        if refs:
+            resolved = dict(self.params)
+            for pname, ref in refs.items():
+                # typed when written (the validator's values; write_key holds a plugin's):
+                # the key's type fits this parameter, so no parsing happens during a tick
+                raw = read_key(ref.key)
+                if ref.field is not None:
+                    raw = raw.get(ref.field) if isinstance(raw, Mapping) else None
+                if raw is None:  # only a tree built in Python: a mission's reads are proved
+                    raise UnwrittenKey(
+                        f"{pname} is {ref}, but nothing has written blackboard key "
+                        f"{str(ref)[1:]!r} before {self.name!r} started (write it first: a "
+                        "SetKey node, or write_key from roomba_bt.behaviours.declare)"
+                    )
+                param = self.declaration.param(pname)
+                problem = param.check_range(raw) if param is not None else None
+                if problem is not None:
+                    raise KeyRange(self, pname, ref, problem)
+                resolved[pname] = raw
+            self._resolved = resolved
+        self.start()
+
+    def start(self) -> None:
+        """Called once each time the behaviour starts (after ``@key`` values are read)."""
+
+
+class Action(RobotBehaviour):
+    """An action: puts commands in the outbox. Motion started must stop on every ending."""
+
+    #: Kept for plugins written before :meth:`send` noted motion by itself: a flag that
+    #: nothing needs to set (an action that sets the wheels turning is halted when it ends).
+    moves = False
+
+    #: how long an action that set the wheels moving waits, once the robot has left Safe and
+    #: Full by itself (a cliff, a wheel drop, the charger), for something to bring it back
+    PASSIVE_GRACE_S = 1.0
+    _out_of_driving_since: float | None = None
+
+    def stranded(self, grace: float | None = None) -> str | None:
+        """A failure message once the robot has been out of Safe/Full for longer than
+        ``grace`` (s; :attr:`PASSIVE_GRACE_S` unless given; 0: in the tick it shows) while
+        this action was driving it, else None. Waiting on silently left the robot in Passive
+        until it slept (5 minutes) and the run ended as a lost connection; failing lets the
+        tree recover (``retry`` with ``mode: safe``) or end with the cause."""
+        snap = self.snapshot
+        if snap.mode in DRIVING_MODES:
+            self._out_of_driving_since = None
+            return None
+        if self._out_of_driving_since is None:
+            self._out_of_driving_since = snap.time
+        if grace is None:
+            grace = self.PASSIVE_GRACE_S
+        if snap.time - self._out_of_driving_since < grace - 1e-9:
+            return None
+        waited = f" and was not brought back within {grace:g} s" if grace > 0 else ""
+        return left_driving_message(snap.last_fallback, waited)
+
+    def wait_for_driving_mode(self, grace: float | None = None) -> py_trees.common.Status:
+        """Out of Safe/Full, where the mode model would refuse a drive command: RUNNING
+        while it waits for them, FAILURE once :meth:`stranded` (``grace``) after it began
+        to move."""
+        stranded = self.stranded(grace) if self._started_motion else None
+        if stranded is not None:
+            self._started_motion = False
+            self.feedback_message = stranded
+            return _FAILURE
+        return _RUNNING
+
+    def terminate(self, new_status: py_trees.common.Status) -> None:
+        """However the action ends (success, failure, or preempted: INVALID), wheels it
+        set turning are stopped: ``[137][0][0][0][0]`` queued in this tick's outbox, unless
+        another behaviour already queued a wheel command in this tick (the branch that
+        preempted this one: its Drive stands), or the robot is out of Safe and Full: it
+        stopped its wheels when it fell to Passive (a cliff, a wheel drop, the charger),
+        and the mode guard would refuse the halt.
+
+        A built-in cycle it started is ended when it fails or is halted (INVALID: preempted,
+        or its parent halted or started over after it succeeded) while the cycle may still
+        drive (:func:`cycle_may_run`): Safe, drive 0, motors off, Start
+        (:meth:`~roomba_bt.robot.interface.Outbox.end_cycle`; its cycle command queued in
+        this very tick is not written). In Passive nothing else the
+        tree sends stops it, and the firmware drove on while the tree showed the leaf
+        halted. Its SUCCESS ends nothing: ``clean`` succeeds as its cycle starts,
+        ``seek_dock`` once docked."""
+        robot = self.robot
+        if self._started_motion and robot is not None and robot.snapshot.mode in DRIVING_MODES:
+            robot.outbox.send_stop(halt(), self)
+        if self._started_cycle and new_status is not _SUCCESS:
+            self._started_cycle = False
+            if robot is not None:
+                robot.outbox.end_cycle(self, running=cycle_may_run(robot))
+        self._started_motion = False
+        self._out_of_driving_since = None
+        self._terminated = True
+
+    #: whether :meth:`terminate` (this class's) ran during the stop under way (:meth:`stop`)
+    _terminated = False
+
+    def stop(self, new_status: py_trees.common.Status) -> None:
+        """py_trees' stop (``terminate``, then the status); then, if the wheels this action
+        set turning are still turning, or a built-in cycle it started still runs, what
+        :meth:`terminate` does for them is done here, and said once per class
+        (:func:`_said_left_going`). py_trees' own ``terminate`` does nothing, so its users
+        override it without calling ``super().terminate()``: the halt was skipped, and the
+        robot drove on after the leaf had ended, with no leaf in charge of it (session 27: at
+        200 mm/s through a whole ``wait: 5s``, and the bump reflex sent the dead action's
+        drive again). Every stop of a leaf comes here: py_trees' ticks and the lean ones
+        (:mod:`~roomba_bt.behaviours.lean`), the composites' and decorators' stops of their
+        children, and the run's end (:func:`~roomba_bt.runtime.teardown.stop_nodes`)."""
+        self._terminated = False
+        super().stop(new_status)
+        if self._started_motion or (self._started_cycle and new_status is not _SUCCESS):
+            self._end_what_terminate_left(new_status)
+
+    def _end_what_terminate_left(self, new_status: py_trees.common.Status) -> None:
+        """The halt (and the cycle's end) that an override of :meth:`terminate` left out, or
+        undid by sending a wheel command after ``super().terminate()``. Not at a run's end
+        (the tree's stop, each ``terminate`` patched into its node to guard it:
+        runtime/teardown.py): the safe stop that follows stops the robot, the outbox is
+        dropped, and what the terminate queued is said there as not written (a halt queued
+        here would replace it, unsaid)."""
+        if "terminate" in vars(self):
+            self._started_motion = self._started_cycle = False
+            self._out_of_driving_since = None
+            return
+        robot = self.robot
+        driving = (
+            self._started_motion and robot is not None and robot.snapshot.mode in DRIVING_MODES
+        )
+        cycle = (
+            self._started_cycle
+            and new_status is not _SUCCESS
+            and robot is not None
+            and cycle_may_run(robot)
+        )
+        after_super = self._terminated
+        Action.terminate(self, new_status)
+        if driving or cycle:
+            _said_left_going(self, after_super, driving)
+
+
+#: the classes whose terminate left the wheels turning (or a cycle running) already said
+_LEFT_GOING_SAID: set[type] = set()
+
+
+def _said_left_going(node: Action, after_super: bool, driving: bool) -> None:
+    """A warning, once per class, that ``node``'s ``terminate`` left the robot going and that
+    :meth:`Action.stop` stopped it: the behaviour, the class, and the file:line of the
+    ``terminate`` it has (``after_super``: it called ``super().terminate()`` and then sent
+    a wheel command; ``driving``: the wheels, else a built-in cycle)."""
+    cls = type(node)
+    if cls in _LEFT_GOING_SAID:
+        return
+    _LEFT_GOING_SAID.add(cls)
+    code = getattr(cls.terminate, "__code__", None)
+    where = f" at {code.co_filename}:{code.co_firstlineno}" if code is not None else ""
+    what = "the wheels were left turning; halted"
+    if not driving:
+        what = "the built-in cycle it started was left running; ended (Start)"
+    how = (
+        "sent a wheel command after super().terminate()"
+        if after_super
+        else "did not call super().terminate()"
+    )
+    _log.warning(
+        "%s (%s.terminate%s) %s: %s (an action that has ended leaves the robot stopped)",
+        node.name, cls.__name__, where, how, what,
+    )  # fmt: skip
+
+
+class Condition(RobotBehaviour):
+    """A condition: SUCCESS or FAILURE from this tick's frame, never RUNNING."""
+
+    #: True on a class whose ``check`` reads nothing but its own parameters and, from
+    #: ``snapshot.frame``, the packets it declares: its result is then a function of those
+    #: packets' values (see :class:`~roomba_bt.behaviours.frame_inputs.FrameInputs`). Said
+    #: by the class that defines ``check``: a subclass with a ``check`` of its own is not
+    #: taken to be pure unless it says so too.
+    frame_pure = False
+    #: the ``check`` that ``frame_pure`` was said of
+    _pure_check: Callable[[Condition, Snapshot], bool] | None = None
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if vars(cls).get("frame_pure"):
+            cls._pure_check = cls.check
+
+    def check(self, snapshot: Snapshot) -> bool:
+        raise NotImplementedError
+
+    def update(self) -> py_trees.common.Status:
+        ok = self.check(self.snapshot)
+        if ok is True:
+            return _SUCCESS
+        if ok is False:
+            return _FAILURE
+        return _SUCCESS if checked_truth(self, ok) else _FAILURE
+
+    def tick_direct(self, started: bool = False) -> None:
+        """The leaf tick (:func:`~roomba_bt.behaviours.lean.behaviour_tick`) of a condition
+        that keeps this lifecycle, with the calls that do nothing left out: ``initialise``
+        only reads ``@key`` parameters (``start`` does nothing), and ``stop`` is the status
+        (``terminate`` does nothing). The reactive guards restart every condition on every
+        tick, so this is most of what a tree's tick calls. A class with a lifecycle step of
+        its own (looked up each tick: a test may patch one in) gets the whole leaf tick;
+        ``update`` is looked up on the node, so a node's own (the monitor forces a condition
+        so) decides, and when it is :meth:`update` itself, ``check`` is called directly. The
+        node's ``__dict__`` is not read: on CPython 3.11 that gives the node a dictionary for
+        good, and every attribute read of it gets slower."""
+        cls = type(self)
+        if (
+            started
+            or self.status is _RUNNING
+            or py_trees.logging.level is _DEBUG
+            or cls.initialise is not _CONDITION_INITIALISE
+            or cls.start is not _CONDITION_START
+            or cls.terminate is not _CONDITION_TERMINATE
+            or cls.stop is not _CONDITION_STOP
+        ):
+            behaviour_tick(self, started)
+            return
+        refs = self._refs
+        if refs is None or refs:  # not looked for yet, or @key parameters to read at each start
+            self.initialise()
+        update = self.update
+        if getattr(update, "__func__", None) is _CONDITION_UPDATE:  # update is check
+            robot = self.robot
+            ok = self.check(robot.snapshot if robot is not None else self.snapshot)
+            if ok is True:
+                self.status = _SUCCESS
+            elif ok is False:
+                self.status = _FAILURE
+            else:
+                self.status = _SUCCESS if checked_truth(self, ok) else _FAILURE
+            return
+        status = update()
+        if status is not _SUCCESS and status is not _FAILURE:
+            status = checked_status(self, status)
+        self.status = status
+
+
+class InvalidCheck(InvalidStatus):
+    """A condition's ``check`` returned no truth value: None (a forgotten ``return``), a
+    text (``"no"`` was true), a Status (``check`` written as ``update``: FAILURE was true),
+    or anything else that is not a bool or a number. Raised as :class:`InvalidStatus` is
+    (the run ends as the behaviour's error, exit 4)."""
+
+    method = "check"
+
+    @staticmethod
+    def describe(node: py_trees.behaviour.Behaviour, status: object) -> str:
+        hint = ""
+        if isinstance(status, py_trees.common.Status):
+            hint = " (check says whether the condition holds; update returns a Status)"
+        return (
+            f"{type(node).__name__}.check() returned {quoted(status)}, not a bool: it must "
+            f"return True or False (a number is taken by its truth){hint}"
+        )
+
+
+def checked_truth(node: Condition, ok: object) -> bool:
+    """What ``check`` returned (neither True nor False) as a truth: a bool or a number
+    (anything with ``__float__``, such as numpy's ``bool_`` and numbers: 0 is false);
+    anything else (None, a text, a Status, a list) raises :class:`InvalidCheck`."""
+    if isinstance(ok, bool) or (
+        hasattr(type(ok), "__float__") and not isinstance(ok, str | bytes | bytearray)
+    ):
+        return bool(ok)
+    raise InvalidCheck(node, ok)
+
+
+#: the lifecycle steps a condition's short tick stands for (:meth:`Condition.tick_direct`)
+_CONDITION_UPDATE, _CONDITION_INITIALISE, _CONDITION_START = (
+    Condition.update, Condition.initialise, Condition.start
+)  # fmt: skip
+_CONDITION_TERMINATE, _CONDITION_STOP = Condition.terminate, Condition.stop
+
+
+#: what a class with the short tick has after ``check``: its update, initialise, start,
+#: terminate and stop (:meth:`FrameInputs.usable
+#: <roomba_bt.behaviours.frame_inputs.FrameInputs.usable>` compares the six at once)
+SHORT_LIFECYCLE = (
+    _CONDITION_UPDATE, _CONDITION_INITIALISE, _CONDITION_START, _CONDITION_TERMINATE,
+    _CONDITION_STOP,
+)  # fmt: skip

@@ -1,0 +1,165 @@
+"""The mission's blackboard: its keys, ``@key`` references, and reading and writing them.
+
+A mission's keys live on py_trees' blackboard under :data:`MISSION_NAMESPACE` (``leg`` is
+``/mission/leg``), read and written straight through its store (:func:`read_key`,
+:func:`write_key`): no py_trees client per node, which registers every key it may touch and
+checks it on every access. A key the mission declares (``blackboard:``, :func:`declare_keys`)
+takes only values of its type (:class:`KeyType`). A parameter given as ``@key`` or
+``@key.field`` (:class:`BlackboardRef`) is read when its behaviour starts
+(:meth:`RobotBehaviour.initialise <roomba_bt.behaviours.base.RobotBehaviour.initialise>`):
+:class:`UnwrittenKey` when nothing wrote it, :class:`KeyRange` when its value is out of the
+parameter's range.
+"""
+
+from __future__ import annotations
+
+import re
+import uuid
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import py_trees
+
+from roomba_bt.behaviours.units import MARK, UnitError, ValueType, held
+from roomba_bt.robot.interface import Odometry
+from roomba_bt.yamlsource import quoted
+
+if TYPE_CHECKING:
+    from roomba_bt.behaviours.base import RobotBehaviour
+
+#: The blackboard key the runtime mirrors the snapshot under (for plugins that prefer it).
+SNAPSHOT_KEY = "/roomba/snapshot"
+#: The declared type of each mission key, by name (:func:`declare_keys`): not a key of its own.
+KEY_TYPES_KEY = "/roomba/key_types"
+#: Mission blackboard keys live under this namespace: ``leg`` is ``/mission/leg``.
+MISSION_NAMESPACE = "/mission/"
+
+
+#: ``@key`` or ``@key.field``: a value read from the blackboard, in YAML and from Python
+BLACKBOARD_REF = re.compile(r"^@([a-z_][a-z0-9_]*)(?:\.([a-z_][a-z0-9_]*))?$")
+
+
+def blackboard_ref(text: str) -> BlackboardRef:
+    """``"@leg"`` -> ``BlackboardRef("leg")``; raises :class:`UnitError` for a text that is
+    not one (``@Leg``, ``@a.b.c``)."""
+    match = BLACKBOARD_REF.match(text)
+    if match is None:
+        raise UnitError(f"{text!r} is not a blackboard reference (@key or @key.field)")
+    return BlackboardRef(*match.groups())
+
+
+@dataclass(frozen=True, slots=True)
+class BlackboardRef:
+    """A parameter value read from the blackboard when the behaviour starts: ``@leg`` or
+    ``@waypoint.x`` (a field of a record)."""
+
+    key: str
+    field: str | None = None
+
+    def __str__(self) -> str:
+        return f"@{self.key}" + (f".{self.field}" if self.field else "")
+
+
+class UnwrittenKey(LookupError):
+    """A behaviour started with a parameter ``@key`` whose key nothing had written. A
+    mission's validator proves every read comes after a write; a tree built in Python has
+    no such proof, and None read as a drive's distance would drive without one."""
+
+
+class KeyRange(ValueError):
+    """A behaviour started with a parameter ``@key`` whose key holds a value out of the
+    parameter's declared range (written by a plugin, which the validator cannot see; it
+    checks ``initial`` and ``set`` values and ``for_each`` items). It would otherwise
+    reach the robot, or a command's encoder, as the behaviour's own bug."""
+
+    def __init__(self, node: RobotBehaviour, pname: str, ref: BlackboardRef, problem: str):
+        self.node, self.param, self.ref = node, pname, ref
+        super().__init__(
+            f"{node.declaration.name} {node.name!r}: {pname} is {ref}, and blackboard key "
+            f"{str(ref)[1:]!r} holds a value out of its range: {problem}"
+        )
+
+
+def read_key(key: str) -> Any:
+    """A mission blackboard key's value (None if never written)."""
+    storage = py_trees.blackboard.Blackboard.storage
+    return storage.get(MISSION_NAMESPACE + key)
+
+
+#: the id the mission's own writes (``set``, ``mark``, ``for_each``, initial values) carry in
+#: py_trees' activity stream
+_MISSION_WRITER = uuid.uuid4()
+
+
+#: the name write_key gives the mission's own writes in py_trees' activity stream
+_MISSION_WRITER_NAME = "roomba-bt mission"
+
+
+def declare_keys(types: Mapping[str, ValueType]) -> None:
+    """The mission's keys and their declared types (``blackboard:``), which
+    :func:`write_key` holds every write to from now on; they replace those declared before
+    (``declare_keys({})``: none). ``CompiledMission.setup`` calls it before each run. Kept
+    on py_trees' blackboard (:data:`KEY_TYPES_KEY`), with the values: its ``clear()``, which
+    a test calls between missions, forgets them too."""
+    storage = py_trees.blackboard.Blackboard.storage
+    if types:
+        storage[KEY_TYPES_KEY] = dict(types)
+    else:
+        storage.pop(KEY_TYPES_KEY, None)
+
+
+class KeyType(TypeError):
+    """A value written to a mission key (a plugin's ``write_key``) that is not of the
+    key's declared type in its canonical unit: ``"fast"`` in a speed, ``1`` in a bool. The
+    readers take the type for granted; said where it is written, it is not blamed on the
+    leaf that reads it later."""
+
+    def __init__(self, key: str, vtype: ValueType, value: Any, problem: str, writer: str):
+        self.key, self.type, self.value = key, vtype, value
+        by = "" if writer == _MISSION_WRITER_NAME else f" by {writer!r}"
+        super().__init__(
+            f"write_key({key!r}, {quoted(value)}){by}: blackboard key {key!r} is declared "
+            f"{vtype.describe()}: {problem}"
+        )
+
+
+def _write_problem(vtype: ValueType, value: Any) -> str | None:
+    if vtype is not MARK:
+        return held(vtype, value)
+    if isinstance(value, Odometry):  # a mark's form is the robot's, not a written one
+        return None
+    return f"expected an odometry mark (snapshot.odometry), got a {type(value).__name__}"
+
+
+def write_key(key: str, value: Any, writer: str = _MISSION_WRITER_NAME) -> None:
+    """Write a mission key. Into the store directly (no py_trees client per node: a client
+    registers each key it may touch and checks it on every access), and, when py_trees'
+    activity stream is on (``Blackboard.enable_activity_stream()``), said there as a client's
+    write would be: a py_trees user's tools show ``/mission/leg`` changing. A key the
+    mission declared (:func:`declare_keys`) takes only a value of its type: else
+    :class:`KeyType`, and nothing is written."""
+    blackboard = py_trees.blackboard.Blackboard
+    types = blackboard.storage.get(KEY_TYPES_KEY)
+    vtype = types.get(key) if types is not None else None
+    if vtype is not None:
+        problem = _write_problem(vtype, value)
+        if problem is not None:
+            raise KeyType(key, vtype, value, problem, writer)
+    name = MISSION_NAMESPACE + key
+    stream = blackboard.activity_stream
+    if stream is not None:
+        had = name in blackboard.storage
+        kind = py_trees.blackboard.ActivityType
+        stream.push(
+            py_trees.blackboard.ActivityItem(
+                key=name,
+                client_name=writer,
+                client_id=_MISSION_WRITER,
+                # its value, as py_trees' own clients push it (its display compares with it)
+                activity_type=(kind.WRITE if had else kind.INITIALISED).value,
+                previous_value=blackboard.storage.get(name) if had else None,
+                current_value=value,
+            )
+        )
+    blackboard.storage[name] = value
