@@ -59,7 +59,7 @@ def baud_rate(text: str) -> int:
     return rate
 
 
-#: ``--baud auto``: find the rate (``robot/handshake.py``); argparse stores None.
+#: ``--baud auto``: find the rate (``robot/discovery.py``); argparse stores None.
 AUTO_BAUD = "auto"
 
 

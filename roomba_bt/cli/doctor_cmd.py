@@ -3,7 +3,7 @@
 Each step prints what it saw and, when it fails, what to do next::
 
     port      the port opens (RTS and DTR released: BRC high, so opening wakes nothing)
-    baud      Start and a Query List at 115200, then 19200 (robot/handshake.py)
+    baud      Start and a Query List at 115200, then 19200 (robot/discovery.py)
     wake      silent at both: BRC pulsed one second through RTS/DTR (or, where they cannot be
               set, a one-second hang-up: speed 0), both rates again
     start     the mode packet right after Start: Passive reads 1, or 2 (the mode + 1 bug)
@@ -38,7 +38,7 @@ from roomba_bt.oi.packets import packet_ids
 
 if TYPE_CHECKING:
     from roomba_bt.oi.frames import SensorFrame
-    from roomba_bt.robot.handshake import Search
+    from roomba_bt.robot.discovery import Search
 
 #: Seconds of stream the round-trip reads (33 frames at one per 15 ms).
 STREAM_CHECK_S = 0.5
@@ -178,7 +178,7 @@ def doctor_command(args: argparse.Namespace) -> int:
     report = Report(sys.stdout)
     url = args.port
     print(f"roomba-bt doctor: {url}", flush=True)
-    from roomba_bt.robot.handshake import rates_to_try
+    from roomba_bt.robot.discovery import rates_to_try
 
     rates = rates_to_try(args.baud)
     try:
@@ -232,7 +232,7 @@ def _leave_passive(transport: Any) -> None:
 
 def _search(transport: Any, rates: tuple[int, ...], report: Report, when: str) -> Search:
     """Each rate tried, a line each (``when``: after what); the probes made."""
-    from roomba_bt.robot.handshake import search
+    from roomba_bt.robot.discovery import search
 
     result = search(transport, rates)
     for probe in result.probes:
@@ -261,7 +261,7 @@ def _after_pulse(transport: Any, rates: tuple[int, ...], before: Search, report:
 
 
 def _examine(transport: Any, rates: tuple[int, ...], allow_reset: bool, report: Report) -> int:
-    from roomba_bt.robot.handshake import wake_pulse
+    from roomba_bt.robot.discovery import wake_pulse
 
     searched = _search(transport, rates, report, "")
     found = searched.found
@@ -314,7 +314,7 @@ def _reset(transport: Any, baud: int, allow_reset: bool, report: Report) -> tupl
     """Reset (7) and read its banner (``--allow-reset``); then Start again."""
     from roomba_bt.oi import commands as oi
     from roomba_bt.oi.identify import parse_banner
-    from roomba_bt.robot.handshake import search
+    from roomba_bt.robot.discovery import search
 
     if not allow_reset:
         report.skip(
@@ -517,8 +517,8 @@ def _latency(report: Report) -> float:
 def _drain_quiet(transport: Any, latency: float) -> None:
     """Read and drop until the line is quiet for longer than its delay: a paused stream's
     frames still on their way come ``latency`` s after the pause (at 0.2 s, the 30 ms of
-    handshake.drain ended before them, and a stale frame was read as the status reply)."""
-    from roomba_bt.robot.handshake import QUIET_S, drain
+    discovery.drain ended before them, and a stale frame was read as the status reply)."""
+    from roomba_bt.robot.discovery import QUIET_S, drain
 
     if latency <= QUIET_S / 2:
         drain(transport)

@@ -15,8 +15,8 @@ from dataclasses import replace
 
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.robot.connection import NO_ANSWER_CAUSES, port_not_opened
+from roomba_bt.robot.discovery import OI_RATES, describe_silence, find_robot
 from roomba_bt.robot.errors import ConnectionFailed
-from roomba_bt.robot.handshake import OI_RATES, describe_silence, find_robot
 from roomba_bt.sim import Faults, RealtimeSimLink, SimLink, Simulator, load_world
 from roomba_bt.transport import SerialTransport, Transport, TransportError
 
@@ -30,7 +30,7 @@ def open_port(url: str, baud: int | None) -> SerialTransport:
     names the port and what to check if it cannot be opened.
 
     ``baud`` None (``--baud auto``): the rate the robot answers at, found as ``doctor`` finds
-    it (:func:`roomba_bt.robot.handshake.find_robot`: 115200, then 19200, then a BRC pulse
+    it (:func:`roomba_bt.robot.discovery.find_robot`: 115200, then 19200, then a BRC pulse
     and both again); the port is left at that rate (``transport.baud``)."""
     try:
         transport = SerialTransport.open(url, baud or OI_RATES[0])

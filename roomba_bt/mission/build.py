@@ -23,7 +23,7 @@ from roomba_bt.behaviours.blackboard import declare_keys, write_key
 from roomba_bt.behaviours.language import GUARD, WORDS
 from roomba_bt.behaviours.units import ValueType
 from roomba_bt.mission.diagnostics import Diagnostic
-from roomba_bt.mission.ir import Node
+from roomba_bt.mission.plan import Node
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.robot.interface import RobotHandle

@@ -55,7 +55,7 @@ from roomba_bt.behaviours.blackboard import BlackboardRef
 from roomba_bt.behaviours.conditions import comparison_problem
 from roomba_bt.behaviours.declare import Declaration, Param
 from roomba_bt.mission.diagnostics import Diagnostic
-from roomba_bt.mission.ir import KeyDecl, Node
+from roomba_bt.mission.plan import KeyDecl, Node
 from roomba_bt.mission.source import Loc
 from roomba_bt.mission.ticks import (
     SELECTORS,

@@ -4,7 +4,7 @@ The pipeline, each stage in its own module::
 
     Loader.compile_file     loader.py: the YAML read, includes and plugins, parameters
                             substituted, each node parsed (nodes.py) into the plan
-                            (ir.py: Node), every problem a Diagnostic at file:line:col
+                            (plan.py: Node), every problem a Diagnostic at file:line:col
     ModeCheck, KeyCheck     checks.py: the OI mode each node runs in, each @key written
     key_ranges, ...         before it is read; the ranges, the profile's commands, the
     check_stream            stream's bandwidth at the baud
@@ -38,8 +38,8 @@ from roomba_bt.mission.checks import (
     sensor_ranges,
 )
 from roomba_bt.mission.diagnostics import Diagnostic, MissionError
-from roomba_bt.mission.ir import Node
 from roomba_bt.mission.loader import NO_PERMISSIONS, Loader, Permissions
+from roomba_bt.mission.plan import Node
 from roomba_bt.mission.shipped import find_mission
 from roomba_bt.mission.values import Context, shown
 from roomba_bt.oi.modes import ALL_MODES, OIMode

@@ -15,7 +15,7 @@ import yaml
 
 from roomba_bt.behaviours.declare import Param
 from roomba_bt.behaviours.language import CHILD_NAMES, KEY_ITEMS, TEXT, NodeKind, Shape
-from roomba_bt.mission.ir import Node
+from roomba_bt.mission.plan import Node
 from roomba_bt.mission.source import Bad, Loc, kind_of, mapping, plain, scalar_text, sequence
 from roomba_bt.mission.ticks import at_once
 from roomba_bt.mission.values import (
@@ -105,7 +105,7 @@ def parse_composite(parser: NodeParser, kind: NodeKind, at: Written) -> Node | N
     for child_node, child_loc in entries:
         child = parser.node(child_node, child_loc, env)
         # one that could not be built keeps its place (its errors are reported): the
-        # checks judge its siblings where they are written (ir.Node)
+        # checks judge its siblings where they are written (plan.Node)
         children.append(child if child is not None else Node("unbuilt", child_loc, "unbuilt"))
     result = Node(word, key_loc, options.pop("name", word), children, options=options)
     for param in kind.options:

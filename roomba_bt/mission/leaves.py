@@ -14,7 +14,7 @@ import yaml
 
 from roomba_bt.behaviours.declare import Declaration
 from roomba_bt.behaviours.units import MARK
-from roomba_bt.mission.ir import KeyDecl, Node
+from roomba_bt.mission.plan import KeyDecl, Node
 from roomba_bt.mission.source import Bad, Loc, mapping
 from roomba_bt.mission.values import (
     UNKNOWN,
@@ -30,7 +30,7 @@ from roomba_bt.mission.values import (
 
 def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node:
     """The leaf, or with every problem recorded in ``ctx`` an ``unbuilt`` node naming
-    ``decl`` (:class:`~roomba_bt.mission.ir.Node`)."""
+    ``decl`` (:class:`~roomba_bt.mission.plan.Node`)."""
     key_loc, env = at.key_loc, at.env
     given = _given(decl, at.value, at.loc)
     params: dict[str, Any] = {}

@@ -45,8 +45,8 @@ import yaml
 
 from roomba_bt.behaviours.language import WORDS
 from roomba_bt.behaviours.units import ANY, STR, VALUE_TYPES, UnitError, ValueType, closest, enum
-from roomba_bt.mission.ir import KeyDecl, Node
 from roomba_bt.mission.nodes import NodeParser
+from roomba_bt.mission.plan import KeyDecl, Node
 from roomba_bt.mission.shipped import (
     DOCKING_LIBRARY,
     SHIPPED_DIR,

@@ -1,4 +1,4 @@
-"""The node parser: one YAML node -> a checked :class:`~roomba_bt.mission.ir.Node`.
+"""The node parser: one YAML node -> a checked :class:`~roomba_bt.mission.plan.Node`.
 
 A node is a mapping with one word (a word of the language table, ``subtree``, or a
 behaviour) plus modifiers (``name``, ``while``, ``until``). Composites and decorators are
@@ -17,8 +17,8 @@ from roomba_bt.behaviours.units import STR, closest
 from roomba_bt.mission.control import parse_composite, parse_decorator
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.foreign import foreign_hint, suggestion
-from roomba_bt.mission.ir import Node
 from roomba_bt.mission.leaves import parse_leaf
+from roomba_bt.mission.plan import Node
 from roomba_bt.mission.shipped import library_defining
 from roomba_bt.mission.source import Bad, Loc, kind_of, mapping, plain, scalar_text
 from roomba_bt.mission.values import (

@@ -1,5 +1,5 @@
 """What the static checks know of how a tree is ticked (py_trees' semantics, on the checked
-tree :class:`~roomba_bt.mission.ir.Node`): which nodes end on the tick they start, and which
+tree :class:`~roomba_bt.mission.plan.Node`): which nodes end on the tick they start, and which
 cliff reads are ticked on every tick of a leaf with a result that can end it.
 
 Each answer is conservative: where it is not sure, it says "no" (not at once, no cliff
@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from roomba_bt.behaviours.conditions import COMPARISON, OPERATORS
 from roomba_bt.behaviours.declare import Comparison, Declaration
-from roomba_bt.mission.ir import Node
+from roomba_bt.mission.plan import Node
 from roomba_bt.oi.frames import CLIFF_PACKETS
 
 SUCCESS, FAILURE = "success", "failure"

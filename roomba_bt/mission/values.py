@@ -34,7 +34,7 @@ from roomba_bt.behaviours.units import (
 )
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.foreign import port_remapping, suggestion
-from roomba_bt.mission.ir import KeyDecl
+from roomba_bt.mission.plan import KeyDecl
 from roomba_bt.mission.source import Bad, Loc, mapping, plain, scalar_text
 
 #: ``${name}``, a parameter's use; not ``$${name}``, the escape (:data:`_PLACEHOLDER`): what

@@ -1,4 +1,9 @@
-"""OI modes as the robot reports them in packet 35."""
+"""OI modes as the robot reports them in packet 35.
+
+The machine that predicts and reconciles them (which command leads where, what each mode
+accepts, the falls to Passive) is :class:`~roomba_bt.robot.modes.ModeModel` in
+``robot/modes.py``, built from the opcode table's ``modes`` and ``leads_to``.
+"""
 
 from __future__ import annotations
 

@@ -37,6 +37,7 @@ from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile, get_profile
 from roomba_bt.oi.stream import ReplyParser, check_bandwidth
+from roomba_bt.robot.discovery import drain
 from roomba_bt.robot.ending import EndMode, SafeStop
 from roomba_bt.robot.errors import (
     DEFAULT_WATCHDOG,
@@ -48,7 +49,6 @@ from roomba_bt.robot.errors import (
     RobotReset,
     StreamStalled,
 )
-from roomba_bt.robot.handshake import drain
 from roomba_bt.robot.interface import ModeChange
 from roomba_bt.robot.link import LinkStatus, StreamLink, TimedFrame
 from roomba_bt.robot.modes import DEFAULT_SETTLE, ModeModel

@@ -34,6 +34,7 @@ from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import BATTERY_PACKETS, SLOT_SECONDS
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.oi.stream import stream_period
+from roomba_bt.robot.discovery import OI_RATES, search, wake_pulse
 from roomba_bt.robot.errors import (
     BaudChanged,
     ConnectionFailed,
@@ -43,7 +44,6 @@ from roomba_bt.robot.errors import (
     RobotAsleep,
     StreamLost,
 )
-from roomba_bt.robot.handshake import OI_RATES, search, wake_pulse
 from roomba_bt.robot.link import LINK_ERRORS
 from roomba_bt.robot.wake import SLEEP_AFTER_S
 
@@ -289,7 +289,7 @@ def _stop_heard(connection: Connection) -> bool:
 
 def answers_elsewhere(connection: Connection, silent: NoAnswer) -> ConnectionFailed:
     """The robot answered no Query List at start-up at the run's rate: ask at the other OI
-    rates (:func:`~roomba_bt.robot.handshake.search`: Start, pause the stream, a Query List;
+    rates (:func:`~roomba_bt.robot.discovery.search`: Start, pause the stream, a Query List;
     no BRC pulse). A rate that answers is the cause, named; the port is left there so the
     stop that ends the run reaches the robot (in Passive: the probe's Start put it there)::
 

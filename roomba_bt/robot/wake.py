@@ -17,7 +17,7 @@ simulator's links model the pin). Asserted means BRC low::
 A transport without the method (a TCP bridge without RFC 2217, a replay) gets no pulses; the
 connection says so once. Nor does a port whose lines cannot be set (a pty: the ioctl fails,
 keep-awake turns itself off, said once): the hang-up that pulses BRC there once, to ask
-whether a silent robot sleeps (:func:`~roomba_bt.robot.handshake.wake_pulse`), carries no
+whether a silent robot sleeps (:func:`~roomba_bt.robot.discovery.wake_pulse`), carries no
 byte for its second, and a pulse a minute would stall the stream once a minute.
 """
 

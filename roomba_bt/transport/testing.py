@@ -2,7 +2,8 @@
 
 :class:`NullTransport` takes bytes and drops them and never has any to read: what a
 :class:`~roomba_bt.robot.connection.Connection` costs, or refuses, with nothing on the line.
-:class:`RecordingTransport` also keeps every write, for tests that look at the wire.
+:class:`WriteLogTransport` also keeps every write, for tests that look at the wire (not
+:class:`~roomba_bt.runtime.recording.RecordingTransport`, which records a run for ``--record``).
 Subclasses give ``read`` something to hand out (a benchmark's stream frames).
 
 They ship in the package, beside the contract they honour, the way
@@ -13,7 +14,7 @@ tests' folders are not an importable package once installed).
 
 from __future__ import annotations
 
-__all__ = ["NullTransport", "RecordingTransport"]
+__all__ = ["NullTransport", "RecordingTransport", "WriteLogTransport"]
 
 
 class NullTransport:
@@ -45,7 +46,7 @@ class NullTransport:
         return self.clock
 
 
-class RecordingTransport(NullTransport):
+class WriteLogTransport(NullTransport):
     """A :class:`NullTransport` that keeps each write, as written, in :attr:`writes`."""
 
     name = "recording"
@@ -56,3 +57,8 @@ class RecordingTransport(NullTransport):
 
     def write(self, data: bytes) -> None:
         self.writes.append(bytes(data))
+
+
+#: Its old name, the same as ``--record``'s :class:`~roomba_bt.runtime.recording.RecordingTransport`
+#: (a file of the run's bytes, not a list): kept for the tests of plugins that import it so.
+RecordingTransport = WriteLogTransport

@@ -320,7 +320,7 @@ def test_a_garbled_status_reply_is_asked_again_not_reported_ok(garbled: int, sho
 
 @pytest.mark.parametrize("latency", [0.2, 0.3])
 def test_a_slow_line_s_stale_stream_is_not_read_as_the_status_reply(latency: float) -> None:
-    """At 0.2 s of latency the paused stream's last frames came after handshake.drain's
+    """At 0.2 s of latency the paused stream's last frames came after discovery.drain's
     30 ms of quiet: "[ok] battery 277 of 27 mAh (1026 %)", "[ok] charging unknown state
     19" (the stream's header byte), "[ok] mode Off"."""
     import io

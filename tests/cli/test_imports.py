@@ -42,7 +42,7 @@ def test_validate_loads_no_connection_mode_model_or_serial_port() -> None:
     assert "roomba_bt.robot.interface" in modules
     for unused in (
         "roomba_bt.robot.connection",
-        "roomba_bt.robot.handshake",
+        "roomba_bt.robot.discovery",
         "roomba_bt.robot.modes",
         "roomba_bt.transport",
         "transitions",

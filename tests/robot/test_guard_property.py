@@ -14,7 +14,7 @@ from roomba_bt.oi.modes import DRIVING_MODES
 from roomba_bt.oi.profiles import PROFILES
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.errors import ModeError
-from roomba_bt.transport.testing import RecordingTransport
+from roomba_bt.transport.testing import WriteLogTransport
 
 COMMANDS: list[Command] = [
     oi.start(),
@@ -41,7 +41,7 @@ COMMANDS: list[Command] = [
     profile=st.sampled_from(list(PROFILES.values())),
 )
 def test_refused_commands_never_reach_the_wire(batches, profile) -> None:  # type: ignore[no-untyped-def]
-    transport = RecordingTransport()
+    transport = WriteLogTransport()
     connection = Connection(transport, profile, watchdog=0)
     accepted: list[Command] = []
     for batch in batches:
@@ -75,7 +75,7 @@ def test_refused_commands_never_reach_the_wire(batches, profile) -> None:  # typ
     profile=st.sampled_from(list(PROFILES.values())),
 )
 def test_send_many_is_sequential_send_in_one_write(batches, profile) -> None:  # type: ignore[no-untyped-def]
-    batched, one_by_one = RecordingTransport(), RecordingTransport()
+    batched, one_by_one = WriteLogTransport(), WriteLogTransport()
     many = Connection(batched, profile, watchdog=0)
     single = Connection(one_by_one, profile, watchdog=0)
     for batch in batches:

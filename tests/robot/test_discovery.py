@@ -1,4 +1,4 @@
-"""Finding the rate and waking the robot (robot/handshake.py), on the simulator's in-process
+"""Finding the rate and waking the robot (robot/discovery.py), on the simulator's in-process
 link (virtual clock): the same function ``doctor`` and ``--baud auto`` use."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ import contextlib
 from collections.abc import Iterator
 
 from roomba_bt.oi.profiles import CREATE2, ROOMBA600
-from roomba_bt.robot.handshake import (
+from roomba_bt.robot.discovery import (
     OI_RATES,
     find_robot,
     is_answer,

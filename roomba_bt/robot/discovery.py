@@ -1,7 +1,10 @@
 """Finding a robot on a port: which baud rate it talks at, and a BRC pulse if it is silent.
 
 One function for ``roomba-bt doctor`` and ``--baud auto`` (``run``, ``sensors``), so both try
-the same rates in the same order and read an answer the same way.
+the same rates in the same order and read an answer the same way. Not the start-up handshake
+of a session (Start, the mode read twice, Safe or Full, the stream): that is
+:meth:`Connection.start <roomba_bt.robot.connection.Connection.start>` with
+:mod:`roomba_bt.robot.startup`.
 
 The OI talks at 115200 (its default) or 19200 (after Clean is held at power-on on a Roomba
 500, at power-off on a 600 / Create 2, or three BRC pulses after power-on:

@@ -1,4 +1,6 @@
-"""The compiler's intermediate tree: what the YAML said, checked, with its place in the file.
+"""The plan: the compiler's intermediate tree, what the YAML said, checked, with its place in
+the file (kept as :attr:`CompiledMission.plan <roomba_bt.mission.build.CompiledMission.plan>`,
+which builds the tree again for the next episode).
 
 The parser builds it, the static checks (:mod:`roomba_bt.mission.checks`) walk it, and the
 builder turns it into py_trees objects. Keeping it apart from py_trees means a mission is
