@@ -488,9 +488,10 @@ class Connection:
             raise
 
     def send_many(self, commands: Iterable[Command]) -> None:
-        """A tick's outbox in one write (:meth:`CommandWriter.send_many
-        <roomba_bt.robot.writer.CommandWriter.send_many>`): refused commands left out, the
-        first refusal raised after the others are written."""
+        """Commands in one write (:meth:`CommandWriter.send_many
+        <roomba_bt.robot.writer.CommandWriter.send_many>`: the safe stop's, the tick guard's,
+        the monitor's; a tick's outbox goes by :meth:`send`, one command at a time): refused
+        commands left out, the first refusal raised after the others are written."""
         self.writer.send_many(_sendable(self, commands))
 
     def set_baud(self, rate: int) -> None:

@@ -7,8 +7,9 @@ stream frame). A behaviour never touches the port:
   frame, the mission clock counted in 15 ms stream slots, the reconciled OI mode and the
   odometry integrated from the wheel encoders);
 * it hands commands to :attr:`RobotHandle.outbox`. After the tick the runtime checks each one
-  against the mode model and writes them once: per actuator channel the last one wins, and
-  mode changes keep their order relative to the actuator commands that follow them.
+  against the mode model and writes it, one write a command (``MissionRunner._flush``): per
+  actuator channel the last one wins, and mode changes keep their order relative to the
+  actuator commands that follow them.
 
 Time in a mission is ``snapshot.time`` (``tick * 0.015`` s), never ``time.time()``, so a replay
 or a simulation on a virtual clock makes the same decisions as the live run.

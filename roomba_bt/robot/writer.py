@@ -1,4 +1,4 @@
-"""The command path of a session: the guard, a tick's batch in one write, each opcode's effect.
+"""The command path of a session: the guard, each opcode's effect, a batch in one write.
 
 Every command a :class:`~roomba_bt.robot.connection.Connection` sends leaves through one
 :class:`CommandWriter`::
@@ -7,9 +7,13 @@ Every command a :class:`~roomba_bt.robot.connection.Connection` sends leaves thr
                  (refused: ModeError,                                   then ModeModel.apply
                   nothing written)                                      and the opcode's Effect
 
-A tick's outbox (:meth:`CommandWriter.send_many`) is guarded command by command against the
-mode the commands before it lead to and written in one write; a Baud (129) in it sends what
-came before at the old rate and the rest after the port followed. What a written command
+The runner writes a tick's outbox command by command, each through :meth:`CommandWriter.send`
+(one write a command; each one let through is noted as its channel's standing command, each
+one refused counted). :meth:`CommandWriter.send_many` writes a batch in one write, each command
+guarded against the mode the commands before it lead to: the safe stop's sequence
+(:mod:`~roomba_bt.robot.ending`), the tick guard's stop, the monitor's pause and resume; a
+Baud (129) in it sends what came before at the old rate and the rest after the port
+followed. What a written command
 changes on our side of the link is the opcode table's
 :class:`~roomba_bt.oi.opcodes.Effect`: a new stream, a pause, a baud change, a built-in cycle
 that may drive in Passive.
@@ -93,9 +97,11 @@ class CommandWriter:
         self._send(command, None)
 
     def send_many(self, commands: Iterable[Command]) -> None:
-        """A tick's outbox, in order, in one write. Each command is guarded against the mode
-        the commands before it lead to (so ``safe`` then ``drive`` passes). Refused commands
-        are left out; after the others are written the first refusal is raised."""
+        """Commands in order, in one write: the safe stop's sequence, the tick guard's stop,
+        the monitor's pause and resume (a tick's outbox goes by :meth:`send`, one command at
+        a time). Each command is guarded against the mode the commands before it lead to (so
+        ``safe`` then ``drive`` passes). Refused commands are left out; after the others are
+        written the first refusal is raised."""
         refused: list[Exception] = []
         batch = bytearray()
         # the model follows what was written: if the batch never leaves, it is put back

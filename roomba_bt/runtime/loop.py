@@ -1,11 +1,12 @@
-"""The tick loop: one tick per stream frame, commands guarded and flushed once.
+"""The tick loop: one tick per stream frame, its commands guarded and written after it.
 
 Per batch of frames read from the connection::
 
     frames --(newest only; older ones are stale: dropped and counted)--> Snapshot
       Snapshot -> blackboard "/roomba/snapshot" (one write) and the RobotHandle
       root.tick_once()  (by its tick_direct when it is a lean node: tick_of)
-      outbox.drain() -> mode guard -> written once, right after the tick
+      outbox.drain() -> mode guard -> written, right after the tick, one write a command
+                        (Connection.send each; _flush)
 
 The stream is the clock. Each frame is one 15 ms slot; the tick index advances by the number of
 frames read, plus the slots the schedule says passed with no frame (frames lost in transit:
