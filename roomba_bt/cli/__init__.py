@@ -1,8 +1,9 @@
 """The ``roomba-bt`` command line.
 
 Each subcommand lives in its own module of this package, which exposes
-``register(subparsers)``; :data:`SUBCOMMAND_MODULES` lists them in help order. A module that
-is missing (a feature not built yet) is skipped, never a traceback.
+``register(subparsers)``; :data:`SUBCOMMAND_MODULES` lists them in help order. Every one
+ships: one that is missing is a broken installation (a wheel built without it), said as such
+and exit 2, never a traceback and never a subcommand silently gone from the help.
 """
 
 from __future__ import annotations
@@ -62,7 +63,12 @@ def build_parser() -> argparse.ArgumentParser:
             module = importlib.import_module(name)
         except ModuleNotFoundError as exc:
             if exc.name == name:
-                continue
+                raise ModuleNotFoundError(
+                    f"the subcommand module {name} is missing from this installation of "
+                    f"roomba-bt {__version__} (reinstall it: pip install --force-reinstall "
+                    "roomba-bt)",
+                    name=name,
+                ) from None
             raise
         module.register(sub)
     return parser

@@ -128,8 +128,3 @@ class PackedRing(Ring):
     def since(self, seq: int) -> list[TickRecord]:
         out = [self.get(s) for s in range(max(seq, 0), self.count)]
         return [r for r in out if r is not None]
-
-    @property
-    def nbytes(self) -> int:
-        """The bytes its rows and frames take (not the shared strings and mappings)."""
-        return len(self._rows) + len(self._payloads)

@@ -376,3 +376,21 @@ def test_five_refusals_or_fewer_say_no_more(
 ) -> None:
     _, err = run_rogue(tmp_path, capsys, "[rogue]")
     assert len(re.findall(r"^refused: t=", err, re.M)) == 1 and "more" not in err, err
+
+
+def test_a_subcommand_module_missing_is_a_broken_installation_not_a_silent_skip(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Every module of ``SUBCOMMAND_MODULES`` ships; the parser skipped one that was missing
+    (scaffolding from before they all existed), so a wheel built without one lost that
+    subcommand from the help without a word."""
+    import roomba_bt.cli as cli
+
+    missing = "roomba_bt.cli.not_built_cmd"
+    monkeypatch.setattr(cli, "SUBCOMMAND_MODULES", (*cli.SUBCOMMAND_MODULES, missing))
+    with pytest.raises(ModuleNotFoundError, match=f"the subcommand module {missing} is missing"):
+        build_parser()
+    assert main(["validate", "--help"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"roomba-bt: the subcommand module {missing} is missing"), err
+    assert "Traceback" not in err
