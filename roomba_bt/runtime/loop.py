@@ -13,6 +13,13 @@ frames read, plus the slots the schedule says passed with no frame (frames lost 
 a gap is measured, not ignored; jitter makes none: :mod:`roomba_bt.runtime.schedule`).
 Mission time is ``tick * 0.015`` s: the same bytes replayed at any speed, or a simulation on
 the virtual clock, make the same decisions. See ``docs/runtime.md``.
+
+No ``py_trees.trees.BehaviourTree`` here: the frames are the clock, so :class:`MissionRunner`
+ticks ``root.tick_once()`` itself, once a frame, where ``BehaviourTree.tick_tock`` would tick
+on a timer. Its pre- and post-tick handlers are the :class:`TickGate` (``before_tick``, which
+may hold the frame's tick, and ``after_tick``: the monitor's session, which records each
+tick in its feed), and its visitor the observer (:data:`TickObserver`: the live tree or the
+status log); the tree's ``shutdown`` is :func:`~roomba_bt.runtime.teardown.shutdown_nodes`.
 """
 
 from __future__ import annotations

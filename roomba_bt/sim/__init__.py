@@ -1,7 +1,8 @@
 """The byte-exact simulator: a virtual Roomba / Create 2 that speaks the Open Interface.
 
-Imports only :mod:`roomba_bt.oi` (plus the standard library, PyYAML, and matplotlib lazily
-for plots). Nothing in the main stack imports it; the CLI and the tests do.
+Imports only :mod:`roomba_bt.oi` and the YAML reader :mod:`roomba_bt.yamlsource` (for world
+files), plus the standard library, PyYAML, and matplotlib lazily for plots. Nothing in the
+main stack imports it; the CLI, the monitor, the evaluation and the tests do.
 """
 
 from roomba_bt.sim.faults import Faults
