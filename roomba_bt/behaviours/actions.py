@@ -20,7 +20,7 @@ from py_trees.common import Status
 
 from roomba_bt.behaviours.base import Action
 from roomba_bt.behaviours.blackboard import write_key
-from roomba_bt.behaviours.declare import Param, declare
+from roomba_bt.behaviours.declare import Param, declare, moving_minimum
 from roomba_bt.behaviours.driving import WHEEL, cycle_may_run, on_home_base
 from roomba_bt.behaviours.units import (
     ANGLE,
@@ -46,6 +46,7 @@ from roomba_bt.oi.bits import LED_NAMES, led_bits, motor_bits
 from roomba_bt.oi.encode import NOTE_NAMES, PLAYABLE_NOTES, Note, Radius, note_name, note_number
 from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS, ENCODER_PACKETS, SLOT_SECONDS
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
+from roomba_bt.oi.odometry import SLOWEST_MOVING_SPEED_MM_S, WHEEL_SPEED_STEP_MM_S, speed_steps
 from roomba_bt.oi.opcodes import COMMANDS_BY_NAME, opcodes
 from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.robot.hazards import sets_going
@@ -258,11 +259,19 @@ def _drive_constraints(params: Mapping[str, Any]) -> list[str]:
     return errors + _never_finishes(params)
 
 
+#: said of a speed the wheels do not turn at: the speed controller's nearest step is 0
+_BELOW_A_STEP = (
+    f" (below half the speed controller's step of about {WHEEL_SPEED_STEP_MM_S} mm/s: the "
+    "wheels stand still)"
+)
+
+
 def _never_finishes(params: Mapping[str, Any]) -> list[str]:
     """An end the wheels can never reach: the leaf would run for ever. ``distance`` is the
     centre's path (a spin in place covers none), ``angle`` the heading (a straight drive
-    keeps it). Judged on the values sent, whole mm and mm/s: 0.4 mm/s is sent as 0, a radius
-    of 1 mm as the OI's spin in place (1). Values read from the blackboard are not known here
+    keeps it). Judged on the values sent, whole mm and mm/s, as the speed controller steps
+    them: 0.4 mm/s is sent as 0, 10 mm/s turns the wheels at 0 (:func:`speed_steps`), a radius
+    of 1 mm is the OI's spin in place (1). Values read from the blackboard are not known here
     and pass."""
     left, right = params.get("left"), params.get("right")
     velocity, radius = params.get("velocity", 200.0), params.get("radius", "straight")
@@ -271,29 +280,40 @@ def _never_finishes(params: Mapping[str, Any]) -> list[str]:
     known = all(isinstance(v, int | float) or v in _RADIUS_WORDS for v in given)
     if not known:
         return []
+    # the wheels turn at the speed controller's nearest step of what is sent (whole mm/s)
     if left is not None and right is not None:
-        centre, spins = (round(left) + round(right)) / 2, round(left) != round(right)
-        how = f"left {left:g} and right {right:g} mm/s"
+        left_steps, right_steps = speed_steps(round(left)), speed_steps(round(right))
+        centre, spins = (left_steps + right_steps) / 2, left_steps != right_steps
+        how = f"left {left:g} and right {right:g} mm/s" + (
+            _BELOW_A_STEP if (left_steps, right_steps) == (0, 0) else ""
+        )
     else:
+        steps = speed_steps(round(velocity))
         in_place = radius in ("spin_left", "spin_right") or (
             not isinstance(radius, str) and abs(round(radius)) == 1
         )
-        centre = 0.0 if in_place else float(round(velocity))
-        spins = round(velocity) != 0 and radius != "straight"
+        centre = 0.0 if in_place else float(steps)
+        spins = steps != 0 and radius != "straight"
         sent = " (sent as 0)" if round(velocity) == 0 and velocity != 0 else ""
-        how = f"{float(velocity):g} mm/s{sent}" + (
+        below = _BELOW_A_STEP if steps == 0 and round(velocity) != 0 else ""
+        how = f"{float(velocity):g} mm/s{sent}{below}" + (
             f", radius {_shown(radius)}" if "radius" in params else ""
         )
     if left is not None and right is not None:
         fix = "wheel speeds that do not cancel"
+        if (left_steps, right_steps) == (0, 0):
+            fix = f"a wheel speed of at least {SLOWEST_MOVING_SPEED_MM_S} mm/s"
     else:
-        fix = "a radius of 2 mm or more" if round(velocity) != 0 else "a speed"
+        fix = "a radius of 2 mm or more" if steps != 0 else "a speed"
+        if round(velocity) != 0 and steps == 0:
+            fix = f"a speed of at least {SLOWEST_MOVING_SPEED_MM_S} mm/s"
     if float(params.get("distance") or 0) > 0 and centre == 0:
         return [f"drive at {how} never covers its distance (its centre does not move): "
                 f"it would run for ever; give {fix}, or end it by angle or duration"]  # fmt: skip
     if float(params.get("angle") or 0) > 0 and not spins:
+        turning = fix if _BELOW_A_STEP in how else "a radius (or different wheel speeds)"
         return [f"drive at {how} never turns, so its angle is never reached: it would run "
-                "for ever; give a radius (or different wheel speeds), or use turn"]  # fmt: skip
+                f"for ever; give {turning}, or use turn"]  # fmt: skip
     return []
 
 
@@ -422,7 +442,8 @@ class Drive(Action):
     params=(
         Param("angle", ANGLE, required=True, minimum=-3600, maximum=3600,
               doc="heading change; positive turns left (counter-clockwise)"),
-        Param("speed", SPEED, default="100 mm/s", minimum=1, maximum=_VELOCITY.maximum,
+        Param("speed", SPEED, default="100 mm/s", minimum=moving_minimum(),
+              maximum=_VELOCITY.maximum,
               doc="wheel speed while spinning in place"),
     ),
     reads=ENCODER_PACKETS,

@@ -67,6 +67,7 @@ from roomba_bt.behaviours.driving import (
 from roomba_bt.behaviours.frame_inputs import FrameInputs
 from roomba_bt.behaviours.units import SPEED, VALUE_TYPES, UnitError, ValueType, closest
 from roomba_bt.oi.modes import ALL_MODES, OIMode
+from roomba_bt.oi.odometry import SLOWEST_MOVING_SPEED_MM_S, WHEEL_SPEED_STEP_MM_S
 from roomba_bt.oi.opcodes import COMMANDS, Effect
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.printable import CONTROL
@@ -155,7 +156,14 @@ class Param:
         if (lo is not None and value < lo) or (hi is not None and value > hi):
             unit = f" {self.type.unit}" if self.type.unit else ""
             shown = f"{value:g}{unit}"
-            return f"{self.name} {shown} is out of range: allowed {_bound(lo)}..{_bound(hi)}{unit}"
+            why = (
+                f" (a wheel asked for less than {SLOWEST_MOVING_SPEED_MM_S} mm/s stands still: "
+                f"the speed controller turns it in steps of about {WHEEL_SPEED_STEP_MM_S} mm/s)"
+                if self.type is SPEED and lo is not None and 0 <= value < SLOWEST_MOVING_SPEED_MM_S
+                else ""
+            )
+            allowed = f"allowed {_bound(lo)}..{_bound(hi)}{unit}"
+            return f"{self.name} {shown} is out of range: {allowed}{why}"
         return None
 
     def describe(self) -> str:
@@ -546,9 +554,24 @@ def class_doc(cls: type) -> str | None:
     return ast.get_docstring(node) if isinstance(node, ast.ClassDef) else None
 
 
+def moving_minimum(share: float = 1.0) -> int:
+    """The smallest speed (whole mm/s) whose ``share`` still turns a wheel: the speed
+    controller's nearest step of anything slower is 0 (:data:`SLOWEST_MOVING_SPEED_MM_S`), and
+    a leaf waiting for a wheel that stands still waits for ever."""
+    return math.ceil(SLOWEST_MOVING_SPEED_MM_S / share)
+
+
+
 # Here, beside Param, not in driving.py: driving.py is below the leaves' base module (which
 # uses its helpers), and this module is above it.
 def wheel_speed_param(name: str, default: str, *, minimum: float, doc: str = "") -> Param:
     """A forward wheel-speed parameter (a ``speed``, mm/s): from ``minimum`` up to what one
-    wheel of Drive Direct takes (:data:`WHEEL`)."""
+    wheel of Drive Direct takes (:data:`WHEEL`). A minimum that does not move a wheel is a
+    declaration's mistake (its leaf would hang): refused when the behaviour is declared."""
+    if minimum < SLOWEST_MOVING_SPEED_MM_S:
+        raise ValueError(
+            f"{name}: minimum {minimum:g} mm/s does not move a wheel (the speed controller "
+            f"steps of {WHEEL_SPEED_STEP_MM_S} mm/s round it to 0): at least "
+            f"{SLOWEST_MOVING_SPEED_MM_S} (moving_minimum())"
+        )
     return Param(name, SPEED, default=default, minimum=minimum, maximum=WHEEL.maximum, doc=doc)

@@ -21,6 +21,22 @@ from roomba_bt.oi.profiles import COUNTS_PER_REVOLUTION, WHEEL_BASE_MM, WHEEL_DI
 MM_PER_COUNT = math.pi * WHEEL_DIAMETER_MM / COUNTS_PER_REVOLUTION
 #: Top wheel speed in the spec (Drive, Drive Direct: -500..500 mm/s).
 TOP_WHEEL_SPEED_MM_S = 500
+#: "Roomba's speed controller can only control the velocity of the wheels in steps of about
+#: 28.5 mm/s" (600 spec, Drive 137 and Drive Direct 145): a wheel asked for a speed turns at
+#: the nearest step (the simulator models it so, docs/simulator.md).
+WHEEL_SPEED_STEP_MM_S = 28.5
+#: The slowest whole mm/s that moves a wheel: below half a step (14.25 mm/s) the controller's
+#: nearest step is 0 and the wheel stands still, so a leaf waiting for it to travel waits for
+#: ever. The minimum of every speed parameter that must produce motion (15 mm/s).
+SLOWEST_MOVING_SPEED_MM_S = math.floor(WHEEL_SPEED_STEP_MM_S / 2) + 1
+
+
+def speed_steps(speed_mm_s: float) -> int:
+    """How many of the speed controller's steps a wheel asked for ``speed_mm_s`` (whole mm/s,
+    as sent) turns at: 0 is a wheel that stands still, the sign its direction."""
+    return round(speed_mm_s / WHEEL_SPEED_STEP_MM_S)
+
+
 #: Most counts a wheel can turn between two stream frames (15 ms): 7.5 mm is 16.9 counts at
 #: top speed; half again for the robot's own timing of the frames. A larger step between two
 #: consecutive frames is a corrupted frame, not a motion.

@@ -25,15 +25,13 @@ import math
 import struct
 from math import trunc
 
-from roomba_bt.oi.odometry import MM_PER_COUNT
+from roomba_bt.oi.odometry import MM_PER_COUNT, WHEEL_SPEED_STEP_MM_S
 from roomba_bt.oi.opcodes import COMMANDS_BY_NAME
 from roomba_bt.sim.geometry import closest_point, wrap_angle
 from roomba_bt.sim.sensing import Sensing
 from roomba_bt.sim.state import EXACT_ODOMETRY, STEP_SECONDS, OdometryError, TracePoint
 from roomba_bt.sim.world import ROBOT_RADIUS_MM
 
-#: The robot's wheel speed controller moves in steps of about 28.5 mm/s.
-WHEEL_SPEED_STEP_MM_S = 28.5
 MAX_WHEEL_SPEED_MM_S = 500.0
 #: Pushed against the dock within this angle of the contacts, its guides align the robot.
 DOCK_GUIDE_ANGLE = math.radians(20.0)

@@ -12,7 +12,7 @@ from collections.abc import Callable
 
 from py_trees.common import Status
 
-from roomba_bt.behaviours.declare import Param, wheel_speed_param
+from roomba_bt.behaviours.declare import Param, moving_minimum, wheel_speed_param
 from roomba_bt.behaviours.docking.common import (
     HOME_BASE,
     RUNNING,
@@ -52,9 +52,11 @@ class DriveOnState(IdentityEnum):
 @declare_stage(
     "dock_drive_on",
     params=(
-        wheel_speed_param("speed", "120 mm/s", minimum=20,
+        # at least what moves the wheels at SEARCH_SHARE of it (neither receiver sees the dock)
+        wheel_speed_param("speed", "120 mm/s", minimum=moving_minimum(SEARCH_SHARE),
                           doc="speed along the axis outside the force field"),
-        wheel_speed_param("slow", "60 mm/s", minimum=10, doc="speed inside the force field"),
+        wheel_speed_param("slow", "60 mm/s", minimum=moving_minimum(SEARCH_SHARE),
+                          doc="speed inside the force field"),
         Param("wiggle", ANGLE, default="12deg", minimum=0, maximum=45,
               doc="how far it turns each way on contact to seat the charging contacts"),
     ),
