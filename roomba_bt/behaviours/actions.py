@@ -444,7 +444,8 @@ class Drive(Action):
               doc="heading change; positive turns left (counter-clockwise)"),
         Param("speed", SPEED, default="100 mm/s", minimum=moving_minimum(),
               maximum=_VELOCITY.maximum,
-              doc="wheel speed while spinning in place"),
+              doc="wheel speed while spinning in place (slower than 15 mm/s, the wheels stand "
+                  "still)"),
     ),
     reads=ENCODER_PACKETS,
     sends=opcodes("drive"),

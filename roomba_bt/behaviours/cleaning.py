@@ -27,6 +27,8 @@ however far the odometry's heading has drifted since the last.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from typing import Any
 
 from py_trees.common import Status
 
@@ -76,6 +78,34 @@ class _Pattern(Action):
 # --------------------------------------------------------------------------- spiral
 
 
+_START_RADIUS = Param(
+    "start_radius",
+    DISTANCE,
+    default="10 cm",
+    minimum=10,
+    maximum=2000,
+    doc="less than max_radius (a spiral that starts at its widest is refused)",
+)
+_MAX_RADIUS = Param("max_radius", DISTANCE, default="1.2 m", minimum=50, maximum=5000,
+                    doc="SUCCESS once the spiral is this wide")  # fmt: skip
+
+
+def _spiral_grows(params: Mapping[str, Any]) -> list[str]:
+    """A spiral that starts at or beyond its ``max_radius`` is over before it moves (it
+    succeeded on its first tick, nothing driven). Values read from the blackboard pass."""
+    start = params.get("start_radius", DISTANCE.parse(_START_RADIUS.default))
+    widest = params.get("max_radius", DISTANCE.parse(_MAX_RADIUS.default))
+    if not isinstance(start, int | float) or not isinstance(widest, int | float):
+        return []
+    if start >= widest:
+        return [
+            f"start_radius {start:g} mm is not below max_radius {widest:g} mm"
+            f"{'' if 'max_radius' in params else ' (its default)'}: the spiral would be over "
+            "before it moved; start_radius must be less than max_radius"
+        ]
+    return []
+
+
 @declare(
     "spiral",
     kind="action",
@@ -84,12 +114,12 @@ class _Pattern(Action):
                           doc="speed of the robot's centre along the spiral"),
         Param("spacing", DISTANCE, default="25 cm", minimum=50, maximum=1000,
               doc="the radius grows this much a turn (the swept strip is 27.5 cm wide)"),
-        Param("start_radius", DISTANCE, default="10 cm", minimum=10, maximum=2000),
-        Param("max_radius", DISTANCE, default="1.2 m", minimum=50, maximum=5000,
-              doc="SUCCESS once the spiral is this wide"),
+        _START_RADIUS,
+        _MAX_RADIUS,
     ),
     reads=(*driving.BLOCKED_PACKETS, *ENCODER_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS),
     sends=opcodes("drive_direct", "drive"),
+    constraints=_spiral_grows,
 )  # fmt: skip
 class Spiral(_Pattern):
     """Spiral outward, turning left, over open floor: SUCCESS when it is ``max_radius`` wide

@@ -193,8 +193,11 @@ def _light_reads(params: Mapping[str, Any]) -> tuple[int, ...]:
     kind="condition",
     params=(
         Param("sensor", enum(*LIGHT_BUMPER_NAMES, "any"), default="any", from_blackboard=False),
-        Param("threshold", INT, minimum=0, maximum=_SIGNAL_MAXIMUM, from_blackboard=False,
-              doc="compare the signal (46-51) instead of the robot's own detection bit (45)"),
+        # from 1: every signal is at least 0, so threshold 0 would be true on any robot (as
+        # sensor: light_bump_left_signal >= 0 is refused)
+        Param("threshold", INT, minimum=1, maximum=_SIGNAL_MAXIMUM, from_blackboard=False,
+              doc="compare the signal (46-51) instead of the robot's own detection bit (45); 0 "
+                  "would be true on any robot, and is refused"),
     ),
     reads=_light_reads,
     primary="sensor",

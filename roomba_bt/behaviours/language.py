@@ -165,7 +165,8 @@ _PARALLEL = NodeKind(
     Shape.CHILDREN,
     _parallel,
     (
-        Param("memory", BOOL, default=False, doc="unused by parallel"),
+        Param("memory", BOOL, default=False,
+              doc="false only: a parallel ticks every child on every tick (it has no memory)"),
         _NAME,
         Param(
             "policy",
@@ -181,7 +182,9 @@ _PARALLEL = NodeKind(
     "py_trees Parallel: ticks every child each tick (with synchronise, not one that succeeded)",
     required_if=(("selected", "policy", "selected"),),
     only_if=(("selected", "policy", "selected"),),
-)
+    refused=(("memory", True, "a parallel ticks every child on every tick: it has no memory "
+              "to resume (memory: true was ignored; its children's own memory is theirs)"),),
+)  # fmt: skip
 
 # ----------------------------------------------------------------------------- decorators
 

@@ -26,6 +26,8 @@ preempted.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from typing import Any
 
 from py_trees.common import Status
 
@@ -51,6 +53,31 @@ _BACK_MM, _BACK_S = 50.0, 1.0
 _TURN_S = 4.0
 
 
+_FRONT_THRESHOLD = Param(
+    "front_threshold", INT, default=800, minimum=1, maximum=_SIGNAL_MAX,
+    doc="centre signal (48/49) above which it turns away from a wall ahead",
+)  # fmt: skip
+
+
+def _hysteresis_in_order(params: Mapping[str, Any]) -> list[str]:
+    """``front_clear`` above ``front_threshold`` is a hysteresis upside down: the turn away
+    from a wall ahead would end at a signal above the one that starts it (it was taken as
+    ``front_threshold`` without a word). Values read from the blackboard pass."""
+    enter = params.get("front_threshold", _FRONT_THRESHOLD.default)
+    leave = params.get("front_clear")
+    if not isinstance(enter, int | float) or not isinstance(leave, int | float):
+        return []
+    if leave > enter:
+        return [
+            f"front_clear {leave:g} is above front_threshold {enter:g}"
+            f"{'' if 'front_threshold' in params else ' (its default)'}: the turn away from a "
+            "wall ahead starts above front_threshold and ends below front_clear, so "
+            f"front_clear must be at most front_threshold (1..{enter:g}; 300 suits the "
+            "default 800)"
+        ]
+    return []
+
+
 @declare(
     "wall_follow",
     kind="action",
@@ -62,11 +89,11 @@ _TURN_S = 4.0
               doc="mm/s of wheel-speed difference per unit of signal error"),
         Param("kd", FLOAT, default=0.01, minimum=0, maximum=10,
               doc="mm/s per unit of signal error change per second"),
-        Param("front_threshold", INT, default=800, minimum=1, maximum=_SIGNAL_MAX,
-              doc="centre signal (48/49) above which it turns away from a wall ahead"),
+        _FRONT_THRESHOLD,
         Param("front_clear", INT, minimum=1, maximum=_SIGNAL_MAX,
               doc="centre signal below which that turn ends (hysteresis; 300 suits it); "
-                  "default: front_threshold"),
+                  "default: front_threshold; above front_threshold it is refused (the "
+                  "hysteresis upside down)"),
         Param("turn_hold", DURATION, default="0s", minimum=0, maximum=5,
               doc="the shortest time that turn, or the following after it, holds (0.3s "
                   "suits it); 0: decided afresh every tick"),
@@ -77,6 +104,7 @@ _TURN_S = 4.0
     reads=(*BUMPS_PACKETS, *_SIGNALS),
     sends=opcodes("drive_direct", "drive"),
     may_succeed=lambda params: "duration" in params,  # else RUNNING until ended
+    constraints=_hysteresis_in_order,
 )  # fmt: skip
 class WallFollow(Action):
     """Follow a wall on the right at a steady light-bumper signal (PD on wheel speeds).

@@ -535,6 +535,11 @@ def param_decl(
         vtype = enum(*_choices(*fields["choices"][::2]))
     else:
         vtype = parse_type_name(tnode, tloc, also=("enum",))
+        if "choices" in fields:  # read by no other type: it was ignored without a word
+            raise Bad(fields["choices"][2].at(
+                f"parameter {name!r}: choices only goes with type: enum (a closed set of "
+                f"words), not with type: {vtype.name}: drop choices, or write type: enum"
+            ))  # fmt: skip
     doc = ""
     if "doc" in fields:
         doc = scalar_text(fields["doc"][0], fields["doc"][2], "doc")

@@ -28,12 +28,13 @@ from __future__ import annotations
 import math
 
 from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.odometry import WHEEL_SPEED_STEP_MM_S
 from roomba_bt.oi.opcodes import COMMANDS, opcodes
 from roomba_bt.oi.profiles import CREATE2, RobotProfile
 from roomba_bt.sim.coverage import ALL_BRUSHES, SweptArea
 from roomba_bt.sim.cycles import BuiltinCycle
 from roomba_bt.sim.faults import Faults
-from roomba_bt.sim.motion import WHEEL_SPEED_STEP_MM_S, drive_wheel_speeds
+from roomba_bt.sim.motion import drive_wheel_speeds
 from roomba_bt.sim.protocol import PASSIVE_SLEEP_SECONDS, OIProtocol
 from roomba_bt.sim.sensing import FAR_ALL
 from roomba_bt.sim.state import STEP_SECONDS, SimEvent, TracePoint, Violation

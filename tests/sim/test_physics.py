@@ -11,10 +11,14 @@ import pytest
 from roomba_bt.oi import commands as C
 from roomba_bt.oi.bits import ChargingState, motor_bits
 from roomba_bt.oi.encode import Command, Radius
-from roomba_bt.oi.odometry import MM_PER_COUNT, OLD_FIRMWARE_ANGLE_FACTOR, encoder_delta
+from roomba_bt.oi.odometry import (
+    MM_PER_COUNT,
+    OLD_FIRMWARE_ANGLE_FACTOR,
+    WHEEL_SPEED_STEP_MM_S,
+    encoder_delta,
+)
 from roomba_bt.oi.profiles import CREATE2, ROOMBA500, ROOMBA600
 from roomba_bt.sim import Pose, drive_wheel_speeds
-from roomba_bt.sim.motion import WHEEL_SPEED_STEP_MM_S
 from roomba_bt.sim.state import STEP_SECONDS
 
 from .helpers import docked_start, make
