@@ -444,14 +444,34 @@ def enum(*choices: str) -> ValueType:
             hint = _miswritten_text(value)
             if not hint and isinstance(value, str):
                 hint = closest(value, choices)
+            if isinstance(value, bool):
+                hint = _boolean_word(value, choices)
             raise UnitError(f"expected one of {', '.join(choices)}, got {described(value)}{hint}")
         return value
 
     return ValueType("enum", parse, choices=tuple(choices))
 
 
+#: the words YAML 1.1 reads as a boolean, by the boolean
+_YAML11_BOOLEANS = {True: ("yes", "on", "true"), False: ("no", "off", "false")}
+
+
+def _boolean_word(value: bool, choices: Sequence[str]) -> str:
+    """For an enum given a boolean: the choice YAML 1.1 read as it, and how to keep it a
+    word (``oi_mode: off`` said "got a boolean (false)" and no more)."""
+    meant = [c for c in choices if c.lower() in _YAML11_BOOLEANS[value]]
+    if not meant:
+        return ""
+    return (f": YAML 1.1 reads {meant[0]} as the boolean {str(value).lower()}: quote it, "
+            f"'{meant[0]}'")  # fmt: skip
+
+
 def compatible(source: ValueType, target: ValueType) -> bool:
-    """May a value of ``source`` type fill a slot of ``target`` type?"""
+    """May a value of ``source`` type fill a slot of ``target`` type? Any value fills an
+    ``any`` slot (a key whose declaration was refused is typed ``any``: its reader's
+    ``${p}`` was "an int, but check.value needs any", an error after the real one)."""
+    if target.name == "any":
+        return True
     if source.name == target.name and source.choices == target.choices:
         return source.fields == target.fields
     if source.choices and target.choices:  # an enum whose every word the slot accepts

@@ -180,6 +180,19 @@ def fraction(text: str) -> float:
     return _number_or_quantity(text, "percent", 100.0, 0.0, 1.0, allowed)
 
 
+def battery_charge(text: str) -> float:
+    """The simulator's initial charge: a :func:`fraction` above 0. An empty battery switches
+    the simulated robot off (docs/simulator.md), so nothing answers: ``--battery 0`` ended
+    the run as NO CONNECTION, blaming the baud rate and the cable."""
+    charge = fraction(text)
+    if charge == 0:
+        raise argparse.ArgumentTypeError(
+            f"found {text!r}: an empty battery switches the simulated robot off, and it would "
+            "answer nothing (a lost connection); allowed: a charge above 0, up to 1 (0.05, 5%)"
+        )
+    return charge
+
+
 def _number_or_quantity(
     text: str, dimension: str, per_unit: float, lo: float, hi: float, allowed: str
 ) -> float:

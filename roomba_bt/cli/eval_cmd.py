@@ -41,6 +41,7 @@ from roomba_bt.cli.arguments import (
     add_param_option,
     add_permission_options,
     add_profile_option,
+    battery_charge,
     fraction,
     metres,
     mission_file,
@@ -162,8 +163,9 @@ def _add_start_options(ev: argparse.ArgumentParser) -> None:
         "red=-5,25 (deg), green=-25,5, contact_tolerance=0.05 (m), angle_tolerance=6 (deg), "
         "family=discovery (characters 240-254); each in the range a world file's dock allows",
     )
-    ev.add_argument("--battery", type=fraction, metavar="FRACTION",
-                    help="initial charge: a fraction 0..1 (0.5) or a percent (50%%)")  # fmt: skip
+    ev.add_argument("--battery", type=battery_charge, metavar="FRACTION",
+                    help="initial charge: a fraction above 0, up to 1 (0.5), or a percent "
+                    "(50%%)")  # fmt: skip
     add_odometry_error_option(ev)
     ev.add_argument("--timeout", default="15min", help="mission time per episode (default 15min)")
     ev.add_argument(

@@ -186,7 +186,7 @@ def validate_command(args: argparse.Namespace) -> int:
             print(line)
         if any(d.severity == "error" for d in diagnostics):
             status = ExitCode.INVALID
-        else:
+        elif not args.quiet:  # -q: the warnings and errors only (the exit status says ok)
             said = "ok" if not diagnostics else "ok, with warnings"
             print(f"{escaped(file, ANY_CONTROL)}: {said}")  # one line: its name may hold "\n"
     return status

@@ -17,7 +17,7 @@ from roomba_bt.cli.arguments import (
     add_odometry_error_option,
     add_param_option,
     add_permission_options,
-    fraction,
+    battery_charge,
     mission_file,
     parse_params,
     parse_timeout,
@@ -81,9 +81,9 @@ def _add_run_parser(sub: Any) -> None:
     )
     run.add_argument("--seed", type=int, default=0, help="simulator seed (default 0)")
     run.add_argument(
-        "--battery", type=fraction, metavar="FRACTION",
-        help="simulator only: initial charge, 0..1 or a percent (0.5, 50%%; default: the "
-        "world's)",
+        "--battery", type=battery_charge, metavar="FRACTION",
+        help="simulator only: initial charge, above 0 up to 1, or a percent (0.5, 50%%; "
+        "default: the world's)",
     )  # fmt: skip
     run.add_argument(
         "--random-start", action="store_true", help="start in the world's start region"

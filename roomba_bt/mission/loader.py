@@ -61,9 +61,11 @@ from roomba_bt.mission.source import (
     kind_of,
     loc_of,
     mapping,
+    named_entries,
     plain,
     scalar_text,
     sequence,
+    written_keys,
 )
 from roomba_bt.mission.values import (
     SUBSTITUTION,
@@ -152,10 +154,12 @@ class Loader:
             *(folder.resolve() for folder in self.permissions.include_dirs),
         )
         self._include_stack.append(resolved)
-        self._file_sections(path, sections)
-        name, description = self._names(path, sections)
+        # the parameters first: a blackboard key's initial value may be one ("${speed}"),
+        # and read before them it was an "unknown parameter" the declaration had just made
         params = self._parameters(sections.get("parameters"), overrides, root_loc)
         self.nodes.global_env = params
+        self._file_sections(path, sections)
+        name, description = self._names(path, sections)
         description = substituted(
             description, lambda name: params[name].text if name in params else None
         )
@@ -402,10 +406,16 @@ class Loader:
         if section is not None:
             node, _, loc = section
             try:
-                items = mapping(node, loc, "parameters")
+                items, not_names = named_entries(node, loc, "parameters")
             except Bad as bad:
                 self.ctx.report(bad)
-                items = []
+                items, not_names = [], None
+            if not_names is not None:  # reported once; the other parameters stand
+                self.ctx.report(not_names)
+                for written in written_keys(node):
+                    if written not in {name for name, *_ in items}:
+                        env[written] = Bound(STR, UNKNOWN, "?")  # its uses: no cascade
+                        broken.add(written)
             for name, value, key_loc, vloc in items:
                 try:
                     vtype, default, has_default, _ = param_decl(self.ctx, value, vloc, name)

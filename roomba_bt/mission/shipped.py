@@ -112,7 +112,8 @@ def in_shipped_library(target: Path) -> bool:
 
 def find_mission(text: str) -> ShippedLookup:
     """A mission argument as the command line takes it: an existing file; else a shipped
-    mission's name (``dock``, ``dock.yaml`` or ``roomba-bt:dock.yaml``)."""
+    mission's name (``dock``, ``dock.yaml`` or ``roomba-bt:dock.yaml``) or a shipped file's
+    path in the shipped directory (``lib/docking.yaml``, as ``roomba-bt missions`` takes it)."""
     if not text.strip():  # Path("") is the current folder: "a directory" said nothing useful
         return ShippedLookup(None, f"{text!r}: an empty path; give a mission file or a shipped "
                              "mission's name (`roomba-bt missions` lists them)")  # fmt: skip
@@ -136,6 +137,11 @@ def _find_mission(text: str, given: Path) -> ShippedLookup:
     stem = text[: -len(".yaml")] if text.endswith(".yaml") else text
     if "/" not in text and stem in shipped:
         return ShippedLookup(shipped[stem])
+    # a shipped library file by its path in the shipped directory, as `roomba-bt missions
+    # lib/docking.yaml` prints it (validate said "no such mission file" to the same words)
+    library = shipped_file(f"{SHIPPED_PREFIX}{stem}.yaml")
+    if library is not None and not given.is_absolute():
+        return ShippedLookup(library)
     names = ", ".join(shipped) or "none"
     if given.is_dir():
         return ShippedLookup(None, f"{text}: a directory, not a mission file (a .yaml file)")

@@ -168,6 +168,18 @@ def mapping(node: yaml.Node, loc: Loc, what: str) -> list[tuple[str, yaml.Node, 
     """``(key, value node, key loc, value loc)`` of a mapping; a non-text key is an error. A
     key written again is left out, the first one standing: :func:`compose_text` reported
     every duplicate already (:func:`duplicate_keys`)."""
+    items, not_names = named_entries(node, loc, what)
+    if not_names is not None:
+        raise not_names
+    return items
+
+
+def named_entries(
+    node: yaml.Node, loc: Loc, what: str
+) -> tuple[list[tuple[str, yaml.Node, Loc, Loc]], Bad | None]:
+    """:func:`mapping`'s entries whose keys are names, and the error of those that are not
+    (None when all are): for a section whose other entries stand on their own (a parameter
+    named ``off:`` made every other parameter of the mission "unknown" at each use)."""
     check_tag(node, loc)
     if not isinstance(node, yaml.MappingNode):
         raise Bad(loc.at(f"{what} must be a mapping (key: value), got {kind_of(node)}"))
@@ -177,15 +189,30 @@ def mapping(node: yaml.Node, loc: Loc, what: str) -> list[tuple[str, yaml.Node, 
             f"keys of {what} must be names, got {_key_kind(key_node)}"
         )
         for _, key_node, _ in yamlsource.pairs(node, skip_duplicates=True)
-        if not isinstance(key_node, yaml.ScalarNode) or key_node.tag != yamlsource.STR
+        if not _is_name(key_node)
     ]
-    if not_names:  # each on its own line: `1:`, `true:`, `1.0:` are three keys, three errors
-        raise Bad(not_names[0], tuple(not_names[1:]))
+    # each on its own line: `1:`, `true:`, `1.0:` are three keys, three errors
+    bad = Bad(not_names[0], tuple(not_names[1:])) if not_names else None
     for _, key_node, value_node in yamlsource.pairs(node, skip_duplicates=True):
+        if not _is_name(key_node):
+            continue
         key = str(key_node.value)
         key_loc = loc_of(key_node, loc.file, join(loc.path, key))
         out.append((key, value_node, key_loc, loc_of(value_node, loc.file, key_loc.path)))
-    return out
+    return out, bad
+
+
+def _is_name(key_node: yaml.Node) -> bool:
+    return isinstance(key_node, yaml.ScalarNode) and key_node.tag == yamlsource.STR
+
+
+def written_keys(node: yaml.Node) -> list[str]:
+    """The keys of a mapping as written, names or not (``off`` for a key YAML 1.1 read as a
+    boolean): the names a user meant, so that their uses are not reported again."""
+    if not isinstance(node, yaml.MappingNode):
+        return []
+    return [str(k.value) for _, k, _ in yamlsource.pairs(node, skip_duplicates=True)
+            if isinstance(k, yaml.ScalarNode)]  # fmt: skip
 
 
 def _key_kind(key_node: yaml.Node) -> str:
