@@ -107,12 +107,14 @@ def _note(item: object) -> tuple[int, int]:
             f"note {parts[0]} ({number}) is outside the notes the robot plays, {lo} to "
             f"{hi}: it would sound as a rest (write rest for one)"
         )
-    sixty_fourths = round(parse_quantity("duration", parts[1]) * 64)
-    if not 1 <= sixty_fourths <= 255:
+    seconds = parse_quantity("duration", parts[1])
+    # the range on the length as written, not on its rounding: 8ms was sent as 1/64 s and
+    # 3.992s as 255/64, both outside the range the error and the docs state
+    if not 1 / 64 <= seconds <= 255 / 64:
         raise UnitError(
             f"note duration {parts[1]!r} is out of range: 16ms..3.98s (1..255 of 1/64 s)"
         )
-    return number, sixty_fourths
+    return number, round(seconds * 64)
 
 
 #: a note name as a musician writes it: a letter, a sharp or a flat (``b``, ``♯``, ``♭``), an

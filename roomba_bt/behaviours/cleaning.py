@@ -122,7 +122,8 @@ def _spiral_grows(params: Mapping[str, Any]) -> list[str]:
     constraints=_spiral_grows,
 )  # fmt: skip
 class Spiral(_Pattern):
-    """Spiral outward, turning left, over open floor: SUCCESS when it is ``max_radius`` wide
+    """Spiral outward, turning left, over open floor (the radius grows by ``spacing`` a turn,
+    so the rings lie side by side): SUCCESS when it is ``max_radius`` wide
     or something is in the way (a bump, a cliff, a virtual wall, a wall close ahead); the
     wheels halt. FAILURE on a wheel drop, or when the robot leaves Safe/Full.
 

@@ -588,8 +588,9 @@ def _comparable(params: Mapping[str, Any]) -> list[str]:
     constraints=_comparable,
 )
 class CheckKey(Condition):
-    """Compare a blackboard key with a value. A key never written is None: the check is
-    False; a value the key's cannot be compared with raises (a bug, not a False)."""
+    """Compare a blackboard key with a value. A key not written yet makes the check False; a
+    value that cannot be compared with the key's (a plugin wrote another type) ends the run
+    as an error: a bug, not a False."""
 
     def check(self, snapshot: Snapshot) -> bool:
         key = str(self.value("key"))

@@ -520,3 +520,22 @@ def test_mode_passive_stops_the_motors_the_run_left_running_before_start(
     robot.set_frame({35: int(OIMode.SAFE)}, ticks=40)  # Start again after 0.5 s: no Motors
     assert tick(behaviour) is Status.RUNNING
     assert data(robot) == [[128]]
+
+
+@pytest.mark.parametrize(
+    ("written", "sent"),
+    [("15.625ms", 1), ("16ms", 1), ("3.98s", 255), ("3.984375s", 255), ("100ms", 6)],
+)
+def test_a_note_length_in_range_is_sent_as_the_nearest_sixty_fourth(
+    written: str, sent: int
+) -> None:
+    assert a.NOTES.parse([f"C4 {written}"]) == ((60, sent),)
+
+
+@pytest.mark.parametrize("written", ["8ms", "15ms", "3.992s", "3.985s"])
+def test_a_note_length_outside_the_range_is_refused_not_rounded_into_it(written: str) -> None:
+    """``C4 8ms`` was sent as 1/64 s and ``C4 3.992s`` as 255/64: the range the error and
+    the docs state (16ms..3.98s, 1..255 of 1/64 s) held only the rounding."""
+    with pytest.raises(ItemErrors) as caught:
+        a.NOTES.parse([f"C4 {written}"])
+    assert "is out of range: 16ms..3.98s (1..255 of 1/64 s)" in str(caught.value)

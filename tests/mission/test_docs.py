@@ -94,3 +94,62 @@ def test_every_sensor_packet_a_comparison_takes_is_listed_with_its_range() -> No
         for profile in PROFILES.values():
             bounds = profile.packet(pid)
             assert f"{bounds.minimum}..{bounds.maximum}" in row, (spec.name, profile.name)
+
+
+def test_the_runtime_packets_the_docs_list_are_the_constants() -> None:
+    """The docs listed battery 25-26 among ``RUNTIME_PACKETS``, which has not got them (the
+    bandwidth error prints the constant: the reader saw two lists)."""
+    from roomba_bt.mission import RUNTIME_PACKETS
+
+    found = re.search(r"`roomba_bt\.mission\.RUNTIME_PACKETS`: ([^)]*)\)", DOC)
+    assert found is not None
+    listed: set[int] = set()
+    for low, high in re.findall(r"(\d+)(?:-(\d+))?", found.group(1)):
+        listed.update(range(int(low), int(high or low) + 1))
+    assert listed == set(RUNTIME_PACKETS)
+
+
+def test_every_value_type_is_in_the_values_table() -> None:
+    """``radius`` (a parameter and blackboard type, in the schema) was missing."""
+    from roomba_bt.behaviours.units import VALUE_TYPES
+
+    table = DOC.split("## Values")[1].split("\n#")[0]
+    rows = {row.split("|")[1] for row in table.splitlines() if row.startswith("| `")}
+    written = " ".join(rows)
+    for name in VALUE_TYPES:
+        assert f"`{name}`" in written, name
+
+
+def _entry(name: str) -> str:
+    """A behaviour's text in docs/missions.md, ``**`name`**: text  `` up to its line break."""
+    found = re.search(rf"^\*\*`{name}`\*\*: (.*?)  $", DOC, re.M)
+    assert found is not None, f"docs/missions.md has no entry for {name}"
+    return found.group(1)
+
+
+@pytest.mark.parametrize(
+    "cls",
+    [*ACTIONS, *CONDITIONS, *CLEANING, *COVERAGE, *HOMING, *WALL_FOLLOWING],
+    ids=lambda cls: cls.declaration.name,
+)
+def test_every_behaviours_text_in_the_docs_starts_with_its_declaration(cls: type) -> None:
+    """The docs say the lists are generated from the declarations (``roomba-bt behaviours``
+    prints the same): each entry starts with the declaration's text, word for word (the
+    docs may say more after it). ``cover``, ``home_by_map`` and ``spiral`` read differently in
+    the two; only the parameter tables were compared."""
+    declared = " ".join(cls.declaration.doc.replace("``", "`").split())
+    assert _entry(cls.declaration.name).replace("``", "`").startswith(declared)
+
+
+@pytest.mark.parametrize(
+    "cls",
+    [*ACTIONS, *CONDITIONS, *CLEANING, *COVERAGE, *HOMING, *WALL_FOLLOWING],
+    ids=lambda cls: cls.declaration.name,
+)
+def test_every_parameters_text_in_the_docs_is_its_declarations(cls: type) -> None:
+    found = re.search(rf"^\*\*`{cls.declaration.name}`\*\*.*?(?=^\*\*`|^#)", DOC, re.S | re.M)
+    assert found is not None
+    rows = dict(re.findall(r"^\| `(\w+)` \| [^|]*\|[^|]*\|[^|]*\| (.*) \|$", found.group(0), re.M))
+    for param in cls.declaration.params:
+        said = rows.get(param.name, "").strip().replace("`", "")
+        assert said == param.doc.replace("`", ""), f"{cls.declaration.name}.{param.name}"
