@@ -304,13 +304,33 @@ class ValueType:
         return dict(self.json_schema)
 
 
+#: a text :func:`parse_quantity` reads as 0 with no unit (``"0"``, ``"-0.0"``): a JSON Schema
+#: pattern (``wait: "0"`` is valid; the schema refused it)
+ZERO_TEXT_PATTERN = r"^\s*[-+]?(?:0+(?:\.0*)?|\.0+)(?:[eE][-+]?[0-9]+)?\s*$"
+
+
+def quantity_schema(dimension: str, *, signed: bool = True) -> dict[str, Any]:
+    """The JSON Schema of a quantity of ``dimension`` as :func:`parse_quantity` reads it:
+    a number and a unit, a 0 (a number or a text). ``signed=False``: no minus sign (a
+    parameter whose minimum is not below 0: a pattern can exclude a negative value, though
+    it cannot hold a range)."""
+    number = _NUMBER if signed else r"\+?" + _NUMBER.removeprefix("[-+]?")
+    units = "|".join(re.escape(u) for u in UNITS[dimension])
+    return {
+        "anyOf": [
+            {"type": "string", "pattern": rf"^\s*{number}\s*({units})\s*$"},
+            {"type": "string", "pattern": ZERO_TEXT_PATTERN},
+            {"const": 0},
+        ]
+    }
+
+
 def _quantity_type(dimension: str) -> ValueType:
-    pattern = rf"^\s*{_NUMBER}\s*({'|'.join(re.escape(u) for u in UNITS[dimension])})\s*$"
     return ValueType(
         dimension,
         lambda v: parse_quantity(dimension, v),
         CANONICAL[dimension],
-        (("anyOf", [{"type": "string", "pattern": pattern}, {"const": 0}]),
+        (("anyOf", quantity_schema(dimension)["anyOf"]),
          ("description", f"{with_article(dimension)}, e.g. {EXAMPLES[dimension]}")),
     )  # fmt: skip
 
@@ -402,7 +422,10 @@ PERCENT = _quantity_type("percent")
 INT = ValueType("int", _parse_int, json_schema=(("type", "integer"),))
 FLOAT = ValueType("float", _parse_float, json_schema=(("type", "number"),))
 BOOL = ValueType("bool", _parse_bool, json_schema=(("type", "boolean"),))
-STR = ValueType("str", _parse_str, json_schema=(("type", "string"),))
+#: a number is a text too (``log: 5`` logs "5"), a boolean is not (``default: no``)
+STR = ValueType(
+    "str", _parse_str, json_schema=(("anyOf", [{"type": "string"}, {"type": "number"}]),)
+)
 STR_LIST = ValueType(
     "str_list",
     _parse_str_list,

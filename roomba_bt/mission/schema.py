@@ -1,10 +1,14 @@
 """The JSON Schema of mission files, generated from the same declarations the validator
 reads (``roomba-bt schema > mission.schema.json``), for editor completion and CI.
 
-The schema knows every word of the language with its options (from
-:data:`roomba_bt.behaviours.language.WORDS`), every behaviour's parameters with their types
-and units, and the modifiers (``name``, ``while``, ``until``). What it cannot express (units
-in range, modes, blackboard order, the stream budget) ``roomba-bt validate`` checks.
+The schema knows every word of the language with its options and the rules between them
+(from :data:`roomba_bt.behaviours.language.WORDS`), every behaviour's parameters with their
+types, units and ranges, where an ``@key`` may stand, and the modifiers (``name``,
+``while``, ``until``). What it cannot express ``roomba-bt validate`` checks: a quantity's
+range (a pattern cannot compare numbers: the description says the range; a minus sign is
+refused where the minimum is not below 0), a behaviour's own rules between its parameters,
+modes, blackboard order and types, the stream budget, what a ``sensor:`` comparison names
+(tests/mission/test_schema_agrees.py lists these, case by case).
 """
 
 from __future__ import annotations
@@ -14,19 +18,32 @@ from typing import Any
 from roomba_bt.behaviours.declare import Declaration, Param
 from roomba_bt.behaviours.language import MODIFIERS, STRUCTURAL, WORDS, NodeKind, Shape
 from roomba_bt.behaviours.registry import Registry, default_registry
-from roomba_bt.behaviours.units import VALUE_TYPES
+from roomba_bt.behaviours.units import UNITS, VALUE_TYPES, quantity_schema
 
 SCHEMA_ID = "https://roomba-bt.example/mission.schema.json"
 _NODE = {"$ref": "#/$defs/node"}
-_SUBSTITUTION = {
+_NAME = r"[A-Za-z_][A-Za-z0-9_]*"
+#: a ``${parameter}`` (``-${p}`` negates it): any option or parameter may be one
+_PARAMETER = {
     "type": "string",
-    "pattern": r"^(-?\$\{[A-Za-z_][A-Za-z0-9_]*\}|@[a-z_][a-z0-9_]*(\.[a-z_][a-z0-9_]*)?)$",
-    "description": "${parameter} or @blackboard_key",
+    "pattern": rf"^-?\$\{{{_NAME}\}}$",
+    "description": "${parameter}",
 }
+#: an ``@key`` (``@record.field``): only a behaviour's parameter declared ``from_blackboard``
+#: (the language's options and ``mode.to`` are read when the tree is built)
+_KEY_REF = {
+    "type": "string",
+    "pattern": r"^@[a-z_][a-z0-9_]*(\.[a-z_][a-z0-9_]*)?$",
+    "description": "@blackboard_key",
+}
+#: what a name a mission declares is (parameters, blackboard keys, subtrees)
+_SNAKE_CASE = {"pattern": r"^[a-z_][a-z0-9_]*$"}
 _MODIFIERS: dict[str, Any] = {
     word: {**({"type": "string"} if word == "name" else _NODE), "description": doc}
     for word, doc in MODIFIERS.items()
 }
+#: said in the description of every quantity with a range (docs/missions.md, "Schema")
+RANGE_NOT_IN_SCHEMA = "checked by roomba-bt validate: a JSON Schema pattern cannot hold a range"
 
 
 def _with_modifiers(word: str, value: dict[str, Any], doc: str) -> dict[str, Any]:
@@ -39,50 +56,91 @@ def _with_modifiers(word: str, value: dict[str, Any], doc: str) -> dict[str, Any
     }
 
 
+def _value_schema(param: Param) -> tuple[dict[str, Any], str]:
+    """A value of ``param``'s type within its range, as far as JSON Schema holds it: an int's
+    or a float's bounds; a quantity's sign (no minus where the minimum is not below 0), its
+    range said in the returned note, not checked (a pattern cannot compare numbers)."""
+    schema = param.type.schema()
+    lo, hi = param.minimum, param.maximum
+    if param.type.name in ("int", "float"):
+        if lo is not None:
+            schema["minimum"] = lo
+        if hi is not None:
+            schema["maximum"] = hi
+        return schema, ""
+    if param.type.name in UNITS and (lo is not None or hi is not None):
+        schema = {**quantity_schema(param.type.name, signed=lo is None or lo < 0),
+                  "description": schema.get("description", "")}  # fmt: skip
+        low = "" if lo is None else f"{lo:g}"
+        high = "" if hi is None else f"{hi:g}"
+        return schema, f"range {low}..{high} {param.type.unit}, {RANGE_NOT_IN_SCHEMA}"
+    return schema, ""
+
+
 def _option_schema(option: Param) -> dict[str, Any]:
     """A language option: its type (a ``${parameter}`` too, unless the compiler takes it as
-    written), minimum and default."""
-    schema = option.type.schema()
-    if option.minimum is not None:
-        schema["minimum"] = option.minimum
+    written; never an ``@key``: options are read when the tree is built), range and
+    default."""
+    schema, note = _value_schema(option)
     if option.type not in STRUCTURAL:
-        schema = {"anyOf": [schema, _SUBSTITUTION]}
+        schema = {"anyOf": [schema, _PARAMETER]}
     if option.default is not None:
         schema["default"] = option.default
-    if option.doc:
-        schema["description"] = option.doc
+    doc = "; ".join(part for part in (option.doc, note) if part)
+    if doc:
+        schema["description"] = doc
     return schema
+
+
+def _option_rules(kind: NodeKind) -> dict[str, Any]:
+    """The language table's rules between options (:class:`NodeKind`), as JSON Schema:
+    ``exclusive`` (at most one), ``required_if``, ``only_if``; ``refused`` values are left
+    out of the option's own schema (:func:`_word_schema`)."""
+    rules: list[dict[str, Any]] = [
+        {"not": {"required": [a, b]}}
+        for i, a in enumerate(kind.exclusive)
+        for b in kind.exclusive[i + 1 :]
+    ]
+    for name, other, value in kind.required_if:
+        rules.append({"if": {"properties": {other: {"const": value}}, "required": [other]},
+                      "then": {"required": [name]}})  # fmt: skip
+    for name, other, value in kind.only_if:
+        given = {"anyOf": [{"const": value}, _PARAMETER]}  # a parameter's value is unknown here
+        rules.append({"if": {"required": [name]},
+                      "then": {"properties": {other: given}, "required": [other]}})  # fmt: skip
+    return {"allOf": rules} if rules else {}
 
 
 def _word_schema(kind: NodeKind) -> dict[str, Any]:
     """What may follow a word of the language, from its :class:`NodeKind`."""
     options = {p.name: _option_schema(p) for p in kind.options}
+    for name, bad, _ in kind.refused:  # reactive_sequence's memory: only false
+        if isinstance(bad, bool):
+            options[name] = {**options[name], "anyOf": [{"const": not bad}, _PARAMETER]}
     required = [p.name for p in kind.options if p.required]
+    rules = _option_rules(kind)
     if kind.shape is Shape.SUBTREE:
         by_id = {"type": "object", "properties": options, "required": required}
         return {"anyOf": [{"type": "string"}, by_id]}
     if kind.shape is Shape.CHILDREN:
         children = {"type": "array", "items": _NODE, "minItems": 1}
         long_form = {"type": "object", "properties": {"children": children, **options},
-                     "required": ["children"], "additionalProperties": False}  # fmt: skip
+                     "required": ["children"], "additionalProperties": False, **rules}  # fmt: skip
         return {"anyOf": [children, long_form]}
     long_form = {"type": "object", "properties": {**options, "do": _NODE},
-                 "required": ["do", *required], "additionalProperties": False}  # fmt: skip
+                 "required": ["do", *required], "additionalProperties": False, **rules}  # fmt: skip
     return {"anyOf": [long_form, _NODE]} if kind.shape is Shape.CHILD_OR_DO else long_form
 
 
 def _param_schema(decl: Declaration) -> dict[str, Any]:
     props: dict[str, Any] = {}
     for p in decl.params:
-        schema = p.type.schema()
-        if p.minimum is not None and p.type.name in ("int", "float"):
-            schema["minimum"] = p.minimum
-        if p.maximum is not None and p.type.name in ("int", "float"):
-            schema["maximum"] = p.maximum
+        schema, note = _value_schema(p)
         described = f"{p.doc} ({p.describe()})".strip() if p.doc else p.describe()
+        written = [schema, _PARAMETER, *([_KEY_REF] if p.from_blackboard else [])]
         props[p.name] = {
-            "anyOf": [schema, _SUBSTITUTION] if schema else [{}],
-            "description": described,
+            "anyOf": written if schema else [{}],
+            "description": f"{described}; {note}" if note else described,
         }
     body: dict[str, Any] = {"type": "object", "properties": props, "additionalProperties": False}
     required = [p.name for p in decl.params if p.required]
@@ -119,8 +177,16 @@ def mission_schema(registry: Registry | None = None) -> dict[str, Any]:
         "properties": {
             "mission": {"type": "string"},
             "description": {"type": "string"},
-            "parameters": {"type": "object", "additionalProperties": parameter},
-            "blackboard": {"type": "object", "additionalProperties": key},
+            "parameters": {
+                "type": "object",
+                "additionalProperties": parameter,
+                "propertyNames": _SNAKE_CASE,
+            },
+            "blackboard": {
+                "type": "object",
+                "additionalProperties": key,
+                "propertyNames": _SNAKE_CASE,
+            },
             "plugins": {"type": "array", "items": {"type": "string"}},
             "include": {"type": "array", "items": {"type": "string"}},
             "subtrees": {
@@ -169,6 +235,8 @@ def _declarations() -> tuple[dict[str, Any], dict[str, Any]]:
                     "doc": {"type": "string"},
                 },
                 "additionalProperties": False,
+                # a key needs its type (or a record's fields): "needs a type (or fields)"
+                "anyOf": [{"required": ["type"]}, {"required": ["fields"]}],
             },
         ]
     }
