@@ -404,18 +404,7 @@ class Loader:
         declared: dict[str, tuple[ValueType, Loc]] = {}
         broken: set[str] = set()  # declared wrongly: reported once, not at each use nor -p
         if section is not None:
-            node, _, loc = section
-            try:
-                items, not_names = named_entries(node, loc, "parameters")
-            except Bad as bad:
-                self.ctx.report(bad)
-                items, not_names = [], None
-            if not_names is not None:  # reported once; the other parameters stand
-                self.ctx.report(not_names)
-                for written in written_keys(node):
-                    if written not in {name for name, *_ in items}:
-                        env[written] = Bound(STR, UNKNOWN, "?")  # its uses: no cascade
-                        broken.add(written)
+            items = _parameter_entries(self.ctx, section, env, broken)
             for name, value, key_loc, vloc in items:
                 try:
                     vtype, default, has_default, _ = param_decl(self.ctx, value, vloc, name)
@@ -526,6 +515,28 @@ def known_fields(
         if key not in allowed:
             raise Bad(kl.at(f"{what}: " + unknown("key", key, list(allowed))))
     return fields
+
+
+def _parameter_entries(
+    ctx: Context, section: tuple[yaml.Node, Loc, Loc], env: dict[str, Bound], broken: set[str]
+) -> list[tuple[str, yaml.Node, Loc, Loc]]:
+    """The parameters section's entries named by a name. A key that is none (``off:``, YAML
+    1.1's false) is reported once and its uses read "unknown" (``env``, ``broken``): the
+    other parameters stand (they were all "unknown" at each use)."""
+    node, _, loc = section
+    try:
+        items, not_names = named_entries(node, loc, "parameters")
+    except Bad as bad:
+        ctx.report(bad)
+        return []
+    if not_names is not None:
+        ctx.report(not_names)
+        named = {name for name, *_ in items}
+        for written in written_keys(node):
+            if written not in named:
+                env[written] = Bound(STR, UNKNOWN, "?")
+                broken.add(written)
+    return items
 
 
 def param_decl(
