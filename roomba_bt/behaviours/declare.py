@@ -561,7 +561,6 @@ def moving_minimum(share: float = 1.0) -> int:
     return math.ceil(SLOWEST_MOVING_SPEED_MM_S / share)
 
 
-
 # Here, beside Param, not in driving.py: driving.py is below the leaves' base module (which
 # uses its helpers), and this module is above it.
 def wheel_speed_param(name: str, default: str, *, minimum: float, doc: str = "") -> Param:
