@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import re
 
-__all__ = ["ANY_CONTROL", "CONTROL", "INVISIBLE", "UNPRINTABLE", "escaped"]
+__all__ = ["ANY_CONTROL", "CONTROL", "INVISIBLE", "UNPRINTABLE", "encodes", "escaped"]
 
 #: Characters no text of a data file may hold (C0 but tab and newline, DEL, C1): a file
 #: travels between strangers, and its texts reach the terminal (``show``, the live tree, the
@@ -46,3 +46,18 @@ def escaped(text: str, which: re.Pattern[str] = UNPRINTABLE) -> str:
 def _escape(found: re.Match[str]) -> str:
     code = ord(found.group())
     return f"\\x{code:02x}" if code <= 0xFF else f"\\u{code:04x}"
+
+
+def encodes(stream: object, text: str) -> bool:
+    """Whether ``stream``'s encoding can write ``text`` (``✓``, ``m²``): False on an ASCII
+    or Latin-1 stdout (``PYTHONIOENCODING=ascii``, ``LC_ALL=POSIX`` with ``PYTHONUTF8=0``),
+    where the caller says it in ASCII (``[ok]``, ``m2``) rather than as ``\u2713``. A stream
+    without an encoding (a ``StringIO``) takes any text."""
+    encoding = getattr(stream, "encoding", None)
+    if not encoding:
+        return True
+    try:
+        text.encode(encoding)
+    except (UnicodeError, LookupError):
+        return False
+    return True

@@ -19,6 +19,7 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 from roomba_bt import __version__
+from roomba_bt.cli.streams import guard_std_streams, stdout_problem
 from roomba_bt.runtime.summary import ExitCode
 
 SUBCOMMAND_MODULES: tuple[str, ...] = (
@@ -96,6 +97,27 @@ def _cannot_run(exc: ImportError) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """The command: ``argv`` None is the process itself (``roomba-bt``), whose streams and
+    signals are its own to set (:func:`_as_the_process`); a list is a program's call."""
+    process = argv is None
+    if process:
+        _as_the_process()
+    try:
+        return _command(argv)
+    except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM/SIGHUP before a run took them
+        if process:
+            _signals_end_the_process()
+        print(f"roomba-bt: interrupted{_by_signal(exc)}", file=sys.stderr)
+        return ExitCode.INTERRUPTED
+    finally:
+        if process:
+            _signals_end_the_process()
+            problem = stdout_problem()
+            if problem is not None:
+                print(f"roomba-bt: {problem}", file=sys.stderr)
+
+
+def _command(argv: Sequence[str] | None) -> int:
     try:
         parser = build_parser()
     except ImportError as exc:
@@ -112,15 +134,52 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(func(args))
     except ImportError as exc:  # the subcommands import the tree and the robot lazily
         return _cannot_run(exc)
-    except KeyboardInterrupt:
-        print("roomba-bt: interrupted", file=sys.stderr)
-        return ExitCode.INTERRUPTED
-    except BrokenPipeError:
-        return ExitCode.OK
-    finally:
-        if argv is None:  # the process itself: its answer is out, a late Ctrl-C changes nothing
+
+
+def _as_the_process() -> None:
+    """What only the process itself sets, first of all (before py_trees is imported, which
+    reads ``sys.stdout.encoding``, and before the slow imports of the subcommands):
+
+    * stdout and stderr that a closed pipe, a full disk, a closed descriptor or an encoding
+      without ``✓`` cannot end the command with (:func:`~roomba_bt.cli.streams.guard_std_streams`):
+      its exit code is its outcome's, never 0 for a broken pipe;
+    * SIGTERM and SIGHUP raise :class:`~roomba_bt.robot.safety.Terminated` (exit 130, as the
+      run's own handlers make it) from here on: in the half second of imports and loading
+      before a run installs its handlers they ended the process with 143 (129), not the
+      130 the exit-code table says. One the process was started with ignored (``nohup``'s
+      SIGHUP) stays ignored."""
+    guard_std_streams()
+    from roomba_bt.robot.safety import IGNORED_AT_START, raise_terminated
+
+    for name in ("SIGTERM", "SIGHUP"):
+        signum = getattr(signal, name, None)
+        if signum is None or signum in IGNORED_AT_START:
+            continue
+        with contextlib.suppress(ValueError):  # not the main thread
+            if signal.getsignal(signum) is signal.SIG_DFL:
+                signal.signal(signum, raise_terminated)
+
+
+def _signals_end_the_process() -> None:
+    """The command's answer is out (a robot stopped): Ctrl-C, SIGTERM and SIGHUP end the
+    process at once from here on, their default action (exit 128 + the signal's number),
+    one started ignored (``nohup``) aside. Only the last writes remain, and a stdout nobody
+    reads (a ``less`` left unscrolled, a frozen SSH session) held them, and the process,
+    for as long: Ctrl-C was ignored then, so that only SIGKILL ended it; a Python handler
+    cannot run while another thread holds the stream's lock in a blocked write."""
+    from roomba_bt.robot.safety import IGNORED_AT_START
+
+    for name in ("SIGINT", "SIGTERM", "SIGHUP"):
+        signum = getattr(signal, name, None)
+        if signum is not None and signum not in IGNORED_AT_START:
             with contextlib.suppress(ValueError):  # not the main thread
-                signal.signal(signal.SIGINT, signal.SIG_IGN)
+                signal.signal(signum, signal.SIG_DFL)
+
+
+def _by_signal(exc: KeyboardInterrupt) -> str:
+    """`` by SIGTERM``: the signal an interrupt stands for, if not Ctrl-C."""
+    signum = getattr(exc, "signum", None)
+    return f" by {signal.Signals(signum).name}" if signum is not None else ""
 
 
 if __name__ == "__main__":

@@ -31,7 +31,7 @@ from roomba_bt.cli.monitor_cmd import LiveMonitor, chosen_token
 from roomba_bt.cli.monitor_cmd import add_run_arguments as add_monitor_arguments
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.profiles import RobotProfile, get_profile
-from roomba_bt.printable import ANY_CONTROL, escaped
+from roomba_bt.printable import ANY_CONTROL, encodes, escaped
 from roomba_bt.robot.errors import DEFAULT_WATCHDOG
 from roomba_bt.runtime.summary import DEFAULT_GRACE, DEFAULT_TICK_LIMIT, ExitCode, Outcome
 
@@ -475,13 +475,17 @@ def _run_and_report(
     if not quiet:
         print(_render_tree(mission), flush=True)
     stack.runner.gate = monitor.session if monitor is not None else None
-    stack.runner.hold_interrupts = True  # once the safe stop began: the summary still prints
+    # after the safe stop: a signal ends the process at once (the robot is stopped), so that
+    # a report blocked on a pipe nobody reads can still be ended (robot/safety.py)
+    stack.runner.hold_interrupts = True
     # on the virtual clock nothing drives meanwhile: Ctrl-Z suspends, Ctrl-\ quits
     stack.runner.on_wall_clock = not args.fast
     stack.runner.names_slow_ticks = True  # a plugin's blocking update named, --fast too
     use_mission_clock(stack.runner)
     try:
-        with logging_off_the_tick():  # a stalled terminal must not hold up the tick loop
+        # a stalled terminal must not hold up the tick loop on the wall clock; on the virtual
+        # clock nothing drives meanwhile, and no line is dropped
+        with logging_off_the_tick(blocks=args.fast):
             summary = stack.run(raise_interrupts=False)  # Ctrl-C: the summary, exit 130
     finally:
         use_mission_clock(None)
@@ -489,16 +493,51 @@ def _run_and_report(
             monitor.finish(stack.runner.summary)
     try:
         stack.close()
-        # the robot is stopped; a terminal gone meanwhile (a hang-up: EIO) takes the report
-        # with it, and the exit code still says how the run ended
-        with contextlib.suppress(OSError):
-            _report(args, stack, summary, observer, simulator)
+        _report(args, stack, summary, observer, simulator)
         return summary.exit_code
     finally:
         stack.runner.release_interrupts()  # the summary is out
 
 
 def _report(
+    args: argparse.Namespace,
+    stack: RunStack,
+    summary: RunSummary,
+    observer: TickObserver | None,
+    simulator: Simulator | None,
+) -> None:
+    """What the run did: on stdout the tree and the summary; on stderr what went wrong; the
+    plot. The robot is stopped: a stdout that fails meanwhile (a hang-up: EIO; ``| head``:
+    EPIPE; a full disk) takes its own part with it, never the stderr lines or the plot, and
+    the summary's outcome is then said on stderr; the exit code still says how the run
+    ended."""
+    from roomba_bt.cli.streams import failed_stdout
+
+    lost = None
+    try:
+        _report_on_stdout(args, stack, summary, observer, simulator)
+    except OSError as exc:  # not the process's guarded stdout: a program's own stream
+        lost = exc.strerror or str(exc)
+    lost = lost or failed_stdout(saying=True)
+    plotted = _plot(simulator, args.plot) if args.plot and simulator is not None else None
+    with contextlib.suppress(OSError):
+        if lost is not None:
+            print(f"roomba-bt: the summary was lost with stdout ({lost}): "
+                  f"{_outcome_said(summary)}", file=sys.stderr)  # fmt: skip
+        _report_on_stderr(args, stack, summary)
+        if plotted:
+            print(plotted, file=sys.stderr)
+
+
+def _outcome_said(summary: RunSummary) -> str:
+    """The summary's outcome, final mode and safe stop in one line (``outcome SUCCESS;
+    final mode Passive; safe stop sent drive, ...``), for stderr when stdout failed."""
+    wanted = ("outcome", "final mode", "safe stop")
+    said = [" ".join(line.split()) for line in summary.lines() if line.startswith(wanted)]
+    return "; ".join(said)
+
+
+def _report_on_stdout(
     args: argparse.Namespace,
     stack: RunStack,
     summary: RunSummary,
@@ -515,9 +554,13 @@ def _report(
         print(_render_tree(stack.mission, status=True))
     print(summary)
     if simulator is not None and simulator.swept is not None and simulator.swept.cleaning_time:
-        print(_coverage_line(simulator))
+        print(_coverage_line(simulator, sys.stdout))
     if simulator is not None:
         print(_where_it_ended(simulator))
+    sys.stdout.flush()  # here, where its failure is noted, not at the process's exit
+
+
+def _report_on_stderr(args: argparse.Namespace, stack: RunStack, summary: RunSummary) -> None:
     if (
         summary.outcome.exit_code
         in (ExitCode.CONNECTION, ExitCode.MISSION_FAILED, ExitCode.BEHAVIOUR_ERROR)
@@ -545,18 +588,16 @@ def _report(
     if summary.refused_commands > SHOWN_REFUSALS:  # the count is all of them: say the rest
         more = summary.refused_commands - SHOWN_REFUSALS
         print(f"refused: ... and {more} more (the summary counts them)", file=sys.stderr)
-    if args.plot and simulator is not None:
-        plotted = _plot(simulator, args.plot)
-        if plotted:
-            print(plotted, file=sys.stderr)
 
 
 def _render_tree(mission: Any, status: bool = False) -> str:
     """The tree as py_trees draws it, each name and message escaped to one line (a plugin's
-    ``feedback_message`` reached the terminal raw: :func:`~roomba_bt.runtime.display.text_tree`)."""
-    from roomba_bt.runtime.display import text_tree
+    ``feedback_message`` reached the terminal raw: :func:`~roomba_bt.runtime.display.text_tree`),
+    in the symbols and colours stdout can show (:func:`~roomba_bt.runtime.display.tree_symbols`:
+    ``[ok]`` on an ASCII stdout, no colour with ``NO_COLOR``)."""
+    from roomba_bt.runtime.display import text_tree, tree_symbols
 
-    return text_tree(mission.root, show_status=status)
+    return text_tree(mission.root, show_status=status, symbols=tree_symbols(sys.stdout))
 
 
 def _where_it_ended(simulator: Any) -> str:
@@ -575,13 +616,15 @@ def _where_it_ended(simulator: Any) -> str:
             "off the dock")  # fmt: skip
 
 
-def _coverage_line(simulator: Any) -> str:
-    """``coverage 84.2 % of 36.7 m² (living-room 91 %, bedroom 80 %, ...)``."""
+def _coverage_line(simulator: Any, stream: object) -> str:
+    """``coverage 84.2 % of 36.7 m² (living-room 91 %, bedroom 80 %, ...)``; ``m2`` where
+    ``stream`` cannot show ``²`` (an ASCII or Latin-1-less stdout)."""
     swept = simulator.swept
     swept.finish(simulator.time, simulator.x, simulator.y, simulator.theta)
     areas = ", ".join(f"{name} {100 * c:.0f} %" for name, c in swept.coverage_by_area().items())
     reachable = swept.area_m2(swept.reachable_total)
-    return f"coverage     {100 * swept.coverage():.1f} % of {reachable:.1f} m² of reachable " + (
+    m2 = "m\u00b2" if encodes(stream, "\u00b2") else "m2"
+    return f"coverage     {100 * swept.coverage():.1f} % of {reachable:.1f} {m2} of reachable " + (
         f"floor ({areas})" if areas else "floor"
     )
 

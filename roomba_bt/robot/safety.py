@@ -18,6 +18,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
+import select
 import signal
 import threading
 from collections.abc import Callable, Iterator
@@ -99,7 +100,9 @@ def signal_reason(signum: int) -> str:
     return signal.Signals(signum).name
 
 
-def _raise_terminated(signum: int, frame: FrameType | None) -> None:
+def raise_terminated(signum: int, frame: FrameType | None) -> None:
+    """A signal handler: the signal raises :class:`Terminated` in the main thread (the CLI
+    installs it for SIGTERM and SIGHUP as the process starts, before a run has its own)."""
     raise Terminated(signum)
 
 
@@ -115,7 +118,7 @@ def sigterm_raises() -> Iterator[None]:
         yield
         return
     previous = {
-        signum: signal.signal(signum, _raise_terminated)
+        signum: signal.signal(signum, raise_terminated)
         for signum in _taken(ENDING_SIGNALS)
         if signum != signal.SIGINT
     }
@@ -135,6 +138,19 @@ THE_SAFE_STOP = "the safe stop"
 #: What a signal came during, as the run's reason says it: a text, or what makes it from the
 #: main thread's frame when the signal came (the behaviour it was in: a ``terminate()``)
 During = str | Callable[[FrameType | None], str]
+
+
+def say_if_room(fd: int, text: bytes) -> None:
+    """Write ``text`` to ``fd`` if it can take it now, else drop it: a signal handler's word
+    (:class:`InterruptGuard`) must not block the main thread, which runs the safe stop, on a
+    terminal or pipe that takes nothing (a stalled SSH session, ``2>&1 | less``). A pipe
+    that selects writable takes ``PIPE_BUF`` bytes (512 or more) without blocking."""
+    with contextlib.suppress(OSError, ValueError):
+        if os.name == "posix":  # elsewhere select() takes sockets only: written as it was
+            _, writable, _ = select.select([], [fd], [], 0)
+            if not writable:
+                return
+        os.write(fd, text)
 
 
 def _waiting(doing: str, raises: bool) -> bytes:
@@ -157,8 +173,15 @@ class InterruptGuard:
     message printed meanwhile says), not only summarised.
 
     Used as a context manager around a run; the previous handlers come back on the way out,
-    or with ``hold`` both signals stay ignored until :meth:`release` (the CLI: its summary is
-    still to be printed). Signal handlers belong to the main thread: elsewhere it does nothing.
+    or with ``hold`` the signals take their default action until :meth:`release` (the CLI:
+    its summary is still to be printed). Default, not ignored (decided): the robot is stopped
+    by then, and a summary written to a terminal or pipe that takes nothing (a ``less``
+    nobody scrolls, a frozen SSH session) blocked for as long, TERM, INT and HUP ignored, so
+    that only SIGKILL ended it. A signal's default action ends the process even in the
+    middle of a write another thread holds the stream's lock for, which no Python handler
+    can. The terminal's stops (:data:`TERMINAL_STOP_SIGNALS`) stay ignored: a summary
+    written from the background goes out. Signal handlers belong to the main thread:
+    elsewhere it does nothing.
     """
 
     def __init__(
@@ -213,8 +236,7 @@ class InterruptGuard:
                 during = self._during
                 self.late_during = during(frame) if callable(during) else during
             if self.ignored == 1:
-                with contextlib.suppress(OSError):
-                    os.write(2, self._waiting)
+                say_if_room(2, self._waiting)
             return
         self.stop_begun = self.raised = True  # the run now unwinds into its safe stop
         if signum == signal.SIGINT:
@@ -237,9 +259,10 @@ class InterruptGuard:
         return self
 
     def __exit__(self, *exc_info: object) -> None:
-        if self.hold:  # ignored until release(): the summary is still to be printed
+        if self.hold:  # the robot is stopped: a signal now ends the process, as by default
             for signum in self._previous:
-                signal.signal(signum, signal.SIG_IGN)
+                action = signal.SIG_IGN if signum in self.ignoring else signal.SIG_DFL
+                signal.signal(signum, action)
             return
         self.release()
 

@@ -1,0 +1,283 @@
+"""The command's stdout and stderr as a headless run has them (over SSH, from cron, under
+systemd, into a pipe): a reader gone, a closed descriptor, a full disk, an ASCII locale, a
+pipe nobody reads. Whatever they do, the exit code is the outcome's, with no traceback, and
+what goes to stderr and to files still arrives (``roomba_bt/cli/streams.py``).
+
+Each runs the command as a process (its streams are the process's own); none depends on
+timing: a pipe's reader is closed before the process starts, or its buffer filled first.
+"""
+
+from __future__ import annotations
+
+import fcntl
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from roomba_bt.cli import main
+from roomba_bt.runtime.recording import load_record
+
+CLI = [sys.executable, "-m", "roomba_bt.cli"]
+
+MISSION = """
+mission: short-drive
+parameters:
+  speed: {type: speed, default: 200 mm/s}
+tree:
+  sequence:
+    - mode: safe
+    - drive: {velocity: "${speed}", distance: 20 cm}
+"""
+
+
+def _env(**extra: str) -> dict[str, str]:
+    env = {k: v for k, v in os.environ.items() if k not in ("NO_COLOR", "PYTHONIOENCODING")}
+    env["PYTHONUTF8"] = "1"
+    env.update(extra)
+    return env
+
+
+def _reader_gone(args: list[str], cwd: Path) -> subprocess.CompletedProcess[str]:
+    """``args`` with stdout a pipe whose reader closed before the process wrote anything
+    (``| head -1`` that already has its line): every write to it is EPIPE."""
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    try:
+        proc = subprocess.Popen(
+            [*CLI, *args], stdout=write_end, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL,
+            text=True, cwd=cwd, env=_env(),
+        )  # fmt: skip
+    finally:
+        os.close(write_end)
+    _, err = proc.communicate(timeout=120)
+    return subprocess.CompletedProcess(proc.args, proc.returncode, "", err)
+
+
+@pytest.fixture
+def mission(tmp_path: Path) -> Path:
+    path = tmp_path / "short.yaml"
+    path.write_text(textwrap.dedent(MISSION))
+    return path
+
+
+def test_a_closed_pipe_keeps_a_failed_runs_exit_code_and_says_its_outcome(
+    tmp_path: Path,
+) -> None:
+    """``run dock ... | head -5``: the tree before the run hit EPIPE and the process exited
+    0 before it connected; now the run runs, exits 1 (its timeout), and stderr says how it
+    ended, with the summary's outcome, since stdout lost it."""
+    done = _reader_gone(["run", "dock", "--fast", "--timeout", "1s"], tmp_path)
+    assert done.returncode == 1, done.stderr
+    assert "Traceback" not in done.stderr
+    assert "roomba-bt: timeout: --timeout 1 s" in done.stderr
+    lost = "roomba-bt: the summary was lost with stdout (Broken pipe): outcome TIMEOUT"
+    assert lost in done.stderr
+    assert "final mode Passive" in done.stderr
+
+
+def test_a_closed_pipe_keeps_validates_exit_code(tmp_path: Path) -> None:
+    """``validate bad.yaml | head -1``: an invalid mission exited 0 (or 120, the
+    interpreter's flush failing at exit)."""
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("mission: bad\ntree:\n  sequence:\n    - no_such_leaf: {}\n")
+    done = _reader_gone(["validate", str(bad)], tmp_path)
+    assert done.returncode == 2, done.stderr
+    assert "Traceback" not in done.stderr and "Exception ignored" not in done.stderr
+
+
+def test_a_closed_pipe_keeps_a_differing_replays_exit_code(mission: Path, tmp_path: Path) -> None:
+    """``replay r.jsonl -p speed=250mm/s | head -2``: a replay that differs exited 0."""
+    record = tmp_path / "r.jsonl"
+    assert main(["run", str(mission), "--fast", "--display", "none", "--record", str(record)]) == 0
+    done = _reader_gone(["replay", str(record), "-p", "speed=250mm/s"], tmp_path)
+    assert done.returncode == 1, done.stderr
+    assert "Traceback" not in done.stderr
+
+
+def test_the_plot_is_written_when_stdout_is_gone(tmp_path: Path) -> None:
+    """``run ... --plot p.png | head -1``: the report stopped at the first failed print, and
+    the plot after it was never drawn."""
+    pytest.importorskip("matplotlib")
+    plot = tmp_path / "p.png"
+    done = _reader_gone(
+        ["run", "dock", "--fast", "--timeout", "60s", "--plot", str(plot)], tmp_path
+    )
+    assert done.returncode == 0, done.stderr
+    assert plot.stat().st_size > 0
+    assert f"trajectory written to {plot}" in done.stderr
+
+
+def _closed_stdout() -> None:
+    os.close(1)
+
+
+@pytest.mark.parametrize(
+    ("args", "code"),
+    [(["missions"], 0), (["run", "dock", "--fast", "--timeout", "60s"], 0)],
+    ids=["missions", "run"],
+)
+def test_a_closed_stdout_is_no_traceback(tmp_path: Path, args: list[str], code: int) -> None:
+    """``roomba-bt ... >&-``: py_trees read ``sys.stdout.encoding`` at import, and
+    ``sys.stdout`` is None: an AttributeError traceback in every subcommand, exit 1."""
+    done = subprocess.run(
+        [*CLI, *args], stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True,
+        cwd=tmp_path, env=_env(), preexec_fn=_closed_stdout, timeout=120,
+    )  # fmt: skip
+    assert done.returncode == code, done.stderr
+    assert "Traceback" not in done.stderr
+    assert "stdout is closed" in done.stderr or "lost with stdout (closed)" in done.stderr
+    if args[0] == "run":
+        assert "outcome SUCCESS" in done.stderr
+
+
+def test_a_full_disk_on_stdout_is_one_line_and_the_outcomes_exit_code(tmp_path: Path) -> None:
+    """``run ... > /dev/full``: an OSError traceback and exit 1 before the robot started."""
+    with open("/dev/full", "w") as full:
+        done = subprocess.run(
+            [*CLI, "run", "dock", "--fast", "--timeout", "60s"], stdout=full,
+            stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True, cwd=tmp_path,
+            env=_env(), timeout=120,
+        )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert "Traceback" not in done.stderr
+    assert "(No space left on device): outcome SUCCESS" in done.stderr
+
+
+@pytest.mark.parametrize(
+    "env",
+    [{"PYTHONIOENCODING": "ascii"}, {"LC_ALL": "POSIX", "LANG": "C", "PYTHONUTF8": "0"}],
+    ids=["PYTHONIOENCODING=ascii", "LC_ALL=POSIX"],
+)
+def test_an_ascii_stdout_gets_an_ascii_report_and_the_outcomes_exit_code(
+    tmp_path: Path, env: dict[str, str]
+) -> None:
+    """The end report's ``✓``/``✕`` and ``m²`` raised UnicodeEncodeError after a dock that
+    succeeded: exit 1, the summary lost. Now ``[ok]``, ``[x]``, ``m2``; and a node's name
+    that is not ASCII is written escaped, not a traceback before the run."""
+    mission = tmp_path / "named.yaml"
+    mission.write_text(
+        "mission: fahrt\ntree:\n  sequence:\n    name: Gr\u00fc\u00dfe\n    children:\n"
+        "      - mode: safe\n      - wait: 0.5s\n      - mode: passive\n",
+        encoding="utf-8",
+    )
+    for args in (["run", "clean", "--fast", "--timeout", "30s"], ["run", str(mission), "--fast"]):
+        done = subprocess.run(
+            [*CLI, *args], capture_output=True, stdin=subprocess.DEVNULL, cwd=tmp_path,
+            env=_env(**env), timeout=120,
+        )  # fmt: skip
+        out, err = done.stdout.decode("ascii"), done.stderr.decode("ascii")  # all ASCII
+        assert "Traceback" not in err
+        if args[1] == "clean":
+            assert done.returncode == 1, err  # its timeout
+            assert " m2 of reachable floor" in out
+        else:
+            assert done.returncode == 0, err
+            assert "Gr\\xfc\\xdfe [ok]" in out
+
+
+def _full_pipe() -> tuple[int, int]:
+    """A pipe whose buffer is full: a write to it blocks until someone reads."""
+    read_end, write_end = os.pipe()
+    fcntl.fcntl(write_end, fcntl.F_SETFL, os.O_NONBLOCK)
+    try:
+        while True:
+            os.write(write_end, b"x" * 4096)
+    except BlockingIOError:
+        pass
+    fcntl.fcntl(write_end, fcntl.F_SETFL, 0)  # the process's writes block
+    return read_end, write_end
+
+
+def test_a_report_blocked_on_a_pipe_nobody_reads_can_be_ended(tmp_path: Path) -> None:
+    """``run ... 2>&1 | less`` with nobody scrolling: the run ends and the robot is stopped,
+    but the report blocks on the full pipe; TERM, INT and HUP were ignored then (held for
+    the summary), and only SIGKILL ended the process. Now the signal ends it."""
+    record = tmp_path / "r.jsonl"
+    read_end, write_end = _full_pipe()
+    try:
+        proc = subprocess.Popen(
+            [*CLI, "run", "dock", "--fast", "--timeout", "1s", "--display", "none",
+             "--record", str(record)],
+            stdout=write_end, stderr=write_end, stdin=subprocess.DEVNULL, cwd=tmp_path,
+            env=_env(),
+        )  # fmt: skip
+    finally:
+        os.close(write_end)
+    try:
+        for _ in _until(lambda: proc.poll() is not None or _record_ended(record)):
+            pass
+        assert proc.poll() is None  # blocked on the pipe: the report after the record's end
+        proc.send_signal(signal.SIGTERM)
+        try:
+            proc.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            pytest.fail("SIGTERM did not end a run whose report is blocked on a full pipe")
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+        os.close(read_end)
+    assert proc.returncode == -signal.SIGTERM
+
+
+def _record_ended(record: Path) -> bool:
+    try:
+        return load_record(record).ending is not None
+    except Exception:  # not there yet, or half written
+        return False
+
+
+def _until(ready: Callable[[], bool], limit: int = 3000) -> Iterator[None]:
+    """Yield until ``ready()`` (polled every 10 ms, up to ``limit`` times: a hang fails)."""
+    import time
+
+    for _ in range(limit):
+        if ready():
+            return
+        yield
+        time.sleep(0.01)
+    pytest.fail("the process never got there")
+
+
+def test_sigterm_before_the_run_took_it_is_exit_130(tmp_path: Path) -> None:
+    """A SIGTERM in the first half second (imports, loading, before the run's handlers) ended
+    the process with 143 and no word; the exit-code table says 130 for SIGTERM. A plugin
+    file whose import waits holds the process there."""
+    (tmp_path / "waits.py").write_text(
+        "import os, sys\nos.write(2, b'plugin importing\\n')\nsys.stdin.read()\n"
+    )
+    mission = tmp_path / "m.yaml"
+    mission.write_text("mission: m\nplugins: [./waits.py]\ntree:\n  sequence:\n    - mode: safe\n")
+    proc = subprocess.Popen(
+        [*CLI, "run", str(mission), "--fast", "--allow-plugin-files"], cwd=tmp_path,
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=_env(),
+    )  # fmt: skip
+    try:
+        assert proc.stderr is not None
+        line = proc.stderr.readline()
+        assert b"plugin importing" in line, line
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 130, err
+    assert b"roomba-bt: interrupted by SIGTERM" in err
+    assert b"Traceback" not in err
+
+
+def test_record_to_stdout_is_refused(tmp_path: Path, monkeypatch: Any) -> None:
+    """``--record -`` wrote a file named ``-`` in the current directory."""
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as exited:
+        main(["run", "dock", "--fast", "--record", "-"])
+    assert exited.value.code == 2
+    assert not (tmp_path / "-").exists()
