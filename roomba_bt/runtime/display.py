@@ -9,6 +9,8 @@ flush, outside the measured tick time.
 from __future__ import annotations
 
 import logging
+import os
+import re
 import shutil
 import threading
 import time
@@ -28,7 +30,7 @@ from roomba_bt.oi.frames import (
     IR_PACKETS,
 )
 from roomba_bt.oi.ir import IRCharacter
-from roomba_bt.printable import ANY_CONTROL, escaped
+from roomba_bt.printable import ANY_CONTROL, encodes, escaped
 
 if TYPE_CHECKING:
     from roomba_bt.robot.interface import Snapshot
@@ -97,6 +99,25 @@ Display = Literal["auto", "tree", "log", "none"]
 
 def sensor_line(snapshot: Snapshot) -> str:
     """One line of the sensors that matter most, from whatever the frame carries."""
+    return "  ".join(_sensor_parts(snapshot))
+
+
+def sensor_lines(snapshot: Snapshot, columns: int) -> list[str]:
+    """:func:`sensor_line` wrapped between its fields to lines of at most ``columns``
+    characters: cut to the width, a 40-column SSH screen lost the cliffs, the battery and
+    the odometry (``t=   0.84s  mode=Safe  bump=-  drop=-  c``). A field wider than the
+    screen on its own is cut."""
+    lines: list[str] = []
+    for part in _sensor_parts(snapshot):
+        if lines and len(lines[-1]) + 2 + len(part) <= columns:
+            lines[-1] += "  " + part
+        else:
+            lines.append(part)
+    return [line[: max(columns, 10)] for line in lines]
+
+
+def _sensor_parts(snapshot: Snapshot) -> list[str]:
+    """The fields of :func:`sensor_line`: ``t=...``, ``mode=...``, ``bump=...``, ..."""
     frame = snapshot.frame
     parts = [f"t={snapshot.time:7.2f}s", f"mode={snapshot.mode.label}"]
     if frame.carries(BUMPS_PACKETS):
@@ -122,7 +143,7 @@ def sensor_line(snapshot: Snapshot) -> str:
         parts.append(f"battery={frame.battery_percent:.0f}%")
     odo = snapshot.odometry
     parts.append(f"odo=({odo.x_mm / 1000:+.2f},{odo.y_mm / 1000:+.2f})m")
-    return "  ".join(parts)
+    return parts
 
 
 def node_kind(node: py_trees.behaviour.Behaviour) -> str:
@@ -139,7 +160,52 @@ def node_kind(node: py_trees.behaviour.Behaviour) -> str:
     return "behaviour"
 
 
-def text_tree(root: py_trees.behaviour.Behaviour, *, show_status: bool = False) -> str:
+#: what the status marks are on a stream that cannot show ``✓`` and ``✕`` (ASCII, Latin-1):
+#: words, not py_trees' ``o`` and ``x``, so that ``[ok]`` reads as it means
+ASCII_MARKS = {py_trees.common.Status.SUCCESS: "ok", py_trees.common.Status.FAILURE: "x"}
+_COLOUR = re.compile("\x1b\\[[0-9;]*m")
+
+
+def colours_wanted(stream: TextIO) -> bool:
+    """Whether ``stream`` may be written colour and bold: a terminal, with no ``NO_COLOR``
+    (https://no-color.org: set and not empty) and not ``TERM=dumb`` (an Emacs shell, a
+    serial console: shown as ``^[[33m``). py_trees decides it once, at import, from stdout
+    being a terminal only."""
+    if os.environ.get("NO_COLOR") or os.environ.get("TERM") == "dumb":
+        return False
+    isatty = getattr(stream, "isatty", None)
+    return bool(isatty and isatty())
+
+
+def plain_terminal() -> bool:
+    """``TERM=dumb``: a terminal that cannot move its cursor or clear its screen."""
+    return os.environ.get("TERM") == "dumb"
+
+
+def tree_symbols(stream: TextIO) -> dict[object, str]:
+    """The symbols :func:`text_tree` draws with on ``stream``: py_trees' unicode ones where
+    its encoding has ``✓`` and ``✕``, else ASCII (``[ok]``, ``[x]``; an ASCII stdout raised
+    ``UnicodeEncodeError`` after the run, exit 1 whatever its outcome); their colour and
+    bold only where :func:`colours_wanted`."""
+    unicode = encodes(stream, "\u2713\u2715")
+    symbols: dict[object, str] = dict(
+        py_trees.display.unicode_symbols if unicode else py_trees.display.ascii_symbols
+    )
+    if not unicode:
+        for status, word in ASCII_MARKS.items():  # py_trees' "o", its colour kept
+            mark = symbols[status]
+            symbols[status] = mark.replace(_COLOUR.sub("", mark), word)
+    if not colours_wanted(stream):
+        symbols = {key: _COLOUR.sub("", value) for key, value in symbols.items()}
+    return symbols
+
+
+def text_tree(
+    root: py_trees.behaviour.Behaviour,
+    *,
+    show_status: bool = False,
+    symbols: dict[object, str] | None = None,
+) -> str:
     """The tree as ``py_trees.display.unicode_tree`` draws it (the run's tree before it
     starts, and with ``show_status`` each node's status and message at its end), each
     node's name and ``feedback_message`` escaped to one line
@@ -148,8 +214,10 @@ def text_tree(root: py_trees.behaviour.Behaviour, *, show_status: bool = False) 
     py_trees prints both as they are: a plugin's message ``"\\x1b[2J\\n[ok] robot stopped"``
     cleared the screen and faked a line under the tree. Drawn here, where the text is
     printed, so the behaviour keeps its message as it set it (a ``failure_reason`` or the
-    monitor read it too, and escape it where they print it)."""
-    symbols = py_trees.display.unicode_symbols
+    monitor read it too, and escape it where they print it). ``symbols``: py_trees' unicode
+    ones by default, the stream's own from :func:`tree_symbols`."""
+    if symbols is None:
+        symbols = py_trees.display.unicode_symbols
     tip = root.tip()
     tip_id = tip.id if tip is not None else None
     lines: list[str] = []
@@ -181,13 +249,20 @@ _MARKS = {
 }
 
 
-def fitted_tree(root: py_trees.behaviour.Behaviour, rows: int, columns: int) -> list[str]:
+def fitted_tree(
+    root: py_trees.behaviour.Behaviour,
+    rows: int,
+    columns: int,
+    marks: dict[py_trees.common.Status, str] | None = None,
+) -> list[str]:
     """The tree as at most ``rows`` lines of at most ``columns`` characters.
 
     Only a running node shows its children: a finished or not yet started subtree is one
     line (``[✓] +3`` says it hides three nodes), so the running path stays in view however
     large the tree. If that is still too tall, the lines off the running path go first, from
-    the bottom, and one line says how many were left out."""
+    the bottom, and one line says how many were left out. ``marks``: the status marks
+    (default ``✓``, ``✕``; :func:`status_marks` for a stream's own)."""
+    shown = marks or _MARKS
     lines: list[tuple[str, bool]] = []  # (text, on the running path)
 
     def walk(node: py_trees.behaviour.Behaviour, depth: int) -> None:
@@ -197,7 +272,7 @@ def fitted_tree(root: py_trees.behaviour.Behaviour, rows: int, columns: int) -> 
         hidden = sum(1 for _ in node.iterate()) - 1 if folded else 0
         more = f" +{hidden}" if hidden else ""
         name = escaped(node.name, ANY_CONTROL)
-        lines.append((f"{'  ' * depth}{name} [{_MARKS[node.status]}]{more}", running))
+        lines.append((f"{'  ' * depth}{name} [{shown[node.status]}]{more}", running))
         if running or depth == 0:
             for child in children:
                 walk(child, depth + 1)
@@ -225,6 +300,14 @@ def fitted_tree(root: py_trees.behaviour.Behaviour, rows: int, columns: int) -> 
     return [text[: max(columns, 10)] for text, _ in lines]
 
 
+def status_marks(stream: TextIO) -> dict[py_trees.common.Status, str]:
+    """The live tree's status marks on ``stream``: ``✓`` and ``✕``, or ``ok`` and ``x`` where
+    its encoding has no such characters (:data:`ASCII_MARKS`)."""
+    if encodes(stream, "".join(_MARKS.values())):
+        return _MARKS
+    return {**_MARKS, **ASCII_MARKS}
+
+
 class OffTickWriter:
     """Writes text to a stream from a thread of its own, so that a terminal that stops taking
     it never holds up the tick loop.
@@ -236,11 +319,18 @@ class OffTickWriter:
     Here the loop only hands text over; the thread writes it. A screen (``latest_only``)
     replaces the one still waiting, so a slow terminal sees fewer redraws, not older ones;
     lines (the log) wait up to :attr:`limit`, then the oldest are dropped and counted. A
-    stream that fails (a terminal gone) ends the writing."""
+    stream that fails (a terminal gone) ends the writing.
 
-    def __init__(self, stream: TextIO, limit: int = 1000) -> None:
+    ``blocks``: lines are never dropped, a :meth:`post` waits for room instead (``run
+    --fast``: on the virtual clock nothing drives while the loop waits, and ``2>&1 | less``,
+    the usual way to read a run, lost 4965 of 7033 lines behind a slow pipe). A signal
+    raised while it waits (the run's Ctrl-C or SIGTERM) ends the waiting for good: the run's
+    stop that follows must not wait on the same pipe, its lines are dropped and counted."""
+
+    def __init__(self, stream: TextIO, limit: int = 1000, *, blocks: bool = False) -> None:
         self.stream = stream
         self.limit = limit
+        self.blocks = blocks
         self.dropped = 0
         #: the stream failed: nothing more is written
         self.gone = False
@@ -259,12 +349,32 @@ class OffTickWriter:
             items = self._items
             if latest_only and items and items[-1][1]:
                 items.pop()  # the screen not drawn yet: this one replaces it
-            elif len(items) >= self.limit:
-                items.popleft()
-                self.dropped += 1
+            else:
+                self._wait_for_room()
+                if self.gone or self._closing:
+                    return
+                if len(items) >= self.limit:
+                    items.popleft()
+                    self.dropped += 1
             items.append((text, latest_only))
             self._idle.clear()
-            self._ready.notify()
+            self._ready.notify_all()
+
+    def _wait_for_room(self) -> None:
+        """With :attr:`blocks`, wait (holding nothing but the condition) until the thread has
+        written a line, the stream failed or the writing ends; a signal's exception ends the
+        blocking for good and goes on up (the run unwinds into its stop)."""
+        try:
+            while (
+                self.blocks
+                and len(self._items) >= self.limit
+                and not self.gone
+                and not self._closing
+            ):
+                self._ready.wait()
+        except BaseException:
+            self.blocks = False
+            raise
 
     def _drain(self) -> None:
         while True:
@@ -276,6 +386,7 @@ class OffTickWriter:
                     self._idle.set()
                     return
                 text, _ = self._items.popleft()
+                self._ready.notify_all()  # a post waiting for room (blocks) has one
             try:
                 self.stream.write(text)
                 self.stream.flush()
@@ -284,19 +395,21 @@ class OffTickWriter:
                     self.gone = True
                     self._items.clear()
                     self._idle.set()
+                    self._ready.notify_all()
                 return
 
-    def wait_written(self, timeout: float) -> bool:
-        """Wait up to ``timeout`` s for what was posted to be written; False if it was not
-        (the terminal still stalled)."""
+    def wait_written(self, timeout: float | None) -> bool:
+        """Wait up to ``timeout`` s (None: until it is) for what was posted to be written;
+        False if it was not (the terminal still stalled)."""
         return self._idle.wait(timeout)
 
-    def close(self, timeout: float = 1.0) -> None:
-        """Write what is pending (for up to ``timeout`` s), then stop posting and writing."""
+    def close(self, timeout: float | None = 1.0) -> None:
+        """Write what is pending (for up to ``timeout`` s; None: all of it, however long),
+        then stop posting and writing."""
         self.wait_written(timeout)
         with self._ready:
             self._closing = True
-            self._ready.notify()
+            self._ready.notify_all()
 
 
 class OffTickHandler(logging.Handler):
@@ -315,15 +428,18 @@ class OffTickHandler(logging.Handler):
 
 
 @contextmanager
-def logging_off_the_tick(timeout: float = 1.0) -> Iterator[None]:
+def logging_off_the_tick(timeout: float = 1.0, *, blocks: bool = False) -> Iterator[None]:
     """Within the block (a run), the root logger's stream handlers write through
     :class:`OffTickHandler`s; on the way out the lines waiting are written (for up to
-    ``timeout`` s) and the handlers put back, so the report that follows comes after them."""
+    ``timeout`` s) and the handlers put back, so the report that follows comes after them.
+    ``blocks`` (the virtual clock): no line is dropped (:class:`OffTickWriter`), and on the
+    way out every line waiting is written, however long that takes (the CLI lets a signal
+    end the process meanwhile: the robot is stopped)."""
     root = logging.getLogger()
     swapped: list[tuple[logging.Handler, OffTickHandler]] = []
     for handler in list(root.handlers):
         if type(handler) is logging.StreamHandler:  # not a file's, nor a test's capture
-            off = OffTickHandler(OffTickWriter(handler.stream))
+            off = OffTickHandler(OffTickWriter(handler.stream, blocks=blocks))
             off.setFormatter(handler.formatter)
             off.setLevel(handler.level)
             root.removeHandler(handler)
@@ -333,7 +449,7 @@ def logging_off_the_tick(timeout: float = 1.0) -> Iterator[None]:
         yield
     finally:
         for handler, off in swapped:
-            off.writer.close(timeout)
+            off.writer.close(None if off.writer.blocks else timeout)
             root.removeHandler(off)
             root.addHandler(handler)
             if off.writer.dropped:  # said once, where the terminal may take it again
@@ -361,6 +477,10 @@ class TerminalDisplay:
         self.period = 1.0 / refresh_hz
         self._last = 0.0
         self._size = size or _terminal_size
+        #: ``TERM=dumb``: each screen printed under the last, no clearing (``ESC [H ESC [J``
+        #: showed as garbage in an Emacs shell or on a serial console)
+        self.plain = plain_terminal()
+        self.marks = status_marks(stream)
 
     def __call__(self, runner: MissionRunner) -> None:
         now = time.monotonic()
@@ -375,10 +495,11 @@ class TerminalDisplay:
         if self.writer.gone:
             return
         columns, rows = self._size()
-        status = sensor_line(runner.snapshot)[:columns]
-        # the status line, a blank line, the tree, and the cursor's line left free
-        tree = fitted_tree(runner.mission.root, rows - 3, columns)
-        text = "\x1b[H\x1b[J" + status + "\n\n" + "\n".join(tree) + "\n"
+        status = sensor_lines(runner.snapshot, columns)
+        # the status lines, a blank line, the tree, and the cursor's line left free
+        tree = fitted_tree(runner.mission.root, rows - 2 - len(status), columns, self.marks)
+        screen = "\n".join(status) + "\n\n" + "\n".join(tree) + "\n"
+        text = "\n" + screen if self.plain else "\x1b[H\x1b[J" + screen
         self.writer.post(text, latest_only=True)
 
     def close(self, timeout: float = 1.0) -> None:
@@ -413,8 +534,10 @@ class StatusChangeLogger:
 
 
 def observer_for(display: Display, stream: TextIO) -> TerminalDisplay | StatusChangeLogger | None:
-    """The observer ``--display`` asks for, the tree drawn on ``stream``."""
-    if display == "tree" or (display == "auto" and stream.isatty()):
+    """The observer ``--display`` asks for, the tree drawn on ``stream``. ``auto`` on a
+    ``TERM=dumb`` terminal is the log: redrawn without a cursor to move, the tree would
+    scroll a copy of itself five times a second."""
+    if display == "tree" or (display == "auto" and stream.isatty() and not plain_terminal()):
         return TerminalDisplay(stream)
     if display in ("log", "auto"):
         return StatusChangeLogger()

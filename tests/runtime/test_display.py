@@ -5,6 +5,8 @@ from __future__ import annotations
 import io
 import logging
 import threading
+from pathlib import Path
+from typing import Any
 
 import py_trees
 import pytest
@@ -19,7 +21,9 @@ from roomba_bt.runtime.display import (
     TerminalDisplay,
     fitted_tree,
     logging_off_the_tick,
+    observer_for,
     sensor_line,
+    sensor_lines,
     text_tree,
 )
 from roomba_bt.runtime.loop import MissionRunner
@@ -259,3 +263,120 @@ def test_the_tree_at_the_end_is_py_trees_drawing_its_texts_escaped(
         "    --> \\x1b[2J [✕] -- \\x1b[2J\\x0a[ok] robot stopped",
     ]
     assert leaf.feedback_message == "\x1b[2J\n[ok] robot stopped"  # the leaf's, as it was
+
+
+def test_a_blocking_writer_waits_for_room_and_drops_no_line() -> None:
+    """``run --fast`` behind a slow pipe (``2>&1 | less``) dropped 4965 of 7033 lines though
+    nothing drives on the virtual clock; there a post waits for the thread instead."""
+    terminal = _StalledTerminal()
+    writer = OffTickWriter(terminal, limit=10, blocks=True)
+    writer.post("line 0\n")
+    assert terminal.entered.wait(5.0)
+    poster = threading.Thread(target=lambda: [writer.post(f"line {i}\n") for i in range(1, 31)])
+    poster.start()
+    terminal.go.set()
+    poster.join(30.0)
+    assert not poster.is_alive()
+    writer.close(None)
+    assert writer.dropped == 0
+    assert terminal.getvalue().splitlines() == [f"line {i}" for i in range(31)]
+
+
+def test_a_fast_run_logs_through_a_blocking_writer(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """``run --fast`` asks for the blocking writer; a run on the wall clock keeps dropping
+    (a stalled terminal must not hold up the tick of a robot that drives)."""
+    from roomba_bt.cli import main
+    from roomba_bt.runtime import display
+
+    asked: list[bool] = []
+    original = display.logging_off_the_tick
+
+    def spy(timeout: float = 1.0, *, blocks: bool = False) -> Any:
+        asked.append(blocks)
+        return original(timeout, blocks=blocks)
+
+    monkeypatch.setattr(display, "logging_off_the_tick", spy)
+    mission = tmp_path / "m.yaml"
+    mission.write_text(DRIVE)
+    assert main(["run", str(mission), "--fast", "--display", "none"]) == 0
+    assert main(["run", str(mission), "--display", "none"]) == 0
+    assert asked == [True, False]
+
+
+class _Terminal(io.StringIO):
+    """A terminal as ``isatty`` says it."""
+
+    def isatty(self) -> bool:
+        return True
+
+
+def test_a_dumb_terminal_gets_no_cursor_movement(
+    run_mission: RunMission, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``TERM=dumb`` (an Emacs shell, a serial console) showed ``ESC [H ESC [J`` as garbage:
+    ``auto`` picks the log there, and ``--display tree`` prints plain screens."""
+    monkeypatch.setenv("TERM", "dumb")
+    assert isinstance(observer_for("auto", _Terminal()), StatusChangeLogger)
+    run = run_mission(DRIVE)
+    out = _Terminal()
+    display = TerminalDisplay(out)
+    display.render(run.runner)
+    assert display.writer.wait_written(5.0)
+    assert "\x1b" not in out.getvalue() and "sequence [✓]" in out.getvalue()
+    monkeypatch.setenv("TERM", "xterm")
+    assert isinstance(observer_for("auto", _Terminal()), TerminalDisplay)
+
+
+@pytest.mark.parametrize("env", [{"NO_COLOR": "1"}, {"TERM": "dumb"}])
+def test_no_color_and_a_dumb_terminal_get_no_colour(
+    monkeypatch: pytest.MonkeyPatch, env: dict[str, str]
+) -> None:
+    """py_trees colours the marks whenever stdout was a terminal when it was imported (the
+    test makes its symbols so); ``NO_COLOR`` and ``TERM=dumb`` are honoured."""
+    from roomba_bt.cli import run_cmd
+
+    status = py_trees.common.Status
+    symbols = py_trees.display.unicode_symbols
+    monkeypatch.setitem(symbols, status.INVALID, "\x1b[33m-\x1b[0m")
+    monkeypatch.setitem(symbols, status.SUCCESS, "\x1b[32m✓\x1b[0m")
+    monkeypatch.setenv("TERM", "xterm")
+    monkeypatch.delenv("NO_COLOR", raising=False)
+    monkeypatch.setattr("sys.stdout", _Terminal())
+    root = py_trees.composites.Sequence("s", memory=True, children=[])
+    mission = type("M", (), {"root": root})()
+    assert "\x1b[33m" in run_cmd._render_tree(mission, status=True)  # a terminal: colour
+    for name, value in env.items():
+        monkeypatch.setenv(name, value)
+    drawn = run_cmd._render_tree(mission, status=True)
+    assert "\x1b" not in drawn and drawn == "{-} s [-]\n"
+
+
+def test_the_sensor_line_wraps_on_a_narrow_terminal(run_mission: RunMission) -> None:
+    """At 40 columns the sensor line was cut (``t=   0.84s  mode=Safe  bump=-  drop=-  c``):
+    the cliffs, the battery and the odometry were lost. It wraps between fields."""
+    run = run_mission(DRIVE)
+    out = io.StringIO()
+    display = TerminalDisplay(out, size=lambda: (40, 24))
+    display.render(run.runner)
+    assert display.writer.wait_written(5.0)
+    screen = out.getvalue().removeprefix("\x1b[H\x1b[J")
+    lines = screen.split("\n")
+    assert all(len(line) <= 40 for line in lines), lines
+    status = "  ".join(lines[: lines.index("")])
+    assert status == sensor_line(run.runner.snapshot)
+    assert "cliff=" in status and "battery=" in status and "odo=" in status
+    assert sensor_lines(run.runner.snapshot, 200) == [sensor_line(run.runner.snapshot)]
+
+
+def test_an_ascii_terminal_gets_ascii_marks(run_mission: RunMission) -> None:
+    """A terminal whose encoding has no ``✓`` (``LANG=C`` on a serial console) is shown
+    ``[ok]``, not ``UnicodeEncodeError`` (or ``\\u2713``)."""
+    run = run_mission(DRIVE)
+    out = io.TextIOWrapper(io.BytesIO(), encoding="ascii")
+    display = TerminalDisplay(out)
+    display.render(run.runner)
+    assert display.writer.wait_written(5.0) and not display.writer.gone
+    out.flush()
+    assert b"sequence [ok]" in out.buffer.getvalue()  # type: ignore[attr-defined]
