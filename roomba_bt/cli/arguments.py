@@ -272,6 +272,11 @@ def record_file(text: str) -> str:
     the mission (a record has no suffix to check, as a picture or a results file has)."""
     from roomba_bt.runtime.recording import RECORD_FORMAT
 
+    if text == "-":  # a record is a file replay reads back, not a stream: not stdout
+        raise argparse.ArgumentTypeError(
+            "found '-': --record writes a file, not stdout (which the run's tree and summary "
+            "use); name a file (run.jsonl)"
+        )
     output_file(text)
 
     def is_record(first: str) -> bool:

@@ -115,13 +115,16 @@ class KeepAwake:
             self.unavailable = str(exc)
             self._low_until = None
             self.due = math.inf
+            # one line: on a 40-column SSH screen the whole story was ten lines, every run
             log.warning(
-                "keep-awake off: %s; a robot left in Passive sleeps after 5 minutes (no "
-                "hang-up pulse instead: it would blank the stream for its second). A pty or a "
-                "plain socket has no modem lines: the simulator serves them with --rfc2217; "
-                "run --no-keep-awake (from Python: Connection.open(..., keep_awake=False) or "
-                "RunStack(..., keep_awake=False)) says it is meant",
-                exc,
+                "keep-awake off (%s): Passive sleeps after 5 min (-v: why; --no-keep-awake)",
+                exc.strerror or exc,
+            )
+            log.debug(
+                "keep-awake off: no hang-up pulse instead (it would blank the stream for its "
+                "second). A pty or a plain socket has no modem lines: the simulator serves "
+                "them with --rfc2217; run --no-keep-awake (from Python: Connection.open(..., "
+                "keep_awake=False) or RunStack(..., keep_awake=False)) says it is meant"
             )
 
     def _set(self, low: bool) -> None:

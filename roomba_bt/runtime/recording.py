@@ -128,7 +128,9 @@ class RecordingTransport:
 
     def _stop(self, exc: OSError) -> None:
         """The file cannot be written: close it (what it holds is a record up to here)."""
-        t = self._inner.now() - (self._t0 if self._t0 is not None else self._inner.now())
+        # before the first chunk (the header's write failed: ``--record /dev/full``) there is
+        # no t0: 0 s, not now() - now(), which a moving clock made ``-0.000 s``
+        t = self._inner.now() - self._t0 if self._t0 is not None else 0.0
         self.stopped = f"stopped at {t:.3f} s: {exc.strerror or exc}; the file ends there"
         log.warning("%s: --record %s %s (the run goes on)", self.name, self.path, self.stopped)
         with contextlib.suppress(OSError):  # its flush fails again; the file is closed

@@ -532,3 +532,25 @@ def test_a_record_names_its_robot_and_start_and_one_without_them_still_loads(
     wrong.write_text("".join([json.dumps({**header, "port": 3}) + "\n", *lines[1:]]))
     assert main(["replay", str(wrong)]) == 2
     assert f"{wrong}:1: header field 'port' is 3; expected text" in capsys.readouterr().err
+
+
+class _MovingClock:
+    """A link whose clock moves on every reading, as the wall clock does."""
+
+    name = "moving"
+    wall_clock = True
+
+    def __init__(self) -> None:
+        self.t = 100.0
+
+    def now(self) -> float:
+        self.t += 0.001
+        return self.t
+
+
+def test_a_record_that_fails_at_its_header_stopped_at_zero_not_minus_zero() -> None:
+    """``--record /dev/full``: the header's write fails before the first chunk, and the
+    warning said ``stopped at -0.000 s`` (now() - now() on a clock that moves)."""
+    recording = RecordingTransport(_MovingClock(), "/dev/full", {})  # type: ignore[arg-type]
+    assert recording.stopped is not None
+    assert recording.stopped.startswith("stopped at 0.000 s: No space left on device")
