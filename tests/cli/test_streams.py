@@ -20,21 +20,14 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from runtime.simrun import SHORT_DRIVE  # tests/runtime: the short drive
 
 from roomba_bt.cli import main
 from roomba_bt.runtime.recording import load_record
 
 CLI = [sys.executable, "-m", "roomba_bt.cli"]
 
-MISSION = """
-mission: short-drive
-parameters:
-  speed: {type: speed, default: 200 mm/s}
-tree:
-  sequence:
-    - mode: safe
-    - drive: {velocity: "${speed}", distance: 20 cm}
-"""
+MISSION = SHORT_DRIVE
 
 
 def _env(**extra: str) -> dict[str, str]:

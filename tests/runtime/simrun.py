@@ -33,6 +33,17 @@ tree:
 DRIVE_TO_WALL_AND_BACK_OFF = DRIVE_TO_WALL + "    - drive: {velocity: -100 mm/s, distance: 50 mm}\n"
 #: Safe, then spin in place at 100 mm/s until something ends the run: a robot that is
 #: driving when a fault comes.
+#: a 20 cm drive with its speed a parameter: the command line's tests run it
+SHORT_DRIVE = """
+mission: short-drive
+parameters:
+  speed: {type: speed, default: 200 mm/s}
+tree:
+  sequence:
+    - mode: safe
+    - drive: {velocity: "${speed}", distance: 20 cm}
+"""
+
 SPIN = """
 mission: spin
 tree:

@@ -19,17 +19,9 @@ from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.runtime.display import MissionClockFormatter
 from roomba_bt.runtime.recording import load_record
 
-from .simrun import SPIN
+from .simrun import SHORT_DRIVE, SPIN
 
-MISSION = """
-mission: short-drive
-parameters:
-  speed: {type: speed, default: 200 mm/s}
-tree:
-  sequence:
-    - mode: safe
-    - drive: {velocity: "${speed}", distance: 20 cm}
-"""
+MISSION = SHORT_DRIVE
 
 
 @pytest.fixture
