@@ -82,12 +82,12 @@ def _quoted_message(record: logging.LogRecord) -> str:
 def use_mission_clock(runner: MissionRunner | None) -> None:
     """Stamp log lines with ``runner``'s mission time from now on (None: stop stamping): the
     time on the run's clock when the line is written, a stall's lines too
-    (:func:`~roomba_bt.runtime.loop.mission_time_now`), not the last frame's."""
+    (:func:`~roomba_bt.runtime.clock.mission_time_now`), not the last frame's."""
     if runner is None:
         MissionClockFormatter.clock = None
         return
-    # here: every command imports this module (its log formatter), only a run the loop
-    from roomba_bt.runtime.loop import mission_time_now
+    # here: every command imports this module (its log formatter), only a run the clock
+    from roomba_bt.runtime.clock import mission_time_now
 
     MissionClockFormatter.clock = partial(mission_time_now, runner)
 

@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import sys
 import time
 import traceback
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -39,16 +38,15 @@ from roomba_bt.behaviours import SNAPSHOT_KEY
 from roomba_bt.behaviours.lean import Direct
 from roomba_bt.behaviours.reasons import failure_reason, running_in
 from roomba_bt.mission import RUNTIME_PACKETS
-from roomba_bt.oi.encode import Command, turns_wheels
+from roomba_bt.oi.encode import Command
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.frames import BATTERY_PACKETS, SLOT_SECONDS, SensorFrame
-from roomba_bt.oi.modes import DRIVING_MODES, OIMode
+from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
 from roomba_bt.robot.connection import Connection
-from roomba_bt.robot.ending import SafeStop
 from roomba_bt.robot.errors import ConnectionFailed, LinkDown, ModeError, StreamStalled
-from roomba_bt.robot.hazards import HazardConfirmation, sets_going
+from roomba_bt.robot.hazards import HazardConfirmation
 from roomba_bt.robot.interface import (
     BaseHandle,
     ModeChange,
@@ -56,18 +54,18 @@ from roomba_bt.robot.interface import (
     Snapshot,
 )
 from roomba_bt.robot.safety import (
-    SAFE_STOP_UNDER_WAY,
     InterruptGuard,
     Terminated,
     signal_reason,
 )
-from roomba_bt.runtime.schedule import (
-    DRIFT,
-    LOST_LATE,
-    NO_FRAME_YET,
-    SPREAD_DECAY,
-    SlotSchedule,
+from roomba_bt.runtime.clock import (
+    StreamClock,
+    ended_at,
+    interrupted_at,
+    mission_time_after,
 )
+from roomba_bt.runtime.ending import RunEnding
+from roomba_bt.runtime.schedule import DRIFT, LOST_LATE, SPREAD_DECAY
 from roomba_bt.runtime.stall import StallRide
 from roomba_bt.runtime.summary import (
     DEFAULT_GRACE,
@@ -78,38 +76,18 @@ from roomba_bt.runtime.summary import (
 )
 from roomba_bt.runtime.teardown import (
     behaviour_error,
-    during,
     note_late_interrupt,
-    note_stop_failures,
-    note_undelivered_stop,
     setup_tree,
-    shutdown_nodes,
-    stop_nodes,
     terminate_raised,
-    tree_running,
-    where_in,
 )
 from roomba_bt.runtime.tick_guard import TickGuardLike
 from roomba_bt.runtime.tick_watch import slowest_tick_named
 
 log = logging.getLogger(__name__)
 
-#: what a Ctrl-C says while the run's tree is stopped (each running node's ``terminate()``),
-#: after what the wheels do meanwhile
-STOPPING_THE_TREE = (
-    "the run is ending: {wheels}; its tree is being stopped (each running behaviour's "
-    "terminate()), the safe stop after it"
-)
-#: ... and while the nodes' ``shutdown()`` runs
-SHUTTING_DOWN = "the robot is stopped; the behaviours' shutdown() is under way"
-#: what the run's reason says a late signal came during (``Ctrl-C during the tree's stop, in
-#: slow (Slow.terminate at plugin.py:12)``; the safe stop's is ``THE_SAFE_STOP``)
-THE_TREES_STOP, THE_SHUTDOWN = "the tree's stop", "the behaviours' shutdown()"
 #: the actuator channels the robot stops when it falls to Passive by itself (a cliff, a wheel
 #: drop): their last commands no longer stand (:meth:`MissionRunner._fallback_changed`)
 FALL_STOPS = ("wheels", "motors")
-#: a gap between frames read this long, not a stall the watchdog saw, is said (``unread_gap``)
-UNREAD_GAP_SECONDS = 1.0
 _new_tuple = tuple.__new__
 _Blackboard = py_trees.blackboard.Blackboard
 #: the blackboard's one store (py_trees clears it, never replaces it): read off the class on
@@ -258,11 +236,14 @@ class MissionRunner(BaseHandle):
         self.poll_timeout = poll_timeout
         self.input_ended = input_ended
         self.gate = gate
-        #: the watchdog's trips, ridden through for ``grace`` seconds (0: a trip ends the run)
-        self._ride = StallRide(
-            connection, self.summary, grace, self._send_wheels_again,
-            partial(mission_time_after, self),
-        )  # fmt: skip
+        #: the watchdog's trips, ridden through for ``grace`` seconds (0: a trip ends the run),
+        #: and the tick guard's drive 0
+        clock = partial(mission_time_after, self)
+        self._ride = StallRide(connection, self._outbox, self.summary, grace, clock)
+        #: the stream's slots added up: the tick index, the slots the monitor held
+        self._clock = StreamClock(self._ride, self.summary, connection)
+        #: the run's end: its tree stopped, the wheels first (also the monitor's reload)
+        self._ending = RunEnding(connection, self._outbox, self.summary, clock)
         #: Ctrl-C and SIGTERM stay ignored after :meth:`run` returns, until
         #: :meth:`release_interrupts` (the CLI: its summary is still to be printed); else the
         #: previous handlers come back when it returns
@@ -272,15 +253,11 @@ class MissionRunner(BaseHandle):
         self._guard: InterruptGuard | None = None
         self.snapshot = NO_SNAPSHOT_YET
         self._odometer = Odometer(profile.wheel_base_mm)
-        self._tick = -1
-        #: when the robot's frames are due on the link's clock: the slots a batch spans
-        self._schedule = SlotSchedule()
         self.refusals: list[str] = []
         #: True while the monitor holds the run paused: frames still come and make snapshots
         #: (the page shows the robot) and the tick index (the stream's) goes on, but mission
         #: time stands still: a wait, a time limit or the run's timeout does not count the pause
         self.clock_held = False
-        self._held_slots = 0
         self._blackboard: py_trees.blackboard.Client | None = None
         #: hazards shown to the tree once two frames agree, or the robot's own reaction does
         self._hazards = HazardConfirmation()
@@ -289,7 +266,7 @@ class MissionRunner(BaseHandle):
         #: properties)
         self._modes = connection.modes
         self._link = connection.link
-        # No more attributes than these 29 (a subclass may add its own): CPython 3.11 keeps
+        # No more attributes than these 28 (a subclass may add its own): CPython 3.11 keeps
         # an instance's attributes in a compact table shared by its class only up to 30
         # names; past that the instance gets a dictionary of its own, and then no method call
         # on it (``self._advance(...)``, ``self._flush()`` every tick) is specialised.
@@ -403,32 +380,25 @@ class MissionRunner(BaseHandle):
             self._guard.release()
 
     def stop_tree(self, raised_in: py_trees.behaviour.Behaviour | None = None) -> list[str]:
-        """The running tree stopped (:func:`stop_running_tree`): the run's end, a reload."""
-        return stop_running_tree(self, raised_in)
+        """The running tree stopped (:meth:`RunEnding.stop_tree
+        <roomba_bt.runtime.ending.RunEnding.stop_tree>`): the run's end, a reload."""
+        return self._ending.stop_tree(self.mission.root, raised_in)
 
     def _finish(
         self, summary: RunSummary, wall_start: float, raised_in: py_trees.behaviour.Behaviour | None
     ) -> None:
         summary.ended_at = ended_at(self, summary.ended_at)  # for the record's end note
         guard = cast(InterruptGuard, self._guard)  # run()'s: told what the stop does
-        first = end_the_tree(self, guard, raised_in)
+        ending = self._ending
+        first = ending.end_tree(self.mission.root, self.tick_guard, guard, raised_in)
         self.count_written()  # the safe stop's are said apart
-        guard.stopping(SAFE_STOP_UNDER_WAY)
-        stop_robot(self.connection, summary, first)
-        if self._sent_at_start is not None:  # set up: what its setup() opened, closed
-            guard.stopping(SHUTTING_DOWN, during(THE_SHUTDOWN))
-            shutdown_nodes(self.mission.root)
+        set_up = self._sent_at_start is not None  # what its setup() opened, closed
+        ending.safe_stop(guard, first, self.mission.root if set_up else None)
         if self._blackboard is not None:
             with contextlib.suppress(Exception):
                 self._blackboard.unregister(clear=True)
-        summary.wall_time_s = time.perf_counter() - wall_start
-        summary.take_last(self.snapshot if self.has_snapshot else None)
-        summary.final_mode = mode_of(self.connection)
-        link = getattr(self.connection, "link", None)
-        summary.robot_answered = getattr(link, "bytes_read", 1) > 0
-        summary.unconfirmed_hazards = self._hazards.unconfirmed
-        summary.take_counters(getattr(self.connection, "counters", None))
-        summary.falls = dict(getattr(self.connection, "falls", {}))
+        last = self.snapshot if self.has_snapshot else None
+        ending.sum_up(time.perf_counter() - wall_start, last, self._hazards.unconfirmed)
 
     # Long on purpose: every frame's path, written out in one loop (a call less a frame),
     # and the try around it that places a Ctrl-C in its frame (interrupted_at)
@@ -436,8 +406,10 @@ class MissionRunner(BaseHandle):
         success, failure = py_trees.common.Status.SUCCESS, py_trees.common.Status.FAILURE
         perf = time.perf_counter
         tick_guard = self.tick_guard  # started by run()
-        tick = guarded_tick(self, root, tick_guard)
-        poll, poll_timeout, ride = self.connection.poll_frames, self.poll_timeout, self._ride
+        ride = self._ride
+        tick = guarded_tick(root, tick_guard, ride, lambda: self.snapshot.tick)
+        poll, poll_timeout = self.connection.poll_frames, self.poll_timeout
+        clock = self._clock
         writer = self.connection.writer
         held = False  # the root ended and the gate holds the run there (the monitor)
         untick: int | None = None  # the gate held the tree: the tick it last ticked on
@@ -468,14 +440,14 @@ class MissionRunner(BaseHandle):
                         continue
                     if self.mission.root is not root:  # a reload replaced it
                         root = self.mission.root
-                        tick = guarded_tick(self, root, tick_guard)
+                        tick = guarded_tick(root, tick_guard, ride, lambda: self.snapshot.tick)
                     elif held:  # the operator let the ended mission go: the run ends
                         tree_ended(root, summary)
                         return
                     held = False
                 tick()
                 self._flush()
-                flushed = self._tick
+                flushed = clock.tick
                 if writer.silenced_by is not None:  # Reset or Stop: no frame will come
                     return silenced(root, summary, writer.silenced_by)
                 elapsed = perf() - started
@@ -502,20 +474,6 @@ class MissionRunner(BaseHandle):
             summary.ended_at = interrupted_at(self, flushed)
             raise
 
-    def _send_wheels_again(self) -> None:
-        """After a drive 0 the runtime sent on its own (the watchdog's, the tick guard's): the
-        last wheel command the tree wrote goes out again, if it turns a wheel and the robot
-        obeys it, unless this tick queued another wheel command (the tree's newer word). A
-        fall to Passive by itself (:meth:`_advance`) forgets that command: the robot stopped."""
-        wheels = self.last_sent.get("wheels")
-        if (
-            wheels is not None
-            and turns_wheels(wheels)
-            and self.connection.mode in DRIVING_MODES
-            and all(c.spec.channel != "wheels" for c in self._outbox)
-        ):
-            self._outbox.send(wheels, self)
-
     def _advance(self, batch: Sequence[SensorFrame], untick: int | None = None) -> float:
         """Newest frame of the batch -> the tick's snapshot; stale frames and gaps counted.
         The frames of a batch came in one read, at the link's ``arrival``. Returns the
@@ -533,7 +491,8 @@ class MissionRunner(BaseHandle):
         modes = self._modes
         # SlotSchedule.slots' common case, inline: one frame, early or less than LOST_LATE
         # late: one slot; the schedule follows it (up to DRIFT), its lateness kept (spread)
-        schedule = self._schedule
+        clock = self._clock
+        schedule = clock.schedule
         due = schedule.due + SLOT_SECONDS
         late = arrival - due
         if count == 1 and late < LOST_LATE:
@@ -542,17 +501,16 @@ class MissionRunner(BaseHandle):
             schedule.spread = late if late > spread else spread - SPREAD_DECAY
             slots = 1
         else:
-            slots = slots_spanned(self, count, arrival)
-        tick = self._tick = self._tick + slots
+            slots = clock.slots_spanned(count, arrival)
+        tick = clock.tick = clock.tick + slots
         if self.clock_held:
-            self._held_slots += slots
-        mission_time = (tick - self._held_slots) * SLOT_SECONDS
+            clock.held_slots += slots
+        mission_time = (tick - clock.held_slots) * SLOT_SECONDS
         fallback = modes.last_fallback  # after the clock: a fall is placed in mission time
         if fallback is self._fallback_seen:
             frame = self._hazards.frame(frame)
         else:
-            frame = self._fallback_changed(frame, fallback)
-            noted_fall(self, fallback, mission_time)  # the first, for --strict
+            frame = self._fallback_changed(frame, fallback, mission_time)
         # tuple.__new__: the named tuple's own __new__ is a Python call that binds each
         # field (with keywords, several times the cost of the rest of this method)
         snapshot: Snapshot = _new_tuple(Snapshot, (
@@ -577,14 +535,19 @@ class MissionRunner(BaseHandle):
                 self._blackboard.set(SNAPSHOT_KEY, snapshot, overwrite=True)
         return mission_time
 
-    def _fallback_changed(self, frame: SensorFrame, fallback: ModeChange | None) -> SensorFrame:
+    def _fallback_changed(
+        self, frame: SensorFrame, fallback: ModeChange | None, mission_time: float
+    ) -> SensorFrame:
         """A fall to Passive by itself new since the last frame (or its end): the hazards see
-        the frame afresh, and the commands of :data:`FALL_STOPS` no longer stand (a stall's
-        ride-through and the monitor's resume do not send them again)."""
+        the frame afresh, the commands of :data:`FALL_STOPS` no longer stand (a stall's
+        ride-through and the monitor's resume do not send them again), and the first fall
+        is noted for ``--strict`` (:func:`noted_fall`)."""
         self._fallback_seen = fallback
         if fallback is not None:
             self._outbox.robot_stopped(FALL_STOPS)
-        return self._hazards.frame(frame, True)
+        frame = self._hazards.frame(frame, True)
+        noted_fall(self.summary, fallback, mission_time, self.mission.root)
+        return frame
 
     def _stale(self, batch: Sequence[SensorFrame]) -> None:
         """The frames of a batch before its newest: dropped (counted), their hazards seen."""
@@ -604,7 +567,21 @@ class MissionRunner(BaseHandle):
                 self.connection.send(command)
                 outbox.written(command)
             except ModeError as exc:
-                refused(self, command, exc)
+                self._refused(command, exc)
+
+    def _refused(self, command: Command, exc: ModeError) -> None:
+        """A command of the tree the mode guard refused: counted, the first 100 said (the CLI
+        prints some after the summary, the monitor the last), the first kept for the
+        summary's warning and ``--strict``'s verdict."""
+        summary = self.summary
+        summary.refused_commands += 1
+        if len(self.refusals) < 100:
+            when = self.snapshot.time if self.has_snapshot else None
+            sender = self._outbox.sender_of(command)
+            arrival = self.connection.link.arrival
+            self.refusals.append(refusal(command, exc, sender, when, arrival))
+        if not summary.first_refusal:
+            summary.first_refusal = self.refusals[0]
 
     def count_written(self) -> int:
         """``summary.commands_written`` brought up to date (at the end, by the monitor's feed):
@@ -661,262 +638,37 @@ def silenced(root: py_trees.behaviour.Behaviour, summary: RunSummary, command: C
     )
 
 
-def interrupted_at(runner: MissionRunner, flushed: int) -> tuple[int, str] | None:
-    """Where a Ctrl-C or SIGTERM came, for the end note (:func:`ended_at`): "after" the tree's
-    tick on the last frame when that tick was written whole (``flushed``: the stream tick of
-    the last one), else "before" it: a tick writes nothing until its flush, so an interrupt
-    inside the tree's tick (or before it, in the gate) left none of it on the wire. It was
-    taken as "after", and the replay ticked that frame in full and wrote a command the live
-    run never sent, where the record holds the safe stop (a false difference, exit 1). An
-    interrupt between two of the flush's writes is still "before": the replay then misses
-    the commands written before it (a partial tick, which no end note places)."""
-    if not runner.has_snapshot:
-        return None
-    tick = runner.snapshot.tick
-    return tick, "after" if tick == flushed else "before"
-
-
-def ended_at(runner: MissionRunner, said: tuple[int, str] | None) -> tuple[int, str] | None:
-    """Where the run ended, for the record's end note (``RunSummary.ended_at``): the tick of
-    its last frame, and whether before the tree's tick on it (the monitor's stop, which comes
-    through the gate before the tick: ``said``, from its :class:`StopRequested`; a Ctrl-C or
-    SIGTERM inside the tick: :func:`interrupted_at`) or after (one where the run waits for
-    its next frame; the tree's own end, a timeout); None before the first frame."""
-    if not runner.has_snapshot:
-        return None
-    return runner.snapshot.tick, said[1] if said is not None else "after"
-
-
-def slots_spanned(runner: MissionRunner, count: int, arrival: float) -> int:
-    """The slots a batch of ``count`` frames spans by the runner's schedule (the first frame:
-    one); more than ``count`` when frames were lost in transit (counted). After a gap of a
-    second or more, or a stall ridden through, the schedule starts again from this batch."""
-    schedule = runner._schedule
-    if schedule.due == NO_FRAME_YET:
-        return schedule.late_batch(count, arrival, runner._tick, False)  # the first: one
-    gap = arrival - schedule.due  # since the last frame's slot was due: the gap, to a ms
-    ride = runner._ride
-    restart = gap >= UNREAD_GAP_SECONDS or ride.gap_explained
-    if gap >= UNREAD_GAP_SECONDS and not ride.gap_explained:
-        unread_gap(runner.summary, runner.connection.name, gap, ride.blocked)
-    ride.gap_explained = False
-    ride.blocked = None
-    slots = schedule.late_batch(count, arrival, runner._tick, restart)
-    if slots > count:
-        runner.summary.frames_lost += slots - count
-    return slots
-
-
-def mission_time_after(runner: MissionRunner, seconds: float) -> float | None:
-    """The mission time ``seconds`` after the last tick's frame, for what happens between
-    ticks (a stall's trip and end); None before the first tick. A clock the monitor holds
-    stands still."""
-    if not runner.has_snapshot:
-        return None
-    return runner.snapshot.time + (0.0 if runner.clock_held else seconds)
-
-
-def guarded_tick(
-    runner: MissionRunner, root: py_trees.behaviour.Behaviour, tick_guard: TickGuardLike | None
-) -> Callable[[], object]:
-    """The root's tick, through the tick guard when the run has one."""
-    tick = tick_of(root)
-    if tick_guard is None:
-        return tick
-    return tick_guard.guarded(tick, partial(tick_halted, runner), lambda: runner.snapshot.tick)
-
-
-def mission_time_now(runner: MissionRunner) -> float | None:
-    """The mission time now on the run's clock, for a log line's stamp: the last tick's, plus
-    what the link's clock (the virtual clock on the simulator and in a replay, the port's on
-    a robot) has counted since that tick's frame arrived, once a slot has passed without the
-    next. No tick moves the mission clock while frames stop: a stall's lines, the grace's and
-    the ending's after it, read the last frame's time, and a 5 s stall showed them all at its
-    start, before the watchdog's own trip. A line of the tick, or of the slot after it, keeps
-    the tick's time, as the status lines have it. None before the first tick; a clock the
-    monitor holds stands still (:func:`mission_time_after`)."""
-    if not runner.has_snapshot:
-        return None
-    link = runner.connection.link
-    since = link.transport.now() - link.arrival
-    return mission_time_after(runner, since if since >= SLOT_SECONDS else 0.0)
-
-
-def tick_halted(runner: MissionRunner, seconds: float, where: str) -> None:
-    """The tick guard stopped the wheels during the tick that just returned: counted,
-    said, and, as after a watchdog stall, the last wheel command goes out again unless
-    this tick queued another (the mission goes on where it was)."""
-    summary = runner.summary
-    summary.tick_halts += 1
-    summary.tick_halt_last = where or "unknown"
-    if not summary.tick_halt_first:
-        summary.tick_halt_first = summary.tick_halt_last
-    log.warning(
-        "a tick ran over %g s (%s): the tick guard sent drive 0",
-        runner.tick_guard.limit_s if runner.tick_guard else 0.0, where or "where: unknown",
-    )  # fmt: skip
-    runner._ride.blocked = (seconds, summary.tick_halt_last)  # the frames it left unread
-    runner._send_wheels_again()
-
-
-def stop_running_tree(
-    runner: MissionRunner, raised_in: py_trees.behaviour.Behaviour | None = None
-) -> list[str]:
-    """Stop the running tree (each running node's ``terminate``, every node even when one
-    raises: :func:`~roomba_bt.runtime.teardown.stop_nodes`) and drop what its leaves queued
-    on the way out: the safe stop that comes with it (the run's end, a reload from the
-    monitor) supersedes their halts, which Passive would refuse anyway; one that would have
-    set the robot going is said (:func:`dropped_in_stop`). Meanwhile nothing
-    written sets the robot going (:meth:`CommandWriter.hold_motion
-    <roomba_bt.robot.writer.CommandWriter.hold_motion>`, :func:`held_in_stop`): a plugin's
-    terminate that wrote a drive straight to the connection and then blocked drove the robot
-    until the safe stop. Its commands no longer stand: nothing sends them again (a resume,
-    the watchdog's recovery). Returns what each ``terminate`` that raised says (each logged
-    as a warning); ``raised_in``: the node whose ``terminate`` raised in the tick that ended
-    the run, already said, is stopped without calling it again."""
-    writer = runner.connection.writer
-    outbox = runner._outbox
-    # what a tick that raised had queued is dropped too, but was not sent by the stop
-    before = [(id(command), id(sender)) for command, sender in outbox.queued_by()]
-    writer.hold_motion(partial(held_in_stop, runner))
-    try:
-        failures = stop_nodes(runner.mission.root, raised_in)
-    finally:
-        writer.hold_motion(None)
-    for command, sender in outbox.queued_by():
-        if sets_going(command) and (id(command), id(sender)) not in before:
-            dropped_in_stop(runner, command, sender)
-    outbox.clear()  # what stood too
-    return failures
-
-
-def held_in_stop(runner: MissionRunner, command: Command) -> None:
-    """A command written while the tree was stopped that would have set the robot going: not
-    written (:func:`stop_running_tree`); said and counted (:func:`_not_written`), with the
-    behaviour that wrote it and where (the frame that called the writer: ``partial`` adds
-    none)."""
-    _not_written(runner, where_in(sys._getframe(1)) or "a behaviour", "sent", command)
-
-
-def dropped_in_stop(runner: MissionRunner, command: Command, sender: object) -> None:
-    """A command queued (``send``) while the tree was stopped that would have set the robot
-    going: dropped with the outbox (:func:`stop_running_tree`); said, with the behaviour that
-    queued it and its ``terminate`` (the method that runs then; the line of the ``send``
-    itself is not kept). It was dropped silently, though docs/runtime.md said otherwise."""
-    who = "the runtime"
-    if isinstance(sender, py_trees.behaviour.Behaviour):
-        cls = type(sender)
-        code = getattr(cls.terminate, "__code__", None)
-        where = f" at {code.co_filename}:{code.co_firstlineno}" if code is not None else ""
-        who = f"{sender.name} ({cls.__name__}.terminate{where})"
-    _not_written(runner, who, "queued", command)
-
-
-def _not_written(runner: MissionRunner, who: str, how: str, command: Command) -> None:
-    """A command that would have set the robot going while the tree was stopped, not
-    written (:func:`held_in_stop`, :func:`dropped_in_stop`): logged, counted, the first kept
-    for the summary and ``--strict`` (``t=1.005 sticky (Sticky.terminate at x.py:31) queued
-    Drive (137) 89 01 2c 80 00``)."""
-    what = f"{command.spec.title} ({command.opcode}) {command.data.hex(' ')}"
-    log.warning(
-        "%s %s %s while the tree was being stopped: not written (the tree's stop sets nothing "
-        "going: it would run on, unwatched, until the safe stop)", who, how, what,
-    )  # fmt: skip
-    summary = runner.summary
-    summary.dropped_in_stop += 1
-    if not summary.first_dropped:
-        when = f"t={runner.snapshot.time:.3f} " if runner.has_snapshot else ""
-        summary.first_dropped = f"{when}{who} {how} {what}"
-
-
-def stop_wheels_first(runner: MissionRunner, guard: InterruptGuard) -> bool:
-    """Before the tree's stop, whose ``terminate()`` calls may block (a plugin's
-    ``time.sleep``): drive 0 and motors off, the first half of the safe stop, through the
-    run's tick guard (a run on the wall clock; a replay's, as its record says), when a node
-    still runs and the wheels move or the tree's last Motors runs a brush or the vacuum. True
-    if they were sent. ``guard`` is told what the run does meanwhile, for a Ctrl-C then."""
-    tick_guard = runner.tick_guard
-    motors = runner.last_sent.get("motors")
-    first = (
-        tick_guard is not None
-        and tree_running(runner.mission.root)
-        and tick_guard.halt_before_stop(motors is not None and sets_going(motors))
-    )
-    wheels = (
-        "drive 0 and motors off were sent"
-        if first
-        else f"the robot keeps its last wheel command ({runner.connection.activity()})"
-    )
-    guard.stopping(STOPPING_THE_TREE.format(wheels=wheels), during(THE_TREES_STOP))
-    return first
-
-
-def end_the_tree(
-    runner: MissionRunner, guard: InterruptGuard, raised_in: py_trees.behaviour.Behaviour | None
-) -> bool:
-    """The tree's stop at the run's end (:meth:`MissionRunner.stop_tree`, its failures in the
-    summary), drive 0 and motors off before it if the wheels move (:func:`stop_wheels_first`:
-    True if they were sent), and a warning if it blocked (:func:`said_slow_stop`)."""
-    first = stop_wheels_first(runner, guard)
-    began = time.monotonic()
-    note_stop_failures(runner.summary, runner.stop_tree(raised_in))
-    said_slow_stop(runner, time.monotonic() - began, first)
-    return first
-
-
-def said_slow_stop(runner: MissionRunner, seconds: float, first: bool) -> None:
-    """A tree's stop that took longer than a tick may (a ``terminate()`` that blocked):
-    warned, with what the wheels did meanwhile (``first``: drive 0 went out before it)."""
-    limit = runner.tick_guard.limit_s if runner.tick_guard is not None else None
-    if not limit or seconds <= limit:
-        return
-    activity = runner.connection.activity()
-    wheels = (
-        "drive 0 and motors off had been sent before it"
-        if first
-        else f"the robot kept its last wheel command ({activity}) meanwhile"
-    )
-    log.warning(
-        "stopping the tree took %.2f s (a behaviour's terminate() blocked); %s", seconds, wheels
-    )
-
-
-def refused(runner: MissionRunner, command: Command, exc: ModeError) -> None:
-    """A command of the tree the mode guard refused: counted, the first 100 said (the CLI
-    prints some after the summary, the monitor the last), the first kept for the summary's
-    warning and ``--strict``'s verdict."""
-    summary = runner.summary
-    summary.refused_commands += 1
-    if len(runner.refusals) < 100:
-        runner.refusals.append(refusal(runner, command, exc))
-    if not summary.first_refusal:
-        summary.first_refusal = runner.refusals[0]
-
-
-def noted_fall(runner: MissionRunner, change: ModeChange | None, mission_time: float) -> None:
+def noted_fall(
+    summary: RunSummary,
+    change: ModeChange | None,
+    mission_time: float,
+    root: py_trees.behaviour.Behaviour,
+) -> None:
     """The robot's first fall out of Safe/Full by itself onto a hazard (a cliff, a wheel
     drop; a charger's is a dock run's end: :data:`EXPECTED_FALLS`), placed for ``--strict``:
     when, why, and the leaf that was driving (the tree has not ticked on this frame yet)."""
-    summary = runner.summary
     if summary.first_fall or change is None or not change.fall or change.cause in EXPECTED_FALLS:
         return
-    summary.first_fall = f"t={mission_time:.3f}{running_in(runner.mission.root)}: {change.cause}"
+    summary.first_fall = f"t={mission_time:.3f}{running_in(root)}: {change.cause}"
 
 
-def refusal(runner: MissionRunner, command: Command, exc: ModeError) -> str:
+def refusal(
+    command: Command, exc: ModeError, sender: object, when: float | None, arrival: float
+) -> str:
     """``t=12.345 drive_straight: drive needs Safe or Full; the robot is in Passive since
-    t=12.300, after a cliff``: when, who sent it, and the mode's start in mission time
-    (the error's own words give the time of day, which a ``--fast`` run never saw)."""
-    when = runner.snapshot.time if runner.has_snapshot else 0.0
-    sender = getattr(runner._outbox.sender_of(command), "name", None)
-    by = f" {sender}:" if isinstance(sender, str) else ""
+    t=12.300, after a cliff``: when (``when``, the tick's mission time; None before the
+    first), who sent it (``sender``, the outbox's), and the mode's start in mission time
+    (the error's own words give the time of day, which a ``--fast`` run never saw;
+    ``arrival``: the link's newest, on its clock)."""
+    name = getattr(sender, "name", None)
+    by = f" {name}:" if isinstance(name, str) else ""
     text = str(exc)
-    if exc.since is not None and runner.has_snapshot:
+    if exc.since is not None and when is not None:
         # the link's clock and mission time advance together: the mode began as long
         # before this tick as the link's newest arrival is after its start
-        ago = max(0.0, runner.connection.link.arrival - exc.since)
+        ago = max(0.0, arrival - exc.since)
         text = exc.worded(f"t={max(0.0, when - ago):.3f}")
-    return f"t={when:.3f}{by} {text}"
+    return f"t={0.0 if when is None else when:.3f}{by} {text}"
 
 
 def ended_by(exc: Exception, summary: RunSummary, *, answered: bool) -> None:
@@ -939,78 +691,20 @@ def ended_by(exc: Exception, summary: RunSummary, *, answered: bool) -> None:
         summary.traceback = "".join(traceback.format_exception(exc))
 
 
-def stop_robot(connection: Connection, summary: RunSummary, first: bool = False) -> None:
-    """The safe stop, and the summary's word on it: what was sent, or why it was not
-    delivered (the connection's report); ``first``: drive 0 and motors off went out before
-    the tree's stop (:func:`stop_wheels_first`), said before it."""
-    try:
-        sequence = [c.name for c in connection.stop_sequence()]
-        if connection.safe_stop():
-            before = "drive 0, motors off before the tree's stop, then " if first else ""
-            summary.safe_stop = (
-                before + "sent " + ", ".join(sequence)
-                if sequence
-                else "nothing to stop: the robot was never started"
-                if connection.mode is OIMode.OFF and connection.writer.sent == 0
-                else off_by_the_tree(connection.writer.silenced_by)
-                if connection.mode is OIMode.OFF and connection.writer.silenced_by is not None
-                else "nothing to send"
-            )
-            return
-        report = getattr(connection, "stop_report", None)
-        summary.safe_stop = "NOT DELIVERED: " + (report or "the stop sequence could not be written")
-        summary.stop_delivered = False
-        note_undelivered_stop(summary)
-    except KeyboardInterrupt:
-        summary.safe_stop = "interrupted during the safe stop"
-    except Exception as exc:
-        summary.safe_stop = f"FAILED: {type(exc).__name__}: {exc}"
-
-
-def off_by_the_tree(command: Command | None) -> str:
-    """The safe stop's word when the tree's own Reset or Stop left the robot in Off: nothing
-    to send, the robot is stopped there (its wheels and motors stop as the OI turns off)."""
-    name = "Reset or Stop" if command is None else f"{command.spec.title} ({command.spec.opcode})"
-    return f"nothing to send: the tree's {name} left the robot in Off, stopped"
-
-
-def unread_gap(
-    summary: RunSummary, link: str, gap: float, blocked: tuple[float, str] | None = None
-) -> None:
-    """No frame was read for ``gap`` seconds and the watchdog did not trip: the process did
-    not run (a laptop suspended, SIGSTOP, a host starved of CPU), or the watchdog is off and
-    the robot was silent. Either way the robot went on with its last command, unwatched:
-    counted and said (the frames that waited are dropped as stale).
-
-    ``blocked``: the tick before the gap blocked, and the tick guard sent drive 0 in it
-    (``(seconds it had run then, where)``, :func:`tick_halted`): the gap is that tick's, the
-    wheels at rest from then on. Said as such, and not counted as unread (the summary's tick
-    guard line counts it): it said the process was suspended and the robot went on."""
-    if blocked is not None:
-        log.warning(
-            "%s: no frame was read for %.2f s: a tick blocked (%s); the tick guard had sent "
-            "drive 0 once it had run %.2f s, and the wheels stood still until it returned",
-            link, gap, blocked[1], blocked[0],
-        )  # fmt: skip
-        return
-    summary.unread_gaps += 1
-    summary.longest_unread_s = max(summary.longest_unread_s, gap)
-    log.warning(
-        "%s: no frame was read for %.2f s (the process suspended or starved of CPU, or the "
-        "robot silent with the watchdog off); the robot went on with its last command "
-        "meanwhile", link, gap,
-    )  # fmt: skip
-
-
-def mode_of(connection: object) -> OIMode | None:
-    """The OI mode ``connection``'s model holds, if it has one; after a stop that did not
-    reach the robot, the mode it was last seen in (a stop written but unconfirmed moved the
-    model to Passive: ``last seen in Passive`` was said of a robot last seen in Safe)."""
-    ending = getattr(connection, "ending", None)
-    if isinstance(ending, SafeStop) and ending.safe_stopped is False:
-        return ending.last_seen
-    mode = getattr(connection, "mode", None)
-    return mode if isinstance(mode, OIMode) else None
+def guarded_tick(
+    root: py_trees.behaviour.Behaviour,
+    tick_guard: TickGuardLike | None,
+    ride: StallRide,
+    tick_now: Callable[[], int],
+) -> Callable[[], object]:
+    """The root's tick (:func:`tick_of`), through the tick guard when the run has one: a tick
+    it halts is ridden through (:meth:`StallRide.tick_halted
+    <roomba_bt.runtime.stall.StallRide.tick_halted>`); ``tick_now``: the stream tick the
+    tree ticks on, for the guard's record."""
+    tick = tick_of(root)
+    if tick_guard is None:
+        return tick
+    return tick_guard.guarded(tick, partial(ride.tick_halted, tick_guard), tick_now)
 
 
 def tick_of(root: py_trees.behaviour.Behaviour) -> Callable[[], None]:

@@ -6,6 +6,10 @@ such gaps; the run waits up to its grace (``--grace``, 2 s) for valid frames. Fr
 back let the tree go on where it was, the wheels given their last command again; none within
 the grace ends the run with the cause the connection finds (a garbled line, a robot asleep,
 reset or switched off: :meth:`~roomba_bt.robot.connection.Connection.check_stall`).
+
+The tick guard's drive 0 (a tick that blocked: :mod:`roomba_bt.runtime.tick_guard`) is ridden
+through the same way (:meth:`StallRide.tick_halted`): counted, the frames it left unread not
+taken for a gap nobody read, the wheels given their last command again.
 """
 
 from __future__ import annotations
@@ -13,18 +17,22 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable, Sequence
 
+from roomba_bt.oi.encode import turns_wheels
 from roomba_bt.oi.frames import SensorFrame
+from roomba_bt.oi.modes import DRIVING_MODES
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.errors import StreamStalled
+from roomba_bt.robot.interface import Outbox
 from roomba_bt.runtime.summary import RunSummary
+from roomba_bt.runtime.tick_guard import TickGuardLike
 
 log = logging.getLogger("roomba_bt.runtime.loop")
 
 
 class StallRide:
     """The run's reads, each trip counted in ``summary`` and ridden through for ``grace``
-    seconds (0: the trip ends the run); ``wheels_again`` sends the tree's last wheel command
-    once frames are back (the watchdog's drive 0 had replaced it). ``clock`` is the mission
+    seconds (0: the trip ends the run); once frames are back the tree's last wheel command
+    goes into ``outbox`` again (the watchdog's drive 0 had replaced it). ``clock`` is the mission
     time so many seconds after the last valid frame (None before the first): no tick moves
     the mission clock during a stall, so the trip and the frames' return are stamped with
     their own times, not both with the last frame's."""
@@ -32,25 +40,26 @@ class StallRide:
     def __init__(
         self,
         connection: Connection,
+        outbox: Outbox,
         summary: RunSummary,
         grace: float,
-        wheels_again: Callable[[], None],
         clock: Callable[[float], float | None],
     ) -> None:
         self.connection = connection
+        self.outbox = outbox
         self.summary = summary
         self.grace = grace
-        self._wheels_again = wheels_again
         self._clock = clock
         #: while a stall is ridden through: (bytes read when it began, drive 0 sent, the
         #: last valid frame's time)
         self.stall: tuple[int, bool, float] | None = None
         #: the next batch's gap is a stall ridden through, not a gap nobody read (read once
-        #: by the runner's count of the slots a batch spans)
+        #: by the run's clock, :meth:`StreamClock.slots_spanned
+        #: <roomba_bt.runtime.clock.StreamClock.slots_spanned>`)
         self.gap_explained = False
         #: the tick before the next batch blocked and the tick guard stopped the wheels in it
         #: (how long it had run then, where): the next batch's gap is that tick's, the robot
-        #: at rest (set by the runner's ``tick_halted``, read once as ``gap_explained``)
+        #: at rest (set by :meth:`tick_halted`, read once as ``gap_explained``)
         self.blocked: tuple[float, str] | None = None
 
     def tripped(self, stalled: StreamStalled) -> Sequence[SensorFrame]:
@@ -92,3 +101,35 @@ class StallRide:
             gap * 1000, extra={"mission_time": self._clock(gap)},
         )  # fmt: skip
         self._wheels_again()
+
+    def tick_halted(self, tick_guard: TickGuardLike | None, seconds: float, where: str) -> None:
+        """The tick guard stopped the wheels during the tick that just returned: counted,
+        said, and, as after a watchdog stall, the last wheel command goes out again unless
+        this tick queued another (the mission goes on where it was)."""
+        summary = self.summary
+        summary.tick_halts += 1
+        summary.tick_halt_last = where or "unknown"
+        if not summary.tick_halt_first:
+            summary.tick_halt_first = summary.tick_halt_last
+        log.warning(
+            "a tick ran over %g s (%s): the tick guard sent drive 0",
+            tick_guard.limit_s if tick_guard else 0.0, where or "where: unknown",
+        )  # fmt: skip
+        self.blocked = (seconds, summary.tick_halt_last)  # the frames it left unread
+        self._wheels_again()
+
+    def _wheels_again(self) -> None:
+        """After a drive 0 the runtime sent on its own (the watchdog's, the tick guard's): the
+        last wheel command the tree wrote goes out again, if it turns a wheel and the robot
+        obeys it, unless this tick queued another wheel command (the tree's newer word). A
+        fall to Passive by itself (``MissionRunner._advance``) forgets that command: the
+        robot stopped."""
+        outbox = self.outbox
+        wheels = outbox.standing.get("wheels")
+        if (
+            wheels is not None
+            and turns_wheels(wheels)
+            and self.connection.mode in DRIVING_MODES
+            and all(c.spec.channel != "wheels" for c in outbox)
+        ):
+            outbox.send(wheels, self)

@@ -1,0 +1,275 @@
+"""The run's ending: its tree stopped, the wheels first, and the safe stop, each said.
+
+``MissionRunner._finish`` ends every run in :mod:`~roomba_bt.runtime.teardown`'s order:
+drive 0 and motors off while a node still runs (:meth:`RunEnding.wheels_first`), the tree's
+stop with nothing set going meanwhile (:meth:`RunEnding.stop_tree`; the monitor's reload
+retires a tree with it too), then the safe stop (:func:`stop_robot`, the connection's
+:class:`~roomba_bt.robot.ending.SafeStop`) and the nodes' ``shutdown()``
+(:meth:`RunEnding.safe_stop`), and the summary's word on each (:meth:`RunEnding.sum_up`).
+"""
+
+from __future__ import annotations
+
+import logging
+import sys
+import time
+from collections.abc import Callable
+
+import py_trees
+
+from roomba_bt.oi.encode import Command
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.robot.connection import Connection
+from roomba_bt.robot.ending import SafeStop
+from roomba_bt.robot.hazards import sets_going
+from roomba_bt.robot.interface import Outbox, Snapshot
+from roomba_bt.robot.safety import SAFE_STOP_UNDER_WAY, InterruptGuard
+from roomba_bt.runtime.summary import RunSummary
+from roomba_bt.runtime.teardown import (
+    during,
+    note_stop_failures,
+    note_undelivered_stop,
+    shutdown_nodes,
+    stop_nodes,
+    tree_running,
+    where_in,
+)
+from roomba_bt.runtime.tick_guard import TickGuardLike
+
+#: the run's own logger, whose warnings these are (as ``runtime/stall.py``'s)
+log = logging.getLogger("roomba_bt.runtime.loop")
+
+#: what a Ctrl-C says while the run's tree is stopped (each running node's ``terminate()``),
+#: after what the wheels do meanwhile
+STOPPING_THE_TREE = (
+    "the run is ending: {wheels}; its tree is being stopped (each running behaviour's "
+    "terminate()), the safe stop after it"
+)
+#: ... and while the nodes' ``shutdown()`` runs
+SHUTTING_DOWN = "the robot is stopped; the behaviours' shutdown() is under way"
+#: what the run's reason says a late signal came during (``Ctrl-C during the tree's stop, in
+#: slow (Slow.terminate at plugin.py:12)``; the safe stop's is ``THE_SAFE_STOP``)
+THE_TREES_STOP, THE_SHUTDOWN = "the tree's stop", "the behaviours' shutdown()"
+
+
+class RunEnding:
+    """How a run stops its tree on ``connection``: the wheels first, nothing the behaviours
+    write meanwhile sets the robot going (counted in ``summary``), what they queued in
+    ``outbox`` dropped. ``clock`` is the mission time so many seconds after the last tick's
+    frame (None before the first), to place what was not written."""
+
+    def __init__(
+        self,
+        connection: Connection,
+        outbox: Outbox,
+        summary: RunSummary,
+        clock: Callable[[float], float | None],
+    ) -> None:
+        self.connection = connection
+        self.outbox = outbox
+        self.summary = summary
+        self._clock = clock
+
+    def end_tree(
+        self,
+        root: py_trees.behaviour.Behaviour,
+        tick_guard: TickGuardLike | None,
+        guard: InterruptGuard,
+        raised_in: py_trees.behaviour.Behaviour | None,
+    ) -> bool:
+        """The tree's stop at the run's end (:meth:`stop_tree`, its failures in the
+        summary), drive 0 and motors off before it if the wheels move (:meth:`wheels_first`:
+        True if they were sent), and a warning if it blocked (:meth:`_said_slow_stop`)."""
+        first = self.wheels_first(root, tick_guard, guard)
+        began = time.monotonic()
+        note_stop_failures(self.summary, self.stop_tree(root, raised_in))
+        self._said_slow_stop(tick_guard, time.monotonic() - began, first)
+        return first
+
+    def safe_stop(
+        self, guard: InterruptGuard, first: bool, set_up: py_trees.behaviour.Behaviour | None
+    ) -> None:
+        """After the tree's stop: the safe stop (:func:`stop_robot`; ``first``: drive 0 and
+        motors off went out before the tree's stop), then each node's ``shutdown()`` of the
+        tree at ``set_up`` (None: its ``setup()`` never ran, nothing to close). ``guard`` is
+        told what the run does meanwhile, for a Ctrl-C then."""
+        guard.stopping(SAFE_STOP_UNDER_WAY)
+        stop_robot(self.connection, self.summary, first)
+        if set_up is not None:
+            guard.stopping(SHUTTING_DOWN, during(THE_SHUTDOWN))
+            shutdown_nodes(set_up)
+
+    def sum_up(self, wall_time_s: float, last: Snapshot | None, unconfirmed: int) -> None:
+        """The summary's last figures, once the robot is stopped: the run's wall time, the
+        last snapshot's (None: none came), the mode the robot was left in, whether it ever
+        answered, the hazard onsets never confirmed, the parser's counters and the falls."""
+        summary, connection = self.summary, self.connection
+        summary.wall_time_s = wall_time_s
+        summary.take_last(last)
+        summary.final_mode = mode_of(connection)
+        link = getattr(connection, "link", None)
+        summary.robot_answered = getattr(link, "bytes_read", 1) > 0
+        summary.unconfirmed_hazards = unconfirmed
+        summary.take_counters(getattr(connection, "counters", None))
+        summary.falls = dict(getattr(connection, "falls", {}))
+
+    def wheels_first(
+        self,
+        root: py_trees.behaviour.Behaviour,
+        tick_guard: TickGuardLike | None,
+        guard: InterruptGuard,
+    ) -> bool:
+        """Before the tree's stop, whose ``terminate()`` calls may block (a plugin's
+        ``time.sleep``): drive 0 and motors off, the first half of the safe stop, through the
+        run's tick guard (a run on the wall clock; a replay's, as its record says), when a
+        node still runs and the wheels move or the tree's last Motors runs a brush or the
+        vacuum. True if they were sent. ``guard`` is told what the run does meanwhile, for a
+        Ctrl-C then."""
+        motors = self.outbox.standing.get("motors")
+        first = (
+            tick_guard is not None
+            and tree_running(root)
+            and tick_guard.halt_before_stop(motors is not None and sets_going(motors))
+        )
+        wheels = (
+            "drive 0 and motors off were sent"
+            if first
+            else f"the robot keeps its last wheel command ({self.connection.activity()})"
+        )
+        guard.stopping(STOPPING_THE_TREE.format(wheels=wheels), during(THE_TREES_STOP))
+        return first
+
+    def _said_slow_stop(
+        self, tick_guard: TickGuardLike | None, seconds: float, first: bool
+    ) -> None:
+        """A tree's stop that took longer than a tick may (a ``terminate()`` that blocked):
+        warned, with what the wheels did meanwhile (``first``: drive 0 went out before it)."""
+        limit = tick_guard.limit_s if tick_guard is not None else None
+        if not limit or seconds <= limit:
+            return
+        activity = self.connection.activity()
+        wheels = (
+            "drive 0 and motors off had been sent before it"
+            if first
+            else f"the robot kept its last wheel command ({activity}) meanwhile"
+        )
+        log.warning(
+            "stopping the tree took %.2f s (a behaviour's terminate() blocked); %s", seconds, wheels
+        )
+
+    def stop_tree(
+        self,
+        root: py_trees.behaviour.Behaviour,
+        raised_in: py_trees.behaviour.Behaviour | None = None,
+    ) -> list[str]:
+        """Stop the running tree at ``root`` (each running node's ``terminate``, every node
+        even when one raises: :func:`~roomba_bt.runtime.teardown.stop_nodes`) and drop what
+        its leaves queued on the way out: the safe stop that comes with it (the run's end, a
+        reload from the monitor) supersedes their halts, which Passive would refuse anyway;
+        one that would have set the robot going is said (:meth:`_dropped_in_stop`).
+        Meanwhile nothing written sets the robot going (:meth:`CommandWriter.hold_motion
+        <roomba_bt.robot.writer.CommandWriter.hold_motion>`, :meth:`_held_in_stop`): a
+        plugin's terminate that wrote a drive straight to the connection and then blocked
+        drove the robot until the safe stop. Its commands no longer stand: nothing sends them
+        again (a resume, the watchdog's recovery). Returns what each ``terminate`` that
+        raised says (each logged as a warning); ``raised_in``: the node whose ``terminate``
+        raised in the tick that ended the run, already said, is stopped without calling it
+        again."""
+        writer = self.connection.writer
+        outbox = self.outbox
+        # what a tick that raised had queued is dropped too, but was not sent by the stop
+        before = [(id(command), id(sender)) for command, sender in outbox.queued_by()]
+        writer.hold_motion(self._held_in_stop)
+        try:
+            failures = stop_nodes(root, raised_in)
+        finally:
+            writer.hold_motion(None)
+        for command, sender in outbox.queued_by():
+            if sets_going(command) and (id(command), id(sender)) not in before:
+                self._dropped_in_stop(command, sender)
+        outbox.clear()  # what stood too
+        return failures
+
+    def _held_in_stop(self, command: Command) -> None:
+        """A command written while the tree was stopped that would have set the robot going:
+        not written (:meth:`stop_tree`); said and counted (:meth:`_not_written`), with the
+        behaviour that wrote it and where (the frame that called the writer: a bound method
+        adds none)."""
+        self._not_written(where_in(sys._getframe(1)) or "a behaviour", "sent", command)
+
+    def _dropped_in_stop(self, command: Command, sender: object) -> None:
+        """A command queued (``send``) while the tree was stopped that would have set the
+        robot going: dropped with the outbox (:meth:`stop_tree`); said, with the behaviour
+        that queued it and its ``terminate`` (the method that runs then; the line of the
+        ``send`` itself is not kept). It was dropped silently, though docs/runtime.md said
+        otherwise."""
+        who = "the runtime"
+        if isinstance(sender, py_trees.behaviour.Behaviour):
+            cls = type(sender)
+            code = getattr(cls.terminate, "__code__", None)
+            where = f" at {code.co_filename}:{code.co_firstlineno}" if code is not None else ""
+            who = f"{sender.name} ({cls.__name__}.terminate{where})"
+        self._not_written(who, "queued", command)
+
+    def _not_written(self, who: str, how: str, command: Command) -> None:
+        """A command that would have set the robot going while the tree was stopped, not
+        written (:meth:`_held_in_stop`, :meth:`_dropped_in_stop`): logged, counted, the first
+        kept for the summary and ``--strict`` (``t=1.005 sticky (Sticky.terminate at x.py:31)
+        queued Drive (137) 89 01 2c 80 00``)."""
+        what = f"{command.spec.title} ({command.opcode}) {command.data.hex(' ')}"
+        log.warning(
+            "%s %s %s while the tree was being stopped: not written (the tree's stop sets "
+            "nothing going: it would run on, unwatched, until the safe stop)", who, how, what,
+        )  # fmt: skip
+        summary = self.summary
+        summary.dropped_in_stop += 1
+        if not summary.first_dropped:
+            now = self._clock(0.0)  # the last tick's time
+            when = f"t={now:.3f} " if now is not None else ""
+            summary.first_dropped = f"{when}{who} {how} {what}"
+
+
+def stop_robot(connection: Connection, summary: RunSummary, first: bool = False) -> None:
+    """The safe stop, and the summary's word on it: what was sent, or why it was not
+    delivered (the connection's report); ``first``: drive 0 and motors off went out before
+    the tree's stop (:meth:`RunEnding.wheels_first`), said before it."""
+    try:
+        sequence = [c.name for c in connection.stop_sequence()]
+        if connection.safe_stop():
+            before = "drive 0, motors off before the tree's stop, then " if first else ""
+            summary.safe_stop = (
+                before + "sent " + ", ".join(sequence)
+                if sequence
+                else "nothing to stop: the robot was never started"
+                if connection.mode is OIMode.OFF and connection.writer.sent == 0
+                else off_by_the_tree(connection.writer.silenced_by)
+                if connection.mode is OIMode.OFF and connection.writer.silenced_by is not None
+                else "nothing to send"
+            )
+            return
+        report = getattr(connection, "stop_report", None)
+        summary.safe_stop = "NOT DELIVERED: " + (report or "the stop sequence could not be written")
+        summary.stop_delivered = False
+        note_undelivered_stop(summary)
+    except KeyboardInterrupt:
+        summary.safe_stop = "interrupted during the safe stop"
+    except Exception as exc:
+        summary.safe_stop = f"FAILED: {type(exc).__name__}: {exc}"
+
+
+def off_by_the_tree(command: Command | None) -> str:
+    """The safe stop's word when the tree's own Reset or Stop left the robot in Off: nothing
+    to send, the robot is stopped there (its wheels and motors stop as the OI turns off)."""
+    name = "Reset or Stop" if command is None else f"{command.spec.title} ({command.spec.opcode})"
+    return f"nothing to send: the tree's {name} left the robot in Off, stopped"
+
+
+def mode_of(connection: object) -> OIMode | None:
+    """The OI mode ``connection``'s model holds, if it has one; after a stop that did not
+    reach the robot, the mode it was last seen in (a stop written but unconfirmed moved the
+    model to Passive: ``last seen in Passive`` was said of a robot last seen in Safe)."""
+    ending = getattr(connection, "ending", None)
+    if isinstance(ending, SafeStop) and ending.safe_stopped is False:
+        return ending.last_seen
+    mode = getattr(connection, "mode", None)
+    return mode if isinstance(mode, OIMode) else None
