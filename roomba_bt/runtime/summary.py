@@ -190,7 +190,7 @@ class RunSummary:
     #: them at rest, and nothing was sent)
     stall_halts: int = 0
     #: gaps of a second or more with no frame read and no watchdog trip (the process
-    #: suspended or starved: runtime/loop.py ``unread_gap``), and the longest
+    #: suspended or starved: runtime/clock.py ``unread_gap``), and the longest
     unread_gaps: int = 0
     longest_unread_s: float = 0.0
     #: ticks that ran over ``--tick-limit`` with the wheels moving, each stopped by the tick
@@ -205,8 +205,8 @@ class RunSummary:
     #: t=3.330, after a cliff``)
     first_refusal: str = ""
     #: commands that would have set the robot going, sent while the tree was being stopped
-    #: (the run's end, the monitor's reload): not written (runtime/loop.py
-    #: ``stop_running_tree``); the first, with its behaviour and when
+    #: (the run's end, the monitor's reload): not written (runtime/ending.py
+    #: ``RunEnding.stop_tree``); the first, with its behaviour and when
     dropped_in_stop: int = 0
     first_dropped: str = ""
     #: the robot's first fall out of Safe/Full by itself that was not its expected end

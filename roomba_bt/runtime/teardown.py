@@ -7,8 +7,8 @@ A run (and the monitor's reload, which retires a tree) ends its tree in this ord
                             the tick guard's (runtime/tick_guard.py, halt_before_stop)
     stop_nodes(root)        every node stopped: its terminate() once, in py_trees' order;
                             one that raises is noted, and the others are stopped all the same;
-                            nothing written meanwhile sets the robot going (the runner's
-                            stop_running_tree: CommandWriter.hold_motion)
+                            nothing written meanwhile sets the robot going (ending.py's
+                            RunEnding.stop_tree: CommandWriter.hold_motion)
     the safe stop           the runner's (drive 0, motors off, pause, Passive)
     shutdown_nodes(root)    every node's shutdown() (py_trees' BehaviourTree.shutdown), each
                             guarded: one that raises is logged, the others still run
