@@ -63,6 +63,11 @@ MOVED = [
     ("roomba_bt.mission", "compile_mission", "roomba_bt.mission.compiler"),
     ("roomba_bt.mission", "load_mission", "roomba_bt.mission.compiler"),
     ("roomba_bt.mission", "validate_files", "roomba_bt.mission.compiler"),
+    ("roomba_bt.mission.ir", "Node", "roomba_bt.mission.plan"),
+    ("roomba_bt.mission.ir", "KeyDecl", "roomba_bt.mission.plan"),
+    ("roomba_bt.robot.handshake", "find_robot", "roomba_bt.robot.discovery"),
+    ("roomba_bt.robot.handshake", "wake_pulse", "roomba_bt.robot.discovery"),
+    ("roomba_bt.robot.handshake", "Probe", "roomba_bt.robot.discovery"),
 ]
 #: what each moved name is called in its new home, where it was renamed
 RENAMED = {("roomba_bt.transport.testing", "RecordingTransport"): "WriteLogTransport"}

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import errno
 import os
-import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -25,6 +24,7 @@ from typing import Any
 import yaml
 
 from roomba_bt.behaviours.units import closest
+from roomba_bt.mission.values import substituted
 
 #: Where the shipped missions live: the package's data directory (a sibling of ``mission/``).
 SHIPPED_DIR = Path(__file__).resolve().parent.parent / "missions"
@@ -174,12 +174,11 @@ def _broken_link(link: Path) -> str:
     return f"a broken symbolic link (to {os.readlink(link)!r}, which does not exist)"
 
 
-_SUBSTITUTION = re.compile(r"\$\{(\w+)\}")
-
-
 def _with_defaults(text: str, params: tuple[ShippedParameter, ...]) -> str:
+    """``text`` with its parameters' defaults, as :func:`~roomba_bt.mission.values.substituted`
+    reads a mission's (``$${`` a literal ``${``)."""
     defaults = {p.name: p.default for p in params}
-    return _SUBSTITUTION.sub(lambda m: defaults.get(m.group(1), m.group(0)), text)
+    return substituted(text, defaults.get)
 
 
 def describe_shipped() -> list[ShippedMission]:

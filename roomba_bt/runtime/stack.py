@@ -159,7 +159,7 @@ class RunStack:
 
     ``strict``, as ``roomba-bt run --strict``: a run whose tree succeeded but in which the
     mode guard refused a command, a command was dropped while the tree was stopped, or the
-    robot fell out of Safe/Full by itself (but onto a charger) ends with exit code 7
+    robot fell out of Safe/Full by itself (not onto a charger) ends with exit code 7
     (:attr:`RunSummary.exit_code`; :meth:`RunSummary.raise_for_outcome` raises), its
     summary naming each count and its first instance. The outcome stays the tree's SUCCESS.
     """

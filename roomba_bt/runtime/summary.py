@@ -276,8 +276,8 @@ class RunSummary:
     def strict_findings(self) -> list[str]:
         """What ``--strict`` fails a successful run for, each with its count and its first
         instance: commands the mode guard refused, commands dropped while the tree was
-        stopped, the robot's falls out of Safe/Full by itself (but onto a charger:
-        :data:`EXPECTED_FALLS`). Empty for a clean run. A poor link (lost frames, checksum
+        stopped, the robot's falls out of Safe/Full by itself (other than onto a
+        charger: :data:`EXPECTED_FALLS`). Empty for a clean run. A poor link (lost frames, checksum
         failures, stalls ridden through) is left out on purpose: it is the cable's, not the
         mission's, and the summary's ``link`` and ``stalls`` lines say it."""
         found = []

@@ -171,3 +171,14 @@ def test_load_mission_reads_a_file_before_a_shipped_name(
     monkeypatch.chdir(tmp_path)
     (tmp_path / "dock").write_text("mission: mine\ntree:\n  sequence:\n    - mode: safe\n")
     assert load_mission("dock").name == "mine"
+
+
+def test_the_listing_reads_a_description_s_escape_as_a_mission_does() -> None:
+    """``roomba-bt missions`` had its own ``${name}`` pattern: ``$${`` stayed doubled and a
+    ``$${speed}`` took the default, though a mission reads it as the text ``${speed}``."""
+    from roomba_bt.mission.shipped import ShippedParameter, _with_defaults
+
+    speed = ShippedParameter("speed", "speed", "200 mm/s", "")
+    assert _with_defaults("at ${speed}, not $${speed}; ${other}", (speed,)) == (
+        "at 200 mm/s, not ${speed}; ${other}"
+    )
