@@ -82,9 +82,15 @@ class KeyRange(ValueError):
 
 
 def read_key(key: str) -> Any:
-    """A mission blackboard key's value (None if never written)."""
+    """A mission blackboard key's value (None if never written); ``key.field``, a record
+    key's field (None if the record was never written), as py_trees' own ``key.attribute``
+    reads one and ``@key.field`` does: ``check: {key: wp.distance}``."""
     storage = py_trees.blackboard.Blackboard.storage
-    return storage.get(MISSION_NAMESPACE + key)
+    if "." not in key:
+        return storage.get(MISSION_NAMESPACE + key)
+    name, _, field = key.partition(".")
+    record = storage.get(MISSION_NAMESPACE + name)
+    return record.get(field) if isinstance(record, Mapping) else None
 
 
 #: the id the mission's own writes (``set``, ``mark``, ``for_each``, initial values) carry in

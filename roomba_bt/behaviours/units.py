@@ -492,13 +492,18 @@ def _boolean_word(value: bool, choices: Sequence[str]) -> str:
 def compatible(source: ValueType, target: ValueType) -> bool:
     """May a value of ``source`` type fill a slot of ``target`` type? Any value fills an
     ``any`` slot (a key whose declaration was refused is typed ``any``: its reader's
-    ``${p}`` was "an int, but check.value needs any", an error after the real one)."""
+    ``${p}`` was "an int, but check.value needs any", an error after the real one). An
+    enum's value is one of its words, a text: it fills a ``str`` slot (a ``str`` key's
+    ``set``, a log line, a subtree's ``str`` parameter), which refused it ("is one of a, b,
+    but set.value needs str")."""
     if target.name == "any":
         return True
     if source.name == target.name and source.choices == target.choices:
         return source.fields == target.fields
     if source.choices and target.choices:  # an enum whose every word the slot accepts
         return set(source.choices) <= set(target.choices)
+    if source.choices and target.name == "str" and not target.choices:
+        return True
     return (source.name, target.name) in {("int", "float"), ("distance", "radius")}
 
 

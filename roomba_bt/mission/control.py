@@ -19,12 +19,16 @@ from roomba_bt.mission.plan import Node
 from roomba_bt.mission.source import Bad, Loc, kind_of, mapping, plain, scalar_text, sequence
 from roomba_bt.mission.ticks import at_once
 from roomba_bt.mission.values import (
+    ESCAPE_HINT,
+    SUBSTITUTION,
     UNKNOWN,
     Bound,
     Context,
     Written,
+    name_text,
     resolve,
     said_origin,
+    substituted,
     unknown,
 )
 
@@ -44,10 +48,15 @@ def option_value(
     env: Mapping[str, Bound],
     options: dict[str, Any],
 ) -> Any:
-    """One option's value; names and child names are taken as written, everything else
-    through :func:`resolve` (``${parameter}``, units)."""
+    """One option's value; a name with its ``${parameter}`` replaced as the ``name:``
+    modifier's is (:func:`name_text`); child names taken as written (a ``${`` in one is
+    refused, :func:`_child_names`); everything else through :func:`resolve`
+    (``${parameter}``, units)."""
     if param.type is TEXT:
-        return scalar_text(node, loc, param.name)
+        text, uses_parameter = name_text(scalar_text(node, loc, param.name), loc, env)
+        if uses_parameter:
+            options[_PARAMETER_IN_NAME] = loc
+        return text
     if param.type is CHILD_NAMES:
         names = plain(node, loc)
         if not isinstance(names, list) or not all(isinstance(s, str) for s in names):
@@ -55,8 +64,32 @@ def option_value(
         if not names:
             raise Bad(loc.at(_empty_list(kind, param, "child name")))
         options[f"{param.name}_loc"] = loc
-        return names
+        return _child_names(f"{kind.word}.{param.name}", names, loc)
     return resolve(ctx, node, loc, param.type, env, f"{kind.word}.{param.name}")
+
+
+#: the option a composite's own ``name:`` that uses a parameter leaves its place in, for
+#: :attr:`Node.parameter_in_name <roomba_bt.mission.plan.Node.parameter_in_name>`
+_PARAMETER_IN_NAME = "parameter_in_name"
+
+
+def _child_names(what: str, names: list[str], loc: Loc) -> list[str]:
+    """``selected:``'s names, each ``$${`` a literal ``${`` as in the name it picks. A
+    ``${parameter}`` is refused: a child's name that uses one changes with its value
+    (``-p side=right``), and a pick that held on the default would name no child, or
+    another, with another value; so names are matched as written, never substituted."""
+    for name in names:
+        used = SUBSTITUTION.search(name)
+        if used is not None:
+            raise Bad(
+                loc.at(
+                    f"{what}: {name!r}: child names are matched as written, and ${{"
+                    f"{used.group(1)}}} is not replaced here: a name made with a parameter "
+                    "changes with its value, so selected: cannot pick it; give the child a "
+                    f"fixed name (name: ...) and select that; {ESCAPE_HINT}"
+                )
+            )
+    return [substituted(name, lambda _: None) for name in names]
 
 
 def _empty_list(kind: NodeKind, param: Param, item: str) -> str:
@@ -107,7 +140,9 @@ def parse_composite(parser: NodeParser, kind: NodeKind, at: Written) -> Node | N
         # one that could not be built keeps its place (its errors are reported): the
         # checks judge its siblings where they are written (plan.Node)
         children.append(child if child is not None else Node("unbuilt", child_loc, "unbuilt"))
-    result = Node(word, key_loc, options.pop("name", word), children, options=options)
+    name, parameter_in_name = options.pop("name", word), options.pop(_PARAMETER_IN_NAME, None)
+    result = Node(word, key_loc, name, children, options=options,
+                  parameter_in_name=parameter_in_name)  # fmt: skip
     for param in kind.options:
         if param.type is CHILD_NAMES and param.name in options:
             _chosen(ctx, f"{word}.{param.name}", options, children, [e[1] for e in entries])
@@ -123,32 +158,52 @@ def _chosen(ctx: Context, what: str, options: dict[str, Any], children: list[Nod
     bump(any)``): it picked both."""
     option = what.rsplit(".", 1)[1]
     where: Loc = options[f"{option}_loc"]
-    answers = [_names_of(c) for c in children]
+    answers = [_answering(c) for c in children]
     # a child that could not be parsed at all has lost its name: not said unknown for that
     nameless = any(c.kind == "unbuilt" and c.partial is None for c in children)
     for chosen in options[option]:
-        picked = [places[i] for i, names in enumerate(answers) if chosen in names]
+        picked = [places[i] for i, nodes in enumerate(answers)
+                  if any(n.name == chosen for n in nodes)]  # fmt: skip
         if not picked and not nameless:
-            known = list(dict.fromkeys(names[-1] for names in answers))
+            known = list(dict.fromkeys(nodes[-1].name for nodes in answers))
             ctx.error(where.at(f"{what}: " + unknown("child name", chosen, known)))
         elif len(picked) > 1:
             at = " and ".join(f"{p.line}:{p.column}" for p in picked)
             ctx.error(where.at(f"{what}: {chosen!r} names {len(picked)} children, at {at}; "
                                "give each its own name (name: ...)"))  # fmt: skip
+        for nodes in answers:
+            _picked_by_parameter(ctx, what, where, chosen, nodes)
     options[f"{option}_at"] = [
-        i for i, names in enumerate(answers) if set(names) & set(options[option])
+        i for i, nodes in enumerate(answers) if {n.name for n in nodes} & set(options[option])
     ]
 
 
-def _names_of(child: Node) -> list[str]:
-    """The names a child answers to in ``selected:``: its own and, through the guards
-    ``while:``/``until:`` wrap it in (named ``until bump(any)``), the name of the node they
+def _picked_by_parameter(
+    ctx: Context, what: str, where: Loc, chosen: str, answering: list[Node]
+) -> None:
+    """``selected: [turn left]`` picking a child named ``"turn ${side}"``: refused at the
+    name, since with ``-p side=right`` it would pick none (or another child)."""
+    for node in answering:
+        if node.name == chosen and node.parameter_in_name is not None:
+            ctx.error(
+                node.parameter_in_name.at(
+                    f"{what} (at {where.line}:{where.column}) picks this child by its name "
+                    f"{chosen!r}, which is made with a parameter: another value would name "
+                    "another child, or none; give the child a fixed name (name: ...) for "
+                    f"selected: to pick; {ESCAPE_HINT}"
+                )
+            )
+
+
+def _answering(child: Node) -> list[Node]:
+    """The nodes whose names a child answers to in ``selected:``: its own and, through the
+    guards ``while:``/``until:`` wrap it in (named ``until bump(any)``), the node they
     guard, which carries the ``name:`` written beside them; that one last."""
-    names = [child.name]
+    nodes = [child]
     while child.kind == "guard":
         child = child.children[1]
-        names.append(child.name)
-    return names
+        nodes.append(child)
+    return nodes
 
 
 def _option_rules(kind: NodeKind, options: dict[str, Any], fields: Fields, key_loc: Loc) -> None:

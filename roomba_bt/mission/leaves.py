@@ -13,14 +13,16 @@ from typing import Any
 import yaml
 
 from roomba_bt.behaviours.declare import Declaration
-from roomba_bt.behaviours.units import MARK
-from roomba_bt.mission.plan import KeyDecl, Node
+from roomba_bt.behaviours.units import MARK, ValueType
+from roomba_bt.mission.plan import Node
 from roomba_bt.mission.source import Bad, Loc, mapping
 from roomba_bt.mission.values import (
+    SUBSTITUTION,
     UNKNOWN,
     Bound,
     Context,
     Written,
+    record_fields,
     resolve,
     said_origin,
     substituted,
@@ -80,7 +82,16 @@ def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node:
     if not ok or not known:  # kept in its place, unbuilt: the checks still judge around it
         return Node("unbuilt", key_loc, decl.name, partial=decl)
     return Node("leaf", key_loc, leaf_name(decl.name, given, env), decl=decl, params=params,
-                options=options)  # fmt: skip
+                options=options, parameter_in_name=_parameter_in(given))  # fmt: skip
+
+
+def _parameter_in(given: list[tuple[str, yaml.Node, Loc, Loc]]) -> Loc | None:
+    """Where the first value its name shows is written with a ``${parameter}``
+    (``bump(${side})`` is named ``bump(left)``: another value, another name), or None."""
+    for _, node, _, value_loc in given:
+        if isinstance(node, yaml.ScalarNode) and SUBSTITUTION.search(str(node.value)):
+            return value_loc
+    return None
 
 
 def _given(
@@ -115,46 +126,72 @@ def _key_params(
     scope and the values as written (a key given as a subtree's ``${out}`` names its use)."""
     env, written = scope
     ok = True
-    key_decl: KeyDecl | None = None
+    key_type: ValueType | None = None
     for pname in (*decl.reads_keys, *decl.writes_keys):
         key = params.get(pname)
         if not isinstance(key, str):
             continue
-        found = ctx.keys.get(key)
         where = options.get(f"loc:{pname}")
-        if found is None:
-            assert isinstance(where, Loc)
-            ctx.error(
-                where.at(
-                    f"{decl.name}.{pname}{said_origin(written[pname], env)}: "
-                    + unknown("blackboard key", key, list(ctx.keys))
-                )
-            )
+        assert isinstance(where, Loc)
+        said = f"{decl.name}.{pname}{said_origin(written[pname], env)}: "
+        try:
+            found = _key_type(ctx, key, reads=pname in decl.reads_keys, who=decl.name)
+        except LookupError as problem:
+            ctx.error(where.at(said + str(problem.args[0])))
             ok = False
             continue
         wants_mark = decl.name in ("mark", "odometry")
-        if wants_mark != (found.type is MARK):
-            assert isinstance(where, Loc)
+        if wants_mark != (found is MARK):
             need = "a key of type mark" if wants_mark else "a key holding a value (not a mark)"
             ctx.error(
                 where.at(
-                    f"{decl.name}.{pname}: blackboard key {key!r} is {found.type.describe()}; "
+                    f"{decl.name}.{pname}: blackboard key {key!r} is {found.describe()}; "
                     f"{decl.name} needs {need}"
                 )
             )
             ok = False
             continue
-        key_decl = found
+        key_type = found
     for pname, (pnode, pvloc) in key_typed.items():
-        if key_decl is None:
+        if key_type is None:
             ok = False
             continue
         try:
-            params[pname] = resolve(ctx, pnode, pvloc, key_decl.type, env, f"{decl.name}.{pname}")
+            params[pname] = resolve(ctx, pnode, pvloc, key_type, env, f"{decl.name}.{pname}")
         except Bad as bad:
             ctx.report(bad)
             ok = False
     return ok
+
+
+def _key_type(ctx: Context, key: str, *, reads: bool, who: str) -> ValueType:
+    """The type of the blackboard value ``key`` names: a declared key, or, read (``check:
+    {key: wp.distance}``), a field of a record key, as ``@wp.distance`` reads one (py_trees'
+    own ``key.attribute``); ``check`` refused it as an unknown key. LookupError says what
+    is wrong and what is allowed: a field is never written alone (``set`` writes the whole
+    record)."""
+    found = ctx.keys.get(key)
+    if found is not None:
+        return found.type
+    name, dot, field = key.partition(".")
+    record = ctx.keys.get(name) if dot else None
+    if record is None:
+        raise LookupError(unknown("blackboard key", key, list(ctx.keys)))
+    fields = record_fields(record.type)
+    if fields is None:
+        raise LookupError(
+            f"blackboard key {name!r} is {record.type.describe()}, not a record: only a "
+            f"record's field is read as KEY.FIELD; here write {name!r}"
+        )
+    if not reads:
+        raise LookupError(
+            f"{key!r} is a field of record key {name!r}, and {who} writes a whole key: a "
+            f"field is read (check, @{key}), never written alone; write {name!r} with every "
+            f"field ({', '.join(fields)})"
+        )
+    if field not in fields:
+        raise LookupError(f"record key {name!r}: " + unknown("field", field, list(fields)))
+    return fields[field]
 
 
 def leaf_name(

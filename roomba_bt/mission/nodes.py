@@ -29,6 +29,7 @@ from roomba_bt.mission.values import (
     SubtreeDef,
     Written,
     given_to,
+    name_text,
     origin_of,
     resolve,
     shown,
@@ -147,7 +148,10 @@ class NodeParser:
         if built is None:
             return None
         if "name" in mods:
-            name = scalar_text(mods["name"][0], mods["name"][2], "name")
+            name_loc = mods["name"][2]
+            written = scalar_text(mods["name"][0], name_loc, "name")
+            name, uses_parameter = name_text(written, name_loc, env)
+            built.parameter_in_name = name_loc if uses_parameter else None
             if name != built.name:
                 built.label, built.name = built.name, name
         for guard in ("until", "while"):
@@ -158,7 +162,8 @@ class NodeParser:
                     continue
                 self._check_guard(condition, guard)
                 built = Node("guard", gkloc, f"{guard} {condition.name}", [condition, built],
-                             options={"until": guard == "until"})  # fmt: skip
+                             options={"until": guard == "until"},
+                             parameter_in_name=condition.parameter_in_name)  # fmt: skip
         return None if stray else built
 
     def _kind(

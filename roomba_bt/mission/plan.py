@@ -42,6 +42,10 @@ class Node:
     #: what the node is, as its name says it without ``name:`` (``drive(velocity=500 mm/s,
     #: duration=10s)``), when ``name:`` replaced that; "" otherwise
     label: str = ""
+    #: where the ``${parameter}`` is written that the name was made with (``name: "turn
+    #: ${side}"``, a leaf's ``bump(${side})``, a guard's condition's): the name changes with
+    #: the value, so ``selected:`` cannot pick the node by it; None: the name is fixed
+    parameter_in_name: Loc | None = None
 
     @property
     def declared(self) -> Declaration | None:
@@ -54,14 +58,16 @@ class Node:
             yield from child.walk()
 
     def keys_read(self) -> list[tuple[str, Loc]]:
-        """Blackboard keys this leaf reads (``@key`` values and key-naming parameters)."""
+        """Blackboard keys this leaf reads (``@key`` values and key-naming parameters; a
+        record's field, ``check: {key: wp.distance}``, reads the key ``wp``)."""
         out: list[tuple[str, Loc]] = []
         if self.decl is None:
             return out
         for pname in self.decl.reads_keys:
             value = self.params.get(pname)
             if isinstance(value, str):
-                out.append((value, self.options.get(f"loc:{pname}", self.loc)))
+                key = value.partition(".")[0]
+                out.append((key, self.options.get(f"loc:{pname}", self.loc)))
         for pname, value in self.params.items():
             if isinstance(value, BlackboardRef):
                 out.append((value.key, self.options.get(f"loc:{pname}", self.loc)))

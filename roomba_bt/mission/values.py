@@ -351,6 +351,32 @@ def _substitute(raw: str, loc: Loc, env: Mapping[str, Bound], what: str) -> Any:
     """``"${a} mm/s"``: each parameter replaced by its text, each ``$${`` by ``${``; UNKNOWN
     if a parameter's value is unknown. A ``${`` that starts no parameter (``"${speed"``,
     ``"${ x }"``) is an error: it was passed on as text, so a typo in a use went unseen."""
+    names = _parameters_used(raw, loc, env, what)
+    if any(env[name].value is UNKNOWN for name in names):
+        return UNKNOWN
+    return substituted(raw, lambda name: env[name].text)
+
+
+def name_text(raw: str, loc: Loc, env: Mapping[str, Bound]) -> tuple[str, bool]:
+    """A node's ``name:`` with each ``${parameter}`` replaced by its text and each ``$${`` by
+    ``${``, and whether it used a parameter (its name then changes with the value: nothing
+    may pick the node by it, :func:`roomba_bt.mission.control.parse_composite`'s
+    ``selected:``). ``name: "turn ${side}"`` ended a run ``FAILURE (turn ${side})``: a
+    subtree used twice could not name its two uses apart. Unknown or stray ``${`` are
+    errors, as in a log line; a value unknown (an unused subtree checked) is kept as
+    written."""
+    names = _parameters_used(raw, loc, env, "name")
+
+    def text_of(name: str) -> str | None:
+        bound = env[name]
+        return None if bound.value is UNKNOWN else bound.text
+
+    return substituted(raw, text_of), bool(names)
+
+
+def _parameters_used(raw: str, loc: Loc, env: Mapping[str, Bound], what: str) -> list[str]:
+    """The parameters ``raw`` uses, each in ``env``; :class:`Bad` at the first ``${`` that
+    starts none, or names an unknown one, saying how a literal one is written."""
     stray = _stray_opening(raw)
     if stray is not None:
         raise Bad(
@@ -365,9 +391,7 @@ def _substitute(raw: str, loc: Loc, env: Mapping[str, Bound], what: str) -> Any:
         if name not in env:
             hint = closest(name, list(env))
             raise Bad(loc.at(f"{what}: unknown parameter ${{{name}}}{hint}; {ESCAPE_HINT}"))
-    if any(env[name].value is UNKNOWN for name in names):
-        return UNKNOWN
-    return substituted(raw, lambda name: env[name].text)
+    return names
 
 
 def _check_range(value: Any, loc: Loc, what: str, param: Param | None, origin: str = "") -> Any:
