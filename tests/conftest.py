@@ -2,7 +2,8 @@
 ``clean_blackboard`` for the folders whose tests write py_trees' blackboard; ``served_sim``,
 ``roomba-bt sim`` in a child process; ``child``, any child process, killed if a test leaves it
 running; ``silent_port``, a pty nobody answers on;
-``usage_error``, a command line that must be refused; ``until``, a wait for another thread.
+``usage_error``, a command line that must be refused; ``until``, a wait for another thread;
+``record_held``, a file held by a child as a run holds its ``--record``.
 
 Outside CI a missing optional package (the peer clients pycreate2 and PyRoombaAdapter,
 matplotlib, jsonschema, the example wall-follow plugin) skips its tests with the install
@@ -138,6 +139,31 @@ def child() -> Iterator[Callable[[Sequence[str]], subprocess.Popen[str]]]:
         if proc.poll() is None:
             proc.kill()
         proc.communicate()
+
+
+#: a child that holds a file as ``run --record`` holds its record (``ClaimedFile``'s flock)
+_HOLD = (
+    "import sys, time\n"
+    "from roomba_bt.runtime.claimed import ClaimedFile\n"
+    "claim = ClaimedFile(sys.argv[1])\n"
+    "print('held', flush=True)\n"
+    "time.sleep(600)\n"
+)
+
+
+@pytest.fixture
+def record_held(
+    child: Callable[[Sequence[str]], subprocess.Popen[str]],
+) -> Callable[[Path], subprocess.Popen[str]]:
+    """``record_held(path)``: a child process holds ``path`` as a run's ``--record`` does
+    (its lock) until it is killed (the test ends, or ``.kill()`` it: a ``kill -9``)."""
+
+    def hold(path: Path) -> subprocess.Popen[str]:
+        proc = child([sys.executable, "-c", _HOLD, str(path)])
+        assert proc.stdout is not None and proc.stdout.readline() == "held\n"
+        return proc
+
+    return hold
 
 
 @pytest.fixture

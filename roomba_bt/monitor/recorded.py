@@ -27,6 +27,7 @@ from roomba_bt.monitor.session import STEP, MonitorSession
 from roomba_bt.runtime.loop import StopRequested
 from roomba_bt.runtime.recording import (
     ENDED,
+    RECORD_STOPPED,
     STILL_WRITTEN,
     Record,
     ReplayTransport,
@@ -127,6 +128,10 @@ def how_the_replay_ended(
     if difference is not None:
         feed.event("warning", difference)
         return f"{difference} ({ticks})"
+    stopped = record.recording_stopped
+    if stopped is not None:  # the run went on: how it ended is not in the record
+        text = f"the recording stopped at t={record.last_t:.2f} s ({stopped}); the run went on"
+        return f"{text} ({ticks})"
     if record.being_written:  # its end is where the run had got to when it was read
         text = f"{STILL_WRITTEN}: shown up to t={record.last_t:.2f} s"
         feed.event("warning", text)
@@ -154,6 +159,8 @@ def diverged(summary: RunSummary, transport: ReplayTransport) -> str | None:
 
 
 def _note_text(note: dict[str, Any]) -> str:
+    if RECORD_STOPPED in note:
+        return f"the recording stopped ({note[RECORD_STOPPED]}): the record ends here"
     if "watchdog" in note and isinstance(note["watchdog"], int | float):  # a trip, replayed
         return f"watchdog: no valid sensor frame for {note['watchdog'] * 1000:.0f} ms"
     if "force" in note:

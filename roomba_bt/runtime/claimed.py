@@ -81,6 +81,30 @@ class ClaimedFile:
         self.release()
 
 
+def held_by_a_writer(path: str | Path) -> bool | None:
+    """Whether a process writes ``path`` now, holding its :class:`ClaimedFile` lock (a ``run
+    --record`` in progress): a shared ``flock`` that cannot be had at once says so. None
+    when it cannot be told (no ``flock`` here, or none on the file's file system: some
+    network mounts; the file unreadable): the caller falls back to another sign. A file's
+    age said it before, and was wrong both ways: a record read 2 s after its run's ``kill
+    -9`` was "still being written", and one read during a run that had written nothing for
+    a while (a long stall ridden through) was "killed". The shared lock is let go at once;
+    a writer starting in that instant would be refused (:class:`FileInUse`) and say so."""
+    if fcntl is None:
+        return None
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_CLOEXEC)
+    except OSError:
+        return None
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+    except OSError as exc:
+        return True if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN) else None
+    finally:
+        os.close(fd)  # and the shared lock with it
+    return False
+
+
 def _open_locked(path: Path) -> tuple[int, bool]:
     """A descriptor of ``path`` for writing, locked, and whether this open made the file.
     The name is checked to still be the locked file: one replaced meanwhile (a writer that

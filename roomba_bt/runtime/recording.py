@@ -53,6 +53,7 @@ import contextlib
 import json
 import logging
 import math
+import os
 import re
 import stat
 import time
@@ -67,7 +68,7 @@ from roomba_bt.oi.encode import BAUD_CODES, command_size, decode_command
 from roomba_bt.oi.errors import EncodeError
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import PROFILES
-from roomba_bt.runtime.claimed import ClaimedFile
+from roomba_bt.runtime.claimed import ClaimedFile, held_by_a_writer
 from roomba_bt.transport.base import Transport
 
 log = logging.getLogger(__name__)
@@ -127,12 +128,15 @@ class RecordingTransport:
             self._stop(exc)
 
     def _stop(self, exc: OSError) -> None:
-        """The file cannot be written: close it (what it holds is a record up to here)."""
+        """The file cannot be written: close it (what it holds is a record up to here),
+        ended by a note that says why, where there is room for one (:func:`_mark_stopped`)."""
         # before the first chunk (the header's write failed: ``--record /dev/full``) there is
         # no t0: 0 s, not now() - now(), which a moving clock made ``-0.000 s``
         t = self._inner.now() - self._t0 if self._t0 is not None else 0.0
-        self.stopped = f"stopped at {t:.3f} s: {exc.strerror or exc}; the file ends there"
+        why = exc.strerror or str(exc)
+        self.stopped = f"stopped at {t:.3f} s: {why}; the file ends there"
         log.warning("%s: --record %s %s (the run goes on)", self.name, self.path, self.stopped)
+        _mark_stopped(self._file, self.path, t, why)
         with contextlib.suppress(OSError):  # its flush fails again; the file is closed
             self._file.close()
 
@@ -219,6 +223,64 @@ class RecordingTransport:
         return getattr(self._inner, name)
 
 
+#: the note that ends a record whose file could no longer be written (its value: why, the
+#: error's words: "File too large", "No space left on device"); the run went on without it
+RECORD_STOPPED = "record_stopped"
+#: how far back from a failed write's end of file a line's end is looked for
+_TAIL_BYTES = 1 << 16
+
+
+def _mark_stopped(file: IO[str], path: str, t: float, why: str) -> bool:
+    """End the record at ``path`` (written through ``file``, whose write just failed) with a
+    :data:`RECORD_STOPPED` note, so that its replay says the recording stopped, not "the run
+    was killed?" (a full disk or ``ulimit -f`` read as a ``kill -9``). A write failed: the
+    room for the note is made by cutting the file back to the end of a whole line at least
+    the note's length before its end (a size limit or a full disk is then not gone past:
+    the bytes were the file's); the few chunks cut are lost. The descriptor is then pointed
+    at the null device, so that what ``file`` still buffers goes nowhere when it is closed
+    (written after the note, it would be a cut line past it). True if the note was
+    written; a device (``/dev/full``) or a file that cannot be read back gets none."""
+    note = json.dumps({"t": round(t, 6), "d": "note", "note": {RECORD_STOPPED: why}}) + "\n"
+    data = note.encode("utf-8")
+    try:
+        fd = file.fileno()
+        held = os.fstat(fd)
+        if not stat.S_ISREG(held.st_mode):
+            return False
+        cut = _line_end_before(path, held, held.st_size - len(data))
+        if cut is None:
+            return False
+        os.ftruncate(fd, cut)
+        os.lseek(fd, cut, os.SEEK_SET)
+        return os.write(fd, data) == len(data)
+    except (OSError, ValueError):
+        return False
+    finally:
+        with contextlib.suppress(OSError, ValueError):
+            nowhere = os.open(os.devnull, os.O_WRONLY)
+            try:
+                os.dup2(nowhere, file.fileno())
+            finally:
+                os.close(nowhere)
+
+
+def _line_end_before(path: str, held: os.stat_result, limit: int) -> int | None:
+    """The offset just past the last newline at or before ``limit`` in the file ``held``
+    (read through ``path``, checked to be the same file), after the header's; None if
+    there is none in the last :data:`_TAIL_BYTES` before it."""
+    if limit <= 0:
+        return None
+    with open(path, "rb") as reader:
+        seen = os.fstat(reader.fileno())
+        if (seen.st_dev, seen.st_ino) != (held.st_dev, held.st_ino):
+            return None
+        start = max(0, limit - _TAIL_BYTES)
+        reader.seek(start)
+        tail = reader.read(limit - start)
+    at = tail.rfind(b"\n")
+    return None if at < 0 else start + at + 1
+
+
 def utc_stamp(moment: datetime) -> str:
     """``2025-03-04T09:12:05Z``: when a run started, as its record's header and the monitor's
     page say it (ISO 8601, UTC, to the second)."""
@@ -281,19 +343,38 @@ class Record:
     size: int = 0
     #: how many bytes the host wrote in the recorded run (its "out" chunks' total)
     out_bytes: int = 0
-    #: no end line, and the file changed in the last :data:`STILL_WRITTEN_S` seconds when it
-    #: was read: a run is most likely writing it still (``--record`` takes no lock to ask)
+    #: no end line, and a run holds the record's lock when it is read (``run --record``'s
+    #: :class:`~roomba_bt.runtime.claimed.ClaimedFile`), or, where no lock can be asked for,
+    #: the file changed in the last :data:`STILL_WRITTEN_S` seconds: a run writes it still
     being_written: bool = False
 
     def unended(self) -> str | None:
-        """Why the record holds no end line (``the run was killed?``), or None when it does."""
+        """Why the record holds no end line, or None when it does: its recording stopped
+        (its :data:`RECORD_STOPPED` note), a run writes it still, or, with no word in the
+        file, its run was killed or its writing failed where no note fitted."""
         if self.ended:
             return None
+        stopped = self.recording_stopped
+        if stopped is not None:
+            return (
+                f"the recording stopped ({stopped}); the run went on without it, and its "
+                "summary said where the record ends"
+            )
         if self.being_written:  # it was said to be killed, or its replay's end its run's
             return STILL_WRITTEN
         if self.header.get("version") == 1:
             return "version 1 records have no end line, or the run was killed"
-        return "the run was killed?"
+        return UNENDED
+
+    @property
+    def recording_stopped(self) -> str | None:
+        """Why the recording stopped before its run's end (the file could not be written:
+        "File too large"), as its last note says; None if it says nothing of it."""
+        for _, note in reversed(self.notes):
+            why = note.get(RECORD_STOPPED)
+            if why is not None:
+                return str(why)
+        return None
 
     @property
     def ending(self) -> dict[str, Any] | None:
@@ -330,12 +411,19 @@ class Record:
         return b"".join(b for _, d, b in self.chunks() if d == "out")
 
 
-#: A record without its end line whose file changed this few seconds before it was read is
-#: taken for one a run is still writing: a run flushes its record every
-#: :data:`FLUSH_EVERY_S` of its link's clock while frames come, and a stall rides through
-#: for ``--grace`` (2 s by default) at most before the run ends.
+#: Where no lock can be asked for (no ``flock``: :func:`_being_written`), a record without
+#: its end line whose file changed this few seconds before it was read is taken for one a
+#: run is still writing: a run flushes its record every :data:`FLUSH_EVERY_S` of its link's
+#: clock while frames come, and a stall rides through for ``--grace`` (2 s by default) at
+#: most before the run ends.
 STILL_WRITTEN_S = 5.0
 STILL_WRITTEN = "the record is still being written (a run in progress?)"
+#: a record without its end line, a run's lock or a word of why: either cause is said (a
+#: record cut by a full disk read as a killed run's, though the run had gone on)
+UNENDED = (
+    "the run was killed, or writing its record failed (a full disk, a file size limit?; "
+    "the run's summary says which)"
+)
 
 
 def load_record(path: str | Path) -> Record:
@@ -385,9 +473,22 @@ def load_record(path: str | Path) -> Record:
         if item[1] == "out":
             record.out_bytes += len(item[2])
     if not record.ended:
-        with contextlib.suppress(OSError):  # read a moment ago: gone since, it is no run's
-            record.being_written = time.time() - path.stat().st_mtime < STILL_WRITTEN_S
+        record.being_written = _being_written(path)
     return record
+
+
+def _being_written(path: Path) -> bool:
+    """Whether a run writes the record at ``path`` now: its lock held (a run 10 minutes in
+    whose file had not changed for 5 s was "killed", a file read 2 s after a ``kill -9``
+    "in progress"); where no lock can be asked for, the file changed in the last
+    :data:`STILL_WRITTEN_S` seconds."""
+    held = held_by_a_writer(path)
+    if held is not None:
+        return held
+    try:
+        return time.time() - path.stat().st_mtime < STILL_WRITTEN_S
+    except OSError:  # read a moment ago: gone since, it is no run's
+        return False
 
 
 #: The longest line of a record (decided): a chunk is one read of the port in hex, a few KB

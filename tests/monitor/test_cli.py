@@ -12,6 +12,7 @@ import socket
 import subprocess
 import sys
 import threading
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -118,10 +119,12 @@ def test_the_url_is_said_once_the_robot_s_port_is_open_with_the_mission_and_robo
 
 
 def test_a_record_still_being_written_is_shown_as_such(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    record_held: Callable[[Path], subprocess.Popen[str]],
 ) -> None:
-    """A record read while its run wrote it was shown as ended ('input ended (recorded
-    run, 829 ticks)'), on the page and on the first line."""
+    """A record read while its run wrote it (the run holds its lock) was shown as ended
+    ('input ended (recorded run, 829 ticks)'), on the page and on the first line."""
     pytest.importorskip("aiohttp")
     record = tmp_path / "live.jsonl"
     main(["run", str(SHUTTLE), "--fast", "--display", "none", "--timeout", "2",
@@ -129,6 +132,7 @@ def test_a_record_still_being_written_is_shown_as_such(
     capsys.readouterr()
     lines = record.read_text(encoding="utf-8").splitlines(keepends=True)
     record.write_text("".join(lines[: len(lines) // 2]), encoding="utf-8")  # written so far
+    record_held(record)
     out, _ = _served_record(record)
     assert re.search(
         rf"{re.escape(str(record))}: the record is still being written \(a run in progress\?\): "

@@ -6,6 +6,9 @@ import json
 import logging
 import os
 import re
+import subprocess
+import sys
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import pytest
@@ -122,7 +125,11 @@ def test_a_killed_runs_record_is_compared_up_to_where_it_ends(
     outbound = sum(len(json.loads(x)["b"]) // 2 for x in lines[1:] if '"out"' in x)
     assert main(["replay", str(_left_a_minute(killed))]) == 0
     out = capsys.readouterr().out
-    assert "replay: the record ends at 1.200 s without the run's end: the run was killed?" in out
+    assert (
+        "replay: the record ends at 1.200 s without the run's end: the run was killed, or "
+        "writing its record failed (a full disk, a file size limit?; the run's summary says "
+        "which)" in out
+    )
     assert f"replay: the tree wrote the same {outbound} bytes up to there" in out
     assert "first difference" not in out
 
@@ -138,7 +145,7 @@ def test_a_killed_runs_record_still_shows_a_difference_before_its_end(
     killed.write_text("".join(lines[:last_out] + lines[last_out + 1 :]), encoding="utf-8")
     assert main(["replay", str(_left_a_minute(killed))]) == 1
     out = capsys.readouterr().out
-    assert "without the run's end: the run was killed?" in out
+    assert "without the run's end: the run was killed, or writing its record failed" in out
     assert "replay: first difference at mission time" in out and "expected nothing, sent" in out
 
 
@@ -169,7 +176,7 @@ def test_a_record_whose_last_line_is_cut_is_replayed_up_to_it(
     out = capsys.readouterr().out
     assert f"{cut}:{number}: the last line is cut short" in caplog.text
     assert f"the record is read up to line {number - 1}" in caplog.text
-    assert "without the run's end: the run was killed?" in out
+    assert "without the run's end: the run was killed, or writing its record failed" in out
     assert "the tree wrote the same" in out and "up to there" in out
 
 
@@ -496,12 +503,19 @@ def test_a_ctrl_c_between_frames_is_still_noted_after_the_last_tick(tmp_path: Pa
 
 
 def test_a_record_a_run_is_still_writing_is_said_to_be_so_not_killed(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    record_held: Callable[[Path], subprocess.Popen[str]],
 ) -> None:
     """A record read while its run wrote it was called killed ('the run was killed?'), and
-    its replay's end the run's: no end line, and the file changed a moment ago."""
+    its replay's end the run's: no end line, and a run holds its lock. Judged by the lock,
+    not the file's age: one unchanged for an hour (a run 10 minutes in, a long stall) is
+    still being written while its run holds it, and one changed a moment ago is not once
+    the run was killed (``kill -9``: its lock went with it); before, the age said both
+    wrong."""
     live = tmp_path / "live.jsonl"
     live.write_text("".join(_killed_at(_recorded_run(tmp_path, capsys), 1.2)), encoding="utf-8")
+    run = record_held(_left_a_minute(live))
     assert load_record(live).being_written
     assert main(["replay", str(live)]) == 0
     out = capsys.readouterr().out
@@ -510,8 +524,59 @@ def test_a_record_a_run_is_still_writing_is_said_to_be_so_not_killed(
         "written (a run in progress?)" in out
     )
     assert "killed" not in out
-    assert not load_record(_left_a_minute(live)).being_written  # a minute on: killed, then
+    run.kill()  # kill -9
+    run.wait()
+    os.utime(live)  # changed a moment ago: read 2 s after the kill
+    assert not load_record(live).being_written
+    assert main(["replay", str(live)]) == 0
+    assert "the run was killed, or writing its record failed" in capsys.readouterr().out
     assert not load_record(tmp_path / "run.jsonl").being_written  # ended: whatever its age
+
+
+def test_where_no_lock_can_be_asked_for_the_record_s_age_says_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Without flock (Windows), a record without its end line that changed in the last
+    seconds is taken for one a run writes, as before the lock was asked."""
+    from roomba_bt.runtime import claimed
+
+    monkeypatch.setattr(claimed, "fcntl", None)
+    live = tmp_path / "live.jsonl"
+    live.write_text("".join(_killed_at(_recorded_run(tmp_path, capsys), 1.2)), encoding="utf-8")
+    assert load_record(live).being_written
+    assert not load_record(_left_a_minute(live)).being_written
+
+
+def test_a_record_cut_short_by_a_file_size_limit_says_so_not_killed(
+    tmp_path: Path, child: Callable[[Sequence[str]], subprocess.Popen[str]]
+) -> None:
+    """``ulimit -f 20``: the recording stopped at 20 KiB while the run went on ("File too
+    large" in its summary), and its replay said "the run was killed?". The record now ends
+    with a note saying why (room made for it by cutting back to a whole line), and replay
+    says the recording stopped."""
+    record = tmp_path / "cut.jsonl"
+    limit = 20 * 1024
+    script = (
+        "import resource, sys\n"
+        f"resource.setrlimit(resource.RLIMIT_FSIZE, ({limit}, {limit}))\n"
+        "from roomba_bt.cli import main\n"
+        "sys.exit(main(sys.argv[1:]))\n"
+    )
+    mission = str(MISSIONS / "bump-and-turn.yaml")
+    run = child([sys.executable, "-c", script, "run", mission, "--fast", "--display", "none",
+                 "-p", "duration=6s", "--record", str(record)])  # fmt: skip
+    out, err = run.communicate(timeout=120)
+    assert run.returncode == 0, err
+    assert "stopped at" in out and "File too large" in out
+    assert record.stat().st_size <= limit
+    lines = record.read_text(encoding="utf-8").splitlines()
+    assert json.loads(lines[-1])["note"] == {"record_stopped": "File too large"}
+    loaded = load_record(record)  # every line whole: nothing cut in the middle of one
+    assert loaded.recording_stopped == "File too large"
+    assert not loaded.being_written
+    unended = loaded.unended()
+    assert unended is not None and unended.startswith("the recording stopped (File too large)")
+    assert "killed" not in unended
 
 
 def test_a_record_names_its_robot_and_start_and_one_without_them_still_loads(
