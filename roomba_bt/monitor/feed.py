@@ -182,9 +182,10 @@ class TickRecord(NamedTuple):
     board: int  # the blackboard's version: RunFeed.boards[board]
     tree: int  # tree generation (a reload starts a new one)
     ticked: bool  # False while paused: the robot is watched, the tree is frozen
-    #: the bytes of the motors' standing command (Motors (138) or PWM Motors (144): what the
-    #: run last wrote to the brushes and vacuum and the robot still obeys), None before any;
-    #: the command's own bytes object, so a tick that changed nothing shares it
+    #: the bytes of the motors' last command (Motors (138) or PWM Motors (144): what the
+    #: run last wrote to the brushes and vacuum, the tree or a halt's motors off, and the
+    #: robot still obeys), None before any; the command's own bytes object, so a tick that
+    #: changed nothing shares it
     motors: bytes | None = None
 
 
@@ -364,7 +365,9 @@ class RunFeed:
         if truth is not None and self.truth_start is None:
             self.truth_start = truth
         ring = self.ring
-        motors = runner.last_sent.get("motors")
+        # what the robot obeys: the last Motors written, the tree's or a batch's (a halt's
+        # motors off), while the channel stands (a fall to Passive stopped them)
+        motors = runner.connection.writer.last_motors if "motors" in runner.last_sent else None
         motor_bytes = motors.data if motors is not None else None
         if snapshot is not None:
             frame = snapshot.frame

@@ -68,6 +68,11 @@ class CommandWriter:
         self.refused = 0
         #: the last wheel command written (Drive, Drive Direct, PWM, a cleaning cycle)
         self.last_wheels: Command | None = None
+        #: the last Motors (138) or PWM Motors (144) written, by the tree or by a batch (the
+        #: safe stop's, the tick guard's, the monitor's pause: their "motors off"): what the
+        #: robot's brushes and vacuum obey, for the monitor's robot panel, which showed the
+        #: tree's last one (the brushes on) after a halt had turned them off
+        self.last_motors: Command | None = None
         #: a Clean/Spot/Max/Seek Dock cycle may be driving
         self.builtin_may_run = False
         #: when the last command was written (link clock)
@@ -105,7 +110,7 @@ class CommandWriter:
         refused: list[Exception] = []
         batch = bytearray()
         # the model follows what was written: if the batch never leaves, it is put back
-        saved = self.modes.snapshot(), self.last_wheels
+        saved = self.modes.snapshot(), self.last_wheels, self.last_motors
         try:
             for command in commands:
                 try:
@@ -118,7 +123,7 @@ class CommandWriter:
                     self.link.write(bytes(batch))
                 except PortLost:
                     self.modes.restore(saved[0])
-                    self.last_wheels = saved[1]
+                    self.last_wheels, self.last_motors = saved[1], saved[2]
                     raise
         if refused:
             for extra in refused[1:]:
@@ -157,8 +162,11 @@ class CommandWriter:
         self.last_command_at = now
         self.recent_commands.append(now)
         self.modes.apply(command, now)
-        if spec.channel == "wheels":
+        channel = spec.channel
+        if channel == "wheels":
             self.last_wheels = command
+        elif channel == "motors":
+            self.last_motors = command
         self.sent += 1
         if effect is not None or spec.leads_to is not None:  # not a plain actuator command
             self._after(command, now)

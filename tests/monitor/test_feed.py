@@ -3,6 +3,7 @@ robot panel's cleaning motors."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -12,12 +13,15 @@ from py_trees.common import Status
 from roomba_bt.mission import load_mission
 from roomba_bt.monitor.feed import RunFeed
 from roomba_bt.monitor.recorded import replay_into_feed
+from roomba_bt.monitor.session import MonitorSession
 from roomba_bt.monitor.views import motors_view, state_view
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.runtime.loop import MissionRunner
 from roomba_bt.runtime.recording import load_record
 from roomba_bt.runtime.stack import Recording, RunStack
+from roomba_bt.runtime.tick_guard import stop_first
 from roomba_bt.sim import SimLink, Simulator, load_world
 
 from .live import feed_of_run
@@ -118,3 +122,63 @@ def test_pwm_motors_show_each_motor_s_power_and_a_pause_shows_them_off() -> None
     assert all(paused[m]["percent"] == 0 for m in ("main_brush", "side_brush", "vacuum"))
     assert paused["note"].startswith("off while paused")
     assert motors_view(None, OIMode.SAFE, ticked=True)["note"].startswith("off: no motor")
+
+
+def _motors_after(
+    halt: Callable[[MissionRunner, MonitorSession], None],
+) -> list[bytes | None]:
+    """The brushes mission with the monitor's session, ``halt`` done in the tick after the
+    tree's Motors went out (the brushes on: the tree sends it once); the motors' bytes the
+    feed keeps for that tick and the frame after it."""
+    mission = load_mission(BRUSHES, {}, profile=CREATE2)
+    feed = RunFeed(history=None, mission_name=mission.name)
+    feed.set_tree(mission.root)
+    session = MonitorSession(feed, simulator=True)
+    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
+    stack = RunStack(mission, link, profile=CREATE2, timeout_s=2.0)
+    stack.runner.gate = session
+    at: list[int] = []
+
+    def observe(runner: MissionRunner) -> None:  # before the session records the tick
+        if "motors" in runner.last_sent and not at:
+            at.append(feed.ring.count)
+        elif len(at) == 1:
+            at.append(feed.ring.count)
+            halt(runner, session)
+
+    stack.runner.observer = observe
+    try:
+        stack.run()
+    finally:
+        stack.close()
+    records = feed.since(0)[0]
+    on = records[at[0]].motors
+    assert on is not None and on[0] == 138 and on[1] != 0  # the brushes on
+    return [record.motors for record in records[at[1] : at[1] + 2]]
+
+
+def test_the_robot_panel_shows_the_motors_a_halt_turned_off() -> None:
+    """The panel showed the tree's last Motors (the brushes on) after the tick guard's or
+    the safe stop's "motors off" (written in one batch, ``send_many``), and in the first
+    frame of a pause, whose snapshot still says Safe: it shows the last Motors written."""
+
+    def tick_guard(runner: MissionRunner, session: MonitorSession) -> None:
+        runner.connection.send_many(stop_first())  # the run's end: halt before the tree's stop
+
+    off = oi.motors_off().data
+    assert _motors_after(tick_guard)[0] == off
+    assert motors_view(off, OIMode.SAFE, ticked=True)["main_brush"]["percent"] == 0
+
+    def pause(runner: MissionRunner, session: MonitorSession) -> None:
+        session.request("pause")  # applied before the next frame's tick, which it records
+        observe = session.feed.observe
+
+        def then_stop(runner: MissionRunner, ticked: bool = True) -> tuple[int, ...]:
+            changed = observe(runner, ticked)
+            if not ticked:  # the paused frame is recorded: the run may end
+                session.request("stop")
+            return changed
+
+        session.feed.observe = then_stop  # type: ignore[method-assign]
+
+    assert _motors_after(pause)[1] == off
