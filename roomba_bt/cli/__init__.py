@@ -106,12 +106,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         return _command(argv)
     except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM/SIGHUP before a run took them
         if process:
-            _signals_end_the_process()
+            _signals_end_the_process()  # only the last words are left
         print(f"roomba-bt: interrupted{_by_signal(exc)}", file=sys.stderr)
         return ExitCode.INTERRUPTED
     finally:
         if process:
-            _signals_end_the_process()
+            _signals_end_the_process()  # the command's answer is out
             problem = stdout_problem()
             if problem is not None:
                 print(f"roomba-bt: {problem}", file=sys.stderr)
@@ -161,19 +161,11 @@ def _as_the_process() -> None:
 
 
 def _signals_end_the_process() -> None:
-    """The command's answer is out (a robot stopped): Ctrl-C, SIGTERM and SIGHUP end the
-    process at once from here on, their default action (exit 128 + the signal's number),
-    one started ignored (``nohup``) aside. Only the last writes remain, and a stdout nobody
-    reads (a ``less`` left unscrolled, a frozen SSH session) held them, and the process,
-    for as long: Ctrl-C was ignored then, so that only SIGKILL ended it; a Python handler
-    cannot run while another thread holds the stream's lock in a blocked write."""
-    from roomba_bt.robot.safety import IGNORED_AT_START
+    """The ending signals end the process at once from here on: the command's answer is out,
+    and a run's port and record closed (:func:`~roomba_bt.robot.safety.signals_end_the_process`)."""
+    from roomba_bt.robot.safety import signals_end_the_process
 
-    for name in ("SIGINT", "SIGTERM", "SIGHUP"):
-        signum = getattr(signal, name, None)
-        if signum is not None and signum not in IGNORED_AT_START:
-            with contextlib.suppress(ValueError):  # not the main thread
-                signal.signal(signum, signal.SIG_DFL)
+    signals_end_the_process()
 
 
 def _by_signal(exc: KeyboardInterrupt) -> str:

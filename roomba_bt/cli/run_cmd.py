@@ -33,6 +33,7 @@ from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.printable import ANY_CONTROL, encodes, escaped
 from roomba_bt.robot.errors import DEFAULT_WATCHDOG
+from roomba_bt.robot.safety import signals_end_the_process
 from roomba_bt.runtime.summary import DEFAULT_GRACE, DEFAULT_TICK_LIMIT, ExitCode, Outcome
 
 if TYPE_CHECKING:
@@ -475,8 +476,8 @@ def _run_and_report(
     if not quiet:
         print(_render_tree(mission), flush=True)
     stack.runner.gate = monitor.session if monitor is not None else None
-    # after the safe stop: a signal ends the process at once (the robot is stopped), so that
-    # a report blocked on a pipe nobody reads can still be ended (robot/safety.py)
+    # after the safe stop a signal is ignored until the run is closed, then ends the process
+    # (robot/safety.py, InterruptGuard)
     stack.runner.hold_interrupts = True
     # on the virtual clock nothing drives meanwhile: Ctrl-Z suspends, Ctrl-\ quits
     stack.runner.on_wall_clock = not args.fast
@@ -493,6 +494,10 @@ def _run_and_report(
             monitor.finish(stack.runner.summary)
     try:
         stack.close()
+        # the record's end note is out, the monitor shut down, the port closed (its exclusive
+        # mode cleared) and an undelivered stop tried again: a signal now ends the process,
+        # so that a report blocked on a pipe nobody reads can still be ended
+        signals_end_the_process()
         _report(args, stack, summary, observer, simulator)
         return summary.exit_code
     finally:

@@ -135,6 +135,10 @@ SAFE_STOP_UNDER_WAY = "the safe stop is under way"
 #: ... and what the run's reason says such a signal came during (``... during the safe stop``)
 THE_SAFE_STOP = "the safe stop"
 
+#: What a held run does once it has returned (:class:`InterruptGuard`'s ``hold``), as a
+#: Ctrl-C or SIGTERM meanwhile says it
+CLOSING_UNDER_WAY = "the run's record, monitor and port are being closed"
+
 #: What a signal came during, as the run's reason says it: a text, or what makes it from the
 #: main thread's frame when the signal came (the behaviour it was in: a ``terminate()``)
 During = str | Callable[[FrameType | None], str]
@@ -162,6 +166,23 @@ def _waiting(doing: str, raises: bool) -> bytes:
     return f"roomba-bt: {doing}; waiting for it to end ({then})\n".encode()
 
 
+def signals_end_the_process() -> None:
+    """From now on the ending signals (:data:`ENDING_SIGNALS`) end the process at once, with
+    their default action (exit 128 + the signal's number), those :data:`IGNORED_AT_START`
+    aside; the terminal's stops are left as they are.
+
+    The CLI's, for its last writes alone, once nothing a robot or the next run needs is left
+    (after a run: the record's end note written, the monitor shut down, the port closed and
+    its exclusive mode cleared, the stop tried again if it was not delivered). A report
+    written to a stdout nobody reads (a ``less`` left unscrolled, a frozen SSH session)
+    blocks, and signals held then left a process only SIGKILL could end; a signal's default
+    action ends it even while another thread holds the stream's lock in a blocked write,
+    which no Python handler can."""
+    for signum in _taken(ENDING_SIGNALS):
+        with contextlib.suppress(ValueError):  # not the main thread
+            signal.signal(signum, signal.SIG_DFL)
+
+
 class InterruptGuard:
     """Ctrl-C and SIGTERM end a run once: the first raises (:class:`KeyboardInterrupt`,
     :class:`Terminated`), and once :meth:`stopping` was called (the safe stop began) every
@@ -173,14 +194,16 @@ class InterruptGuard:
     message printed meanwhile says), not only summarised.
 
     Used as a context manager around a run; the previous handlers come back on the way out,
-    or with ``hold`` the signals take their default action until :meth:`release` (the CLI:
-    its summary is still to be printed). Default, not ignored (decided): the robot is stopped
-    by then, and a summary written to a terminal or pipe that takes nothing (a ``less``
-    nobody scrolls, a frozen SSH session) blocked for as long, TERM, INT and HUP ignored, so
-    that only SIGKILL ended it. A signal's default action ends the process even in the
-    middle of a write another thread holds the stream's lock for, which no Python handler
-    can. The terminal's stops (:data:`TERMINAL_STOP_SIGNALS`) stay ignored: a summary
-    written from the background goes out. Signal handlers belong to the main thread:
+    or with ``hold`` every signal stays noted and ignored after it, until :meth:`release`
+    (the CLI: the record's end note, the monitor's shutdown and the port's close are still to
+    come, then the summary). Ignored there, not ended by (decided): the port's close clears
+    its kernel exclusive mode (``TIOCEXCL``), which a process ended before it leaves set on
+    a simulator's pty, refusing the next run until the simulator restarts; a stop that was
+    not delivered is tried again there, the robot's last chance; and the record's end note
+    tells replay how the run ended. Only then, around the report alone, does the CLI let the
+    signals end the process (:func:`signals_end_the_process`). The terminal's stops
+    (:data:`TERMINAL_STOP_SIGNALS`) stay ignored: a summary written from the background
+    goes out. Signal handlers belong to the main thread:
     elsewhere it does nothing.
     """
 
@@ -217,6 +240,9 @@ class InterruptGuard:
         #: what the run was doing when :attr:`late` came (:meth:`stopping`'s ``during``)
         self.late_during = THE_SAFE_STOP
         self.ignored = 0
+        #: the held run has returned: a signal now is ignored, never kept as :attr:`late`
+        self.closing = False
+        self._said = False  # the message for what is under way now
         self._previous: dict[int, object] = {}
 
     def stopping(self, doing: str = SAFE_STOP_UNDER_WAY, during: During = THE_SAFE_STOP) -> None:
@@ -231,11 +257,12 @@ class InterruptGuard:
     def _handle(self, signum: int, frame: FrameType | None) -> None:
         if self.stop_begun:
             self.ignored += 1
-            if not self.raised and self.late is None:
+            if not self.raised and self.late is None and not self.closing:
                 self.late = signum  # not lost: raised or reported once the stop is done
                 during = self._during
                 self.late_during = during(frame) if callable(during) else during
-            if self.ignored == 1:
+            if not self._said:
+                self._said = True
                 say_if_room(2, self._waiting)
             return
         self.stop_begun = self.raised = True  # the run now unwinds into its safe stop
@@ -259,10 +286,10 @@ class InterruptGuard:
         return self
 
     def __exit__(self, *exc_info: object) -> None:
-        if self.hold:  # the robot is stopped: a signal now ends the process, as by default
-            for signum in self._previous:
-                action = signal.SIG_IGN if signum in self.ignoring else signal.SIG_DFL
-                signal.signal(signum, action)
+        if self.hold:  # still ignored, said once more: the run's closing is under way
+            self.stop_begun = self.closing = True
+            self._waiting = _waiting(CLOSING_UNDER_WAY, self.raises)
+            self._said = False
             return
         self.release()
 
