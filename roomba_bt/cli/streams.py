@@ -27,28 +27,42 @@ import sys
 import threading
 from typing import Any, TextIO, cast
 
+#: Why a stream takes no text: its descriptor was closed before the process started (``>&-``)
+CLOSED = "closed"
+
 
 class GuardedStream:
     """A text stream whose ``write`` and ``flush`` never raise: the first failure is kept in
     :attr:`failure`, and from then on the text is dropped. Everything else (``encoding``,
-    ``isatty``, ``fileno``...) is the wrapped stream's."""
+    ``isatty``, ``fileno``...) is the wrapped stream's.
 
-    def __init__(self, stream: TextIO, name: str, failure: str | None = None) -> None:
+    ``closed``: the process's descriptor was closed (``>&-``) and ``stream`` stands in for
+    it; it fails at the first text written to it, not before: a command that printed nothing
+    there (``validate -q``) lost nothing, and says nothing about it."""
+
+    def __init__(self, stream: TextIO, name: str, *, closed: bool = False) -> None:
         self.stream = stream
         self.name = name
         #: why the stream takes no more text (``Broken pipe``, ``No space left on device``,
-        #: ``closed``); None while it works
-        self.failure = failure
+        #: :data:`CLOSED`, ``I/O operation on closed file.``); None while it works
+        self.failure: str | None = None
         #: the failure is the reader gone (EPIPE: ``| head``), which Unix programs keep quiet
         self.reader_gone = False
         #: the command said the failure itself (a run: its outcome on stderr instead)
         self.failure_said = False
+        self._closed = closed
         self._lock = threading.Lock()
 
     def write(self, text: str) -> int:
-        if self.failure is None:
+        if self.failure is None and text:
+            if self._closed:
+                self.failure = CLOSED
+                return len(text)
             try:
-                return self.stream.write(text)
+                try:
+                    return self.stream.write(text)
+                except UnicodeEncodeError:  # a stream reconfigure() could not set errors= on
+                    self.stream.write(_encodable(text, self.stream))
             except (OSError, ValueError) as exc:
                 self._failed(exc)
         return len(text)
@@ -67,7 +81,7 @@ class GuardedStream:
     def __getattr__(self, name: str) -> Any:
         return getattr(self.stream, name)
 
-    def _failed(self, exc: BaseException) -> None:
+    def _failed(self, exc: OSError | ValueError) -> None:
         """Note why, and point the descriptor at ``os.devnull``: the wrapped stream's buffer
         still holds what it could not write, which its next flush (the interpreter's, at
         exit) would fail on again ("Exception ignored ... BrokenPipeError", exit 120)."""
@@ -77,9 +91,19 @@ class GuardedStream:
             self.reader_gone = isinstance(exc, BrokenPipeError)
             if isinstance(exc, OSError):
                 self.failure = exc.strerror or str(exc)
-            else:
-                self.failure = "closed"
+            else:  # the stream closed under us (``I/O operation on closed file.``), or other
+                self.failure = str(exc) or type(exc).__name__
             discard(self.stream)
+
+
+def _encodable(text: str, stream: TextIO) -> str:
+    """``text`` with what ``stream``'s encoding lacks written as ``\\u2713``, as
+    ``errors="backslashreplace"`` writes it."""
+    encoding = getattr(stream, "encoding", None) or "ascii"
+    try:
+        return text.encode(encoding, "backslashreplace").decode(encoding)
+    except LookupError:  # an encoding Python does not know: ASCII, which every one has
+        return text.encode("ascii", "backslashreplace").decode("ascii")
 
 
 def discard(stream: TextIO) -> None:
@@ -96,10 +120,11 @@ def discard(stream: TextIO) -> None:
 
 def _opened(stream: TextIO | None, name: str) -> GuardedStream:
     """``stream`` guarded; None (the descriptor was closed: ``>&-``) is ``os.devnull``, failed
-    from the start, so py_trees, logging and the report find a stream."""
+    at its first text (:class:`GuardedStream`'s ``closed``), so py_trees, logging and the
+    report find a stream."""
     if stream is None:
         devnull = open(os.devnull, "w", encoding="utf-8")  # noqa: SIM115 (the process's)
-        return GuardedStream(devnull, name, failure="closed")
+        return GuardedStream(devnull, name, closed=True)
     reconfigure = getattr(stream, "reconfigure", None)
     if reconfigure is not None:
         with contextlib.suppress(ValueError, OSError):  # a stream of another kind
@@ -141,6 +166,6 @@ def stdout_problem() -> str | None:
         return None
     if stdout.reader_gone or stdout.failure_said:
         return None
-    if stdout.failure == "closed":
+    if stdout.failure == CLOSED:
         return "stdout is closed: what the command printed there is lost"
     return f"cannot write to stdout ({stdout.failure}): the rest of the output is lost"

@@ -10,6 +10,7 @@ timing: a pipe's reader is closed before the process starts, or its buffer fille
 from __future__ import annotations
 
 import fcntl
+import io
 import os
 import signal
 import subprocess
@@ -26,6 +27,7 @@ from roomba_bt.cli import main
 from roomba_bt.runtime.recording import load_record
 
 CLI = [sys.executable, "-m", "roomba_bt.cli"]
+DOCK = Path(__file__).resolve().parents[2] / "missions" / "dock.yaml"
 
 MISSION = SHORT_DRIVE
 
@@ -128,6 +130,49 @@ def test_a_closed_stdout_is_no_traceback(tmp_path: Path, args: list[str], code: 
     assert "stdout is closed" in done.stderr or "lost with stdout (closed)" in done.stderr
     if args[0] == "run":
         assert "outcome SUCCESS" in done.stderr
+
+
+def test_a_closed_stdout_nothing_was_printed_to_is_not_said(tmp_path: Path) -> None:
+    """``validate -q dock.yaml >&-`` from cron: nothing was printed to stdout, so nothing was
+    lost, yet every run said "stdout is closed: what the command printed there is lost"."""
+    done = subprocess.run(
+        [*CLI, "validate", "-q", str(DOCK)], stderr=subprocess.PIPE, stdin=subprocess.DEVNULL,
+        text=True, cwd=tmp_path, env=_env(), preexec_fn=_closed_stdout, timeout=120,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert done.stderr == ""
+
+
+def test_a_character_the_stream_cannot_encode_is_escaped_not_a_closed_stream() -> None:
+    """A stream ``reconfigure`` could not set ``errors=`` on raised UnicodeEncodeError (a
+    ValueError) at ``✓``: the guard called that "closed" and dropped all the rest."""
+    from roomba_bt.cli.streams import GuardedStream
+
+    raw = io.BytesIO()
+    guarded = GuardedStream(io.TextIOWrapper(raw, encoding="ascii"), "stdout")
+    guarded.write("\u2713 ok\n")
+    guarded.write("done\n")
+    guarded.flush()
+    assert guarded.failure is None
+    assert raw.getvalue() == b"\\u2713 ok\ndone\n"
+
+
+def test_a_stream_closed_under_the_command_is_said_as_it_failed(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A stream a program closed (``I/O operation on closed file.``) is not a descriptor
+    closed before the process started (``>&-``): the end of the command says which."""
+    from roomba_bt.cli import streams
+
+    wrapped = io.TextIOWrapper(io.BytesIO(), encoding="utf-8")
+    wrapped.close()
+    guarded = streams.GuardedStream(wrapped, "stdout")
+    guarded.write("summary\n")
+    assert guarded.failure == "I/O operation on closed file."
+    monkeypatch.setattr(sys, "stdout", guarded)
+    assert streams.stdout_problem() == (
+        "cannot write to stdout (I/O operation on closed file.): the rest of the output is lost"
+    )
 
 
 def test_a_full_disk_on_stdout_is_one_line_and_the_outcomes_exit_code(tmp_path: Path) -> None:
