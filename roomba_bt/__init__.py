@@ -44,7 +44,7 @@ if TYPE_CHECKING:
     from roomba_bt.sim import RealtimeSimLink, SimLink, Simulator, load_world
     from roomba_bt.transport import SerialTransport, Transport
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 
 __all__ = [
     "CREATE2",

@@ -70,3 +70,19 @@ def test_import_roomba_bt_loads_no_layer() -> None:
     loaded, taken = output.splitlines()
     assert loaded == "['roomba_bt', 'roomba_bt._lazy']"
     assert taken == "roomba_bt.runtime.summary False"
+
+
+def test_the_version_is_written_once_and_is_past_the_previous_release_s() -> None:
+    """Both builds said 0.1.0 (``--version``, eval's ``roomba_bt_version``, the wheel's name)
+    after a release of breaking changes (the previous, e80f20a, and this one): nobody could
+    tell which build made a result file. The version is written in ``__version__`` alone
+    (``pyproject.toml`` reads it from there), as MAJOR.MINOR.PATCH, past 0.1.0."""
+    import tomllib
+
+    pyproject = tomllib.loads((INIT.parents[1] / "pyproject.toml").read_text(encoding="utf-8"))
+    assert "version" not in pyproject["project"] and "version" in pyproject["project"]["dynamic"]
+    assert pyproject["tool"]["setuptools"]["dynamic"]["version"] == {
+        "attr": "roomba_bt.__version__"
+    }
+    release = tuple(int(part) for part in roomba_bt.__version__.split("."))
+    assert len(release) == 3 and release > (0, 1, 0)
