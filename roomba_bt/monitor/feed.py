@@ -277,12 +277,12 @@ class RunFeed:
     ) -> None:
         #: the run's identity, sent in the page's first message and checked with each
         #: control: a page left open after its run was killed reconnected to the next run
-        #: served on that port (another robot, perhaps) and its controls drove that one. A
-        #: new random id each feed (each run, each record served); ``robot`` says which robot
-        #: (its port, or ``simulator WORLD``) and ``started`` when (UTC)
+        #: served on that port (another robot, perhaps) and its controls drove that one. A new
+        #: random id each feed; ``robot``: its port, or ``simulator WORLD``; ``started``, UTC
+        #: (None for a record made before its header held it: unknown, not the monitor's)
         self.run_id = secrets.token_urlsafe(12)
         self.robot = robot
-        self.started = started if started is not None else datetime.now(UTC)
+        self.started = started if started or source == "record" else datetime.now(UTC)
         #: the frames' layouts (one per stream: a record names its layout by index)
         self.layouts: list[FrameLayout] = []
         if packed:  # every tick, packed (a recorded run's: monitor/history.py)

@@ -630,3 +630,32 @@ def test_a_record_s_page_names_the_robot_and_start_its_header_gives(tmp_path: Pa
     shown = run_view(feed)
     assert shown["robot"] == "simulator empty-room"
     assert shown["started"] == header["started"]
+
+
+def test_a_record_made_before_it_held_its_start_shows_the_start_unknown(
+    tmp_path: Path,
+) -> None:
+    """A record made before the header held ``started`` showed the time the monitor was
+    opened as the run's start (a record of 00:30:08 "started" at 00:31:30); the robot it
+    does not name either was shown as unknown (empty) already."""
+    from roomba_bt.mission import load_mission
+    from roomba_bt.monitor.recorded import replay_into_feed
+    from roomba_bt.monitor.views import run_view
+    from roomba_bt.oi.profiles import CREATE2
+    from roomba_bt.runtime.recording import load_record
+
+    from .live import replayed_record
+
+    made = tmp_path / "shuttle.jsonl"
+    replayed_record(SHUTTLE, "1s", made)
+    lines = made.read_text(encoding="utf-8").splitlines(keepends=True)
+    header = json.loads(lines[0])
+    older = tmp_path / "older.jsonl"
+    before = {k: v for k, v in header.items() if k not in ("port", "started")}
+    older.write_text("".join([json.dumps(before) + "\n", *lines[1:]]), encoding="utf-8")
+    record = load_record(older)
+    mission = load_mission(SHUTTLE, {}, profile=CREATE2)
+    packets = tuple(record.header["packets"])
+    feed, _ = replay_into_feed(record, mission, CREATE2, packets, 115200, "older")
+    shown = run_view(feed)
+    assert shown["started"] == "" and shown["robot"] == ""

@@ -604,7 +604,9 @@ function hello(header) {
   view.header = header; view.world = header.world;
   $("mission").textContent = header.mission;
   $("robot-name").textContent = run.robot ? "on " + run.robot : "";
-  $("robot-name").title = `run started ${clockOf(run.started)} (${run.started})`;
+  // a record made before its header held the start: unknown, not the time the page opened
+  $("robot-name").title = run.started ? `run started ${clockOf(run.started)} (${run.started})`
+    : "the run's start is unknown (its record was made before records held it)";
   document.title = `${header.mission}${run.robot ? " on " + run.robot : ""} · roomba-bt monitor`;
   $("source").textContent = header.source;
   view.window = [header.first_tick, header.last_tick];
