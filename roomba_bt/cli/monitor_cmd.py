@@ -464,6 +464,7 @@ def monitor_command(args: argparse.Namespace) -> int:
         return ExitCode.INVALID
     from roomba_bt.monitor.recorded import replay_into_feed
     from roomba_bt.monitor.server import MonitorServer
+    from roomba_bt.runtime.provenance import changed_sources
 
     host, port = args.monitor or parse_address(None)
     taken = bind_problem(host, port) if port else None
@@ -482,10 +483,15 @@ def monitor_command(args: argparse.Namespace) -> int:
     if isinstance(recorded, int):
         return recorded
     record, mission, profile, baud, packets = recorded
+
+    def diverged_at(text: str) -> None:
+        """Where the replay diverged, and each file changed since the record was made."""
+        for line in (text, *changed_sources(record.header, mission.files)):
+            print(f"monitor: {args.record}: {line}", file=sys.stderr)
+
     feed, _ = replay_into_feed(
         record, mission, profile, packets, baud, args.record,
-        progress=replay_progress("monitor", record),
-        diverged_at=lambda text: print(f"monitor: {args.record}: {text}", file=sys.stderr),
+        progress=replay_progress("monitor", record), diverged_at=diverged_at,
     )  # fmt: skip
     server = MonitorServer(feed, None, host=host, port=port, readonly=True)
     try:

@@ -327,6 +327,7 @@ def _stack(
 ) -> RunStack:
     """The run's stack as the options say (OSError: the --record file cannot be written);
     ``claimed``: the --record file, claimed at the run's start."""
+    from roomba_bt.runtime.provenance import source_digests
     from roomba_bt.runtime.recording import utc_stamp
     from roomba_bt.runtime.stack import Recording, RunStack
 
@@ -334,7 +335,8 @@ def _stack(
     if args.record:
         record = Recording(
             args.record, str(Path(args.mission).resolve()), params,
-            port=args.robot, started=utc_stamp(args.started), claimed=claimed,
+            port=args.robot, started=utc_stamp(args.started),
+            sources=source_digests(mission.files), claimed=claimed,
         )  # fmt: skip
     stack = RunStack(
         mission,
@@ -673,7 +675,11 @@ def load_recorded(args: argparse.Namespace) -> Recorded | int:
     mission_path = args.mission or header.get("mission")
     found = mission_file(str(mission_path)) if mission_path else None
     if not isinstance(found, str):
-        return _error(f"{args.record}: mission {mission_path!r} not found; pass --mission FILE")
+        shipped = None if args.mission else shipped_mission_at(mission_path)
+        also = f", or --mission {shipped} (the shipped mission it was)" if shipped else ""
+        return _error(
+            f"{args.record}: mission {mission_path!r} not found; pass --mission FILE{also}"
+        )
     params = {name: str(value) for name, value in (header.get("parameters") or {}).items()}
     extra = parse_params(args.param)
     if isinstance(extra, str):
@@ -689,8 +695,23 @@ def load_recorded(args: argparse.Namespace) -> Recorded | int:
     return Recorded(record, mission, profile, baud, packets)
 
 
+def shipped_mission_at(path: object) -> str | None:
+    """The shipped mission's name a recorded mission path shows it was (a record of
+    ``run dock`` holds ``.../site-packages/roomba_bt/missions/dock.yaml``: a moved venv or a
+    new Python loses the path, not the mission), or None."""
+    from roomba_bt.mission.shipped import shipped_missions
+
+    if not isinstance(path, str):
+        return None
+    where = Path(path)
+    if (where.parent.name, where.parent.parent.name) != ("missions", "roomba_bt"):
+        return None
+    return where.stem if where.suffix == ".yaml" and where.stem in shipped_missions() else None
+
+
 def replay_command(args: argparse.Namespace) -> int:
     from roomba_bt.monitor.recorded import operator_replay
+    from roomba_bt.runtime.provenance import changed_sources
     from roomba_bt.runtime.recording import ending_text
     from roomba_bt.runtime.stack import replay_record
 
@@ -724,6 +745,8 @@ def replay_command(args: argparse.Namespace) -> int:
         f"replay: first difference at mission time {summary.mission_time_s:.3f} s "
         f"(byte {offset} of {record.out_bytes} recorded): expected {expected}, sent {sent}"
     )
+    for changed in changed_sources(record.header, recorded.mission.files):
+        print(f"replay: {changed}")
     unplayed = operator_acts(record)
     if unplayed:
         print(

@@ -2,9 +2,11 @@
 
 A record is JSON Lines, one object a line::
 
-    {"format": "roomba-bt-record", "version": 2, "profile": "create2", "baud": 115200,
-     "mission": "missions/dock.yaml", "parameters": {...}, "packets": [7, 9, ...],
-     "watchdog": 0.1, "grace": 2.0, "port": "/dev/ttyUSB0", "started": "2025-03-04T09:12:05Z"}
+    {"format": "roomba-bt-record", "version": 2, "roomba_bt_version": "0.2.0",
+     "profile": "create2", "baud": 115200, "mission": "/home/me/missions/dock.yaml",
+     "parameters": {...}, "packets": [7, 9, ...], "watchdog": 0.1, "grace": 2.0,
+     "port": "/dev/ttyUSB0", "started": "2025-03-04T09:12:05Z",
+     "sources": {"/home/me/missions/dock.yaml": "9f86d0...", "roomba-bt:lib/docking.yaml": ...}}
     {"t": 0.000000, "d": "out", "b": "80"}          <- host -> robot, hex
     {"t": 0.015012, "d": "in",  "b": "1305..."}     <- robot -> host, hex
     {"t": 3.120000, "d": "note", "note": {...}}     <- an act: the monitor's force, the tick
@@ -20,6 +22,10 @@ replay ends an interrupted run (the monitor's stop, Ctrl-C, ``stack.stop()``) or
 one where it ended, where before it ticked the tree on past it (the tree wrote a command where
 the record holds the safe stop: a difference at the record's last bytes). A record without it
 (made before) is replayed as before.
+
+The header names the roomba-bt release that made the record (``roomba_bt_version``) and the
+SHA-256 of each file its mission was compiled from (``sources``, ``runtime/provenance.py``):
+a replay that differs names the files changed since. A record made before has neither.
 
 The header also holds the run's ``watchdog`` and ``grace`` (seconds), and each watchdog trip
 is a note (``{"watchdog": 0.101, "limit": 0.1}``, at the link time it tripped): a replay's
@@ -64,6 +70,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import IO, Any
 
+from roomba_bt import __version__
 from roomba_bt.oi.encode import BAUD_CODES, command_size, decode_command
 from roomba_bt.oi.errors import EncodeError
 from roomba_bt.oi.packets import PACKETS
@@ -77,6 +84,11 @@ RECORD_FORMAT = "roomba-bt-record"
 RECORD_VERSION = 2
 #: the versions this roomba-bt reads: 1 is 2 without the end line
 READ_VERSIONS = (1, 2)
+#: the header field naming the roomba-bt release that made the record (none before 0.2.0,
+#: whose records could not say which build made them)
+MADE_BY = "roomba_bt_version"
+#: the header field holding the SHA-256 of each file the mission was compiled from
+SOURCES = "sources"
 
 #: Seconds of the link's clock between two flushes of the record to the operating system: a
 #: run killed outright (``kill -9``, the OOM killer) loses at most this much of its record.
@@ -113,7 +125,7 @@ class RecordingTransport:
         self._t0: float | None = None
         #: why and when the recording stopped before the run's end (None: it did not)
         self.stopped: str | None = None
-        head = {"format": RECORD_FORMAT, "version": RECORD_VERSION, **header}
+        head = {"format": RECORD_FORMAT, "version": RECORD_VERSION, MADE_BY: __version__, **header}
         self._flushed_at = -math.inf  # the header goes out at once, and the first chunk
         self._put(json.dumps(head) + "\n", 0.0)
 
@@ -617,10 +629,15 @@ def header_problem(header: dict[str, Any]) -> str | None:
         seconds = header.get(name, 0.0)
         if type(seconds) not in (int, float) or not 0.0 <= seconds < math.inf:
             return f"header field {name!r} is {seconds!r}; expected seconds, 0 or more"
-    for name in ("port", "started"):  # which robot, and when (UTC): said, not replayed
+    for name in ("port", "started", MADE_BY):  # which robot, when (UTC), which roomba-bt
         text = header.get(name)
         if text is not None and not isinstance(text, str):
             return f"header field {name!r} is {text!r}; expected text"
+    sources = header.get(SOURCES, {})
+    if not isinstance(sources, dict) or not all(
+        isinstance(k, str) and isinstance(v, str) for k, v in sources.items()
+    ):
+        return f"header field {SOURCES!r} is {sources!r}; expected {{file: SHA-256}}"
     packets = header.get("packets")
     if not isinstance(packets, list) or not packets:
         return 'the header lists no stream packets ("packets")'

@@ -44,6 +44,7 @@ from roomba_bt.runtime.loop import (
 from roomba_bt.runtime.recording import (
     ENDED,
     ENDED_FROM_OUTSIDE,
+    SOURCES,
     Record,
     RecordingTransport,
     ReplayTransport,
@@ -112,6 +113,10 @@ class Recording:
     #: Neither is read by a replay; a header without them (a record made before) loads.
     port: str | None = None
     started: str | None = None
+    #: the SHA-256 of each file the mission was compiled from, the mission file first
+    #: (:func:`~roomba_bt.runtime.provenance.source_digests`): a replay that differs names
+    #: the ones changed since. Empty: none written (a tree built in Python has no files)
+    sources: Mapping[str, str] = field(default_factory=dict)
     #: ``path`` claimed already for this run (``run`` does, before it opens the robot, so a
     #: path another run writes is refused first); None: the record claims it when made
     claimed: ClaimedFile | None = field(default=None, compare=False)
@@ -132,6 +137,7 @@ class Recording:
             "grace": grace,
             **({"port": self.port} if self.port is not None else {}),
             **({"started": self.started} if self.started is not None else {}),
+            **({SOURCES: dict(self.sources)} if self.sources else {}),
         }
 
 

@@ -619,3 +619,124 @@ def test_a_record_that_fails_at_its_header_stopped_at_zero_not_minus_zero() -> N
     recording = RecordingTransport(_MovingClock(), "/dev/full", {})  # type: ignore[arg-type]
     assert recording.stopped is not None
     assert recording.stopped.startswith("stopped at 0.000 s: No space left on device")
+
+
+def _mission_with_a_library(folder: Path, velocity: str) -> Path:
+    """A mission driving by a subtree of its own library, which also includes the shipped
+    undock library; the library's drive at ``velocity``."""
+    (folder / "moves.yaml").write_text(
+        f"subtrees:\n  forward:\n    tree: {{drive: {{velocity: {velocity}, distance: 10cm}}}}\n",
+        encoding="utf-8",
+    )
+    mission = folder / "trip.yaml"
+    mission.write_text(
+        "include: [moves.yaml, 'roomba-bt:lib/undock.yaml']\n"
+        "tree:\n"
+        "  sequence:\n"
+        "    - subtree: undock\n"
+        "    - mode: safe\n"
+        "    - subtree: forward\n",
+        encoding="utf-8",
+    )
+    return mission
+
+
+def test_a_record_names_the_roomba_bt_that_made_it_and_each_file_its_mission_came_from(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Records carried no version and nothing of the files they were made with: an owner
+    could not tell which build made a file, nor that a shipped library had changed since."""
+    import hashlib
+
+    from roomba_bt import __version__
+    from roomba_bt.mission.shipped import SHIPPED_DIR
+
+    mission = _mission_with_a_library(tmp_path, "200 mm/s")
+    record = tmp_path / "trip.jsonl"
+    argv = ["run", str(mission), "--fast", "--display", "none", "--record", str(record)]
+    assert main(argv) == 0
+    capsys.readouterr()
+    header = json.loads(record.read_text(encoding="utf-8").splitlines()[0])
+    assert header["roomba_bt_version"] == __version__
+    undock = (SHIPPED_DIR / "lib" / "undock.yaml").read_bytes()
+    assert header["sources"] == {
+        str(mission.resolve()): hashlib.sha256(mission.read_bytes()).hexdigest(),
+        str((tmp_path / "moves.yaml").resolve()): hashlib.sha256(
+            (tmp_path / "moves.yaml").read_bytes()
+        ).hexdigest(),
+        "roomba-bt:lib/undock.yaml": hashlib.sha256(undock).hexdigest(),
+    }
+    assert next(iter(header["sources"])) == str(mission.resolve())  # the mission's first
+    bad = tmp_path / "bad.jsonl"
+    lines = record.read_text(encoding="utf-8").splitlines(keepends=True)
+    bad.write_text("".join([json.dumps({**header, "sources": ["x"]}) + "\n", *lines[1:]]))
+    assert main(["replay", str(bad)]) == 2
+    assert f"{bad}:1: header field 'sources' is ['x']; expected {{file: SHA-256}}" in (
+        capsys.readouterr().err
+    )
+
+
+def test_a_replay_that_differs_names_the_files_changed_since_the_record_was_made(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An old record of a mission including the shipped undock library differed on replay
+    once the library changed (``expected Drive ... sent Drive 0``), and nothing said why:
+    the owner hunted for a change in their own mission. A record made before (no digests)
+    says nothing more than it did."""
+    mission = _mission_with_a_library(tmp_path, "200 mm/s")
+    record = tmp_path / "trip.jsonl"
+    argv = ["run", str(mission), "--fast", "--display", "none", "--record", str(record)]
+    assert main(argv) == 0
+    capsys.readouterr()
+    # the record as a previous release would have made it: another undock library
+    lines = record.read_text(encoding="utf-8").splitlines(keepends=True)
+    header = json.loads(lines[0])
+    header["roomba_bt_version"] = "0.1.0"
+    header["sources"]["roomba-bt:lib/undock.yaml"] = "0" * 64
+    record.write_text("".join([json.dumps(header) + "\n", *lines[1:]]), encoding="utf-8")
+    _mission_with_a_library(tmp_path, "150 mm/s")  # and the owner's library changed since
+    from roomba_bt import __version__
+
+    assert main(["replay", str(record)]) == 1
+    out = capsys.readouterr().out
+    assert "replay: first difference at" in out
+    moves = (tmp_path / "moves.yaml").resolve()
+    assert (
+        f"replay: {moves} changed since this record was made: a difference may come from it" in out
+    )
+    assert (
+        f"replay: roomba-bt:lib/undock.yaml changed since this record was made (roomba-bt "
+        f"0.1.0 -> {__version__}): a difference may come from it" in out
+    )
+    assert str(mission.resolve()) not in out  # the mission file itself is as it was
+    older = tmp_path / "older.jsonl"
+    before = {k: v for k, v in header.items() if k not in ("roomba_bt_version", "sources")}
+    older.write_text("".join([json.dumps(before) + "\n", *lines[1:]]), encoding="utf-8")
+    assert main(["replay", str(older)]) == 1
+    out = capsys.readouterr().out
+    assert "replay: first difference at" in out
+    assert "changed since" not in out
+
+
+def test_a_record_of_a_shipped_mission_moved_since_names_the_shipped_mission(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A record of ``run dock`` holds the mission's path in the installation that made it; a
+    moved venv or a new Python loses that path. The error said only "pass --mission FILE",
+    where ``--mission bump-and-turn`` would do."""
+    lines = _recorded_run(tmp_path, capsys)
+    header = json.loads(lines[0])
+    gone = "/usr/lib/python3.12/site-packages/roomba_bt/missions/bump-and-turn.yaml"
+    moved = tmp_path / "moved.jsonl"
+    moved.write_text("".join([json.dumps({**header, "mission": gone}) + "\n", *lines[1:]]))
+    assert main(["replay", str(moved)]) == 2
+    assert (
+        f"{moved}: mission {gone!r} not found; pass --mission FILE, or --mission "
+        "bump-and-turn (the shipped mission it was)" in capsys.readouterr().err
+    )
+    assert main(["replay", str(moved), "--mission", "bump-and-turn"]) == 0
+    assert "as the recorded run" in capsys.readouterr().out
+    elsewhere = "/home/me/missions/bump-and-turn.yaml"  # not the shipped one's folder
+    moved.write_text("".join([json.dumps({**header, "mission": elsewhere}) + "\n", *lines[1:]]))
+    assert main(["replay", str(moved)]) == 2
+    assert capsys.readouterr().err.rstrip().endswith("not found; pass --mission FILE")
