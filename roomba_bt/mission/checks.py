@@ -34,8 +34,9 @@
   the wheels: the robot gets the last wheel command of a tick only (:func:`parallel_wheels`).
 * **A parallel's restarted branches.** With ``synchronise: false`` (policies ``all`` and
   ``selected``) a branch that succeeded is ticked again and starts over: one that can
-  succeed and would start an action or a clock again is an error
-  (:func:`restarted_branches`).
+  succeed and would start an action or a clock again is an error when another branch the
+  parallel waits for may still be RUNNING on the tick it succeeds (beside conditions alone
+  the parallel ends on that tick: :func:`restarted_branches`).
 * **A reactive sequence's restarts (a warning).** A child that is not the last and may be
   RUNNING starts again after it succeeded, stopping a later running child each time
   (:func:`restarted_runs`).
@@ -500,16 +501,48 @@ def restarted_limits(root: Node) -> list[Diagnostic]:
 _WAITING_POLICIES = frozenset({"all", "selected"})
 
 
+def _waited_for(parallel: Node) -> list[int]:
+    """The places of the branches whose successes a ``policy: all`` or ``selected``
+    parallel waits for: every branch, or the ``selected`` ones (by place: mission.control)."""
+    if parallel.options.get("policy") == "selected":
+        return list(parallel.options.get("selected_at", range(len(parallel.children))))
+    return list(range(len(parallel.children)))
+
+
+def _still_running(parallel: Node, index: int) -> list[Node]:
+    """The branches, other than the one at ``index``, that may still be RUNNING on the tick
+    it succeeds and so keep the parallel running into the next tick, where it starts over.
+
+    The parallel ends on any tick where a branch fails, or where every branch it waits for
+    (:func:`_waited_for`) succeeds. A branch that ends on every tick it is ticked
+    (:func:`~roomba_bt.mission.ticks.at_once`: a condition, ``held``, ``stop``, a
+    composite or decorator of such) has ended on that tick too, one way or the other: so
+    when every other branch waited for is one, the parallel ends on the very tick this one
+    succeeds (all succeeded) or has failed before, and nothing is started over
+    (``[drive 20 cm, inverter: {cliff: any}]``, the docs' cliff watcher before session
+    28). A branch the parallel does not wait for (not ``selected``) keeps nothing running,
+    and one that could not be built is not known to: its own error is said."""
+    return [
+        parallel.children[i]
+        for i in _waited_for(parallel)
+        if i != index
+        and not at_once(parallel.children[i])
+        and not any(n.kind == "unbuilt" for n in parallel.children[i].walk())
+    ]
+
+
 def restarted_branches(root: Node) -> list[Diagnostic]:
     """Errors: a branch of a ``parallel`` with ``synchronise: false`` (policy ``all`` or
     ``selected``) that can succeed and would start something over when ticked again
-    (:func:`~roomba_bt.mission.ticks.runs_again`). py_trees ticks every branch on every
-    tick, and one that succeeded starts again: ``[drive 20 cm, wait 3s]`` drove 20 cm
-    eleven times (2.2 m), and the parallel, which succeeds only on a tick where every
+    (:func:`~roomba_bt.mission.ticks.runs_again`), beside a branch the parallel waits for
+    that may still be RUNNING then (:func:`_still_running`). py_trees ticks every branch
+    on every tick, and one that succeeded starts again: ``[drive 20 cm, wait 3s]`` drove
+    20 cm eleven times (2.2 m), and the parallel, which succeeds only on a tick where every
     branch succeeds, ran until the run's time limit. An error, not a warning: a robot that
-    drives ten times the distance asked is a safety matter. Said at the branch, with the
-    fixes: run it once (``synchronise: true``, or ``oneshot`` to keep the others watched on
-    every tick) or say the re-run (``repeat``). A subtree used twice is one place."""
+    drives ten times the distance asked is a safety matter. Said at the branch, naming the
+    branch that keeps the parallel running, with the fixes: run it once (``synchronise:
+    true``, or ``oneshot`` to keep the others watched on every tick) or say the re-run
+    (``repeat``). A subtree used twice is one place."""
     errors: list[Diagnostic] = []
     for node in root.walk():
         if (
@@ -518,29 +551,41 @@ def restarted_branches(root: Node) -> list[Diagnostic]:
             or node.options.get("policy") not in _WAITING_POLICIES
         ):
             continue
-        for branch in node.children:
+        for index, branch in enumerate(node.children):
             if (
                 never_succeeds(branch)
                 or not runs_again(branch)
                 or any(n.kind == "unbuilt" for n in branch.walk())
             ):
                 continue
-            named = branch
-            while named.kind == "guard":  # said as the node its while:/until: guards
-                named = named.children[1]
+            running = _still_running(node, index)
+            if not running:
+                continue
+            named = _guarded(branch)
+            keeper = _guarded(running[0])
             errors.append(
                 named.loc.at(
                     f"{named.name} can succeed, and the parallel ({node.loc.line}:"
-                    f"{node.loc.column}) has synchronise: false: it ticks every branch on "
-                    "every tick, so once this one succeeds it starts again (a drive drives its "
-                    "distance again, a wait waits again), and the parallel succeeds only on a "
-                    "tick where every branch succeeds; write synchronise: true (the default) "
-                    "to run it once, put it under oneshot to run it once and keep its "
-                    "success while the other branches are ticked on every tick, or under "
-                    "repeat (no times or for) if it should run again and again"
+                    f"{node.loc.column}) has synchronise: false and waits for {keeper.name} "
+                    f"({_line_of(keeper.loc, named.loc)}), which may still be RUNNING then: "
+                    "it ticks every branch on every tick, so once this one succeeds it starts "
+                    "again (a drive drives its distance again, a wait waits again), and the "
+                    "parallel succeeds only on a tick where every branch it waits for succeeds; "
+                    "write "
+                    "synchronise: true (the default) to run it once, put it under oneshot to "
+                    "run it once and keep its success while the other branches are ticked on "
+                    "every tick, or under repeat (no times or for) if it should run again and "
+                    "again"
                 )
             )
     return list(dict.fromkeys(errors))  # a subtree used twice is one place
+
+
+def _guarded(branch: Node) -> Node:
+    """A branch as it is said: the node its ``while:``/``until:`` guards."""
+    while branch.kind == "guard":
+        branch = branch.children[1]
+    return branch
 
 
 def restarted_runs(root: Node) -> list[Diagnostic]:
