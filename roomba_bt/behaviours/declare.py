@@ -23,16 +23,27 @@ here too (as it was before they moved): the leaves to derive from (:mod:`.base`:
 ``read_key``, ``write_key``, ``declare_keys``, ``@key`` references), the driving leaves'
 shared helpers (:mod:`.driving`: ``WHEEL``, ``cycle_may_run``, ``left_driving_message``) and
 the guard's memo of pure conditions (:mod:`.frame_inputs`: ``FrameInputs``).
+
+Every other public name this module's namespace held at e80f20a (the release before
+session 28) still imports from here too, as the very object its home defines: a plugin
+written then imported what it found here (``InvalidStatus``, ``Snapshot``, ``SensorFrame``,
+``DRIVING_MODES``, ``halt``...), not only what was defined here. tests/test_moved_names.py
+holds the whole list, so a name dropped from the imports below fails a test, not a plugin.
 """
 
 from __future__ import annotations
 
+import logging
 import math
+import operator
 import re
 import sys
+import uuid
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal, TypeVar
+
+import py_trees
 
 from roomba_bt.behaviours.base import (
     Action,
@@ -65,12 +76,31 @@ from roomba_bt.behaviours.driving import (
     on_home_base,
 )
 from roomba_bt.behaviours.frame_inputs import FrameInputs
-from roomba_bt.behaviours.units import SPEED, VALUE_TYPES, UnitError, ValueType, closest
-from roomba_bt.oi.modes import ALL_MODES, OIMode
+from roomba_bt.behaviours.lean import (
+    DirectLeaf,
+    InvalidStatus,
+    Selector,
+    Sequence,
+    behaviour_tick,
+    checked_status,
+)
+from roomba_bt.behaviours.units import (
+    MARK,
+    SPEED,
+    VALUE_TYPES,
+    UnitError,
+    ValueType,
+    closest,
+    held,
+)
+from roomba_bt.oi.encode import Command, halt, motors_off, turns_wheels
+from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS, SensorFrame
+from roomba_bt.oi.modes import ALL_MODES, DRIVING_MODES, OIMode
 from roomba_bt.oi.odometry import SLOWEST_MOVING_SPEED_MM_S, WHEEL_SPEED_STEP_MM_S
-from roomba_bt.oi.opcodes import COMMANDS, Effect
+from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME, Effect
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.printable import CONTROL
+from roomba_bt.robot.interface import ModeChange, Odometry, RobotHandle, Snapshot
 from roomba_bt.yamlsource import character_name, quoted
 
 __all__ = [
@@ -117,6 +147,34 @@ __all__ = [
     "on_home_base",
     "read_key",
     "write_key",
+    # imported here for a declaration's use before session 28, and so found here by
+    # plugins written then (InvalidStatus from lean, Snapshot from robot.interface, ...):
+    # kept importable from here, the same objects (tests/test_moved_names.py)
+    "CHARGING_SOURCES_PACKETS",
+    "COMMANDS_BY_NAME",
+    "DRIVING_MODES",
+    "MARK",
+    "Command",
+    "DirectLeaf",
+    "InvalidStatus",
+    "ModeChange",
+    "Odometry",
+    "RobotHandle",
+    "Selector",
+    "Sequence",
+    "SensorFrame",
+    "Snapshot",
+    "behaviour_tick",
+    "checked_status",
+    "halt",
+    "held",
+    "motors_off",
+    "turns_wheels",
+    # the modules it imported, for the same reason
+    "logging",
+    "operator",
+    "py_trees",
+    "uuid",
 ]
 
 Kind = Literal["action", "condition"]
