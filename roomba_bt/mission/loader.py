@@ -68,16 +68,17 @@ from roomba_bt.mission.source import (
     written_keys,
 )
 from roomba_bt.mission.values import (
-    SUBSTITUTION,
     UNKNOWN,
     Bound,
     Context,
     SubtreeDef,
+    parameters_used,
     parse_type_name,
     record_type,
     resolve,
     substituted,
     unknown,
+    warn_escaped,
 )
 from roomba_bt.yamlsource import too_many_digits, yaml11_number_problem
 
@@ -160,6 +161,9 @@ class Loader:
         self.nodes.global_env = params
         self._file_sections(path, sections)
         name, description = self._names(path, sections)
+        if "description" in sections and "$" in description:
+            node, _, vloc = sections["description"]
+            warn_escaped(self.ctx, description, node, vloc, params, "description")
         description = substituted(
             description, lambda name: params[name].text if name in params else None
         )
@@ -567,7 +571,7 @@ def param_decl(
     if "default" not in fields:
         return vtype, None, False, doc
     dnode, _, dloc = fields["default"]
-    used = SUBSTITUTION.findall(str(dnode.value)) if isinstance(dnode, yaml.ScalarNode) else []
+    used = parameters_used(str(dnode.value)) if isinstance(dnode, yaml.ScalarNode) else []
     if used:  # no parameter is known where defaults are read: not "unknown parameter ${a}"
         whom = "itself" if used[0] == name else "a parameter"
         raise Bad(dloc.at(

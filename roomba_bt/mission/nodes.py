@@ -22,7 +22,6 @@ from roomba_bt.mission.plan import Node
 from roomba_bt.mission.shipped import library_defining
 from roomba_bt.mission.source import Bad, Loc, kind_of, mapping, plain, scalar_text
 from roomba_bt.mission.values import (
-    SUBSTITUTION,
     UNKNOWN,
     Bound,
     Context,
@@ -31,6 +30,7 @@ from roomba_bt.mission.values import (
     given_to,
     name_text,
     origin_of,
+    parameters_used,
     resolve,
     shown,
     unknown,
@@ -265,7 +265,7 @@ class NodeParser:
             name = scalar_text(value, loc, "subtree")
             id_loc = loc
         sub = self.ctx.subtrees.get(name)
-        used = SUBSTITUTION.findall(name)
+        used = parameters_used(name)
         if sub is None and used:  # not "unknown subtree '${x}'"
             if used[0] not in env:
                 hint = closest(used[0], list(env))

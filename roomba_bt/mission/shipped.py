@@ -176,7 +176,7 @@ def _broken_link(link: Path) -> str:
 
 def _with_defaults(text: str, params: tuple[ShippedParameter, ...]) -> str:
     """``text`` with its parameters' defaults, as :func:`~roomba_bt.mission.values.substituted`
-    reads a mission's (``$${`` a literal ``${``)."""
+    reads a mission's (``$$`` one literal ``$``)."""
     defaults = {p.name: p.default for p in params}
     return substituted(text, defaults.get)
 

@@ -1,5 +1,6 @@
-"""Values in a mission: ``${parameter}`` substitution (``$${`` is a literal ``${``), ``@key``
-references, units and ranges, and what one compilation shares (:class:`Context`).
+"""Values in a mission: ``${parameter}`` substitution (``$$`` is one literal ``$``, as in
+Python's ``string.Template``), ``@key`` references, units and ranges, and what one
+compilation shares (:class:`Context`).
 
 Every value a mission writes goes through :func:`resolve`: the loader for parameter
 defaults and initial blackboard values, the node parser for options and behaviour
@@ -9,7 +10,7 @@ parameters.
 from __future__ import annotations
 
 import re
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -37,40 +38,95 @@ from roomba_bt.mission.foreign import port_remapping, suggestion
 from roomba_bt.mission.plan import KeyDecl
 from roomba_bt.mission.source import Bad, Loc, mapping, plain, scalar_text
 
-#: ``${name}``, a parameter's use; not ``$${name}``, the escape (:data:`_PLACEHOLDER`): what
-#: finds the parameters a text uses sees the same ones :func:`substituted` replaces
-SUBSTITUTION = re.compile(r"(?<!\$)\$\{([A-Za-z_][A-Za-z0-9_]*)\}")
 _FULL_SUBSTITUTION = re.compile(r"^\s*(-?)\$\{([A-Za-z_][A-Za-z0-9_]*)\}\s*$")
-#: What a text's ``$`` may start, read left to right: ``$${``, a literal ``${`` (the escape,
-#: as docker-compose's, GitHub Actions' and string.Template's ``$$``: without one a log line
-#: could not say ``${``); ``${name}``, a parameter (group 1); or a ``${`` that starts
-#: neither, unterminated or not a name (group 1 None): an error in a value
-_PLACEHOLDER = re.compile(r"\$\$\{|\$\{(?:([A-Za-z_][A-Za-z0-9_]*)\})?")
-_ESCAPE = "$${"
+#: What a text's ``$`` may start, read left to right, by Python's ``string.Template`` rule
+#: (which users know): ``$$``, one literal ``$`` anywhere (so ``$${x}`` is the text ``${x}``,
+#: and ``$$${x}`` a ``$`` and then x's value: a price); ``${name}``, a parameter (group 1);
+#: or a ``${`` that starts neither, unterminated or not a name (group 1 None): an error in
+#: a value. A ``$`` before anything else is itself. (In session 28 before this, ``$${`` was
+#: the escape and ``$$`` elsewhere two dollars, so no ``$`` could come right before a value;
+#: at e80f20a, ``$${x}`` was a ``$`` and x's value: :func:`escaped_parameters` warns.)
+_PLACEHOLDER = re.compile(r"\$\$|\$\{(?:([A-Za-z_][A-Za-z0-9_]*)\})?")
+_DOLLAR = "$$"
+#: a parameter's ``{name}`` right after a ``$$``: the text ``${name}``
+_BRACED_NAME = re.compile(r"\{([A-Za-z_][A-Za-z0-9_]*)\}")
 #: said with every error about a ``${``: the text may have meant one literally
 ESCAPE_HINT = 'a literal "${" is written "$${"'
 
 
 def substituted(text: str, text_of: Callable[[str], str | None]) -> str:
-    """``text`` with each ``$${`` as ``${`` and each ``${name}`` as ``text_of(name)`` (kept
+    """``text`` with each ``$$`` as ``$`` and each ``${name}`` as ``text_of(name)`` (kept
     as written where that is None: a description or a name shown names an unknown
     parameter as it was written); a ``${`` that starts no parameter is kept as it is
     (:func:`_substitute` refuses it first where a value is resolved)."""
 
     def replaced(match: re.Match[str]) -> str:
         whole, name = match.group(0), match.group(1)
-        if whole == _ESCAPE:
-            return "${"
+        if whole == _DOLLAR:
+            return "$"
         value = None if name is None else text_of(name)
         return whole if value is None else value
 
     return _PLACEHOLDER.sub(replaced, text)
 
 
-def _stray_opening(text: str) -> int | None:
-    """Where in ``text`` the first ``${`` is that is neither a parameter nor escaped."""
+def parameters_used(text: str) -> list[str]:
+    """The names of the parameters ``text`` uses, read as :func:`substituted` reads it: the
+    ``x`` of ``$$${x}``, not that of ``$${x}`` (the text ``${x}``)."""
+    return [m.group(1) for m in _PLACEHOLDER.finditer(text) if m.group(1) is not None]
+
+
+def escaped_parameters(text: str, names: Collection[str]) -> list[tuple[int, str]]:
+    """Each ``$${name}`` in ``text`` whose name is one of ``names`` (the parameters in
+    scope): its place and the name. The text ``${name}`` now, it was a ``$`` and the value
+    before session 28 (e80f20a), and such a mission validated and ran with another text:
+    what :func:`escape_warning` says."""
+    found = []
     for match in _PLACEHOLDER.finditer(text):
-        if match.group(0) != _ESCAPE and match.group(1) is None:
+        if match.group(0) == _DOLLAR:
+            braced = _BRACED_NAME.match(text, match.end())
+            if braced is not None and braced.group(1) in names:
+                found.append((match.start(), braced.group(1)))
+    return found
+
+
+def escape_warning(where: Loc, what: str, name: str) -> Diagnostic:
+    """The warning of a ``$${name}`` naming a parameter (:func:`escaped_parameters`)."""
+    return where.at(
+        f'{what}: "$${{{name}}}" is the text "${{{name}}}"; a "$" before the value is written '
+        f'"$$${{{name}}}" (before session 28, "$${{{name}}}" was a "$" and then the value)'
+    ).as_warning()
+
+
+def warn_escaped(
+    ctx: Context, text: str, node: yaml.Node, loc: Loc, names: Collection[str], what: str
+) -> None:
+    """Add to ``ctx.warnings`` one :func:`escape_warning` for each ``$${name}`` in ``text``
+    (``node``'s, at ``loc``) naming one of ``names``, each at its own column where the text
+    is written on one line as it reads; once, however often the text is resolved (a
+    subtree used twice)."""
+    for offset, name in escaped_parameters(text, names):
+        warning = escape_warning(_character_at(node, loc, text, offset), what, name)
+        if warning not in ctx.warnings:
+            ctx.warnings.append(warning)
+
+
+def _character_at(node: yaml.Node, loc: Loc, text: str, offset: int) -> Loc:
+    """Where character ``offset`` of ``text``, the value of ``node`` (at ``loc``), is in the
+    file: exact when the scalar is written on one line, plain or quoted, with no escape or
+    folding (its length in the file is the text's, plus its quotes); else where it starts."""
+    if isinstance(node, yaml.ScalarNode) and node.start_mark.line == node.end_mark.line:
+        quotes = 1 if node.style in ('"', "'") else 0
+        if node.end_mark.column - node.start_mark.column == len(text) + 2 * quotes:
+            return Loc(loc.file, loc.line, loc.column + quotes + offset, loc.path)
+    return loc
+
+
+def _stray_opening(text: str) -> int | None:
+    """Where in ``text`` the first ``${`` is that is neither a parameter nor after a
+    ``$$``."""
+    for match in _PLACEHOLDER.finditer(text):
+        if match.group(0) != _DOLLAR and match.group(1) is None:
             return match.start()
     return None
 
@@ -260,7 +316,8 @@ def resolve(
                     )
                 )
             raw = ("-" if negative else "") + str(bound.value)
-        elif "${" in raw:
+        elif "$" in raw:  # a parameter, a stray "${", or "$$" (one "$")
+            warn_escaped(ctx, raw, node, loc, env, what)
             raw = _substitute(raw, loc, env, what)
             if raw is UNKNOWN:
                 return UNKNOWN
@@ -348,7 +405,7 @@ def _record(
 
 
 def _substitute(raw: str, loc: Loc, env: Mapping[str, Bound], what: str) -> Any:
-    """``"${a} mm/s"``: each parameter replaced by its text, each ``$${`` by ``${``; UNKNOWN
+    """``"${a} mm/s"``: each parameter replaced by its text, each ``$$`` by ``$``; UNKNOWN
     if a parameter's value is unknown. A ``${`` that starts no parameter (``"${speed"``,
     ``"${ x }"``) is an error: it was passed on as text, so a typo in a use went unseen."""
     names = _parameters_used(raw, loc, env, what)
@@ -386,7 +443,7 @@ def _parameters_used(raw: str, loc: Loc, env: Mapping[str, Bound], what: str) ->
                 f"{ESCAPE_HINT}"
             )
         )
-    names = SUBSTITUTION.findall(raw)
+    names = parameters_used(raw)
     for name in names:
         if name not in env:
             hint = closest(name, list(env))

@@ -597,7 +597,8 @@ RERUN = "can succeed, and the parallel (4:7) has synchronise: false"
         # nothing running, and is itself started over while a selected one runs
         ("selected\n        selected: [w]", ["{wait: 1s, name: w}", "{repeat: {do: {wait: 1s}}}"],
          []),
-        ("selected\n        selected: [w]", ["{wait: 1s, name: w}", "{log: hi}"], ["10:14 log(hi)"]),
+        ("selected\n        selected: [w]", ["{wait: 1s, name: w}", "{log: hi}"],
+         ["10:14 log(hi)"]),
         ("selected\n        selected: [w, v]", ["{wait: 1s, name: w}", "{wait: 2s, name: v}"],
          ["9:14 w", "10:14 v"]),
         ("selected\n        selected: [c]", ["{drive: {velocity: 200 mm/s, distance: 20cm}}",

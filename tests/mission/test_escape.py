@@ -1,7 +1,9 @@
-"""``$${`` in a mission text is a literal ``${`` (as docker-compose's, GitHub Actions' and
-string.Template's ``$$``): before it, a log line or a text parameter could not say ``${``
-at all, and a ``${`` that started no parameter (``"${speed"``) was passed on as text, so a
-typo in a use went unseen. Both ways: the escape gives the text, and every error about a
+"""``$$`` in a mission text is one literal ``$``, anywhere (Python's ``string.Template`` rule):
+``$${x}`` is the text ``${x}`` and ``$$${x}`` a ``$`` and then x's value. Before session 28 a
+log line or a text parameter could not say ``${`` at all, and a ``${`` that started no
+parameter (``"${speed"``) was passed on as text, so a typo in a use went unseen; and
+``$${x}`` was a ``$`` and x's value, so where x is a parameter that changed meaning: a
+warning at its place says so. Both ways: the escape gives the text, and every error about a
 ``${`` says how to write one."""
 
 from __future__ import annotations
@@ -47,6 +49,7 @@ def test_a_doubled_dollar_writes_a_literal_opening(
             - log: "${said}"
             - log: "${said}, ${who}"
             - log: "$$${who}"
+            - log: "cost $$5, $5, $$$$ and $"
         """
     )
     assert _logged(mission, caplog) == [
@@ -54,7 +57,8 @@ def test_a_doubled_dollar_writes_a_literal_opening(
         "${who}",
         "it costs ${price}",  # an escape in a parameter's default: its value, substituted once
         "it costs ${price}, bob",
-        "$${who}",  # "$$${": "$" and then the escape, as in docker-compose
+        "$bob",  # "$$" is one "$", then the value: string.Template's rule
+        "cost $5, $5, $$ and $",  # "$$" is one "$" anywhere; a "$" before anything else is itself
     ]
     assert mission.description == "Say ${who} to bob"
     names = [node.name for node in mission.root.iterate()]
@@ -109,3 +113,68 @@ def test_a_stray_opening_in_a_typed_value_is_named_not_its_unit(errors_of: Error
     )
     assert error.startswith("7:25: drive.velocity: \"${\" at character 1 of '${speed'"), error
     assert error.endswith(ESCAPE_HINT)
+
+
+#: The upgrade report's mission (e80f20a logged "budget: $5 for 20cm")
+BUDGET = """
+mission: m
+description: "costs $${price}"
+parameters:
+  price: {type: int, default: 5}
+  dist: {type: distance, default: 20cm}
+tree:
+  sequence:
+    - log: "budget: $${price} for ${dist}"
+    - log: "budget: $$${price}, not $${cost}"
+    - log:
+        message: "said
+          $${price}"
+"""
+
+
+def test_a_dollar_before_a_value_is_written_with_three(
+    compile_text: Compile, caplog: pytest.LogCaptureFixture
+) -> None:
+    """``$${price}`` was ``$5`` at e80f20a and is the text ``${price}`` now: a warning at
+    each such place (its own column where the text is on one line, else where the value
+    starts), naming the spelling of the old meaning; ``$$${price}`` is that meaning, and a
+    ``$${cost}`` that names no parameter is the text it always was."""
+    mission = compile_text(BUDGET)
+    assert _logged(mission, caplog) == [
+        "budget: ${price} for 20cm",
+        "budget: $5, not ${cost}",
+        "said ${price}",
+    ]
+    assert mission.description == "costs ${price}"
+    said = [f"{w.line}:{w.column}: {w.message}" for w in mission.warnings]
+    tail = (
+        '"$${price}" is the text "${price}"; a "$" before the value is written "$$${price}" '
+        '(before session 28, "$${price}" was a "$" and then the value)'
+    )
+    assert said == [
+        f"2:21: description: {tail}",
+        f"8:21: log.message: {tail}",
+        f"11:18: log.message: {tail}",  # on two lines: where the text starts
+    ], said
+    assert all(w.severity == "warning" for w in mission.warnings)
+
+
+def test_the_escape_warning_is_said_once_for_a_subtree_used_twice(compile_text: Compile) -> None:
+    mission = compile_text(
+        """
+        mission: m
+        subtrees:
+          s:
+            parameters: {price: {type: int, default: 5}}
+            tree: {log: "$${price}"}
+        tree: {sequence: [{subtree: s}, {subtree: {id: s, price: 6}}]}
+        """
+    )
+    assert [(w.line, w.column) for w in mission.warnings] == [(5, 18)]
+
+
+def test_a_default_may_not_use_a_parameter_after_a_dollar(errors_of: Errors) -> None:
+    """``$$${a}`` uses ``a`` (a ``$``, then its value): refused in a default as ``${a}`` is."""
+    head = "mission: m\nparameters:\n  a: {type: str, default: "
+    (error,) = errors_of(head + '"$$${a}"}\ntree: {log: "${a}"}\n')
+    assert "a default cannot refer to itself" in error
