@@ -27,6 +27,7 @@ from roomba_bt.mission.values import (
     Written,
     name_text,
     resolve,
+    said_defaults,
     said_origin,
     substituted,
     unknown,
@@ -330,7 +331,8 @@ def _decorator_options(
             raise Bad(
                 where.at(
                     f"{word}.{param.name} must be at least {_amount(param, param.minimum)}, "
-                    f"got {_amount(param, value)}" + said_origin(written, env)
+                    f"got {_amount(param, value)}"
+                    + (said_origin(written, env) or said_defaults([written], env, where))
                 )
             )
     return options

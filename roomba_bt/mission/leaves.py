@@ -24,6 +24,7 @@ from roomba_bt.mission.values import (
     Written,
     record_fields,
     resolve,
+    said_defaults,
     said_origin,
     substituted,
     unknown,
@@ -74,7 +75,8 @@ def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node:
     known = UNKNOWN not in params.values()
     if ok and decl.constraints is not None and known:
         for problem in decl.constraints(params):
-            ctx.error(key_loc.at(f"{decl.name}: {problem}"))
+            defaults = said_defaults(written.values(), env, key_loc, problem)
+            ctx.error(key_loc.at(f"{decl.name}: {problem}{defaults}"))
             ok = False
     # A value not known (a parameter declared wrongly, a subtree argument that did not
     # resolve: reported there) is unbuilt too: what the leaf sends and the mode it leads to

@@ -428,9 +428,9 @@ class Loader:
                     )
                     env[name] = Bound(vtype, UNKNOWN, "?")  # reported once, not at every use
                     continue
-                # a text's value as its uses insert it: "$${" already a literal "${"
+                # a text's value as its uses insert it: "$$" already one "$"
                 text = default if vtype is STR else _text(value, vloc, default)
-                env[name] = Bound(vtype, default, text)
+                env[name] = Bound(vtype, default, text, default_at=_default_at(value, vloc))
         for name, text in overrides.items():
             if name in broken:
                 continue
@@ -760,6 +760,14 @@ def _link_loop(each: str, text: str) -> str:
         f"{each} {text!r} is a symbolic link loop (it leads back to itself), not a file: "
         "name the file itself"
     )
+
+
+def _default_at(node: yaml.Node, loc: Loc) -> Loc:
+    """Where the ``default:`` of a parameter's declaration ``node`` (at ``loc``) is written."""
+    for key, value in getattr(node, "value", []):
+        if getattr(key, "value", None) == "default":
+            return loc.child(value, "default")
+    return loc
 
 
 def _text(node: yaml.Node, loc: Loc, default: Any) -> str:

@@ -10,7 +10,7 @@ parameters.
 from __future__ import annotations
 
 import re
-from collections.abc import Callable, Collection, Mapping
+from collections.abc import Callable, Collection, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -161,6 +161,11 @@ class Bound:
     value: Any
     text: str
     origin: str = ""
+    #: where the default is written, for a mission parameter that has its default (none
+    #: given with -p): an error its value makes at a use names the parameter and that place,
+    #: and how to give another (:func:`said_default`); not ``origin``, which a subtree's
+    #: argument passes on in place of the use that gave it
+    default_at: Loc | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -306,6 +311,10 @@ def resolve(
                     except UnitError as exc:
                         raise Bad(loc.at(f"{what}: {exc}")) from None
                 origin = f" (${{{pname}}} is {bound.origin})" if bound.origin else ""
+                if not origin and param is not None and param.check_range(value) is not None:
+                    origin = said_default(
+                        pname, bound, loc, _in_range(pname, bound, param, negative)
+                    )
                 return _check_range(value, loc, what, param, origin)
             if bound.type.name != "str":
                 raise Bad(
@@ -458,6 +467,79 @@ def _check_range(value: Any, loc: Loc, what: str, param: Param | None, origin: s
             owner = what.rsplit(".", 1)[0] if "." in what else what
             raise Bad(loc.at(f"{owner}: {problem}{origin}"))
     return value
+
+
+def said_default(name: str, bound: Bound, said_at: Loc, give: str = "") -> str:
+    """`` (${creep} is 10 mm/s, the default of parameter creep at 7:26: give -p
+    creep=15mm/s, or another default there)``, after an error that a mission parameter's
+    default makes at a use (said at ``said_at``: the value was not written there); "" when
+    the value was not its default. ``give``: a ``name=value`` that would do, if known."""
+    if bound.default_at is None or bound.origin:
+        return ""
+    return (
+        f" ({_default_of(name, bound, said_at)}: give -p {give or name + '=VALUE'}, or "
+        "another default there)"
+    )
+
+
+def said_defaults(
+    written: Iterable[yaml.Node], env: Mapping[str, Bound], said_at: Loc, problem: str = ""
+) -> str:
+    """Each of ``written`` that is a whole ``${name}`` with its default, as
+    :func:`said_default` says one, in one parenthesis. ``problem``: an error of a leaf as a
+    whole (``drive at 10 mm/s never covers its distance``), which does not say which
+    parameter made it: only the defaults whose value it names, so that one about which
+    parameters are given (``velocity or left/right, not both``) names none."""
+    said: dict[str, str] = {}
+    for node in written:
+        if isinstance(node, yaml.ScalarNode) and isinstance(node.value, str):
+            full = _FULL_SUBSTITUTION.match(node.value)
+            bound = None if full is None else env.get(full.group(2))
+            if (
+                full is not None
+                and bound is not None
+                and bound.default_at
+                and not bound.origin
+                and (not problem or _names_value(problem, bound))
+            ):
+                said[full.group(2)] = _default_of(full.group(2), bound, said_at)
+    if not said:
+        return ""
+    give = f"{next(iter(said))}=VALUE" if len(said) == 1 else "NAME=VALUE"
+    return f" ({'; '.join(said.values())}: give -p {give}, or another default there)"
+
+
+def _names_value(problem: str, bound: Bound) -> bool:
+    """Whether ``problem`` says ``bound``'s value, as written or as a mission writes it
+    (``10 mm/s``), as a whole word (not the ``0`` of ``500``)."""
+    for text in {bound.text, shown(bound.type, bound.value)}:
+        if re.search(rf"(?<![\w.]){re.escape(text)}(?![\w.])", problem):
+            return True
+    return False
+
+
+def _default_of(name: str, bound: Bound, said_at: Loc) -> str:
+    """``${creep} is 10 mm/s, the default of parameter creep at 7:26`` (with its file when
+    that is not the one of ``said_at``)."""
+    at = bound.default_at
+    assert at is not None
+    where = (
+        f"{at.line}:{at.column}" if at.file == said_at.file else f"{at.file}:{at.line}:{at.column}"
+    )
+    return f"${{{name}}} is {bound.text}, the default of parameter {name} at {where}"
+
+
+def _in_range(name: str, bound: Bound, param: Param, negative: str) -> str:
+    """``creep=15mm/s``: the end of ``param``'s range nearest the parameter's value, as -p
+    takes it (the canonical unit, no space); "" where the use converts or negates it."""
+    value = bound.value
+    if negative or bound.type.name != param.type.name or not isinstance(value, int | float):
+        return ""
+    low, high = param.minimum, param.maximum
+    nearest = low if low is not None and value < low else high
+    if nearest is None:
+        return ""
+    return f"{name}={nearest:g}{param.type.unit}"
 
 
 def origin_of(node: yaml.Node, env: Mapping[str, Bound]) -> str:

@@ -218,6 +218,51 @@ def test_a_value_out_of_range_from_the_command_line_says_so_where_it_is_used(
     assert compile_mission(path, {"speed": "400mm/s"})[1] == []
 
 
+def test_a_bad_value_from_a_parameter_s_default_names_the_parameter_and_its_default(
+    tmp_path: Path,
+) -> None:
+    """The upgrade report's ``turn: {speed: "${creep}"}`` with ``creep`` defaulting to 10
+    mm/s was refused at the use only: nothing said the value was creep's default, at line 3,
+    or that ``-p creep=15mm/s`` would do. An error a leaf makes as a whole names the default
+    whose value it says (the speed, not the distance); a value set with -p is said as set."""
+    path = tmp_path / "m.yaml"
+    path.write_text(
+        "parameters:\n"
+        "  dist: {type: distance, default: 20cm}\n"
+        "  creep: {type: speed, default: 10 mm/s}\n"
+        "  laps: {type: int, default: 0}\n"
+        "tree:\n"
+        "  sequence:\n"
+        "    - mode: safe\n"
+        "    - turn: {angle: 45deg, speed: '${creep}'}\n"
+        "    - drive: {velocity: '${creep}', distance: '${dist}'}\n"
+        "    - repeat: {times: '${laps}', do: {log: hi}}\n"
+        "    - turn: {angle: 5deg, speed: '-${creep}'}\n"
+    )
+    _, problems = compile_mission(path)
+    assert [f"{p.line}:{p.column}: {p.message}" for p in problems] == [
+        "8:35: turn: speed 10 mm/s is out of range: allowed 15..500 mm/s (a wheel asked for "
+        "less than 15 mm/s stands still: the speed controller turns it in steps of about 28.5 "
+        "mm/s) (${creep} is 10 mm/s, the default of parameter creep at 3:33: give -p "
+        "creep=15mm/s, or another default there)",
+        "9:7: drive: drive at 10 mm/s (below half the speed controller's step of about 28.5 "
+        "mm/s: the wheels stand still) never covers its distance (its centre does not move): it "
+        "would run for ever; give a speed of at least 15 mm/s, or end it by angle or duration "
+        "(${creep} is 10 mm/s, the default of parameter creep at 3:33: give -p creep=VALUE, or "
+        "another default there)",
+        "10:23: repeat.times must be at least 1, got 0 (${laps} is 0, the default of parameter "
+        "laps at 4:30: give -p laps=VALUE, or another default there)",
+        "11:34: turn: speed -10 mm/s is out of range: allowed 15..500 mm/s (${creep} is 10 "
+        "mm/s, the default of parameter creep at 3:33: give -p creep=VALUE, or another default "
+        "there)",
+    ]
+    _, problems = compile_mission(path, {"creep": "12mm/s", "laps": "1"})
+    assert "(${creep} is creep=12mm/s, set on the command line)" in problems[0].message
+    assert all("default" not in p.message for p in problems), problems
+    _, problems = compile_mission(path, {"creep": "15mm/s", "laps": "1"})
+    assert [p.line for p in problems] == [11]  # only the negated speed is left
+
+
 def test_a_bad_value_a_subtree_use_passes_names_that_use(tmp_path: Path) -> None:
     """``subtree: {id: go, speed: 900 mm/s}`` was refused only in the subtree's body (its
     line and YAML path), naming none of the uses: each use that gives a bad value is named
