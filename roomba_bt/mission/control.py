@@ -20,12 +20,12 @@ from roomba_bt.mission.source import Bad, Loc, kind_of, mapping, plain, scalar_t
 from roomba_bt.mission.ticks import at_once
 from roomba_bt.mission.values import (
     ESCAPE_HINT,
-    SUBSTITUTION,
     UNKNOWN,
     Bound,
     Context,
     Written,
     name_text,
+    parameters_used,
     resolve,
     said_defaults,
     said_origin,
@@ -75,17 +75,17 @@ _PARAMETER_IN_NAME = "parameter_in_name"
 
 
 def _child_names(what: str, names: list[str], loc: Loc) -> list[str]:
-    """``selected:``'s names, each ``$${`` a literal ``${`` as in the name it picks. A
+    """``selected:``'s names, each ``$$`` one ``$`` as in the name it picks. A
     ``${parameter}`` is refused: a child's name that uses one changes with its value
     (``-p side=right``), and a pick that held on the default would name no child, or
     another, with another value; so names are matched as written, never substituted."""
     for name in names:
-        used = SUBSTITUTION.search(name)
-        if used is not None:
+        used = parameters_used(name)
+        if used:
             raise Bad(
                 loc.at(
                     f"{what}: {name!r}: child names are matched as written, and ${{"
-                    f"{used.group(1)}}} is not replaced here: a name made with a parameter "
+                    f"{used[0]}}} is not replaced here: a name made with a parameter "
                     "changes with its value, so selected: cannot pick it; give the child a "
                     f"fixed name (name: ...) and select that; {ESCAPE_HINT}"
                 )

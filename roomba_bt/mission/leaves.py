@@ -17,11 +17,11 @@ from roomba_bt.behaviours.units import MARK, ValueType
 from roomba_bt.mission.plan import Node
 from roomba_bt.mission.source import Bad, Loc, mapping
 from roomba_bt.mission.values import (
-    SUBSTITUTION,
     UNKNOWN,
     Bound,
     Context,
     Written,
+    parameters_used,
     record_fields,
     resolve,
     said_defaults,
@@ -91,7 +91,7 @@ def _parameter_in(given: list[tuple[str, yaml.Node, Loc, Loc]]) -> Loc | None:
     """Where the first value its name shows is written with a ``${parameter}``
     (``bump(${side})`` is named ``bump(left)``: another value, another name), or None."""
     for _, node, _, value_loc in given:
-        if isinstance(node, yaml.ScalarNode) and SUBSTITUTION.search(str(node.value)):
+        if isinstance(node, yaml.ScalarNode) and parameters_used(str(node.value)):
             return value_loc
     return None
 
