@@ -187,8 +187,59 @@ def dask_client(scheduler: str | None = None, workers: int = 2) -> Iterator[Any]
                 scheduler_kwargs={"dashboard": False, "dashboard_address": ":0"},
                 silence_logs=40,  # logging.ERROR: no worker chatter over the progress bar
             )
-        with cluster, distributed.Client(cluster) as client:
-            yield client
+        with cluster:
+            client = distributed.Client(cluster)
+            try:
+                yield client
+            finally:
+                close_quietly(client, cluster)
+
+
+#: The loggers a local cluster's processes say their shutdown on: Dask's, and those of the
+#: libraries its comms run on (Tornado's streams, asyncio's tasks).
+SHUTDOWN_LOGGERS = ("distributed", "tornado", "asyncio")
+
+#: How long the workers get to hear that the shutdown begins (s): one round trip each, then
+#: the cluster is closed anyway.
+SHUTDOWN_NOTICE_S = 5.0
+
+
+def close_quietly(client: Any, cluster: Any) -> None:
+    """Close a local cluster in order, without a word: first each worker's loggers are
+    silenced (in the worker's process, by the client), then those of this process (its
+    scheduler, nannies and client) until the end, then the client closes, then the
+    cluster. A shutdown races Dask's own traffic (a worker's heartbeat meets the closed
+    scheduler or its own closing connection pool), and Dask logs each such loss as an ERROR
+    with its traceback: on a loaded machine one came under the summary of an evaluation,
+    after a Ctrl-C or not. What the evaluation asked is done by then; its errors came back
+    with the futures."""
+    levels = silence_shutdown_loggers()
+    try:
+        with contextlib.suppress(Exception):  # a worker that does not answer is ended anyway
+            client.run(silence_shutdown_loggers, on_error="ignore",
+                       callback_timeout=SHUTDOWN_NOTICE_S)  # fmt: skip
+        client.close()
+        cluster.close()
+    finally:
+        for name, level in levels.items():
+            logging.getLogger(name).setLevel(level)
+
+
+def silence_shutdown_loggers() -> dict[str, int]:
+    """Every logger of :data:`SHUTDOWN_LOGGERS` and each of their children (some have a
+    level of their own from Dask's configuration) set above CRITICAL: the levels before."""
+    manager = logging.Logger.manager
+    names = [
+        name
+        for name in [*SHUTDOWN_LOGGERS, *manager.loggerDict]
+        if name.split(".")[0] in SHUTDOWN_LOGGERS
+    ]
+    levels = {}
+    for name in dict.fromkeys(names):
+        logger = logging.getLogger(name)
+        levels[name] = logger.level
+        logger.setLevel(logging.CRITICAL + 1)
+    return levels
 
 
 #: How long an evaluation waits for a worker of a ``--scheduler`` cluster before saying so.

@@ -21,7 +21,7 @@ import sys
 import threading
 import time
 import traceback
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
@@ -149,7 +149,8 @@ def _pool_round(
 
     def submit(index: int) -> None:
         try:
-            running[executor.submit(_watched_episode, index, specs[index])] = index
+            with _signals_held_while_workers_start():  # a submit may fork the workers
+                running[executor.submit(_watched_episode, index, specs[index])] = index
         except BrokenProcessPool:  # a worker died since the last result
             lost.append(index)
 
@@ -273,12 +274,55 @@ def _terminate(executor: ProcessPoolExecutor) -> None:
         process.terminate()
 
 
+#: The signals a pool worker leaves to its parent (a terminal sends Ctrl-C and its hangup to
+#: the whole process group), and the one its parent ends it with (:func:`_terminate`).
+LEFT_TO_THE_PARENT: tuple[signal.Signals, ...] = tuple(
+    s for s in (signal.SIGINT, getattr(signal, "SIGHUP", None)) if s is not None
+)
+ENDS_A_WORKER: signal.Signals = signal.SIGTERM
+
+
+@contextlib.contextmanager
+def _signals_held_while_workers_start() -> Iterator[None]:
+    """A forked worker starts with this process's Python signal handlers until its
+    initializer (:func:`_worker_started`) replaces them: a Ctrl-C in that window raised
+    KeyboardInterrupt in it, and the parent's SIGTERM raised the CLI's ``Terminated``
+    (:func:`~roomba_bt.robot.safety.raise_terminated`), each a traceback under the summary
+    (the window is long on a loaded machine). Meanwhile they are held here: a worker not
+    started yet ignores what is left to the parent and ends at once at its SIGTERM; this
+    process gets its own again, through its own handlers, once the submit is done."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    parent = os.getpid()
+    came: list[int] = []
+
+    def held(signum: int, frame: FrameType | None) -> None:
+        if os.getpid() == parent:
+            came.append(signum)
+        elif signum == ENDS_A_WORKER:
+            os._exit(128 + signum)  # a worker not started yet: nothing of it to keep
+
+    previous = {s: signal.signal(s, held) for s in (*LEFT_TO_THE_PARENT, ENDS_A_WORKER)}
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+        for held_signal in dict.fromkeys(came):
+            signal.raise_signal(held_signal)
+
+
 def _worker_started(reports: Any = None, limit_s: float = 0.0) -> None:
-    """A pool worker leaves Ctrl-C to its parent, which ends the pool (SIGTERM ends a worker
-    at once: on the simulator nothing drives): each worker raising KeyboardInterrupt printed
-    its traceback under the summary. With a wall-clock limit, ``reports`` is the queue to
-    the parent, and SIGUSR1 asks where the episode is stuck."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    """A pool worker leaves Ctrl-C (and a hangup) to its parent, which ends the pool, and
+    the SIGTERM it is ended with ends it at once (on the simulator nothing drives): each
+    worker raising KeyboardInterrupt at Ctrl-C, or the CLI's ``Terminated`` at SIGTERM
+    (handlers a forked worker inherits), printed its traceback under the summary. With a
+    wall-clock limit, ``reports`` is the queue to the parent, and SIGUSR1 asks where the
+    episode is stuck."""
+    for signum in LEFT_TO_THE_PARENT:
+        signal.signal(signum, signal.SIG_IGN)
+    signal.signal(ENDS_A_WORKER, signal.SIG_DFL)
     episode.IN_POOL_WORKER = True
     threading.Thread(target=_end_with, args=(os.getppid(),), daemon=True).start()
     if reports is not None:

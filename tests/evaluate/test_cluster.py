@@ -257,3 +257,43 @@ def test_results_are_released_as_they_are_gathered(
         results, retried, _ = run_on_client(client, SPECS[:4], at_the_last)
     assert held and held[-1] == 0, f"still held at the last result: {held[-1:]}"
     assert _episodes([r for r in results if r is not None]) == one_job[:4] and retried == 0
+
+
+def test_a_local_cluster_shuts_down_without_a_word(capfd: pytest.CaptureFixture[str]) -> None:
+    """A shutdown races Dask's own traffic (a worker's heartbeat meets the closed scheduler
+    or its own closing connection pool), and Dask logs each loss as an ERROR with its
+    traceback, in the worker's process or this one: on a loaded machine one came under the
+    summary of an evaluation. Here a worker plugin and a scheduler plugin log such an ERROR
+    as they close, where the race would: neither reaches stderr, and this process's
+    loggers are as they were afterwards."""
+    import logging
+
+    from distributed import WorkerPlugin
+    from distributed.diagnostics.plugin import SchedulerPlugin
+
+    class ClosingWorker(WorkerPlugin):  # sent by value to the worker's process
+        def teardown(self, worker: Any) -> None:
+            try:
+                raise OSError("Stream is closed")
+            except OSError:
+                logging.getLogger("distributed.worker").exception("worker: lost at shutdown")
+            print("worker plugin closed", file=sys.stderr, flush=True)
+
+    class ClosingScheduler(SchedulerPlugin):
+        async def close(self) -> None:
+            try:
+                raise OSError("Stream is closed")
+            except OSError:
+                logging.getLogger("distributed.core").exception("scheduler: lost at shutdown")
+            print("scheduler plugin closed", file=sys.stderr, flush=True)
+
+    names = ("distributed", "distributed.worker", "tornado")
+    with dask_client(workers=1) as client:
+        levels = {name: logging.getLogger(name).level for name in names}
+        client.register_plugin(ClosingWorker())
+        client.register_plugin(ClosingScheduler())
+        assert client.submit(sum, [1, 2]).result() == 3
+    err = capfd.readouterr().err
+    assert "worker plugin closed" in err and "scheduler plugin closed" in err  # they ran
+    assert "lost at shutdown" not in err and "Traceback" not in err, err
+    assert {name: logging.getLogger(name).level for name in names} == levels

@@ -272,6 +272,57 @@ def test_results_are_taken_as_they_finish_and_a_ctrl_c_keeps_them(hooked) -> Non
     mark.touch()
 
 
+def test_a_ctrl_c_ends_the_pools_workers_without_a_word(
+    hooked,  # type: ignore[no-untyped-def]
+    capfd: pytest.CaptureFixture[str],
+) -> None:
+    """``roomba-bt`` raises ``Terminated`` at SIGTERM (its handler, which a forked worker
+    inherits), and a Ctrl-C ends the pool with SIGTERM: a worker waiting for its next
+    episode raised it there and printed its traceback under the summary. Seed 0 holds one
+    worker; the other finishes seeds 1 and 2 and waits; then the parent stops (as at
+    Ctrl-C) and ends both."""
+    import signal
+
+    from roomba_bt.evaluate.parallel import LocalRun
+    from roomba_bt.robot.safety import raise_terminated
+
+    specs = _short_specs(3)
+    mark = hooked(0, "wait")
+    seen: list[int] = []
+
+    def progress(done: int, total: int, result: EpisodeResult) -> None:
+        seen.append(result.seed)
+        if len(seen) == 2:
+            raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, raise_terminated)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            run_episodes(specs, 2, progress, LocalRun())
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+        mark.touch()
+    assert sorted(seen) == [1, 2]
+    err = capfd.readouterr().err
+    assert "Traceback" not in err and "Terminated" not in err, err
+
+
+def test_a_signal_while_the_pool_starts_its_workers_comes_once_they_are_started() -> None:
+    """A forked worker has its parent's handlers until its initializer: meanwhile Ctrl-C and
+    SIGTERM are held, and raised in the parent, by its own handlers, once the submit is
+    done (a worker not started yet ignores the Ctrl-C; the parent ends it with SIGTERM)."""
+    import os
+    import signal
+
+    from roomba_bt.evaluate.parallel import _signals_held_while_workers_start
+
+    reached = False
+    with pytest.raises(KeyboardInterrupt), _signals_held_while_workers_start():
+        os.kill(os.getpid(), signal.SIGINT)
+        reached = True
+    assert reached and signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
 _BOOM = """\
 from roomba_bt.behaviours import Condition, declare
 
