@@ -985,6 +985,11 @@ def _robot(c: _Checker, top: dict[str, Any]) -> tuple[Pose | None, StartRegion |
             level = percent
         else:
             level = c.number(given, ("robot", "battery"), 0.0, 1.0, "(or a percent, 0%..100%)")
+        if level == 0.0:  # as --battery 0: the robot would answer nothing, a lost connection
+            c.error(("robot", "battery"), f"{_show(given)}: an empty battery switches the "
+                    "simulated robot off, and it would answer nothing",
+                    "a charge above 0, up to 1 (0.05, 5%)")  # fmt: skip
+            level = None
         battery = 0.8 if level is None else level
     return start, region, battery
 

@@ -529,6 +529,19 @@ def test_a_world_s_battery_may_be_a_percent_as_the_command_line_s() -> None:
     )
 
 
+@pytest.mark.parametrize("empty", ["0", "0%", "0.0"])
+def test_a_world_s_empty_battery_is_refused_as_the_command_line_s(empty: str) -> None:
+    """``--battery 0`` is refused (the simulated robot is off and answers nothing: the run
+    ended NO CONNECTION, blaming the cable); ``robot: {battery: 0}`` in a world was taken."""
+    rooms = "rooms: [[[0, 0], [4, 0], [4, 3], [0, 3]]]\n"
+    [found] = problems(rooms + f"robot: {{battery: {empty}}}\n")
+    assert found.startswith("w.yaml:2:18: robot.battery: found ")
+    assert found.endswith(
+        ": an empty battery switches the simulated robot off, and it would answer nothing; "
+        "allowed: a charge above 0, up to 1 (0.05, 5%)"
+    )
+
+
 def test_where_things_stand_is_said_with_the_other_problems_at_once() -> None:
     """A drop outside every room was said only after the file's other problems were mended
     (a second reading); with the rooms whole it is said beside them. A start is not judged
