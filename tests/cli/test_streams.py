@@ -15,13 +15,12 @@ import os
 import signal
 import subprocess
 import sys
-import textwrap
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
-from runtime.simrun import SHORT_DRIVE  # tests/runtime: the short drive
+from runtime.simrun import SHORT_DRIVE, write_mission  # tests/runtime: the short drive
 
 from roomba_bt.cli import main
 from roomba_bt.runtime.recording import load_record
@@ -57,9 +56,7 @@ def _reader_gone(args: list[str], cwd: Path) -> subprocess.CompletedProcess[str]
 
 @pytest.fixture
 def mission(tmp_path: Path) -> Path:
-    path = tmp_path / "short.yaml"
-    path.write_text(textwrap.dedent(MISSION))
-    return path
+    return write_mission(tmp_path, MISSION, "short.yaml")
 
 
 def test_a_closed_pipe_keeps_a_failed_runs_exit_code_and_says_its_outcome(

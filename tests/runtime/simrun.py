@@ -4,8 +4,9 @@ byte tapped."""
 from __future__ import annotations
 
 import random
+import textwrap
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -51,6 +52,18 @@ tree:
     - mode: safe
     - drive: {velocity: 100 mm/s, radius: spin_left}
 """
+
+
+def write_mission(
+    folder: Path, text: str, name: str = "mission.yaml", plugins: Mapping[str, str] | None = None
+) -> Path:
+    """``text`` (dedented) written as ``folder/name``, with each plugin file it loads (file
+    name: source) beside it: the files a command line (``roomba-bt run FILE``) is given."""
+    for plugin, source in (plugins or {}).items():
+        (folder / plugin).write_text(source)
+    path = folder / name
+    path.write_text(textwrap.dedent(text))
+    return path
 
 
 SAFE, START = bytes(opcodes("safe")), bytes(opcodes("start"))

@@ -18,6 +18,8 @@ from roomba_bt.runtime.stack import RunStack, TreeMission
 from roomba_bt.runtime.summary import ExitCode, Outcome, RunSummary
 from roomba_bt.sim import SimLink, Simulator, load_world
 
+from .simrun import write_mission
+
 PLUGIN = '''
 from roomba_bt.behaviours import Condition, declare
 
@@ -44,10 +46,7 @@ tree:
 
 @pytest.fixture
 def mission(tmp_path: Path) -> Path:
-    (tmp_path / "fragile.py").write_text(PLUGIN)
-    path = tmp_path / "m.yaml"
-    path.write_text(MISSION)
-    return path
+    return write_mission(tmp_path, MISSION, "m.yaml", {"fragile.py": PLUGIN})
 
 
 def run_tree(

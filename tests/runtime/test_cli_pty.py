@@ -8,7 +8,6 @@ import os
 import signal
 import subprocess
 import sys
-import textwrap
 import threading
 import time
 from collections.abc import Callable
@@ -20,7 +19,7 @@ import pytest
 from roomba_bt.oi import commands as oi
 from roomba_bt.runtime.recording import load_record
 
-from .simrun import SPIN
+from .simrun import SPIN, write_mission
 
 SAFE_END = oi.halt().data + oi.motors_off().data + oi.pause_stream().data + oi.start().data
 CLI = [sys.executable, "-m", "roomba_bt.cli"]
@@ -33,12 +32,6 @@ def sim_port(served_sim: Callable[..., Any]) -> str:
     port: str = served_sim("--pty").address
     assert port.startswith("/dev/"), port
     return port
-
-
-def _mission(tmp_path: Path, text: str) -> Path:
-    path = tmp_path / "mission.yaml"
-    path.write_text(textwrap.dedent(text))
-    return path
 
 
 def _start_run(
@@ -68,7 +61,7 @@ def _wait_for_driving(record: Path, timeout: float = 10.0) -> None:
 def _driving(port: str, tmp_path: Path) -> tuple[subprocess.Popen[str], Path]:
     """A run spinning for ever on ``port``, once it drives; its record's path."""
     record = tmp_path / "run.jsonl"
-    proc = _start_run(port, _mission(tmp_path, SPIN), record)
+    proc = _start_run(port, write_mission(tmp_path, SPIN), record)
     _wait_for_driving(record)
     return proc, record
 
@@ -106,7 +99,7 @@ def test_a_run_started_by_nohup_outlives_a_hang_up(sim_port: str, tmp_path: Path
     as nohup set it, and the run goes on (it ended, exit 130, 'SIGHUP: the terminal was
     closed'); SIGTERM still ends it with the safe stop."""
     record = tmp_path / "run.jsonl"
-    proc = _start_run(sim_port, _mission(tmp_path, SPIN), record, ignoring=signal.SIGHUP)
+    proc = _start_run(sim_port, write_mission(tmp_path, SPIN), record, ignoring=signal.SIGHUP)
     _wait_for_driving(record)
     proc.send_signal(signal.SIGHUP)
     assert _still_running(proc, record), proc.communicate()
@@ -126,7 +119,7 @@ def test_the_terminal_closing_ends_with_the_safe_stop_and_exit_130(
     import pty
 
     record = tmp_path / "run.jsonl"
-    mission = _mission(tmp_path, SPIN)
+    mission = write_mission(tmp_path, SPIN)
     pid, terminal = pty.fork()
     if pid == 0:  # the run, its terminal the pty's (the live display draws on it)
         os.execv(sys.executable, [*CLI, "run", str(mission), "--port", sim_port, "--record",
@@ -170,7 +163,7 @@ def test_a_second_ctrl_c_waits_for_the_safe_stop_and_the_summary(
 
 def test_success_over_the_pty(sim_port: str, tmp_path: Path) -> None:
     record = tmp_path / "run.jsonl"
-    mission = _mission(
+    mission = write_mission(
         tmp_path,
         """
         tree:
@@ -202,7 +195,7 @@ def test_a_run_whose_watchdog_stopped_the_wheels_over_the_pty_replays_byte_for_b
     nothing', exit 1, for every run with a stall (every run over a noisy cable)."""
     sim = served_sim("--pty", "--stream-gap-at", "1.5", "--stream-gap-s", "0.5")
     record = tmp_path / "run.jsonl"
-    proc = _start_run(sim.address, _mission(tmp_path, SPIN), record, "--timeout", "3s")
+    proc = _start_run(sim.address, write_mission(tmp_path, SPIN), record, "--timeout", "3s")
     out, err = proc.communicate(timeout=30)
     assert proc.returncode == 1, err  # its timeout
     assert "stalls       1 (watchdog drive 0), 1 ridden through" in out
@@ -215,7 +208,7 @@ def test_a_run_whose_watchdog_stopped_the_wheels_over_the_pty_replays_byte_for_b
 
 def test_timeout_over_the_pty_is_exit_1(sim_port: str, tmp_path: Path) -> None:
     record = tmp_path / "run.jsonl"
-    proc = _start_run(sim_port, _mission(tmp_path, SPIN), record, "--timeout", "1s")
+    proc = _start_run(sim_port, write_mission(tmp_path, SPIN), record, "--timeout", "1s")
     out, err = proc.communicate(timeout=30)
     assert proc.returncode == 1, err
     assert "TIMEOUT" in out
@@ -224,7 +217,7 @@ def test_timeout_over_the_pty_is_exit_1(sim_port: str, tmp_path: Path) -> None:
 
 def _run_on(port: str, tmp_path: Path) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [*CLI, "run", str(_mission(tmp_path, SPIN)), "--port", port],
+        [*CLI, "run", str(write_mission(tmp_path, SPIN)), "--port", port],
         capture_output=True,
         text=True,
         timeout=30,
@@ -286,7 +279,7 @@ def test_a_terminal_that_stops_reading_does_not_hold_up_the_run(
     import fcntl
 
     record = tmp_path / "run.jsonl"
-    mission = _mission(tmp_path, SPIN if display == "tree" else BACK_AND_FORTH)
+    mission = write_mission(tmp_path, SPIN if display == "tree" else BACK_AND_FORTH)
     read_end, write_end = os.pipe()
     fcntl.fcntl(write_end, 1031, 4096)  # F_SETPIPE_SZ: a terminal's few KiB, never read
     quiet = subprocess.DEVNULL

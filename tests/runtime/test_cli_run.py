@@ -8,7 +8,6 @@ import logging
 import re
 import subprocess
 import sys
-import textwrap
 from pathlib import Path
 
 import pytest
@@ -19,16 +18,14 @@ from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.runtime.display import MissionClockFormatter
 from roomba_bt.runtime.recording import load_record
 
-from .simrun import SHORT_DRIVE, SPIN
+from .simrun import SHORT_DRIVE, SPIN, write_mission
 
 MISSION = SHORT_DRIVE
 
 
 @pytest.fixture
 def mission(tmp_path: Path) -> Path:
-    path = tmp_path / "short.yaml"
-    path.write_text(textwrap.dedent(MISSION))
-    return path
+    return write_mission(tmp_path, MISSION, "short.yaml")
 
 
 def test_run_fast_succeeds(mission: Path, capsys: pytest.CaptureFixture[str]) -> None:

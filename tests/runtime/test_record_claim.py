@@ -7,7 +7,6 @@ from __future__ import annotations
 import contextlib
 import subprocess
 import sys
-import textwrap
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -16,6 +15,8 @@ import pytest
 from roomba_bt.cli import main
 from roomba_bt.runtime.recording import RecordingTransport, load_record
 from roomba_bt.transport.testing import NullTransport
+
+from .simrun import write_mission
 
 MISSION = """
 mission: short-drive
@@ -45,9 +46,7 @@ sys.stdin.read()
 
 @pytest.fixture
 def mission(tmp_path: Path) -> Path:
-    path = tmp_path / "short.yaml"
-    path.write_text(textwrap.dedent(MISSION))
-    return path
+    return write_mission(tmp_path, MISSION, "short.yaml")
 
 
 @pytest.fixture

@@ -14,7 +14,7 @@ from roomba_bt.cli import main
 from roomba_bt.mission import Permissions
 from roomba_bt.runtime.summary import ExitCode, RunSummary
 
-from .simrun import RunMission
+from .simrun import RunMission, write_mission
 
 PLUGIN = '''
 import time
@@ -43,10 +43,7 @@ MISSION = "plugins: [./sleepy.py]\ntree:\n  sequence: [{mode: safe}, {wait: 100m
 
 @pytest.fixture
 def mission(tmp_path: Path) -> Path:
-    (tmp_path / "sleepy.py").write_text(PLUGIN)
-    path = tmp_path / "m.yaml"
-    path.write_text(MISSION)
-    return path
+    return write_mission(tmp_path, MISSION, "m.yaml", {"sleepy.py": PLUGIN})
 
 
 def test_run_fast_names_the_behaviour_of_its_slowest_tick(
