@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import logging
 from pathlib import Path
+from typing import Any
 
 import py_trees
 import pytest
@@ -16,7 +17,7 @@ from roomba_bt.mission import Permissions
 from roomba_bt.oi import commands as C
 from roomba_bt.runtime.summary import Outcome
 
-from .simrun import RunMission
+from .simrun import Run, RunMission
 
 #: the stranger's classes (their plugin packages bt-bad-halt and bt-bad-run), plus one that
 #: calls super() and then drives again, and one that calls super() as it should
@@ -110,6 +111,18 @@ def plugin(tmp_path: Path) -> Path:
     return path
 
 
+@pytest.fixture
+def run_warned(run_mission: RunMission, caplog: pytest.LogCaptureFixture) -> RunMission:
+    """``run_mission`` with plugin files allowed (each mission loads the stranger's file) and
+    the warnings it logs kept in ``caplog``, for :func:`_warnings`."""
+
+    def run(mission: str, **options: Any) -> Run:
+        with caplog.at_level(logging.WARNING):
+            return run_mission(mission, permissions=PERMIT, **options)
+
+    return run
+
+
 def _drives(run_writes: list[tuple[float, bytes]]) -> list[tuple[float, bytes]]:
     """The Drive commands written, each when it first differed from the one before (an
     action sends its drive on every tick)."""
@@ -133,7 +146,7 @@ def _warnings(caplog: pytest.LogCaptureFixture) -> list[str]:
 
 
 def test_an_until_guard_halts_an_action_whose_terminate_skips_super(
-    run_mission: RunMission, plugin: Path, caplog: pytest.LogCaptureFixture
+    run_warned: RunMission, plugin: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
     """The stranger's ``m/halt.yaml``: drive 0 is written in the tick the bump guard fires,
     the bump reflex does not send the dead action's drive again, and the robot stands
@@ -149,8 +162,7 @@ def test_an_until_guard_halts_an_action_whose_terminate_skips_super(
         - wait: 5s
         - mode: passive
     """
-    with caplog.at_level(logging.WARNING):
-        run = run_mission(mission, permissions=PERMIT)
+    run = run_warned(mission)
     assert run.summary.outcome is Outcome.SUCCESS, run.summary.reason
     drives = _drives(run.link.writes)
     # forward, the reflex's drive 0 at the bump's onset, and nothing after it turns a wheel:
@@ -170,7 +182,7 @@ def test_an_until_guard_halts_an_action_whose_terminate_skips_super(
 
 
 def test_the_reflex_resends_nothing_once_the_guard_has_fired(
-    run_mission: RunMission, plugin: Path
+    run_warned: RunMission, plugin: Path
 ) -> None:
     """The bump reflex's hold: drive 0 at the onset frame; the guard fires a frame later and
     its halt is that tick's wheel command, so the held forward drive is not written again."""
@@ -183,13 +195,13 @@ def test_the_reflex_resends_nothing_once_the_guard_has_fired(
           until: {bump: any}
         - wait: 1s
     """
-    run = run_mission(mission, permissions=PERMIT)
+    run = run_warned(mission)
     drives = [data for _, data in _drives(run.link.writes)]
     assert drives == [FORWARD, HALT], drives
 
 
 def test_a_timeout_halts_wheels_started_in_start_with_a_terminate_that_does_nothing(
-    run_mission: RunMission, plugin: Path, caplog: pytest.LogCaptureFixture
+    run_warned: RunMission, plugin: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
     """``m/sticky2.yaml``: the arc stops at the timeout's 1 s, not at the end of the wait."""
     mission = """
@@ -204,8 +216,7 @@ def test_a_timeout_halts_wheels_started_in_start_with_a_terminate_that_does_noth
         - wait: 2s
         - mode: passive
     """
-    with caplog.at_level(logging.WARNING):
-        run = run_mission(mission, permissions=PERMIT)
+    run = run_warned(mission)
     assert run.summary.outcome is Outcome.SUCCESS, run.summary.reason
     drives = _drives(run.link.writes)
     [(started, arc), (halted, stop), *_rest] = drives
@@ -216,7 +227,7 @@ def test_a_timeout_halts_wheels_started_in_start_with_a_terminate_that_does_noth
 
 
 def test_a_drive_sent_after_super_terminate_is_halted_and_said_so(
-    run_mission: RunMission, plugin: Path, caplog: pytest.LogCaptureFixture
+    run_warned: RunMission, plugin: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
     mission = """
     plugins: [./mine.py]
@@ -227,8 +238,7 @@ def test_a_drive_sent_after_super_terminate_is_halted_and_said_so(
             timeout: {after: 500ms, do: drives_after_super}
         - wait: 1s
     """
-    with caplog.at_level(logging.WARNING):
-        run = run_mission(mission, permissions=PERMIT)
+    run = run_warned(mission)
     drives = [data for _, data in _drives(run.link.writes)]
     assert drives[:2] == [FORWARD, HALT], drives
     assert C.drive_straight(300).data not in drives
@@ -237,7 +247,7 @@ def test_a_drive_sent_after_super_terminate_is_halted_and_said_so(
 
 
 def test_said_once_per_class_and_not_for_a_terminate_that_calls_super(
-    run_mission: RunMission, plugin: Path, caplog: pytest.LogCaptureFixture
+    run_warned: RunMission, plugin: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
     mission = """
     plugins: [./mine.py]
@@ -253,8 +263,7 @@ def test_said_once_per_class_and_not_for_a_terminate_that_calls_super(
                 - force_success: {timeout: {after: 150ms, do: polite}}
                 - wait: 100ms
     """
-    with caplog.at_level(logging.WARNING):
-        run = run_mission(mission, permissions=PERMIT)
+    run = run_warned(mission)
     assert run.summary.outcome is Outcome.SUCCESS, run.summary.reason
     assert len(_warnings(caplog)) == 1
     drives = [data for _, data in _drives(run.link.writes)]
@@ -284,7 +293,7 @@ def test_a_tree_ticked_by_the_generator_halts_it_too(plugin: Path) -> None:
 
 
 def test_a_built_in_cycle_a_halted_action_left_running_is_ended(
-    run_mission: RunMission, plugin: Path, caplog: pytest.LogCaptureFixture
+    run_warned: RunMission, plugin: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
     """Its terminate's super() ended the cycle (Safe, drive 0, motors off, Start); left out,
     the firmware cleaned on in Passive, where nothing else the tree sends stops it."""
@@ -296,8 +305,7 @@ def test_a_built_in_cycle_a_halted_action_left_running_is_ended(
             timeout: {after: 1s, do: cleans_quietly}
         - wait: 2s
     """
-    with caplog.at_level(logging.WARNING):
-        run = run_mission(mission, permissions=PERMIT)
+    run = run_warned(mission)
     assert run.summary.outcome is Outcome.SUCCESS, run.summary.reason
     end = [c.data for c in (C.safe(), C.halt(), C.motors_off(), C.start())]
     [(started, _)] = [(t, data) for t, data in run.link.writes if data == C.clean().data]
@@ -309,14 +317,13 @@ def test_a_built_in_cycle_a_halted_action_left_running_is_ended(
 
 
 def test_a_drive_a_terminate_queues_at_the_run_s_end_is_dropped_with_a_warning(
-    run_mission: RunMission, tmp_path: Path, caplog: pytest.LogCaptureFixture
+    run_warned: RunMission, tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
     """``m/st.yaml`` with ``--timeout 1``: the drive was not written, as docs/runtime.md
     says, but the warning naming the behaviour it promises was not given."""
     (tmp_path / "sticky.py").write_text(PLUGIN)
     mission = "plugins: [./sticky.py]\ntree:\n  sequence:\n    - mode: safe\n    - sticky\n"
-    with caplog.at_level(logging.WARNING):
-        run = run_mission(mission, permissions=PERMIT, timeout=1.0)
+    run = run_warned(mission, timeout=1.0)
     assert run.summary.outcome is Outcome.TIMEOUT
     assert C.drive_straight(300).data not in b"".join(data for _, data in run.link.writes)
     [said] = [r.getMessage() for r in caplog.records if "sticky" in r.getMessage()]
