@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import io
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -213,6 +214,18 @@ def _short_specs(runs: int = 8) -> list[EpisodeSpec]:
                          params=(("duration", "2s"),), timeout_s=10)  # fmt: skip
 
 
+def _ctrl_c_after(count: int, seen: list[int]) -> Callable[[int, int, EpisodeResult], None]:
+    """A progress callback that notes each finished episode's seed in ``seen`` and, at the
+    ``count``-th, stops the evaluation as a Ctrl-C does."""
+
+    def progress(done: int, total: int, result: EpisodeResult) -> None:
+        seen.append(result.seed)
+        if len(seen) == count:
+            raise KeyboardInterrupt
+
+    return progress
+
+
 def test_a_worker_killed_mid_evaluation_loses_no_episode_and_hangs_nothing(hooked) -> None:  # type: ignore[no-untyped-def]
     """A worker killed (kill -9, the OOM killer) hung the pool for ever, silently: now the
     unfinished episodes run again in new workers, counted, with the same results."""
@@ -258,11 +271,7 @@ def test_results_are_taken_as_they_finish_and_a_ctrl_c_keeps_them(hooked) -> Non
     specs = _short_specs()
     mark = hooked(0, "wait")
     seen: list[int] = []
-
-    def progress(done: int, total: int, result: EpisodeResult) -> None:
-        seen.append(result.seed)
-        if len(seen) == 3:
-            raise KeyboardInterrupt
+    progress = _ctrl_c_after(3, seen)
 
     run = LocalRun()
     with pytest.raises(KeyboardInterrupt):
@@ -289,11 +298,7 @@ def test_a_ctrl_c_ends_the_pools_workers_without_a_word(
     specs = _short_specs(3)
     mark = hooked(0, "wait")
     seen: list[int] = []
-
-    def progress(done: int, total: int, result: EpisodeResult) -> None:
-        seen.append(result.seed)
-        if len(seen) == 2:
-            raise KeyboardInterrupt
+    progress = _ctrl_c_after(2, seen)
 
     previous = signal.signal(signal.SIGTERM, raise_terminated)
     try:
