@@ -16,17 +16,9 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from runtime.simrun import SHORT_DRIVE, write_mission  # tests/runtime: the short drive
 
 from roomba_bt.cli import build_parser, main, setup_logging
 from roomba_bt.runtime.display import MissionClockFormatter, use_mission_clock
-
-MISSION = SHORT_DRIVE
-
-
-@pytest.fixture
-def mission(tmp_path: Path) -> Path:
-    return write_mission(tmp_path, MISSION, "short.yaml")
 
 
 def test_an_unsupported_py_trees_is_a_message_and_exit_2_not_a_traceback(

@@ -20,15 +20,12 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from runtime.simrun import SHORT_DRIVE, write_mission  # tests/runtime: the short drive
 
 from roomba_bt.cli import main
 from roomba_bt.runtime.recording import load_record
 
 CLI = [sys.executable, "-m", "roomba_bt.cli"]
 DOCK = Path(__file__).resolve().parents[2] / "missions" / "dock.yaml"
-
-MISSION = SHORT_DRIVE
 
 
 def _env(**extra: str) -> dict[str, str]:
@@ -52,11 +49,6 @@ def _reader_gone(args: list[str], cwd: Path) -> subprocess.CompletedProcess[str]
         os.close(write_end)
     _, err = proc.communicate(timeout=120)
     return subprocess.CompletedProcess(proc.args, proc.returncode, "", err)
-
-
-@pytest.fixture
-def mission(tmp_path: Path) -> Path:
-    return write_mission(tmp_path, MISSION, "short.yaml")
 
 
 def test_a_closed_pipe_keeps_a_failed_runs_exit_code_and_says_its_outcome(
