@@ -31,6 +31,7 @@ from roomba_bt.mission.values import (
     said_origin,
     substituted,
     unknown,
+    warn_escaped,
 )
 
 if TYPE_CHECKING:
@@ -54,7 +55,9 @@ def option_value(
     refused, :func:`_child_names`); everything else through :func:`resolve`
     (``${parameter}``, units)."""
     if param.type is TEXT:
-        text, uses_parameter = name_text(scalar_text(node, loc, param.name), loc, env)
+        written = scalar_text(node, loc, param.name)
+        text, uses_parameter = name_text(written, loc, env)
+        warn_escaped(ctx, written, node, loc, None, f"{kind.word}.{param.name}")
         if uses_parameter:
             options[_PARAMETER_IN_NAME] = loc
         return text

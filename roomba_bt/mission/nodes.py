@@ -34,6 +34,7 @@ from roomba_bt.mission.values import (
     resolve,
     shown,
     unknown,
+    warn_escaped,
 )
 
 #: How deep a tree may nest, counted in nodes from the root, subtrees expanded. A mission
@@ -151,6 +152,7 @@ class NodeParser:
             name_loc = mods["name"][2]
             written = scalar_text(mods["name"][0], name_loc, "name")
             name, uses_parameter = name_text(written, name_loc, env)
+            warn_escaped(self.ctx, written, mods["name"][0], name_loc, None, "name")
             built.parameter_in_name = name_loc if uses_parameter else None
             if name != built.name:
                 built.label, built.name = built.name, name

@@ -94,19 +94,63 @@ def escape_warning(where: Loc, what: str, name: str) -> Diagnostic:
     """The warning of a ``$${name}`` naming a parameter (:func:`escaped_parameters`)."""
     return where.at(
         f'{what}: "$${{{name}}}" is the text "${{{name}}}"; a "$" before the value is written '
-        f'"$$${{{name}}}" (before session 28, "$${{{name}}}" was a "$" and then the value)'
+        f'"$$${{{name}}}" (in 0.1.0, "$${{{name}}}" was a "$" and then the value)'
+    ).as_warning()
+
+
+#: Two dollars alone (no ``$`` before or after them) and before anything but a ``{``: one
+#: ``$`` now, two in 0.1.0, where no ``$`` was special outside ``${name}``. A 0.1.0 author
+#: meant the two they saw; one written for 0.2.0 never needs them, a lone ``$`` before
+#: anything else being itself. A longer run (``$$$$``: two now) or ``$$${x}`` (a ``$`` and
+#: the value) is the only spelling of what it says now, so it is not warned of: a warning
+#: with no way to avoid it would be said on every run of a mission that is right.
+_LONE_DOUBLED = re.compile(r"(?<!\$)\$\$(?![$\{])")
+
+
+def doubled_dollars(text: str) -> list[int]:
+    """Where in ``text`` each ``$$`` is that read ``$$`` in 0.1.0 and reads ``$`` now,
+    with nothing a 0.2.0 author needs it for (:data:`_LONE_DOUBLED`)."""
+    return [match.start() for match in _LONE_DOUBLED.finditer(text)]
+
+
+def doubled_warning(where: Loc, what: str, text: str, offset: int) -> Diagnostic:
+    """The warning of a ``$$`` at ``offset`` of ``text`` (:func:`doubled_dollars`): what
+    was found, with the character after it, what it reads now, and both spellings."""
+    after = text[offset + 2 : offset + 3]
+    return where.at(
+        f'{what}: "$${after}" reads "${after}" since 0.2.0 ("$$" is one "$", as in Python\'s '
+        f'string.Template); in 0.1.0 it read "$${after}": write "${after}" for one "$", or '
+        f'"$$$${after}" to keep two'
     ).as_warning()
 
 
 def warn_escaped(
-    ctx: Context, text: str, node: yaml.Node, loc: Loc, names: Collection[str], what: str
+    ctx: Context,
+    text: str,
+    node: yaml.Node,
+    loc: Loc,
+    names: Collection[str] | None,
+    what: str,
 ) -> None:
-    """Add to ``ctx.warnings`` one :func:`escape_warning` for each ``$${name}`` in ``text``
-    (``node``'s, at ``loc``) naming one of ``names``, each at its own column where the text
-    is written on one line as it reads; once, however often the text is resolved (a
-    subtree used twice)."""
-    for offset, name in escaped_parameters(text, names):
-        warning = escape_warning(_character_at(node, loc, text, offset), what, name)
+    """Add to ``ctx.warnings`` what changed meaning in ``text`` (``node``'s, at ``loc``)
+    since 0.1.0: an :func:`escape_warning` for each ``$${name}`` naming one of ``names``
+    (None: a ``name:``, which 0.1.0 showed as written, substituting nothing) and a
+    :func:`doubled_warning` for each lone ``$$``; each at its own column where the text is
+    written on one line as it reads; once, however often the text is resolved (a subtree
+    used twice)."""
+
+    def at(offset: int) -> Loc:
+        return _character_at(node, loc, text, offset)
+
+    said = [
+        (offset, doubled_warning(at(offset), what, text, offset))
+        for offset in doubled_dollars(text)
+    ]
+    said += [
+        (offset, escape_warning(at(offset), what, name))
+        for offset, name in escaped_parameters(text, names or ())
+    ]
+    for _, warning in sorted(said, key=lambda each: each[0]):
         if warning not in ctx.warnings:
             ctx.warnings.append(warning)
 

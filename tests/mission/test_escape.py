@@ -149,7 +149,7 @@ def test_a_dollar_before_a_value_is_written_with_three(
     said = [f"{w.line}:{w.column}: {w.message}" for w in mission.warnings]
     tail = (
         '"$${price}" is the text "${price}"; a "$" before the value is written "$$${price}" '
-        '(before session 28, "$${price}" was a "$" and then the value)'
+        '(in 0.1.0, "$${price}" was a "$" and then the value)'
     )
     assert said == [
         f"2:21: description: {tail}",
@@ -178,3 +178,60 @@ def test_a_default_may_not_use_a_parameter_after_a_dollar(errors_of: Errors) -> 
     head = "mission: m\nparameters:\n  a: {type: str, default: "
     (error,) = errors_of(head + '"$$${a}"}\ntree: {log: "${a}"}\n')
     assert "a default cannot refer to itself" in error
+
+
+#: 0.1.0 (e80f20a) read no "$" but that of ``${name}``: each "$$" below was two dollars
+DOUBLED = """
+mission: m
+description: "costs $$ 5"
+parameters:
+  price: {type: int, default: 5}
+  note: {type: str, default: "pay $$"}
+tree:
+  sequence:
+    - log: "cost $$5, $$$$5, $$$5 and $5"
+    - log: "$$${price} and $$$$"
+    - log: "ok"
+      name: "pay $$5"
+    - sequence:
+        name: "spend $$"
+        children: [{log: "${note}"}]
+"""
+
+
+def test_a_lone_doubled_dollar_is_warned_of_where_0_1_0_read_two(
+    compile_text: Compile, caplog: pytest.LogCaptureFixture
+) -> None:
+    """``"cost $$5"`` logged ``cost $$5`` in 0.1.0 and logs ``cost $5`` now, with no word
+    said: a warning at each lone ``$$`` (a description, a value, a parameter's default, a
+    ``name:``), saying what was found, what it reads now and both spellings. ``$$$$`` (two
+    now) and ``$$${price}`` (a ``$`` and the value) are the only spellings of what they say
+    now, and are not warned of."""
+    mission = compile_text(DOUBLED)
+    assert _logged(mission, caplog) == ["cost $5, $$5, $$5 and $5", "$5 and $$", "ok", "pay $"]
+    said = [f"{w.line}:{w.column}: {w.message}" for w in mission.warnings]
+    assert said == [
+        '5:35: parameter note: "$$" reads "$" since 0.2.0 ("$$" is one "$", as in Python\'s '
+        'string.Template); in 0.1.0 it read "$$": write "$" for one "$", or "$$$$" to keep two',
+        '2:21: description: "$$ " reads "$ " since 0.2.0 ("$$" is one "$", as in Python\'s '
+        'string.Template); in 0.1.0 it read "$$ ": write "$ " for one "$", or "$$$$ " to keep two',
+        '8:18: log.message: "$$5" reads "$5" since 0.2.0 ("$$" is one "$", as in Python\'s '
+        'string.Template); in 0.1.0 it read "$$5": write "$5" for one "$", or "$$$$5" to keep two',
+        '11:18: name: "$$5" reads "$5" since 0.2.0 ("$$" is one "$", as in Python\'s '
+        'string.Template); in 0.1.0 it read "$$5": write "$5" for one "$", or "$$$$5" to keep two',
+        '13:22: sequence.name: "$$" reads "$" since 0.2.0 ("$$" is one "$", as in Python\'s '
+        'string.Template); in 0.1.0 it read "$$": write "$" for one "$", or "$$$$" to keep two',
+    ], said
+    names = [node.name for node in mission.root.iterate()]
+    assert "pay $5" in names and "spend $" in names, names
+
+
+def test_the_spellings_a_doubled_dollar_warning_gives_are_not_warned_of(
+    compile_text: Compile, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Following either spelling the warning gives leaves a mission with no warning."""
+    mission = compile_text(
+        'mission: m\ntree: {sequence: [{log: "cost $5"}, {log: "cost $$$$5"}, {log: "$$$$"}]}\n'
+    )
+    assert _logged(mission, caplog) == ["cost $5", "cost $$5", "$$"]
+    assert mission.warnings == ()
