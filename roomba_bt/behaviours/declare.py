@@ -205,6 +205,11 @@ class Param:
     doc: str = ""
     #: may the value be ``@key`` (read from the blackboard at run time)?
     from_blackboard: bool = True
+    #: why ``minimum`` is what it is, said after a value below it (``" (...)"``); a speed
+    #: whose minimum is :data:`SLOWEST_MOVING_SPEED_MM_S` says the wheel stands still without
+    #: it. A minimum set for another reason says nothing of standing still: a ``dock_search``
+    #: speed of 10 mm/s said so, where 20 mm/s, refused alike, said nothing.
+    minimum_why: str = ""
 
     def check_range(self, value: Any) -> str | None:
         """An error message if ``value`` is outside the range, else None."""
@@ -214,12 +219,11 @@ class Param:
         if (lo is not None and value < lo) or (hi is not None and value > hi):
             unit = f" {self.type.unit}" if self.type.unit else ""
             shown = f"{value:g}{unit}"
-            why = (
-                f" (a wheel asked for less than {SLOWEST_MOVING_SPEED_MM_S} mm/s stands still: "
-                f"the speed controller turns it in steps of about {WHEEL_SPEED_STEP_MM_S} mm/s)"
-                if self.type is SPEED and lo is not None and 0 <= value < SLOWEST_MOVING_SPEED_MM_S
-                else ""
-            )
+            why = ""
+            if lo is not None and 0 <= value < lo:  # a negative one is refused for its sign
+                why = self.minimum_why
+                if not why and self.type is SPEED and lo == SLOWEST_MOVING_SPEED_MM_S:
+                    why = STANDS_STILL
             allowed = f"allowed {_bound(lo)}..{_bound(hi)}{unit}"
             return f"{self.name} {shown} is out of range: {allowed}{why}"
         return None
@@ -612,6 +616,13 @@ def class_doc(cls: type) -> str | None:
     return ast.get_docstring(node) if isinstance(node, ast.ClassDef) else None
 
 
+#: said after a speed below :data:`SLOWEST_MOVING_SPEED_MM_S` where that is the minimum
+STANDS_STILL = (
+    f" (a wheel asked for less than {SLOWEST_MOVING_SPEED_MM_S} mm/s stands still: "
+    f"the speed controller turns it in steps of about {WHEEL_SPEED_STEP_MM_S} mm/s)"
+)
+
+
 def moving_minimum(share: float = 1.0) -> int:
     """The smallest speed (whole mm/s) whose ``share`` still turns a wheel: the speed
     controller's nearest step of anything slower is 0 (:data:`SLOWEST_MOVING_SPEED_MM_S`), and
@@ -621,14 +632,47 @@ def moving_minimum(share: float = 1.0) -> int:
 
 # Here, beside Param, not in driving.py: driving.py is below the leaves' base module (which
 # uses its helpers), and this module is above it.
-def wheel_speed_param(name: str, default: str, *, minimum: float, doc: str = "") -> Param:
+#: A share of a speed parameter that a leaf sends to a wheel that must turn: the share and
+#: when ("on the inside of its orbit round the force field"). See :func:`wheel_speed_param`.
+SpeedShare = tuple[float, str]
+
+
+def wheel_speed_param(
+    name: str,
+    default: str,
+    *,
+    minimum: float,
+    doc: str = "",
+    shares: tuple[SpeedShare, ...] = (),
+) -> Param:
     """A forward wheel-speed parameter (a ``speed``, mm/s): from ``minimum`` up to what one
     wheel of Drive Direct takes (:data:`WHEEL`). A minimum that does not move a wheel is a
-    declaration's mistake (its leaf would hang): refused when the behaviour is declared."""
+    declaration's mistake (its leaf would hang): refused when the behaviour is declared.
+
+    ``shares``: each fixed share of the speed the leaf sends to a wheel that must turn (a
+    turn in place's slow phase, a straight move at a share, an arc's inner wheel). The
+    minimum is raised to what turns the slowest of them (:func:`moving_minimum`), and a
+    value below it is refused when the mission is compiled, saying which wheel would stand
+    still: ``dock_approach`` took ``speed: 30 mm/s``, and backed toward the beams' band at
+    36% of it, 10.8 mm/s, a wheel that never turned, until the stage's time limit."""
     if minimum < SLOWEST_MOVING_SPEED_MM_S:
         raise ValueError(
             f"{name}: minimum {minimum:g} mm/s does not move a wheel (the speed controller "
             f"steps of {WHEEL_SPEED_STEP_MM_S} mm/s round it to 0): at least "
             f"{SLOWEST_MOVING_SPEED_MM_S} (moving_minimum())"
         )
-    return Param(name, SPEED, default=default, minimum=minimum, maximum=WHEEL.maximum, doc=doc)
+    why = STANDS_STILL if minimum == SLOWEST_MOVING_SPEED_MM_S else ""
+    if shares:
+        share, when = min(shares)
+        needed = moving_minimum(share)
+        if needed > minimum:
+            minimum = needed
+            why = (
+                f" (it sends a wheel {share:.0%} of {name} {when}: below {needed} mm/s that "
+                f"is less than {SLOWEST_MOVING_SPEED_MM_S} mm/s, and the wheel stands still, "
+                f"the speed controller turning it in steps of about {WHEEL_SPEED_STEP_MM_S} mm/s)"
+            )
+    return Param(
+        name, SPEED, default=default, minimum=minimum, maximum=WHEEL.maximum, doc=doc,
+        minimum_why=why,
+    )  # fmt: skip

@@ -92,6 +92,23 @@ FACE_SEARCH_SHARE = 1.0
 FACE_TURN = HeadingTurn(
     fast=0.6, slow=0.25, slow_within_rad=math.radians(8), done_rad=math.radians(2)
 )
+#: Each share of ``speed`` and ``turn_speed`` a wheel is sent, which must turn it (the
+#: parameters' minimums: :func:`~roomba_bt.behaviours.declare.wheel_speed_param`)
+SPEED_SHARES = (
+    (CLOSER_SHARE, "moving closer along the beams"),
+    (CLOSER_SHARE * CLOSER_INNER_SHARE, "on the inside of its steering toward the beams"),
+    (ORBIT_SHARE, "on the outside of its orbit round the force field"),
+    (ORBIT_SHARE * ORBIT_INNER_SHARE, "on the inside of its orbit round the force field"),
+    (FORCE_FIELD_SHARE, "crossing toward the axis inside the force field"),
+    (NEAR_EDGE_SHARE * FORCE_FIELD_SHARE, "backing to the near edge of the beams' band"),
+)
+TURN_SPEED_SHARES = (
+    (TURN_AWAY_SHARE, "turning away from the dock"),
+    (FACE_SEEN_SHARE, "turning while a receiver sees the dock"),
+    (FACE_SEARCH_SHARE, "turning while no receiver sees the dock"),
+    (FACE_TURN.fast, "turning to face the dock"),
+    (FACE_TURN.slow, "for the last degrees of a turn to face the dock"),
+)
 #: seen at one heading only, then nothing for this much turn: face that heading
 FRINGE_RAD = math.radians(60.0)
 #: spun this far without facing: forget the heading where the dock was seen, start again
@@ -114,9 +131,11 @@ class ApproachState(IdentityEnum):
 @declare_stage(
     "dock_approach",
     params=(
-        wheel_speed_param("speed", "150 mm/s", minimum=30, doc="speed toward the axis"),
+        wheel_speed_param("speed", "150 mm/s", minimum=30, doc="speed toward the axis",
+                          shares=SPEED_SHARES),
         wheel_speed_param("turn_speed", "200 mm/s", minimum=40,
-                          doc="wheel speed of the turns in place (facing the dock, turning away)"),
+                          doc="wheel speed of the turns in place (facing the dock, turning away)",
+                          shares=TURN_SPEED_SHARES),
         Param("cross_angle", ANGLE, default="80deg", minimum=20, maximum=90,
               doc="how far it turns away from the dock to move toward its axis"),
         Param("lost_after", DURATION, default="4s", minimum=0.1,

@@ -42,6 +42,13 @@ NUDGE_SHARE = 0.15
 WIGGLE_DONE_RAD = math.radians(1.0)
 WIGGLE_MM_S = 30.0
 WIGGLE_PUSH_MM_S = 8.0
+#: Each share of ``speed`` (and of ``slow``, in the force field) a wheel is sent, which must
+#: turn it (the parameters' minimums: :func:`~roomba_bt.behaviours.declare.wheel_speed_param`)
+SPEED_SHARES = (
+    (STEER_SHARE, "on the near side, steering toward the receiver that sees the dock"),
+    (SEARCH_SHARE, "driving on while neither receiver sees the dock"),
+    (1.0 - NUDGE_SHARE, "on the slower side of its nudge toward the axis"),
+)
 
 
 class DriveOnState(IdentityEnum):
@@ -52,10 +59,9 @@ class DriveOnState(IdentityEnum):
 @declare_stage(
     "dock_drive_on",
     params=(
-        # at least what moves the wheels at SEARCH_SHARE of it (neither receiver sees the dock)
-        wheel_speed_param("speed", "120 mm/s", minimum=moving_minimum(SEARCH_SHARE),
+        wheel_speed_param("speed", "120 mm/s", minimum=moving_minimum(), shares=SPEED_SHARES,
                           doc="speed along the axis outside the force field"),
-        wheel_speed_param("slow", "60 mm/s", minimum=moving_minimum(SEARCH_SHARE),
+        wheel_speed_param("slow", "60 mm/s", minimum=moving_minimum(), shares=SPEED_SHARES,
                           doc="speed inside the force field"),
         Param("wiggle", ANGLE, default="12deg", minimum=0, maximum=45,
               doc="how far it turns each way on contact to seat the charging contacts"),

@@ -111,6 +111,10 @@ FOLLOW_MIN_MM = 1000.0
 UNWEDGE_TURN_RAD = math.radians(30)
 UNWEDGE_MM_S = 120
 FOLLOW_BUMPS = 6
+#: Each share of ``speed`` a wheel is sent, which must turn it (the parameter's minimum:
+#: :func:`~roomba_bt.behaviours.declare.wheel_speed_param`); the steering's slower wheel is
+#: not one: a correction a still wheel makes a pivot is still made, and sooner
+SPEED_SHARES = ((CORNER_INNER_SHARE, "on the inside of its arc round a wall's end"),)
 
 Cell = tuple[int, int]
 
@@ -188,7 +192,8 @@ class VisitGrid:
 @declare_stage(
     "dock_search",
     params=(
-        wheel_speed_param("speed", "200 mm/s", minimum=50, doc="forward speed while wandering"),
+        wheel_speed_param("speed", "200 mm/s", minimum=50, doc="forward speed while wandering",
+                          shares=SPEED_SHARES),
         Param("spin_first", BOOL, default=True, doc="turn once in place before wandering"),
         Param("leg", DISTANCE, default="2 m", minimum=200,
               doc="longest straight leg before choosing a new heading"),
