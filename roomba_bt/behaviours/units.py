@@ -304,17 +304,21 @@ class ValueType:
         return dict(self.json_schema)
 
 
+#: a number written as zero (``0``, ``0.0``, ``.0e5``), without its sign
+_ZERO_NUMBER = r"(?:0+(?:\.0*)?|\.0+)(?:[eE][-+]?[0-9]+)?"
 #: a text :func:`parse_quantity` reads as 0 with no unit (``"0"``, ``"-0.0"``): a JSON Schema
 #: pattern (``wait: "0"`` is valid; the schema refused it)
-ZERO_TEXT_PATTERN = r"^\s*[-+]?(?:0+(?:\.0*)?|\.0+)(?:[eE][-+]?[0-9]+)?\s*$"
+ZERO_TEXT_PATTERN = rf"^\s*[-+]?{_ZERO_NUMBER}\s*$"
 
 
 def quantity_schema(dimension: str, *, signed: bool = True) -> dict[str, Any]:
     """The JSON Schema of a quantity of ``dimension`` as :func:`parse_quantity` reads it:
-    a number and a unit, a 0 (a number or a text). ``signed=False``: no minus sign (a
-    parameter whose minimum is not below 0: a pattern can exclude a negative value, though
-    it cannot hold a range)."""
-    number = _NUMBER if signed else r"\+?" + _NUMBER.removeprefix("[-+]?")
+    a number and a unit, a 0 (a number or a text). ``signed=False``: no minus sign but on a
+    zero (a parameter whose minimum is not below 0: a pattern can exclude a negative value,
+    though it cannot hold a range; ``-0s`` is 0, which validate takes and the schema
+    refused)."""
+    unsigned = _NUMBER.removeprefix("[-+]?")
+    number = _NUMBER if signed else rf"(?:\+?{unsigned}|-{_ZERO_NUMBER})"
     units = "|".join(re.escape(u) for u in UNITS[dimension])
     return {
         "anyOf": [

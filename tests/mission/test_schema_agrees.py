@@ -75,7 +75,7 @@ def _written(param: Param, value: float) -> Any:
 
 #: the cases whose value is a negative quantity where the minimum is 0: no "range"
 #: exception, the schema refuses them (``wait: "-1s"`` was schema-valid)
-NEGATIVE: set[str] = {"negative wait", "negative delay"}
+NEGATIVE: set[str] = {"negative wait", "negative delay", "negative tenth wait"}
 
 
 def _edge_cases() -> list[tuple[str, dict[str, Any]]]:
@@ -146,6 +146,17 @@ REPORTED: list[tuple[str, dict[str, Any], bool]] = [
                                  parameters={"t": {"type": "duration", "default": "1s"}}), True),
     ("negative wait", _tree({"wait": "-1s"}), False),
     ("negative delay", _tree({"delay": {"for": "-1s", "do": _WAIT}}), False),
+    # a minus on a zero is 0: validate took "-0s" and the schema refused it
+    ("negative zero wait", _tree({"wait": "-0s"}), True),
+    ("negative zero wait spaced", _tree({"wait": "- 0 s"}), False),
+    ("negative zero wait decimal", _tree({"wait": "-0.0 ms"}), True),
+    ("negative zero wait exponent", _tree({"wait": "-0e3s"}), True),
+    ("negative zero delay", _tree({"delay": {"for": "-0min", "do": _WAIT}}), True),
+    ("negative zero as text", _tree({"wait": "-0"}), True),
+    ("negative tenth wait", _tree({"wait": "-0.1s"}), False),
+    ("negative zero turn speed", _tree({"sequence": [{"mode": "safe"},
+                                                     {"turn": {"angle": "90deg",
+                                                               "speed": "-0 mm/s"}}]}), False),
     ("negative drive", _tree({"sequence": [{"mode": "safe"},
                                            {"drive": {"velocity": "-100 mm/s",
                                                       "duration": "1s"}}]}), True),
