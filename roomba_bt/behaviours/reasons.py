@@ -78,6 +78,9 @@ def _explain(root: Behaviour) -> tuple[str, Behaviour | None, bool]:
         if condition is not None:  # a name the mission gave it says what it means: kept
             said = f"{condition.name} held"
             return (said if node.name == "inverter" else f"{node.name} ({said})"), condition, False
+        # a flip below it (an inverter in an inverter): said leaf by leaf, each as it ended
+        # (``inverter: {inverter: {bump: any}}`` said only "inverter")
+        return f"{node.name}: {_succeeded_because(node.children[0])} (inverted)", None, True
     if best is node and isinstance(node, py_trees.decorators.SuccessIsFailure):
         # a forced failure: the decorator failed the run, its child having succeeded; a
         # condition that held just before it ("back away, then fail": the patrol's cliff
@@ -85,7 +88,8 @@ def _explain(root: Behaviour) -> tuple[str, Behaviour | None, bool]:
         # action that succeeded before it is no cause: ``[drive 100ms, force_failure:
         # {wait: 15ms}]`` blamed the drive
         child = node.children[0]
-        said = f"{node.name}: {child.name} succeeded (success is failure)"
+        why = _succeeded_because(child)
+        said = f"{node.name}: {why} (success is failure)"
         held = _held_before(path)
         return (said if held is None else f"{held} held, then {said}"), None, True
     message = "" if isinstance(best, _FLIPS) else best.feedback_message
@@ -152,6 +156,35 @@ def _deepest_success(node: Behaviour) -> Behaviour | None:
             return None
         node = held[-1]
     return node
+
+
+def _succeeded_because(node: Behaviour) -> str:
+    """Why ``node`` succeeded, down to the leaves that decided it, as a clause: an action
+    "succeeded", a condition "held"; under an inverter, its child failed: what failed, in
+    the same words (a condition "did not hold")."""
+    if not node.children:
+        return f"{node.name} {'succeeded' if _is_action(node) else 'held'}"
+    if isinstance(node, _FLIPS) and node.children[0].status == py_trees.common.Status.FAILURE:
+        return f"{node.name} succeeded, as {_failed_because(node.children[0])}"
+    success = py_trees.common.Status.SUCCESS
+    held = [child for child in node.children if child.status == success]
+    return _succeeded_because(held[-1]) if held else f"{node.name} succeeded"
+
+
+def _failed_because(node: Behaviour) -> str:
+    """Why ``node`` failed, as :func:`_succeeded_because` says a success: a condition "did
+    not hold", an action "failed" (with its message), a flip's child succeeded."""
+    if not node.children:
+        if not _is_action(node):
+            return f"{node.name} did not hold"
+        return f"{node.name} failed" + (
+            f" ({node.feedback_message})" if node.feedback_message else ""
+        )
+    if isinstance(node, _FLIPS) and node.children[0].status == py_trees.common.Status.SUCCESS:
+        return f"{node.name} failed, as {_succeeded_because(node.children[0])}"
+    failure = py_trees.common.Status.FAILURE
+    failed = [child for child in node.children if child.status == failure]
+    return _failed_because(failed[-1]) if failed else f"{node.name} failed"
 
 
 def _held_before(path: list[Behaviour]) -> str | None:

@@ -21,7 +21,19 @@ from .simrun import RunMission
         ("[{log: hello}, {force_failure: {wait: 15ms}}]",
          "force_failure: wait(15ms) succeeded (success is failure)"),
         ("[{log: delayed}, {force_failure: {inverter: {bump: any}}}]",
-         "force_failure: inverter succeeded (success is failure)"),
+         "force_failure: inverter succeeded, as bump(any) did not hold (success is failure)"),
+        # nested flips: each said as it ended, down to the leaf (they said only "inverter")
+        ("[{log: hello}, {inverter: {inverter: {bump: any}}}]",
+         "inverter: inverter succeeded, as bump(any) did not hold (inverted)"),
+        ("[{log: hello}, {inverter: {name: not not, inverter: {inverter: {wait: 15ms}}}}]",
+         "inverter: not not succeeded, as inverter failed, as wait(15ms) succeeded (inverted)"),
+        ("[{log: hello}, {inverter: {selector: [{bump: any}, {inverter: {cliff: any}}]}}]",
+         "inverter: inverter succeeded, as cliff(any) did not hold (inverted)"),
+        ("[{log: hello}, {inverter: {sequence: [{log: a}, {inverter: {bump: any}}]}}]",
+         "inverter: inverter succeeded, as bump(any) did not hold (inverted)"),
+        # an inverter around a composite that a leaf decided: that leaf
+        ("[{log: hello}, {inverter: {selector: [{bump: any}, {wait: 15ms}]}}]",
+         "inverter: wait(15ms) succeeded (inverted)"),
         # an inverted action ran and succeeded (it did not "hold"); an inverted condition held
         ("[{log: hello}, {inverter: {wait: 15ms}}]", "inverter: wait(15ms) succeeded (inverted)"),
         ("[{log: hello}, {inverter: {ir: {sees: dock}}}]", "ir(sees=dock) held"),
