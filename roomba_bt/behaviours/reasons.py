@@ -88,7 +88,10 @@ def _explain(root: Behaviour) -> tuple[str, Behaviour | None, bool]:
         # action that succeeded before it is no cause: ``[drive 100ms, force_failure:
         # {wait: 15ms}]`` blamed the drive
         child = node.children[0]
-        why = _succeeded_because(child)
+        # a leaf or a composite is said by its name ("back off succeeded"); a flip, leaf by
+        # leaf ("inverter succeeded, as bump(any) did not hold")
+        flip = isinstance(child, _FLIPS)
+        why = _succeeded_because(child) if flip else f"{child.name} succeeded"
         said = f"{node.name}: {why} (success is failure)"
         held = _held_before(path)
         return (said if held is None else f"{held} held, then {said}"), None, True
