@@ -464,7 +464,7 @@ def monitor_command(args: argparse.Namespace) -> int:
         return ExitCode.INVALID
     from roomba_bt.monitor.recorded import replay_into_feed
     from roomba_bt.monitor.server import MonitorServer
-    from roomba_bt.runtime.provenance import changed_sources
+    from roomba_bt.runtime.provenance import changed_since
 
     host, port = args.monitor or parse_address(None)
     taken = bind_problem(host, port) if port else None
@@ -485,8 +485,9 @@ def monitor_command(args: argparse.Namespace) -> int:
     record, mission, profile, baud, packets = recorded
 
     def diverged_at(text: str) -> None:
-        """Where the replay diverged, and each file changed since the record was made."""
-        for line in (text, *changed_sources(record.header, mission.files)):
+        """Where the replay diverged, and each file and plugin changed since the record was
+        made."""
+        for line in (text, *changed_since(record.header, mission.files, mission.root)):
             print(f"monitor: {args.record}: {line}", file=sys.stderr)
 
     feed, _ = replay_into_feed(

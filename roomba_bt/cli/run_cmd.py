@@ -327,16 +327,19 @@ def _stack(
 ) -> RunStack:
     """The run's stack as the options say (OSError: the --record file cannot be written);
     ``claimed``: the --record file, claimed at the run's start."""
-    from roomba_bt.runtime.provenance import source_digests
+    from roomba_bt.runtime.provenance import plugin_digests, source_digests, source_name
     from roomba_bt.runtime.recording import utc_stamp
     from roomba_bt.runtime.stack import Recording, RunStack
 
     record = None
     if args.record:
+        # a shipped mission by its name (roomba-bt:dock.yaml), found by a replay wherever
+        # roomba-bt is installed; a file of the user's by its absolute path
         record = Recording(
-            args.record, str(Path(args.mission).resolve()), params,
+            args.record, source_name(Path(args.mission)), params,
             port=args.robot, started=utc_stamp(args.started),
-            sources=source_digests(mission.files), claimed=claimed,
+            sources=source_digests(mission.files), plugins=plugin_digests(mission.root),
+            claimed=claimed,
         )  # fmt: skip
     stack = RunStack(
         mission,
@@ -673,13 +676,9 @@ def load_recorded(args: argparse.Namespace) -> Recorded | int:
     header = record.header
     profile = get_profile(header.get("profile", "create2"))
     mission_path = args.mission or header.get("mission")
-    found = mission_file(str(mission_path)) if mission_path else None
-    if not isinstance(found, str):
-        shipped = None if args.mission else shipped_mission_at(mission_path)
-        also = f", or --mission {shipped} (the shipped mission it was)" if shipped else ""
-        return _error(
-            f"{args.record}: mission {mission_path!r} not found; pass --mission FILE{also}"
-        )
+    found = _recorded_mission(args.record, mission_path, given=bool(args.mission))
+    if isinstance(found, int):
+        return found
     params = {name: str(value) for name, value in (header.get("parameters") or {}).items()}
     extra = parse_params(args.param)
     if isinstance(extra, str):
@@ -693,6 +692,36 @@ def load_recorded(args: argparse.Namespace) -> Recorded | int:
     if isinstance(packets, str):
         return _error(packets)
     return Recorded(record, mission, profile, baud, packets)
+
+
+def _recorded_mission(record_path: str, mission_path: object, *, given: bool) -> str | int:
+    """The mission file a replay compiles: ``--mission`` (``given``), else the record's own,
+    a path or a shipped mission's name (``roomba-bt:dock.yaml``, what a record of ``run
+    dock`` holds since session 29). A record made before holds a shipped mission's path in the
+    installation that made it (``.../site-packages/roomba_bt/missions/dock.yaml``), which a
+    moved venv, a new Python or another machine lacks: this installation's shipped mission of
+    that name is replayed, and said so (its changes since are said as any file's are). It
+    said "not found; pass --mission dock", and an old record of ``run dock`` was refused on
+    every machine but the one that made it. An exit code after saying what is missing."""
+    from roomba_bt import __version__
+    from roomba_bt.mission.shipped import SHIPPED_PREFIX
+
+    found = mission_file(str(mission_path)) if mission_path else None
+    if isinstance(found, str):
+        return found
+    shipped = None if given else shipped_mission_at(mission_path)
+    if shipped is not None:
+        print(
+            f"{record_path}: mission {mission_path!r} is not here (the installation that made "
+            f"the record had it); replaying the shipped mission {shipped!r} of roomba-bt "
+            f"{__version__}",
+            file=sys.stderr,
+        )
+        return str(mission_file(shipped))
+    gone = ""
+    if isinstance(mission_path, str) and mission_path.startswith(SHIPPED_PREFIX) and not given:
+        gone = f" (shipped with the roomba-bt that made the record, not with {__version__})"
+    return _error(f"{record_path}: mission {mission_path!r} not found{gone}; pass --mission FILE")
 
 
 def shipped_mission_at(path: object) -> str | None:
@@ -711,7 +740,7 @@ def shipped_mission_at(path: object) -> str | None:
 
 def replay_command(args: argparse.Namespace) -> int:
     from roomba_bt.monitor.recorded import operator_replay
-    from roomba_bt.runtime.provenance import changed_sources
+    from roomba_bt.runtime.provenance import changed_plugins, changed_sources, drift_line
     from roomba_bt.runtime.recording import ending_text
     from roomba_bt.runtime.stack import replay_record
 
@@ -729,6 +758,14 @@ def replay_command(args: argparse.Namespace) -> int:
     difference = transport.first_difference()
     ending = record.ending  # its end note, said last (a record made before has none)
     ended = f"replay: {ending_text(ending)}" if ending is not None else None
+    mission = recorded.mission
+    sources = changed_sources(record.header, mission.files)
+    plugins = changed_plugins(record.header, mission.root)
+    # what the replay ran on, said before its verdict: one line, when it is not what the
+    # record was made with
+    drift = drift_line(record.header, sources, plugins, same_bytes=difference is None)
+    if drift is not None:
+        print(f"replay: {drift}")
     unended = record.unended()
     if unended is not None:  # compared up to where it ends
         print(f"replay: the record ends at {record.last_t:.3f} s without the run's end: {unended}")
@@ -745,7 +782,7 @@ def replay_command(args: argparse.Namespace) -> int:
         f"replay: first difference at mission time {summary.mission_time_s:.3f} s "
         f"(byte {offset} of {record.out_bytes} recorded): expected {expected}, sent {sent}"
     )
-    for changed in changed_sources(record.header, recorded.mission.files):
+    for changed in (*sources, *plugins):
         print(f"replay: {changed}")
     unplayed = operator_acts(record)
     if unplayed:

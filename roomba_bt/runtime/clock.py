@@ -145,8 +145,9 @@ def interrupted_at(run: TimedRun, flushed: int) -> tuple[int, str] | None:
     inside the tree's tick (or before it, in the gate) left none of it on the wire. It was
     taken as "after", and the replay ticked that frame in full and wrote a command the live
     run never sent, where the record holds the safe stop (a false difference, exit 1). An
-    interrupt between two of the flush's writes is still "before": the replay then misses
-    the commands written before it (a partial tick, which no end note places)."""
+    interrupt between two of the flush's writes is "before" too; the bytes written by then
+    (``RunSummary.written_when_interrupted``, the end note's ``written``) tell the replay to
+    tick that frame and write its commands up to there (``stack.RecordedEnd``)."""
     if not run.has_snapshot:
         return None
     tick = run.snapshot.tick

@@ -472,6 +472,7 @@ class MissionRunner(BaseHandle):
                     return
         except KeyboardInterrupt:  # Ctrl-C, SIGTERM...: in which half of its frame
             summary.ended_at = interrupted_at(self, flushed)
+            summary.written_when_interrupted = self._link.bytes_written  # a flush cut short?
             raise
 
     def _advance(self, batch: Sequence[SensorFrame], untick: int | None = None) -> float:

@@ -1,37 +1,50 @@
-"""What made a record: the roomba-bt release that ran it, and the files its mission was
-compiled from, each by its digest.
+"""What made a record: the roomba-bt release that ran it, the files its mission was compiled
+from, and the installed plugins its behaviours came from, each by its digest.
 
-A record's header names both (``roomba_bt_version``; ``sources``: the SHA-256 of the mission
-file and of each file it included or imported, the mission's first). A record replays
-byte for byte only against the files it was made with: when a shipped library changed in a
-new release (``roomba-bt:lib/undock.yaml`` came to end in Safe), an owner's old records
-differed on replay, and nothing said why, so they hunted for a change in their own mission.
-A replay that differs now names each file whose digest is no longer the recorded one.
+A record's header names them (``roomba_bt_version``; ``sources``: the SHA-256 of the mission
+file and of each file it included or imported, the mission's first; ``plugins``: each
+installed plugin distribution that provides a behaviour of the mission's tree, its version
+and the SHA-256 of its modules' files). A record replays byte for byte only against what it
+was made with: when a shipped library changed in a new release (``roomba-bt:lib/undock.yaml``
+came to end in Safe), an owner's old records differed on replay, and nothing said why, so
+they hunted for a change in their own mission; a plugin upgraded (or edited in an editable
+install) did the same with no digest to say so. A replay that differs names each file and
+plugin that is no longer the recorded one, and one whose bytes are the same says in one
+line that the record was made with other files (:func:`drift_line`).
 
 A file of the shipped missions' folder is named as an include names it
 (``roomba-bt:lib/undock.yaml``, ``roomba-bt:dock.yaml``), so the name holds wherever the
-package is installed; any other file by its absolute path (the header's ``mission`` is too).
-A record made before has neither field: its replay says nothing of them.
+package is installed; any other file by its absolute path. The header's ``mission`` is named
+the same way (:func:`source_name`): a record of ``roomba-bt run dock`` replays on any machine.
+A record made before has none of the fields: its replay says nothing of them.
 """
 
 from __future__ import annotations
 
 import hashlib
+import sys
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
+from py_trees.behaviour import Behaviour
+
 from roomba_bt import __version__
-from roomba_bt.mission.shipped import SHIPPED_DIR, SHIPPED_PREFIX
-from roomba_bt.runtime.recording import MADE_BY, SOURCES
+from roomba_bt.behaviours.declare import Declaration
+from roomba_bt.behaviours.registry import ENTRY_POINT_GROUP, group_entry_points
+from roomba_bt.mission import shipped
+from roomba_bt.runtime.recording import MADE_BY, PLUGINS, SOURCES
+
+#: a plugin's provenance: its distribution's version and its modules' digest
+VERSION, DIGEST = "version", "sha256"
 
 
 def source_name(path: Path) -> str:
     """``roomba-bt:lib/undock.yaml`` for a shipped file (the same in every installation),
     else the file's absolute path."""
     resolved = path.resolve()
-    if resolved.is_relative_to(SHIPPED_DIR):
-        return SHIPPED_PREFIX + resolved.relative_to(SHIPPED_DIR).as_posix()
+    if resolved.is_relative_to(shipped.SHIPPED_DIR):
+        return shipped.SHIPPED_PREFIX + resolved.relative_to(shipped.SHIPPED_DIR).as_posix()
     return str(resolved)
 
 
@@ -46,6 +59,59 @@ def source_digests(files: Iterable[Path]) -> dict[str, str]:
         except OSError:
             continue
     return digests
+
+
+def plugin_digests(root: Behaviour) -> dict[str, dict[str, str]]:
+    """Each installed plugin distribution that provides a behaviour of the tree ``root``:
+    ``{"roomba-bt-dirt": {"version": "0.1.0", "sha256": ...}}``, by name. The digest is of
+    the ``.py`` files of its top-level packages that hold those behaviours, read where Python
+    imported them from (an editable install's source tree too, whose distribution lists no
+    module file). A plugin installed but unused by the mission is left out: it cannot change
+    the run. A plugin file a mission names (``plugins: [./x.py]``) is a source file instead."""
+    used = {
+        type(node).__module__.partition(".")[0]
+        for node in root.iterate()
+        if isinstance(getattr(node, "declaration", None), Declaration)
+    }
+    used.discard("roomba_bt")  # the built-ins: the release says them
+    if not used:  # no entry point read (a scan of the installed distributions)
+        return {}
+    packages: dict[str, dict[str, str]] = {}  # distribution -> its packages used -> version
+    for ep in group_entry_points(ENTRY_POINT_GROUP):
+        top = ep.module.partition(".")[0]
+        if top in used and ep.dist is not None:
+            packages.setdefault(ep.dist.name, {})[top] = ep.dist.version
+    return {
+        name: {VERSION: next(iter(tops.values())), DIGEST: _package_digest(sorted(tops))}
+        for name, tops in sorted(packages.items())
+    }
+
+
+def _package_digest(tops: list[str]) -> str:
+    """SHA-256 over each ``.py`` file of the imported packages (or modules) ``tops``: its
+    package and path within it, then its bytes' digest, in path order; a file that cannot
+    be read counts as empty."""
+    total = hashlib.sha256()
+    for top in tops:
+        module = sys.modules.get(top)
+        places = list(getattr(module, "__path__", ()) or ())
+        file = getattr(module, "__file__", None)
+        if not places and file:  # a single-module plugin
+            files = [(Path(file).name, Path(file))]
+        else:
+            files = sorted(
+                (path.relative_to(place).as_posix(), path)
+                for place in map(Path, places)
+                for path in place.rglob("*.py")
+                if "__pycache__" not in path.parts
+            )
+        for relative, path in files:
+            try:
+                data = path.read_bytes()
+            except OSError:
+                data = b""
+            total.update(f"{top}/{relative}\0{hashlib.sha256(data).hexdigest()}\n".encode())
+    return total.hexdigest()
 
 
 def changed_sources(header: Mapping[str, Any], files: Iterable[Path]) -> list[str]:
@@ -64,9 +130,81 @@ def changed_sources(header: Mapping[str, Any], files: Iterable[Path]) -> list[st
         if was is None or was == digest:
             continue
         releases = ""
-        if name.startswith(SHIPPED_PREFIX) and made_by != __version__:  # a new release's file
+        if name.startswith(shipped.SHIPPED_PREFIX) and made_by != __version__:  # a release's
             releases = f" (roomba-bt {made_by or 'unknown'} -> {__version__})"
         changed.append(
             f"{name} changed since this record was made{releases}: a difference may come from it"
         )
     return changed
+
+
+def changed_plugins(header: Mapping[str, Any], root: Behaviour) -> list[str]:
+    """Each plugin distribution whose behaviours the recorded run or the replay's tree
+    ``root`` used, that is not now what it was (``plugin roomba-bt-dirt changed since this
+    record was made (0.1.0 -> 0.2.0): a difference may come from it``): another version, the
+    same version with other code (an editable install, a rebuild), gone from the tree
+    (uninstalled, or its behaviours now from elsewhere), or new to it. A record made before
+    plugins were recorded says nothing."""
+    recorded = header.get(PLUGINS)
+    if not isinstance(recorded, Mapping):
+        return []
+    now = plugin_digests(root)
+    changed = []
+    for name in sorted(set(recorded) | set(now)):
+        was: Mapping[str, str] | None = recorded.get(name)
+        is_ = now.get(name)
+        if was == is_:
+            continue
+        if was is None and is_ is not None:
+            what = (f"plugin {name} {is_[VERSION]} provides behaviours of this replay and "
+                    "provided none of the recorded run's")  # fmt: skip
+        elif was is not None and is_ is None:
+            what = (f"plugin {name} {was[VERSION]} provided behaviours of the recorded run and "
+                    "provides none of this replay's (uninstalled, or they come from elsewhere "
+                    "now)")  # fmt: skip
+        elif was is not None and is_ is not None and was[VERSION] != is_[VERSION]:
+            what = (f"plugin {name} changed since this record was made ({was[VERSION]} -> "
+                    f"{is_[VERSION]})")  # fmt: skip
+        else:
+            what = (f"plugin {name} {(is_ or {}).get(VERSION)}'s code changed since this record "
+                    "was made (the same version: an editable install, or a rebuild)")  # fmt: skip
+        changed.append(f"{what}: a difference may come from it")
+    return changed
+
+
+def changed_since(header: Mapping[str, Any], files: Iterable[Path], root: Behaviour) -> list[str]:
+    """Every file (:func:`changed_sources`) and plugin (:func:`changed_plugins`) of the
+    record's that the replay's mission (its ``files``, its tree ``root``) has otherwise."""
+    return [*changed_sources(header, files), *changed_plugins(header, root)]
+
+
+def drift_line(
+    header: Mapping[str, Any], sources: list[str], plugins: list[str], *, same_bytes: bool
+) -> str | None:
+    """One line saying that the replay ran on other code than the record was made with
+    (``recorded with roomba-bt 0.1.0 (this is 0.2.0); 1 of its 3 source files and 1 plugin
+    differ now``), or None when nothing differs; ``sources`` and ``plugins``: what
+    :func:`changed_sources` and :func:`changed_plugins` said. ``same_bytes``: the replay
+    wrote the recorded bytes, and a release alone is not said then (the bytes are the news:
+    an older record that still replays is the common case, and a line on every one would be
+    noise); when they differ it is, for a runtime that changed may be the cause where no
+    file did. A record made before ``roomba_bt_version`` was written says nothing."""
+    made_by = header.get(MADE_BY)
+    if not isinstance(made_by, str):
+        return None
+    release = made_by != __version__
+    if not sources and not plugins and (same_bytes or not release):
+        return None
+    said = []
+    if sources:
+        recorded = header.get(SOURCES)
+        total = len(recorded) if isinstance(recorded, Mapping) else len(sources)
+        said.append(f"{len(sources)} of its {total} source file{'s' * (total != 1)}")
+    if plugins:
+        said.append(f"{len(plugins)} plugin{'s' * (len(plugins) != 1)}")
+    which = f"this is {__version__}" if release else "this release too"
+    line = f"recorded with roomba-bt {made_by} ({which})"
+    if said:
+        verb = "differs" if len(sources) + len(plugins) == 1 else "differ"
+        line += f"; {' and '.join(said)} {verb} now"
+    return line

@@ -6,7 +6,8 @@ A record is JSON Lines, one object a line::
      "profile": "create2", "baud": 115200, "mission": "/home/me/missions/dock.yaml",
      "parameters": {...}, "packets": [7, 9, ...], "watchdog": 0.1, "grace": 2.0,
      "port": "/dev/ttyUSB0", "started": "2025-03-04T09:12:05Z",
-     "sources": {"/home/me/missions/dock.yaml": "9f86d0...", "roomba-bt:lib/docking.yaml": ...}}
+     "sources": {"/home/me/missions/dock.yaml": "9f86d0...", "roomba-bt:lib/docking.yaml": ...},
+     "plugins": {"roomba-bt-dirt": {"version": "0.1.0", "sha256": "84755334..."}}}
     {"t": 0.000000, "d": "out", "b": "80"}          <- host -> robot, hex
     {"t": 0.015012, "d": "in",  "b": "1305..."}     <- robot -> host, hex
     {"t": 3.120000, "d": "note", "note": {...}}     <- an act: the monitor's force, the tick
@@ -21,11 +22,18 @@ tree's tick on it): ``replay`` and ``roomba-bt monitor`` say how the recorded ru
 replay ends an interrupted run (the monitor's stop, Ctrl-C, ``stack.stop()``) or a timed-out
 one where it ended, where before it ticked the tree on past it (the tree wrote a command where
 the record holds the safe stop: a difference at the record's last bytes). A record without it
-(made before) is replayed as before.
+(made before) is replayed as before. A Ctrl-C or SIGTERM that came before the tick was written
+whole (``"at": "before"``) notes the bytes of the "out" side written by then (``written``):
+one that came between two writes of that tick left part of it on the wire, and the replay
+writes the tick up to there (:meth:`ReplayTransport.interrupt_at`).
 
-The header names the roomba-bt release that made the record (``roomba_bt_version``) and the
-SHA-256 of each file its mission was compiled from (``sources``, ``runtime/provenance.py``):
-a replay that differs names the files changed since. A record made before has neither.
+The header names the roomba-bt release that made the record (``roomba_bt_version``), the
+SHA-256 of each file its mission was compiled from (``sources``) and each installed plugin
+its tree used, with its version and its modules' digest (``plugins``, since session 29;
+``runtime/provenance.py``): a replay says in one line when it ran on other files or plugins,
+and one that differs names each changed since. A record made before has none of them. The
+header's ``mission`` names a shipped mission as an include does (``roomba-bt:dock.yaml``, since
+session 29; a path in the installation that made it before), any other by its absolute path.
 
 The header also holds the run's ``watchdog`` and ``grace`` (seconds), and each watchdog trip
 is a note (``{"watchdog": 0.101, "limit": 0.1}``, at the link time it tripped): a replay's
@@ -89,6 +97,10 @@ READ_VERSIONS = (1, 2)
 MADE_BY = "roomba_bt_version"
 #: the header field holding the SHA-256 of each file the mission was compiled from
 SOURCES = "sources"
+#: the header field naming each installed plugin (a distribution with an entry point in
+#: ``roomba_bt.behaviours``) whose behaviours the mission's tree holds: its version and the
+#: SHA-256 of its modules' files (absent before: no plugin could be told apart)
+PLUGINS = "plugins"
 
 #: Seconds of the link's clock between two flushes of the record to the operating system: a
 #: run killed outright (``kill -9``, the OOM killer) loses at most this much of its record.
@@ -183,6 +195,10 @@ class RecordingTransport:
         self._inner.write(data)
         if not self._file.closed:
             self._log("out", data)
+            self.out_bytes += len(data)
+
+    #: the bytes of the record's "out" side so far (an end note's ``written`` is one)
+    out_bytes = 0
 
     def read(self, timeout: float) -> bytes:
         """The inner read, recorded. The next :meth:`now` (the link's, right after the read:
@@ -304,16 +320,31 @@ ENDED = "ended"
 #: the outcomes that come from outside the tree (an operator, a signal, the run's time limit),
 #: which a replay, whose tree would go on, brings about where the end note says
 ENDED_FROM_OUTSIDE = ("interrupted", "timeout")
+#: the end note's key, for a Ctrl-C or SIGTERM that came before its tick was written whole:
+#: how many bytes of the record's "out" side were written when it came. More than were
+#: written before that tick: it came between two of the tick's writes (its flush), and the
+#: replay ticks that frame and writes its commands up to there (``stack.RecordedEnd``);
+#: before, such a record's replay differed at the first command the live run had written
+#: of the tick ("expected Motors (138) 8a 04, sent Drive (137) 89 00 00 00 00"), exit 1
+WRITTEN = "written"
 
 
 def end_note(
-    outcome: str, reason: str, mission_time: float, ended_at: tuple[int, str] | None
+    outcome: str,
+    reason: str,
+    mission_time: float,
+    ended_at: tuple[int, str] | None,
+    written: int | None = None,
 ) -> dict[str, Any]:
     """The record's end note: how its run ended, and where (``ended_at``: the tick and
-    half, ``RunSummary.ended_at``; None: before the first frame)."""
+    half, ``RunSummary.ended_at``; None: before the first frame). ``written``: for an
+    interrupt "before" the tick was written whole, the bytes of the record's "out" side
+    written by then (:data:`WRITTEN`)."""
     note: dict[str, Any] = {ENDED: outcome, "reason": reason, "time": round(mission_time, 3)}
     if ended_at is not None:
         note["tick"], note["at"] = ended_at
+        if written is not None and ended_at[1] == "before":
+            note[WRITTEN] = written
     return note
 
 
@@ -638,6 +669,16 @@ def header_problem(header: dict[str, Any]) -> str | None:
         isinstance(k, str) and isinstance(v, str) for k, v in sources.items()
     ):
         return f"header field {SOURCES!r} is {sources!r}; expected {{file: SHA-256}}"
+    plugins = header.get(PLUGINS, {})
+    if not isinstance(plugins, dict) or not all(
+        isinstance(k, str) and isinstance(v, dict) and set(v) == {"version", "sha256"}
+        and all(isinstance(text, str) for text in v.values())
+        for k, v in plugins.items()
+    ):  # fmt: skip
+        return (
+            f"header field {PLUGINS!r} is {plugins!r}; expected "
+            '{distribution: {"version": text, "sha256": SHA-256}}'
+        )
     packets = header.get("packets")
     if not isinstance(packets, list) or not packets:
         return 'the header lists no stream packets ("packets")'
@@ -758,10 +799,24 @@ class ReplayTransport:
             self._more = False
         return False
 
+    def interrupt_at(self, offset: int, interrupt: Callable[[], None]) -> None:
+        """Call ``interrupt`` (which raises) instead of a write that would take the tree past
+        byte ``offset`` of the "out" side: where the recorded run's Ctrl-C came between two
+        writes of one tick (the end note's :data:`WRITTEN`). A write the interrupt cut in two
+        is not in the record (:class:`RecordingTransport` notes a write once it returned),
+        so ``offset`` is between two writes."""
+        self._interrupt = (offset, interrupt)
+
+    #: (offset, what raises there): :meth:`interrupt_at`; None: no interrupt to do again
+    _interrupt: tuple[int, Callable[[], None]] | None = None
+
     def write(self, data: bytes) -> None:
         """Compare ``data`` with the record's "out" side, and move the clock to the time the
         recorded run wrote those bytes (:meth:`_written_at`)."""
         start = self.written
+        if self._interrupt is not None and start + len(data) > self._interrupt[0]:
+            interrupt, self._interrupt = self._interrupt[1], None
+            interrupt()  # the recorded run's Ctrl-C came before these bytes
         self.written += len(data)
         if self.difference is None:
             while start + len(data) > self._out_read and self._read_chunk():

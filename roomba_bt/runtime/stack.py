@@ -44,7 +44,9 @@ from roomba_bt.runtime.loop import (
 from roomba_bt.runtime.recording import (
     ENDED,
     ENDED_FROM_OUTSIDE,
+    PLUGINS,
     SOURCES,
+    WRITTEN,
     Record,
     RecordingTransport,
     ReplayTransport,
@@ -117,6 +119,11 @@ class Recording:
     #: (:func:`~roomba_bt.runtime.provenance.source_digests`): a replay that differs names
     #: the ones changed since. Empty: none written (a tree built in Python has no files)
     sources: Mapping[str, str] = field(default_factory=dict)
+    #: each installed plugin distribution whose behaviours the tree holds, its version and
+    #: its modules' digest (:func:`~roomba_bt.runtime.provenance.plugin_digests`); a replay
+    #: that differs names the ones changed since. None: not written (a record that cannot
+    #: tell "no plugin" from "not looked at" says nothing of them); {}: none was used
+    plugins: Mapping[str, Mapping[str, str]] | None = None
     #: ``path`` claimed already for this run (``run`` does, before it opens the robot, so a
     #: path another run writes is refused first); None: the record claims it when made
     claimed: ClaimedFile | None = field(default=None, compare=False)
@@ -138,7 +145,13 @@ class Recording:
             **({"port": self.port} if self.port is not None else {}),
             **({"started": self.started} if self.started is not None else {}),
             **({SOURCES: dict(self.sources)} if self.sources else {}),
+            **({} if self.plugins is None else {PLUGINS: _plain(self.plugins)}),
         }
+
+
+def _plain(plugins: Mapping[str, Mapping[str, str]]) -> dict[str, dict[str, str]]:
+    """``plugins`` as plain dicts, as JSON writes them."""
+    return {name: dict(provenance) for name, provenance in plugins.items()}
 
 
 class RunStack:
@@ -254,11 +267,22 @@ class RunStack:
                 summary = self.runner.summary
                 self.transport.note(  # how it ended, for replay and the monitor's record view
                     end_note(summary.outcome.value, summary.reason, summary.mission_time_s,
-                             summary.ended_at)
+                             summary.ended_at, self._written_when_interrupted())
                 )  # fmt: skip
                 self.transport.flush()
                 summary.record_stopped = self.transport.stopped or ""
             self._ended.set()
+
+    def _written_when_interrupted(self) -> int | None:
+        """The bytes of the record's "out" side when a Ctrl-C or SIGTERM came (None: none
+        did): the link's count then, less what the link wrote since (the tree's stop, the
+        safe stop), from the record's count now; the two counts differ when the record
+        began on a connection that had written already (one taken over)."""
+        when = self.runner.summary.written_when_interrupted
+        if when is None or not isinstance(self.transport, RecordingTransport):
+            return None
+        since = self.connection.link.bytes_written - when
+        return self.transport.out_bytes - since
 
     def _warn_off_the_main_thread(self) -> None:
         """A run that drives (a link on the wall clock) in a thread Ctrl-C never reaches: a
@@ -372,10 +396,17 @@ class RecordedEnd:
     replay's first difference (run1.jsonl of session 27: ``expected Drive (137) 89 00 00 00
     00, sent Drive Direct ...`` at its last bytes)."""
 
-    def __init__(self, note: dict[str, Any], inner: TickGate | None) -> None:
+    def __init__(
+        self, note: dict[str, Any], inner: TickGate | None, transport: ReplayTransport | None
+    ) -> None:
         self.tick, self.half = int(note["tick"]), str(note.get("at", "after"))
         self.reason = ending_text(note)
         self.inner = inner
+        #: the bytes the recorded run had written when its interrupt came "before" the tick
+        #: was written whole (the note's ``written``; None: a record made before said none)
+        written = note.get(WRITTEN)
+        self.written = written if type(written) is int and transport is not None else None
+        self.transport = transport
         #: whether the replay ended here (its summary then says how the recorded run did)
         self.ended = False
 
@@ -387,8 +418,22 @@ class RecordedEnd:
         ticks = self.inner.before_tick(runner) if self.inner is not None else True
         tick = runner.snapshot.tick
         if tick > self.tick or (tick == self.tick and self.half == "before"):
+            if tick == self.tick and self._cut_short():
+                return ticks  # the tick's commands are written up to the interrupt
             self._end()
         return ticks
+
+    def _cut_short(self) -> bool:
+        """Whether the recorded run's interrupt came between two writes of this tick (it had
+        written more than the replay has so far): the replay then ticks the frame and its
+        transport ends the run at the first write past those bytes (or :meth:`after_tick`
+        does, where the tick wrote no more). Before, the replay ended before the tick and
+        missed the commands the live run had written of it: a difference, exit 1."""
+        transport = self.transport
+        if self.written is None or transport is None or transport.written >= self.written:
+            return False
+        transport.interrupt_at(self.written, self._end)
+        return True
 
     def after_tick(self, runner: MissionRunner) -> None:
         if self.inner is not None:
@@ -400,16 +445,19 @@ class RecordedEnd:
         return self.inner is not None and self.inner.holds(runner)
 
 
-def recorded_end(record: Record, gate: TickGate | None) -> RecordedEnd | None:
+def recorded_end(
+    record: Record, gate: TickGate | None, transport: ReplayTransport | None = None
+) -> RecordedEnd | None:
     """The gate that ends ``record``'s replay where its run was ended from outside its tree,
     ``gate`` inside it; None when the record says no such end (an older record, a run that
-    ended by its tree or its link: the replay ends there by itself)."""
+    ended by its tree or its link: the replay ends there by itself). ``transport``: the
+    replay's, which ends a tick the recorded run's interrupt cut short where it did."""
     note = record.ending
     if note is None or note[ENDED] not in ENDED_FROM_OUTSIDE:
         return None
     if not isinstance(note.get("tick"), int) or note.get("at") not in ("before", "after"):
         return None
-    return RecordedEnd(note, gate)
+    return RecordedEnd(note, gate, transport)
 
 
 def replay_record(
@@ -453,7 +501,7 @@ def replay_record(
     )
     if trips is not None:  # it trips where the record's did (None: on the record's silence)
         stack.connection.link.replayed_trips = deque(trips)
-    end = recorded_end(record, gate)
+    end = recorded_end(record, gate, transport)
     stack.runner.gate = end or gate  # the monitor's replay of the operator's acts inside
     stack.runner.on_wall_clock = False  # a record's clock: Ctrl-Z suspends, Ctrl-\ quits
     summary = stack.run(raise_interrupts=raise_interrupts)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 import logging
 import os
@@ -168,9 +169,10 @@ def test_a_record_whose_last_line_is_cut_is_replayed_up_to_it(
     refused, exit 2, 'malformed chunk'. The cut line is dropped with a warning naming it."""
     whole = "".join(_recorded_run(tmp_path, capsys))
     cut = tmp_path / "cut.jsonl"
-    cut.write_text(whole[:5000], encoding="utf-8")
-    number = whole[:5000].count("\n") + 1  # the line cut short
-    assert not whole[:5000].endswith("\n")
+    at = whole.rindex("\n", 0, 5000) + 20  # 20 characters into a line (the header's length aside)
+    cut.write_text(whole[:at], encoding="utf-8")
+    number = whole[:at].count("\n") + 1  # the line cut short
+    assert not whole[:at].endswith("\n")
     with caplog.at_level(logging.WARNING):
         assert main(["replay", str(_left_a_minute(cut))]) == 0
     out = capsys.readouterr().out
@@ -646,8 +648,6 @@ def test_a_record_names_the_roomba_bt_that_made_it_and_each_file_its_mission_cam
 ) -> None:
     """Records carried no version and nothing of the files they were made with: an owner
     could not tell which build made a file, nor that a shipped library had changed since."""
-    import hashlib
-
     from roomba_bt import __version__
     from roomba_bt.mission.shipped import SHIPPED_DIR
 
@@ -718,25 +718,270 @@ def test_a_replay_that_differs_names_the_files_changed_since_the_record_was_made
     assert "changed since" not in out
 
 
-def test_a_record_of_a_shipped_mission_moved_since_names_the_shipped_mission(
+def test_a_record_of_a_shipped_mission_made_before_replays_it_where_its_path_is_gone(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """A record of ``run dock`` holds the mission's path in the installation that made it; a
-    moved venv or a new Python loses that path. The error said only "pass --mission FILE",
-    where ``--mission bump-and-turn`` would do."""
+    """A record made before session 29 of ``run dock`` holds the mission's path in the
+    installation that made it; a moved venv, a new Python or another machine lacks that path.
+    The replay refused it ("not found; pass --mission FILE, or --mission bump-and-turn"), on
+    every machine but the one that made it: it now replays this installation's shipped
+    mission of that name, and says so. A path elsewhere, or a shipped name this release
+    does not ship, is still refused."""
     lines = _recorded_run(tmp_path, capsys)
     header = json.loads(lines[0])
     gone = "/usr/lib/python3.12/site-packages/roomba_bt/missions/bump-and-turn.yaml"
     moved = tmp_path / "moved.jsonl"
     moved.write_text("".join([json.dumps({**header, "mission": gone}) + "\n", *lines[1:]]))
-    assert main(["replay", str(moved)]) == 2
+    assert main(["replay", str(moved)]) == 0
+    out, err = capsys.readouterr()
+    assert "as the recorded run" in out
     assert (
-        f"{moved}: mission {gone!r} not found; pass --mission FILE, or --mission "
-        "bump-and-turn (the shipped mission it was)" in capsys.readouterr().err
+        f"{moved}: mission {gone!r} is not here (the installation that made the record had "
+        "it); replaying the shipped mission 'bump-and-turn' of roomba-bt" in err
     )
-    assert main(["replay", str(moved), "--mission", "bump-and-turn"]) == 0
-    assert "as the recorded run" in capsys.readouterr().out
     elsewhere = "/home/me/missions/bump-and-turn.yaml"  # not the shipped one's folder
     moved.write_text("".join([json.dumps({**header, "mission": elsewhere}) + "\n", *lines[1:]]))
     assert main(["replay", str(moved)]) == 2
     assert capsys.readouterr().err.rstrip().endswith("not found; pass --mission FILE")
+    unshipped = "roomba-bt:retired.yaml"  # shipped by the release that made the record
+    moved.write_text("".join([json.dumps({**header, "mission": unshipped}) + "\n", *lines[1:]]))
+    assert main(["replay", str(moved)]) == 2
+    assert (
+        f"mission {unshipped!r} not found (shipped with the roomba-bt that made the record, "
+        "not with" in capsys.readouterr().err
+    )
+
+
+def _installation(monkeypatch: pytest.MonkeyPatch, missions: Path) -> None:
+    """Make ``missions`` the shipped missions' folder, as another installation's is: in each
+    module that holds it (the code of before bound it by name in more of them)."""
+    import roomba_bt.mission.loader as loader
+
+    folder = missions.resolve()
+    for name, module in list(sys.modules.items()):
+        if name.startswith("roomba_bt") and hasattr(module, "SHIPPED_DIR"):
+            monkeypatch.setattr(module, "SHIPPED_DIR", folder)
+    monkeypatch.setattr(loader, "SHIPPED_LIBRARY", (folder,))
+
+
+def test_a_record_of_a_shipped_mission_run_by_name_replays_in_another_installation(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``roomba-bt run dock --record r.jsonl`` wrote the shipped file's path into the header
+    (``.../site-packages/roomba_bt/missions/dock.yaml``), which only the venv that made it
+    has. The header names a shipped mission as an include names it, so a replay in another
+    venv, or on another machine, finds its own."""
+    import shutil
+
+    from roomba_bt.mission.shipped import SHIPPED_DIR
+
+    there = tmp_path / "venv" / "site-packages" / "roomba_bt" / "missions"
+    shutil.copytree(SHIPPED_DIR, there)
+    with monkeypatch.context() as patched:  # the machine that records
+        _installation(patched, there)
+        record = tmp_path / "run.jsonl"
+        argv = ["run", "bump-and-turn", "--fast", "--display", "none", "-p", "duration=2s"]
+        assert main([*argv, "--record", str(record)]) == 0
+    shutil.rmtree(tmp_path / "venv")  # the venv is gone; this one replays it
+    capsys.readouterr()
+    monkeypatch.chdir(tmp_path)
+    assert main(["replay", str(record)]) == 0
+    out, err = capsys.readouterr()
+    assert "replay: the tree wrote the same" in out and "as the recorded run" in out
+    assert "not here" not in err and "differ" not in out
+    header = load_record(record).header
+    assert header["mission"] == "roomba-bt:bump-and-turn.yaml"
+    assert "roomba-bt:bump-and-turn.yaml" in header["sources"]
+
+
+FAR_S29 = '''\
+from roomba_bt.behaviours import Condition, declare
+
+FAR = {far}
+
+
+@declare("far_s29", kind="condition")
+class FarS29(Condition):
+    """Whether to drive far: the plugin's own answer."""
+
+    def check(self, snapshot):
+        return FAR
+'''
+FAR_OR_NEAR = """\
+mission: far-or-near
+tree:
+  sequence:
+    - mode: safe
+    - selector:
+        - sequence:
+            - far_s29: {}
+            - drive: {velocity: 200 mm/s, distance: 5 cm}
+        - drive: {velocity: 100 mm/s, distance: 5 cm}
+"""
+
+
+def _plugin(monkeypatch: pytest.MonkeyPatch, site: Path, version: str, far: bool) -> None:
+    """The distribution ``bt-far-s29`` installed on ``site`` (on sys.path) at ``version``,
+    its condition ``far_s29`` answering ``far``; what the next command loads (a fresh
+    registry, the module imported again)."""
+    import importlib
+    import shutil
+
+    import roomba_bt.behaviours.registry as registry
+
+    for old in site.glob("bt_far_s29-*.dist-info"):
+        shutil.rmtree(old)
+    (site / "s29_far.py").write_text(FAR_S29.format(far=far), encoding="utf-8")
+    info = site / f"bt_far_s29-{version}.dist-info"
+    info.mkdir(parents=True)
+    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: bt-far-s29\nVersion: {version}\n")
+    (info / "entry_points.txt").write_text("[roomba_bt.behaviours]\ns29_far = s29_far\n")
+    sys.modules.pop("s29_far", None)
+    importlib.invalidate_caches()
+    monkeypatch.setattr(registry, "_DEFAULT", None)
+
+
+def test_a_record_names_its_plugins_and_a_replay_that_differs_names_the_one_changed(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A behaviour from an installed plugin package had no digest in the record: a replay
+    after the plugin changed (upgraded, or edited in an editable install) differed, and
+    nothing said why. The header names each plugin the tree used, its version and its
+    modules' digest, and a replay that differs names the plugin changed since."""
+    site = tmp_path / "site"
+    site.mkdir()
+    monkeypatch.syspath_prepend(str(site))
+    monkeypatch.setattr(sys, "dont_write_bytecode", True)  # the edited module read again
+    _plugin(monkeypatch, site, "1.0", far=True)
+    mission, record = tmp_path / "far.yaml", tmp_path / "far.jsonl"
+    mission.write_text(FAR_OR_NEAR, encoding="utf-8")
+    assert main(["run", str(mission), "--fast", "--display", "none", "--record", str(record)]) == 0
+    capsys.readouterr()
+    plugins = load_record(record).header["plugins"]
+    assert list(plugins) == ["bt-far-s29"] and plugins["bt-far-s29"]["version"] == "1.0"
+    assert re.fullmatch("[0-9a-f]{64}", plugins["bt-far-s29"]["sha256"])
+    assert main(["replay", str(record)]) == 0
+    assert "plugin" not in capsys.readouterr().out  # the same plugin: nothing said
+
+    _plugin(monkeypatch, site, "1.0", far=False)  # edited in place, its version unchanged
+    assert main(["replay", str(record)]) == 1
+    out = capsys.readouterr().out
+    assert "replay: first difference at" in out
+    assert (
+        "replay: plugin bt-far-s29 1.0's code changed since this record was made (the same "
+        "version: an editable install, or a rebuild): a difference may come from it" in out
+    )
+    _plugin(monkeypatch, site, "2.0", far=False)  # upgraded
+    assert main(["replay", str(record)]) == 1
+    assert (
+        "replay: plugin bt-far-s29 changed since this record was made (1.0 -> 2.0): a "
+        "difference may come from it" in capsys.readouterr().out
+    )
+    lines = record.read_text(encoding="utf-8").splitlines(keepends=True)
+    header = json.loads(lines[0])
+    bad = tmp_path / "bad.jsonl"
+    bad.write_text("".join([json.dumps({**header, "plugins": ["x"]}) + "\n", *lines[1:]]))
+    assert main(["replay", str(bad)]) == 2
+    assert f"{bad}:1: header field 'plugins' is ['x']; expected " in capsys.readouterr().err
+
+
+def test_a_replay_says_in_one_line_that_it_ran_on_other_files_than_the_record_was_made_with(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The files changed since were named only when the replay differed: one whose bytes
+    were the same said nothing of running on other files (a shipped library changed in an
+    upgrade, in a branch the run never took), and a difference with no file changed said
+    nothing of the roomba-bt that made the record. One line says it now, before the verdict:
+    changed files and plugins always, another release only when the bytes differ (an older
+    record that still replays is the common case: not noise on every one)."""
+    from roomba_bt import __version__
+
+    mission = _mission_with_a_library(tmp_path, "200 mm/s")
+    record = tmp_path / "trip.jsonl"
+    argv = ["run", str(mission), "--fast", "--display", "none", "--record", str(record)]
+    assert main(argv) == 0
+    capsys.readouterr()
+    assert main(["replay", str(record)]) == 0
+    assert "recorded with" not in capsys.readouterr().out  # nothing differs: nothing said
+    mission.write_text(mission.read_text() + "# a comment: the same tree\n", encoding="utf-8")
+    assert main(["replay", str(record)]) == 0
+    out = capsys.readouterr().out
+    said = f"replay: recorded with roomba-bt {__version__} (this release too); 1 of its 3 "
+    assert f"{said}source files differs now\nreplay: the tree wrote the same" in out
+    assert "changed since" not in out  # the names are for a difference
+    lines = record.read_text(encoding="utf-8").splitlines(keepends=True)
+    header = json.loads(lines[0])
+    header["roomba_bt_version"] = "0.1.0"
+    header["sources"][str(mission.resolve())] = hashlib.sha256(mission.read_bytes()).hexdigest()
+    older = tmp_path / "older.jsonl"
+    older.write_text("".join([json.dumps(header) + "\n", *lines[1:]]), encoding="utf-8")
+    assert main(["replay", str(older)]) == 0
+    assert "recorded with" not in capsys.readouterr().out  # the same bytes: the release unsaid
+    _mission_with_a_library(tmp_path, "150 mm/s")  # the tree decides otherwise now
+    header["sources"] = load_record(record).header["sources"]  # each digest as the files now
+    header["sources"][str((tmp_path / "moves.yaml").resolve())] = hashlib.sha256(
+        (tmp_path / "moves.yaml").read_bytes()
+    ).hexdigest()
+    header["sources"][str(mission.resolve())] = hashlib.sha256(mission.read_bytes()).hexdigest()
+    older.write_text("".join([json.dumps(header) + "\n", *lines[1:]]), encoding="utf-8")
+    assert main(["replay", str(older)]) == 1
+    out = capsys.readouterr().out
+    assert f"replay: recorded with roomba-bt 0.1.0 (this is {__version__})\n" in out
+    assert "changed since" not in out
+
+
+TWO_A_TICK = """
+mission: two-a-tick
+tree:
+  sequence:
+    - mode: safe
+    - parallel:
+        - motors: {main_brush: true}
+        - drive: {velocity: 100 mm/s, radius: spin_left, duration: 1s}
+"""
+
+
+class _CtrlCBetweenWrites(SimLink):
+    """A Ctrl-C that comes between two writes of one tick: before its first Drive (137),
+    which the tick's flush writes after its Motors (138)."""
+
+    def write(self, data: bytes) -> None:
+        if data[0] == 137 and not getattr(self, "interrupted", False):
+            self.interrupted = True
+            raise KeyboardInterrupt
+        super().write(data)
+
+
+def test_a_ctrl_c_between_two_writes_of_a_tick_replays_byte_for_byte(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A Ctrl-C that lands between two of a tick's writes left part of the tick on the wire
+    (its Motors, not its Drive). The end note said "before" the tick, and the replay ended
+    before ticking it: "expected Motors (138) 8a 04, sent Drive (137) 89 00 00 00 00", exit
+    1. The note holds the bytes written when it came (``written``), and the replay ticks
+    that frame and writes its commands up to there. A record made before (no ``written``)
+    replays as it did."""
+    link = _CtrlCBetweenWrites(Simulator(load_world("empty-room"), CREATE2, 0))
+    source, path = tmp_path / "m.yaml", tmp_path / "run.jsonl"
+    source.write_text(TWO_A_TICK)
+    stack = RunStack(load_mission(source, {}, profile=CREATE2), link, profile=CREATE2,
+                     record=Recording(path, str(source)))  # fmt: skip
+    assert stack.run(raise_interrupts=False).outcome is Outcome.INTERRUPTED
+    stack.close()
+    assert main(["replay", str(path)]) == 0
+    out = capsys.readouterr().out
+    record = load_record(path)
+    outbound = record.outbound
+    assert f"replay: the tree wrote the same {len(outbound)} bytes as the recorded run" in out
+    assert "replay: the recorded run was interrupted (Ctrl-C) at t=0.01 s" in out
+    ending = record.ending
+    assert ending is not None and (ending["reason"], ending["at"]) == ("Ctrl-C", "before")
+    motors = bytes.fromhex("8a04")
+    assert outbound[ending["written"] - 2 : ending["written"]] == motors  # then the safe stop
+    lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
+    made_before = tmp_path / "before.jsonl"
+    made_before.write_text(
+        "".join(re.sub(r', "written": \d+', "", line) for line in lines), encoding="utf-8"
+    )
+    assert main(["replay", str(made_before)]) == 1
+    assert "expected Motors (138) 8a 04" in capsys.readouterr().out
