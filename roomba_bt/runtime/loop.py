@@ -349,7 +349,9 @@ class MissionRunner(BaseHandle):
                 interrupt = exc
                 why = signal_reason(exc.signum) if isinstance(exc, Terminated) else "Ctrl-C"
                 summary.outcome, summary.reason = Outcome.INTERRUPTED, why
-            except Exception as exc:  # the operator's stop, a lost link, a bug: the safe stop
+            # the operator's stop, a lost link, a bug: the safe stop. SystemExit too: a
+            # plugin's sys.exit(0) in a tick left the run without its summary, exit 0
+            except (Exception, SystemExit) as exc:
                 ended_by(exc, summary, answered=self.has_snapshot)
                 raised_in = terminate_raised(exc)
                 summary.ended_at = (-1, getattr(exc, "at", "after"))  # a stop's: before the tick
@@ -672,11 +674,12 @@ def refusal(
     return f"t={0.0 if when is None else when:.3f}{by} {text}"
 
 
-def ended_by(exc: Exception, summary: RunSummary, *, answered: bool) -> None:
+def ended_by(exc: Exception | SystemExit, summary: RunSummary, *, answered: bool) -> None:
     """The outcome and reason of a run that ``exc`` ended (Ctrl-C aside): the operator's
     stop, the link (its own errors, :class:`LinkDown` and :class:`ConnectionFailed`;
     ``answered``: the robot had streamed, so it was not merely never there), or an
-    exception in a behaviour, an ``OSError`` too (its path and file:line, the traceback)."""
+    exception in a behaviour, an ``OSError`` too, or its ``sys.exit()`` (its path and
+    file:line, the traceback: not ours to exit, as a plugin's import is not)."""
     if isinstance(exc, StopRequested):
         summary.outcome, summary.reason = Outcome.INTERRUPTED, str(exc)
     elif isinstance(exc, ConnectionFailed):

@@ -52,6 +52,8 @@ def behaviour_error(exc: BaseException) -> str:
     source tells (:func:`returned_from`), else where the method is defined, said so."""
     frames = list(traceback.walk_tb(exc.__traceback__))
     what = f"{type(exc).__name__}: {exc}"
+    if isinstance(exc, SystemExit):  # "SystemExit: 0" read as if the run had ended well
+        what = f"SystemExit (it called sys.exit({exc.code!r}))"
     behaviour, where = innermost_behaviour(frames)
     if isinstance(exc, InvalidStatus):  # raised after its update (check) returned: where it is
         behaviour, where = exc.node, _top_line(frames)

@@ -427,3 +427,35 @@ def test_odometry_since_a_mark_nothing_made_is_an_error_not_a_count_from_the_sta
     summary = run_tree(TreeMission(root, "unmarked"), timeout_s=10.0)
     assert summary.outcome is Outcome.ERROR and summary.exit_code == 4, summary.reason
     assert "raised UnwrittenKey: since is 'start', but nothing has marked" in summary.reason
+
+
+QUITTER = '''
+import sys
+
+from roomba_bt.behaviours import Condition, declare
+
+
+@declare("quitter", kind="condition", reads=(27,))
+class Quitter(Condition):
+    """Gives up the way a script does: sys.exit()."""
+
+    def check(self, snapshot):
+        sys.exit(0)
+'''
+
+
+def test_a_behaviour_calling_sys_exit_is_a_behaviour_error_after_the_safe_stop(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A plugin's ``sys.exit(0)`` in a tick: the safe stop was sent, but the SystemExit went
+    on through the CLI, which exited 0 with no summary and no word. It is a behaviour's
+    error now, as any exception (and as a plugin's ``sys.exit()`` at import is): exit 4."""
+    (tmp_path / "quitter.py").write_text(QUITTER)
+    mission = tmp_path / "m.yaml"
+    mission.write_text(MISSION.replace("fragile", "quitter"))
+    assert main(_run(mission)) == ExitCode.BEHAVIOUR_ERROR
+    out, err = capsys.readouterr()
+    assert "behaviour outer / quitter raised SystemExit (it called sys.exit(0))" in err
+    assert f"(at {tmp_path / 'quitter.py'}:12)" in err
+    assert "safe stop    sent" in out
+    assert "Traceback" not in out + err
