@@ -20,7 +20,11 @@ from typing import NoReturn
 
 from roomba_bt import __version__
 from roomba_bt.cli.streams import guard_std_streams, stdout_problem
-from roomba_bt.runtime.summary import ExitCode
+
+# Nothing heavier at the top: the process's signal handlers (:func:`_as_the_process`) are set
+# once this module has loaded, and each module imported here delays them. The exit codes'
+# module (``runtime/summary.py``, with the protocol tables under it: two thirds of this
+# module's import time) is imported where a code is returned.
 
 SUBCOMMAND_MODULES: tuple[str, ...] = (
     "roomba_bt.cli.run_cmd",
@@ -92,6 +96,8 @@ def _cannot_run(exc: ImportError) -> int:
     """An installation roomba-bt cannot run on: a py_trees release the tree is not proven
     against (``UnsupportedPyTrees``, an ImportError, says which to install) or a dependency
     missing. A message and exit 2, never a traceback."""
+    from roomba_bt.runtime.summary import ExitCode
+
     print(f"roomba-bt: {exc}", file=sys.stderr)
     return ExitCode.INVALID
 
@@ -108,6 +114,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if process:
             _signals_end_the_process()  # only the last words are left
         print(f"roomba-bt: interrupted{_by_signal(exc)}", file=sys.stderr)
+        from roomba_bt.runtime.summary import ExitCode
+
         return ExitCode.INTERRUPTED
     finally:
         if process:
@@ -127,6 +135,8 @@ def _command(argv: Sequence[str] | None) -> int:
     args.quiet += getattr(args, "quiet_after", 0)
     setup_logging(args.verbose, args.quiet)
     func = getattr(args, "func", None)
+    from roomba_bt.runtime.summary import ExitCode  # imported by the parser's commands
+
     if func is None:
         parser.print_help(sys.stderr)
         return ExitCode.INVALID
@@ -134,6 +144,27 @@ def _command(argv: Sequence[str] | None) -> int:
         return int(func(args))
     except ImportError as exc:  # the subcommands import the tree and the robot lazily
         return _cannot_run(exc)
+    except Exception as exc:  # each command has closed what it held (a run: its port)
+        return _internal_error(exc, args.verbose)
+
+
+def _internal_error(exc: Exception, verbose: int) -> int:
+    """roomba-bt's own bug, in one line with the file:line it came from, the traceback with
+    ``-v``; exit 70 (:attr:`ExitCode.INTERNAL_ERROR`). It was Python's traceback and exit 1,
+    which a script reads as "the mission failed"."""
+    import traceback
+
+    from roomba_bt.runtime.summary import ExitCode
+
+    frames = traceback.extract_tb(exc.__traceback__)
+    where = f" (at {frames[-1].filename}:{frames[-1].lineno})" if frames else ""
+    with contextlib.suppress(OSError):
+        if verbose:
+            traceback.print_exception(exc, file=sys.stderr)
+        print(f"roomba-bt: internal error: {type(exc).__name__}: {exc}{where}: a bug in roomba-bt, "
+              "please report it" + ("" if verbose else " with the traceback (run with -v)"),
+              file=sys.stderr)  # fmt: skip
+    return ExitCode.INTERNAL_ERROR
 
 
 def _as_the_process() -> None:

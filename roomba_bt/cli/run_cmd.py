@@ -71,7 +71,7 @@ def _add_run_parser(sub: Any) -> None:
         Run MISSION. Without --port it runs on the built-in simulator (real time; --fast on the
         virtual clock). Exit codes: 0 succeeded, 1 failed or timed out, 2 invalid mission or usage,
         3 connection or stream failure, 4 a behaviour raised an exception, 7 succeeded but failed
-        --strict, 130 interrupted.
+        --strict, 70 internal error (a bug in roomba-bt), 130 interrupted.
         """,
     )
     run.add_argument("mission", help="mission YAML file, or a shipped mission's name (dock)")
@@ -296,10 +296,14 @@ def _claimed_run(
     observer = observer_for(args.display, sys.stdout)
     try:
         stack = _stack(args, mission, link, packets, params, timeout, observer, claimed)
-    except OSError as exc:
+    except BaseException as exc:  # the port let go of (its exclusive mode): it was left open
+        with contextlib.suppress(Exception):
+            link.close()
         if monitor is not None:
             monitor.finish(None)
-        return _error(f"--record {args.record}: {exc.strerror or exc}")
+        if isinstance(exc, OSError):  # the record cannot be written
+            return _error(f"--record {args.record}: {exc.strerror or exc}")
+        raise  # a bug (main() says it, exit 70), or Ctrl-C
     if monitor is not None:
         monitor.start()  # the port is open: its URL now, not one a busy port never serves
     return _run_and_report(args, stack, observer, simulator, monitor)
@@ -472,8 +476,6 @@ def _run_and_report(
     monitor: LiveMonitor | None,
 ) -> int:
     """The run, then what it did: the tree's last state, the summary, what went wrong."""
-    from roomba_bt.runtime.display import logging_off_the_tick, use_mission_clock
-
     mission = stack.mission
     quiet = args.display == "none"
     if quiet and not args.verbose:  # nothing but the summary (and what went wrong)
@@ -487,26 +489,59 @@ def _run_and_report(
     # on the virtual clock nothing drives meanwhile: Ctrl-Z suspends, Ctrl-\ quits
     stack.runner.on_wall_clock = not args.fast
     stack.runner.names_slow_ticks = True  # a plugin's blocking update named, --fast too
-    use_mission_clock(stack.runner)
+    closed = False
     try:
-        # a stalled terminal must not hold up the tick loop on the wall clock; on the virtual
-        # clock nothing drives meanwhile, and no line is dropped
-        with logging_off_the_tick(blocks=args.fast):
-            summary = stack.run(raise_interrupts=False)  # Ctrl-C: the summary, exit 130
-    finally:
-        use_mission_clock(None)
-        if monitor is not None:
-            monitor.finish(stack.runner.summary)
-    try:
+        summary = _run_held(args, stack, monitor)
         stack.close()
+        closed = True
         # the record's end note is out, the monitor shut down, the port closed (its exclusive
         # mode cleared) and an undelivered stop tried again: a signal now ends the process,
         # so that a report blocked on a pipe nobody reads can still be ended
         signals_end_the_process()
         _report(args, stack, summary, observer, simulator)
         return summary.exit_code
+    except BaseException as exc:
+        # roomba-bt's own bug (a display, the monitor, the record, the runner: a behaviour's
+        # is the summary's ERROR) or an interrupt before the run took the signals: the port
+        # is closed all the same (its exclusive mode, an undelivered stop tried again), then
+        # the exception goes on to main(), which says it in one line (exit 70, or 130)
+        if not closed:
+            stack.close()
+        if not isinstance(exc, KeyboardInterrupt):
+            with contextlib.suppress(OSError):
+                print(f"roomba-bt: the run ended on an internal error; {_stop_said(stack)}",
+                      file=sys.stderr)  # fmt: skip
+        raise
     finally:
         stack.runner.release_interrupts()  # the summary is out
+
+
+def _run_held(args: argparse.Namespace, stack: RunStack, monitor: LiveMonitor | None) -> RunSummary:
+    """The run itself, its log lines stamped with mission time, and the monitor told how it
+    ended (the page says it): its summary. Ctrl-C and SIGTERM end it with its summary (exit
+    130); anything raised here is roomba-bt's own bug."""
+    from roomba_bt.runtime.display import logging_off_the_tick, use_mission_clock
+
+    use_mission_clock(stack.runner)
+    try:
+        # a stalled terminal must not hold up the tick loop on the wall clock; on the virtual
+        # clock nothing drives meanwhile, and no line is dropped
+        with logging_off_the_tick(blocks=args.fast):
+            return stack.run(raise_interrupts=False)  # Ctrl-C: the summary, exit 130
+    finally:
+        use_mission_clock(None)
+        if monitor is not None:
+            monitor.finish(stack.runner.summary)
+
+
+def _stop_said(stack: RunStack) -> str:
+    """Whether the robot was stopped, once the stack is closed, for a run that ended on an
+    internal error (its summary may be unfinished): ``the robot was stopped (the safe stop
+    was delivered)`` or ``safe stop NOT DELIVERED: ...``."""
+    connection = stack.connection
+    if connection.safe_stopped:
+        return "the robot was stopped (the safe stop was delivered) and its port closed"
+    return f"safe stop NOT DELIVERED: {connection.stop_report or 'the port failed'}"
 
 
 def _report(

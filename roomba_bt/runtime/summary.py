@@ -42,6 +42,11 @@ class ExitCode(IntEnum):
     #: dropped while the tree was stopped, a fall out of Safe/Full by itself). 7, not 5: 5
     #: and 6 are ``roomba-bt doctor``'s (nothing answered; a later step failed)
     STRICT = 7
+    #: roomba-bt itself raised (a bug in the runner, the display, the monitor, the record),
+    #: not a behaviour: said in one line, the traceback with ``-v``, after the run's port was
+    #: closed. 70 is sysexits.h's EX_SOFTWARE ("internal software error"): Python's own exit
+    #: for an uncaught exception, 1, read as "the mission failed"
+    INTERNAL_ERROR = 70
     INTERRUPTED = 130  # Ctrl-C or SIGTERM, after the safe stop
 
 
