@@ -349,9 +349,7 @@ class MissionRunner(BaseHandle):
                 interrupt = exc
                 why = signal_reason(exc.signum) if isinstance(exc, Terminated) else "Ctrl-C"
                 summary.outcome, summary.reason = Outcome.INTERRUPTED, why
-            # the operator's stop, a lost link, a bug: the safe stop. SystemExit too: a
-            # plugin's sys.exit(0) in a tick left the run without its summary, exit 0
-            except (Exception, SystemExit) as exc:
+            except (Exception, SystemExit) as exc:  # a stop, a lost link, a bug, sys.exit()
                 ended_by(exc, summary, answered=self.has_snapshot)
                 raised_in = terminate_raised(exc)
                 summary.ended_at = (-1, getattr(exc, "at", "after"))  # a stop's: before the tick
@@ -679,7 +677,8 @@ def ended_by(exc: Exception | SystemExit, summary: RunSummary, *, answered: bool
     stop, the link (its own errors, :class:`LinkDown` and :class:`ConnectionFailed`;
     ``answered``: the robot had streamed, so it was not merely never there), or an
     exception in a behaviour, an ``OSError`` too, or its ``sys.exit()`` (its path and
-    file:line, the traceback: not ours to exit, as a plugin's import is not)."""
+    file:line, the traceback: not ours to exit, as at a plugin's import; it went on through
+    the CLI, which exited 0 with no summary), each after the safe stop."""
     if isinstance(exc, StopRequested):
         summary.outcome, summary.reason = Outcome.INTERRUPTED, str(exc)
     elif isinstance(exc, ConnectionFailed):
