@@ -303,14 +303,17 @@ class LiveMonitor:
 
     def finish(self, summary: Any) -> None:
         """After the run (``summary``), or when it could not start (None)."""
+        from roomba_bt.monitor.feed import Ending
+
         if summary is None:
-            self.feed.finished = "the run did not start"
+            self.feed.end("the run did not start", None)
         else:
-            # what the robot was left in: the page's robot panel holds the last tick before
-            # the safe stop (it showed Safe and the wheels turning after the run had ended)
-            reason = f": {summary.reason}" if summary.reason else ""
-            after = f"final mode {summary.final_mode_text()}; safe stop {summary.safe_stop}"
-            self.feed.finished = f"{summary.outcome.value}{reason} ({after})"
+            # what the robot was left in, which no tick shows (the safe stop comes after the
+            # last one): the banner says it, and the robot panel shows it in place of the
+            # last tick's Safe, wheels turning and brushes on
+            ending = Ending.of(summary)
+            after = f"final mode {ending.mode}; safe stop {ending.safe_stop}"
+            self.feed.end(f"{ending.outcome} ({after})", ending)
         self._done.set()
         logging.getLogger("roomba_bt").removeHandler(self._handler)
         for thread in self._threads:

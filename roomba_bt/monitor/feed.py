@@ -199,6 +199,37 @@ class Event(NamedTuple):
     tick: int = 0
 
 
+class Ending(NamedTuple):
+    """What the run's end left the robot in, which no tick shows: the safe stop comes after
+    the last tick, with the stream paused, so no frame after it is read. The page's robot
+    panel showed that last tick (Safe, the wheels at their last speed, the brushes on) under
+    "the run ended"; it shows this in its place once the run has ended."""
+
+    #: the summary's ``final mode`` (``Passive``, or ``unknown: last seen in Safe, the stop
+    #: was not delivered``)
+    mode: str
+    #: the stop is known to have arrived (:attr:`RunSummary.left_stopped`): drive 0, motors
+    #: off; False: what the robot does is not known, and the panel says so
+    stopped: bool
+    #: the summary's ``safe stop`` (``sent drive, motors, pause_resume_stream, start``)
+    safe_stop: str
+    #: how the run ended (``interrupted: stopped by the operator``)
+    outcome: str
+
+    @classmethod
+    def of(cls, summary: RunSummary) -> Ending:
+        reason = f": {summary.reason}" if summary.reason else ""
+        return cls(
+            mode=summary.final_mode_text(),
+            stopped=summary.left_stopped,
+            safe_stop=summary.safe_stop,
+            outcome=f"{summary.outcome.value}{reason}",
+        )
+
+    def as_json(self) -> dict[str, Any]:
+        return self._asdict()
+
+
 class Ring:
     """The last ``size`` records by sequence number (all of them when ``size`` is None).
 
@@ -299,6 +330,9 @@ class RunFeed:
         self.trees: dict[int, list[NodeInfo]] = {}
         self.generation = -1
         self.finished: str | None = None  # the run's outcome once it ended
+        #: what the run's safe stop left the robot in (None: not ended, or not known: a
+        #: record's view that diverged or was cut short); set before ``finished``
+        self.ending: Ending | None = None
         self.truth_start: tuple[float, float, float] | None = None  # where odometry's 0 is
         #: writers of the event log (the tick thread, a logging thread, the file watcher)
         #: take it so that the log's order is its sequence numbers'; readers never do
@@ -504,6 +538,13 @@ class RunFeed:
         )
 
     # ---------------------------------------------------------------- any thread
+    def end(self, finished: str, ending: Ending | None) -> None:
+        """The run is over: ``finished`` is what the page's banner says, ``ending`` what the
+        robot was left in (the robot panel's last state). ``ending`` is published first: a
+        server that sees ``finished`` change sends the robot panel it gives."""
+        self.ending = ending
+        self.finished = finished
+
     def event(
         self, kind: str, text: str, time: float | None = None, tick: int | None = None
     ) -> None:

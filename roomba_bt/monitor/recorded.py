@@ -22,7 +22,7 @@ from collections.abc import Callable
 from datetime import datetime
 from typing import TYPE_CHECKING, Any
 
-from roomba_bt.monitor.feed import RunFeed
+from roomba_bt.monitor.feed import Ending, RunFeed
 from roomba_bt.monitor.session import STEP, MonitorSession
 from roomba_bt.runtime.loop import StopRequested
 from roomba_bt.runtime.recording import (
@@ -72,7 +72,12 @@ def replay_into_feed(
     difference = diverged(summary, transport)
     if difference is not None and diverged_at is not None:
         diverged_at(difference)
-    feed.finished = how_the_replay_ended(record, summary, difference, feed)
+    finished = how_the_replay_ended(record, summary, difference, feed)
+    # what the recorded run's safe stop left the robot in: the replay wrote the same stop
+    # (checked against the record), where the record holds the run's end and no difference
+    whole = difference is None and record.ending is not None and not record.being_written
+    whole = whole and record.recording_stopped is None
+    feed.end(finished, Ending.of(summary) if whole else None)
     return feed, summary
 
 

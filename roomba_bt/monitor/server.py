@@ -483,15 +483,20 @@ class MonitorServer:
             now_session = self._session_view()
             if records or new_events or now_session != session_view or feed.finished != finished:
                 message: dict[str, Any] = {"type": "update", "session": now_session}
+                # the run has ended since: its newest tick again, as the safe stop left the
+                # robot (no tick shows that: views.after_the_end), nothing flipped anew
+                again = not records and feed.finished != finished and feed.ending is not None
+                if again and (newest := feed.latest()) is not None:
+                    records = [newest]
                 if records:
                     last = records[-1]
                     _, earlier = feed.at(last.tick)
                     state = state_view(feed, last, earlier)
                     flipped = {i for r in records if r.tree == last.tree for i in r.changed}
-                    state["changed"] = sorted(flipped)
+                    state["changed"] = [] if again else sorted(flipped)
                     message["state"] = state
                     stride = max(1, len(records) // 8)
-                    message["path"] = path_view([*records[:-1:stride], last])
+                    message["path"] = path_view([] if again else [*records[:-1:stride], last])
                     if last.tree != generation:
                         generation = last.tree
                         message["tree"] = tree_view(feed, last.tree)

@@ -9,7 +9,7 @@ from __future__ import annotations
 from collections.abc import Collection, Mapping
 from typing import Any
 
-from roomba_bt.monitor.feed import TEXT_KEYS, TEXT_LIMIT, RunFeed, TickRecord
+from roomba_bt.monitor.feed import TEXT_KEYS, TEXT_LIMIT, Ending, RunFeed, TickRecord
 from roomba_bt.oi.bits import ChargingState
 from roomba_bt.oi.frames import (
     BATTERY_PACKETS,
@@ -237,7 +237,31 @@ def state_view(feed: RunFeed, record: TickRecord, earlier: list[TickRecord]) -> 
             measured = _measured_wheels(record, earlier[1])
             if measured is not None:
                 robot["wheels"] = measured
+        if feed.ending is not None and not rewound:
+            after_the_end(robot, feed.ending)
+            out["ended"] = feed.ending.as_json()
     return out
+
+
+def after_the_end(robot: dict[str, Any], ending: Ending) -> None:
+    """The robot panel of a run that has ended, from its newest tick: the safe stop came
+    after that tick (with the stream paused, no frame shows it), so the tick's mode, wheels
+    and motors are not what the robot was left in. A stop known delivered: the final mode,
+    the wheels at 0 (its drive 0, or Passive, which no drive moves), the motors off. One not
+    delivered: the mode unknown, and the wheels and motors said to be the last seen."""
+    robot["mode"] = ending.mode
+    if ending.stopped:
+        robot["wheels"] = {"left": 0, "right": 0, "source": "after the run's safe stop"}
+        robot["motors"] = {"command": None, "note": "off: the run's safe stop"}
+        for name in ("main_brush", "side_brush", "vacuum"):
+            robot["motors"][name] = _motor(0, None)
+        robot.pop("brush_currents_ma", None)  # the last frame's, drawn before the stop
+        return
+    unknown = "last seen before the end; the stop was not delivered"
+    if "wheels" in robot:
+        robot["wheels"]["source"] += f"; {unknown}"
+    if "motors" in robot:
+        robot["motors"]["note"] = unknown
 
 
 def _measured_wheels(record: TickRecord, previous: TickRecord) -> dict[str, Any] | None:

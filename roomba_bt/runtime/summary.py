@@ -338,6 +338,19 @@ class RunSummary:
         limit = self.time_limit or f"--timeout {limit_s:g} s"
         self.reason = f"{limit} of mission time ran out{where}"
 
+    @property
+    def left_stopped(self) -> bool:
+        """Whether the run's end is known to have left the robot stopped: its safe stop was
+        written and heard (or there was nothing to stop), so its wheels are at 0 and its
+        motors off in :attr:`final_mode`; False when the stop was not delivered, was cut
+        short or failed, or the robot never answered (what it does is then unknown)."""
+        unfinished = ("not attempted", "interrupted", "FAILED")
+        return (
+            self.stop_delivered
+            and self.robot_answered
+            and not self.safe_stop.startswith(unfinished)
+        )
+
     def final_mode_text(self) -> str:
         """The summary's ``final mode``: the mode after the safe stop, or why it is unknown."""
         mode = self.final_mode.label if self.final_mode is not None else "unknown"

@@ -263,6 +263,33 @@ def test_the_robot_panel_shows_the_brushes_and_vacuum_on_and_off_while_paused(
         run.finish()
 
 
+def test_after_the_run_the_robot_panel_shows_it_stopped_in_passive(page: Any, child: Child) -> None:
+    """The robot panel froze on the last tick before the run's safe stop: the page of an
+    ended run showed Safe, the wheels at their last speed and the brushes on. It shows what
+    the stop left (Passive, the wheels at 0, the motors off) and says the run ended."""
+    proc = child(monitored_run(BRUSHES))
+    page.goto(_url_from(proc))
+    page.wait_for_selector('#motors:has-text("main brush ON")', timeout=WAIT_MS)
+    page.wait_for_function(
+        "document.querySelector('#wheels') && !/L 0 R 0/.test("
+        "document.querySelector('#wheels').textContent)",
+        timeout=WAIT_MS,
+    )
+    page.click("#stop")
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130, err
+    page.wait_for_selector('#link:text("ended")', timeout=WAIT_MS)
+    assert page.inner_text("#mode") == "Passive"
+    assert page.inner_text("#wheels") == "L 0 R 0"
+    motors = page.inner_text("#motors")
+    assert "main brush off" in motors and "vacuum off" in motors, motors
+    assert "safe stop" in motors
+    title = page.inner_text("#robot-panel h2")
+    assert title.lower() == "robot after the run ended: stopped, passive", title  # CSS caps
+    banner = page.inner_text("#banner")
+    assert banner.startswith("the run ended: interrupted: stopped by the operator"), banner
+
+
 #: the deepest RUNNING node's name, and whether it is inside the tree panel's visible box
 DEEPEST_RUNNING_IN_VIEW = """() => {
   const rows = Array.from(document.querySelectorAll('.node[data-status="R"]'));

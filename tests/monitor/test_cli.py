@@ -376,6 +376,45 @@ def test_the_page_is_told_what_the_robot_was_left_in(
     )
 
 
+def test_the_robot_panel_after_the_run_shows_what_the_safe_stop_left(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The robot panel froze on the last tick before the safe stop: after the run it showed
+    Safe, the wheels at their last speed and the brushes on, though the robot was stopped
+    and in Passive. The newest tick's panel, once the run has ended, is the final state."""
+    pytest.importorskip("aiohttp")
+    from roomba_bt.cli import monitor_cmd
+    from roomba_bt.monitor.views import state_view
+
+    shown: list[dict[str, Any]] = []
+    finish = monitor_cmd.LiveMonitor.finish
+
+    def finish_and_look(self: monitor_cmd.LiveMonitor, summary: Any) -> None:
+        finish(self, summary)
+        last = self.feed.latest()
+        assert last is not None
+        before = self.feed.record(last.seq - 1)
+        assert before is not None
+        shown.append(state_view(self.feed, last, self.feed.at(last.tick)[1]))
+        shown.append(state_view(self.feed, before, self.feed.at(before.tick)[1]))
+
+    monkeypatch.setattr(monitor_cmd.LiveMonitor, "finish", finish_and_look)
+    brushes = SHUTTLE.with_name("brushes.yaml")
+    argv = ["run", str(brushes), "--fast", "--display", "none", "--monitor", "0", "--timeout", "2s"]
+    assert main(argv) == 1
+    ended, rewound = (state["robot"] for state in shown)
+    assert ended["mode"] == "Passive"
+    assert (ended["wheels"]["left"], ended["wheels"]["right"]) == (0, 0)
+    motors = ended["motors"]
+    assert [motors[m]["percent"] for m in ("main_brush", "side_brush", "vacuum")] == [0, 0, 0]
+    assert motors["note"] == "off: the run's safe stop"
+    assert shown[0]["ended"]["stopped"] is True
+    assert shown[0]["ended"]["outcome"].startswith("timeout: ")
+    # a tick before the end is shown as it was: Safe, the brushes on
+    assert rewound["mode"] == "Safe" and rewound["motors"]["main_brush"]["percent"] == 100
+    assert "ended" not in shown[1]
+
+
 def test_a_wildcard_address_and_the_virtual_clock_are_said(
     capsys: pytest.CaptureFixture[str],
 ) -> None:

@@ -74,11 +74,14 @@ def _brushes_run(tmp_path: Path) -> tuple[RunFeed, Path, tuple[int, ...]]:
     return feed, path, stack.packets
 
 
-def _robot_at_newest(feed: RunFeed) -> dict[str, Any]:
+def _robot_at_newest(feed: RunFeed, back: int = 0) -> dict[str, Any]:
+    """The robot panel at the newest tick, or ``back`` ticks before it."""
     newest = feed.latest()
     assert newest is not None
-    _, earlier = feed.at(newest.tick)
-    return dict(state_view(feed, newest, earlier)["robot"])
+    record = feed.record(newest.seq - back)
+    assert record is not None
+    _, earlier = feed.at(record.tick)
+    return dict(state_view(feed, record, earlier)["robot"])
 
 
 def test_the_robot_panel_shows_the_brushes_and_vacuum_the_run_switched_on(
@@ -106,7 +109,9 @@ def test_the_robot_panel_shows_the_brushes_and_vacuum_the_run_switched_on(
     assert first.motors is None  # before the motors' command: none stands
     mission = load_mission(BRUSHES, {}, profile=CREATE2)
     replayed, _ = replay_into_feed(load_record(path), mission, CREATE2, packets, 115200, "b")
-    assert _robot_at_newest(replayed)["motors"] == robot["motors"]
+    # the tick before the end (at the end, the view shows what the safe stop left: off)
+    assert _robot_at_newest(replayed, back=1)["motors"] == robot["motors"]
+    assert _robot_at_newest(replayed)["motors"]["note"] == "off: the run's safe stop"
 
 
 def test_pwm_motors_show_each_motor_s_power_and_a_pause_shows_them_off() -> None:

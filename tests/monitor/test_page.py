@@ -125,7 +125,8 @@ def _seek(page: Any, tick: int) -> None:
 def test_a_rewound_record_s_robot_panel_is_titled_by_the_tick_it_shows(
     recorded: MonitorServer, page: Any
 ) -> None:
-    """It said "its last tick before the run ended" at every tick of a record."""
+    """It said "its last tick before the run ended" at every tick of a record. At the
+    record's end it shows what the recorded run's safe stop left the robot in."""
     page.goto(recorded.url)
     page.wait_for_selector('#source:text("record")', timeout=WAIT_MS)
     first, last = recorded.feed.window()
@@ -134,7 +135,9 @@ def test_a_rewound_record_s_robot_panel_is_titled_by_the_tick_it_shows(
     _seek(page, middle)
     assert page.inner_text("#robot-panel h2").lower() == f"robot at tick {middle}"
     _seek(page, last.tick)
-    assert "last tick before the run ended" in page.inner_text("#robot-panel h2").lower()
+    title = page.inner_text("#robot-panel h2").lower()
+    assert title == "robot after the run ended: stopped, passive", title
+    assert page.inner_text("#mode") == "Passive"
 
 
 def test_a_seek_brings_its_events_into_view(recorded: MonitorServer, page: Any) -> None:

@@ -35,6 +35,8 @@ const view = {
   events: [], path: { odometry: [], truth: [] }, pathLive: { odometry: [], truth: [] },
   world: null, fontSize: 13, follow: true, shownTick: 0, window: [0, 0], playing: null, menuNode: null,
   finished: null, ended: false,
+  // what the run's safe stop left the robot in, when the state shown is after it (state.ended)
+  shownEnded: null,
   // the run this page watches (its first hello's header.run.id), and another run found
   // served here since (its header.run), which the page does not take
   runId: null, otherRun: null,
@@ -404,6 +406,7 @@ function render(state) {
   $("time").textContent = state.time.toFixed(3);
   $("tick").textContent = state.tick;
   view.shownTick = state.tick;
+  view.shownEnded = state.ended || null;
   renderStatuses(state); renderRobot(state); renderBlackboard(state);
   drawPath(state, view.live ? view.pathLive : view.path);
   renderEvents();
@@ -453,10 +456,16 @@ function updateControls() {
   robotTitle();
 }
 
-// the robot panel's title says which tick it shows: the last before the end only when it does
+// the robot panel's title says which tick it shows; after the run's end, what its safe stop
+// left the robot in (the server's state.ended: no tick shows it, the stream was paused)
 function robotTitle() {
   let title = view.live ? "Robot" : `Robot at tick ${view.shownTick}`;
-  if (view.finished && (view.live || view.shownTick >= view.window[1])) title = "Robot: its last tick before the run ended";
+  const ended = view.shownEnded;
+  if (ended) {
+    title = ended.stopped ? `Robot after the run ended: stopped, ${ended.mode}`
+      : `Robot: last seen before the run ended (final mode ${ended.mode})`;
+  }
+  else if (view.finished && (view.live || view.shownTick >= view.window[1])) title = "Robot: its last tick before the run ended";
   const h2 = $("robot-panel").querySelector("h2");
   if (h2.textContent !== title) h2.textContent = title;
 }
