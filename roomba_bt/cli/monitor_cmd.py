@@ -265,6 +265,8 @@ class LiveMonitor:
         logging.getLogger("roomba_bt").addHandler(self._handler)
         if self.args.watch:
             self._spawn(self._watch, "roomba-bt watch")
+        from roomba_bt.runtime.display import in_foreground
+
         if sys.stdin.isatty():  # the operator's at the keyboard, --monitor-readonly or not
             if in_foreground(sys.stdin.fileno()):
                 print(KEYS_HELP, flush=True)
@@ -407,15 +409,6 @@ class LiveMonitor:
             self.session.request(action, by="the terminal's keys")
         except ValueError as exc:  # ControlRefused: e.g. resume when not paused
             log.info("monitor: key %s (%s) refused: %s", key, action, exc)
-
-
-def in_foreground(fd: int) -> bool:
-    """Whether this process's group owns the terminal at ``fd``: a command started with ``&``
-    does not, and the terminal stops it (SIGTTOU) when it changes the terminal's settings."""
-    try:
-        return os.tcgetpgrp(fd) == os.getpgrp()
-    except OSError:
-        return False
 
 
 def _files_of(mission: Any, path: Path) -> tuple[Path, ...]:

@@ -182,6 +182,39 @@ def plain_terminal() -> bool:
     return os.environ.get("TERM") == "dumb"
 
 
+def in_foreground(fd: int) -> bool:
+    """Whether this process's group owns the terminal at ``fd``: a command started with ``&``
+    does not (nor one a shell's ``bg`` sent on), and the terminal stops it (SIGTTOU) when it
+    changes the terminal's settings. False where it cannot be asked (not a terminal; no job
+    control on the system)."""
+    if not hasattr(os, "tcgetpgrp"):
+        return False
+    try:
+        return os.tcgetpgrp(fd) == os.getpgrp()
+    except OSError:
+        return False
+
+
+def owns_the_screen(stream: TextIO) -> bool:
+    """``--display auto``'s live tree: ``stream`` is a terminal that moves its cursor and
+    this run is its foreground job. A run started with ``&`` shares the screen with the shell
+    and whatever else runs there: two runs in the background of one terminal each cleared it
+    and drew their tree over the other's, five times a second, and neither could be read.
+    A background run gets the log's plain lines instead (a line each, its own; decided: the
+    tree stays the log for the whole run, even if ``fg`` brings it to the foreground later).
+    Whether another program draws on the same terminal from elsewhere (another terminal
+    multiplexer's pane, a second SSH session's ``write``) cannot be known, so only the job
+    control's answer is taken. A stream without a descriptor that says it is a terminal (a
+    test's) is taken at its word."""
+    if not stream.isatty() or plain_terminal():
+        return False
+    try:
+        fd = stream.fileno()
+    except (OSError, ValueError):  # io.UnsupportedOperation is both
+        return True
+    return in_foreground(fd)
+
+
 def tree_symbols(stream: TextIO) -> dict[object, str]:
     """The symbols :func:`text_tree` draws with on ``stream``: py_trees' unicode ones where
     its encoding has ``✓`` and ``✕``, else ASCII (``[ok]``, ``[x]``; an ASCII stdout raised
@@ -536,8 +569,9 @@ class StatusChangeLogger:
 def observer_for(display: Display, stream: TextIO) -> TerminalDisplay | StatusChangeLogger | None:
     """The observer ``--display`` asks for, the tree drawn on ``stream``. ``auto`` on a
     ``TERM=dumb`` terminal is the log: redrawn without a cursor to move, the tree would
-    scroll a copy of itself five times a second."""
-    if display == "tree" or (display == "auto" and stream.isatty() and not plain_terminal()):
+    scroll a copy of itself five times a second; so is ``auto`` in the background of a
+    terminal (:func:`owns_the_screen`). ``tree`` draws the tree wherever it is asked."""
+    if display == "tree" or (display == "auto" and owns_the_screen(stream)):
         return TerminalDisplay(stream)
     if display in ("log", "auto"):
         return StatusChangeLogger()

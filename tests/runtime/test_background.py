@@ -19,27 +19,32 @@ import pytest
 pytestmark = pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs a pty")
 
 #: The terminal's session leader: it sets ``tostop`` if asked, starts the command given in a
-#: process group of its own (the background) and prints how it ended: ``exit N`` or
-#: ``stopped by SIGTTOU`` (then kills it).
+#: process group of its own (the background; in its own, the terminal's foreground group,
+#: when asked ``foreground``), keeps what the terminal's screen was sent in ``screen.out``
+#: and prints how it ended: ``exit N`` or ``stopped by SIGTTOU`` (then kills it).
 LEADER = textwrap.dedent(
     """
     import fcntl, os, signal, subprocess, sys, termios, time
-    tostop, command = sys.argv[1] == "tostop", sys.argv[2:]
+    how, command = sys.argv[1], sys.argv[2:]
     os.setsid()
     master, slave = os.openpty()
     fcntl.ioctl(slave, termios.TIOCSCTTY, 0)
-    if tostop:
+    if how == "tostop":
         attributes = termios.tcgetattr(slave)
         attributes[3] |= termios.TOSTOP
         termios.tcsetattr(slave, termios.TCSANOW, attributes)
-    job = subprocess.Popen(command, stdin=slave, stdout=slave, stderr=slave, process_group=0)
+    job = subprocess.Popen(command, stdin=slave, stdout=slave, stderr=slave,
+                           process_group=None if how == "foreground" else 0)
     os.set_blocking(master, False)
+    screen = bytearray()
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline:
         try:
-            os.read(master, 65536)  # the terminal's screen: read, so no write waits
+            screen += os.read(master, 65536)  # read, so no write waits
         except OSError:
             pass
+        with open("screen.out", "wb") as kept:
+            kept.write(screen)
         pid, status = os.waitpid(job.pid, os.WNOHANG | os.WUNTRACED)
         if pid and os.WIFSTOPPED(status):
             print("stopped by", signal.Signals(os.WSTOPSIG(status)).name)
@@ -64,16 +69,40 @@ tree:
 """
 
 
-def _in_the_background(tmp_path: Path, *args: str, tostop: bool) -> str:
-    """``roomba-bt ARGS`` (``circle.yaml`` written first) as a background job: how it ended."""
+def _in_the_background(tmp_path: Path, *args: str, tostop: bool, foreground: bool = False) -> str:
+    """``roomba-bt ARGS`` (``circle.yaml`` written first) as a background job of a terminal
+    (or its foreground job): how it ended; the terminal's screen in ``screen.out``."""
     (tmp_path / "circle.yaml").write_text(CIRCLE)
     command = [sys.executable, "-m", "roomba_bt.cli", *args]
+    how = "foreground" if foreground else "tostop" if tostop else "-"
     done = subprocess.run(
-        [sys.executable, "-c", LEADER, "tostop" if tostop else "-", *command],
+        [sys.executable, "-c", LEADER, how, *command],
         capture_output=True, text=True, timeout=90, cwd=tmp_path,
     )  # fmt: skip
     assert done.returncode == 0, done.stderr
     return done.stdout.strip()
+
+
+#: what the live tree's redraw sends: the cursor home, the screen cleared
+CLEAR_SCREEN = b"\x1b[H\x1b[J"
+
+
+def test_a_run_in_the_background_of_a_terminal_prints_lines_not_the_live_tree(
+    tmp_path: Path,
+) -> None:
+    """Two runs started with ``&`` in one terminal each cleared the screen and drew their
+    live tree over the other's. ``--display auto`` draws the tree only for the terminal's
+    foreground job; a background run prints a line per status change."""
+    ended = _in_the_background(tmp_path, "run", "circle.yaml", "--timeout", "1s", tostop=False)
+    assert ended == "exit 1", ended
+    screen = (tmp_path / "screen.out").read_bytes()
+    assert CLEAR_SCREEN not in screen
+    assert b"INFO roomba_bt.run: drive(velocity=100 mm/s, radius=200 mm) -> RUNNING" in screen
+    ended = _in_the_background(
+        tmp_path, "run", "circle.yaml", "--timeout", "1s", tostop=False, foreground=True
+    )
+    assert ended == "exit 1", ended
+    assert CLEAR_SCREEN in (tmp_path / "screen.out").read_bytes()  # the foreground's tree
 
 
 def test_a_run_in_the_background_writing_to_a_tostop_terminal_is_not_stopped(
