@@ -117,6 +117,31 @@ def add_far_end_options(parser: Any, *, port_help: str, world_help: str) -> None
     parser.add_argument("--world", help=world_help)
 
 
+#: ``run --label``'s longest: the page's tab, its header and the summary's line show it whole
+LABEL_LENGTH = 40
+
+
+def run_label(text: str) -> str:
+    """``run --label TEXT``: which run this is, to a person running several from one laptop
+    (``blue robot``, ``group 3``): 1 to :data:`LABEL_LENGTH` printable characters, spaces
+    inside allowed (around it, dropped). A control or invisible character (``ESC [2J``, a
+    bidi override) is refused, not escaped: the label is shown in the terminal's live tree,
+    its log lines and a browser's tab, and is the user's own choice."""
+    label = text.strip()
+    allowed = f"1 to {LABEL_LENGTH} printable characters, e.g. --label 'robot 3'"
+    if not label:
+        raise argparse.ArgumentTypeError(f"found an empty label; allowed: {allowed}")
+    if not label.isprintable():
+        odd = next(c for c in label if not c.isprintable())
+        raise argparse.ArgumentTypeError(
+            f"found the unprintable character U+{ord(odd):04X} (a control or invisible one); "
+            f"allowed: {allowed}"
+        )
+    if len(label) > LABEL_LENGTH:
+        raise argparse.ArgumentTypeError(f"found {len(label)} characters; allowed: {allowed}")
+    return label
+
+
 def seconds(text: str) -> float:
     """A time in seconds, 0 or more (``0.1``)."""
     return _real(text, "seconds, 0 or more", lambda value: value >= 0)

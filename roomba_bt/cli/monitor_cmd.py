@@ -187,6 +187,7 @@ class LiveMonitor:
         loader: Any,
         robot: str = "",
         started: datetime | None = None,
+        label: str = "",
     ) -> None:
         from roomba_bt.monitor.feed import EventLogHandler, RunFeed
         from roomba_bt.monitor.session import MonitorSession
@@ -210,6 +211,7 @@ class LiveMonitor:
             mission_name=mission.name,
             robot=robot,
             started=started,
+            label=label,
         )
         self.feed.set_tree(mission.root)
         self.session = MonitorSession(
@@ -259,7 +261,9 @@ class LiveMonitor:
             if chosen:  # the operator's own: known to them, printed nowhere
                 url = url.split("?token=", 1)[0]
             feed = self.feed
-            which = f" ({feed.mission_name} on {feed.robot})" if feed.robot else ""
+            which = f"{feed.mission_name} on {feed.robot}" if feed.robot else ""
+            which = ": ".join(filter(None, (feed.label, which)))
+            which = f" ({which})" if which else ""
             print(f"monitor: {url}{which}{CHOSEN_TOKEN if chosen else ''}", flush=True)
             self._say_where(host, url)
         logging.getLogger("roomba_bt").addHandler(self._handler)

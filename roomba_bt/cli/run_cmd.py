@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 from roomba_bt.cli.arguments import (
+    LABEL_LENGTH,
     MIN_WATCHDOG,
     add_command,
     add_far_end_options,
@@ -24,6 +25,7 @@ from roomba_bt.cli.arguments import (
     permissions,
     plot_file,
     record_file,
+    run_label,
     seconds,
     watchdog_seconds,
 )
@@ -117,6 +119,12 @@ def _add_run_parser(sub: Any) -> None:
         "--display", choices=("auto", "tree", "log", "none"), default="auto",
         help="live tree on a terminal (auto), one line per status change (log), or only the "
         "summary (none)",
+    )  # fmt: skip
+    run.add_argument(
+        "--label", type=run_label, metavar="TEXT",
+        help="a label for this run, to tell several apart (robot 3): shown in the live tree "
+        "and each log line, the summary, the monitor's URL line, page and tab, and the record "
+        f"(1 to {LABEL_LENGTH} printable characters)",
     )  # fmt: skip
     add_monitor_arguments(run)
 
@@ -293,7 +301,7 @@ def _claimed_run(
             monitor.finish(None)
         print(f"roomba-bt: {exc}", file=sys.stderr)
         return ExitCode.CONNECTION
-    observer = observer_for(args.display, sys.stdout)
+    observer = observer_for(args.display, sys.stdout, label=args.label or "")
     try:
         stack = _stack(args, mission, link, packets, params, timeout, observer, claimed)
     except BaseException as exc:  # the port let go of (its exclusive mode): it was left open
@@ -341,7 +349,7 @@ def _stack(
         # roomba-bt is installed; a file of the user's by its absolute path
         record = Recording(
             args.record, source_name(Path(args.mission)), params,
-            port=args.robot, started=utc_stamp(args.started),
+            port=args.robot, started=utc_stamp(args.started), label=args.label,
             sources=source_digests(mission.files), plugins=plugin_digests(mission.root),
             claimed=claimed,
         )  # fmt: skip
@@ -364,6 +372,7 @@ def _stack(
     if _fast_limit(args):  # no user gave it: its reason says whose it is
         stack.runner.summary.time_limit = f"--fast's own limit of {FAST_TIMEOUT_S:g} s"
     stack.runner.summary.robot = args.robot
+    stack.runner.summary.label = args.label or ""
     return stack
 
 
@@ -461,7 +470,7 @@ def _live_monitor(
 
     return LiveMonitor(
         args, mission, simulator=simulator, packets=packets, robot=args.robot,
-        started=args.started,
+        started=args.started, label=args.label or "",
         loader=lambda path: load_mission(
             path, params, profile=profile, baud=args.baud, permissions=permissions(args)
         ),
@@ -522,7 +531,7 @@ def _run_held(args: argparse.Namespace, stack: RunStack, monitor: LiveMonitor | 
     130); anything raised here is roomba-bt's own bug."""
     from roomba_bt.runtime.display import logging_off_the_tick, use_mission_clock
 
-    use_mission_clock(stack.runner)
+    use_mission_clock(stack.runner, label=args.label or "")
     try:
         # a stalled terminal must not hold up the tick loop on the wall clock; on the virtual
         # clock nothing drives meanwhile, and no line is dropped

@@ -305,6 +305,7 @@ class RunFeed:
         packed: bool = False,
         robot: str = "",
         started: datetime | None = None,
+        label: str = "",
     ) -> None:
         #: the run's identity, sent in the page's first message and checked with each
         #: control: a page left open after its run was killed reconnected to the next run
@@ -313,6 +314,10 @@ class RunFeed:
         #: (None for a record made before its header held it: unknown, not the monitor's)
         self.run_id = secrets.token_urlsafe(12)
         self.robot = robot
+        #: the run's label (``run --label``: ``robot 3``), "" for none: the page's title and
+        #: header lead with it (several robots' pages in one browser told apart by more
+        #: than their ports)
+        self.label = label
         self.started = started if started or source == "record" else datetime.now(UTC)
         #: the frames' layouts (one per stream: a record names its layout by index)
         self.layouts: list[FrameLayout] = []

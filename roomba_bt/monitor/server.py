@@ -413,8 +413,8 @@ class MonitorServer:
         if given == feed.run_id:
             return None
         now = (
-            f"the run served here now is {feed.mission_name}"
-            f"{f' on {feed.robot}' if feed.robot else ''}, started "
+            f"the run served here now is {f'{feed.label}: ' if feed.label else ''}"
+            f"{feed.mission_name}{f' on {feed.robot}' if feed.robot else ''}, started "
             f"{run_view(feed)['started']} (id {feed.run_id})"
         )
         if given is None or given == "":

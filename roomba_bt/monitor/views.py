@@ -326,13 +326,15 @@ def world_view(simulator: Any) -> dict[str, Any]:
 
 def run_view(feed: RunFeed) -> dict[str, str]:
     """Which run this is: its id (a page loaded for another refuses to take it silently, and
-    sends it with each control), its mission, its robot and when it started (ISO 8601, UTC;
-    empty when unknown: a record made before its header held it)."""
+    sends it with each control), its mission, its robot, when it started (ISO 8601, UTC;
+    empty when unknown: a record made before its header held it) and its label (``run
+    --label``; empty for none)."""
     return {
         "id": feed.run_id,
         "mission": feed.mission_name,
         "robot": feed.robot,
         "started": utc_stamp(feed.started) if feed.started is not None else "",
+        "label": feed.label,
     }
 
 

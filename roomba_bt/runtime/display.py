@@ -53,11 +53,17 @@ class MissionClockFormatter(logging.Formatter):
     (``ESC [2J`` clears the screen) reaches the terminal from a message or a traceback."""
 
     clock: Callable[[], float | None] | None = None
+    #: the run's label (``run --label``), said on each line as ``[robot 3]``: two runs'
+    #: lines in one terminal (started with ``&``) told apart; "" for none
+    label = ""
 
     def format(self, record: logging.LogRecord) -> str:
         """``t=12.345 LEVEL logger: message``: the record's own ``mission_time`` (passed as
         ``extra``) if it has one, else the mission clock's now."""
         line = f"{record.levelname} {record.name}: {escaped(_quoted_message(record))}"
+        label = type(self).label
+        if label:
+            line = f"[{label}] {line}"
         if record.exc_info and not record.exc_text:
             record.exc_text = self.formatException(record.exc_info)
         if record.exc_text:
@@ -79,10 +85,12 @@ def _quoted_message(record: logging.LogRecord) -> str:
     return str(record.msg) % one_line
 
 
-def use_mission_clock(runner: MissionRunner | None) -> None:
+def use_mission_clock(runner: MissionRunner | None, label: str = "") -> None:
     """Stamp log lines with ``runner``'s mission time from now on (None: stop stamping): the
     time on the run's clock when the line is written, a stall's lines too
-    (:func:`~roomba_bt.runtime.clock.mission_time_now`), not the last frame's."""
+    (:func:`~roomba_bt.runtime.clock.mission_time_now`), not the last frame's; and with the
+    run's ``label`` (``run --label``), if any."""
+    MissionClockFormatter.label = label if runner is not None else ""
     if runner is None:
         MissionClockFormatter.clock = None
         return
@@ -502,8 +510,12 @@ class TerminalDisplay:
         stream: TextIO,
         refresh_hz: float = 5.0,
         size: Callable[[], tuple[int, int]] | None = None,
+        label: str = "",
     ) -> None:
         self.stream = stream
+        #: the run's label (``run --label``), the screen's first line: which run's tree
+        #: this is, in one of several terminals; "" for none
+        self.label = label
         #: what draws on the terminal, off the tick loop (a stalled terminal must not hold
         #: it up); a terminal that failed ends the drawing
         self.writer = OffTickWriter(stream)
@@ -529,6 +541,8 @@ class TerminalDisplay:
             return
         columns, rows = self._size()
         status = sensor_lines(runner.snapshot, columns)
+        if self.label:
+            status.insert(0, self.label[:columns])
         # the status lines, a blank line, the tree, and the cursor's line left free
         tree = fitted_tree(runner.mission.root, rows - 2 - len(status), columns, self.marks)
         screen = "\n".join(status) + "\n\n" + "\n".join(tree) + "\n"
@@ -566,13 +580,16 @@ class StatusChangeLogger:
                 last[node.id] = status
 
 
-def observer_for(display: Display, stream: TextIO) -> TerminalDisplay | StatusChangeLogger | None:
+def observer_for(
+    display: Display, stream: TextIO, label: str = ""
+) -> TerminalDisplay | StatusChangeLogger | None:
     """The observer ``--display`` asks for, the tree drawn on ``stream``. ``auto`` on a
     ``TERM=dumb`` terminal is the log: redrawn without a cursor to move, the tree would
     scroll a copy of itself five times a second; so is ``auto`` in the background of a
-    terminal (:func:`owns_the_screen`). ``tree`` draws the tree wherever it is asked."""
+    terminal (:func:`owns_the_screen`). ``tree`` draws the tree wherever it is asked, under
+    the run's ``label`` (``run --label``) when it has one."""
     if display == "tree" or (display == "auto" and owns_the_screen(stream)):
-        return TerminalDisplay(stream)
+        return TerminalDisplay(stream, label=label)
     if display in ("log", "auto"):
         return StatusChangeLogger()
     return None

@@ -5,7 +5,7 @@ A record is JSON Lines, one object a line::
     {"format": "roomba-bt-record", "version": 2, "roomba_bt_version": "0.2.0",
      "profile": "create2", "baud": 115200, "mission": "/home/me/missions/dock.yaml",
      "parameters": {...}, "packets": [7, 9, ...], "watchdog": 0.1, "grace": 2.0,
-     "port": "/dev/ttyUSB0", "started": "2025-03-04T09:12:05Z",
+     "port": "/dev/ttyUSB0", "started": "2025-03-04T09:12:05Z", "label": "robot 3",
      "sources": {"/home/me/missions/dock.yaml": "9f86d0...", "roomba-bt:lib/docking.yaml": ...},
      "plugins": {"roomba-bt-dirt": {"version": "0.1.0", "sha256": "84755334..."}}}
     {"t": 0.000000, "d": "out", "b": "80"}          <- host -> robot, hex
@@ -660,7 +660,7 @@ def header_problem(header: dict[str, Any]) -> str | None:
         seconds = header.get(name, 0.0)
         if type(seconds) not in (int, float) or not 0.0 <= seconds < math.inf:
             return f"header field {name!r} is {seconds!r}; expected seconds, 0 or more"
-    for name in ("port", "started", MADE_BY):  # which robot, when (UTC), which roomba-bt
+    for name in ("port", "started", "label", MADE_BY):  # which robot, when, which roomba-bt
         text = header.get(name)
         if text is not None and not isinstance(text, str):
             return f"header field {name!r} is {text!r}; expected text"

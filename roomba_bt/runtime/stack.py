@@ -115,6 +115,8 @@ class Recording:
     #: Neither is read by a replay; a header without them (a record made before) loads.
     port: str | None = None
     started: str | None = None
+    #: the run's label (``run --label``), None: none given (the header leaves it out)
+    label: str | None = None
     #: the SHA-256 of each file the mission was compiled from, the mission file first
     #: (:func:`~roomba_bt.runtime.provenance.source_digests`): a replay that differs names
     #: the ones changed since. Empty: none written (a tree built in Python has no files)
@@ -144,6 +146,7 @@ class Recording:
             "grace": grace,
             **({"port": self.port} if self.port is not None else {}),
             **({"started": self.started} if self.started is not None else {}),
+            **({"label": self.label} if self.label is not None else {}),
             **({SOURCES: dict(self.sources)} if self.sources else {}),
             **({} if self.plugins is None else {PLUGINS: _plain(self.plugins)}),
         }

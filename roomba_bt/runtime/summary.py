@@ -270,6 +270,9 @@ class RunSummary:
     #: runs' summaries in one terminal, of one mission, could not be told apart); "" says
     #: nothing (a replay, an evaluation's episode)
     robot: str = ""
+    #: the run's label (``run --label``: ``robot 3``), said on the summary's first line:
+    #: several robots run from one laptop, one mission each, the summaries alike; "" for none
+    label: str = ""
 
     @property
     def exit_code(self) -> int:
@@ -367,6 +370,7 @@ class RunSummary:
         battery = f"{self.battery_percent:.0f}%" if self.battery_percent is not None else "n/a"
         reason = f" ({self.reason})" if self.reason else ""
         lines = [
+            *([f"label        {self.label}"] if self.label else []),
             f"mission      {self.mission}",
             *([f"profile      {self.profile}"] if self.profile else []),
             *([f"robot        {self.robot}"] if self.robot else []),

@@ -72,6 +72,7 @@ def start_live_run(
     history: int | None = 20_000,
     port: int = 0,
     robot: str = "",
+    label: str = "",
 ) -> LiveRun:
     compiled = load_mission(mission, params or {}, profile=CREATE2)
     steps: list[Step] = []
@@ -110,6 +111,7 @@ def start_live_run(
         world=world_view(simulator),
         mission_name=compiled.name,
         robot=robot,
+        label=label,
     )
     feed.set_tree(compiled.root)
     session = MonitorSession(feed, simulator=True, stream_packets=packets)

@@ -290,6 +290,26 @@ def test_after_the_run_the_robot_panel_shows_it_stopped_in_passive(page: Any, ch
     assert banner.startswith("the run ended: interrupted: stopped by the operator"), banner
 
 
+def test_a_run_s_label_leads_the_tab_s_title_and_the_header(page: Any) -> None:
+    """Several robots' pages in one browser were told apart by their ports alone (the tabs
+    all read the mission's name): ``run --label`` leads the title and shows in the header."""
+    run = start_live_run(SHUTTLE, robot="/dev/ttyUSB1", label="robot 3")
+    try:
+        page.goto(run.url)
+        page.wait_for_selector('#run-label:text("robot 3")', timeout=WAIT_MS)
+        assert page.title() == "robot 3 · shuttle on /dev/ttyUSB1 · roomba-bt monitor"
+    finally:
+        run.finish()
+    unlabelled = start_live_run(SHUTTLE, robot="/dev/ttyUSB1")
+    try:
+        page.goto(unlabelled.url)
+        page.wait_for_selector('#mission:text("shuttle")', timeout=WAIT_MS)
+        assert page.title() == "shuttle on /dev/ttyUSB1 · roomba-bt monitor"
+        assert not page.is_visible("#run-label")
+    finally:
+        unlabelled.finish()
+
+
 #: the deepest RUNNING node's name, and whether it is inside the tree panel's visible box
 DEEPEST_RUNNING_IN_VIEW = """() => {
   const rows = Array.from(document.querySelectorAll('.node[data-status="R"]'));

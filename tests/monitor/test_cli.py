@@ -415,6 +415,67 @@ def test_the_robot_panel_after_the_run_shows_what_the_safe_stop_left(
     assert "ended" not in shown[1]
 
 
+def test_a_run_s_label_is_on_its_url_line_page_summary_and_record(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A teacher running several robots from one laptop told pages and terminals apart only
+    by their ports: ``run --label`` names the run on the monitor's URL line, on the page
+    (its header's ``run``: the tab's title and the header), in the summary and the record's
+    header, which ``roomba-bt monitor RECORD`` shows again."""
+    pytest.importorskip("aiohttp")
+    from roomba_bt.cli import monitor_cmd
+    from roomba_bt.mission import load_mission
+    from roomba_bt.monitor.recorded import replay_into_feed
+    from roomba_bt.monitor.views import run_view
+    from roomba_bt.oi.profiles import CREATE2
+    from roomba_bt.runtime.recording import load_record
+
+    runs: list[dict[str, str]] = []
+    finish = monitor_cmd.LiveMonitor.finish
+
+    def finish_and_look(self: monitor_cmd.LiveMonitor, summary: Any) -> None:
+        finish(self, summary)
+        runs.append(run_view(self.feed))
+
+    monkeypatch.setattr(monitor_cmd.LiveMonitor, "finish", finish_and_look)
+    record = tmp_path / "run.jsonl"
+    argv = ["run", str(SHUTTLE), "--fast", "--display", "none", "--monitor", "0", "--timeout",
+            "1s", "--label", " robot 3 ", "--record", str(record)]  # fmt: skip
+    assert main(argv) == 1
+    out = capsys.readouterr().out
+    url_line = r"monitor: http://127\.0\.0\.1:\d+/ \(robot 3: shuttle on simulator empty-room\)"
+    assert re.match(url_line, out), out
+    assert "\nlabel        robot 3\nmission      shuttle\n" in out
+    assert runs[0]["label"] == "robot 3"
+    loaded = load_record(record)
+    assert loaded.header["label"] == "robot 3"
+    mission = load_mission(SHUTTLE, {}, profile=CREATE2)
+    packets = tuple(loaded.header["packets"])
+    feed, _ = replay_into_feed(loaded, mission, CREATE2, packets, 115200, "run")
+    assert run_view(feed)["label"] == "robot 3"
+
+
+@pytest.mark.parametrize(
+    ("label", "said"),
+    [
+        ("", "found an empty label"),
+        ("   ", "found an empty label"),
+        ("robot\x1b[2J", "found the unprintable character U+001B (a control or invisible one)"),
+        ("robot\u202e3", "found the unprintable character U+202E (a control or invisible one)"),
+        ("r" * 41, "found 41 characters"),
+    ],
+)
+def test_a_label_that_will_not_do_is_a_usage_error(
+    label: str, said: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(SystemExit) as exited:
+        main(["run", str(SHUTTLE), "--fast", "--label", label])
+    assert exited.value.code == 2
+    err = capsys.readouterr().err
+    assert f"argument --label: {said}; allowed: 1 to 40 printable characters" in err, err
+    assert "\x1b" not in err
+
+
 def test_a_wildcard_address_and_the_virtual_clock_are_said(
     capsys: pytest.CaptureFixture[str],
 ) -> None:

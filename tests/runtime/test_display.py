@@ -25,6 +25,7 @@ from roomba_bt.runtime.display import (
     sensor_line,
     sensor_lines,
     text_tree,
+    use_mission_clock,
 )
 from roomba_bt.runtime.loop import MissionRunner
 
@@ -80,6 +81,28 @@ def test_terminal_display_draws_the_tree_with_statuses(run_mission: RunMission) 
     assert "sequence" in text and "drive" in text
     assert "✓" in text
     assert f"mode={OIMode.PASSIVE.label}" in text or "mode=Safe" in text
+
+
+def test_the_live_tree_and_the_log_lines_say_the_run_s_label(
+    run_mission: RunMission, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Several runs in several terminals of one laptop could be told apart only by their
+    ports: ``run --label`` is the live tree's first line and on each log line."""
+    run = run_mission(DRIVE)
+    out = io.StringIO()
+    display = TerminalDisplay(out, label="robot 3")
+    display.render(run.runner)
+    assert display.writer.wait_written(5.0)
+    assert out.getvalue().startswith("\x1b[H\x1b[Jrobot 3\n")
+    record = logging.LogRecord("roomba_bt.run", logging.INFO, "", 0, "drive -> RUNNING", (), None)
+    use_mission_clock(run.runner, label="robot 3")
+    try:
+        assert "[robot 3] INFO roomba_bt.run: drive -> RUNNING" in MissionClockFormatter().format(
+            record
+        )
+    finally:
+        use_mission_clock(None)
+    assert "[robot 3]" not in MissionClockFormatter().format(record)  # the run's alone
 
 
 LONG = """

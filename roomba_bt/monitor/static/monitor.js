@@ -435,8 +435,8 @@ function updateControls() {
   document.body.classList.toggle("stale", !view.connected && !(view.finished && view.ended));
   if (view.otherRun) {
     const o = view.otherRun;
-    showBanner(`a different run is now served here (${o.mission || "?"}${o.robot ? " on " + o.robot : ""}, `
-      + `started ${clockOf(o.started)}): reload to watch it. This page showed ${runLabel(view.header)}; `
+    showBanner(`a different run is now served here (${runLabel({ run: o })}): reload to watch it. `
+      + `This page showed ${runLabel(view.header)}; `
       + "its controls are off", true);
   }
   else if (!view.connected && !view.ended) {
@@ -585,10 +585,12 @@ function clockOf(iso) {
   const two = (n) => String(n).padStart(2, "0");
   return `${two(d.getHours())}:${two(d.getMinutes())}:${two(d.getSeconds())}`;
 }
-// "bump-and-turn on /dev/ttyUSB0, started 14:03:27": which run a header is
+// "robot 3: bump-and-turn on /dev/ttyUSB0, started 14:03:27": which run a header is (its
+// label, run --label, first when it has one)
 function runLabel(header) {
   const run = (header && header.run) || {};
-  return `${run.mission || (header && header.mission) || "?"}${run.robot ? " on " + run.robot : ""}, started ${clockOf(run.started)}`;
+  return `${run.label ? run.label + ": " : ""}${run.mission || (header && header.mission) || "?"}`
+    + `${run.robot ? " on " + run.robot : ""}, started ${clockOf(run.started)}`;
 }
 
 // the socket found another run than the page's: it is not taken (its controls would drive
@@ -616,7 +618,11 @@ function hello(header) {
   // a record made before its header held the start: unknown, not the time the page opened
   $("robot-name").title = run.started ? `run started ${clockOf(run.started)} (${run.started})`
     : "the run's start is unknown (its record was made before records held it)";
-  document.title = `${header.mission}${run.robot ? " on " + run.robot : ""} · roomba-bt monitor`;
+  $("run-label").textContent = run.label || "";
+  $("run-label").hidden = !run.label;
+  // a tab's title is cut from its end: the label first, so several robots' tabs differ
+  document.title = `${run.label ? run.label + " · " : ""}${header.mission}`
+    + `${run.robot ? " on " + run.robot : ""} · roomba-bt monitor`;
   $("source").textContent = header.source;
   view.window = [header.first_tick, header.last_tick];
   view.finished = header.finished === undefined ? view.finished : header.finished;
