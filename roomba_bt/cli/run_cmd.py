@@ -120,13 +120,18 @@ def _add_run_parser(sub: Any) -> None:
         help="live tree on a terminal (auto), one line per status change (log), or only the "
         "summary (none)",
     )  # fmt: skip
+    _add_label_option(run)
+    add_monitor_arguments(run)
+
+
+def _add_label_option(run: argparse.ArgumentParser) -> None:
+    """``--label``: which run this is, to its people (several robots from one laptop)."""
     run.add_argument(
         "--label", type=run_label, metavar="TEXT",
         help="a label for this run, to tell several apart (robot 3): shown in the live tree "
         "and each log line, the summary, the monitor's URL line, page and tab, and the record "
         f"(1 to {LABEL_LENGTH} printable characters)",
     )  # fmt: skip
-    add_monitor_arguments(run)
 
 
 def _add_strict_option(run: argparse.ArgumentParser) -> None:

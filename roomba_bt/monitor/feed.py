@@ -311,13 +311,10 @@ class RunFeed:
         #: control: a page left open after its run was killed reconnected to the next run
         #: served on that port (another robot, perhaps) and its controls drove that one. A new
         #: random id each feed; ``robot``: its port, or ``simulator WORLD``; ``started``, UTC
-        #: (None for a record made before its header held it: unknown, not the monitor's)
+        #: (None for a record made before its header held it: unknown, not the monitor's);
+        #: ``label``: ``run --label`` (``robot 3``), which the page's title and header lead with
         self.run_id = secrets.token_urlsafe(12)
-        self.robot = robot
-        #: the run's label (``run --label``: ``robot 3``), "" for none: the page's title and
-        #: header lead with it (several robots' pages in one browser told apart by more
-        #: than their ports)
-        self.label = label
+        self.robot, self.label = robot, label
         self.started = started if started or source == "record" else datetime.now(UTC)
         #: the frames' layouts (one per stream: a record names its layout by index)
         self.layouts: list[FrameLayout] = []
@@ -329,15 +326,12 @@ class RunFeed:
             self.ring = Ring(history)
         self.events: deque[Event] = deque(maxlen=2000)
         self.source = source  # simulator, robot or record
-        self.truth = truth
-        self.world = world
+        self.truth, self.world = truth, world
         self.mission_name = mission_name
         self.trees: dict[int, list[NodeInfo]] = {}
         self.generation = -1
         self.finished: str | None = None  # the run's outcome once it ended
-        #: what the run's safe stop left the robot in (None: not ended, or not known: a
-        #: record's view that diverged or was cut short); set before ``finished``
-        self.ending: Ending | None = None
+        self.ending: Ending | None = None  # what its safe stop left (:meth:`end`)
         self.truth_start: tuple[float, float, float] | None = None  # where odometry's 0 is
         #: writers of the event log (the tick thread, a logging thread, the file watcher)
         #: take it so that the log's order is its sequence numbers'; readers never do
@@ -545,8 +539,9 @@ class RunFeed:
     # ---------------------------------------------------------------- any thread
     def end(self, finished: str, ending: Ending | None) -> None:
         """The run is over: ``finished`` is what the page's banner says, ``ending`` what the
-        robot was left in (the robot panel's last state). ``ending`` is published first: a
-        server that sees ``finished`` change sends the robot panel it gives."""
+        robot was left in (the robot panel's last state; None: not known, a record's view
+        that diverged or was cut short). ``ending`` is published first: a server that sees
+        ``finished`` change sends the robot panel it gives."""
         self.ending = ending
         self.finished = finished
 
