@@ -516,6 +516,7 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
             params=v.params,
             profile=args.profile,
             timeout_s=timeout,
+            time_limit=f"--timeout {timeout:g} s",  # as its reasons name the limit
             within_m=args.within,
             dock=dock,
             battery=args.battery,

@@ -374,10 +374,14 @@ def _stack(
         record=record,
         strict=args.strict,
     )
+    summary = stack.runner.summary  # the runtime says its settings as things; here, as flags
     if _fast_limit(args):  # no user gave it: its reason says whose it is
-        stack.runner.summary.time_limit = f"--fast's own limit of {FAST_TIMEOUT_S:g} s"
-    stack.runner.summary.robot = args.robot
-    stack.runner.summary.label = args.label or ""
+        summary.time_limit = f"--fast's own limit of {FAST_TIMEOUT_S:g} s"
+    elif timeout is not None:
+        summary.time_limit = f"--timeout {timeout:g} s"
+    summary.strict_named = "--strict"
+    summary.robot = args.robot
+    summary.label = args.label or ""
     return stack
 
 
@@ -803,6 +807,7 @@ def replay_command(args: argparse.Namespace) -> int:
         progress=replay_progress("replay", record),
         gate=operator_replay(record, recorded.mission),  # the monitor's pauses, steps, forces
     )  # fmt: skip
+    summary.strict_named = "run --strict"  # its warning of refusals: what would fail a run
     print(summary)
     difference = transport.first_difference()
     ending = record.ending  # its end note, said last (a record made before has none)

@@ -104,6 +104,9 @@ class EpisodeSpec:
     start_area: str | None = None
     #: the encoders' error (``Faults.odometry_error``, a fraction; 0: exact odometry)
     odometry_error: float = 0.0
+    #: how a TIMEOUT's reason names ``timeout_s`` (``RunSummary.time_limit``): "" as the
+    #: thing it is (``the run's 900 s``), ``eval`` as its flag (``--timeout 900 s``)
+    time_limit: str = ""
 
 
 def self_contained(spec: EpisodeSpec) -> EpisodeSpec:
@@ -497,6 +500,7 @@ def _run_episode(spec: EpisodeSpec, measured: type[_MeasuredSimulator]) -> Episo
         trace=spec.trace_every > 0, cycle_commands_pause=True,  # as the OI spec says
     )  # fmt: skip
     stack = RunStack(mission, SimLink(simulator), profile=profile, timeout_s=spec.timeout_s)
+    stack.runner.summary.time_limit = spec.time_limit
     stack.runner.on_wall_clock = False  # Ctrl-Z suspends an evaluation, Ctrl-\ quits it
     if IN_POOL_WORKER:  # Ctrl-C is the parent's: it ends the pool, a worker just ends
         stack.runner.guards_signals = False

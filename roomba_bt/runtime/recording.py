@@ -159,7 +159,7 @@ class RecordingTransport:
         t = self._inner.now() - self._t0 if self._t0 is not None else 0.0
         why = exc.strerror or str(exc)
         self.stopped = f"stopped at {t:.3f} s: {why}; the file ends there"
-        log.warning("%s: --record %s %s (the run goes on)", self.name, self.path, self.stopped)
+        log.warning("%s: the record %s %s (the run goes on)", self.name, self.path, self.stopped)
         _mark_stopped(self._file, self.path, t, why)
         with contextlib.suppress(OSError):  # its flush fails again; the file is closed
             self._file.close()

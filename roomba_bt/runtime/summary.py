@@ -103,7 +103,7 @@ class RunFailed(Exception):
         #: succeeded; empty for any other failure
         self.findings = tuple(summary.strict_findings()) if summary.failed_strict else ()
         if self.findings:
-            reason = f" but failed --strict: {'; '.join(self.findings)}"
+            reason = f" but failed {summary.strict_named}: {'; '.join(self.findings)}"
         else:
             reason = f": {summary.reason}" if summary.reason else ""
         message = (
@@ -252,9 +252,14 @@ class RunSummary:
     paused_s: float = 0.0
     pauses: int = 0
     steps: int = 0
-    #: how a TIMEOUT's reason names the run's time limit when no user gave it (``run
-    #: --fast``'s own: ``--fast's own limit of 7200 s``); "" names it ``--timeout 90 s``
+    #: how a TIMEOUT's reason names the run's time limit: "" says it as the thing it is
+    #: (``the run's 90 s``: a Python caller's ``timeout_s=90``); the command line names its
+    #: flag (``--timeout 90 s``), or says whose limit it was when no user gave one (``run
+    #: --fast``'s own: ``--fast's own limit of 7200 s``)
     time_limit: str = ""
+    #: how the summary and :class:`RunFailed` name the strict check (``RunStack(...,
+    #: strict=True)``); the command line names its flag, ``--strict``
+    strict_named: str = "the strict check"
     #: where the run's end came: the stream tick of its last frame and whether the tree had
     #: ticked on it (``"after"``) or not (``"before"``: the monitor's stop comes before the
     #: tick); the record's end note holds it, and a replay ends an interrupted run there
@@ -338,7 +343,7 @@ class RunSummary:
         running). The reason keeps its end, ``... of mission time ran out in drive``, which
         :func:`~roomba_bt.evaluate.episode.failure_stage` reads."""
         self.outcome = Outcome.TIMEOUT
-        limit = self.time_limit or f"--timeout {limit_s:g} s"
+        limit = self.time_limit or f"the run's {limit_s:g} s"
         self.reason = f"{limit} of mission time ran out{where}"
 
     @property
@@ -440,7 +445,7 @@ class RunSummary:
             return []
         refused = times_said(self.refused_commands, "command")
         strict = (
-            f": --strict fails such a run (exit {int(ExitCode.STRICT)})"
+            f": {self.strict_named} fails such a run (exit {int(ExitCode.STRICT)})"
             if self.outcome is Outcome.SUCCESS
             else ""
         )

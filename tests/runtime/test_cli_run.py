@@ -371,7 +371,7 @@ def test_a_record_that_cannot_be_written_stops_the_record_not_the_run(
     assert re.search(
         r"record       stopped at \d+\.\d{3} s: No space left on device; the file ends there", out
     )
-    assert any("--record /dev/full stopped at" in r.getMessage() for r in caplog.records)
+    assert any("the record /dev/full stopped at" in r.getMessage() for r in caplog.records)
 
 
 def test_a_record_is_not_written_over_a_file_that_is_not_one(

@@ -178,10 +178,11 @@ def test_a_stack_run_strictly_raises_for_its_outcome(tmp_path: Path) -> None:
     assert failed.findings == (
         "the robot fell to Passive by itself once (cliff) (the first: t=3.330 in forward: cliff)",
     )
-    assert (
-        str(failed) == f"mission edge ended SUCCESS but failed --strict: {failed.findings[0]} "
-        "(exit code 7)"
+    assert (  # the caller wrote strict=True, not a flag: the check is named as a thing
+        str(failed) == f"mission edge ended SUCCESS but failed the strict check: "
+        f"{failed.findings[0]} (exit code 7)"
     )
+    assert "--strict" not in "\n".join(strict.lines())
 
 
 @pytest.mark.parametrize(

@@ -40,17 +40,22 @@ def test_each_line_of_the_summary_stays_one_line() -> None:
 
 def test_a_time_limit_says_whose_it_is_and_keeps_the_stage_a_script_reads() -> None:
     """``run --fast``'s own limit was said as a ``--timeout`` nobody gave ("--timeout 7200 s
-    of mission time ran out"); the end, "ran out in drive", is what ``failure_stage`` and
-    eval's groups read, for either."""
-    given = RunSummary("m")
+    of mission time ran out"), and so was a Python caller's ``RunStack(timeout_s=90)``: the
+    runtime says the limit as the thing it is, the command line as its flag. The end, "ran
+    out in drive", is what ``failure_stage`` and eval's groups read, for each."""
+    python = RunSummary("m")
+    python.timed_out(90.0, " in drive")
+    assert python.outcome is Outcome.TIMEOUT and python.exit_code == 1
+    assert python.reason == "the run's 90 s of mission time ran out in drive"
+    given = RunSummary("m", time_limit="--timeout 90 s")  # as ``run`` and ``eval`` name it
     given.timed_out(90.0, " in drive")
-    assert given.outcome is Outcome.TIMEOUT and given.exit_code == 1
     assert given.reason == "--timeout 90 s of mission time ran out in drive"
     own = RunSummary("m", time_limit="--fast's own limit of 7200 s")
     own.timed_out(7200.0, " in drive")
     assert own.outcome is Outcome.TIMEOUT and own.exit_code == 1
     assert own.reason == "--fast's own limit of 7200 s of mission time ran out in drive"
-    assert failure_stage(given.reason) == failure_stage(own.reason) == "drive"
+    assert failure_stage(python.reason) == failure_stage(given.reason) == "drive"
+    assert failure_stage(own.reason) == "drive"
 
 
 def test_a_success_is_returned() -> None:
@@ -126,3 +131,12 @@ def test_falls_of_several_causes_are_said_the_commonest_first() -> None:
     assert RunSummary("m", falls={"charger": 1}).falls_text() == (
         "the robot fell to Passive by itself once (charger)"
     )
+
+
+def test_the_refusals_warning_names_the_strict_check_as_its_caller_sets_it() -> None:
+    """A Python caller's summary said "--strict fails such a run", a flag it never typed;
+    the command line still names its flag."""
+    summary = RunSummary("m", Outcome.SUCCESS, refused_commands=3)
+    assert summary.lines()[-1].endswith(": the strict check fails such a run (exit 7)")
+    summary.strict_named = "--strict"
+    assert summary.lines()[-1].endswith(": --strict fails such a run (exit 7)")
