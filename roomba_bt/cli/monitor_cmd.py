@@ -19,6 +19,7 @@ import string
 import sys
 import threading
 from collections.abc import Mapping
+from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
 from typing import Any
@@ -174,12 +175,50 @@ def add_run_arguments(run: argparse.ArgumentParser) -> None:
 WILDCARD_HOSTS = ("0.0.0.0", "::", "")
 
 
+@dataclass(frozen=True)
+class MonitorOptions:
+    """What one run's live monitor does, typed, so that a program can build one as well as
+    ``run`` can (:meth:`from_args` converts its options; :class:`LiveMonitor` took the
+    argparse namespace itself, and read it by attribute names a caller had to guess)."""
+
+    #: the mission file: what ``watch`` reloads, and the first of the files it watches
+    mission: Path
+    #: (host, port) to serve the page at (``--monitor``); None: no page
+    address: tuple[str, int] | None = None
+    #: the page has no controls (``--monitor-readonly``); the terminal's keys still work
+    readonly: bool = False
+    #: the page's token (``--monitor-token``); None: a new one each run, said in the URL
+    token: str | None = None
+    #: conditions may be forced from the page on a real robot (``--monitor-force``; always
+    #: allowed on the simulator)
+    allow_force: bool = False
+    #: reload the mission when one of its files changes (``--watch``)
+    watch: bool = False
+    #: the run is on the virtual clock (``--fast``): the session paces it, and the page is
+    #: told it may end before anyone opens it
+    virtual_clock: bool = False
+
+    @classmethod
+    def from_args(cls, args: argparse.Namespace) -> MonitorOptions:
+        """``run``'s options as the monitor reads them (the token already taken from the
+        environment by :func:`chosen_token`)."""
+        return cls(
+            mission=Path(args.mission),
+            address=args.monitor,
+            readonly=bool(args.monitor_readonly),
+            token=args.monitor_token,
+            allow_force=bool(args.monitor_force),
+            watch=bool(args.watch),
+            virtual_clock=bool(args.fast),
+        )
+
+
 class LiveMonitor:
     """The feed, session, server, file watcher and terminal keys of one ``run``."""
 
     def __init__(
         self,
-        args: argparse.Namespace,
+        options: MonitorOptions,
         mission: Any,
         *,
         simulator: Any,
@@ -193,9 +232,9 @@ class LiveMonitor:
         from roomba_bt.monitor.session import MonitorSession
         from roomba_bt.monitor.views import world_view
 
-        self.args = args
+        self.options = options
         self.loader = loader
-        self._watched = _files_of(mission, Path(args.mission))
+        self._watched = _files_of(mission, options.mission)
         truth = None
         world = None
         if simulator is not None:
@@ -217,12 +256,12 @@ class LiveMonitor:
         self.session = MonitorSession(
             self.feed,
             simulator=simulator is not None,
-            allow_force=bool(args.monitor_force),
-            paced=bool(getattr(args, "fast", False)),
+            allow_force=options.allow_force,
+            paced=options.virtual_clock,
             stream_packets=packets,
         )
-        if args.watch:
-            self.session.state.watching = str(args.mission)
+        if options.watch:
+            self.session.state.watching = str(options.mission)
         self.server: Any = None
         self._handler = EventLogHandler(self.feed)
         self._done = threading.Event()
@@ -233,14 +272,13 @@ class LiveMonitor:
         """Serve the page (when asked), before the robot is opened: an address that cannot
         be used is an exit code (2) before anything is opened or moved. Its URL is said by
         :meth:`start`, once the robot's port is open."""
-        if self.args.monitor is not None:
+        if self.options.address is not None:
             from roomba_bt.monitor.server import MonitorServer
 
-            host, port = self.args.monitor
+            host, port = self.options.address
             self.server = MonitorServer(
                 self.feed, self.session, host=host, port=port,
-                readonly=self.args.monitor_readonly,
-                token=getattr(self.args, "monitor_token", None),
+                readonly=self.options.readonly, token=self.options.token,
             )  # fmt: skip
             try:
                 self.server.start()
@@ -254,9 +292,9 @@ class LiveMonitor:
         mission and the robot it is for, and start the watcher and the keys. The URL was said
         before the port was opened, and a busy port left a URL in the terminal that never
         served a page."""
-        if self.server is not None:
-            host = self.args.monitor[0]
-            chosen = getattr(self.args, "monitor_token", None)
+        if self.server is not None and self.options.address is not None:
+            host = self.options.address[0]
+            chosen = self.options.token
             url = self.server.url
             if chosen:  # the operator's own: known to them, printed nowhere
                 url = url.split("?token=", 1)[0]
@@ -267,7 +305,7 @@ class LiveMonitor:
             print(f"monitor: {url}{which}{CHOSEN_TOKEN if chosen else ''}", flush=True)
             self._say_where(host, url)
         logging.getLogger("roomba_bt").addHandler(self._handler)
-        if self.args.watch:
+        if self.options.watch:
             self._spawn(self._watch, "roomba-bt watch")
         from roomba_bt.runtime.display import in_foreground
 
@@ -294,7 +332,7 @@ class LiveMonitor:
                 f"monitor: it listens on every address of this machine: {named}{also}",
                 flush=True,
             )
-        if getattr(self.args, "fast", False):
+        if self.options.virtual_clock:
             print(
                 "roomba-bt: --fast runs the mission on the virtual clock: it may end before a "
                 "page opens (in real time without --fast; or --record it and open the record "
@@ -334,7 +372,7 @@ class LiveMonitor:
         by a valid reload is watched from then on), and always the mission file."""
         from roomba_bt.behaviours.registry import file_version
 
-        path = Path(self.args.mission)
+        path = self.options.mission
         stamps = {f: file_version(f) for f in self._watched}
         shown = ", ".join(_shown(f) for f in self._watched)
         print(f"watching {shown}: a change reloads the mission", flush=True)

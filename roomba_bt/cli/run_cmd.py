@@ -29,7 +29,7 @@ from roomba_bt.cli.arguments import (
     seconds,
     watchdog_seconds,
 )
-from roomba_bt.cli.monitor_cmd import LiveMonitor, chosen_token
+from roomba_bt.cli.monitor_cmd import LiveMonitor, MonitorOptions, chosen_token
 from roomba_bt.cli.monitor_cmd import add_run_arguments as add_monitor_arguments
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.profiles import RobotProfile, get_profile
@@ -478,7 +478,8 @@ def _live_monitor(
     from roomba_bt.mission import load_mission
 
     return LiveMonitor(
-        args, mission, simulator=simulator, packets=packets, robot=args.robot,
+        MonitorOptions.from_args(args), mission, simulator=simulator, packets=packets,
+        robot=args.robot,
         started=args.started, label=args.label or "",
         loader=lambda path: load_mission(
             path, params, profile=profile, baud=args.baud, permissions=permissions(args)

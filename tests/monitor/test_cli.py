@@ -759,3 +759,30 @@ def test_a_record_made_before_it_held_its_start_shows_the_start_unknown(
     feed, _ = replay_into_feed(record, mission, CREATE2, packets, 115200, "older")
     shown = run_view(feed)
     assert shown["started"] == "" and shown["robot"] == ""
+
+
+def test_a_program_builds_a_live_monitor_from_typed_options(tmp_path: Path) -> None:
+    """``LiveMonitor`` took ``run``'s argparse namespace, read by attribute names a program
+    had to guess (``monitor_readonly``, ``fast``...): it takes :class:`MonitorOptions`, which
+    ``run`` converts its options into."""
+    import argparse
+
+    from roomba_bt.cli.monitor_cmd import LiveMonitor, MonitorOptions
+    from roomba_bt.mission import load_mission
+
+    mission = load_mission(SHUTTLE)
+    options = MonitorOptions(mission=SHUTTLE, watch=True, virtual_clock=True)
+    monitor = LiveMonitor(
+        options, mission, simulator=None, packets=(7,), loader=load_mission, robot="by hand"
+    )
+    assert monitor.session.state.watching == str(SHUTTLE)
+    assert monitor.bind() is None and monitor.server is None  # no address: no page
+    monitor.finish(None)
+    assert monitor.feed.finished == "the run did not start"
+    args = argparse.Namespace(
+        mission=str(SHUTTLE), monitor=("127.0.0.1", 0), monitor_readonly=True,
+        monitor_token=None, monitor_force=False, watch=False, fast=True,
+    )  # fmt: skip
+    assert MonitorOptions.from_args(args) == MonitorOptions(
+        mission=SHUTTLE, address=("127.0.0.1", 0), readonly=True, virtual_clock=True
+    )
