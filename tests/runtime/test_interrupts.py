@@ -274,7 +274,7 @@ def test_a_signal_during_the_trees_stop_says_the_tree_is_stopping(
     line = _SignalsOnTerminate.terminate.__code__.co_firstlineno + 2  # its signal
     assert summary.reason == (
         "Ctrl-C during the tree's stop, in slow_term (_SignalsOnTerminate.terminate at "
-        f"{__file__}:{line}) (the run had ended: timeout: --timeout 0.3 s of mission time "
+        f"{__file__}:{line}) (the run had ended: timeout: the run's 0.3 s of mission time "
         "ran out in forward)"
     ), summary.reason  # it said "during the safe stop", which had not begun
     assert summary.safe_stop.startswith("drive 0, motors off before the tree's stop, then sent")
