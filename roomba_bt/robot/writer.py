@@ -223,6 +223,15 @@ class CommandWriter:
         self.send(oi.halt())
         return True
 
+    def robot_stopped(self) -> None:
+        """The robot fell to Passive by itself (a cliff, a wheel drop, the charger): it
+        stopped its wheels and motors, so the commands written before drive nothing now.
+        Forgotten, as the runtime's outbox forgets them (``Outbox.robot_stopped``): the tick
+        guard and the run's end took the robot for moving after the tree's Safe again, and
+        the bump reflex kept the drive from before the fall and sent it again (the robot
+        drove back over the edge) once an onset cleared."""
+        self.last_wheels = self.last_motors = self.held_wheels = None
+
     def hold_forward(self) -> None:
         """A bump onset waits for the frame that confirms it (robot/hazards.py): drive 0 now
         if the last wheel command drives forward, so the robot does not push on into what it

@@ -123,7 +123,10 @@ class StallRide:
         last wheel command the tree wrote goes out again, if it turns a wheel and the robot
         obeys it, unless this tick queued another wheel command (the tree's newer word). A
         fall to Passive by itself (``MissionRunner._advance``) forgets that command: the
-        robot stopped."""
+        robot stopped. The outbox's record, not the writer's (``CommandWriter.last_wheels``,
+        which the tick guard reads): the writer's holds the drive 0 this gives the wheels
+        their command back after. The two agree but for the runtime's own drive 0s; both
+        forget a fall."""
         outbox = self.outbox
         wheels = outbox.standing.get("wheels")
         if (

@@ -58,7 +58,12 @@ AT_THE_END = "the run's end, before the tree's stop"
 
 
 def wheels_moving(connection: Connection) -> bool:
-    """The last wheel command drives, in a mode where the robot obeys it."""
+    """The last wheel command drives, in a mode where the robot obeys it: the writer's
+    record of what went on the wire (``CommandWriter.last_wheels``), the runtime's own drive
+    0s included (the monitor's pause, the bump reflex's hold, the watchdog's) and forgotten
+    at the robot's own fall to Passive, as the outbox's ``standing`` is. The stall's ride
+    reads that one instead (runtime/stall.py): it gives back the tree's command those drive
+    0s replaced, which this record no longer holds."""
     wheels = connection.writer.last_wheels
     return wheels is not None and turns_wheels(wheels) and connection.mode in DRIVING_MODES
 
