@@ -4,8 +4,6 @@ the connection holds forward motion at 0 (the bump reflex) and gives the command
 
 from __future__ import annotations
 
-from pathlib import Path
-
 from roomba_bt.oi import commands
 from roomba_bt.oi.frames import FrameLayout, SensorFrame, layout_for
 from roomba_bt.oi.modes import OIMode
@@ -220,51 +218,3 @@ def test_what_sets_the_robot_going_reads_the_motors_run_bits_not_their_direction
     assert not sets_going(C.motors_off()) and not sets_going(C.pwm_motors(0, 0, 0))
     assert sets_going(C.pwm_motors(0, 0, 40)) and sets_going(C.clean())
     assert sets_going(C.drive(100, 32767)) and not sets_going(C.drive(0, 1))
-
-
-#: a room whose east half is a drop, the robot 0.8 m from its edge and facing it
-_LEDGE = """\
-name: ledge
-rooms:
-  - [[0.0, 0.0], [4.0, 0.0], [4.0, 3.5], [0.0, 3.5]]
-drops:
-  - {name: ledge, rect: [2.0, 0.0, 4.0, 3.5]}
-robot:
-  start: {at: [1.2, 1.75], heading: 0}
-"""
-
-
-def test_after_the_robot_s_own_fall_nothing_from_before_it_is_held_or_moving(
-    tmp_path: Path,
-) -> None:
-    """Forward into a drop: the robot falls to Passive by itself and stops its wheels; Safe
-    again leaves them at rest. The writer kept the forward Drive from before the fall as the
-    wheels' command: the tick guard (``wheels_moving``) took the robot for moving, and a bump
-    onset's hold wrote drive 0 and gave that Drive back to be sent again (over the edge),
-    while the runtime's outbox had forgotten it at the fall."""
-    from roomba_bt.runtime.tick_guard import wheels_moving
-
-    (tmp_path / "ledge.yaml").write_text(_LEDGE)
-    simulator = Simulator(load_world(str(tmp_path / "ledge.yaml")), CREATE2, 0)
-    written: list[bytes] = []
-
-    class Tap(SimLink):
-        def write(self, data: bytes) -> None:
-            written.append(bytes(data))
-            super().write(data)
-
-    connection = Connection(Tap(simulator), CREATE2)
-    connection.start(OIMode.SAFE, packets=PACKETS)
-    connection.send(commands.drive(200, commands.Radius.STRAIGHT))
-    assert wheels_moving(connection)
-    while connection.mode is not OIMode.PASSIVE:
-        assert simulator.time < 10.0, "no fall"
-        connection.poll_frames(0.1)
-    assert connection.falls == {"cliff": 1}
-    connection.send(commands.safe())
-    written.clear()
-    assert not wheels_moving(connection)
-    connection.hold_forward()
-    assert written == []  # no drive 0: nothing drives
-    assert connection.release_forward() is None  # nothing to send again
-    connection.close()

@@ -239,3 +239,34 @@ def test_a_stall_with_the_wheels_at_rest_is_not_said_to_have_sent_drive_0() -> N
     assert RunSummary("m", stalls=553, stall_halts=11, stalls_ridden=553).stall_text() == (
         "553 (watchdog drive 0 in 11, the wheels at rest in the others), 553 ridden through"
     )
+
+
+def test_after_the_robot_s_own_fall_nothing_from_before_it_is_held_or_moving(
+    tmp_path: Path,
+) -> None:
+    """Forward into a drop: the robot falls to Passive by itself and stops its wheels; Safe
+    again leaves them at rest. The writer kept the forward Drive from before the fall as the
+    wheels' command: the tick guard (``wheels_moving``) took the robot for moving, and a bump
+    onset's hold wrote drive 0 and gave that Drive back to be sent again (over the edge),
+    while the runtime's outbox had forgotten it at the fall."""
+    from roomba_bt.oi.modes import OIMode
+    from roomba_bt.robot.connection import Connection
+    from roomba_bt.runtime.tick_guard import wheels_moving
+
+    (tmp_path / "ledge.yaml").write_text(LEDGE)
+    link = TapLink(Simulator(load_world(tmp_path / "ledge.yaml"), CREATE2, 0))
+    connection = Connection(link, CREATE2)
+    connection.start(OIMode.SAFE, packets=(7, 9, 10, 11, 12, 35))
+    connection.send(oi.drive(200, oi.Radius.STRAIGHT))
+    assert wheels_moving(connection)
+    while connection.mode is not OIMode.PASSIVE:
+        assert link.simulator.time < 10.0, "no fall"
+        connection.poll_frames(0.1)
+    assert connection.falls == {"cliff": 1}
+    connection.send(oi.safe())
+    link.writes.clear()
+    assert not wheels_moving(connection)
+    connection.hold_forward()
+    assert link.writes == []  # no drive 0: nothing drives
+    assert connection.release_forward() is None  # nothing to send again
+    connection.close()
