@@ -125,6 +125,10 @@ Cell = int
 #: (the map and its own pose) on py_trees' blackboard, shared by every ``cover`` of the
 #: mission (one floor, one odometry frame); each run's ``setup`` drops it.
 MAP_KEY = "/roomba/cover/map"
+#: What a leaf that drives on the map reads (``cover``, and ``home_by_map`` along it): the
+#: hazards that end a move, the encoders its pose integrates (:meth:`Bearings.integrate`),
+#: the light bumper's signals and the dock's beams that :meth:`Bearings.observe` marks.
+MAP_READS = (*driving.BLOCKED_PACKETS, *ENCODER_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS, *IR_PACKETS)
 
 
 def path_to(cell: Cell, start: Cell, parent: dict[Cell, Cell]) -> list[Cell]:
@@ -462,7 +466,7 @@ class Bearings:
         Param("edge_time", DURATION, default="3min", minimum=5,
               doc="an edge ends after this long even if it still finds new floor"),
     ),
-    reads=(*driving.BLOCKED_PACKETS, *ENCODER_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS, *IR_PACKETS),
+    reads=MAP_READS,
     sends=opcodes("drive_direct", "drive"),
 )  # fmt: skip
 class Cover(Action):

@@ -53,6 +53,7 @@ from roomba_bt.behaviours.base import Action
 from roomba_bt.behaviours.coverage_map import (
     BLOCKED,
     MAP_KEY,
+    MAP_READS,
     NEIGHBOUR_STEPS,
     SWEPT,
     VISITED,
@@ -65,7 +66,7 @@ from roomba_bt.behaviours.declare import Param, declare, wheel_speed_param
 from roomba_bt.behaviours.drops import DROP
 from roomba_bt.behaviours.units import DURATION
 from roomba_bt.oi import commands as oi
-from roomba_bt.oi.frames import ENCODER_PACKETS, IR_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS, SensorFrame
+from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.opcodes import opcodes
 from roomba_bt.robot.interface import Odometry
 
@@ -100,7 +101,7 @@ _ACROSS_NEAR = 3
         Param("timeout", DURATION, default="3min", minimum=5,
               doc="give up (FAILURE) after this long"),
     ),
-    reads=(*driving.BLOCKED_PACKETS, *ENCODER_PACKETS, *LIGHT_BUMP_SIGNAL_PACKETS, *IR_PACKETS),
+    reads=MAP_READS,
     sends=opcodes("drive_direct", "drive"),
 )  # fmt: skip
 class HomeByMap(Action):

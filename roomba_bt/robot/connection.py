@@ -160,6 +160,9 @@ def _weakly(method: Callable[P, R], dead: R) -> Callable[P, R]:
     return call
 
 
+# Long on purpose (a line past the guide's 400): the session's facade, where a program finds
+# the robot's state, each part in its own module (link.py, writer.py, ending.py, startup.py,
+# silence.py); what stays here is the start-up, the reads and one-line views of the parts.
 class Connection:
     """A robot on a :class:`~roomba_bt.transport.Transport`: see the module docstring.
 
