@@ -42,7 +42,7 @@ from roomba_bt.oi.frames import (
 )
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import COMMANDS_BY_NAME
-from roomba_bt.robot.interface import ModeChange, RobotHandle
+from roomba_bt.robot.interface import ModeChange, RobotHandle, docked_by_seek_dock
 
 if TYPE_CHECKING:  # the leaves' base imports this module: their class for annotations only
     from roomba_bt.behaviours.base import Action
@@ -106,9 +106,6 @@ def left_driving_message(change: ModeChange | None, waited: str = "") -> str:
     return message
 
 
-_SEEK_DOCK = COMMANDS_BY_NAME["seek_dock"]
-
-
 def on_home_base(frame: SensorFrame) -> bool:
     """Whether ``frame`` carries packet 34 and it shows the home base's power."""
     return all(pid in frame for pid in CHARGING_SOURCES_PACKETS) and (
@@ -126,8 +123,7 @@ def cycle_may_run(robot: RobotHandle) -> bool:
     snap = robot.snapshot
     if not snap.cycle_may_run or snap.mode is not OIMode.PASSIVE:
         return False
-    cycle = robot.outbox.last_on("wheels")
-    return cycle is None or cycle.spec is not _SEEK_DOCK or not on_home_base(snap.frame)
+    return not docked_by_seek_dock(robot.outbox.last_on("wheels"), snap.frame)
 
 
 #: a centre light-bump signal (packets 47-50) at or above this: something within a few

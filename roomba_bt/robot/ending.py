@@ -5,7 +5,10 @@ Every ending (:meth:`~roomba_bt.robot.connection.Connection.close`, the context 
 holds::
 
     [131]                 Safe, only in Passive while a Clean/Spot/Max/Seek Dock cycle may
-                          be driving (drive 0 is not accepted in Passive; Safe ends the cycle)
+                          be driving (drive 0 is not accepted in Passive; Safe ends the cycle);
+                          not after a Seek Dock that docked (the last frame shows the home
+                          base: the cycle ended there, and Safe on a powered dock would stop
+                          the charge only to fall back to Passive)
     [137][0][0][0][0]     drive 0            } only while the model is in Safe or Full: in
     [138][0]              motors off         } Passive and Off the robot refuses actuators
     [150][0]              pause the stream
@@ -193,7 +196,7 @@ class SafeStop:
         """What :meth:`stop` sends from the current mode (:func:`stop_sequence`)."""
         writer = self.writer
         return stop_sequence(
-            writer.modes.mode, builtin_may_run=writer.builtin_may_run, end_in=self.end_in,
+            writer.modes.mode, builtin_may_run=writer.cycle_may_drive, end_in=self.end_in,
             profile=writer.profile,
         )  # fmt: skip
 

@@ -24,14 +24,14 @@ from typing import NamedTuple, Protocol
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import Command
+from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS, FrameLayout, SensorFrame
 
 # the 15 ms slot is the protocol's (oi.frames); named here too for the plugins that take it
 # from what a behaviour sees
 from roomba_bt.oi.frames import SLOT_SECONDS as SLOT_SECONDS
-from roomba_bt.oi.frames import FrameLayout, SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.odometry import MM_PER_COUNT
-from roomba_bt.oi.opcodes import Effect
+from roomba_bt.oi.opcodes import COMMANDS_BY_NAME, Effect
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
 
 _new_tuple = tuple.__new__
@@ -235,6 +235,27 @@ class Snapshot(NamedTuple):
 #: run the brushes and the vacuum), Start (128) back to Passive. On a powered home base
 #: Safe drops to Passive at once: harmless, and Start leaves the model where the robot is.
 CYCLE_END: tuple[Command, ...] = (oi.safe(), oi.halt(), oi.motors_off(), oi.start())
+_SEEK_DOCK = COMMANDS_BY_NAME["seek_dock"]
+
+
+def docked_by_seek_dock(cycle: Command | None, frame: SensorFrame | None) -> bool:
+    """Whether the built-in cycle written last (``cycle``: the last wheel command) is a Seek
+    Dock that has ended on its home base: ``frame`` carries packet 34 and shows the home
+    base's power. The firmware's Seek Dock stops on the contacts, and the robot charges there
+    in Passive: nothing drives, so nothing needs ending (no Safe, which on a powered dock
+    stops the charge and drops back to Passive). Any other cycle on the home base may be
+    about to drive off it (a Clean sent on the dock) and is ended all the same. The one rule
+    of the tree's cycle leaves (``behaviours.driving.cycle_may_run``) and of the safe stop
+    (:mod:`~roomba_bt.robot.ending`)."""
+    return (
+        cycle is not None
+        and cycle.spec is _SEEK_DOCK
+        and frame is not None
+        and all(pid in frame for pid in CHARGING_SOURCES_PACKETS)
+        and frame.charging_sources.home_base
+    )
+
+
 #: the outbox's key of a cycle's end asked for (no channel's, no opcode's), and who asked
 #: when nobody did (a sender may be None)
 _CYCLE_END_KEY = object()

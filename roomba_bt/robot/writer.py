@@ -34,6 +34,7 @@ from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
 from roomba_bt.robot.errors import ModeError, PortLost
 from roomba_bt.robot.hazards import drives_forward, sets_going
+from roomba_bt.robot.interface import docked_by_seek_dock
 from roomba_bt.robot.link import StreamLink
 from roomba_bt.robot.modes import ModeModel
 
@@ -209,11 +210,20 @@ class CommandWriter:
     @property
     def running_cycle(self) -> Command | None:
         """The Clean/Spot/Max/Seek Dock command written last while its cycle may still be
-        driving the robot (in Passive), else None."""
+        driving the robot (in Passive; :attr:`cycle_may_drive`: not a Seek Dock that docked),
+        else None."""
         wheels = self.last_wheels
-        if self.builtin_may_run and wheels is not None:
+        if wheels is not None and self.cycle_may_drive:
             return wheels if wheels.spec.effect is Effect.BUILTIN_CYCLE else None
         return None
+
+    @property
+    def cycle_may_drive(self) -> bool:
+        """Whether a built-in cycle may be driving the robot as the stream last showed it:
+        :attr:`builtin_may_run`, unless it was Seek Dock and the last frame shows the home
+        base's power (:func:`~roomba_bt.robot.interface.docked_by_seek_dock`: docked, the
+        cycle ended there). What the safe stop asks before it sends Safe to end a cycle."""
+        return self.builtin_may_run and not docked_by_seek_dock(self.last_wheels, self.link.frame)
 
     def halt(self) -> bool:
         """Drive 0 if the model says the robot may be driving; True if it was sent (the

@@ -149,6 +149,28 @@ def test_a_docked_seek_dock_sends_nothing_more(run_mission: RunMission) -> None:
     assert END not in run.link.written
 
 
+def test_the_safe_stop_after_a_docked_seek_dock_goes_straight_to_passive(
+    run_mission: RunMission,
+) -> None:
+    """dock-builtin's ending: Seek Dock docked, its cycle ended on the contacts, and the run's
+    safe stop is Pause Stream and Start alone. It sent Safe (131), drive 0 and motors off
+    first, as for a cycle that may still drive: the 600 / Create 2 spec says charging
+    terminates on entering Safe, and a powered charger drops Safe to Passive at once, so the
+    robot's charge was cut for nothing. The connection, told nothing more, is not left
+    warning of a cycle at the program's end."""
+    run = run_mission(
+        "tree: {sequence: [{mode: passive}, seek_dock, dock_wait_charge, {mode: passive}]}",
+        world="empty-room",
+        timeout=600.0,
+    )
+    assert run.summary.outcome is Outcome.SUCCESS, run.summary.reason
+    assert run.simulator.docked
+    later = [data for _, data in _written_after(run, oi.seek_dock().opcode)]
+    assert later == [oi.pause_stream().data + oi.start().data]
+    assert run.runner.connection.running_cycle is None
+    assert run.summary.final_mode is OIMode.PASSIVE and run.summary.refused_commands == 0
+
+
 def test_a_cycle_ended_on_a_powered_dock_says_no_fall(
     run_mission: RunMission, caplog: pytest.LogCaptureFixture
 ) -> None:
