@@ -12,6 +12,15 @@ the registry for its contents, never at ``import roomba_bt``. A plugin that fail
 or declares itself wrongly, becomes a :class:`PluginError` naming the plugin and the cause;
 every other behaviour still loads. A mission may also name a module by path
 (``plugins: [./my_behaviour.py]``): :meth:`Registry.with_file` loads it into a copy.
+
+A mission names a behaviour by its name alone (``dirt_detect``) or by its package and name
+(``roomba-bt-dirt:dirt_detect``, as ``include: [roomba-bt:lib/docking.yaml]`` names a file of
+a package): the package is the installed distribution's name as pip takes it, and
+``roomba-bt`` names the built-ins. The name alone is the behaviour's while no one else
+declares it; two plugins that both declare it, a plugin's behaviour that takes a built-in's
+name or a word of the language, are each reached by the package's spelling
+(:meth:`Registry.get`), and the name alone is refused (two plugins) or stays the built-in's
+and the language's.
 """
 
 from __future__ import annotations
@@ -20,6 +29,7 @@ import importlib
 import importlib.util
 import inspect
 import logging
+import re
 import sys
 import traceback
 import types
@@ -34,6 +44,9 @@ from roomba_bt.behaviours.language import RESERVED
 from roomba_bt.behaviours.units import closest
 
 ENTRY_POINT_GROUP = "roomba_bt.behaviours"
+#: the package a mission writes before ``:`` to name a built-in (``roomba-bt:drive``), as
+#: ``include: [roomba-bt:lib/docking.yaml]`` names a shipped file
+CORE_PACKAGE = "roomba-bt"
 
 #: a plugin's import traceback is logged here at DEBUG: ``roomba-bt -v`` shows it
 log = logging.getLogger("roomba_bt.plugins")
@@ -51,20 +64,37 @@ class NameClash(DeclarationError):
         self.name = name
         self.existing = existing
 
-    def clash(self) -> str:
+    def clash(self, spelled: str | None = None, other: str | None = None) -> str:
         """What a plugin's class that lost the name is told: not that it declared itself
-        wrongly, but who else declares the name and what becomes of it."""
-        other = f"{_where(self.existing.cls)}"
+        wrongly, but who else declares the name, what becomes of it, and how a mission
+        names each (``spelled``: this class's ``package:name``, ``other``: the first's; None
+        for a plugin file, which has no package)."""
+        holder = f"{_where(self.existing.cls)}"
         if self.existing.origin == "builtin":
+            reach = f"a mission reaches this one as {spelled!r}" if spelled else "this one is not"
             return (
-                f"declares {self.name!r}, the name of the built-in {other}: a name clash; the "
-                "built-in is used and this behaviour is not (rename it)"
+                f"declares {self.name!r}, the name of the built-in {holder}: a name clash; the "
+                f"built-in is used and {reach} (or rename it)"
             )
-        return (
-            f"declares {self.name!r}, as {other} of plugin {self.existing.origin} does: a name "
-            f"clash between two plugins; a mission that uses {self.name!r} is refused (exit 2) "
-            "until one is uninstalled or renames its behaviour"
+        said = (
+            f"; write {other!r} or {spelled!r} to choose"
+            if spelled and other
+            else " until one is uninstalled or renames its behaviour"
         )
+        return (
+            f"declares {self.name!r}, as {holder} of plugin {self.existing.origin} does: a name "
+            f"clash between two plugins; a mission that uses {self.name!r} is refused (exit 2)"
+            f"{said}"
+        )
+
+
+class _LanguageWord(DeclarationError):
+    """A behaviour declares a word of the mission language (``retry``): the word stays the
+    language's; the behaviour is reached by its package's spelling, if it has one."""
+
+    def __init__(self, name: str) -> None:
+        super().__init__(f"name {name!r} is a word of the mission language")
+        self.name = name
 
 
 @dataclass(frozen=True, slots=True)
@@ -95,11 +125,17 @@ class Registry:
         #: yet, by name: the entry point that names it (:meth:`_named`)
         self._unnamed: dict[str, EntryPoint] = {}
         self._errors: list[PluginError] = []
-        #: names two plugins both declare, with what to say where a mission uses one: which
-        #: of them it meant is not known (:meth:`clash`)
-        self._contested: dict[str, str] = {}
-        #: built-in names a plugin declares too: the built-in is used (:meth:`clash`)
-        self._shadowed: dict[str, str] = {}
+        #: names two plugins both declare: who declares each, ``(class and origin, its
+        #: package:name or None)``; which of them a mission meant is not known (:meth:`clash`)
+        self._contested: dict[str, list[tuple[str, str | None]]] = {}
+        #: built-in names a plugin declares too, who does; the built-in is used (:meth:`clash`)
+        self._shadowed: dict[str, list[tuple[str, str | None]]] = {}
+        #: every entry-point plugin's behaviour by package and name, with the entry point
+        #: that names its origin (:meth:`_qualified`): those that hold their name alone, and
+        #: those that lost it to a built-in, another plugin or the language
+        self._packages: dict[str, dict[str, tuple[Declaration, EntryPoint]]] = {}
+        #: each entry-point plugin's class -> its package (:func:`package_name`)
+        self._package_of: dict[type, str] = {}
         self._group = entry_point_group
         self._loaded = entry_point_group is None
 
@@ -111,6 +147,7 @@ class Registry:
         *,
         validated: bool = False,
         said_as: str | None = None,
+        entry: EntryPoint | None = None,
     ) -> Declaration:
         """Register one behaviour class; raises :class:`DeclarationError` if it declares
         itself wrongly or takes a name already taken. ``validated``: its declaration is known
@@ -118,7 +155,10 @@ class Registry:
         suite validates every one, and running it for the 45 of them was 1.2 M instructions
         of every process's first mission). ``said_as``: where it is from as a clash names
         it, when not ``origin`` (an entry point's with its distribution: the other side of a
-        clash is named so, and which package to uninstall must be read from both)."""
+        clash is named so, and which package to uninstall must be read from both).
+        ``entry``: an installed plugin's entry point, whose package (:func:`package_name` of
+        its distribution) reaches it as ``package:name`` even where its name alone is not
+        its own."""
         declaration = getattr(cls, "declaration", None)
         if not isinstance(declaration, Declaration) or declaration.cls is not cls:
             raise DeclarationError(
@@ -127,42 +167,91 @@ class Registry:
             )
         if not validated:
             declaration.validate()
+        if declaration.origin != origin:  # a built-in's own declaration says "builtin"
+            declaration = replace(declaration, origin=origin)
+        if entry is not None:
+            self._add_qualified(_package(entry), declaration, entry)
         if declaration.name in RESERVED:
-            raise DeclarationError(f"name {declaration.name!r} is a word of the mission language")
+            raise _LanguageWord(declaration.name)
         existing = self._declarations.get(declaration.name)
         if existing is not None and existing.cls is not cls:
             existing = self._named(existing)
-            self._note_clash(declaration.name, existing, f"{_qualname(cls)} ({said_as or origin})")
+            who = (f"{_qualname(cls)} ({said_as or origin})", self.spelled(declaration))
+            self._note_clash(declaration.name, existing, who)
             raise NameClash(declaration.name, existing)
-        if declaration.origin != origin:  # a built-in's own declaration says "builtin"
-            declaration = replace(declaration, origin=origin)
         self._declarations[declaration.name] = declaration
         self._unnamed.pop(declaration.name, None)
         return declaration
 
-    def _note_clash(self, name: str, existing: Declaration, other: str) -> None:
-        """A second class declares ``name`` (``other``: the class and where it is from)."""
-        first = f"{_qualname(existing.cls)} ({existing.origin})"
+    def _add_qualified(self, package: str, declaration: Declaration, entry: EntryPoint) -> None:
+        """``package:name`` for a plugin's behaviour; one package that declares a name twice
+        (two entry points, two classes) keeps the first and says so (:meth:`clash`)."""
+        self._package_of[declaration.cls] = package
+        held = self._packages.setdefault(package, {})
+        first = held.get(declaration.name)
+        if first is not None and first[0].cls is not declaration.cls:
+            spelled = f"{package}:{declaration.name}"
+            self._contested[spelled] = [
+                (f"{_qualname(first[0].cls)} ({first[0].origin})", None),
+                (f"{_qualname(declaration.cls)} ({declaration.origin})", None),
+            ]
+            return
+        held[declaration.name] = (declaration, entry)
+
+    def spelled(self, declaration: Declaration) -> str | None:
+        """``package:name``: how a mission names an installed plugin's behaviour whatever
+        else declares its name (``roomba-bt:name`` a built-in); None for a plugin file's."""
+        package = self._package_of.get(declaration.cls)
+        if package is not None:
+            return f"{package}:{declaration.name}"
+        held = self._declarations.get(declaration.name)
+        builtin = held is not None and held.cls is declaration.cls and held.origin == "builtin"
+        return f"{CORE_PACKAGE}:{declaration.name}" if builtin else None
+
+    def _note_clash(self, name: str, existing: Declaration, other: tuple[str, str | None]) -> None:
+        """A second class declares ``name`` (``other``: the class and where it is from, and
+        its ``package:name``)."""
         if existing.origin == "builtin":
-            self._shadowed[name] = (
-                f"a plugin declares {name!r} too, {other}; the built-in is used (rename the "
-                "plugin's behaviour)"
-            )
-        else:
-            self._contested[name] = (
-                f"{name!r} is declared by two plugins, {first} and {other}: which one is meant "
-                "is not known (uninstall one, or rename its behaviour)"
-            )
+            self._shadowed.setdefault(name, []).append(other)
+            return
+        first = (f"{_qualname(existing.cls)} ({existing.origin})", self.spelled(existing))
+        self._contested.setdefault(name, [first]).append(other)
 
     def clash(self, name: str) -> tuple[str, str] | None:
         """("error", why) for a name two plugins declare, ("warning", why) for a built-in's
         name a plugin declares too, else None: what a mission that uses it is told (a plugin
-        that lost the name was only said by ``roomba-bt behaviours``)."""
+        that lost the name was only said by ``roomba-bt behaviours``). A ``package:name``
+        has no clash, but where one package declares the name twice."""
         self._ensure_loaded()
-        if name in self._contested:
-            return "error", self._contested[name]
-        if name in self._shadowed:
-            return "warning", self._shadowed[name]
+        claimants = self._contested.get(name)
+        if claimants is not None:
+            spellings = [spelled for _, spelled in claimants if spelled]
+            said = " and ".join([", ".join(who for who, _ in claimants[:-1]), claimants[-1][0]])
+            if ":" in name:
+                return "error", f"{name!r} is declared twice in its package, by {said}"
+            choose = (
+                f"write {' or '.join(repr(s) for s in spellings)} to choose"
+                if len(spellings) == len(claimants)
+                else "uninstall one, or rename its behaviour"
+            )
+            return "error", (
+                f"{name!r} is declared by {_count(len(claimants))} plugins, {said}: which one "
+                "is meant "
+                f"is not known ({choose})"
+            )
+        shadows = self._shadowed.get(name)
+        if shadows is not None:
+            who = ", ".join(who for who, _ in shadows)
+            theirs = [repr(spelled) for _, spelled in shadows if spelled]
+            reach = (
+                f": write {CORE_PACKAGE + ':' + name!r} to say so, {' or '.join(theirs)} for "
+                "the plugin's"
+                if theirs
+                else " (rename the plugin's behaviour)"
+            )
+            return "warning", (
+                f"a plugin declares {name!r} too, {who}; the built-in is used{reach}"
+            )
         return None
 
     def register_provider(
@@ -171,16 +260,17 @@ class Registry:
         origin: str,
         *,
         said_as: str | None = None,
-        entry_name: str | None = None,
+        entry: EntryPoint | None = None,
     ) -> list[Declaration]:
         """Register what an entry point or a plugin file provides (class, sequence of
         classes, or module); each class that declares itself wrongly becomes a recorded
         :class:`PluginError` naming it and where it is, and the others still load (one bad
         class dropped the rest of its module). ``said_as``: the origin the errors name, when
-        it is not ``origin``; ``entry_name``: the entry point's name, among each error's
-        :attr:`PluginError.names`."""
+        it is not ``origin``; ``entry``: the entry point that provides them (its name is
+        among each error's :attr:`PluginError.names`; its distribution, the package a
+        mission may name them by)."""
         said = said_as or origin
-        named = () if entry_name is None else (entry_name,)
+        named = () if entry is None else (entry.name,)
         try:
             classes = _provided(provider)
         except DeclarationError as exc:
@@ -197,10 +287,19 @@ class Registry:
                         f"class {cls.__qualname__} is decorated with @declare but is not a "
                         "behaviour: derive it from roomba_bt.behaviours.Action or Condition"
                     )
-                registered.append(self.register(cls, origin, said_as=said))
+                registered.append(self.register(cls, origin, said_as=said, entry=entry))
             except NameClash as exc:  # it declared nothing wrongly: two classes want a name
-                clash = f"{_where(cls)} {exc.clash()}"
+                spelled = self.spelled(declared) if isinstance(declared, Declaration) else None
+                clash = f"{_where(cls)} {exc.clash(spelled, self.spelled(exc.existing))}"
                 self._errors.append(PluginError(said, clash, names=names))
+            except _LanguageWord as exc:  # the word is the language's; the class may be reached
+                spelled = self.spelled(declared) if isinstance(declared, Declaration) else None
+                reach = f"a mission reaches it as {spelled!r}" if spelled else "it is not used"
+                word = (
+                    f"{_where(cls)} declares {exc.name!r}, a word of the mission language: the "
+                    f"word is the language's, and {reach} (or rename it)"
+                )
+                self._errors.append(PluginError(said, word, names=names))
             except _NotABehaviour as exc:
                 self._errors.append(PluginError(said, f"{_where(cls)}: {exc}", names=names))
             except DeclarationError as exc:
@@ -237,7 +336,7 @@ class Registry:
             self._errors.append(PluginError(_origin(ep), failed, imported=False, names=(ep.name,)))
             return []
         registered = self.register_provider(
-            provider, _origin(ep, named=False), said_as=_origin(ep), entry_name=ep.name
+            provider, _origin(ep, named=False), said_as=_origin(ep), entry=ep
         )
         for declaration in registered:
             self._unnamed[declaration.name] = ep
@@ -289,17 +388,74 @@ class Registry:
         other._declarations = dict(self._declarations)
         other._unnamed = dict(self._unnamed)
         other._errors = list(self._errors)
-        other._contested = dict(self._contested)
-        other._shadowed = dict(self._shadowed)
+        other._contested = {name: list(who) for name, who in self._contested.items()}
+        other._shadowed = {name: list(who) for name, who in self._shadowed.items()}
+        other._packages = {package: dict(held) for package, held in self._packages.items()}
+        other._package_of = dict(self._package_of)
         return other
 
     # ------------------------------------------------------------------ queries
     def get(self, name: str) -> Declaration | None:
+        """The declaration a mission's word names: a behaviour's name alone, or
+        ``package:name`` (:meth:`_qualified`)."""
+        if ":" in name:
+            return self._qualified(name)
         found = self._declarations.get(name)
         if found is None:
             self._ensure_loaded()
             found = self._declarations.get(name)
         return found if found is None or not self._unnamed else self._named(found)
+
+    def _qualified(self, word: str) -> Declaration | None:
+        """``package:name``: a built-in (``roomba-bt:drive``, the declaration as its name
+        alone gives it) or an installed plugin's behaviour, under the name the mission wrote
+        (a plugin's ``drive`` is no built-in to the checks that know a built-in by name, and
+        ``show`` says which it is)."""
+        self._ensure_loaded()
+        package, _, name = word.partition(":")
+        package = package_name(package)
+        if package == CORE_PACKAGE:
+            found = self._declarations.get(name)
+            return found if found is not None and found.origin == "builtin" else None
+        held = self._packages.get(package, {}).get(name)
+        if held is None:
+            return None
+        declaration, entry = held
+        return replace(declaration, name=f"{package}:{name}", origin=_origin(entry))
+
+    def qualified(self) -> list[tuple[str, Declaration]]:
+        """Every ``package:name`` a mission may write, the built-ins' (``roomba-bt:drive``)
+        and each installed plugin's, with its declaration (:meth:`get`'s): what the JSON
+        Schema lists beside the names alone."""
+        self._ensure_loaded()
+        words = [f"{CORE_PACKAGE}:{d.name}" for d in self._declarations.values()
+                 if d.origin == "builtin"]  # fmt: skip
+        words += [f"{package}:{name}" for package, held in self._packages.items() for name in held]
+        found = [(word, self.get(word)) for word in sorted(words)]
+        return [(word, declaration) for word, declaration in found if declaration is not None]
+
+    def why_unknown(self, word: str) -> str | None:
+        """Why ``package:name`` names nothing: no such package (the installed ones named),
+        or the package has no such behaviour (a near name, else its behaviours); None for
+        a name alone."""
+        if ":" not in word:
+            return None
+        self._ensure_loaded()
+        written, _, name = word.partition(":")
+        package = package_name(written)
+        if package == CORE_PACKAGE:
+            builtins = [n for n, d in self._declarations.items() if d.origin == "builtin"]
+            near = closest(name, builtins)
+            return f"{CORE_PACKAGE} has no built-in behaviour {name!r}{near}"
+        held = self._packages.get(package)
+        if held is None:
+            installed = ", ".join(sorted(self._packages)) or "none"
+            return (
+                f"no installed plugin package is called {written!r} (installed: {installed}; "
+                f"{CORE_PACKAGE!r} names the built-ins)"
+            )
+        near = closest(name, list(held)) or f" (it has: {', '.join(sorted(held))})"
+        return f"package {package!r} has no behaviour {name!r}{near}"
 
     def __contains__(self, name: object) -> bool:
         return isinstance(name, str) and self.get(name) is not None
@@ -348,6 +504,29 @@ def group_entry_points(group: str) -> list[EntryPoint]:
 
 #: whether distributions have the name ``entry_points`` tells them apart by
 _NAMES_DISTRIBUTIONS = hasattr(Distribution, "_normalized_name")
+
+
+def package_name(name: str) -> str:
+    """A distribution's name as ``package:name`` spells it: pip's normal form (PEP 503:
+    lower case, each run of ``-``, ``_`` and ``.`` one ``-``), so ``Roomba_BT.Dirt`` is
+    ``roomba-bt-dirt``, the spelling ``pip`` and ``roomba-bt behaviours`` show."""
+    return re.sub(r"[-_.]+", "-", name).lower()
+
+
+def _package(ep: EntryPoint) -> str:
+    """The package a mission names an entry point's behaviours by: its distribution's name
+    (:func:`package_name`), read off the ``.dist-info`` folder's name where the standard
+    library has it (``_normalized_name``: the METADATA's e-mail parser is not loaded for
+    it, :meth:`Registry._load_entry_point`); the entry point's own name when it has no
+    distribution (one made in Python)."""
+    if ep.dist is None:
+        return package_name(ep.name)
+    stem = getattr(ep.dist, "_normalized_name", None)
+    return package_name(stem if isinstance(stem, str) else ep.dist.name)
+
+
+def _count(n: int) -> str:
+    return {2: "two", 3: "three"}.get(n, str(n))
 
 
 def file_version(path: Path) -> tuple[int, int] | None:

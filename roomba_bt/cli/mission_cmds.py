@@ -320,13 +320,16 @@ def describe_behaviours(
 
     out = []
     registry = registry if registry is not None else default_registry()
-    for decl in registry:
-        if names and decl.name not in names:
-            continue
+    chosen = [decl for decl in registry if not names or decl.name in names]
+    # a package:name asked for (roomba-bt behaviours roomba-bt-dirt:dirt_detect), in order
+    chosen += [d for d in (registry.get(n) for n in names or () if ":" in n) if d is not None]
+    for decl in chosen:
         clash = registry.clash(decl.name)
         out.append(
             {
                 "name": decl.name,
+                # how a mission names it whatever else declares its name (package:name)
+                "qualified": decl.name if ":" in decl.name else registry.spelled(decl),
                 "kind": decl.kind,
                 "doc": decl.doc,
                 "origin": decl.origin,
@@ -446,6 +449,8 @@ def _print_behaviour(entry: dict[str, Any]) -> None:
         head += f"; leads to {entry['leads_to']}"
     if entry["origin"] != "builtin":
         head += f"; from {entry['origin']}"
+        if entry["qualified"] and entry["qualified"] != entry["name"]:
+            head += f"; also written {entry['qualified']}"
     print(head + ")")
     if entry["clash"]:
         print(f"    {entry['clash']['severity']}: {entry['clash']['why']}")

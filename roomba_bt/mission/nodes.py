@@ -208,6 +208,9 @@ class NodeParser:
         # contains the word (u_metres in u_metres_nodefault's)
         named = [e for e in errors if word in e.names]
         message = f"unknown node {word!r}{where}"
+        qualified = self.ctx.registry.why_unknown(word)  # package:name, said by its package
+        if qualified is not None:
+            return f"{message}: {qualified}"
         if not named:  # a misspelling, perhaps: not when a plugin is known to declare it
             message += suggestion(word, [*WORDS, *self.ctx.registry.names(), *MODIFIERS])
         likely = named or [e for e in errors if not e.imported]

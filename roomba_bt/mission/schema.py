@@ -162,10 +162,13 @@ def mission_schema(registry: Registry | None = None) -> dict[str, Any]:
     bare: list[str] = []
     for kind in WORDS.values():
         defs[kind.word] = _with_modifiers(kind.word, _word_schema(kind), kind.doc)
-    for decl in registry:
-        defs[decl.name] = _with_modifiers(decl.name, _param_schema(decl), decl.doc)
+    # each behaviour by its name alone, unless two plugins declare it (a mission that uses
+    # it so is refused), and by its package:name (roomba-bt:drive, roomba-bt-dirt:...)
+    alone = [(d.name, d) for d in registry if (registry.clash(d.name) or ("",))[0] != "error"]
+    for word, decl in [*alone, *registry.qualified()]:
+        defs[word] = _with_modifiers(word, _param_schema(decl), decl.doc)
         if not any(p.required for p in decl.params):
-            bare.append(decl.name)
+            bare.append(word)
     node_forms = [{"$ref": f"#/$defs/{word}"} for word in defs]
     defs["node"] = {"anyOf": [*node_forms, {"enum": bare}]}
     parameter, key = _declarations()

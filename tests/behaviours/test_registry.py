@@ -304,7 +304,8 @@ def test_a_name_two_plugins_declare_is_said_as_a_clash_not_a_wrong_declaration()
         in second
     )
     assert "declares 'drive', the name of the built-in Drive (" in mine
-    assert "the built-in is used and this behaviour is not (rename it)" in mine
+    # an entry point made in Python has no distribution: its own name is the package
+    assert "the built-in is used and a mission reaches this one as 'mine:drive'" in mine
 
 
 def test_a_plugin_that_takes_a_builtins_name_is_a_warning_where_it_is_used(

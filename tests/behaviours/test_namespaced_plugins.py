@@ -1,0 +1,181 @@
+"""Plugin behaviours named by their package: ``package:name`` picks one of two installed
+plugins that declare the same name, a plugin's behaviour that takes a built-in's name or a
+word of the language, and ``roomba-bt:name`` the built-in (docs/plugins.md, "Two plugins, one
+name"). Two tiny plugin distributions are installed for real (a ``.dist-info`` with its
+``entry_points.txt`` and a module, on ``sys.path``), so the registry finds them as it finds
+any installed plugin."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.behaviours import Registry
+from roomba_bt.cli.mission_cmds import describe_behaviours
+from roomba_bt.mission import compile_mission
+from roomba_bt.mission.schema import mission_schema
+
+ALPHA = '''\
+from roomba_bt.behaviours import Condition, declare
+
+
+@declare("sense", kind="condition")
+class AlphaSense(Condition):
+    """Alpha's sense: always true."""
+
+    def check(self, snapshot):
+        return True
+
+
+@declare("drive", kind="condition")
+class AlphaDrive(Condition):
+    """Alpha's condition that takes a built-in's name."""
+
+    def check(self, snapshot):
+        return True
+'''
+
+BETA = '''\
+from roomba_bt.behaviours import Condition, declare
+
+
+@declare("sense", kind="condition")
+class BetaSense(Condition):
+    """Beta's sense: never true."""
+
+    def check(self, snapshot):
+        return False
+
+
+@declare("retry", kind="condition")
+class BetaRetry(Condition):
+    """Beta's condition that takes a word of the mission language."""
+
+    def check(self, snapshot):
+        return True
+'''
+
+
+def _install(site: Path, distribution: str, module: str, source: str) -> None:
+    """A distribution as pip leaves it: its module and its ``.dist-info``."""
+    (site / f"{module}.py").write_text(source)
+    info = site / f"{distribution.replace('-', '_')}-1.0.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {distribution}\nVersion: 1.0\n")
+    (info / "entry_points.txt").write_text(f"[roomba_bt.behaviours]\n{module} = {module}\n")
+
+
+@pytest.fixture
+def registry(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Registry:
+    site = tmp_path / "site"
+    site.mkdir()
+    _install(site, "bt-ns-alpha", "bt_ns_alpha_plugin", ALPHA)
+    _install(site, "bt-ns-beta", "bt_ns_beta_plugin", BETA)
+    monkeypatch.syspath_prepend(str(site))
+    for module in ("bt_ns_alpha_plugin", "bt_ns_beta_plugin"):
+        monkeypatch.delitem(__import__("sys").modules, module, raising=False)
+    from roomba_bt.behaviours.registry import builtin_registry
+
+    found = builtin_registry()
+    found._group = "roomba_bt.behaviours"  # the entry points, read on first use
+    found._loaded = False
+    return found
+
+
+def _compile(tmp_path: Path, registry: Registry, tree: str) -> tuple[object, list]:
+    path = tmp_path / "m.yaml"
+    path.write_text(f"tree:\n  sequence:\n{tree}")
+    mission, diagnostics = compile_mission(path, {}, registry=registry)
+    return mission, list(diagnostics)
+
+
+def _leaf_classes(mission: object) -> list[str]:
+    root = mission.root  # type: ignore[attr-defined]
+    return [type(node).__name__ for node in root.iterate() if not node.children]
+
+
+def test_a_name_two_plugins_declare_names_both_packages_and_how_to_choose(
+    tmp_path: Path, registry: Registry
+) -> None:
+    """Before, the error said to uninstall one or rename its behaviour: a mission had no way
+    to say which of the two it meant."""
+    mission, [error] = _compile(tmp_path, registry, "    - sense\n")
+    assert mission is None and (error.line, error.column) == (3, 7)
+    assert "'sense' is declared by two plugins" in error.message
+    assert "from bt-ns-alpha" in error.message and "from bt-ns-beta" in error.message
+    assert "write 'bt-ns-alpha:sense' or 'bt-ns-beta:sense'" in error.message
+
+
+def test_package_colon_name_picks_one_plugin(tmp_path: Path, registry: Registry) -> None:
+    mission, diagnostics = _compile(
+        tmp_path, registry, "    - bt-ns-alpha:sense\n    - bt-ns-beta:sense\n"
+    )
+    assert diagnostics == [] and mission is not None
+    assert _leaf_classes(mission) == ["AlphaSense", "BetaSense"]
+    assert not [w for w in mission.warnings if "sense" in w.message]  # type: ignore[attr-defined]
+    # the package's name as pip takes it: case, '_' and '.' for '-'
+    mission, diagnostics = _compile(tmp_path, registry, "    - BT_NS.Alpha:sense\n")
+    assert diagnostics == [] and _leaf_classes(mission) == ["AlphaSense"]
+
+
+def test_a_built_in_s_name_is_the_built_in_and_the_plugin_s_is_reachable(
+    tmp_path: Path, registry: Registry
+) -> None:
+    """Before, a plugin's behaviour that took a built-in's name could not be used at all,
+    and every use of the built-in was warned of with no way to say it was meant."""
+    drive = "    - mode: safe\n    - {kind}: {{velocity: 100 mm/s, duration: 1s}}\n"
+    mission, diagnostics = _compile(tmp_path, registry, drive.format(kind="drive"))
+    assert diagnostics == [] and "Drive" in _leaf_classes(mission)
+    [warning] = [w for w in mission.warnings if "too" in w.message]  # type: ignore[attr-defined]
+    assert "the built-in is used" in warning.message
+    assert "'roomba-bt:drive'" in warning.message and "'bt-ns-alpha:drive'" in warning.message
+    mission, diagnostics = _compile(tmp_path, registry, drive.format(kind="roomba-bt:drive"))
+    assert diagnostics == [] and "Drive" in _leaf_classes(mission)
+    assert not [w for w in mission.warnings if "too" in w.message]  # type: ignore[attr-defined]
+    mission, diagnostics = _compile(tmp_path, registry, "    - bt-ns-alpha:drive\n")
+    assert diagnostics == [] and _leaf_classes(mission) == ["AlphaDrive"]
+
+
+def test_a_word_of_the_language_stays_the_language_s(tmp_path: Path, registry: Registry) -> None:
+    mission, diagnostics = _compile(tmp_path, registry, "    - bt-ns-beta:retry\n")
+    assert diagnostics == [] and _leaf_classes(mission) == ["BetaRetry"]
+    mission, diagnostics = _compile(tmp_path, registry, "    - retry: {times: 2, do: {wait: 1s}}\n")
+    assert diagnostics == [] and _leaf_classes(mission) == ["Wait"]
+
+
+def test_what_each_plugin_is_told_names_the_other_and_the_spellings(registry: Registry) -> None:
+    errors = [str(e) for e in registry.errors]
+    [sense] = [e for e in errors if "'sense'" in e]
+    assert "bt-ns-alpha" in sense and "bt-ns-beta" in sense
+    assert "'bt-ns-alpha:sense' or 'bt-ns-beta:sense'" in sense
+    [drive] = [e for e in errors if "'drive'" in e]
+    assert "the name of the built-in Drive" in drive and "'bt-ns-alpha:drive'" in drive
+    [retry] = [e for e in errors if "'retry'" in e]
+    assert "a word of the mission language" in retry and "'bt-ns-beta:retry'" in retry
+    assert "wrongly" not in retry
+
+
+@pytest.mark.parametrize(
+    ("word", "said"),
+    [
+        ("bt-ns-gamma:sense", "no installed plugin package is called 'bt-ns-gamma'"),
+        ("bt-ns-alpha:sens", "package 'bt-ns-alpha' has no behaviour 'sens' (did you mean"),
+        ("roomba-bt:sense", "roomba-bt has no built-in behaviour 'sense'"),
+    ],
+)
+def test_an_unknown_qualified_name_says_what_the_package_has(
+    tmp_path: Path, registry: Registry, word: str, said: str
+) -> None:
+    _, [error] = _compile(tmp_path, registry, f"    - {word}\n")
+    assert error.message.startswith(f"unknown node {word!r}") and said in error.message
+
+
+def test_behaviours_and_the_schema_know_the_qualified_spellings(registry: Registry) -> None:
+    [entry] = describe_behaviours(["bt-ns-beta:sense"], registry)
+    assert entry["name"] == "bt-ns-beta:sense" and "Beta's sense" in entry["doc"]
+    [drive] = describe_behaviours(["drive"], registry)
+    assert drive["clash"]["severity"] == "warning" and "'roomba-bt:drive'" in drive["clash"]["why"]
+    defs = mission_schema(registry)["$defs"]
+    assert {"bt-ns-alpha:sense", "bt-ns-beta:sense", "bt-ns-beta:retry"} <= set(defs)
+    assert "roomba-bt:drive" in defs and "sense" not in defs
