@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 from roomba_bt.oi.encode import BAUD_CODES
 from roomba_bt.oi.frames import SLOT_SECONDS
-from roomba_bt.oi.profiles import DEFAULT_PROFILE, PROFILES
+from roomba_bt.oi.profiles import DEFAULT_PROFILE, PROFILES, RobotProfile
 
 if TYPE_CHECKING:
     from roomba_bt.mission import Permissions
@@ -72,6 +72,41 @@ def baud_or_auto(text: str) -> int | None:
         return baud_rate(text)
     except argparse.ArgumentTypeError as exc:
         raise argparse.ArgumentTypeError(f"{exc}, or auto") from None
+
+
+def simulated_baud_refused(rate: int, profile: RobotProfile) -> str | None:
+    """``sim --baud``: a rate the robot does not talk at from power-on (the profile's
+    ``power_on_bauds``) is refused, since a simulated robot has just been powered on and
+    nothing has sent it Baud (129); None for a rate it does. ``sim --profile roomba600
+    --baud 57600`` served a robot at a rate no Roomba 600 starts at."""
+    problem = profile.baud_problem(rate)
+    if problem is None:
+        return None
+    allowed = ", ".join(str(r) for r in profile.power_on_bauds)
+    return (
+        f"--baud {rate}: {problem}, and a simulated robot has just been powered on; "
+        f"allowed: {allowed}"
+    )
+
+
+def baud_warning(rate: int | None, profile: RobotProfile, *, simulated: bool) -> str | None:
+    """``run``/``sensors --baud RATE``: a warning for a rate the ``--profile``'s robot does
+    not talk at from power-on (a Baud command may have set it since, so the rate is still
+    tried), None for one it does and for ``auto`` (None). On the simulator the simulated
+    robot talks at its default rate whatever ``--baud`` says; only the stream's fit is
+    checked at ``rate``. A Roomba 600 opened at 57600 was silent garbage, said only as a
+    lost stream."""
+    problem = None if rate is None else profile.baud_problem(rate)
+    if problem is None:
+        return None
+    if simulated:
+        then = (
+            f"the simulated robot talks at {profile.default_baud} whatever --baud says; the "
+            f"mission's stream is checked at {rate}"
+        )
+    else:
+        then = "if it does not answer, --baud auto finds the rate it talks at"
+    return f"warning: --baud {rate}: {problem}; {then}"
 
 
 def port_name(text: str) -> str:

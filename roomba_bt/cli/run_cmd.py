@@ -19,6 +19,7 @@ from roomba_bt.cli.arguments import (
     add_param_option,
     add_permission_options,
     battery_charge,
+    baud_warning,
     mission_file,
     parse_params,
     parse_timeout,
@@ -274,6 +275,9 @@ def _claimed_run(
     from roomba_bt.runtime.display import observer_for
 
     profile = get_profile(args.profile)
+    warned = baud_warning(args.baud, profile, simulated=not args.port)
+    if warned is not None:
+        print(f"roomba-bt run: {warned}", file=sys.stderr)
     opened = None
     if args.baud is None:  # --baud auto: the mission's stream is checked at the rate found
         try:

@@ -8,7 +8,13 @@ import sys
 import time
 from typing import TYPE_CHECKING, Any
 
-from roomba_bt.cli.arguments import add_command, add_far_end_options, count, refresh_rate
+from roomba_bt.cli.arguments import (
+    add_command,
+    add_far_end_options,
+    baud_warning,
+    count,
+    refresh_rate,
+)
 from roomba_bt.oi.frames import stream_frame_size
 from roomba_bt.oi.modes import OI_MODE_PACKET, mode_from_packet
 from roomba_bt.oi.packets import PACKETS
@@ -102,6 +108,9 @@ def sensors_command(args: argparse.Namespace) -> int:
     from roomba_bt.sim import WorldError
 
     profile = get_profile(args.profile)
+    warned = baud_warning(args.baud, profile, simulated=not args.port)
+    if warned is not None:
+        print(f"roomba-bt sensors: {warned}", file=sys.stderr)
     opened = None
     try:
         if args.baud is None:  # --baud auto

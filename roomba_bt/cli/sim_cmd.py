@@ -21,7 +21,14 @@ import time
 from types import FrameType
 from typing import TYPE_CHECKING, Any
 
-from roomba_bt.cli.arguments import add_command, add_profile_option, plot_file, seconds
+from roomba_bt.cli.arguments import (
+    add_command,
+    add_profile_option,
+    plot_file,
+    seconds,
+    simulated_baud_refused,
+)
+from roomba_bt.oi.profiles import POWER_ON_BAUDS
 from roomba_bt.runtime.summary import ExitCode
 
 if TYPE_CHECKING:
@@ -70,9 +77,10 @@ def register(sub: Any) -> None:
         "RTS/DTR) reach the robot",
     )  # fmt: skip
     parser.add_argument(
-        "--baud", type=int, choices=(19200, 115200), default=None,
-        help="the robot's baud rate: 115200 (the default) or 19200 (Clean held at power-on on a "
-        "Roomba 500, at power-off on a 600 or Create 2)",
+        "--baud", type=int, default=None,
+        help=f"the robot's baud rate, one it talks at from power-on: "
+        f"{' or '.join(str(rate) for rate in POWER_ON_BAUDS)} (the first the default; 19200 "
+        "after Clean held at power-on on a Roomba 500, at power-off on a 600 or Create 2)",
     )  # fmt: skip
     parser.add_argument(
         "--asleep", action="store_true",
@@ -157,6 +165,9 @@ def _simulator(args: argparse.Namespace) -> Simulator | int:
         faults = Faults(**{name: getattr(args, name) for name, *_ in FAULT_OPTIONS})
     except ValueError as exc:
         return _fail(str(exc), ExitCode.INVALID)
+    refused = None if args.baud is None else simulated_baud_refused(args.baud, profile)
+    if refused is not None:
+        return _fail(refused, ExitCode.INVALID)
     try:
         world = load_world(args.world)
         simulator = Simulator(

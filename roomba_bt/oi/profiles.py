@@ -22,6 +22,13 @@ A difference is a field here, never an ``if`` elsewhere. Each decision is explai
   ends it, each spec's own procedure ("Serial Port Settings"): the 500 spec holds Clean
   "when powering on", the 600 spec "while powering off"; the 500 stays there until "the
   power is turned off", the 600 until "the processor loses battery power".
+* ``power_on_bauds``: the rates the port talks at from power-on, the default first: "Baud:
+  115200 or 19200" in both specs' "Serial Port Settings" (the original Create's 57600 is
+  gone: the 600 spec's Appendix A, "The default baud rate has changed from 57600 to
+  115200"). Any other rate of the Baud command (129), whose codes 0-11 (300 to 115200 bps,
+  ``encode.BAUD_CODES``) both specs list alike, only once a host sent it, until the robot
+  loses power. :meth:`RobotProfile.baud_problem` says so; ``sim --baud`` refuses such a
+  rate (a simulated robot has just been powered on), ``run``/``sensors --baud`` warn.
 """
 
 from __future__ import annotations
@@ -30,6 +37,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from types import MappingProxyType
 
+from roomba_bt.oi.encode import BAUD_CODES
 from roomba_bt.oi.errors import UnsupportedCommandError
 from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME, CommandSpec
 from roomba_bt.oi.packets import PACKETS, PacketSpec
@@ -65,6 +73,14 @@ CLIFF_SENSOR_RADIUS_MM = 150.0
 #: layer's ``Connection.set_baud``; no ``roomba-bt`` command sends it.
 SEND_BAUD = "in Python, Connection.set_baud(115200) sends Baud (129); no roomba-bt command does"
 
+#: The rates a robot's port talks at from power-on, the default first: 115200, or 19200 after
+#: the Clean-button or BRC procedure (both specs, "Serial Port Settings": "Baud: 115200 or
+#: 19200"). The same on every profile; ``robot.discovery`` tries them in this order.
+POWER_ON_BAUDS: tuple[int, ...] = (115200, 19200)
+
+#: where both specs say the rates a robot starts at
+_SERIAL_SETTINGS = '"Serial Port Settings"'
+
 #: The stream frame's header byte (``frames.STREAM_HEADER``; frames imports this module), as
 #: the sum of a frame that leaves it out of its checksum reads.
 STREAM_CHECKSUM_HEADER = 19
@@ -86,7 +102,9 @@ class RobotProfile:
     #: Passive sleeps after 5 minutes of inactivity (600 spec, "Passive Mode"); the 500 spec
     #: does not say, and is assumed to (a BRC pulse is harmless): the runtime keeps it awake.
     sleeps_in_passive: bool = True
-    default_baud: int = 115200
+    default_baud: int = POWER_ON_BAUDS[0]
+    #: the rates its port talks at from power-on (the module docstring)
+    power_on_bauds: tuple[int, ...] = POWER_ON_BAUDS
     wheel_base_mm: float = WHEEL_BASE_MM
     max_velocity_mm_s: int = 500
     max_radius_mm: int = 2000
@@ -108,6 +126,26 @@ class RobotProfile:
             f"on the {self.title}, 19200 comes after {self.slow_baud_how}, and lasts "
             f"{self.slow_baud_until}"
         )
+
+    @property
+    def baud_command_rates(self) -> tuple[int, ...]:
+        """The rates Baud (129) can set (codes 0-11 of the opcode's argument, the same
+        table in both specs), slowest first."""
+        return tuple(sorted(BAUD_CODES))
+
+    def baud_problem(self, rate: int) -> str | None:
+        """Why this robot would not be talking at ``rate`` when a host opens its port, or
+        None for a rate it talks at from power-on: ``the Roomba 600 series talks at 115200
+        or 19200 from power-on (its OI spec, "Serial Port Settings"); 57600 only once a Baud
+        (129) command has set it, until it loses power``."""
+        if rate in self.power_on_bauds:
+            return None
+        rates = " or ".join(str(r) for r in self.power_on_bauds)
+        said = f"the {self.title} talks at {rates} from power-on (its OI spec, {_SERIAL_SETTINGS})"
+        if rate not in self.baud_command_rates:
+            listed = ", ".join(str(r) for r in self.baud_command_rates)
+            return f"{said}; {rate} is no rate of the OI at all (Baud (129) sets {listed})"
+        return f"{said}; {rate} only once a Baud (129) command has set it, until it loses power"
 
     @property
     def checksum_sums(self) -> frozenset[int]:

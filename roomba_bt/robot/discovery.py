@@ -37,12 +37,13 @@ from dataclasses import dataclass
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.oi.packets import PACKETS, packet_ids
+from roomba_bt.oi.profiles import POWER_ON_BAUDS
 from roomba_bt.robot.wake import PULSE_LENGTH_S, HangUpLine, WakeLine
 from roomba_bt.transport.base import Transport
 
 #: The OI's rates, likeliest first: the default, then the rate Clean held at power-on (500)
-#: or power-off (600 / Create 2) sets.
-OI_RATES: tuple[int, ...] = (115200, 19200)
+#: or power-off (600 / Create 2) sets; the profiles' table (``oi.profiles.POWER_ON_BAUDS``).
+OI_RATES: tuple[int, ...] = POWER_ON_BAUDS
 #: OI mode, charging state, charging sources: one byte each, each with a narrow range.
 PROBE_PACKETS: tuple[int, ...] = packet_ids("oi_mode", "charging_state", "charging_sources")
 #: The probe's question, ``[149][3][35][21][34]``.
