@@ -270,28 +270,15 @@ def _claimed_run(
     claimed: ClaimedFile | None,
 ) -> int:
     """The run, once its arguments are checked and its record claimed (``claimed``)."""
-    from roomba_bt.cli.links import auto_baud, far_end
+    from roomba_bt.cli.links import far_end
     from roomba_bt.robot.errors import ConnectionFailed
     from roomba_bt.runtime.display import observer_for
 
     profile = get_profile(args.profile)
-    warned = baud_warning(args.baud, profile, simulated=not args.port)
-    if warned is not None:
-        print(f"roomba-bt run: {warned}", file=sys.stderr)
-    opened = None
-    if args.baud is None:  # --baud auto: the mission's stream is checked at the rate found
-        try:
-            args.baud, opened = auto_baud(args.port, profile)
-        except ConnectionFailed as exc:
-            print(f"roomba-bt: {exc}", file=sys.stderr)
-            return ExitCode.CONNECTION
-    mission = load(args.mission, params, profile, args.baud, permissions(args))
-    if isinstance(mission, int):
-        return mission
-    try:
-        packets = stream_packets(mission, args.baud)
-    except BandwidthError as exc:
-        return _error(f"{args.mission}: {exc}")
+    prepared = _mission_at_its_rate(args, params, profile)
+    if isinstance(prepared, int):
+        return prepared
+    mission, packets, opened = prepared
     simulator = _simulator(args, profile)
     if isinstance(simulator, str):
         return _error(simulator)
@@ -324,6 +311,34 @@ def _claimed_run(
     if monitor is not None:
         monitor.start()  # the port is open: its URL now, not one a busy port never serves
     return _run_and_report(args, stack, observer, simulator, monitor)
+
+
+def _mission_at_its_rate(
+    args: argparse.Namespace, params: dict[str, str], profile: RobotProfile
+) -> tuple[Any, tuple[int, ...], Any] | int:
+    """The mission compiled for the port's rate, its stream's packets and a port ``--baud
+    auto`` opened to find that rate (None otherwise); or the exit code after saying why not."""
+    from roomba_bt.cli.links import auto_baud
+    from roomba_bt.robot.errors import ConnectionFailed
+
+    warned = baud_warning(args.baud, profile, simulated=not args.port)
+    if warned is not None:
+        print(f"roomba-bt run: {warned}", file=sys.stderr)
+    opened = None
+    if args.baud is None:  # --baud auto: the mission's stream is checked at the rate found
+        try:
+            args.baud, opened = auto_baud(args.port, profile)
+        except ConnectionFailed as exc:
+            print(f"roomba-bt: {exc}", file=sys.stderr)
+            return ExitCode.CONNECTION
+    mission = load(args.mission, params, profile, args.baud, permissions(args))
+    if isinstance(mission, int):
+        return mission
+    try:
+        packets = stream_packets(mission, args.baud)
+    except BandwidthError as exc:
+        return _error(f"{args.mission}: {exc}")
+    return mission, packets, opened
 
 
 def robot_label(port: str | None, simulator: Simulator | None) -> str:
