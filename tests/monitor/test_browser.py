@@ -74,16 +74,21 @@ def _pause_write(run: LiveRun) -> float:
     raise AssertionError(f"no pause sequence {expected.hex()} among the writes")
 
 
-def test_pause_stops_the_wheels_within_two_frames_in_passive_and_resume_drives_again(
-    live: LiveRun, page: Any
-) -> None:
-    page.goto(live.url)
-    page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+def _wait_for_wheels_turning(page: Any) -> None:
+    """Until the Robot panel shows a wheel speed other than ``L 0 R 0``."""
     page.wait_for_function(
         "document.querySelector('#wheels') && !/L 0 R 0/.test("
         "document.querySelector('#wheels').textContent)",
         timeout=WAIT_MS,
     )
+
+
+def test_pause_stops_the_wheels_within_two_frames_in_passive_and_resume_drives_again(
+    live: LiveRun, page: Any
+) -> None:
+    page.goto(live.url)
+    page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+    _wait_for_wheels_turning(page)
     page.click("#pause")
     page.wait_for_selector('#mode:text("Passive")', timeout=WAIT_MS)
     page.wait_for_selector('#wheels:text("L 0 R 0")', timeout=WAIT_MS)
@@ -270,11 +275,7 @@ def test_after_the_run_the_robot_panel_shows_it_stopped_in_passive(page: Any, ch
     proc = child(monitored_run(BRUSHES))
     page.goto(_url_from(proc))
     page.wait_for_selector('#motors:has-text("main brush ON")', timeout=WAIT_MS)
-    page.wait_for_function(
-        "document.querySelector('#wheels') && !/L 0 R 0/.test("
-        "document.querySelector('#wheels').textContent)",
-        timeout=WAIT_MS,
-    )
+    _wait_for_wheels_turning(page)
     page.click("#stop")
     _, err = proc.communicate(timeout=30)
     assert proc.returncode == 130, err

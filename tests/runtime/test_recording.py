@@ -11,6 +11,7 @@ import subprocess
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -487,16 +488,22 @@ class _CtrlCBetweenFrames(SimLink):
         return super().read(timeout)
 
 
-def test_a_ctrl_c_between_frames_is_still_noted_after_the_last_tick(tmp_path: Path) -> None:
-    """The other half: an interrupt in the wait for a frame comes after the last tick, which
-    the replay then ticks in full, as live."""
-    link = _CtrlCBetweenFrames(Simulator(load_world("empty-room"), CREATE2, 0), after=80)
+def _interrupted_record(tmp_path: Path, mission: str, link: Any) -> Path:
+    """The record of ``mission`` run over ``link`` until the link's Ctrl-C ends it."""
     source, path = tmp_path / "m.yaml", tmp_path / "run.jsonl"
-    source.write_text(SPIN)
+    source.write_text(mission)
     stack = RunStack(load_mission(source, {}, profile=CREATE2), link, profile=CREATE2,
                      record=Recording(path, str(source)))  # fmt: skip
     assert stack.run(raise_interrupts=False).outcome is Outcome.INTERRUPTED
     stack.close()
+    return path
+
+
+def test_a_ctrl_c_between_frames_is_still_noted_after_the_last_tick(tmp_path: Path) -> None:
+    """The other half: an interrupt in the wait for a frame comes after the last tick, which
+    the replay then ticks in full, as live."""
+    link = _CtrlCBetweenFrames(Simulator(load_world("empty-room"), CREATE2, 0), after=80)
+    path = _interrupted_record(tmp_path, SPIN, link)
     ending = load_record(path).ending
     assert ending is not None and (ending["reason"], ending["at"]) == ("Ctrl-C", "after")
     summary, difference, written = _replayed(path)
@@ -962,12 +969,7 @@ def test_a_ctrl_c_between_two_writes_of_a_tick_replays_byte_for_byte(
     that frame and writes its commands up to there. A record made before (no ``written``)
     replays as it did."""
     link = _CtrlCBetweenWrites(Simulator(load_world("empty-room"), CREATE2, 0))
-    source, path = tmp_path / "m.yaml", tmp_path / "run.jsonl"
-    source.write_text(TWO_A_TICK)
-    stack = RunStack(load_mission(source, {}, profile=CREATE2), link, profile=CREATE2,
-                     record=Recording(path, str(source)))  # fmt: skip
-    assert stack.run(raise_interrupts=False).outcome is Outcome.INTERRUPTED
-    stack.close()
+    path = _interrupted_record(tmp_path, TWO_A_TICK, link)
     assert main(["replay", str(path)]) == 0
     out = capsys.readouterr().out
     record = load_record(path)
