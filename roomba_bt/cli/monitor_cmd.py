@@ -33,6 +33,8 @@ log = logging.getLogger("roomba_bt.monitor")
 KEYS_HELP = "keys: p pause, r resume, n step, q stop"
 #: after the page's URL when the token is the operator's (``--monitor-token``)
 CHOSEN_TOKEN = " (add ?token= and your --monitor-token, or open your bookmark)"
+#: after the view-only URL when its token is the operator's (``--monitor-view-token``)
+CHOSEN_VIEW_TOKEN = " (add ?token= and your --monitor-view-token, or open its bookmark)"
 
 
 #: how many ports after a taken one are tried for one free now (:func:`free_port_after`)
@@ -95,6 +97,14 @@ def monitor_address(text: str) -> tuple[str, int]:
 
 #: the environment's ``--monitor-token``, for a bookmark that outlives the run
 TOKEN_VARIABLE = "ROOMBA_BT_MONITOR_TOKEN"
+#: the environment's ``--monitor-view-token``: a view-only bookmark (a class's, a
+#: projector's) that outlives the run
+VIEW_TOKEN_VARIABLE = "ROOMBA_BT_MONITOR_VIEW_TOKEN"
+#: each chosen token: its option, its ``args`` attribute and its environment variable
+CHOSEN_TOKENS = (
+    ("--monitor-token", "monitor_token", TOKEN_VARIABLE),
+    ("--monitor-view-token", "monitor_view_token", VIEW_TOKEN_VARIABLE),
+)
 #: a token's length: as long as the generated one's at least (``secrets.token_urlsafe(18)``,
 #: 24 characters), at most what a URL and a cookie carry without trouble
 TOKEN_LENGTH = (24, 256)
@@ -128,19 +138,30 @@ def monitor_token(text: str) -> str:
 
 
 def chosen_token(args: argparse.Namespace, environ: Mapping[str, str] = os.environ) -> str:
-    """``--monitor-token``, else :data:`TOKEN_VARIABLE` from ``environ`` (checked here: its
-    problem names the variable) into ``args.monitor_token``; "" when all is well, else what
-    is wrong. A token on the command line without ``--monitor`` is a mistake said as such;
-    the variable, set once for every run, is left unused then."""
-    if args.monitor_token is not None:
-        return "" if args.monitor is not None else "--monitor-token is for --monitor: add it"
-    from_environment = environ.get(TOKEN_VARIABLE, "")
-    if not from_environment or args.monitor is None:
-        return ""
-    problem = token_problem(from_environment)
-    if problem:
-        return f"{TOKEN_VARIABLE}: {problem}"
-    args.monitor_token = from_environment
+    """``--monitor-token`` and ``--monitor-view-token``, each else its variable from
+    ``environ`` (:data:`CHOSEN_TOKENS`; checked here: its problem names the variable), into
+    ``args``; "" when all is well, else what is wrong. A token on the command line without
+    ``--monitor`` is a mistake said as such; a variable, set once for every run, is left
+    unused then. The two the same is a mistake too: the view link would have the controls."""
+    for option, attribute, variable in CHOSEN_TOKENS:
+        if getattr(args, attribute, None) is not None:
+            if args.monitor is None:
+                return f"{option} is for --monitor: add it"
+            continue
+        from_environment = environ.get(variable, "")
+        if not from_environment or args.monitor is None:
+            continue
+        problem = token_problem(from_environment)
+        if problem:
+            return f"{variable}: {problem}"
+        setattr(args, attribute, from_environment)
+    control, view = args.monitor_token, getattr(args, "monitor_view_token", None)
+    if control is not None and control == view:
+        return (
+            "the view-only token (--monitor-view-token or "
+            f"{VIEW_TOKEN_VARIABLE}) is the control token (--monitor-token or {TOKEN_VARIABLE}): "
+            f"whoever has the view link would have the controls; choose another ({MAKE_ONE})"
+        )
     return ""
 
 
@@ -159,6 +180,12 @@ def add_run_arguments(run: argparse.ArgumentParser) -> None:
         help=f"the page's token instead of a new one each run, so a bookmark keeps working "
         f"(also {TOKEN_VARIABLE}); {TOKEN_LENGTH[0]} to {TOKEN_LENGTH[1]} of A-Z a-z 0-9 - _; "
         "not printed",
+    )  # fmt: skip
+    run.add_argument(
+        "--monitor-view-token", type=monitor_token, metavar="TOKEN",
+        help="the view-only link's token (the page without its controls, for a class or a "
+        f"projector) instead of a new one each run (also {VIEW_TOKEN_VARIABLE}); as "
+        "--monitor-token, and not the same; not printed",
     )  # fmt: skip
     run.add_argument(
         "--monitor-force", action="store_true",
@@ -189,6 +216,9 @@ class MonitorOptions:
     readonly: bool = False
     #: the page's token (``--monitor-token``); None: a new one each run, said in the URL
     token: str | None = None
+    #: the view-only link's token (``--monitor-view-token``); None: a new one each run
+    #: where a token is in force, said in the view-only URL
+    view_token: str | None = None
     #: conditions may be forced from the page on a real robot (``--monitor-force``; always
     #: allowed on the simulator)
     allow_force: bool = False
@@ -207,6 +237,7 @@ class MonitorOptions:
             address=args.monitor,
             readonly=bool(args.monitor_readonly),
             token=args.monitor_token,
+            view_token=getattr(args, "monitor_view_token", None),
             allow_force=bool(args.monitor_force),
             watch=bool(args.watch),
             virtual_clock=bool(args.fast),
@@ -279,6 +310,7 @@ class LiveMonitor:
             self.server = MonitorServer(
                 self.feed, self.session, host=host, port=port,
                 readonly=self.options.readonly, token=self.options.token,
+                view_token=self.options.view_token,
             )  # fmt: skip
             try:
                 self.server.start()
@@ -292,18 +324,8 @@ class LiveMonitor:
         mission and the robot it is for, and start the watcher and the keys. The URL was said
         before the port was opened, and a busy port left a URL in the terminal that never
         served a page."""
-        if self.server is not None and self.options.address is not None:
-            host = self.options.address[0]
-            chosen = self.options.token
-            url = self.server.url
-            if chosen:  # the operator's own: known to them, printed nowhere
-                url = url.split("?token=", 1)[0]
-            feed = self.feed
-            which = f"{feed.mission_name} on {feed.robot}" if feed.robot else ""
-            which = ": ".join(filter(None, (feed.label, which)))
-            which = f" ({which})" if which else ""
-            print(f"monitor: {url}{which}{CHOSEN_TOKEN if chosen else ''}", flush=True)
-            self._say_where(host, url)
+        if self.server is not None:
+            self._say_urls()
         logging.getLogger("roomba_bt").addHandler(self._handler)
         if self.options.watch:
             self._spawn(self._watch, "roomba-bt watch")
@@ -316,10 +338,39 @@ class LiveMonitor:
             else:  # setting the terminal from the background (&) stopped the run (SIGTTOU)
                 print("keys: off (started in the background); the page's controls work")
 
-    def _say_where(self, host: str, url: str) -> None:
+    def _say_urls(self) -> None:
+        """The page's URL with the control token, then (where a token is in force) the
+        view-only one to share: a class, a projector, a link sent on; each with the
+        machine's own addresses when it listens on every one. A chosen token is the
+        operator's own: known to them, printed nowhere."""
+        assert self.server is not None and self.options.address is not None
+        host, server = self.options.address[0], self.server
+        chosen = self.options.token
+        url = _without_token(server.url) if chosen else server.url
+        feed = self.feed
+        which = f"{feed.mission_name} on {feed.robot}" if feed.robot else ""
+        which = ": ".join(filter(None, (feed.label, which)))
+        which = f" ({which})" if which else ""
+        print(f"monitor: {url}{which}{CHOSEN_TOKEN if chosen else ''}", flush=True)
+        self._say_where(host, url, "it listens")
+        if server.view_url is not None:
+            chosen_view = self.options.view_token
+            view_url = _without_token(server.view_url) if chosen_view else server.view_url
+            said = CHOSEN_VIEW_TOKEN if chosen_view else ""
+            print(f"monitor: view only: {view_url}{said}", flush=True)
+            self._say_where(host, view_url, "view only: it listens")
+        if self.options.virtual_clock:
+            print(
+                "roomba-bt: --fast runs the mission on the virtual clock: it may end before a "
+                "page opens (in real time without --fast; or --record it and open the record "
+                "with roomba-bt monitor FILE)",
+                file=sys.stderr,
+            )
+
+    def _say_where(self, host: str, url: str, which: str) -> None:
         """What the URL alone does not say: a wildcard address is no address to open from
-        another machine (browsers refuse 0.0.0.0), and a run on the virtual clock may be
-        over before any page opens."""
+        another machine (browsers refuse 0.0.0.0). ``which``: the line's start after
+        ``monitor: `` (which link it is)."""
         if host in WILDCARD_HOSTS:
             bound = f"//[{host}]:" if ":" in host else f"//{host}:"
             named = url.replace(bound, f"//{socket.gethostname()}:", 1)
@@ -329,15 +380,8 @@ class LiveMonitor:
             ]
             also = f" or, by address, {' or '.join(by_address)}" if by_address else ""
             print(
-                f"monitor: it listens on every address of this machine: {named}{also}",
+                f"monitor: {which} on every address of this machine: {named}{also}",
                 flush=True,
-            )
-        if self.options.virtual_clock:
-            print(
-                "roomba-bt: --fast runs the mission on the virtual clock: it may end before a "
-                "page opens (in real time without --fast; or --record it and open the record "
-                "with roomba-bt monitor FILE)",
-                file=sys.stderr,
             )
 
     def _spawn(self, target: Any, name: str) -> None:
@@ -451,6 +495,11 @@ class LiveMonitor:
             self.session.request(action, by="the terminal's keys")
         except ValueError as exc:  # ControlRefused: e.g. resume when not paused
             log.info("monitor: key %s (%s) refused: %s", key, action, exc)
+
+
+def _without_token(url: str) -> str:
+    """``url`` without its ``?token=...``: a chosen token is not printed."""
+    return url.split("?token=", 1)[0]
 
 
 def _files_of(mission: Any, path: Path) -> tuple[Path, ...]:

@@ -32,7 +32,11 @@ Safety: on a loopback address no token is needed, and a request whose ``Host`` i
 points at 127.0.0.1, DNS rebinding); on any other, every request must carry the token printed
 in the URL at start (``?token=``, the ``X-Monitor-Token`` header, or the cookie the page is
 given), else 401 (none given) or 403 (wrong): a new token each run, or the operator's own
-(``token=``: ``run --monitor-token``), which then guards a loopback address too. On either, a
+(``token=``: ``run --monitor-token``), which then guards a loopback address too. Where a
+token is in force a second one, the view token (new each run, or ``view_token=``: ``run
+--monitor-view-token``), opens the same page with its controls off (:mod:`.access`): the
+hello says ``controls`` false and a control with it is 403, so a link shown to a class or
+on a projector reads the run and drives nothing. On either, a
 request whose ``Origin`` is not this server (a WebSocket, a control, a fetch from another
 site's page) is refused (403), so another site open in the same browser can neither drive the
 robot nor read the run.
@@ -43,10 +47,8 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import gc
-import hmac
 import json
 import math
-import secrets
 import threading
 from collections.abc import Awaitable, Callable
 from importlib import resources
@@ -55,6 +57,7 @@ from urllib.parse import urlsplit
 
 from aiohttp import WSCloseCode, WSMsgType, web
 
+from roomba_bt.monitor.access import Access, Tokens
 from roomba_bt.monitor.address import DEFAULT_PORT, is_loopback
 from roomba_bt.monitor.feed import RunFeed
 from roomba_bt.monitor.session import ControlRefused, MonitorSession
@@ -67,6 +70,11 @@ TICK_POLL_S = 0.002  # how often it looks for that end when a tick is late
 AFTER_TICK_S = 0.001  # how long after a tick's expected end the pump looks
 #: the login cookie's name, ``_PORT`` added (:func:`cookie_name`)
 COOKIE = "roomba_bt_monitor"
+#: a control with the view token: the link shared with a class opens no controls
+VIEW_ONLY = (
+    "view-only link: controls need the control link (the first monitor: URL the run printed, "
+    "or --monitor-token)"
+)
 STATIC_TYPES = {".js": "text/javascript", ".css": "text/css", ".svg": "image/svg+xml"}
 Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
 
@@ -136,6 +144,52 @@ def _error(status: int, message: str) -> web.Response:
     return web.json_response({"error": message}, status=status)
 
 
+def foreign_request(request: web.Request, bound: str, port: int) -> web.Response | None:
+    """403 for a request another site's page made: on a loopback address, one whose
+    ``Host`` is not this machine (``127.0.0.1``, ``localhost``, ``[::1]``, any port):
+    a name of another site that its DNS turned to 127.0.0.1 (DNS rebinding) makes the
+    browser treat this server as that site; on any address, one whose ``Origin`` (the
+    page that made it: every WebSocket and control has one) is not this server. ``bound``:
+    the address the server listens on, ``port`` its port."""
+    host = request.headers.get("Host", "")
+    if host and is_loopback(bound) and not _local_host(host, bound):
+        return _error(
+            403,
+            f"this monitor listens on {bound} and answers only requests addressed "
+            f"to 127.0.0.1, localhost or [::1] (http://127.0.0.1:{port}/); Host "
+            f"{host!r} refused (another site's name pointed at this machine: DNS rebinding)",
+        )
+    origin = request.headers.get("Origin")
+    if origin is not None and urlsplit(origin).netloc.lower() != host.lower():
+        return _error(403, f"a request from another site ({origin}) is refused")
+    return None
+
+
+def _local_host(host: str, bound: str) -> bool:
+    """``host`` (a ``Host`` header) names this machine's loopback, with any port or none:
+    the name is what a rebinding page cannot fake (its own is in its URL); the port may
+    be another than this one (``ssh -L 9000:127.0.0.1:8765``, then localhost:9000)."""
+    try:
+        parts = urlsplit(f"//{host}")
+        parts.port  # noqa: B018 - a port that is not a number raises here
+    except ValueError:
+        return False
+    name = (parts.hostname or "").lower()
+    return name in {"127.0.0.1", "localhost", "::1", bound.strip("[]").lower()}
+
+
+def given_token(request: web.Request) -> str:
+    """The request's token, "" for none. The first one given decides: a view link's page
+    sends its view token in the query and the header, so a control token in an older
+    cookie of the same browser does not give it the controls."""
+    return (
+        request.query.get("token")
+        or request.headers.get("X-Monitor-Token")
+        or request.cookies.get(cookie_name(request))
+        or ""
+    )
+
+
 class MonitorServer:
     """Serves one feed (a live run with its session, or a recorded run without one)."""
 
@@ -148,16 +202,18 @@ class MonitorServer:
         port: int = DEFAULT_PORT,
         readonly: bool = False,
         token: str | None = None,
+        view_token: str | None = None,
     ) -> None:
+        """``token``: the control token (None: a new one off loopback, none on it);
+        ``view_token``: the view-only one (None: a new one wherever a control token is in
+        force and there are controls to withhold); ValueError when they are the same."""
         self.feed = feed
         self.session = session
         self.host = host
         self.port = port
         self.readonly = readonly or session is None
-        self.token = (
-            token
-            if token is not None
-            else (None if is_loopback(host) else secrets.token_urlsafe(18))
+        self.tokens = Tokens.make(
+            host, has_controls=not self.readonly, control=token, view=view_token
         )
         self.pages = 0
         self._sockets: set[web.WebSocketResponse] = set()
@@ -170,9 +226,28 @@ class MonitorServer:
 
     # ---------------------------------------------------------------- lifecycle
     @property
+    def token(self) -> str | None:
+        """The control token (None: none in force, the loopback default)."""
+        return self.tokens.control
+
+    @property
+    def view_token(self) -> str | None:
+        """The view-only token (None: no view-only link)."""
+        return self.tokens.view
+
+    @property
     def url(self) -> str:
+        """The page's URL with the control token (the operator's)."""
+        return self._url_with(self.token)
+
+    @property
+    def view_url(self) -> str | None:
+        """The page's URL with the view token (to share: no controls), or None."""
+        return self._url_with(self.view_token) if self.view_token else None
+
+    def _url_with(self, token: str | None) -> str:
         host = f"[{self.host}]" if ":" in self.host else self.host
-        query = f"/?token={self.token}" if self.token else "/"
+        query = f"/?token={token}" if token else "/"
         return f"http://{host}:{self.port}{query}"
 
     def start(self) -> str:
@@ -248,62 +323,43 @@ class MonitorServer:
 
     @web.middleware
     async def _guard(self, request: web.Request, handler: Handler) -> web.StreamResponse:
-        refused = self._foreign(request)
+        refused = foreign_request(request, self.host, self.port)
         if refused is not None:
             return refused
         if self.token is not None:
-            given = (
-                request.query.get("token")
-                or request.headers.get("X-Monitor-Token")
-                or request.cookies.get(cookie_name(request))
-            )
-            if not given:
+            if not given_token(request):
                 return _error(
                     401,
-                    "this monitor is on a non-local address and needs its token: open the URL "
-                    "printed when the run started (it ends in ?token=...)",
+                    "this monitor needs its token: open the URL printed when the run started "
+                    "(it ends in ?token=...)",
                 )
-            if not hmac.compare_digest(given.encode(), self.token.encode()):
+            if self._access(request) is None:
                 return _error(403, "wrong token: open the URL printed when the run started")
         return await handler(request)
 
-    def _foreign(self, request: web.Request) -> web.Response | None:
-        """403 for a request another site's page made: on a loopback address, one whose
-        ``Host`` is not this machine (``127.0.0.1``, ``localhost``, ``[::1]``, any port):
-        a name of another site that its DNS turned to 127.0.0.1 (DNS rebinding) makes the
-        browser treat this server as that site; on any address, one whose ``Origin`` (the
-        page that made it: every WebSocket and control has one) is not this server."""
-        host = request.headers.get("Host", "")
-        if host and is_loopback(self.host) and not self._local_host(host):
-            return _error(
-                403,
-                f"this monitor listens on {self.host} and answers only requests addressed "
-                f"to 127.0.0.1, localhost or [::1] (http://127.0.0.1:{self.port}/); Host "
-                f"{host!r} refused (another site's name pointed at this machine: DNS rebinding)",
-            )
-        origin = request.headers.get("Origin")
-        if origin is not None and urlsplit(origin).netloc.lower() != host.lower():
-            return _error(403, f"a request from another site ({origin}) is refused")
-        return None
+    def _access(self, request: web.Request) -> Access | None:
+        """What the request's token lets it do (every request without a token in force: the
+        loopback default); None: none given, or neither token."""
+        if self.token is None:
+            return Access.CONTROL
+        given = given_token(request)
+        return self.tokens.access(given) if given else None
 
-    def _local_host(self, host: str) -> bool:
-        """``host`` (a ``Host`` header) names this machine's loopback, with any port or none:
-        the name is what a rebinding page cannot fake (its own is in its URL); the port may
-        be another than this one (``ssh -L 9000:127.0.0.1:8765``, then localhost:9000)."""
-        try:
-            parts = urlsplit(f"//{host}")
-            parts.port  # noqa: B018 - a port that is not a number raises here
-        except ValueError:
-            return False
-        name = (parts.hostname or "").lower()
-        return name in {"127.0.0.1", "localhost", "::1", self.host.strip("[]").lower()}
+    def _controls(self, request: web.Request) -> bool:
+        """Whether this request's page may control the run: a live run, not read-only, and
+        opened with the control token (or with none in force)."""
+        return not self.readonly and self._access(request) is Access.CONTROL
 
     async def _page(self, request: web.Request) -> web.StreamResponse:
         html = resources.files("roomba_bt.monitor").joinpath("static/index.html").read_text("utf-8")
         response = web.Response(text=html, content_type="text/html")
         response.headers["Cache-Control"] = "no-store"
-        if self.token is not None:
-            response.set_cookie(cookie_name(request), self.token, httponly=True, samesite="Strict")
+        # the token this page was opened with, never more: a view link's page gets the view
+        # token, so its reload (the cookie alone) is view-only too
+        access = self._access(request)
+        token = self.tokens.of(access) if self.token is not None and access else None
+        if token is not None:
+            response.set_cookie(cookie_name(request), token, httponly=True, samesite="Strict")
         return response
 
     async def _static(self, request: web.Request) -> web.StreamResponse:
@@ -321,14 +377,18 @@ class MonitorServer:
             return _error(404, f"no asset {name!r}")
         return web.Response(body=asset.read_bytes(), content_type=STATIC_TYPES[suffix])
 
-    def _header(self) -> dict[str, Any]:
+    def _header(self, request: web.Request) -> dict[str, Any]:
+        """The run's header as this request's page may have it: ``controls`` only with the
+        control token; ``view_only`` says a view link's page has them off for that reason."""
         session = self.session
+        controls = self._controls(request)
         return header_view(
             self.feed,
             {
                 "readonly": self.readonly,
-                "controls": not self.readonly,
-                "can_force": bool(session and session.allow_force and not self.readonly),
+                "controls": controls,
+                "view_only": not self.readonly and not controls,
+                "can_force": bool(session and session.allow_force and controls),
                 "watching": session.state.watching if session else None,
             },
         )
@@ -360,7 +420,7 @@ class MonitorServer:
         if record is None:
             return _error(409, "no tick recorded yet")
         body = {
-            "header": self._header(),
+            "header": self._header(request),
             "state": state_view(self.feed, record, earlier),
             "tree": tree_view(self.feed, record.tree),
             "path": path_view(self.feed.path(record.seq)),
@@ -374,6 +434,8 @@ class MonitorServer:
             return _error(409, "a recorded run has no controls: it can only be watched")
         if self.readonly:
             return _error(403, "this monitor is read-only (--monitor-readonly): no controls")
+        if not self._controls(request):
+            return _error(403, VIEW_ONLY)
         try:
             body = await request.json()
         except (json.JSONDecodeError, UnicodeDecodeError):
@@ -432,7 +494,8 @@ class MonitorServer:
         await ws.prepare(request)
         self.pages += 1
         self._sockets.add(ws)
-        pump = asyncio.get_running_loop().create_task(self._pump(ws))
+        hello = {"type": "hello", "header": self._header(request)}
+        pump = asyncio.get_running_loop().create_task(self._pump(ws, hello))
         try:
             async for message in ws:  # the page sends nothing we need; read to see it close
                 if message.type is WSMsgType.ERROR:
@@ -466,7 +529,7 @@ class MonitorServer:
                 return
             await asyncio.sleep(TICK_POLL_S)
 
-    async def _pump(self, ws: web.WebSocketResponse) -> None:
+    async def _pump(self, ws: web.WebSocketResponse, hello: dict[str, Any]) -> None:
         feed = self.feed
         loop = asyncio.get_running_loop()
         latest = feed.latest()
@@ -475,7 +538,7 @@ class MonitorServer:
         generation = -1
         session_view: dict[str, Any] | None = None
         finished: str | None = None
-        await ws.send_str(json.dumps({"type": "hello", "header": self._header()}))
+        await ws.send_str(json.dumps(hello))
         while not ws.closed:
             last_sent = loop.time()
             records = feed.ring.since(seq)

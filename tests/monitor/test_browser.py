@@ -241,6 +241,46 @@ def test_a_non_local_address_refuses_a_page_without_the_token(page: Any) -> None
         run.finish()
 
 
+def test_a_view_only_link_has_its_controls_off_and_cannot_pause(page: Any) -> None:
+    """A run shown to a class on a projector, or a link shared, drove the robot: the page's
+    one token was the controls'. The view link's page shows the run, says it is view only,
+    has its buttons, keys and node menu off, and its own request (with its cookie) to pause
+    is refused; its reload (the cookie alone) is view-only too."""
+    run = start_live_run(SHUTTLE, host="0.0.0.0")
+    try:
+        view_url = run.server.view_url
+        assert view_url and run.server.view_token != run.server.token
+        page.goto(view_url)
+        page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+        assert page.is_visible('#view-only:text-is("view only")')
+        assert page.is_hidden("#controls")
+        for button in ("#pause", "#resume", "#step", "#stop"):
+            assert page.is_disabled(button), button
+        page.click('.node[data-name="there and back"] .name')
+        assert page.is_visible("#node-menu")
+        assert all(b.is_disabled() for b in page.query_selector_all("#node-menu button"))
+        page.keyboard.press("Escape")
+        tick = int(page.inner_text("#tick"))
+        page.keyboard.press("p")
+        status = page.evaluate(
+            """async (run) => (await fetch("api/control", {method: "POST",
+                 headers: {"Content-Type": "application/json"},
+                 body: JSON.stringify({action: "pause", run})})).status""",
+            run.feed.run_id,
+        )
+        assert status == 403
+        page.wait_for_function(
+            f"Number(document.getElementById('tick').textContent) > {tick + 20}",
+            timeout=WAIT_MS,
+        )  # the run went on
+        assert not run.session.state.paused and run.session._requests.empty()
+        page.reload()
+        page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+        assert page.is_visible("#view-only") and page.is_hidden("#controls")
+    finally:
+        run.finish()
+
+
 BRUSHES = HERE / "missions" / "brushes.yaml"
 
 

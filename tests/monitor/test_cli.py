@@ -522,6 +522,13 @@ def test_a_wildcard_address_is_said_by_the_machine_s_lan_addresses_too(
     assert match, lines[0]
     port, token = match.groups()
     assert lines[1].endswith(f" or, by address, http://192.0.2.77:{port}/?token={token}")
+    # the view-only link, to share (a class, a projector), said the same way
+    match = re.fullmatch(rf"monitor: view only: http://0\.0\.0\.0:{port}/\?token=(\S+)", lines[2])
+    assert match, lines[2]
+    view = match.group(1)
+    assert view != token
+    assert lines[3].startswith("monitor: view only: it listens on every address of this machine")
+    assert lines[3].endswith(f" or, by address, http://192.0.2.77:{port}/?token={view}")
 
 
 def test_the_lan_addresses_leave_out_loopback_and_link_local() -> None:
@@ -687,6 +694,90 @@ def test_a_chosen_token_that_will_not_do_is_a_usage_error_that_does_not_repeat_i
 def test_a_chosen_token_without_a_page_is_said(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["run", str(SHUTTLE), "--fast", "--monitor-token", CHOSEN]) == 2
     assert "roomba-bt: --monitor-token is for --monitor: add it" in capsys.readouterr().err
+    assert main(["run", str(SHUTTLE), "--fast", "--monitor-view-token", VIEW_CHOSEN]) == 2
+    assert "roomba-bt: --monitor-view-token is for --monitor: add it" in capsys.readouterr().err
+
+
+#: a view-only token of the operator's own (a projector's bookmark)
+VIEW_CHOSEN = "Projector-view_token-0123456789ab"
+
+
+def _probe_the_view_link(monkeypatch: pytest.MonkeyPatch) -> dict[str, int]:
+    """Once the run's page is up: the HTTP status of its page and of a pause with
+    :data:`VIEW_CHOSEN` (``"page"``, ``"control"``)."""
+    import urllib.error
+    import urllib.request
+
+    from roomba_bt.monitor.server import MonitorServer
+
+    statuses: dict[str, int] = {}
+    start = MonitorServer.start
+
+    def probed(server: MonitorServer) -> str:
+        url = start(server)
+        base, headers = f"http://127.0.0.1:{server.port}", {"X-Monitor-Token": VIEW_CHOSEN}
+        body = json.dumps({"action": "pause", "run": server.feed.run_id}).encode()
+        for name, request in (
+            ("page", urllib.request.Request(f"{base}/", headers=headers)),
+            ("control", urllib.request.Request(f"{base}/api/control", body, headers)),
+        ):
+            try:
+                with urllib.request.urlopen(request, timeout=10) as response:
+                    statuses[name] = response.status
+            except urllib.error.HTTPError as exc:
+                exc.close()
+                statuses[name] = exc.code
+        return url
+
+    monkeypatch.setattr(MonitorServer, "start", probed)
+    return statuses
+
+
+@pytest.mark.parametrize("by", ["option", "environment"])
+def test_a_chosen_view_token_opens_the_page_without_controls_and_is_printed_nowhere(
+    by: str,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """A projector's bookmark of the view-only link, kept from run to run
+    (``--monitor-view-token`` or ``ROOMBA_BT_MONITOR_VIEW_TOKEN``): it opens the page, its
+    pause is refused (403), and the URL printed leaves it out, as a chosen control token."""
+    pytest.importorskip("aiohttp")
+    statuses = _probe_the_view_link(monkeypatch)
+    record = tmp_path / "run.jsonl"
+    argv = ["run", str(SHUTTLE), "--fast", "--display", "log", "--monitor", "0.0.0.0:0",
+            "--timeout", "1s", "--record", str(record)]  # fmt: skip
+    if by == "option":
+        argv += ["--monitor-view-token", VIEW_CHOSEN]
+    else:
+        monkeypatch.setenv("ROOMBA_BT_MONITOR_VIEW_TOKEN", VIEW_CHOSEN)
+    assert main(argv) == 1
+    assert statuses == {"page": 200, "control": 403}
+    out, err = capsys.readouterr()
+    lines = out.splitlines()
+    assert re.fullmatch(r"monitor: http://0\.0\.0\.0:\d+/\?token=\S+ \(shuttle on simulator "
+                        r"empty-room\)", lines[0]), lines[0]  # fmt: skip
+    view_line = r"monitor: view only: http://0\.0\.0\.0:\d+/ \(add \?token= and your "
+    view_line += r"--monitor-view-token, or open its bookmark\)"
+    assert re.fullmatch(view_line, lines[2]), lines[2]
+    assert VIEW_CHOSEN not in out + err + caplog.text + record.read_text()
+
+
+def test_a_view_token_that_is_the_control_token_is_a_usage_error(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Whoever had the view link would have had the controls."""
+    pytest.importorskip("aiohttp")
+    argv = ["run", str(SHUTTLE), "--fast", "--display", "none", "--monitor", "0"]
+    assert main([*argv, "--monitor-token", CHOSEN, "--monitor-view-token", CHOSEN]) == 2
+    err = capsys.readouterr().err
+    assert "the view-only token (--monitor-view-token or ROOMBA_BT_MONITOR_VIEW_TOKEN)" in err
+    assert "whoever has the view link would have the controls" in err and CHOSEN not in err
+    monkeypatch.setenv("ROOMBA_BT_MONITOR_VIEW_TOKEN", CHOSEN)
+    assert main([*argv, "--monitor-token", CHOSEN]) == 2
+    assert "would have the controls" in capsys.readouterr().err
 
 
 def test_a_record_of_a_megabyte_says_at_once_that_it_is_read_before_its_page(

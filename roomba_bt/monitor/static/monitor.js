@@ -624,6 +624,8 @@ function hello(header) {
   document.title = `${run.label ? run.label + " · " : ""}${header.mission}`
     + `${run.robot ? " on " + run.robot : ""} · roomba-bt monitor`;
   $("source").textContent = header.source;
+  // a view-only link (shown to a class, on a projector): no controls, said so
+  $("view-only").hidden = !header.view_only;
   view.window = [header.first_tick, header.last_tick];
   view.finished = header.finished === undefined ? view.finished : header.finished;
   if (JSON.stringify(header.tree) !== JSON.stringify(view.tree)) buildTree(header.tree);

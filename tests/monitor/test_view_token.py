@@ -1,0 +1,170 @@
+"""The view-only link: a run shown to a class on a projector, or a link shared, without the
+controls. Anyone with the page's one token could pause, step, force and stop the robot; where
+a token is in force there is now a view token too, which reads everything the page shows and
+drives nothing."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import threading
+import urllib.request
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+
+from roomba_bt.monitor.access import SAME_TOKEN
+from roomba_bt.monitor.server import MonitorServer
+
+from .test_server import SHUTTLE, _call, _control, _serve
+
+#: a token of the operator's own (32 URL-safe characters)
+CHOSEN = "Bookmark-ed_token-0123456789abcd"
+
+
+@pytest.fixture
+def lan() -> Iterator[MonitorServer]:
+    """A live run's monitor on every address: a token in force."""
+    served = _serve(host="0.0.0.0")
+    yield served
+    served.close()
+
+
+def _hello(server: MonitorServer, **headers: str) -> dict[str, Any]:
+    """The header of the WebSocket's first message (the hello) for a page with ``headers``."""
+    import aiohttp
+
+    async def first() -> dict[str, Any]:
+        async with (
+            aiohttp.ClientSession() as client,
+            client.ws_connect(f"ws://127.0.0.1:{server.port}/ws", headers=headers) as ws,
+        ):
+            message = await asyncio.wait_for(ws.receive(), 30)
+            hello = json.loads(message.data)
+            assert hello["type"] == "hello"
+            return dict(hello["header"])
+
+    got: list[dict[str, Any]] = []
+    # an event loop of its own: the browser tests' driver may own this thread's
+    reader = threading.Thread(target=lambda: got.append(asyncio.run(first())))
+    reader.start()
+    reader.join(60)
+    assert got, "no hello"
+    return got[0]
+
+
+def _cookie_set(server: MonitorServer, token: str) -> str:
+    """The token the page's cookie keeps after ``/?token=TOKEN``."""
+    url = f"http://127.0.0.1:{server.port}/?token={token}"
+    with urllib.request.urlopen(url, timeout=10) as reply:
+        cookies = reply.headers.get_all("Set-Cookie") or []
+    name = f"roomba_bt_monitor_{server.port}="
+    (cookie,) = [c for c in cookies if c.startswith(name)]
+    return cookie[len(name) :].split(";", 1)[0]
+
+
+def test_the_view_token_reads_the_run_and_gets_403_on_every_control(
+    lan: MonitorServer,
+) -> None:
+    control, view = lan.token, lan.view_token
+    assert control and view and view != control and len(view) >= 24
+    assert lan.view_url == f"http://0.0.0.0:{lan.port}/?token={view}"
+    base = f"http://127.0.0.1:{lan.port}"
+    assert _call(f"{base}/?token={view}")[0] == 200
+    assert _call(f"{base}/static/monitor.js", headers={"X-Monitor-Token": view})[0] == 200
+    status, _ = _call(f"{base}/api/state", headers={"X-Monitor-Token": view})
+    assert status == 409  # authorised: no tick yet (401/403 for a token it refuses)
+    header = _hello(lan, **{"X-Monitor-Token": view})
+    assert header["controls"] is False and header["view_only"] is True
+    assert header["can_force"] is False  # the simulator's force: not for a viewer either
+    condition = next(i for i, info in enumerate(lan.feed.infos) if info.condition)
+    for payload in (
+        {"action": "pause"},
+        {"action": "stop"},
+        {"action": "force", "node": condition, "value": "success"},
+        {"action": "break", "node": 0, "value": "start"},
+    ):
+        got, body = _control(lan, payload, **{"X-Monitor-Token": view})
+        assert got == 403, payload
+        assert body["error"].startswith("view-only link: controls need the control link")
+    assert lan.session is not None and lan.session._requests.empty()
+
+
+def test_the_control_token_still_controls_and_a_wrong_token_is_refused_as_before(
+    lan: MonitorServer,
+) -> None:
+    control = str(lan.token)
+    header = _hello(lan, **{"X-Monitor-Token": control})
+    assert header["controls"] is True and header["view_only"] is False
+    assert header["can_force"] is True  # the simulator
+    assert _control(lan, {"action": "pause"}, **{"X-Monitor-Token": control})[0] == 202
+    assert _control(lan, {"action": "pause"})[0] == 401
+    got, body = _control(lan, {"action": "pause"}, **{"X-Monitor-Token": "x" * 24})
+    assert got == 403 and "wrong token" in body["error"]
+    assert _call(f"http://127.0.0.1:{lan.port}/?token={str(lan.view_token)[:-1]}")[0] == 403
+
+
+def test_a_viewer_cannot_take_the_controls_by_the_cookie(lan: MonitorServer) -> None:
+    """The page's cookie keeps the token it was opened with: the view link's reload is
+    view-only too (it was the control token for every page). A view page in a browser that
+    had the control link's cookie sends its view token first, and that one decides."""
+    control, view = str(lan.token), str(lan.view_token)
+    assert _cookie_set(lan, view) == view
+    assert _cookie_set(lan, control) == control
+    name = f"roomba_bt_monitor_{lan.port}"
+    viewer = {"Cookie": f"{name}={view}"}
+    assert _hello(lan, **viewer)["controls"] is False
+    assert _control(lan, {"action": "pause"}, **viewer)[0] == 403
+    both = {"Cookie": f"{name}={control}", "X-Monitor-Token": view}
+    assert _hello(lan, **both)["controls"] is False
+    assert _control(lan, {"action": "pause"}, **both)[0] == 403
+    assert lan.session is not None and lan.session._requests.empty()
+    assert _control(lan, {"action": "pause"}, Cookie=f"{name}={control}")[0] == 202
+
+
+def test_loopback_without_a_token_has_no_view_link_and_keeps_its_controls() -> None:
+    served = _serve()
+    try:
+        assert served.token is None and served.view_token is None and served.view_url is None
+        header = _hello(served)
+        assert header["controls"] is True and header["view_only"] is False
+        assert _control(served, {"action": "pause"})[0] == 202
+    finally:
+        served.close()
+
+
+def test_a_chosen_view_token_puts_a_control_token_in_force_on_loopback() -> None:
+    """A view token alone would guard nothing there: without a token everyone controls."""
+    from roomba_bt.mission import load_mission
+    from roomba_bt.monitor.feed import RunFeed
+    from roomba_bt.monitor.session import MonitorSession
+    from roomba_bt.oi.profiles import CREATE2
+
+    mission = load_mission(SHUTTLE, {}, profile=CREATE2)
+    feed = RunFeed(mission_name=mission.name)
+    feed.set_tree(mission.root)
+    session = MonitorSession(feed, simulator=True)
+    with pytest.raises(ValueError, match=SAME_TOKEN):
+        MonitorServer(feed, session, port=0, token=CHOSEN, view_token=CHOSEN)
+    served = MonitorServer(feed, session, port=0, view_token=CHOSEN)
+    served.start()
+    try:
+        assert served.token is not None and served.view_token == CHOSEN
+        base = f"http://127.0.0.1:{served.port}"
+        assert _call(f"{base}/")[0] == 401
+        assert _control(served, {"action": "pause"}, **{"X-Monitor-Token": CHOSEN})[0] == 403
+        assert _control(served, {"action": "pause"}, **{"X-Monitor-Token": served.token})[0] == 202
+    finally:
+        served.close()
+
+
+def test_a_readonly_or_recorded_monitor_has_one_token_and_no_view_link() -> None:
+    """Nothing to withhold: its one token's page has no controls already."""
+    for served in (_serve(host="0.0.0.0", readonly=True), _serve(host="0.0.0.0", live=False)):
+        try:
+            assert served.token is not None and served.view_token is None
+            header = _hello(served, **{"X-Monitor-Token": served.token})
+            assert header["controls"] is False and header["view_only"] is False
+        finally:
+            served.close()
