@@ -18,8 +18,27 @@ from typing import TYPE_CHECKING
 from roomba_bt._lazy import lazy_exports
 
 if TYPE_CHECKING:
-    from roomba_bt.mission import CompiledMission, MissionError, load_mission, validate_files
-    from roomba_bt.oi import OIMode, SensorFrame, commands
+    from roomba_bt.behaviours import (
+        Action,
+        Condition,
+        DeclarationError,
+        Param,
+        ParamError,
+        UnwrittenKey,
+        declare,
+        default_registry,
+    )
+    from roomba_bt.errors import RoombaBtError
+    from roomba_bt.mission import (
+        CompiledMission,
+        MissionError,
+        Permissions,
+        load_mission,
+        load_mission_text,
+        validate_files,
+    )
+    from roomba_bt.oi import BandwidthError, EncodeError, OIMode, SensorFrame, commands
+    from roomba_bt.oi.frames import MissingPacket
     from roomba_bt.oi.profiles import (
         CREATE2,
         PROFILES,
@@ -38,11 +57,13 @@ if TYPE_CHECKING:
         Terminated,
         sigterm_raises,
     )
-    from roomba_bt.runtime.loop import stream_request
+    from roomba_bt.robot.interface import Snapshot
+    from roomba_bt.runtime.loop import Interrupted, MissionRunner, TickObserver, stream_request
     from roomba_bt.runtime.stack import RunStack, TreeMission
+    from roomba_bt.runtime.stepping import Tick
     from roomba_bt.runtime.summary import ExitCode, Outcome, RunFailed, RunSummary
-    from roomba_bt.sim import RealtimeSimLink, SimLink, Simulator, load_world
-    from roomba_bt.transport import SerialTransport, Transport
+    from roomba_bt.sim import RealtimeSimLink, SimLink, Simulator, WorldError, load_world
+    from roomba_bt.transport import SerialTransport, Transport, TransportError
 
 __version__ = "0.2.0"
 
@@ -51,18 +72,30 @@ __all__ = [
     "PROFILES",
     "ROOMBA500",
     "ROOMBA600",
+    "Action",
+    "BandwidthError",
     "CompiledMission",
+    "Condition",
     "Connection",
     "ConnectionFailed",
+    "DeclarationError",
+    "EncodeError",
     "ExitCode",
+    "Interrupted",
     "LinkDown",
+    "MissingPacket",
     "MissionError",
+    "MissionRunner",
     "ModeError",
     "OIMode",
     "Outcome",
+    "Param",
+    "ParamError",
+    "Permissions",
     "RealtimeSimLink",
     "RobotError",
     "RobotProfile",
+    "RoombaBtError",
     "RunFailed",
     "RunStack",
     "RunSummary",
@@ -70,14 +103,23 @@ __all__ = [
     "SerialTransport",
     "SimLink",
     "Simulator",
+    "Snapshot",
     "StreamStalled",
     "Terminated",
+    "Tick",
+    "TickObserver",
     "Transport",
+    "TransportError",
     "TreeMission",
+    "UnwrittenKey",
+    "WorldError",
     "__version__",
     "commands",
+    "declare",
+    "default_registry",
     "get_profile",
     "load_mission",
+    "load_mission_text",
     "load_world",
     "sigterm_raises",
     "stream_request",
@@ -86,18 +128,26 @@ __all__ = [
 
 #: the module (below this package) that each name of :data:`__all__` is taken from
 _MODULE_OF: dict[str, str] = {
-    **dict.fromkeys(("CompiledMission", "MissionError", "load_mission", "validate_files"),
-                    "mission"),
-    **dict.fromkeys(("OIMode", "SensorFrame", "commands"), "oi"),
+    **dict.fromkeys(("Action", "Condition", "DeclarationError", "Param", "ParamError",
+                     "UnwrittenKey", "declare", "default_registry"), "behaviours"),
+    "RoombaBtError": "errors",
+    **dict.fromkeys(("CompiledMission", "MissionError", "Permissions", "load_mission",
+                     "load_mission_text", "validate_files"), "mission"),
+    **dict.fromkeys(("BandwidthError", "EncodeError", "OIMode", "SensorFrame", "commands"), "oi"),
+    "MissingPacket": "oi.frames",
     **dict.fromkeys(("CREATE2", "PROFILES", "ROOMBA500", "ROOMBA600", "RobotProfile",
                      "get_profile"), "oi.profiles"),
     **dict.fromkeys(("Connection", "ConnectionFailed", "LinkDown", "ModeError", "RobotError",
                      "StreamStalled", "Terminated", "sigterm_raises"), "robot"),
-    "stream_request": "runtime.loop",
+    "Snapshot": "robot.interface",
+    **dict.fromkeys(("Interrupted", "MissionRunner", "TickObserver", "stream_request"),
+                    "runtime.loop"),
     **dict.fromkeys(("RunStack", "TreeMission"), "runtime.stack"),
+    "Tick": "runtime.stepping",
     **dict.fromkeys(("ExitCode", "Outcome", "RunFailed", "RunSummary"), "runtime.summary"),
-    **dict.fromkeys(("RealtimeSimLink", "SimLink", "Simulator", "load_world"), "sim"),
-    **dict.fromkeys(("SerialTransport", "Transport"), "transport"),
+    **dict.fromkeys(("RealtimeSimLink", "SimLink", "Simulator", "WorldError", "load_world"),
+                    "sim"),
+    **dict.fromkeys(("SerialTransport", "Transport", "TransportError"), "transport"),
 }  # fmt: skip
 
 __getattr__, __dir__ = lazy_exports(__name__, _MODULE_OF)

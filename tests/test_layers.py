@@ -33,8 +33,11 @@ LAZY = "_lazy"
 #: below every layer too: what of a text may be printed as it is (control characters
 #: escaped), standard library only, so the command line's parser loads no YAML to say a name
 PRINTABLE = "printable"
+#: below every layer too: ``RoombaBtError``, the base of the package's own errors (every
+#: layer's errors derive from it, the protocol's included), standard library only
+ERRORS = "errors"
 #: what every layer may import, the protocol's included
-STDLIB_ONLY = {LAZY, PRINTABLE}
+STDLIB_ONLY = {LAZY, PRINTABLE, ERRORS}
 ALLOWED: dict[str, set[str]] = {
     BOTTOM: {BOTTOM, PRINTABLE},
     "oi": {"oi", *STDLIB_ONLY},  # the protocol stays standard-library only, so no YAML

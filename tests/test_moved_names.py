@@ -154,5 +154,5 @@ def test_the_slot_is_a_number_in_one_module() -> None:
     for path in sorted(PACKAGE.rglob("*.py")):
         for node in ast.walk(ast.parse(path.read_text())):
             if isinstance(node, ast.Constant) and node.value == 0.015:
-                found.append(f"{path.relative_to(PACKAGE)}:{node.lineno}")
-    assert found == ["evaluate/coverage_report.py:41", "oi/frames.py:46"]
+                found.append(str(path.relative_to(PACKAGE)))
+    assert found == ["evaluate/coverage_report.py", "oi/frames.py"]

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any
 import py_trees
 
 from roomba_bt.behaviours.units import MARK, UnitError, ValueType, held
+from roomba_bt.errors import RoombaBtError
 from roomba_bt.robot.interface import Odometry
 from roomba_bt.yamlsource import quoted
 
@@ -61,13 +62,13 @@ class BlackboardRef:
         return f"@{self.key}" + (f".{self.field}" if self.field else "")
 
 
-class UnwrittenKey(LookupError):
+class UnwrittenKey(LookupError, RoombaBtError):
     """A behaviour started with a parameter ``@key`` whose key nothing had written. A
     mission's validator proves every read comes after a write; a tree built in Python has
     no such proof, and None read as a drive's distance would drive without one."""
 
 
-class KeyRange(ValueError):
+class KeyRange(ValueError, RoombaBtError):
     """A behaviour started with a parameter ``@key`` whose key holds a value out of the
     parameter's declared range (written by a plugin, which the validator cannot see; it
     checks ``initial`` and ``set`` values and ``for_each`` items). It would otherwise
@@ -115,7 +116,7 @@ def declare_keys(types: Mapping[str, ValueType]) -> None:
         storage.pop(KEY_TYPES_KEY, None)
 
 
-class KeyType(TypeError):
+class KeyType(TypeError, RoombaBtError):
     """A value written to a mission key (a plugin's ``write_key``) that is not of the
     key's declared type in its canonical unit: ``"fast"`` in a speed, ``1`` in a bool. The
     readers take the type for granted; said where it is written, it is not blamed on the

@@ -93,6 +93,7 @@ from roomba_bt.behaviours.units import (
     closest,
     held,
 )
+from roomba_bt.errors import RoombaBtError
 from roomba_bt.oi.encode import Command, halt, motors_off, turns_wheels
 from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS, SensorFrame
 from roomba_bt.oi.modes import ALL_MODES, DRIVING_MODES, OIMode
@@ -181,11 +182,11 @@ Kind = Literal["action", "condition"]
 _NAME = re.compile(r"^[a-z][a-z0-9_]*$")
 
 
-class DeclarationError(ValueError):
+class DeclarationError(ValueError, RoombaBtError):
     """A behaviour that declares itself wrongly (a plugin author's mistake)."""
 
 
-class ParamError(TypeError, ValueError):
+class ParamError(TypeError, ValueError, RoombaBtError):
     """A leaf built in Python with a parameter its declaration does not have, a value its
     type cannot read, one out of range, or a required one missing: refused when the leaf is
     built, not at its first tick with the robot in Safe. A TypeError, as an unknown keyword

@@ -57,9 +57,10 @@ class NameClash(DeclarationError):
     first: not a mistake in its declaration, a clash between the two. ``existing``: the
     declaration that holds the name."""
 
-    def __init__(self, name: str, existing: Declaration) -> None:
+    def __init__(self, name: str, existing: Declaration, message: str | None = None) -> None:
         super().__init__(
-            f"name {name!r} is already taken by {_qualname(existing.cls)} ({existing.origin})"
+            message
+            or f"name {name!r} is already taken by {_qualname(existing.cls)} ({existing.origin})"
         )
         self.name = name
         self.existing = existing
@@ -381,6 +382,44 @@ class Registry:
         before = len(copy._errors)
         copy.register_provider(module, origin)
         return copy, copy._errors[before:]
+
+    def with_behaviours(
+        self, classes: Iterable[type[RobotBehaviour]], origin: str = "the program"
+    ) -> Registry:
+        """A copy of this registry with ``classes`` registered too: behaviours a program
+        defines itself (``load_mission(..., behaviours=[FarEnough])``), usable in its YAML by
+        their declared names. Raises :class:`DeclarationError` naming the class for one that
+        is not a declared behaviour, or whose name a built-in or a plugin holds already
+        (a program's behaviour never replaces one: rename it)."""
+        copy = self.copy()
+        if isinstance(classes, type) or not isinstance(classes, Iterable):
+            raise TypeError(
+                f"behaviours= takes a list of behaviour classes, such as behaviours=[MyAction], "
+                f"not {classes!r}"
+            )
+        for cls in classes:
+            if not (isinstance(cls, type) and issubclass(cls, RobotBehaviour)):
+                raise DeclarationError(
+                    f"behaviours=[..., {cls!r}]: a behaviour class is one derived from "
+                    "roomba_bt.behaviours.Action or Condition and decorated with "
+                    "@declare(name, ...)"
+                )
+            try:
+                copy.register(cls, origin)
+            except NameClash as clash:
+                holder = clash.existing
+                whose = "the built-in" if holder.origin == "builtin" else f"{holder.origin}'s"
+                raise NameClash(clash.name, holder, (
+                    f"behaviours=[{cls.__qualname__}]: {_where(cls)} declares {clash.name!r}, "
+                    f"the name of {whose} {_qualname(holder.cls)}; a program's behaviour does "
+                    f"not replace it: declare another name, @declare('my_{clash.name}', ...)"
+                )) from None  # fmt: skip
+            except DeclarationError as wrong:
+                raise DeclarationError(
+                    f"behaviours=[{cls.__qualname__}]: {_where(cls)} declares itself wrongly: "
+                    f"{wrong}"
+                ) from None
+        return copy
 
     def copy(self) -> Registry:
         self._ensure_loaded()

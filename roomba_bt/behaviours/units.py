@@ -23,6 +23,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from roomba_bt.errors import RoombaBtError
 from roomba_bt.yamlsource import (
     QUOTE_LIMIT,
     TYPOGRAPHIC_QUOTES,
@@ -60,7 +61,7 @@ EXAMPLES: dict[str, str] = {
 }
 
 
-class UnitError(ValueError):
+class UnitError(ValueError, RoombaBtError):
     """A value that does not parse; the message says what was expected."""
 
 

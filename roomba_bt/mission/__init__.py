@@ -11,7 +11,12 @@ file to the tree, is :mod:`roomba_bt.mission.compiler`; this package names its f
 
 from roomba_bt.mission.build import CompiledMission
 from roomba_bt.mission.checks import RUNTIME_PACKETS
-from roomba_bt.mission.compiler import compile_mission, load_mission, validate_files
+from roomba_bt.mission.compiler import (
+    compile_mission,
+    load_mission,
+    load_mission_text,
+    validate_files,
+)
 from roomba_bt.mission.diagnostics import Diagnostic, MissionError, reported
 from roomba_bt.mission.loader import NO_PERMISSIONS, SHIPPED_LIBRARY, Permissions
 
@@ -25,6 +30,7 @@ __all__ = [
     "SHIPPED_LIBRARY",
     "compile_mission",
     "load_mission",
+    "load_mission_text",
     "reported",
     "validate_files",
 ]

@@ -15,6 +15,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
+from weakref import WeakKeyDictionary
 
 from py_trees.behaviour import Behaviour
 
@@ -111,6 +112,13 @@ class CompiledMission:
             return self.root
         return build(_as_reviewed(self.plan))
 
+    def __post_init__(self) -> None:
+        # the root remembers the blackboard its mission declares: a tree built in Python
+        # around it (a TreeMission) writes the initial values too (missions_in)
+        _BLACKBOARD_OF_ROOT[self.root] = MissionBlackboard(
+            self.name, self.blackboard_keys, self.blackboard_initial
+        )
+
     def setup(self, robot: RobotHandle, **kwargs: Any) -> None:
         """Hand the robot to every node (py_trees idiom: hardware arrives in ``setup``) and
         write the blackboard's initial values. Call again before each run."""
@@ -119,6 +127,54 @@ class CompiledMission:
             write_key(key, value)
         for node in self.root.iterate():
             node.setup(robot=robot, **kwargs)
+
+
+@dataclass(frozen=True)
+class MissionBlackboard:
+    """The blackboard a compiled mission declares (``blackboard:``): each key's type and
+    the initial values, which its ``setup`` writes before a run. Kept for its root, so that
+    a tree that holds the root as a subtree writes them too (:func:`blackboard_within`):
+    wrapped in a py_trees ``Sequence`` with other behaviours, a mission whose ``initial:``
+    values were never written ended its run with ``UnwrittenKey``."""
+
+    mission: str
+    keys: Mapping[str, ValueType]
+    initial: Mapping[str, Any]
+
+
+#: each compiled mission's root -> the blackboard its mission declares. Weak: a root no
+#: longer held leaves (the entry does not hold the root: a mission's blackboard does not)
+_BLACKBOARD_OF_ROOT: WeakKeyDictionary[Behaviour, MissionBlackboard] = WeakKeyDictionary()
+
+
+def blackboard_within(root: Behaviour) -> MissionBlackboard | None:
+    """The blackboard of every compiled mission whose root is ``root`` or in its tree, in
+    one (None: no compiled mission's root is there), its keys' types and initial values
+    to write before a run. A key two of them declare with different types, or with
+    different initial values, is a ValueError naming both: the blackboard is one."""
+    found = [_BLACKBOARD_OF_ROOT.get(node) for node in root.iterate()]
+    missions = [each for each in found if each is not None]
+    if not missions:
+        return None
+    keys: dict[str, ValueType] = {}
+    initial: dict[str, Any] = {}
+    declared_by: dict[str, str] = {}
+    for each in missions:
+        for key, vtype in each.keys.items():
+            other = declared_by.setdefault(key, each.mission)
+            if key in keys and (keys[key] != vtype or _differs(initial, each.initial, key)):
+                raise ValueError(
+                    f"blackboard key {key!r} is declared by missions {other!r} and "
+                    f"{each.mission!r}, differently (its type or its initial value): one "
+                    "tree has one blackboard; rename the key in one of them"
+                )
+            keys[key] = vtype
+        initial.update(each.initial)
+    return MissionBlackboard(", ".join(each.mission for each in missions), keys, initial)
+
+
+def _differs(initial: Mapping[str, Any], other: Mapping[str, Any], key: str) -> bool:
+    return (key in initial) != (key in other) or initial.get(key) != other.get(key)
 
 
 def _as_reviewed(node: Node) -> Node:

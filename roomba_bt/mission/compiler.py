@@ -19,9 +19,11 @@ The pipeline, each stage in its own module::
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
 from pathlib import Path
 
 from roomba_bt import yamlsource
+from roomba_bt.behaviours.base import RobotBehaviour
 from roomba_bt.behaviours.registry import Registry, default_registry
 from roomba_bt.mission.build import BuildError, CompiledMission, build
 from roomba_bt.mission.checks import (
@@ -45,7 +47,7 @@ from roomba_bt.mission.values import Context, shown
 from roomba_bt.oi.modes import ALL_MODES, OIMode
 from roomba_bt.oi.profiles import CREATE2, RobotProfile
 
-__all__ = ["compile_mission", "load_mission", "validate_files"]
+__all__ = ["MissionText", "compile_mission", "load_mission", "load_mission_text", "validate_files"]
 
 
 def _display(path: Path) -> str:
@@ -64,16 +66,34 @@ def compile_mission(
     registry: Registry | None = None,
     require_tree: bool = True,
     permissions: Permissions = NO_PERMISSIONS,
+    text: MissionText | None = None,
 ) -> tuple[CompiledMission | None, list[Diagnostic]]:
     """Compile and check; ``(mission or None, diagnostics)``. Never raises for bad input.
     ``permissions`` (none by default) says whether the file's plugin files may be imported
-    and where else it may include from."""
+    and where else it may include from. ``text``: the mission's YAML as given, read in
+    place of the file at ``path`` (which then only places its includes and names it)."""
     path = Path(path)
+    display = _display if text is None else text.display
     try:
-        return _compile(path, params, profile, baud, registry, require_tree, permissions)
+        return _compile(path, params, profile, baud, registry, require_tree, permissions, text)
     except Exception as exc:  # a compiler bug must still not be a traceback at a user
         message = f"internal error while compiling ({type(exc).__name__}: {exc}); please report it"
-        return None, [Diagnostic(_display(path), 1, 1, message)]
+        return None, [Diagnostic(display(path), 1, 1, message)]
+
+
+@dataclass(frozen=True)
+class MissionText:
+    """A mission given as text (:func:`load_mission_text`): its YAML, and the name its
+    diagnostics say (``name:3:7: ...``) for the path it stands at, in the folder its includes
+    and plugin files are found from."""
+
+    yaml: str
+    name: str
+    path: Path
+
+    def display(self, path: Path) -> str:
+        """How a diagnostic names ``path``: this text by its name, another file as usual."""
+        return self.name if path == self.path else _display(path)
 
 
 def _compile(
@@ -84,10 +104,11 @@ def _compile(
     registry: Registry | None,
     require_tree: bool,
     permissions: Permissions,
+    text: MissionText | None = None,
 ) -> tuple[CompiledMission | None, list[Diagnostic]]:
     ctx = Context(registry=registry or default_registry())
-    loader = Loader(ctx, _display, permissions)
-    parsed = loader.compile_file(path, dict(params or {}), require_tree=require_tree)
+    loader = Loader(ctx, _display if text is None else text.display, permissions)
+    parsed = loader.compile_file(path, dict(params or {}), require_tree=require_tree, text=text)
     if parsed is None or parsed.tree is None:
         return None, sorted(ctx.diagnostics)
     tree = parsed.tree
@@ -162,18 +183,80 @@ def load_mission(
     baud: int = 115200,
     registry: Registry | None = None,
     permissions: Permissions = NO_PERMISSIONS,
+    behaviours: Iterable[type[RobotBehaviour]] = (),
 ) -> CompiledMission:
     """Compile the mission at ``path`` with ``params`` (``-p name=value`` strings); raises
     :class:`MissionError` carrying every diagnostic. ``path`` is read as ``roomba-bt run``
     reads its argument (:func:`~roomba_bt.mission.shipped.find_mission`): a file, else a
-    shipped mission's name (``"dock"``, ``"roomba-bt:dock.yaml"``)."""
+    shipped mission's name (``"dock"``, ``"roomba-bt:dock.yaml"``). ``behaviours``: classes
+    the program declares itself (``@declare``), which the YAML may name beside the
+    built-ins (:meth:`Registry.with_behaviours`: a name a built-in has is a
+    :class:`~roomba_bt.behaviours.declare.DeclarationError`). YAML text itself is
+    :func:`load_mission_text`'s."""
+    if isinstance(path, str) and "\n" in path:  # text, not a name: said so, not escaped back
+        raise MissionError([Diagnostic(
+            "load_mission", 1, 1,
+            "load_mission takes a mission file's path or a shipped mission's name, and this "
+            "is several lines of text: compile YAML text with load_mission_text(text, "
+            "name=..., base_dir=...)",
+        )])  # fmt: skip
     found = find_mission(str(path)).path or path
     mission, diagnostics = compile_mission(
-        found, params, profile=profile, baud=baud, registry=registry, permissions=permissions
-    )
+        found, params, profile=profile, baud=baud, permissions=permissions,
+        registry=_with_behaviours(registry, behaviours),
+    )  # fmt: skip
     if mission is None:
         raise MissionError(diagnostics)
     return mission
+
+
+def load_mission_text(
+    text: str,
+    params: Mapping[str, str] | None = None,
+    *,
+    name: str = "<string>",
+    base_dir: str | Path | None = None,
+    profile: RobotProfile = CREATE2,
+    baud: int = 115200,
+    registry: Registry | None = None,
+    permissions: Permissions = NO_PERMISSIONS,
+    behaviours: Iterable[type[RobotBehaviour]] = (),
+) -> CompiledMission:
+    """Compile a mission written as YAML ``text`` (a string in a test, a notebook cell, a
+    generated mission), as :func:`load_mission` compiles a file: raises
+    :class:`MissionError` carrying every diagnostic, each at ``name:line:column``.
+    ``base_dir`` (the current folder by default) is the folder the text stands in: its
+    ``include:`` and ``plugins:`` paths are found from there, and may reach that folder's
+    tree (and the shipped library, and ``permissions.include_dirs``), as a file's may reach
+    its own folder's. ``name`` also names the mission when it has no ``mission:``."""
+    if not isinstance(text, str):
+        raise TypeError(
+            f"load_mission_text(text) takes the mission's YAML as a str, not "
+            f"{type(text).__name__} (a file: load_mission(path))"
+        )
+    if not isinstance(name, str) or not name:
+        raise TypeError(f"load_mission_text(name=...) takes a non-empty str, not {name!r}")
+    folder = Path.cwd() if base_dir is None else Path(base_dir)
+    if not folder.is_dir():
+        raise ValueError(f"load_mission_text(base_dir={str(base_dir)!r}): no such folder")
+    stands_at = folder.resolve() / (Path(name).name or "mission")
+    given = MissionText(text, name, stands_at)
+    mission, diagnostics = compile_mission(
+        stands_at, params, profile=profile, baud=baud, permissions=permissions,
+        registry=_with_behaviours(registry, behaviours), text=given,
+    )  # fmt: skip
+    if mission is None:
+        raise MissionError(diagnostics)
+    return mission
+
+
+def _with_behaviours(
+    registry: Registry | None, behaviours: Iterable[type[RobotBehaviour]]
+) -> Registry | None:
+    """``registry`` (the default one when None) with the program's own ``behaviours``."""
+    if isinstance(behaviours, tuple | list) and not behaviours:
+        return registry
+    return (registry or default_registry()).with_behaviours(behaviours)
 
 
 def validate_files(

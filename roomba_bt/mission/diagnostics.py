@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass, replace
 
+from roomba_bt.errors import RoombaBtError
 from roomba_bt.printable import ANY_CONTROL, UNPRINTABLE, escaped
 
 
@@ -78,7 +79,7 @@ def reported(diagnostics: Iterable[Diagnostic], limit: int = MAX_REPORTED) -> li
     return lines
 
 
-class MissionError(Exception):
+class MissionError(RoombaBtError):
     """A mission that cannot be compiled; ``diagnostics`` holds every error found (its
     message, the first :data:`MAX_REPORTED`)."""
 

@@ -35,11 +35,12 @@ that is not a mission is reported as such, never quoted back.
 
 from __future__ import annotations
 
+import os
 import re
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 import yaml
 
@@ -58,6 +59,7 @@ from roomba_bt.mission.source import (
     Bad,
     Loc,
     compose,
+    compose_text,
     kind_of,
     loc_of,
     mapping,
@@ -105,9 +107,40 @@ class Permissions:
     plugin_files: bool = False
     include_dirs: tuple[Path, ...] = ()
 
+    def __post_init__(self) -> None:
+        """Checked here, the folders made paths: a ``str`` among ``include_dirs`` (the obvious
+        thing to write) had the compiler say "internal error ... please report it"."""
+        if not isinstance(self.plugin_files, bool):
+            raise TypeError(
+                f"Permissions(plugin_files=...) takes True or False, "
+                f"not {type(self.plugin_files).__name__} {self.plugin_files!r}"
+            )
+        folders = self.include_dirs
+        if isinstance(folders, str | bytes | os.PathLike) or not isinstance(folders, Iterable):
+            raise TypeError(
+                f"Permissions(include_dirs=...) takes a tuple of folders, such as "
+                f"include_dirs=(Path('lib'),), not {type(folders).__name__} {folders!r}"
+            )
+        paths = []
+        for folder in folders:
+            if not isinstance(folder, str | os.PathLike) or isinstance(folder, bytes):
+                raise TypeError(
+                    "Permissions(include_dirs=...): each folder is a path or a str, not "
+                    f"{type(folder).__name__} {folder!r}"
+                )
+            paths.append(Path(folder))
+        object.__setattr__(self, "include_dirs", tuple(paths))
+
 
 #: The default: a mission file imports nothing and includes only from its tree and the library.
 NO_PERMISSIONS = Permissions()
+
+
+class GivenText(Protocol):
+    """A mission given as text (``compiler.MissionText``): its YAML."""
+
+    @property
+    def yaml(self) -> str: ...
 
 
 @dataclass
@@ -142,10 +175,16 @@ class Loader:
         self.files: list[Path] = []
 
     def compile_file(
-        self, path: Path, overrides: Mapping[str, str], *, require_tree: bool = True
+        self,
+        path: Path,
+        overrides: Mapping[str, str],
+        *,
+        require_tree: bool = True,
+        text: GivenText | None = None,
     ) -> ParsedFile | None:
+        """``text``: YAML read in place of the file at ``path`` (``load_mission_text``)."""
         resolved = path.resolve()  # once: a resolve is a system call per folder on the way
-        read = self._read_sections(path, resolved)
+        read = self._read_sections(path, resolved, None if text is None else text.yaml)
         if read is None:
             return None
         sections, root_loc = read
@@ -182,7 +221,11 @@ class Loader:
         return ParsedFile(name, description, params, tree, tree_loc, root_loc)
 
     def _compose(
-        self, path: Path, resolved: Path, include: tuple[str, Loc] | None = None
+        self,
+        path: Path,
+        resolved: Path,
+        include: tuple[str, Loc] | None = None,
+        text: str | None = None,
     ) -> tuple[yaml.Node, Loc] | None:
         """One file of the mission (the main file or an include) read as YAML nodes: its
         root and the root's place, None when it cannot be read or parsed (reported). The
@@ -190,8 +233,11 @@ class Loader:
         text and place, where a file that cannot be opened is reported (its own 1:1 names
         no line the user wrote)."""
         display = self.display(path)
-        self.files.append(resolved)
-        root, errors = compose(path, display, include)
+        if text is not None:  # a mission given as text: no file to read or watch
+            root, errors = compose_text(text, display)
+        else:
+            self.files.append(resolved)
+            root, errors = compose(path, display, include)
         for e in errors:
             self.ctx.error(e)
         if root is None:
@@ -199,11 +245,11 @@ class Loader:
         return root, loc_of(root, display, "")
 
     def _read_sections(
-        self, path: Path, resolved: Path
+        self, path: Path, resolved: Path, text: str | None = None
     ) -> tuple[dict[str, tuple[yaml.Node, Loc, Loc]], Loc] | None:
         """The file's top-level sections by key (node, key's and value's place) and the
         root's place; None when it is no mission file. Unknown keys are reported."""
-        read = self._compose(path, resolved)
+        read = self._compose(path, resolved, text=text)
         if read is None:
             return None
         root, root_loc = read

@@ -7,8 +7,10 @@ what is allowed and what was given.
 
 from __future__ import annotations
 
+from roomba_bt.errors import RoombaBtError
 
-class OIError(Exception):
+
+class OIError(RoombaBtError):
     """Base of every error raised by :mod:`roomba_bt.oi`."""
 
 

@@ -20,6 +20,7 @@ from collections.abc import Callable, Iterable, Iterator, Mapping
 from functools import lru_cache
 from typing import Protocol, TypeVar, cast
 
+from roomba_bt.errors import RoombaBtError
 from roomba_bt.oi.bits import (
     BUMP_BITS,
     BUMPS_BY_BYTE,
@@ -335,7 +336,7 @@ _OI_MODE_BY_BYTE = _by_byte(lambda v: OIMode(v) if v <= 3 else OIMode.FULL)
 _STASIS_BY_BYTE = _by_byte(lambda v: Stasis(v & 3))
 
 
-class MissingPacket(KeyError):
+class MissingPacket(KeyError, RoombaBtError):
     """A packet read from a frame that does not carry it (a behaviour that reads a packet
     its declaration does not list: the runtime's message says where to add it)."""
 

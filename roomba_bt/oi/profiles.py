@@ -35,6 +35,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
+from dataclasses import fields as dataclass_fields
 from types import MappingProxyType
 
 from roomba_bt.oi.encode import BAUD_CODES
@@ -86,9 +87,14 @@ _SERIAL_SETTINGS = '"Serial Port Settings"'
 STREAM_CHECKSUM_HEADER = 19
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(frozen=True, slots=True, repr=False)
 class RobotProfile:
-    """What a robot model speaks; see the module docstring for each field's source."""
+    """What a robot model speaks; see the module docstring for each field's source.
+
+    A shipped profile's repr is its name in the package (``roomba_bt.CREATE2``): it is the
+    default of many signatures, and ``help(load_mission)`` showed its every field, the
+    19200-baud sentences too, about 600 characters a signature. Another profile (one made
+    with ``dataclasses.replace``) shows its fields."""
 
     name: str
     title: str
@@ -118,6 +124,13 @@ class RobotProfile:
         "until its processor loses battery power (take the battery out) or Baud (129) sets "
         "another rate"
     )
+
+    def __repr__(self) -> str:
+        shipped = _SHIPPED_NAMES.get(self.name)
+        if shipped is not None and PROFILES.get(self.name) == self:
+            return f"roomba_bt.{shipped}"
+        fields = ", ".join(f"{f.name}={getattr(self, f.name)!r}" for f in dataclass_fields(self))
+        return f"RobotProfile({fields})"
 
     @property
     def at_19200(self) -> str:
@@ -262,6 +275,8 @@ PROFILES: Mapping[str, RobotProfile] = MappingProxyType(
     {p.name: p for p in (CREATE2, ROOMBA600, ROOMBA500)}
 )
 DEFAULT_PROFILE = CREATE2
+#: the name each shipped profile has in the package, which its repr says
+_SHIPPED_NAMES = {"create2": "CREATE2", "roomba600": "ROOMBA600", "roomba500": "ROOMBA500"}
 
 
 def _packets_for(profile: RobotProfile) -> Mapping[int, PacketSpec]:

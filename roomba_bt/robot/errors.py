@@ -18,12 +18,13 @@ from __future__ import annotations
 
 import time
 
+from roomba_bt.errors import RoombaBtError
 from roomba_bt.oi.errors import OIError
 from roomba_bt.oi.identify import ChecksumMismatch
 from roomba_bt.oi.modes import OIMode
 
 
-class RobotError(Exception):
+class RobotError(RoombaBtError):
     """Base of every error raised by :mod:`roomba_bt.robot`."""
 
 

@@ -181,6 +181,48 @@ class StopRequested(Exception):
         self.at = at
 
 
+class Interrupted(KeyboardInterrupt):
+    """A Ctrl-C that ended a run, raised again by :meth:`MissionRunner.run` once the robot
+    is stopped, the run's summary as :attr:`summary`. A ``KeyboardInterrupt``, as the
+    interrupt it stands for (``except KeyboardInterrupt`` catches it, and the program ends
+    on it as on any Ctrl-C); ``except roomba_bt.Interrupted as interrupt:
+    interrupt.summary`` is typed (``interrupt.summary`` on a bare ``KeyboardInterrupt``
+    failed ``mypy --strict``)."""
+
+    summary: RunSummary
+
+    def __init__(self, *args: object, summary: RunSummary) -> None:
+        super().__init__(*args)
+        self.summary = summary
+
+
+class RunTerminated(Interrupted, Terminated):
+    """SIGTERM, SIGHUP, Ctrl-Z or Ctrl-\\ that ended a run, raised again as Ctrl-C's is: an
+    :class:`Interrupted` and a :class:`~roomba_bt.robot.safety.Terminated` (its ``signum``)."""
+
+    def __init__(self, signum: int, *, summary: RunSummary) -> None:
+        Terminated.__init__(self, signum)
+        self.summary = summary
+
+
+def interrupted(interrupt: KeyboardInterrupt, summary: RunSummary) -> KeyboardInterrupt:
+    """What :meth:`MissionRunner.run` raises again for ``interrupt``, once the robot is
+    stopped: an :class:`Interrupted` (a :class:`RunTerminated` for a signal) with the
+    summary, its traceback the interrupt's. A ``KeyboardInterrupt`` subclass of the
+    program's own (raised by its behaviour) is raised as it is, the summary set on it, so
+    that its ``except`` still catches it."""
+    kind = type(interrupt)
+    again: KeyboardInterrupt
+    if kind is KeyboardInterrupt:
+        again = Interrupted(*interrupt.args, summary=summary)
+    elif kind is Terminated:
+        again = RunTerminated(cast(Terminated, interrupt).signum, summary=summary)
+    else:
+        interrupt.summary = summary  # type: ignore[attr-defined]
+        return interrupt
+    return again.with_traceback(interrupt.__traceback__)
+
+
 #: what a second run() of one runner says
 RUN_TWICE = (
     "this run has ended: a RunStack (a MissionRunner) runs once; build a new RunStack for "
@@ -303,6 +345,11 @@ class MissionRunner(BaseHandle):
         return self._outbox.standing
 
     @property
+    def ride(self) -> StallRide:
+        """The run's ride through a watchdog trip or a tick guard's halt."""
+        return self._ride
+
+    @property
     def has_snapshot(self) -> bool:
         return self.snapshot is not NO_SNAPSHOT_YET
 
@@ -363,8 +410,7 @@ class MissionRunner(BaseHandle):
             interrupt = late
             note_late_interrupt(summary, late, guard.late_during)
         if interrupt is not None and raise_interrupts:  # the robot is stopped: now the caller
-            interrupt.summary = summary  # type: ignore[attr-defined]
-            raise interrupt
+            raise interrupted(interrupt, summary) from None
         return summary
 
     def request_stop(self, reason: str = "stopped by the program") -> None:
@@ -605,6 +651,26 @@ class MissionRunner(BaseHandle):
                 self._outbox.send(held, self)
 
 
+def guarded_between_ticks(
+    runner: MissionRunner, work: Callable[[], object], where: str
+) -> Callable[[], object]:
+    """``work``, done between two ticks in the ticking thread, watched as a tick is by the
+    run's tick guard (none: ``work`` itself): past the limit with the wheels moving, drive
+    0, counted and said as a tick's halt ``where`` (the summary's ``tick_halt_first``), the
+    wheels' last command sent again once it returns. ``RunStack.ticks()`` has the
+    program's loop body watched so: the robot drives on while it runs, as while a
+    behaviour blocks."""
+    tick_guard = runner.tick_guard
+    if tick_guard is None:
+        return work
+    ride = runner.ride
+
+    def halted(seconds: float, _where: str) -> None:
+        ride.tick_halted(tick_guard, seconds, where)
+
+    return tick_guard.guarded(work, halted, lambda: runner.snapshot.tick)
+
+
 def tree_ended(root: py_trees.behaviour.Behaviour, summary: RunSummary) -> None:
     """The run's outcome by its tree's: SUCCESS, or FAILURE and why."""
     if root.status is py_trees.common.Status.SUCCESS:
@@ -692,6 +758,7 @@ def ended_by(exc: Exception | SystemExit, summary: RunSummary, *, answered: bool
         # (a plugin's log file, a socket of its own), not from the robot's port
         summary.outcome, summary.reason = Outcome.ERROR, behaviour_error(exc)
         summary.traceback = "".join(traceback.format_exception(exc))
+        summary.exception = exc  # the program's own exception object: RunFailed's cause
 
 
 def guarded_tick(

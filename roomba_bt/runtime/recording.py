@@ -79,6 +79,7 @@ from pathlib import Path
 from typing import IO, Any
 
 from roomba_bt import __version__
+from roomba_bt.errors import RoombaBtError
 from roomba_bt.oi.encode import BAUD_CODES, command_size, decode_command
 from roomba_bt.oi.errors import EncodeError
 from roomba_bt.oi.packets import PACKETS
@@ -362,7 +363,7 @@ def ending_text(note: dict[str, Any]) -> str:
     return f"the recorded run ended in {outcome}{at}{f': {reason}' if reason else ''}"
 
 
-class RecordError(ValueError):
+class RecordError(ValueError, RoombaBtError):
     """A record file that cannot be replayed; names the file and line."""
 
 

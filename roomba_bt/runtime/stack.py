@@ -20,19 +20,23 @@ import contextlib
 import logging
 import threading
 from collections import deque
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
+from os import PathLike
 from pathlib import Path
 from typing import Any, Literal
 
 from py_trees.behaviour import Behaviour
 
+from roomba_bt.behaviours.blackboard import declare_keys, write_key
 from roomba_bt.behaviours.declare import Declaration
 from roomba_bt.behaviours.lean import check_updates
+from roomba_bt.mission.build import blackboard_within
 from roomba_bt.oi.profiles import PROFILES, RobotProfile
 from roomba_bt.robot.connection import Connection, EndMode
 from roomba_bt.robot.errors import DEFAULT_WATCHDOG
 from roomba_bt.runtime.claimed import ClaimedFile
+from roomba_bt.runtime.given import check_given, check_mission, check_numbers
 from roomba_bt.runtime.loop import (
     MissionLike,
     MissionRunner,
@@ -53,6 +57,7 @@ from roomba_bt.runtime.recording import (
     end_note,
     ending_text,
 )
+from roomba_bt.runtime.stepping import Tick, TickStepper, ticks
 from roomba_bt.runtime.summary import DEFAULT_GRACE, DEFAULT_TICK_LIMIT, Outcome, RunSummary
 from roomba_bt.runtime.tick_guard import TickGuard, TickGuardLike, recorded_tick_guard
 from roomba_bt.transport.base import Transport
@@ -95,8 +100,15 @@ class TreeMission:
     def setup(self, robot: Any, **kwargs: Any) -> None:
         """Every node's ``setup(robot=...)``; and a plain behaviour whose ``update`` returns
         no Status (a forgotten ``return``) ends the run as an error, exit 4, as a roomba-bt
-        leaf's does (:func:`~roomba_bt.behaviours.lean.check_updates`)."""
+        leaf's does (:func:`~roomba_bt.behaviours.lean.check_updates`). A compiled mission's
+        root in the tree brings its blackboard: its keys' types and ``initial:`` values are
+        written first, as its own ``setup`` writes them (:func:`blackboard_within`)."""
         check_updates(self.root)
+        blackboard = blackboard_within(self.root)
+        if blackboard is not None:
+            declare_keys(blackboard.keys)
+            for key, value in blackboard.initial.items():
+                write_key(key, value)
         for node in self.root.iterate():
             node.setup(robot=robot, **kwargs)
 
@@ -206,6 +218,8 @@ class RunStack:
         replayed_notes: Sequence[dict[str, Any]] | None = None,
         strict: bool = False,
     ) -> None:
+        _check_given(mission, link, timeout_s, grace, watchdog, baud, tick_limit, packets)
+        check_given(observer=observer, input_ended=input_ended, strict=strict)
         made: dict[str, Any] = dict(
             watchdog=watchdog, end_in=end_in, baud=baud, keep_awake=keep_awake
         )
@@ -242,6 +256,8 @@ class RunStack:
         #: the thread :meth:`run` runs in, while it runs; set when it has ended
         self._running_in: threading.Thread | None = None
         self._ended = threading.Event()
+        #: the hand-over to a :meth:`ticks` loop, while one runs the stack
+        self.stepper: TickStepper | None = None
 
     @property
     def mission(self) -> MissionLike:
@@ -253,16 +269,22 @@ class RunStack:
         With ``--record``, the record is written out before the summary is made, which says
         when a file that could not be written stopped it.
 
-        Ctrl-C or SIGTERM: after the safe stop the interrupt is raised again, the summary as
-        its ``summary`` attribute, unless ``raise_interrupts`` is False (the CLI, the
+        Ctrl-C or SIGTERM: after the safe stop the interrupt is raised again, an
+        :class:`~roomba_bt.runtime.loop.Interrupted` (a ``KeyboardInterrupt``) with the
+        summary as its ``summary``, unless ``raise_interrupts`` is False (the CLI, the
         evaluation: the summary's outcome is then INTERRUPTED, exit 130). A stack runs once:
         a second call raises RuntimeError (build a new RunStack).
 
         Off the main thread (a worker thread, ``asyncio.to_thread``) no signal reaches the
         run: it says so, and the program ends it with :meth:`stop` or :meth:`close`."""
+        if threading.current_thread() is not threading.main_thread():
+            self._warn_off_the_main_thread(threading.current_thread())
+        return self.run_here(raise_interrupts=raise_interrupts)
+
+    def run_here(self, *, raise_interrupts: bool = True) -> RunSummary:
+        """:meth:`run` in this thread, without its warning off the main thread (the worker
+        of :meth:`ticks`, whose loop in the main thread takes the signals)."""
         self._running_in = threading.current_thread()
-        if self._running_in is not threading.main_thread():
-            self._warn_off_the_main_thread()
         try:
             return self.runner.run(raise_interrupts=raise_interrupts)
         finally:  # an interrupt raised again too: its summary says how the record ended
@@ -276,6 +298,38 @@ class RunStack:
                 summary.record_stopped = self.transport.stopped or ""
             self._ended.set()
 
+    def ticks(self) -> Iterator[Tick]:
+        """The run tick by tick: ``for tick in stack.ticks():`` runs the mission as
+        :meth:`run` does, and after each tick of its tree yields a
+        :class:`~roomba_bt.runtime.stepping.Tick` (the snapshot, the root's status, the
+        tree, the blackboard) and waits for the loop to ask for the next: the loop's body
+        runs between two ticks. The loop ends with the run, its summary then
+        :attr:`summary` (``stack.summary.raise_for_outcome()``).
+
+        Every way out of the loop ends the run with its safe stop: a ``break`` or an
+        exception in the body stops it (INTERRUPTED) before the exception goes on (use
+        the loop in a ``with RunStack(...) as stack:`` block, whose end closes the stack,
+        so this holds even where the generator is kept alive); Ctrl-C while it waits is
+        raised again as :meth:`run` raises it, the robot stopped. The run itself goes on
+        in a worker thread (so the tree is ticked as :meth:`run` ticks it, frame by
+        frame, at the same cost); on a robot the robot drives on while the body runs, and
+        the tick guard watches the body as it watches a tick. Runs once, as :meth:`run`."""
+        return ticks(self)
+
+    @property
+    def summary(self) -> RunSummary:
+        """The run's summary: final once :meth:`run` has returned (or :meth:`ticks`'s loop
+        ended), growing while the run goes on."""
+        return self.runner.summary
+
+    def __enter__(self) -> RunStack:
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        """The end of a ``with`` block: :meth:`close` (a run still going, in a worker thread
+        or a :meth:`ticks` loop left early, is stopped first, its safe stop written)."""
+        self.close()
+
     def _written_when_interrupted(self) -> int | None:
         """The bytes of the record's "out" side when a Ctrl-C or SIGTERM came (None: none
         did): the link's count then, less what the link wrote since (the tree's stop, the
@@ -287,7 +341,7 @@ class RunStack:
         since = self.connection.link.bytes_written - when
         return self.transport.out_bytes - since
 
-    def _warn_off_the_main_thread(self) -> None:
+    def _warn_off_the_main_thread(self, thread: threading.Thread) -> None:
         """A run that drives (a link on the wall clock) in a thread Ctrl-C never reaches: a
         program that does not stop it itself leaves its robot driving after Ctrl-C (and hangs
         joining the thread). An evaluation's worker, which guards no signal, is its pool's."""
@@ -298,7 +352,7 @@ class RunStack:
             "it, and the robot would drive on after them; end it from the main thread with "
             "stack.stop() or stack.close() (in a finally:, see docs/runtime.md, From Python: a "
             "run in a worker thread)",
-            self.connection.name, self._running_in.name if self._running_in else "?",
+            self.connection.name, thread.name,
         )  # fmt: skip
 
     def stop(self, reason: str = "stopped by the program") -> None:
@@ -308,6 +362,8 @@ class RunStack:
         :meth:`~roomba_bt.runtime.loop.MissionRunner.request_stop`). Then join the thread,
         and :meth:`close` (which, called while the run goes on, stops it and waits itself)."""
         self.runner.request_stop(reason)
+        if self.stepper is not None:  # a ticks() loop's worker may wait for its loop
+            self.stepper.release()
 
     def close(self) -> None:
         """Close the connection (and the record); a link already gone is no error here: the
@@ -329,6 +385,32 @@ class RunStack:
                 )  # fmt: skip
         with contextlib.suppress(Exception):
             self.connection.close()
+
+
+def _check_given(
+    mission: object,
+    link: object,
+    timeout_s: object,
+    grace: object,
+    watchdog: object,
+    baud: object,
+    tick_limit: object,
+    packets: Sequence[int] | None,
+) -> None:
+    """What :class:`RunStack` was given, checked before anything is made (``given.py``): a
+    wrong one is a TypeError or ValueError naming it, not a run that ends as a behaviour's
+    error."""
+    check_mission(mission)
+    if isinstance(link, str | bytes | PathLike):
+        raise TypeError(
+            f"RunStack(mission, link): the link is a Transport or a Connection, not the "
+            f"{type(link).__name__} {link!r}: open it first, "
+            f"roomba_bt.Connection.open({link!r}) (and close it after)"
+        )
+    check_numbers(
+        timeout_s=timeout_s, grace=grace, watchdog=watchdog, baud=baud,
+        tick_limit=tick_limit, packets=packets,
+    )  # fmt: skip
 
 
 def _given(

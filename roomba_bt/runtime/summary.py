@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 from enum import Enum, IntEnum
 from typing import TYPE_CHECKING
 
+from roomba_bt.errors import RoombaBtError
 from roomba_bt.oi.frames import BATTERY_PACKETS, SLOT_SECONDS
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
@@ -87,18 +88,23 @@ _EXIT = {
 }
 
 
-class RunFailed(Exception):
+class RunFailed(RoombaBtError):
     """A run that did not succeed, raised by :meth:`RunSummary.raise_for_outcome` (as
     requests' ``raise_for_status``): for a program that would rather have an exception than
     read the outcome. ``outcome``, ``reason`` and ``exit_code`` (what ``roomba-bt run`` would
     exit with) say how it ended; ``summary`` is the whole report. The robot was stopped
-    before it was raised: the run had ended."""
+    before it was raised: the run had ended. A run that a behaviour's or an observer's
+    exception ended has that exception as ``__cause__`` (and as :attr:`exception`), so
+    Python shows its traceback under this one and a program can test its class."""
 
     def __init__(self, summary: RunSummary) -> None:
         self.summary = summary
         self.outcome = summary.outcome
         self.reason = summary.reason
         self.exit_code = ExitCode(summary.exit_code)
+        #: the exception that ended the run as ERROR (also ``__cause__`` when raised by
+        #: :meth:`RunSummary.raise_for_outcome`); None for any other ending
+        self.exception = summary.exception
         #: what failed ``--strict`` (``RunStack(..., strict=True)``) in a run whose tree
         #: succeeded; empty for any other failure
         self.findings = tuple(summary.strict_findings()) if summary.failed_strict else ()
@@ -236,6 +242,13 @@ class RunSummary:
     slowest_in: str = ""
     #: the exception's traceback when a behaviour raised one (printed under ``-v``)
     traceback: str = ""
+    #: the exception itself that ended the run as ERROR (a behaviour's, a plugin's, the
+    #: observer's: the program's own code), kept so that a Python caller can catch or
+    #: inspect it: :class:`RunFailed` is raised from it (its ``__cause__``), so
+    #: ``except RunFailed as failed: raise failed.__cause__`` or ``isinstance`` reach the
+    #: caller's own class; None for every other ending. Not shown, not compared: the
+    #: summary's text and the CLI say it through :attr:`reason` and :attr:`traceback`
+    exception: BaseException | None = field(default=None, repr=False, compare=False)
     #: ``--record``: why and when the record stopped before the run's end ("" if it did not)
     record_stopped: str = ""
     #: the robot profile, said when it is not the default (``roomba500 (Roomba 500 series)``;
@@ -318,7 +331,7 @@ class RunSummary:
         strict); else :class:`RunFailed` carrying it (its outcome, reason and exit code):
         ``stack.run().raise_for_outcome()``."""
         if self.exit_code != ExitCode.OK:
-            raise RunFailed(self)
+            raise RunFailed(self) from self.exception  # the caller's own, when it raised
         return self
 
     def take_last(self, snapshot: Snapshot | None) -> None:

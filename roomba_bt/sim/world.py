@@ -41,6 +41,7 @@ from typing import Any
 import yaml
 
 from roomba_bt import yamlsource
+from roomba_bt.errors import RoombaBtError
 from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.profiles import BODY_RADIUS_MM
 from roomba_bt.sim.geometry import (
@@ -356,7 +357,7 @@ class WorldProblem:
         return f"{where}: {self.field}: found {self.found}; allowed: {self.allowed}"
 
 
-class WorldError(ValueError):
+class WorldError(ValueError, RoombaBtError):
     """A world that cannot be loaded; ``problems`` lists every one found, in the file's
     order (those without a place last)."""
 

@@ -10,8 +10,10 @@ from __future__ import annotations
 
 from typing import Protocol, runtime_checkable
 
+from roomba_bt.errors import RoombaBtError
 
-class TransportError(ConnectionError):
+
+class TransportError(ConnectionError, RoombaBtError):
     """The port could not be opened, read or written; names the port and the cause.
 
     A subclass of :class:`ConnectionError` (so of :class:`OSError`): code that catches "the
