@@ -150,4 +150,5 @@ _MODULE_OF: dict[str, str] = {
     **dict.fromkeys(("SerialTransport", "Transport", "TransportError"), "transport"),
 }  # fmt: skip
 
-__getattr__, __dir__ = lazy_exports(__name__, _MODULE_OF)
+if not TYPE_CHECKING:  # a type checker reads the imports above: a name not there is an error
+    __getattr__, __dir__ = lazy_exports(__name__, _MODULE_OF)

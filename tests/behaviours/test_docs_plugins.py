@@ -139,3 +139,17 @@ def test_the_held_for_condition_counts_only_while_it_is_ticked() -> None:
     robot.set_frame({25: 900, 26: 1000})
     node.tick_once()
     assert node.status is Status.FAILURE
+
+
+def test_the_behaviour_in_your_own_program_example_compiles_its_mission(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The class defined in the program is named in the YAML through ``behaviours=``."""
+    [example] = _blocks("### A behaviour in your own program")
+    (tmp_path / "lab.yaml").write_text(
+        "tree:\n  sequence:\n    - mode: safe\n    - drive: {velocity: 200 mm/s}\n"
+        "      until: {far_enough: 300 mm}\n"
+    )
+    monkeypatch.chdir(tmp_path)
+    mission = _run(example, "own_program")["mission"]
+    assert any(node.name.startswith("far_enough") for node in mission.root.iterate())

@@ -167,3 +167,20 @@ def test_the_asyncio_recipe_stops_the_robot_on_ctrl_c() -> None:
         "wheels": [0, 0],
     }, err
     assert "not the main thread: Ctrl-C and SIGTERM do not reach it" in err
+
+
+TICKS = "## From Python: a run tick by tick"
+
+
+def test_the_tick_by_tick_example_runs(capsys: pytest.CaptureFixture[str]) -> None:
+    """The loop sees the run to its end: the blackboard's key written, SUCCESS, the robot
+    left in Passive."""
+    section = DOC.read_text(encoding="utf-8").split(TICKS, 1)[1].split("\n## ", 1)[0]
+    [block] = re.findall(r"```python\n(.*?)```", section, flags=re.DOTALL)
+    namespace: dict[str, object] = {"__name__": "docs_example"}
+    exec(compile(block, f"{DOC}:ticks", "exec"), namespace)
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].startswith("t=1.48 s RUNNING Safe {'legs': 0}"), out
+    assert out[-2].endswith("SUCCESS Passive {'legs': 1}") and out[-1] == "Outcome.SUCCESS", out
+    simulator = namespace["simulator"]
+    assert simulator.mode.label == "Passive"  # type: ignore[attr-defined]

@@ -1,0 +1,463 @@
+"""roomba-bt embedded as a Python library (a py_trees and pycreate2 user's findings): the
+program's own exceptions kept, a run tick by tick, a mission from a string, a behaviour of
+the program's own in YAML, a compiled mission nested in a bigger tree, arguments checked
+when given, and the small things (``import roomba_bt.commands``, one base error, ``with
+RunStack``, a typed interrupt, a short profile repr)."""
+
+from __future__ import annotations
+
+import inspect
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import py_trees
+import pytest
+
+import roomba_bt
+from roomba_bt import CREATE2, Outcome, RunStack, SimLink, Simulator, TreeMission, load_world
+from roomba_bt.behaviours import DISTANCE, Condition, Param, declare
+from roomba_bt.robot.interface import Snapshot
+
+TO_THE_WALL = """\
+mission: lab-exp
+blackboard:
+  legs: {type: int, initial: 0}
+tree:
+  sequence:
+    - mode: safe
+    - drive: {velocity: 200 mm/s}
+      until: {bump: {}}
+    - drive: {velocity: -150 mm/s, distance: 20 cm}
+    - set: {key: legs, value: 1}
+    - stop
+    - mode: passive
+"""
+
+
+class Mine(Exception):
+    """The program's own error class."""
+
+
+def _simulator() -> Simulator:
+    return Simulator(load_world("empty-room"), CREATE2, seed=0)
+
+
+def _stack(mission: object, simulator: Simulator, **kwargs: object) -> RunStack:
+    return RunStack(mission, SimLink(simulator), profile=CREATE2, timeout_s=30.0, **kwargs)  # type: ignore[arg-type]
+
+
+def _stopped(simulator: Simulator) -> bool:
+    return simulator.mode.label == "Passive" and (
+        simulator.requested_left,
+        simulator.requested_right,
+    ) == (0, 0)
+
+
+# ------------------------------------------------------------------ 1. the program's exceptions
+class Raises(py_trees.behaviour.Behaviour):
+    def update(self) -> py_trees.common.Status:
+        raise Mine("sensor fusion failed")
+
+
+def test_an_observers_exception_is_kept_and_is_the_run_faileds_cause() -> None:
+    def observer(runner: roomba_bt.MissionRunner) -> None:
+        if runner.snapshot.time > 1.0:
+            raise Mine("observer says no")
+
+    simulator = _simulator()
+    with _stack(roomba_bt.load_mission_text(TO_THE_WALL), simulator, observer=observer) as stack:
+        summary = stack.run()
+    assert summary.outcome is Outcome.ERROR and summary.exit_code == 4
+    assert isinstance(summary.exception, Mine) and str(summary.exception) == "observer says no"
+    with pytest.raises(roomba_bt.RunFailed) as failed:
+        summary.raise_for_outcome()
+    assert failed.value.__cause__ is summary.exception  # ``except`` and pytest reach it
+    assert failed.value.exception is summary.exception
+    assert _stopped(simulator)
+
+
+def test_a_behaviours_exception_is_kept_too_and_a_clean_run_keeps_none() -> None:
+    root = py_trees.composites.Sequence("p", memory=True, children=[Raises("crash")])
+    with _stack(TreeMission(root, "p"), _simulator()) as stack:
+        summary = stack.run()
+    assert isinstance(summary.exception, Mine)
+    assert "Mine: sensor fusion failed" in summary.reason  # the text the CLI prints, as it was
+    with _stack(roomba_bt.load_mission_text(TO_THE_WALL), _simulator()) as stack:
+        assert stack.run().raise_for_outcome().exception is None
+
+
+# ------------------------------------------------------------------ 2. tick by tick
+def test_ticks_yields_each_tick_with_its_status_and_blackboard_and_ends_with_the_run() -> None:
+    simulator = _simulator()
+    seen = []
+    with _stack(roomba_bt.load_mission_text(TO_THE_WALL), simulator) as stack:
+        for tick in stack.ticks():
+            assert isinstance(tick, roomba_bt.Tick)
+            seen.append((tick.number, tick.time, tick.status, dict(tick.blackboard)))
+            assert tick.root is stack.mission.root
+    assert [number for number, *_ in seen] == list(range(1, len(seen) + 1))
+    assert seen[0][3] == {"legs": 0} and seen[-1][3] == {"legs": 1}
+    assert seen[-1][2] is py_trees.common.Status.SUCCESS
+    assert all(status is py_trees.common.Status.RUNNING for *_, status, _ in seen[:-1])
+    assert stack.summary.outcome is Outcome.SUCCESS and stack.summary.ticks == len(seen)
+    assert _stopped(simulator)
+
+
+def test_the_same_run_by_ticks_and_by_run_writes_the_same_bytes() -> None:
+    """The loop changes nothing of the run: the virtual clock stands still meanwhile."""
+    by_run = _simulator()
+    with _stack(roomba_bt.load_mission_text(TO_THE_WALL), by_run) as stack:
+        stack.run()
+    by_ticks = _simulator()
+    with _stack(roomba_bt.load_mission_text(TO_THE_WALL), by_ticks) as stack:
+        for _ in stack.ticks():
+            pass
+    assert by_ticks.pose == by_run.pose and by_ticks.time == by_run.time
+
+
+def test_a_break_stops_the_run_with_its_safe_stop() -> None:
+    simulator = _simulator()
+    with _stack(roomba_bt.load_mission_text(TO_THE_WALL), simulator) as stack:
+        for tick in stack.ticks():
+            if tick.time > 1.0:
+                assert simulator.requested_left > 0  # driving
+                break
+        summary = stack.summary  # the loop's generator closed: the run has ended
+        assert summary.outcome is Outcome.INTERRUPTED and summary.stop_delivered
+        assert "loop over stack.ticks() ended" in summary.reason
+        assert _stopped(simulator)
+
+
+def test_an_exception_in_the_loop_stops_the_run_before_it_goes_on() -> None:
+    simulator = _simulator()
+    stack = _stack(roomba_bt.load_mission_text(TO_THE_WALL), simulator)
+    with pytest.raises(Mine):
+        for tick in stack.ticks():
+            if tick.time > 1.0:
+                raise Mine("the program's check failed")
+    assert stack.summary.outcome is Outcome.INTERRUPTED and _stopped(simulator)
+    stack.close()
+
+
+def test_a_loop_kept_alive_is_stopped_by_the_with_blocks_end() -> None:
+    """A generator that is kept (not closed by its loop's end): ``with`` closes the stack,
+    which stops the run its worker holds."""
+    simulator = _simulator()
+    with _stack(roomba_bt.load_mission_text(TO_THE_WALL), simulator) as stack:
+        kept = stack.ticks()
+        for _ in range(50):
+            next(kept)
+    assert stack.summary.outcome is Outcome.INTERRUPTED and _stopped(simulator)
+    kept.close()
+
+
+def test_an_observer_given_still_sees_every_tick_of_a_loop() -> None:
+    observed: list[int] = []
+    with _stack(
+        roomba_bt.load_mission_text(TO_THE_WALL),
+        _simulator(),
+        observer=lambda runner: observed.append(runner.summary.ticks),
+    ) as stack:
+        numbers = [tick.number for tick in stack.ticks()]
+    assert observed == numbers
+
+
+def test_the_tick_guard_watches_the_loops_body_on_the_wall_clock() -> None:
+    """On a robot the robot drives on while the body runs: a body that blocks is a tick
+    that blocks, and the guard's drive 0 is said as the loop's."""
+    from roomba_bt.sim import RealtimeSimLink
+
+    simulator = _simulator()
+    stack = RunStack(
+        roomba_bt.load_mission_text(TO_THE_WALL), RealtimeSimLink(simulator),
+        profile=CREATE2, timeout_s=20.0,
+    )  # fmt: skip
+    with stack:
+        for tick in stack.ticks():
+            if tick.number == 40:
+                writer = stack.connection.writer
+                for _ in range(1500):  # until the guard stopped the wheels (3 s at most)
+                    if getattr(writer.last_wheels, "args", None) == (0, 0):
+                        break
+                    time.sleep(0.002)
+                break
+    assert stack.summary.tick_halts == 1, stack.summary
+    assert stack.summary.tick_halt_first.startswith("the program's loop over stack.ticks()")
+
+
+# ------------------------------------------------------------------ 3. a mission from a string
+def test_a_mission_compiles_from_text_its_errors_at_the_name_given() -> None:
+    mission = roomba_bt.load_mission_text(TO_THE_WALL, name="lab.yaml")
+    assert mission.name == "lab-exp" and mission.blackboard_initial == {"legs": 0}
+    broken = "tree:\n  sequence:\n    - mode: safe\n    - drive: {velocty: 1}\n"
+    with pytest.raises(roomba_bt.MissionError) as error:
+        roomba_bt.load_mission_text(broken, name="cell[3]")
+    [diagnostic] = error.value.diagnostics
+    assert (diagnostic.file, diagnostic.line, diagnostic.column) == ("cell[3]", 4, 15)
+    assert str(error.value).splitlines()[1].startswith("cell[3]:4:15: drive: unknown parameter")
+
+
+def test_a_texts_includes_are_found_from_its_base_dir(tmp_path: Path) -> None:
+    (tmp_path / "lib.yaml").write_text(
+        "subtrees:\n  go: {tree: {drive: {velocity: 100 mm/s, distance: 5 cm}}}\n"
+    )
+    text = "tree:\n  sequence:\n    - mode: safe\n    - subtree: go\ninclude: [lib.yaml]\n"
+    mission = roomba_bt.load_mission_text(text, name="cell", base_dir=tmp_path)
+    assert mission.files == ((tmp_path / "lib.yaml").resolve(),)
+    with pytest.raises(roomba_bt.MissionError, match=r"\ncell:5:11: included file 'lib.yaml' not"):
+        roomba_bt.load_mission_text(text, name="cell", base_dir=tmp_path / "..")
+
+
+def test_load_mission_given_yaml_text_says_to_use_load_mission_text() -> None:
+    with pytest.raises(roomba_bt.MissionError, match="load_mission_text"):
+        roomba_bt.load_mission(TO_THE_WALL)
+
+
+# ------------------------------------------------------------------ 4. the program's behaviour
+@declare(
+    "far_enough", kind="condition", reads=(43, 44), primary="mm",
+    params=(Param("mm", DISTANCE, default="30 cm", minimum=0, maximum=10000),),
+)  # fmt: skip
+class FarEnough(Condition):
+    """Odometry says the robot has gone far enough."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        return snapshot.odometry.distance_mm >= self.number("mm")
+
+
+@declare("drive", kind="condition")
+class ClashesWithDrive(Condition):
+    """Declares a built-in's name."""
+
+    def check(self, snapshot: Snapshot) -> bool:
+        return True
+
+
+FAR_ENOUGH = """\
+tree:
+  sequence:
+    - mode: safe
+    - drive: {velocity: 200 mm/s}
+      until: {far_enough: 300 mm}
+    - stop
+"""
+
+
+def test_a_behaviour_of_the_programs_own_is_named_in_yaml_by_behaviours() -> None:
+    mission = roomba_bt.load_mission_text(FAR_ENOUGH, behaviours=[FarEnough])
+    with _stack(mission, _simulator()) as stack:
+        summary = stack.run().raise_for_outcome()
+    assert 300 <= summary.distance_mm < 330
+    with pytest.raises(roomba_bt.MissionError, match="unknown node 'far_enough'"):
+        roomba_bt.load_mission_text(FAR_ENOUGH)  # the default registry is left as it was
+
+
+def test_a_behaviour_that_takes_a_built_ins_name_is_refused_by_name() -> None:
+    with pytest.raises(roomba_bt.DeclarationError) as refused:
+        roomba_bt.load_mission_text(FAR_ENOUGH, behaviours=[FarEnough, ClashesWithDrive])
+    message = str(refused.value)
+    assert message.startswith("behaviours=[ClashesWithDrive]: ClashesWithDrive (")
+    assert (
+        "declares 'drive', the name of the built-in roomba_bt.behaviours.actions.Drive" in message
+    )
+    with pytest.raises(roomba_bt.DeclarationError, match="Action or Condition"):
+        roomba_bt.load_mission_text(FAR_ENOUGH, behaviours=[Mine])  # type: ignore[list-item]
+
+
+# ------------------------------------------------------------------ 5. nested in a bigger tree
+class Noop(py_trees.behaviour.Behaviour):
+    def update(self) -> py_trees.common.Status:
+        return py_trees.common.Status.SUCCESS
+
+
+def test_a_compiled_missions_initial_values_come_with_its_root_into_a_bigger_tree() -> None:
+    text = """\
+mission: bb
+blackboard:
+  leg: {type: distance, initial: 30 cm}
+tree:
+  sequence:
+    - mode: safe
+    - drive: {velocity: 200 mm/s, distance: "@leg"}
+"""
+    mission = roomba_bt.load_mission_text(text)
+    py_trees.blackboard.Blackboard.clear()
+    root = py_trees.composites.Sequence("wrap", memory=True, children=[Noop("hi"), mission.root])
+    with _stack(TreeMission(root, "wrapped"), _simulator()) as stack:
+        summary = stack.run().raise_for_outcome()
+    assert 295 < summary.distance_mm < 320
+
+
+def test_two_missions_declaring_one_key_differently_are_refused() -> None:
+    one = roomba_bt.load_mission_text(
+        "blackboard: {n: {type: int, initial: 1}}\ntree: {set: {key: n, value: 2}}\n", name="one"
+    )
+    two = roomba_bt.load_mission_text(
+        "blackboard: {n: {type: int, initial: 5}}\ntree: {set: {key: n, value: 2}}\n", name="two"
+    )
+    root = py_trees.composites.Sequence("both", memory=True, children=[one.root, two.root])
+    with _stack(TreeMission(root), _simulator()) as stack:
+        summary = stack.run()
+    assert summary.outcome is Outcome.ERROR
+    assert "blackboard key 'n' is declared by missions 'one' and 'two'" in summary.reason
+
+
+# ------------------------------------------------------------------ 6. arguments checked
+@pytest.mark.parametrize(
+    ("given", "error", "said"),
+    [
+        ({"timeout_s": "30s"}, TypeError, "RunStack(timeout_s=...) takes a number of seconds"),
+        ({"timeout_s": -1}, ValueError, "RunStack(timeout_s=-1)"),
+        ({"grace": None}, TypeError, "RunStack(grace=...)"),
+        ({"observer": 3}, TypeError, "RunStack(observer=...) takes a function"),
+        ({"strict": 1}, TypeError, "RunStack(strict=...)"),
+        ({"baud": "fast"}, TypeError, "RunStack(baud=...)"),
+        ({"packets": "7"}, TypeError, "RunStack(packets=...)"),
+    ],
+)
+def test_a_run_stacks_wrong_argument_is_said_when_given(
+    given: dict[str, object], error: type[Exception], said: str
+) -> None:
+    mission = roomba_bt.load_mission_text(TO_THE_WALL)
+    simulator = _simulator()
+    with pytest.raises(error) as raised:
+        RunStack(mission, SimLink(simulator), profile=CREATE2, **given)  # type: ignore[arg-type]
+    assert said in str(raised.value)
+    assert simulator.time == 0.0  # nothing written, nothing run
+
+
+def test_a_run_stack_given_a_name_or_a_url_says_what_it_takes() -> None:
+    with pytest.raises(TypeError, match=r"compiled mission \(roomba_bt.load_mission"):
+        RunStack("bump-and-turn", SimLink(_simulator()), profile=CREATE2)  # type: ignore[arg-type]
+    mission = roomba_bt.load_mission_text(TO_THE_WALL)
+    with pytest.raises(TypeError, match=r"Connection.open\('socket://host:1'\)"):
+        RunStack(mission, "socket://host:1", profile=CREATE2)  # type: ignore[arg-type]
+
+
+def test_permissions_take_folders_as_text_and_refuse_one_bare_text(tmp_path: Path) -> None:
+    (tmp_path / "other").mkdir()
+    (tmp_path / "other" / "lib.yaml").write_text("subtrees:\n  s: {tree: {wait: 1 s}}\n")
+    (tmp_path / "m").mkdir()
+    mission_file = tmp_path / "m" / "m.yaml"
+    mission_file.write_text("include: [../other/lib.yaml]\ntree: {subtree: s}\n")
+    granted = roomba_bt.Permissions(include_dirs=(str(tmp_path / "other"),))  # type: ignore[arg-type]
+    assert granted.include_dirs == (tmp_path / "other",)
+    assert roomba_bt.load_mission(mission_file, permissions=granted).name == "m"
+    with pytest.raises(TypeError, match=r"include_dirs=\.\.\.\) takes a tuple of folders"):
+        roomba_bt.Permissions(include_dirs=str(tmp_path))  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="plugin_files"):
+        roomba_bt.Permissions(plugin_files="yes")  # type: ignore[arg-type]
+
+
+# ------------------------------------------------------------------ 7. the small things
+def test_import_roomba_bt_commands_is_the_module_from_roomba_bt_import_commands() -> None:
+    done = subprocess.run(
+        [sys.executable, "-c", "import roomba_bt.commands as c\nfrom roomba_bt import commands\n"
+         "print(c is commands, c.drive(200, 32767).args)"],
+        capture_output=True, text=True, timeout=60,
+        env={**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])},
+    )  # fmt: skip
+    assert done.stdout == "True (200, 32767)\n", done.stderr
+
+
+def test_the_packages_errors_share_one_base_and_keep_their_own() -> None:
+    from roomba_bt.behaviours import UnitError
+    from roomba_bt.behaviours.blackboard import KeyRange, KeyType
+    from roomba_bt.oi.errors import OIError
+    from roomba_bt.robot import ModeError, StreamStalled
+    from roomba_bt.runtime.recording import RecordError
+
+    base = roomba_bt.RoombaBtError
+    for error, kept in [
+        (roomba_bt.MissionError, Exception), (roomba_bt.RunFailed, Exception),
+        (roomba_bt.RobotError, Exception), (StreamStalled, ConnectionError),
+        (ModeError, ValueError), (OIError, Exception), (roomba_bt.EncodeError, ValueError),
+        (roomba_bt.BandwidthError, ValueError), (roomba_bt.ParamError, TypeError),
+        (roomba_bt.DeclarationError, ValueError), (roomba_bt.WorldError, ValueError),
+        (roomba_bt.TransportError, OSError), (roomba_bt.MissingPacket, KeyError),
+        (roomba_bt.UnwrittenKey, LookupError), (KeyRange, ValueError), (KeyType, TypeError),
+        (UnitError, ValueError), (RecordError, ValueError),
+    ]:  # fmt: skip
+        assert issubclass(error, base) and issubclass(error, kept), error
+    # a mix-in that adds nothing: each error behaves as it did, its own bases' methods used
+    assert [name for name in vars(base) if not name.startswith("__")] == []
+
+
+def test_the_interrupt_a_run_raises_again_is_typed_and_still_a_keyboard_interrupt() -> None:
+    def observer(runner: roomba_bt.MissionRunner) -> None:
+        if runner.snapshot.tick == 40:
+            raise KeyboardInterrupt
+
+    stack = _stack(roomba_bt.load_mission_text(TO_THE_WALL), _simulator(), observer=observer)
+    with stack, pytest.raises(roomba_bt.Interrupted) as caught:
+        stack.run()
+    assert isinstance(caught.value, KeyboardInterrupt)
+    assert caught.value.summary is stack.summary
+    assert caught.value.summary.outcome is Outcome.INTERRUPTED
+
+
+def test_a_signal_raised_again_is_typed_and_still_terminated() -> None:
+    from roomba_bt.robot.safety import Terminated
+
+    def observer(runner: roomba_bt.MissionRunner) -> None:
+        if runner.snapshot.tick == 40:
+            os.kill(os.getpid(), signal.SIGTERM)
+
+    stack = _stack(roomba_bt.load_mission_text(TO_THE_WALL), _simulator(), observer=observer)
+    with stack, pytest.raises(roomba_bt.Interrupted) as caught:
+        stack.run()
+    assert isinstance(caught.value, Terminated) and caught.value.signum == signal.SIGTERM
+    assert caught.value.summary.outcome is Outcome.INTERRUPTED
+
+
+def test_signatures_show_a_shipped_profile_by_its_name() -> None:
+    shown = str(inspect.signature(roomba_bt.load_mission))
+    assert "profile: 'RobotProfile' = roomba_bt.CREATE2" in shown
+    assert "slow_baud_how" not in shown and len(shown) < 400
+    import dataclasses
+
+    custom = dataclasses.replace(CREATE2, max_velocity_mm_s=300)
+    assert repr(custom).startswith("RobotProfile(name='create2', ") and "300" in repr(custom)
+
+
+def test_the_typed_interrupt_pattern_passes_mypy_strict(tmp_path: Path) -> None:
+    """``interrupt.summary`` is a RunSummary to mypy (a bare KeyboardInterrupt has none), and
+    a name the package does not have is an error, not Any (the package's ``__getattr__``
+    made every name Any to a type checker)."""
+    program = tmp_path / "typed.py"
+    program.write_text(
+        textwrap.dedent("""\
+        import roomba_bt
+
+        def run(stack: roomba_bt.RunStack) -> roomba_bt.RunSummary:
+            try:
+                return stack.run()
+            except roomba_bt.Interrupted as interrupt:
+                print(interrupt.summary.outcome)
+                planted: int = interrupt.summary
+                raise
+
+        roomba_bt.RunStak
+    """)
+    )
+    mypy = Path(sys.executable).parent / "mypy"
+    if not mypy.exists():
+        pytest.skip("mypy is not installed beside this Python")
+    done = subprocess.run(
+        [str(mypy), "--strict", "--no-incremental", str(program)], capture_output=True, text=True,
+        timeout=300, cwd=tmp_path,
+        env={**os.environ, "MYPYPATH": str(Path(__file__).resolve().parents[2])},
+    )  # fmt: skip
+    errors = [
+        line.split(": error: ", 1)[1] for line in done.stdout.splitlines() if ": error: " in line
+    ]
+    assert errors == [  # the two planted mistakes, and nothing else
+        'Incompatible types in assignment (expression has type "RunSummary", variable has type '
+        '"int")  [assignment]',
+        'Module has no attribute "RunStak"; maybe "RunStack"?  [attr-defined]',
+    ], done.stdout + done.stderr
