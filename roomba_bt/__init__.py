@@ -17,54 +17,6 @@ from typing import TYPE_CHECKING
 
 from roomba_bt._lazy import lazy_exports
 
-if TYPE_CHECKING:
-    from roomba_bt.behaviours import (
-        Action,
-        Condition,
-        DeclarationError,
-        Param,
-        ParamError,
-        UnwrittenKey,
-        declare,
-        default_registry,
-    )
-    from roomba_bt.errors import RoombaBtError
-    from roomba_bt.mission import (
-        CompiledMission,
-        MissionError,
-        Permissions,
-        load_mission,
-        load_mission_text,
-        validate_files,
-    )
-    from roomba_bt.oi import BandwidthError, EncodeError, OIMode, SensorFrame, commands
-    from roomba_bt.oi.frames import MissingPacket
-    from roomba_bt.oi.profiles import (
-        CREATE2,
-        PROFILES,
-        ROOMBA500,
-        ROOMBA600,
-        RobotProfile,
-        get_profile,
-    )
-    from roomba_bt.robot import (
-        Connection,
-        ConnectionFailed,
-        LinkDown,
-        ModeError,
-        RobotError,
-        StreamStalled,
-        Terminated,
-        sigterm_raises,
-    )
-    from roomba_bt.robot.interface import Snapshot
-    from roomba_bt.runtime.loop import Interrupted, MissionRunner, TickObserver, stream_request
-    from roomba_bt.runtime.stack import RunStack, TreeMission
-    from roomba_bt.runtime.stepping import Tick
-    from roomba_bt.runtime.summary import ExitCode, Outcome, RunFailed, RunSummary
-    from roomba_bt.sim import RealtimeSimLink, SimLink, Simulator, WorldError, load_world
-    from roomba_bt.transport import SerialTransport, Transport, TransportError
-
 __version__ = "0.2.0"
 
 __all__ = [
@@ -150,5 +102,53 @@ _MODULE_OF: dict[str, str] = {
     **dict.fromkeys(("SerialTransport", "Transport", "TransportError"), "transport"),
 }  # fmt: skip
 
-if not TYPE_CHECKING:  # a type checker reads the imports above: a name not there is an error
+if TYPE_CHECKING:
+    from roomba_bt.behaviours import (
+        Action,
+        Condition,
+        DeclarationError,
+        Param,
+        ParamError,
+        UnwrittenKey,
+        declare,
+        default_registry,
+    )
+    from roomba_bt.errors import RoombaBtError
+    from roomba_bt.mission import (
+        CompiledMission,
+        MissionError,
+        Permissions,
+        load_mission,
+        load_mission_text,
+        validate_files,
+    )
+    from roomba_bt.oi import BandwidthError, EncodeError, OIMode, SensorFrame, commands
+    from roomba_bt.oi.frames import MissingPacket
+    from roomba_bt.oi.profiles import (
+        CREATE2,
+        PROFILES,
+        ROOMBA500,
+        ROOMBA600,
+        RobotProfile,
+        get_profile,
+    )
+    from roomba_bt.robot import (
+        Connection,
+        ConnectionFailed,
+        LinkDown,
+        ModeError,
+        RobotError,
+        StreamStalled,
+        Terminated,
+        sigterm_raises,
+    )
+    from roomba_bt.robot.interface import Snapshot
+    from roomba_bt.runtime.loop import Interrupted, MissionRunner, TickObserver, stream_request
+    from roomba_bt.runtime.stack import RunStack, TreeMission
+    from roomba_bt.runtime.stepping import Tick
+    from roomba_bt.runtime.summary import ExitCode, Outcome, RunFailed, RunSummary
+    from roomba_bt.sim import RealtimeSimLink, SimLink, Simulator, WorldError, load_world
+    from roomba_bt.transport import SerialTransport, Transport, TransportError
+else:  # a type checker reads the imports instead, and a name not there is an error to it (a
+    # module __getattr__ it could see made every name Any: roomba_bt.RunStak passed)
     __getattr__, __dir__ = lazy_exports(__name__, _MODULE_OF)

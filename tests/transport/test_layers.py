@@ -11,8 +11,9 @@ import sys
 import pytest
 
 PACKAGE = pathlib.Path(__file__).resolve().parents[2] / "roomba_bt"
-#: below every layer, standard library only (tests/test_layers.py): lazy exports, escaping
-BELOW = {"roomba_bt._lazy", "roomba_bt.printable"}
+#: below every layer, standard library only (tests/test_layers.py): lazy exports, escaping,
+#: the base of the package's errors
+BELOW = {"roomba_bt._lazy", "roomba_bt.printable", "roomba_bt.errors"}
 ALLOWED = {
     "transport": {"roomba_bt.transport", "serial", *BELOW},
     "robot": {
