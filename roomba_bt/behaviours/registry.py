@@ -112,6 +112,12 @@ class PluginError:
     #: node of one of them gets this error as its note (mission/nodes.py), not every broken
     #: plugin's
     names: tuple[str, ...] = ()
+    #: False for a name two classes want (a clash, a word of the language): nothing is
+    #: broken, each behaviour is still reached (by ``package:name``, or the name stays the
+    #: built-in's). True when behaviours the plugin was to provide are missing: it did not
+    #: import, or a class declared itself wrongly. ``schema`` and ``behaviours`` fail on these
+    #: (a schema without them marks every mission that uses them wrong in an editor)
+    loses_behaviours: bool = True
 
     def __str__(self) -> str:
         return f"plugin {self.plugin}: {self.cause}"
@@ -292,7 +298,7 @@ class Registry:
             except NameClash as exc:  # it declared nothing wrongly: two classes want a name
                 spelled = self.spelled(declared) if isinstance(declared, Declaration) else None
                 clash = f"{_where(cls)} {exc.clash(spelled, self.spelled(exc.existing))}"
-                self._errors.append(PluginError(said, clash, names=names))
+                self._errors.append(PluginError(said, clash, names=names, loses_behaviours=False))
             except _LanguageWord as exc:  # the word is the language's; the class may be reached
                 spelled = self.spelled(declared) if isinstance(declared, Declaration) else None
                 reach = f"a mission reaches it as {spelled!r}" if spelled else "it is not used"
@@ -300,7 +306,7 @@ class Registry:
                     f"{_where(cls)} declares {exc.name!r}, a word of the mission language: the "
                     f"word is the language's, and {reach} (or rename it)"
                 )
-                self._errors.append(PluginError(said, word, names=names))
+                self._errors.append(PluginError(said, word, names=names, loses_behaviours=False))
             except _NotABehaviour as exc:
                 self._errors.append(PluginError(said, f"{_where(cls)}: {exc}", names=names))
             except DeclarationError as exc:
@@ -512,6 +518,13 @@ class Registry:
         self._ensure_loaded()
         return list(self._errors)
 
+    @property
+    def broken(self) -> list[PluginError]:
+        """The errors of plugins whose behaviours are missing
+        (:attr:`PluginError.loses_behaviours`): what ``schema`` and ``behaviours`` refuse to
+        pass over in silence."""
+        return [error for error in self.errors if error.loses_behaviours]
+
 
 def group_entry_points(group: str) -> list[EntryPoint]:
     """``importlib.metadata.entry_points(group=group)``: the same entry points in the same
@@ -672,9 +685,12 @@ def _package_of(ep: EntryPoint) -> list[Path]:
 
 
 def _cause(exc: BaseException) -> str:
+    """The exception in one line: a message of several lines (a plugin's own ``raise
+    RuntimeError(...)``) would print as lines of their own under ``roomba-bt: warning:``,
+    one of them looking like a line of the command's output."""
     if isinstance(exc, SystemExit):  # its exit code would have passed for one of ours
         return f"it called sys.exit({exc.code!r})"
-    return f"{type(exc).__name__}: {exc}"
+    return " ".join(f"{type(exc).__name__}: {exc}".split())
 
 
 class _NotABehaviour(DeclarationError):

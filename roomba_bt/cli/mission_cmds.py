@@ -94,12 +94,14 @@ def register(sub: Any) -> None:
         """list every behaviour with its parameters
 
         List the built-in and plugin behaviours: parameters (type, unit, range, default), sensor
-        packets read, OI modes needed.
+        packets read, OI modes needed. Exit 2 if an installed plugin did not load (it is
+        named, with its error), unless --skip-broken-plugins.
         """,
     )
     behaviours.add_argument("names", nargs="*", help="only these behaviours")
     behaviours.add_argument("--json", action="store_true", help="machine-readable output")
     _add_plugin_file_option(behaviours, "also list")
+    _add_skip_broken_option(behaviours, "list the behaviours that loaded and exit 0")
 
     schema = add_command(
         sub,
@@ -108,10 +110,13 @@ def register(sub: Any) -> None:
         """print the JSON Schema of mission files
 
         Print the JSON Schema of mission files (roomba-bt schema > mission.schema.json), generated
-        from the behaviour declarations.
+        from the behaviour declarations. If an installed plugin did not load, it is named with
+        its error, no schema is printed and the exit code is 2: a schema without its
+        behaviours would mark every mission that uses them wrong.
         """,
     )
     _add_plugin_file_option(schema, "also describe")
+    _add_skip_broken_option(schema, "print the schema without their behaviours and exit 0")
 
 
 def _add_plugin_file_option(parser: argparse.ArgumentParser, verb: str) -> None:
@@ -122,6 +127,14 @@ def _add_plugin_file_option(parser: argparse.ArgumentParser, verb: str) -> None:
         metavar="FILE",
         help=f"{verb} the behaviours of this plugin file (imported: it is code), for "
         "missions that name it under plugins: (repeatable)",
+    )
+
+
+def _add_skip_broken_option(parser: argparse.ArgumentParser, then: str) -> None:
+    parser.add_argument(
+        "--skip-broken-plugins",
+        action="store_true",
+        help=f"when an installed plugin does not load, warn, {then}",
     )
 
 
@@ -421,7 +434,6 @@ def behaviours_command(args: argparse.Namespace) -> int:
             )
         _plugin_warnings(registry)  # it may be one of a plugin that did not load
         return ExitCode.INVALID
-    _plugin_warnings(registry)
     data = describe_behaviours(args.names, registry)
     # a name two plugins declare is no behaviour a mission can use (it is refused, exit 2):
     # asked for by name, the answer is that error, not one of the two as if it were in use
@@ -429,13 +441,19 @@ def behaviours_command(args: argparse.Namespace) -> int:
     said = ExitCode.INVALID if args.names and contested else ExitCode.OK
     if args.json:
         print(json.dumps(data, indent=2, default=str))
-        return said
-    for entry in data:
-        if entry in contested:
-            print(f"{entry['name']}  (declared by two plugins: a mission that uses it is refused)")
-            print(f"    error: {entry['clash']['why']}\n")
-        else:
-            _print_behaviour(entry)
+    else:
+        for entry in data:
+            if entry in contested:
+                print(f"{entry['name']}  (declared by two plugins: a mission that uses it is "
+                      "refused)")  # fmt: skip
+                print(f"    error: {entry['clash']['why']}\n")
+            else:
+                _print_behaviour(entry)
+    # after the listing, where a terminal leaves it in view
+    if _plugins_broken(
+        "behaviours", registry, args.skip_broken_plugins, "their behaviours are not listed"
+    ):
+        return ExitCode.INVALID
     return said
 
 
@@ -484,7 +502,15 @@ def schema_command(args: argparse.Namespace) -> int:
     registry = _registry_with_files("schema", args.plugin_file)
     if isinstance(registry, int):
         return registry
-    _plugin_warnings(registry)  # their behaviours are missing from the schema
+    # nothing printed: ``schema > mission.schema.json`` in CI or a bot wrote a schema
+    # without the plugin's behaviours, exit 0, and every editor marked its missions wrong
+    if _plugins_broken(
+        "schema",
+        registry,
+        args.skip_broken_plugins,
+        "no schema printed: it would lack their behaviours",
+    ):
+        return ExitCode.INVALID
     print(json.dumps(mission_schema(registry), indent=2))
     return ExitCode.OK
 
@@ -492,4 +518,28 @@ def schema_command(args: argparse.Namespace) -> int:
 def _plugin_warnings(registry: Registry) -> None:
     """The plugins that did not load, or not whole, each a warning on stderr."""
     for error in registry.errors:
-        print(f"roomba-bt: warning: {error}", file=sys.stderr)
+        print(f"roomba-bt: warning: {escaped(str(error), ANY_CONTROL)}", file=sys.stderr)
+
+
+def _plugins_broken(command: str, registry: Registry, skip: bool, consequence: str) -> bool:
+    """Say each installed plugin that did not load (its entry point, module and distribution,
+    the error in one line) and whether the command must fail for it: True unless ``skip``
+    (``--skip-broken-plugins``), when they are warnings, as a name two plugins declare
+    always is (nothing is missing: each is reached by ``package:name``)."""
+    broken = registry.broken
+    for error in registry.errors:
+        kind = "error" if error in broken and not skip else "warning"
+        print(f"roomba-bt {command}: {kind}: {escaped(str(error), ANY_CONTROL)}", file=sys.stderr)
+    if not broken or skip:
+        return False
+    what, it = (
+        ("an installed plugin", "it")
+        if len(broken) == 1
+        else (f"{len(broken)} installed plugins", "them")
+    )
+    print(
+        f"roomba-bt {command}: {what} did not load ({consequence}): fix or uninstall {it}, or "
+        f"pass --skip-broken-plugins to go on without {it}",
+        file=sys.stderr,
+    )
+    return True

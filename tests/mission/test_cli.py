@@ -270,7 +270,11 @@ def test_a_plugin_that_did_not_load_is_said_by_behaviours_name_and_by_schema(
     err = capsys.readouterr().err
     assert "unknown behaviour 'typo_cond'" in err
     assert "warning: plugin 'typo' (typo_mdo): failed to import: ModuleNotFoundError" in err
-    assert main(["schema"]) == 0
+    # it does not import: no schema without its behaviours (tests/mission/test_broken_plugin_cli.py)
+    assert main(["schema"]) == 2
+    out, err = capsys.readouterr()
+    assert not out and "error: plugin 'typo' (typo_mdo): failed to import" in err
+    assert main(["schema", "--skip-broken-plugins"]) == 0
     out, err = capsys.readouterr()
     assert json.loads(out) and "warning: plugin 'typo' (typo_mdo): failed to import" in err
 

@@ -1,0 +1,128 @@
+"""An installed plugin that fails to import makes ``roomba-bt schema`` and ``roomba-bt
+behaviours`` fail (exit 2), naming the entry point, its module and distribution and the
+error in one line (docs/plugins.md, "A plugin that does not load"). Before, both exited 0
+with a warning: ``roomba-bt schema > mission.schema.json`` in CI wrote a schema without the
+plugin's behaviours, and every editor then marked the missions that use them wrong.
+
+The plugin is a tiny distribution installed for real (a ``.dist-info`` with its
+``entry_points.txt`` and a module that raises on import, on ``sys.path``), so the registry
+finds it as it finds any installed plugin."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.cli import main
+
+Capsys = pytest.CaptureFixture[str]
+
+#: a module whose import raises, with a message of two lines
+BROKEN = 'raise RuntimeError("the lab\'s calibration file is missing\\nsee README")\n'
+WORKING = '''\
+from roomba_bt.behaviours import Condition, declare
+
+
+@declare("s29_sound", kind="condition")
+class SoundCondition(Condition):
+    """Always true: a plugin that loads."""
+
+    def check(self, snapshot):
+        return True
+'''
+
+
+def _install(site: Path, distribution: str, module: str, source: str) -> None:
+    """A distribution as pip leaves it: its module and its ``.dist-info``."""
+    (site / f"{module}.py").write_text(source)
+    info = site / f"{distribution.replace('-', '_')}-1.0.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {distribution}\nVersion: 1.0\n")
+    (info / "entry_points.txt").write_text(f"[roomba_bt.behaviours]\n{module} = {module}\n")
+
+
+@pytest.fixture
+def installed(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``bt-s29-broken`` (entry point ``s29_broken``, raises on import) and ``bt-s29-sound``
+    installed; the commands' registry reads the entry points afresh."""
+    import roomba_bt.behaviours as behaviours
+    from roomba_bt.behaviours.registry import ENTRY_POINT_GROUP
+
+    site = tmp_path / "site"
+    site.mkdir()
+    _install(site, "bt-s29-broken", "s29_broken", BROKEN)
+    _install(site, "bt-s29-sound", "s29_sound", WORKING)
+    monkeypatch.syspath_prepend(str(site))
+    for module in ("s29_broken", "s29_sound"):
+        monkeypatch.delitem(sys.modules, module, raising=False)
+    registry = behaviours.builtin_registry()
+    registry._group = ENTRY_POINT_GROUP  # the entry points, read on first use
+    registry._loaded = False
+    monkeypatch.setattr(behaviours, "default_registry", lambda: registry)
+
+
+def _said(err: str) -> list[str]:
+    """The lines of stderr that name the broken plugin."""
+    return [line for line in err.splitlines() if "s29_broken" in line]
+
+
+@pytest.mark.usefixtures("installed")
+def test_schema_fails_and_prints_no_schema_when_a_plugin_does_not_import(capsys: Capsys) -> None:
+    assert main(["schema"]) == 2
+    out, err = capsys.readouterr()
+    assert out == ""  # not a schema without the plugin's behaviours, to be redirected to a file
+    [line] = _said(err)
+    assert line.startswith(
+        "roomba-bt schema: error: plugin 's29_broken' (s29_broken, from bt-s29-broken): failed "
+        "to import: RuntimeError: the lab's calibration file is missing see README (at "
+    )  # the entry point, its module, the distribution, the error on one line
+    assert "s29_broken.py:1)" in line
+    assert "did not load (no schema printed" in err and "--skip-broken-plugins" in err
+
+
+@pytest.mark.usefixtures("installed")
+def test_schema_skip_broken_plugins_goes_on_with_a_warning(capsys: Capsys) -> None:
+    assert main(["schema", "--skip-broken-plugins"]) == 0
+    out, err = capsys.readouterr()
+    schema = json.loads(out)
+    assert "s29_sound" in schema["$defs"]  # the plugin that loads is described
+    [line] = _said(err)
+    assert line.startswith("roomba-bt schema: warning: plugin 's29_broken'")
+
+
+@pytest.mark.usefixtures("installed")
+@pytest.mark.parametrize("json_output", [False, True])
+def test_behaviours_lists_what_loaded_and_fails(capsys: Capsys, json_output: bool) -> None:
+    assert main(["behaviours", *(["--json"] if json_output else [])]) == 2
+    out, err = capsys.readouterr()
+    assert "s29_sound" in out  # the listing is still printed
+    [line] = _said(err)
+    assert line.startswith("roomba-bt behaviours: error: plugin 's29_broken' (s29_broken, from ")
+    assert main(["behaviours", "--skip-broken-plugins"]) == 0
+    assert "warning: plugin 's29_broken'" in capsys.readouterr().err
+
+
+def test_a_name_two_plugins_declare_is_no_broken_plugin(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
+) -> None:
+    """A clash loses no behaviour (each is reached by ``package:name``; the schema lists
+    those): a warning, exit 0, as before."""
+    import roomba_bt.behaviours as behaviours
+    from roomba_bt.behaviours.registry import ENTRY_POINT_GROUP
+
+    site = tmp_path / "site"
+    site.mkdir()
+    _install(site, "bt-s29-one", "s29_one", WORKING)
+    _install(site, "bt-s29-two", "s29_two", WORKING.replace("SoundCondition", "Other"))
+    monkeypatch.syspath_prepend(str(site))
+    registry = behaviours.builtin_registry()
+    registry._group = ENTRY_POINT_GROUP
+    registry._loaded = False
+    monkeypatch.setattr(behaviours, "default_registry", lambda: registry)
+    assert main(["schema"]) == 0
+    out, err = capsys.readouterr()
+    assert "bt-s29-one:s29_sound" in json.loads(out)["$defs"]
+    assert "roomba-bt schema: warning: plugin 's29_two'" in err
