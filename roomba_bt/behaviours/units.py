@@ -424,9 +424,52 @@ SPEED = _quantity_type("speed")
 DISTANCE = _quantity_type("distance")
 ANGLE = _quantity_type("angle")
 PERCENT = _quantity_type("percent")
-INT = ValueType("int", _parse_int, json_schema=(("type", "integer"),))
-FLOAT = ValueType("float", _parse_float, json_schema=(("type", "number"),))
-BOOL = ValueType("bool", _parse_bool, json_schema=(("type", "boolean"),))
+#: the words PyYAML (YAML 1.1) reads as a boolean and a YAML 1.2 reader (an editor's YAML
+#: extension, check-jsonschema) as a text, by the boolean: ``vacuum: on`` is true to
+#: ``validate``, the text "on" to an editor, so the schema takes them where a boolean may stand
+#: (``y``/``n`` are texts to both: PyYAML leaves them out of its booleans)
+YAML11_BOOLEAN_WORDS: dict[bool, tuple[str, ...]] = {
+    value: tuple(form for word in words for form in (word, word.title(), word.upper()))
+    for value, words in ((True, ("yes", "on")), (False, ("no", "off")))
+}
+#: an integer as PyYAML (YAML 1.1) reads it that a YAML 1.2 reader takes as a text: with
+#: ``_`` between its digits (``1_000``), or binary (``0b101``); validate warns of both
+#: (yamlsource.yaml12_text_number). Octal (``010``) and base 60 (``1:30``) validate refuses.
+YAML11_INT_TEXT = r"[-+]?(?:0b[01_]+|0x[0-9a-fA-F]*_[0-9a-fA-F_]*|[1-9][0-9]*_[0-9_]*)"
+#: a float as PyYAML reads it, with ``_`` between its digits (``1_000.5``), a text to YAML 1.2
+YAML11_FLOAT_TEXT = (
+    r"(?:[-+]?(?:[0-9]+_[0-9_]*\.[0-9_]*|[0-9][0-9_]*\.[0-9]*_[0-9_]*)(?:[eE][-+][0-9]+)?"
+    r"|\.[0-9]*_[0-9_]*(?:[eE][-+][0-9]+)?)"
+)
+
+
+def boolean_schema(only: bool | None = None) -> dict[str, Any]:
+    """A boolean (``only``: that one) as JSON Schema, with the YAML 1.1 words for it that a
+    YAML 1.2 reader sees as texts (:data:`YAML11_BOOLEAN_WORDS`): the schema is never
+    stricter than ``validate``, which reads the file with PyYAML."""
+    values = (True, False) if only is None else (only,)
+    words = [word for value in values for word in YAML11_BOOLEAN_WORDS[value]]
+    exact = {"type": "boolean"} if only is None else {"const": only}
+    return {"anyOf": [exact, {"enum": words}]}
+
+
+def _yaml11_text(pattern: str) -> dict[str, Any]:
+    return {"type": "string", "pattern": f"^{pattern}$"}
+
+
+INT = ValueType(
+    "int",
+    _parse_int,
+    json_schema=(("anyOf", [{"type": "integer"}, _yaml11_text(YAML11_INT_TEXT)]),),
+)
+FLOAT = ValueType(
+    "float",
+    _parse_float,
+    json_schema=(
+        ("anyOf", [{"type": "number"}, _yaml11_text(f"(?:{YAML11_INT_TEXT}|{YAML11_FLOAT_TEXT})")]),
+    ),
+)
+BOOL = ValueType("bool", _parse_bool, json_schema=tuple(boolean_schema().items()))
 #: a number is a text too (``log: 5`` logs "5"), a boolean is not (``default: no``)
 STR = ValueType(
     "str", _parse_str, json_schema=(("anyOf", [{"type": "string"}, {"type": "number"}]),)

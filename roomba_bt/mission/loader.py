@@ -234,12 +234,15 @@ class Loader:
         no line the user wrote)."""
         display = self.display(path)
         if text is not None:  # a mission given as text: no file to read or watch
-            root, errors = compose_text(text, display)
+            root, said = compose_text(text, display)
         else:
             self.files.append(resolved)
-            root, errors = compose(path, display, include)
-        for e in errors:
-            self.ctx.error(e)
+            root, said = compose(path, display, include)
+        for e in said:
+            if e.severity != "warning":
+                self.ctx.error(e)
+            elif e not in self.ctx.warnings:  # a file included twice is read twice
+                self.ctx.warnings.append(e)
         if root is None:
             return None
         return root, loc_of(root, display, "")

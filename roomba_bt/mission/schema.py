@@ -18,7 +18,7 @@ from typing import Any
 from roomba_bt.behaviours.declare import Declaration, Param
 from roomba_bt.behaviours.language import MODIFIERS, STRUCTURAL, WORDS, NodeKind, Shape
 from roomba_bt.behaviours.registry import Registry, default_registry
-from roomba_bt.behaviours.units import UNITS, VALUE_TYPES, quantity_schema
+from roomba_bt.behaviours.units import UNITS, VALUE_TYPES, boolean_schema, quantity_schema
 
 SCHEMA_ID = "https://roomba-bt.example/mission.schema.json"
 _NODE = {"$ref": "#/$defs/node"}
@@ -46,14 +46,45 @@ _MODIFIERS: dict[str, Any] = {
 RANGE_NOT_IN_SCHEMA = "checked by roomba-bt validate: a JSON Schema pattern cannot hold a range"
 
 
-def _with_modifiers(word: str, value: dict[str, Any], doc: str) -> dict[str, Any]:
-    return {
+def _either(
+    test: dict[str, Any], then: dict[str, Any], otherwise: dict[str, Any]
+) -> dict[str, Any]:
+    """``then`` where the value passes ``test`` (its type, its ``do:``), else ``otherwise``:
+    the form validate reads it as, chosen as validate chooses (an ``anyOf`` of the forms
+    reported a mistake in one as "not valid under any of the given schemas" at the node
+    above, and every other form's mismatch beside it)."""
+    return {"if": test, "then": then, "else": otherwise}
+
+
+def _node_schema(words: dict[str, str], bare: list[str]) -> dict[str, Any]:
+    """A node: a behaviour's name alone (``- stop``), or a mapping of one word (a word of the
+    language, a behaviour's name or ``package:name``) and the modifiers. One object schema
+    whose properties are every word, not an ``anyOf`` of one schema per word: a typo inside
+    ``drive:`` is one error at ``drive``'s value (``'velocty' was unexpected``), an unknown
+    word one error at the node; it was 500-900 errors under one "not valid under any of the
+    given schemas" at the whole ``tree:``. ``words``: each word's description."""
+    modifiers = list(MODIFIERS)
+    one_word = [
+        {"if": {"required": [word]}, "then": {"propertyNames": {"enum": [word, *modifiers]}}}
+        for word in words
+    ]
+    mapping = {
         "type": "object",
-        "description": doc,
-        "properties": {word: value, **_MODIFIERS},
-        "required": [word],
+        "properties": {
+            **{
+                word: {"$ref": f"#/$defs/{word}", "description": doc} for word, doc in words.items()
+            },
+            **_MODIFIERS,
+        },
         "additionalProperties": False,
+        # no word at all (only modifiers, or nothing): one of them is needed; a node with an
+        # unknown word is said once, by additionalProperties
+        "if": {"propertyNames": {"enum": modifiers}},
+        "then": {"anyOf": [{"required": [word]} for word in words]},
+        # and one at the most (a second word is said at the node)
+        "allOf": one_word,
     }
+    return _either({"type": "string"}, {"enum": bare}, mapping)
 
 
 def _value_schema(param: Param) -> tuple[dict[str, Any], str]:
@@ -114,22 +145,25 @@ def _option_rules(kind: NodeKind) -> dict[str, Any]:
 def _word_schema(kind: NodeKind) -> dict[str, Any]:
     """What may follow a word of the language, from its :class:`NodeKind`."""
     options = {p.name: _option_schema(p) for p in kind.options}
-    for name, bad, _ in kind.refused:  # reactive_sequence's memory: only false
+    for name, bad, _ in kind.refused:  # reactive_sequence's memory: only false (or off, no)
         if isinstance(bad, bool):
-            options[name] = {**options[name], "anyOf": [{"const": not bad}, _PARAMETER]}
+            only = [boolean_schema(not bad), _PARAMETER]
+            options[name] = {**options[name], "anyOf": only}
     required = [p.name for p in kind.options if p.required]
     rules = _option_rules(kind)
     if kind.shape is Shape.SUBTREE:
         by_id = {"type": "object", "properties": options, "required": required}
-        return {"anyOf": [{"type": "string"}, by_id]}
+        return _either({"type": "object"}, by_id, {"type": "string"})
     if kind.shape is Shape.CHILDREN:
         children = {"type": "array", "items": _NODE, "minItems": 1}
         long_form = {"type": "object", "properties": {"children": children, **options},
                      "required": ["children"], "additionalProperties": False, **rules}  # fmt: skip
-        return {"anyOf": [children, long_form]}
+        return _either({"type": "array"}, children, long_form)
     long_form = {"type": "object", "properties": {**options, "do": _NODE},
                  "required": ["do", *required], "additionalProperties": False, **rules}  # fmt: skip
-    return {"anyOf": [long_form, _NODE]} if kind.shape is Shape.CHILD_OR_DO else long_form
+    if kind.shape is Shape.CHILD_OR_DO:  # a mapping with do: is the long form (control.py)
+        return _either({"type": "object", "required": ["do"]}, long_form, _NODE)
+    return long_form
 
 
 def _param_schema(decl: Declaration) -> dict[str, Any]:
@@ -146,31 +180,34 @@ def _param_schema(decl: Declaration) -> dict[str, Any]:
     required = [p.name for p in decl.params if p.required]
     if required:
         body["required"] = required
-    forms: list[dict[str, Any]] = [body]
+    # a mapping is the parameters, anything else the short form (leaves.py, _given)
+    short: list[dict[str, Any]] = []
     if not required:
-        forms.append({"type": "null"})
+        short.append({"type": "null"})
     if decl.primary is not None:
-        forms.append(props[decl.primary])
-    return {"anyOf": forms}
+        short.append(props[decl.primary])
+    if not short:
+        return body
+    return _either({"type": "object"}, body, short[0] if len(short) == 1 else {"anyOf": short})
 
 
 def mission_schema(registry: Registry | None = None) -> dict[str, Any]:
     """The whole schema as a JSON-ready dict."""
     registry = registry or default_registry()
+    #: each word's value (what follows ``word:``), by the word
     defs: dict[str, Any] = {}
-    node_forms: list[dict[str, Any]] = []
+    docs: dict[str, str] = {}
     bare: list[str] = []
     for kind in WORDS.values():
-        defs[kind.word] = _with_modifiers(kind.word, _word_schema(kind), kind.doc)
+        defs[kind.word], docs[kind.word] = _word_schema(kind), kind.doc
     # each behaviour by its name alone, unless two plugins declare it (a mission that uses
     # it so is refused), and by its package:name (roomba-bt:drive, roomba-bt-dirt:...)
     alone = [(d.name, d) for d in registry if (registry.clash(d.name) or ("",))[0] != "error"]
     for word, decl in [*alone, *registry.qualified()]:
-        defs[word] = _with_modifiers(word, _param_schema(decl), decl.doc)
+        defs[word], docs[word] = _param_schema(decl), decl.doc
         if not any(p.required for p in decl.params):
             bare.append(word)
-    node_forms = [{"$ref": f"#/$defs/{word}"} for word in defs]
-    defs["node"] = {"anyOf": [*node_forms, {"enum": bare}]}
+    defs["node"] = _node_schema(docs, bare)
     parameter, key = _declarations()
     return {
         "$schema": "https://json-schema.org/draft/2020-12/schema",

@@ -102,7 +102,7 @@ def compose_text(text: str, display: str) -> tuple[yaml.Node | None, list[Diagno
         return None, [Diagnostic(display, 1, 1, f"YAML error: {exc}")]
     if node is None:
         return None, [Diagnostic(display, 1, 1, "the mission file is empty")]
-    return node, duplicate_keys(node, display)
+    return node, [*duplicate_keys(node, display), *yaml12_text_numbers(node, display)]
 
 
 def duplicate_keys(root: yaml.Node, display: str) -> list[Diagnostic]:
@@ -117,6 +117,18 @@ def duplicate_keys(root: yaml.Node, display: str) -> list[Diagnostic]:
         first = yamlsource.position(dup.first)[0]
         where = loc_of(dup.node, display, path)
         found.append(where.at(f"duplicate key {_key_shown(dup.node)} (first at line {first})"))
+    return found
+
+
+def yaml12_text_numbers(root: yaml.Node, display: str) -> list[Diagnostic]:
+    """A warning at each number an editor reads otherwise (``1_000``, ``0b11``: texts to
+    YAML 1.2; :func:`yamlsource.yaml12_text_numbers`)."""
+    found = []
+    for node, parts, problem in yamlsource.yaml12_text_numbers(root):
+        path = ""
+        for part in parts:
+            path = join(path, f"[{part}]" if isinstance(part, int) else part)
+        found.append(loc_of(node, display, path).at(problem).as_warning())
     return found
 
 

@@ -619,6 +619,48 @@ def yaml11_number_problem(text: str, *, in_a_file: bool = True) -> str | None:
     return f"{quoted(text)} is read by YAML 1.1 as {what}, not as written: {advice}{quote}"
 
 
+#: a number PyYAML reads that a YAML 1.2 reader takes as a text: ``_`` between digits, binary
+_YAML12_TEXT = re.compile(r"[-+]?0b[01_]+|.*_.*")
+
+
+def yaml12_text_numbers(root: yaml.Node) -> list[tuple[yaml.ScalarNode, PathKey, str]]:
+    """Every number of the document (a value, in the order written) that PyYAML reads as a
+    number and a YAML 1.2 reader (an editor's YAML extension, check-jsonschema, ruamel) as a
+    text: ``1_000`` (1000 here, the text "1_000" there), ``0b11``; with its path and what to
+    say (:func:`yaml12_number_problem`). Octal and base 60 are refused already (:func:`scalar`)."""
+    found: list[tuple[yaml.ScalarNode, PathKey, str]] = []
+    pending: list[tuple[yaml.Node, PathKey]] = [(root, ())]
+    while pending:
+        node, path = pending.pop()
+        if node.__class__ is yaml.ScalarNode:
+            problem = yaml12_number_problem(node) if node.tag in _NUMBER_TAGS else None
+            if problem is not None:
+                found.append((node, path, problem))
+        elif node.__class__ is yaml.SequenceNode:
+            pending += ((item, (*path, i)) for i, item in enumerate(node.value))
+        elif node.__class__ is yaml.MappingNode:
+            pending += ((value, (*path, str(key.value))) for key, value in node.value)
+    found.sort(key=lambda each: position(each[0]))
+    return found
+
+
+def yaml12_number_problem(node: yaml.ScalarNode) -> str | None:
+    """What a number node written in a YAML 1.1 spelling that YAML 1.2 reads as a text says,
+    or None. A warning, not an error: roomba-bt reads it as the number it shows, but an editor
+    validating against the JSON Schema, or another program reading the file, sees a text."""
+    text = str(node.value)
+    if _YAML12_TEXT.fullmatch(text) is None or yaml11_number_problem(text) is not None:
+        return None
+    reading = _yaml11_reading(text, "int" if node.tag == CORE + "int" else "float")
+    if not reading:
+        return None
+    return (
+        f"{quoted(text)} is the number {reading} to roomba-bt (YAML 1.1), but the text "
+        f"{quoted(text)} to a YAML 1.2 reader (an editor, check-jsonschema): write {reading}, "
+        "or quote it where the text is meant"
+    )
+
+
 def _yaml11_reading(text: str, kind: str) -> str:
     """What PyYAML makes of ``text`` as a ``kind`` ("int", "float"), for a message; "" when
     too long to work out."""

@@ -189,11 +189,13 @@ def test_schema_is_json_with_every_behaviour(capsys: Capsys) -> None:
     defs = schema["$defs"]
     for word in ("sequence", "parallel", "retry", "for_each", "subtree", "drive", "wall_follow"):
         assert word in defs
-    drive = defs["drive"]["properties"]["drive"]["anyOf"][0]
+    drive = defs["drive"]["then"]  # drive's value when it is a mapping
     assert set(drive["properties"]) >= {"velocity", "radius", "distance"}
     assert drive["additionalProperties"] is False
-    assert defs["turn"]["properties"]["turn"]["anyOf"][0]["required"] == ["angle"]
-    assert set(defs["drive"]["properties"]) == {"drive", "name", "while", "until"}
+    assert defs["turn"]["then"]["required"] == ["angle"]
+    node = defs["node"]["else"]  # a node that is a mapping: one word and the modifiers
+    assert {"drive", "name", "while", "until"} <= set(node["properties"])
+    assert node["properties"]["drive"]["$ref"] == "#/$defs/drive"
 
 
 def test_schema_with_a_plugin_file_describes_its_behaviours(capsys: Capsys) -> None:

@@ -2,7 +2,8 @@
 
 Checked with the jsonschema package (in the test extra) and with a small validator for the
 subset the schema uses (type, enum, const, pattern, properties, required,
-additionalProperties, items, minItems, maxItems, anyOf, $ref), which needs nothing.
+additionalProperties, propertyNames, items, minItems, maxItems, anyOf, allOf, if/then/else,
+$ref), which needs nothing.
 """
 
 from __future__ import annotations
@@ -30,6 +31,15 @@ def valid(value: Any, schema: dict[str, Any]) -> bool:
         if not valid(value, target):
             return False
     if "anyOf" in schema and not any(valid(value, s) for s in schema["anyOf"]):
+        return False
+    if not all(valid(value, s) for s in schema.get("allOf", [])):
+        return False
+    if "if" in schema:
+        chosen = schema.get("then" if valid(value, schema["if"]) else "else", {})
+        if not valid(value, chosen):
+            return False
+    names = schema.get("propertyNames")
+    if isinstance(value, dict) and names and not all(valid(key, names) for key in value):
         return False
     if "enum" in schema and value not in schema["enum"]:
         return False
