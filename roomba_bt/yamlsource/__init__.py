@@ -625,9 +625,10 @@ _YAML12_TEXT = re.compile(r"[-+]?0b[01_]+|.*_.*")
 
 def yaml12_text_numbers(root: yaml.Node) -> list[tuple[yaml.ScalarNode, PathKey, str]]:
     """Every number of the document (a value, in the order written) that PyYAML reads as a
-    number and a YAML 1.2 reader (an editor's YAML extension, check-jsonschema, ruamel) as a
-    text: ``1_000`` (1000 here, the text "1_000" there), ``0b11``; with its path and what to
-    say (:func:`yaml12_number_problem`). Octal and base 60 are refused already (:func:`scalar`)."""
+    number and YAML 1.2's core schema as a text: ``1_000`` (1000 here, the text "1_000" to
+    an editor's YAML extension, yaml-language-server; ruamel, check-jsonschema's reader, takes
+    both spellings as numbers), ``0b11``; with its path and what to say
+    (:func:`yaml12_number_problem`). Octal and base 60 are refused already (:func:`scalar`)."""
     found: list[tuple[yaml.ScalarNode, PathKey, str]] = []
     pending: list[tuple[yaml.Node, PathKey]] = [(root, ())]
     while pending:
@@ -656,8 +657,8 @@ def yaml12_number_problem(node: yaml.ScalarNode) -> str | None:
         return None
     return (
         f"{quoted(text)} is the number {reading} to roomba-bt (YAML 1.1), but the text "
-        f"{quoted(text)} to a YAML 1.2 reader (an editor, check-jsonschema): write {reading}, "
-        "or quote it where the text is meant"
+        f"{quoted(text)} to YAML 1.2 (an editor's YAML extension reads it so): write "
+        f"{reading}, or quote it where the text is meant"
     )
 
 

@@ -26,9 +26,10 @@ CORE = "tag:yaml.org,2002:"
 
 
 class Yaml12Loader(yaml.SafeLoader):
-    """PyYAML with YAML 1.2's core schema, as ruamel (check-jsonschema) and the VS Code YAML
-    extension read a file: booleans are only true/false, integers decimal, 0o octal or 0x
-    hex (no ``_``, no ``0b``, no base 60), floats without ``_``."""
+    """PyYAML with YAML 1.2's core schema, as the VS Code YAML extension (yaml-language-server)
+    reads a file: booleans are only true/false, integers decimal, 0o octal or 0x hex (no
+    ``_``, no ``0b``, no base 60), floats without ``_``. (ruamel, check-jsonschema's reader,
+    reads ``on`` as a text too, but ``1_000`` and ``0b11`` as numbers.)"""
 
 
 Yaml12Loader.yaml_implicit_resolvers = {
@@ -138,11 +139,11 @@ def test_validate_warns_of_a_number_an_editor_reads_as_a_text(
     written: str, column: int, reading: str, tmp_path: Path
 ) -> None:
     """Before, ``times: 1_000`` passed in silence: 1000 to roomba-bt, the text "1_000" to the
-    editor and check-jsonschema."""
+    editor's YAML extension."""
     errors, [warning] = _validate(_mission(written), tmp_path)
     assert errors == []
     assert re.match(rf".*m\.yaml:4:{column}: warning: '", warning), warning
-    assert f"to a YAML 1.2 reader (an editor, check-jsonschema): write {reading}" in warning
+    assert f"to YAML 1.2 (an editor's YAML extension reads it so): write {reading}," in warning
 
 
 def test_a_boolean_word_is_no_warning(tmp_path: Path) -> None:
@@ -196,7 +197,8 @@ tree:
 def test_a_mistake_is_one_error_at_its_node(name: str, text: str, path: str, said: str) -> None:
     """The node schema picks a node's form by its one key (and a word's by its type or its
     ``do:``), as validate does: the error is where the mistake is, alone. Before, the node
-    was an ``anyOf`` of 65 words, and the typo 887 errors, the one shown at ``$.tree``."""
+    was an ``anyOf`` of its 110 words and spellings, and the typo 887 errors, the one shown
+    at ``$.tree``."""
     top = list(_validator().iter_errors(_as_an_editor_reads(text)))
     shown = [(e.json_path, e.message[:80]) for e in top]
     assert [e.json_path for e in top if said in e.message] == [path], shown
