@@ -451,7 +451,7 @@ def behaviours_command(args: argparse.Namespace) -> int:
                 _print_behaviour(entry)
     # after the listing, where a terminal leaves it in view
     if _plugins_broken(
-        "behaviours", registry, args.skip_broken_plugins, "their behaviours are not listed"
+        "behaviours", registry, args.skip_broken_plugins, "{its} behaviours are not listed"
     ):
         return ExitCode.INVALID
     return said
@@ -508,7 +508,7 @@ def schema_command(args: argparse.Namespace) -> int:
         "schema",
         registry,
         args.skip_broken_plugins,
-        "no schema printed: it would lack their behaviours",
+        "no schema printed: it would lack {its} behaviours",
     ):
         return ExitCode.INVALID
     print(json.dumps(mission_schema(registry), indent=2))
@@ -525,21 +525,20 @@ def _plugins_broken(command: str, registry: Registry, skip: bool, consequence: s
     """Say each installed plugin that did not load (its entry point, module and distribution,
     the error in one line) and whether the command must fail for it: True unless ``skip``
     (``--skip-broken-plugins``), when they are warnings, as a name two plugins declare
-    always is (nothing is missing: each is reached by ``package:name``)."""
+    always is (nothing is missing: each is reached by ``package:name``). ``consequence``:
+    what the command leaves undone, ``{its}`` where it names the plugin's behaviours."""
     broken = registry.broken
     for error in registry.errors:
         kind = "error" if error in broken and not skip else "warning"
         print(f"roomba-bt {command}: {kind}: {escaped(str(error), ANY_CONTROL)}", file=sys.stderr)
     if not broken or skip:
         return False
-    what, it = (
-        ("an installed plugin", "it")
-        if len(broken) == 1
-        else (f"{len(broken)} installed plugins", "them")
-    )
+    one = len(broken) == 1
+    what = "an installed plugin" if one else f"{len(broken)} installed plugins"
+    it, its = ("it", "its") if one else ("them", "their")
     print(
-        f"roomba-bt {command}: {what} did not load ({consequence}): fix or uninstall {it}, or "
-        f"pass --skip-broken-plugins to go on without {it}",
+        f"roomba-bt {command}: {what} did not load ({consequence.format(its=its)}): fix or "
+        f"uninstall {it}, or pass --skip-broken-plugins to go on without {it}",
         file=sys.stderr,
     )
     return True
