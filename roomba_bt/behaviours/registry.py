@@ -124,7 +124,10 @@ class PluginError:
 
 
 class Registry:
-    """Behaviour name -> :class:`Declaration`."""
+    """Behaviour name -> :class:`Declaration`. Long on purpose: every way a mission names a
+    behaviour (a name alone, ``package:name``, ``roomba-bt:name``) and every clash between
+    them resolve here; the package index (``_packages``, ``_package_of``) is the seam to
+    split along when it grows."""
 
     def __init__(self, *, entry_point_group: str | None = ENTRY_POINT_GROUP) -> None:
         self._declarations: dict[str, Declaration] = {}

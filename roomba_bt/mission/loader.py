@@ -238,11 +238,7 @@ class Loader:
         else:
             self.files.append(resolved)
             root, said = compose(path, display, include)
-        for e in said:
-            if e.severity != "warning":
-                self.ctx.error(e)
-            elif e not in self.ctx.warnings:  # a file included twice is read twice
-                self.ctx.warnings.append(e)
+        self.ctx.said(said)
         if root is None:
             return None
         return root, loc_of(root, display, "")

@@ -258,6 +258,15 @@ class Context:
             self._reported.add(diagnostic)
             self.diagnostics.append(diagnostic)
 
+    def said(self, diagnostics: list[Diagnostic]) -> None:
+        """What reading a file said: its errors, and its warnings once each (a file
+        included twice is read twice)."""
+        for diagnostic in diagnostics:
+            if diagnostic.severity != "warning":
+                self.error(diagnostic)
+            elif diagnostic not in self.warnings:
+                self.warnings.append(diagnostic)
+
     def report(self, bad: Bad) -> None:
         """A :class:`Bad`'s diagnostic and those raised with it (each key of a mapping that
         is no name, on its own line)."""
