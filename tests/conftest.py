@@ -51,6 +51,13 @@ ROOT = Path(__file__).resolve().parents[1]
 MISSING_DEPENDENCY = ("could not import", "No module named", "pip install")
 
 
+@pytest.fixture(autouse=True)
+def _no_include_path_from_the_shell(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A developer's ``ROOMBA_BT_INCLUDE_PATH`` grants include folders to every command:
+    not to the suite's, whose refusals it would turn into passes (children inherit this)."""
+    monkeypatch.delenv("ROOMBA_BT_INCLUDE_PATH", raising=False)
+
+
 def in_ci() -> bool:
     return os.environ.get("CI", "").lower() == "true"
 

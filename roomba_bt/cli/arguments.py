@@ -11,6 +11,7 @@ import inspect
 import json
 import math
 import os
+import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -18,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 from roomba_bt.oi.encode import BAUD_CODES
 from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, PROFILES, RobotProfile
+from roomba_bt.printable import ANY_CONTROL, escaped
 
 if TYPE_CHECKING:
     from roomba_bt.mission import Permissions
@@ -489,23 +491,52 @@ def add_permission_options(parser: argparse.ArgumentParser) -> None:
         metavar="DIR",
         type=include_dir,
         help="a folder the mission may also include from, and import plugin files from with "
-        "--allow-plugin-files (repeatable)",
+        "--allow-plugin-files (repeatable; for every command: ROOMBA_BT_INCLUDE_PATH, or "
+        "include-dirs under [tool.roomba-bt] in a pyproject.toml above the mission)",
     )
 
 
 def include_dir(text: str) -> Path:
-    """An existing folder (``--include-dir``)."""
+    """An existing folder (``--include-dir``); a file is said to be one, with its folder
+    (``--include-dir lib/escapes.yaml`` was "there is no such directory")."""
     folder = Path(text)
+    if folder.is_file():
+        raise argparse.ArgumentTypeError(
+            f"found {text!r}: a file, not a folder; give the folder that holds it "
+            f"(--include-dir {folder.parent})"
+        )
     if not folder.is_dir():
         raise argparse.ArgumentTypeError(f"found {text!r}: there is no such directory")
     return folder
 
 
-def permissions(args: argparse.Namespace) -> Permissions:
-    """The :class:`~roomba_bt.mission.Permissions` the command line grants."""
+def permissions(args: argparse.Namespace, mission: str | Path | None = None) -> Permissions:
+    """The :class:`~roomba_bt.mission.Permissions` the user grants ``mission``: the command
+    line's, and the include folders of ``ROOMBA_BT_INCLUDE_PATH`` and of the project file
+    above the mission (:mod:`roomba_bt.mission.include_path`, which says what a project
+    file may grant). What does not grant is said once on stderr, as a warning: the include
+    it was meant for is refused at its own line."""
     from roomba_bt.mission import Permissions
+    from roomba_bt.mission.include_path import configured_include_dirs
 
+    given = tuple(getattr(args, "include_dir", None) or ())
+    configured = configured_include_dirs(mission)
+    for warning in configured.warnings:
+        warn_once(warning)
     return Permissions(
         plugin_files=bool(getattr(args, "allow_plugin_files", False)),
-        include_dirs=tuple(getattr(args, "include_dir", None) or ()),
+        include_dirs=tuple(dict.fromkeys((*given, *configured.folders))),
     )
+
+
+#: The warnings :func:`warn_once` has printed in this process.
+_WARNED: set[str] = set()
+
+
+def warn_once(message: str) -> None:
+    """``message`` on stderr as a warning, once a process: ``validate`` of every mission of
+    a repository reads the same project file for each, and said its problem each time."""
+    if message in _WARNED:
+        return
+    _WARNED.add(message)
+    print(f"roomba-bt: warning: {escaped(message, ANY_CONTROL)}", file=sys.stderr)

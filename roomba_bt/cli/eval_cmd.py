@@ -522,14 +522,17 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
             battery=args.battery,
             start_area=args.start_area,
             odometry_error=args.odometry_error,
-            permissions=permissions(args),
+            permissions=permissions(args, v.mission),
             trace_every=2 if args.plot else 0,  # only the plot reads trajectories
         )
         for v in chosen
     ]
     for v in chosen:
         loaded = load(
-            v.mission, dict(v.params), get_profile(args.profile), granted=permissions(args)
+            v.mission,
+            dict(v.params),
+            get_profile(args.profile),
+            granted=permissions(args, v.mission),
         )
         if isinstance(loaded, int):
             return loaded

@@ -31,6 +31,7 @@ from roomba_bt.runtime.summary import ExitCode
 
 if TYPE_CHECKING:
     from roomba_bt.behaviours.registry import Registry
+    from roomba_bt.mission import Diagnostic
 
 
 def register(sub: Any) -> None:
@@ -49,8 +50,10 @@ def register(sub: Any) -> None:
         """,
     )
     validate.add_argument(
-        "files", nargs="+", metavar="FILE", help="a mission file, or a shipped mission's name"
-    )
+        "files", nargs="+", metavar="FILE",
+        help="a mission file, a shipped mission's name, or a world file (rooms:, no tree:), "
+        "checked as --world reads it",
+    )  # fmt: skip
     _common(validate)
 
     show = add_command(
@@ -176,7 +179,7 @@ def _params(items: list[str]) -> dict[str, str] | None:
 
 
 def validate_command(args: argparse.Namespace) -> int:
-    from roomba_bt.mission import reported, validate_files
+    from roomba_bt.mission import reported
 
     params = _params(args.param)
     if params is None:
@@ -188,13 +191,7 @@ def validate_command(args: argparse.Namespace) -> int:
             print(f"roomba-bt validate: {escaped(found[0], ANY_CONTROL)}", file=sys.stderr)
             status = ExitCode.INVALID
             continue
-        diagnostics = validate_files(
-            [found],
-            params,
-            profile=get_profile(args.profile),
-            baud=args.baud,
-            permissions=permissions(args),
-        )
+        diagnostics = _checked(found, params, args)
         for line in reported(diagnostics):
             print(line)
         if any(d.severity == "error" for d in diagnostics):
@@ -203,6 +200,25 @@ def validate_command(args: argparse.Namespace) -> int:
             said = "ok" if not diagnostics else "ok, with warnings"
             print(f"{escaped(file, ANY_CONTROL)}: {said}")  # one line: its name may hold "\n"
     return status
+
+
+def _checked(found: str, params: dict[str, str], args: argparse.Namespace) -> list[Diagnostic]:
+    """Every diagnostic of one file ``validate`` was given: a world's (checked as ``run
+    --world`` reads it, so CI checks a world without running a mission in it), else a
+    mission's or a library's, with the include folders granted to it."""
+    from roomba_bt.cli.worlds_cmd import world_diagnostics
+    from roomba_bt.mission import validate_files
+
+    world = world_diagnostics(found)
+    if world is not None:
+        return world
+    return validate_files(
+        [found],
+        params,
+        profile=get_profile(args.profile),
+        baud=args.baud,
+        permissions=permissions(args, found),
+    )
 
 
 def show_command(args: argparse.Namespace) -> int:
@@ -226,7 +242,7 @@ def show_command(args: argparse.Namespace) -> int:
         params,
         profile=get_profile(args.profile),
         baud=args.baud,
-        permissions=permissions(args),
+        permissions=permissions(args, found),
     )
     if mission is None:
         for line in reported(diagnostics):

@@ -280,8 +280,9 @@ def _claimed_run(
         return prepared
     mission, packets, opened = prepared
     simulator = _simulator(args, profile)
-    if isinstance(simulator, str):
-        return _error(simulator)
+    if isinstance(simulator, str):  # the world's problems, each at its file:line:col
+        print(simulator, file=sys.stderr)
+        return ExitCode.INVALID
     args.robot = robot_label(args.port, simulator)
     args.started = datetime.now(UTC)
     monitor = None
@@ -331,7 +332,7 @@ def _mission_at_its_rate(
         except ConnectionFailed as exc:
             print(f"roomba-bt: {exc}", file=sys.stderr)
             return ExitCode.CONNECTION
-    mission = load(args.mission, params, profile, args.baud, permissions(args))
+    mission = load(args.mission, params, profile, args.baud, permissions(args, args.mission))
     if isinstance(mission, int):
         return mission
     try:
@@ -454,7 +455,8 @@ def end_in_problem(end_in: str, profile: RobotProfile) -> str | None:
 
 
 def _simulator(args: argparse.Namespace, profile: RobotProfile) -> Simulator | str | None:
-    """The simulator when there is no ``--port`` (None with one); the world's problem as text."""
+    """The simulator when there is no ``--port`` (None with one); the world's problems as
+    the lines to print (:func:`~roomba_bt.cli.worlds_cmd.world_error_text`)."""
     if args.port:
         return None
     from roomba_bt.cli.links import make_simulator
@@ -472,7 +474,9 @@ def _simulator(args: argparse.Namespace, profile: RobotProfile) -> Simulator | s
             trace=bool(args.plot),  # only a plot reads the trajectory
         )
     except WorldError as exc:
-        return str(exc)
+        from roomba_bt.cli.worlds_cmd import world_error_text
+
+        return world_error_text(exc)
     world = simulator.world
     if args.random_start and world.start_region is None:  # eval says it too
         x, y = world.start.x / 1000.0, world.start.y / 1000.0
@@ -501,7 +505,7 @@ def _live_monitor(
         robot=args.robot,
         started=args.started, label=args.label or "",
         loader=lambda path: load_mission(
-            path, params, profile=profile, baud=args.baud, permissions=permissions(args)
+            path, params, profile=profile, baud=args.baud, permissions=permissions(args, path)
         ),
     )  # fmt: skip
 
@@ -758,7 +762,7 @@ def load_recorded(args: argparse.Namespace) -> Recorded | int:
         return _error(extra)
     params.update(extra)
     baud: int = header.get("baud", 115200)
-    mission = load(found, params, profile, baud, permissions(args))
+    mission = load(found, params, profile, baud, permissions(args, found))
     if isinstance(mission, int):
         return mission
     packets = _recorded_packets(args.record, header, mission, found)

@@ -130,7 +130,9 @@ def sensors_command(args: argparse.Namespace) -> int:
             try:
                 simulator = make_simulator(args.world, profile, 0)
             except WorldError as exc:
-                print(f"roomba-bt: {exc}", file=sys.stderr)
+                from roomba_bt.cli.worlds_cmd import world_error_text
+
+                print(world_error_text(exc), file=sys.stderr)
                 return ExitCode.INVALID
         link = far_end(args.port, args.baud, simulator, opened=opened)
         _show_live(link, profile, args, group)

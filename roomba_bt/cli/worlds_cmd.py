@@ -5,10 +5,16 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import Any
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from roomba_bt.cli.arguments import add_command
+from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.runtime.summary import ExitCode
+
+if TYPE_CHECKING:
+    from roomba_bt.mission import Diagnostic
+    from roomba_bt.sim.world import WorldError, WorldProblem
 
 
 def register(sub: Any) -> None:
@@ -34,6 +40,12 @@ def worlds_command(args: argparse.Namespace) -> int:
     names = shipped_worlds()
     if args.name is not None:
         name = args.name.removesuffix(".yaml")
+        if name not in names and Path(args.name).is_file():  # a world of one's own
+            shown = escaped(args.name, ANY_CONTROL)
+            print(f"roomba-bt worlds: {shown} is a file, not a shipped world's name: check it "
+                  f"with roomba-bt validate {shown}; run a mission in it with --world {shown}",
+                  file=sys.stderr)  # fmt: skip
+            return ExitCode.INVALID
         if name not in names:
             hint = closest(name, list(names))
             print(f"roomba-bt worlds: no shipped world {args.name!r}{hint}; shipped: "
@@ -51,3 +63,63 @@ def worlds_command(args: argparse.Namespace) -> int:
         print(f"{name}  {world.description}")
         print(f"    {size}, {dock}; areas: {areas}")
     return ExitCode.OK
+
+
+def world_diagnostics(path: str) -> list[Diagnostic] | None:
+    """Every problem of the world file ``path`` as ``validate`` reports a mission's (each at
+    file:line:col), none for a good world; None when the file is no world (a mapping with
+    ``rooms:`` and no ``tree:``, as the mission loader tells one). A world's checks were
+    reached only by running a mission in it, whose first line began ``roomba-bt: `` and
+    broke a ``^file:line:col`` matcher."""
+    if not is_world_file(Path(path)):
+        return None
+    from roomba_bt.sim.world import WorldError, parse_world, world_text
+
+    try:
+        parse_world(*world_text(Path(path)))
+    except WorldError as exc:
+        return [_as_diagnostic(problem) for problem in exc.problems]
+    return []
+
+
+def is_world_file(path: Path) -> bool:
+    """``path`` holds a world: a top-level mapping with ``rooms:`` and no ``tree:``. A text
+    YAML cannot read counts by its unindented lines, so that a world with a syntax error is
+    reported as a world's, not as "not a mission file"."""
+    import yaml
+
+    from roomba_bt import yamlsource
+
+    try:
+        text = yamlsource.read_text(path)
+    except (OSError, UnicodeDecodeError, yamlsource.FileTooLarge):
+        return False  # the mission's check says why it cannot be read
+    if "rooms" not in text:  # every mission, at no cost
+        return False
+    try:
+        root = yamlsource.compose(text)
+    except yaml.YAMLError:
+        keys = {line.split(":", 1)[0] for line in text.splitlines() if line[:1].isalpha()}
+    else:
+        if not isinstance(root, yaml.MappingNode):
+            return False
+        keys = {key.value for key, _ in root.value if isinstance(key, yaml.ScalarNode)}
+    return "rooms" in keys and "tree" not in keys
+
+
+def _as_diagnostic(problem: WorldProblem) -> Diagnostic:
+    """A world's problem as a mission's diagnostic: the same line, ``file:line:col:
+    field: ...``; one without a place (none is found reading a file that exists) at 1:1."""
+    from roomba_bt.mission import Diagnostic
+
+    where = f"{problem.source}:{problem.line}:{problem.column}" if problem.line else problem.source
+    message = str(problem).removeprefix(where).removeprefix(": ")
+    return Diagnostic(problem.source, problem.line or 1, problem.column or 1, message)
+
+
+def world_error_text(exc: WorldError) -> str:
+    """A world's problems as ``run`` and ``sensors`` print them on stderr: a problem at a
+    place as its own ``file:line:col: ...`` line, as ``validate`` prints it (the first line
+    began ``roomba-bt: `` and broke a ``^file:line:col`` matcher), one without a place (no
+    such file) after ``roomba-bt: ``."""
+    return "\n".join(str(p) if p.line else f"roomba-bt: {p}" for p in exc.problems)

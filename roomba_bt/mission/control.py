@@ -355,9 +355,7 @@ def _key_items(ctx: Context, kind: NodeKind, options: dict[str, Any], fields: Fi
     decl = ctx.keys.get(key)
     if decl is None:
         raise Bad(
-            key_value_loc.at(
-                f"{kind.word}.{key_option}: " + unknown("blackboard key", key, list(ctx.keys))
-            )
+            key_value_loc.at(f"{kind.word}.{key_option}: " + ctx.unknown_key(key, key_value_loc))
         )
     for param in kind.options:
         if param.type is not KEY_ITEMS:

@@ -137,7 +137,7 @@ def _key_params(
         assert isinstance(where, Loc)
         said = f"{decl.name}.{pname}{said_origin(written[pname], env)}: "
         try:
-            found = _key_type(ctx, key, reads=pname in decl.reads_keys, who=decl.name)
+            found = _key_type(ctx, key, where, reads=pname in decl.reads_keys, who=decl.name)
         except LookupError as problem:
             ctx.error(where.at(said + str(problem.args[0])))
             ok = False
@@ -166,7 +166,7 @@ def _key_params(
     return ok
 
 
-def _key_type(ctx: Context, key: str, *, reads: bool, who: str) -> ValueType:
+def _key_type(ctx: Context, key: str, where: Loc, *, reads: bool, who: str) -> ValueType:
     """The type of the blackboard value ``key`` names: a declared key, or, read (``check:
     {key: wp.distance}``), a field of a record key, as ``@wp.distance`` reads one (py_trees'
     own ``key.attribute``); ``check`` refused it as an unknown key. LookupError says what
@@ -178,7 +178,7 @@ def _key_type(ctx: Context, key: str, *, reads: bool, who: str) -> ValueType:
     name, dot, field = key.partition(".")
     record = ctx.keys.get(name) if dot else None
     if record is None:
-        raise LookupError(unknown("blackboard key", key, list(ctx.keys)))
+        raise LookupError(ctx.unknown_key(key, where))
     fields = record_fields(record.type)
     if fields is None:
         raise LookupError(

@@ -46,6 +46,13 @@ import yaml
 
 from roomba_bt.behaviours.language import WORDS
 from roomba_bt.behaviours.units import ANY, STR, VALUE_TYPES, UnitError, ValueType, closest, enum
+from roomba_bt.mission.include_path import (
+    DOCUMENTED_AT,
+    INCLUDE_DIRS_KEY,
+    INCLUDE_PATH_VARIABLE,
+    PROJECT_FILE,
+    PROJECT_TABLE,
+)
 from roomba_bt.mission.nodes import NodeParser
 from roomba_bt.mission.plan import KeyDecl, Node
 from roomba_bt.mission.shipped import (
@@ -254,8 +261,9 @@ class Loader:
         root, root_loc = read
         if _is_world(root):  # its name: and description: are mission words too: 11 lines
             self.ctx.error(root_loc.at(
-                "this file is a world (rooms:, no tree:), not a mission: run a mission on it "
-                f"with --world {path} (roomba-bt run dock --world {path} --fast)"
+                "this file is a world (rooms:, no tree:), not a mission: run a mission in it "
+                f"with --world {path} (roomba-bt run dock --world {path} --fast); roomba-bt "
+                f"validate {path} checks it"
             ))  # fmt: skip
             return None
         if not _is_mission(root, TOP_LEVEL):
@@ -357,31 +365,38 @@ class Loader:
 
     def _includes(self, path: Path, node: yaml.Node, loc: Loc) -> None:
         for text, target, iloc in self._files(path, node, loc, "include", "an include"):
-            if self._outside(text, target, iloc, "include"):
-                continue
-            if target in self._include_stack:
-                chain = [p.name for p in self._include_stack[self._include_stack.index(target) :]]
-                self.ctx.error(iloc.at(f"include cycle: {' -> '.join([*chain, target.name])}"))
-                continue
-            if text.startswith(SHIPPED_PREFIX) and not in_shipped_library(target):
-                self.ctx.error(
-                    iloc.at(
-                        f"included file {text!r} is not in the shipped library; "
-                        f"it holds {', '.join(shipped_library_files()) or 'nothing'}"
-                    )
+            if not self._include_entry(path, text, target, iloc):
+                # what it would have defined is unknown: its uses say why (values.Context)
+                self.ctx.unread_includes.append((text, iloc))
+
+    def _include_entry(self, path: Path, text: str, target: Path, iloc: Loc) -> bool:
+        """Read the file one include entry names, unless it may not or cannot be read
+        (reported): False then. A cycle or a file read already is no loss: True."""
+        if self._outside(text, target, iloc, "include"):
+            return False
+        if target in self._include_stack:
+            chain = [p.name for p in self._include_stack[self._include_stack.index(target) :]]
+            self.ctx.error(iloc.at(f"include cycle: {' -> '.join([*chain, target.name])}"))
+            return True
+        if text.startswith(SHIPPED_PREFIX) and not in_shipped_library(target):
+            self.ctx.error(
+                iloc.at(
+                    f"included file {text!r} is not in the shipped library; "
+                    f"it holds {', '.join(shipped_library_files()) or 'nothing'}"
                 )
-                continue
-            unreadable = _unreadable(target)
-            if unreadable is not None:
-                self.ctx.error(iloc.at(f"cannot read included file {text!r}: {unreadable}"))
-                continue
-            if not target.is_file():
-                self.ctx.error(iloc.at(_not_a_file(path, text, target)))
-                continue
-            if self._again(target, text, iloc):
-                continue
-            self._included[target] = iloc
-            self._include(target, text, iloc)
+            )
+            return False
+        unreadable = _unreadable(target)
+        if unreadable is not None:
+            self.ctx.error(iloc.at(f"cannot read included file {text!r}: {unreadable}"))
+            return False
+        if not target.is_file():
+            self.ctx.error(iloc.at(_not_a_file(path, text, target)))
+            return False
+        if self._again(target, text, iloc):
+            return True
+        self._included[target] = iloc
+        return self._include(target, text, iloc)
 
     def _outside(self, text: str, target: Path, iloc: Loc, what: str) -> bool:
         """``target`` (resolved: a link out is out) lies outside the top mission's folder
@@ -390,12 +405,7 @@ class Loader:
         anywhere once ``--allow-plugin-files`` was given for the mission's own folder."""
         if any(target.is_relative_to(root) for root in self._include_roots):
             return False
-        self.ctx.error(
-            iloc.at(
-                f"{what} {text!r} is outside the mission's folder and the shipped library; "
-                "allow its folder with --include-dir DIR"
-            )
-        )
+        self.ctx.error(iloc.at(_outside_message(what, text, target, self._include_roots)))
         return True
 
     def _again(self, target: Path, text: str, iloc: Loc) -> bool:
@@ -412,10 +422,11 @@ class Loader:
             )
         return True
 
-    def _include(self, target: Path, text: str, iloc: Loc) -> None:
+    def _include(self, target: Path, text: str, iloc: Loc) -> bool:
+        """Read an included library's sections; False when it is no library (reported)."""
         read = self._compose(target, target, (text, iloc))
         if read is None:
-            return
+            return False
         root, root_loc = read
         # a whole mission, not a library: said at the include, whatever else it holds (one
         # with a description: was three errors at lines of the included file, none here); a
@@ -425,15 +436,15 @@ class Loader:
                 f"included file {text!r} is a mission (it has mission: or tree:), not a "
                 f"library: an included file may hold only {', '.join(_INCLUDED_KEYS)}"
             ))  # fmt: skip
-            return
+            return False
         if not _is_mission(root, _INCLUDED_KEYS):
             self.ctx.error(iloc.at(_not_a_mission(f"included file {text!r}", _INCLUDED_KEYS)))
-            return
+            return False
         try:
             items = mapping(root, root_loc, "an included file")
         except Bad as bad:
             self.ctx.report(bad)
-            return
+            return False
         allowed = _INCLUDED_KEYS
         for key, _, key_loc, _ in items:
             if key not in allowed:
@@ -445,6 +456,7 @@ class Loader:
         self._include_stack.append(target)
         self._file_sections(target, {k: (v, kl, vl) for k, v, kl, vl in items})
         self._include_stack.pop()
+        return True
 
     def _parameters(
         self, section: tuple[yaml.Node, Loc, Loc] | None, overrides: Mapping[str, str], root: Loc
@@ -683,6 +695,32 @@ def key_decl(
     ctx.keys[name] = KeyDecl(name, vtype, key_loc, initial, has_initial, doc, initial_loc)
 
 
+def _outside_message(what: str, text: str, target: Path, roots: tuple[Path, ...]) -> str:
+    """Why an include (or plugin file) outside ``roots`` (the mission's folder, the shipped
+    library, the include folders granted: resolved, in that order) is refused: where a file
+    may be read from, and how to allow its folder, here or for every command. The fix was
+    "--include-dir DIR" alone, and the user who had given it to ``validate`` met the
+    refusal again at ``run``, ``eval`` and ``replay``."""
+    mission_folder, granted = roots[0], roots[1 + len(SHIPPED_LIBRARY) :]
+    folders = ", ".join(_shown_path(folder) for folder in granted) or "none"
+    return (
+        f"{what} {text!r} is outside the mission's folder ({_shown_path(mission_folder)}), "
+        f"the shipped library and the include folders granted ({folders}); allow its folder "
+        f"with --include-dir {_shown_path(target.parent)}, or for every command with "
+        f"{INCLUDE_PATH_VARIABLE} or {INCLUDE_DIRS_KEY} under [tool.{PROJECT_TABLE}] in a "
+        f"{PROJECT_FILE} ({DOCUMENTED_AT})"
+    )
+
+
+def _shown_path(folder: Path) -> str:
+    """``folder`` (or a file) as a user passes it from here: relative to the current
+    directory when inside it, else whole."""
+    try:
+        return str(folder.relative_to(Path.cwd().resolve())) or "."
+    except (ValueError, OSError):  # elsewhere, or the current directory is gone
+        return str(folder)
+
+
 def _not_a_file(path: Path, text: str, target: Path) -> str:
     """What an include names when it is no file: a directory, or nothing, with the file it
     most likely meant (``lib\\b.yaml`` written the Windows way, ``lib/B.yaml`` in the wrong
@@ -706,9 +744,11 @@ def _not_a_file(path: Path, text: str, target: Path) -> str:
                 f"included file {text!r} not found; did you mean {meant!r}? (names are "
                 "case-sensitive)"
             )
+    looked = _shown_path(target)  # where "../lib/x.yaml" led, unless the text says it
+    looked_for = f"looked for {looked}: " if looked != text else ""
     return (
-        f"included file {text!r} not found (paths are relative to the including file; "
-        f"the shipped docking library is {DOCKING_LIBRARY})"
+        f"included file {text!r} not found ({looked_for}paths are relative to the including "
+        f"file; the shipped docking library is {DOCKING_LIBRARY})"
     )
 
 

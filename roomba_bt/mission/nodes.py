@@ -189,17 +189,20 @@ class NodeParser:
         for other in words:
             if other is not known[0]:
                 where = f" next to {known[0][0]!r}"
-                self.ctx.error(other[2].at(self._unknown_word(other[0], where)))
+                self.ctx.error(other[2].at(self._unknown_word(other[0], other[2], where)))
         return known[0]
 
     #: at most this many broken plugins are noted beside an unknown node
     _PLUGIN_NOTES = 3
 
-    def _unknown_word(self, word: str, where: str = "") -> str:
+    def _unknown_word(self, word: str, at: Loc, where: str = "") -> str:
         unloaded = self.ctx.unloaded_plugins
         if unloaded:  # most likely theirs: no "did you mean" a built-in of another name
             files = ", ".join(repr(text) for text in unloaded)
             return f"unknown node {word!r}{where} (the plugin file {files} was not loaded)"
+        unread = self.ctx.unread_include_note(at)
+        if unread is not None and self.ctx.registry.why_unknown(word) is None:
+            return f"unknown node {word!r}{where} ({unread})"  # its plugins: were not read
         errors = self.ctx.registry.errors
         # the plugins that may have meant this word: one that declares it (a class refused
         # for its declaration: the cause, not a misspelling), else those that did not import
@@ -222,6 +225,20 @@ class NodeParser:
             message += f" (note: {failed})"
         return message
 
+    def _unknown_subtree_hint(self, name: str, at: Loc) -> str:
+        """What follows ``unknown subtree NAME``: that an include was not read (its
+        subtrees are unknown, so a "did you mean" or the shipped library's name would send
+        the user the wrong way), else a close name, else the shipped library file that
+        defines it."""
+        note = self.ctx.unread_include_note(at)
+        if note is not None:
+            return f" ({note})"
+        hint = closest(name, list(self.ctx.subtrees))
+        library = None if hint else library_defining(name)
+        if library is not None:  # the shipped docking subtree, used without its include
+            hint = f" (the shipped {library} defines it: include: [{library}])"
+        return hint
+
     def _check_guard(self, condition: Node, guard: str) -> None:
         for n in condition.walk():
             decl = n.declared
@@ -235,7 +252,7 @@ class NodeParser:
         if kind is None:
             decl = self.ctx.registry.get(word)
             if decl is None:
-                raise Bad(at.key_loc.at(self._unknown_word(word)))
+                raise Bad(at.key_loc.at(self._unknown_word(word, at.key_loc)))
             clash = self.ctx.registry.clash(word)
             if clash is not None:
                 severity, why = clash
@@ -280,11 +297,9 @@ class NodeParser:
                 "replaced there (name the subtree)"
             ))  # fmt: skip
         if sub is None:
-            hint = closest(name, list(self.ctx.subtrees))
-            library = None if hint else library_defining(name)
-            if library is not None:  # the shipped docking subtree, used without its include
-                hint = f" (the shipped {library} defines it: include: [{library}])"
-            raise Bad(id_loc.at(f"unknown subtree {name!r}{hint}"))
+            raise Bad(
+                id_loc.at(f"unknown subtree {name!r}{self._unknown_subtree_hint(name, id_loc)}")
+            )
         if name in self._use_stack:
             chain = self._use_stack[self._use_stack.index(name) :]
             raise Bad(id_loc.at(f"recursive subtree: {' -> '.join([*chain, name])}"))

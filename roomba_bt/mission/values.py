@@ -246,6 +246,9 @@ class Context:
     #: plugin files named but not loaded (no --allow-plugin-files, or not found): an unknown
     #: word may be one of theirs
     unloaded_plugins: list[str] = field(default_factory=list)
+    #: includes refused or not read (each its text and place): a subtree, key or node not
+    #: found may be one of theirs, and its error says so (:meth:`unread_include_note`)
+    unread_includes: list[tuple[str, Loc]] = field(default_factory=list)
     #: what compiles but is likely a mistake, found while parsing (a plugin's behaviour of a
     #: built-in's name): the compiled mission's warnings, with the whole-tree checks' own
     warnings: list[Diagnostic] = field(default_factory=list)
@@ -267,11 +270,43 @@ class Context:
             elif diagnostic not in self.warnings:
                 self.warnings.append(diagnostic)
 
+    #: at most this many unread includes are named in one note
+    _UNREAD_NAMED = 2
+
+    def unknown_key(self, key: str, at: Loc) -> str:
+        """``unknown blackboard key 'legs' ...``: after a failed include, that it may be
+        one of the include's; else a close name and the keys known."""
+        note = self.unread_include_note(at)
+        if note is not None:
+            return f"unknown blackboard key {key!r} ({note})"
+        return unknown("blackboard key", key, list(self.keys))
+
+    def unread_include_note(self, at: Loc) -> str | None:
+        """What an unknown name at ``at`` follows from when an include was not read, instead
+        of a "did you mean" that sends the user the wrong way (``unknown subtree 'undock'
+        (did you mean 'dock'?)`` when a refused library defined ``undock``); None when every
+        include was read."""
+        unread = self.unread_includes
+        if not unread:
+            return None
+        if len(unread) == 1:
+            text, loc = unread[0]
+            return f"the include of {text!r} at {_line_of(loc, at)} failed, and may have defined it"
+        named = [f"{text!r} ({_line_of(loc, at)})" for text, loc in unread[: self._UNREAD_NAMED]]
+        more = len(unread) - len(named)
+        listed = ", ".join(named) + (f" and {more} more" if more else "")
+        return f"the includes of {listed} failed, and may have defined it"
+
     def report(self, bad: Bad) -> None:
         """A :class:`Bad`'s diagnostic and those raised with it (each key of a mapping that
         is no name, on its own line)."""
         for diagnostic in (bad.diagnostic, *bad.more):
             self.error(diagnostic)
+
+
+def _line_of(loc: Loc, at: Loc) -> str:
+    """Where ``loc`` is, said from ``at``: ``line 5`` in the same file, else ``file:5``."""
+    return f"line {loc.line}" if loc.file == at.file else f"{loc.file}:{loc.line}"
 
 
 def parse_type_name(
@@ -641,7 +676,9 @@ def _reference(
     key, fname = match.groups()
     decl = ctx.keys.get(key)
     if decl is None:
-        raise Bad(loc.at(f"{what}: unknown blackboard key {key!r}{closest(key, list(ctx.keys))}"))
+        note = ctx.unread_include_note(loc)
+        hint = f" ({note})" if note is not None else closest(key, list(ctx.keys))
+        raise Bad(loc.at(f"{what}: unknown blackboard key {key!r}{hint}"))  # no list: @key
     ktype = decl.type
     if fname is not None:
         fields = record_fields(ktype)

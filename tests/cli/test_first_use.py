@@ -316,7 +316,8 @@ def test_a_world_file_given_as_a_mission_is_said_to_be_a_world(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """Its name: and description: are mission words too: validate listed every other key
-    of it as unknown (11 lines for a field trial's flat)."""
+    of it as unknown (11 lines for a field trial's flat). ``validate`` checks it as a
+    world (its one problem, at its line); ``show`` says it is no mission."""
     world = tmp_path / "flat.yaml"
     world.write_text(
         "name: flat\ndescription: my flat\nrooms: [[[0, 0], [4, 0], [4, 3], [0, 3]]]\n"
@@ -325,7 +326,12 @@ def test_a_world_file_given_as_a_mission_is_said_to_be_a_world(
     assert main(["validate", str(world)]) == 2
     said = "".join(capsys.readouterr())
     assert said.count("\n") == 1, said
-    assert "this file is a world (rooms:, no tree:), not a mission: run a mission on it" in said
+    assert said.startswith(f"{world}:5:7: dock: found no robot.start"), said
+    assert main(["show", str(world)]) == 2
+    said = "".join(capsys.readouterr())
+    assert said.count("\n") == 1, said
+    assert "this file is a world (rooms:, no tree:), not a mission: run a mission in it" in said
+    assert f"roomba-bt validate {world} checks it" in said
 
 
 def test_random_start_in_a_world_without_a_start_region_is_said(

@@ -42,6 +42,13 @@ def granted(path: Path) -> Permissions:
     return Permissions(plugin_files=re.search(r"^# allow-plugin-files$", text, re.M) is not None)
 
 
+@pytest.fixture(autouse=True)
+def _in_the_corpus(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Run from the corpus's folder: a message names the folders it looked in relative to
+    the current directory, and each file's expectation holds wherever the tests run."""
+    monkeypatch.chdir(CORPUS)
+
+
 def test_the_corpus_has_at_least_30_missions() -> None:
     assert len(FILES) >= 30
 

@@ -121,7 +121,7 @@ def test_an_include_outside_the_mission_folder_is_refused(
 
 @pytest.mark.parametrize("where", ["absolute", "../", "symlink"])
 def test_an_allowed_plugin_file_outside_the_mission_folder_is_refused_as_an_include(
-    tmp_path: Path, where: str, capsys: Capsys
+    tmp_path: Path, where: str, capsys: Capsys, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """``--allow-plugin-files`` imported ``plugins: [/tmp/x.py]`` or ``../../x.py`` from
     anywhere, where an include is held to the mission's folder: the user who read the
@@ -137,10 +137,14 @@ def test_an_allowed_plugin_file_outside_the_mission_folder_is_refused_as_an_incl
               "symlink": "link.py"}[where]  # fmt: skip
     path = folder / "m.yaml"
     path.write_text(f"plugins: ['{target}']\ntree: {{sequence: [always_true, {{wait: 1s}}]}}\n")
+    monkeypatch.chdir(tmp_path)
     assert main(["validate", str(path), "--allow-plugin-files"]) == 2
     assert capsys.readouterr().out.splitlines()[0] == (
-        f"{path}:1:11: plugin file {target!r} is outside the mission's folder and the shipped "
-        "library; allow its folder with --include-dir DIR [plugins[0]]"
+        f"mail/m.yaml:1:11: plugin file {target!r} is outside the mission's folder (mail), the "
+        "shipped library and the include folders granted (none); allow its folder with "
+        "--include-dir elsewhere, or for every command with ROOMBA_BT_INCLUDE_PATH or "
+        "include-dirs under [tool.roomba-bt] in a pyproject.toml (docs/missions.md, Include "
+        "folders) [plugins[0]]"
     )
     assert not (elsewhere / "imported.txt").exists()
     allowed = ["--allow-plugin-files", "--include-dir", str(elsewhere)]

@@ -1,0 +1,82 @@
+"""``roomba-bt validate WORLD.yaml``: a world file checked on its own, as ``run --world``
+reads it, with a mission's error style (file:line:col, exit 2 for a bad file). CI reached a
+world's checks only by running a mission in it, whose first error line began with
+``roomba-bt: `` and broke a ``^file:line:col`` matcher."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.cli import main
+
+Capsys = pytest.CaptureFixture[str]
+
+GOOD = """\
+name: lab
+rooms:
+  - {rect: [0, 0, 5, 4]}
+dock: {at: [2, 0], facing: 90}
+"""
+
+BAD = """\
+name: bad
+rooms:
+  - {rect: [0, 0, 5, 4]}
+obstacles:
+  - {name: x, rect: [30, 30, 40, 40]}
+dock: {at: [2, 0], facng: 90}
+"""
+
+
+@pytest.fixture
+def worlds(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    (tmp_path / "worlds").mkdir()
+    (tmp_path / "worlds" / "lab.yaml").write_text(GOOD)
+    (tmp_path / "worlds" / "bad.yaml").write_text(BAD)
+    monkeypatch.chdir(tmp_path)
+    return tmp_path
+
+
+def test_a_good_world_validates(worlds: Path, capsys: Capsys) -> None:
+    assert main(["validate", "worlds/lab.yaml", "dock"]) == 0
+    assert capsys.readouterr().out.splitlines() == ["worlds/lab.yaml: ok", "dock: ok"]
+
+
+def test_a_bad_world_is_every_problem_at_its_place(worlds: Path, capsys: Capsys) -> None:
+    assert main(["validate", "worlds/bad.yaml", "worlds/lab.yaml"]) == 2
+    out, err = capsys.readouterr()
+    assert out.splitlines() == [
+        "worlds/bad.yaml:5:5: obstacles[0]: found a shape wholly outside every room (x 30..40, "
+        "y 30..40 m); allowed: a shape on a room's floor, in metres",
+        "worlds/bad.yaml:6:7: dock: found no 'facing'; allowed: a mapping with 'facing'",
+        "worlds/bad.yaml:6:20: dock.facng: found unknown key 'facng'; allowed: at, facing, red, "
+        "green, buoy_range, force_field, contact_tolerance, angle_tolerance, family, plate_width "
+        "(did you mean 'facing'?)",
+        "worlds/lab.yaml: ok",
+    ]
+    assert err == ""
+
+
+def test_a_world_yaml_cannot_read_is_still_a_world(worlds: Path, capsys: Capsys) -> None:
+    """Told from its unindented ``rooms:``: the YAML error at its place, not "this file is
+    not a mission"."""
+    (worlds / "worlds" / "broken.yaml").write_text("rooms: [[[0, 0], [1, 0]]\nname: x\n")
+    assert main(["validate", "worlds/broken.yaml"]) == 2
+    assert capsys.readouterr().out.startswith("worlds/broken.yaml:2:1: YAML syntax error: ")
+
+
+def test_run_prints_a_worlds_problems_as_validate_does(worlds: Path, capsys: Capsys) -> None:
+    argv = ["run", "dock", "--fast", "--display", "none", "--world", "worlds/bad.yaml"]
+    assert main(argv) == 2
+    first = capsys.readouterr().err.splitlines()[0]
+    assert first.startswith("worlds/bad.yaml:5:5: obstacles[0]: found a shape"), first
+
+
+def test_worlds_given_a_file_says_how_to_check_it(worlds: Path, capsys: Capsys) -> None:
+    assert main(["worlds", "worlds/lab.yaml"]) == 2
+    assert capsys.readouterr().err == (
+        "roomba-bt worlds: worlds/lab.yaml is a file, not a shipped world's name: check it with "
+        "roomba-bt validate worlds/lab.yaml; run a mission in it with --world worlds/lab.yaml\n"
+    )
