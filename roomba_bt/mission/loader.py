@@ -203,7 +203,7 @@ class Loader:
         self._include_stack.append(resolved)
         # the parameters first: a blackboard key's initial value may be one ("${speed}"),
         # and read before them it was an "unknown parameter" the declaration had just made
-        params = self._parameters(sections.get("parameters"), overrides, root_loc)
+        params = bind_parameters(self.ctx, sections.get("parameters"), overrides, root_loc)
         self.nodes.global_env = params
         self._file_sections(path, sections)
         name, description = self._names(path, sections)
@@ -458,59 +458,6 @@ class Loader:
         self._include_stack.pop()
         return True
 
-    def _parameters(
-        self, section: tuple[yaml.Node, Loc, Loc] | None, overrides: Mapping[str, str], root: Loc
-    ) -> dict[str, Bound]:
-        env: dict[str, Bound] = {}
-        declared: dict[str, tuple[ValueType, Loc]] = {}
-        broken: set[str] = set()  # declared wrongly: reported once, not at each use nor -p
-        if section is not None:
-            items = _parameter_entries(self.ctx, section, env, broken)
-            for name, value, key_loc, vloc in items:
-                try:
-                    vtype, default, has_default, _ = param_decl(self.ctx, value, vloc, name)
-                except Bad as bad:
-                    self.ctx.report(bad)
-                    env[name] = Bound(STR, UNKNOWN, "?")  # a use reads "unknown": no type check
-                    broken.add(name)
-                    continue
-                declared[name] = (vtype, key_loc)
-                if name in overrides:
-                    continue
-                if not has_default:
-                    self.ctx.error(
-                        key_loc.at(
-                            f"parameter {name!r} has no default: give it with -p {name}=VALUE"
-                        )
-                    )
-                    env[name] = Bound(vtype, UNKNOWN, "?")  # reported once, not at every use
-                    continue
-                # a text's value as its uses insert it: "$$" already one "$"
-                text = default if vtype is STR else _text(value, vloc, default)
-                env[name] = Bound(vtype, default, text, default_at=_default_at(value, vloc))
-        for name, text in overrides.items():
-            if name in broken:
-                continue
-            if name not in declared:
-                self.ctx.error(
-                    root.at(
-                        f"unknown parameter {name!r} set on the command line"
-                        f"{closest(name, list(declared))}; "
-                        f"the mission declares: {', '.join(declared) or 'none'}"
-                    )
-                )
-                continue
-            vtype, key_loc = declared[name]
-            try:
-                value = vtype.parse(_cli_value(text, vtype))
-            except UnitError as exc:
-                where = f"parameter {name}={text} (from the command line)"
-                self.ctx.error(key_loc.at(f"{where}: {exc}"))
-                env[name] = Bound(vtype, UNKNOWN, "?")  # reported once, not at every use
-                continue
-            env[name] = Bound(vtype, value, text, f"{name}={text}, set on the command line")
-        return env
-
     def _each(
         self,
         node: yaml.Node,
@@ -564,6 +511,63 @@ class Loader:
         self.ctx.subtrees[name] = SubtreeDef(
             name, key_loc, params, body, body_loc, broken=frozenset(broken)
         )
+
+
+def bind_parameters(
+    ctx: Context,
+    section: tuple[yaml.Node, Loc, Loc] | None,
+    overrides: Mapping[str, str],
+    root: Loc,
+) -> dict[str, Bound]:
+    """The mission's parameters bound to their values: ``-p`` overrides first, else each
+    default; each wrong declaration or value reported once (a use of it reads "unknown")."""
+    env: dict[str, Bound] = {}
+    declared: dict[str, tuple[ValueType, Loc]] = {}
+    broken: set[str] = set()  # declared wrongly: reported once, not at each use nor -p
+    if section is not None:
+        items = _parameter_entries(ctx, section, env, broken)
+        for name, value, key_loc, vloc in items:
+            try:
+                vtype, default, has_default, _ = param_decl(ctx, value, vloc, name)
+            except Bad as bad:
+                ctx.report(bad)
+                env[name] = Bound(STR, UNKNOWN, "?")  # a use reads "unknown": no type check
+                broken.add(name)
+                continue
+            declared[name] = (vtype, key_loc)
+            if name in overrides:
+                continue
+            if not has_default:
+                ctx.error(
+                    key_loc.at(f"parameter {name!r} has no default: give it with -p {name}=VALUE")
+                )
+                env[name] = Bound(vtype, UNKNOWN, "?")  # reported once, not at every use
+                continue
+            # a text's value as its uses insert it: "$$" already one "$"
+            text = default if vtype is STR else _text(value, vloc, default)
+            env[name] = Bound(vtype, default, text, default_at=_default_at(value, vloc))
+    for name, text in overrides.items():
+        if name in broken:
+            continue
+        if name not in declared:
+            ctx.error(
+                root.at(
+                    f"unknown parameter {name!r} set on the command line"
+                    f"{closest(name, list(declared))}; "
+                    f"the mission declares: {', '.join(declared) or 'none'}"
+                )
+            )
+            continue
+        vtype, key_loc = declared[name]
+        try:
+            value = vtype.parse(_cli_value(text, vtype))
+        except UnitError as exc:
+            where = f"parameter {name}={text} (from the command line)"
+            ctx.error(key_loc.at(f"{where}: {exc}"))
+            env[name] = Bound(vtype, UNKNOWN, "?")  # reported once, not at every use
+            continue
+        env[name] = Bound(vtype, value, text, f"{name}={text}, set on the command line")
+    return env
 
 
 def known_fields(
