@@ -574,7 +574,7 @@ def monitor_command(args: argparse.Namespace) -> int:
     def diverged_at(text: str) -> None:
         """Where the replay diverged, and each file and plugin changed since the record was
         made."""
-        for line in (text, *changed_since(record.header, mission.files, mission.root)):
+        for line in (text, *changed_since(record.header, mission.files, mission.root, record.path)):
             print(f"monitor: {args.record}: {line}", file=sys.stderr)
 
     feed, _ = replay_into_feed(

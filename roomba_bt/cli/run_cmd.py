@@ -32,6 +32,7 @@ from roomba_bt.cli.arguments import (
 )
 from roomba_bt.cli.monitor_cmd import LiveMonitor, MonitorOptions, chosen_token
 from roomba_bt.cli.monitor_cmd import add_run_arguments as add_monitor_arguments
+from roomba_bt.cli.record_header import add_reproducible_option, epoch_problem
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.printable import ANY_CONTROL, encodes, escaped
@@ -114,6 +115,7 @@ def _add_run_parser(sub: Any) -> None:
     )
     add_permission_options(run)
     run.add_argument("--fast", action="store_true", help="simulator on the virtual clock")
+    add_reproducible_option(run)
     _add_strict_option(run)
     _add_session_options(run)
     run.add_argument(
@@ -284,6 +286,7 @@ def _claimed_run(
         print(simulator, file=sys.stderr)
         return ExitCode.INVALID
     args.robot = robot_label(args.port, simulator)
+    args.world_source = simulator.world.source if simulator is not None else None
     args.started = datetime.now(UTC)
     monitor = None
     if args.monitor is not None or args.watch:
@@ -364,20 +367,12 @@ def _stack(
 ) -> RunStack:
     """The run's stack as the options say (OSError: the --record file cannot be written);
     ``claimed``: the --record file, claimed at the run's start."""
-    from roomba_bt.runtime.provenance import plugin_digests, source_digests, source_name
-    from roomba_bt.runtime.recording import utc_stamp
-    from roomba_bt.runtime.stack import Recording, RunStack
+    from roomba_bt.cli.record_header import recording
+    from roomba_bt.runtime.stack import RunStack
 
-    record = None
-    if args.record:
-        # a shipped mission by its name (roomba-bt:dock.yaml), found by a replay wherever
-        # roomba-bt is installed; a file of the user's by its absolute path
-        record = Recording(
-            args.record, source_name(Path(args.mission)), params,
-            port=args.robot, started=utc_stamp(args.started), label=args.label,
-            sources=source_digests(mission.files), plugins=plugin_digests(mission.root),
-            claimed=claimed,
-        )  # fmt: skip
+    # a shipped mission by its name (roomba-bt:dock.yaml), found by a replay wherever
+    # roomba-bt is installed; a file of the user's by its path from the record's folder
+    record = recording(args, mission, params, claimed) if args.record else None
     stack = RunStack(
         mission,
         link,
@@ -402,6 +397,7 @@ def _stack(
     summary.strict_named = "--strict"
     summary.robot = args.robot
     summary.label = args.label or ""
+    summary.timings = not getattr(args, "reproducible", False)  # wall-clock lines vary
     return stack
 
 
@@ -425,6 +421,9 @@ def _checked_arguments(args: argparse.Namespace) -> tuple[dict[str, str], float 
     token = chosen_token(args)
     if token:
         return _error(token)
+    epoch = epoch_problem() if args.record else None
+    if epoch is not None:  # the convention: stop rather than write the current time
+        return _error(epoch)
     ending = end_in_problem(args.end_in, get_profile(args.profile))
     if ending is not None:
         return _error(ending)
@@ -753,6 +752,8 @@ def load_recorded(args: argparse.Namespace) -> Recorded | int:
     header = record.header
     profile = get_profile(header.get("profile", "create2"))
     mission_path = args.mission or header.get("mission")
+    if not args.mission:
+        mission_path = _from_the_record(args.record, header)
     found = _recorded_mission(args.record, mission_path, given=bool(args.mission))
     if isinstance(found, int):
         return found
@@ -801,6 +802,34 @@ def _recorded_mission(record_path: str, mission_path: object, *, given: bool) ->
     return _error(f"{record_path}: mission {mission_path!r} not found{gone}; pass --mission FILE")
 
 
+def _from_the_record(record_path: str, header: dict[str, Any]) -> object:
+    """The header's mission as a path a replay opens: one relative to the record's folder
+    (``../missions/dock.yaml``, what ``run --record`` writes since session 29) from there, or,
+    where the record was moved away from it, its absolute path when recorded (``mission_path``),
+    said on stderr; else as the header says it (a shipped name, a path of a record made
+    before). Relative paths were absolute ones, and a record committed beside its missions
+    was "not found" in every other checkout."""
+    from roomba_bt.runtime.recording import MISSION_AT, recorded_path
+
+    named = header.get("mission")
+    if not isinstance(named, str) or Path(named).is_absolute():
+        return named
+    here = recorded_path(named, header, Path(record_path))
+    if here is None:  # a shipped name, or a record made before (relative to the cwd)
+        return named
+    if here.is_file():
+        return str(here)
+    there = header.get(MISSION_AT)
+    if isinstance(there, str) and Path(there).is_file():
+        print(
+            f"{record_path}: mission {named!r} is not beside the record ({here}); replaying "
+            f"{there}, where it was recorded",
+            file=sys.stderr,
+        )
+        return there
+    return str(here)
+
+
 def shipped_mission_at(path: object) -> str | None:
     """The shipped mission's name a recorded mission path shows it was (a record of
     ``run dock`` holds ``.../site-packages/roomba_bt/missions/dock.yaml``: a moved venv or a
@@ -837,7 +866,7 @@ def replay_command(args: argparse.Namespace) -> int:
     ending = record.ending  # its end note, said last (a record made before has none)
     ended = f"replay: {ending_text(ending)}" if ending is not None else None
     mission = recorded.mission
-    sources = changed_sources(record.header, mission.files)
+    sources = changed_sources(record.header, mission.files, record.path)
     plugins = changed_plugins(record.header, mission.root)
     # what the replay ran on, said before its verdict: one line, when it is not what the
     # record was made with

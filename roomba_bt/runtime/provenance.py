@@ -21,7 +21,9 @@ A record made before has none of the fields: its replay says nothing of them.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
+import os
 import sys
 from collections.abc import Iterable, Mapping
 from pathlib import Path
@@ -33,32 +35,58 @@ from roomba_bt import __version__
 from roomba_bt.behaviours.declare import Declaration
 from roomba_bt.behaviours.registry import ENTRY_POINT_GROUP, group_entry_points
 from roomba_bt.mission import shipped
-from roomba_bt.runtime.recording import MADE_BY, PLUGINS, SOURCES
+from roomba_bt.runtime.recording import (
+    MADE_BY,
+    PLUGINS,
+    SOURCES,
+    recorded_path,
+)
 
 #: a plugin's provenance: its distribution's version and its modules' digest
 VERSION, DIGEST = "version", "sha256"
 
 
-def source_name(path: Path) -> str:
-    """``roomba-bt:lib/undock.yaml`` for a shipped file (the same in every installation),
-    else the file's absolute path."""
+def source_name(path: Path, folder: Path | None = None) -> str:
+    """``roomba-bt:lib/undock.yaml`` for a shipped file (the same in every installation);
+    else, given the record's ``folder``, the file's path relative to it (``../missions/x.yaml``)
+    when the two lie under a common folder below the file system's root (:func:`near`), the
+    same in every checkout of a repository that holds both; else the file's absolute path."""
     resolved = path.resolve()
     if resolved.is_relative_to(shipped.SHIPPED_DIR):
         return shipped.SHIPPED_PREFIX + resolved.relative_to(shipped.SHIPPED_DIR).as_posix()
+    if folder is not None and near(resolved, folder.resolve()):
+        return Path(os.path.relpath(resolved, folder.resolve())).as_posix()
     return str(resolved)
 
 
-def source_digests(files: Iterable[Path]) -> dict[str, str]:
-    """Each file's SHA-256 by :func:`source_name`, in the order given (a compiled mission's
-    ``files``: the mission file first). A file gone since it was compiled is left out: there
-    is nothing to compare a replay's with."""
+def near(path: Path, folder: Path) -> bool:
+    """Whether ``path`` and ``folder`` (both absolute) share a folder below the file system's
+    root: a mission and the record of it in one repository (``repo/missions/x.yaml``,
+    ``repo/records/x.jsonl``) do, and a checkout moved or cloned elsewhere keeps the path
+    from one to the other. Only ``/`` in common (``/home/me/x.yaml``, ``/mnt/usb/r.jsonl``):
+    the absolute path is the better guess, for the record is likely to move alone."""
+    common = Path(os.path.commonpath([path, folder]))
+    return common != Path(common.anchor)
+
+
+def source_digests(files: Iterable[Path], folder: Path | None = None) -> dict[str, str]:
+    """Each file's SHA-256 by :func:`source_name` (relative to ``folder``, the record's, where
+    near it), in the order given (a compiled mission's ``files``: the mission file first). A
+    file gone since it was compiled is left out: there is nothing to compare a replay's with."""
     digests: dict[str, str] = {}
     for path in files:
-        try:
-            digests[source_name(path)] = hashlib.sha256(path.read_bytes()).hexdigest()
-        except OSError:
-            continue
+        digest = file_digest(path)
+        if digest is not None:
+            digests[source_name(path, folder)] = digest
     return digests
+
+
+def file_digest(path: Path) -> str | None:
+    """The SHA-256 of the file at ``path``, None when it cannot be read."""
+    try:
+        return hashlib.sha256(path.read_bytes()).hexdigest()
+    except OSError:
+        return None
 
 
 def plugin_digests(root: Behaviour) -> dict[str, dict[str, str]]:
@@ -114,28 +142,86 @@ def _package_digest(tops: list[str]) -> str:
     return total.hexdigest()
 
 
-def changed_sources(header: Mapping[str, Any], files: Iterable[Path]) -> list[str]:
-    """What a replay against ``files`` (the mission it compiled) says of the record's
-    ``header``: each file the recorded run's mission was compiled from too, whose digest
-    changed since (``roomba-bt:lib/undock.yaml changed since this record was made (roomba-bt
-    0.2.0 -> 0.3.0): a difference may come from it``). Files are matched by name; a file
-    the record does not name (a record made before: none) is not said."""
+def changed_sources(
+    header: Mapping[str, Any], files: Iterable[Path], record: Path | None = None
+) -> list[str]:
+    """What a replay against ``files`` (the mission it compiled, its file first) says of the
+    record's ``header`` (the record at ``record``): each file the recorded run's mission was
+    compiled from too, whose digest changed since (``roomba-bt:lib/undock.yaml changed since
+    this record was made (roomba-bt 0.2.0 -> 0.3.0): a difference may come from it``). A file
+    the record does not name (a record made before: none) is not said.
+
+    Files are matched by where they lie from their mission (:func:`_by_place`): the mission
+    file with the recorded one, ``../common/lib/escapes.yaml`` beside the recorded mission
+    with the one beside the replay's, whatever folder either checkout is in, and with
+    ``--mission``. They were matched by absolute path, and a record replayed in another
+    checkout (CI's) named no change at all."""
     recorded = header.get(SOURCES)
-    if not isinstance(recorded, Mapping):
+    if not isinstance(recorded, Mapping) or not recorded:
         return []
+    files = list(files)
+    was = _by_place(
+        [(name, recorded_path(name, header, record)) for name in recorded], recorded.values()
+    )
+    was_at = {str(where): (name, digest) for name, where, digest in was.values() if where}
+    now = _by_place([(source_name(path), path.resolve()) for path in files], None)
     made_by = header.get(MADE_BY)
     changed = []
-    for name, digest in source_digests(files).items():
-        was = recorded.get(name)
-        if was is None or was == digest:
+    for place, (name, where, digest) in now.items():
+        before = was.get(place, (None, None, None))[2] or was_at.get(str(where), (None, None))[1]
+        if before is None or before == digest:
+            continue
+        recorded_as = Path(was[""][0]).name if place == "" and "" in was else None
+        if recorded_as is not None and recorded_as != Path(name).name:  # replay --mission
+            changed.append(
+                f"{_shown(name)} is not the recorded mission {recorded_as}: a difference may "
+                "come from it"
+            )
             continue
         releases = ""
         if name.startswith(shipped.SHIPPED_PREFIX) and made_by != __version__:  # a release's
             releases = f" (roomba-bt {made_by or 'unknown'} -> {__version__})"
         changed.append(
-            f"{name} changed since this record was made{releases}: a difference may come from it"
+            f"{_shown(name)} changed since this record was made{releases}: a difference may "
+            "come from it"
         )
     return changed
+
+
+def _by_place(
+    files: list[tuple[str, Path | None]], digests: Iterable[str] | None
+) -> dict[str, tuple[str, Path | None, str | None]]:
+    """Each file ``(name, where)`` (a mission's, its own first) by its place from the mission:
+    ``""`` for the mission itself, a shipped file's name, else its path relative to the
+    mission's folder (its name where it cannot be found: a relative name of a record made
+    before); its name, where it is and its digest (``digests``, in the same order; None: the
+    file's, read now)."""
+    places: dict[str, tuple[str, Path | None, str | None]] = {}
+    digest_of = iter(digests) if digests is not None else None
+    home = files[0][1].parent if files and files[0][1] is not None else None
+    for index, (name, where) in enumerate(files):
+        if digest_of is not None:
+            digest = next(digest_of, None)
+        else:
+            digest = file_digest(where) if where is not None else None
+        if index == 0:
+            place = ""
+        elif name.startswith(shipped.SHIPPED_PREFIX) or where is None or home is None:
+            place = name
+        else:
+            place = Path(os.path.relpath(where, home)).as_posix()
+        places[place] = (name, where, digest)
+    return places
+
+
+def _shown(name: str) -> str:
+    """A file's name as a replay says it: relative to the working folder when it lies in it
+    (``missions/common/lib/escapes.yaml``, as the user typed it), else as it is."""
+    path = Path(name)
+    if path.is_absolute():
+        with contextlib.suppress(ValueError):
+            return path.relative_to(Path.cwd()).as_posix()
+    return name
 
 
 def changed_plugins(header: Mapping[str, Any], root: Behaviour) -> list[str]:
@@ -172,10 +258,13 @@ def changed_plugins(header: Mapping[str, Any], root: Behaviour) -> list[str]:
     return changed
 
 
-def changed_since(header: Mapping[str, Any], files: Iterable[Path], root: Behaviour) -> list[str]:
+def changed_since(
+    header: Mapping[str, Any], files: Iterable[Path], root: Behaviour, record: Path | None = None
+) -> list[str]:
     """Every file (:func:`changed_sources`) and plugin (:func:`changed_plugins`) of the
-    record's that the replay's mission (its ``files``, its tree ``root``) has otherwise."""
-    return [*changed_sources(header, files), *changed_plugins(header, root)]
+    record's (at ``record``) that the replay's mission (its ``files``, its tree ``root``) has
+    otherwise."""
+    return [*changed_sources(header, files, record), *changed_plugins(header, root)]
 
 
 def drift_line(

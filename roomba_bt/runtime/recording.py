@@ -3,11 +3,14 @@
 A record is JSON Lines, one object a line::
 
     {"format": "roomba-bt-record", "version": 2, "roomba_bt_version": "0.2.0",
-     "profile": "create2", "baud": 115200, "mission": "/home/me/missions/dock.yaml",
+     "profile": "create2", "baud": 115200, "mission": "../missions/dock.yaml",
+     "relative_to": "record", "mission_path": "/home/me/repo/missions/dock.yaml",
      "parameters": {...}, "packets": [7, 9, ...], "watchdog": 0.1, "grace": 2.0,
      "port": "/dev/ttyUSB0", "started": "2025-03-04T09:12:05Z", "label": "robot 3",
-     "sources": {"/home/me/missions/dock.yaml": "9f86d0...", "roomba-bt:lib/docking.yaml": ...},
-     "plugins": {"roomba-bt-dirt": {"version": "0.1.0", "sha256": "84755334..."}}}
+     "sources": {"../missions/dock.yaml": "9f86d0...", "roomba-bt:lib/docking.yaml": ...},
+     "plugins": {"roomba-bt-dirt": {"version": "0.1.0", "sha256": "84755334..."}},
+     "simulator": {"world": "../worlds/lab.yaml", "world_sha256": ..., "seed": 0, ...},
+     "options": {"timeout": "10min", "include_dirs": [], ...}}
     {"t": 0.000000, "d": "out", "b": "80"}          <- host -> robot, hex
     {"t": 0.015012, "d": "in",  "b": "1305..."}     <- robot -> host, hex
     {"t": 3.120000, "d": "note", "note": {...}}     <- an act: the monitor's force, the tick
@@ -33,7 +36,13 @@ its tree used, with its version and its modules' digest (``plugins``, since sess
 ``runtime/provenance.py``): a replay says in one line when it ran on other files or plugins,
 and one that differs names each changed since. A record made before has none of them. The
 header's ``mission`` names a shipped mission as an include does (``roomba-bt:dock.yaml``, since
-session 29; a path in the installation that made it before), any other by its absolute path.
+session 29; a path in the installation that made it before), any other by its path from the
+record's folder where the two share a folder below the root (``relative_to``: ``record``; since
+session 29, so that a record committed beside its missions replays in every checkout: its
+absolute path is in ``mission_path``, for the reader), else by its absolute path. The
+simulator's options (``simulator``) and the run's (``options``) say how to make it again;
+``run --reproducible`` leaves out ``started`` (unless ``SOURCE_DATE_EPOCH`` gives it) and
+``mission_path``, which change on every run with nothing changed.
 
 The header also holds the run's ``watchdog`` and ``grace`` (seconds), and each watchdog trip
 is a note (``{"watchdog": 0.101, "limit": 0.1}``, at the link time it tripped): a replay's
@@ -72,7 +81,7 @@ import re
 import stat
 import time
 from collections import deque
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -102,6 +111,23 @@ SOURCES = "sources"
 #: ``roomba_bt.behaviours``) whose behaviours the mission's tree holds: its version and the
 #: SHA-256 of its modules' files (absent before: no plugin could be told apart)
 PLUGINS = "plugins"
+#: the header field saying what its relative paths (``mission``, ``sources``' names, the
+#: world and the include folders) are relative to: ``"record"``, the record file's folder
+#: (absent before: every path was absolute, a shipped file's aside)
+RELATIVE_TO = "relative_to"
+RELATIVE_TO_RECORD = "record"
+#: the header field holding the mission's absolute path when the run was recorded, for the
+#: reader (and a replay of a record moved away from its mission); left out by ``run
+#: --reproducible``, whose header is the same in every checkout
+MISSION_AT = "mission_path"
+#: the header field holding the simulator's options as the run was given them (``world``,
+#: ``world_sha256``, ``seed``, ``random_start``, ``battery``, ``odometry_error``, ``fast``):
+#: with the mission and the run's ``options`` (:data:`RUN_OPTIONS`), what runs it again.
+#: Absent on a robot's port, and in a record made before
+SIMULATOR = "simulator"
+#: the header field holding the run's options that decide its bytes besides the mission and
+#: the simulator, as given (``timeout``, ``include_dirs``, ``allow_plugin_files``, ``end_in``)
+RUN_OPTIONS = "options"
 
 #: Seconds of the link's clock between two flushes of the record to the operating system: a
 #: run killed outright (``kill -9``, the OOM killer) loses at most this much of its record.
@@ -310,10 +336,51 @@ def _line_end_before(path: str, held: os.stat_result, limit: int) -> int | None:
     return None if at < 0 else start + at + 1
 
 
+def recorded_path(name: str, header: Mapping[str, Any], record: Path | None) -> Path | None:
+    """Where a path of the record's header (its ``mission``, a ``sources`` name) is now: a
+    relative one from the record's folder when the header says its paths are relative to it
+    (:data:`RELATIVE_TO`), an absolute one as it is; None for a shipped file's name
+    (``roomba-bt:...``), or a relative path of a record made before (relative to a folder
+    nobody noted)."""
+    if name.startswith("roomba-bt:"):  # mission.shipped's prefix (that package is not needed)
+        return None
+    path = Path(name)
+    if path.is_absolute():
+        return path
+    if record is None or header.get(RELATIVE_TO) != RELATIVE_TO_RECORD:
+        return None
+    return Path(os.path.normpath(record.resolve().parent / path))
+
+
 def utc_stamp(moment: datetime) -> str:
     """``2025-03-04T09:12:05Z``: when a run started, as its record's header and the monitor's
     page say it (ISO 8601, UTC, to the second)."""
     return moment.astimezone(UTC).isoformat(timespec="seconds").replace("+00:00", "Z")
+
+
+#: the reproducible-builds convention's variable (https://reproducible-builds.org/specs/
+#: source-date-epoch/): seconds since 1970-01-01 UTC to write in place of the current time
+SOURCE_DATE_EPOCH = "SOURCE_DATE_EPOCH"
+
+
+def source_date_epoch(environ: Mapping[str, str] | None = None) -> datetime | None:
+    """The time :data:`SOURCE_DATE_EPOCH` gives (``environ``: the process's environment by
+    default), which a record's ``started`` says instead of the run's start, so that a run
+    recorded again with nothing changed writes the same bytes; None when it is not set (or
+    empty). ValueError naming the variable when it is not a whole number of seconds: the
+    convention asks a tool to stop there rather than write the current time."""
+    text = (os.environ if environ is None else environ).get(SOURCE_DATE_EPOCH, "")
+    if not text:
+        return None
+    if not text.isascii() or not text.isdigit():
+        raise ValueError(
+            f"{SOURCE_DATE_EPOCH}={text!r}: expected a whole number of seconds since "
+            "1970-01-01 UTC (date +%s)"
+        )
+    try:
+        return datetime.fromtimestamp(int(text), UTC)
+    except (OverflowError, ValueError, OSError):
+        raise ValueError(f"{SOURCE_DATE_EPOCH}={text!r}: a time past what a date holds") from None
 
 
 #: the end note's key: the run's outcome (``Outcome.value``)
@@ -391,6 +458,17 @@ class Record:
     #: :class:`~roomba_bt.runtime.claimed.ClaimedFile`), or, where no lock can be asked for,
     #: the file changed in the last :data:`STILL_WRITTEN_S` seconds: a run writes it still
     being_written: bool = False
+
+    @property
+    def mission_file(self) -> str | None:
+        """The header's ``mission`` as a path to compile (``load_mission``): one relative to
+        the record's folder (``../missions/dock.yaml``, as ``run --record`` writes it) from
+        there, a shipped name or an absolute path as it is; None when the header has none."""
+        named = self.header.get("mission")
+        if not isinstance(named, str):
+            return None
+        here = recorded_path(named, self.header, self.path)
+        return named if here is None else str(here)
 
     def unended(self) -> str | None:
         """Why the record holds no end line, or None when it does: its recording stopped
@@ -661,7 +739,14 @@ def header_problem(header: dict[str, Any]) -> str | None:
         seconds = header.get(name, 0.0)
         if type(seconds) not in (int, float) or not 0.0 <= seconds < math.inf:
             return f"header field {name!r} is {seconds!r}; expected seconds, 0 or more"
-    for name in ("port", "started", "label", MADE_BY):  # which robot, when, which roomba-bt
+    relative_to = header.get(RELATIVE_TO, RELATIVE_TO_RECORD)
+    if relative_to != RELATIVE_TO_RECORD:
+        return f"header field {RELATIVE_TO!r} is {relative_to!r}; expected {RELATIVE_TO_RECORD!r}"
+    for name in (SIMULATOR, RUN_OPTIONS):  # read by the user, not by a replay
+        options = header.get(name, {})
+        if not isinstance(options, dict):
+            return f"header field {name!r} is {options!r}; expected {{option: value}}"
+    for name in ("port", "started", "label", MADE_BY, MISSION_AT):  # which robot, when, ...
         text = header.get(name)
         if text is not None and not isinstance(text, str):
             return f"header field {name!r} is {text!r}; expected text"

@@ -48,7 +48,12 @@ from roomba_bt.runtime.loop import (
 from roomba_bt.runtime.recording import (
     ENDED,
     ENDED_FROM_OUTSIDE,
+    MISSION_AT,
     PLUGINS,
+    RELATIVE_TO,
+    RELATIVE_TO_RECORD,
+    RUN_OPTIONS,
+    SIMULATOR,
     SOURCES,
     WRITTEN,
     Record,
@@ -138,6 +143,18 @@ class Recording:
     #: that differs names the ones changed since. None: not written (a record that cannot
     #: tell "no plugin" from "not looked at" says nothing of them); {}: none was used
     plugins: Mapping[str, Mapping[str, str]] | None = None
+    #: the mission's absolute path, for the reader, when ``mission`` is relative to the
+    #: record's folder (None: left out, as ``run --reproducible`` does)
+    mission_path: str | None = None
+    #: the simulator's options as given (``world``, ``seed``, ...: ``recording.SIMULATOR``)
+    #: and the run's (``timeout``, ``include_dirs``, ...: ``recording.RUN_OPTIONS``), what
+    #: runs the mission again as recorded; None: not written (a robot's port has no simulator)
+    simulator: Mapping[str, Any] | None = None
+    options: Mapping[str, Any] | None = None
+    #: whether the relative paths of the header (``mission``, ``sources``' names, ...) are
+    #: relative to the record's folder, as ``run`` writes them (``recording.RELATIVE_TO``);
+    #: False: a program's, as it gave them
+    paths_from_record: bool = False
     #: ``path`` claimed already for this run (``run`` does, before it opens the robot, so a
     #: path another run writes is refused first); None: the record claims it when made
     claimed: ClaimedFile | None = field(default=None, compare=False)
@@ -152,6 +169,8 @@ class Recording:
             "profile": profile.name,
             "baud": baud,
             "mission": self.mission,
+            **({RELATIVE_TO: RELATIVE_TO_RECORD} if self.paths_from_record else {}),
+            **({MISSION_AT: self.mission_path} if self.mission_path is not None else {}),
             "parameters": dict(self.parameters),
             "packets": list(packets),
             "watchdog": watchdog,
@@ -161,6 +180,8 @@ class Recording:
             **({"label": self.label} if self.label is not None else {}),
             **({SOURCES: dict(self.sources)} if self.sources else {}),
             **({} if self.plugins is None else {PLUGINS: _plain(self.plugins)}),
+            **({SIMULATOR: dict(self.simulator)} if self.simulator is not None else {}),
+            **({RUN_OPTIONS: dict(self.options)} if self.options is not None else {}),
         }
 
 

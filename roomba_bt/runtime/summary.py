@@ -251,6 +251,10 @@ class RunSummary:
     exception: BaseException | None = field(default=None, repr=False, compare=False)
     #: ``--record``: why and when the record stopped before the run's end ("" if it did not)
     record_stopped: str = ""
+    #: whether :meth:`lines` says the wall-clock measurements (the wall time, the ticks over
+    #: the slot and the slowest): other on every run of the same mission; ``run
+    #: --reproducible`` leaves them out, so the summary of a run made again is the same
+    timings: bool = True
     #: the robot profile, said when it is not the default (``roomba500 (Roomba 500 series)``;
     #: "" for the default, whose summary reads as it always did)
     profile: str = ""
@@ -394,10 +398,9 @@ class RunSummary:
             *([f"robot        {self.robot}"] if self.robot else []),
             f"outcome      {self.outcome.value.upper()}{reason}",
             *([f"forced       by the operator: {'; '.join(self.forced)}"] if self.forced else []),
-            f"duration     {self.mission_time_s:.2f} s mission time, {self.wall_time_s:.2f} s wall",
+            f"duration     {self.mission_time_s:.2f} s mission time{self.wall_said()}",
             *([f"paused       {self.paused_text()}"] if self.pauses or self.steps else []),
-            f"ticks        {self.ticks} ({self.overruns} overruns > 15 ms, "
-            f"slowest {self.max_tick_s * 1000:.2f} ms{self.slowest_said()})",
+            f"ticks        {self.ticks}{self.tick_times_said()}",
             f"frames       {self.stale_frames_dropped} stale dropped, {self.frames_lost} lost, "
             f"{self.checksum_failures} checksum failures, "
             f"{self.implausible_frames} out of range, {self.skipped_bytes} bytes skipped, "
@@ -431,6 +434,20 @@ class RunSummary:
             *self.verdict_lines(),
         ]
         return [escaped(line, ANY_CONTROL) for line in lines]
+
+    def wall_said(self) -> str:
+        """``, 0.04 s wall`` for the duration line; "" without :attr:`timings`."""
+        return f", {self.wall_time_s:.2f} s wall" if self.timings else ""
+
+    def tick_times_said(self) -> str:
+        """`` (0 overruns > 15 ms, slowest 1.98 ms)`` for the ticks line; "" without
+        :attr:`timings`."""
+        if not self.timings:
+            return ""
+        return (
+            f" ({self.overruns} overruns > 15 ms, slowest {self.max_tick_s * 1000:.2f} ms"
+            f"{self.slowest_said()})"
+        )
 
     def dropped_said(self) -> str:
         """``, 2 dropped while the tree was stopped`` for the commands line; "" for none."""

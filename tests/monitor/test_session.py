@@ -823,7 +823,7 @@ def test_the_record_of_a_stall_is_shown_whole_the_watchdogs_trip_among_its_event
     difference: a 90 s noisy run showed '6 ticks, input ended'."""
     path = record_run(tmp_path, stream_gap_link())
     record = load_record(path)
-    mission = load_mission(record.header["mission"], {}, profile=CREATE2)
+    mission = load_mission(record.mission_file or "", {}, profile=CREATE2)
     feed, summary = replay_into_feed(
         record, mission, CREATE2, tuple(record.header["packets"]), 115200, str(path)
     )

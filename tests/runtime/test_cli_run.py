@@ -319,8 +319,10 @@ def test_replay_stops_at_the_first_difference_and_names_it(
     )
     assert main(["replay", str(record), "--mission", str(slower)]) == 1
     out = capsys.readouterr().out
-    line = next(x for x in out.splitlines() if x.startswith("replay:"))
+    line = next(x for x in out.splitlines() if x.startswith("replay: first difference"))
     assert "first difference at mission time 1.0" in line
+    # the mission given is not the recorded one: said, as a changed file is (session 29)
+    assert f"replay: {slower} is not the recorded mission drive.yaml: a difference" in out
     assert "expected Drive (137) 89 00 c8 80 00, sent Drive (137) 89 00 64 80 00" in line
     assert "end of the record" not in out  # it stopped there, not at the record's end
     # the tree's input ended: nothing was lost (it read "CONNECTION LOST")

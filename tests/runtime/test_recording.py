@@ -203,7 +203,7 @@ def _replayed(path: Path) -> tuple[RunSummary, tuple[int, str, str] | None, int]
     """``path`` replayed as ``roomba-bt replay`` does: its summary, its first difference and
     the bytes the tree wrote."""
     record = load_record(path)
-    mission = load_mission(record.header["mission"], {}, profile=CREATE2)
+    mission = load_mission(record.mission_file or "", {}, profile=CREATE2)
     summary, transport = replay_record(
         record, mission, profile=CREATE2, packets=record.header["packets"], baud=115200,
         name=str(path),
@@ -666,14 +666,12 @@ def test_a_record_names_the_roomba_bt_that_made_it_and_each_file_its_mission_cam
     header = json.loads(record.read_text(encoding="utf-8").splitlines()[0])
     assert header["roomba_bt_version"] == __version__
     undock = (SHIPPED_DIR / "lib" / "undock.yaml").read_bytes()
-    assert header["sources"] == {
-        str(mission.resolve()): hashlib.sha256(mission.read_bytes()).hexdigest(),
-        str((tmp_path / "moves.yaml").resolve()): hashlib.sha256(
-            (tmp_path / "moves.yaml").read_bytes()
-        ).hexdigest(),
+    assert header["sources"] == {  # by their paths from the record's folder (session 29)
+        mission.name: hashlib.sha256(mission.read_bytes()).hexdigest(),
+        "moves.yaml": hashlib.sha256((tmp_path / "moves.yaml").read_bytes()).hexdigest(),
         "roomba-bt:lib/undock.yaml": hashlib.sha256(undock).hexdigest(),
     }
-    assert next(iter(header["sources"])) == str(mission.resolve())  # the mission's first
+    assert next(iter(header["sources"])) == mission.name  # the mission's first
     bad = tmp_path / "bad.jsonl"
     lines = record.read_text(encoding="utf-8").splitlines(keepends=True)
     bad.write_text("".join([json.dumps({**header, "sources": ["x"]}) + "\n", *lines[1:]]))
@@ -919,17 +917,17 @@ def test_a_replay_says_in_one_line_that_it_ran_on_other_files_than_the_record_wa
     lines = record.read_text(encoding="utf-8").splitlines(keepends=True)
     header = json.loads(lines[0])
     header["roomba_bt_version"] = "0.1.0"
-    header["sources"][str(mission.resolve())] = hashlib.sha256(mission.read_bytes()).hexdigest()
+    header["sources"][mission.name] = hashlib.sha256(mission.read_bytes()).hexdigest()
     older = tmp_path / "older.jsonl"
     older.write_text("".join([json.dumps(header) + "\n", *lines[1:]]), encoding="utf-8")
     assert main(["replay", str(older)]) == 0
     assert "recorded with" not in capsys.readouterr().out  # the same bytes: the release unsaid
     _mission_with_a_library(tmp_path, "150 mm/s")  # the tree decides otherwise now
     header["sources"] = load_record(record).header["sources"]  # each digest as the files now
-    header["sources"][str((tmp_path / "moves.yaml").resolve())] = hashlib.sha256(
+    header["sources"]["moves.yaml"] = hashlib.sha256(
         (tmp_path / "moves.yaml").read_bytes()
     ).hexdigest()
-    header["sources"][str(mission.resolve())] = hashlib.sha256(mission.read_bytes()).hexdigest()
+    header["sources"][mission.name] = hashlib.sha256(mission.read_bytes()).hexdigest()
     older.write_text("".join([json.dumps(header) + "\n", *lines[1:]]), encoding="utf-8")
     assert main(["replay", str(older)]) == 1
     out = capsys.readouterr().out

@@ -1,0 +1,123 @@
+"""What ``run --record`` says of its run in the record's header, and ``--reproducible``.
+
+A record is committed beside its missions (``repo/records/dock.jsonl``) and replayed in
+every checkout CI makes elsewhere. Its header names the mission, each file the mission came
+from and the simulator's world by their paths relative to the record's folder
+(``../missions/docking/dock.yaml``) where the two lie under a common folder
+(:func:`~roomba_bt.runtime.provenance.near`), so a replay in another checkout finds them,
+and keeps the mission's absolute path for the reader. The simulator's options and the run's
+own (``--timeout``, ``--include-dir``, ...) are there as given: the record says how to make it
+again (docs/runtime.md, Recording and replay).
+
+``--reproducible`` leaves out what changes from one run to the next with nothing changed:
+the start time (``SOURCE_DATE_EPOCH``'s, when set, as the reproducible-builds convention
+has it), the absolute path, and the summary's wall-clock measurements.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from roomba_bt.runtime.claimed import ClaimedFile
+    from roomba_bt.runtime.stack import Recording
+
+REPRODUCIBLE_HELP = (
+    "byte-stable output for committing: leave out the wall-clock measurements (wall and CPU "
+    "time, the slowest tick, worker ids) and the absolute paths, and write a record's "
+    "'started' only from SOURCE_DATE_EPOCH"
+)
+
+
+def add_reproducible_option(parser: argparse.ArgumentParser) -> None:
+    """``--reproducible`` (``run`` and ``eval``)."""
+    parser.add_argument("--reproducible", action="store_true", help=REPRODUCIBLE_HELP)
+
+
+def started_said(args: argparse.Namespace) -> str | None:
+    """The header's ``started``: ``SOURCE_DATE_EPOCH``'s time when it is set (checked by
+    :func:`epoch_problem` before the run), else the run's start; None with ``--reproducible``
+    and no ``SOURCE_DATE_EPOCH`` (a header without it loads, as one made before did)."""
+    from roomba_bt.runtime.recording import source_date_epoch, utc_stamp
+
+    epoch = source_date_epoch()
+    if epoch is not None:
+        return utc_stamp(epoch)
+    return None if getattr(args, "reproducible", False) else utc_stamp(args.started)
+
+
+def epoch_problem() -> str | None:
+    """What is wrong with ``SOURCE_DATE_EPOCH``, said before the run (exit 2), or None."""
+    from roomba_bt.runtime.recording import source_date_epoch
+
+    try:
+        source_date_epoch()
+    except ValueError as exc:
+        return str(exc)
+    return None
+
+
+def recording(
+    args: argparse.Namespace,
+    mission: Any,
+    params: dict[str, str],
+    claimed: ClaimedFile | None,
+) -> Recording:
+    """The header ``run --record`` writes: the mission (a shipped one by its name, a file
+    by its path from the record's folder, :func:`~roomba_bt.runtime.provenance.source_name`),
+    its sources and plugins, the simulator's options and the run's."""
+    from roomba_bt.runtime.provenance import plugin_digests, source_digests, source_name
+    from roomba_bt.runtime.stack import Recording
+
+    folder = Path(args.record).resolve().parent
+    reproducible = bool(getattr(args, "reproducible", False))
+    name = source_name(Path(args.mission), folder)
+    relative = not Path(name).is_absolute() and not name.startswith("roomba-bt:")
+    return Recording(
+        args.record, name, params,
+        port=args.robot, started=started_said(args), label=args.label,
+        sources=source_digests(mission.files, folder), plugins=plugin_digests(mission.root),
+        mission_path=str(Path(args.mission).resolve()) if relative and not reproducible else None,
+        simulator=simulator_options(args, folder), options=run_options(args, folder),
+        paths_from_record=True, claimed=claimed,
+    )  # fmt: skip
+
+
+def simulator_options(args: argparse.Namespace, folder: Path) -> dict[str, Any] | None:
+    """The simulator's options as given: the world (a shipped world's name, a file's path
+    from the record's ``folder``) and its file's digest, the seed, ``--random-start``,
+    ``--battery``, ``--odometry-error`` and ``--fast``; None on a robot's port."""
+    if args.port:
+        return None
+    from roomba_bt.cli.links import DEFAULT_WORLD
+    from roomba_bt.runtime.provenance import file_digest, source_name
+    from roomba_bt.sim.world import WORLDS_DIR
+
+    given = args.world or DEFAULT_WORLD
+    source = Path(getattr(args, "world_source", "") or given)
+    shipped = source.resolve().is_relative_to(WORLDS_DIR.resolve()) and not Path(given).is_file()
+    return {
+        "world": given if shipped else source_name(Path(given), folder),
+        "world_sha256": file_digest(source),
+        "seed": args.seed,
+        "random_start": bool(args.random_start),
+        "battery": args.battery,
+        "odometry_error": args.odometry_error or 0.0,
+        "fast": bool(args.fast),
+    }
+
+
+def run_options(args: argparse.Namespace, folder: Path) -> dict[str, Any]:
+    """The run's options besides the mission and the simulator that decide its bytes, as
+    given: ``--timeout`` (None: none given), ``--include-dir`` (from the record's ``folder``,
+    as the mission is), ``--allow-plugin-files`` and ``--end-in``."""
+    from roomba_bt.runtime.provenance import source_name
+
+    return {
+        "timeout": args.timeout,
+        "include_dirs": [source_name(Path(d), folder) for d in args.include_dir or ()],
+        "allow_plugin_files": bool(args.allow_plugin_files),
+        "end_in": args.end_in,
+    }
