@@ -51,6 +51,7 @@ from roomba_bt.cli.arguments import (
     plot_file,
     results_file,
 )
+from roomba_bt.cli.record_header import add_reproducible_option
 from roomba_bt.oi.profiles import PROFILES
 from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.runtime.summary import ExitCode, Outcome, profile_shown
@@ -122,6 +123,7 @@ def _add_output_options(ev: argparse.ArgumentParser) -> None:
         help="one record per episode: .jsonl (JSON Lines) or .csv",
     )  # fmt: skip
     ev.add_argument("--json", action="store_true", help="print the summary as JSON")
+    add_reproducible_option(ev)
     ev.add_argument(
         "--sweep",
         metavar="NAME=V1,V2,...",
@@ -302,7 +304,7 @@ def eval_command(args: argparse.Namespace) -> int:
             partial.done()
         return done
     # the records first: a summary that fails (a bug in the statistics) loses no episode
-    unwritten = _save(args.out, done, partial)
+    unwritten = _save(args, done, partial)
     try:
         summaries, comparisons = _statistics(args, chosen, done, world.name)
         _report(args, engine.describe(), chosen, summaries, comparisons, done)
@@ -330,16 +332,23 @@ def _count(done: list[Evaluation]) -> int:
     return sum(len(e.results) for e in done)
 
 
-def _save(out: str | None, done: list[Evaluation], partial: PartialResults | None) -> str | None:
-    """``--out``'s records written (before any statistics); the problem when they could
-    not be (the partial file is then kept, and the message names it)."""
+def _save(
+    args: argparse.Namespace, done: list[Evaluation], partial: PartialResults | None
+) -> str | None:
+    """``--out``'s records written (before any statistics), with what made them
+    (:func:`made_by`); the problem when they could not be (the partial file is then kept,
+    and the message names it)."""
+    out: str | None = args.out
     if out is None:
         return None
     from roomba_bt.evaluate.records import write_results
 
     assert partial is not None
     try:
-        write_results(out, [r for e in done for r in e.results])
+        write_results(
+            out, [r for e in done for r in e.results], getattr(args, "made_by", None),
+            reproducible=args.reproducible,
+        )  # fmt: skip
     except OSError as exc:
         partial.done(keep=True)
         problem = exc.strerror or exc
@@ -359,7 +368,8 @@ def _statistics(
 
     shown = profile_shown(PROFILES[args.profile])
     summaries = [
-        summarize(v.mission, world, e.results, shown) for v, e in zip(chosen, done, strict=True)
+        replace(summarize(v.mission, world, e.results, shown), timings=not args.reproducible)
+        for v, e in zip(chosen, done, strict=True)
     ]
     comparisons: list[Comparison | str] = []
     for v, e in zip(chosen[1:], done[1:], strict=True):
@@ -527,6 +537,7 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
         )
         for v in chosen
     ]
+    missions = []
     for v in chosen:
         loaded = load(
             v.mission,
@@ -536,13 +547,40 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
         )
         if isinstance(loaded, int):
             return loaded
+        missions.append(loaded)
     try:
         world = build_world(batches[0][0])
         start_pose(world, batches[0][0])
     except EvaluationError as exc:
         return _error(str(exc))
+    args.made_by = made_by(args, chosen, missions, world)
     _warn_if_one_start(args, world)
     return chosen, batches, world
+
+
+def made_by(
+    args: argparse.Namespace, chosen: list[Variant], missions: list[Any], world: World
+) -> dict[str, dict[str, Any]]:
+    """What made each variant's episodes, by its mission as the results name it: the
+    roomba-bt release, the world file's digest, each file the mission was compiled from
+    (by its path from ``--out``'s folder, else the working folder's, as a record names them
+    from its own) and each installed plugin its tree used, as a record's header has them
+    (``records.PROVENANCE_COLUMNS``). The results said none of it, so a committed results
+    file could not be told from one of another release or another library."""
+    from roomba_bt import __version__
+    from roomba_bt.runtime.provenance import file_digest, plugin_digests, source_digests
+
+    folder = Path(args.out).resolve().parent if args.out else Path.cwd()
+    world_digest = file_digest(Path(world.source))
+    return {
+        v.mission: {
+            "roomba_bt_version": __version__,
+            "world_sha256": world_digest,
+            "sources": source_digests(m.files, folder),
+            "plugins": plugin_digests(m.root),
+        }
+        for v, m in zip(chosen, missions, strict=True)
+    }
 
 
 def _warn_if_more_jobs_than_cores(jobs: int) -> None:
@@ -637,21 +675,7 @@ def _report(
 
     retried = sum(e.retried for e in done)
     if args.json:
-        import json
-
-        coverages = [summarize_coverage(e.results) for e in done]
-        from roomba_bt.evaluate.stats import tidy
-
-        print(json.dumps(tidy({
-            "conditions": run_conditions(args),
-            "engine": engine,
-            "retried": retried,
-            "interrupted": any(e.interrupted for e in done),
-            "variants": [{"label": v.label, "params": dict(v.params), **s.to_dict(),
-                          "coverage": c.to_dict() if c is not None else None}
-                         for v, s, c in zip(chosen, summaries, coverages, strict=True)],
-            "comparisons": [c.to_dict() for c in comparisons if not isinstance(c, str)],
-        }), indent=2))  # fmt: skip
+        _json_report(args, engine, chosen, summaries, comparisons, done)
         return
     for v, s, e in zip(chosen, summaries, done, strict=True):
         if len(chosen) > 1:
@@ -664,7 +688,49 @@ def _report(
     for c in comparisons:
         print(c)
         print()
-    print(f"engine       {engine}; {retried} episode(s) run again after a worker was lost")
+    if not args.reproducible:  # which processes ran them, and what was lost: not the results
+        print(f"engine       {engine}; {retried} episode(s) run again after a worker was lost")
+
+
+def _json_report(
+    args: argparse.Namespace,
+    engine: str,
+    chosen: list[Variant],
+    summaries: list[Summary],
+    comparisons: list[Comparison | str],
+    done: list[Evaluation],
+) -> None:
+    """``--json``: the conditions, what made the episodes (the release, each plugin, each
+    variant's files: :func:`made_by`), the ``--min-rate`` verdict (``passed``: each variant's
+    and all of them; null without ``--min-rate``), each variant's summary and coverage, and
+    the comparisons. ``--reproducible``: the engine, the episodes run again and the times
+    measured on the wall clock null, so that the same episodes run again print the same."""
+    import json
+
+    from roomba_bt.evaluate.coverage import summarize_coverage
+    from roomba_bt.evaluate.stats import tidy
+
+    made = getattr(args, "made_by", {})
+    plugins: dict[str, Any] = {}
+    for provenance in made.values():
+        plugins.update(provenance["plugins"])
+    passed = [None if args.min_rate is None else s.rate >= args.min_rate for s in summaries]
+    measured = not args.reproducible
+    print(json.dumps(tidy({
+        "conditions": run_conditions(args),
+        "engine": engine if measured else None,
+        "retried": sum(e.retried for e in done) if measured else None,
+        "interrupted": any(e.interrupted for e in done),
+        "passed": None if args.min_rate is None else all(passed),
+        "plugins": dict(sorted(plugins.items())),
+        "variants": [{"label": v.label, "params": dict(v.params), **s.to_dict(),
+                      "passed": ok, "sources": made.get(v.mission, {}).get("sources"),
+                      "coverage": c.to_dict() if c is not None else None}
+                     for v, s, c, ok in zip(chosen, summaries,
+                                            [summarize_coverage(e.results) for e in done],
+                                            passed, strict=True)],
+        "comparisons": [c.to_dict() for c in comparisons if not isinstance(c, str)],
+    }), indent=2))  # fmt: skip
 
 
 def run_conditions(args: argparse.Namespace) -> dict[str, Any]:
@@ -695,8 +761,16 @@ def run_conditions(args: argparse.Namespace) -> dict[str, Any]:
         "odometry_error": args.odometry_error,
         "battery": args.battery,
         "profile": args.profile,
+        "min_rate": args.min_rate,
+        "world_sha256": _world_digest(args),
         "roomba_bt_version": __version__,
     }
+
+
+def _world_digest(args: argparse.Namespace) -> str | None:
+    """The world file's SHA-256 (:func:`made_by`'s, the same for every variant)."""
+    made: dict[str, dict[str, Any]] = getattr(args, "made_by", {})
+    return next((provenance["world_sha256"] for provenance in made.values()), None)
 
 
 def _plot(

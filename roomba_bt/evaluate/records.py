@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import csv
 import json
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import fields
 from pathlib import Path
 from typing import Any
@@ -55,7 +55,7 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "reason": ("reason", "str"),
     "stage": ("stage", "str"),
     "mission_time": ("time_s", "float"),
-    "wall_time": ("wall_s", "float"),
+    "wall_time": ("wall_s", "float?"),
     "ticks": ("ticks", "int"),
     "start_x": ("start", "0"),
     "start_y": ("start", "1"),
@@ -94,6 +94,18 @@ COVERAGE_COLUMNS: dict[str, str] = {
     "longest_idle": "longest_idle_s",
     "cleaning_time": "cleaning_s",
 }
+
+
+#: what made the episodes (after the coverage columns; the same in each row of a mission):
+#: the roomba-bt release, the world file's SHA-256, each file the mission was compiled from
+#: by its path from the results file's folder (``{"../missions/dock.yaml": SHA-256}``; in
+#: CSV ``name=SHA-256;...``) and each installed plugin its tree used (``{"roomba-bt-lab":
+#: {"version": "0.3.1", "sha256": ...}}``; in CSV ``name=version:SHA-256;...``), as a
+#: record's header has them. Empty in a file written before, and in rows written without them
+PROVENANCE_COLUMNS = ("roomba_bt_version", "world_sha256", "sources", "plugins")
+#: the columns ``--reproducible`` leaves empty: measured on the wall clock, or naming a
+#: process, they differ on every run of the same episodes
+MEASURED_COLUMNS = ("wall_time", "cpu_time", "worker")
 
 
 class ResultsFileError(ValueError):
@@ -251,17 +263,34 @@ def _params(raw: Any) -> tuple[tuple[str, str], ...]:
     return tuple((name, value) for name, _, value in pairs)
 
 
-def write_results(path: str | Path, results: Iterable[EpisodeResult]) -> int:
-    """Write the records to ``path`` (format by suffix); the number written. A file another
-    roomba-bt writes is refused (FileInUse, an OSError) before it is emptied."""
+def write_results(
+    path: str | Path,
+    results: Iterable[EpisodeResult],
+    provenance: Mapping[str, Mapping[str, Any]] | None = None,
+    *,
+    reproducible: bool = False,
+) -> int:
+    """Write the records to ``path`` (format by suffix); the number written. ``provenance``:
+    each mission's :data:`PROVENANCE_COLUMNS`, by the mission as its rows name it (None:
+    left empty); ``reproducible``: the :data:`MEASURED_COLUMNS` left empty, so that the same
+    episodes run again write the same bytes. A file another roomba-bt writes is refused
+    (FileInUse, an OSError) before it is emptied."""
     fmt = results_format(path)
-    records = [to_record(r) for r in results]
+    made_by = provenance or {}
+    records = []
+    for result in results:
+        record = to_record(result)
+        if reproducible:
+            record.update(dict.fromkeys(MEASURED_COLUMNS))
+        record.update({c: made_by.get(result.mission, {}).get(c) for c in PROVENANCE_COLUMNS})
+        records.append(record)
     with ClaimedFile(path).open_text(newline="") as out:
         if fmt == ".jsonl":
             for record in records:
                 out.write(json.dumps(record) + "\n")
         else:
-            writer = csv.DictWriter(out, fieldnames=[*COLUMNS, *COVERAGE_COLUMNS])
+            names = [*COLUMNS, *COVERAGE_COLUMNS, *PROVENANCE_COLUMNS]
+            writer = csv.DictWriter(out, fieldnames=names)
             writer.writeheader()
             for record in records:
                 writer.writerow({**record, **_csv_cells(record)})  # str(float) is its repr
@@ -301,6 +330,12 @@ def _csv_cells(record: dict[str, Any]) -> dict[str, str]:
         "params": ";".join(f"{k}={v}" for k, v in record["params"].items()),
         "falls_by_cause": ";".join(f"{c}={n}" for c, n in record["falls_by_cause"].items()),
     }
+    if record.get("sources") is not None:
+        cells["sources"] = ";".join(f"{n}={d}" for n, d in record["sources"].items())
+    if record.get("plugins") is not None:
+        cells["plugins"] = ";".join(
+            f"{n}={p['version']}:{p['sha256']}" for n, p in record["plugins"].items()
+        )
     if record["coverage_by_area"] is not None:
         cells["coverage_by_area"] = ";".join(
             f"{a}={c!r}" for a, c in record["coverage_by_area"].items()

@@ -90,6 +90,9 @@ class Summary:
     falls: tuple[tuple[str, int], ...] = ()
     episodes_with_falls: int = 0
     episodes_with_falls_by_cause: tuple[tuple[str, int], ...] = ()
+    #: whether the wall-clock and CPU times are said (:meth:`lines`, :meth:`to_dict`): other
+    #: on every run of the same episodes; ``eval --reproducible`` leaves them out
+    timings: bool = True
 
     @property
     def rate(self) -> float:
@@ -117,9 +120,13 @@ class Summary:
             f"bumps        {self.mean_bumps:.1f} per episode (bumper onsets in the simulator)",
             f"docked       {self.docked} of {self.runs} episodes ended on the dock's contacts",
             *([f"falls        {self.falls_text()}"] if self.falls else []),
-            f"simulated    {self.simulated_s:.0f} s of mission time in {self.cpu_s:.1f} s of "
-            f"CPU time ({speed:.0f}x real time per CPU second); {self.wall_s:.1f} s of "
-            "wall-clock time summed over the episodes",
+            f"simulated    {self.simulated_s:.0f} s of mission time"
+            + (
+                f" in {self.cpu_s:.1f} s of CPU time ({speed:.0f}x real time per CPU second); "
+                f"{self.wall_s:.1f} s of wall-clock time summed over the episodes"
+                if self.timings
+                else ""
+            ),
         ]
         if self.failures:
             out.append("failures")
@@ -160,8 +167,8 @@ class Summary:
             "falls": dict(self.falls),
             "episodes_with_falls": self.episodes_with_falls,
             "episodes_with_falls_by_cause": dict(self.episodes_with_falls_by_cause),
-            "wall_time": self.wall_s,
-            "cpu_time": self.cpu_s,
+            "wall_time": self.wall_s if self.timings else None,
+            "cpu_time": self.cpu_s if self.timings else None,
             "mission_time": self.simulated_s,
         }
 

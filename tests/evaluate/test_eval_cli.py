@@ -269,8 +269,16 @@ def test_the_json_summary_records_how_the_episodes_were_made(
                  "--dock", "buoy_range=0.8", "--dock", "red=-10,20", "--odometry-error", "0.01",
                  "--profile", "roomba600", "--no-progress", "--json"]) == 0  # fmt: skip
     report = json.loads(capsys.readouterr().out)
-    assert set(report) == {"conditions", "engine", "retried", "interrupted", "variants",
-                           "comparisons"}  # fmt: skip
+    assert set(report) == {
+        "conditions",
+        "engine",
+        "retried",
+        "interrupted",
+        "variants",
+        "comparisons",
+        "passed",
+        "plugins",
+    }  # fmt: skip (session 29's two)
     assert report["conditions"] == {
         "timeout": 120.0,
         "wall_limit": 72.0,  # by default a minute and a tenth of --timeout
@@ -283,6 +291,8 @@ def test_the_json_summary_records_how_the_episodes_were_made(
         "odometry_error": 0.01,
         "battery": 0.4,
         "profile": "roomba600",
+        "min_rate": None,  # session 29: the bar it was judged against, and the world's digest
+        "world_sha256": report["conditions"]["world_sha256"],
         "roomba_bt_version": __version__,
     }
     assert main(["eval", BUMP, "-p", "duration=1s", "--runs", "1", "--world", "apartment",
@@ -366,7 +376,7 @@ def test_a_failed_results_write_keeps_the_summary(
 
     import roomba_bt.evaluate.records as records
 
-    def full(path: object, results: object) -> int:
+    def full(path: object, results: object, *more: object, **options: object) -> int:
         raise OSError(errno.ENOSPC, "No space left on device")
 
     monkeypatch.setattr(records, "write_results", full)
