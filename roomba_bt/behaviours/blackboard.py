@@ -4,8 +4,12 @@ A mission's keys live on py_trees' blackboard under :data:`MISSION_NAMESPACE` (`
 ``/mission/leg``), read and written straight through its store (:func:`read_key`,
 :func:`write_key`): no py_trees client per node, which registers every key it may touch and
 checks it on every access. A key the mission declares (``blackboard:``, :func:`declare_keys`)
-takes only values of its type (:class:`KeyType`). A parameter given as ``@key`` or
-``@key.field`` (:class:`BlackboardRef`) is read when its behaviour starts
+takes only values of its type (:class:`KeyType`), and is registered, once, with one py_trees
+client of the mission's (:data:`MISSION_CLIENT_NAME`, read and write): py_trees' own
+tools (``Blackboard.keys()``, ``py_trees.display.unicode_blackboard()``, its activity
+stream) show the mission's keys as they show any client's, at no cost on the tick. A
+parameter given as ``@key`` or ``@key.field`` (:class:`BlackboardRef`) is read when its
+behaviour starts
 (:meth:`RobotBehaviour.initialise <roomba_bt.behaviours.base.RobotBehaviour.initialise>`):
 :class:`UnwrittenKey` when nothing wrote it, :class:`KeyRange` when its value is out of the
 parameter's range.
@@ -13,9 +17,10 @@ parameter's range.
 
 from __future__ import annotations
 
+import contextlib
 import re
 import uuid
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -95,12 +100,59 @@ def read_key(key: str) -> Any:
 
 
 #: the id the mission's own writes (``set``, ``mark``, ``for_each``, initial values) carry in
-#: py_trees' activity stream
+#: py_trees' activity stream while no mission client is registered (:func:`declare_keys`)
 _MISSION_WRITER = uuid.uuid4()
 
 
 #: the name write_key gives the mission's own writes in py_trees' activity stream
 _MISSION_WRITER_NAME = "roomba-bt mission"
+#: the py_trees client the declared keys are registered with (:func:`declare_keys`)
+MISSION_CLIENT_NAME = _MISSION_WRITER_NAME
+
+
+class _MissionClient:
+    """The one py_trees client holding the mission's declared keys, replaced by each
+    :func:`declare_keys`. Registered at setup, never used to read or write: py_trees'
+    client checks every access (its permissions, the key's name parsed), which on the tick
+    path cost more than the write itself; the store is written directly and the
+    registration is what py_trees' display and ``Blackboard.keys()`` read."""
+
+    client: py_trees.blackboard.Client | None = None
+
+    @classmethod
+    def replace(cls, keys: Iterable[str]) -> None:
+        old, cls.client = cls.client, None
+        blackboard = py_trees.blackboard.Blackboard
+        if old is not None and old.unique_identifier in blackboard.clients:
+            # (else a Blackboard.clear() since forgot it and its keys.) Each key once, the
+            # values kept: py_trees' own unregister() unregisters a key registered both to
+            # read and to write twice, and the second raises KeyError (py_trees 2.6)
+            with contextlib.suppress(KeyError):
+                for key in {*old.read, *old.write}:
+                    old.unregister_key(key, clear=False, update_namespace_cache=False)
+            del blackboard.clients[old.unique_identifier]
+        keys = sorted(keys)
+        if not keys:
+            return
+        client = py_trees.blackboard.Client(
+            name=MISSION_CLIENT_NAME, namespace=MISSION_NAMESPACE.rstrip("/")
+        )
+        for key in keys:
+            client.register_key(key=key, access=py_trees.common.Access.WRITE)
+            client.register_key(key=key, access=py_trees.common.Access.READ)
+        cls.client = client
+
+    @classmethod
+    def writer_id(cls) -> uuid.UUID:
+        """The id :func:`write_key` says a mission write came from: the client's while one
+        is registered (py_trees' display of the stream names it), else the module's own."""
+        client = cls.client
+        if client is None:
+            return _MISSION_WRITER
+        registered: uuid.UUID = client.unique_identifier  # py_trees' Client types it Any
+        return (
+            registered if registered in py_trees.blackboard.Blackboard.clients else _MISSION_WRITER
+        )
 
 
 def declare_keys(types: Mapping[str, ValueType]) -> None:
@@ -108,12 +160,16 @@ def declare_keys(types: Mapping[str, ValueType]) -> None:
     :func:`write_key` holds every write to from now on; they replace those declared before
     (``declare_keys({})``: none). ``CompiledMission.setup`` calls it before each run. Kept
     on py_trees' blackboard (:data:`KEY_TYPES_KEY`), with the values: its ``clear()``, which
-    a test calls between missions, forgets them too."""
+    a test calls between missions, forgets them too. Each key is registered (read and
+    write) with the mission's py_trees client (:data:`MISSION_CLIENT_NAME`), so that py_trees'
+    display, ``Blackboard.keys()`` and its activity stream see them; the values stay after
+    the run, for a program to look at."""
     storage = py_trees.blackboard.Blackboard.storage
     if types:
         storage[KEY_TYPES_KEY] = dict(types)
     else:
         storage.pop(KEY_TYPES_KEY, None)
+    _MissionClient.replace(types)
 
 
 class KeyType(TypeError, RoombaBtError):
@@ -162,7 +218,7 @@ def write_key(key: str, value: Any, writer: str = _MISSION_WRITER_NAME) -> None:
             py_trees.blackboard.ActivityItem(
                 key=name,
                 client_name=writer,
-                client_id=_MISSION_WRITER,
+                client_id=_MissionClient.writer_id(),
                 # its value, as py_trees' own clients push it (its display compares with it)
                 activity_type=(kind.WRITE if had else kind.INITIALISED).value,
                 previous_value=blackboard.storage.get(name) if had else None,
