@@ -101,6 +101,11 @@ class SimLink:
         self.simulator.set_brc(low)
 
     def close(self) -> None:
+        """Let go of the robot; its wheels' speeds settle to the 0 a stop asked for
+        (:meth:`Simulator.settle_wheels`): a program that reads ``simulator.left_speed``
+        after a run sees the robot stopped, as the safe stop left it."""
+        if self._open:
+            self.simulator.settle_wheels()
         self._open = False
 
     def now(self) -> float:

@@ -203,6 +203,24 @@ class Simulator(OIProtocol):
             else:
                 self._send_frame(frame)
 
+    def settle_wheels(self) -> None:
+        """The wheels' speeds (``left_speed``, ``right_speed``: the last step's) set now to
+        the 0 the next step would turn them at, when it would: in Passive or Off with no
+        built-in cycle, or in Safe or Full asked for 0. A host that stopped the robot and
+        let go (:meth:`SimLink.close <roomba_bt.sim.link.SimLink.close>`) then reads a
+        stopped robot, as the wire said it, not the speed of the step before its stop.
+        What the next step does is unchanged: the stop's bookkeeping (:meth:`_move` to 0)
+        done early, which that step then finds done; a speed other than 0 waits for the
+        step, which moves the robot."""
+        if not (self.left_speed or self.right_speed):
+            return
+        mode = self.mode
+        if mode is _PASSIVE and self.builtin is not None:
+            return  # the cycle's own wheels, worked out by the step
+        if (mode is _SAFE or mode is _FULL) and (self.requested_left or self.requested_right):
+            return
+        self._move(0.0, 0.0, STEP_SECONDS)
+
     def _send_frame(self, frame: bytes) -> None:
         """A stream frame through the faults of the link: dropped, cut short, then
         corrupted, flipped or delayed (:meth:`_emit`); none once the link is cut."""
