@@ -38,6 +38,7 @@ from __future__ import annotations
 import zlib
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
+from functools import lru_cache
 
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.frames import (
@@ -407,14 +408,20 @@ _ONE_SLOT_SPAN = 2 * MAX_COUNTS_PER_SLOT
 ValueCheck = Callable[[tuple[int, ...]], bool]
 
 
+@lru_cache(maxsize=256)
 def _compile_checks(
     checks: tuple[tuple[int, int, int], ...], unsigned: frozenset[int] = frozenset()
 ) -> ValueCheck | None:
     """One function testing every ``(slot, lowest, highest)`` of a layout: a chained
-    comparison per packet, built once per parser (a loop over the tuple costs twice as much
+    comparison per packet, built once per layout (a loop over the tuple costs twice as much
     on the tick path); only the highest where the lowest is 0 and the slot is in ``unsigned``
     (its values are never negative: half the operations, every frame). None when there is
-    nothing to test."""
+    nothing to test.
+
+    Cached, so that the parser a safe stop makes to listen after it (robot/ending.py) finds
+    its function made: the stop of a script's connection runs at exit (atexit), and an
+    ``eval`` of a text there makes CPython (3.11, 3.12) forget that the program ended on
+    Ctrl-C: it exited 1, not by SIGINT (130 in a shell)."""
     if not checks:
         return None
     body = " and ".join(

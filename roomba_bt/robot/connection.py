@@ -132,10 +132,15 @@ def stop_left_open(ending: SafeStop, why: str) -> None:
         return  # never started, or stopped in Passive: nothing of ours can be moving
     doing = ending.activity()
     stopped = ending.close()
+    if stopped:
+        fate = "the safe stop was sent"
+    elif ending.written:  # the line before says why it is not known to have arrived
+        fate = "the safe stop was written, but its arrival is unconfirmed (said above)"
+    else:
+        fate = "the safe stop could not be delivered"
     log.warning(
         "%s: %s (the robot %s); %s (use `with Connection.open(...)` or call close())",
-        writer.link.name, why, doing,
-        "the safe stop was sent" if stopped else "the safe stop could not be delivered",
+        writer.link.name, why, doing, fate,
     )  # fmt: skip
 
 

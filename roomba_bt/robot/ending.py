@@ -57,6 +57,14 @@ STOP_LISTEN = 0.15
 PAUSE_SLACK = 3
 #: How many times a stop the stream contradicts is written (the first, and once more).
 STOP_ATTEMPTS = 2
+#: Reads at most of what waits unread in the port before a stop (each read takes all there
+#: is: one is the rule; the bound is for a line that never runs dry)
+BACKLOG_READS = 16
+#: The share of the time a program did not read by which the frames that waited may fall
+#: short of filling it and still show a stream that ran on: the robot's 15 ms slots against
+#: the host's clock, and its first frame's way after the stream request (over TCP, Nagle's
+#: 40 ms). A robot silent for longer before the stop is said silent.
+BACKLOG_SLACK = 0.05
 #: Stream periods the robot may have been silent when a stop is written for the quiet after
 #: it to show the stop heard: a robot that heard Pause Stream had sent its last frame under a
 #: period before it (a later one would come while the stop is listened after); the rest is
@@ -184,6 +192,12 @@ class SafeStop:
         self._unproven: str | None = None
         #: the link's count of valid frames when a stop was last said not delivered
         self._unseen_from = -1
+        #: whether the last stop's sequence was written whole (:attr:`safe_stopped` says
+        #: whether it is known to have arrived)
+        self.written = False
+        #: frames that waited unread in the port as the stop was written, and for how long
+        #: the program had not read it (:meth:`_read_backlog`), or None
+        self._unread: tuple[int, float] | None = None
 
     def begin(self) -> None:
         """A session starts (again): nothing has ended."""
@@ -210,6 +224,8 @@ class SafeStop:
         if writer.modes.mode is OIMode.OFF:  # never started (or ended in Off by Stop):
             self.safe_stopped = True  # nothing written, nothing to stop; not "unconfirmed"
             return True
+        self.written, self._unread = False, None
+        sent_until = self._read_backlog()
         # what the robot was last seen or told to do, before the stop moves the model on;
         # once more after a stop not delivered (close()'s), nothing heard since: what was
         # seen before that one (it moved the model on to Passive without the robot)
@@ -221,6 +237,8 @@ class SafeStop:
         # and a slot (over TCP, 40 ms and more of Nagle's delay): no silence, the watchdog's
         streamed = link.frame is not None and link.arrival >= link.silent_since
         self._heard_at = link.arrival if streamed else None
+        if sent_until is not None:  # frames that waited unread: when the robot sent them
+            self._heard_at = sent_until
         if not link.transport.is_open:
             return self._undelivered(self._port_gone())
         unconfirmed = None
@@ -255,6 +273,62 @@ class SafeStop:
         link.status = LinkStatus.STOPPED
         self.safe_stopped = True
         return True
+
+    def _read_backlog(self) -> float | None:
+        """Read the frames the robot sent that the program had not read (a script asleep in
+        ``time.sleep`` while the stream ran, then Ctrl-C), as a poll would, before the stop
+        is written: nothing is waited for. Left in the port, the listening after the stop
+        took them for frames sent after it, and the time since the last frame *read* for
+        the robot's silence before it ("no valid frame for 0.15 s"): a stop the robot heard
+        was called unconfirmed. When the robot sent the last of them (link clock): now if
+        they fill the time since the last frame read (or the stream's start: a script that
+        never polled), a stream that ran on; else as many stream periods after it as there
+        were frames (a robot that fell silent meanwhile);
+        None if nothing waited. Only on the wall clock, as the listening after the stop."""
+        link = self.writer.link
+        if not (
+            link.streaming
+            and link.status is LinkStatus.STREAMING
+            and link.transport.is_open
+            and getattr(link.transport, "wall_clock", True)
+        ):
+            return None
+        # the last frame read, or the stream's start if none was read since
+        last_read, index_then = link.silent_since, link.index
+        self._take_unread(0.0)
+        waited = link.index - index_then
+        if not waited:
+            return None
+        now = link.transport.now()
+        period = stream_period(link.stream_ids, self.writer.baud)
+        self._unread = (waited, now - last_read)
+        sent_until = last_read + waited * period
+        if sent_until >= now - QUIET_BEFORE_PERIODS * period - BACKLOG_SLACK * (now - last_read):
+            return now
+        # short of it: a robot silent since, or a stream that lagged (a loaded host's robot
+        # double); a frame within a few periods more says which
+        if self._take_unread(QUIET_BEFORE_PERIODS * period):
+            return link.transport.now()
+        return sent_until
+
+    def _take_unread(self, wait: float) -> bool:
+        """What the port holds (and, ``wait`` > 0, the first frame within ``wait`` s) fed to
+        the link as a poll would; whether a frame came. A port that fails is left to the
+        stop to say."""
+        link = self.writer.link
+        clock = link.transport.now
+        index, deadline = link.index, clock() + wait
+        with contextlib.suppress(*_RECOVERABLE):
+            for _ in range(BACKLOG_READS):
+                left = deadline - clock()
+                data = link.read(left if left > 0.0 else 0.0)
+                if data:
+                    link.ingest(data, clock())
+                    if wait and link.index > index:
+                        break  # the frame waited for
+                elif left <= 0.0:
+                    break  # nothing more there, and no more to wait
+        return link.index > index
 
     def _write_heard(self, checked: bool) -> str | None:
         """Write the stop; ``checked``: listen after it (:meth:`_contradicted`), and write it
@@ -299,6 +373,7 @@ class SafeStop:
             return self._port_gone()
         except _RECOVERABLE as exc:
             return f"the stop was not delivered: {exc}"
+        self.written = True
         return None
 
     def _contradicted(self) -> str | None:
@@ -346,7 +421,17 @@ class SafeStop:
         period = stream_period(link.stream_ids, self.writer.baud)
         if silent <= QUIET_BEFORE_PERIODS * period:  # heard after it (< 0), or up to it
             return None
-        return f"the robot had sent no valid frame for {silent:.2f} s before it, and none after it"
+        unread = ""
+        if self._unread is not None:  # read only as the stop was written
+            frames, waited = self._unread
+            unread = (
+                f" (the program had not read the port for {waited:.2f} s: the {frames} "
+                "frames it held stop short of that)"
+            )
+        return (
+            f"the robot had sent no valid frame for {silent:.2f} s before it{unread}, and none "
+            "after it"
+        )
 
     def _confirmed(self) -> bool:
         """Whether :attr:`confirm` says the robot heard the stop (False if there is none, or

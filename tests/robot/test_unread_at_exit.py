@@ -1,0 +1,75 @@
+"""Ctrl-C in a plain script that never closed its driving connection (a py_trees / pycreate2
+user's report): open, Safe, drive, ``time.sleep`` in a loop, Ctrl-C. The robot was stopped,
+but the program said "the stop was written but is unconfirmed: the robot had sent no valid
+frame for 0.15 s before it" (the frames had waited unread in the port, and were taken for
+frames sent after the stop), then "the safe stop could not be delivered", and it exited 1
+instead of by SIGINT (130 in a shell)."""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from collections.abc import Callable, Sequence
+
+from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.oi.stream import StreamParser
+from roomba_bt.sim.server import PtyEndpoint
+
+from .fake_robot import FakeRobot
+
+STOP_TO_PASSIVE = bytes([137, 0, 0, 0, 0, 138, 0, 150, 0, 128])
+
+SCRIPT = textwrap.dedent("""
+    import sys, time
+    from roomba_bt.oi import commands as oi
+    from roomba_bt.robot.connection import Connection
+
+    robot = Connection.open(sys.argv[1], profile="create2")
+    robot.start("safe", packets=(7, 35))
+    robot.send(oi.drive(100, 32767))
+    print("ready", flush=True)
+    while True:
+        time.sleep(0.05)
+""")
+
+Child = Callable[[Sequence[str]], "subprocess.Popen[str]"]
+
+
+def _wait_for(predicate: Callable[[], bool], timeout: float = 10.0) -> bool:
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.01)
+    return True
+
+
+def test_ctrl_c_in_a_sleeping_script_stops_the_robot_and_says_so_truly(child: Child) -> None:
+    endpoint = PtyEndpoint()
+    with FakeRobot(endpoint) as robot:
+        script = child([sys.executable, "-c", SCRIPT, endpoint.address])
+        assert script.stdout is not None
+        assert script.stdout.readline().strip() == "ready", script.stderr
+        sent = robot.frames_sent
+        assert _wait_for(lambda: robot.frames_sent >= sent + 30)  # unread, in the pty
+        script.send_signal(signal.SIGINT)
+        _, err = script.communicate(timeout=20)
+        assert robot.wait_until(lambda r: r.received.endswith(STOP_TO_PASSIVE))
+        assert robot.mode.label == "Passive"
+    assert "KeyboardInterrupt" in err
+    ended = "the program ended without close() (the robot at 100 mm/s)"
+    assert f"{ended}; the safe stop was sent" in err
+    assert "unconfirmed" not in err and "could not be delivered" not in err
+    assert script.returncode == -signal.SIGINT  # as any Python program's Ctrl-C: 130 in a shell
+
+
+def test_the_stops_listening_parser_compiles_no_code() -> None:
+    """An ``eval`` of a text in an atexit handler (the stop of an unclosed connection) makes
+    CPython exit 1 after an uncaught Ctrl-C, not by SIGINT: the parser the stop listens
+    with finds its value checks made by the link's own, of the same stream."""
+    first = StreamParser((7, 35, 43, 44), CREATE2)
+    again = StreamParser((7, 35, 43, 44), CREATE2)
+    assert first._checks is not None and again._checks is first._checks
