@@ -515,9 +515,11 @@ def permissions(args: argparse.Namespace, mission: str | Path | None = None) -> 
     line's, and the include folders of ``ROOMBA_BT_INCLUDE_PATH`` and of the project file
     above the mission (:mod:`roomba_bt.mission.include_path`, which says what a project
     file may grant). What does not grant is said once on stderr, as a warning: the include
-    it was meant for is refused at its own line."""
+    it was meant for is refused at its own line. The messages about them, and about ``-p``
+    values, name the command line's flags."""
     from roomba_bt.mission import Permissions
     from roomba_bt.mission.include_path import configured_include_dirs
+    from roomba_bt.mission.wording import COMMAND_LINE
 
     given = tuple(getattr(args, "include_dir", None) or ())
     configured = configured_include_dirs(mission)
@@ -526,6 +528,7 @@ def permissions(args: argparse.Namespace, mission: str | Path | None = None) -> 
     return Permissions(
         plugin_files=bool(getattr(args, "allow_plugin_files", False)),
         include_dirs=tuple(dict.fromkeys((*given, *configured.folders))),
+        wording=COMMAND_LINE,
     )
 
 

@@ -69,6 +69,7 @@ from roomba_bt.mission.ticks import (
     succeeds_at_once,
     watched_children,
 )
+from roomba_bt.mission.wording import PYTHON, Wording
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.frames import (
     CHARGING_SOURCES_PACKETS,
@@ -714,12 +715,13 @@ def blind_in_full(root: Node, modes: ModeCheck) -> list[Diagnostic]:
 
 
 def profile_commands(
-    root: Node, profile: RobotProfile
+    root: Node, profile: RobotProfile, wording: Wording = PYTHON
 ) -> tuple[list[Diagnostic], list[Diagnostic]]:
     """Errors and warnings (see the module docstring) for each leaf's declared ``sends`` on
     ``profile``: an error where the robot lacks a command (the run would stop with an
     UnsupportedCommandError after its first commands were written), a warning where the
-    firmware ignores it. A subtree used twice is one place in its file: said once."""
+    firmware ignores it. A subtree used twice is one place in its file: said once.
+    ``wording``: how the caller chooses another profile (the command line's ``--profile``)."""
     errors: list[Diagnostic] = []
     warnings: list[Diagnostic] = []
     seen: set[tuple[str, int, int, int]] = set()
@@ -735,8 +737,8 @@ def profile_commands(
             problem = profile.command_unavailable(opcode)
             if problem is not None:
                 errors.append(node.loc.at(
-                    f"{decl.name} sends {problem} (choose the robot's --profile, or leave "
-                    "this node out)"
+                    f"{decl.name} sends {problem} (choose the robot's {wording.profile}, or "
+                    "leave this node out)"
                 ))  # fmt: skip
                 continue
             warning = profile.command_warning(opcode)

@@ -106,7 +106,7 @@ def _compile(
     permissions: Permissions,
     text: MissionText | None = None,
 ) -> tuple[CompiledMission | None, list[Diagnostic]]:
-    ctx = Context(registry=registry or default_registry())
+    ctx = Context(registry=registry or default_registry(), wording=permissions.wording)
     loader = Loader(ctx, _display if text is None else text.display, permissions)
     parsed = loader.compile_file(path, dict(params or {}), require_tree=require_tree, text=text)
     if parsed is None or parsed.tree is None:
@@ -117,7 +117,7 @@ def _compile(
     keys = KeyCheck()
     keys.run(tree, frozenset(k for k, d in ctx.keys.items() if d.has_initial))
     packets, sends, needed = _what_leaves_use(tree)
-    unavailable, ignored = profile_commands(tree, profile)
+    unavailable, ignored = profile_commands(tree, profile, permissions.wording)
     diagnostics = ctx.diagnostics + modes.errors + keys.errors + key_ranges(tree, ctx.keys)
     diagnostics += restarted_limits(tree) + restarted_branches(tree) + unavailable
     problem = check_stream(tuple(sorted(packets)), baud or profile.default_baud, profile)
@@ -192,7 +192,9 @@ def load_mission(
     the program declares itself (``@declare``), which the YAML may name beside the
     built-ins (:meth:`Registry.with_behaviours`: a name a built-in has is a
     :class:`~roomba_bt.behaviours.declare.DeclarationError`). YAML text itself is
-    :func:`load_mission_text`'s."""
+    :func:`load_mission_text`'s. Neither a file nor a shipped name, and the diagnostic says
+    so as the command line does, a shipped mission's name it may have meant with it
+    (``"dok"``: did you mean 'dock'?)."""
     if isinstance(path, str) and "\n" in path:  # text, not a name: said so, not escaped back
         raise MissionError([Diagnostic(
             "load_mission", 1, 1,
@@ -200,7 +202,12 @@ def load_mission(
             "is several lines of text: compile YAML text with load_mission_text(text, "
             "name=..., base_dir=...)",
         )])  # fmt: skip
-    found = find_mission(str(path)).path or path
+    lookup = find_mission(str(path), permissions.wording)
+    if lookup.path is None and lookup.problem is not None:
+        shown = _display(Path(path))
+        problem = lookup.problem.removeprefix(f"{path}: ")  # the diagnostic names the file
+        raise MissionError([Diagnostic(shown, 1, 1, problem)])
+    found = lookup.path or path
     mission, diagnostics = compile_mission(
         found, params, profile=profile, baud=baud, permissions=permissions,
         registry=_with_behaviours(registry, behaviours),

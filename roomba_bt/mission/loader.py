@@ -30,7 +30,9 @@ A mission file is data, never code: a plugin file it names is imported only when
 grants :attr:`Permissions.plugin_files` (the command line's ``--allow-plugin-files``), and an
 include or a plugin file resolves only inside the top mission's folder tree, the shipped
 library (:data:`SHIPPED_LIBRARY`) and the folders the caller adds (``--include-dir``). A file
-that is not a mission is reported as such, never quoted back.
+that is not a mission is reported as such, never quoted back. A message says how the caller
+grants or sets what it names in the caller's own words (:attr:`Permissions.wording`: a
+Python program's arguments, or the command line's flags).
 """
 
 from __future__ import annotations
@@ -89,6 +91,7 @@ from roomba_bt.mission.values import (
     unknown,
     warn_escaped,
 )
+from roomba_bt.mission.wording import COMMAND_LINE, PYTHON, Wording
 from roomba_bt.yamlsource import too_many_digits, yaml11_number_problem
 
 TOP_LEVEL = ("mission", "description", "parameters", "blackboard", "plugins", "include",
@@ -109,10 +112,14 @@ class Permissions:
 
     ``plugin_files``: import the Python files its ``plugins:`` names (``--allow-plugin-files``).
     ``include_dirs``: folders it may include from (and import plugin files from, when allowed)
-    besides its own folder tree and the shipped library (``--include-dir``)."""
+    besides its own folder tree and the shipped library (``--include-dir``).
+    ``wording``: how the messages say what the caller grants and sets (a permission, a
+    parameter, the profile): a Python program's arguments (``wording.PYTHON``, the
+    default), or the command line's flags (``wording.COMMAND_LINE``, which the CLI gives)."""
 
     plugin_files: bool = False
     include_dirs: tuple[Path, ...] = ()
+    wording: Wording = PYTHON
 
     def __post_init__(self) -> None:
         """Checked here, the folders made paths: a ``str`` among ``include_dirs`` (the obvious
@@ -261,9 +268,8 @@ class Loader:
         root, root_loc = read
         if _is_world(root):  # its name: and description: are mission words too: 11 lines
             self.ctx.error(root_loc.at(
-                "this file is a world (rooms:, no tree:), not a mission: run a mission in it "
-                f"with --world {path} (roomba-bt run dock --world {path} --fast); roomba-bt "
-                f"validate {path} checks it"
+                "this file is a world (rooms:, no tree:), not a mission: run a mission on it "
+                f"with {self.permissions.wording.on_world.format(path=str(path))}"
             ))  # fmt: skip
             return None
         if not _is_mission(root, TOP_LEVEL):
@@ -341,8 +347,9 @@ class Loader:
                 self.ctx.error(
                     iloc.at(
                         f"plugin file {text!r} not loaded: a mission file cannot run code on "
-                        "its own; allow its plugin files with --allow-plugin-files (or install "
-                        "the plugin as a package)"
+                        "its own; allow its plugin files with "
+                        f"{self.permissions.wording.allow_plugin_files} (or install the plugin "
+                        "as a package)"
                     )
                 )
                 self.ctx.unloaded_plugins.append(text)
@@ -405,7 +412,11 @@ class Loader:
         anywhere once ``--allow-plugin-files`` was given for the mission's own folder."""
         if any(target.is_relative_to(root) for root in self._include_roots):
             return False
-        self.ctx.error(iloc.at(_outside_message(what, text, target, self._include_roots)))
+        self.ctx.error(
+            iloc.at(
+                _outside_message(what, text, target, self._include_roots, self.permissions.wording)
+            )
+        )
         return True
 
     def _again(self, target: Path, text: str, iloc: Loc) -> bool:
@@ -524,6 +535,7 @@ def bind_parameters(
     env: dict[str, Bound] = {}
     declared: dict[str, tuple[ValueType, Loc]] = {}
     broken: set[str] = set()  # declared wrongly: reported once, not at each use nor -p
+    wording = ctx.wording  # how the caller sets a parameter
     if section is not None:
         items = _parameter_entries(ctx, section, env, broken)
         for name, value, key_loc, vloc in items:
@@ -545,14 +557,16 @@ def bind_parameters(
                 continue
             # a text's value as its uses insert it: "$$" already one "$"
             text = default if vtype is STR else _text(value, vloc, default)
-            env[name] = Bound(vtype, default, text, default_at=_default_at(value, vloc))
+            env[name] = Bound(
+                vtype, default, text, default_at=_default_at(value, vloc), wording=wording
+            )
     for name, text in overrides.items():
         if name in broken:
             continue
         if name not in declared:
             ctx.error(
                 root.at(
-                    f"unknown parameter {name!r} set on the command line"
+                    f"unknown parameter {name!r} {wording.set_by}"
                     f"{closest(name, list(declared))}; "
                     f"the mission declares: {', '.join(declared) or 'none'}"
                 )
@@ -562,11 +576,11 @@ def bind_parameters(
         try:
             value = vtype.parse(_cli_value(text, vtype))
         except UnitError as exc:
-            where = f"parameter {name}={text} (from the command line)"
+            where = f"parameter {name}={text} ({wording.set_from})"
             ctx.error(key_loc.at(f"{where}: {exc}"))
             env[name] = Bound(vtype, UNKNOWN, "?")  # reported once, not at every use
             continue
-        env[name] = Bound(vtype, value, text, f"{name}={text}, set on the command line")
+        env[name] = Bound(vtype, value, text, f"{name}={text}, {wording.set_by}")
     return env
 
 
@@ -637,7 +651,7 @@ def param_decl(
         whom = "itself" if used[0] == name else "a parameter"
         raise Bad(dloc.at(
             f"parameter {name}: a default cannot refer to {whom} (${{{used[0]}}}): write its "
-            "value; -p sets it on the command line"
+            f"value; {ctx.wording.set_instead}"
         ))  # fmt: skip
     default = resolve(ctx, dnode, dloc, vtype, {}, f"parameter {name}")
     return vtype, default, True, doc
@@ -699,7 +713,9 @@ def key_decl(
     ctx.keys[name] = KeyDecl(name, vtype, key_loc, initial, has_initial, doc, initial_loc)
 
 
-def _outside_message(what: str, text: str, target: Path, roots: tuple[Path, ...]) -> str:
+def _outside_message(
+    what: str, text: str, target: Path, roots: tuple[Path, ...], wording: Wording
+) -> str:
     """Why an include (or plugin file) outside ``roots`` (the mission's folder, the shipped
     library, the include folders granted: resolved, in that order) is refused: where a file
     may be read from, and how to allow its folder, here or for every command. The fix was
@@ -707,12 +723,17 @@ def _outside_message(what: str, text: str, target: Path, roots: tuple[Path, ...]
     refusal again at ``run``, ``eval`` and ``replay``."""
     mission_folder, granted = roots[0], roots[1 + len(SHIPPED_LIBRARY) :]
     folders = ", ".join(_shown_path(folder) for folder in granted) or "none"
+    allow = wording.include_dir.replace("DIR", _shown_path(target.parent))
+    every = (  # the command line reads these; a Python call is given its folders
+        f", or for every command with {INCLUDE_PATH_VARIABLE} or {INCLUDE_DIRS_KEY} under "
+        f"[tool.{PROJECT_TABLE}] in a {PROJECT_FILE} ({DOCUMENTED_AT})"
+        if wording is COMMAND_LINE
+        else ""
+    )
     return (
         f"{what} {text!r} is outside the mission's folder ({_shown_path(mission_folder)}), "
         f"the shipped library and the include folders granted ({folders}); allow its folder "
-        f"with --include-dir {_shown_path(target.parent)}, or for every command with "
-        f"{INCLUDE_PATH_VARIABLE} or {INCLUDE_DIRS_KEY} under [tool.{PROJECT_TABLE}] in a "
-        f"{PROJECT_FILE} ({DOCUMENTED_AT})"
+        f"with {allow}{every}"
     )
 
 

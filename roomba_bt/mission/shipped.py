@@ -25,6 +25,7 @@ import yaml
 
 from roomba_bt.behaviours.units import closest
 from roomba_bt.mission.values import substituted
+from roomba_bt.mission.wording import COMMAND_LINE, Wording
 
 #: Where the shipped missions live: the package's data directory (a sibling of ``mission/``).
 SHIPPED_DIR = Path(__file__).resolve().parent.parent / "missions"
@@ -110,24 +111,26 @@ def in_shipped_library(target: Path) -> bool:
     return target.is_relative_to(SHIPPED_DIR) and target.is_file()
 
 
-def find_mission(text: str) -> ShippedLookup:
+def find_mission(text: str, wording: Wording = COMMAND_LINE) -> ShippedLookup:
     """A mission argument as the command line takes it: an existing file; else a shipped
     mission's name (``dock``, ``dock.yaml`` or ``roomba-bt:dock.yaml``) or a shipped file's
-    path in the shipped directory (``lib/docking.yaml``, as ``roomba-bt missions`` takes it)."""
+    path in the shipped directory (``lib/docking.yaml``, as ``roomba-bt missions`` takes it).
+    ``wording``: the caller's (``load_mission`` gives its own: no command to list them)."""
     if not text.strip():  # Path("") is the current folder: "a directory" said nothing useful
+        lists = f" ({wording.lists_missions.removeprefix('; ')})" if wording.lists_missions else ""
         return ShippedLookup(None, f"{text!r}: an empty path; give a mission file or a shipped "
-                             "mission's name (`roomba-bt missions` lists them)")  # fmt: skip
+                             f"mission's name{lists}")  # fmt: skip
     if text == "-":
         return ShippedLookup(None, "reading a mission from standard input is not supported: "
                              "give a file")  # fmt: skip
     given = Path(text)
     try:
-        return _find_mission(text, given)
+        return _find_mission(text, given, wording)
     except OSError as exc:  # a folder on the way the user cannot enter: stat() itself fails
         return ShippedLookup(None, f"cannot read {text}: {exc.strerror or exc}")
 
 
-def _find_mission(text: str, given: Path) -> ShippedLookup:
+def _find_mission(text: str, given: Path, wording: Wording) -> ShippedLookup:
     if given.is_file():
         return ShippedLookup(given)
     named = shipped_file(text)
@@ -160,7 +163,7 @@ def _find_mission(text: str, given: Path) -> ShippedLookup:
     return ShippedLookup(
         None,
         f"{text}: no such mission file, and no shipped mission of that name "
-        f"(shipped: {names}; `roomba-bt missions` lists them){hint}",
+        f"(shipped: {names}{wording.lists_missions}){hint}",
     )
 
 

@@ -37,6 +37,7 @@ from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.foreign import port_remapping, suggestion
 from roomba_bt.mission.plan import KeyDecl
 from roomba_bt.mission.source import Bad, Loc, mapping, plain, scalar_text
+from roomba_bt.mission.wording import PYTHON, Wording
 
 _FULL_SUBSTITUTION = re.compile(r"^\s*(-?)\$\{([A-Za-z_][A-Za-z0-9_]*)\}\s*$")
 #: What a text's ``$`` may start, read left to right, by Python's ``string.Template`` rule
@@ -210,6 +211,8 @@ class Bound:
     #: and how to give another (:func:`said_default`); not ``origin``, which a subtree's
     #: argument passes on in place of the use that gave it
     default_at: Loc | None = None
+    #: how the caller gives a parameter another value (said with ``default_at``)
+    wording: Wording = PYTHON
 
 
 @dataclass(frozen=True, slots=True)
@@ -241,6 +244,8 @@ class Context:
 
     registry: Registry
     diagnostics: list[Diagnostic] = field(default_factory=list)
+    #: how the messages say what the caller grants and sets (``Permissions.wording``)
+    wording: Wording = PYTHON
     keys: dict[str, KeyDecl] = field(default_factory=dict)
     subtrees: dict[str, SubtreeDef] = field(default_factory=dict)
     #: plugin files named but not loaded (no --allow-plugin-files, or not found): an unknown
@@ -565,8 +570,8 @@ def said_default(name: str, bound: Bound, said_at: Loc, give: str = "") -> str:
     if bound.default_at is None or bound.origin:
         return ""
     return (
-        f" ({_default_of(name, bound, said_at)}: give -p {give or name + '=VALUE'}, or "
-        "another default there)"
+        f" ({_default_of(name, bound, said_at)}: "
+        f"give {bound.wording.give(give or name + '=VALUE')}, or another default there)"
     )
 
 
@@ -579,6 +584,7 @@ def said_defaults(
     parameter made it: only the defaults whose value it names, so that one about which
     parameters are given (``velocity or left/right, not both``) names none."""
     said: dict[str, str] = {}
+    wording = PYTHON
     for node in written:
         if isinstance(node, yaml.ScalarNode) and isinstance(node.value, str):
             full = _FULL_SUBSTITUTION.match(node.value)
@@ -591,10 +597,11 @@ def said_defaults(
                 and (not problem or _names_value(problem, bound))
             ):
                 said[full.group(2)] = _default_of(full.group(2), bound, said_at)
+                wording = bound.wording  # the caller's, as every default's
     if not said:
         return ""
     give = f"{next(iter(said))}=VALUE" if len(said) == 1 else "NAME=VALUE"
-    return f" ({'; '.join(said.values())}: give -p {give}, or another default there)"
+    return f" ({'; '.join(said.values())}: give {wording.give(give)}, or another default there)"
 
 
 def _names_value(problem: str, bound: Bound) -> bool:

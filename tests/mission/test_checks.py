@@ -198,8 +198,8 @@ def test_baud_is_checked_per_mission(errors_of: Errors) -> None:
 @pytest.mark.parametrize(
     ("params", "first"),
     [
-        ({}, "2:3: parameter 't' has no default: give it with -p t=VALUE"),
-        ({"t": "soon"}, "2:3: parameter t=soon (from the command line): expected a duration"),
+        ({}, "2:3: parameter 't' has no default: give it with params={'t': 'VALUE'}"),
+        ({"t": "soon"}, "2:3: parameter t=soon (given in params): expected a duration"),
     ],
     ids=["no-default", "bad-override"],
 )

@@ -22,6 +22,7 @@ from roomba_bt.mission import (
     compile_mission,
     load_mission,
 )
+from roomba_bt.mission.wording import COMMAND_LINE
 
 CORPUS = Path(__file__).parent / "malformed"
 FILES = sorted(CORPUS.glob("*.yaml"))
@@ -37,9 +38,12 @@ def expectations(path: Path) -> tuple[list[str], int, dict[str, str] | None]:
 
 
 def granted(path: Path) -> Permissions:
-    """``# allow-plugin-files``: the file is compiled as with ``--allow-plugin-files``."""
+    """``# allow-plugin-files``: the file is compiled as with ``--allow-plugin-files``. The
+    corpus's expected lines are what ``roomba-bt validate`` prints (checked below), so the
+    messages name the command line's flags (``-p``), as it words them."""
     text = path.read_text(encoding="utf-8")
-    return Permissions(plugin_files=re.search(r"^# allow-plugin-files$", text, re.M) is not None)
+    allowed = re.search(r"^# allow-plugin-files$", text, re.M) is not None
+    return Permissions(plugin_files=allowed, wording=COMMAND_LINE)
 
 
 @pytest.fixture(autouse=True)
@@ -213,14 +217,14 @@ def test_a_value_out_of_range_from_the_command_line_says_so_where_it_is_used(
     _, problems = compile_mission(path, {"speed": "600mm/s"})
     assert [(p.file.rsplit("/", 1)[-1], p.line, p.message) for p in problems] == [
         ("lib.yaml", 5, "drive: velocity 600 mm/s is out of range: allowed -500..500 mm/s "
-                        "(${v} is speed=600mm/s, set on the command line)"),
+                        "(${v} is speed=600mm/s, given in params)"),
         ("m.yaml", 6, "drive: velocity 600 mm/s is out of range: allowed -500..500 mm/s "
-                      "(${speed} is speed=600mm/s, set on the command line)"),
+                      "(${speed} is speed=600mm/s, given in params)"),
     ]  # fmt: skip
     _, (problem,) = compile_mission(path, {"laps": "0"})
     assert (problem.line, problem.message) == (
         5,
-        "repeat.times must be at least 1, got 0 (${n} is laps=0, set on the command line)",
+        "repeat.times must be at least 1, got 0 (${n} is laps=0, given in params)",
     )
     assert compile_mission(path, {"speed": "400mm/s"})[1] == []
 
@@ -250,21 +254,21 @@ def test_a_bad_value_from_a_parameter_s_default_names_the_parameter_and_its_defa
     assert [f"{p.line}:{p.column}: {p.message}" for p in problems] == [
         "8:35: turn: speed 10 mm/s is out of range: allowed 15..500 mm/s (a wheel asked for "
         "less than 15 mm/s stands still: the speed controller turns it in steps of about 28.5 "
-        "mm/s) (${creep} is 10 mm/s, the default of parameter creep at 3:33: give -p "
-        "creep=15mm/s, or another default there)",
+        "mm/s) (${creep} is 10 mm/s, the default of parameter creep at 3:33: give "
+        "params={'creep': '15mm/s'}, or another default there)",
         "9:7: drive: drive at 10 mm/s (below half the speed controller's step of about 28.5 "
         "mm/s: the wheels stand still) never covers its distance (its centre does not move): it "
         "would run for ever; give a speed of at least 15 mm/s, or end it by angle or duration "
-        "(${creep} is 10 mm/s, the default of parameter creep at 3:33: give -p creep=VALUE, or "
-        "another default there)",
+        "(${creep} is 10 mm/s, the default of parameter creep at 3:33: give "
+        "params={'creep': 'VALUE'}, or another default there)",
         "10:23: repeat.times must be at least 1, got 0 (${laps} is 0, the default of parameter "
-        "laps at 4:30: give -p laps=VALUE, or another default there)",
+        "laps at 4:30: give params={'laps': 'VALUE'}, or another default there)",
         "11:34: turn: speed -10 mm/s is out of range: allowed 15..500 mm/s (${creep} is 10 "
-        "mm/s, the default of parameter creep at 3:33: give -p creep=VALUE, or another default "
-        "there)",
+        "mm/s, the default of parameter creep at 3:33: give params={'creep': 'VALUE'}, or "
+        "another default there)",
     ]
     _, problems = compile_mission(path, {"creep": "12mm/s", "laps": "1"})
-    assert "(${creep} is creep=12mm/s, set on the command line)" in problems[0].message
+    assert "(${creep} is creep=12mm/s, given in params)" in problems[0].message
     assert all("default" not in p.message for p in problems), problems
     _, problems = compile_mission(path, {"creep": "15mm/s", "laps": "1"})
     assert [p.line for p in problems] == [11]  # only the negated speed is left

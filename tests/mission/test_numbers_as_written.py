@@ -92,7 +92,7 @@ def test_a_command_line_number_with_a_leading_zero_or_colon_is_refused(
     )
     (problem,) = _problems(tmp_path, text, {"c": value})
     assert f"as the {'octal' if ':' not in value else 'base-60'} number {reading}" in problem
-    assert "(from the command line)" in problem and "quote it" not in problem
+    assert "(given in params)" in problem and "quote it" not in problem
     assert _problems(tmp_path, text, {"n": value}) == []  # a text parameter: the text
 
 

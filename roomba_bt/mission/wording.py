@@ -1,0 +1,75 @@
+"""How a mission's messages name what its caller gives it: the command line's flags, or the
+arguments of a Python call.
+
+A message about something only the caller can change (a permission, a parameter's value, the
+robot's profile) says how to change it. The command line's user changes it with a flag
+(``--allow-plugin-files``, ``-p speed=250mm/s``); a program calling ``load_mission`` with an
+argument (``permissions=Permissions(plugin_files=True)``, ``params={"speed": "250mm/s"}``),
+and a flag it cannot give was no help to it. The caller's :class:`Wording` travels with what
+it grants (:attr:`Permissions.wording <roomba_bt.mission.loader.Permissions.wording>`):
+:data:`PYTHON` unless the command line says :data:`COMMAND_LINE`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True, slots=True)
+class Wording:
+    """What the caller writes to change each thing a message may name."""
+
+    #: what lets a mission import the plugin files it names
+    allow_plugin_files: str
+    #: what lets a mission include from another folder (``DIR``)
+    include_dir: str
+    #: where a value the caller set came from, after the value: "set on the command line"
+    set_by: str
+    #: the same in a parenthesis after the value: "(from the command line)"
+    set_from: str
+    #: how the caller sets parameter ``{name}`` to ``{value}``
+    give_template: str
+    #: how a parameter's value is set instead of a default that refers to another
+    set_instead: str
+    #: how the caller chooses the robot's profile
+    profile: str
+    #: how to run a mission on the world file ``{path}``
+    on_world: str
+    #: how the caller lists the shipped missions ("" when it has no such command)
+    lists_missions: str
+
+    def give(self, assignment: str) -> str:
+        """``"creep=VALUE"`` as the caller gives it: ``-p creep=VALUE``,
+        ``params={'creep': 'VALUE'}``."""
+        name, _, value = assignment.partition("=")
+        return self.give_template.format(name=name, value=value)
+
+
+#: A Python program's words: ``load_mission``'s and ``compile_mission``'s arguments.
+PYTHON = Wording(
+    allow_plugin_files="permissions=Permissions(plugin_files=True)",
+    include_dir="permissions=Permissions(include_dirs=(Path(DIR),))",
+    set_by="given in params",
+    set_from="given in params",
+    give_template="params={{'{name}': '{value}'}}",
+    set_instead="params= sets it when the mission is loaded",
+    profile="profile= (roomba_bt.PROFILES)",
+    on_world="load_world({path!r}) and a Simulator on it",
+    lists_missions="",
+)
+
+#: The ``roomba-bt`` command's words: its flags.
+COMMAND_LINE = Wording(
+    allow_plugin_files="--allow-plugin-files",
+    include_dir="--include-dir DIR",
+    set_by="set on the command line",
+    set_from="from the command line",
+    give_template="-p {name}={value}",
+    set_instead="-p sets it on the command line",
+    profile="--profile",
+    on_world=(
+        "--world {path} (roomba-bt run dock --world {path} --fast); roomba-bt validate {path} "
+        "checks it"
+    ),
+    lists_missions="; `roomba-bt missions` lists them",
+)
