@@ -551,7 +551,10 @@ def bind_parameters(
                 continue
             if not has_default:
                 ctx.error(
-                    key_loc.at(f"parameter {name!r} has no default: give it with -p {name}=VALUE")
+                    key_loc.at(
+                        f"parameter {name!r} has no default: give it with "
+                        f"{wording.give(name + '=VALUE')}"
+                    )
                 )
                 env[name] = Bound(vtype, UNKNOWN, "?")  # reported once, not at every use
                 continue

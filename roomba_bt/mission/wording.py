@@ -15,9 +15,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(frozen=True, slots=True, repr=False)
 class Wording:
     """What the caller writes to change each thing a message may name."""
+
+    #: the module's name for it (its repr: a signature's default reads ``PYTHON``, not the
+    #: whole table)
+    name: str
 
     #: what lets a mission import the plugin files it names
     allow_plugin_files: str
@@ -38,6 +42,9 @@ class Wording:
     #: how the caller lists the shipped missions ("" when it has no such command)
     lists_missions: str
 
+    def __repr__(self) -> str:
+        return f"roomba_bt.mission.wording.{self.name}"
+
     def give(self, assignment: str) -> str:
         """``"creep=VALUE"`` as the caller gives it: ``-p creep=VALUE``,
         ``params={'creep': 'VALUE'}``."""
@@ -47,8 +54,9 @@ class Wording:
 
 #: A Python program's words: ``load_mission``'s and ``compile_mission``'s arguments.
 PYTHON = Wording(
+    name="PYTHON",
     allow_plugin_files="permissions=Permissions(plugin_files=True)",
-    include_dir="permissions=Permissions(include_dirs=(Path(DIR),))",
+    include_dir="permissions=Permissions(include_dirs=(Path('DIR'),))",
     set_by="given in params",
     set_from="given in params",
     give_template="params={{'{name}': '{value}'}}",
@@ -60,6 +68,7 @@ PYTHON = Wording(
 
 #: The ``roomba-bt`` command's words: its flags.
 COMMAND_LINE = Wording(
+    name="COMMAND_LINE",
     allow_plugin_files="--allow-plugin-files",
     include_dir="--include-dir DIR",
     set_by="set on the command line",

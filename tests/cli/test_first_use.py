@@ -330,7 +330,7 @@ def test_a_world_file_given_as_a_mission_is_said_to_be_a_world(
     assert main(["show", str(world)]) == 2
     said = "".join(capsys.readouterr())
     assert said.count("\n") == 1, said
-    assert "this file is a world (rooms:, no tree:), not a mission: run a mission in it" in said
+    assert "this file is a world (rooms:, no tree:), not a mission: run a mission on it" in said
     assert f"roomba-bt validate {world} checks it" in said
 
 

@@ -54,15 +54,18 @@ def test_a_plugin_file_and_an_include_are_allowed_with_python_arguments(
         "the plugin as a package)"
     )
     assert include_said.endswith(
-        "is outside the mission's folder and the shipped library; allow its folder with "
-        "permissions=Permissions(include_dirs=(Path(DIR),))"
+        "the shipped library and the include folders granted (none); allow its folder with "
+        f"permissions=Permissions(include_dirs=(Path('{outside}'),))"
     )
     for said in (plugin_said, include_said):
         assert not any(flag in said for flag in FLAGS), said
     # the command line's words where it compiles (validate, run, show, eval)
     granted = Permissions(wording=COMMAND_LINE)
     assert "with --allow-plugin-files (or" in _messages(plugin, permissions=granted)[0]
-    assert _messages(include, permissions=granted)[0].endswith("with --include-dir DIR")
+    assert (
+        f"with --include-dir {outside}, or for every command with ROOMBA_BT_INCLUDE_PATH"
+        in (_messages(include, permissions=granted)[0])
+    )
 
 
 def test_parameters_given_in_params_are_said_so(mission_file: Write) -> None:
