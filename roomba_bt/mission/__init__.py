@@ -17,13 +17,14 @@ from roomba_bt.mission.compiler import (
     load_mission_text,
     validate_files,
 )
-from roomba_bt.mission.diagnostics import Diagnostic, MissionError, reported
+from roomba_bt.mission.diagnostics import Diagnostic, IncludeSite, MissionError, reported
 from roomba_bt.mission.loader import NO_PERMISSIONS, SHIPPED_LIBRARY, Permissions
 
 __all__ = [
     "RUNTIME_PACKETS",
     "CompiledMission",
     "Diagnostic",
+    "IncludeSite",
     "NO_PERMISSIONS",
     "MissionError",
     "Permissions",

@@ -19,7 +19,7 @@ The pipeline, each stage in its own module::
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from roomba_bt import yamlsource
@@ -39,10 +39,11 @@ from roomba_bt.mission.checks import (
     restarted_runs,
     sensor_ranges,
 )
-from roomba_bt.mission.diagnostics import Diagnostic, MissionError
+from roomba_bt.mission.diagnostics import Diagnostic, IncludeSite, MissionError
 from roomba_bt.mission.loader import NO_PERMISSIONS, Loader, Permissions
 from roomba_bt.mission.plan import Node
 from roomba_bt.mission.shipped import find_mission
+from roomba_bt.mission.source import Loc
 from roomba_bt.mission.values import Context, shown
 from roomba_bt.oi.modes import ALL_MODES, OIMode
 from roomba_bt.oi.profiles import CREATE2, RobotProfile
@@ -107,7 +108,53 @@ def _compile(
     text: MissionText | None = None,
 ) -> tuple[CompiledMission | None, list[Diagnostic]]:
     ctx = Context(registry=registry or default_registry(), wording=permissions.wording)
-    loader = Loader(ctx, _display if text is None else text.display, permissions)
+    display = _display if text is None else text.display
+    loader = Loader(ctx, display, permissions)
+    mission, diagnostics = _checked(loader, ctx, path, params, profile, baud, require_tree, text)
+    if not diagnostics and (mission is None or not mission.warnings):
+        return mission, diagnostics  # a clean compile (run's, eval's) resolves no more paths
+    chains = _IncludeChains(display(path), loader.include_sites)
+    if mission is None:
+        return None, [chains.of(d) for d in diagnostics]
+    mission.warnings = tuple(chains.of(d) for d in mission.warnings)
+    return mission, diagnostics
+
+
+class _IncludeChains:
+    """Each diagnostic in an included file given the include chain that reached it
+    (:attr:`Diagnostic.included_from`), so that the mission that failed is named beside the
+    library's line."""
+
+    def __init__(self, top: str, sites: dict[str, Loc]) -> None:
+        self.top = top
+        self.sites = sites
+
+    def of(self, diagnostic: Diagnostic) -> Diagnostic:
+        chain: list[IncludeSite] = []
+        file = diagnostic.file
+        # each file is entered once (an include cycle is refused), so the walk ends at the top
+        # file; bounded by the number of files all the same
+        while file != self.top and file in self.sites and len(chain) <= len(self.sites):
+            site = self.sites[file]
+            chain.append(IncludeSite(site.file, site.line, site.column))
+            file = site.file
+        if not chain:
+            return diagnostic
+        return replace(diagnostic, included_from=tuple(chain))
+
+
+def _checked(
+    loader: Loader,
+    ctx: Context,
+    path: Path,
+    params: Mapping[str, str] | None,
+    profile: RobotProfile,
+    baud: int | None,
+    require_tree: bool,
+    text: MissionText | None = None,
+) -> tuple[CompiledMission | None, list[Diagnostic]]:
+    """The mission file (or ``text``) read, checked and built: the compiler's stages in
+    order."""
     parsed = loader.compile_file(path, dict(params or {}), require_tree=require_tree, text=text)
     if parsed is None or parsed.tree is None:
         return None, sorted(ctx.diagnostics)
@@ -117,7 +164,7 @@ def _compile(
     keys = KeyCheck()
     keys.run(tree, frozenset(k for k, d in ctx.keys.items() if d.has_initial))
     packets, sends, needed = _what_leaves_use(tree)
-    unavailable, ignored = profile_commands(tree, profile, permissions.wording)
+    unavailable, ignored = profile_commands(tree, profile, ctx.wording)
     diagnostics = ctx.diagnostics + modes.errors + keys.errors + key_ranges(tree, ctx.keys)
     diagnostics += restarted_limits(tree) + restarted_branches(tree) + unavailable
     problem = check_stream(tuple(sorted(packets)), baud or profile.default_baud, profile)
@@ -276,7 +323,10 @@ def validate_files(
     permissions: Permissions = NO_PERMISSIONS,
 ) -> list[Diagnostic]:
     """Every diagnostic of every file, errors and warnings (``severity``). A file without
-    ``tree:`` is checked as a library of subtrees (what ``include`` brings in)."""
+    ``tree:`` is checked as a library of subtrees (what ``include`` brings in). A diagnostic
+    in a file that one of ``paths`` includes names the include chain that reached it
+    (``included_from``; ``checked_file`` is then the path it was found through): an error
+    in a library shared by several of ``paths`` comes once for each of them."""
     out: list[Diagnostic] = []
     for path in paths:
         path = Path(path)

@@ -4,6 +4,12 @@
 
     square.yaml:12:18: drive: velocity 600 mm/s is out of range: allowed -500..500 mm/s
                        [tree.sequence[2].drive.velocity]   (on the same line)
+
+A diagnostic in a file the mission includes carries the include chain that reached it
+(``included_from``), said on the same line as a C compiler says it::
+
+    lib/escapes.yaml:12:52: drive.distance: unknown distance unit 'parsecs' ... [subtrees...]
+        (included from lib/safe_drive.yaml:3:11, from delivery/to-kitchen.yaml:5:11)
 """
 
 from __future__ import annotations
@@ -16,9 +22,28 @@ from roomba_bt.printable import ANY_CONTROL, UNPRINTABLE, escaped
 
 
 @dataclass(frozen=True, slots=True, order=True)
+class IncludeSite:
+    """Where an ``include:`` entry named a file: the including file, 1-based line and column
+    of the entry."""
+
+    file: str
+    line: int
+    column: int
+
+    def __str__(self) -> str:
+        return f"{escaped(self.file, ANY_CONTROL)}:{self.line}:{self.column}"
+
+
+@dataclass(frozen=True, slots=True, order=True)
 class Diagnostic:
     """One error (or, ``severity="warning"``, something that compiles but is likely a
-    mistake): file, 1-based line and column, the message, and the YAML path."""
+    mistake): file, 1-based line and column, the message, and the YAML path.
+
+    ``included_from``: when ``file`` is not the file that was compiled but one it includes,
+    the include entries that reached it, innermost first: the last is in the compiled file.
+    Without it an error in a shared library was printed once per mission under the
+    library's name alone, and nothing said which missions it broke. Empty for the compiled
+    file's own diagnostics."""
 
     file: str
     line: int
@@ -26,6 +51,7 @@ class Diagnostic:
     message: str
     yaml_path: str = ""
     severity: str = "error"
+    included_from: tuple[IncludeSite, ...] = ()
 
     def __str__(self) -> str:
         where = (
@@ -35,7 +61,25 @@ class Diagnostic:
         # the file's name on one line: a newline in it faked a line of ``validate *.yaml``
         file = escaped(self.file, ANY_CONTROL)
         text = f"{self.line}:{self.column}: {kind}{self.message}"
-        return f"{file}:{escaped(text, UNPRINTABLE)}{where}"
+        return f"{file}:{escaped(text, UNPRINTABLE)}{where}{self.chain_said()}"
+
+    def chain_said(self) -> str:
+        """``included_from`` as the line says it: `` (included from a.yaml:3:11, from
+        m.yaml:5:11)``, or "" for a diagnostic of the compiled file itself."""
+        if not self.included_from:
+            return ""
+        return " (included from " + ", from ".join(map(str, self.included_from)) + ")"
+
+    @property
+    def checked_file(self) -> str:
+        """The file that was compiled when this was found: the outermost include's file, or
+        ``file`` itself."""
+        return self.included_from[-1].file if self.included_from else self.file
+
+    def located(self) -> Diagnostic:
+        """The diagnostic without its include chain: the same error reached from two
+        missions is one place to fix (``validate`` prints it once)."""
+        return replace(self, included_from=()) if self.included_from else self
 
     def as_warning(self) -> Diagnostic:
         return replace(self, severity="warning")

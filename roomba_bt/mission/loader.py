@@ -188,6 +188,12 @@ class Loader:
         #: every file read: the mission file, then each include and plugin file as reached
         self.files: list[Path] = []
 
+    @property
+    def include_sites(self) -> dict[str, Loc]:
+        """Each included file, named as its diagnostics name it, with the include entry that
+        first reached it: the links of a diagnostic's include chain."""
+        return {self.display(target): loc for target, loc in self._included.items()}
+
     def compile_file(
         self,
         path: Path,
