@@ -25,6 +25,7 @@ from roomba_bt.cli.arguments import (
     parse_params,
     permissions,
 )
+from roomba_bt.cli.validate_report import FORMATS
 from roomba_bt.oi.profiles import get_profile
 from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.runtime.summary import ExitCode
@@ -45,8 +46,10 @@ def register(sub: Any) -> None:
         """check mission files before anything moves
 
         Check each FILE: names, parameters, units, ranges, subtrees, includes, blackboard keys, OI
-        modes of every actuator, and the sensor stream budget. Every error is printed as
-        file:line:col: message. Exit 0 if all are valid, 2 if not.
+        modes of every actuator, and the sensor stream budget. Every error is printed once as
+        file:line:col: message, one in an included file with the include chain that reached
+        it, then each FILE's verdict (ok, or failed and why). Exit 0 if all are valid, 2 if
+        not; with --strict, 7 if warnings alone fail a file.
         """,
     )
     validate.add_argument(
@@ -55,6 +58,16 @@ def register(sub: Any) -> None:
         "checked as --world reads it",
     )  # fmt: skip
     _common(validate)
+    validate.add_argument(
+        "--strict", action="store_true",
+        help="fail on warnings too (the Full-mode drive with no cliff check, ...): exit 7 "
+        "when warnings alone fail a file (2 stays for errors)",
+    )  # fmt: skip
+    validate.add_argument(
+        "--format", choices=FORMATS, default="text",
+        help="text (file:line:col: message, the default), json (every diagnostic and each "
+        "file's verdict) or github (GitHub Actions ::error/::warning annotations)",
+    )  # fmt: skip
 
     show = add_command(
         sub,
@@ -179,27 +192,32 @@ def _params(items: list[str]) -> dict[str, str] | None:
 
 
 def validate_command(args: argparse.Namespace) -> int:
-    from roomba_bt.mission import reported
+    """Each file checked, then said in ``--format`` (``cli/validate_report.py``)."""
+    from roomba_bt.cli import validate_report as report
 
     params = _params(args.param)
     if params is None:
         return ExitCode.INVALID
-    status = ExitCode.OK
+    checked: list[report.Checked] = []
     for file in args.files:
         found = mission_file(file)
-        if isinstance(found, tuple):  # as show and run say it: stderr, the command named
-            print(f"roomba-bt validate: {escaped(found[0], ANY_CONTROL)}", file=sys.stderr)
-            status = ExitCode.INVALID
+        if isinstance(found, tuple):
+            checked.append(report.Checked(file, problem=found[0]))
             continue
         diagnostics = _checked(found, params, args)
-        for line in reported(diagnostics):
-            print(line)
-        if any(d.severity == "error" for d in diagnostics):
-            status = ExitCode.INVALID
-        elif not args.quiet:  # -q: the warnings and errors only (the exit status says ok)
-            said = "ok" if not diagnostics else "ok, with warnings"
-            print(f"{escaped(file, ANY_CONTROL)}: {said}")  # one line: its name may hold "\n"
-    return status
+        checked.append(report.Checked(file, diagnostics))
+    if args.format != "text":
+        for one in checked:  # said on stderr too, as in text: a reader of the log sees it
+            if one.problem is not None:
+                problem = escaped(one.problem, ANY_CONTROL)
+                print(f"roomba-bt validate: {problem}", file=sys.stderr)
+    if args.format == "json":
+        report.print_json(checked, strict=args.strict)
+    elif args.format == "github":
+        report.print_github(checked, strict=args.strict, quiet=bool(args.quiet))
+    else:
+        report.print_text(checked, strict=args.strict, quiet=bool(args.quiet))
+    return report.exit_code(checked, args.strict)
 
 
 def _checked(found: str, params: dict[str, str], args: argparse.Namespace) -> list[Diagnostic]:

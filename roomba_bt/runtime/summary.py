@@ -41,7 +41,8 @@ class ExitCode(IntEnum):
     #: ``run --strict``: the tree ended in SUCCESS, but the run did what a mission that works
     #: does not (:meth:`RunSummary.strict_findings`: a command the mode guard refused, one
     #: dropped while the tree was stopped, a fall out of Safe/Full by itself). 7, not 5: 5
-    #: and 6 are ``roomba-bt doctor``'s (nothing answered; a later step failed)
+    #: and 6 are ``roomba-bt doctor``'s (nothing answered; a later step failed). Also
+    #: ``validate --strict``: every file valid, but warnings failed one (docs/ci.md)
     STRICT = 7
     #: roomba-bt itself raised (a bug in the runner, the display, the monitor, the record),
     #: not a behaviour: said in one line, the traceback with ``-v``, after the run's port was

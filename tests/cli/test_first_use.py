@@ -325,8 +325,9 @@ def test_a_world_file_given_as_a_mission_is_said_to_be_a_world(
     )
     assert main(["validate", str(world)]) == 2
     said = "".join(capsys.readouterr())
-    assert said.count("\n") == 1, said
+    assert said.count("\n") == 2, said  # the error, then the file's verdict
     assert said.startswith(f"{world}:5:7: dock: found no robot.start"), said
+    assert said.endswith(f"{world}: failed (1 error)\n")
     assert main(["show", str(world)]) == 2
     said = "".join(capsys.readouterr())
     assert said.count("\n") == 1, said

@@ -28,8 +28,9 @@ def test_validate_reports_every_file(mission_file: Callable[..., Path], capsys: 
     bad = mission_file("tree: {wal: {}}\n", "bad.yaml")
     assert main(["validate", str(bad), str(good)]) == 2
     out, _ = capsys.readouterr()
-    bad_line, good_line = out.strip().splitlines()
+    bad_line, bad_verdict, good_line = out.strip().splitlines()
     assert bad_line.endswith("bad.yaml:1:8: unknown node 'wal' (did you mean 'wall'?) [tree.wal]")
+    assert bad_verdict == f"{bad}: failed (1 error)"  # each file's verdict, a failed one too
     assert good_line == f"{good}: ok"
 
 
@@ -225,6 +226,8 @@ def test_a_terminal_escape_in_a_mission_never_reaches_the_screen(
     assert main([command, str(mission)]) == 2
     out, err = capsys.readouterr()
     lines = out.splitlines()
+    if command == "validate":
+        assert lines.pop() == f"{mission}: failed (4 errors)"
     assert lines[0] == (
         f"{mission}:1:10: control character U+001B (an escape such as \\e, \\x1b or \\a in "
         "quotes) is not allowed in a value: a text may hold printable characters, tabs and "

@@ -181,6 +181,8 @@ def test_a_file_of_thousands_of_errors_lists_the_first_hundred_and_counts_the_re
         assert main([command, "al.yaml", *(["--fast"] if command == "run" else [])]) == 2
         out, err = capsys.readouterr()
         lines = (out + err).splitlines()
+        if command == "validate":  # the file's verdict counts them all
+            assert lines.pop() == "al.yaml: failed (250 errors)"
         assert len(lines) == 101, command
         assert all("alias *a is not allowed" in line for line in lines[:100])
         assert lines[100] == "... and 150 more errors (the first 100 are listed)"
@@ -199,9 +201,11 @@ def test_a_file_over_the_limit_is_refused_before_it_is_read(
     for command in ("validate", "show", "run"):
         assert main([command, "big.yaml", *(["--fast"] if command == "run" else [])]) == 2
         out, err = capsys.readouterr()
+        verdict = ["big.yaml: failed (1 error)"] if command == "validate" else []
         assert (out + err).splitlines() == [
             "big.yaml:1:1: mission file of 1,073,741,824 bytes; at most 1,048,576 are read (a "
-            "mission or a world is a few KB: a file generated wrong?)"
+            "mission or a world is a few KB: a file generated wrong?)",
+            *verdict,
         ], command
 
 
@@ -228,7 +232,9 @@ def test_an_integer_too_long_to_read_is_placed_in_a_mission_a_world_and_a_parame
     assert main(["validate", "p.yaml", "-p", f"n={digits}"]) == 2
     assert capsys.readouterr().out.splitlines() == [
         f"m.yaml:3:19: {too_long} [tree.repeat.times]",
+        "m.yaml: failed (1 error)",
         f"p.yaml:1:14: parameter n={digits} (from the command line): {too_long} [parameters.n]",
+        "p.yaml: failed (1 error)",
     ]
     assert main(["run", "dock", "--fast", "--world", "w.yaml"]) == 2
     assert main(["sim", "--pty", "--world", "w.yaml"]) == 2
@@ -259,6 +265,7 @@ def test_includes_that_are_no_library_say_what_they_are_at_the_include(
         "m.yaml:1:38: included file 'pipe.yaml' is not a regular file; an include is a .yaml "
         "file [include[2]]",
         "m.yaml:2:11: a plugin is an empty path: name a file [plugins[0]]",
+        "m.yaml: failed (4 errors)",
     ]
     assert main(["schema", "--plugin-file", str(tmp_path)]) == 2
     assert main(["schema", "--plugin-file", "pipe.yaml"]) == 2

@@ -83,6 +83,7 @@ def test_validate_prints_them_and_exits_2(path: Path, capsys: pytest.CaptureFixt
     assert main(argv) == 2
     out, err = capsys.readouterr()
     lines = out.splitlines()
+    assert lines.pop() == f"{path}: failed ({len(expected)} error{'s' * (len(expected) > 1)})"
     assert len(lines) == len(expected)
     for line, want in zip(lines, expected, strict=True):
         assert f":{want}" in line
@@ -170,7 +171,8 @@ def test_the_cli_names_a_deep_file_with_exit_2_and_a_short_path(
     path.write_text(f"mission: deep\ntree: {_nested_sequences(140)}\n")
     assert main(["validate", str(path)]) == 2
     out, err = capsys.readouterr()
-    (line,) = out.splitlines()
+    line, verdict = out.splitlines()
+    assert verdict == f"{path}: failed (1 error)"
     assert "nodes deep here" in line
     assert line.endswith(" ... (95 more) ... sequence[0].sequence[0].sequence[0]]")
     assert len(line) < 300
@@ -341,7 +343,7 @@ def test_a_control_character_in_the_file_is_one_line_at_its_place(
     path.write_text(text, encoding="utf-8")
     assert main(["validate", str(path)]) == 2
     out, err = capsys.readouterr()
-    assert out.splitlines() == [f"{path}:{expected}"]
+    assert out.splitlines() == [f"{path}:{expected}", f"{path}: failed (1 error)"]
     assert "Traceback" not in out + err
 
 

@@ -288,7 +288,8 @@ def test_a_plugin_file_that_is_a_device_is_named_as_such(
     assert main(args) == 2
     assert capsys.readouterr().out.splitlines() == [
         f"{path}:2:11: plugin file '/dev/zero' is not a regular file (a device or a pipe); name "
-        "a .py file [plugins[0]]"
+        "a .py file [plugins[0]]",
+        f"{path}: failed (1 error)",
     ]
 
 

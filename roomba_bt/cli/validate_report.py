@@ -1,0 +1,241 @@
+"""What ``roomba-bt validate`` says of the files it checked: as text, JSON or GitHub
+workflow commands, each with a verdict per file.
+
+A team library included by five missions holds one error; the missions fail through it. The
+text and the GitHub annotations say the error once, at its place in the library, with the
+include chain that first reached it, and name every file that failed, through which include
+(``to-kitchen.yaml: failed (an included file has errors: 1 error in lib/escapes.yaml,
+included at line 5)``): before, the library's line came once for each mission that included
+it and the missions were named nowhere. JSON keeps every diagnostic of every checked file
+(``checked_file``), for a program to group as it likes.
+
+``--strict`` fails a file on its warnings too (the compiler's: a drive in Full mode with no
+cliff check, ...), exit 7 when warnings alone failed it, as ``run --strict``'s 7 is a run
+that did what only warned. Errors stay exit 2.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+from roomba_bt.printable import ANY_CONTROL, UNPRINTABLE, escaped
+
+if TYPE_CHECKING:
+    from roomba_bt.mission.diagnostics import Diagnostic, IncludeSite
+
+#: ``--format``'s choices; text is the default
+FORMATS = ("text", "json", "github")
+
+#: the ``title=`` of every GitHub annotation
+ANNOTATION_TITLE = "roomba-bt validate"
+
+
+@dataclass
+class Checked:
+    """One file argument of ``validate`` and what its check found: its diagnostics (errors
+    and warnings, in files it includes too), or ``problem`` when no such file exists."""
+
+    file: str
+    diagnostics: list[Diagnostic] = field(default_factory=list)
+    problem: str | None = None
+
+    def count(self, severity: str) -> int:
+        return sum(d.severity == severity for d in self.diagnostics) + (
+            self.problem is not None and severity == "error"
+        )
+
+    def failing(self, strict: bool) -> list[Diagnostic]:
+        """What fails the file: its errors, and under ``--strict`` its warnings."""
+        return [d for d in self.diagnostics if strict or d.severity == "error"]
+
+    def failed(self, strict: bool) -> bool:
+        return self.problem is not None or bool(self.failing(strict))
+
+    def verdict(self, strict: bool) -> str:
+        """What follows ``FILE: `` in the text: ``ok``, ``ok, with warnings`` or ``failed``
+        with what failed it, its own count and each included file's."""
+        if self.problem is not None:
+            return "failed (not checked: its problem is said above)"
+        failing = self.failing(strict)
+        if not failing:
+            return "ok, with warnings" if self.diagnostics else "ok"
+        own = [d for d in failing if not d.included_from]
+        included: dict[str, list[Diagnostic]] = {}
+        for d in failing:
+            if d.included_from:
+                included.setdefault(d.file, []).append(d)
+        parts = [counted(own)] if own else []
+        if included:
+            each = ", ".join(
+                f"{counted(found)} in {escaped(file, ANY_CONTROL)}, included at line "
+                f"{found[0].included_from[-1].line}"
+                for file, found in included.items()
+            )
+            noun = counted([d for found in included.values() for d in found], nouns_only=True)
+            parts.append(f"an included file has {noun}: {each}")
+        strictly = "" if any(d.severity == "error" for d in failing) else " --strict"
+        return f"failed{strictly} ({'; '.join(parts)})"
+
+    def through_includes(self, strict: bool) -> dict[IncludeSite, list[Diagnostic]]:
+        """The include entries of this file that brought in a failing diagnostic, with what
+        each brought: where a GitHub annotation on the mission itself goes."""
+        sites: dict[IncludeSite, list[Diagnostic]] = {}
+        for d in self.failing(strict):
+            if d.included_from:
+                sites.setdefault(d.included_from[-1], []).append(d)
+        return sites
+
+
+def counted(diagnostics: list[Diagnostic], *, nouns_only: bool = False) -> str:
+    """``1 error``, ``2 warnings``, ``1 error and 2 warnings``; ``nouns_only``: ``errors``,
+    ``warnings`` or ``errors and warnings``."""
+    errors = sum(d.severity == "error" for d in diagnostics)
+    warnings = len(diagnostics) - errors
+    said = []
+    for count, noun in ((errors, "error"), (warnings, "warning")):
+        if count:
+            plural = f"{noun}s" if count != 1 or nouns_only else noun
+            said.append(plural if nouns_only else f"{count:,} {plural}")
+    return " and ".join(said)
+
+
+def exit_code(checked: list[Checked], strict: bool) -> int:
+    """2 when a file has an error (or is missing); 7 when ``--strict`` and warnings alone
+    fail a file; 0 otherwise."""
+    from roomba_bt.runtime.summary import ExitCode
+
+    if any(c.problem is not None or c.count("error") for c in checked):
+        return ExitCode.INVALID
+    if strict and any(c.count("warning") for c in checked):
+        return ExitCode.STRICT
+    return ExitCode.OK
+
+
+def print_text(checked: list[Checked], *, strict: bool, quiet: bool) -> None:
+    """Each diagnostic once per place (the first include chain that reached it), then each
+    file's verdict; ``quiet``: the verdicts of files that passed are left out."""
+    from roomba_bt.mission import reported
+
+    seen: set[Diagnostic] = set()
+    for one in checked:
+        if one.problem is not None:  # as show and run say it: stderr, the command named
+            print(f"roomba-bt validate: {escaped(one.problem, ANY_CONTROL)}", file=sys.stderr)
+            continue
+        fresh = _unseen(one.diagnostics, seen)
+        for line in reported(fresh):
+            print(line)
+        if one.failed(strict) or not quiet:
+            # one line: a file's name may hold "\n"
+            print(f"{escaped(one.file, ANY_CONTROL)}: {one.verdict(strict)}")
+
+
+def _unseen(diagnostics: list[Diagnostic], seen: set[Diagnostic]) -> list[Diagnostic]:
+    """The diagnostics whose place and message were not said yet (``seen`` updated)."""
+    fresh = []
+    for d in diagnostics:
+        place = d.located()
+        if place not in seen:
+            seen.add(place)
+            fresh.append(d)
+    return fresh
+
+
+def print_json(checked: list[Checked], *, strict: bool) -> None:
+    """One JSON document: ``files`` (each file's verdict and counts) and ``diagnostics``
+    (every one of every file, with ``checked_file``, the file argument that found it; the
+    first :data:`~roomba_bt.mission.diagnostics.MAX_REPORTED` of a file, the rest counted
+    in its ``diagnostics_omitted``)."""
+    from roomba_bt.mission.diagnostics import MAX_REPORTED
+
+    files: list[dict[str, Any]] = []
+    diagnostics: list[dict[str, Any]] = []
+    for one in checked:
+        failed = one.failed(strict)
+        verdict = one.verdict(strict)
+        entry: dict[str, Any] = {
+            "file": one.file,
+            "verdict": "failed" if failed else verdict,
+            "said": verdict,
+            "errors": one.count("error"),
+            "warnings": one.count("warning"),
+            "diagnostics_omitted": max(0, len(one.diagnostics) - MAX_REPORTED),
+        }
+        if one.problem is not None:
+            entry["problem"] = one.problem
+        files.append(entry)
+        diagnostics += [
+            {**diagnostic_as_json(d), "checked_file": one.file}
+            for d in one.diagnostics[:MAX_REPORTED]
+        ]
+    document = {
+        "strict": strict,
+        "exit_code": int(exit_code(checked, strict)),
+        "files": files,
+        "diagnostics": diagnostics,
+    }
+    print(json.dumps(document, indent=2))
+
+
+def diagnostic_as_json(d: Diagnostic) -> dict[str, Any]:
+    """A diagnostic's fields by their names, the include chain innermost first."""
+    return {
+        "file": d.file,
+        "line": d.line,
+        "column": d.column,
+        "severity": d.severity,
+        "message": d.message,
+        "yaml_path": d.yaml_path,
+        "included_from": [
+            {"file": s.file, "line": s.line, "column": s.column} for s in d.included_from
+        ],
+    }
+
+
+def print_github(checked: list[Checked], *, strict: bool, quiet: bool) -> None:
+    """GitHub Actions workflow commands: ``::error file=F,line=L,col=C,title=...::message``
+    (``::warning`` for a warning), each diagnostic once per place; a file that failed
+    through an include gets one more at that include, so the mission is marked too; the
+    verdicts follow as plain lines of the job's log."""
+    from roomba_bt.mission.diagnostics import MAX_REPORTED
+
+    seen: set[Diagnostic] = set()
+    for one in checked:
+        if one.problem is not None:
+            print(
+                f"::error title={command_property(ANNOTATION_TITLE)}::{command_data(one.problem)}"
+            )
+            continue
+        for d in _unseen(one.diagnostics[:MAX_REPORTED], seen):
+            where = f"{d.message} [{d.yaml_path}]" if d.yaml_path else d.message
+            severity = d.severity
+            if strict and severity == "warning":  # it fails the job: marked as what fails it
+                severity, where = "error", f"warning (an error under --strict): {where}"
+            print(_annotation(severity, d.file, d.line, d.column, where + d.chain_said()))
+        for site, brought in one.through_includes(strict).items():
+            first = "" if len(brought) == 1 else ", the first"
+            said = f"this include brings in {counted(brought)}{first}: {brought[0].located()}"
+            print(_annotation("error", site.file, site.line, site.column, said))
+        if one.failed(strict) or not quiet:
+            print(f"{escaped(one.file, ANY_CONTROL)}: {one.verdict(strict)}")
+
+
+def _annotation(severity: str, file: str, line: int, column: int, message: str) -> str:
+    kind = "warning" if severity == "warning" else "error"
+    where = f"file={command_property(file)},line={line},col={column}"
+    return f"::{kind} {where},title={command_property(ANNOTATION_TITLE)}::{command_data(message)}"
+
+
+def command_data(text: str) -> str:
+    """A workflow command's message, escaped as the Actions toolkit escapes it (``%``, CR and
+    LF), its other control characters shown as ``\\x1b``."""
+    text = text.replace("%", "%25").replace("\r", "%0D").replace("\n", "%0A")
+    return escaped(text, UNPRINTABLE)
+
+
+def command_property(text: str) -> str:
+    """A workflow command's property value (a file's name, the title): :func:`command_data`'s
+    escapes, and ``:`` and ``,``, which end a property."""
+    return command_data(text).replace(":", "%3A").replace(",", "%2C")

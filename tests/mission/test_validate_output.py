@@ -1,0 +1,213 @@
+"""``roomba-bt validate`` in a team's CI: each error once, a verdict naming every failing
+file, ``--strict`` for warnings, and ``--format json|github`` for programs and annotations.
+
+Found by a lab team (missions in git, CI and pre-commit): a library error was printed once
+per mission that included it, under the library's name only, and the missions that failed
+were named nowhere; a warning (a Full-mode drive with no cliff check) could not fail the
+check; the output was text only, parsed with sed.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from team_repo import ESCAPES, team_repo  # beside this file
+
+from roomba_bt.cli import main
+
+Capsys = pytest.CaptureFixture[str]
+
+EVERY_FILE = [
+    "missions/delivery/square.yaml",
+    "missions/delivery/to-kitchen.yaml",
+    "missions/common/lib/escapes.yaml",
+    "missions/common/lib/safe_drive.yaml",
+]
+SHARED = ["--include-dir", "missions/common"]
+LIBRARY_ERROR = (
+    "missions/common/lib/escapes.yaml:7:50: drive.distance: unknown distance unit 'parsecs' "
+    "in '10 parsecs'; use one of: mm, cm, m [subtrees.back_off.tree.sequence[1].drive.distance]"
+)
+
+#: a drive in Full mode that reads no cliff: compiles, with the safety warning
+FULL_DRIVE = """\
+mission: w
+tree:
+  sequence:
+    - mode: full
+    - drive: {velocity: 200 mm/s, duration: 1s}
+    - mode: passive
+"""
+
+
+@pytest.fixture
+def repo(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    monkeypatch.chdir(tmp_path)
+    return team_repo(tmp_path)
+
+
+def test_a_library_error_is_said_once_and_every_mission_it_breaks_is_named(
+    repo: Path, capsys: Capsys
+) -> None:
+    assert main(["validate", *SHARED, *EVERY_FILE]) == 2
+    out, err = capsys.readouterr()
+    assert err == ""
+    assert out.splitlines() == [
+        f"{LIBRARY_ERROR} (included from missions/delivery/square.yaml:2:11)",
+        "missions/delivery/square.yaml: failed (an included file has errors: 1 error in "
+        "missions/common/lib/escapes.yaml, included at line 2)",
+        "missions/delivery/to-kitchen.yaml: failed (an included file has errors: 1 error in "
+        "missions/common/lib/escapes.yaml, included at line 2)",
+        "missions/common/lib/escapes.yaml: failed (1 error)",
+        "missions/common/lib/safe_drive.yaml: failed (an included file has errors: 1 error in "
+        "missions/common/lib/escapes.yaml, included at line 2)",
+    ]
+
+
+def test_the_chain_of_a_mission_checked_alone_reaches_its_own_include(
+    repo: Path, capsys: Capsys
+) -> None:
+    (repo / "missions/delivery/square.yaml").write_text(
+        (repo / "missions/delivery/square.yaml").read_text().replace("mode: passive", "mde: x")
+    )
+    assert main(["validate", *SHARED, "missions/delivery/to-kitchen.yaml",
+                 "missions/delivery/square.yaml"]) == 2  # fmt: skip
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0] == (
+        f"{LIBRARY_ERROR} (included from missions/common/lib/safe_drive.yaml:2:11, "
+        "from missions/delivery/to-kitchen.yaml:2:11)"
+    )
+    # square's own error, then its verdict: its own and the library's, said already
+    assert lines[2].startswith("missions/delivery/square.yaml:7:7: unknown node 'mde'")
+    assert lines[3] == (
+        "missions/delivery/square.yaml: failed (1 error; an included file has errors: 1 error "
+        "in missions/common/lib/escapes.yaml, included at line 2)"
+    )
+
+
+def test_quiet_leaves_out_the_files_that_passed_not_those_that_failed(
+    repo: Path, capsys: Capsys
+) -> None:
+    (repo / "ok.yaml").write_text("tree: wall\n")
+    assert main(["validate", "-q", *SHARED, "ok.yaml", "missions/delivery/to-kitchen.yaml"]) == 2
+    out = capsys.readouterr().out
+    assert "ok.yaml" not in out
+    assert out.splitlines()[-1].startswith("missions/delivery/to-kitchen.yaml: failed (")
+
+
+def test_strict_fails_on_warnings_with_exit_7_and_errors_stay_2(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "w1.yaml").write_text(FULL_DRIVE)
+    assert main(["validate", "w1.yaml"]) == 0
+    assert capsys.readouterr().out.splitlines()[-1] == "w1.yaml: ok, with warnings"
+    assert main(["validate", "--strict", "w1.yaml"]) == 7
+    warning, verdict = capsys.readouterr().out.splitlines()
+    assert warning.startswith("w1.yaml:5:7: warning: drive can turn the wheels in Full mode")
+    assert verdict == "w1.yaml: failed --strict (1 warning)"
+    (tmp_path / "bad.yaml").write_text("tree: {wal: {}}\n")
+    assert main(["validate", "--strict", "w1.yaml", "bad.yaml"]) == 2  # an error: 2, as ever
+    (tmp_path / "ok.yaml").write_text("tree: wall\n")
+    assert main(["validate", "--strict", "ok.yaml"]) == 0
+
+
+def test_strict_names_a_warning_that_comes_through_an_include(repo: Path, capsys: Capsys) -> None:
+    (repo / "missions/common/lib/escapes.yaml").write_text(
+        ESCAPES.replace("mode: safe", "mode: full").replace("10 parsecs", "10 cm")
+    )
+    assert main(["validate", "--strict", *SHARED, "missions/delivery/square.yaml"]) == 7
+    assert capsys.readouterr().out.splitlines()[-1] == (
+        "missions/delivery/square.yaml: failed --strict (an included file has warnings: "
+        "1 warning in missions/common/lib/escapes.yaml, included at line 2)"
+    )
+
+
+def test_json_lists_every_diagnostic_with_its_chain_and_each_file_verdict(
+    repo: Path, capsys: Capsys
+) -> None:
+    (repo / "w1.yaml").write_text(FULL_DRIVE)
+    files = ["missions/delivery/to-kitchen.yaml", "w1.yaml", "missing.yaml"]
+    assert main(["validate", "--format", "json", *SHARED, *files]) == 2
+    out, err = capsys.readouterr()
+    assert "missing.yaml: no such mission file" in err  # said on stderr as in text
+    report = json.loads(out)
+    assert report["exit_code"] == 2
+    assert report["strict"] is False
+    assert [(f["file"], f["verdict"], f["errors"], f["warnings"]) for f in report["files"]] == [
+        ("missions/delivery/to-kitchen.yaml", "failed", 1, 0),
+        ("w1.yaml", "ok, with warnings", 0, 1),
+        ("missing.yaml", "failed", 1, 0),
+    ]
+    assert "no such mission file" in report["files"][2]["problem"]
+    library, warning = report["diagnostics"]
+    assert library == {
+        "file": "missions/common/lib/escapes.yaml",
+        "line": 7,
+        "column": 50,
+        "severity": "error",
+        "message": "drive.distance: unknown distance unit 'parsecs' in '10 parsecs'; use one "
+        "of: mm, cm, m",
+        "yaml_path": "subtrees.back_off.tree.sequence[1].drive.distance",
+        "included_from": [
+            {"file": "missions/common/lib/safe_drive.yaml", "line": 2, "column": 11},
+            {"file": "missions/delivery/to-kitchen.yaml", "line": 2, "column": 11},
+        ],
+        "checked_file": "missions/delivery/to-kitchen.yaml",
+    }
+    said = (warning["severity"], warning["checked_file"], warning["line"])
+    assert said == ("warning", "w1.yaml", 5)
+    assert main(["validate", "--format", "json", "--strict", "w1.yaml"]) == 7
+    strict = json.loads(capsys.readouterr().out)
+    assert (strict["exit_code"], strict["files"][0]["verdict"]) == (7, "failed")
+
+
+def test_github_annotates_the_library_once_and_each_mission_at_its_include(
+    repo: Path, capsys: Capsys
+) -> None:
+    assert main(["validate", "--format", "github", *SHARED, *EVERY_FILE]) == 2
+    lines = capsys.readouterr().out.splitlines()
+    annotations = [line for line in lines if line.startswith("::")]
+    title = "title=roomba-bt validate::"
+    assert annotations == [
+        # the library's error once, where it is
+        "::error file=missions/common/lib/escapes.yaml,line=7,col=50,"
+        + title
+        + LIBRARY_ERROR.split(":7:50: ")[1]
+        + " (included from missions/delivery/square.yaml:2:11)",
+        # each file that fails through it, at its include: the mission is marked too
+        *(
+            f"::error file={file},line=2,col=11,{title}this include brings in 1 error: "
+            + LIBRARY_ERROR
+            for file in (EVERY_FILE[0], EVERY_FILE[1], EVERY_FILE[3])
+        ),
+    ]
+    assert "missions/delivery/to-kitchen.yaml: failed (an included file has errors: 1 error in " \
+        "missions/common/lib/escapes.yaml, included at line 2)" in lines  # fmt: skip
+
+
+def test_github_escapes_what_would_end_a_property_or_the_message_and_marks_warnings(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "a,b:c.yaml").write_text("tree: {log: '100%\\nx', wal: 1}\n")
+    (tmp_path / "w1.yaml").write_text(FULL_DRIVE)
+    assert main(["validate", "--format", "github", "a,b:c.yaml"]) == 2
+    [annotation] = [line for line in capsys.readouterr().out.splitlines() if line[:2] == "::"]
+    assert annotation.startswith("::error file=a%2Cb%3Ac.yaml,line=1,col=")
+    assert main(["validate", "--format", "github", "w1.yaml"]) == 0
+    assert capsys.readouterr().out.startswith("::warning file=w1.yaml,line=5,col=7,")
+    assert main(["validate", "--format", "github", "--strict", "w1.yaml"]) == 7
+    assert capsys.readouterr().out.startswith(
+        "::error file=w1.yaml,line=5,col=7,title=roomba-bt validate::warning (an error under "
+        "--strict): drive can turn the wheels"
+    )
+
+
+def test_github_messages_and_properties_are_escaped_as_the_actions_toolkit_does() -> None:
+    from roomba_bt.cli.validate_report import command_data, command_property
+
+    assert command_data("100% done\r\nnext\x1b[2J") == "100%25 done%0D%0Anext\\x1b[2J"
+    assert command_property("a,b:c\n.yaml") == "a%2Cb%3Ac%0A.yaml"
