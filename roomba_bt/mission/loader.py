@@ -570,27 +570,40 @@ def bind_parameters(
                 vtype, default, text, default_at=_default_at(value, vloc), wording=wording
             )
     for name, text in overrides.items():
-        if name in broken:
-            continue
-        if name not in declared:
-            ctx.error(
-                root.at(
-                    f"unknown parameter {name!r} {wording.set_by}"
-                    f"{closest(name, list(declared))}; "
-                    f"the mission declares: {', '.join(declared) or 'none'}"
-                )
-            )
-            continue
-        vtype, key_loc = declared[name]
-        try:
-            value = vtype.parse(_cli_value(text, vtype))
-        except UnitError as exc:
-            where = f"parameter {name}={text} ({wording.set_from})"
-            ctx.error(key_loc.at(f"{where}: {exc}"))
-            env[name] = Bound(vtype, UNKNOWN, "?")  # reported once, not at every use
-            continue
-        env[name] = Bound(vtype, value, text, f"{name}={text}, {wording.set_by}")
+        if name not in broken:
+            _bind_override(ctx, name, text, declared, env, root)
     return env
+
+
+def _bind_override(
+    ctx: Context,
+    name: str,
+    text: str,
+    declared: Mapping[str, tuple[ValueType, Loc]],
+    env: dict[str, Bound],
+    root: Loc,
+) -> None:
+    """One value the caller set (``-p name=text``, ``params=``) bound in ``env``, or said
+    wrong: a name the mission does not declare, a value its type refuses."""
+    wording = ctx.wording
+    if name not in declared:
+        ctx.error(
+            root.at(
+                f"unknown parameter {name!r} {wording.set_by}"
+                f"{closest(name, list(declared))}; "
+                f"the mission declares: {', '.join(declared) or 'none'}"
+            )
+        )
+        return
+    vtype, key_loc = declared[name]
+    try:
+        value = vtype.parse(_cli_value(text, vtype))
+    except UnitError as exc:
+        where = f"parameter {name}={text} ({wording.set_from})"
+        ctx.error(key_loc.at(f"{where}: {exc}"))
+        env[name] = Bound(vtype, UNKNOWN, "?")  # reported once, not at every use
+        return
+    env[name] = Bound(vtype, value, text, f"{name}={text}, {wording.set_by}")
 
 
 def known_fields(

@@ -54,6 +54,7 @@ def test_a_bad_world_is_every_problem_at_its_place(worlds: Path, capsys: Capsys)
         "worlds/bad.yaml:6:20: dock.facng: found unknown key 'facng'; allowed: at, facing, red, "
         "green, buoy_range, force_field, contact_tolerance, angle_tolerance, family, plate_width "
         "(did you mean 'facing'?)",
+        "worlds/bad.yaml: failed (3 errors)",
         "worlds/lab.yaml: ok",
     ]
     assert err == ""

@@ -211,7 +211,7 @@ def test_what_follows_from_a_refused_include_says_so(repo: Path, capsys: Capsys)
     assert lines[1].startswith(f"{MISSION_PATH}:5:21: unknown subtree 'undock' {follows}")
     assert lines[2].startswith(f"{MISSION_PATH}:7:21: unknown subtree 'leg' {follows}")
     assert f"unknown blackboard key 'legs' {follows}" in lines[3]
-    assert len(lines) == 4
+    assert lines[4:] == [f"{MISSION_PATH}: failed (4 errors)"]  # the file's verdict
     assert "did you mean" not in out and "defines it" not in out
 
 
