@@ -170,6 +170,9 @@ def _note_text(note: dict[str, Any]) -> str:
         return f"the recording stopped ({note[RECORD_STOPPED]}): the record ends here"
     if "watchdog" in note and isinstance(note["watchdog"], int | float):  # a trip, replayed
         return f"watchdog: no valid sensor frame for {note['watchdog'] * 1000:.0f} ms"
+    if "baud" in note:  # the port's rate changed (the record's own note)
+        cut = f", cut short by {note['cut_short']}" if "cut_short" in note else ""
+        return f"the port set to {note['baud']} baud{cut}"
     if "force" in note:
         to = note.get("to")
         return f"{note['force']} forced to {to}" if to != "none" else f"{note['force']} released"

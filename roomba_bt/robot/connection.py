@@ -211,8 +211,8 @@ class Connection:
         # Keep-awake (robot/wake.py): on by default where the profile sleeps in Passive.
         self.keep_awake = self.profile.sleeps_in_passive if keep_awake is None else keep_awake
         self.ending.wake = keep_awake_for(transport, self.link.name, self.keep_awake)
-        #: when the port last listened at other rates and the bytes read by then (link
-        #: clock; silence.follow_baud tries again while garbage keeps coming)
+        #: when garbage was last judged (listened at other rates, or noise) and the bytes
+        #: read by then (link clock; silence.follow_baud judges again while garbage comes)
         self.baud_listened: tuple[float, int] | None = None
         self._changes_said: Counter[str] = Counter()  # the robot's own falls, by cause
         self._falls: Counter[str] = Counter()  # ... this session's (:attr:`falls`)

@@ -365,9 +365,13 @@ class SafeStop:
         writer.link.pause_resume(True, now)
 
     def _write(self) -> str | None:
-        """Write the stop sequence whole; why it could not be, or None."""
+        """Write the stop sequence whole, the port at the robot's rate first, whatever a
+        listen at another rate cut short by a signal left it at (``at_robot_rate``: before,
+        every byte of the stop went out at 19200 to a robot at 115200, which drove on); why
+        it could not be, or None."""
         try:
             with signals_deferred():
+                self.writer.at_robot_rate()
                 self.writer.send_many(self.sequence())
         except PortLost:
             return self._port_gone()

@@ -36,6 +36,7 @@ from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import StreamParser, shows_reset_banner
 from roomba_bt.robot.errors import PortLost, StreamStalled
 from roomba_bt.robot.interface import ModeChange
+from roomba_bt.robot.listen import listen_at
 from roomba_bt.transport.base import Transport, TransportError
 from roomba_bt.transport.open_failure import CLOSED_AT_ONCE
 from roomba_bt.transport.serial_port import TERMIOS_ERRORS
@@ -128,6 +129,17 @@ class StreamLink:
         self.index = 0
         self.bytes_read = 0
         self.bytes_written = 0
+        #: the rate the port was last set to (None: unknown, a change cut short by an
+        #: exception, Ctrl-C among them): what a write checks against the robot's rate
+        #: (``CommandWriter.at_robot_rate``). Where the transport says none, the session sets
+        #: it to the rate it opened at.
+        baud = getattr(transport, "baud", None)
+        self.port_rate: int | None = int(baud) if isinstance(baud, int) else None
+        #: when a frame of the running stream last came damaged (link clock; -inf: none):
+        #: its header, length and packet ids in place, its checksum or a value wrong. The
+        #: robot's own frames at the port's rate, hurt on the line: not another rate
+        self.damaged_frame_at = -math.inf
+        self._refused_seen = 0  # the parser's refused candidates when last looked at
         self.watchdog_trips = 0
         #: whether packet 35 reads the mode + 1, as the session learned at start-up (None:
         #: as the profile expects); the parser's range for packet 35 follows it
@@ -168,63 +180,42 @@ class StreamLink:
         self.bytes_written += len(data)
 
     def set_baud(self, rate: int) -> None:
-        """The port follows the robot to ``rate``; a running stream starts a new parser."""
-        try:
-            self.transport.set_baud(rate)
-        except LINK_ERRORS as exc:
-            raise self.lost("baud change", exc) from exc
+        """The port follows the robot to ``rate`` (what it wrote drained first); a running
+        stream starts a new parser."""
+        self.switch_rate(rate)
         if self._parser is not None:
             self.new_stream(self.stream_ids, self.transport.now())
 
-    def listen_at(self, rate: int, seconds: float, enough: int) -> bool:
-        """Whether the stream's frames come at ``rate``: the port is set there, what it holds
-        is discarded (read before the switch took effect: the old rate's bytes, valid frames
-        at the old rate), and it listens ``seconds`` (:meth:`_heard`). The port is left at
-        ``rate`` if they do, put back if not; the link's own parser and its watchdog times
-        are not touched (what is read meanwhile is only counted)."""
-        was = self.transport.baud if hasattr(self.transport, "baud") else None
-        parser = StreamParser(self.stream_ids, self.profile, mode_plus_one=self.mode_plus_one)
+    def drain_output(self) -> None:
+        """Wait until what was written has left the port (the transport's ``drain_output``:
+        ``tcdrain``); a transport without one delivers on write (the simulator's link) or
+        has no wire (a replay)."""
+        drain = getattr(self.transport, "drain_output", None)
+        if drain is None:
+            return
+        try:
+            drain()
+        except LINK_ERRORS as exc:
+            raise self.lost("drain", exc) from exc
+
+    def switch_rate(self, rate: int) -> None:
+        """Set the port to ``rate``, what was written drained first so that it leaves at the
+        rate it was written for (:meth:`drain_output`). :attr:`port_rate` is unknown (None)
+        until the change is done: one cut short (Ctrl-C inside it) is set again before the
+        next write (``CommandWriter.at_robot_rate``)."""
+        self.drain_output()
+        self.port_rate = None
         try:
             self.transport.set_baud(rate)
         except LINK_ERRORS as exc:
             raise self.lost("baud change", exc) from exc
-        deadline = self.transport.now() + seconds
-        self.read(0.0)  # queued before the switch: the old rate's (an RFC 2217 port's queue)
-        heard = self._heard(parser, deadline, enough)
-        if not heard and was is not None:
-            try:
-                self.transport.set_baud(int(was))
-            except LINK_ERRORS as exc:
-                raise self.lost("baud change", exc) from exc
-        return heard
+        self.port_rate = rate
 
-    def _heard(self, parser: StreamParser, deadline: float, enough: int) -> bool:
-        """Whether, reading into ``parser`` until ``deadline``, the last ``enough`` or more
-        frames came one after the other with nothing invalid after them. The whole window is
-        read: the old rate's frames still in flight when the port switched (the network's,
-        a USB adapter's FIFO) come first and pass, and the robot's bytes at its real rate
-        follow as garbage, which voids them; a robot that did change its rate keeps sending
-        valid frames to the end. A read with invalid bytes (checksum failures, skipped or
-        out-of-range bytes) voids the frames counted so far, its own too. What came by the
-        deadline is read even if the wait overran it (a host starved past the whole window
-        still finds the frames sent meanwhile)."""
-        clock = self.transport.now
-        counters = parser.counters
-        invalid = 0
-        run = 0
-        while True:
-            remaining = deadline - clock()
-            data = self.read(max(0.0, remaining))
-            if data:
-                run += len(parser.feed(data, clock()))
-                now_invalid = (
-                    counters.checksum_failures + counters.skipped_bytes + counters.implausible
-                )
-                if now_invalid != invalid:
-                    invalid, run = now_invalid, 0
-            if remaining <= 0:
-                break
-        return run >= enough
+    def listen_at(self, rate: int, seconds: float, enough: int, back_to: int | None = None) -> bool:
+        """Whether the stream's frames come at ``rate`` (:func:`~roomba_bt.robot.listen.
+        listen_at`); the port left there if they do, put back at ``back_to`` (default: the
+        rate it has) on every other way out, Ctrl-C too."""
+        return listen_at(self, rate, seconds, enough, back_to)
 
     def lost(self, action: str, exc: BaseException) -> PortLost:
         """Mark the link lost; the error to raise."""
@@ -272,6 +263,7 @@ class StreamLink:
         self.streaming = bool(ids)
         self._silent_since = now
         self._bytes_at_frame = self.bytes_read
+        self._refused_seen = 0  # the new parser's count
         self.status = LinkStatus.STREAMING if ids else LinkStatus.OPEN
 
     def pause_resume(self, resume: bool, now: float) -> None:
@@ -374,6 +366,11 @@ class StreamLink:
                             self.status = _STREAMING
                         return (frame,)  # a tuple: one allocation, a list's is two
                     frames = parser.search(data, now)
+                    counters = parser.counters  # a damaged frame among the bytes?
+                    refused = counters.checksum_failures + counters.implausible
+                    if refused != self._refused_seen:
+                        self._refused_seen = refused
+                        self.damaged_frame_at = now
                     if frames:  # a frame that came now leaves nothing silent for the watchdog
                         return self._checked(frames, now)
             if now >= deadline:  # no read past the deadline (a virtual clock's read of

@@ -12,9 +12,10 @@ battery went flat, or the cable. Asking tells the first two from the rest::
                     answered ──► it was asleep: the pulse woke it      RobotAsleep
                     nothing ───► switched off, a flat battery, the cable  StreamLost
 
-Bytes that keep coming without a frame are noise, or the robot at another rate (a battery
-swap or a reset brings a Create 2 back at its default rate): :func:`follow_baud` listens at
-the other OI rates when the watchdog trips on garbage.
+Bytes that keep coming without a frame are noise, or the robot at another rate (a Baud (129)
+the run did not send): :func:`follow_baud` listens at the other OI rates when the watchdog
+trips on garbage that holds no damaged frame of the run's rate (a noisy line's garbage does:
+the robot talks at the run's rate, and a listen elsewhere could only miss it).
 
 A robot that sleeps is in Passive; asleep is also named without asking when the model has
 been in Passive past the OI's five minutes with nothing from us (:func:`asleep_by_idle`).
@@ -27,6 +28,7 @@ left among the likely causes.
 
 from __future__ import annotations
 
+import contextlib
 import weakref
 from typing import TYPE_CHECKING
 
@@ -35,6 +37,7 @@ from roomba_bt.oi.frames import BATTERY_PACKETS, SLOT_SECONDS
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.oi.stream import stream_period
 from roomba_bt.robot.discovery import OI_RATES, search, wake_pulse
+from roomba_bt.robot.ending import signals_deferred
 from roomba_bt.robot.errors import (
     BaudChanged,
     ConnectionFailed,
@@ -57,6 +60,12 @@ FRAMES_TO_FOLLOW = 2
 #: a listen can miss the change (a hiccup of the host or of the robot's port, the change
 #: landing after the listen began), and a robot still driving must hear drive 0 soon.
 RETRY_AFTER_S = 0.1
+#: A frame of the run's stream that came damaged this recently (its header, length and
+#: packet ids in place) shows a noisy line at the robot's rate: no listen elsewhere
+#: (:func:`follow_baud`). Half a second holds a damaged frame of most noisy stalls (the 5 %
+#: bit flips damage a third of the run's 11-packet frames or more); the cost, a robot whose
+#: rate changed just after such a frame is listened for that much later.
+NOISY_FOR_S = 0.5
 
 if TYPE_CHECKING:
     from roomba_bt.robot.connection import Connection
@@ -160,11 +169,14 @@ def garbled_line(
     cannot be known to have reached is said with it."""
     link = connection.link
     mismatch = link.checksum_mismatch()
+    noisy = link.damaged_frame_at > link.silent_since  # its frames, damaged: at our rate
     connection.unheard = (
-        f"the line is garbled (no valid frame at {connection.baud} or another OI rate)"
-        if mismatch is None
-        else f"its frames fail the {connection.profile.name} profile's checksum (most likely "
+        f"its frames fail the {connection.profile.name} profile's checksum (most likely "
         f"a {mismatch.likely[0].title}: --profile {mismatch.likely[0].name})"
+        if mismatch is not None
+        else f"the line is garbled (the robot's frames come damaged at {connection.baud})"
+        if noisy
+        else f"the line is garbled (no valid frame at {connection.baud} or another OI rate)"
     )
     return StreamLost(
         connection.name, silent_for, grace, garbled, watchdog=link.watchdog, halted=halted,
@@ -217,31 +229,52 @@ def follow_baud(connection: Connection) -> BaudChanged | None:
     OI rate, the robot changed its rate (the port is left there, drive 0 sent again at it,
     where the robot understands it); None if they do not (noise, or a listen that missed:
     the stall is ridden through at the run's rate, and this is called again while garbage
-    keeps coming, :data:`RETRY_AFTER_S` after the last listen)::
+    keeps coming, :data:`RETRY_AFTER_S` after the garbage was last judged)::
 
         115200 ▒▒▒▒▒▒▒▒ (100 ms, no frame) ──► port at 19200, listen 100 ms ──► 2 frames
                                                    nothing: 115200, 100 ms ──► listen again
-    """
+        115200 ▒▒[19 n id .. bad sum]▒▒ ──► no listen: a noisy line at the robot's rate
+
+    Decided (session 29), from the specs ("Serial Port Settings", Baud (129)): a robot's
+    rate changes only by Baud, or at power-on (where the OI comes up Off and streams
+    nothing). Garbage that holds a damaged frame of the run's stream (its header, length and
+    packet ids in place, the checksum or a value wrong: :attr:`StreamLink.damaged_frame_at`)
+    is the robot talking at the run's rate over a noisy line, and a listen elsewhere can only
+    miss it: no listen while one came in the last :data:`NOISY_FOR_S`, the garbage judged,
+    the next judgement on new garbage. At another rate no damaged frame shows (three or more
+    bytes would have to fall in place): the listen comes at the trip, not after a long
+    silence, since a robot that changed its rate did not understand the watchdog's drive 0
+    and drives on until it is sent again at its rate. Before, a line with 5 % of its bytes
+    flipped was listened at 19200 at most trips, the port away from the robot's rate 0.1 s
+    each time."""
     link = connection.link
     if not link.stream_ids:
         return None
     now = link.transport.now()
     last = connection.baud_listened
-    if last is not None and last[0] > link.silent_since:  # a listen in this stall
+    if last is not None and last[0] > link.silent_since:  # judged in this stall
         if now - last[0] < RETRY_AFTER_S or link.bytes_read - last[1] < GARBAGE_BYTES:
             return None
     elif link.garbage_since_frame < GARBAGE_BYTES:  # a frame cut by a late read is not
+        return None
+    if now - link.damaged_frame_at < NOISY_FOR_S:  # the robot's frames, hurt: noise
+        connection.baud_listened = (now, link.bytes_read)  # judged: next on new garbage
         return None
     was = connection.baud
     garbage_s = now - link.silent_since
     garbage_bytes = link.bytes_since_frame
     try:
         for rate in OI_RATES:
-            window = listen_window(link.stream_ids, rate)
-            if rate == was or not link.listen_at(rate, window, FRAMES_TO_FOLLOW):
+            if rate == was:
                 continue
-            link.set_baud(rate)  # the link's parser starts again at the new rate
-            connection.baud = rate
+            window = listen_window(link.stream_ids, rate)
+            # a signal waits for the listen's end (0.1-0.15 s; where the process can hold
+            # it): the port then at the rate the robot talks at, for the safe stop
+            with signals_deferred():
+                if not link.listen_at(rate, window, FRAMES_TO_FOLLOW, was):
+                    continue
+                link.set_baud(rate)  # the link's parser starts again at the new rate
+                connection.baud = rate
             _confirm_at(connection, rate)
             halted = connection.halt()
             return BaudChanged(connection.name, rate, was, garbage_s, garbage_bytes, halted=halted)
@@ -298,17 +331,24 @@ def answers_elsewhere(connection: Connection, silent: NoAnswer) -> ConnectionFai
 
     No rate answers (or the port cannot change its rate): ``silent`` as it was, with its
     likely causes."""
-    transport = connection.link.transport
+    link = connection.link
+    transport = link.transport
     run_rate = connection.baud
     others = tuple(rate for rate in OI_RATES if rate != run_rate)
     try:
+        link.drain_output()  # the start-up's bytes leave at the run's rate
+        link.port_rate = None  # the search sets the port's rate itself: unknown until done
         found = search(transport, others)
         if found.baud is None:
-            transport.set_baud(run_rate)
+            link.switch_rate(run_rate)
             return silent
-    except LINK_ERRORS:
+    except LINK_ERRORS:  # the next write sets the run's rate again (CommandWriter.at_robot_rate)
         return silent
-    connection.baud = found.baud
+    except BaseException:  # Ctrl-C: back at the run's rate, where the safe stop goes
+        with contextlib.suppress(*LINK_ERRORS):
+            link.switch_rate(run_rate)
+        raise
+    link.port_rate = connection.baud = found.baud
     # it answered, on this port: its bytes count as heard (the summary's final mode, the
     # stop's confirmation), as the link's own reads would; the probe read them itself
     answer = found.found

@@ -64,7 +64,9 @@ class CommandWriter:
         self.link = link
         self.modes = modes
         self.profile = profile
-        self.baud = baud
+        #: the robot's rate: the port's, once every change of it is done (a session starts
+        #: with the port at it, whether or not its transport keeps a rate to read)
+        self.baud = link.port_rate = baud
         self.sent = 0
         self.refused = 0
         #: the last wheel command written (Drive, Drive Direct, PWM, a cleaning cycle)
@@ -121,6 +123,7 @@ class CommandWriter:
         finally:
             if batch:
                 try:
+                    self.at_robot_rate()
                     self.link.write(bytes(batch))
                 except PortLost:
                     self.modes.restore(saved[0])
@@ -153,10 +156,13 @@ class CommandWriter:
         if warning is not None:
             log.warning("%s: %s", self.link.name, warning)
         if batch is None or effect is _BAUD:  # the rest goes at the new rate
+            link = self.link
+            if link.port_rate != self.baud:  # a rate change cut short (Ctrl-C in a listen)
+                self.at_robot_rate()
             if batch:
-                self.link.write(bytes(batch))
+                link.write(bytes(batch))
                 batch.clear()
-            self.link.write(command.data)
+            link.write(command.data)
         else:
             batch += command.data
         now = self.link.transport.now()
@@ -189,9 +195,12 @@ class CommandWriter:
             self._change_baud(BAUD_RATES[command.args[0]])
 
     def _change_baud(self, rate: int) -> None:
-        """Baud (129) was written: wait the 100 ms the spec asks (reading, so the link's
-        clock moves on a virtual link too), then change the port's rate."""
+        """Baud (129) was written: the robot's rate is ``rate`` from now on (a Ctrl-C in the
+        wait leaves the port to be set there before the safe stop: :meth:`at_robot_rate`);
+        wait the 100 ms the spec asks (reading, so the link's clock moves on a virtual link
+        too), then change the port's rate (what was written drained first)."""
         link = self.link
+        self.baud = rate
         clock = link.transport.now
         deadline = clock() + BAUD_CHANGE_WAIT
         while (remaining := deadline - clock()) > 0:
@@ -199,7 +208,16 @@ class CommandWriter:
             if data:
                 link.ingest(data, clock())
         link.set_baud(rate)
-        self.baud = rate
+
+    def at_robot_rate(self) -> None:
+        """The port at the robot's rate (:attr:`baud`) before bytes are written: set again if
+        the link's last change of it was another rate's, or cut short (a listen at another
+        rate that a Ctrl-C, SIGTERM or SIGHUP ended: the whole safe stop went out at 19200
+        to a robot at 115200, which drove on). Nothing to do on the common path."""
+        link = self.link
+        if link.port_rate != self.baud:
+            log.debug("%s: the port set back to %d baud before a write", link.name, self.baud)
+            link.switch_rate(self.baud)
 
     def set_baud(self, rate: int) -> None:
         """Baud (129) by rate (e.g. 19200); the port follows after 100 ms."""
@@ -226,11 +244,15 @@ class CommandWriter:
         return self.builtin_may_run and not docked_by_seek_dock(self.last_wheels, self.link.frame)
 
     def halt(self) -> bool:
-        """Drive 0 if the model says the robot may be driving; True if it was sent (the
-        watchdog's action)."""
+        """Drive 0 if the model says the robot may be driving; True once it was written at
+        the robot's rate (:meth:`at_robot_rate`) and has left the port (drained: a rate
+        change right after it, a listen at another rate, re-clocked it, and the robot heard
+        3 watchdog drive 0s of 11 while the summary counted all 11 sent). The watchdog's
+        action, and the tick guard's."""
         if self.modes.mode not in DRIVING_MODES:
             return False
         self.send(oi.halt())
+        self.link.drain_output()
         return True
 
     def robot_stopped(self) -> None:

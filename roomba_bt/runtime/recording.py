@@ -15,6 +15,9 @@ A record is JSON Lines, one object a line::
     {"t": 0.015012, "d": "in",  "b": "1305..."}     <- robot -> host, hex
     {"t": 3.120000, "d": "note", "note": {...}}     <- an act: the monitor's force, the tick
                                                        guard's or the watchdog's drive 0
+    {"t": 3.240000, "d": "note", "note": {"baud": 19200}}  <- the port's rate changed (a
+                                                       listen at another rate, the port
+                                                       put back, Baud (129) followed)
     {"t": 9.060000, "d": "note", "note": {"ended": "interrupted", "reason": "stopped by the
         operator", "time": 8.91, "tick": 594, "at": "before"}}   <- how the run ended
     {"t": 9.075000, "d": "end"}                     <- the run's end (version 2 on)
@@ -248,7 +251,16 @@ class RecordingTransport:
             inner(low)
 
     def set_baud(self, baud: int) -> None:
-        self._inner.set_baud(baud)
+        """The port's rate changed: noted (``{"baud": 19200}``), so that a reader sees the
+        rate the bytes after it went out at (a listen at another rate, the port put back,
+        Baud (129) followed). One cut short by an exception (Ctrl-C inside it) is noted with
+        ``"cut_short"``: the port may be at either rate until the next note."""
+        try:
+            self._inner.set_baud(baud)
+        except BaseException as exc:
+            self.note({"baud": baud, "cut_short": type(exc).__name__})
+            raise
+        self.note({"baud": baud})
 
     def close(self) -> None:
         """Close the link, then end the record with its end line (the run ended here)."""

@@ -337,6 +337,18 @@ class SerialTransport:
             self._port.timeout = timeout
             self._port_timeout = timeout
 
+    def drain_output(self) -> None:
+        """Wait until the bytes written have left the port (``tcdrain`` on a device; nothing
+        to wait for on a socket, whose bytes are the kernel's once written). Before a rate
+        change: a ``tcsetattr`` right after a ``write`` re-clocks the bytes still in the
+        driver's buffer or a USB adapter's FIFO at the new rate (the watchdog's drive 0 was
+        lost so, at the switch to listen at 19200). Without flow control (ours: none) a
+        device drains within the bytes' own time on the wire."""
+        try:
+            self._port.flush()
+        except _OPEN_ERRORS as exc:  # pyserial's, the OS's, termios' (a pty gone)
+            raise TransportError(self.name, "drain the output", exc) from exc
+
     def set_baud(self, baud: int) -> None:
         try:
             self._port.baudrate = baud

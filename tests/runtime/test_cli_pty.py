@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -302,3 +303,78 @@ def test_a_terminal_that_stops_reading_does_not_hold_up_the_run(
         proc.kill()
         proc.wait()
         os.close(read_end)
+
+
+#: Safe, the brushes and the vacuum on, an arc for ever: a robot busy when the line goes bad
+BRUSHING_ARC = """
+tree:
+  sequence:
+    - mode: safe
+    - motors: {main_brush: true, side_brush: true, vacuum: true}
+    - drive: {velocity: 200 mm/s, radius: -600 mm}
+"""
+
+
+def _lines_of(path: Path) -> list[str]:
+    return path.read_text(errors="replace").splitlines() if path.exists() else []
+
+
+def _wait_for_any(watched: dict[Path, str], proc: subprocess.Popen[str], count: int) -> str:
+    """The first line of a watched file that matches its pattern ``count`` times (the first
+    file's first match is enough), waiting while ``proc`` runs; "" if it ended first."""
+    deadline = time.monotonic() + 30.0
+    while proc.poll() is None and time.monotonic() < deadline:
+        for number, (path, pattern) in enumerate(watched.items()):
+            hits = [line for line in _lines_of(path) if re.search(pattern, line)]
+            if len(hits) >= (1 if number == 0 else count):
+                return hits[-1]
+        time.sleep(0.002)
+    return ""
+
+
+def test_ctrl_c_on_a_noisy_line_leaves_the_robot_stopped_in_passive(tmp_path: Path) -> None:
+    """The line flips a bit in 5 % of the robot's bytes; the watchdog trips again and again.
+    Before, each trip switched the port to 19200 to listen there, right after its drive 0
+    (which the robot then got at the wrong rate: ``ignored 5 byte(s)``), and a Ctrl-C in
+    that listen left the port there: the whole safe stop went out at 19200 and the robot
+    drove on in Safe, brushes and vacuum on (10 runs of 10). Now the robot's damaged frames
+    show it talks at the run's rate: no listen elsewhere, every drive 0 heard, and the stop
+    goes at its rate. Ctrl-C comes at the first sign of a listen, or at the third stall."""
+    sim_log, run_log = tmp_path / "sim.err", tmp_path / "run.err"
+    with sim_log.open("w") as sim_err:
+        sim = subprocess.Popen(
+            [*CLI, "sim", "--pty", "--log", "--bit-flip-rate", "0.05", "--seed", "1"],
+            stdout=subprocess.PIPE, stderr=sim_err, text=True,
+        )  # fmt: skip
+    try:
+        assert sim.stdout is not None
+        port = sim.stdout.readline().strip()
+        record = tmp_path / "run.jsonl"
+        with run_log.open("w") as run_err:
+            proc = subprocess.Popen(
+                [*CLI, "run", str(write_mission(tmp_path, BRUSHING_ARC)), "--port", port,
+                 "--record", str(record), "--display", "log", "-v"],
+                stdout=subprocess.PIPE, stderr=run_err, text=True,
+            )  # fmt: skip
+        seen = _wait_for_any(
+            {
+                sim_log: r"ignored \d+ byte",  # the old listen's lost drive 0
+                run_log: r"listening at 19200|waiting up to 2 s for valid frames",
+            },
+            proc,
+            count=3,
+        )
+        assert seen, "no watchdog trip on the noisy line"
+        proc.send_signal(signal.SIGINT)
+        out, _ = proc.communicate(timeout=30)
+        assert proc.returncode == 130, out + run_log.read_text()
+    finally:
+        if sim.poll() is None:
+            sim.send_signal(signal.SIGINT)
+        sim.communicate(timeout=10)
+    said = sim_log.read_text()
+    final = said.strip().splitlines()[-1]
+    assert "mode Passive, wheels 0/0 mm/s" in final, final
+    assert not [line for line in said.splitlines() if re.search(r"ignored \d+ byte", line)], said
+    assert "stalls" in out
+    assert SAFE_END in load_record(record).outbound  # then close()'s again, unconfirmed

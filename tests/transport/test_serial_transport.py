@@ -145,6 +145,28 @@ def test_set_baud_changes_the_port_rate(far_end: FarEnd) -> None:
         transport.close()
 
 
+def test_drain_output_waits_for_what_was_written_and_says_a_closed_port(
+    far_end: FarEnd,
+) -> None:
+    """Before a rate change the bytes written leave first (``tcdrain`` on a device; nothing
+    to wait for on a socket): the watchdog's drive 0 was re-clocked at 19200 by a switch
+    right after its write. A closed port is a TransportError naming it, not a traceback."""
+    transport = SerialTransport.open(far_end.url, 115200)
+    transport.write(bytes([137, 0, 0, 0, 0]))
+    transport.drain_output()
+    transport.set_baud(19200)
+    if not far_end.echoes:
+        got = b""
+        while len(got) < 5:
+            got += far_end.recv(16)
+        assert got == bytes([137, 0, 0, 0, 0])
+    transport.close()
+    if far_end.url.startswith("socket://"):
+        return  # pyserial's socket port has no output of its own to drain, open or closed
+    with pytest.raises(TransportError, match=f"{far_end.url}: could not drain the output"):
+        transport.drain_output()
+
+
 @pytest.mark.parametrize("kind", ["pty", "tcp"])
 def test_a_vanished_far_end_raises_transport_error_naming_the_port(kind: str) -> None:
     with FAR_ENDS[kind]() as end:
