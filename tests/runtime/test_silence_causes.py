@@ -284,7 +284,7 @@ def test_a_robot_silent_at_every_rate_keeps_the_likely_causes(tmp_path: Path) ->
 
 def test_noise_at_the_run_rate_is_not_taken_for_a_baud_change(tmp_path: Path) -> None:
     summary, _ = run(tmp_path, SPIN, Faults(bit_flip_rate=0.02), timeout=20.0)
-    assert summary.stalls >= 1  # the watchdog tripped on garbage: the other rate was tried
+    assert summary.stalls >= 1  # the watchdog tripped on garbage (its frames damaged: noise)
     assert "baud rate" not in summary.reason, summary.reason
 
 
