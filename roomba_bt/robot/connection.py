@@ -36,7 +36,7 @@ from roomba_bt.oi.encode import BAUD_CODES, Command
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile, get_profile
-from roomba_bt.oi.stream import ReplyParser, check_bandwidth
+from roomba_bt.oi.stream import ReplyParser, check_bandwidth, stream_period
 from roomba_bt.robot.discovery import drain
 from roomba_bt.robot.ending import EndMode, SafeStop
 from roomba_bt.robot.errors import (
@@ -281,6 +281,11 @@ class Connection:
         if not self.modes.calibrate(raw, self.link.transport.now(), self.name):
             raise not_a_mode(self.name, raw)
         self.link.mode_plus_one = self.modes.plus_one
+        # the frames the robot sent before it heard a mode command come a round trip later
+        # (twice it, for jitter): on a link with latency the old mode they read is neither a
+        # fall to Passive nor a resync (0.2 s: "went from Safe to Passive by itself" at once)
+        in_flight = self.ending.in_flight(stream_period(ids, self.baud))
+        self.modes.settle = max(self.settle, in_flight)
         if target is OIMode.SAFE:
             self.send(oi.safe())
         elif target is OIMode.FULL:
@@ -308,12 +313,14 @@ class Connection:
         if self.link.streaming:
             raise RobotError("query() needs the stream paused: a reply cannot be told apart")
         reply = ReplyParser(tuple(packet_ids), self.profile)
-        self.send(oi.query_list(packet_ids))
         clock = self.link.transport.now
+        asked = clock()
+        self.send(oi.query_list(packet_ids))
         deadline = clock() + timeout
         while True:
             frame = reply.feed(self.link.read(max(0.0, deadline - clock())))
-            if frame is not None:
+            if frame is not None:  # the link's round trip: how late the stop's frames come
+                self.ending.heard_round_trip(clock() - asked)
                 return frame
             if clock() >= deadline:
                 return None

@@ -50,11 +50,18 @@ log = logging.getLogger(__name__)
 EndMode = Literal["passive", "stop"]
 
 #: Seconds the safe stop listens, once written while a stream ran, for frames that should no
-#: longer come: ten stream periods (15 ms each).
+#: longer come, once the frames already on their way have come (:meth:`SafeStop.in_flight`):
+#: ten stream periods (15 ms each). A quiet this long after the last frame shows the stop
+#: heard at once.
 STOP_LISTEN = 0.15
-#: Frames a robot that heard Pause Stream may still be seen to send after it was written: the
-#: one in flight and what the port's buffers held (a robot that did not hear it sends ten).
+#: Frames a robot that heard Pause Stream may still be seen to send after the frames on their
+#: way (:meth:`SafeStop.in_flight`) have come: jitter (a robot that did not hear it sends ten);
+#: also the stream periods that allowance has beside the link's round trip.
 PAUSE_SLACK = 3
+#: How many of the link's measured round trips the frames sent before the robot heard a
+#: command may still take to come: the round trip itself, and as much again for its jitter
+#: (Wi-Fi and Bluetooth bridges: 50-300 ms, and uneven).
+ROUND_TRIPS_IN_FLIGHT = 2
 #: How many times a stop the stream contradicts is written (the first, and once more).
 STOP_ATTEMPTS = 2
 #: Reads at most of what waits unread in the port before a stop (each read takes all there
@@ -198,6 +205,9 @@ class SafeStop:
         #: frames that waited unread in the port as the stop was written, and for how long
         #: the program had not read it (:meth:`_read_backlog`), or None
         self._unread: tuple[int, float] | None = None
+        #: the longest round trip measured on this link (a Query List to its reply, seconds;
+        #: :meth:`heard_round_trip`), 0 before any
+        self.round_trip = 0.0
 
     def begin(self) -> None:
         """A session starts (again): nothing has ended."""
@@ -205,6 +215,20 @@ class SafeStop:
         self.safe_stopped = None
         self.unheard = None
         self.confirm = None
+
+    def heard_round_trip(self, seconds: float) -> None:
+        """A question asked of the robot was answered ``seconds`` after it was written (the
+        start-up's Query List): the longest is kept. A link with latency (a Wi-Fi or
+        Bluetooth bridge, ``socket://``) still brings frames the robot sent before it heard
+        the stop that long after it: they are not the robot streaming on."""
+        self.round_trip = max(self.round_trip, seconds)
+
+    def in_flight(self, period: float) -> float:
+        """Seconds after a command is written that frames the robot sent before it heard it
+        may still come: :data:`ROUND_TRIPS_IN_FLIGHT` measured round trips, and
+        :data:`PAUSE_SLACK` stream ``period`` s for the frame in flight and the port's
+        buffers (a link never measured: those alone, the 45 ms of old)."""
+        return ROUND_TRIPS_IN_FLIGHT * self.round_trip + PAUSE_SLACK * period
 
     def sequence(self) -> list[Command]:
         """What :meth:`stop` sends from the current mode (:func:`stop_sequence`)."""
@@ -345,7 +369,7 @@ class SafeStop:
             failed = self._write()
             if failed is not None:
                 return failed
-            contradiction = self._contradicted() if checked else None
+            contradiction = self._contradicted(written_at) if checked else None
             if contradiction is None:
                 self._unproven = self._quiet_unproven(written_at) if checked else None
                 return None
@@ -380,36 +404,51 @@ class SafeStop:
         self.written = True
         return None
 
-    def _contradicted(self) -> str | None:
-        """What the stream says of a stop just written (Pause Stream in it): a robot that
-        heard it sends no more than :data:`PAUSE_SLACK` frames (in flight, in the port's
-        buffers) in the :data:`STOP_LISTEN` s after; more, and it did not hear it (the
-        host-to-robot wire dead, the robot still in Safe and driving): what they showed,
-        or None (quiet: the stop was heard)."""
-        link, modes = self.writer.link, self.writer.modes
+    def _contradicted(self, written_at: float) -> str | None:
+        """What the stream says of a stop written at ``written_at`` (Pause Stream in it).
+        The frames the robot sent before it heard it come first, for :meth:`in_flight` s
+        (the port's backlog after a tick that blocked, read at once; those on their way over
+        a link with latency): they show the robot as it was before the stop, and are neither
+        counted nor read for its mode. A quiet of :data:`STOP_LISTEN` s after the last frame
+        shows the stop heard; frames still coming :data:`STOP_LISTEN` s past the frames in
+        flight, more than :data:`PAUSE_SLACK`, show it unheard (the host-to-robot wire dead,
+        the robot still in Safe and driving): what they showed, or None (heard)."""
+        link = self.writer.link
         parser = StreamParser(link.stream_ids, link.profile, mode_plus_one=link.mode_plus_one)
         clock = link.transport.now
-        deadline = clock() + STOP_LISTEN
-        frames: list[SensorFrame] = []
+        in_flight = self.in_flight(stream_period(link.stream_ids, self.writer.baud))
+        stale_until = written_at + in_flight
+        deadline = stale_until + STOP_LISTEN
+        last = written_at  # when the last frame came (the write, before any)
+        late: list[SensorFrame] = []  # the frames sent after the robot should have heard it
         try:
-            while (remaining := deadline - clock()) > 0:
-                data = link.read(remaining)
+            while (now := clock()) < deadline and now - last < STOP_LISTEN:
+                data = link.read(min(deadline, last + STOP_LISTEN) - now)
                 new = parser.feed(data, clock()) if data else []
                 if new:
-                    frames += new
-                    self._heard_at = clock()
+                    last = self._heard_at = clock()
+                    if last > stale_until:
+                        late += new
         except PortLost:  # the stop was written; the quiet it cut short shows nothing
             return None  # (:meth:`_quiet_unproven` says so)
-        if len(frames) <= PAUSE_SLACK:
-            return None
-        said = f"{len(frames)} sensor frames came in the {STOP_LISTEN:.2f} s after Pause Stream"
-        last = frames[-1]
+        if clock() - last >= STOP_LISTEN or len(late) <= PAUSE_SLACK:
+            return None  # the stream stopped: it heard Pause Stream
+        return self._streamed_on(late, in_flight)
+
+    def _streamed_on(self, late: list[SensorFrame], in_flight: float) -> str:
+        """What the frames that came after a stop the robot did not hear showed: how many,
+        its mode (packet 35, kept for the stop written again) and its wheels."""
+        said = (
+            f"{len(late)} sensor frames came in the {STOP_LISTEN:.2f} s after Pause Stream "
+            f"(past the {in_flight:.2f} s the frames already on their way may take)"
+        )
+        last = late[-1]
         if OI_MODE_PACKET in last:
-            mode = modes.detector.interpret(last[OI_MODE_PACKET])
+            mode = self.writer.modes.detector.interpret(last[OI_MODE_PACKET])
             if mode is not None:
                 said += f", packet 35 still reading {mode.label}"
                 self._seen = mode
-        return said + wheels_seen(frames)
+        return said + wheels_seen(late)
 
     def _quiet_unproven(self, written_at: float) -> str | None:
         """Why the quiet after a stop written at ``written_at`` does not show it heard: the

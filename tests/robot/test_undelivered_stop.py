@@ -14,9 +14,9 @@ from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.ending import describe_activity
-from roomba_bt.robot.errors import PortLost, StreamStalled
+from roomba_bt.robot.errors import DEFAULT_WATCHDOG, PortLost, StreamStalled
 from roomba_bt.robot.link import LinkStatus
-from roomba_bt.sim import SimLink, Simulator, parse_world
+from roomba_bt.sim import Faults, SimLink, Simulator, parse_world
 
 BOX = """
 name: box
@@ -142,10 +142,16 @@ class CutTx:
         return getattr(self.link, name)
 
 
-def spinning(relay: type[CutTx] = CutTx) -> tuple[Connection, CutTx, Simulator]:
-    simulator = Simulator(parse_world(BOX, "<test>"), profile=CREATE2)
+def spinning(
+    relay: type[CutTx] = CutTx, latency: float = 0.0
+) -> tuple[Connection, CutTx, Simulator]:
+    """Spinning left at 100 mm/s in Safe, ten frames read; ``latency``: the simulator's
+    robot-to-host delay (its fault; the watchdog then waits for the first frame that long)."""
+    simulator = Simulator(
+        parse_world(BOX, "<test>"), profile=CREATE2, faults=Faults(latency=latency)
+    )
     link = relay(SimLink(simulator))
-    connection = Connection(link, CREATE2)
+    connection = Connection(link, CREATE2, watchdog=DEFAULT_WATCHDOG + latency)
     connection.start("safe", PACKETS)
     connection.send_many([oi.drive(100, 1)])
     while connection.counters.frames < 10:
@@ -183,6 +189,68 @@ def test_a_stop_the_robot_heard_is_confirmed_by_the_stream_going_quiet() -> None
     assert connection.stop_report is None
     assert connection.mode is OIMode.PASSIVE and simulator.mode is OIMode.PASSIVE
     assert simulator.requested_left == simulator.requested_right == 0
+
+
+@pytest.mark.parametrize("latency", [0.06, 0.2, 0.5])
+def test_a_stop_over_a_link_with_latency_is_confirmed_when_its_frames_in_flight_have_come(
+    latency: float,
+) -> None:
+    """The frames the robot sent before it heard Pause Stream come ``latency`` s after it was
+    written: more than three in the 0.15 s listened, they were taken for a robot streaming
+    on, the stop written again from the mode they read (Safe: Drive and Motors into a robot
+    in Passive) and said not received. The start-up's Query List measures the round trip;
+    the frames within twice it are on their way, not the robot's answer."""
+    connection, link, simulator = spinning(latency=latency)
+    assert connection.ending.round_trip >= latency
+    written: list[bytes] = []
+    write = link.write
+    link.write = lambda data: (written.append(bytes(data)), write(data))[1]  # type: ignore[method-assign]
+    assert connection.safe_stop() is True, connection.stop_report
+    assert written == [STOP]  # once
+    assert connection.stop_report is None
+    assert simulator.mode is OIMode.PASSIVE
+    assert simulator.requested_left == simulator.requested_right == 0
+    assert simulator.violations == []  # no actuator byte in a mode that refuses it
+
+
+@pytest.mark.parametrize("latency", [0.2, 0.5])
+def test_the_old_mode_frames_on_their_way_read_is_no_fall_to_passive(
+    latency: float, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Safe written, the frames of the next ``latency`` s still read Passive (sent before
+    the robot heard it): past the mode model's 0.1 s settle they were a fall to Passive
+    ("went from Safe to Passive by itself"), then a resync back to Safe, in every run over a
+    link with 0.2 s of latency. The settle is at least the frames' time on their way."""
+    caplog.set_level(logging.WARNING)
+    simulator = Simulator(
+        parse_world(BOX, "<test>"), profile=CREATE2, faults=Faults(latency=latency)
+    )
+    connection = Connection(SimLink(simulator), CREATE2, watchdog=DEFAULT_WATCHDOG + latency)
+    connection.start("passive", PACKETS)  # as a run starts: the tree's `mode: safe` later
+    while connection.counters.frames < 5:
+        connection.poll(0.05)
+    connection.send(oi.safe())
+    while connection.counters.frames < 5 + 3 * latency / 0.015:
+        connection.poll(0.05)
+    assert simulator.mode is OIMode.SAFE
+    assert connection.falls == {}
+    assert connection.mode is OIMode.SAFE
+    assert [r.getMessage() for r in caplog.records] == []
+    connection.close()
+
+
+def test_a_stop_unheard_on_a_slow_link_goes_again_from_the_mode_streamed_after() -> None:
+    """The host-to-robot wire dead on a link with latency: the frames past those on their
+    way still come, and packet 35 in them (Safe, not the old frames' reading) decides the
+    stop written again, drive 0 in it."""
+    connection, link, simulator = spinning(latency=0.2)
+    link.cut = True
+    assert connection.safe_stop() is False
+    assert link.dropped == [STOP, STOP]
+    report = connection.stop_report or ""
+    assert "sensor frames came in the 0.15 s after Pause Stream (past the 0." in report, report
+    assert "packet 35 still reading Safe" in report
+    assert connection.mode is OIMode.SAFE and simulator.mode is OIMode.SAFE
 
 
 def test_a_stop_after_the_robot_fell_silent_is_unconfirmed() -> None:
