@@ -17,11 +17,12 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable, Sequence
 
-from roomba_bt.oi.encode import turns_wheels
+from roomba_bt.oi.encode import Command, turns_wheels
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.errors import StreamStalled
+from roomba_bt.robot.hazards import sets_going
 from roomba_bt.robot.interface import Outbox
 from roomba_bt.runtime.summary import RunSummary
 from roomba_bt.runtime.tick_guard import TickGuardLike
@@ -103,20 +104,40 @@ class StallRide:
         self._wheels_again()
 
     def tick_halted(self, tick_guard: TickGuardLike | None, seconds: float, where: str) -> None:
-        """The tick guard stopped the wheels during the tick that just returned: counted,
-        said, and, as after a watchdog stall, the last wheel command goes out again unless
-        this tick queued another (the mission goes on where it was)."""
+        """The tick guard stopped the wheels (and the motors) during the tick that just
+        returned: counted, said, and, as after a watchdog stall, the last wheel command goes
+        out again unless this tick queued another, and so does the last Motors command the
+        guard turned off (the mission goes on where it was)."""
         summary = self.summary
         summary.tick_halts += 1
         summary.tick_halt_last = where or "unknown"
         if not summary.tick_halt_first:
             summary.tick_halt_first = summary.tick_halt_last
+        motors_off = self._motors_off()
         log.warning(
-            "a tick ran over %g s (%s): the tick guard sent drive 0",
+            "a tick ran over %g s (%s): the tick guard sent drive 0%s",
             tick_guard.limit_s if tick_guard else 0.0, where or "where: unknown",
+            " and motors off" if motors_off is not None else "",
         )  # fmt: skip
         self.blocked = (seconds, summary.tick_halt_last)  # the frames it left unread
         self._wheels_again()
+        if motors_off is not None and all(c.spec.channel != "motors" for c in self.outbox):
+            self.outbox.send(motors_off, self)
+
+    def _motors_off(self) -> Command | None:
+        """The tree's last Motors command (the outbox's record) if the tick guard turned it
+        off (the writer's last is no longer it) and it runs a brush or the vacuum in a mode
+        the robot obeys it in: sent again unless the tick queued another Motors command, as
+        the wheels' is (a drive 0 alone leaves the motors running: nothing to give back)."""
+        motors = self.outbox.standing.get("motors")
+        if (
+            motors is not None
+            and sets_going(motors)
+            and self.connection.writer.last_motors != motors
+            and self.connection.mode in DRIVING_MODES
+        ):
+            return motors
+        return None
 
     def _wheels_again(self) -> None:
         """After a drive 0 the runtime sent on its own (the watchdog's, the tick guard's): the

@@ -1,4 +1,4 @@
-"""The tick guard: the wheels stop when a tick takes too long.
+"""The tick guard: the wheels (and the brushes and vacuum) stop when a tick takes too long.
 
 A tick does not block (``docs/runtime.md``), but a behaviour can: a plugin that waits on the
 network, a file, ``time.sleep``; a debugger. Meanwhile the robot drives on with its last
@@ -7,15 +7,19 @@ Drive: the Open Interface has no command timeout, and the stream watchdog does n
 
     main thread   ─ port ─┤ tick ............................... ├─ port ─ flush ─
     guard         ·········│····· limit ─► drive 0 (if wheels move)│···············
+                           │          and motors off (if they run) │
                            release lock                   take lock back
 
 The main thread holds :attr:`TickGuard.lock` whenever it is not inside a tick, so the guard
 can write only while the tree is busy and never between the main thread's own bytes (a
 command is never cut by another). Once a tick has run for ``limit_s`` with the wheels
 commanded to move in Safe or Full, the guard sends drive 0 (the watchdog's action:
-:meth:`~roomba_bt.robot.connection.Connection.halt`), once per tick. When the tick returns,
-the runner counts it and, as after a watchdog stall, sends the last wheel command again
-unless the tick queued another: the mission goes on where it was.
+:meth:`~roomba_bt.robot.connection.Connection.halt`), once per tick; with a brush or the
+vacuum running too (or alone), drive 0 and motors off in one write (:func:`stop_first`, as at
+the run's end): a tree that is not in control runs nothing on the robot (a blocked ``update``
+of 5 s ran the brushes and vacuum on the spot for 5 s). When the tick returns, the runner
+counts it and, as after a watchdog stall, sends the last wheel command and the last Motors
+command again unless the tick queued another: the mission goes on where it was.
 
 The run's end is guarded too (:meth:`TickGuard.halt_before_stop`): before the tree's stop,
 whose ``terminate()`` calls may block as an ``update`` may, the runner has the guard send the
@@ -44,6 +48,7 @@ from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import Command, turns_wheels
 from roomba_bt.oi.modes import DRIVING_MODES
 from roomba_bt.robot.connection import Connection
+from roomba_bt.robot.hazards import sets_going
 from roomba_bt.runtime.summary import DEFAULT_TICK_LIMIT
 from roomba_bt.runtime.teardown import where_in
 
@@ -66,6 +71,23 @@ def wheels_moving(connection: Connection) -> bool:
     0s replaced, which this record no longer holds."""
     wheels = connection.writer.last_wheels
     return wheels is not None and turns_wheels(wheels) and connection.mode in DRIVING_MODES
+
+
+def motors_running(connection: Connection) -> bool:
+    """The last Motors command written runs a brush or the vacuum, in a mode where the robot
+    obeys it (``CommandWriter.last_motors``, forgotten at the robot's own fall to Passive)."""
+    motors = connection.writer.last_motors
+    return motors is not None and sets_going(motors) and connection.mode in DRIVING_MODES
+
+
+def halt_blocked(connection: Connection) -> bool:
+    """The guard's act on a tick that blocks: drive 0, and motors off in the same write if a
+    brush or the vacuum runs (:func:`stop_first`); True if motors off was sent."""
+    if motors_running(connection):
+        connection.send_many(stop_first())
+        return True
+    connection.halt()
+    return False
 
 
 def stop_first() -> list[Command]:
@@ -201,24 +223,29 @@ class TickGuard:
                 if self._entered is not None and self._ticks == tick and self._moving():
                     where = self._where()
                     self._halted = (tick, ran, where)  # once a tick, even if the write fails
-                    self.connection.halt()
-                    self._note(ran, where)  # only a drive 0 that went out is replayed
+                    motors = halt_blocked(self.connection)
+                    self._note(ran, where, motors)  # only a stop that went out is replayed
             except Exception as exc:  # the port gone, say: the main thread meets it next
                 log.warning("the tick guard could not send drive 0: %s", exc)
             finally:
                 self.lock.release()
 
-    def _note(self, ran: float, where: str) -> None:
-        """The act in the record (``run --record``), for a replay to do it again."""
+    def _note(self, ran: float, where: str, motors: bool) -> None:
+        """The act in the record (``run --record``), for a replay to do it again; ``motors``:
+        motors off went out with the drive 0 (a note without it: drive 0 alone)."""
         note = getattr(self.connection.transport, "note", None)
         if callable(note):
-            note({
+            act: dict[str, Any] = {
                 "tick_guard": round(ran, 3), "limit": self.limit_s, "where": where,
                 "tick": self._index(), "at": "during",
-            })  # fmt: skip
+            }  # fmt: skip
+            if motors:
+                act["motors"] = True
+            note(act)
 
     def _moving(self) -> bool:
-        return wheels_moving(self.connection)
+        """The wheels move or a brush or the vacuum runs: something to stop."""
+        return wheels_moving(self.connection) or motors_running(self.connection)
 
     def _where(self) -> str:
         """Where the ticking thread is (:func:`where_in`); "" if the thread is gone."""
@@ -262,7 +289,10 @@ class RecordedTickGuard:
                 acts.popleft()  # a tick the replay did not reach as recorded
             if acts and int(acts[0]["tick"]) == now:
                 act = acts.popleft()
-                self.connection.halt()
+                if act.get("motors"):
+                    self.connection.send_many(stop_first())
+                else:
+                    self.connection.halt()
                 halted(float(act["tick_guard"]), str(act.get("where", "")))
 
         return replayed_tick

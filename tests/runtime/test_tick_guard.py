@@ -391,3 +391,52 @@ def test_the_gap_a_blocked_tick_leaves_is_said_as_the_guards(
     assert "a tick blocked (stuck (Stuck.update at " in said[0]
     assert "the tick guard had sent drive 0" in said[0]
     assert "suspended" not in said[0] and "went on with its last command" not in said[0]
+
+
+#: the brushes and vacuum on, then the drive beside the blocking leaf
+MOTORS_MISSION = MISSION.replace(
+    "    - mode: safe\n",
+    "    - mode: safe\n    - motors: {main_brush: true, side_brush: true, vacuum: true}\n",
+)
+#: blocks until the motors were turned off behind its back (at most 10 s)
+MOTORS_PLUGIN = PLUGIN.replace(
+    'getattr(writer.last_wheels, "args", None) != (0, 0)',
+    'getattr(writer.last_motors, "args", None) != (0,)',
+)
+MOTORS_ON = C.motors(7).data
+
+
+def test_a_tick_that_blocks_with_the_motors_on_gets_them_off_and_back_after(
+    run_mission: RunMission, plugin_dir: Path, tmp_path: Path
+) -> None:
+    """The guard sent drive 0 alone: a blocked ``update`` of 5 s ran the brushes and vacuum
+    on the spot for 5 s (the audit's finding 7). Now drive 0 and motors off go in one write,
+    noted in the record; when the tick returns the wheels and the motors get the tree's
+    commands again, and a replay writes the same bytes."""
+    from roomba_bt.mission import load_mission
+    from roomba_bt.oi.profiles import CREATE2
+    from roomba_bt.runtime.recording import load_record
+    from roomba_bt.runtime.stack import replay_record
+
+    (plugin_dir / "stuck.py").write_text(MOTORS_PLUGIN)
+    record_path = tmp_path / "run.rec"
+    allowed = Permissions(plugin_files=True)
+    run = run_mission(MOTORS_MISSION, tick_limit=0.02, permissions=allowed, timeout=20.0,
+                      record=record_path)  # fmt: skip
+    assert run.summary.outcome.value == "success", run.summary
+    assert run.summary.tick_halts == 1
+    written = [data for _, data in run.link.writes]
+    guard = written.index(HALT + C.motors_off().data)  # the guard's act, one write
+    assert MOTORS_ON in written[:guard] and FORWARD in written[:guard]
+    after = written[guard + 1 :]
+    assert after[:2] == [FORWARD, MOTORS_ON], after  # the tree's commands back, wheels first
+    notes = [n for _, n in load_record(record_path).notes if "tick_guard" in n]
+    assert [n.get("motors") for n in notes] == [True]
+    (plugin_dir / "stuck.py").write_text(MOTORS_PLUGIN.replace("10.0", "0.0"))
+    mission = load_mission(plugin_dir / "mission.yaml", permissions=allowed)
+    record = load_record(record_path)
+    _, transport = replay_record(
+        record, mission, profile=CREATE2, packets=record.header["packets"],
+        baud=record.header["baud"], name="run.rec",
+    )  # fmt: skip
+    assert transport.first_difference() is None and transport.written == record.out_bytes
