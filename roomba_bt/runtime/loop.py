@@ -774,7 +774,13 @@ def guarded_tick(
     tick = tick_of(root)
     if tick_guard is None:
         return tick
-    return tick_guard.guarded(tick, partial(ride.tick_halted, tick_guard), tick_now)
+
+    def halted(seconds: float, where: str) -> None:
+        # a tick that ended the tree gets nothing of it sent again: the run's end follows
+        going = root.status is py_trees.common.Status.RUNNING
+        ride.tick_halted(tick_guard, seconds, where, tree_running=going)
+
+    return tick_guard.guarded(tick, halted, tick_now)
 
 
 def tick_of(root: py_trees.behaviour.Behaviour) -> Callable[[], None]:

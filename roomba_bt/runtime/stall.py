@@ -103,11 +103,16 @@ class StallRide:
         )  # fmt: skip
         self._wheels_again()
 
-    def tick_halted(self, tick_guard: TickGuardLike | None, seconds: float, where: str) -> None:
+    def tick_halted(
+        self, tick_guard: TickGuardLike | None, seconds: float, where: str,
+        tree_running: bool = True,
+    ) -> None:  # fmt: skip
         """The tick guard stopped the wheels (and the motors) during the tick that just
         returned: counted, said, and, as after a watchdog stall, the last wheel command goes
         out again unless this tick queued another, and so does the last Motors command the
-        guard turned off (the mission goes on where it was)."""
+        guard turned off (the mission goes on where it was); not once the tick ended the
+        tree (``tree_running`` False): the run's end follows, and the brushes went on again
+        for a moment before its motors off."""
         summary = self.summary
         summary.tick_halts += 1
         summary.tick_halt_last = where or "unknown"
@@ -120,6 +125,8 @@ class StallRide:
             " and motors off" if motors_off is not None else "",
         )  # fmt: skip
         self.blocked = (seconds, summary.tick_halt_last)  # the frames it left unread
+        if not tree_running:
+            return
         self._wheels_again()
         if motors_off is not None and all(c.spec.channel != "motors" for c in self.outbox):
             self.outbox.send(motors_off, self)

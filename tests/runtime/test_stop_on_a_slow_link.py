@@ -149,4 +149,8 @@ def test_a_tick_that_blocked_then_ended_the_tree_has_its_stop_delivered(
     assert "safe stop    sent drive, motors, pause_resume_stream, start" in result.stdout
     outbound = load_record(record).outbound
     assert outbound.endswith(SAFE_END) and outbound.count(SAFE_END) == 1
+    # the guard's drive 0 and motors off while it blocked; the tick ended the tree: the
+    # brushes and vacuum not set going again before the stop
+    assert outbound.count(oi.halt().data + oi.motors_off().data) == 2  # the guard's, the stop's
+    assert outbound.count(oi.motors(7).data) == 1
     assert _robot_at_the_end(sim) == (0, "Passive", 0, 0)
