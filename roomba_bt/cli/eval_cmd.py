@@ -20,10 +20,12 @@ floor covered at 5, 10 and 20 minutes and at the end (mean, sd, min..max; of ``-
 if given; per area at the end) and how many episodes went a minute of brush time without
 new floor. An episode still running after ``--wall-limit`` of wall-clock time (stuck in a
 behaviour's loop: the virtual clock does not move) is recorded as HUNG, where it was stuck,
-and its worker process replaced. Ctrl-C prints what finished (exit 130). Exit codes: 0 (and 1 when
-``--min-rate`` is given and not reached), 2 for invalid input, 3 when the ``--scheduler``
-does not answer, 4 when a behaviour raised in an episode or one ran past ``--wall-limit`` (a
-bug, not a mission outcome).
+and its worker process replaced; one whose worker process dies running it, again when it runs
+alone (``os._exit`` in a behaviour, a crash in C code), is recorded as DIED and the sweep goes
+on. Ctrl-C prints what finished (exit 130). Exit codes: 0 (and 1 when ``--min-rate`` is given
+and not reached), 2 for invalid input, 3 when the ``--scheduler`` does not answer, 4 when a
+behaviour raised in an episode, one ran past ``--wall-limit`` or one killed its worker (a
+bug, not a mission outcome), 70 on roomba-bt's own bug.
 """
 
 from __future__ import annotations
@@ -54,7 +56,7 @@ from roomba_bt.cli.arguments import (
 from roomba_bt.cli.record_header import add_reproducible_option
 from roomba_bt.oi.profiles import PROFILES
 from roomba_bt.printable import ANY_CONTROL, escaped
-from roomba_bt.runtime.summary import ExitCode, Outcome, profile_shown
+from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, ExitCode, Outcome, profile_shown
 
 if TYPE_CHECKING:  # the evaluation is imported when it runs: the CLI starts faster
     from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec
@@ -69,14 +71,14 @@ def register(sub: Any) -> None:
         sub,
         "eval",
         eval_command,
-        """run missions many times on the simulator: success rates
+        f"""run missions many times on the simulator: success rates
 
         Run MISSION in N seeded episodes on the simulator's virtual clock and report the success
         rate (95% Wilson interval), median and p90 time, bumps, the robot's own falls to
         Passive and the failure reasons. Exit codes:
         0 done, 1 --min-rate not reached, 2 invalid input, 3 --scheduler unreachable, 4 a behaviour
-        raised in an episode or one hung (--wall-limit), 130 interrupted (what finished is
-        summarised).
+        raised in an episode, one hung (--wall-limit) or killed its worker process (DIED),
+        {INTERNAL_ERROR_SAID}, 130 interrupted (what finished is summarised).
         """,
     )
     ev.add_argument(
@@ -415,8 +417,8 @@ def rerun_command(args: argparse.Namespace, result: Any) -> str:
 
 def _verdict(args: argparse.Namespace, summaries: list[Summary], done: list[Evaluation]) -> int:
     """The exit code of a finished evaluation, with what decided it on stderr: 4 when a
-    behaviour raised in an episode or one ran past ``--wall-limit`` (HUNG), 1 when a success
-    rate is below ``--min-rate``, else 0."""
+    behaviour raised in an episode, one ran past ``--wall-limit`` (HUNG) or one's worker
+    died running it (DIED), 1 when a success rate is below ``--min-rate``, else 0."""
     min_rate: float | None = args.min_rate
     low = [s for s in summaries if min_rate is not None and s.rate < min_rate]
     for s in low:
@@ -425,7 +427,7 @@ def _verdict(args: argparse.Namespace, summaries: list[Summary], done: list[Eval
             f"--min-rate {100 * (min_rate or 0.0):.1f} %",
             file=sys.stderr,
         )
-    from roomba_bt.evaluate.episode import HUNG
+    from roomba_bt.evaluate.episode import DIED, HUNG
 
     bug = False
     for ending, how, then in (
@@ -433,6 +435,8 @@ def _verdict(args: argparse.Namespace, summaries: list[Summary], done: list[Eval
          "see its traceback with"),
         (HUNG, "ran past --wall-limit (stuck: an endless loop in a behaviour?)",
          "run it alone with"),
+        (DIED, "killed the worker process running it (os._exit in a behaviour? a crash in C "
+         "code?)", "run it alone with"),
     ):  # fmt: skip
         found = [r for e in done for r in e.results if r.outcome == ending]
         if found:

@@ -34,6 +34,7 @@ from roomba_bt.evaluate.episode import (
     EpisodeResult,
     EpisodeSpec,
     all_self_contained,
+    died_result,
     hung_result,
     run_episode,
 )
@@ -144,8 +145,15 @@ def _import_distributed() -> Any:
 #: (a runaway worker is still paused and restarted), the system monitor every 2 s, not 0.5 s.
 #: Together the submitting process (scheduler, nannies, client) spent 0.43 s of CPU on 48
 #: dock episodes with 2 workers where it spent 0.61 s (docs/performance.md, session 17).
+#: Its scheduler gives up on an episode at the first death of a worker holding it
+#: (``allowed-failures`` 0, not 3): the episodes that worker held run again alone
+#: (:func:`run_on_client`), which tells the one that killed it from those queued beside it;
+#: with 3, an episode that kills its worker (``os._exit`` in a behaviour) cost 4 worker
+#: restarts, 4 more alone, 8 to 26 s on the 2-core VM, and a restart that timed out on the
+#: loaded machine left the cluster without a worker.
 #: A cluster of one's own (``--scheduler``) keeps its own settings.
 LOCAL_CLUSTER_CONFIG: dict[str, object] = {
+    "distributed.scheduler.allowed-failures": 0,
     "distributed.worker.profile.enabled": False,
     "distributed.admin.system-monitor.disk": False,
     "distributed.admin.tick.interval": "500ms",
@@ -269,14 +277,35 @@ def _ctrl_c_left_to_this_process() -> Iterator[None]:
     """The local cluster's processes start with Ctrl-C ignored (a started Python keeps an
     ignored SIGINT ignored, and asyncio then leaves it so): a terminal's Ctrl-C reaches the
     whole process group, and every nanny and worker printed its KeyboardInterrupt traceback
-    under the summary. This process takes it and closes the cluster."""
+    under the summary. This process takes it and closes the cluster.
+
+    A worker that dies is started again by its nanny later, from the cluster's threads in
+    this process, once Ctrl-C is this process's again: it started with Ctrl-C live, and a
+    Ctrl-C during its start-up's imports or its run printed a traceback. So Ctrl-C is also
+    blocked here, in this thread's signal mask, while the cluster starts: its event-loop
+    thread, made now, and every thread that one starts (those that start the nannies'
+    worker processes) keep that mask for good, a process started from them keeps it through
+    ``exec``, and Python never unblocks it. This thread's own mask is given back, so Ctrl-C
+    reaches this process as before. Dask's other way, its workers started from a fork
+    server that ignores Ctrl-C (``distributed.worker.multiprocessing-method: forkserver``),
+    changes how every worker starts (docs/evaluation.md); this one changes nothing else."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    mask = getattr(signal, "pthread_sigmask", None)  # POSIX; Windows sends no Ctrl-C to a group
+    if mask is not None:
+        # multiprocessing's resource tracker unblocks Ctrl-C in the thread that starts it
+        # (the first queue of a spawned process does): started now, before the block
+        from multiprocessing import resource_tracker
+
+        resource_tracker.ensure_running()
+    held = mask(signal.SIG_BLOCK, {signal.SIGINT}) if mask is not None else None
     try:
         yield
     finally:
+        if mask is not None and held is not None:
+            mask(signal.SIG_SETMASK, held)
         signal.signal(signal.SIGINT, previous)
 
 
@@ -296,37 +325,105 @@ def run_on_client(
 
     Each result is released once gathered (in batches of :data:`RELEASE_EVERY`, after the
     scheduler says which of them a dead worker held): futures kept to the end made the
-    scheduler compute again what a dead worker had finished, and the count missed those."""
+    scheduler compute again what a dead worker had finished, and the count missed those.
+    An episode Dask gave up on (its workers kept dying) runs again alone once the others
+    are done (:func:`_alone`): DIED if it kills its workers again; it ended the evaluation."""
     distributed = _import_distributed()
     total = len(specs)
     batch = uuid.uuid4().hex[:12]  # keys unique on a cluster shared by many evaluations
+    travelling = all_self_contained(specs)
     futures = {
         f"episode-{batch}-{i}": client.submit(
             run_on_worker, spec, wall_limit_s, key=f"episode-{batch}-{i}", pure=False
         )
-        for i, spec in enumerate(all_self_contained(specs))
+        for i, spec in enumerate(travelling)
     }
     index = {key: i for i, key in enumerate(futures)}
     results: list[EpisodeResult | None] = [None] * total
     gathered: list[Any] = []
-    retried = done = 0
+    given_up: dict[int, BaseException] = {}
+    retried = 0
     interrupted = False
+
+    def finished(i: int, result: EpisodeResult) -> None:
+        results[i] = result
+        if progress is not None:
+            progress(sum(r is not None for r in results), total, result)
+
     try:
         # results gathered on the client's event loop as they complete, not one blocking
         # round trip from this thread each
-        for future, result in distributed.as_completed(list(futures.values()), with_results=True):
-            results[index[future.key]] = result
+        for future, result in distributed.as_completed(
+            list(futures.values()), with_results=True, raise_errors=False
+        ):
             gathered.append(futures.pop(future.key))
             if len(gathered) >= RELEASE_EVERY:
                 retried += _count_and_release(client, gathered)
-            done += 1
-            if progress is not None:
-                progress(done, total, result)
+            if future.status == "error":  # (type, exception, traceback)
+                given_up[index[future.key]] = _killed_worker(specs[index[future.key]], result[1])
+            else:
+                finished(index[future.key], result)
+        for i, first in sorted(given_up.items()):
+            finished(
+                i, _alone(client, travelling[i], wall_limit_s, f"episode-{batch}-{i}-alone", first)
+            )
     except KeyboardInterrupt:
         interrupted = True
         client.cancel([f for f in futures.values() if not f.done()])
     retried += _count_and_release(client, [*gathered, *futures.values()])
     return results, retried, interrupted
+
+
+def _killed_worker(spec: EpisodeSpec, error: BaseException) -> BaseException:
+    """``error``, Dask's ``KilledWorker`` (each worker that held the episode died, more than
+    the scheduler's ``allowed-failures``), said on stderr. A worker runs the episodes queued
+    on it one after the other, and they all count each death: the one that killed it is
+    not told from the others by this alone. Any other error of a future is roomba-bt's own
+    (an episode's errors are in its result): raised again."""
+    from distributed.scheduler import KilledWorker
+
+    if not isinstance(error, KilledWorker):
+        raise error
+    print(f"roomba-bt eval: seed {spec.seed}: {error.allowed_failures + 1} Dask worker(s) died "
+          "running it or with it queued: it runs again alone once the others are done",
+          file=sys.stderr)  # fmt: skip
+    return error
+
+
+def _alone(
+    client: Any, spec: EpisodeSpec, wall_limit_s: float | None, key: str, first: BaseException
+) -> EpisodeResult:
+    """The episode Dask gave up on (``first``, its ``KilledWorker``) run again with no other
+    episode of the evaluation beside it: its result, or DIED when its workers die again
+    (:func:`died_on_workers`), said on stderr."""
+    from distributed.scheduler import KilledWorker
+
+    future = client.submit(run_on_worker, spec, wall_limit_s, key=key, pure=False)
+    try:
+        result: EpisodeResult = future.result()
+    except KilledWorker as again:
+        return died_on_workers(spec, first, again)
+    finally:
+        if not future.done():  # Ctrl-C
+            client.cancel([future])
+        future.release()
+    print(f"roomba-bt eval: seed {spec.seed} ran alone without a death (it was queued on a "
+          "dying worker)", file=sys.stderr)  # fmt: skip
+    return result
+
+
+def died_on_workers(spec: EpisodeSpec, first: BaseException, again: BaseException) -> EpisodeResult:
+    """The DIED record of an episode whose Dask workers kept dying (``first``, Dask's
+    ``KilledWorker`` among the others) and again when it ran alone (``again``): a behaviour
+    calling ``os._exit``, a crash in C code; how many died, the last worker, said on stderr."""
+    allowed = int(getattr(again, "allowed_failures", 0))
+    last = str(getattr(getattr(again, "last_worker", None), "address", "") or "unknown")
+    how = (f"{int(getattr(first, 'allowed_failures', 0)) + 1} Dask worker(s) died running it, "
+           f"{allowed + 1} more when it ran alone, the last {last} (the scheduler's "
+           f"distributed.scheduler.allowed-failures is {allowed})")  # fmt: skip
+    print(f"roomba-bt eval: seed {spec.seed} killed its workers again, alone: recorded as DIED",
+          file=sys.stderr)  # fmt: skip
+    return died_result(spec, how, worker=last)
 
 
 def _count_and_release(client: Any, futures: list[Any]) -> int:

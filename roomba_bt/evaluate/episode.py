@@ -614,6 +614,24 @@ def hung_result(
     return tidied(measured)
 
 
+#: The outcome of an episode whose worker process died while running it, and again when it
+#: ran alone (a behaviour calling ``os._exit``, a crash in C code, the OOM killer): a bug, as a
+#: HUNG one is, recorded so that the sweep goes on without it.
+DIED = "died"
+
+
+def died_result(spec: EpisodeSpec, how: str, worker: str = "") -> EpisodeResult:
+    """The record of an episode whose worker died running it: ``how`` it died (its exit
+    status, or what Dask says) as the reason; nothing measured (the process that measured
+    it is gone), as a HUNG episode stuck before its run began."""
+    zero = (0.0, 0.0, 0.0)
+    return EpisodeResult(
+        spec.seed, DIED, f"the worker running it died: {how}", 0.0, 0.0, 0, zero, zero, 0, (),
+        False, False, 0, False, 0, 0.0, 0.0, mission=spec.mission, world=spec.world,
+        params=spec.params, worker=worker,
+    )  # fmt: skip
+
+
 #: What runs the brushes (Motors, PWM Motors, the firmware's Clean, Spot and Max): a mission
 #: whose leaves send none of these never cleans, and its simulator keeps no coverage grid
 #: (building one was a fifth of an episode's set-up, and it was updated on every step).

@@ -7,7 +7,10 @@ give the same results in the same order; only the wall time differs. Workers are
 (on Linux) so the mission and world modules are imported once, in the parent. Results are
 taken as they finish (``progress`` sees that order; the list returned is in spec order), and
 a worker that dies breaks the pool (``concurrent.futures``' BrokenProcessPool) instead of
-hanging it: its unfinished episodes run again in a new one.
+hanging it: its unfinished episodes run again in a new one, and those that were running when
+it died first run alone, each in a worker of its own, so that an episode that kills its
+worker (a behaviour calling ``os._exit``, a crash in C code) is found and recorded as
+:data:`~roomba_bt.evaluate.episode.DIED` while the sweep goes on.
 """
 
 from __future__ import annotations
@@ -29,19 +32,29 @@ from types import FrameType
 from typing import Any, TextIO, cast
 
 from roomba_bt.evaluate import episode
-from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec, hung_result, run_episode
+from roomba_bt.evaluate.episode import (
+    EpisodeResult,
+    EpisodeSpec,
+    died_result,
+    hung_result,
+    run_episode,
+)
 
 Progress = Callable[[int, int, EpisodeResult], None]
 
 
-#: How many times a local evaluation starts its workers again after one died (killed by the
-#: OOM killer or a ``kill -9``); after that it stops with :class:`WorkersLostError`.
+#: How many times a local evaluation starts its workers again after one died with no episode
+#: to blame (each episode it was running ran alone without a death: ended from outside, by
+#: the OOM killer or a ``kill -9``); after that it stops with :class:`WorkersLostError`. An
+#: episode that kills its worker again when it runs alone is recorded as DIED instead, and
+#: is no such death: the sweep goes on.
 POOL_RESTARTS = 2
 
 
 class WorkersLostError(RuntimeError):
-    """A local worker process died more often than :data:`POOL_RESTARTS`: the episodes
-    that finished (``finished``, in spec order) and a message naming those that did not."""
+    """A local worker process died more often than :data:`POOL_RESTARTS` with no episode to
+    blame: the episodes that finished (``finished``, in spec order) and a message naming
+    those that did not."""
 
     def __init__(self, message: str, finished: list[EpisodeResult], retried: int) -> None:
         super().__init__(message)
@@ -70,15 +83,18 @@ def run_episodes(
     """Run every spec; results in spec order, ``progress(done, total, result)`` after each
     one finishes (in the order they finish). In worker processes, a worker that dies does
     not hang the evaluation: the episodes its pool had not finished run again in new workers
-    (counted in ``run.retried``), up to :data:`POOL_RESTARTS` times, then
-    :class:`WorkersLostError`. ``run`` holds what finished (also after a Ctrl-C).
+    (counted in ``run.retried``), those it was running first alone (:func:`_blame`): one
+    that kills its worker again is recorded as DIED and the sweep goes on; a death with no
+    episode to blame is allowed :data:`POOL_RESTARTS` times, then :class:`WorkersLostError`.
+    ``run`` holds what finished (also after a Ctrl-C).
 
     ``wall_limit_s``: an episode still running after that many seconds of wall-clock time
     is recorded as :data:`~roomba_bt.evaluate.episode.HUNG` (where it was stuck: its worker
     is asked, :func:`_say_where_stuck`) and its worker is ended, the pool's other episodes
     run again as after a death (not counted as one). Only a process can be ended whatever
     it runs, so with a limit even ``jobs`` 1 runs in a worker process; without one (None),
-    ``jobs`` 1 runs in this process, and an endless loop in a behaviour hangs it."""
+    ``jobs`` 1 runs in this process, and an endless loop in a behaviour hangs it (and one
+    that ends its process ends the evaluation)."""
     run = run if run is not None else LocalRun()
     total = len(specs)
 
@@ -93,27 +109,65 @@ def run_episodes(
         return run.in_order()
     todo, deaths = list(range(total)), 0
     while todo:
-        lost, unstarted, hung = _pool_round(specs, todo, jobs, finished, wall_limit_s)
-        todo = sorted([*lost, *unstarted])
-        if not todo:
-            break
-        if hung:  # ended here: no death
-            why = "; ".join(f"seed {specs[i].seed}: {run.results[i].reason}" for i in hung)
-            what = f"an episode ran past its wall-clock limit, its worker ended ({why})"
-        elif deaths == POOL_RESTARTS:
+        ended = _pool_round(specs, todo, jobs, finished, wall_limit_s)
+        todo = sorted([*ended.lost, *ended.unstarted])
+        if not ended.lost:
+            continue
+        run.retried += len(ended.lost)
+        if ended.hung:  # ended here: no death
+            why = "; ".join(f"seed {specs[i].seed}: {run.results[i].reason}" for i in ended.hung)
+            print(f"roomba-bt eval: an episode ran past its wall-clock limit, its worker ended "
+                  f"({why}); the {len(ended.lost)} episode(s) its pool had taken run again in "
+                  f"new workers: seeds {_seeds(specs, ended.lost)}", file=sys.stderr)  # fmt: skip
+            continue
+        todo = [i for i in todo if i not in ended.running]
+        if _blame(specs, ended, finished, wall_limit_s) or not todo:
+            continue
+        if deaths == POOL_RESTARTS:
             raise WorkersLostError(
-                f"a worker process died {POOL_RESTARTS + 1} times (killed: the OOM killer?); "
-                f"{len(todo)} episode(s) did not finish: seeds {_seeds(specs, todo)}",
+                f"a worker process died {POOL_RESTARTS + 1} times with no episode to blame "
+                f"(ended from outside: the OOM killer?); {len(todo)} episode(s) did not "
+                f"finish: seeds {_seeds(specs, todo)}",
                 run.in_order(),
                 run.retried,
             )
-        else:
-            deaths += 1
-            what = "a worker process died (killed: the OOM killer?)"
-        run.retried += len(lost)
-        print(f"roomba-bt eval: {what}; the {len(lost)} episode(s) its pool had taken run "
-              f"again in new workers: seeds {_seeds(specs, lost)}", file=sys.stderr)  # fmt: skip
+        deaths += 1
     return run.in_order()
+
+
+def _blame(
+    specs: Sequence[EpisodeSpec],
+    ended: _Round,
+    finished: Callable[[int, EpisodeResult], None],
+    wall_limit_s: float | None,
+) -> bool:
+    """After a worker died: each episode that was running then (any of them may have killed
+    it; a broken pool ends the others) runs again alone, in a pool of one worker, and one
+    whose worker dies again is recorded as DIED (:func:`~roomba_bt.evaluate.episode.died_result`,
+    how it died as the reason). Whether one was: else the worker was ended from outside.
+    What happens is said on stderr as it happens."""
+    running = f"seed(s) {_seeds(specs, ended.running)}" if ended.running else ""
+    queued = [i for i in ended.lost if i not in ended.running]
+    print(f"roomba-bt eval: a worker process died: {ended.died or 'exit status unknown'}; "
+          + (f"{running} were running: each runs again alone" if running else
+             "no episode was running: none to blame")
+          + (f"; the {len(queued)} other episode(s) its pool had taken run again in new "
+             f"workers: seeds {_seeds(specs, queued)}" if queued else ""),
+          file=sys.stderr)  # fmt: skip
+    blamed = False
+    for index in ended.running:
+        alone = _pool_round(specs, [index], 1, finished, wall_limit_s)
+        if alone.lost:
+            died = alone.died or "exit status unknown"
+            how = f"{died}, twice (the second time running it alone)"
+            finished(index, died_result(specs[index], how))
+            print(f"roomba-bt eval: seed {specs[index].seed} killed its worker again, alone "
+                  f"({died}): recorded as DIED", file=sys.stderr)  # fmt: skip
+            blamed = True
+    if ended.running and not blamed:
+        print(f"roomba-bt eval: {running} ran alone without a death: the worker was "
+              "ended from outside (the OOM killer? a kill -9?)", file=sys.stderr)  # fmt: skip
+    return blamed
 
 
 def _seeds(specs: Sequence[EpisodeSpec], indices: Sequence[int], shown: int = 10) -> str:
@@ -122,20 +176,34 @@ def _seeds(specs: Sequence[EpisodeSpec], indices: Sequence[int], shown: int = 10
     return ", ".join(seeds[:shown]) + more
 
 
+@dataclass(frozen=True)
+class _Round:
+    """How a pool round ended. When a worker died: the episodes the pool had taken and lost
+    (running or queued in it: a broken pool ends every worker), those of them that had
+    started (``running``: one of these may have killed it) and how it died (its exit status,
+    :func:`_how_it_died`; "" when unknown); the episodes never handed to the pool
+    (``unstarted``), and those ended at the wall-clock limit (``hung``: their HUNG results
+    are in)."""
+
+    lost: list[int]
+    running: list[int]
+    unstarted: list[int]
+    hung: list[int]
+    died: str = ""
+
+
 def _pool_round(
     specs: Sequence[EpisodeSpec],
     todo: Sequence[int],
     jobs: int,
     finished: Callable[[int, EpisodeResult], None],
     wall_limit_s: float | None = None,
-) -> tuple[list[int], list[int], list[int]]:
+) -> _Round:
     """``specs[i]`` for each ``i`` in ``todo`` on ``jobs`` worker processes, each result to
-    ``finished`` as it comes; when a worker died, the indices the pool had taken and lost
-    (running or queued in it: a broken pool ends every worker) and those never handed to it;
-    and those ended at ``wall_limit_s`` (their HUNG results given to ``finished``). A few
+    ``finished`` as it comes, until they are done or a worker dies (:class:`_Round`). A few
     episodes are queued ahead per worker, not all: a million futures would fill memory."""
-    method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
-    context = multiprocessing.get_context(method)
+    forks = "fork" in multiprocessing.get_all_start_methods()
+    context = multiprocessing.get_context("fork" if forks else "spawn")
     watch = _Watch(context, wall_limit_s)
     executor = ProcessPoolExecutor(
         max_workers=min(jobs, len(todo)),
@@ -143,6 +211,7 @@ def _pool_round(
         initializer=_worker_started,
         initargs=(watch.reports, wall_limit_s or 0.0),
     )
+    workers = getattr(executor, "_processes", None)  # their exit codes say how one died
     queue = iter(todo)
     running: dict[Future[EpisodeResult], int] = {}
     lost: list[int] = []
@@ -166,20 +235,54 @@ def _pool_round(
                 if isinstance(future.exception(), BrokenProcessPool):
                     lost.append(index)
                     continue
+                watch.ended(index)
                 finished(index, future.result())
                 nxt = None if lost or watch.hung else next(queue, None)
                 if nxt is not None:
                     submit(nxt)
             for index, result in watch.overdue(specs, running):
                 finished(index, result)
-        return sorted(lost), list(queue), sorted(watch.hung)
     except BaseException:  # Ctrl-C (or an episode's bug): no worker left running
         _terminate(executor)
         raise
     finally:
         executor.shutdown(wait=True, cancel_futures=True)
-        if watch.reports is not None:
-            watch.reports.close()
+        began = watch.close(lost)
+    died = _how_it_died(workers) if lost and not watch.hung else ""
+    return _Round(sorted(lost), began, list(queue), sorted(watch.hung), died)
+
+
+def _how_it_died(workers: dict[int, Any] | None) -> str:
+    """How the worker that broke a pool ended, read from the pool's processes once it is
+    shut down (the others were ended with SIGTERM): ``exit status 1``, ``killed by SIGSEGV
+    (a crash in C code)``; "" when it cannot be told (Python's pool keeps them privately)."""
+    codes = [
+        p.exitcode
+        for p in (workers or {}).values()
+        if p.exitcode is not None and p.exitcode not in (0, -ENDS_A_WORKER)
+    ]
+    return "; ".join(exit_status(code) for code in dict.fromkeys(codes))
+
+
+#: What a signal that killed a worker most often means.
+_KILLED_BY = {
+    "SIGKILL": " (the OOM killer? a kill -9?)",
+    "SIGSEGV": " (a crash in C code)",
+    "SIGBUS": " (a crash in C code)",
+    "SIGABRT": " (a crash in C code: abort())",
+}
+
+
+def exit_status(code: int) -> str:
+    """A process's exit code in words: ``exit status 1``, or ``killed by SIGSEGV (a crash in
+    C code)`` for a negative one (the signal that ended it)."""
+    if code >= 0:
+        return f"exit status {code}"
+    try:
+        name = signal.Signals(-code).name
+    except ValueError:
+        return f"killed by signal {-code}"
+    return f"killed by {name}{_KILLED_BY.get(name, '')}"
 
 
 #: How long the parent waits for a stuck worker to say where it is before ending it, and
@@ -189,14 +292,15 @@ WATCH_POLL_S = 1.0
 
 
 class _Watch:
-    """A pool round's wall-clock limit: each worker says on ``reports`` when it starts an
-    episode (index, pid, ``time.monotonic()``: one clock for every process of the machine),
-    and where it is stuck when asked (:func:`_say_where_stuck`)."""
+    """A pool round's workers as they go: each says on ``reports`` when it starts an episode
+    (index, pid, ``time.monotonic()``: one clock for every process of the machine), so that
+    after a death the round knows which episodes were running (:meth:`began`); with a
+    wall-clock limit, where it is stuck when asked (:func:`_say_where_stuck`)."""
 
     def __init__(self, context: Any, limit_s: float | None) -> None:
         # a SimpleQueue writes in the worker's own thread: a Queue's feeder thread might
         # never send the start of an episode stuck in C code, holding the GIL
-        self.reports: Any = context.SimpleQueue() if limit_s is not None else None
+        self.reports: Any = context.SimpleQueue()
         self.limit_s = limit_s
         self.started: dict[int, tuple[int, float]] = {}
         self.hung: set[int] = set()
@@ -217,6 +321,21 @@ class _Watch:
             elif index == stuck:
                 return cast(EpisodeResult, result)
 
+    def close(self, lost: list[int]) -> list[int]:
+        """The reports' pipe closed, once read: those of ``lost`` (with their pool) that had
+        started. A worker says so before it runs one, in a pipe written at once, so it is
+        there when the pool breaks (finished and hung episodes are no longer in
+        :attr:`started`)."""
+        self._read()
+        self.reports.close()
+        return sorted(i for i in lost if i in self.started)
+
+    def ended(self, index: int) -> None:
+        """Episode ``index`` finished: forgotten. Its start was written before its result,
+        so it is read here, not later (where it would look like an episode running)."""
+        self._read()
+        self.started.pop(index, None)
+
     def next_check(self) -> float | None:
         """How long the round may wait for a result before looking again (None: no limit)."""
         if self.limit_s is None:
@@ -236,11 +355,9 @@ class _Watch:
             return []
         self._read()
         taken = {i for f, i in running.items() if not f.done()}
-        for index in [i for i in self.started if i not in taken]:
-            del self.started[index]
         now = time.monotonic()
         limit = self.limit_s
-        late = [i for i, (_, t) in self.started.items() if now - t >= limit]
+        late = [i for i, (_, t) in self.started.items() if i in taken and now - t >= limit]
         if not late or self.hung:
             return []
         index = late[0]
@@ -317,9 +434,9 @@ def _worker_started(reports: Any = None, limit_s: float = 0.0) -> None:
     """A pool worker leaves Ctrl-C (and a hangup) to its parent, which ends the pool, and
     the SIGTERM it is ended with ends it at once (on the simulator nothing drives): each
     worker raising KeyboardInterrupt at Ctrl-C, or the CLI's ``Terminated`` at SIGTERM
-    (handlers a forked worker inherits), printed its traceback under the summary. With a
-    wall-clock limit, ``reports`` is the queue to the parent, and SIGUSR1 asks where the
-    episode is stuck."""
+    (handlers a forked worker inherits), printed its traceback under the summary.
+    ``reports`` is the queue to the parent (each episode's start); with a wall-clock limit
+    (``limit_s`` above 0), SIGUSR1 asks where the episode is stuck."""
     for signum in LEFT_TO_THE_PARENT:
         signal.signal(signum, signal.SIG_IGN)
     signal.signal(ENDS_A_WORKER, signal.SIG_DFL)
@@ -327,7 +444,7 @@ def _worker_started(reports: Any = None, limit_s: float = 0.0) -> None:
     threading.Thread(target=_end_with, args=(os.getppid(),), daemon=True).start()
     if reports is not None:
         _WORKER.update(reports=reports, limit_s=limit_s, running=None)
-        if ASK_WHERE is not None:
+        if ASK_WHERE is not None and limit_s > 0:
             signal.signal(ASK_WHERE, _say_where_stuck)
 
 

@@ -52,6 +52,11 @@ class ExitCode(IntEnum):
     INTERRUPTED = 130  # Ctrl-C or SIGTERM, after the safe stop
 
 
+#: Exit 70 as each command's ``--help`` lists it among its exit codes (every command ends
+#: there on roomba-bt's own bug: :func:`roomba_bt.cli._internal_error`), from the table above.
+INTERNAL_ERROR_SAID = f"{int(ExitCode.INTERNAL_ERROR)} internal error (a bug in roomba-bt)"
+
+
 def profile_shown(profile: RobotProfile) -> str:
     """How a summary names the robot profile: ``roomba500 (Roomba 500 series)``, or "" for
     the default (create2), which goes unsaid so that the usual summary reads as it did."""

@@ -180,8 +180,14 @@ def _hooked_episode(spec: EpisodeSpec):  # type: ignore[no-untyped-def]
         if _HOOK["what"] == "wait":
             while not mark.exists():  # a file the parent makes: no event crosses processes
                 time.sleep(0.01)
-        elif _HOOK["what"] == "kill-always" or not mark.exists():
+        elif _HOOK["what"] == "kill-always" or (_HOOK["what"] == "kill-once" and not mark.exists()):
             mark.touch()
+            os.kill(os.getpid(), signal.SIGKILL)
+    if _HOOK["what"] == "kill-unless-alone" and spec.seed >= int(str(_HOOK["seed"])):
+        import psutil
+
+        parent = psutil.Process(os.getppid())  # its forked workers run its command line
+        if sum(c.cmdline() == parent.cmdline() for c in parent.children()) > 1:  # a pool of 2
             os.kill(os.getpid(), signal.SIGKILL)
     return run_episode(spec)
 
@@ -243,23 +249,54 @@ def test_a_worker_killed_mid_evaluation_loses_no_episode_and_hangs_nothing(hooke
     assert 1 <= done.retried <= 2 * 2
 
 
-def test_a_worker_that_always_dies_ends_with_the_finished_episodes_and_a_message(
+def test_an_episode_that_always_kills_its_worker_is_died_and_the_others_finish(
     hooked,  # type: ignore[no-untyped-def]
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    from roomba_bt.evaluate.parallel import POOL_RESTARTS, LocalRun, WorkersLostError
+    """It ended the evaluation after three deaths (WorkersLostError: exit 130), the episodes
+    queued behind it unrun. Now it runs alone, dies again, and is recorded as DIED."""
+    from roomba_bt.evaluate.episode import DIED
+    from roomba_bt.evaluate.parallel import LocalRun
 
     specs = _short_specs()
     hooked(3, "kill-always")
-    run = LocalRun()
-    with pytest.raises(WorkersLostError, match=r"did not finish: seeds .*\b3\b") as raised:
-        run_episodes(specs, 2, None, run)
-    kept = [r.seed for r in raised.value.finished]
-    assert 3 not in kept and kept == sorted(kept) and len(kept) >= 1
-    assert _without_wall_time(raised.value.finished) == _without_wall_time(
-        [run_episode(specs[s]) for s in kept]
+    results = run_episodes(specs, 2, None, LocalRun())
+    assert [r.seed for r in results] == list(range(8))
+    assert results[3].outcome == DIED
+    assert results[3].reason == (
+        "the worker running it died: killed by SIGKILL (the OOM killer? a kill -9?), twice "
+        "(the second time running it alone)"
     )
-    assert capsys.readouterr().err.count("run again in new workers") == POOL_RESTARTS
+    others = results[:3] + results[4:]
+    assert _without_wall_time(others) == _without_wall_time(
+        [run_episode(s) for s in specs if s.seed != 3]
+    )
+    err = capsys.readouterr().err
+    assert "seed 3 killed its worker again, alone (killed by SIGKILL" in err
+
+
+def test_workers_that_keep_dying_with_no_episode_to_blame_end_with_a_message(
+    hooked,  # type: ignore[no-untyped-def]
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Deaths that no episode repeats alone (the OOM killer under memory pressure) are
+    allowed POOL_RESTARTS times; then the episodes that finished and the seeds that did not."""
+    pytest.importorskip("psutil")
+    from roomba_bt.evaluate.parallel import POOL_RESTARTS, LocalRun, WorkersLostError
+
+    specs = _short_specs(12)
+    hooked(3, "kill-unless-alone")
+    with pytest.raises(
+        WorkersLostError, match=r"with no episode to blame .*did not finish"
+    ) as raised:
+        run_episodes(specs, 2, None, LocalRun())
+    kept = [r.seed for r in raised.value.finished]
+    assert kept == sorted(kept) and {0, 1, 2} <= set(kept) and len(kept) < 12
+    err = capsys.readouterr().err
+    assert (
+        err.count("ran alone without a death: the worker was ended from outside")
+        == POOL_RESTARTS + 1
+    )
 
 
 def test_results_are_taken_as_they_finish_and_a_ctrl_c_keeps_them(hooked) -> None:  # type: ignore[no-untyped-def]
