@@ -35,6 +35,7 @@ from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.identify import MODEL_RANGE_PACKETS
 from roomba_bt.oi.modes import OI_MODE_PACKET
 from roomba_bt.oi.packets import packet_ids
+from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID
 
 if TYPE_CHECKING:
     from roomba_bt.oi.frames import SensorFrame
@@ -109,13 +110,13 @@ def register(sub: Any) -> None:
         sub,
         "doctor",
         doctor_command,
-        """find the robot on a port and say what it is, step by step
+        f"""find the robot on a port and say what it is, step by step
 
         Find the robot on --port: the port, the baud rate (115200, then 19200), a BRC wake pulse if
         it is silent, Start, its profile, battery, charging, OI mode, a stream round-trip, whether
         the shipped missions' streams fit the rate, and (with --allow-reset) its firmware. Exit
         codes: 0 found, 2 usage, 3 the port could not be opened, 5 nothing answered, 6 it answered
-        but a later step failed, 130 interrupted.
+        but a later step failed, {INTERNAL_ERROR_SAID}, 130 interrupted.
         """,
     )
     parser.add_argument(

@@ -28,7 +28,7 @@ from roomba_bt.cli.arguments import (
 from roomba_bt.cli.validate_report import FORMATS
 from roomba_bt.oi.profiles import get_profile
 from roomba_bt.printable import ANY_CONTROL, escaped
-from roomba_bt.runtime.summary import ExitCode
+from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, ExitCode
 
 if TYPE_CHECKING:
     from roomba_bt.behaviours.registry import Registry
@@ -43,13 +43,14 @@ def register(sub: Any) -> None:
         sub,
         "validate",
         validate_command,
-        """check mission files before anything moves
+        f"""check mission files before anything moves
 
         Check each FILE: names, parameters, units, ranges, subtrees, includes, blackboard keys, OI
         modes of every actuator, and the sensor stream budget. Every error is printed once as
         file:line:col: message, one in an included file with the include chain that reached
         it, then each FILE's verdict (ok, or failed and why). Exit 0 if all are valid, 2 if
-        not; with --strict, 7 if warnings alone fail a file.
+        not; with --strict, 7 if warnings alone fail a file;
+        {INTERNAL_ERROR_SAID}.
         """,
     )
     validate.add_argument(

@@ -38,7 +38,13 @@ from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.printable import ANY_CONTROL, encodes, escaped
 from roomba_bt.robot.errors import DEFAULT_WATCHDOG
 from roomba_bt.robot.safety import signals_end_the_process
-from roomba_bt.runtime.summary import DEFAULT_GRACE, DEFAULT_TICK_LIMIT, ExitCode, Outcome
+from roomba_bt.runtime.summary import (
+    DEFAULT_GRACE,
+    DEFAULT_TICK_LIMIT,
+    INTERNAL_ERROR_SAID,
+    ExitCode,
+    Outcome,
+)
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -70,12 +76,12 @@ def _add_run_parser(sub: Any) -> None:
         sub,
         "run",
         run_command,
-        """run a mission on a robot (--port) or the simulator
+        f"""run a mission on a robot (--port) or the simulator
 
         Run MISSION. Without --port it runs on the built-in simulator (real time; --fast on the
         virtual clock). Exit codes: 0 succeeded, 1 failed or timed out, 2 invalid mission or usage,
         3 connection or stream failure, 4 a behaviour raised an exception, 7 succeeded but failed
-        --strict, 70 internal error (a bug in roomba-bt), 130 interrupted.
+        --strict, {INTERNAL_ERROR_SAID}, 130 interrupted.
         """,
     )
     run.add_argument("mission", help="mission YAML file, or a shipped mission's name (dock)")
@@ -184,13 +190,14 @@ def _add_replay_parser(sub: Any) -> None:
         sub,
         "replay",
         replay_command,
-        """play a --record file back through the tree
+        f"""play a --record file back through the tree
 
         Feed the recorded sensor bytes back through the same parser and tree and compare the
         commands the tree writes with the recorded ones; the monitor's pauses, steps and
         forced conditions in the record are done again where they were done. Exit codes: 0
         the same bytes, 1 at the first difference (its mission time and both commands are
-        printed), 2 invalid record or mission, or a mission reading packets the record lacks.
+        printed), 2 invalid record or mission, or a mission reading packets the record lacks,
+        {INTERNAL_ERROR_SAID}.
         """,
     )
     replay.add_argument("record", help="a file written by run --record")

@@ -20,7 +20,7 @@ from roomba_bt.oi.modes import OI_MODE_PACKET, mode_from_packet
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.oi.stream import stream_budget
-from roomba_bt.runtime.summary import DEFAULT_GRACE, ExitCode
+from roomba_bt.runtime.summary import DEFAULT_GRACE, INTERNAL_ERROR_SAID, ExitCode
 
 if TYPE_CHECKING:
     from roomba_bt.transport import Transport
@@ -45,12 +45,12 @@ def register(sub: Any) -> None:
         sub,
         "sensors",
         sensors_command,
-        """show every decoded sensor, live
+        f"""show every decoded sensor, live
 
         Stream the largest sensor group the baud rate carries and show every packet decoded,
         with its unit, a few times a second; the robot stays in Passive and is left there.
         Without --port, the built-in simulator. Exit codes: 0 done (--count reached), 2
-        invalid option, 3 connection or stream failure, 130 interrupted.
+        invalid option, 3 connection or stream failure, {INTERNAL_ERROR_SAID}, 130 interrupted.
         """,
     )
     add_far_end_options(
