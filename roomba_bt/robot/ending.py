@@ -62,6 +62,10 @@ PAUSE_SLACK = 3
 #: command may still take to come: the round trip itself, and as much again for its jitter
 #: (Wi-Fi and Bluetooth bridges: 50-300 ms, and uneven).
 ROUND_TRIPS_IN_FLIGHT = 2
+#: Seconds below which a wait is taken as over: a virtual clock that adds each read's timeout
+#: to a large time adds nothing for a wait under its last bit (the listen after the stop
+#: looped for ever on ``bench.bench_robot``'s transport).
+CLOCK_ROUNDING = 1e-6
 #: How many times a stop the stream contradicts is written (the first, and once more).
 STOP_ATTEMPTS = 2
 #: Reads at most of what waits unread in the port before a stop (each read takes all there
@@ -423,7 +427,10 @@ class SafeStop:
         late: list[SensorFrame] = []  # the frames sent after the robot should have heard it
         try:
             while (now := clock()) < deadline and now - last < STOP_LISTEN:
-                data = link.read(min(deadline, last + STOP_LISTEN) - now)
+                wait = min(deadline, last + STOP_LISTEN) - now
+                if wait < CLOCK_ROUNDING:  # at the bound: a clock that moves by the wait
+                    break  # read (a virtual one) may not move at all, and looped for ever
+                data = link.read(wait)
                 new = parser.feed(data, clock()) if data else []
                 if new:
                     last = self._heard_at = clock()
@@ -431,7 +438,7 @@ class SafeStop:
                         late += new
         except PortLost:  # the stop was written; the quiet it cut short shows nothing
             return None  # (:meth:`_quiet_unproven` says so)
-        if clock() - last >= STOP_LISTEN or len(late) <= PAUSE_SLACK:
+        if clock() - last >= STOP_LISTEN - CLOCK_ROUNDING or len(late) <= PAUSE_SLACK:
             return None  # the stream stopped: it heard Pause Stream
         return self._streamed_on(late, in_flight)
 
