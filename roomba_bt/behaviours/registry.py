@@ -42,6 +42,7 @@ from roomba_bt.behaviours.base import RobotBehaviour
 from roomba_bt.behaviours.declare import Declaration, DeclarationError
 from roomba_bt.behaviours.language import RESERVED
 from roomba_bt.behaviours.units import closest
+from roomba_bt.robot.safety import code_failure, failure_said, interrupts_told_apart
 
 ENTRY_POINT_GROUP = "roomba_bt.behaviours"
 #: the package a mission writes before ``:`` to name a built-in (``roomba-bt:drive``), as
@@ -322,8 +323,9 @@ class Registry:
         if self._loaded:
             return
         self._loaded = True
-        for ep in sorted(group_entry_points(self._group or ""), key=lambda e: e.name):
-            self._load_entry_point(ep)
+        with interrupts_told_apart():  # a plugin's raise KeyboardInterrupt, from a Ctrl-C
+            for ep in sorted(group_entry_points(self._group or ""), key=lambda e: e.name):
+                self._load_entry_point(ep)
 
     def load_entry_point(self, ep: EntryPoint) -> list[Declaration]:
         """Import an entry point and register what it provides; a failure becomes a
@@ -339,7 +341,9 @@ class Registry:
         error names the distribution at once."""
         try:
             provider = ep.load()
-        except (Exception, SystemExit) as exc:  # any import-time failure of third-party code
+        except BaseException as exc:  # any import-time failure of third-party code
+            if not code_failure(exc):  # a Ctrl-C (not the plugin's KeyboardInterrupt)
+                raise
             failed = _missing_attribute(ep, exc) or _import_failed(
                 exc, _package_of(ep), _origin(ep)
             )
@@ -383,9 +387,12 @@ class Registry:
                 module = importlib.util.module_from_spec(spec)
                 module.__dict__["__roomba_bt_stamp__"] = stamp
                 sys.modules[module_name] = module
-                spec.loader.exec_module(module)
-            except (Exception, SystemExit) as exc:  # sys.exit() in it: not ours to exit
+                with interrupts_told_apart():
+                    spec.loader.exec_module(module)
+            except BaseException as exc:  # sys.exit() in it: not ours to exit
                 sys.modules.pop(module_name, None)
+                if not code_failure(exc):  # a Ctrl-C (not the plugin's KeyboardInterrupt)
+                    raise
                 failed = _import_failed(exc, [path.resolve()], origin)
                 return copy, [PluginError(origin, failed, imported=False)]
         before = len(copy._errors)
@@ -693,6 +700,8 @@ def _cause(exc: BaseException) -> str:
     one of them looking like a line of the command's output."""
     if isinstance(exc, SystemExit):  # its exit code would have passed for one of ours
         return f"it called sys.exit({exc.code!r})"
+    if not isinstance(exc, Exception):  # KeyboardInterrupt: its own, not a Ctrl-C
+        return failure_said(exc)
     return " ".join(f"{type(exc).__name__}: {exc}".split())
 
 

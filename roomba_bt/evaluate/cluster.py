@@ -38,6 +38,7 @@ from roomba_bt.evaluate.episode import (
     hung_result,
     run_episode,
 )
+from roomba_bt.robot.safety import RunAborted
 
 
 class ClusterUnavailableError(RuntimeError):
@@ -88,9 +89,10 @@ def run_on_worker(spec: EpisodeSpec, wall_limit_s: float | None = None) -> Episo
     return result
 
 
-class WallLimitReached(BaseException):
+class WallLimitReached(RunAborted):
     """Raised in an episode's thread at its wall-clock limit: no ``except Exception`` (a
-    behaviour's, the runner's) takes it for the episode's own error."""
+    behaviour's, the runner's) takes it for the episode's own error, nor the runner's
+    ``except BaseException`` around a behaviour's code (a :class:`RunAborted`)."""
 
 
 def within_wall_limit(spec: EpisodeSpec, limit_s: float) -> EpisodeResult:

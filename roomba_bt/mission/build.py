@@ -28,20 +28,25 @@ from roomba_bt.mission.plan import Node
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.robot.interface import RobotHandle
+from roomba_bt.robot.safety import code_failure, failure_said, interrupts_told_apart
 
 
 class BuildError(Exception):
     """A behaviour's class raised while it was built (a plugin's ``__init__``): the node it
-    was built for and the exception, said as a diagnostic at the node's place."""
+    was built for and the exception, said as a diagnostic at the node's place. Its
+    ``sys.exit()``, a ``KeyboardInterrupt`` it raised itself and a ``BaseException`` of its
+    own are said so too (:func:`~roomba_bt.robot.safety.code_failure`): they ended
+    ``validate`` and ``run`` with exit 0 and no word, 130 or a traceback."""
 
-    def __init__(self, node: Node, error: Exception) -> None:
+    def __init__(self, node: Node, error: BaseException) -> None:
         self.node = node
         self.error = error
         frames = traceback.extract_tb(error.__traceback__)
         where = f" (at {frames[-1].filename}:{frames[-1].lineno})" if frames else ""
         assert node.decl is not None
+        said = f"{type(error).__name__}: {error}" if isinstance(error, Exception) else None
         super().__init__(
-            f"{node.decl.name}: building it raised {type(error).__name__}: {error}{where}"
+            f"{node.decl.name}: building it raised {said or failure_said(error)}{where}"
         )
 
     def diagnostic(self) -> Diagnostic:
@@ -51,14 +56,23 @@ class BuildError(Exception):
 def build(node: Node) -> Behaviour:
     """The py_trees (sub)tree for a checked node: a leaf's declared class, or the class the
     language table names for the node's word. A leaf's class that raises (a plugin's bug in
-    its ``__init__``) raises :class:`BuildError`, not an internal error of the compiler."""
+    its ``__init__``) raises :class:`BuildError`, not an internal error of the compiler; a
+    Ctrl-C meanwhile goes on as it came, told from a plugin's own ``raise
+    KeyboardInterrupt`` (:func:`~roomba_bt.robot.safety.interrupts_told_apart`)."""
+    with interrupts_told_apart():
+        return _built(node)
+
+
+def _built(node: Node) -> Behaviour:
     if node.kind == "leaf":
         assert node.decl is not None
         try:
             return node.decl.cls(node.name, CheckedParams(node.params))  # checked here
-        except Exception as exc:
+        except BaseException as exc:
+            if not code_failure(exc):
+                raise
             raise BuildError(node, exc) from exc
-    children = [build(child) for child in node.children]
+    children = [_built(child) for child in node.children]
     kind = GUARD if node.kind == GUARD.word else WORDS[node.kind]
     assert kind.build is not None, f"no builder for node kind {node.kind!r}"
     return kind.build(node.name, children, node.options)

@@ -23,6 +23,7 @@ import signal
 import threading
 from collections.abc import Callable, Iterator
 from types import FrameType
+from typing import TypeVar
 
 log = logging.getLogger(__name__)
 
@@ -102,8 +103,117 @@ def signal_reason(signum: int) -> str:
 
 def raise_terminated(signum: int, frame: FrameType | None) -> None:
     """A signal handler: the signal raises :class:`Terminated` in the main thread (the CLI
-    installs it for SIGTERM and SIGHUP as the process starts, before a run has its own)."""
-    raise Terminated(signum)
+    installs it for SIGTERM and SIGHUP as the process starts, before a run has its own),
+    marked as a signal's (:func:`signal_delivered`)."""
+    raise delivered(Terminated(signum), signum)
+
+
+def raise_interrupt(signum: int, frame: FrameType | None) -> None:
+    """A signal handler for SIGINT: Python's own (a :class:`KeyboardInterrupt`), marked as a
+    signal's (:func:`signal_delivered`); :func:`interrupts_told_apart` installs it."""
+    raise delivered(KeyboardInterrupt(), signum)
+
+
+#: the attribute a signal's interrupt carries (its signal's number), which one a plugin's
+#: code raised lacks: :func:`signal_delivered`
+_DELIVERED_BY = "roomba_bt_signal"
+
+_Interrupt = TypeVar("_Interrupt", bound=KeyboardInterrupt)
+
+
+def delivered(interrupt: _Interrupt, signum: int) -> _Interrupt:
+    """``interrupt`` marked as the one signal ``signum`` delivered (each handler of ours
+    raises it so): :func:`signal_delivered` tells it from a ``raise KeyboardInterrupt`` in a
+    plugin's code."""
+    setattr(interrupt, _DELIVERED_BY, signum)
+    return interrupt
+
+
+def signal_delivered(exc: BaseException) -> bool:
+    """Whether ``exc`` is an interrupt a signal delivered, the operator's Ctrl-C or a
+    ``kill`` (exit 130), and not a ``raise KeyboardInterrupt`` in a plugin's code (decided:
+    that is the plugin's error, exit 4: nobody pressed Ctrl-C). Every handler of ours marks
+    the interrupt it raises (:func:`delivered`); so an unmarked one came from code where one
+    of ours holds its signal (a run's :class:`InterruptGuard`, :func:`interrupts_told_apart`,
+    the CLI's :func:`raise_terminated`), and in any thread but the main one, which signals
+    never reach. Elsewhere (a program's own handler, Python's default outside those) the two
+    cannot be told apart, and an interrupt is taken for a signal's, as it always was."""
+    if not isinstance(exc, KeyboardInterrupt):
+        return False
+    mark = getattr(exc, _DELIVERED_BY, None)
+    if mark is not None:
+        return bool(mark)  # 0: told apart as the code's (interrupts_told_apart)
+    if threading.current_thread() is not threading.main_thread():
+        return False
+    signum = exc.signum if isinstance(exc, Terminated) else signal.SIGINT
+    with contextlib.suppress(ValueError):  # a number that is no signal here: not ours
+        return not _ours(signal.getsignal(signum))
+    return True
+
+
+def _ours(handler: object) -> bool:
+    """Whether ``handler`` is one of ours, which mark what they raise."""
+    if handler is raise_terminated or handler is raise_interrupt:
+        return True
+    return isinstance(getattr(handler, "__self__", None), InterruptGuard)
+
+
+class RunAborted(BaseException):
+    """Base of an exception another thread raises into a run's thread (its asynchronous
+    exception: an evaluation's wall-clock limit, ``WallLimitReached``). It goes on through
+    the run as it came, after the safe stop, never taken for the error of the behaviour it
+    happened to land in (any other exception a behaviour raises is its error: exit 4)."""
+
+
+def code_failure(exc: BaseException) -> bool:
+    """Whether ``exc``, raised out of a plugin's or a behaviour's code (its import, its
+    ``__init__``, a method), is that code's failure, to be said as such with its file:line:
+    any exception, ``sys.exit()`` (SystemExit), ``GeneratorExit``, a ``BaseException`` of its
+    own, a ``KeyboardInterrupt`` it raised itself; all but an interrupt a signal delivered
+    (:func:`signal_delivered`: the operator's) and :class:`RunAborted` (from outside the
+    run), which go on as they came. Before, only ``Exception`` (and SystemExit) was caught:
+    a plugin's ``sys.exit(0)`` in ``shutdown()`` exited 0 after a failed mission, its
+    ``raise KeyboardInterrupt`` read ``INTERRUPTED (Ctrl-C)``, its ``BaseException`` was a
+    traceback and exit 1."""
+    return not isinstance(exc, RunAborted) and not signal_delivered(exc)
+
+
+def failure_said(exc: BaseException) -> str:
+    """A code's failure (:func:`code_failure`) in one line, its exception named: ``SystemExit
+    (it called sys.exit(0))`` (``SystemExit: 0`` read as a run that went well), a
+    ``KeyboardInterrupt`` said to be the code's own, an exception without a message by its
+    name alone (``GeneratorExit``), else ``Type: message`` (its lines joined)."""
+    name = type(exc).__name__
+    if isinstance(exc, SystemExit):
+        return f"{name} (it called sys.exit({exc.code!r}))"
+    if isinstance(exc, KeyboardInterrupt):
+        name += " (raised by its own code: no Ctrl-C or signal came)"
+    text = " ".join(str(exc).split())
+    return f"{name}: {text}" if text else name
+
+
+@contextlib.contextmanager
+def interrupts_told_apart() -> Iterator[None]:
+    """Within the block, a Ctrl-C raises a :class:`KeyboardInterrupt` marked as the signal's
+    (:func:`raise_interrupt`), so that one a plugin's code raises (at its import, in its
+    ``__init__``) is told apart from it (:func:`signal_delivered`); Python's own handler
+    comes back on the way out. Only where Python's own holds SIGINT, in the main thread: a
+    program's own handler is left as it is (and its interrupts taken for signals'). One no
+    signal delivered that leaves the block is marked as the code's on its way out, so that
+    it is told apart after the block too."""
+    main = threading.current_thread() is threading.main_thread()
+    if not main or signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        yield
+        return
+    signal.signal(signal.SIGINT, raise_interrupt)
+    try:
+        yield
+    except KeyboardInterrupt as exc:  # told apart here, where it can be: marked for later
+        if getattr(exc, _DELIVERED_BY, None) is None:
+            setattr(exc, _DELIVERED_BY, 0)  # no signal's: raised by code
+        raise
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @contextlib.contextmanager
@@ -267,15 +377,16 @@ class InterruptGuard:
             return
         self.stop_begun = self.raised = True  # the run now unwinds into its safe stop
         if signum == signal.SIGINT:
-            raise KeyboardInterrupt
-        raise Terminated(signum)
+            raise delivered(KeyboardInterrupt(), signum)
+        raise delivered(Terminated(signum), signum)
 
     def late_interrupt(self) -> KeyboardInterrupt | None:
         """The interrupt a signal that came during the stop stands for (:attr:`late`), or
         None."""
         if self.late is None:
             return None
-        return KeyboardInterrupt() if self.late == signal.SIGINT else Terminated(self.late)
+        late = KeyboardInterrupt() if self.late == signal.SIGINT else Terminated(self.late)
+        return delivered(late, self.late)
 
     def __enter__(self) -> InterruptGuard:
         if self.enabled and threading.current_thread() is threading.main_thread():

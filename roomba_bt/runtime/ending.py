@@ -97,7 +97,8 @@ class RunEnding:
         stop_robot(self.connection, self.summary, first)
         if set_up is not None:
             guard.stopping(SHUTTING_DOWN, during(THE_SHUTDOWN))
-            shutdown_nodes(set_up)
+            _, exits = shutdown_nodes(set_up)  # an exception there: logged, no more
+            note_stop_failures(self.summary, exits)  # sys.exit() there: the run's error
 
     def sum_up(self, wall_time_s: float, last: Snapshot | None, unconfirmed: int) -> None:
         """The summary's last figures, once the robot is stopped: the run's wall time, the

@@ -55,6 +55,7 @@ from roomba_bt.robot.interface import (
 )
 from roomba_bt.robot.safety import (
     InterruptGuard,
+    RunAborted,
     Terminated,
     signal_reason,
 )
@@ -76,6 +77,7 @@ from roomba_bt.runtime.summary import (
 )
 from roomba_bt.runtime.teardown import (
     behaviour_error,
+    behaviours_interrupt,
     note_late_interrupt,
     setup_tree,
     terminate_raised,
@@ -392,14 +394,10 @@ class MissionRunner(BaseHandle):
                     tick_guard.start()
                 with slowest_tick_named(summary, self.names_slow_ticks):
                     self._loop(root, summary)
-            except KeyboardInterrupt as exc:  # Ctrl-C, or Terminated: SIGTERM, SIGHUP, ...
-                interrupt = exc
-                why = signal_reason(exc.signum) if isinstance(exc, Terminated) else "Ctrl-C"
-                summary.outcome, summary.reason = Outcome.INTERRUPTED, why
-            except (Exception, SystemExit) as exc:  # a stop, a lost link, a bug, sys.exit()
-                ended_by(exc, summary, answered=self.has_snapshot)
-                raised_in = terminate_raised(exc)
-                summary.ended_at = (-1, getattr(exc, "at", "after"))  # a stop's: before the tick
+            except RunAborted:  # raised into the run from outside: on, after the safe stop
+                raise
+            except BaseException as exc:  # Ctrl-C; a stop, a lost link, a bug, sys.exit()
+                interrupt, raised_in = run_ended_by(exc, summary, answered=self.has_snapshot)
             finally:
                 if tick_guard is not None:
                     tick_guard.close()  # it writes nothing more: the safe stop is ours
@@ -516,9 +514,10 @@ class MissionRunner(BaseHandle):
                 if self.timeout_s is not None and mission_time >= self.timeout_s:
                     summary.timed_out(self.timeout_s, running_in(root))
                     return
-        except KeyboardInterrupt:  # Ctrl-C, SIGTERM...: in which half of its frame
-            summary.ended_at = interrupted_at(self, flushed)
-            summary.written_when_interrupted = self._link.bytes_written  # a flush cut short?
+        except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM...: in which half of its frame
+            if not behaviours_interrupt(exc):  # (a behaviour's own: its error, run() says)
+                summary.ended_at = interrupted_at(self, flushed)
+                summary.written_when_interrupted = self._link.bytes_written  # a flush cut short?
             raise
 
     def _advance(self, batch: Sequence[SensorFrame], untick: int | None = None) -> float:
@@ -738,13 +737,32 @@ def refusal(
     return f"t={0.0 if when is None else when:.3f}{by} {text}"
 
 
-def ended_by(exc: Exception | SystemExit, summary: RunSummary, *, answered: bool) -> None:
+def run_ended_by(
+    exc: BaseException, summary: RunSummary, *, answered: bool
+) -> tuple[KeyboardInterrupt | None, py_trees.behaviour.Behaviour | None]:
+    """The run's outcome and reason when ``exc`` ended it (:meth:`MissionRunner.run`): an
+    interrupt (Ctrl-C, or :class:`Terminated`: SIGTERM, SIGHUP, ...), returned to be raised
+    once the robot is stopped; else what :func:`ended_by` says, a behaviour's own ``raise
+    KeyboardInterrupt`` too (:func:`behaviours_interrupt`), the node whose ``terminate``
+    raised it returned (its ``terminate`` is not called again)."""
+    if isinstance(exc, KeyboardInterrupt) and not behaviours_interrupt(exc):
+        why = signal_reason(exc.signum) if isinstance(exc, Terminated) else "Ctrl-C"
+        summary.outcome, summary.reason = Outcome.INTERRUPTED, why
+        return exc, None
+    ended_by(exc, summary, answered=answered)
+    summary.ended_at = (-1, getattr(exc, "at", "after"))  # a stop's: before the tick
+    return None, terminate_raised(exc)
+
+
+def ended_by(exc: BaseException, summary: RunSummary, *, answered: bool) -> None:
     """The outcome and reason of a run that ``exc`` ended (Ctrl-C aside): the operator's
     stop, the link (its own errors, :class:`LinkDown` and :class:`ConnectionFailed`;
     ``answered``: the robot had streamed, so it was not merely never there), or an
-    exception in a behaviour, an ``OSError`` too, or its ``sys.exit()`` (its path and
-    file:line, the traceback: not ours to exit, as at a plugin's import; it went on through
-    the CLI, which exited 0 with no summary), each after the safe stop."""
+    exception in a behaviour, an ``OSError`` too, or its ``sys.exit()``, a
+    ``KeyboardInterrupt`` it raised itself (no signal came), a ``BaseException`` of its own
+    (its path, method and file:line, the traceback: not ours to exit, as at a plugin's
+    import; they went on through the CLI, which exited 0, 130 or 1 with no summary), each
+    after the safe stop."""
     if isinstance(exc, StopRequested):
         summary.outcome, summary.reason = Outcome.INTERRUPTED, str(exc)
     elif isinstance(exc, ConnectionFailed):

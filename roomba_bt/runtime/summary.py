@@ -37,7 +37,9 @@ class ExitCode(IntEnum):
     #: 200 mm/s; the stop was not delivered: the port is gone"); also a run whose tree ended
     #: well but whose stop did not reach the robot (``note_undelivered_stop``)
     CONNECTION = 3
-    BEHAVIOUR_ERROR = 4  # a behaviour raised an exception (a bug in it or its plugin)
+    #: a behaviour raised an exception (a bug in it or its plugin), its own ``sys.exit()``,
+    #: ``KeyboardInterrupt`` or ``BaseException`` too (``robot/safety.py``: ``code_failure``)
+    BEHAVIOUR_ERROR = 4
     #: ``run --strict``: the tree ended in SUCCESS, but the run did what a mission that works
     #: does not (:meth:`RunSummary.strict_findings`: a command the mode guard refused, one
     #: dropped while the tree was stopped, a fall out of Safe/Full by itself). 7, not 5: 5

@@ -34,7 +34,14 @@ from roomba_bt.behaviours.lean import InvalidStatus
 from roomba_bt.behaviours.returned import returned_from
 from roomba_bt.oi.frames import MissingPacket
 from roomba_bt.oi.packets import PACKETS
-from roomba_bt.robot.safety import THE_SAFE_STOP, Terminated, signal_reason
+from roomba_bt.robot.safety import (
+    THE_SAFE_STOP,
+    Terminated,
+    code_failure,
+    failure_said,
+    signal_delivered,
+    signal_reason,
+)
 from roomba_bt.runtime.summary import Outcome, RunSummary
 
 log = logging.getLogger(__name__)
@@ -44,25 +51,59 @@ _INVALID, _RUNNING = py_trees.common.Status.INVALID, py_trees.common.Status.RUNN
 _CLEAN_ENDINGS = frozenset({Outcome.SUCCESS, Outcome.FAILURE, Outcome.TIMEOUT, Outcome.INPUT_ENDED})
 
 
-def behaviour_error(exc: BaseException) -> str:
+def behaviour_error(exc: BaseException, *, method: bool = True) -> str:
     """What a behaviour's exception says to the user: the behaviour's path in the tree (the
-    innermost behaviour on the traceback) and the file:line where it raised in that
-    behaviour's own module (a plugin's file), else the line the exception came from; for
-    a wrong value returned (:class:`InvalidStatus`), the ``return`` that gave it when its
-    source tells (:func:`returned_from`), else where the method is defined, said so."""
+    innermost behaviour on the traceback), the exception (:func:`failure_said` for one that
+    is no ``Exception``: ``SystemExit (it called sys.exit(0))``), the behaviour's method it
+    came out of (``method``: said, unless the caller names it: ``terminate() of ...``) and
+    the file:line where it raised in that behaviour's own module (a plugin's file), else the
+    line the exception came from; for a wrong value returned (:class:`InvalidStatus`, which
+    names its method), the ``return`` that gave it when its source tells
+    (:func:`returned_from`), else where the method is defined, said so."""
     frames = list(traceback.walk_tb(exc.__traceback__))
-    what = f"{type(exc).__name__}: {exc}"
-    if isinstance(exc, SystemExit):  # "SystemExit: 0" read as if the run had ended well
-        what = f"SystemExit (it called sys.exit({exc.code!r}))"
+    what = f"{type(exc).__name__}: {exc}" if isinstance(exc, Exception) else failure_said(exc)
     behaviour, where = innermost_behaviour(frames)
     if isinstance(exc, InvalidStatus):  # raised after its update (check) returned: where it is
         behaviour, where = exc.node, _top_line(frames)
         update: Any = getattr(type(behaviour), exc.method, None)
         with contextlib.suppress(TypeError, OSError, SyntaxError):
             where = returned_from(update, exc.status)
+        method = False
     if behaviour is None:
         return f"{what} ({where})" if where else what
-    return f"behaviour {tree_path(behaviour)} raised {what} ({where}){_hint(exc, behaviour)}"
+    came_out_of = _method_of(behaviour, frames) if method else None
+    within = f" in its {came_out_of}()" if came_out_of else ""
+    hint = _hint(exc, behaviour)
+    return f"behaviour {tree_path(behaviour)} raised {what}{within} ({where}){hint}"
+
+
+def _method_of(
+    behaviour: py_trees.behaviour.Behaviour, frames: list[tuple[FrameType, int]]
+) -> str | None:
+    """The method of ``behaviour`` an exception came out of (``frames``: its traceback,
+    outermost first): the outermost of the behaviour's own frames in its class's module
+    (``update``, not a helper method it called; ``check``, not the base class's ``update``
+    that called it), else the innermost of its frames; None when none is on it."""
+    own = [frame for frame, _ in frames if frame.f_locals.get("self") is behaviour]
+    if not own:
+        return None
+    with contextlib.suppress(TypeError, OSError):
+        home = inspect.getfile(type(behaviour))
+        for frame in own:
+            if frame.f_code.co_filename == home:
+                return frame.f_code.co_name
+    return own[-1].f_code.co_name
+
+
+def behaviours_interrupt(exc: BaseException) -> bool:
+    """Whether ``exc``, which ended a run, is a ``KeyboardInterrupt`` a behaviour's code
+    raised itself, no signal having come (:func:`~roomba_bt.robot.safety.signal_delivered`):
+    the behaviour's error, exit 4, not the operator's Ctrl-C (decided). One raised outside
+    every behaviour (a program's observer, a link of its own, as tests stand in a Ctrl-C)
+    stays the interrupt it was."""
+    if not isinstance(exc, KeyboardInterrupt) or signal_delivered(exc):
+        return False
+    return innermost_behaviour(list(traceback.walk_tb(exc.__traceback__)))[0] is not None
 
 
 def innermost_behaviour(
@@ -141,8 +182,10 @@ def stop_nodes(
                 stopped.add(id(node))
                 node.stop(_INVALID)
             running = _topmost_running(root, stopped)
-    except Exception as exc:  # a stop() of its own raised, not a terminate: said, and
-        failures.append(f"stopping the tree: {behaviour_error(exc)}")  # the rest marked
+    except BaseException as exc:  # a stop() of its own raised, not a terminate: said, and
+        if not code_failure(exc):  # the rest marked; a signal's interrupt goes on
+            raise
+        failures.append(f"stopping the tree: {behaviour_error(exc)}")
         for node in nodes:
             node.status = _INVALID
     finally:
@@ -203,8 +246,11 @@ def _guard_terminate(
             return
         try:
             usual(new_status)
-        except Exception as exc:
-            failures.append(f"stopping the tree: terminate() of {behaviour_error(exc)}")
+        except BaseException as exc:  # sys.exit() too; a signal's interrupt goes on
+            if not code_failure(exc):
+                raise
+            said = behaviour_error(exc, method=False)
+            failures.append(f"stopping the tree: terminate() of {said}")
 
     node.terminate = guarded  # type: ignore[method-assign]
     return None if class_own else usual
@@ -340,17 +386,25 @@ def _setup_raised(
     return None
 
 
-def shutdown_nodes(root: py_trees.behaviour.Behaviour) -> list[str]:
+def shutdown_nodes(root: py_trees.behaviour.Behaviour) -> tuple[list[str], list[str]]:
     """Every node's ``shutdown()`` (py_trees' ``BehaviourTree.shutdown``: what a node opened
     in ``setup`` closed), each once and guarded: one that raises is logged with its
     behaviour's name and the others still run. Only the nodes whose ``setup()`` completed
-    (:func:`setup_tree`) are shut down. Returns what each failure says."""
-    failures = []
+    (:func:`setup_tree`) are shut down. Returns what each failure says, the exceptions first
+    (logged, the run's outcome left as it is: a clean-up that failed), then each that was no
+    ``Exception`` (``sys.exit()``, a ``KeyboardInterrupt`` or ``BaseException`` of its own:
+    the code tried to end the program, or choose its exit code; :func:`note_stop_failures`
+    makes it the run's error, decided). A signal's interrupt goes on as it came."""
+    failures: list[str] = []
+    exits: list[str] = []
     held = _SET_UP.pop(id(root), None)
     for node in held[1] if held is not None and held[0] is root else ():
         try:
             node.shutdown()
-        except Exception as exc:
-            failures.append(f"shutdown() of {behaviour_error(exc)}")
-            log.warning("%s; the other nodes were shut down all the same", failures[-1])
-    return failures
+        except BaseException as exc:
+            if not code_failure(exc):
+                raise
+            said = f"shutdown() of {behaviour_error(exc, method=False)}"
+            (failures if isinstance(exc, Exception) else exits).append(said)
+            log.warning("%s; the other nodes were shut down all the same", said)
+    return failures, exits

@@ -126,3 +126,86 @@ def test_a_name_two_plugins_declare_is_no_broken_plugin(
     out, err = capsys.readouterr()
     assert "bt-s29-one:s29_sound" in json.loads(out)["$defs"]
     assert "roomba-bt schema: warning: plugin 's29_two'" in err
+
+
+#: what an installed plugin's import may raise that is no ``Exception`` (session 29's
+#: audit): every command answered ``interrupted`` (130) to its ``raise KeyboardInterrupt``,
+#: ``validate`` of a mission that does not use it too, and printed Python's traceback for
+#: a ``BaseException`` of its own; each is now the plugin that did not load, named
+RAISES_AT_IMPORT = {
+    "KeyboardInterrupt": (
+        "raise KeyboardInterrupt\n",
+        "KeyboardInterrupt (raised by its own code: no Ctrl-C or signal came)",
+    ),
+    "BaseException": (
+        "class Own(BaseException):\n    pass\n\nraise Own('the lab is closed')\n",
+        "Own: the lab is closed",
+    ),
+    "GeneratorExit": ("raise GeneratorExit\n", "GeneratorExit"),
+}
+#: a mission that uses no plugin
+PLAIN = "tree:\n  sequence:\n    - mode: safe\n    - wait: 0.1s\n    - mode: passive\n"
+
+
+def _installed_alone(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, source: str) -> None:
+    """``bt-s29-rude`` (entry point ``s29_rude``, its module ``source``) installed, as the
+    ``installed`` fixture installs its two."""
+    import roomba_bt.behaviours as behaviours
+    from roomba_bt.behaviours.registry import ENTRY_POINT_GROUP
+
+    site = tmp_path / "site"
+    site.mkdir()
+    _install(site, "bt-s29-rude", "s29_rude", source)
+    monkeypatch.syspath_prepend(str(site))
+    monkeypatch.delitem(sys.modules, "s29_rude", raising=False)
+    registry = behaviours.builtin_registry()
+    registry._group = ENTRY_POINT_GROUP
+    registry._loaded = False
+    monkeypatch.setattr(behaviours, "default_registry", lambda: registry)
+
+
+@pytest.mark.parametrize("kind", list(RAISES_AT_IMPORT))
+def test_what_else_an_import_raises_is_a_plugin_that_did_not_load(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys, kind: str
+) -> None:
+    source, said = RAISES_AT_IMPORT[kind]
+    _installed_alone(tmp_path, monkeypatch, source)
+    mission = tmp_path / "plain.yaml"
+    mission.write_text(PLAIN)
+    assert main(["validate", str(mission)]) == 0  # it does not use the plugin
+    assert main(["behaviours"]) == 2
+    out, err = capsys.readouterr()
+    [line] = [line for line in err.splitlines() if "s29_rude" in line]
+    assert line.startswith(
+        f"roomba-bt behaviours: error: plugin 's29_rude' (s29_rude, from bt-s29-rude): failed "
+        f"to import: {said} (at "
+    ), line
+    assert "Traceback" not in out + err and "interrupted" not in err
+    run = ["run", str(mission), "--fast", "--display", "none"]
+    assert main(run) == 0  # a run of a mission that does not use it runs
+    assert "outcome      SUCCESS" in capsys.readouterr().out
+
+
+def test_a_real_ctrl_c_during_a_plugin_s_import_is_still_an_interrupt(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
+) -> None:
+    """The SIGINT itself, delivered while the plugin imports (a slow import, the operator's
+    Ctrl-C): the command is interrupted, 130, as before."""
+    _installed_alone(tmp_path, monkeypatch, "import signal\nsignal.raise_signal(signal.SIGINT)\n")
+    assert main(["behaviours"]) == 130
+    assert "roomba-bt: interrupted" in capsys.readouterr().err
+
+
+def test_a_plugin_file_that_raises_keyboard_interrupt_is_a_mission_error(
+    tmp_path: Path, capsys: Capsys
+) -> None:
+    (tmp_path / "rude.py").write_text("raise KeyboardInterrupt\n")
+    mission = tmp_path / "m.yaml"
+    mission.write_text("plugins: [./rude.py]\n" + PLAIN)
+    assert main(["validate", str(mission), "--allow-plugin-files"]) == 2
+    out, err = capsys.readouterr()
+    assert (
+        "failed to import: KeyboardInterrupt (raised by its own code: no Ctrl-C or signal "
+        f"came) (at {tmp_path / 'rude.py'}:1)"
+    ) in out, out + err
+    assert "interrupted" not in err

@@ -188,6 +188,6 @@ def test_a_plugin_s_write_of_the_wrong_type_ends_the_run_naming_the_writer(
     err = capsys.readouterr().err
     assert (
         "fast(key=v) raised KeyType: write_key('v', 'fast'): blackboard key 'v' is declared "
-        "speed (mm/s): expected a number of mm/s, got 'fast' (a str) "
+        "speed (mm/s): expected a number of mm/s, got 'fast' (a str) in its update() "
         f"(at {tmp_path / 'fast.py'}:12)" in err
     ), err

@@ -131,3 +131,54 @@ def test_a_guard_on_the_wall_clock_ignores_the_terminals_stops_and_gives_them_ba
     assert signal.getsignal(signum) is signal.SIG_IGN  # until the summary is printed
     guard.release()
     assert signal.getsignal(signum) is before
+
+
+def test_a_signal_s_interrupt_is_told_from_one_code_raises() -> None:
+    """The runtime's handlers mark the interrupt they raise (session 29): one a plugin's code
+    raises itself is its error (exit 4), the operator's Ctrl-C stays 130."""
+    from roomba_bt.robot.safety import code_failure, interrupts_told_apart, signal_delivered
+
+    # Python's own handler: the two cannot be told apart, so it is a signal's, as ever
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    assert signal_delivered(KeyboardInterrupt())
+    assert not code_failure(KeyboardInterrupt())
+    with interrupts_told_apart():
+        assert not signal_delivered(KeyboardInterrupt())  # no signal: the code's
+        with pytest.raises(KeyboardInterrupt) as sent:
+            signal.raise_signal(signal.SIGINT)
+        assert signal_delivered(sent.value)
+        with pytest.raises(Terminated) as terminated:  # no handler of ours for SIGTERM here
+            raise Terminated(signal.SIGTERM)
+        assert signal_delivered(terminated.value)
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # given back
+    assert signal_delivered(sent.value)  # still, after the block
+    with pytest.raises(KeyboardInterrupt) as raised, interrupts_told_apart():
+        raise KeyboardInterrupt
+    assert not signal_delivered(raised.value)  # marked on its way out of the block
+    for other in (SystemExit(0), GeneratorExit(), RuntimeError("x")):
+        assert code_failure(other) and not signal_delivered(other)
+    with InterruptGuard(), pytest.raises(KeyboardInterrupt) as guarded:
+        signal.raise_signal(signal.SIGINT)
+    assert signal_delivered(guarded.value)
+    with InterruptGuard():
+        assert not signal_delivered(KeyboardInterrupt())
+        assert not signal_delivered(Terminated(signal.SIGTERM))
+
+
+def test_an_interrupt_raised_in_another_thread_is_never_a_signal_s() -> None:
+    """Signals reach the main thread alone: a KeyboardInterrupt in a run's worker thread
+    (``RunStack.ticks()``) was raised by code."""
+    import threading
+
+    from roomba_bt.robot.safety import RunAborted, code_failure, signal_delivered
+
+    seen: list[bool] = []
+    worker = threading.Thread(target=lambda: seen.append(signal_delivered(KeyboardInterrupt())))
+    worker.start()
+    worker.join()
+    assert seen == [False]
+
+    class Limit(RunAborted):
+        """As an evaluation's wall-clock limit: raised into the run from outside."""
+
+    assert not code_failure(Limit())

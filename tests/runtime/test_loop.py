@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+import signal
 from pathlib import Path
 from typing import Any
 
@@ -77,6 +78,10 @@ def test_timeout_counts_mission_time(run_mission: RunMission) -> None:
     assert run.link.written.endswith(SAFE_END)
 
 
+#: what :func:`_bump_raises_after` raises to stand for Ctrl-C: the signal itself
+SIGINT_NOW = KeyboardInterrupt("the signal")
+
+
 def _bump_raises_after(monkeypatch: pytest.MonkeyPatch, error: BaseException, ticks: int) -> None:
     """The bump condition returns FAILURE for ``ticks`` ticks, then raises ``error``."""
     from roomba_bt.behaviours import conditions
@@ -86,6 +91,8 @@ def _bump_raises_after(monkeypatch: pytest.MonkeyPatch, error: BaseException, ti
     def update(self: object) -> py_trees.common.Status:
         calls["n"] += 1
         if calls["n"] > ticks:
+            if error is SIGINT_NOW:
+                signal.raise_signal(signal.SIGINT)
             raise error
         return py_trees.common.Status.FAILURE
 
@@ -106,7 +113,7 @@ def test_exception_in_a_behaviour_still_stops_the_robot(
 def test_ctrl_c_is_exit_130_after_the_safe_stop(
     run_mission: RunMission, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    _bump_raises_after(monkeypatch, KeyboardInterrupt(), 20)
+    _bump_raises_after(monkeypatch, SIGINT_NOW, 20)  # a behaviour's own raise: its error
     run = run_mission(DRIVE_TO_WALL)
     assert run.summary.outcome is Outcome.INTERRUPTED
     assert run.summary.exit_code == 130

@@ -423,16 +423,18 @@ def test_a_command_the_replayed_tree_writes_before_its_frames_is_a_difference(
 
 INTERRUPTING = '''\
 import os
+import signal
 from roomba_bt.behaviours import Condition, declare
 
 @declare("interrupting", kind="condition")
 class Interrupting(Condition):
-    """A Ctrl-C landing inside a tick: the first tick past 50 whose tree queued a command."""
+    """A Ctrl-C landing inside a tick: the first tick past 50 whose tree queued a command
+    (the signal itself: a ``raise KeyboardInterrupt`` of the plugin's own is its error)."""
 
     def check(self, snapshot):
         queued = self.robot.outbox.queued
         if os.environ.get("INTERRUPT_MID_TICK") and snapshot.tick >= 50 and queued:
-            raise KeyboardInterrupt
+            signal.raise_signal(signal.SIGINT)
         return True
 '''
 SPINS_WHILE = """\

@@ -6,9 +6,10 @@ py_trees nodes beside roomba-bt leaves."""
 from __future__ import annotations
 
 import logging
+import signal
 from collections import Counter
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NoReturn
 
 import py_trees
 import pytest
@@ -114,6 +115,14 @@ def test_an_interrupted_run_keeps_its_outcome_and_says_the_terminate_too() -> No
     assert summary.reason == "Ctrl-C; then terminate() of behaviour x raised E: e (at f.py:1)"
 
 
+def raise_as_it_comes(exc: BaseException) -> NoReturn:
+    """``exc`` raised in a behaviour; a bare ``KeyboardInterrupt`` stands for Ctrl-C, so the
+    signal itself is sent (one a behaviour raises itself is its error, exit 4)."""
+    if type(exc) is KeyboardInterrupt:
+        signal.raise_signal(signal.SIGINT)
+    raise exc
+
+
 class Closing(py_trees.behaviour.Behaviour):
     """What a py_trees user writes: opens something in setup(), closes it in shutdown().
     Its update gives ``ends`` after ``after`` ticks (None: RUNNING for ever; an exception:
@@ -132,7 +141,7 @@ class Closing(py_trees.behaviour.Behaviour):
         if self.ends is None or self.ticks <= self.after:
             return Status.RUNNING
         if isinstance(self.ends, BaseException):
-            raise self.ends
+            raise_as_it_comes(self.ends)
         return self.ends  # type: ignore[no-any-return]
 
     def shutdown(self) -> None:
@@ -202,7 +211,7 @@ class _FirstTick(py_trees.behaviour.Behaviour):
         self.exc = exc
 
     def update(self) -> Status:
-        raise self.exc
+        raise_as_it_comes(self.exc)
 
 
 @pytest.mark.parametrize(
