@@ -80,9 +80,8 @@ def _add_run_parser(sub: Any) -> None:
 
         Run MISSION. Without --port it runs on the built-in simulator (real time; --fast on the
         virtual clock). Exit codes: 0 succeeded, 1 failed or timed out, 2 invalid mission or usage,
-        3 connection or stream failure, 4 a behaviour raised an exception (or called sys.exit()),
-        7 succeeded but failed --strict, {INTERNAL_ERROR_SAID}, 130 interrupted (Ctrl-C or a
-        signal).
+        3 connection or stream failure, 4 a behaviour raised an exception (sys.exit() too), 7
+        succeeded but failed --strict, {INTERNAL_ERROR_SAID}, 130 interrupted (Ctrl-C, a signal).
         """,
     )
     run.add_argument("mission", help="mission YAML file, or a shipped mission's name (dock)")
