@@ -749,7 +749,7 @@ def _outside_message(
     every = (  # the command line reads these; a Python call is given its folders
         f", or for every command with {INCLUDE_PATH_VARIABLE} or {INCLUDE_DIRS_KEY} under "
         f"[tool.{PROJECT_TABLE}] in a {PROJECT_FILE} ({DOCUMENTED_AT})"
-        if wording is COMMAND_LINE
+        if wording == COMMAND_LINE  # by value: eval's workers get a pickled copy
         else ""
     )
     return (

@@ -200,3 +200,24 @@ def test_the_shipped_library_is_allowed_from_anywhere(tmp_path: Path) -> None:
         mission, diagnostics = compile_mission(path)
         assert diagnostics == []
         assert mission is not None
+
+
+def test_a_pickled_command_line_wording_still_names_every_command_s_configuration(
+    tmp_path: Path,
+) -> None:
+    """eval's workers get the permissions pickled: a copy of ``COMMAND_LINE``, not the object,
+    and the refusal must still name the environment variable and the project file."""
+    import pickle
+
+    from roomba_bt.mission.wording import COMMAND_LINE
+
+    copied = pickle.loads(pickle.dumps(Permissions(wording=COMMAND_LINE)))
+    (tmp_path / "shared").mkdir()
+    (tmp_path / "shared" / "lib.yaml").write_text("subtrees: {pause: {tree: {wait: 1s}}}\n")
+    folder = tmp_path / "mission"
+    folder.mkdir()
+    path = folder / "m.yaml"
+    path.write_text("include: [../shared/lib.yaml]\ntree: {subtree: pause}\n")
+    _, diagnostics = compile_mission(path, permissions=copied)
+    assert "--include-dir" in diagnostics[0].message
+    assert "ROOMBA_BT_INCLUDE_PATH" in diagnostics[0].message
