@@ -57,8 +57,10 @@ class Checked:
     def verdict(self, strict: bool) -> str:
         """What follows ``FILE: `` in the text: ``ok``, ``ok, with warnings`` or ``failed``
         with what failed it, its own count and each included file's."""
-        if self.problem is not None:
-            return "failed (not checked: its problem is said above)"
+        if self.problem is not None:  # its own words: a log kept from stdout alone, or JSON,
+            # has no "above" to point to (the stderr line says it with the command's name)
+            reason = self.problem.removeprefix(f"{self.file}: ")
+            return f"failed (cannot read: {escaped(reason, ANY_CONTROL)})"
         failing = self.failing(strict)
         if not failing:
             return "ok, with warnings" if self.diagnostics else "ok"
@@ -121,8 +123,10 @@ def print_text(checked: list[Checked], *, strict: bool, quiet: bool) -> None:
 
     seen: set[Diagnostic] = set()
     for one in checked:
-        if one.problem is not None:  # as show and run say it: stderr, the command named
+        if one.problem is not None:  # as show and run say it: stderr, the command named;
+            # and its verdict on stdout, as every file's (a CI log may keep stdout alone)
             print(f"roomba-bt validate: {escaped(one.problem, ANY_CONTROL)}", file=sys.stderr)
+            print(f"{escaped(one.file, ANY_CONTROL)}: {one.verdict(strict)}")
             continue
         fresh = _unseen(one.diagnostics, seen)
         for line in reported(fresh):
@@ -207,6 +211,7 @@ def print_github(checked: list[Checked], *, strict: bool, quiet: bool) -> None:
             print(
                 f"::error title={command_property(ANNOTATION_TITLE)}::{command_data(one.problem)}"
             )
+            print(f"{escaped(one.file, ANY_CONTROL)}: {one.verdict(strict)}")
             continue
         for d in _unseen(one.diagnostics[:MAX_REPORTED], seen):
             where = f"{d.message} [{d.yaml_path}]" if d.yaml_path else d.message

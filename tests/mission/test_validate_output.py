@@ -211,3 +211,18 @@ def test_github_messages_and_properties_are_escaped_as_the_actions_toolkit_does(
 
     assert command_data("100% done\r\nnext\x1b[2J") == "100%25 done%0D%0Anext\\x1b[2J"
     assert command_property("a,b:c\n.yaml") == "a%2Cb%3Ac%0A.yaml"
+
+
+def test_a_file_it_cannot_read_has_its_verdict_on_stdout_and_its_reason_in_json(
+    repo: Path, capsys: Capsys
+) -> None:
+    """A CI log that keeps stdout alone showed only the files that passed, and JSON's
+    ``said`` pointed "above", where a JSON document has nothing."""
+    assert main(["validate", "missing.yaml", "dock"]) == 2
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].startswith("missing.yaml: failed (cannot read: no such mission file")
+    assert out[1] == "dock: ok"
+    assert main(["validate", "--format", "json", "missing.yaml"]) == 2
+    (entry,) = json.loads(capsys.readouterr().out)["files"]
+    assert entry["said"].startswith("failed (cannot read: no such mission file")
+    assert "above" not in entry["said"]
