@@ -271,13 +271,16 @@ class Connection:
         self.send(oi.start())
         self.send(oi.pause_stream())
         drain(self.link.transport, self.link.read)  # a stale stream, a reset banner
+        round_trips: list[float] = []
         try:
             raw = agreed_mode_reply(
-                self.name, lambda: self._query_raw((OI_MODE_PACKET,), confirm_timeout),
+                self.name,
+                lambda: self._query_raw((OI_MODE_PACKET,), confirm_timeout, round_trips),
                 confirm_timeout,
-            )  # fmt: skip
+            )
         except NoAnswer as silent:
             raise answers_elsewhere(self, silent) from None
+        self.ending.heard_round_trips(round_trips, self.name)
         if not self.modes.calibrate(raw, self.link.transport.now(), self.name):
             raise not_a_mode(self.name, raw)
         self.link.mode_plus_one = self.modes.plus_one
@@ -308,8 +311,12 @@ class Connection:
                 self._report_change(change)
         return frame
 
-    def _query_raw(self, packet_ids: Sequence[int], timeout: float) -> SensorFrame | None:
-        """Query List and its reply, without telling the mode model."""
+    def _query_raw(
+        self, packet_ids: Sequence[int], timeout: float, round_trips: list[float] | None = None
+    ) -> SensorFrame | None:
+        """Query List and its reply, without telling the mode model; how long the reply took
+        is added to ``round_trips`` (the start-up's, which the stop's allowance comes from: a
+        user's later ``query()`` does not change it)."""
         if self.link.streaming:
             raise RobotError("query() needs the stream paused: a reply cannot be told apart")
         reply = ReplyParser(tuple(packet_ids), self.profile)
@@ -319,8 +326,9 @@ class Connection:
         deadline = clock() + timeout
         while True:
             frame = reply.feed(self.link.read(max(0.0, deadline - clock())))
-            if frame is not None:  # the link's round trip: how late the stop's frames come
-                self.ending.heard_round_trip(clock() - asked)
+            if frame is not None:
+                if round_trips is not None:  # the link's round trip: how late frames come
+                    round_trips.append(clock() - asked)
                 return frame
             if clock() >= deadline:
                 return None

@@ -27,7 +27,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import signal
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any, Literal
 
 from roomba_bt.oi import commands as oi
@@ -66,6 +66,12 @@ ROUND_TRIPS_IN_FLIGHT = 2
 #: to a large time adds nothing for a wait under its last bit (the listen after the stop
 #: looped for ever on ``bench.bench_robot``'s transport).
 CLOCK_ROUNDING = 1e-6
+#: The most a measured round trip counts for, in seconds (:meth:`SafeStop.heard_round_trips`):
+#: the allowance it sets is also the time the mode model waits for a mode command to show,
+#: during which a robot that really fell to Passive could still be sent actuator bytes. The
+#: slowest link the tests run on has 0.5 s of latency (its reply a slot later), past any
+#: bridge that works (Wi-Fi and Bluetooth: 50-300 ms); a slower link is logged, not followed.
+ROUND_TRIP_CAP = 0.6
 #: How many times a stop the stream contradicts is written (the first, and once more).
 STOP_ATTEMPTS = 2
 #: Reads at most of what waits unread in the port before a stop (each read takes all there
@@ -209,8 +215,8 @@ class SafeStop:
         #: frames that waited unread in the port as the stop was written, and for how long
         #: the program had not read it (:meth:`_read_backlog`), or None
         self._unread: tuple[int, float] | None = None
-        #: the longest round trip measured on this link (a Query List to its reply, seconds;
-        #: :meth:`heard_round_trip`), 0 before any
+        #: the link's round trip (the quickest of the start-up's Query List replies, at most
+        #: :data:`ROUND_TRIP_CAP` seconds; :meth:`heard_round_trips`), 0 before any
         self.round_trip = 0.0
 
     def begin(self) -> None:
@@ -220,12 +226,24 @@ class SafeStop:
         self.unheard = None
         self.confirm = None
 
-    def heard_round_trip(self, seconds: float) -> None:
-        """A question asked of the robot was answered ``seconds`` after it was written (the
-        start-up's Query List): the longest is kept. A link with latency (a Wi-Fi or
-        Bluetooth bridge, ``socket://``) still brings frames the robot sent before it heard
-        the stop that long after it: they are not the robot streaming on."""
-        self.round_trip = max(self.round_trip, seconds)
+    def heard_round_trips(self, seconds: Sequence[float], port: str) -> None:
+        """The start-up's Query Lists were answered ``seconds`` after each was written. A link
+        with latency (a Wi-Fi or Bluetooth bridge, ``socket://``) still brings frames the
+        robot sent before it heard the stop that long after it: they are not the robot
+        streaming on. The quickest reply is the link's round trip (a floor: a slower one is
+        a host that was busy, and jitter is :data:`ROUND_TRIPS_IN_FLIGHT`'s), capped at
+        :data:`ROUND_TRIP_CAP`. The longest ever kept let one slow reply on a loaded host
+        widen the stop's listening and the mode model's settle for the whole session."""
+        if not seconds:
+            return
+        quickest = min(seconds)
+        if quickest > ROUND_TRIP_CAP:
+            log.warning(
+                "%s: the robot answered a Query List after %.2f s at the quickest; the frames "
+                "on their way are allowed for a round trip of %.2f s at most",
+                port, quickest, ROUND_TRIP_CAP,
+            )  # fmt: skip
+        self.round_trip = min(quickest, ROUND_TRIP_CAP)
 
     def in_flight(self, period: float) -> float:
         """Seconds after a command is written that frames the robot sent before it heard it
