@@ -17,6 +17,7 @@ has it), the absolute path, and the summary's wall-clock measurements.
 from __future__ import annotations
 
 import argparse
+import os
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -111,13 +112,56 @@ def simulator_options(args: argparse.Namespace, folder: Path) -> dict[str, Any] 
 
 def run_options(args: argparse.Namespace, folder: Path) -> dict[str, Any]:
     """The run's options besides the mission and the simulator that decide its bytes, as
-    given: ``--timeout`` (None: none given), ``--include-dir`` (from the record's ``folder``,
-    as the mission is), ``--allow-plugin-files`` and ``--end-in``."""
+    given: ``--timeout`` (None: none given), the include folders granted (``--include-dir``,
+    ``ROOMBA_BT_INCLUDE_PATH`` and the project file's, each from the record's ``folder`` as
+    the mission is: a replay grants them, :func:`replayed_include_dirs`), ``--allow-plugin-files``
+    and ``--end-in``. Only ``--include-dir``'s were kept, and a record made with the
+    environment's folders could not say what it needed."""
+    from roomba_bt.cli.arguments import permissions
     from roomba_bt.runtime.provenance import source_name
 
+    granted = permissions(args, args.mission).include_dirs
     return {
         "timeout": args.timeout,
-        "include_dirs": [source_name(Path(d), folder) for d in args.include_dir or ()],
+        "include_dirs": [source_name(Path(d), folder) for d in granted],
         "allow_plugin_files": bool(args.allow_plugin_files),
         "end_in": args.end_in,
     }
+
+
+def replayed_include_dirs(record: str, header: dict[str, Any], mission: str) -> tuple[Path, ...]:
+    """The include folders a replay of ``record`` grants ``mission`` from its header's
+    ``options.include_dirs``: the folders its run was granted, read from the record's folder.
+
+    A record may come from someone else, as a project file may, and is held to the same
+    rule (docs/missions.md, Include folders): it grants only folders inside the folder that
+    holds both the record and the mission (a repository with ``records/`` and ``missions/``),
+    symbolic links followed, never one whose only common folder is the file system's root;
+    and only from a header whose paths are relative to the record (a record made before has
+    the recording machine's absolute ones). What it does not grant is a warning, said once:
+    the include it was meant for is refused at its own line, with ``--include-dir``."""
+    from roomba_bt.cli.arguments import warn_once
+    from roomba_bt.runtime.recording import recorded_path
+
+    options = header.get("options")
+    names = options.get("include_dirs") if isinstance(options, dict) else None
+    if not isinstance(names, list):
+        return ()
+    home = Path(record).resolve().parent
+    common = Path(os.path.commonpath([home, Path(mission).resolve()]))
+    granted: list[Path] = []
+    for name in names:
+        folder = recorded_path(name, header, Path(record)) if isinstance(name, str) else None
+        if folder is None or not folder.is_dir():
+            warn_once(f"{record}: include folder {name!r} of the recorded run is not here")
+            continue
+        folder = folder.resolve()
+        if common == Path(common.anchor) or not folder.is_relative_to(common):
+            warn_once(
+                f"{record}: include folder {name!r} of the recorded run is outside the folder "
+                f"that holds the record and its mission ({common}): a record grants only "
+                f"folders there; give it with --include-dir or ROOMBA_BT_INCLUDE_PATH; not granted"
+            )
+            continue
+        granted.append(folder)
+    return tuple(granted)

@@ -6,6 +6,7 @@ import argparse
 import contextlib
 import logging
 import sys
+from dataclasses import replace
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
@@ -32,7 +33,11 @@ from roomba_bt.cli.arguments import (
 )
 from roomba_bt.cli.monitor_cmd import LiveMonitor, MonitorOptions, chosen_token
 from roomba_bt.cli.monitor_cmd import add_run_arguments as add_monitor_arguments
-from roomba_bt.cli.record_header import add_reproducible_option, epoch_problem
+from roomba_bt.cli.record_header import (
+    add_reproducible_option,
+    epoch_problem,
+    replayed_include_dirs,
+)
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.printable import ANY_CONTROL, encodes, escaped
@@ -748,8 +753,9 @@ class Recorded(NamedTuple):
 
 def load_recorded(args: argparse.Namespace) -> Recorded | int:
     """The record ``args.record``, its mission (``--mission``, else the recorded one, by path
-    or shipped name; ``-p`` over the recorded parameters; ``--allow-plugin-files``), profile,
-    baud and packets; or an exit code after printing what is wrong."""
+    or shipped name; ``-p`` over the recorded parameters; ``--allow-plugin-files``; the
+    include folders its run was granted, where the record may grant them), profile, baud and
+    packets; or an exit code after printing what is wrong."""
     from roomba_bt.runtime.recording import RecordError, load_record
 
     try:
@@ -770,7 +776,12 @@ def load_recorded(args: argparse.Namespace) -> Recorded | int:
         return _error(extra)
     params.update(extra)
     baud: int = header.get("baud", 115200)
-    mission = load(found, params, profile, baud, permissions(args, found))
+    granted = permissions(args, found)
+    recorded_dirs = replayed_include_dirs(args.record, header, found)
+    granted = replace(
+        granted, include_dirs=tuple(dict.fromkeys((*granted.include_dirs, *recorded_dirs)))
+    )
+    mission = load(found, params, profile, baud, granted)
     if isinstance(mission, int):
         return mission
     packets = _recorded_packets(args.record, header, mission, found)

@@ -217,3 +217,59 @@ def test_a_record_holds_what_makes_it_again(
     capsys.readouterr()
     assert main(["run", "dock", "--fast", "--display", "none", "--record", "d.jsonl"]) == 0
     assert load_record(tmp_path / "d.jsonl").header["simulator"]["world"] == "empty-room"
+
+
+def test_a_record_replays_with_the_include_folders_its_run_was_granted(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The header held ``--include-dir``'s folders and the replay never read them: a record
+    made with ``--include-dir`` (or with ROOMBA_BT_INCLUDE_PATH, which the header did not even
+    hold) was refused at its include unless the replay was given the folder again."""
+    repo = _repository(tmp_path / "repo")
+    assert _record(repo, monkeypatch) == 0
+    capsys.readouterr()
+    assert main(["replay", "records/patrol.jsonl"]) == 0
+    assert "the tree wrote the same" in capsys.readouterr().out
+    monkeypatch.chdir(tmp_path)  # from anywhere: the folder is read from the record's
+    assert main(["replay", "repo/records/patrol.jsonl"]) == 0
+    # granted by the environment: recorded too, and replayed without it
+    monkeypatch.chdir(repo)
+    monkeypatch.setenv("ROOMBA_BT_INCLUDE_PATH", "missions/common")
+    assert main([
+        "run", "missions/patrol/patrol.yaml", "--fast", "--display", "none", "--world",
+        "worlds/lab.yaml", "--record", "records/by-env.jsonl",
+    ]) == 0  # fmt: skip
+    header = load_record(repo / "records" / "by-env.jsonl").header
+    assert header["options"]["include_dirs"] == ["../missions/common"]
+    monkeypatch.delenv("ROOMBA_BT_INCLUDE_PATH")
+    capsys.readouterr()
+    assert main(["replay", "records/by-env.jsonl"]) == 0
+
+
+def test_a_record_grants_no_folder_outside_the_one_that_holds_it_and_its_mission(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A record from a stranger is held to a project file's rule: a folder its header names
+    outside the folder holding the record and its mission (``/etc``, ``..``) is not granted,
+    and said once; the include is refused at its line as ever."""
+    repo = _repository(tmp_path / "repo")
+    assert _record(repo, monkeypatch) == 0
+    record = repo / "records" / "patrol.jsonl"
+    lines = record.read_text().splitlines()
+    header = json.loads(lines[0])
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    header["options"]["include_dirs"] = ["/etc", "../../elsewhere", "../missions/common"]
+    record.write_text("\n".join([json.dumps(header), *lines[1:]]) + "\n")
+    capsys.readouterr()
+    assert main(["replay", "records/patrol.jsonl"]) == 0  # its own folder still granted
+    err = capsys.readouterr().err
+    assert "include folder '/etc' of the recorded run is outside the folder" in err
+    assert "include folder '../../elsewhere' of the recorded run is outside" in err
+    assert "common" not in err
+    # the library moved outside: the record's word does not reach it
+    shutil.copy(repo / "missions/common/escapes.yaml", elsewhere / "escapes.yaml")
+    patrol = repo / "missions/patrol/patrol.yaml"
+    patrol.write_text(PATROL.replace("../common/escapes.yaml", "../../../elsewhere/escapes.yaml"))
+    assert main(["replay", "records/patrol.jsonl"]) == 2
+    assert "is outside the mission's folder" in capsys.readouterr().err
