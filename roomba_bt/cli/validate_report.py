@@ -59,7 +59,7 @@ class Checked:
         with what failed it, its own count and each included file's."""
         if self.problem is not None:  # its own words: a log kept from stdout alone, or JSON,
             # has no "above" to point to (the stderr line says it with the command's name)
-            reason = self.problem.removeprefix(f"{self.file}: ")
+            reason = self.problem.removeprefix(f"{self.file}: ").removeprefix(f"{self.file!r}: ")
             return f"failed (cannot read: {escaped(reason, ANY_CONTROL)})"
         failing = self.failing(strict)
         if not failing:
@@ -126,7 +126,7 @@ def print_text(checked: list[Checked], *, strict: bool, quiet: bool) -> None:
         if one.problem is not None:  # as show and run say it: stderr, the command named;
             # and its verdict on stdout, as every file's (a CI log may keep stdout alone)
             print(f"roomba-bt validate: {escaped(one.problem, ANY_CONTROL)}", file=sys.stderr)
-            print(f"{escaped(one.file, ANY_CONTROL)}: {one.verdict(strict)}")
+            print(f"{escaped(one.file, ANY_CONTROL) or repr('')}: {one.verdict(strict)}")
             continue
         fresh = _unseen(one.diagnostics, seen)
         for line in reported(fresh):

@@ -38,7 +38,7 @@ from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile, get_profile
 from roomba_bt.oi.stream import ReplyParser, check_bandwidth, stream_period
 from roomba_bt.robot.discovery import drain
-from roomba_bt.robot.ending import EndMode, SafeStop
+from roomba_bt.robot.ending import EndMode, SafeStop, link_round_trip
 from roomba_bt.robot.errors import (
     DEFAULT_WATCHDOG,
     ConnectionClosed,
@@ -280,7 +280,7 @@ class Connection:
             )
         except NoAnswer as silent:
             raise answers_elsewhere(self, silent) from None
-        self.ending.heard_round_trips(round_trips, self.name)
+        self.ending.round_trip = link_round_trip(round_trips, self.name)
         if not self.modes.calibrate(raw, self.link.transport.now(), self.name):
             raise not_a_mode(self.name, raw)
         self.link.mode_plus_one = self.modes.plus_one

@@ -66,7 +66,7 @@ ROUND_TRIPS_IN_FLIGHT = 2
 #: to a large time adds nothing for a wait under its last bit (the listen after the stop
 #: looped for ever on ``bench.bench_robot``'s transport).
 CLOCK_ROUNDING = 1e-6
-#: The most a measured round trip counts for, in seconds (:meth:`SafeStop.heard_round_trips`):
+#: The most a measured round trip counts for, in seconds (:func:`link_round_trip`):
 #: the allowance it sets is also the time the mode model waits for a mode command to show,
 #: during which a robot that really fell to Passive could still be sent actuator bytes. The
 #: slowest link the tests run on has 0.5 s of latency (its reply a slot later), past any
@@ -173,6 +173,27 @@ def signals_deferred() -> Iterator[None]:
         signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
+def link_round_trip(seconds: Sequence[float], port: str) -> float:
+    """The link's round trip from the start-up's Query Lists, answered ``seconds`` after each
+    was written (0 for none). A link with latency (a Wi-Fi or Bluetooth bridge,
+    ``socket://``) still brings frames the robot sent before it heard the stop that long
+    after it: they are not the robot streaming on (:meth:`SafeStop.in_flight`). The quickest
+    reply is the round trip (a floor: a slower one is a host that was busy, and jitter is
+    :data:`ROUND_TRIPS_IN_FLIGHT`'s), capped at :data:`ROUND_TRIP_CAP`. The longest ever kept
+    let one slow reply on a loaded host widen the stop's listening and the mode model's
+    settle for the whole session."""
+    if not seconds:
+        return 0.0
+    quickest = min(seconds)
+    if quickest > ROUND_TRIP_CAP:
+        log.warning(
+            "%s: the robot answered a Query List after %.2f s at the quickest; the frames "
+            "on their way are allowed for a round trip of %.2f s at most",
+            port, quickest, ROUND_TRIP_CAP,
+        )  # fmt: skip
+    return min(quickest, ROUND_TRIP_CAP)
+
+
 class SafeStop:
     """The endings of one session: the stop sequence written whole from the mode the model
     holds, whether it reached the robot, and the port closed once.
@@ -216,7 +237,7 @@ class SafeStop:
         #: the program had not read it (:meth:`_read_backlog`), or None
         self._unread: tuple[int, float] | None = None
         #: the link's round trip (the quickest of the start-up's Query List replies, at most
-        #: :data:`ROUND_TRIP_CAP` seconds; :meth:`heard_round_trips`), 0 before any
+        #: :data:`ROUND_TRIP_CAP` seconds; :func:`link_round_trip`), 0 before any
         self.round_trip = 0.0
 
     def begin(self) -> None:
@@ -225,25 +246,6 @@ class SafeStop:
         self.safe_stopped = None
         self.unheard = None
         self.confirm = None
-
-    def heard_round_trips(self, seconds: Sequence[float], port: str) -> None:
-        """The start-up's Query Lists were answered ``seconds`` after each was written. A link
-        with latency (a Wi-Fi or Bluetooth bridge, ``socket://``) still brings frames the
-        robot sent before it heard the stop that long after it: they are not the robot
-        streaming on. The quickest reply is the link's round trip (a floor: a slower one is
-        a host that was busy, and jitter is :data:`ROUND_TRIPS_IN_FLIGHT`'s), capped at
-        :data:`ROUND_TRIP_CAP`. The longest ever kept let one slow reply on a loaded host
-        widen the stop's listening and the mode model's settle for the whole session."""
-        if not seconds:
-            return
-        quickest = min(seconds)
-        if quickest > ROUND_TRIP_CAP:
-            log.warning(
-                "%s: the robot answered a Query List after %.2f s at the quickest; the frames "
-                "on their way are allowed for a round trip of %.2f s at most",
-                port, quickest, ROUND_TRIP_CAP,
-            )  # fmt: skip
-        self.round_trip = min(quickest, ROUND_TRIP_CAP)
 
     def in_flight(self, period: float) -> float:
         """Seconds after a command is written that frames the robot sent before it heard it

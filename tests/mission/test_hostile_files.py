@@ -119,7 +119,7 @@ def test_command_line_paths_that_are_no_file_say_what_they_are(
     """An empty path was ": a directory"; a broken link or a link loop "no such mission
     file, and no shipped mission of that name"; ``ok`` beside ok.yaml suggested "dock".
     Said as ``show`` and ``run`` say them: on stderr, the command named (``validate -`` was
-    on stdout, unprefixed, among the diagnostics)."""
+    on stdout, unprefixed, among the diagnostics); stdout has each file's verdict line."""
     monkeypatch.chdir(tmp_path)
     (tmp_path / "ok.yaml").write_text("tree: {wait: 1s}\n")
     (tmp_path / "broken.yaml").symlink_to("nothere.yaml")
@@ -127,7 +127,12 @@ def test_command_line_paths_that_are_no_file_say_what_they_are(
     (tmp_path / "loop2.yaml").symlink_to("loop1.yaml")
     assert main(["validate", "", "-", "broken.yaml", "loop1.yaml", "ok"]) == 2
     out, err = capsys.readouterr()
-    assert out == ""
+    verdicts = [line.partition(": failed (cannot read: ")[0] for line in out.splitlines()]
+    assert verdicts == ["''", "-", "broken.yaml", "loop1.yaml", "ok"]
+    assert out.splitlines()[0] == (
+        "'': failed (cannot read: an empty path; give a mission file or a shipped mission's "
+        "name (`roomba-bt missions` lists them))"
+    )
     lines = [line.removeprefix("roomba-bt validate: ") for line in err.splitlines()]
     assert len(lines) == len(err.split("roomba-bt validate: ")) - 1 == 5
     assert lines[:4] == [

@@ -5,6 +5,7 @@ follow from it named as such (docs/missions.md, Include folders)."""
 
 from __future__ import annotations
 
+import json
 import os
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -98,7 +99,11 @@ def test_replay_reads_it_too(repo: Path, capsys: Capsys) -> None:
     argv = [*COMMANDS["run"], "--record", str(record)]
     assert main(argv) == 0
     assert main(["replay", str(record)]) == 0
-    (repo / "pyproject.toml").unlink()
+    (repo / "pyproject.toml").unlink()  # the record holds the folder its run was granted
+    assert main(["replay", str(record)]) == 0
+    header = json.loads(record.read_text().splitlines()[0])
+    header["options"]["include_dirs"] = []
+    record.write_text("\n".join([json.dumps(header), *record.read_text().splitlines()[1:]]))
     assert main(["replay", str(record)]) == 2
     assert "is outside the mission's folder" in "".join(capsys.readouterr())
 
