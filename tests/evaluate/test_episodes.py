@@ -6,6 +6,7 @@ import dataclasses
 import io
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -187,9 +188,23 @@ def _hooked_episode(spec: EpisodeSpec):  # type: ignore[no-untyped-def]
         import psutil
 
         parent = psutil.Process(os.getppid())  # its forked workers run its command line
-        if sum(c.cmdline() == parent.cmdline() for c in parent.children()) > 1:  # a pool of 2
+        if _living_twins(parent) > 1:  # a pool of 2
             os.kill(os.getpid(), signal.SIGKILL)
     return run_episode(spec)
+
+
+def _living_twins(parent: Any) -> int:
+    """The parent's children that run its command line; a worker just killed is a zombie
+    until the pool reaps it, and its command line cannot be read (psutil.ZombieProcess)."""
+    import psutil
+
+    count = 0
+    for child in parent.children():
+        try:
+            count += child.cmdline() == parent.cmdline()
+        except psutil.Error:
+            continue
+    return count
 
 
 @pytest.fixture
