@@ -10,6 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from runtime.installed import install_distribution  # tests/runtime: a plugin installed
 
 from roomba_bt.behaviours import Registry
 from roomba_bt.cli.mission_cmds import describe_behaviours
@@ -57,21 +58,12 @@ class BetaRetry(Condition):
 '''
 
 
-def _install(site: Path, distribution: str, module: str, source: str) -> None:
-    """A distribution as pip leaves it: its module and its ``.dist-info``."""
-    (site / f"{module}.py").write_text(source)
-    info = site / f"{distribution.replace('-', '_')}-1.0.dist-info"
-    info.mkdir()
-    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {distribution}\nVersion: 1.0\n")
-    (info / "entry_points.txt").write_text(f"[roomba_bt.behaviours]\n{module} = {module}\n")
-
-
 @pytest.fixture
 def registry(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Registry:
     site = tmp_path / "site"
     site.mkdir()
-    _install(site, "bt-ns-alpha", "bt_ns_alpha_plugin", ALPHA)
-    _install(site, "bt-ns-beta", "bt_ns_beta_plugin", BETA)
+    install_distribution(site, "bt-ns-alpha", "bt_ns_alpha_plugin", ALPHA)
+    install_distribution(site, "bt-ns-beta", "bt_ns_beta_plugin", BETA)
     monkeypatch.syspath_prepend(str(site))
     for module in ("bt_ns_alpha_plugin", "bt_ns_beta_plugin"):
         monkeypatch.delitem(__import__("sys").modules, module, raising=False)

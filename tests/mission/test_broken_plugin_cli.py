@@ -15,6 +15,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from runtime.installed import install_distribution  # tests/runtime: a plugin installed
 
 from roomba_bt.cli import main
 
@@ -35,15 +36,6 @@ class SoundCondition(Condition):
 '''
 
 
-def _install(site: Path, distribution: str, module: str, source: str) -> None:
-    """A distribution as pip leaves it: its module and its ``.dist-info``."""
-    (site / f"{module}.py").write_text(source)
-    info = site / f"{distribution.replace('-', '_')}-1.0.dist-info"
-    info.mkdir()
-    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {distribution}\nVersion: 1.0\n")
-    (info / "entry_points.txt").write_text(f"[roomba_bt.behaviours]\n{module} = {module}\n")
-
-
 @pytest.fixture
 def installed(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """``bt-s29-broken`` (entry point ``s29_broken``, raises on import) and ``bt-s29-sound``
@@ -53,8 +45,8 @@ def installed(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
 
     site = tmp_path / "site"
     site.mkdir()
-    _install(site, "bt-s29-broken", "s29_broken", BROKEN)
-    _install(site, "bt-s29-sound", "s29_sound", WORKING)
+    install_distribution(site, "bt-s29-broken", "s29_broken", BROKEN)
+    install_distribution(site, "bt-s29-sound", "s29_sound", WORKING)
     monkeypatch.syspath_prepend(str(site))
     for module in ("s29_broken", "s29_sound"):
         monkeypatch.delitem(sys.modules, module, raising=False)
@@ -115,8 +107,8 @@ def test_a_name_two_plugins_declare_is_no_broken_plugin(
 
     site = tmp_path / "site"
     site.mkdir()
-    _install(site, "bt-s29-one", "s29_one", WORKING)
-    _install(site, "bt-s29-two", "s29_two", WORKING.replace("SoundCondition", "Other"))
+    install_distribution(site, "bt-s29-one", "s29_one", WORKING)
+    install_distribution(site, "bt-s29-two", "s29_two", WORKING.replace("SoundCondition", "Other"))
     monkeypatch.syspath_prepend(str(site))
     registry = behaviours.builtin_registry()
     registry._group = ENTRY_POINT_GROUP
@@ -155,7 +147,7 @@ def _installed_alone(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, source: st
 
     site = tmp_path / "site"
     site.mkdir()
-    _install(site, "bt-s29-rude", "s29_rude", source)
+    install_distribution(site, "bt-s29-rude", "s29_rude", source)
     monkeypatch.syspath_prepend(str(site))
     monkeypatch.delitem(sys.modules, "s29_rude", raising=False)
     registry = behaviours.builtin_registry()
