@@ -604,6 +604,19 @@ def test_a_record_says_how_its_run_ended_and_its_replay_ends_there(
     assert out.startswith(f"{record}: {ended}"), out
 
 
+def _status(request: Any) -> int:
+    """The HTTP status the monitor answers ``request`` (a ``urllib.request.Request``) with."""
+    import urllib.error
+    import urllib.request
+
+    try:
+        with urllib.request.urlopen(request, timeout=10) as response:
+            return int(response.status)
+    except urllib.error.HTTPError as exc:
+        exc.close()
+        return exc.code
+
+
 #: a token of the operator's own (32 URL-safe characters)
 CHOSEN = "Bookmark-ed_token-0123456789abcd"
 
@@ -624,12 +637,7 @@ def _probe_the_page(monkeypatch: pytest.MonkeyPatch) -> dict[str, int]:
         for name, token in (("given", CHOSEN), ("none", ""), ("wrong", "x" * 32)):
             headers = {"X-Monitor-Token": token} if token else {}
             request = urllib.request.Request(f"http://127.0.0.1:{server.port}/", headers=headers)
-            try:
-                with urllib.request.urlopen(request, timeout=10) as response:
-                    statuses[name] = response.status
-            except urllib.error.HTTPError as exc:
-                exc.close()
-                statuses[name] = exc.code
+            statuses[name] = _status(request)
         return url
 
     monkeypatch.setattr(MonitorServer, "start", probed)
@@ -721,12 +729,7 @@ def _probe_the_view_link(monkeypatch: pytest.MonkeyPatch) -> dict[str, int]:
             ("page", urllib.request.Request(f"{base}/", headers=headers)),
             ("control", urllib.request.Request(f"{base}/api/control", body, headers)),
         ):
-            try:
-                with urllib.request.urlopen(request, timeout=10) as response:
-                    statuses[name] = response.status
-            except urllib.error.HTTPError as exc:
-                exc.close()
-                statuses[name] = exc.code
+            statuses[name] = _status(request)
         return url
 
     monkeypatch.setattr(MonitorServer, "start", probed)
