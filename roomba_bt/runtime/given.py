@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from os import PathLike
 from typing import Any
 
 #: what a mission given to a run must have (:class:`~roomba_bt.runtime.loop.MissionLike`)
@@ -45,8 +46,9 @@ def seconds(name: str, value: object, *, none: bool, zero: bool) -> None:
         raise ValueError(f"RunStack({name}={value!r}): seconds {least}")
 
 
-def check_numbers(
-    *,
+def check_arguments(
+    mission: object,
+    link: object,
     timeout_s: object,
     grace: object,
     watchdog: object,
@@ -54,7 +56,15 @@ def check_numbers(
     tick_limit: object,
     packets: Sequence[int] | None,
 ) -> None:
-    """The numbers a :class:`RunStack` is given, each checked (None: its default)."""
+    """The mission, the link and the numbers a :class:`RunStack` is given, each checked (a
+    number None: its default)."""
+    check_mission(mission)
+    if isinstance(link, str | bytes | PathLike):
+        raise TypeError(
+            f"RunStack(mission, link): the link is a Transport or a Connection, not the "
+            f"{type(link).__name__} {link!r}: open it first, "
+            f"roomba_bt.Connection.open({link!r}) (and close it after)"
+        )
     seconds("timeout_s", timeout_s, none=True, zero=False)
     seconds("grace", grace, none=False, zero=True)
     seconds("watchdog", watchdog, none=True, zero=True)  # 0: no watchdog (a replay's)

@@ -22,7 +22,6 @@ import threading
 from collections import deque
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
-from os import PathLike
 from pathlib import Path
 from typing import Any, Literal
 
@@ -36,7 +35,7 @@ from roomba_bt.oi.profiles import PROFILES, RobotProfile
 from roomba_bt.robot.connection import Connection, EndMode
 from roomba_bt.robot.errors import DEFAULT_WATCHDOG
 from roomba_bt.runtime.claimed import ClaimedFile
-from roomba_bt.runtime.given import check_given, check_mission, check_numbers
+from roomba_bt.runtime.given import check_arguments, check_given
 from roomba_bt.runtime.loop import (
     MissionLike,
     MissionRunner,
@@ -239,7 +238,7 @@ class RunStack:
         replayed_notes: Sequence[dict[str, Any]] | None = None,
         strict: bool = False,
     ) -> None:
-        _check_given(mission, link, timeout_s, grace, watchdog, baud, tick_limit, packets)
+        check_arguments(mission, link, timeout_s, grace, watchdog, baud, tick_limit, packets)
         check_given(observer=observer, input_ended=input_ended, strict=strict)
         made: dict[str, Any] = dict(
             watchdog=watchdog, end_in=end_in, baud=baud, keep_awake=keep_awake
@@ -406,32 +405,6 @@ class RunStack:
                 )  # fmt: skip
         with contextlib.suppress(Exception):
             self.connection.close()
-
-
-def _check_given(
-    mission: object,
-    link: object,
-    timeout_s: object,
-    grace: object,
-    watchdog: object,
-    baud: object,
-    tick_limit: object,
-    packets: Sequence[int] | None,
-) -> None:
-    """What :class:`RunStack` was given, checked before anything is made (``given.py``): a
-    wrong one is a TypeError or ValueError naming it, not a run that ends as a behaviour's
-    error."""
-    check_mission(mission)
-    if isinstance(link, str | bytes | PathLike):
-        raise TypeError(
-            f"RunStack(mission, link): the link is a Transport or a Connection, not the "
-            f"{type(link).__name__} {link!r}: open it first, "
-            f"roomba_bt.Connection.open({link!r}) (and close it after)"
-        )
-    check_numbers(
-        timeout_s=timeout_s, grace=grace, watchdog=watchdog, baud=baud,
-        tick_limit=tick_limit, packets=packets,
-    )  # fmt: skip
 
 
 def _given(
