@@ -136,11 +136,8 @@ class CompiledMission:
     def setup(self, robot: RobotHandle, **kwargs: Any) -> None:
         """Hand the robot to every node (py_trees idiom: hardware arrives in ``setup``) and
         write the blackboard's initial values. Call again before each run."""
-        declare_keys(self.blackboard_keys)
-        for key, value in self.blackboard_initial.items():
-            write_key(key, value)
-        for node in self.root.iterate():
-            node.setup(robot=robot, **kwargs)
+        blackboard = MissionBlackboard(self.name, self.blackboard_keys, self.blackboard_initial)
+        set_up_tree(self.root, blackboard, robot, **kwargs)
 
 
 @dataclass(frozen=True)
@@ -159,6 +156,21 @@ class MissionBlackboard:
 #: each compiled mission's root -> the blackboard its mission declares. Weak: a root no
 #: longer held leaves (the entry does not hold the root: a mission's blackboard does not)
 _BLACKBOARD_OF_ROOT: WeakKeyDictionary[Behaviour, MissionBlackboard] = WeakKeyDictionary()
+
+
+def set_up_tree(
+    root: Behaviour, blackboard: MissionBlackboard | None, robot: RobotHandle, **kwargs: Any
+) -> None:
+    """A run's set-up of ``root``, for a compiled mission and a tree built around one alike:
+    ``blackboard``'s keys declared and its initial values written first (None: no mission
+    declares one), so that a node's ``setup`` may read them, then the robot handed to every
+    node."""
+    if blackboard is not None:
+        declare_keys(blackboard.keys)
+        for key, value in blackboard.initial.items():
+            write_key(key, value)
+    for node in root.iterate():
+        node.setup(robot=robot, **kwargs)
 
 
 def blackboard_within(root: Behaviour) -> MissionBlackboard | None:

@@ -27,10 +27,9 @@ from typing import Any, Literal
 
 from py_trees.behaviour import Behaviour
 
-from roomba_bt.behaviours.blackboard import declare_keys, write_key
 from roomba_bt.behaviours.declare import Declaration
 from roomba_bt.behaviours.lean import check_updates
-from roomba_bt.mission.build import blackboard_within
+from roomba_bt.mission.build import blackboard_within, set_up_tree
 from roomba_bt.oi.profiles import PROFILES, RobotProfile
 from roomba_bt.robot.connection import Connection, EndMode
 from roomba_bt.robot.errors import DEFAULT_WATCHDOG
@@ -108,13 +107,7 @@ class TreeMission:
         root in the tree brings its blackboard: its keys' types and ``initial:`` values are
         written first, as its own ``setup`` writes them (:func:`blackboard_within`)."""
         check_updates(self.root)
-        blackboard = blackboard_within(self.root)
-        if blackboard is not None:
-            declare_keys(blackboard.keys)
-            for key, value in blackboard.initial.items():
-                write_key(key, value)
-        for node in self.root.iterate():
-            node.setup(robot=robot, **kwargs)
+        set_up_tree(self.root, blackboard_within(self.root), robot, **kwargs)
 
 
 @dataclass(frozen=True)
