@@ -14,6 +14,7 @@ import logging
 import sys
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import py_trees
 
@@ -52,23 +53,19 @@ SHUTTING_DOWN = "the robot is stopped; the behaviours' shutdown() is under way"
 THE_TREES_STOP, THE_SHUTDOWN = "the tree's stop", "the behaviours' shutdown()"
 
 
+@dataclass(frozen=True, eq=False)
 class RunEnding:
     """How a run stops its tree on ``connection``: the wheels first, nothing the behaviours
     write meanwhile sets the robot going (counted in ``summary``), what they queued in
-    ``outbox`` dropped. ``clock`` is the mission time so many seconds after the last tick's
-    frame (None before the first), to place what was not written."""
+    ``outbox`` dropped. The runner's parts, held as it made them (frozen: one run, one
+    ending; ``eq=False``: each ending is its own, compared by identity)."""
 
-    def __init__(
-        self,
-        connection: Connection,
-        outbox: Outbox,
-        summary: RunSummary,
-        clock: Callable[[float], float | None],
-    ) -> None:
-        self.connection = connection
-        self.outbox = outbox
-        self.summary = summary
-        self._clock = clock
+    connection: Connection
+    outbox: Outbox
+    summary: RunSummary
+    #: the mission time so many seconds after the last tick's frame (None before the
+    #: first), to place what was not written
+    clock: Callable[[float], float | None]
 
     def end_tree(
         self,
@@ -225,7 +222,7 @@ class RunEnding:
         summary = self.summary
         summary.dropped_in_stop += 1
         if not summary.first_dropped:
-            now = self._clock(0.0)  # the last tick's time
+            now = self.clock(0.0)  # the last tick's time
             when = f"t={now:.3f} " if now is not None else ""
             summary.first_dropped = f"{when}{who} {how} {what}"
 
