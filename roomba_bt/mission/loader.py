@@ -48,6 +48,7 @@ import yaml
 
 from roomba_bt.behaviours.language import WORDS
 from roomba_bt.behaviours.units import ANY, STR, VALUE_TYPES, UnitError, ValueType, closest, enum
+from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.include_path import (
     DOCUMENTED_AT,
     INCLUDE_DIRS_KEY,
@@ -278,23 +279,46 @@ class Loader:
                 f"with {self.permissions.wording.on_world.format(path=str(path))}"
             ))  # fmt: skip
             return None
-        if not _is_mission(root, TOP_LEVEL):
-            self.ctx.error(root_loc.at(_not_a_mission("this file", TOP_LEVEL)))
+        sections = self._sections(
+            root,
+            root_loc,
+            TOP_LEVEL,
+            not_a_mission=root_loc.at(_not_a_mission("this file", TOP_LEVEL)),
+            called="a mission file",
+            unknown_key=lambda key: (
+                f"unknown top-level key {key!r}{closest(key, TOP_LEVEL)}; "
+                f"known: {', '.join(TOP_LEVEL)}"
+            ),
+        )
+        return None if sections is None else (sections, root_loc)
+
+    def _sections(
+        self,
+        root: yaml.Node,
+        root_loc: Loc,
+        words: tuple[str, ...],
+        *,
+        not_a_mission: Diagnostic,
+        called: str,
+        unknown_key: Callable[[str], str],
+    ) -> dict[str, tuple[yaml.Node, Loc, Loc]] | None:
+        """The sections of a file's root (a mission, or a library it includes) by key:
+        None, ``not_a_mission`` reported, when the root is no mapping with one of ``words``
+        (its content is not quoted back), or when its keys are not all names (``called``
+        names the file in that error). A key not in ``words`` is reported with
+        ``unknown_key(key)`` and the others are read on."""
+        if not _is_mission(root, words):
+            self.ctx.error(not_a_mission)
             return None
         try:
-            items = mapping(root, root_loc, "a mission file")
+            items = mapping(root, root_loc, called)
         except Bad as bad:
             self.ctx.report(bad)
             return None
         for key, _, key_loc, _ in items:
-            if key not in TOP_LEVEL:
-                self.ctx.error(
-                    key_loc.at(
-                        f"unknown top-level key {key!r}{closest(key, TOP_LEVEL)}; "
-                        f"known: {', '.join(TOP_LEVEL)}"
-                    )
-                )
-        return {k: (v, kl, vl) for k, v, kl, vl in items}, root_loc
+            if key not in words:
+                self.ctx.error(key_loc.at(unknown_key(key)))
+        return {k: (v, kl, vl) for k, v, kl, vl in items}
 
     def _names(
         self, path: Path, sections: dict[str, tuple[yaml.Node, Loc, Loc]]
@@ -454,24 +478,20 @@ class Loader:
                 f"library: an included file may hold only {', '.join(_INCLUDED_KEYS)}"
             ))  # fmt: skip
             return False
-        if not _is_mission(root, _INCLUDED_KEYS):
-            self.ctx.error(iloc.at(_not_a_mission(f"included file {text!r}", _INCLUDED_KEYS)))
+        sections = self._sections(
+            root,
+            root_loc,
+            _INCLUDED_KEYS,
+            not_a_mission=iloc.at(_not_a_mission(f"included file {text!r}", _INCLUDED_KEYS)),
+            called="an included file",
+            unknown_key=lambda key: (
+                f"an included file may only hold {', '.join(_INCLUDED_KEYS)}; found {key!r}"
+            ),
+        )
+        if sections is None:
             return False
-        try:
-            items = mapping(root, root_loc, "an included file")
-        except Bad as bad:
-            self.ctx.report(bad)
-            return False
-        allowed = _INCLUDED_KEYS
-        for key, _, key_loc, _ in items:
-            if key not in allowed:
-                self.ctx.error(
-                    key_loc.at(
-                        f"an included file may only hold {', '.join(allowed)}; found {key!r}"
-                    )
-                )
         self._include_stack.append(target)
-        self._file_sections(target, {k: (v, kl, vl) for k, v, kl, vl in items})
+        self._file_sections(target, sections)
         self._include_stack.pop()
         return True
 
