@@ -248,6 +248,26 @@ class SlowTerm(Action):
 '''
 
 
+#: the source of a function a plugin's blocking method calls (the plugin's source ends with
+#: it): the tick waits until the tick guard has stopped the wheels behind its back, at most
+#: 10 s, so that a test of the guard waits for its act, not for a time that depends on the
+#: machine's speed (tests/runtime/test_tick_guard.py, test_stop_on_a_slow_link.py)
+WAITS_FOR_THE_GUARD = '''
+
+import time
+
+
+def wait_for_the_guard(robot):
+    """Blocks until the wheels were stopped behind the tick's back (at most 10 s)."""
+    writer = robot.connection.writer
+    deadline = time.monotonic() + 10.0
+    while getattr(writer.last_wheels, "args", None) != (0, 0):
+        if time.monotonic() > deadline:
+            break
+        time.sleep(0.002)
+'''
+
+
 def run_in_a_worker(stack: RunStack) -> tuple[threading.Thread, list[RunSummary | BaseException]]:
     """``stack.run()`` in a thread of its own, started; what it returned or raised lands in
     the list (the test says what it was)."""

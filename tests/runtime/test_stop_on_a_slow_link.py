@@ -22,7 +22,7 @@ import pytest
 from roomba_bt.oi import commands as oi
 from roomba_bt.runtime.recording import load_record
 
-from .simrun import write_mission
+from .simrun import WAITS_FOR_THE_GUARD, write_mission
 
 CLI = [sys.executable, "-m", "roomba_bt.cli"]
 SAFE_END = oi.halt().data + oi.motors_off().data + oi.pause_stream().data + oi.start().data
@@ -44,9 +44,8 @@ tree:
 
 #: spins with the motors on; its second tick blocks until the tick guard has stopped the
 #: wheels behind its back (at most 10 s), then fails: the frames of the blocked time queue
-BLOCKS = '''
-import time
-
+BLOCKS = (
+    '''
 from py_trees.common import Status
 
 from roomba_bt.behaviours import Action, declare
@@ -67,14 +66,11 @@ class Blocks(Action):
         self.ticks += 1
         if self.ticks < 3:
             return Status.RUNNING
-        writer = self.robot.connection.writer
-        deadline = time.monotonic() + 10.0
-        while getattr(writer.last_wheels, "args", None) != (0, 0):
-            if time.monotonic() > deadline:
-                break
-            time.sleep(0.002)
+        wait_for_the_guard(self.robot)
         return Status.FAILURE
 '''
+    + WAITS_FOR_THE_GUARD
+)
 
 BLOCKING_MISSION = """
 mission: blocking

@@ -16,11 +16,10 @@ from roomba_bt.oi import commands as C
 from roomba_bt.oi.encode import turns_wheels
 from roomba_bt.runtime.tick_guard import TickGuard
 
-from .simrun import SLOW_TERM, RunMission
+from .simrun import SLOW_TERM, WAITS_FOR_THE_GUARD, RunMission
 
-PLUGIN = '''
-import time
-
+PLUGIN = (
+    '''
 from py_trees.common import Status
 
 from roomba_bt.behaviours import Action, declare
@@ -33,14 +32,11 @@ class Stuck(Action):
     def update(self):
         if not getattr(self, "waited", False):
             self.waited = True
-            writer = self.robot.connection.writer
-            deadline = time.monotonic() + 10.0
-            while getattr(writer.last_wheels, "args", None) != (0, 0):
-                if time.monotonic() > deadline:
-                    break
-                time.sleep(0.002)
+            wait_for_the_guard(self.robot)
         return Status.SUCCESS
 '''
+    + WAITS_FOR_THE_GUARD
+)
 
 #: forward at 100 mm/s for 6 cm, with the blocking leaf beside the drive
 MISSION = """
@@ -338,16 +334,12 @@ def test_a_terminate_that_blocks_mid_run_is_the_tick_guards(
     tick: the tick guard covers it as it covers an update() (drive 0 behind its back), and
     the leaf's own halt, queued in that tick, stands: the wheels are not sent on again while
     the next branch runs."""
-    blocking = SLOW_TERM.replace(
-        "    def terminate(self, new_status):\n",
-        "    def terminate(self, new_status):\n"
-        "        import time\n"
-        "        writer = self.robot.connection.writer\n"
-        "        deadline = time.monotonic() + 10.0\n"
-        "        while getattr(writer.last_wheels, 'args', None) != (0, 0):\n"
-        "            if time.monotonic() > deadline:\n"
-        "                break\n"
-        "            time.sleep(0.002)\n",
+    blocking = (
+        SLOW_TERM.replace(
+            "    def terminate(self, new_status):\n",
+            "    def terminate(self, new_status):\n        wait_for_the_guard(self.robot)\n",
+        )
+        + WAITS_FOR_THE_GUARD
     )
     (tmp_path / "slowterm.py").write_text(blocking)
     run = run_mission(
