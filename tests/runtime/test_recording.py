@@ -37,15 +37,18 @@ HEADER = {"profile": "create2", "baud": 115200, "mission": "bump-and-turn", "pac
 
 
 class _Link:
-    """A port on a clock the test moves: a stream frame every 15 ms."""
+    """A port on a clock the test moves: a stream frame every 15 ms; with ``drift``, the
+    clock moves on every reading too, as the wall clock does."""
 
     name = "link"
     is_open = True
 
-    def __init__(self) -> None:
+    def __init__(self, drift: float = 0.0) -> None:
         self.t = 50.0
+        self.drift = drift
 
     def now(self) -> float:
+        self.t += self.drift
         return self.t
 
     def read(self, timeout: float) -> bytes:
@@ -610,24 +613,10 @@ def test_a_record_names_its_robot_and_start_and_one_without_them_still_loads(
     assert f"{wrong}:1: header field 'port' is 3; expected text" in capsys.readouterr().err
 
 
-class _MovingClock:
-    """A link whose clock moves on every reading, as the wall clock does."""
-
-    name = "moving"
-    wall_clock = True
-
-    def __init__(self) -> None:
-        self.t = 100.0
-
-    def now(self) -> float:
-        self.t += 0.001
-        return self.t
-
-
 def test_a_record_that_fails_at_its_header_stopped_at_zero_not_minus_zero() -> None:
     """``--record /dev/full``: the header's write fails before the first chunk, and the
     warning said ``stopped at -0.000 s`` (now() - now() on a clock that moves)."""
-    recording = RecordingTransport(_MovingClock(), "/dev/full", {})  # type: ignore[arg-type]
+    recording = RecordingTransport(_Link(drift=0.001), "/dev/full", {})  # type: ignore[arg-type]
     assert recording.stopped is not None
     assert recording.stopped.startswith("stopped at 0.000 s: No space left on device")
 
