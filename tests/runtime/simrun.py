@@ -11,6 +11,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import py_trees
+
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.opcodes import opcodes
 from roomba_bt.oi.profiles import CREATE2
@@ -266,6 +268,37 @@ def wait_for_the_guard(robot):
             break
         time.sleep(0.002)
 '''
+
+
+class Raises(py_trees.behaviour.Behaviour):
+    """A plain py_trees behaviour (no plugin's): RUNNING, and raises ``exc`` in ``where``
+    (setup, initialise, update or terminate); its tenth update raises, or else succeeds (it
+    ends a parallel around it, and its terminate comes)."""
+
+    def __init__(self, exc: BaseException, where: str, name: str = "telemetry") -> None:
+        super().__init__(name)
+        self.exc, self.where, self.ticks = exc, where, 0
+
+    def _maybe(self, where: str) -> None:
+        if where == self.where:
+            raise self.exc
+
+    def setup(self, **kwargs: object) -> None:
+        self._maybe("setup")
+
+    def initialise(self) -> None:
+        self._maybe("initialise")
+
+    def update(self) -> py_trees.common.Status:
+        self.ticks += 1
+        if self.ticks == 10:
+            self._maybe("update")
+            return py_trees.common.Status.SUCCESS
+        return py_trees.common.Status.RUNNING
+
+    def terminate(self, new_status: py_trees.common.Status) -> None:
+        if new_status is not py_trees.common.Status.INVALID:
+            self._maybe("terminate")
 
 
 def run_in_a_worker(stack: RunStack) -> tuple[threading.Thread, list[RunSummary | BaseException]]:

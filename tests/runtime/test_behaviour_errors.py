@@ -4,6 +4,7 @@ that failed), after the safe stop."""
 
 from __future__ import annotations
 
+import inspect
 from pathlib import Path
 from typing import Any
 
@@ -18,7 +19,7 @@ from roomba_bt.runtime.stack import RunStack, TreeMission
 from roomba_bt.runtime.summary import ExitCode, Outcome, RunSummary
 from roomba_bt.sim import SimLink, Simulator, load_world
 
-from .simrun import write_mission
+from .simrun import Raises, write_mission
 
 PLUGIN = '''
 from roomba_bt.behaviours import Condition, declare
@@ -266,35 +267,6 @@ def test_a_plugin_that_breaks_the_contract_ends_the_run_as_its_error(
     assert "invalid status" not in out + err
 
 
-class _Raises(py_trees.behaviour.Behaviour):
-    """RUNNING, and raises ``exc`` in ``where`` (setup, initialise, update or terminate)."""
-
-    def __init__(self, exc: BaseException, where: str) -> None:
-        super().__init__("telemetry")
-        self.exc, self.where, self.ticks = exc, where, 0
-
-    def _maybe(self, where: str) -> None:
-        if where == self.where:
-            raise self.exc
-
-    def setup(self, **kwargs: object) -> None:
-        self._maybe("setup")
-
-    def initialise(self) -> None:
-        self._maybe("initialise")
-
-    def update(self) -> py_trees.common.Status:
-        self.ticks += 1
-        if self.ticks == 10:
-            self._maybe("update")
-            return py_trees.common.Status.SUCCESS  # ends the parallel: terminate comes
-        return py_trees.common.Status.RUNNING
-
-    def terminate(self, new_status: py_trees.common.Status) -> None:
-        if new_status is not py_trees.common.Status.INVALID:
-            self._maybe("terminate")
-
-
 OS_ERRORS = [
     OSError("cannot open the log device"),
     FileNotFoundError(2, "No such file or directory", "/tmp/calibration.json"),
@@ -312,14 +284,14 @@ def test_an_oserror_a_behaviour_raises_is_its_error_not_a_lost_link(
         Mode("safe", {"to": "safe"}),
         py_trees.composites.Parallel(
             "par", policy=py_trees.common.ParallelPolicy.SuccessOnOne(),
-            children=[Drive("d", {"velocity": "200 mm/s"}), _Raises(exc, where)],
+            children=[Drive("d", {"velocity": "200 mm/s"}), Raises(exc, where)],
         ),
     ])  # fmt: skip
     summary = run_tree(TreeMission(root, "os"), timeout_s=5.0)
     assert summary.outcome is Outcome.ERROR and summary.exit_code == 4, summary.reason
     said = f"behaviour root / par / telemetry raised {type(exc).__name__}"
     assert summary.reason.startswith(said)
-    assert f"(at {__file__}:" in summary.reason
+    assert f"(at {inspect.getfile(Raises)}:" in summary.reason  # the file of its code
     assert summary.traceback
     assert summary.safe_stop.startswith("sent ")
 

@@ -21,6 +21,8 @@ from roomba_bt.runtime.stack import RunStack, TreeMission
 from roomba_bt.runtime.summary import ExitCode, Outcome
 from roomba_bt.sim import SimLink, Simulator, load_world
 
+from .simrun import Raises
+
 Capsys = pytest.CaptureFixture[str]
 
 #: an action that drives with the motors on, and misbehaves in the method ``where`` names
@@ -221,23 +223,11 @@ def test_a_real_ctrl_c_while_the_tree_is_built_is_still_an_interrupt(
     assert "roomba-bt: interrupted" in capsys.readouterr().err
 
 
-class _Raises(py_trees.behaviour.Behaviour):
-    """A plain py_trees behaviour whose update raises ``exc`` on its fifth tick."""
-
-    def __init__(self, exc: BaseException) -> None:
-        super().__init__("rude")
-        self.exc, self.ticks = exc, 0
-
-    def update(self) -> py_trees.common.Status:
-        self.ticks += 1
-        if self.ticks == 5:
-            raise self.exc
-        return py_trees.common.Status.RUNNING
-
-
 def _tree(exc: BaseException) -> TreeMission:
+    """Safe, a plain behaviour whose update raises ``exc`` on its tenth tick, a drive."""
     root = py_trees.composites.Sequence("root", memory=True, children=[
-        Mode("safe", {"to": "safe"}), _Raises(exc), Drive("d", {"velocity": "200 mm/s"}),
+        Mode("safe", {"to": "safe"}), Raises(exc, "update", "rude"),
+        Drive("d", {"velocity": "200 mm/s"}),
     ])  # fmt: skip
     return TreeMission(root, "rude")
 
