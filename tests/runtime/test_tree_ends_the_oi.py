@@ -23,30 +23,32 @@ from roomba_bt.runtime.summary import Outcome
 
 from .simrun import Run, RunMission
 
-#: the owner's plugin (m/plugins/display.py, its oi_off), and a leaf as a user may write it
-#: that sends Stop or Reset and then waits for something (the validator cannot see that it
-#: goes on after the command: it is the last leaf)
+#: the owner's plugin (m/plugins/display.py, its oi_off: Stop, then success), and leaves as
+#: a user may write them that send Stop or Reset and then wait for something (the validator
+#: cannot see that they go on after the command: each is the last leaf)
 PLUGIN = '''
 from py_trees.common import Status
 from roomba_bt.behaviours import Action, declare
 from roomba_bt.oi import commands
 from roomba_bt.oi.opcodes import opcodes
 
-@declare("oi_off", kind="action", sends=opcodes("stop"))
-class OIOff(Action):
-    """Stop (173): the OI off."""
+class SendsOnce(Action):
+    """Sends its COMMAND at its start, then returns ENDS on every tick."""
+    COMMAND = staticmethod(commands.stop)
+    ENDS = Status.SUCCESS
     def start(self) -> None:
-        self.send(commands.stop())
+        self.send(self.COMMAND())
     def update(self) -> Status:
-        return Status.SUCCESS
+        return self.ENDS
+
+@declare("oi_off", kind="action", sends=opcodes("stop"))
+class OIOff(SendsOnce):
+    """Stop (173): the OI off."""
 
 @declare("off_and_wait", kind="action", sends=opcodes("stop"))
-class OffAndWait(Action):
+class OffAndWait(SendsOnce):
     """Stop (173), then wait for the OI to come back (it never does by itself)."""
-    def start(self) -> None:
-        self.send(commands.stop())
-    def update(self) -> Status:
-        return Status.RUNNING
+    ENDS = Status.RUNNING
 
 @declare("drive_then_off", kind="action", sends=opcodes("drive", "motors", "stop"))
 class DriveThenOff(Action):
@@ -62,12 +64,10 @@ class DriveThenOff(Action):
         return Status.RUNNING
 
 @declare("reboot_and_wait", kind="action", sends=opcodes("reset"))
-class RebootAndWait(Action):
+class RebootAndWait(SendsOnce):
     """Reset (7), then wait for the robot to come back."""
-    def start(self) -> None:
-        self.send(commands.reset())
-    def update(self) -> Status:
-        return Status.RUNNING
+    COMMAND = staticmethod(commands.reset)
+    ENDS = Status.RUNNING
 '''
 
 #: how long the run may take in wall-clock seconds before the test calls it a hang: the run
