@@ -8,6 +8,7 @@ import dataclasses
 from pathlib import Path
 
 import pytest
+from runtime.simrun import SHORT_DRIVE, write_mission  # tests/runtime: the short drive
 
 from roomba_bt.evaluate import EpisodeSpec, run_episode
 from roomba_bt.evaluate.episode import _mission, build_world
@@ -16,17 +17,6 @@ from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.sim import load_world
 
 MISSIONS = Path(__file__).resolve().parents[2] / "missions"
-
-SHUTTLE = """\
-mission: shuttle
-parameters:
-  speed: {type: speed, default: 100 mm/s}
-tree:
-  sequence:
-    - mode: safe
-    - drive: {velocity: "${speed}", distance: 5cm}
-    - drive: {velocity: "-${speed}", distance: 5cm}
-"""
 
 
 def test_a_world_file_is_parsed_once_and_again_when_it_changes(tmp_path: Path) -> None:
@@ -45,8 +35,7 @@ def test_a_world_file_is_parsed_once_and_again_when_it_changes(tmp_path: Path) -
 
 
 def test_each_episode_gets_a_tree_of_its_own_from_one_compile(tmp_path: Path) -> None:
-    path = tmp_path / "shuttle.yaml"
-    path.write_text(SHUTTLE, encoding="utf-8")
+    path = write_mission(tmp_path, SHORT_DRIVE)
     first = _mission(path, (), CREATE2, NO_PERMISSIONS)
     second = _mission(path, (), CREATE2, NO_PERMISSIONS)
     assert second.root is not first.root
@@ -60,12 +49,11 @@ def test_each_episode_gets_a_tree_of_its_own_from_one_compile(tmp_path: Path) ->
 
 
 def test_a_changed_mission_file_or_other_parameters_compile_again(tmp_path: Path) -> None:
-    path = tmp_path / "shuttle.yaml"
-    path.write_text(SHUTTLE, encoding="utf-8")
+    path = write_mission(tmp_path, SHORT_DRIVE)
     slow = _mission(path, (), CREATE2, NO_PERMISSIONS)
     fast = _mission(path, (("speed", "300mm/s"),), CREATE2, NO_PERMISSIONS)
     assert slow.parameters["speed"] != fast.parameters["speed"]
-    path.write_text(SHUTTLE.replace("100 mm/s", "200 mm/s"), encoding="utf-8")
+    path.write_text(SHORT_DRIVE.replace("200 mm/s", "100 mm/s"), encoding="utf-8")
     edited = _mission(path, (), CREATE2, NO_PERMISSIONS)
     assert edited.parameters["speed"] != slow.parameters["speed"]
     assert (
@@ -76,8 +64,7 @@ def test_a_changed_mission_file_or_other_parameters_compile_again(tmp_path: Path
 
 def test_episodes_after_the_first_give_the_results_of_a_fresh_process(tmp_path: Path) -> None:
     """An episode run after others (cached world and mission) is the episode run first."""
-    path = tmp_path / "shuttle.yaml"
-    path.write_text(SHUTTLE, encoding="utf-8")
+    path = write_mission(tmp_path, SHORT_DRIVE)
     spec = EpisodeSpec(str(path), "empty-room", seed=5, timeout_s=20.0)
     first = run_episode(spec)
     again = run_episode(spec)
@@ -108,11 +95,10 @@ def test_a_coverage_grid_only_for_a_mission_that_can_run_the_brushes(
             super().__init__(*args, **kwargs)  # type: ignore[arg-type]
 
     monkeypatch.setattr(sim_robot, "SweptArea", Counted)
-    path = tmp_path / "shuttle.yaml"
-    path.write_text(SHUTTLE, encoding="utf-8")
+    path = write_mission(tmp_path, SHORT_DRIVE)
     assert run_episode(EpisodeSpec(str(path), "empty-room", timeout_s=5.0)).coverage is None
     assert not built  # Drive and Safe only: no grid
-    brushing = SHUTTLE.replace(
+    brushing = SHORT_DRIVE.replace(
         "    - mode: safe\n", "    - mode: safe\n    - motors: {main_brush: true}\n"
     )
     path.write_text(brushing, encoding="utf-8")

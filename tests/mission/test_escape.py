@@ -12,6 +12,7 @@ import logging
 from collections.abc import Callable
 
 import pytest
+from runtime.simrun import SHORT_DRIVE  # tests/runtime: the short drive
 
 from roomba_bt.mission import CompiledMission
 from roomba_bt.oi.modes import OIMode
@@ -100,17 +101,8 @@ def test_a_stray_or_unknown_opening_is_an_error_that_names_the_escape(
 
 def test_a_stray_opening_in_a_typed_value_is_named_not_its_unit(errors_of: Errors) -> None:
     """``velocity: "${speed"`` said "expected a speed", as if the text were a number."""
-    (error,) = errors_of(
-        """
-        mission: m
-        parameters:
-          speed: {type: speed, default: 200 mm/s}
-        tree:
-          sequence:
-            - mode: safe
-            - drive: {velocity: "${speed", duration: 1s}
-        """
-    )
+    # the short drive with its velocity's closing brace left out (line 7, the drive's)
+    (error,) = errors_of(SHORT_DRIVE.replace('"${speed}"', '"${speed"'))
     assert error.startswith("7:25: drive.velocity: \"${\" at character 1 of '${speed'"), error
     assert error.endswith(ESCAPE_HINT)
 

@@ -34,9 +34,8 @@ tree:
 """
 #: The same, then the tree's reaction to the bump: back off 5 cm.
 DRIVE_TO_WALL_AND_BACK_OFF = DRIVE_TO_WALL + "    - drive: {velocity: -100 mm/s, distance: 50 mm}\n"
-#: Safe, then spin in place at 100 mm/s until something ends the run: a robot that is
-#: driving when a fault comes.
-#: a 20 cm drive with its speed a parameter: the command line's tests run it
+#: a 20 cm drive with its speed a parameter: the command line's tests run it, the
+#: evaluation's set-up cache compiles it, tests/mission/test_escape.py mistypes its ``${``
 SHORT_DRIVE = """
 mission: short-drive
 parameters:
@@ -47,6 +46,8 @@ tree:
     - drive: {velocity: "${speed}", distance: 20 cm}
 """
 
+#: Safe, then spin in place at 100 mm/s until something ends the run: a robot that is
+#: driving when a fault comes.
 SPIN = """
 mission: spin
 tree:
