@@ -8,6 +8,7 @@ import logging
 import re
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -26,6 +27,14 @@ MISSION = SHORT_DRIVE
 @pytest.fixture
 def mission(tmp_path: Path) -> Path:
     return write_mission(tmp_path, MISSION, "short.yaml")
+
+
+def _run_file(
+    folder: Path, name: str, text: str, *options: str, plugins: dict[str, str] | None = None
+) -> int:
+    """``roomba-bt run FILE --fast OPTIONS``, ``text`` written first as ``folder/name`` with
+    its ``plugins`` (file name: source) beside it: the exit code."""
+    return main(["run", str(write_mission(folder, text, name, plugins)), "--fast", *options])
 
 
 def test_run_fast_succeeds(mission: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -99,11 +108,10 @@ def test_run_takes_the_simulated_encoders_error(
 def test_invalid_mission_reports_file_line_col(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    bad = tmp_path / "bad.yaml"
-    bad.write_text("tree:\n  sequence:\n    - drive: {velocity: 600 mm/s}\n")
-    assert main(["run", str(bad), "--fast"]) == 2
+    bad = "tree:\n  sequence:\n    - drive: {velocity: 600 mm/s}\n"
+    assert _run_file(tmp_path, "bad.yaml", bad) == 2
     err = capsys.readouterr().err
-    assert f"{bad.name}:3:" in err or "bad.yaml:3:" in err
+    assert "bad.yaml:3:" in err
     assert "600" in err
 
 
@@ -113,9 +121,7 @@ def test_missing_mission_file_is_exit_2(capsys: pytest.CaptureFixture[str]) -> N
 
 
 def test_timeout_is_exit_1(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    spin = tmp_path / "spin.yaml"
-    spin.write_text(SPIN)
-    assert main(["run", str(spin), "--fast", "--display", "none", "--timeout", "2s"]) == 1
+    assert _run_file(tmp_path, "spin.yaml", SPIN, "--display", "none", "--timeout", "2s") == 1
     assert "TIMEOUT" in capsys.readouterr().out
 
 
@@ -346,11 +352,9 @@ def test_a_robot_whose_battery_went_flat_is_named_as_such(
 ) -> None:
     """The simulated robot switches itself off at an empty battery; the run ends as a lost
     connection (exit 3), and the cause it gives first is the battery the last frame read."""
-    mission = tmp_path / "go.yaml"
-    mission.write_text("tree:\n  sequence:\n    - mode: safe\n    - drive: {velocity: 200 mm/s}\n")
-    argv = ["run", str(mission), "--fast", "--display", "none", "--battery", "0.0002",
-            "--world", "corridor"]  # fmt: skip
-    assert main(argv) == 3
+    go = "tree:\n  sequence:\n    - mode: safe\n    - drive: {velocity: 200 mm/s}\n"
+    options = ["--display", "none", "--battery", "0.0002", "--world", "corridor"]
+    assert _run_file(tmp_path, "go.yaml", go, *options) == 3
     err = capsys.readouterr().err
     assert "most likely a flat battery (the last frame read 0.0 %: it switched itself off" in err
 
@@ -361,11 +365,11 @@ def test_a_record_that_cannot_be_written_stops_the_record_not_the_run(
 ) -> None:
     """A full disk under --record: the file's error rose from the port's read, and the run
     ended as a lost port without its safe stop. Now the record stops, the run goes on."""
-    mission = tmp_path / "drive.yaml"
-    mission.write_text("tree:\n  sequence:\n    - mode: safe\n    - drive: {velocity: 200 mm/s, "
-                       "distance: 50 cm}\n")  # fmt: skip
-    argv = ["run", str(mission), "--fast", "--display", "none", "--record", "/dev/full"]
-    assert main(argv) == 0
+    drive = (
+        "tree:\n  sequence:\n    - mode: safe\n    - drive: {velocity: 200 mm/s, distance: 50 cm}\n"
+    )
+    options = ["--display", "none", "--record", "/dev/full"]
+    assert _run_file(tmp_path, "drive.yaml", drive, *options) == 0
     out = capsys.readouterr().out
     assert "outcome      SUCCESS" in out
     assert "safe stop    sent" in out
@@ -418,11 +422,10 @@ def test_the_summary_says_where_the_simulated_robot_ended(
         "drops: [{rect: [3, 0, 4, 3]}]\n"
         "robot: {start: {at: [1, 1.5], heading: 0}}\n"
     )
-    mission = tmp_path / "off.yaml"
-    mission.write_text(
+    off = (
         "tree:\n  sequence:\n    - mode: full\n    - drive: {velocity: 200 mm/s, distance: 2.5 m}\n"
     )
-    code = main(["run", str(mission), "--world", str(world), "--fast", "--display", "none"])
+    code = _run_file(tmp_path, "off.yaml", off, "--world", str(world), "--display", "none")
     out = capsys.readouterr().out
     assert code == 0 and "outcome      SUCCESS" in out
     assert "simulator    the robot FELL off a drop at (3." in out
@@ -493,23 +496,35 @@ tree:
 """
 
 
+#: ``_run_file`` of a mission that fails (exit 1): what it showed (stdout, stderr, the log)
+Shown = Callable[..., tuple[str, str, str]]
+
+
+@pytest.fixture
+def run_shown(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], caplog: pytest.LogCaptureFixture
+) -> Shown:
+    """``run_shown(name, text, *options, plugins=...)``: :func:`_run_file` of a mission that
+    fails (exit 1); what it printed on stdout and stderr, and what it logged as the run's
+    formatter writes it (pytest's handler holds the records): where a text could fake a line."""
+    caplog.set_level(logging.INFO)
+
+    def run(
+        name: str, text: str, *options: str, plugins: dict[str, str] | None = None
+    ) -> tuple[str, str, str]:
+        assert _run_file(tmp_path, name, text, *options, plugins=plugins) == 1
+        out, err = capsys.readouterr()
+        return out, err, "\n".join(MissionClockFormatter().format(r) for r in caplog.records)
+
+    return run
+
+
 @pytest.mark.parametrize("display", ["log", "tree"])
-def test_what_a_mission_wrote_fakes_no_line_of_the_run(
-    tmp_path: Path,
-    capsys: pytest.CaptureFixture[str],
-    caplog: pytest.LogCaptureFixture,
-    display: str,
-) -> None:
+def test_what_a_mission_wrote_fakes_no_line_of_the_run(run_shown: Shown, display: str) -> None:
     """A name, a ``log`` leaf's text and the mission's name printed raw: a "\\n" in them
     started a line of its own ("[ok] robot stopped") in the status-change log, the tree at
-    the end, the summary and the failure's line on stderr. Each stays on its line, escaped
-    (the log as the run's formatter writes it: pytest's handler holds the records)."""
-    caplog.set_level(logging.INFO)
-    faking = tmp_path / "faking.yaml"
-    faking.write_text(FAKING)
-    assert main(["run", str(faking), "--fast", "--display", display]) == 1
-    out, err = capsys.readouterr()
-    logged = "\n".join(MissionClockFormatter().format(r) for r in caplog.records)
+    the end, the summary and the failure's line on stderr. Each stays on its line, escaped."""
+    out, err, logged = run_shown("faking.yaml", FAKING, "--display", display)
     faked = [line for line in (out + err + logged).splitlines() if line.startswith("[ok]")]
     assert not faked, out + err + logged
     assert "mission      faked\\x0a[ok] mission" in out
@@ -539,23 +554,15 @@ class Sayer(Action):
 
 @pytest.mark.parametrize("display", ["log", "tree"])
 def test_a_plugin_s_feedback_message_is_escaped_where_it_is_printed(
-    tmp_path: Path,
-    capsys: pytest.CaptureFixture[str],
-    caplog: pytest.LogCaptureFixture,
-    display: str,
+    run_shown: Shown, display: str
 ) -> None:
     """A plugin's ``feedback_message`` is code's text, not a file's: nothing refused its
     ``ESC [2J`` or its newline, and the tree at the end (py_trees' drawing) printed it raw,
     clearing the screen and faking a line under it. Escaped where it is printed, on its
     leaf's line, as the summary and the failure's line on stderr have it."""
-    caplog.set_level(logging.INFO)
-    (tmp_path / "sayer.py").write_text(SAYER)
-    mission = tmp_path / "m.yaml"
-    mission.write_text("plugins: [./sayer.py]\ntree:\n  sequence: [sayer]\n")
-    args = ["run", str(mission), "--fast", "--display", display, "--allow-plugin-files"]
-    assert main(args) == 1
-    out, err = capsys.readouterr()
-    logged = "\n".join(MissionClockFormatter().format(r) for r in caplog.records)
+    mission = "plugins: [./sayer.py]\ntree:\n  sequence: [sayer]\n"
+    options = ["--display", display, "--allow-plugin-files"]
+    out, err, logged = run_shown("m.yaml", mission, *options, plugins={"sayer.py": SAYER})
     shown = out + err + logged
     assert "\x1b[2J" not in shown, shown  # (the live tree's own redraw is ESC [H ESC [J)
     assert not [line for line in shown.splitlines() if line.startswith("[ok]")], shown
@@ -569,9 +576,8 @@ def test_a_control_character_never_reaches_the_run(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """``"\\e[2J"`` in a name (it clears the screen) is refused with the file, before a run."""
-    faking = tmp_path / "faking.yaml"
-    faking.write_text('tree:\n  wait: 0.1s\n  name: "\\e[2J[ok] cleared"\n')
-    assert main(["run", str(faking), "--fast"]) == 2
+    faking = 'tree:\n  wait: 0.1s\n  name: "\\e[2J[ok] cleared"\n'
+    assert _run_file(tmp_path, "faking.yaml", faking) == 2
     out, err = capsys.readouterr()
     assert "\x1b" not in out + err
     assert "control character U+001B" in err and "faking.yaml:3:" in err
