@@ -255,6 +255,15 @@ def battery_charge(text: str) -> float:
     return charge
 
 
+def add_battery_option(parser: Any, what: str = "") -> None:
+    """``--battery`` (``eval``, ``run``): one definition, read by :func:`battery_charge`."""
+    parser.add_argument(
+        "--battery", type=battery_charge, metavar="FRACTION",
+        help=f"{what}initial charge, above 0 up to 1, or a percent (0.5, 50%%; default: the "
+        "world's)",
+    )  # fmt: skip
+
+
 def _number_or_quantity(
     text: str, dimension: str, per_unit: float, lo: float, hi: float, allowed: str
 ) -> float:

@@ -38,12 +38,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from roomba_bt.cli.arguments import (
+    add_battery_option,
     add_command,
     add_odometry_error_option,
     add_param_option,
     add_permission_options,
     add_profile_option,
-    battery_charge,
     fraction,
     metres,
     mission_file,
@@ -167,9 +167,7 @@ def _add_start_options(ev: argparse.ArgumentParser) -> None:
         "red=-5,25 (deg), green=-25,5, contact_tolerance=0.05 (m), angle_tolerance=6 (deg), "
         "family=discovery (characters 240-254); each in the range a world file's dock allows",
     )
-    ev.add_argument("--battery", type=battery_charge, metavar="FRACTION",
-                    help="initial charge: a fraction above 0, up to 1 (0.5), or a percent "
-                    "(50%%)")  # fmt: skip
+    add_battery_option(ev)
     add_odometry_error_option(ev)
     ev.add_argument("--timeout", default="15min", help="mission time per episode (default 15min)")
     ev.add_argument(
@@ -248,6 +246,18 @@ class Variant:
     params: tuple[tuple[str, str], ...]
 
 
+@dataclass(frozen=True)
+class Evaluated:
+    """A finished evaluation, what its report, plot and exit code are made of: each variant
+    (``chosen``), its episodes (``done``) and its summary, in the same order, and each later
+    variant compared with the first (or the line that says why there is no comparison)."""
+
+    chosen: list[Variant]
+    done: list[Evaluation]
+    summaries: list[Summary]
+    comparisons: list[Comparison | str]
+
+
 def variants(args: argparse.Namespace, params: dict[str, str]) -> list[Variant] | str:
     """The missions x (sweep values or variant sets); a message on error."""
     sets: list[dict[str, str]] = [{}]
@@ -308,8 +318,8 @@ def eval_command(args: argparse.Namespace) -> int:
     # the records first: a summary that fails (a bug in the statistics) loses no episode
     unwritten = _save(args, done, partial)
     try:
-        summaries, comparisons = _statistics(args, chosen, done, world.name)
-        _report(args, engine.describe(), chosen, summaries, comparisons, done)
+        evaluated = _statistics(args, chosen, done, world.name)
+        _report(args, engine.describe(), evaluated)
     except Exception:
         kept = args.out if unwritten is None else partial.path if partial else None
         if kept is not None:
@@ -324,10 +334,10 @@ def eval_command(args: argparse.Namespace) -> int:
               file=sys.stderr)  # fmt: skip
         return ExitCode.INTERRUPTED
     if args.plot:
-        plotted = _plot(args.plot, world, chosen, done, summaries)
+        plotted = _plot(args.plot, world, evaluated)
         if plotted is not None:
             return plotted
-    return _verdict(args, summaries, done)
+    return _verdict(args, evaluated.summaries, done)
 
 
 def _count(done: list[Evaluation]) -> int:
@@ -362,7 +372,7 @@ def _save(
 
 def _statistics(
     args: argparse.Namespace, chosen: list[Variant], done: list[Evaluation], world: str
-) -> tuple[list[Summary], list[Comparison | str]]:
+) -> Evaluated:
     """Each variant's summary, and each later variant compared with the first: over the
     seeds both finished when interrupted, or a line saying why there is no comparison."""
     from roomba_bt.evaluate import summarize
@@ -381,7 +391,7 @@ def _statistics(
                                "comparison, no seed finished with both (interrupted)")  # fmt: skip
         else:
             comparisons.append(replace(c, interrupted=e.interrupted or done[0].interrupted))
-    return summaries, comparisons
+    return Evaluated(chosen, done, summaries, comparisons)
 
 
 def rerun_command(args: argparse.Namespace, result: Any) -> str:
@@ -666,22 +676,15 @@ def _recorded(partial: PartialResults, bar: Progress | None) -> Progress:
     return progress
 
 
-def _report(
-    args: argparse.Namespace,
-    engine: str,
-    chosen: list[Variant],
-    summaries: list[Summary],
-    comparisons: list[Comparison | str],
-    done: list[Evaluation],
-) -> None:
+def _report(args: argparse.Namespace, engine: str, evaluated: Evaluated) -> None:
     """The summaries, coverage and comparisons on stdout: as JSON with ``--json``, else text."""
     from roomba_bt.evaluate.coverage import summarize_coverage
 
-    retried = sum(e.retried for e in done)
     if args.json:
-        _json_report(args, engine, chosen, summaries, comparisons, done)
+        _json_report(args, engine, evaluated)
         return
-    for v, s, e in zip(chosen, summaries, done, strict=True):
+    chosen, done = evaluated.chosen, evaluated.done
+    for v, s, e in zip(chosen, evaluated.summaries, done, strict=True):
         if len(chosen) > 1:
             print(f"variant      {v.label}")
         print(s)
@@ -689,21 +692,15 @@ def _report(
         if coverage is not None:
             print(coverage)
         print()
-    for c in comparisons:
+    for c in evaluated.comparisons:
         print(c)
         print()
     if not args.reproducible:  # which processes ran them, and what was lost: not the results
+        retried = sum(e.retried for e in done)
         print(f"engine       {engine}; {retried} episode(s) run again after a worker was lost")
 
 
-def _json_report(
-    args: argparse.Namespace,
-    engine: str,
-    chosen: list[Variant],
-    summaries: list[Summary],
-    comparisons: list[Comparison | str],
-    done: list[Evaluation],
-) -> None:
+def _json_report(args: argparse.Namespace, engine: str, evaluated: Evaluated) -> None:
     """``--json``: the conditions, what made the episodes (the release, each plugin, each
     variant's files: :func:`made_by`), the ``--min-rate`` verdict (``passed``: each variant's
     and all of them; null without ``--min-rate``), each variant's summary and coverage, and
@@ -718,6 +715,7 @@ def _json_report(
     plugins: dict[str, Any] = {}
     for provenance in made.values():
         plugins.update(provenance["plugins"])
+    summaries, done = evaluated.summaries, evaluated.done
     passed = [None if args.min_rate is None else s.rate >= args.min_rate for s in summaries]
     measured = not args.reproducible
     print(json.dumps(tidy({
@@ -730,10 +728,10 @@ def _json_report(
         "variants": [{"label": v.label, "params": dict(v.params), **s.to_dict(),
                       "passed": ok, "sources": made.get(v.mission, {}).get("sources"),
                       "coverage": c.to_dict() if c is not None else None}
-                     for v, s, c, ok in zip(chosen, summaries,
+                     for v, s, c, ok in zip(evaluated.chosen, summaries,
                                             [summarize_coverage(e.results) for e in done],
                                             passed, strict=True)],
-        "comparisons": [c.to_dict() for c in comparisons if not isinstance(c, str)],
+        "comparisons": [c.to_dict() for c in evaluated.comparisons if not isinstance(c, str)],
     }), indent=2))  # fmt: skip
 
 
@@ -777,17 +775,12 @@ def _world_digest(args: argparse.Namespace) -> str | None:
     return next((provenance["world_sha256"] for provenance in made.values()), None)
 
 
-def _plot(
-    out: str,
-    world: World,
-    chosen: list[Variant],
-    done: list[Evaluation],
-    summaries: list[Summary],
-) -> int | None:
+def _plot(out: str, world: World, evaluated: Evaluated) -> int | None:
     """Every variant's trajectories drawn to ``out``, a panel each side by side (one variant:
     one picture); an exit code if that failed."""
     from roomba_bt.evaluate.plot import PlotUnavailableError, plot_variants
 
+    chosen, summaries, done = evaluated.chosen, evaluated.summaries, evaluated.done
     if len(chosen) == 1:
         titles = [f"{Path(chosen[0].mission).stem} in {world.name}: "
                   f"{summaries[0].successes}/{summaries[0].runs}"]  # fmt: skip

@@ -14,12 +14,12 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 from roomba_bt.cli.arguments import (
     LABEL_LENGTH,
     MIN_WATCHDOG,
+    add_battery_option,
     add_command,
     add_far_end_options,
     add_odometry_error_option,
     add_param_option,
     add_permission_options,
-    battery_charge,
     baud_warning,
     mission_file,
     parse_params,
@@ -96,11 +96,7 @@ def _add_run_parser(sub: Any) -> None:
         world_help="simulator world: a shipped name or a YAML path",
     )
     run.add_argument("--seed", type=int, default=0, help="simulator seed (default 0)")
-    run.add_argument(
-        "--battery", type=battery_charge, metavar="FRACTION",
-        help="simulator only: initial charge, above 0 up to 1, or a percent (0.5, 50%%; "
-        "default: the world's)",
-    )  # fmt: skip
+    add_battery_option(run, "simulator only: ")
     run.add_argument(
         "--random-start", action="store_true", help="start in the world's start region"
     )
