@@ -20,7 +20,7 @@ from roomba_bt.runtime.stack import RunStack, TreeMission
 from roomba_bt.runtime.summary import ExitCode, Outcome, RunFailed, RunSummary
 from roomba_bt.sim import SimLink, Simulator, load_world
 
-from .simrun import DRIVE_TO_WALL, LEDGE, RunMission
+from .simrun import DRIVE_TO_WALL, LEDGE, RunMission, write_mission
 
 #: a plugin's leaf that never looks at the mode: it sends its drive every tick for 8 s and
 #: succeeds, whatever the robot did meanwhile
@@ -232,3 +232,35 @@ def test_a_drive_dropped_while_the_tree_is_stopped_is_counted(
     assert summary.strict_findings() == [
         f"1 command dropped while the tree was stopped (the first: {summary.first_dropped})"
     ]
+
+
+#: compiles with one warning: a drive in Full mode with no cliff sensor read while it runs
+FULL_WITH_NO_CLIFF_CHECK = """\
+tree:
+  sequence:
+    - mode: full
+    - drive: {velocity: 100 mm/s, duration: 1s}
+"""
+
+
+def test_strict_does_not_start_a_mission_validate_strict_fails(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``validate --strict`` failed the mission, exit 7, and ``run --strict`` started it and
+    judged only the run: exit 0, so a CI that ran its missions strictly passed what its
+    validation step failed. Now it is not started, exit 7, with validate's verdict on stderr
+    after the warning; without ``--strict`` it runs as before, the warning printed."""
+    path = write_mission(tmp_path, FULL_WITH_NO_CLIFF_CHECK, "w1.yaml")
+    assert main(["validate", "--strict", str(path)]) == ExitCode.STRICT
+    verdict = f"{path}: failed --strict (1 warning)"
+    assert f"{verdict}\n" in capsys.readouterr().out
+    run = ["run", str(path), "--fast", "--display", "none"]
+    assert main([*run, "--strict"]) == ExitCode.STRICT
+    out, err = capsys.readouterr()
+    assert out == ""  # no summary: nothing was opened or sent
+    warning = f"{path}:4:7: warning: drive can turn the wheels in Full mode"
+    assert err.startswith(warning)
+    assert err.endswith(f"roomba-bt: {verdict}; not started\n")
+    assert main(run) == ExitCode.OK
+    out, err = capsys.readouterr()
+    assert "outcome      SUCCESS" in out and err.startswith(warning)
