@@ -105,19 +105,23 @@ def _label(modes: frozenset[OIMode]) -> str:
 #: The opcodes that end the run when the tree sends them (Reset 7, Stop 173: the opcode
 #: table's :attr:`~roomba_bt.oi.opcodes.Effect.SILENCES`).
 SILENCING = frozenset(op for op, spec in COMMANDS.items() if spec.effect is Effect.SILENCES)
-#: Why nothing may follow a leaf that sends Reset or Stop (the validator's error, docs/runtime.md).
+#: Why nothing may follow a leaf that sends Reset or Stop (the validator's error,
+#: docs/runtime.md); ``{end_in_stop}``: how the caller ends in Off (:attr:`Wording.end_in_stop`)
 ENDS_THE_RUN = (
     "which end the run: the OI is off and streams no more sensor frames, and the frames are "
     "the run's clock (the runtime ends the run at once when the tree sends either). A leaf "
     "that sends Reset or Stop must be the last one the tree runs; to leave the robot in Off "
-    "at the end of any mission, use --end-in stop instead"
+    "at the end of any mission, use {end_in_stop} instead"
 )
 
 
 class ModeCheck:
-    """The static mode pass; ``errors`` after :meth:`run`."""
+    """The static mode pass; ``errors`` after :meth:`run`. ``wording``: how the caller ends a
+    mission in Off, which the error of a leaf after a Reset or Stop offers instead (a Python
+    program was told of ``--end-in stop``, a flag it cannot give)."""
 
-    def __init__(self) -> None:
+    def __init__(self, wording: Wording = PYTHON) -> None:
+        self.wording = wording
         self.errors: list[Diagnostic] = []
         self._reported: set[int] = set()
         #: the leaves that send Reset (7) or Stop (173), in the order reached
@@ -197,7 +201,7 @@ class ModeCheck:
         senders = ", ".join(dict.fromkeys(f"{s.name} (line {s.loc.line})" for s in self.silencers))
         return (
             f"{decl.name} can run after {senders or 'a leaf'} sent Reset (7) or Stop (173), "
-            f"{ENDS_THE_RUN}"
+            f"{ENDS_THE_RUN.format(end_in_stop=self.wording.end_in_stop)}"
         )
 
     def _chain(self, node: Node, entry: Modes, *, on_success: bool) -> tuple[Modes, Modes]:

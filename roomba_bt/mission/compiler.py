@@ -159,7 +159,7 @@ def _checked(
     if parsed is None or parsed.tree is None:
         return None, sorted(ctx.diagnostics)
     tree = parsed.tree
-    modes = ModeCheck()
+    modes = ModeCheck(ctx.wording)
     modes.run(tree)
     keys = KeyCheck()
     keys.run(tree, frozenset(k for k, d in ctx.keys.items() if d.has_initial))

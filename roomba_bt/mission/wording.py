@@ -41,6 +41,8 @@ class Wording:
     on_world: str
     #: how the caller lists the shipped missions ("" when it has no such command)
     lists_missions: str
+    #: how the caller leaves the robot in Off (Stop, 173) at the end of a mission
+    end_in_stop: str
 
     def __repr__(self) -> str:
         return f"roomba_bt.mission.wording.{self.name}"
@@ -64,6 +66,7 @@ PYTHON = Wording(
     profile="profile= (roomba_bt.PROFILES)",
     on_world="load_world({path!r}) and a Simulator on it",
     lists_missions="",
+    end_in_stop="end_in='stop' (RunStack's or Connection's)",
 )
 
 #: The ``roomba-bt`` command's words: its flags.
@@ -81,4 +84,5 @@ COMMAND_LINE = Wording(
         "checks it"
     ),
     lists_missions="; `roomba-bt missions` lists them",
+    end_in_stop="--end-in stop",
 )

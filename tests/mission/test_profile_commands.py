@@ -130,3 +130,23 @@ def test_nothing_may_follow_a_reset_or_a_stop_not_even_mode_passive(tmp_path: Pa
         message = found[0].message
         assert message.startswith(f"{steps[0].split(':')[0]} can run after reboot (line 6) sent")
         assert "which end the run" in message and "must be the last one the tree runs" in message
+
+
+def test_the_way_to_end_in_off_is_offered_in_the_callers_words(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The error of a leaf after a Reset or Stop offered ``--end-in stop`` to a Python
+    program too, which ends in Off with an argument (``mission/wording.py``); the command
+    line keeps its flag."""
+    path = _after_reboot(tmp_path, "mode: passive")
+    allowed = Permissions(plugin_files=True)
+    [found] = validate_files([path], profile=PROFILES["create2"], permissions=allowed)
+    assert found.message.endswith(
+        "to leave the robot in Off at the end of any mission, use end_in='stop' (RunStack's or "
+        "Connection's) instead"
+    )
+    assert "--end-in" not in found.message
+    code = main(["validate", str(path), "--profile", "create2", "--allow-plugin-files"])
+    out, err = capsys.readouterr()
+    assert code == 2, out + err
+    assert "at the end of any mission, use --end-in stop instead" in out
