@@ -14,11 +14,14 @@ import sys
 import threading
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import pytest
 
 from roomba_bt.cli import main
+
+if TYPE_CHECKING:  # the server needs the monitor extra, which each test checks for first
+    from roomba_bt.monitor.server import MonitorServer
 
 SHUTTLE = Path(__file__).resolve().parent / "missions" / "shuttle.yaml"
 
@@ -311,19 +314,6 @@ def test_watch_reloads_when_a_plugin_file_changes(tmp_path: Path) -> None:
         run.close()
 
 
-ALWAYS_CLEAR = '''
-from roomba_bt.behaviours import Condition, declare
-
-
-@declare("always_clear", kind="condition", reads=(7,))
-class AlwaysClear(Condition):
-    """Always clear."""
-
-    def check(self, snapshot):
-        return True
-'''
-
-
 def test_a_recorded_run_of_a_mission_with_a_plugin_file_can_be_shown(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -332,7 +322,7 @@ def test_a_recorded_run_of_a_mission_with_a_plugin_file_can_be_shown(
     from roomba_bt.cli import build_parser
     from roomba_bt.cli.run_cmd import Recorded, load_recorded
 
-    (tmp_path / "plugin.py").write_text(ALWAYS_CLEAR)
+    (tmp_path / "plugin.py").write_text(PLUGIN)
     mission = tmp_path / "m.yaml"
     mission.write_text(
         "plugins: [./plugin.py]\ntree:\n  sequence: [{mode: safe}, always_clear, "
@@ -621,12 +611,11 @@ def _status(request: Any) -> int:
 CHOSEN = "Bookmark-ed_token-0123456789abcd"
 
 
-def _probe_the_page(monkeypatch: pytest.MonkeyPatch) -> dict[str, int]:
-    """Once the run's page is up: the page's HTTP status with the chosen token, with none
-    and with another (``"given"``, ``"none"``, ``"wrong"``)."""
-    import urllib.error
-    import urllib.request
-
+def _probe_once_up(
+    monkeypatch: pytest.MonkeyPatch, requests_to: Callable[[MonitorServer], dict[str, Any]]
+) -> dict[str, int]:
+    """Once the run's page is up: the HTTP status of each request ``requests_to(server)``
+    names, by its name (filled in while the run is on: read it once the run has ended)."""
     from roomba_bt.monitor.server import MonitorServer
 
     statuses: dict[str, int] = {}
@@ -634,9 +623,7 @@ def _probe_the_page(monkeypatch: pytest.MonkeyPatch) -> dict[str, int]:
 
     def probed(server: MonitorServer) -> str:
         url = start(server)
-        for name, token in (("given", CHOSEN), ("none", ""), ("wrong", "x" * 32)):
-            headers = {"X-Monitor-Token": token} if token else {}
-            request = urllib.request.Request(f"http://127.0.0.1:{server.port}/", headers=headers)
+        for name, request in requests_to(server).items():
             statuses[name] = _status(request)
         return url
 
@@ -644,9 +631,42 @@ def _probe_the_page(monkeypatch: pytest.MonkeyPatch) -> dict[str, int]:
     return statuses
 
 
-@pytest.mark.parametrize("by", ["option", "environment"])
+def _probe_the_page(monkeypatch: pytest.MonkeyPatch) -> dict[str, int]:
+    """Once the run's page is up: the page's HTTP status with the chosen token, with none
+    and with another (``"given"``, ``"none"``, ``"wrong"``)."""
+    import urllib.request
+
+    def requests_to(server: MonitorServer) -> dict[str, Any]:
+        page = f"http://127.0.0.1:{server.port}/"
+        return {
+            name: urllib.request.Request(page, headers={"X-Monitor-Token": token} if token else {})
+            for name, token in (("given", CHOSEN), ("none", ""), ("wrong", "x" * 32))
+        }
+
+    return _probe_once_up(monkeypatch, requests_to)
+
+
+def _run_with_a_chosen_token(
+    token: str, given_by: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> Path:
+    """Run the shuttle with its page on every address and ``token``, a token of the
+    operator's own, given by ``given_by``: a command-line option (``--monitor-token``) or an
+    environment variable (``ROOMBA_BT_MONITOR_TOKEN``). The run's record, once its
+    ``--timeout`` has ended it."""
+    record = tmp_path / "run.jsonl"
+    argv = ["run", str(SHUTTLE), "--fast", "--display", "log", "--monitor", "0.0.0.0:0",
+            "--timeout", "1s", "--record", str(record)]  # fmt: skip
+    if given_by.startswith("--"):
+        argv += [given_by, token]
+    else:
+        monkeypatch.setenv(given_by, token)
+    assert main(argv) == 1
+    return record
+
+
+@pytest.mark.parametrize("given_by", ["--monitor-token", "ROOMBA_BT_MONITOR_TOKEN"])
 def test_a_chosen_token_outlives_the_run_and_is_printed_nowhere(
-    by: str,
+    given_by: str,
     tmp_path: Path,
     capsys: pytest.CaptureFixture[str],
     monkeypatch: pytest.MonkeyPatch,
@@ -658,14 +678,7 @@ def test_a_chosen_token_outlives_the_run_and_is_printed_nowhere(
     holds it."""
     pytest.importorskip("aiohttp")
     statuses = _probe_the_page(monkeypatch)
-    record = tmp_path / "run.jsonl"
-    argv = ["run", str(SHUTTLE), "--fast", "--display", "log", "--monitor", "0.0.0.0:0",
-            "--timeout", "1s", "--record", str(record)]  # fmt: skip
-    if by == "option":
-        argv += ["--monitor-token", CHOSEN]
-    else:
-        monkeypatch.setenv("ROOMBA_BT_MONITOR_TOKEN", CHOSEN)
-    assert main(argv) == 1
+    record = _run_with_a_chosen_token(CHOSEN, given_by, tmp_path, monkeypatch)
     assert statuses == {"given": 200, "none": 401, "wrong": 403}
     out, err = capsys.readouterr()
     first = out.splitlines()[0]
@@ -713,32 +726,22 @@ VIEW_CHOSEN = "Projector-view_token-0123456789ab"
 def _probe_the_view_link(monkeypatch: pytest.MonkeyPatch) -> dict[str, int]:
     """Once the run's page is up: the HTTP status of its page and of a pause with
     :data:`VIEW_CHOSEN` (``"page"``, ``"control"``)."""
-    import urllib.error
     import urllib.request
 
-    from roomba_bt.monitor.server import MonitorServer
-
-    statuses: dict[str, int] = {}
-    start = MonitorServer.start
-
-    def probed(server: MonitorServer) -> str:
-        url = start(server)
+    def requests_to(server: MonitorServer) -> dict[str, Any]:
         base, headers = f"http://127.0.0.1:{server.port}", {"X-Monitor-Token": VIEW_CHOSEN}
         body = json.dumps({"action": "pause", "run": server.feed.run_id}).encode()
-        for name, request in (
-            ("page", urllib.request.Request(f"{base}/", headers=headers)),
-            ("control", urllib.request.Request(f"{base}/api/control", body, headers)),
-        ):
-            statuses[name] = _status(request)
-        return url
+        return {
+            "page": urllib.request.Request(f"{base}/", headers=headers),
+            "control": urllib.request.Request(f"{base}/api/control", body, headers),
+        }
 
-    monkeypatch.setattr(MonitorServer, "start", probed)
-    return statuses
+    return _probe_once_up(monkeypatch, requests_to)
 
 
-@pytest.mark.parametrize("by", ["option", "environment"])
+@pytest.mark.parametrize("given_by", ["--monitor-view-token", "ROOMBA_BT_MONITOR_VIEW_TOKEN"])
 def test_a_chosen_view_token_opens_the_page_without_controls_and_is_printed_nowhere(
-    by: str,
+    given_by: str,
     tmp_path: Path,
     capsys: pytest.CaptureFixture[str],
     monkeypatch: pytest.MonkeyPatch,
@@ -749,14 +752,7 @@ def test_a_chosen_view_token_opens_the_page_without_controls_and_is_printed_nowh
     pause is refused (403), and the URL printed leaves it out, as a chosen control token."""
     pytest.importorskip("aiohttp")
     statuses = _probe_the_view_link(monkeypatch)
-    record = tmp_path / "run.jsonl"
-    argv = ["run", str(SHUTTLE), "--fast", "--display", "log", "--monitor", "0.0.0.0:0",
-            "--timeout", "1s", "--record", str(record)]  # fmt: skip
-    if by == "option":
-        argv += ["--monitor-view-token", VIEW_CHOSEN]
-    else:
-        monkeypatch.setenv("ROOMBA_BT_MONITOR_VIEW_TOKEN", VIEW_CHOSEN)
-    assert main(argv) == 1
+    record = _run_with_a_chosen_token(VIEW_CHOSEN, given_by, tmp_path, monkeypatch)
     assert statuses == {"page": 200, "control": 403}
     out, err = capsys.readouterr()
     lines = out.splitlines()
