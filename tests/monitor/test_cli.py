@@ -12,7 +12,7 @@ import socket
 import subprocess
 import sys
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -24,6 +24,38 @@ if TYPE_CHECKING:  # the server needs the monitor extra, which each test checks 
     from roomba_bt.monitor.server import MonitorServer
 
 SHUTTLE = Path(__file__).resolve().parent / "missions" / "shuttle.yaml"
+
+#: a record view's stdout and stderr (``served_record(record, *options)``)
+ServedRecord = Callable[..., tuple[str, str]]
+
+
+def _record_the_shuttle(record: Path) -> int:
+    """Run the shuttle for 2 s of mission time into ``record`` (it times out): its exit code."""
+    return main(["run", str(SHUTTLE), "--fast", "--display", "none", "--timeout", "2",
+                 "--record", str(record)])  # fmt: skip
+
+
+@pytest.fixture
+def served_record(child: Callable[[Sequence[str]], subprocess.Popen[str]]) -> ServedRecord:
+    """``served_record(record, *options)``: ``roomba-bt monitor RECORD`` up to its URL, then
+    ended by SIGTERM: its stdout and stderr (it must exit 0). One the test leaves running
+    (a failed assertion, a timeout) is killed by ``child``."""
+
+    def serve(record: Path, *options: str) -> tuple[str, str]:
+        proc = child([sys.executable, "-m", "roomba_bt.cli", "monitor", str(record),
+                      "--monitor", "0", *options])  # fmt: skip
+        assert proc.stdout is not None
+        lines = []
+        for line in proc.stdout:
+            lines.append(line)
+            if line.startswith("monitor: http"):
+                break
+        proc.send_signal(signal.SIGTERM)
+        out, err = proc.communicate(timeout=30)
+        assert proc.returncode == 0, err
+        return "".join(lines) + out, err
+
+    return serve
 
 
 def test_without_the_extra_monitor_says_how_to_install_it_and_exits_2(
@@ -125,18 +157,18 @@ def test_a_record_still_being_written_is_shown_as_such(
     tmp_path: Path,
     capsys: pytest.CaptureFixture[str],
     record_held: Callable[[Path], subprocess.Popen[str]],
+    served_record: ServedRecord,
 ) -> None:
     """A record read while its run wrote it (the run holds its lock) was shown as ended
     ('input ended (recorded run, 829 ticks)'), on the page and on the first line."""
     pytest.importorskip("aiohttp")
     record = tmp_path / "live.jsonl"
-    main(["run", str(SHUTTLE), "--fast", "--display", "none", "--timeout", "2",
-          "--record", str(record)])  # fmt: skip
+    _record_the_shuttle(record)
     capsys.readouterr()
     lines = record.read_text(encoding="utf-8").splitlines(keepends=True)
     record.write_text("".join(lines[: len(lines) // 2]), encoding="utf-8")  # written so far
     record_held(record)
-    out, _ = _served_record(record)
+    out, _ = served_record(record)
     assert re.search(
         rf"{re.escape(str(record))}: the record is still being written \(a run in progress\?\): "
         r"shown up to t=\d+\.\d\d s \(recorded run, \d+ ticks\)",
@@ -483,12 +515,13 @@ def test_a_wildcard_address_and_the_virtual_clock_are_said(
     assert "--fast runs the mission on the virtual clock: it may end before a page opens" in err
 
 
-def test_monitor_of_a_record_ends_on_sigterm_as_on_ctrl_c(tmp_path: Path) -> None:
+def test_monitor_of_a_record_ends_on_sigterm_as_on_ctrl_c(
+    tmp_path: Path, served_record: ServedRecord
+) -> None:
     """SIGTERM killed ``roomba-bt monitor RECORD``: exit 143 and no word (Ctrl-C gave 0)."""
     record = tmp_path / "run.jsonl"
-    argv = ["run", str(SHUTTLE), "--fast", "--display", "none", "--timeout", "2"]
-    main([*argv, "--record", str(record)])
-    out, _ = _served_record(record)  # up to its URL, then SIGTERM
+    _record_the_shuttle(record)
+    out, _ = served_record(record)  # up to its URL, then SIGTERM
     assert "monitor: ended by SIGTERM" in out
 
 
@@ -529,31 +562,8 @@ def test_the_lan_addresses_leave_out_loopback_and_link_local() -> None:
         assert not (address.is_loopback or address.is_link_local or address.is_unspecified)
 
 
-def _served_record(record: Path, *extra: str) -> tuple[str, str]:
-    """``roomba-bt monitor RECORD`` up to its URL, then ended: its stdout and stderr."""
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "roomba_bt.cli", "monitor", str(record), "--monitor", "0", *extra],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
-    try:
-        assert proc.stdout is not None
-        lines = []
-        for line in proc.stdout:
-            lines.append(line)
-            if line.startswith("monitor: http"):
-                break
-        proc.send_signal(signal.SIGTERM)
-        out, err = proc.communicate(timeout=30)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
-    assert proc.returncode == 0, err
-    return "".join(lines) + out, err
-
-
 def test_a_record_view_whose_replay_diverges_says_where_on_stderr_and_the_page(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], served_record: ServedRecord
 ) -> None:
     """A record whose replay diverges (another mission, an older record) ended the view there
     saying only 'input ended (recorded run, N ticks)'; stderr said nothing. Now it says where,
@@ -561,12 +571,11 @@ def test_a_record_view_whose_replay_diverges_says_where_on_stderr_and_the_page(
     (``feed.finished``)."""
     pytest.importorskip("aiohttp")
     record = tmp_path / "run.jsonl"
-    argv = ["run", str(SHUTTLE), "--fast", "--display", "none", "--timeout", "2"]
-    main([*argv, "--record", str(record)])
+    _record_the_shuttle(record)
     capsys.readouterr()
     faster = tmp_path / "faster.yaml"
     faster.write_text(SHUTTLE.read_text().replace("velocity: 100 mm/s", "velocity: 150 mm/s"))
-    out, err = _served_record(record, "--mission", str(faster))
+    out, err = served_record(record, "--mission", str(faster))
     said = (
         "replay diverged from the record at t=0.01 s: expected Drive (137) 89 00 64 80 00, "
         "sent Drive (137) 89 00 96 80 00; the timeline ends there"
@@ -576,21 +585,20 @@ def test_a_record_view_whose_replay_diverges_says_where_on_stderr_and_the_page(
 
 
 def test_a_record_says_how_its_run_ended_and_its_replay_ends_there(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], served_record: ServedRecord
 ) -> None:
     """The record's end note: ``replay`` and the record view say how the recorded run ended
     (they said 'input ended'), and a replay ends a timed-out run where it timed out."""
     pytest.importorskip("aiohttp")
     record = tmp_path / "run.jsonl"
-    argv = ["run", str(SHUTTLE), "--fast", "--display", "none", "--timeout", "2"]
-    assert main([*argv, "--record", str(record)]) == 1
+    assert _record_the_shuttle(record) == 1
     capsys.readouterr()
     ended = "the recorded run ended in timeout at t=2.01 s: --timeout 2 s of mission time ran out"
     assert main(["replay", str(record)]) == 0
     out = capsys.readouterr().out
     assert f"replay: {ended}" in out
     assert "the tree wrote the same" in out
-    out, _ = _served_record(record)
+    out, _ = served_record(record)
     assert out.startswith(f"{record}: {ended}"), out
 
 
