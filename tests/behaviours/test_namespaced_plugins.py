@@ -10,7 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from runtime.installed import install_distribution  # tests/runtime: a plugin installed
+from runtime.installed import installed_registry  # tests/runtime: plugins installed
 
 from roomba_bt.behaviours import Registry
 from roomba_bt.cli.mission_cmds import describe_behaviours
@@ -60,19 +60,12 @@ class BetaRetry(Condition):
 
 @pytest.fixture
 def registry(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Registry:
-    site = tmp_path / "site"
-    site.mkdir()
-    install_distribution(site, "bt-ns-alpha", "bt_ns_alpha_plugin", ALPHA)
-    install_distribution(site, "bt-ns-beta", "bt_ns_beta_plugin", BETA)
-    monkeypatch.syspath_prepend(str(site))
-    for module in ("bt_ns_alpha_plugin", "bt_ns_beta_plugin"):
-        monkeypatch.delitem(__import__("sys").modules, module, raising=False)
-    from roomba_bt.behaviours.registry import builtin_registry
-
-    found = builtin_registry()
-    found._group = "roomba_bt.behaviours"  # the entry points, read on first use
-    found._loaded = False
-    return found
+    return installed_registry(
+        tmp_path,
+        monkeypatch,
+        ("bt-ns-alpha", "bt_ns_alpha_plugin", ALPHA),
+        ("bt-ns-beta", "bt_ns_beta_plugin", BETA),
+    )
 
 
 def _compile(tmp_path: Path, registry: Registry, tree: str) -> tuple[object, list]:

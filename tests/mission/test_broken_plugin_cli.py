@@ -11,11 +11,10 @@ finds it as it finds any installed plugin."""
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 
 import pytest
-from runtime.installed import install_distribution  # tests/runtime: a plugin installed
+from runtime.installed import installed_registry  # tests/runtime: plugins installed
 
 from roomba_bt.cli import main
 
@@ -36,24 +35,27 @@ class SoundCondition(Condition):
 '''
 
 
+def _installed(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, *distributions: tuple[str, str, str]
+) -> None:
+    """``distributions`` (name, module, source) installed; the commands' registry reads the
+    entry points afresh."""
+    import roomba_bt.behaviours as behaviours
+
+    registry = installed_registry(tmp_path, monkeypatch, *distributions)
+    monkeypatch.setattr(behaviours, "default_registry", lambda: registry)
+
+
 @pytest.fixture
 def installed(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """``bt-s29-broken`` (entry point ``s29_broken``, raises on import) and ``bt-s29-sound``
-    installed; the commands' registry reads the entry points afresh."""
-    import roomba_bt.behaviours as behaviours
-    from roomba_bt.behaviours.registry import ENTRY_POINT_GROUP
-
-    site = tmp_path / "site"
-    site.mkdir()
-    install_distribution(site, "bt-s29-broken", "s29_broken", BROKEN)
-    install_distribution(site, "bt-s29-sound", "s29_sound", WORKING)
-    monkeypatch.syspath_prepend(str(site))
-    for module in ("s29_broken", "s29_sound"):
-        monkeypatch.delitem(sys.modules, module, raising=False)
-    registry = behaviours.builtin_registry()
-    registry._group = ENTRY_POINT_GROUP  # the entry points, read on first use
-    registry._loaded = False
-    monkeypatch.setattr(behaviours, "default_registry", lambda: registry)
+    installed."""
+    _installed(
+        tmp_path,
+        monkeypatch,
+        ("bt-s29-broken", "s29_broken", BROKEN),
+        ("bt-s29-sound", "s29_sound", WORKING),
+    )
 
 
 def _said(err: str) -> list[str]:
@@ -102,18 +104,10 @@ def test_a_name_two_plugins_declare_is_no_broken_plugin(
 ) -> None:
     """A clash loses no behaviour (each is reached by ``package:name``; the schema lists
     those): a warning, exit 0, as before."""
-    import roomba_bt.behaviours as behaviours
-    from roomba_bt.behaviours.registry import ENTRY_POINT_GROUP
-
-    site = tmp_path / "site"
-    site.mkdir()
-    install_distribution(site, "bt-s29-one", "s29_one", WORKING)
-    install_distribution(site, "bt-s29-two", "s29_two", WORKING.replace("SoundCondition", "Other"))
-    monkeypatch.syspath_prepend(str(site))
-    registry = behaviours.builtin_registry()
-    registry._group = ENTRY_POINT_GROUP
-    registry._loaded = False
-    monkeypatch.setattr(behaviours, "default_registry", lambda: registry)
+    other = WORKING.replace("SoundCondition", "Other")
+    _installed(
+        tmp_path, monkeypatch, ("bt-s29-one", "s29_one", WORKING), ("bt-s29-two", "s29_two", other)
+    )
     assert main(["schema"]) == 0
     out, err = capsys.readouterr()
     assert "bt-s29-one:s29_sound" in json.loads(out)["$defs"]
@@ -139,29 +133,12 @@ RAISES_AT_IMPORT = {
 PLAIN = "tree:\n  sequence:\n    - mode: safe\n    - wait: 0.1s\n    - mode: passive\n"
 
 
-def _installed_alone(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, source: str) -> None:
-    """``bt-s29-rude`` (entry point ``s29_rude``, its module ``source``) installed, as the
-    ``installed`` fixture installs its two."""
-    import roomba_bt.behaviours as behaviours
-    from roomba_bt.behaviours.registry import ENTRY_POINT_GROUP
-
-    site = tmp_path / "site"
-    site.mkdir()
-    install_distribution(site, "bt-s29-rude", "s29_rude", source)
-    monkeypatch.syspath_prepend(str(site))
-    monkeypatch.delitem(sys.modules, "s29_rude", raising=False)
-    registry = behaviours.builtin_registry()
-    registry._group = ENTRY_POINT_GROUP
-    registry._loaded = False
-    monkeypatch.setattr(behaviours, "default_registry", lambda: registry)
-
-
 @pytest.mark.parametrize("kind", list(RAISES_AT_IMPORT))
 def test_what_else_an_import_raises_is_a_plugin_that_did_not_load(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys, kind: str
 ) -> None:
     source, said = RAISES_AT_IMPORT[kind]
-    _installed_alone(tmp_path, monkeypatch, source)
+    _installed(tmp_path, monkeypatch, ("bt-s29-rude", "s29_rude", source))
     mission = tmp_path / "plain.yaml"
     mission.write_text(PLAIN)
     assert main(["validate", str(mission)]) == 0  # it does not use the plugin
@@ -183,7 +160,8 @@ def test_a_real_ctrl_c_during_a_plugin_s_import_is_still_an_interrupt(
 ) -> None:
     """The SIGINT itself, delivered while the plugin imports (a slow import, the operator's
     Ctrl-C): the command is interrupted, 130, as before."""
-    _installed_alone(tmp_path, monkeypatch, "import signal\nsignal.raise_signal(signal.SIGINT)\n")
+    interrupting = "import signal\nsignal.raise_signal(signal.SIGINT)\n"
+    _installed(tmp_path, monkeypatch, ("bt-s29-rude", "s29_rude", interrupting))
     assert main(["behaviours"]) == 130
     assert "roomba-bt: interrupted" in capsys.readouterr().err
 

@@ -1,11 +1,17 @@
-"""A plugin distribution installed into a test's own site folder as pip leaves one: its
+"""Plugin distributions installed into a test's own site folder as pip leaves one: each
 module and its ``.dist-info`` with the ``roomba_bt.behaviours`` entry point, so the
 registry finds it as it finds any installed plugin (tests of plugins that clash, that do
 not load, that raise on import)."""
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
+
+import pytest
+
+from roomba_bt.behaviours import Registry, builtin_registry
+from roomba_bt.behaviours.registry import ENTRY_POINT_GROUP
 
 
 def install_distribution(site: Path, distribution: str, module: str, source: str) -> None:
@@ -16,3 +22,22 @@ def install_distribution(site: Path, distribution: str, module: str, source: str
     info.mkdir()
     (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {distribution}\nVersion: 1.0\n")
     (info / "entry_points.txt").write_text(f"[roomba_bt.behaviours]\n{module} = {module}\n")
+
+
+def installed_registry(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, *distributions: tuple[str, str, str]
+) -> Registry:
+    """Each of ``distributions`` (its name, its module, the module's source) installed into
+    the site folder ``tmp_path/site``, first on ``sys.path`` for the test; each module
+    forgotten, so that this test imports its own. The built-in registry that reads the
+    entry points on first use, as a command's registry does, with these among them."""
+    site = tmp_path / "site"
+    site.mkdir()
+    for distribution, module, source in distributions:
+        install_distribution(site, distribution, module, source)
+        monkeypatch.delitem(sys.modules, module, raising=False)
+    monkeypatch.syspath_prepend(str(site))
+    registry = builtin_registry()
+    registry._group = ENTRY_POINT_GROUP  # the entry points, read on first use
+    registry._loaded = False
+    return registry
