@@ -10,52 +10,26 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from runtime.installed import installed_registry  # tests/runtime: plugins installed
+from runtime.installed import (  # tests/runtime: plugins installed
+    conditions_module,
+    installed_registry,
+)
 
 from roomba_bt.behaviours import Registry
 from roomba_bt.cli.mission_cmds import describe_behaviours
 from roomba_bt.mission import compile_mission
 from roomba_bt.mission.schema import mission_schema
 
-ALPHA = '''\
-from roomba_bt.behaviours import Condition, declare
-
-
-@declare("sense", kind="condition")
-class AlphaSense(Condition):
-    """Alpha's sense: always true."""
-
-    def check(self, snapshot):
-        return True
-
-
-@declare("drive", kind="condition")
-class AlphaDrive(Condition):
-    """Alpha's condition that takes a built-in's name."""
-
-    def check(self, snapshot):
-        return True
-'''
-
-BETA = '''\
-from roomba_bt.behaviours import Condition, declare
-
-
-@declare("sense", kind="condition")
-class BetaSense(Condition):
-    """Beta's sense: never true."""
-
-    def check(self, snapshot):
-        return False
-
-
-@declare("retry", kind="condition")
-class BetaRetry(Condition):
-    """Beta's condition that takes a word of the mission language."""
-
-    def check(self, snapshot):
-        return True
-'''
+#: two plugins that both declare ``sense``; Alpha's ``drive`` takes a built-in's name and
+#: Beta's ``retry`` a word of the mission language
+ALPHA = conditions_module(
+    ("sense", "AlphaSense", "Alpha's sense: always true.", True),
+    ("drive", "AlphaDrive", "Alpha's condition that takes a built-in's name.", True),
+)
+BETA = conditions_module(
+    ("sense", "BetaSense", "Beta's sense: never true.", False),
+    ("retry", "BetaRetry", "Beta's condition that takes a word of the mission language.", True),
+)
 
 
 @pytest.fixture

@@ -14,7 +14,10 @@ import json
 from pathlib import Path
 
 import pytest
-from runtime.installed import installed_registry  # tests/runtime: plugins installed
+from runtime.installed import (  # tests/runtime: plugins installed
+    conditions_module,
+    installed_registry,
+)
 
 from roomba_bt.cli import main
 
@@ -22,17 +25,10 @@ Capsys = pytest.CaptureFixture[str]
 
 #: a module whose import raises, with a message of two lines
 BROKEN = 'raise RuntimeError("the lab\'s calibration file is missing\\nsee README")\n'
-WORKING = '''\
-from roomba_bt.behaviours import Condition, declare
-
-
-@declare("s29_sound", kind="condition")
-class SoundCondition(Condition):
-    """Always true: a plugin that loads."""
-
-    def check(self, snapshot):
-        return True
-'''
+#: a plugin that loads
+WORKING = conditions_module(
+    ("s29_sound", "SoundCondition", "Always true: a plugin that loads.", True)
+)
 
 
 def _installed(
@@ -104,7 +100,7 @@ def test_a_name_two_plugins_declare_is_no_broken_plugin(
 ) -> None:
     """A clash loses no behaviour (each is reached by ``package:name``; the schema lists
     those): a warning, exit 0, as before."""
-    other = WORKING.replace("SoundCondition", "Other")
+    other = conditions_module(("s29_sound", "Other", "Always true: a plugin that loads.", True))
     _installed(
         tmp_path, monkeypatch, ("bt-s29-one", "s29_one", WORKING), ("bt-s29-two", "s29_two", other)
     )

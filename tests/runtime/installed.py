@@ -1,7 +1,7 @@
 """Plugin distributions installed into a test's own site folder as pip leaves one: each
 module and its ``.dist-info`` with the ``roomba_bt.behaviours`` entry point, so the
 registry finds it as it finds any installed plugin (tests of plugins that clash, that do
-not load, that raise on import)."""
+not load, that raise on import); and the source of such a module, of conditions alone."""
 
 from __future__ import annotations
 
@@ -22,6 +22,18 @@ def install_distribution(site: Path, distribution: str, module: str, source: str
     info.mkdir()
     (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {distribution}\nVersion: 1.0\n")
     (info / "entry_points.txt").write_text(f"[roomba_bt.behaviours]\n{module} = {module}\n")
+
+
+def conditions_module(*declared: tuple[str, str, str, bool]) -> str:
+    """The source of a plugin module of conditions that always answer the same, each
+    declared by its (name, class, docstring, answer): the plugin tests' distributions differ
+    in these alone."""
+    classes = "".join(
+        f'\n\n@declare("{name}", kind="condition")\nclass {cls}(Condition):\n'
+        f'    """{doc}"""\n\n    def check(self, snapshot):\n        return {answer}\n'
+        for name, cls, doc, answer in declared
+    )
+    return f"from roomba_bt.behaviours import Condition, declare\n{classes}"
 
 
 def installed_registry(
