@@ -72,6 +72,19 @@ def test_a_declared_plain_class_leaves_its_plugin_file_s_others(tmp_path: Path) 
     _assert_mixed(registry, [str(e) for e in errors], path)
 
 
+def test_one_class_that_declares_itself_wrongly_leaves_its_module_s_others(
+    tmp_path: Path,
+) -> None:
+    """The good class was dropped with the bad one, and the error said neither which class
+    nor where."""
+    path = tmp_path / "mixed.py"
+    path.write_text(MIXED)
+    registry, [bad, _plain] = Registry(entry_point_group=None).with_file(path)
+    assert [d.name for d in registry] == ["ok_one"]
+    assert f"BadOne ({path}:9) declares itself wrongly" in str(bad)  # its @declare
+    assert "parameter 'level': type must be a ValueType" in str(bad)
+
+
 def test_a_plugin_file_that_fails_to_import_says_where(
     tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:

@@ -323,36 +323,6 @@ def test_a_plugin_that_takes_a_builtins_name_is_a_warning_where_it_is_used(
     assert "the built-in is used" in warning.message
 
 
-def test_one_class_that_declares_itself_wrongly_leaves_its_module_s_others(
-    tmp_path: Path,
-) -> None:
-    """The good class was dropped with the bad one, and the error said neither which class
-    nor where."""
-    path = tmp_path / "two.py"
-    path.write_text(TWO_CLASSES)
-    registry, [error] = Registry(entry_point_group=None).with_file(path)
-    assert [d.name for d in registry] == ["good_one"]
-    assert f"Bad ({path}:4) declares itself wrongly" in str(error)  # its @declare
-    assert "parameter 'level': type must be a ValueType" in str(error)
-
-
-TWO_CLASSES = """\
-from roomba_bt.behaviours import Condition, Param, declare
-
-
-@declare("bad_one", kind="condition", params=(Param("level", int, default=3),))
-class Bad(Condition):
-    def check(self, snapshot):
-        return True
-
-
-@declare("good_one", kind="condition")
-class Good(Condition):
-    def check(self, snapshot):
-        return True
-"""
-
-
 def test_an_unknown_node_notes_only_the_plugins_that_may_have_meant_it(tmp_path: Path) -> None:
     """The note beside an unknown node listed every broken plugin on the machine (a line of
     more than 1,000 characters): it lists those whose error names the word, else those that
