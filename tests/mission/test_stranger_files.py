@@ -22,12 +22,19 @@ def _problems(path: Path, params: dict[str, str] | None = None) -> list[str]:
     return [f"{p.line}:{p.column}: {p.message}" for p in problems]
 
 
+def _mission(tmp_path: Path, text: str) -> Path:
+    """The mission file ``m.yaml`` holding ``text`` as written: what the stranger's editor
+    wrote, quotes and spaces and all (``simrun.write_mission`` dedents)."""
+    path = tmp_path / "m.yaml"
+    path.write_text(text)
+    return path
+
+
 def test_an_include_through_a_symlink_loop_is_refused_at_the_include(tmp_path: Path) -> None:
     """It was "internal error while compiling (RuntimeError: Symlink loop ...)" at 1:1."""
     (tmp_path / "loop_a.yaml").symlink_to("loop_b.yaml")
     (tmp_path / "loop_b.yaml").symlink_to("loop_a.yaml")
-    path = tmp_path / "m.yaml"
-    path.write_text("mission: m\ninclude: [loop_a.yaml]\ntree: {log: x}\n")
+    path = _mission(tmp_path, "mission: m\ninclude: [loop_a.yaml]\ntree: {log: x}\n")
     assert _problems(path) == [
         "2:11: an include 'loop_a.yaml' is a symbolic link loop (it leads back to itself), "
         "not a file: name the file itself"
@@ -56,9 +63,9 @@ def test_show_escapes_control_characters_a_command_line_text_brings_into_the_tre
 ) -> None:
     """The tree line printed ``log(hello ESC[2J ESC]0;pwned BEL X)`` raw: it cleared the
     screen and retitled the window (the first line was escaped)."""
-    path = tmp_path / "m.yaml"
-    path.write_text(
-        "mission: m\nparameters: {who: {type: str, default: x}}\ntree: {log: 'hello ${who}'}\n"
+    path = _mission(
+        tmp_path,
+        "mission: m\nparameters: {who: {type: str, default: x}}\ntree: {log: 'hello ${who}'}\n",
     )
     assert main(["show", str(path), "-p", "who=\x1b[2J\x1b]0;pwned\x07X\nfake"]) == 0
     out = capsys.readouterr().out
@@ -95,14 +102,14 @@ def test_bidi_and_zero_width_characters_are_escaped_wherever_names_are_printed(
 def test_a_key_yaml_reads_as_a_boolean_says_to_quote_it(tmp_path: Path) -> None:
     """``vacuum: {on: true}``, the long form of ``on: bool, required``, was refused without
     the hint an enum's ``yes`` gets; a text parameter's ``default: no`` likewise."""
-    path = tmp_path / "m.yaml"
-    path.write_text(
+    path = _mission(
+        tmp_path,
         "mission: m\n"
         "parameters: {label: {type: str, default: no}}\n"
         "tree:\n"
         "  sequence:\n"
         "    - mode: safe\n"
-        "    - vacuum: {on: true}\n"
+        "    - vacuum: {on: true}\n",
     )
     assert _problems(path) == [
         "2:42: parameter label: expected a text, got a boolean (false): YAML 1.1 reads yes/no, "
@@ -127,8 +134,7 @@ def test_a_utf16_file_is_named_as_such(tmp_path: Path, encoding: str) -> None:
 
 def test_a_second_document_is_named_where_it_starts(tmp_path: Path) -> None:
     """It was PyYAML's fragment "but found another document"."""
-    path = tmp_path / "m.yaml"
-    path.write_text("mission: m\ntree: {log: x}\n---\nmission: n\n")
+    path = _mission(tmp_path, "mission: m\ntree: {log: x}\n---\nmission: n\n")
     assert _problems(path) == [
         "3:1: YAML syntax error: a mission file holds one YAML document; a second one (---) "
         "starts here"
@@ -140,9 +146,7 @@ def test_a_second_document_is_named_where_it_starts(tmp_path: Path) -> None:
 
 def _one_step(tmp_path: Path, step: str) -> Path:
     """A mission whose second step is ``step``, written as given (a flow or block line)."""
-    path = tmp_path / "m.yaml"
-    path.write_text(f"mission: m\ntree:\n  sequence:\n    - mode: safe\n    - {step}\n")
-    return path
+    return _mission(tmp_path, f"mission: m\ntree:\n  sequence:\n    - mode: safe\n    - {step}\n")
 
 
 @pytest.mark.parametrize(
@@ -175,10 +179,10 @@ def test_a_typographic_quote_inside_a_text_is_not_blamed_for_a_syntax_error(
 def test_a_value_in_typographic_quotes_says_what_to_write(tmp_path: Path) -> None:
     """The typographic quotes were quoted back, never named: ``got '\u2018safe\u2019' (did
     you mean 'safe'?)``."""
-    path = tmp_path / "m.yaml"
-    path.write_text(
+    path = _mission(
+        tmp_path,
         "mission: m\ntree:\n  sequence:\n    - mode: \u2018safe\u2019\n"
-        "    - drive:\n        velocity: \u201c200 mm/s\u201d\n        duration: 1s\n"
+        "    - drive:\n        velocity: \u201c200 mm/s\u201d\n        duration: 1s\n",
     )
     assert _problems(path) == [
         "4:13: mode.to: expected one of passive, safe, full, got '\u2018safe\u2019': '\u2018' "
@@ -193,8 +197,7 @@ def test_a_value_in_typographic_quotes_says_what_to_write(tmp_path: Path) -> Non
 def test_a_no_break_space_indenting_a_key_is_named(tmp_path: Path) -> None:
     """It was "expected a node, got nothing (null) [tree]" and "unknown top-level key
     '\\xa0\\xa0sequence'": the character was shown, never named."""
-    path = tmp_path / "m.yaml"
-    path.write_text("mission: m\ntree:\n\xa0\xa0sequence:\n    - mode: safe\n")
+    path = _mission(tmp_path, "mission: m\ntree:\n\xa0\xa0sequence:\n    - mode: safe\n")
     assert _problems(path) == [
         "3:1: '\\xa0' (U+00A0 NO-BREAK SPACE) indents this line: YAML indents with plain spaces "
         "only (write a space)"
@@ -203,8 +206,9 @@ def test_a_no_break_space_indenting_a_key_is_named(tmp_path: Path) -> None:
 
 def test_a_no_break_space_indenting_a_line_yaml_cannot_read_is_named(tmp_path: Path) -> None:
     """PyYAML's "could not find expected ':'" came a line after the pasted one."""
-    path = tmp_path / "m.yaml"
-    path.write_text("mission: m\ntree:\n  sequence:\n    - mode: safe\n    - log: x\n\xa0\xa0\n")
+    path = _mission(
+        tmp_path, "mission: m\ntree:\n  sequence:\n    - mode: safe\n    - log: x\n\xa0\xa0\n"
+    )
     assert _problems(path) == [
         "6:1: YAML syntax error: '\\xa0' (U+00A0 NO-BREAK SPACE) indents this line: YAML indents "
         "with plain spaces only (write a space) (could not find expected ':' at 7:1)"
@@ -282,8 +286,7 @@ def test_a_plugin_file_that_is_a_device_is_named_as_such(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """``plugins: [/dev/zero]`` with ``--include-dir /dev`` said "not found": it exists."""
-    path = tmp_path / "m.yaml"
-    path.write_text("mission: m\nplugins: [/dev/zero]\ntree: {log: x}\n")
+    path = _mission(tmp_path, "mission: m\nplugins: [/dev/zero]\ntree: {log: x}\n")
     args = ["validate", str(path), "--include-dir", "/dev", "--allow-plugin-files"]
     assert main(args) == 2
     assert capsys.readouterr().out.splitlines() == [
@@ -311,8 +314,8 @@ def test_a_bad_note_is_said_at_its_own_line_in_a_list_written_down_the_page(
 ) -> None:
     """A song's notes written one a line: a bad note on the list's third line was said at
     the list's first (8:11 here), and the reader counted down to it by hand."""
-    path = tmp_path / "m.yaml"
-    path.write_text(
+    path = _mission(
+        tmp_path,
         "mission: m\n"
         "tree:\n"
         "  sequence:\n"
@@ -323,7 +326,7 @@ def test_a_bad_note_is_said_at_its_own_line_in_a_list_written_down_the_page(
         "          - C4 250ms\n"
         "          - E4 250ms\n"
         "          - H4 250ms\n"
-        "          - G4 9s\n"
+        "          - G4 9s\n",
     )
     assert _problems(path) == [
         "10:13: song.notes: note 3 of 4: unknown note 'H4': H is B in German names: write B4",
@@ -351,7 +354,6 @@ def test_a_mode_whose_value_is_not_known_is_its_error_not_an_internal_one(
     """``mode: "${m}"`` with ``m`` not known (its error said where it was given): the mode
     check read the mode it leads to from the unknown value, "internal error while compiling
     (KeyError: '<UNKNOWN>')" at 1:1."""
-    path = tmp_path / "m.yaml"
-    path.write_text("mission: m\n" + text)
+    path = _mission(tmp_path, "mission: m\n" + text)
     (problem,) = _problems(path)
     assert problem.startswith(said), problem
