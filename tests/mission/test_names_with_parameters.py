@@ -100,38 +100,38 @@ tree:
 """
 
 
+@pytest.mark.parametrize(
+    ("text", "said"),
+    [
+        # with the default it picked 'w left'; ``-p side=right`` would have named no child
+        (SELECTING.format(selected='"w left"', first='"w ${side}"'),
+         "8:28: parallel.selected (at 6:15) picks this child by its name 'w left', which is "
+         "made with a parameter"),
+        # a leaf's own name, made of its parameter
+        ("parameters: {t: {type: duration, default: 10ms}}\ntree:\n  parallel:\n"
+         "    policy: selected\n    selected: [wait(10ms)]\n"
+         '    children: [{wait: "${t}"}, {wait: 20ms}]\n',
+         "6:23: parallel.selected (at 5:15) picks this child"),
+        # selected: takes no parameter
+        (SELECTING.format(selected='"w ${side}"', first='"w ${side}"'),
+         "6:15: parallel.selected: 'w ${side}': child names are matched as written, and "
+         "${side} is not replaced here"),
+    ],
+    ids=["a name made with a parameter", "a leaf's parameter in its name", "in selected"],
+)  # fmt: skip
 def test_a_child_selected_by_a_name_made_with_a_parameter_is_refused_at_the_name(
-    errors_of: Errors,
+    errors_of: Errors, text: str, said: str
 ) -> None:
-    """With the default it picked 'w left'; ``-p side=right`` would have named no child."""
-    (error,) = errors_of(SELECTING.format(selected='"w left"', first='"w ${side}"'))
-    assert error.startswith(
-        "8:28: parallel.selected (at 6:15) picks this child by its name 'w left', which is "
-        "made with a parameter"
-    ), error
-    assert error.endswith(ESCAPE_HINT)
+    (error,) = errors_of(text)
+    assert error.startswith(said), error
+    assert error.endswith(ESCAPE_HINT), error
 
 
-def test_a_child_selected_by_a_leaf_s_parameter_in_its_own_name_is_refused_too(
-    errors_of: Errors,
-) -> None:
-    (error,) = errors_of(
-        "parameters: {t: {type: duration, default: 10ms}}\ntree:\n  parallel:\n"
-        "    policy: selected\n    selected: [wait(10ms)]\n"
-        '    children: [{wait: "${t}"}, {wait: 20ms}]\n'
-    )
-    assert error.startswith("6:23: parallel.selected (at 5:15) picks this child"), error
-
-
-def test_selected_takes_no_parameter_and_reads_the_escape(
+def test_selected_reads_the_escape_and_a_varying_name_may_stand_beside_it(
     errors_of: Errors, compile_text: Compile
 ) -> None:
-    (error,) = errors_of(SELECTING.format(selected='"w ${side}"', first='"w ${side}"'))
-    assert error.startswith(
-        "6:15: parallel.selected: 'w ${side}': child names are matched as written, and "
-        "${side} is not replaced here"
-    ), error
-    # a child whose name varies may stand beside the selected one; $${ picks a literal ${
+    """A child whose name varies may stand beside the selected one; ``$${`` in selected:
+    picks a literal ``${``."""
     assert errors_of(SELECTING.format(selected="fixed", first='"w ${side}"')) == []
     mission = compile_text(SELECTING.format(selected='"a $${b}"', first='"a $${b}"'))
     parallel = mission.root
