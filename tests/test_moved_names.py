@@ -16,77 +16,66 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "roomba_bt"
 
+#: the names ``roomba_bt.behaviours.declare`` offers that other modules define now, by module
+DECLARE_OFFERS = {
+    "roomba_bt.behaviours.base": (
+        "RobotBehaviour",
+        "Action",
+        "Condition",
+        "CheckedParams",
+        "UndeclaredCommand",
+        "InvalidCheck",
+        "checked_truth",
+    ),
+    "roomba_bt.behaviours.blackboard": (
+        "SNAPSHOT_KEY",
+        "KEY_TYPES_KEY",
+        "MISSION_NAMESPACE",
+        "BLACKBOARD_REF",
+        "BlackboardRef",
+        "blackboard_ref",
+        "read_key",
+        "write_key",
+        "declare_keys",
+        "KeyType",
+        "UnwrittenKey",
+        "KeyRange",
+    ),
+    "roomba_bt.behaviours.driving": (
+        "WHEEL",
+        "CHARGER_ADVICE",
+        "left_driving_message",
+        "on_home_base",
+        "cycle_may_run",
+    ),
+    "roomba_bt.behaviours.frame_inputs": ("FrameInputs",),
+    # never defined in declare, but imported there before session 28 and so found there
+    # by plugins (InvalidStatus, Snapshot: the upgrade report's slowpoke.py)
+    "roomba_bt.behaviours.lean": (
+        "DirectLeaf",
+        "InvalidStatus",
+        "Selector",
+        "Sequence",
+        "behaviour_tick",
+        "checked_status",
+    ),
+    "roomba_bt.robot.interface": ("ModeChange", "Odometry", "RobotHandle", "Snapshot"),
+    "roomba_bt.oi.encode": ("Command", "halt", "motors_off", "turns_wheels"),
+    "roomba_bt.oi.frames": ("SensorFrame", "CHARGING_SOURCES_PACKETS"),
+    "roomba_bt.oi.modes": ("DRIVING_MODES",),
+    "roomba_bt.oi.opcodes": ("COMMANDS_BY_NAME",),
+    "roomba_bt.behaviours.units": ("MARK", "held"),
+}
+
 #: (old module, name, the module that defines it now)
 MOVED = [
     ("roomba_bt.oi.stream", "SLOT_SECONDS", "roomba_bt.oi.frames"),
     ("roomba_bt.robot.interface", "SLOT_SECONDS", "roomba_bt.oi.frames"),
     *(
-        ("roomba_bt.behaviours.declare", name, "roomba_bt.behaviours.base")
-        for name in (
-            "RobotBehaviour",
-            "Action",
-            "Condition",
-            "CheckedParams",
-            "UndeclaredCommand",
-            "InvalidCheck",
-            "checked_truth",
-        )
+        ("roomba_bt.behaviours.declare", name, home)
+        for home, names in DECLARE_OFFERS.items()
+        for name in names
     ),
-    *(
-        ("roomba_bt.behaviours.declare", name, "roomba_bt.behaviours.blackboard")
-        for name in (
-            "SNAPSHOT_KEY",
-            "KEY_TYPES_KEY",
-            "MISSION_NAMESPACE",
-            "BLACKBOARD_REF",
-            "BlackboardRef",
-            "blackboard_ref",
-            "read_key",
-            "write_key",
-            "declare_keys",
-            "KeyType",
-            "UnwrittenKey",
-            "KeyRange",
-        )
-    ),
-    *(
-        ("roomba_bt.behaviours.declare", name, "roomba_bt.behaviours.driving")
-        for name in (
-            "WHEEL",
-            "CHARGER_ADVICE",
-            "left_driving_message",
-            "on_home_base",
-            "cycle_may_run",
-        )
-    ),
-    ("roomba_bt.behaviours.declare", "FrameInputs", "roomba_bt.behaviours.frame_inputs"),
-    # never defined in declare, but imported there before session 28 and so found there
-    # by plugins (InvalidStatus, Snapshot: the upgrade report's slowpoke.py)
-    *(
-        ("roomba_bt.behaviours.declare", name, "roomba_bt.behaviours.lean")
-        for name in (
-            "DirectLeaf",
-            "InvalidStatus",
-            "Selector",
-            "Sequence",
-            "behaviour_tick",
-            "checked_status",
-        )
-    ),
-    *(
-        ("roomba_bt.behaviours.declare", name, "roomba_bt.robot.interface")
-        for name in ("ModeChange", "Odometry", "RobotHandle", "Snapshot")
-    ),
-    *(
-        ("roomba_bt.behaviours.declare", name, "roomba_bt.oi.encode")
-        for name in ("Command", "halt", "motors_off", "turns_wheels")
-    ),
-    ("roomba_bt.behaviours.declare", "SensorFrame", "roomba_bt.oi.frames"),
-    ("roomba_bt.behaviours.declare", "CHARGING_SOURCES_PACKETS", "roomba_bt.oi.frames"),
-    ("roomba_bt.behaviours.declare", "DRIVING_MODES", "roomba_bt.oi.modes"),
-    ("roomba_bt.behaviours.declare", "COMMANDS_BY_NAME", "roomba_bt.oi.opcodes"),
-    ("roomba_bt.behaviours.declare", "MARK", "roomba_bt.behaviours.units"),
-    ("roomba_bt.behaviours.declare", "held", "roomba_bt.behaviours.units"),
     ("roomba_bt.transport.testing", "RecordingTransport", "roomba_bt.transport.testing"),
     ("roomba_bt.mission", "compile_mission", "roomba_bt.mission.compiler"),
     ("roomba_bt.mission", "load_mission", "roomba_bt.mission.compiler"),
