@@ -19,6 +19,16 @@ robot: {start: {at: [2, 2], heading: 0}}
 """
 
 
+def box_with_a_drop(drop_from_x: float, start: tuple[float, float]) -> str:
+    """:data:`BOX`'s room, its floor a drop east of ``drop_from_x`` (m) to the wall, the
+    robot starting at ``start`` (m) facing east, toward the drop."""
+    return (
+        "rooms: [[[0, 0], [4, 0], [4, 4], [0, 4]]]\n"
+        f"drops: [{{rect: [{drop_from_x}, 0, 4, 4]}}]\n"
+        f"robot: {{start: {{at: [{start[0]}, {start[1]}], heading: 0}}}}\n"
+    )
+
+
 def world(text: str = BOX) -> World:
     return parse_world(text, "<test>")
 

@@ -10,7 +10,7 @@ from roomba_bt.oi.stream import StreamParser
 from roomba_bt.sim import Faults, SimLink, Simulator
 from roomba_bt.sim.narrate import after_the_cut
 
-from .helpers import BOX, make, world
+from .helpers import BOX, box_with_a_drop, make, world
 
 IDS = [7, 22, 35, 43, 44, 46, 48]
 
@@ -185,11 +185,7 @@ def test_fault_times_and_rates_are_checked() -> None:
         Faults(bit_flip_rate=2)
 
 
-STAIRS = """
-rooms: [[[0, 0], [4, 0], [4, 4], [0, 4]]]
-drops: [{rect: [3.0, 0, 4, 4]}]
-robot: {start: {at: [1, 2], heading: 0}}
-"""
+STAIRS = box_with_a_drop(3.0, start=(1, 2))
 
 
 @pytest.mark.parametrize(

@@ -9,7 +9,7 @@ from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.opcodes import COMMANDS
 from roomba_bt.oi.profiles import CREATE2, ROOMBA500, ROOMBA600
 
-from .helpers import DOCK_WORLD, docked_start, make, pose
+from .helpers import DOCK_WORLD, box_with_a_drop, docked_start, make, pose
 
 
 def mode_of(host) -> int:  # type: ignore[no-untyped-def]
@@ -111,13 +111,12 @@ def test_roomba600_reports_mode_plus_one_as_its_profile_says() -> None:
     assert mode_of(host) == 4
 
 
+#: the robot in the room's middle, facing a drop 1 m ahead
+A_METRE_FROM_A_DROP = box_with_a_drop(3.0, start=(2, 2))
+
+
 def test_safe_mode_cliff_while_driving_forward_drops_to_passive() -> None:
-    text = """
-rooms: [[[0, 0], [4, 0], [4, 4], [0, 4]]]
-drops: [{rect: [3.0, 0, 4, 4]}]
-robot: {start: {at: [2, 2], heading: 0}}
-"""
-    host = make(text)
+    host = make(A_METRE_FROM_A_DROP)
     host.stream([9, 10, 11, 12, 35, 41, 42])
     host.send(C.drive_direct(200, 200))
     frames = host.frames(5.0)
@@ -149,12 +148,7 @@ events: [{at: 0.3, kind: lift, duration: 0.5}]
 
 
 def test_full_mode_has_no_cliff_safety_and_the_robot_falls() -> None:
-    text = """
-rooms: [[[0, 0], [4, 0], [4, 4], [0, 4]]]
-drops: [{rect: [3.0, 0, 4, 4]}]
-robot: {start: {at: [2, 2], heading: 0}}
-"""
-    host = make(text, mode="full")
+    host = make(A_METRE_FROM_A_DROP, mode="full")
     host.send(C.drive_direct(200, 200))
     host.run(8.0)
     assert host.sim.mode is OIMode.FULL

@@ -14,7 +14,7 @@ from roomba_bt.sim import Pose, Simulator
 from roomba_bt.sim.sensing import _RAY_REACH, _RAY_TURNS, FAR_PACKETS
 from roomba_bt.sim.world import ROBOT_RADIUS_MM
 
-from .helpers import make, pose
+from .helpers import box_with_a_drop, make, pose
 
 ROOM = """
 rooms: [[[0, 0], [2, 0], [2, 2], [0, 2]]]
@@ -190,11 +190,7 @@ def test_a_builtin_cycle_reads_far_sensors_measured_as_it_starts() -> None:
     assert lazy.sim.pose == eager.sim.pose
 
 
-CLIFFS = """
-rooms: [[[0, 0], [4, 0], [4, 4], [0, 4]]]
-drops: [{rect: [2.0, 0, 4, 4]}]
-robot: {start: {at: [1, 1], heading: 0}}
-"""
+CLIFFS = box_with_a_drop(2.0, start=(1, 1))
 
 
 @pytest.mark.parametrize(
