@@ -79,12 +79,18 @@ def test_a_tick_that_blocks_gets_drive_0_and_the_run_goes_on(
     assert run.summary.distance_mm == pytest.approx(60, abs=5)
 
 
+def _blocking_for(plugin: str, seconds: str) -> str:
+    """The plugin with its leaf blocking ``seconds`` at the most, not 10 s (the wait is
+    :data:`WAITS_FOR_THE_GUARD`'s): a plugin without that bound fails here, not silently."""
+    assert plugin.count("10.0") == 1, "the plugin's 10 s bound moved"
+    return plugin.replace("10.0", seconds)
+
+
 def test_no_guard_no_halt(run_mission: RunMission, plugin_dir: Path) -> None:
     """Without the guard the same tick blocks until its own 10 s: the wheels are not
     stopped behind its back (the virtual clock: the robot did not move meanwhile)."""
-    blocked = MISSION.replace("10.0", "0.05")
-    (plugin_dir / "stuck.py").write_text(PLUGIN.replace("10.0", "0.05"))
-    run = run_mission(blocked, permissions=Permissions(plugin_files=True), timeout=20.0)
+    (plugin_dir / "stuck.py").write_text(_blocking_for(PLUGIN, "0.05"))
+    run = run_mission(MISSION, permissions=Permissions(plugin_files=True), timeout=20.0)
     assert run.summary.tick_halts == 0
     assert [d for _, d in run.link.writes if d[:1] == HALT[:1]][:2] == [FORWARD, HALT]
 
@@ -92,7 +98,7 @@ def test_no_guard_no_halt(run_mission: RunMission, plugin_dir: Path) -> None:
 def test_a_slow_tick_with_the_wheels_at_rest_sends_nothing(
     run_mission: RunMission, plugin_dir: Path
 ) -> None:
-    (plugin_dir / "stuck.py").write_text(PLUGIN.replace("10.0", "0.1"))
+    (plugin_dir / "stuck.py").write_text(_blocking_for(PLUGIN, "0.1"))
     run = run_mission(
         "plugins: [./stuck.py]\ntree:\n  sequence:\n    - mode: safe\n    - stuck\n",
         tick_limit=0.02, permissions=Permissions(plugin_files=True),
@@ -170,7 +176,7 @@ def test_a_record_replays_the_guards_acts_byte_for_byte(
     record = load_record(record_path)
     assert [n["tick_guard"] > 0 for _, n in record.notes if "ended" not in n] == [True]
     # in the replay nothing stops the wheels during the tick: do not wait 10 s for it
-    (plugin_dir / "stuck.py").write_text(PLUGIN.replace("10.0", "0.0"))
+    (plugin_dir / "stuck.py").write_text(_blocking_for(PLUGIN, "0.0"))
     mission = load_mission(plugin_dir / "mission.yaml", permissions=allowed)
     summary, transport = replay_record(
         record, mission, profile=CREATE2, packets=record.header["packets"],
@@ -196,7 +202,7 @@ def test_the_monitor_shows_each_act_of_a_recorded_run(
     allowed = Permissions(plugin_files=True)
     run_mission(MISSION, tick_limit=0.02, permissions=allowed, timeout=20.0,
                 record=record_path)  # fmt: skip
-    (plugin_dir / "stuck.py").write_text(PLUGIN.replace("10.0", "0.0"))
+    (plugin_dir / "stuck.py").write_text(_blocking_for(PLUGIN, "0.0"))
     record = load_record(record_path)
     mission = load_mission(plugin_dir / "mission.yaml", permissions=allowed)
     feed, summary = replay_into_feed(
@@ -424,7 +430,7 @@ def test_a_tick_that_blocks_with_the_motors_on_gets_them_off_and_back_after(
     assert after[:2] == [FORWARD, MOTORS_ON], after  # the tree's commands back, wheels first
     notes = [n for _, n in load_record(record_path).notes if "tick_guard" in n]
     assert [n.get("motors") for n in notes] == [True]
-    (plugin_dir / "stuck.py").write_text(MOTORS_PLUGIN.replace("10.0", "0.0"))
+    (plugin_dir / "stuck.py").write_text(_blocking_for(MOTORS_PLUGIN, "0.0"))
     mission = load_mission(plugin_dir / "mission.yaml", permissions=allowed)
     record = load_record(record_path)
     _, transport = replay_record(
