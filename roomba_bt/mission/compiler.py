@@ -42,7 +42,7 @@ from roomba_bt.mission.checks import (
 from roomba_bt.mission.diagnostics import Diagnostic, IncludeSite, MissionError
 from roomba_bt.mission.loader import NO_PERMISSIONS, Loader, Permissions
 from roomba_bt.mission.plan import Node
-from roomba_bt.mission.shipped import find_mission
+from roomba_bt.mission.shipped import find_mission, shipped_name
 from roomba_bt.mission.source import Loc
 from roomba_bt.mission.values import Context, shown
 from roomba_bt.oi.modes import ALL_MODES, OIMode
@@ -52,10 +52,15 @@ __all__ = ["MissionText", "compile_mission", "load_mission", "load_mission_text"
 
 
 def _display(path: Path) -> str:
+    """How a diagnostic names a file: by its path from the working folder; else a shipped
+    file by its shipped name (``roomba-bt:lib/docking.yaml``, as an include writes it and a
+    record holds it: ``validate dock`` named it by its site-packages path, a different line
+    on every machine); else as given."""
+    resolved = path.resolve()
     try:
-        return str(path.resolve().relative_to(Path.cwd()))
+        return str(resolved.relative_to(Path.cwd()))
     except ValueError:
-        return str(path)
+        return shipped_name(resolved) or str(path)
 
 
 def compile_mission(

@@ -64,6 +64,7 @@ from roomba_bt.mission.shipped import (
     SHIPPED_PREFIX,
     in_shipped_library,
     shipped_library_files,
+    shipped_name,
 )
 from roomba_bt.mission.source import (
     Bad,
@@ -868,9 +869,7 @@ def _a_library(resolved: Path, path: Path) -> str:
     """What ``show`` or ``run`` says of a library file (``subtrees:``, no ``tree:``), such
     as the shipped ``roomba-bt:lib/docking.yaml``: "a mission needs a tree" read as if the
     file were broken, when it is whole and only meant to be included."""
-    name = str(path)
-    if in_shipped_library(resolved):
-        name = SHIPPED_PREFIX + resolved.relative_to(SHIPPED_DIR).as_posix()
+    name = shipped_name(resolved) or str(path)
     return (
         "this file is a library of subtrees (subtrees:, no tree:), to be included, not run: "
         f"include it in a mission (include: [{name}]) and use them there with subtree: NAME "

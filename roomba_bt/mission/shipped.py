@@ -105,6 +105,15 @@ def shipped_file(text: str) -> Path | None:
     return target if in_shipped_library(target) else None
 
 
+def shipped_name(resolved: Path) -> str | None:
+    """The name a file of the shipped directory goes by in every installation
+    (``roomba-bt:lib/docking.yaml``, what an include writes and a record holds), or None for
+    another file. ``resolved``: an absolute path without links, as ``Path.resolve`` gives."""
+    if not resolved.is_relative_to(SHIPPED_DIR):
+        return None
+    return SHIPPED_PREFIX + resolved.relative_to(SHIPPED_DIR).as_posix()
+
+
 def in_shipped_library(target: Path) -> bool:
     """``target`` (a resolved path) is a file of the shipped directory: what a
     ``roomba-bt:PATH`` name may designate."""

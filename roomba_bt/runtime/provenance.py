@@ -52,8 +52,9 @@ def source_name(path: Path, folder: Path | None = None) -> str:
     when the two lie under a common folder below the file system's root (:func:`near`), the
     same in every checkout of a repository that holds both; else the file's absolute path."""
     resolved = path.resolve()
-    if resolved.is_relative_to(shipped.SHIPPED_DIR):
-        return shipped.SHIPPED_PREFIX + resolved.relative_to(shipped.SHIPPED_DIR).as_posix()
+    name = shipped.shipped_name(resolved)
+    if name is not None:
+        return name
     if folder is not None and near(resolved, folder.resolve()):
         return Path(os.path.relpath(resolved, folder.resolve())).as_posix()
     return str(resolved)

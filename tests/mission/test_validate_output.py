@@ -226,3 +226,45 @@ def test_a_file_it_cannot_read_has_its_verdict_on_stdout_and_its_reason_in_json(
     (entry,) = json.loads(capsys.readouterr().out)["files"]
     assert entry["said"].startswith("failed (cannot read: no such mission file")
     assert "above" not in entry["said"]
+
+
+#: a mission that gives the shipped docking subtree a speed its search leaf refuses
+BAD_DOCK_SPEED = """\
+include: [roomba-bt:lib/docking.yaml]
+tree:
+  sequence:
+    - mode: safe
+    - subtree: {id: dock, search_speed: 900 mm/s}
+"""
+
+
+@pytest.mark.parametrize("form", ["text", "json", "github"])
+def test_a_shipped_file_is_named_by_its_shipped_name_in_every_format(
+    form: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
+) -> None:
+    """A diagnostic in a shipped file (``validate dock``, or a mission that includes the
+    shipped library) named it by its site-packages path, a different line on every machine:
+    it is named as an include writes it and a record holds it. The package lies outside the
+    working folder here, as an installed wheel's does."""
+    from roomba_bt.mission.shipped import SHIPPED_DIR
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "m.yaml").write_text(BAD_DOCK_SPEED)
+    said = []
+    for argv in (["m.yaml"], ["dock", "-p", "time_limit=abc"]):
+        assert main(["validate", "--format", form, *argv]) == 2
+        said.append(capsys.readouterr().out)
+    assert str(SHIPPED_DIR) not in "".join(said)
+    library, dock = "roomba-bt:lib/docking.yaml", "roomba-bt:dock.yaml"
+    if form == "json":
+        included, own = (json.loads(out) for out in said)
+        assert [(d["file"], d["line"]) for d in included["diagnostics"]] == [(library, 43)]
+        assert [(d["file"], d["line"]) for d in own["diagnostics"]] == [(dock, 17)]
+        assert included["files"][0]["said"].endswith(f"1 error in {library}, included at line 1)")
+    elif form == "github":
+        assert said[0].startswith(f"::error file={library.replace(':', '%3A')},line=43,col=44,")
+        assert said[1].startswith(f"::error file={dock.replace(':', '%3A')},line=17,col=3,")
+    else:
+        assert said[0].startswith(f"{library}:43:44: dock_search: speed 900 mm/s is out of range")
+        assert f"m.yaml: failed (an included file has errors: 1 error in {library}," in said[0]
+        assert said[1].startswith(f"{dock}:17:3: parameter time_limit=abc (from the command line)")
