@@ -525,6 +525,16 @@ class Loader:
             raise
 
     def _subtree_def(self, name: str, node: yaml.Node, key_loc: Loc, loc: Loc) -> None:
+        try:
+            self._new_subtree(name, node, key_loc, loc)
+        except Bad:  # defined wrongly: its error is said once, here, not again at every use
+            # as "unknown subtree" (a compiler's cascade); a name defined twice keeps its first
+            self.ctx.subtrees.setdefault(
+                name, SubtreeDef(name, key_loc, {}, None, loc, written_wrongly=True)
+            )
+            raise
+
+    def _new_subtree(self, name: str, node: yaml.Node, key_loc: Loc, loc: Loc) -> None:
         _new_name(name, key_loc, "subtree name", "subtree", self.ctx.subtrees, "defined")
         if name in WORDS or name in self.ctx.registry:
             raise Bad(key_loc.at(f"subtree name {name!r} is already a node name"))

@@ -304,6 +304,8 @@ class NodeParser:
             chain = self._use_stack[self._use_stack.index(name) :]
             raise Bad(id_loc.at(f"recursive subtree: {' -> '.join([*chain, name])}"))
         sub.used = True
+        if sub.written_wrongly:  # its definition's error is the one to fix
+            return None
         sub_env = self._subtree_env(sub, args, key_loc, env)
         if sub.body is None:
             return None

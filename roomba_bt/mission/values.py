@@ -236,6 +236,9 @@ class SubtreeDef:
     used: bool = False
     #: parameters declared wrongly (reported there): unknown values at every use
     broken: frozenset[str] = frozenset()
+    #: the definition itself was refused (reported there): its uses compile to nothing and
+    #: say nothing more, its parameters being unknown
+    written_wrongly: bool = False
 
 
 @dataclass

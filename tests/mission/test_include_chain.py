@@ -88,3 +88,33 @@ def test_a_warning_in_a_library_and_a_load_mission_error_carry_the_chain_too(rep
     with pytest.raises(MissionError) as raised:
         load_mission("missions/delivery/to-kitchen.yaml", permissions=SHARED)
     assert "from missions/delivery/to-kitchen.yaml:2:11)" in str(raised.value)
+
+
+@pytest.mark.parametrize(
+    ("written", "error"),
+    [
+        (
+            "  escape_bump:\n    tre: {subtree: back_off}\n",
+            "subtree 'escape_bump': unknown key 'tre'",
+        ),
+        ("  escape_bump: [back_off]\n", "subtree 'escape_bump' must be a mapping"),
+    ],
+)
+def test_a_subtree_defined_wrongly_is_one_error_not_one_more_at_each_use(
+    written: str, error: str, repo: Path
+) -> None:
+    """A library subtree written wrongly gave its error, then "unknown subtree" at each of
+    its uses, in every mission: a cascade that buried the one line to fix. Its uses now say
+    nothing more (as a wrongly declared blackboard key's do), nor do the arguments given
+    there (the parameters it declares are not known)."""
+    library = ESCAPES.replace("10 parsecs", "10 cm")
+    library = library[: library.index("  escape_bump:")] + written
+    (repo / "missions/common/lib/escapes.yaml").write_text(library)
+    square = repo / "missions/delivery/square.yaml"
+    square.write_text(square.read_text().replace("escape_bump", "{id: escape_bump, turn: 90deg}"))
+    files = ["missions/delivery/square.yaml", "missions/delivery/to-kitchen.yaml"]
+    found = validate_files(files, permissions=SHARED)
+    assert [(d.file, d.checked_file) for d in found] == [
+        ("missions/common/lib/escapes.yaml", file) for file in files
+    ]
+    assert all(d.message.startswith(error) for d in found)
