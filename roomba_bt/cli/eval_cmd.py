@@ -307,7 +307,7 @@ def eval_command(args: argparse.Namespace) -> int:
                     args.scheduler, limit if isinstance(limit, float) else None)  # fmt: skip
     if engine.scheduler is None:
         _warn_if_more_jobs_than_cores(jobs)
-    partial = _partial(args.out)
+    partial = _partial(args)
     if isinstance(partial, int):
         return partial
     done = _run(args, chosen, batches, engine, partial)
@@ -627,15 +627,16 @@ def _warn_if_one_start(args: argparse.Namespace, world: World) -> None:
         )
 
 
-def _partial(out: str | None) -> PartialResults | int | None:
-    """``--out``'s records as they finish (:class:`PartialResults`); an exit code when its
-    file cannot be made."""
+def _partial(args: argparse.Namespace) -> PartialResults | int | None:
+    """``--out``'s records as they finish (:class:`PartialResults`), with what made them as
+    ``--out`` has it; an exit code when its file cannot be made."""
+    out: str | None = args.out
     if out is None:
         return None
     from roomba_bt.evaluate.records import PartialResults
 
     try:
-        return PartialResults(out)
+        return PartialResults(out, getattr(args, "made_by", None), reproducible=args.reproducible)
     except OSError as exc:
         return _error(f"--out {out}: {exc.strerror or exc}")
 

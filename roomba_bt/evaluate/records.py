@@ -263,6 +263,22 @@ def _params(raw: Any) -> tuple[tuple[str, str], ...]:
     return tuple((name, value) for name, _, value in pairs)
 
 
+def written_record(
+    result: EpisodeResult,
+    provenance: Mapping[str, Mapping[str, Any]] | None = None,
+    *,
+    reproducible: bool = False,
+) -> dict[str, Any]:
+    """One episode's row as a results file holds it: :func:`to_record`'s columns with its
+    mission's :data:`PROVENANCE_COLUMNS` (:func:`write_results`' arguments)."""
+    record = to_record(result)
+    if reproducible:
+        record.update(dict.fromkeys(MEASURED_COLUMNS))
+    made_by = (provenance or {}).get(result.mission, {})
+    record.update({column: made_by.get(column) for column in PROVENANCE_COLUMNS})
+    return record
+
+
 def write_results(
     path: str | Path,
     results: Iterable[EpisodeResult],
@@ -276,14 +292,7 @@ def write_results(
     episodes run again write the same bytes. A file another roomba-bt writes is refused
     (FileInUse, an OSError) before it is emptied."""
     fmt = results_format(path)
-    made_by = provenance or {}
-    records = []
-    for result in results:
-        record = to_record(result)
-        if reproducible:
-            record.update(dict.fromkeys(MEASURED_COLUMNS))
-        record.update({c: made_by.get(result.mission, {}).get(c) for c in PROVENANCE_COLUMNS})
-        records.append(record)
+    records = [written_record(result, provenance, reproducible=reproducible) for result in results]
     with ClaimedFile(path).open_text(newline="") as out:
         if fmt == ".jsonl":
             for record in records:
@@ -307,14 +316,28 @@ class PartialResults:
     :class:`~roomba_bt.runtime.claimed.ClaimedFile`) for the whole sweep, so a second sweep
     given the same ``--out`` is refused at its start (FileInUse, an OSError) before it
     empties it; two sweeps both said "results written" and ``OUT`` held one sweep's
-    episodes. ``OUT`` itself is not made before the end: a killed sweep leaves none."""
+    episodes. ``OUT`` itself is not made before the end: a killed sweep leaves none.
 
-    def __init__(self, out: str | Path) -> None:
+    Its rows are ``OUT``'s (:func:`written_record`, ``provenance`` and ``reproducible`` as
+    :func:`write_results` takes them): they had no provenance columns, and the records a
+    killed sweep left said nothing of the release, the world or the mission files that made
+    them."""
+
+    def __init__(
+        self,
+        out: str | Path,
+        provenance: Mapping[str, Mapping[str, Any]] | None = None,
+        *,
+        reproducible: bool = False,
+    ) -> None:
         self.path = Path(f"{out}.partial.jsonl")
+        self.provenance = provenance
+        self.reproducible = reproducible
         self._file = ClaimedFile(self.path).open_text()  # closed in done: the lock let go
 
     def add(self, result: EpisodeResult) -> None:
-        self._file.write(json.dumps(to_record(result)) + "\n")
+        record = written_record(result, self.provenance, reproducible=self.reproducible)
+        self._file.write(json.dumps(record) + "\n")
         self._file.flush()
 
     def done(self, keep: bool = False) -> None:

@@ -388,6 +388,32 @@ def test_a_failed_results_write_keeps_the_summary(
     assert "No space left on device; the summary is above" in err
 
 
+def test_the_partial_records_say_what_made_them_as_the_final_ones_do(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """OUT.partial.jsonl's rows had no provenance columns, while OUT's have them: a sweep
+    that died left records that said nothing of the release, the world or the mission
+    files that made them. Its rows are OUT's now (kept here by a write of OUT that fails)."""
+    import errno
+    import json
+
+    import roomba_bt.evaluate.records as records
+
+    argv = ["eval", BUMP, "-p", "duration=1s", "--runs", "2", "--no-progress", "--out"]
+    assert main([*argv, str(tmp_path / "r.jsonl")]) == 0
+    final = [json.loads(line) for line in (tmp_path / "r.jsonl").read_text().splitlines()]
+
+    def full(path: object, results: object, *more: object, **options: object) -> int:
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(records, "write_results", full)
+    assert main([*argv, str(tmp_path / "kept.jsonl")]) == 2
+    partial = (tmp_path / "kept.jsonl.partial.jsonl").read_text().splitlines()
+    made = [{c: json.loads(row)[c] for c in records.PROVENANCE_COLUMNS} for row in partial]
+    assert made == [{c: row[c] for c in records.PROVENANCE_COLUMNS} for row in final]
+    assert made[0]["sources"] and made[0]["roomba_bt_version"] and made[0]["world_sha256"]
+
+
 def test_a_summary_that_fails_loses_no_episode(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
