@@ -25,14 +25,13 @@ from roomba_bt.cli.arguments import (
     parse_params,
     permissions,
 )
-from roomba_bt.cli.validate_report import FORMATS
+from roomba_bt.cli.validate_report import FORMATS, Checked
 from roomba_bt.oi.profiles import get_profile
 from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, ExitCode
 
 if TYPE_CHECKING:
     from roomba_bt.behaviours.registry import Registry
-    from roomba_bt.mission import Diagnostic
 
 
 def register(sub: Any) -> None:
@@ -205,8 +204,7 @@ def validate_command(args: argparse.Namespace) -> int:
         if isinstance(found, tuple):
             checked.append(report.Checked(file, problem=found[0]))
             continue
-        diagnostics = _checked(found, params, args)
-        checked.append(report.Checked(file, diagnostics))
+        checked.append(_checked(file, found, params, args))
     if args.format != "text":
         for one in checked:  # said on stderr too, as in text: a reader of the log sees it
             if one.problem is not None:
@@ -221,23 +219,25 @@ def validate_command(args: argparse.Namespace) -> int:
     return report.exit_code(checked, args.strict)
 
 
-def _checked(found: str, params: dict[str, str], args: argparse.Namespace) -> list[Diagnostic]:
-    """Every diagnostic of one file ``validate`` was given: a world's (checked as ``run
-    --world`` reads it, so CI checks a world without running a mission in it), else a
-    mission's or a library's, with the include folders granted to it."""
+def _checked(file: str, found: str, params: dict[str, str], args: argparse.Namespace) -> Checked:
+    """What ``validate`` found in the file argument ``file`` (at ``found``): a world's
+    diagnostics (checked as ``run --world`` reads it, so CI checks a world without running a
+    mission in it), else a mission's or a library's, with the include folders granted to it,
+    and the files it includes."""
     from roomba_bt.cli.worlds_cmd import world_diagnostics
-    from roomba_bt.mission import validate_files
+    from roomba_bt.mission import validate_file
 
     world = world_diagnostics(found)
     if world is not None:
-        return world
-    return validate_files(
-        [found],
+        return Checked(file, world)
+    validation = validate_file(
+        found,
         params,
         profile=get_profile(args.profile),
         baud=args.baud,
         permissions=permissions(args, found),
     )
+    return Checked(file, validation.diagnostics, includes=validation.includes)
 
 
 def show_command(args: argparse.Namespace) -> int:

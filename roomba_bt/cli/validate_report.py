@@ -36,11 +36,14 @@ ANNOTATION_TITLE = "roomba-bt validate"
 @dataclass
 class Checked:
     """One file argument of ``validate`` and what its check found: its diagnostics (errors
-    and warnings, in files it includes too), or ``problem`` when no such file exists."""
+    and warnings, in files it includes too), or ``problem`` when no such file exists; and
+    ``includes``, the files it includes (JSON's reverse view: which missions a library
+    reaches)."""
 
     file: str
     diagnostics: list[Diagnostic] = field(default_factory=list)
     problem: str | None = None
+    includes: tuple[str, ...] = ()
 
     def count(self, severity: str) -> int:
         return sum(d.severity == severity for d in self.diagnostics) + (
@@ -148,7 +151,7 @@ def _unseen(diagnostics: list[Diagnostic], seen: set[Diagnostic]) -> list[Diagno
 
 
 def print_json(checked: list[Checked], *, strict: bool) -> None:
-    """One JSON document: ``files`` (each file's verdict and counts) and ``diagnostics``
+    """One JSON document: ``files`` (each file's verdict, counts and includes) and ``diagnostics``
     (every one of every file, with ``checked_file``, the file argument that found it; the
     first :data:`~roomba_bt.mission.diagnostics.MAX_REPORTED` of a file, the rest counted
     in its ``diagnostics_omitted``)."""
@@ -166,6 +169,7 @@ def print_json(checked: list[Checked], *, strict: bool) -> None:
             "errors": one.count("error"),
             "warnings": one.count("warning"),
             "diagnostics_omitted": max(0, len(one.diagnostics) - MAX_REPORTED),
+            "includes": list(one.includes),
         }
         if one.problem is not None:
             entry["problem"] = one.problem

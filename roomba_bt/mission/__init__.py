@@ -5,8 +5,9 @@
     mission.root.tick_once()          # once per 15 ms stream frame (the runtime does this)
 
 :func:`load_mission` raises :class:`MissionError` with every :class:`Diagnostic` at once;
-:func:`validate_files` returns them. Never opens a port. The compiler's pipeline, from the
-file to the tree, is :mod:`roomba_bt.mission.compiler`; this package names its front door.
+:func:`validate_files` returns them (:func:`validate_file`: one file's, and the files it
+includes). Never opens a port. The compiler's pipeline, from the file to the tree, is
+:mod:`roomba_bt.mission.compiler`; this package names its front door.
 """
 
 from roomba_bt.mission.build import CompiledMission
@@ -15,6 +16,7 @@ from roomba_bt.mission.compiler import (
     compile_mission,
     load_mission,
     load_mission_text,
+    validate_file,
     validate_files,
 )
 from roomba_bt.mission.diagnostics import Diagnostic, IncludeSite, MissionError, reported
@@ -33,5 +35,6 @@ __all__ = [
     "load_mission",
     "load_mission_text",
     "reported",
+    "validate_file",
     "validate_files",
 ]

@@ -48,7 +48,15 @@ from roomba_bt.mission.values import Context, shown
 from roomba_bt.oi.modes import ALL_MODES, OIMode
 from roomba_bt.oi.profiles import CREATE2, RobotProfile
 
-__all__ = ["MissionText", "compile_mission", "load_mission", "load_mission_text", "validate_files"]
+__all__ = [
+    "FileValidation",
+    "MissionText",
+    "compile_mission",
+    "load_mission",
+    "load_mission_text",
+    "validate_file",
+    "validate_files",
+]
 
 
 def _display(path: Path) -> str:
@@ -78,13 +86,10 @@ def compile_mission(
     ``permissions`` (none by default) says whether the file's plugin files may be imported
     and where else it may include from. ``text``: the mission's YAML as given, read in
     place of the file at ``path`` (which then only places its includes and names it)."""
-    path = Path(path)
-    display = _display if text is None else text.display
-    try:
-        return _compile(path, params, profile, baud, registry, require_tree, permissions, text)
-    except Exception as exc:  # a compiler bug must still not be a traceback at a user
-        message = f"internal error while compiling ({type(exc).__name__}: {exc}); please report it"
-        return None, [Diagnostic(display(path), 1, 1, message)]
+    mission, diagnostics, _ = _compile(
+        Path(path), params, profile, baud, registry, require_tree, permissions, text
+    )
+    return mission, diagnostics
 
 
 @dataclass(frozen=True)
@@ -111,18 +116,26 @@ def _compile(
     require_tree: bool,
     permissions: Permissions,
     text: MissionText | None = None,
-) -> tuple[CompiledMission | None, list[Diagnostic]]:
-    ctx = Context(registry=registry or default_registry(), wording=permissions.wording)
+) -> tuple[CompiledMission | None, list[Diagnostic], Loader | None]:
+    """The mission, its diagnostics, and the loader that read its files (what it included;
+    None when the compiler itself failed, which is said as a diagnostic)."""
     display = _display if text is None else text.display
-    loader = Loader(ctx, display, permissions)
-    mission, diagnostics = _checked(loader, ctx, path, params, profile, baud, require_tree, text)
-    if not diagnostics and (mission is None or not mission.warnings):
-        return mission, diagnostics  # a clean compile (run's, eval's) resolves no more paths
-    chains = _IncludeChains(display(path), loader.include_sites)
-    if mission is None:
-        return None, [chains.of(d) for d in diagnostics]
-    mission.warnings = tuple(chains.of(d) for d in mission.warnings)
-    return mission, diagnostics
+    try:
+        ctx = Context(registry=registry or default_registry(), wording=permissions.wording)
+        loader = Loader(ctx, display, permissions)
+        mission, diagnostics = _checked(
+            loader, ctx, path, params, profile, baud, require_tree, text
+        )
+        if not diagnostics and (mission is None or not mission.warnings):
+            return mission, diagnostics, loader  # a clean compile (run's) resolves no more
+        chains = _IncludeChains(display(path), loader.include_sites)
+        if mission is None:
+            return None, [chains.of(d) for d in diagnostics], loader
+        mission.warnings = tuple(chains.of(d) for d in mission.warnings)
+        return mission, diagnostics, loader
+    except Exception as exc:  # a compiler bug must still not be a traceback at a user
+        message = f"internal error while compiling ({type(exc).__name__}: {exc}); please report it"
+        return None, [Diagnostic(display(path), 1, 1, message)], None
 
 
 class _IncludeChains:
@@ -318,6 +331,39 @@ def _with_behaviours(
     return (registry or default_registry()).with_behaviours(behaviours)
 
 
+@dataclass(frozen=True)
+class FileValidation:
+    """What :func:`validate_file` found in one file: its diagnostics, errors and warnings,
+    and ``includes``, every file it includes, directly or through others, named as the
+    diagnostics name them, in the order first reached: a CI job reads which missions a
+    changed library reaches from it (``validate --format json``, docs/ci.md)."""
+
+    diagnostics: list[Diagnostic]
+    includes: tuple[str, ...]
+
+
+def validate_file(
+    path: str | Path,
+    params: Mapping[str, str] | None = None,
+    *,
+    profile: RobotProfile = CREATE2,
+    baud: int = 115200,
+    registry: Registry | None = None,
+    permissions: Permissions = NO_PERMISSIONS,
+) -> FileValidation:
+    """Every diagnostic of the file, and the files it includes. A file without ``tree:`` is
+    checked as a library of subtrees (what ``include`` brings in). A diagnostic in a file it
+    includes names the include chain that reached it (``included_from``; ``checked_file``
+    is then ``path``)."""
+    path = Path(path)
+    mission, diagnostics, loader = _compile(
+        path, params, profile, baud, registry, _has_tree(path), permissions
+    )
+    warnings = mission.warnings if mission is not None else ()
+    includes = tuple(loader.include_sites) if loader is not None else ()
+    return FileValidation([*diagnostics, *warnings], includes)
+
+
 def validate_files(
     paths: Iterable[str | Path],
     params: Mapping[str, str] | None = None,
@@ -327,23 +373,15 @@ def validate_files(
     registry: Registry | None = None,
     permissions: Permissions = NO_PERMISSIONS,
 ) -> list[Diagnostic]:
-    """Every diagnostic of every file, errors and warnings (``severity``). A file without
-    ``tree:`` is checked as a library of subtrees (what ``include`` brings in). A diagnostic
-    in a file that one of ``paths`` includes names the include chain that reached it
-    (``included_from``; ``checked_file`` is then the path it was found through): an error
-    in a library shared by several of ``paths`` comes once for each of them."""
-    out: list[Diagnostic] = []
-    for path in paths:
-        path = Path(path)
-        require_tree = _has_tree(path)
-        mission, diagnostics = compile_mission(
-            path, params, profile=profile, baud=baud, registry=registry,
-            require_tree=require_tree, permissions=permissions,
-        )  # fmt: skip
-        out.extend(diagnostics)
-        if mission is not None:
-            out.extend(mission.warnings)
-    return out
+    """Every diagnostic of every file (:func:`validate_file`'s): an error in a library
+    shared by several of ``paths`` comes once for each of them."""
+    return [
+        diagnostic
+        for path in paths
+        for diagnostic in validate_file(
+            path, params, profile=profile, baud=baud, registry=registry, permissions=permissions
+        ).diagnostics
+    ]
 
 
 def _has_tree(path: Path) -> bool:

@@ -14,6 +14,7 @@ from __future__ import annotations
 import os
 import re
 import shlex
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -119,3 +120,32 @@ def test_the_actions_step_annotates_the_broken_missions(repo: Path) -> None:
         "missions/delivery/to-kitchen.yaml",
     }
     assert "::error file=missions/delivery/to-kitchen.yaml,line=2,col=11," in broken.stdout
+
+
+def reverse_view_command() -> str:
+    """The page's ``jq`` one-liner: which files include a library."""
+    text = CI_DOC.read_text(encoding="utf-8")
+    [command] = [m[1] for m in re.finditer(r"^```sh\n(.*?)^```", text, re.M | re.S) if "jq" in m[1]]
+    return command
+
+
+@pytest.mark.skipif(shutil.which("jq") is None, reason="the page's one-liner needs jq")
+def test_the_reverse_view_lists_every_file_that_includes_the_library(repo: Path) -> None:
+    """Which missions include a library (what to re-run when it changes) had no answer but
+    reading every file: validate's JSON said include chains only of errors. Its
+    ``includes`` answers it, through the library that includes it too, valid or not."""
+    argv = ["bash", "-e", "-c", reverse_view_command()]
+
+    def listed() -> list[str]:
+        done = run_in(repo, argv)
+        assert done.returncode == 0, done.stderr
+        return done.stdout.splitlines()
+
+    expected = [
+        "missions/common/lib/safe_drive.yaml",
+        "missions/delivery/square.yaml",
+        "missions/delivery/to-kitchen.yaml",
+    ]
+    assert listed() == expected
+    break_the_library(repo)  # the missions fail now: still listed, their includes read
+    assert listed() == expected

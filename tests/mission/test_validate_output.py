@@ -164,6 +164,22 @@ def test_json_lists_every_diagnostic_with_its_chain_and_each_file_verdict(
     assert (strict["exit_code"], strict["files"][0]["verdict"]) == (7, "failed")
 
 
+def test_json_names_the_files_each_file_includes_valid_or_not(repo: Path, capsys: Capsys) -> None:
+    """The reverse view docs/ci.md reads with jq (which missions a library reaches): each
+    file's includes, through other libraries too, in the order first reached."""
+    (repo / "m.yaml").write_text("include: [roomba-bt:lib/undock.yaml]\ntree: wall\n")
+    assert main(["validate", "--format", "json", *SHARED, *EVERY_FILE, "m.yaml"]) == 2
+    report = json.loads(capsys.readouterr().out)
+    escapes, safe_drive = EVERY_FILE[2], EVERY_FILE[3]
+    assert [(f["file"], f["includes"]) for f in report["files"]] == [
+        (EVERY_FILE[0], [escapes]),
+        (EVERY_FILE[1], [safe_drive, escapes]),
+        (escapes, []),
+        (safe_drive, [escapes]),
+        ("m.yaml", ["roomba-bt:lib/undock.yaml"]),
+    ]
+
+
 def test_github_annotates_the_library_once_and_each_mission_at_its_include(
     repo: Path, capsys: Capsys
 ) -> None:
