@@ -224,6 +224,9 @@ class MonitorOptions:
     allow_force: bool = False
     #: reload the mission when one of its files changes (``--watch``)
     watch: bool = False
+    #: a reloaded mission with compile-time warnings is refused (``run --strict``, which
+    #: does not start one either)
+    strict: bool = False
     #: the run is on the virtual clock (``--fast``): the session paces it, and the page is
     #: told it may end before anyone opens it
     virtual_clock: bool = False
@@ -240,6 +243,7 @@ class MonitorOptions:
             view_token=getattr(args, "monitor_view_token", None),
             allow_force=bool(args.monitor_force),
             watch=bool(args.watch),
+            strict=bool(getattr(args, "strict", False)),
             virtual_clock=bool(args.fast),
         )
 
@@ -434,31 +438,43 @@ class LiveMonitor:
                 stamps = {f: now[f] if f in now else file_version(f) for f in self._watched}
 
     def _reload(self, path: Path, changed: list[Path]) -> Any:
-        """The new mission once it is handed to the session, or None (refused)."""
-        from roomba_bt.mission import MissionError, reported
+        """The new mission once it is handed to the session, or None (refused: why is said
+        on the terminal and in the page's events, and the old mission runs on)."""
+        from roomba_bt.mission import reported
 
         names = ", ".join(_shown(f) for f in changed)
         self.feed.event("reload", f"changed: {names}; checking {path}")
+        mission, refused = self._reloadable(path)
+        if refused:
+            for line in refused:
+                print(f"reload refused: {line}", file=sys.stderr, flush=True)
+            self.feed.event("error", "reload refused, the run goes on: " + "; ".join(refused))
+            return None
+        for line in reported(mission.warnings):  # said, as run says them at its start
+            print(f"reload: {line}", file=sys.stderr, flush=True)
+            self.feed.event("warning", f"reloaded with a warning: {line}")
+        print(f"reload: {path} is valid; the new tree starts at the next safe point", flush=True)
+        self.session.reload(mission)
+        return mission
+
+    def _reloadable(self, path: Path) -> tuple[Any, list[str]]:
+        """The mission at ``path`` and why it may not replace the running one (empty: it
+        may). Under ``--strict`` a mission with compile-time warnings may not, in ``validate
+        --strict``'s words: ``run --strict`` does not start one, and a reload took it."""
+        from roomba_bt.cli.validate_report import failed_strict
+        from roomba_bt.mission import MissionError, reported
 
         try:
             mission = self.loader(path)
         except MissionError as exc:
-            lines = reported(exc.diagnostics)
-            for line in lines:
-                print(f"reload refused: {line}", file=sys.stderr, flush=True)
-            self.feed.event("error", "reload refused, the run goes on: " + "; ".join(lines))
-            return None
+            return None, reported(exc.diagnostics)
         except OSError as exc:
-            self.feed.event("error", f"reload refused: {path}: {exc.strerror or exc}")
-            return None
+            return None, [f"{path}: {exc.strerror or exc}"]
+        warnings = mission.warnings
+        if self.options.strict and warnings:
+            return mission, [*reported(warnings), failed_strict(str(path), warnings)]
         why = self.session.check_reloadable(mission)
-        if why is not None:
-            print(f"reload refused: {path}: {why}", file=sys.stderr, flush=True)
-            self.feed.event("error", f"reload refused, the run goes on: {path}: {why}")
-            return None
-        print(f"reload: {path} is valid; the new tree starts at the next safe point", flush=True)
-        self.session.reload(mission)
-        return mission
+        return mission, [] if why is None else [f"{path}: {why}"]
 
     # ---------------------------------------------------------------- terminal keys
     def _keys(self) -> None:

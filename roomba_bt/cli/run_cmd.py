@@ -52,10 +52,9 @@ from roomba_bt.runtime.summary import (
 )
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Sequence
+    from collections.abc import Callable
 
     from roomba_bt.mission import Permissions
-    from roomba_bt.mission.diagnostics import Diagnostic
     from roomba_bt.runtime.claimed import ClaimedFile
     from roomba_bt.runtime.loop import TickObserver
     from roomba_bt.runtime.recording import Record
@@ -151,10 +150,10 @@ def _add_strict_option(run: argparse.ArgumentParser) -> None:
     run.add_argument(
         "--strict", action="store_true",
         help="fail on warnings too, exit 7: a mission with compile-time warnings (as validate "
-        "--strict fails it) is not started; one that succeeded exits 7 if the mode guard "
-        "refused any command, a command was dropped while the tree was stopped, or the robot "
-        "fell out of Safe/Full by itself (a cliff, a wheel drop; not onto a charger): the "
-        "summary's strict line names each count and its first instance",
+        "--strict fails it) is not started (nor reloaded by --watch); one that succeeded "
+        "exits 7 if the mode guard refused any command, a command was dropped while the tree "
+        "was stopped, or the robot fell out of Safe/Full by itself (a cliff, a wheel drop; not "
+        "onto a charger): the summary's strict line names each count and its first instance",
     )  # fmt: skip
 
 
@@ -354,21 +353,14 @@ def _mission_at_its_rate(
     except BandwidthError as exc:
         return _error(f"{args.mission}: {exc}")
     if args.strict and mission.warnings:  # printed by load(), above; errors were exit 2
-        print(f"roomba-bt: {_failed_strict(args.mission, mission.warnings)}", file=sys.stderr)
+        # not started, as validate --strict fails it in CI: it started, and --strict judged
+        # only what the run did, so such a mission ran under run --strict and could exit 0
+        from roomba_bt.cli.validate_report import failed_strict
+
+        said = failed_strict(args.mission, mission.warnings)
+        print(f"roomba-bt: {said}; not started", file=sys.stderr)
         return ExitCode.STRICT
     return mission, packets, opened
-
-
-def _failed_strict(file: str, warnings: Sequence[Diagnostic]) -> str:
-    """``run --strict`` refuses a mission with compile-time warnings (a drive in Full mode
-    with no cliff check, ...) before anything is opened or sent, in ``validate --strict``'s
-    words and with its exit code 7: ``w.yaml: failed --strict (1 warning); not started``. It
-    started, and ``--strict`` judged only what the run did, so a mission that validate
-    --strict fails in CI ran under run --strict and could exit 0."""
-    from roomba_bt.cli.validate_report import Checked
-
-    verdict = Checked(file, list(warnings)).verdict(strict=True)
-    return f"{escaped(file, ANY_CONTROL)}: {verdict}; not started"
 
 
 def robot_label(port: str | None, simulator: Simulator | None) -> str:

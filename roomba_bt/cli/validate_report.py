@@ -24,6 +24,8 @@ from typing import TYPE_CHECKING, Any
 from roomba_bt.printable import ANY_CONTROL, UNPRINTABLE, escaped
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     from roomba_bt.mission.diagnostics import Diagnostic, IncludeSite
 
 #: ``--format``'s choices; text is the default
@@ -92,6 +94,14 @@ class Checked:
             if d.included_from:
                 sites.setdefault(d.included_from[-1], []).append(d)
         return sites
+
+
+def failed_strict(file: str, warnings: Sequence[Diagnostic]) -> str:
+    """What ``run --strict`` says of a mission with compile-time warnings (a drive in Full
+    mode with no cliff check, ...), in ``validate --strict``'s words: ``w.yaml: failed
+    --strict (1 warning)``. A run does not start it, and ``run --strict --watch`` does not
+    reload it: the two say it alike, so a reload is refused for what a start is."""
+    return f"{escaped(file, ANY_CONTROL)}: {Checked(file, list(warnings)).verdict(strict=True)}"
 
 
 def counted(diagnostics: list[Diagnostic], *, nouns_only: bool = False) -> str:

@@ -346,6 +346,57 @@ def test_watch_reloads_when_a_plugin_file_changes(tmp_path: Path) -> None:
         run.close()
 
 
+#: a drive in Safe mode, and the same drive in Full mode with no cliff check: one warning
+SAFE_DRIVE = """\
+tree:
+  sequence:
+    - mode: safe
+    - drive: {velocity: 100 mm/s, duration: 1s}
+"""
+FULL_DRIVE = SAFE_DRIVE.replace("mode: safe", "mode: full")
+
+
+@pytest.mark.parametrize("strict", [True, False], ids=["strict", "not-strict"])
+def test_a_reload_with_compile_time_warnings_is_refused_under_strict(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], strict: bool
+) -> None:
+    """``run --strict`` does not start a mission with compile-time warnings (exit 7, in
+    ``validate --strict``'s words), and ``run --strict --watch`` took one changed into it:
+    the run went on under a tree --strict refuses. It is refused as an invalid change is,
+    the terminal and the page saying why, and the old tree runs on. Without ``--strict`` it
+    is taken, its warning said (a reload said nothing of it)."""
+    from roomba_bt.cli import build_parser
+    from roomba_bt.cli.monitor_cmd import LiveMonitor, MonitorOptions
+    from roomba_bt.mission import load_mission
+
+    mission = tmp_path / "drive.yaml"
+    mission.write_text(SAFE_DRIVE)
+    argv = ["run", str(mission), "--watch", *(["--strict"] if strict else [])]
+    options = MonitorOptions.from_args(build_parser().parse_args(argv))
+    assert options.strict is strict
+    monitor = LiveMonitor(
+        options, load_mission(mission), simulator=None, packets=(), loader=load_mission
+    )
+    mission.write_text(FULL_DRIVE)
+    reloaded = monitor._reload(mission, [mission])
+    monitor.finish(None)
+    err = capsys.readouterr().err
+    [warning] = [str(w) for w in load_mission(mission).warnings]
+    assert warning.startswith(f"{mission}:4:7: warning: drive can turn the wheels in Full mode")
+    last = monitor.feed.events[-1]
+    if strict:
+        assert reloaded is None
+        verdict = f"{mission}: failed --strict (1 warning)"
+        assert err == f"reload refused: {warning}\nreload refused: {verdict}\n"
+        assert (last.kind, last.text) == (
+            "error", f"reload refused, the run goes on: {warning}; {verdict}"
+        )  # fmt: skip
+    else:
+        assert reloaded is not None
+        assert err == f"reload: {warning}\n"
+        assert (last.kind, last.text) == ("warning", f"reloaded with a warning: {warning}")
+
+
 def test_a_recorded_run_of_a_mission_with_a_plugin_file_can_be_shown(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
