@@ -885,6 +885,7 @@ def replay_command(args: argparse.Namespace) -> int:
         gate=operator_replay(record, recorded.mission),  # the monitor's pauses, steps, forces
     )  # fmt: skip
     summary.strict_named = "run --strict"  # its warning of refusals: what would fail a run
+    summary.label = record.label  # replays of several robots' runs told apart, as the runs
     print(summary)
     difference = transport.first_difference()
     ending = record.ending  # its end note, said last (a record made before has none)

@@ -24,7 +24,6 @@ from typing import TYPE_CHECKING, Any
 
 from roomba_bt.monitor.feed import Ending, RunFeed
 from roomba_bt.monitor.session import STEP, MonitorSession
-from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.runtime.loop import StopRequested
 from roomba_bt.runtime.recording import (
     ENDED,
@@ -58,7 +57,7 @@ def replay_into_feed(
     feed = RunFeed(
         source="record", mission_name=mission.name, packed=True,
         robot=record.header.get("port") or "", started=recorded_start(record),
-        label=escaped(record.header.get("label") or "", ANY_CONTROL),  # a hand-edited one
+        label=record.label,
     )  # fmt: skip
     feed.set_tree(mission.root)
     summary, transport = replay_record(

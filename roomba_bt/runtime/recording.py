@@ -96,6 +96,7 @@ from roomba_bt.oi.encode import BAUD_CODES, command_size, decode_command
 from roomba_bt.oi.errors import EncodeError
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import PROFILES
+from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.runtime.claimed import ClaimedFile, held_by_a_writer
 from roomba_bt.transport.base import Transport
 
@@ -470,6 +471,14 @@ class Record:
     #: :class:`~roomba_bt.runtime.claimed.ClaimedFile`), or, where no lock can be asked for,
     #: the file changed in the last :data:`STILL_WRITTEN_S` seconds: a run writes it still
     being_written: bool = False
+
+    @property
+    def label(self) -> str:
+        """The recorded run's label (``run --label``; "" for none), on one line: a replay's
+        summary and a recorded run's page say it, as the run's did, so that replays of
+        several robots' runs of one mission can be told apart. A hand-edited header's
+        control characters are shown escaped (``\\n``), never written to the terminal."""
+        return escaped(self.header.get("label") or "", ANY_CONTROL)
 
     @property
     def mission_file(self) -> str | None:
