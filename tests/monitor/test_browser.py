@@ -174,6 +174,7 @@ def test_a_recorded_run_on_the_timeline_shows_that_ticks_statuses(
         page.goto(server.url)
         page.wait_for_selector('#source:text("record")', timeout=WAIT_MS)
         assert page.is_hidden("#controls")
+        assert page.is_hidden("#no-controls")  # a player: its badge and ▶ say what it is
         page.eval_on_selector(
             "#timeline",
             "(el, v) => { el.value = v; el.dispatchEvent(new Event('input')); }",
@@ -252,7 +253,7 @@ def test_a_view_only_link_has_its_controls_off_and_cannot_pause(page: Any) -> No
         assert view_url and run.server.view_token != run.server.token
         page.goto(view_url)
         page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
-        assert page.is_visible('#view-only:text-is("view only")')
+        assert page.is_visible(f"#no-controls:text-is({json.dumps(VIEW_ONLY_NOTE)})")
         assert page.is_hidden("#controls")
         for button in ("#pause", "#resume", "#step", "#stop"):
             assert page.is_disabled(button), button
@@ -276,7 +277,35 @@ def test_a_view_only_link_has_its_controls_off_and_cannot_pause(page: Any) -> No
         assert not run.session.state.paused and run.session._requests.empty()
         page.reload()
         page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
-        assert page.is_visible("#view-only") and page.is_hidden("#controls")
+        assert page.is_visible("#no-controls") and page.is_hidden("#controls")
+    finally:
+        run.finish()
+
+
+#: what a live page without controls says where they would be, by why it has none
+VIEW_ONLY_NOTE = "view only: the controls are on the control link"
+READONLY_NOTE = "read-only (--monitor-readonly): no controls on this page"
+
+
+@pytest.mark.parametrize(
+    ("readonly", "note"), [(True, READONLY_NOTE), (False, None)], ids=["readonly", "controls"]
+)
+def test_a_readonly_page_says_why_it_has_no_controls(
+    page: Any, readonly: bool, note: str | None
+) -> None:
+    """``--monitor-readonly``'s page had its controls gone and said nothing of it: a viewer
+    took it for broken. It says why where they would be (and the terminal's keys, in its
+    tooltip); a page with its controls says nothing."""
+    run = start_live_run(SHUTTLE, readonly=readonly)
+    try:
+        page.goto(run.url)
+        page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+        if note is None:
+            assert page.is_hidden("#no-controls") and page.is_visible("#controls")
+        else:
+            assert page.is_visible(f"#no-controls:text-is({json.dumps(note)})")
+            assert page.is_hidden("#controls")
+            assert "terminal keys" in (page.get_attribute("#no-controls", "title") or "")
     finally:
         run.finish()
 

@@ -607,6 +607,26 @@ function otherRun(run) {
   updateControls();
 }
 
+// a live run's page without controls says why where they would be: with none said, a
+// viewer took the page for broken (a view-only link shown to a class, on a projector; a run
+// started with --monitor-readonly). A recorded run's page is a player: its badge says so.
+const NO_CONTROLS = {
+  view: ["view only: the controls are on the control link",
+    "opened with the view-only link (to share: a class, a projector): it shows the run; pausing, "
+      + "stepping and stopping need the control link, the first monitor: URL the run printed"],
+  readonly: ["read-only (--monitor-readonly): no controls on this page",
+    "the run was started with --monitor-readonly: this page only shows it; the run's terminal "
+      + "keys (p pause, r resume, n step, q stop) still work"],
+};
+
+function noControlsNote(header) {
+  const why = header.view_only ? NO_CONTROLS.view
+    : header.readonly && header.source !== "record" ? NO_CONTROLS.readonly : null;
+  const note = $("no-controls");
+  note.hidden = why === null;
+  [note.textContent, note.title] = why || ["", ""];
+}
+
 function hello(header) {
   const run = header.run || {};
   if (view.runId === null) view.runId = run.id;
@@ -624,8 +644,7 @@ function hello(header) {
   document.title = `${run.label ? run.label + " · " : ""}${header.mission}`
     + `${run.robot ? " on " + run.robot : ""} · roomba-bt monitor`;
   $("source").textContent = header.source;
-  // a view-only link (shown to a class, on a projector): no controls, said so
-  $("view-only").hidden = !header.view_only;
+  noControlsNote(header);
   view.window = [header.first_tick, header.last_tick];
   view.finished = header.finished === undefined ? view.finished : header.finished;
   if (JSON.stringify(header.tree) !== JSON.stringify(view.tree)) buildTree(header.tree);
