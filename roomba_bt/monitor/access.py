@@ -76,10 +76,6 @@ class Tokens:
             return Access.CONTROL
         return Access.VIEW if is_view else None
 
-    def of(self, access: Access) -> str | None:
-        """The token that gives ``access`` (what the page's cookie keeps)."""
-        return self.control if access is Access.CONTROL else self.view
-
 
 def _same(given: str, token: str) -> bool:
     return hmac.compare_digest(given.encode(), token.encode())

@@ -16,9 +16,10 @@ write to the loop's self-pipe) releases the GIL mid-``after_tick`` and cost it u
 anyway. A page whose socket is slow holds up only its own pump; when it catches up, it is
 sent the newest state and the ticks in between are lost to it, never to the robot.
 
-Routes (all behind the token when one is set)::
+Routes (all behind the token when one is set), each under ``/view/`` too: the view-only
+link's pages, whose controls are off whatever the token, and whose cookie is their own::
 
-    GET  /                the page (static/index.html)
+    GET  /                the page (static/index.html); ``/?token=VIEW`` sends to ``/view/``
     GET  /static/NAME     its script and style, from the package
     GET  /ws              WebSocket: {"type": "hello", ...} then {"type": "update", ...}
     GET  /api/state?tick=T  the run at tick T (timeline), with the path up to it
@@ -70,6 +71,11 @@ TICK_POLL_S = 0.002  # how often it looks for that end when a tick is late
 AFTER_TICK_S = 0.001  # how long after a tick's expected end the pump looks
 #: the login cookie's name, ``_PORT`` added (:func:`cookie_name`)
 COOKIE = "roomba_bt_monitor"
+#: where the view-only link's pages are (``/view/?token=VIEW``): their cookie is set for this
+#: path alone, under a name of its own, so a view link opened in the operator's browser
+#: leaves the control page's cookie as it was (one cookie for both made the control tab,
+#: reloaded, view-only); and a page here has no controls, whichever token it holds
+VIEW_PATH = "/view/"
 #: a control with the view token: the link shared with a class opens no controls
 VIEW_ONLY = (
     "view-only link: controls need the control link (the first monitor: URL the run printed, "
@@ -79,14 +85,20 @@ STATIC_TYPES = {".js": "text/javascript", ".css": "text/css", ".svg": "image/svg
 Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
 
 
-def cookie_name(request: web.Request) -> str:
-    """The login cookie's name for the port the browser asked (``roomba_bt_monitor_8765``):
-    a browser keeps one host's cookies together whatever the port, so two monitors on one
-    host (a live run and a record's view, two robots) under one name took each other's
-    cookie, and a reload of the other page got 403. The port of the ``Host`` header, the
-    browser's own (a tunnel's local port, not the one this server bound); its scheme's
-    default when it names none."""
-    return f"{COOKIE}_{request.url.port}"
+def cookie_name(request: web.Request, *, view: bool = False) -> str:
+    """The login cookie's name for the port the browser asked (``roomba_bt_monitor_8765``;
+    ``view``: the view-only pages', ``roomba_bt_monitor_view_8765``): a browser keeps one
+    host's cookies together whatever the port, so two monitors on one host (a live run and
+    a record's view, two robots) under one name took each other's cookie, and a reload of
+    the other page got 403. The port of the ``Host`` header, the browser's own (a tunnel's
+    local port, not the one this server bound); its scheme's default when it names none."""
+    return f"{COOKIE}{'_view' if view else ''}_{request.url.port}"
+
+
+def viewing(request: web.Request) -> bool:
+    """Whether ``request`` is the view-only link's (its page, assets, socket or API, under
+    :data:`VIEW_PATH`)."""
+    return request.path.startswith(VIEW_PATH)
 
 
 class _StartupFreeze:
@@ -178,14 +190,23 @@ def _local_host(host: str, bound: str) -> bool:
     return name in {"127.0.0.1", "localhost", "::1", bound.strip("[]").lower()}
 
 
+async def see_the_view_path(request: web.Request) -> web.Response:
+    """303 See Other to the view-only page, the query kept: from ``/view`` (its relative URLs
+    and its cookie's path need the slash), and from ``/?token=VIEW``."""
+    query = f"?{request.query_string}" if request.query_string else ""
+    return web.Response(status=303, headers={"Location": f"{VIEW_PATH}{query}"})
+
+
 def given_token(request: web.Request) -> str:
-    """The request's token, "" for none. The first one given decides: a view link's page
-    sends its view token in the query and the header, so a control token in an older
-    cookie of the same browser does not give it the controls."""
+    """The request's token, "" for none. The first one given decides: the query, the header,
+    then the cookie of the request's path (under :data:`VIEW_PATH` the view pages' own
+    first: the browser sends the control page's too, set for every path)."""
+    cookies = request.cookies
     return (
         request.query.get("token")
         or request.headers.get("X-Monitor-Token")
-        or request.cookies.get(cookie_name(request))
+        or (cookies.get(cookie_name(request, view=True)) if viewing(request) else None)
+        or cookies.get(cookie_name(request))
         or ""
     )
 
@@ -242,13 +263,13 @@ class MonitorServer:
 
     @property
     def view_url(self) -> str | None:
-        """The page's URL with the view token (to share: no controls), or None."""
-        return self._url_with(self.view_token) if self.view_token else None
+        """The view-only page's URL with the view token (to share: no controls), or None."""
+        return self._url_with(self.view_token, VIEW_PATH) if self.view_token else None
 
-    def _url_with(self, token: str | None) -> str:
+    def _url_with(self, token: str | None, path: str = "/") -> str:
         host = f"[{self.host}]" if ":" in self.host else self.host
-        query = f"/?token={token}" if token else "/"
-        return f"http://{host}:{self.port}{query}"
+        query = f"?token={token}" if token else ""
+        return f"http://{host}:{self.port}{path}{query}"
 
     def start(self) -> str:
         """Bind and serve in a background thread; returns the page's URL. Raises OSError when
@@ -314,11 +335,13 @@ class MonitorServer:
     # ---------------------------------------------------------------- app
     def app(self) -> web.Application:
         app = web.Application(middlewares=[self._guard], client_max_size=64 * 1024)
-        app.router.add_get("/", self._page)
-        app.router.add_get("/static/{name}", self._static)
-        app.router.add_get("/ws", self._socket)
-        app.router.add_get("/api/state", self._state)
-        app.router.add_post("/api/control", self._control)
+        for path in ("/", VIEW_PATH):  # the same page: what it may do is the path's
+            app.router.add_get(path, self._page)
+            app.router.add_get(f"{path}static/{{name}}", self._static)
+            app.router.add_get(f"{path}ws", self._socket)
+            app.router.add_get(f"{path}api/state", self._state)
+            app.router.add_post(f"{path}api/control", self._control)
+        app.router.add_get(VIEW_PATH.rstrip("/"), see_the_view_path)
         return app
 
     @web.middleware
@@ -339,7 +362,13 @@ class MonitorServer:
 
     def _access(self, request: web.Request) -> Access | None:
         """What the request's token lets it do (every request without a token in force: the
-        loopback default); None: none given, or neither token."""
+        loopback default; under :data:`VIEW_PATH` at most to view); None: none given, or
+        neither token."""
+        access = self._token_access(request)
+        return Access.VIEW if access is Access.CONTROL and viewing(request) else access
+
+    def _token_access(self, request: web.Request) -> Access | None:
+        """What the request's token is, whatever its path (:meth:`_access`)."""
         if self.token is None:
             return Access.CONTROL
         given = given_token(request)
@@ -351,15 +380,22 @@ class MonitorServer:
         return not self.readonly and self._access(request) is Access.CONTROL
 
     async def _page(self, request: web.Request) -> web.StreamResponse:
+        access = self._token_access(request)
+        view = viewing(request)
+        if access is Access.VIEW and not view and "token" in request.query:
+            # the view link as it was before it had a path of its own (a projector's
+            # bookmark of /?token=VIEW): to its path, so its cookie is not the control page's
+            return await see_the_view_path(request)
         html = resources.files("roomba_bt.monitor").joinpath("static/index.html").read_text("utf-8")
         response = web.Response(text=html, content_type="text/html")
         response.headers["Cache-Control"] = "no-store"
-        # the token this page was opened with, never more: a view link's page gets the view
-        # token, so its reload (the cookie alone) is view-only too
-        access = self._access(request)
-        token = self.tokens.of(access) if self.token is not None and access else None
-        if token is not None:
-            response.set_cookie(cookie_name(request), token, httponly=True, samesite="Strict")
+        # the token this page was opened with, in its path's cookie: the control page's holds
+        # the control token alone, and a view page's, set for its path, cannot replace it
+        if self.token is not None and (view or access is Access.CONTROL):
+            response.set_cookie(
+                cookie_name(request, view=view), given_token(request),
+                path=VIEW_PATH if view else "/", httponly=True, samesite="Strict",
+            )  # fmt: skip
         return response
 
     async def _static(self, request: web.Request) -> web.StreamResponse:

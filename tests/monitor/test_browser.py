@@ -282,6 +282,35 @@ def test_a_view_only_link_has_its_controls_off_and_cannot_pause(page: Any) -> No
         run.finish()
 
 
+def test_a_view_link_opened_in_the_operator_s_browser_leaves_the_control_tab_its_controls(
+    page: Any,
+) -> None:
+    """One browser kept one cookie for both links: the operator opened the view link (to see
+    what the class sees) and the control tab, reloaded, was view-only. The view link's page
+    is under /view/ with a cookie of its own: the control tab reloaded keeps its controls and
+    pauses the run, and the view tab reloaded is still view-only."""
+    run = start_live_run(SHUTTLE, host="0.0.0.0")
+    try:
+        page.goto(run.url)
+        page.wait_for_selector("#pause:enabled", timeout=WAIT_MS)
+        viewer = page.context.new_page()
+        viewer.goto(str(run.server.view_url))
+        viewer.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+        assert viewer.is_visible("#no-controls") and viewer.is_hidden("#controls")
+        for shown in (page, viewer):
+            response = shown.reload()  # each by its own cookie: the token left the URL
+            assert response is not None and response.status == 200, response.status
+            shown.wait_for_selector('#link:text-is("connected")', timeout=WAIT_MS)
+        assert viewer.is_visible("#no-controls") and viewer.is_hidden("#controls")
+        page.wait_for_selector("#pause:enabled", timeout=WAIT_MS)
+        assert page.is_hidden("#no-controls")
+        page.click("#pause")
+        page.wait_for_selector("#resume:enabled", timeout=WAIT_MS)  # paused: the server said
+        assert run.session.state.paused
+    finally:
+        run.finish()
+
+
 #: what a live page without controls says where they would be, by why it has none
 VIEW_ONLY_NOTE = "view only: the controls are on the control link"
 READONLY_NOTE = "read-only (--monitor-readonly): no controls on this page"

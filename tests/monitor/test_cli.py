@@ -597,12 +597,14 @@ def test_a_wildcard_address_is_said_by_the_machine_s_lan_addresses_too(
     port, token = match.groups()
     assert lines[1].endswith(f" or, by address, http://192.0.2.77:{port}/?token={token}")
     # the view-only link, to share (a class, a projector), said the same way
-    match = re.fullmatch(rf"monitor: view only: http://0\.0\.0\.0:{port}/\?token=(\S+)", lines[2])
+    match = re.fullmatch(
+        rf"monitor: view only: http://0\.0\.0\.0:{port}/view/\?token=(\S+)", lines[2]
+    )
     assert match, lines[2]
     view = match.group(1)
     assert view != token
     assert lines[3].startswith("monitor: view only: it listens on every address of this machine")
-    assert lines[3].endswith(f" or, by address, http://192.0.2.77:{port}/?token={view}")
+    assert lines[3].endswith(f" or, by address, http://192.0.2.77:{port}/view/?token={view}")
 
 
 def test_the_lan_addresses_leave_out_loopback_and_link_local() -> None:
@@ -817,7 +819,7 @@ def test_a_chosen_view_token_opens_the_page_without_controls_and_is_printed_nowh
     lines = out.splitlines()
     assert re.fullmatch(r"monitor: http://0\.0\.0\.0:\d+/\?token=\S+ \(shuttle on simulator "
                         r"empty-room\)", lines[0]), lines[0]  # fmt: skip
-    view_line = r"monitor: view only: http://0\.0\.0\.0:\d+/ \(add \?token= and your "
+    view_line = r"monitor: view only: http://0\.0\.0\.0:\d+/view/ \(add \?token= and your "
     view_line += r"--monitor-view-token, or open its bookmark\)"
     assert re.fullmatch(view_line, lines[2]), lines[2]
     assert VIEW_CHOSEN not in out + err + caplog.text + record.read_text()

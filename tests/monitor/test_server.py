@@ -61,10 +61,13 @@ def _call(
         return status, raw.decode()
 
 
-def _control(server: MonitorServer, payload: object, **headers: str) -> tuple[int, Any]:
-    """POST ``payload`` as a control; a dict naming no run is sent for the run served (as
-    the page sends it: every control names its run)."""
-    base = f"http://127.0.0.1:{server.port}/api/control"
+def _control(
+    server: MonitorServer, payload: object, at: str = "/", **headers: str
+) -> tuple[int, Any]:
+    """POST ``payload`` as a control from the page at ``at`` (``/view/``: the view-only
+    link's); a dict naming no run is sent for the run served (as the page sends it: every
+    control names its run)."""
+    base = f"http://127.0.0.1:{server.port}{at}api/control"
     if isinstance(payload, dict) and "run" not in payload:
         payload = {**payload, "run": server.feed.run_id}
     body = payload if isinstance(payload, bytes) else json.dumps(payload).encode()

@@ -8,6 +8,7 @@ from __future__ import annotations
 import asyncio
 import json
 import threading
+import urllib.error
 import urllib.request
 from collections.abc import Iterator
 from typing import Any
@@ -31,14 +32,15 @@ def lan() -> Iterator[MonitorServer]:
     served.close()
 
 
-def _hello(server: MonitorServer, **headers: str) -> dict[str, Any]:
-    """The header of the WebSocket's first message (the hello) for a page with ``headers``."""
+def _hello(server: MonitorServer, at: str = "/", **headers: str) -> dict[str, Any]:
+    """The header of the WebSocket's first message (the hello) for the page at ``at`` with
+    ``headers``."""
     import aiohttp
 
     async def first() -> dict[str, Any]:
         async with (
             aiohttp.ClientSession() as client,
-            client.ws_connect(f"ws://127.0.0.1:{server.port}/ws", headers=headers) as ws,
+            client.ws_connect(f"ws://127.0.0.1:{server.port}{at}ws", headers=headers) as ws,
         ):
             message = await asyncio.wait_for(ws.receive(), 30)
             hello = json.loads(message.data)
@@ -54,14 +56,25 @@ def _hello(server: MonitorServer, **headers: str) -> dict[str, Any]:
     return got[0]
 
 
-def _cookie_set(server: MonitorServer, token: str) -> str:
-    """The token the page's cookie keeps after ``/?token=TOKEN``."""
-    url = f"http://127.0.0.1:{server.port}/?token={token}"
-    with urllib.request.urlopen(url, timeout=10) as reply:
-        cookies = reply.headers.get_all("Set-Cookie") or []
-    name = f"roomba_bt_monitor_{server.port}="
-    (cookie,) = [c for c in cookies if c.startswith(name)]
-    return cookie[len(name) :].split(";", 1)[0]
+class NoRedirect(urllib.request.HTTPRedirectHandler):
+    """A redirect answered, not followed: what the page's own answer is."""
+
+    def redirect_request(self, *args: Any) -> None:
+        return None
+
+
+def _page_answer(server: MonitorServer, at: str, token: str) -> tuple[int, dict[str, str], str]:
+    """``GET AT?token=TOKEN``: its status, the cookies it sets (``name: value; Path=...``)
+    and where it sends the browser ("" for nowhere)."""
+    url = f"http://127.0.0.1:{server.port}{at}?token={token}"
+    try:
+        reply = urllib.request.build_opener(NoRedirect).open(url, timeout=10)
+    except urllib.error.HTTPError as exc:
+        reply = exc
+    with reply:
+        headers = reply.headers
+        cookies = dict(c.split("=", 1) for c in headers.get_all("Set-Cookie") or [])
+        return reply.status, cookies, headers.get("Location", "")
 
 
 def test_the_view_token_reads_the_run_and_gets_403_on_every_control(
@@ -69,9 +82,9 @@ def test_the_view_token_reads_the_run_and_gets_403_on_every_control(
 ) -> None:
     control, view = lan.token, lan.view_token
     assert control and view and view != control and len(view) >= 24
-    assert lan.view_url == f"http://0.0.0.0:{lan.port}/?token={view}"
+    assert lan.view_url == f"http://0.0.0.0:{lan.port}/view/?token={view}"
     base = f"http://127.0.0.1:{lan.port}"
-    assert _call(f"{base}/?token={view}")[0] == 200
+    assert _call(f"{base}/view/?token={view}")[0] == 200
     assert _call(f"{base}/static/monitor.js", headers={"X-Monitor-Token": view})[0] == 200
     status, _ = _call(f"{base}/api/state", headers={"X-Monitor-Token": view})
     assert status == 409  # authorised: no tick yet (401/403 for a token it refuses)
@@ -106,21 +119,31 @@ def test_the_control_token_still_controls_and_a_wrong_token_is_refused_as_before
 
 
 def test_a_viewer_cannot_take_the_controls_by_the_cookie(lan: MonitorServer) -> None:
-    """The page's cookie keeps the token it was opened with: the view link's reload is
-    view-only too (it was the control token for every page). A view page in a browser that
-    had the control link's cookie sends its view token first, and that one decides."""
+    """The view link's pages are under /view/, whose cookie is their own (its name and its
+    Path): one browser kept one cookie for both links, and a view link opened in the
+    operator's browser made the control tab, reloaded, view-only. A page there has no
+    controls whichever token it holds, so neither a viewer's cookie nor the control page's,
+    which the browser sends there too, gives it the controls."""
     control, view = str(lan.token), str(lan.view_token)
-    assert _cookie_set(lan, view) == view
-    assert _cookie_set(lan, control) == control
-    name = f"roomba_bt_monitor_{lan.port}"
-    viewer = {"Cookie": f"{name}={view}"}
-    assert _hello(lan, **viewer)["controls"] is False
-    assert _control(lan, {"action": "pause"}, **viewer)[0] == 403
-    both = {"Cookie": f"{name}={control}", "X-Monitor-Token": view}
-    assert _hello(lan, **both)["controls"] is False
-    assert _control(lan, {"action": "pause"}, **both)[0] == 403
+    name, view_name = f"roomba_bt_monitor_{lan.port}", f"roomba_bt_monitor_view_{lan.port}"
+    assert _page_answer(lan, "/view/", view) == (
+        200, {view_name: f"{view}; HttpOnly; Path=/view/; SameSite=Strict"}, ""
+    )  # fmt: skip
+    assert _page_answer(lan, "/", control) == (
+        200, {name: f"{control}; HttpOnly; Path=/; SameSite=Strict"}, ""
+    )  # fmt: skip
+    # a bookmark of the view link from before it had its path: there, no cookie set here
+    assert _page_answer(lan, "/", view) == (303, {}, f"/view/?token={view}")
+    assert _page_answer(lan, "/view", view) == (303, {}, f"/view/?token={view}")
+    viewer = {"Cookie": f"{view_name}={view}"}
+    both = {"Cookie": f"{name}={control}; {view_name}={view}"}  # the operator's browser
+    for cookies in (viewer, both, {"Cookie": f"{name}={control}"}):
+        assert _hello(lan, "/view/", **cookies)["controls"] is False
+        assert _control(lan, {"action": "pause"}, "/view/", **cookies)[0] == 403
+    assert _hello(lan, "/view/", **{"X-Monitor-Token": control})["controls"] is False
     assert lan.session is not None and lan.session._requests.empty()
-    assert _control(lan, {"action": "pause"}, Cookie=f"{name}={control}")[0] == 202
+    assert _hello(lan, "/", **both)["controls"] is True  # the view page's cookie: not sent
+    assert _control(lan, {"action": "pause"}, **both)[0] == 202
 
 
 def test_loopback_without_a_token_has_no_view_link_and_keeps_its_controls() -> None:

@@ -532,8 +532,11 @@ function connect() {
   const current = view.socket;
   if (current && (current.readyState === WebSocket.CONNECTING || current.readyState === WebSocket.OPEN)) return;
   clearTimeout(view.retryTimer); view.retryTimer = null;
-  const proto = location.protocol === "https:" ? "wss:" : "ws:";
-  const ws = new WebSocket(`${proto}//${location.host}/ws${token ? "?token=" + encodeURIComponent(token) : ""}`);
+  // beside the page, as its other requests: the view-only link's page is under /view/
+  const address = new URL("ws", location.href);
+  address.protocol = location.protocol === "https:" ? "wss:" : "ws:";
+  address.search = token ? "?token=" + encodeURIComponent(token) : "";
+  const ws = new WebSocket(address.href);
   view.socket = ws;
   // a socket that was closing when this one opened says nothing more (its close is no drop)
   const mine = (handler) => (ev) => { if (view.socket === ws) handler(ev); };
