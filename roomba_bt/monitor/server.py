@@ -211,6 +211,15 @@ def given_token(request: web.Request) -> str:
     )
 
 
+def token_access(tokens: Tokens, request: web.Request) -> Access | None:
+    """What the request's token is, whatever its path (every request without a token in
+    force: the loopback default); None: none given, or neither token."""
+    if tokens.control is None:
+        return Access.CONTROL
+    given = given_token(request)
+    return tokens.access(given) if given else None
+
+
 class MonitorServer:
     """Serves one feed (a live run with its session, or a recorded run without one)."""
 
@@ -361,18 +370,10 @@ class MonitorServer:
         return await handler(request)
 
     def _access(self, request: web.Request) -> Access | None:
-        """What the request's token lets it do (every request without a token in force: the
-        loopback default; under :data:`VIEW_PATH` at most to view); None: none given, or
-        neither token."""
-        access = self._token_access(request)
+        """What the request's token lets it do (:func:`token_access`), under
+        :data:`VIEW_PATH` at most to view."""
+        access = token_access(self.tokens, request)
         return Access.VIEW if access is Access.CONTROL and viewing(request) else access
-
-    def _token_access(self, request: web.Request) -> Access | None:
-        """What the request's token is, whatever its path (:meth:`_access`)."""
-        if self.token is None:
-            return Access.CONTROL
-        given = given_token(request)
-        return self.tokens.access(given) if given else None
 
     def _controls(self, request: web.Request) -> bool:
         """Whether this request's page may control the run: a live run, not read-only, and
@@ -380,7 +381,7 @@ class MonitorServer:
         return not self.readonly and self._access(request) is Access.CONTROL
 
     async def _page(self, request: web.Request) -> web.StreamResponse:
-        access = self._token_access(request)
+        access = token_access(self.tokens, request)
         view = viewing(request)
         if access is Access.VIEW and not view and "token" in request.query:
             # the view link as it was before it had a path of its own (a projector's
