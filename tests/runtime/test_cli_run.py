@@ -143,27 +143,6 @@ def test_a_run_recorded_on_the_virtual_clock_replays_byte_for_byte(
     assert "the tree wrote the same" in out
 
 
-def test_a_replay_s_summary_says_the_run_s_label(
-    mission: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    """``run --label`` is in the record, and the run's summary says it first; a replay's
-    summary did not, so replays of several robots' runs of one mission could not be told
-    apart. It says it as the run did; a hand-edited label on one line, escaped."""
-    record = tmp_path / "run.jsonl"
-    argv = ["run", str(mission), "--fast", "--display", "none", "--label", "robot 3"]
-    assert main([*argv, "--record", str(record)]) == 0
-    assert capsys.readouterr().out.startswith("label        robot 3\nmission      ")
-    assert main(["replay", str(record)]) == 0
-    assert capsys.readouterr().out.startswith("label        robot 3\nmission      ")
-    header, *rest = record.read_text().splitlines(keepends=True)
-    edited = tmp_path / "edited.jsonl"
-    relabelled = {**json.loads(header), "label": "robot 3\noutcome      SUCCESS"}
-    edited.write_text(json.dumps(relabelled) + "\n" + "".join(rest))
-    assert main(["replay", str(edited)]) == 0
-    said = capsys.readouterr().out
-    assert said.startswith("label        robot 3\\x0aoutcome      SUCCESS\nmission      ")
-
-
 def test_a_replay_keeps_no_robot_awake(tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
     """It said "no modem line to pulse BRC on this link: a robot left in Passive sleeps after
     5 minutes": there is no robot in a replay."""
@@ -354,6 +333,27 @@ def test_replay_stops_at_the_first_difference_and_names_it(
     assert "end of the record" not in out  # it stopped there, not at the record's end
     # the tree's input ended: nothing was lost (it read "CONNECTION LOST")
     assert "outcome      INPUT ENDED (first difference from the record)" in out
+
+
+def test_a_replay_s_summary_says_the_run_s_label(
+    mission: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``run --label`` is in the record, and the run's summary says it first; a replay's
+    summary did not, so replays of several robots' runs of one mission could not be told
+    apart. It says it as the run did; a hand-edited label on one line, escaped."""
+    record = tmp_path / "run.jsonl"
+    argv = ["run", str(mission), "--fast", "--display", "none", "--label", "robot 3"]
+    assert main([*argv, "--record", str(record)]) == 0
+    assert capsys.readouterr().out.startswith("label        robot 3\nmission      ")
+    assert main(["replay", str(record)]) == 0
+    assert capsys.readouterr().out.startswith("label        robot 3\nmission      ")
+    header, *rest = record.read_text().splitlines(keepends=True)
+    edited = tmp_path / "edited.jsonl"
+    relabelled = {**json.loads(header), "label": "robot 3\noutcome      SUCCESS"}
+    edited.write_text(json.dumps(relabelled) + "\n" + "".join(rest))
+    assert main(["replay", str(edited)]) == 0
+    said = capsys.readouterr().out
+    assert said.startswith("label        robot 3\\x0aoutcome      SUCCESS\nmission      ")
 
 
 def test_replay_checks_the_record_holds_the_missions_packets(
