@@ -304,6 +304,7 @@ def test_a_breakpoint_on_an_ending_pauses_after_that_tick_and_step_ticks_once(
         rig.session.request("step")
         until(lambda: rig.session.state.pause_reason == "stepped one tick")
         seen["after step"] = rig.ticks(ticked=True)
+        rig.session.request("stop")  # paused for good: run_with would wait its 10 s first
 
     rig.run_with(operator)
     assert seen["after step"] - seen["ticked"] == 1
