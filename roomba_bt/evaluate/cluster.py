@@ -164,6 +164,12 @@ LOCAL_CLUSTER_CONFIG: dict[str, object] = {
 }
 
 
+#: How long a ``--scheduler`` has to answer before the evaluation gives up (exit code 3):
+#: long enough for a scheduler across a slow network, short enough for a mistyped port that
+#: nothing listens on (Dask's client retries a refused connection until then).
+SCHEDULER_CONNECT_TIMEOUT_S = 10.0
+
+
 @contextlib.contextmanager
 def dask_client(scheduler: str | None = None, workers: int = 2) -> Iterator[Any]:
     """A client of the scheduler at ``scheduler``, or of a local cluster of ``workers``
@@ -174,7 +180,7 @@ def dask_client(scheduler: str | None = None, workers: int = 2) -> Iterator[Any]
     if scheduler is not None:
         check_scheduler_address(scheduler)
         try:
-            client = distributed.Client(scheduler, timeout="10s")
+            client = distributed.Client(scheduler, timeout=SCHEDULER_CONNECT_TIMEOUT_S)
         except (OSError, TimeoutError) as exc:
             raise SchedulerUnreachableError(
                 f"--scheduler {scheduler}: cannot connect ({exc})"

@@ -119,9 +119,15 @@ def test_separate_scheduler_and_workers_give_the_results_of_one_job_even_if_one_
     assert retried >= 1, "the killed worker's episode ran again elsewhere"
 
 
-def test_an_unreachable_scheduler_exits_3(capsys: pytest.CaptureFixture[str]) -> None:
+def test_an_unreachable_scheduler_exits_3(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Nothing listens on the port: Dask's client retries the refused connection until the
+    timeout, then exit code 3. The timeout is 1 s here, not the user's 10 s spent waiting."""
     from roomba_bt.cli import main
+    from roomba_bt.evaluate import cluster
 
+    monkeypatch.setattr(cluster, "SCHEDULER_CONNECT_TIMEOUT_S", 1.0)
     port = _free_port()  # nothing listens there
     code = main(["eval", str(MISSIONS / "dock.yaml"), "--runs", "1", "--no-progress",
                  "--scheduler", f"tcp://127.0.0.1:{port}"])  # fmt: skip
