@@ -269,6 +269,23 @@ tree:
 """
 
 
+def _frames_read(record: Path) -> int:
+    return record.read_text().count('"d": "in"') if record.exists() else 0
+
+
+def _fill(pipe: int) -> None:
+    """Write into ``pipe`` until it takes no more byte: its next writer blocks. Through a
+    non-blocking opening of its own (Linux's /proc): O_NONBLOCK set on ``pipe`` itself would
+    be set on the run's stdout or stderr too (one open file), its writes failing, not blocking."""
+    filler = os.open(f"/proc/self/fd/{pipe}", os.O_WRONLY | os.O_NONBLOCK)
+    try:
+        with contextlib.suppress(BlockingIOError):
+            while True:
+                os.write(filler, b"x")
+    finally:
+        os.close(filler)
+
+
 @pytest.mark.parametrize("display", ["tree", "log"])
 def test_a_terminal_that_stops_reading_does_not_hold_up_the_run(
     sim_port: str, tmp_path: Path, display: str
@@ -276,7 +293,11 @@ def test_a_terminal_that_stops_reading_does_not_hold_up_the_run(
     """An SSH session on a stalled network: the terminal takes nothing, its buffer fills, and
     every write to it blocks. The live tree and the status log were written from the tick
     loop, which then stopped reading frames with the robot driving on (a 4 KiB buffer held a
-    run after about a second). Now they are written off the loop: the run reads on."""
+    run after about a second). Now they are written off the loop: the run reads on.
+
+    Once the run reads frames, the test fills the terminal's buffer to the last byte, so the
+    display's next write blocks (the tree is redrawn, the log gets a line, several times a
+    second); the run must then read 3 s more of stream (200 frames) while nothing drains it."""
     import fcntl
 
     record = tmp_path / "run.jsonl"
@@ -290,18 +311,25 @@ def test_a_terminal_that_stops_reading_does_not_hold_up_the_run(
          display],
         stdout=out, stderr=err,
     )  # fmt: skip
-    os.close(write_end)
     try:
-        frames = 0
         deadline = time.monotonic() + 30.0
-        while frames < 600 and time.monotonic() < deadline:  # about 9 s of stream
-            time.sleep(0.2)
-            if record.exists():
-                frames = record.read_text().count('"d": "in"')
-        assert frames >= 600, f"the run stopped reading after {frames} reads"
+        while _frames_read(record) == 0 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        _fill(write_end)
+        filled_at = _frames_read(record)
+        assert filled_at > 0, "the run never read a frame"
+        frames = filled_at
+        while frames < filled_at + 200 and time.monotonic() < deadline:
+            time.sleep(0.1)
+            frames = _frames_read(record)
+        assert frames >= filled_at + 200, (
+            f"the run stopped reading after {frames} reads, {frames - filled_at} after its "
+            "terminal's buffer was full"
+        )
     finally:
         proc.kill()
         proc.wait()
+        os.close(write_end)
         os.close(read_end)
 
 
