@@ -112,6 +112,11 @@ def register(sub: Any) -> None:
     for name, kind, default, help in FAULT_OPTIONS:
         option = "--" + name.replace("_", "-")
         faults.add_argument(option, type=kind, default=default, help=help)
+    faults.add_argument(
+        "--faults-from-stream", dest="from_stream", action="store_true",
+        help="count the --...-at times from the first Stream the client sends, not from the "
+        "simulator's start (a client that connects late still meets them)",
+    )  # fmt: skip
 
 
 def _fail(message: str, code: ExitCode) -> int:
@@ -162,7 +167,10 @@ def _simulator(args: argparse.Namespace) -> Simulator | int:
 
     try:
         profile = get_profile(args.profile)
-        faults = Faults(**{name: getattr(args, name) for name, *_ in FAULT_OPTIONS})
+        faults = Faults(
+            **{name: getattr(args, name) for name, *_ in FAULT_OPTIONS},
+            from_stream=args.from_stream,
+        )
     except ValueError as exc:
         return _fail(str(exc), ExitCode.INVALID)
     refused = None if args.baud is None else simulated_baud_refused(args.baud, profile)

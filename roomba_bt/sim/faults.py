@@ -50,6 +50,12 @@ class Faults:
     ``odometry_error`` the encoders' error, as a fraction (0: exact, the default): each
                        wheel's counts are off by a seeded scale (see sim/state.py's
                        ``OdometryError``), and the heading they give drifts slowly
+    ``from_stream``    the one-off times (``disconnect_at``, ``reset_at``, ``stream_stop_at``,
+                       ``stream_gap_at``, ``sleep_at``, ``baud_change_at``) count from the
+                       first step with a stream on (the host's Stream, 148), not from the
+                       simulator's start: a served simulator's clock runs from its own start,
+                       and a host that opened the port late (a slow start on a loaded
+                       machine) found the fault long past; none comes while no stream was on
     """
 
     corrupt_rate: float = 0.0
@@ -69,8 +75,11 @@ class Faults:
     baud_change_at: float | None = None
     baud_change_to: int | None = None
     odometry_error: float = 0.0
+    from_stream: bool = False
 
     def __post_init__(self) -> None:
+        if not isinstance(self.from_stream, bool):
+            raise ValueError(f"faults.from_stream: found {self.from_stream!r}; allowed: a bool")
         for name, lo, hi in (
             ("corrupt_rate", 0.0, 1.0),
             ("bit_flip_rate", 0.0, 1.0),

@@ -68,8 +68,8 @@ class Simulator(OIProtocol):
 
     #: its own state's attributes (state.py: slots, not a dict, on the step's path)
     __slots__ = (
-        "_disconnect_at", "_fault_at", "_next_timed", "_timed_faults", "_timeline",
-        "keeps_trace", "swept",
+        "_disconnect_at", "_fault_at", "_fault_clock_waits", "_next_timed", "_timed_faults",
+        "_timeline", "keeps_trace", "swept",
     )  # fmt: skip
 
     def __init__(
@@ -108,6 +108,11 @@ class Simulator(OIProtocol):
         self._next_timed = self._timed_faults[0][0] if self._timed_faults else math.inf
         #: the first of the two: one comparison a step
         self._fault_at = min(self._disconnect_at, self._next_timed)
+        #: ``Faults.from_stream``: the times above are offsets from a stream not started yet;
+        #: until then every step looks for it (:meth:`_timed_fault`) and no link is cut
+        self._fault_clock_waits = self.faults.from_stream and self._fault_at < math.inf
+        if self._fault_clock_waits:
+            self._disconnect_at, self._fault_at = math.inf, 0.0
         self._sense()
         self._battery(0.0)
         #: the floor cleaned so far (``coverage=True``; it reads the pose, never the bytes)
@@ -265,6 +270,10 @@ class Simulator(OIProtocol):
     def _timed_fault(self) -> None:
         """The one-off faults due now (``Faults.reset_at``, ``stream_stop_at``, ``sleep_at``,
         ``baud_change_at``)."""
+        if self._fault_clock_waits:
+            if self._stream is None:
+                return  # _fault_at stays due: the next step looks again
+            self._start_fault_clock()
         while self._timed_faults and self._timed_faults[0][0] <= self.time:
             _, kind = self._timed_faults.pop(0)
             self._event("fault", kind)
@@ -290,6 +299,15 @@ class Simulator(OIProtocol):
                 self._end_stream()
         self._next_timed = self._timed_faults[0][0] if self._timed_faults else math.inf
         self._fault_at = min(self._disconnect_at, self._next_timed)
+
+    def _start_fault_clock(self) -> None:
+        """``Faults.from_stream``: the first step with a stream on; the fault times, offsets
+        until now, are counted from it."""
+        now = self.time
+        self._fault_clock_waits = False
+        self._timed_faults = [(now + at, kind) for at, kind in self._timed_faults]
+        if self.faults.disconnect_at is not None:
+            self._disconnect_at = now + self.faults.disconnect_at
 
     def _world_events(self, timeline: Timeline) -> None:
         """The timeline's events due now: marked, and their effects on the body."""

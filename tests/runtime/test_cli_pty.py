@@ -193,8 +193,14 @@ def test_a_run_whose_watchdog_stopped_the_wheels_over_the_pty_replays_byte_for_b
     """The robot's stream pauses half a second: the watchdog's drive 0, the stall ridden
     through, the spin again. The replay does each again and writes the same bytes; before,
     it ran no watchdog: 'first difference ... expected Drive (137) 89 00 00 00 00, sent
-    nothing', exit 1, for every run with a stall (every run over a noisy cable)."""
-    sim = served_sim("--pty", "--stream-gap-at", "1.5", "--stream-gap-s", "0.5")
+    nothing', exit 1, for every run with a stall (every run over a noisy cable).
+
+    The gap comes 1.5 s after the run started the stream (``--faults-from-stream``): at 1.5 s
+    of the simulator's own clock it had passed before a run slow to start (its imports on a
+    loaded machine) opened the port, and no stall happened."""
+    sim = served_sim(
+        "--pty", "--stream-gap-at", "1.5", "--stream-gap-s", "0.5", "--faults-from-stream"
+    )
     record = tmp_path / "run.jsonl"
     proc = _start_run(sim.address, write_mission(tmp_path, SPIN), record, "--timeout", "3s")
     out, err = proc.communicate(timeout=30)

@@ -15,10 +15,15 @@ from .helpers import BOX, box_with_a_drop, make, world
 IDS = [7, 22, 35, 43, 44, 46, 48]
 
 
+def stream_bytes_from(sim: Simulator, seconds: float) -> bytes:
+    """What ``sim`` sends in ``seconds`` once it streams :data:`IDS`, driving in Full."""
+    sim.receive(C.start().data + C.full().data + C.stream(IDS).data + C.drive(200, 500).data)
+    return sim.run(seconds)
+
+
 def stream_bytes(faults: Faults, seconds: float = 3.0, seed: int = 0) -> tuple[bytes, Simulator]:
     sim = Simulator(world(BOX), seed=seed, faults=faults)
-    sim.receive(C.start().data + C.full().data + C.stream(IDS).data + C.drive(200, 500).data)
-    return sim.run(seconds), sim
+    return stream_bytes_from(sim, seconds), sim
 
 
 def test_corrupted_bytes_fail_the_checksum_and_the_parser_resynchronises() -> None:
@@ -102,6 +107,7 @@ def test_faults_are_repeatable_for_a_seed() -> None:
         ({"latency": "slow"}, "latency"),
         ({"inject_text": "caf\u00e9"}, "inject_text"),
         ({"disconnect_at": -1}, "disconnect_at"),
+        ({"from_stream": 1}, "from_stream"),
     ],
 )
 def test_bad_faults_name_the_field(kwargs: dict[str, object], field: str) -> None:
@@ -157,6 +163,32 @@ def test_timed_faults_happen_once_at_their_time(
         assert b"Roomba by iRobot" in data and sim.mode is OIMode.OFF
     if event == "sleep":
         assert sim.asleep
+
+
+@pytest.mark.parametrize(
+    ("faults", "event"),
+    [
+        (Faults(stream_stop_at=1.0, from_stream=True), ("fault", "stream stop")),
+        (Faults(stream_gap_at=1.0, stream_gap_s=0.5, from_stream=True), ("fault", "stream gap")),
+        (Faults(disconnect_at=1.0, from_stream=True), ("disconnect", "link lost in Full")),
+    ],
+)
+def test_fault_times_from_the_stream_count_from_the_step_it_started(
+    faults: Faults, event: tuple[str, str]
+) -> None:
+    """``sim --faults-from-stream``: a served simulator's clock runs from its own start, and a
+    host that opened the port late found a fault at 1.5 s long past. Counted from the stream,
+    the fault comes 1 s after the first frame however long the robot waited for its host."""
+    sim = Simulator(world(BOX), seed=0, faults=faults)
+    sim.run(2.4)  # no host yet: the fault clock has not started
+    assert [e for e in sim.events if e.kind in ("fault", "disconnect")] == []
+    data = stream_bytes_from(sim, seconds=1.5)
+    kind, detail = event
+    [due] = [e for e in sim.events if e.kind == kind]
+    assert due.detail.startswith(detail)
+    first_frame = 2.4 + 0.015
+    assert first_frame + 1.0 <= due.time < first_frame + 1.0 + 0.015  # the step it falls in
+    assert 60 <= len(StreamParser(IDS).feed(data)) <= 68  # one second of frames, then none
 
 
 def test_a_baud_change_mid_run_streams_on_at_the_other_rate() -> None:
