@@ -2,6 +2,12 @@
 
 Standard library only. Everything above (transport, robot, simulator, missions) reads the
 tables defined here: :mod:`~roomba_bt.oi.opcodes` and :mod:`~roomba_bt.oi.packets`.
+
+``roomba_bt.oi.encode`` is the encoder's module, as ``import roomba_bt.oi.encode`` says, and
+its function is ``roomba_bt.oi.encode.encode`` (``commands.encode``). The package once
+exported the function under the module's name, so the module, once imported, was out of
+reach by its own path (``import roomba_bt.oi.encode as e`` gave the function, which has no
+``drive``): nothing here takes a submodule's name.
 """
 
 import sys
@@ -16,7 +22,7 @@ from roomba_bt.oi.bits import (
     Overcurrents,
     Stasis,
 )
-from roomba_bt.oi.encode import Command, Note, Radius, decode_command, encode
+from roomba_bt.oi.encode import Command, Note, Radius, decode_command
 from roomba_bt.oi.errors import BandwidthError, EncodeError, OIError, UnsupportedCommandError
 from roomba_bt.oi.frames import FrameLayout, SensorFrame, layout_for, stream_frame_size
 from roomba_bt.oi.ir import IRCharacter, IRSource, LighthouseBeam
@@ -72,7 +78,6 @@ __all__ = [
     "commands",
     "decode_command",
     "decode_reply",
-    "encode",
     "get_profile",
     "layout_for",
     "mode_from_packet",

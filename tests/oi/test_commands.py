@@ -262,6 +262,25 @@ def test_the_commands_module_is_importable_by_the_name_the_docs_give_it() -> Non
     assert module is sys.modules["roomba_bt.oi.encode"] and module.drive is drive
 
 
+def test_the_encoder_module_is_reached_as_a_module_by_every_import() -> None:
+    """``import roomba_bt.oi.encode`` then ``roomba_bt.oi.encode.drive`` was an
+    AttributeError: the package exported the function ``encode`` under the module's name,
+    so its own path, ``import ... as`` too, gave the function. The function stays where the
+    docs name it: ``roomba_bt.oi.encode.encode``, the commands module's ``encode``."""
+    from roomba_bt.oi.commands import encode as by_commands
+
+    import roomba_bt.commands
+    import roomba_bt.oi.encode
+    import roomba_bt.oi.encode as imported_as
+    from roomba_bt.oi import encode as imported_from
+
+    module = sys.modules["roomba_bt.oi.encode"]
+    assert roomba_bt.oi.encode is imported_as is imported_from is module
+    assert roomba_bt.oi.encode.drive(-200, 500).data == bytes([137, 255, 56, 1, 244])
+    assert module.encode is encode is by_commands is roomba_bt.commands.encode
+    assert "encode" not in roomba_bt.oi.__all__  # no name of the package hides a submodule
+
+
 def test_the_leds_example_runs_as_its_docstring_writes_it() -> None:
     """``oi.leds``'s example named ``led_bits`` as if it were beside it: ``oi.led_bits`` was an
     AttributeError, and nothing said where it lives."""
