@@ -43,11 +43,19 @@ from roomba_bt.behaviours.units import (
 )
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.bits import LED_NAMES, led_bits, motor_bits
-from roomba_bt.oi.encode import NOTE_NAMES, PLAYABLE_NOTES, Note, Radius, note_name, note_number
+from roomba_bt.oi.encode import NOTE_NAMES, Note, Radius, note_name, note_number
 from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS, ENCODER_PACKETS, SLOT_SECONDS
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.odometry import SLOWEST_MOVING_SPEED_MM_S, WHEEL_SPEED_STEP_MM_S, speed_steps
-from roomba_bt.oi.opcodes import COMMANDS_BY_NAME, opcodes
+from roomba_bt.oi.opcodes import (
+    COMMANDS_BY_NAME,
+    NOTE_DURATION,
+    NOTE_STEPS_PER_SECOND,
+    PLAYABLE_NOTES,
+    SONG_LENGTH,
+    SONG_NUMBER,
+    opcodes,
+)
 from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.robot.hazards import sets_going
 
@@ -56,8 +64,6 @@ log = logging.getLogger("roomba_bt.mission")
 # Ranges read from the opcode table, never retyped.
 _VELOCITY = COMMANDS_BY_NAME["drive"].args[0]
 _RADIUS = COMMANDS_BY_NAME["drive"].args[1]
-_SONG_NUMBER = COMMANDS_BY_NAME["song"].args[0]
-_SONG_LENGTH = COMMANDS_BY_NAME["song"].args[1]
 _LED_COLOR = COMMANDS_BY_NAME["leds"].args[1]
 
 _RADIUS_WORDS: dict[str, int] = {
@@ -82,9 +88,25 @@ def _parse_notes(value: object) -> tuple[tuple[int, int], ...]:
             problems.append((index, str(exc)))
     if problems:
         raise ItemErrors("note", len(value), problems)
-    if len(notes) > _SONG_LENGTH.maximum:
-        raise UnitError(f"a song has at most {_SONG_LENGTH.maximum} notes, got {len(notes)}")
+    if len(notes) > SONG_LENGTH.maximum:
+        raise UnitError(f"a song has at most {SONG_LENGTH.maximum} notes, got {len(notes)}")
     return tuple(notes)
+
+
+#: the note lengths the language takes, in 1/64 s: one step to the table's longest (a note
+#: of 0/64 s, which the table allows, plays nothing: a slip, refused), said in words
+_NOTE_STEPS = range(max(NOTE_DURATION.minimum, 1), NOTE_DURATION.maximum + 1)
+_NOTE_LENGTHS = (
+    f"{1000 * _NOTE_STEPS[0] / NOTE_STEPS_PER_SECOND:.0f}ms.."
+    f"{_NOTE_STEPS[-1] / NOTE_STEPS_PER_SECOND:.2f}s"
+)
+#: the lowest and highest notes the robot plays, by name (G1, G9), and why one it does not
+#: play is refused (the encoder would send it: a rest)
+_LOWEST, _HIGHEST = note_name(PLAYABLE_NOTES[0]), note_name(PLAYABLE_NOTES[-1])
+_RESTS = (
+    f"outside the notes the robot plays, {_LOWEST} to {_HIGHEST}: it would sound as a rest "
+    "(write rest for one)"
+)
 
 
 def _note(item: object) -> tuple[int, int]:
@@ -102,19 +124,16 @@ def _note(item: object) -> tuple[int, int]:
     except ValueError:
         raise UnitError(f"unknown note {parts[0]!r}: {_note_hint(parts[0])}") from None
     if number and number not in PLAYABLE_NOTES:
-        lo, hi = note_name(PLAYABLE_NOTES[0]), note_name(PLAYABLE_NOTES[-1])
-        raise UnitError(
-            f"note {parts[0]} ({number}) is outside the notes the robot plays, {lo} to "
-            f"{hi}: it would sound as a rest (write rest for one)"
-        )
+        raise UnitError(f"note {parts[0]} ({number}) is {_RESTS}")
     seconds = parse_quantity("duration", parts[1])
     # the range on the length as written, not on its rounding: 8ms was sent as 1/64 s and
     # 3.992s as 255/64, both outside the range the error and the docs state
-    if not 1 / 64 <= seconds <= 255 / 64:
+    if not _NOTE_STEPS[0] <= seconds * NOTE_STEPS_PER_SECOND <= _NOTE_STEPS[-1]:
         raise UnitError(
-            f"note duration {parts[1]!r} is out of range: 16ms..3.98s (1..255 of 1/64 s)"
+            f"note duration {parts[1]!r} is out of range: {_NOTE_LENGTHS} ({_NOTE_STEPS[0]}.."
+            f"{_NOTE_STEPS[-1]} of 1/{NOTE_STEPS_PER_SECOND} s)"
         )
-    return number, round(seconds * 64)
+    return number, round(seconds * NOTE_STEPS_PER_SECOND)
 
 
 #: a note name as a musician writes it: a letter, a sharp or a flat (``b``, ``♯``, ``♭``), an
@@ -127,7 +146,8 @@ def _note_hint(name: str) -> str:
     ``E#4`` as the same pitch the way the robot's names spell it (``C#4``, ``F4``): flats are
     common and were refused with only "write A4, C#5 or rest". A MIDI number (``200``,
     ``69``) and German ``H`` (B) are named as what they are; anything else hears what a name
-    is made of."""
+    is made of. A pitch the robot does not play is said to be one, never named as a note to
+    write instead (``Ab9`` was told to write G#9, refused in turn; ``B#9`` C10, no name)."""
     lo, hi = PLAYABLE_NOTES[0], PLAYABLE_NOTES[-1]
     plays = f"the robot plays {note_name(lo)} ({lo}) to {note_name(hi)} ({hi})"
     if name.isdigit():
@@ -136,6 +156,9 @@ def _note_hint(name: str) -> str:
         return f"a note is written by its name, not its MIDI number: {named}"
     german = re.fullmatch("[Hh]([0-9])", name)
     if german is not None:
+        number = note_number(f"B{german.group(1)}")
+        if number not in PLAYABLE_NOTES:
+            return f"H is B in German names: {name} is MIDI note {number}, {_RESTS}"
         return f"H is B in German names: write B{german.group(1)}"
     spelled = _SPELLED_NOTE.fullmatch(name)
     if spelled is None:
@@ -146,6 +169,8 @@ def _note_hint(name: str) -> str:
     letter, accidental, octave = spelled.groups()
     shift = {"#": 1, "\u266f": 1, "b": -1, "\u266d": -1}.get(accidental, 0)
     number = 12 * (int(octave) + 1) + NOTE_NAMES.index(letter.upper()) + shift
+    if number not in PLAYABLE_NOTES:
+        return f"{name} is MIDI note {number}, {_RESTS}"
     return (
         f"write {note_name(number)}, the same pitch (the notes are {', '.join(NOTE_NAMES)}: "
         "no flats)"
@@ -155,8 +180,8 @@ def _note_hint(name: str) -> str:
 NOTES = ValueType(
     "notes",
     _parse_notes,
-    json_schema=(("type", "array"), ("items", {"type": "string"}), ("minItems", 1),
-                 ("maxItems", _SONG_LENGTH.maximum)),
+    json_schema=(("type", "array"), ("items", {"type": "string"}),
+                 ("minItems", SONG_LENGTH.minimum), ("maxItems", SONG_LENGTH.maximum)),
 )  # fmt: skip
 
 _OK, _RUN, _FAIL = Status.SUCCESS, Status.RUNNING, Status.FAILURE
@@ -610,8 +635,8 @@ class Leds(Action):
 
 #: the slot ``song`` stores a song in (Song 140) and ``play`` plays it from (Play 141): one
 #: parameter, its range the opcode table's
-_SONG_SLOT = Param("number", INT, default=0, minimum=_SONG_NUMBER.minimum,
-                   maximum=_SONG_NUMBER.maximum, doc="song slot")  # fmt: skip
+_SONG_SLOT = Param("number", INT, default=0, minimum=SONG_NUMBER.minimum,
+                   maximum=SONG_NUMBER.maximum, doc="song slot")  # fmt: skip
 
 
 @declare(
@@ -621,8 +646,8 @@ _SONG_SLOT = Param("number", INT, default=0, minimum=_SONG_NUMBER.minimum,
     params=(
         _SONG_SLOT,
         Param("notes", NOTES, required=True,
-              doc='e.g. ["C4 250ms", "rest 125ms", "G4 500ms"]; G1..G9, sharps (C#4, not '
-                  'Db4), 16ms..3.98s each'),
+              doc=f'e.g. ["C4 250ms", "rest 125ms", "G4 500ms"]; {_LOWEST}..{_HIGHEST}, '
+                  f'sharps (C#4, not Db4), {_NOTE_LENGTHS} each'),
     ),
     sends=opcodes("song"),
 )  # fmt: skip

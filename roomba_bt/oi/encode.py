@@ -19,7 +19,14 @@ from enum import IntEnum
 
 from roomba_bt.oi.bits import DIGIT_ASCII, day_bits
 from roomba_bt.oi.errors import EncodeError
-from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME, ArgSpec, CommandSpec
+from roomba_bt.oi.opcodes import (
+    COMMANDS,
+    COMMANDS_BY_NAME,
+    PLAYABLE_NOTES,  # noqa: F401  (the name's old home: roomba_bt.oi.encode.PLAYABLE_NOTES)
+    SONG_LENGTH,
+    ArgSpec,
+    CommandSpec,
+)
 
 
 class Radius(IntEnum):
@@ -374,21 +381,29 @@ def buttons(button_bits: int) -> Command:
 
 @dataclass(frozen=True, slots=True)
 class Note:
-    """A song note: MIDI number (31-127 sound, anything else in 0-255 is a rest) and
-    duration in 1/64 s."""
+    """A song note: MIDI number (31-127 sound, anything else in 0-255 is a rest:
+    :data:`~roomba_bt.oi.opcodes.PLAYABLE_NOTES`) and duration in 1/64 s."""
 
     number: int
     duration: int
 
 
 NOTE_NAMES = ("C", "C#", "D", "D#", "E", "F", "F#", "G", "G#", "A", "A#", "B")
-#: the MIDI notes the robot plays (both specs: G1 = 31 to G9 = 127); any other is a rest
-PLAYABLE_NOTES = range(31, 128)
+#: the MIDI numbers a name of :func:`note_number` stands for: C0 (12) to B9 (131)
+NAMED_NOTES = range(12, 12 * 11)
 
 
 def note_name(number: int) -> str:
-    """``note_name(69) == "A4"``: the inverse of :func:`note_number` (0: ``rest``)."""
-    return "rest" if number == 0 else f"{NOTE_NAMES[number % 12]}{number // 12 - 1}"
+    """``note_name(69) == "A4"``: the inverse of :func:`note_number` (0: ``rest``). A number
+    no name stands for (11 would be ``B-1``, 132 ``C10``, which :func:`note_number` refuses)
+    is an :class:`EncodeError`."""
+    if number == 0:
+        return "rest"
+    if not _is_int(number) or number not in NAMED_NOTES:
+        raise EncodeError(
+            "song", "note", f"0 (rest) or {NAMED_NOTES[0]} (C0) to {NAMED_NOTES[-1]} (B9)", number
+        )
+    return f"{NOTE_NAMES[number % 12]}{number // 12 - 1}"
 
 
 def note_number(name: str) -> int:
@@ -404,13 +419,17 @@ def note_number(name: str) -> int:
 
 
 def song(song_number: int, notes: Sequence[Note | tuple[int, int]]) -> Command:
-    """Song (140): ``[140][number][length][note 1][duration 1]...``; 1-16 notes.
+    """Song (140): ``[140][number][length][note 1][duration 1]...``; 1-16 notes, each a
+    MIDI number 0-255 (31-127 sound; any other is a rest, as the spec defines it, and is sent
+    as it is) and a duration 0-255 in 1/64 s. A value outside a byte is an
+    :class:`EncodeError` naming it (``note_number``, ``note_duration``): nothing is built.
 
     ``song(0, [(60, 32)]) -> [140][0][1][60][32]`` (middle C for half a second)."""
+    lengths = f"{SONG_LENGTH.minimum} to {SONG_LENGTH.maximum}"
     if isinstance(notes, (str, bytes)) or not isinstance(notes, Sequence):
-        raise EncodeError("song", "notes", "a sequence of 1 to 16 (note, duration) pairs", notes)
-    if not 1 <= len(notes) <= 16:
-        raise EncodeError("song", "notes", "1 to 16 notes", len(notes))
+        raise EncodeError("song", "notes", f"a sequence of {lengths} (note, duration) pairs", notes)
+    if not SONG_LENGTH.minimum <= len(notes) <= SONG_LENGTH.maximum:
+        raise EncodeError("song", "notes", f"{lengths} notes", len(notes))
     tail: list[int] = []
     for note in notes:
         if isinstance(note, Note):

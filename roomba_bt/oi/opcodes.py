@@ -234,6 +234,20 @@ def _packet_id() -> ArgSpec:
 VELOCITY = ArgSpec("velocity", "h", -500, 500, "mm/s", "average wheel velocity")
 RADIUS = ArgSpec("radius", "h", -2000, 2000, "mm", "turn radius; 0x8000/0x7FFF straight, -1/1 spin")
 
+#: Song (140) and Play (141): the slot (0-4, though the text says "up to four songs"), the
+#: song's length in notes and each note, a MIDI number and a duration. Named here, as the
+#: encoder's ``song`` and the mission language's ``song`` leaf check the same ranges.
+SONG_NUMBER = _u8("song_number", 0, 4)
+SONG_LENGTH = _u8("song_length", 1, 16)
+NOTE_NUMBER = _u8("note_number", 0, 255, "MIDI")
+NOTE_DURATION = _u8("note_duration", 0, 255, "1/64 s")
+#: the notes the robot plays (both specs: "the lowest musical note that Roomba will play is
+#: Note #31"; G1 to G9). Any other byte of ``NOTE_NUMBER`` is a rest: no sound for its
+#: duration, the spec's own meaning, so the encoder sends it as it is
+PLAYABLE_NOTES = range(31, 128)
+#: a note's duration is counted in 1/64 s (a half-second note is 32)
+NOTE_STEPS_PER_SECOND = 64
+
 #: Schedule (167)'s 14 time bytes: hour then minute, Sunday first.
 _SCHEDULE_TIMES: tuple[ArgSpec, ...] = tuple(
     arg
@@ -266,13 +280,11 @@ _COMMAND_LIST: tuple[CommandSpec, ...] = (
     _c(139, "leds", "LEDs",
        (_u8("led_bits", 0, 255, "bits"), _u8("power_color"), _u8("power_intensity")),
        modes=DRIVING_MODES, channel="leds"),
-    _c(140, "song", "Song", (_u8("song_number", 0, 4), _u8("song_length", 1, 16)),
+    _c(140, "song", "Song", (SONG_NUMBER, SONG_LENGTH),
        variable="song_length x (note 0-255, duration 0-255 in 1/64 s)",
-       doc="Defines a song; notes outside 31-127 are rests.",
-       tail=TailSpec("song_length", (_u8("note_number", 0, 255, "MIDI"),
-                                     _u8("note_duration", 0, 255, "1/64 s")))),
-    _c(141, "play", "Play", (_u8("song_number", 0, 4),), modes=DRIVING_MODES,
-       channel="speaker"),
+       doc=f"Defines a song; notes outside {PLAYABLE_NOTES[0]}-{PLAYABLE_NOTES[-1]} are rests.",
+       tail=TailSpec("song_length", (NOTE_NUMBER, NOTE_DURATION))),
+    _c(141, "play", "Play", (SONG_NUMBER,), modes=DRIVING_MODES, channel="speaker"),
     _c(142, "sensors", "Sensors", (_packet_id(),), effect=Effect.QUERY,
        doc="Asks for one packet or group; the reply has no header and no checksum."),
     _c(143, "seek_dock", "Seek Dock", leads_to=OIMode.PASSIVE, channel="wheels",

@@ -15,9 +15,26 @@ from roomba_bt.behaviours import actions as a
 from roomba_bt.behaviours import builtin_registry
 from roomba_bt.behaviours.declare import Action, BlackboardRef, declare, read_key, write_key
 from roomba_bt.behaviours.units import ItemErrors
-from roomba_bt.oi.encode import drive, drive_direct, drive_straight, motors, turns_wheels
+from roomba_bt.oi.encode import (
+    NAMED_NOTES,
+    drive,
+    drive_direct,
+    drive_straight,
+    motors,
+    note_name,
+    song,
+    turns_wheels,
+)
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.odometry import mm_to_counts
+from roomba_bt.oi.opcodes import (
+    COMMANDS_BY_NAME,
+    NOTE_DURATION,
+    NOTE_NUMBER,
+    PLAYABLE_NOTES,
+    SONG_LENGTH,
+    SONG_NUMBER,
+)
 from roomba_bt.robot.interface import Odometry
 from roomba_bt.robot.testing import StubRobot
 
@@ -364,6 +381,15 @@ def test_notes_parse_names_and_durations() -> None:
                     "G#, A, A#, B, and an octave 0-9 (A4, C#5; the robot plays G1 (31) to G9 "
                     "(127)), or rest"),
         ("C1 1s", "note C1 (24) is outside the notes the robot plays, G1 to G9"),
+        # a flat, a sharp or a German H whose pitch the robot does not play is said to be a
+        # rest, not named as a note to write: "write G#9" (refused in turn), "write C10" and
+        # "write B-1" (no such names), "write B9" (a rest)
+        ("Ab9 1s", "unknown note 'Ab9': Ab9 is MIDI note 128, outside the notes the robot "
+                   "plays, G1 to G9: it would sound as a rest (write rest for one)"),
+        ("B#9 1s", "unknown note 'B#9': B#9 is MIDI note 132, outside the notes the robot"),
+        ("Cb0 1s", "unknown note 'Cb0': Cb0 is MIDI note 11, outside the notes the robot"),
+        ("Db1 1s", "unknown note 'Db1': Db1 is MIDI note 25, outside the notes the robot"),
+        ("H9 1s", "unknown note 'H9': H is B in German names: H9 is MIDI note 131, outside"),
         ("C4 5s", "note duration '5s' is out of range: 16ms..3.98s (1..255 of 1/64 s)"),
     ],
 )  # fmt: skip
@@ -520,6 +546,36 @@ def test_mode_passive_stops_the_motors_the_run_left_running_before_start(
     robot.set_frame({35: int(OIMode.SAFE)}, ticks=40)  # Start again after 0.5 s: no Motors
     assert tick(behaviour) is Status.RUNNING
     assert data(robot) == [[128]]
+
+
+def test_the_song_leaf_and_the_encoder_check_the_opcode_tables_ranges() -> None:
+    """Song (140)'s ranges live in the opcode table (``oi/opcodes.py``), and the mission
+    language's ``song`` leaf and the encoder's ``song`` read them there: every note the
+    language takes, the longest song, the longest note and the last slot encode; what the
+    language refuses as a note the robot does not play is a byte the encoder would send as
+    the rest the spec makes of it."""
+    table = COMMANDS_BY_NAME["song"]
+    assert table.args == (SONG_NUMBER, SONG_LENGTH) and table.tail is not None
+    assert table.tail.item == (NOTE_NUMBER, NOTE_DURATION)
+    assert COMMANDS_BY_NAME["play"].args == (SONG_NUMBER,)
+    slot = a.Song.declaration.params[0]
+    assert (slot.minimum, slot.maximum) == (SONG_NUMBER.minimum, SONG_NUMBER.maximum)
+    schema = dict(a.NOTES.json_schema)
+    assert (schema["minItems"], schema["maxItems"]) == (SONG_LENGTH.minimum, SONG_LENGTH.maximum)
+
+    longest = a.NOTES.parse(["C4 3.984375s"] * SONG_LENGTH.maximum)
+    assert longest[0] == (60, NOTE_DURATION.maximum)
+    assert len(song(SONG_NUMBER.maximum, longest).data) == 3 + 2 * SONG_LENGTH.maximum
+    with pytest.raises(a.UnitError, match=f"at most {SONG_LENGTH.maximum} notes"):
+        a.NOTES.parse(["C4 100ms"] * (SONG_LENGTH.maximum + 1))
+    for number in (0, *NAMED_NOTES):
+        name = note_name(number)
+        if number == 0 or number in PLAYABLE_NOTES:
+            assert a.NOTES.parse([f"{name} 1s"]) == ((number, 64),)
+        else:
+            with pytest.raises(ItemErrors, match="it would sound as a rest"):
+                a.NOTES.parse([f"{name} 1s"])
+        assert song(0, [(number, 64)]).data == bytes([140, 0, 1, number, 64])
 
 
 @pytest.mark.parametrize(

@@ -19,12 +19,14 @@ from roomba_bt.oi.bits import (
     segment_bits,
 )
 from roomba_bt.oi.encode import (
+    NAMED_NOTES,
     Command,
     Note,
     Radius,
     command_size,
     decode_command,
     encode,
+    note_name,
     note_number,
 )
 from roomba_bt.oi.opcodes import COMMANDS
@@ -236,6 +238,21 @@ def test_note_names_follow_midi_and_the_spec_table() -> None:
     assert note_number("C#5") == 73
     assert note_number("B7") == 107  # the highest in the table
     assert note_number("REST") == 0
+
+
+def test_a_note_the_robot_does_not_play_is_sent_as_the_rest_the_spec_makes_it() -> None:
+    """Both specs: "Roomba considers all musical notes outside the range of 31 - 127 as rest
+    notes": any byte is a note number, sent as it is (31-127 sound, the rest are rests)."""
+    rests = [(number, 8) for number in (0, 1, 30, 128, 255)]
+    assert c.song(0, rests).data == bytes([140, 0, 5, 0, 8, 1, 8, 30, 8, 128, 8, 255, 8])
+
+
+def test_every_note_name_reads_back_as_its_number() -> None:
+    """``note_name`` names every number ``note_number`` reads (rest, C0 to B9), and no
+    other: 11 was "B-1" and 132 "C10", names ``note_number`` refuses."""
+    for number in (0, *NAMED_NOTES):
+        assert note_number(note_name(number)) == number
+    assert (note_name(NAMED_NOTES[0]), note_name(NAMED_NOTES[-1])) == ("C0", "B9")
 
 
 def test_tails_and_id_lists_may_be_bytes() -> None:

@@ -157,6 +157,9 @@ HELPER_ERRORS: list[tuple[str, Callable[[], object], str]] = [
     ("song notes a string", lambda: c.song(0, "C4"), "notes"),  # type: ignore[arg-type]
     ("note name", lambda: c.note_number("H2"), "note"),
     ("note name empty", lambda: c.note_number(""), "note"),
+    ("no name for MIDI 11 (B-1)", lambda: c.note_name(11), "note"),
+    ("no name for MIDI 132 (C10)", lambda: c.note_name(132), "note"),
+    ("no name for a byte's 300", lambda: c.note_name(300), "note"),
     ("play 5", lambda: c.play(5), "song_number"),
     ("stream group 102", lambda: c.stream([102]), "packet_id"),
     ("stream 256 ids", lambda: c.stream([7] * 256), "packet ids"),
