@@ -4,6 +4,21 @@ The names a Python program needs, from one place: ``roomba_bt.load_mission``,
 ``roomba_bt.Connection``, ``roomba_bt.RunStack``, ``roomba_bt.CREATE2``... (``docs/runtime.md``,
 From Python: a connection driven by hand, then a mission, whose example a test runs).
 
+The shipped ``dock`` mission on the built-in simulator, on its virtual clock (no robot, no
+waiting; on a robot, the link is ``roomba_bt.Connection.open("/dev/ttyUSB0")`` instead)::
+
+    >>> import roomba_bt
+    >>> mission = roomba_bt.load_mission("dock")  # by name, or a file's path
+    >>> world = roomba_bt.load_world("empty-room")
+    >>> link = roomba_bt.SimLink(roomba_bt.Simulator(world, roomba_bt.CREATE2, seed=0))
+    >>> with roomba_bt.RunStack(mission, link, profile=roomba_bt.CREATE2, timeout_s=120) as stack:
+    ...     summary = stack.run().raise_for_outcome()  # RunFailed unless it succeeded
+    >>> print(summary.outcome.value, "in", summary.final_mode.label)
+    success in Passive
+
+``print(summary)`` shows the whole summary as ``roomba-bt run`` does; ``summary.exit_code``
+is its exit code (``tests/test_package.py`` runs this example as a doctest).
+
 This package sits above every layer (``tests/test_layers.py``): it names things from all of
 them. Each name is imported from its module when first asked for (a module ``__getattr__``,
 PEP 562), so ``import roomba_bt`` (which every ``roomba-bt`` command runs first) loads none

@@ -5,9 +5,11 @@ first asked for (``roomba_bt/__init__.py``); ``import roomba_bt`` gave nothing b
 from __future__ import annotations
 
 import ast
+import doctest
 import importlib
 import subprocess
 import sys
+import textwrap
 from pathlib import Path
 
 import pytest
@@ -47,6 +49,20 @@ def test_type_checkers_see_the_same_names() -> None:
     assert sorted(seen) == sorted(EXPORTS)
     for name, module in seen.items():
         assert getattr(importlib.import_module(str(module)), name) is getattr(roomba_bt, name)
+
+
+def test_the_packages_example_runs_as_help_shows_it() -> None:
+    """``help(roomba_bt)`` showed no example: its docstring's example (a shipped mission
+    on the simulator, its summary read) is run here as a doctest, output compared."""
+    assert roomba_bt.__doc__ is not None
+    example = doctest.DocTestParser().get_doctest(roomba_bt.__doc__, {}, "roomba_bt", str(INIT), 0)
+    assert any("RunStack" in step.source for step in example.examples)
+    runner = doctest.DocTestRunner(optionflags=doctest.REPORT_NDIFF)
+    runner.run(example)
+    assert runner.summarize(verbose=False) == (0, len(example.examples))
+    session = roomba_bt.__doc__.split("::\n\n", 1)[1].split("\n\n", 1)[0]
+    docs = (INIT.parents[1] / "docs" / "runtime.md").read_text(encoding="utf-8")
+    assert f"```pycon\n{textwrap.dedent(session)}\n```" in docs  # the docs show the same
 
 
 def test_an_unknown_name_is_an_attribute_error() -> None:
