@@ -81,9 +81,14 @@ def check_arguments(
 
 
 def check_given(
-    *, observer: Callable[..., Any] | None, input_ended: Callable[..., Any] | None, strict: bool
+    *,
+    observer: Callable[..., Any] | None,
+    input_ended: Callable[..., Any] | None,
+    strict: bool,
+    visitors: object,
 ) -> None:
-    """``observer=``, ``input_ended=``: a function, or None; ``strict``: True or False."""
+    """``observer=``, ``input_ended=``: a function, or None; ``strict``: True or False;
+    ``visitors``: py_trees visitors (:func:`check_visitors`)."""
     for name, value in (("observer", observer), ("input_ended", input_ended)):
         if value is not None and not callable(value):
             raise TypeError(
@@ -92,6 +97,35 @@ def check_given(
             )
     if not isinstance(strict, bool):
         raise TypeError(f"RunStack(strict=...) takes True or False, not {strict!r}")
+    check_visitors(visitors)
+
+
+#: what a py_trees visitor has (``py_trees.visitors.VisitorBase``), each called on every tick
+_VISITOR_PARTS = ("initialise", "run", "finalise")
+
+
+def check_visitors(visitors: object) -> None:
+    """``visitors=``: a list (or tuple) of py_trees visitors, each with ``initialise()``,
+    ``run(behaviour)`` and ``finalise()``; one visitor not in a list is said so (it was not
+    a list of visitors to run, and iterating it would have said nothing useful)."""
+    if all(callable(getattr(visitors, part, None)) for part in _VISITOR_PARTS):
+        raise TypeError(
+            f"RunStack(visitors=...) takes a list of py_trees visitors, not one: "
+            f"visitors=[{type(visitors).__name__}(...)]"
+        )
+    if not isinstance(visitors, list | tuple):
+        raise TypeError(
+            f"RunStack(visitors=...) takes a list of py_trees visitors, not "
+            f"{type(visitors).__name__} {_short(visitors)}"
+        )
+    for visitor in visitors:
+        missing = [part for part in _VISITOR_PARTS if not callable(getattr(visitor, part, None))]
+        if missing:
+            raise TypeError(
+                f"RunStack(visitors=...): each is a py_trees visitor "
+                f"(py_trees.visitors.VisitorBase: initialise(), run(behaviour), finalise()), "
+                f"not {type(visitor).__name__} {_short(visitor)} (it has no {', '.join(missing)})"
+            )
 
 
 def _is_number(value: object) -> bool:

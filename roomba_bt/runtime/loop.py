@@ -18,8 +18,10 @@ No ``py_trees.trees.BehaviourTree`` here: the frames are the clock, so :class:`M
 ticks ``root.tick_once()`` itself, once a frame, where ``BehaviourTree.tick_tock`` would tick
 on a timer. Its pre- and post-tick handlers are the :class:`TickGate` (``before_tick``, which
 may hold the frame's tick, and ``after_tick``: the monitor's session, which records each
-tick in its feed), and its visitor the observer (:data:`TickObserver`: the live tree or the
-status log); the tree's ``shutdown`` is :func:`~roomba_bt.runtime.teardown.shutdown_nodes`.
+tick in its feed), and its post-tick handler the observer (:data:`TickObserver`: the live
+tree or the status log); py_trees visitors, when a run is given some, are run on each tick as
+``BehaviourTree.tick`` runs them (:func:`visiting_tick`); the tree's ``shutdown`` is
+:func:`~roomba_bt.runtime.teardown.shutdown_nodes`.
 """
 
 from __future__ import annotations
@@ -152,6 +154,17 @@ class MissionLike(Protocol):
 
 
 TickObserver = Callable[["MissionRunner"], None]
+
+
+class VisitorLike(Protocol):
+    """A py_trees visitor (``py_trees.visitors.VisitorBase``, or any object with these
+    three methods), run on every tick as ``py_trees.trees.BehaviourTree.tick`` runs it
+    (:func:`visiting_tick`); one whose ``full`` is true visits every node after the tick,
+    any other each node the tick ticked, as it is ticked."""
+
+    def initialise(self) -> None: ...
+    def run(self, behaviour: py_trees.behaviour.Behaviour) -> None: ...
+    def finalise(self) -> None: ...
 
 
 class TickGate(Protocol):
@@ -335,6 +348,9 @@ class MissionRunner(BaseHandle):
     #: its parent's, which ends the workers)
     guards_signals: bool = True
     names_slow_ticks: bool = False  #: the slowest tick's behaviour named (runtime/tick_watch.py)
+    #: py_trees visitors run on every tick (``RunStack(visitors=...)``; :func:`visiting_tick`);
+    #: none: the tree is ticked directly (:func:`tick_of`), its tick's cost unchanged
+    visitors: tuple[VisitorLike, ...] = ()
     #: the writer's count of commands when the start-up was done (see :meth:`count_written`)
     _sent_at_start: int | None = None
 
@@ -449,9 +465,8 @@ class MissionRunner(BaseHandle):
     def _loop(self, root: py_trees.behaviour.Behaviour, summary: RunSummary) -> None:
         success, failure = py_trees.common.Status.SUCCESS, py_trees.common.Status.FAILURE
         perf = time.perf_counter
-        tick_guard = self.tick_guard  # started by run()
         ride = self._ride
-        tick = guarded_tick(root, tick_guard, ride, lambda: self.snapshot.tick)
+        tick = guarded_tick(self, root)
         poll, poll_timeout = self.connection.poll_frames, self.poll_timeout
         clock = self._clock
         writer = self.connection.writer
@@ -484,7 +499,7 @@ class MissionRunner(BaseHandle):
                         continue
                     if self.mission.root is not root:  # a reload replaced it
                         root = self.mission.root
-                        tick = guarded_tick(root, tick_guard, ride, lambda: self.snapshot.tick)
+                        tick = guarded_tick(self, root)
                     elif held:  # the operator let the ended mission go: the run ends
                         tree_ended(root, summary)
                         return
@@ -779,26 +794,54 @@ def ended_by(exc: BaseException, summary: RunSummary, *, answered: bool) -> None
         summary.exception = exc  # the program's own exception object: RunFailed's cause
 
 
-def guarded_tick(
-    root: py_trees.behaviour.Behaviour,
-    tick_guard: TickGuardLike | None,
-    ride: StallRide,
-    tick_now: Callable[[], int],
-) -> Callable[[], object]:
-    """The root's tick (:func:`tick_of`), through the tick guard when the run has one: a tick
-    it halts is ridden through (:meth:`StallRide.tick_halted
-    <roomba_bt.runtime.stall.StallRide.tick_halted>`); ``tick_now``: the stream tick the
-    tree ticks on, for the guard's record."""
-    tick = tick_of(root)
+def guarded_tick(runner: MissionRunner, root: py_trees.behaviour.Behaviour) -> Callable[[], object]:
+    """What ``runner``'s loop calls to tick ``root`` once: its tick (:func:`tick_of`; with
+    the run's visitors, :func:`visiting_tick`), through the run's tick guard when it has
+    one (started by :meth:`MissionRunner.run`): a tick it halts is ridden through
+    (:meth:`StallRide.tick_halted <roomba_bt.runtime.stall.StallRide.tick_halted>`), the
+    stream tick the tree ticks on kept for the guard's record."""
+    visitors = runner.visitors
+    tick = visiting_tick(root, visitors) if visitors else tick_of(root)
+    tick_guard = runner.tick_guard
     if tick_guard is None:
         return tick
+    ride = runner.ride
 
     def halted(seconds: float, where: str) -> None:
         # a tick that ended the tree gets nothing of it sent again: the run's end follows
         going = root.status is py_trees.common.Status.RUNNING
         ride.tick_halted(tick_guard, seconds, where, tree_running=going)
 
-    return tick_guard.guarded(tick, halted, tick_now)
+    return tick_guard.guarded(tick, halted, lambda: runner.snapshot.tick)
+
+
+def visiting_tick(
+    root: py_trees.behaviour.Behaviour, visitors: Sequence[VisitorLike]
+) -> Callable[[], None]:
+    """``root``'s tick with py_trees visitors, as ``py_trees.trees.BehaviourTree.tick`` runs
+    them: each one's ``initialise()``; the tree ticked by its generator, ``root.tick()``,
+    each node it yields (each node ticked, when its tick ends: the same nodes at the same
+    moments as the lean nodes' direct tick, ``behaviours/lean.py``) visited by every visitor
+    that is not ``full``; then every node of the tree by the ``full`` ones; each one's
+    ``finalise()``. Which visitors are ``full`` is read once, when the run starts. A run
+    without visitors ticks by :func:`tick_of` instead: nothing of this is on its path."""
+    ticked = tuple(v for v in visitors if not getattr(v, "full", False))
+    full = tuple(v for v in visitors if getattr(v, "full", False))
+
+    def tick() -> None:
+        for visitor in visitors:
+            visitor.initialise()
+        for node in root.tick():
+            for visitor in ticked:
+                node.visit(visitor)
+        if full:
+            for node in root.iterate():
+                for visitor in full:
+                    node.visit(visitor)
+        for visitor in visitors:
+            visitor.finalise()
+
+    return tick
 
 
 def tick_of(root: py_trees.behaviour.Behaviour) -> Callable[[], None]:

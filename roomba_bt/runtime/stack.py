@@ -41,6 +41,7 @@ from roomba_bt.runtime.loop import (
     StopRequested,
     TickGate,
     TickObserver,
+    VisitorLike,
     stream_request,
 )
 from roomba_bt.runtime.recording import (
@@ -209,8 +210,16 @@ class RunStack:
     robot fell out of Safe/Full by itself (not onto a charger) ends with exit code 7
     (:attr:`RunSummary.exit_code`; :meth:`RunSummary.raise_for_outcome` raises), its
     summary naming each count and its first instance. The outcome stays the tree's SUCCESS.
+
+    ``visitors``: py_trees visitors (``py_trees.visitors.VisitorBase``: ``SnapshotVisitor``,
+    ``DebugVisitor``, one of the program's own), run on every tick as
+    ``py_trees.trees.BehaviourTree.tick`` runs them (``initialise()``, ``run(node)`` for
+    each node ticked, or every node when ``full``, ``finalise()``), in the ticking thread;
+    ``observer`` is the post-tick handler. With none, the tree's tick is as it was.
     """
 
+    # Long on purpose: a signature of 15 keyword arguments (a program's one call sets up the
+    # whole run), each a line; the body, the run's assembly, is about 40 lines
     def __init__(
         self,
         mission: MissionLike,
@@ -230,9 +239,10 @@ class RunStack:
         tick_limit: TickLimit = "default",
         replayed_notes: Sequence[dict[str, Any]] | None = None,
         strict: bool = False,
+        visitors: Sequence[VisitorLike] = (),
     ) -> None:
         check_arguments(mission, link, timeout_s, grace, watchdog, baud, tick_limit, packets)
-        check_given(observer=observer, input_ended=input_ended, strict=strict)
+        check_given(observer=observer, input_ended=input_ended, strict=strict, visitors=visitors)
         made: dict[str, Any] = dict(
             watchdog=watchdog, end_in=end_in, baud=baud, keep_awake=keep_awake
         )
@@ -266,6 +276,8 @@ class RunStack:
             tick_guard=_tick_guard(self.connection, link, tick_limit, replayed_notes),
         )
         self.runner.summary.strict = strict
+        if visitors:  # set only when given (a class attribute: MissionRunner.visitors)
+            self.runner.visitors = tuple(visitors)
         #: the thread :meth:`run` runs in, while it runs; set when it has ended
         self._running_in: threading.Thread | None = None
         self._ended = threading.Event()

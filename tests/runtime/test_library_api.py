@@ -1,8 +1,9 @@
 """roomba-bt embedded as a Python library (a py_trees and pycreate2 user's findings): the
 program's own exceptions kept, a run tick by tick, a mission from a string, a behaviour of
 the program's own in YAML, a compiled mission nested in a bigger tree, arguments checked
-when given, and the small things (``import roomba_bt.commands``, one base error, ``with
-RunStack``, a typed interrupt, a short profile repr)."""
+when given, py_trees visitors on a run's ticks, and the small things (``import
+roomba_bt.commands``, one base error, ``with RunStack``, a typed interrupt, a short profile
+repr)."""
 
 from __future__ import annotations
 
@@ -64,16 +65,35 @@ class Raises(py_trees.behaviour.Behaviour):
         raise Mine("sensor fusion failed")
 
 
-def test_an_observers_exception_is_kept_and_is_the_run_faileds_cause() -> None:
-    def observer(runner: roomba_bt.MissionRunner) -> None:
-        if runner.snapshot.time > 1.0:
-            raise Mine("observer says no")
+def _observer_says_no(runner: roomba_bt.MissionRunner) -> None:
+    if runner.snapshot.time > 1.0:
+        raise Mine("observer says no")
 
+
+class VisitorSaysNo(py_trees.visitors.VisitorBase):
+    """A py_trees visitor that raises on its 100th visit (about the 50th tick)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.visits = 0
+
+    def run(self, behaviour: py_trees.behaviour.Behaviour) -> None:
+        self.visits += 1
+        if self.visits == 100:
+            raise Mine("visitor says no")
+
+
+@pytest.mark.parametrize("hook", ["observer", "visitors"])
+def test_an_observers_or_visitors_exception_is_kept_and_is_the_run_faileds_cause(
+    hook: str,
+) -> None:
+    given = {"observer": _observer_says_no, "visitors": [VisitorSaysNo()]}[hook]
     simulator = _simulator()
-    with _stack(roomba_bt.load_mission_text(TO_THE_WALL), simulator, observer=observer) as stack:
+    with _stack(roomba_bt.load_mission_text(TO_THE_WALL), simulator, **{hook: given}) as stack:
         summary = stack.run()
     assert summary.outcome is Outcome.ERROR and summary.exit_code == 4
-    assert isinstance(summary.exception, Mine) and str(summary.exception) == "observer says no"
+    said = "observer says no" if hook == "observer" else "visitor says no"
+    assert isinstance(summary.exception, Mine) and str(summary.exception) == said
     with pytest.raises(roomba_bt.RunFailed) as failed:
         summary.raise_for_outcome()
     assert failed.value.__cause__ is summary.exception  # ``except`` and pytest reach it
@@ -318,8 +338,16 @@ def test_two_missions_declaring_one_key_differently_are_refused() -> None:
         ({"strict": 1}, TypeError, "RunStack(strict=...)"),
         ({"baud": "fast"}, TypeError, "RunStack(baud=...)"),
         ({"packets": "7"}, TypeError, "RunStack(packets=...)"),
+        ({"visitors": py_trees.visitors.DebugVisitor()}, TypeError,
+         "RunStack(visitors=...) takes a list of py_trees visitors, not one: "
+         "visitors=[DebugVisitor(...)]"),
+        ({"visitors": "snapshot"}, TypeError,
+         "RunStack(visitors=...) takes a list of py_trees visitors, not str 'snapshot'"),
+        ({"visitors": [print]}, TypeError,
+         "RunStack(visitors=...): each is a py_trees visitor (py_trees.visitors.VisitorBase: "
+         "initialise(), run(behaviour), finalise()), not builtin_function_or_method"),
     ],
-)
+)  # fmt: skip
 def test_a_run_stacks_wrong_argument_is_said_when_given(
     given: dict[str, object], error: type[Exception], said: str
 ) -> None:
@@ -354,7 +382,68 @@ def test_permissions_take_folders_as_text_and_refuse_one_bare_text(tmp_path: Pat
         roomba_bt.Permissions(plugin_files="yes")  # type: ignore[arg-type]
 
 
-# ------------------------------------------------------------------ 7. the small things
+# ------------------------------------------------------------------ 7. py_trees visitors
+class Names(py_trees.visitors.VisitorBase):
+    """Each tick's visits, by name, and its calls counted."""
+
+    def __init__(self, full: bool = False) -> None:
+        super().__init__(full=full)
+        self.ticks: list[list[str]] = []
+        self.finalised = 0
+
+    def initialise(self) -> None:
+        self.ticks.append([])
+
+    def run(self, behaviour: py_trees.behaviour.Behaviour) -> None:
+        self.ticks[-1].append(behaviour.name)
+
+    def finalise(self) -> None:
+        self.finalised += 1
+
+
+def test_py_trees_visitors_visit_each_tick_as_a_behaviour_tree_runs_them() -> None:
+    """A py_trees user's hook on a tree's ticks (``BehaviourTree.visitors``) had no place
+    in a run: ``RunStack(visitors=[...])`` runs them on every tick, each node the tick
+    ticked visited as it ends (the root last), every node by a ``full`` one; the run is
+    the same run, and its tree py_trees' display shows with what the last tick visited."""
+    ticked, full, snapshot = Names(), Names(full=True), py_trees.visitors.SnapshotVisitor()
+    simulator = _simulator()
+    mission = roomba_bt.load_mission_text(TO_THE_WALL)
+    with _stack(mission, simulator, visitors=[ticked, full, snapshot]) as stack:
+        summary = stack.run()
+    assert summary.outcome is Outcome.SUCCESS and _stopped(simulator)
+    assert len(ticked.ticks) == ticked.finalised == full.finalised == summary.ticks
+    assert ticked.ticks[0] == ["mode(safe)", "sequence"]  # only what the first tick ticked
+    assert all(names[-1] == "sequence" for names in ticked.ticks)
+    every = [node.name for node in mission.root.iterate()]
+    assert all(names == every for names in full.ticks)
+    assert snapshot.visited[mission.root.id] is py_trees.common.Status.SUCCESS
+    shown = py_trees.display.unicode_tree(
+        mission.root, show_status=True, visited=snapshot.visited,
+        previously_visited=snapshot.previously_visited,
+    )  # fmt: skip
+    assert "mode(passive) [✓]" in shown
+
+    without = _simulator()
+    with _stack(roomba_bt.load_mission_text(TO_THE_WALL), without) as stack:
+        assert stack.run().ticks == summary.ticks
+    assert without.pose == simulator.pose and without.time == simulator.time
+
+
+def test_without_visitors_the_tree_is_ticked_directly_as_before() -> None:
+    """No visitor given, nothing of them is on the tick's path: the loop ticks the root's
+    direct tick (``tick_of``), the function it called before visitors were taken."""
+    from roomba_bt.runtime.loop import guarded_tick, tick_of
+
+    mission = roomba_bt.load_mission_text(TO_THE_WALL)
+    with _stack(mission, _simulator()) as stack:
+        assert stack.runner.visitors == ()
+        assert guarded_tick(stack.runner, mission.root) == tick_of(mission.root)
+    with _stack(mission, _simulator(), visitors=[Names()]) as stack:
+        assert guarded_tick(stack.runner, mission.root) != tick_of(mission.root)
+
+
+# ------------------------------------------------------------------ 8. the small things
 def test_import_roomba_bt_commands_is_the_module_from_roomba_bt_import_commands() -> None:
     done = subprocess.run(
         [sys.executable, "-c", "import roomba_bt.commands as c\nfrom roomba_bt import commands\n"
