@@ -332,32 +332,40 @@ class SafeStop:
         they fill the time since the last frame read (or the stream's start: a script that
         never polled), a stream that ran on; else as many stream periods after it as there
         were frames (a robot that fell silent meanwhile);
-        None if nothing waited. Only on the wall clock, as the listening after the stop."""
+        None if nothing waited. Only on the wall clock, as the listening after the stop, and in
+        a replay (a transport's ``recorded_reads``: ``ReplayTransport``'s), where it reads what
+        the recorded run read here, at its recorded times (nothing, for a run on a virtual
+        clock): before, it read nothing, and a frame the live run had read there was its
+        stop's difference."""
         link = self.writer.link
+        transport = link.transport
+        recorded = getattr(transport, "recorded_reads", None)
         if not (
             link.streaming
             and link.status is LinkStatus.STREAMING
-            and link.transport.is_open
-            and getattr(link.transport, "wall_clock", True)
+            and transport.is_open
+            and (recorded is not None or getattr(transport, "wall_clock", True))
         ):
             return None
-        # the last frame read, or the stream's start if none was read since
-        last_read, index_then = link.silent_since, link.index
-        self._take_unread(0.0)
-        waited = link.index - index_then
-        if not waited:
-            return None
-        now = link.transport.now()
-        period = stream_period(link.stream_ids, self.writer.baud)
-        self._unread = (waited, now - last_read)
-        sent_until = last_read + waited * period
-        if sent_until >= now - QUIET_BEFORE_PERIODS * period - BACKLOG_SLACK * (now - last_read):
-            return now
-        # short of it: a robot silent since, or a stream that lagged (a loaded host's robot
-        # double); a frame within a few periods more says which
-        if self._take_unread(QUIET_BEFORE_PERIODS * period):
-            return link.transport.now()
-        return sent_until
+        with recorded() if recorded is not None else contextlib.nullcontext():
+            # the last frame read, or the stream's start if none was read since
+            last_read, index_then = link.silent_since, link.index
+            self._take_unread(0.0)
+            waited = link.index - index_then
+            if not waited:
+                return None
+            now = transport.now()
+            period = stream_period(link.stream_ids, self.writer.baud)
+            self._unread = (waited, now - last_read)
+            sent_until = last_read + waited * period
+            quiet = now - QUIET_BEFORE_PERIODS * period - BACKLOG_SLACK * (now - last_read)
+            if sent_until >= quiet:
+                return now
+            # short of it: a robot silent since, or a stream that lagged (a loaded host's
+            # robot double); a frame within a few periods more says which
+            if self._take_unread(QUIET_BEFORE_PERIODS * period):
+                return transport.now()
+            return sent_until
 
     def _take_unread(self, wait: float) -> bool:
         """What the port holds (and, ``wait`` > 0, the first frame within ``wait`` s) fed to

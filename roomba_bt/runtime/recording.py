@@ -890,6 +890,9 @@ class ReplayTransport:
         #: a write early (:meth:`_early_by`): the robot's chunks not given yet that the recorded
         #: run had read before it, and the seconds of the record's clock it came before its time
         self.early: tuple[int, float] | None = None
+        #: inside :meth:`recorded_reads`: a read gives what the recorded run read before the
+        #: tree's next write, whatever the clock
+        self._as_recorded = False
 
     def _read_chunk(self, queue: bool = True) -> bool:
         """Read the record's next chunk into the queue (``queue``; else the robot's chunk is
@@ -1026,7 +1029,7 @@ class ReplayTransport:
             self._now += timeout
             return b""
         t, data, written_before = self._inbound[0]
-        if t > self._now + timeout or self.written < written_before:
+        if (t > self._now + timeout and not self._as_recorded) or self.written < written_before:
             self._now += timeout
             return b""
         self._inbound.popleft()
@@ -1037,6 +1040,25 @@ class ReplayTransport:
                 self._tenths = tenths
                 self._progress(tenths / 10)
         return data
+
+    @contextlib.contextmanager
+    def recorded_reads(self) -> Iterator[None]:
+        """Meanwhile a read gives each of the robot's chunks that the recorded run read before
+        the bytes the tree has still to write, at its recorded time, whatever the replay's
+        clock says; the chunks recorded after those bytes wait for them as ever. The safe
+        stop's read of the port's backlog (``SafeStop._read_backlog``, robot/ending.py) does
+        what the recorded run did there: that run's host had meanwhile taken time the
+        replay's clock does not keep (its tree's stop, a loaded machine), and the frames the
+        robot sent then waited in the port. Before, the replay read nothing there, and its
+        stop, written before those frames, was its first difference (``expected Drive (137)
+        89 00 00 00 00, sent Drive (137) 89 00 00 00 00 0.00 s early: the recorded run read 1
+        more of the robot's chunks before writing it``, exit 1, a pty run's record under
+        load). A record made on a virtual clock has none there: nothing is read."""
+        self._as_recorded = True
+        try:
+            yield
+        finally:
+            self._as_recorded = False
 
     @property
     def exhausted(self) -> bool:

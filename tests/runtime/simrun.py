@@ -325,8 +325,9 @@ def stream_gap_link() -> SimLink:
     return SimLink(Simulator(load_world("empty-room"), CREATE2, 0, faults))
 
 
-def record_run(tmp_path: Path, link: SimLink, mission: str = SPIN) -> Path:
-    """The record (``run --record``) of ``mission`` run 3 s on ``link``."""
+def record_run(tmp_path: Path, link: SimLink, mission: str = SPIN, **options: Any) -> Path:
+    """The record (``run --record``) of ``mission`` run 3 s on ``link``; ``options``: the
+    rest of :class:`RunStack`'s (``tick_limit``)."""
     from roomba_bt.mission import load_mission
     from roomba_bt.runtime.stack import Recording, RunStack
 
@@ -334,7 +335,7 @@ def record_run(tmp_path: Path, link: SimLink, mission: str = SPIN) -> Path:
     source.write_text(mission)
     loaded = load_mission(source, {}, profile=CREATE2)
     stack = RunStack(loaded, link, profile=CREATE2, timeout_s=3.0,
-                     record=Recording(path, str(source)))  # fmt: skip
+                     record=Recording(path, str(source)), **options)  # fmt: skip
     stack.run()
     stack.close()  # the record's end line
     return path

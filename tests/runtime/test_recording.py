@@ -21,6 +21,7 @@ from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.runtime.recording import RecordingTransport, load_record
 from roomba_bt.runtime.stack import Recording, RunStack, replay_record
 from roomba_bt.runtime.summary import Outcome, RunSummary
+from roomba_bt.runtime.tick_guard import stop_first
 from roomba_bt.sim import SimLink, Simulator, load_world
 
 from .simrun import (
@@ -34,6 +35,8 @@ from .simrun import (
 
 FRAME = bytes.fromhex("131a070009000a000b000c001906511a0a88220023022b020d2c020dca")
 HEADER = {"profile": "create2", "baud": 115200, "mission": "bump-and-turn", "packets": [7]}
+#: drive 0 and motors off in one write: the run's end before its tree's stop
+STOP_FIRST = b"".join(command.data for command in stop_first())
 
 
 class _Link:
@@ -274,6 +277,41 @@ def test_a_read_that_woke_late_is_no_trip_in_the_replay(tmp_path: Path) -> None:
     summary, difference, _ = _replayed(path)
     assert difference is None, difference
     assert summary.stalls == 0
+
+
+class _BusyAtTheEnd(SimLink):
+    """A port's link (on the wall clock, a read of nothing waits for nothing) whose host is
+    busy a slot after the run's end sent drive 0 and motors off (its tree's stop, on a
+    loaded machine) while the robot streams on: the safe stop finds that frame waiting."""
+
+    wall_clock = True
+
+    def write(self, data: bytes) -> None:
+        super().write(data)
+        if data == STOP_FIRST:
+            self.advance(0.015)
+
+    def read(self, timeout: float) -> bytes:
+        return super().read(timeout) if timeout > 0.0 else self.simulator.read()
+
+
+def test_the_frames_the_safe_stop_read_first_are_read_by_its_replay(tmp_path: Path) -> None:
+    """The safe stop reads what waits unread in the port before it writes the stop (robot/
+    ending.py): a run on the wall clock whose host was busy at its end (a pty run under
+    load: its tree's stop took a slot after drive 0 and motors off) read a frame there. The
+    replay read nothing there, and its stop was its first difference: "expected Drive (137)
+    89 00 00 00 00, sent Drive (137) 89 00 00 00 00 0.00 s early: the recorded run read 1
+    more of the robot's chunks before writing it", exit 1. It reads what the run read."""
+    path = record_run(tmp_path, _BusyAtTheEnd(Simulator(load_world("empty-room"), CREATE2, 0)),
+                      tick_limit=60.0)  # fmt: skip
+    record = load_record(path)
+    chunks = list(record.chunks())
+    [first] = [i for i, (_, d, b) in enumerate(chunks) if (d, b) == ("out", STOP_FIRST)]
+    assert chunks[first + 1][1] == "in" and chunks[first + 2][1] == "out"  # the frame waited
+    summary, difference, written = _replayed(path)
+    assert difference is None, difference
+    assert written == len(record.outbound)
+    assert summary.safe_stop.startswith("drive 0, motors off before the tree's stop, then sent")
 
 
 def _replay_peak(path: Path) -> int:
