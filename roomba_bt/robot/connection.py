@@ -201,7 +201,7 @@ class Connection:
         self.modes = ModeModel(self.profile, settle=settle)
         self.link = StreamLink(
             transport, self.profile, watchdog=watchdog, reconcile=self.modes.reconcile,
-            report=_weakly(self._report_change, None), halt=_weakly(self.halt, False),
+            report=_weakly(self._report_change, None), halt=_weakly(self.stop_on_stall, False),
         )  # fmt: skip
         if baud is None:
             baud = int(getattr(transport, "baud", DEFAULT_BAUD))
@@ -474,9 +474,15 @@ class Connection:
         return dict(self._falls)
 
     def halt(self) -> bool:
-        """Drive 0 if the model says the robot may be driving; True if it was sent (the
-        watchdog's action)."""
+        """Drive 0 if the model says the robot may be driving; True if it was sent."""
         return self.writer.halt()
+
+    def stop_on_stall(self) -> bool:
+        """The watchdog's action: drive 0 if the model says the robot may be driving, and
+        motors off with it if a brush or the vacuum runs (a run riding the stall through
+        gives both their commands back once frames return: runtime/stall.py); True if it
+        was sent."""
+        return self.writer.halt(motors=True)
 
     # ------------------------------------------------------------------ the bump reflex
     def hold_forward(self) -> None:

@@ -243,17 +243,29 @@ class CommandWriter:
         cycle ended there). What the safe stop asks before it sends Safe to end a cycle."""
         return self.builtin_may_run and not docked_by_seek_dock(self.last_wheels, self.link.frame)
 
-    def halt(self) -> bool:
+    def halt(self, motors: bool = False) -> bool:
         """Drive 0 if the model says the robot may be driving; True once it was written at
         the robot's rate (:meth:`at_robot_rate`) and has left the port (drained: a rate
         change right after it, a listen at another rate, re-clocked it, and the robot heard
         3 watchdog drive 0s of 11 while the summary counted all 11 sent). The watchdog's
-        action, and the tick guard's."""
+        action, and the tick guard's. ``motors`` (the watchdog's): motors off in the same
+        write when a brush or the vacuum runs (:meth:`motors_running`), as the tick guard
+        does: a stream that stalled left the brushes and vacuum running on the spot while
+        the wheels stood."""
         if self.modes.mode not in DRIVING_MODES:
             return False
-        self.send(oi.halt())
+        if motors and self.motors_running():
+            self.send_many((oi.halt(), oi.motors_off()))
+        else:
+            self.send(oi.halt())
         self.link.drain_output()
         return True
+
+    def motors_running(self) -> bool:
+        """The last Motors command written runs a brush or the vacuum, in a mode where the
+        robot obeys it (:attr:`last_motors`, forgotten at the robot's own fall to Passive)."""
+        motors = self.last_motors
+        return motors is not None and sets_going(motors) and self.modes.mode in DRIVING_MODES
 
     def robot_stopped(self) -> None:
         """The robot fell to Passive by itself (a cliff, a wheel drop, the charger): it

@@ -1,15 +1,16 @@
 """A watchdog trip, ridden through: the run's read of the stream when frames stop coming.
 
-The connection's watchdog sends drive 0 when no valid frame came for its time and raises
-:class:`~roomba_bt.robot.errors.StreamStalled` once. A noisy cable or a loaded machine makes
-such gaps; the run waits up to its grace (``--grace``, 2 s) for valid frames. Frames coming
-back let the tree go on where it was, the wheels given their last command again; none within
+The connection's watchdog sends drive 0 (and motors off, if a brush or the vacuum runs) when
+no valid frame came for its time and raises :class:`~roomba_bt.robot.errors.StreamStalled`
+once. A noisy cable or a loaded machine makes such gaps; the run waits up to its grace
+(``--grace``, 2 s) for valid frames. Frames coming back let the tree go on where it was, the
+wheels and the motors given their last commands again; none within
 the grace ends the run with the cause the connection finds (a garbled line, a robot asleep,
 reset or switched off: :meth:`~roomba_bt.robot.connection.Connection.check_stall`).
 
 The tick guard's drive 0 (a tick that blocked: :mod:`roomba_bt.runtime.tick_guard`) is ridden
 through the same way (:meth:`StallRide.tick_halted`): counted, the frames it left unread not
-taken for a gap nobody read, the wheels given their last command again.
+taken for a gap nobody read, the wheels and the motors given their last commands again.
 """
 
 from __future__ import annotations
@@ -73,7 +74,8 @@ class StallRide:
         link = self.connection.link
         self.stall = (link.bytes_read, stalled.halted, link.silent_since)
         log.warning(
-            "%s; waiting up to %g s for valid frames", stalled, self.grace,
+            "%s%s; waiting up to %g s for valid frames", stalled,
+            ", and motors off" if self._motors_off() is not None else "", self.grace,
             extra={"mission_time": self._clock(stalled.silent_for)},
         )  # fmt: skip
         return ()
@@ -90,8 +92,9 @@ class StallRide:
             self.connection.check_stall(stall[0], self.grace, stall[1])
 
     def _back(self, silent_since: float) -> None:
-        """Valid frames came back within the grace: the tree goes on, and the wheels get
-        their last command again unless the tick sends another."""
+        """Valid frames came back within the grace: the tree goes on, and the wheels and the
+        motors (which the watchdog turned off with the wheels) get their last commands
+        again unless the tick sends others."""
         self.stall = None
         self.gap_explained = True
         self.summary.stalls_ridden += 1
@@ -101,7 +104,7 @@ class StallRide:
             "%s: valid frames are back after %.0f ms; the mission goes on", connection.name,
             gap * 1000, extra={"mission_time": self._clock(gap)},
         )  # fmt: skip
-        self._wheels_again()
+        self._given_back(self._motors_off())
 
     def tick_halted(
         self, tick_guard: TickGuardLike | None, seconds: float, where: str,
@@ -125,17 +128,24 @@ class StallRide:
             " and motors off" if motors_off is not None else "",
         )  # fmt: skip
         self.blocked = (seconds, summary.tick_halt_last)  # the frames it left unread
-        if not tree_running:
-            return
+        if tree_running:
+            self._given_back(motors_off)
+
+    def _given_back(self, turned_off: Command | None) -> None:
+        """After the runtime's own stop (the watchdog's, the tick guard's): the last wheel
+        command again (:meth:`_wheels_again`), and ``turned_off``, the Motors command that
+        stop turned off (:meth:`_motors_off`), unless the tick queued another: the mission
+        goes on as it had the robot."""
         self._wheels_again()
-        if motors_off is not None and all(c.spec.channel != "motors" for c in self.outbox):
-            self.outbox.send(motors_off, self)
+        if turned_off is not None and all(c.spec.channel != "motors" for c in self.outbox):
+            self.outbox.send(turned_off, self)
 
     def _motors_off(self) -> Command | None:
-        """The tree's last Motors command (the outbox's record) if the tick guard turned it
-        off (the writer's last is no longer it) and it runs a brush or the vacuum in a mode
-        the robot obeys it in: sent again unless the tick queued another Motors command, as
-        the wheels' is (a drive 0 alone leaves the motors running: nothing to give back)."""
+        """The tree's last Motors command (the outbox's record) if the runtime's stop (the
+        watchdog's, the tick guard's) turned it off (the writer's last is no longer it) and
+        it runs a brush or the vacuum in a mode the robot obeys it in: sent again unless the
+        tick queued another Motors command, as the wheels' is (a drive 0 alone leaves the
+        motors running: nothing to give back)."""
         motors = self.outbox.standing.get("motors")
         if (
             motors is not None

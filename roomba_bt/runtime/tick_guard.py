@@ -48,7 +48,6 @@ from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import Command, turns_wheels
 from roomba_bt.oi.modes import DRIVING_MODES
 from roomba_bt.robot.connection import Connection
-from roomba_bt.robot.hazards import sets_going
 from roomba_bt.runtime.summary import DEFAULT_TICK_LIMIT
 from roomba_bt.runtime.teardown import where_in
 
@@ -75,9 +74,9 @@ def wheels_moving(connection: Connection) -> bool:
 
 def motors_running(connection: Connection) -> bool:
     """The last Motors command written runs a brush or the vacuum, in a mode where the robot
-    obeys it (``CommandWriter.last_motors``, forgotten at the robot's own fall to Passive)."""
-    motors = connection.writer.last_motors
-    return motors is not None and sets_going(motors) and connection.mode in DRIVING_MODES
+    obeys it (:meth:`CommandWriter.motors_running
+    <roomba_bt.robot.writer.CommandWriter.motors_running>`, as the watchdog asks it)."""
+    return connection.writer.motors_running()
 
 
 def halt_blocked(connection: Connection) -> bool:

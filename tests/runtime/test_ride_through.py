@@ -53,10 +53,10 @@ class BadPatchLink(TapLink):
 
 
 def run(
-    tmp_path: Path, link_of: type[BadPatchLink], *args: object, **run: float
+    tmp_path: Path, link_of: type[BadPatchLink], *args: object, mission: str = SPIN, **run: float
 ) -> tuple[RunSummary, BadPatchLink]:
     path = tmp_path / "m.yaml"
-    path.write_text(SPIN)
+    path.write_text(mission)
     mission = load_mission(path, {}, profile=CREATE2)
     link = link_of(Simulator(load_world("empty-room"), CREATE2, 0), *args)
     stack = RunStack(mission, link, profile=CREATE2, timeout_s=run.get("timeout", 4.0),
@@ -83,6 +83,32 @@ def test_a_garbled_second_is_ridden_through_and_the_wheels_get_their_command_aga
     back = [(t, b) for t, b in link.writes if t >= 2.0]
     assert back[0][1] == SPIN_COMMAND and back[0][0] < 2.0 + 0.05
     assert link.simulator.time >= 4.0
+
+
+MOTORS_ON = oi.motors(7).data
+
+
+def test_a_stall_with_the_brushes_on_stops_them_too_and_gives_them_back_after(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """The watchdog sent drive 0 alone: a stalled stream left the brushes and vacuum running
+    on the spot, while the tick guard stopped them. Now drive 0 and motors off go in one
+    write at the trip, and once frames are back the wheels and the motors get the tree's
+    commands again, wheels first."""
+    caplog.set_level(logging.WARNING, logger="roomba_bt.runtime.loop")
+    brushes = SPIN.replace(
+        "    - mode: safe\n",
+        "    - mode: safe\n    - motors: {main_brush: true, side_brush: true, vacuum: true}\n",
+    )
+    summary, link = run(tmp_path, BadPatchLink, 1.0, 2.0, mission=brushes)
+    assert summary.outcome is Outcome.TIMEOUT, summary.reason  # the mission went on
+    assert summary.stalls == summary.stalls_ridden == 1
+    written = [b for t, b in link.writes if t < 1.0]
+    assert MOTORS_ON in written and SPIN_COMMAND in written
+    assert writes_between(link, 1.0, 2.0) == [HALT + oi.motors_off().data]  # one write
+    assert [b for t, b in link.writes if t >= 2.0][:2] == [SPIN_COMMAND, MOTORS_ON]
+    [tripped] = [r.getMessage() for r in caplog.records if "waiting up to" in r.getMessage()]
+    assert "drive 0 sent, and motors off; waiting up to 2 s" in tripped
 
 
 def test_the_trip_and_the_frames_return_are_stamped_each_with_its_own_mission_time(
