@@ -23,7 +23,8 @@ behaviour's loop: the virtual clock does not move) is recorded as HUNG, where it
 and its worker process replaced; one whose worker process dies running it, again when it runs
 alone (``os._exit`` in a behaviour, a crash in C code), is recorded as DIED and the sweep goes
 on. Ctrl-C prints what finished (exit 130). Exit codes: 0 (and 1 when ``--min-rate`` is given
-and not reached), 2 for invalid input, 3 when the ``--scheduler`` does not answer, 4 when a
+and not reached), 2 for invalid input, 3 when the ``--scheduler`` does not answer or the Dask
+cluster had no worker for ``--worker-wait`` (what finished is summarised), 4 when a
 behaviour raised in an episode, one ran past ``--wall-limit`` or one killed its worker (a
 bug, not a mission outcome), 70 on roomba-bt's own bug.
 """
@@ -76,9 +77,10 @@ def register(sub: Any) -> None:
         Run MISSION in N seeded episodes on the simulator's virtual clock and report the success
         rate (95% Wilson interval), median and p90 time, bumps, the robot's own falls to
         Passive and the failure reasons. Exit codes:
-        0 done, 1 --min-rate not reached, 2 invalid input, 3 --scheduler unreachable, 4 a behaviour
-        raised in an episode, one hung (--wall-limit) or killed its worker process (DIED),
-        {INTERNAL_ERROR_SAID}, 130 interrupted (what finished is summarised).
+        0 done, 1 --min-rate not reached, 2 invalid input, 3 --scheduler unreachable or no Dask
+        worker for --worker-wait, 4 a behaviour raised in an episode, one hung (--wall-limit)
+        or killed its worker process (DIED), {INTERNAL_ERROR_SAID}, 130 interrupted (what
+        finished is summarised).
         """,
     )
     ev.add_argument(
@@ -115,6 +117,12 @@ def _add_episode_options(ev: argparse.ArgumentParser) -> None:
         "--scheduler",
         metavar="tcp://HOST:8786",
         help="run on this Dask scheduler's cluster (implies --engine dask)",
+    )
+    ev.add_argument(
+        "--worker-wait",
+        metavar="DURATION",
+        help="on Dask: stop when the cluster has had no worker this long (exit 3; what "
+        "finished is summarised and written); default 2min; none: wait for ever",
     )
 
 
@@ -302,9 +310,10 @@ def eval_command(args: argparse.Namespace) -> int:
     chosen, batches, world = plan
     # no more workers than episodes: a local Dask cluster would start each one's process
     jobs = min(args.jobs, sum(len(batch) for batch in batches))
-    limit = wall_limit(args)  # checked: a number or None
+    limit, wait = wall_limit(args), worker_wait(args)  # checked: each a number or None
     engine = Engine("dask" if args.scheduler or args.engine == "dask" else "local", jobs,
-                    args.scheduler, limit if isinstance(limit, float) else None)  # fmt: skip
+                    args.scheduler, limit if isinstance(limit, float) else None,
+                    wait if isinstance(wait, float) else None)  # fmt: skip
     if engine.scheduler is None:
         _warn_if_more_jobs_than_cores(jobs)
     partial = _partial(args)
@@ -328,6 +337,11 @@ def eval_command(args: argparse.Namespace) -> int:
         raise
     if unwritten is not None:
         return _error(unwritten)
+    stopped = next((e.stopped for e in done if e.stopped), "")
+    if stopped:  # the cluster, not the missions: a connection's failure
+        print(f"roomba-bt eval: {stopped}; what finished is summarised above",
+              file=sys.stderr)  # fmt: skip
+        return ExitCode.CONNECTION
     interrupted = any(e.interrupted for e in done)
     if interrupted:
         print(f"roomba-bt eval: interrupted; {_count(done)} episode(s) finished, summarised above",
@@ -483,9 +497,9 @@ def _check_arguments(args: argparse.Namespace) -> str | None:
     if args.scheduler is not None and not args.scheduler.strip():
         return "--scheduler '': expected the scheduler's address, e.g. tcp://HOST:8786"
     # --within, --battery, --min-rate and --odometry-error: read and checked by argparse
-    limit = wall_limit(args)
-    if isinstance(limit, str):
-        return limit
+    for limit in (wall_limit(args), worker_wait(args)):
+        if isinstance(limit, str):
+            return limit
     if args.out is not None:
         from roomba_bt.evaluate.records import results_format
 
@@ -502,13 +516,28 @@ def wall_limit(args: argparse.Namespace) -> float | str | None:
     either is not a duration."""
     from roomba_bt.evaluate.episode import default_wall_limit
 
-    if args.wall_limit is not None and args.wall_limit.strip().lower() == "none":
-        return None
     if args.wall_limit is not None:
-        limit = parse_timeout(args.wall_limit, "--wall-limit")
-        return f"{limit}, or none" if isinstance(limit, str) else limit
+        return _limit(args.wall_limit, "--wall-limit")
     timeout = parse_timeout(args.timeout)
     return default_wall_limit(timeout) if isinstance(timeout, float) else timeout
+
+
+def worker_wait(args: argparse.Namespace) -> float | str | None:
+    """``--worker-wait`` in seconds (None: ``none``), by default
+    :data:`~roomba_bt.evaluate.parallel.WORKER_WAIT_S`; a message when it is not a
+    duration."""
+    from roomba_bt.evaluate.parallel import WORKER_WAIT_S
+
+    return WORKER_WAIT_S if args.worker_wait is None else _limit(args.worker_wait, "--worker-wait")
+
+
+def _limit(text: str, option: str) -> float | str | None:
+    """A limit's ``option``: a duration in seconds (:func:`parse_timeout`), or ``none`` (no
+    limit: None); a message when it is neither."""
+    if text.strip().lower() == "none":
+        return None
+    limit = parse_timeout(text, option)
+    return f"{limit}, or none" if isinstance(limit, str) else limit
 
 
 def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpec]], World] | int:

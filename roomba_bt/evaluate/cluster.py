@@ -25,9 +25,12 @@ import logging
 import signal
 import sys
 import threading
+import time
 import traceback
 import uuid
-from collections.abc import Callable, Iterator, Sequence
+import warnings
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from dataclasses import dataclass, field
 from typing import Any
 
 from roomba_bt.evaluate.episode import (
@@ -171,24 +174,35 @@ SCHEDULER_CONNECT_TIMEOUT_S = 10.0
 
 
 @contextlib.contextmanager
-def dask_client(scheduler: str | None = None, workers: int = 2) -> Iterator[Any]:
+def dask_client(
+    scheduler: str | None = None, workers: int = 2, worker_wait_s: float | None = None
+) -> Iterator[Any]:
     """A client of the scheduler at ``scheduler``, or of a local cluster of ``workers``
-    single-threaded worker processes (closed on exit)."""
+    single-threaded worker processes (closed on exit); Dask's own log lines and warnings
+    meanwhile its detail (:func:`dask_logs_as_detail`). ``worker_wait_s``: how long the
+    evaluation will wait for a worker (None: for ever), as said when a scheduler has none."""
     distributed = _import_distributed()
-    # the scheduler's and nannies' INFO lines would scroll over the progress bar
-    logging.getLogger("distributed").setLevel(logging.WARNING)
-    if scheduler is not None:
-        check_scheduler_address(scheduler)
-        try:
-            client = distributed.Client(scheduler, timeout=SCHEDULER_CONNECT_TIMEOUT_S)
-        except (OSError, TimeoutError) as exc:
-            raise SchedulerUnreachableError(
-                f"--scheduler {scheduler}: cannot connect ({exc})"
-            ) from None
-        with client:
-            say_when_no_worker(client, scheduler)
+    with dask_logs_as_detail() as level:
+        if scheduler is not None:
+            check_scheduler_address(scheduler)
+            try:
+                client = distributed.Client(scheduler, timeout=SCHEDULER_CONNECT_TIMEOUT_S)
+            except (OSError, TimeoutError) as exc:
+                raise SchedulerUnreachableError(
+                    f"--scheduler {scheduler}: cannot connect ({exc})"
+                ) from None
+            with client:
+                say_when_no_worker(client, scheduler, worker_wait_s)
+                yield client
+            return
+        with _local_cluster(distributed, workers, level) as client:
             yield client
-        return
+
+
+@contextlib.contextmanager
+def _local_cluster(distributed: Any, workers: int, log_level: int) -> Iterator[Any]:
+    """A client of a local cluster of ``workers`` single-threaded worker processes, closed
+    on exit (:func:`close_quietly`); its workers log from ``log_level`` on."""
     import dask
 
     with dask.config.set(LOCAL_CLUSTER_CONFIG):
@@ -201,7 +215,7 @@ def dask_client(scheduler: str | None = None, workers: int = 2) -> Iterator[Any]
                 # the scheduler's HTTP server (health routes) would take port 8787 even with
                 # no dashboard, and two evaluations at once would collide: any free port
                 scheduler_kwargs={"dashboard": False, "dashboard_address": ":0"},
-                silence_logs=40,  # logging.ERROR: no worker chatter over the progress bar
+                silence_logs=log_level,  # each worker process's own Dask log lines
             )
         with cluster:
             client = distributed.Client(cluster)
@@ -211,9 +225,39 @@ def dask_client(scheduler: str | None = None, workers: int = 2) -> Iterator[Any]
                 close_quietly(client, cluster)
 
 
-#: The loggers a local cluster's processes say their shutdown on: Dask's, and those of the
-#: libraries its comms run on (Tornado's streams, asyncio's tasks).
-SHUTDOWN_LOGGERS = ("distributed", "tornado", "asyncio")
+#: The loggers Dask says what it does on: its own, and those of the libraries its comms run
+#: on (Tornado's streams, asyncio's tasks).
+DASK_LOGGERS = ("distributed", "tornado", "asyncio")
+
+#: A level above every record's: a logger set to it says nothing.
+SILENT = logging.CRITICAL + 1
+
+
+def dask_log_level() -> int:
+    """From which level Dask's own log lines are shown: its warnings and errors once this
+    process's log shows DEBUG lines (``roomba-bt -v``), else none (:data:`SILENT`). What it
+    logs as an evaluation goes (a task failed because its worker died, a nanny restarting a
+    worker, a worker removed with the episodes it held) is Dask's detail of what roomba-bt
+    says on stderr in its own words (a seed that killed its workers, the episodes run
+    again); by default its lines came beside each of ours, a wall of its internals."""
+    return logging.WARNING if logging.getLogger().isEnabledFor(logging.DEBUG) else SILENT
+
+
+@contextlib.contextmanager
+def dask_logs_as_detail() -> Iterator[int]:
+    """Dask's loggers (:data:`DASK_LOGGERS`) at :func:`dask_log_level` (the level given to
+    the body) and, when that is silent, the warnings Dask's code raises ignored; the levels
+    and the warning filters as they were on exit."""
+    level = dask_log_level()
+    levels = set_dask_log_level(level)
+    try:
+        with warnings.catch_warnings():
+            if level == SILENT:
+                warnings.filterwarnings("ignore", module=r"(distributed|tornado)\b")
+            yield level
+    finally:
+        restore_log_levels(levels)
+
 
 #: How long the workers get to hear that the shutdown begins (s): one round trip each, then
 #: the cluster is closed anyway.
@@ -229,43 +273,50 @@ def close_quietly(client: Any, cluster: Any) -> None:
     with its traceback: on a loaded machine one came under the summary of an evaluation,
     after a Ctrl-C or not. What the evaluation asked is done by then; its errors came back
     with the futures."""
-    levels = silence_shutdown_loggers()
+    levels = set_dask_log_level()
     try:
         with contextlib.suppress(Exception):  # a worker that does not answer is ended anyway
-            client.run(silence_shutdown_loggers, on_error="ignore",
+            client.run(set_dask_log_level, on_error="ignore",
                        callback_timeout=SHUTDOWN_NOTICE_S)  # fmt: skip
         client.close()
         cluster.close()
     finally:
-        for name, level in levels.items():
-            logging.getLogger(name).setLevel(level)
+        restore_log_levels(levels)
 
 
-def silence_shutdown_loggers() -> dict[str, int]:
-    """Every logger of :data:`SHUTDOWN_LOGGERS` and each of their children (some have a
-    level of their own from Dask's configuration) set above CRITICAL: the levels before."""
+def set_dask_log_level(level: int = SILENT) -> dict[str, int]:
+    """Every logger of :data:`DASK_LOGGERS` and each of their children (some have a level of
+    their own from Dask's configuration) set to ``level``: the levels before."""
     manager = logging.Logger.manager
     names = [
-        name
-        for name in [*SHUTDOWN_LOGGERS, *manager.loggerDict]
-        if name.split(".")[0] in SHUTDOWN_LOGGERS
+        name for name in [*DASK_LOGGERS, *manager.loggerDict] if name.split(".")[0] in DASK_LOGGERS
     ]
     levels = {}
     for name in dict.fromkeys(names):
         logger = logging.getLogger(name)
         levels[name] = logger.level
-        logger.setLevel(logging.CRITICAL + 1)
+        logger.setLevel(level)
     return levels
+
+
+def restore_log_levels(levels: dict[str, int]) -> None:
+    """Each logger named in ``levels`` set back to its level there."""
+    for name, level in levels.items():
+        logging.getLogger(name).setLevel(level)
 
 
 #: How long an evaluation waits for a worker of a ``--scheduler`` cluster before saying so.
 NO_WORKER_AFTER_S = 5.0
 
 
-def say_when_no_worker(client: Any, scheduler: str, after_s: float = NO_WORKER_AFTER_S) -> None:
-    """A scheduler with no worker takes the futures and waits for one for ever: after
-    ``after_s`` without a worker, say so on stderr (once; the evaluation goes on waiting,
-    Ctrl-C ends it). A scheduler that answers about nothing else is left to the futures."""
+def say_when_no_worker(
+    client: Any, scheduler: str, worker_wait_s: float | None = None,
+    after_s: float = NO_WORKER_AFTER_S,
+) -> None:  # fmt: skip
+    """A scheduler with no worker takes the futures and waits for one: after ``after_s``
+    without a worker, say so on stderr (once; the evaluation goes on waiting, up to
+    ``worker_wait_s`` with none (None: for ever, :class:`WorkerWatch`), Ctrl-C ends it). A
+    scheduler that answers about nothing else is left to the futures."""
     with contextlib.suppress(TimeoutError):
         client.wait_for_workers(1, timeout=after_s)
         return
@@ -273,11 +324,87 @@ def say_when_no_worker(client: Any, scheduler: str, after_s: float = NO_WORKER_A
         workers = len(client.scheduler_info().get("workers", {}))
         if workers:  # one joined as the wait ended
             return
+    up_to = "" if worker_wait_s is None else f" up to {worker_wait_s:g} s (--worker-wait)"
     print(
-        f"roomba-bt eval: the cluster at {scheduler} has 0 workers; waiting for one (start "
-        f"`dask worker {scheduler} --nthreads 1` on a machine; Ctrl-C to stop)...",
+        f"roomba-bt eval: the cluster at {scheduler} has 0 workers; waiting{up_to} for one "
+        f"(start `dask worker {scheduler} --nthreads 1` on a machine; Ctrl-C to stop)...",
         file=sys.stderr,
     )
+
+
+class NoWorkersError(RuntimeError):
+    """The cluster had no worker for the evaluation's ``worker_wait_s`` (its workers gone
+    for good, or never there): the evaluation stopped. ``results``: in spec order, None
+    where an episode did not finish; ``retried``: as :func:`run_on_client` counts them."""
+
+    def __init__(self, message: str, results: list[EpisodeResult | None], retried: int) -> None:
+        super().__init__(message)
+        self.results = results
+        self.retried = retried
+
+
+#: The longest a :class:`WorkerWatch` goes between two questions to the scheduler (s).
+WORKER_POLL_S = 1.0
+
+
+class WorkerWatch:
+    """Whether the cluster has a worker, asked in a thread of its own every second (a
+    scheduler that does not answer has none): after ``limit_s`` with none, the futures given
+    to :meth:`guard` are cancelled, so that the evaluation's wait for them ends, and
+    :attr:`expired` says why. Dask's scheduler holds the futures of a cluster without
+    workers for ever (its ``no-workers-timeout`` is off by default, and a cluster of one's
+    own keeps its settings); a local cluster whose nanny could not start a worker again was
+    one such. ``limit_s`` None: no watch."""
+
+    def __init__(self, client: Any, limit_s: float | None) -> None:
+        self.client = client
+        self.limit_s = limit_s
+        self.expired = ""
+        self._guarded: list[Any] = []
+        self._lock = threading.Lock()
+        self._done = threading.Event()
+        self._thread = threading.Thread(target=self._watch, name="roomba-bt worker watch",
+                                        daemon=True)  # fmt: skip
+
+    def __enter__(self) -> WorkerWatch:
+        if self.limit_s is not None:
+            self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._done.set()
+        if self._thread.is_alive():
+            self._thread.join()
+
+    def guard(self, futures: Iterable[Any]) -> None:
+        """Cancel ``futures`` too if the watch expires (at once if it has)."""
+        with self._lock:
+            self._guarded.extend(futures)
+            if self.expired:
+                self.client.cancel(self._guarded)
+
+    def _workers(self) -> int:
+        with contextlib.suppress(Exception):  # no answer: no worker the evaluation can use
+            return len(self.client.nthreads())
+        return 0
+
+    def _watch(self) -> None:
+        assert self.limit_s is not None
+        seen = time.monotonic()
+        while not self._done.wait(min(WORKER_POLL_S, self.limit_s / 4)):
+            now = time.monotonic()
+            if self._workers():
+                seen = now
+            elif now - seen >= self.limit_s:
+                address = getattr(self.client.scheduler, "address", None) or "its scheduler"
+                with self._lock:
+                    self.expired = (
+                        f"the Dask cluster at {address} has had no worker for {now - seen:.0f} "
+                        f"s (--worker-wait {self.limit_s:g} s): its workers are gone"
+                    )
+                    with contextlib.suppress(Exception):
+                        self.client.cancel(self._guarded)
+                return
 
 
 @contextlib.contextmanager
@@ -327,16 +454,18 @@ def run_on_client(
     specs: Sequence[EpisodeSpec],
     progress: Callable[[int, int, EpisodeResult], None] | None = None,
     wall_limit_s: float | None = None,
+    worker_wait_s: float | None = None,
 ) -> tuple[list[EpisodeResult | None], int, bool]:
     """``(results in spec order (None where cancelled), episodes retried, interrupted)``;
-    each episode within ``wall_limit_s`` (:func:`within_wall_limit`).
+    each episode within ``wall_limit_s`` (:func:`within_wall_limit`); after ``worker_wait_s``
+    with no worker in the cluster (:class:`WorkerWatch`; None: waited for ever), the
+    evaluation stops: :class:`NoWorkersError`, with what finished.
 
     Each result is released once gathered (in batches of :data:`RELEASE_EVERY`, after the
     scheduler says which of them a dead worker held): futures kept to the end made the
     scheduler compute again what a dead worker had finished, and the count missed those.
     An episode Dask gave up on (its workers kept dying) runs again alone once the others
     are done (:func:`_alone`): DIED if it kills its workers again; it ended the evaluation."""
-    distributed = _import_distributed()
     total = len(specs)
     batch = uuid.uuid4().hex[:12]  # keys unique on a cluster shared by many evaluations
     travelling = all_self_contained(specs)
@@ -346,40 +475,71 @@ def run_on_client(
         )
         for i, spec in enumerate(travelling)
     }
-    index = {key: i for i, key in enumerate(futures)}
     results: list[EpisodeResult | None] = [None] * total
-    gathered: list[Any] = []
-    given_up: dict[int, BaseException] = {}
-    retried = 0
+    gathered = _Gathered()
     interrupted = False
 
-    def finished(i: int, result: EpisodeResult) -> None:
+    def finished(i: int, result: EpisodeResult | None) -> None:
+        if result is None:  # cancelled: the watch found no worker for it
+            return
         results[i] = result
         if progress is not None:
             progress(sum(r is not None for r in results), total, result)
 
-    try:
-        # results gathered on the client's event loop as they complete, not one blocking
-        # round trip from this thread each
-        for future, result in distributed.as_completed(
-            list(futures.values()), with_results=True, raise_errors=False
-        ):
-            gathered.append(futures.pop(future.key))
-            if len(gathered) >= RELEASE_EVERY:
-                retried += _count_and_release(client, gathered)
-            if future.status == "error":  # (type, exception, traceback)
-                given_up[index[future.key]] = _killed_worker(specs[index[future.key]], result[1])
-            else:
-                finished(index[future.key], result)
-        for i, first in sorted(given_up.items()):
-            finished(
-                i, _alone(client, travelling[i], wall_limit_s, f"episode-{batch}-{i}-alone", first)
-            )
-    except KeyboardInterrupt:
-        interrupted = True
-        client.cancel([f for f in futures.values() if not f.done()])
-    retried += _count_and_release(client, [*gathered, *futures.values()])
+    with WorkerWatch(client, worker_wait_s) as watch:
+        watch.guard(futures.values())
+        try:
+            given_up = _gather(client, specs, futures, gathered, finished)
+            for i, first in sorted(given_up.items()):
+                key = f"episode-{batch}-{i}-alone"
+                finished(i, _alone(client, watch, travelling[i], wall_limit_s, key, first))
+        except KeyboardInterrupt:
+            interrupted = True
+            client.cancel([f for f in futures.values() if not f.done()])
+    retried = gathered.retried + _count_and_release(client, [*gathered.futures, *futures.values()])
+    if watch.expired:
+        done = sum(r is not None for r in results)
+        raise NoWorkersError(f"{watch.expired}; stopped with {done} of {total} episode(s) "
+                             "finished", results, retried)  # fmt: skip
     return results, retried, interrupted
+
+
+@dataclass
+class _Gathered:
+    """The futures gathered and not released yet, and the episodes retried among those
+    released (:func:`_count_and_release`)."""
+
+    futures: list[Any] = field(default_factory=list)
+    retried: int = 0
+
+
+def _gather(
+    client: Any,
+    specs: Sequence[EpisodeSpec],
+    futures: dict[str, Any],
+    gathered: _Gathered,
+    finished: Callable[[int, EpisodeResult], None],
+) -> dict[int, BaseException]:
+    """Each of ``futures`` (by key ``...-i`` for ``specs[i]``) as it completes, its result to
+    ``finished``, gathered on the client's event loop (not one blocking round trip from this
+    thread each); each moved from ``futures`` to ``gathered`` and released there in batches
+    of :data:`RELEASE_EVERY`. A cancelled one (a :class:`WorkerWatch` found no worker) has no
+    result. The episodes Dask gave up on, by spec index: their errors (:func:`_killed_worker`)."""
+    distributed = _import_distributed()
+    index = {key: i for i, key in enumerate(futures)}
+    given_up: dict[int, BaseException] = {}
+    for future, result in distributed.as_completed(
+        list(futures.values()), with_results=True, raise_errors=False
+    ):
+        gathered.futures.append(futures.pop(future.key))
+        if len(gathered.futures) >= RELEASE_EVERY:
+            gathered.retried += _count_and_release(client, gathered.futures)
+        i = index[future.key]
+        if future.status == "error":  # (type, exception, traceback)
+            given_up[i] = _killed_worker(specs[i], result[1])
+        elif future.status != "cancelled":
+            finished(i, result)
+    return given_up
 
 
 def _killed_worker(spec: EpisodeSpec, error: BaseException) -> BaseException:
@@ -399,18 +559,24 @@ def _killed_worker(spec: EpisodeSpec, error: BaseException) -> BaseException:
 
 
 def _alone(
-    client: Any, spec: EpisodeSpec, wall_limit_s: float | None, key: str, first: BaseException
-) -> EpisodeResult:
+    client: Any, watch: WorkerWatch, spec: EpisodeSpec, wall_limit_s: float | None, key: str,
+    first: BaseException,
+) -> EpisodeResult | None:  # fmt: skip
     """The episode Dask gave up on (``first``, its ``KilledWorker``) run again with no other
     episode of the evaluation beside it: its result, or DIED when its workers die again
-    (:func:`died_on_workers`), said on stderr."""
+    (:func:`died_on_workers`), said on stderr; None when ``watch`` found no worker for it."""
+    from concurrent.futures import CancelledError
+
     from distributed.scheduler import KilledWorker
 
     future = client.submit(run_on_worker, spec, wall_limit_s, key=key, pure=False)
+    watch.guard([future])
     try:
         result: EpisodeResult = future.result()
     except KilledWorker as again:
         return died_on_workers(spec, first, again)
+    except CancelledError:
+        return None
     finally:
         if not future.done():  # Ctrl-C
             client.cancel([future])

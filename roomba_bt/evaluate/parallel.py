@@ -493,12 +493,22 @@ def _say_where_stuck(signum: int, frame: FrameType | None) -> None:
 @dataclass(frozen=True)
 class Evaluation:
     """What a batch of episodes gave: results in spec order (only those that finished when
-    ``interrupted``), how many were run again after a worker died, and where they ran."""
+    ``interrupted``), how many were run again after a worker died, and where they ran;
+    ``stopped``, why the evaluation stopped before the end when no Ctrl-C did (the cluster's
+    workers gone: :class:`~roomba_bt.evaluate.cluster.NoWorkersError`; ``interrupted`` too)."""
 
     results: list[EpisodeResult]
     retried: int = 0
     interrupted: bool = False
     engine: str = "local"
+    stopped: str = ""
+
+
+#: How long an evaluation on Dask waits with no worker in the cluster before it stops (s;
+#: ``eval --worker-wait``): long enough for a nanny to start a dead worker again, or a
+#: worker machine to reboot; a cluster whose workers are gone for good held the episodes,
+#: and the evaluation, for ever.
+WORKER_WAIT_S = 120.0
 
 
 @dataclass(frozen=True)
@@ -506,12 +516,14 @@ class Engine:
     """Where episodes run: ``local`` processes (``jobs``), or ``dask`` (a local cluster of
     ``jobs`` workers, or the cluster at ``scheduler``); each episode's wall-clock limit
     (s; None: none, :func:`run_episodes` and :func:`~roomba_bt.evaluate.cluster.run_on_worker`
-    say what it does where)."""
+    say what it does where); on Dask, how long to wait with no worker in the cluster before
+    stopping (s; None: for ever, :class:`~roomba_bt.evaluate.cluster.WorkerWatch`)."""
 
     kind: str = "local"
     jobs: int = 1
     scheduler: str | None = None
     wall_limit_s: float | None = None
+    worker_wait_s: float | None = WORKER_WAIT_S
 
     def describe(self) -> str:
         if self.kind == "local":
@@ -547,16 +559,22 @@ def evaluate(
                 continue
             out.append(Evaluation(run.in_order(), run.retried, False, "local"))
         return out
-    from roomba_bt.evaluate.cluster import dask_client, run_on_client
+    from roomba_bt.evaluate.cluster import NoWorkersError, dask_client, run_on_client
 
-    with dask_client(engine.scheduler, engine.jobs) as client:
+    with dask_client(engine.scheduler, engine.jobs, engine.worker_wait_s) as client:
         for specs, bar in zip(batches, bars, strict=True):
             if out and out[-1].interrupted:
                 out.append(Evaluation([], 0, True, "dask"))
                 continue
-            results, retried, interrupted = run_on_client(client, specs, bar, engine.wall_limit_s)
+            stopped = ""
+            try:
+                results, retried, interrupted = run_on_client(
+                    client, specs, bar, engine.wall_limit_s, engine.worker_wait_s
+                )
+            except NoWorkersError as exc:
+                results, retried, interrupted, stopped = exc.results, exc.retried, True, str(exc)
             finished = [r for r in results if r is not None]
-            out.append(Evaluation(finished, retried, interrupted, "dask"))
+            out.append(Evaluation(finished, retried, interrupted, "dask", stopped))
     return out
 
 

@@ -9,7 +9,7 @@ import socket
 import subprocess
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -119,6 +119,43 @@ def test_separate_scheduler_and_workers_give_the_results_of_one_job_even_if_one_
     assert retried >= 1, "the killed worker's episode ran again elsewhere"
 
 
+def test_a_cluster_whose_workers_are_gone_for_good_stops_after_worker_wait_with_exit_3(
+    tmp_path: Path,
+    scheduler: tuple[str, list[subprocess.Popen[bytes]]],
+    child: Callable[[Sequence[str]], subprocess.Popen[str]],
+) -> None:
+    """Every worker killed mid-evaluation (no nanny starts them again): the scheduler held the
+    episodes and the evaluation waited for ever. Now, after --worker-wait with no worker, it
+    stops: exit 3 (the cluster's failure, not the missions'), why on stderr, and the episodes
+    that finished summarised and written to --out."""
+    from roomba_bt.evaluate.records import read_results
+
+    address, workers = scheduler
+    with _connect_when_ready(address) as client:  # type: ignore[attr-defined]
+        client.wait_for_workers(2, timeout=60)
+    out = tmp_path / "out.jsonl"
+    partial = Path(f"{out}.partial.jsonl")
+    evaluation = child(
+        [sys.executable, "-m", "roomba_bt", "eval", str(MISSIONS / "dock.yaml"), "--runs", "400",
+         "--within", "1.5", "--no-progress", "--scheduler", address, "--worker-wait", "2s",
+         "--out", str(out)]
+    )  # fmt: skip
+    deadline = time.monotonic() + 120
+    while not (partial.exists() and partial.read_text().strip()):
+        assert evaluation.poll() is None and time.monotonic() < deadline
+        time.sleep(0.05)  # another process's file: no event to wait on
+    for worker in workers:
+        worker.kill()
+    stdout, stderr = evaluation.communicate(timeout=120)
+    assert evaluation.returncode == 3, stderr
+    assert f"the Dask cluster at {address} has had no worker for " in stderr
+    assert "(--worker-wait 2 s): its workers are gone; stopped with " in stderr
+    assert "what finished is summarised above" in stderr and "Traceback" not in stderr
+    records = read_results(out)
+    assert 1 <= len(records) < 400
+    assert f"/{len(records)} = " in stdout  # the summary of those that finished
+
+
 def test_an_unreachable_scheduler_exits_3(
     capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -210,6 +247,24 @@ def test_a_local_clusters_workers_run_without_what_only_a_dashboard_shows() -> N
     assert [dask.config.get(key) for key in keys] == before
 
 
+def test_dask_s_warnings_are_its_detail_too() -> None:
+    """A warning Dask's code raises is ignored while a client is open and the log shows no
+    DEBUG lines (the suite's filter makes one an error: here it is not), and the warning
+    filters are as they were afterwards."""
+    import warnings
+
+    from roomba_bt.evaluate.cluster import dask_logs_as_detail
+
+    def dask_warns() -> None:
+        warnings.warn_explicit("a Dask warning", UserWarning, "client.py", 1,
+                               module="distributed.client")  # fmt: skip
+
+    with dask_logs_as_detail():
+        dask_warns()
+    with pytest.raises(UserWarning, match="a Dask warning"):
+        dask_warns()
+
+
 def test_a_scheduler_without_workers_is_said_to_have_none(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
@@ -271,7 +326,7 @@ def test_a_local_cluster_shuts_down_without_a_word(capfd: pytest.CaptureFixture[
     traceback, in the worker's process or this one: on a loaded machine one came under the
     summary of an evaluation. Here a worker plugin and a scheduler plugin log such an ERROR
     as they close, where the race would: neither reaches stderr, and this process's
-    loggers are as they were afterwards."""
+    loggers are afterwards as they were before the client."""
     import logging
 
     from distributed import WorkerPlugin
@@ -294,8 +349,8 @@ def test_a_local_cluster_shuts_down_without_a_word(capfd: pytest.CaptureFixture[
             print("scheduler plugin closed", file=sys.stderr, flush=True)
 
     names = ("distributed", "distributed.worker", "tornado")
+    levels = {name: logging.getLogger(name).level for name in names}
     with dask_client(workers=1) as client:
-        levels = {name: logging.getLogger(name).level for name in names}
         client.register_plugin(ClosingWorker())
         client.register_plugin(ClosingScheduler())
         assert client.submit(sum, [1, 2]).result() == 3

@@ -199,3 +199,30 @@ def test_ctrl_c_while_a_dask_worker_restarts_prints_no_traceback(tmp_path: Path)
             proc.wait()
     assert proc.returncode == 130, stderr
     assert b"Traceback" not in stderr and b"KeyboardInterrupt" not in stderr, stderr.decode()
+
+
+@pytest.mark.parametrize("verbose", [[], ["-v"]])
+def test_dask_s_own_lines_on_a_worker_death_are_its_detail_shown_with_v(
+    tmp_path: Path, verbose: list[str]
+) -> None:
+    """A worker of a local Dask cluster dies: Dask's own log lines (a task marked as failed, a
+    nanny restarting a worker, a worker removed with what it held) came on stderr between
+    ours, a wall of its internals. Now every line is ours (what died, what runs again, the
+    DIED record), and Dask's are its detail, shown with -v."""
+    pytest.importorskip("distributed")
+    done = subprocess.run(
+        [sys.executable, "-m", "roomba_bt", *verbose, "eval", str(_mission(tmp_path)), "--runs",
+         "6", "--seed", "1", "--timeout", "5s", "--allow-plugin-files", "--no-progress",
+         "--engine", "dask", "--jobs", "2"],
+        capture_output=True, text=True, timeout=300, cwd=tmp_path,
+    )  # fmt: skip
+    assert done.returncode == 4, done.stderr
+    assert "roomba-bt eval: seed 3 killed its workers again, alone: recorded as DIED" in done.stderr
+    lines = done.stderr.splitlines()
+    dask = [
+        line for line in lines if line.startswith(("ERROR distributed.", "WARNING distributed."))
+    ]
+    if verbose:
+        assert dask, done.stderr
+    else:
+        assert all(line.startswith("roomba-bt eval: ") for line in lines), done.stderr
