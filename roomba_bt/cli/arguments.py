@@ -8,10 +8,12 @@ from __future__ import annotations
 
 import argparse
 import inspect
+import io
 import json
 import math
 import os
 import sys
+import zlib
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -341,7 +343,7 @@ def record_file(text: str) -> str:
     """A file for ``--record``: as :func:`output_file`, and if it exists, an earlier record
     (written over) and nothing else: ``run m.yaml --record m.yaml`` wrote the record over
     the mission (a record has no suffix to check, as a picture or a results file has)."""
-    from roomba_bt.runtime.recording import RECORD_FORMAT
+    from roomba_bt.runtime.recording import RECORD_FORMAT, open_record
 
     if text == "-":  # a record is a file replay reads back, not a stream: not stdout
         raise argparse.ArgumentTypeError(
@@ -356,7 +358,7 @@ def record_file(text: str) -> str:
 
     return _written_over_only(
         text, is_record, "a record (a mission? a world?); --record writes over an earlier "
-        "record only: name a new file (run.jsonl)",
+        "record only: name a new file (run.jsonl)", opener=open_record,
     )  # fmt: skip
 
 
@@ -384,16 +386,22 @@ def results_file(text: str) -> str:
     )  # fmt: skip
 
 
-def _written_over_only(text: str, is_kind: Callable[[str], bool], refusal: str) -> str:
+def _written_over_only(
+    text: str,
+    is_kind: Callable[[str], bool],
+    refusal: str,
+    opener: Callable[[Path], io.BufferedIOBase] = lambda path: path.open("rb"),
+) -> str:
     """An existing file (not empty) only if its first line says it is of the kind written
-    (``is_kind``): what else is there is someone's, not ours."""
+    (``is_kind``): what else is there is someone's, not ours. ``opener``: how the file's
+    bytes are read (an earlier record may be compressed: ``recording.open_record``)."""
     path = Path(text)
     if not path.is_file() or path.stat().st_size == 0:
         return text
     try:
-        with path.open(encoding="utf-8", errors="replace") as file:
-            first = file.readline(1 << 16)  # a header line, parameters and all
-    except OSError:
+        with opener(path) as file:  # a header line, parameters and all
+            first = file.readline(1 << 16).decode("utf-8", errors="replace")
+    except (OSError, EOFError, zlib.error):  # unreadable, or compressed and damaged
         first = ""
     if not is_kind(first):
         raise argparse.ArgumentTypeError(f"found {text!r}: a file that is not {refusal}")

@@ -113,7 +113,7 @@ def _add_run_parser(sub: Any) -> None:
         "--record",
         metavar="FILE",
         type=record_file,
-        help="write every byte in and out, timestamped",
+        help="write every byte in and out, timestamped (a FILE ending in .gz: compressed)",
     )
     run.add_argument(
         "--plot",

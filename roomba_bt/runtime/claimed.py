@@ -55,12 +55,21 @@ class ClaimedFile:
 
     def open_text(self, newline: str | None = None) -> IO[str]:
         """The file, emptied, as a text file for writing; closing it lets go of the lock."""
+        return os.fdopen(self._handed_over(), "w", encoding="utf-8", newline=newline)
+
+    def open_binary(self) -> IO[bytes]:
+        """The file, emptied, for writing bytes (a compressed record, ``--record x.gz``);
+        closing it lets go of the lock."""
+        return os.fdopen(self._handed_over(), "wb")
+
+    def _handed_over(self) -> int:
+        """The descriptor, the file emptied, handed to its one writer."""
         if self._handed:
             raise RuntimeError(f"{self.path}: already handed to its writer")
         if stat.S_ISREG(os.fstat(self._fd).st_mode):  # a device (/dev/null) is not truncated
             os.ftruncate(self._fd, 0)
         self._handed = True
-        return os.fdopen(self._fd, "w", encoding="utf-8", newline=newline)
+        return self._fd
 
     def release(self) -> None:
         """Let go of a file that was never written: as it was, or gone if the claim made it

@@ -1,0 +1,174 @@
+"""``--record run.jsonl.gz``: a record written gzip-compressed, and every reader of records
+(``replay``, ``roomba-bt monitor RECORD``, ``--record``'s check of the file it writes over)
+reading it, whatever its name."""
+
+from __future__ import annotations
+
+import gzip
+import json
+import shutil
+import subprocess
+import sys
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.cli import main
+from roomba_bt.runtime.recording import GZIP_MAGIC, RecordingTransport, load_record
+
+from .test_recording import HEADER, MISSIONS, _left_a_minute, _Link
+
+BUMP_AND_TURN = str(MISSIONS / "bump-and-turn.yaml")
+
+
+def _record(path: Path, capsys: pytest.CaptureFixture[str], *extra: str) -> Path:
+    """A 3 s bump-and-turn recorded on the virtual clock into ``path``: compressed when
+    its name ends in ``.gz``, as every one here but ``plain.jsonl``."""
+    argv = ["run", BUMP_AND_TURN, "--fast", "--display", "none", "-p", "duration=3s"]
+    assert main([*argv, "--record", str(path), *extra]) == 0
+    capsys.readouterr()
+    assert path.read_bytes().startswith(GZIP_MAGIC) == (path.suffix == ".gz")
+    return path
+
+
+def _replayed(path: Path, capsys: pytest.CaptureFixture[str]) -> str:
+    """``replay path``'s stdout; it must find no difference."""
+    assert main(["replay", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "the tree wrote the same" in out, out
+    return out
+
+
+def test_a_record_named_gz_is_written_compressed_and_replays(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--record x.jsonl.gz`` wrote plain text under a ``.gz`` name (``file``: ASCII text),
+    and ``replay`` refused a gzipped record ('byte 0x8b, not UTF-8 text')."""
+    record = _record(tmp_path / "run.jsonl.gz", capsys)
+    data = record.read_bytes()
+    assert data.startswith(GZIP_MAGIC)
+    lines = gzip.decompress(data).decode("utf-8").splitlines()
+    assert json.loads(lines[0])["format"] == "roomba-bt-record"
+    assert json.loads(lines[-1])["d"] == "end"
+    assert len(data) * 4 < sum(len(line) + 1 for line in lines)  # it compresses
+    assert "as the recorded run" in _replayed(record, capsys)
+    assert load_record(record).ended
+
+
+def test_a_compressed_record_made_twice_is_the_same_bytes(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``run --reproducible`` writes the same record again: gzip's header holds no time
+    and no file name that would differ."""
+    first = _record(tmp_path / "a.jsonl.gz", capsys, "--reproducible")
+    second = _record(tmp_path / "b.jsonl.gz", capsys, "--reproducible")
+    assert first.read_bytes() == second.read_bytes()
+
+
+def test_a_compressed_record_reaches_the_file_as_the_run_goes(tmp_path: Path) -> None:
+    """A run killed outright leaves a plain record readable up to its last flush (a quarter
+    second ago); a compressed one too: each flush is a zlib sync flush, so what the file
+    holds at any moment decompresses up to there, though gzip's trailer is not written."""
+    path = tmp_path / "run.jsonl.gz"
+    link = _Link()
+    recording = RecordingTransport(link, path, HEADER)  # type: ignore[arg-type]
+    for _ in range(134):  # 2 s of frames, each with the tick's Drive
+        recording.read(0.015)
+        recording.write(bytes([137, 0, 200, 128, 0]))
+    last_t = link.t - 50.0 - 0.015  # the first read's arrival is the record's 0
+    killed = tmp_path / "killed.jsonl.gz"
+    shutil.copyfile(path, killed)  # what a kill -9 now would leave
+    recording.close()
+    assert killed.read_bytes().startswith(GZIP_MAGIC)
+    record = load_record(_left_a_minute(killed))
+    assert not record.ended and record.last_t >= last_t - 0.25
+    assert record.unended() is not None and "killed" in str(record.unended())
+
+
+def test_a_record_is_read_by_its_bytes_not_its_name(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Decided: compressed or not is what the file's first bytes say (gzip's magic number),
+    so a compressed record renamed, or a plain one named ``.gz``, replays all the same."""
+    compressed = _record(tmp_path / "run.jsonl.gz", capsys)
+    renamed = compressed.rename(tmp_path / "renamed.jsonl")
+    _replayed(renamed, capsys)
+    plain = _record(tmp_path / "plain.jsonl", capsys)
+    named_gz = plain.rename(tmp_path / "plain.jsonl.gz")
+    _replayed(named_gz, capsys)
+
+
+def test_damaged_compressed_data_is_an_error_naming_the_file_not_a_traceback(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    record = _record(tmp_path / "run.jsonl.gz", capsys)
+    data = bytearray(record.read_bytes())
+    data[len(data) // 2 : len(data) // 2 + 64] = b"\xff" * 64
+    record.write_bytes(bytes(data))
+    assert main(["replay", str(record)]) == 2
+    err = capsys.readouterr().err
+    assert f"roomba-bt: {record}:" in err and "damaged compressed data" in err, err
+    assert "Traceback" not in err
+
+
+def test_a_compressed_record_may_be_written_over_as_a_plain_one_is(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--record`` writes over an earlier record only; a compressed one was taken for
+    someone else's file ('a file that is not a record') and refused."""
+    record = _record(tmp_path / "run.jsonl.gz", capsys)
+    _record(record, capsys)
+    _replayed(record, capsys)
+    mission = tmp_path / "mission.gz"
+    mission.write_bytes(gzip.compress(b"tree: {wait: 1s}\n"))
+    argv = ["run", BUMP_AND_TURN, "--fast", "--display", "none", "--record", str(mission)]
+    with pytest.raises(SystemExit):
+        main(argv)
+    assert "a file that is not a record" in capsys.readouterr().err
+
+
+def test_the_monitor_shows_a_compressed_record(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    child: Callable[[Sequence[str]], subprocess.Popen[str]],
+) -> None:
+    """``roomba-bt monitor RECORD.jsonl.gz`` replays it into its page as a plain record."""
+    pytest.importorskip("aiohttp")
+    record = _record(tmp_path / "run.jsonl.gz", capsys)
+    proc = child([sys.executable, "-m", "roomba_bt.cli", "monitor", str(record), "--monitor", "0"])
+    assert proc.stdout is not None
+    seen = []
+    for line in proc.stdout:
+        seen.append(line)
+        if line.startswith("monitor: http"):
+            break
+    proc.terminate()
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 0, err
+    assert f"{record}: the recorded run ended in success at t=3.0" in "".join(seen), seen
+
+
+def test_a_compressed_record_cut_by_a_file_size_limit_reads_up_to_there(
+    tmp_path: Path, child: Callable[[Sequence[str]], subprocess.Popen[str]]
+) -> None:
+    """``ulimit -f``: the recording stops and the run goes on, as for a plain record; the
+    compressed file holds no note of why (its bytes cannot be cut back to a line for one),
+    and reads as a record up to where it could be written."""
+    record = tmp_path / "cut.jsonl.gz"
+    limit = 8 * 1024
+    script = (
+        "import resource, sys\n"
+        f"resource.setrlimit(resource.RLIMIT_FSIZE, ({limit}, {limit}))\n"
+        "from roomba_bt.cli import main\n"
+        "sys.exit(main(sys.argv[1:]))\n"
+    )
+    run = child([sys.executable, "-c", script, "run", BUMP_AND_TURN, "--fast", "--display",
+                 "none", "-p", "duration=20s", "--record", str(record)])  # fmt: skip
+    out, err = run.communicate(timeout=120)
+    assert run.returncode == 0, err
+    assert "stopped at" in out and "File too large" in out
+    assert record.stat().st_size <= limit
+    loaded = load_record(record)
+    assert not loaded.ended and loaded.last_t > 1.0
+    assert "writing its record failed" in str(loaded.unended())
