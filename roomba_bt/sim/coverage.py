@@ -37,8 +37,10 @@ a cell, in rows (``index = row * columns + column``). A cell counts when its cen
 
 Coverage is cleaned / reachable, overall and per named area of the world (``areas:`` in a
 world file, e.g. the apartment's living room, bedroom and kitchen); :attr:`SweptArea.curve`
-samples it every :data:`SAMPLE_EVERY_S` seconds, and :meth:`SweptArea.longest_idle` says the
-longest stretch of cleaning time in which no new cell was cleaned (a stuck robot).
+samples it every :data:`SAMPLE_EVERY_S` seconds (less often past :data:`MAX_CURVE_SAMPLES`
+samples, so that a run of days keeps a curve of bounded size), and
+:meth:`SweptArea.longest_idle` says the longest stretch of cleaning time in which no new cell
+was cleaned (a stuck robot).
 """
 
 from __future__ import annotations
@@ -82,8 +84,15 @@ CLIFF_KEEPOUT_MM = 130.0
 #: between two marks is a quadrilateral; along an arc of 0.3 m radius it misses the arc by
 #: under a millimetre.
 MARK_EVERY_MM = 3 * CELL_MM
-#: Sample coverage for :attr:`SweptArea.curve` this often (simulated seconds).
+#: Sample coverage for :attr:`SweptArea.curve` this often (simulated seconds), at first.
 SAMPLE_EVERY_S = 5.0
+#: The most samples :attr:`SweptArea.curve` holds: one more, and every other one is dropped
+#: (the first, at 0 s, and the newest kept) and the interval doubles (5 s, 10 s, 20 s, ...),
+#: so the curve keeps its shape over the whole run in at most this many. 4096 at 5 s is 5.7
+#: hours: no evaluation episode or report reaches it. Before, it was sampled for ever: a
+#: simulator left running (``run`` keeps a coverage grid on every simulator run) grew by
+#: 0.12 MB an hour of simulated time, 20 MB a week.
+MAX_CURVE_SAMPLES = 4096
 
 # Cell states of SweptArea.cells.
 # 0: not reachable floor
@@ -410,8 +419,10 @@ class SweptArea:
         #: cleaned cells per area, as reachable_cells
         self.cleaned_cells = [0] * len(counts)
         self.cleaned_total = 0
-        #: (time s, cleaned cells per area) every SAMPLE_EVERY_S seconds, from time 0
+        #: (time s, cleaned cells per area) every :attr:`sample_every` seconds, from time 0
         self.curve: list[tuple[float, tuple[int, ...]]] = [(0.0, tuple(self.cleaned_cells))]
+        #: the curve's interval: SAMPLE_EVERY_S, doubled each time it is thinned
+        self.sample_every = SAMPLE_EVERY_S
         self._next_sample = SAMPLE_EVERY_S
         self._mark: tuple[float, float, float] | None = None  # pose of the last mark
         self._footprint: tuple[float, float, float, float] | None = None
@@ -449,8 +460,18 @@ class SweptArea:
         self.last_time = time
         if time >= self._next_sample:
             self.curve.append((time, tuple(self.cleaned_cells)))
-            self._next_sample += SAMPLE_EVERY_S
+            self._next_sample += self.sample_every
+            if len(self.curve) > MAX_CURVE_SAMPLES:
+                self._thin_curve()
         self.idle_until = self._next_sample if self._mark is None else -math.inf
+
+    def _thin_curve(self) -> None:
+        """Keep every other sample of the curve (its first and, an odd count, its newest)
+        and sample half as often from here: the samples stay evenly spaced from 0 s, sample
+        ``k`` due at ``k * sample_every`` s."""
+        del self.curve[1::2]
+        self.sample_every *= 2.0
+        self._next_sample = len(self.curve) * self.sample_every
 
     def finish(self, time: float, x: float, y: float, theta: float) -> None:
         """Sweep what moved since the last mark (at the end of a run, or before reading)."""

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import pytest
@@ -11,7 +12,9 @@ from roomba_bt.sim import Pose, Simulator, parse_world
 from roomba_bt.sim.coverage import (
     CELL_MM,
     MAIN_BRUSH_WIDTH_MM,
+    MAX_CURVE_SAMPLES,
     REACH_MM,
+    SAMPLE_EVERY_S,
     SweptArea,
     floor_model,
     reachable_floor,
@@ -199,6 +202,24 @@ def test_coverage_curve_idle_time_and_marks_follow_the_time() -> None:
     assert swept.curve[1][1][0] > 0
     assert swept.longest_idle() == pytest.approx(12.0 - 6.0, abs=0.1)
     assert swept.cleaning_time == pytest.approx(12.0, abs=0.02)
+
+
+def test_the_coverage_curve_of_a_run_of_days_stays_bounded_and_evenly_spaced() -> None:
+    """The curve was sampled every 5 s for ever: 0.12 MB more an hour of a simulator left
+    running (soak, finding 4). Past MAX_CURVE_SAMPLES it is thinned, every other sample
+    dropped and the interval doubled, its first sample and its newest kept."""
+    swept = SweptArea(world(), Pose(2000.0, 2000.0, 0.0))
+    days = 3 * 24 * 3600.0
+    time = 0.0
+    while time < days:  # a step at each sample due: what the simulator's idle steps call
+        time = max(swept.idle_until, time + 0.015)
+        swept.update(time, 2000.0, 2000.0, 0.0, 0)
+    times = [t for t, _ in swept.curve]
+    assert len(times) <= MAX_CURVE_SAMPLES
+    assert times[0] == 0.0 and days - times[-1] <= swept.sample_every
+    assert swept.sample_every == SAMPLE_EVERY_S * 2**4  # thinned at 5.7, 11, 23 and 46 h
+    gaps = {round(b - a, 3) for a, b in itertools.pairwise(times)}
+    assert gaps == {swept.sample_every}
 
 
 def test_the_simulator_tracks_coverage_when_asked_and_sends_the_same_bytes() -> None:
