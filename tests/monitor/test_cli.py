@@ -176,6 +176,20 @@ def test_a_record_still_being_written_is_shown_as_such(
     ), out
 
 
+def test_a_compressed_record_is_shown_as_a_plain_one_is(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], served_record: ServedRecord
+) -> None:
+    """``roomba-bt monitor RECORD.jsonl.gz`` (``run --record`` compresses a ``.gz``) replays
+    it into its page; a gzipped record was refused ('byte 0x8b, not UTF-8 text')."""
+    pytest.importorskip("aiohttp")
+    record = tmp_path / "run.jsonl.gz"
+    _record_the_shuttle(record)
+    capsys.readouterr()
+    assert record.read_bytes().startswith(b"\x1f\x8b")  # gzip's magic number
+    out, _ = served_record(record)
+    assert f"{record}: the recorded run ended in timeout at t=2.01 s" in out, out
+
+
 @pytest.mark.parametrize(
     ("address", "message"),
     [("99999", "0 to 65535"), ("host:port", "allowed: [HOST:]PORT"), ("-1", "0 to 65535")],

@@ -1,6 +1,6 @@
 """``--record run.jsonl.gz``: a record written gzip-compressed, and every reader of records
-(``replay``, ``roomba-bt monitor RECORD``, ``--record``'s check of the file it writes over)
-reading it, whatever its name."""
+(``replay``, ``--record``'s check of the file it writes over; ``roomba-bt monitor RECORD``:
+tests/monitor/test_cli.py) reading it, whatever its name."""
 
 from __future__ import annotations
 
@@ -15,9 +15,9 @@ from pathlib import Path
 import pytest
 
 from roomba_bt.cli import main
-from roomba_bt.runtime.recording import GZIP_MAGIC, RecordingTransport, load_record
+from roomba_bt.runtime.recording import GZIP_MAGIC, load_record
 
-from .test_recording import HEADER, MISSIONS, _left_a_minute, _Link
+from .test_recording import MISSIONS, _left_a_minute, two_seconds_recorded
 
 BUMP_AND_TURN = str(MISSIONS / "bump-and-turn.yaml")
 
@@ -71,12 +71,7 @@ def test_a_compressed_record_reaches_the_file_as_the_run_goes(tmp_path: Path) ->
     second ago); a compressed one too: each flush is a zlib sync flush, so what the file
     holds at any moment decompresses up to there, though gzip's trailer is not written."""
     path = tmp_path / "run.jsonl.gz"
-    link = _Link()
-    recording = RecordingTransport(link, path, HEADER)  # type: ignore[arg-type]
-    for _ in range(134):  # 2 s of frames, each with the tick's Drive
-        recording.read(0.015)
-        recording.write(bytes([137, 0, 200, 128, 0]))
-    last_t = link.t - 50.0 - 0.015  # the first read's arrival is the record's 0
+    recording, last_t = two_seconds_recorded(path)
     killed = tmp_path / "killed.jsonl.gz"
     shutil.copyfile(path, killed)  # what a kill -9 now would leave
     recording.close()
@@ -126,27 +121,6 @@ def test_a_compressed_record_may_be_written_over_as_a_plain_one_is(
     with pytest.raises(SystemExit):
         main(argv)
     assert "a file that is not a record" in capsys.readouterr().err
-
-
-def test_the_monitor_shows_a_compressed_record(
-    tmp_path: Path,
-    capsys: pytest.CaptureFixture[str],
-    child: Callable[[Sequence[str]], subprocess.Popen[str]],
-) -> None:
-    """``roomba-bt monitor RECORD.jsonl.gz`` replays it into its page as a plain record."""
-    pytest.importorskip("aiohttp")
-    record = _record(tmp_path / "run.jsonl.gz", capsys)
-    proc = child([sys.executable, "-m", "roomba_bt.cli", "monitor", str(record), "--monitor", "0"])
-    assert proc.stdout is not None
-    seen = []
-    for line in proc.stdout:
-        seen.append(line)
-        if line.startswith("monitor: http"):
-            break
-    proc.terminate()
-    _, err = proc.communicate(timeout=30)
-    assert proc.returncode == 0, err
-    assert f"{record}: the recorded run ended in success at t=3.0" in "".join(seen), seen
 
 
 def test_a_compressed_record_cut_by_a_file_size_limit_reads_up_to_there(

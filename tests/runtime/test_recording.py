@@ -65,18 +65,24 @@ class _Link:
         pass
 
 
+def two_seconds_recorded(path: Path) -> tuple[RecordingTransport, float]:
+    """A record being written to ``path``, 2 s of frames in, each with its tick's Drive, and
+    the time of its last chunk; not closed (what a run killed now leaves is on disk)."""
+    link = _Link()
+    recording = RecordingTransport(link, path, HEADER)  # type: ignore[arg-type]
+    for _ in range(134):
+        recording.read(0.015)
+        recording.write(bytes([137, 0, 200, 128, 0]))
+    return recording, link.t - 50.0 - 0.015  # the first read's arrival is the record's 0
+
+
 def test_the_record_reaches_the_file_as_the_run_goes(tmp_path: Path) -> None:
     """A run killed outright (kill -9) leaves what the record had flushed: before, only the
     run's end flushed it, and a killed 2 s run's record stopped at 1.22 s (an 8 KiB buffer).
     Now the file, read while the run goes on, holds the run up to a quarter second ago
     (recording.FLUSH_EVERY_S)."""
     path = tmp_path / "run.jsonl"
-    link = _Link()
-    recording = RecordingTransport(link, path, HEADER)  # type: ignore[arg-type]
-    for _ in range(134):  # 2 s of frames, each with the tick's Drive
-        recording.read(0.015)
-        recording.write(bytes([137, 0, 200, 128, 0]))
-    last_t = link.t - 50.0 - 0.015  # the first read's arrival is the record's 0
+    recording, last_t = two_seconds_recorded(path)
     on_disk = path.read_text(encoding="utf-8")  # what a kill -9 now would leave
     lines = on_disk.splitlines()
     assert on_disk.endswith("\n")
