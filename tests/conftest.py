@@ -52,10 +52,13 @@ MISSING_DEPENDENCY = ("could not import", "No module named", "pip install")
 
 
 @pytest.fixture(autouse=True)
-def _no_include_path_from_the_shell(monkeypatch: pytest.MonkeyPatch) -> None:
-    """A developer's ``ROOMBA_BT_INCLUDE_PATH`` grants include folders to every command:
-    not to the suite's, whose refusals it would turn into passes (children inherit this)."""
+def _no_settings_from_the_shell(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A developer's ``ROOMBA_BT_INCLUDE_PATH`` grants include folders to every command,
+    and ``ROOMBA_BT_PROFILE`` names the robot for every command: not for the suite's, whose
+    refusals the one would turn into passes and whose profiles the other would change
+    (children inherit this)."""
     monkeypatch.delenv("ROOMBA_BT_INCLUDE_PATH", raising=False)
+    monkeypatch.delenv("ROOMBA_BT_PROFILE", raising=False)
 
 
 def in_ci() -> bool:

@@ -36,8 +36,12 @@ PRINTABLE = "printable"
 #: below every layer too: ``RoombaBtError``, the base of the package's own errors (every
 #: layer's errors derive from it, the protocol's included), standard library only
 ERRORS = "errors"
+#: below every layer too: the project file (``pyproject.toml``'s ``[tool.roomba-bt]``), found
+#: and read with the standard library only, so a command reads the project's robot model
+#: without loading the mission compiler
+PROJECT = "project"
 #: what every layer may import, the protocol's included
-STDLIB_ONLY = {LAZY, PRINTABLE, ERRORS}
+STDLIB_ONLY = {LAZY, PRINTABLE, ERRORS, PROJECT}
 ALLOWED: dict[str, set[str]] = {
     BOTTOM: {BOTTOM, PRINTABLE},
     "oi": {"oi", *STDLIB_ONLY},  # the protocol stays standard-library only, so no YAML

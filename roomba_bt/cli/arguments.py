@@ -127,17 +127,25 @@ def port_name(text: str) -> str:
     return text
 
 
-def add_profile_option(parser: Any, what: str = "the robot's model") -> None:
+def add_profile_option(parser: Any, what: str = "the robot's model", *, auto: bool = False) -> None:
     """``--profile``, the same on every command (``run``, ``sensors``, ``validate``, ``show``,
-    ``eval``, ``sim``): its choices, its default and what it changes. They had no help, and
+    ``eval``, ``sim``): its choices, what it changes, and where it comes from when not given
+    (``ROOMBA_BT_PROFILE``, the project file, the default: :mod:`roomba_bt.cli.profile_choice`,
+    which each command asks; argparse leaves None to say "not given"). ``auto``: the command
+    connects to a robot and may identify it (``run``, ``sensors``). They had no help, and
     ``sim`` took free text."""
     models = ", ".join(
         f"{name} ({profile.title}{'; the default' if profile is DEFAULT_PROFILE else ''})"
         for name, profile in PROFILES.items()
     )
+    identify = (
+        "; auto: identify the robot on --port as doctor does, without a Reset" if auto else ""
+    )
     parser.add_argument(
-        "--profile", choices=sorted(PROFILES), default=DEFAULT_PROFILE.name,
-        help=f"{what}: {models}. It sets the stream checksum (a Roomba 500's leaves the "
+        "--profile", choices=sorted(PROFILES) + (["auto"] if auto else []), default=None,
+        help=f"{what}: {models}{identify}. Default: ROOMBA_BT_PROFILE, else profile under "
+        "[tool.roomba-bt] in a pyproject.toml above the mission (or the current directory), "
+        "else create2. It sets the stream checksum (a Roomba 500's leaves the "
         "header out), how packet 35 reports the OI mode (a Roomba 600's reads the mode + 1) "
         "and the commands there are (a Roomba 500 has no Reset 7 or Stop 173; Digit LEDs "
         "Raw 163 does not work on current firmware of any of them); roomba-bt doctor tells which",
@@ -148,7 +156,7 @@ def add_far_end_options(parser: Any, *, port_help: str, world_help: str) -> None
     """What a command talks to (``run``, ``sensors``): ``--port`` (none: the simulator),
     ``--profile``, ``--baud`` (a rate or auto) and the simulator's ``--world``."""
     parser.add_argument("--port", type=port_name, help=port_help)
-    add_profile_option(parser)
+    add_profile_option(parser, auto=True)
     parser.add_argument(
         "--baud", type=baud_or_auto, default=115200,
         help="baud rate (default 115200), or auto: the OI's rate the robot answers at",

@@ -11,6 +11,7 @@ Each step prints what it saw and, when it fails, what to do next::
     stream    a short stream: frames counted, checksums checked, which checksum convention
     profile   the profiles that fit: the banner, the checksum convention, the mode reading,
               readings only one model's ranges allow (wall signal 27, stasis 58)
+    setting   the model ROOMBA_BT_PROFILE or the project file names, and whether it fits
     battery   charge, capacity, voltage, current;  charging: state and sources;  mode
     missions  each shipped mission's stream frame against the bytes a 15 ms slot carries
     firmware  the release the banner names, and whether it wakes by BRC on the dock
@@ -41,13 +42,6 @@ if TYPE_CHECKING:
     from roomba_bt.oi.frames import SensorFrame
     from roomba_bt.robot.discovery import Search
 
-#: Seconds of stream the round-trip reads (33 frames at one per 15 ms).
-STREAM_CHECK_S = 0.5
-#: The round-trip's packets: bumps, mode, charging state, and the two above (a 14-byte frame:
-#: fits the 28 bytes of 19200).
-STREAM_CHECK_PACKETS = (
-    packet_ids("bumps_wheel_drops", "oi_mode", "charging_state") + MODEL_RANGE_PACKETS
-)
 #: The battery step's Query List.
 STATUS_PACKETS = packet_ids(
     "charging_state", "voltage", "current", "battery_charge", "battery_capacity",
@@ -298,6 +292,7 @@ def _examine(transport: Any, rates: tuple[int, ...], allow_reset: bool, report: 
     banner, reset_tried = _reset(transport, baud, allow_reset, report)
     header_in_checksum, readings = _stream(transport, baud, report)
     profile = _profile(plus_one, header_in_checksum, banner, reset_tried, readings, report)
+    _setting(report)
     _status(transport, profile, plus_one, report)
     _missions(profile, baud, report)
     _firmware(banner, reset_tried, report)
@@ -356,52 +351,27 @@ def _reset(transport: Any, baud: int, allow_reset: bool, report: Report) -> tupl
 
 
 def _stream(transport: Any, baud: int, report: Report) -> tuple[bool | None, dict[int, int]]:
-    """Stream (148) a short list for :data:`STREAM_CHECK_S`; which checksum convention the
-    frames follow, and the widest reading of each packet seen (for the profile's ranges)."""
-    from roomba_bt.oi import commands as oi
-    from roomba_bt.oi.frames import stream_frame_size
-    from roomba_bt.oi.identify import checksum_covers_header, stream_readings
+    """A short stream (:func:`~roomba_bt.robot.discovery.sample_stream`, as ``--profile
+    auto`` reads one): which checksum convention the frames follow, and the widest reading
+    of each packet seen (for the profile's ranges)."""
+    from roomba_bt.robot.discovery import SAMPLE_PACKETS, SAMPLE_S, sample_stream
 
-    ids = STREAM_CHECK_PACKETS
-    size = stream_frame_size(ids)
-    transport.write(oi.stream(ids).data)
-    clock = transport.now
-    sent = clock()
-    deadline = sent + STREAM_CHECK_S
-    data = b""
-    while (remaining := deadline - clock()) > 0:
-        data += transport.read(remaining)
-        if data and "latency" not in report.facts:  # the first frame's bytes: the line's
-            report.facts["latency"] = f"{clock() - sent:.3f}"  # delay, a slot at most more
-    transport.write(oi.pause_stream().data)
-    conventions: list[bool] = []
-    readings: dict[int, int] = {}
-    at = 0
-    skipped = 0
-    while at + size <= len(data):
-        frame = data[at : at + size]
-        verdict = checksum_covers_header(frame)
-        if verdict is None:
-            at += 1
-            skipped += 1
-            continue
-        conventions.append(verdict)
-        for pid, value in stream_readings(frame).items():
-            readings[pid] = max(value, readings.get(pid, value))
-        at += size
+    sample = sample_stream(transport)
+    if sample.latency is not None:  # the line's delay, a slot at most more
+        report.facts["latency"] = f"{sample.latency:.3f}"
     delay = _latency(report)  # the frames of the window's last `delay` s are still on the way
-    expected = round(max(0.0, STREAM_CHECK_S - delay) / SLOT_SECONDS)
-    frames = len(conventions)
+    expected = round(max(0.0, SAMPLE_S - delay) / SLOT_SECONDS)
+    frames, skipped = sample.frames, sample.skipped
     text = (
-        f"Stream (148) of {list(ids)}: {frames} frames of {size} bytes in {STREAM_CHECK_S:g} s "
-        f"(one per 15 ms: {expected}"
+        f"Stream (148) of {list(SAMPLE_PACKETS)}: {frames} frames of {sample.frame_size} bytes "
+        f"in {SAMPLE_S:g} s (one per 15 ms: {expected}"
         + (f", the first {delay * 1000:.0f} ms after the request" if delay >= 0.05 else "")
         + f"), {skipped} bytes skipped"
     )
     if frames == 0:
         report.fail(
             "stream",
-            text + f"; {len(data)} bytes came, no whole frame",
+            text + f"; {sample.received} bytes came, no whole frame",
             "the robot answers queries but does not stream: another program may be talking "
             "to it, or the line drops bytes (a long cable, a bad adapter)",
         )
@@ -410,8 +380,7 @@ def _stream(transport: Any, baud: int, report: Report) -> tuple[bool | None, dic
         report.warn("stream", text, "frames are lost or damaged on this line: check the cable")
     else:
         report.ok("stream", text)
-    covers = sum(conventions) > len(conventions) / 2
-    return covers, readings
+    return sample.header_in_checksum, dict(sample.readings)
 
 
 def _profile(
@@ -445,17 +414,19 @@ def _profile(
         return DEFAULT_PROFILE
     if found.decided:
         report.ok("profile", f"{best.title} (--profile {best.name}): {why}")
-        return best
-    return _undecided(found, why, reset_tried, report)
+    else:
+        _undecided(found, why, reset_tried, report)
+    return found.assumed
 
 
-def _undecided(found: Any, why: str, reset_tried: bool, report: Report) -> Any:
+def _undecided(found: Any, why: str, reset_tried: bool, report: Report) -> None:
     """Several models fit: each named, and what would tell them apart. Where the default
     profile (the Create 2) is one of them, it is [ok] and the default's, the others named
     for an owner whose label says so: the evidence cannot tell a Create 2 from a Roomba 500
     whose checksum covers the header, and a [warn] advising --profile roomba500 met every
     Create 2 owner (the most of them) for a doubt their label settles. Otherwise a [warn], and
-    the one that sends nothing another lacks, to use until it is known."""
+    the one that sends nothing another lacks, to use until it is known (the profile the
+    caller goes on with: ``Identification.assumed``)."""
     from roomba_bt.oi.identify import telling_apart
     from roomba_bt.oi.profiles import DEFAULT_PROFILE
 
@@ -480,7 +451,7 @@ def _undecided(found: Any, why: str, reset_tried: bool, report: Report) -> Any:
         )
         titles = " or ".join(p.title for p in candidates if p is not DEFAULT_PROFILE)
         report.facts["model"] = f"{DEFAULT_PROFILE.title} (or a {titles}, by its label)"
-        return DEFAULT_PROFILE
+        return
     report.warn(
         "profile",
         f"{names}: not told apart: {why}; until it is known, --profile {best.name} sends "
@@ -488,7 +459,46 @@ def _undecided(found: Any, why: str, reset_tried: bool, report: Report) -> Any:
         "tell them apart by " + "; or by ".join(ways),
     )
     report.facts["model"] = " or ".join(p.title for p in found.candidates)
-    return best
+
+
+def _setting(report: Report) -> None:
+    """The profile named once for every command (``ROOMBA_BT_PROFILE``, else the project
+    file above the current directory: :mod:`roomba_bt.cli.profile_choice`) against the
+    models the profile step found: a setting that names another model is a [warn], since
+    every ``run`` would speak to this robot as that one."""
+    from roomba_bt.cli.profile_choice import (
+        AUTO_PROFILE,
+        DOCUMENTED_AT,
+        PROFILE_VARIABLE,
+        BadSetting,
+        choose_profile,
+        profile_said,
+    )
+
+    choice = choose_profile(None)
+    if isinstance(choice, BadSetting):
+        report.warn("setting", str(choice), "set it to a profile's name or auto, or remove it")
+        return
+    if not choice.named:
+        report.skip(
+            "setting",
+            f"no model named once: {PROFILE_VARIABLE} or profile under [tool.roomba-bt] "
+            f"would spare each command its --profile ({DOCUMENTED_AT})",
+        )
+        return
+    said = profile_said(choice)
+    if choice.name == AUTO_PROFILE:
+        report.ok("setting", f"{said}: run and sensors identify the robot as above, no Reset")
+    elif any(p.name == choice.name for p in report.models):
+        report.ok("setting", f"{said}: fits this robot")
+    else:
+        fits = " or ".join(p.name for p in report.models) or "auto"
+        report.warn(
+            "setting",
+            f"{said}: this robot is no {choice.name}, and every command without --profile "
+            "would speak to it as one",
+            f"set it to {fits}, or to auto; or give --profile on the command line",
+        )
 
 
 #: The status packets that stay the same between two replies a moment apart.

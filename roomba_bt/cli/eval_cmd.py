@@ -55,9 +55,8 @@ from roomba_bt.cli.arguments import (
     results_file,
 )
 from roomba_bt.cli.record_header import add_reproducible_option
-from roomba_bt.oi.profiles import PROFILES
 from roomba_bt.printable import ANY_CONTROL, escaped
-from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, ExitCode, Outcome, profile_shown
+from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, ExitCode, Outcome
 
 if TYPE_CHECKING:  # the evaluation is imported when it runs: the CLI starts faster
     from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec
@@ -389,10 +388,11 @@ def _statistics(
 ) -> Evaluated:
     """Each variant's summary, and each later variant compared with the first: over the
     seeds both finished when interrupted, or a line saying why there is no comparison."""
+    from roomba_bt.cli.profile_choice import profile_line
     from roomba_bt.evaluate import summarize
     from roomba_bt.evaluate.stats import compare_finished
 
-    shown = profile_shown(PROFILES[args.profile])
+    shown = profile_line(args)
     summaries = [
         replace(summarize(v.mission, world, e.results, shown), timings=not args.reproducible)
         for v, e in zip(chosen, done, strict=True)
@@ -489,6 +489,9 @@ def _check_arguments(args: argparse.Namespace) -> str | None:
         if isinstance(found, tuple):
             return found[0]
         args.mission_paths[mission] = found
+    problem = _profile_of_the_missions(args)
+    if problem is not None:
+        return problem
     if not 1 <= args.runs <= MAX_RUNS:
         # each episode's spec is made before the first runs: 10^11 ran the memory out
         return f"--runs {args.runs}: expected 1..{MAX_RUNS:,} (more: several evaluations)"
@@ -507,6 +510,25 @@ def _check_arguments(args: argparse.Namespace) -> str | None:
             results_format(args.out)
         except ValueError as exc:
             return f"--out {exc}"
+    return None
+
+
+def _profile_of_the_missions(args: argparse.Namespace) -> str | None:
+    """``args.profile`` the simulated robot's model (:mod:`roomba_bt.cli.profile_choice`): the
+    flag, the environment, or the project file above each mission; missions of projects
+    that name different models are compared on none of them (the problem, said)."""
+    from roomba_bt.cli.profile_choice import BadSetting, mission_near, resolved_profile
+
+    choices = []
+    for given, found in args.mission_paths.items():
+        choice = resolved_profile(args.profile, "eval", mission_near(given, found))
+        if isinstance(choice, BadSetting):
+            return str(choice)
+        choices.append(choice)
+    if len({choice.name for choice in choices}) > 1:
+        named = "; ".join(f"{c.name} ({c.source})" for c in choices)
+        return f"the missions' projects name different robots ({named}): give --profile NAME"
+    args.profile, args.profile_source = choices[0].name, choices[0].source
     return None
 
 

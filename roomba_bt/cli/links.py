@@ -10,12 +10,16 @@ the wall clock.
 
 from __future__ import annotations
 
+import argparse
 import logging
+import sys
 from dataclasses import replace
 
-from roomba_bt.oi.profiles import RobotProfile
+from roomba_bt.cli.profile_choice import AUTO_PROFILE, ProfileChoice, profile_said
+from roomba_bt.oi.identify import Identification
+from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
 from roomba_bt.robot.connection import NO_ANSWER_CAUSES, port_not_opened
-from roomba_bt.robot.discovery import OI_RATES, describe_silence, find_robot
+from roomba_bt.robot.discovery import OI_RATES, describe_silence, find_robot, identify_robot
 from roomba_bt.robot.errors import ConnectionFailed
 from roomba_bt.sim import Faults, RealtimeSimLink, SimLink, Simulator, load_world
 from roomba_bt.transport import SerialTransport, Transport, TransportError
@@ -91,6 +95,60 @@ def auto_baud(port: str | None, profile: RobotProfile) -> tuple[int, SerialTrans
         return profile.default_baud, None
     opened = open_port(port, None)
     return opened.baud, opened
+
+
+def auto_profile(args: argparse.Namespace, command: str) -> SerialTransport | None:
+    """``--profile auto`` (from the flag, ``ROOMBA_BT_PROFILE`` or the project file; only
+    with ``--port``: :mod:`roomba_bt.cli.profile_choice`): the port opened, at ``--baud``
+    or the rate ``--baud auto`` finds (``args.baud`` then set), and the robot identified on
+    it before the mission is compiled for a model (:func:`identify_robot`: no Reset);
+    ``args.profile`` the model, ``args.profile_source`` how it was told, said on stderr with
+    what it fell back to when it could not tell. The port, left open for the run (None: a
+    model was named, nothing done). :class:`ConnectionFailed` if the port cannot be opened
+    or fails."""
+    if args.profile != AUTO_PROFILE:
+        return None
+    transport = open_port(args.port, args.baud)
+    args.baud = transport.baud
+    try:
+        found = identify_robot(transport, transport.baud)
+    except OSError as exc:
+        transport.close()
+        raise ConnectionFailed(
+            args.port, f"the port failed while identifying the robot ({exc})"
+        ) from exc
+    said = profile_said(ProfileChoice(AUTO_PROFILE, args.profile_source))
+    profile, how, sentence = identified(found)
+    args.profile, args.profile_source = profile.name, f"{said}: {how}"
+    print(f"roomba-bt {command}: {said}: {sentence}", file=sys.stderr)
+    return transport
+
+
+def identified(found: Identification | str) -> tuple[RobotProfile, str, str]:
+    """The profile ``--profile auto`` runs with, how it was told (a few words for the
+    summary's profile line) and the whole sentence: the evidence, or why none, and what it
+    fell back to."""
+    if isinstance(found, str):
+        return DEFAULT_PROFILE, "not identified, the default", (
+            f"not identified: {found}; speaking to it as the {DEFAULT_PROFILE.title} "
+            f"({DEFAULT_PROFILE.name}), the default"
+        )  # fmt: skip
+    profile = found.assumed
+    why = "; ".join(found.evidence) or "nothing seen"
+    if found.decided:
+        return profile, "identified", f"{profile.title} ({profile.name}): {why}"
+    if found.best is None:
+        return profile, "no profile fits, the default", (
+            f"no profile fits ({why}); speaking to it as the {profile.title} ({profile.name}), "
+            "the default; roomba-bt doctor --port URL says more"
+        )  # fmt: skip
+    others = " or ".join(f"a {p.title} (--profile {p.name})" for p in found.candidates
+                         if p is not profile)  # fmt: skip
+    return profile, f"not told apart from {others}", (
+        f"the {profile.title} ({profile.name}) or {others}: not told apart ({why}); "
+        f"speaking to it as the {profile.title}: give --profile NAME if its label says "
+        "otherwise"
+    )  # fmt: skip
 
 
 def far_end(

@@ -25,6 +25,13 @@ from roomba_bt.cli.arguments import (
     parse_params,
     permissions,
 )
+from roomba_bt.cli.profile_choice import (
+    BadSetting,
+    chosen_profile,
+    environment_profile,
+    mission_near,
+    resolved_profile,
+)
 from roomba_bt.cli.validate_report import FORMATS, Checked
 from roomba_bt.oi.profiles import get_profile
 from roomba_bt.printable import ANY_CONTROL, escaped
@@ -198,6 +205,10 @@ def validate_command(args: argparse.Namespace) -> int:
     params = _params(args.param)
     if params is None:
         return ExitCode.INVALID
+    named = None if args.profile is not None else environment_profile()
+    if isinstance(named, BadSetting):  # every file's: a usage error, not one file's
+        print(f"roomba-bt validate: {named}", file=sys.stderr)
+        return ExitCode.INVALID
     checked: list[report.Checked] = []
     for file in args.files:
         found = mission_file(file)
@@ -225,15 +236,19 @@ def _checked(file: str, found: str, params: dict[str, str], args: argparse.Names
     mission in it), else a mission's or a library's, with the include folders granted to it,
     and the files it includes."""
     from roomba_bt.cli.worlds_cmd import world_diagnostics
-    from roomba_bt.mission import validate_file
+    from roomba_bt.mission import Diagnostic, validate_file
 
     world = world_diagnostics(found)
     if world is not None:
         return Checked(file, world)
+    # each file its own project's profile: a repository's missions, several projects' files
+    choice = resolved_profile(args.profile, "validate", mission_near(file, found))
+    if isinstance(choice, BadSetting):  # the project file's (the environment's: checked first)
+        return Checked(file, [Diagnostic(choice.file, choice.line or 1, 1, choice.message)])
     validation = validate_file(
         found,
         params,
-        profile=get_profile(args.profile),
+        profile=get_profile(choice.name),
         baud=args.baud,
         permissions=permissions(args, found),
     )
@@ -253,6 +268,7 @@ def show_command(args: argparse.Namespace) -> int:
         print(f"roomba-bt show: {escaped(found[0], ANY_CONTROL)}", file=sys.stderr)
         return ExitCode.INVALID
     missing = graph_tools_missing(dot=args.dot is not None, svg=args.svg is not None)
+    missing = missing or chosen_profile(args, "show", mission_near(args.file, found))
     if missing is not None:  # said before the tree is printed, not after
         print(f"roomba-bt show: {missing}", file=sys.stderr)
         return ExitCode.INVALID

@@ -33,6 +33,12 @@ from roomba_bt.cli.arguments import (
 )
 from roomba_bt.cli.monitor_cmd import LiveMonitor, MonitorOptions, chosen_token
 from roomba_bt.cli.monitor_cmd import add_run_arguments as add_monitor_arguments
+from roomba_bt.cli.profile_choice import (
+    AUTO_PROFILE,
+    chosen_profile,
+    mission_near,
+    profile_line,
+)
 from roomba_bt.cli.record_header import (
     add_reproducible_option,
     epoch_problem,
@@ -286,11 +292,11 @@ def _claimed_run(
     from roomba_bt.robot.errors import ConnectionFailed
     from roomba_bt.runtime.display import observer_for
 
-    profile = get_profile(args.profile)
-    prepared = _mission_at_its_rate(args, params, profile)
+    prepared = _mission_at_its_rate(args, params)
     if isinstance(prepared, int):
         return prepared
     mission, packets, opened = prepared
+    profile = get_profile(args.profile)
     simulator = _simulator(args, profile)
     if isinstance(simulator, str):  # the world's problems, each at its file:line:col
         print(simulator, file=sys.stderr)
@@ -328,17 +334,27 @@ def _claimed_run(
 
 
 def _mission_at_its_rate(
-    args: argparse.Namespace, params: dict[str, str], profile: RobotProfile
+    args: argparse.Namespace, params: dict[str, str]
 ) -> tuple[Any, tuple[int, ...], Any] | int:
-    """The mission compiled for the port's rate, its stream's packets and a port ``--baud
-    auto`` opened to find that rate (None otherwise); or the exit code after saying why not."""
-    from roomba_bt.cli.links import auto_baud
+    """The mission compiled for the robot's model and the port's rate, its stream's packets
+    and a port ``--profile auto`` or ``--baud auto`` opened to find them (None otherwise);
+    or the exit code after saying why not."""
+    from roomba_bt.cli.links import auto_baud, auto_profile
     from roomba_bt.robot.errors import ConnectionFailed
 
+    try:  # --profile auto: identified first, since the mission is compiled for a model
+        opened = auto_profile(args, "run")
+    except ConnectionFailed as exc:
+        print(f"roomba-bt: {exc}", file=sys.stderr)
+        return ExitCode.CONNECTION
+    profile = get_profile(args.profile)
+    ending = None if opened is None else end_in_problem(args.end_in, profile)
+    if opened is not None and ending is not None:
+        opened.close()  # the identification's Start left the robot in Passive
+        return _error(ending)
     warned = baud_warning(args.baud, profile, simulated=not args.port)
     if warned is not None:
         print(f"roomba-bt run: {warned}", file=sys.stderr)
-    opened = None
     if args.baud is None:  # --baud auto: the mission's stream is checked at the rate found
         try:
             args.baud, opened = auto_baud(args.port, profile)
@@ -413,6 +429,7 @@ def _stack(
     elif timeout is not None:
         summary.time_limit = f"--timeout {timeout:g} s"
     summary.strict_named = "--strict"
+    summary.profile = profile_line(args)  # where it came from, unless the flag named it
     summary.robot = args.robot
     summary.label = args.label or ""
     summary.timings = not getattr(args, "reproducible", False)  # wall-clock lines vary
@@ -442,13 +459,15 @@ def _checked_arguments(args: argparse.Namespace) -> tuple[dict[str, str], float 
     epoch = epoch_problem() if args.record else None
     if epoch is not None:  # the convention: stop rather than write the current time
         return _error(epoch)
-    ending = end_in_problem(args.end_in, get_profile(args.profile))
-    if ending is not None:
-        return _error(ending)
     found = mission_file(args.mission)
     if isinstance(found, tuple):
         return _error(found[0])
+    problem = chosen_profile(args, "run", mission_near(args.mission, found))
     args.mission = found
+    if problem is None and args.profile != AUTO_PROFILE:  # auto: once it is identified
+        problem = end_in_problem(args.end_in, get_profile(args.profile))
+    if problem is not None:
+        return _error(problem)
     return params, timeout
 
 

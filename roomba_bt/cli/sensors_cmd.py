@@ -103,15 +103,24 @@ def _show(value: object) -> str:
 
 
 def sensors_command(args: argparse.Namespace) -> int:
-    from roomba_bt.cli.links import auto_baud, far_end, make_simulator
+    from roomba_bt.cli.links import auto_baud, auto_profile, far_end, make_simulator
+    from roomba_bt.cli.profile_choice import chosen_profile
     from roomba_bt.robot.errors import ConnectionFailed, LinkDown
     from roomba_bt.sim import WorldError
 
+    problem = chosen_profile(args, "sensors")  # the current directory's project's
+    if problem is not None:
+        print(f"roomba-bt sensors: {problem}", file=sys.stderr)
+        return ExitCode.INVALID
+    try:
+        opened = auto_profile(args, "sensors")
+    except ConnectionFailed as exc:
+        print(f"roomba-bt: {exc}", file=sys.stderr)
+        return ExitCode.CONNECTION
     profile = get_profile(args.profile)
     warned = baud_warning(args.baud, profile, simulated=not args.port)
     if warned is not None:
         print(f"roomba-bt sensors: {warned}", file=sys.stderr)
-    opened = None
     try:
         if args.baud is None:  # --baud auto
             args.baud, opened = auto_baud(args.port, profile)

@@ -161,10 +161,14 @@ def run_sim(args: argparse.Namespace) -> int:
 def _simulator(args: argparse.Namespace) -> Simulator | int:
     """The simulated robot the options describe (faults, world, rate, firmware, asleep), or
     the exit code after saying which option is wrong."""
+    from roomba_bt.cli.profile_choice import chosen_profile
     from roomba_bt.oi.identify import parse_firmware
     from roomba_bt.oi.profiles import get_profile
     from roomba_bt.sim import Faults, Simulator, WorldError, load_world
 
+    problem = chosen_profile(args, "sim")
+    if problem is not None:
+        return _fail(problem, ExitCode.INVALID)
     try:
         profile = get_profile(args.profile)
         faults = Faults(

@@ -23,31 +23,37 @@ the user allows it), so where it may come from follows who is trusted:
 
 Entries that grant nothing are returned as warnings, never as errors: the include they were
 meant for is then refused at its line, which says where it looked and how to allow it.
-Standard library only (``tomllib``).
+Standard library only; the project file is found by :mod:`roomba_bt.project`.
 """
 
 from __future__ import annotations
 
 import os
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+
+from roomba_bt.project import PROFILE_KEY, PROJECT_FILE, PROJECT_TABLE, find_project_file, why
+
+__all__ = [  # the project file's names too, where the loader's messages take them
+    "DOCUMENTED_AT",
+    "INCLUDE_DIRS_KEY",
+    "INCLUDE_PATH_VARIABLE",
+    "PROJECT_FILE",
+    "PROJECT_TABLE",
+    "IncludeGrant",
+    "configured_include_dirs",
+]
 
 #: The environment variable of include folders, ``os.pathsep``-separated (``:``, ``;`` on
 #: Windows), as ``PYTHONPATH`` is.
 INCLUDE_PATH_VARIABLE = "ROOMBA_BT_INCLUDE_PATH"
 
-#: The project file looked for in the mission's folder and each folder above it.
-PROJECT_FILE = "pyproject.toml"
-
-#: Its table and key: ``[tool.roomba-bt]`` ``include-dirs = ["missions/common"]``.
-PROJECT_TABLE = "roomba-bt"
+#: Its key: ``[tool.roomba-bt]`` ``include-dirs = ["missions/common"]``.
 INCLUDE_DIRS_KEY = "include-dirs"
 
-#: A project file larger than this is not read (as a mission file, yamlsource.read_text):
-#: one that came with a stranger's mission is not parsed whatever its size.
-MAX_PROJECT_FILE = 1 << 20
+#: The other keys the table may hold, read elsewhere: the robot's model (cli/profile_choice.py).
+OTHER_KEYS = (PROFILE_KEY,)
 
 #: Where a user reads about it, said in every message that names these settings.
 DOCUMENTED_AT = "docs/missions.md, Include folders"
@@ -103,48 +109,6 @@ def _from_environment(value: str) -> tuple[list[Path], list[str]]:
     return folders, warnings
 
 
-def find_project_file(mission: Path) -> tuple[Path, object] | str | None:
-    """The nearest ``pyproject.toml`` with a ``[tool.roomba-bt]`` table in the mission's
-    folder or a folder above it, with the table; a warning when the nearest such file
-    cannot be used (unreadable, not TOML, owned by another user: the search stops there, so
-    that a broken project file is said rather than passed over for one further up); None
-    when there is none. A ``pyproject.toml`` without the table (a plugin package's own) is
-    passed over."""
-    try:
-        start = mission.resolve().parent
-    except (OSError, RuntimeError):  # a link loop: the loader says so at the mission
-        return None
-    for folder in (start, *start.parents):
-        candidate = folder / PROJECT_FILE
-        try:
-            if not candidate.is_file():
-                continue
-            size = candidate.stat().st_size
-            if size > MAX_PROJECT_FILE:
-                return f"{candidate}: a file of {size:,} bytes, over 1 MiB; not read"
-            text = candidate.read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as exc:
-            return f"{candidate}: cannot read it ({_why(exc)}); its include-dirs not read"
-        if PROJECT_TABLE not in text:  # parsed only when it may hold the table
-            continue
-        try:
-            tool = tomllib.loads(text).get("tool")
-        except tomllib.TOMLDecodeError as exc:
-            return f"{candidate}: not valid TOML ({exc}); its include-dirs not read"
-        table = tool.get(PROJECT_TABLE) if isinstance(tool, dict) else None
-        if table is None:
-            continue
-        owner = _foreign_owner(candidate)
-        if owner is not None:
-            return (
-                f"{candidate}: not read, owned by another user ({owner}): a project file "
-                "grants include folders only when it is yours (or root's), as git reads a "
-                "repository's configuration"
-            )
-        return candidate, table
-    return None
-
-
 def _from_project_file(project_file: Path, table: object) -> tuple[list[Path], list[str]]:
     """The folders ``include-dirs`` names, relative to the project file's folder, each
     inside that folder's tree (symbolic links followed): a project file that came with a
@@ -152,10 +116,11 @@ def _from_project_file(project_file: Path, table: object) -> tuple[list[Path], l
     where = f"{project_file}: [tool.{PROJECT_TABLE}]"
     if not isinstance(table, dict):
         return [], [f"{where} is not a table; write it as [tool.{PROJECT_TABLE}]"]
+    known = (INCLUDE_DIRS_KEY, *OTHER_KEYS)
     warnings = [
-        f"{where}: unknown key {key!r}; known: {INCLUDE_DIRS_KEY}"
+        f"{where}: unknown key {key!r}; known: {', '.join(known)}"
         for key in table
-        if key != INCLUDE_DIRS_KEY
+        if key not in known
     ]
     entries = table.get(INCLUDE_DIRS_KEY, [])
     if not isinstance(entries, list) or not all(isinstance(e, str) for e in entries):
@@ -193,19 +158,5 @@ def _not_a_folder(folder: Path, entry: str) -> str | None:
         if folder.is_file():
             return f"{entry!r} is a file, not a folder: give its folder ({folder.parent})"
     except (OSError, RuntimeError) as exc:  # a link loop, a folder the user cannot enter
-        return f"{entry!r} cannot be read ({_why(exc)})"
+        return f"{entry!r} cannot be read ({why(exc)})"
     return f"{entry!r} is no folder (looked for {folder.absolute()})"
-
-
-def _foreign_owner(path: Path) -> str | None:
-    """Who owns ``path`` when it is neither the user running this nor root; None where the
-    system has no owners (Windows)."""
-    getuid = getattr(os, "getuid", None)
-    if getuid is None:
-        return None
-    owner = path.stat().st_uid
-    return None if owner in (getuid(), 0) else f"uid {owner}"
-
-
-def _why(exc: BaseException) -> str:
-    return str(getattr(exc, "strerror", None) or exc)

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 from roomba_bt.oi.frames import STREAM_HEADER
 from roomba_bt.oi.packets import PACKETS, packet_ids
-from roomba_bt.oi.profiles import PROFILES, RobotProfile
+from roomba_bt.oi.profiles import DEFAULT_PROFILE, PROFILES, RobotProfile
 
 #: The packets whose ranges differ between the models: a reading only one allows tells it.
 MODEL_RANGE_PACKETS: tuple[int, ...] = packet_ids("wall_signal", "stasis")
@@ -131,6 +131,17 @@ class Identification:
             if all(set(profile.commands) <= set(other.commands) for other in self.candidates):
                 return profile
         return self.best
+
+    @property
+    def assumed(self) -> RobotProfile:
+        """The profile to speak to the robot with: the one that fits; of several, the
+        default if it is one (the evidence cannot tell a Create 2 from a Roomba 500 whose
+        checksum covers the header, and a Create 2 owner is the likelier), else
+        :attr:`cautious`; the default when none fits. ``doctor`` and ``--profile auto``
+        fall back alike."""
+        if self.best is None or (not self.decided and DEFAULT_PROFILE in self.candidates):
+            return DEFAULT_PROFILE
+        return self.cautious or DEFAULT_PROFILE
 
 
 def identify(

@@ -1,7 +1,10 @@
-"""Finding a robot on a port: which baud rate it talks at, and a BRC pulse if it is silent.
+"""Finding a robot on a port: which baud rate it talks at, a BRC pulse if it is silent, and
+which model it is.
 
 One function for ``roomba-bt doctor`` and ``--baud auto`` (``run``, ``sensors``), so both try
-the same rates in the same order and read an answer the same way. Not the start-up handshake
+the same rates in the same order and read an answer the same way; and one for ``doctor``'s
+stream check and ``--profile auto`` (:func:`identify_robot`), so both tell the models apart
+from the same evidence. Not the start-up handshake
 of a session (Start, the mode read twice, Safe or Full, the stream): that is
 :meth:`Connection.start <roomba_bt.robot.connection.Connection.start>` with
 :mod:`roomba_bt.robot.startup`.
@@ -31,10 +34,18 @@ for that second instead (speed 0 drops DTR and RTS; the rate's return raises the
 from __future__ import annotations
 
 import errno
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 from roomba_bt.oi import commands as oi
+from roomba_bt.oi.frames import stream_frame_size
+from roomba_bt.oi.identify import (
+    MODEL_RANGE_PACKETS,
+    Identification,
+    checksum_covers_header,
+    identify,
+    stream_readings,
+)
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.oi.packets import PACKETS, packet_ids
 from roomba_bt.oi.profiles import POWER_ON_BAUDS
@@ -291,3 +302,96 @@ def describe_silence(found: Found) -> str:
     elif found.after_wake is not None:
         seen += " (the last after a BRC pulse)"
     return seen
+
+
+#: Seconds of stream a sample reads (33 frames at one per 15 ms).
+SAMPLE_S = 0.5
+#: A sample's packets: bumps, mode, charging state, and those whose ranges tell the models
+#: apart (a 14-byte frame: fits the 28 bytes of 19200).
+SAMPLE_PACKETS: tuple[int, ...] = (
+    packet_ids("bumps_wheel_drops", "oi_mode", "charging_state") + MODEL_RANGE_PACKETS
+)
+
+
+@dataclass(frozen=True, slots=True)
+class StreamSample:
+    """A short stream cut into frames by the packet table alone (no profile: the profile is
+    what is being found out): each frame's checksum convention (True: the header summed in,
+    a 600 / Create 2; False: left out, a 500), the widest reading of each packet, the bytes
+    that were no frame, all the bytes read, and how late the first came (None: none did)."""
+
+    frame_size: int
+    conventions: tuple[bool, ...]
+    readings: Mapping[int, int]
+    skipped: int
+    received: int
+    latency: float | None
+
+    @property
+    def frames(self) -> int:
+        return len(self.conventions)
+
+    @property
+    def header_in_checksum(self) -> bool | None:
+        """The convention most frames follow; None when no frame came."""
+        if not self.conventions:
+            return None
+        return sum(self.conventions) > len(self.conventions) / 2
+
+
+def sample_stream(
+    transport: Transport, packets: Sequence[int] = SAMPLE_PACKETS, seconds: float = SAMPLE_S
+) -> StreamSample:
+    """Stream (148) ``packets`` for ``seconds`` of the link's clock, then pause it."""
+    ids = tuple(packets)
+    size = stream_frame_size(ids)
+    transport.write(oi.stream(ids).data)
+    clock = transport.now
+    sent = clock()
+    deadline = sent + seconds
+    data = b""
+    latency = None
+    while (remaining := deadline - clock()) > 0:
+        data += transport.read(remaining)
+        if data and latency is None:  # the first frame's bytes: the line's delay
+            latency = clock() - sent
+    transport.write(oi.pause_stream().data)
+    conventions: list[bool] = []
+    readings: dict[int, int] = {}
+    at = skipped = 0
+    while at + size <= len(data):
+        frame = data[at : at + size]
+        verdict = checksum_covers_header(frame)
+        if verdict is None:
+            at += 1
+            skipped += 1
+            continue
+        conventions.append(verdict)
+        for pid, value in stream_readings(frame).items():
+            readings[pid] = max(value, readings.get(pid, value))
+        at += size
+    return StreamSample(size, tuple(conventions), readings, skipped, len(data), latency)
+
+
+def identify_robot(transport: Transport, baud: int) -> Identification | str:
+    """``--profile auto``: the models the robot at ``baud`` may be, told as ``doctor`` tells
+    them without ``--allow-reset``: the mode reading right after Start (:func:`probe`: 2 is a
+    600's mode + 1), then a :func:`sample_stream` (the checksum convention, readings only one
+    model's range allows). Never Reset (7): it restarts a 600's or a Create 2's OI, and the
+    500 spec has no such opcode. Why nothing could be told, instead, when the robot did not
+    answer; the stream is left paused, the robot in Passive."""
+    answer = probe(transport, baud)
+    if not answer.answered:
+        return (
+            f"no answer to Start and a Query List at {baud} baud ({answer.seen}); the "
+            "start-up says why"
+        )
+    drain(transport)
+    sample = sample_stream(transport)
+    drain(transport)  # the paused stream's last frames
+    readings = sample.readings
+    return identify(
+        mode_plus_one=answer.reply[0] == int(OIMode.PASSIVE) + 1,
+        header_in_checksum=sample.header_in_checksum,
+        readings={pid: readings[pid] for pid in MODEL_RANGE_PACKETS if pid in readings},
+    )
