@@ -1,6 +1,6 @@
 """``--profile`` is one option on every command that takes it: its choices, its default
-(create2) and what it changes, in the help (run, validate, sensors and eval had no help
-text, and sim took free text). ``run``'s summary and ``eval``'s text summary name the
+(the environment's, the project's, else create2) and what it changes, in the help (run,
+validate, sensors and eval had no help text, and sim took free text). ``run``'s summary and ``eval``'s text summary name the
 profile when it is not the default, and read as before when it is."""
 
 from __future__ import annotations
@@ -22,7 +22,10 @@ def test_every_profile_option_says_its_choices_default_and_effect(
     with pytest.raises(SystemExit):
         main([command, "--help"])
     text = " ".join(capsys.readouterr().out.split())  # argparse's line breaks undone
-    assert "--profile {create2,roomba500,roomba600}" in text
+    # auto where the command connects to a robot and can identify it (a port's run, sensors)
+    choices = "create2,roomba500,roomba600" + (",auto" if command in ("run", "sensors") else "")
+    assert f"--profile {{{choices}}}" in text
+    assert "Default: ROOMBA_BT_PROFILE, else profile under [tool.roomba-bt]" in text
     assert "create2 (iRobot Create 2; the default), roomba600 (Roomba 600 series), " \
         "roomba500 (Roomba 500 series)" in text  # fmt: skip
     assert "stream checksum" in text and "packet 35" in text and "Stop 173" in text

@@ -92,6 +92,18 @@ def test_a_checksum_over_the_header_does_not_make_a_robot_a_create2() -> None:
     assert telling_apart((CREATE2,)) == []
 
 
+def test_the_profile_assumed_is_the_one_that_fits_else_the_default_else_the_cautious() -> None:
+    """What ``doctor`` goes on with and ``--profile auto`` runs with: one fitting profile;
+    of a Create 2 or a 500 that sums the header, the Create 2 (the default, the likelier,
+    named with the other), and so of any several with the default among them; none fitting,
+    the default."""
+    assert identify(mode_plus_one=True, header_in_checksum=True).assumed is ROOMBA600
+    assert identify(mode_plus_one=False, header_in_checksum=False).assumed is ROOMBA500
+    assert identify(mode_plus_one=False, header_in_checksum=True).assumed is CREATE2
+    assert identify(mode_plus_one=None, header_in_checksum=None).assumed is CREATE2
+    assert identify(mode_plus_one=True, header_in_checksum=False).assumed is CREATE2  # none
+
+
 def test_a_reading_only_one_models_range_allows_rules_the_others_out() -> None:
     wall = identify(mode_plus_one=None, header_in_checksum=None, readings={27: 2000})
     assert wall.candidates == (ROOMBA500,)  # the 600's wall signal stops at 1023

@@ -6,13 +6,16 @@ from __future__ import annotations
 import contextlib
 from collections.abc import Iterator
 
-from roomba_bt.oi.profiles import CREATE2, ROOMBA600
+from roomba_bt.oi.profiles import CREATE2, ROOMBA500, ROOMBA600
 from roomba_bt.robot.discovery import (
     OI_RATES,
+    SAMPLE_PACKETS,
     find_robot,
+    identify_robot,
     is_answer,
     probe,
     rates_to_try,
+    sample_stream,
     wake_pulse,
 )
 from roomba_bt.sim import Simulator, load_world
@@ -135,4 +138,42 @@ def test_a_port_without_modem_lines_is_hung_up_instead_and_the_robot_wakes() -> 
     assert wake_pulse(link).how == (
         "pulsed BRC by a 1 s hang-up (the modem lines cannot be set here: speed 0 drops DTR "
         "and RTS, the rate's return raises them)"
+    )
+
+
+def test_a_stream_sample_reads_each_frames_checksum_rule_and_the_widest_readings() -> None:
+    """doctor's stream check and ``--profile auto``'s: a 500's frames leave the header out
+    of the checksum; a half second carries 33 frames of 15 ms; the stream is paused after."""
+    link = _link(profile=ROOMBA500)
+    probe(link, 115200)  # Start: Passive
+    sample = sample_stream(link)
+    assert sample.frames >= 30 and sample.skipped == 0
+    assert sample.header_in_checksum is False and set(sample.conventions) == {False}
+    assert set(sample.readings) == set(SAMPLE_PACKETS) and sample.readings[35] == 1
+    assert sample.latency is not None
+    assert link.read(0.1) == b""  # paused: nothing more comes
+
+
+def test_identify_robot_tells_a_600_and_a_500_and_names_a_create2_or_500() -> None:
+    """``--profile auto``: the mode + 1 tells the 600, the checksum the 500; a Create 2's
+    evidence fits a 500 that sums the header too, and the default is assumed. No Reset
+    (7) is written: it restarts a 600's OI, and a 500 has none."""
+    link = _link(profile=ROOMBA600)
+    written: list[bytes] = []
+    write = link.write
+    link.write = lambda data: (written.append(bytes(data)), write(data))[1]  # type: ignore[method-assign]
+    told = identify_robot(link, 115200)
+    assert not isinstance(told, str) and told.candidates == (ROOMBA600,)
+    assert [data[0] for data in written] == [128, 149, 148, 150]  # Start+pause, query, stream
+    told = identify_robot(_link(profile=ROOMBA500), 115200)
+    assert not isinstance(told, str) and told.candidates == (ROOMBA500,)
+    told = identify_robot(_link(profile=CREATE2), 115200)
+    assert not isinstance(told, str) and told.candidates == (CREATE2, ROOMBA500)
+    assert told.assumed is CREATE2
+
+
+def test_identify_robot_says_why_when_nothing_answers() -> None:
+    said = identify_robot(_link(asleep=True), 115200)
+    assert said == (
+        "no answer to Start and a Query List at 115200 baud (nothing); the start-up says why"
     )
