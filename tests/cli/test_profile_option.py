@@ -1,7 +1,8 @@
 """``--profile`` is one option on every command that takes it: its choices, its default
 (the environment's, the project's, else create2) and what it changes, in the help (run,
-validate, sensors and eval had no help text, and sim took free text). ``run``'s summary and ``eval``'s text summary name the
-profile when it is not the default, and read as before when it is."""
+validate, sensors and eval had no help text, and sim took free text). ``run``'s summary
+and ``eval``'s text summary name the profile when it is not the default, and read as before
+when it is."""
 
 from __future__ import annotations
 
