@@ -117,9 +117,13 @@ def environment_profile(
 
 def _from_project(near: Path | None) -> ProfileChoice | BadSetting | None:
     """The project file's ``profile``, or its problem, or None (no project file, no key).
-    A project file that cannot be read (another user's, not TOML) is warned of by the
-    include folders' reading too; here it names no profile."""
+    A project file that cannot be read (another user's, not TOML) names no profile, said
+    as a warning once (the include folders' reading says the same words: once in all)."""
+    from roomba_bt.cli.arguments import warn_once
+
     found = find_project_file(near if near is not None else Path.cwd() / PROJECT_FILE)
+    if isinstance(found, str):
+        warn_once(found)
     if not isinstance(found, tuple):
         return None
     path, table = found

@@ -167,7 +167,11 @@ def test_a_project_file_of_another_user_names_no_profile(
     assert run(mission) == 0
     captured = capsys.readouterr()
     assert "profile " not in captured.out  # the default: create2, no line
-    assert "not read, owned by another user" in captured.err
+    assert captured.err.count("not read, owned by another user") == 1  # said once, not twice
+    monkeypatch.chdir(tmp_path)  # sensors reads no mission: the current directory's project
+    assert main(["sensors", "--count", "1"]) == 0
+    captured = capsys.readouterr()
+    assert "(iRobot Create 2)" in captured.out.splitlines()[0]
 
 
 @pytest.mark.parametrize(
