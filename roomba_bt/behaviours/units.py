@@ -3,7 +3,7 @@
 Each value type parses a YAML scalar into one canonical unit, so every behaviour computes in
 the same units and every error names what was allowed::
 
-    duration  -> seconds   500ms, 30s, 2min, 1h, 0
+    duration  -> seconds   500ms, 30s, 2min, 1h, 1d, 1h30min, 0
     speed     -> mm/s      200 mm/s, 0.2 m/s, 20cm/s, 0
     distance  -> mm        300 mm, 30cm, 1.5 m, 0
     angle     -> degrees   90deg, 90°, 1.57rad, 0.25turn, 0
@@ -11,6 +11,11 @@ the same units and every error names what was allowed::
 
 A bare number is refused for a dimensioned type (except 0): ``speed: 200`` could be mm/s or
 m/s, and a robot that drives 1000 times too fast is the error this module exists to prevent.
+
+A duration may be written in several units, the largest first, each once (``1h30min``,
+``2h 15min``, ``1d 6h``; :func:`compound_duration`): a patrol's shift or a charge is said so,
+and ``90min`` for it made the user do the sum. One grammar for a mission's values and the
+command line's ``--timeout`` (``roomba_bt.cli.arguments.parse_timeout``), which read it here.
 """
 
 from __future__ import annotations
@@ -33,13 +38,14 @@ from roomba_bt.yamlsource import (
 )
 
 _NUMBER = r"[-+]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][-+]?[0-9]+)?"
+_UNSIGNED = _NUMBER.removeprefix("[-+]?")
 #: ASCII digits and spaces only: ``\d`` took any script's (``1\u09ea0 mm/s``, whose Bengali 4
 #: reads like an 8, was 140 mm/s) and ``\s`` a no-break space (:func:`miswritten`)
 _QUANTITY = re.compile(rf"^\s*({_NUMBER})\s*([A-Za-z°%/]*)\s*$", re.ASCII)
 
 #: unit -> factor to the canonical unit, per dimension.
 UNITS: dict[str, dict[str, float]] = {
-    "duration": {"ms": 0.001, "s": 1.0, "sec": 1.0, "min": 60.0, "h": 3600.0},
+    "duration": {"ms": 0.001, "s": 1.0, "sec": 1.0, "min": 60.0, "h": 3600.0, "d": 86400.0},
     "speed": {"mm/s": 1.0, "cm/s": 10.0, "m/s": 1000.0},
     "distance": {"mm": 1.0, "cm": 10.0, "m": 1000.0},
     "angle": {"deg": 1.0, "°": 1.0, "rad": 180.0 / math.pi, "turn": 360.0, "turns": 360.0},
@@ -153,6 +159,55 @@ def _unknown_unit(dimension: str, value: str, number: str, unit: str) -> str:
     return message
 
 
+#: a duration in two units or more (``1h30min``, ``2h 15min``): each part a number without a
+#: sign and its unit (:func:`compound_duration`)
+_COMPOUND = re.compile(rf"^\s*(?:{_UNSIGNED}\s*[A-Za-z]+\s*){{2,}}$", re.ASCII)
+_COMPOUND_PART = re.compile(rf"({_UNSIGNED})\s*([A-Za-z]+)", re.ASCII)
+#: how a compound duration is written, for its errors
+COMPOUND_EXAMPLES = "1h30min, 2h 15min or 1d 6h"
+
+
+def compound_duration(value: str) -> float | None:
+    """``1h30min`` -> 5400.0: a duration in several units, each part a number without a sign
+    and a duration unit, the largest unit first and each once (``30min1h`` and ``1h1h`` are
+    refused: a slip, not a sum meant). None for a text not of that shape (one unit, a sign, a
+    part without its unit): :func:`parse_quantity` says what is wrong with it. Raises
+    :class:`UnitError` for an unknown unit or the wrong order."""
+    if _COMPOUND.match(value) is None:
+        return None
+    units = UNITS["duration"]
+    total, larger = 0.0, math.inf
+    for number, unit in _COMPOUND_PART.findall(value):
+        factor = units.get(unit)
+        if factor is None:
+            raise UnitError(_unknown_unit("duration", value, number, unit))
+        if factor >= larger:
+            raise UnitError(
+                f"{quoted(value)}: a duration in several units is written the largest unit "
+                f"first, each once, e.g. {COMPOUND_EXAMPLES}"
+            )
+        larger = factor
+        total += float(number) * factor
+    if not math.isfinite(total):
+        raise UnitError(f"{quoted(value)} is too large a number for a duration")
+    return total
+
+
+#: a unit followed by another number: a duration in several units meant (``1h30``)
+_SEVERAL_PARTS = re.compile(r"[0-9.]\s*[A-Za-z]+\s*[-+]?[0-9.]", re.ASCII)
+
+
+def _compound_hint(dimension: str, value: str) -> str:
+    """For a duration that reads as several parts but is not one (``1h30``, ``-1h30min``):
+    how a compound duration is written; "" for any other value."""
+    if dimension != "duration" or _SEVERAL_PARTS.search(value) is None:
+        return ""
+    return (
+        f": in several units, each part has its own unit and none a sign (e.g. "
+        f"{COMPOUND_EXAMPLES})"
+    )
+
+
 def parse_quantity(dimension: str, value: object) -> float:
     """``parse_quantity("speed", "0.2 m/s") == 200.0``; raises :class:`UnitError`."""
     units = UNITS[dimension]
@@ -165,12 +220,14 @@ def parse_quantity(dimension: str, value: object) -> float:
         raise UnitError(f"expected {what} such as {EXAMPLES[dimension]}, got {described(value)}")
     match = _QUANTITY.match(value)
     if match is None:
+        if dimension == "duration" and (compound := compound_duration(value)) is not None:
+            return compound
         spelled = _ANY_UNIT.match(value)  # 100µs, 90º: a number and a unit not in ASCII
         if spelled is not None and math.isfinite(float(spelled.group(1))):
             raise UnitError(_unknown_unit(dimension, value, *spelled.groups()) + miswritten(value))
         raise UnitError(
             f"expected {what} such as {EXAMPLES[dimension]}, got {quoted(value)}"
-            + miswritten(value)
+            + (miswritten(value) or _compound_hint(dimension, value))
         )
     number, unit = float(match.group(1)), match.group(2)
     if not math.isfinite(number):  # 1e400 overflows to inf
@@ -321,9 +378,17 @@ def quantity_schema(dimension: str, *, signed: bool = True) -> dict[str, Any]:
     unsigned = _NUMBER.removeprefix("[-+]?")
     number = _NUMBER if signed else rf"(?:\+?{unsigned}|-{_ZERO_NUMBER})"
     units = "|".join(re.escape(u) for u in UNITS[dimension])
+    compound = (
+        # a duration in several units (compound_duration); the order of its units is
+        # validate's to check, as a range is
+        [{"type": "string", "pattern": rf"^\s*(?:{unsigned}\s*(?:{units})\s*){{2,}}$"}]
+        if dimension == "duration"
+        else []
+    )
     return {
         "anyOf": [
             {"type": "string", "pattern": rf"^\s*{number}\s*({units})\s*$"},
+            *compound,
             {"type": "string", "pattern": ZERO_TEXT_PATTERN},
             {"const": 0},
         ]

@@ -470,8 +470,9 @@ def parse_params(items: list[str]) -> dict[str, str] | str:
 
 
 def parse_timeout(text: str | None, option: str = "--timeout") -> float | str | None:
-    """``--timeout`` (or ``option``): seconds (``90``) or a duration (``5min``), above 0; a
-    message string on error, None if not given."""
+    """``--timeout`` (or ``option``): seconds (``90``) or a duration as a mission writes one
+    (``5min``, ``1d``, ``1h30min``: :func:`~roomba_bt.behaviours.units.parse_quantity`, the
+    one grammar), above 0; a message string on error, None if not given."""
     if text is None:
         return None
     from roomba_bt.behaviours.units import UnitError, parse_quantity

@@ -1,6 +1,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import pytest
 
@@ -48,6 +49,38 @@ from roomba_bt.behaviours.units import (
 )
 def test_quantities_parse_into_canonical_units(dimension: str, text: object, value: float) -> None:
     assert parse_quantity(dimension, text) == pytest.approx(value)
+
+
+@pytest.mark.parametrize(
+    ("text", "seconds"),
+    [("1d", 86400.0), ("1h30min", 5400.0), ("2h 15min", 8100.0), ("1d 6h", 108000.0),
+     ("1 h 30 min", 5400.0), ("1s500ms", 1.5), ("1.5h30sec", 5430.0)],
+)  # fmt: skip
+def test_a_duration_in_days_or_in_several_units_adds_up(text: str, seconds: float) -> None:
+    """The soak's ``--timeout 1d`` and ``1h30min`` were refused (``90min`` was not): a
+    patrol's shift is said in hours and minutes. The mission's values read the same."""
+    assert DURATION.parse(text) == pytest.approx(seconds)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [("30min1h", "written the largest unit first, each once, e.g. 1h30min"),
+     ("1h1h", "written the largest unit first, each once"),
+     ("1s2sec", "written the largest unit first, each once"),
+     ("1h30", "in several units, each part has its own unit and none a sign (e.g. 1h30min"),
+     ("-1h30min", "in several units, each part has its own unit and none a sign"),
+     ("1h 30 mins", "unknown duration unit 'mins' in '1h 30 mins'; use one of: ms, s, sec, "
+      "min, h, d"),
+     ("1e400h30min", "is too large a number for a duration")],
+)  # fmt: skip
+def test_a_duration_in_several_units_written_wrong_says_how(text: str, message: str) -> None:
+    with pytest.raises(UnitError, match=re.escape(message)):
+        DURATION.parse(text)
+
+
+def test_several_units_are_a_duration_s_only() -> None:
+    with pytest.raises(UnitError, match="expected a distance such as"):
+        DISTANCE.parse("1m30cm")
 
 
 def test_radians_convert_to_degrees() -> None:

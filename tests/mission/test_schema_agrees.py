@@ -39,6 +39,9 @@ KNOWN_EXCEPTIONS: dict[str, tuple[str, ...]] = {
     # a behaviour's own rules between its values (declared constraints: drive's ends,
     # spiral's radii, wall_follow's hysteresis)
     "behaviour rule": ("never", "must be less than", "must be at most"),
+    # a duration in several units: the largest first, each once (a pattern could list the
+    # orders, but not readably: validate says how to write it)
+    "order of units": ("the largest unit first",),
 }
 _UNIT_OF = {"speed": "mm/s", "distance": "mm", "duration": "s", "angle": "deg", "percent": "%"}
 #: a value of each type for a required parameter the case does not vary
@@ -168,6 +171,11 @@ REPORTED: list[tuple[str, dict[str, Any], bool]] = [
                                                                   "default": 1}}), False),
     ("repeat times and for", _tree({"repeat": {"times": 2, "for": "1s", "do": _WAIT}}), False),
     ("wait 0 as text", _tree({"wait": "0"}), True),
+    ("wait in days", _tree({"wait": "1d"}), True),
+    ("wait in several units", _tree({"wait": "1h30min"}), True),
+    ("timeout in several units", _tree({"timeout": {"after": "2h 15min", "do": _WAIT}}), True),
+    ("wait in several units, smallest first", _tree({"wait": "30min1h"}), False),
+    ("wait in several units, one signed", _tree({"wait": "1h-30min"}), False),
     ("log a number", _tree({"log": 5}), True),
     ("log a boolean", _tree({"log": True}), False),
     ("sensor text", _tree({"sensor": "voltage = 100"}), False),

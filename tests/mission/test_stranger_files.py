@@ -232,10 +232,10 @@ def test_a_no_break_space_indenting_a_line_yaml_cannot_read_is_named(tmp_path: P
       "turn, turns: '\u02da' (U+02DA RING ABOVE) is not a degree sign: write 90deg or 90\u00b0"),
      ("wait: 100\u00b5s",
       "5:13: wait.duration: unknown duration unit '\u00b5s' in '100\u00b5s'; use one of: ms, s, "
-      "sec, min, h (100\u00b5s is 0.1ms)"),
+      "sec, min, h, d (100\u00b5s is 0.1ms)"),
      ("wait: 100 us",
       "5:13: wait.duration: unknown duration unit 'us' in '100 us'; use one of: ms, s, sec, min, "
-      "h (100us is 0.1ms)")],
+      "h, d (100us is 0.1ms)")],
 )  # fmt: skip
 def test_a_lookalike_in_a_number_or_a_unit_is_named(tmp_path: Path, step: str, said: str) -> None:
     """The Unicode minus and ``90º`` got the generic "expected a speed", ``100µs`` "expected a

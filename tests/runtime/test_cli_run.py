@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 
 from roomba_bt.cli import main, run_cmd
+from roomba_bt.cli.arguments import parse_timeout
 from roomba_bt.evaluate.episode import failure_stage
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.runtime.display import MissionClockFormatter
@@ -63,6 +64,8 @@ def test_parameter_from_the_command_line(
         (["--timeout", "soon"], "--timeout 'soon'"),
         (["--timeout", "nan"], "--timeout 'nan': must be a finite duration"),  # was no timeout
         (["--timeout", "1e999s"], "1e999 is too large a number for a duration"),
+        (["--timeout", "30min1h"], "'30min1h': a duration in several units is "
+         "written the largest unit first, each once, e.g. 1h30min"),
         (["--world", "no-such-world"], "no-such-world"),
         (["--baud", "19200", "-p", "speed=100mm/s"], None),
     ],
@@ -485,6 +488,21 @@ def test_fast_without_a_timeout_stops_at_its_own_limit_and_says_how_to_change_it
     out, err = capsys.readouterr()
     assert "(--timeout 20 s of mission time ran out in wait)" in out
     assert "own limit" not in out + err and "no --timeout" not in err
+
+
+@pytest.mark.parametrize(("given", "seconds"), [("1d", 86400.0), ("1h30min", 5400.0),
+                                                ("2h 15min", 8100.0), ("90", 90.0)])  # fmt: skip
+def test_timeout_takes_days_and_several_units_as_a_mission_does(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], given: str, seconds: float
+) -> None:
+    """The soak: ``--timeout 1d`` was "unknown duration unit 'd'" and ``1h30min`` "expected a
+    duration such as 500ms, 30s or 2min"; one grammar with the mission's durations now (its
+    ``wait: 1h30min`` here), and the run takes it."""
+    assert parse_timeout(given) == seconds
+    waits = tmp_path / "waits.yaml"
+    waits.write_text("tree:\n  timeout:\n    after: 1h30min\n    do: {wait: 1s}\n")
+    assert main(["run", str(waits), "--fast", "--display", "none", "--timeout", given]) == 0
+    assert "outcome      SUCCESS" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize(
