@@ -465,7 +465,7 @@ class Connection:
     def _report_change(self, change: ModeChange) -> None:
         if change.fall:
             self._falls[change.cause] += 1
-            self.writer.robot_stopped()
+            self.writer.robot_stopped(change.cause)
         _say_change(self.name, change, self._changes_said)
 
     @property

@@ -118,10 +118,16 @@ def stop_sequence(
     return commands
 
 
-def describe_activity(command: Command | None) -> str:
+def describe_activity(command: Command | None, stopped_by: str = "") -> str:
     """What the last wheel command written had the robot doing: ``at 200 mm/s``,
-    ``stopped``, ``in its Clean cycle``."""
+    ``stopped``, ``in its Clean cycle``. With no command since the robot's own fall to
+    Passive stopped the wheels (``stopped_by``, its cause:
+    :attr:`~roomba_bt.robot.writer.CommandWriter.wheels_stopped_by`), ``with its wheels
+    stopped by its own fall to Passive (charger)``: an overnight patrol asleep on its
+    charger after 488 m of driving was said to have its wheels "never commanded"."""
     if command is None:
+        if stopped_by:
+            return f"with its wheels stopped by its own fall to Passive ({stopped_by})"
         return "with its wheels never commanded"
     spec = command.spec
     if spec.effect is Effect.BUILTIN_CYCLE:
@@ -220,7 +226,9 @@ class SafeStop:
         self.closed = False
         #: the mode and the last wheel command before the stop was written (what is said
         #: of a stop that did not arrive)
-        self._before: tuple[OIMode, Command | None] = (writer.modes.mode, writer.last_wheels)
+        self._before: tuple[OIMode, Command | None, str] = (
+            writer.modes.mode, writer.last_wheels, writer.wheels_stopped_by
+        )  # fmt: skip
         #: the mode packet 35 read in frames that came after a stop (it was not heard)
         self._seen: OIMode | None = None
         #: when a valid frame of the running stream last came (link clock), as the stop is
@@ -278,7 +286,7 @@ class SafeStop:
         # once more after a stop not delivered (close()'s), nothing heard since: what was
         # seen before that one (it moved the model on to Passive without the robot)
         if self.safe_stopped is not False or link.index != self._unseen_from:
-            self._before = (writer.modes.mode, writer.last_wheels)
+            self._before = (writer.modes.mode, writer.last_wheels, writer.wheels_stopped_by)
             self._seen = None
         self._unproven = None
         # before the stream's first frame the wait is the stream request's way to the robot
@@ -531,7 +539,7 @@ class SafeStop:
 
     def activity(self) -> str:
         """What the last wheel command written had the robot doing (:func:`describe_activity`)."""
-        return describe_activity(self.writer.last_wheels)
+        return describe_activity(self.writer.last_wheels, self.writer.wheels_stopped_by)
 
     def _port_gone(self) -> str:
         """Why a stop to a port that failed was not delivered. A far end that closed the
@@ -550,7 +558,7 @@ class SafeStop:
         doing before the stop was written (the mode and the wheels the model held then, not
         the Passive and drive 0 of the stop itself); False (what :meth:`stop` returns)."""
         writer = self.writer
-        mode, wheels = self._before
+        mode, wheels, stopped_by = self._before
         # never told to move and seen in Passive, or never seen at all: nothing was left
         # driving (``sensors``, ``doctor``); the summary or the error says the port's fate
         if self._seen is not None:  # in the frames after the stop: what the robot is in
@@ -562,10 +570,10 @@ class SafeStop:
         elif self._seen is not None:
             report = (
                 f"last seen in {mode.label} (the last wheel command written: "
-                f"{describe_activity(wheels)}); {why}"
+                f"{describe_activity(wheels, stopped_by)}); {why}"
             )
         else:
-            report = f"last seen in {mode.label} {describe_activity(wheels)}; {why}"
+            report = f"last seen in {mode.label} {describe_activity(wheels, stopped_by)}; {why}"
         if report != self.stop_report:  # close() tries once more: said once, not twice
             log.log(level, "%s: %s", self.writer.link.name, report)
         self.stop_report = report

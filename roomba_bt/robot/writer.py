@@ -71,6 +71,13 @@ class CommandWriter:
         self.refused = 0
         #: the last wheel command written (Drive, Drive Direct, PWM, a cleaning cycle)
         self.last_wheels: Command | None = None
+        #: why :attr:`last_wheels` is None after wheels were commanded: the cause of the
+        #: robot's own fall to Passive that stopped them (``charger``; :meth:`robot_stopped`),
+        #: "" while none has. Not cleared by a wheel command after it: ``last_wheels`` says
+        #: that one, and this is read only while it is None (:func:`describe_activity
+        #: <roomba_bt.robot.ending.describe_activity>`: "with its wheels stopped by its own
+        #: fall to Passive (charger)", not "never commanded" after 488 m of driving)
+        self.wheels_stopped_by = ""
         #: the last Motors (138) or PWM Motors (144) written, by the tree or by a batch (the
         #: safe stop's, the tick guard's, the monitor's pause: their "motors off"): what the
         #: robot's brushes and vacuum obey, for the monitor's robot panel, which showed the
@@ -267,14 +274,16 @@ class CommandWriter:
         motors = self.last_motors
         return motors is not None and sets_going(motors) and self.modes.mode in DRIVING_MODES
 
-    def robot_stopped(self) -> None:
+    def robot_stopped(self, cause: str) -> None:
         """The robot fell to Passive by itself (a cliff, a wheel drop, the charger): it
         stopped its wheels and motors, so the commands written before drive nothing now.
         Forgotten, as the runtime's outbox forgets them (``Outbox.robot_stopped``): the tick
         guard and the run's end took the robot for moving after the tree's Safe again, and
         the bump reflex kept the drive from before the fall and sent it again (the robot
-        drove back over the edge) once an onset cleared."""
+        drove back over the edge) once an onset cleared. ``cause`` (``cliff``, ``charger``)
+        is kept as what stopped the wheels (:attr:`wheels_stopped_by`)."""
         self.last_wheels = self.last_motors = self.held_wheels = None
+        self.wheels_stopped_by = cause
 
     def hold_forward(self) -> None:
         """A bump onset waits for the frame that confirms it (robot/hazards.py): drive 0 now

@@ -107,6 +107,43 @@ def test_a_robot_never_told_to_move_has_its_undelivered_stop_said_quietly(
     assert [r.levelname for r in caplog.records] == ["ERROR"]
 
 
+LEDGE = """
+name: ledge
+rooms: [[[0, 0], [4, 0], [4, 3.5], [0, 3.5]]]
+drops: [{name: ledge, rect: [2.0, 0.0, 4.0, 3.5]}]
+robot: {start: {at: [1.6, 1.75], heading: 0}}
+"""
+
+
+def test_wheels_stopped_by_the_robot_s_own_fall_are_not_said_never_commanded() -> None:
+    """The soak: a patrol that drove 488 m, docked (the OI's own drop to Passive on the
+    charger) and fell asleep there was "last seen in Passive with its wheels never
+    commanded". The fall forgets the last wheel command (the robot stopped them); what is
+    said is what stopped them, until the next wheel command."""
+    link = Pullable(SimLink(Simulator(parse_world(LEDGE, "<test>"), profile=CREATE2)))
+    connection = Connection(link, CREATE2)
+    connection.start("safe", PACKETS)
+    connection.send_many([oi.drive(200, 32767)])
+    while connection.mode is not OIMode.PASSIVE:  # over the edge: the OI drops to Passive
+        connection.poll(0.05)
+    assert connection.falls == {"cliff": 1}
+    assert connection.activity() == "with its wheels stopped by its own fall to Passive (cliff)"
+    link.pulled = True
+    assert connection.safe_stop() is False
+    assert connection.stop_report == (
+        "last seen in Passive with its wheels stopped by its own fall to Passive (cliff); the "
+        "stop was not delivered: the port is gone"
+    )
+
+
+def test_a_wheel_command_after_a_fall_is_said_as_itself() -> None:
+    assert describe_activity(None, "charger") == (
+        "with its wheels stopped by its own fall to Passive (charger)"
+    )
+    assert describe_activity(None) == "with its wheels never commanded"
+    assert describe_activity(oi.drive(100, 32767), "charger") == "at 100 mm/s"
+
+
 @pytest.mark.parametrize("straight", [0x8000, 0x7FFF])
 def test_driving_straight_is_said_without_a_radius(straight: int) -> None:
     """``radius: straight`` is sent as 0x8000: it was said "radius 32768 mm"."""
