@@ -203,8 +203,7 @@ def _compound_hint(dimension: str, value: str) -> str:
     if dimension != "duration" or _SEVERAL_PARTS.search(value) is None:
         return ""
     return (
-        f": in several units, each part has its own unit and none a sign (e.g. "
-        f"{COMPOUND_EXAMPLES})"
+        f": in several units, each part has its own unit and none a sign (e.g. {COMPOUND_EXAMPLES})"
     )
 
 

@@ -64,8 +64,11 @@ def test_parameter_from_the_command_line(
         (["--timeout", "soon"], "--timeout 'soon'"),
         (["--timeout", "nan"], "--timeout 'nan': must be a finite duration"),  # was no timeout
         (["--timeout", "1e999s"], "1e999 is too large a number for a duration"),
-        (["--timeout", "30min1h"], "'30min1h': a duration in several units is "
-         "written the largest unit first, each once, e.g. 1h30min"),
+        (
+            ["--timeout", "30min1h"],
+            "'30min1h': a duration in several units is "
+            "written the largest unit first, each once, e.g. 1h30min",
+        ),
         (["--world", "no-such-world"], "no-such-world"),
         (["--baud", "19200", "-p", "speed=100mm/s"], None),
     ],
