@@ -111,9 +111,9 @@ def _add_run_parser(sub: Any) -> None:
     add_param_option(run, "set a mission parameter, e.g. -p speed=250mm/s (repeatable)")
     run.add_argument(
         "--timeout",
-        help="give up after this much mission time, e.g. 90s, 5min, 1h30min or 1d (default: none; with "
-        f"--fast and no --monitor/--watch {FAST_TIMEOUT_S / 3600:g}h, else a mission that never "
-        "ends would run until the simulated battery is flat, or for ever on the dock)",
+        help="give up after this much mission time, e.g. 90s, 5min, 1h30min or 1d (default: "
+        f"none; with --fast and no --monitor/--watch {FAST_TIMEOUT_S / 3600:g}h, else a mission "
+        "that never ends would run until the simulated battery is flat, or for ever on the dock)",
     )
     run.add_argument(
         "--record",

@@ -68,6 +68,7 @@ from roomba_bt.runtime.clock import (
     mission_time_after,
 )
 from roomba_bt.runtime.ending import RunEnding
+from roomba_bt.runtime.long_run import MissionTimeChecks
 from roomba_bt.runtime.schedule import DRIFT, LOST_LATE, SPREAD_DECAY
 from roomba_bt.runtime.stall import StallRide
 from roomba_bt.runtime.summary import (
@@ -473,6 +474,7 @@ class MissionRunner(BaseHandle):
         held = False  # the root ended and the gate holds the run there (the monitor)
         untick: int | None = None  # the gate held the tree: the tick it last ticked on
         flushed = -1  # the stream tick of the last tree tick written whole
+        checks = MissionTimeChecks(summary, self.timeout_s)  # the time limit, the charge
         try:
             while True:
                 try:
@@ -526,9 +528,8 @@ class MissionRunner(BaseHandle):
                         continue
                     tree_ended(root, summary)
                     return
-                if self.timeout_s is not None and mission_time >= self.timeout_s:
-                    summary.timed_out(self.timeout_s, running_in(root))
-                    return
+                if mission_time >= checks.next_at and not checks.look(self.snapshot, root):
+                    return  # the time limit ran out; else the charge was looked at (long_run.py)
         except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM...: in which half of its frame
             if not behaviours_interrupt(exc):  # (a behaviour's own: its error, run() says)
                 summary.ended_at = interrupted_at(self, flushed)

@@ -175,6 +175,30 @@ def first_said(instance: str) -> str:
     return f" (the first: {instance})" if instance else ""
 
 
+#: the units :func:`duration_words` says a duration in, largest first, in seconds (the
+#: mission language's own spelling: ``1 h 30 min`` reads back as a duration)
+_DURATION_WORDS = (("d", 86400), ("h", 3600), ("min", 60), ("s", 1))
+
+
+def duration_words(seconds: float) -> str:
+    """A duration as a person says a long one, to the second: ``4 h 12 min 3 s``, ``12 h``,
+    ``45 s``, ``1 d 2 h`` (units that are 0 left out)."""
+    left = round(seconds)
+    parts = []
+    for unit, size in _DURATION_WORDS:
+        count, left = divmod(left, size)
+        if count:
+            parts.append(f"{count} {unit}")
+    return " ".join(parts) or "0 s"
+
+
+def long_duration_said(seconds: float) -> str:
+    """`` (4 h 12 min 3 s)`` after a number of seconds of a minute or more, for the
+    summary's duration line (``43200.00 s`` alone had the reader divide by 3600 after a
+    night); "" for a shorter one, whose seconds say it (``3.00 s``)."""
+    return f" ({duration_words(seconds)})" if seconds >= 60 else ""
+
+
 #: the share of the robot's frames lost from which the summary calls the link poor
 POOR_LINK = 0.05
 #: the frames a run must span (3 s) before the summary judges its link
@@ -238,6 +262,12 @@ class RunSummary:
     distance_mm: float = 0.0
     final_mode: OIMode | None = None
     battery_percent: float | None = None
+    #: the lowest battery level seen, looked at once a second of mission time
+    #: (runtime/long_run.py) and at the end; None when the stream did not carry it
+    lowest_battery_percent: float | None = None
+    #: seconds of mission time the robot spent on a powered charger (packet 34), to the
+    #: second (runtime/long_run.py): an overnight patrol's hours of charging
+    on_charger_s: float = 0.0
     safe_stop: str = "not attempted"
     #: False when the stop could not reach the robot: the final mode is then only the last
     #: one seen, and says so
@@ -354,7 +384,9 @@ class RunSummary:
         self.mission_time_s = snapshot.time
         self.distance_mm = snapshot.odometry.path_mm
         if snapshot.frame.carries(BATTERY_PACKETS):
-            self.battery_percent = snapshot.frame.battery_percent
+            self.battery_percent = level = snapshot.frame.battery_percent
+            lowest = self.lowest_battery_percent
+            self.lowest_battery_percent = level if lowest is None else min(lowest, level)
 
     def take_counters(self, counters: object) -> None:
         """What the stream parser refused or skipped (its ``counters``; None: a link without)."""
@@ -397,7 +429,6 @@ class RunSummary:
         """The summary's lines, each one line: what a mission's author wrote (its name, a
         node's in the reason) is escaped (``"\\n[ok] robot stopped"`` faked a line)."""
         mode = self.final_mode_text()
-        battery = f"{self.battery_percent:.0f}%" if self.battery_percent is not None else "n/a"
         reason = f" ({self.reason})" if self.reason else ""
         lines = [
             *([f"label        {self.label}"] if self.label else []),
@@ -406,7 +437,8 @@ class RunSummary:
             *([f"robot        {self.robot}"] if self.robot else []),
             f"outcome      {self.outcome.value.upper()}{reason}",
             *([f"forced       by the operator: {'; '.join(self.forced)}"] if self.forced else []),
-            f"duration     {self.mission_time_s:.2f} s mission time{self.wall_said()}",
+            f"duration     {self.mission_time_s:.2f} s mission time"
+            f"{long_duration_said(self.mission_time_s)}{self.wall_said()}",
             *([f"paused       {self.paused_text()}"] if self.pauses or self.steps else []),
             f"ticks        {self.ticks}{self.tick_times_said()}",
             f"frames       {self.stale_frames_dropped} stale dropped, {self.frames_lost} lost, "
@@ -414,7 +446,8 @@ class RunSummary:
             f"{self.implausible_frames} out of range, {self.skipped_bytes} bytes skipped, "
             f"{self.unconfirmed_hazards} unconfirmed hazards",
             *([f"stalls       {self.stall_text()}"] if self.stalls else []),
-            *([f"falls        {self.falls_text()}"] if self.falls else []),
+            *([f"falls        {self.falls_text()}"] if hazard_falls(self.falls) else []),
+            *([f"charger      {charger}"] if (charger := self.charger_text()) else []),
             *([f"link         {link}"] if (link := self.link_verdict()) else []),
             *(
                 [
@@ -436,7 +469,7 @@ class RunSummary:
             f"{self.refused_commands} refused by the mode guard{self.dropped_said()}",
             f"distance     {self.distance_mm / 1000:.2f} m",
             f"final mode   {mode}",
-            f"battery      {battery}",
+            f"battery      {self.battery_text()}",
             f"safe stop    {self.safe_stop}",
             *([f"record       {self.record_stopped}"] if self.record_stopped else []),
             *self.verdict_lines(),
@@ -445,7 +478,9 @@ class RunSummary:
 
     def wall_said(self) -> str:
         """``, 0.04 s wall`` for the duration line; "" without :attr:`timings`."""
-        return f", {self.wall_time_s:.2f} s wall" if self.timings else ""
+        if not self.timings:
+            return ""
+        return f", {self.wall_time_s:.2f} s wall{long_duration_said(self.wall_time_s)}"
 
     def tick_times_said(self) -> str:
         """`` (0 overruns > 15 ms, slowest 1.98 ms)`` for the ticks line; "" without
@@ -523,8 +558,32 @@ class RunSummary:
 
     def falls_text(self) -> str:
         """The robot's own falls to Passive, the commonest cause first: ``the robot fell to
-        Passive by itself 21 times (cliff 20, wheel drop 1)`` (:func:`falls_said`)."""
-        return falls_said(self.falls)
+        Passive by itself 21 times (cliff 20, wheel drop 1)`` (:func:`falls_said`). Those
+        onto the charger (:data:`EXPECTED_FALLS`) are not among them: each is a docking,
+        which the ``charger`` line counts (:meth:`charger_text`); a patrol that docked ten
+        times read as ten faults."""
+        return falls_said(hazard_falls(self.falls))
+
+    def charger_text(self) -> str:
+        """The ``charger`` line: the dockings (the OI's own drop from Safe or Full to
+        Passive on a powered charger's contacts: how docking ends) and the time on the
+        charger, when a second or more (``docked 2 times, on it 2 h 41 min in all``); ""
+        for a run that met no charger."""
+        docked = self.falls.get("charger", 0)
+        parts = [f"docked {'once' if docked == 1 else f'{docked} times'}"] if docked else []
+        if self.on_charger_s >= 1:
+            parts.append(f"on it {duration_words(self.on_charger_s)} in all")
+        return ", ".join(parts)
+
+    def battery_text(self) -> str:
+        """``46%``, then the lowest level seen when it was lower: ``46%, the lowest 18%``
+        (a night's patrol ended charged, its low point unsaid); ``n/a`` unknown."""
+        final, lowest = self.battery_percent, self.lowest_battery_percent
+        if final is None:
+            return "n/a"
+        if lowest is None or round(lowest) >= round(final):
+            return f"{final:.0f}%"
+        return f"{final:.0f}%, the lowest {lowest:.0f}%"
 
     def link_verdict(self) -> str:
         """A line that lost :data:`POOR_LINK` or more of the robot's frames, over a run long

@@ -128,9 +128,9 @@ def test_falls_of_several_causes_are_said_the_commonest_first() -> None:
     assert "falls        the robot fell to Passive by itself 21 times (cliff 20, wheel drop 1)" in (
         summary.lines()
     )
-    assert RunSummary("m", falls={"charger": 1}).falls_text() == (
-        "the robot fell to Passive by itself once (charger)"
-    )
+    summary = RunSummary("m", falls={"charger": 1, "cliff": 2})
+    assert summary.falls_text() == "the robot fell to Passive by itself 2 times (cliff)"
+    assert "charger      docked once" in summary.lines()
 
 
 def test_the_refusals_warning_names_the_strict_check_as_its_caller_sets_it() -> None:
@@ -140,3 +140,68 @@ def test_the_refusals_warning_names_the_strict_check_as_its_caller_sets_it() -> 
     assert summary.lines()[-1].endswith(": the strict check fails such a run (exit 7)")
     summary.strict_named = "--strict"
     assert summary.lines()[-1].endswith(": --strict fails such a run (exit 7)")
+
+
+@pytest.mark.parametrize(
+    ("seconds", "said"),
+    [(3.0, ""), (59.9, ""), (60.0, " (1 min)"), (90.4, " (1 min 30 s)"),
+     (15123.0, " (4 h 12 min 3 s)"), (43200.0, " (12 h)"), (93784.0, " (1 d 2 h 3 min 4 s)")],
+)  # fmt: skip
+def test_a_long_duration_is_said_in_hours_and_minutes_too(seconds: float, said: str) -> None:
+    """The soak: "43200.00 s mission time, 209.05 s wall" after a night. The seconds stay
+    (scripts read them), and a minute or more is said as a person says it too."""
+    summary = RunSummary("m", mission_time_s=seconds, wall_time_s=seconds)
+    assert f"duration     {seconds:.2f} s mission time{said}, {seconds:.2f} s wall{said}" in (
+        summary.lines()
+    )
+
+
+def test_dockings_are_counted_apart_from_the_falls_with_the_time_on_the_charger() -> None:
+    """A patrol that docks ten times read "the robot fell to Passive by itself 10 times
+    (charger)": ten faults, to a reader. The OI's drop to Passive on the charger is how a
+    docking ends: the charger line counts it, with the hours on the charger; the falls line
+    keeps the hazards."""
+    summary = RunSummary("m", falls={"charger": 10}, on_charger_s=48603.0)
+    lines = summary.lines()
+    assert "charger      docked 10 times, on it 13 h 30 min 3 s in all" in lines
+    assert not [line for line in lines if line.startswith("falls")]
+    summary.falls["cliff"] = 1
+    assert "falls        the robot fell to Passive by itself once (cliff)" in summary.lines()
+    assert RunSummary("m", on_charger_s=0.5).charger_text() == ""  # the dock's last frame
+    assert RunSummary("m", on_charger_s=75.0).charger_text() == "on it 1 min 15 s in all"
+
+
+def test_the_lowest_battery_level_is_said_when_it_was_lower_than_the_last() -> None:
+    assert RunSummary("m", battery_percent=46.2, lowest_battery_percent=18.4).battery_text() == (
+        "46%, the lowest 18%"
+    )
+    assert RunSummary("m", battery_percent=46.2, lowest_battery_percent=45.9).battery_text() == (
+        "46%"
+    )
+    assert RunSummary("m").battery_text() == "n/a"
+
+
+DOCK_AND_REST = """\
+mission: dock and rest
+include: [roomba-bt:lib/docking.yaml]
+tree:
+  sequence:
+    - subtree: {id: dock}
+    - mode: passive
+    - wait: 2min
+"""
+
+
+def test_a_run_counts_its_time_on_the_charger_and_its_lowest_battery(
+    run_mission: RunMission,
+) -> None:
+    """Looked at once a second of mission time (runtime/long_run.py): the two minutes of
+    rest on the charger, to the second, and the battery's low point before it charged."""
+    run = run_mission(DOCK_AND_REST, timeout=None)
+    summary = run.summary
+    assert summary.outcome is Outcome.SUCCESS
+    assert summary.falls == {"charger": 1}
+    assert 119.0 <= summary.on_charger_s <= 121.0
+    assert summary.lowest_battery_percent is not None and summary.battery_percent is not None
+    assert summary.lowest_battery_percent < summary.battery_percent  # it charged
+    assert "charger      docked once, on it 2 min in all" in summary.lines()
