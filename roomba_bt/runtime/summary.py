@@ -278,6 +278,10 @@ class RunSummary:
     #: where the slowest tick was, when a watch could tell (runtime/tick_watch.py: ``run``'s,
     #: on either clock): ``sleepy (Sleepy.update at x.py:98)``; "" otherwise
     slowest_in: str = ""
+    #: the slowest tick was the host's: its thread's time on a CPU and waiting for one
+    #: (runtime/tick_watch.py: ``3.10 ms of CPU in 100.20 ms, 95.00 ms of it waiting for a
+    #: CPU``), said instead of a behaviour it did not spend its time in; "" otherwise
+    slowest_host_busy: str = ""
     #: the exception's traceback when a behaviour raised one (printed under ``-v``)
     traceback: str = ""
     #: the exception itself that ended the run as ERROR (a behaviour's, a plugin's, the
@@ -533,10 +537,13 @@ class RunSummary:
     def slowest_said(self) -> str:
         """`` in sleepy (Sleepy.update at x.py:98)``: the slowest tick's behaviour, for the ticks
         line, when it ran over the 15 ms slot (a run's ordinary slowest tick is not news) and
-        the watch named it; else ""."""
-        if not self.slowest_in or self.max_tick_s <= SLOT_SECONDS:
+        the watch named it, or ``: the host was busy (...)`` when the host kept the ticking
+        thread from running (:attr:`slowest_host_busy`); else ""."""
+        if self.max_tick_s <= SLOT_SECONDS:
             return ""
-        return f" in {self.slowest_in}"
+        if self.slowest_host_busy:
+            return f": the host was busy ({self.slowest_host_busy})"
+        return f" in {self.slowest_in}" if self.slowest_in else ""
 
     def paused_text(self) -> str:
         """The pauses, in the duration line's units: ``6.15 s in 2 pauses, 3 steps, left out

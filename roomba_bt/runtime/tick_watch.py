@@ -20,15 +20,31 @@ What it can name: a tick that ran for two looks or more (about 50 ms); a shorter
 tick, or one whose looks found no behaviour (the runtime's own code, the port), stays
 unnamed, and one that ran much shorter than the longest iteration seen is not called that
 (:meth:`SlowTickWatch.culprit`).
+
+A tick is also slow when the process did not run: on a loaded host (a soak's ``--fast`` runs
+beside other work, load 6 to 8 on 2 cores) the ticking thread waits for a CPU, and the look
+finds it wherever it was stopped, a line of ``wall_follow`` that computes in a millisecond
+("slowest 126.74 ms in wall_follow ... wall.py:192"). So the watch also reads the ticking
+thread's time on a CPU and its time waiting for one (Linux's
+``/proc/self/task/TID/schedstat``, :class:`SchedStat`: a microsecond's read of a file kept
+open, at each look that finds a new tick count, in the watch's own thread: nothing on the
+tick path). When the slowest tick so far ended between two such looks, and over that window
+the thread had a CPU for less than half the time and waited for one for half of it or more,
+the slowest tick was the host's, not a behaviour's: the summary says ``the host was busy
+(3.10 ms of CPU in 100.20 ms, 95.00 ms of it waiting for a CPU)`` and names no behaviour. A
+behaviour that blocks (``time.sleep``, I/O, a lock) has no CPU either but waits for none,
+and is named as before; where the times cannot be read (not Linux), every slow tick is
+named as before.
 """
 
 from __future__ import annotations
 
 import contextlib
+import os
 import sys
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 from roomba_bt.runtime.summary import RunSummary
 from roomba_bt.runtime.teardown import behaviour_at
@@ -36,18 +52,78 @@ from roomba_bt.runtime.teardown import behaviour_at
 #: seconds between two looks at the ticking thread
 LOOK_EVERY_S = 0.025
 
+#: a thread's seconds on a CPU and waiting for one, so far (:class:`SchedStat`); None: not
+#: known here
+ThreadTimes = Callable[[], tuple[float, float] | None]
+
+
+class SchedStat:
+    """The thread ``native_id``'s seconds on a CPU and waiting on a run queue for one, from
+    Linux's ``/proc/self/task/TID/schedstat`` ("on-CPU ns, waiting ns, timeslices"), read
+    by :meth:`read` (about a microsecond: the file is kept open and read again from its
+    start); None where there is no such file (another system, a kernel without scheduler
+    statistics)."""
+
+    def __init__(self, native_id: int) -> None:
+        try:
+            self._fd: int | None = os.open(f"/proc/self/task/{native_id}/schedstat", os.O_RDONLY)
+        except OSError:
+            self._fd = None
+
+    def read(self) -> tuple[float, float] | None:
+        if self._fd is None:
+            return None
+        try:
+            on_cpu, waiting = os.pread(self._fd, 64, 0).split()[:2]
+            return int(on_cpu) / 1e9, int(waiting) / 1e9
+        except (OSError, ValueError):
+            return None
+
+    def close(self) -> None:
+        if self._fd is not None:
+            os.close(self._fd)
+            self._fd = None
+
 
 class SlowTickWatch:
-    """Looks at one run's ticking thread from a thread of its own (the module docstring)."""
+    """Looks at one run's ticking thread from a thread of its own (the module docstring).
+    ``clock`` and ``times`` (the ticking thread's :data:`ThreadTimes`) are the wall clock's
+    and the kernel's (:class:`SchedStat`), given for a test."""
 
-    def __init__(self, summary: RunSummary, look_every_s: float = LOOK_EVERY_S) -> None:
+    def __init__(
+        self,
+        summary: RunSummary,
+        look_every_s: float = LOOK_EVERY_S,
+        *,
+        clock: Callable[[], float] = time.monotonic,
+        times: ThreadTimes | None = None,
+    ) -> None:
         self.summary = summary
         self.look_every_s = look_every_s
+        self.clock = clock
+        #: the kernel's reader of the ticking thread's times (the one that makes the watch),
+        #: closed by :meth:`close`; None when a test gives ``times``
+        self._schedstat: SchedStat | None = None
+        if times is None:
+            self._schedstat = SchedStat(threading.get_native_id())
+            times = self._schedstat.read
+        self.times = times
         #: the longest iteration found inside a behaviour: seconds it had run by the last
         #: look that found it there, and where that look found it
         self.longest_s = 0.0
         self.where = ""
+        #: the slowest tick that had ended at a look (the summary's ``max_tick_s`` then), and
+        #: its thread's time on a CPU, in how long, and how much of it waiting for a CPU when
+        #: the host kept the thread from running (:meth:`_host_busy`), else ""
+        self.slowest_judged = 0.0
+        self.host_busy = ""
         self._owner = threading.get_ident()  # the thread that ticks: the one that made it
+        self._seen = -1  # the tick count at the last look
+        self._last = 0.0  # when that look was
+        self._inside: float | None = None  # since when (a look's time) it is in a behaviour
+        #: the last look that found a new tick count, and the thread's times then: the ticks
+        #: that end before the next such look ran after it
+        self._window: tuple[float, tuple[float, float] | None] | None = None
         self._done = threading.Event()
         self._thread = threading.Thread(
             target=self._watch, name="roomba-bt slow tick watch", daemon=True
@@ -57,46 +133,92 @@ class SlowTickWatch:
         self._thread.start()
 
     def close(self) -> None:
-        """Stop looking (at once: the thread waits on an event)."""
+        """Stop looking (at once: the thread waits on an event); the ticks since the last
+        look have ended too (:meth:`_ticks_ended`)."""
         self._done.set()
-        self._thread.join()
+        if self._thread.ident is not None:  # started (a test looks by hand)
+            self._thread.join()
+        self._ticks_ended(self.clock())
+        if self._schedstat is not None:
+            self._schedstat.close()
 
     def culprit(self) -> str:
-        """Where the slowest tick was, or "" when the watch cannot tell: the longest iteration
-        it found inside a behaviour must have run, by its looks, for at least the slowest
-        tick's time less three looks (a look comes up to one late at each end, and a look
-        may itself be late); an iteration
-        that ran that long is the slowest tick, or one as slow."""
+        """Where the slowest tick was, or "" when the watch cannot tell, or the host kept
+        the thread from running then (:meth:`host_kept_it`): the longest iteration it found
+        inside a behaviour must have run, by its looks, for at least the slowest tick's time
+        less three looks (a look comes up to one late at each end, and a look may itself be
+        late); an iteration that ran that long is the slowest tick, or one as slow."""
         slowest = self.summary.max_tick_s
         if not self.where or self.longest_s < slowest - 3 * self.look_every_s:
             return ""
-        return self.where
+        return "" if self.host_kept_it() else self.where
+
+    def host_kept_it(self) -> str:
+        """:attr:`host_busy`, when it was said of the run's slowest tick; else ""."""
+        return self.host_busy if self.slowest_judged == self.summary.max_tick_s else ""
 
     def _watch(self) -> None:
-        summary, clock, frames = self.summary, time.monotonic, sys._current_frames
-        seen = -1  # the tick count at the last look
-        last = 0.0  # when that look was
-        inside: float | None = None  # since when (a look's time) the iteration is in a behaviour
+        frames = sys._current_frames
         while not self._done.wait(self.look_every_s):
-            now, ticks = clock(), summary.ticks
-            if ticks != seen:  # a new iteration since the last look: a short one, so far
-                seen, last, inside = ticks, now, None
-                continue
-            where = behaviour_at(frames().get(self._owner))
-            if not where:  # the runtime's own code or wait (a poll, a pause): no tick's
-                inside = None
-            else:
-                inside = last if inside is None else inside  # it was running at the last look
-                if now - inside > self.longest_s:
-                    self.longest_s, self.where = now - inside, where
-            last = now
+            self.look(self.summary.ticks, lambda: behaviour_at(frames().get(self._owner)))
+
+    def look(self, ticks: int, where_now: Callable[[], str]) -> None:
+        """One look, the loop's tick count ``ticks`` read: the same as at the last look is
+        an iteration still running, and the thread is looked into (``where_now``: the
+        behaviour it is in, "" for none); another, ticks that ended (:meth:`_ticks_ended`)."""
+        now = self.clock()
+        if ticks != self._seen:  # a new iteration since the last look: a short one, so far
+            self._ticks_ended(now)
+            self._seen, self._last, self._inside = ticks, now, None
+            return
+        where = where_now()
+        if not where:  # the runtime's own code or wait (a poll, a pause): no tick's
+            self._inside = None
+        else:
+            inside = self._inside = self._last if self._inside is None else self._inside
+            if now - inside > self.longest_s:
+                self.longest_s, self.where = now - inside, where
+        self._last = now
+
+    def _ticks_ended(self, now: float) -> None:
+        """Ticks ended since the window began (the last look that found a new tick count):
+        if the slowest so far is among them (the loop raised ``max_tick_s``), what the
+        thread's times over the window say of it (:meth:`_host_busy`). The times are read
+        at every such look (the window's start must be read before a tick turns out slow:
+        on a loaded host the looks themselves come late, the slowest tick seen by none),
+        and after the ticks ended (a wait for a CPU is counted once the thread has one)."""
+        times = self.times()
+        slowest = self.summary.max_tick_s
+        if self._window is not None and slowest > self.slowest_judged:
+            began, before = self._window
+            self.slowest_judged = slowest
+            self.host_busy = self._host_busy(now - began, before, times)
+        self._window = (now, times)
+
+    def _host_busy(
+        self, window: float, before: tuple[float, float] | None, after: tuple[float, float] | None
+    ) -> str:
+        """``3.10 ms of CPU in 100.20 ms, 95.00 ms of it waiting for a CPU`` when, over the
+        ``window`` s (the times ``before`` and ``after``), the thread had a CPU for less
+        than half the time and waited for one for half of it or more; "" otherwise, or when
+        not known."""
+        if before is None or after is None or window <= 0:
+            return ""
+        on_cpu, waiting = after[0] - before[0], after[1] - before[1]
+        if on_cpu >= window / 2 or waiting < window / 2:
+            return ""
+        return (
+            f"{on_cpu * 1000:.2f} ms of CPU in {window * 1000:.2f} ms, {waiting * 1000:.2f} ms "
+            "of it waiting for a CPU"
+        )
 
 
 @contextlib.contextmanager
 def slowest_tick_named(summary: RunSummary, watch: bool) -> Iterator[None]:
     """The run's ticks, watched when ``watch`` (:class:`SlowTickWatch`, from the calling
     thread, which ticks); when they end, however they end, ``summary.slowest_in`` says where
-    the slowest tick was if the watch could tell."""
+    the slowest tick was if the watch could tell, or ``summary.slowest_host_busy`` that the
+    host kept the ticking thread from running then."""
     if not watch:
         yield
         return
@@ -107,3 +229,4 @@ def slowest_tick_named(summary: RunSummary, watch: bool) -> Iterator[None]:
     finally:
         watcher.close()
         summary.slowest_in = watcher.culprit()
+        summary.slowest_host_busy = watcher.host_kept_it()

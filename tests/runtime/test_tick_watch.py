@@ -13,6 +13,7 @@ import pytest
 from roomba_bt.cli import main
 from roomba_bt.mission import Permissions
 from roomba_bt.runtime.summary import ExitCode, RunSummary
+from roomba_bt.runtime.tick_watch import SlowTickWatch
 
 from .simrun import RunMission, write_mission
 
@@ -84,3 +85,121 @@ def test_only_a_slow_tick_is_named() -> None:
     assert watch.culprit() == "w (W.update at w.py:3)"
     watch.longest_s = 0.2  # another, shorter tick's: not the slowest one
     assert watch.culprit() == ""
+
+
+class FakeThread:
+    """The ticking thread's clocks as a test sets them: the wall clock, and the seconds on a
+    CPU and waiting for one (a loaded host's run queue) that :func:`thread_times` reads."""
+
+    def __init__(self) -> None:
+        self.now = 100.0
+        self.on_cpu = 5.0
+        self.waiting = 1.0
+        self.reads = 0
+
+    def times(self) -> tuple[float, float]:
+        self.reads += 1
+        return self.on_cpu, self.waiting
+
+    def run(self, seconds: float, cpu_share: float, waiting_share: float) -> None:
+        self.now += seconds
+        self.on_cpu += seconds * cpu_share
+        self.waiting += seconds * waiting_share
+
+
+def _watched_tick(cpu_share: float, waiting_share: float) -> SlowTickWatch:
+    """Two short ticks, then one that lasts 125 ms (five looks of 25 ms) inside wall_follow,
+    the thread's time spent as the shares say, then short ones again."""
+    thread = FakeThread()
+    summary = RunSummary("m", max_tick_s=0.001)
+    watch = SlowTickWatch(summary, 0.025, clock=lambda: thread.now, times=thread.times)
+    where = "wall_follow (WallFollow.update at wall.py:192)"
+    for ticks in (1, 2):  # short ticks: the times read at each look that finds new ones
+        thread.run(0.025, 1.0, 0.0)
+        watch.look(ticks, lambda: where)
+    for _ in range(5):  # the slow one: still running at each look, nothing more read
+        thread.run(0.025, cpu_share, waiting_share)
+        watch.look(2, lambda: where)
+    assert thread.reads == 2
+    summary.max_tick_s = 0.125  # the loop's measure, once it ended
+    thread.run(0.025, 1.0, 0.0)  # the next ticks, short and computing, as --fast's are
+    watch.look(3, lambda: where)
+    summary.slowest_in, summary.slowest_host_busy = watch.culprit(), watch.host_kept_it()
+    return watch
+
+
+def test_a_tick_the_host_kept_from_running_is_said_so_not_blamed_on_its_behaviour() -> None:
+    """The soak's loaded host (load 6 to 8 on 2 cores): "slowest 126.74 ms in wall_follow
+    ... wall.py:192", a leaf that computes in a millisecond; the thread was waiting for a
+    CPU. Its times over the looks around the tick say so."""
+    watch = _watched_tick(cpu_share=0.05, waiting_share=0.9)
+    assert watch.culprit() == ""
+    said = "31.25 ms of CPU in 150.00 ms, 112.50 ms of it waiting for a CPU"
+    assert watch.host_kept_it() == said
+    assert f"slowest 125.00 ms: the host was busy ({said}))" in str(watch.summary)
+    assert "wall_follow" not in str(watch.summary)
+
+
+@pytest.mark.parametrize(
+    ("cpu_share", "waiting_share"), [(0.95, 0.0), (0.0, 0.0), (0.6, 0.4)],
+    ids=["computed", "blocked (time.sleep)", "computed, some waiting"],
+)  # fmt: skip
+def test_a_tick_its_behaviour_spent_is_named_as_before(
+    cpu_share: float, waiting_share: float
+) -> None:
+    """A behaviour that computes has the CPU; one that blocks (the sleepy plugin above, I/O,
+    a lock) has none but waits for none either: both are the behaviour's to answer for."""
+    watch = _watched_tick(cpu_share, waiting_share)
+    assert watch.host_kept_it() == ""
+    assert "slowest 125.00 ms in wall_follow (WallFollow.update at wall.py:192))" in str(
+        watch.summary
+    )
+
+
+def test_a_slow_tick_no_look_saw_running_is_judged_by_the_looks_around_it() -> None:
+    """On a loaded host the watch's own thread waits for a CPU too: its looks come late, and
+    the slowest tick may run and end between two of them. The times read at both still say
+    whose it was; a later, slower tick the host did not keep is named by nobody's verdict."""
+    thread = FakeThread()
+    summary = RunSummary("m", max_tick_s=0.001)
+    watch = SlowTickWatch(summary, 0.025, clock=lambda: thread.now, times=thread.times)
+    watch.look(10, str)
+    thread.run(0.3, 0.2, 0.75)  # a 164 ms tick among short ones, the process mostly waiting
+    summary.max_tick_s = 0.164
+    watch.look(20, str)
+    assert watch.host_kept_it() == "60.00 ms of CPU in 300.00 ms, 225.00 ms of it waiting for a CPU"
+    thread.run(0.3, 0.0, 0.0)  # a later, slower one: blocked, not waiting (a sleep)
+    summary.max_tick_s = 0.25
+    watch.close()  # the run ended before the next look
+    assert watch.host_kept_it() == ""
+
+
+def test_without_the_thread_s_times_every_slow_tick_is_named_as_before() -> None:
+    summary = RunSummary("m", max_tick_s=0.1)
+    clock = iter(0.025 * n for n in range(10))
+    watch = SlowTickWatch(summary, 0.025, clock=lambda: next(clock), times=lambda: None)
+    for _ in range(5):
+        watch.look(1, lambda: "w (W.update at w.py:3)")
+    assert (watch.culprit(), watch.host_busy) == ("w (W.update at w.py:3)", "")
+
+
+def test_the_thread_s_times_are_read_from_the_kernel_where_it_keeps_them() -> None:
+    """Linux's schedstat of the calling thread: its time on a CPU grows as it computes."""
+    import threading
+
+    from roomba_bt.runtime.tick_watch import SchedStat
+
+    stats = SchedStat(threading.get_native_id())
+    before = stats.read()
+    if before is None:
+        pytest.skip("no /proc/self/task/TID/schedstat here")
+    after = before
+    for _ in range(1000):  # the kernel adds a running thread's time up at its clock's ticks
+        sum(range(100_000))
+        after = stats.read()
+        if after is not None and after[0] > before[0]:
+            break
+    stats.close()
+    assert after is not None and after[0] > before[0] and after[1] >= before[1]
+    assert stats.read() is None  # closed
+    assert SchedStat(-1).read() is None
