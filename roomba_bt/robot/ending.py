@@ -28,6 +28,7 @@ import contextlib
 import logging
 import signal
 from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
 from typing import Any, Literal
 
 from roomba_bt.oi import commands as oi
@@ -40,7 +41,7 @@ from roomba_bt.oi.packets import packet_ids
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import StreamParser, stream_period
 from roomba_bt.robot.errors import PortLost, RobotError
-from roomba_bt.robot.link import LINK_ERRORS, LinkStatus
+from roomba_bt.robot.link import LINK_ERRORS, LinkStatus, StreamLink
 from roomba_bt.robot.safety import ENDING_SIGNALS
 from roomba_bt.robot.wake import KeepAwake
 from roomba_bt.robot.writer import CommandWriter
@@ -200,6 +201,81 @@ def link_round_trip(seconds: Sequence[float], port: str) -> float:
     return min(quickest, ROUND_TRIP_CAP)
 
 
+@dataclass(frozen=True)
+class Backlog:
+    """Frames that waited unread in the port when a stop was about to be written
+    (:func:`read_backlog`): ``sent_until``, when the robot sent the last of them (link
+    clock); ``frames``, how many; ``waited``, the seconds since the last frame read before."""
+
+    sent_until: float
+    frames: int
+    waited: float
+
+
+def read_backlog(link: StreamLink, baud: int) -> Backlog | None:
+    """Read the frames the robot sent that the program had not read (a script asleep in
+    ``time.sleep`` while the stream ran, then Ctrl-C), as a poll would, before the stop
+    is written: nothing is waited for. Left in the port, the listening after the stop
+    took them for frames sent after it, and the time since the last frame *read* for
+    the robot's silence before it ("no valid frame for 0.15 s"): a stop the robot heard
+    was called unconfirmed. When the robot sent the last of them (link clock): now if
+    they fill the time since the last frame read (or the stream's start: a script that
+    never polled), a stream that ran on; else as many stream periods after it as there
+    were frames (a robot that fell silent meanwhile);
+    None if nothing waited. Only on the wall clock, as the listening after the stop, and in
+    a replay (a transport's ``recorded_reads``: ``ReplayTransport``'s), where it reads what
+    the recorded run read here, at its recorded times (nothing, for a run on a virtual
+    clock): before, it read nothing, and a frame the live run had read there was its
+    stop's difference. A part of :meth:`SafeStop.stop`, out of the class because it reads
+    only the link."""
+    transport = link.transport
+    recorded = getattr(transport, "recorded_reads", None)
+    if not (
+        link.streaming
+        and link.status is LinkStatus.STREAMING
+        and transport.is_open
+        and (recorded is not None or getattr(transport, "wall_clock", True))
+    ):
+        return None
+    with recorded() if recorded is not None else contextlib.nullcontext():
+        # the last frame read, or the stream's start if none was read since
+        last_read, index_then = link.silent_since, link.index
+        take_unread(link, 0.0)
+        waited = link.index - index_then
+        if not waited:
+            return None
+        now = transport.now()
+        period = stream_period(link.stream_ids, baud)
+        sent_until = last_read + waited * period
+        quiet = now - QUIET_BEFORE_PERIODS * period - BACKLOG_SLACK * (now - last_read)
+        if sent_until >= quiet:
+            sent_until = now
+        elif take_unread(link, QUIET_BEFORE_PERIODS * period):
+            # short of it: a robot silent since, or a stream that lagged (a loaded host's
+            # robot double); a frame within a few periods more says which
+            sent_until = transport.now()
+        return Backlog(sent_until, waited, now - last_read)
+
+
+def take_unread(link: StreamLink, wait: float) -> bool:
+    """What the port holds (and, ``wait`` > 0, the first frame within ``wait`` s) fed to
+    the link as a poll would; whether a frame came. A port that fails is left to the
+    stop to say."""
+    clock = link.transport.now
+    index, deadline = link.index, clock() + wait
+    with contextlib.suppress(*_RECOVERABLE):
+        for _ in range(BACKLOG_READS):
+            left = deadline - clock()
+            data = link.read(left if left > 0.0 else 0.0)
+            if data:
+                link.ingest(data, clock())
+                if wait and link.index > index:
+                    break  # the frame waited for
+            elif left <= 0.0:
+                break  # nothing more there, and no more to wait
+    return link.index > index
+
+
 class SafeStop:
     """The endings of one session: the stop sequence written whole from the mode the model
     holds, whether it reached the robot, and the port closed once.
@@ -242,7 +318,7 @@ class SafeStop:
         #: whether it is known to have arrived)
         self.written = False
         #: frames that waited unread in the port as the stop was written, and for how long
-        #: the program had not read it (:meth:`_read_backlog`), or None
+        #: the program had not read it (:func:`read_backlog`), or None
         self._unread: tuple[int, float] | None = None
         #: the link's round trip (the quickest of the start-up's Query List replies, at most
         #: :data:`ROUND_TRIP_CAP` seconds; :func:`link_round_trip`), 0 before any
@@ -280,8 +356,9 @@ class SafeStop:
         if writer.modes.mode is OIMode.OFF:  # never started (or ended in Off by Stop):
             self.safe_stopped = True  # nothing written, nothing to stop; not "unconfirmed"
             return True
-        self.written, self._unread = False, None
-        sent_until = self._read_backlog()
+        self.written = False
+        backlog = read_backlog(link, writer.baud)
+        self._unread = None if backlog is None else (backlog.frames, backlog.waited)
         # what the robot was last seen or told to do, before the stop moves the model on;
         # once more after a stop not delivered (close()'s), nothing heard since: what was
         # seen before that one (it moved the model on to Passive without the robot)
@@ -293,8 +370,8 @@ class SafeStop:
         # and a slot (over TCP, 40 ms and more of Nagle's delay): no silence, the watchdog's
         streamed = link.frame is not None and link.arrival >= link.silent_since
         self._heard_at = link.arrival if streamed else None
-        if sent_until is not None:  # frames that waited unread: when the robot sent them
-            self._heard_at = sent_until
+        if backlog is not None:  # frames that waited unread: when the robot sent them
+            self._heard_at = backlog.sent_until
         if not link.transport.is_open:
             return self._undelivered(self._port_gone())
         unconfirmed = None
@@ -329,70 +406,6 @@ class SafeStop:
         link.status = LinkStatus.STOPPED
         self.safe_stopped = True
         return True
-
-    def _read_backlog(self) -> float | None:
-        """Read the frames the robot sent that the program had not read (a script asleep in
-        ``time.sleep`` while the stream ran, then Ctrl-C), as a poll would, before the stop
-        is written: nothing is waited for. Left in the port, the listening after the stop
-        took them for frames sent after it, and the time since the last frame *read* for
-        the robot's silence before it ("no valid frame for 0.15 s"): a stop the robot heard
-        was called unconfirmed. When the robot sent the last of them (link clock): now if
-        they fill the time since the last frame read (or the stream's start: a script that
-        never polled), a stream that ran on; else as many stream periods after it as there
-        were frames (a robot that fell silent meanwhile);
-        None if nothing waited. Only on the wall clock, as the listening after the stop, and in
-        a replay (a transport's ``recorded_reads``: ``ReplayTransport``'s), where it reads what
-        the recorded run read here, at its recorded times (nothing, for a run on a virtual
-        clock): before, it read nothing, and a frame the live run had read there was its
-        stop's difference."""
-        link = self.writer.link
-        transport = link.transport
-        recorded = getattr(transport, "recorded_reads", None)
-        if not (
-            link.streaming
-            and link.status is LinkStatus.STREAMING
-            and transport.is_open
-            and (recorded is not None or getattr(transport, "wall_clock", True))
-        ):
-            return None
-        with recorded() if recorded is not None else contextlib.nullcontext():
-            # the last frame read, or the stream's start if none was read since
-            last_read, index_then = link.silent_since, link.index
-            self._take_unread(0.0)
-            waited = link.index - index_then
-            if not waited:
-                return None
-            now = transport.now()
-            period = stream_period(link.stream_ids, self.writer.baud)
-            self._unread = (waited, now - last_read)
-            sent_until = last_read + waited * period
-            quiet = now - QUIET_BEFORE_PERIODS * period - BACKLOG_SLACK * (now - last_read)
-            if sent_until >= quiet:
-                return now
-            # short of it: a robot silent since, or a stream that lagged (a loaded host's
-            # robot double); a frame within a few periods more says which
-            if self._take_unread(QUIET_BEFORE_PERIODS * period):
-                return transport.now()
-            return sent_until
-
-    def _take_unread(self, wait: float) -> bool:
-        """What the port holds (and, ``wait`` > 0, the first frame within ``wait`` s) fed to
-        the link as a poll would; whether a frame came. A port that fails is left to the
-        stop to say."""
-        link = self.writer.link
-        clock = link.transport.now
-        index, deadline = link.index, clock() + wait
-        with contextlib.suppress(*_RECOVERABLE):
-            for _ in range(BACKLOG_READS):
-                left = deadline - clock()
-                data = link.read(left if left > 0.0 else 0.0)
-                if data:
-                    link.ingest(data, clock())
-                    if wait and link.index > index:
-                        break  # the frame waited for
-                elif left <= 0.0:
-                    break  # nothing more there, and no more to wait
-        return link.index > index
 
     def _write_heard(self, checked: bool) -> str | None:
         """Write the stop; ``checked``: listen after it (:meth:`_contradicted`), and write it
