@@ -1152,7 +1152,7 @@ class ReplayTransport:
         """Meanwhile a read gives each of the robot's chunks that the recorded run read before
         the bytes the tree has still to write, at its recorded time, whatever the replay's
         clock says; the chunks recorded after those bytes wait for them as ever. The safe
-        stop's read of the port's backlog (``SafeStop._read_backlog``, robot/ending.py) does
+        stop's read of the port's backlog (``read_backlog``, robot/ending.py) does
         what the recorded run did there: that run's host had meanwhile taken time the
         replay's clock does not keep (its tree's stop, a loaded machine), and the frames the
         robot sent then waited in the port. Before, the replay read nothing there, and its
