@@ -22,6 +22,7 @@ from roomba_bt.errors import RoombaBtError
 from roomba_bt.oi.errors import OIError
 from roomba_bt.oi.identify import ChecksumMismatch
 from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
 
 
 class RobotError(RoombaBtError):
@@ -252,7 +253,8 @@ class StreamLost(LinkDown):
 class RobotAsleep(LinkDown):
     """The stream stopped because the robot slept: it sat in Passive five minutes with
     nothing from us (no command, no BRC pulse), or it answered nothing until a BRC pulse
-    woke it (``woken_by``: how the pulse was given). Says how to keep it awake."""
+    woke it (``woken_by``: how the pulse was given). Says how to keep it awake, and how the
+    firmware that does not wake by BRC on the dock is found on ``profile``'s robot."""
 
     def __init__(
         self,
@@ -262,6 +264,7 @@ class RobotAsleep(LinkDown):
         keep_awake: bool,
         pulses: bool,
         woken_by: str | None = None,
+        profile: RobotProfile = DEFAULT_PROFILE,
     ) -> None:
         self.idle_s = idle_s
         self.woken_by = woken_by
@@ -293,8 +296,22 @@ class RobotAsleep(LinkDown):
             port,
             f"{what}; {fix}. Firmware older than "
             "release-3.8.2 / release-stm32-3.7.7 does not wake by BRC on the dock "
-            "(roomba-bt doctor --allow-reset reads the version)",
+            f"({firmware_read(profile)})",
         )
+
+
+def firmware_read(profile: RobotProfile) -> str:
+    """How the firmware release of ``profile``'s robot is read: the banner Reset (7) prints
+    (``doctor --allow-reset``), where the robot has Reset; the Roomba 500 has none, and its
+    OI tells its release no other way (the advice named ``doctor --allow-reset`` to a 500
+    owner, whose doctor then says "the Roomba 500 has no Reset")."""
+    if profile.has_command("reset"):
+        return "roomba-bt doctor --allow-reset reads the version"
+    return (
+        f"the {profile.title} has no Reset (7), the one way its OI tells the version: a robot "
+        "asleep on the dock that a BRC pulse does not wake has such firmware; take it off the "
+        "dock to wake it"
+    )
 
 
 class BaudChanged(LinkDown):

@@ -99,8 +99,9 @@ def asleep_by_idle(connection: Connection) -> RobotAsleep | None:
         "nothing until a BRC pulse)"
     )
     return RobotAsleep(
-        connection.name, idle, keep_awake=connection.keep_awake, pulses=_pulses(connection)
-    )
+        connection.name, idle, keep_awake=connection.keep_awake, pulses=_pulses(connection),
+        profile=connection.profile,
+    )  # fmt: skip
 
 
 def idle_at(connection: Connection, moment: float) -> float | None:
@@ -152,7 +153,7 @@ def explain_silence(
         connection.unheard = None
         return RobotAsleep(
             connection.name, idle, keep_awake=connection.keep_awake,
-            pulses=_pulses(connection), woken_by=pulse.how,
+            pulses=_pulses(connection), woken_by=pulse.how, profile=connection.profile,
         )  # fmt: skip
     return lost(
         f"it answered no query, not even after a BRC pulse ({pulse.how}): "
@@ -353,10 +354,15 @@ def answers_elsewhere(connection: Connection, silent: NoAnswer) -> ConnectionFai
     # stop's confirmation), as the link's own reads would; the probe read them itself
     answer = found.found
     connection.link.bytes_read += len(answer.reply) if answer is not None else 0
+    # how a robot comes to talk at 19200, said only of one found there: one found at its
+    # default 115200 (a run opened at another rate) was told how a 600 comes to 19200
+    how = (
+        f" ({connection.profile.at_19200})" if found.baud != connection.profile.default_baud else ""
+    )
     return ConnectionFailed(
         connection.name,
         f"the robot answers at {found.baud} baud, not at the {run_rate} of the run: it answered "
-        f"no Query List at {run_rate}, and Start and a Query List at {found.baud} "
-        f"({connection.profile.at_19200}); open it at {found.baud} (--baud {found.baud} or "
-        f"--baud auto; in Python, Connection.open(port, baud={found.baud}))",
+        f"no Query List at {run_rate}, and Start and a Query List at {found.baud}{how}; open "
+        f"it at {found.baud} (--baud {found.baud} or --baud auto; in Python, "
+        f"Connection.open(port, baud={found.baud}))",
     )

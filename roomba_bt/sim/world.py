@@ -57,6 +57,10 @@ from roomba_bt.sim.geometry import (
 
 #: Radius of the round Roomba / Create 2 body (oi.profiles.BODY_RADIUS_MM).
 ROBOT_RADIUS_MM = BODY_RADIUS_MM
+#: How far into a wall a pose may reach and still count as touching it (mm): a robot whose
+#: bumper rests on a wall fits there (the docked pose is one, 170 mm from the plate), and
+#: the docked pose of a dock facing at an angle lands that much off by rounding.
+TOUCHING_MM = 1e-6
 
 #: The shipped worlds: package data (``roomba_bt/sim/worlds/``, also linked as ``worlds/`` at
 #: the top of the source tree), or ``$ROOMBA_BT_WORLDS`` if set.
@@ -288,10 +292,13 @@ class World:
         return max((d.level for d in self.dirt if point_in_polygon(x, y, d.area)), default=0)
 
     def pose_is_free(self, pose: Pose, clearance: float = ROBOT_RADIUS_MM) -> bool:
-        """The robot fits here: on the floor, no wall within its radius, not over a drop."""
+        """The robot fits here: on the floor, no wall within its radius (touching one fits:
+        :data:`TOUCHING_MM`), not over a drop. Decided (session 30): the docked pose, the
+        bumper on the plate, is a start pose; 0.17 m from a wall was refused and 0.171 m
+        taken."""
         if not self.on_floor(pose.x, pose.y) or self.over_drop(pose.x, pose.y):
             return False
-        limit = clearance * clearance
+        limit = (clearance - TOUCHING_MM) ** 2
         return all(distance_sq_to_segment(pose.x, pose.y, s) > limit for s in self.solid)
 
     def area(self, name: str) -> AreaSpec | None:
@@ -1038,7 +1045,10 @@ def _check_placement(
         return
     if not world.pose_is_free(world.start) and not (dock_off and not start_given):
         where = f"({world.start.x / 1000:.2f}, {world.start.y / 1000:.2f}) m"
-        fits = "a pose on the floor with 0.17 m clear of every wall, obstacle and drop"
+        fits = (
+            "a pose on the floor at least 0.17 m from every wall and obstacle (touching one "
+            "fits: the docked pose), not over a drop"
+        )
         if start_given:
             c.error(("robot", "start"), f"a start pose {where} where the robot does not fit",
                     fits)  # fmt: skip

@@ -300,6 +300,18 @@ def test_wait_for_charge_needs_both_packets(
     assert wait.status is expected
 
 
+def test_wait_for_charge_names_every_charging_state_it_accepts() -> None:
+    """Its help said "reconditioning, full, trickle" while it accepts waiting (4) too, which
+    a full battery on the dock often reads."""
+    from roomba_bt.oi.bits import ChargingState
+
+    help_text = " ".join((DockWaitCharge.__doc__ or "").split())
+    accepted = [state for state in ChargingState if state.is_charging]
+    assert ChargingState.WAITING in accepted
+    for state in accepted:
+        assert state.name.lower().split("_")[0] in help_text, state
+
+
 def test_wait_for_charge_fails_with_its_stage(robot: StubRobot, make: Make) -> None:
     wait = make(DockWaitCharge, timeout=0.5)
     robot.set_frame({21: 0, 34: 2, 35: 1}, mode=OIMode.PASSIVE)

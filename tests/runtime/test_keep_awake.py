@@ -61,10 +61,28 @@ def test_without_keep_awake_it_sleeps_and_is_reported_asleep(tmp_path: Path) -> 
     assert "the robot fell asleep" in summary.reason
     assert "drop --no-keep-awake" in summary.reason
     assert "release-3.8.2 / release-stm32-3.7.7" in summary.reason
+    assert "(roomba-bt doctor --allow-reset reads the version)" in summary.reason
     assert "no valid sensor frame" not in summary.reason
     # the stop met the robot asleep, and says so (not "no valid frame for 0.5 s")
     assert "unconfirmed: the robot was asleep (300 s in Passive" in summary.safe_stop
     assert summary.exit_code == 3
+
+
+def test_a_roomba500_asleep_is_not_told_to_read_its_version_by_reset(tmp_path: Path) -> None:
+    """The 500 has no Reset (7): ``doctor --allow-reset`` reads no version there (doctor
+    itself says so), and the advice sent a 500 owner to it."""
+    path = tmp_path / "idle.yaml"
+    path.write_text("tree:\n  wait: 7min\n")
+    mission = load_mission(path, profile=ROOMBA500)
+    simulator = Simulator(load_world("empty-room"), ROOMBA500, 0)
+    stack = RunStack(
+        mission, SimLink(simulator), profile=ROOMBA500, timeout_s=600.0, keep_awake=False
+    )
+    summary = stack.run()
+    stack.close()
+    assert "the robot fell asleep" in summary.reason
+    assert "--allow-reset" not in summary.reason, summary.reason
+    assert "the Roomba 500 series has no Reset (7)" in summary.reason
 
 
 def _patrol(keep_awake: bool | None) -> tuple[RunSummary, Simulator]:

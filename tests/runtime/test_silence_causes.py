@@ -324,3 +324,20 @@ def test_a_robot_found_at_another_rate_is_said_to_have_answered(tmp_path: Path) 
     assert "final mode   Passive" in str(summary)  # the probe's Start, at 19200
     assert summary.safe_stop == "sent pause_resume_stream, start"
     assert simulator.mode is OIMode.PASSIVE
+
+
+def test_a_robot_found_at_115200_is_not_told_how_a_robot_comes_to_19200(tmp_path: Path) -> None:
+    """The run at 57600, the robot at its default 115200: the message named the rate and
+    then explained how a 600 comes to talk at 19200, which had nothing to do with it."""
+    path = tmp_path / "m.yaml"
+    path.write_text(SPIN)
+    simulator = Simulator(load_world("empty-room"), CREATE2, 0, trace=False)
+    mission = load_mission(path, {}, profile=CREATE2)
+    link = SimLink(simulator)
+    link.set_baud(57600)  # the port opened at the run's rate
+    stack = RunStack(mission, link, profile=CREATE2, baud=57600)
+    summary = stack.run()
+    stack.close()
+    assert "the robot answers at 115200 baud, not at the 57600 of the run" in summary.reason
+    assert "19200" not in summary.reason, summary.reason
+    assert "open it at 115200 (--baud 115200" in summary.reason

@@ -176,7 +176,28 @@ def test_a_start_pose_inside_a_wall_is_refused() -> None:
     [problem] = problems(text)
     assert problem.startswith("w.yaml:2:")
     assert "robot.start: found a start pose (0.10, 1.00) m where the robot does not fit" in problem
-    assert f"{ROBOT_RADIUS_MM / 1000:.2f} m clear" in problem
+    assert f"at least {ROBOT_RADIUS_MM / 1000:.2f} m from every wall" in problem
+
+
+@pytest.mark.parametrize("facing", [90, 0, 45, 135, 200, -30])
+def test_the_docked_pose_is_a_start_pose(facing: float) -> None:
+    """The robot starting on the dock, at the docked pose the docs give (0.17 m in front of
+    the plate, facing it): 0.17 was refused as not fitting, 0.171 taken. Touching the plate
+    (and the wall behind it) fits; a millimetre closer does not."""
+    room = "rooms: [[[-3, -3], [3, -3], [3, 3], [-3, 3]]]\n"
+    dock = parse_world(f"{room}dock: {{at: [0, 0], facing: {facing}}}\n").dock
+    assert dock is not None
+    docked = dock.docked_pose
+    at, heading = (docked.x / 1000, docked.y / 1000), math.degrees(docked.theta)
+    text = (
+        f"{room}dock: {{at: [0, 0], facing: {facing}}}\n"
+        f"robot: {{start: {{at: [{at[0]!r}, {at[1]!r}], heading: {heading!r}}}}}\n"
+    )
+    world = parse_world(text, "w.yaml")
+    assert world.pose_is_free(world.start)
+    closer = 0.169 / 0.170
+    nearer = text.replace(f"[{at[0]!r}, {at[1]!r}]", f"[{at[0] * closer!r}, {at[1] * closer!r}]")
+    assert any("where the robot does not fit" in p for p in problems(nearer))
 
 
 def test_near_dock_start_region_needs_a_dock() -> None:

@@ -37,8 +37,9 @@ _LOGGING = py_trees.logging  # its level read on every tick (lean.py's _LOGGING)
 )  # fmt: skip
 class DockWaitCharge(Action):
     """SUCCESS when charging is confirmed: packet 34's home-base bit AND a charging state
-    (reconditioning, full, trickle) in packet 21. The robot charges only in Passive: put a
-    ``mode: passive`` before this leaf."""
+    (reconditioning, full, trickle, or waiting: 4, which a full battery on the dock often
+    reads) in packet 21. The robot charges only in Passive: put a ``mode: passive`` before
+    this leaf."""
 
     stage = "wait for charge"
 
