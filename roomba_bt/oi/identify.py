@@ -33,7 +33,8 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from roomba_bt.oi.frames import STREAM_HEADER
+from roomba_bt.oi.frames import STREAM_HEADER, layout_for
+from roomba_bt.oi.modes import OI_MODE_PACKET
 from roomba_bt.oi.packets import PACKETS, packet_ids
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, PROFILES, RobotProfile
 
@@ -261,6 +262,11 @@ class ChecksumMismatch:
     rule: str
 
     @property
+    def fails(self) -> str:
+        """What the frames fail, in words (``the create2 profile's checksum``)."""
+        return f"the {self.profile.name} profile's checksum"
+
+    @property
     def explained(self) -> str:
         """What was seen and what it means, without the fix (the caller knows its own)."""
         return (
@@ -284,3 +290,96 @@ def checksum_mismatch(
         return None
     rule = "the header 19 summed in" if 0 in other else "the header left out"
     return ChecksumMismatch(profile, likely, failures, other_checksum, rule)
+
+
+@dataclass(frozen=True, slots=True)
+class RangeMismatch:
+    """Stream frames that pass ``profile``'s checksum but carry a value out of its range
+    that another model's range holds: the robot is most likely one of ``likely`` (a Roomba
+    500 whose firmware sums the header, read with the default profile: its wall signal over
+    1023). Found from the parser's last such frame (``StreamParser.out_of_range``) when a
+    stream is declared lost, never on the tick path. The same attributes as
+    :class:`ChecksumMismatch`, which the messages read."""
+
+    profile: RobotProfile
+    likely: tuple[RobotProfile, ...]
+    #: frames refused as out of range, and the first packet and value of the last one
+    refused: int
+    packet: int
+    value: int
+
+    @property
+    def fails(self) -> str:
+        """What the frames fail, in words (``the create2 profile's range``)."""
+        return f"the {self.profile.name} profile's range"
+
+    @property
+    def explained(self) -> str:
+        """What was seen and what it means, without the fix (the caller knows its own)."""
+        spec = self.profile.packet(self.packet)
+        title = PACKETS[self.packet].title.lower()
+        past = f"over {spec.maximum}" if self.value > spec.maximum else f"under {spec.minimum}"
+        fits = " and ".join(
+            f"the {p.title} range {p.packet(self.packet).minimum}-{p.packet(self.packet).maximum}"
+            for p in self.likely
+        )
+        return (
+            f"{self.refused} frames passed the checksum but not the range of the "
+            f"{self.profile.name} profile: {title} ({self.packet}) read {self.value}, {past} "
+            f"({self.profile.title}), within {fits}: the robot is most likely a "
+            f"{' or a '.join(p.title for p in self.likely)}"
+        )
+
+
+def range_mismatch(
+    profile: RobotProfile,
+    frame: bytes | None,
+    packet_ids: tuple[int, ...],
+    *,
+    refused: int,
+    checksum_failures: int,
+    mode_plus_one: bool | None = None,
+) -> RangeMismatch | None:
+    """Whether stream frames of ``packet_ids`` refused as out of ``profile``'s range
+    (``refused`` of them, ``frame`` the last) are a robot of another model: a value of
+    ``frame`` out of ``profile``'s range that another profile's range holds, every value of
+    it in that profile's range and its checksum that profile's rule. None if not, or if too
+    few were refused or most refusals were checksum failures (noise: a damaged frame passes
+    the 8-bit sum 1 time in 256). ``mode_plus_one``: packet 35's offset as the session
+    learned it (None: as each profile expects)."""
+    if frame is None or refused < MISMATCH_FRAMES or refused < checksum_failures:
+        return None
+    outside = _outside_range(profile, frame, packet_ids, mode_plus_one)
+    if outside is None:
+        return None
+    total = sum(frame) & 0xFF
+    likely = tuple(
+        other
+        for other in PROFILES.values()
+        if other is not profile
+        and total in other.checksum_sums
+        and _outside_range(other, frame, packet_ids, mode_plus_one) is None
+    )
+    if not likely:
+        return None
+    return RangeMismatch(profile, likely, refused, *outside)
+
+
+def _outside_range(
+    profile: RobotProfile, frame: bytes, packet_ids: tuple[int, ...], mode_plus_one: bool | None
+) -> tuple[int, int] | None:
+    """The first (packet id, value) of stream ``frame`` outside ``profile``'s ranges, each
+    value read with the profile's own signedness (the encoders differ); None if all are in."""
+    layout = layout_for(packet_ids, profile, True)
+    if len(frame) != layout.frame_size:
+        return None
+    values = layout.struct.unpack_from(frame, 2)
+    for pid, value in zip(layout.members, values, strict=True):
+        spec = profile.packet(pid)
+        low, high = spec.minimum, spec.maximum
+        if pid == OI_MODE_PACKET:
+            plus_one = profile.reports_mode_plus_one if mode_plus_one is None else mode_plus_one
+            low, high = low + int(plus_one), high + int(plus_one)
+        if not low <= value <= high:
+            return pid, value
+    return None

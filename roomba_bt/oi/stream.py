@@ -133,6 +133,7 @@ class StreamParser:
     __slots__ = (
         "_anchor", "_buffer", "_byte_sum", "_checks", "_encoders", "_mask", "_n", "_ok_sums",
         "_other_sums", "_size", "_suspect", "_template", "_unpack", "counters", "layout",
+        "out_of_range",
     )  # fmt: skip
 
     def __init__(
@@ -161,6 +162,11 @@ class StreamParser:
         self._anchor: _EncoderMark | None = None
         self._suspect: _EncoderMark | None = None
         self.counters = ParserCounters()
+        #: the last candidate that passed the checksum with a value out of the profile's
+        #: range (its bytes, header to checksum), kept on that failure only: which packet
+        #: and value it was is worked out when a stream is declared lost
+        #: (:func:`~roomba_bt.oi.identify.range_mismatch`), never on the tick path
+        self.out_of_range: bytes | None = None
         self._buffer = bytearray()
         self._n = self.layout.payload_size
         self._size = self._n + 3
@@ -352,6 +358,7 @@ class StreamParser:
                     total = byte_sum(window) & 0xFF
                     if total in ok_sums:
                         counters.implausible += 1
+                        self.out_of_range = bytes(window)
                     else:
                         counters.checksum_failures += 1
                         if total in self._other_sums:
@@ -365,6 +372,7 @@ class StreamParser:
                 # plausible(), its common case inline: in range, one slot's encoder step
                 if checks is not None and not checks(values):
                     ok = False
+                    self.out_of_range = bytes(window)
                 elif encoders is None:
                     ok = True
                 else:

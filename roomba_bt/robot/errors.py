@@ -20,7 +20,7 @@ import time
 
 from roomba_bt.errors import RoombaBtError
 from roomba_bt.oi.errors import OIError
-from roomba_bt.oi.identify import ChecksumMismatch
+from roomba_bt.oi.identify import ChecksumMismatch, RangeMismatch
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
 
@@ -138,9 +138,14 @@ class PortLost(LinkDown):
     """Reading or writing the port raised (cable unplugged, bridge closed, robot reset)."""
 
 
-def wrong_profile(mismatch: ChecksumMismatch) -> str:
-    """The frames pass another model's checksum: what was seen and the fix, for the command
-    line and for a Python caller (the ``profile`` argument)."""
+#: Frames that show a robot of another model: they pass its checksum rule, or its range.
+ProfileMismatch = ChecksumMismatch | RangeMismatch
+
+
+def wrong_profile(mismatch: ProfileMismatch) -> str:
+    """The frames pass another model's checksum, or only its range holds their values: what
+    was seen and the fix, for the command line and for a Python caller (the ``profile``
+    argument)."""
     return f"{mismatch.explained}: {profile_fix(mismatch.likely[0].name)}"
 
 
@@ -163,11 +168,12 @@ DEFAULT_WATCHDOG = 0.1
 
 class StreamStalled(LinkDown):
     """No valid stream frame within the watchdog time; drive 0 was sent (if allowed).
-    ``mismatch``: the frames that came pass another model's checksum (the profile is wrong)."""
+    ``mismatch``: the frames that came pass another model's checksum, or only its range holds
+    their values (the profile is wrong)."""
 
     def __init__(
         self, port: str, silent_for: float, watchdog: float, halted: bool,
-        mismatch: ChecksumMismatch | None = None, held: str | None = None,
+        mismatch: ProfileMismatch | None = None, held: str | None = None,
     ) -> None:  # fmt: skip
         self.silent_for = silent_for
         self.watchdog = watchdog
@@ -203,8 +209,9 @@ class RobotReset(LinkDown):
 class StreamLost(LinkDown):
     """No valid frame came back within the grace after the watchdog tripped: the stream
     stopped (nothing arrived) or the line is garbled (bytes arrived, none made a frame).
-    ``mismatch``: the garbled frames pass another model's checksum rule (the profile is
-    wrong: a Roomba 500 read as a Create 2); the message then names the model and the fix,
+    ``mismatch``: the garbled frames pass another model's checksum rule, or only its range
+    holds their values (the profile is wrong: a Roomba 500 read as a Create 2, its wall
+    signal over 1023); the message then names the model, the packet or the rule, and the fix,
     for the command line (``--profile``) and for Python (the ``profile`` argument)."""
 
     def __init__(
@@ -217,7 +224,7 @@ class StreamLost(LinkDown):
         watchdog: float,
         halted: bool,
         probed: str = "",
-        mismatch: ChecksumMismatch | None = None,
+        mismatch: ProfileMismatch | None = None,
     ) -> None:
         self.silent_for = silent_for
         self.grace = grace

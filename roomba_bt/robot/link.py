@@ -31,7 +31,12 @@ from typing import NamedTuple
 import serial
 
 from roomba_bt.oi.frames import SensorFrame
-from roomba_bt.oi.identify import ChecksumMismatch, checksum_mismatch
+from roomba_bt.oi.identify import (
+    ChecksumMismatch,
+    RangeMismatch,
+    checksum_mismatch,
+    range_mismatch,
+)
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import StreamParser, shows_reset_banner
 from roomba_bt.robot.errors import PortLost, StreamStalled
@@ -297,6 +302,24 @@ class StreamLink:
             other_checksum=counters.other_checksum,
         )  # fmt: skip
 
+    def range_mismatch(self) -> RangeMismatch | None:
+        """Whether the running stream's frames pass the profile's checksum but carry a value
+        only another model's range holds (read off the parser's last such frame: only when a
+        stream is declared lost)."""
+        parser = self._parser
+        if parser is None:
+            return None
+        counters = parser.counters
+        return range_mismatch(
+            self.profile, parser.out_of_range, self.stream_ids, refused=counters.implausible,
+            checksum_failures=counters.checksum_failures, mode_plus_one=self.mode_plus_one,
+        )  # fmt: skip
+
+    def profile_mismatch(self) -> ChecksumMismatch | RangeMismatch | None:
+        """The frames show a robot of another model (:meth:`checksum_mismatch`, else
+        :meth:`range_mismatch`), or None: what a stall or a lost stream names with its fix."""
+        return self.checksum_mismatch() or self.range_mismatch()
+
     @property
     def latest(self) -> TimedFrame | None:
         """The newest checked frame, when it arrived and its number (None before the first)."""
@@ -432,7 +455,7 @@ class StreamLink:
         if callable(note):
             note({"watchdog": round(silent, 6), "limit": self.watchdog}, at=now)
         halted = self._halt()
-        raise StreamStalled(self.name, silent, self.watchdog, halted, self.checksum_mismatch())
+        raise StreamStalled(self.name, silent, self.watchdog, halted, self.profile_mismatch())
 
 
 def replayed_due(trips: deque[float], now: float) -> float:

@@ -165,15 +165,16 @@ def garbled_line(
     connection: Connection, silent_for: float, grace: float, garbled: int, *, halted: bool
 ) -> StreamLost:
     """Bytes kept coming for the grace (``garbled`` of them) and none made a frame: noise, or
-    a robot of another model (its frames pass that model's checksum: the profile is wrong,
-    :meth:`~roomba_bt.robot.link.StreamLink.checksum_mismatch`). What a stop written now
+    a robot of another model (its frames pass that model's checksum, or only its range holds
+    their values: the profile is wrong,
+    :meth:`~roomba_bt.robot.link.StreamLink.profile_mismatch`). What a stop written now
     cannot be known to have reached is said with it."""
     link = connection.link
-    mismatch = link.checksum_mismatch()
+    mismatch = link.profile_mismatch()
     noisy = link.damaged_frame_at > link.silent_since  # its frames, damaged: at our rate
     connection.unheard = (
-        f"its frames fail the {connection.profile.name} profile's checksum (most likely "
-        f"a {mismatch.likely[0].title}: --profile {mismatch.likely[0].name})"
+        f"its frames fail {mismatch.fails} (most likely a {mismatch.likely[0].title}: "
+        f"--profile {mismatch.likely[0].name})"
         if mismatch is not None
         else f"the line is garbled (the robot's frames come damaged at {connection.baud})"
         if noisy

@@ -13,7 +13,8 @@ from roomba_bt.oi.identify import (
     parse_firmware,
     stream_readings,
 )
-from roomba_bt.oi.profiles import CREATE2, ROOMBA500, ROOMBA600
+from roomba_bt.oi.profiles import CREATE2, ROOMBA500, ROOMBA600, RobotProfile
+from roomba_bt.oi.stream import StreamParser
 
 #: A Roomba 620's banner as posted on robotics.stackexchange.com (question 12846).
 ROOMBA620_BANNER = (
@@ -162,3 +163,48 @@ def test_a_500_beside_a_wall_read_as_a_create2_is_still_named_by_its_checksum() 
     refused = StreamParser((100,), CREATE2)
     assert refused.feed(wrong) == [] and refused.counters.implausible == 1
     assert refused.counters.checksum_failures == 0
+
+
+def _refused_by(profile: RobotProfile, frames: bytes) -> StreamParser:
+    parser = StreamParser((100,), profile)
+    assert parser.feed(frames) == []
+    return parser
+
+
+def test_a_500_summing_the_header_beside_a_wall_is_named_by_its_range() -> None:
+    """A Roomba 500 whose firmware sums the header (the rule a real 500 follows is not
+    certain) read with the default profile: its frames pass the checksum and fail only the
+    range of packet 27. The stream was lost as "noise on the line, or a wrong baud rate"."""
+    from roomba_bt.oi.identify import RangeMismatch, range_mismatch
+
+    layout = layout_for((100,), ROOMBA500, True)
+    frames = b"".join(layout.stream_frame({27: 2263, 35: 1, 43: i, 44: i}) for i in range(6))
+    parser = _refused_by(CREATE2, frames)
+    counters = parser.counters
+    assert counters.implausible == 6 and counters.checksum_failures == 0
+    found = range_mismatch(
+        CREATE2, parser.out_of_range, (100,), refused=counters.implausible,
+        checksum_failures=counters.checksum_failures,
+    )  # fmt: skip
+    assert isinstance(found, RangeMismatch)
+    assert (found.packet, found.value, found.likely) == (27, 2263, (ROOMBA500,))
+    assert "wall signal (27) read 2263, over 1023 (iRobot Create 2)" in found.explained
+    assert "within the Roomba 500 series range 0-4095" in found.explained
+    assert found.fails == "the create2 profile's range"
+
+
+def test_a_range_mismatch_needs_a_value_another_model_holds_and_no_noise() -> None:
+    """Not named: too few refused, more checksum failures than refusals (noise), a value no
+    profile holds (a charging state of 9), or a robot the profile's range holds."""
+    from roomba_bt.oi.identify import range_mismatch
+
+    wall = layout_for((100,), ROOMBA500, True).stream_frame({27: 2263, 35: 1})
+    assert range_mismatch(CREATE2, wall, (100,), refused=1, checksum_failures=0) is None
+    assert range_mismatch(CREATE2, wall, (100,), refused=5, checksum_failures=40) is None
+    assert range_mismatch(ROOMBA500, wall, (100,), refused=5, checksum_failures=0) is None
+    assert range_mismatch(CREATE2, None, (100,), refused=5, checksum_failures=0) is None
+    nowhere = layout_for((100,), ROOMBA500, True).stream_frame({21: 9, 35: 1})
+    assert range_mismatch(CREATE2, nowhere, (100,), refused=5, checksum_failures=0) is None
+    # an unsigned 500 encoder reading past 32767 is in the 600's signed range: not a mismatch
+    counts = layout_for((100,), ROOMBA500, True).stream_frame({35: 1, 43: 40000, 44: 40000})
+    assert range_mismatch(CREATE2, counts, (100,), refused=5, checksum_failures=0) is None

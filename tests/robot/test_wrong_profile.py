@@ -84,3 +84,33 @@ def test_a_roomba500_beside_a_wall_is_named_not_called_noise(profile: RobotProfi
     assert stalled.value.mismatch is not None
     assert "--profile roomba500" in str(stalled.value)
     connection.close()
+
+
+@pytest.mark.parametrize("profile", [CREATE2, ROOMBA600])
+def test_a_roomba500_summing_the_header_beside_a_wall_is_named_by_its_range(
+    profile: RobotProfile,
+) -> None:
+    """A 500 whose firmware sums the header into the checksum (the rule a real 500 follows is
+    not certain): its frames pass the profile's checksum and fail only the range of its wall
+    signal. Every one was dropped, and the stall named no packet, no value, no profile."""
+    from dataclasses import replace
+
+    from roomba_bt.oi.identify import RangeMismatch
+    from roomba_bt.sim import parse_world
+
+    summing = replace(ROOMBA500, checksum_includes_header=True)
+    simulator = Simulator(parse_world(BESIDE_A_WALL), summing, seed=1)
+    connection = Connection(SimLink(simulator), profile)
+    connection.start("passive", (100,))
+    with pytest.raises(StreamStalled) as stalled:
+        for _ in range(20):
+            connection.poll(0.05)
+    wall = simulator.values[27]
+    assert wall > 1023, "the robot sees the wall"
+    assert isinstance(stalled.value.mismatch, RangeMismatch)
+    assert connection.counters.checksum_failures == 0
+    message = str(stalled.value)
+    assert f"not the range of the {profile.name} profile: wall signal (27) read" in message
+    assert "within the Roomba 500 series range 0-4095" in message
+    assert "--profile roomba500" in message
+    connection.close()

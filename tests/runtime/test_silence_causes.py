@@ -341,3 +341,32 @@ def test_a_robot_found_at_115200_is_not_told_how_a_robot_comes_to_19200(tmp_path
     assert "the robot answers at 115200 baud, not at the 57600 of the run" in summary.reason
     assert "19200" not in summary.reason, summary.reason
     assert "open it at 115200 (--baud 115200" in summary.reason
+
+
+def test_a_roomba500_read_by_the_default_profile_near_a_wall_is_not_called_noise(
+    tmp_path: Path,
+) -> None:
+    """A 500 whose firmware sums the header, run with the default profile, along a wall:
+    every frame passes the checksum and fails the create2 range of packet 27. The run ended
+    "noise on the line, or a wrong baud rate"; it names the packet, the value and the
+    profile whose range holds it."""
+    from dataclasses import replace
+
+    from roomba_bt.sim import parse_world
+
+    path = tmp_path / "m.yaml"
+    path.write_text(  # a mission that reads the wall signal: it is streamed
+        "tree:\n  sequence:\n    - mode: safe\n    - wait: 3s\n"
+        "      until: {sensor: wall_signal > 1000}\n"
+    )
+    beside_a_wall = "rooms: [[[0, 0], [4, 0], [4, 4], [0, 4]]]\nrobot: {start: {at: [2, 0.2]}}\n"
+    summing = replace(ROOMBA500, checksum_includes_header=True)
+    simulator = Simulator(parse_world(beside_a_wall), summing, 0, trace=False)
+    stack = RunStack(load_mission(path, {}, profile=CREATE2), SimLink(simulator), profile=CREATE2)
+    summary = stack.run()
+    stack.close()
+    assert summary.implausible_frames > 0 and summary.checksum_failures == 0
+    assert "noise on the line" not in summary.reason, summary.reason
+    assert "wall signal (27) read" in summary.reason
+    assert "use --profile roomba500" in summary.reason
+    assert "most likely a Roomba 500 series: --profile roomba500" in summary.safe_stop
