@@ -35,14 +35,13 @@ from py_trees.common import Status
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import (
     BUMPS_PACKETS,
-    CHARGING_SOURCES_PACKETS,
     CLIFF_PACKETS,
     VIRTUAL_WALL_PACKETS,
     SensorFrame,
 )
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import COMMANDS_BY_NAME
-from roomba_bt.robot.interface import ModeChange, RobotHandle, docked_by_seek_dock
+from roomba_bt.robot.interface import ModeChange, RobotHandle, docked_by_seek_dock, on_home_base
 
 if TYPE_CHECKING:  # the leaves' base imports this module: their class for annotations only
     from roomba_bt.behaviours.base import Action
@@ -104,13 +103,6 @@ def left_driving_message(change: ModeChange | None, waited: str = "") -> str:
     if change is not None and change.refused_on_charger:
         message += f"; {CHARGER_ADVICE}"
     return message
-
-
-def on_home_base(frame: SensorFrame) -> bool:
-    """Whether ``frame`` carries packet 34 and it shows the home base's power."""
-    return all(pid in frame for pid in CHARGING_SOURCES_PACKETS) and (
-        frame.charging_sources.home_base
-    )
 
 
 def cycle_may_run(robot: RobotHandle) -> bool:

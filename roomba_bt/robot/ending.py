@@ -5,10 +5,13 @@ Every ending (:meth:`~roomba_bt.robot.connection.Connection.close`, the context 
 holds::
 
     [131]                 Safe, only in Passive while a Clean/Spot/Max/Seek Dock cycle may
-                          be driving (drive 0 is not accepted in Passive; Safe ends the cycle);
-                          not after a Seek Dock that docked (the last frame shows the home
-                          base: the cycle ended there, and Safe on a powered dock would stop
-                          the charge only to fall back to Passive)
+                          be driving (drive 0 is not accepted in Passive; Safe ends the cycle:
+                          Start does not, docs/protocol.md), one the session wrote or one the
+                          robot started by itself (``CommandWriter.robot_cycle``: a button,
+                          a schedule); not after a Seek Dock that docked (the last frame shows
+                          the home base: the cycle ended there, and Safe on a powered dock
+                          would stop the charge only to fall back to Passive), nor a cycle
+                          of the robot's own on its home base
     [137][0][0][0][0]     drive 0            } only while the model is in Safe or Full: in
     [138][0]              motors off         } Passive and Off the robot refuses actuators
     [150][0]              pause the stream
@@ -413,7 +416,10 @@ class SafeStop:
         the robot streamed on after leaves the model where it was (as the robot is, as far
         as it was seen), so that a later stop (``close()``) sends it whole again."""
         writer = self.writer
-        saved = writer.modes.snapshot(), writer.last_wheels, writer.builtin_may_run
+        saved = (
+            writer.modes.snapshot(), writer.last_wheels, writer.builtin_may_run,
+            writer.robot_cycle,
+        )  # fmt: skip
         contradiction = None
         for attempt in range(STOP_ATTEMPTS if checked else 1):
             if attempt:  # the robot did not hear it: the model back where it was, again
@@ -429,14 +435,14 @@ class SafeStop:
         self._restore(saved)
         return f"the stop was written {STOP_ATTEMPTS} times but not received: {contradiction}"
 
-    def _restore(self, saved: tuple[tuple[Any, ...], Command | None, bool]) -> None:
+    def _restore(self, saved: tuple[tuple[Any, ...], Command | None, bool, str | None]) -> None:
         """The model, the wheels and the stream as they were before a stop not heard, the
         model in the mode packet 35 read after it if that is another (a ``mode: passive``
         the robot never heard either: the stop is sent again from Safe, drive 0 in it)."""
         writer = self.writer
         now = writer.link.transport.now()
         writer.modes.restore(saved[0])
-        writer.last_wheels, writer.builtin_may_run = saved[1], saved[2]
+        writer.last_wheels, writer.builtin_may_run, writer.robot_cycle = saved[1:]
         if self._seen is not None and self._seen is not writer.modes.mode:
             writer.modes.force(self._seen, now)
         writer.link.pause_resume(True, now)

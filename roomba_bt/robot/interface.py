@@ -117,7 +117,7 @@ class Odometer:
 
     __slots__ = (
         "_counted_left", "_counted_right", "_fields", "_layout", "_left_slot", "_right_slot",
-        "_wheel_base_mm", "odometry",
+        "_wheel_base_mm", "odometry", "passive_from_mm",
     )  # fmt: skip
 
     def __init__(self, wheel_base_mm: float) -> None:
@@ -133,6 +133,19 @@ class Odometer:
         #: the counts :attr:`odometry` was last advanced to (None: none yet)
         self._counted_left: int | None = None
         self._counted_right: int | None = None
+        #: the path (mm) when the robot last went to Passive (the run's start, a command
+        #: written, a fall by itself: the writer's ``on_passive`` calls
+        #: :meth:`entered_passive`): what it drives in Passive by itself is measured from
+        #: there (:meth:`driven_in_passive`), once, at the run's end
+        self.passive_from_mm = 0.0
+
+    def entered_passive(self) -> None:
+        """The robot went to Passive now: its path in Passive is measured from here."""
+        self.passive_from_mm = self.odometry.path_mm
+
+    def driven_in_passive(self) -> float:
+        """The path (mm) since the robot last went to Passive (:meth:`entered_passive`)."""
+        return self.odometry.path_mm - self.passive_from_mm
 
     def frame(self, frame: SensorFrame) -> Odometry:
         """The odometry after ``frame`` (:meth:`Odometry.advance` on its encoder counts)."""
@@ -247,10 +260,13 @@ def docked_by_seek_dock(cycle: Command | None, frame: SensorFrame | None) -> boo
     about to drive off it (a Clean sent on the dock) and is ended all the same. The one rule
     of the tree's cycle leaves (``behaviours.driving.cycle_may_run``) and of the safe stop
     (:mod:`~roomba_bt.robot.ending`)."""
+    return cycle is not None and cycle.spec is _SEEK_DOCK and on_home_base(frame)
+
+
+def on_home_base(frame: SensorFrame | None) -> bool:
+    """Whether ``frame`` carries packet 34 and it shows the home base's power."""
     return (
-        cycle is not None
-        and cycle.spec is _SEEK_DOCK
-        and frame is not None
+        frame is not None
         and all(pid in frame for pid in CHARGING_SOURCES_PACKETS)
         and frame.charging_sources.home_base
     )

@@ -28,13 +28,13 @@ from collections.abc import Callable, Iterable
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import BAUD_RATES, Command
 from roomba_bt.oi.errors import UnsupportedCommandError
-from roomba_bt.oi.modes import DRIVING_MODES
+from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import Effect
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import check_bandwidth
 from roomba_bt.robot.errors import ModeError, PortLost
 from roomba_bt.robot.hazards import drives_forward, sets_going
-from roomba_bt.robot.interface import docked_by_seek_dock
+from roomba_bt.robot.interface import docked_by_seek_dock, on_home_base
 from roomba_bt.robot.link import StreamLink
 from roomba_bt.robot.modes import ModeModel
 
@@ -85,6 +85,16 @@ class CommandWriter:
         self.last_motors: Command | None = None
         #: a Clean/Spot/Max/Seek Dock cycle may be driving
         self.builtin_may_run = False
+        #: a cycle the robot runs that this session did not write (a Clean, Spot or Dock
+        #: button pressed, its schedule): what its caller saw of it (the runtime: the robot
+        #: drove in Passive by itself), until a command that ends cycles (Safe, Full, Off);
+        #: None: none seen. The safe stop ends it as its own (:attr:`cycle_may_drive`)
+        self.robot_cycle: str | None = None
+        #: told each time the robot goes to Passive: a command written that leads there
+        #: (Start, a cycle: any caller's, the monitor's pause too) or its own fall
+        #: (:meth:`robot_stopped`). The runtime measures from there what the robot drives in
+        #: Passive by itself (``runtime/ending.py``, ``RunEnding.robot_cycle``); None: nobody
+        self.on_passive: Callable[[], None] | None = None
         #: when the last command was written (link clock)
         self.last_command_at = float("-inf")
         #: when the last few commands were written (link clock): how long the robot had been
@@ -198,6 +208,11 @@ class CommandWriter:
             self.link.streaming = False
             self.silenced_by = command
         self.builtin_may_run = spec.cycle_may_run_after(self.builtin_may_run)
+        if spec.leads_to is not None:  # a mode command: Safe, Full, Off end any cycle
+            if spec.leads_to is not OIMode.PASSIVE:
+                self.robot_cycle = None
+            elif self.on_passive is not None:  # Start, a cycle: the robot goes to Passive
+                self.on_passive()
         if effect is Effect.BAUD:
             self._change_baud(BAUD_RATES[command.args[0]])
 
@@ -247,8 +262,14 @@ class CommandWriter:
         """Whether a built-in cycle may be driving the robot as the stream last showed it:
         :attr:`builtin_may_run`, unless it was Seek Dock and the last frame shows the home
         base's power (:func:`~roomba_bt.robot.interface.docked_by_seek_dock`: docked, the
-        cycle ended there). What the safe stop asks before it sends Safe to end a cycle."""
-        return self.builtin_may_run and not docked_by_seek_dock(self.last_wheels, self.link.frame)
+        cycle ended there); or :attr:`robot_cycle`, a cycle the robot started by itself,
+        unless the last frame shows the home base (which of its cycles it ran is not known:
+        one on its dock has docked or not yet left, and Safe there would stop the charge).
+        What the safe stop asks before it sends Safe to end a cycle."""
+        frame = self.link.frame
+        if self.builtin_may_run and not docked_by_seek_dock(self.last_wheels, frame):
+            return True
+        return self.robot_cycle is not None and not on_home_base(frame)
 
     def halt(self, motors: bool = False) -> bool:
         """Drive 0 if the model says the robot may be driving; True once it was written at
@@ -284,6 +305,8 @@ class CommandWriter:
         is kept as what stopped the wheels (:attr:`wheels_stopped_by`)."""
         self.last_wheels = self.last_motors = self.held_wheels = None
         self.wheels_stopped_by = cause
+        if self.on_passive is not None:
+            self.on_passive()
 
     def hold_forward(self) -> None:
         """A bump onset waits for the frame that confirms it (robot/hazards.py): drive 0 now

@@ -300,8 +300,9 @@ class MissionRunner(BaseHandle):
         self._ride = StallRide(connection, self._outbox, self.summary, grace, clock)
         #: the stream's slots added up: the tick index, the slots the monitor held
         self._clock = StreamClock(self._ride, self.summary, connection)
+        self._odometer = Odometer(profile.wheel_base_mm)
         #: the run's end: its tree stopped, the wheels first (also the monitor's reload)
-        self._ending = RunEnding(connection, self._outbox, self.summary, clock)
+        self._ending = RunEnding(connection, self._outbox, self.summary, clock, self._odometer)
         #: Ctrl-C and SIGTERM stay ignored after :meth:`run` returns, until
         #: :meth:`release_interrupts` (the CLI: its summary is still to be printed); else the
         #: previous handlers come back when it returns
@@ -310,7 +311,6 @@ class MissionRunner(BaseHandle):
             self.tick_guard = tick_guard
         self._guard: InterruptGuard | None = None
         self.snapshot = NO_SNAPSHOT_YET
-        self._odometer = Odometer(profile.wheel_base_mm)
         self.refusals: list[str] = []
         #: True while the monitor holds the run paused: frames still come and make snapshots
         #: (the page shows the robot) and the tick index (the stream's) goes on, but mission

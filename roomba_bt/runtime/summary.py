@@ -260,6 +260,10 @@ class RunSummary:
     #: :attr:`ExitCode.STRICT` when :meth:`strict_findings` found anything
     strict: bool = False
     distance_mm: float = 0.0
+    #: a cycle the robot started by itself (a button, its schedule): it drove in Passive
+    #: with no command of the run's, and how the stop ended it (runtime/ending.py
+    #: ``RunEnding.robot_cycle``); "" if none was seen
+    robot_cycle: str = ""
     final_mode: OIMode | None = None
     battery_percent: float | None = None
     #: the lowest battery level seen, looked at once a second of mission time
@@ -472,6 +476,7 @@ class RunSummary:
             f"commands     {self.commands_written} written, "
             f"{self.refused_commands} refused by the mode guard{self.dropped_said()}",
             f"distance     {self.distance_mm / 1000:.2f} m",
+            *([f"robot cycle  {self.robot_cycle}"] if self.robot_cycle else []),
             f"final mode   {mode}",
             f"battery      {self.battery_text()}",
             f"safe stop    {self.safe_stop}",

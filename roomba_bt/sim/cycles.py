@@ -1,6 +1,9 @@
 """The firmware's own behaviours, which run in Passive: Spot (134), Clean (135), Max (136) and
 Seek Dock (143). The robot stays in Passive (packet 35 says 1) while one runs; a cycle ends by
-itself (its time is up, the battery is low, the dock is reached) or when a mode command comes.
+itself (its time is up, the battery is low, the dock is reached) or when a mode command that
+ends cycles comes (Safe, Full, Power, Stop, Reset: not Start, docs/protocol.md). A Clean, Spot
+or Dock button pushed in Passive (Buttons, 165) starts the cycle of its command
+(:data:`BUTTON_CYCLES`).
 
 The real firmware's algorithms are not specified; these behave the way a client sees them:
 
@@ -21,7 +24,7 @@ import math
 import random
 from abc import ABC, abstractmethod
 
-from roomba_bt.oi.bits import BUMP_BITS
+from roomba_bt.oi.bits import BUMP_BITS, Buttons
 from roomba_bt.oi.ir import IR_CHARACTERS
 from roomba_bt.sim.geometry import wrap_angle
 from roomba_bt.sim.motion import drive_wheel_speeds
@@ -289,3 +292,14 @@ CYCLES: dict[str, type[BuiltinCycle]] = {
     "max": Clean,
     "seek_dock": SeekDock,
 }
+
+#: The buttons that start a cycle (packet 18's flags, as :class:`~roomba_bt.oi.bits.Buttons`
+#: names them, in bit order) and the command each is: the 600 / Create 2 spec says Clean
+#: (135) "is the same as pressing Roomba's Clean button", Spot (134) and Seek Dock (143) the
+#: same of theirs. Max has no button; the scheduling buttons start nothing. Several pushed
+#: at once: the first here (neither spec says; decided).
+BUTTON_CYCLES: tuple[tuple[int, str], ...] = (
+    (1 << Buttons.flag_names().index("clean"), "clean"),
+    (1 << Buttons.flag_names().index("spot"), "spot"),
+    (1 << Buttons.flag_names().index("dock"), "seek_dock"),
+)

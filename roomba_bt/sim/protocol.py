@@ -28,7 +28,7 @@ from roomba_bt.oi.encode import BAUD_RATES
 from roomba_bt.oi.identify import parse_firmware
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME, CommandSpec, Effect
-from roomba_bt.sim.cycles import CYCLES, BuiltinCycle
+from roomba_bt.sim.cycles import BUTTON_CYCLES, CYCLES, BuiltinCycle
 from roomba_bt.sim.replies import StreamOutput
 from roomba_bt.sim.state import TracePoint, Violation
 
@@ -53,6 +53,7 @@ def reset_banner(firmware: str) -> bytes:
 #: what Off (and a sleeping robot) answers: the commands the table accepts in Off (Start, Reset)
 _WAKERS = frozenset(c.opcode for c in COMMANDS.values() if OIMode.OFF in c.modes)
 _DRIVE = COMMANDS_BY_NAME["drive"].opcode
+_START = COMMANDS_BY_NAME["start"].opcode
 #: Drive, Drive Direct, Drive PWM: sent again with the same bytes, they change nothing
 _WHEEL_COMMANDS = frozenset(c.opcode for c in COMMANDS.values() if c.drives_wheels)
 
@@ -192,8 +193,8 @@ class OIProtocol(StreamOutput):
             if spec.is_actuator:
                 self.violations.append(Violation(self.time, op, spec.name, self.mode))
             return
-        if spec.effect is Effect.BUILTIN_CYCLE and self.cycle_commands_pause:
-            self._cycle_command(spec)
+        if spec.effect is Effect.BUILTIN_CYCLE:
+            self._start_cycle(spec)
             return
         if spec.leads_to is not None:
             self._command_mode(spec)
@@ -201,10 +202,34 @@ class OIProtocol(StreamOutput):
         if handler is not None:
             handler(self, args)
 
+    def _start_cycle(self, spec: CommandSpec) -> None:
+        """Spot, Clean, Max or Seek Dock, sent or its button pushed: into a running cycle a
+        pause with :attr:`cycle_commands_pause` (:meth:`_cycle_command`), else the cycle
+        started in place of any other."""
+        if self.cycle_commands_pause:
+            self._cycle_command(spec)
+            return
+        self._command_mode(spec)
+        _HANDLERS[spec.opcode](self, b"")
+
     # ------------------------------------------------------------------ modes
     def _command_mode(self, spec: CommandSpec) -> None:
+        """The mode ``spec`` leads to, the wheels stopped and a cycle ended on the way,
+        but for Start (128) in Passive while a cycle runs or is paused: it changes nothing.
+        Decided (session 30, docs/protocol.md "What ends a built-in cycle"): neither spec
+        says Start ends a cycle, and Passive is where the robot runs one ("watch Roomba
+        perform a cleaning cycle"); Safe and Full end it ("Roomba waits with all motors and
+        LEDs off"), Power, Stop and Reset turn the OI off or asleep. The robot layer never
+        relied on Start (it sends Safe first); the simulator ended the cycle at Start, which
+        hid a stop that ended a cycle by Start alone."""
         target = spec.leads_to
         assert target is not None
+        if (
+            spec.opcode == _START
+            and self.mode is OIMode.PASSIVE
+            and (self.builtin is not None or self.paused_cycle is not None)
+        ):
+            return
         self.asleep = self.deaf = False
         self.builtin = self.paused_cycle = None
         self._stop_wheels()
@@ -364,9 +389,17 @@ class OIProtocol(StreamOutput):
         self._held_until = min(self._held_until, self._song_until)
 
     def _on_buttons(self, args: bytes) -> None:
-        self.values[18] = args[0]
+        """The buttons pushed: packet 18 for 1/6 s (both specs), and in Passive a Clean,
+        Spot or Dock button starts its cycle as its command does (:data:`BUTTON_CYCLES`);
+        in Safe and Full the robot "does not respond to button presses" (both specs)."""
+        pushed = args[0]
+        self.values[18] = pushed
         self._buttons_until = self.time + 1.0 / 6.0
         self._held_until = min(self._held_until, self._buttons_until)
+        if self.mode is OIMode.PASSIVE:
+            cycle = next((name for bit, name in BUTTON_CYCLES if pushed & bit), None)
+            if cycle is not None:
+                self._start_cycle(COMMANDS_BY_NAME[cycle])
 
     def _release_held(self, now: float) -> None:
         """A song's end or the buttons' release is due by ``now``: its packet cleared."""

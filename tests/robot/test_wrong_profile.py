@@ -67,22 +67,31 @@ robot: {start: {at: [2, 0.2], heading: 0}}
 """
 
 
-@pytest.mark.parametrize("profile", [CREATE2, ROOMBA600])
-def test_a_roomba500_beside_a_wall_is_named_not_called_noise(profile: RobotProfile) -> None:
-    """Its frames set bits the 600's wall-signal range leaves clear; they were counted as
-    out of range before their checksum was judged, and the stall said "noise on the line,
-    or a wrong baud rate" instead of naming the Roomba 500."""
+def _stalled_beside_a_wall(
+    robot: RobotProfile, profile: RobotProfile
+) -> tuple[StreamStalled, Connection]:
+    """A simulated ``robot`` in :data:`BESIDE_A_WALL`, read with ``profile`` until the
+    watchdog trips: the stall and the connection (to close)."""
     from roomba_bt.sim import parse_world
 
-    simulator = Simulator(parse_world(BESIDE_A_WALL), ROOMBA500, seed=1)
+    simulator = Simulator(parse_world(BESIDE_A_WALL), robot, seed=1)
     connection = Connection(SimLink(simulator), profile)
     connection.start("passive", (100,))
     with pytest.raises(StreamStalled) as stalled:
         for _ in range(20):
             connection.poll(0.05)
     assert simulator.values[27] > 1023, "the robot sees the wall"
-    assert stalled.value.mismatch is not None
-    assert "--profile roomba500" in str(stalled.value)
+    return stalled.value, connection
+
+
+@pytest.mark.parametrize("profile", [CREATE2, ROOMBA600])
+def test_a_roomba500_beside_a_wall_is_named_not_called_noise(profile: RobotProfile) -> None:
+    """Its frames set bits the 600's wall-signal range leaves clear; they were counted as
+    out of range before their checksum was judged, and the stall said "noise on the line,
+    or a wrong baud rate" instead of naming the Roomba 500."""
+    stalled, connection = _stalled_beside_a_wall(ROOMBA500, profile)
+    assert stalled.mismatch is not None
+    assert "--profile roomba500" in str(stalled)
     connection.close()
 
 
@@ -96,20 +105,12 @@ def test_a_roomba500_summing_the_header_beside_a_wall_is_named_by_its_range(
     from dataclasses import replace
 
     from roomba_bt.oi.identify import RangeMismatch
-    from roomba_bt.sim import parse_world
 
     summing = replace(ROOMBA500, checksum_includes_header=True)
-    simulator = Simulator(parse_world(BESIDE_A_WALL), summing, seed=1)
-    connection = Connection(SimLink(simulator), profile)
-    connection.start("passive", (100,))
-    with pytest.raises(StreamStalled) as stalled:
-        for _ in range(20):
-            connection.poll(0.05)
-    wall = simulator.values[27]
-    assert wall > 1023, "the robot sees the wall"
-    assert isinstance(stalled.value.mismatch, RangeMismatch)
+    stalled, connection = _stalled_beside_a_wall(summing, profile)
+    assert isinstance(stalled.mismatch, RangeMismatch)
     assert connection.counters.checksum_failures == 0
-    message = str(stalled.value)
+    message = str(stalled)
     assert f"not the range of the {profile.name} profile: wall signal (27) read" in message
     assert "within the Roomba 500 series range 0-4095" in message
     assert "--profile roomba500" in message

@@ -9,6 +9,7 @@ import logging
 import pytest
 
 from roomba_bt.oi import commands as oi
+from roomba_bt.oi.encode import Command
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.runtime.loop import MissionRunner
 from roomba_bt.runtime.summary import Outcome
@@ -274,3 +275,64 @@ def test_two_cycle_leaves_in_one_tick_are_both_written_the_first_ended_between(
     written = b"".join(data for t, data in run.link.writes if t == at)
     assert written == one + END + two
     assert run.summary.refused_commands == 0
+
+
+#: a mission that waits in Passive (the run's start): nothing of it drives the robot
+WAITS_IN_PASSIVE = "mission: waits in passive\ntree:\n  wait: 4s\n"
+#: the stop from Passive with a cycle that may drive: Safe, drive 0, motors off, pause, Start
+STOP_ENDING_A_CYCLE = b"".join(
+    c.data for c in (oi.safe(), oi.halt(), oi.motors_off(), oi.pause_stream(), oi.start())
+)
+
+
+@pytest.mark.parametrize(
+    "press", [oi.buttons(1), oi.clean()], ids=["clean-button", "clean-from-elsewhere"]
+)
+def test_a_cycle_the_robot_started_by_itself_is_ended_and_said(
+    run_mission: RunMission, press: Command
+) -> None:
+    """Someone pushes Clean (or the robot's schedule fires) 1 s into a mission waiting in
+    Passive: the robot drove 0.7 m in Passive with no warning, and the stop was Start alone
+    (Safe first only for a cycle the run wrote), which ends no cycle (docs/protocol.md)."""
+    pressed: list[float] = []
+
+    def push(runner: MissionRunner) -> None:
+        simulator = runner.connection.transport.simulator  # type: ignore[attr-defined]
+        if not pressed and runner.snapshot.time >= 1.0:
+            simulator.receive(press.data)  # not through the run: the robot's own doing
+            pressed.append(simulator.time)
+
+    run = run_mission(WAITS_IN_PASSIVE, observer=push, cycle_commands_pause=True)
+    assert pressed and run.summary.outcome is Outcome.SUCCESS
+    assert run.summary.distance_mm > 300.0, "the cycle drove the robot"
+    said = run.summary.robot_cycle
+    assert said.startswith("the robot started a cycle by itself"), said
+    assert "the safe stop ends it with Safe first" in said
+    assert f"robot cycle  {said}" in str(run.summary)
+    assert run.link.written.endswith(STOP_ENDING_A_CYCLE)
+    assert run.summary.safe_stop.startswith("sent safe, drive, motors, pause_resume_stream")
+    simulator = run.simulator
+    assert simulator.builtin is None and simulator.paused_cycle is None
+    assert simulator.mode is OIMode.PASSIVE
+    x, y = simulator.x, simulator.y
+    for _ in range(100):
+        simulator.step()
+    assert (simulator.x, simulator.y) == (x, y), "stopped for good"
+
+
+def test_a_mission_that_stays_in_passive_sees_no_cycle_of_the_robot_s(
+    run_mission: RunMission,
+) -> None:
+    run = run_mission(WAITS_IN_PASSIVE)
+    assert run.summary.robot_cycle == ""
+    assert not run.link.written.endswith(STOP_ENDING_A_CYCLE)
+
+
+def test_a_drive_before_mode_passive_is_not_taken_for_a_cycle(run_mission: RunMission) -> None:
+    """The path is measured from the ``mode: passive`` written: the run's own drive before
+    it is not a cycle of the robot's."""
+    run = run_mission(
+        "tree:\n  sequence:\n    - mode: safe\n    - drive: {velocity: 500 mm/s, duration: 1s}\n"
+        "    - mode: passive\n    - wait: 1s\n"
+    )
+    assert run.summary.outcome is Outcome.SUCCESS and run.summary.robot_cycle == ""
