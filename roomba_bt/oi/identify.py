@@ -32,7 +32,6 @@ from __future__ import annotations
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import ClassVar
 
 from roomba_bt.oi.frames import STREAM_HEADER, layout_for
 from roomba_bt.oi.modes import OI_MODE_PACKET
@@ -249,33 +248,23 @@ def checksum_rule(profile: RobotProfile) -> str:
 
 
 @dataclass(frozen=True, slots=True)
-class ModelMismatch:
-    """Stream frames that show a robot of another model than ``profile``'s: most likely one
-    of ``likely``. What the two kinds share, which the messages read (with ``explained``)."""
-
-    profile: RobotProfile
-    likely: tuple[RobotProfile, ...]
-    #: what of the profile the frames fail, in a word
-    failed: ClassVar[str] = "checks"
-
-    @property
-    def fails(self) -> str:
-        """What the frames fail, in words (``the create2 profile's checksum``)."""
-        return f"the {self.profile.name} profile's {self.failed}"
-
-
-@dataclass(frozen=True, slots=True)
-class ChecksumMismatch(ModelMismatch):
+class ChecksumMismatch:
     """Stream frames that fail ``profile``'s checksum and pass another model's rule: the
     robot is most likely one of ``likely`` (a Roomba 500 read with the default profile: its
     checksum leaves the header out). Found from the stream parser's counters alone
     (``ParserCounters.other_checksum``, counted on a failure only), never on the tick path."""
 
+    profile: RobotProfile
+    likely: tuple[RobotProfile, ...]
     failures: int
     passing: int
     #: the rule the frames pass, in words ("the header left out")
     rule: str
-    failed: ClassVar[str] = "checksum"
+
+    @property
+    def fails(self) -> str:
+        """What the frames fail, in words (``the create2 profile's checksum``)."""
+        return f"the {self.profile.name} profile's checksum"
 
     @property
     def explained(self) -> str:
@@ -304,18 +293,25 @@ def checksum_mismatch(
 
 
 @dataclass(frozen=True, slots=True)
-class RangeMismatch(ModelMismatch):
+class RangeMismatch:
     """Stream frames that pass ``profile``'s checksum but carry a value out of its range
     that another model's range holds: the robot is most likely one of ``likely`` (a Roomba
     500 whose firmware sums the header, read with the default profile: its wall signal over
     1023). Found from the parser's last such frame (``StreamParser.out_of_range``) when a
-    stream is declared lost, never on the tick path."""
+    stream is declared lost, never on the tick path. The same attributes as
+    :class:`ChecksumMismatch`, which the messages read."""
 
+    profile: RobotProfile
+    likely: tuple[RobotProfile, ...]
     #: frames refused as out of range, and the first packet and value of the last one
     refused: int
     packet: int
     value: int
-    failed: ClassVar[str] = "range"
+
+    @property
+    def fails(self) -> str:
+        """What the frames fail, in words (``the create2 profile's range``)."""
+        return f"the {self.profile.name} profile's range"
 
     @property
     def explained(self) -> str:
