@@ -446,9 +446,9 @@ class RunSummary:
             f"outcome      {self.outcome.value.upper()}{reason}",
             *([f"forced       by the operator: {'; '.join(self.forced)}"] if self.forced else []),
             f"duration     {self.mission_time_s:.2f} s mission time"
-            f"{long_duration_said(self.mission_time_s)}{self.wall_said()}",
+            f"{long_duration_said(self.mission_time_s)}{_wall_said(self)}",
             *([f"paused       {self.paused_text()}"] if self.pauses or self.steps else []),
-            f"ticks        {self.ticks}{self.tick_times_said()}",
+            f"ticks        {self.ticks}{_tick_times_said(self)}",
             f"frames       {self.stale_frames_dropped} stale dropped, {self.frames_lost} lost, "
             f"{self.checksum_failures} checksum failures, "
             f"{self.implausible_frames} out of range, {self.skipped_bytes} bytes skipped, "
@@ -456,7 +456,7 @@ class RunSummary:
             *([f"stalls       {self.stall_text()}"] if self.stalls else []),
             *([f"falls        {self.falls_text()}"] if hazard_falls(self.falls) else []),
             *([f"charger      {charger}"] if (charger := self.charger_text()) else []),
-            *([f"link         {link}"] if (link := self.link_verdict()) else []),
+            *([f"link         {link}"] if (link := _link_verdict(self)) else []),
             *(
                 [
                     f"unread       {self.unread_gaps} gap(s) with no frame read, the longest "
@@ -474,7 +474,7 @@ class RunSummary:
                 else []
             ),
             f"commands     {self.commands_written} written, "
-            f"{self.refused_commands} refused by the mode guard{self.dropped_said()}",
+            f"{self.refused_commands} refused by the mode guard{_dropped_said(self)}",
             f"distance     {self.distance_mm / 1000:.2f} m",
             *([f"robot cycle  {self.robot_cycle}"] if self.robot_cycle else []),
             f"final mode   {mode}",
@@ -484,28 +484,6 @@ class RunSummary:
             *self.verdict_lines(),
         ]
         return [escaped(line, ANY_CONTROL) for line in lines]
-
-    def wall_said(self) -> str:
-        """``, 0.04 s wall`` for the duration line; "" without :attr:`timings`."""
-        if not self.timings:
-            return ""
-        return f", {self.wall_time_s:.2f} s wall{long_duration_said(self.wall_time_s)}"
-
-    def tick_times_said(self) -> str:
-        """`` (0 overruns > 15 ms, slowest 1.98 ms)`` for the ticks line; "" without
-        :attr:`timings`."""
-        if not self.timings:
-            return ""
-        return (
-            f" ({self.overruns} overruns > 15 ms, slowest {self.max_tick_s * 1000:.2f} ms"
-            f"{self.slowest_said()})"
-        )
-
-    def dropped_said(self) -> str:
-        """``, 2 dropped while the tree was stopped`` for the commands line; "" for none."""
-        if not self.dropped_in_stop:
-            return ""
-        return f", {self.dropped_in_stop} dropped while the tree was stopped"
 
     def verdict_lines(self) -> list[str]:
         """``--strict``'s verdict, said on every strict run (``strict       FAILED (exit 7):
@@ -538,17 +516,6 @@ class RunSummary:
 
     def __str__(self) -> str:
         return "\n".join(self.lines())
-
-    def slowest_said(self) -> str:
-        """`` in sleepy (Sleepy.update at x.py:98)``: the slowest tick's behaviour, for the ticks
-        line, when it ran over the 15 ms slot (a run's ordinary slowest tick is not news) and
-        the watch named it, or ``: the host was busy (...)`` when the host kept the ticking
-        thread from running (:attr:`slowest_host_busy`); else ""."""
-        if self.max_tick_s <= SLOT_SECONDS:
-            return ""
-        if self.slowest_host_busy:
-            return f": the host was busy ({self.slowest_host_busy})"
-        return f" in {self.slowest_in}" if self.slowest_in else ""
 
     def paused_text(self) -> str:
         """The pauses, in the duration line's units: ``6.15 s in 2 pauses, 3 steps, left out
@@ -597,15 +564,57 @@ class RunSummary:
             return f"{final:.0f}%"
         return f"{final:.0f}%, the lowest {lowest:.0f}%"
 
-    def link_verdict(self) -> str:
-        """A line that lost :data:`POOR_LINK` or more of the robot's frames, over a run long
-        enough to tell (:data:`LINK_VERDICT_SLOTS`), said as such: the run may end well on
-        it, the tree seeing the robot late. "" for a line that did not."""
-        sent = self.ticks + self.stale_frames_dropped + self.frames_lost
-        if sent < LINK_VERDICT_SLOTS or self.frames_lost < POOR_LINK * sent:
-            return ""
-        return (
-            f"poor: {100 * self.frames_lost / sent:.0f} % of the robot's frames lost "
-            f"({self.frames_lost} of {sent}), {self.checksum_failures} checksum failures: the "
-            "tree saw the robot late; check the cable and its adapter (roomba-bt doctor)"
-        )
+
+# How the summary's lines word a measure (RunSummary.lines): out of the class, which
+# holds what was measured.
+
+
+def _wall_said(summary: RunSummary) -> str:
+    """``, 0.04 s wall`` for the duration line; "" without :attr:`RunSummary.timings`."""
+    if not summary.timings:
+        return ""
+    return f", {summary.wall_time_s:.2f} s wall{long_duration_said(summary.wall_time_s)}"
+
+
+def _tick_times_said(summary: RunSummary) -> str:
+    """`` (0 overruns > 15 ms, slowest 1.98 ms)`` for the ticks line; "" without
+    :attr:`RunSummary.timings`."""
+    if not summary.timings:
+        return ""
+    return (
+        f" ({summary.overruns} overruns > 15 ms, slowest {summary.max_tick_s * 1000:.2f} ms"
+        f"{_slowest_said(summary)})"
+    )
+
+
+def _dropped_said(summary: RunSummary) -> str:
+    """``, 2 dropped while the tree was stopped`` for the commands line; "" for none."""
+    if not summary.dropped_in_stop:
+        return ""
+    return f", {summary.dropped_in_stop} dropped while the tree was stopped"
+
+
+def _slowest_said(summary: RunSummary) -> str:
+    """`` in sleepy (Sleepy.update at x.py:98)``: the slowest tick's behaviour, for the ticks
+    line, when it ran over the 15 ms slot (a run's ordinary slowest tick is not news) and
+    the watch named it, or ``: the host was busy (...)`` when the host kept the ticking
+    thread from running (:attr:`RunSummary.slowest_host_busy`); else ""."""
+    if summary.max_tick_s <= SLOT_SECONDS:
+        return ""
+    if summary.slowest_host_busy:
+        return f": the host was busy ({summary.slowest_host_busy})"
+    return f" in {summary.slowest_in}" if summary.slowest_in else ""
+
+
+def _link_verdict(summary: RunSummary) -> str:
+    """A line that lost :data:`POOR_LINK` or more of the robot's frames, over a run long
+    enough to tell (:data:`LINK_VERDICT_SLOTS`), said as such: the run may end well on
+    it, the tree seeing the robot late. "" for a line that did not."""
+    sent = summary.ticks + summary.stale_frames_dropped + summary.frames_lost
+    if sent < LINK_VERDICT_SLOTS or summary.frames_lost < POOR_LINK * sent:
+        return ""
+    return (
+        f"poor: {100 * summary.frames_lost / sent:.0f} % of the robot's frames lost "
+        f"({summary.frames_lost} of {sent}), {summary.checksum_failures} checksum failures: the "
+        "tree saw the robot late; check the cable and its adapter (roomba-bt doctor)"
+    )
