@@ -531,13 +531,14 @@ def _gather(
     for future, result in distributed.as_completed(
         list(futures.values()), with_results=True, raise_errors=False
     ):
+        status = future.status  # before the release below, which marks it cancelled
         gathered.futures.append(futures.pop(future.key))
         if len(gathered.futures) >= RELEASE_EVERY:
             gathered.retried += _count_and_release(client, gathered.futures)
         i = index[future.key]
-        if future.status == "error":  # (type, exception, traceback)
+        if status == "error":  # (type, exception, traceback)
             given_up[i] = _killed_worker(specs[i], result[1])
-        elif future.status != "cancelled":
+        elif status != "cancelled":
             finished(i, result)
     return given_up
 
