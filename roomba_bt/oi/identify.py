@@ -30,8 +30,10 @@ them; the simulator produces them from its profile):
 from __future__ import annotations
 
 import re
+from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import ClassVar
 
 from roomba_bt.oi.frames import STREAM_HEADER, layout_for
 from roomba_bt.oi.modes import OI_MODE_PACKET
@@ -248,31 +250,51 @@ def checksum_rule(profile: RobotProfile) -> str:
 
 
 @dataclass(frozen=True, slots=True)
-class ChecksumMismatch:
+class ProfileMismatch(ABC):
+    """Frames that say the robot is not the model of ``profile`` but most likely one of
+    ``likely``: what the messages of both kinds read (:class:`ChecksumMismatch`,
+    :class:`RangeMismatch`)."""
+
+    profile: RobotProfile
+    likely: tuple[RobotProfile, ...]
+    #: the profile's check the frames fail, in words ("checksum", "range")
+    CHECK: ClassVar[str] = ""
+
+    @property
+    def fails(self) -> str:
+        """What the frames fail, in words (``the create2 profile's checksum``)."""
+        return f"the {self.profile.name} profile's {self.CHECK}"
+
+    @property
+    def most_likely(self) -> str:
+        """The models the frames fit, in words (``a Roomba 500 series or a ...``)."""
+        return "a " + " or a ".join(p.title for p in self.likely)
+
+    @property
+    @abstractmethod
+    def explained(self) -> str:
+        """What was seen and what it means, without the fix (the caller knows its own)."""
+
+
+@dataclass(frozen=True, slots=True)
+class ChecksumMismatch(ProfileMismatch):
     """Stream frames that fail ``profile``'s checksum and pass another model's rule: the
     robot is most likely one of ``likely`` (a Roomba 500 read with the default profile: its
     checksum leaves the header out). Found from the stream parser's counters alone
     (``ParserCounters.other_checksum``, counted on a failure only), never on the tick path."""
 
-    profile: RobotProfile
-    likely: tuple[RobotProfile, ...]
     failures: int
     passing: int
     #: the rule the frames pass, in words ("the header left out")
     rule: str
-
-    @property
-    def fails(self) -> str:
-        """What the frames fail, in words (``the create2 profile's checksum``)."""
-        return f"the {self.profile.name} profile's checksum"
+    CHECK: ClassVar[str] = "checksum"
 
     @property
     def explained(self) -> str:
-        """What was seen and what it means, without the fix (the caller knows its own)."""
         return (
             f"{self.failures} frames failed the checksum of the {self.profile.name} profile "
             f"({checksum_rule(self.profile)}) and {self.passing} of them pass with {self.rule}: "
-            f"the robot is most likely a {' or a '.join(p.title for p in self.likely)}"
+            f"the robot is most likely {self.most_likely}"
         )
 
 
@@ -293,29 +315,21 @@ def checksum_mismatch(
 
 
 @dataclass(frozen=True, slots=True)
-class RangeMismatch:
+class RangeMismatch(ProfileMismatch):
     """Stream frames that pass ``profile``'s checksum but carry a value out of its range
     that another model's range holds: the robot is most likely one of ``likely`` (a Roomba
     500 whose firmware sums the header, read with the default profile: its wall signal over
     1023). Found from the parser's last such frame (``StreamParser.out_of_range``) when a
-    stream is declared lost, never on the tick path. The same attributes as
-    :class:`ChecksumMismatch`, which the messages read."""
+    stream is declared lost, never on the tick path."""
 
-    profile: RobotProfile
-    likely: tuple[RobotProfile, ...]
     #: frames refused as out of range, and the first packet and value of the last one
     refused: int
     packet: int
     value: int
-
-    @property
-    def fails(self) -> str:
-        """What the frames fail, in words (``the create2 profile's range``)."""
-        return f"the {self.profile.name} profile's range"
+    CHECK: ClassVar[str] = "range"
 
     @property
     def explained(self) -> str:
-        """What was seen and what it means, without the fix (the caller knows its own)."""
         spec = self.profile.packet(self.packet)
         title = PACKETS[self.packet].title.lower()
         past = f"over {spec.maximum}" if self.value > spec.maximum else f"under {spec.minimum}"
@@ -326,8 +340,7 @@ class RangeMismatch:
         return (
             f"{self.refused} frames passed the checksum but not the range of the "
             f"{self.profile.name} profile: {title} ({self.packet}) read {self.value}, {past} "
-            f"({self.profile.title}), within {fits}: the robot is most likely a "
-            f"{' or a '.join(p.title for p in self.likely)}"
+            f"({self.profile.title}), within {fits}: the robot is most likely {self.most_likely}"
         )
 
 

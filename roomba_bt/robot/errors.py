@@ -20,7 +20,7 @@ import time
 
 from roomba_bt.errors import RoombaBtError
 from roomba_bt.oi.errors import OIError
-from roomba_bt.oi.identify import ChecksumMismatch, RangeMismatch
+from roomba_bt.oi.identify import ProfileMismatch
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
 
@@ -136,10 +136,6 @@ class LinkDown(RobotError, ConnectionError):
 
 class PortLost(LinkDown):
     """Reading or writing the port raised (cable unplugged, bridge closed, robot reset)."""
-
-
-#: Frames that show a robot of another model: they pass its checksum rule, or its range.
-ProfileMismatch = ChecksumMismatch | RangeMismatch
 
 
 def wrong_profile(mismatch: ProfileMismatch) -> str:

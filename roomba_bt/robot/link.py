@@ -33,6 +33,7 @@ import serial
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.identify import (
     ChecksumMismatch,
+    ProfileMismatch,
     RangeMismatch,
     checksum_mismatch,
     range_mismatch,
@@ -315,7 +316,7 @@ class StreamLink:
             checksum_failures=counters.checksum_failures, mode_plus_one=self.mode_plus_one,
         )  # fmt: skip
 
-    def profile_mismatch(self) -> ChecksumMismatch | RangeMismatch | None:
+    def profile_mismatch(self) -> ProfileMismatch | None:
         """The frames show a robot of another model (:meth:`checksum_mismatch`, else
         :meth:`range_mismatch`), or None: what a stall or a lost stream names with its fix."""
         return self.checksum_mismatch() or self.range_mismatch()
