@@ -76,11 +76,14 @@ A record named ``*.gz`` (``--record run.jsonl.gz``) is written gzip-compressed, 
 (about 12 times smaller: a plain record is some 45 MB an hour of run); before, such a name got
 plain text. Its flushes (every :data:`FLUSH_EVERY_S`) are zlib sync flushes, so the file as a
 ``kill -9`` leaves it decompresses up to its last flush, as a plain record reads up to its
-own; only a full disk's note (:data:`RECORD_STOPPED`) is not written into it (compressed bytes
-cannot be cut back to a line's end): its replay says the run was killed or its writing failed,
-and the run's summary says which. A record is read by what its first bytes are, not by its
-name (:func:`open_record`): gzip's magic number is decompressed whatever the file is called
-(``cp run.jsonl.gz copy``), and a plain record named ``.gz`` is read as plain text.
+own. A full disk or a file size limit ends it with the same note as a plain record
+(:data:`RECORD_STOPPED`): the file is cut back to one of its last flushes, where the deflate
+stream is at a byte's boundary after a whole line, and the note follows as a final block of
+its own with gzip's trailer, so the file is a whole gzip file again (before, it got no note,
+and its replay said the run was killed or its writing failed). A record is read by what its
+first bytes are, not by its name (:func:`open_record`): gzip's magic number is decompressed
+whatever the file is called (``cp run.jsonl.gz copy``), and a plain record named ``.gz`` is
+read as plain text.
 """
 
 from __future__ import annotations
@@ -94,6 +97,7 @@ import math
 import os
 import re
 import stat
+import struct
 import time
 import zlib
 from collections import deque
@@ -180,16 +184,67 @@ class _CompressedLines(io.TextIOWrapper):
 
     def __init__(self, raw: IO[bytes]) -> None:
         self._raw = raw
-        compressor = gzip.GzipFile(
+        self._gzip = gzip.GzipFile(
             filename="", mode="wb", fileobj=raw, compresslevel=COMPRESS_LEVEL, mtime=0
         )
-        super().__init__(compressor, encoding="utf-8")
+        #: after each flush that reached the file, the latest last: the file's size then
+        #: (a sync flush ends on a byte, after a whole line), and the CRC-32 and length of
+        #: the text up to there, which gzip's trailer holds (:meth:`end_with`)
+        self._flushed: deque[tuple[int, int, int]] = deque(maxlen=FLUSHES_KEPT)
+        super().__init__(self._gzip, encoding="utf-8")
+
+    def flush(self) -> None:
+        super().flush()
+        self._flushed.append((self._raw.tell(), self._gzip.crc, self._gzip.tell()))
+
+    def end_with(self, line: bytes) -> bool:
+        """End the file, whose write just failed, with ``line`` (the recording's stop note)
+        and gzip's trailer, as :func:`_mark_stopped` ends a plain record: cut back to the
+        latest flush that leaves room for them within the bytes the file held (a size limit
+        or a full disk is not gone past), the chunks after it lost. The deflate stream there
+        is at a byte's boundary (a sync flush), so a final block compressed on its own
+        (nothing of it refers back) and the trailer's CRC-32 and length of the whole text
+        make the file a whole gzip file again: ``zcat`` and every reader take it. Before, a
+        compressed record got no note (its bytes could not be cut back to a line's end),
+        and its replay said the run was killed or its writing failed. True if it was
+        written; a device or a failure before the first flush gets none."""
+        try:
+            fd = self._raw.fileno()
+            held = os.fstat(fd)
+            if not stat.S_ISREG(held.st_mode):
+                return False
+            for size, crc, length in reversed(self._flushed):
+                ending = _gzip_ending(line, crc, length)
+                if size + len(ending) <= held.st_size:
+                    os.ftruncate(fd, size)
+                    os.lseek(fd, size, os.SEEK_SET)
+                    return os.write(fd, ending) == len(ending)
+            return False
+        except (OSError, ValueError):
+            return False
+        finally:
+            _write_nowhere(self)
 
     def close(self) -> None:
         try:
             super().close()  # the last block and gzip's trailer
         finally:
             self._raw.close()
+
+
+#: how many of a compressed record's last flushes are kept to cut back to (one each
+#: :data:`FLUSH_EVERY_S` while frames come: some 16 s of record, 300 bytes to a few KB of it)
+FLUSHES_KEPT = 64
+
+
+def _gzip_ending(line: bytes, crc: int, length: int) -> bytes:
+    """``line`` as a final deflate block compressed on its own, then gzip's trailer for a
+    text whose first ``length`` bytes had the CRC-32 ``crc`` (RFC 1952: CRC-32, then the
+    length modulo 2**32, both little-endian)."""
+    deflate = zlib.compressobj(COMPRESS_LEVEL, zlib.DEFLATED, -zlib.MAX_WBITS)
+    block = deflate.compress(line) + deflate.flush(zlib.Z_FINISH)
+    trailer = struct.pack("<II", zlib.crc32(line, crc), (length + len(line)) & 0xFFFFFFFF)
+    return block + trailer
 
 
 def _open_for_writing(claimed: ClaimedFile, path: str) -> IO[str]:
@@ -251,10 +306,7 @@ class RecordingTransport:
         why = exc.strerror or str(exc)
         self.stopped = f"stopped at {t:.3f} s: {why}; the file ends there"
         log.warning("%s: the record %s %s (the run goes on)", self.name, self.path, self.stopped)
-        if self.compressed:  # its bytes cannot be cut back to a line's end for a note
-            _write_nowhere(self._file)
-        else:
-            _mark_stopped(self._file, self.path, t, why)
+        _mark_stopped(self._file, self.path, t, why)
         with contextlib.suppress(OSError):  # its flush fails again; the file is closed
             self._file.close()
 
@@ -370,9 +422,13 @@ def _mark_stopped(file: IO[str], path: str, t: float, why: str) -> bool:
     the bytes were the file's); the few chunks cut are lost. The descriptor is then pointed
     at the null device, so that what ``file`` still buffers goes nowhere when it is closed
     (written after the note, it would be a cut line past it). True if the note was
-    written; a device (``/dev/full``) or a file that cannot be read back gets none."""
+    written; a device (``/dev/full``) or a file that cannot be read back gets none. A
+    compressed record is cut back to one of its last flushes instead, and ended there as a
+    whole gzip file (:meth:`_CompressedLines.end_with`)."""
     note = json.dumps({"t": round(t, 6), "d": "note", "note": {RECORD_STOPPED: why}}) + "\n"
     data = note.encode("utf-8")
+    if isinstance(file, _CompressedLines):  # cut back to a flush, not to a line's end
+        return file.end_with(data)
     try:
         fd = file.fileno()
         held = os.fstat(fd)

@@ -4,20 +4,30 @@ tests/monitor/test_cli.py) reading it, whatever its name."""
 
 from __future__ import annotations
 
+import errno
 import gzip
+import io
 import json
+import os
 import shutil
 import subprocess
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import IO
 
 import pytest
 
 from roomba_bt.cli import main
-from roomba_bt.runtime.recording import GZIP_MAGIC, load_record
+from roomba_bt.runtime.claimed import ClaimedFile
+from roomba_bt.runtime.recording import (
+    FLUSH_EVERY_S,
+    GZIP_MAGIC,
+    RecordingTransport,
+    load_record,
+)
 
-from .test_recording import MISSIONS, _left_a_minute, two_seconds_recorded
+from .test_recording import HEADER, MISSIONS, _left_a_minute, _Link, two_seconds_recorded
 
 BUMP_AND_TURN = str(MISSIONS / "bump-and-turn.yaml")
 
@@ -123,12 +133,13 @@ def test_a_compressed_record_may_be_written_over_as_a_plain_one_is(
     assert "a file that is not a record" in capsys.readouterr().err
 
 
-def test_a_compressed_record_cut_by_a_file_size_limit_reads_up_to_there(
+def test_a_compressed_record_cut_by_a_file_size_limit_says_so_as_a_plain_one_does(
     tmp_path: Path, child: Callable[[Sequence[str]], subprocess.Popen[str]]
 ) -> None:
-    """``ulimit -f``: the recording stops and the run goes on, as for a plain record; the
-    compressed file holds no note of why (its bytes cannot be cut back to a line for one),
-    and reads as a record up to where it could be written."""
+    """``ulimit -f``: the recording stops and the run goes on to its safe stop, as for a
+    plain record. The compressed file held no note of why (its replay said "the run was
+    killed, or writing its record failed"); it now ends with the plain record's note, and
+    is a whole gzip file up to there."""
     record = tmp_path / "cut.jsonl.gz"
     limit = 8 * 1024
     script = (
@@ -142,7 +153,95 @@ def test_a_compressed_record_cut_by_a_file_size_limit_reads_up_to_there(
     out, err = run.communicate(timeout=120)
     assert run.returncode == 0, err
     assert "stopped at" in out and "File too large" in out
+    assert "final mode   Passive" in out and "safe stop    sent" in out  # stopped as ever
     assert record.stat().st_size <= limit
+    lines = gzip.decompress(record.read_bytes()).decode("utf-8").splitlines()
+    assert json.loads(lines[-1])["note"] == {"record_stopped": "File too large"}
     loaded = load_record(record)
     assert not loaded.ended and loaded.last_t > 1.0
-    assert "writing its record failed" in str(loaded.unended())
+    assert loaded.recording_stopped == "File too large"
+    assert str(loaded.unended()).startswith("the recording stopped (File too large)")
+
+
+class _FillsUp(io.RawIOBase):
+    """A file on a disk with ``room`` bytes free: the write that reaches them writes what
+    fits, and the next one raises ENOSPC, as write(2) does on a full disk."""
+
+    def __init__(self, file: io.RawIOBase, room: int) -> None:
+        super().__init__()
+        self._file = file
+        self._room = room
+
+    def writable(self) -> bool:
+        return True
+
+    def seekable(self) -> bool:
+        return True
+
+    def fileno(self) -> int:
+        return self._file.fileno()
+
+    def tell(self) -> int:
+        return self._file.tell()
+
+    def seek(self, offset: int, whence: int = os.SEEK_SET) -> int:
+        return self._file.seek(offset, whence)
+
+    def write(self, data: bytes | bytearray | memoryview) -> int:  # type: ignore[override]
+        if self._room == 0:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        taken = self._file.write(bytes(data[: self._room])) or 0
+        self._room -= taken
+        return taken
+
+    def close(self) -> None:
+        self._file.close()
+        super().close()
+
+
+class _ClaimedOnAFullDisk(ClaimedFile):
+    """``run --record``'s claim of a file on a disk with ``room`` bytes free."""
+
+    def __init__(self, path: Path, room: int) -> None:
+        super().__init__(path)
+        self._room = room
+
+    def open_binary(self) -> IO[bytes]:
+        raw = super().open_binary().detach()  # type: ignore[attr-defined]
+        return io.BufferedWriter(_FillsUp(raw, self._room))
+
+    def open_text(self, newline: str | None = None) -> IO[str]:
+        return io.TextIOWrapper(self.open_binary(), encoding="utf-8", newline=newline)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("name", ["run.jsonl", "run.jsonl.gz"])
+def test_a_record_cut_by_a_full_disk_ends_with_its_note_plain_or_compressed(
+    tmp_path: Path, name: str
+) -> None:
+    """ENOSPC: the recording stops (said once, the run goes on) and the file, within the
+    bytes it held, ends with the note of why, read back by ``load_record``. A compressed
+    record got no note (replay: "the run was killed, or writing its record failed")."""
+    path, room = tmp_path / name, 6000
+    link = _Link()
+    recording = RecordingTransport(link, path, HEADER, _ClaimedOnAFullDisk(path, room))  # type: ignore[arg-type]
+    for _ in range(1000):  # 15 s of frames: far more than the room
+        recording.read(0.015)
+        recording.write(bytes([137, 0, 200, 128, 0]))
+    stopped = recording.stopped
+    assert stopped is not None and "No space left on device" in stopped
+    recording.close()  # the run's end: nothing more reaches the file
+    assert path.stat().st_size <= room
+    loaded = load_record(path)
+    assert loaded.recording_stopped == "No space left on device"
+    assert str(loaded.unended()).startswith("the recording stopped (No space left on device)")
+    stopped_at = float(stopped.split()[2])  # "stopped at 0.765 s: ..."
+    last_chunk = max(t for t, _, _ in loaded.chunks())
+    # read up to the cut: a plain record's last whole line with room for the note after it;
+    # a compressed one's last flush, or the one before when fewer bytes than the note's
+    # reached the file after it
+    assert stopped_at - 3 * FLUSH_EVERY_S <= last_chunk < stopped_at
+    if name.endswith(".gz"):  # a whole gzip file: its trailer's CRC and length check out
+        text = gzip.decompress(path.read_bytes()).decode("utf-8")
+        assert json.loads(text.splitlines()[-1])["note"] == {
+            "record_stopped": "No space left on device"
+        }
