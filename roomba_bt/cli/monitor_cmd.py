@@ -552,11 +552,41 @@ def register(sub: Any) -> None:
     add_permission_options(monitor)
 
 
-#: a record from this size on is said to be read before its page is served: its URL comes
-#: after the replay, about a second a MB on the development machine (a 6-minute clean run's
-#: 4.9 MB record: 5 s, silent before); its progress is said from run_cmd's
+#: a record from this size of text on is said to be read before its page is served: its URL
+#: comes after the replay, about a second a MB on the development machine (a 6-minute clean
+#: run's 4.9 MB record: 5 s, silent before); its progress is said from run_cmd's
 #: PROGRESS_FROM_BYTES on
 READING_NOTICE_BYTES = 1 << 20
+#: how many times its file's size a compressed record's text is taken to be where its gzip
+#: trailer cannot say (a run killed): 10 to 12 measured (docs/runtime.md, Long unattended runs)
+COMPRESSED_TEXT_RATIO = 10
+
+
+def reading_notice(path: str) -> str | None:
+    """What ``roomba-bt monitor`` says before it reads a record of a second or more (None: a
+    shorter one, or a file it cannot read, which the load then names): its size, and a
+    compressed record's text size beside its file's (the replay's time goes by the text).
+    It said the compressed file's size as the record's (``2.3 MB`` for 23.6 MB of record),
+    and a compressed record under 1 MB, 10 MB of record, was read without a word."""
+    from roomba_bt.runtime.recording import record_size
+
+    try:
+        size = record_size(Path(path))
+    except OSError:
+        return None
+    text = size.text if size.text is not None else size.file * COMPRESSED_TEXT_RATIO
+    if text < READING_NOTICE_BYTES:
+        return None
+    if not size.compressed:
+        words = f"{size.file / 1e6:.1f} MB"
+    elif size.text is not None:
+        words = f"{size.text / 1e6:.1f} MB of record, {size.file / 1e6:.1f} MB compressed"
+    else:  # no trailer to say it: a run killed, or one still writing it
+        words = f"{size.file / 1e6:.1f} MB compressed, its record's own size known once read"
+    return (
+        f"monitor: reading {path} ({words}) before serving it: the page's timeline is the "
+        "whole run's, so every tick is replayed first"
+    )
 
 
 def monitor_command(args: argparse.Namespace) -> int:
@@ -574,14 +604,9 @@ def monitor_command(args: argparse.Namespace) -> int:
     if taken is not None:  # said before the replay: a long record's took minutes first
         print(f"roomba-bt: {address_problem(host, port, taken)}", file=sys.stderr)
         return ExitCode.INVALID
-    with contextlib.suppress(OSError):  # load_recorded says what is wrong with the file
-        size = os.stat(args.record).st_size
-        if size >= READING_NOTICE_BYTES:  # a second or more before the page
-            print(
-                f"monitor: reading {args.record} ({size / 1e6:.1f} MB) before serving it: "
-                "the page's timeline is the whole run's, so every tick is replayed first",
-                file=sys.stderr, flush=True,
-            )  # fmt: skip
+    notice = reading_notice(args.record)  # load_recorded says what is wrong with the file
+    if notice is not None:  # a second or more before the page
+        print(notice, file=sys.stderr, flush=True)
     recorded = load_recorded(args)
     if isinstance(recorded, int):
         return recorded

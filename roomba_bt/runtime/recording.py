@@ -804,6 +804,39 @@ def open_record(path: Path) -> io.BufferedIOBase:
     return path.open("rb")
 
 
+#: the bytes a zlib sync flush ends with (an empty stored block): the end of a compressed
+#: record whose run was killed, or writes it still (no gzip trailer yet)
+SYNC_FLUSH_END = b"\x00\x00\xff\xff"
+
+
+@dataclass(frozen=True)
+class RecordSize:
+    """A record file's size in bytes, and the size of the text it holds (the same for a
+    plain record; None where a compressed one's cannot be told before it is read)."""
+
+    file: int
+    text: int | None
+    compressed: bool
+
+
+def record_size(path: Path) -> RecordSize:
+    """How big the record at ``path`` is, without reading it through: a compressed record's
+    text size is its gzip trailer's (the last 4 bytes: the text's length modulo 2**32),
+    unknown where the file does not end with one (a run killed, or writing it still: it
+    ends with its last sync flush, :data:`SYNC_FLUSH_END`) or holds 4 GiB of text or more
+    (the trailer's length then smaller than the file). OSError when it cannot be read."""
+    with path.open("rb") as file:
+        size = os.fstat(file.fileno()).st_size
+        if file.read(len(GZIP_MAGIC)) != GZIP_MAGIC:
+            return RecordSize(size, size, compressed=False)
+        file.seek(max(size - 8, 0))
+        trailer = file.read(8)
+    text = int.from_bytes(trailer[4:], "little") if len(trailer) == 8 else None
+    if trailer.endswith(SYNC_FLUSH_END) or text is None or text < size:
+        text = None
+    return RecordSize(size, text, compressed=True)
+
+
 def _read_lines(path: Path, file: io.BufferedIOBase) -> Iterator[bytes]:
     """``file``'s lines, each cut at :data:`MAX_RECORD_LINE` + 1 bytes. A compressed record
     that stops short (its run killed, a full disk, or a run writing it still: no gzip

@@ -24,7 +24,9 @@ from roomba_bt.runtime.recording import (
     FLUSH_EVERY_S,
     GZIP_MAGIC,
     RecordingTransport,
+    RecordSize,
     load_record,
+    record_size,
 )
 
 from .test_recording import HEADER, MISSIONS, _left_a_minute, _Link, two_seconds_recorded
@@ -245,3 +247,32 @@ def test_a_record_cut_by_a_full_disk_ends_with_its_note_plain_or_compressed(
         assert json.loads(text.splitlines()[-1])["note"] == {
             "record_stopped": "No space left on device"
         }
+
+
+def test_a_compressed_record_s_text_size_is_its_trailer_s_and_unknown_without_one(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``roomba-bt monitor``'s notice said a compressed record's file size as the record's.
+    Its text's size is in gzip's trailer; a run killed while writing it leaves none, and the
+    notice says the file's size alone, and that the record's own is known once read (taken
+    to be ten times the file's, for whether to say anything at all)."""
+    from roomba_bt.cli import monitor_cmd
+
+    path, killed = tmp_path / "run.jsonl.gz", tmp_path / "killed.jsonl.gz"
+    recording, _ = two_seconds_recorded(path)
+    shutil.copyfile(path, killed)  # what a kill -9 now would leave
+    recording.close()
+    text = len(gzip.decompress(path.read_bytes()))
+    assert record_size(path) == RecordSize(path.stat().st_size, text, compressed=True)
+    assert record_size(killed) == RecordSize(killed.stat().st_size, None, compressed=True)
+    plain = tmp_path / "plain.jsonl"
+    plain.write_bytes(gzip.decompress(path.read_bytes()))
+    assert record_size(plain) == RecordSize(text, text, compressed=False)
+
+    size = killed.stat().st_size
+    monkeypatch.setattr(monitor_cmd, "READING_NOTICE_BYTES", 10 * size)
+    notice = monitor_cmd.reading_notice(str(killed))
+    assert notice is not None
+    assert f"({size / 1e6:.1f} MB compressed, its record's own size known once read)" in notice
+    monkeypatch.setattr(monitor_cmd, "READING_NOTICE_BYTES", 10 * size + 1)
+    assert monitor_cmd.reading_notice(str(killed)) is None
