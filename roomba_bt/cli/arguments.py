@@ -489,6 +489,35 @@ def parse_timeout(text: str | None, option: str = "--timeout") -> float | str | 
     return value
 
 
+def add_window_options(parser: argparse.ArgumentParser, *, start: bool) -> None:
+    """``--to`` (and with ``start``, ``--from``): a window of a long record's mission time,
+    read by :func:`parse_window` (``monitor RECORD``, ``replay``)."""
+    if start:
+        parser.add_argument(
+            "--from", dest="window_from", metavar="DURATION",
+            help="keep the ticks from this mission time on, e.g. 1h30min (the run before it "
+            "is replayed all the same, its events shown; the memory is the window's)",
+        )  # fmt: skip
+    parser.add_argument(
+        "--to", dest="window_to", metavar="DURATION",
+        help="end the replay at this mission time, e.g. 2h (the rest of the record is not read)",
+    )  # fmt: skip
+
+
+def parse_window(args: argparse.Namespace) -> tuple[float, float | None] | str:
+    """``(--from, --to)`` in seconds of mission time (0 and None when not given), each a
+    duration as ``--timeout`` takes it; a message string on error."""
+    start = parse_timeout(getattr(args, "window_from", None), "--from")
+    end = parse_timeout(args.window_to, "--to")
+    if isinstance(start, str):
+        return start
+    if isinstance(end, str):
+        return end
+    if start is not None and end is not None and start >= end:
+        return f"--from {args.window_from} is not before --to {args.window_to}"
+    return start or 0.0, end
+
+
 def mission_file(text: str) -> str | tuple[str]:
     """A mission argument as a path: an existing file, else the shipped mission of that name
     (``roomba-bt run dock``); ``(problem,)`` when neither exists. The mission package (its

@@ -24,7 +24,13 @@ from datetime import datetime
 from pathlib import Path
 from typing import Any
 
-from roomba_bt.cli.arguments import add_command, add_param_option, add_permission_options
+from roomba_bt.cli.arguments import (
+    add_command,
+    add_param_option,
+    add_permission_options,
+    add_window_options,
+    parse_window,
+)
 from roomba_bt.monitor import INSTALL_HINT, server_available
 from roomba_bt.monitor.address import DEFAULT_HOST, lan_addresses, parse_address
 from roomba_bt.runtime.summary import ExitCode
@@ -550,6 +556,7 @@ def register(sub: Any) -> None:
     monitor.add_argument("--mission", help="mission to replay against (default: the recorded one)")
     add_param_option(monitor, "set a mission parameter for the replay (repeatable)")
     add_permission_options(monitor)
+    add_window_options(monitor, start=True)
 
 
 #: a record from this size of text on is said to be read before its page is served: its URL
@@ -604,6 +611,10 @@ def monitor_command(args: argparse.Namespace) -> int:
     if taken is not None:  # said before the replay: a long record's took minutes first
         print(f"roomba-bt: {address_problem(host, port, taken)}", file=sys.stderr)
         return ExitCode.INVALID
+    window = parse_window(args)
+    if isinstance(window, str):
+        print(f"roomba-bt: {window}", file=sys.stderr)
+        return ExitCode.INVALID
     notice = reading_notice(args.record)  # load_recorded says what is wrong with the file
     if notice is not None:  # a second or more before the page
         print(notice, file=sys.stderr, flush=True)
@@ -611,6 +622,12 @@ def monitor_command(args: argparse.Namespace) -> int:
     if isinstance(recorded, int):
         return recorded
     record, mission, profile, baud, packets = recorded
+    if window[0] > record.last_t:
+        print(
+            f"roomba-bt: --from {args.window_from}: the record ends at t={record.last_t:.2f} s",
+            file=sys.stderr,
+        )
+        return ExitCode.INVALID
 
     def diverged_at(text: str) -> None:
         """Where the replay diverged, and each file and plugin changed since the record was
@@ -620,7 +637,7 @@ def monitor_command(args: argparse.Namespace) -> int:
 
     feed, _ = replay_into_feed(
         record, mission, profile, packets, baud, args.record,
-        progress=replay_progress("monitor", record), diverged_at=diverged_at,
+        progress=replay_progress("monitor", record), diverged_at=diverged_at, window=window,
     )  # fmt: skip
     server = MonitorServer(feed, None, host=host, port=port, readonly=True)
     try:

@@ -20,10 +20,12 @@ from roomba_bt.cli.arguments import (
     add_odometry_error_option,
     add_param_option,
     add_permission_options,
+    add_window_options,
     baud_warning,
     mission_file,
     parse_params,
     parse_timeout,
+    parse_window,
     permissions,
     plot_file,
     record_file,
@@ -213,6 +215,7 @@ def _add_replay_parser(sub: Any) -> None:
     replay.add_argument("--mission", help="mission to replay against (default: the recorded one)")
     add_param_option(replay)
     add_permission_options(replay)
+    add_window_options(replay, start=False)
 
 
 def _error(message: str) -> int:
@@ -893,6 +896,9 @@ def replay_command(args: argparse.Namespace) -> int:
     from roomba_bt.runtime.recording import ending_text
     from roomba_bt.runtime.stack import replay_record
 
+    window = parse_window(args)
+    if isinstance(window, str):
+        return _error(window)
     recorded = load_recorded(args)
     if isinstance(recorded, int):
         return recorded
@@ -902,6 +908,7 @@ def replay_command(args: argparse.Namespace) -> int:
         baud=recorded.baud, name=args.record, raise_interrupts=False,
         progress=replay_progress("replay", record),
         gate=operator_replay(record, recorded.mission),  # the monitor's pauses, steps, forces
+        until=window[1],
     )  # fmt: skip
     summary.strict_named = "run --strict"  # its warning of refusals: what would fail a run
     summary.label = record.label  # replays of several robots' runs told apart, as the runs
@@ -918,10 +925,17 @@ def replay_command(args: argparse.Namespace) -> int:
     if drift is not None:
         print(f"replay: {drift}")
     unended = record.unended()
-    if unended is not None:  # compared up to where it ends
+    if transport.ended_early:  # --to: compared up to there
+        print(
+            f"replay: compared up to mission time {summary.mission_time_s:.3f} s (--to); the "
+            f"record goes on to {record.last_t:.3f} s"
+        )
+    elif unended is not None:  # compared up to where it ends
         print(f"replay: the record ends at {record.last_t:.3f} s without the run's end: {unended}")
     if difference is None:
-        if unended is not None:
+        if transport.ended_early:
+            print("replay: the tree wrote the same bytes up to there")
+        elif unended is not None:
             print(f"replay: the tree wrote the same {record.out_bytes} bytes up to there")
         else:
             print(f"replay: the tree wrote the same {transport.written} bytes as the recorded run")

@@ -306,7 +306,10 @@ class RunFeed:
         robot: str = "",
         started: datetime | None = None,
         label: str = "",
+        keep_from: float = 0.0,
     ) -> None:
+        """``keep_from``: of a packed feed (a record's), the mission time from which its
+        ticks are kept (``monitor RECORD --from``); the events are every tick's."""
         #: the run's identity, sent in the page's first message and checked with each
         #: control: a page left open after its run was killed reconnected to the next run
         #: served on that port (another robot, perhaps) and its controls drove that one. A new
@@ -321,7 +324,7 @@ class RunFeed:
         if packed:  # every tick, packed (a recorded run's: monitor/history.py)
             from roomba_bt.monitor.history import PackedRing
 
-            self.ring: Ring = PackedRing(self.layouts)
+            self.ring: Ring = PackedRing(self.layouts, keep_from)
         else:
             self.ring = Ring(history)
         self.events: deque[Event] = deque(maxlen=2000)

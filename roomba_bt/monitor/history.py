@@ -50,10 +50,15 @@ class _Interned(Generic[_Value]):
 class PackedRing(Ring):
     """Every record appended (a :class:`~roomba_bt.monitor.feed.Ring` without a size), each
     packed into a row; ``layouts`` is the feed's list of frame layouts (a record names its
-    own by index)."""
+    own by index). ``keep_from``: the records of an earlier mission time are counted, not
+    kept (``monitor RECORD --from``: a window of a long record, in the memory of the
+    window), so the ring starts later, as a live one that has dropped its oldest does."""
 
-    def __init__(self, layouts: list[FrameLayout]) -> None:
+    def __init__(self, layouts: list[FrameLayout], keep_from: float = 0.0) -> None:
         super().__init__(None)
+        self._keep_from = keep_from
+        #: the sequence number of the first record kept (:attr:`first`)
+        self._first = 0
         self._layouts = layouts
         self._rows = bytearray()
         self._payloads = bytearray()
@@ -64,8 +69,16 @@ class PackedRing(Ring):
         self._motors: _Interned[bytes] = _Interned()  # a run sets the motors a few ways
         self._truths: dict[int, tuple[float, float, float]] = {}  # a record has none
 
+    @property
+    def first(self) -> int:
+        return self._first
+
     def append(self, record: TickRecord) -> None:
         """Tick thread only; ``record.seq`` must be ``count``."""
+        if record.time < self._keep_from:  # before the window: counted, not kept
+            self._first = self.count = record.seq + 1
+            self.ended = monotonic()
+            return
         reasons = record.reasons
         odometry = record.odometry or Odometry()
         left, right = odometry.left_counts, odometry.right_counts
@@ -101,13 +114,13 @@ class PackedRing(Ring):
         return at
 
     def get(self, seq: int) -> TickRecord | None:
-        if not 0 <= seq < self.count:
+        if not self._first <= seq < self.count:
             return None
         (
             tick, time, statuses, changed, reasons, frame_at, layout, mode, frames_lost, sent,
             refused, board, tree, ticked, has_odometry, x, y, theta, distance, angle, path,
             left, right, motors,
-        ) = _ROW.unpack_from(self._rows, seq * _ROW.size)  # fmt: skip
+        ) = _ROW.unpack_from(self._rows, (seq - self._first) * _ROW.size)  # fmt: skip
         frame = (
             self._layouts[layout].struct.unpack_from(self._payloads, frame_at)
             if frame_at >= 0
@@ -126,5 +139,5 @@ class PackedRing(Ring):
         )  # fmt: skip
 
     def since(self, seq: int) -> list[TickRecord]:
-        out = [self.get(s) for s in range(max(seq, 0), self.count)]
+        out = [self.get(s) for s in range(max(seq, self._first), self.count)]
         return [r for r in out if r is not None]

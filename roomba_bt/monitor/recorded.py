@@ -49,22 +49,27 @@ def replay_into_feed(
     name: str,
     progress: Callable[[float], None] | None = None,
     diverged_at: Callable[[str], None] | None = None,
+    window: tuple[float, float | None] = (0.0, None),
 ) -> tuple[RunFeed, RunSummary]:
     """Replay ``record`` through ``mission``; the feed holds every tick, packed
     (``monitor/history.py``). ``progress(fraction)``: at each tenth of the record replayed;
     ``diverged_at(text)``: where the replay diverged from the record, if it did (the command
-    line says it on stderr, as ``replay`` does)."""
+    line says it on stderr, as ``replay`` does). ``window``: the mission time from which
+    ticks are kept, and the one the replay ends at (None: the record's end; ``--from``,
+    ``--to``); the ticks before it are replayed all the same (the tree's state there is
+    the recorded run's only so), and their events kept."""
+    keep_from, until = window
     feed = RunFeed(
         source="record", mission_name=mission.name, packed=True,
         robot=record.header.get("port") or "", started=recorded_start(record),
-        label=record.label,
+        label=record.label, keep_from=keep_from,
     )  # fmt: skip
     feed.set_tree(mission.root)
     summary, transport = replay_record(
         record, mission, profile=profile, packets=packets, baud=baud, name=name,
         gate=ReplayedActs(feed, recorded_acts(record)),  # it records each tick in the feed
         raise_interrupts=False,  # Ctrl-C: the monitor shows the summary, as `replay` does
-        progress=progress,
+        progress=progress, until=until,
     )  # fmt: skip
     for t, note in record.notes:
         # the tick guard's: shown as the run had it (the end note: below, with the end)
@@ -73,11 +78,11 @@ def replay_into_feed(
     difference = diverged(summary, transport)
     if difference is not None and diverged_at is not None:
         diverged_at(difference)
-    finished = how_the_replay_ended(record, summary, difference, feed)
+    finished = how_the_replay_ended(record, summary, difference, feed, transport.ended_early)
     # what the recorded run's safe stop left the robot in: the replay wrote the same stop
     # (checked against the record), where the record holds the run's end and no difference
     whole = difference is None and record.ending is not None and not record.being_written
-    whole = whole and record.recording_stopped is None
+    whole = whole and record.recording_stopped is None and not transport.ended_early
     feed.end(finished, Ending.of(summary) if whole else None)
     return feed, summary
 
@@ -123,17 +128,29 @@ def operator_replay(record: Record, mission: Any) -> ReplayedActs | None:
 
 
 def how_the_replay_ended(
-    record: Record, summary: RunSummary, difference: str | None, feed: RunFeed
+    record: Record,
+    summary: RunSummary,
+    difference: str | None,
+    feed: RunFeed,
+    ended_early: bool = False,
 ) -> str:
     """What the record view says of the end (its banner, and the event log): where the
     replay diverged from the record, if it did (``difference``: where, what was expected,
     what was sent; the timeline ends there, as ``replay`` says it: it said only "input
-    ended"), else how the recorded run ended (its end note: "the recorded run was stopped by
-    the operator at t=44.17 s"), else the replay's outcome (an older record)."""
+    ended"), else where its window ended (``ended_early``: ``--to``), else how the recorded
+    run ended (its end note: "the recorded run was stopped by the operator at t=44.17 s"),
+    else the replay's outcome (an older record)."""
     ticks = f"recorded run, {summary.ticks} ticks"
     if difference is not None:
         feed.event("warning", difference)
         return f"{difference} ({ticks})"
+    if ended_early:
+        text = (
+            f"shown up to t={summary.mission_time_s:.2f} s of mission time (--to); the "
+            f"record goes on to t={record.last_t:.2f} s"
+        )
+        feed.event("control", text)
+        return f"{text} ({ticks})"
     stopped = record.recording_stopped
     if stopped is not None:  # the run went on: how it ended is not in the record
         text = f"the recording stopped at t={record.last_t:.2f} s ({stopped}); the run went on"

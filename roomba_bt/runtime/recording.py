@@ -1088,6 +1088,8 @@ class ReplayTransport:
         #: inside :meth:`recorded_reads`: a read gives what the recorded run read before the
         #: tree's next write, whatever the clock
         self._as_recorded = False
+        #: the replay was ended before the record's end (:meth:`end_here`: ``--to``)
+        self.ended_early = False
 
     def _read_chunk(self, queue: bool = True) -> bool:
         """Read the record's next chunk into the queue (``queue``; else the robot's chunk is
@@ -1115,9 +1117,21 @@ class ReplayTransport:
     #: (offset, what raises there): :meth:`interrupt_at`; None: no interrupt to do again
     _interrupt: tuple[int, Callable[[], None]] | None = None
 
+    def end_here(self) -> None:
+        """End the replay here, as if the record ended here (``--to``: a window of a long
+        record): nothing more of it is read, and what the tree writes from now on (the
+        replay's own safe stop, where the recorded run went on) is not compared; a
+        difference found before stays one."""
+        self.ended_early = True
+        self._more = False
+        self._inbound.clear()
+
     def write(self, data: bytes) -> None:
         """Compare ``data`` with the record's "out" side, and move the clock to the time the
         recorded run wrote those bytes (:meth:`_written_at`)."""
+        if self.ended_early:
+            self.written += len(data)
+            return
         start = self.written
         if self._interrupt is not None and start + len(data) > self._interrupt[0]:
             interrupt, self._interrupt = self._interrupt[1], None
@@ -1285,7 +1299,7 @@ class ReplayTransport:
         """``(byte offset, command expected, command sent)`` of the first difference between
         what the tree wrote and the record's "out" side, or None when they are the same."""
         offset = self.difference
-        if offset is None and self.written < self._recorded:
+        if offset is None and self.written < self._recorded and not self.ended_early:
             offset = self.written
         if offset is None:
             return None

@@ -529,6 +529,30 @@ class RecordedEnd:
         return self.inner is not None and self.inner.holds(runner)
 
 
+class WindowEnd:
+    """A replay's gate that ends it once the tree has ticked at mission time ``until``
+    (``--to``: a window of a long record, the rest not replayed), as if the record ended
+    there (:meth:`ReplayTransport.end_here`); ``inner``: the monitor's replay of the
+    operator's acts, asked first."""
+
+    def __init__(self, until: float, inner: TickGate | None, transport: ReplayTransport) -> None:
+        self.until = until
+        self.inner = inner
+        self.transport = transport
+
+    def before_tick(self, runner: MissionRunner) -> bool:
+        return self.inner.before_tick(runner) if self.inner is not None else True
+
+    def after_tick(self, runner: MissionRunner) -> None:
+        if self.inner is not None:
+            self.inner.after_tick(runner)
+        if runner.snapshot.time >= self.until and not self.transport.ended_early:
+            self.transport.end_here()
+
+    def holds(self, runner: MissionRunner) -> bool:
+        return self.inner is not None and self.inner.holds(runner)
+
+
 def recorded_end(
     record: Record, gate: TickGate | None, transport: ReplayTransport | None = None
 ) -> RecordedEnd | None:
@@ -556,18 +580,23 @@ def replay_record(
     gate: TickGate | None = None,
     raise_interrupts: bool = True,
     progress: Callable[[float], None] | None = None,
+    until: float | None = None,
 ) -> tuple[RunSummary, ReplayTransport]:
     """``record``'s sensor bytes through ``mission`` on the recorded clock (``replay`` and the
     monitor's recorded runs): the run ends at the record's end or at the first command that
     differs from the recorded ones; the transport holds what the tree wrote. Ctrl-C is
     raised again unless ``raise_interrupts`` is False (see :meth:`RunStack.run`).
-    ``progress(fraction)``: at each tenth of the record's time replayed."""
+    ``progress(fraction)``: at each tenth of the record's time replayed. ``until``: the
+    mission time the replay ends at, as if the record ended there (``--to``; its
+    transport's ``ended_early``)."""
     transport = ReplayTransport(record, name=f"replay:{name}", progress=progress)
     header, trips = record.header, record.watchdog_trips
 
     def input_ended() -> str | None:
         if transport.difference is not None or transport.starved():
             return "first difference from the record"
+        if transport.ended_early:
+            return f"the end of the window, mission time {until:g} s (--to)"
         return "end of the record" if transport.exhausted else None
 
     stack = RunStack(
@@ -585,6 +614,8 @@ def replay_record(
     )
     if trips is not None:  # it trips where the record's did (None: on the record's silence)
         stack.connection.link.replayed_trips = deque(trips)
+    if until is not None:
+        gate = WindowEnd(until, gate, transport)
     end = recorded_end(record, gate, transport)
     stack.runner.gate = end or gate  # the monitor's replay of the operator's acts inside
     stack.runner.on_wall_clock = False  # a record's clock: Ctrl-Z suspends, Ctrl-\ quits
