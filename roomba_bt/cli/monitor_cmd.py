@@ -596,6 +596,11 @@ def reading_notice(path: str) -> str | None:
     )
 
 
+def _usage_error(message: str) -> int:
+    print(f"roomba-bt: {message}", file=sys.stderr)
+    return ExitCode.INVALID
+
+
 def monitor_command(args: argparse.Namespace) -> int:
     from roomba_bt.cli.run_cmd import load_recorded, replay_progress
 
@@ -613,8 +618,7 @@ def monitor_command(args: argparse.Namespace) -> int:
         return ExitCode.INVALID
     window = parse_window(args)
     if isinstance(window, str):
-        print(f"roomba-bt: {window}", file=sys.stderr)
-        return ExitCode.INVALID
+        return _usage_error(window)
     notice = reading_notice(args.record)  # load_recorded says what is wrong with the file
     if notice is not None:  # a second or more before the page
         print(notice, file=sys.stderr, flush=True)
@@ -623,11 +627,7 @@ def monitor_command(args: argparse.Namespace) -> int:
         return recorded
     record, mission, profile, baud, packets = recorded
     if window[0] > record.last_t:
-        print(
-            f"roomba-bt: --from {args.window_from}: the record ends at t={record.last_t:.2f} s",
-            file=sys.stderr,
-        )
-        return ExitCode.INVALID
+        return _usage_error(f"--from {args.window_from}: the record ends at {record.last_t:.2f} s")
 
     def diverged_at(text: str) -> None:
         """Where the replay diverged, and each file and plugin changed since the record was

@@ -65,7 +65,7 @@ if TYPE_CHECKING:
     from roomba_bt.mission import Permissions
     from roomba_bt.runtime.claimed import ClaimedFile
     from roomba_bt.runtime.loop import TickObserver
-    from roomba_bt.runtime.recording import Record
+    from roomba_bt.runtime.recording import Record, ReplayTransport
     from roomba_bt.runtime.stack import RunStack
     from roomba_bt.runtime.summary import RunSummary
     from roomba_bt.sim import Simulator
@@ -925,20 +925,11 @@ def replay_command(args: argparse.Namespace) -> int:
     if drift is not None:
         print(f"replay: {drift}")
     unended = record.unended()
-    if transport.ended_early:  # --to: compared up to there
-        print(
-            f"replay: compared up to mission time {summary.mission_time_s:.3f} s (--to); the "
-            f"record goes on to {record.last_t:.3f} s"
-        )
-    elif unended is not None:  # compared up to where it ends
-        print(f"replay: the record ends at {record.last_t:.3f} s without the run's end: {unended}")
+    compared, same = _compared(summary, transport, record, unended)
+    if compared is not None:
+        print(compared)
     if difference is None:
-        if transport.ended_early:
-            print("replay: the tree wrote the same bytes up to there")
-        elif unended is not None:
-            print(f"replay: the tree wrote the same {record.out_bytes} bytes up to there")
-        else:
-            print(f"replay: the tree wrote the same {transport.written} bytes as the recorded run")
+        print(same)
         if ended is not None:
             print(ended)
         return ExitCode.OK
@@ -959,6 +950,26 @@ def replay_command(args: argparse.Namespace) -> int:
     if ended is not None:
         print(ended)
     return ExitCode.MISSION_FAILED
+
+
+def _compared(
+    summary: RunSummary, transport: ReplayTransport, record: Record, unended: str | None
+) -> tuple[str | None, str]:
+    """What ``replay`` says of how far it compared (None: the whole record), and its verdict
+    where the tree wrote the same bytes: up to ``--to`` (the transport ``ended_early``), up to
+    where a record without its run's end (``unended``: why) ends, or the whole run."""
+    if transport.ended_early:
+        return (
+            f"replay: compared up to mission time {summary.mission_time_s:.3f} s (--to); the "
+            f"record goes on to {record.last_t:.3f} s",
+            "replay: the tree wrote the same bytes up to there",
+        )
+    if unended is not None:
+        return (
+            f"replay: the record ends at {record.last_t:.3f} s without the run's end: {unended}",
+            f"replay: the tree wrote the same {record.out_bytes} bytes up to there",
+        )
+    return None, f"replay: the tree wrote the same {transport.written} bytes as the recorded run"
 
 
 #: A record this long (about 20 minutes of a run) says how far its replay has gone.

@@ -292,7 +292,10 @@ class Ring:
 
 
 class RunFeed:
-    """Everything the page shows, appended by the tick thread, read by the server thread."""
+    """Everything the page shows, appended by the tick thread, read by the server thread.
+    ``packed_from``: None, the last ``history`` ticks are kept (a live run's); a mission
+    time, every tick from then on, packed (a recorded run's, from 0 or ``monitor RECORD
+    --from``; its events are every tick's)."""
 
     def __init__(
         self,
@@ -302,14 +305,11 @@ class RunFeed:
         truth: Callable[[], tuple[float, float, float]] | None = None,
         world: Mapping[str, Any] | None = None,
         mission_name: str = "",
-        packed: bool = False,
+        packed_from: float | None = None,
         robot: str = "",
         started: datetime | None = None,
         label: str = "",
-        keep_from: float = 0.0,
     ) -> None:
-        """``keep_from``: of a packed feed (a record's), the mission time from which its
-        ticks are kept (``monitor RECORD --from``); the events are every tick's."""
         #: the run's identity, sent in the page's first message and checked with each
         #: control: a page left open after its run was killed reconnected to the next run
         #: served on that port (another robot, perhaps) and its controls drove that one. A new
@@ -321,10 +321,10 @@ class RunFeed:
         self.started = started if started or source == "record" else datetime.now(UTC)
         #: the frames' layouts (one per stream: a record names its layout by index)
         self.layouts: list[FrameLayout] = []
-        if packed:  # every tick, packed (a recorded run's: monitor/history.py)
+        if packed_from is not None:  # every tick from then, packed (a record's: history.py)
             from roomba_bt.monitor.history import PackedRing
 
-            self.ring: Ring = PackedRing(self.layouts, keep_from)
+            self.ring: Ring = PackedRing(self.layouts, packed_from)
         else:
             self.ring = Ring(history)
         self.events: deque[Event] = deque(maxlen=2000)

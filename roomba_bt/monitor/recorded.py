@@ -60,9 +60,9 @@ def replay_into_feed(
     the recorded run's only so), and their events kept."""
     keep_from, until = window
     feed = RunFeed(
-        source="record", mission_name=mission.name, packed=True,
+        source="record", mission_name=mission.name, packed_from=keep_from,
         robot=record.header.get("port") or "", started=recorded_start(record),
-        label=record.label, keep_from=keep_from,
+        label=record.label,
     )  # fmt: skip
     feed.set_tree(mission.root)
     summary, transport = replay_record(

@@ -70,7 +70,7 @@ def test_replay_to_compares_up_to_there(
     ("command", "options", "said"),
     [
         ("monitor", ["--from", "10s", "--to", "5s"], "--from 10s is not before --to 5s"),
-        ("monitor", ["--from", "1h"], "--from 1h: the record ends at t=20.0"),
+        ("monitor", ["--from", "1h"], "--from 1h: the record ends at 20.0"),
         ("monitor", ["--to", "soon"], "--to 'soon': "),
         ("replay", ["--to", "0"], "--to '0': must be a finite duration, more than 0 s"),
     ],
