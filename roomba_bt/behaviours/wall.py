@@ -117,8 +117,6 @@ class WallFollow(Action):
     cases.
     """
 
-    moves = True
-
     def start(self) -> None:
         self._start_time = self.snapshot.time
         self._previous_error: float | None = None
@@ -177,7 +175,6 @@ class WallFollow(Action):
         duration = self.value("duration")
         if duration is not None and snap.time - self._start_time >= float(duration) - 1e-9:
             self.send(commands.halt())
-            self._started_motion = False
             return Status.SUCCESS
         if snap.mode not in DRIVING_MODES:
             return self.wait_for_driving_mode()
@@ -190,7 +187,6 @@ class WallFollow(Action):
             front = max(frame.light_bump_center_left_signal, frame.light_bump_center_right_signal)
             left, right = self.wheel_speeds(frame.light_bump_right_signal, front, snap.time)
         self.send(commands.drive_direct(right, left))
-        self._started_motion = True
         return Status.RUNNING
 
 
