@@ -17,7 +17,14 @@ from roomba_bt.behaviours.blackboard import (
     read_key,
     write_key,
 )
-from roomba_bt.behaviours.declare import Declaration, DeclarationError, Param, ParamError, declare
+from roomba_bt.behaviours.declare import (
+    Declaration,
+    DeclarationError,
+    Param,
+    ParamError,
+    declare,
+    declare_like,
+)
 from roomba_bt.behaviours.registry import (
     ENTRY_POINT_GROUP,
     PluginError,
@@ -74,6 +81,7 @@ __all__ = [
     "builtin_registry",
     "declare",
     "declare_keys",
+    "declare_like",
     "default_registry",
     "enum",
     "read_key",

@@ -29,6 +29,7 @@ from roomba_bt.behaviours.units import (
     DISTANCE,
     DURATION,
     INT,
+    MARK,
     PERCENT,
     RADIUS,
     RADIUS_WORDS,
@@ -744,7 +745,7 @@ class SetKey(Action):
     params=(Param("key", STR, required=True, from_blackboard=False,
                   doc="a key declared with type mark"),),
     reads=ENCODER_PACKETS,
-    writes_keys=("key",),
+    writes_keys={"key": MARK},
     primary="key",
 )  # fmt: skip
 class Mark(Action):

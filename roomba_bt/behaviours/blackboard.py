@@ -18,7 +18,9 @@ parameter's range.
 from __future__ import annotations
 
 import contextlib
+import logging
 import re
+import sys
 import uuid
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
@@ -33,6 +35,8 @@ from roomba_bt.yamlsource import quoted
 
 if TYPE_CHECKING:
     from roomba_bt.behaviours.base import RobotBehaviour
+
+_log = logging.getLogger("roomba_bt.mission")
 
 #: The blackboard key the runtime mirrors the snapshot under (for plugins that prefer it).
 SNAPSHOT_KEY = "/roomba/snapshot"
@@ -158,17 +162,16 @@ class _MissionClient:
 def declare_keys(types: Mapping[str, ValueType]) -> None:
     """The mission's keys and their declared types (``blackboard:``), which
     :func:`write_key` holds every write to from now on; they replace those declared before
-    (``declare_keys({})``: none). ``CompiledMission.setup`` calls it before each run. Kept
+    (``declare_keys({})``: none; a write to a key not declared is then warned of, once a
+    key, :func:`write_key`). ``CompiledMission.setup`` calls it before each run. Kept
     on py_trees' blackboard (:data:`KEY_TYPES_KEY`), with the values: its ``clear()``, which
     a test calls between missions, forgets them too. Each key is registered (read and
     write) with the mission's py_trees client (:data:`MISSION_CLIENT_NAME`), so that py_trees'
     display, ``Blackboard.keys()`` and its activity stream see them; the values stay after
     the run, for a program to look at."""
     storage = py_trees.blackboard.Blackboard.storage
-    if types:
-        storage[KEY_TYPES_KEY] = dict(types)
-    else:
-        storage.pop(KEY_TYPES_KEY, None)
+    storage[KEY_TYPES_KEY] = dict(types)  # {}: a mission that declares none, still said
+    _UNDECLARED_SAID.clear()
     _MissionClient.replace(types)
 
 
@@ -195,13 +198,39 @@ def _write_problem(vtype: ValueType, value: Any) -> str | None:
     return f"expected an odometry mark (snapshot.odometry), got a {type(value).__name__}"
 
 
+#: the keys written this run that the mission does not declare, each warned of once
+_UNDECLARED_SAID: set[str] = set()
+
+
+def _said_undeclared(key: str, writer: str, declared: Mapping[str, ValueType]) -> None:
+    """A warning, once a key a run, that ``writer`` wrote ``key``, which the mission's
+    ``blackboard:`` does not declare, and where (the line that called :func:`write_key`).
+    Written all the same, as a tree built in Python writes any key: nothing drives on it,
+    where an undeclared command (``UndeclaredCommand``) escapes the mode check and is
+    refused; but no ``check`` or ``@key`` of the mission can read it, no type holds it, and
+    the validator never saw it (a key a parameter names it checks: ``writes_keys``). A
+    misspelt key ran silently."""
+    _UNDECLARED_SAID.add(key)
+    caller = sys._getframe(2)  # write_key's caller: the plugin's line
+    where = f" at {caller.f_code.co_filename}:{caller.f_lineno}"
+    by = "" if writer == _MISSION_WRITER_NAME else f" by {writer!r}"
+    keys = ", ".join(sorted(declared)) or "none"
+    _log.warning(
+        "write_key(%r)%s%s: blackboard key %r is not declared by the mission (it declares: "
+        "%s), so no check or @%s of the mission reads it; declare it under blackboard: "
+        "(%s: {type: ...}), or name a declared key in a parameter listed in writes_keys",
+        key, by, where, key, keys, key, key,
+    )  # fmt: skip
+
+
 def write_key(key: str, value: Any, writer: str = _MISSION_WRITER_NAME) -> None:
     """Write a mission key. Into the store directly (no py_trees client per node: a client
     registers each key it may touch and checks it on every access), and, when py_trees'
     activity stream is on (``Blackboard.enable_activity_stream()``), said there as a client's
     write would be: a py_trees user's tools show ``/mission/leg`` changing. A key the
     mission declared (:func:`declare_keys`) takes only a value of its type: else
-    :class:`KeyType`, and nothing is written."""
+    :class:`KeyType`, and nothing is written. One it did not declare is written, with a
+    warning once a key (:func:`_said_undeclared`)."""
     blackboard = py_trees.blackboard.Blackboard
     types = blackboard.storage.get(KEY_TYPES_KEY)
     vtype = types.get(key) if types is not None else None
@@ -209,6 +238,8 @@ def write_key(key: str, value: Any, writer: str = _MISSION_WRITER_NAME) -> None:
         problem = _write_problem(vtype, value)
         if problem is not None:
             raise KeyType(key, vtype, value, problem, writer)
+    elif types is not None and key not in _UNDECLARED_SAID:
+        _said_undeclared(key, writer, types)
     name = MISSION_NAMESPACE + key
     stream = blackboard.activity_stream
     if stream is not None:

@@ -27,6 +27,7 @@ from roomba_bt.behaviours.units import (
     ANY,
     DISTANCE,
     INT,
+    MARK,
     PERCENT,
     STR,
     UnitError,
@@ -362,7 +363,7 @@ class OIModeIs(Condition):
         Param("angle", ANGLE, minimum=0, doc="at least this heading change"),
     ),
     reads=ENCODER_PACKETS,
-    reads_keys=("since",),
+    reads_keys={"since": MARK},
     constraints=_exactly_one("distance", "angle"),
 )  # fmt: skip
 class OdometrySince(Condition):

@@ -40,7 +40,7 @@ import re
 import sys
 import uuid
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Literal, TypeVar
 
 import py_trees
@@ -118,6 +118,7 @@ __all__ = [
     "ParamError",
     "class_doc",
     "declare",
+    "declare_like",
     "from_python",
     "mode_after_sending",
     "wheel_speed_param",
@@ -322,6 +323,11 @@ class Declaration:
     constraints: Callable[[Mapping[str, Any]], list[str]] | None = None
     writes_keys: tuple[str, ...] = field(default=())  # params naming keys it writes
     reads_keys: tuple[str, ...] = field(default=())  # params naming keys it reads
+    #: the type of the value written to or read from the key each of those parameters
+    #: names, where the declaration says it (``writes_keys={"key": INT}``, as BT.CPP's
+    #: ``OutputPort<int>``): validate holds the mission's ``blackboard:`` declaration of
+    #: the key to it. A parameter not here is untyped: any key but a ``mark`` is taken
+    key_types: tuple[tuple[str, ValueType], ...] = field(default=())
     #: its wheel commands only stop the wheels (``stop``: Drive 0), so it turns none
     halts_only: bool = False
     #: the packet tests its answer is, where a parameter names one by a word (``stasis:
@@ -385,6 +391,13 @@ class Declaration:
 
     def mode_after(self, params: Mapping[str, Any]) -> OIMode | None:
         return self.leads_to(params) if callable(self.leads_to) else self.leads_to
+
+    def key_type(self, pname: str) -> ValueType | None:
+        """The declared type of the key parameter ``pname`` names (None: untyped)."""
+        for name, vtype in self.key_types:
+            if name == pname:
+                return vtype
+        return None
 
     def param(self, name: str) -> Param | None:
         for p in self.params:
@@ -470,6 +483,9 @@ class Declaration:
             )
         if self.primary is not None and self.primary not in seen:
             raise DeclarationError(f"primary parameter {self.primary!r} is not declared")
+        problem = _key_param_problem(self)
+        if problem is not None:
+            raise DeclarationError(problem)
         problem = self.cls.declaration_problem(self)
         if problem is not None:
             raise DeclarationError(problem)
@@ -496,6 +512,59 @@ def _kind_problem(kind: str, cls: type) -> str | None:
         f"roomba_bt.behaviours.{base.__name__} ({its_method}); declare kind={other_kind!r} or "
         f"derive it from {base.__name__}"
     )
+
+
+def _key_param_problem(decl: Declaration) -> str | None:
+    """What is wrong with the parameters ``writes_keys`` and ``reads_keys`` name, or None:
+    each a declared ``STR`` parameter (the key's name is a text), each type a ValueType,
+    each typed parameter one of them. ``primary=`` was checked and these were not: a key
+    parameter misspelt, or an ``INT`` one, loaded, and the validator's key checks passed
+    the behaviour by without a word."""
+    for role in ("writes_keys", "reads_keys"):
+        for pname in getattr(decl, role):
+            param = decl.param(pname)
+            if param is None:
+                declared = ", ".join(p.name for p in decl.params) or "none"
+                return (
+                    f"{role} names {pname!r}, which is not a declared parameter (declared: "
+                    f"{declared}); declare the parameter that names the key: "
+                    f"Param({pname!r}, STR, from_blackboard=False)"
+                )
+            if param.type.name != "str":
+                return (
+                    f"{role} names {pname!r}, a parameter of type {param.type.name}: the parameter "
+                    f"names the key, so it is a text, Param({pname!r}, STR, "
+                    f"from_blackboard=False); the type of the value is the key's: "
+                    f"{role}={{{pname!r}: {param.type.name.upper()}}}"
+                )
+    keyed = {*decl.writes_keys, *decl.reads_keys}
+    typed: dict[str, object] = {}
+    for pname, vtype in decl.key_types:
+        if typed.setdefault(pname, vtype) != vtype:
+            return (
+                f"{pname!r} names a key it reads and writes, typed differently in "
+                "writes_keys and reads_keys: one key holds one type"
+            )
+        if pname not in keyed:
+            return f"key type given for {pname!r}, which neither writes_keys nor reads_keys names"
+        if not isinstance(vtype, ValueType):
+            known = ", ".join(t.name.upper() for t in VALUE_TYPES.values())
+            return (
+                f"the type given for the key {pname!r} names is {vtype!r}: a key's type is a "
+                f"ValueType of roomba_bt.behaviours.units ({known})"
+            )
+    return None
+
+
+def key_roles(
+    keys: tuple[str, ...] | Mapping[str, ValueType],
+) -> tuple[tuple[str, ...], tuple[tuple[str, ValueType], ...]]:
+    """``writes_keys=`` / ``reads_keys=`` as ``@declare`` takes them, parameter names alone
+    (untyped, as before) or a mapping of each to the type of its key's value, as the
+    names and the typed ones of a :class:`Declaration`."""
+    if isinstance(keys, Mapping):
+        return tuple(keys), tuple(keys.items())
+    return tuple(keys), ()
 
 
 def _param_problem(p: object) -> str | None:
@@ -566,8 +635,8 @@ def declare(
     sends: tuple[int, ...] = (),
     leads_to: OIMode | ModeOf | None = None,
     primary: str | None = None,
-    writes_keys: tuple[str, ...] = (),
-    reads_keys: tuple[str, ...] = (),
+    writes_keys: tuple[str, ...] | Mapping[str, ValueType] = (),
+    reads_keys: tuple[str, ...] | Mapping[str, ValueType] = (),
     constraints: Callable[[Mapping[str, Any]], list[str]] | None = None,
     halts_only: bool = False,
     compares: ComparesOf | None = None,
@@ -582,20 +651,133 @@ def declare(
     only stop the wheels (``stop``): the Full-mode warning passes it by. ``at_once=True``
     says that it returns SUCCESS on the tick it starts, every time (the static checks rely
     on it: a test ticks every built-in that says so). ``may_succeed`` says, of the
-    parameters, whether it can succeed by itself at all (a ``drive`` with no end cannot)."""
+    parameters, whether it can succeed by itself at all (a ``drive`` with no end cannot).
+    ``writes_keys`` / ``reads_keys`` name the ``STR`` parameters that name blackboard keys
+    it writes / reads, alone or with the type of the value (``writes_keys={"key": INT}``):
+    validate holds a typed one to the key's declaration in the mission."""
     after = mode_after_sending(sends) if leads_to is None else leads_to
+    writes, written_types = key_roles(writes_keys)
+    reads_named, read_types = key_roles(reads_keys)
 
     def attach(cls: B) -> B:
         doc = " ".join((class_doc(cls) or "").strip().split("\n\n")[0].split())
         cls.declaration = Declaration(
             name, kind, cls, params, reads, sends, after, doc, primary,
-            constraints=constraints, writes_keys=writes_keys, reads_keys=reads_keys,
-            halts_only=halts_only, compares=compares, sends_by=sends_by, at_once=at_once,
-            may_succeed=may_succeed,
+            constraints=constraints, writes_keys=writes, reads_keys=reads_named,
+            key_types=(*written_types, *read_types), halts_only=halts_only,
+            compares=compares, sends_by=sends_by, at_once=at_once, may_succeed=may_succeed,
         )  # fmt: skip
         return cls
 
     return attach
+
+
+def declare_like(
+    parent: type,
+    name: str,
+    *,
+    add_params: tuple[Param, ...] = (),
+    drop_params: tuple[str, ...] = (),
+    add_reads: tuple[int, ...] = (),
+    add_sends: tuple[int, ...] = (),
+    add_constraints: Callable[[Mapping[str, Any]], list[str]] | None = None,
+    writes_keys: tuple[str, ...] | Mapping[str, ValueType] = (),
+    reads_keys: tuple[str, ...] | Mapping[str, ValueType] = (),
+    primary: str | None = None,
+    at_once: bool = False,
+    may_succeed: Callable[[Mapping[str, Any]], bool] | None = None,
+) -> Callable[[B], B]:
+    """Class decorator: declare a subclass of a declared behaviour (a built-in's, such as
+    ``WallFollow``) as ``name``, the parent's declaration carried over and changed where
+    said. A copy by hand (``params=WallFollow.declaration.params``) dropped what it did not
+    copy without a word (``constraints=``: the front_clear / front_threshold check), and
+    ``(*WallFollow.declaration.reads, ...)`` failed ``mypy --strict`` (``reads`` may be a
+    function of the parameters).
+
+    Carried: the kind; the parameters (without ``drop_params``, then ``add_params``, one of
+    a parent's name in its place); the packets read (then ``add_reads``, after a parent's
+    function's too) and the commands sent (then ``add_sends``); ``leads_to``, ``sends_by``,
+    ``compares``, ``halts_only``; the cross-parameter rules (and ``add_constraints``: both
+    run, a dropped parameter being not given to the parent's); the key parameters still
+    declared (and ``writes_keys`` / ``reads_keys``); ``primary`` unless dropped or given.
+    Not carried: ``at_once`` and ``may_succeed``, which say when ``update`` succeeds, what
+    a subclass changes (the parent's "only with a ``duration``" would say a ``distance``
+    subclass never succeeds); the doc, the subclass's docstring. For more: :func:`declare`."""
+    base = getattr(parent, "declaration", None)
+    if not isinstance(base, Declaration):
+        raise DeclarationError(
+            f"declare_like({getattr(parent, '__qualname__', parent)!r}, {name!r}): the parent "
+            "is no declared behaviour (a class decorated with @declare)"
+        )
+    params = _extended_params(base, name, add_params, drop_params)
+    names = {p.name for p in params if isinstance(p, Param)}
+    writes, written_types = key_roles(writes_keys)
+    reads_named, read_types = key_roles(reads_keys)
+    key_types = (*base.key_types, *written_types, *read_types)
+    changes: dict[str, Any] = {
+        "name": name, "params": params, "origin": "builtin",
+        "reads": _more_packets(base.reads, add_reads),
+        "sends": (*base.sends, *(op for op in add_sends if op not in base.sends)),
+        "primary": primary or (base.primary if base.primary in names else None),
+        "constraints": _both(base.constraints, add_constraints),
+        "writes_keys": (*(k for k in base.writes_keys if k in names), *writes),
+        "reads_keys": (*(k for k in base.reads_keys if k in names), *reads_named),
+        "key_types": tuple((k, t) for k, t in key_types if k in names),
+        "at_once": at_once, "may_succeed": may_succeed,
+    }  # fmt: skip
+
+    def attach(cls: B) -> B:
+        doc = " ".join((class_doc(cls) or "").strip().split("\n\n")[0].split())
+        cls.declaration = replace(base, cls=cls, doc=doc, **changes)
+        return cls
+
+    return attach
+
+
+def _extended_params(
+    base: Declaration, name: str, add_params: tuple[Param, ...], drop_params: tuple[str, ...]
+) -> tuple[Param, ...]:
+    """The parameters of ``base`` without ``drop_params``, then ``add_params``: an added one
+    of a parent's name takes its place, the others follow. A dropped name ``base`` does not
+    declare is a :class:`DeclarationError` (a typo would keep the parameter silently)."""
+    unknown = [p for p in drop_params if base.param(p) is None]
+    if unknown:
+        declared = ", ".join(p.name for p in base.params) or "none"
+        raise DeclarationError(
+            f"declare_like({base.name!r}, {name!r}): drop_params names {unknown}, which "
+            f"{base.name} does not declare (it declares: {declared})"
+        )
+    replacing = {p.name: p for p in add_params if isinstance(p, Param)}
+    kept = tuple(replacing.get(p.name, p) for p in base.params if p.name not in drop_params)
+    return (*kept, *(p for p in add_params if p not in kept))
+
+
+def _more_packets(
+    reads: tuple[int, ...] | PacketsOf, more: tuple[int, ...]
+) -> tuple[int, ...] | PacketsOf:
+    """A parent's packets read and ``more`` after them (each once)."""
+    if not more:
+        return reads
+    if not callable(reads):
+        return (*reads, *(pid for pid in more if pid not in reads))
+    of = reads
+
+    def packets(params: Mapping[str, Any]) -> tuple[int, ...]:
+        got = of(params)
+        return (*got, *(pid for pid in more if pid not in got))
+
+    return packets
+
+
+def _both(
+    first: Callable[[Mapping[str, Any]], list[str]] | None,
+    then: Callable[[Mapping[str, Any]], list[str]] | None,
+) -> Callable[[Mapping[str, Any]], list[str]] | None:
+    """The cross-parameter rules of a parent and of its subclass, both run."""
+    if first is None or then is None:
+        return first or then
+    parent, own = first, then
+    return lambda params: [*parent(params), *own(params)]
 
 
 def class_doc(cls: type) -> str | None:

@@ -38,6 +38,7 @@ from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, ExitCode
 
 if TYPE_CHECKING:
+    from roomba_bt.behaviours.declare import Declaration
     from roomba_bt.behaviours.registry import Registry
 
 
@@ -415,6 +416,10 @@ def describe_behaviours(
                     for p in decl.params
                 ],
                 "reads": "depends on parameters" if callable(decl.reads) else list(decl.reads),
+                # the parameters naming blackboard keys, each with its value's type (None:
+                # untyped, any key but a mark): what validate holds the mission's keys to
+                "writes_keys": _key_roles(decl, decl.writes_keys),
+                "reads_keys": _key_roles(decl, decl.reads_keys),
                 "sends": list(decl.sends),
                 "modes": [m.label for m in sorted(decl.modes)],
                 "leads_to": _leads_to(decl),
@@ -456,6 +461,16 @@ def language_word(name: str) -> str | None:
     if name in RESERVED:
         return f"{name!r} is a section of a mission file, not a behaviour (docs/missions.md)"
     return None
+
+
+def _key_roles(decl: Declaration, names: tuple[str, ...]) -> list[dict[str, str | None]]:
+    """Each parameter of ``names`` (its ``writes_keys`` or ``reads_keys``) with the type of
+    its key's value, as ``behaviours --json`` lists them."""
+    out: list[dict[str, str | None]] = []
+    for pname in names:
+        vtype = decl.key_type(pname)
+        out.append({"parameter": pname, "type": None if vtype is None else vtype.name})
+    return out
 
 
 def _leads_to(decl: Any) -> str | None:
@@ -544,6 +559,12 @@ def _print_behaviour(entry: dict[str, Any]) -> None:
     reads = entry["reads"]
     if reads:
         print(f"    reads packets: {reads}")
+    for role, verb in (("writes_keys", "writes"), ("reads_keys", "reads")):
+        for key in entry[role]:
+            typed = (
+                f"a value of type {key['type']}" if key["type"] else "untyped (any key but a mark)"
+            )
+            print(f"    {verb} the blackboard key named by {key['parameter']}: {typed}")
     print()
 
 

@@ -142,15 +142,9 @@ def _key_params(
             ctx.error(where.at(said + str(problem.args[0])))
             ok = False
             continue
-        wants_mark = decl.name in ("mark", "odometry")
-        if wants_mark != (found is MARK):
-            need = "a key of type mark" if wants_mark else "a key holding a value (not a mark)"
-            ctx.error(
-                where.at(
-                    f"{decl.name}.{pname}: blackboard key {key!r} is {found.describe()}; "
-                    f"{decl.name} needs {need}"
-                )
-            )
+        mismatch = _key_type_problem(decl, pname, key, found)
+        if mismatch is not None:
+            ctx.error(where.at(said + mismatch))
             ok = False
             continue
         key_type = found
@@ -164,6 +158,44 @@ def _key_params(
             ctx.report(bad)
             ok = False
     return ok
+
+
+def _key_type_problem(decl: Declaration, pname: str, key: str, found: ValueType) -> str | None:
+    """What is wrong with the key ``pname`` names being of type ``found``, or None. A typed
+    key parameter (``writes_keys={"key": INT}``; ``mark`` and ``odometry.since`` are typed
+    ``mark``) needs a key of its type; a number written as an ``int`` fits a ``float`` key,
+    and a ``float`` reader takes an ``int`` key, as ``write_key`` holds them. A type of
+    another name is an error, units included: a dirt level (an ``int``) in a ``speed`` key is
+    read by a ``drive`` as mm/s, though ``write_key`` takes the number. An untyped one (as
+    every plugin's was before) takes any key but a ``mark``, whose value no reader of a
+    value can use."""
+    wanted = decl.key_type(pname)
+    verb = "reads" if pname in decl.reads_keys else "writes"
+    if wanted is None or wanted.name == "any":
+        if found is not MARK:
+            return None
+        return (
+            f"blackboard key {key!r} is {found.describe()}; {decl.name} needs a key holding a "
+            "value (not a mark)"
+        )
+    written, held_as = (found, wanted) if verb == "reads" else (wanted, found)
+    if _shape(written) == _shape(held_as) or (written.name, held_as.name) == ("int", "float"):
+        return None
+    typed = f"{decl.name} {verb} a value of type {wanted.describe()}"
+    if wanted is MARK:
+        return f"blackboard key {key!r} is {found.describe()}; {decl.name} needs a key of type mark"
+    return (
+        f"blackboard key {key!r} is declared {found.describe()}, and {typed} "
+        f"(its declaration: {verb}_keys={{{pname!r}: {wanted.name.upper()}}}): declare "
+        f"{key!r} with type {wanted.name}, or name a key of that type"
+    )
+
+
+def _shape(vtype: ValueType) -> tuple[Any, ...]:
+    """What makes two types one: name, unit, an enum's words, a record's fields (an enum
+    made twice is two objects of one type)."""
+    fields = tuple((name, _shape(each)) for name, each in vtype.fields)
+    return vtype.name, vtype.unit, vtype.choices, fields
 
 
 def _key_type(ctx: Context, key: str, where: Loc, *, reads: bool, who: str) -> ValueType:
