@@ -43,10 +43,41 @@ def test_the_testing_examples_run(monkeypatch: pytest.MonkeyPatch) -> None:
     namespace["test_near_wall_succeeds_from_the_corridor_s_start"]()
 
 
+def test_the_declare_like_example_keeps_wall_follow_s_checks() -> None:
+    """``wall_follow_for``, declared like ``WallFollow``: its parameters without duration
+    and with distance, the encoders read too, and the hysteresis check carried (a copy by
+    hand dropped it); it follows the wall and ends at the distance."""
+    _, extended = _blocks("## 4. An action: spot cleaning")[1:]
+    cls = _run(extended, "wall_follow_for")["WallFollowFor"]
+    declaration = cls.declaration
+    assert declaration.param("duration") is None and declaration.primary == "distance"
+    assert declaration.packets({})[-2:] == (43, 44)
+    with pytest.raises(ValueError, match="front_clear 900 is above front_threshold 800"):
+        cls("follow", {"distance": "1 m", "front_clear": 900})
+    robot = StubRobot(mode=OIMode.SAFE)
+    node = cls("follow", {"distance": "10 mm"})
+    node.setup(robot=robot)
+    signals = {7: 0, 48: 0, 49: 0, 50: 0, 51: 600}  # the wall on the right, on target
+    robot.set_frame({**signals, 43: 0, 44: 0})
+    node.tick_once()
+    assert node.status is Status.RUNNING and [c.opcode for c in robot.flush()] == [145]
+    robot.set_frame({**signals, 43: 100, 44: 100})  # both wheels about 44 mm on
+    node.tick_once()
+    assert node.status is Status.SUCCESS and [c.args for c in robot.flush()] == [(0, 0)]
+
+
+def test_the_typed_key_example_declares_its_key_s_type() -> None:
+    """``dirt_seen`` of §6: ``writes_keys={"key": INT}``, checked when declared."""
+    [example] = _blocks("### Key parameters and their types")
+    declaration = _run(example, "dirt_seen")["DirtSeen"].declaration
+    declaration.validate()
+    assert declaration.writes_keys == ("key",) and declaration.key_type("key").name == "int"
+
+
 def test_the_wait_for_driving_mode_example_fails_once_stranded() -> None:
     """``creep`` drives in Safe, waits (RUNNING) in Passive, and fails after the grace with
     the cause; nothing is sent while it waits."""
-    [creep] = _blocks("## 4. An action: spot cleaning")[1:]
+    creep, _ = _blocks("## 4. An action: spot cleaning")[1:]
     cls = _run(creep, "creep")["Creep"]
     robot = StubRobot(mode=OIMode.SAFE)
     node = cls("creep", {})
