@@ -518,6 +518,25 @@ def parse_window(args: argparse.Namespace) -> tuple[float, float | None] | str:
     return start or 0.0, end
 
 
+def limit_seconds(text: str, option: str) -> float | str | None:
+    """A limit's ``option`` (``--wall-limit``, ``--worker-wait``): a duration in seconds
+    (:func:`parse_timeout`), or ``none`` (no limit: None); a message when it is neither."""
+    if text.strip().lower() == "none":
+        return None
+    limit = parse_timeout(text, option)
+    return f"{limit}, or none" if isinstance(limit, str) else limit
+
+
+def add_wall_limit_option(parser: Any, per: str, then: str) -> None:
+    """``--wall-limit`` (``eval``, ``run``): one wording, read by :func:`limit_seconds`;
+    ``per``: what the time is of, ``then``: what follows it and the default."""
+    parser.add_argument(
+        "--wall-limit", metavar="DURATION",
+        help=f"wall-clock time {per}, after which it is recorded as HUNG (stuck: an endless "
+        f"loop in a behaviour, named with its file:line) {then}",
+    )  # fmt: skip
+
+
 def mission_file(text: str) -> str | tuple[str]:
     """A mission argument as a path: an existing file, else the shipped mission of that name
     (``roomba-bt run dock``); ``(problem,)`` when neither exists. The mission package (its

@@ -45,7 +45,9 @@ from roomba_bt.cli.arguments import (
     add_param_option,
     add_permission_options,
     add_profile_option,
+    add_wall_limit_option,
     fraction,
+    limit_seconds,
     metres,
     mission_file,
     parse_params,
@@ -177,13 +179,11 @@ def _add_start_options(ev: argparse.ArgumentParser) -> None:
     add_battery_option(ev)
     add_odometry_error_option(ev)
     ev.add_argument("--timeout", default="15min", help="mission time per episode (default 15min)")
-    ev.add_argument(
-        "--wall-limit",
-        metavar="DURATION",
-        help="wall-clock time per episode, after which it is recorded as HUNG (stuck: an "
-        "endless loop in a behaviour) and its worker process ended; default 60 s plus a tenth "
-        "of --timeout; none: no limit, and --jobs 1 runs the episodes in this process",
-    )
+    add_wall_limit_option(
+        ev, "per episode",
+        "and its worker process ended; default 60 s plus a tenth of --timeout; none: no "
+        "limit, and --jobs 1 runs the episodes in this process",
+    )  # fmt: skip
     add_profile_option(ev, "the simulated robot's model")
     ev.add_argument("--min-rate", type=fraction, metavar="FRACTION",
                     help="exit 1 if the success rate is below this, a fraction (0.9) or a "
@@ -411,8 +411,11 @@ def _statistics(
 def rerun_command(args: argparse.Namespace, result: Any) -> str:
     """The ``roomba-bt run`` line that runs episode ``result`` again, alone, with its
     traceback: its seed and seeded start, world, parameters, profile, charge and what the
-    evaluation was allowed to load. ``run`` has no --within, --start-area, --dock nor
+    evaluation was allowed to load; for a HUNG one, its ``--wall-limit``, which then names
+    where it is stuck as the evaluation did. ``run`` has no --within, --start-area, --dock nor
     --odometry-error: with any of those the line says its start or world may differ."""
+    from roomba_bt.evaluate.episode import HUNG
+
     words = ["roomba-bt", "-v", "run", result.mission, "--fast", "--random-start", "--seed",
              str(result.seed)]  # fmt: skip
     if args.world != "empty-room":
@@ -425,6 +428,9 @@ def rerun_command(args: argparse.Namespace, result: Any) -> str:
         words += ["--battery", f"{args.battery:g}"]
     if getattr(args, "allow_plugin_files", False):
         words.append("--allow-plugin-files")
+    limit = wall_limit(args)
+    if result.outcome == HUNG and isinstance(limit, float):  # else the run hangs silently
+        words += ["--wall-limit", f"{limit:g}"]
     for folder in getattr(args, "include_dir", None) or ():
         words += ["--include-dir", folder]
     line = shlex.join(words)
@@ -539,7 +545,7 @@ def wall_limit(args: argparse.Namespace) -> float | str | None:
     from roomba_bt.evaluate.episode import default_wall_limit
 
     if args.wall_limit is not None:
-        return _limit(args.wall_limit, "--wall-limit")
+        return limit_seconds(args.wall_limit, "--wall-limit")
     timeout = parse_timeout(args.timeout)
     return default_wall_limit(timeout) if isinstance(timeout, float) else timeout
 
@@ -550,16 +556,9 @@ def worker_wait(args: argparse.Namespace) -> float | str | None:
     duration."""
     from roomba_bt.evaluate.parallel import WORKER_WAIT_S
 
-    return WORKER_WAIT_S if args.worker_wait is None else _limit(args.worker_wait, "--worker-wait")
-
-
-def _limit(text: str, option: str) -> float | str | None:
-    """A limit's ``option``: a duration in seconds (:func:`parse_timeout`), or ``none`` (no
-    limit: None); a message when it is neither."""
-    if text.strip().lower() == "none":
-        return None
-    limit = parse_timeout(text, option)
-    return f"{limit}, or none" if isinstance(limit, str) else limit
+    if args.worker_wait is None:
+        return WORKER_WAIT_S
+    return limit_seconds(args.worker_wait, "--worker-wait")
 
 
 def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpec]], World] | int:

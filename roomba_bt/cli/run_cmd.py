@@ -21,7 +21,9 @@ from roomba_bt.cli.arguments import (
     add_param_option,
     add_permission_options,
     add_window_options,
+    add_wall_limit_option,
     baud_warning,
+    limit_seconds,
     mission_file,
     parse_params,
     parse_timeout,
@@ -111,12 +113,7 @@ def _add_run_parser(sub: Any) -> None:
     )
     add_odometry_error_option(run, "simulator only: ")
     add_param_option(run, "set a mission parameter, e.g. -p speed=250mm/s (repeatable)")
-    run.add_argument(
-        "--timeout",
-        help="give up after this much mission time, e.g. 90s, 5min, 1h30min or 1d (default: "
-        f"none; with --fast and no --monitor/--watch {FAST_TIMEOUT_S / 3600:g}h, else a mission "
-        "that never ends would run until the simulated battery is flat, or for ever on the dock)",
-    )
+    _add_limit_options(run)
     run.add_argument(
         "--record",
         metavar="FILE",
@@ -141,6 +138,23 @@ def _add_run_parser(sub: Any) -> None:
     )  # fmt: skip
     _add_label_option(run)
     add_monitor_arguments(run)
+
+
+def _add_limit_options(run: argparse.ArgumentParser) -> None:
+    """The run's two limits: ``--timeout`` of mission time, which a tree that returns
+    reaches, and ``--wall-limit`` of wall-clock time, for one stuck in a tick (mission time
+    stands still with it on the virtual clock)."""
+    run.add_argument(
+        "--timeout",
+        help="give up after this much mission time, e.g. 90s, 5min, 1h30min or 1d (default: "
+        f"none; with --fast and no --monitor/--watch {FAST_TIMEOUT_S / 3600:g}h, else a mission "
+        "that never ends would run until the simulated battery is flat, or for ever on the dock)",
+    )
+    add_wall_limit_option(
+        run, "for the run",
+        "after the safe stop, exit 4; the way to end a --fast run stuck where --timeout's "
+        "mission time stands still (default: none)",
+    )  # fmt: skip
 
 
 def _add_label_option(run: argparse.ArgumentParser) -> None:
@@ -450,6 +464,10 @@ def _checked_arguments(args: argparse.Namespace) -> tuple[dict[str, str], float 
         return _error(timeout)
     if _fast_limit(args):
         timeout = FAST_TIMEOUT_S
+    limit = None if args.wall_limit is None else limit_seconds(args.wall_limit, "--wall-limit")
+    if isinstance(limit, str):
+        return _error(limit)
+    args.wall_limit_s = limit
     simulated = (args.world, args.plot, args.fast, args.battery is not None, args.odometry_error)
     if args.port and any(simulated):
         return _error(
@@ -570,6 +588,7 @@ def _run_and_report(
     # on the virtual clock nothing drives meanwhile: Ctrl-Z suspends, Ctrl-\ quits
     stack.runner.on_wall_clock = not args.fast
     stack.runner.names_slow_ticks = True  # a plugin's blocking update named, --fast too
+    stack.runner.wall_limit_s = args.wall_limit_s  # a stuck tree named (eval's HUNG)
     closed = False
     try:
         summary = _run_held(args, stack, monitor)

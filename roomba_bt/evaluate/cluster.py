@@ -20,7 +20,6 @@ finished, marked ``interrupted``.
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import logging
 import signal
 import sys
@@ -41,7 +40,7 @@ from roomba_bt.evaluate.episode import (
     hung_result,
     run_episode,
 )
-from roomba_bt.robot.safety import RunAborted
+from roomba_bt.runtime.wall_limit import WallLimit, WallLimitReached
 
 
 class ClusterUnavailableError(RuntimeError):
@@ -92,39 +91,17 @@ def run_on_worker(spec: EpisodeSpec, wall_limit_s: float | None = None) -> Episo
     return result
 
 
-class WallLimitReached(RunAborted):
-    """Raised in an episode's thread at its wall-clock limit: no ``except Exception`` (a
-    behaviour's, the runner's) takes it for the episode's own error, nor the runner's
-    ``except BaseException`` around a behaviour's code (a :class:`RunAborted`)."""
-
-
 def within_wall_limit(spec: EpisodeSpec, limit_s: float) -> EpisodeResult:
     """:func:`run_episode`, or its HUNG result when it is still running after ``limit_s``
     of wall-clock time. A Dask worker runs its tasks in threads, and a thread cannot be
-    ended: :class:`WallLimitReached` is raised in it instead, between two bytecodes (the
-    interpreter's asynchronous exception), so a loop in Python ends there, the robot's safe
-    stop runs, and the worker goes on. A loop in C code never sees it, and one that catches
-    BaseException swallows it: either holds its worker until it is restarted (a local pool,
-    ``--engine local``, ends its worker process whatever it runs)."""
-    thread, lock, done = threading.get_ident(), threading.Lock(), threading.Event()
-
-    def expire() -> None:
-        with lock:
-            if not done.is_set():
-                ctypes.pythonapi.PyThreadState_SetAsyncExc(
-                    ctypes.c_ulong(thread), ctypes.py_object(WallLimitReached)
-                )
-
-    timer = threading.Timer(limit_s, expire)
-    timer.daemon = True
-    timer.start()
+    ended: :class:`~roomba_bt.runtime.wall_limit.WallLimit` raises ``WallLimitReached`` in
+    it instead, so a loop in Python ends there, the robot's safe stop runs, and the worker
+    goes on. A loop in C code never sees it, and one that catches BaseException swallows
+    it: either holds its worker until it is restarted (a local pool, ``--engine local``,
+    ends its worker process whatever it runs)."""
     try:
-        try:
+        with WallLimit(limit_s):
             return run_episode(spec)
-        finally:
-            with lock:  # no exception is raised in this thread after this
-                done.set()
-            timer.cancel()
     except WallLimitReached as exc:
         return hung_result(spec, limit_s, list(traceback.walk_tb(exc.__traceback__)))
 

@@ -46,7 +46,7 @@ from roomba_bt.oi.opcodes import opcodes
 from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome, RunSummary, falls_in_order
-from roomba_bt.runtime.teardown import innermost_behaviour, tree_path
+from roomba_bt.runtime.wall_limit import ran_out
 from roomba_bt.sim import STEP_SECONDS, Faults, SimLink, Simulator, World
 from roomba_bt.sim.world import (
     DOCK_BEAM_LIMIT,
@@ -586,14 +586,7 @@ def hung_result(
     the behaviour (its path in the tree, file:line, the stage) and what the episode had
     measured by then (the locals of its :func:`_run_episode`); all zero when it was stuck
     before its run began (compiling the mission: a plugin's import)."""
-    behaviour, where = innermost_behaviour(frames) if frames else (None, "")
-    if behaviour is not None:
-        where = f" in behaviour {tree_path(behaviour)} ({where})"
-    elif where:
-        where = f" {where}"
-    else:
-        where = ": no Python frame answered (a loop in C code?)"
-    reason = f"--wall-limit {limit_s:g} s of wall-clock time ran out{where}"
+    behaviour, reason = ran_out(limit_s, frames)
     stage = behaviour.name.split("(", 1)[0] if behaviour is not None else ""
     run = next((f.f_locals for f, _ in frames or () if f.f_code is _run_episode.__code__), {})
     stack = run.get("stack")

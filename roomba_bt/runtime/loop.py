@@ -69,6 +69,7 @@ from roomba_bt.runtime.clock import (
 )
 from roomba_bt.runtime.ending import RunEnding
 from roomba_bt.runtime.long_run import MissionTimeChecks
+from roomba_bt.runtime.refusals import Refusals
 from roomba_bt.runtime.schedule import DRIFT, LOST_LATE, SPREAD_DECAY
 from roomba_bt.runtime.stall import StallRide
 from roomba_bt.runtime.summary import (
@@ -81,12 +82,14 @@ from roomba_bt.runtime.summary import (
 from roomba_bt.runtime.teardown import (
     behaviour_error,
     behaviours_interrupt,
+    cut_short,
     note_late_interrupt,
     setup_tree,
     terminate_raised,
 )
 from roomba_bt.runtime.tick_guard import TickGuardLike
 from roomba_bt.runtime.tick_watch import slowest_tick_named
+from roomba_bt.runtime.wall_limit import WallLimit
 
 log = logging.getLogger(__name__)
 
@@ -311,7 +314,7 @@ class MissionRunner(BaseHandle):
             self.tick_guard = tick_guard
         self._guard: InterruptGuard | None = None
         self.snapshot = NO_SNAPSHOT_YET
-        self.refusals: list[str] = []
+        self.refusals = Refusals(self.summary)
         #: True while the monitor holds the run paused: frames still come and make snapshots
         #: (the page shows the robot) and the tick index (the stream's) goes on, but mission
         #: time stands still: a wait, a time limit or the run's timeout does not count the pause
@@ -349,6 +352,9 @@ class MissionRunner(BaseHandle):
     #: its parent's, which ends the workers)
     guards_signals: bool = True
     names_slow_ticks: bool = False  #: the slowest tick's behaviour named (runtime/tick_watch.py)
+    #: wall-clock seconds after which the run ends as an ERROR saying where it was stuck
+    #: (``run --wall-limit``: runtime/wall_limit.py); None: none. Set as ``tick_guard`` is
+    wall_limit_s: float | None = None
     #: py_trees visitors run on every tick (``RunStack(visitors=...)``; :func:`visiting_tick`);
     #: none: the tree is ticked directly (:func:`tick_of`), its tick's cost unchanged
     visitors: tuple[VisitorLike, ...] = ()
@@ -397,22 +403,28 @@ class MissionRunner(BaseHandle):
         tick_guard = self.tick_guard
         interrupt: KeyboardInterrupt | None = None
         raised_in: py_trees.behaviour.Behaviour | None = None  # its terminate raised: said
+        limit = WallLimit(self.wall_limit_s)
         with guard:
             try:
-                self.connection.start(OIMode.PASSIVE, self.packets)
-                self._sent_at_start = self.connection.writer.sent
-                self._blackboard = py_trees.blackboard.Client(name="roomba-bt runtime")
-                self._blackboard.register_key(key=SNAPSHOT_KEY, access=py_trees.common.Access.WRITE)
-                setup_tree(self.mission.root, lambda: self.mission.setup(self))
-                virtual = not getattr(self.connection.transport, "wall_clock", True)
-                if virtual or not self.on_wall_clock:  # py_trees' Timeout would never fire
-                    warn_of_wall_clock_timeouts(root)
-                if tick_guard is not None:
-                    tick_guard.start()
-                with slowest_tick_named(summary, self.names_slow_ticks):
-                    self._loop(root, summary)
-            except RunAborted:  # raised into the run from outside: on, after the safe stop
-                raise
+                with limit:
+                    self.connection.start(OIMode.PASSIVE, self.packets)
+                    self._sent_at_start = self.connection.writer.sent
+                    self._blackboard = py_trees.blackboard.Client(name="roomba-bt runtime")
+                    self._blackboard.register_key(
+                        key=SNAPSHOT_KEY, access=py_trees.common.Access.WRITE
+                    )
+                    setup_tree(self.mission.root, lambda: self.mission.setup(self))
+                    virtual = not getattr(self.connection.transport, "wall_clock", True)
+                    if virtual or not self.on_wall_clock:  # py_trees' Timeout would never fire
+                        warn_of_wall_clock_timeouts(root)
+                    if tick_guard is not None:
+                        tick_guard.start()
+                    with slowest_tick_named(summary, self.names_slow_ticks):
+                        self._loop(root, summary)
+            except RunAborted as exc:
+                if not limit.reached:  # raised into the run from outside: on, after the stop
+                    raise
+                summary.outcome, summary.reason = Outcome.ERROR, limit.said(exc)  # eval's HUNG
             except BaseException as exc:  # Ctrl-C; a stop, a lost link, a bug, sys.exit()
                 interrupt, raised_in = run_ended_by(exc, summary, answered=self.has_snapshot)
             finally:
@@ -475,6 +487,7 @@ class MissionRunner(BaseHandle):
         untick: int | None = None  # the gate held the tree: the tick it last ticked on
         flushed = -1  # the stream tick of the last tree tick written whole
         checks = MissionTimeChecks(summary, self.timeout_s)  # the time limit, the charge
+        started = perf()  # each tick's start (an interrupt's before the first: none cut short)
         try:
             while True:
                 try:
@@ -530,10 +543,12 @@ class MissionRunner(BaseHandle):
                     return
                 if mission_time >= checks.next_at and not checks.look(self.snapshot, root):
                     return  # the time limit ran out; else the charge was looked at (long_run.py)
-        except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM...: in which half of its frame
-            if not behaviours_interrupt(exc):  # (a behaviour's own: its error, run() says)
-                summary.ended_at = interrupted_at(self, flushed)
+        except (KeyboardInterrupt, RunAborted) as exc:  # Ctrl-C, SIGTERM, --wall-limit...:
+            if not behaviours_interrupt(exc):  # in which half of its frame (a behaviour's own
+                summary.ended_at = interrupted_at(self, flushed)  # interrupt: its error)
                 summary.written_when_interrupted = self._link.bytes_written  # a flush cut short?
+                if summary.ended_at is not None and summary.ended_at[1] == "before":
+                    summary.cut_short = cut_short(exc, perf() - started)
             raise
 
     def _advance(self, batch: Sequence[SensorFrame], untick: int | None = None) -> float:
@@ -628,22 +643,10 @@ class MissionRunner(BaseHandle):
             try:
                 self.connection.send(command)
                 outbox.written(command)
-            except ModeError as exc:
-                self._refused(command, exc)
-
-    def _refused(self, command: Command, exc: ModeError) -> None:
-        """A command of the tree the mode guard refused: counted, the first 100 said (the CLI
-        prints some after the summary, the monitor the last), the first kept for the
-        summary's warning and ``--strict``'s verdict."""
-        summary = self.summary
-        summary.refused_commands += 1
-        if len(self.refusals) < 100:
-            when = self.snapshot.time if self.has_snapshot else None
-            sender = self._outbox.sender_of(command)
-            arrival = self.connection.link.arrival
-            self.refusals.append(refusal(command, exc, sender, when, arrival))
-        if not summary.first_refusal:
-            summary.first_refusal = self.refusals[0]
+            except ModeError as exc:  # counted, said with when and who sent it
+                when = self.snapshot.time if self.has_snapshot else None
+                sender = outbox.sender_of(command)
+                self.refusals.note(command, exc, sender, when, self._link.arrival)
 
     def count_written(self) -> int:
         """``summary.commands_written`` brought up to date (at the end, by the monitor's feed):
@@ -734,25 +737,6 @@ def noted_fall(
     summary.first_fall = f"t={mission_time:.3f}{running_in(root)}: {change.cause}"
 
 
-def refusal(
-    command: Command, exc: ModeError, sender: object, when: float | None, arrival: float
-) -> str:
-    """``t=12.345 drive_straight: drive needs Safe or Full; the robot is in Passive since
-    t=12.300, after a cliff``: when (``when``, the tick's mission time; None before the
-    first), who sent it (``sender``, the outbox's), and the mode's start in mission time
-    (the error's own words give the time of day, which a ``--fast`` run never saw;
-    ``arrival``: the link's newest, on its clock)."""
-    name = getattr(sender, "name", None)
-    by = f" {name}:" if isinstance(name, str) else ""
-    text = str(exc)
-    if exc.since is not None and when is not None:
-        # the link's clock and mission time advance together: the mode began as long
-        # before this tick as the link's newest arrival is after its start
-        ago = max(0.0, arrival - exc.since)
-        text = exc.worded(f"t={max(0.0, when - ago):.3f}")
-    return f"t={0.0 if when is None else when:.3f}{by} {text}"
-
-
 def run_ended_by(
     exc: BaseException, summary: RunSummary, *, answered: bool
 ) -> tuple[KeyboardInterrupt | None, py_trees.behaviour.Behaviour | None]:
@@ -763,7 +747,8 @@ def run_ended_by(
     raised it returned (its ``terminate`` is not called again)."""
     if isinstance(exc, KeyboardInterrupt) and not behaviours_interrupt(exc):
         why = signal_reason(exc.signum) if isinstance(exc, Terminated) else "Ctrl-C"
-        summary.outcome, summary.reason = Outcome.INTERRUPTED, why
+        cut = f" {summary.cut_short}" if summary.cut_short else ""
+        summary.outcome, summary.reason = Outcome.INTERRUPTED, why + cut
         return exc, None
     ended_by(exc, summary, answered=answered)
     summary.ended_at = (-1, getattr(exc, "at", "after"))  # a stop's: before the tick

@@ -286,6 +286,10 @@ class RunSummary:
     #: (runtime/tick_watch.py: ``3.10 ms of CPU in 100.20 ms, 95.00 ms of it waiting for a
     #: CPU``), said instead of a behaviour it did not spend its time in; "" otherwise
     slowest_host_busy: str = ""
+    #: the tick a Ctrl-C or a signal ended the run in, when it had run past its slot in a
+    #: behaviour (runtime/teardown.py ``cut_short``: ``in a tick that had run 19.66 s, in
+    #: behaviour sequence / hang (at bad.py:30)``), which the reason says; "" otherwise
+    cut_short: str = ""
     #: the exception's traceback when a behaviour raised one (printed under ``-v``)
     traceback: str = ""
     #: the exception itself that ended the run as ERROR (a behaviour's, a plugin's, the

@@ -32,7 +32,7 @@ import py_trees
 
 from roomba_bt.behaviours.lean import InvalidStatus
 from roomba_bt.behaviours.returned import returned_from
-from roomba_bt.oi.frames import MissingPacket
+from roomba_bt.oi.frames import SLOT_SECONDS, MissingPacket
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.robot.safety import (
     THE_SAFE_STOP,
@@ -122,6 +122,32 @@ def innermost_behaviour(
             if frame.f_code.co_filename == home:
                 return behaviour, f"at {home}:{line}"
     return behaviour, _top_line(frames)
+
+
+def stuck_in(
+    frames: list[tuple[FrameType, int]],
+) -> tuple[py_trees.behaviour.Behaviour | None, str]:
+    """Where a tick that has not returned is, from its stack (``frames`` outermost first, a
+    traceback's or a running thread's), as eval's HUNG, ``run --wall-limit`` and a Ctrl-C in
+    a long tick say it: ``in behaviour sequence / hang (at bad.py:30)`` (its path in the
+    tree, :func:`innermost_behaviour`'s line), else ``at file:line`` of the top frame outside
+    every behaviour, "" with no frames; and the behaviour (None outside every one)."""
+    behaviour, where = innermost_behaviour(frames)
+    if behaviour is None:
+        return None, where
+    return behaviour, f"in behaviour {tree_path(behaviour)} ({where})"
+
+
+def cut_short(exc: BaseException, ran_s: float) -> str:
+    """What the reason of a run that ``exc`` (a Ctrl-C, a SIGTERM) ended inside a tick adds,
+    when that tick had run past its 15 ms slot (``ran_s``) in a behaviour: ``in a tick that
+    had run 19.66 s, in behaviour sequence / hang (at bad.py:30)`` (:func:`stuck_in`): the
+    operator stopped a tree that was stuck, and the summary's slowest tick is of the ticks
+    that returned. "" for an ordinary tick's interrupt, or one outside every behaviour."""
+    if ran_s <= SLOT_SECONDS:
+        return ""
+    behaviour, where = stuck_in(list(traceback.walk_tb(exc.__traceback__)))
+    return f"in a tick that had run {ran_s:.2f} s, {where}" if behaviour is not None else ""
 
 
 def _top_line(frames: list[tuple[FrameType, int]]) -> str:

@@ -4,6 +4,7 @@ limit, where it was stuck, and the sweep goes on (its worker process ended and r
 from __future__ import annotations
 
 import re
+import shlex
 import threading
 from pathlib import Path
 
@@ -120,6 +121,14 @@ def test_eval_reports_hung_episodes_and_exits_4(
     assert "1 episode(s) ran past --wall-limit (stuck: an endless loop in a behaviour?)" in err
     assert main(["eval", BUMP, "--wall-limit", "soon"]) == 2
     assert "--wall-limit 'soon': expected a duration" in capsys.readouterr().err
+    # the advice's run, with the evaluation's limit: it ends there and says where, as eval
+    # did (it had no --wall-limit, and the run it gave hung with no word)
+    advice = err.split("run it alone with: ", 1)[1].splitlines()[0]
+    words = shlex.split(advice)
+    assert words[:3] == ["roomba-bt", "-v", "run"] and "--wall-limit" in words
+    assert main(words[1:]) == 4
+    stuck = "--wall-limit 1 s of wall-clock time ran out in behaviour sequence / stuck (at "
+    assert f"roomba-bt: error: {stuck}" in capsys.readouterr().err
 
 
 def test_a_dask_worker_goes_on_after_a_hung_episode(tmp_path: Path) -> None:

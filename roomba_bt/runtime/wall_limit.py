@@ -1,0 +1,99 @@
+"""A wall-clock limit on a block of code that may be stuck: ``run --wall-limit`` and an
+evaluation's episode on a Dask worker (``eval --wall-limit``).
+
+A behaviour stuck in an endless loop holds the ticking thread: on the virtual clock
+(``run --fast``, an evaluation) mission time stops with it, so ``--timeout`` never fires,
+and no frame is missed, so no watchdog does either. A thread cannot be ended from outside;
+:class:`WallLimit` raises :class:`WallLimitReached` in it instead, between two bytecodes (the
+interpreter's asynchronous exception), so a loop in Python ends where it is, the run's
+safe stop still runs on the way out, and the stack it was raised on says where it was stuck
+(:func:`ran_out`). A loop in C code, or a blocking call (``time.sleep``), sees it only when
+it returns to Python; one that catches ``BaseException`` swallows it.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import threading
+import traceback
+from types import FrameType, TracebackType
+
+import py_trees
+
+from roomba_bt.robot.safety import RunAborted
+from roomba_bt.runtime.teardown import stuck_in
+
+
+class WallLimitReached(RunAborted):
+    """Raised in a thread at its wall-clock limit (:class:`WallLimit`): no ``except
+    Exception`` (a behaviour's, the runner's) takes it for the run's own error, nor the
+    runner's ``except BaseException`` around a behaviour's code (a :class:`RunAborted`)."""
+
+
+class WallLimit:
+    """``with WallLimit(seconds):`` raises :class:`WallLimitReached` in the thread that
+    entered it once ``seconds`` of wall-clock time have passed inside (None: no limit);
+    :attr:`reached` says whether it did. Nothing is raised once the block is left: an
+    exception the limit set going as the block ended is taken back."""
+
+    def __init__(self, limit_s: float | None) -> None:
+        self.limit_s = limit_s
+        #: the limit ran out and its exception was set going in the thread
+        self.reached = False
+        self._thread = 0
+        self._lock = threading.Lock()
+        self._left = False
+        self._timer: threading.Timer | None = None
+
+    def __enter__(self) -> WallLimit:
+        if self.limit_s is not None:
+            self._thread = threading.get_ident()
+            self._timer = threading.Timer(self.limit_s, self._expire)
+            self._timer.daemon = True
+            self._timer.start()
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        exc: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        with self._lock:  # no exception is set going in this thread after this
+            self._left = True
+            if self.reached and not isinstance(exc, WallLimitReached):
+                _set_async_exc(self._thread, None)  # set going, not raised yet: taken back
+                self.reached = False
+        if self._timer is not None:
+            self._timer.cancel()
+
+    def said(self, exc: BaseException) -> str:
+        """Where the limit found the thread, from the stack ``exc`` (its
+        :class:`WallLimitReached`) unwound: :func:`ran_out`'s words."""
+        return ran_out(self.limit_s or 0.0, list(traceback.walk_tb(exc.__traceback__)))[1]
+
+    def _expire(self) -> None:
+        with self._lock:
+            if not self._left:
+                self.reached = True
+                _set_async_exc(self._thread, WallLimitReached)
+
+
+def _set_async_exc(thread: int, kind: type[BaseException] | None) -> None:
+    """The interpreter's asynchronous exception ``kind`` raised in ``thread`` at its next
+    bytecode; None takes back one set going and not raised yet."""
+    ctypes.pythonapi.PyThreadState_SetAsyncExc(
+        ctypes.c_ulong(thread), None if kind is None else ctypes.py_object(kind)
+    )
+
+
+def ran_out(
+    limit_s: float, frames: list[tuple[FrameType, int]] | None
+) -> tuple[py_trees.behaviour.Behaviour | None, str]:
+    """What a run or episode stopped at its wall-clock limit says, and the behaviour it was
+    stuck in (None: outside every behaviour, or no stack): ``--wall-limit 3 s of wall-clock
+    time ran out in behaviour sequence / hang (at bad.py:30)``, where :func:`stuck_in` finds
+    it on ``frames`` (outermost first; None: no Python frame answered, a loop in C code)."""
+    behaviour, where = stuck_in(frames) if frames else (None, "")
+    said = f" {where}" if where else ": no Python frame answered (a loop in C code?)"
+    return behaviour, f"--wall-limit {limit_s:g} s of wall-clock time ran out{said}"
