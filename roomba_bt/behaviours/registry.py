@@ -66,11 +66,14 @@ class NameClash(DeclarationError):
         self.name = name
         self.existing = existing
 
-    def clash(self, spelled: str | None = None, other: str | None = None) -> str:
+    def clash(
+        self, spelled: str | None = None, other: str | None = None, *, file: str | None = None
+    ) -> str:
         """What a plugin's class that lost the name is told: not that it declared itself
         wrongly, but who else declares the name, what becomes of it, and how a mission
         names each (``spelled``: this class's ``package:name``, ``other``: the first's; None
-        for a plugin file, which has no package)."""
+        for a plugin file, which has no package; ``file``: the plugin file this class is
+        in, where nothing is installed to uninstall, and the first may be in it too)."""
         holder = f"{_where(self.existing.cls)}"
         if self.existing.origin == "builtin":
             reach = f"a mission reaches this one as {spelled!r}" if spelled else "this one is not"
@@ -78,14 +81,18 @@ class NameClash(DeclarationError):
                 f"declares {self.name!r}, the name of the built-in {holder}: a name clash; the "
                 f"built-in is used and {reach} (or rename it)"
             )
-        said = (
-            f"; write {other!r} or {spelled!r} to choose"
-            if spelled and other
-            else " until one is uninstalled or renames its behaviour"
-        )
+        between = "two plugins"
+        if spelled and other:
+            said = f"; write {other!r} or {spelled!r} to choose"
+        elif file is None:
+            said = " until one is uninstalled or renames its behaviour"
+        elif file == self.existing.origin:
+            between, said = "two classes of one plugin file", " until one of them is renamed"
+        else:
+            said = " until one is renamed, or its file left out of the mission's plugins:"
         return (
             f"declares {self.name!r}, as {holder} of plugin {self.existing.origin} does: a name "
-            f"clash between two plugins; a mission that uses {self.name!r} is refused (exit 2)"
+            f"clash between {between}; a mission that uses {self.name!r} is refused (exit 2)"
             f"{said}"
         )
 
@@ -301,7 +308,8 @@ class Registry:
                 registered.append(self.register(cls, origin, said_as=said, entry=entry))
             except NameClash as exc:  # it declared nothing wrongly: two classes want a name
                 spelled = self.spelled(declared) if isinstance(declared, Declaration) else None
-                clash = f"{_where(cls)} {exc.clash(spelled, self.spelled(exc.existing))}"
+                file = origin if entry is None else None  # a plugin file's: none installed
+                clash = f"{_where(cls)} {exc.clash(spelled, self.spelled(exc.existing), file=file)}"
                 self._errors.append(PluginError(said, clash, names=names, loses_behaviours=False))
             except _LanguageWord as exc:  # the word is the language's; the class may be reached
                 spelled = self.spelled(declared) if isinstance(declared, Declaration) else None
@@ -344,8 +352,10 @@ class Registry:
         except BaseException as exc:  # any import-time failure of third-party code
             if not code_failure(exc):  # a Ctrl-C (not the plugin's KeyboardInterrupt)
                 raise
-            failed = _missing_attribute(ep, exc) or _import_failed(
-                exc, _package_of(ep), _origin(ep)
+            failed = (
+                _missing_attribute(ep, exc)
+                or _missing_module(ep, exc)
+                or _import_failed(exc, _package_of(ep), _origin(ep))
             )
             self._errors.append(PluginError(_origin(ep), failed, imported=False, names=(ep.name,)))
             return []
@@ -649,12 +659,30 @@ def _missing_attribute(ep: EntryPoint, exc: BaseException) -> str | None:
     if not offered:
         listed = ", ".join(classes[:5]) + (", ..." if len(classes) > 5 else "")
         offered = f"; its behaviour classes: {listed}" if classes else "; it has no behaviour class"
-    written = f'[project.entry-points."{ep.group}"] {ep.name} = "{ep.value}"'
-    where = f"in {ep.dist.name}'s pyproject.toml" if ep.dist else "in its distribution's metadata"
     return (
         f"the entry point names {ep.value}, but module {ep.module!r} has no attribute "
-        f"{first!r}{offered} (written {where}: {written})"
+        f"{first!r}{offered} ({_written_at(ep)})"
     )
+
+
+def _missing_module(ep: EntryPoint, exc: BaseException) -> str | None:
+    """What an entry point whose module is not there says (``typo = "roomba_bt_brokn"``):
+    where the entry point is written, as :func:`_missing_attribute` does; None for any other
+    failure (a module the plugin itself imports and lacks is its own import's failure). It
+    said ``failed to import: ModuleNotFoundError: No module named 'roomba_bt_brokn'``."""
+    missing = getattr(exc, "name", None) if isinstance(exc, ModuleNotFoundError) else None
+    if not missing or not (ep.module == missing or ep.module.startswith(f"{missing}.")):
+        return None
+    written = _written_at(ep)
+    return f"the entry point names {ep.value}, but there is no module {missing!r} ({written})"
+
+
+def _written_at(ep: EntryPoint) -> str:
+    """``written in roomba-bt-lab's pyproject.toml: [project.entry-points...] lab = "..."``:
+    where a user fixes an entry point that names what is not there."""
+    written = f'[project.entry-points."{ep.group}"] {ep.name} = "{ep.value}"'
+    where = f"in {ep.dist.name}'s pyproject.toml" if ep.dist else "in its distribution's metadata"
+    return f"written {where}: {written}"
 
 
 def _raised_at(exc: BaseException, home: list[Path]) -> str | None:

@@ -162,12 +162,14 @@ def _add_skip_broken_option(parser: argparse.ArgumentParser, then: str) -> None:
     )
 
 
-def _registry_with_files(command: str, files: list[str]) -> Registry | int:
-    """The default registry and the behaviours of each ``--plugin-file``, or an exit code
-    after saying which file could not be read."""
+def _registry_with_files(command: str, files: list[str]) -> tuple[Registry, list[str]] | int:
+    """The default registry with the behaviours of each ``--plugin-file`` that loaded, and
+    what each of its classes that did not load (or a file that did not import) says, as
+    the command prints it; an exit code after saying which file could not be read."""
     from roomba_bt.behaviours import default_registry
 
     registry = default_registry()
+    said: list[str] = []
     for file in files:
         path = Path(file)
         if not path.is_file():
@@ -176,11 +178,8 @@ def _registry_with_files(command: str, files: list[str]) -> Registry | int:
             print(f"roomba-bt {command}: --plugin-file {file}: {what}", file=sys.stderr)
             return ExitCode.INVALID
         registry, errors = registry.with_file(Path(file))
-        for error in errors:
-            print(f"roomba-bt {command}: --plugin-file {file}: {error}", file=sys.stderr)
-        if errors:
-            return ExitCode.INVALID
-    return registry
+        said += [f"roomba-bt {command}: --plugin-file {file}: {error}" for error in errors]
+    return registry, said
 
 
 def _common(parser: argparse.ArgumentParser) -> None:
@@ -480,9 +479,24 @@ def _leads_to(decl: Any) -> str | None:
 
 
 def behaviours_command(args: argparse.Namespace) -> int:
-    registry = _registry_with_files("behaviours", args.plugin_file)
-    if isinstance(registry, int):
-        return registry
+    """What each behaviour takes; with a ``--plugin-file`` one of whose classes is declared
+    wrongly, the others are listed all the same and the errors said after them, exit 2, as
+    for an installed plugin (it printed nothing)."""
+    loaded = _registry_with_files("behaviours", args.plugin_file)
+    if isinstance(loaded, int):
+        return loaded
+    registry, file_errors = loaded
+    from roomba_bt.behaviours import default_registry
+
+    said = _listed(args, registry, default_registry())  # the files' errors are said below
+    for line in file_errors:  # after the listing, where a terminal leaves it in view
+        print(line, file=sys.stderr)
+    return ExitCode.INVALID if file_errors else said
+
+
+def _listed(args: argparse.Namespace, registry: Registry, installed: Registry) -> int:
+    """The behaviours ``args`` asks for, listed from ``registry``, and the exit code they
+    call for; the ``installed`` plugins that did not load said after them."""
     unknown = [n for n in args.names if n not in registry]
     if unknown:
         from roomba_bt.behaviours.units import closest
@@ -498,7 +512,7 @@ def behaviours_command(args: argparse.Namespace) -> int:
                 "are listed with --plugin-file FILE",
                 file=sys.stderr,
             )
-        _plugin_warnings(registry)  # it may be one of a plugin that did not load
+        _plugin_warnings(installed)  # it may be one of a plugin that did not load
         return ExitCode.INVALID
     data = describe_behaviours(args.names, registry)
     # a name two plugins declare is no behaviour a mission can use (it is refused, exit 2):
@@ -517,7 +531,7 @@ def behaviours_command(args: argparse.Namespace) -> int:
                 _print_behaviour(entry)
     # after the listing, where a terminal leaves it in view
     if _plugins_broken(
-        "behaviours", registry, args.skip_broken_plugins, "{its} behaviours are not listed"
+        "behaviours", installed, args.skip_broken_plugins, "{its} behaviours are not listed"
     ):
         return ExitCode.INVALID
     return said
@@ -571,9 +585,14 @@ def _print_behaviour(entry: dict[str, Any]) -> None:
 def schema_command(args: argparse.Namespace) -> int:
     from roomba_bt.mission.schema import mission_schema
 
-    registry = _registry_with_files("schema", args.plugin_file)
-    if isinstance(registry, int):
-        return registry
+    loaded = _registry_with_files("schema", args.plugin_file)
+    if isinstance(loaded, int):
+        return loaded
+    registry, file_errors = loaded
+    if file_errors:  # a schema without a file's behaviours marks its missions wrong
+        for line in file_errors:
+            print(line, file=sys.stderr)
+        return ExitCode.INVALID
     # nothing printed: ``schema > mission.schema.json`` in CI or a bot wrote a schema
     # without the plugin's behaviours, exit 0, and every editor marked its missions wrong
     if _plugins_broken(

@@ -145,8 +145,13 @@ class NodeParser:
             raise Bad(loc.at(f"a node needs a kind (such as sequence, drive, bump); found {found}"))
         word, value, key_loc, value_loc = self._kind(words)
         stray = len(words) > 1  # unknown words beside it: reported, the node is not built
-        built = self._word(word, Written(value, key_loc, value_loc, env))
+        try:
+            built = self._word(word, Written(value, key_loc, value_loc, env))
+        except Bad as bad:  # an unknown word, say: its guards still checked, in the same pass
+            self.ctx.report(bad)
+            built = None
         if built is None:
+            self._guards(mods, env)
             return None
         if "name" in mods:
             name_loc = mods["name"][2]
@@ -156,17 +161,27 @@ class NodeParser:
             built.parameter_in_name = name_loc if uses_parameter else None
             if name != built.name:
                 built.label, built.name = built.name, name
+        for guard, gkloc, condition in self._guards(mods, env):
+            built = Node("guard", gkloc, f"{guard} {condition.name}", [condition, built],
+                         options={"until": guard == "until"},
+                         parameter_in_name=condition.parameter_in_name)  # fmt: skip
+        return None if stray else built
+
+    def _guards(
+        self, mods: Mapping[str, tuple[yaml.Node, Loc, Loc]], env: Mapping[str, Bound]
+    ) -> list[tuple[str, Loc, Node]]:
+        """The node's ``until`` and ``while`` conditions, each parsed and checked (made of
+        conditions), with its key's place; also for a node that could not be built (an
+        unknown word: a plugin not installed), whose guards were not checked at all."""
+        guards = []
         for guard in ("until", "while"):
             if guard in mods:
                 gnode, gkloc, gvloc = mods[guard]
                 condition = self.node(gnode, gvloc, env)
-                if condition is None:
-                    continue
-                self._check_guard(condition, guard)
-                built = Node("guard", gkloc, f"{guard} {condition.name}", [condition, built],
-                             options={"until": guard == "until"},
-                             parameter_in_name=condition.parameter_in_name)  # fmt: skip
-        return None if stray else built
+                if condition is not None:
+                    self._check_guard(condition, guard)
+                    guards.append((guard, gkloc, condition))
+        return guards
 
     def _kind(
         self, words: list[tuple[str, yaml.Node, Loc, Loc]]

@@ -120,9 +120,12 @@ def test_an_entry_point_that_fails_to_import_says_where_in_its_package(
     assert raising.endswith(
         f"failed to import: KeyError: 'S24_NOPE' (at {folder / 'helpers.py'}:5)"
     )
-    # nothing of its own ran: no line to name
-    assert gone.endswith("failed to import: ModuleNotFoundError: No module named "
-                         "'s24_no_such_package_xyz'")  # fmt: skip
+    # nothing of its own ran: no line to name, but the entry point that names it
+    assert gone.endswith(
+        "the entry point names s24_no_such_package_xyz, but there is no module "
+        "'s24_no_such_package_xyz' (written in its distribution's metadata: "
+        '[project.entry-points."roomba_bt.behaviours"] gone = "s24_no_such_package_xyz")'
+    )
 
 
 #: the stranger's bt-bad-units, in part: a maximum written in metres (2, taken as 2 mm) with a
@@ -263,6 +266,32 @@ def test_a_kind_its_class_contradicts_is_refused_where_it_is_declared(
         "roomba_bt.behaviours.Condition (its check() says whether it holds); declare "
         "kind='action' or derive it from Condition",
     ]
+
+
+def test_an_entry_point_naming_a_module_that_is_not_there_says_where_it_is_written(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A misspelt module (``typo = "roomba_bt_brokn"``) said only ``failed to import:
+    ModuleNotFoundError: No module named 'roomba_bt_brokn'``; a module the plugin's own code
+    imports and lacks is still its import's failure, at its line."""
+    _package(tmp_path, "s31_needs", {"conds.py": "import s31_not_installed_anywhere\n"})
+    monkeypatch.syspath_prepend(str(tmp_path))
+    registry = Registry(entry_point_group=None)
+    for name, target in (("typo", "s31_brokn"), ("sub", "s31_needs.cnds"),
+                         ("own", "s31_needs.conds")):  # fmt: skip
+        registry.load_entry_point(EntryPoint(name, target, GROUP))
+    [typo, sub, own] = [e.cause for e in registry.errors]
+    assert typo == (
+        "the entry point names s31_brokn, but there is no module 's31_brokn' (written in its "
+        'distribution\'s metadata: [project.entry-points."roomba_bt.behaviours"] typo = '
+        '"s31_brokn")'
+    )
+    assert sub.startswith("the entry point names s31_needs.cnds, but there is no module "
+                          "'s31_needs.cnds' (written in its distribution's metadata: ")  # fmt: skip
+    assert own.startswith(
+        "failed to import: ModuleNotFoundError: No module named 's31_not_installed_anywhere' "
+        f"(at {tmp_path / 's31_needs' / 'conds.py'}:1)"
+    )
 
 
 def test_an_entry_point_naming_an_attribute_its_module_lacks_says_where_it_is_written(

@@ -184,6 +184,65 @@ def test_behaviours_lists_a_plugin_files_behaviours_with_plugin_file(capsys: Cap
     assert "--plugin-file no_such.py: no such file" in capsys.readouterr().err
 
 
+#: a plugin file with one good class, one declared wrongly and two that declare one name
+PARTLY_BAD = """\
+from py_trees.common import Status
+from roomba_bt.behaviours import Action, declare
+
+
+@declare("s31_fine", kind="action")
+class Fine(Action):
+    \"\"\"Loads.\"\"\"
+    def update(self):
+        return Status.SUCCESS
+
+
+@declare("S31 Bad", kind="action")
+class Bad(Action):
+    \"\"\"Not snake_case.\"\"\"
+    def update(self):
+        return Status.SUCCESS
+
+
+@declare("s31_twice", kind="action")
+class Once(Action):
+    \"\"\"The name's first.\"\"\"
+    def update(self):
+        return Status.SUCCESS
+
+
+@declare("s31_twice", kind="action")
+class Again(Action):
+    \"\"\"The same name in the same file.\"\"\"
+    def update(self):
+        return Status.SUCCESS
+"""
+
+
+def test_behaviours_lists_what_a_plugin_file_loaded_beside_a_bad_class(
+    tmp_path: Path, capsys: Capsys
+) -> None:
+    """One badly declared class left stdout empty (exit 2), where an installed plugin's
+    good behaviours are still listed; the errors now follow the listing, exit 2 still. Two
+    classes of one file that clash are told to rename one, not to be uninstalled."""
+    plugin = tmp_path / "partly_bad.py"
+    plugin.write_text(PARTLY_BAD)
+    assert main(["behaviours", "s31_fine", "--plugin-file", str(plugin)]) == 2
+    out, err = capsys.readouterr()
+    assert out.startswith(f"s31_fine  (action; from {plugin})")
+    said = [line for line in err.splitlines() if line.startswith("roomba-bt behaviours: --plugin")]
+    assert len(said) == 2
+    assert "Bad (" in said[0] and "declares itself wrongly: name 'S31 Bad' is not" in said[0]
+    assert said[1].endswith(
+        "a name clash between two classes of one plugin file; a mission that uses 's31_twice' "
+        "is refused (exit 2) until one of them is renamed"
+    )
+    assert "installed plugin" not in err  # the file's errors are not the installed ones'
+    assert main(["schema", "--plugin-file", str(plugin)]) == 2  # no schema without them
+    out, err = capsys.readouterr()
+    assert out == "" and "declares itself wrongly" in err
+
+
 def test_schema_is_json_with_every_behaviour(capsys: Capsys) -> None:
     assert main(["schema"]) == 0
     schema = json.loads(capsys.readouterr().out)
@@ -274,14 +333,15 @@ def test_a_plugin_that_did_not_load_is_said_by_behaviours_name_and_by_schema(
     assert main(["behaviours", "typo_cond"]) == 2
     err = capsys.readouterr().err
     assert "unknown behaviour 'typo_cond'" in err
-    assert "warning: plugin 'typo' (typo_mdo): failed to import: ModuleNotFoundError" in err
+    missing = "plugin 'typo' (typo_mdo): the entry point names typo_mdo, but there is no module"
+    assert f"warning: {missing} 'typo_mdo' (written in its distribution's metadata: " in err
     # it does not import: no schema without its behaviours (tests/mission/test_broken_plugin_cli.py)
     assert main(["schema"]) == 2
     out, err = capsys.readouterr()
-    assert not out and "error: plugin 'typo' (typo_mdo): failed to import" in err
+    assert not out and f"error: {missing}" in err
     assert main(["schema", "--skip-broken-plugins"]) == 0
     out, err = capsys.readouterr()
-    assert json.loads(out) and "warning: plugin 'typo' (typo_mdo): failed to import" in err
+    assert json.loads(out) and f"warning: {missing}" in err
 
 
 @pytest.mark.parametrize(
