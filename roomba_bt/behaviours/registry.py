@@ -156,6 +156,8 @@ class Registry:
         self._package_of: dict[type, str] = {}
         self._group = entry_point_group
         self._loaded = entry_point_group is None
+        #: plugins the mission was made with that are not here, each said (:meth:`expecting`)
+        self.absent: tuple[str, ...] = ()
 
     # ------------------------------------------------------------------ registration
     def register(
@@ -457,7 +459,18 @@ class Registry:
         other._shadowed = {name: list(who) for name, who in self._shadowed.items()}
         other._packages = {package: dict(held) for package, held in self._packages.items()}
         other._package_of = dict(self._package_of)
+        other.absent = self.absent
         return other
+
+    def expecting(self, absent: Iterable[str]) -> Registry:
+        """A copy that knows plugins the mission was made with are not here (``absent``,
+        each said: ``plugin roomba-bt-lab 0.1.0, not installed``, a record's header's:
+        runtime/provenance.py): an unknown node is most likely one of theirs, and is offered
+        no "did you mean" a built-in that does something else (wall_follow for the plugin's
+        wall_follow_for, which ends by distance)."""
+        copy = self.copy()
+        copy.absent = tuple(absent)
+        return copy
 
     # ------------------------------------------------------------------ queries
     def get(self, name: str) -> Declaration | None:

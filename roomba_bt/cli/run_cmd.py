@@ -62,11 +62,12 @@ from roomba_bt.runtime.summary import (
 )
 
 if TYPE_CHECKING:
-    from collections.abc import Callable
+    from collections.abc import Callable, Sequence
 
     from roomba_bt.mission import Permissions
     from roomba_bt.runtime.claimed import ClaimedFile
     from roomba_bt.runtime.loop import TickObserver
+    from roomba_bt.runtime.provenance import AbsentPlugin
     from roomba_bt.runtime.recording import Record, ReplayTransport
     from roomba_bt.runtime.stack import RunStack
     from roomba_bt.runtime.summary import RunSummary
@@ -243,16 +244,24 @@ def load(
     profile: RobotProfile,
     baud: int = 115200,
     granted: Permissions | None = None,
+    absent: Sequence[AbsentPlugin] = (),
 ) -> Any:
     """The compiled mission, or an int exit code after printing every diagnostic (``run``,
-    ``replay``, and ``eval`` before its workers start)."""
+    ``replay``, and ``eval`` before its workers start). ``absent``: plugins a record's run
+    used that are not here as they were, said first when the mission does not compile
+    (its unknown nodes are most likely theirs: no "did you mean" for them)."""
+    from roomba_bt.behaviours import default_registry
     from roomba_bt.mission import MissionError, Permissions, load_mission, reported
 
+    registry = default_registry().expecting(p.short for p in absent) if absent else None
     try:
         mission = load_mission(
-            path, params, profile=profile, baud=baud, permissions=granted or Permissions()
-        )
+            path, params, profile=profile, baud=baud, permissions=granted or Permissions(),
+            registry=registry,
+        )  # fmt: skip
     except MissionError as exc:
+        for plugin in absent:
+            print(f"roomba-bt: {plugin.said()}", file=sys.stderr)
         for line in reported(exc.diagnostics):
             print(line, file=sys.stderr)
         return ExitCode.INVALID
@@ -803,6 +812,7 @@ def load_recorded(args: argparse.Namespace) -> Recorded | int:
     or shipped name; ``-p`` over the recorded parameters; ``--allow-plugin-files``; the
     include folders its run was granted, where the record may grant them), profile, baud and
     packets; or an exit code after printing what is wrong."""
+    from roomba_bt.runtime.provenance import absent_plugins
     from roomba_bt.runtime.recording import RecordError, load_record
 
     try:
@@ -828,7 +838,7 @@ def load_recorded(args: argparse.Namespace) -> Recorded | int:
     granted = replace(
         granted, include_dirs=tuple(dict.fromkeys((*granted.include_dirs, *recorded_dirs)))
     )
-    mission = load(found, params, profile, baud, granted)
+    mission = load(found, params, profile, baud, granted, absent_plugins(header))
     if isinstance(mission, int):
         return mission
     packets = _recorded_packets(args.record, header, mission, found)

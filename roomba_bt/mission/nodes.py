@@ -229,6 +229,9 @@ class NodeParser:
         qualified = self.ctx.registry.why_unknown(word)  # package:name, said by its package
         if qualified is not None:
             return f"{message}: {qualified}"
+        absent = self.ctx.registry.absent  # plugins the mission was made with, not here
+        if absent and not named:  # theirs, most likely: no "did you mean" a built-in
+            return f"{message} (perhaps of {'; '.join(absent)})"
         if not named:  # a misspelling, perhaps: not when a plugin is known to declare it
             message += suggestion(word, [*WORDS, *self.ctx.registry.names(), *MODIFIERS])
         likely = named or [e for e in errors if not e.imported]

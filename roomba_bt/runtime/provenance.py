@@ -26,6 +26,8 @@ import hashlib
 import os
 import sys
 from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from importlib import metadata
 from pathlib import Path
 from typing import Any
 
@@ -257,6 +259,58 @@ def changed_plugins(header: Mapping[str, Any], root: Behaviour) -> list[str]:
                     "was made (the same version: an editable install, or a rebuild)")  # fmt: skip
         changed.append(f"{what}: a difference may come from it")
     return changed
+
+
+@dataclass(frozen=True)
+class AbsentPlugin:
+    """A plugin distribution a record's run used (its header's ``plugins``) that is not
+    installed here as it was: ``installed`` is the version here, None when there is none."""
+
+    name: str
+    version: str
+    installed: str | None
+
+    @property
+    def short(self) -> str:
+        """``plugin roomba-bt-lab 0.1.0, not installed`` (``0.2.0 installed`` for another
+        version): an unknown node's note, where a "did you mean" would send the user to a
+        built-in the plugin's behaviour is not."""
+        here = "not installed" if self.installed is None else f"{self.installed} installed"
+        return f"plugin {self.name} {self.version}, {here}"
+
+    def said(self) -> str:
+        """What a replay or the monitor says first when the recorded mission does not
+        compile: ``this record was made with plugin roomba-bt-lab 0.1.0, which is not
+        installed (pip install roomba-bt-lab==0.1.0)``."""
+        here = (
+            "which is not installed" if self.installed is None
+            else f"and {self.installed} is installed"
+        )  # fmt: skip
+        return (
+            f"this record was made with plugin {self.name} {self.version}, {here} "
+            f"(pip install {self.name}=={self.version})"
+        )
+
+
+def absent_plugins(header: Mapping[str, Any]) -> list[AbsentPlugin]:
+    """Each plugin distribution the record's header names that is not installed here, or
+    not at the recorded version (its code is :func:`changed_plugins`' to compare, once the
+    mission compiles); none for a record made before plugins were recorded."""
+    recorded = header.get(PLUGINS)
+    if not isinstance(recorded, Mapping):
+        return []
+    absent = []
+    for name, was in sorted(recorded.items()):
+        version = was.get(VERSION) if isinstance(was, Mapping) else None
+        if not isinstance(name, str) or not isinstance(version, str):
+            continue
+        try:
+            installed: str | None = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            installed = None
+        if installed != version:
+            absent.append(AbsentPlugin(name, version, installed))
+    return absent
 
 
 def changed_since(

@@ -925,6 +925,61 @@ def test_a_record_names_its_plugins_and_a_replay_that_differs_names_the_one_chan
     assert f"{bad}:1: header field 'plugins' is ['x']; expected " in capsys.readouterr().err
 
 
+def _uninstall_plugin(monkeypatch: pytest.MonkeyPatch, site: Path) -> None:
+    """``pip uninstall bt-far-s29``: its module and metadata gone from ``site``."""
+    import importlib
+    import shutil
+
+    import roomba_bt.behaviours.registry as registry
+
+    for old in site.glob("bt_far_s29-*.dist-info"):
+        shutil.rmtree(old)
+    (site / "s29_far.py").unlink()
+    sys.modules.pop("s29_far", None)
+    importlib.invalidate_caches()
+    monkeypatch.setattr(registry, "_DEFAULT", None)
+
+
+def test_a_replay_whose_recorded_plugin_is_not_installed_says_so_first(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The header names the plugin and its version, yet a replay (the monitor's too) of a
+    record whose plugin was uninstalled said only ``unknown node 'far_s29'``, with any
+    "did you mean" a built-in of a near name would give: the plugin is said first, and the
+    node is not offered a built-in."""
+    from roomba_bt.runtime.provenance import absent_plugins
+
+    site = tmp_path / "site"
+    site.mkdir()
+    monkeypatch.syspath_prepend(str(site))
+    _plugin(monkeypatch, site, "1.0", far=True)
+    mission, record = tmp_path / "far.yaml", tmp_path / "far.jsonl"
+    mission.write_text(FAR_OR_NEAR, encoding="utf-8")
+    assert main(["run", str(mission), "--fast", "--display", "none", "--record", str(record)]) == 0
+    capsys.readouterr()
+    _uninstall_plugin(monkeypatch, site)
+    for command in ("replay", "monitor"):
+        assert main([command, str(record)]) == 2
+        first, second, *_ = capsys.readouterr().err.splitlines()
+        assert first == (
+            "roomba-bt: this record was made with plugin bt-far-s29 1.0, which is not "
+            "installed (pip install bt-far-s29==1.0)"
+        )
+        assert second.endswith(
+            "unknown node 'far_s29' (perhaps of plugin bt-far-s29 1.0, not installed) "
+            "[tree.sequence[1].selector[0].sequence[0].far_s29]"
+        )
+    header = load_record(record).header
+    _plugin(monkeypatch, site, "2.0", far=True)  # another version: said by its version
+    [other] = absent_plugins(header)
+    assert other.said() == (
+        "this record was made with plugin bt-far-s29 1.0, and 2.0 is installed (pip install "
+        "bt-far-s29==1.0)"
+    )
+    assert main(["replay", str(record)]) == 0  # it compiles: the drift line says the rest
+    assert "this record was made with" not in capsys.readouterr().err
+
+
 def test_a_replay_says_in_one_line_that_it_ran_on_other_files_than_the_record_was_made_with(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
