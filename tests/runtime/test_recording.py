@@ -860,10 +860,12 @@ tree:
 """
 
 
-def _plugin(monkeypatch: pytest.MonkeyPatch, site: Path, version: str, far: bool) -> None:
-    """The distribution ``bt-far-s29`` installed on ``site`` (on sys.path) at ``version``,
-    its condition ``far_s29`` answering ``far``; what the next command loads (a fresh
-    registry, the module imported again)."""
+def _plugin(
+    monkeypatch: pytest.MonkeyPatch, site: Path, version: str | None, far: bool = True
+) -> None:
+    """The distribution ``bt-far-s29`` installed on ``site`` (on sys.path) at ``version``
+    (None: uninstalled, its module and metadata gone), its condition ``far_s29`` answering
+    ``far``; what the next command loads (a fresh registry, the module imported again)."""
     import importlib
     import shutil
 
@@ -871,11 +873,17 @@ def _plugin(monkeypatch: pytest.MonkeyPatch, site: Path, version: str, far: bool
 
     for old in site.glob("bt_far_s29-*.dist-info"):
         shutil.rmtree(old)
-    (site / "s29_far.py").write_text(FAR_S29.format(far=far), encoding="utf-8")
-    info = site / f"bt_far_s29-{version}.dist-info"
-    info.mkdir(parents=True)
-    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: bt-far-s29\nVersion: {version}\n")
-    (info / "entry_points.txt").write_text("[roomba_bt.behaviours]\ns29_far = s29_far\n")
+    module = site / "s29_far.py"
+    if version is None:
+        module.unlink()
+    else:
+        module.write_text(FAR_S29.format(far=far), encoding="utf-8")
+        info = site / f"bt_far_s29-{version}.dist-info"
+        info.mkdir(parents=True)
+        (info / "METADATA").write_text(
+            f"Metadata-Version: 2.1\nName: bt-far-s29\nVersion: {version}\n"
+        )
+        (info / "entry_points.txt").write_text("[roomba_bt.behaviours]\ns29_far = s29_far\n")
     sys.modules.pop("s29_far", None)
     importlib.invalidate_caches()
     monkeypatch.setattr(registry, "_DEFAULT", None)
@@ -925,21 +933,6 @@ def test_a_record_names_its_plugins_and_a_replay_that_differs_names_the_one_chan
     assert f"{bad}:1: header field 'plugins' is ['x']; expected " in capsys.readouterr().err
 
 
-def _uninstall_plugin(monkeypatch: pytest.MonkeyPatch, site: Path) -> None:
-    """``pip uninstall bt-far-s29``: its module and metadata gone from ``site``."""
-    import importlib
-    import shutil
-
-    import roomba_bt.behaviours.registry as registry
-
-    for old in site.glob("bt_far_s29-*.dist-info"):
-        shutil.rmtree(old)
-    (site / "s29_far.py").unlink()
-    sys.modules.pop("s29_far", None)
-    importlib.invalidate_caches()
-    monkeypatch.setattr(registry, "_DEFAULT", None)
-
-
 def test_a_replay_whose_recorded_plugin_is_not_installed_says_so_first(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -957,7 +950,7 @@ def test_a_replay_whose_recorded_plugin_is_not_installed_says_so_first(
     mission.write_text(FAR_OR_NEAR, encoding="utf-8")
     assert main(["run", str(mission), "--fast", "--display", "none", "--record", str(record)]) == 0
     capsys.readouterr()
-    _uninstall_plugin(monkeypatch, site)
+    _plugin(monkeypatch, site, None)  # pip uninstall bt-far-s29
     for command in ("replay", "monitor"):
         assert main([command, str(record)]) == 2
         first, second, *_ = capsys.readouterr().err.splitlines()
