@@ -198,7 +198,8 @@ def print_json(checked: list[Checked], *, strict: bool) -> None:
 
 
 def diagnostic_as_json(d: Diagnostic) -> dict[str, Any]:
-    """A diagnostic's fields by their names, the include chain innermost first."""
+    """A diagnostic's fields by their names, the include chain innermost first; ``began_at``,
+    ``{line, column}`` of where a YAML syntax error's structure began, else null."""
     return {
         "file": d.file,
         "line": d.line,
@@ -209,6 +210,7 @@ def diagnostic_as_json(d: Diagnostic) -> dict[str, Any]:
         "included_from": [
             {"file": s.file, "line": s.line, "column": s.column} for s in d.included_from
         ],
+        "began_at": {"line": d.began_at[0], "column": d.began_at[1]} if d.began_at else None,
     }
 
 

@@ -43,7 +43,11 @@ class Diagnostic:
     the include entries that reached it, innermost first: the last is in the compiled file.
     Without it an error in a shared library was printed once per mission under the
     library's name alone, and nothing said which missions it broke. Empty for the compiled
-    file's own diagnostics."""
+    file's own diagnostics.
+
+    ``began_at``: of a YAML syntax error, the 1-based line and column where the structure it
+    broke began (the ``{`` left open, the block a line falls out of), said in the message too;
+    empty otherwise."""
 
     file: str
     line: int
@@ -52,6 +56,7 @@ class Diagnostic:
     yaml_path: str = ""
     severity: str = "error"
     included_from: tuple[IncludeSite, ...] = ()
+    began_at: tuple[int, ...] = ()
 
     def __str__(self) -> str:
         where = (

@@ -36,6 +36,7 @@ from roomba_bt.mission.values import (
     unknown,
     warn_escaped,
 )
+from roomba_bt.yamlsource import NOT_PLAIN_SPACES, named_character
 
 #: How deep a tree may nest, counted in nodes from the root, subtrees expanded. A mission
 #: written by hand nests a dozen or so; a file nested hundreds deep (a generator gone wrong)
@@ -226,6 +227,9 @@ class NodeParser:
         # contains the word (u_metres in u_metres_nodefault's)
         named = [e for e in errors if word in e.names]
         message = f"unknown node {word!r}{where}"
+        unspaced = self._missing_space(word)
+        if unspaced is not None:  # before "no plugin package 'mode'": the likelier cause
+            return f"{message}: {unspaced}"
         qualified = self.ctx.registry.why_unknown(word)  # package:name, said by its package
         if qualified is not None:
             return f"{message}: {qualified}"
@@ -242,6 +246,27 @@ class NodeParser:
                 failed += f"; and {more} more (roomba-bt behaviours lists them)"
             message += f" (note: {failed})"
         return message
+
+    def _missing_space(self, word: str) -> str | None:
+        """What is wrong with ``mode:safe`` or ``mode safe`` (a node's word and its value
+        written as one text: YAML needs ``: ``, a colon and a plain space), or None. The
+        commonest beginner's mistake; ``mode:safe`` read as ``package:name`` sent students
+        looking for a plugin package called ``mode``."""
+        for separator in (":", " "):
+            name, found, rest = word.partition(separator)
+            if not found or not (name in WORDS or name in self.ctx.registry):
+                continue
+            value = rest.lstrip(NOT_PLAIN_SPACES + " ")
+            if separator == " ":
+                return f"write a colon and a space after the word: `{name}: {value}`"
+            odd = rest[:1]
+            if odd and odd in NOT_PLAIN_SPACES:  # a no-break space pasted from a web page
+                return (
+                    f"{named_character(odd)} after the colon is no space to YAML: write a "
+                    f"plain space: `{name}: {value}`"
+                )
+            return f"{word!r} is one text to YAML: write a space after the colon: `{name}: {value}`"
+        return None
 
     def _unknown_subtree_hint(self, name: str, at: Loc) -> str:
         """What follows ``unknown subtree NAME``: that an include was not read (its

@@ -72,7 +72,8 @@ def compose(
     except UnicodeDecodeError as exc:
         line, column = yamlsource.undecodable_position(exc)
         byte = bytes(exc.object)[exc.start]
-        said = f"byte 0x{byte:02x} ({exc.reason})" if exc.reason != yamlsource.UTF16 else exc.reason
+        whole = exc.reason in yamlsource.WHOLE_REASONS
+        said = exc.reason if whole else f"byte 0x{byte:02x} at offset {exc.start:,} ({exc.reason})"
         return None, [Diagnostic(display, line, column, f"mission file is not UTF-8 text: {said}")]
     return compose_text(text, display)
 
@@ -94,10 +95,14 @@ def compose_text(text: str, display: str) -> tuple[yaml.Node | None, list[Diagno
         tab = yamlsource.tab_hint(text, line, column)
         problem += tab
         cause = None if tab else yamlsource.lookalike_cause(text, line, column)
+        began: tuple[int, ...] = ()
         if cause is not None:  # the character that looks like YAML's own, at its place
             problem = f"{cause[2]} ({problem} at {line}:{column})"
             line, column = cause[0], cause[1]
-        return None, [Diagnostic(display, line, column, f"YAML syntax error: {problem}")]
+        elif not tab and (context := yamlsource.syntax_context(exc, text)) is not None:
+            problem, began = f"{problem} ({context[0]})", context[1]
+        said = f"YAML syntax error: {problem}"
+        return None, [Diagnostic(display, line, column, said, began_at=began)]
     except yaml.YAMLError as exc:
         return None, [Diagnostic(display, 1, 1, f"YAML error: {exc}")]
     if node is None:

@@ -22,6 +22,7 @@ from roomba_bt.behaviours.registry import Registry
 from roomba_bt.behaviours.units import (
     CANONICAL,
     MARK,
+    STR,
     VALUE_TYPES,
     BareNumber,
     ItemErrors,
@@ -38,6 +39,7 @@ from roomba_bt.mission.foreign import port_remapping, suggestion
 from roomba_bt.mission.plan import KeyDecl
 from roomba_bt.mission.source import Bad, Loc, mapping, plain, scalar_text
 from roomba_bt.mission.wording import PYTHON, Wording
+from roomba_bt.yamlsource import quoted, yaml12_number_problem
 
 _FULL_SUBSTITUTION = re.compile(r"^\s*(-?)\$\{([A-Za-z_][A-Za-z0-9_]*)\}\s*$")
 #: What a text's ``$`` may start, read left to right, by Python's ``string.Template`` rule
@@ -428,7 +430,27 @@ def resolve(
                 return UNKNOWN
         if raw.startswith("@") or (port_remapping(raw) and vtype.name not in ("str", "any")):
             return _reference(ctx, raw, loc, vtype, what, (allow_ref, no_ref))
+    elif vtype is STR and isinstance(raw, int | float) and not isinstance(raw, bool):
+        other_digits = number_as_text_problem(node, raw)
+        if other_digits is not None:
+            raise Bad(loc.at(f"{what}: {other_digits}"))
     return _check_range(_parsed(vtype, raw, loc, what, param, node), loc, what, param)
+
+
+def number_as_text_problem(node: yaml.Node, number: float) -> str | None:
+    """What is wrong with a plain number written where a text is meant when the text it
+    makes shows other digits than the file (``1.10`` is the float 1.1, ``0x1F`` 31, ``1.5e3``
+    1500.0), or None (``3``, ``2.5``). Refused, as ``0200`` and ``1:30`` are (decided: never
+    a number other than the digits shown): a version ``1.10`` was logged as ``1.1``."""
+    written = str(getattr(node, "value", ""))
+    if not written or str(number) == written:
+        return None
+    if isinstance(node, yaml.ScalarNode) and yaml12_number_problem(node) is not None:
+        return None  # 1_000, 0b11: warned of already (a text to YAML 1.2, decided)
+    return (
+        f"{quoted(written)} is read by YAML as the number {number}, not as written: quote it "
+        f'where a text is meant ("{written}")'
+    )
 
 
 def _item_locs(node: yaml.Node, loc: Loc, raw: object) -> list[Loc] | None:

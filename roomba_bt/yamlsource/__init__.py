@@ -81,8 +81,10 @@ TYPOGRAPHIC_QUOTES = "\u2018\u2019\u201a\u201b\u201c\u201d\u201e\u201f"
 _TYPOGRAPHIC_QUOTE = re.compile(f"(?:^|[-:[{{,])[ \\t]*([{TYPOGRAPHIC_QUOTES}])")
 #: spaces that are not U+0020 (a no-break space, a narrow one, an ideographic one): YAML
 #: reads them as text, so one at the start of a line indents nothing
-_NOT_PLAIN_SPACE = "\u00a0\u1680\u2000-\u200a\u202f\u205f\u3000"
-_SPACE_INDENT = re.compile(f"^[ \t]*([{_NOT_PLAIN_SPACE}])", re.MULTILINE)
+NOT_PLAIN_SPACES = "\u00a0\u1680" + "".join(map(chr, range(0x2000, 0x200B))) + "\u202f\u205f\u3000"
+_SPACE_INDENT = re.compile(f"^[ \t]*([{NOT_PLAIN_SPACES}])", re.MULTILINE)
+#: such a space right after a colon: ``mission:\xa0name`` is one text, no key and value
+_SPACE_AFTER_COLON = re.compile(f":([{NOT_PLAIN_SPACES}])")
 
 
 def named_character(char: str) -> str:
@@ -96,8 +98,10 @@ def lookalike_cause(text: str, line: int, column: int) -> tuple[int, int, str] |
     """Where and what the cause of PyYAML's syntax error at (``line``, ``column``), 1-based,
     is when it is a character that looks like YAML's own: a typographic quote on that line
     (YAML reads ``“${speed}”`` as text, and its ``{`` is the error: "did not find expected
-    ','") or a space that is not a plain one indenting that line or the one before (a
-    no-break space indents nothing: "could not find expected ':'" a line later). None
+    ','"), a space that is not a plain one indenting that line or the one before (a
+    no-break space indents nothing: "could not find expected ':'" a line later) or following
+    a colon there (``mission:\xa0x`` runs on as a text: "mapping values are not allowed" a
+    line later). None
     otherwise: PyYAML's sentence is all there is to say."""
     lines = text.split("\n")
     if 0 < line <= len(lines):
@@ -108,7 +112,78 @@ def lookalike_cause(text: str, line: int, column: int) -> tuple[int, int, str] |
         indent = _SPACE_INDENT.match(lines[number - 1]) if 0 < number <= len(lines) else None
         if indent is not None:
             return number, indent.start(1) + 1, space_indent(indent.group(1))
+    for number in (line, line - 1):  # "mission:\xa0x" is a text running on to the next key
+        after = _SPACE_AFTER_COLON.search(lines[number - 1]) if 0 < number <= len(lines) else None
+        if after is not None:
+            return number, after.start(1) + 1, space_after_colon(after.group(1))
     return None
+
+
+#: PyYAML's ``context`` of a syntax error, as a diagnostic names the structure it began
+_STRUCTURES = {
+    "while parsing a block mapping": "the mapping that starts at",
+    "while parsing a block collection": "the list that starts at",
+    "while parsing a flow mapping": "the { opened at",
+    "while parsing a flow sequence": "the [ opened at",
+}
+
+
+def syntax_context(exc: yaml.MarkedYAMLError, text: str) -> tuple[str, tuple[int, int]] | None:
+    """What to add to a syntax error's problem about where the structure it broke began, and
+    that place (1-based line and column), or None when PyYAML gives no such place. PyYAML
+    says it ("while parsing a flow mapping ... in line 3, column 10"); the problem's own place
+    alone is often a line that looks fine: the ``tree:`` after a ``{`` left open, a list
+    item one space out of line. For a block, the line that broke and the nearest line above
+    it of its kind (a list item, a key) are compared: their indentation is the usual cause."""
+    context, mark = exc.context, exc.context_mark
+    problem_mark = exc.problem_mark
+    if not context or mark is None or problem_mark is None:
+        return None
+    began = (mark.line + 1, mark.column + 1)
+    structure = _STRUCTURES.get(context)
+    if structure is None:  # "while scanning a quoted scalar": PyYAML's own words
+        if not context.startswith("while "):  # "expected a single document": said already
+            return None
+        return f"{context} at {began[0]}:{began[1]}", began
+    said = f"in {structure} {began[0]}:{began[1]}"
+    if structure.startswith("the {") or structure.startswith("the ["):
+        closing = "}" if "{" in structure else "]"
+        return f"{said}: is its {closing} missing?", began
+    hint = indentation_hint(text.split("\n"), problem_mark.line + 1, began[0])
+    return (f"{said}; {hint}" if hint else said), began
+
+
+def indentation_hint(lines: list[str], line: int, first: int) -> str:
+    """``line 6 is indented 3 spaces, the list item on line 5 above it 4: ...``: the line
+    that broke against the nearest line above it (down to ``first``) of its kind, a list
+    item or a key; "" when they line up or there is none."""
+    if not 0 < line <= len(lines):
+        return ""
+    broke = lines[line - 1]
+    stripped = broke.lstrip(" ")
+    item = stripped.startswith("-")
+    for number in range(line - 1, max(first, 1) - 1, -1):
+        above = lines[number - 1]
+        content = above.lstrip(" ")
+        if not content or content.startswith("#") or content.startswith("-") != item:
+            continue
+        indent, other = len(broke) - len(stripped), len(above) - len(content)
+        if indent == other:
+            return ""
+        kind = "list item" if item else "key"
+        return (
+            f"line {line} is indented {indent} spaces, the {kind} on line {number} above it "
+            f"{other}: the entries of one list or mapping start in the same column"
+        )
+    return ""
+
+
+def space_after_colon(char: str) -> str:
+    """What is wrong with a space that is not a plain one after a key's colon."""
+    return (
+        f"{named_character(char)} after ':' is no space to YAML, so the key, the colon and "
+        "the value are one text: write a plain space after the colon"
+    )
 
 
 def typographic_quote(char: str) -> str:
@@ -160,12 +235,48 @@ def read_text(path: Path) -> str:
         raise FileTooLarge(len(data))
     if looks_utf16(data):  # Notepad's "Unicode": "byte 0xff" or "U+0000" said nothing of it
         raise UnicodeDecodeError("utf-8", data, 0, 1, UTF16)
+    for signature, what in DOCUMENT_SIGNATURES:  # a word processor's file, named as one
+        if data.startswith(signature):
+            raise UnicodeDecodeError("utf-8", data, 0, 1, what)
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise UnicodeDecodeError(
+            exc.encoding, data, exc.start, exc.end, f"{exc.reason}{legacy_encoding(data, exc)}"
+        ) from None
     # as Path.read_text: universal newlines (a CRLF file's columns as a LF file's)
-    return data.decode("utf-8").replace("\r\n", "\n").replace("\r", "\n")
+    return text.replace("\r\n", "\n").replace("\r", "\n")
 
 
 #: the reason of the :class:`UnicodeDecodeError` :func:`read_text` raises for UTF-16 text
 UTF16 = "this is UTF-16 text: save it as UTF-8"
+#: how files that are no text start, and the reason :func:`read_text` gives for each (a
+#: teacher's class handed in TextEdit's RTF and Word's .docx as missions: "byte 0x8e" and a
+#: YAML syntax error in line 2 said nothing of what the file was)
+DOCUMENT_SIGNATURES: tuple[tuple[bytes, str], ...] = (
+    (b"{\\rtf", "this is an RTF document (TextEdit's default): save it as plain text, UTF-8"),
+    (b"PK\x03\x04", "this is a ZIP archive, such as a Word (.docx) or OpenDocument file: "
+     "save it as plain text, UTF-8"),
+    (b"%PDF-", "this is a PDF document: a mission is a plain text file, UTF-8"),
+    (b"\x89PNG", "this is a PNG image: a mission is a plain text file, UTF-8"),
+)  # fmt: skip
+#: the reasons that say the whole of what is wrong (no byte of a text to show)
+WHOLE_REASONS = frozenset({UTF16, *(what for _, what in DOCUMENT_SIGNATURES)})
+
+
+def legacy_encoding(data: bytes, exc: UnicodeDecodeError) -> str:
+    """What follows the reason a byte is not UTF-8 when the file reads as Windows-1252 (which
+    Latin-1 files also read as): the character the byte is there, and to save it as UTF-8;
+    "" otherwise."""
+    try:
+        char = data[exc.start : exc.start + 1].decode("cp1252")
+        data.decode("cp1252")
+    except UnicodeDecodeError:
+        return ""
+    return (
+        f"; it reads as {char!r} in Windows-1252 or Latin-1, an older encoding: save the file "
+        "as UTF-8"
+    )
 
 
 def looks_utf16(data: bytes) -> bool:
@@ -204,6 +315,8 @@ def compose(text: str, loader: type[Any] = FAST_LOADER) -> yaml.Node | None:
     composer's "expected a single document")."""
     if _HIDDEN_BREAK.search(text) is not None:
         refuse_hidden_breaks(text)
+    if text.find(BOM, 1) > 0:
+        refuse_inner_boms(text)
     try:
         root = _compose(text, loader)
     except yaml.reader.ReaderError as exc:
@@ -345,6 +458,29 @@ def unprintable(text: str, exc: yaml.reader.ReaderError) -> Refused:
 #: line:col, as every other control character (decided: not read as breaks)
 _HIDDEN_BREAK = re.compile("[\x85\u2028\u2029]")
 _BREAK_NAMES = {"\u2028": "line separator", "\u2029": "paragraph separator"}
+
+
+#: the byte-order mark: YAML skips one at the file's start, and reads one anywhere else as text
+BOM = "\ufeff"
+
+
+def refuse_inner_boms(text: str) -> None:
+    """Raise :class:`Refused` at each byte-order mark after the file's start (the first, the
+    others in its ``more``): two files pasted together leave one, invisible in an editor,
+    and the error was "did not find expected key" a line later."""
+    found = []
+    index = text.find(BOM, 1)
+    while index > 0:
+        line = text.count("\n", 0, index)
+        column = index - (text.rfind("\n", 0, index) + 1)
+        problem = (
+            f"{named_character(BOM)}, a byte-order mark, is allowed only at the start of the "
+            "file (two files pasted together?): delete it (most editors do not show it)"
+        )
+        mark = yaml.Mark("<text>", index, line, column, None, 0)
+        found.append(Refused(problem=problem, problem_mark=mark))
+        index = text.find(BOM, index + 1)
+    raise_every(found)
 
 
 def refuse_hidden_breaks(text: str) -> None:

@@ -104,7 +104,8 @@ def test_a_tab_and_a_byte_that_is_not_utf8_are_placed_and_named(tmp_path: Path) 
     _, (problem,) = compile_mission(latin)
     assert (problem.line, problem.column) == (3, 25)
     assert problem.message == (
-        "mission file is not UTF-8 text: byte 0xe9 (invalid continuation byte)"
+        "mission file is not UTF-8 text: byte 0xe9 at offset 42 (invalid continuation byte; "
+        "it reads as 'é' in Windows-1252 or Latin-1, an older encoding: save the file as UTF-8)"
     )
 
 

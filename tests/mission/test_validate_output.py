@@ -155,6 +155,7 @@ def test_json_lists_every_diagnostic_with_its_chain_and_each_file_verdict(
             {"file": "missions/common/lib/safe_drive.yaml", "line": 2, "column": 11},
             {"file": "missions/delivery/to-kitchen.yaml", "line": 2, "column": 11},
         ],
+        "began_at": None,
         "checked_file": "missions/delivery/to-kitchen.yaml",
     }
     said = (warning["severity"], warning["checked_file"], warning["line"])

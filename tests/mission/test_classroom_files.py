@@ -1,0 +1,192 @@
+"""What a teacher's class of 30 students wrote that a message now meets (session 31, the
+classroom report): a missing space after a colon, indentation and an unclosed ``{``, a
+version ``1.10`` where a text is meant, files saved by a word processor or in an older
+encoding. Each file's bytes are as the students' were."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.cli import main
+from roomba_bt.mission import compile_mission
+
+Capsys = pytest.CaptureFixture[str]
+
+
+def _problems(tmp_path: Path, data: bytes, name: str = "m.yaml") -> list[str]:
+    """``line:column: message`` of each diagnostic of a file holding ``data`` as written."""
+    path = tmp_path / name
+    path.write_bytes(data)
+    _, problems = compile_mission(path)
+    return [f"{p.line}:{p.column}: {p.message}" for p in problems]
+
+
+def test_a_word_and_its_value_without_a_space_say_to_write_one(tmp_path: Path) -> None:
+    """``- mode:safe`` is the text 'mode:safe' to YAML, read as ``package:name``: it was "no
+    installed plugin package is called 'mode'", which sent students looking for plugins."""
+    text = "mission: m\ntree:\n  sequence:\n    - mode:safe\n    - wait:2s\n    - mode safe\n"
+    assert _problems(tmp_path, text.encode()) == [
+        "4:7: unknown node 'mode:safe': 'mode:safe' is one text to YAML: write a space after "
+        "the colon: `mode: safe`",
+        "5:7: unknown node 'wait:2s': 'wait:2s' is one text to YAML: write a space after the "
+        "colon: `wait: 2s`",
+        "6:7: unknown node 'mode safe': write a colon and a space after the word: `mode: safe`",
+    ]
+
+
+def test_a_no_break_space_after_the_colon_is_named(tmp_path: Path) -> None:
+    """Pasted from a web page: the value's colon is followed by U+00A0, no space to YAML."""
+    text = "mission: m\ntree:\n  sequence:\n    - mode: safe\n    - wait:\xa01s\n"
+    assert _problems(tmp_path, text.encode()) == [
+        "5:7: unknown node 'wait:\\xa01s': '\\xa0' (U+00A0 NO-BREAK SPACE) after the colon is "
+        "no space to YAML: write a plain space: `wait: 1s`"
+    ]
+
+
+def test_a_no_break_space_after_a_top_level_colon_is_named_at_its_place(
+    tmp_path: Path,
+) -> None:
+    """``mission:\\xa0x`` runs on into the next line as one text: the error was "mapping
+    values are not allowed in this context" at 2:5, naming neither the space nor line 1."""
+    text = "mission:\xa0nbsp\ntree:\n  sequence:\n    - stop\n"
+    assert _problems(tmp_path, text.encode()) == [
+        "1:9: YAML syntax error: '\\xa0' (U+00A0 NO-BREAK SPACE) after ':' is no space to YAML, "
+        "so the key, the colon and the value are one text: write a plain space after the colon "
+        "(mapping values are not allowed in this context at 2:5)"
+    ]
+
+
+#: (file as written, the line and column of the error, the message)
+STRUCTURE_ERRORS = [
+    pytest.param(
+        "mission: half\nparameters:\n  speed: {type: speed, default: 200 mm/s\ntree:\n"
+        "  sequence:\n    - mode: safe\n",
+        (4, 5, (3, 10)),
+        "did not find expected ',' or '}' (in the { opened at 3:10: is its } missing?)",
+        id="an unclosed brace",
+    ),
+    pytest.param(
+        "mission: mix\ntree:\n  sequence:\n    - mode: safe\n  - stop\n",
+        (5, 3, (3, 3)),
+        "did not find expected key (in the mapping that starts at 3:3; line 5 is indented 2 "
+        "spaces, the list item on line 4 above it 4: the entries of one list or mapping start "
+        "in the same column)",
+        id="a list item one level out",
+    ),
+    pytest.param(
+        "mission: mix\ntree:\n  sequence:\n    - mode: safe\n     - stop\n",
+        (5, 6, (4, 5)),
+        "did not find expected '-' indicator (in the list that starts at 4:5; line 5 is "
+        "indented 5 spaces, the list item on line 4 above it 4: the entries of one list or "
+        "mapping start in the same column)",
+        id="a list item a space in",
+    ),
+    pytest.param(
+        "mission: m\ntree:\n  sequence:\n    - turn:\n        angle: 90deg\n"
+        "       speed: 100 mm/s\n",
+        (6, 8, (4, 7)),
+        "did not find expected key (in the mapping that starts at 4:7; line 6 is indented 7 "
+        "spaces, the key on line 5 above it 8: the entries of one list or mapping start in "
+        "the same column)",
+        id="a key a space out",
+    ),
+]
+
+
+@pytest.mark.parametrize(("text", "where", "problem"), STRUCTURE_ERRORS)
+def test_a_structure_error_says_where_the_structure_began(
+    text: str,
+    where: tuple[int, int, tuple[int, int]],
+    problem: str,
+    tmp_path: Path,
+    capsys: Capsys,
+) -> None:
+    """PyYAML's context ("while parsing a flow mapping ... line 3, column 10") was dropped: the
+    line given (``tree:`` after a ``{`` left open) looked fine. Both places are said, in the
+    message and, the structure's start, in ``--format json``'s ``began_at``."""
+    line, column, began = where
+    assert _problems(tmp_path, text.encode()) == [f"{line}:{column}: YAML syntax error: {problem}"]
+    assert main(["validate", "--format", "json", str(tmp_path / "m.yaml")]) == 2
+    [diagnostic] = json.loads(capsys.readouterr().out)["diagnostics"]
+    assert (diagnostic["line"], diagnostic["column"]) == (line, column)
+    assert diagnostic["began_at"] == {"line": began[0], "column": began[1]}
+
+
+@pytest.mark.parametrize(
+    ("written", "shown"),
+    [("1.10", "1.1"), ("3.10", "3.1"), ("0x1F", "31"), ("1.5e+3", "1500.0")],
+)
+def test_a_number_that_shows_other_digits_is_refused_where_a_text_is_meant(
+    written: str, shown: str, tmp_path: Path
+) -> None:
+    """A version ``1.10`` was logged as ``1.1``, though the docs say a text's place never gets
+    a number other than the digits shown (``01234`` and ``12:30`` were refused already)."""
+    text = (
+        f"mission: m\nparameters:\n  ver: {{type: str, default: {written}}}\n"
+        f"tree:\n  sequence:\n    - log: {written}\n"
+    )
+    said = f"'{written}' is read by YAML as the number {shown}, not as written: quote it where "
+    quote = f'a text is meant ("{written}")'
+    assert _problems(tmp_path, text.encode()) == [
+        f"3:29: parameter ver: {said}{quote}",
+        f"6:12: log.message: {said}{quote}",
+    ]
+
+
+def test_a_number_that_shows_its_own_digits_is_still_a_text(tmp_path: Path) -> None:
+    text = "mission: m\nparameters:\n  ver: {type: str, default: 2.5}\n  n: {type: float, "
+    text += "default: 1.10}\ntree:\n  sequence:\n    - log: 3\n    - log: '${ver}'\n"
+    assert _problems(tmp_path, text.encode()) == []
+
+
+WORD_PROCESSORS = [
+    pytest.param(
+        b"{\\rtf1\\ansi\\ansicpg1252\\cocoartf2709\n\\cocoatextscaling0\\cocoaplatform0",
+        "1:1: mission file is not UTF-8 text: this is an RTF document (TextEdit's default): "
+        "save it as plain text, UTF-8",
+        id="RTF",
+    ),
+    pytest.param(
+        b"PK\x03\x04\x14\x00\x00\x00\x00\x00\x8e:\x86]word/document.xml",
+        "1:1: mission file is not UTF-8 text: this is a ZIP archive, such as a Word (.docx) or "
+        "OpenDocument file: save it as plain text, UTF-8",
+        id="docx",
+    ),
+    pytest.param(
+        b"mission: cp1252\ndescription: \x93quoted\x94\ntree: {log: x}\n",
+        "2:14: mission file is not UTF-8 text: byte 0x93 at offset 29 (invalid start byte; it "
+        "reads as '\u201c' in Windows-1252 or Latin-1, an older encoding: save the file as "
+        "UTF-8)",
+        id="Windows-1252",
+    ),
+    pytest.param(
+        b'mission: latin1\ndescription: "Zo\xeb f\xe4hrt"\ntree: {log: x}\n',
+        "2:17: mission file is not UTF-8 text: byte 0xeb at offset 32 (invalid continuation "
+        "byte; it reads as '\u00eb' in Windows-1252 or Latin-1, an older encoding: save the "
+        "file as UTF-8)",
+        id="Latin-1",
+    ),
+    pytest.param(
+        b"mission: midbom\n\xef\xbb\xbftree:\n  sequence:\n    - stop\n",
+        "2:1: '\\ufeff' (U+FEFF ZERO WIDTH NO-BREAK SPACE), a byte-order mark, is allowed only "
+        "at the start of the file (two files pasted together?): delete it (most editors do not "
+        "show it)",
+        id="a BOM in the middle",
+    ),
+]
+
+
+@pytest.mark.parametrize(("data", "problem"), WORD_PROCESSORS)
+def test_a_word_processors_file_or_an_old_encoding_is_named(
+    data: bytes, problem: str, tmp_path: Path
+) -> None:
+    """UTF-16 was named ("save it as UTF-8"); RTF was a YAML syntax error on line 2, a .docx
+    "byte 0x8e", a Windows-1252 quote "byte 0x93", a BOM mid-file "did not find expected key"."""
+    assert _problems(tmp_path, data) == [problem]
+
+
+def test_a_bom_at_the_start_is_still_fine(tmp_path: Path) -> None:
+    assert _problems(tmp_path, b"\xef\xbb\xbfmission: m\ntree: {log: x}\n") == []
