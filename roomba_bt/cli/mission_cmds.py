@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import shutil
 import sys
 from pathlib import Path
@@ -210,12 +211,20 @@ def validate_command(args: argparse.Namespace) -> int:
         print(f"roomba-bt validate: {named}", file=sys.stderr)
         return ExitCode.INVALID
     checked: list[report.Checked] = []
-    for file in args.files:
-        found = mission_file(file)
+    paths: list[str] = []  # each checked file's path, "" for one that could not be read
+    for file in (each for given in args.files for each in files_under(given)):
+        found = (f"{file}: {_NO_MISSIONS}",) if file and os.path.isdir(file) else mission_file(file)
+        paths.append("" if isinstance(found, tuple) else found)
         if isinstance(found, tuple):
             checked.append(report.Checked(file, problem=found[0]))
             continue
         checked.append(_checked(file, found, params, args))
+    if len(checked) > 1 and params:  # each file its own -p values: the batch's rule
+        declared = {name for one in checked for name in one.parameters}
+        for index, (one, found) in enumerate(zip(checked, paths, strict=True)):
+            own = {k: v for k, v in params.items() if k in one.parameters or k not in declared}
+            if found and own != params:
+                checked[index] = _checked(one.file, found, own, args)
     if args.format != "text":
         for one in checked:  # said on stderr too, as in text: a reader of the log sees it
             if one.problem is not None:
@@ -228,6 +237,28 @@ def validate_command(args: argparse.Namespace) -> int:
     else:
         report.print_text(checked, strict=args.strict, quiet=bool(args.quiet))
     return report.exit_code(checked, args.strict)
+
+
+#: what a folder given to ``validate`` with no mission file in it is
+_NO_MISSIONS = "a folder with no .yaml or .yml file in it (folders are read recursively)"
+
+
+def files_under(given: str) -> list[str]:
+    """``validate``'s file argument as the files it names: a folder as every ``.yaml`` and
+    ``.yml`` file under it, at any depth, in the order of their paths (as ``git ls-files``
+    lists them), hidden files and folders (``.git``) left out; anything else as itself. A
+    folder needs no shell list: ``$(git ls-files ...)`` split "Zoë Müller (final).yaml" at
+    its spaces and gave it octal-escaped (docs/ci.md)."""
+    if not given or not os.path.isdir(given):  # "" is no folder (Path("") is "."), and a
+        return [given]  # folder the user cannot enter is said by the file's own check
+    folder = Path(given)
+    found = []
+    for parent, folders, names in os.walk(folder):
+        folders[:] = [name for name in folders if not name.startswith(".")]
+        inside = Path(parent).relative_to(folder)
+        found += [(inside / name).as_posix() for name in names
+                  if name.endswith((".yaml", ".yml")) and not name.startswith(".")]  # fmt: skip
+    return [os.path.join(given, name) for name in sorted(found)] or [given]
 
 
 def _checked(file: str, found: str, params: dict[str, str], args: argparse.Namespace) -> Checked:
@@ -252,7 +283,8 @@ def _checked(file: str, found: str, params: dict[str, str], args: argparse.Names
         baud=args.baud,
         permissions=permissions(args, found),
     )
-    return Checked(file, validation.diagnostics, includes=validation.includes)
+    return Checked(file, validation.diagnostics, includes=validation.includes,
+                   parameters=validation.parameters)  # fmt: skip
 
 
 def show_command(args: argparse.Namespace) -> int:

@@ -40,12 +40,20 @@ class Checked:
     """One file argument of ``validate`` and what its check found: its diagnostics (errors
     and warnings, in files it includes too), or ``problem`` when no such file exists; and
     ``includes``, the files it includes (JSON's reverse view: which missions a library
-    reaches)."""
+    reaches); ``parameters``, the names it declares (which ``-p`` values it takes in a
+    batch)."""
 
     file: str
     diagnostics: list[Diagnostic] = field(default_factory=list)
     problem: str | None = None
     includes: tuple[str, ...] = ()
+    parameters: tuple[str, ...] = ()
+
+    @property
+    def problem_said(self) -> str:
+        """``problem`` in its own words, without the file's name it starts with."""
+        problem = self.problem or ""
+        return problem.removeprefix(f"{self.file}: ").removeprefix(f"{self.file!r}: ")
 
     def count(self, severity: str) -> int:
         return sum(d.severity == severity for d in self.diagnostics) + (
@@ -64,8 +72,7 @@ class Checked:
         with what failed it, its own count and each included file's."""
         if self.problem is not None:  # its own words: a log kept from stdout alone, or JSON,
             # has no "above" to point to (the stderr line says it with the command's name)
-            reason = self.problem.removeprefix(f"{self.file}: ").removeprefix(f"{self.file!r}: ")
-            return f"failed (cannot read: {escaped(reason, ANY_CONTROL)})"
+            return f"failed (cannot read: {escaped(self.problem_said, ANY_CONTROL)})"
         failing = self.failing(strict)
         if not failing:
             return "ok, with warnings" if self.diagnostics else "ok"
@@ -147,6 +154,13 @@ def print_text(checked: list[Checked], *, strict: bool, quiet: bool) -> None:
         if one.failed(strict) or not quiet:
             # one line: a file's name may hold "\n"
             print(f"{escaped(one.file, ANY_CONTROL)}: {one.verdict(strict)}")
+    _print_summary(checked, strict=strict, quiet=quiet)
+
+
+def _print_summary(checked: list[Checked], *, strict: bool, quiet: bool) -> None:
+    said = summary(checked, strict=strict, quiet=quiet)
+    if said is not None:
+        print(said)
 
 
 def _unseen(diagnostics: list[Diagnostic], seen: set[Diagnostic]) -> list[Diagnostic]:
@@ -181,8 +195,9 @@ def print_json(checked: list[Checked], *, strict: bool) -> None:
             "diagnostics_omitted": max(0, len(one.diagnostics) - MAX_REPORTED),
             "includes": list(one.includes),
         }
-        if one.problem is not None:
+        if one.problem is not None:  # a diagnostic too: a program reads the reason there
             entry["problem"] = one.problem
+            diagnostics.append({**_problem_as_json(one), "checked_file": one.file})
         files.append(entry)
         diagnostics += [
             {**diagnostic_as_json(d), "checked_file": one.file}
@@ -191,10 +206,48 @@ def print_json(checked: list[Checked], *, strict: bool) -> None:
     document = {
         "strict": strict,
         "exit_code": int(exit_code(checked, strict)),
+        "summary": dict(zip(("files", "ok", "warnings_only", "errors"), tally(checked),
+                            strict=True)),
         "files": files,
         "diagnostics": diagnostics,
-    }
+    }  # fmt: skip
     print(json.dumps(document, indent=2))
+
+
+def _problem_as_json(one: Checked) -> dict[str, Any]:
+    """A file argument that is no file to read (missing, a folder with no mission, a FIFO)
+    as a diagnostic: at no line or column (null), the reason its message."""
+    return {
+        "file": one.file,
+        "line": None,
+        "column": None,
+        "severity": "error",
+        "message": one.problem_said,
+        "yaml_path": "",
+        "included_from": [],
+        "began_at": None,
+    }
+
+
+def tally(checked: list[Checked]) -> tuple[int, int, int, int]:
+    """How many files were checked, and how many of them are ok, have warnings only, have
+    errors (or could not be read)."""
+    errors = sum(bool(c.problem is not None or c.count("error")) for c in checked)
+    warned = sum(c.problem is None and not c.count("error") and bool(c.count("warning"))
+                 for c in checked)  # fmt: skip
+    return len(checked), len(checked) - errors - warned, warned, errors
+
+
+def summary(checked: list[Checked], *, strict: bool, quiet: bool) -> str | None:
+    """The closing line of a batch (more than one file): ``31 files: 28 ok, 1 with warnings
+    only, 2 with errors``; None for one file, and under ``quiet`` when every file passed
+    (nothing else is printed then either)."""
+    files, ok, warned, errors = tally(checked)
+    if files < 2 or (quiet and not errors and not (strict and warned)):
+        return None
+    failing = " (failed: --strict)" if strict and warned else ""
+    said = f"{warned:,} with warnings only{failing}, {errors:,} with errors"
+    return f"{files:,} files: {ok:,} ok, {said}"
 
 
 def diagnostic_as_json(d: Diagnostic) -> dict[str, Any]:
@@ -241,6 +294,7 @@ def print_github(checked: list[Checked], *, strict: bool, quiet: bool) -> None:
             print(_annotation("error", site.file, site.line, site.column, said))
         if one.failed(strict) or not quiet:
             print(f"{escaped(one.file, ANY_CONTROL)}: {one.verdict(strict)}")
+    _print_summary(checked, strict=strict, quiet=quiet)
 
 
 def _annotation(severity: str, file: str, line: int, column: int, message: str) -> str:

@@ -336,10 +336,13 @@ class FileValidation:
     """What :func:`validate_file` found in one file: its diagnostics, errors and warnings,
     and ``includes``, every file it includes, directly or through others, named as the
     diagnostics name them, in the order first reached: a CI job reads which missions a
-    changed library reaches from it (``validate --format json``, docs/ci.md)."""
+    changed library reaches from it (``validate --format json``, docs/ci.md); and
+    ``parameters``, the names the file declares (which of ``validate -p``'s values a file of
+    a batch takes)."""
 
     diagnostics: list[Diagnostic]
     includes: tuple[str, ...]
+    parameters: tuple[str, ...] = ()
 
 
 def validate_file(
@@ -360,8 +363,9 @@ def validate_file(
         path, params, profile, baud, registry, _has_tree(path), permissions
     )
     warnings = mission.warnings if mission is not None else ()
-    includes = tuple(loader.include_sites) if loader is not None else ()
-    return FileValidation([*diagnostics, *warnings], includes)
+    if loader is None:
+        return FileValidation([*diagnostics, *warnings], ())
+    return FileValidation([*diagnostics, *warnings], tuple(loader.include_sites), loader.parameters)
 
 
 def validate_files(

@@ -189,6 +189,8 @@ class Loader:
         self._included: dict[Path, Loc] = {}
         #: every file read: the mission file, then each include and plugin file as reached
         self.files: list[Path] = []
+        #: the parameters the compiled file declares (``validate``'s ``-p`` over many files)
+        self.parameters: tuple[str, ...] = ()
 
     @property
     def include_sites(self) -> dict[str, Loc]:
@@ -219,6 +221,7 @@ class Loader:
         # the parameters first: a blackboard key's initial value may be one ("${speed}"),
         # and read before them it was an "unknown parameter" the declaration had just made
         params = bind_parameters(self.ctx, sections.get("parameters"), overrides, root_loc)
+        self.parameters = tuple(params)
         self.nodes.global_env = params
         self._file_sections(path, sections)
         name, description = self._names(path, sections)

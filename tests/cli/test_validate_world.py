@@ -41,7 +41,11 @@ def worlds(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
 
 def test_a_good_world_validates(worlds: Path, capsys: Capsys) -> None:
     assert main(["validate", "worlds/lab.yaml", "dock"]) == 0
-    assert capsys.readouterr().out.splitlines() == ["worlds/lab.yaml: ok", "dock: ok"]
+    assert capsys.readouterr().out.splitlines() == [
+        "worlds/lab.yaml: ok",
+        "dock: ok",
+        "2 files: 2 ok, 0 with warnings only, 0 with errors",
+    ]
 
 
 def test_a_bad_world_is_every_problem_at_its_place(worlds: Path, capsys: Capsys) -> None:
@@ -56,6 +60,7 @@ def test_a_bad_world_is_every_problem_at_its_place(worlds: Path, capsys: Capsys)
         "(did you mean 'facing'?)",
         "worlds/bad.yaml: failed (3 errors)",
         "worlds/lab.yaml: ok",
+        "2 files: 1 ok, 0 with warnings only, 1 with errors",
     ]
     assert err == ""
 

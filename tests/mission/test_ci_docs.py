@@ -149,3 +149,30 @@ def test_the_reverse_view_lists_every_file_that_includes_the_library(repo: Path)
     assert listed() == expected
     break_the_library(repo)  # the missions fail now: still listed, their includes read
     assert listed() == expected
+
+
+#: a student's file name: spaces, brackets and letters git quotes (``core.quotePath``)
+STUDENT = "missions/delivery/s26 Zoë Müller mission (final) v2.yaml"
+#: compiles, with a warning: a drive in Full mode with no cliff check (``--strict`` fails it)
+WARNED = "tree:\n  sequence:\n    - mode: full\n    - drive: {velocity: 100 mm/s, distance: 1 m}\n"
+
+
+@pytest.mark.parametrize(
+    ("text", "code"),
+    [("tree: {mde: safe}\n", 2), (WARNED, 7)],
+    ids=["an error: 2", "a warning alone: 7"],
+)
+def test_the_actions_step_checks_a_name_with_spaces_and_accents_as_one_file(
+    text: str, code: int, repo: Path
+) -> None:
+    """``$(git ls-files 'missions/*.yaml')`` made "s26 Zoë Müller ... v2.yaml" six missing
+    files (split at the spaces, the letters octal-escaped), and ``xargs`` would give 123 for
+    an error and a warning alike: the step as written checks the file, exit 2 or 7."""
+    (repo / STUDENT).write_text(text, encoding="utf-8")
+    subprocess.run(["git", "add", "."], cwd=repo, check=True)
+    done = run_in(repo, ["bash", "-e", "-c", validate_step()])
+    assert done.returncode == code, done.stdout + done.stderr
+    assert "no such mission file" not in done.stdout + done.stderr
+    annotated = {line.split(",")[0] for line in done.stdout.splitlines() if line[:2] == "::"}
+    assert annotated == {"::error file=missions/delivery/s26 Zoë Müller mission (final) v2.yaml"}
+    assert done.stdout.splitlines()[-1].startswith("5 files: 4 ok, ")  # the team's 4 and it

@@ -190,3 +190,58 @@ def test_a_word_processors_file_or_an_old_encoding_is_named(
 
 def test_a_bom_at_the_start_is_still_fine(tmp_path: Path) -> None:
     assert _problems(tmp_path, b"\xef\xbb\xbfmission: m\ntree: {log: x}\n") == []
+
+
+def test_a_folder_is_every_yaml_file_under_it_in_path_order(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
+) -> None:
+    """``validate submissions/`` was "a directory, not a mission file": a class's folder is
+    every .yaml and .yml file under it, at any depth, hidden ones left out; a folder with none
+    is an error that names it."""
+    monkeypatch.chdir(tmp_path)
+    for name, text in {
+        "class/b/zoë müller.yml": "tree: wall\n",
+        "class/a.yaml": "tree: {mde: safe}\n",
+        "class/notes.txt": "not a mission",
+        "class/.git/x.yaml": "not: [checked",
+        "class/.hidden.yaml": "not: [checked",
+        "empty/readme.md": "",
+    }.items():
+        (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / name).write_text(text, encoding="utf-8")
+    assert main(["validate", "class", "empty"]) == 2
+    out, err = capsys.readouterr()
+    assert out.splitlines()[1:] == [
+        "class/a.yaml: failed (1 error)",
+        "class/b/zoë müller.yml: ok",
+        "empty: failed (cannot read: a folder with no .yaml or .yml file in it (folders are "
+        "read recursively))",
+        "3 files: 1 ok, 0 with warnings only, 2 with errors",
+    ]
+    assert err == (
+        "roomba-bt validate: empty: a folder with no .yaml or .yml file in it (folders are read "
+        "recursively)\n"
+    )
+
+
+def test_p_in_a_batch_sets_the_parameter_where_a_file_declares_it(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
+) -> None:
+    """``-p speed=...`` for 30 files failed each file that declares no ``speed``, an annotation
+    on its line 1 for a command-line choice. The rule: a file takes the values of the
+    parameters it declares; one no file of the batch declares (a typo) is said in each."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "fast.yaml").write_text(
+        "parameters: {speed: {type: speed, default: 100 mm/s}}\n"
+        "tree: {sequence: [mode: safe, drive: {velocity: '${speed}', distance: 1 m}]}\n"
+    )
+    (tmp_path / "plain.yaml").write_text("tree: wall\n")
+    assert main(["validate", "-p", "speed=300mm/s", "fast.yaml", "plain.yaml"]) == 0
+    capsys.readouterr()
+    assert main(["validate", "-p", "speed=9000mm/s", "fast.yaml", "plain.yaml"]) == 2
+    assert "fast.yaml:2:49: drive: velocity 9000 mm/s is out of range" in capsys.readouterr().out
+    assert main(["validate", "-p", "sped=300mm/s", "fast.yaml", "plain.yaml"]) == 2
+    out = capsys.readouterr().out
+    assert "fast.yaml:1:1: unknown parameter 'sped' set on the command line (did you mean " in out
+    assert "plain.yaml:1:1: unknown parameter 'sped' set on the command line;" in out
+    assert main(["validate", "-p", "speed=300mm/s", "plain.yaml"]) == 2  # one file: as before

@@ -28,10 +28,11 @@ def test_validate_reports_every_file(mission_file: Callable[..., Path], capsys: 
     bad = mission_file("tree: {wal: {}}\n", "bad.yaml")
     assert main(["validate", str(bad), str(good)]) == 2
     out, _ = capsys.readouterr()
-    bad_line, bad_verdict, good_line = out.strip().splitlines()
+    bad_line, bad_verdict, good_line, counts = out.strip().splitlines()
     assert bad_line.endswith("bad.yaml:1:8: unknown node 'wal' (did you mean 'wall'?) [tree.wal]")
     assert bad_verdict == f"{bad}: failed (1 error)"  # each file's verdict, a failed one too
     assert good_line == f"{good}: ok"
+    assert counts == "2 files: 1 ok, 0 with warnings only, 1 with errors"  # a batch's count
 
 
 def test_validate_takes_parameters(mission_file: Callable[..., Path], capsys: Capsys) -> None:

@@ -127,8 +127,9 @@ def test_command_line_paths_that_are_no_file_say_what_they_are(
     (tmp_path / "loop2.yaml").symlink_to("loop1.yaml")
     assert main(["validate", "", "-", "broken.yaml", "loop1.yaml", "ok"]) == 2
     out, err = capsys.readouterr()
-    verdicts = [line.partition(": failed (cannot read: ")[0] for line in out.splitlines()]
+    *verdicts, counts = [line.partition(": failed (cannot read: ")[0] for line in out.splitlines()]
     assert verdicts == ["''", "-", "broken.yaml", "loop1.yaml", "ok"]
+    assert counts == "5 files: 0 ok, 0 with warnings only, 5 with errors"
     assert out.splitlines()[0] == (
         "'': failed (cannot read: an empty path; give a mission file or a shipped mission's "
         "name (`roomba-bt missions` lists them))"

@@ -63,6 +63,7 @@ def test_a_library_error_is_said_once_and_every_mission_it_breaks_is_named(
         "missions/common/lib/escapes.yaml: failed (1 error)",
         "missions/common/lib/safe_drive.yaml: failed (an included file has errors: 1 error in "
         "missions/common/lib/escapes.yaml, included at line 2)",
+        "4 files: 0 ok, 0 with warnings only, 4 with errors",
     ]
 
 
@@ -94,7 +95,12 @@ def test_quiet_leaves_out_the_files_that_passed_not_those_that_failed(
     assert main(["validate", "-q", *SHARED, "ok.yaml", "missions/delivery/to-kitchen.yaml"]) == 2
     out = capsys.readouterr().out
     assert "ok.yaml" not in out
-    assert out.splitlines()[-1].startswith("missions/delivery/to-kitchen.yaml: failed (")
+    verdict, counts = out.splitlines()[-2:]
+    assert verdict.startswith("missions/delivery/to-kitchen.yaml: failed (")
+    assert counts == "2 files: 1 ok, 0 with warnings only, 1 with errors"  # the count stays
+    (repo / "ok2.yaml").write_text("tree: wall\n")
+    assert main(["validate", "-q", "ok.yaml", "ok2.yaml"]) == 0
+    assert capsys.readouterr().out == ""  # all passed: nothing, as before
 
 
 def test_strict_fails_on_warnings_with_exit_7_and_errors_stay_2(
@@ -142,7 +148,20 @@ def test_json_lists_every_diagnostic_with_its_chain_and_each_file_verdict(
         ("missing.yaml", "failed", 1, 0),
     ]
     assert "no such mission file" in report["files"][2]["problem"]
-    library, warning = report["diagnostics"]
+    assert report["summary"] == {"files": 3, "ok": 0, "warnings_only": 1, "errors": 2}
+    library, warning, missing = report["diagnostics"]
+    assert missing == {  # the reason, not only the count: at no line (null)
+        "file": "missing.yaml",
+        "line": None,
+        "column": None,
+        "severity": "error",
+        "message": missing["message"],
+        "yaml_path": "",
+        "included_from": [],
+        "began_at": None,
+        "checked_file": "missing.yaml",
+    }
+    assert missing["message"].startswith("no such mission file")
     assert library == {
         "file": "missions/common/lib/escapes.yaml",
         "line": 7,
