@@ -422,14 +422,14 @@ class Loader:
         if text.startswith(SHIPPED_PREFIX) and not in_shipped_library(target):
             self.ctx.error(
                 iloc.at(
-                    f"included file {text!r} is not in the shipped library; "
+                    f"included file {_written(text)} is not in the shipped library; "
                     f"it holds {', '.join(shipped_library_files()) or 'nothing'}"
                 )
             )
             return False
         unreadable = _unreadable(target)
         if unreadable is not None:
-            self.ctx.error(iloc.at(f"cannot read included file {text!r}: {unreadable}"))
+            self.ctx.error(iloc.at(f"cannot read included file {_written(text)}: {unreadable}"))
             return False
         if not target.is_file():
             self.ctx.error(iloc.at(_not_a_file(path, text, target)))
@@ -463,7 +463,9 @@ class Loader:
             return False
         if first.file == iloc.file:
             self.ctx.error(
-                iloc.at(f"included file {text!r} is included twice (first at line {first.line})")
+                iloc.at(
+                    f"included file {_written(text)} is included twice (first at line {first.line})"
+                )
             )
         return True
 
@@ -478,7 +480,7 @@ class Loader:
         # library with a stray tree: is a library, its subtrees read, the tree: an error there
         if _is_mission(root, ("mission", "tree")) and not _is_mission(root, ("subtrees",)):
             self.ctx.error(iloc.at(
-                f"included file {text!r} is a mission (it has mission: or tree:), not a "
+                f"included file {_written(text)} is a mission (it has mission: or tree:), not a "
                 f"library: an included file may hold only {', '.join(_INCLUDED_KEYS)}"
             ))  # fmt: skip
             return False
@@ -486,7 +488,9 @@ class Loader:
             root,
             root_loc,
             _INCLUDED_KEYS,
-            not_a_mission=iloc.at(_not_a_mission(f"included file {text!r}", _INCLUDED_KEYS)),
+            not_a_mission=iloc.at(
+                _not_a_mission(f"included file {_written(text)}", _INCLUDED_KEYS)
+            ),
             called="an included file",
             unknown_key=lambda key: (
                 f"an included file may only hold {', '.join(_INCLUDED_KEYS)}; found {key!r}"
@@ -548,7 +552,9 @@ class Loader:
             pnode, _, ploc = fields["parameters"]
             for pname, pvalue, pkloc, pvloc in mapping(pnode, ploc, "parameters"):
                 try:
-                    vtype, default, has_default, _ = param_decl(self.ctx, pvalue, pvloc, pname)
+                    vtype, default, has_default, _ = param_decl(
+                        self.ctx, pvalue, pvloc, pname, pkloc
+                    )
                 except Bad as bad:
                     self.ctx.report(bad)
                     broken.add(pname)  # not reported again at its uses and arguments
@@ -580,7 +586,7 @@ def bind_parameters(
         items = _parameter_entries(ctx, section, env, broken)
         for name, value, key_loc, vloc in items:
             try:
-                vtype, default, has_default, _ = param_decl(ctx, value, vloc, name)
+                vtype, default, has_default, _ = param_decl(ctx, value, vloc, name, key_loc)
             except Bad as bad:
                 ctx.report(bad)
                 env[name] = Bound(STR, UNKNOWN, "?")  # a use reads "unknown": no type check
@@ -675,12 +681,13 @@ def _parameter_entries(
 
 
 def param_decl(
-    ctx: Context, node: yaml.Node, loc: Loc, name: str
+    ctx: Context, node: yaml.Node, loc: Loc, name: str, name_loc: Loc
 ) -> tuple[ValueType, Any, bool, str]:
     """A parameter's declaration (the mission's or a subtree's): its type, default (when it
-    has one: the third item) and doc. Raises :class:`Bad`."""
+    has one: the third item) and doc; ``name_loc``, where its name is written. Raises
+    :class:`Bad`."""
     if not _IDENT.match(name):
-        raise Bad(loc.at(f"parameter name {name!r} must be snake_case"))
+        raise Bad(name_loc.at(f"parameter name {name!r} must be snake_case{_snake_hint(name)}"))
     fields = known_fields(node, loc, f"parameter {name!r}", ("type", "default", "doc", "choices"))
     if "type" not in fields:
         raise Bad(loc.at(f"parameter {name!r} needs a type (one of {', '.join(_PARAM_TYPES)})"))
@@ -787,7 +794,7 @@ def _outside_message(
         else ""
     )
     return (
-        f"{what} {text!r} is outside the mission's folder ({_shown_path(mission_folder)}), "
+        f"{what} {_written(text)} is outside the mission's folder ({_shown_path(mission_folder)}), "
         f"the shipped library and the include folders granted ({folders}); allow its folder "
         f"with {allow}{every}"
     )
@@ -807,30 +814,70 @@ def _not_a_file(path: Path, text: str, target: Path) -> str:
     most likely meant (``lib\\b.yaml`` written the Windows way, ``lib/B.yaml`` in the wrong
     case: both found on Windows, not here)."""
     if target.is_dir():
-        return f"included file {text!r} is a directory, not a file: name a .yaml file in it"
+        return f"included file {_written(text)} is a directory, not a file: name a .yaml file in it"
     if target.exists():  # a pipe, a device: no file to read (it "was not found")
-        return f"included file {text!r} is not a regular file; an include is a .yaml file"
+        return f"included file {_written(text)} is not a regular file; an include is a .yaml file"
     slashed = text.replace("\\", "/")
+    if _WINDOWS_ABSOLUTE.match(text):
+        return (
+            f"included file {_written(text)} not found: an absolute Windows path names a file "
+            "on one computer only; write the path relative to the including file, with /"
+        )
     if slashed != text and (path.parent / slashed).is_file():
         return (
-            f"included file {text!r} not found; did you mean {slashed!r}? (paths are written "
-            "with /, on Windows too)"
+            f"included file {_written(text)} not found; did you mean {slashed!r}? (paths are "
+            "written with /, on Windows too)"
         )
-    if target.parent.is_dir():
-        same = sorted(p.name for p in target.parent.iterdir()
-                      if p.name.lower() == target.name.lower() and p.is_file())  # fmt: skip
-        if same:
-            meant = text[: len(text) - len(target.name)] + same[0]
-            return (
-                f"included file {text!r} not found; did you mean {meant!r}? (names are "
-                "case-sensitive)"
-            )
+    meant = _near_path(path.parent, slashed)
+    if meant is not None:
+        why = ("names are case-sensitive" if meant.lower() == slashed.lower() else
+               "a space at an end of a name" if meant == slashed.strip() else
+               "the name ends in .yaml")  # fmt: skip
+        return f"included file {_written(text)} not found; did you mean {meant!r}? ({why})"
     looked = _shown_path(target)  # where "../lib/x.yaml" led, unless the text says it
     looked_for = f"looked for {looked}: " if looked != text else ""
     return (
-        f"included file {text!r} not found ({looked_for}paths are relative to the including "
-        f"file; the shipped docking library is {DOCKING_LIBRARY})"
+        f"included file {_written(text)} not found ({looked_for}paths are relative to the "
+        f"including file; the shipped docking library is {DOCKING_LIBRARY})"
     )
+
+
+#: ``C:\\Users\\...`` or ``D:/lab/...``: a path on one Windows computer
+_WINDOWS_ABSOLUTE = re.compile(r"[A-Za-z]:[\\/]")
+
+
+def _written(text: str) -> str:
+    """A path as a message quotes it: ``repr``'s quotes and escapes, but each backslash as the
+    file writes it (``'lib\\moves.yaml'``, doubled, sent a student searching the file for two)."""
+    return repr(text).replace("\\\\", "\\")
+
+
+def _near_path(folder: Path, text: str) -> str | None:
+    """The file ``text`` (relative to ``folder``, written with /) most likely meant when it
+    names none: each step found again with another case (``S55_lib/Moves.yaml``, found on
+    Windows and macOS), without a space at its ends, or the last one with ``.yaml`` added;
+    None when a step has no such match."""
+    here = folder
+    found: list[str] = []
+    steps = text.split("/")
+    for index, step in enumerate(steps):
+        if step in ("", ".", "..") or (here / step).exists():
+            here /= step
+            found.append(step)
+            continue
+        last = index == len(steps) - 1
+        try:
+            names = sorted(p.name for p in here.iterdir()) if here.is_dir() else []
+        except OSError:  # a folder the user cannot list: nothing to offer
+            return None
+        same = [name for name in names
+                if name.lower() == step.lower() or name == step.strip()
+                or (last and name == f"{step}.yaml")]  # fmt: skip
+        if not same:
+            return None
+        here /= same[0]
+        found.append(same[0])
+    return "/".join(found) if here.is_file() else None
 
 
 def _not_a_plugin_file(text: str, target: Path) -> str | None:
@@ -904,10 +951,18 @@ def _new_name(
 ) -> None:
     """A name a file declares: snake_case, and not declared before (here or in an include)."""
     if not _IDENT.match(name):
-        raise Bad(key_loc.at(f"{called} {name!r} must be snake_case"))
+        raise Bad(key_loc.at(f"{called} {name!r} must be snake_case{_snake_hint(name)}"))
     if name in taken:
         first = taken[name].loc
         raise Bad(key_loc.at(f"{what} {name!r} {verb} twice (first at {first.file}:{first.line})"))
+
+
+def _snake_hint(name: str) -> str:
+    """`` (write 'my_speed')`` for ``MySpeed``, ``my-speed`` or ``my speed``; "" when no
+    snake_case spelling of it is plain."""
+    words = re.sub(r"(?<=[a-z0-9])(?=[A-Z])", "_", name.strip())
+    snake = re.sub(r"[-\s]+", "_", words).lower()
+    return f" (write {snake!r})" if snake != name and _IDENT.match(snake) else ""
 
 
 def _named_file(path: Path, text: str) -> Path:

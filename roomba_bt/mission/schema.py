@@ -231,10 +231,15 @@ def mission_schema(registry: Registry | None = None) -> dict[str, Any]:
             "include": {"type": "array", "items": {"type": "string"}},
             "subtrees": {
                 "type": "object",
+                "propertyNames": _SNAKE_CASE,
                 "additionalProperties": {
                     "type": "object",
                     "properties": {
-                        "parameters": {"type": "object", "additionalProperties": parameter},
+                        "parameters": {
+                            "type": "object",
+                            "additionalProperties": parameter,
+                            "propertyNames": _SNAKE_CASE,
+                        },
                         "tree": _NODE,
                         "doc": {"type": "string"},
                     },

@@ -245,3 +245,69 @@ def test_p_in_a_batch_sets_the_parameter_where_a_file_declares_it(
     assert "fast.yaml:1:1: unknown parameter 'sped' set on the command line (did you mean " in out
     assert "plain.yaml:1:1: unknown parameter 'sped' set on the command line;" in out
     assert main(["validate", "-p", "speed=300mm/s", "plain.yaml"]) == 2  # one file: as before
+
+
+@pytest.fixture
+def library(tmp_path: Path) -> Path:
+    """A student's folder: ``s55_lib/moves.yaml`` defines ``wiggle``."""
+    (tmp_path / "s55_lib").mkdir()
+    (tmp_path / "s55_lib" / "moves.yaml").write_text("subtrees: {wiggle: {tree: {turn: 10deg}}}\n")
+    return tmp_path
+
+
+@pytest.mark.parametrize(
+    ("written", "said"),
+    [
+        ("s55_lib\\\\moves.yaml", "'s55_lib\\moves.yaml' not found; did you mean "
+         "'s55_lib/moves.yaml'? (paths are written with /, on Windows too)"),
+        ("S55_lib/moves.yaml", "'S55_lib/moves.yaml' not found; did you mean "
+         "'s55_lib/moves.yaml'? (names are case-sensitive)"),
+        ("s55_lib/Moves.yaml", "'s55_lib/Moves.yaml' not found; did you mean "
+         "'s55_lib/moves.yaml'? (names are case-sensitive)"),
+        ("'s55_lib/moves.yaml '", "'s55_lib/moves.yaml ' not found; did you mean "
+         "'s55_lib/moves.yaml'? (a space at an end of a name)"),
+        ("s55_lib/moves", "'s55_lib/moves' not found; did you mean 's55_lib/moves.yaml'? (the "
+         "name ends in .yaml)"),
+        ("C:\\\\Users\\\\ana\\\\lib.yaml", "'C:\\Users\\ana\\lib.yaml' not found: an absolute "
+         "Windows path names a file on one computer only; write the path relative to the "
+         "including file, with /"),
+    ],
+    ids=["backslash", "folder case", "file case", "trailing space", "no .yaml", "C:"],
+)  # fmt: skip
+def test_an_include_not_found_names_what_was_likely_meant_as_written(
+    written: str, said: str, library: Path
+) -> None:
+    """The message showed a backslash doubled (a student searched the file for ``\\\\``), and
+    gave a "did you mean" for a file name in the wrong case only: not for a folder's, a space
+    at the end, a missing .yaml, nor a Windows path from another computer."""
+    text = f'mission: m\ninclude: ["{written}"]\ntree: {{subtree: wiggle}}\n'
+    if written.startswith("'"):
+        text = f"mission: m\ninclude: [{written}]\ntree: {{subtree: wiggle}}\n"
+    problems = _problems(library, text.encode())
+    assert problems[0] == f"2:11: included file {said}"
+
+
+def test_a_name_not_in_snake_case_is_said_at_the_name_with_its_spelling(tmp_path: Path) -> None:
+    """The parameter's error pointed at its value's ``{`` (8:12), and none said how to write it."""
+    text = (
+        "mission: x\nsubtrees:\n  MyTurn:\n    tree: {turn: 10deg}\nparameters:\n"
+        "  MySpeed: {type: speed, default: 100 mm/s}\ntree: {subtree: MyTurn}\n"
+    )
+    assert _problems(tmp_path, text.encode()) == [
+        "3:3: subtree name 'MyTurn' must be snake_case (write 'my_turn')",
+        "6:3: parameter name 'MySpeed' must be snake_case (write 'my_speed')",
+    ]
+
+
+def test_the_schema_refuses_a_subtree_name_not_in_snake_case_as_validate_does() -> None:
+    """``MyTurn:`` passed the editor (``subtrees`` had no ``propertyNames``) and failed
+    ``validate``."""
+    jsonschema = pytest.importorskip("jsonschema")
+    from roomba_bt.mission.schema import mission_schema
+
+    validator = jsonschema.Draft202012Validator(mission_schema())
+    for name, ok in (("my_turn", True), ("MyTurn", False)):
+        for parameters in ({}, {"parameters": {name: {"type": "angle"}}}):
+            subtree = {"tree": {"turn": "10deg"}, **parameters}
+            mission = {"subtrees": {"my_turn" if parameters else name: subtree}, "tree": "wall"}
+            assert validator.is_valid(mission) is ok, mission
