@@ -191,6 +191,22 @@ def _param_schema(decl: Declaration) -> dict[str, Any]:
     return _either({"type": "object"}, body, short[0] if len(short) == 1 else {"anyOf": short})
 
 
+def _named(each: dict[str, Any]) -> dict[str, Any]:
+    """A section of declarations by their names (parameters, blackboard keys, subtrees):
+    each name snake_case, as ``validate`` checks it, each value ``each``."""
+    return {"type": "object", "additionalProperties": each, "propertyNames": _SNAKE_CASE}
+
+
+def _subtree_schema(parameter: dict[str, Any]) -> dict[str, Any]:
+    """A subtree's definition: its tree, its doc and its parameters."""
+    return {
+        "type": "object",
+        "properties": {"parameters": _named(parameter), "tree": _NODE, "doc": {"type": "string"}},
+        "required": ["tree"],
+        "additionalProperties": False,
+    }
+
+
 def mission_schema(registry: Registry | None = None) -> dict[str, Any]:
     """The whole schema as a JSON-ready dict."""
     registry = registry or default_registry()
@@ -217,36 +233,11 @@ def mission_schema(registry: Registry | None = None) -> dict[str, Any]:
         "properties": {
             "mission": {"type": "string"},
             "description": {"type": "string"},
-            "parameters": {
-                "type": "object",
-                "additionalProperties": parameter,
-                "propertyNames": _SNAKE_CASE,
-            },
-            "blackboard": {
-                "type": "object",
-                "additionalProperties": key,
-                "propertyNames": _SNAKE_CASE,
-            },
+            "parameters": _named(parameter),
+            "blackboard": _named(key),
             "plugins": {"type": "array", "items": {"type": "string"}},
             "include": {"type": "array", "items": {"type": "string"}},
-            "subtrees": {
-                "type": "object",
-                "propertyNames": _SNAKE_CASE,
-                "additionalProperties": {
-                    "type": "object",
-                    "properties": {
-                        "parameters": {
-                            "type": "object",
-                            "additionalProperties": parameter,
-                            "propertyNames": _SNAKE_CASE,
-                        },
-                        "tree": _NODE,
-                        "doc": {"type": "string"},
-                    },
-                    "required": ["tree"],
-                    "additionalProperties": False,
-                },
-            },
+            "subtrees": _named(_subtree_schema(parameter)),
             "tree": _NODE,
         },
         "additionalProperties": False,

@@ -430,14 +430,10 @@ def resolve(
                 return UNKNOWN
         if raw.startswith("@") or (port_remapping(raw) and vtype.name not in ("str", "any")):
             return _reference(ctx, raw, loc, vtype, what, (allow_ref, no_ref))
-    elif vtype is STR and isinstance(raw, int | float) and not isinstance(raw, bool):
-        other_digits = number_as_text_problem(node, raw)
-        if other_digits is not None:
-            raise Bad(loc.at(f"{what}: {other_digits}"))
     return _check_range(_parsed(vtype, raw, loc, what, param, node), loc, what, param)
 
 
-def number_as_text_problem(node: yaml.Node, number: float) -> str | None:
+def number_as_text_problem(node: yaml.Node | None, number: float) -> str | None:
     """What is wrong with a plain number written where a text is meant when the text it
     makes shows other digits than the file (``1.10`` is the float 1.1, ``0x1F`` 31, ``1.5e3``
     1500.0), or None (``3``, ``2.5``). Refused, as ``0200`` and ``1:30`` are (decided: never
@@ -491,6 +487,10 @@ def _parsed(
     parameter's range (``max_radius: 1`` is ``1m``, not ``1mm``). Items of a list that do
     not parse are each said at their own place in ``node`` (the value as written), all of
     them."""
+    if vtype is STR and isinstance(raw, int | float) and not isinstance(raw, bool):
+        other_digits = number_as_text_problem(node, raw)
+        if other_digits is not None:
+            raise Bad(loc.at(f"{what}: {other_digits}"))
     try:
         return vtype.parse(raw)
     except BareNumber as exc:

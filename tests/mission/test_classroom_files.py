@@ -59,7 +59,10 @@ def test_a_no_break_space_after_a_top_level_colon_is_named_at_its_place(
     ]
 
 
-#: (file as written, the line and column of the error, the message)
+#: what every indentation hint ends with
+LINE_UP = "the entries of one list or mapping start in the same column)"
+#: (file as written, the line and column of the error and where its structure began, the
+#: message)
 STRUCTURE_ERRORS = [
     pytest.param(
         "mission: half\nparameters:\n  speed: {type: speed, default: 200 mm/s\ntree:\n"
@@ -72,16 +75,14 @@ STRUCTURE_ERRORS = [
         "mission: mix\ntree:\n  sequence:\n    - mode: safe\n  - stop\n",
         (5, 3, (3, 3)),
         "did not find expected key (in the mapping that starts at 3:3; line 5 is indented 2 "
-        "spaces, the list item on line 4 above it 4: the entries of one list or mapping start "
-        "in the same column)",
+        f"spaces, the list item on line 4 above it 4: {LINE_UP}",
         id="a list item one level out",
     ),
     pytest.param(
         "mission: mix\ntree:\n  sequence:\n    - mode: safe\n     - stop\n",
         (5, 6, (4, 5)),
         "did not find expected '-' indicator (in the list that starts at 4:5; line 5 is "
-        "indented 5 spaces, the list item on line 4 above it 4: the entries of one list or "
-        "mapping start in the same column)",
+        f"indented 5 spaces, the list item on line 4 above it 4: {LINE_UP}",
         id="a list item a space in",
     ),
     pytest.param(
@@ -89,8 +90,7 @@ STRUCTURE_ERRORS = [
         "       speed: 100 mm/s\n",
         (6, 8, (4, 7)),
         "did not find expected key (in the mapping that starts at 4:7; line 6 is indented 7 "
-        "spaces, the key on line 5 above it 8: the entries of one list or mapping start in "
-        "the same column)",
+        f"spaces, the key on line 5 above it 8: {LINE_UP}",
         id="a key a space out",
     ),
 ]
