@@ -8,8 +8,9 @@
 Runs N seeded episodes of the mission on the simulator's virtual clock, from random start
 poses in the world's start region (or within ``--within``, 1.5 or 1.5m, of the dock), in ``--jobs``
 worker processes, with a progress bar on stderr; then prints the success rate with its 95 %
-Wilson interval, the median and p90 time, bumps, the robot's own falls to Passive (``run``'s
-``falls`` line summed, and in how many episodes), and the failure reasons grouped. The same
+Wilson interval, the median and p90 time, bumps, the robot's own falls to Passive on a hazard
+(``run``'s ``falls`` line summed, and in how many episodes) apart from the dockings (its drop
+to Passive on the charger), and the failure reasons grouped. The same
 ``--seed`` gives the same episodes whatever ``--jobs`` or engine (``--engine dask``: a local
 Dask cluster of ``--jobs`` workers; ``--scheduler``: an existing one). With two missions, a
 ``--sweep`` or ``--variant`` sets, every variant runs on the same seeds and start poses and
@@ -77,7 +78,7 @@ def register(sub: Any) -> None:
 
         Run MISSION in N seeded episodes on the simulator's virtual clock and report the success
         rate (95% Wilson interval), median and p90 time, bumps, the robot's own falls to
-        Passive and the failure reasons. Exit codes:
+        Passive on a hazard, the dockings and the failure reasons. Exit codes:
         0 done, 1 --min-rate not reached, 2 invalid input, 3 --scheduler unreachable or no Dask
         worker for --worker-wait, 4 a behaviour raised in an episode, one hung (--wall-limit)
         or killed its worker process (DIED), {INTERNAL_ERROR_SAID}, 130 interrupted (what

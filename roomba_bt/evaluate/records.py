@@ -17,8 +17,10 @@ trajectory (plots) and the per-bump contact steps are not written: they are for 
 tables. Readers should ignore columns they do not know: later versions add columns, never
 rename or drop one. ``falls`` counts the robot's own falls to Passive (the run summary's
 ``falls`` line: a cliff or a wheel drop in Safe, the charger) and ``falls_by_cause`` splits
-them (``{"cliff": 4}``; ``cliff=4;wheel drop=1`` in CSV); a file written before they were
-recorded reads back as episodes without a fall.
+them (``{"cliff": 4}``; ``cliff=4;wheel drop=1`` in CSV); ``hazard_falls`` counts those of
+them that were no docking (every cause but ``charger``: a dock mission that docks in Safe falls
+to Passive on the charger in every episode, which ``falls > 0`` read as a hazard); a file
+written before they were recorded reads back as episodes without a fall.
 
 Coverage (:data:`COVERAGE_COLUMNS`, after the others) is empty (``null`` / an empty cell) for
 an episode whose brushes never ran: ``coverage`` is the fraction of the start area (or of all
@@ -42,7 +44,7 @@ from typing import Any
 
 from roomba_bt.evaluate.episode import Coverage, EpisodeResult
 from roomba_bt.runtime.claimed import ClaimedFile
-from roomba_bt.runtime.summary import falls_in_order
+from roomba_bt.runtime.summary import falls_in_order, hazard_falls
 
 FORMATS = (".jsonl", ".csv")
 
@@ -79,6 +81,7 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "cpu_time": ("cpu_s", "float?"),
     "falls": ("falls", "falls total"),
     "falls_by_cause": ("falls", "falls by cause"),
+    "hazard_falls": ("falls", "hazard falls"),
 }
 
 #: the coverage columns (empty when the episode did not clean): name -> Coverage field
@@ -136,6 +139,8 @@ def to_record(result: EpisodeResult) -> dict[str, Any]:
             value = sum(times for _, times in value)
         elif kind == "falls by cause":
             value = dict(value)
+        elif kind == "hazard falls":
+            value = sum(hazard_falls(dict(value)).values())
         out[column] = value
     out.update(_coverage_record(result))
     return out
@@ -203,7 +208,7 @@ def from_record(record: dict[str, Any]) -> EpisodeResult:
             raw = record.get(column)
             values[name] = 0.0 if raw is None or raw == "" else float(raw)
             continue
-        if kind == "falls total":  # the sum of falls_by_cause, which is read instead
+        if kind in ("falls total", "hazard falls"):  # sums of falls_by_cause, read instead
             continue
         if kind == "falls by cause":
             values[name] = _falls(record.get(column))

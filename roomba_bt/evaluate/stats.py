@@ -1,5 +1,6 @@
 """Statistics of a batch of episodes: success rate with a Wilson interval, time percentiles,
-bumps, the robot's own falls to Passive summed, and the failure reasons grouped.
+bumps, the robot's own falls to Passive summed (the hazards apart from the charger's, which
+end a docking), and the failure reasons grouped.
 
 Why Wilson: with 50 or 200 episodes and rates near 100 %, the textbook normal interval
 (``p +- 1.96 sqrt(p(1-p)/n)``) collapses to zero width at 100 % and can leave [0, 1]; the
@@ -17,7 +18,7 @@ from dataclasses import dataclass
 
 from roomba_bt.evaluate.episode import EpisodeResult
 from roomba_bt.printable import ANY_CONTROL, escaped
-from roomba_bt.runtime.summary import falls_in_order, falls_said
+from roomba_bt.runtime.summary import falls_in_order, falls_said, hazard_falls
 
 Z95 = 1.959963984540054
 
@@ -84,12 +85,16 @@ class Summary:
     #: create2); ``eval --json`` has it in its conditions
     profile: str = ""
     #: the robot's own falls to Passive summed over the episodes, by cause, the commonest
-    #: first (:attr:`EpisodeResult.falls`); how many episodes had one or more, and by cause
-    #: in the same order (a dock mission that docks in Safe falls to Passive on the charger
-    #: in every episode: the episodes with a cliff fall are told apart from those)
+    #: first (:attr:`EpisodeResult.falls`), the charger's among them; how many episodes had
+    #: one or more, and by cause in the same order
     falls: tuple[tuple[str, int], ...] = ()
     episodes_with_falls: int = 0
     episodes_with_falls_by_cause: tuple[tuple[str, int], ...] = ()
+    #: how many episodes fell on a hazard (a cliff, a wheel drop: any cause but the
+    #: charger's, :func:`~roomba_bt.runtime.summary.hazard_falls`). A dock mission that
+    #: docks in Safe falls to Passive on the charger in every episode: that is its success,
+    #: and counted with the cliffs it read as a hazard met in every episode
+    episodes_with_hazard_falls: int = 0
     #: whether the wall-clock and CPU times are said (:meth:`lines`, :meth:`to_dict`): other
     #: on every run of the same episodes; ``eval --reproducible`` leaves them out
     timings: bool = True
@@ -119,7 +124,8 @@ class Summary:
             f"time         median {med}, p90 {p90} (successful episodes, mission time)",
             f"bumps        {self.mean_bumps:.1f} per episode (bumper onsets in the simulator)",
             f"docked       {self.docked} of {self.runs} episodes ended on the dock's contacts",
-            *([f"falls        {self.falls_text()}"] if self.falls else []),
+            *([f"falls        {self.falls_text()}"] if self.hazard_falls else []),
+            *([f"charger      {self.charger_text()}"] if self.charger_arrivals else []),
             f"simulated    {self.simulated_s:.0f} s of mission time"
             + (
                 f" in {self.cpu_s:.1f} s of CPU time ({speed:.0f}x real time per CPU second); "
@@ -136,18 +142,45 @@ class Summary:
     def __str__(self) -> str:
         return "\n".join(self.lines())
 
+    @property
+    def hazard_falls(self) -> dict[str, int]:
+        """The falls on a hazard by cause, the commonest first: every cause but the
+        charger's (``run``'s ``falls`` line says these alone too)."""
+        return hazard_falls(dict(self.falls))
+
+    @property
+    def charger_arrivals(self) -> int:
+        """The falls to Passive on a powered charger: each the end of a docking in Safe (the
+        OI's own drop), counted apart from the hazards."""
+        return dict(self.falls).get("charger", 0)
+
+    @property
+    def episodes_with_charger_arrivals(self) -> int:
+        return dict(self.episodes_with_falls_by_cause).get("charger", 0)
+
     def falls_text(self) -> str:
-        """The episodes' falls to Passive in the run summary's words, and how many episodes
-        they were in, by cause when there are several: ``the robot fell to Passive by
-        itself 213 times (charger 200, cliff 13) in 200 of 200 episodes (charger in 200,
-        cliff in 4)``; with one cause, its count of episodes is the one said before."""
-        said = (
-            f"{falls_said(dict(self.falls))} in {self.episodes_with_falls} of {self.runs} episodes"
-        )
-        by_cause = self.episodes_with_falls_by_cause
+        """The episodes' falls to Passive on a hazard in the run summary's words, and how
+        many episodes they were in, by cause when there are several: ``the robot fell to
+        Passive by itself 13 times (cliff 12, wheel drop 1) in 4 of 200 episodes (cliff in
+        4, wheel drop in 1)``; with one cause, its count of episodes is the one said before.
+        The charger's are not among them (:meth:`charger_text`), as in ``run``'s summary."""
+        hazards = self.hazard_falls
+        said = f"{falls_said(hazards)} in {self.episodes_with_hazard_falls} of {self.runs} episodes"
+        by_cause = [(c, n) for c, n in self.episodes_with_falls_by_cause if c in hazards]
         if len(by_cause) < 2:
             return said
         return f"{said} ({', '.join(f'{cause} in {episodes}' for cause, episodes in by_cause)})"
+
+    def charger_text(self) -> str:
+        """The dockings, the falls to Passive on the charger, and the episodes they were in:
+        ``docked 200 times in 200 of 200 episodes (...)``, said as what they are."""
+        docked = self.charger_arrivals
+        times = "once" if docked == 1 else f"{docked} times"
+        return (
+            f"docked {times} in {self.episodes_with_charger_arrivals} of {self.runs} episodes "
+            "(the robot drops to Passive by itself on the charger: how docking in Safe ends, "
+            "not a hazard)"
+        )
 
     def to_dict(self) -> dict[str, object]:
         """The summary for scripts (``eval --json``): rates as fractions, times in seconds;
@@ -167,6 +200,10 @@ class Summary:
             "falls": dict(self.falls),
             "episodes_with_falls": self.episodes_with_falls,
             "episodes_with_falls_by_cause": dict(self.episodes_with_falls_by_cause),
+            "hazard_falls": self.hazard_falls,
+            "episodes_with_hazard_falls": self.episodes_with_hazard_falls,
+            "charger_arrivals": self.charger_arrivals,
+            "episodes_with_charger_arrivals": self.episodes_with_charger_arrivals,
             "wall_time": self.wall_s if self.timings else None,
             "cpu_time": self.cpu_s if self.timings else None,
             "mission_time": self.simulated_s,
@@ -219,6 +256,7 @@ def summarize(
         falls=in_order,
         episodes_with_falls=sum(1 for r in results if r.falls),
         episodes_with_falls_by_cause=tuple((c, episodes_by_cause[c]) for c, _ in in_order),
+        episodes_with_hazard_falls=sum(1 for r in results if hazard_falls(dict(r.falls))),
     )
 
 

@@ -93,29 +93,60 @@ def test_an_episode_s_falls_are_the_ones_its_run_summary_says(
     assert said in capsys.readouterr().out.splitlines()
 
 
-def test_falls_of_several_causes_are_summed_the_commonest_first() -> None:
-    def episode(seed: int, falls: tuple[tuple[str, int], ...]) -> EpisodeResult:
-        return EpisodeResult(seed, "failure", "", 1.0, 0.1, 1, (0.0, 0.0, 0.0),
-                             (0.0, 0.0, 0.0), 0, (), False, False, 0, False, 0, 0.0, 0.0,
-                             falls=falls)  # fmt: skip
+def _episode(seed: int, falls: tuple[tuple[str, int], ...]) -> EpisodeResult:
+    return EpisodeResult(seed, "failure", "", 1.0, 0.1, 1, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 0,
+                         (), False, False, 0, False, 0, 0.0, 0.0, falls=falls)  # fmt: skip
 
+
+def test_falls_of_several_causes_are_summed_the_commonest_first() -> None:
     results = [
-        episode(1, (("cliff", 3),)),
-        episode(2, ()),
-        episode(3, (("cliff", 1), ("wheel drop", 1))),
-        episode(4, (("charger", 1),)),
+        _episode(1, (("cliff", 3),)),
+        _episode(2, ()),
+        _episode(3, (("cliff", 1), ("wheel drop", 1))),
+        _episode(4, (("charger", 1),)),
     ]
     summary = summarize("m", "w", results)
     assert summary.falls_text() == (
-        "the robot fell to Passive by itself 6 times (cliff 4, charger 1, wheel drop 1) "
-        "in 3 of 4 episodes (cliff in 2, charger in 1, wheel drop in 1)"
+        "the robot fell to Passive by itself 5 times (cliff 4, wheel drop 1) "
+        "in 2 of 4 episodes (cliff in 2, wheel drop in 1)"
     )
     assert summary.to_dict()["episodes_with_falls_by_cause"] == {
         "cliff": 2, "charger": 1, "wheel drop": 1
     }  # fmt: skip
-    none = summarize("m", "w", [episode(1, ())])
-    assert not any(line.startswith("falls") for line in none.lines())
+    none = summarize("m", "w", [_episode(1, ())])
+    assert not any(line.startswith(("falls", "charger")) for line in none.lines())
     assert none.to_dict()["falls"] == {} and none.to_dict()["episodes_with_falls"] == 0
+
+
+def test_the_charger_s_falls_are_dockings_said_apart_from_the_hazards() -> None:
+    """A dock mission that docks in Safe falls to Passive on the charger in every episode:
+    its success. The report counted those with the cliffs, ``fell to Passive by itself 13
+    times (charger 10, cliff 3) in 10 of 10 episodes``: a hazard in every episode. Now the
+    falls line has the hazards alone, as ``run``'s summary does, and a charger line the
+    dockings; ``--json`` has both apart."""
+    docked = (("charger", 1),)
+    results = [_episode(seed, (("charger", 1), ("cliff", 1)) if seed in (1, 3, 8) else docked)
+               for seed in range(1, 11)]  # fmt: skip
+    summary = summarize("dock", "apartment", results)
+    lines = summary.lines()
+    assert (
+        "falls        the robot fell to Passive by itself 3 times (cliff) in 3 of 10 episodes"
+        in lines
+    )
+    assert (
+        "charger      docked 10 times in 10 of 10 episodes (the robot drops to Passive by itself "
+        "on the charger: how docking in Safe ends, not a hazard)"
+    ) in lines
+    said = summary.to_dict()
+    assert (said["hazard_falls"], said["episodes_with_hazard_falls"]) == ({"cliff": 3}, 3)
+    assert (said["charger_arrivals"], said["episodes_with_charger_arrivals"]) == (10, 10)
+    assert said["falls"] == {"charger": 10, "cliff": 3}  # every cause, as it was
+    assert said["episodes_with_falls"] == 10
+    only_docked = summarize("dock", "apartment", [_episode(1, docked)])
+    assert not any(line.startswith("falls") for line in only_docked.lines())
+    assert "charger      docked once in 1 of 1 episodes" in str(only_docked)
+    assert only_docked.to_dict()["hazard_falls"] == {}
+    assert to_record(results[0])["hazard_falls"] == 1 and to_record(results[1])["hazard_falls"] == 0
 
 
 @pytest.mark.parametrize("suffix", [".jsonl", ".csv"])
@@ -158,14 +189,17 @@ def test_eval_json_has_the_falls(
     (variant,) = json.loads(capsys.readouterr().out)["variants"]
     fell = sum(1 for r in toward if r.falls)
     assert variant["falls"] == {"cliff": fell} and variant["episodes_with_falls"] == fell
+    assert variant["hazard_falls"] == {"cliff": fell}
+    assert variant["episodes_with_hazard_falls"] == fell and variant["charger_arrivals"] == 0
 
 
 def test_a_record_written_before_falls_were_recorded_still_loads(
     toward: list[EpisodeResult], tmp_path: Path
 ) -> None:
-    """Files from before: no ``falls`` nor ``falls_by_cause`` column, read as no falls."""
+    """Files from before: no ``falls``, ``falls_by_cause`` nor ``hazard_falls`` column, read
+    as no falls."""
     record = to_record(next(r for r in toward if r.falls))
-    old = {k: v for k, v in record.items() if k not in ("falls", "falls_by_cause")}
+    old = {k: v for k, v in record.items() if k not in ("falls", "falls_by_cause", "hazard_falls")}
     assert from_record(old).falls == ()
     path = tmp_path / "old.jsonl"
     path.write_text(json.dumps(old) + "\n", encoding="utf-8")
@@ -176,7 +210,7 @@ def test_a_record_written_before_falls_were_recorded_still_loads(
     with open(csv_path, encoding="utf-8", newline="") as src:
         rows = list(csv.DictReader(src))
     with open(csv_path, "w", encoding="utf-8", newline="") as out:
-        columns = [c for c in rows[0] if c not in ("falls", "falls_by_cause")]
+        columns = [c for c in rows[0] if c not in ("falls", "falls_by_cause", "hazard_falls")]
         writer = csv.DictWriter(out, fieldnames=columns, extrasaction="ignore")
         writer.writeheader()
         writer.writerows(rows)
