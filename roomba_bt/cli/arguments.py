@@ -239,6 +239,18 @@ def add_odometry_error_option(parser: Any, what: str = "") -> None:
     )  # fmt: skip
 
 
+def add_strict_option(parser: Any, then: str) -> None:
+    """``--strict`` (``run``, ``eval``), as pytest's and mypy's: what the command only warned
+    of fails it, exit 7; first of all a mission with compile-time warnings, refused as
+    ``validate --strict`` fails it, in the same words on each command. ``then``: what else
+    the command's ``--strict`` fails, or does instead of starting."""
+    parser.add_argument(
+        "--strict", action="store_true",
+        help="fail on warnings too, exit 7: a mission with compile-time warnings (as validate "
+        f"--strict fails it) is not started {then}",
+    )  # fmt: skip
+
+
 def metres(text: str, lo: float, hi: float) -> float:
     """A distance in metres, ``lo..hi``: a plain number (metres) or a distance as missions
     write it (``1.5m``, ``150cm``, ``300 mm``)."""

@@ -24,10 +24,12 @@ behaviour's loop: the virtual clock does not move) is recorded as HUNG, where it
 and its worker process replaced; one whose worker process dies running it, again when it runs
 alone (``os._exit`` in a behaviour, a crash in C code), is recorded as DIED and the sweep goes
 on. Ctrl-C prints what finished (exit 130). Exit codes: 0 (and 1 when ``--min-rate`` is given
-and not reached), 2 for invalid input, 3 when the ``--scheduler`` does not answer or the Dask
-cluster had no worker for ``--worker-wait`` (what finished is summarised), 4 when a
-behaviour raised in an episode, one ran past ``--wall-limit`` or one killed its worker (a
-bug, not a mission outcome), 70 on roomba-bt's own bug.
+and not reached), 2 for invalid input, 3 when the run environment failed: the ``--scheduler``
+does not answer or is lost, the Dask cluster had no worker for ``--worker-wait``, or local
+worker processes were killed from outside again and again (what finished is summarised), 4
+when a behaviour raised in an episode, one ran past ``--wall-limit`` or one killed its worker
+(a bug, not a mission outcome), 7 with ``--strict`` when a mission has compile-time warnings
+(no episode runs), 70 on roomba-bt's own bug.
 """
 
 from __future__ import annotations
@@ -46,6 +48,7 @@ from roomba_bt.cli.arguments import (
     add_param_option,
     add_permission_options,
     add_profile_option,
+    add_strict_option,
     add_wall_limit_option,
     fraction,
     limit_seconds,
@@ -63,7 +66,7 @@ from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, ExitCode, Outcome
 
 if TYPE_CHECKING:  # the evaluation is imported when it runs: the CLI starts faster
     from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec
-    from roomba_bt.evaluate.parallel import Engine, Evaluation, Progress
+    from roomba_bt.evaluate.parallel import Engine, Evaluation, Interruption, Progress
     from roomba_bt.evaluate.records import PartialResults
     from roomba_bt.evaluate.stats import Comparison, Summary
     from roomba_bt.sim.world import World
@@ -79,10 +82,13 @@ def register(sub: Any) -> None:
         Run MISSION in N seeded episodes on the simulator's virtual clock and report the success
         rate (95% Wilson interval), median and p90 time, bumps, the robot's own falls to
         Passive on a hazard, the dockings and the failure reasons. Exit codes:
-        0 done, 1 --min-rate not reached, 2 invalid input, 3 --scheduler unreachable or no Dask
-        worker for --worker-wait, 4 a behaviour raised in an episode, one hung (--wall-limit)
-        or killed its worker process (DIED), {INTERNAL_ERROR_SAID}, 130 interrupted (what
-        finished is summarised).
+        0 done, 1 --min-rate not reached, 2 invalid input, 3 the run environment failed:
+        --scheduler unreachable or lost, no Dask worker for --worker-wait, local worker
+        processes killed from outside again and again (what finished is summarised), 4 a
+        behaviour raised in an episode, one hung (--wall-limit) or killed its worker process
+        (DIED), 7 with --strict, a mission has compile-time warnings (no episode runs),
+        {INTERNAL_ERROR_SAID}, 130 interrupted by Ctrl-C or a signal (what finished is
+        summarised).
         """,
     )
     ev.add_argument(
@@ -189,6 +195,7 @@ def _add_start_options(ev: argparse.ArgumentParser) -> None:
     ev.add_argument("--min-rate", type=fraction, metavar="FRACTION",
                     help="exit 1 if the success rate is below this, a fraction (0.9) or a "
                     "percent (90%%) (for CI)")  # fmt: skip
+    add_strict_option(ev, "(no episode runs when one of the missions has any)")
     ev.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
@@ -264,6 +271,8 @@ class Evaluated:
     done: list[Evaluation]
     summaries: list[Summary]
     comparisons: list[Comparison | str]
+    #: the episodes each variant was to run (``--runs``)
+    runs: int
 
 
 def variants(args: argparse.Namespace, params: dict[str, str]) -> list[Variant] | str:
@@ -337,16 +346,15 @@ def eval_command(args: argparse.Namespace) -> int:
         raise
     if unwritten is not None:
         return _error(unwritten)
-    stopped = next((e.stopped for e in done if e.stopped), "")
-    if stopped:  # the cluster, not the missions: a connection's failure
-        print(f"roomba-bt eval: {stopped}; what finished is summarised above",
+    interruption = interruption_of(done)
+    if interruption is not None:
+        failed = interruption.environment_failed
+        said = interruption.said if failed else f"interrupted {interruption.said}"
+        print(f"roomba-bt eval: {said}; {_finished(done, evaluated)}, summarised above",
               file=sys.stderr)  # fmt: skip
-        return ExitCode.CONNECTION
-    interrupted = any(e.interrupted for e in done)
-    if interrupted:
-        print(f"roomba-bt eval: interrupted; {_count(done)} episode(s) finished, summarised above",
-              file=sys.stderr)  # fmt: skip
-        return ExitCode.INTERRUPTED
+        # the workers or the cluster gone: the run environment failed, not the missions
+        # (3, as a connection's failure); a signal is the operator's (130)
+        return ExitCode.CONNECTION if failed else ExitCode.INTERRUPTED
     if args.plot:
         plotted = _plot(args.plot, world, evaluated)
         if plotted is not None:
@@ -356,6 +364,23 @@ def eval_command(args: argparse.Namespace) -> int:
 
 def _count(done: list[Evaluation]) -> int:
     return sum(len(e.results) for e in done)
+
+
+def _finished(done: list[Evaluation], evaluated: Evaluated) -> str:
+    """``12 of 200 episode(s) finished``: of every variant's episodes."""
+    planned = evaluated.runs * len(evaluated.chosen)
+    return f"{_count(done)} of {planned} episode(s) finished"
+
+
+def interruption_of(done: list[Evaluation]) -> Interruption | None:
+    """Why the evaluation stopped before its end: the first batch interrupted says (the
+    later ones were skipped); None when it ran to its end."""
+    from roomba_bt.evaluate.parallel import Interruption
+
+    for e in done:
+        if e.interrupted:  # an Evaluation a program made itself may not say why
+            return e.interruption or Interruption("unknown", "for a reason not said")
+    return None
 
 
 def _save(
@@ -406,7 +431,7 @@ def _statistics(
                                "comparison, no seed finished with both (interrupted)")  # fmt: skip
         else:
             comparisons.append(replace(c, interrupted=e.interrupted or done[0].interrupted))
-    return Evaluated(chosen, done, summaries, comparisons)
+    return Evaluated(chosen, done, summaries, comparisons, args.runs)
 
 
 def rerun_command(args: argparse.Namespace, result: Any) -> str:
@@ -613,6 +638,8 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
         if isinstance(loaded, int):
             return loaded
         missions.append(loaded)
+    if args.strict and any(m.warnings for m in missions):
+        return _refused_by_strict(chosen, missions)
     try:
         world = build_world(batches[0][0])
         start_pose(world, batches[0][0])
@@ -621,6 +648,20 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
     args.made_by = made_by(args, chosen, missions, world)
     _warn_if_one_start(args, world)
     return chosen, batches, world
+
+
+def _refused_by_strict(chosen: list[Variant], missions: list[Any]) -> int:
+    """``--strict``: each variant whose mission has compile-time warnings (printed as it was
+    loaded) said as ``run --strict`` says it, in ``validate --strict``'s words, and exit 7
+    before any worker starts. It ran every episode of such a mission under ``validate
+    --strict``'s CI, and a 1000-episode sweep's exit 0 read as a clean one."""
+    from roomba_bt.cli.validate_report import failed_strict
+
+    for v, mission in zip(chosen, missions, strict=True):
+        if mission.warnings:
+            said = failed_strict(v.label, mission.warnings)
+            print(f"roomba-bt eval: {said}; no episode runs", file=sys.stderr)
+    return ExitCode.STRICT
 
 
 def made_by(
@@ -747,6 +788,10 @@ def _report(args: argparse.Namespace, engine: str, evaluated: Evaluated) -> None
     for c in evaluated.comparisons:
         print(c)
         print()
+    interruption = interruption_of(done)
+    if interruption is not None:
+        print(escaped(f"interrupted  {interruption.said}; {_finished(done, evaluated)}",
+                      ANY_CONTROL))  # fmt: skip
     if not args.reproducible:  # which processes ran them, and what was lost: not the results
         retried = sum(e.retried for e in done)
         print(f"engine       {engine}; {retried} episode(s) run again after a worker was lost")
@@ -770,11 +815,14 @@ def _json_report(args: argparse.Namespace, engine: str, evaluated: Evaluated) ->
     summaries, done = evaluated.summaries, evaluated.done
     passed = [None if args.min_rate is None else s.rate >= args.min_rate for s in summaries]
     measured = not args.reproducible
+    interruption = interruption_of(done)
     print(json.dumps(tidy({
         "conditions": run_conditions(args),
         "engine": engine if measured else None,
         "retried": sum(e.retried for e in done) if measured else None,
-        "interrupted": any(e.interrupted for e in done),
+        "interrupted": interruption is not None,
+        "interrupted_by": interruption.cause if interruption else None,
+        "interruption": interruption.said if interruption else None,
         "passed": None if args.min_rate is None else all(passed),
         "plugins": dict(sorted(plugins.items())),
         "variants": [{"label": v.label, "params": dict(v.params), **s.to_dict(),

@@ -20,6 +20,7 @@ from roomba_bt.cli.arguments import (
     add_odometry_error_option,
     add_param_option,
     add_permission_options,
+    add_strict_option,
     add_wall_limit_option,
     add_window_options,
     baud_warning,
@@ -130,7 +131,13 @@ def _add_run_parser(sub: Any) -> None:
     add_permission_options(run)
     run.add_argument("--fast", action="store_true", help="simulator on the virtual clock")
     add_reproducible_option(run)
-    _add_strict_option(run)
+    add_strict_option(
+        run,
+        "(nor reloaded by --watch); one that succeeded exits 7 if the mode guard refused any "
+        "command, a command was dropped while the tree was stopped, or the robot fell out of "
+        "Safe/Full by itself (a cliff, a wheel drop; not onto a charger): the summary's strict "
+        "line names each count and its first instance",
+    )
     _add_session_options(run)
     run.add_argument(
         "--display", choices=("auto", "tree", "log", "none"), default="auto",
@@ -165,18 +172,6 @@ def _add_label_option(run: argparse.ArgumentParser) -> None:
         help="a label for this run, to tell several apart (robot 3): shown in the live tree "
         "and each log line, the summary, the monitor's URL line, page and tab, and the record "
         f"(1 to {LABEL_LENGTH} printable characters)",
-    )  # fmt: skip
-
-
-def _add_strict_option(run: argparse.ArgumentParser) -> None:
-    """``--strict``, as pytest's and mypy's: what the run only warned of fails it."""
-    run.add_argument(
-        "--strict", action="store_true",
-        help="fail on warnings too, exit 7: a mission with compile-time warnings (as validate "
-        "--strict fails it) is not started (nor reloaded by --watch); one that succeeded "
-        "exits 7 if the mode guard refused any command, a command was dropped while the tree "
-        "was stopped, or the robot fell out of Safe/Full by itself (a cliff, a wheel drop; not "
-        "onto a charger): the summary's strict line names each count and its first instance",
     )  # fmt: skip
 
 

@@ -14,7 +14,9 @@ released.
 
 Results come back in spec order; progress is reported as futures complete, in completion
 order. Ctrl-C (KeyboardInterrupt) cancels the futures still pending and returns what
-finished, marked ``interrupted``.
+finished, with the interrupt. A cluster that can run no more of them (no worker for
+``--worker-wait``, its scheduler lost) stops the evaluation with what finished
+(:class:`ClusterLostError`).
 """
 
 from __future__ import annotations
@@ -40,6 +42,7 @@ from roomba_bt.evaluate.episode import (
     hung_result,
     run_episode,
 )
+from roomba_bt.evaluate.parallel import NO_WORKERS, SCHEDULER_LOST
 from roomba_bt.runtime.wall_limit import WallLimit, WallLimitReached
 
 
@@ -309,15 +312,62 @@ def say_when_no_worker(
     )
 
 
-class NoWorkersError(RuntimeError):
-    """The cluster had no worker for the evaluation's ``worker_wait_s`` (its workers gone
-    for good, or never there): the evaluation stopped. ``results``: in spec order, None
+class ClusterLostError(RuntimeError):
+    """The cluster can run no more of the evaluation's episodes: it stopped. ``why``, the
+    cluster's failure in words; ``cause``, the same as a word for scripts
+    (:class:`~roomba_bt.evaluate.parallel.Interruption`); ``results``: in spec order, None
     where an episode did not finish; ``retried``: as :func:`run_on_client` counts them."""
 
-    def __init__(self, message: str, results: list[EpisodeResult | None], retried: int) -> None:
-        super().__init__(message)
+    cause = ""
+
+    def __init__(self, why: str, results: list[EpisodeResult | None], retried: int) -> None:
+        done = sum(r is not None for r in results)
+        super().__init__(f"{why}; stopped with {done} of {len(results)} episode(s) finished")
+        self.why = why
         self.results = results
         self.retried = retried
+
+
+class NoWorkersError(ClusterLostError):
+    """The cluster had no worker for the evaluation's ``worker_wait_s`` (its workers gone
+    for good, or never there)."""
+
+    cause = NO_WORKERS
+
+
+class SchedulerLostError(ClusterLostError):
+    """The scheduler was lost mid-evaluation (it died, its machine or the network went
+    down: Dask's client cancels every future it had), or cancelled the episodes itself
+    (restarted by another client of a shared cluster). Its episodes that had not come back
+    are lost with it; the evaluation ended as if every episode had run, exit 0, its summary
+    over those that had (``20/20`` of 400)."""
+
+    cause = SCHEDULER_LOST
+
+
+#: The reason Dask's client gives the futures it cancels when its scheduler's connection closes
+CONNECTION_LOST = "scheduler-connection-lost"
+
+
+def scheduler_lost(client: Any, cancelled_because: str, unfinished: int) -> str:
+    """Why ``unfinished`` episodes never came back, the scheduler having cancelled them
+    (``cancelled_because``: Dask's reason, :data:`CONNECTION_LOST` when its connection
+    closed), in words."""
+    address = _scheduler_address(client)
+    if cancelled_because == CONNECTION_LOST:
+        return (
+            f"the connection to the Dask scheduler at {address} was lost (the scheduler "
+            f"ended, or its machine or the network went down): the {unfinished} episode(s) "
+            "not finished were lost with it"
+        )
+    return (
+        f"the Dask scheduler at {address} cancelled {unfinished} episode(s) "
+        f"({cancelled_because or 'no reason given'}: restarted by another client?)"
+    )
+
+
+def _scheduler_address(client: Any) -> str:
+    return getattr(client.scheduler, "address", None) or "its scheduler"
 
 
 #: The longest a :class:`WorkerWatch` goes between two questions to the scheduler (s).
@@ -373,7 +423,7 @@ class WorkerWatch:
             if self._workers():
                 seen = now
             elif now - seen >= self.limit_s:
-                address = getattr(self.client.scheduler, "address", None) or "its scheduler"
+                address = _scheduler_address(self.client)
                 with self._lock:
                     self.expired = (
                         f"the Dask cluster at {address} has had no worker for {now - seen:.0f} "
@@ -432,11 +482,13 @@ def run_on_client(
     progress: Callable[[int, int, EpisodeResult], None] | None = None,
     wall_limit_s: float | None = None,
     worker_wait_s: float | None = None,
-) -> tuple[list[EpisodeResult | None], int, bool]:
-    """``(results in spec order (None where cancelled), episodes retried, interrupted)``;
-    each episode within ``wall_limit_s`` (:func:`within_wall_limit`); after ``worker_wait_s``
-    with no worker in the cluster (:class:`WorkerWatch`; None: waited for ever), the
-    evaluation stops: :class:`NoWorkersError`, with what finished.
+) -> tuple[list[EpisodeResult | None], int, KeyboardInterrupt | None]:
+    """``(results in spec order (None where cancelled), episodes retried, the Ctrl-C or
+    signal that interrupted it (None: none did))``; each episode within ``wall_limit_s``
+    (:func:`within_wall_limit`); after ``worker_wait_s`` with no worker in the cluster
+    (:class:`WorkerWatch`; None: waited for ever), the evaluation stops:
+    :class:`NoWorkersError`, with what finished; so it does when the scheduler is lost or
+    cancels episodes itself (:class:`SchedulerLostError`).
 
     Each result is released once gathered (in batches of :data:`RELEASE_EVERY`, after the
     scheduler says which of them a dead worker held): futures kept to the end made the
@@ -454,10 +506,10 @@ def run_on_client(
     }
     results: list[EpisodeResult | None] = [None] * total
     gathered = _Gathered()
-    interrupted = False
+    interrupt: KeyboardInterrupt | None = None
 
     def finished(i: int, result: EpisodeResult | None) -> None:
-        if result is None:  # cancelled: the watch found no worker for it
+        if result is None:  # cancelled: the watch found no worker for it, or the scheduler
             return
         results[i] = result
         if progress is not None:
@@ -468,26 +520,48 @@ def run_on_client(
         try:
             given_up = _gather(client, specs, futures, gathered, finished)
             for i, first in sorted(given_up.items()):
+                if gathered.cancelled_because:  # the scheduler is gone: nothing runs alone
+                    break
                 key = f"episode-{batch}-{i}-alone"
-                finished(i, _alone(client, watch, travelling[i], wall_limit_s, key, first))
-        except KeyboardInterrupt:
-            interrupted = True
+                finished(i, _alone(client, watch, travelling[i], wall_limit_s, key, first,
+                                   gathered))  # fmt: skip
+        except KeyboardInterrupt as exc:
+            interrupt = exc
             client.cancel([f for f in futures.values() if not f.done()])
-    retried = gathered.retried + _count_and_release(client, [*gathered.futures, *futures.values()])
+    held = [*gathered.futures, *futures.values()]
+    retried = gathered.retried + _count_and_release(client, held, gathered.asks_scheduler)
     if watch.expired:
-        done = sum(r is not None for r in results)
-        raise NoWorkersError(f"{watch.expired}; stopped with {done} of {total} episode(s) "
-                             "finished", results, retried)  # fmt: skip
-    return results, retried, interrupted
+        raise NoWorkersError(watch.expired, results, retried)
+    unfinished = sum(r is None for r in results)
+    if unfinished and interrupt is None:  # cancelled, not by us: the summary would say 20/20
+        why = scheduler_lost(client, gathered.cancelled_because, unfinished)
+        raise SchedulerLostError(why, results, retried)
+    return results, retried, interrupt
 
 
 @dataclass
 class _Gathered:
-    """The futures gathered and not released yet, and the episodes retried among those
-    released (:func:`_count_and_release`)."""
+    """The futures gathered and not released yet, the episodes retried among those released
+    (:func:`_count_and_release`), and why the scheduler cancelled an episode when it did
+    (Dask's reason: :data:`CONNECTION_LOST` when the scheduler was lost; "" when none was
+    cancelled, or only by the evaluation's own :class:`WorkerWatch`, which gives none)."""
 
     futures: list[Any] = field(default_factory=list)
     retried: int = 0
+    cancelled_because: str = ""
+
+    def cancelled(self, error: BaseException) -> None:
+        """A future cancelled with ``error`` (Dask's ``FutureCancelledError``): its reason
+        kept, the first one given."""
+        reason = getattr(error, "reason", None)
+        if reason and reason != "unknown" and not self.cancelled_because:
+            self.cancelled_because = str(reason)
+
+    @property
+    def asks_scheduler(self) -> bool:
+        """Whether the scheduler can be asked anything: a lost one would be waited for
+        (Dask's client tries to reconnect for 10 s) before each question failed."""
+        return self.cancelled_because != CONNECTION_LOST
 
 
 def _gather(
@@ -500,8 +574,9 @@ def _gather(
     """Each of ``futures`` (by key ``...-i`` for ``specs[i]``) as it completes, its result to
     ``finished``, gathered on the client's event loop (not one blocking round trip from this
     thread each); each moved from ``futures`` to ``gathered`` and released there in batches
-    of :data:`RELEASE_EVERY`. A cancelled one (a :class:`WorkerWatch` found no worker) has no
-    result. The episodes Dask gave up on, by spec index: their errors (:func:`_killed_worker`)."""
+    of :data:`RELEASE_EVERY`. A cancelled one (a :class:`WorkerWatch` found no worker, the
+    scheduler was lost) has no result: why is noted (:meth:`_Gathered.cancelled`). The
+    episodes Dask gave up on, by spec index: their errors (:func:`_killed_worker`)."""
     distributed = _import_distributed()
     index = {key: i for i, key in enumerate(futures)}
     given_up: dict[int, BaseException] = {}
@@ -511,11 +586,14 @@ def _gather(
         status = future.status  # before the release below, which marks it cancelled
         gathered.futures.append(futures.pop(future.key))
         if len(gathered.futures) >= RELEASE_EVERY:
-            gathered.retried += _count_and_release(client, gathered.futures)
+            gathered.retried += _count_and_release(client, gathered.futures,
+                                                   gathered.asks_scheduler)  # fmt: skip
         i = index[future.key]
         if status == "error":  # (type, exception, traceback)
             given_up[i] = _killed_worker(specs[i], result[1])
-        elif status != "cancelled":
+        elif status == "cancelled":  # its result is Dask's FutureCancelledError
+            gathered.cancelled(result)
+        else:
             finished(i, result)
     return given_up
 
@@ -538,11 +616,12 @@ def _killed_worker(spec: EpisodeSpec, error: BaseException) -> BaseException:
 
 def _alone(
     client: Any, watch: WorkerWatch, spec: EpisodeSpec, wall_limit_s: float | None, key: str,
-    first: BaseException,
+    first: BaseException, gathered: _Gathered,
 ) -> EpisodeResult | None:  # fmt: skip
     """The episode Dask gave up on (``first``, its ``KilledWorker``) run again with no other
     episode of the evaluation beside it: its result, or DIED when its workers die again
-    (:func:`died_on_workers`), said on stderr; None when ``watch`` found no worker for it."""
+    (:func:`died_on_workers`), said on stderr; None when it was cancelled (``watch`` found no
+    worker for it, the scheduler was lost: noted in ``gathered``)."""
     from concurrent.futures import CancelledError
 
     from distributed.scheduler import KilledWorker
@@ -553,7 +632,8 @@ def _alone(
         result: EpisodeResult = future.result()
     except KilledWorker as again:
         return died_on_workers(spec, first, again)
-    except CancelledError:
+    except CancelledError as cancelled:
+        gathered.cancelled(cancelled)
         return None
     finally:
         if not future.done():  # Ctrl-C
@@ -578,12 +658,14 @@ def died_on_workers(spec: EpisodeSpec, first: BaseException, again: BaseExceptio
     return died_result(spec, how, worker=last)
 
 
-def _count_and_release(client: Any, futures: list[Any]) -> int:
-    """How many of ``futures`` a dead worker held (read from the scheduler), then each
-    released (``futures`` emptied): the scheduler forgets them."""
+def _count_and_release(client: Any, futures: list[Any], ask: bool = True) -> int:
+    """How many of ``futures`` a dead worker held (read from the scheduler; 0 unless
+    ``ask``: a scheduler known lost is not asked), then each released (``futures``
+    emptied): the scheduler forgets them."""
     retried = 0
     with contextlib.suppress(Exception):  # the count is a report, never a reason to fail
-        retried = int(client.run_on_scheduler(_retried, keys=[f.key for f in futures]))
+        if ask:
+            retried = int(client.run_on_scheduler(_retried, keys=[f.key for f in futures]))
     for future in futures:
         future.release()
     futures.clear()

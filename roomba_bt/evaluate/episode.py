@@ -504,9 +504,11 @@ def _run_episode(spec: EpisodeSpec, measured: type[_MeasuredSimulator]) -> Episo
     stack.runner.on_wall_clock = False  # Ctrl-Z suspends an evaluation, Ctrl-\ quits it
     if IN_POOL_WORKER:  # Ctrl-C is the parent's: it ends the pool, a worker just ends
         stack.runner.guards_signals = False
-    summary = stack.run(raise_interrupts=False)
-    if summary.outcome is Outcome.INTERRUPTED:  # Ctrl-C (or SIGTERM) stops the evaluation,
-        raise KeyboardInterrupt(summary.reason)  # not just this episode
+    # Ctrl-C or a signal stops the evaluation, not just this episode: raised again once the
+    # robot is stopped, with the signal it stands for (its Interruption says which)
+    summary = stack.run()
+    if summary.outcome is Outcome.INTERRUPTED:  # a stop asked of the run itself: the same
+        raise KeyboardInterrupt(summary.reason)
     stage = failure_stage(summary.reason)
     return _measured(spec, world, pose, simulator, summary, summary.outcome.value, stage)
 

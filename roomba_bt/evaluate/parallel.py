@@ -490,18 +490,57 @@ def _say_where_stuck(signum: int, frame: FrameType | None) -> None:
     _WORKER["reports"].put((index, os.getpid(), 0.0, hung_result(spec, _WORKER["limit_s"], frames)))
 
 
+#: The causes of an :class:`Interruption` that are no signal: the machinery that runs the
+#: episodes failed, not the operator. Local worker processes kept dying with no episode to
+#: blame (:class:`WorkersLostError`); the Dask cluster had no worker for ``--worker-wait``
+#: (:class:`~roomba_bt.evaluate.cluster.NoWorkersError`); the Dask scheduler was lost, or
+#: forgot the episodes (:class:`~roomba_bt.evaluate.cluster.SchedulerLostError`).
+WORKERS_LOST = "workers-lost"
+NO_WORKERS = "no-workers"
+SCHEDULER_LOST = "scheduler-lost"
+ENVIRONMENT_FAILURES = frozenset({WORKERS_LOST, NO_WORKERS, SCHEDULER_LOST})
+
+
+@dataclass(frozen=True)
+class Interruption:
+    """Why an evaluation stopped before its end: ``cause``, a word for scripts (the signal's
+    name, ``SIGINT`` for Ctrl-C, or one of :data:`WORKERS_LOST`, :data:`NO_WORKERS`,
+    :data:`SCHEDULER_LOST`), and ``said``, the same in words (``by Ctrl-C (SIGINT)``, the
+    cluster's failure). ``eval --json`` said ``"interrupted": true`` and no more: a Ctrl-C,
+    a job scheduler's SIGTERM and a cluster gone read alike."""
+
+    cause: str
+    said: str
+
+    @property
+    def environment_failed(self) -> bool:
+        """The machinery that runs the episodes failed (``eval`` exits 3, as for a
+        connection's failure); else a signal stopped it, the operator's (exit 130)."""
+        return self.cause in ENVIRONMENT_FAILURES
+
+
+def interruption_by(interrupt: KeyboardInterrupt) -> Interruption:
+    """The :class:`Interruption` a Ctrl-C or a signal stands for (:class:`~roomba_bt.robot.
+    safety.Terminated` carries its signal: SIGTERM, SIGHUP), in the run summary's words."""
+    from roomba_bt.robot.safety import signal_reason
+
+    signum = getattr(interrupt, "signum", signal.SIGINT)
+    said = "Ctrl-C (SIGINT)" if signum == signal.SIGINT else signal_reason(signum)
+    return Interruption(signal.Signals(signum).name, f"by {said}")
+
+
 @dataclass(frozen=True)
 class Evaluation:
     """What a batch of episodes gave: results in spec order (only those that finished when
     ``interrupted``), how many were run again after a worker died, and where they ran;
-    ``stopped``, why the evaluation stopped before the end when no Ctrl-C did (the cluster's
-    workers gone: :class:`~roomba_bt.evaluate.cluster.NoWorkersError`; ``interrupted`` too)."""
+    ``interruption``, why it stopped before the end (a signal, or the workers or the cluster
+    gone; set whenever the engine stopped it, with ``interrupted``)."""
 
     results: list[EpisodeResult]
     retried: int = 0
     interrupted: bool = False
     engine: str = "local"
-    stopped: str = ""
+    interruption: Interruption | None = None
 
 
 #: How long an evaluation on Dask waits with no worker in the cluster before it stops (s;
@@ -539,42 +578,49 @@ def evaluate(
     progress: Sequence[Progress | None] | None = None,
 ) -> list[Evaluation]:
     """Run each batch on ``engine`` (one Dask client for all of them); ``progress[i]`` for
-    batch ``i``. A Ctrl-C stops the batch running and skips the rest (each ``interrupted``)."""
+    batch ``i``. A Ctrl-C or a signal stops the batch running and skips the rest (each
+    ``interrupted``, with its :class:`Interruption`), as do local workers that keep dying
+    (:class:`WorkersLostError`) and a Dask cluster lost (no worker, no scheduler)."""
     bars: Sequence[Progress | None] = progress or [None] * len(batches)
     out: list[Evaluation] = []
     if engine.kind == "local":
         for specs, bar in zip(batches, bars, strict=True):
             if out and out[-1].interrupted:
-                out.append(Evaluation([], 0, True, "local"))
+                out.append(Evaluation([], 0, True, "local", out[-1].interruption))
                 continue
             run = LocalRun()
             try:
                 run_episodes(specs, engine.jobs, bar, run, engine.wall_limit_s)
-            except KeyboardInterrupt:
-                out.append(Evaluation(run.in_order(), run.retried, True, "local"))
+            except KeyboardInterrupt as exc:
+                out.append(Evaluation(run.in_order(), run.retried, True, "local",
+                                      interruption_by(exc)))  # fmt: skip
                 continue
             except WorkersLostError as exc:
-                print(f"roomba-bt eval: {exc}; stopped", file=sys.stderr)
-                out.append(Evaluation(run.in_order(), run.retried, True, "local"))
+                out.append(Evaluation(run.in_order(), run.retried, True, "local",
+                                      Interruption(WORKERS_LOST, str(exc))))  # fmt: skip
                 continue
             out.append(Evaluation(run.in_order(), run.retried, False, "local"))
         return out
-    from roomba_bt.evaluate.cluster import NoWorkersError, dask_client, run_on_client
+    from roomba_bt.evaluate.cluster import ClusterLostError, dask_client, run_on_client
 
     with dask_client(engine.scheduler, engine.jobs, engine.worker_wait_s) as client:
         for specs, bar in zip(batches, bars, strict=True):
             if out and out[-1].interrupted:
-                out.append(Evaluation([], 0, True, "dask"))
+                out.append(Evaluation([], 0, True, "dask", out[-1].interruption))
                 continue
-            stopped = ""
+            interruption = None
             try:
-                results, retried, interrupted = run_on_client(
+                results, retried, interrupt = run_on_client(
                     client, specs, bar, engine.wall_limit_s, engine.worker_wait_s
                 )
-            except NoWorkersError as exc:
-                results, retried, interrupted, stopped = exc.results, exc.retried, True, str(exc)
+                if interrupt is not None:
+                    interruption = interruption_by(interrupt)
+            except ClusterLostError as exc:
+                results, retried = exc.results, exc.retried
+                interruption = Interruption(exc.cause, exc.why)
             finished = [r for r in results if r is not None]
-            out.append(Evaluation(finished, retried, interrupted, "dask", stopped))
+            out.append(Evaluation(finished, retried, interruption is not None, "dask",
+                                  interruption))  # fmt: skip
     return out
 
 

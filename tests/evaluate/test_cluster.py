@@ -52,11 +52,11 @@ def test_results_released_as_they_come_are_all_kept(
     episodes: 16 a batch). Released after each result here, every result is kept."""
     release = cluster._count_and_release
 
-    def released_and_forgotten(client: Any, futures: list[Any]) -> int:
+    def released_and_forgotten(client: Any, futures: list[Any], ask: bool = True) -> int:
         """Released, then waited for until the client has marked them so (its event loop
         does it a moment later: the race ``make bench`` lost now and then)."""
         held = list(futures)
-        retried = release(client, futures)
+        retried = release(client, futures, ask)
         deadline = time.monotonic() + 10
         while any(f.status != "cancelled" for f in held) and time.monotonic() < deadline:
             time.sleep(0.005)
@@ -75,8 +75,12 @@ def _free_port() -> int:
         return int(s.getsockname()[1])
 
 
+#: the scheduler's address, its workers' processes and its own
+Separate = tuple[str, list[subprocess.Popen[bytes]], subprocess.Popen[bytes]]
+
+
 @pytest.fixture
-def scheduler(tmp_path: Path) -> Iterator[tuple[str, list[subprocess.Popen[bytes]]]]:
+def scheduler(tmp_path: Path) -> Iterator[Separate]:
     """A scheduler and two single-threaded workers without nannies (a killed worker stays
     dead), each its own process, run from another folder (no shared files with the test)."""
     port = _free_port()
@@ -93,7 +97,7 @@ def scheduler(tmp_path: Path) -> Iterator[tuple[str, list[subprocess.Popen[bytes
     ]  # fmt: skip
     processes += workers
     try:
-        yield address, workers
+        yield address, workers, processes[0]
     finally:
         for p in processes:
             p.kill()
@@ -117,9 +121,9 @@ def _connect_when_ready(address: str) -> object:
 
 def test_separate_scheduler_and_workers_give_the_results_of_one_job_even_if_one_dies(
     one_job: list[EpisodeResult],
-    scheduler: tuple[str, list[subprocess.Popen[bytes]]],
+    scheduler: Separate,
 ) -> None:
-    address, workers = scheduler
+    address, workers, _ = scheduler
     client = _connect_when_ready(address)
     with client:  # type: ignore[attr-defined]
         client.wait_for_workers(2, timeout=60)  # type: ignore[attr-defined]
@@ -144,9 +148,30 @@ def test_separate_scheduler_and_workers_give_the_results_of_one_job_even_if_one_
     assert retried >= 1, "the killed worker's episode ran again elsewhere"
 
 
+def _evaluation_under_way(
+    child: Callable[[Sequence[str]], subprocess.Popen[str]], address: str, out: Path,
+    *options: str,
+) -> subprocess.Popen[str]:  # fmt: skip
+    """``roomba-bt eval`` of 400 dock episodes on the cluster at ``address``, writing ``out``,
+    once its first episode is in the partial file (another process's file: polled)."""
+    with _connect_when_ready(address) as client:  # type: ignore[attr-defined]
+        client.wait_for_workers(2, timeout=60)
+    evaluation = child(
+        [sys.executable, "-m", "roomba_bt", "eval", str(MISSIONS / "dock.yaml"), "--runs", "400",
+         "--within", "1.5", "--no-progress", "--scheduler", address, "--out", str(out),
+         *options]
+    )  # fmt: skip
+    partial = Path(f"{out}.partial.jsonl")
+    deadline = time.monotonic() + 120
+    while not (partial.exists() and partial.read_text().strip()):
+        assert evaluation.poll() is None and time.monotonic() < deadline
+        time.sleep(0.05)  # another process's file: no event to wait on
+    return evaluation
+
+
 def test_a_cluster_whose_workers_are_gone_for_good_stops_after_worker_wait_with_exit_3(
     tmp_path: Path,
-    scheduler: tuple[str, list[subprocess.Popen[bytes]]],
+    scheduler: Separate,
     child: Callable[[Sequence[str]], subprocess.Popen[str]],
 ) -> None:
     """Every worker killed mid-evaluation (no nanny starts them again): the scheduler held the
@@ -155,30 +180,58 @@ def test_a_cluster_whose_workers_are_gone_for_good_stops_after_worker_wait_with_
     that finished summarised and written to --out."""
     from roomba_bt.evaluate.records import read_results
 
-    address, workers = scheduler
-    with _connect_when_ready(address) as client:  # type: ignore[attr-defined]
-        client.wait_for_workers(2, timeout=60)
+    address, workers, _ = scheduler
     out = tmp_path / "out.jsonl"
-    partial = Path(f"{out}.partial.jsonl")
-    evaluation = child(
-        [sys.executable, "-m", "roomba_bt", "eval", str(MISSIONS / "dock.yaml"), "--runs", "400",
-         "--within", "1.5", "--no-progress", "--scheduler", address, "--worker-wait", "2s",
-         "--out", str(out)]
-    )  # fmt: skip
-    deadline = time.monotonic() + 120
-    while not (partial.exists() and partial.read_text().strip()):
-        assert evaluation.poll() is None and time.monotonic() < deadline
-        time.sleep(0.05)  # another process's file: no event to wait on
+    evaluation = _evaluation_under_way(child, address, out, "--worker-wait", "2s")
     for worker in workers:
         worker.kill()
     stdout, stderr = evaluation.communicate(timeout=120)
     assert evaluation.returncode == 3, stderr
     assert f"the Dask cluster at {address} has had no worker for " in stderr
-    assert "(--worker-wait 2 s): its workers are gone; stopped with " in stderr
-    assert "what finished is summarised above" in stderr and "Traceback" not in stderr
     records = read_results(out)
     assert 1 <= len(records) < 400
+    assert (
+        f"(--worker-wait 2 s): its workers are gone; {len(records)} of 400 episode(s) "
+        "finished, summarised above"
+    ) in stderr
+    assert "Traceback" not in stderr
     assert f"/{len(records)} = " in stdout  # the summary of those that finished
+    assert f"interrupted  the Dask cluster at {address} has had no worker for " in stdout
+
+
+def test_a_scheduler_lost_mid_evaluation_stops_it_with_exit_3_and_what_finished(
+    tmp_path: Path,
+    scheduler: Separate,
+    child: Callable[[Sequence[str]], subprocess.Popen[str]],
+) -> None:
+    """The scheduler killed mid-evaluation: Dask's client cancels every future it held, and
+    the evaluation took the cancelled episodes for none to run: it ended exit 0, ``success
+    18/18`` of 400 episodes, not a word of the others. Now it stops: exit 3 (the cluster's
+    failure, as an unreachable --scheduler), why in the summary (``interrupted_by``:
+    ``scheduler-lost``) and on stderr, and the episodes that finished, those the partial
+    file held, summarised and written to --out."""
+    import json
+
+    from roomba_bt.evaluate.records import read_results
+
+    address, _, scheduler_process = scheduler
+    out = tmp_path / "out.jsonl"
+    evaluation = _evaluation_under_way(child, address, out, "--json")
+    scheduler_process.kill()
+    stdout, stderr = evaluation.communicate(timeout=120)
+    assert evaluation.returncode == 3, stderr
+    report = json.loads(stdout)
+    lost = f"the connection to the Dask scheduler at {address} was lost"
+    assert (report["interrupted"], report["interrupted_by"]) == (True, "scheduler-lost")
+    assert report["interruption"].startswith(lost)
+    records = read_results(out)
+    (variant,) = report["variants"]
+    assert 1 <= len(records) == variant["runs"] < 400
+    assert sorted(r.seed for r in records) == [r.seed for r in records]
+    assert f"{lost} " in stderr
+    assert f"; {len(records)} of 400 episode(s) finished, summarised above" in stderr
+    assert "Traceback" not in stderr
+    assert not Path(f"{out}.partial.jsonl").exists(), "--out written: the partial file removed"
 
 
 def test_an_unreachable_scheduler_exits_3(

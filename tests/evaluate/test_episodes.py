@@ -314,6 +314,38 @@ def test_workers_that_keep_dying_with_no_episode_to_blame_end_with_a_message(
     )
 
 
+def test_eval_ends_3_when_its_workers_keep_dying_with_no_episode_to_blame(
+    hooked,  # type: ignore[no-untyped-def]
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Workers killed from outside again and again (the OOM killer under memory pressure)
+    ended ``eval`` 130, as a Ctrl-C, and ``--json`` said ``"interrupted": true`` alone: a
+    CI job read its operator's stop. The run environment failed, not the missions and not
+    the operator: exit 3, as for a Dask cluster whose workers are gone (docs/evaluation.md),
+    why said in the JSON (``interrupted_by``: ``workers-lost``) and on stderr, and what
+    finished written to --out."""
+    import json
+
+    from roomba_bt.cli import main
+    from roomba_bt.evaluate.records import read_results
+
+    hooked(3, "kill-unless-alone")
+    out = tmp_path / "out.jsonl"
+    code = main(["eval", BUMP, "-p", "duration=2s", "--world", "corridor", "--runs", "12",
+                 "--timeout", "10s", "--jobs", "2", "--no-progress", "--json",
+                 "--out", str(out)])  # fmt: skip
+    stdout, err = capsys.readouterr()
+    assert code == 3, err
+    report = json.loads(stdout)
+    assert (report["interrupted"], report["interrupted_by"]) == (True, "workers-lost")
+    assert report["interruption"].startswith("a worker process died 3 times with no episode")
+    finished = len(read_results(out))
+    assert 3 <= finished < 12 and report["variants"][0]["runs"] == finished
+    assert f"; {finished} of 12 episode(s) finished, summarised above" in err
+    assert "Traceback" not in err
+
+
 def test_results_are_taken_as_they_finish_and_a_ctrl_c_keeps_them(hooked) -> None:  # type: ignore[no-untyped-def]
     """pool.imap handed results back in seed order: episodes finished after a slow one were
     neither in the partial file nor kept by a Ctrl-C. Seed 0 waits here until three later

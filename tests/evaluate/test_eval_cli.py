@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import shlex
+import subprocess
 import sys
 from pathlib import Path
 
@@ -274,6 +275,8 @@ def test_the_json_summary_records_how_the_episodes_were_made(
         "engine",
         "retried",
         "interrupted",
+        "interrupted_by",
+        "interruption",
         "variants",
         "comparisons",
         "passed",
@@ -464,25 +467,15 @@ def test_an_interrupted_ab_compares_the_seeds_both_finished(
         assert "no comparison, no seed finished with both (interrupted)" in out
 
 
-@pytest.mark.parametrize(
-    "engine", [["--jobs", "1"], ["--jobs", "2"], ["--engine", "dask", "--jobs", "2"]]
-)
-def test_ctrl_c_prints_what_finished_and_exits_130(tmp_path: Path, engine: list[str]) -> None:
-    """SIGINT after the first episode has reported (read from the progress bar, not a
-    clock), to the whole process group as a terminal sends it: the summary of the finished
-    episodes, exit code 130, and no traceback (each pool worker, Dask nanny and worker
-    printed its own)."""
+def _eval_past_its_first_episode(out: Path, *options: str) -> tuple[subprocess.Popen[bytes], bytes]:
+    """``roomba-bt eval`` of 200 dock episodes writing ``out``, in a session of its own, once
+    its progress bar says the first finished (read from its stderr, not a clock); what it
+    wrote to stderr meanwhile."""
     import os
-    import signal
-    import subprocess
 
-    if "dask" in engine:
-        pytest.importorskip("distributed")
-
-    out = tmp_path / "partial.jsonl"
     proc = subprocess.Popen(
         [sys.executable, "-m", "roomba_bt.cli", "eval", str(MISSIONS / "dock.yaml"),
-         "--runs", "200", "--within", "1.5", "--out", str(out), *engine],
+         "--runs", "200", "--within", "1.5", "--out", str(out), *options],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,
     )  # fmt: skip
     assert proc.stderr is not None and proc.stdout is not None
@@ -491,14 +484,106 @@ def test_ctrl_c_prints_what_finished_and_exits_130(tmp_path: Path, engine: list[
         chunk = os.read(proc.stderr.fileno(), 4096)
         assert chunk, f"eval ended before its first episode: {seen!r}"
         seen += chunk
+    return proc
+
+
+@pytest.mark.parametrize(
+    "engine", [["--jobs", "1"], ["--jobs", "2"], ["--engine", "dask", "--jobs", "2"]]
+)
+def test_ctrl_c_prints_what_finished_and_exits_130(tmp_path: Path, engine: list[str]) -> None:
+    """SIGINT after the first episode has reported, to the whole process group as a terminal
+    sends it: the summary of the finished episodes, exit code 130, and no traceback (each
+    pool worker, Dask nanny and worker printed its own)."""
+    import os
+    import signal
+
+    if "dask" in engine:
+        pytest.importorskip("distributed")
+
+    out = tmp_path / "partial.jsonl"
+    proc = _eval_past_its_first_episode(out, *engine)
     os.killpg(proc.pid, signal.SIGINT)
     stdout, stderr = proc.communicate(timeout=120)
     assert proc.returncode == 130, stderr
     finished = len(out.read_text(encoding="utf-8").splitlines())
     assert 1 <= finished < 200
     assert f"/{finished} = " in stdout.decode()
-    assert f"interrupted; {finished} episode(s) finished" in (seen + stderr).decode()
+    said = f"interrupted by Ctrl-C (SIGINT); {finished} of 200 episode(s) finished"
+    assert f"roomba-bt eval: {said}, summarised above" in stderr.decode()
+    assert f"interrupted  by Ctrl-C (SIGINT); {finished} of 200 episode(s) finished" in (
+        stdout.decode()
+    )
     assert "Traceback" not in stderr.decode() and "safe stop" not in stderr.decode(), stderr
+
+
+@pytest.mark.parametrize("engine", [["--jobs", "2"], ["--jobs", "1", "--wall-limit", "none"]])
+def test_a_sigterm_says_so_in_the_json_summary(tmp_path: Path, engine: list[str]) -> None:
+    """``--json`` said ``"interrupted": true`` and not why: a job scheduler's SIGTERM read as
+    an operator's Ctrl-C, or a cluster gone. Now ``interrupted_by`` names the signal and
+    ``interruption`` says it as the text summary's ``interrupted`` line does; exit 130. Sent
+    to the evaluation alone, as ``kill`` does: also while it runs an episode in its own
+    process (``--jobs 1 --wall-limit none``), where the run's guard takes the signal."""
+    import json
+    import signal
+
+    out = tmp_path / "partial.jsonl"
+    proc = _eval_past_its_first_episode(out, "--json", *engine)
+    proc.send_signal(signal.SIGTERM)
+    stdout, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 130, stderr
+    report = json.loads(stdout)
+    finished = len(out.read_text(encoding="utf-8").splitlines())
+    assert report["variants"][0]["runs"] == finished
+    assert (report["interrupted"], report["interrupted_by"]) == (True, "SIGTERM")
+    assert report["interruption"] == "by SIGTERM"
+    said = f"interrupted by SIGTERM; {finished} of 200 episode(s) finished, summarised above"
+    assert f"roomba-bt eval: {said}" in stderr.decode()
+    assert "Traceback" not in stderr.decode()
+
+
+def test_an_evaluation_that_ran_to_its_end_says_no_interruption(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    import json
+
+    assert main(["eval", BUMP, "-p", "duration=1s", "--runs", "2", "--no-progress"]) == 0
+    assert "interrupted" not in capsys.readouterr().out
+    assert main(["eval", BUMP, "-p", "duration=1s", "--runs", "2", "--no-progress",
+                 "--json"]) == 0  # fmt: skip
+    report = json.loads(capsys.readouterr().out)
+    assert (report["interrupted"], report["interrupted_by"], report["interruption"]) == (
+        False, None, None
+    )  # fmt: skip
+
+
+def test_strict_runs_no_episode_of_a_mission_with_warnings_exit_7_as_run_strict(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``validate --strict`` and ``run --strict`` refuse a mission with compile-time
+    warnings; ``eval`` had no ``--strict`` and ran every episode of it. Now ``eval --strict``
+    refuses it as ``run --strict`` does (exit 7, validate's verdict after the warning), before
+    any episode or file; each mission with warnings is named, not the clean one beside it."""
+    from roomba_bt.runtime.summary import ExitCode
+
+    warned = tmp_path / "w1.yaml"
+    warned.write_text("tree:\n  sequence:\n    - mode: full\n"
+                      "    - drive: {velocity: 100 mm/s, duration: 1s}\n")  # fmt: skip
+    out = tmp_path / "r.jsonl"
+    dock = str(MISSIONS / "dock.yaml")
+    options = ["--within", "1.5", "--runs", "2", "--no-progress", "--out", str(out)]
+    argv = ["eval", dock, str(warned), *options]
+    assert main([*argv, "--strict"]) == ExitCode.STRICT
+    stdout, err = capsys.readouterr()
+    assert stdout == ""
+    assert err.startswith(f"{warned}:4:7: warning: drive can turn the wheels in Full mode")
+    assert err.endswith(f"roomba-bt eval: {warned}: failed --strict (1 warning); no episode runs\n")
+    assert dock not in err
+    assert not out.exists() and not Path(f"{out}.partial.jsonl").exists()
+    assert main(["run", str(warned), "--fast", "--display", "none", "--strict"]) == ExitCode.STRICT
+    capsys.readouterr()
+    assert main(["eval", dock, *options, "--strict"]) == ExitCode.OK  # the clean one alone
+    assert main(argv) == ExitCode.OK  # without --strict: run, the warning printed
+    assert "warning: drive can turn the wheels in Full mode" in capsys.readouterr().err
 
 
 def test_a_cleaning_mission_reports_its_coverage_as_json(
