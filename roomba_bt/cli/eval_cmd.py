@@ -590,10 +590,8 @@ def worker_wait(args: argparse.Namespace) -> float | str | None:
 def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpec]], World] | int:
     """The variants and their episodes; each mission and the world checked once, here,
     before any worker starts. An exit code on a problem (said on stderr)."""
-    from roomba_bt.cli.run_cmd import load
     from roomba_bt.evaluate import EvaluationError, episode_specs
     from roomba_bt.evaluate.episode import build_world, start_pose
-    from roomba_bt.oi.profiles import get_profile
 
     params = parse_params(args.param)
     if isinstance(params, str):
@@ -627,19 +625,9 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
         )
         for v in chosen
     ]
-    missions = []
-    for v in chosen:
-        loaded = load(
-            v.mission,
-            dict(v.params),
-            get_profile(args.profile),
-            granted=permissions(args, v.mission),
-        )
-        if isinstance(loaded, int):
-            return loaded
-        missions.append(loaded)
-    if args.strict and any(m.warnings for m in missions):
-        return _refused_by_strict(chosen, missions)
+    missions = _compiled(args, chosen)
+    if isinstance(missions, int):
+        return missions
     try:
         world = build_world(batches[0][0])
         start_pose(world, batches[0][0])
@@ -650,17 +638,29 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
     return chosen, batches, world
 
 
-def _refused_by_strict(chosen: list[Variant], missions: list[Any]) -> int:
-    """``--strict``: each variant whose mission has compile-time warnings (printed as it was
-    loaded) said as ``run --strict`` says it, in ``validate --strict``'s words, and exit 7
-    before any worker starts. It ran every episode of such a mission under ``validate
-    --strict``'s CI, and a 1000-episode sweep's exit 0 read as a clean one."""
+def _compiled(args: argparse.Namespace, chosen: list[Variant]) -> list[Any] | int:
+    """Each variant's mission compiled (its warnings printed), or an exit code: 2 for an
+    error (said), 7 with ``--strict`` when one has compile-time warnings, each such variant
+    said as ``run --strict`` says it, in ``validate --strict``'s words, before any worker
+    starts (``eval`` ran every episode of such a mission, exit 0, what CI's ``validate
+    --strict`` failed)."""
+    from roomba_bt.cli.run_cmd import load
     from roomba_bt.cli.validate_report import failed_strict
+    from roomba_bt.oi.profiles import get_profile
 
-    for v, mission in zip(chosen, missions, strict=True):
-        if mission.warnings:
-            said = failed_strict(v.label, mission.warnings)
-            print(f"roomba-bt eval: {said}; no episode runs", file=sys.stderr)
+    missions = []
+    for v in chosen:
+        loaded = load(v.mission, dict(v.params), get_profile(args.profile),
+                      granted=permissions(args, v.mission))  # fmt: skip
+        if isinstance(loaded, int):
+            return loaded
+        missions.append(loaded)
+    warned = [(v, m) for v, m in zip(chosen, missions, strict=True) if m.warnings]
+    if not (args.strict and warned):
+        return missions
+    for v, mission in warned:
+        said = failed_strict(v.label, mission.warnings)
+        print(f"roomba-bt eval: {said}; no episode runs", file=sys.stderr)
     return ExitCode.STRICT
 
 

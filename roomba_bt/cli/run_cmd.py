@@ -131,13 +131,7 @@ def _add_run_parser(sub: Any) -> None:
     add_permission_options(run)
     run.add_argument("--fast", action="store_true", help="simulator on the virtual clock")
     add_reproducible_option(run)
-    add_strict_option(
-        run,
-        "(nor reloaded by --watch); one that succeeded exits 7 if the mode guard refused any "
-        "command, a command was dropped while the tree was stopped, or the robot fell out of "
-        "Safe/Full by itself (a cliff, a wheel drop; not onto a charger): the summary's strict "
-        "line names each count and its first instance",
-    )
+    _add_strict_option(run)
     _add_session_options(run)
     run.add_argument(
         "--display", choices=("auto", "tree", "log", "none"), default="auto",
@@ -173,6 +167,17 @@ def _add_label_option(run: argparse.ArgumentParser) -> None:
         "and each log line, the summary, the monitor's URL line, page and tab, and the record "
         f"(1 to {LABEL_LENGTH} printable characters)",
     )  # fmt: skip
+
+
+def _add_strict_option(run: argparse.ArgumentParser) -> None:
+    """``--strict``: what the run did fails it too, beside compile-time warnings."""
+    add_strict_option(
+        run,
+        "(nor reloaded by --watch); one that succeeded exits 7 if the mode guard refused any "
+        "command, a command was dropped while the tree was stopped, or the robot fell out of "
+        "Safe/Full by itself (a cliff, a wheel drop; not onto a charger): the summary's strict "
+        "line names each count and its first instance",
+    )
 
 
 def _add_session_options(run: argparse.ArgumentParser) -> None:

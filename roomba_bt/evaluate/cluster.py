@@ -485,10 +485,9 @@ def run_on_client(
 ) -> tuple[list[EpisodeResult | None], int, KeyboardInterrupt | None]:
     """``(results in spec order (None where cancelled), episodes retried, the Ctrl-C or
     signal that interrupted it (None: none did))``; each episode within ``wall_limit_s``
-    (:func:`within_wall_limit`); after ``worker_wait_s`` with no worker in the cluster
-    (:class:`WorkerWatch`; None: waited for ever), the evaluation stops:
-    :class:`NoWorkersError`, with what finished; so it does when the scheduler is lost or
-    cancels episodes itself (:class:`SchedulerLostError`).
+    (:func:`within_wall_limit`). The cluster lost stops it, with what finished: no worker
+    for ``worker_wait_s`` (:class:`WorkerWatch`, :class:`NoWorkersError`; None: waited for
+    ever), the scheduler gone or cancelling episodes itself (:class:`SchedulerLostError`).
 
     Each result is released once gathered (in batches of :data:`RELEASE_EVERY`, after the
     scheduler says which of them a dead worker held): futures kept to the end made the
@@ -498,12 +497,7 @@ def run_on_client(
     total = len(specs)
     batch = uuid.uuid4().hex[:12]  # keys unique on a cluster shared by many evaluations
     travelling = all_self_contained(specs)
-    futures = {
-        f"episode-{batch}-{i}": client.submit(
-            run_on_worker, spec, wall_limit_s, key=f"episode-{batch}-{i}", pure=False
-        )
-        for i, spec in enumerate(travelling)
-    }
+    futures = _submitted(client, travelling, wall_limit_s, batch)
     results: list[EpisodeResult | None] = [None] * total
     gathered = _Gathered()
     interrupt: KeyboardInterrupt | None = None
@@ -528,8 +522,9 @@ def run_on_client(
         except KeyboardInterrupt as exc:
             interrupt = exc
             client.cancel([f for f in futures.values() if not f.done()])
-    held = [*gathered.futures, *futures.values()]
-    retried = gathered.retried + _count_and_release(client, held, gathered.asks_scheduler)
+    retried = gathered.retried + _count_and_release(
+        client, [*gathered.futures, *futures.values()], gathered.asks_scheduler
+    )
     if watch.expired:
         raise NoWorkersError(watch.expired, results, retried)
     unfinished = sum(r is None for r in results)
@@ -537,6 +532,19 @@ def run_on_client(
         why = scheduler_lost(client, gathered.cancelled_because, unfinished)
         raise SchedulerLostError(why, results, retried)
     return results, retried, interrupt
+
+
+def _submitted(
+    client: Any, specs: Sequence[EpisodeSpec], wall_limit_s: float | None, batch: str
+) -> dict[str, Any]:
+    """A future of each episode on the cluster, by its key ``episode-BATCH-i`` (``i``: its
+    spec's index, which :func:`_gather` reads back)."""
+    return {
+        f"episode-{batch}-{i}": client.submit(
+            run_on_worker, spec, wall_limit_s, key=f"episode-{batch}-{i}", pure=False
+        )
+        for i, spec in enumerate(specs)
+    }
 
 
 @dataclass

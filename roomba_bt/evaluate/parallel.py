@@ -520,8 +520,9 @@ class Interruption:
 
 
 def interruption_by(interrupt: KeyboardInterrupt) -> Interruption:
-    """The :class:`Interruption` a Ctrl-C or a signal stands for (:class:`~roomba_bt.robot.
-    safety.Terminated` carries its signal: SIGTERM, SIGHUP), in the run summary's words."""
+    """The :class:`Interruption` a Ctrl-C or a signal stands for (a
+    :class:`~roomba_bt.robot.safety.Terminated` carries its signal: SIGTERM, SIGHUP), in the
+    run summary's words."""
     from roomba_bt.robot.safety import signal_reason
 
     signum = getattr(interrupt, "signum", signal.SIGINT)
