@@ -349,11 +349,10 @@ class SchedulerLostError(ClusterLostError):
 CONNECTION_LOST = "scheduler-connection-lost"
 
 
-def scheduler_lost(client: Any, cancelled_because: str, unfinished: int) -> str:
-    """Why ``unfinished`` episodes never came back, the scheduler having cancelled them
-    (``cancelled_because``: Dask's reason, :data:`CONNECTION_LOST` when its connection
-    closed), in words."""
-    address = _scheduler_address(client)
+def scheduler_lost(address: str, cancelled_because: str, unfinished: int) -> str:
+    """Why ``unfinished`` episodes never came back, the scheduler at ``address`` having
+    cancelled them (``cancelled_because``: Dask's reason, :data:`CONNECTION_LOST` when its
+    connection closed), in words."""
     if cancelled_because == CONNECTION_LOST:
         return (
             f"the connection to the Dask scheduler at {address} was lost (the scheduler "
@@ -381,21 +380,27 @@ class WorkerWatch:
     :attr:`expired` says why. Dask's scheduler holds the futures of a cluster without
     workers for ever (its ``no-workers-timeout`` is off by default, and a cluster of one's
     own keeps its settings); a local cluster whose nanny could not start a worker again was
-    one such. ``limit_s`` None: no watch."""
+    one such. ``limit_s`` None: no limit.
+
+    It also ends the gathering (:meth:`gathering`) once the client has closed, having
+    failed to reconnect to a scheduler that was lost: a result Dask was fetching when its
+    scheduler died never completes its ``as_completed``, which then waited for ever."""
 
     def __init__(self, client: Any, limit_s: float | None) -> None:
         self.client = client
         self.limit_s = limit_s
         self.expired = ""
         self._guarded: list[Any] = []
+        self._completing: Any = None
+        #: the client has closed: it lost its scheduler and could not reconnect
+        self.closed = False
         self._lock = threading.Lock()
         self._done = threading.Event()
         self._thread = threading.Thread(target=self._watch, name="roomba-bt worker watch",
                                         daemon=True)  # fmt: skip
 
     def __enter__(self) -> WorkerWatch:
-        if self.limit_s is not None:
-            self._thread.start()
+        self._thread.start()
         return self
 
     def __exit__(self, *exc: object) -> None:
@@ -410,17 +415,37 @@ class WorkerWatch:
             if self.expired:
                 self.client.cancel(self._guarded)
 
+    def gathering(self, completing: Any) -> None:
+        """``completing`` (Dask's ``as_completed``) ended if the client closes: what came
+        back before is in by then (a closed client gets nothing more), so nothing is lost;
+        at once if it has closed."""
+        with self._lock:
+            self._completing = completing
+            if self.closed:
+                completing.clear()
+
+    def _end_the_gathering_if_closed(self) -> bool:
+        if getattr(self.client, "status", "running") != "closed":
+            return False
+        with self._lock:
+            self.closed = True
+            if self._completing is not None:
+                self._completing.clear()
+        return True
+
     def _workers(self) -> int:
         with contextlib.suppress(Exception):  # no answer: no worker the evaluation can use
             return len(self.client.nthreads())
         return 0
 
     def _watch(self) -> None:
-        assert self.limit_s is not None
         seen = time.monotonic()
-        while not self._done.wait(min(WORKER_POLL_S, self.limit_s / 4)):
+        poll = WORKER_POLL_S if self.limit_s is None else min(WORKER_POLL_S, self.limit_s / 4)
+        while not self._done.wait(poll):
             now = time.monotonic()
-            if self._workers():
+            if self._end_the_gathering_if_closed():
+                return
+            if self.limit_s is None or self._workers():
                 seen = now
             elif now - seen >= self.limit_s:
                 address = _scheduler_address(self.client)
@@ -496,6 +521,7 @@ def run_on_client(
     are done (:func:`_alone`): DIED if it kills its workers again; it ended the evaluation."""
     total = len(specs)
     batch = uuid.uuid4().hex[:12]  # keys unique on a cluster shared by many evaluations
+    address = _scheduler_address(client)  # a client that lost its scheduler forgets it
     travelling = all_self_contained(specs)
     futures = _submitted(client, travelling, wall_limit_s, batch)
     results: list[EpisodeResult | None] = [None] * total
@@ -512,7 +538,7 @@ def run_on_client(
     with WorkerWatch(client, worker_wait_s) as watch:
         watch.guard(futures.values())
         try:
-            given_up = _gather(client, specs, futures, gathered, finished)
+            given_up = _gather(client, watch, specs, futures, gathered, finished)
             for i, first in sorted(given_up.items()):
                 if gathered.cancelled_because:  # the scheduler is gone: nothing runs alone
                     break
@@ -529,7 +555,8 @@ def run_on_client(
         raise NoWorkersError(watch.expired, results, retried)
     unfinished = sum(r is None for r in results)
     if unfinished and interrupt is None:  # cancelled, not by us: the summary would say 20/20
-        why = scheduler_lost(client, gathered.cancelled_because, unfinished)
+        because = gathered.cancelled_because or (CONNECTION_LOST if watch.closed else "")
+        why = scheduler_lost(address, because, unfinished)
         raise SchedulerLostError(why, results, retried)
     return results, retried, interrupt
 
@@ -574,6 +601,7 @@ class _Gathered:
 
 def _gather(
     client: Any,
+    watch: WorkerWatch,
     specs: Sequence[EpisodeSpec],
     futures: dict[str, Any],
     gathered: _Gathered,
@@ -583,14 +611,17 @@ def _gather(
     ``finished``, gathered on the client's event loop (not one blocking round trip from this
     thread each); each moved from ``futures`` to ``gathered`` and released there in batches
     of :data:`RELEASE_EVERY`. A cancelled one (a :class:`WorkerWatch` found no worker, the
-    scheduler was lost) has no result: why is noted (:meth:`_Gathered.cancelled`). The
-    episodes Dask gave up on, by spec index: their errors (:func:`_killed_worker`)."""
+    scheduler was lost) has no result: why is noted (:meth:`_Gathered.cancelled`); ``watch``
+    ends the gathering if the client closes (:meth:`WorkerWatch.gathering`). The episodes
+    Dask gave up on, by spec index: their errors (:func:`_killed_worker`)."""
     distributed = _import_distributed()
     index = {key: i for i, key in enumerate(futures)}
     given_up: dict[int, BaseException] = {}
-    for future, result in distributed.as_completed(
+    completing = distributed.as_completed(
         list(futures.values()), with_results=True, raise_errors=False
-    ):
+    )
+    watch.gathering(completing)
+    for future, result in completing:
         status = future.status  # before the release below, which marks it cancelled
         gathered.futures.append(futures.pop(future.key))
         if len(gathered.futures) >= RELEASE_EVERY:

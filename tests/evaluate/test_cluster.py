@@ -234,6 +234,36 @@ def test_a_scheduler_lost_mid_evaluation_stops_it_with_exit_3_and_what_finished(
     assert not Path(f"{out}.partial.jsonl").exists(), "--out written: the partial file removed"
 
 
+def test_a_client_that_closed_ends_the_gathering() -> None:
+    """A result Dask was fetching when its scheduler died never completes its
+    ``as_completed``, which waited for ever: now and then the evaluation hung after its
+    scheduler was killed. Once the client has closed (it gave up reconnecting), the watch
+    ends the gathering, also one that begins after."""
+    import threading
+
+    from roomba_bt.evaluate.cluster import WorkerWatch
+
+    class Completing:
+        def __init__(self) -> None:
+            self.cleared = threading.Event()
+
+        def clear(self) -> None:
+            self.cleared.set()
+
+    client = type("ClosedClient", (), {"status": "closed"})()
+    with WorkerWatch(client, None) as watch:
+        watch._thread.join(timeout=30)  # it ends once it has seen the client closed
+        assert watch.closed
+        late = Completing()
+        watch.gathering(late)
+        assert late.cleared.is_set()
+    running = type("RunningClient", (), {"status": "running"})()
+    with WorkerWatch(running, None) as watch:
+        completing = Completing()
+        watch.gathering(completing)
+    assert not completing.cleared.is_set() and not watch.closed
+
+
 def test_an_unreachable_scheduler_exits_3(
     capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
