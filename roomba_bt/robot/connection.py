@@ -53,6 +53,7 @@ from roomba_bt.robot.interface import ModeChange
 from roomba_bt.robot.link import LinkStatus, StreamLink, TimedFrame
 from roomba_bt.robot.modes import DEFAULT_SETTLE, ModeModel
 from roomba_bt.robot.silence import (
+    another_model,
     answers_elsewhere,
     asleep_by_idle,
     explain_silence,
@@ -429,6 +430,8 @@ class Connection:
         except StreamStalled as exc:
             if self.link.banner_seen():
                 raise RobotReset(self.name, exc.halted) from exc
+            if exc.mismatch is not None:  # another model's frames: the stop's check too
+                another_model(self, exc.mismatch)
             cause = (
                 asleep_by_idle(self)
                 or follow_baud(self)

@@ -68,7 +68,10 @@ RETRY_AFTER_S = 0.1
 NOISY_FOR_S = 0.5
 
 if TYPE_CHECKING:
+    from roomba_bt.oi.identify import ChecksumMismatch, RangeMismatch
     from roomba_bt.robot.connection import Connection
+
+    ProfileMismatch = ChecksumMismatch | RangeMismatch
 
 #: How long each query waits for its one-byte reply.
 QUERY_TIMEOUT_S = 0.3
@@ -172,14 +175,14 @@ def garbled_line(
     link = connection.link
     mismatch = link.profile_mismatch()
     noisy = link.damaged_frame_at > link.silent_since  # its frames, damaged: at our rate
-    connection.unheard = (
-        f"its frames fail {mismatch.fails} (most likely a {mismatch.likely[0].title}: "
-        f"--profile {mismatch.likely[0].name})"
-        if mismatch is not None
-        else f"the line is garbled (the robot's frames come damaged at {connection.baud})"
-        if noisy
-        else f"the line is garbled (no valid frame at {connection.baud} or another OI rate)"
-    )
+    if mismatch is not None:
+        another_model(connection, mismatch)
+    else:
+        connection.unheard = (
+            f"the line is garbled (the robot's frames come damaged at {connection.baud})"
+            if noisy
+            else f"the line is garbled (no valid frame at {connection.baud} or another OI rate)"
+        )
     return StreamLost(
         connection.name, silent_for, grace, garbled, watchdog=link.watchdog, halted=halted,
         mismatch=mismatch,
@@ -289,10 +292,33 @@ def _confirm_at(connection: Connection, rate: int) -> None:
     """The port followed the robot to ``rate`` on its frames alone: the stop written there is
     unconfirmed until the robot answers a Query List there (asked after the stop, the stream
     paused; the answer's mode is the final mode seen)."""
-    connection.unheard = (
+    _confirmed_by_quiet(
+        connection,
         f"the port followed the robot to {rate} baud on its frames alone, and it answered no "
-        f"query at {rate} after the stop (it may not hear there)"
+        f"query at {rate} after the stop (it may not hear there)",
     )
+
+
+def another_model(connection: Connection, mismatch: ProfileMismatch) -> None:
+    """The stream stalled on frames of another model (``mismatch``: they fail the profile's
+    checksum or range and pass another's): the robot streams, and its frames, refused, can
+    neither show a silence before the stop nor one after it. A stop written now is known
+    heard once its Pause Stream quiets the line and the robot answers a Query List (whose
+    one-byte reply no profile's frame rules refuse); until then it is unconfirmed, with the
+    mismatch and its fix. It was said unconfirmed because "the robot had sent no valid
+    frame for 0.11 s before it", a silence that was only the profile's."""
+    likely = mismatch.likely[0]
+    _confirmed_by_quiet(
+        connection,
+        f"its frames fail {mismatch.fails} (most likely a {likely.title}: --profile "
+        f"{likely.name}), and it neither went quiet after Pause Stream nor answered a query",
+    )
+
+
+def _confirmed_by_quiet(connection: Connection, unheard: str) -> None:
+    """A stop written from now on is unconfirmed (``unheard`` says why) unless the line goes
+    quiet after it and the robot answers a Query List (:func:`_stop_heard`)."""
+    connection.unheard = unheard
     # weakly: the ending outlives a dropped connection (its finalizer holds it), and a
     # connection it held would never become garbage
     held = weakref.ref(connection)

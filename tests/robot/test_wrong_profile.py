@@ -115,3 +115,30 @@ def test_a_roomba500_summing_the_header_beside_a_wall_is_named_by_its_range(
     assert "within the Roomba 500 series range 0-4095" in message
     assert "--profile roomba500" in message
     connection.close()
+
+
+@pytest.mark.parametrize("sums_header", [True, False], ids=["range", "checksum"])
+@pytest.mark.parametrize("hears", [True, False], ids=["heard", "deaf"])
+def test_the_stop_after_another_model_s_stall_says_what_is_known(
+    sums_header: bool, hears: bool
+) -> None:
+    """After a stall on a Roomba 500's frames read with create2 (its frames fail the range,
+    or the checksum, of the profile), the stop was "unconfirmed: the robot had sent no valid
+    frame for 0.11 s before it": a silence that was only the profile's, the robot streaming
+    all along. Its Pause Stream heard (the line quiet) and a Query List answered confirm it;
+    a robot that hears nothing leaves it unconfirmed, with the mismatch and its fix."""
+    from dataclasses import replace
+
+    summing = replace(ROOMBA500, checksum_includes_header=sums_header)
+    stalled, connection = _stalled_beside_a_wall(summing, CREATE2)
+    assert stalled.mismatch is not None
+    simulator = connection.transport.simulator  # type: ignore[attr-defined]
+    simulator.deaf = not hears
+    assert connection.close() is hears
+    if hears:
+        assert connection.stop_report is None
+    else:
+        report = connection.stop_report or ""
+        assert "unconfirmed: its frames fail the create2 profile's" in report, report
+        assert "--profile roomba500" in report
+        assert "no valid frame" not in report
