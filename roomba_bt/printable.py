@@ -1,6 +1,7 @@
 """What of a text may reach a terminal or a log line as it is: the control characters a
 stranger's file can carry, the invisible ones that reorder or hide what is shown, and
-:func:`escaped` to show them as ``\\x1b`` or ``\\u202e``.
+:func:`escaped` to show them as ``\\x1b`` or ``\\u202e``; and a duration as a person reads it
+(:func:`duration_said`: ``1 d``, not ``86400 s``), the one spelling of every layer's messages.
 
 Standard library only and importing nothing of ours, so that every layer may use it, the
 protocol's included, and the command line's parser can say a name without loading YAML
@@ -11,7 +12,10 @@ from __future__ import annotations
 
 import re
 
-__all__ = ["ANY_CONTROL", "CONTROL", "INVISIBLE", "UNPRINTABLE", "encodes", "escaped"]
+__all__ = [
+    "ANY_CONTROL", "CONTROL", "INVISIBLE", "UNPRINTABLE", "duration_said", "duration_words",
+    "encodes", "escaped",
+]  # fmt: skip
 
 #: Characters no text of a data file may hold (C0 but tab and newline, DEL, C1): a file
 #: travels between strangers, and its texts reach the terminal (``show``, the live tree, the
@@ -61,3 +65,30 @@ def encodes(stream: object, text: str) -> bool:
     except (UnicodeError, LookupError):
         return False
     return True
+
+
+#: the units :func:`duration_words` says a duration in, largest first, in seconds (the
+#: mission language's own spelling: ``1 h 30 min`` reads back as a duration)
+_DURATION_WORDS = (("d", 86400), ("h", 3600), ("min", 60), ("s", 1))
+
+
+def duration_words(seconds: float) -> str:
+    """A duration as a person says a long one, to the second: ``4 h 12 min 3 s``, ``12 h``,
+    ``45 s``, ``1 d 2 h`` (units that are 0 left out)."""
+    left = round(seconds)
+    parts = []
+    for unit, size in _DURATION_WORDS:
+        count, left = divmod(left, size)
+        if count:
+            parts.append(f"{count} {unit}")
+    return " ".join(parts) or "0 s"
+
+
+def duration_said(seconds: float) -> str:
+    """A duration a message names (a time limit, a wait): ``45 s`` or ``0.25 s`` under a
+    minute, in words from a minute on when it is whole seconds (``1 d``, ``1 h 30 min``,
+    :func:`duration_words`), else as it is (``90.5 s``). ``--timeout 1d`` ran out as
+    ``--timeout 86400 s``, and a reader had to divide to know it was the day they gave."""
+    if seconds < 60 or seconds != int(seconds):
+        return f"{seconds:g} s"
+    return duration_words(seconds)

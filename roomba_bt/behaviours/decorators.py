@@ -29,6 +29,7 @@ from roomba_bt.behaviours.lean import (
 from roomba_bt.behaviours.reasons import SaysWhy, running_in, while_stopped
 from roomba_bt.behaviours.units import DURATION, UnitError
 from roomba_bt.oi.frames import SLOT_SECONDS
+from roomba_bt.printable import duration_said
 from roomba_bt.robot.interface import RobotHandle
 
 #: the statuses as module constants: ``Status.RUNNING`` goes through the Enum metaclass's
@@ -113,7 +114,9 @@ class Timeout(_Lasting):
         status: Status = self.decorated.status
         if status is _RUNNING and self.lasted(self.duration):
             where = running_in(self.decorated)
-            self.feedback_message = f"the tree's {self.duration:g} s limit ran out{where}"
+            self.feedback_message = (
+                f"the tree's {duration_said(self.duration)} limit ran out{where}"
+            )
             return _FAILURE
         return status
 

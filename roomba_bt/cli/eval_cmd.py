@@ -61,7 +61,7 @@ from roomba_bt.cli.arguments import (
     results_file,
 )
 from roomba_bt.cli.record_header import add_reproducible_option
-from roomba_bt.printable import ANY_CONTROL, escaped
+from roomba_bt.printable import ANY_CONTROL, duration_said, escaped
 from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, ExitCode, Outcome
 
 if TYPE_CHECKING:  # the evaluation is imported when it runs: the CLI starts faster
@@ -614,7 +614,7 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
             params=v.params,
             profile=args.profile,
             timeout_s=timeout,
-            time_limit=f"--timeout {timeout:g} s",  # as its reasons name the limit
+            time_limit=f"--timeout {duration_said(timeout)}",  # as its reasons name the limit
             within_m=args.within,
             dock=dock,
             battery=args.battery,

@@ -51,7 +51,7 @@ from roomba_bt.cli.record_header import (
 )
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.profiles import RobotProfile, get_profile
-from roomba_bt.printable import ANY_CONTROL, encodes, escaped
+from roomba_bt.printable import ANY_CONTROL, duration_said, encodes, escaped
 from roomba_bt.robot.errors import DEFAULT_WATCHDOG
 from roomba_bt.robot.safety import signals_end_the_process
 from roomba_bt.runtime.summary import (
@@ -451,9 +451,9 @@ def _stack(
     )
     summary = stack.runner.summary  # the runtime says its settings as things; here, as flags
     if _fast_limit(args):  # no user gave it: its reason says whose it is
-        summary.time_limit = f"--fast's own limit of {FAST_TIMEOUT_S:g} s"
+        summary.time_limit = f"--fast's own limit of {duration_said(FAST_TIMEOUT_S)}"
     elif timeout is not None:
-        summary.time_limit = f"--timeout {timeout:g} s"
+        summary.time_limit = f"--timeout {duration_said(timeout)}"
     summary.strict_named = "--strict"
     summary.profile = profile_line(args)  # where it came from, unless the flag named it
     summary.robot = args.robot

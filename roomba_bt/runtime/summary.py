@@ -12,7 +12,7 @@ from roomba_bt.errors import RoombaBtError
 from roomba_bt.oi.frames import BATTERY_PACKETS, SLOT_SECONDS
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
-from roomba_bt.printable import ANY_CONTROL, escaped
+from roomba_bt.printable import ANY_CONTROL, duration_said, duration_words, escaped
 
 if TYPE_CHECKING:
     from roomba_bt.robot.interface import Snapshot
@@ -173,23 +173,6 @@ def first_said(instance: str) -> str:
     """`` (the first: t=3.330 blind_drive: ...)`` after a count; "" when the first is not
     known (a summary a program made itself)."""
     return f" (the first: {instance})" if instance else ""
-
-
-#: the units :func:`duration_words` says a duration in, largest first, in seconds (the
-#: mission language's own spelling: ``1 h 30 min`` reads back as a duration)
-_DURATION_WORDS = (("d", 86400), ("h", 3600), ("min", 60), ("s", 1))
-
-
-def duration_words(seconds: float) -> str:
-    """A duration as a person says a long one, to the second: ``4 h 12 min 3 s``, ``12 h``,
-    ``45 s``, ``1 d 2 h`` (units that are 0 left out)."""
-    left = round(seconds)
-    parts = []
-    for unit, size in _DURATION_WORDS:
-        count, left = divmod(left, size)
-        if count:
-            parts.append(f"{count} {unit}")
-    return " ".join(parts) or "0 s"
 
 
 def long_duration_said(seconds: float) -> str:
@@ -412,7 +395,7 @@ class RunSummary:
         running). The reason keeps its end, ``... of mission time ran out in drive``, which
         :func:`~roomba_bt.evaluate.episode.failure_stage` reads."""
         self.outcome = Outcome.TIMEOUT
-        limit = self.time_limit or f"the run's {limit_s:g} s"
+        limit = self.time_limit or f"the run's {duration_said(limit_s)}"
         self.reason = f"{limit} of mission time ran out{where}"
 
     @property

@@ -20,6 +20,7 @@ from types import FrameType, TracebackType
 
 import py_trees
 
+from roomba_bt.printable import duration_said
 from roomba_bt.robot.safety import RunAborted
 from roomba_bt.runtime.teardown import stuck_in
 
@@ -96,4 +97,4 @@ def ran_out(
     it on ``frames`` (outermost first; None: no Python frame answered, a loop in C code)."""
     behaviour, where = stuck_in(frames) if frames else (None, "")
     said = f" {where}" if where else ": no Python frame answered (a loop in C code?)"
-    return behaviour, f"--wall-limit {limit_s:g} s of wall-clock time ran out{said}"
+    return behaviour, f"--wall-limit {duration_said(limit_s)} of wall-clock time ran out{said}"

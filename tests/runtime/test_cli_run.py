@@ -491,6 +491,9 @@ def test_fast_without_a_timeout_stops_at_its_own_limit_and_says_how_to_change_it
     out, err = capsys.readouterr()
     assert "(--timeout 20 s of mission time ran out in wait)" in out
     assert "own limit" not in out + err and "no --timeout" not in err
+    # a limit of a minute or more as a person says it: it was "--timeout 86400 s" for a 1d
+    assert main(["run", str(forever), "--fast", "--display", "none", "--timeout", "1min"]) == 1
+    assert "(--timeout 1 min of mission time ran out in wait)" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize(("given", "seconds"), [("1d", 86400.0), ("1h30min", 5400.0),

@@ -46,14 +46,14 @@ def test_a_time_limit_says_whose_it_is_and_keeps_the_stage_a_script_reads() -> N
     python = RunSummary("m")
     python.timed_out(90.0, " in drive")
     assert python.outcome is Outcome.TIMEOUT and python.exit_code == 1
-    assert python.reason == "the run's 90 s of mission time ran out in drive"
+    assert python.reason == "the run's 1 min 30 s of mission time ran out in drive"
     given = RunSummary("m", time_limit="--timeout 90 s")  # as ``run`` and ``eval`` name it
     given.timed_out(90.0, " in drive")
     assert given.reason == "--timeout 90 s of mission time ran out in drive"
-    own = RunSummary("m", time_limit="--fast's own limit of 7200 s")
+    own = RunSummary("m", time_limit="--fast's own limit of 2 h")
     own.timed_out(7200.0, " in drive")
     assert own.outcome is Outcome.TIMEOUT and own.exit_code == 1
-    assert own.reason == "--fast's own limit of 7200 s of mission time ran out in drive"
+    assert own.reason == "--fast's own limit of 2 h of mission time ran out in drive"
     assert failure_stage(python.reason) == failure_stage(given.reason) == "drive"
     assert failure_stage(own.reason) == "drive"
 
@@ -205,3 +205,19 @@ def test_a_run_counts_its_time_on_the_charger_and_its_lowest_battery(
     assert summary.lowest_battery_percent is not None and summary.battery_percent is not None
     assert summary.lowest_battery_percent < summary.battery_percent  # it charged
     assert "charger      docked once, on it 2 min in all" in summary.lines()
+
+
+@pytest.mark.parametrize(
+    ("seconds", "said"),
+    [(86400.0, "1 d"), (90000.0, "1 d 1 h"), (5400.0, "1 h 30 min"), (7200.0, "2 h"),
+     (45.0, "45 s"), (0.25, "0.25 s"), (60.0, "1 min"), (90.5, "90.5 s")],
+)  # fmt: skip
+def test_a_duration_a_message_names_reads_as_a_person_says_it(seconds: float, said: str) -> None:
+    """``--timeout 1d`` ran out as "the run's 86400 s" (and ``--timeout 86400 s``): one
+    spelling for every message that names a limit, below every layer (``printable``)."""
+    from roomba_bt.printable import duration_said
+
+    assert duration_said(seconds) == said
+    summary = RunSummary("m")
+    summary.timed_out(seconds, "")
+    assert summary.reason == f"the run's {said} of mission time ran out"
