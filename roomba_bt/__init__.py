@@ -82,6 +82,7 @@ __all__ = [
     "WorldError",
     "__version__",
     "commands",
+    "configured_profile",
     "declare",
     "default_registry",
     "get_profile",
@@ -98,6 +99,7 @@ _MODULE_OF: dict[str, str] = {
     **dict.fromkeys(("Action", "Condition", "DeclarationError", "Param", "ParamError",
                      "UnwrittenKey", "declare", "default_registry"), "behaviours"),
     "RoombaBtError": "errors",
+    "configured_profile": "cli.profile_choice",
     **dict.fromkeys(("CompiledMission", "MissionError", "Permissions", "load_mission",
                      "load_mission_text", "validate_files"), "mission"),
     **dict.fromkeys(("BandwidthError", "EncodeError", "OIMode", "SensorFrame", "commands"), "oi"),
@@ -128,6 +130,7 @@ if TYPE_CHECKING:
         declare,
         default_registry,
     )
+    from roomba_bt.cli.profile_choice import configured_profile
     from roomba_bt.errors import RoombaBtError
     from roomba_bt.mission import (
         CompiledMission,

@@ -18,6 +18,14 @@ connect (:func:`roomba_bt.cli.links.auto_profile`); a command that talks to no r
 (``validate``, ``show``, ``eval``, ``sim``, a run on the simulator) says so and takes the
 default. A name that is no profile is a usage error naming the variable, or the project
 file and line, and the names allowed.
+
+The library reads neither (decided, session 31): ``Connection.open``, ``load_mission`` and
+``RunStack`` take the model from their ``profile=`` argument, ``create2`` when none is given,
+so a program does the same in any shell and any folder (a CI job's ``ROOMBA_BT_PROFILE``
+meant for the command line, a ``pyproject.toml`` in the folder a notebook was started from,
+would otherwise change the model, and with it the commands it may send, without a line of
+the program saying so). A program that wants the command line's choice asks for it by name:
+:func:`configured_profile`, and passes what it returns.
 """
 
 from __future__ import annotations
@@ -29,6 +37,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+from roomba_bt.errors import RoombaBtError
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, PROFILES
 from roomba_bt.printable import ANY_CONTROL, escaped
 from roomba_bt.project import PROFILE_KEY, PROJECT_FILE, PROJECT_TABLE, find_project_file, key_line
@@ -139,6 +148,28 @@ def _from_project(near: Path | None) -> ProfileChoice | BadSetting | None:
             line,
         )
     return ProfileChoice(value.strip().lower(), f"{path}:{line}" if line else str(path))
+
+
+class ProfileSettingError(ValueError, RoombaBtError):
+    """``ROOMBA_BT_PROFILE`` or the project file's ``profile`` names no robot profile
+    (:func:`configured_profile`): the message names the variable, or the file and line, and
+    the names allowed, as the command line's usage error does."""
+
+
+def configured_profile(near: str | Path | None = None) -> str:
+    """The robot model the command line takes when no ``--profile`` is given, for a Python
+    program that wants the same: ``ROOMBA_BT_PROFILE``, then ``profile`` under
+    ``[tool.roomba-bt]`` in the project file above ``near`` (a mission file's path; None:
+    the current directory), then ``create2``. Its name, for ``profile=`` of
+    ``Connection.open``, ``load_mission`` or ``get_profile``; ``"auto"`` when the setting
+    asks for the robot to be identified (``roomba_bt.robot.discovery.identify_robot`` on the
+    open port). None of the library's functions reads these by itself (the module
+    docstring says why). Raises :class:`ProfileSettingError` for a setting that names no
+    profile."""
+    choice = choose_profile(None, None if near is None else Path(near))
+    if isinstance(choice, BadSetting):
+        raise ProfileSettingError(str(choice))
+    return choice.name
 
 
 def resolved_profile(

@@ -259,7 +259,9 @@ def load_mission(
     :class:`~roomba_bt.behaviours.declare.DeclarationError`). YAML text itself is
     :func:`load_mission_text`'s. Neither a file nor a shipped name, and the diagnostic says
     so as the command line does, a shipped mission's name it may have meant with it
-    (``"dok"``: did you mean 'dock'?)."""
+    (``"dok"``: did you mean 'dock'?). ``profile``: the model it is compiled for, ``CREATE2``
+    unless given, never ``ROOMBA_BT_PROFILE`` or the project file's (the command line's;
+    ``roomba_bt.configured_profile(path)`` reads them for a program that wants them)."""
     if isinstance(path, str) and "\n" in path:  # text, not a name: said so, not escaped back
         raise MissionError([Diagnostic(
             "load_mission", 1, 1,

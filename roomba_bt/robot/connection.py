@@ -235,7 +235,11 @@ class Connection:
         keep_awake: bool | None = None,
     ) -> Connection:
         """Open ``url`` (device path, ``socket://``, ``rfc2217://``, ``loop://``) at ``baud``, an
-        OI rate (19200: ``profile.at_19200``); ``keep_awake`` as ``Connection``'s (wake.py)."""
+        OI rate (19200: ``profile.at_19200``); ``keep_awake`` as ``Connection``'s (wake.py).
+        ``profile``: the robot's model, ``create2`` unless given; ``ROOMBA_BT_PROFILE`` and
+        the project file's ``profile`` are the command line's and are not read here (a
+        program runs the same in any shell and folder): ``profile=roomba_bt.configured_profile()``
+        takes the command line's choice (``cli/profile_choice.py`` says why)."""
         if baud not in BAUD_CODES:
             rates = ", ".join(str(rate) for rate in BAUD_CODES)
             raise ValueError(f"baud {baud!r}: the OI talks at {rates}")

@@ -233,3 +233,29 @@ def test_the_key_line_is_found_in_its_table_only(tmp_path: Path) -> None:
 def test_a_bad_setting_says_its_place(tmp_path: Path) -> None:
     assert str(BadSetting("bad", "p.toml", 3)) == "p.toml:3: bad"
     assert str(BadSetting("bad")) == "bad"
+
+
+def test_the_library_reads_no_setting_and_configured_profile_reads_them_when_asked(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``Connection`` and ``load_mission`` take their ``profile=`` (create2 by default) and
+    never the environment or the project file, which are the command line's; a program asks
+    for the command line's choice with ``configured_profile`` (docs/robot.md, Which robot)."""
+    import roomba_bt
+    from roomba_bt.transport.testing import NullTransport
+
+    mission = project(tmp_path / "robots", '"roomba500"')
+    mission.write_text(WALL_500)  # a warning on any model but the 500: what it was made for
+    monkeypatch.chdir(tmp_path / "robots")
+    assert roomba_bt.load_mission(mission).warnings, "compiled for create2, not the project's"
+    assert roomba_bt.Connection(NullTransport()).profile is roomba_bt.CREATE2
+    assert roomba_bt.configured_profile(mission) == "roomba500"  # the project file
+    assert roomba_bt.configured_profile() == "roomba500"  # above the current folder
+    given = roomba_bt.get_profile(roomba_bt.configured_profile(mission))
+    assert not roomba_bt.load_mission(mission, profile=given).warnings
+    monkeypatch.setenv(PROFILE_VARIABLE, "roomba600")  # the environment before the project
+    assert roomba_bt.Connection(NullTransport()).profile is roomba_bt.CREATE2
+    assert roomba_bt.configured_profile(mission) == "roomba600"
+    monkeypatch.setenv(PROFILE_VARIABLE, "roomba560")
+    with pytest.raises(ValueError, match=r"ROOMBA_BT_PROFILE='roomba560': no robot profile"):
+        roomba_bt.configured_profile(mission)
