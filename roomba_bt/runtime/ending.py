@@ -23,8 +23,9 @@ from roomba_bt.oi.modes import OIMode
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.ending import SafeStop
 from roomba_bt.robot.hazards import sets_going
-from roomba_bt.robot.interface import Odometer, Outbox, Snapshot
+from roomba_bt.robot.interface import Outbox, Snapshot
 from roomba_bt.robot.safety import SAFE_STOP_UNDER_WAY, InterruptGuard
+from roomba_bt.runtime.long_run import RobotCycleWatch
 from roomba_bt.runtime.summary import RunSummary
 from roomba_bt.runtime.teardown import (
     during,
@@ -39,11 +40,6 @@ from roomba_bt.runtime.tick_guard import TickGuardLike
 
 #: the run's own logger, whose warnings these are (as ``runtime/stall.py``'s)
 log = logging.getLogger("roomba_bt.runtime.loop")
-
-#: How far the robot may roll in Passive after what put it there (a drive's frames still on
-#: their way, the wheels spinning down) before a drive in Passive is taken for a cycle the
-#: robot started by itself: a firmware cycle drives 0.3 m a second, past this in a third.
-ROBOT_CYCLE_MM = 100.0
 
 #: what a Ctrl-C says while the run's tree is stopped (each running node's ``terminate()``),
 #: after what the wheels do meanwhile
@@ -71,12 +67,9 @@ class RunEnding:
     #: the mission time so many seconds after the last tick's frame (None before the
     #: first), to place what was not written
     clock: Callable[[float], float | None]
-    #: the run's odometry, told by the writer each time the robot goes to Passive: what it
-    #: drives there by itself is a cycle it started (:meth:`robot_cycle`)
-    odometer: Odometer
-
-    def __post_init__(self) -> None:
-        self.connection.writer.on_passive = self.odometer.entered_passive
+    #: the watch for a cycle the robot started by itself, looked at once more before the
+    #: safe stop (:meth:`safe_stop`)
+    cycles: RobotCycleWatch
 
     def end_tree(
         self,
@@ -95,49 +88,26 @@ class RunEnding:
         return first
 
     def safe_stop(
-        self, guard: InterruptGuard, first: bool, set_up: py_trees.behaviour.Behaviour | None
+        self,
+        guard: InterruptGuard,
+        first: bool,
+        set_up: py_trees.behaviour.Behaviour | None,
+        last: Snapshot | None = None,
     ) -> None:
         """After the tree's stop: the safe stop (:func:`stop_robot`; ``first``: drive 0 and
-        motors off went out before the tree's stop), then each node's ``shutdown()`` of the
-        tree at ``set_up`` (None: its ``setup()`` never ran, nothing to close). ``guard`` is
-        told what the run does meanwhile, for a Ctrl-C then."""
+        motors off went out before the tree's stop), a cycle the robot still drives by
+        itself at ``last`` (the last tick's snapshot; None: none came) ended by it with Safe
+        first (:meth:`RobotCycleWatch.at_end`), then each node's ``shutdown()`` of the tree
+        at ``set_up`` (None: its ``setup()`` never ran, nothing to close). ``guard`` is told
+        what the run does meanwhile, for a Ctrl-C then."""
         guard.stopping(SAFE_STOP_UNDER_WAY)
-        self.robot_cycle(self.odometer.driven_in_passive())
+        if last is not None:
+            self.cycles.at_end(last.odometry, last.time)
         stop_robot(self.connection, self.summary, first)
         if set_up is not None:
             guard.stopping(SHUTTING_DOWN, during(THE_SHUTDOWN))
             _, exits = shutdown_nodes(set_up)  # an exception there: logged, no more
             note_stop_failures(self.summary, exits)  # sys.exit() there: the run's error
-
-    def robot_cycle(self, driven_mm: float) -> None:
-        """Before the safe stop: the robot drove ``driven_mm`` in Passive since it last went
-        there, with no cycle of the run's that may drive: a cycle the robot started by
-        itself (its Clean, Spot or Dock button pressed, its schedule) drives it. The writer
-        is told (``CommandWriter.robot_cycle``: the stop then sends Safe first and ends it,
-        as a cycle the run wrote, Start alone not being known to end one), the summary says
-        it and a warning is logged. Found at the run's end, from the odometry the run
-        integrates anyway (its path since the writer last said the robot went to Passive):
-        nothing on the tick's path."""
-        connection = self.connection
-        writer = connection.writer
-        if (
-            connection.mode is not OIMode.PASSIVE
-            or writer.builtin_may_run
-            or driven_mm <= ROBOT_CYCLE_MM
-        ):
-            return
-        writer.robot_cycle = (
-            f"the robot started a cycle by itself (its Clean, Spot or Dock button, or its "
-            f"schedule): it drove {driven_mm / 1000:.2f} m in Passive with no command of the "
-            "run's"
-        )
-        ended = (
-            "the safe stop ends it with Safe first"
-            if writer.cycle_may_drive
-            else "it was on its home base at the end (docked: no Safe, which would stop the charge)"
-        )
-        self.summary.robot_cycle = f"{writer.robot_cycle}; {ended}"
-        log.warning("%s: %s", connection.name, self.summary.robot_cycle)
 
     def sum_up(self, wall_time_s: float, last: Snapshot | None, unconfirmed: int) -> None:
         """The summary's last figures, once the robot is stopped: the run's wall time, the

@@ -11,21 +11,51 @@ its mission time with the time limit on every tick (the limit read twice off the
 now compares it with the time of the next look (:attr:`MissionTimeChecks.next_at`, the time
 limit when that is sooner), and calls :meth:`MissionTimeChecks.look` when it is reached: the
 time limit ends the run on the same tick as before.
+
+The same look watches for a cycle the robot started by itself (its Clean, Spot or Dock button
+pressed, its schedule) while the run has it in Passive (:class:`RobotCycleWatch`): a robot
+driving itself while its mission thinks it idle. It was found at the run's end only, hours
+later on an overnight patrol.
 """
 
 from __future__ import annotations
 
+import logging
 import math
 
 import py_trees
 
 from roomba_bt.behaviours.reasons import running_in
 from roomba_bt.oi.frames import BATTERY_PACKETS, CHARGING_SOURCES_PACKETS, SensorFrame
-from roomba_bt.robot.interface import Snapshot
-from roomba_bt.runtime.summary import RunSummary
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.odometry import MM_PER_COUNT, encoder_delta
+from roomba_bt.robot.connection import Connection
+from roomba_bt.robot.interface import Odometer, Odometry, Snapshot
+from roomba_bt.runtime.summary import Outcome, RunSummary
+
+#: the run's own logger, whose warnings these are (as ``runtime/ending.py``'s)
+log = logging.getLogger("roomba_bt.runtime.loop")
 
 #: seconds of mission time between two looks at the battery and the charger
 LOOK_EVERY_S = 1.0
+
+#: The wheels' travel (mm a second, the mean of the two wheels' counts) from which a look
+#: finds the robot driving since the look before: the firmware's slowest cycle move (Seek
+#: Dock's last approach) is 80 mm/s, its turns on the spot 150 mm/s a wheel.
+DRIVING_MM_S = 50.0
+#: Looks running that must find the robot driving in Passive, with no cycle of the run's
+#: that may drive, before it is taken for a cycle of its own: two whole seconds and more of
+#: driving. A cycle drives on; a hand's push is over in a moment (0.2 m in half a second,
+#: across one look at most, or two: it was taken for a cycle at the run's end).
+CYCLE_LOOKS = 3
+#: How far the robot must have rolled in Passive since it went there, at the run's end, for
+#: a drive still under way to be taken for a cycle of its own (a drive's frames still on
+#: their way, the wheels spinning down stay under it; a firmware cycle passes it in a third of
+#: a second).
+ROBOT_CYCLE_MM = 100.0
+#: At the run's end, the least time since the last look over which the wheels' travel says
+#: whether the robot still drives; shorter, the last look's word stands.
+END_LOOK_S = 0.3
 
 
 class MissionTimeChecks:
@@ -33,9 +63,16 @@ class MissionTimeChecks:
     written into ``summary`` (:attr:`RunSummary.lowest_battery_percent`,
     :attr:`RunSummary.on_charger_s`)."""
 
-    def __init__(self, summary: RunSummary, timeout_s: float | None) -> None:
+    def __init__(
+        self,
+        summary: RunSummary,
+        timeout_s: float | None,
+        cycles: RobotCycleWatch | None = None,
+    ) -> None:
         self.summary = summary
         self.timeout_s = timeout_s
+        #: the watch for a cycle the robot started by itself (None: not watched)
+        self.cycles = cycles
         #: the mission time at which the loop calls :meth:`look` (its first tick: at once)
         self.next_at = 0.0
         #: when the last look was, and whether it found the robot on a powered charger (a
@@ -44,12 +81,17 @@ class MissionTimeChecks:
         self._on_charger = False
 
     def look(self, snapshot: Snapshot, root: py_trees.behaviour.Behaviour) -> bool:
-        """At :attr:`next_at` or after: False when the run's time limit ran out (the summary
-        says so, in the leaf running under ``root``); else the look at the tick's
-        ``snapshot`` (:meth:`take`), :attr:`next_at` moved on, and True."""
+        """At :attr:`next_at` or after: False when the run's time limit ran out, or the
+        robot drives a cycle of its own (:class:`RobotCycleWatch`; the summary says which,
+        in the leaf running under ``root``); else the look at the tick's ``snapshot``
+        (:meth:`take`), :attr:`next_at` moved on, and True."""
         limit, mission_time = self.timeout_s, snapshot.time
         if limit is not None and mission_time >= limit:
             self.summary.timed_out(limit, running_in(root))
+            return False
+        cycles = self.cycles
+        if cycles is not None and cycles.look(snapshot.odometry, mission_time):
+            cycles.end_run(root)
             return False
         self.take(mission_time, snapshot.frame)
         self.next_at = min(mission_time + LOOK_EVERY_S, math.inf if limit is None else limit)
@@ -70,3 +112,116 @@ class MissionTimeChecks:
             lowest = summary.lowest_battery_percent
             if lowest is None or level < lowest:
                 summary.lowest_battery_percent = level
+
+
+class RobotCycleWatch:
+    """A cycle the robot started by itself (its Clean, Spot or Dock button, its schedule)
+    while the run has it in Passive, where nothing the run may send stops it: found by the
+    once-a-second look (:meth:`look`: the robot driving in Passive, with no cycle of the
+    run's that may drive, at :data:`CYCLE_LOOKS` looks running), and at the run's end
+    (:meth:`at_end`). ``connection``'s writer is told (``CommandWriter.robot_cycle``: the
+    safe stop then sends Safe first and ends it, Start alone ending no cycle:
+    docs/protocol.md, "What ends a built-in cycle"), ``summary`` says it, a warning is
+    logged. ``odometer``: the run's, told by the writer each time the robot goes to Passive.
+
+    Read off the encoders the stream always carries, at the look: what tells a cycle from a
+    hand pushing the robot is that a cycle drives on. Packet 35 reads Passive in both, the
+    requested velocities (39-42) are the OI's Drive commands', not a cycle's, and the wheel
+    motors' currents (54, 55), which a push does not draw, are streamed only for a mission
+    that reads them (asking for them would change every run's stream request)."""
+
+    def __init__(self, connection: Connection, summary: RunSummary, odometer: Odometer) -> None:
+        self.connection = connection
+        self.summary = summary
+        self.odometer = odometer
+        connection.writer.on_passive = odometer.entered_passive
+        #: the encoder counts (left, right) and the mission time of the last look
+        self._counts: tuple[int, int] | None = None
+        self._looked_at = 0.0
+        #: looks running that found the robot driving in Passive by itself
+        self.driving_looks = 0
+
+    def look(self, odometry: Odometry, mission_time: float) -> bool:
+        """Whether the robot, as ``odometry`` has it at ``mission_time``, has driven in
+        Passive by itself at :data:`CYCLE_LOOKS` looks running: a cycle of its own."""
+        driving = self._driving(odometry, mission_time)
+        self.driving_looks = self.driving_looks + 1 if driving and self._unbidden() else 0
+        return self.driving_looks >= CYCLE_LOOKS and self.connection.writer.robot_cycle is None
+
+    def _driving(self, odometry: Odometry, mission_time: float) -> bool:
+        """Whether the wheels travelled :data:`DRIVING_MM_S` a second or more since the last
+        look (the mean of the two wheels' counts, a turn on the spot's too); the look's
+        counts kept for the next."""
+        before, since = self._counts, self._looked_at
+        left, right = odometry.left_counts, odometry.right_counts
+        self._looked_at = mission_time
+        self._counts = None if left is None or right is None else (left, right)
+        if self._counts is None or before is None or mission_time <= since:
+            return False
+        turned = abs(encoder_delta(before[0], left)) + abs(encoder_delta(before[1], right))
+        return turned * MM_PER_COUNT / 2.0 >= DRIVING_MM_S * (mission_time - since)
+
+    def _unbidden(self) -> bool:
+        """In Passive with no cycle of the run's that may drive: what moves the robot is its
+        own doing (or a hand's)."""
+        connection = self.connection
+        return connection.mode is OIMode.PASSIVE and not connection.writer.builtin_may_run
+
+    def end_run(self, root: py_trees.behaviour.Behaviour) -> None:
+        """The look found a cycle of the robot's own: the run ends here, FAILURE (exit 1),
+        its reason saying so and what the tree was doing (``root``'s running leaf). Decided
+        (session 31): the tree took the robot for idle in Passive, where the run can stop no
+        cycle (drive 0 is refused there; Safe ends the cycle, but would take the robot from
+        under the tree); its safe stop ends it with Safe first."""
+        summary = self.summary
+        summary.outcome = Outcome.FAILURE
+        summary.reason = (
+            f"{self._said(self.odometer.driven_in_passive())} while the tree ran"
+            f"{running_in(root)}; the run ended there, its safe stop ending the cycle with "
+            "Safe first (Start alone ends none)"
+        )
+
+    def at_end(self, odometry: Odometry, mission_time: float) -> None:
+        """Before the safe stop, one look more at the time since the last (if
+        :data:`END_LOOK_S` or more; else the last look's word stands): driving at
+        :data:`CYCLE_LOOKS` looks running, a cycle of the robot's own, said as :meth:`look`'s;
+        driving at the last only, with over :data:`ROBOT_CYCLE_MM` driven in Passive since
+        it went there, a cycle or a hand, which the looks had no time to tell apart: said
+        so, and the stop sends Safe first all the same (harmless off the dock; Start alone
+        would leave a cycle driving after the run). A push over before the last look is
+        neither."""
+        if self.connection.writer.robot_cycle is not None or not self._unbidden():
+            return
+        looks = self.driving_looks
+        if mission_time - self._looked_at >= END_LOOK_S:
+            looks = looks + 1 if self._driving(odometry, mission_time) else 0
+        driven = self.odometer.driven_in_passive()
+        if looks >= CYCLE_LOOKS:
+            self._said(driven)
+        elif looks and driven > ROBOT_CYCLE_MM:
+            self._said(driven, told_apart=False)
+
+    def _said(self, driven_mm: float, *, told_apart: bool = True) -> str:
+        """The writer told of the robot's cycle, the summary's word on it and the warning
+        (``driven_mm``: its path in Passive; ``told_apart``: the looks saw it drive on, a
+        cycle, not a hand); the cycle said, for a run's reason."""
+        connection = self.connection
+        writer = connection.writer
+        driven = f"{driven_mm / 1000:.2f} m"
+        said = (
+            "the robot started a cycle by itself (its Clean, Spot or Dock button, or its "
+            f"schedule): it drove {driven} in Passive with no command of the run's"
+            if told_apart
+            else f"the robot was moving in Passive with no command of the run's as the run "
+            f"ended ({driven} since it went there): a cycle it started by itself (its Clean, "
+            "Spot or Dock button, or its schedule), or a hand"
+        )
+        writer.robot_cycle = said
+        ended = (
+            "the safe stop ends it with Safe first"
+            if writer.cycle_may_drive
+            else "it was on its home base at the end (docked: no Safe, which would stop the charge)"
+        )
+        self.summary.robot_cycle = f"{said}; {ended}"
+        log.warning("%s: %s", connection.name, self.summary.robot_cycle)
+        return said

@@ -68,7 +68,7 @@ from roomba_bt.runtime.clock import (
     mission_time_after,
 )
 from roomba_bt.runtime.ending import RunEnding
-from roomba_bt.runtime.long_run import MissionTimeChecks
+from roomba_bt.runtime.long_run import MissionTimeChecks, RobotCycleWatch
 from roomba_bt.runtime.refusals import Refusals
 from roomba_bt.runtime.schedule import DRIFT, LOST_LATE, SPREAD_DECAY
 from roomba_bt.runtime.stall import StallRide
@@ -305,7 +305,8 @@ class MissionRunner(BaseHandle):
         self._clock = StreamClock(self._ride, self.summary, connection)
         self._odometer = Odometer(profile.wheel_base_mm)
         #: the run's end: its tree stopped, the wheels first (also the monitor's reload)
-        self._ending = RunEnding(connection, self._outbox, self.summary, clock, self._odometer)
+        cycles = RobotCycleWatch(connection, self.summary, self._odometer)
+        self._ending = RunEnding(connection, self._outbox, self.summary, clock, cycles)
         #: Ctrl-C and SIGTERM stay ignored after :meth:`run` returns, until
         #: :meth:`release_interrupts` (the CLI: its summary is still to be printed); else the
         #: previous handlers come back when it returns
@@ -466,11 +467,11 @@ class MissionRunner(BaseHandle):
         first = ending.end_tree(self.mission.root, self.tick_guard, guard, raised_in)
         self.count_written()  # the safe stop's are said apart
         set_up = self._sent_at_start is not None  # what its setup() opened, closed
-        ending.safe_stop(guard, first, self.mission.root if set_up else None)
+        last = self.snapshot if self.has_snapshot else None
+        ending.safe_stop(guard, first, self.mission.root if set_up else None, last)
         if self._blackboard is not None:
             with contextlib.suppress(Exception):
                 self._blackboard.unregister(clear=True)
-        last = self.snapshot if self.has_snapshot else None
         ending.sum_up(time.perf_counter() - wall_start, last, self._hazards.unconfirmed)
 
     # Long on purpose: every frame's path, written out in one loop (a call less a frame),
@@ -486,7 +487,8 @@ class MissionRunner(BaseHandle):
         held = False  # the root ended and the gate holds the run there (the monitor)
         untick: int | None = None  # the gate held the tree: the tick it last ticked on
         flushed = -1  # the stream tick of the last tree tick written whole
-        checks = MissionTimeChecks(summary, self.timeout_s)  # the time limit, the charge
+        # the time limit, the charge, a cycle the robot started by itself
+        checks = MissionTimeChecks(summary, self.timeout_s, self._ending.cycles)
         started = perf()  # each tick's start (an interrupt's before the first: none cut short)
         try:
             while True:
@@ -542,7 +544,7 @@ class MissionRunner(BaseHandle):
                     tree_ended(root, summary)
                     return
                 if mission_time >= checks.next_at and not checks.look(self.snapshot, root):
-                    return  # the time limit ran out; else the charge was looked at (long_run.py)
+                    return  # the time limit ran out, or a cycle of the robot's own (long_run.py)
         except (KeyboardInterrupt, RunAborted) as exc:  # Ctrl-C, SIGTERM, --wall-limit...:
             if not behaviours_interrupt(exc):  # in which half of its frame (a behaviour's own
                 summary.ended_at = interrupted_at(self, flushed)  # interrupt: its error)

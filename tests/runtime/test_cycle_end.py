@@ -5,6 +5,7 @@ on the simulator's virtual clock, every byte tapped."""
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 
 import pytest
 
@@ -318,6 +319,83 @@ def test_a_cycle_the_robot_started_by_itself_is_ended_and_said(
     for _ in range(100):
         simulator.step()
     assert (simulator.x, simulator.y) == (x, y), "stopped for good"
+
+
+#: a mission that waits in Passive for longer than the looks take to tell a cycle (3 s)
+WAITS_LONG_IN_PASSIVE = "mission: waits long\ntree:\n  sequence:\n    - wait: 20s\n"
+
+
+def pressing_at(press: Command, at: float, pressed: list[float]) -> Callable[[MissionRunner], None]:
+    """An observer that has ``press`` reach the simulated robot at ``at`` s of mission time,
+    not through the run (a button pushed, the robot's schedule); when, in ``pressed``."""
+
+    def press_once(runner: MissionRunner) -> None:
+        simulator = runner.connection.transport.simulator  # type: ignore[attr-defined]
+        if not pressed and runner.snapshot.time >= at:
+            simulator.receive(press.data)
+            pressed.append(runner.snapshot.time)
+
+    return press_once
+
+
+def test_a_cycle_the_robot_started_during_the_run_ends_it_at_once(
+    run_mission: RunMission,
+) -> None:
+    """The Clean button pushed 1 s into a 20 s wait in Passive: the robot cleaned the room
+    for the 19 s left, the tree taking it for idle, and was said only at the end. The
+    once-a-second look sees it drive by itself at three looks running: the run ends there,
+    FAILURE (exit 1), and its safe stop ends the cycle with Safe first (docs/protocol.md)."""
+    pressed: list[float] = []
+    run = run_mission(WAITS_LONG_IN_PASSIVE, observer=pressing_at(oi.buttons(1), 1.0, pressed))
+    summary = run.summary
+    assert pressed and summary.outcome is Outcome.FAILURE and summary.exit_code == 1
+    assert summary.reason.startswith("the robot started a cycle by itself"), summary.reason
+    assert "while the tree ran in wait; the run ended there" in summary.reason
+    assert summary.mission_time_s <= pressed[0] + 4.0, "three looks after the press, or four"
+    assert summary.robot_cycle.endswith("the safe stop ends it with Safe first")
+    assert run.link.written.endswith(STOP_ENDING_A_CYCLE)
+    assert run.simulator.builtin is None and run.simulator.mode is OIMode.PASSIVE
+
+
+def pushing(start: float, seconds: float, speed: float) -> Callable[[MissionRunner], None]:
+    """An observer that pushes the simulated robot by hand from ``start`` s of mission time
+    for ``seconds`` at ``speed`` mm/s: its wheels turn (its encoders count), no motor
+    drives them, no cycle runs (the simulator's next step in Passive stops them again)."""
+
+    def push(runner: MissionRunner) -> None:
+        simulator = runner.connection.transport.simulator  # type: ignore[attr-defined]
+        if start <= runner.snapshot.time < start + seconds:
+            simulator._move(speed, speed, 0.015)  # a hand, not the robot: no command
+
+    return push
+
+
+@pytest.mark.parametrize(
+    ("start", "seconds", "speed"),
+    [(1.2, 0.5, 400.0), (1.8, 0.5, 400.0), (2.9, 0.5, 600.0)],
+    ids=["between-looks", "across-a-look", "at-the-end"],
+)  # fmt: skip
+def test_a_robot_pushed_by_hand_in_passive_is_no_cycle(
+    run_mission: RunMission, start: float, seconds: float, speed: float
+) -> None:
+    """0.2-0.3 m pushed by hand in half a second, in Passive, was taken for a cycle the robot
+    started by itself (over 100 mm driven in Passive), said so, and ended with Safe first. A
+    cycle drives on: a push, over in a moment, is none. One in the run's last second, which
+    the looks had no time to tell from a cycle, is said as either, and the stop sends Safe
+    first all the same (Start alone would leave a cycle driving after the run)."""
+    run = run_mission(WAITS_IN_PASSIVE, observer=pushing(start, seconds, speed))
+    assert run.summary.outcome is Outcome.SUCCESS, run.summary.reason
+    assert run.summary.distance_mm > 150.0, "the hand moved it"
+    said = run.summary.robot_cycle
+    assert not said.startswith("the robot started a cycle by itself"), said
+    at_the_end = start + seconds > 3.0  # the last look
+    assert run.link.written.endswith(STOP_ENDING_A_CYCLE) is at_the_end
+    if at_the_end:
+        assert said.startswith("the robot was moving in Passive with no command of the run's")
+        assert "a cycle it started by itself (its Clean, Spot or Dock button, or its " in said
+        assert said.endswith("or a hand; the safe stop ends it with Safe first"), said
+    else:
+        assert said == ""
 
 
 def test_a_mission_that_stays_in_passive_sees_no_cycle_of_the_robot_s(
