@@ -14,7 +14,7 @@ import logging
 import sys
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import py_trees
 
@@ -23,7 +23,7 @@ from roomba_bt.oi.modes import OIMode
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.ending import SafeStop
 from roomba_bt.robot.hazards import sets_going
-from roomba_bt.robot.interface import Outbox, Snapshot
+from roomba_bt.robot.interface import Odometer, Outbox, Snapshot
 from roomba_bt.robot.safety import SAFE_STOP_UNDER_WAY, InterruptGuard
 from roomba_bt.runtime.long_run import RobotCycleWatch
 from roomba_bt.runtime.summary import RunSummary
@@ -67,9 +67,16 @@ class RunEnding:
     #: the mission time so many seconds after the last tick's frame (None before the
     #: first), to place what was not written
     clock: Callable[[float], float | None]
-    #: the watch for a cycle the robot started by itself, looked at once more before the
-    #: safe stop (:meth:`safe_stop`)
-    cycles: RobotCycleWatch
+    #: the run's odometry, told by the writer each time the robot goes to Passive: what it
+    #: drives there by itself may be a cycle it started (:attr:`cycles`)
+    odometer: Odometer
+    #: the watch for a cycle the robot started by itself (the loop's once-a-second look),
+    #: looked at once more before the safe stop (:meth:`safe_stop`)
+    cycles: RobotCycleWatch = field(init=False)
+
+    def __post_init__(self) -> None:
+        watch = RobotCycleWatch(self.connection, self.summary, self.odometer)
+        object.__setattr__(self, "cycles", watch)  # frozen: set once, as it is made
 
     def end_tree(
         self,

@@ -155,8 +155,11 @@ class RobotCycleWatch:
         before, since = self._counts, self._looked_at
         left, right = odometry.left_counts, odometry.right_counts
         self._looked_at = mission_time
-        self._counts = None if left is None or right is None else (left, right)
-        if self._counts is None or before is None or mission_time <= since:
+        if left is None or right is None:  # a stream without the encoders
+            self._counts = None
+            return False
+        self._counts = (left, right)
+        if before is None or mission_time <= since:
             return False
         turned = abs(encoder_delta(before[0], left)) + abs(encoder_delta(before[1], right))
         return turned * MM_PER_COUNT / 2.0 >= DRIVING_MM_S * (mission_time - since)

@@ -68,7 +68,7 @@ from roomba_bt.runtime.clock import (
     mission_time_after,
 )
 from roomba_bt.runtime.ending import RunEnding
-from roomba_bt.runtime.long_run import MissionTimeChecks, RobotCycleWatch
+from roomba_bt.runtime.long_run import MissionTimeChecks
 from roomba_bt.runtime.refusals import Refusals
 from roomba_bt.runtime.schedule import DRIFT, LOST_LATE, SPREAD_DECAY
 from roomba_bt.runtime.stall import StallRide
@@ -305,8 +305,7 @@ class MissionRunner(BaseHandle):
         self._clock = StreamClock(self._ride, self.summary, connection)
         self._odometer = Odometer(profile.wheel_base_mm)
         #: the run's end: its tree stopped, the wheels first (also the monitor's reload)
-        cycles = RobotCycleWatch(connection, self.summary, self._odometer)
-        self._ending = RunEnding(connection, self._outbox, self.summary, clock, cycles)
+        self._ending = RunEnding(connection, self._outbox, self.summary, clock, self._odometer)
         #: Ctrl-C and SIGTERM stay ignored after :meth:`run` returns, until
         #: :meth:`release_interrupts` (the CLI: its summary is still to be printed); else the
         #: previous handlers come back when it returns
@@ -487,8 +486,7 @@ class MissionRunner(BaseHandle):
         held = False  # the root ended and the gate holds the run there (the monitor)
         untick: int | None = None  # the gate held the tree: the tick it last ticked on
         flushed = -1  # the stream tick of the last tree tick written whole
-        # the time limit, the charge, a cycle the robot started by itself
-        checks = MissionTimeChecks(summary, self.timeout_s, self._ending.cycles)
+        checks = MissionTimeChecks(summary, self.timeout_s, self._ending.cycles)  # long_run.py
         started = perf()  # each tick's start (an interrupt's before the first: none cut short)
         try:
             while True:
