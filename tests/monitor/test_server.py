@@ -308,7 +308,7 @@ def test_a_stalled_page_loses_updates_never_a_tick() -> None:
         threading.Thread(target=run, daemon=True).start()
         assert finished.wait(120), "the run was held up"
         summary = result[0]
-        assert summary.reason.startswith("the run's 120 s of mission time ran out")
+        assert summary.reason.startswith("the run's 2 min of mission time ran out")
         assert len(feed.since(0)[0]) == summary.ticks  # every tick recorded
         assert server.pages == 1
     finally:
