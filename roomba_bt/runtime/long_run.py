@@ -143,10 +143,16 @@ class RobotCycleWatch:
 
     def look(self, odometry: Odometry, mission_time: float) -> bool:
         """Whether the robot, as ``odometry`` has it at ``mission_time``, has driven in
-        Passive by itself at :data:`CYCLE_LOOKS` looks running: a cycle of its own."""
+        Passive by itself at :data:`CYCLE_LOOKS` looks running: a cycle of its own. Out of
+        Passive, or with a cycle of the run's that may drive, nothing is measured (the next
+        look in Passive measures from itself): most looks of a run that drives, and the
+        cheapest (instruction counts: ``python -m bench.icount --against``)."""
+        if not self._unbidden():
+            self._counts, self.driving_looks = None, 0
+            return False
         driving = self._driving(odometry, mission_time)
-        self.driving_looks = self.driving_looks + 1 if driving and self._unbidden() else 0
-        return self.driving_looks >= CYCLE_LOOKS and self.connection.writer.robot_cycle is None
+        self.driving_looks = self.driving_looks + 1 if driving else 0
+        return self.driving_looks >= CYCLE_LOOKS
 
     def _driving(self, odometry: Odometry, mission_time: float) -> bool:
         """Whether the wheels travelled :data:`DRIVING_MM_S` a second or more since the last
