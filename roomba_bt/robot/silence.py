@@ -68,10 +68,8 @@ RETRY_AFTER_S = 0.1
 NOISY_FOR_S = 0.5
 
 if TYPE_CHECKING:
-    from roomba_bt.oi.identify import ChecksumMismatch, RangeMismatch
+    from roomba_bt.oi.identify import ProfileMismatch
     from roomba_bt.robot.connection import Connection
-
-    ProfileMismatch = ChecksumMismatch | RangeMismatch
 
 #: How long each query waits for its one-byte reply.
 QUERY_TIMEOUT_S = 0.3
