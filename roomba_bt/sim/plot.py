@@ -1,6 +1,7 @@
-"""A picture of a simulated run: walls, drops, the dock and its beams, the path coloured by
-time, bumps and mode changes marked, the floor cleaned shaded (when the simulator tracks it).
-PNG via matplotlib, an optional extra, imported only here and only when a plot is asked for.
+"""A picture of a simulated run: walls, drops, dirt patches, the dock and its beams, the path
+coloured by time, bumps and mode changes marked, the floor cleaned shaded (when the simulator
+tracks it). PNG via matplotlib, an optional extra, imported only here and only when a plot is
+asked for.
 
 :func:`draw_world` is the one drawing of a world; ``roomba-bt eval --plot``
 (:mod:`roomba_bt.evaluate.plot`) draws its trajectories over it too.
@@ -13,6 +14,7 @@ import pathlib
 from typing import Any
 
 from roomba_bt.sim.coverage import SweptArea
+from roomba_bt.sim.geometry import Polygon
 from roomba_bt.sim.robot import Simulator
 from roomba_bt.sim.world import World
 
@@ -48,26 +50,34 @@ _EVENT_STYLE = {
 
 
 def draw_world(ax: Any, world: World, *, labels: bool = True) -> None:
-    """Rooms, walls, obstacles, drops, virtual walls, lighthouses and the dock with its beams,
-    in metres, on the matplotlib axes ``ax`` (legend labels unless ``labels`` is False)."""
+    """Rooms, dirt patches (each with the dirt-detect level, packet 15, the robot reads over
+    it: a plugin's condition on it is then read against the picture), walls, obstacles,
+    drops, virtual walls, lighthouses and the dock with its beams, in metres, on the
+    matplotlib axes ``ax`` (legend labels unless ``labels`` is False)."""
     from matplotlib.patches import Polygon as PolygonPatch
     from matplotlib.patches import Wedge
 
     def label(text: str) -> str | None:
         return text if labels else None
 
+    def polygon(points: Polygon, **style: Any) -> None:
+        ax.add_patch(PolygonPatch([(x / 1000, y / 1000) for x, y in points], closed=True, **style))
+
     for room in world.rooms:
-        ax.add_patch(PolygonPatch([(x / 1000, y / 1000) for x, y in room], closed=True,
-                                  facecolor="#f7f7f2", edgecolor="black", lw=2))  # fmt: skip
+        polygon(room, facecolor="#f7f7f2", edgecolor="black", lw=2)
+    for patch in world.dirt:  # on the floor: under everything else
+        polygon(patch.area, facecolor="#c9a36b", alpha=0.45, hatch="..", edgecolor="#8a6a3a",
+                label=label("dirt (level, packet 15)"))  # fmt: skip
+        x, y = middle(patch.area)
+        ax.text(x / 1000, y / 1000, str(patch.level), ha="center", va="center", fontsize=7,
+                color="#5a4020")  # fmt: skip
     for ax0, ay0, ax1, ay1 in world.walls:
         ax.plot([ax0 / 1000, ax1 / 1000], [ay0 / 1000, ay1 / 1000], color="black", lw=2)
     for obstacle in world.obstacles:
-        ax.add_patch(PolygonPatch([(x / 1000, y / 1000) for x, y in obstacle], closed=True,
-                                  facecolor="#b8a88a", edgecolor="#6b5a3a"))  # fmt: skip
+        polygon(obstacle, facecolor="#b8a88a", edgecolor="#6b5a3a")
     for drop in world.drops:
-        ax.add_patch(PolygonPatch([(x / 1000, y / 1000) for x, y in drop], closed=True,
-                                  facecolor="#333333", alpha=0.55, hatch="//",
-                                  edgecolor="black", label=label("drop")))  # fmt: skip
+        polygon(drop, facecolor="#333333", alpha=0.55, hatch="//", edgecolor="black",
+                label=label("drop"))  # fmt: skip
     for vw in world.virtual_walls:
         ax.plot([vw.ax / 1000, vw.bx / 1000], [vw.ay / 1000, vw.by / 1000],
                 color="tab:orange", lw=2, ls="--", label=label("virtual wall"))  # fmt: skip
@@ -90,6 +100,13 @@ def draw_world(ax: Any, world: World, *, labels: bool = True) -> None:
                            ls=":", color="tab:blue", label=label("force field")))  # fmt: skip
         x0, y0, x1, y1 = dock.plate
         ax.plot([x0 / 1000, x1 / 1000], [y0 / 1000, y1 / 1000], color="tab:green", lw=5)
+
+
+def middle(points: Polygon) -> tuple[float, float]:
+    """The middle of a shape's bounding box: where its label is written."""
+    xs = [x for x, _ in points]
+    ys = [y for _, y in points]
+    return (min(xs) + max(xs)) / 2, (min(ys) + max(ys)) / 2
 
 
 def draw_swept(ax: Any, swept: SweptArea) -> None:

@@ -9,7 +9,14 @@ import pytest
 
 from roomba_bt.oi import commands as C
 from roomba_bt.sim import Simulator, load_world
-from roomba_bt.sim.plot import PlotUnavailableError, plot_run
+from roomba_bt.sim.plot import PlotUnavailableError, draw_world, plot_run, pyplot
+
+from .helpers import BOX, world
+
+#: the box with two dirt patches, one over the other's corner (the robot reads the higher)
+DIRTY_BOX = BOX + (
+    "dirt: [{rect: [1.0, 1.0, 1.5, 2.0], level: 40}, {rect: [1.4, 1.9, 2.0, 2.5], level: 200}]\n"
+)
 
 
 def run() -> Simulator:
@@ -43,3 +50,24 @@ def test_without_matplotlib_the_error_says_how_to_install_it(
     with pytest.raises(PlotUnavailableError, match=r"pip install 'roomba-bt\[plot\]'"):
         plot_run(run(), tmp_path / "run.png")
     assert not (tmp_path / "run.png").exists()
+
+
+@pytest.mark.parametrize("labels", [True, False], ids=["run --plot", "eval --plot"])
+def test_the_world_drawing_shows_each_dirt_patch_with_its_level(labels: bool) -> None:
+    """A world's dirt patches were not drawn (a plugin author's run over crumbs showed none):
+    each is a shaded shape with the dirt-detect level (packet 15) written in its middle, in
+    the one drawing ``run --plot`` and ``eval --plot`` share, named in the legend where the
+    drawing has one."""
+    pytest.importorskip("matplotlib")
+    plt = pyplot()
+    fig, ax = plt.subplots()
+    try:
+        draw_world(ax, world(DIRTY_BOX), labels=labels)
+        shaded = [p.get_path().get_extents().bounds for p in ax.patches if p.get_hatch() == ".."]
+        assert shaded == [pytest.approx((1.0, 1.0, 0.5, 1.0)), pytest.approx((1.4, 1.9, 0.6, 0.6))]
+        levels = {t.get_text(): t.get_position() for t in ax.texts}
+        assert levels == {"40": pytest.approx((1.25, 1.5)), "200": pytest.approx((1.7, 2.2))}
+        named = [label for label in ax.get_legend_handles_labels()[1] if "dirt" in label]
+        assert named == (["dirt (level, packet 15)"] * 2 if labels else [])
+    finally:
+        plt.close(fig)
