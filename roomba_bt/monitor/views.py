@@ -29,8 +29,18 @@ from roomba_bt.oi.ir import IRCharacter
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.odometry import counts_to_mm, encoder_delta
 from roomba_bt.oi.opcodes import COMMANDS
+from roomba_bt.oi.packets import PACKETS
 from roomba_bt.robot.interface import Snapshot
 from roomba_bt.runtime.recording import utc_stamp
+
+#: How the page's streamed-packets table names each packet: the OI packet table's name (what
+#: a mission's ``sensor:`` and a plugin read it by), title and unit, by id. Sent once, in the
+#: header, so that each update carries only the frame's ids and values
+#: (:func:`streamed_view`): a page keeps no list of its own.
+PACKET_NAMES: dict[str, dict[str, str]] = {
+    str(spec.id): {"name": spec.name, "title": spec.title, "unit": spec.unit}
+    for spec in PACKETS.values()
+}
 
 
 def _ir(code: int) -> dict[str, Any]:
@@ -177,6 +187,15 @@ def robot_view(snapshot: Snapshot, rates: tuple[float, float] | None) -> dict[st
     return out
 
 
+def streamed_view(frame: SensorFrame) -> dict[str, tuple[int, ...]]:
+    """The page's streamed-packets table: every packet of the stream request, raw, in the
+    frame's order, so that a packet a plugin reads (dirt detect, 15; wall signal, 27) that no
+    row of the robot panel decodes is on the page too. The frame's own tuples of ids and
+    values, nothing made a packet (the page is sent up to 20 times a second); the header's
+    :data:`PACKET_NAMES` names them."""
+    return {"ids": frame.packet_ids, "values": frame.values}
+
+
 def _rates(record: TickRecord, earlier: list[TickRecord]) -> tuple[float, float] | None:
     """Per second of the stream (a paused run's mission time stands still; its stream not)."""
     if not earlier or earlier[0].tick >= record.tick:
@@ -233,6 +252,7 @@ def state_view(feed: RunFeed, record: TickRecord, earlier: list[TickRecord]) -> 
         robot = out["robot"] = robot_view(snapshot, _rates(record, earlier))
         robot["motors"] = motors_view(record.motors, snapshot.mode, record.ticked)
         robot.update(_motor_packets(snapshot.frame))
+        robot["streamed"] = streamed_view(snapshot.frame)
         if "wheels" not in robot and len(earlier) > 1:
             measured = _measured_wheels(record, earlier[1])
             if measured is not None:
@@ -297,7 +317,8 @@ def tree_view(feed: RunFeed, generation: int | None = None) -> list[dict[str, An
 
 
 def world_view(simulator: Any) -> dict[str, Any]:
-    """The simulator's world as the page draws it (the shapes ``sim/plot.py`` draws)."""
+    """The simulator's world as the page draws it (the shapes ``sim/plot.py`` draws; a dirt
+    patch with the dirt-detect level, packet 15, the robot reads over it)."""
     world = simulator.world
     out: dict[str, Any] = {
         "name": getattr(world, "name", ""),
@@ -305,6 +326,7 @@ def world_view(simulator: Any) -> dict[str, Any]:
         "walls": [list(w) for w in world.walls],
         "obstacles": [[list(p) for p in o] for o in world.obstacles],
         "drops": [[list(p) for p in d] for d in world.drops],
+        "dirt": [{"area": [list(p) for p in d.area], "level": d.level} for d in world.dirt],
         "virtual_walls": [[vw.ax, vw.ay, vw.bx, vw.by] for vw in world.virtual_walls],
         "lighthouses": [[lh.x, lh.y, *lh.fence_segment] for lh in world.lighthouses],
         "dock": None,
@@ -351,5 +373,6 @@ def header_view(feed: RunFeed, extra: Mapping[str, Any]) -> dict[str, Any]:
         "last_tick": last.tick if last else 0,
         "finished": feed.finished,
         "truth_start": list(feed.truth_start) if feed.truth_start is not None else None,
+        "packets": PACKET_NAMES,
         **extra,
     }

@@ -366,6 +366,50 @@ def test_the_robot_panel_shows_the_brushes_and_vacuum_on_and_off_while_paused(
         run.finish()
 
 
+CRUMBS, DUSTY_ROOM = HERE / "missions" / "crumbs.yaml", HERE / "missions" / "dusty-room.yaml"
+#: a pixel of a dirt patch on the Path panel: its fill, rgba(190,140,70,.35), over the room's
+#: floor, #f4f4ee
+DIRT_ON_THE_FLOOR = (225, 208, 179)
+COUNT_PIXELS = """([r, g, b]) => {
+  const canvas = document.getElementById('path');
+  const data = canvas.getContext('2d').getImageData(0, 0, canvas.width, canvas.height).data;
+  let count = 0;
+  for (let i = 0; i < data.length; i += 4) {
+    if (Math.abs(data[i] - r) <= 2 && Math.abs(data[i + 1] - g) <= 2
+        && Math.abs(data[i + 2] - b) <= 2) count++;
+  }
+  return count;
+}"""
+
+
+def test_the_page_shows_every_streamed_packet_and_the_world_s_dirt(page: Any) -> None:
+    """A plugin author's condition read dirt detect (15) over the world's crumbs: the page
+    showed neither the packet (the robot panel's sensors are a fixed set) nor the crumbs.
+    The streamed-packets panel, opened, lists every packet of the stream request with its
+    name and unit and its value live; the Path panel shades each dirt patch."""
+    run = start_live_run(CRUMBS, world=str(DUSTY_ROOM))
+    try:
+        page.goto(run.url)
+        page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+        assert page.is_hidden("#packets")  # closed: its summary line only
+        page.click("#packets-panel summary")
+        dirt = '#packets tr[data-packet="15"]'
+        page.wait_for_selector(f'{dirt} td:nth-child(3):text-is("40")', timeout=WAIT_MS)
+        assert page.inner_text(f"{dirt} td:nth-child(2)") == "dirt_detect"
+        wall = '#packets tr[data-packet="27"]'
+        assert page.inner_text(f"{wall} td:nth-child(2)") == "wall_signal"
+        assert page.inner_text('#packets tr[data-packet="43"] td:nth-child(4)') == "counts"
+        assert page.inner_text('#packets tr[data-packet="7"] td:nth-child(3)') == "0 = 0b0"
+        rows = page.eval_on_selector_all(
+            "#packets tr[data-packet]", "rs => rs.map(r => +r.dataset.packet)"
+        )
+        assert rows == list(run.feed.layouts[-1].members)  # the stream request, in its order
+        assert page.inner_text("#packets-title") == f"({len(rows)})"
+        assert page.evaluate(COUNT_PIXELS, DIRT_ON_THE_FLOOR) > 1000  # both patches shaded
+    finally:
+        run.finish()
+
+
 def test_after_the_run_the_robot_panel_shows_it_stopped_in_passive(page: Any, child: Child) -> None:
     """The robot panel froze on the last tick before the run's safe stop: the page of an
     ended run showed Safe, the wheels at their last speed and the brushes on. It shows what

@@ -1,5 +1,6 @@
 """The monitor's feed: what it says of a failed node, on the page and in its event log; the
-robot panel's cleaning motors."""
+robot panel's cleaning motors; every streamed packet and the world's dirt, as the page is
+sent them."""
 
 from __future__ import annotations
 
@@ -14,9 +15,10 @@ from roomba_bt.mission import load_mission
 from roomba_bt.monitor.feed import RunFeed
 from roomba_bt.monitor.recorded import replay_into_feed
 from roomba_bt.monitor.session import MonitorSession
-from roomba_bt.monitor.views import motors_view, state_view
+from roomba_bt.monitor.views import header_view, motors_view, state_view, world_view
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.packets import expand
 from roomba_bt.oi.profiles import CREATE2
 from roomba_bt.runtime.loop import MissionRunner
 from roomba_bt.runtime.recording import load_record
@@ -55,23 +57,37 @@ def test_a_failed_leaf_s_message_is_one_line_on_the_page_and_in_the_events() -> 
     assert sayer.feedback_message == HOSTILE
 
 
-BRUSHES = Path(__file__).parent / "missions" / "brushes.yaml"
+MISSIONS = Path(__file__).parent / "missions"
+BRUSHES = MISSIONS / "brushes.yaml"
+#: the shuttle on a patch of crumbs, reading dirt detect (15) and wall signal (27), and its
+#: world (dirt detect reads 40 where it starts)
+CRUMBS, DUSTY_ROOM = MISSIONS / "crumbs.yaml", MISSIONS / "dusty-room.yaml"
 
 
-def _brushes_run(tmp_path: Path) -> tuple[RunFeed, Path, tuple[int, ...]]:
-    """The brushes mission for 2 s on the virtual clock, recorded, with a live feed of it."""
-    mission = load_mission(BRUSHES, {}, profile=CREATE2)
-    path = tmp_path / "brushes.jsonl"
+def _recorded_run(
+    tmp_path: Path, mission_file: Path, world: str | Path = "empty-room"
+) -> tuple[RunFeed, Path, tuple[int, ...]]:
+    """``mission_file`` for 2 s on the virtual clock in ``world``, recorded, with a live feed
+    of it: the feed, the record's path and the stream request."""
+    mission = load_mission(mission_file, {}, profile=CREATE2)
+    path = tmp_path / f"{mission.name}.jsonl"
     feed = RunFeed(history=None, mission_name=mission.name)
     feed.set_tree(mission.root)
-    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=0))
+    link = SimLink(Simulator(load_world(world), CREATE2, seed=0))
     stack = RunStack(mission, link, profile=CREATE2, timeout_s=2.0, observer=feed.observe,
-                     record=Recording(path, str(BRUSHES)))  # fmt: skip
+                     record=Recording(path, str(mission_file)))  # fmt: skip
     try:
         stack.run()
     finally:
         stack.close()
     return feed, path, stack.packets
+
+
+def _replayed(mission_file: Path, path: Path, packets: tuple[int, ...]) -> RunFeed:
+    """The record at ``path`` replayed into a feed: what ``roomba-bt monitor RECORD`` shows."""
+    mission = load_mission(mission_file, {}, profile=CREATE2)
+    replayed, _ = replay_into_feed(load_record(path), mission, CREATE2, packets, 115200, "r")
+    return replayed
 
 
 def _robot_at_newest(feed: RunFeed, back: int = 0) -> dict[str, Any]:
@@ -91,7 +107,7 @@ def test_the_robot_panel_shows_the_brushes_and_vacuum_the_run_switched_on(
     whether the brushes were on. It shows what the motors' standing command (Motors (138))
     set, and what the stream carries of them (packet 14, the brushes' currents 56 and 57);
     a recorded run's view (every tick packed) shows the same."""
-    feed, path, packets = _brushes_run(tmp_path)
+    feed, path, packets = _recorded_run(tmp_path, BRUSHES)
     robot = _robot_at_newest(feed)
     assert robot["motors"] == {
         "command": "Motors (138)",
@@ -107,8 +123,7 @@ def test_the_robot_panel_shows_the_brushes_and_vacuum_the_run_switched_on(
     assert robot["brush_currents_ma"]["side_brush"] > 0
     first = feed.since(0)[0][0]
     assert first.motors is None  # before the motors' command: none stands
-    mission = load_mission(BRUSHES, {}, profile=CREATE2)
-    replayed, _ = replay_into_feed(load_record(path), mission, CREATE2, packets, 115200, "b")
+    replayed = _replayed(BRUSHES, path, packets)
     # the tick before the end (at the end, the view shows what the safe stop left: off)
     assert _robot_at_newest(replayed, back=1)["motors"] == robot["motors"]
     assert _robot_at_newest(replayed)["motors"]["note"] == "off: the run's safe stop"
@@ -187,3 +202,35 @@ def test_the_robot_panel_shows_the_motors_a_halt_turned_off() -> None:
         session.feed.observe = then_stop  # type: ignore[method-assign]
 
     assert _motors_after(pause)[1] == off
+
+
+def test_every_streamed_packet_goes_to_the_page_named_by_the_packet_table(
+    tmp_path: Path,
+) -> None:
+    """The robot panel decodes a fixed set of sensors: dirt detect (15) and wall signal (27),
+    which a plugin's condition reads and the stream carries, were nowhere on the page. Every
+    packet of the stream request goes to the page raw, in the frame's order, and the header
+    names each by the OI packet table (the name a mission reads it by, its unit); a recorded
+    run's view (every tick packed) shows the same."""
+    feed, path, packets = _recorded_run(tmp_path, CRUMBS, DUSTY_ROOM)
+    streamed = _robot_at_newest(feed)["streamed"]
+    assert tuple(streamed["ids"]) == tuple(m for p in packets for m in expand(p))
+    values = dict(zip(streamed["ids"], streamed["values"], strict=True))
+    assert (values[15], values[27]) == (40, 0)  # on the crumbs, no wall near
+    names = header_view(feed, {})["packets"]
+    assert (names["15"]["name"], names["27"]["name"]) == ("dirt_detect", "wall_signal")
+    assert (names["22"]["unit"], names["7"]["unit"]) == ("mV", "bits")
+    assert {str(pid) for pid in streamed["ids"]} <= set(names)
+    replayed = _replayed(CRUMBS, path, packets)
+    assert (
+        _robot_at_newest(replayed, back=5)["streamed"] == _robot_at_newest(feed, back=5)["streamed"]
+    )
+
+
+def test_the_page_s_world_has_each_dirt_patch_and_its_level() -> None:
+    """The Path panel drew rooms, walls, obstacles, drops, virtual walls and lighthouses, not
+    the dirt: the world the page is sent has each patch's shape (mm) and level."""
+    dirt = world_view(Simulator(load_world(DUSTY_ROOM), CREATE2, seed=0))["dirt"]
+    assert [patch["level"] for patch in dirt] == [40, 200]
+    xs, ys = zip(*dirt[0]["area"], strict=True)
+    assert (min(xs), min(ys), max(xs), max(ys)) == (1500, 1500, 2500, 2500)

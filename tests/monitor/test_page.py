@@ -16,6 +16,7 @@ import pytest
 
 from roomba_bt.mission import load_mission
 from roomba_bt.monitor.server import MonitorServer
+from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import CREATE2
 
 from .conftest import SHUTTLE
@@ -138,6 +139,33 @@ def test_a_rewound_record_s_robot_panel_is_titled_by_the_tick_it_shows(
     title = page.inner_text("#robot-panel h2").lower()
     assert title == "robot after the run ended: stopped, passive", title
     assert page.inner_text("#mode") == "Passive"
+
+
+def test_a_rewound_record_s_streamed_packets_are_those_of_the_tick_shown(
+    recorded: MonitorServer, page: Any
+) -> None:
+    """The streamed-packets panel of a recorded run: every packet the run streamed, each
+    value as the record has it at the tick the timeline shows (bits also in binary)."""
+    page.goto(recorded.url)
+    page.wait_for_selector('#source:text("record")', timeout=WAIT_MS)
+    page.click("#packets-panel summary")
+    records = recorded.feed.since(0)[0]
+    middle = records[len(records) // 2]
+    _seek(page, middle.tick)
+    assert middle.frame is not None
+    layout = recorded.feed.layouts[middle.layout]
+    bits = {pid for pid in layout.members if PACKETS[pid].unit == "bits"}
+    expected = [
+        [str(pid), f"{value} = 0b{value:b}" if pid in bits else str(value)]
+        for pid, value in zip(layout.members, middle.frame, strict=True)
+    ]
+    shown = page.eval_on_selector_all(
+        "#packets tr[data-packet]",
+        "rows => rows.map(r => [r.dataset.packet, r.cells[2].textContent])",
+    )
+    assert shown == expected
+    title = page.inner_text("#packets-title").lower()  # CSS caps
+    assert title == f"({len(expected)}) at tick {middle.tick}"
 
 
 def test_a_seek_brings_its_events_into_view(recorded: MonitorServer, page: Any) -> None:

@@ -33,6 +33,8 @@ const view = {
   header: null, tree: [], rows: [], shown: "", collapsed: new Set(),
   live: true, liveState: null, session: { paused: false, breakpoints: {}, forced: {} },
   events: [], path: { odometry: [], truth: [] }, pathLive: { odometry: [], truth: [] },
+  // the state the panels show (the packets panel, opened, shows it at once)
+  shownState: null,
   world: null, fontSize: 13, follow: true, shownTick: 0, window: [0, 0], playing: null, menuNode: null,
   finished: null, ended: false,
   // what the run's safe stop left the robot in, when the state shown is after it (state.ended)
@@ -297,6 +299,35 @@ function renderBlackboard(state) {
     ? keys.map((k) => `<tr><td>${esc(k)}</td><td>${esc(bb[k])}</td></tr>`).join("")
     : "<tr><td>(no keys)</td></tr>";
 }
+// ------------------------------------------------------------------ streamed packets
+// every packet of the run's stream request, raw, named by the OI packet table the header
+// brings (header.packets: the name a mission's sensor: and a plugin read it by, its title
+// and unit): a packet no row of the robot panel decodes (dirt detect, 15; wall signal, 27)
+// is here. Made only while its panel is open (closed, an update costs nothing more), its
+// rows again only when the frame's packets change, a value's cell only when it does.
+const packets = { ids: null, cells: [] };
+const packetValue = (value, unit) => (unit === "bits" ? `${value} = 0b${value.toString(2)}` : String(value));
+function renderPackets(state) {
+  const streamed = state.robot && state.robot.streamed;
+  const count = streamed ? `(${streamed.ids.length})` : "";
+  $("packets-title").textContent = view.live ? count : `${count} at tick ${state.tick}`;
+  if (!$("packets-panel").open) return;
+  const rows = $("packets-rows");
+  if (!streamed) { rows.innerHTML = "<tr><td colspan=\"4\">no frame yet</td></tr>"; packets.ids = null; return; }
+  const names = view.header.packets, key = streamed.ids.join(" ");
+  if (packets.ids !== key) {
+    rows.innerHTML = streamed.ids.map((id) => `<tr data-packet="${id}"><td>${id}</td>`
+      + `<td title="${esc(names[id].title)}">${esc(names[id].name)}</td><td></td><td>${esc(names[id].unit)}</td></tr>`).join("");
+    packets.cells = Array.from(rows.querySelectorAll("td:nth-child(3)"));
+    packets.ids = key;
+  }
+  streamed.values.forEach((value, j) => {
+    const text = packetValue(value, names[streamed.ids[j]].unit);
+    if (packets.cells[j].textContent !== text) packets.cells[j].textContent = text;
+  });
+}
+$("packets-panel").addEventListener("toggle", () => { if (view.shownState) renderPackets(view.shownState); });
+
 function esc(s) { return String(s).replace(/[&<>"]/g, (c) => ({ "&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;" })[c]); }
 
 // ------------------------------------------------------------------ events
@@ -355,6 +386,12 @@ function drawPath(state, path) {
   };
   if (w) {
     for (const room of w.rooms) poly(room, "#f4f4ee", "#222");
+    for (const d of w.dirt) {  // on the floor, under the rest; its dirt-detect level (15) in its middle
+      poly(d.area, "rgba(190,140,70,.35)", "rgba(120,80,30,.7)");
+      const xs = d.area.map((p) => p[0]), ys = d.area.map((p) => p[1]);
+      g.fillStyle = "#5a4020"; g.font = "10px sans-serif"; g.textAlign = "center"; g.textBaseline = "middle";
+      g.fillText(String(d.level), X((Math.min(...xs) + Math.max(...xs)) / 2), Y((Math.min(...ys) + Math.max(...ys)) / 2));
+    }
     for (const o of w.obstacles) poly(o, "#b8a88a", "#6b5a3a");
     for (const d of w.drops) poly(d, "rgba(40,40,40,.45)", "#000");
     for (const wall of w.walls) line(...wall, "#111", 2);
@@ -407,7 +444,8 @@ function render(state) {
   $("tick").textContent = state.tick;
   view.shownTick = state.tick;
   view.shownEnded = state.ended || null;
-  renderStatuses(state); renderRobot(state); renderBlackboard(state);
+  view.shownState = state;
+  renderStatuses(state); renderRobot(state); renderPackets(state); renderBlackboard(state);
   drawPath(state, view.live ? view.pathLive : view.path);
   renderEvents();
   updateTimeline();
