@@ -310,7 +310,10 @@ const packetValue = (value, unit) => (unit === "bits" ? `${value} = 0b${value.to
 function renderPackets(state) {
   const streamed = state.robot && state.robot.streamed;
   const count = streamed ? `(${streamed.ids.length})` : "";
-  $("packets-title").textContent = view.live ? count : `${count} at tick ${state.tick}`;
+  // after the run's end the robot panel shows what its safe stop left; no frame shows that
+  const when = view.shownEnded ? ": the last frame, before the run's safe stop"
+    : view.live ? "" : ` at tick ${state.tick}`;
+  $("packets-title").textContent = count + when;
   if (!$("packets-panel").open) return;
   const rows = $("packets-rows");
   if (!streamed) { rows.innerHTML = "<tr><td colspan=\"4\">no frame yet</td></tr>"; packets.ids = null; return; }
