@@ -16,6 +16,7 @@ from roomba_bt.cli.arguments import (
     MIN_WATCHDOG,
     add_battery_option,
     add_command,
+    add_display_option,
     add_far_end_options,
     add_odometry_error_option,
     add_param_option,
@@ -133,11 +134,7 @@ def _add_run_parser(sub: Any) -> None:
     add_reproducible_option(run)
     _add_strict_option(run)
     _add_session_options(run)
-    run.add_argument(
-        "--display", choices=("auto", "tree", "log", "none"), default="auto",
-        help="live tree on a terminal (auto), one line per status change (log), or only the "
-        "summary (none)",
-    )  # fmt: skip
+    add_display_option(run, live=True)
     _add_label_option(run)
     add_monitor_arguments(run)
 
@@ -231,6 +228,7 @@ def _add_replay_parser(sub: Any) -> None:
     add_param_option(replay)
     add_permission_options(replay)
     add_window_options(replay, start=False)
+    add_display_option(replay, live=False)
 
 
 def _error(message: str) -> int:
@@ -921,7 +919,7 @@ def shipped_mission_at(path: object) -> str | None:
 
 def replay_command(args: argparse.Namespace) -> int:
     from roomba_bt.monitor.recorded import operator_replay
-    from roomba_bt.runtime.provenance import changed_plugins, changed_sources, drift_line
+    from roomba_bt.runtime.display import StatusChangeLogger
     from roomba_bt.runtime.recording import ending_text
     from roomba_bt.runtime.stack import replay_record
 
@@ -938,14 +936,32 @@ def replay_command(args: argparse.Namespace) -> int:
         progress=replay_progress("replay", record),
         gate=operator_replay(record, recorded.mission),  # the monitor's pauses, steps, forces
         until=window[1],
+        observer=StatusChangeLogger() if args.display == "log" else None,
     )  # fmt: skip
     summary.strict_named = "run --strict"  # its warning of refusals: what would fail a run
     summary.label = record.label  # replays of several robots' runs told apart, as the runs
+    if args.display == "tree":
+        print(_render_tree(recorded.mission, status=True))
     print(summary)
-    difference = transport.first_difference()
+    code = _replay_verdict(summary, transport, recorded)
     ending = record.ending  # its end note, said last (a record made before has none)
-    ended = f"replay: {ending_text(ending)}" if ending is not None else None
-    mission = recorded.mission
+    if ending is not None:
+        print(f"replay: {ending_text(ending)}")
+    return code
+
+
+def _replay_verdict(summary: RunSummary, transport: ReplayTransport, recorded: Recorded) -> int:
+    """What ``replay`` says of the bytes the tree wrote against the record's, printed, and
+    its exit code: the same (0), the same up to where the recorded run's link failed (0),
+    or the first difference, with what changed since the record was made (1)."""
+    from roomba_bt.runtime.provenance import changed_plugins, changed_sources, drift_line
+
+    record, mission = recorded.record, recorded.mission
+    difference = transport.first_difference()
+    lost = _past_the_link_loss(transport, difference, record.ending)
+    if lost is not None:  # the same up to where the recorded run's link failed
+        print(*lost, sep="\n")
+        return ExitCode.OK
     sources = changed_sources(record.header, mission.files, record.path)
     plugins = changed_plugins(record.header, mission.root)
     # what the replay ran on, said before its verdict: one line, when it is not what the
@@ -953,14 +969,11 @@ def replay_command(args: argparse.Namespace) -> int:
     drift = drift_line(record.header, sources, plugins, same_bytes=difference is None)
     if drift is not None:
         print(f"replay: {drift}")
-    unended = record.unended()
-    compared, same = _compared(summary, transport, record, unended)
+    compared, same = _compared(summary, transport, record, record.unended())
     if compared is not None:
         print(compared)
     if difference is None:
         print(same)
-        if ended is not None:
-            print(ended)
         return ExitCode.OK
     offset, expected, sent = difference
     print(
@@ -976,9 +989,36 @@ def replay_command(args: argparse.Namespace) -> int:
             "a reload (the record has no copy of the new mission), or an act a record made "
             "before noted without its tick"
         )
-    if ended is not None:
-        print(ended)
     return ExitCode.MISSION_FAILED
+
+
+def _past_the_link_loss(
+    transport: ReplayTransport,
+    difference: tuple[int, str, str] | None,
+    ending: dict[str, Any] | None,
+) -> tuple[str, str] | None:
+    """What ``replay`` says of a difference that came only after the recorded run's link
+    failed (after its tree's last tick: :attr:`ReplayTransport.link_lost_from`), or None
+    for any other. The recorded run then wrote what the failure had it write (the watchdog's
+    drive 0, queries, a wake by BRC, the stop, or nothing once the port was gone), which a
+    replay, with no line to fail, does not do again: "first difference", exit 1, read as
+    "your mission changed" for every record of a pulled cable or a reset robot."""
+    lost_from = transport.link_lost_from
+    if difference is None or lost_from is None or difference[0] < lost_from:
+        return None
+    _, expected, sent = difference
+    time, tick = (ending or {}).get("time"), (ending or {}).get("tick")
+    if not isinstance(tick, int):  # the start-up's bytes alone, the same up to the difference
+        lost = f"before its tree's first tick; the {difference[0]} bytes up to there are the same"
+    else:
+        when = f" at mission time {time:.3f} s" if isinstance(time, int | float) else ""
+        lost = f"{when}, after its tree's last tick; compared up to there: the tree wrote the "
+        lost += f"same {lost_from} bytes"
+    return (
+        f"replay: the recorded run lost its link {lost.lstrip()}",
+        f"replay: past there the replay does not fail as its link did (the record holds "
+        f"{expected}, the replay's own ending sent {sent})",
+    )
 
 
 def _compared(

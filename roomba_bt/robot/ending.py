@@ -43,10 +43,11 @@ from roomba_bt.oi.opcodes import Effect
 from roomba_bt.oi.packets import packet_ids
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import StreamParser, stream_period
-from roomba_bt.robot.errors import PortLost, RobotError
+from roomba_bt.robot.errors import PortLost, RobotError, WaitCutShort
 from roomba_bt.robot.link import LINK_ERRORS, LinkStatus, StreamLink
 from roomba_bt.robot.safety import ENDING_SIGNALS
 from roomba_bt.robot.wake import KeepAwake
+from roomba_bt.robot.wall_bound import WallBound, bounded
 from roomba_bt.robot.writer import CommandWriter
 
 log = logging.getLogger(__name__)
@@ -70,6 +71,14 @@ ROUND_TRIPS_IN_FLIGHT = 2
 #: to a large time adds nothing for a wait under its last bit (the listen after the stop
 #: looped for ever on ``bench.bench_robot``'s transport).
 CLOCK_ROUNDING = 1e-6
+#: Seconds of wall time after which the safe stop gives up waiting for the robot (the stop
+#: is then unconfirmed, and says why): a last resort, for a wait whose end on the link's
+#: clock never comes. Its longest own wait is some 4 s: two listens after the stop of
+#: :data:`STOP_LISTEN` past the frames in flight (a round trip of :data:`ROUND_TRIP_CAP`,
+#: twice), and a followed rate's quiet and Query List (``silence._stop_heard``). A replay
+#: whose clock stood still read for ever there, and ignored Ctrl-C and SIGTERM, which wait
+#: for the stop.
+STOP_WALL_S = 10.0
 #: The most a measured round trip counts for, in seconds (:func:`link_round_trip`):
 #: the allowance it sets is also the time the mode model waits for a mode command to show,
 #: during which a robot that really fell to Passive could still be sent actuator bytes. The
@@ -353,7 +362,14 @@ class SafeStop:
         """Stop the robot and leave it in Passive (or Off with ``end_in="stop"``); never
         raises for a dead link (False, and the stop report logged). A stop written while a
         stream ran is checked against it (:meth:`_contradicted`) and written once more if the
-        robot streams on."""
+        robot streams on. Its waits for the robot end on the link's clock, and, as a last
+        resort, after :data:`STOP_WALL_S` of wall time (the stop then unconfirmed, said so):
+        the signals that would end a stuck wait are held or deferred while it runs."""
+        with bounded(self.writer.link, STOP_WALL_S, "the safe stop's wait for the robot") as bound:
+            return self._stop(bound)
+
+    def _stop(self, bound: WallBound) -> bool:
+        """:meth:`stop`, its waits bounded by ``bound``."""
         writer = self.writer
         link = writer.link
         if writer.modes.mode is OIMode.OFF:  # never started (or ended in Off by Stop):
@@ -403,6 +419,8 @@ class SafeStop:
             unconfirmed = self._unproven
         if unconfirmed is None and link.bytes_read == 0:  # a robot that may hear and not
             unconfirmed = "the robot never answered"  # answer (its TX line cut)
+        if bound.cut is not None:  # a wait given up: nothing it would have shown is known
+            unconfirmed = bound.cut
         if unconfirmed is not None:
             return self._undelivered(f"the stop was written but is unconfirmed: {unconfirmed}")
         link.streaming = False
@@ -491,8 +509,8 @@ class SafeStop:
                     last = self._heard_at = clock()
                     if last > stale_until:
                         late += new
-        except PortLost:  # the stop was written; the quiet it cut short shows nothing
-            return None  # (:meth:`_quiet_unproven` says so)
+        except (PortLost, WaitCutShort):  # the stop was written; the quiet it cut short
+            return None  # shows nothing (:meth:`_quiet_unproven`, :meth:`stop` say so)
         if clock() - last >= STOP_LISTEN - CLOCK_ROUNDING or len(late) <= PAUSE_SLACK:
             return None  # the stream stopped: it heard Pause Stream
         return self._streamed_on(late, in_flight)

@@ -138,6 +138,14 @@ class PortLost(LinkDown):
     """Reading or writing the port raised (cable unplugged, bridge closed, robot reset)."""
 
 
+class WaitCutShort(RobotError):
+    """A read inside a wait bounded in wall time (the safe stop's,
+    :meth:`~roomba_bt.robot.link.StreamLink.bounded`) came after the bound: the wait would
+    otherwise have gone on, its end measured on a link clock that does not move as it reads
+    (a transport of one's own, a virtual clock at its float's last bit). Not a port lost:
+    the port may be fine, only the wait is given up."""
+
+
 def wrong_profile(mismatch: ProfileMismatch) -> str:
     """The frames pass another model's checksum, or only its range holds their values: what
     was seen and the fix, for the command line and for a Python caller (the ``profile``

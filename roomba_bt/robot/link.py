@@ -43,6 +43,7 @@ from roomba_bt.oi.stream import StreamParser, shows_reset_banner
 from roomba_bt.robot.errors import PortLost, StreamStalled
 from roomba_bt.robot.interface import ModeChange
 from roomba_bt.robot.listen import listen_at
+from roomba_bt.robot.wall_bound import WallBound
 from roomba_bt.transport.base import Transport, TransportError
 from roomba_bt.transport.open_failure import CLOSED_AT_ONCE
 from roomba_bt.transport.serial_port import TERMIOS_ERRORS
@@ -168,7 +169,14 @@ class StreamLink:
         return self.transport.name
 
     # ------------------------------------------------------------------ bytes
+    #: a bound in wall time on the waits that read now (the safe stop's:
+    #: :func:`~roomba_bt.robot.wall_bound.bounded`), or None
+    wall_bound: WallBound | None = None
+
     def read(self, timeout: float) -> bytes:
+        bound = self.wall_bound
+        if bound is not None:
+            bound.check(self.transport)
         try:
             data = self.transport.read(timeout)
         except LINK_ERRORS as exc:

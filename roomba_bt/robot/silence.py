@@ -337,12 +337,12 @@ def _stop_heard(connection: Connection) -> bool:
     link = connection.link
     clock = link.transport.now
     give_up = clock() + QUIET_WITHIN_S
-    quiet_from = clock()
-    while (now := clock()) - quiet_from < QUIET_S:
+    quiet_until = clock() + QUIET_S
+    while (now := clock()) < quiet_until:
         if now >= give_up:
             return False
-        if link.read(min(QUIET_S - (now - quiet_from), give_up - now)):
-            quiet_from = clock()
+        if link.read(min(quiet_until, give_up) - now):
+            quiet_until = clock() + QUIET_S
     return _answers(connection)
 
 

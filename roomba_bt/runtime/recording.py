@@ -374,9 +374,9 @@ class RecordingTransport:
         try:
             self._inner.set_baud(baud)
         except BaseException as exc:
-            self.note({"baud": baud, "cut_short": type(exc).__name__})
+            self.note({BAUD_NOTE: baud, "cut_short": type(exc).__name__})
             raise
-        self.note({"baud": baud})
+        self.note({BAUD_NOTE: baud})
 
     def close(self) -> None:
         """Close the link, then end the record with its end line (the run ended here)."""
@@ -406,6 +406,9 @@ class RecordingTransport:
         return getattr(self._inner, name)
 
 
+#: the note of a change of the port's rate (its value: the new rate, :meth:`RecordingTransport.
+#: set_baud`)
+BAUD_NOTE = "baud"
 #: the note that ends a record whose file could no longer be written (its value: why, the
 #: error's words: "File too large", "No space left on device"); the run went on without it
 RECORD_STOPPED = "record_stopped"
@@ -1090,6 +1093,15 @@ class ReplayTransport:
         self._as_recorded = False
         #: the replay was ended before the record's end (:meth:`end_here`: ``--to``)
         self.ended_early = False
+        #: the bytes the tree had written when the recorded run's link failed, after its
+        #: last tick, the same as the record's up to there (``stack.LinkLostAfter``); None:
+        #: its link did not fail, or the replay did not get there
+        self.link_lost_from: int | None = None
+        #: the recorded run's changes of the port's rate, ``(time, rate)`` in order, not yet
+        #: done again (:meth:`set_baud`)
+        self._rate_changes = deque(
+            (t, note[BAUD_NOTE]) for t, note in record.notes if BAUD_NOTE in note
+        )
 
     def _read_chunk(self, queue: bool = True) -> bool:
         """Read the record's next chunk into the queue (``queue``; else the robot's chunk is
@@ -1235,12 +1247,10 @@ class ReplayTransport:
 
     def read(self, timeout: float) -> bytes:
         if self.difference is not None or self.exhausted:  # a difference ends the replay
-            self._now += timeout
-            return b""
+            return self._nothing_for(timeout)
         t, data, written_before = self._inbound[0]
         if (t > self._now + timeout and not self._as_recorded) or self.written < written_before:
-            self._now += timeout
-            return b""
+            return self._nothing_for(timeout)
         self._inbound.popleft()
         self._now = max(self._now, t)
         if self._progress is not None and self._last_t > 0:
@@ -1249,6 +1259,19 @@ class ReplayTransport:
                 self._tenths = tenths
                 self._progress(tenths / 10)
         return data
+
+    def _nothing_for(self, timeout: float) -> bytes:
+        """A read that gives nothing: the clock moves on by ``timeout``, and by one step of
+        the float at least for any ``timeout`` > 0. A wait whose rest was under the clock's
+        last bit (``5.678475 + 3.6e-16`` is ``5.678475``) added nothing: the safe stop's
+        wait for a quiet line after a followed baud change (``silence._stop_heard``) read
+        for ever at the record's end, its signals deferred, and only SIGKILL ended the
+        replay."""
+        moved = self._now + timeout
+        if timeout > 0.0 and moved <= self._now:
+            moved = math.nextafter(self._now, math.inf)
+        self._now = moved
+        return b""
 
     @contextlib.contextmanager
     def recorded_reads(self) -> Iterator[None]:
@@ -1318,7 +1341,22 @@ class ReplayTransport:
         return offset, command_at(self._expected, at), sent
 
     def set_baud(self, baud: int) -> None:
-        pass
+        """The port changes its rate where the recorded run changed it: the clock moves on to
+        the time the record notes that change at (:data:`BAUD_NOTE`). A run on the wall clock
+        switched a drained port one slot after the watchdog's drive 0 (robot/listen.py); on
+        the record's clock it switched at once, listened 15 ms short of the live run's
+        window, and missed its last frame there: the drive 0 at the followed rate came a
+        chunk early, a difference (exit 1) in the replay of every run that followed a baud
+        change. Once the tree's changes and the record's part ways (another rate), the clock
+        is left alone."""
+        changes = self._rate_changes
+        if not changes:
+            return
+        at, rate = changes.popleft()
+        if rate != baud:
+            changes.clear()
+        elif at > self._now:
+            self._now = at
 
     def close(self) -> None:
         self._open = False

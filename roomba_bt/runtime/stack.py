@@ -529,14 +529,12 @@ class RecordedEnd:
         return self.inner is not None and self.inner.holds(runner)
 
 
-class WindowEnd:
-    """A replay's gate that ends it once the tree has ticked at mission time ``until``
-    (``--to``: a window of a long record, the rest not replayed), as if the record ended
-    there (:meth:`ReplayTransport.end_here`); ``inner``: the monitor's replay of the
-    operator's acts, asked first."""
+class AfterTickGate:
+    """A replay's gate that looks at the run after each tick (:meth:`after_tick`, the part a
+    subclass adds) and otherwise is ``inner``: the monitor's replay of the operator's acts,
+    asked first, or nothing."""
 
-    def __init__(self, until: float, inner: TickGate | None, transport: ReplayTransport) -> None:
-        self.until = until
+    def __init__(self, inner: TickGate | None, transport: ReplayTransport) -> None:
         self.inner = inner
         self.transport = transport
 
@@ -546,11 +544,68 @@ class WindowEnd:
     def after_tick(self, runner: MissionRunner) -> None:
         if self.inner is not None:
             self.inner.after_tick(runner)
-        if runner.snapshot.time >= self.until and not self.transport.ended_early:
-            self.transport.end_here()
 
     def holds(self, runner: MissionRunner) -> bool:
         return self.inner is not None and self.inner.holds(runner)
+
+
+class WindowEnd(AfterTickGate):
+    """A replay's gate that ends it once the tree has ticked at mission time ``until``
+    (``--to``: a window of a long record, the rest not replayed), as if the record ended
+    there (:meth:`ReplayTransport.end_here`)."""
+
+    def __init__(self, until: float, inner: TickGate | None, transport: ReplayTransport) -> None:
+        super().__init__(inner, transport)
+        self.until = until
+
+    def after_tick(self, runner: MissionRunner) -> None:
+        super().after_tick(runner)
+        if runner.snapshot.time >= self.until and not self.transport.ended_early:
+            self.transport.end_here()
+
+
+class LinkLostAfter(AfterTickGate):
+    """A replay's gate that marks where the recorded run's link failed: once the tree has
+    ticked the recorded run's last tick (its end note's, ``tick``) with the same bytes, what
+    it wrote by then (:attr:`ReplayTransport.link_lost_from`). Past there the recorded run
+    wrote what its link's failure had it write (the watchdog's drive 0, its queries, a wake,
+    the stop, or nothing: the port gone) on a line the replay cannot be: a difference there
+    is the ending's, not the tree's (``replay`` says so, exit 0)."""
+
+    def __init__(self, tick: int, inner: TickGate | None, transport: ReplayTransport) -> None:
+        super().__init__(inner, transport)
+        self.tick = tick
+
+    def after_tick(self, runner: MissionRunner) -> None:
+        super().after_tick(runner)
+        transport = self.transport
+        if (
+            runner.snapshot.tick >= self.tick
+            and transport.link_lost_from is None
+            and transport.difference is None
+        ):
+            transport.link_lost_from = transport.written
+
+
+#: the end notes of a run whose link failed (``Outcome.CONNECTION_LOST``, ``NO_CONNECTION``)
+LINK_FAILED = ("connection lost", "no connection")
+
+
+def link_lost_after(
+    record: Record, gate: TickGate | None, transport: ReplayTransport
+) -> TickGate | None:
+    """``gate`` inside a :class:`LinkLostAfter` where ``record``'s run ended by its link
+    failing after its tree's last tick; a run that failed before its first tick (its note
+    has none: the wrong profile, no answer) marks the transport from its start, as its tree
+    wrote nothing to compare. ``gate`` itself for any other ending."""
+    note = record.ending
+    if note is None or note[ENDED] not in LINK_FAILED:
+        return gate
+    tick = note.get("tick")
+    if not isinstance(tick, int):
+        transport.link_lost_from = 0
+        return gate
+    return LinkLostAfter(tick, gate, transport)
 
 
 def recorded_end(
@@ -616,6 +671,7 @@ def replay_record(
         stack.connection.link.replayed_trips = deque(trips)
     if until is not None:
         gate = WindowEnd(until, gate, transport)
+    gate = link_lost_after(record, gate, transport)
     end = recorded_end(record, gate, transport)
     stack.runner.gate = end or gate  # the monitor's replay of the operator's acts inside
     stack.runner.on_wall_clock = False  # a record's clock: Ctrl-Z suspends, Ctrl-\ quits

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import logging
 import re
+import threading
 from typing import Any
 
 import pytest
@@ -392,3 +393,46 @@ def test_a_stop_whose_listening_the_port_failed_in_is_unconfirmed() -> None:
         "the port failed while the robot was listened to after it"
     )
     assert connection.status is LinkStatus.LOST
+
+
+class StandingClock(Pullable):
+    """A wall-clock link whose clock stops once ``stood``: reads bring nothing and the time
+    does not move (a transport of one's own that keeps its clock badly, a virtual clock at
+    its float's last bit). Every wait of the safe stop ends on that clock."""
+
+    wall_clock = True
+
+    def __init__(self, link: SimLink) -> None:
+        super().__init__(link)
+        self.stood_at: float | None = None
+
+    def read(self, timeout: float) -> bytes:
+        return b"" if self.stood_at is not None else bytes(self.link.read(timeout))
+
+    def now(self) -> float:
+        return self.stood_at if self.stood_at is not None else float(self.link.now())
+
+
+def test_a_stop_whose_waits_never_end_on_the_link_clock_is_given_up_in_wall_time(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The listening after the stop waits for a quiet on the link's clock; that clock stands
+    still. It read for ever (signals held by the stop: only SIGKILL ended it); now it gives
+    up after the stop's bound in wall time, written but unconfirmed, and says why."""
+    monkeypatch.setattr("roomba_bt.robot.ending.STOP_WALL_S", 0.2)
+    link = StandingClock(SimLink(Simulator(parse_world(BOX, "<test>"), profile=CREATE2)))
+    connection = Connection(link, CREATE2)
+    connection.start("safe", PACKETS)
+    connection.send_many([oi.drive(200, 32767)])
+    while connection.counters.frames < 10:
+        connection.poll(0.05)
+    link.stood_at = link.now()
+    stopped: list[bool] = []
+    stopping = threading.Thread(target=lambda: stopped.append(connection.safe_stop()), daemon=True)
+    stopping.start()
+    stopping.join(timeout=30)
+    assert stopped == [False], "the stop's wait never ended"
+    report = connection.stop_report or ""
+    assert "the stop was written but is unconfirmed: " in report, report
+    assert "the safe stop's wait for the robot was given up after 0.2 s of wall time" in report
+    assert link.link.simulator.requested_left == 0  # written, and heard by the robot

@@ -213,6 +213,29 @@ def test_a_run_whose_watchdog_stopped_the_wheels_over_the_pty_replays_byte_for_b
     assert "the tree wrote the same" in replay.stdout
 
 
+def test_a_run_that_followed_a_baud_change_over_the_pty_replays_byte_for_byte(
+    served_sim: Callable[..., Any], tmp_path: Path
+) -> None:
+    """The robot changes its rate mid-run (a battery swap): the run follows it, stops it
+    there and ends, exit 3. Its replay listened at the new rate 15 ms short of the live
+    run's window (the live port settles a slot first), wrote the drive 0 a frame early (a
+    difference), then its safe stop's wait for a quiet line read for ever at the record's
+    end, its clock stuck at a float's last bit, deaf to Ctrl-C and SIGTERM. Now the replay
+    switches where the record notes the switch, and writes the same bytes."""
+    sim = served_sim("--pty", "--baud-change-at", "1.5", "--faults-from-stream")
+    record = tmp_path / "run.jsonl"
+    proc = _start_run(sim.address, write_mission(tmp_path, SPIN), record, "--timeout", "5s")
+    out, err = proc.communicate(timeout=30)
+    assert proc.returncode == 3, out + err
+    assert "the robot now talks at another baud rate: 19200" in out
+    replay = subprocess.run(
+        [*CLI, "replay", str(record)], capture_output=True, text=True, timeout=30
+    )
+    assert replay.returncode == 0, replay.stdout + replay.stderr
+    assert "the tree wrote the same" in replay.stdout
+    assert "safe stop    sent drive, motors, pause_resume_stream, start" in replay.stdout
+
+
 def test_timeout_over_the_pty_is_exit_1(sim_port: str, tmp_path: Path) -> None:
     record = tmp_path / "run.jsonl"
     proc = _start_run(sim_port, write_mission(tmp_path, SPIN), record, "--timeout", "1s")

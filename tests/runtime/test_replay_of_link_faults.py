@@ -1,0 +1,98 @@
+"""Replaying the record of a run whose link failed: the replay ends, on every transport
+clock, and says what the recorded run's link did rather than "first difference"."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.cli import main
+from roomba_bt.oi.profiles import CREATE2, ROOMBA500, RobotProfile
+from roomba_bt.runtime.recording import ReplayTransport, load_record
+from roomba_bt.sim import Faults, SimLink, Simulator, load_world
+
+from .simrun import SPIN, record_run, write_mission
+
+FRAME = "131a070009000a000b000c001906511a0a88220023022b020d2c020dca"
+HEADER = {"format": "roomba-bt-record", "version": 2, "profile": "create2", "baud": 115200,
+          "packets": [7, 9, 10, 11, 12, 25, 26, 34, 35, 43, 44]}  # fmt: skip
+
+
+def _record(path: Path, *lines: dict[str, object]) -> Path:
+    path.write_text("".join(json.dumps(line) + "\n" for line in (HEADER, *lines)))
+    return path
+
+
+def test_a_wait_under_the_clocks_last_bit_at_the_record_s_end_still_moves_it(
+    tmp_path: Path,
+) -> None:
+    """At 5.678475 s, a wait of 3.6e-16 s added nothing to the replay's clock: the safe
+    stop's wait for a quiet line, whose rest came to that, read for ever (a record of a run
+    that followed a baud change, its replay deaf to Ctrl-C and SIGTERM). Any wait moves it."""
+    path = _record(
+        tmp_path / "run.jsonl",
+        {"t": 0.0, "d": "out", "b": "80"},
+        {"t": 5.678475, "d": "in", "b": FRAME},
+        {"t": 5.68, "d": "end"},
+    )
+    transport = ReplayTransport(load_record(path))
+    transport.write(b"\x80")  # Start, which the robot's bytes came after
+    assert transport.read(10.0) == bytes.fromhex(FRAME)
+    assert transport.now() == 5.678475
+    assert transport.exhausted
+    transport.read(3.608224830031759e-16)
+    assert transport.now() > 5.678475
+    transport.read(0.0)  # a read of what is there now: no time passes
+    later = transport.now()
+    transport.read(0.0)
+    assert transport.now() == later
+
+
+@pytest.mark.parametrize(
+    ("faults", "profile", "verdict"),
+    [
+        (Faults(disconnect_at=1.0), CREATE2, "lost its link at mission time"),  # cable pulled
+        (Faults(reset_at=1.0), CREATE2, "lost its link at mission time"),
+        (Faults(sleep_at=1.0), CREATE2, "lost its link at mission time"),  # woken by BRC
+        (Faults(stream_stop_at=1.0), CREATE2, "the tree wrote the same 48 bytes as the recorded"),
+        (Faults(baud_change_at=1.0), CREATE2, "lost its link at mission time"),
+        (Faults(), ROOMBA500, "lost its link before its tree's first tick"),  # wrong profile
+    ],
+    ids=["port gone", "reset", "asleep", "stream stopped", "baud change", "wrong profile"],
+)
+def test_the_replay_of_a_run_whose_link_failed_compares_the_tree_up_to_there_and_exits_0(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    faults: Faults,
+    profile: RobotProfile,
+    verdict: str,
+) -> None:
+    """Each ending of the noisy cable's table. Past the recorded run's last tick it wrote
+    what its link's failure had it write (nothing, the port gone; a Query List; a wake),
+    which the replay, on a line that cannot fail, does not: that was its "first
+    difference", exit 1, read as "your mission changed"."""
+    link = SimLink(Simulator(load_world("empty-room"), profile, 0, faults))
+    record = record_run(tmp_path, link)
+    capsys.readouterr()
+    assert main(["replay", str(record)]) == 0
+    out = capsys.readouterr().out
+    assert verdict in out, out
+    assert "first difference" not in out
+    assert "replay: the recorded run ended in connection lost" in out
+
+
+def test_a_change_of_the_tree_before_the_link_failed_is_still_a_difference(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The recorded run's cable was pulled at 1 s; its mission, replayed at another speed,
+    differs from its first drive: exit 1, as any changed mission."""
+    link = SimLink(Simulator(load_world("empty-room"), CREATE2, 0, Faults(disconnect_at=1.0)))
+    record = record_run(tmp_path, link)
+    capsys.readouterr()
+    faster = write_mission(tmp_path, SPIN.replace("100 mm/s", "150 mm/s"), "faster.yaml")
+    assert main(["replay", str(record), "--mission", str(faster)]) == 1
+    out = capsys.readouterr().out
+    assert "first difference at mission time" in out
+    assert "lost its link" not in out
