@@ -54,6 +54,22 @@ class _Parser(argparse.ArgumentParser):
 _VALUE_MISSING = re.compile(r"argument (?P<option>\S+): expected one argument")
 
 
+class _CommandParser(_Parser):
+    """A subcommand's parser: an argument it does not know is its own usage error, said with
+    its own usage (``usage: roomba-bt replay [-h] ... RECORD``). argparse hands a
+    subcommand's unknown arguments up to the top parser, which said ``usage: roomba-bt [-h]
+    [--version] [-v] [-q] COMMAND ...`` to ``roomba-bt replay rec.jsonl --display none``,
+    and left the user to find the command's options."""
+
+    def parse_known_args(  # type: ignore[override]
+        self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
+    ) -> tuple[argparse.Namespace, list[str]]:
+        parsed, unknown = super().parse_known_args(args, namespace)
+        if unknown:
+            self.error(f"unrecognized arguments: {' '.join(unknown)}")
+        return parsed, unknown
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="roomba-bt",
@@ -62,7 +78,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"roomba-bt {__version__}")
     parser.add_argument("-v", "--verbose", action="count", default=0, help="more logging")
     parser.add_argument("-q", "--quiet", action="count", default=0, help="less logging")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_CommandParser)
     for name in SUBCOMMAND_MODULES:
         try:
             module = importlib.import_module(name)

@@ -501,6 +501,30 @@ def parse_timeout(text: str | None, option: str = "--timeout") -> float | str | 
     return value
 
 
+#: ``--display``'s choices and what each shows, live (``run``)
+DISPLAYS = {
+    "auto": "the live tree on a terminal, else the log",
+    "tree": "the tree",
+    "log": "one line per status change",
+    "none": "only the summary",
+}
+
+
+def add_display_option(parser: argparse.ArgumentParser, *, live: bool) -> None:
+    """``--display``, one wording for ``run`` (``live``: every choice, ``auto`` its default)
+    and ``replay``, which reads the record as fast as it can: a live tree would only flicker,
+    so its ``tree`` is the tree with its final statuses, drawn once, and ``none``, the
+    summary alone as before the option, its default. ``replay --display none`` was a usage
+    error (its top-level usage) while ``run`` had the option."""
+    choices = tuple(DISPLAYS) if live else ("tree", "log", "none")
+    shown = {**DISPLAYS, "tree": "the tree" if live else "the tree with its final statuses"}
+    default = "auto" if live else "none"
+    said = ", ".join(f"{shown[choice]} ({choice})" for choice in choices)
+    parser.add_argument(
+        "--display", choices=choices, default=default, help=f"{said}; default {default}"
+    )
+
+
 def add_window_options(parser: argparse.ArgumentParser, *, start: bool) -> None:
     """``--to`` (and with ``start``, ``--from``): a window of a long record's mission time,
     read by :func:`parse_window` (``monitor RECORD``, ``replay``)."""

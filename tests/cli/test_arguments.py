@@ -196,3 +196,45 @@ def test_run_s_watchdog_default_is_the_connection_s_in_the_value_and_the_help(
 
     assert run_cmd.DEFAULT_WATCHDOG is DEFAULT_WATCHDOG  # the connection's own default
     assert inspect.signature(Connection).parameters["watchdog"].default is DEFAULT_WATCHDOG
+
+
+def _commands() -> list[str]:
+    subparsers = next(
+        action
+        for action in build_parser()._actions
+        if isinstance(action, argparse._SubParsersAction)
+    )
+    return sorted(subparsers.choices)
+
+
+#: what a command needs besides its options, to be parsed as far as an unknown option
+REQUIRED = {
+    "doctor": ["--port", "/dev/ttyUSB0"], "eval": ["m.yaml"], "monitor": ["r.jsonl"],
+    "replay": ["r.jsonl"], "run": ["m.yaml"], "show": ["m.yaml"], "sim": ["--pty"],
+    "validate": ["m.yaml"],
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("command", _commands())
+def test_an_option_a_command_does_not_know_prints_that_command_s_usage(
+    command: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``roomba-bt replay rec.jsonl --display none`` printed the top-level usage (``usage:
+    roomba-bt [-h] [--version] [-v] [-q] COMMAND ...``): argparse hands a subcommand's unknown
+    arguments up to the top parser. Each command now says its own, exit 2."""
+    with pytest.raises(SystemExit) as ended:
+        main([command, *REQUIRED.get(command, []), "--no-such-option"])
+    assert ended.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"usage: roomba-bt {command} "), err
+    assert f"roomba-bt {command}: error: unrecognized arguments: --no-such-option" in err
+
+
+def test_replay_takes_the_displays_that_fit_a_record_read_as_fast_as_it_can() -> None:
+    """``--display`` as ``run`` has it, where it fits a replay: the tree with its final
+    statuses, the log of status changes, or the summary alone (its default); no live tree."""
+    parser = build_parser()
+    assert parser.parse_args(["replay", "rec.jsonl"]).display == "none"
+    for display in ("tree", "log", "none"):
+        assert parser.parse_args(["replay", "rec.jsonl", "--display", display]).display == display
+    assert parser.parse_args(["run", "dock"]).display == "auto"
