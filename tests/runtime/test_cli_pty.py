@@ -233,7 +233,10 @@ def test_a_run_that_followed_a_baud_change_over_the_pty_replays_byte_for_byte(
     )
     assert replay.returncode == 0, replay.stdout + replay.stderr
     assert "the tree wrote the same" in replay.stdout
-    assert "safe stop    sent drive, motors, pause_resume_stream, start" in replay.stdout
+    # its stop confirmed, or not, as the live run's was (a loaded machine's live run may
+    # have read frames past the quiet it waits for at the new rate)
+    stop = next(line for line in out.splitlines() if line.startswith("safe stop"))
+    assert stop in replay.stdout, replay.stdout
 
 
 def test_timeout_over_the_pty_is_exit_1(sim_port: str, tmp_path: Path) -> None:
