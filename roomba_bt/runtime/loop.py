@@ -249,16 +249,16 @@ RUN_TWICE = (
 )
 
 
-class _StopGate:
-    """What :meth:`MissionRunner.request_stop` puts before the run's gate: the next frame
-    ends the run with :class:`StopRequested` (the monitor's stop, from any thread). A gate,
-    so that the tick path reads nothing more than it did."""
+class InnerGate:
+    """A gate put around another, ``inner`` (the monitor's, or a replay of the operator's
+    acts; None: none): it is ``inner`` but for what a subclass adds (the stop below, a
+    replay's ends in :mod:`~roomba_bt.runtime.stack`)."""
 
-    def __init__(self, reason: str, inner: TickGate | None) -> None:
-        self.reason, self.inner = reason, inner
+    def __init__(self, inner: TickGate | None) -> None:
+        self.inner = inner
 
     def before_tick(self, runner: MissionRunner) -> bool:
-        raise StopRequested(self.reason)
+        return self.inner.before_tick(runner) if self.inner is not None else True
 
     def after_tick(self, runner: MissionRunner) -> None:
         if self.inner is not None:
@@ -266,6 +266,19 @@ class _StopGate:
 
     def holds(self, runner: MissionRunner) -> bool:
         return self.inner is not None and self.inner.holds(runner)
+
+
+class _StopGate(InnerGate):
+    """What :meth:`MissionRunner.request_stop` puts before the run's gate: the next frame
+    ends the run with :class:`StopRequested` (the monitor's stop, from any thread). A gate,
+    so that the tick path reads nothing more than it did."""
+
+    def __init__(self, reason: str, inner: TickGate | None) -> None:
+        super().__init__(inner)
+        self.reason = reason
+
+    def before_tick(self, runner: MissionRunner) -> bool:
+        raise StopRequested(self.reason)
 
 
 class MissionRunner(BaseHandle):

@@ -36,6 +36,7 @@ from roomba_bt.robot.errors import DEFAULT_WATCHDOG
 from roomba_bt.runtime.claimed import ClaimedFile
 from roomba_bt.runtime.given import check_arguments, check_given
 from roomba_bt.runtime.loop import (
+    InnerGate,
     MissionLike,
     MissionRunner,
     StopRequested,
@@ -470,7 +471,7 @@ def _tick_guard(
     return TickGuard(connection, tick_limit) if tick_limit else None
 
 
-class RecordedEnd:
+class RecordedEnd(InnerGate):
     """A replay's gate that ends the run where its record's end note says the recorded run was
     ended from outside its tree (:data:`~roomba_bt.runtime.recording.ENDED_FROM_OUTSIDE`: the
     monitor's stop, Ctrl-C, its time limit), before or after the tree's tick on that frame,
@@ -485,7 +486,7 @@ class RecordedEnd:
     ) -> None:
         self.tick, self.half = int(note["tick"]), str(note.get("at", "after"))
         self.reason = ending_text(note)
-        self.inner = inner
+        super().__init__(inner)
         #: the bytes the recorded run had written when its interrupt came "before" the tick
         #: was written whole (the note's ``written``; None: a record made before said none)
         written = note.get(WRITTEN)
@@ -520,33 +521,19 @@ class RecordedEnd:
         return True
 
     def after_tick(self, runner: MissionRunner) -> None:
-        if self.inner is not None:
-            self.inner.after_tick(runner)
+        super().after_tick(runner)
         if runner.snapshot.tick >= self.tick:  # "after": the run ended with this tick
             self._end()
 
-    def holds(self, runner: MissionRunner) -> bool:
-        return self.inner is not None and self.inner.holds(runner)
 
-
-class AfterTickGate:
+class AfterTickGate(InnerGate):
     """A replay's gate that looks at the run after each tick (:meth:`after_tick`, the part a
     subclass adds) and otherwise is ``inner``: the monitor's replay of the operator's acts,
     asked first, or nothing."""
 
     def __init__(self, inner: TickGate | None, transport: ReplayTransport) -> None:
-        self.inner = inner
+        super().__init__(inner)
         self.transport = transport
-
-    def before_tick(self, runner: MissionRunner) -> bool:
-        return self.inner.before_tick(runner) if self.inner is not None else True
-
-    def after_tick(self, runner: MissionRunner) -> None:
-        if self.inner is not None:
-            self.inner.after_tick(runner)
-
-    def holds(self, runner: MissionRunner) -> bool:
-        return self.inner is not None and self.inner.holds(runner)
 
 
 class WindowEnd(AfterTickGate):
