@@ -12,6 +12,7 @@ import io
 import json
 import math
 import os
+import re
 import sys
 import zlib
 from collections.abc import Callable
@@ -303,6 +304,27 @@ def _number_or_quantity(
     if not lo <= value <= hi:  # NaN and inf too
         raise argparse.ArgumentTypeError(f"found {text!r}; allowed: {allowed}")
     return value
+
+
+def record_size_limit(text: str) -> int:
+    """``run --record-max``: a size as people write one, a number and its unit (``500MB``,
+    ``2 GB``, ``1.5GiB``, ``64kb``: the units of ``recording.BYTE_UNITS``, any case), in
+    bytes; at least ``recording.MIN_RECORD_MAX``. A bare number is refused: 500 what?"""
+    from roomba_bt.runtime.recording import BYTE_UNITS, MIN_RECORD_MAX, size_text
+
+    allowed = (
+        f"a size with its unit, {size_text(MIN_RECORD_MAX)} or more (500MB, 2GB, 1.5GiB; "
+        "units: kB MB GB TB, or KiB MiB GiB TiB)"
+    )
+    units = {unit.lower(): per for unit, per in BYTE_UNITS.items()}
+    found = re.fullmatch(r"\s*([0-9]+(?:\.[0-9]*)?|\.[0-9]+)\s*([A-Za-z]+)\s*", text)
+    per = units.get(found[2].lower()) if found else None
+    if found is None or per is None:
+        raise argparse.ArgumentTypeError(f"found {text!r}; allowed: {allowed}")
+    size = round(float(found[1]) * per)
+    if size < MIN_RECORD_MAX:
+        raise argparse.ArgumentTypeError(f"found {text!r}, {size:,} bytes; allowed: {allowed}")
+    return size
 
 
 def count(text: str) -> int:

@@ -82,7 +82,7 @@ def recording(
         sources=source_digests(mission.files, folder), plugins=plugin_digests(mission.root),
         mission_path=str(Path(args.mission).resolve()) if relative and not reproducible else None,
         simulator=simulator_options(args, folder), options=run_options(args, folder),
-        paths_from_record=True, claimed=claimed,
+        paths_from_record=True, claimed=claimed, max_bytes=args.record_max,
     )  # fmt: skip
 
 

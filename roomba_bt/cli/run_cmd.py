@@ -33,6 +33,7 @@ from roomba_bt.cli.arguments import (
     permissions,
     plot_file,
     record_file,
+    record_size_limit,
     run_label,
     seconds,
     watchdog_seconds,
@@ -117,12 +118,7 @@ def _add_run_parser(sub: Any) -> None:
     add_odometry_error_option(run, "simulator only: ")
     add_param_option(run, "set a mission parameter, e.g. -p speed=250mm/s (repeatable)")
     _add_limit_options(run)
-    run.add_argument(
-        "--record",
-        metavar="FILE",
-        type=record_file,
-        help="write every byte in and out, timestamped (a FILE ending in .gz: compressed)",
-    )
+    _add_record_options(run)
     run.add_argument(
         "--plot",
         metavar="FILE",
@@ -153,6 +149,21 @@ def _add_limit_options(run: argparse.ArgumentParser) -> None:
         run, "for the run",
         "after the safe stop, exit 4; the way to end a --fast run stuck where --timeout's "
         "mission time stands still (default: none)",
+    )  # fmt: skip
+
+
+def _add_record_options(run: argparse.ArgumentParser) -> None:
+    """``--record`` and its size limit, ``--record-max`` (a night's record on a small disk)."""
+    run.add_argument(
+        "--record",
+        metavar="FILE",
+        type=record_file,
+        help="write every byte in and out, timestamped (a FILE ending in .gz: compressed)",
+    )
+    run.add_argument(
+        "--record-max", metavar="SIZE", type=record_size_limit,
+        help="stop the --record file at this size on disk (500MB, 2GB); the run goes on, and "
+        "its summary says the mission time of the cut (default: no limit)",
     )  # fmt: skip
 
 
@@ -484,6 +495,8 @@ def _checked_arguments(args: argparse.Namespace) -> tuple[dict[str, str], float 
     token = chosen_token(args)
     if token:
         return _error(token)
+    if args.record_max is not None and not args.record:
+        return _error("--record-max limits the --record file: give --record FILE too")
     epoch = epoch_problem() if args.record else None
     if epoch is not None:  # the convention: stop rather than write the current time
         return _error(epoch)

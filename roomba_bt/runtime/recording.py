@@ -84,6 +84,10 @@ and its replay said the run was killed or its writing failed). A record is read 
 first bytes are, not by its name (:func:`open_record`): gzip's magic number is decompressed
 whatever the file is called (``cp run.jsonl.gz copy``), and a plain record named ``.gz`` is
 read as plain text.
+
+``run --record-max SIZE`` ends a record, plain or compressed, the same way at a size of the
+user's (:attr:`RecordingTransport.max_bytes`): a night's run cannot fill the disk, and the
+file up to the note is a record every reader takes.
 """
 
 from __future__ import annotations
@@ -197,11 +201,12 @@ class _CompressedLines(io.TextIOWrapper):
         super().flush()
         self._flushed.append((self._raw.tell(), self._gzip.crc, self._gzip.tell()))
 
-    def end_with(self, line: bytes) -> bool:
+    def end_with(self, line: bytes, within: int | None = None) -> bool:
         """End the file, whose write just failed, with ``line`` (the recording's stop note)
         and gzip's trailer, as :func:`_mark_stopped` ends a plain record: cut back to the
         latest flush that leaves room for them within the bytes the file held (a size limit
-        or a full disk is not gone past), the chunks after it lost. The deflate stream there
+        or a full disk is not gone past), or within ``within`` bytes when fewer (``run
+        --record-max``), the chunks after it lost. The deflate stream there
         is at a byte's boundary (a sync flush), so a final block compressed on its own
         (nothing of it refers back) and the trailer's CRC-32 and length of the whole text
         make the file a whole gzip file again: ``zcat`` and every reader take it. Before, a
@@ -213,9 +218,10 @@ class _CompressedLines(io.TextIOWrapper):
             held = os.fstat(fd)
             if not stat.S_ISREG(held.st_mode):
                 return False
+            room = _room(held, within)
             for size, crc, length in reversed(self._flushed):
                 ending = _gzip_ending(line, crc, length)
-                if size + len(ending) <= held.st_size:
+                if size + len(ending) <= room:
                     os.ftruncate(fd, size)
                     os.lseek(fd, size, os.SEEK_SET)
                     return os.write(fd, ending) == len(ending)
@@ -268,10 +274,18 @@ class RecordingTransport:
         path: str | Path,
         header: dict[str, Any],
         claimed: ClaimedFile | None = None,
+        max_bytes: int | None = None,
     ) -> None:
         """``claimed``: ``path`` already claimed (``run`` claims it before it opens the
         robot); else it is claimed here. Either way a file another run writes is refused
-        (:class:`~roomba_bt.runtime.claimed.FileInUse`, an OSError) before it is emptied."""
+        (:class:`~roomba_bt.runtime.claimed.FileInUse`, an OSError) before it is emptied.
+        ``max_bytes``: the file's size limit (``run --record-max``), None for none; less
+        than :data:`MIN_RECORD_MAX` is a ValueError."""
+        if max_bytes is not None and max_bytes < MIN_RECORD_MAX:
+            raise ValueError(
+                f"max_bytes={max_bytes}: a record's size limit is {size_text(MIN_RECORD_MAX)} "
+                "or more (its header and a few seconds of run)"
+            )
         self._inner = inner
         #: the wrapped transport's word on its clock (``Transport``'s note)
         self.wall_clock: bool = getattr(inner, "wall_clock", True)
@@ -283,6 +297,14 @@ class RecordingTransport:
         self._t0: float | None = None
         #: why and when the recording stopped before the run's end (None: it did not)
         self.stopped: str | None = None
+        #: the file's size limit on disk (``run --record-max``; a compressed record's
+        #: compressed size): the flush that finds the file past it stops the recording as
+        #: a full disk does, cut back to within it, and the run goes on. A limit and not a
+        #: rotation (decided): what is kept is the run's start, one file replay reads whole.
+        self.max_bytes = max_bytes
+        #: the run's mission time now (None before its first tick), for where the recording
+        #: stopped: the run's stack gives its runner's; by itself, the record's own clock
+        self.mission_time: Callable[[], float | None] = _no_mission_time
         head = {"format": RECORD_FORMAT, "version": RECORD_VERSION, MADE_BY: __version__, **header}
         self._flushed_at = -math.inf  # the header goes out at once, and the first chunk
         self._put(json.dumps(head) + "\n", 0.0)
@@ -293,20 +315,32 @@ class RecordingTransport:
             self._file.write(line)
             if now - self._flushed_at >= FLUSH_EVERY_S:
                 self._flushed_at = now
-                self._file.flush()
+                self._flushed()
         except OSError as exc:
-            self._stop(exc)
+            self._stop(exc.strerror or str(exc))
 
-    def _stop(self, exc: OSError) -> None:
-        """The file cannot be written: close it (what it holds is a record up to here),
-        ended by a note that says why, where there is room for one (:func:`_mark_stopped`)."""
+    def _flushed(self) -> None:
+        """Flush the file, and stop the recording if that took it past :attr:`max_bytes`
+        (checked at each flush, a stat of the file each :data:`FLUSH_EVERY_S`, not at each
+        line: between two it grows by a fraction of a second of record, cut back then)."""
+        self._file.flush()
+        limit = self.max_bytes
+        if limit is not None and os.fstat(self._file.fileno()).st_size > limit:
+            self._stop(f"--record-max {size_text(limit)} reached", within=limit)
+
+    def _stop(self, why: str, within: int | None = None) -> None:
+        """The file cannot be written (``why``: the error's words), or may not grow past
+        ``within`` bytes (:attr:`max_bytes`): close it (what it holds is a record up to
+        here), ended by a note that says why, where there is room for one
+        (:func:`_mark_stopped`)."""
         # before the first chunk (the header's write failed: ``--record /dev/full``) there is
         # no t0: 0 s, not now() - now(), which a moving clock made ``-0.000 s``
         t = self._inner.now() - self._t0 if self._t0 is not None else 0.0
-        why = exc.strerror or str(exc)
-        self.stopped = f"stopped at {t:.3f} s: {why}; the file ends there"
+        mission_time = self.mission_time()
+        at = f"{t:.3f} s" if mission_time is None else f"mission time {mission_time:.3f} s"
+        self.stopped = f"stopped at {at}: {why}; the file ends there"
         log.warning("%s: the record %s %s (the run goes on)", self.name, self.path, self.stopped)
-        _mark_stopped(self._file, self.path, t, why)
+        _mark_stopped(self._file, self.path, t, why, within)
         with contextlib.suppress(OSError):  # its flush fails again; the file is closed
             self._file.close()
 
@@ -314,9 +348,9 @@ class RecordingTransport:
         """Write out what is buffered (at the run's end, before the summary is made)."""
         if not self._file.closed:
             try:
-                self._file.flush()
+                self._flushed()
             except OSError as exc:
-                self._stop(exc)
+                self._stop(exc.strerror or str(exc))
 
     def _log(self, direction: str, data: bytes) -> float:
         """Write one chunk, stamped now; returns the stamp."""
@@ -416,7 +450,7 @@ RECORD_STOPPED = "record_stopped"
 _TAIL_BYTES = 1 << 16
 
 
-def _mark_stopped(file: IO[str], path: str, t: float, why: str) -> bool:
+def _mark_stopped(file: IO[str], path: str, t: float, why: str, within: int | None = None) -> bool:
     """End the record at ``path`` (written through ``file``, whose write just failed) with a
     :data:`RECORD_STOPPED` note, so that its replay says the recording stopped, not "the run
     was killed?" (a full disk or ``ulimit -f`` read as a ``kill -9``). A write failed: the
@@ -427,17 +461,19 @@ def _mark_stopped(file: IO[str], path: str, t: float, why: str) -> bool:
     (written after the note, it would be a cut line past it). True if the note was
     written; a device (``/dev/full``) or a file that cannot be read back gets none. A
     compressed record is cut back to one of its last flushes instead, and ended there as a
-    whole gzip file (:meth:`_CompressedLines.end_with`)."""
+    whole gzip file (:meth:`_CompressedLines.end_with`). ``within``: the bytes the file
+    may hold, when fewer than it holds (``run --record-max``: the note is within the limit).
+    """
     note = json.dumps({"t": round(t, 6), "d": "note", "note": {RECORD_STOPPED: why}}) + "\n"
     data = note.encode("utf-8")
     if isinstance(file, _CompressedLines):  # cut back to a flush, not to a line's end
-        return file.end_with(data)
+        return file.end_with(data, within)
     try:
         fd = file.fileno()
         held = os.fstat(fd)
         if not stat.S_ISREG(held.st_mode):
             return False
-        cut = _line_end_before(path, held, held.st_size - len(data))
+        cut = _line_end_before(path, held, _room(held, within) - len(data))
         if cut is None:
             return False
         os.ftruncate(fd, cut)
@@ -447,6 +483,39 @@ def _mark_stopped(file: IO[str], path: str, t: float, why: str) -> bool:
         return False
     finally:
         _write_nowhere(file)
+
+
+def _room(held: os.stat_result, within: int | None) -> int:
+    """The bytes a stopped record may end within: those the file ``held`` (what a full disk
+    or a file size limit let it write), or ``within`` (``--record-max``) when fewer."""
+    return held.st_size if within is None else min(within, held.st_size)
+
+
+def _no_mission_time() -> float | None:
+    """:attr:`RecordingTransport.mission_time` of a record made outside a run's stack."""
+    return None
+
+
+#: The units ``run --record-max`` takes, as a disk's or a file manager's sizes are written:
+#: decimal (kB, MB, GB, TB: powers of 1000) and binary (KiB, MiB, GiB, TiB: of 1024), any
+#: case (``500mb``); a bare number is refused (500 what?). Largest first: :func:`size_text`.
+BYTE_UNITS: dict[str, int] = {
+    "TB": 1000**4, "TiB": 1 << 40, "GB": 1000**3, "GiB": 1 << 30,
+    "MB": 1000**2, "MiB": 1 << 20, "kB": 1000, "KiB": 1 << 10, "B": 1,
+}  # fmt: skip
+
+
+#: The least size limit a record takes (``run --record-max``): its header (a few KB) and
+#: some seconds of run (a plain record writes about 13 kB a second, a compressed one 0.6 kB),
+#: room to cut back to a whole line, or a compressed record's flush, with the note after it.
+MIN_RECORD_MAX = 64 * 1000
+
+
+def size_text(size: int) -> str:
+    """``size`` bytes in the largest unit of :data:`BYTE_UNITS` that holds it whole: ``500
+    MB``, ``2 GiB``, ``1500 MB``, ``100 B``; how a summary and a record's note say a limit."""
+    unit, per = next((u, n) for u, n in BYTE_UNITS.items() if size % n == 0 and size >= n)
+    return f"{size // per} {unit}"
 
 
 def _write_nowhere(file: IO[str]) -> None:

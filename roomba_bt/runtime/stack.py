@@ -22,6 +22,7 @@ import threading
 from collections import deque
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Any, Literal
 
@@ -34,6 +35,7 @@ from roomba_bt.oi.profiles import PROFILES, RobotProfile
 from roomba_bt.robot.connection import Connection, EndMode
 from roomba_bt.robot.errors import DEFAULT_WATCHDOG
 from roomba_bt.runtime.claimed import ClaimedFile
+from roomba_bt.runtime.clock import mission_time_after
 from roomba_bt.runtime.given import check_arguments, check_given
 from roomba_bt.runtime.loop import (
     InnerGate,
@@ -152,6 +154,9 @@ class Recording:
     #: ``path`` claimed already for this run (``run`` does, before it opens the robot, so a
     #: path another run writes is refused first); None: the record claims it when made
     claimed: ClaimedFile | None = field(default=None, compare=False)
+    #: the file's size limit in bytes (``run --record-max``): the recording stops there, as
+    #: on a full disk, and the run goes on; None: none
+    max_bytes: int | None = None
 
     def header(
         self, profile: RobotProfile, baud: int, packets: Sequence[int], watchdog: float,
@@ -256,7 +261,9 @@ class RunStack:
             watchdog_s = connection.link.watchdog if connection else _made_watchdog(made)
             header = record.header(profile, baud, self.packets, watchdog_s, grace)
             # OSError: the file cannot be written (FileInUse: another run writes it)
-            transport = RecordingTransport(link, record.path, header, record.claimed)
+            transport = RecordingTransport(
+                link, record.path, header, record.claimed, record.max_bytes
+            )
         self.link = link
         self.transport = transport
         if connection is None:
@@ -276,6 +283,8 @@ class RunStack:
             grace=grace,
             tick_guard=_tick_guard(self.connection, link, tick_limit, replayed_notes),
         )
+        if isinstance(transport, RecordingTransport):  # where it stops, said in mission time
+            transport.mission_time = partial(mission_time_after, self.runner, 0.0)
         self.runner.summary.strict = strict
         if visitors:  # set only when given (a class attribute: MissionRunner.visitors)
             self.runner.visitors = tuple(visitors)

@@ -19,6 +19,7 @@ from roomba_bt.cli.arguments import (
     parse_params,
     parse_timeout,
     port_name,
+    record_size_limit,
     seconds,
 )
 from roomba_bt.oi.encode import BAUD_CODES
@@ -47,8 +48,39 @@ def test_bad_seconds(text: str) -> None:
 
 
 @pytest.mark.parametrize(
+    ("text", "size"),
+    [
+        ("500MB", 500_000_000),
+        ("2 GB", 2_000_000_000),
+        ("1.5GiB", 3 << 29),
+        ("64kb", 64_000),
+        ("100KiB", 102_400),
+        (" 2tb ", 2 * 1000**4),
+    ],
+)
+def test_a_record_size_limit_is_read_as_people_write_sizes(text: str, size: int) -> None:
+    assert record_size_limit(text) == size
+
+
+@pytest.mark.parametrize(
+    ("text", "found"),
+    [
+        ("500", "found '500'; allowed: a size with its unit"),  # 500 what?
+        ("2 GBs", "found '2 GBs'"),
+        ("big", "found 'big'"),
+        ("-1MB", "found '-1MB'"),
+        ("10kB", "found '10kB', 10,000 bytes; allowed: a size with its unit, 64 kB or more"),
+    ],
+)
+def test_a_bad_record_size_limit_says_what_is_allowed(text: str, found: str) -> None:
+    with pytest.raises(argparse.ArgumentTypeError, match=re.escape(found)):
+        record_size_limit(text)
+
+
+@pytest.mark.parametrize(
     ("argv", "message"),
     [
+        (["run", "missions/dock.yaml", "--record-max", "2G"], "--record-max: found '2G'"),
         (["run", "missions/dock.yaml", "--watchdog", "-1"], "--watchdog: found -1"),
         # 0 turned the watchdog off, and with it stall and stream-loss detection: a stopped
         # stream froze the mission clock and the run hung, the robot driving on

@@ -9,6 +9,7 @@ import gzip
 import io
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -247,6 +248,49 @@ def test_a_record_cut_by_a_full_disk_ends_with_its_note_plain_or_compressed(
         assert json.loads(text.splitlines()[-1])["note"] == {
             "record_stopped": "No space left on device"
         }
+
+
+#: the run each record size limit's test makes: a plain record writes its 64 kB in about
+#: 10 s of run, a compressed one in about 80 s (each run well under a second on --fast)
+LIMITED_RUNS = [("run.jsonl", "duration=20s"), ("run.jsonl.gz", "duration=3min")]
+
+
+@pytest.mark.parametrize(("name", "duration"), LIMITED_RUNS)
+def test_a_record_stops_at_its_size_limit_and_the_run_goes_on(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str, duration: str
+) -> None:
+    """``run --record-max``: a night's record could fill the disk. At the limit the recording
+    stops with the note a full disk writes, the file (compressed or not) within the limit
+    on disk; the run goes on to its end and safe stop, its summary saying the mission time
+    of the cut; the record replays up to there."""
+    path = tmp_path / name
+    argv = ["run", BUMP_AND_TURN, "--fast", "--display", "none", "-p", duration]
+    assert main([*argv, "--record", str(path), "--record-max", "64kB"]) == 0
+    out = capsys.readouterr().out
+    assert "outcome      SUCCESS" in out and "safe stop    sent" in out
+    said = re.search(
+        r"record       stopped at mission time (\d+\.\d{3}) s: --record-max 64 kB reached; "
+        "the file ends there",
+        out,
+    )
+    assert said is not None, out
+    cut = float(said[1])
+    assert path.stat().st_size <= 64_000
+    loaded = load_record(path)
+    assert not loaded.ended and loaded.recording_stopped == "--record-max 64 kB reached"
+    # the file is checked at each flush, and cut back to a whole line or a flush before it
+    assert cut - 4 * FLUSH_EVERY_S <= loaded.last_t <= cut + 2 * FLUSH_EVERY_S
+    replayed = _replayed(path, capsys)
+    assert "the recording stopped (--record-max 64 kB reached)" in replayed
+
+
+def test_a_record_size_limit_without_a_record_is_a_usage_error(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    assert main(["run", BUMP_AND_TURN, "--fast", "--record-max", "1GB"]) == 2
+    assert "--record-max limits the --record file: give --record FILE too" in (
+        capsys.readouterr().err
+    )
 
 
 def test_a_compressed_record_s_text_size_is_its_trailer_s_and_unknown_without_one(
