@@ -223,6 +223,18 @@ def _said_undeclared(key: str, writer: str, declared: Mapping[str, ValueType]) -
     )  # fmt: skip
 
 
+def unwrite_keys(keys: Iterable[str]) -> None:
+    """Forget the values of ``keys``: a run's set-up does, for the keys its mission declares
+    without an ``initial:`` value, so that the run starts with them unwritten. The store is
+    py_trees' one for the process, and its values stay after a run: the next run in the
+    process (the next episode in an evaluation's worker, a monitor's reload) read the one
+    before's as its own (``check`` True on a key it never wrote; ``eval --key`` reporting
+    another episode's value)."""
+    storage = py_trees.blackboard.Blackboard.storage
+    for key in keys:
+        storage.pop(MISSION_NAMESPACE + key, None)
+
+
 def write_key(key: str, value: Any, writer: str = _MISSION_WRITER_NAME) -> None:
     """Write a mission key. Into the store directly (no py_trees client per node: a client
     registers each key it may touch and checks it on every access), and, when py_trees'

@@ -141,6 +141,12 @@ def _add_output_options(ev: argparse.ArgumentParser) -> None:
         help="one record per episode: .jsonl (JSON Lines) or .csv",
     )  # fmt: skip
     ev.add_argument("--json", action="store_true", help="print the summary as JSON")
+    ev.add_argument(
+        "--key", action="append", default=[], metavar="NAME",
+        help="report this blackboard key's value at each episode's end (repeatable; "
+        "wp.distance: a record's field): a key:NAME column in --out, a summary line (numbers: "
+        "mean, sd, min..max; else counts per value) and how many episodes never wrote it",
+    )  # fmt: skip
     add_reproducible_option(ev)
     ev.add_argument(
         "--sweep",
@@ -515,6 +521,7 @@ MAX_RUNS = 1_000_000
 def _check_arguments(args: argparse.Namespace) -> str | None:
     """The missions found (their paths kept in ``args.mission_paths``) and every number in
     its range; the first problem's message."""
+    args.key = list(dict.fromkeys(args.key))  # a key named twice is reported once
     args.mission_paths = {}
     for mission in args.missions:
         found = mission_file(mission)
@@ -631,6 +638,7 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
     try:
         world = build_world(batches[0][0])
         start_pose(world, batches[0][0])
+        batches = _reading_keys(args, chosen, missions, batches)
     except EvaluationError as exc:
         return _error(str(exc))
     args.made_by = made_by(args, chosen, missions, world)
@@ -662,6 +670,31 @@ def _compiled(args: argparse.Namespace, chosen: list[Variant]) -> list[Any] | in
         said = failed_strict(v.label, mission.warnings)
         print(f"roomba-bt eval: {said}; no episode runs", file=sys.stderr)
     return ExitCode.STRICT
+
+
+def _reading_keys(
+    args: argparse.Namespace,
+    chosen: list[Variant],
+    missions: list[Any],
+    batches: list[list[EpisodeSpec]],
+) -> list[list[EpisodeSpec]]:
+    """The episodes, each reading the ``--key`` values at its end, once every variant's
+    mission can report each one (``evaluate.keys.key_problem``: declared under its
+    ``blackboard:``, not a record named whole nor a mark; else EvaluationError, before any
+    episode runs); each key's unit kept (``args.key_units``) for the summary."""
+    from roomba_bt.evaluate import EvaluationError
+    from roomba_bt.evaluate.keys import key_problem, key_unit
+
+    args.key_units = {}
+    for name in args.key:
+        for v, mission in zip(chosen, missions, strict=True):
+            problem = key_problem(name, mission.blackboard_keys, v.mission)
+            if problem is not None:
+                raise EvaluationError(problem)
+        args.key_units[name] = key_unit(name, missions[0].blackboard_keys)
+    if not args.key:
+        return batches
+    return [[replace(spec, keys=tuple(args.key)) for spec in batch] for batch in batches]
 
 
 def made_by(
@@ -772,6 +805,7 @@ def _recorded(partial: PartialResults, bar: Progress | None) -> Progress:
 def _report(args: argparse.Namespace, engine: str, evaluated: Evaluated) -> None:
     """The summaries, coverage and comparisons on stdout: as JSON with ``--json``, else text."""
     from roomba_bt.evaluate.coverage import summarize_coverage
+    from roomba_bt.evaluate.keys import summarize_keys
 
     if args.json:
         _json_report(args, engine, evaluated)
@@ -784,6 +818,8 @@ def _report(args: argparse.Namespace, engine: str, evaluated: Evaluated) -> None
         coverage = summarize_coverage(e.results)
         if coverage is not None:
             print(coverage)
+        for key in summarize_keys(e.results, args.key, args.key_units):
+            print(key.line())
         print()
     for c in evaluated.comparisons:
         print(c)
@@ -806,6 +842,7 @@ def _json_report(args: argparse.Namespace, engine: str, evaluated: Evaluated) ->
     import json
 
     from roomba_bt.evaluate.coverage import summarize_coverage
+    from roomba_bt.evaluate.keys import summarize_keys
     from roomba_bt.evaluate.stats import tidy
 
     made = getattr(args, "made_by", {})
@@ -827,10 +864,12 @@ def _json_report(args: argparse.Namespace, engine: str, evaluated: Evaluated) ->
         "plugins": dict(sorted(plugins.items())),
         "variants": [{"label": v.label, "params": dict(v.params), **s.to_dict(),
                       "passed": ok, "sources": made.get(v.mission, {}).get("sources"),
-                      "coverage": c.to_dict() if c is not None else None}
-                     for v, s, c, ok in zip(evaluated.chosen, summaries,
-                                            [summarize_coverage(e.results) for e in done],
-                                            passed, strict=True)],
+                      "coverage": c.to_dict() if c is not None else None,
+                      "keys": {k.name: k.to_dict()
+                               for k in summarize_keys(e.results, args.key, args.key_units)}}
+                     for v, s, c, ok, e in zip(evaluated.chosen, summaries,
+                                               [summarize_coverage(e.results) for e in done],
+                                               passed, done, strict=True)],
         "comparisons": [c.to_dict() for c in evaluated.comparisons if not isinstance(c, str)],
     }), indent=2))  # fmt: skip
 

@@ -61,6 +61,9 @@ class CoverageSummary:
     #: per area, how many episodes could reach it (an area is in an episode's figures only
     #: when some of it is reachable from its start: not behind a virtual wall)
     reached: tuple[tuple[str, int], ...] = ()
+    #: the batch's other episodes, left out of every figure: their brushes never ran (a
+    #: mission that cleans only when it finds dirt, one that failed before its cleaning)
+    never_cleaned: int = 0
 
     @property
     def partial(self) -> int:
@@ -70,7 +73,8 @@ class CoverageSummary:
 
     def lines(self) -> list[str]:
         what = f"the {self.area}" if self.area else "the reachable floor"
-        out = [f"coverage     of {what}, {self.episodes} episodes: mean (sd, min..max)"]
+        left_out = f" ({self.never_cleaned} never ran the brushes)" if self.never_cleaned else ""
+        out = [f"coverage     of {what}, {self.episodes} episodes{left_out}: mean (sd, min..max)"]
         out += [f"  at {t / 60:4.0f} min {spread}" for t, spread in self.at]
         out.append(f"  at the end {self.final}")
         reached = dict(self.reached)
@@ -101,6 +105,7 @@ class CoverageSummary:
             "longest_idle_s": self.longest_idle_s,
             "stuck": self.stuck,
             "reached": dict(self.reached),
+            "never_cleaned": self.never_cleaned,
         }
 
     def __str__(self) -> str:
@@ -138,6 +143,7 @@ def summarize_coverage(
         longest_idle_s=max(idle),
         stuck=sum(1 for i in idle if i >= STUCK_S),
         reached=tuple(reached),
+        never_cleaned=len(results) - len(covered),
     )
 
 

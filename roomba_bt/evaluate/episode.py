@@ -23,13 +23,14 @@ import os
 import re
 import socket
 import time
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from types import FrameType
 from typing import Any
 
 from roomba_bt import yamlsource
+from roomba_bt.behaviours.blackboard import read_key
 from roomba_bt.behaviours.reasons import GUARD_STOPPED
 from roomba_bt.evaluate.sources import MissionSources, bundle_mission, bundle_world
 from roomba_bt.mission import (
@@ -107,6 +108,9 @@ class EpisodeSpec:
     #: how a TIMEOUT's reason names ``timeout_s`` (``RunSummary.time_limit``): "" as the
     #: thing it is (``the run's 900 s``), ``eval`` as its flag (``--timeout 900 s``)
     time_limit: str = ""
+    #: the mission's blackboard keys whose values at the end the result keeps (``eval
+    #: --key``; ``wp.distance``, a record's field), checked against its declaration first
+    keys: tuple[str, ...] = ()
 
 
 def self_contained(spec: EpisodeSpec) -> EpisodeSpec:
@@ -216,6 +220,9 @@ class EpisodeResult:
     #: mission, building the world, the run), where ``wall_s`` is the run's wall-clock time,
     #: which also counts the time waiting for a core; not part of the episode
     cpu_s: float = field(default=0.0, compare=False)
+    #: the spec's ``keys`` and their values at the end, in its order (None: never written;
+    #: :func:`final_values`), as ``params``: pairs, hashable and picklable
+    keys: tuple[tuple[str, Any], ...] = ()
 
     @property
     def succeeded(self) -> bool:
@@ -561,7 +568,22 @@ def _measured(
         falls=falls_in_order(summary.falls),
         worker=f"{socket.gethostname()}:{os.getpid()}",
         coverage=_coverage(simulator, spec.start_area or ""),
+        keys=final_values(spec.keys),
     )
+
+
+def final_values(names: Sequence[str]) -> tuple[tuple[str, Any], ...]:
+    """Each of ``names`` with its value on the blackboard now, at the episode's end (None:
+    never written; a record's field read as ``check`` reads it). The declared types are
+    numbers, bools and text; anything else a plugin wrote is kept as its text, so that a
+    result stays plain data (pickled from a worker, written as JSON)."""
+    values = []
+    for name in names:
+        value = read_key(name)
+        if not (value is None or isinstance(value, bool | int | float | str)):
+            value = str(value)
+        values.append((name, value))
+    return tuple(values)
 
 
 #: The outcome of an episode stopped at its wall-clock limit (``eval --wall-limit``): stuck

@@ -31,6 +31,10 @@ coverage if it succeeded, empty if it was cut short or failed: :func:`coverage_a
 ``coverage_curve`` the samples every 30 s (``[[t, c], ...]``; in CSV ``t:c;t:c``),
 ``longest_idle`` the longest brush time (s) without new floor. In pandas,
 ``df.groupby("mission").coverage_10min.describe()`` (NaN, not counted, where cut short).
+
+Each ``eval --key NAME`` adds a column ``key:NAME`` (last in CSV): the blackboard key's value
+when the episode ended, null / an empty cell when it never wrote it
+(:mod:`roomba_bt.evaluate.keys`).
 """
 
 from __future__ import annotations
@@ -43,6 +47,7 @@ from pathlib import Path
 from typing import Any
 
 from roomba_bt.evaluate.episode import Coverage, EpisodeResult
+from roomba_bt.evaluate.keys import KEY_PREFIX
 from roomba_bt.runtime.claimed import ClaimedFile
 from roomba_bt.runtime.summary import falls_in_order, hazard_falls
 
@@ -143,6 +148,7 @@ def to_record(result: EpisodeResult) -> dict[str, Any]:
             value = sum(hazard_falls(dict(value)).values())
         out[column] = value
     out.update(_coverage_record(result))
+    out.update((KEY_PREFIX + name, value) for name, value in result.keys)
     return out
 
 
@@ -232,7 +238,29 @@ def from_record(record: dict[str, Any]) -> EpisodeResult:
     known = {f.name for f in fields(EpisodeResult)}
     defaults = {"contact_steps": (), "trajectory": ()}
     values["coverage"] = _coverage_from(record)
+    values["keys"] = tuple(
+        (column.removeprefix(KEY_PREFIX), _key_value(raw))
+        for column, raw in record.items()
+        if column.startswith(KEY_PREFIX)
+    )
     return EpisodeResult(**{**defaults, **{k: v for k, v in values.items() if k in known}})
+
+
+def _key_value(raw: Any) -> Any:
+    """A ``key:`` column's value as it was: JSON Lines keep its type; a CSV cell is text,
+    read back as the bool, whole number or number it spells (``True``, ``3``, ``2.5``),
+    None when empty (never written), else the text itself (a text key's value that spells
+    a number reads back as that number)."""
+    if not isinstance(raw, str):
+        return raw
+    if raw in ("", "True", "False"):
+        return None if raw == "" else raw == "True"
+    for number in (int, float):
+        try:
+            return number(raw)
+        except ValueError:
+            continue
+    return raw
 
 
 def _falls(raw: Any) -> tuple[tuple[str, int], ...]:
@@ -303,7 +331,8 @@ def write_results(
             for record in records:
                 out.write(json.dumps(record) + "\n")
         else:
-            names = [*COLUMNS, *COVERAGE_COLUMNS, *PROVENANCE_COLUMNS]
+            keys = dict.fromkeys(c for r in records for c in r if c.startswith(KEY_PREFIX))
+            names = [*COLUMNS, *COVERAGE_COLUMNS, *PROVENANCE_COLUMNS, *keys]
             writer = csv.DictWriter(out, fieldnames=names)
             writer.writeheader()
             for record in records:

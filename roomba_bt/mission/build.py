@@ -20,7 +20,7 @@ from weakref import WeakKeyDictionary
 from py_trees.behaviour import Behaviour
 
 from roomba_bt.behaviours.base import CheckedParams
-from roomba_bt.behaviours.blackboard import declare_keys, write_key
+from roomba_bt.behaviours.blackboard import declare_keys, unwrite_keys, write_key
 from roomba_bt.behaviours.language import GUARD, WORDS
 from roomba_bt.behaviours.units import ValueType
 from roomba_bt.mission.diagnostics import Diagnostic
@@ -162,11 +162,13 @@ def set_up_tree(
     root: Behaviour, blackboard: MissionBlackboard | None, robot: RobotHandle, **kwargs: Any
 ) -> None:
     """A run's set-up of ``root``, for a compiled mission and a tree built around one alike:
-    ``blackboard``'s keys declared and its initial values written first (None: no mission
-    declares one), so that a node's ``setup`` may read them, then the robot handed to every
-    node."""
+    ``blackboard``'s keys declared, those without an initial value unwritten (a value the
+    run before in this process left is not this run's) and the initial values written
+    first (None: no mission declares one), so that a node's ``setup`` may read them, then
+    the robot handed to every node."""
     if blackboard is not None:
         declare_keys(blackboard.keys)
+        unwrite_keys(key for key in blackboard.keys if key not in blackboard.initial)
         for key, value in blackboard.initial.items():
             write_key(key, value)
     for node in root.iterate():
