@@ -284,6 +284,17 @@ def test_a_record_stops_at_its_size_limit_and_the_run_goes_on(
     assert "the recording stopped (--record-max 64 kB reached)" in replayed
 
 
+def test_a_record_size_limit_below_the_least_is_refused_before_the_file_is_made(
+    tmp_path: Path,
+) -> None:
+    """From Python, as ``--record-max`` refuses it: a limit the header and a few seconds of
+    run do not fit in, said before the file is claimed or emptied."""
+    path = tmp_path / "small.jsonl"
+    with pytest.raises(ValueError, match="max_bytes=1000: a record's size limit is 64 kB or more"):
+        RecordingTransport(_Link(), path, HEADER, max_bytes=1000)  # type: ignore[arg-type]
+    assert not path.exists()
+
+
 def test_a_record_size_limit_without_a_record_is_a_usage_error(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
