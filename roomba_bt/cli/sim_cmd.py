@@ -54,6 +54,13 @@ FAULT_OPTIONS: tuple[tuple[str, type, object, str], ...] = (
     ("sleep_at", float, None, "the robot falls asleep at this time (s)"),
     ("baud_change_at", float, None, "the robot's port changes its rate at this time (s)"),
     ("baud_change_to", int, None, "the rate it changes to (default: the other OI rate)"),
+    ("host_drop_rate", float, 0.0, "per-byte probability that a byte from the client is lost"),
+    (
+        "host_corrupt_rate",
+        float,
+        0.0,
+        "per-byte probability that a byte from the client arrives changed",
+    ),
 )
 
 
@@ -142,6 +149,13 @@ def run_sim(args: argparse.Namespace) -> int:
     )
     from roomba_bt.sim.narrate import after_the_cut
 
+    line = simulator.host_line
+    if line is not None:
+        print(
+            f"roomba-bt sim: the line lost {line.dropped} and changed {line.corrupted} of the "
+            "bytes from the client",
+            file=sys.stderr,
+        )
     cut = after_the_cut(simulator)
     if cut is not None:
         print(f"roomba-bt sim: {cut}", file=sys.stderr)

@@ -8,6 +8,7 @@ as repeatable as a clean one.
 from __future__ import annotations
 
 import math
+import random
 from dataclasses import dataclass
 
 from roomba_bt.oi.encode import BAUD_RATES
@@ -28,6 +29,10 @@ class Faults:
     ``truncate_rate``  probability that a stream frame is cut short: a random 1..n-1 bytes of
                        it are sent, the rest never (the next frame follows at once)
     ``drop_rate``      probability that a stream frame is never sent (its distance/angle lost)
+    ``host_drop_rate`` probability that a host->robot byte is lost on the line (the robot's
+                       parser then waits for it and takes the next command's bytes in its
+                       place: a bad cable loses bytes both ways; :class:`HostLine`)
+    ``host_corrupt_rate`` probability that a host->robot byte is replaced by a random byte
     ``latency``        seconds added before robot->host bytes become readable
     ``inject_text``    ASCII the "firmware" prints into the stream, every ``inject_every`` s
     ``disconnect_at``  simulated time (s) at which the link goes away for good (the robot
@@ -76,6 +81,8 @@ class Faults:
     baud_change_to: int | None = None
     odometry_error: float = 0.0
     from_stream: bool = False
+    host_drop_rate: float = 0.0
+    host_corrupt_rate: float = 0.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.from_stream, bool):
@@ -85,6 +92,8 @@ class Faults:
             ("bit_flip_rate", 0.0, 1.0),
             ("truncate_rate", 0.0, 1.0),
             ("drop_rate", 0.0, 1.0),
+            ("host_drop_rate", 0.0, 1.0),
+            ("host_corrupt_rate", 0.0, 1.0),
             ("latency", 0.0, 10.0),
             ("inject_every", SLOT_SECONDS, 3600.0),
             ("noise", 0.0, 4095.0),
@@ -133,3 +142,57 @@ class Faults:
 
 
 NO_FAULTS = Faults()
+
+
+class HostLine:
+    """The host->robot direction of a bad cable (``Faults.host_drop_rate``,
+    ``host_corrupt_rate``): each byte the host writes is lost or replaced on its way, drawn
+    from a generator of its own (``host-line:SEED``), so the robot->host faults of a seed
+    draw as they did without it. The served simulator (``sim --pty``) and the in-process
+    link hand the robot every byte through :meth:`Simulator.receive
+    <roomba_bt.sim.protocol.OIProtocol.receive>`, which passes them through here first.
+
+    A robot's OI parser knows nothing of a lost byte: it waits for the command's missing data
+    byte and takes the next command's first byte as it (``89 00 80 00`` then ``89 ...``:
+    a Drive of velocity 128, radius 137 nobody sent), which is what the runtime must notice
+    (docs/reliability.md, "Bytes lost on the way to the robot")."""
+
+    __slots__ = ("_corrupt", "_drop", "_rng", "corrupted", "dropped")
+
+    def __init__(self, faults: Faults, seed: int) -> None:
+        self._drop = faults.host_drop_rate
+        self._corrupt = faults.host_corrupt_rate
+        self._rng = random.Random(f"host-line:{seed}")
+        #: bytes lost and bytes replaced so far (the ``sim`` summary says them)
+        self.dropped = 0
+        self.corrupted = 0
+
+    @staticmethod
+    def of(faults: Faults, seed: int) -> HostLine | None:
+        """The line's faults for a simulator with ``faults``; None when they touch no
+        host->robot byte (the common case: :meth:`OIProtocol.receive` tests for None)."""
+        return HostLine(faults, seed) if faults.host_drop_rate or faults.host_corrupt_rate else None
+
+    def passed(self, data: bytes | bytearray) -> tuple[bytes, str]:
+        """What of ``data`` reaches the robot, and what the line did to it ("" for nothing:
+        ``lost c8 of 89 00 c8 80 00``), for the simulator's event (``sim --log``)."""
+        rng = self._rng
+        kept = bytearray()
+        lost: list[str] = []
+        changed: list[str] = []
+        for byte in data:
+            if self._drop and rng.random() < self._drop:
+                lost.append(f"{byte:02x}")
+                continue
+            if self._corrupt and rng.random() < self._corrupt:
+                new = rng.randrange(256)
+                changed.append(f"{byte:02x}->{new:02x}")
+                byte = new
+            kept.append(byte)
+        if not lost and not changed:
+            return bytes(data), ""
+        self.dropped += len(lost)
+        self.corrupted += len(changed)
+        said = [f"lost {' '.join(lost)}"] if lost else []
+        said += [f"changed {' '.join(changed)}"] if changed else []
+        return bytes(kept), f"{', '.join(said)} of {bytes(data).hex(' ')} from the host"

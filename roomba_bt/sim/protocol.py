@@ -29,6 +29,7 @@ from roomba_bt.oi.identify import parse_firmware
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME, CommandSpec, Effect
 from roomba_bt.sim.cycles import BUTTON_CYCLES, CYCLES, BuiltinCycle
+from roomba_bt.sim.faults import HostLine
 from roomba_bt.sim.replies import StreamOutput
 from roomba_bt.sim.state import TracePoint, Violation
 
@@ -77,7 +78,7 @@ class OIProtocol(StreamOutput):
         "_buttons_until", "_commands", "_data_sizes", "_drive_modes", "_held_until", "_inbuf",
         "_last_activity", "_paused_at", "_rng", "_song_until", "_tails", "baud", "brc_low",
         "brc_pulses", "builtin", "cycle_commands_pause", "day_time", "deaf", "digits",
-        "firmware", "heard", "ignored_bytes", "leds", "paused_cycle", "schedule",
+        "firmware", "heard", "host_line", "ignored_bytes", "leds", "paused_cycle", "schedule",
         "scheduling_leds", "songs",
     )  # fmt: skip
 
@@ -116,6 +117,9 @@ class OIProtocol(StreamOutput):
         #: asleep by the five-minute idle rule: deaf to the serial line until BRC wakes it
         self.deaf = False
         self.ignored_bytes = 0
+        #: the bytes' way from the host, when a fault loses or changes some (None: a clean
+        #: line, every byte arrives)
+        self.host_line = HostLine.of(self.faults, self.seed)
         #: told of each command the robot takes in, before its mode is checked (``sim --log``,
         #: :class:`~roomba_bt.sim.narrate.Narrator`); None: nobody is told
         self.heard: Callable[[CommandSpec, bytes], None] | None = None
@@ -137,6 +141,12 @@ class OIProtocol(StreamOutput):
         for them, as the robot does; unknown opcodes are skipped one byte at a time."""
         if self.disconnected or not data:
             return
+        if self.host_line is not None:
+            data, what = self.host_line.passed(data)
+            if what:
+                self._event("line", what)
+            if not data:
+                return
         self._last_activity = self.time
         buf = self._inbuf
         commands = self._commands

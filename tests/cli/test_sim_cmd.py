@@ -44,3 +44,29 @@ def test_help_says_what_latency_is_and_the_least_inject_every(
     assert "per byte" not in text
     assert "before the robot's bytes become readable" in text
     assert "at least 0.015" in text
+
+
+def test_the_served_simulator_loses_the_clients_bytes_on_request_and_says_how_many(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``sim --host-drop-rate``: the host->robot half of a bad cable, rehearsed on a pty."""
+
+    def serve(simulator: Simulator, endpoint: object, duration: object, **_: object) -> None:
+        endpoint.close()  # type: ignore[attr-defined]
+        for _ in range(50):
+            simulator.receive(b"\x89\x00\xc8\x80\x00")  # what a client writes
+
+    monkeypatch.setattr(sim_cmd, "_serve_until_stopped", serve)
+    args = ["sim", "--pty", "--host-drop-rate", "0.5", "--host-corrupt-rate", "0.1"]
+    assert main([*args, "--seed", "4"]) == 0
+    said = capsys.readouterr().err
+    assert "roomba-bt sim: the line lost " in said and "of the bytes from the client" in said
+    lost = int(said.split("the line lost ")[1].split()[0])
+    assert 60 < lost < 190  # about half of 250
+
+
+def test_a_host_line_rate_out_of_range_is_refused_by_name(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    assert main(["sim", "--pty", "--host-drop-rate", "2"]) == 2
+    assert "faults.host_drop_rate: found 2.0; allowed: 0.0..1.0" in capsys.readouterr().err

@@ -260,3 +260,50 @@ def test_timed_faults_and_the_disconnect_each_come_at_their_time(
         assert reset_at <= happened["fault"] < reset_at + 0.015
     else:
         assert "fault" not in happened  # the link was lost first
+
+
+# ---------------------------------------------------------------- host -> robot bytes
+DRIVE_200 = C.drive(200, 0x8000).data  # 89 00 c8 80 00
+
+
+def test_a_clean_line_has_no_host_line_and_a_faulty_one_counts_what_it_did() -> None:
+    assert Simulator(world(BOX)).host_line is None
+    sim = Simulator(world(BOX), seed=3, faults=Faults(host_drop_rate=0.1, host_corrupt_rate=0.1))
+    line = sim.host_line
+    assert line is not None
+    for _ in range(100):
+        sim.receive(DRIVE_200)
+    assert 25 < line.dropped < 75 and 25 < line.corrupted < 75
+    assert [e.detail for e in sim.events if e.kind == "line"][0].endswith(
+        "of 89 00 c8 80 00 from the host"
+    )
+
+
+def test_the_host_line_is_seeded() -> None:
+    def lost(seed: int) -> list[str]:
+        sim = Simulator(world(BOX), seed=seed, faults=Faults(host_drop_rate=0.2))
+        for _ in range(20):
+            sim.receive(DRIVE_200)
+        return [e.detail for e in sim.events if e.kind == "line"]
+
+    assert lost(1) == lost(1) != lost(2)
+
+
+def test_a_lost_data_byte_makes_the_robot_take_the_next_commands_opcode_as_data() -> None:
+    """What a bad cable does to a robot (the noisy-cable report): Drive 200 with its c8 lost
+    waits for a fifth byte; the next command's opcode completes it, a drive nobody sent."""
+    sim = Simulator(world(BOX), faults=Faults(host_drop_rate=1.0))
+    sim.host_line = None  # the mode commands arrive whole
+    sim.receive(C.start().data + C.full().data)
+    sim.receive(DRIVE_200[:2] + DRIVE_200[3:])  # 89 00 80 00: the c8 lost
+    sim.run(0.3)
+    assert sim.requested_left == sim.requested_right == 0  # still waiting: it stands
+    sim.receive(C.halt().data)  # the stop, 89 00 00 00 00
+    assert sim.values[39] == 0x80 and sim.values[40] == 0x89  # velocity 128, radius 137
+    assert sim.requested_left or sim.requested_right  # the "stop" set it going
+
+
+@pytest.mark.parametrize("name", ["host_drop_rate", "host_corrupt_rate"])
+def test_host_line_rates_are_checked(name: str) -> None:
+    with pytest.raises(ValueError, match=f"faults.{name}: found 1.5; allowed: 0.0..1.0"):
+        Faults(**{name: 1.5})
