@@ -274,7 +274,7 @@ def test_a_clean_line_has_no_host_line_and_a_faulty_one_counts_what_it_did() -> 
     for _ in range(100):
         sim.receive(DRIVE_200)
     assert 25 < line.dropped < 75 and 25 < line.corrupted < 75
-    assert [e.detail for e in sim.events if e.kind == "line"][0].endswith(
+    assert next(e.detail for e in sim.events if e.kind == "line").endswith(
         "of 89 00 c8 80 00 from the host"
     )
 
