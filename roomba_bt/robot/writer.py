@@ -48,6 +48,16 @@ _STREAM, _BAUD = Effect.STREAM, Effect.BAUD
 BAUD_CHANGE_WAIT = 0.1
 #: Command times kept for :attr:`CommandWriter.recent_commands`.
 RECENT_COMMANDS = 8
+#: Zero bytes that bring the robot's OI parser back in step after bytes from us were lost
+#: on the line (:meth:`CommandWriter.send_many`'s ``prefix``): a parser left waiting in a
+#: command for data bytes that never came takes them as those bytes, and the longest wait of
+#: a command a run sends after its start-up is a Song (140) of 16 notes, 34 data bytes. A
+#: command that zeros complete is harmless or at once replaced: a Drive of velocity 0 or
+#: ``vel hi * 256`` (the wheel command written after the zeros, in the same write, replaces
+#: it), Motors or LEDs off, a song of no notes; 0 is no opcode, so the zeros left over are
+#: skipped one by one. (A Stream or Query List whose count byte arrived waits for up to 255
+#: ids: the start-up's, not a running mission's.)
+RESYNC_ZEROS = bytes(34)
 
 
 class CommandWriter:
@@ -121,14 +131,15 @@ class CommandWriter:
         """
         self._send(command, None)
 
-    def send_many(self, commands: Iterable[Command]) -> None:
+    def send_many(self, commands: Iterable[Command], prefix: bytes = b"") -> None:
         """Commands in order, in one write: the safe stop's sequence, the tick guard's stop,
         the monitor's pause and resume (a tick's outbox goes by :meth:`send`, one command at
         a time). Each command is guarded against the mode the commands before it lead to (so
         ``safe`` then ``drive`` passes). Refused commands are left out; after the others are
-        written the first refusal is raised."""
+        written the first refusal is raised. ``prefix``: bytes that go first in the same
+        write, no command (:data:`RESYNC_ZEROS`, the run's resend after bytes were lost)."""
         refused: list[Exception] = []
-        batch = bytearray()
+        batch = bytearray(prefix)
         # the model follows what was written: if the batch never leaves, it is put back
         saved = self.modes.snapshot(), self.last_wheels, self.last_motors
         try:

@@ -31,6 +31,7 @@ from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.odometry import MM_PER_COUNT, encoder_delta
 from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.interface import Odometer, Odometry, Snapshot
+from roomba_bt.runtime.motion_watch import MotionWatch
 from roomba_bt.runtime.summary import Outcome, RunSummary
 
 #: the run's own logger, whose warnings these are (as ``runtime/ending.py``'s)
@@ -61,18 +62,21 @@ END_LOOK_S = 0.3
 class MissionTimeChecks:
     """The run's time limit (``timeout_s``, None for none) and the looks at the charge,
     written into ``summary`` (:attr:`RunSummary.lowest_battery_percent`,
-    :attr:`RunSummary.on_charger_s`)."""
+    :attr:`RunSummary.on_charger_s`), and at the wheels (``motion``: whether the robot does
+    what it was told, runtime/motion_watch.py; None: not looked at)."""
 
     def __init__(
         self,
         summary: RunSummary,
         timeout_s: float | None,
         cycles: RobotCycleWatch | None = None,
+        motion: MotionWatch | None = None,
     ) -> None:
         self.summary = summary
         self.timeout_s = timeout_s
         #: the watch for a cycle the robot started by itself (None: not watched)
         self.cycles = cycles
+        self.motion = motion
         #: the mission time at which the loop calls :meth:`look` (its first tick: at once)
         self.next_at = 0.0
         #: when the last look was, and whether it found the robot on a powered charger (a
@@ -81,9 +85,10 @@ class MissionTimeChecks:
         self._on_charger = False
 
     def look(self, snapshot: Snapshot, root: py_trees.behaviour.Behaviour) -> bool:
-        """At :attr:`next_at` or after: False when the run's time limit ran out, or the
-        robot drives a cycle of its own (:class:`RobotCycleWatch`; the summary says which,
-        in the leaf running under ``root``); else the look at the tick's ``snapshot``
+        """At :attr:`next_at` or after: False when the run's time limit ran out, the robot
+        drives a cycle of its own (:class:`RobotCycleWatch`; the summary says which, in the
+        leaf running under ``root``) or keeps not doing what it is told
+        (:meth:`MotionWatch.look`); else the look at the tick's ``snapshot``
         (:meth:`take`), :attr:`next_at` moved on, and True."""
         limit, mission_time = self.timeout_s, snapshot.time
         if limit is not None and mission_time >= limit:
@@ -92,6 +97,8 @@ class MissionTimeChecks:
         cycles = self.cycles
         if cycles is not None and cycles.look(snapshot.odometry, mission_time):
             cycles.end_run(root)
+            return False
+        if self.motion is not None and not self.motion.look(snapshot):
             return False
         self.take(mission_time, snapshot.frame)
         self.next_at = min(mission_time + LOOK_EVERY_S, math.inf if limit is None else limit)

@@ -69,6 +69,7 @@ from roomba_bt.runtime.clock import (
 )
 from roomba_bt.runtime.ending import RunEnding
 from roomba_bt.runtime.long_run import MissionTimeChecks
+from roomba_bt.runtime.motion_watch import MotionWatch
 from roomba_bt.runtime.refusals import Refusals
 from roomba_bt.runtime.schedule import DRIFT, LOST_LATE, SPREAD_DECAY
 from roomba_bt.runtime.stall import StallRide
@@ -499,7 +500,10 @@ class MissionRunner(BaseHandle):
         held = False  # the root ended and the gate holds the run there (the monitor)
         untick: int | None = None  # the gate held the tree: the tick it last ticked on
         flushed = -1  # the stream tick of the last tree tick written whole
-        checks = MissionTimeChecks(summary, self.timeout_s, self._ending.cycles)  # long_run.py
+        # the time limit, the charge, a cycle the robot started by itself, the wheels doing
+        # what they were told (long_run.py)
+        motion = MotionWatch(self.connection, summary)
+        checks = MissionTimeChecks(summary, self.timeout_s, self._ending.cycles, motion)
         started = perf()  # each tick's start (an interrupt's before the first: none cut short)
         try:
             while True:
@@ -555,7 +559,8 @@ class MissionRunner(BaseHandle):
                     tree_ended(root, summary)
                     return
                 if mission_time >= checks.next_at and not checks.look(self.snapshot, root):
-                    return  # the time limit ran out, or a cycle of the robot's own (long_run.py)
+                    return  # the time limit ran out, a cycle of the robot's own, or the robot
+                    # keeps not obeying (long_run.py)
         except (KeyboardInterrupt, RunAborted) as exc:  # Ctrl-C, SIGTERM, --wall-limit...:
             if not behaviours_interrupt(exc):  # in which half of its frame (a behaviour's own
                 summary.ended_at = interrupted_at(self, flushed)  # interrupt: its error)

@@ -226,6 +226,14 @@ class RunSummary:
     tick_halt_first: str = ""
     tick_halt_last: str = ""
     commands_written: int = 0
+    #: times the robot's wheels did not do what the command standing asked for a second (its
+    #: encoders), put right by zeros and the command again (runtime/motion_watch.py); of
+    #: those, the times the wheels then obeyed (bytes from us had been lost); the first
+    #: finding, when and what (``t=6.390 the wheels stood still for a second under Drive
+    #: (137) velocity 200, radius 32768``)
+    unheard: int = 0
+    unheard_obeyed: int = 0
+    unheard_first: str = ""
     #: the first command the mode guard refused: when, the behaviour that sent it, and why
     #: (``t=3.330 blind_drive: drive needs Safe or Full; the robot is in Passive since
     #: t=3.330, after a cliff``)
@@ -460,6 +468,7 @@ class RunSummary:
                 if self.tick_halts
                 else []
             ),
+            *([f"unheard      {self.unheard_text()}"] if self.unheard else []),
             f"commands     {self.commands_written} written, "
             f"{self.refused_commands} refused by the mode guard{_dropped_said(self)}",
             f"distance     {self.distance_mm / 1000:.2f} m",
@@ -522,6 +531,24 @@ class RunSummary:
         )
         return f"{self.stalls} ({halts}), {self.stalls_ridden} ridden through"
 
+    def unheard_text(self) -> str:
+        """The robot not doing what it was told (runtime/motion_watch.py), in the summary's
+        words: ``the robot did not do what it was told 2 times (the first t=6.390 the wheels
+        stood still ...): bytes from the computer to the robot were lost 2 times (it obeyed
+        the command sent again); check the cable and its adapter (roomba-bt doctor)``."""
+        first = f" (the first {self.unheard_first})" if self.unheard_first else ""
+        said = f"the robot did not do what it was told {_times(self.unheard)}{first}"
+        if not self.unheard_obeyed:
+            return (
+                f"{said}; the command sent again did not help either: the robot wedged with no "
+                "bump shown or its wheels stalled, or the line lost that too"
+            )
+        return (
+            f"{said}: bytes from the computer to the robot were lost "
+            f"{_times(self.unheard_obeyed)} (it obeyed the command sent again); check the "
+            "cable and its adapter (roomba-bt doctor)"
+        )
+
     def falls_text(self) -> str:
         """The robot's own falls to Passive, the commonest cause first: ``the robot fell to
         Passive by itself 21 times (cliff 20, wheel drop 1)`` (:func:`falls_said`). Those
@@ -554,6 +581,11 @@ class RunSummary:
 
 # How the summary's lines word a measure (RunSummary.lines): out of the class, which
 # holds what was measured.
+
+
+def _times(count: int) -> str:
+    """``once``, ``2 times``."""
+    return "once" if count == 1 else f"{count} times"
 
 
 def _wall_said(summary: RunSummary) -> str:

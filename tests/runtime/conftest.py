@@ -13,6 +13,7 @@ from roomba_bt.oi.profiles import CREATE2, RobotProfile
 from roomba_bt.runtime.loop import MissionRunner
 from roomba_bt.runtime.stack import Recording, RunStack
 from roomba_bt.sim import Faults, Simulator, load_world
+from roomba_bt.sim.faults import HostLine
 
 from .simrun import Run, RunMission, TapLink
 
@@ -39,6 +40,7 @@ def run_mission(tmp_path: Path) -> RunMission:
         record: Path | None = None,
         jitter: float = 0.0,
         cycle_commands_pause: bool = False,
+        host_line: HostLine | None = None,
     ) -> Run:
         path = tmp_path / "mission.yaml"
         path.write_text(textwrap.dedent(text))
@@ -46,6 +48,8 @@ def run_mission(tmp_path: Path) -> RunMission:
         simulator = Simulator(
             load_world(world), profile, seed, faults, cycle_commands_pause=cycle_commands_pause
         )
+        if host_line is not None:  # the bytes' way to the robot, scripted by the test
+            simulator.host_line = host_line
         link = TapLink(simulator, stall_after, burst, freeze, jitter)
         stack = RunStack(
             mission,

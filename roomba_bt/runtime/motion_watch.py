@@ -1,0 +1,223 @@
+"""Whether the robot does what it was told: bytes lost on their way to the robot, noticed by
+the wheels' encoders and put right by the run.
+
+A cable that loses bytes loses them both ways. A byte lost on its way from us leaves the
+robot's OI parser waiting for the command's missing data byte: ``89 00 c8 80 00`` (Drive 200
+straight) arriving as ``89 00 80 00`` moves nothing, and the next command's first byte
+completes it (``89 00 80 00 89``: velocity 128, radius 137, a drive nobody sent); the rest of
+that command is skipped as no opcode. Nothing comes back to say so: the Open Interface
+acknowledges no command. A run on such a cable once stood for 19 s while its tree "drove",
+and ended SUCCESS.
+
+The robot's encoders (packets 43, 44, streamed by most missions) say what its wheels did.
+Once a second of mission time (:class:`~roomba_bt.runtime.long_run.MissionTimeChecks`, which
+calls :meth:`MotionWatch.look`; nothing more on the tick path, and nothing written on a line
+that loses nothing), the watch compares them with the wheel command last written
+(``CommandWriter.last_wheels``), when the same command stood over the whole second:
+
+* it turns a wheel at a full speed step (28.5 mm/s) or more, and neither encoder moved; or
+* it turns no wheel, and a wheel turned :data:`RUNAWAY_MM` or more (a robot slowing down
+  after a stop written just before the last look turns its wheels a few centimetres at
+  most; a drive the robot made of a lost byte and the next command's, 128 mm/s say, twice
+  that or more).
+
+It judges nothing in Passive, while a built-in cycle may drive, while the bump reflex holds
+forward motion, or while the frame shows a bump, a wheel drop or a wheel's overcurrent (a
+robot pushing a wall, lifted, or stalled on a carpet's edge turns its wheels or stalls them
+for reasons of its own), nor a Drive PWM (its speed is no speed). A finding is put right at
+once: :data:`~roomba_bt.robot.writer.RESYNC_ZEROS` (they complete whatever command the
+parser waits in, harmlessly) and the wheel command again, and the Motors command again if it
+runs a brush or the vacuum (the zeros may have completed a Motors as "off"), in one write.
+At the next look the wheels obeyed (the bytes were lost: said in the summary's ``unheard``
+line) or still did not (a robot wedged with no bump shown, its wheels stalled: said once,
+not resent again for that command). Three findings put right within a minute end the run
+with the safe stop, its drive 0 after zeros too: a line that loses that many commands
+cannot be trusted with the next stop.
+"""
+
+from __future__ import annotations
+
+import logging
+
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.encode import Command, turns_wheels
+from roomba_bt.oi.frames import SensorFrame
+from roomba_bt.oi.modes import DRIVING_MODES
+from roomba_bt.oi.odometry import WHEEL_SPEED_STEP_MM_S, encoder_delta, mm_to_counts
+from roomba_bt.robot.connection import Connection
+from roomba_bt.robot.hazards import sets_going
+from roomba_bt.robot.interface import Snapshot
+from roomba_bt.robot.writer import RESYNC_ZEROS
+from roomba_bt.runtime.summary import Outcome, RunSummary
+
+log = logging.getLogger("roomba_bt.runtime.loop")
+
+#: Findings put right within :data:`GIVE_UP_WITHIN_S` of mission time that end the run.
+GIVE_UP_AFTER = 3
+GIVE_UP_WITHIN_S = 60.0
+#: How far a wheel turns in the second under a stop before the watch takes it for a drive
+#: nobody sent (the stop lost on the line), rather than the robot slowing down.
+RUNAWAY_MM = 50.0
+_RUNAWAY_COUNTS = mm_to_counts(RUNAWAY_MM)
+#: Packet 14's wheel bits (left 4, right 3): a wheel's motor stalled, not a byte lost.
+_WHEEL_OVERCURRENT_BITS = 0b11000
+#: Packet 7's bump and wheel-drop bits.
+_BUMPED_OR_LIFTED = 0b1111
+
+
+def fastest_wheel_mm_s(command: Command) -> float | None:
+    """How fast the faster wheel turns under ``command`` (mm/s, unsigned; Drive's arc turns
+    its outer wheel faster than its velocity, so the velocity is the least of it), or None
+    for a command whose speed is not a speed (Drive PWM, a built-in cycle)."""
+    name = command.spec.name
+    if name == "drive":
+        return float(abs(command.args[0]))
+    if name == "drive_direct":
+        right, left = command.args
+        return float(max(abs(right), abs(left)))
+    return None
+
+
+class MotionWatch:
+    """The looks of one run at its robot's wheels (:meth:`look`), and what they found, in
+    ``summary`` (:attr:`RunSummary.unheard`, :attr:`RunSummary.unheard_obeyed`,
+    :attr:`RunSummary.unheard_first`)."""
+
+    def __init__(self, connection: Connection, summary: RunSummary) -> None:
+        self.connection = connection
+        self.summary = summary
+        #: what the last look saw: the wheel command standing and the encoder counts
+        self._command: Command | None = None
+        self._counts: tuple[int, int] | None = None
+        #: the command put right at the last finding, until the look after it judges it
+        self._resent: Command | None = None
+        #: a command the wheels did not obey after it was sent again: not resent again
+        self._given_up_on: Command | None = None
+        #: the mission times of the findings the wheels then obeyed (the last minute's)
+        self._obeyed_at: list[float] = []
+
+    def look(self, snapshot: Snapshot) -> bool:
+        """Once a second of mission time: compare the wheels with the command (the module's
+        docstring), put a finding right; False when findings keep coming and the run must
+        end (the summary says why)."""
+        writer = self.connection.writer
+        command = writer.last_wheels
+        counts = _encoder_counts(snapshot.frame)
+        judged = (
+            command is not None
+            and counts is not None
+            and snapshot.mode in DRIVING_MODES
+            and not snapshot.cycle_may_run
+            and not writer.forward_held
+            and not _excused(snapshot.frame)
+        )
+        if not judged or command != self._command or counts is None or self._counts is None:
+            self._command, self._counts = command if judged else None, counts
+            self._resent = None
+            return True
+        assert command is not None
+        before = self._counts
+        moved = max(
+            abs(encoder_delta(before[0], counts[0])), abs(encoder_delta(before[1], counts[1]))
+        )
+        self._counts = counts
+        if self._resent is not None:
+            return self._after_resend(command, moved, snapshot.time)
+        if not self._disobeyed(command, moved) or command == self._given_up_on:
+            return True
+        self._put_right(command, moved, snapshot.time)
+        return True
+
+    @staticmethod
+    def _disobeyed(command: Command, moved: int) -> bool:
+        """The wheels did not do what ``command`` asks over the last second, in which they
+        turned ``moved`` encoder counts (the faster wheel)."""
+        if turns_wheels(command):
+            fastest = fastest_wheel_mm_s(command)
+            return fastest is not None and fastest >= WHEEL_SPEED_STEP_MM_S and not moved
+        return moved >= _RUNAWAY_COUNTS
+
+    def _put_right(self, command: Command, moved: int, mission_time: float) -> None:
+        """The zeros, then the wheel command (and the running Motors) again, in one write."""
+        summary = self.summary
+        summary.unheard += 1
+        what = (
+            f"the wheels stood still for a second under {_said(command)}"
+            if not moved
+            else f"the wheels turned for a second under {_said(command)}"
+        )
+        if not summary.unheard_first:
+            summary.unheard_first = f"t={mission_time:.3f} {what}"
+        writer = self.connection.writer
+        again = [command]
+        motors = writer.last_motors
+        if motors is not None and sets_going(motors):
+            again.append(motors)
+        log.warning(
+            "%s: the robot did not do what it was told (%s): bytes from the computer to the "
+            "robot may have been lost; its command parser set in step and the command sent "
+            "again", self.connection.name, what, extra={"mission_time": mission_time},
+        )  # fmt: skip
+        writer.send_many(again, prefix=RESYNC_ZEROS)
+        self._resent = command
+
+    def _after_resend(self, command: Command, moved: int, mission_time: float) -> bool:
+        """The look after a finding: the wheels obey now (the bytes were lost: counted, and
+        the run ended at the third within a minute) or still do not (said once; that command
+        is not sent again)."""
+        self._resent = None
+        if self._disobeyed(command, moved):
+            self._given_up_on = command
+            log.warning(
+                "%s: the wheels still do not obey %s after it was sent again: the robot may "
+                "be wedged with no bump shown or its wheels stalled, or the line lost it "
+                "again", self.connection.name, _said(command),
+                extra={"mission_time": mission_time},
+            )  # fmt: skip
+            return True
+        summary = self.summary
+        summary.unheard_obeyed += 1
+        recent = [t for t in self._obeyed_at if mission_time - t <= GIVE_UP_WITHIN_S]
+        self._obeyed_at = [*recent, mission_time]
+        if len(self._obeyed_at) < GIVE_UP_AFTER:
+            return True
+        # the stop that follows goes over the same line: the parser set in step first
+        self.connection.writer.send_many([oi.halt()], prefix=RESYNC_ZEROS)
+        summary.outcome = Outcome.CONNECTION_LOST
+        summary.reason = (
+            f"{self.connection.name}: the robot did not do what it was told "
+            f"{len(self._obeyed_at)} times within {GIVE_UP_WITHIN_S:g} s (each time it obeyed "
+            "the command sent again): bytes from the computer to the robot are being lost; "
+            "check the cable and its adapter (roomba-bt doctor)"
+        )
+        return False
+
+
+def _encoder_counts(frame: SensorFrame) -> tuple[int, int] | None:
+    """The frame's left and right encoder counts (packets 43, 44), or None without them."""
+    slots = frame.layout.encoder_slots
+    if slots is None:
+        return None
+    values = frame.values
+    return values[slots[0]], values[slots[1]]
+
+
+def _excused(frame: SensorFrame) -> bool:
+    """The frame shows why wheels may stand or turn against their command: a bump or a wheel
+    drop (packet 7), a wheel's overcurrent (packet 14), where streamed."""
+    index = frame.layout.index
+    values = frame.values
+    at = index.get(7)
+    if at is not None and values[at] & _BUMPED_OR_LIFTED:
+        return True
+    at = index.get(14)
+    return at is not None and bool(values[at] & _WHEEL_OVERCURRENT_BITS)
+
+
+def _said(command: Command) -> str:
+    """``Drive (137) velocity 200, radius 32768``: the command as the summary names it."""
+    spec = command.spec
+    args = ", ".join(
+        f"{arg.name} {value}" for arg, value in zip(spec.args, command.args, strict=False)
+    )
+    return f"{spec.title} ({spec.opcode}) {args}"

@@ -1,0 +1,131 @@
+"""Bytes lost on their way to the robot: the run notices by the encoders that the robot does
+not do what it was told, sets its parser in step and sends the command again
+(runtime/motion_watch.py); a line that keeps losing commands ends the run."""
+
+from __future__ import annotations
+
+from roomba_bt.oi import commands as C
+from roomba_bt.robot.writer import RESYNC_ZEROS
+from roomba_bt.runtime.motion_watch import GIVE_UP_AFTER
+from roomba_bt.runtime.summary import ExitCode, Outcome
+from roomba_bt.sim import Faults
+from roomba_bt.sim.faults import HostLine
+
+from .simrun import RunMission
+
+DRIVE_200 = C.drive(200, 0x8000).data  # 89 00 c8 80 00
+STOP = C.halt().data  # 89 00 00 00 00
+
+
+class LosesByte(HostLine):
+    """A line that loses byte ``index`` of the first ``times`` writes equal to ``data``."""
+
+    def __init__(self, data: bytes, index: int, times: int = 1) -> None:
+        super().__init__(Faults(), 0)
+        self.data, self.index, self.times = data, index, times
+
+    def passed(self, data: bytes | bytearray) -> tuple[bytes, str]:
+        if bytes(data) != self.data or not self.times:
+            return bytes(data), ""
+        self.times -= 1
+        self.dropped += 1
+        return bytes(data[: self.index] + data[self.index + 1 :]), f"lost byte {self.index}"
+
+
+#: Safe, then 60 cm at 200 mm/s: 3 s of driving, which a robot standing never finishes
+DRIVE_60_CM = """
+mission: drive
+tree:
+  sequence:
+    - mode: safe
+    - drive: {velocity: 200 mm/s, distance: 60 cm}
+"""
+
+
+def test_a_drive_whose_byte_was_lost_is_sent_again_and_the_robot_drives(
+    run_mission: RunMission,
+) -> None:
+    """The noisy-cable report: Drive 200 arriving as ``89 00 80 00`` left the robot standing
+    for 19 s while the tree drove, and the run ended SUCCESS. Now it stands a second or two,
+    the parser is set in step by zeros and the drive sent again, in one write."""
+    run = run_mission(DRIVE_60_CM, host_line=LosesByte(DRIVE_200, 2), timeout=15.0)
+    summary = run.summary
+    assert summary.outcome is Outcome.SUCCESS
+    assert (summary.unheard, summary.unheard_obeyed) == (1, 1)
+    assert summary.mission_time_s < 3.0 + 2.5  # it stood at most two looks
+    assert any(data == RESYNC_ZEROS + DRIVE_200 for _, data in run.link.writes)
+    unheard = next(line for line in summary.lines() if line.startswith("unheard"))
+    assert "the wheels stood still for a second under Drive (137) velocity 200" in unheard
+    assert "bytes from the computer to the robot were lost once" in unheard
+    assert "check the cable" in unheard
+
+
+def test_a_stop_whose_byte_was_lost_is_sent_again_and_the_robot_stops(
+    run_mission: RunMission,
+) -> None:
+    """The worse half: the drive 0 that ends a drive lost a byte, and the robot drove on
+    while the tree waited, believing it stopped."""
+    mission = DRIVE_60_CM + "    - wait: {duration: 6 s}\n"
+    run = run_mission(mission, world="corridor", host_line=LosesByte(STOP, 3), timeout=15.0)
+    summary = run.summary
+    assert summary.outcome is Outcome.SUCCESS
+    assert (summary.unheard, summary.unheard_obeyed) == (1, 1)
+    assert "the wheels turned for a second under Drive (137) velocity 0" in summary.unheard_first
+    # 60 cm, then at most 2 s more at 200 mm/s before it stopped (6 s more without the watch)
+    assert summary.distance_mm < 600 + 450
+    assert run.simulator.requested_left == run.simulator.requested_right == 0
+
+
+def test_a_line_that_keeps_losing_commands_ends_the_run_stopped(run_mission: RunMission) -> None:
+    """Each of three drives loses a byte; each is put right, and the third ends the run: a
+    line that loses that many commands cannot be trusted with the next stop."""
+    mission = (
+        DRIVE_60_CM
+        + ("    - wait: {duration: 2 s}\n    - drive: {velocity: 200 mm/s, distance: 60 cm}\n") * 3
+    )
+    run = run_mission(
+        mission, world="corridor", host_line=LosesByte(DRIVE_200, 2, times=3), timeout=40.0
+    )
+    summary = run.summary
+    assert summary.outcome is Outcome.CONNECTION_LOST
+    assert summary.exit_code == ExitCode.CONNECTION
+    assert summary.unheard_obeyed == GIVE_UP_AFTER
+    assert (
+        f"the robot did not do what it was told {GIVE_UP_AFTER} times within 60 s" in summary.reason
+    )
+    assert "bytes from the computer to the robot are being lost; check the cable" in (
+        summary.reason
+    )
+    assert summary.distance_mm < 3 * 600 + 400  # the third drive ended part of the way
+    sim = run.simulator
+    assert sim.mode.label == "Passive" and sim.requested_left == sim.requested_right == 0
+
+
+def test_a_clean_line_writes_nothing_more(run_mission: RunMission) -> None:
+    run = run_mission(DRIVE_60_CM + "    - wait: {duration: 3 s}\n", timeout=15.0)
+    assert run.summary.unheard == 0
+    assert not any(b"\x00" * 8 in data for _, data in run.link.writes)
+    assert not any(line.startswith("unheard") for line in run.summary.lines())
+
+
+def test_a_robot_wedged_with_no_bump_gets_one_resend_and_no_blame_on_the_cable(
+    run_mission: RunMission,
+) -> None:
+    """Backing into the corridor's end (no bumper behind): the wheels stall. The watch cannot
+    tell that from a lost byte until it sent the drive again; then it says so once, sends
+    nothing more, and leaves the run to its tree."""
+    mission = """
+    mission: back
+    tree:
+      sequence:
+        - mode: safe
+        - drive: {velocity: -200 mm/s, distance: 3 m}
+    """
+    run = run_mission(mission, world="corridor", timeout=16.0)
+    summary = run.summary
+    assert summary.outcome is Outcome.TIMEOUT
+    assert (summary.unheard, summary.unheard_obeyed) == (1, 0)
+    assert sum(data.startswith(RESYNC_ZEROS) for _, data in run.link.writes) == 1
+    unheard = next(line for line in summary.lines() if line.startswith("unheard"))
+    assert "the command sent again did not help either: the robot wedged" in unheard
+    assert "check the cable" not in unheard
