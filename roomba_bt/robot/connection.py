@@ -69,7 +69,7 @@ from roomba_bt.robot.startup import (
     port_not_opened,
 )
 from roomba_bt.robot.wake import KeepAwake, keep_awake_for, named_stall
-from roomba_bt.robot.writer import CommandWriter
+from roomba_bt.robot.writer import RESYNC_ZEROS, CommandWriter
 from roomba_bt.transport.base import Transport, TransportError
 from roomba_bt.transport.serial_port import DEFAULT_BAUD, SerialTransport
 
@@ -282,6 +282,7 @@ class Connection:
                 self.name,
                 lambda: self._query_raw((OI_MODE_PACKET,), confirm_timeout, round_trips),
                 confirm_timeout,
+                self._resync,
             )
         except NoAnswer as silent:
             raise answers_elsewhere(self, silent) from None
@@ -303,6 +304,14 @@ class Connection:
         log.info(
             "%s: %s in %s, streaming %s", self.name, self.profile.title, target.label, list(ids)
         )
+
+    def _resync(self) -> None:
+        """The start-up's Query List went unanswered: the robot's OI parser set in step, as
+        after bytes to it were lost (:data:`~roomba_bt.robot.writer.RESYNC_ZEROS`), then Start
+        and the pause again (a Start lost leaves the OI Off, which answers no query), and what
+        all that made it say read and dropped until the line is quiet."""
+        self.writer.send_many((oi.start(), oi.pause_stream()), prefix=RESYNC_ZEROS)
+        drain(self.link.transport, self.link.read)
 
     def query(self, packet_ids: Sequence[int], timeout: float = 1.0) -> SensorFrame | None:
         """Query List (149) for ``packet_ids``; the decoded reply, or None after ``timeout``.
@@ -433,7 +442,7 @@ class Connection:
             return link.read_checked(timeout, now)
         except StreamStalled as exc:
             if self.link.banner_seen():
-                raise RobotReset(self.name, exc.halted) from exc
+                raise RobotReset(self.name, exc.halted, self._since_write()) from exc
             if exc.mismatch is not None:  # another model's frames: the stop's check too
                 another_model(self, exc.mismatch)
             cause = (
@@ -456,7 +465,7 @@ class Connection:
         (a first listen can miss the change): :class:`BaudChanged` as soon as one finds it."""
         link = self.link
         if link.banner_seen():
-            raise RobotReset(self.name, halted)
+            raise RobotReset(self.name, halted, self._since_write())
         followed = follow_baud(self)
         if followed is not None:
             raise followed
@@ -468,6 +477,14 @@ class Connection:
         if not garbled:
             raise explain_silence(self, now - since, grace, halted=halted)
         raise garbled_line(self, now - since, grace, garbled, halted=halted)
+
+    def _since_write(self) -> float:
+        """Seconds from the last command we wrote but the watchdog's own drive 0 (which
+        comes after the stall began) to the stall's start: how soon after our bytes the
+        robot went quiet (a reset banner then may be a byte of ours lost: RobotReset)."""
+        writer = self.writer
+        recent = [t for t in writer.recent_commands if t <= self.link.silent_since]
+        return self.link.silent_since - recent[-1] if recent else float("inf")
 
     def _report_change(self, change: ModeChange) -> None:
         if change.fall:

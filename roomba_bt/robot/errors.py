@@ -196,17 +196,34 @@ class StreamStalled(LinkDown):
         )
 
 
+#: A stream that stopped for a reset within this many seconds of a command of ours may have
+#: stopped at that command's doing: a robot resets on the byte it reads as Reset, and its
+#: stream stops before its next frame (15 ms), a USB adapter's latency after that.
+RESET_AFTER_WRITE_S = 0.1
+
+
 class RobotReset(LinkDown):
     """The robot restarted while running: its start-up banner came down the line and the
-    stream stopped (after a reset the OI is Off and streams nothing until Start)."""
+    stream stopped (after a reset the OI is Off and streams nothing until Start).
+    ``after_write``: seconds from our last command to the stall (None: not known). Within
+    :data:`RESET_AFTER_WRITE_S` the cable is named too: a byte of that command lost on the
+    line makes its next data byte an opcode, and a 7 (packet 7 in a stream request, a
+    speed's low byte) is Reset (7): a battery or power dip is then the wrong thing to check
+    alone."""
 
-    def __init__(self, port: str, halted: bool) -> None:
+    def __init__(self, port: str, halted: bool, after_write: float | None = None) -> None:
         action = "drive 0 sent" if halted else "it was not driving"
+        cable = (
+            f", or a byte of our command {after_write:.2f} s before lost on the line (a bad "
+            "cable: a data byte 7 after it is read as Reset)"
+            if after_write is not None and 0.0 <= after_write <= RESET_AFTER_WRITE_S
+            else ""
+        )
         super().__init__(
             port,
             "the robot reset: its start-up banner was on the line and the stream stopped (the "
             "OI is Off after a reset: a battery or power dip, a firmware fault, the power "
-            f"button held); {action}",
+            f"button held{cable}); {action}",
         )
 
 

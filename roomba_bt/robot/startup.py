@@ -9,6 +9,11 @@
                           which proves it listens at this baud and calibrates the "mode + 1"
                           rule; the reply has no checksum, so two that agree are needed (up to
                           START_QUERIES asks: :func:`agreed_mode_reply`)
+    [0] x 34, then again  after a Query List nobody answered, once: a byte of it lost on the
+                          way to the robot leaves its parser waiting (``[149][35]`` waits for
+                          35 ids); zeros and the quiet line set it in step, and it is asked
+                          again at the same rate before the start-up blames the baud rate,
+                          sleep or the wiring
     [131] or [132]        Safe or Full, if asked
     [148][n][ids...]      the stream, checked against the bandwidth before it is sent
 """
@@ -62,17 +67,34 @@ def as_mode(mode: OIMode | str) -> OIMode:
         raise ValueError(f"unknown OI mode {mode!r}; use passive, safe or full") from None
 
 
-def agreed_mode_reply(port: str, ask: Callable[[], SensorFrame | None], timeout: float) -> int:
+def agreed_mode_reply(
+    port: str,
+    ask: Callable[[], SensorFrame | None],
+    timeout: float,
+    resync: Callable[[], object] | None = None,
+) -> int:
     """Packet 35 as two consecutive Query List replies (``ask``: one Query List, its reply
     or None after ``timeout`` s) agree on it: a reply has no checksum, and one corrupted byte
-    must not end the run or teach a wrong offset."""
+    must not end the run or teach a wrong offset. A Query List nobody answered is asked once
+    more after ``resync()`` (zeros, then the line left to go quiet): one byte of it lost on
+    a bad cable must not end the start-up as "wrong baud rate, asleep or wiring"."""
     replies: list[int] = []
+    unanswered = 0
     for _ in range(START_QUERIES):
         reply = ask()
+        if reply is None and resync is not None and not unanswered:
+            unanswered += 1
+            log.warning(
+                "%s: no answer to a Query List (149) within %g s; its parser set in step and "
+                "asked again (a byte lost on the way to the robot?)", port, timeout,
+            )  # fmt: skip
+            resync()
+            reply = ask()
         if reply is None:
+            asked = "a Query List (149)" if not unanswered else "two Query Lists (149)"
             raise NoAnswer(
                 port,
-                f"the robot did not answer a Query List (149) for packet 35 within {timeout:g} s",
+                f"the robot did not answer {asked} for packet 35 within {timeout:g} s",
                 NO_ANSWER_CAUSES,
             )
         replies.append(reply[OI_MODE_PACKET])

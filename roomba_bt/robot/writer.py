@@ -50,14 +50,16 @@ BAUD_CHANGE_WAIT = 0.1
 RECENT_COMMANDS = 8
 #: Zero bytes that bring the robot's OI parser back in step after bytes from us were lost
 #: on the line (:meth:`CommandWriter.send_many`'s ``prefix``): a parser left waiting in a
-#: command for data bytes that never came takes them as those bytes, and the longest wait of
-#: a command a run sends after its start-up is a Song (140) of 16 notes, 34 data bytes. A
-#: command that zeros complete is harmless or at once replaced: a Drive of velocity 0 or
-#: ``vel hi * 256`` (the wheel command written after the zeros, in the same write, replaces
-#: it), Motors or LEDs off, a song of no notes; 0 is no opcode, so the zeros left over are
-#: skipped one by one. (A Stream or Query List whose count byte arrived waits for up to 255
-#: ids: the start-up's, not a running mission's.)
-RESYNC_ZEROS = bytes(34)
+#: command for data bytes that never came takes them as those bytes. The longest such wait
+#: of a command a run sends is the start-up's Query List ``[149][1][35]`` with its count
+#: lost, ``[149][35]``: 35 packet ids (then zeros ask for packet group 0, an answer the
+#: start-up reads and drops); a Song (140) of 16 notes waits 34 data bytes. A command that
+#: zeros complete is harmless or at once replaced: a Drive of velocity 0 or ``vel hi * 256``
+#: (the wheel command written after the zeros, in the same write, replaces it), Motors or
+#: LEDs off, a song of no notes; 0 is no opcode, so the zeros left over are skipped one by
+#: one. (A Stream or Query List whose count byte came whole may wait for up to 255 ids: not
+#: covered.)
+RESYNC_ZEROS = bytes(35)
 
 
 class CommandWriter:

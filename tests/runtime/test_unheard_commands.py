@@ -129,3 +129,38 @@ def test_a_robot_wedged_with_no_bump_gets_one_resend_and_no_blame_on_the_cable(
     unheard = next(line for line in summary.lines() if line.startswith("unheard"))
     assert "the command sent again did not help either: the robot wedged" in unheard
     assert "check the cable" not in unheard
+
+
+def test_a_reset_right_after_our_stream_request_names_the_cable_too(
+    run_mission: RunMission,
+) -> None:
+    """The noisy-cable report: a lost 148 made the stream request's packet id 7 a Reset, and
+    the run blamed a battery dip alone."""
+    stream = bytes.fromhex("94 0b 07 09 0a 0b 0c 19 1a 22 23 2b 2c")
+    run = run_mission(DRIVE_60_CM, host_line=LosesByte(stream, 0), timeout=10.0)
+    reason = run.summary.reason
+    assert run.summary.outcome is Outcome.CONNECTION_LOST
+    assert "the robot reset: its start-up banner was on the line" in reason
+    assert "a battery or power dip" in reason
+    assert "or a byte of our command 0.00 s before lost on the line (a bad cable" in reason
+
+
+def test_a_query_list_that_lost_a_byte_is_asked_again_before_blaming_the_baud_rate(
+    run_mission: RunMission,
+) -> None:
+    """``[149][1][35]`` arriving as ``[149][35]``: the robot waits for 35 packet ids and
+    answers nothing; the start-up gave up at once with "wrong baud rate, asleep, wiring"."""
+    query = C.query_list((35,)).data
+    run = run_mission(DRIVE_60_CM, host_line=LosesByte(query, 1), timeout=10.0)
+    assert run.summary.outcome is Outcome.SUCCESS
+    assert any(data.startswith(RESYNC_ZEROS + C.start().data) for _, data in run.link.writes)
+
+
+def test_a_robot_that_never_answers_is_asked_twice_and_the_baud_rate_named(
+    run_mission: RunMission,
+) -> None:
+    query = C.query_list((35,)).data
+    run = run_mission(DRIVE_60_CM, host_line=LosesByte(query, 1, times=2), timeout=10.0)
+    assert run.summary.outcome is Outcome.NO_CONNECTION
+    assert "did not answer two Query Lists (149) for packet 35 within 1 s" in run.summary.reason
+    assert "wrong baud rate" in run.summary.reason
