@@ -22,9 +22,10 @@ that loses nothing), the watch compares them with the wheel command last written
   that or more).
 
 It judges nothing in Passive, while a built-in cycle may drive, while the bump reflex holds
-forward motion, or while the frame shows a bump, a wheel drop or a wheel's overcurrent (a
-robot pushing a wall, lifted, or stalled on a carpet's edge turns its wheels or stalls them
-for reasons of its own), nor a Drive PWM (its speed is no speed). A finding is put right at
+forward motion, or while the frame shows a wheel drop, a wheel's overcurrent, or a bump
+under a command that drives forward (a robot lifted, stalled on a carpet's edge or pushing
+a wall turns its wheels or stalls them for reasons of its own; one backing or turning away
+from what it bumped is free to), nor a Drive PWM (its speed is no speed). A finding is put right at
 once: :data:`~roomba_bt.robot.writer.RESYNC_ZEROS` (they complete whatever command the
 parser waits in, harmlessly) and the wheel command again, and the Motors command again if it
 runs a brush or the vacuum (the zeros may have completed a Motors as "off"), in one write.
@@ -40,12 +41,13 @@ from __future__ import annotations
 import logging
 
 from roomba_bt.oi import commands as oi
+from roomba_bt.oi.bits import BUMP_BITS, WHEEL_DROP_BITS
 from roomba_bt.oi.encode import Command, turns_wheels
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES
 from roomba_bt.oi.odometry import WHEEL_SPEED_STEP_MM_S, encoder_delta, mm_to_counts
 from roomba_bt.robot.connection import Connection
-from roomba_bt.robot.hazards import sets_going
+from roomba_bt.robot.hazards import drives_forward, sets_going
 from roomba_bt.robot.interface import Snapshot
 from roomba_bt.robot.writer import RESYNC_ZEROS
 from roomba_bt.runtime.summary import Outcome, RunSummary
@@ -62,7 +64,7 @@ _RUNAWAY_COUNTS = mm_to_counts(RUNAWAY_MM)
 #: Packet 14's wheel bits (left 4, right 3): a wheel's motor stalled, not a byte lost.
 _WHEEL_OVERCURRENT_BITS = 0b11000
 #: Packet 7's bump and wheel-drop bits.
-_BUMPED_OR_LIFTED = 0b1111
+_BUMPED_OR_LIFTED = BUMP_BITS | WHEEL_DROP_BITS
 
 
 def fastest_wheel_mm_s(command: Command) -> float | None:
@@ -109,23 +111,26 @@ class MotionWatch:
             and snapshot.mode in DRIVING_MODES
             and not snapshot.cycle_may_run
             and not writer.forward_held
-            and not _excused(snapshot.frame)
+            and not _excused(snapshot.frame, drives_forward(command))
         )
-        if not judged or command != self._command or counts is None or self._counts is None:
-            self._command, self._counts = command if judged else None, counts
-            self._resent = None
+        before, resent = self._counts, self._resent
+        self._counts, self._resent = counts, None
+        moved = None if before is None or counts is None else _moved(before, counts)
+        # the look after a finding, on the command put right: a drive shows it was obeyed by
+        # any motion, even once the tree has gone on (its leaf ended: it was obeyed)
+        if (
+            resent is not None
+            and (resent == command or turns_wheels(resent))
+            and moved is not None
+            and not self._after_resend(resent, moved, snapshot.time)
+        ):
+            return False
+        if not judged or command != self._command or moved is None:
+            self._command, self._given_up_on = (command if judged else None), None
             return True
         assert command is not None
-        before = self._counts
-        moved = max(
-            abs(encoder_delta(before[0], counts[0])), abs(encoder_delta(before[1], counts[1]))
-        )
-        self._counts = counts
-        if self._resent is not None:
-            return self._after_resend(command, moved, snapshot.time)
-        if not self._disobeyed(command, moved) or command == self._given_up_on:
-            return True
-        self._put_right(command, moved, snapshot.time)
+        if resent is None and command != self._given_up_on and self._disobeyed(command, moved):
+            self._put_right(command, moved, snapshot.time)
         return True
 
     @staticmethod
@@ -164,10 +169,10 @@ class MotionWatch:
     def _after_resend(self, command: Command, moved: int, mission_time: float) -> bool:
         """The look after a finding: the wheels obey now (the bytes were lost: counted, and
         the run ended at the third within a minute) or still do not (said once; that command
-        is not sent again)."""
-        self._resent = None
+        is not sent again while it stands)."""
         if self._disobeyed(command, moved):
             self._given_up_on = command
+            self.summary.unheard_stalled += 1
             log.warning(
                 "%s: the wheels still do not obey %s after it was sent again: the robot may "
                 "be wedged with no bump shown or its wheels stalled, or the line lost it "
@@ -193,6 +198,11 @@ class MotionWatch:
         return False
 
 
+def _moved(before: tuple[int, int], after: tuple[int, int]) -> int:
+    """Encoder counts the faster wheel turned from ``before`` to ``after`` (either way)."""
+    return max(abs(encoder_delta(before[0], after[0])), abs(encoder_delta(before[1], after[1])))
+
+
 def _encoder_counts(frame: SensorFrame) -> tuple[int, int] | None:
     """The frame's left and right encoder counts (packets 43, 44), or None without them."""
     slots = frame.layout.encoder_slots
@@ -202,13 +212,15 @@ def _encoder_counts(frame: SensorFrame) -> tuple[int, int] | None:
     return values[slots[0]], values[slots[1]]
 
 
-def _excused(frame: SensorFrame) -> bool:
-    """The frame shows why wheels may stand or turn against their command: a bump or a wheel
-    drop (packet 7), a wheel's overcurrent (packet 14), where streamed."""
+def _excused(frame: SensorFrame, forward: bool) -> bool:
+    """The frame shows why wheels may stand or turn against their command: a bump while it
+    drives ``forward`` (pushing what it hit; backing or turning away from it, the robot is
+    free to move: a back-off that lost a byte stood 16 s against a wall, its bumper
+    pressed), a wheel drop (packet 7), a wheel's overcurrent (packet 14), where streamed."""
     index = frame.layout.index
     values = frame.values
     at = index.get(7)
-    if at is not None and values[at] & _BUMPED_OR_LIFTED:
+    if at is not None and values[at] & (_BUMPED_OR_LIFTED if forward else WHEEL_DROP_BITS):
         return True
     at = index.get(14)
     return at is not None and bool(values[at] & _WHEEL_OVERCURRENT_BITS)

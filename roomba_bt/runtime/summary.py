@@ -228,11 +228,14 @@ class RunSummary:
     commands_written: int = 0
     #: times the robot's wheels did not do what the command standing asked for a second (its
     #: encoders), put right by zeros and the command again (runtime/motion_watch.py); of
-    #: those, the times the wheels then obeyed (bytes from us had been lost); the first
-    #: finding, when and what (``t=6.390 the wheels stood still for a second under Drive
-    #: (137) velocity 200, radius 32768``)
+    #: those, the times the wheels then obeyed (bytes from us had been lost) and the times
+    #: they still did not (a robot wedged, or the line lost that too; the others the run
+    #: ended or the tree went on from before the next look); the first finding, when and
+    #: what (``t=6.390 the wheels stood still for a second under Drive (137) velocity 200,
+    #: radius 32768``)
     unheard: int = 0
     unheard_obeyed: int = 0
+    unheard_stalled: int = 0
     unheard_first: str = ""
     #: the first command the mode guard refused: when, the behaviour that sent it, and why
     #: (``t=3.330 blind_drive: drive needs Safe or Full; the robot is in Passive since
@@ -537,16 +540,26 @@ class RunSummary:
         stood still ...): bytes from the computer to the robot were lost 2 times (it obeyed
         the command sent again); check the cable and its adapter (roomba-bt doctor)``."""
         first = f" (the first {self.unheard_first})" if self.unheard_first else ""
-        said = f"the robot did not do what it was told {_times(self.unheard)}{first}"
-        if not self.unheard_obeyed:
-            return (
-                f"{said}; the command sent again did not help either: the robot wedged with no "
-                "bump shown or its wheels stalled, or the line lost that too"
+        said = [f"the robot did not do what it was told {_times(self.unheard)}{first}"]
+        if self.unheard_obeyed:
+            said.append(
+                f"bytes from the computer to the robot were lost {_times(self.unheard_obeyed)} "
+                "(it obeyed the command sent again)"
             )
-        return (
-            f"{said}: bytes from the computer to the robot were lost "
-            f"{_times(self.unheard_obeyed)} (it obeyed the command sent again); check the "
-            "cable and its adapter (roomba-bt doctor)"
+        if self.unheard_stalled:
+            said.append(
+                f"{_times(self.unheard_stalled)} the command sent again did not help either "
+                "(the robot wedged with no bump shown or its wheels stalled, or the line lost "
+                "that too)"
+            )
+        if self.unheard > self.unheard_obeyed + self.unheard_stalled:
+            said.append(
+                "the command was sent again, and the run ended before it could be judged: "
+                "bytes from the computer to the robot may have been lost"
+            )
+        cable = self.unheard > self.unheard_stalled
+        return "; ".join(said) + (
+            "; check the cable and its adapter (roomba-bt doctor)" if cable else ""
         )
 
     def falls_text(self) -> str:

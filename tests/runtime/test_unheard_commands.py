@@ -11,7 +11,7 @@ from roomba_bt.runtime.summary import ExitCode, Outcome
 from roomba_bt.sim import Faults
 from roomba_bt.sim.faults import HostLine
 
-from .simrun import RunMission
+from .simrun import DRIVE_TO_WALL_AND_BACK_OFF, RunMission
 
 DRIVE_200 = C.drive(200, 0x8000).data  # 89 00 c8 80 00
 STOP = C.halt().data  # 89 00 00 00 00
@@ -124,10 +124,10 @@ def test_a_robot_wedged_with_no_bump_gets_one_resend_and_no_blame_on_the_cable(
     run = run_mission(mission, world="corridor", timeout=16.0)
     summary = run.summary
     assert summary.outcome is Outcome.TIMEOUT
-    assert (summary.unheard, summary.unheard_obeyed) == (1, 0)
+    assert (summary.unheard, summary.unheard_obeyed, summary.unheard_stalled) == (1, 0, 1)
     assert sum(data.startswith(RESYNC_ZEROS) for _, data in run.link.writes) == 1
     unheard = next(line for line in summary.lines() if line.startswith("unheard"))
-    assert "the command sent again did not help either: the robot wedged" in unheard
+    assert "once the command sent again did not help either (the robot wedged" in unheard
     assert "check the cable" not in unheard
 
 
@@ -164,3 +164,17 @@ def test_a_robot_that_never_answers_is_asked_twice_and_the_baud_rate_named(
     assert run.summary.outcome is Outcome.NO_CONNECTION
     assert "did not answer two Query Lists (149) for packet 35 within 1 s" in run.summary.reason
     assert "wrong baud rate" in run.summary.reason
+
+
+def test_a_back_off_that_lost_a_byte_is_judged_though_the_bumper_is_pressed(
+    run_mission: RunMission,
+) -> None:
+    """A robot pushing a wall may stall with its bumper pressed: excused. One backing away
+    from it is free to move: its back-off that lost a byte stood 16 s against the wall."""
+    back_off = C.drive(-100, 0x8000).data
+    mission = DRIVE_TO_WALL_AND_BACK_OFF + "    - wait: {duration: 2 s}\n"
+    run = run_mission(mission, host_line=LosesByte(back_off, 4), timeout=30.0)
+    summary = run.summary
+    assert summary.outcome is Outcome.SUCCESS
+    assert (summary.unheard, summary.unheard_obeyed) == (1, 1)
+    assert "under Drive (137) velocity -100" in summary.unheard_first
