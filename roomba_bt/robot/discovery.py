@@ -14,6 +14,9 @@ The OI talks at 115200 (its default) or 19200 (after Clean is held at power-on o
 ``RobotProfile.at_19200``); those are the rates tried, 115200 first because it is the default and
 so the likeliest (a rate the user names goes first). At each rate the probe sends::
 
+    [0] x 35              zeros: complete a command the robot's parser may still wait in
+                          (a byte of an earlier probe's query lost on a bad cable left it
+                          waiting for packet ids: robot/writer.RESYNC_ZEROS); 0 is no opcode
     [128]                 Start: Passive, from any mode (Off included)
     [150][0]              pause a stream a previous program may have left running
                           ... read until the line is quiet (a stale stream, a banner)
@@ -50,6 +53,7 @@ from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.oi.packets import PACKETS, packet_ids
 from roomba_bt.oi.profiles import POWER_ON_BAUDS
 from roomba_bt.robot.wake import PULSE_LENGTH_S, HangUpLine, WakeLine
+from roomba_bt.robot.writer import RESYNC_ZEROS
 from roomba_bt.transport.base import Transport
 
 #: The OI's rates, likeliest first: the default, then the rate Clean held at power-on (500)
@@ -172,7 +176,7 @@ def is_answer(reply: bytes) -> bool:
 def probe(transport: Transport, baud: int) -> Probe:
     """Set the port to ``baud`` and ask: see the module docstring."""
     transport.set_baud(baud)
-    transport.write(oi.start().data + oi.pause_stream().data)
+    transport.write(RESYNC_ZEROS + oi.start().data + oi.pause_stream().data)
     noise = drain(transport)
     transport.write(PROBE_QUERY)
     clock = transport.now

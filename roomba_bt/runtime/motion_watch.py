@@ -9,7 +9,7 @@ that command is skipped as no opcode. Nothing comes back to say so: the Open Int
 acknowledges no command. A run on such a cable once stood for 19 s while its tree "drove",
 and ended SUCCESS.
 
-The robot's encoders (packets 43, 44, streamed by most missions) say what its wheels did.
+The robot's encoders (packets 43, 44: every run streams them) say what its wheels did.
 Once a second of mission time (:class:`~roomba_bt.runtime.long_run.MissionTimeChecks`, which
 calls :meth:`MotionWatch.look`; nothing more on the tick path, and nothing written on a line
 that loses nothing), the watch compares them with the wheel command last written

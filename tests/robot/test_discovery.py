@@ -18,6 +18,7 @@ from roomba_bt.robot.discovery import (
     sample_stream,
     wake_pulse,
 )
+from roomba_bt.robot.writer import RESYNC_ZEROS
 from roomba_bt.sim import Simulator, load_world
 from roomba_bt.sim.link import SimLink
 
@@ -164,7 +165,9 @@ def test_identify_robot_tells_a_600_and_a_500_and_names_a_create2_or_500() -> No
     link.write = lambda data: (written.append(bytes(data)), write(data))[1]  # type: ignore[method-assign]
     told = identify_robot(link, 115200)
     assert not isinstance(told, str) and told.candidates == (ROOMBA600,)
-    assert [data[0] for data in written] == [128, 149, 148, 150]  # Start+pause, query, stream
+    # zeros, Start and pause, query, stream
+    assert written[0].startswith(RESYNC_ZEROS)
+    assert [data.lstrip(b"\0")[0] for data in written] == [128, 149, 148, 150]
     told = identify_robot(_link(profile=ROOMBA500), 115200)
     assert not isinstance(told, str) and told.candidates == (ROOMBA500,)
     told = identify_robot(_link(profile=CREATE2), 115200)
