@@ -471,7 +471,7 @@ class RunSummary:
                 if self.tick_halts
                 else []
             ),
-            *([f"unheard      {self.unheard_text()}"] if self.unheard else []),
+            *([f"unheard      {_unheard_said(self)}"] if self.unheard else []),
             f"commands     {self.commands_written} written, "
             f"{self.refused_commands} refused by the mode guard{_dropped_said(self)}",
             f"distance     {self.distance_mm / 1000:.2f} m",
@@ -534,34 +534,6 @@ class RunSummary:
         )
         return f"{self.stalls} ({halts}), {self.stalls_ridden} ridden through"
 
-    def unheard_text(self) -> str:
-        """The robot not doing what it was told (runtime/motion_watch.py), in the summary's
-        words: ``the robot did not do what it was told 2 times (the first t=6.390 the wheels
-        stood still ...): bytes from the computer to the robot were lost 2 times (it obeyed
-        the command sent again); check the cable and its adapter (roomba-bt doctor)``."""
-        first = f" (the first {self.unheard_first})" if self.unheard_first else ""
-        said = [f"the robot did not do what it was told {_times(self.unheard)}{first}"]
-        if self.unheard_obeyed:
-            said.append(
-                f"bytes from the computer to the robot were lost {_times(self.unheard_obeyed)} "
-                "(it obeyed the command sent again)"
-            )
-        if self.unheard_stalled:
-            said.append(
-                f"{_times(self.unheard_stalled)} the command sent again did not help either "
-                "(the robot wedged with no bump shown or its wheels stalled, or the line lost "
-                "that too)"
-            )
-        if self.unheard > self.unheard_obeyed + self.unheard_stalled:
-            said.append(
-                "the command was sent again, and the run ended before it could be judged: "
-                "bytes from the computer to the robot may have been lost"
-            )
-        cable = self.unheard > self.unheard_stalled
-        return "; ".join(said) + (
-            "; check the cable and its adapter (roomba-bt doctor)" if cable else ""
-        )
-
     def falls_text(self) -> str:
         """The robot's own falls to Passive, the commonest cause first: ``the robot fell to
         Passive by itself 21 times (cliff 20, wheel drop 1)`` (:func:`falls_said`). Those
@@ -594,6 +566,35 @@ class RunSummary:
 
 # How the summary's lines word a measure (RunSummary.lines): out of the class, which
 # holds what was measured.
+
+
+def _unheard_said(summary: RunSummary) -> str:
+    """The robot not doing what it was told (runtime/motion_watch.py), in the summary's
+    words: ``the robot did not do what it was told 2 times (the first t=6.390 the wheels
+    stood still ...): bytes from the computer to the robot were lost 2 times (it obeyed
+    the command sent again); check the cable and its adapter (roomba-bt doctor)``."""
+    first = f" (the first {summary.unheard_first})" if summary.unheard_first else ""
+    said = [f"the robot did not do what it was told {_times(summary.unheard)}{first}"]
+    if summary.unheard_obeyed:
+        said.append(
+            f"bytes from the computer to the robot were lost {_times(summary.unheard_obeyed)} "
+            "(it obeyed the command sent again)"
+        )
+    if summary.unheard_stalled:
+        said.append(
+            f"{_times(summary.unheard_stalled)} the command sent again did not help either "
+            "(the robot wedged with no bump shown or its wheels stalled, or the line lost "
+            "that too)"
+        )
+    if summary.unheard > summary.unheard_obeyed + summary.unheard_stalled:
+        said.append(
+            "the command was sent again, and the run ended before it could be judged: "
+            "bytes from the computer to the robot may have been lost"
+        )
+    cable = summary.unheard > summary.unheard_stalled
+    return "; ".join(said) + (
+        "; check the cable and its adapter (roomba-bt doctor)" if cable else ""
+    )
 
 
 def _times(count: int) -> str:

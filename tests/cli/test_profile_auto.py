@@ -86,7 +86,7 @@ def test_auto_with_nothing_behind_the_port_says_it_could_not_tell_and_the_start_
         "115200 baud (nothing); the start-up says why; speaking to it as the iRobot Create 2 "
         "(create2), the default"
     ) in done.stderr
-    assert "did not answer a Query List (149)" in done.stderr  # the start-up's own diagnosis
+    assert "did not answer two Query Lists (149)" in done.stderr  # the start-up's own diagnosis
 
 
 def test_auto_on_a_roomba500_refuses_end_in_stop_once_it_is_known(

@@ -270,7 +270,7 @@ def test_a_robot_silent_at_every_rate_keeps_the_likely_causes(tmp_path: Path) ->
     summary = stack.run()
     stack.close()
     assert summary.exit_code == 3
-    assert "the robot did not answer a Query List (149) for packet 35" in summary.reason
+    assert "the robot did not answer two Query Lists (149) for packet 35" in summary.reason
     assert "likely causes: wrong baud rate" in summary.reason
     assert "answers at" not in summary.reason
     # nothing was ever heard: its mode is not known, and the stop (written: a robot that
