@@ -25,15 +25,16 @@ It judges nothing in Passive, while a built-in cycle may drive, while the bump r
 forward motion, or while the frame shows a wheel drop, a wheel's overcurrent, or a bump
 under a command that drives forward (a robot lifted, stalled on a carpet's edge or pushing
 a wall turns its wheels or stalls them for reasons of its own; one backing or turning away
-from what it bumped is free to), nor a Drive PWM (its speed is no speed). A finding is put right at
-once: :data:`~roomba_bt.robot.writer.RESYNC_ZEROS` (they complete whatever command the
-parser waits in, harmlessly) and the wheel command again, and the Motors command again if it
-runs a brush or the vacuum (the zeros may have completed a Motors as "off"), in one write.
-At the next look the wheels obeyed (the bytes were lost: said in the summary's ``unheard``
-line) or still did not (a robot wedged with no bump shown, its wheels stalled: said once,
-not resent again for that command). Three findings put right within a minute end the run
-with the safe stop, its drive 0 after zeros too: a line that loses that many commands
-cannot be trusted with the next stop.
+from what it bumped is free to), nor a Drive PWM (its speed is no speed).
+
+A finding is put right at once: :data:`~roomba_bt.robot.writer.RESYNC_ZEROS` (they complete
+whatever command the parser waits in, harmlessly) and the wheel command again, and the
+Motors command again if it runs a brush or the vacuum (the zeros may have completed a Motors
+as "off"), in one write. At the next look the wheels obeyed (the bytes were lost: said in
+the summary's ``unheard`` line) or still did not (a robot wedged with no bump shown, its
+wheels stalled: said once, not resent again while that command stands). A third finding the
+wheels then obeyed within a minute ends the run with the safe stop, its drive 0 after zeros
+too: a line that loses that many commands cannot be trusted with the next stop.
 """
 
 from __future__ import annotations
