@@ -107,8 +107,9 @@ class MotionWatch:
         docstring), put a finding right; False when findings keep coming and the run must
         end (the summary says why). Most looks find the command of the look before obeyed
         (a drive's wheels moved, a stop's stood still) and end at the first test: the look
-        comes once a second, but on every run (``python -m bench.icount``: a bump-and-turn
-        tick paid 0.3 % more for a look that weighed every excuse first)."""
+        comes once a second, but on every run, and the excuses (the mode, a cycle, the bump
+        reflex, the frame's bits) are weighed only when the wheels may have disobeyed
+        (``python -m bench.icount --against``: within 0.1 % of the tick before it)."""
         frame = snapshot.frame
         slots = frame.layout.encoder_slots
         command = self._writer.last_wheels
