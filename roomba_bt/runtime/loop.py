@@ -500,9 +500,7 @@ class MissionRunner(BaseHandle):
         held = False  # the root ended and the gate holds the run there (the monitor)
         untick: int | None = None  # the gate held the tree: the tick it last ticked on
         flushed = -1  # the stream tick of the last tree tick written whole
-        # the time limit, the charge, a cycle the robot started by itself, the wheels doing
-        # what they were told (long_run.py)
-        motion = MotionWatch(self.connection, summary)
+        motion = MotionWatch(self.connection, summary)  # the wheels doing what they were told
         checks = MissionTimeChecks(summary, self.timeout_s, self._ending.cycles, motion)
         started = perf()  # each tick's start (an interrupt's before the first: none cut short)
         try:
@@ -559,8 +557,7 @@ class MissionRunner(BaseHandle):
                     tree_ended(root, summary)
                     return
                 if mission_time >= checks.next_at and not checks.look(self.snapshot, root):
-                    return  # the time limit ran out, a cycle of the robot's own, or the robot
-                    # keeps not obeying (long_run.py)
+                    return  # the time limit, the robot's own cycle, or no obeying (long_run.py)
         except (KeyboardInterrupt, RunAborted) as exc:  # Ctrl-C, SIGTERM, --wall-limit...:
             if not behaviours_interrupt(exc):  # in which half of its frame (a behaviour's own
                 summary.ended_at = interrupted_at(self, flushed)  # interrupt: its error)
