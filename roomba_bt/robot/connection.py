@@ -53,6 +53,7 @@ from roomba_bt.robot.interface import ModeChange
 from roomba_bt.robot.link import LinkStatus, StreamLink, TimedFrame
 from roomba_bt.robot.modes import DEFAULT_SETTLE, ModeModel
 from roomba_bt.robot.silence import (
+    _stop_heard,
     another_model,
     answers_elsewhere,
     asleep_by_idle,
@@ -212,6 +213,9 @@ class Connection:
         # Keep-awake (robot/wake.py): on by default where the profile sleeps in Passive.
         self.keep_awake = self.profile.sleeps_in_passive if keep_awake is None else keep_awake
         self.ending.wake = keep_awake_for(transport, self.link.name, self.keep_awake)
+        # a stop written through a port that came back is heard if the stream falls quiet
+        # and the robot answers, as after a stop at a rate the port followed (silence.py)
+        self.ending.heard_after_reopen = _weakly(self._stop_heard, False)
         #: when garbage was last judged (listened at other rates, or noise) and the bytes
         #: read by then (link clock; silence.follow_baud judges again while garbage comes)
         self.baud_listened: tuple[float, int] | None = None
@@ -562,6 +566,9 @@ class Connection:
         self.writer.baud = rate
 
     # ------------------------------------------------------------------ endings
+    def _stop_heard(self) -> bool:
+        return _stop_heard(self)
+
     def stop_sequence(self) -> list[Command]:
         """What :meth:`safe_stop` sends from the current mode (:mod:`~roomba_bt.robot.ending`)."""
         return self.ending.sequence()

@@ -102,6 +102,16 @@ BACKLOG_SLACK = 0.05
 #: nothing of it (a cable pulled a moment before Ctrl-C, the watchdog not yet tripped).
 QUIET_BEFORE_PERIODS = 3
 
+#: Seconds a stop waits for a port that failed to come back at the same device path (a
+#: loose connector, a USB adapter that reset), to deliver the stop alone, unless told
+#: (:attr:`SafeStop.reopen_within`: a run's ``--grace``).
+REOPEN_WITHIN_S = 2.0
+#: What to do about a robot the stop could not reach over a port that is gone.
+PORT_GONE_ADVICE = (
+    "the robot may still be moving: pick it up or press its Clean or power button; reseat "
+    "the cable, then roomba-bt doctor --port {port}"
+)
+
 #: Requested wheel velocities (left, right) and the encoders (left, right): what a stop the
 #: robot streams on after says of its wheels.
 _LEFT_VELOCITY, _RIGHT_VELOCITY = packet_ids("requested_left_velocity", "requested_right_velocity")
@@ -335,6 +345,13 @@ class SafeStop:
         #: the link's round trip (the quickest of the start-up's Query List replies, at most
         #: :data:`ROUND_TRIP_CAP` seconds; :func:`link_round_trip`), 0 before any
         self.round_trip = 0.0
+        #: how long a stop waits for a port that failed to come back (:meth:`_reopened`)
+        self.reopen_within = REOPEN_WITHIN_S
+        #: asked after a stop written through a port that came back: whether the robot
+        #: answers a Query List after it, its stream quiet (the connection's own question)
+        self.heard_after_reopen: Callable[[], bool] | None = None
+        #: what the wait for the port to come back found ("" before one): said with the stop
+        self.reopened = ""
 
     def begin(self) -> None:
         """A session starts (again): nothing has ended."""
@@ -342,6 +359,7 @@ class SafeStop:
         self.safe_stopped = None
         self.unheard = None
         self.confirm = None
+        self.reopened = ""
 
     def in_flight(self, period: float) -> float:
         """Seconds after a command is written that frames the robot sent before it heard it
@@ -391,6 +409,11 @@ class SafeStop:
         self._heard_at = link.arrival if streamed else None
         if backlog is not None:  # frames that waited unread: when the robot sent them
             self._heard_at = backlog.sent_until
+        came_back = None
+        if link.status is LinkStatus.LOST or not link.transport.is_open:
+            came_back = self._reopened()
+            if came_back is False:
+                return self._undelivered(self._port_gone())
         if not link.transport.is_open:
             return self._undelivered(self._port_gone())
         unconfirmed = None
@@ -413,6 +436,12 @@ class SafeStop:
         failed = self._write_heard(checked)
         if failed is not None:
             return self._undelivered(failed)
+        if came_back and not self._confirmed_by(self.heard_after_reopen):
+            self.reopened += "; the stop was written through it, and no robot answered after it"
+            return self._undelivered(self._port_gone())
+        if came_back:
+            self.reopened += ": the robot heard the stop written through it"
+            log.warning("%s: the port %s (the mission is not carried on)", link.name, self.reopened)
         if unconfirmed is not None and unconfirmed is self.unheard and self._confirmed():
             self.unheard = unconfirmed = None  # it answered after the stop: it heard it
         elif unconfirmed is None:  # a quiet after the stop that began before it
@@ -559,13 +588,40 @@ class SafeStop:
     def _confirmed(self) -> bool:
         """Whether :attr:`confirm` says the robot heard the stop (False if there is none, or
         asking failed)."""
-        confirm = self.confirm
+        return self._confirmed_by(self.confirm)
+
+    @staticmethod
+    def _confirmed_by(confirm: Callable[[], bool] | None) -> bool:
+        """Whether ``confirm`` says the robot heard the stop (False if there is none, or
+        asking failed)."""
         if confirm is None:
             return False
         try:
             return confirm()
         except _RECOVERABLE:
             return False
+
+    def _reopened(self) -> bool | None:
+        """The port failed: wait up to :attr:`reopen_within` s for it to come back at the
+        same device path, for the stop alone (the mission is not carried on: the robot may
+        have moved meanwhile). True if it came back (the link open again, no stream known
+        to run), False if it did not or was already waited for in this ending, None where
+        the transport cannot reopen (a simulator, a replay, a URL's bridge) or the far end
+        turned this run away (its robot was never this run's to stop)."""
+        link = self.writer.link
+        transport = link.transport
+        if not getattr(transport, "reopens", False) or link.turned_away:
+            return None
+        if self.reopened or self.reopen_within <= 0:  # waited for already (``close()``)
+            return False
+        took = transport.reopen(self.reopen_within)
+        if took is None:
+            self.reopened = f"did not come back within {self.reopen_within:g} s"
+            return False
+        self.reopened = f"came back after {took:.2f} s"
+        link.status = LinkStatus.OPEN
+        link.streaming = False
+        return True
 
     @property
     def last_seen(self) -> OIMode:
@@ -583,12 +639,15 @@ class SafeStop:
         connection before it sent a byte turned this run away: the robot there is another
         client's, fine, and was never this run's to stop (the second client of a
         simulator's TCP server was told its stop was NOT DELIVERED: the port is gone)."""
-        if self.writer.link.turned_away:
+        link = self.writer.link
+        if link.turned_away:
             return (
                 "not sent: the far end closed the connection at once, and this run reached "
                 "no robot (another client may hold it; its run is not affected)"
             )
-        return "the stop was not delivered: the port is gone"
+        came_back = f" (it {self.reopened})" if self.reopened else ""
+        advice = PORT_GONE_ADVICE.format(port=link.name)
+        return f"the stop was not delivered: the port is gone{came_back}: {advice}"
 
     def _undelivered(self, why: str) -> bool:
         """The stop did not reach the robot: say so, with what the robot was last seen

@@ -63,6 +63,15 @@ WATCHDOG_MARGIN = 0.001
 Reconcile = Callable[[SensorFrame, int, float], ModeChange | None]
 
 
+def gone_how(port: str) -> str:
+    """What a port that failed most likely means, in its user's words: a device path's cable
+    or adapter, a URL's bridge or network (pyserial's own words, "device reports readiness to
+    read but returned no data", said nothing of either)."""
+    if "://" in port:
+        return "the bridge closed the connection or the network dropped"
+    return "the cable was pulled or the adapter reset"
+
+
 class LinkStatus(enum.Enum):
     """Where the link stands; :attr:`Connection.status`."""
 
@@ -240,7 +249,9 @@ class StreamLink:
             self.turned_away = True
             return PortLost(self.name, f"{cause}; nothing reached a robot")
         return PortLost(
-            self.name, f"the port is gone: it failed on {action} ({cause}); the link is lost"
+            self.name,
+            f"the port is gone ({gone_how(self.name)}): it failed on {action} ({cause}); the "
+            "link is lost",
         )
 
     def banner_seen(self) -> bool:

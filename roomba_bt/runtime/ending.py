@@ -254,8 +254,10 @@ def stop_robot(connection: Connection, summary: RunSummary, first: bool = False)
         sequence = [c.name for c in connection.stop_sequence()]
         if connection.safe_stop():
             before = "drive 0, motors off before the tree's stop, then " if first else ""
+            reopened = getattr(getattr(connection, "ending", None), "reopened", "")
+            through = f" (the port {reopened})" if reopened else ""
             summary.safe_stop = (
-                before + "sent " + ", ".join(sequence)
+                before + "sent " + ", ".join(sequence) + through
                 if sequence
                 else "nothing to stop: the robot was never started"
                 if connection.mode is OIMode.OFF and connection.writer.sent == 0

@@ -64,6 +64,11 @@ POLL_INTERVAL = 0.001
 #: A polled port's own read timeout: it reads only what is already queued, so it never waits
 #: this long (a read at timeout 0 would end after one byte: ``SerialTransport._queued``).
 QUEUED_READ_TIMEOUT = 1.0
+#: How often a device that vanished is tried again while the safe stop waits for it to come
+#: back (``SerialTransport.reopen``).
+REOPEN_EVERY_S = 0.05
+#: Where a pseudo-terminal's own device paths are (Linux; macOS names its ``/dev/ttys00N``)
+PTY_DEVICES = ("/dev/pts/", "/dev/ttys")
 
 
 try:  # a pty whose other side closed while it was being set up: termios.error, no OSError
@@ -416,6 +421,45 @@ class SerialTransport:
         finally:
             self._hung_up = False
             self.set_baud(rate)
+
+    @property
+    def reopens(self) -> bool:
+        """Whether :meth:`reopen` can bring this port back: a device path (a link to one
+        too: ``/dev/serial/by-id/...``, socat's ``link=``), not a URL (a bridge's new
+        connection is another client's session, not this line back) nor a pty's own
+        ``/dev/pts/N`` (a pty never comes back: its number, reused, is another program's)."""
+        return "://" not in self.name and not self.name.startswith(PTY_DEVICES)
+
+    def reopen(self, within: float) -> float | None:
+        """Open the same device path again, trying until ``within`` seconds have passed: a
+        loose connector that comes back, a USB adapter that reset. The seconds it took, or
+        None if it did not come back.
+
+        The old port is closed first: while it is held open, Linux keeps the vanished
+        device's number taken, and the adapter that comes back gets the next one
+        (``/dev/ttyUSB1``). Only for the safe stop (``SafeStop``): the mission is never
+        carried on over a port that came back (docs/robot.md, Losing the link)."""
+        old = self._port
+        settings = (self.name, int(old.baudrate), old.write_timeout)
+        self.close()
+        began = time.monotonic()
+        while True:
+            try:
+                port = _device_port(*settings)
+                port.exclusive = True
+                port.open()
+            except _OPEN_ERRORS:
+                took = time.monotonic() - began
+                if took >= within:
+                    return None
+                time.sleep(min(REOPEN_EVERY_S, within - took))
+                continue
+            break
+        self._port = port
+        self._wait_handle = getattr(port, "fd", None)
+        self._port_timeout = port.timeout = 0
+        self._hung_up = False
+        return time.monotonic() - began
 
     def close(self) -> None:
         # pyserial's socket:// close skips socket.close() when shutdown() fails (the peer

@@ -273,6 +273,41 @@ def test_the_simulator_killed_mid_run_is_the_port_gone_and_the_stop_said_undeliv
     assert f"NOT DELIVERED: {report}: the port is gone" in out
     assert err.count(report) == 1, err
     assert "Traceback" not in err
+    # in a hobbyist's words, and what to do now (pyserial's words alone said neither)
+    assert "the port is gone (the cable was pulled or the adapter reset)" in err
+    advice = "the robot may still be moving: pick it up or press its Clean or power button"
+    assert f"{advice}; reseat the cable, then roomba-bt doctor --port {sim.address}" in out
+    # a pty's own path never comes back (its number, reused, is another program's line)
+    assert "come back" not in out
+
+
+def test_a_port_that_comes_back_within_the_grace_gets_the_stop_not_the_mission(
+    served_sim: Callable[..., Any], tmp_path: Path
+) -> None:
+    """A loose connector: the device path (a link, as ``/dev/serial/by-id/...`` is) fails
+    mid-drive and is there again within the grace. The run still ends as a lost port (the
+    mission is not carried on), and the stop goes out through the port that came back, where
+    the robot hears it."""
+    first, second = served_sim("--pty"), served_sim("--pty", "--log")
+    port = tmp_path / "robot"
+    port.symlink_to(first.address)
+    proc, _ = _driving(str(port), tmp_path)
+    first.proc.kill()
+    first.proc.communicate()
+    back = tmp_path / "robot.back"
+    back.symlink_to(second.address)
+    back.replace(port)  # the adapter back, at the same path
+    out, err = proc.communicate(timeout=30)
+    assert proc.returncode == 3, err
+    assert "CONNECTION LOST" in out and "the cable was pulled or the adapter reset" in out
+    assert re.search(
+        r"safe stop    sent drive, motors, pause_resume_stream, start \(the port came back "
+        r"after \d+\.\d\d s: the robot heard the stop written through it\)",
+        out,
+    ), out
+    assert "final mode   Passive" in out
+    _, said = second.stop(signal.SIGINT)
+    assert "heard Start (128)" in said and "mode Passive, wheels 0/0 mm/s" in said, said
 
 
 def test_no_robot_on_the_port_is_exit_3(tmp_path: Path, silent_port: str) -> None:
