@@ -116,15 +116,20 @@ class KeepAwake:
             self._low_until = None
             self.due = math.inf
             # one line: on a 40-column SSH screen the whole story was ten lines, every run
+            # what keep-awake is, whether it matters and how to silence it: "keep-awake off
+            # (...: [Errno 25] Inappropriate ioctl for device): Passive sleeps after 5 min
+            # (-v: why; --no-keep-awake)" on every pty run said none of it to a hobbyist
             log.warning(
-                "keep-awake off (%s): Passive sleeps after 5 min (-v: why; --no-keep-awake)",
-                exc.strerror or exc,
+                "keep-awake (a BRC pulse a minute, so Passive never sleeps) is off: this port "
+                "cannot set its modem lines; a simulator never sleeps; --no-keep-awake silences "
+                "this (-v: why)"
             )
             log.debug(
-                "keep-awake off: no hang-up pulse instead (it would blank the stream for its "
+                "keep-awake off (%s): no hang-up pulse instead (it would blank the stream for its "
                 "second). A pty or a plain socket has no modem lines: the simulator serves "
                 "them with --rfc2217; run --no-keep-awake (from Python: Connection.open(..., "
-                "keep_awake=False) or RunStack(..., keep_awake=False)) says it is meant"
+                "keep_awake=False) or RunStack(..., keep_awake=False)) says it is meant",
+                exc.strerror or exc,
             )
 
     def _set(self, low: bool) -> None:
