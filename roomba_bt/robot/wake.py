@@ -120,9 +120,8 @@ class KeepAwake:
             # (...: [Errno 25] Inappropriate ioctl for device): Passive sleeps after 5 min
             # (-v: why; --no-keep-awake)" on every pty run said none of it to a hobbyist
             log.warning(
-                "keep-awake (a BRC pulse a minute, so Passive never sleeps) is off: this port "
-                "cannot set its modem lines; a simulator never sleeps; --no-keep-awake silences "
-                "this (-v: why)"
+                "keep-awake (a BRC pulse a minute: Passive never sleeps) is off: no modem lines "
+                "on this port; a simulator never sleeps; --no-keep-awake silences this (-v: why)"
             )
             log.debug(
                 "keep-awake off (%s): no hang-up pulse instead (it would blank the stream for its "

@@ -183,7 +183,7 @@ def test_a_port_without_modem_lines_turns_keep_awake_off_once(
     # said once, in one short line (every run on a pty said 400 characters: ten lines of a
     # 40-column SSH screen), with what to do; the rest at -v (it named only the ioctl's error)
     [warned] = [r.getMessage() for r in caplog.records if r.levelname == "WARNING"]
-    assert "keep-awake (a BRC pulse a minute, so Passive never sleeps) is off" in warned
+    assert "keep-awake (a BRC pulse a minute: Passive never sleeps) is off" in warned
     assert "a simulator never sleeps; --no-keep-awake silences this (-v: why)" in warned
     assert "Errno" not in warned  # the port's error at -v: it said nothing to a hobbyist
     assert len(warned) <= 160, warned
