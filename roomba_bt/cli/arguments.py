@@ -195,6 +195,16 @@ def seconds(text: str) -> float:
     return _real(text, "seconds, 0 or more", lambda value: value >= 0)
 
 
+def duration(text: str) -> float:
+    """A duration above 0 as ``--timeout`` takes it (``10``, ``10s``, ``1min``:
+    :func:`parse_timeout`), as an argparse type: ``doctor --listen``."""
+    value = parse_timeout(text, "")
+    if isinstance(value, str):
+        raise argparse.ArgumentTypeError(value.removeprefix(" ").strip())
+    assert value is not None  # a text was given
+    return value
+
+
 def _real(text: str, allowed: str, fits: Callable[[float], bool]) -> float:
     """``text`` as a finite number that ``fits``; else the usage error saying what was found
     and what is ``allowed``."""

@@ -31,12 +31,12 @@ from dataclasses import dataclass, field
 from enum import IntEnum
 from typing import TYPE_CHECKING, Any, TextIO
 
-from roomba_bt.cli.arguments import add_command, baud_or_auto, port_name
+from roomba_bt.cli.arguments import add_command, baud_or_auto, duration, port_name
 from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.identify import MODEL_RANGE_PACKETS
 from roomba_bt.oi.modes import OI_MODE_PACKET
 from roomba_bt.oi.packets import packet_ids
-from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID
+from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, POOR_LINK
 
 if TYPE_CHECKING:
     from roomba_bt.oi.frames import SensorFrame
@@ -122,6 +122,12 @@ def register(sub: Any) -> None:
         help="a rate to try first (default auto: 115200, then 19200)",
     )  # fmt: skip
     parser.add_argument(
+        "--listen", type=duration, default=None, metavar="DURATION",
+        help="how long the stream step listens (default 0.5 s; 10s or more to judge an "
+        "intermittent cable: a line losing 5 %% of the frames or more is warned about, as "
+        "run calls it poor)",
+    )  # fmt: skip
+    parser.add_argument(
         "--allow-reset", action="store_true",
         help="send Reset (7) to read the firmware version from its banner (restarts the OI of "
         "a 600 or a Create 2; the Roomba 500 has no Reset 7: its spec says nothing of what a "
@@ -190,7 +196,7 @@ def doctor_command(args: argparse.Namespace) -> int:
         return DoctorExit.PORT
     report.ok("port", f"opened {url} (8N1, no flow control; RTS and DTR released: BRC high)")
     try:
-        return _examine(transport, rates, args.allow_reset, report)
+        return _examine(transport, rates, args, report)
     except _Failed as failed:
         return failed.code
     except KeyboardInterrupt:
@@ -255,9 +261,12 @@ def _after_pulse(transport: Any, rates: tuple[int, ...], before: Search, report:
     raise _Failed(DoctorExit.SILENT)
 
 
-def _examine(transport: Any, rates: tuple[int, ...], allow_reset: bool, report: Report) -> int:
+def _examine(
+    transport: Any, rates: tuple[int, ...], args: argparse.Namespace, report: Report
+) -> int:
     from roomba_bt.robot.discovery import wake_pulse
 
+    allow_reset: bool = args.allow_reset
     searched = _search(transport, rates, report, "")
     found = searched.found
     if found is None and all(probe.echoed for probe in searched.probes):
@@ -290,7 +299,7 @@ def _examine(transport: Any, rates: tuple[int, ...], allow_reset: bool, report: 
         + (" (this firmware reports the OI mode + 1)" if plus_one else ""),
     )
     banner, reset_tried = _reset(transport, baud, allow_reset, report)
-    header_in_checksum, readings = _stream(transport, baud, report)
+    header_in_checksum, readings = _stream(transport, baud, report, args.listen)
     profile = _profile(plus_one, header_in_checksum, banner, reset_tried, readings, report)
     _setting(report)
     _status(transport, profile, plus_one, report)
@@ -350,21 +359,35 @@ def _reset(transport: Any, baud: int, allow_reset: bool, report: Report) -> tupl
     return banner, True
 
 
-def _stream(transport: Any, baud: int, report: Report) -> tuple[bool | None, dict[int, int]]:
-    """A short stream (:func:`~roomba_bt.robot.discovery.sample_stream`, as ``--profile
-    auto`` reads one): which checksum convention the frames follow, and the widest reading
-    of each packet seen (for the profile's ranges)."""
+#: Frames a sample may fall short by at its window's edges (the first cut by the request's
+#: way, the last by the window's end) before they count as lost.
+EDGE_FRAMES = 1
+#: A sample this long judges an intermittent cable; a shorter one's warning suggests it.
+LONG_LISTEN_S = 10.0
+
+
+def _stream(
+    transport: Any, baud: int, report: Report, listen: float | None
+) -> tuple[bool | None, dict[int, int]]:
+    """A stream of ``listen`` s (:func:`~roomba_bt.robot.discovery.sample_stream`, as
+    ``--profile auto`` reads one; its 0.5 s unless told): which checksum convention the
+    frames follow, the widest reading of each packet seen (for the profile's ranges), and
+    whether the line loses frames, judged by ``run``'s own bar (:data:`~roomba_bt.runtime.
+    summary.POOR_LINK`): doctor said ``[ok]`` to a line losing 35 % of them (it warned below
+    half only) while ``run`` called 5 % poor and sent its user here."""
     from roomba_bt.robot.discovery import SAMPLE_PACKETS, SAMPLE_S, sample_stream
 
-    sample = sample_stream(transport)
+    seconds = SAMPLE_S if listen is None else listen
+    sample = sample_stream(transport, seconds=seconds)
     if sample.latency is not None:  # the line's delay, a slot at most more
         report.facts["latency"] = f"{sample.latency:.3f}"
     delay = _latency(report)  # the frames of the window's last `delay` s are still on the way
-    expected = round(max(0.0, SAMPLE_S - delay) / SLOT_SECONDS)
+    expected = round(max(0.0, seconds - delay) / SLOT_SECONDS)
     frames, skipped = sample.frames, sample.skipped
+    lost = max(0, expected - frames - EDGE_FRAMES)
     text = (
         f"Stream (148) of {list(SAMPLE_PACKETS)}: {frames} frames of {sample.frame_size} bytes "
-        f"in {SAMPLE_S:g} s (one per 15 ms: {expected}"
+        f"in {seconds:g} s (one per 15 ms: {expected}"
         + (f", the first {delay * 1000:.0f} ms after the request" if delay >= 0.05 else "")
         + f"), {skipped} bytes skipped"
     )
@@ -376,7 +399,15 @@ def _stream(transport: Any, baud: int, report: Report) -> tuple[bool | None, dic
             "to it, or the line drops bytes (a long cable, a bad adapter)",
         )
         raise _Failed(DoctorExit.UNHEALTHY)
-    if frames < expected // 2 or skipped:
+    if expected and lost >= POOR_LINK * expected:
+        report.warn(
+            "stream",
+            f"{text}; {100 * lost / expected:.0f} % of the frames lost",
+            f"the line loses frames (run calls {100 * POOR_LINK:g} % or more a poor link): "
+            "check the cable and its adapter"
+            + ("; --listen 10s samples longer" if seconds < LONG_LISTEN_S else ""),
+        )
+    elif skipped:
         report.warn("stream", text, "frames are lost or damaged on this line: check the cable")
     else:
         report.ok("stream", text)

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import re
 import subprocess
 import sys
 import textwrap
@@ -78,6 +79,30 @@ def test_doctor_finds_an_awake_create2_on_a_pty_at_either_rate(
     else:
         assert missions.startswith("[ok]") and missions.endswith("all fit")
     assert "mode Passive" in sim.stop()[1], "the robot is left in Passive"
+
+
+def test_a_line_losing_a_third_of_the_frames_is_warned_at_run_s_bar_over_a_longer_listen(
+    served_sim: Callable[..., Any],
+) -> None:
+    """``doctor`` said ``[ok]`` to a stream losing 35 % of its frames (it warned below half
+    only) while ``run`` calls 5 % a poor link and sends its user to doctor: one bar now
+    (``POOR_LINK``), and ``--listen`` samples as long as told."""
+    sim = served_sim("--pty", "--drop-rate", "0.3", "--seed", "1")
+    done = _doctor(sim.address, "--listen", "2s")
+    assert done.returncode == DoctorExit.FOUND, done.stdout  # a warning, not a failure
+    [stream] = _step(done.stdout, "stream")
+    assert stream.startswith("[warn]") and " in 2 s (one per 15 ms: " in stream, stream
+    assert re.search(r"; [2-4]\d % of the frames lost$", stream), stream
+    fix = done.stdout.split(stream)[1].splitlines()[1]
+    assert "the line loses frames (run calls 5 % or more a poor link)" in fix
+    assert "--listen 10s samples longer" in fix
+
+
+def test_a_clean_line_s_stream_is_ok_over_a_longer_listen(served_sim: Callable[..., Any]) -> None:
+    sim = served_sim("--pty")
+    done = _doctor(sim.address, "--listen", "2s")
+    [stream] = _step(done.stdout, "stream")
+    assert stream.startswith("[ok]") and " in 2 s (one per 15 ms: " in stream, stream
 
 
 @pytest.mark.parametrize("baud", [19200, 115200])
