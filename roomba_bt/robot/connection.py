@@ -293,6 +293,7 @@ class Connection:
         self.ending.round_trip = link_round_trip(round_trips, self.name)
         if not self.modes.calibrate(raw, self.link.transport.now(), self.name):
             raise not_a_mode(self.name, raw)
+        self.ending.answered = True
         self.link.mode_plus_one = self.modes.plus_one
         # the frames the robot sent before it heard a mode command come a round trip later
         # (twice it, for jitter): on a link with latency the old mode they read is neither a
@@ -324,6 +325,7 @@ class Connection:
         """
         frame = self._query_raw(packet_ids, timeout)
         if frame is not None:
+            self.ending.answered = True
             change = self.modes.reconcile(frame, self.link.index, self.link.transport.now())
             if change is not None:
                 self._report_change(change)
@@ -594,6 +596,12 @@ class Connection:
     @property
     def end_in(self) -> EndMode:
         return self.ending.end_in
+
+    @property
+    def robot_answered(self) -> bool:
+        """Whether a robot ever answered (:attr:`SafeStop.robot_heard`): a valid frame or a
+        reply, not bytes alone (noise)."""
+        return self.ending.robot_heard
 
     @property
     def safe_stopped(self) -> bool | None:

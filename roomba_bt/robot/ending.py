@@ -352,6 +352,13 @@ class SafeStop:
         self.heard_after_reopen: Callable[[], bool] | None = None
         #: what the wait for the port to come back found ("" before one): said with the stop
         self.reopened = ""
+        #: a reply the start-up agreed on, or any query's, came (:attr:`robot_heard`)
+        self.answered = False
+        #: the last stop not known delivered met a robot this session set nothing going
+        #: for: none answered, or one seen only in Passive, its wheels never commanded
+        self.nothing_set_going = False
+        #: the stop being said undelivered found the port gone (:meth:`_port_gone`)
+        self._gone = False
 
     def begin(self) -> None:
         """A session starts (again): nothing has ended."""
@@ -446,8 +453,8 @@ class SafeStop:
             self.unheard = unconfirmed = None  # it answered after the stop: it heard it
         elif unconfirmed is None:  # a quiet after the stop that began before it
             unconfirmed = self._unproven
-        if unconfirmed is None and link.bytes_read == 0:  # a robot that may hear and not
-            unconfirmed = "the robot never answered"  # answer (its TX line cut)
+        if unconfirmed is None and not self.robot_heard:  # a robot that may hear and not
+            unconfirmed = "no robot answered"  # answer (its TX line cut)
         if bound.cut is not None:  # a wait given up: nothing it would have shown is known
             unconfirmed = bound.cut
         if unconfirmed is not None:
@@ -624,6 +631,13 @@ class SafeStop:
         return True
 
     @property
+    def robot_heard(self) -> bool:
+        """Whether a robot ever answered: a valid stream frame, or a reply (the start-up's
+        agreed mode, a query's). Bytes alone are not one: a pty of random bytes, no robot
+        behind it, was said to have left a robot in Passive, its stop sent."""
+        return self.answered or self.writer.link.index > 0
+
+    @property
     def last_seen(self) -> OIMode:
         """The mode the robot was last seen in as the last stop was written (or packet 35
         read after it): what is known of a robot the stop did not reach, whose model may
@@ -645,9 +659,9 @@ class SafeStop:
                 "not sent: the far end closed the connection at once, and this run reached "
                 "no robot (another client may hold it; its run is not affected)"
             )
+        self._gone = True  # what to do now, said unless nothing was set going
         came_back = f" (it {self.reopened})" if self.reopened else ""
-        advice = PORT_GONE_ADVICE.format(port=link.name)
-        return f"the stop was not delivered: the port is gone{came_back}: {advice}"
+        return f"the stop was not delivered: the port is gone{came_back}"
 
     def _undelivered(self, why: str) -> bool:
         """The stop did not reach the robot: say so, with what the robot was last seen
@@ -659,9 +673,11 @@ class SafeStop:
         # driving (``sensors``, ``doctor``); the summary or the error says the port's fate
         if self._seen is not None:  # in the frames after the stop: what the robot is in
             mode = self._seen
-        idle = wheels is None and (writer.link.bytes_read == 0 or mode is OIMode.PASSIVE)
+        heard = self.robot_heard
+        idle = wheels is None and (not heard or mode is OIMode.PASSIVE)
+        self.nothing_set_going = idle
         level = logging.DEBUG if idle else logging.ERROR
-        if writer.link.bytes_read == 0:  # nothing was ever seen of it
+        if not heard:  # nothing was ever seen of it
             report = why
         elif self._seen is not None:
             report = (
@@ -670,6 +686,9 @@ class SafeStop:
             )
         else:
             report = f"last seen in {mode.label} {describe_activity(wheels, stopped_by)}; {why}"
+        if self._gone and not idle:
+            report += ": " + PORT_GONE_ADVICE.format(port=writer.link.name)
+        self._gone = False
         if report != self.stop_report:  # close() tries once more: said once, not twice
             log.log(level, "%s: %s", self.writer.link.name, report)
         self.stop_report = report

@@ -63,11 +63,15 @@ WATCHDOG_MARGIN = 0.001
 Reconcile = Callable[[SensorFrame, int, float], ModeChange | None]
 
 
+#: The URLs whose far end is a bridge over a network, not a cable (pyserial's schemes).
+NETWORK_PORTS = ("socket://", "rfc2217://")
+
+
 def gone_how(port: str) -> str:
     """What a port that failed most likely means, in its user's words: a device path's cable
     or adapter, a URL's bridge or network (pyserial's own words, "device reports readiness to
     read but returned no data", said nothing of either)."""
-    if "://" in port:
+    if port.lower().startswith(NETWORK_PORTS):
         return "the bridge closed the connection or the network dropped"
     return "the cable was pulled or the adapter reset"
 

@@ -379,6 +379,7 @@ def answers_elsewhere(connection: Connection, silent: NoAnswer) -> ConnectionFai
     # stop's confirmation), as the link's own reads would; the probe read them itself
     answer = found.found
     connection.link.bytes_read += len(answer.reply) if answer is not None else 0
+    connection.ending.answered = True
     # how a robot comes to talk at 19200, said only of one found there: one found at its
     # default 115200 (a run opened at another rate) was told how a 600 comes to 19200
     how = (

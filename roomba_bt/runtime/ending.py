@@ -125,7 +125,8 @@ class RunEnding:
         summary.take_last(last)
         summary.final_mode = mode_of(connection)
         link = getattr(connection, "link", None)
-        summary.robot_answered = getattr(link, "bytes_read", 1) > 0
+        heard = getattr(connection, "robot_answered", None)  # a reply or a frame, not noise
+        summary.robot_answered = getattr(link, "bytes_read", 1) > 0 if heard is None else heard
         summary.unconfirmed_hazards = unconfirmed
         summary.take_counters(getattr(connection, "counters", None))
         summary.falls = dict(getattr(connection, "falls", {}))
@@ -267,8 +268,14 @@ def stop_robot(connection: Connection, summary: RunSummary, first: bool = False)
             )
             return
         report = getattr(connection, "stop_report", None)
-        summary.safe_stop = "NOT DELIVERED: " + (report or "the stop sequence could not be written")
+        calm = getattr(getattr(connection, "ending", None), "nothing_set_going", False)
+        # a robot the run set nothing going for is not said NOT DELIVERED in capitals: one
+        # that never left Passive nor had a wheel command read as an alarm to a hobbyist
+        summary.safe_stop = ("nothing this run set going; " if calm else "NOT DELIVERED: ") + (
+            report or "the stop sequence could not be written"
+        )
         summary.stop_delivered = False
+        summary.set_nothing_going = calm
         note_undelivered_stop(summary)
     except KeyboardInterrupt:
         summary.safe_stop = "interrupted during the safe stop"

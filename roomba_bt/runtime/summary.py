@@ -270,8 +270,12 @@ class RunSummary:
     #: False when the stop could not reach the robot: the final mode is then only the last
     #: one seen, and says so
     stop_delivered: bool = True
-    #: False when not one byte came from the robot: its mode is then not known at all
+    #: False when no robot answered (no valid frame, no reply; noise is none): its mode is
+    #: then not known at all
     robot_answered: bool = True
+    #: the stop not known delivered met a robot the run set nothing going for (none
+    #: answered, or one seen only in Passive with its wheels never commanded)
+    set_nothing_going: bool = False
     max_tick_s: float = 0.0
     #: where the slowest tick was, when a watch could tell (runtime/tick_watch.py: ``run``'s,
     #: on either clock): ``sleepy (Sleepy.update at x.py:98)``; "" otherwise
@@ -426,7 +430,9 @@ class RunSummary:
         """The summary's ``final mode``: the mode after the safe stop, or why it is unknown."""
         mode = self.final_mode.label if self.final_mode is not None else "unknown"
         if not self.robot_answered:
-            return "unknown: the robot never answered"
+            return "unknown: no robot answered"
+        if not self.stop_delivered and self.set_nothing_going:
+            return f"unknown: last seen in {mode}, the run set nothing going, the stop unconfirmed"
         if not self.stop_delivered:
             return f"unknown: last seen in {mode}, the stop was not delivered"
         return mode

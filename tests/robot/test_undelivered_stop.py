@@ -70,8 +70,11 @@ def test_a_stop_that_cannot_be_written_is_reported_undelivered() -> None:
     connection, link = driving()
     link.pulled = True
     assert connection.safe_stop() is False
+    # what to do now, for a robot that may still be moving
     assert connection.stop_report == (
-        "last seen in Safe at 200 mm/s; the stop was not delivered: the port is gone"
+        "last seen in Safe at 200 mm/s; the stop was not delivered: the port is gone: the robot "
+        "may still be moving: pick it up or press its Clean or power button; reseat the cable, "
+        "then roomba-bt doctor --port sim://box"
     )
     assert connection.mode is OIMode.SAFE  # not advanced to Passive by the unsent Start
     assert connection.safe_stopped is False

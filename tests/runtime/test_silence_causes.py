@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import random
 import re
 from collections.abc import Iterator
 from pathlib import Path
@@ -19,12 +20,14 @@ import pytest
 
 from roomba_bt.mission import load_mission
 from roomba_bt.oi import commands as oi
+from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2, ROOMBA500, RobotProfile
 from roomba_bt.robot.silence import LISTEN_S, listen_window
 from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome, RunSummary
 from roomba_bt.sim import Faults, SimLink, Simulator, load_world
+from roomba_bt.transport.testing import NullTransport
 
 from .simrun import SPIN, TapLink
 
@@ -174,9 +177,10 @@ def test_a_port_that_vanished_in_the_silence_is_said_gone_not_unpulsed(tmp_path:
     pulse could wake it ... Input/output error", the advice of a robot asleep or off."""
     summary, _ = run(tmp_path, WAIT_IN_PASSIVE, Faults(sleep_at=5.0), UnpluggedInTheSilence)
     assert summary.outcome is Outcome.CONNECTION_LOST
-    assert "the port is gone: it failed on a BRC pulse ([Errno 5] Input/output error)" in (
-        summary.reason
-    )
+    assert (
+        "the port is gone (the cable was pulled or the adapter reset): it failed on a BRC "
+        "pulse ([Errno 5] Input/output error)"
+    ) in summary.reason
     assert "no BRC pulse could wake it" not in summary.reason
     assert not summary.stop_delivered and "the port had failed before it" in summary.safe_stop
 
@@ -276,9 +280,41 @@ def test_a_robot_silent_at_every_rate_keeps_the_likely_causes(tmp_path: Path) ->
     # nothing was ever heard: its mode is not known, and the stop (written: a robot that
     # hears but cannot answer is stopped by it) is not claimed delivered
     assert not summary.robot_answered
-    assert "final mode   unknown: the robot never answered" in str(summary)
+    assert "final mode   unknown: no robot answered" in str(summary)
     assert summary.safe_stop == (
-        "NOT DELIVERED: the stop was written but is unconfirmed: the robot never answered"
+        "nothing this run set going; the stop was written but is unconfirmed: no robot answered"
+    )
+
+
+class NoiseOnly(NullTransport):
+    """A line with no robot behind it: every read brings random bytes (a pty of noise)."""
+
+    name = "noise"
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.draws = random.Random(1)
+
+    def read(self, timeout: float) -> bytes:
+        self.clock += max(timeout, SLOT_SECONDS)
+        return self.draws.randbytes(170)
+
+
+def test_a_line_of_noise_is_no_robot_answering_not_one_left_in_passive(tmp_path: Path) -> None:
+    """Bytes came, but no reply ever agreed and no frame was valid: the summary said ``final
+    mode Passive`` and ``safe stop sent pause_resume_stream, start`` (the mode model's
+    guess), where a silent line said ``unknown``; both now say no robot answered, calmly
+    (nothing was set going)."""
+    path = tmp_path / "m.yaml"
+    path.write_text(SPIN)
+    stack = RunStack(load_mission(path, {}, profile=CREATE2), NoiseOnly(), profile=CREATE2)
+    summary = stack.run()
+    stack.close()
+    assert summary.exit_code == 3 and "never agreed" in summary.reason, summary.reason
+    assert not summary.robot_answered
+    assert "final mode   unknown: no robot answered" in str(summary)
+    assert summary.safe_stop == (
+        "nothing this run set going; the stop was written but is unconfirmed: no robot answered"
     )
 
 
