@@ -246,12 +246,21 @@ class StreamLost(LinkDown):
         halted: bool,
         probed: str = "",
         mismatch: ProfileMismatch | None = None,
+        came_back: float | None = None,
     ) -> None:
         self.silent_for = silent_for
         self.grace = grace
         self.bytes_seen = bytes_seen
         self.mismatch = mismatch
-        if bytes_seen and mismatch is not None:
+        #: seconds from the last frame until the robot answered again, when it did (asked
+        #: after the grace): a line that froze and came back, not a robot that slept
+        self.came_back = came_back
+        if came_back is not None:
+            what = (
+                f"the stream stopped for {came_back:.1f} s and came back (a frozen adapter or "
+                "cable?)"
+            )
+        elif bytes_seen and mismatch is not None:
             what = (
                 f"the line is garbled: no valid sensor frame for {silent_for:.1f} s while "
                 f"{bytes_seen} bytes arrived; {wrong_profile(mismatch)}"
@@ -278,6 +287,13 @@ class StreamLost(LinkDown):
         super().__init__(port, f"{what}; {action}, then the run waited the {grace:g} s grace{tail}")
 
 
+def idle_said(idle_s: float | None) -> str:
+    """How long the robot had been without a command or a BRC pulse, as a message says it."""
+    if idle_s is None:
+        return "an unknown time"
+    return f"{idle_s:.0f} s" if idle_s >= 0.5 else "less than a second"
+
+
 class RobotAsleep(LinkDown):
     """The stream stopped because the robot slept: it sat in Passive five minutes with
     nothing from us (no command, no BRC pulse), or it answered nothing until a BRC pulse
@@ -299,16 +315,18 @@ class RobotAsleep(LinkDown):
         if not keep_awake:
             fix = "leave keep-awake on (drop --no-keep-awake): it pulses BRC once a minute"
         elif not pulses:
+            # woken by a hang-up, it was told this link cannot pulse BRC: keep-awake cannot
+            hang_up = (
+                "; the hang-up that woke it blanks the line for a second, too long to give "
+                "once a minute" if woken_by is not None else ""
+            )  # fmt: skip
             fix = (
-                "this link has no modem line to pulse BRC: use a USB cable with BRC on RTS or "
-                "DTR, or an rfc2217:// bridge"
+                f"keep-awake cannot pulse BRC on this port (no modem lines{hang_up}): use a "
+                "USB cable with BRC on RTS or DTR, or an rfc2217:// bridge"
             )
         else:
             fix = "check that the cable wires BRC to RTS or DTR"
-        idle = (
-            f"{idle_s:.0f} s" if idle_s is not None and idle_s >= 0.5
-            else "less than a second" if idle_s is not None else "an unknown time"
-        )  # fmt: skip
+        idle = idle_said(idle_s)
         if woken_by is None:
             what = (
                 f"the robot fell asleep: {idle} in Passive without a command or a BRC pulse "

@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import BATTERY_PACKETS, SLOT_SECONDS
-from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
+from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
 from roomba_bt.oi.stream import stream_period
 from roomba_bt.robot.discovery import OI_RATES, search, wake_pulse
 from roomba_bt.robot.ending import signals_deferred
@@ -46,6 +46,7 @@ from roomba_bt.robot.errors import (
     NoAnswer,
     RobotAsleep,
     StreamLost,
+    idle_said,
 )
 from roomba_bt.robot.link import LINK_ERRORS
 from roomba_bt.robot.wake import SLEEP_AFTER_S
@@ -131,6 +132,8 @@ def explain_silence(
 
     # how long it had been without a command or a pulse when the stream stopped
     idle = idle_at(connection, connection.link.silent_since)
+    clock = connection.transport.now
+    asked = clock()
     try:
         connection.send(oi.pause_stream())
     except ModeError:  # the model says Off: nothing to ask
@@ -142,6 +145,8 @@ def explain_silence(
     connection.unheard = "the robot answers nothing"  # unless a pulse wakes it
     if not connection.profile.sleeps_in_passive:
         return lost("it answered no query either (switched off, a flat battery, or the cable)")
+    if connection.mode in DRIVING_MODES:
+        return _asked_again(connection, silent_for, grace, halted=halted, asked=asked)
     pulse = wake_pulse(connection.transport)
     if pulse.gone is not None:  # unplugged meanwhile: the silence was the cable's
         return connection.link.lost("a BRC pulse", pulse.gone)
@@ -152,6 +157,14 @@ def explain_silence(
         )
     if _answers(connection):
         connection.unheard = None
+        if idle is None or idle < SLEEP_AFTER_S:  # no sleep by the OI's rule: said as seen
+            return StreamLost(
+                connection.name, silent_for, grace, 0, watchdog=connection.watchdog,
+                halted=halted, came_back=silent_for + connection.transport.now() - asked,
+                probed=f"it answered again after a BRC pulse ({pulse.how}), having been "
+                f"{idle_said(idle)} in Passive without a command or a pulse from us: too soon "
+                "to sleep (the OI sleeps after 5 minutes of that)",
+            )  # fmt: skip
         return RobotAsleep(
             connection.name, idle, keep_awake=connection.keep_awake,
             pulses=_pulses(connection), woken_by=pulse.how, profile=connection.profile,
@@ -160,6 +173,43 @@ def explain_silence(
         f"it answered no query, not even after a BRC pulse ({pulse.how}): "
         f"{_silent_causes(connection)}"
     )
+
+
+#: Seconds a robot last seen in Safe or Full that answered no query is given before it is
+#: asked once more: as long as a BRC pulse would have taken (it is never asleep there).
+ASK_AGAIN_AFTER_S = 1.0
+
+
+def _asked_again(
+    connection: Connection, silent_for: float, grace: float, *, halted: bool, asked: float
+) -> StreamLost:
+    """The robot, last seen in Safe or Full, answered no query: asked once more after
+    :data:`ASK_AGAIN_AFTER_S`, with no BRC pulse. Decided (session 31): Safe and Full never
+    sleep, so a pulse could tell nothing; and on a port without modem lines the pulse is a
+    hang-up, whose speed 0 lost the bytes still queued for a frozen line (the watchdog's
+    drive 0 among them: a robot frozen behind its adapter for 3 s spun on after it came
+    back, and the run called it asleep). One that answers now came back: a frozen adapter
+    or cable, not sleep."""
+    link = connection.link
+    clock = link.transport.now
+    deadline = clock() + ASK_AGAIN_AFTER_S
+    while (now := clock()) < deadline:  # what comes meanwhile is the old stream's
+        link.read(deadline - now)
+        if clock() <= now:  # a clock that does not move (a replay past its record)
+            break
+    mode = connection.mode.label
+    if not _answers(connection):
+        return StreamLost(
+            connection.name, silent_for, grace, 0, watchdog=connection.watchdog, halted=halted,
+            probed=f"it answered no query, asked twice {ASK_AGAIN_AFTER_S:g} s apart, and it "
+            f"was in {mode}, which never sleeps: switched off, a flat battery, or the cable",
+        )  # fmt: skip
+    connection.unheard = None
+    return StreamLost(
+        connection.name, silent_for, grace, 0, watchdog=connection.watchdog, halted=halted,
+        came_back=silent_for + clock() - asked,
+        probed=f"it answered again, in {mode}, which never sleeps",
+    )  # fmt: skip
 
 
 def garbled_line(

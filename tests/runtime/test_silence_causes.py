@@ -88,30 +88,101 @@ def run(
     return summary, simulator
 
 
-def test_a_robot_that_fell_asleep_early_is_woken_by_a_pulse_and_named_asleep(
+def test_a_robot_that_answers_after_a_pulse_too_soon_to_sleep_is_not_called_asleep(
     tmp_path: Path,
 ) -> None:
+    """Silent 5 s into Passive, answering after a BRC pulse: the OI sleeps only after 5
+    minutes in Passive with nothing from the host, so this is said as seen (the stream
+    stopped and came back after a pulse), not "asleep" with advice to buy a BRC cable."""
     summary, simulator = run(tmp_path, WAIT_IN_PASSIVE, Faults(sleep_at=5.0))
     assert summary.outcome is Outcome.CONNECTION_LOST
     assert summary.exit_code == 3
-    assert "the robot was asleep" in summary.reason
-    assert "until a BRC pulse woke it (pulsed BRC low for 1 s" in summary.reason
-    assert "sensor stream stopped" not in summary.reason
+    reason = summary.reason
+    assert re.search(r"the stream stopped for \d\.\d s and came back \(a frozen adapter", reason)
+    assert "it answered again after a BRC pulse (pulsed BRC low for 1 s" in reason, reason
+    assert "having been 5 s in Passive without a command or a pulse from us: too soon" in reason
+    assert "asleep" not in reason and "-0 s" not in reason
     assert [e.kind for e in simulator.events if e.kind in ("sleep", "wake")] == ["sleep", "wake"]
     assert not simulator.asleep and simulator.mode is OIMode.PASSIVE
     assert summary.stop_delivered  # it answered after the pulse: it hears the stop
 
 
-def test_a_robot_asleep_while_driving_is_said_idle_since_our_last_command_before_it(
+def test_a_robot_silent_in_safe_is_neither_called_asleep_nor_hung_up_on(tmp_path: Path) -> None:
+    """Safe and Full never sleep: a robot last seen driving in Safe that answers no query is
+    asked once more, with no BRC pulse (``sim --sleep-at`` drops it from Safe to sleep, which
+    no robot does; it stays deaf)."""
+    driving = "tree:\n  sequence:\n    - mode: safe\n    - drive: {velocity: 100 mm/s}\n"
+    summary, simulator = run(tmp_path, driving, Faults(sleep_at=3.0))
+    assert "asleep" not in summary.reason, summary.reason
+    assert "it answered no query, asked twice 1 s apart, and it was in Safe, which never " \
+        "sleeps: switched off, a flat battery, or the cable" in summary.reason  # fmt: skip
+    assert simulator.brc_pulses == 1  # keep-awake's first only: no wake pulse
+    assert not summary.stop_delivered
+
+
+class FrozenAdapter(NoModemLines):
+    """A USB adapter that freezes for :attr:`FREEZE_S` from :attr:`FREEZE_AT` (simulated
+    time): nothing comes from the robot meanwhile, and what the host writes waits in the
+    adapter's queue, to reach the robot when it thaws. A hang-up (the BRC pulse of a port
+    without modem lines) throws the queue away, as speed 0 does on a pty."""
+
+    FREEZE_AT, FREEZE_S = 3.0, 3.0
+
+    def __init__(self, simulator: Simulator) -> None:
+        super().__init__(simulator)
+        self.queued: list[bytes] = []
+        #: what reached the robot, at its simulated time
+        self.delivered: list[tuple[float, bytes]] = []
+
+    def _frozen(self) -> bool:
+        return self.FREEZE_AT <= self.simulator.time < self.FREEZE_AT + self.FREEZE_S
+
+    def _thaw(self) -> None:
+        if not self._frozen():
+            for data in self.queued:
+                self.delivered.append((self.simulator.time, data))
+                super().write(data)
+            self.queued.clear()
+
+    def write(self, data: bytes) -> None:
+        self.queued.append(data)
+        self._thaw()
+
+    def read(self, timeout: float) -> bytes:
+        data = super().read(timeout)
+        self._thaw()
+        return b"" if self._frozen() else data
+
+    @contextlib.contextmanager
+    def hung_up(self) -> Iterator[None]:
+        self.queued.clear()
+        yield
+
+
+def test_a_line_that_froze_in_safe_is_said_frozen_and_the_watchdog_s_drive_0_arrives(
     tmp_path: Path,
 ) -> None:
-    """The watchdog's own drive 0, written after the stream stopped, read as "-0 s" without a
-    command when it stopped."""
-    driving = "tree:\n  sequence:\n    - mode: safe\n    - drive: {velocity: 100 mm/s}\n"
-    summary, _ = run(tmp_path, driving, Faults(sleep_at=3.0))
-    assert "the robot was asleep" in summary.reason
-    assert "it had been 3 s without a command" in summary.reason, summary.reason  # drive at 0 s
-    assert "-0 s" not in summary.reason
+    """The robot, driving in Safe, frozen behind its adapter for 3 s: it was called asleep
+    ("answered nothing until a BRC pulse woke it"; buy a cable with BRC on RTS or DTR), and the
+    hang-up that pulsed BRC threw away the watchdog's drive 0 waiting in the adapter's queue:
+    the robot spun on until the final stop. Now no pulse (Safe never sleeps): the queue
+    reaches the robot as the adapter thaws, the watchdog's drive 0 first, and the run says the
+    stream stopped and came back."""
+    (tmp_path / "m.yaml").write_text(SPIN)
+    link = FrozenAdapter(Simulator(load_world("empty-room"), CREATE2, 0, trace=False))
+    mission = load_mission(tmp_path / "m.yaml", {}, profile=CREATE2)
+    stack = RunStack(mission, link, profile=CREATE2, timeout_s=60)
+    summary = stack.run()
+    stack.close()
+    reason = summary.reason
+    assert summary.outcome is Outcome.CONNECTION_LOST
+    assert re.search(r"the stream stopped for \d\.\d s and came back \(a frozen adapter", reason)
+    assert "it answered again, in Safe, which never sleeps" in reason, reason
+    assert "asleep" not in reason and "BRC on RTS" not in reason
+    thawed = FrozenAdapter.FREEZE_AT + FrozenAdapter.FREEZE_S
+    first_halt = min(t for t, data in link.delivered if data == oi.halt().data and t >= 3.0)
+    assert first_halt < thawed + 0.05, link.delivered  # the watchdog's, as the adapter thawed
+    assert summary.stop_delivered and "sent drive, motors" in summary.safe_stop
 
 
 def test_the_oracles_stream_gap_is_ridden_through_the_wheels_stopped_within_150_ms(
