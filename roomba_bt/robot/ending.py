@@ -616,12 +616,12 @@ class SafeStop:
         the transport cannot reopen (a simulator, a replay, a URL's bridge) or the far end
         turned this run away (its robot was never this run's to stop)."""
         link = self.writer.link
-        transport = link.transport
-        if not getattr(transport, "reopens", False) or link.turned_away:
+        reopen: Callable[[float], float | None] | None = getattr(link.transport, "reopen", None)
+        if reopen is None or not getattr(link.transport, "reopens", False) or link.turned_away:
             return None
         if self.reopened or self.reopen_within <= 0:  # waited for already (``close()``)
             return False
-        took = transport.reopen(self.reopen_within)
+        took = reopen(self.reopen_within)
         if took is None:
             self.reopened = f"did not come back within {self.reopen_within:g} s"
             return False

@@ -441,3 +441,64 @@ def test_a_backlog_is_read_whole_in_one_read() -> None:
         finally:
             transport._port = real  # type: ignore[attr-defined]
             transport.close()
+
+
+def _pty() -> tuple[int, int, str]:
+    """A raw pty pair and its device path: a far end a test opens and closes itself."""
+    master, slave = os.openpty()
+    tty.setraw(slave)
+    return master, slave, os.ttyname(slave)
+
+
+def test_a_device_path_that_comes_back_is_reopened_and_carries_bytes(tmp_path: Path) -> None:
+    """A loose connector: the device behind a link (``/dev/serial/by-id/...``) goes and comes
+    back. ``reopen`` opens the same path again (for the safe stop alone) and the port reads
+    and writes there; the old port was closed first."""
+    first = _pty()
+    link = tmp_path / "robot"
+    link.symlink_to(first[2])
+    transport = SerialTransport.open(str(link))
+    assert transport.reopens
+    second = _pty()
+    back = tmp_path / "robot.back"
+    back.symlink_to(second[2])
+    back.replace(link)
+    for fd in first[:2]:
+        os.close(fd)
+    try:
+        took = transport.reopen(within=2.0)
+        assert took is not None and took >= 0.0
+        transport.write(b"\x80")
+        assert os.read(second[0], 1) == b"\x80"
+        os.write(second[0], b"\x01")
+        assert transport.read(1.0) == b"\x01"
+    finally:
+        transport.close()
+        for fd in second[:2]:
+            os.close(fd)
+
+
+def test_a_device_path_that_does_not_come_back_is_said_so(tmp_path: Path) -> None:
+    master, slave, path = _pty()
+    link = tmp_path / "robot"
+    link.symlink_to(path)
+    transport = SerialTransport.open(str(link))
+    link.unlink()  # the adapter gone, its link with it
+    os.close(master)
+    os.close(slave)
+    assert transport.reopen(within=0.2) is None
+    assert not transport.is_open
+
+
+def test_neither_a_url_nor_a_pty_s_own_path_is_reopened() -> None:
+    """A bridge's new connection is another client's session; a pty's number, reused, is
+    another program's line: only a device path (or a link to one) comes back."""
+    master, slave, path = _pty()
+    try:
+        for port in (path, "loop://"):
+            transport = SerialTransport.open(port)
+            assert not transport.reopens, port
+            transport.close()
+    finally:
+        os.close(master)
+        os.close(slave)
