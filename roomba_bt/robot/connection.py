@@ -215,7 +215,7 @@ class Connection:
         self.ending.wake = keep_awake_for(transport, self.link.name, self.keep_awake)
         # a stop written through a port that came back is heard if the stream falls quiet
         # and the robot answers, as after a stop at a rate the port followed (silence.py)
-        self.ending.heard_after_reopen = _weakly(self._stop_heard, False)
+        self.ending.port_return.heard = _weakly(self._stop_heard, False)
         #: when garbage was last judged (listened at other rates, or noise) and the bytes
         #: read by then (link clock; silence.follow_baud judges again while garbage comes)
         self.baud_listened: tuple[float, int] | None = None

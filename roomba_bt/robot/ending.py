@@ -104,7 +104,7 @@ QUIET_BEFORE_PERIODS = 3
 
 #: Seconds a stop waits for a port that failed to come back at the same device path (a
 #: loose connector, a USB adapter that reset), to deliver the stop alone, unless told
-#: (:attr:`SafeStop.reopen_within`: a run's ``--grace``).
+#: (:attr:`PortReturn.within`: a run's ``--grace``).
 REOPEN_WITHIN_S = 2.0
 #: What to do about a robot the stop could not reach over a port that is gone.
 PORT_GONE_ADVICE = (
@@ -298,6 +298,60 @@ def take_unread(link: StreamLink, wait: float) -> bool:
     return link.index > index
 
 
+def confirmed_by(confirm: Callable[[], bool] | None) -> bool:
+    """Whether ``confirm`` says the robot heard the stop (False if there is none, or asking
+    failed)."""
+    if confirm is None:
+        return False
+    try:
+        return confirm()
+    except _RECOVERABLE:
+        return False
+
+
+class PortReturn:
+    """The wait, at a stop, for a port that failed to come back at the same device path (a
+    loose connector, a USB adapter that reset), to deliver the stop alone: the mission is not
+    carried on (the robot may have moved meanwhile). ``within``: how long (a run's
+    ``--grace``); ``heard``: the connection's question after the stop written through it
+    (the stream quiet, a Query List answered); ``said``: what the wait found ("" before one).
+    """
+
+    def __init__(self) -> None:
+        self.within = REOPEN_WITHIN_S
+        self.heard: Callable[[], bool] | None = None
+        self.said = ""
+
+    def wait(self, link: StreamLink) -> bool | None:
+        """True if the port came back (the link open again, no stream known to run), False
+        if it did not or was already waited for in this ending, None where the transport
+        cannot reopen (a simulator, a replay, a URL's bridge, a pty's own path) or the far
+        end turned this run away (its robot was never this run's to stop)."""
+        reopen: Callable[[float], float | None] | None = getattr(link.transport, "reopen", None)
+        if reopen is None or not getattr(link.transport, "reopens", False) or link.turned_away:
+            return None
+        if self.said or self.within <= 0:  # waited for already (``close()``'s stop)
+            return False
+        took = reopen(self.within)
+        if took is None:
+            self.said = f"did not come back within {self.within:g} s"
+            return False
+        self.said = f"came back after {took:.2f} s"
+        link.status = LinkStatus.OPEN
+        link.streaming = False
+        return True
+
+    def heard_stop(self, port: str) -> bool:
+        """Whether the robot heard the stop written through the port that came back: said
+        either way (logged when it did: the run still ends as a lost port)."""
+        if not confirmed_by(self.heard):
+            self.said += "; the stop was written through it, and no robot answered after it"
+            return False
+        self.said += ": the robot heard the stop written through it"
+        log.warning("%s: the port %s (the mission is not carried on)", port, self.said)
+        return True
+
+
 class SafeStop:
     """The endings of one session: the stop sequence written whole from the mode the model
     holds, whether it reached the robot, and the port closed once.
@@ -345,13 +399,8 @@ class SafeStop:
         #: the link's round trip (the quickest of the start-up's Query List replies, at most
         #: :data:`ROUND_TRIP_CAP` seconds; :func:`link_round_trip`), 0 before any
         self.round_trip = 0.0
-        #: how long a stop waits for a port that failed to come back (:meth:`_reopened`)
-        self.reopen_within = REOPEN_WITHIN_S
-        #: asked after a stop written through a port that came back: whether the robot
-        #: answers a Query List after it, its stream quiet (the connection's own question)
-        self.heard_after_reopen: Callable[[], bool] | None = None
-        #: what the wait for the port to come back found ("" before one): said with the stop
-        self.reopened = ""
+        #: the wait for a port that failed to come back, for the stop alone
+        self.port_return = PortReturn()
         #: a reply the start-up agreed on, or any query's, came (:attr:`robot_heard`)
         self.answered = False
         #: the last stop not known delivered met a robot this session set nothing going
@@ -366,7 +415,7 @@ class SafeStop:
         self.safe_stopped = None
         self.unheard = None
         self.confirm = None
-        self.reopened = ""
+        self.port_return.said = ""
 
     def in_flight(self, period: float) -> float:
         """Seconds after a command is written that frames the robot sent before it heard it
@@ -418,20 +467,10 @@ class SafeStop:
             self._heard_at = backlog.sent_until
         came_back = None
         if link.status is LinkStatus.LOST or not link.transport.is_open:
-            came_back = self._reopened()
-            if came_back is False:
-                return self._undelivered(self._port_gone())
-        if not link.transport.is_open:
+            came_back = self.port_return.wait(link)  # for the stop alone
+        if came_back is False or not link.transport.is_open:
             return self._undelivered(self._port_gone())
-        unconfirmed = None
-        if link.status is LinkStatus.LOST:
-            unconfirmed = "the port had failed before it"
-        elif self.unheard is not None:  # the silence's diagnosis: the line, the robot
-            unconfirmed = self.unheard  # (unless :attr:`confirm` says it heard the stop)
-        elif link.status is LinkStatus.STALLED and link.streaming:  # the watchdog tripped
-            # and nothing was heard since (no diagnosis yet: it pauses the stream and asks)
-            silent = link.transport.now() - link.silent_since
-            unconfirmed = f"the robot had sent no valid frame for {silent:.2f} s before it"
+        unconfirmed = self._unconfirmed_before(link)
         # checked against the stream on the wall clock only: on a virtual clock (the
         # simulator's SimLink, a replay) listening would only move the simulated time on,
         # and no cable can be cut there
@@ -441,14 +480,10 @@ class SafeStop:
             and getattr(link.transport, "wall_clock", True)
         )
         failed = self._write_heard(checked)
+        if failed is None and came_back and not self.port_return.heard_stop(link.name):
+            failed = self._port_gone()
         if failed is not None:
             return self._undelivered(failed)
-        if came_back and not self._confirmed_by(self.heard_after_reopen):
-            self.reopened += "; the stop was written through it, and no robot answered after it"
-            return self._undelivered(self._port_gone())
-        if came_back:
-            self.reopened += ": the robot heard the stop written through it"
-            log.warning("%s: the port %s (the mission is not carried on)", link.name, self.reopened)
         if unconfirmed is not None and unconfirmed is self.unheard and self._confirmed():
             self.unheard = unconfirmed = None  # it answered after the stop: it heard it
         elif unconfirmed is None:  # a quiet after the stop that began before it
@@ -463,6 +498,20 @@ class SafeStop:
         link.status = LinkStatus.STOPPED
         self.safe_stopped = True
         return True
+
+    def _unconfirmed_before(self, link: StreamLink) -> str | None:
+        """Why a stop written now could not be known to arrive, known before it is written:
+        the port failed, the silence's diagnosis (the line, the robot; unless :attr:`confirm`
+        says it heard the stop), the watchdog tripped with nothing heard since (no diagnosis
+        yet: it pauses the stream and asks); None if none."""
+        if link.status is LinkStatus.LOST:
+            return "the port had failed before it"
+        if self.unheard is not None:
+            return self.unheard
+        if link.status is LinkStatus.STALLED and link.streaming:
+            silent = link.transport.now() - link.silent_since
+            return f"the robot had sent no valid frame for {silent:.2f} s before it"
+        return None
 
     def _write_heard(self, checked: bool) -> str | None:
         """Write the stop; ``checked``: listen after it (:meth:`_contradicted`), and write it
@@ -595,40 +644,7 @@ class SafeStop:
     def _confirmed(self) -> bool:
         """Whether :attr:`confirm` says the robot heard the stop (False if there is none, or
         asking failed)."""
-        return self._confirmed_by(self.confirm)
-
-    @staticmethod
-    def _confirmed_by(confirm: Callable[[], bool] | None) -> bool:
-        """Whether ``confirm`` says the robot heard the stop (False if there is none, or
-        asking failed)."""
-        if confirm is None:
-            return False
-        try:
-            return confirm()
-        except _RECOVERABLE:
-            return False
-
-    def _reopened(self) -> bool | None:
-        """The port failed: wait up to :attr:`reopen_within` s for it to come back at the
-        same device path, for the stop alone (the mission is not carried on: the robot may
-        have moved meanwhile). True if it came back (the link open again, no stream known
-        to run), False if it did not or was already waited for in this ending, None where
-        the transport cannot reopen (a simulator, a replay, a URL's bridge) or the far end
-        turned this run away (its robot was never this run's to stop)."""
-        link = self.writer.link
-        reopen: Callable[[float], float | None] | None = getattr(link.transport, "reopen", None)
-        if reopen is None or not getattr(link.transport, "reopens", False) or link.turned_away:
-            return None
-        if self.reopened or self.reopen_within <= 0:  # waited for already (``close()``)
-            return False
-        took = reopen(self.reopen_within)
-        if took is None:
-            self.reopened = f"did not come back within {self.reopen_within:g} s"
-            return False
-        self.reopened = f"came back after {took:.2f} s"
-        link.status = LinkStatus.OPEN
-        link.streaming = False
-        return True
+        return confirmed_by(self.confirm)
 
     @property
     def robot_heard(self) -> bool:
@@ -660,7 +676,8 @@ class SafeStop:
                 "no robot (another client may hold it; its run is not affected)"
             )
         self._gone = True  # what to do now, said unless nothing was set going
-        came_back = f" (it {self.reopened})" if self.reopened else ""
+        said = self.port_return.said
+        came_back = f" (it {said})" if said else ""
         return f"the stop was not delivered: the port is gone{came_back}"
 
     def _undelivered(self, why: str) -> bool:

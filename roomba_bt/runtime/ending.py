@@ -255,7 +255,8 @@ def stop_robot(connection: Connection, summary: RunSummary, first: bool = False)
         sequence = [c.name for c in connection.stop_sequence()]
         if connection.safe_stop():
             before = "drive 0, motors off before the tree's stop, then " if first else ""
-            reopened = getattr(getattr(connection, "ending", None), "reopened", "")
+            back = getattr(getattr(connection, "ending", None), "port_return", None)
+            reopened = back.said if back is not None else ""
             through = f" (the port {reopened})" if reopened else ""
             summary.safe_stop = (
                 before + "sent " + ", ".join(sequence) + through

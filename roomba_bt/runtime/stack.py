@@ -273,7 +273,7 @@ class RunStack:
             connection.transport = transport  # the record's tap under the taken-over link
         self.connection = connection
         # a port that fails is waited for as long as a silent stream is, for the stop alone
-        connection.ending.reopen_within = grace
+        connection.ending.port_return.within = grace
         self.runner = MissionRunner(
             self.connection,
             mission,
