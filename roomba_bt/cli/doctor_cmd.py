@@ -196,7 +196,7 @@ def doctor_command(args: argparse.Namespace) -> int:
         return DoctorExit.PORT
     report.ok("port", f"opened {url} (8N1, no flow control; RTS and DTR released: BRC high)")
     try:
-        return _examine(transport, rates, args, report)
+        return _examine(transport, rates, args.allow_reset, report, args.listen)
     except _Failed as failed:
         return failed.code
     except KeyboardInterrupt:
@@ -262,11 +262,14 @@ def _after_pulse(transport: Any, rates: tuple[int, ...], before: Search, report:
 
 
 def _examine(
-    transport: Any, rates: tuple[int, ...], args: argparse.Namespace, report: Report
+    transport: Any,
+    rates: tuple[int, ...],
+    allow_reset: bool,
+    report: Report,
+    listen: float | None = None,
 ) -> int:
     from roomba_bt.robot.discovery import wake_pulse
 
-    allow_reset: bool = args.allow_reset
     searched = _search(transport, rates, report, "")
     found = searched.found
     if found is None and all(probe.echoed for probe in searched.probes):
@@ -299,7 +302,7 @@ def _examine(
         + (" (this firmware reports the OI mode + 1)" if plus_one else ""),
     )
     banner, reset_tried = _reset(transport, baud, allow_reset, report)
-    header_in_checksum, readings = _stream(transport, baud, report, args.listen)
+    header_in_checksum, readings = _stream(transport, baud, report, listen)
     profile = _profile(plus_one, header_in_checksum, banner, reset_tried, readings, report)
     _setting(report)
     _status(transport, profile, plus_one, report)
@@ -367,7 +370,7 @@ LONG_LISTEN_S = 10.0
 
 
 def _stream(
-    transport: Any, baud: int, report: Report, listen: float | None
+    transport: Any, baud: int, report: Report, listen: float | None = None
 ) -> tuple[bool | None, dict[int, int]]:
     """A stream of ``listen`` s (:func:`~roomba_bt.robot.discovery.sample_stream`, as
     ``--profile auto`` reads one; its 0.5 s unless told): which checksum convention the

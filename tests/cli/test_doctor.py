@@ -155,7 +155,9 @@ def test_a_port_that_can_neither_set_its_lines_nor_hang_up_says_press_clean_exit
     """In process: the real pty (its ioctl fails) behind a transport whose B0 fails too."""
     sim = served_sim("--pty", "--asleep")
     monkeypatch.setattr(transport_package, "SerialTransport", _NoHangUp)
-    code = doctor_command(argparse.Namespace(port=sim.address, baud=None, allow_reset=False))
+    code = doctor_command(
+        argparse.Namespace(port=sim.address, baud=None, allow_reset=False, listen=None)
+    )
     out = capsys.readouterr().out
     assert code == DoctorExit.SILENT, out
     wake = _step(out, "wake")[0]
