@@ -202,7 +202,7 @@ def _asked_again(
         return StreamLost(
             connection.name, silent_for, grace, 0, watchdog=connection.watchdog, halted=halted,
             probed=f"it answered no query, asked twice {ASK_AGAIN_AFTER_S:g} s apart, and it "
-            f"was in {mode}, which never sleeps: switched off, a flat battery, or the cable",
+            f"was in {mode}, which never sleeps: {_silent_causes(connection)}",
         )  # fmt: skip
     connection.unheard = None
     return StreamLost(
