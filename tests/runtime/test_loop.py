@@ -138,7 +138,9 @@ def test_unplugged_link_is_exit_3_and_says_the_stop_was_not_sent(run_mission: Ru
     assert run.summary.exit_code == 3
     assert run.summary.safe_stop == (
         "NOT DELIVERED: last seen in Safe spinning left at 100 mm/s; "
-        "the stop was not delivered: the port is gone"
+        "the stop was not delivered: the port is gone: the robot may still be moving: pick it "
+        "up or press its Clean or power button; reseat the cable, then roomba-bt doctor --port "
+        "sim://empty-room"
     )
     assert "final mode   unknown: last seen in Safe, the stop was not delivered" in (
         run.summary.lines()
