@@ -83,6 +83,11 @@ TEXT_BUDGET_S = 0.0002
 #: strings and a tuple, which the cyclic collector stops tracking, as it does a record (a str
 #: subclass marking them would be tracked: one more tracked object a tick)
 TEXT_KEYS = "\x00kept as text"
+#: while paused, a live run's ring keeps a frame this many stream ticks (a second) after the
+#: last one it kept: the stream goes on in a pause, and at 66.7 frames a second a 5-minute
+#: pause filled the 20 000 ticks and pushed the whole run out of the page (24 m driven,
+#: 0.5 m of path shown)
+PAUSED_ROW_TICKS = round(1.0 / SLOT_SECONDS)
 
 
 def _fixed(value: object) -> bool:
@@ -293,9 +298,9 @@ class Ring:
 
 class RunFeed:
     """Everything the page shows, appended by the tick thread, read by the server thread.
-    ``packed_from``: None, the last ``history`` ticks are kept (a live run's); a mission
-    time, every tick from then on, packed (a recorded run's, from 0 or ``monitor RECORD
-    --from``; its events are every tick's)."""
+    ``packed_from``: None, the last ``history`` ticks are kept (a live run's; a pause's
+    frames at one a second: :meth:`_thins`); a mission time, every tick from then on, packed
+    (a recorded run's, from 0 or ``monitor RECORD --from``; its events are every tick's)."""
 
     def __init__(
         self,
@@ -309,6 +314,7 @@ class RunFeed:
         robot: str = "",
         started: datetime | None = None,
         label: str = "",
+        thin_pauses: bool = True,
     ) -> None:
         #: the run's identity, sent in the page's first message and checked with each
         #: control: a page left open after its run was killed reconnected to the next run
@@ -328,6 +334,12 @@ class RunFeed:
         else:
             self.ring = Ring(history)
         self.events: deque[Event] = deque(maxlen=2000)
+        #: a live run's ring thins its paused frames (:meth:`observe`); a record's keeps all
+        #: (its pauses are in its file already), as does ``thin_pauses=False`` (a test that
+        #: compares a live run's every frame with its replay's)
+        self.thin_pauses = thin_pauses and source != "record"
+        #: the stream's tick of the last paused frame kept (None: not paused)
+        self._paused_kept: int | None = None
         self.source = source  # simulator, robot or record
         self.truth, self.world = truth, world
         self.mission_name = mission_name
@@ -388,7 +400,8 @@ class RunFeed:
             changed = self._flipped(statuses, runner)
         snapshot = runner.snapshot if runner.has_snapshot else None
         summary = runner.summary
-        if snapshot is not None and snapshot.mode is not self._mode:
+        mode_changed = snapshot is not None and snapshot.mode is not self._mode
+        if mode_changed:
             if self._mode is not None:
                 self.event("mode", f"OI mode {snapshot.mode.label}", snapshot.time)
             self._mode = snapshot.mode
@@ -397,6 +410,11 @@ class RunFeed:
         if summary.tick_halts != self._tick_halts_seen:
             self._tick_halted(summary, snapshot)
         self._watch_board()
+        if not ticked and self.thin_pauses and snapshot is not None:
+            if self._thins(snapshot.tick, changed or mode_changed):
+                return changed
+        else:
+            self._paused_kept = None
         truth = self.truth() if self.truth is not None else None
         if truth is not None and self.truth_start is None:
             self.truth_start = truth
@@ -440,6 +458,18 @@ class RunFeed:
                                 ticked, motor_bytes)  # fmt: skip
         ring.append(record)
         return changed
+
+    def _thins(self, tick: int, news: object) -> bool:
+        """Whether this paused frame is left out of the ring: kept are the pause's first
+        frame, one a second after it (:data:`PAUSED_ROW_TICKS`) and any that brings news (a
+        status flipped, the mode changed). The page's timeline, path and robot panel then
+        show a pause at a frame a second, and a long pause no longer uses up the ticks the
+        ring holds of the run (a lunch's pause erased the morning from the page)."""
+        kept = self._paused_kept
+        if kept is not None and not news and tick - kept < PAUSED_ROW_TICKS:
+            return True
+        self._paused_kept = tick
+        return False
 
     def _watch_board(self) -> None:
         """A new version of the blackboard when a key changed (the snapshot's mirror and the

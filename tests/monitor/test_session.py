@@ -73,6 +73,7 @@ class Rig:
         mission: Path = SHUTTLE,
         world: str | Path = "empty-room",
         keep_awake: bool | None = None,
+        thin_pauses: bool = False,
     ) -> None:
         self.mission = load_mission(mission, {}, profile=CREATE2)
         self.sim = Simulator(load_world(world), CREATE2, 0)
@@ -88,7 +89,9 @@ class Rig:
         )
         self.packets = self.stack.packets
         self.connection = self.stack.connection
-        self.feed = RunFeed(history=5000, mission_name=self.mission.name)
+        # every frame of a pause kept (a live page keeps one a second): these tests read the
+        # stream's ticks of a pause and compare each frame with the record's replay
+        self.feed = RunFeed(history=5000, mission_name=self.mission.name, thin_pauses=thin_pauses)
         self.feed.set_tree(self.mission.root)
         self.session = MonitorSession(self.feed, simulator=simulator, stream_packets=self.packets)
         self.ended = threading.Event()
@@ -188,6 +191,37 @@ def test_mission_time_stands_still_while_paused_so_a_wait_does_not_count_the_pau
     assert len({r.time for r in paused}) <= 2  # held; then the frame skipped after resume
     assert len({r.tick for r in paused}) == len(paused)  # the stream's ticks went on
     assert summary.mission_time_s < (len(records) - 200) * 0.015  # the pause left out
+
+
+def test_a_live_page_keeps_a_paused_frame_a_second_so_a_long_pause_keeps_the_run(
+    until: Callable[..., None],
+) -> None:
+    """The stream goes on in a pause: at 66.7 frames a second a 5-minute pause filled the
+    page's 20 000 ticks and pushed the run out (24 m driven, 0.5 m of path shown). A live
+    feed keeps the pause's first frame, then one a second (and any that brings news); the
+    driving before it stays in the ring."""
+    rig = Rig(thin_pauses=True)
+    rig.feed.ring = Ring(400)  # the page's 20 000 ticks, scaled: 6 s of frames
+
+    def operator(rig: Rig) -> None:
+        until(lambda: rig.ticks(ticked=True) > 100)
+        rig.session.request("pause")
+        until(lambda: rig.session.state.paused)
+        until(lambda: rig.runner.summary.paused_s > 10.0)  # 667 frames: more than the ring
+        rig.session.request("stop")
+
+    rig.run_with(operator)
+    records = rig.feed.since(0)[0]
+    paused = [r for r in records if not r.ticked]
+    assert records[0].tick == 0  # the run's start is still held
+    assert sum(r.ticked for r in records) > 100
+    assert 10 <= len(paused) <= 13, [r.tick for r in paused]
+    # the pause's first frame (its snapshot still in Safe), the one that shows Passive (news),
+    # then a frame a second of stream time
+    assert paused[0].tick == rig.session.state.paused_tick
+    assert paused[1].tick == paused[0].tick + 1 and paused[1].mode != paused[0].mode
+    gaps = {b.tick - a.tick for a, b in itertools.pairwise(paused[1:])}
+    assert gaps == {67}, gaps
 
 
 def test_resume_and_step_are_refused_unless_paused_and_bad_requests_change_nothing() -> None:
