@@ -433,13 +433,14 @@ class MonitorServer:
     def _session_view(self) -> dict[str, Any]:
         session = self.session
         if session is None:
-            return {"paused": False, "pause_reason": "", "paused_tick": None, "breakpoints": {},
-                    "forced": {}}  # fmt: skip
+            return {"paused": False, "pause_reason": "", "paused_tick": None, "sleep_note": "",
+                    "breakpoints": {}, "forced": {}}  # fmt: skip
         state = session.state
         return {
             "paused": state.paused,
             "pause_reason": state.pause_reason,
             "paused_tick": state.paused_tick,
+            "sleep_note": state.sleep_note,
             "breakpoints": {str(k): v for k, v in state.breakpoints.items()},
             "forced": {str(k): v for k, v in state.forced.items()},
         }

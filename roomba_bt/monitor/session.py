@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import math
 import queue
 import threading
 from collections.abc import Callable, Iterable
@@ -33,6 +34,7 @@ from roomba_bt.oi import commands as oi
 from roomba_bt.oi.encode import Command
 from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.modes import OIMode
+from roomba_bt.printable import duration_words
 from roomba_bt.runtime.loop import StopRequested
 from roomba_bt.runtime.teardown import setup_tree, shutdown_nodes
 
@@ -51,7 +53,8 @@ STEPPED = "stepped one tick"
 FORCEABLE = {"success": Status.SUCCESS, "failure": Status.FAILURE}
 #: an OI robot's sleep after this long in Passive (keep-awake's BRC pulses prevent it)
 ROBOT_SLEEPS_S = 300.0
-#: how long into a pause a robot that will sleep is warned of
+#: how long into a pause a robot that will sleep is warned of in the event log and the
+#: terminal's log (the page's banner counts down from the pause's start: ``sleep_note``)
 SLEEP_WARNING_S = 240.0
 
 
@@ -79,6 +82,12 @@ class SessionState:
     pause_reason: str = ""
     #: the stream's tick the pause began at (the page says for how long); None: not paused
     paused_tick: int | None = None
+    #: on a link without keep-awake, how long until the paused robot sleeps and the run
+    #: ends, counted down each second of the pause from its start (``this link cannot keep
+    #: the robot awake: the run ends 5 min into the pause; 4 min 18 s left``); "" otherwise.
+    #: It came only at 4 minutes, in the pause's reason, and 42 s later still said "in
+    #: about 60 s"
+    sleep_note: str = ""
     breakpoints: dict[int, str] = field(default_factory=dict)
     forced: dict[int, str] = field(default_factory=dict)
     watching: str | None = None  # the mission file under --watch
@@ -137,6 +146,8 @@ class MonitorSession:
         #: the stream's tick at which a paused robot that sleeps in Passive (no keep-awake)
         #: is warned of (None: not paused, warned already, or it does not sleep)
         self._sleep_warn_tick: int | None = None
+        #: the stream's tick at which that robot sleeps (None: not paused, or it does not)
+        self._sleep_tick: int | None = None
         #: each forced node's entry in the summary's ``forced``, until it is released
         self._forcing: dict[int, int] = {}
         self.listeners: list[Callable[[str], None]] = []  # told of pauses (the terminal)
@@ -191,6 +202,8 @@ class MonitorSession:
         if self.state.paused:
             self.feed.observe(runner, ticked=False)
             self._tally_pause(runner)
+            if self._sleep_tick is not None and runner.has_snapshot:
+                self._count_down_to_sleep(runner.snapshot.tick)
             if self._sleep_warn_tick is not None and runner.snapshot.tick >= self._sleep_warn_tick:
                 self._warn_of_sleep(runner)
             if self.paced:
@@ -294,16 +307,24 @@ class MonitorSession:
             else:
                 summary.pauses += 1
         runner.clock_held = True  # mission time stands still until the resume
-        self._sleep_warn_tick = (
-            runner.snapshot.tick + round(SLEEP_WARNING_S / SLOT_SECONDS)
-            if self.WARN_OF_SLEEP and _sleeps_in_passive(connection) and runner.has_snapshot
-            else None
-        )
+        sleeps = self.WARN_OF_SLEEP and _sleeps_in_passive(connection) and runner.has_snapshot
+        began = runner.snapshot.tick if sleeps else 0
+        self._sleep_warn_tick = began + round(SLEEP_WARNING_S / SLOT_SECONDS) if sleeps else None
+        self._sleep_tick = began + round(ROBOT_SLEEPS_S / SLOT_SECONDS) if sleeps else None
+        if sleeps:
+            self._count_down_to_sleep(began)
         sent = ", ".join(c.name for c in commands) or "nothing"
+        sleeps_at = duration_words(ROBOT_SLEEPS_S)
+        asleep = (
+            f"; this link cannot keep the robot awake: the run ends {sleeps_at} into the pause "
+            "unless resumed"
+            if sleeps
+            else ""
+        )
         self._said(
             runner,
             "control",
-            f"pause ({why}): safe stop {self.SENT} {sent}{self.WHERE}; tree frozen",
+            f"pause ({why}): safe stop {self.SENT} {sent}{self.WHERE}; tree frozen{asleep}",
         )
         for listener in self.listeners:
             with contextlib.suppress(Exception):
@@ -316,20 +337,28 @@ class MonitorSession:
         self._resume(runner, STEP)
         self._steps_left = 1
 
+    def _count_down_to_sleep(self, tick: int) -> None:
+        """The banner's countdown (:attr:`SessionState.sleep_note`) at stream tick ``tick``,
+        in whole seconds left (a new text once a second: the page is sent it as it changes)."""
+        assert self._sleep_tick is not None
+        left = max(0.0, (self._sleep_tick - tick) * SLOT_SECONDS)
+        self.state.sleep_note = sleep_countdown(left)
+
     def _warn_of_sleep(self, runner: MissionRunner) -> None:
         """The pause has lasted :data:`SLEEP_WARNING_S` on a link without keep-awake: an OI
         robot sleeps after 5 minutes in Passive, and the run then ends (CONNECTION LOST, "the
-        robot fell asleep") with nothing said before: said now, on the page (its event log
-        and the pause's reason) and in the terminal's log."""
+        robot fell asleep"): said in the page's event log and the terminal's log, which have
+        no countdown (the page's banner has had one since the pause began)."""
         self._sleep_warn_tick = None
-        left = ROBOT_SLEEPS_S - SLEEP_WARNING_S
+        tick = runner.snapshot.tick
+        left = (self._sleep_tick - tick) * SLOT_SECONDS if self._sleep_tick is not None else 0.0
+        paused = (tick - (self.state.paused_tick or 0)) * SLOT_SECONDS
         text = (
-            f"paused {SLEEP_WARNING_S / 60:g} min without keep-awake: the robot sleeps after "
-            f"{ROBOT_SLEEPS_S / 60:g} min paused in Passive (in about {left:g} s; the run then "
-            "ends, connection lost); resume or stop"
+            f"paused {duration_words(paused)} without keep-awake: the robot sleeps after "
+            f"{duration_words(ROBOT_SLEEPS_S)} paused in Passive (in {duration_words(left)}; "
+            "the run then ends, connection lost); resume or stop"
         )
-        self.state.pause_reason += f" - {text}"
-        self.feed.event("warning", text)
+        self.feed.event("warning", text, runner.snapshot.time, tick)
         log.warning("monitor: %s", text, extra=IN_THE_EVENT_LOG)  # in the terminal's log too
 
     def _resume(self, runner: MissionRunner, why: str) -> None:
@@ -337,6 +366,8 @@ class MonitorSession:
         self._tally_pause(runner)
         self._paused_before_s = runner.summary.paused_s
         self.state.paused_tick = None
+        self._sleep_warn_tick = self._sleep_tick = None  # awake again: no sleep to count to
+        self.state.sleep_note = ""
         if self._held_end is not None:  # nothing to go on with: no mode, no wheels again
             self.state.paused, self.state.pause_reason = False, ""
             self._steps_left = None
@@ -354,7 +385,6 @@ class MonitorSession:
             runner.connection.send_many(again)
             runner.count_written()
         self.state.paused, self.state.pause_reason = False, ""
-        self._sleep_warn_tick = None
         runner.clock_held = False
         self._skip_tick = True  # the tree next ticks on a frame that shows the new mode
         back = f"back to {mode.label}" if mode is not None else "mode unchanged"
@@ -468,8 +498,10 @@ class MonitorSession:
         self.feed.set_tree(mission.root)
         self._said(runner, "reload", f"reloaded {mission.name}: the new tree starts from its root")
         self.state.paused = was_paused
-        if not was_paused:
+        if not was_paused:  # the reload's own pause lasts no frame: nothing to count down
             self.state.paused_tick = None
+            self._sleep_warn_tick = self._sleep_tick = None
+            self.state.sleep_note = ""
         runner.clock_held = was_paused
         self._skip_tick = True
         # the new tree sets its own modes, from Passive: now, or when a paused run resumes
@@ -570,6 +602,15 @@ def find_node(infos: list[Any], wanted: str) -> int:
     raise ValueError(
         f"node {wanted!r}: no node has that name or path; give an index 0..{len(infos) - 1}, "
         "a node's name or its path from the root (names joined by /)"
+    )
+
+
+def sleep_countdown(left_s: float) -> str:
+    """The paused banner's words for a robot that sleeps in ``left_s`` seconds (rounded up:
+    "0 s left" only once it is due)."""
+    return (
+        "this link cannot keep the robot awake: the run ends "
+        f"{duration_words(ROBOT_SLEEPS_S)} into the pause; {duration_words(math.ceil(left_s))} left"
     )
 
 

@@ -773,23 +773,30 @@ def test_a_replayed_pause_says_its_safe_stop_was_replayed_not_sent(
 
 
 @pytest.mark.parametrize("keep_awake", [False, None])
-def test_a_long_pause_without_keep_awake_is_warned_of_before_the_robot_sleeps(
+def test_a_long_pause_without_keep_awake_counts_down_to_the_robot_s_sleep_from_its_start(
     until: Callable[..., None], monkeypatch: pytest.MonkeyPatch, keep_awake: bool | None
 ) -> None:
     """A robot paused in Passive on a link without keep-awake falls asleep after 5 minutes
-    and the run ends (connection lost), with no word before. Warned of on the page (its
-    event log, the pause's reason) and in the log 4 minutes into the pause (here 1.5 s);
-    not with keep-awake on, which keeps the robot awake."""
-    monkeypatch.setattr(session_module, "SLEEP_WARNING_S", 1.5, raising=False)
+    and the run ends (connection lost). The page's banner says so from the pause's start
+    and counts down in the stream's time (it said nothing for 4 minutes, then "in about
+    60 s" for the rest); the event log and the terminal's log warn once, 4 minutes in (here
+    the robot sleeps at 3 s, warned at 1.5 s). Nothing of it with keep-awake on, which keeps
+    the robot awake."""
+    monkeypatch.setattr(session_module, "ROBOT_SLEEPS_S", 3.0)
+    monkeypatch.setattr(session_module, "SLEEP_WARNING_S", 1.5)
     rig = Rig(keep_awake=keep_awake)
-    seen: dict[str, object] = {}
+    notes: dict[int, str] = {}  # paused frames -> the banner's countdown then
 
     def operator(rig: Rig) -> None:
         until(lambda: rig.ticks(ticked=True) > 50)
         rig.session.request("pause")
         until(lambda: rig.session.state.paused)
-        until(lambda: rig.ticks(ticked=False) > 200)  # 3 s of stream, paused
-        seen["reason"] = rig.session.state.pause_reason
+        began = rig.ticks(ticked=False)
+        for frames in (1, 67, 134):  # the pause's start, 1 s and 2 s of stream in
+            until(lambda frames=frames: rig.ticks(ticked=False) - began >= frames)
+            notes[frames] = rig.session.state.sleep_note
+        seen_reason = rig.session.state.pause_reason
+        notes[0] = seen_reason
         rig.session.request("stop")
 
     logger = logging.getLogger("roomba_bt")
@@ -800,12 +807,23 @@ def test_a_long_pause_without_keep_awake_is_warned_of_before_the_robot_sleeps(
     finally:
         logger.removeHandler(handler)
     warnings = [e.text for e in rig.feed.events if "without keep-awake" in e.text]
+    [pause] = [e.text for e in rig.feed.events if e.text.startswith("pause (")]
+    assert notes[0] == "paused by the operator"  # the reason stays the reason
     if keep_awake is False:  # once: it was also there again as "monitor: paused 4 min ..."
-        assert len(warnings) == 1 and "resume or stop" in warnings[0], warnings
-        assert "the robot sleeps after 5 min paused in Passive" in warnings[0]
-        assert "without keep-awake" in str(seen["reason"])
+        prefix = "this link cannot keep the robot awake: the run ends 3 s into the pause; "
+        assert notes[1].startswith(prefix), notes
+        # the countdown is the stream's seconds left, give or take the frame read
+        left = {n: int(notes[n].removeprefix(prefix).removesuffix(" s left")) for n in (1, 67, 134)}
+        assert left[1] == 3 and left[67] in (1, 2) and left[134] in (0, 1), notes
+        assert pause.endswith("this link cannot keep the robot awake: the run ends 3 s into "
+                              "the pause unless resumed"), pause  # fmt: skip
+        assert warnings == [
+            "paused 2 s without keep-awake: the robot sleeps after 3 s paused in Passive "
+            "(in 2 s; the run then ends, connection lost); resume or stop"
+        ]  # 1.5 s, 1.5 s left: whole seconds, rounded half to even
     else:
-        assert warnings == [] and seen["reason"] == "paused by the operator"
+        assert warnings == [] and set(notes.values()) == {"", "paused by the operator"}
+        assert "keep the robot awake" not in pause
 
 
 def test_a_pause_the_robot_fell_asleep_in_says_the_stop_met_a_sleeping_robot(
@@ -909,7 +927,8 @@ def test_a_run_paused_stepped_stopped_and_late_after_a_fall_replays_byte_for_byt
     link = BusyAfterTheFall(Simulator(load_world(tmp_path / "ledge.yaml"), CREATE2, 0))
     stack = RunStack(mission, link, profile=CREATE2, timeout_s=60.0,
                      record=Recording(path, str(source)))  # fmt: skip
-    feed = RunFeed(history=5000, mission_name=mission.name)
+    # every frame of the pauses kept (as Rig keeps them): compared with the replay's below
+    feed = RunFeed(history=5000, mission_name=mission.name, thin_pauses=False)
     feed.set_tree(mission.root)
     session = MonitorSession(feed, simulator=True, stream_packets=stack.packets)
     acts = [(100, "pause"), (150, "step"), (160, "resume"),  # before the fall (at ~4.3 s)

@@ -491,7 +491,8 @@ function updateControls() {
   else if (s.paused) {
     const since = s.paused_tick !== undefined && s.paused_tick !== null
       ? ` for ${duration((view.window[1] - s.paused_tick) * SLOT)}` : "";
-    showBanner(`PAUSED${since} — ` + (s.pause_reason || "") + " (robot stopped, in Passive; resume goes back to the mission's mode)", false);
+    const sleeps = s.sleep_note ? ` (${s.sleep_note})` : "";
+    showBanner(`PAUSED${since}${sleeps} — ` + (s.pause_reason || "") + " (robot stopped, in Passive; resume goes back to the mission's mode)", false);
   }
   else showBanner("");
   robotTitle();
