@@ -607,7 +607,7 @@ def monitor_command(args: argparse.Namespace) -> int:
     if not server_available():
         print(f"roomba-bt: {INSTALL_HINT}", file=sys.stderr)
         return ExitCode.INVALID
-    from roomba_bt.monitor.recorded import replay_into_feed
+    from roomba_bt.monitor.recorded import recorded_world, replay_into_feed
     from roomba_bt.monitor.server import MonitorServer
     from roomba_bt.runtime.provenance import changed_since
 
@@ -639,6 +639,11 @@ def monitor_command(args: argparse.Namespace) -> int:
         record, mission, profile, packets, baud, args.record,
         progress=replay_progress("monitor", record), diverged_at=diverged_at, window=window,
     )  # fmt: skip
+    drawn = recorded_world(record)
+    if isinstance(drawn, str):
+        print(f"monitor: {args.record}: {drawn}", file=sys.stderr)
+    elif drawn is not None:  # odometry's 0 is where the robot started in it
+        feed.world, feed.truth_start = drawn
     server = MonitorServer(feed, None, host=host, port=port, readonly=True)
     try:
         url = server.start()

@@ -400,8 +400,9 @@ class RunFeed:
             changed = self._flipped(statuses, runner)
         snapshot = runner.snapshot if runner.has_snapshot else None
         summary = runner.summary
-        mode_changed = snapshot is not None and snapshot.mode is not self._mode
-        if mode_changed:
+        mode_changed = False
+        if snapshot is not None and snapshot.mode is not self._mode:
+            mode_changed = True
             if self._mode is not None:
                 self.event("mode", f"OI mode {snapshot.mode.label}", snapshot.time)
             self._mode = snapshot.mode

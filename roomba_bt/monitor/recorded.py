@@ -3,7 +3,8 @@
 The record's sensor bytes go through the same parser, mode model and tree as ``replay`` does
 (:class:`~roomba_bt.runtime.recording.ReplayTransport`), and every tick is kept, packed
 (:mod:`roomba_bt.monitor.history`), so the page's timeline covers the whole run. A record
-holds no simulator truth: the path is the odometry.
+holds no simulator truth: the path is the odometry, drawn in the world a simulator run's
+record names (:func:`recorded_world`) from where the robot started in it.
 
 The operator's acts are in the record as notes, each with the tick it was done at and in which
 half of that frame (before or after the tick): pause, resume, a condition forced. The replay
@@ -28,10 +29,12 @@ from roomba_bt.runtime.loop import StopRequested
 from roomba_bt.runtime.recording import (
     ENDED,
     RECORD_STOPPED,
+    SIMULATOR,
     STILL_WRITTEN,
     Record,
     ReplayTransport,
     ending_text,
+    recorded_path,
 )
 from roomba_bt.runtime.stack import replay_record
 from roomba_bt.runtime.summary import RunSummary
@@ -85,6 +88,41 @@ def replay_into_feed(
     whole = whole and record.recording_stopped is None and not transport.ended_early
     feed.end(finished, Ending.of(summary) if whole else None)
     return feed, summary
+
+
+#: the world the page draws for a record and where its robot started there (mm, mm, rad:
+#: the odometry's 0), or why it draws none (a text for stderr)
+DrawnWorld = tuple[dict[str, Any], tuple[float, float, float]]
+
+
+def recorded_world(record: Record) -> DrawnWorld | str | None:
+    """The world a simulator run's record names (its header's ``simulator.world``: a shipped
+    world's name, or a file's path from the record's folder, found as ``replay`` finds the
+    mission's), drawn as the live page draws it, with the pose the robot started at (its
+    seed's, under ``random_start``): the recorded page drew the bare odometry, in its own
+    frame, with no rooms, furniture or dock. None for a robot's record; a text saying why
+    when the world named cannot be read (the page then draws the odometry alone)."""
+    from roomba_bt.monitor.views import world_drawing
+    from roomba_bt.sim.world import WorldError, load_world
+
+    options = record.header.get(SIMULATOR)
+    if not isinstance(options, dict) or not isinstance(options.get("world"), str):
+        return None
+    name = options["world"]
+    where = recorded_path(name, record.header, record.path)
+    if where is not None and not where.is_file() and "/" not in name:
+        where = None  # a shipped world's name (``apartment``), as ``run --world`` took it
+    try:
+        world = load_world(where if where is not None else name)
+    except WorldError as exc:
+        return f"its world {name}: {exc}; the page draws the odometry alone"
+    seed = options.get("seed")
+    start = (
+        world.sample_start(seed)
+        if options.get("random_start") and isinstance(seed, int)
+        else world.start
+    )
+    return world_drawing(world), (start.x, start.y, start.theta)
 
 
 def recorded_start(record: Record) -> datetime | None:

@@ -317,9 +317,14 @@ def tree_view(feed: RunFeed, generation: int | None = None) -> list[dict[str, An
 
 
 def world_view(simulator: Any) -> dict[str, Any]:
-    """The simulator's world as the page draws it (the shapes ``sim/plot.py`` draws; a dirt
-    patch with the dirt-detect level, packet 15, the robot reads over it)."""
-    world = simulator.world
+    """The simulator's world as the page draws it (:func:`world_drawing`)."""
+    return world_drawing(simulator.world)
+
+
+def world_drawing(world: Any) -> dict[str, Any]:
+    """A world as the page draws it, a live simulator's or the one a record names (the
+    shapes ``sim/plot.py`` draws; a dirt patch with the dirt-detect level, packet 15, the
+    robot reads over it)."""
     out: dict[str, Any] = {
         "name": getattr(world, "name", ""),
         "rooms": [[list(p) for p in room] for room in world.rooms],

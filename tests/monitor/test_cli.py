@@ -29,10 +29,11 @@ SHUTTLE = Path(__file__).resolve().parent / "missions" / "shuttle.yaml"
 ServedRecord = Callable[..., tuple[str, str]]
 
 
-def _record_the_shuttle(record: Path) -> int:
-    """Run the shuttle for 2 s of mission time into ``record`` (it times out): its exit code."""
+def _record_the_shuttle(record: Path, *options: str) -> int:
+    """Run the shuttle for 2 s of mission time into ``record`` (it times out): its exit code.
+    ``options``: more of ``run``'s (``--world apartment``)."""
     return main(["run", str(SHUTTLE), "--fast", "--display", "none", "--timeout", "2",
-                 "--record", str(record)])  # fmt: skip
+                 "--record", str(record), *options])  # fmt: skip
 
 
 @pytest.fixture
@@ -967,3 +968,48 @@ def test_a_program_builds_a_live_monitor_from_typed_options(tmp_path: Path) -> N
     assert MonitorOptions.from_args(args) == MonitorOptions(
         mission=SHUTTLE, address=("127.0.0.1", 0), readonly=True, virtual_clock=True
     )
+
+
+def test_a_recorded_view_draws_the_world_its_record_names_from_where_the_robot_started(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], served_record: ServedRecord
+) -> None:
+    """The recorded page drew the bare odometry in its own frame (no rooms, no dock) though
+    the record's header names the world: a shipped one by its name, a file by its path from
+    the record's folder (found as ``replay`` finds the mission). A world gone since is said on
+    stderr, and the page draws the odometry alone; a robot's record names none."""
+    pytest.importorskip("aiohttp")
+    from roomba_bt.monitor.recorded import recorded_world
+    from roomba_bt.runtime.recording import SIMULATOR, load_record
+    from roomba_bt.sim.world import WORLDS_DIR, load_world
+
+    shipped = tmp_path / "shipped.jsonl"
+    _record_the_shuttle(shipped, "--world", "apartment")
+    drawn = recorded_world(load_record(shipped))
+    assert isinstance(drawn, tuple)
+    world, start = drawn
+    apartment = load_world("apartment")
+    assert world["name"] == apartment.name and world["rooms"] and world["dock"] is not None
+    assert start == (apartment.start.x, apartment.start.y, apartment.start.theta)
+
+    own = tmp_path / "worlds" / "mine.yaml"
+    own.parent.mkdir()
+    own.write_text((WORLDS_DIR / "apartment.yaml").read_text())
+    (tmp_path / "records").mkdir()
+    by_path = tmp_path / "records" / "run.jsonl"
+    _record_the_shuttle(by_path, "--world", str(own))
+    record = load_record(by_path)
+    assert record.header[SIMULATOR]["world"] == "../worlds/mine.yaml"
+    drawn = recorded_world(record)
+    assert isinstance(drawn, tuple) and drawn[0]["rooms"] == world["rooms"]
+    capsys.readouterr()
+
+    own.unlink()
+    problem = recorded_world(load_record(by_path))
+    assert isinstance(problem, str) and problem.startswith("its world ../worlds/mine.yaml: ")
+    assert problem.endswith("; the page draws the odometry alone")
+    _, err = served_record(by_path)
+    assert f"monitor: {by_path}: its world ../worlds/mine.yaml: " in err, err
+
+    robot = load_record(shipped)
+    del robot.header[SIMULATOR]
+    assert recorded_world(robot) is None

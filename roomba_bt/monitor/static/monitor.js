@@ -689,6 +689,9 @@ function hello(header) {
   document.title = `${run.label ? run.label + " · " : ""}${header.mission}`
     + `${run.robot ? " on " + run.robot : ""} · roomba-bt monitor`;
   $("source").textContent = header.source;
+  // only the simulator knows where the robot truly is: no "true pose" legend on a robot's
+  // page or a record's, which draw none
+  $("legend-truth").hidden = header.source !== "simulator";
   noControlsNote(header);
   view.window = [header.first_tick, header.last_tick];
   view.finished = header.finished === undefined ? view.finished : header.finished;
