@@ -601,13 +601,25 @@ def _usage_error(message: str) -> int:
     return ExitCode.INVALID
 
 
+def _draw_recorded_world(feed: Any, record: Any, shown: str) -> None:
+    """The world ``record`` names into its page (odometry's 0 where the robot started in
+    it), or why not on stderr (``shown``: the record as the user named it)."""
+    from roomba_bt.monitor.recorded import recorded_world
+
+    drawn = recorded_world(record)
+    if isinstance(drawn, str):
+        print(f"monitor: {shown}: {drawn}", file=sys.stderr)
+    elif drawn is not None:
+        feed.world, feed.truth_start = drawn
+
+
 def monitor_command(args: argparse.Namespace) -> int:
     from roomba_bt.cli.run_cmd import load_recorded, replay_progress
 
     if not server_available():
         print(f"roomba-bt: {INSTALL_HINT}", file=sys.stderr)
         return ExitCode.INVALID
-    from roomba_bt.monitor.recorded import recorded_world, replay_into_feed
+    from roomba_bt.monitor.recorded import replay_into_feed
     from roomba_bt.monitor.server import MonitorServer
     from roomba_bt.runtime.provenance import changed_since
 
@@ -639,11 +651,7 @@ def monitor_command(args: argparse.Namespace) -> int:
         record, mission, profile, packets, baud, args.record,
         progress=replay_progress("monitor", record), diverged_at=diverged_at, window=window,
     )  # fmt: skip
-    drawn = recorded_world(record)
-    if isinstance(drawn, str):
-        print(f"monitor: {args.record}: {drawn}", file=sys.stderr)
-    elif drawn is not None:  # odometry's 0 is where the robot started in it
-        feed.world, feed.truth_start = drawn
+    _draw_recorded_world(feed, record, args.record)
     server = MonitorServer(feed, None, host=host, port=port, readonly=True)
     try:
         url = server.start()

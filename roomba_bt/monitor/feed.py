@@ -302,6 +302,7 @@ class RunFeed:
     frames at one a second: :meth:`_thins`); a mission time, every tick from then on, packed
     (a recorded run's, from 0 or ``monitor RECORD --from``; its events are every tick's)."""
 
+    # long on purpose: every attribute the feed holds, each said where it is set
     def __init__(
         self,
         *,
@@ -392,6 +393,8 @@ class RunFeed:
         return self.generation
 
     # ---------------------------------------------------------------- tick thread
+    # long on purpose: once per tick, on the tick thread: one pass with no call it need not
+    # make (each check a compare; the record built in place)
     def observe(self, runner: MissionRunner, ticked: bool = True) -> tuple[int, ...]:
         """Record this tick; returns the indices of the nodes whose status flipped."""
         statuses = list(map(_STATUS, self._nodes))

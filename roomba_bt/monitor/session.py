@@ -203,7 +203,7 @@ class MonitorSession:
             self.feed.observe(runner, ticked=False)
             self._tally_pause(runner)
             if self._sleep_tick is not None and runner.has_snapshot:
-                self._count_down_to_sleep(runner.snapshot.tick)
+                self.state.sleep_note = sleep_countdown(self._sleep_tick - runner.snapshot.tick)
             if self._sleep_warn_tick is not None and runner.snapshot.tick >= self._sleep_warn_tick:
                 self._warn_of_sleep(runner)
             if self.paced:
@@ -312,15 +312,9 @@ class MonitorSession:
         self._sleep_warn_tick = began + round(SLEEP_WARNING_S / SLOT_SECONDS) if sleeps else None
         self._sleep_tick = began + round(ROBOT_SLEEPS_S / SLOT_SECONDS) if sleeps else None
         if sleeps:
-            self._count_down_to_sleep(began)
+            self.state.sleep_note = sleep_countdown(round(ROBOT_SLEEPS_S / SLOT_SECONDS))
         sent = ", ".join(c.name for c in commands) or "nothing"
-        sleeps_at = duration_words(ROBOT_SLEEPS_S)
-        asleep = (
-            f"; this link cannot keep the robot awake: the run ends {sleeps_at} into the pause "
-            "unless resumed"
-            if sleeps
-            else ""
-        )
+        asleep = f"; {_cannot_keep_awake()} unless resumed" if sleeps else ""
         self._said(
             runner,
             "control",
@@ -337,13 +331,6 @@ class MonitorSession:
         self._resume(runner, STEP)
         self._steps_left = 1
 
-    def _count_down_to_sleep(self, tick: int) -> None:
-        """The banner's countdown (:attr:`SessionState.sleep_note`) at stream tick ``tick``,
-        in whole seconds left (a new text once a second: the page is sent it as it changes)."""
-        assert self._sleep_tick is not None
-        left = max(0.0, (self._sleep_tick - tick) * SLOT_SECONDS)
-        self.state.sleep_note = sleep_countdown(left)
-
     def _warn_of_sleep(self, runner: MissionRunner) -> None:
         """The pause has lasted :data:`SLEEP_WARNING_S` on a link without keep-awake: an OI
         robot sleeps after 5 minutes in Passive, and the run then ends (CONNECTION LOST, "the
@@ -353,11 +340,7 @@ class MonitorSession:
         tick = runner.snapshot.tick
         left = (self._sleep_tick - tick) * SLOT_SECONDS if self._sleep_tick is not None else 0.0
         paused = (tick - (self.state.paused_tick or 0)) * SLOT_SECONDS
-        text = (
-            f"paused {duration_words(paused)} without keep-awake: the robot sleeps after "
-            f"{duration_words(ROBOT_SLEEPS_S)} paused in Passive (in {duration_words(left)}; "
-            "the run then ends, connection lost); resume or stop"
-        )
+        text = sleep_warning(paused, left)
         self.feed.event("warning", text, runner.snapshot.time, tick)
         log.warning("monitor: %s", text, extra=IN_THE_EVENT_LOG)  # in the terminal's log too
 
@@ -605,12 +588,27 @@ def find_node(infos: list[Any], wanted: str) -> int:
     )
 
 
-def sleep_countdown(left_s: float) -> str:
-    """The paused banner's words for a robot that sleeps in ``left_s`` seconds (rounded up:
-    "0 s left" only once it is due)."""
+def _cannot_keep_awake() -> str:
     return (
         "this link cannot keep the robot awake: the run ends "
-        f"{duration_words(ROBOT_SLEEPS_S)} into the pause; {duration_words(math.ceil(left_s))} left"
+        f"{duration_words(ROBOT_SLEEPS_S)} into the pause"
+    )
+
+
+def sleep_countdown(ticks_left: int) -> str:
+    """The paused banner's countdown (:attr:`SessionState.sleep_note`) for a robot that
+    sleeps in ``ticks_left`` stream ticks, in whole seconds rounded up ("0 s left" only once
+    it is due): a new text once a second, which the page is sent as it changes."""
+    left = duration_words(math.ceil(max(0, ticks_left) * SLOT_SECONDS))
+    return f"{_cannot_keep_awake()}; {left} left"
+
+
+def sleep_warning(paused_s: float, left_s: float) -> str:
+    """The event log's and the terminal's warning :data:`SLEEP_WARNING_S` into the pause."""
+    return (
+        f"paused {duration_words(paused_s)} without keep-awake: the robot sleeps after "
+        f"{duration_words(ROBOT_SLEEPS_S)} paused in Passive (in {duration_words(left_s)}; "
+        "the run then ends, connection lost); resume or stop"
     )
 
 
