@@ -111,6 +111,10 @@ CHOSEN_TOKENS = (
     ("--monitor-token", "monitor_token", TOKEN_VARIABLE),
     ("--monitor-view-token", "monitor_view_token", VIEW_TOKEN_VARIABLE),
 )
+#: the switches that shape the page ``--monitor`` serves: without it each is said to be a
+#: mistake, as a token is (``--monitor-readonly`` alone read like "a read-only monitor",
+#: and the run served no page without a word)
+MONITOR_SWITCHES = (("--monitor-readonly", "monitor_readonly"), ("--monitor-force", "monitor_force"))
 #: a token's length: as long as the generated one's at least (``secrets.token_urlsafe(18)``,
 #: 24 characters), at most what a URL and a cookie carry without trouble
 TOKEN_LENGTH = (24, 256)
@@ -148,7 +152,12 @@ def chosen_token(args: argparse.Namespace, environ: Mapping[str, str] = os.envir
     ``environ`` (:data:`CHOSEN_TOKENS`; checked here: its problem names the variable), into
     ``args``; "" when all is well, else what is wrong. A token on the command line without
     ``--monitor`` is a mistake said as such; a variable, set once for every run, is left
-    unused then. The two the same is a mistake too: the view link would have the controls."""
+    unused then. The two the same is a mistake too: the view link would have the controls.
+    A switch of :data:`MONITOR_SWITCHES` without ``--monitor`` is the same mistake."""
+    if args.monitor is None:
+        for option, attribute in MONITOR_SWITCHES:
+            if getattr(args, attribute, False):
+                return f"{option} is for --monitor: add it"
     for option, attribute, variable in CHOSEN_TOKENS:
         if getattr(args, attribute, None) is not None:
             if args.monitor is None:
@@ -169,6 +178,23 @@ def chosen_token(args: argparse.Namespace, environ: Mapping[str, str] = os.envir
             f"whoever has the view link would have the controls; choose another ({MAKE_ONE})"
         )
     return ""
+
+
+def say_where(host: str, url: str, which: str) -> None:
+    """What the URL alone does not say: a wildcard address is no address to open from
+    another machine (browsers refuse 0.0.0.0), so the machine's name and LAN addresses
+    follow it (``run`` and ``monitor RECORD`` alike: a record shown on a phone needs them
+    too). ``which``: the line's start after ``monitor: `` (which link it is)."""
+    if host not in WILDCARD_HOSTS:
+        return
+    bound = f"//[{host}]:" if ":" in host else f"//{host}:"
+    named = url.replace(bound, f"//{socket.gethostname()}:", 1)
+    by_address = [
+        url.replace(bound, f"//[{a}]:" if ":" in a else f"//{a}:", 1)
+        for a in lan_addresses(ipv6=host == "::")
+    ]
+    also = f" or, by address, {' or '.join(by_address)}" if by_address else ""
+    print(f"monitor: {which} on every address of this machine: {named}{also}", flush=True)
 
 
 def add_run_arguments(run: argparse.ArgumentParser) -> None:
@@ -362,36 +388,19 @@ class LiveMonitor:
         which = ": ".join(filter(None, (feed.label, which)))
         which = f" ({which})" if which else ""
         print(f"monitor: {url}{which}{CHOSEN_TOKEN if chosen else ''}", flush=True)
-        self._say_where(host, url, "it listens")
+        say_where(host, url, "it listens")
         if server.view_url is not None:
             chosen_view = self.options.view_token
             view_url = _without_token(server.view_url) if chosen_view else server.view_url
             said = CHOSEN_VIEW_TOKEN if chosen_view else ""
             print(f"monitor: view only: {view_url}{said}", flush=True)
-            self._say_where(host, view_url, "view only: it listens")
+            say_where(host, view_url, "view only: it listens")
         if self.options.virtual_clock:
             print(
                 "roomba-bt: --fast runs the mission on the virtual clock: it may end before a "
                 "page opens (in real time without --fast; or --record it and open the record "
                 "with roomba-bt monitor FILE)",
                 file=sys.stderr,
-            )
-
-    def _say_where(self, host: str, url: str, which: str) -> None:
-        """What the URL alone does not say: a wildcard address is no address to open from
-        another machine (browsers refuse 0.0.0.0). ``which``: the line's start after
-        ``monitor: `` (which link it is)."""
-        if host in WILDCARD_HOSTS:
-            bound = f"//[{host}]:" if ":" in host else f"//{host}:"
-            named = url.replace(bound, f"//{socket.gethostname()}:", 1)
-            by_address = [
-                url.replace(bound, f"//[{a}]:" if ":" in a else f"//{a}:", 1)
-                for a in lan_addresses(ipv6=host == "::")
-            ]
-            also = f" or, by address, {' or '.join(by_address)}" if by_address else ""
-            print(
-                f"monitor: {which} on every address of this machine: {named}{also}",
-                flush=True,
             )
 
     def _spawn(self, target: Any, name: str) -> None:
@@ -664,6 +673,7 @@ def monitor_command(args: argparse.Namespace) -> int:
     # killed the process before (exit 143, no word)
     previous = signal.signal(signal.SIGTERM, lambda *_: ended.set())
     print(f"monitor: {url}  (Ctrl-C ends)", flush=True)
+    say_where(host, url, "it listens")
     try:
         ended.wait()
         print("monitor: ended by SIGTERM", flush=True)

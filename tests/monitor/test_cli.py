@@ -591,6 +591,21 @@ def test_monitor_of_a_record_ends_on_sigterm_as_on_ctrl_c(
     assert "monitor: ended by SIGTERM" in out
 
 
+def test_monitor_of_a_record_on_a_wildcard_address_says_the_machine_s_name(
+    tmp_path: Path, served_record: ServedRecord
+) -> None:
+    """``monitor RECORD --monitor 0.0.0.0:PORT`` printed only the 0.0.0.0 URL, which a phone
+    cannot open; ``run`` said the machine's name and addresses too."""
+    record = tmp_path / "run.jsonl"
+    _record_the_shuttle(record)
+    out, _ = served_record(record, "--monitor", "0.0.0.0:0")
+    lines = out.splitlines()
+    at = next(i for i, line in enumerate(lines) if line.startswith("monitor: http://0.0.0.0:"))
+    assert lines[at + 1].startswith(
+        f"monitor: it listens on every address of this machine: http://{socket.gethostname()}:"
+    )
+
+
 def test_a_wildcard_address_is_said_by_the_machine_s_lan_addresses_too(
     capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -788,15 +803,28 @@ def test_a_chosen_token_that_will_not_do_is_a_usage_error_that_does_not_repeat_i
     assert "secrets.token_urlsafe(18)" in err
 
 
-def test_a_chosen_token_without_a_page_is_said(capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["run", str(SHUTTLE), "--fast", "--monitor-token", CHOSEN]) == 2
-    assert "roomba-bt: --monitor-token is for --monitor: add it" in capsys.readouterr().err
-    assert main(["run", str(SHUTTLE), "--fast", "--monitor-view-token", VIEW_CHOSEN]) == 2
-    assert "roomba-bt: --monitor-view-token is for --monitor: add it" in capsys.readouterr().err
-
-
 #: a view-only token of the operator's own (a projector's bookmark)
 VIEW_CHOSEN = "Projector-view_token-0123456789ab"
+
+
+@pytest.mark.parametrize(
+    "option",
+    [
+        ["--monitor-token", CHOSEN],
+        ["--monitor-view-token", VIEW_CHOSEN],
+        ["--monitor-readonly"],
+        ["--monitor-force"],
+    ],
+    ids=lambda option: option[0],
+)
+def test_a_monitor_option_without_a_page_is_said(
+    option: list[str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--monitor-readonly`` and ``--monitor-force`` alone were ignored without a word
+    (the run served no page) while a token alone was this error."""
+    assert main(["run", str(SHUTTLE), "--fast", "--display", "none", *option]) == 2
+    assert f"roomba-bt: {option[0]} is for --monitor: add it" in capsys.readouterr().err
+
 
 
 def _probe_the_view_link(monkeypatch: pytest.MonkeyPatch) -> dict[str, int]:
