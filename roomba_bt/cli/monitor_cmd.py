@@ -114,7 +114,10 @@ CHOSEN_TOKENS = (
 #: the switches that shape the page ``--monitor`` serves: without it each is said to be a
 #: mistake, as a token is (``--monitor-readonly`` alone read like "a read-only monitor",
 #: and the run served no page without a word)
-MONITOR_SWITCHES = (("--monitor-readonly", "monitor_readonly"), ("--monitor-force", "monitor_force"))
+MONITOR_SWITCHES = (
+    ("--monitor-readonly", "monitor_readonly"),
+    ("--monitor-force", "monitor_force"),
+)
 #: a token's length: as long as the generated one's at least (``secrets.token_urlsafe(18)``,
 #: 24 characters), at most what a URL and a cookie carry without trouble
 TOKEN_LENGTH = (24, 256)

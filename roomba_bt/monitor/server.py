@@ -21,10 +21,13 @@ link's pages, whose controls are off whatever the token, and whose cookie is the
 
     GET  /                the page (static/index.html); ``/?token=VIEW`` sends to ``/view/``
     GET  /static/NAME     its script and style, from the package
-    GET  /ws              WebSocket: {"type": "hello", ...} then {"type": "update", ...}
+    GET  /ws              WebSocket: {"type": "hello", ...} then {"type": "update", ...},
+                          at least one a second (:data:`HEARTBEAT_S`), each with "sent"
     GET  /api/state?tick=T  the run at tick T (timeline), with the path up to it
     POST /api/control     {"action": "pause"|"resume"|"step"|"stop"|"break"|"force",
-                           "node": INDEX|NAME|PATH, "value": ..., "run": RUN_ID}
+                           "node": INDEX|NAME|PATH, "value": ..., "run": RUN_ID,
+                           "seen": SENT}  (the last update's "sent": a resume, step or
+                           force from a view over STALE_VIEW_S old is 409)
                            -> 202, or 400/401/403/409 (docs/monitor.md, HTTP API); a control
                            without the run id served now (the hello's header.run.id) is 409
 
@@ -51,6 +54,7 @@ import gc
 import json
 import math
 import threading
+import time
 from collections.abc import Awaitable, Callable
 from importlib import resources
 from typing import Any
@@ -69,6 +73,19 @@ UPDATE_PERIOD_S = 0.05  # at most 20 updates a second per page
 TICK_WAIT_S = 0.05  # the longest a pump waits for a tick's end before it sends anyway
 TICK_POLL_S = 0.002  # how often it looks for that end when a tick is late
 AFTER_TICK_S = 0.001  # how long after a tick's expected end the pump looks
+#: the longest a page hears nothing: with nothing new (a record, a run that ended) the pump
+#: sends an update anyway, so a page that hears nothing for longer knows its link is silent
+#: (packets lost, the socket not closed: a train's tunnel) and says so
+HEARTBEAT_S = 1.0
+#: the oldest view a control that sets the robot going may come from: a page stamps each
+#: control with the ``sent`` of the last update it had (the server's clock: no clock of the
+#: browser's is compared), and a resume, step or force sent from a page more than this behind
+#: the run is refused. A Resume pressed 2 s into a network stall reached the run 60 s later
+#: and set the robot cleaning unseen. A late pause, stop or breakpoint stops or holds the
+#: robot: it is applied.
+STALE_VIEW_S = 3.0
+#: the controls that set the robot going, refused from a page :data:`STALE_VIEW_S` behind
+MOTION_CONTROLS = frozenset({"resume", "step", "force"})
 #: the login cookie's name, ``_PORT`` added (:func:`cookie_name`)
 COOKIE = "roomba_bt_monitor"
 #: where the view-only link's pages are (``/view/?token=VIEW``): their cookie is set for this
@@ -150,6 +167,12 @@ def next_look(ended: float, due: float, period: float = SLOT_SECONDS) -> float:
     """
     steps = max(1, math.ceil((due - ended - AFTER_TICK_S) / period))
     return ended + steps * period + AFTER_TICK_S
+
+
+def stamp() -> float:
+    """The server's time for the ``sent`` of its messages, which a page echoes as a
+    control's ``seen``: monotonic (a clock set meanwhile changes no age), to the ms."""
+    return round(time.monotonic(), 3)
 
 
 def _error(status: int, message: str) -> web.Response:
@@ -464,6 +487,7 @@ class MonitorServer:
             "path": path_view(self.feed.path(record.seq)),
             "events": [e._asdict() for e in self.feed.events_after(-1)],  # not the ticks
             "session": self._session_view(),
+            "sent": stamp(),
         }
         return web.json_response(body)
 
@@ -495,6 +519,9 @@ class MonitorServer:
         other_run = self._other_run(body.get("run"))
         if other_run is not None:
             return _error(409, other_run)
+        late = self._late(body["action"], body.get("seen"), request.remote)
+        if late is not None:
+            return late
         try:
             self.session.request(body["action"], node, value, by=request.remote or None)
         except ControlRefused as exc:
@@ -502,6 +529,28 @@ class MonitorServer:
         except ValueError as exc:
             return _error(400, str(exc))
         return web.json_response({"accepted": body["action"]}, status=202)
+
+    def _late(self, action: str, seen: object, by: str | None) -> web.Response | None:
+        """400 for a ``seen`` that is no stamp; 409 for a control that sets the robot going
+        (:data:`MOTION_CONTROLS`) from a page whose last update (its ``seen``, the ``sent``
+        it echoes) is more than :data:`STALE_VIEW_S` old: the operator pressed it looking
+        at a run that has moved on, or the request sat in a stalled network; said in the
+        event log too, as the controls applied are. None: in time, or a stop or pause (late,
+        still safe), or no ``seen`` (an API client that shows no view)."""
+        if seen is None:
+            return None
+        if not isinstance(seen, int | float) or isinstance(seen, bool) or not math.isfinite(seen):
+            return _error(400, f'seen {seen!r}: allowed the "sent" of the last update the page had')
+        behind = time.monotonic() - seen
+        if action not in MOTION_CONTROLS or behind <= STALE_VIEW_S:
+            return None
+        said = f"{behind:.0f} s behind the run"
+        self.feed.event(
+            "control", f"{action} refused: sent from a page {said}{f'; from {by}' if by else ''}"
+        )
+        return _error(
+            409, f"your page was {said}: look again and press {action.capitalize()} again"
+        )
 
     def _other_run(self, given: object) -> str | None:
         """Why a control for ``given`` (the run id the page was loaded for, the body's
@@ -576,13 +625,20 @@ class MonitorServer:
         generation = -1
         session_view: dict[str, Any] | None = None
         finished: str | None = None
-        await ws.send_str(json.dumps(hello))
+        await ws.send_str(json.dumps({**hello, "sent": stamp()}))
+        heard = loop.time()  # when the page was last sent a message
         while not ws.closed:
             last_sent = loop.time()
             records = feed.ring.since(seq)
             new_events = [e._asdict() for e in feed.events_after(event_seq)]
             now_session = self._session_view()
-            if records or new_events or now_session != session_view or feed.finished != finished:
+            if (
+                records
+                or new_events
+                or now_session != session_view
+                or feed.finished != finished
+                or last_sent - heard >= HEARTBEAT_S  # nothing new: the page hears the link
+            ):
                 message: dict[str, Any] = {"type": "update", "session": now_session}
                 # the run has ended since: its newest tick again, as the safe stop left the
                 # robot (no tick shows that: views.after_the_end), nothing flipped anew
@@ -608,9 +664,11 @@ class MonitorServer:
                     message["events"] = new_events
                     event_seq = new_events[-1]["seq"]
                 message["finished"] = finished = feed.finished
+                message["sent"] = stamp()
                 session_view = now_session
                 try:
                     await ws.send_str(json.dumps(message))
                 except (ConnectionResetError, RuntimeError):
                     return
+                heard = loop.time()
             await self._after_a_tick(last_sent)

@@ -826,7 +826,6 @@ def test_a_monitor_option_without_a_page_is_said(
     assert f"roomba-bt: {option[0]} is for --monitor: add it" in capsys.readouterr().err
 
 
-
 def _probe_the_view_link(monkeypatch: pytest.MonkeyPatch) -> dict[str, int]:
     """Once the run's page is up: the HTTP status of its page and of a pause with
     :data:`VIEW_CHOSEN` (``"page"``, ``"control"``)."""

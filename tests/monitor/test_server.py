@@ -7,6 +7,7 @@ import gc
 import json
 import socket
 import threading
+import time
 import urllib.error
 import urllib.request
 from collections.abc import Iterator
@@ -108,6 +109,8 @@ def test_a_control_for_another_run_or_for_none_is_refused_and_changes_nothing(
         ({"action": "break", "node": 999, "value": "start"}, 400, "node 999"),
         ({"action": "force", "node": 0, "value": "success"}, 409, "not a condition"),
         ({"action": "resume"}, 409, "not paused"),
+        ({"action": "pause", "seen": "yesterday"}, 400, '"sent" of the last update'),
+        ({"action": "pause", "seen": True}, 400, '"sent" of the last update'),
     ],
 )
 def test_a_bad_control_gets_a_clear_error_and_changes_nothing(
@@ -133,6 +136,83 @@ def test_a_pause_when_paused_and_a_release_of_what_is_not_forced_are_refused(
     assert got == 409 and "is not forced: nothing to release" in body["error"]
     assert server.session._requests.empty()
     assert _control(server, {"action": "resume"}) == (202, {"accepted": "resume"})
+
+
+@pytest.mark.parametrize("action", ["resume", "step", "force"])
+def test_a_control_that_sets_the_robot_going_from_a_page_behind_the_run_is_refused(
+    server: MonitorServer, action: str
+) -> None:
+    """A Resume pressed 2 s into a silent network stall reached the run 60 s later and the
+    robot started cleaning the moment the network came back, the event log showing nothing
+    late. The page stamps each control with the ``sent`` of its last update: a resume, step
+    or force from a view more than STALE_VIEW_S behind is refused, said in the event log; the
+    same from a page in time goes through."""
+    assert server.session is not None
+    server.session.state.paused = True
+    condition = next(i for i, info in enumerate(server.feed.infos) if info.condition)
+    payload = {"action": action, "node": condition, "value": "success"} if action == "force" \
+        else {"action": action}  # fmt: skip
+    got, body = _control(server, {**payload, "seen": time.monotonic() - 62})
+    assert got == 409
+    assert body["error"] == (
+        f"your page was 62 s behind the run: look again and press {action.capitalize()} again"
+    )
+    assert server.session._requests.empty()
+    assert server.feed.events[-1].kind == "control"
+    assert server.feed.events[-1].text == (
+        f"{action} refused: sent from a page 62 s behind the run; from 127.0.0.1"
+    )
+    got, body = _control(server, {**payload, "seen": time.monotonic() - 1})
+    assert (got, body) == (202, {"accepted": action})
+
+
+def test_a_late_pause_or_stop_is_applied_it_stops_the_robot(server: MonitorServer) -> None:
+    """Late, a pause or a stop still stops the robot: safe whenever it arrives."""
+    assert server.session is not None
+    long_ago = time.monotonic() - 600
+    assert _control(server, {"action": "pause", "seen": long_ago}) == (202, {"accepted": "pause"})
+    assert _control(server, {"action": "stop", "seen": long_ago}) == (202, {"accepted": "stop"})
+
+
+def test_a_page_hears_from_the_run_every_second_when_nothing_changes() -> None:
+    """A page tells a silent link (packets lost, the socket not closed) from a quiet run
+    only if the run speaks when nothing changes: a recorded run's page, with nothing new
+    after its hello, was sent nothing more. Each message carries ``sent``, the server's
+    clock, which the page echoes as a control's ``seen``."""
+    import asyncio
+
+    import aiohttp
+
+    served = _serve(live=False)
+
+    async def listen() -> list[dict[str, Any]]:
+        received: list[dict[str, Any]] = []
+        async with (
+            aiohttp.ClientSession() as client,
+            client.ws_connect(f"ws://127.0.0.1:{served.port}/ws") as ws,
+        ):
+            async for message in ws:
+                received.append(json.loads(message.data))
+                if len(received) == 4:
+                    return received
+        return received
+
+    messages: list[list[dict[str, Any]]] = []
+    # the page's event loop in a thread of its own: the browser tests' driver may own this one
+    watcher = threading.Thread(
+        target=lambda: messages.append(asyncio.run(asyncio.wait_for(listen(), 30)))
+    )
+    try:
+        watcher.start()
+        watcher.join(60)
+    finally:
+        served.close()
+    assert messages, "the page heard nothing after the run's first update"
+    received = messages[0]
+    assert [m["type"] for m in received] == ["hello", "update", "update", "update"]
+    sent = [m["sent"] for m in received]
+    assert sent == sorted(sent) and sent[1] < sent[2] < sent[3]
+    assert all(m["finished"] is None and "state" not in m for m in received[1:])
 
 
 def test_a_good_control_is_accepted(server: MonitorServer) -> None:
