@@ -179,6 +179,44 @@ def _error(status: int, message: str) -> web.Response:
     return web.json_response({"error": message}, status=status)
 
 
+#: a browser's page for a link without its token, or with another run's (each run makes a
+#: new one): the JSON error an API client gets read as a raw line on a phone, and named "the
+#: URL printed when the run started", which a colleague sent the link never saw
+NO_ENTRY_PAGE = """<!doctype html>
+<html lang="en"><head><meta charset="utf-8"><meta name="viewport" content="width=device-width">
+<title>roomba-bt monitor: {title}</title></head>
+<body style="font-family: sans-serif; max-width: 36em; margin: 2em auto; padding: 0 1em">
+<h1 style="font-size: 1.3em">{title}</h1>
+<p>{what}</p>
+<p>Ask whoever started the run for its link: each run makes a new one, so yesterday's
+link, or a bookmark of it, does not open today's run.</p>
+<p>For a bookmark that keeps working, the run is started with <code>--monitor-token</code>
+(and <code>--monitor-view-token</code> for the view-only link).</p>
+</body></html>
+"""
+#: the page's title and first line for a link without a token (401) and with a wrong one (403)
+NO_ENTRY = {
+    401: (
+        "This link has no token",
+        "This address needs the token of the run's link (it ends in <code>?token=...</code>).",
+    ),
+    403: (
+        "This link is for another run or has expired",
+        "The token in this link (or in the cookie of an earlier visit) is not this run's.",
+    ),
+}
+
+
+def _refused(request: web.Request, status: int, message: str) -> web.Response:
+    """A missing or wrong token's answer: a short page saying what to do for a browser
+    (``Accept: text/html``: a page opened from a link), the JSON error for an API client."""
+    if "text/html" not in request.headers.get("Accept", ""):
+        return _error(status, message)
+    title, what = NO_ENTRY[status]
+    page = NO_ENTRY_PAGE.format(title=title, what=what)
+    return web.Response(status=status, text=page, content_type="text/html")
+
+
 def foreign_request(request: web.Request, bound: str, port: int) -> web.Response | None:
     """403 for a request another site's page made: on a loopback address, one whose
     ``Host`` is not this machine (``127.0.0.1``, ``localhost``, ``[::1]``, any port):
@@ -383,13 +421,15 @@ class MonitorServer:
             return refused
         if self.token is not None:
             if not given_token(request):
-                return _error(
-                    401,
+                return _refused(
+                    request, 401,
                     "this monitor needs its token: open the URL printed when the run started "
                     "(it ends in ?token=...)",
-                )
+                )  # fmt: skip
             if self._access(request) is None:
-                return _error(403, "wrong token: open the URL printed when the run started")
+                return _refused(
+                    request, 403, "wrong token: open the URL printed when the run started"
+                )
         return await handler(request)
 
     def _access(self, request: web.Request) -> Access | None:

@@ -228,9 +228,10 @@ def test_a_non_local_address_refuses_a_page_without_the_token(page: Any) -> None
         port = run.server.port
         response = page.goto(f"http://127.0.0.1:{port}/")
         assert response is not None and response.status == 401
-        assert "needs its token" in page.content()
+        assert "This link has no token" in page.content()
         response = page.goto(f"http://127.0.0.1:{port}/?token=wrong")
         assert response is not None and response.status == 403
+        assert "This link is for another run or has expired" in page.inner_text("h1")
         control = page.request.post(
             f"http://127.0.0.1:{port}/api/control", data=json.dumps({"action": "pause"})
         )

@@ -38,18 +38,20 @@ def _record_the_shuttle(record: Path, *options: str) -> int:
 
 @pytest.fixture
 def served_record(child: Callable[[Sequence[str]], subprocess.Popen[str]]) -> ServedRecord:
-    """``served_record(record, *options)``: ``roomba-bt monitor RECORD`` up to its URL, then
-    ended by SIGTERM: its stdout and stderr (it must exit 0). One the test leaves running
-    (a failed assertion, a timeout) is killed by ``child``."""
+    """``served_record(record, *options, until=START)``: ``roomba-bt monitor RECORD`` up to
+    its first line starting with ``until`` (its URL), then ended by SIGTERM: its stdout and
+    stderr (it must exit 0). Lines after ``until``'s may be lost (read ahead, then not
+    returned by ``communicate``). One the test leaves running (a failed assertion, a
+    timeout) is killed by ``child``."""
 
-    def serve(record: Path, *options: str) -> tuple[str, str]:
+    def serve(record: Path, *options: str, until: str = "monitor: http") -> tuple[str, str]:
         proc = child([sys.executable, "-m", "roomba_bt.cli", "monitor", str(record),
                       "--monitor", "0", *options])  # fmt: skip
         assert proc.stdout is not None
         lines = []
         for line in proc.stdout:
             lines.append(line)
-            if line.startswith("monitor: http"):
+            if line.startswith(until):
                 break
         proc.send_signal(signal.SIGTERM)
         out, err = proc.communicate(timeout=30)
@@ -598,7 +600,7 @@ def test_monitor_of_a_record_on_a_wildcard_address_says_the_machine_s_name(
     cannot open; ``run`` said the machine's name and addresses too."""
     record = tmp_path / "run.jsonl"
     _record_the_shuttle(record)
-    out, _ = served_record(record, "--monitor", "0.0.0.0:0")
+    out, _ = served_record(record, "--monitor", "0.0.0.0:0", until="monitor: it listens")
     lines = out.splitlines()
     at = next(i for i, line in enumerate(lines) if line.startswith("monitor: http://0.0.0.0:"))
     assert lines[at + 1].startswith(

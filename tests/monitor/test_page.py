@@ -314,3 +314,68 @@ def test_two_monitors_on_one_host_keep_a_cookie_each(page: Any) -> None:
     finally:
         first.finish()
         second.finish()
+
+
+def test_a_silent_link_says_so_and_turns_off_what_sets_the_robot_going(
+    live: LiveRun, page: Any
+) -> None:
+    """A network stall that closes nothing (a train's tunnel: packets lost, no FIN) left the
+    page under a green "connected" badge with Resume enabled; a Resume pressed then reached
+    the run a minute later. Silent for 2 s, the page says so, resume and step are off (pause
+    and stop still go: late, they are safe), and a key says it was not sent."""
+    stalled: list[bool] = []  # the messages from the run are dropped while it holds True
+
+    def through_a_stalling_network(route: Any) -> None:
+        run = route.connect_to_server()
+        run.on_message(lambda message: None if stalled else route.send(message))
+
+    page.route_web_socket("**/ws", through_a_stalling_network)
+    page.goto(live.url)
+    page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+    page.click("#pause")
+    page.wait_for_selector("#resume:enabled", timeout=WAIT_MS)
+    stalled.append(True)
+    page.wait_for_selector('#link:has-text("no word from the run for")', timeout=WAIT_MS)
+    assert page.is_disabled("#resume") and page.is_disabled("#step")
+    assert page.is_enabled("#stop")
+    assert "NO WORD from the run for" in page.inner_text("#banner")
+    assert page.evaluate("document.body.classList.contains('stale')")
+    page.keyboard.press("r")
+    page.wait_for_selector('#alert:has-text("resume NOT sent: no word from the run for")',
+                           timeout=WAIT_MS)  # fmt: skip
+    assert live.session.state.paused  # nothing reached the run
+    stalled.clear()  # the network is back: fresh word from the run
+    page.wait_for_selector('#link:text-is("connected")', timeout=WAIT_MS)
+    page.wait_for_selector("#resume:enabled", timeout=WAIT_MS)
+    assert not page.evaluate("document.body.classList.contains('stale')")
+    page.click("#resume")
+    page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+    assert not live.session.state.paused
+
+
+def test_the_event_log_scrolled_up_stays_where_the_reader_left_it(live: LiveRun, page: Any) -> None:
+    """The live log was rebuilt and snapped to its bottom at every update (20 a second), so
+    it could not be scrolled back nor a line selected. Scrolled up, it stays; at the bottom,
+    it follows the new events, as a terminal does."""
+    for n in range(80):
+        live.feed.event("note", f"an event to scroll past, number {n}")
+    page.goto(live.url)
+    page.wait_for_selector('#events li:has-text("number 79")', timeout=WAIT_MS)
+    box = "document.getElementById('events-panel')"
+    assert page.evaluate(f"{box}.scrollHeight > {box}.clientHeight")
+    page.evaluate("document.querySelector('#events li').dataset.marked = 'kept'")
+    page.evaluate(f"{box}.scrollTop = 0")
+    tick = _tick(page)
+    page.wait_for_function(
+        f"Number(document.getElementById('tick').textContent) > {tick + 20}", timeout=WAIT_MS
+    )  # updates came
+    live.feed.event("note", "a new event while the reader is up")
+    page.wait_for_selector('#events li:has-text("while the reader is up")', timeout=WAIT_MS)
+    assert page.evaluate(f"{box}.scrollTop") == 0
+    assert page.evaluate("document.querySelector('#events li[data-marked]') !== null")  # kept
+    page.evaluate(f"{box}.scrollTop = {box}.scrollHeight")
+    live.feed.event("note", "a new event at the bottom")
+    page.wait_for_selector('#events li:has-text("at the bottom")', timeout=WAIT_MS)
+    page.wait_for_function(
+        f"{box}.scrollHeight - {box}.scrollTop - {box}.clientHeight < 2", timeout=WAIT_MS
+    )

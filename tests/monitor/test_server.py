@@ -350,6 +350,27 @@ def test_a_non_local_address_needs_the_token_for_everything() -> None:
         served.close()
 
 
+def test_a_browser_without_the_right_token_gets_a_page_saying_what_to_do() -> None:
+    """Yesterday's link on a phone showed a raw ``{"error": "wrong token: ..."}``, naming
+    "the URL printed when the run started", which the colleague sent the link never saw. A
+    browser (``Accept: text/html``) gets a short page; an API client keeps the JSON."""
+    served = _serve(host="0.0.0.0")
+    browser = {"Accept": "text/html,application/xhtml+xml,*/*;q=0.8"}
+    try:
+        base = f"http://127.0.0.1:{served.port}"
+        status, page = _call(f"{base}/?token=yesterdays-token", headers=browser)
+        assert status == 403
+        assert "<title>roomba-bt monitor: This link is for another run or has expired" in page
+        assert "Ask whoever started the run for its link" in page
+        assert "<code>--monitor-token</code>" in page
+        status, page = _call(f"{base}/", headers=browser)
+        assert status == 401 and "This link has no token" in page
+        status, body = _call(f"{base}/?token=yesterdays-token")
+        assert status == 403 and body["error"].startswith("wrong token: ")
+    finally:
+        served.close()
+
+
 def test_the_loopback_address_needs_no_token(server: MonitorServer) -> None:
     assert server.token is None
     assert server.url == f"http://127.0.0.1:{server.port}/"

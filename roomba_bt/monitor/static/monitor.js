@@ -7,6 +7,10 @@
 // run served on its port (its own was killed, a new one started there, perhaps on another
 // robot) does not take it: it says so, keeps its controls off and stops connecting. Every
 // control carries the id the page was loaded for; the server refuses one for another run.
+// A silent link (packets lost, the socket not closed: a train's tunnel) is no drop: the run
+// speaks at least once a second, so after SILENT_MS without a word the page says so and turns
+// off what sets the robot going; each control echoes the server's stamp of the last update
+// ("seen"), and the server refuses a resume, step or force from a view too far behind.
 "use strict";
 
 const SYMBOL = {
@@ -45,9 +49,22 @@ const view = {
   // the socket (the page's one: null before the first), connected, when it dropped, the next
   // try's delay (ms) and its timer
   socket: null, connected: false, droppedAt: null, retryMs: 1000, retryTimer: null, retryAt: 0,
+  // when the socket last brought a message (this browser's clock), and the server's stamp of
+  // it (its "sent", echoed as a control's "seen": the server compares it with its own clock)
+  heardAt: null, sent: null,
 };
 const RETRY_MAX_MS = 10000;
 const GOING_AWAY = 1001;  // the server's close when the run ended (or the monitor stopped)
+const SILENT_MS = 2000;  // the run speaks every second at least: silent longer, the link is
+const CONTROL_TIMEOUT_MS = 5000;  // a control unanswered this long is said not confirmed
+const MOTION = new Set(["resume", "step", "force"]);  // what sets the robot going
+
+// whole seconds the open socket has brought nothing, when over SILENT_MS; 0 otherwise
+function silentSeconds() {
+  if (!view.connected || view.heardAt === null) return 0;
+  const quiet = Date.now() - view.heardAt;
+  return quiet > SILENT_MS ? Math.floor(quiet / 1000) : 0;
+}
 
 function headers() {
   const h = { "Content-Type": "application/json" };
@@ -56,16 +73,23 @@ function headers() {
 }
 
 async function control(action, node, value) {
-  const body = { action, run: view.runId };
+  const body = { action, run: view.runId, seen: view.sent };
   if (node !== undefined) body.node = node;
   if (value !== undefined) body.value = value;
   let reply;
+  const abort = new AbortController(), timer = setTimeout(() => abort.abort(), CONTROL_TIMEOUT_MS);
   try {
-    reply = await fetch("api/control", { method: "POST", headers: headers(), body: JSON.stringify(body) });
+    reply = await fetch("api/control", { method: "POST", headers: headers(), body: JSON.stringify(body), signal: abort.signal });
   } catch (e) {
-    // the request never reached the run: say so where the operator looks (it failed silently)
-    showAlert(`${action} NOT sent: no connection to the run (${e.message}); the robot does what it did`);
+    // the request never reached the run, or sits in a stalled network: say so where the
+    // operator looks (it failed silently; a resume sat 60 s in a stall, then set the robot going)
+    showAlert(abort.signal.aborted
+      ? `${action} NOT confirmed: no answer from the run in ${CONTROL_TIMEOUT_MS / 1000} s; it may still reach it`
+        + (MOTION.has(action) ? ` (a late ${action} is refused there)` : "")
+      : `${action} NOT sent: no connection to the run (${e.message}); the robot does what it did`);
     return false;
+  } finally {
+    clearTimeout(timer);
   }
   if (!reply.ok) {
     let text = `${reply.status}`;
@@ -213,14 +237,19 @@ function openMenu(i, ev) {
   $("node-menu-title").textContent = n.name + (n.condition ? " (condition)" : "");
   const reason = (view.liveState && view.liveState.reasons || {})[String(i)];
   $("node-menu-reason").textContent = reason ? "failed: " + reason : "";
-  const canControl = view.connected && view.header && view.header.controls && !view.finished
-    && !view.otherRun;
-  for (const b of menu.querySelectorAll("button")) b.disabled = !canControl;
+  menuButtons(view.connected && view.header && view.header.controls && !view.finished
+    && !view.otherRun);
   $("force-row").hidden = !(n.condition && view.header && view.header.can_force);
   menu.hidden = false;
   menu.style.left = Math.min(ev.clientX, window.innerWidth - 360) + "px";
   menu.style.top = Math.min(ev.clientY + 8, window.innerHeight - 120) + "px";
   ev.stopPropagation();
+}
+// the node menu's buttons on (``on``), its force off while the run is silent (it sets the
+// robot going; a breakpoint holds it)
+function menuButtons(on) {
+  const silent = silentSeconds() > 0;
+  for (const b of $("node-menu").querySelectorAll("button")) b.disabled = !on || (silent && "force" in b.dataset);
 }
 function closeMenu() { $("node-menu").hidden = true; view.menuNode = null; }
 // the menu's node, then the menu closed; nothing when it names no node (closed since)
@@ -270,7 +299,7 @@ function motorRows(r, rows) {
 function renderRobot(state) {
   const r = state.robot;
   const rows = [];
-  if (!r) { $("robot").innerHTML = "<tr><td>no frame yet</td></tr>"; return; }
+  if (!r) { setRows("robot", [["no frame yet", ""]]); return; }
   rows.push(["OI mode", `<b id="mode">${r.mode}</b>`]);
   if (r.bumps) rows.push(["bumps", `<span id="bumps">${lamp(r.bumps.left, "L")} ${lamp(r.bumps.right, "R")}</span>`]);
   if (r.wheel_drops) rows.push(["wheel drops", `${lamp(r.wheel_drops.left, "L")} ${lamp(r.wheel_drops.right, "R")}`]);
@@ -289,15 +318,26 @@ function renderRobot(state) {
   rows.push(["odometry", `(${(o.x / 1000).toFixed(2)}, ${(o.y / 1000).toFixed(2)}) m, ${degrees(o.theta)}°, ${(o.path / 1000).toFixed(2)} m driven`]);
   if (state.truth) rows.push(["true pose (simulator)", `(${(state.truth[0] / 1000).toFixed(2)}, ${(state.truth[1] / 1000).toFixed(2)}) m, ${degrees(state.truth[2])}°`]);
   if (r.frames_lost) rows.push(["frames lost", String(r.frames_lost)]);
-  $("robot").innerHTML = rows.map(([k, v]) => `<tr><td>${k}</td><td>${v}</td></tr>`).join("");
+  setRows("robot", rows);
+}
+
+// a table's rows ([label, HTML] each) set where they changed: rebuilt 20 times a second, a
+// pose or a blackboard value could not be selected to copy. Another set of labels: rebuilt.
+const tableRows = new Map();
+function setRows(id, rows) {
+  const table = $(id), before = tableRows.get(id);
+  if (!before || before.length !== rows.length || before.some((row, j) => row[0] !== rows[j][0])) {
+    table.innerHTML = rows.map(([k, v]) => `<tr><td>${k}</td><td>${v}</td></tr>`).join("");
+  } else {
+    rows.forEach(([, v], j) => { if (before[j][1] !== v) table.rows[j].cells[1].innerHTML = v; });
+  }
+  tableRows.set(id, rows);
 }
 
 function renderBlackboard(state) {
   const bb = state.blackboard || {};
   const keys = Object.keys(bb);
-  $("blackboard").innerHTML = keys.length
-    ? keys.map((k) => `<tr><td>${esc(k)}</td><td>${esc(bb[k])}</td></tr>`).join("")
-    : "<tr><td>(no keys)</td></tr>";
+  setRows("blackboard", keys.length ? keys.map((k) => [esc(k), esc(bb[k])]) : [["(no keys)", ""]]);
 }
 // ------------------------------------------------------------------ streamed packets
 // every packet of the run's stream request, raw, named by the OI packet table the header
@@ -339,6 +379,16 @@ function addEvents(events) {
   if (view.events.length > 2000) view.events.splice(0, view.events.length - 2000);
   renderEvents();
 }
+// what the event list shows: its key (the tick it greys after, its first and last event),
+// whether it is the live list, and its last event's seq
+const shownEvents = { key: null, live: false, last: null };
+function eventRow(e, t) {
+  const li = document.createElement("li");
+  li.className = `kind-${e.kind}${e.tick > t ? " future" : ""}`;
+  li.dataset.seq = e.seq;
+  li.innerHTML = `<span class="k">${e.time.toFixed(3)}s ${e.kind}</span> ${esc(e.text)}`;
+  return li;
+}
 function renderEvents() {
   // greyed by the stream's tick, the timeline's own: mission time stands still while paused
   const list = $("events"), box = list.parentElement, t = view.live ? Infinity : view.shownTick;
@@ -350,9 +400,22 @@ function renderEvents() {
     end = Math.min(view.events.length, Math.max(at + 100, 400));
   }
   const shown = view.events.slice(Math.max(0, end - 400), end);
-  list.innerHTML = shown.map((e) =>
-    `<li class="kind-${e.kind}${e.tick > t ? " future" : ""}"><span class="k">${e.time.toFixed(3)}s ${e.kind}</span> ${esc(e.text)}</li>`).join("");
-  if (view.live) { box.scrollTop = box.scrollHeight; return; }
+  const firstSeq = shown.length ? shown[0].seq : null, lastSeq = shown.length ? shown[shown.length - 1].seq : null;
+  const key = `${t} ${firstSeq} ${lastSeq}`;
+  // nothing new: the list, where it is scrolled and a selection in it stay (it was rebuilt and
+  // snapped to the bottom at every update, 20 times a second)
+  if (key === shownEvents.key) return;
+  const atBottom = box.scrollHeight - box.scrollTop - box.clientHeight < 24;
+  if (view.live && shownEvents.live && shownEvents.last !== null && firstSeq !== null) {
+    // live: the oldest gone from the log leave the top, the new ones come at the bottom
+    while (list.firstElementChild && Number(list.firstElementChild.dataset.seq) < firstSeq) list.firstElementChild.remove();
+    list.append(...shown.filter((e) => e.seq > shownEvents.last).map((e) => eventRow(e, t)));
+  } else {
+    list.replaceChildren(...shown.map((e) => eventRow(e, t)));
+  }
+  Object.assign(shownEvents, { key, live: view.live, last: lastSeq });
+  // as a terminal does: at the bottom it stays there; scrolled up to read, it is left there
+  if (view.live) { if (atBottom) box.scrollTop = box.scrollHeight; return; }
   // the list follows the seek: the last event at or before the tick shown, near the bottom
   const past = list.querySelectorAll("li:not(.future)");
   const last = past.length ? past[past.length - 1] : null;
@@ -466,14 +529,18 @@ function duration(seconds) {
 function updateControls() {
   const h = view.header || {}, s = view.session;
   const c = Boolean(view.connected && h.controls && !view.finished && !view.otherRun);
+  // silent: pause and stop still go (late, they are safe); what sets the robot going waits
+  // for word from the run
+  const silent = silentSeconds();
   // before the first hello nothing is known: the controls stay off (they looked usable)
   $("controls").hidden = view.header !== null && !h.controls;
   $("pause").disabled = !c || s.paused;
-  $("resume").disabled = !c || !s.paused;
-  $("step").disabled = !c || !s.paused;
+  $("resume").disabled = !c || silent > 0 || !s.paused;
+  $("step").disabled = !c || silent > 0 || !s.paused;
   $("stop").disabled = !c;
-  for (const b of $("node-menu").querySelectorAll("button")) b.disabled = !c;
-  document.body.classList.toggle("stale", !view.connected && !(view.finished && view.ended));
+  menuButtons(c);
+  document.body.classList.toggle("stale", silent > 0 || (!view.connected && !(view.finished && view.ended)));
+  if (view.connected) setBadge(silent ? `no word from the run for ${silent} s` : "connected", !silent);
   if (view.otherRun) {
     const o = view.otherRun;
     showBanner(`a different run is now served here (${runLabel({ run: o })}): reload to watch it. `
@@ -486,6 +553,11 @@ function updateControls() {
     if (view.droppedAt === null) showBanner("");  // connecting the first time
     else showBanner(`NO CONNECTION to the run since ${view.droppedAt.toLocaleTimeString()}: what the page shows is `
       + `stale (its last tick ${view.window[1]}${s.paused ? ", PAUSED then" : ""}) and the controls are off; ${again}`, true);
+  }
+  else if (silent) {
+    showBanner(`NO WORD from the run for ${silent} s: what the page shows may be stale (its last tick `
+      + `${view.window[1]}${s.paused ? ", PAUSED then" : ""}); resume, step and force are off until it `
+      + "speaks again; pause and stop still go", true);
   }
   else if (view.finished) showBanner("the run ended: " + view.finished, false);
   else if (s.paused) {
@@ -566,7 +638,11 @@ async function loadLiveState() {
 }
 
 // ------------------------------------------------------------------ live socket
-function setBadge(text, on) { $("link").textContent = text; $("link").className = on ? "badge on" : "badge off"; }
+function setBadge(text, on) {
+  const badge = $("link"), className = on ? "badge on" : "badge off";
+  if (badge.textContent !== text) badge.textContent = text;
+  if (badge.className !== className) badge.className = className;
+}
 
 function connect() {
   // one socket a page: the browser's "online" comes while a try is still connecting too; a
@@ -583,7 +659,7 @@ function connect() {
   // a socket that was closing when this one opened says nothing more (its close is no drop)
   const mine = (handler) => (ev) => { if (view.socket === ws) handler(ev); };
   ws.onopen = mine(() => {
-    view.connected = true; view.droppedAt = null; view.retryMs = 1000;
+    view.connected = true; view.droppedAt = null; view.retryMs = 1000; view.heardAt = Date.now();
     setBadge("connected", true);
   });
   ws.onclose = mine((ev) => {
@@ -598,6 +674,8 @@ function connect() {
   });
   ws.onmessage = mine((ev) => {
     const msg = JSON.parse(ev.data);
+    view.heardAt = Date.now();
+    if (msg.sent !== undefined) view.sent = msg.sent;
     if (msg.type === "hello") { hello(msg.header); return; }
     if (msg.tree && JSON.stringify(msg.tree) !== JSON.stringify(view.tree)) {
       buildTree(msg.tree);  // a reload: a new tree from its root
@@ -742,9 +820,12 @@ document.addEventListener("keydown", (ev) => {
   if (!key) return;
   // a stale page asks nothing: the HTTP side may still reach the run while the socket is down,
   // and a resume from a page that no longer shows the run would set the robot going unseen
-  if (!view.connected || view.finished || view.otherRun) {
+  const silent = MOTION.has(key) ? silentSeconds() : 0;
+  if (!view.connected || view.finished || view.otherRun || silent) {
     const why = view.otherRun ? "a different run is now served here (reload to watch it)"
-      : view.finished ? "the run has ended" : "no connection to the run (the page is stale)";
+      : view.finished ? "the run has ended"
+      : silent ? `no word from the run for ${silent} s (the page may be stale)`
+      : "no connection to the run (the page is stale)";
     showAlert(`${key} NOT sent: ${why}; the robot does what it did`);
     return;
   }
@@ -753,6 +834,7 @@ document.addEventListener("keydown", (ev) => {
 window.addEventListener("resize", fitTree);
 window.addEventListener("online", () => { if (!view.connected && !view.ended) connect(); });
 $("alert-close").onclick = () => showAlert("");
-setInterval(() => { if (!view.connected && !view.ended) updateControls(); }, 1000);  // the countdown
+// the countdown to the next try, and the run's silence (no message: nothing else calls it)
+setInterval(() => { if (!view.ended) updateControls(); }, 500);
 updateControls();
 connect();
