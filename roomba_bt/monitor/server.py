@@ -217,6 +217,45 @@ def _refused(request: web.Request, status: int, message: str) -> web.Response:
     return web.Response(status=status, text=page, content_type="text/html")
 
 
+def session_view(session: MonitorSession | None) -> dict[str, Any]:
+    """What the page shows of the operator's session: paused (why, since which tick, the
+    countdown to the robot's sleep), the breakpoints and forced conditions by node index; a
+    recorded run's: none of them."""
+    if session is None:
+        return {"paused": False, "pause_reason": "", "paused_tick": None, "sleep_note": "",
+                "breakpoints": {}, "forced": {}}  # fmt: skip
+    state = session.state
+    return {
+        "paused": state.paused,
+        "pause_reason": state.pause_reason,
+        "paused_tick": state.paused_tick,
+        "sleep_note": state.sleep_note,
+        "breakpoints": {str(k): v for k, v in state.breakpoints.items()},
+        "forced": {str(k): v for k, v in state.forced.items()},
+    }
+
+
+def late_control(feed: RunFeed, action: str, seen: object, by: str | None) -> web.Response | None:
+    """400 for a ``seen`` that is no stamp; 409 for a control that sets the robot going
+    (:data:`MOTION_CONTROLS`) from a page whose last update (its ``seen``, the ``sent``
+    it echoes) is more than :data:`STALE_VIEW_S` old: the operator pressed it looking
+    at a run that has moved on, or the request sat in a stalled network; said in the
+    event log too, as the controls applied are. None: in time, or a stop or pause (late,
+    still safe), or no ``seen`` (an API client that shows no view)."""
+    if seen is None:
+        return None
+    if not isinstance(seen, int | float) or isinstance(seen, bool) or not math.isfinite(seen):
+        return _error(400, f'seen {seen!r}: allowed the "sent" of the last update the page had')
+    behind = time.monotonic() - seen
+    if action not in MOTION_CONTROLS or behind <= STALE_VIEW_S:
+        return None
+    said = f"{behind:.0f} s behind the run"
+    feed.event(
+        "control", f"{action} refused: sent from a page {said}{f'; from {by}' if by else ''}"
+    )
+    return _error(409, f"your page was {said}: look again and press {action.capitalize()} again")
+
+
 def foreign_request(request: web.Request, bound: str, port: int) -> web.Response | None:
     """403 for a request another site's page made: on a loopback address, one whose
     ``Host`` is not this machine (``127.0.0.1``, ``localhost``, ``[::1]``, any port):
@@ -493,21 +532,6 @@ class MonitorServer:
             },
         )
 
-    def _session_view(self) -> dict[str, Any]:
-        session = self.session
-        if session is None:
-            return {"paused": False, "pause_reason": "", "paused_tick": None, "sleep_note": "",
-                    "breakpoints": {}, "forced": {}}  # fmt: skip
-        state = session.state
-        return {
-            "paused": state.paused,
-            "pause_reason": state.pause_reason,
-            "paused_tick": state.paused_tick,
-            "sleep_note": state.sleep_note,
-            "breakpoints": {str(k): v for k, v in state.breakpoints.items()},
-            "forced": {str(k): v for k, v in state.forced.items()},
-        }
-
     async def _state(self, request: web.Request) -> web.StreamResponse:
         text = request.query.get("tick")
         try:
@@ -526,7 +550,7 @@ class MonitorServer:
             "tree": tree_view(self.feed, record.tree),
             "path": path_view(self.feed.path(record.seq)),
             "events": [e._asdict() for e in self.feed.events_after(-1)],  # not the ticks
-            "session": self._session_view(),
+            "session": session_view(self.session),
             "sent": stamp(),
         }
         return web.json_response(body)
@@ -559,7 +583,7 @@ class MonitorServer:
         other_run = self._other_run(body.get("run"))
         if other_run is not None:
             return _error(409, other_run)
-        late = self._late(body["action"], body.get("seen"), request.remote)
+        late = late_control(self.feed, body["action"], body.get("seen"), request.remote)
         if late is not None:
             return late
         try:
@@ -569,28 +593,6 @@ class MonitorServer:
         except ValueError as exc:
             return _error(400, str(exc))
         return web.json_response({"accepted": body["action"]}, status=202)
-
-    def _late(self, action: str, seen: object, by: str | None) -> web.Response | None:
-        """400 for a ``seen`` that is no stamp; 409 for a control that sets the robot going
-        (:data:`MOTION_CONTROLS`) from a page whose last update (its ``seen``, the ``sent``
-        it echoes) is more than :data:`STALE_VIEW_S` old: the operator pressed it looking
-        at a run that has moved on, or the request sat in a stalled network; said in the
-        event log too, as the controls applied are. None: in time, or a stop or pause (late,
-        still safe), or no ``seen`` (an API client that shows no view)."""
-        if seen is None:
-            return None
-        if not isinstance(seen, int | float) or isinstance(seen, bool) or not math.isfinite(seen):
-            return _error(400, f'seen {seen!r}: allowed the "sent" of the last update the page had')
-        behind = time.monotonic() - seen
-        if action not in MOTION_CONTROLS or behind <= STALE_VIEW_S:
-            return None
-        said = f"{behind:.0f} s behind the run"
-        self.feed.event(
-            "control", f"{action} refused: sent from a page {said}{f'; from {by}' if by else ''}"
-        )
-        return _error(
-            409, f"your page was {said}: look again and press {action.capitalize()} again"
-        )
 
     def _other_run(self, given: object) -> str | None:
         """Why a control for ``given`` (the run id the page was loaded for, the body's
@@ -663,7 +665,7 @@ class MonitorServer:
         seq = latest.seq if latest else 0
         event_seq = -1
         generation = -1
-        session_view: dict[str, Any] | None = None
+        sent_session: dict[str, Any] | None = None
         finished: str | None = None
         await ws.send_str(json.dumps({**hello, "sent": stamp()}))
         heard = loop.time()  # when the page was last sent a message
@@ -671,11 +673,11 @@ class MonitorServer:
             last_sent = loop.time()
             records = feed.ring.since(seq)
             new_events = [e._asdict() for e in feed.events_after(event_seq)]
-            now_session = self._session_view()
+            now_session = session_view(self.session)
             if (
                 records
                 or new_events
-                or now_session != session_view
+                or now_session != sent_session
                 or feed.finished != finished
                 or last_sent - heard >= HEARTBEAT_S  # nothing new: the page hears the link
             ):
@@ -705,7 +707,7 @@ class MonitorServer:
                     event_seq = new_events[-1]["seq"]
                 message["finished"] = finished = feed.finished
                 message["sent"] = stamp()
-                session_view = now_session
+                sent_session = now_session
                 try:
                     await ws.send_str(json.dumps(message))
                 except (ConnectionResetError, RuntimeError):
