@@ -632,7 +632,6 @@ def monitor_command(args: argparse.Namespace) -> int:
         print(f"roomba-bt: {INSTALL_HINT}", file=sys.stderr)
         return ExitCode.INVALID
     from roomba_bt.monitor.recorded import replay_into_feed
-    from roomba_bt.monitor.server import MonitorServer
     from roomba_bt.runtime.provenance import changed_since
 
     host, port = args.monitor or parse_address(None)
@@ -664,13 +663,21 @@ def monitor_command(args: argparse.Namespace) -> int:
         progress=replay_progress("monitor", record), diverged_at=diverged_at, window=window,
     )  # fmt: skip
     _draw_recorded_world(feed, record, args.record)
+    return _serve_record(feed, host, port, args.record)
+
+
+def _serve_record(feed: Any, host: str, port: int, path: str) -> int:
+    """The page of a replayed record, until Ctrl-C or SIGTERM (exit 0); a port that cannot be
+    served is exit 2."""
+    from roomba_bt.monitor.server import MonitorServer
+
     server = MonitorServer(feed, None, host=host, port=port, readonly=True)
     try:
         url = server.start()
     except OSError as exc:
         print(f"roomba-bt: {address_problem(host, port, exc)}", file=sys.stderr)
         return ExitCode.INVALID
-    print(f"{args.record}: {feed.finished}")
+    print(f"{path}: {feed.finished}")
     ended = threading.Event()
     # SIGTERM (a service manager, `kill`) ends it as Ctrl-C does: the pages told, exit 0; it
     # killed the process before (exit 143, no word)
