@@ -227,6 +227,18 @@ def profile_said(choice: ProfileChoice) -> str:
     return f'{PROFILE_KEY} = "{choice.name}" ({choice.source})'
 
 
+def profile_setting(args: argparse.Namespace) -> str | None:
+    """Where ``args.profile`` was set, as the robot layer words a wrong profile's fix
+    (``Connection.profile_setting``, :func:`~roomba_bt.robot.errors.profile_fix`):
+    ``--profile``, ``ROOMBA_BT_PROFILE`` or the project file's ``path:line``, where the fix
+    is made (``ROOMBA_BT_PROFILE=create2`` was told "use --profile roomba500", which fixed
+    one command and not the next); None for the default, and for a model ``auto``
+    identified (nothing to set but the model itself)."""
+    source: str = getattr(args, "profile_source", DEFAULT_SOURCE)
+    # auto's is "--profile auto: identified ..." (cli/links.py); a file's is path:line
+    return None if source == DEFAULT_SOURCE or ": " in source else source
+
+
 def profile_line(args: argparse.Namespace) -> str:
     """The summary's profile line (``run``, ``eval``): as the runtime says it (nothing for
     the default, ``roomba500 (Roomba 500 series)`` for one the flag named), and where it

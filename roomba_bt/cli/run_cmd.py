@@ -45,6 +45,7 @@ from roomba_bt.cli.profile_choice import (
     chosen_profile,
     mission_near,
     profile_line,
+    profile_setting,
 )
 from roomba_bt.cli.record_header import (
     add_reproducible_option,
@@ -458,6 +459,7 @@ def _stack(
         record=record,
         strict=args.strict,
     )
+    stack.connection.profile_setting = profile_setting(args)  # a wrong profile's fix
     summary = stack.runner.summary  # the runtime says its settings as things; here, as flags
     if _fast_limit(args):  # no user gave it: its reason says whose it is
         summary.time_limit = f"--fast's own limit of {duration_said(FAST_TIMEOUT_S)}"
@@ -731,8 +733,11 @@ def _report_on_stderr(args: argparse.Namespace, stack: RunStack, summary: RunSum
         in (ExitCode.CONNECTION, ExitCode.MISSION_FAILED, ExitCode.BEHAVIOUR_ERROR)
         and summary.reason
     ):
-        reason = escaped(summary.reason, ANY_CONTROL)  # a node's name in it: one line
-        print(f"roomba-bt: {summary.outcome.value}: {reason}", file=sys.stderr)
+        # a node's name in it: one line; a long reason's short first line where it has one,
+        # the summary above it saying it whole
+        reason = escaped(summary.headline or summary.reason, ANY_CONTROL)
+        more = " (the summary's outcome says what was seen)" if summary.headline else ""
+        print(f"roomba-bt: {summary.outcome.value}: {reason}{more}", file=sys.stderr)
     if summary.failed_strict:  # the outcome reads SUCCESS: say why the exit code is not 0
         findings = escaped("; ".join(summary.strict_findings()), ANY_CONTROL)
         print(f"roomba-bt: --strict: {findings}", file=sys.stderr)

@@ -158,11 +158,13 @@ def _show_live(
 ) -> None:
     """The table of the newest frame, ``args.rate`` times a second, ``args.count`` times (0:
     until interrupted); the robot is left in Passive."""
+    from roomba_bt.cli.profile_choice import profile_setting
     from roomba_bt.robot.connection import Connection
     from roomba_bt.robot.errors import StreamStalled
     from roomba_bt.robot.safety import sigterm_raises
 
     connection = Connection(link, profile, baud=args.baud)
+    connection.profile_setting = profile_setting(args)  # a wrong profile's fix
     interactive = sys.stdout.isatty()
     shown = 0
     #: a watchdog trip being ridden through, as ``run`` does: (bytes read then, drive 0 sent)
@@ -174,6 +176,8 @@ def _show_live(
             try:
                 frames = connection.poll(0.1)
             except StreamStalled as stalled:  # a flaky line is what one looks at it for
+                if stalled.mismatch is not None:  # another model's frames: certain now
+                    raise
                 stall = (connection.link.bytes_read, stalled.halted)
                 print(f"roomba-bt: {stalled}; waiting up to {DEFAULT_GRACE:g} s for valid "
                       "frames", file=sys.stderr)  # fmt: skip

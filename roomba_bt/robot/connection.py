@@ -219,6 +219,11 @@ class Connection:
         #: when garbage was last judged (listened at other rates, or noise) and the bytes
         #: read by then (link clock; silence.follow_baud judges again while garbage comes)
         self.baud_listened: tuple[float, int] | None = None
+        #: where the profile was set, for a wrong profile's fix: the command line's
+        #: ``--profile``, ``ROOMBA_BT_PROFILE`` or a project file's ``path:line``
+        #: (:func:`~roomba_bt.robot.errors.profile_fix`); None: the option and the Python
+        #: argument both are named
+        self.profile_setting: str | None = None
         self._changes_said: Counter[str] = Counter()  # the robot's own falls, by cause
         self._falls: Counter[str] = Counter()  # ... this session's (:attr:`falls`)
         _LIVE.add(self)
@@ -423,7 +428,9 @@ class Connection:
         trips (frames coming back clear the stall), the stall's cause if it is already known
         (:class:`RobotReset`: the banner was read; :class:`RobotAsleep`; :class:`BaudChanged`:
         garbage, and frames at another rate) or
-        :class:`StreamStalled` (see :meth:`check_stall` for riding it through).
+        :class:`StreamStalled` (see :meth:`check_stall` for riding it through; one whose
+        ``mismatch`` is set, another model's frames, is certain at once: nothing to ride
+        through, its fix worded for :attr:`profile_setting`).
         """
         if self.ending.closed:
             raise ConnectionClosed(self.name)
@@ -451,6 +458,10 @@ class Connection:
                 raise RobotReset(self.name, exc.halted, self._since_write()) from exc
             if exc.mismatch is not None:  # another model's frames: the stop's check too
                 another_model(self, exc.mismatch)
+                raise StreamStalled(
+                    exc.port, exc.silent_for, exc.watchdog, exc.halted, exc.mismatch,
+                    setting=self.profile_setting,
+                ) from exc  # fmt: skip
             cause = (
                 asleep_by_idle(self)
                 or follow_baud(self)

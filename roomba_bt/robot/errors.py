@@ -23,6 +23,7 @@ from roomba_bt.oi.errors import OIError
 from roomba_bt.oi.identify import ProfileMismatch
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
+from roomba_bt.project import PROFILE_KEY
 
 
 class RobotError(RoombaBtError):
@@ -129,8 +130,11 @@ class NoAnswer(ConnectionFailed):
 class LinkDown(RobotError, ConnectionError):
     """The link failed while running: the port is gone or the stream stopped."""
 
-    def __init__(self, port: str, message: str) -> None:
+    def __init__(self, port: str, message: str, headline: str = "") -> None:
         self.port = port
+        #: the message's short first line, for where it is repeated (a run's stderr line,
+        #: the summary saying it whole); "" when the message is short enough to repeat
+        self.headline = headline
         super().__init__(f"{port}: {message}")
 
 
@@ -146,20 +150,46 @@ class WaitCutShort(RobotError):
     the port may be fine, only the wait is given up."""
 
 
-def wrong_profile(mismatch: ProfileMismatch) -> str:
+def wrong_profile(mismatch: ProfileMismatch, setting: str | None = None) -> str:
     """The frames pass another model's checksum, or only its range holds their values: what
-    was seen and the fix, for the command line and for a Python caller (the ``profile``
-    argument)."""
-    return f"{mismatch.explained}: {profile_fix(mismatch.likely[0].name)}"
+    was seen and the fix, worded for where the profile was set (``setting``,
+    :func:`profile_fix`)."""
+    return f"{mismatch.explained}: {profile_fix(mismatch.likely[0].name, setting)}"
 
 
-def profile_fix(name: str) -> str:
-    """The fix for a robot read with another model's profile, as every such message says
-    it (a 500's checksum, a 600's mode + 1): the option, the Python argument, doctor."""
+def wrong_profile_headline(port: str, mismatch: ProfileMismatch, setting: str | None) -> str:
+    """The short first line of a wrong profile's ending, for where the full message
+    (:func:`wrong_profile`) is repeated: the model, the profile it was read with, the fix. A
+    run printed the same ~450 characters three times; a 40-column window wants the fix
+    first."""
     return (
-        f"use --profile {name} (in Python, Connection.open(port, profile={name!r})), or "
-        "roomba-bt doctor to tell the model"
+        f"{port}: the robot is most likely {mismatch.most_likely}, which the "
+        f"{mismatch.profile.name} profile cannot read: "
+        f"{profile_fix(mismatch.likely[0].name, setting)}"
     )
+
+
+#: How every wrong-profile fix ends: the command that tells the model.
+_DOCTOR = "or roomba-bt doctor to tell the model"
+
+
+def profile_fix(name: str, setting: str | None = None) -> str:
+    """The fix for a robot read with another model's profile, as every such message says
+    it (a 500's checksum, a 600's mode + 1), worded for where the profile was set: the
+    fix is made there, or the setting keeps coming back (``ROOMBA_BT_PROFILE=create2``
+    with "use --profile roomba500" fixed one command and not the next). ``setting`` is the
+    command line's, handed down as data (this layer reads no command line): ``"--profile"``,
+    an environment variable's name (``ROOMBA_BT_PROFILE``), a project file's ``path:line``;
+    None when not known (the default, a Python program): the option and the Python
+    argument both."""
+    if setting is None:
+        python = f"Connection.open(port, profile={name!r})"
+        return f"use --profile {name} (in Python, {python}), {_DOCTOR}"
+    if setting.startswith("-"):
+        return f"use {setting} {name}, {_DOCTOR}"
+    if setting.isidentifier():
+        return f"set {setting}={name} (or auto), {_DOCTOR}"
+    return f'set {PROFILE_KEY} = "{name}" at {setting} (or "auto"), {_DOCTOR}'
 
 
 #: Seconds without a valid frame before the watchdog trips (drive 0, :class:`StreamStalled`)
@@ -173,26 +203,30 @@ DEFAULT_WATCHDOG = 0.1
 class StreamStalled(LinkDown):
     """No valid stream frame within the watchdog time; drive 0 was sent (if allowed).
     ``mismatch``: the frames that came pass another model's checksum, or only its range holds
-    their values (the profile is wrong)."""
+    their values (the profile is wrong: certain at once, a run ends without riding it
+    through); ``setting``: where the profile was set, for its fix (:func:`profile_fix`)."""
 
     def __init__(
         self, port: str, silent_for: float, watchdog: float, halted: bool,
         mismatch: ProfileMismatch | None = None, held: str | None = None,
+        setting: str | None = None,
     ) -> None:  # fmt: skip
         self.silent_for = silent_for
         self.watchdog = watchdog
         self.halted = halted
         self.mismatch = mismatch
+        self.setting = setting
         #: what held this process's reads meanwhile, if known (a keep-awake pulse's line
         #: change that took long): then the stall is ours, not the line's
         self.held = held
         action = "drive 0 sent" if halted else "the robot was not driving (drive 0 not needed)"
-        why = f"; {wrong_profile(mismatch)}" if mismatch is not None else ""
+        why = f"; {wrong_profile(mismatch, setting)}" if mismatch is not None else ""
         why += f"; {held}" if held is not None else ""
         super().__init__(
             port,
             f"no valid sensor frame for {silent_for * 1000:.0f} ms (watchdog "
             f"{watchdog * 1000:.0f} ms){why}; {action}",
+            wrong_profile_headline(port, mismatch, setting) if mismatch is not None else "",
         )
 
 
@@ -233,7 +267,8 @@ class StreamLost(LinkDown):
     ``mismatch``: the garbled frames pass another model's checksum rule, or only its range
     holds their values (the profile is wrong: a Roomba 500 read as a Create 2, its wall
     signal over 1023); the message then names the model, the packet or the rule, and the fix,
-    for the command line (``--profile``) and for Python (the ``profile`` argument)."""
+    for where the profile was set (``setting``, :func:`profile_fix`), or else for the
+    command line (``--profile``) and for Python (the ``profile`` argument)."""
 
     def __init__(
         self,
@@ -247,6 +282,7 @@ class StreamLost(LinkDown):
         probed: str = "",
         mismatch: ProfileMismatch | None = None,
         came_back: float | None = None,
+        setting: str | None = None,
     ) -> None:
         self.silent_for = silent_for
         self.grace = grace
@@ -255,6 +291,7 @@ class StreamLost(LinkDown):
         #: seconds from the last frame until the robot answered again, when it did (asked
         #: after the grace): a line that froze and came back, not a robot that slept
         self.came_back = came_back
+        headline = ""
         if came_back is not None:
             what = (
                 f"the stream stopped for {came_back:.1f} s and came back (a frozen adapter or "
@@ -263,8 +300,9 @@ class StreamLost(LinkDown):
         elif bytes_seen and mismatch is not None:
             what = (
                 f"the line is garbled: no valid sensor frame for {silent_for:.1f} s while "
-                f"{bytes_seen} bytes arrived; {wrong_profile(mismatch)}"
+                f"{bytes_seen} bytes arrived; {wrong_profile(mismatch, setting)}"
             )
+            headline = wrong_profile_headline(port, mismatch, setting)
         elif bytes_seen:
             what = (
                 f"the line is garbled: no valid sensor frame for {silent_for:.1f} s while "
@@ -284,7 +322,11 @@ class StreamLost(LinkDown):
         #: BRC pulse), or ""
         self.probed = probed
         tail = f"; {probed}" if probed else ""
-        super().__init__(port, f"{what}; {action}, then the run waited the {grace:g} s grace{tail}")
+        super().__init__(
+            port,
+            f"{what}; {action}, then the run waited the {grace:g} s grace{tail}",
+            headline,
+        )
 
 
 def idle_said(idle_s: float | None) -> str:

@@ -233,7 +233,7 @@ def garbled_line(
         )
     return StreamLost(
         connection.name, silent_for, grace, garbled, watchdog=link.watchdog, halted=halted,
-        mismatch=mismatch,
+        mismatch=mismatch, setting=connection.profile_setting,
     )  # fmt: skip
 
 

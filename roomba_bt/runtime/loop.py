@@ -786,6 +786,7 @@ def ended_by(exc: BaseException, summary: RunSummary, *, answered: bool) -> None
         summary.reason = str(exc)
     elif isinstance(exc, LinkDown):
         summary.outcome, summary.reason = Outcome.CONNECTION_LOST, str(exc)
+        summary.headline = exc.headline
     else:  # a bug in a behaviour must still end in a safe stop. An OSError is one too: the
         # link turns its own I/O errors into LinkDown (PortLost) and ConnectionFailed where
         # it reads and writes (robot/link.py), so a bare one came from a behaviour's code

@@ -66,11 +66,16 @@ class StallRide:
 
     def tripped(self, stalled: StreamStalled) -> Sequence[SensorFrame]:
         """The watchdog tripped (drive 0 sent): the ride begins, no frames this read; or,
-        without a grace, the trip ends the run."""
+        without a grace, the trip ends the run, as does one whose frames are another
+        model's (``mismatch``): that diagnosis is certain at the trip (the robot streams all
+        along, every frame refused by the profile alone), and the run waited the whole grace
+        for frames that could not come."""
         if self.grace <= 0:
             raise stalled
         self.summary.stalls += 1
         self.summary.stall_halts += stalled.halted
+        if stalled.mismatch is not None:
+            raise stalled
         link = self.connection.link
         self.stall = (link.bytes_read, stalled.halted, link.silent_since)
         log.warning(

@@ -195,6 +195,10 @@ class RunSummary:
     mission: str
     outcome: Outcome = Outcome.ERROR
     reason: str = ""
+    #: the reason's short first line, where a long one is repeated (the command line's
+    #: stderr line under the summary: a wrong profile's fix, its detail said once, here in
+    #: :attr:`reason`); "" says the reason whole there too
+    headline: str = ""
     mission_time_s: float = 0.0
     wall_time_s: float = 0.0
     ticks: int = 0
