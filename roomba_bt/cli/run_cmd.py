@@ -736,8 +736,8 @@ def _report_on_stderr(args: argparse.Namespace, stack: RunStack, summary: RunSum
         # a node's name in it: one line; a long reason's short first line where it has one,
         # the summary above it saying it whole
         reason = escaped(summary.headline or summary.reason, ANY_CONTROL)
-        more = " (the summary's outcome says what was seen)" if summary.headline else ""
-        print(f"roomba-bt: {summary.outcome.value}: {reason}{more}", file=sys.stderr)
+        pointer = " (the summary's outcome says what was seen)" if summary.headline else ""
+        print(f"roomba-bt: {summary.outcome.value}: {reason}{pointer}", file=sys.stderr)
     if summary.failed_strict:  # the outcome reads SUCCESS: say why the exit code is not 0
         findings = escaped("; ".join(summary.strict_findings()), ANY_CONTROL)
         print(f"roomba-bt: --strict: {findings}", file=sys.stderr)

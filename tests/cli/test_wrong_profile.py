@@ -38,7 +38,10 @@ def test_sensors_with_the_default_profile_on_a_roomba500_names_the_profile(
     roomba500_port: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
     assert main(["sensors", "--port", roomba500_port, "--count", "2"]) == 3
-    _says_roomba500(capsys.readouterr().err)
+    err = capsys.readouterr().err
+    _says_roomba500(err)
+    # certain at the first trip: said once, not again after a grace waited for nothing
+    assert "waiting up to" not in err and err.count("failed the checksum") == 1, err
 
 
 def test_run_with_the_default_profile_on_a_roomba500_names_the_profile(
@@ -48,8 +51,41 @@ def test_run_with_the_default_profile_on_a_roomba500_names_the_profile(
     mission.write_text(MISSION)
     assert main(["run", str(mission), "--port", roomba500_port, "--display", "none"]) == 3
     out, err = capsys.readouterr()
-    _says_roomba500(err)
-    assert "--profile roomba500" in out  # the summary's outcome and its safe stop line
+    _says_roomba500(out)  # the summary's outcome, whole for one who reads only the summary
+    assert "then the run waited" not in out  # ended at the watchdog's trip: it was certain
+    # said once: stderr's line is the short first line, the model and the fix; the warning
+    # that repeated it all (a ride through the grace) is gone
+    (line,) = err.splitlines()
+    assert line.startswith(f"roomba-bt: connection lost: {roomba500_port}: the robot is most ")
+    assert "use --profile roomba500" in line and "failed the checksum" not in line
+    assert (out + err).count("failed the checksum") == 1
+
+
+@pytest.mark.parametrize("where", ["environment", "project file"])
+def test_a_wrong_profile_set_elsewhere_is_fixed_where_it_was_set(
+    where: str,
+    roomba500_port: str,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``ROOMBA_BT_PROFILE=create2`` on a Roomba 500: the summary said the profile came
+    from ROOMBA_BT_PROFILE and its fix said "use --profile roomba500", which fixed one
+    command and not the next. The fix is made where the setting is (as doctor says it)."""
+    monkeypatch.delenv("ROOMBA_BT_PROFILE", raising=False)
+    if where == "environment":
+        monkeypatch.setenv("ROOMBA_BT_PROFILE", "create2")
+        fix = "set ROOMBA_BT_PROFILE=roomba500 (or auto)"
+    else:
+        project = tmp_path / "pyproject.toml"
+        project.write_text('[tool.roomba-bt]\nprofile = "create2"\n')
+        fix = f'set profile = "roomba500" at {project}:2 (or "auto")'
+    mission = tmp_path / "sit.yaml"
+    mission.write_text(MISSION)
+    assert main(["run", str(mission), "--port", roomba500_port, "--display", "none"]) == 3
+    out, err = capsys.readouterr()
+    assert fix in out and fix in err, (out, err)
+    assert "use --profile" not in out + err
 
 
 def test_the_right_profile_reads_it(

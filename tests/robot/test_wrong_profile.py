@@ -35,6 +35,32 @@ def test_the_stall_on_a_roomba500_names_its_profile(profile: RobotProfile) -> No
     connection.close()
 
 
+@pytest.mark.parametrize(
+    ("setting", "fix"),
+    [
+        (None, "use --profile roomba500 (in Python, Connection.open(port, profile='roomba500'))"),
+        ("--profile", "use --profile roomba500, or roomba-bt doctor"),
+        ("ROOMBA_BT_PROFILE", "set ROOMBA_BT_PROFILE=roomba500 (or auto), or roomba-bt doctor"),
+        ("/p/pyproject.toml:4", 'set profile = "roomba500" at /p/pyproject.toml:4 (or "auto")'),
+    ],
+    ids=["not known", "the flag", "the environment", "the project file"],
+)
+def test_the_stall_says_the_fix_where_the_profile_was_set(setting: str | None, fix: str) -> None:
+    """``ROOMBA_BT_PROFILE=create2`` on a Roomba 500 was told "use --profile roomba500":
+    one command fixed, the next wrong again. The fix is made where the setting is, and a
+    command line's fix does not name the Python argument."""
+    connection = _connection(ROOMBA500, CREATE2)
+    connection.profile_setting = setting
+    with pytest.raises(StreamStalled) as stalled:
+        for _ in range(20):
+            connection.poll(0.05)
+    connection.close()
+    assert fix in str(stalled.value)
+    assert fix in stalled.value.headline  # the short first line carries the fix too
+    assert stalled.value.headline.endswith("roomba-bt doctor to tell the model")
+    assert ("Connection.open" in str(stalled.value)) is (setting is None)
+
+
 @pytest.mark.parametrize("robot", [CREATE2, ROOMBA600])
 def test_the_roomba500_profile_reads_a_600_and_a_create2(robot: RobotProfile) -> None:
     connection = _connection(robot, ROOMBA500)

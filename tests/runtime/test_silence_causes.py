@@ -25,7 +25,7 @@ from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import CREATE2, ROOMBA500, RobotProfile
 from roomba_bt.robot.silence import LISTEN_S, listen_window
 from roomba_bt.runtime.stack import RunStack
-from roomba_bt.runtime.summary import Outcome, RunSummary
+from roomba_bt.runtime.summary import DEFAULT_GRACE, Outcome, RunSummary
 from roomba_bt.sim import Faults, SimLink, Simulator, load_world
 from roomba_bt.transport.testing import NullTransport
 
@@ -448,6 +448,31 @@ def test_a_robot_found_at_115200_is_not_told_how_a_robot_comes_to_19200(tmp_path
     assert "the robot answers at 115200 baud, not at the 57600 of the run" in summary.reason
     assert "19200" not in summary.reason, summary.reason
     assert "open it at 115200 (--baud 115200" in summary.reason
+
+
+def test_a_roomba500_read_by_the_default_profile_ends_the_run_at_the_watchdog_trip(
+    tmp_path: Path,
+) -> None:
+    """The frames passing the 500's checksum make the diagnosis certain at the watchdog's
+    trip (the robot streams all along, its frames refused by the profile alone): the run
+    waited the whole 2 s grace for frames that could not come. It ends at the trip now,
+    with the same safe stop (confirmed by the Pause Stream's quiet and a query)."""
+    path = tmp_path / "m.yaml"
+    path.write_text(SPIN)
+    simulator = Simulator(load_world("empty-room"), ROOMBA500, 0, trace=False)
+    link = SimLink(simulator)
+    stack = RunStack(load_mission(path, {}, profile=CREATE2), link, profile=CREATE2)
+    summary = stack.run()
+    ended_at = link.now()  # the virtual clock: the run's own time, not the wall's
+    stack.close()
+    assert summary.outcome is Outcome.CONNECTION_LOST and summary.exit_code == 3
+    assert "then the run waited" not in summary.reason, summary.reason
+    assert "use --profile roomba500" in summary.reason
+    assert summary.stalls == 1 and summary.stalls_ridden == 0
+    assert ended_at < DEFAULT_GRACE, ended_at  # the grace was not waited
+    assert summary.safe_stop == "sent pause_resume_stream, start", summary.safe_stop
+    assert summary.stop_delivered
+    assert summary.headline.startswith(f"{link.name}: the robot is most likely a Roomba 500")
 
 
 def test_a_roomba500_read_by_the_default_profile_near_a_wall_is_not_called_noise(
