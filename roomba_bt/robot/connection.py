@@ -219,11 +219,6 @@ class Connection:
         #: when garbage was last judged (listened at other rates, or noise) and the bytes
         #: read by then (link clock; silence.follow_baud judges again while garbage comes)
         self.baud_listened: tuple[float, int] | None = None
-        #: where the profile was set, for a wrong profile's fix: the command line's
-        #: ``--profile``, ``ROOMBA_BT_PROFILE`` or a project file's ``path:line``
-        #: (:func:`~roomba_bt.robot.errors.profile_fix`); None: the option and the Python
-        #: argument both are named
-        self.profile_setting: str | None = None
         self._changes_said: Counter[str] = Counter()  # the robot's own falls, by cause
         self._falls: Counter[str] = Counter()  # ... this session's (:attr:`falls`)
         _LIVE.add(self)
@@ -418,6 +413,18 @@ class Connection:
             watchdog_trips=link.watchdog_trips,
             mode_readings_ignored=self.modes.invalid_readings,
         )
+
+    @property
+    def profile_setting(self) -> str | None:
+        """Where the profile was set, for a wrong profile's fix (a stall's, a 600's mode + 1
+        warning): the command line's ``--profile``, ``ROOMBA_BT_PROFILE`` or a project
+        file's ``path:line`` (:func:`~roomba_bt.robot.errors.profile_fix`); None (the
+        default): the option and the Python argument both are named."""
+        return self.modes.detector.setting
+
+    @profile_setting.setter
+    def profile_setting(self, setting: str | None) -> None:
+        self.modes.detector.setting = setting
 
     # ------------------------------------------------------------------ reading
     def poll(self, timeout: float = 0.0) -> list[TimedFrame]:

@@ -200,11 +200,13 @@ _PASSIVE_READINGS = (OIMode.PASSIVE, OIMode.PASSIVE + 1)
 class OffsetDetector:
     """Learns whether packet 35 reads mode + 1 (see the module docstring for the rule)."""
 
-    __slots__ = ("expected_plus_one", "offset", "profile")
+    __slots__ = ("expected_plus_one", "offset", "profile", "setting")
 
     def __init__(self, profile: RobotProfile = DEFAULT_PROFILE) -> None:
         self.offset: int | None = None
         self.profile = profile
+        #: where the profile was set, for the fix (``Connection.profile_setting``)
+        self.setting: str | None = None
         self.expected_plus_one = profile.reports_mode_plus_one
 
     def interpret(self, raw: int) -> OIMode | None:
@@ -248,7 +250,7 @@ class OffsetDetector:
             "%spacket 35 reports the OI mode + 1 (read %d), which the %s profile does not "
             "expect: the robot is most likely a %s: %s (correcting every reading by -1 "
             "meanwhile)", where, raw, self.profile.name, likely[0].title,
-            profile_fix(likely[0].name),
+            profile_fix(likely[0].name, self.setting),
         )  # fmt: skip
 
 

@@ -168,3 +168,21 @@ def test_the_stop_after_another_model_s_stall_says_what_is_known(
         assert "unconfirmed: its frames fail the create2 profile's" in report, report
         assert "--profile roomba500" in report
         assert "no valid frame" not in report
+
+
+def test_a_600s_mode_plus_one_says_the_fix_where_the_profile_was_set(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """The 600's mode + 1 warning gives the same fix as the 500's stall: where the setting
+    is (``ROOMBA_BT_PROFILE=create2`` was told "use --profile roomba600")."""
+    import logging
+
+    caplog.set_level(logging.WARNING, logger="roomba_bt.robot.modes")
+    simulator = Simulator(load_world("empty-room"), ROOMBA600, seed=1)
+    connection = Connection(SimLink(simulator), CREATE2)
+    connection.profile_setting = "ROOMBA_BT_PROFILE"
+    connection.start("passive", (100,))
+    connection.close()
+    (line,) = [r.getMessage() for r in caplog.records if "mode + 1" in r.getMessage()]
+    assert "most likely a Roomba 600 series: set ROOMBA_BT_PROFILE=roomba600 (or auto)" in line
+    assert "use --profile" not in line
