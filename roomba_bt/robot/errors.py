@@ -23,7 +23,6 @@ from roomba_bt.oi.errors import OIError
 from roomba_bt.oi.identify import ProfileMismatch
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
-from roomba_bt.project import PROFILE_KEY
 
 
 class RobotError(RoombaBtError):
@@ -189,7 +188,9 @@ def profile_fix(name: str, setting: str | None = None) -> str:
         return f"use {setting} {name}, {_DOCTOR}"
     if setting.isidentifier():
         return f"set {setting}={name} (or auto), {_DOCTOR}"
-    return f'set {PROFILE_KEY} = "{name}" at {setting} (or "auto"), {_DOCTOR}'
+    # the project file's key (roomba_bt.project.PROFILE_KEY: a module this layer does not
+    # import, tests/transport/test_layers.py)
+    return f'set profile = "{name}" at {setting} (or "auto"), {_DOCTOR}'
 
 
 #: Seconds without a valid frame before the watchdog trips (drive 0, :class:`StreamStalled`)
