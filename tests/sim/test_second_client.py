@@ -109,7 +109,12 @@ def test_a_run_turned_away_says_another_client_may_hold_the_robot(
     assert code == 3
     out, err = capsys.readouterr()
     assert f"{held_robot}: {TURNED_AWAY} may hold it" in err
-    assert "safe stop    NOT DELIVERED: not sent: the far end closed the connection at once" in out
+    # no robot was reached, so none was set going: said calmly, not NOT DELIVERED
+    assert (
+        "safe stop    nothing this run set going; not sent: the far end closed the "
+        "connection at once" in out
+    )
+    assert "NOT DELIVERED" not in out
     assert "the port is gone" not in out + err
 
 
