@@ -628,10 +628,17 @@ def convert(source: ValueType, target: ValueType, value: Any) -> Any:
 
 def closest(word: str, candidates: Sequence[str]) -> str:
     """ " (did you mean 'x'?)" or ""; the difflib suggestion every unknown name gets."""
+    found = closest_name(word, candidates)
+    return f" (did you mean {found!r}?)" if found is not None else ""
+
+
+def closest_name(word: str, candidates: Sequence[str]) -> str | None:
+    """The candidate :func:`closest` suggests, or None: for a caller that goes on as if it
+    had been written (a misspelt ``paramaters:`` read as ``parameters:``)."""
     import difflib
 
     found = difflib.get_close_matches(word, list(candidates), n=1, cutoff=0.6)
-    return f" (did you mean {found[0]!r}?)" if found else ""
+    return found[0] if found else None
 
 
 def _parse_any(value: object) -> object:

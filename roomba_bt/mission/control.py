@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 import yaml
 
 from roomba_bt.behaviours.declare import Param
-from roomba_bt.behaviours.language import CHILD_NAMES, KEY_ITEMS, TEXT, NodeKind, Shape
+from roomba_bt.behaviours.language import CHILD_NAMES, KEY_ITEMS, TEXT, WORDS, NodeKind, Shape
 from roomba_bt.mission.plan import Node
 from roomba_bt.mission.source import Bad, Loc, kind_of, mapping, plain, scalar_text, sequence
 from roomba_bt.mission.ticks import at_once
@@ -118,7 +118,9 @@ def parse_composite(parser: NodeParser, kind: NodeKind, at: Written) -> Node | N
     if isinstance(value, yaml.MappingNode):
         allowed = ["children", *(p.name for p in kind.options)]
         fields = {}
-        for k, v, kl, vl in mapping(value, loc, word):
+        items = mapping(value, loc, word)
+        _children_as_keys(parser, word, [(k, kl) for k, _, kl, _ in items if k not in allowed])
+        for k, v, kl, vl in items:
             if k not in allowed:
                 ctx.error(kl.at(f"{word}: " + unknown("option", k, allowed, word)))
                 continue
@@ -151,6 +153,18 @@ def parse_composite(parser: NodeParser, kind: NodeKind, at: Written) -> Node | N
         if param.type is CHILD_NAMES and param.name in options:
             _chosen(ctx, f"{word}.{param.name}", options, children, [e[1] for e in entries])
     return result
+
+
+def _children_as_keys(parser: NodeParser, word: str, strays: list[tuple[str, Loc]]) -> None:
+    """``sequence: {drive: ..., turn: ...}``: children written as keys of the composite, not
+    as a list. Each was "unknown option 'drive'", and then "sequence needs children": one
+    error (:class:`Bad`), at the first, with the fix. Nothing when no stray key is a node."""
+    nodes = [key for key, _ in strays if key in parser.ctx.registry or key in WORDS]
+    if nodes:
+        raise Bad(strays[0][1].at(
+            f"a {word}'s children are a list, not keys of it: write each as `- {nodes[0]}: "
+            f"...`, one under another (found {', '.join(key for key, _ in strays)} as keys)"
+        ))  # fmt: skip
 
 
 def _chosen(ctx: Context, what: str, options: dict[str, Any], children: list[Node],

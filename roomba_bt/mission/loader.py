@@ -47,7 +47,16 @@ from typing import Any, Protocol
 import yaml
 
 from roomba_bt.behaviours.language import WORDS
-from roomba_bt.behaviours.units import ANY, STR, VALUE_TYPES, UnitError, ValueType, closest, enum
+from roomba_bt.behaviours.units import (
+    ANY,
+    STR,
+    VALUE_TYPES,
+    UnitError,
+    ValueType,
+    closest,
+    closest_name,
+    enum,
+)
 from roomba_bt.mission.diagnostics import Diagnostic
 from roomba_bt.mission.include_path import (
     DOCUMENTED_AT,
@@ -293,6 +302,7 @@ class Loader:
                 f"unknown top-level key {key!r}{closest(key, TOP_LEVEL)}; "
                 f"known: {', '.join(TOP_LEVEL)}"
             ),
+            read_misspelt=True,
         )
         return None if sections is None else (sections, root_loc)
 
@@ -305,12 +315,17 @@ class Loader:
         not_a_mission: Diagnostic,
         called: str,
         unknown_key: Callable[[str], str],
+        read_misspelt: bool = False,
     ) -> dict[str, tuple[yaml.Node, Loc, Loc]] | None:
         """The sections of a file's root (a mission, or a library it includes) by key:
         None, ``not_a_mission`` reported, when the root is no mapping with one of ``words``
         (its content is not quoted back), or when its keys are not all names (``called``
         names the file in that error). A key not in ``words`` is reported with
-        ``unknown_key(key)`` and the others are read on."""
+        ``unknown_key(key)`` and the others are read on. With ``read_misspelt`` (a mission,
+        whose message says "did you mean"), one that is a misspelling of a section the file
+        lacks (``paramaters:``, ``Parameters:``) is read as that section, so that its one
+        error is the only one: each ``${speed}`` of the tree was "unknown parameter" too,
+        pointing away from the typo."""
         if not _is_mission(root, words):
             self.ctx.error(not_a_mission)
             return None
@@ -319,10 +334,15 @@ class Loader:
         except Bad as bad:
             self.ctx.report(bad)
             return None
-        for key, _, key_loc, _ in items:
+        written = {key for key, *_ in items}
+        sections: dict[str, tuple[yaml.Node, Loc, Loc]] = {}
+        for key, value, key_loc, value_loc in items:
             if key not in words:
                 self.ctx.error(key_loc.at(unknown_key(key)))
-        return {k: (v, kl, vl) for k, v, kl, vl in items}
+                meant = closest_name(key, words) if read_misspelt else None
+                key = meant if meant is not None and meant not in written else key
+            sections.setdefault(key, (value, key_loc, value_loc))
+        return sections
 
     def _names(
         self, path: Path, sections: dict[str, tuple[yaml.Node, Loc, Loc]]

@@ -68,6 +68,24 @@ def _without_id(items: list[tuple[str, yaml.Node, Loc, Loc]], key_loc: Loc) -> D
     return key_loc.at("subtree needs id: NAME")
 
 
+def _misplaced(
+    known: tuple[str, yaml.Node, Loc, Loc], misplaced: list[tuple[str, yaml.Node, Loc, Loc]]
+) -> Diagnostic:
+    """``- drive:`` and then ``velocity: 200 mm/s`` at the indent of ``drive:``: YAML reads
+    the parameters as keys of the node, beside its word. Each was "unknown node 'velocity'
+    next to 'drive'" (and ``turn`` without them "missing required parameter 'angle'"): one
+    error, at the first, saying to indent them (or to write them with the word's others)."""
+    word, value, _, _ = known
+    keys = [m[0] for m in misplaced]
+    listed = " and ".join([", ".join(keys[:-1]), keys[-1]] if len(keys) > 1 else keys)
+    are, them = ("are", "them") if len(keys) > 1 else ("is", "it")
+    if value is None or (isinstance(value, yaml.ScalarNode) and value.tag.endswith(":null")):
+        fix = f"indent {them} under `{word}:`"
+    else:
+        fix = f"write {them} in its mapping, `{word}: {{...}}`"
+    return misplaced[0][2].at(f"{listed} {are} {word}'s, written at the node's level: {fix}")
+
+
 class NodeParser:
     """Parses trees (the mission's, each subtree's at each use) within one :class:`Context`."""
 
@@ -144,10 +162,10 @@ class NodeParser:
         if not words:
             found = f"only {', '.join(mods)}" if mods else "an empty mapping"
             raise Bad(loc.at(f"a node needs a kind (such as sequence, drive, bump); found {found}"))
-        word, value, key_loc, value_loc = self._kind(words)
+        kind = self._kind(words)
         stray = len(words) > 1  # unknown words beside it: reported, the node is not built
         try:
-            built = self._word(word, Written(value, key_loc, value_loc, env))
+            built = None if kind is None else self._word(kind[0], Written(*kind[1:], env))
         except Bad as bad:  # an unknown word, say: its guards still checked, in the same pass
             self.ctx.report(bad)
             built = None
@@ -186,11 +204,12 @@ class NodeParser:
 
     def _kind(
         self, words: list[tuple[str, yaml.Node, Loc, Loc]]
-    ) -> tuple[str, yaml.Node, Loc, Loc]:
+    ) -> tuple[str, yaml.Node, Loc, Loc] | None:
         """The node's one kind among the keys that are no modifier. Beside exactly one known
         word, each unknown one (a misspelt ``untill``) is reported and the known word is still
         parsed, so that its own errors (``velocty``) come in the same pass; :class:`Bad` when
-        none or several are known."""
+        none or several are known. None when the word's own parameters stand beside it
+        (:meth:`_misplaced`): said once, the word not parsed without them."""
         if len(words) == 1:
             return words[0]
         names = [w[0] for w in words]
@@ -202,11 +221,25 @@ class NodeParser:
                     "(put several nodes in a sequence)"
                 )
             )
+        own = self._parameter_names(known[0][0])
+        misplaced = [w for w in words if w[0] in own]
+        if misplaced:
+            self.ctx.error(_misplaced(known[0], misplaced))
         for other in words:
-            if other is not known[0]:
+            if other is not known[0] and other not in misplaced:
                 where = f" next to {known[0][0]!r}"
                 self.ctx.error(other[2].at(self._unknown_word(other[0], other[2], where)))
-        return known[0]
+        return None if misplaced else known[0]
+
+    def _parameter_names(self, word: str) -> set[str]:
+        """What ``word`` takes in its value: a behaviour's parameters, a language word's
+        options (and its ``children:``, ``do:`` or ``id:``)."""
+        kind = WORDS.get(word)
+        if kind is None:
+            decl = self.ctx.registry.get(word)
+            return {p.name for p in decl.params} if decl is not None else set()
+        value_keys = {Shape.CHILDREN: "children", Shape.SUBTREE: "id"}.get(kind.shape, "do")
+        return {value_keys, *(p.name for p in kind.options)}
 
     #: at most this many broken plugins are noted beside an unknown node
     _PLUGIN_NOTES = 3

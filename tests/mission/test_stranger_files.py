@@ -357,3 +357,35 @@ def test_a_mode_whose_value_is_not_known_is_its_error_not_an_internal_one(
     path = _mission(tmp_path, "mission: m\n" + text)
     (problem,) = _problems(path)
     assert problem.startswith(said), problem
+
+
+@pytest.mark.parametrize("spelt", ["paramaters", "paramters", "Parameters"])
+def test_a_misspelt_parameters_section_is_one_error_not_one_per_use(
+    tmp_path: Path, spelt: str
+) -> None:
+    """Each ``${speed}`` the tree used was "unknown parameter" besides the typo itself: the
+    section is read as the one it was meant to be, and the typo is the only error."""
+    path = _mission(
+        tmp_path,
+        f"mission: m\n{spelt}:\n  speed: {{type: speed, default: 200 mm/s}}\ntree:\n"
+        "  sequence:\n    - mode: safe\n    - drive: {velocity: '${speed}', distance: 1 m}\n",
+    )
+    assert _problems(path) == [
+        f"2:1: unknown top-level key {spelt!r} (did you mean 'parameters'?); known: mission, "
+        "description, parameters, blackboard, plugins, include, subtrees, tree"
+    ]
+
+
+def test_a_misspelt_section_beside_the_right_one_is_not_read(tmp_path: Path) -> None:
+    """Read as the section it was meant to be only where the file lacks that section: beside
+    ``parameters:``, ``paramaters:`` is an unknown key and nothing of it is read."""
+    path = _mission(
+        tmp_path,
+        "mission: m\nparameters: {speed: {type: speed, default: 200 mm/s}}\n"
+        "paramaters: {side: {type: distance, default: 1 m}}\n"
+        "tree: {wait: '${side}'}\n",
+    )
+    assert [problem.split(";")[0] for problem in _problems(path)] == [
+        "3:1: unknown top-level key 'paramaters' (did you mean 'parameters'?)",
+        "4:14: wait.duration: unknown parameter ${side}",
+    ]
