@@ -1,6 +1,7 @@
 """What of a text may reach a terminal or a log line as it is: the control characters a
 stranger's file can carry, the invisible ones that reorder or hide what is shown, and
-:func:`escaped` to show them as ``\\x1b`` or ``\\u202e``; and a duration as a person reads it
+:func:`escaped` to show them as ``\\x1b`` or ``\\u202e``; a path quoted as it was written
+(:func:`path_written`, one backslash where the file has one); and a duration as a person reads it
 (:func:`duration_said`: ``1 d``, not ``86400 s``), the one spelling of every layer's messages.
 
 Standard library only and importing nothing of ours, so that every layer may use it, the
@@ -50,6 +51,13 @@ def escaped(text: str, which: re.Pattern[str] = UNPRINTABLE) -> str:
 def _escape(found: re.Match[str]) -> str:
     code = ord(found.group())
     return f"\\x{code:02x}" if code <= 0xFF else f"\\u{code:04x}"
+
+
+def path_written(text: str) -> str:
+    """A path a stranger wrote, quoted in a message: ``repr``'s quotes and escapes, but each
+    backslash as the file writes it. ``'lib\\moves.yaml'``, doubled, sent a student searching
+    the file for two, and a Windows path ``'C:\\lab\\x.py'`` read as no path they wrote."""
+    return repr(text).replace("\\\\", "\\")
 
 
 def encodes(stream: object, text: str) -> bool:

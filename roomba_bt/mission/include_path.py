@@ -33,6 +33,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+from roomba_bt.printable import path_written
 from roomba_bt.project import PROFILE_KEY, PROJECT_FILE, PROJECT_TABLE, find_project_file, why
 
 __all__ = [  # the project file's names too, where the loader's messages take them
@@ -138,8 +139,8 @@ def _from_project_file(project_file: Path, table: object) -> tuple[list[Path], l
             folder = folder.resolve()
             if not folder.is_relative_to(root):
                 problem = (
-                    f"{entry!r} is outside this file's folder ({folder}): a project file "
-                    "grants only folders inside its own folder tree; give it with "
+                    f"{path_written(entry)} is outside this file's folder ({folder}): a project "
+                    "file grants only folders inside its own folder tree; give it with "
                     f"--include-dir or {INCLUDE_PATH_VARIABLE}"
                 )
         if problem is not None:
@@ -156,7 +157,9 @@ def _not_a_folder(folder: Path, entry: str) -> str | None:
             folder.resolve()
             return None
         if folder.is_file():
-            return f"{entry!r} is a file, not a folder: give its folder ({folder.parent})"
+            return (
+                f"{path_written(entry)} is a file, not a folder: give its folder ({folder.parent})"
+            )
     except (OSError, RuntimeError) as exc:  # a link loop, a folder the user cannot enter
-        return f"{entry!r} cannot be read ({why(exc)})"
-    return f"{entry!r} is no folder (looked for {folder.absolute()})"
+        return f"{path_written(entry)} cannot be read ({why(exc)})"
+    return f"{path_written(entry)} is no folder (looked for {folder.absolute()})"

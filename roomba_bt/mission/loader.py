@@ -103,6 +103,7 @@ from roomba_bt.mission.values import (
     warn_escaped,
 )
 from roomba_bt.mission.wording import COMMAND_LINE, PYTHON, Wording
+from roomba_bt.printable import path_written
 from roomba_bt.yamlsource import too_many_digits, yaml11_number_problem
 
 TOP_LEVEL = ("mission", "description", "parameters", "blackboard", "plugins", "include",
@@ -400,8 +401,8 @@ class Loader:
             if not self.permissions.plugin_files:
                 self.ctx.error(
                     iloc.at(
-                        f"plugin file {text!r} not loaded: a mission file cannot run code on "
-                        "its own; allow its plugin files with "
+                        f"plugin file {path_written(text)} not loaded: a mission file cannot run "
+                        "code on its own; allow its plugin files with "
                         f"{self.permissions.wording.allow_plugin_files} (or install the plugin "
                         "as a package)"
                     )
@@ -442,14 +443,14 @@ class Loader:
         if text.startswith(SHIPPED_PREFIX) and not in_shipped_library(target):
             self.ctx.error(
                 iloc.at(
-                    f"included file {_written(text)} is not in the shipped library; "
+                    f"included file {path_written(text)} is not in the shipped library; "
                     f"it holds {', '.join(shipped_library_files()) or 'nothing'}"
                 )
             )
             return False
         unreadable = _unreadable(target)
         if unreadable is not None:
-            self.ctx.error(iloc.at(f"cannot read included file {_written(text)}: {unreadable}"))
+            self.ctx.error(iloc.at(f"cannot read included file {path_written(text)}: {unreadable}"))
             return False
         if not target.is_file():
             self.ctx.error(iloc.at(_not_a_file(path, text, target)))
@@ -484,7 +485,8 @@ class Loader:
         if first.file == iloc.file:
             self.ctx.error(
                 iloc.at(
-                    f"included file {_written(text)} is included twice (first at line {first.line})"
+                    f"included file {path_written(text)} is included twice (first at line "
+                    f"{first.line})"
                 )
             )
         return True
@@ -500,8 +502,8 @@ class Loader:
         # library with a stray tree: is a library, its subtrees read, the tree: an error there
         if _is_mission(root, ("mission", "tree")) and not _is_mission(root, ("subtrees",)):
             self.ctx.error(iloc.at(
-                f"included file {_written(text)} is a mission (it has mission: or tree:), not a "
-                f"library: an included file may hold only {', '.join(_INCLUDED_KEYS)}"
+                f"included file {path_written(text)} is a mission (it has mission: or tree:), "
+                f"not a library: an included file may hold only {', '.join(_INCLUDED_KEYS)}"
             ))  # fmt: skip
             return False
         sections = self._sections(
@@ -509,7 +511,7 @@ class Loader:
             root_loc,
             _INCLUDED_KEYS,
             not_a_mission=iloc.at(
-                _not_a_mission(f"included file {_written(text)}", _INCLUDED_KEYS)
+                _not_a_mission(f"included file {path_written(text)}", _INCLUDED_KEYS)
             ),
             called="an included file",
             unknown_key=lambda key: (
@@ -814,9 +816,9 @@ def _outside_message(
         else ""
     )
     return (
-        f"{what} {_written(text)} is outside the mission's folder ({_shown_path(mission_folder)}), "
-        f"the shipped library and the include folders granted ({folders}); allow its folder "
-        f"with {allow}{every}"
+        f"{what} {path_written(text)} is outside the mission's folder "
+        f"({_shown_path(mission_folder)}), the shipped library and the include folders granted "
+        f"({folders}); allow its folder with {allow}{every}"
     )
 
 
@@ -834,42 +836,44 @@ def _not_a_file(path: Path, text: str, target: Path) -> str:
     most likely meant (``lib\\b.yaml`` written the Windows way, ``lib/B.yaml`` in the wrong
     case: both found on Windows, not here)."""
     if target.is_dir():
-        return f"included file {_written(text)} is a directory, not a file: name a .yaml file in it"
+        return (
+            f"included file {path_written(text)} is a directory, not a file: name a .yaml file "
+            "in it"
+        )
     if target.exists():  # a pipe, a device: no file to read (it "was not found")
-        return f"included file {_written(text)} is not a regular file; an include is a .yaml file"
+        return (
+            f"included file {path_written(text)} is not a regular file; an include is a .yaml file"
+        )
     slashed = text.replace("\\", "/")
     if _WINDOWS_ABSOLUTE.match(text):
         return (
-            f"included file {_written(text)} not found: an absolute Windows path names a file "
+            f"included file {path_written(text)} not found: an absolute Windows path names a file "
             "on one computer only; write the path relative to the including file, with /"
         )
     if slashed != text and (path.parent / slashed).is_file():
         return (
-            f"included file {_written(text)} not found; did you mean {slashed!r}? (paths are "
-            "written with /, on Windows too)"
+            f"included file {path_written(text)} not found; did you mean "
+            f"{path_written(slashed)}? (paths are written with /, on Windows too)"
         )
     meant = _near_path(path.parent, slashed)
     if meant is not None:
         why = ("names are case-sensitive" if meant.lower() == slashed.lower() else
                "a space at an end of a name" if meant == slashed.strip() else
                "the name ends in .yaml")  # fmt: skip
-        return f"included file {_written(text)} not found; did you mean {meant!r}? ({why})"
+        return (
+            f"included file {path_written(text)} not found; did you mean {path_written(meant)}? "
+            f"({why})"
+        )
     looked = _shown_path(target)  # where "../lib/x.yaml" led, unless the text says it
     looked_for = f"looked for {looked}: " if looked != text else ""
     return (
-        f"included file {_written(text)} not found ({looked_for}paths are relative to the "
+        f"included file {path_written(text)} not found ({looked_for}paths are relative to the "
         f"including file; the shipped docking library is {DOCKING_LIBRARY})"
     )
 
 
 #: ``C:\\Users\\...`` or ``D:/lab/...``: a path on one Windows computer
 _WINDOWS_ABSOLUTE = re.compile(r"[A-Za-z]:[\\/]")
-
-
-def _written(text: str) -> str:
-    """A path as a message quotes it: ``repr``'s quotes and escapes, but each backslash as the
-    file writes it (``'lib\\moves.yaml'``, doubled, sent a student searching the file for two)."""
-    return repr(text).replace("\\\\", "\\")
 
 
 def _near_path(folder: Path, text: str) -> str | None:
@@ -906,14 +910,17 @@ def _not_a_plugin_file(text: str, target: Path) -> str | None:
     pipe: it was "not found"), or nothing there."""
     unreadable = _unreadable(target)
     if unreadable is not None:
-        return f"cannot read plugin file {text!r}: {unreadable}"
+        return f"cannot read plugin file {path_written(text)}: {unreadable}"
     if target.is_file():
         return None
     if target.is_dir():
-        return f"plugin file {text!r} is a directory, not a file: name a .py file in it"
+        return f"plugin file {path_written(text)} is a directory, not a file: name a .py file in it"
     if target.exists():
-        return f"plugin file {text!r} is not a regular file (a device or a pipe); name a .py file"
-    return f"plugin file {text!r} not found (paths are relative to the file naming it)"
+        return (
+            f"plugin file {path_written(text)} is not a regular file (a device or a pipe); name "
+            "a .py file"
+        )
+    return f"plugin file {path_written(text)} not found (paths are relative to the file naming it)"
 
 
 def _unreadable(target: Path) -> str | None:
@@ -996,8 +1003,8 @@ def _named_file(path: Path, text: str) -> Path:
 def _link_loop(each: str, text: str) -> str:
     """An entry naming a symbolic link loop: it was "internal error (RuntimeError)" at 1:1."""
     return (
-        f"{each} {text!r} is a symbolic link loop (it leads back to itself), not a file: "
-        "name the file itself"
+        f"{each} {path_written(text)} is a symbolic link loop (it leads back to itself), not a "
+        "file: name the file itself"
     )
 
 

@@ -36,6 +36,7 @@ from roomba_bt.mission.values import (
     unknown,
     warn_escaped,
 )
+from roomba_bt.printable import path_written
 from roomba_bt.yamlsource import NOT_PLAIN_SPACES, named_character
 
 #: How deep a tree may nest, counted in nodes from the root, subtrees expanded. A mission
@@ -247,7 +248,7 @@ class NodeParser:
     def _unknown_word(self, word: str, at: Loc, where: str = "") -> str:
         unloaded = self.ctx.unloaded_plugins
         if unloaded:  # most likely theirs: no "did you mean" a built-in of another name
-            files = ", ".join(repr(text) for text in unloaded)
+            files = ", ".join(path_written(text) for text in unloaded)
             return f"unknown node {word!r}{where} (the plugin file {files} was not loaded)"
         unread = self.ctx.unread_include_note(at)
         if unread is not None and self.ctx.registry.why_unknown(word) is None:

@@ -17,6 +17,7 @@ import yaml
 
 from roomba_bt import yamlsource
 from roomba_bt.mission.diagnostics import Diagnostic
+from roomba_bt.printable import path_written
 
 _CORE = yamlsource.CORE
 
@@ -67,7 +68,8 @@ def compose(
     except OSError as exc:
         if include is not None:
             name, where = include
-            return None, [where.at(f"cannot read included file {name!r}: {exc.strerror or exc}")]
+            why = exc.strerror or exc
+            return None, [where.at(f"cannot read included file {path_written(name)}: {why}")]
         return None, [Diagnostic(display, 1, 1, f"cannot read mission file: {exc.strerror}")]
     except UnicodeDecodeError as exc:
         line, column = yamlsource.undecodable_position(exc)

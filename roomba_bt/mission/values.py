@@ -39,6 +39,7 @@ from roomba_bt.mission.foreign import port_remapping, suggestion
 from roomba_bt.mission.plan import KeyDecl
 from roomba_bt.mission.source import Bad, Loc, mapping, plain, scalar_text
 from roomba_bt.mission.wording import PYTHON, Wording
+from roomba_bt.printable import path_written
 from roomba_bt.yamlsource import quoted, yaml12_number_problem
 
 _FULL_SUBSTITUTION = re.compile(r"^\s*(-?)\$\{([A-Za-z_][A-Za-z0-9_]*)\}\s*$")
@@ -301,8 +302,14 @@ class Context:
             return None
         if len(unread) == 1:
             text, loc = unread[0]
-            return f"the include of {text!r} at {_line_of(loc, at)} failed, and may have defined it"
-        named = [f"{text!r} ({_line_of(loc, at)})" for text, loc in unread[: self._UNREAD_NAMED]]
+            return (
+                f"the include of {path_written(text)} at {_line_of(loc, at)} failed, and may have "
+                "defined it"
+            )
+        named = [
+            f"{path_written(text)} ({_line_of(loc, at)})"
+            for text, loc in unread[: self._UNREAD_NAMED]
+        ]
         more = len(unread) - len(named)
         listed = ", ".join(named) + (f" and {more} more" if more else "")
         return f"the includes of {listed} failed, and may have defined it"

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from roomba_bt.cli import main
-from roomba_bt.mission import compile_mission
+from roomba_bt.mission import Permissions, compile_mission
 from roomba_bt.printable import ANY_CONTROL, escaped
 
 #: the bidi and zero-width characters printable.INVISIBLE covers, by themselves: on the old
@@ -388,4 +388,25 @@ def test_a_misspelt_section_beside_the_right_one_is_not_read(tmp_path: Path) -> 
     assert [problem.split(";")[0] for problem in _problems(path)] == [
         "3:1: unknown top-level key 'paramaters' (did you mean 'parameters'?)",
         "4:14: wait.duration: unknown parameter ${side}",
+    ]
+
+
+@pytest.mark.parametrize(
+    ("allowed", "said"),
+    [(False, "2:11: plugin file 'lib\\moves.py' not loaded: a mission file cannot run code on "
+             "its own; allow its plugin files with permissions=Permissions(plugin_files=True) "
+             "(or install the plugin as a package)"),
+     (True, "2:11: plugin file 'lib\\moves.py' not found (paths are relative to the file "
+            "naming it)")],
+)  # fmt: skip
+def test_a_plugin_file_written_the_windows_way_is_quoted_as_written(
+    tmp_path: Path, allowed: bool, said: str
+) -> None:
+    """``'lib\\\\moves.py'``: each backslash doubled by ``repr``, as the includes' messages
+    no longer were; the node it was to provide names the file as written too."""
+    path = _mission(tmp_path, "mission: m\nplugins: ['lib\\moves.py']\ntree: {lurch: {}}\n")
+    _, problems = compile_mission(path, permissions=Permissions(plugin_files=allowed))
+    assert [f"{p.line}:{p.column}: {p.message}" for p in problems] == [
+        said,
+        "3:8: unknown node 'lurch' (the plugin file 'lib\\moves.py' was not loaded)",
     ]
