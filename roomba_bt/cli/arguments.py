@@ -617,6 +617,30 @@ def mission_file(text: str) -> str | tuple[str]:
     return str(found.path) if found.path is not None else (found.problem,)
 
 
+def given_once(command: str, found: list[tuple[str, str]], done: str) -> list[tuple[str, str]]:
+    """``(as given, path)`` of each mission argument, a file given twice kept once, at its
+    first place (by its real path: ``dock.yaml ./dock.yaml``, a folder and a file in it, a
+    shipped name and its file), the others said on stderr as a warning, ``done`` once
+    (``checked``, ``evaluated``). ``validate`` said such a file twice, counted twice; ``eval``
+    ran it as an A/B against itself, or refused "the same variant twice"."""
+    first: dict[str, str] = {}
+    kept = []
+    for given, path in found:
+        # "": not found (said by the caller), once a name; a path that exists is no such name
+        real = os.path.realpath(path) if path else given
+        same = first.get(real)
+        if same is None:
+            first[real] = given
+            kept.append((given, path))
+            continue
+        again = "given twice" if same == given else f"{escaped(same, ANY_CONTROL)} again"
+        print(
+            f"roomba-bt {command}: warning: {escaped(given, ANY_CONTROL)} is {again}: {done} once",
+            file=sys.stderr,
+        )
+    return kept
+
+
 def add_permission_options(parser: argparse.ArgumentParser) -> None:
     """What a mission file may reach, granted here and never by the file: its plugin files
     (Python, imported) and include folders beyond its own folder tree and the shipped library."""

@@ -51,6 +51,7 @@ from roomba_bt.cli.arguments import (
     add_strict_option,
     add_wall_limit_option,
     fraction,
+    given_once,
     limit_seconds,
     metres,
     mission_file,
@@ -519,15 +520,18 @@ MAX_RUNS = 1_000_000
 
 
 def _check_arguments(args: argparse.Namespace) -> str | None:
-    """The missions found (their paths kept in ``args.mission_paths``) and every number in
-    its range; the first problem's message."""
+    """The missions found (their paths kept in ``args.mission_paths``, each file once:
+    :func:`given_once`; those not found in ``args.not_found``, said with the missions that
+    do not compile, :func:`_compiled`) and every number in its range; the first problem's
+    message."""
     args.key = list(dict.fromkeys(args.key))  # a key named twice is reported once
-    args.mission_paths = {}
-    for mission in args.missions:
-        found = mission_file(mission)
-        if isinstance(found, tuple):
-            return found[0]
-        args.mission_paths[mission] = found
+    found = [(mission, mission_file(mission)) for mission in args.missions]
+    args.not_found = list(dict.fromkeys(f[0] for _, f in found if isinstance(f, tuple)))
+    named = [(mission, f) for mission, f in found if not isinstance(f, tuple)]
+    if not named:
+        return "; ".join(args.not_found)
+    args.mission_paths = dict(given_once("eval", named, "evaluated"))
+    args.missions = list(args.mission_paths)
     problem = _profile_of_the_missions(args)
     if problem is not None:
         return problem
@@ -648,21 +652,34 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
 
 def _compiled(args: argparse.Namespace, chosen: list[Variant]) -> list[Any] | int:
     """Each variant's mission compiled (its warnings printed), or an exit code: 2 for an
-    error (said), 7 with ``--strict`` when one has compile-time warnings, each such variant
-    said as ``run --strict`` says it, in ``validate --strict``'s words, before any worker
-    starts (``eval`` ran every episode of such a mission, exit 0, what CI's ``validate
-    --strict`` failed)."""
+    error, every mission's errors said first, and the missions not found (``eval`` stopped
+    at the first, and its user fixed the files one run at a time; a file's other variants are
+    not compiled again to say its errors again); 7 with ``--strict`` when one has
+    compile-time warnings, each such variant said as ``run --strict`` says it, in ``validate
+    --strict``'s words, before any worker starts (``eval`` ran every episode of such a
+    mission, exit 0, what CI's ``validate --strict`` failed)."""
     from roomba_bt.cli.run_cmd import load
     from roomba_bt.cli.validate_report import failed_strict
     from roomba_bt.oi.profiles import get_profile
 
     missions = []
+    invalid: list[str] = []
     for v in chosen:
+        if v.mission in invalid:
+            continue
         loaded = load(v.mission, dict(v.params), get_profile(args.profile),
                       granted=permissions(args, v.mission))  # fmt: skip
         if isinstance(loaded, int):
-            return loaded
+            invalid.append(v.mission)
         missions.append(loaded)
+    if invalid or args.not_found:
+        for problem in args.not_found:
+            print(f"roomba-bt eval: {problem}", file=sys.stderr)
+        count, given = len(invalid) + len(args.not_found), len(args.mission_paths)
+        if given + len(args.not_found) == 1:
+            return ExitCode.INVALID  # its errors are the whole story
+        return _error(f"{count} of {given + len(args.not_found)} missions cannot be evaluated "
+                      "(said above); no episode runs")  # fmt: skip
     warned = [(v, m) for v, m in zip(chosen, missions, strict=True) if m.warnings]
     if not (args.strict and warned):
         return missions

@@ -21,6 +21,7 @@ from roomba_bt.cli.arguments import (
     add_permission_options,
     add_profile_option,
     baud_rate,
+    given_once,
     mission_file,
     output_with_suffix,
     parse_params,
@@ -212,11 +213,10 @@ def validate_command(args: argparse.Namespace) -> int:
         return ExitCode.INVALID
     checked: list[report.Checked] = []
     paths: list[str] = []  # each checked file's path, "" for one that could not be read
-    for file in (each for given in args.files for each in files_under(given)):
-        found = (f"{file}: {_NO_MISSIONS}",) if file and os.path.isdir(file) else mission_file(file)
-        paths.append("" if isinstance(found, tuple) else found)
-        if isinstance(found, tuple):
-            checked.append(report.Checked(file, problem=found[0]))
+    for file, found, problem in _each_file_once(args.files):
+        paths.append(found)
+        if problem is not None:
+            checked.append(report.Checked(file, problem=problem))
             continue
         checked.append(_checked(file, found, params, args))
     if len(checked) > 1 and params:  # each file its own -p values: the batch's rule
@@ -237,6 +237,20 @@ def validate_command(args: argparse.Namespace) -> int:
     else:
         report.print_text(checked, strict=args.strict, quiet=bool(args.quiet))
     return report.exit_code(checked, args.strict)
+
+
+def _each_file_once(given: list[str]) -> list[tuple[str, str, str | None]]:
+    """``(file, path, problem)`` of each file ``validate`` checks, as :func:`files_under`
+    names them, a file named twice kept once (:func:`given_once`); the path "" and what is
+    wrong for one that cannot be read, else no problem."""
+    problems: dict[str, str] = {}
+    named: list[tuple[str, str]] = []
+    for file in (each for one in given for each in files_under(one)):
+        found = (f"{file}: {_NO_MISSIONS}",) if file and os.path.isdir(file) else mission_file(file)
+        if isinstance(found, tuple):
+            problems[file] = found[0]
+        named.append((file, "" if isinstance(found, tuple) else found))
+    return [(f, p, problems.get(f)) for f, p in given_once("validate", named, "checked")]
 
 
 #: what a folder given to ``validate`` with no mission file in it is

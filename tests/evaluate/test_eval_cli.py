@@ -586,6 +586,44 @@ def test_strict_runs_no_episode_of_a_mission_with_warnings_exit_7_as_run_strict(
     assert "warning: drive can turn the wheels in Full mode" in capsys.readouterr().err
 
 
+def test_every_mission_that_cannot_run_is_said_before_any_episode(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``eval a.yaml b.yaml c.yaml`` stopped at the first invalid file: its user fixed them
+    one run at a time. Each file that does not compile, and each not found, is said now,
+    as ``validate`` says a batch, and no episode runs (exit 2)."""
+    typo = tmp_path / "typo.yaml"
+    typo.write_text("tree: {wal: {}}\n")
+    keys = tmp_path / "keys.yaml"
+    keys.write_text("tree:\n  sequence: {mode: safe, wall: {}}\n")
+    missing = str(tmp_path / "nope.yaml")
+    argv = ["eval", str(typo), BUMP, str(keys), missing, "--runs", "1", "--no-progress"]
+    assert main(argv) == 2
+    out, err = capsys.readouterr()
+    assert out == ""
+    lines = err.splitlines()
+    assert lines[0].startswith(f"{typo}:1:8: unknown node 'wal' (did you mean 'wall'?)")
+    assert lines[1].startswith(f"{keys}:2:14: a sequence's children are a list")
+    assert lines[2].startswith(f"roomba-bt eval: {missing}: no such mission file")
+    assert lines[3:] == [
+        "roomba-bt eval: 3 of 4 missions cannot be evaluated (said above); no episode runs"
+    ]
+
+
+def test_a_mission_given_twice_is_evaluated_once(capsys: pytest.CaptureFixture[str]) -> None:
+    """``eval dock.yaml ./dock.yaml`` ran an A/B of the file against itself, and ``eval dock
+    dock`` refused "the same variant twice": each file once now, the other warned about."""
+    again = str(MISSIONS / ".." / "missions" / "bump-and-turn.yaml")
+    assert main(["eval", BUMP, again, "--runs", "1", "--no-progress"]) == 0
+    out, err = capsys.readouterr()
+    assert f"roomba-bt eval: warning: {again} is {BUMP} again: evaluated once" in err
+    assert "A/B" not in out and out.count("mission      ") == 1
+    assert main(["eval", BUMP, BUMP, "--runs", "1", "--no-progress"]) == 0
+    out, err = capsys.readouterr()
+    assert f"roomba-bt eval: warning: {BUMP} is given twice: evaluated once" in err
+    assert "A/B" not in out
+
+
 def test_a_cleaning_mission_reports_its_coverage_as_json(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

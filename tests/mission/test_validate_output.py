@@ -103,6 +103,30 @@ def test_quiet_leaves_out_the_files_that_passed_not_those_that_failed(
     assert capsys.readouterr().out == ""  # all passed: nothing, as before
 
 
+def test_a_file_given_twice_is_checked_and_said_once(repo: Path, capsys: Capsys) -> None:
+    """``validate bad.yaml ./bad.yaml bad.yaml`` said its errors once and "failed" three times,
+    counted as three files; a folder and a file in it, likewise. Each file once now, at its
+    first place, the others warned about on stderr."""
+    (repo / "ok.yaml").write_text("tree: wall\n")
+    (repo / "bad.yaml").write_text("tree: {wal: {}}\n")
+    assert main(["validate", "bad.yaml", "./bad.yaml", "ok.yaml", "bad.yaml", "nope.yaml",
+                 "nope.yaml"]) == 2  # fmt: skip
+    out, err = capsys.readouterr()
+    assert [line.split(":")[0] for line in out.splitlines()] == [
+        "bad.yaml", "bad.yaml", "ok.yaml", "nope.yaml", "3 files"
+    ]  # fmt: skip
+    assert err.splitlines()[:3] == [
+        "roomba-bt validate: warning: ./bad.yaml is bad.yaml again: checked once",
+        "roomba-bt validate: warning: bad.yaml is given twice: checked once",
+        "roomba-bt validate: warning: nope.yaml is given twice: checked once",
+    ]
+    assert main(["validate", "-q", "missions/delivery", "missions/delivery/square.yaml",
+                 *SHARED]) == 2  # fmt: skip
+    out, err = capsys.readouterr()
+    assert out.count("missions/delivery/square.yaml: failed") == 1
+    assert "missions/delivery/square.yaml is given twice: checked once" in err
+
+
 def test_strict_fails_on_warnings_with_exit_7_and_errors_stay_2(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: Capsys
 ) -> None:
