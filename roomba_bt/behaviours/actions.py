@@ -57,7 +57,7 @@ from roomba_bt.oi.opcodes import (
     SONG_NUMBER,
     opcodes,
 )
-from roomba_bt.printable import ANY_CONTROL, escaped
+from roomba_bt.printable import ANY_CONTROL, duration_said, escaped
 from roomba_bt.robot.hazards import sets_going
 
 log = logging.getLogger("roomba_bt.mission")
@@ -569,7 +569,7 @@ class SeekDock(Action):
             return _OK
         timeout = self.value("timeout")
         if timeout is not None and snap.time - self._start_time >= timeout:
-            self.feedback_message = "did not reach the home base"
+            self.feedback_message = f"did not reach the home base within {duration_said(timeout)}"
             return _FAIL
         return _RUN
 

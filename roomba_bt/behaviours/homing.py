@@ -68,6 +68,7 @@ from roomba_bt.behaviours.units import DURATION
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.opcodes import opcodes
+from roomba_bt.printable import duration_said
 from roomba_bt.robot.interface import Odometry
 
 __all__ = ["HOMING", "HomeByMap"]
@@ -161,7 +162,7 @@ class HomeByMap(Action):
                 bearings.map.avoid.add(self._cell)
             return waiting
         if snap.time >= self._until:
-            self.feedback_message = f"not back within {float(self.value('timeout')):g} s"
+            self.feedback_message = f"not back within {duration_said(float(self.value('timeout')))}"
             return Status.FAILURE
         for _ in range(6):
             step = self._step(frame)

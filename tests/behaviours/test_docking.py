@@ -312,6 +312,26 @@ def test_wait_for_charge_names_every_charging_state_it_accepts() -> None:
         assert state.name.lower().split("_")[0] in help_text, state
 
 
+@pytest.mark.parametrize(
+    ("seconds", "said"), [(120.0, "2 min"), (90.0, "1 min 30 s"), (45.0, "45 s")]
+)
+def test_time_limits_are_said_as_the_durations_they_are(
+    robot: StubRobot, make: Make, seconds: float, said: str
+) -> None:
+    """``dock_time_limit: 2min`` gave up "after the time limit of 120 s", and a stage's own
+    timeout was said in seconds too, where every other time limit says ``2 min``."""
+    limit = make(DockTimeLimit, limit=seconds)
+    search = make(DockSearch, timeout=seconds)
+    robot.set_frame(frame())
+    limit.tick_once()
+    search.tick_once()
+    robot.set_frame(frame(), ticks=round(seconds / 0.015) + 1)
+    limit.tick_once()
+    search.tick_once()
+    assert limit.feedback_message.startswith(f"search: gave up after the time limit of {said} (")
+    assert search.feedback_message == f"search: no dock beam seen in {said}"
+
+
 def test_wait_for_charge_fails_with_its_stage(robot: StubRobot, make: Make) -> None:
     wait = make(DockWaitCharge, timeout=0.5)
     robot.set_frame({21: 0, 34: 2, 35: 1}, mode=OIMode.PASSIVE)

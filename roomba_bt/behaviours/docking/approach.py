@@ -44,6 +44,7 @@ from roomba_bt.oi.frames import (
     VIRTUAL_WALL_PACKETS,
 )
 from roomba_bt.oi.profiles import OMNI_AHEAD_MM
+from roomba_bt.printable import duration_said
 from roomba_bt.robot.interface import Snapshot
 
 #: Attempts (starts of this leaf) in one docking run before the approach first backs away
@@ -161,7 +162,7 @@ class DockApproach(DockingAction):
     """
 
     stage = "approach"
-    LATE = "not on the dock's axis after {:g} s"
+    LATE = "not on the dock's axis after {}"
     #: the receivers (the view), the home base, the hazards but the light bumper (near the
     #: dock its wall is always in sight of it: not a hazard here)
     WATCHED = (*IR_PACKETS, *CHARGING_SOURCES_PACKETS, *HAZARD_PACKETS, *VIRTUAL_WALL_PACKETS)
@@ -235,7 +236,9 @@ class DockApproach(DockingAction):
                 self._last_side = view.side
                 self._last_side_time = now
         elif now - self._last_seen >= self._lost_after:
-            return self.fail(f"lost the dock's beams for {self.number('lost_after'):g} s")
+            return self.fail(
+                f"lost the dock's beams for {duration_said(self.number('lost_after'))}"
+            )
         hazard = self._hazard
         act = _ACTS
         while True:

@@ -21,6 +21,7 @@ from roomba_bt.behaviours.docking.common import (
 from roomba_bt.behaviours.lean import behaviour_tick, tick_ended
 from roomba_bt.behaviours.units import DURATION
 from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS, CHARGING_STATE_PACKETS
+from roomba_bt.printable import duration_said
 
 _DEBUG = py_trees.logging.Level.DEBUG
 _LOGGING = py_trees.logging  # its level read on every tick (lean.py's _LOGGING)
@@ -58,7 +59,7 @@ class DockWaitCharge(Action):
             why = "charging state stays" if home else "the home base is not powering the robot;"
             state = frame.charging_state.name.lower().replace("_", " ")
             self.feedback_message = (
-                f"{self.stage}: {why} {state} after {self.number('timeout'):g} s"
+                f"{self.stage}: {why} {state} after {duration_said(self.number('timeout'))}"
                 if home
                 else f"{self.stage}: {why} charging state {state}"
             )
@@ -107,7 +108,7 @@ class DockTimeLimit(Action):
         if (robot.snapshot if robot is not None else self.snapshot).time - self._t0 >= self._limit:
             stage = current_stage() or "search"
             self.feedback_message = (
-                f"{stage}: gave up after the time limit of {self.number('limit'):g} s "
+                f"{stage}: gave up after the time limit of {duration_said(self.number('limit'))} "
                 f"(stage {stage} was running)"
             )
             return FAILED

@@ -36,6 +36,7 @@ from roomba_bt.oi.ir import IR_CHARACTERS, IRCharacter
 from roomba_bt.oi.modes import DRIVING_MODES
 from roomba_bt.oi.opcodes import COMMANDS_BY_NAME
 from roomba_bt.oi.packets import PACKETS
+from roomba_bt.printable import duration_said
 from roomba_bt.robot.interface import Snapshot
 
 #: The stages drive with Drive Direct and halt with Drive 0: their ``sends=``.
@@ -298,8 +299,9 @@ class DockingAction(Action):
     stage = ""
     #: the packets :meth:`read` takes the values of, in its order (two at least)
     WATCHED: tuple[int, ...] = ()
-    #: what the stage did not do within its ``timeout`` (``{:g}``: the seconds)
-    LATE = "not done in {:g} s"
+    #: what the stage did not do within its ``timeout`` (``{}``: the limit as a message says
+    #: a duration, ``2 min``: :func:`~roomba_bt.printable.duration_said`)
+    LATE = "not done in {}"
     #: The stages' state in slots, set in ``__init__`` (the class keeps no defaults of
     #: these names): a node's own attributes past the 30 that CPython 3.11 keeps in its
     #: class's shared table give it a dictionary of its own, and then no method call on it
@@ -370,7 +372,7 @@ class DockingAction(Action):
         if self._done:
             return self.succeed()
         if snap.time - self._t0 >= self._time_limit:
-            return self.fail(self.LATE.format(self.number("timeout")))
+            return self.fail(self.LATE.format(duration_said(self.number("timeout"))))
         if snap.mode not in DRIVING_MODES:
             return self.fail(self.fallback_message())
         return self.step(snap)

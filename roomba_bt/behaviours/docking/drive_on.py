@@ -81,7 +81,7 @@ class DockDriveOn(DockingAction):
     """
 
     stage = "final alignment"
-    LATE = "did not reach the contacts in {:g} s"
+    LATE = "did not reach the contacts in {}"
     #: the receivers (the view), the home base, the bumper
     WATCHED = (*IR_PACKETS, *CHARGING_SOURCES_PACKETS, *BUMPS_PACKETS)
 

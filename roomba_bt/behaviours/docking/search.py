@@ -40,6 +40,7 @@ from roomba_bt.behaviours.units import BOOL, DISTANCE, enum
 from roomba_bt.oi.bits import BUMP_BITS, LIGHT_BUMPER_AHEAD_BITS, LIGHT_BUMPER_BITS
 from roomba_bt.oi.frames import IR_PACKETS, LIGHT_BUMP_SIGNAL_PACKETS, SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES
+from roomba_bt.printable import duration_said
 from roomba_bt.robot.interface import Odometry, Snapshot
 
 # The visit grid (odometry frame) and how a heading is chosen on it.
@@ -224,7 +225,7 @@ class DockSearch(DockingAction):
     """
 
     stage = "search"
-    LATE = "no dock beam seen in {:g} s"
+    LATE = "no dock beam seen in {}"
     #: the receivers (is a dock seen), then the hazards (:func:`hazard_of`'s order)
     WATCHED = (*IR_PACKETS, *HAZARD_IN_PACKETS)
 
@@ -302,7 +303,7 @@ class DockSearch(DockingAction):
             return self.succeed()
         now = snap.time
         if now - self._t0 >= self._time_limit:
-            return self.fail(self.LATE.format(self.number("timeout")))
+            return self.fail(self.LATE.format(duration_said(self.number("timeout"))))
         odo = snap.odometry
         # the robot's cell (VisitGrid.cell), found once a tick: visited here, and read by a
         # wall follow
