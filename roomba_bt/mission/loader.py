@@ -322,11 +322,8 @@ class Loader:
         None, ``not_a_mission`` reported, when the root is no mapping with one of ``words``
         (its content is not quoted back), or when its keys are not all names (``called``
         names the file in that error). A key not in ``words`` is reported with
-        ``unknown_key(key)`` and the others are read on. With ``read_misspelt`` (a mission,
-        whose message says "did you mean"), one that is a misspelling of a section the file
-        lacks (``paramaters:``, ``Parameters:``) is read as that section, so that its one
-        error is the only one: each ``${speed}`` of the tree was "unknown parameter" too,
-        pointing away from the typo."""
+        ``unknown_key(key)`` and the others are read on; with ``read_misspelt`` (a mission,
+        whose message says "did you mean"), as the section it misspells (:func:`_by_key`)."""
         if not _is_mission(root, words):
             self.ctx.error(not_a_mission)
             return None
@@ -335,15 +332,10 @@ class Loader:
         except Bad as bad:
             self.ctx.report(bad)
             return None
-        written = {key for key, *_ in items}
-        sections: dict[str, tuple[yaml.Node, Loc, Loc]] = {}
-        for key, value, key_loc, value_loc in items:
+        for key, _, key_loc, _ in items:
             if key not in words:
                 self.ctx.error(key_loc.at(unknown_key(key)))
-                meant = closest_name(key, words) if read_misspelt else None
-                key = meant if meant is not None and meant not in written else key
-            sections.setdefault(key, (value, key_loc, value_loc))
-        return sections
+        return _by_key(items, words if read_misspelt else ())
 
     def _names(
         self, path: Path, sections: dict[str, tuple[yaml.Node, Loc, Loc]]
@@ -398,18 +390,7 @@ class Loader:
 
     def _plugins(self, path: Path, node: yaml.Node, loc: Loc) -> None:
         for text, target, iloc in self._files(path, node, loc, "plugins", "a plugin"):
-            if not self.permissions.plugin_files:
-                self.ctx.error(
-                    iloc.at(
-                        f"plugin file {path_written(text)} not loaded: a mission file cannot run "
-                        "code on its own; allow its plugin files with "
-                        f"{self.permissions.wording.allow_plugin_files} (or install the plugin "
-                        "as a package)"
-                    )
-                )
-                self.ctx.unloaded_plugins.append(text)
-                continue
-            if self._outside(text, target, iloc, "plugin file"):
+            if self._refused(text, target, iloc, "plugin file", self.permissions.plugin_files):
                 self.ctx.unloaded_plugins.append(text)
                 continue
             not_a_file = _not_a_plugin_file(text, target)
@@ -434,7 +415,7 @@ class Loader:
     def _include_entry(self, path: Path, text: str, target: Path, iloc: Loc) -> bool:
         """Read the file one include entry names, unless it may not or cannot be read
         (reported): False then. A cycle or a file read already is no loss: True."""
-        if self._outside(text, target, iloc, "include"):
+        if self._refused(text, target, iloc, "include", allowed=True):
             return False
         if target in self._include_stack:
             chain = [p.name for p in self._include_stack[self._include_stack.index(target) :]]
@@ -460,18 +441,17 @@ class Loader:
         self._included[target] = iloc
         return self._include(target, text, iloc)
 
-    def _outside(self, text: str, target: Path, iloc: Loc, what: str) -> bool:
-        """``target`` (resolved: a link out is out) lies outside the top mission's folder
-        tree, the shipped library and the ``--include-dir`` folders: reported. An include and
-        a plugin file alike: ``plugins: [/tmp/x.py]`` or ``../../x.py`` imported a file from
-        anywhere once ``--allow-plugin-files`` was given for the mission's own folder."""
-        if any(target.is_relative_to(root) for root in self._include_roots):
+    def _refused(self, text: str, target: Path, iloc: Loc, what: str, allowed: bool) -> bool:
+        """``target`` may not be read, said at its entry: a plugin file not ``allowed``, or
+        ``target`` (resolved: a link out is out) outside the top mission's folder tree, the
+        shipped library and the ``--include-dir`` folders. An include and a plugin file
+        alike: ``plugins: [/tmp/x.py]`` or ``../../x.py`` imported a file from anywhere once
+        ``--allow-plugin-files`` was given for the mission's own folder."""
+        wording, roots = self.permissions.wording, self._include_roots
+        if allowed and any(target.is_relative_to(root) for root in roots):
             return False
-        self.ctx.error(
-            iloc.at(
-                _outside_message(what, text, target, self._include_roots, self.permissions.wording)
-            )
-        )
+        said = _outside_message(what, text, target, roots, wording) if allowed else None
+        self.ctx.error(iloc.at(said or _not_allowed(text, wording)))
         return True
 
     def _again(self, target: Path, text: str, iloc: Loc) -> bool:
@@ -796,6 +776,31 @@ def key_decl(
         if "doc" in fields:
             doc = scalar_text(fields["doc"][0], fields["doc"][2], "doc")
     ctx.keys[name] = KeyDecl(name, vtype, key_loc, initial, has_initial, doc, initial_loc)
+
+
+def _not_allowed(text: str, wording: Wording) -> str:
+    """Why a plugin file is not imported without the caller's permission, and how to give it."""
+    return (
+        f"plugin file {path_written(text)} not loaded: a mission file cannot run code on its "
+        f"own; allow its plugin files with {wording.allow_plugin_files} (or install the plugin "
+        "as a package)"
+    )
+
+
+def _by_key(
+    items: list[tuple[str, yaml.Node, Loc, Loc]], misspelt: tuple[str, ...]
+) -> dict[str, tuple[yaml.Node, Loc, Loc]]:
+    """A file's sections by key, a key that misspells one of ``misspelt`` the file lacks
+    (``paramaters:``, ``Parameters:``: the "did you mean" its error says) read as that
+    section, so that the typo's error is the only one: each ``${speed}`` of the tree was
+    "unknown parameter" too, pointing away from it."""
+    written = {key for key, *_ in items}
+    sections: dict[str, tuple[yaml.Node, Loc, Loc]] = {}
+    for key, value, key_loc, value_loc in items:
+        meant = closest_name(key, misspelt) if key not in misspelt else None
+        sections.setdefault(key if meant is None or meant in written else meant,
+                            (value, key_loc, value_loc))  # fmt: skip
+    return sections
 
 
 def _outside_message(
