@@ -32,7 +32,7 @@ from dataclasses import dataclass
 from typing import ParamSpec, TypeVar
 
 from roomba_bt.oi import commands as oi
-from roomba_bt.oi.encode import BAUD_CODES, Command
+from roomba_bt.oi.encode import BAUD_CODES, Command, turns_wheels
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile, get_profile
@@ -49,7 +49,7 @@ from roomba_bt.robot.errors import (
     RobotReset,
     StreamStalled,
 )
-from roomba_bt.robot.interface import ModeChange
+from roomba_bt.robot.interface import UNKNOWN_CAUSE, ModeChange
 from roomba_bt.robot.link import LinkStatus, StreamLink, TimedFrame
 from roomba_bt.robot.modes import DEFAULT_SETTLE, ModeModel
 from roomba_bt.robot.silence import (
@@ -63,11 +63,13 @@ from roomba_bt.robot.silence import (
 )
 from roomba_bt.robot.startup import (
     NO_ANSWER_CAUSES,
+    STREAM_ASKS_AGAIN,
     ModeName,
     agreed_mode_reply,
     as_mode,
     not_a_mode,
     port_not_opened,
+    stream_zeros,
 )
 from roomba_bt.robot.wake import KeepAwake, keep_awake_for, named_stall
 from roomba_bt.robot.writer import RESYNC_ZEROS, CommandWriter
@@ -204,6 +206,7 @@ class Connection:
         self.link = StreamLink(
             transport, self.profile, watchdog=watchdog, reconcile=self.modes.reconcile,
             report=_weakly(self._report_change, None), halt=_weakly(self.stop_on_stall, False),
+            ask_again=_weakly(self._stream_again, False),
         )  # fmt: skip
         if baud is None:
             baud = int(getattr(transport, "baud", DEFAULT_BAUD))
@@ -221,6 +224,14 @@ class Connection:
         self.baud_listened: tuple[float, int] | None = None
         self._changes_said: Counter[str] = Counter()  # the robot's own falls, by cause
         self._falls: Counter[str] = Counter()  # ... this session's (:attr:`falls`)
+        #: how many times the stream was asked for again, no frame having come after its
+        #: request (:meth:`_stream_again`): bytes to the robot lost, most likely
+        self.stream_asked_again = 0
+        #: the bytes to the robot this session found lost and put right, by what they were
+        #: (``"a Query List"``, ``"the stream request"``, ``"a wheel command"``: the run's
+        #: motion watch adds its own): the evidence a fall of unknown cause names the cable
+        #: by (:meth:`cable_suspected`)
+        self.lost_on_the_way: Counter[str] = Counter()
         _LIVE.add(self)
         # a program that dropped it unclosed (at its end: _close_at_exit, which says so)
         weakref.finalize(self, _stop_dropped, self.ending).atexit = False
@@ -317,6 +328,33 @@ class Connection:
         all that made it say read and dropped until the line is quiet."""
         self.writer.send_many((oi.start(), oi.pause_stream()), prefix=RESYNC_ZEROS)
         drain(self.link.transport, self.link.read)
+        self.lost_on_the_way["a Query List"] += 1  # the start-up fails if it goes unanswered
+
+    def _stream_again(self) -> bool:
+        """The watchdog's time passed since Stream (148) was written and no frame came: a
+        byte of the request lost on its way leaves the robot waiting for an id, or streaming
+        another list, and nothing would ever ask again. The zeros that end any such wait
+        (:func:`~roomba_bt.robot.startup.stream_zeros`) and the request again, in one
+        write, up to :data:`~roomba_bt.robot.startup.STREAM_ASKS_AGAIN` times; said once.
+        False (the watchdog's trip goes on as a trip) once given up, or while the wheels
+        may turn (the watchdog's drive 0 comes first)."""
+        ids = self.link.stream_ids
+        if self.stream_asked_again >= STREAM_ASKS_AGAIN or not ids:
+            return False
+        wheels = self.writer.last_wheels
+        if wheels is not None and turns_wheels(wheels) and self.modes.mode in DRIVING_MODES:
+            return False
+        self.stream_asked_again += 1
+        self.lost_on_the_way["the stream request"] += 1  # the stream came, or the run ends
+        log.log(
+            logging.WARNING if self.stream_asked_again == 1 else logging.INFO,
+            "%s: no sensor data came within %.0f ms of asking the robot for it: a byte of "
+            "the request may have been lost on the way to the robot (a loose or noisy "
+            "cable?); asking again (%d of %d)", self.name, self.watchdog * 1000,
+            self.stream_asked_again, STREAM_ASKS_AGAIN,
+        )  # fmt: skip
+        self.writer.send_many([oi.stream(ids)], prefix=stream_zeros(ids))
+        return True
 
     def query(self, packet_ids: Sequence[int], timeout: float = 1.0) -> SensorFrame | None:
         """Query List (149) for ``packet_ids``; the decoded reply, or None after ``timeout``.
@@ -485,8 +523,10 @@ class Connection:
         stall began, to tell a stopped stream from a garbled line), :class:`StreamLost` for a
         garbled line, or for a silent one what asking the robot shows
         (:func:`~roomba_bt.robot.silence.explain_silence`: :class:`RobotAsleep` if a BRC
-        pulse woke it). While garbage keeps coming the other rates are listened at again
-        (a first listen can miss the change): :class:`BaudChanged` as soon as one finds it."""
+        pulse woke it; a word of the cable beside it when no frame came though the stream
+        was asked for again, :meth:`_stream_again`). While garbage keeps coming the other
+        rates are listened at again (a first listen can miss the change): :class:`BaudChanged`
+        as soon as one finds it."""
         link = self.link
         if link.banner_seen():
             raise RobotReset(self.name, halted, self._since_write())
@@ -498,9 +538,18 @@ class Connection:
         if now - since <= grace:
             return
         garbled = link.bytes_read - bytes_before
-        if not garbled:
-            raise explain_silence(self, now - since, grace, halted=halted)
-        raise garbled_line(self, now - since, grace, garbled, halted=halted)
+        cause = (
+            garbled_line(self, now - since, grace, garbled, halted=halted)
+            if garbled
+            else explain_silence(self, now - since, grace, halted=halted)
+        )
+        if self.stream_asked_again and link.stream_unanswered:
+            cause.also(
+                f"no frame came though the stream was asked for {self.stream_asked_again + 1} "
+                "times: bytes from the computer to the robot may be lost (check the cable and "
+                "its adapter: roomba-bt doctor)"
+            )
+        raise cause
 
     def _since_write(self) -> float:
         """Seconds from the last command we wrote but the watchdog's own drive 0 (which
@@ -514,7 +563,26 @@ class Connection:
         if change.fall:
             self._falls[change.cause] += 1
             self.writer.robot_stopped(change.cause)
-        _say_change(self.name, change, self._changes_said)
+        _say_change(self.name, change, self._changes_said, self.cable_suspected())
+
+    def cable_suspected(self) -> str:
+        """Why a fall to Passive of unknown cause may be the cable's, when this session has
+        the evidence: bytes to the robot it found lost and put right (:attr:`lost_on_the_way`).
+        A data byte after a lost one is read as an opcode, and a radius's or a count's 128 is
+        Start: the robot drops to Passive, its frame showing no cliff, wheel drop or
+        charger. "" without that evidence: a fall is not blamed on a cable never seen to
+        lose a byte."""
+        lost = self.lost_on_the_way
+        if not lost:
+            return ""
+        said = ", ".join(
+            f"{what} {'once' if times == 1 else f'{times} times'}" for what, times in lost.items()
+        )
+        return (
+            f"bytes from the computer to the robot were lost in this run ({said}, put right): "
+            "a data byte after a lost one can be read as Start (128), so the cable is a likely "
+            "cause"
+        )
 
     @property
     def falls(self) -> dict[str, int]:
@@ -649,7 +717,7 @@ class Connection:
         self.close()
 
 
-def _say_change(name: str, change: ModeChange, said: Counter[str]) -> None:
+def _say_change(name: str, change: ModeChange, said: Counter[str], cable: str = "") -> None:
     """The robot's own fall to Passive, logged: a warning the first time a cause brings it
     in a connection's life, an INFO after it with the count (the shipped ``clean``, in Safe,
     meets each cliff it cleans up to through the firmware's stop: 18 warnings a run read as
@@ -658,10 +726,11 @@ def _say_change(name: str, change: ModeChange, said: Counter[str]) -> None:
     said[change.cause] += 1
     times = said[change.cause]
     first = times == 1 and change.cause != "charger"
+    cause = f"{change.cause}; {cable}" if cable and change.cause == UNKNOWN_CAUSE else change.cause
     log.log(
         logging.WARNING if first else logging.INFO,
         "%s: the robot went from %s to %s by itself (%s)%s",
-        name, change.previous.label, change.current.label, change.cause,
+        name, change.previous.label, change.current.label, cause,
         "" if times == 1 else f", {times} times so far",
     )  # fmt: skip
 

@@ -136,6 +136,11 @@ class LinkDown(RobotError, ConnectionError):
         self.headline = headline
         super().__init__(f"{port}: {message}")
 
+    def also(self, said: str) -> None:
+        """``said`` added at the message's end: what the session knows beside the cause (a
+        stream that never came though it was asked for again)."""
+        self.args = (f"{self.args[0]}; {said}",)
+
 
 class PortLost(LinkDown):
     """Reading or writing the port raised (cable unplugged, bridge closed, robot reset)."""

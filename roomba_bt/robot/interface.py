@@ -174,6 +174,12 @@ class Odometer:
         return odometry
 
 
+#: A fall's cause when its frame and the frames before show none (no cliff, wheel drop or
+#: charger: ``robot/modes.infer_cause``): said with the cable beside it where bytes to the
+#: robot were seen lost (``Connection.cable_suspected``).
+UNKNOWN_CAUSE = "unknown"
+
+
 @dataclass(frozen=True, slots=True)
 class ModeChange:
     """A mode change the robot made by itself (seen in packet 35), with its likely cause."""

@@ -11,6 +11,8 @@ virtual clock the caller's reads are what move time::
 
     no valid frame for ``watchdog`` s while a stream runs ──► halt() ──► StreamStalled
                                                       (once; frames coming back clear it)
+    none at all since Stream (148) was written ──► ask_again(): the request again, while
+                                                   the session has tries left
 
 Each trip is noted in the run's record when the transport keeps one (``note``: the runtime's
 ``RecordingTransport``), at the link time it tripped at; a replay's link trips at those
@@ -117,7 +119,10 @@ class StreamLink:
     ``report`` with what it returns when the robot changed mode by itself; ``halt`` is what
     the watchdog does when it trips (the session sends drive 0 if the robot may be driving,
     and says whether it did). ``watchdog``: seconds without a valid frame while a stream runs;
-    0 disables it.
+    0 disables it. ``ask_again`` is what the watchdog does instead when no frame at all came
+    since the stream was asked for (a byte of the request lost on the line leaves no
+    stream): the session writes the request again and says True, or False once it has
+    given up (the trip is then a trip).
     """
 
     def __init__(
@@ -129,6 +134,7 @@ class StreamLink:
         reconcile: Reconcile,
         report: Callable[[ModeChange], None],
         halt: Callable[[], bool],
+        ask_again: Callable[[], bool] = lambda: False,
     ) -> None:
         self.transport = transport
         self.profile = profile
@@ -136,6 +142,7 @@ class StreamLink:
         self._reconcile = reconcile
         self._report = report
         self._halt = halt
+        self._ask_again = ask_again
         self.status = LinkStatus.OPEN if transport.is_open else LinkStatus.CLOSED
         #: the far end closed the connection before it sent a byte (another client holds
         #: it: :data:`~roomba_bt.transport.open_failure.CLOSED_AT_ONCE`): no robot was reached
@@ -170,6 +177,8 @@ class StreamLink:
         #: has since (link clock): what the watchdog measures from
         self._silent_since = 0.0
         self._bytes_at_frame = 0  # bytes_read when the last valid frame came
+        #: :attr:`index` when Stream (148) was last written (no frame since while they agree)
+        self._index_at_request = 0
         #: the last chunks read (a reset's banner comes just before the stream stops)
         self._recent: deque[bytes] = deque(maxlen=RECENT_CHUNKS)
         #: a replay's watchdog: the link times its recorded run's watchdog tripped at, in
@@ -292,6 +301,7 @@ class StreamLink:
         self.streaming = bool(ids)
         self._silent_since = now
         self._bytes_at_frame = self.bytes_read
+        self._index_at_request = self.index
         self._refused_seen = 0  # the new parser's count
         self.status = LinkStatus.STREAMING if ids else LinkStatus.OPEN
 
@@ -461,6 +471,11 @@ class StreamLink:
             for index, frame in enumerate(frames, first)
         ]
 
+    @property
+    def stream_unanswered(self) -> bool:
+        """Whether no valid frame came since Stream (148) was last written."""
+        return self.index == self._index_at_request
+
     def _check_watchdog(self, now: float) -> None:
         if not self.streaming or self.watchdog <= 0 or self.status is not _STREAMING:
             return
@@ -473,11 +488,13 @@ class StreamLink:
             trips.popleft()
         else:
             return
+        note = getattr(self.transport, "note", None)  # a record's (run --record), for a replay
+        if callable(note):  # noted before a request again too: a replay asks where it did
+            note({"watchdog": round(silent, 6), "limit": self.watchdog}, at=now)
+        if self.index == self._index_at_request and self._ask_again():
+            return  # the stream asked for again: the watchdog counts from that request
         self.status = LinkStatus.STALLED
         self.watchdog_trips += 1
-        note = getattr(self.transport, "note", None)  # a record's (run --record), for a replay
-        if callable(note):
-            note({"watchdog": round(silent, 6), "limit": self.watchdog}, at=now)
         halted = self._halt()
         raise StreamStalled(self.name, silent, self.watchdog, halted, self.profile_mismatch())
 

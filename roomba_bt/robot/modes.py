@@ -60,7 +60,7 @@ from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
 from roomba_bt.oi.opcodes import MODE_COMMANDS, CommandSpec
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, PROFILES, RobotProfile
 from roomba_bt.robot.errors import ModeError, profile_fix
-from roomba_bt.robot.interface import ModeChange
+from roomba_bt.robot.interface import UNKNOWN_CAUSE, ModeChange
 
 log = logging.getLogger(__name__)
 
@@ -270,7 +270,7 @@ def infer_cause(frame: SensorFrame, *earlier: SensorFrame | None) -> str:
             causes.append("charger")
         if causes:
             return " and ".join(causes)
-    return "unknown"
+    return UNKNOWN_CAUSE
 
 
 class ModeModel:
@@ -473,7 +473,7 @@ class ModeModel:
         # A fall the same frame explains (a cliff, a wheel drop, the charger: the robot's own
         # reaction agrees with its sensors) is followed at once; anything else needs
         # ``confirm`` consecutive frames.
-        if count < self.confirm and not (falls and infer_cause(frame) != "unknown"):
+        if count < self.confirm and not (falls and infer_cause(frame) != UNKNOWN_CAUSE):
             self._unconfirmed = (reported, count, seen[2], seen[3])
             return None
         self._unconfirmed = None

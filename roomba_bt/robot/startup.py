@@ -16,6 +16,11 @@
                           sleep or the wiring
     [131] or [132]        Safe or Full, if asked
     [148][n][ids...]      the stream, checked against the bandwidth before it is sent
+    [0] x 35+, [148]...   no frame within the watchdog's time (100 ms) of the request: a
+                          byte of it lost on the way leaves no stream (the robot waits for
+                          an id, or streams another list), so the zeros that complete any
+                          wait it left and the request again, up to STREAM_ASKS_AGAIN times
+                          (:func:`stream_zeros`; ``Connection._stream_again``)
 """
 
 from __future__ import annotations
@@ -28,6 +33,7 @@ from roomba_bt.oi import commands as oi
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.robot.errors import ConnectionFailed, NoAnswer
+from roomba_bt.robot.writer import RESYNC_ZEROS
 from roomba_bt.transport.base import TransportError
 
 log = logging.getLogger(__name__)
@@ -50,6 +56,20 @@ def port_not_opened(url: str, exc: TransportError) -> ConnectionFailed:
     if isinstance(exc.cause, str):
         return ConnectionFailed(url, f"could not open the port: {exc.cause}")
     return ConnectionFailed(url, f"could not open the port ({exc.cause})", OPEN_CAUSES)
+
+
+#: How many times the stream is asked for again when no frame came after its request.
+STREAM_ASKS_AGAIN = 2
+
+
+def stream_zeros(ids: tuple[int, ...]) -> bytes:
+    """The zeros written before a Stream request of ``ids`` asked for again: enough to end
+    any wait the first request left the robot's parser in when it lost a byte. An id lost
+    leaves it waiting for one more; the count lost makes the first id the count, so it waits
+    for up to that many (group 100 first: 100), more than :data:`RESYNC_ZEROS` covers. A
+    zero completes the wait as packet 0, a stream the request written after them replaces;
+    0 is no opcode, so the zeros left over are skipped."""
+    return bytes(max(len(RESYNC_ZEROS), *ids))
 
 
 #: The modes :meth:`~roomba_bt.robot.connection.Connection.start` enters, by name (a type

@@ -130,6 +130,8 @@ class RunEnding:
         summary.unconfirmed_hazards = unconfirmed
         summary.take_counters(getattr(connection, "counters", None))
         summary.falls = dict(getattr(connection, "falls", {}))
+        suspected = getattr(connection, "cable_suspected", None)
+        summary.falls_cable = suspected() if callable(suspected) else ""
 
     def wheels_first(
         self,

@@ -212,6 +212,8 @@ class MotionWatch:
             return True
         summary = self.summary
         summary.unheard_obeyed += 1
+        # the session's evidence of a bad cable, which a fall of unknown cause then names
+        self.connection.lost_on_the_way["a wheel command"] += 1
         recent = [t for t in self._obeyed_at if mission_time - t <= GIVE_UP_WITHIN_S]
         self._obeyed_at = [*recent, mission_time]
         if len(self._obeyed_at) < GIVE_UP_AFTER:

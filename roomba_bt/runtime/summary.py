@@ -13,6 +13,7 @@ from roomba_bt.oi.frames import BATTERY_PACKETS, SLOT_SECONDS
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
 from roomba_bt.printable import ANY_CONTROL, duration_said, duration_words, escaped
+from roomba_bt.robot.interface import UNKNOWN_CAUSE
 
 if TYPE_CHECKING:
     from roomba_bt.robot.interface import Snapshot
@@ -254,6 +255,9 @@ class RunSummary:
     #: (:data:`EXPECTED_FALLS`): when, why and the leaf that was running
     #: (``t=3.330 in blind_drive: cliff``)
     first_fall: str = ""
+    #: why a fall of unknown cause may be the cable's, where the run found bytes to the
+    #: robot lost and put right (``Connection.cable_suspected``); "" without that evidence
+    falls_cable: str = ""
     #: ``run --strict`` (``RunStack(..., strict=True)``): a run whose tree succeeded exits
     #: :attr:`ExitCode.STRICT` when :meth:`strict_findings` found anything
     strict: bool = False
@@ -550,7 +554,9 @@ class RunSummary:
         onto the charger (:data:`EXPECTED_FALLS`) are not among them: each is a docking,
         which the ``charger`` line counts (:meth:`charger_text`); a patrol that docked ten
         times read as ten faults."""
-        return falls_said(hazard_falls(self.falls))
+        falls = hazard_falls(self.falls)
+        cable = f"; {self.falls_cable}" if self.falls_cable and UNKNOWN_CAUSE in falls else ""
+        return f"{falls_said(falls)}{cable}"
 
     def charger_text(self) -> str:
         """The ``charger`` line: the dockings (the OI's own drop from Safe or Full to
