@@ -26,6 +26,7 @@ from roomba_bt.printable import ANY_CONTROL, escaped
 
 if TYPE_CHECKING:
     from roomba_bt.mission import Permissions
+    from roomba_bt.sim.faults import Faults
 
 
 def add_command(
@@ -248,6 +249,79 @@ def add_odometry_error_option(parser: Any, what: str = "") -> None:
         help=f"{what}the encoders' error (0..0.2; e.g. 0.015: wheel scales off by up to 1.5 %%, "
         "a heading drift of up to 0.9 deg/min; seeded; default 0: exact)",
     )  # fmt: skip
+
+
+#: The simulator's faults as options (``sim``; ``run`` on the simulator; ``eval``, each
+#: episode's drawn from its seed): :class:`~roomba_bt.sim.Faults`' field, its type, default
+#: and help; the ranges are the field's, checked by ``Faults`` (:func:`faults_given`).
+FAULT_OPTIONS: tuple[tuple[str, type, object, str], ...] = (
+    ("corrupt_rate", float, 0.0, "per-byte probability"),
+    ("drop_rate", float, 0.0, "per-frame probability"),
+    ("latency", float, 0.0, "seconds before the robot's bytes become readable (a delay, 0..10)"),
+    ("inject_text", str, "", "ASCII printed into the stream"),
+    ("inject_every", float, 1.0, "seconds between texts (at least 0.015: one a frame)"),
+    ("disconnect_at", float, None, "drop the line at this time (s)"),
+    ("noise", float, 0.0, "analog sensor noise (raw)"),
+    ("bit_flip_rate", float, 0.0, "per-byte probability"),
+    ("truncate_rate", float, 0.0, "per-frame probability"),
+    ("reset_at", float, None, "the robot resets at this time (s)"),
+    ("stream_stop_at", float, None, "the stream stops at this time (s)"),
+    ("stream_gap_at", float, None, "the stream pauses at this time (s), then goes on"),
+    ("stream_gap_s", float, 0.8, "how long the stream's gap lasts (s)"),
+    ("sleep_at", float, None, "the robot falls asleep at this time (s)"),
+    ("baud_change_at", float, None, "the robot's port changes its rate at this time (s)"),
+    ("baud_change_to", int, None, "the rate it changes to (default: the other OI rate)"),
+    ("host_drop_rate", float, 0.0, "per-byte probability that a byte from the client is lost"),
+    (
+        "host_corrupt_rate",
+        float,
+        0.0,
+        "per-byte probability that a byte from the client arrives changed",
+    ),
+)
+
+
+def add_fault_options(parser: Any, what: str) -> None:
+    """The simulator's faults, :data:`FAULT_OPTIONS` and ``--faults-from-stream``, in one
+    group, the same names and ranges on every command that has a simulator (``sim``, ``run``,
+    ``eval``); ``what``: the group's description (where they apply). Read by
+    :func:`faults_given`. A bad cable for an hour took an hour to rehearse: only ``sim``
+    had them, in real time."""
+    faults = parser.add_argument_group("faults", what)
+    for name, kind, default, help in FAULT_OPTIONS:
+        faults.add_argument("--" + name.replace("_", "-"), type=kind, default=default, help=help)
+    faults.add_argument(
+        "--faults-from-stream", dest="from_stream", action="store_true",
+        help="count the --...-at times from the first Stream the client sends, not from the "
+        "simulator's start (a client that connects late still meets them)",
+    )  # fmt: skip
+
+
+def fault_options_set(args: argparse.Namespace) -> list[str]:
+    """The fault options given other than at their defaults, as the command line writes
+    them (``--host-drop-rate 0.01``): what ``run --port`` refuses and what ``eval``'s line to
+    run an episode again repeats."""
+    given = [
+        f"--{name.replace('_', '-')} {getattr(args, name)}"
+        for name, _, default, _ in FAULT_OPTIONS
+        if getattr(args, name) != default
+    ]
+    return given + (["--faults-from-stream"] if args.from_stream else [])
+
+
+def faults_given(args: argparse.Namespace, **more: Any) -> Faults | str:
+    """The :class:`~roomba_bt.sim.Faults` the fault options (and ``more`` of its fields:
+    ``odometry_error``) describe, or what is wrong, naming the option
+    (``--host-drop-rate: found 1.5; allowed: 0.0..1.0``)."""
+    from roomba_bt.sim.faults import Faults
+
+    values = {name: getattr(args, name) for name, *_ in FAULT_OPTIONS}
+    try:
+        return Faults(**values, from_stream=args.from_stream, **more)
+    except ValueError as exc:
+        field, sep, rest = str(exc).partition(": ")
+        name = field.removeprefix("faults.")
+        return f"--{name.replace('_', '-')}: {rest}" if sep and name in values else str(exc)
 
 
 def add_strict_option(parser: Any, then: str) -> None:

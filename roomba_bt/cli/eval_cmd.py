@@ -44,12 +44,15 @@ from typing import TYPE_CHECKING, Any
 from roomba_bt.cli.arguments import (
     add_battery_option,
     add_command,
+    add_fault_options,
     add_odometry_error_option,
     add_param_option,
     add_permission_options,
     add_profile_option,
     add_strict_option,
     add_wall_limit_option,
+    fault_options_set,
+    faults_given,
     fraction,
     given_once,
     limit_seconds,
@@ -192,6 +195,10 @@ def _add_start_options(ev: argparse.ArgumentParser) -> None:
     )
     add_battery_option(ev)
     add_odometry_error_option(ev)
+    add_fault_options(
+        ev, "what goes wrong on the line and in the robot, in every episode, each drawing "
+        "from its own seed (a sweep is repeatable); the same options as sim's",
+    )  # fmt: skip
     ev.add_argument("--timeout", default="15min", help="mission time per episode (default 15min)")
     add_wall_limit_option(
         ev, "per episode",
@@ -466,6 +473,8 @@ def rerun_command(args: argparse.Namespace, result: Any) -> str:
         words += ["--wall-limit", f"{limit:g}"]
     for folder in getattr(args, "include_dir", None) or ():
         words += ["--include-dir", folder]
+    for option in fault_options_set(args):  # each episode's draws are its seed's
+        words += option.split(" ", 1)
     line = shlex.join(words)
     unmatched = [
         option for option, given in (
@@ -543,6 +552,9 @@ def _check_arguments(args: argparse.Namespace) -> str | None:
     if args.scheduler is not None and not args.scheduler.strip():
         return "--scheduler '': expected the scheduler's address, e.g. tcp://HOST:8786"
     # --within, --battery, --min-rate and --odometry-error: read and checked by argparse
+    args.faults = faults_given(args)
+    if isinstance(args.faults, str):
+        return args.faults
     for limit in (wall_limit(args), worker_wait(args)):
         if isinstance(limit, str):
             return limit
@@ -631,6 +643,7 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
             battery=args.battery,
             start_area=args.start_area,
             odometry_error=args.odometry_error,
+            faults=args.faults,
             permissions=permissions(args, v.mission),
             trace_every=2 if args.plot else 0,  # only the plot reads trajectories
         )
@@ -917,6 +930,7 @@ def run_conditions(args: argparse.Namespace) -> dict[str, Any]:
         "start_area": args.start_area,
         "dock": overrides,
         "odometry_error": args.odometry_error,
+        "faults": fault_options_set(args),  # ["--host-drop-rate 0.01"]; [] for none
         "battery": args.battery,
         "profile": args.profile,
         "min_rate": args.min_rate,

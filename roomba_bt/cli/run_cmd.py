@@ -18,6 +18,7 @@ from roomba_bt.cli.arguments import (
     add_command,
     add_display_option,
     add_far_end_options,
+    add_fault_options,
     add_odometry_error_option,
     add_param_option,
     add_permission_options,
@@ -25,6 +26,8 @@ from roomba_bt.cli.arguments import (
     add_wall_limit_option,
     add_window_options,
     baud_warning,
+    fault_options_set,
+    faults_given,
     limit_seconds,
     mission_file,
     parse_params,
@@ -117,6 +120,10 @@ def _add_run_parser(sub: Any) -> None:
         "--random-start", action="store_true", help="start in the world's start region"
     )
     add_odometry_error_option(run, "simulator only: ")
+    add_fault_options(
+        run, "simulator only (refused with --port): what goes wrong on the line and in the "
+        "robot, drawn from --seed; with --fast, an hour of a bad cable in seconds",
+    )  # fmt: skip
     add_param_option(run, "set a mission parameter, e.g. -p speed=250mm/s (repeatable)")
     _add_limit_options(run)
     _add_record_options(run)
@@ -494,6 +501,15 @@ def _checked_arguments(args: argparse.Namespace) -> tuple[dict[str, str], float 
             "--world, --plot, --fast, --battery and --odometry-error are for the simulator: "
             "drop them or --port"
         )
+    faults = fault_options_set(args)
+    if args.port and faults:
+        return _error(
+            f"{', '.join(faults)}: the simulator's faults, and --port is a real robot: drop "
+            "them or --port (rehearse a bad cable on the simulator: no --port)"
+        )
+    args.faults = faults_given(args, odometry_error=args.odometry_error)
+    if isinstance(args.faults, str):
+        return _error(args.faults)
     token = chosen_token(args)
     if token:
         return _error(token)
@@ -539,7 +555,8 @@ def _simulator(args: argparse.Namespace, profile: RobotProfile) -> Simulator | s
     if args.port:
         return None
     from roomba_bt.cli.links import make_simulator
-    from roomba_bt.sim import Faults, WorldError
+    from roomba_bt.sim import WorldError
+    from roomba_bt.sim.faults import NO_FAULTS
 
     try:
         simulator = make_simulator(
@@ -547,7 +564,7 @@ def _simulator(args: argparse.Namespace, profile: RobotProfile) -> Simulator | s
             profile,
             args.seed,
             random_start=args.random_start,
-            faults=Faults(odometry_error=args.odometry_error) if args.odometry_error else None,
+            faults=None if args.faults == NO_FAULTS else args.faults,
             coverage=True,
             battery=args.battery,
             trace=bool(args.plot),  # only a plot reads the trajectory

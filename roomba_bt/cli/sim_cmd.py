@@ -23,7 +23,9 @@ from typing import TYPE_CHECKING, Any
 
 from roomba_bt.cli.arguments import (
     add_command,
+    add_fault_options,
     add_profile_option,
+    faults_given,
     plot_file,
     seconds,
     simulated_baud_refused,
@@ -34,34 +36,6 @@ from roomba_bt.runtime.summary import ExitCode
 if TYPE_CHECKING:
     from roomba_bt.sim import Simulator
     from roomba_bt.sim.server import Endpoint
-
-
-#: The faults as options: :class:`~roomba_bt.sim.Faults`' field, its type, default and help.
-FAULT_OPTIONS: tuple[tuple[str, type, object, str], ...] = (
-    ("corrupt_rate", float, 0.0, "per-byte probability"),
-    ("drop_rate", float, 0.0, "per-frame probability"),
-    ("latency", float, 0.0, "seconds before the robot's bytes become readable (a delay, 0..10)"),
-    ("inject_text", str, "", "ASCII printed into the stream"),
-    ("inject_every", float, 1.0, "seconds between texts (at least 0.015: one a frame)"),
-    ("disconnect_at", float, None, "drop the line at this time (s)"),
-    ("noise", float, 0.0, "analog sensor noise (raw)"),
-    ("bit_flip_rate", float, 0.0, "per-byte probability"),
-    ("truncate_rate", float, 0.0, "per-frame probability"),
-    ("reset_at", float, None, "the robot resets at this time (s)"),
-    ("stream_stop_at", float, None, "the stream stops at this time (s)"),
-    ("stream_gap_at", float, None, "the stream pauses at this time (s), then goes on"),
-    ("stream_gap_s", float, 0.8, "how long the stream's gap lasts (s)"),
-    ("sleep_at", float, None, "the robot falls asleep at this time (s)"),
-    ("baud_change_at", float, None, "the robot's port changes its rate at this time (s)"),
-    ("baud_change_to", int, None, "the rate it changes to (default: the other OI rate)"),
-    ("host_drop_rate", float, 0.0, "per-byte probability that a byte from the client is lost"),
-    (
-        "host_corrupt_rate",
-        float,
-        0.0,
-        "per-byte probability that a byte from the client arrives changed",
-    ),
-)
 
 
 def register(sub: Any) -> None:
@@ -115,15 +89,7 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--log", action="store_true", help="on stderr: each command heard or ignored, each event"
     )
-    faults = parser.add_argument_group("faults")
-    for name, kind, default, help in FAULT_OPTIONS:
-        option = "--" + name.replace("_", "-")
-        faults.add_argument(option, type=kind, default=default, help=help)
-    faults.add_argument(
-        "--faults-from-stream", dest="from_stream", action="store_true",
-        help="count the --...-at times from the first Stream the client sends, not from the "
-        "simulator's start (a client that connects late still meets them)",
-    )  # fmt: skip
+    add_fault_options(parser, "what goes wrong on the line and in the robot")
 
 
 def _fail(message: str, code: ExitCode) -> int:
@@ -178,19 +144,15 @@ def _simulator(args: argparse.Namespace) -> Simulator | int:
     from roomba_bt.cli.profile_choice import chosen_profile
     from roomba_bt.oi.identify import parse_firmware
     from roomba_bt.oi.profiles import get_profile
-    from roomba_bt.sim import Faults, Simulator, WorldError, load_world
+    from roomba_bt.sim import Simulator, WorldError, load_world
 
     problem = chosen_profile(args, "sim")
     if problem is not None:
         return _fail(problem, ExitCode.INVALID)
-    try:
-        profile = get_profile(args.profile)
-        faults = Faults(
-            **{name: getattr(args, name) for name, *_ in FAULT_OPTIONS},
-            from_stream=args.from_stream,
-        )
-    except ValueError as exc:
-        return _fail(str(exc), ExitCode.INVALID)
+    profile = get_profile(args.profile)
+    faults = faults_given(args)
+    if isinstance(faults, str):
+        return _fail(faults, ExitCode.INVALID)
     refused = None if args.baud is None else simulated_baud_refused(args.baud, profile)
     if refused is not None:
         return _fail(refused, ExitCode.INVALID)

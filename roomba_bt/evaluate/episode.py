@@ -49,6 +49,7 @@ from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome, RunSummary, falls_in_order
 from roomba_bt.runtime.wall_limit import ran_out
 from roomba_bt.sim import STEP_SECONDS, Faults, SimLink, Simulator, World
+from roomba_bt.sim.faults import NO_FAULTS
 from roomba_bt.sim.world import (
     DOCK_BEAM_LIMIT,
     DOCK_FAMILIES,
@@ -105,6 +106,9 @@ class EpisodeSpec:
     start_area: str | None = None
     #: the encoders' error (``Faults.odometry_error``, a fraction; 0: exact odometry)
     odometry_error: float = 0.0
+    #: what else goes wrong (``eval``'s fault options: a bad cable, a reset...); each
+    #: episode's draws come from its own ``seed``, so a sweep is repeatable episode by episode
+    faults: Faults = NO_FAULTS
     #: how a TIMEOUT's reason names ``timeout_s`` (``RunSummary.time_limit``): "" as the
     #: thing it is (``the run's 900 s``), ``eval`` as its flag (``--timeout 900 s``)
     time_limit: str = ""
@@ -501,7 +505,7 @@ def _run_episode(spec: EpisodeSpec, measured: type[_MeasuredSimulator]) -> Episo
     mission = _mission(Path(path), spec.params, profile, granted)
     world = build_world(spec)
     pose = start_pose(world, spec)
-    faults = Faults(odometry_error=spec.odometry_error) if spec.odometry_error else None
+    faults = replace(spec.faults, odometry_error=spec.odometry_error)
     simulator = measured(
         world, profile, spec.seed, faults, start=pose, coverage=bool(mission.sends & BRUSHES),
         trace=spec.trace_every > 0, cycle_commands_pause=True,  # as the OI spec says

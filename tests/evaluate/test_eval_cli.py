@@ -292,6 +292,7 @@ def test_the_json_summary_records_how_the_episodes_were_made(
         "start_area": None,
         "dock": {"buoy_range": 0.8, "red": [-10.0, 20.0]},
         "odometry_error": 0.01,
+        "faults": [],  # the fault options given (session 32)
         "battery": 0.4,
         "profile": "roomba600",
         "min_rate": None,  # session 29: the bar it was judged against, and the world's digest

@@ -1,0 +1,82 @@
+"""The simulator's fault options on every command that has a simulator (``sim``, ``run``,
+``eval``): one definition (``cli/arguments.add_fault_options``), the same names and ranges.
+A bad cable for an hour took an hour to rehearse: only ``sim`` had them, in real time."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.cli import main
+from roomba_bt.evaluate.episode import EpisodeSpec, run_episode
+from roomba_bt.runtime.summary import ExitCode
+from roomba_bt.sim import Faults
+
+#: bump-and-turn, 3 s of it
+BUMP = ["bump-and-turn", "-p", "duration=3s"]
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["sim", "--pty"],
+        ["run", *BUMP, "--fast"],
+        ["eval", *BUMP, "--runs", "1", "--no-progress"],
+    ],
+    ids=["sim", "run", "eval"],
+)
+def test_a_fault_rate_out_of_range_is_refused_by_its_option(
+    argv: list[str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main([*argv, "--host-drop-rate", "2"]) == ExitCode.INVALID
+    assert "--host-drop-rate: found 2.0; allowed: 0.0..1.0" in capsys.readouterr().err
+
+
+def test_a_real_robot_is_given_no_simulated_faults(capsys: pytest.CaptureFixture[str]) -> None:
+    argv = ["run", *BUMP, "--port", "/dev/ttyUSB9", "--host-drop-rate", "0.01", "--reset-at", "2"]
+    assert main(argv) == ExitCode.INVALID
+    err = capsys.readouterr().err
+    assert "--reset-at 2.0, --host-drop-rate 0.01: the simulator's faults, and --port is a " in err
+    assert "real robot: drop them or --port" in err
+
+
+def test_run_fast_meets_the_faults_it_is_given(capsys: pytest.CaptureFixture[str]) -> None:
+    """A reset 1 s into the stream, on the virtual clock: the run ends as on a robot that
+    reset."""
+    argv = ["run", *BUMP, "--fast", "--display", "none", "--reset-at", "1", "--faults-from-stream"]
+    assert main(argv) == ExitCode.CONNECTION
+    assert "the robot reset: its start-up banner was on the line" in capsys.readouterr().err
+
+
+def test_each_episode_draws_its_faults_from_its_seed() -> None:
+    """An evaluation with a bad cable is repeatable episode by episode: the same seed loses
+    the same bytes, another seed others."""
+    faults = Faults(host_drop_rate=0.05)
+
+    def lost(seed: int) -> tuple[str, str, float]:
+        spec = EpisodeSpec("bump-and-turn", seed=seed, params=(("duration", "5s"),),
+                           faults=faults, trace_every=0)  # fmt: skip
+        result = run_episode(spec)
+        return result.outcome, result.reason, result.distance_m
+
+    assert lost(1) == lost(1)
+    assert len({lost(seed) for seed in range(4)}) > 1
+
+
+def test_eval_records_the_faults_its_episodes_met(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "faulty.jsonl"
+    argv = ["eval", *BUMP, "--runs", "2", "--no-progress", "--json", "--out", str(out),
+            "--host-drop-rate", "0.02", "--reset-at", "1", "--faults-from-stream"]  # fmt: skip
+    assert main(argv) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["conditions"]["faults"] == [
+        "--reset-at 1.0",
+        "--host-drop-rate 0.02",
+        "--faults-from-stream",
+    ]
+    records = [json.loads(line) for line in out.read_text().splitlines()]
+    assert [r["outcome"] for r in records] == ["CONNECTION LOST"] * 2
