@@ -11,8 +11,8 @@ virtual clock the caller's reads are what move time::
 
     no valid frame for ``watchdog`` s while a stream runs ──► halt() ──► StreamStalled
                                                       (once; frames coming back clear it)
-    none at all since Stream (148) was written ──► ask_again(): the request again, while
-                                                   the session has tries left
+    none at all since Stream (148) was written, ──► ask_again(): the request again, while
+    not even a damaged one                         the session has tries left
 
 Each trip is noted in the run's record when the transport keeps one (``note``: the runtime's
 ``RecordingTransport``), at the link time it tripped at; a replay's link trips at those
@@ -476,6 +476,12 @@ class StreamLink:
         """Whether no valid frame came since Stream (148) was last written."""
         return self.index == self._index_at_request
 
+    def _request_unheard(self) -> bool:
+        """Whether the robot may not have heard the stream request: no frame of it came,
+        not even a damaged one (its header, length and ids in place, its checksum or a
+        value wrong: a noisy line, another model's checksum), which would show it heard."""
+        return self.index == self._index_at_request and self.damaged_frame_at < self._silent_since
+
     def _check_watchdog(self, now: float) -> None:
         if not self.streaming or self.watchdog <= 0 or self.status is not _STREAMING:
             return
@@ -491,7 +497,7 @@ class StreamLink:
         note = getattr(self.transport, "note", None)  # a record's (run --record), for a replay
         if callable(note):  # noted before a request again too: a replay asks where it did
             note({"watchdog": round(silent, 6), "limit": self.watchdog}, at=now)
-        if self.index == self._index_at_request and self._ask_again():
+        if self._request_unheard() and self._ask_again():
             return  # the stream asked for again: the watchdog counts from that request
         self.status = LinkStatus.STALLED
         self.watchdog_trips += 1
