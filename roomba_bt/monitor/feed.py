@@ -46,6 +46,7 @@ from roomba_bt.behaviours.base import Condition
 from roomba_bt.behaviours.blackboard import KEY_TYPES_KEY, SNAPSHOT_KEY
 from roomba_bt.behaviours.language import WORDS
 from roomba_bt.behaviours.reasons import failure_reason
+from roomba_bt.monitor.board_text import board_text
 from roomba_bt.oi.frames import SLOT_SECONDS, FrameLayout, SensorFrame
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.printable import ANY_CONTROL, escaped
@@ -72,8 +73,6 @@ _monotonic = time.monotonic
 _perf_counter = time.perf_counter
 #: blackboard values that cannot change in place: kept as they are
 _PLAIN = frozenset({str, int, float, bool, type(None), bytes, complex})
-#: the longest text a blackboard value is kept (and shown) as
-TEXT_LIMIT = 200
 #: a blackboard value whose text takes longer is shown as it is now, marked so (see
 #: :meth:`RunFeed._text_at_tick`)
 TEXT_BUDGET_S = 0.0002
@@ -508,13 +507,10 @@ class RunFeed:
         if key in self.live_keys:
             return None
         began = _perf_counter()
-        try:
-            text = repr(value)
-        except Exception as exc:  # a plugin's repr: never the tick's end
-            text = f"<{type(value).__name__}: its repr failed: {exc!r}>"
+        text = board_text(value)
         if _perf_counter() - began > TEXT_BUDGET_S:
             self.live_keys.add(key)
-        return text if len(text) <= TEXT_LIMIT else text[: TEXT_LIMIT - 3] + "..."
+        return text
 
     def _new_board(self, board: Mapping[str, Any]) -> None:
         self._blackboard = board

@@ -9,7 +9,8 @@ from __future__ import annotations
 from collections.abc import Collection, Mapping
 from typing import Any
 
-from roomba_bt.monitor.feed import TEXT_KEYS, TEXT_LIMIT, Ending, RunFeed, TickRecord
+from roomba_bt.monitor.board_text import board_text
+from roomba_bt.monitor.feed import TEXT_KEYS, Ending, RunFeed, TickRecord
 from roomba_bt.oi.bits import ChargingState
 from roomba_bt.oi.frames import (
     BATTERY_PACKETS,
@@ -211,9 +212,10 @@ def blackboard_view(
     board: Mapping[str, Any], rewound: bool, live_keys: Collection[str] = ()
 ) -> dict[str, str]:
     """The blackboard as shown, key by key: a value that changes in place as its text at the
-    tick (the feed kept it so: its :data:`TEXT_KEYS` entry, left out here), any other as its
-    repr. A key in ``live_keys`` (its text too slow to take every tick: kept as the object)
-    shows the object as it is now, which a rewound tick says."""
+    tick (the feed kept it so: its :data:`TEXT_KEYS` entry, left out here), any other as
+    :func:`board_text` reads it (a record as JSON-like text, not its Python repr). A key in
+    ``live_keys`` (its text too slow to take every tick: kept as the object) shows the object
+    as it is now, which a rewound tick says."""
     texts = board.get(TEXT_KEYS, ())
     shown: dict[str, str] = {}
     for key, value in sorted(board.items()):
@@ -222,8 +224,7 @@ def blackboard_view(
         if key in texts:
             shown[key] = value
             continue
-        text = repr(value)
-        text = text if len(text) <= TEXT_LIMIT else text[: TEXT_LIMIT - 3] + "..."
+        text = board_text(value)
         shown[key] = (
             f"{text} (its value now, not at this tick)" if rewound and key in live_keys else text
         )

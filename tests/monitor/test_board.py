@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import dataclass
 
 import py_trees
 import pytest
@@ -13,6 +14,7 @@ from py_trees.common import Status
 
 from roomba_bt.behaviours.coverage_map import Bearings, FloorMap
 from roomba_bt.behaviours.docking.common import DockingRun
+from roomba_bt.monitor.board_text import board_text
 from roomba_bt.monitor.feed import RunFeed
 from roomba_bt.monitor.views import state_view
 from roomba_bt.robot.interface import Odometry
@@ -96,3 +98,75 @@ def test_a_docking_run_reads_as_its_start_not_a_python_id() -> None:
     assert repr(run) == "<docking run since t=927.24 s (dock_time_limit(300 s))>"
     assert run == DockingRun(140000000000, 927.24, "dock_time_limit(300 s)")
     assert run != DockingRun(140000000001, 927.24, "dock_time_limit(300 s)")  # another limit
+
+
+@dataclass
+class Waypoint:
+    """A plugin's record: a dataclass with the repr the decorator writes."""
+
+    distance: float
+    turn: float
+
+
+@dataclass
+class Leg:
+    """One that says itself how it reads."""
+
+    distance: float
+
+    def __repr__(self) -> str:
+        return f"<leg of {self.distance:.0f} mm>"
+
+
+@pytest.mark.parametrize(
+    ("value", "shown"),
+    [
+        # a mission's record key: its fields, JSON's words, the float a turn's radians
+        ({"distance": 1000.0, "turn": math.pi / 2, "room": "kitchen", "done": False},
+         '{"distance": 1000.0, "turn": 1.5708, "room": "kitchen", "done": false}'),
+        # a mark: the odometry's fields, None as null, no "-0.0"
+        (Odometry(x_mm=-0.00001, theta_rad=-math.pi),
+         '{"x_mm": 0.0, "y_mm": 0.0, "theta_rad": -3.1416, "distance_mm": 0.0, '
+         '"angle_rad": 0.0, "left_counts": null, "right_counts": null, "path_mm": 0.0}'),
+        (Waypoint(300.0, 0.1 + 0.2), '{"distance": 300.0, "turn": 0.3}'),
+        ([{"distance": 500.0}, None], '[{"distance": 500.0}, null]'),
+        ((1, "two"), '[1, "two"]'),
+        ("hello", '"hello"'),
+        (3, "3"),
+        # a class's own repr says how it reads: kept
+        (DockingRun(1, 927.24, "dock_time_limit(300 s)"),
+         "<docking run since t=927.24 s (dock_time_limit(300 s))>"),
+        (Leg(1200.0), "<leg of 1200 mm>"),
+        (Status.RUNNING, "<Status.RUNNING: 'RUNNING'>"),
+    ],
+)  # fmt: skip
+def test_a_record_reads_as_json_like_text_not_a_python_repr(value: object, shown: str) -> None:
+    """``{'distance': 1000.0, 'turn': 1.5707963267948966}`` and ``Odometry(x_mm=...,
+    left_counts=None, ...)`` were what a parent read on the page."""
+    assert board_text(value) == shown
+
+
+def test_a_long_value_is_cut_and_a_list_holding_itself_says_so() -> None:
+    shown = board_text(list(range(100_000)))  # made only as far as it is shown
+    assert len(shown) == 200 and shown.startswith("[0, 1, 2, ") and shown.endswith("...")
+    itself: list[object] = []
+    itself.append(itself)
+    assert board_text(itself).startswith("<list: its text failed: RecursionError(")
+
+
+class Records(py_trees.behaviour.Behaviour):
+    """Writes what a mission's ``set`` and ``mark`` write: a record (a dict) and a mark (an
+    :class:`Odometry`)."""
+
+    def update(self) -> Status:
+        storage = py_trees.blackboard.Blackboard.storage
+        storage["/mission/wp"] = {"distance": 1000.0, "turn": math.pi / 2}
+        storage["/mission/start"] = Odometry(x_mm=12.5)
+        return Status.RUNNING
+
+
+def test_the_page_s_blackboard_shows_a_record_and_a_mark_as_json_like_text() -> None:
+    feed = feed_of_run(Records(name="records"), "records", history=1000)
+    board = state_view(feed, feed.since(0)[0][-1], [])["blackboard"]
+    assert board["/mission/wp"] == '{"distance": 1000.0, "turn": 1.5708}'
+    assert board["/mission/start"].startswith('{"x_mm": 12.5, "y_mm": 0.0, ')

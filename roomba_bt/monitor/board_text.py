@@ -1,0 +1,82 @@
+"""A blackboard value as the monitor's page shows it: readable JSON-like text.
+
+A mission's record key holds a dict and a ``mark`` an :class:`~roomba_bt.robot.interface.
+Odometry` (a NamedTuple); shown as their Python repr they read ``{'distance': 1000.0,
+'turn': 1.5707963267948966}`` and ``Odometry(x_mm=0.0, ..., left_counts=None, ...)``: a
+parent on a phone reads ``{"distance": 1000, "turn": 1.5708}`` and ``{"x_mm": 0, ...,
+"left_counts": null, ...}``. A value whose class says itself how it reads (its own
+``__repr__``: the cover's map, a docking run) keeps its own words.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from collections import namedtuple
+from collections.abc import Iterator
+from typing import Any
+
+#: the longest text a blackboard value is kept (and shown) as
+TEXT_LIMIT = 200
+#: the code of the ``__repr__`` every ``namedtuple`` (and ``typing.NamedTuple``) class gets
+#: unless its body defines one: a NamedTuple with this repr is a plain record
+_NAMEDTUPLE_REPR = namedtuple("_Probe", "field").__repr__.__code__
+#: decimals a float keeps: a tenth of a micrometre in mm, of a microradian in rad
+_DECIMALS = 4
+
+
+def board_text(value: Any) -> str:
+    """``value`` as the blackboard panel shows it, cut to :data:`TEXT_LIMIT` characters."""
+    try:
+        text = _readable(value)
+    except Exception as exc:  # a plugin's repr, a list holding itself: never the tick's end
+        text = f"<{type(value).__name__}: its text failed: {exc!r}>"
+    return text if len(text) <= TEXT_LIMIT else text[: TEXT_LIMIT - 3] + "..."
+
+
+def _readable(value: Any) -> str:
+    """JSON's words for what JSON has (``true``, ``null``, ``"text"``, ``[...]``, ``{...}``),
+    floats rounded to :data:`_DECIMALS`; anything else its own repr."""
+    if value is None or isinstance(value, bool):
+        return json.dumps(value)
+    if isinstance(value, str):
+        return json.dumps(value, ensure_ascii=False)
+    if isinstance(value, float):
+        return repr(round(value, _DECIMALS) + 0.0)  # + 0.0: no "-0.0"
+    if isinstance(value, int):
+        return repr(value)  # an IntEnum's too: <Side.LEFT: 1>
+    fields = _record_fields(value)
+    if fields is not None:
+        return _joined((f"{json.dumps(str(k))}: {_readable(v)}" for k, v in fields), "{}")
+    if type(value) is list or type(value) is tuple:  # a subclass may say how it reads
+        return _joined((_readable(item) for item in value), "[]")
+    return repr(value)
+
+
+def _joined(parts: Iterator[str], brackets: str) -> str:
+    """``parts`` between ``brackets``, comma-separated, made only until the text is longer
+    than it is shown (a list of 10 000 points would be made whole, then cut to 200)."""
+    text = brackets[0]
+    for part in parts:
+        text += part if text == brackets[0] else ", " + part
+        if len(text) > TEXT_LIMIT:
+            return text
+    return text + brackets[1]
+
+
+def _record_fields(value: Any) -> list[tuple[Any, Any]] | None:
+    """A record's fields in order: a dict's items, a NamedTuple's or a dataclass's
+    fields; None for anything else, or for a record whose class has its own ``__repr__``."""
+    if isinstance(value, dict):  # not the Mapping ABC: its first check of a class is slow
+        return list(value.items())
+    kind = type(value)
+    if isinstance(value, tuple) and hasattr(kind, "_fields"):
+        if getattr(kind.__repr__, "__code__", None) is not _NAMEDTUPLE_REPR:
+            return None
+        return list(zip(kind._fields, value, strict=True))
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        fields = [(f.name, getattr(value, f.name)) for f in dataclasses.fields(value) if f.repr]
+        # the repr the decorator writes, or the class's own (kept: it says how it reads)
+        generated = ", ".join(f"{name}={field!r}" for name, field in fields)
+        return fields if repr(value) == f"{kind.__qualname__}({generated})" else None
+    return None
