@@ -62,9 +62,13 @@ def browser() -> Iterator[Any]:
             launched.close()
 
 
-@pytest.fixture
-def page(browser: Any) -> Iterator[Any]:
-    context = browser.new_context(viewport={"width": 1400, "height": 900})
+#: a phone held upright (390 x 844 CSS pixels: an iPhone 12 to 14), with touch
+PHONE = {"viewport": {"width": 390, "height": 844}, "is_mobile": True, "has_touch": True}
+
+
+def _opened(browser: Any, **options: Any) -> Iterator[Any]:
+    """A page in a fresh context; the test fails if the page's script raised."""
+    context = browser.new_context(**options)
     opened = context.new_page()
     errors: list[str] = []
     opened.on("pageerror", lambda exc: errors.append(str(exc)))
@@ -73,6 +77,28 @@ def page(browser: Any) -> Iterator[Any]:
     finally:
         context.close()
     assert not errors, f"the page raised: {errors}"
+
+
+def on_screen(page: Any, selector: str) -> bool:
+    """Whether the element is wholly inside the window (not scrolled off it)."""
+    box = page.locator(selector).bounding_box()
+    if not box:
+        return False
+    size = page.viewport_size
+    right, bottom = box["x"] + box["width"], box["y"] + box["height"]
+    return box["x"] >= 0 and box["y"] >= 0 and right <= size["width"] and bottom <= size["height"]
+
+
+@pytest.fixture
+def page(browser: Any) -> Iterator[Any]:
+    """A laptop's window."""
+    yield from _opened(browser, viewport={"width": 1400, "height": 900})
+
+
+@pytest.fixture
+def phone(browser: Any) -> Iterator[Any]:
+    """A phone's screen (:data:`PHONE`): the page's narrow layout."""
+    yield from _opened(browser, **PHONE)
 
 
 @pytest.fixture

@@ -19,7 +19,7 @@ from roomba_bt.monitor.server import MonitorServer
 from roomba_bt.oi.packets import PACKETS
 from roomba_bt.oi.profiles import CREATE2
 
-from .conftest import SHUTTLE
+from .conftest import SHUTTLE, on_screen
 from .live import LiveRun, replayed_record, start_live_run
 from .test_browser import WAIT_MS
 
@@ -77,33 +77,20 @@ def test_the_controls_are_off_until_the_page_knows_the_run(live: LiveRun, page: 
 
 
 def test_on_a_phone_pause_and_stop_stay_on_the_screen_and_the_panels_stack(
-    live: LiveRun, browser: Any
+    live: LiveRun, phone: Any
 ) -> None:
-    context = browser.new_context(viewport={"width": 390, "height": 844}, is_mobile=True)
-    try:
-        page = context.new_page()
-        page.goto(live.url)
-        page.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
-        assert page.evaluate("document.documentElement.scrollWidth") <= 390  # it was 916
-
-        def on_screen(selector: str) -> bool:
-            box = page.locator(selector).bounding_box()
-            if not box:
-                return False
-            right, bottom = box["x"] + box["width"], box["y"] + box["height"]
-            return box["x"] >= 0 and box["y"] >= 0 and right <= 390 and bottom <= 844
-
-        assert on_screen("#pause") and on_screen("#stop")
-        robot = page.locator("#robot-panel").bounding_box()
-        tree = page.locator("#tree-panel").bounding_box()
-        assert robot and tree and robot["y"] >= tree["y"] + tree["height"]  # below, not beside
-        page.evaluate("window.scrollTo(0, document.body.scrollHeight)")
-        page.wait_for_timeout(100)
-        assert on_screen("#pause") and on_screen("#stop")  # the header sticks
-        page.click("#pause")
-        page.wait_for_selector('#mode:text("Passive")', timeout=WAIT_MS)
-    finally:
-        context.close()
+    phone.goto(live.url)
+    phone.wait_for_selector('#mode:text("Safe")', timeout=WAIT_MS)
+    assert phone.evaluate("document.documentElement.scrollWidth") <= 390  # it was 916
+    assert on_screen(phone, "#pause") and on_screen(phone, "#stop")
+    robot = phone.locator("#robot-panel").bounding_box()
+    tree = phone.locator("#tree-panel").bounding_box()
+    assert robot and tree and robot["y"] >= tree["y"] + tree["height"]  # below, not beside
+    phone.evaluate("window.scrollTo(0, document.body.scrollHeight)")
+    phone.wait_for_timeout(100)
+    assert on_screen(phone, "#pause") and on_screen(phone, "#stop")  # the header sticks
+    phone.click("#pause")
+    phone.wait_for_selector('#mode:text("Passive")', timeout=WAIT_MS)
 
 
 @pytest.fixture(scope="module")

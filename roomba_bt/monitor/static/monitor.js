@@ -72,7 +72,22 @@ function headers() {
   return h;
 }
 
+// a control the page sent whose answer has not come: its button says so ("Pausing…") and
+// takes no second press until the run's server accepts or refuses it (which the alert says)
+const PENDING_LABELS = { pause: "Pausing…", resume: "Resuming…", step: "Stepping…", stop: "Stopping…" };
+const pending = new Set();
+
 async function control(action, node, value) {
+  const button = action in PENDING_LABELS ? action : null;
+  if (button) { pending.add(button); updateControls(); }
+  try {
+    return await sendControl(action, node, value);
+  } finally {
+    if (button) { pending.delete(button); updateControls(); }
+  }
+}
+
+async function sendControl(action, node, value) {
   const body = { action, run: view.runId, seen: view.sent };
   if (node !== undefined) body.node = node;
   if (value !== undefined) body.value = value;
@@ -102,7 +117,7 @@ async function control(action, node, value) {
 function showBanner(text, error) {
   const b = $("banner");
   if (!text) { b.hidden = true; return; }
-  b.hidden = false; b.textContent = text; b.className = error ? "error" : "";
+  b.hidden = false; b.textContent = text; b.classList.toggle("error", Boolean(error));
 }
 
 // a control that failed: red, above the state's banner (which updates 20 times a second and
@@ -191,11 +206,23 @@ function followRunning() {
         && (deepest === null || view.tree[i].depth > view.tree[deepest].depth)) deepest = i;
   });
   if (deepest === null) return;
-  const box = $("tree"), frame = box.getBoundingClientRect();
+  const box = $("tree"), frame = shownPart(box);
   const at = view.rows[deepest].row.getBoundingClientRect();
+  // the tree scrolled off the page (a phone's reader further down): nothing to keep in view
+  if (frame.bottom - frame.top < 2 * at.height) return;
   const name = view.rows[deepest].name.getBoundingClientRect();
-  if (at.top < frame.top || at.bottom > frame.bottom) box.scrollTop += at.top - frame.top - box.clientHeight / 3;
+  if (at.top < frame.top || at.bottom > frame.bottom) {
+    box.scrollTop += at.top - frame.top - Math.min(box.clientHeight, frame.bottom - frame.top) / 3;
+  }
   if (name.left < frame.left || name.left + 40 > frame.right) box.scrollLeft += name.left - frame.left - 40;
+}
+// the part of an element's box the reader sees: on a phone the page scrolls under the stuck
+// top (the header, its controls and status), which covered the running node followed in the
+// tree's box; the window's bottom cuts it too
+function shownPart(element) {
+  const box = element.getBoundingClientRect();
+  return { top: Math.max(box.top, $("top").getBoundingClientRect().bottom),
+    bottom: Math.min(box.bottom, window.innerHeight), left: box.left, right: box.right };
 }
 function setFollow(on) {
   view.follow = on;
@@ -296,6 +323,10 @@ function motorRows(r, rows) {
   const c = r.brush_currents_ma;
   if (c) rows.push(["brush currents (56, 57)", `<span id="brush-currents">${c.main_brush !== undefined ? `main ${c.main_brush} mA ` : ""}${c.side_brush !== undefined ? `side ${c.side_brush} mA` : ""}</span>`]);
 }
+// the two poses are in two frames: odometry from where the robot started, the simulator's
+// true pose in the room; unlabelled, (0.02, 0.00) beside (2.10, 0.93) read as 2 m of error
+const TRUE_POSE_LABEL = "<span title=\"the simulator's: where it has the robot; odometry is "
+  + "the robot's own reckoning, from where it started\">true pose (in the room)</span>";
 function renderRobot(state) {
   const r = state.robot;
   const rows = [];
@@ -315,8 +346,8 @@ function renderRobot(state) {
   motorRows(r, rows);
   if (r.commands_per_s !== undefined) rows.push(["commands / refused per s", `<span id="rates">${r.commands_per_s} / ${r.refused_per_s}</span>`]);
   const o = r.odometry;
-  rows.push(["odometry", `(${(o.x / 1000).toFixed(2)}, ${(o.y / 1000).toFixed(2)}) m, ${degrees(o.theta)}°, ${(o.path / 1000).toFixed(2)} m driven`]);
-  if (state.truth) rows.push(["true pose (simulator)", `(${(state.truth[0] / 1000).toFixed(2)}, ${(state.truth[1] / 1000).toFixed(2)}) m, ${degrees(state.truth[2])}°`]);
+  rows.push(["odometry (from its start)", `(${(o.x / 1000).toFixed(2)}, ${(o.y / 1000).toFixed(2)}) m, ${degrees(o.theta)}°, ${(o.path / 1000).toFixed(2)} m driven`]);
+  if (state.truth) rows.push([TRUE_POSE_LABEL, `(${(state.truth[0] / 1000).toFixed(2)}, ${(state.truth[1] / 1000).toFixed(2)}) m, ${degrees(state.truth[2])}°`]);
   if (r.frames_lost) rows.push(["frames lost", String(r.frames_lost)]);
   setRows("robot", rows);
 }
@@ -534,11 +565,12 @@ function updateControls() {
   const silent = silentSeconds();
   // before the first hello nothing is known: the controls stay off (they looked usable)
   $("controls").hidden = view.header !== null && !h.controls;
-  $("pause").disabled = !c || s.paused;
-  $("resume").disabled = !c || silent > 0 || !s.paused;
-  $("step").disabled = !c || silent > 0 || !s.paused;
-  $("stop").disabled = !c;
+  controlButton("pause", !c || s.paused);
+  controlButton("resume", !c || silent > 0 || !s.paused);
+  controlButton("step", !c || silent > 0 || !s.paused);
+  controlButton("stop", !c);
   menuButtons(c);
+  statusBar(s);
   document.body.classList.toggle("stale", silent > 0 || (!view.connected && !(view.finished && view.ended)));
   if (view.connected) setBadge(silent ? `no word from the run for ${silent} s` : "connected", !silent);
   if (view.otherRun) {
@@ -568,6 +600,44 @@ function updateControls() {
   }
   else showBanner("");
   robotTitle();
+}
+
+// one of the four controls: off when ``off``, and while its control is on its way (pending)
+const LABELS = {};
+function controlButton(action, off) {
+  const button = $(action), waiting = pending.has(action);
+  LABELS[action] = LABELS[action] || button.textContent;
+  const label = waiting ? PENDING_LABELS[action] : LABELS[action];
+  button.disabled = off || waiting;
+  if (button.textContent !== label) button.textContent = label;
+  button.classList.toggle("pending", waiting);
+  button.setAttribute("aria-busy", String(waiting));
+}
+
+// a phone's status bar (CSS shows it at 480 px and less): how the run is (running, PAUSED
+// and for how long, how it ended), the OI mode and battery of the state shown; the link's
+// badge beside it says whether that is stale
+function statusBar(s) {
+  const state = view.shownState, robot = state && state.robot, ended = view.shownEnded;
+  let run = "", kind = "";
+  if (view.finished) {
+    // the outcome's word (success, interrupted, connection lost); a record's longer ending
+    // ("the recorded run was stopped by the operator at ...") is the banner's to say
+    const outcome = view.finished.split(/[:(]/)[0].trim();
+    run = outcome.length <= 16 ? "ended: " + outcome : "ended"; kind = "ended";
+  }
+  else if (s.paused) {
+    run = "PAUSED" + (s.paused_tick !== undefined && s.paused_tick !== null
+      ? " " + duration((view.window[1] - s.paused_tick) * SLOT) : "");
+    kind = "paused";
+  }
+  else if (view.header) run = "running";
+  const texts = [[$("status-state"), run],
+    [$("status-mode"), ended ? ended.mode : robot ? robot.mode : ""],
+    [$("status-battery"), robot && robot.battery_percent !== undefined ? `${robot.battery_percent.toFixed(0)} %` : ""]];
+  for (const [element, text] of texts) if (element.textContent !== text) element.textContent = text;
+  $("status-state").className = kind;
+  $("status-state").title = view.finished || "";
 }
 
 // the robot panel's title says which tick it shows; after the run's end, what its safe stop
@@ -834,6 +904,8 @@ document.addEventListener("keydown", (ev) => {
 window.addEventListener("resize", fitTree);
 window.addEventListener("online", () => { if (!view.connected && !view.ended) connect(); });
 $("alert-close").onclick = () => showAlert("");
+// a phone cuts the banner to two lines: a tap shows it all, another cuts it again
+$("banner").onclick = () => $("banner").classList.toggle("open");
 // the countdown to the next try, and the run's silence (no message: nothing else calls it)
 setInterval(() => { if (!view.ended) updateControls(); }, 500);
 updateControls();
