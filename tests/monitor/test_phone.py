@@ -39,8 +39,10 @@ RUNNING_NODE_AND_TOP = """() => {
   const depth = (row) => parseFloat(row.style.paddingLeft);
   const deepest = rows.reduce((a, b) => (depth(b) > depth(a) ? b : a));
   const name = deepest.querySelector('.name').getBoundingClientRect();
+  const stuck = Array.from(document.querySelectorAll('header, #alert, #banner'))
+    .filter((e) => !e.hidden).map((e) => e.getBoundingClientRect().bottom);
   return {name: deepest.dataset.name, top: name.top, bottom: name.bottom,
-          stuck: document.getElementById('top').getBoundingClientRect().bottom};
+          stuck: Math.max(...stuck)};
 }"""
 
 
