@@ -1,11 +1,12 @@
 """A blackboard value as the monitor's page shows it: readable JSON-like text.
 
 A mission's record key holds a dict and a ``mark`` an :class:`~roomba_bt.robot.interface.
-Odometry` (a NamedTuple); shown as their Python repr they read ``{'distance': 1000.0,
-'turn': 1.5707963267948966}`` and ``Odometry(x_mm=0.0, ..., left_counts=None, ...)``: a
-parent on a phone reads ``{"distance": 1000, "turn": 1.5708}`` and ``{"x_mm": 0, ...,
-"left_counts": null, ...}``. A value whose class says itself how it reads (its own
-``__repr__``: the cover's map, a docking run) keeps its own words.
+Odometry` (a NamedTuple); shown as their Python repr they read ``{'room': 'kitchen',
+'turn': 90.0}`` and ``Odometry(x_mm=12.5, ..., theta_rad=1.5707963267948966,
+left_counts=None, ...)``: a parent on a phone reads ``{"room": "kitchen", "turn": 90.0}`` and
+``{"x_mm": 12.5, ..., "theta_rad": 1.5708, "left_counts": null, ...}``. A value whose class
+says itself how it reads (its own ``__repr__``: the cover's map, a docking run) keeps its
+own words.
 """
 
 from __future__ import annotations

@@ -121,7 +121,7 @@ class Leg:
 @pytest.mark.parametrize(
     ("value", "shown"),
     [
-        # a mission's record key: its fields, JSON's words, the float a turn's radians
+        # a mission's record key: its fields, JSON's words, a float to 4 decimals
         ({"distance": 1000.0, "turn": math.pi / 2, "room": "kitchen", "done": False},
          '{"distance": 1000.0, "turn": 1.5708, "room": "kitchen", "done": false}'),
         # a mark: the odometry's fields, None as null, no "-0.0"
