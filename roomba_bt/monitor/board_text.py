@@ -12,9 +12,9 @@ own words.
 from __future__ import annotations
 
 import dataclasses
-import json
 from collections import namedtuple
 from collections.abc import Iterator
+from json.encoder import encode_basestring  # json.dumps's quoting of a str, in C
 from typing import Any
 
 #: the longest text a blackboard value is kept (and shown) as
@@ -38,17 +38,19 @@ def board_text(value: Any) -> str:
 def _readable(value: Any) -> str:
     """JSON's words for what JSON has (``true``, ``null``, ``"text"``, ``[...]``, ``{...}``),
     floats rounded to :data:`_DECIMALS`; anything else its own repr."""
-    if value is None or isinstance(value, bool):
-        return json.dumps(value)
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "true" if value else "false"
     if isinstance(value, str):
-        return json.dumps(value, ensure_ascii=False)
+        return encode_basestring(value)
     if isinstance(value, float):
         return repr(round(value, _DECIMALS) + 0.0)  # + 0.0: no "-0.0"
     if isinstance(value, int):
         return repr(value)  # an IntEnum's too: <Side.LEFT: 1>
     fields = _record_fields(value)
     if fields is not None:
-        return _joined((f"{json.dumps(str(k))}: {_readable(v)}" for k, v in fields), "{}")
+        return _joined((f"{encode_basestring(str(k))}: {_readable(v)}" for k, v in fields), "{}")
     if type(value) is list or type(value) is tuple:  # a subclass may say how it reads
         return _joined((_readable(item) for item in value), "[]")
     return repr(value)

@@ -454,17 +454,21 @@ def test_a_run_s_label_leads_the_tab_s_title_and_the_header(page: Any) -> None:
         unlabelled.finish()
 
 
+#: the deepest RUNNING node's row (the leaf at work), null when none runs: a JS expression
+DEEPEST_RUNNING_ROW = """(() => {
+  const rows = Array.from(document.querySelectorAll('.node[data-status="R"]'));
+  const depth = (row) => parseFloat(row.style.paddingLeft);
+  return rows.length ? rows.reduce((a, b) => (depth(b) > depth(a) ? b : a)) : null;
+})()"""
 #: the deepest RUNNING node's name, and whether it is inside the tree panel's visible box
 DEEPEST_RUNNING_IN_VIEW = """() => {
-  const rows = Array.from(document.querySelectorAll('.node[data-status="R"]'));
-  if (!rows.length) return null;
-  const depth = (row) => parseFloat(row.style.paddingLeft);
-  const deepest = rows.reduce((a, b) => (depth(b) > depth(a) ? b : a));
+  const deepest = DEEPEST_RUNNING_ROW;
+  if (!deepest) return null;
   const box = document.getElementById('tree').getBoundingClientRect();
   const name = deepest.querySelector('.name').getBoundingClientRect();
   return [deepest.dataset.name, name.top >= box.top && name.bottom <= box.bottom
           && name.left >= box.left && name.left < box.right];
-}"""
+}""".replace("DEEPEST_RUNNING_ROW", DEEPEST_RUNNING_ROW)
 
 
 @pytest.mark.usefixtures("clean_blackboard")  # the cover's map left there: other tests saw it

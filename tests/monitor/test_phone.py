@@ -10,7 +10,7 @@ from typing import Any
 
 from .conftest import on_screen
 from .live import MISSIONS, LiveRun, start_live_run
-from .test_browser import WAIT_MS
+from .test_browser import DEEPEST_RUNNING_ROW, WAIT_MS
 
 
 def test_the_run_s_state_mode_and_battery_stay_on_the_screen_beside_the_controls(
@@ -34,16 +34,14 @@ def test_the_run_s_state_mode_and_battery_stay_on_the_screen_beside_the_controls
 
 #: where the deepest RUNNING node's name is, and the bottom of the page's stuck top
 RUNNING_NODE_AND_TOP = """() => {
-  const rows = Array.from(document.querySelectorAll('.node[data-status="R"]'));
-  if (!rows.length) return null;
-  const depth = (row) => parseFloat(row.style.paddingLeft);
-  const deepest = rows.reduce((a, b) => (depth(b) > depth(a) ? b : a));
+  const deepest = DEEPEST_RUNNING_ROW;
+  if (!deepest) return null;
   const name = deepest.querySelector('.name').getBoundingClientRect();
   const stuck = Array.from(document.querySelectorAll('header, #alert, #banner'))
     .filter((e) => !e.hidden).map((e) => e.getBoundingClientRect().bottom);
   return {name: deepest.dataset.name, top: name.top, bottom: name.bottom,
           stuck: Math.max(...stuck)};
-}"""
+}""".replace("DEEPEST_RUNNING_ROW", DEEPEST_RUNNING_ROW)
 
 
 def test_the_running_node_is_kept_on_the_screen_until_the_reader_scrolls_the_tree(

@@ -887,7 +887,7 @@ function stopPlay() { if (view.playing) clearInterval(view.playing); view.playin
 document.addEventListener("keydown", (ev) => {
   if (ev.target.tagName === "INPUT" || ev.target.tagName === "SELECT" || !(view.header && view.header.controls)) return;
   const key = { p: "pause", r: "resume", n: "step" }[ev.key];
-  if (!key) return;
+  if (!key || pending.has(key)) return;  // on its way already: its button says so
   // a stale page asks nothing: the HTTP side may still reach the run while the socket is down,
   // and a resume from a page that no longer shows the run would set the robot going unseen
   const silent = MOTION.has(key) ? silentSeconds() : 0;
