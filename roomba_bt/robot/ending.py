@@ -49,6 +49,7 @@ from roomba_bt.robot.safety import ENDING_SIGNALS
 from roomba_bt.robot.wake import KeepAwake
 from roomba_bt.robot.wall_bound import WallBound, bounded
 from roomba_bt.robot.writer import CommandWriter
+from roomba_bt.transport.link_kind import link_of
 
 log = logging.getLogger(__name__)
 
@@ -106,10 +107,11 @@ QUIET_BEFORE_PERIODS = 3
 #: loose connector, a USB adapter that reset), to deliver the stop alone, unless told
 #: (:attr:`PortReturn.within`: a run's ``--grace``).
 REOPEN_WITHIN_S = 2.0
-#: What to do about a robot the stop could not reach over a port that is gone.
+#: What to do about a robot the stop could not reach over a port that is gone; ``reach``: the
+#: link's way back to it (:attr:`~roomba_bt.transport.link_kind.LinkWords.reach`)
 PORT_GONE_ADVICE = (
-    "the robot may still be moving: pick it up or press its Clean or power button; reseat "
-    "the cable, then roomba-bt doctor --port {port}"
+    "the robot may still be moving: pick it up or press its Clean or power button; {reach}, "
+    "then roomba-bt doctor --port {port}"
 )
 
 #: Requested wheel velocities (left, right) and the encoders (left, right): what a stop the
@@ -311,7 +313,8 @@ def confirmed_by(confirm: Callable[[], bool] | None) -> bool:
 
 class PortReturn:
     """The wait, at a stop, for a port that failed to come back at the same device path (a
-    loose connector, a USB adapter that reset), to deliver the stop alone: the mission is not
+    loose connector, a USB adapter that reset) or URL (a Wi-Fi bridge that rebooted: a new
+    connection reaches the same robot), to deliver the stop alone: the mission is not
     carried on (the robot may have moved meanwhile). ``within``: how long (a run's
     ``--grace``); ``heard``: the connection's question after the stop written through it
     (the stream quiet, a Query List answered); ``said``: what the wait found ("" before one).
@@ -325,7 +328,7 @@ class PortReturn:
     def wait(self, link: StreamLink) -> bool | None:
         """True if the port came back (the link open again, no stream known to run), False
         if it did not or was already waited for in this ending, None where the transport
-        cannot reopen (a simulator, a replay, a URL's bridge, a pty's own path) or the far
+        cannot reopen (a simulator, a replay, ``loop://``, a pty's own path) or the far
         end turned this run away (its robot was never this run's to stop)."""
         reopen: Callable[[float], float | None] | None = getattr(link.transport, "reopen", None)
         if reopen is None or not getattr(link.transport, "reopens", False) or link.turned_away:
@@ -333,10 +336,11 @@ class PortReturn:
         if self.said or self.within <= 0:  # waited for already (``close()``'s stop)
             return False
         took = reopen(self.within)
+        port = link_of(link.name).reopened
         if took is None:
-            self.said = f"did not come back within {self.within:g} s"
+            self.said = f"{port} did not come back within {self.within:g} s"
             return False
-        self.said = f"came back after {took:.2f} s"
+        self.said = f"{port} came back after {took:.2f} s"
         link.status = LinkStatus.OPEN
         link.streaming = False
         return True
@@ -348,7 +352,7 @@ class PortReturn:
             self.said += "; the stop was written through it, and no robot answered after it"
             return False
         self.said += ": the robot heard the stop written through it"
-        log.warning("%s: the port %s (the mission is not carried on)", port, self.said)
+        log.warning("%s: %s (the mission is not carried on)", port, self.said)
         return True
 
 
@@ -677,7 +681,7 @@ class SafeStop:
             )
         self._gone = True  # what to do now, said unless nothing was set going
         said = self.port_return.said
-        came_back = f" (it {said})" if said else ""
+        came_back = f" ({said})" if said else ""
         return f"the stop was not delivered: the port is gone{came_back}"
 
     def _undelivered(self, why: str) -> bool:
@@ -704,7 +708,8 @@ class SafeStop:
         else:
             report = f"last seen in {mode.label} {describe_activity(wheels, stopped_by)}; {why}"
         if self._gone and not idle:
-            report += ": " + PORT_GONE_ADVICE.format(port=writer.link.name)
+            port = writer.link.name
+            report += ": " + PORT_GONE_ADVICE.format(reach=link_of(port).reach, port=port)
         self._gone = False
         if report != self.stop_report:  # close() tries once more: said once, not twice
             log.log(level, "%s: %s", self.writer.link.name, report)

@@ -47,6 +47,7 @@ from roomba_bt.robot.interface import ModeChange
 from roomba_bt.robot.listen import listen_at
 from roomba_bt.robot.wall_bound import WallBound
 from roomba_bt.transport.base import Transport, TransportError
+from roomba_bt.transport.link_kind import link_of
 from roomba_bt.transport.open_failure import CLOSED_AT_ONCE
 from roomba_bt.transport.serial_port import TERMIOS_ERRORS
 
@@ -63,19 +64,6 @@ WATCHDOG_MARGIN = 0.001
 
 #: The session's mode model, told of every frame: the change the robot made by itself, if any.
 Reconcile = Callable[[SensorFrame, int, float], ModeChange | None]
-
-
-#: The URLs whose far end is a bridge over a network, not a cable (pyserial's schemes).
-NETWORK_PORTS = ("socket://", "rfc2217://")
-
-
-def gone_how(port: str) -> str:
-    """What a port that failed most likely means, in its user's words: a device path's cable
-    or adapter, a URL's bridge or network (pyserial's own words, "device reports readiness to
-    read but returned no data", said nothing of either)."""
-    if port.lower().startswith(NETWORK_PORTS):
-        return "the bridge closed the connection or the network dropped"
-    return "the cable was pulled or the adapter reset"
 
 
 class LinkStatus(enum.Enum):
@@ -263,7 +251,7 @@ class StreamLink:
             return PortLost(self.name, f"{cause}; nothing reached a robot")
         return PortLost(
             self.name,
-            f"the port is gone ({gone_how(self.name)}): it failed on {action} ({cause}); the "
+            f"the port is gone ({link_of(self.name).gone}): it failed on {action} ({cause}); the "
             "link is lost",
         )
 

@@ -259,7 +259,7 @@ def stop_robot(connection: Connection, summary: RunSummary, first: bool = False)
             before = "drive 0, motors off before the tree's stop, then " if first else ""
             back = getattr(getattr(connection, "ending", None), "port_return", None)
             reopened = back.said if back is not None else ""
-            through = f" (the port {reopened})" if reopened else ""
+            through = f" ({reopened})" if reopened else ""
             summary.safe_stop = (
                 before + "sent " + ", ".join(sequence) + through
                 if sequence

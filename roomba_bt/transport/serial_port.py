@@ -20,6 +20,7 @@ import contextlib
 import logging
 import os
 import select
+import socket
 import time
 import weakref
 from collections.abc import Iterator
@@ -29,6 +30,7 @@ import serial
 from serial import rfc2217
 
 from roomba_bt.transport.base import TransportError
+from roomba_bt.transport.link_kind import LinkKind, link_of
 from roomba_bt.transport.open_failure import (
     CLOSED_AT_ONCE,
     CLOSED_ERRORS,
@@ -65,10 +67,17 @@ POLL_INTERVAL = 0.001
 #: this long (a read at timeout 0 would end after one byte: ``SerialTransport._queued``).
 QUEUED_READ_TIMEOUT = 1.0
 #: How often a device that vanished is tried again while the safe stop waits for it to come
-#: back (``SerialTransport.reopen``).
+#: back (``SerialTransport.reopen``): opening a path that is not there costs nothing.
 REOPEN_EVERY_S = 0.05
-#: Where a pseudo-terminal's own device paths are (Linux; macOS names its ``/dev/ttys00N``)
-PTY_DEVICES = ("/dev/pts/", "/dev/ttys")
+#: A bridge's connection is tried again after this long at first, then twice as long each
+#: time up to :data:`RECONNECT_MOST_S`: a bridge that reboots refuses at once, and an
+#: ESP8266 serves few sockets; a connection tried every 50 ms for seconds only loads it.
+RECONNECT_FIRST_S = 0.1
+RECONNECT_MOST_S = 1.0
+#: How long a new raw TCP connection is watched for its far end closing it at once (a bridge
+#: still rebooting whose listener takes the connection and resets it, a server that has
+#: another client): a robot's stream would come within a slot; a close comes at once.
+RECONNECT_SETTLE_S = 0.05
 
 
 try:  # a pty whose other side closed while it was being set up: termios.error, no OSError
@@ -148,12 +157,53 @@ def _held_here(url: str) -> bool:
         return False
 
 
+def _close_port(port: serial.SerialBase) -> None:
+    """Close ``port``, whatever state it is in. pyserial's ``socket://`` close skips
+    ``socket.close()`` when ``shutdown()`` fails (the peer already hung up), which leaks the
+    socket: it is closed here too."""
+    sock = getattr(port, "_socket", None)
+    with contextlib.suppress(serial.SerialException, OSError):
+        port.close()
+    if sock is not None:
+        with contextlib.suppress(OSError):
+            sock.close()
+
+
+def _closed_at_once(port: serial.SerialBase) -> bool:
+    """Whether the far end of a new raw TCP connection (``socket://``) closes it within
+    :data:`RECONNECT_SETTLE_S`: looked at with ``MSG_PEEK``, so a byte of the robot's stream
+    stays for the reads that follow. Other ports: False (an RFC 2217 port's open fails by
+    itself when its server does not negotiate)."""
+    sock = getattr(port, "_socket", None)
+    if sock is None or isinstance(port, rfc2217.Serial):
+        return False
+    ready, _, _ = select.select([sock], [], [], RECONNECT_SETTLE_S)
+    if not ready:
+        return False
+    try:
+        return not sock.recv(1, socket.MSG_PEEK)
+    except BlockingIOError:
+        return False
+    except OSError:  # reset
+        return True
+
+
 class SerialTransport:
     """Bytes over a pyserial port, with errors wrapped in :class:`TransportError`."""
 
     def __init__(self, port: serial.SerialBase, name: str | None = None) -> None:
-        self._port = port
         self.name: str = name if name is not None else str(port.port)
+        self._attach(port)
+        #: a raw TCP connection (``socket://``), whose far end may close it on a second client
+        self._socket = self.name.lower().startswith("socket://")
+        #: whether a read has given a byte yet: a connection closed before is a far end that
+        #: turned this client away (:data:`~roomba_bt.transport.open_failure.CLOSED_AT_ONCE`)
+        self._heard = False
+
+    def _attach(self, port: serial.SerialBase) -> None:
+        """Read and write through ``port`` (an open pyserial port: the first, or the one a
+        reopen brought back)."""
+        self._port = port
         self._wait_handle: Any = getattr(port, "fd", None) or getattr(port, "_socket", None)
         # pyserial's RFC 2217 port reads its socket in a thread of its own: a select on the
         # socket would race that thread, so its reads poll the port's queue instead.
@@ -166,11 +216,6 @@ class SerialTransport:
         if self._polled:
             self._wait_handle = None
         self._hung_up = False
-        #: a raw TCP connection (``socket://``), whose far end may close it on a second client
-        self._socket = self.name.lower().startswith("socket://")
-        #: whether a read has given a byte yet: a connection closed before is a far end that
-        #: turned this client away (:data:`~roomba_bt.transport.open_failure.CLOSED_AT_ONCE`)
-        self._heard = False
 
     @classmethod
     def open(
@@ -425,51 +470,55 @@ class SerialTransport:
     @property
     def reopens(self) -> bool:
         """Whether :meth:`reopen` can bring this port back: a device path (a link to one
-        too: ``/dev/serial/by-id/...``, socat's ``link=``), not a URL (a bridge's new
-        connection is another client's session, not this line back) nor a pty's own
-        ``/dev/pts/N`` (a pty never comes back: its number, reused, is another program's)."""
-        return "://" not in self.name and not self.name.startswith(PTY_DEVICES)
+        too: ``/dev/serial/by-id/...``, socat's ``link=``) and a bridge's URL (a new
+        connection reaches the same robot's serial port), not a pty's own ``/dev/pts/N`` (a
+        pty never comes back: its number, reused, is another program's) nor ``loop://``."""
+        return link_of(self.name).reopens
 
     def reopen(self, within: float) -> float | None:
-        """Open the same device path again, trying until ``within`` seconds have passed: a
-        loose connector that comes back, a USB adapter that reset. The seconds it took, or
-        None if it did not come back.
+        """Open the same device path or URL again, trying until ``within`` seconds have
+        passed: a loose connector that comes back, a USB adapter that reset, a Wi-Fi bridge
+        that rebooted or a network that dropped the connection. The seconds it took, or None
+        if it did not come back. A device is tried every :data:`REOPEN_EVERY_S`; a bridge
+        with a backoff (:data:`RECONNECT_FIRST_S` doubling to :data:`RECONNECT_MOST_S`). A
+        try's own connect waits up to pyserial's timeout (5 s for a host that does not
+        answer at all), past ``within`` when that is shorter.
 
         The old port is closed first: while it is held open, Linux keeps the vanished
         device's number taken, and the adapter that comes back gets the next one
-        (``/dev/ttyUSB1``). Only for the safe stop (``SafeStop``): the mission is never
-        carried on over a port that came back (docs/robot.md, Losing the link)."""
+        (``/dev/ttyUSB1``); a bridge that serves one client at a time would turn the new
+        connection away while the old one stands. Only for the safe stop (``SafeStop``): the
+        mission is never carried on over a port that came back (docs/robot.md, Losing the
+        link)."""
         old = self._port
         settings = (self.name, int(old.baudrate), old.write_timeout)
+        network = link_of(self.name).kind is LinkKind.NETWORK
+        pause = RECONNECT_FIRST_S if network else REOPEN_EVERY_S
+        began = time.monotonic()  # pyserial's close of a socket:// port sleeps 0.3 s
         self.close()
-        began = time.monotonic()
         while True:
             try:
                 port = _device_port(*settings)
-                port.exclusive = True
+                if isinstance(port, serial.Serial):  # a device, not a URL
+                    port.exclusive = True
                 port.open()
+                if _closed_at_once(port):
+                    _close_port(port)
+                    raise ConnectionResetError("the far end closed the new connection at once")
             except _OPEN_ERRORS:
                 took = time.monotonic() - began
                 if took >= within:
                     return None
-                time.sleep(min(REOPEN_EVERY_S, within - took))
+                time.sleep(min(pause, within - took))
+                if network:
+                    pause = min(2 * pause, RECONNECT_MOST_S)
                 continue
             break
-        self._port = port
-        self._wait_handle = getattr(port, "fd", None)
-        self._port_timeout = port.timeout = 0
-        self._hung_up = False
+        self._attach(port)
         return time.monotonic() - began
 
     def close(self) -> None:
-        # pyserial's socket:// close skips socket.close() when shutdown() fails (the peer
-        # already hung up), which leaks the socket: close it ourselves.
-        sock = getattr(self._port, "_socket", None)
-        with contextlib.suppress(serial.SerialException, OSError):
-            self._port.close()
-        if sock is not None:
-            with contextlib.suppress(OSError):
-                sock.close()
+        _close_port(self._port)
 
     def __repr__(self) -> str:
         state = "open" if self.is_open else "closed"

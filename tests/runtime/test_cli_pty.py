@@ -11,7 +11,7 @@ import subprocess
 import sys
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -20,6 +20,7 @@ import pytest
 from roomba_bt.oi import commands as oi
 from roomba_bt.runtime.recording import load_record
 
+from .bridge import ResettingBridge
 from .simrun import SPIN, write_mission
 
 SAFE_END = oi.halt().data + oi.motors_off().data + oi.pause_stream().data + oi.start().data
@@ -308,6 +309,64 @@ def test_a_port_that_comes_back_within_the_grace_gets_the_stop_not_the_mission(
     assert "final mode   Passive" in out
     _, said = second.stop(signal.SIGINT)
     assert "heard Start (128)" in said and "mode Passive, wheels 0/0 mm/s" in said, said
+
+
+@pytest.fixture
+def bridge(served_sim: Callable[..., Any]) -> Iterator[tuple[ResettingBridge, Any]]:
+    """A Wi-Fi bridge that can reset (:class:`ResettingBridge`) in front of the simulator's
+    TCP server (its log on), and the simulator."""
+    sim = served_sim("--tcp", "127.0.0.1:0", "--log")
+    proxy = ResettingBridge(sim.address)
+    yield proxy, sim
+    proxy.close()
+
+
+def test_a_bridge_that_resets_gets_the_stop_through_a_new_connection(
+    bridge: tuple[ResettingBridge, Any], tmp_path: Path
+) -> None:
+    """An ESP8266 bridge reboots mid-drive (both connections reset) and takes clients again
+    0.3 s later. A new connection reaches the same robot, which drove on in Safe: the stop
+    goes through it within the grace, as through a device path that came back, and the
+    mission is not carried on (docs/robot.md, Losing the link). Before, the run exited at
+    once, "reseat the cable", and left the robot driving."""
+    proxy, sim = bridge
+    proc, _ = _driving(proxy.url, tmp_path)
+    proxy.reset(down_s=0.3)
+    out, err = proc.communicate(timeout=30)
+    assert proc.returncode == 3, err
+    assert "the bridge closed the connection or the network dropped" in out
+    assert re.search(
+        r"safe stop    sent drive, motors, pause_resume_stream, start \(the connection came "
+        r"back after \d+\.\d\d s: the robot heard the stop written through it\)",
+        out,
+    ), out
+    assert "final mode   Passive" in out
+    assert proxy.clients == 2  # the run's connection, then the stop's
+    _, said = sim.stop(signal.SIGINT)
+    assert "turned a second client away" not in said  # the same robot took the new one
+    assert said.count("mode: Off->Passive") == 1, said  # ... not started again
+    assert "mode: Safe->Passive (start)" in said and "mode Passive, wheels 0/0 mm/s" in said
+
+
+def test_a_bridge_that_stays_down_past_the_grace_is_said_in_the_network_s_words(
+    bridge: tuple[ResettingBridge, Any], tmp_path: Path
+) -> None:
+    """The bridge does not come back within the grace: the stop is not delivered, and what
+    to do is said for a bridge (wait for it, then doctor), not for a cable."""
+    proxy, sim = bridge
+    proc, _ = _driving(proxy.url, tmp_path)
+    proxy.reset(down_s=30.0)
+    out, err = proc.communicate(timeout=30)
+    assert proc.returncode == 3, err
+    assert "NOT DELIVERED" in out and "the connection did not come back within 2 s" in out
+    where = proxy.url.removeprefix("socket://")
+    assert (
+        f"wait for the bridge at {where} to come back (it reset, or the Wi-Fi dropped), then "
+        f"roomba-bt doctor --port {proxy.url}"
+    ) in out
+    assert "cable" not in out
+    _, said = sim.stop(signal.SIGINT)
+    assert "mode Safe" in said  # left driving: what the message warns of
 
 
 def test_no_robot_on_the_port_is_exit_3(tmp_path: Path, silent_port: str) -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import os
 import socket
+import struct
 import subprocess
 import sys
 import termios
@@ -490,9 +491,9 @@ def test_a_device_path_that_does_not_come_back_is_said_so(tmp_path: Path) -> Non
     assert not transport.is_open
 
 
-def test_neither_a_url_nor_a_pty_s_own_path_is_reopened() -> None:
-    """A bridge's new connection is another client's session; a pty's number, reused, is
-    another program's line: only a device path (or a link to one) comes back."""
+def test_neither_loop_nor_a_pty_s_own_path_is_reopened() -> None:
+    """A pty's number, reused, is another program's line, and ``loop://`` has no far end:
+    a device path (or a link to one) and a bridge's URL come back."""
     master, slave, path = _pty()
     try:
         for port in (path, "loop://"):
@@ -502,3 +503,48 @@ def test_neither_a_url_nor_a_pty_s_own_path_is_reopened() -> None:
     finally:
         os.close(master)
         os.close(slave)
+
+
+def test_a_bridge_that_resets_is_reconnected_past_one_that_turns_the_connection_away() -> None:
+    """A Wi-Fi bridge that rebooted: its connection reset, then its listener takes the first
+    new connection and resets it at once (still rebooting), then serves again. ``reopen``
+    connects again (a new connection reaches the same robot), past the one turned away, and
+    bytes pass both ways on the new connection."""
+    listener = socket.create_server(("127.0.0.1", 0))
+    url = f"socket://127.0.0.1:{listener.getsockname()[1]}"
+    transport = SerialTransport.open(url)
+    assert transport.reopens
+    first, _ = listener.accept()
+    first.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+    first.close()  # the bridge reboots: RST
+    served: list[socket.socket] = []
+
+    def bridge_back() -> None:
+        turned, _ = listener.accept()  # still rebooting: taken and reset at once
+        turned.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+        turned.close()
+        served.append(listener.accept()[0])
+
+    thread = threading.Thread(target=bridge_back, daemon=True)
+    thread.start()
+    try:
+        took = transport.reopen(within=5.0)
+        thread.join(timeout=5)
+        assert took is not None and served, "the bridge's new connection was not made"
+        transport.write(b"\x80")
+        assert served[0].recv(1) == b"\x80"
+        served[0].sendall(b"\x01")
+        assert transport.read(1.0) == b"\x01"
+    finally:
+        transport.close()
+        for sock in (*served, listener):
+            sock.close()
+
+
+def test_a_bridge_that_stays_down_is_said_not_to_come_back() -> None:
+    listener = socket.create_server(("127.0.0.1", 0))
+    transport = SerialTransport.open(f"socket://127.0.0.1:{listener.getsockname()[1]}")
+    listener.accept()[0].close()
+    listener.close()  # nothing listens there any more
+    assert transport.reopen(within=0.3) is None
+    assert not transport.is_open

@@ -1,0 +1,104 @@
+"""What kind of link a port is (a device path, a pty's own path, a network bridge), and the
+words every message about that link uses.
+
+A Wi-Fi bridge's user was told to "reseat the cable" of a robot behind an ESP8266, that a
+network stall was "a frozen adapter or cable?", and "check the cable and its adapter" after
+jitter. Each message took its words from its own ``if``, most from none. Here the port's name
+is read once (:func:`link_of`), and a message asks its :class:`LinkWords` for the link's part:
+what failed, what to check, what to do to reach the robot again. The same kind decides whether
+a failed port is opened again for the safe stop (:attr:`LinkWords.reopens`) and whether BRC
+can cross it (:attr:`LinkWords.modem_lines`).
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+
+#: the network URLs: a bridge (ser2net, esp-link, an ESP8266's raw TCP port) or ``roomba-bt
+#: sim --tcp`` / ``--rfc2217``
+NETWORK_PORTS = ("socket://", "rfc2217://")
+#: Where a pseudo-terminal's own device paths are (Linux; macOS names its ``/dev/ttys00N``)
+PTY_DEVICES = ("/dev/pts/", "/dev/ttys")
+
+
+class LinkKind(enum.Enum):
+    """What is between this computer and the robot's serial port."""
+
+    DEVICE = "device"  # a serial adapter's device path, or a link to one (/dev/serial/by-id)
+    PTY = "pty"  # a pseudo-terminal's own /dev/pts/N (a simulator, socat)
+    NETWORK = "network"  # socket:// or rfc2217://: a bridge on the network
+    OTHER = "other"  # loop:// and the like: no robot's line at all
+
+
+@dataclass(frozen=True, slots=True)
+class LinkWords:
+    """A link's kind and its part of every message: each field is a phrase a message puts
+    where it names the line, worded for the port's kind."""
+
+    kind: LinkKind
+    #: what a port that failed most likely means
+    gone: str
+    #: the line, as the last of a silent robot's causes ("switched off, a flat battery, or ...")
+    line: str
+    #: a stream that stopped and came back
+    froze: str
+    #: what to check when frames are lost or late, or commands are not obeyed
+    check: str
+    #: what to do to reach the robot again after a stop that did not get through (then doctor)
+    reach: str
+    #: what comes back when a port that failed is opened again
+    reopened: str
+    #: whether a port that failed is opened again for the safe stop: a device path comes
+    #: back (a loose connector, an adapter that reset) and a bridge's new connection reaches
+    #: the same robot's serial port; a pty's own number, reused, is another program's line
+    reopens: bool
+    #: whether the modem lines (BRC) can reach the robot: False on a raw TCP bridge, which
+    #: carries bytes only; None where only trying tells (a device, RFC 2217, a pty)
+    modem_lines: bool | None
+
+
+def _network_words(port: str) -> LinkWords:
+    """A bridge on the network: its address, its power and its Wi-Fi's reach."""
+    where = port.split("://", 1)[1].split("?", 1)[0].rstrip("/")
+    bridge = f"the bridge at {where}"
+    return LinkWords(
+        kind=LinkKind.NETWORK,
+        gone="the bridge closed the connection or the network dropped",
+        line=f"the network ({bridge} stopped answering: is it powered and in Wi-Fi range?)",
+        froze="the network or the bridge stalled (Wi-Fi?)",
+        check=(
+            f"check the network: {bridge}, its power and its Wi-Fi signal (a larger --watchdog "
+            "and --grace ride a Wi-Fi link's gaps through)"
+        ),
+        reach=f"wait for {bridge} to come back (it reset, or the Wi-Fi dropped)",
+        reopened="the connection",
+        reopens=True,
+        modem_lines=False if port.lower().startswith("socket://") else None,
+    )
+
+
+def _cable_words(kind: LinkKind, reopens: bool) -> LinkWords:
+    """A serial adapter's link (a device path, a pty, ``loop://``): its cable and adapter."""
+    return LinkWords(
+        kind=kind,
+        gone="the cable was pulled or the adapter reset",
+        line="the cable",
+        froze="a frozen adapter or cable?",
+        check="check the cable and its adapter",
+        reach="reseat the cable",
+        reopened="the port",
+        reopens=reopens,
+        modem_lines=None,
+    )
+
+
+def link_of(port: str) -> LinkWords:
+    """The kind and the words of the link named ``port`` (a ``--port`` value)."""
+    if port.lower().startswith(NETWORK_PORTS):
+        return _network_words(port)
+    if "://" in port:
+        return _cable_words(LinkKind.OTHER, reopens=False)
+    if port.startswith(PTY_DEVICES):
+        return _cable_words(LinkKind.PTY, reopens=False)
+    return _cable_words(LinkKind.DEVICE, reopens=True)
