@@ -268,8 +268,9 @@ def _examine(
     report: Report,
     listen: float | None = None,
 ) -> int:
-    from roomba_bt.robot.discovery import wake_pulse
+    from roomba_bt.robot.discovery import overheard, wake_pulse
 
+    left = overheard(transport)  # before Start: what a run that could not stop it left
     searched = _search(transport, rates, report, "")
     found = searched.found
     if found is None and all(probe.echoed for probe in searched.probes):
@@ -301,6 +302,8 @@ def _examine(
         f"Start (128): Passive; packet 35 reads {mode_raw}"
         + (" (this firmware reports the OI mode + 1)" if plus_one else ""),
     )
+    if left is not None:
+        _left_running(left, plus_one, report)
     banner, reset_tried = _reset(transport, baud, allow_reset, report)
     header_in_checksum, readings = _stream(transport, baud, report, listen)
     profile = _profile(plus_one, header_in_checksum, banner, reset_tried, readings, report)
@@ -316,6 +319,28 @@ def _examine(
         flush=True,
     )
     return DoctorExit.UNHEALTHY if report.failed else DoctorExit.FOUND
+
+
+def _left_running(left: Any, plus_one: bool, report: Report) -> None:
+    """A stream ran before doctor wrote a byte (``discovery.overheard``): a run whose stop
+    did not get through (its bridge reset, its cable pulled) left the robot so. Said, with
+    the mode it streamed in and whether its wheels turned: doctor's Start has stopped a robot
+    left driving, and its user learns it was left driving."""
+    from roomba_bt.oi.modes import DRIVING_MODES, mode_from_packet
+
+    mode = None if left.mode_raw is None else mode_from_packet(left.mode_raw, plus_one)
+    turned = left.wheels_turned
+    wheels = {True: ", its wheels turning", False: ", its wheels still"}.get(turned, "")
+    seen = f" in {mode.label}{wheels}" if mode is not None else wheels
+    text = f"a stream was running when doctor came{seen}"
+    if mode in DRIVING_MODES or turned:
+        report.warn(
+            "left", f"{text}: a run's stop did not reach the robot, which drove on; doctor's "
+            "Start (128) has stopped it (Passive: wheels and motors off)",
+            "see where it went and what it hit",
+        )  # fmt: skip
+    else:
+        report.ok("left", f"{text}: a program left it running; nothing drives in Passive")
 
 
 def _reset(transport: Any, baud: int, allow_reset: bool, report: Report) -> tuple[Any, bool]:

@@ -41,7 +41,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 from roomba_bt.oi import commands as oi
-from roomba_bt.oi.frames import stream_frame_size
+from roomba_bt.oi.frames import STREAM_HEADER, stream_frame_size
 from roomba_bt.oi.identify import (
     MODEL_RANGE_PACKETS,
     Identification,
@@ -296,6 +296,59 @@ def find_robot(transport: Transport, preferred: int | None = None, *, wake: bool
         return Found(None, first, None, pulse.problem)
     second = search(transport, rates)
     return Found(second.baud, first, second, None)
+
+
+#: How long doctor listens, writing nothing, for a stream a run left running (its stop not
+#: delivered): several 15 ms frames, and a Wi-Fi link's usual delay.
+OVERHEAR_S = 0.15
+#: The encoder packets a run always streams: moving counts mean turning wheels.
+_ENCODERS = packet_ids("left_encoder_counts", "right_encoder_counts")
+
+
+@dataclass(frozen=True, slots=True)
+class Overheard:
+    """A stream that was running before anything was written: its first and last whole
+    frames' readings (packet id -> raw value), cut by the packet table alone."""
+
+    first: Mapping[int, int]
+    last: Mapping[int, int]
+
+    @property
+    def mode_raw(self) -> int | None:
+        """Packet 35 as the last frame read it (the mode + 1 rule not applied), or None."""
+        return self.last.get(OI_MODE_PACKET)
+
+    @property
+    def wheels_turned(self) -> bool | None:
+        """Whether the encoders moved between the first and the last frame; None when the
+        stream carries no encoders or one frame alone came."""
+        if self.first is self.last or not all(p in self.last for p in _ENCODERS):
+            return None
+        return any(self.first.get(p) != self.last[p] for p in _ENCODERS)
+
+
+def overheard(transport: Transport, seconds: float = OVERHEAR_S) -> Overheard | None:
+    """Listen ``seconds`` without writing a byte: a robot whose run lost its link (a Wi-Fi
+    bridge that reset, a cable pulled) streams on, in the mode the run left it in. The
+    frames it sent, cut by their ``[19][n]`` headers and checksums, or None if none came."""
+    clock = transport.now
+    deadline = clock() + seconds
+    data = b""
+    while (remaining := deadline - clock()) > 0:
+        data += transport.read(remaining)
+    frames: list[dict[int, int]] = []
+    at = 0
+    while at + 3 <= len(data):
+        size = data[at + 1] + 3
+        readings = {}
+        if data[at] == STREAM_HEADER and checksum_covers_header(data[at : at + size]) is not None:
+            readings = stream_readings(data[at : at + size])
+        if readings:
+            frames.append(readings)
+            at += size
+        else:
+            at += 1
+    return Overheard(frames[0], frames[-1]) if frames else None
 
 
 def describe_silence(found: Found) -> str:

@@ -352,7 +352,9 @@ def test_a_bridge_that_stays_down_past_the_grace_is_said_in_the_network_s_words(
     bridge: tuple[ResettingBridge, Any], tmp_path: Path
 ) -> None:
     """The bridge does not come back within the grace: the stop is not delivered, and what
-    to do is said for a bridge (wait for it, then doctor), not for a cable."""
+    to do is said for a bridge (wait for it, then doctor), not for a cable. The doctor run
+    then (on the simulator's own address: the bridge back) says it found the robot driving
+    and that its Start stopped it."""
     proxy, sim = bridge
     proc, _ = _driving(proxy.url, tmp_path)
     proxy.reset(down_s=30.0)
@@ -365,8 +367,17 @@ def test_a_bridge_that_stays_down_past_the_grace_is_said_in_the_network_s_words(
         f"roomba-bt doctor --port {proxy.url}"
     ) in out
     assert "cable" not in out
+    doctor = subprocess.run(
+        [*CLI, "doctor", "--port", sim.address], capture_output=True, text=True, timeout=30
+    )
+    assert re.search(
+        r"\[warn\] left +a stream was running when doctor came in Safe, its wheels turning: a "
+        r"run's stop did not reach the robot, which drove on; doctor's Start \(128\) has "
+        r"stopped it",
+        doctor.stdout,
+    ), doctor.stdout
     _, said = sim.stop(signal.SIGINT)
-    assert "mode Safe" in said  # left driving: what the message warns of
+    assert "mode Passive, wheels 0/0 mm/s" in said, said
 
 
 def test_no_robot_on_the_port_is_exit_3(tmp_path: Path, silent_port: str) -> None:
