@@ -55,6 +55,7 @@ from roomba_bt.oi.profiles import POWER_ON_BAUDS
 from roomba_bt.robot.wake import PULSE_LENGTH_S, HangUpLine, WakeLine
 from roomba_bt.robot.writer import RESYNC_ZEROS
 from roomba_bt.transport.base import Transport
+from roomba_bt.transport.link_kind import link_of
 
 #: The OI's rates, likeliest first: the default, then the rate Clean held at power-on (500)
 #: or power-off (600 / Create 2) sets; the profiles' table (``oi.profiles.POWER_ON_BAUDS``).
@@ -232,6 +233,8 @@ def wake_pulse(transport: Transport, length: float = PULSE_LENGTH_S) -> WakePuls
     is written meanwhile)."""
     if not isinstance(transport, WakeLine):
         return WakePulse(None, f"{transport.name} cannot drive modem lines")
+    if getattr(transport, "modem_lines", True) is False:  # a raw TCP bridge: nor a hang-up
+        return WakePulse(None, link_of(transport.name).no_modem_lines)
     try:
         transport.set_wake_line(True)
     except OSError as exc:

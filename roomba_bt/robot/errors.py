@@ -297,12 +297,13 @@ class StreamLost(LinkDown):
         #: seconds from the last frame until the robot answered again, when it did (asked
         #: after the grace): a line that froze and came back, not a robot that slept
         self.came_back = came_back
+        # imported here: validate loads this module, and the transport package pyserial
+        from roomba_bt.transport.link_kind import link_of
+
         headline = ""
+        words = link_of(port)
         if came_back is not None:
-            what = (
-                f"the stream stopped for {came_back:.1f} s and came back (a frozen adapter or "
-                "cable?)"
-            )
+            what = f"the stream stopped for {came_back:.1f} s and came back ({words.froze})"
         elif bytes_seen and mismatch is not None:
             what = (
                 f"the line is garbled: no valid sensor frame for {silent_for:.1f} s while "
@@ -317,7 +318,7 @@ class StreamLost(LinkDown):
         else:
             what = (
                 f"the sensor stream stopped: nothing arrived for {silent_for:.1f} s (the robot "
-                "switched off or stopped streaming, or the cable)"
+                f"switched off or stopped streaming, or {words.line})"
             )
         action = (
             f"the watchdog sent drive 0 after {watchdog * 1000:.0f} ms"
@@ -328,6 +329,8 @@ class StreamLost(LinkDown):
         #: BRC pulse), or ""
         self.probed = probed
         tail = f"; {probed}" if probed else ""
+        if came_back is not None and words.gap_fix:
+            tail += f"; {words.gap_fix}"
         super().__init__(
             port,
             f"{what}; {action}, then the run waited the {grace:g} s grace{tail}",

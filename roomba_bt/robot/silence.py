@@ -33,7 +33,7 @@ import weakref
 from typing import TYPE_CHECKING
 
 from roomba_bt.oi import commands as oi
-from roomba_bt.oi.frames import BATTERY_PACKETS, SLOT_SECONDS
+from roomba_bt.oi.frames import BATTERY_PACKETS, SLOT_SECONDS, SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
 from roomba_bt.oi.stream import stream_period
 from roomba_bt.robot.discovery import OI_RATES, search, wake_pulse
@@ -50,6 +50,7 @@ from roomba_bt.robot.errors import (
 )
 from roomba_bt.robot.link import LINK_ERRORS
 from roomba_bt.robot.wake import SLEEP_AFTER_S
+from roomba_bt.transport.link_kind import link_of
 
 #: Garbage that must have come since the last valid frame (or the last listen) before other
 #: rates are tried.
@@ -144,7 +145,8 @@ def explain_silence(
         )
     connection.unheard = "the robot answers nothing"  # unless a pulse wakes it
     if not connection.profile.sleeps_in_passive:
-        return lost("it answered no query either (switched off, a flat battery, or the cable)")
+        line = link_of(connection.name).line
+        return lost(f"it answered no query either (switched off, a flat battery, or {line})")
     if connection.mode in DRIVING_MODES:
         return _asked_again(connection, silent_for, grace, halted=halted, asked=asked)
     pulse = wake_pulse(connection.transport)
@@ -197,18 +199,25 @@ def _asked_again(
         link.read(deadline - now)
         if clock() <= now:  # a clock that does not move (a replay past its record)
             break
-    mode = connection.mode.label
-    if not _answers(connection):
+    mode = connection.mode.label  # last seen in, before the robot's reply
+    reply = _reply(connection)
+    if reply is None:
         return StreamLost(
             connection.name, silent_for, grace, 0, watchdog=connection.watchdog, halted=halted,
             probed=f"it answered no query, asked twice {ASK_AGAIN_AFTER_S:g} s apart, and it "
             f"was in {mode}, which never sleeps: {_silent_causes(connection)}",
         )  # fmt: skip
     connection.unheard = None
+    # the mode the robot answered with, not the model's: it may have fallen to Passive
+    # meanwhile (driven onto its dock while the line was frozen)
+    answered = connection.modes.detector.interpret(reply.oi_mode_raw)
+    if answered is None or answered.label == mode:
+        said = f"it answered again, in {mode}, which never sleeps"
+    else:
+        said = f"it answered again, in {answered.label} (last seen in {mode}, which never sleeps)"
     return StreamLost(
         connection.name, silent_for, grace, 0, watchdog=connection.watchdog, halted=halted,
-        came_back=silent_for + clock() - asked,
-        probed=f"it answered again, in {mode}, which never sleeps",
+        came_back=silent_for + clock() - asked, probed=said,
     )  # fmt: skip
 
 
@@ -246,18 +255,24 @@ def _silent_causes(connection: Connection) -> str:
     """The likely causes of a robot that answers nothing, the likeliest first: a flat battery
     when the last frame read the charge (packets 25, 26) at :data:`FLAT_PERCENT` or less."""
     last = connection.link.frame
+    line = link_of(connection.name).line
     if last is not None and last.carries(BATTERY_PACKETS):
         percent = last.battery_percent
         if percent <= FLAT_PERCENT:
             return (
                 f"most likely a flat battery (the last frame read {percent:.1f} %: it switched "
-                "itself off; put it on its charger), else switched off or the cable"
+                f"itself off; put it on its charger), else switched off or {line}"
             )
-    return "switched off, a flat battery, or the cable"
+    return f"switched off, a flat battery, or {line}"
+
+
+def _reply(connection: Connection) -> SensorFrame | None:
+    """The robot's answer to a Query List of its mode (packet 35), or None."""
+    return connection.query((OI_MODE_PACKET,), QUERY_TIMEOUT_S)
 
 
 def _answers(connection: Connection) -> bool:
-    return connection.query((OI_MODE_PACKET,), QUERY_TIMEOUT_S) is not None
+    return _reply(connection) is not None
 
 
 def _pulses(connection: Connection) -> bool:

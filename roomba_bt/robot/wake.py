@@ -31,6 +31,7 @@ from contextlib import AbstractContextManager
 from typing import Protocol, runtime_checkable
 
 from roomba_bt.robot.errors import StreamStalled
+from roomba_bt.transport.link_kind import link_of
 
 log = logging.getLogger(__name__)
 
@@ -119,10 +120,12 @@ class KeepAwake:
             # what keep-awake is, whether it matters and how to silence it: "keep-awake off
             # (...: [Errno 25] Inappropriate ioctl for device): Passive sleeps after 5 min
             # (-v: why; --no-keep-awake)" on every pty run said none of it to a hobbyist
+            words = link_of(getattr(self.line, "name", ""))
             log.warning(
-                "keep-awake (a BRC pulse a minute: Passive never sleeps) is off: no modem lines "
-                "on this port; a simulator never sleeps; --no-keep-awake silences this (-v: why)"
-            )
+                "keep-awake (a BRC pulse a minute: Passive never sleeps) is off: %s; %s; "
+                "--no-keep-awake silences this (-v: why)",
+                words.no_modem_lines, words.sleep_advice,
+            )  # fmt: skip
             log.debug(
                 "keep-awake off (%s): no hang-up pulse instead (it would blank the stream for its "
                 "second). A pty or a plain socket has no modem lines: the simulator serves "

@@ -52,6 +52,7 @@ from roomba_bt.robot.hazards import drives_forward, sets_going
 from roomba_bt.robot.interface import Snapshot
 from roomba_bt.robot.writer import RESYNC_ZEROS
 from roomba_bt.runtime.summary import Outcome, RunSummary
+from roomba_bt.transport.link_kind import link_of
 
 log = logging.getLogger("roomba_bt.runtime.loop")
 
@@ -225,7 +226,7 @@ class MotionWatch:
             f"{self.connection.name}: the robot did not do what it was told "
             f"{len(self._obeyed_at)} times within {GIVE_UP_WITHIN_S:g} s (each time it obeyed "
             "the command sent again): bytes from the computer to the robot are being lost; "
-            "check the cable and its adapter (roomba-bt doctor)"
+            f"{link_of(self.connection.name).check} (roomba-bt doctor)"
         )
         return False
 

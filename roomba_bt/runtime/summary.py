@@ -607,10 +607,16 @@ def _unheard_said(summary: RunSummary) -> str:
             "the command was sent again, and the run ended before it could be judged: "
             "bytes from the computer to the robot may have been lost"
         )
-    cable = summary.unheard > summary.unheard_stalled
-    return "; ".join(said) + (
-        "; check the cable and its adapter (roomba-bt doctor)" if cable else ""
-    )
+    line = summary.unheard > summary.unheard_stalled
+    return "; ".join(said) + (f"; {_check_the_line(summary)} (roomba-bt doctor)" if line else "")
+
+
+def _check_the_line(summary: RunSummary) -> str:
+    """What to check of the run's line, in its kind's words (a cable, a Wi-Fi bridge)."""
+    # imported here: validate and show load this module, and the transport package pyserial
+    from roomba_bt.transport.link_kind import link_of
+
+    return link_of(summary.robot).check
 
 
 def _times(count: int) -> str:
@@ -665,5 +671,5 @@ def _link_verdict(summary: RunSummary) -> str:
     return (
         f"poor: {100 * summary.frames_lost / sent:.0f} % of the robot's frames lost "
         f"({summary.frames_lost} of {sent}), {summary.checksum_failures} checksum failures: the "
-        "tree saw the robot late; check the cable and its adapter (roomba-bt doctor)"
+        f"tree saw the robot late; {_check_the_line(summary)} (roomba-bt doctor)"
     )

@@ -43,6 +43,8 @@ class LinkWords:
     line: str
     #: a stream that stopped and came back
     froze: str
+    #: what rides such a gap through next time ("" where nothing is worth saying)
+    gap_fix: str
     #: what to check when frames are lost or late, or commands are not obeyed
     check: str
     #: what to do to reach the robot again after a stop that did not get through (then doctor)
@@ -56,6 +58,10 @@ class LinkWords:
     #: whether the modem lines (BRC) can reach the robot: False on a raw TCP bridge, which
     #: carries bytes only; None where only trying tells (a device, RFC 2217, a pty)
     modem_lines: bool | None
+    #: why no BRC pulse can be given where the lines cannot be set
+    no_modem_lines: str
+    #: what a link without modem lines means for sleep, and what to do (keep-awake's warning)
+    sleep_advice: str
 
 
 def _network_words(port: str) -> LinkWords:
@@ -65,16 +71,28 @@ def _network_words(port: str) -> LinkWords:
     return LinkWords(
         kind=LinkKind.NETWORK,
         gone="the bridge closed the connection or the network dropped",
-        line=f"the network ({bridge} stopped answering: is it powered and in Wi-Fi range?)",
-        froze="the network or the bridge stalled (Wi-Fi?)",
+        line=f"the network: is {bridge} powered and in Wi-Fi range?",
+        froze="the network or the bridge stalled: Wi-Fi?",
+        gap_fix=(
+            "a larger --grace rides such a gap through, a larger --watchdog the shorter ones "
+            f"without a drive 0; and look at {bridge}'s placement and power"
+        ),
         check=(
-            f"check the network: {bridge}, its power and its Wi-Fi signal (a larger --watchdog "
-            "and --grace ride a Wi-Fi link's gaps through)"
+            f"check the network: {bridge}, its power and its Wi-Fi signal; a larger --watchdog "
+            "and --grace ride a Wi-Fi link's gaps through"
         ),
         reach=f"wait for {bridge} to come back (it reset, or the Wi-Fi dropped)",
         reopened="the connection",
         reopens=True,
         modem_lines=False if port.lower().startswith("socket://") else None,
+        no_modem_lines=(
+            "a raw TCP bridge (socket://) has no modem lines: no BRC pulse reaches the robot "
+            "(rfc2217:// to a bridge that wires BRC, as esp-link can, or BRC on a pin of the "
+            "bridge does)"
+        ),
+        sleep_advice=(
+            "a robot left 5 minutes in Passive (waiting on its dock) sleeps: keep it in Safe"
+        ),
     )
 
 
@@ -85,11 +103,14 @@ def _cable_words(kind: LinkKind, reopens: bool) -> LinkWords:
         gone="the cable was pulled or the adapter reset",
         line="the cable",
         froze="a frozen adapter or cable?",
+        gap_fix="",
         check="check the cable and its adapter",
         reach="reseat the cable",
         reopened="the port",
         reopens=reopens,
         modem_lines=None,
+        no_modem_lines="no modem lines on this port",
+        sleep_advice="a simulator never sleeps",
     )
 
 

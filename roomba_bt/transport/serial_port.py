@@ -196,6 +196,9 @@ class SerialTransport:
         self._attach(port)
         #: a raw TCP connection (``socket://``), whose far end may close it on a second client
         self._socket = self.name.lower().startswith("socket://")
+        #: why the modem lines reach no robot here (a raw TCP bridge), or None
+        words = link_of(self.name)
+        self._no_lines = words.no_modem_lines if words.modem_lines is False else None
         #: whether a read has given a byte yet: a connection closed before is a far end that
         #: turned this client away (:data:`~roomba_bt.transport.open_failure.CLOSED_AT_ONCE`)
         self._heard = False
@@ -405,11 +408,19 @@ class SerialTransport:
         except (serial.SerialException, OSError, ValueError) as exc:
             raise TransportError(self.name, f"set the baud rate to {baud}", exc) from exc
 
+    @property
+    def modem_lines(self) -> bool:
+        """Whether the modem lines may reach the robot: not over a raw TCP bridge."""
+        return self._no_lines is None
+
     def set_wake_line(self, low: bool) -> None:
         """Drive the robot's BRC pin through the modem lines: RTS and DTR together (cables
         wire one or the other), asserted = BRC low. ``rfc2217://`` carries them to the far
         end without waiting for its answer (:meth:`_send_control`); a raw ``socket://``
-        bridge ignores them; ``loop://`` keeps them."""
+        bridge has none, and says so (no pulse is said given that could not be);
+        ``loop://`` keeps them."""
+        if self._no_lines is not None:
+            raise TransportError(self.name, "set the modem lines (BRC)", self._no_lines)
         try:
             if self._polled:
                 self._send_control(low)
@@ -453,6 +464,8 @@ class SerialTransport:
         own is needed. Nothing is written meanwhile (:meth:`write` refuses: a byte at B0 is a
         byte at no rate), and the rate comes back on every exit, an exception or Ctrl-C too.
         """
+        if self._no_lines is not None:  # a bridge's rate is its own: no hang-up crosses it
+            raise TransportError(self.name, "hang up (set the speed to 0)", self._no_lines)
         rate = self.baud
         try:
             self._port.baudrate = 0
