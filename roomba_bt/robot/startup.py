@@ -35,6 +35,7 @@ from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.robot.errors import ConnectionFailed, NoAnswer
 from roomba_bt.robot.writer import RESYNC_ZEROS
 from roomba_bt.transport.base import TransportError
+from roomba_bt.transport.link_kind import link_of
 
 log = logging.getLogger(__name__)
 
@@ -46,7 +47,6 @@ NO_ANSWER_CAUSES = (
     "no power or the robot asleep (press Clean or the power button)",
     "wrong cable or wiring (TX/RX swapped, adapter not a 5 V TTL serial)",
 )
-OPEN_CAUSES = ("wrong device path or URL", "the port in use by another program", "permissions")
 
 
 def port_not_opened(url: str, exc: TransportError) -> ConnectionFailed:
@@ -55,7 +55,8 @@ def port_not_opened(url: str, exc: TransportError) -> ConnectionFailed:
     :func:`~roomba_bt.transport.open_failure.open_failure`) is named alone."""
     if isinstance(exc.cause, str):
         return ConnectionFailed(url, f"could not open the port: {exc.cause}")
-    return ConnectionFailed(url, f"could not open the port ({exc.cause})", OPEN_CAUSES)
+    causes = link_of(url).open_causes
+    return ConnectionFailed(url, f"could not open the port ({exc.cause})", causes)
 
 
 #: How many times the stream is asked for again when no frame came after its request. Each

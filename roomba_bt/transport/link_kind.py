@@ -47,6 +47,8 @@ class LinkWords:
     gap_fix: str
     #: what to check when frames are lost or late, or commands are not obeyed
     check: str
+    #: the likely causes of a port that could not be opened, when its error tells none
+    open_causes: tuple[str, ...]
     #: what to do to reach the robot again after a stop that did not get through (then doctor)
     reach: str
     #: what comes back when a port that failed is opened again
@@ -81,6 +83,11 @@ def _network_words(port: str) -> LinkWords:
             f"check the network: {bridge}, its power and its Wi-Fi signal; a larger --watchdog "
             "and --grace ride a Wi-Fi link's gaps through"
         ),
+        open_causes=(
+            "a wrong address or port",
+            f"{bridge} off, rebooting or out of Wi-Fi range",
+            "another client holding it",
+        ),
         reach=f"wait for {bridge} to come back (it reset, or the Wi-Fi dropped)",
         reopened="the connection",
         reopens=True,
@@ -105,6 +112,11 @@ def _cable_words(kind: LinkKind, reopens: bool) -> LinkWords:
         froze="a frozen adapter or cable?",
         gap_fix="",
         check="check the cable and its adapter",
+        open_causes=(
+            "wrong device path or URL",
+            "the port in use by another program",
+            "permissions",
+        ),
         reach="reseat the cable",
         reopened="the port",
         reopens=reopens,

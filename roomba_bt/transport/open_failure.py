@@ -17,6 +17,8 @@ import stat
 
 from serial.tools import list_ports
 
+from roomba_bt.transport.link_kind import NETWORK_PORTS
+
 #: why a device that another process holds (``flock``) was not opened
 IN_USE = (
     "another program has it open (another roomba-bt run, sensors, doctor or sim client?); "
@@ -125,6 +127,8 @@ def open_failure(device: str, code: int | None) -> str | None:
         return "not a serial port: a device, but no terminal (a USB serial adapter is /dev/ttyUSB*)"
     if code == errno.ECONNREFUSED:
         return "nothing listens there (is the bridge, or roomba-bt sim --tcp, running?)"
+    if code in CLOSED_ERRORS and device.lower().startswith(NETWORK_PORTS):
+        return CLOSED_AT_ONCE  # an rfc2217:// server closed it while it was negotiated
     if code == errno.ENOENT:
         return no_such_device()
     return None
