@@ -27,6 +27,7 @@ from roomba_bt.robot.silence import LISTEN_S, listen_window
 from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import DEFAULT_GRACE, Outcome, RunSummary
 from roomba_bt.sim import Faults, SimLink, Simulator, load_world
+from roomba_bt.sim.world import parse_world
 from roomba_bt.transport.testing import NullTransport
 
 from .simrun import SPIN, TapLink
@@ -183,6 +184,36 @@ def test_a_line_that_froze_in_safe_is_said_frozen_and_the_watchdog_s_drive_0_arr
     first_halt = min(t for t, data in link.delivered if data == oi.halt().data and t >= 3.0)
     assert first_halt < thawed + 0.05, link.delivered  # the watchdog's, as the adapter thawed
     assert summary.stop_delivered and "sent drive, motors" in summary.safe_stop
+
+
+#: a room whose floor drops away 0.8 m ahead of the robot, facing it
+_TO_A_DROP = """
+rooms: [[[0, 0], [4, 0], [4, 4], [0, 4]]]
+drops: [{rect: [1.8, 0, 4, 4]}]
+robot: {start: {at: [1, 2], heading: 0}}
+"""
+
+
+def test_a_robot_that_answers_after_a_freeze_is_said_in_the_mode_it_answered_with(
+    tmp_path: Path,
+) -> None:
+    """Driving in Safe toward a drop, the line frozen for 3 s: meanwhile the robot meets the
+    cliff and falls to Passive by itself. It answers in Passive, and is said so: the run
+    said "it answered again, in Safe, which never sleeps", the mode it was last seen in."""
+    (tmp_path / "m.yaml").write_text(
+        "tree:\n  sequence:\n    - mode: safe\n    - drive: {velocity: 200 mm/s}\n"
+    )
+    simulator = Simulator(parse_world(_TO_A_DROP, "<test>"), CREATE2, 0, trace=False)
+    link = FrozenAdapter(simulator)
+    mission = load_mission(tmp_path / "m.yaml", {}, profile=CREATE2)
+    stack = RunStack(mission, link, profile=CREATE2, timeout_s=60)
+    summary = stack.run()
+    stack.close()
+    falls = [e.detail for e in simulator.events if e.kind == "mode"]
+    assert any("Safe->Passive (safety: cliff" in d for d in falls), falls  # in the freeze
+    assert "it answered again, in Passive (last seen in Safe, which never sleeps)" in (
+        summary.reason
+    ), summary.reason
 
 
 def test_the_oracles_stream_gap_is_ridden_through_the_wheels_stopped_within_150_ms(
