@@ -58,7 +58,7 @@ class StreamClock:
         schedule = self.schedule
         if schedule.due == NO_FRAME_YET:
             return schedule.late_batch(count, arrival, self.tick, False)  # the first: one
-        gap = arrival - schedule.due  # since the last frame's slot was due: the gap, to a ms
+        gap = schedule.gap(arrival, self.tick)
         ride = self._ride
         restart = gap >= UNREAD_GAP_SECONDS or ride.gap_explained
         if gap >= UNREAD_GAP_SECONDS and not ride.gap_explained:

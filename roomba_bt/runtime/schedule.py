@@ -2,28 +2,33 @@
 
 The robot sends a frame every 15 ms on its own clock; the host reads each some time later,
 never earlier, and by a delay that varies (a busy host, a USB adapter, a relay: a few ms, now
-and then tens). Frames carry no number, so a frame the robot sent and the host never got
-(corrupted, dropped) shows only as a slot on the schedule that passed without a frame. The
-rule (docs/runtime.md, "The stream is the clock"):
+and then tens; a WiFi bridge: 5-80 ms, and stalls of seconds whose backlog comes in a burst).
+Frames carry no number, so a frame the robot sent and the host never got (corrupted, dropped)
+shows only as a slot on the schedule that passed without a frame, and stays so: every frame
+after it comes a slot later than it would have. A late frame delays only itself and those
+bunched behind it. The rule (docs/runtime.md, "The stream is the clock"):
 
 * The schedule is the earliest arrival seen, moved on one slot a frame: :attr:`due` is when
   the frame of the last tick's slot was due. A frame earlier than it moves it back at once (a
   shorter delay; a robot clock faster than the host's); a later one moves it on by at most
   :data:`DRIFT` (a robot clock slower than the host's, a link that got slower, are followed
   slowly; jitter hardly moves it). Cumulative: drift and jitter never add up to a slot.
-* A batch of ``count`` frames is on time unless its newest frame is half a slot late or
-  more (:data:`LOST_LATE`; a slot and a half for a batch of several, which a busy host may
-  have read up to a slot after its newest frame came): then ``int((late - tolerance) / 15 ms)
-  + 1`` slots passed with no frame.
-* On a calm link (:attr:`spread`, the latest frames' lateness as a decaying maximum, under
-  :data:`CALM`: the simulator's virtual clock, a replay of it) such a gap is counted at once,
-  as the arrival times say. On a jittery one a single late batch is jitter until the next one
-  is late too (a lost frame delays every frame after it; a late one does not: the next comes
-  on time), and then the slots both agree on are counted, one batch late.
-* After a gap of a second or more, or a stall ridden through, the stream may have started
-  again at another phase: the gap is counted at once by its length, less the link's
-  tolerance (a stalled host or relay delivers the backlog in one read, late), and the
-  schedule starts again.
+* Each frame is one slot. On a calm link (:attr:`spread`, the latest frames' lateness as a
+  decaying maximum, under :data:`CALM`: the simulator's virtual clock, a replay of it) a
+  batch half a slot late or more (:data:`LOST_LATE`) has ``int((late - 7.5 ms) / 15 ms) + 1``
+  lost slots before it, counted at once, as the arrival times say.
+* On a jittery link a batch 0.9 slot late (:data:`JITTER_LATE`) opens a run of late batches,
+  which goes on while they come half a slot late or more. Nothing is counted while it lasts:
+  the schedule waits, one slot a frame. A batch on time ends it: nothing was lost. A run that
+  lasts :data:`LOST_WINDOW` (longer on a link whose frames spread wider, :func:`run_window`)
+  is counted by its least lateness, what every batch of it lacked: frames lost for good.
+* After a gap of a second or more, or a stall ridden through, the frames that waited may come
+  as a backlog, over several reads (a TCP bridge, a pty relay, a host that was stopped): each
+  is a slot, none lost. The gap opens a run as a late batch does, and what the backlog leaves
+  short once it is read (the next batch half a slot after the one before; on a jittery link,
+  the run's window) is counted; the schedule then starts again from that batch (the stream
+  may have come back at another phase). Counted at once, the gap was counted a second time
+  by the backlog's frames: a 6 s stall over WiFi made 6 s of mission time that never passed.
 
 The common frame (alone in its batch, less than half a slot late) takes :meth:`late_batch`
 with nothing lost: the schedule follows it (up to :data:`DRIFT`) and its lateness is kept in
@@ -39,9 +44,21 @@ from roomba_bt.oi.frames import SLOT_SECONDS
 LOST_LATE = 0.5 * SLOT_SECONDS
 #: On a jittery link, a frame this late (0.9 slot), or later, may have a lost one before it
 JITTER_LATE = 0.9 * SLOT_SECONDS
-#: On a jittery link, lost frames are counted once this many batches came late in a row (two
-#: late frames in a row, then on time again, were measured on a loaded host: jitter)
-LATE_RUN = 3
+#: On a jittery link, a run of late batches is counted once it has lasted this long (a second,
+#: and longer on a link whose frames spread wider: :func:`run_window`): a lost frame delays
+#: every frame after it for good, a late one only those bunched behind it, and over a second
+#: or more some frame comes on time. Three late batches in a row (the rule until session 32)
+#: counted 11-43 frames "lost" in 10 s through a WiFi bridge that lost none
+LOST_WINDOW = 1.0
+#: ... longer by this many seconds per second of the link's :attr:`SlotSchedule.spread`
+#: (0-80 ms of jitter: 5.8 s; the least lateness of a second of it reached 24 ms in 1 %)
+WINDOW_PER_SPREAD = 60.0
+#: ... up to this spread (a power-save hold of 200 ms is a moment's, not the link's jitter)
+WIDEST_SPREAD = 0.1
+#: A run this late at least, or later, has lost frames: two thirds of a slot, not half, as
+#: the least of a jittery run sits a few ms above the schedule (0-80 ms of jitter: 2 frames
+#: made in 10 min, against 13 at half a slot, every one lost frame of 40 counted)
+COUNT_LATE = 2 / 3 * SLOT_SECONDS
 #: How far the schedule follows a late frame, per frame (0.5 % of a slot, 75 us)
 DRIFT = 0.005 * SLOT_SECONDS
 #: How fast :attr:`SlotSchedule.spread` forgets a late frame, per frame (12 s from 12 ms)
@@ -59,7 +76,8 @@ class SlotSchedule:
     """When the robot's frames are due on the link's clock, and what a batch spans."""
 
     __slots__ = (
-        "_suspect_at", "_suspect_late", "_suspect_run", "_suspect_tick", "due", "spread", "tick",
+        "_run_began", "_run_last", "_run_late", "_run_least", "_run_restart", "_run_tick",
+        "due", "spread", "tick",
     )  # fmt: skip
 
     def __init__(self) -> None:
@@ -69,10 +87,25 @@ class SlotSchedule:
         self.spread = START_SPREAD
         #: the slot index after the last batch (:meth:`slots` keeps it; the runner its own)
         self.tick = -1
-        self._suspect_tick = -2  # the tick of the late batch not counted yet
-        self._suspect_late = 0.0  # and how late it was (the least, in a run of them)
-        self._suspect_at = 0.0  # and when it came
-        self._suspect_run = 0  # late batches in a row
+        self._run_tick = -2  # the tick after the run's last late batch (none: -2)
+        self._run_least = 0.0  # the least lateness of the run's batches
+        self._run_late = 0.0  # how late its last batch came
+        self._run_last = 0.0  # when its last batch came
+        self._run_began = 0.0  # and its first
+        self._run_restart = False  # it began after a long gap or a stall ridden through
+
+    def run_window(self) -> float:
+        """How long a run of late batches lasts before it is counted as frames lost: a
+        second, and longer the wider the link's frames spread (a calm link's gap: at once,
+        once the backlog is read)."""
+        return LOST_WINDOW + WINDOW_PER_SPREAD * min(self.spread, WIDEST_SPREAD)
+
+    def gap(self, arrival: float, tick: int) -> float:
+        """How long no frame came before a batch at ``arrival`` (``tick``: the slot index
+        before it): since the last frame's slot was due, to a ms; in a run of late batches
+        (the schedule waits), since the last of them came (a stall's backlog read over
+        several reads is one gap, not one a read)."""
+        return arrival - (self._run_last if self._run_tick == tick else self.due)
 
     def slots(self, count: int, arrival: float) -> int:
         """The slots a batch of ``count`` frames read at ``arrival`` spans: the schedule's
@@ -91,43 +124,56 @@ class SlotSchedule:
         late = arrival - on_time
         calm = self.spread < CALM
         # calm: what the arrival says (the old gap rule's count, to the frame, on the virtual
-        # clock); jittery: 0.9 slot, a slot more for a batch a busy host may have read late
-        # (after a stall ridden through, the backlog came in one read: a stalled relay or
-        # host, not a lost frame, counted 6 in 20 s at the calm tolerance)
-        tolerance = LOST_LATE if calm else JITTER_LATE + (count > 1) * SLOT_SECONDS
+        # clock); jittery: 0.9 slot opens a run of late batches (a gap too, on either link),
+        # half a slot goes on with it, and it is counted by what its batches all lack
+        running = self._run_tick == tick
         lost = 0
-        if late >= tolerance:
-            agreed = late if calm or restart else self._agreed(count, arrival, tick, late)
-            if agreed is None:  # jitter, until a later batch says otherwise: the schedule
-                self.due = on_time  # waits for it
-                return count
-            if agreed >= tolerance:
-                lost = int((agreed - tolerance) / SLOT_SECONDS) + 1
+        if late >= (LOST_LATE if calm or running else JITTER_LATE):
+            if calm and not restart and not running:
+                lost = int((late - LOST_LATE) / SLOT_SECONDS) + 1
+            else:
+                least = self._run_on(count, arrival, tick, late, restart, calm)
+                if least is None:  # jitter or a backlog, until the run says otherwise: the
+                    self.due = on_time  # schedule waits for it
+                    return count
+                reach = LOST_LATE if calm else COUNT_LATE
+                lost = int((least - reach) / SLOT_SECONDS) + 1 if least >= reach else 0
+                if self._run_restart:  # after a gap the stream may have come back at
+                    self._run_tick = -2  # another phase: the schedule starts again here
+                    self.due = arrival
+                else:  # what is still late goes on as a run of its own (frames lost since)
+                    self._run_tick, self._run_began = tick + count + lost, arrival
+                    self._run_least = self._run_late = late - lost * SLOT_SECONDS
+                    self.due = on_time + lost * SLOT_SECONDS
+                return count + lost
         on_time += lost * SLOT_SECONDS
         late -= lost * SLOT_SECONDS
-        if restart:
-            self.due = arrival
-        else:
-            self.due = arrival if late < DRIFT else on_time + DRIFT
-            if count == 1:
-                spread = self.spread
-                self.spread = late if late > spread else spread - SPREAD_DECAY
+        self.due = arrival if late < DRIFT else on_time + DRIFT
+        if count == 1:
+            spread = self.spread
+            self.spread = late if late > spread else spread - SPREAD_DECAY
         return count + lost
 
-    def _agreed(self, count: int, arrival: float, tick: int, late: float) -> float | None:
-        """On a jittery link, a late batch: how late the batches since the first late one
-        agree the stream is (the least of them), once :data:`LATE_RUN` came late in a row,
-        the last spaced as the stream is (half a slot or more after the one before: not the
-        backlog of a stalled sender or host, read a frame at a time); None while that is
-        still to come."""
-        if self._suspect_tick == tick:  # the batch before was late too
-            late = min(late, self._suspect_late)
-            run = self._suspect_run + 1
-            if run >= LATE_RUN and arrival - self._suspect_at >= LOST_LATE:
-                self._suspect_tick = -2
-                return late
+    def _run_on(
+        self, count: int, arrival: float, tick: int, late: float, restart: bool, calm: bool
+    ) -> float | None:
+        """A late batch in a run of them: how late the run's batches agree the stream is (the
+        least of them), once the run has lasted :meth:`run_window` (after a gap on a calm
+        link: at its next batch) and this batch came spaced as the stream is (half a slot or
+        more after the one before: not the rest of a backlog, read a read at a time); None
+        while that is still to come. A batch less late than the one before widens the
+        link's :attr:`spread` to the fall (a lost frame makes none), as a late frame on time
+        does; else the spread decays, as on time."""
+        if self._run_tick != tick:  # the first of the run
+            self._run_began, self._run_restart, self._run_least = arrival, restart, late
         else:
-            run = 1
-        self._suspect_tick, self._suspect_late, self._suspect_at = tick + count, late, arrival
-        self._suspect_run = run
+            fall = self._run_late - late  # (a backlog's is no jitter)
+            spread = self.spread
+            self.spread = fall if fall > spread and not self._run_restart else spread - SPREAD_DECAY
+            self._run_least = min(late, self._run_least)
+            self._run_restart = self._run_restart or restart
+            window = 0.0 if calm else self.run_window()
+            if arrival - self._run_began >= window and arrival - self._run_last >= LOST_LATE:
+                return self._run_least
+        self._run_tick, self._run_late, self._run_last = tick + count, late, arrival
         return None

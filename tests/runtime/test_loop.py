@@ -380,14 +380,24 @@ def test_jitter_makes_no_lost_frames_and_the_clock_keeps_the_robots_slots(
 
 def test_jitter_does_not_hide_frames_really_lost(run_mission: RunMission) -> None:
     # Frames dropped by the robot's side and every frame read up to 10 ms late: the lost
-    # ones are counted all the same (on a jittery link two frames late: the last may still
-    # wait when the run ends), and mission time is the slots the robot sent.
-    run = run_mission(WAIT_3S, faults=Faults(drop_rate=0.2), watchdog=1.0, jitter=0.010)
-    exact = run_mission(WAIT_3S, faults=Faults(drop_rate=0.2), watchdog=1.0)
-    assert run.summary.outcome is Outcome.SUCCESS
-    assert exact.summary.frames_lost - 1 <= run.summary.frames_lost <= exact.summary.frames_lost
-    assert exact.summary.frames_lost > 0
-    assert run.summary.mission_time_s == pytest.approx(3.0, abs=0.1)
+    # ones are counted all the same, on a jittery link once the frames after them have come
+    # late for the run's window (1.4 s at that spread; those lost during it, by the next
+    # one): every frame the exact run had counted two windows before the end, none it had not.
+    counted: list[tuple[float, int]] = []  # the exact run's (robot's time, frames lost)
+
+    def lost_by(runner: MissionRunner) -> None:  # the link's clock: the simulator's
+        counted.append((runner.connection.link.transport.now(), runner.summary.frames_lost))
+
+    wait_6s = WAIT_3S.replace("3s", "6s")
+    run = run_mission(wait_6s, faults=Faults(drop_rate=0.2), watchdog=1.0, jitter=0.010)
+    exact = run_mission(wait_6s, faults=Faults(drop_rate=0.2), watchdog=1.0, observer=lost_by)
+    assert run.summary.outcome is exact.summary.outcome is Outcome.SUCCESS
+    window = run.runner._clock.schedule.run_window()
+    assert 1.0 < window < 1.7
+    by_then = max(n for at, n in counted if at <= run.simulator.time - 2 * window)
+    assert by_then > 0.2 * 2.0 / 0.015  # a fifth of 2 s of frames
+    assert by_then <= run.summary.frames_lost <= exact.summary.frames_lost
+    assert run.summary.mission_time_s == pytest.approx(6.0, abs=0.1)
 
 
 def test_the_robot_s_own_fall_forgets_its_wheel_and_motor_commands(
