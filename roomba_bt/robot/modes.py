@@ -26,7 +26,9 @@ corrupted frame with packet 35 = 4 made an earlier model take every later Safe f
 which disarmed the safe stop. Until the offset is known, packet 35 is ignored.
 
 With the offset known, the modes the robot may be in are the model's mode, the mode a command
-just sent leads to (for ``settle`` seconds after it was sent), and Passive if either is Safe or
+just sent leads to (for ``settle`` seconds after it was sent, counted while frames flow: a gap
+of :data:`HELD_GAP` or more since the frame before moves it on by the gap, as the link held the
+command too), and Passive if either is Safe or
 Full (a robot changes mode by itself only by falling back to Passive). A reading
 ``raw - offset`` that is one of those is followed; one that is another mode is a resync; one
 that is no mode is ignored and counted in :attr:`ModeModel.invalid_readings`; never an
@@ -53,6 +55,7 @@ from roomba_bt.oi.frames import (
     BUMPS_PACKETS,
     CHARGING_SOURCES_PACKETS,
     CLIFF_PACKETS,
+    SLOT_SECONDS,
     FrameLayout,
     SensorFrame,
 )
@@ -103,6 +106,12 @@ FALL_BACK = "fall_back"
 RESYNC_PREFIX = "resync_"
 #: Seconds after a mode command during which packet 35 may still show the old mode.
 DEFAULT_SETTLE = 0.1
+#: While a mode command waits to show, no frame for this long (two slots) is the link holding
+#: the frames back (a WiFi bridge's hiccup, a stall ridden through), and likely the command
+#: with them: the settle is moved on by the hold, less the slot a frame takes. A 250 ms
+#: hiccup as a mission sent ``mode: passive`` read the backlog's Safe as a resync and the
+#: late Start's Passive as a fall by itself (unknown): ``--strict`` failed a correct run.
+HELD_GAP = 2 * SLOT_SECONDS
 #: Modes the robot can fall into by itself from each mode (Full never falls in the spec, but a
 #: robot that reports it is followed rather than argued with).
 FALLS: dict[OIMode, frozenset[OIMode]] = {
@@ -309,7 +318,9 @@ class ModeModel:
         self.confirm = 2
         # (reported mode, frames so far, the first such frame, the frame before it)
         self._unconfirmed: tuple[OIMode, int, SensorFrame, SensorFrame | None] | None = None
-        self._pending: tuple[OIMode, OIMode, float] | None = None  # (from, to, sent at)
+        #: (from, to, when its allowance began: the write, moved on by every stall of the
+        #: link since; the last frame's time since it): a mode command not yet seen taken
+        self._pending: tuple[OIMode, OIMode, float, float] | None = None
         self._previous_frame: SensorFrame | None = None
         #: the layout of the frames reconciled last and packet 35's slot in it (None: not
         #: carried), found once per layout instead of by a lookup every frame
@@ -397,7 +408,7 @@ class ModeModel:
             return
         previous = self.mode
         self._fire(spec.name, spec.leads_to, time, cause=None)
-        self._pending = (previous, spec.leads_to, time)
+        self._pending = (previous, spec.leads_to, time, time)
         self._track()
 
     def _fire(self, trigger: str, dest: OIMode, time: float, cause: str | None) -> float:
@@ -451,13 +462,18 @@ class ModeModel:
         if reported is None:
             self.invalid_readings += 1
             return None
-        if self._pending is not None:
-            if reported is self._pending[1]:
+        pending = self._pending
+        if pending is not None:
+            if reported is pending[1]:
                 self._pending = None
                 self._unconfirmed = None
                 self._track()
                 return None
-            if time - self._pending[2] < self.settle:
+            began = pending[2]
+            if time - pending[3] > HELD_GAP:  # the link held the frames (and, as likely,
+                began += time - pending[3] - SLOT_SECONDS  # the command): that long more
+            if time - began < self.settle:
+                self._pending = (pending[0], pending[1], began, time)
                 return None
             self._pending = None
             self._track()

@@ -132,6 +132,64 @@ class TapLink(SimLink):
         return b"".join(b for _, b in self.writes)
 
 
+class BridgeLink(SimLink):
+    """The simulator behind a WiFi-serial bridge, on the virtual clock: every byte takes
+    ``latency`` seconds each way, plus up to ``jitter`` more (seeded; order kept, as TCP
+    keeps it: a late chunk holds back those behind it), and during ``hold`` (at, seconds)
+    nothing passes either way; the bytes held then come at once at its end (the bridge's
+    hiccup, a power-save burst: no byte is lost). What the robot sends each step is one
+    chunk; so is each write. A read takes at most ``most`` bytes (a backlog is read over
+    several reads, as from a socket)."""
+
+    def __init__(
+        self,
+        simulator: Simulator,
+        latency: float = 0.02,
+        jitter: float = 0.0,
+        hold: tuple[float, float] | None = None,
+        seed: int = 7,
+        most: int = 256,
+    ) -> None:
+        super().__init__(simulator)
+        self.most = most
+        self.latency, self.jitter, self.hold = latency, jitter, hold
+        self._draws = random.Random(seed)
+        self._to_robot: list[tuple[float, bytes]] = []  # (when it reaches the robot, bytes)
+        self._to_host: list[tuple[float, bytes]] = []  # (when the host can read it, bytes)
+        self.writes: list[tuple[float, bytes]] = []  # (the simulated time of the write, bytes)
+
+    def _passes(self, queue: list[tuple[float, bytes]], data: bytes) -> None:
+        """``data`` on its way, at its time: its delay, never before what went before it,
+        nor during the hold."""
+        at = self.simulator.time + self.latency + self._draws.uniform(0.0, self.jitter)
+        if queue:
+            at = max(at, queue[-1][0])
+        if self.hold is not None and self.hold[0] <= at < sum(self.hold):
+            at = sum(self.hold)
+        queue.append((at, data))
+
+    def write(self, data: bytes) -> None:
+        self._check()
+        self.writes.append((self.simulator.time, bytes(data)))
+        self._passes(self._to_robot, bytes(data))
+
+    def read(self, timeout: float) -> bytes:
+        sim = self.simulator
+        deadline = sim.time + max(timeout, 0.0) - 1e-9
+        while True:
+            while self._to_robot and self._to_robot[0][0] <= sim.time:
+                sim.receive(self._to_robot.pop(0)[1])
+            sent = sim.read()
+            if sent:
+                self._passes(self._to_host, sent)
+            came = b""
+            while self._to_host and self._to_host[0][0] <= sim.time and len(came) < self.most:
+                came += self._to_host.pop(0)[1]
+            if came or sim.time >= deadline:
+                return came
+            sim.step()
+
+
 @dataclass
 class Run:
     summary: RunSummary

@@ -1,0 +1,89 @@
+"""A run through a WiFi-serial bridge (tests/runtime/simrun.py's ``BridgeLink``: latency,
+ordered jitter, a hiccup that holds both directions and then lets the backlog through, no
+byte lost), on the simulator's virtual clock: what the robot did is the simulator's own
+record, not the wall clock's."""
+
+from __future__ import annotations
+
+import pytest
+
+from roomba_bt.mission import load_mission_text
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.profiles import ROOMBA600
+from roomba_bt.runtime.stack import RunStack
+from roomba_bt.runtime.summary import Outcome, RunSummary
+from roomba_bt.sim import Simulator, load_world
+
+from .simrun import BridgeLink
+
+#: Safe, a wait, then the mission's own Start (``mode: passive``) and a wait after it
+SAFE_THEN_PASSIVE = """
+mission: safe-then-passive
+tree:
+  sequence:
+    - mode: safe
+    - wait: 2s
+    - mode: passive
+    - wait: 1s
+"""
+START = oi.start().data
+
+
+def through_a_bridge(
+    text: str, hold: tuple[float, float] | None = None, jitter: float = 0.0, **run: object
+) -> tuple[RunSummary, BridgeLink]:
+    """``text`` run to its end on a Roomba 600 behind a bridge of 20 ms each way."""
+    simulator = Simulator(load_world("empty-room"), ROOMBA600, seed=0)
+    link = BridgeLink(simulator, 0.02, jitter, hold)
+    mission = load_mission_text(text, profile=ROOMBA600)
+    stack = RunStack(mission, link, profile=ROOMBA600, timeout_s=60.0, **run)  # type: ignore[arg-type]
+    return stack.run(raise_interrupts=False), link
+
+
+def test_a_hiccup_as_the_mission_sends_start_is_no_fall_by_itself() -> None:
+    # the bridge holds both ways for 250 ms as the mission's Start goes out: the frames
+    # that waited (Safe, sent before the robot heard it) come in a burst, then Passive.
+    # It was "went from Passive to Safe by itself (unexpected report)", then "from Safe to
+    # Passive by itself (unknown)": --strict exit 7 for a run that did what it should
+    _, clean = through_a_bridge(SAFE_THEN_PASSIVE)
+    # the start-up's Start, then the mission's (the safe stop's comes with its pause)
+    _, sent = [t for t, b in clean.writes if b == START]
+    summary, link = through_a_bridge(SAFE_THEN_PASSIVE, hold=(sent - 0.005, 0.25), strict=True)
+    assert [t for t, b in link.writes if b == START] == [0.0, sent]
+    assert summary.outcome is Outcome.SUCCESS, summary.reason
+    assert summary.falls == {} and summary.strict_findings() == []
+    assert summary.exit_code == 0
+    # the robot took the Start once the hold was over: the simulator's own record; and
+    # mission time is the robot's (the backlog filled the hold's slots, none lost)
+    *_, start = [e for e in link.simulator.events if e.detail == "Safe->Passive (start)"]
+    assert start.time >= sent + 0.245
+    assert summary.frames_lost == 0 and summary.stalls == summary.stalls_ridden == 1
+
+
+#: ten seconds of mission time, nothing else: its length on the robot's clock tells
+WAIT_10S = "mission: wait\ntree:\n  wait: 10s\n"
+STREAM = 148  # the opcode of the stream request: the robot's stream begins when it hears it
+
+
+def robot_time_of_the_run(summary: RunSummary, link: BridgeLink) -> float:
+    """Seconds of the robot's clock from the stream request to the safe stop's write, less
+    the link's way there and back: what the mission's time should have counted."""
+    [asked] = [t for t, b in link.writes if b[0] == STREAM]
+    stopped = link.writes[-1][0]
+    return stopped - asked - 2 * link.latency
+
+
+@pytest.mark.parametrize(
+    ("jitter", "hold"), [(0.08, None), (0.01, (4.0, 3.0))], ids=["0-80 ms", "a 3 s hold"]
+)
+def test_mission_time_through_a_bridge_is_the_robot_s(
+    jitter: float, hold: tuple[float, float] | None
+) -> None:
+    # no byte lost: no frame lost, and the wait lasts its 10 s on the robot. Through 0-80 ms
+    # of jitter 43 frames were "lost" in 10 s (the wait 9.42 s on the robot); a stall ridden
+    # through was counted twice, the gap then the backlog (a 10 s wait: 8.34 s)
+    summary, link = through_a_bridge(WAIT_10S, hold, jitter, watchdog=0.3, grace=5.0)
+    assert summary.outcome is Outcome.SUCCESS, summary.reason
+    assert summary.frames_lost == 0
+    assert summary.mission_time_s == pytest.approx(10.0, abs=0.05)  # a batch's slots
+    assert robot_time_of_the_run(summary, link) == pytest.approx(10.0, abs=jitter + 0.05)
