@@ -9,6 +9,8 @@ Each step prints what it saw and, when it fails, what to do next::
     start     the mode packet right after Start: Passive reads 1, or 2 (the mode + 1 bug)
     reset     --allow-reset only: Reset (7) and its banner (a Roomba 500 has no Reset)
     stream    a short stream: frames counted, checksums checked, which checksum convention
+    timing    when its frames came: the spread of their intervals and the longest gap, against
+              what run's --watchdog and --grace tolerate (a network bridge's jitter, stalls)
     profile   the profiles that fit: the banner, the checksum convention, the mode reading,
               readings only one model's ranges allow (wall signal 27, stasis 58)
     setting   the model ROOMBA_BT_PROFILE or the project file names, and whether it fits
@@ -26,6 +28,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import itertools
 import sys
 from dataclasses import dataclass, field
 from enum import IntEnum
@@ -36,7 +39,8 @@ from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.identify import MODEL_RANGE_PACKETS
 from roomba_bt.oi.modes import OI_MODE_PACKET
 from roomba_bt.oi.packets import packet_ids
-from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, POOR_LINK
+from roomba_bt.robot.errors import DEFAULT_WATCHDOG
+from roomba_bt.runtime.summary import DEFAULT_GRACE, INTERNAL_ERROR_SAID, POOR_LINK
 
 if TYPE_CHECKING:
     from roomba_bt.oi.frames import SensorFrame
@@ -439,7 +443,67 @@ def _stream(
         report.warn("stream", text, "frames are lost or damaged on this line: check the cable")
     else:
         report.ok("stream", text)
+    _timing(sample.arrivals, seconds, report)
     return sample.header_in_checksum, dict(sample.readings)
+
+
+#: Frames a sample needs for its intervals' spread to say something
+TIMING_FRAMES = 20
+#: ``--watchdog`` and ``--grace`` suggested for a link with jitter and gaps are this many
+#: times its 99th percentile interval and its longest gap: an ordinary burst must not trip
+#: the watchdog (the robot stutters: drive 0, then the drive again), nor a stall outlast
+#: the grace (the run ends)
+TIMING_MARGIN = 2.0
+
+
+def _timing(arrivals: tuple[float, ...], seconds: float, report: Report) -> None:
+    """When the sample's frames were read: the median and 99th percentile interval and the
+    longest gap, warned when ``run``'s defaults would not ride them, with the values that
+    would. A WiFi bridge's 5-80 ms of jitter and its power-save bursts tripped the default
+    0.1 s watchdog 5 times in 20 s, and a 3 s stall outlasted the default 2 s grace, while
+    doctor said the stream was ``[ok]``: the reason a WiFi user runs it."""
+    if len(arrivals) < TIMING_FRAMES:
+        return
+    # between the reads that brought frames: a bunch read at once (a late chunk and those it
+    # held back, a stall's backlog) is one arrival, its wait one interval
+    reads = sorted(set(arrivals))
+    intervals = sorted(b - a for a, b in itertools.pairwise(reads)) or [0.0]
+    longest = intervals[-1]
+    rest = intervals[:-1] or intervals  # the longest gap said apart (a stall, maybe)
+    median, p99 = rest[len(rest) // 2], rest[int(0.99 * (len(rest) - 1))]
+    text = (
+        f"frames came every {median * 1000:.0f} ms (the median), {p99 * 1000:.0f} ms at the "
+        f"99th percentile, the longest gap aside: {longest * 1000:.0f} ms"
+    )
+    # the watchdog rides the ordinary jitter; a longer gap is a stall, ridden through within
+    # the grace (the watchdog's drive 0 stops the wheels meanwhile: it is not widened for it)
+    watchdog = max(DEFAULT_WATCHDOG, _rounded_up(TIMING_MARGIN * p99, 0.05))
+    grace = max(DEFAULT_GRACE, _rounded_up(TIMING_MARGIN * longest, 1.0))
+    options = []
+    if watchdog > DEFAULT_WATCHDOG:
+        options.append(
+            f"--watchdog {watchdog:g} (the default {DEFAULT_WATCHDOG:g} s sends drive 0 at "
+            "every gap longer, and the robot stutters)"
+        )
+    if grace > DEFAULT_GRACE:
+        options.append(
+            f"--grace {grace:g} (a stall longer than the default {DEFAULT_GRACE:g} s ends the run)"
+        )
+    if not options:
+        report.ok("timing", text)
+        return
+    report.warn(
+        "timing",
+        text,
+        "a link with jitter or stalls (a network bridge: WiFi, Bluetooth): run with "
+        + " and ".join(options)
+        + ("; --listen 10s samples longer" if seconds < LONG_LISTEN_S else ""),
+    )
+
+
+def _rounded_up(value: float, step: float) -> float:
+    """``value`` up to the next multiple of ``step`` (a suggestion a person types)."""
+    return round(-(-value // step) * step, 3)
 
 
 def _profile(

@@ -378,7 +378,9 @@ class StreamSample:
     """A short stream cut into frames by the packet table alone (no profile: the profile is
     what is being found out): each frame's checksum convention (True: the header summed in,
     a 600 / Create 2; False: left out, a 500), the widest reading of each packet, the bytes
-    that were no frame, all the bytes read, and how late the first came (None: none did)."""
+    that were no frame, all the bytes read, how late the first came (None: none did), and
+    when each whole frame was read, on the link's clock (a network link's jitter and gaps:
+    ``doctor``'s timing)."""
 
     frame_size: int
     conventions: tuple[bool, ...]
@@ -386,6 +388,7 @@ class StreamSample:
     skipped: int
     received: int
     latency: float | None
+    arrivals: tuple[float, ...] = ()
 
     @property
     def frames(self) -> int:
@@ -411,11 +414,17 @@ def sample_stream(
     deadline = sent + seconds
     data = b""
     latency = None
+    reads: list[tuple[int, float]] = []  # (bytes read by then, when)
     while (remaining := deadline - clock()) > 0:
-        data += transport.read(remaining)
+        chunk = transport.read(remaining)
+        if chunk:
+            data += chunk
+            reads.append((len(data), clock()))
         if data and latency is None:  # the first frame's bytes: the line's delay
             latency = clock() - sent
     transport.write(oi.pause_stream().data)
+    arrivals: list[float] = []
+    read = 0
     conventions: list[bool] = []
     readings: dict[int, int] = {}
     at = skipped = 0
@@ -430,7 +439,12 @@ def sample_stream(
         for pid, value in stream_readings(frame).items():
             readings[pid] = max(value, readings.get(pid, value))
         at += size
-    return StreamSample(size, tuple(conventions), readings, skipped, len(data), latency)
+        while reads[read][0] < at:  # the read that brought the frame's last byte
+            read += 1
+        arrivals.append(reads[read][1])
+    return StreamSample(
+        size, tuple(conventions), readings, skipped, len(data), latency, tuple(arrivals)
+    )
 
 
 def identify_robot(transport: Transport, baud: int) -> Identification | str:

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import io
 import re
 import subprocess
 import sys
@@ -16,9 +17,12 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from runtime.simrun import BridgeLink  # tests/runtime: a WiFi bridge on the virtual clock
 
 import roomba_bt.transport as transport_package
-from roomba_bt.cli.doctor_cmd import DoctorExit, doctor_command
+from roomba_bt.cli.doctor_cmd import DoctorExit, Report, _examine, doctor_command
+from roomba_bt.oi.profiles import ROOMBA600
+from roomba_bt.sim import Simulator, load_world
 from roomba_bt.transport import SerialTransport, TransportError
 
 #: The acceptance bar: nothing behind the port, the answer comes within 10 s.
@@ -471,3 +475,34 @@ def test_allow_reset_s_help_says_it_sends_reset_which_the_500_lacks() -> None:
     done = _cli("doctor", "--help")
     assert "send Reset (7)" in done.stdout
     assert "the Roomba 500 has no Reset 7" in " ".join(done.stdout.split())
+
+
+def _doctor_through_a_bridge(jitter: float, hold: tuple[float, float] | None) -> str:
+    """``doctor --listen 3s``'s report, in-process, of a Roomba 600 behind a WiFi bridge of
+    20 ms each way (tests/runtime/simrun.py's ``BridgeLink``: on the virtual clock)."""
+    link = BridgeLink(Simulator(load_world("empty-room"), ROOMBA600, seed=0), 0.02, jitter, hold)
+    out = io.StringIO()
+    assert _examine(link, (115200,), False, Report(out), 3.0) == DoctorExit.FOUND
+    return out.getvalue()
+
+
+def test_doctor_says_a_steady_link_s_timing_is_ok() -> None:
+    [timing] = _step(_doctor_through_a_bridge(0.0, None), "timing")
+    assert timing == (
+        "[ok]   timing    frames came every 15 ms (the median), 15 ms at the 99th percentile, "
+        "the longest gap aside: 15 ms"
+    )
+
+
+def test_doctor_warns_of_a_wifi_link_s_jitter_and_stall_naming_watchdog_and_grace() -> None:
+    # 20-100 ms of jitter, and a 1.2 s stall in the stream's 3 s (the stream asked at 0.15 s):
+    # doctor said "[ok] stream" and nothing else; run's defaults stutter and end the run
+    out = _doctor_through_a_bridge(0.08, (1.15, 1.2))
+    [timing] = _step(out, "timing")
+    assert timing.startswith("[warn] timing    frames came every ")
+    assert timing.endswith("the longest gap aside: 1230 ms")
+    fix = out.split(timing)[1].splitlines()[1]
+    assert "a link with jitter or stalls (a network bridge: WiFi, Bluetooth): run with " in fix
+    assert "--watchdog 0.15 (the default 0.1 s sends drive 0 at every gap longer" in fix
+    assert "--grace 3 (a stall longer than the default 2 s ends the run)" in fix
+    assert any(line.startswith("[ok]") for line in _step(out, "stream"))  # no frame lost

@@ -5,16 +5,20 @@ record, not the wall clock's."""
 
 from __future__ import annotations
 
+import re
+from pathlib import Path
+
 import pytest
 
-from roomba_bt.mission import load_mission_text
+from roomba_bt.mission import Permissions, load_mission, load_mission_text
 from roomba_bt.oi import commands as oi
-from roomba_bt.oi.profiles import ROOMBA600
+from roomba_bt.oi.profiles import CREATE2, ROOMBA600
 from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome, RunSummary
 from roomba_bt.sim import Simulator, load_world
 
-from .simrun import BridgeLink
+from .simrun import LEDGE, BridgeLink
+from .test_strict import BLIND, OVER_THE_EDGE_BLIND
 
 #: Safe, a wait, then the mission's own Start (``mode: passive``) and a wait after it
 SAFE_THEN_PASSIVE = """
@@ -87,3 +91,25 @@ def test_mission_time_through_a_bridge_is_the_robot_s(
     assert summary.frames_lost == 0
     assert summary.mission_time_s == pytest.approx(10.0, abs=0.05)  # a batch's slots
     assert robot_time_of_the_run(summary, link) == pytest.approx(10.0, abs=jitter + 0.05)
+
+
+def test_the_mode_guard_s_since_agrees_with_the_fall_s_mission_time(tmp_path: Path) -> None:
+    # 0-80 ms of jitter, over the edge with a leaf that drives on, then a 0.6 s hold ridden
+    # through: the last refusal said, after the hold, still has the robot "in Passive since"
+    # the fall's mission time (0.5-0.9 s apart through a WiFi bridge, while mission time ran
+    # ahead of the link's clock)
+    (tmp_path / "blind.py").write_text(BLIND)
+    (tmp_path / "blind.yaml").write_text(OVER_THE_EDGE_BLIND)
+    (tmp_path / "ledge.yaml").write_text(LEDGE)
+    simulator = Simulator(load_world(tmp_path / "ledge.yaml"), CREATE2, seed=0)
+    link = BridgeLink(simulator, 0.02, 0.08, (4.3, 0.6))
+    mission = load_mission(tmp_path / "blind.yaml", permissions=Permissions(plugin_files=True))
+    stack = RunStack(mission, link, profile=CREATE2, timeout_s=60.0, watchdog=0.3, grace=5.0)
+    summary = stack.run(raise_interrupts=False)
+    assert summary.stalls_ridden == 1 and summary.frames_lost == 0
+    fell = re.fullmatch(r"t=([\d.]+) in blind_drive: cliff", summary.first_fall)
+    last = stack.runner.refusals[-1]
+    said = re.fullmatch(r"t=([\d.]+) blind_drive: .* in Passive since t=([\d.]+), .*", last)
+    assert fell is not None and said is not None, (summary.first_fall, last)
+    assert float(said[1]) > float(fell[1]) + 1.0  # said after the hold
+    assert float(said[2]) == pytest.approx(float(fell[1]), abs=0.1)  # the jitter at most
