@@ -443,6 +443,29 @@ class ModeModel:
         self._track()
 
     # ------------------------------------------------------------------ packet 35
+    def _settling(self, reported: OIMode, time: float) -> bool:
+        """A mode command waits to show: True while ``reported`` changes nothing (the
+        command's mode, seen: it is done; the old mode within the settle, counted while
+        frames flow: a hold of the link of :data:`HELD_GAP` or more moves it on); False
+        once the settle is over (the command no longer pending: the reading is judged as
+        any other)."""
+        pending = self._pending
+        assert pending is not None
+        if reported is pending[1]:
+            self._pending = None
+            self._unconfirmed = None
+            self._track()
+            return True
+        began = pending[2]
+        if time - pending[3] > HELD_GAP:  # the link held the frames (and, as likely, the
+            began += time - pending[3] - SLOT_SECONDS  # command): that long more
+        if time - began < self.settle:
+            self._pending = (pending[0], pending[1], began, time)
+            return True
+        self._pending = None
+        self._track()
+        return False
+
     def reconcile(self, frame: SensorFrame, tick: int, time: float) -> ModeChange | None:
         """Follow packet 35 of ``frame``; return the change the robot made by itself, if any."""
         previous_frame, self._previous_frame = self._previous_frame, frame
@@ -462,21 +485,8 @@ class ModeModel:
         if reported is None:
             self.invalid_readings += 1
             return None
-        pending = self._pending
-        if pending is not None:
-            if reported is pending[1]:
-                self._pending = None
-                self._unconfirmed = None
-                self._track()
-                return None
-            began = pending[2]
-            if time - pending[3] > HELD_GAP:  # the link held the frames (and, as likely,
-                began += time - pending[3] - SLOT_SECONDS  # the command): that long more
-            if time - began < self.settle:
-                self._pending = (pending[0], pending[1], began, time)
-                return None
-            self._pending = None
-            self._track()
+        if self._pending is not None and self._settling(reported, time):
+            return None
         if reported is self.mode:
             self._unconfirmed = None
             return None
