@@ -271,8 +271,11 @@ class Variant:
     """One thing evaluated: a mission with its parameters, labelled for the report."""
 
     label: str
+    #: how the results, the summary and the records name the mission (:func:`results_name`)
     mission: str
     params: tuple[tuple[str, str], ...]
+    #: the file read: where the project file and the include folders are looked for
+    path: str
 
 
 @dataclass(frozen=True)
@@ -315,10 +318,24 @@ def variants(args: argparse.Namespace, params: dict[str, str]) -> list[Variant] 
             text = " ".join(f"-p {k}={v}" for k, v in extra.items())
             label = f"{mission} {text}".strip()
             path = getattr(args, "mission_paths", {}).get(mission, mission)
-            out.append(Variant(label, path, tuple(sorted(merged.items()))))
+            name = results_name(mission, path)
+            out.append(Variant(label, name, tuple(sorted(merged.items())), path))
     if len({v.label for v in out}) < len(out):
         return "the same variant twice: give each mission or value once"
     return out
+
+
+def results_name(given: str, found: str) -> str:
+    """How an evaluation names the mission ``given`` (found at ``found``): a file the user
+    gave as given (relative to where ``eval`` ran, if given so); a shipped mission named
+    alone (``dock``) by its shipped name, ``roomba-bt:dock.yaml``, as a record and the
+    rows' ``sources`` name it. Its path in site-packages differed from one installation
+    to the next, so two venvs' ``--reproducible`` results were never the same bytes."""
+    from roomba_bt.mission.shipped import shipped_name
+
+    if Path(given).is_file():
+        return given
+    return shipped_name(Path(found).resolve()) or found
 
 
 def eval_command(args: argparse.Namespace) -> int:
@@ -644,7 +661,7 @@ def _plan(args: argparse.Namespace) -> tuple[list[Variant], list[list[EpisodeSpe
             start_area=args.start_area,
             odometry_error=args.odometry_error,
             faults=args.faults,
-            permissions=permissions(args, v.mission),
+            permissions=permissions(args, v.path),
             trace_every=2 if args.plot else 0,  # only the plot reads trajectories
         )
         for v in chosen
@@ -680,8 +697,8 @@ def _compiled(args: argparse.Namespace, chosen: list[Variant]) -> list[Any] | in
     for v in chosen:
         if v.mission in invalid:
             continue
-        loaded = load(v.mission, dict(v.params), get_profile(args.profile),
-                      granted=permissions(args, v.mission))  # fmt: skip
+        loaded = load(v.path, dict(v.params), get_profile(args.profile),
+                      granted=permissions(args, v.path))  # fmt: skip
         if isinstance(loaded, int):
             invalid.append(v.mission)
         missions.append(loaded)
@@ -809,7 +826,7 @@ def _run(
     from roomba_bt.evaluate.parallel import ProgressBar, evaluate
 
     bars = [
-        None if args.no_progress else ProgressBar(label=f"{Path(v.mission).stem} "
+        None if args.no_progress else ProgressBar(label=f"{Path(v.path).stem} "
                                                   f"{' '.join(f'{k}={x}' for k, x in v.params)} ")
         for v in chosen
     ]  # fmt: skip
@@ -952,7 +969,7 @@ def _plot(out: str, world: World, evaluated: Evaluated) -> int | None:
 
     chosen, summaries, done = evaluated.chosen, evaluated.summaries, evaluated.done
     if len(chosen) == 1:
-        titles = [f"{Path(chosen[0].mission).stem} in {world.name}: "
+        titles = [f"{Path(chosen[0].path).stem} in {world.name}: "
                   f"{summaries[0].successes}/{summaries[0].runs}"]  # fmt: skip
     else:
         titles = [

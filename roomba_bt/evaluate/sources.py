@@ -31,7 +31,7 @@ from pathlib import Path
 import yaml
 
 from roomba_bt import yamlsource
-from roomba_bt.mission.shipped import SHIPPED_PREFIX
+from roomba_bt.mission.shipped import SHIPPED_PREFIX, shipped_file
 
 #: The sections of a mission (or included) file that name other files to bring along.
 FILE_LISTS = ("include", "plugins")
@@ -95,8 +95,9 @@ def _named_files(path: Path) -> list[Path]:
 
 
 def bundle_mission(path: str | Path) -> MissionSources:
-    """The mission at ``path`` and every file it names, transitively, as texts."""
-    main = Path(path).resolve()
+    """The mission at ``path`` (a file, or a shipped mission's name as ``eval`` names it in
+    its results: ``roomba-bt:dock.yaml``) and every file it names, transitively, as texts."""
+    main = (shipped_file(str(path)) or Path(path)).resolve()
     seen: list[Path] = []
     pending = [main]
     while pending:

@@ -9,6 +9,7 @@ import json
 from pathlib import Path
 
 import pytest
+from runtime.installed import another_installation  # tests/runtime: installations
 
 from roomba_bt import __version__
 from roomba_bt.cli import main
@@ -49,6 +50,33 @@ def test_reproducible_results_are_the_same_bytes_whatever_the_jobs(
     assert code == 0 and "CPU time" not in text and "engine" not in text
     code, text = _eval(capsys)  # without: the times, as before
     assert "CPU time" in text and "engine       1 local process" in text
+
+
+def test_a_shipped_mission_named_alone_is_named_the_same_in_every_installation(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``eval dock --reproducible`` wrote the shipped file's site-packages path into every
+    row's ``mission``, the summary and ``--json``: two venvs with the same wheel wrote
+    different files. A shipped mission named alone is named by its shipped name, as a
+    record and the rows' ``sources`` name it."""
+    monkeypatch.chdir(tmp_path)  # no file called bump-and-turn here: the shipped one
+    made = []
+    for venv in ("one", "two"):
+        out = tmp_path / f"{venv}.jsonl"
+        with monkeypatch.context() as patched:
+            another_installation(patched, tmp_path / venv)
+            argv = ["eval", "bump-and-turn", *EVAL[1:], "--reproducible"]
+            assert main([*argv, "--out", str(out)]) == 0
+            text = capsys.readouterr().out
+            assert main([*argv, "--json"]) == 0
+            summary = json.loads(capsys.readouterr().out)
+        made.append((text, summary, out.read_bytes()))
+    assert made[0] == made[1]
+    text, summary, rows = made[0]
+    name = "roomba-bt:bump-and-turn.yaml"
+    assert f"mission      {name} in empty-room" in text
+    assert summary["variants"][0]["mission"] == name
+    assert {json.loads(row)["mission"] for row in rows.splitlines()} == {name}
 
 
 def test_results_say_what_made_them_and_the_json_its_verdict(

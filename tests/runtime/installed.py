@@ -1,10 +1,12 @@
 """Plugin distributions installed into a test's own site folder as pip leaves one: each
 module and its ``.dist-info`` with the ``roomba_bt.behaviours`` entry point, so the
 registry finds it as it finds any installed plugin (tests of plugins that clash, that do
-not load, that raise on import); and the source of such a module, of conditions alone."""
+not load, that raise on import); and the source of such a module, of conditions alone.
+:func:`another_installation`: the shipped missions where another venv keeps them."""
 
 from __future__ import annotations
 
+import shutil
 import sys
 from pathlib import Path
 
@@ -12,6 +14,7 @@ import pytest
 
 from roomba_bt.behaviours import Registry, builtin_registry
 from roomba_bt.behaviours.registry import ENTRY_POINT_GROUP
+from roomba_bt.mission.shipped import SHIPPED_DIR
 
 
 def install_distribution(site: Path, distribution: str, module: str, source: str) -> None:
@@ -53,3 +56,20 @@ def installed_registry(
     registry._group = ENTRY_POINT_GROUP  # the entry points, read on first use
     registry._loaded = False
     return registry
+
+
+def another_installation(monkeypatch: pytest.MonkeyPatch, venv: Path) -> Path:
+    """The shipped missions copied to ``venv``'s site-packages, and that copy made the shipped
+    missions' folder, as another installation's is: in each module that holds it (the code
+    of before bound it by name in more of them). What names a shipped mission by its path
+    there differs from one venv to the next. The copy's folder is returned."""
+    import roomba_bt.mission.loader as loader
+
+    missions = venv / "site-packages" / "roomba_bt" / "missions"
+    shutil.copytree(SHIPPED_DIR, missions)
+    folder = missions.resolve()
+    for name, module in list(sys.modules.items()):
+        if name.startswith("roomba_bt") and hasattr(module, "SHIPPED_DIR"):
+            monkeypatch.setattr(module, "SHIPPED_DIR", folder)
+    monkeypatch.setattr(loader, "SHIPPED_LIBRARY", (folder,))
+    return folder

@@ -24,6 +24,7 @@ from roomba_bt.runtime.summary import Outcome, RunSummary
 from roomba_bt.runtime.tick_guard import stop_first
 from roomba_bt.sim import SimLink, Simulator, load_world
 
+from .installed import another_installation
 from .simrun import (
     LEDGE,
     SPIN,
@@ -792,18 +793,6 @@ def test_a_record_of_a_shipped_mission_made_before_replays_it_where_its_path_is_
     )
 
 
-def _installation(monkeypatch: pytest.MonkeyPatch, missions: Path) -> None:
-    """Make ``missions`` the shipped missions' folder, as another installation's is: in each
-    module that holds it (the code of before bound it by name in more of them)."""
-    import roomba_bt.mission.loader as loader
-
-    folder = missions.resolve()
-    for name, module in list(sys.modules.items()):
-        if name.startswith("roomba_bt") and hasattr(module, "SHIPPED_DIR"):
-            monkeypatch.setattr(module, "SHIPPED_DIR", folder)
-    monkeypatch.setattr(loader, "SHIPPED_LIBRARY", (folder,))
-
-
 def test_a_record_of_a_shipped_mission_run_by_name_replays_in_another_installation(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -813,12 +802,8 @@ def test_a_record_of_a_shipped_mission_run_by_name_replays_in_another_installati
     venv, or on another machine, finds its own."""
     import shutil
 
-    from roomba_bt.mission.shipped import SHIPPED_DIR
-
-    there = tmp_path / "venv" / "site-packages" / "roomba_bt" / "missions"
-    shutil.copytree(SHIPPED_DIR, there)
     with monkeypatch.context() as patched:  # the machine that records
-        _installation(patched, there)
+        another_installation(patched, tmp_path / "venv")
         record = tmp_path / "run.jsonl"
         argv = ["run", "bump-and-turn", "--fast", "--display", "none", "-p", "duration=2s"]
         assert main([*argv, "--record", str(record)]) == 0
