@@ -54,11 +54,12 @@ MISSING_DEPENDENCY = ("could not import", "No module named", "pip install")
 @pytest.fixture(autouse=True)
 def _no_settings_from_the_shell(monkeypatch: pytest.MonkeyPatch) -> None:
     """A developer's ``ROOMBA_BT_INCLUDE_PATH`` grants include folders to every command,
-    and ``ROOMBA_BT_PROFILE`` names the robot for every command: not for the suite's, whose
-    refusals the one would turn into passes and whose profiles the other would change
-    (children inherit this)."""
-    monkeypatch.delenv("ROOMBA_BT_INCLUDE_PATH", raising=False)
-    monkeypatch.delenv("ROOMBA_BT_PROFILE", raising=False)
+    ``ROOMBA_BT_PROFILE`` names the robot for every command and ``ROOMBA_BT_WORLDS`` adds
+    worlds that may take a shipped world's name: not for the suite's, whose refusals the
+    first would turn into passes, whose profiles the second would change and whose worlds
+    the third (children inherit this)."""
+    for variable in ("ROOMBA_BT_INCLUDE_PATH", "ROOMBA_BT_PROFILE", "ROOMBA_BT_WORLDS"):
+        monkeypatch.delenv(variable, raising=False)
 
 
 def in_ci() -> bool:

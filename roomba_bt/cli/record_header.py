@@ -100,7 +100,8 @@ def simulator_options(args: argparse.Namespace, folder: Path) -> dict[str, Any] 
     source = Path(getattr(args, "world_source", "") or given)
     shipped = source.resolve().is_relative_to(WORLDS_DIR.resolve()) and not Path(given).is_file()
     return {
-        "world": given if shipped else source_name(Path(given), folder),
+        # one of ROOMBA_BT_WORLDS's by its name: by its file, which a replay can find
+        "world": given if shipped else source_name(source, folder),
         "world_sha256": file_digest(source),
         "seed": args.seed,
         "random_start": bool(args.random_start),

@@ -25,19 +25,25 @@ def register(sub: Any) -> None:
         """list the shipped simulator worlds, or print one
 
         List the worlds shipped with roomba-bt (give one to run, sim or eval: --world
-        apartment), each with its description, size, areas and dock. With NAME, print that
-        world's file as shipped, its comments included: a start for a world of your own
-        (docs/simulator.md, Worlds).
+        apartment), each with its description, size, areas and dock, and your own from the
+        folders ROOMBA_BT_WORLDS names (separated by ':'; they come before the shipped
+        ones). With NAME, print that world's file, its comments included: a start for a
+        world of your own (roomba-bt worlds empty-room > my-room.yaml).
         """,
     )
-    parser.add_argument("name", nargs="?", metavar="NAME", help="print this shipped world")
+    parser.add_argument("name", nargs="?", metavar="NAME", help="print this world's file")
 
 
 def worlds_command(args: argparse.Namespace) -> int:
     from roomba_bt.behaviours.units import closest
-    from roomba_bt.sim.world import WORLDS_DIR, load_world, shipped_worlds
+    from roomba_bt.sim.world import WORLDS_VARIABLE, WorldError, shipped_worlds, world_files
 
-    names = shipped_worlds()
+    try:
+        files = world_files()
+    except WorldError as exc:
+        print(world_error_text(exc), file=sys.stderr)
+        return ExitCode.INVALID
+    names = tuple(files)
     if args.name is not None:
         name = args.name.removesuffix(".yaml")
         if name not in names and Path(args.name).is_file():  # a world of one's own
@@ -48,21 +54,38 @@ def worlds_command(args: argparse.Namespace) -> int:
             return ExitCode.INVALID
         if name not in names:
             hint = closest(name, list(names))
-            print(f"roomba-bt worlds: no shipped world {args.name!r}{hint}; shipped: "
+            which = "shipped" if names == shipped_worlds() else f"{WORLDS_VARIABLE}'s or shipped"
+            print(f"roomba-bt worlds: no {which} world {args.name!r}{hint}; there are: "
                   f"{', '.join(names)}", file=sys.stderr)  # fmt: skip
             return ExitCode.INVALID
-        sys.stdout.write((WORLDS_DIR / f"{name}.yaml").read_text(encoding="utf-8"))
+        sys.stdout.write(files[name].read_text(encoding="utf-8"))
         return ExitCode.OK
-    for name in names:
-        world = load_world(name)
+    return _list_worlds(files)
+
+
+def _list_worlds(files: dict[str, Path]) -> int:
+    """Each world's name, description, size, dock and areas; one of the user's says its
+    file, and one that does not load its problems on stderr (exit 2 after the others)."""
+    from roomba_bt.sim.world import WORLDS_DIR, WorldError, load_world
+
+    code = ExitCode.OK
+    for name, path in files.items():
+        try:
+            world = load_world(path)
+        except WorldError as exc:
+            print(world_error_text(exc), file=sys.stderr)
+            code = ExitCode.INVALID
+            continue
         xs = [x for room in world.rooms for x, _ in room]
         ys = [y for room in world.rooms for _, y in room]
         size = f"{(max(xs) - min(xs)) / 1000:g} x {(max(ys) - min(ys)) / 1000:g} m"
         areas = ", ".join(a.name for a in world.areas) or "none"
         dock = "a dock" if world.dock is not None else "no dock"
-        print(f"{name}  {world.description}")
+        print(f"{escaped(name, ANY_CONTROL)}  {escaped(world.description, ANY_CONTROL)}")
         print(f"    {size}, {dock}; areas: {areas}")
-    return ExitCode.OK
+        if path.parent != WORLDS_DIR:
+            print(f"    your own: {escaped(str(path), ANY_CONTROL)}")
+    return code
 
 
 def world_diagnostics(path: str) -> list[Diagnostic] | None:

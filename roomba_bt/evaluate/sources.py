@@ -7,7 +7,8 @@ the file naming them) into a :class:`MissionSources`: each file's text under its
 relative to the files' common folder. :meth:`MissionSources.materialise` writes them once per
 process into a private temporary folder with the same layout and returns the mission's path
 there, so the loader reads exactly the bytes the submitting machine read and reports the same
-diagnostics. A world given by path travels the same way (:func:`bundle_world`).
+diagnostics. A world given by path, or one of ``ROOMBA_BT_WORLDS``'s by its name, travels the
+same way (:func:`bundle_world`).
 
 An include of the shipped library (``roomba-bt:lib/docking.yaml``) is not copied: the loader
 reads it from the installed package, like the code itself, so workers must run the same
@@ -32,6 +33,7 @@ import yaml
 
 from roomba_bt import yamlsource
 from roomba_bt.mission.shipped import SHIPPED_PREFIX, shipped_file
+from roomba_bt.sim.world import WORLDS_DIR, named_world
 
 #: The sections of a mission (or included) file that name other files to bring along.
 FILE_LISTS = ("include", "plugins")
@@ -112,9 +114,13 @@ def bundle_mission(path: str | Path) -> MissionSources:
 
 
 def bundle_world(world: str) -> tuple[str, str] | None:
-    """``(file name, text)`` of a world given by path; None for a shipped world's name
-    (every installation has those)."""
+    """``(file name, text)`` of a world given by path, or by its name in a folder of
+    ``ROOMBA_BT_WORLDS`` (a worker on another machine has neither); None for a shipped
+    world's name (every installation has those)."""
     path = Path(world)
     if not path.is_file():
-        return None
+        named = named_world(world)
+        if named is None or named.parent == WORLDS_DIR:
+            return None
+        path = named
     return (path.name, path.read_text(encoding="utf-8"))

@@ -63,10 +63,12 @@ ROBOT_RADIUS_MM = BODY_RADIUS_MM
 TOUCHING_MM = 1e-6
 
 #: The shipped worlds: package data (``roomba_bt/sim/worlds/``, also linked as ``worlds/`` at
-#: the top of the source tree), or ``$ROOMBA_BT_WORLDS`` if set.
-WORLDS_DIR = pathlib.Path(
-    os.environ.get("ROOMBA_BT_WORLDS", pathlib.Path(__file__).resolve().parent / "worlds")
-)
+#: the top of the source tree).
+WORLDS_DIR = pathlib.Path(__file__).resolve().parent / "worlds"
+
+#: Folders of the user's own worlds, separated as in ``PYTHONPATH``, whose worlds a name
+#: finds before the shipped ones (:func:`world_folders`).
+WORLDS_VARIABLE = "ROOMBA_BT_WORLDS"
 
 EVENT_KINDS = ("bump", "lift", "charger_step")
 SIDES = ("left", "right", "both")
@@ -1073,9 +1075,87 @@ def shipped_worlds() -> tuple[str, ...]:
     return tuple(sorted(p.stem for p in WORLDS_DIR.glob("*.yaml")))
 
 
+def world_folders() -> tuple[pathlib.Path, ...]:
+    """Where a world's name is looked for, in order: each folder ``ROOMBA_BT_WORLDS`` names
+    (the user's own worlds; separated by ``:``, ``;`` on Windows; an empty entry skipped),
+    then the shipped worlds' folder, so a world of one's own may take a shipped world's
+    name. Read when a name is looked up, not at import. :class:`WorldError` naming the
+    variable and the folder when one is missing or unreadable: the variable once replaced
+    the shipped folder, and a wrong one left no world at all, its error ending in "one of"
+    and nothing, and ``roomba-bt worlds`` listing nothing with exit 0."""
+    folders = []
+    for entry in os.environ.get(WORLDS_VARIABLE, "").split(os.pathsep):
+        if not entry.strip():
+            continue
+        problem = _not_a_readable_folder(pathlib.Path(entry))
+        if problem is not None:
+            raise WorldError([WorldProblem(
+                WORLDS_VARIABLE, 0, 0, "",
+                f"{entry!r}: {problem}; it names folders of your own worlds, looked in before "
+                f"the shipped ones: give existing folders, or unset it", "",
+            )])  # fmt: skip
+        folders.append(pathlib.Path(entry))
+    return (*folders, WORLDS_DIR)
+
+
+def _not_a_readable_folder(folder: pathlib.Path) -> str | None:
+    """Why ``folder`` holds no worlds one can read (None: it is a folder that can be)."""
+    try:
+        with os.scandir(folder):
+            return None
+    except FileNotFoundError:
+        return "no such folder"
+    except NotADirectoryError:
+        return "a file, not a folder"
+    except OSError as exc:
+        return f"an unreadable folder ({exc.strerror or exc})"
+
+
+def world_files() -> dict[str, pathlib.Path]:
+    """Every world a name finds, name -> file, sorted by name: a name in two folders is the
+    first folder's (:func:`world_folders`)."""
+    found: dict[str, pathlib.Path] = {}
+    for folder in world_folders():
+        for path in sorted(folder.glob("*.yaml")):
+            found.setdefault(path.stem, path)
+    return dict(sorted(found.items()))
+
+
+def named_world(name: str) -> pathlib.Path | None:
+    """The file a world's name finds in :func:`world_folders` (None: none)."""
+    if "/" in name:
+        return None
+    for folder in world_folders():
+        path = folder / f"{name}.yaml"
+        if path.is_file():
+            return path
+    return None
+
+
 def load_world(path_or_name: str | pathlib.Path) -> World:
-    """A shipped world by name (``"empty-room"``) or a world file by path."""
+    """A world file by path, or a world by name (``"empty-room"``): a shipped one, or one of
+    the user's in ``ROOMBA_BT_WORLDS``'s folders (:func:`world_folders`)."""
     return parse_world(*world_text(path_or_name))
+
+
+def _no_such_world(path: pathlib.Path, given: str) -> WorldProblem:
+    """What ``given`` is instead of a world file or a world's name, with the names there are
+    and the closest of them."""
+    own = len(world_folders()) > 1
+    found = (
+        "a directory"
+        if path.is_dir()
+        else "a device or a pipe, not a file"
+        if path.exists()
+        else f"no such file or world in {WORLDS_VARIABLE}'s folders or the shipped ones"
+        if own
+        else "no such file or shipped world"
+    )
+    names = list(world_files())
+    close = difflib.get_close_matches(given, names, n=1)
+    if close and not path.exists():
+        found += f" (did you mean {close[0]!r}?)"
+    return WorldProblem(given, 0, 0, "world", found, f"a YAML file or one of {', '.join(names)}")
 
 
 def world_text(path_or_name: str | pathlib.Path) -> tuple[str, str]:
@@ -1090,24 +1170,10 @@ def world_text(path_or_name: str | pathlib.Path) -> tuple[str, str]:
                           "a UTF-8 YAML file")]
         ) from None  # fmt: skip
     if not is_file:
-        shipped = WORLDS_DIR / f"{path_or_name}.yaml"
-        if isinstance(path_or_name, str) and "/" not in path_or_name and shipped.is_file():
-            path = shipped
-        else:
-            found = (
-                "a directory"
-                if path.is_dir()
-                else "a device or a pipe, not a file"
-                if path.exists()
-                else "no such file or shipped world"
-            )
-            close = difflib.get_close_matches(str(path_or_name), shipped_worlds(), n=1)
-            if close and not path.exists():
-                found += f" (did you mean {close[0]!r}?)"
-            raise WorldError(
-                [WorldProblem(str(path_or_name), 0, 0, "world", found,
-                              f"a YAML file or one of {', '.join(shipped_worlds())}")]
-            )  # fmt: skip
+        named = named_world(path_or_name) if isinstance(path_or_name, str) else None
+        if named is None:
+            raise WorldError([_no_such_world(path, str(path_or_name))])
+        path = named
     try:
         text = yamlsource.read_text(path)
     except yamlsource.FileTooLarge as exc:

@@ -4,6 +4,9 @@ package's folder: the docs say each mission is documented at its top)."""
 
 from __future__ import annotations
 
+import os
+from pathlib import Path
+
 import pytest
 
 from roomba_bt.cli import main
@@ -46,3 +49,64 @@ def test_worlds_lists_each_shipped_world_and_prints_one(
     assert "roomba-bt worlds: no shipped world 'apartmnt' (did you mean 'apartment'?)" in (
         capsys.readouterr().err
     )
+
+
+def test_worlds_of_ones_own_come_before_the_shipped_ones(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``ROOMBA_BT_WORLDS`` replaced the shipped worlds' folder, and was documented nowhere:
+    its folders now add the user's worlds, looked in before the shipped ones (one may take a
+    shipped world's name), listed by ``worlds`` with their files and run by name."""
+    own, more = tmp_path / "worlds", tmp_path / "more"
+    for folder in (own, more):
+        folder.mkdir()
+    room = (WORLDS_DIR / "empty-room.yaml").read_text(encoding="utf-8")
+    (own / "my-room.yaml").write_text(room.replace("name: empty-room", "name: my-room"))
+    (more / "corridor.yaml").write_text(room)  # a shipped world's name: this one is taken
+    monkeypatch.setenv("ROOMBA_BT_WORLDS", f"{own}{os.pathsep}{os.pathsep}{more}")
+    assert main(["worlds"]) == 0
+    out = capsys.readouterr().out
+    assert "\nmy-room  Empty room" in f"\n{out}" and f"your own: {own / 'my-room.yaml'}" in out
+    assert f"your own: {more / 'corridor.yaml'}" in out and "apartment  " in out
+    assert main(["worlds", "my-room"]) == 0
+    assert "name: my-room" in capsys.readouterr().out
+    assert main(["worlds", "my-rom"]) == 2
+    assert "no ROOMBA_BT_WORLDS's or shipped world 'my-rom' (did you mean 'my-room'?)" in (
+        capsys.readouterr().err
+    )
+    argv = ["run", "bump-and-turn", "--fast", "--display", "none", "-p", "duration=1s"]
+    assert main([*argv, "--world", "my-room"]) == 0
+    assert "robot        simulator my-room" in capsys.readouterr().out
+    assert main([*argv, "--world", "corridor"]) == 0
+    assert "robot        simulator empty-room" in capsys.readouterr().out
+    assert main([*argv, "--world", "moon"]) == 2
+    assert (
+        "moon: world: found no such file or world in ROOMBA_BT_WORLDS's folders or the "
+        "shipped ones; allowed: a YAML file or one of apartment, corridor, empty-room, "
+        "my-room" in capsys.readouterr().err
+    )
+
+
+@pytest.mark.parametrize(
+    ("folder", "problem"),
+    [("nowhere", "no such folder"), ("a-file", "a file, not a folder")],
+)
+def test_a_worlds_variable_naming_no_folder_is_refused_naming_it(
+    folder: str,
+    problem: str,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A missing folder left no world at all: ``run`` said "allowed: a YAML file or one of"
+    and nothing, ``worlds`` printed nothing with exit 0. Now both are usage errors (exit 2)
+    naming the variable and the folder."""
+    (tmp_path / "a-file").write_text("")
+    given = str(tmp_path / folder)
+    monkeypatch.setenv("ROOMBA_BT_WORLDS", given)
+    said = f"roomba-bt: ROOMBA_BT_WORLDS: {given!r}: {problem}; it names folders of your own"
+    assert main(["worlds"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.startswith(said)
+    assert main(["run", "dock", "--fast", "--display", "none"]) == 2
+    assert capsys.readouterr().err.startswith(said)

@@ -165,6 +165,32 @@ def test_a_self_contained_spec_needs_none_of_its_files(
     assert _without_wall_time([run_episode(travelling)]) == _without_wall_time([from_files])
 
 
+def test_a_world_of_ones_own_and_a_shipped_mission_travel_by_their_names(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A world found by its name in a folder of ``ROOMBA_BT_WORLDS`` is on no other machine:
+    it travels as its text, as a world given by path does (a shipped world's name stays a
+    name: every installation has those). A shipped mission named as ``eval``'s results name
+    it (``roomba-bt:bump-and-turn.yaml``) travels as the file it is."""
+    from roomba_bt.evaluate.episode import self_contained
+    from roomba_bt.sim.world import WORLDS_DIR
+
+    own = tmp_path / "worlds"
+    own.mkdir()
+    (own / "room.yaml").write_text((WORLDS_DIR / "corridor.yaml").read_text())
+    monkeypatch.setenv("ROOMBA_BT_WORLDS", str(own))
+    spec = EpisodeSpec("roomba-bt:bump-and-turn.yaml", "room", seed=3, timeout_s=3.0,
+                       params=(("duration", "2s"),))  # fmt: skip
+    travelling = self_contained(spec)
+    assert travelling.world_file == ("room.yaml", (own / "room.yaml").read_text())
+    assert travelling.sources is not None
+    assert [name for name, _ in travelling.sources.files] == ["bump-and-turn.yaml"]
+    assert self_contained(dataclasses.replace(spec, world="corridor")).world_file is None
+    from_files = run_episode(spec)
+    monkeypatch.delenv("ROOMBA_BT_WORLDS")  # the worker's machine has no such folder
+    assert _without_wall_time([run_episode(travelling)]) == _without_wall_time([from_files])
+
+
 # A worker's episode that misbehaves on purpose, set in the parent before the pool forks: the
 # worker running ``seed`` kills itself with SIGKILL (``every`` time, or once: a marker file),
 # or waits for the marker (made by the parent) before running it.
