@@ -47,6 +47,7 @@ from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
 from roomba_bt.behaviours.reasons import failure_reason
+from roomba_bt.errors import RoombaBtError
 from roomba_bt.yamlsource import quoted
 
 #: The py_trees releases whose ticks these classes are proven to repeat (by the property tests
@@ -55,8 +56,9 @@ from roomba_bt.yamlsource import quoted
 PROVEN_PY_TREES = ("2.6.0",)
 
 
-class UnsupportedPyTrees(ImportError):
-    """The installed py_trees is not one the lean tree is proven against."""
+class UnsupportedPyTrees(ImportError, RoombaBtError):
+    """The installed py_trees is not one the lean tree is proven against (roomba-bt's own
+    error, worded with the release to install: the command line says it as it is)."""
 
 
 def check_py_trees(installed: str | None = None) -> None:

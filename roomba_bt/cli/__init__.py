@@ -19,6 +19,7 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 from roomba_bt import __version__
+from roomba_bt.cli.installation import IncompleteInstallation, missing_from_installation
 from roomba_bt.cli.streams import guard_std_streams, stdout_problem
 
 # Nothing heavier at the top: the process's signal handlers (:func:`_as_the_process`) are set
@@ -84,12 +85,8 @@ def build_parser() -> argparse.ArgumentParser:
             module = importlib.import_module(name)
         except ModuleNotFoundError as exc:
             if exc.name == name:
-                raise ModuleNotFoundError(
-                    f"the subcommand module {name} is missing from this installation of "
-                    f"roomba-bt {__version__} (reinstall it: pip install --force-reinstall "
-                    "roomba-bt)",
-                    name=name,
-                ) from None
+                said = missing_from_installation(name, __version__, "subcommand module")
+                raise IncompleteInstallation(said, name=name) from None
             raise
         module.register(sub)
     return parser
@@ -108,13 +105,24 @@ def setup_logging(verbose: int, quiet: int) -> None:
     logging.getLogger("matplotlib").setLevel(logging.DEBUG if verbose >= 2 else logging.WARNING)
 
 
-def _cannot_run(exc: ImportError) -> int:
+def _cannot_run(exc: ImportError, verbose: int) -> int:
     """An installation roomba-bt cannot run on: a py_trees release the tree is not proven
-    against (``UnsupportedPyTrees``, an ImportError, says which to install) or a dependency
-    missing. A message and exit 2, never a traceback."""
+    against (``UnsupportedPyTrees`` says which to install), a dependency missing or
+    installed incompletely, a module of roomba-bt missing: what to install or reinstall
+    (:func:`~roomba_bt.cli.installation.import_failure`), exit 2, the traceback with ``-v``.
+    An ImportError of roomba-bt's own code is its bug: :func:`_internal_error`, exit 70."""
+    import traceback
+
+    from roomba_bt.cli.installation import import_failure
     from roomba_bt.runtime.summary import ExitCode
 
-    print(f"roomba-bt: {exc}", file=sys.stderr)
+    said = import_failure(exc, __version__)
+    if said is None:
+        return _internal_error(exc, verbose)
+    with contextlib.suppress(OSError):
+        if verbose:
+            traceback.print_exception(exc, file=sys.stderr)
+        print(f"roomba-bt: {said}", file=sys.stderr)
     return ExitCode.INVALID
 
 
@@ -144,8 +152,9 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _command(argv: Sequence[str] | None) -> int:
     try:
         parser = build_parser()
-    except ImportError as exc:
-        return _cannot_run(exc)
+    except ImportError as exc:  # before the arguments are read: -v as the user typed it
+        given = sys.argv[1:] if argv is None else argv
+        return _cannot_run(exc, sum(1 for a in given if re.fullmatch(r"-v+|--verbose", a)))
     args = parser.parse_args(argv)
     args.verbose += getattr(args, "verbose_after", 0)
     args.quiet += getattr(args, "quiet_after", 0)
@@ -159,7 +168,7 @@ def _command(argv: Sequence[str] | None) -> int:
     try:
         return int(func(args))
     except ImportError as exc:  # the subcommands import the tree and the robot lazily
-        return _cannot_run(exc)
+        return _cannot_run(exc, args.verbose)
     except Exception as exc:  # each command has closed what it held (a run: its port)
         return _internal_error(exc, args.verbose)
 
