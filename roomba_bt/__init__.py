@@ -13,7 +13,7 @@ waiting; on a robot, the link is ``roomba_bt.Connection.open("/dev/ttyUSB0")`` i
     >>> link = roomba_bt.SimLink(roomba_bt.Simulator(world, roomba_bt.CREATE2, seed=0))
     >>> with roomba_bt.RunStack(mission, link, profile=roomba_bt.CREATE2, timeout_s=120) as stack:
     ...     summary = stack.run().raise_for_outcome()  # RunFailed unless it succeeded
-    >>> print(summary.outcome.value, "in", summary.final_mode.label)
+    >>> print(summary.outcome.value, "in", summary.final_mode_text())
     success in Passive
 
 ``print(summary)`` shows the whole summary as ``roomba-bt run`` does; ``summary.exit_code``

@@ -7,6 +7,7 @@ from __future__ import annotations
 import ast
 import doctest
 import importlib
+import os
 import subprocess
 import sys
 import textwrap
@@ -63,6 +64,25 @@ def test_the_packages_example_runs_as_help_shows_it() -> None:
     session = roomba_bt.__doc__.split("::\n\n", 1)[1].split("\n\n", 1)[0]
     docs = (INIT.parents[1] / "docs" / "runtime.md").read_text(encoding="utf-8")
     assert f"```pycon\n{textwrap.dedent(session)}\n```" in docs  # the docs show the same
+
+
+def test_the_packages_example_type_checks_as_a_user_copies_it(tmp_path: Path) -> None:
+    """The example called ``.label`` on ``summary.final_mode``, which is None when no robot
+    answered: a user who copied it into a program got ``mypy --strict``'s union-attr error
+    (the package ships ``py.typed``). Its lines, as a file, pass ``mypy --strict``."""
+    pytest.importorskip("mypy", reason="the test extra: pip install 'roomba-bt[test]'")
+    assert roomba_bt.__doc__ is not None
+    example = doctest.DocTestParser().get_doctest(roomba_bt.__doc__, {}, "roomba_bt", str(INIT), 0)
+    program = tmp_path / "user.py"
+    program.write_text("".join(step.source for step in example.examples))
+    checkout = INIT.parents[1]  # this roomba_bt, not another one installed in the venv
+    env = {"MYPYPATH": str(checkout)} if (checkout / "pyproject.toml").is_file() else {}
+    done = subprocess.run(
+        [sys.executable, "-m", "mypy", "--strict", "--cache-dir", str(tmp_path / "cache"),
+         program.name],
+        capture_output=True, text=True, timeout=300, cwd=tmp_path, env={**os.environ, **env},
+    )  # fmt: skip
+    assert done.returncode == 0, done.stdout + done.stderr
 
 
 def test_an_unknown_name_is_an_attribute_error() -> None:
