@@ -482,6 +482,11 @@ _WORD_KINDS = {
 }
 
 
+#: Where the mission language is described: a page the wheel does not ship, so named as
+#: the project's.
+MISSIONS_DOC = "roomba-bt's repository: docs/missions.md"
+
+
 def language_word(name: str) -> str | None:
     """What ``behaviours NAME`` says of a word of the mission language (a composite, a
     decorator, ``subtree``, a modifier, a file section), which is no behaviour: what it is,
@@ -496,15 +501,15 @@ def language_word(name: str) -> str | None:
         takes = f" (options: {options})" if options else ""
         return (
             f"{name!r} is {what} of the mission language, not a behaviour: {kind.doc}{takes}; "
-            'the language\'s words are in docs/missions.md, "Nodes"'
+            f'the language\'s words are in {MISSIONS_DOC}, "Nodes"'
         )
     if name in MODIFIERS:
         return (
             f"{name!r} is a modifier of the mission language, written beside any node's word, "
-            f'not a behaviour: {MODIFIERS[name]} (docs/missions.md, "Modifiers")'
+            f'not a behaviour: {MODIFIERS[name]} ({MISSIONS_DOC}, "Modifiers")'
         )
     if name in RESERVED:
-        return f"{name!r} is a section of a mission file, not a behaviour (docs/missions.md)"
+        return f"{name!r} is a section of a mission file, not a behaviour ({MISSIONS_DOC})"
     return None
 
 

@@ -51,8 +51,9 @@ AUTO_PROFILE = "auto"
 #: Where ``--profile`` came from when nothing named it.
 DEFAULT_SOURCE = "the default"
 
-#: Where a user reads about it, said in the messages.
-DOCUMENTED_AT = "docs/robot.md, Which robot"
+#: Where a user reads about it, said in the messages: the help an installed user has (it
+#: said docs/robot.md, which the wheel does not ship).
+DOCUMENTED_AT = "roomba-bt run --help, --profile"
 
 
 @dataclass(frozen=True, slots=True)

@@ -56,8 +56,9 @@ INCLUDE_DIRS_KEY = "include-dirs"
 #: The other keys the table may hold, read elsewhere: the robot's model (cli/profile_choice.py).
 OTHER_KEYS = (PROFILE_KEY,)
 
-#: Where a user reads about it, said in every message that names these settings.
-DOCUMENTED_AT = "docs/missions.md, Include folders"
+#: Where a user reads about it, said in every message that names these settings: the help
+#: an installed user has (it said docs/missions.md, which the wheel does not ship).
+DOCUMENTED_AT = "roomba-bt run --help, --include-dir"
 
 
 @dataclass(frozen=True, slots=True)

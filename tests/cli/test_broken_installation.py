@@ -83,8 +83,9 @@ def raised_in(module: str, error: ImportError) -> ImportError:
         ),
         (
             "roomba_bt.cli.run_cmd",
-            ModuleNotFoundError("No module named 'roomba_bt.runtime.gone'",
-                                name="roomba_bt.runtime.gone"),  # fmt: skip
+            ModuleNotFoundError(
+                "No module named 'roomba_bt.runtime.gone'", name="roomba_bt.runtime.gone"
+            ),
             "the module roomba_bt.runtime.gone is missing from this installation of roomba-bt",
         ),
         (
@@ -141,8 +142,7 @@ def test_an_import_error_in_roomba_bts_own_code_is_an_internal_error(
 
     namespace = {"__name__": worlds_cmd.__name__, "CIRCULAR": CIRCULAR}
     exec(
-        "def worlds_command(args):\n"
-        "    raise ImportError(CIRCULAR, name='roomba_bt.sim')\n",
+        "def worlds_command(args):\n    raise ImportError(CIRCULAR, name='roomba_bt.sim')\n",
         namespace,
     )
     monkeypatch.setattr(worlds_cmd, "worlds_command", namespace["worlds_command"])

@@ -24,7 +24,7 @@ from roomba_bt.project import key_line
 
 MISSION = "mission: sit\ntree:\n  wait: 0.1s\n"
 #: the names a setting may hold, as every message says them
-ALLOWED = "allowed: create2, roomba600, roomba500, auto (docs/robot.md, Which robot)"
+ALLOWED = "allowed: create2, roomba600, roomba500, auto (roomba-bt run --help, --profile)"
 
 Capsys = pytest.CaptureFixture[str]
 

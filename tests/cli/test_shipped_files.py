@@ -5,12 +5,13 @@ package's folder: the docs say each mission is documented at its top)."""
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 
 import pytest
 
 from roomba_bt.cli import main
-from roomba_bt.mission.shipped import shipped_missions
+from roomba_bt.mission.shipped import SHIPPED_DIR, find_mission, shipped_missions
 from roomba_bt.sim.world import WORLDS_DIR, parse_world, shipped_worlds
 
 
@@ -20,6 +21,21 @@ def test_a_shipped_mission_is_printed_with_its_comments(
 ) -> None:
     assert main(["missions", name]) == 0
     assert capsys.readouterr().out == shipped_missions()[name].read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize("path", sorted(SHIPPED_DIR.rglob("*.yaml")), ids=lambda p: p.name)
+def test_what_a_shipped_file_says_an_installed_user_can_follow(
+    path: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``roomba-bt missions dock`` showed ``roomba-bt run missions/dock.yaml --fast``, exit 2
+    in any folder but a checkout's, and sent its reader to ``docs/routines.md``, a file the
+    wheel does not ship: its commands name shipped missions by name, and a page of the docs
+    is named as the project repository's."""
+    monkeypatch.chdir(tmp_path)  # an empty folder, as an installed user's
+    text = path.read_text(encoding="utf-8")
+    for mission in re.findall(r"^#\s+roomba-bt (?:run|eval) (\S+)", text, re.M):
+        assert find_mission(mission).path is not None, mission
+    assert re.findall(r"(?<!roomba-bt's repository: )docs/\S*", text) == []
 
 
 def test_a_library_file_is_printed_and_an_unknown_name_is_refused(

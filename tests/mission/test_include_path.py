@@ -201,7 +201,7 @@ def test_the_refusal_says_where_it_looked_and_the_fix(repo: Path, capsys: Capsys
         "folder (missions/delivery), the shipped library and the include folders granted "
         "(missions/delivery); allow its folder with --include-dir missions/common/lib, or for "
         f"every command with {INCLUDE_PATH_VARIABLE} or include-dirs under [tool.roomba-bt] in "
-        "a pyproject.toml (docs/missions.md, Include folders) [include[1]]"
+        "a pyproject.toml (roomba-bt run --help, --include-dir) [include[1]]"
     )
 
 

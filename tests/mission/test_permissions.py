@@ -143,8 +143,8 @@ def test_an_allowed_plugin_file_outside_the_mission_folder_is_refused_as_an_incl
         f"mail/m.yaml:1:11: plugin file {target!r} is outside the mission's folder (mail), the "
         "shipped library and the include folders granted (none); allow its folder with "
         "--include-dir elsewhere, or for every command with ROOMBA_BT_INCLUDE_PATH or "
-        "include-dirs under [tool.roomba-bt] in a pyproject.toml (docs/missions.md, Include "
-        "folders) [plugins[0]]"
+        "include-dirs under [tool.roomba-bt] in a pyproject.toml (roomba-bt run --help, "
+        "--include-dir) [plugins[0]]"
     )
     assert not (elsewhere / "imported.txt").exists()
     allowed = ["--allow-plugin-files", "--include-dir", str(elsewhere)]
