@@ -392,6 +392,15 @@ class Declaration:
     def mode_after(self, params: Mapping[str, Any]) -> OIMode | None:
         return self.leads_to(params) if callable(self.leads_to) else self.leads_to
 
+    def takes_blackboard_value(self, param: Param) -> bool:
+        """Whether ``param`` may be given as ``@key`` (read from the blackboard when the leaf
+        starts): where it says so (``from_blackboard``), and never a key parameter, whatever
+        it says. The key a key parameter names is checked when the mission is compiled
+        (declared, of the type the declaration says, written before it is read); a name read
+        from the blackboard at run time passed every one of those checks unseen, and a
+        plugin that left out ``from_blackboard=False`` wrote wherever the blackboard said."""
+        return param.from_blackboard and key_role(self, param.name) is None
+
     def key_type(self, pname: str) -> ValueType | None:
         """The declared type of the key parameter ``pname`` names (None: untyped)."""
         for name, vtype in self.key_types:
@@ -429,6 +438,8 @@ class Declaration:
                 )
             if value is None and not param.required:
                 continue  # not given: its default
+            if _is_blackboard_value(value) and key_role(self, pname) is not None:
+                raise ParamError(f"{what}: {pname} {value}: not allowed{key_not_read(self, pname)}")
             try:
                 value = from_python(param, value)
             except (UnitError, TypeError, ValueError, KeyError, AttributeError) as exc:
@@ -554,6 +565,32 @@ def _key_param_problem(decl: Declaration) -> str | None:
                 f"ValueType of roomba_bt.behaviours.units ({known})"
             )
     return None
+
+
+def key_role(decl: Declaration, pname: str) -> str | None:
+    """``"writes"`` or ``"reads"`` where ``pname`` names a key ``decl`` writes or reads
+    (``writes_keys``, ``reads_keys``), else None."""
+    if pname in decl.writes_keys:
+        return "writes"
+    return "reads" if pname in decl.reads_keys else None
+
+
+def key_not_read(decl: Declaration, pname: str) -> str:
+    """Why the key parameter ``pname`` of ``decl`` takes no ``@key``, said after the refusal
+    (the compiler's at the mission's file:line:col, :meth:`Declaration.checked`'s for a tree
+    built in Python), naming the plugin it comes from."""
+    role = key_role(decl, pname)
+    plugin = "" if decl.origin == "builtin" else f" (plugin {decl.origin})"
+    return (
+        f": {pname} names the key {decl.name}{plugin} {role}, which is checked before the "
+        "run (declared, of its type, written before it is read); a name read from the "
+        f"blackboard would skip those checks: write the key's name ({pname}: my_key)"
+    )
+
+
+def _is_blackboard_value(value: object) -> bool:
+    """``value`` a :class:`BlackboardRef`, or a text ``"@..."`` as YAML writes one."""
+    return isinstance(value, BlackboardRef) or (isinstance(value, str) and value.startswith("@"))
 
 
 def key_roles(

@@ -12,7 +12,7 @@ from typing import Any
 
 import yaml
 
-from roomba_bt.behaviours.declare import Declaration
+from roomba_bt.behaviours.declare import Declaration, key_not_read, key_role
 from roomba_bt.behaviours.units import MARK, ValueType
 from roomba_bt.mission.plan import Node
 from roomba_bt.mission.source import Bad, Loc, mapping
@@ -54,7 +54,8 @@ def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node:
         try:
             params[pname] = resolve(
                 ctx, pnode, pvloc, param.type, env, f"{decl.name}.{pname}",
-                param=param, allow_ref=param.from_blackboard,
+                param=param, allow_ref=decl.takes_blackboard_value(param),
+                no_ref=key_not_read(decl, pname) if key_role(decl, pname) else "",
             )  # fmt: skip
         except Bad as bad:
             ctx.report(bad)

@@ -171,7 +171,7 @@ def _param_schema(decl: Declaration) -> dict[str, Any]:
     for p in decl.params:
         schema, note = _value_schema(p)
         described = f"{p.doc} ({p.describe()})".strip() if p.doc else p.describe()
-        written = [schema, _PARAMETER, *([_KEY_REF] if p.from_blackboard else [])]
+        written = [schema, _PARAMETER, *([_KEY_REF] if decl.takes_blackboard_value(p) else [])]
         props[p.name] = {
             "anyOf": written if schema else [{}],
             "description": f"{described}; {note}" if note else described,

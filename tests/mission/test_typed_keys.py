@@ -19,8 +19,10 @@ from roomba_bt.behaviours import (
     INT,
     STR,
     Action,
+    BlackboardRef,
     Condition,
     Param,
+    ParamError,
     ValueType,
     declare,
     default_registry,
@@ -196,3 +198,73 @@ def test_behaviours_lists_the_key_parameters_and_their_types(
     assert listed["dirt_seen"]["writes_keys"] == [{"parameter": "key", "type": "int"}]
     assert listed["dirt_seen"]["reads_keys"] == []
     assert listed["mark"]["writes_keys"] == [{"parameter": "key", "type": "mark"}]
+
+
+@declare(
+    "count_into",
+    kind="action",
+    params=(Param("key", STR, required=True, doc="left from_blackboard=True, as a plugin may"),),
+    writes_keys={"key": INT},
+)
+class CountInto(Action):
+    """Writes 3 to the key its parameter names; its author forgot ``from_blackboard=False``."""
+
+    def update(self) -> Status:
+        write_key(str(self.value("key")), 3, self.name)
+        return Status.SUCCESS
+
+
+COUNTING_PLUGIN = '''
+from py_trees.common import Status
+
+from roomba_bt.behaviours import INT, STR, Action, Param, declare, write_key
+
+
+@declare("count_into", kind="action", params=(Param("key", STR, required=True),),
+         writes_keys={"key": INT})
+class CountInto(Action):
+    """Writes 3 to the key its parameter names (from_blackboard left at its default)."""
+
+    def update(self):
+        write_key(str(self.value("key")), 3, self.name)
+        return Status.SUCCESS
+'''
+POINTER = (
+    "blackboard:\n  lvl: {type: int}\n  pointer: {type: str, initial: top}\n"
+    "  top: {type: speed}\ntree:\n  sequence:\n    - count_into: {key: \"@pointer\"}\n"
+)
+
+
+def test_a_key_parameter_never_reads_its_key_s_name_from_the_blackboard(
+    mission_file: Callable[..., Path], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``key: "@pointer"`` validated and ran when the plugin left ``from_blackboard`` at its
+    default: the key's name came from the blackboard at run time, and the checks of the key
+    (declared, of its type, written before read) were passed by; the int went into ``top``,
+    a speed. A key parameter takes its key's name only, said at the file:line:col with the
+    plugin, by ``validate`` and by ``run`` before anything moves (exit 2)."""
+    path = mission_file("plugins: [counting.py]\n" + POINTER, name="pointer.yaml")
+    plugin = path.parent / "counting.py"
+    plugin.write_text(COUNTING_PLUGIN, encoding="utf-8")
+    for command in (["validate"], ["run", "--fast"]):
+        assert main([*command, "--allow-plugin-files", str(path)]) == 2
+        said = "".join(capsys.readouterr())  # validate says it on stdout, run on stderr
+        assert (
+            f"{path}:8:25: count_into.key: a blackboard value (@key) is not allowed here: key "
+            f"names the key count_into (plugin {plugin}) writes, which is checked before the "
+            "run (declared, of its type, written before it is read); a name read from the "
+            "blackboard would skip those checks: write the key's name (key: my_key)"
+        ) in said, said
+
+
+def test_a_key_parameter_built_in_python_refuses_a_blackboard_value() -> None:
+    """The same rule for a tree built in Python, which nothing validates: refused when the
+    leaf is built (``ParamError``), not read at its start as any other ``@key`` is."""
+    with pytest.raises(ParamError) as refused:
+        CountInto("count", {"key": "@pointer"})
+    assert str(refused.value).startswith(
+        "count_into 'count': key @pointer: not allowed: key names the key count_into writes"
+    )
+    with pytest.raises(ParamError):
+        CountInto("count", {"key": BlackboardRef("pointer")})
+    assert CountInto("count", {"key": "lvl"}).value("key") == "lvl"
