@@ -103,7 +103,8 @@ def _add_run_parser(sub: Any) -> None:
 
         Run MISSION. Without --port it runs on the built-in simulator (real time; --fast on the
         virtual clock). Exit codes: 0 succeeded, 1 failed or timed out, 2 invalid mission or usage,
-        3 connection or stream failure, 4 a behaviour raised an exception (sys.exit() too), 7
+        3 connection or stream failure, 4 a behaviour raised an exception (sys.exit() too) or
+        the run hung past --wall-limit, 7
         succeeded but failed --strict (or, with --strict, not started: the mission has
         warnings), {INTERNAL_ERROR_SAID}, 130 interrupted (Ctrl-C, a signal).
         """,
@@ -155,7 +156,7 @@ def _add_limit_options(run: argparse.ArgumentParser) -> None:
     )
     add_wall_limit_option(
         run, "for the run",
-        "after the safe stop, exit 4; the way to end a --fast run stuck where --timeout's "
+        "after the safe stop, HUNG, exit 4; the way to end a --fast run stuck where --timeout's "
         "mission time stands still (default: none)",
     )  # fmt: skip
 

@@ -591,8 +591,9 @@ def final_values(names: Sequence[str]) -> tuple[tuple[str, Any], ...]:
 
 
 #: The outcome of an episode stopped at its wall-clock limit (``eval --wall-limit``): stuck
-#: (a behaviour's endless loop, most often), not a way the mission ended.
-HUNG = "hung"
+#: (a behaviour's endless loop, most often), not a way the mission ended; ``run
+#: --wall-limit``'s outcome, the same word (:attr:`Outcome.HUNG`).
+HUNG = Outcome.HUNG.value
 
 #: ``--wall-limit``'s default: this, plus a tenth of the episode's --timeout. Episodes run
 #: 200-900x real time (docs/performance.md), so one still running at a tenth of its mission

@@ -438,7 +438,7 @@ class MissionRunner(BaseHandle):
             except RunAborted as exc:
                 if not limit.reached:  # raised into the run from outside: on, after the stop
                     raise
-                summary.outcome, summary.reason = Outcome.ERROR, limit.said(exc)  # eval's HUNG
+                summary.outcome, summary.reason = Outcome.HUNG, limit.said(exc)
             except BaseException as exc:  # Ctrl-C; a stop, a lost link, a bug, sys.exit()
                 interrupt, raised_in = run_ended_by(exc, summary, answered=self.has_snapshot)
             finally:

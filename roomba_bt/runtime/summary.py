@@ -75,6 +75,10 @@ class Outcome(Enum):
     #: the robot never answered the start-up (it was never connected, so nothing was lost)
     NO_CONNECTION = "no connection"
     ERROR = "error"
+    #: the run ran past its wall-clock limit (``run --wall-limit``, an ``eval`` episode's):
+    #: stuck, most often in a behaviour's endless loop. No exception in the tree (nothing
+    #: raised: the limit ended it from outside), and a bug all the same, so exit 4 as ERROR
+    HUNG = "hung"
     #: the run's input ended before the tree did: a replayed record's end, or its first
     #: difference from what the tree wrote (``replay`` says which, and exits by the bytes)
     INPUT_ENDED = "input ended"
@@ -93,6 +97,7 @@ _EXIT = {
     Outcome.CONNECTION_LOST: ExitCode.CONNECTION,
     Outcome.NO_CONNECTION: ExitCode.CONNECTION,
     Outcome.ERROR: ExitCode.BEHAVIOUR_ERROR,
+    Outcome.HUNG: ExitCode.BEHAVIOUR_ERROR,
     Outcome.INPUT_ENDED: ExitCode.MISSION_FAILED,
 }
 

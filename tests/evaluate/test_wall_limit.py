@@ -127,8 +127,11 @@ def test_eval_reports_hung_episodes_and_exits_4(
     words = shlex.split(advice)
     assert words[:3] == ["roomba-bt", "-v", "run"] and "--wall-limit" in words
     assert main(words[1:]) == 4
+    # the same outcome and words as the episode's (it said ERROR, as if the tree had raised)
     stuck = "--wall-limit 1 s of wall-clock time ran out in behaviour sequence / stuck (at "
-    assert f"roomba-bt: error: {stuck}" in capsys.readouterr().err
+    out, err = capsys.readouterr()
+    assert f"outcome      HUNG ({stuck}" in out
+    assert f"roomba-bt: hung: {stuck}" in err
 
 
 def test_a_dask_worker_goes_on_after_a_hung_episode(tmp_path: Path) -> None:

@@ -123,7 +123,8 @@ def test_the_wall_limit_ends_a_stuck_run_naming_the_leaf_after_the_safe_stop() -
     with stack:
         summary = stack.run()
     assert stuck.spinning.is_set()
-    assert summary.outcome is Outcome.ERROR and summary.exit_code == 4
+    # HUNG, eval's word for a stuck episode: not ERROR, no exception was raised in the tree
+    assert summary.outcome is Outcome.HUNG and summary.exit_code == 4
     said = "--wall-limit 0.5 s of wall-clock time ran out in behaviour root / stuck"
     assert summary.reason.startswith(said), summary.reason
     assert stuck.named(summary.reason, said), summary.reason
