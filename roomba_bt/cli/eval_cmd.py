@@ -25,8 +25,9 @@ and its worker process replaced; one whose worker process dies running it, again
 alone (``os._exit`` in a behaviour, a crash in C code), is recorded as DIED and the sweep goes
 on. Ctrl-C prints what finished (exit 130). Exit codes: 0 (and 1 when ``--min-rate`` is given
 and not reached), 2 for invalid input, 3 when the run environment failed: the ``--scheduler``
-does not answer or is lost, the Dask cluster had no worker for ``--worker-wait``, or local
-worker processes were killed from outside again and again (what finished is summarised), 4
+does not answer or is lost, the Dask cluster had no worker for ``--worker-wait``, local
+worker processes were killed from outside again and again (what finished is summarised), or
+a worker cannot compile a mission this machine compiled (a plugin not installed there), 4
 when a behaviour raised in an episode, one ran past ``--wall-limit`` or one killed its worker
 (a bug, not a mission outcome), 7 with ``--strict`` when a mission has compile-time warnings
 (no episode runs), 70 on roomba-bt's own bug.
@@ -69,7 +70,7 @@ from roomba_bt.printable import ANY_CONTROL, duration_said, escaped
 from roomba_bt.runtime.summary import INTERNAL_ERROR_SAID, ExitCode, Outcome
 
 if TYPE_CHECKING:  # the evaluation is imported when it runs: the CLI starts faster
-    from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec
+    from roomba_bt.evaluate.episode import EpisodeResult, EpisodeSpec, MissionNotCompiled
     from roomba_bt.evaluate.parallel import Engine, Evaluation, Interruption, Progress
     from roomba_bt.evaluate.records import PartialResults
     from roomba_bt.evaluate.stats import Comparison, Summary
@@ -88,7 +89,8 @@ def register(sub: Any) -> None:
         Passive on a hazard, the dockings and the failure reasons. Exit codes:
         0 done, 1 --min-rate not reached, 2 invalid input, 3 the run environment failed:
         --scheduler unreachable or lost, no Dask worker for --worker-wait, local worker
-        processes killed from outside again and again (what finished is summarised), 4 a
+        processes killed from outside again and again (what finished is summarised), a
+        worker that cannot compile a mission (a plugin not installed there), 4 a
         behaviour raised in an episode, one hung (--wall-limit) or killed its worker process
         (DIED), 7 with --strict, a mission has compile-time warnings (no episode runs),
         {INTERNAL_ERROR_SAID}, 130 interrupted by Ctrl-C or a signal (what finished is
@@ -823,6 +825,7 @@ def _run(
     """Every variant's episodes on the engine, a progress bar each, each record into
     ``partial`` as it finishes; an exit code when the cluster is not there."""
     from roomba_bt.evaluate.cluster import ClusterUnavailableError, SchedulerUnreachableError
+    from roomba_bt.evaluate.episode import MissionNotCompiled
     from roomba_bt.evaluate.parallel import ProgressBar, evaluate
 
     bars = [
@@ -838,6 +841,27 @@ def _run(
         return ExitCode.CONNECTION
     except ClusterUnavailableError as exc:
         return _error(str(exc))
+    except MissionNotCompiled as exc:
+        _not_on_the_worker(args, exc)
+        return ExitCode.CONNECTION
+
+
+def _not_on_the_worker(args: argparse.Namespace, exc: MissionNotCompiled) -> None:
+    """A worker that cannot compile a mission this machine compiled, said once (its first
+    episode there stops the evaluation: every other would fail alike), with what this
+    machine's tree used that the worker may lack: the installed plugins and their versions
+    (the worker's compiler knows only that a node is unknown), else the modules a plugin
+    file imports, which its import error names."""
+    for line in str(exc).splitlines():
+        print(f"roomba-bt eval: {escaped(line, ANY_CONTROL)}", file=sys.stderr)
+    plugins = getattr(args, "made_by", {}).get(exc.mission, {}).get("plugins") or {}
+    if plugins:
+        here = ", ".join(f"{name} {about['version']}" for name, about in plugins.items())
+        need = f"the installed plugin(s) its tree uses here: {here}"
+    else:
+        need = "what its plugin files import"
+    print(f"roomba-bt eval: install on every worker {need}, and this roomba-bt release (exit "
+          "3: the run environment failed, not the mission)", file=sys.stderr)  # fmt: skip
 
 
 def _recorded(partial: PartialResults, bar: Progress | None) -> Progress:

@@ -75,6 +75,25 @@ class EvaluationError(ValueError):
     """Bad input to an evaluation (mission, world, override): a message for the user."""
 
 
+class MissionNotCompiled(EvaluationError):
+    """A mission the evaluating machine compiled that an episode's worker could not: a
+    plugin installed there and not on the worker (an installed package's behaviours are
+    unknown nodes there; a module a plugin file imports is missing), or another roomba-bt
+    release. Every episode of the mission would fail alike: ``eval`` says it once, naming the
+    mission as it was given and the worker, and stops (exit 3: the run environment failed,
+    not the mission). Pickled from a worker process or a Dask worker as it is."""
+
+    def __init__(self, mission: str, worker: str, problem: str) -> None:
+        super().__init__(mission, worker, problem)
+        self.mission, self.worker, self.problem = mission, worker, problem
+
+    def __str__(self) -> str:
+        return (
+            f"{self.mission} was compiled here, but not on the worker {self.worker}, where "
+            f"no episode of it can run:\n{self.problem}"
+        )
+
+
 @dataclass(frozen=True)
 class EpisodeSpec:
     """Everything that decides one episode. Same spec, same result."""
@@ -472,10 +491,7 @@ def _mission(
         mission, texts = cached
         if all(_text_of(file) == text for file, text in texts):
             return mission.rebuilt()
-    try:
-        mission = load_mission(path, dict(params), profile=profile, permissions=granted)
-    except MissionError as exc:
-        raise EvaluationError("\n".join(reported(exc.diagnostics))) from None
+    mission = load_mission(path, dict(params), profile=profile, permissions=granted)
     if len(_COMPILED) >= _COMPILED_KEPT:
         del _COMPILED[next(iter(_COMPILED))]  # the oldest
     _COMPILED[key] = (mission, tuple((file, _text_of(file)) for file in mission.files))
@@ -502,7 +518,10 @@ def _run_episode(spec: EpisodeSpec, measured: type[_MeasuredSimulator]) -> Episo
     if spec.sources is not None:  # the bundle holds what the submitter's check allowed
         folder = Path(path).parents[len(Path(spec.sources.main).parts) - 1]
         granted = replace(granted, include_dirs=(*granted.include_dirs, folder))
-    mission = _mission(Path(path), spec.params, profile, granted)
+    try:
+        mission = _mission(Path(path), spec.params, profile, granted)
+    except MissionError as exc:  # the evaluation compiled it before any episode: not here
+        raise _not_compiled(spec, Path(path), exc) from None
     world = build_world(spec)
     pose = start_pose(world, spec)
     faults = replace(spec.faults, odometry_error=spec.odometry_error)
@@ -522,6 +541,19 @@ def _run_episode(spec: EpisodeSpec, measured: type[_MeasuredSimulator]) -> Episo
         raise KeyboardInterrupt(summary.reason)
     stage = failure_stage(summary.reason)
     return _measured(spec, world, pose, simulator, summary, summary.outcome.value, stage)
+
+
+def _not_compiled(spec: EpisodeSpec, path: Path, exc: MissionError) -> MissionNotCompiled:
+    """What the worker's compiler said of the mission at ``path``, each file named as the
+    evaluation gave it: the bundle's copy (``/tmp/roomba-bt-.../lab.py``) is no file the
+    user knows."""
+    said = "\n".join(reported(exc.diagnostics))
+    if spec.sources is not None:
+        depth = len(Path(spec.sources.main).parts) - 1  # folders from the bundle's root
+        copy = path.parents[depth]
+        given = os.path.normpath(os.path.join(Path(spec.mission).parent, *[".."] * depth))
+        said = said.replace(f"{copy}{os.sep}", "" if given == "." else f"{given}{os.sep}")
+    return MissionNotCompiled(spec.mission, f"{socket.gethostname()}:{os.getpid()}", said)
 
 
 def _measured(

@@ -231,7 +231,7 @@ class CountInto(Action):
 '''
 POINTER = (
     "blackboard:\n  lvl: {type: int}\n  pointer: {type: str, initial: top}\n"
-    "  top: {type: speed}\ntree:\n  sequence:\n    - count_into: {key: \"@pointer\"}\n"
+    '  top: {type: speed}\ntree:\n  sequence:\n    - count_into: {key: "@pointer"}\n'
 )
 
 
