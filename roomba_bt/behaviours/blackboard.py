@@ -198,8 +198,17 @@ def _write_problem(vtype: ValueType, value: Any) -> str | None:
     return f"expected an odometry mark (snapshot.odometry), got a {type(value).__name__}"
 
 
-#: the keys written this run that the mission does not declare, each warned of once
-_UNDECLARED_SAID: set[str] = set()
+#: the keys written this run that the mission does not declare, each warned of once, with
+#: who wrote it first and where (``" by 'writer' at plugin.py:12"``)
+_UNDECLARED_SAID: dict[str, str] = {}
+
+
+def undeclared_writes() -> tuple[tuple[str, str], ...]:
+    """Each key written this run (since the mission's :func:`declare_keys`) that the mission
+    does not declare, with who wrote it first and where (``" by 'writer' at plugin.py:12"``),
+    in the order written: what the warning said, for an evaluation, whose episodes' log
+    lines are silenced, to count the episodes it was said in and say it once."""
+    return tuple(_UNDECLARED_SAID.items())
 
 
 def _said_undeclared(key: str, writer: str, declared: Mapping[str, ValueType]) -> None:
@@ -210,10 +219,10 @@ def _said_undeclared(key: str, writer: str, declared: Mapping[str, ValueType]) -
     refused; but no ``check`` or ``@key`` of the mission can read it, no type holds it, and
     the validator never saw it (a key a parameter names it checks: ``writes_keys``). A
     misspelt key ran silently."""
-    _UNDECLARED_SAID.add(key)
     caller = sys._getframe(2)  # write_key's caller: the plugin's line
     where = f" at {caller.f_code.co_filename}:{caller.f_lineno}"
     by = "" if writer == _MISSION_WRITER_NAME else f" by {writer!r}"
+    _UNDECLARED_SAID[key] = by + where
     keys = ", ".join(sorted(declared)) or "none"
     _log.warning(
         "write_key(%r)%s%s: blackboard key %r is not declared by the mission (it declares: "

@@ -30,7 +30,7 @@ from types import FrameType
 from typing import Any
 
 from roomba_bt import yamlsource
-from roomba_bt.behaviours.blackboard import read_key
+from roomba_bt.behaviours.blackboard import read_key, undeclared_writes
 from roomba_bt.behaviours.reasons import GUARD_STOPPED
 from roomba_bt.evaluate.sources import MissionSources, bundle_mission, bundle_world
 from roomba_bt.mission import (
@@ -246,6 +246,10 @@ class EpisodeResult:
     #: the spec's ``keys`` and their values at the end, in its order (None: never written;
     #: :func:`final_values`), as ``params``: pairs, hashable and picklable
     keys: tuple[tuple[str, Any], ...] = ()
+    #: each key a behaviour wrote that the mission does not declare, with who wrote it first
+    #: and where (:func:`~roomba_bt.behaviours.blackboard.undeclared_writes`): the warning a
+    #: run says, which an episode's silenced log does not; the summary says it once
+    undeclared: tuple[tuple[str, str], ...] = ()
 
     @property
     def succeeded(self) -> bool:
@@ -605,6 +609,7 @@ def _measured(
         worker=f"{socket.gethostname()}:{os.getpid()}",
         coverage=_coverage(simulator, spec.start_area or ""),
         keys=final_values(spec.keys),
+        undeclared=undeclared_writes(),
     )
 
 

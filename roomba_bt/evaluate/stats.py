@@ -98,6 +98,10 @@ class Summary:
     #: whether the wall-clock and CPU times are said (:meth:`lines`, :meth:`to_dict`): other
     #: on every run of the same episodes; ``eval --reproducible`` leaves them out
     timings: bool = True
+    #: each key a behaviour wrote that the mission does not declare, who wrote it first and
+    #: where, and the episodes it was written in (:attr:`EpisodeResult.undeclared`): said
+    #: once, where each episode's run would have warned of it
+    undeclared: tuple[tuple[str, str, int], ...] = ()
 
     @property
     def rate(self) -> float:
@@ -134,6 +138,7 @@ class Summary:
                 else ""
             ),
         ]
+        out += [f"warning      {said}" for said in self.undeclared_said()]
         if self.failures:
             out.append("failures")
             out += [f"  {count:4d}  {reason}" for reason, count in self.failures]
@@ -141,6 +146,17 @@ class Summary:
 
     def __str__(self) -> str:
         return "\n".join(self.lines())
+
+    def undeclared_said(self) -> list[str]:
+        """The undeclared keys written, each as ``run`` warns of it, and in how many of the
+        episodes: ``write_key('secret') by 'probe' at lab.py:10: blackboard key 'secret' is
+        not declared by the mission, in 3 of 20 episodes; ...``."""
+        return [
+            f"write_key({key!r}){where}: blackboard key {key!r} is not declared by the mission, "
+            f"in {episodes} of {self.runs} episodes; declare it under blackboard: ({key}: "
+            "{type: ...}), or name a declared key in a parameter listed in writes_keys"
+            for key, where, episodes in self.undeclared
+        ]
 
     @property
     def hazard_falls(self) -> dict[str, int]:
@@ -207,6 +223,10 @@ class Summary:
             "wall_time": self.wall_s if self.timings else None,
             "cpu_time": self.cpu_s if self.timings else None,
             "mission_time": self.simulated_s,
+            "undeclared_keys": [
+                {"key": key, "written": where.strip(), "episodes": episodes}
+                for key, where, episodes in self.undeclared
+            ],
         }
 
 
@@ -238,6 +258,11 @@ def summarize(
         falls.update(dict(r.falls))
         episodes_by_cause.update(cause for cause, _ in r.falls)
     in_order = falls_in_order(falls)
+    undeclared: dict[str, tuple[str, int]] = {}  # the first episode's writer, the episodes
+    for r in results:
+        for key, where in r.undeclared:
+            first, episodes = undeclared.get(key, (where, 0))
+            undeclared[key] = (first, episodes + 1)
     return Summary(
         mission=mission,
         world=world,
@@ -257,6 +282,7 @@ def summarize(
         episodes_with_falls=sum(1 for r in results if r.falls),
         episodes_with_falls_by_cause=tuple((c, episodes_by_cause[c]) for c, _ in in_order),
         episodes_with_hazard_falls=sum(1 for r in results if hazard_falls(dict(r.falls))),
+        undeclared=tuple((key, where, n) for key, (where, n) in undeclared.items()),
     )
 
 
@@ -369,6 +395,17 @@ class Comparison:
 
     def __str__(self) -> str:
         return "\n".join(self.lines())
+
+    def undeclared_said(self) -> list[str]:
+        """The undeclared keys written, each as ``run`` warns of it, and in how many of the
+        episodes: ``write_key('secret') by 'probe' at lab.py:10: blackboard key 'secret' is
+        not declared by the mission, in 3 of 20 episodes; ...``."""
+        return [
+            f"write_key({key!r}){where}: blackboard key {key!r} is not declared by the mission, "
+            f"in {episodes} of {self.runs} episodes; declare it under blackboard: ({key}: "
+            "{type: ...}), or name a declared key in a parameter listed in writes_keys"
+            for key, where, episodes in self.undeclared
+        ]
 
     def to_dict(self) -> dict[str, object]:
         return {

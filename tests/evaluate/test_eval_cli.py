@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import shlex
 import subprocess
 import sys
@@ -795,3 +796,54 @@ def test_more_jobs_than_cores_is_warned_about(
     assert "warning: --jobs 2 on 1 core(s)" in capsys.readouterr().err
     assert main(["eval", BUMP, "-p", "duration=1s", "--runs", "2", "--no-progress"]) == 0
     assert "warning: --jobs" not in capsys.readouterr().err
+
+
+_SOMETIMES = '''\
+from py_trees.common import Status
+
+from roomba_bt.behaviours import Action, declare, write_key
+
+STARTS = []
+
+
+@declare("sometimes_writer", kind="action")
+class SometimesWriter(Action):
+    """Writes a key the mission does not declare, in every other episode of this process."""
+
+    def start(self):
+        STARTS.append(1)
+
+    def update(self):
+        if len(STARTS) % 2:
+            write_key("secret", 5, self.name)
+        return Status.SUCCESS
+'''
+
+
+def test_an_undeclared_key_written_is_said_once_with_its_episodes(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``run`` warns of a write to a key the mission does not declare; an episode's log is
+    silenced, and the warning was said in no episode of an evaluation (or, unsilenced, once
+    in each). Said once per variant, with the episodes it was written in, in the summary and
+    in ``--json``. In this process (``--wall-limit none``) the plugin counts the episodes."""
+    plugin = tmp_path / "sometimes.py"
+    plugin.write_text(_SOMETIMES)
+    mission = tmp_path / "sometimes.yaml"
+    mission.write_text("plugins: [./sometimes.py]\nblackboard:\n  x: int\n"
+                       "tree:\n  sequence:\n    - sometimes_writer\n")  # fmt: skip
+    words = ["eval", str(mission), "--runs", "4", "--allow-plugin-files", "--no-progress",
+             "--wall-limit", "none"]  # fmt: skip
+    assert main(words) == 0
+    out = capsys.readouterr().out
+    said = (
+        f"write_key('secret') by 'sometimes_writer' at {plugin}:17: blackboard key 'secret' is "
+        "not declared by the mission, in 2 of 4 episodes; declare it under blackboard: "
+        "(secret: {type: ...}), or name a declared key in a parameter listed in writes_keys"
+    )
+    assert out.count("write_key(") == 1 and f"warning      {said}\n" in out, out
+    assert main([*words, "--json"]) == 0
+    (variant,) = json.loads(capsys.readouterr().out)["variants"]
+    assert variant["undeclared_keys"] == [
+        {"key": "secret", "written": f"by 'sometimes_writer' at {plugin}:17", "episodes": 2}
+    ]
