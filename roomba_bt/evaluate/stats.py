@@ -396,17 +396,6 @@ class Comparison:
     def __str__(self) -> str:
         return "\n".join(self.lines())
 
-    def undeclared_said(self) -> list[str]:
-        """The undeclared keys written, each as ``run`` warns of it, and in how many of the
-        episodes: ``write_key('secret') by 'probe' at lab.py:10: blackboard key 'secret' is
-        not declared by the mission, in 3 of 20 episodes; ...``."""
-        return [
-            f"write_key({key!r}){where}: blackboard key {key!r} is not declared by the mission, "
-            f"in {episodes} of {self.runs} episodes; declare it under blackboard: ({key}: "
-            "{type: ...}), or name a declared key in a parameter listed in writes_keys"
-            for key, where, episodes in self.undeclared
-        ]
-
     def to_dict(self) -> dict[str, object]:
         return {
             "a": self.a,
