@@ -9,6 +9,12 @@ range (a pattern cannot compare numbers: the description says the range; a minus
 refused where the minimum is not below 0), a behaviour's own rules between its parameters,
 modes, blackboard order and types, the stream budget, what a ``sensor:`` comparison names
 (tests/mission/test_schema_agrees.py lists these, case by case).
+
+The schema has no ``$id``: it is generated on each machine from the behaviours installed
+there and published at no address, so an ``$id`` would give different documents one name
+(0.1.0's was ``https://roomba-bt.example/mission.schema.json``, an address that does not
+exist). Its references are all ``#/$defs/...``, resolved in the document itself, so an
+editor or ``check-jsonschema`` reads it from wherever the file is.
 """
 
 from __future__ import annotations
@@ -20,7 +26,6 @@ from roomba_bt.behaviours.language import MODIFIERS, STRUCTURAL, WORDS, NodeKind
 from roomba_bt.behaviours.registry import Registry, default_registry
 from roomba_bt.behaviours.units import UNITS, VALUE_TYPES, boolean_schema, quantity_schema
 
-SCHEMA_ID = "https://roomba-bt.example/mission.schema.json"
 _NODE = {"$ref": "#/$defs/node"}
 _NAME = r"[A-Za-z_][A-Za-z0-9_]*"
 #: a ``${parameter}`` (``-${p}`` negates it): any option or parameter may be one
@@ -227,7 +232,6 @@ def mission_schema(registry: Registry | None = None) -> dict[str, Any]:
     parameter, key = _declarations()
     return {
         "$schema": "https://json-schema.org/draft/2020-12/schema",
-        "$id": SCHEMA_ID,
         "title": "roomba-bt mission",
         "type": "object",
         "properties": {
