@@ -32,11 +32,20 @@ def test_the_shipped_missions_are_package_data() -> None:
 
 
 def test_the_repository_paths_link_to_the_one_copy() -> None:
-    """``missions/dock.yaml`` (docs, tests, the Makefile's history) is a link, not a copy."""
+    """``missions/dock.yaml`` (docs, tests, the Makefile's history) is a link, not a copy.
+    An sdist (the tree with a ``PKG-INFO``, where packagers run the tests) holds no links:
+    setuptools writes each as a copy of the file it names, so there the bytes are the same."""
+    from_sdist = (ROOT / "PKG-INFO").is_file()
     for name in shipped_missions():
-        link = ROOT / "missions" / f"{name}.yaml"
-        assert link.is_symlink() and link.resolve() == SHIPPED_DIR / f"{name}.yaml"
-    assert (ROOT / "missions" / "lib").resolve() == SHIPPED_DIR / "lib"
+        link, shipped = ROOT / "missions" / f"{name}.yaml", SHIPPED_DIR / f"{name}.yaml"
+        if from_sdist:
+            assert link.read_bytes() == shipped.read_bytes(), link
+        else:
+            assert link.is_symlink() and link.resolve() == shipped
+    library = sorted(p.name for p in (SHIPPED_DIR / "lib").iterdir())
+    assert sorted(p.name for p in (ROOT / "missions" / "lib").iterdir()) == library
+    if not from_sdist:
+        assert (ROOT / "missions" / "lib").resolve() == SHIPPED_DIR / "lib"
 
 
 def test_a_name_finds_the_shipped_mission_and_a_file_wins(
