@@ -6,13 +6,18 @@ running; ``silent_port``, a pty nobody answers on;
 ``record_held``, a file held by a child as a run holds its ``--record``.
 
 Outside CI a missing optional package (the peer clients pycreate2 and PyRoombaAdapter,
-matplotlib, jsonschema, the example wall-follow plugin) skips its tests with the install
-hint; in CI that would hide a broken install step, so the skip becomes a failure that says
-which package is missing.
+jsonschema, the example wall-follow plugin) skips its tests with the install hint; in CI
+that would hide a broken install step, so the skip becomes a failure that says which
+package is missing. The tests of roomba-bt's own extras (plot, monitor, cluster) say which
+extra they need, ``@pytest.mark.extra("plot")`` or a folder in :data:`EXTRA_FOLDERS`, and
+:func:`without_extra` decides alike: skipped, naming the extra, for a packager who builds
+the core alone; failed under ``CI=true``, where ``make test`` installs every extra
+(docs/releasing.md, The tests from the sdist).
 """
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import select
 import signal
@@ -78,6 +83,54 @@ def pytest_runtest_makereport(
     if any(sign in reason for sign in MISSING_DEPENDENCY):
         report.outcome = "failed"
         report.longrepr = f"CI=true: a test dependency is missing, so this fails: {reason}"
+
+
+#: pyproject.toml's optional extras that tests need, by the module each one installs
+EXTRAS = {"plot": "matplotlib", "monitor": "aiohttp", "cluster": "distributed"}
+#: folders whose every test needs an extra: their modules import it as they are collected
+#: (the monitor's server imports aiohttp), so a mark on each test would come too late
+EXTRA_FOLDERS = {ROOT / "tests" / "monitor": "monitor"}
+
+
+def without_extra(extra: str) -> tuple[str, str] | None:
+    """What becomes of a test of the extra ``extra`` where it is not installed: ``("skipped",
+    reason)`` for a packager's core-only build, ``("failed", reason)`` under ``CI=true``; None
+    where it is installed. Whether it is installed is whether its module can be found: a
+    half-installed extra (its module there, a dependency of it missing) is not skipped but
+    fails in the test, as it would for a user."""
+    module = EXTRAS[extra]
+    if importlib.util.find_spec(module) is not None:
+        return None
+    reason = f"needs the {extra} extra ({module} is missing): pip install 'roomba-bt[{extra}]'"
+    if in_ci():
+        return "failed", f"CI=true: make test installs every extra, so this fails: {reason}"
+    return "skipped", reason
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_runtest_setup(item: pytest.Item) -> None:
+    """A test marked ``@pytest.mark.extra(name)`` (or a ``pytest.param`` of one) needs it."""
+    for mark in item.iter_markers("extra"):
+        if verdict := without_extra(*mark.args):
+            outcome, reason = verdict
+            if outcome == "failed":
+                pytest.fail(reason, pytrace=False)
+            pytest.skip(reason)
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_make_collect_report(collector: pytest.Collector) -> pytest.CollectReport | None:
+    """A folder of :data:`EXTRA_FOLDERS` is skipped whole (failed under CI) before its
+    conftest imports the extra; the ImportError there was a collection error that stopped
+    the whole run."""
+    extra = EXTRA_FOLDERS.get(collector.path) if isinstance(collector, pytest.Directory) else None
+    verdict = without_extra(extra) if extra else None
+    if verdict is None:
+        return None
+    outcome, reason = verdict
+    if outcome == "failed":
+        return pytest.CollectReport(collector.nodeid, "failed", reason, None)
+    return pytest.CollectReport(collector.nodeid, "skipped", (str(collector.path), 0, reason), None)
 
 
 @pytest.fixture

@@ -44,6 +44,7 @@ command that is neither run nor listed.
 from __future__ import annotations
 
 import glob
+import importlib.util
 import os
 import re
 import shlex
@@ -275,7 +276,30 @@ def test_every_world_in_the_docs_loads(where: str, file: str, text: str) -> None
     parse_world(text, file)  # WorldError (its problems) if the docs' world does not load
 
 
-RUN = [(w, c) for w, c in COMMANDS if c not in NOT_RUN and not c.startswith("make test")]
+#: a word of a command that needs one of pyproject.toml's extras (the ``extra`` mark of
+#: tests/conftest.py: skipped where it is not installed, failed under CI=true)
+NEEDS_EXTRA = {"--plot": "plot", "--monitor": "monitor", "--engine dask": "cluster"}
+#: words of a command that needs the example plugin installed (`make test` installs it)
+NEEDS_PLUGIN = ("dirt_detect", "plugins/roomba-bt-dirt/")
+PLUGIN_INSTALLED = pytest.mark.skipif(
+    importlib.util.find_spec("roomba_bt_dirt") is None,
+    reason="needs the example plugin installed: pip install -e plugins/roomba-bt-dirt",
+)
+
+
+def needs(command: str) -> list[pytest.MarkDecorator]:
+    """What a command needs beyond roomba-bt itself, as marks of its case."""
+    marks = [pytest.mark.extra(extra) for word, extra in NEEDS_EXTRA.items() if word in command]
+    if any(word in command for word in NEEDS_PLUGIN):
+        marks.append(PLUGIN_INSTALLED)
+    return marks
+
+
+RUN = [
+    pytest.param(w, c, marks=needs(c), id=w)
+    for w, c in COMMANDS
+    if c not in NOT_RUN and not c.startswith("make test")
+]
 
 
 #: (exit code, stdout, stderr) of each whole command line run so far, by its argv as run: a
@@ -284,7 +308,7 @@ RUN = [(w, c) for w, c in COMMANDS if c not in NOT_RUN and not c.startswith("mak
 RAN: dict[tuple[str, ...], tuple[int, str, str]] = {}
 
 
-@pytest.mark.parametrize(("where", "command"), RUN, ids=[w for w, _ in RUN])
+@pytest.mark.parametrize(("where", "command"), RUN)
 def test_every_command_in_the_docs_runs(
     where: str, command: str, workdir: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

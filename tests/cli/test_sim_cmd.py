@@ -29,6 +29,7 @@ def test_a_served_simulator_without_plot_keeps_no_trajectory(
     assert len(kept[0].trace) <= 1
 
 
+@pytest.mark.extra("plot")
 def test_a_served_simulator_with_plot_keeps_its_trajectory(tmp_path: Path) -> None:
     args = build_parser().parse_args(["sim", "--pty", "--plot", str(tmp_path / "t.png")])
     simulator = sim_cmd._simulator(args)

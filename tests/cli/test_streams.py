@@ -85,10 +85,10 @@ def test_a_closed_pipe_keeps_a_differing_replays_exit_code(mission: Path, tmp_pa
     assert "Traceback" not in done.stderr
 
 
+@pytest.mark.extra("plot")
 def test_the_plot_is_written_when_stdout_is_gone(tmp_path: Path) -> None:
     """``run ... --plot p.png | head -1``: the report stopped at the first failed print, and
     the plot after it was never drawn."""
-    pytest.importorskip("matplotlib")
     plot = tmp_path / "p.png"
     done = _reader_gone(
         ["run", "dock", "--fast", "--timeout", "60s", "--plot", str(plot)], tmp_path

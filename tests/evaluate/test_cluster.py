@@ -23,6 +23,9 @@ MISSIONS = Path(__file__).resolve().parents[2] / "missions"
 SPECS = episode_specs(str(MISSIONS / "dock.yaml"), world="empty-room", runs=8, seed=11,
                       within_m=1.5)  # fmt: skip
 DASK = str(Path(sys.executable).parent / "dask")
+#: every test here runs episodes on Dask, or reads what roomba-bt says of a cluster after
+#: Dask is imported
+pytestmark = pytest.mark.extra("cluster")
 
 
 def _episodes(results: list[EpisodeResult]) -> list[EpisodeResult]:
@@ -377,7 +380,8 @@ def test_a_scheduler_without_workers_is_said_to_have_none(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     """--scheduler at a cluster with no worker waited for ever without a word."""
-    distributed = pytest.importorskip("distributed")
+    import distributed
+
     from roomba_bt.evaluate.cluster import say_when_no_worker
 
     with (
@@ -403,7 +407,6 @@ def test_results_are_released_as_they_are_gathered(
     """Every future was kept to the end: the scheduler held each finished episode (a dead
     worker's finished ones were computed again, and the retried count missed them). By the
     last result, the scheduler has forgotten the earlier ones."""
-    pytest.importorskip("distributed")
     import roomba_bt.evaluate.cluster as cluster
 
     monkeypatch.setattr(cluster, "RELEASE_EVERY", 1, raising=False)  # (none in old code)

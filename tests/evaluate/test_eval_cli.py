@@ -17,6 +17,7 @@ MISSIONS = Path(__file__).resolve().parents[2] / "missions"
 BUMP = str(MISSIONS / "bump-and-turn.yaml")
 
 
+@pytest.mark.extra("plot")
 def test_eval_prints_the_report_and_plots(tmp_path: Path,
                                           capsys: pytest.CaptureFixture[str]) -> None:  # fmt: skip
     png = tmp_path / "runs.png"
@@ -29,6 +30,7 @@ def test_eval_prints_the_report_and_plots(tmp_path: Path,
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+@pytest.mark.extra("plot")
 def test_every_variant_is_plotted_in_a_panel_of_its_own(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -189,6 +191,7 @@ def test_plot_without_matplotlib_is_a_clear_error(
 
 @pytest.mark.parametrize("command", [["eval", BUMP, "--runs", "1"], ["run", BUMP, "--fast"],
                                      ["sim", "--pty", "--duration", "0"]])  # fmt: skip
+@pytest.mark.extra("plot")
 def test_plot_into_a_missing_directory_is_refused_before_running(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], command: list[str]
 ) -> None:
@@ -205,6 +208,7 @@ def test_plot_into_a_missing_directory_is_refused_before_running(
                                      ["sim", "--pty", "--duration", "0"]])  # fmt: skip
 @pytest.mark.parametrize(("name", "why"), [("x.txt", "no picture format '.txt'"),
                                           ("x", "no suffix")])  # fmt: skip
+@pytest.mark.extra("plot")
 def test_plot_to_a_format_matplotlib_cannot_write_is_refused_before_running(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], command: list[str], name: str, why: str
 ) -> None:
@@ -490,17 +494,16 @@ def _eval_past_its_first_episode(out: Path, *options: str) -> tuple[subprocess.P
 
 
 @pytest.mark.parametrize(
-    "engine", [["--jobs", "1"], ["--jobs", "2"], ["--engine", "dask", "--jobs", "2"]]
-)
+    "engine",
+    [["--jobs", "1"], ["--jobs", "2"],
+     pytest.param(["--engine", "dask", "--jobs", "2"], marks=pytest.mark.extra("cluster"))],
+)  # fmt: skip
 def test_ctrl_c_prints_what_finished_and_exits_130(tmp_path: Path, engine: list[str]) -> None:
     """SIGINT after the first episode has reported, to the whole process group as a terminal
     sends it: the summary of the finished episodes, exit code 130, and no traceback (each
     pool worker, Dask nanny and worker printed its own)."""
     import os
     import signal
-
-    if "dask" in engine:
-        pytest.importorskip("distributed")
 
     out = tmp_path / "partial.jsonl"
     proc = _eval_past_its_first_episode(out, *engine)

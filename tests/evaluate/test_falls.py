@@ -229,6 +229,7 @@ def test_a_bad_falls_cell_names_the_line(tmp_path: Path, toward: list[EpisodeRes
             read_results(path)
 
 
+@pytest.mark.extra("cluster")
 def test_a_dask_worker_hands_back_the_falls(
     files: dict[str, str], toward: list[EpisodeResult]
 ) -> None:

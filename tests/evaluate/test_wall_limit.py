@@ -134,9 +134,9 @@ def test_eval_reports_hung_episodes_and_exits_4(
     assert f"roomba-bt: hung: {stuck}" in err
 
 
+@pytest.mark.extra("cluster")
 def test_a_dask_worker_goes_on_after_a_hung_episode(tmp_path: Path) -> None:
     """On a real (local) cluster of one worker: the episode after the stuck one runs there."""
-    pytest.importorskip("distributed")
     from roomba_bt.evaluate.parallel import Engine, evaluate
 
     (done,) = evaluate([[_stuck(tmp_path), *_quick(1)]], Engine("dask", 1, wall_limit_s=2.0))

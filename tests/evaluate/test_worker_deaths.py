@@ -63,13 +63,11 @@ def _mission(tmp_path: Path) -> Path:
 @pytest.mark.parametrize(
     "engine",
     [["--jobs", "2"], ["--jobs", "1"], ["--jobs", "2", "--wall-limit", "none"],
-     ["--engine", "dask", "--jobs", "2"]],
+     pytest.param(["--engine", "dask", "--jobs", "2"], marks=pytest.mark.extra("cluster"))],
 )  # fmt: skip
 def test_an_episode_that_kills_its_worker_is_recorded_as_died_and_the_sweep_goes_on(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], engine: list[str]
 ) -> None:
-    if "dask" in engine:
-        pytest.importorskip("distributed")
     out = tmp_path / "out.jsonl"
     code = main(["eval", str(_mission(tmp_path)), "--runs", "6", "--seed", "1", "--timeout", "5s",
                  "--allow-plugin-files", "--no-progress", "--out", str(out), *engine])  # fmt: skip
@@ -164,13 +162,13 @@ def _replacement_importing(eval_pid: int, dead: int, seen: set[int]) -> int | No
     return None
 
 
+@pytest.mark.extra("cluster")
 def test_ctrl_c_while_a_dask_worker_restarts_prints_no_traceback(tmp_path: Path) -> None:
     """The nannies (in the evaluation's process) start a worker again after one died, once
     Ctrl-C is the evaluation's: the new worker started with Ctrl-C live, and a Ctrl-C while it
     imported Dask printed its KeyboardInterrupt traceback under the summary. The SIGINT here
     goes to the whole process group, as a terminal's, while that worker imports."""
     psutil = pytest.importorskip("psutil")
-    pytest.importorskip("distributed")
     died = tmp_path / "died"
     (tmp_path / "once.py").write_text(_DIES_ONCE_THEN_RUNS.format(died=str(died)))
     mission = tmp_path / "once.yaml"
@@ -202,6 +200,7 @@ def test_ctrl_c_while_a_dask_worker_restarts_prints_no_traceback(tmp_path: Path)
 
 
 @pytest.mark.parametrize("verbose", [[], ["-v"]])
+@pytest.mark.extra("cluster")
 def test_dask_s_own_lines_on_a_worker_death_are_its_detail_shown_with_v(
     tmp_path: Path, verbose: list[str]
 ) -> None:
@@ -209,7 +208,6 @@ def test_dask_s_own_lines_on_a_worker_death_are_its_detail_shown_with_v(
     nanny restarting a worker, a worker removed with what it held) came on stderr between
     ours, a wall of its internals. Now every line is ours (what died, what runs again, the
     DIED record), and Dask's are its detail, shown with -v."""
-    pytest.importorskip("distributed")
     done = subprocess.run(
         [sys.executable, "-m", "roomba_bt", *verbose, "eval", str(_mission(tmp_path)), "--runs",
          "6", "--seed", "1", "--timeout", "5s", "--allow-plugin-files", "--no-progress",

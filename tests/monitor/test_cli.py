@@ -99,7 +99,6 @@ def test_a_taken_port_names_one_free_now_and_any_free_port(
 ) -> None:
     """It suggested port + 1 unchecked: a teacher starting several runs was sent to the next
     run's port. The suggestion is a port free now, and --monitor 0 (any free port)."""
-    pytest.importorskip("aiohttp")
     from roomba_bt.cli.monitor_cmd import bind_problem
 
     first, second = _two_ports_held()
@@ -121,7 +120,6 @@ def test_a_record_view_on_a_taken_port_says_so_before_reading_the_record(
 ) -> None:
     """`roomba-bt monitor RECORD` replayed the whole record (minutes for a long one) before
     it found its port taken."""
-    pytest.importorskip("aiohttp")
     with socket.socket() as held:
         held.bind(("127.0.0.1", 0))
         held.listen()
@@ -138,7 +136,6 @@ def test_the_url_is_said_once_the_robot_s_port_is_open_with_the_mission_and_robo
 ) -> None:
     """The URL was printed before the port was opened: a busy port left a URL that never
     served a page. It names the mission and the robot, as the summary does."""
-    pytest.importorskip("aiohttp")
     missing = str(tmp_path / "no-such-tty")
     code = main(["run", str(SHUTTLE), "--port", missing, "--monitor", "0", "--display", "none"])
     out, err = capsys.readouterr()
@@ -164,7 +161,6 @@ def test_a_record_still_being_written_is_shown_as_such(
 ) -> None:
     """A record read while its run wrote it (the run holds its lock) was shown as ended
     ('input ended (recorded run, 829 ticks)'), on the page and on the first line."""
-    pytest.importorskip("aiohttp")
     record = tmp_path / "live.jsonl"
     _record_the_shuttle(record)
     capsys.readouterr()
@@ -184,7 +180,6 @@ def test_a_compressed_record_is_shown_as_a_plain_one_is(
 ) -> None:
     """``roomba-bt monitor RECORD.jsonl.gz`` (``run --record`` compresses a ``.gz``) replays
     it into its page; a gzipped record was refused ('byte 0x8b, not UTF-8 text')."""
-    pytest.importorskip("aiohttp")
     record = tmp_path / "run.jsonl.gz"
     _record_the_shuttle(record)
     capsys.readouterr()
@@ -446,7 +441,6 @@ def test_the_page_is_told_what_the_robot_was_left_in(
 ) -> None:
     """After the run the page's robot panel holds the last tick before the safe stop: it
     showed Safe and the wheels turning under "the run ended". The banner says the end."""
-    pytest.importorskip("aiohttp")
     from roomba_bt.cli import monitor_cmd
 
     told: list[str | None] = []
@@ -472,7 +466,6 @@ def test_the_robot_panel_after_the_run_shows_what_the_safe_stop_left(
     """The robot panel froze on the last tick before the safe stop: after the run it showed
     Safe, the wheels at their last speed and the brushes on, though the robot was stopped
     and in Passive. The newest tick's panel, once the run has ended, is the final state."""
-    pytest.importorskip("aiohttp")
     from roomba_bt.cli import monitor_cmd
     from roomba_bt.monitor.views import state_view
 
@@ -512,7 +505,6 @@ def test_a_run_s_label_is_on_its_url_line_page_summary_and_record(
     by their ports: ``run --label`` names the run on the monitor's URL line, on the page
     (its header's ``run``: the tab's title and the header), in the summary and the record's
     header, which ``roomba-bt monitor RECORD`` shows again."""
-    pytest.importorskip("aiohttp")
     from roomba_bt.cli import monitor_cmd
     from roomba_bt.mission import load_mission
     from roomba_bt.monitor.recorded import replay_into_feed
@@ -571,7 +563,6 @@ def test_a_wildcard_address_and_the_virtual_clock_are_said(
 ) -> None:
     """``--monitor 0.0.0.0:PORT`` printed only ``http://0.0.0.0:...``, which no browser on
     another machine opens; ``--fast`` ran to its end before a page could open, unsaid."""
-    pytest.importorskip("aiohttp")
     argv = ["run", str(SHUTTLE), "--fast", "--display", "none", "--monitor", "0.0.0.0:0",
             "--timeout", "1s"]  # fmt: skip
     assert main(argv) == 1
@@ -613,7 +604,6 @@ def test_a_wildcard_address_is_said_by_the_machine_s_lan_addresses_too(
 ) -> None:
     """A bare host name often does not resolve from a phone on a home LAN: the addresses
     do (``http://192.0.2.2:8765/?token=...``)."""
-    pytest.importorskip("aiohttp")
     from roomba_bt.cli import monitor_cmd
 
     monkeypatch.setattr(monitor_cmd, "lan_addresses", lambda ipv6=False: ["192.0.2.77"])
@@ -654,7 +644,6 @@ def test_a_record_view_whose_replay_diverges_says_where_on_stderr_and_the_page(
     saying only 'input ended (recorded run, N ticks)'; stderr said nothing. Now it says where,
     what was expected and what was sent, as ``replay`` does; the page's banner holds the same
     (``feed.finished``)."""
-    pytest.importorskip("aiohttp")
     record = tmp_path / "run.jsonl"
     _record_the_shuttle(record)
     capsys.readouterr()
@@ -674,7 +663,6 @@ def test_a_record_says_how_its_run_ended_and_its_replay_ends_there(
 ) -> None:
     """The record's end note: ``replay`` and the record view say how the recorded run ended
     (they said 'input ended'), and a replay ends a timed-out run where it timed out."""
-    pytest.importorskip("aiohttp")
     record = tmp_path / "run.jsonl"
     assert _record_the_shuttle(record) == 1
     capsys.readouterr()
@@ -769,7 +757,6 @@ def test_a_chosen_token_outlives_the_run_and_is_printed_nowhere(
     ``--monitor-token`` (or ``ROOMBA_BT_MONITOR_TOKEN``) is the page's token instead; the
     operator knows it, so the URL printed leaves it out, and neither the log nor the record
     holds it."""
-    pytest.importorskip("aiohttp")
     statuses = _probe_the_page(monkeypatch)
     record = _run_with_a_chosen_token(CHOSEN, given_by, tmp_path, monkeypatch)
     assert statuses == {"given": 200, "none": 401, "wrong": 403}
@@ -791,7 +778,6 @@ def test_a_chosen_token_outlives_the_run_and_is_printed_nowhere(
 def test_a_chosen_token_that_will_not_do_is_a_usage_error_that_does_not_repeat_it(
     token: str, said: str, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    pytest.importorskip("aiohttp")
     argv = ["run", str(SHUTTLE), "--fast", "--display", "none", "--monitor", "0"]
     with pytest.raises(SystemExit) as exited:
         main([*argv, "--monitor-token", token])
@@ -855,7 +841,6 @@ def test_a_chosen_view_token_opens_the_page_without_controls_and_is_printed_nowh
     """A projector's bookmark of the view-only link, kept from run to run
     (``--monitor-view-token`` or ``ROOMBA_BT_MONITOR_VIEW_TOKEN``): it opens the page, its
     pause is refused (403), and the URL printed leaves it out, as a chosen control token."""
-    pytest.importorskip("aiohttp")
     statuses = _probe_the_view_link(monkeypatch)
     record = _run_with_a_chosen_token(VIEW_CHOSEN, given_by, tmp_path, monkeypatch)
     assert statuses == {"page": 200, "control": 403}
@@ -873,7 +858,6 @@ def test_a_view_token_that_is_the_control_token_is_a_usage_error(
     capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """Whoever had the view link would have had the controls."""
-    pytest.importorskip("aiohttp")
     argv = ["run", str(SHUTTLE), "--fast", "--display", "none", "--monitor", "0"]
     assert main([*argv, "--monitor-token", CHOSEN, "--monitor-view-token", CHOSEN]) == 2
     err = capsys.readouterr().err
@@ -905,7 +889,6 @@ def test_a_record_of_a_megabyte_says_at_once_that_it_is_read_before_its_page(
     timeline is the whole run's): a 6-minute clean run's record printed nothing for 5 s, and
     the URL seemed slow to come. From 1 MB of record on it says so first, before the
     replay."""
-    pytest.importorskip("aiohttp")
     from roomba_bt.monitor.server import MonitorServer
 
     record = tmp_path / name
@@ -1006,7 +989,6 @@ def test_a_recorded_view_draws_the_world_its_record_names_from_where_the_robot_s
     the record's header names the world: a shipped one by its name, a file by its path from
     the record's folder (found as ``replay`` finds the mission). A world gone since is said on
     stderr, and the page draws the odometry alone; a robot's record names none."""
-    pytest.importorskip("aiohttp")
     from roomba_bt.monitor.recorded import recorded_world
     from roomba_bt.runtime.recording import SIMULATOR, load_record
     from roomba_bt.sim.world import WORLDS_DIR, load_world

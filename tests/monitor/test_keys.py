@@ -13,7 +13,6 @@ from pathlib import Path
 
 import pytest
 
-pytest.importorskip("aiohttp")
 pty = pytest.importorskip("pty")
 termios = pytest.importorskip("termios")
 

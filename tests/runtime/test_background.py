@@ -118,11 +118,11 @@ def test_a_run_in_the_background_writing_to_a_tostop_terminal_is_not_stopped(
     assert ended == "exit 1", ended  # the timeout, after its safe stop
 
 
+@pytest.mark.extra("monitor")
 def test_a_monitored_run_in_the_background_is_not_stopped_by_its_keys(tmp_path: Path) -> None:
     """The monitor's keys put the terminal in cbreak mode, which stops a background job
     whether ``tostop`` is set or not: the run never started. Keys are read in the
     foreground only; the page's controls work."""
-    pytest.importorskip("aiohttp")
     ended = _in_the_background(
         tmp_path, "run", "circle.yaml", "--timeout", "1s", "--display", "none",
         "--monitor", "127.0.0.1:0", tostop=False,

@@ -204,11 +204,13 @@ def test_replay_of_a_malformed_record_is_exit_2(
     assert "bad.jsonl:2:" in err
 
 
+#: the two commands that read a record; ``monitor RECORD`` needs the monitor extra
+READERS = ["replay", pytest.param("monitor", marks=pytest.mark.extra("monitor"))]
 HEADER = {"format": "roomba-bt-record", "version": 1, "profile": "create2", "baud": 115200,
           "mission": "dock", "parameters": {}, "packets": [7, 35]}  # fmt: skip
 
 
-@pytest.mark.parametrize("command", ["replay", "monitor"])
+@pytest.mark.parametrize("command", READERS)
 @pytest.mark.parametrize(
     ("field", "value", "said"),
     [("baud", "fast", "header field 'baud' is 'fast'; allowed: the OI's rates 300, "),
@@ -263,7 +265,7 @@ def test_a_time_that_is_not_finite_or_goes_back_is_placed(
     assert f"{record}:4: time " in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("command", ["replay", "monitor"])
+@pytest.mark.parametrize("command", READERS)
 def test_a_record_with_a_byte_that_is_not_utf8_is_placed_not_a_traceback(
     command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

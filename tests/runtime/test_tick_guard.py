@@ -187,12 +187,12 @@ def test_a_record_replays_the_guards_acts_byte_for_byte(
     assert summary.tick_halts == 1 and summary.tick_halt_first.startswith("stuck (Stuck.update")
 
 
+@pytest.mark.extra("monitor")
 def test_the_monitor_shows_each_act_of_a_recorded_run(
     run_mission: RunMission, plugin_dir: Path, tmp_path: Path
 ) -> None:
     """``roomba-bt monitor RECORD``: the replay does the act again and its timeline says so,
     as the live page did (one event per act, naming the behaviour)."""
-    pytest.importorskip("aiohttp")
     from roomba_bt.mission import load_mission
     from roomba_bt.monitor.recorded import replay_into_feed
     from roomba_bt.oi.profiles import CREATE2

@@ -26,8 +26,8 @@ def run() -> Simulator:
     return sim
 
 
+@pytest.mark.extra("plot")
 def test_plot_writes_a_png(tmp_path: Path) -> None:
-    pytest.importorskip("matplotlib")
     sim = run()
     assert any(e.kind == "bump" for e in sim.events)
     out = tmp_path / "run.png"
@@ -53,12 +53,12 @@ def test_without_matplotlib_the_error_says_how_to_install_it(
 
 
 @pytest.mark.parametrize("labels", [True, False], ids=["run --plot", "eval --plot"])
+@pytest.mark.extra("plot")
 def test_the_world_drawing_shows_each_dirt_patch_with_its_level(labels: bool) -> None:
     """A world's dirt patches were not drawn (a plugin author's run over crumbs showed none):
     each is a shaded shape with the dirt-detect level (packet 15) written in its middle, in
     the one drawing ``run --plot`` and ``eval --plot`` share, named in the legend where the
     drawing has one."""
-    pytest.importorskip("matplotlib")
     plt = pyplot()
     fig, ax = plt.subplots()
     try:

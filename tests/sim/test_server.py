@@ -185,8 +185,8 @@ def test_pyroombaadapter_streams_queries_and_drives(pty_server: Any) -> None:
     assert code == 0 and "mode Passive" in err
 
 
+@pytest.mark.extra("plot")
 def test_plot_on_exit(tmp_path: Path) -> None:
-    pytest.importorskip("matplotlib")
     out = tmp_path / "run.png"
     proc = subprocess.run(
         [sys.executable, "-m", "roomba_bt.cli", "sim", "--pty", "--duration", "0.2",
