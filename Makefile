@@ -9,7 +9,7 @@ RUN_STAMP := $(VENV)/.installed-run
 STAMP := $(VENV)/.installed
 EXTRAS ?= test,plot,bench,cluster,monitor,browser-test
 
-.PHONY: run test wheel-check lint typecheck bench icount routines coverage golden venv clean monitor-screenshots reliability
+.PHONY: run test wheel-check sdist-check lint typecheck bench icount routines coverage golden venv clean monitor-screenshots reliability
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -44,11 +44,18 @@ test: $(STAMP) lint typecheck
 	$(BIN)/python -m pytest -q -p no:cacheprovider --durations=15; rc=$$?; \
 	if [ $$rc -eq 5 ]; then echo "pytest collected no tests: failing"; exit 1; fi; exit $$rc
 	PYTHON=$(PYTHON) .ci/wheel-check
+	PYTHON=$(PYTHON) .ci/sdist-check
 
 # What `pip install roomba-bt` gives a new user: the wheel in a fresh venv, in an empty
 # directory, lists, validates and runs the shipped missions by name (about a minute).
 wheel-check:
 	PYTHON=$(PYTHON) .ci/wheel-check
+
+# What a packager gets: the sdist as `python -m build` makes it from the tracked files holds
+# every file the tests read and none of a working tree's caches; the wheel built from it
+# carries the licence (seconds; docs/releasing.md).
+sdist-check:
+	PYTHON=$(PYTHON) .ci/sdist-check
 
 bench: $(STAMP)
 	$(BIN)/python -m bench
