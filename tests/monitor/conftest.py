@@ -10,11 +10,12 @@ import os
 import shutil
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import pytest
 
-from .live import LiveRun, start_live_run
+if TYPE_CHECKING:
+    from .live import LiveRun
 
 #: the shuttle mission of the live page's tests (tests/monitor/missions)
 SHUTTLE = Path(__file__).parent / "missions" / "shuttle.yaml"
@@ -103,7 +104,11 @@ def phone(browser: Any) -> Iterator[Any]:
 
 @pytest.fixture
 def live() -> Iterator[LiveRun]:
-    """The shuttle mission on the simulator, its monitor served (tests/monitor/live.py)."""
+    """The shuttle mission on the simulator, its monitor served (tests/monitor/live.py,
+    imported here: it imports aiohttp, and ``pytest tests/monitor`` reads this conftest
+    before tests/conftest.py skips the folder where the monitor extra is missing)."""
+    from .live import start_live_run
+
     run = start_live_run(SHUTTLE)
     try:
         yield run
