@@ -10,9 +10,9 @@ jsonschema, the example wall-follow plugin) skips its tests with the install hin
 that would hide a broken install step, so the skip becomes a failure that says which
 package is missing. The tests of roomba-bt's own extras (plot, monitor, cluster) say which
 extra they need, ``@pytest.mark.extra("plot")`` or a folder in :data:`EXTRA_FOLDERS`, and
-:func:`without_extra` decides alike: skipped, naming the extra, for a packager who builds
-the core alone; failed under ``CI=true``, where ``make test`` installs every extra
-(docs/releasing.md, The tests from the sdist).
+:func:`missing_extra` says why for both: skipped, naming the extra, for a packager who
+builds the core alone; failed under ``CI=true``, where ``make test`` installs every extra
+(docs/ci.md, "roomba-bt's own suite").
 """
 
 from __future__ import annotations
@@ -82,7 +82,11 @@ def pytest_runtest_makereport(
     reason = str(report.longrepr[2])
     if any(sign in reason for sign in MISSING_DEPENDENCY):
         report.outcome = "failed"
-        report.longrepr = f"CI=true: a test dependency is missing, so this fails: {reason}"
+        report.longrepr = fails_in_ci(reason)
+
+
+def fails_in_ci(reason: str) -> str:
+    return f"CI=true: a test dependency is missing, so this fails: {reason}"
 
 
 #: pyproject.toml's optional extras that tests need, by the module each one installs
@@ -92,30 +96,24 @@ EXTRAS = {"plot": "matplotlib", "monitor": "aiohttp", "cluster": "distributed"}
 EXTRA_FOLDERS = {ROOT / "tests" / "monitor": "monitor"}
 
 
-def without_extra(extra: str) -> tuple[str, str] | None:
-    """What becomes of a test of the extra ``extra`` where it is not installed: ``("skipped",
-    reason)`` for a packager's core-only build, ``("failed", reason)`` under ``CI=true``; None
-    where it is installed. Whether it is installed is whether its module can be found: a
-    half-installed extra (its module there, a dependency of it missing) is not skipped but
-    fails in the test, as it would for a user."""
+def missing_extra(extra: str) -> str | None:
+    """Why a test of the extra ``extra`` cannot run here, or None where it can. Whether it is
+    installed is whether its module can be found: a half-installed extra (its module there, a
+    dependency of it missing) is not skipped but fails in the test, as it would for a user."""
     module = EXTRAS[extra]
     if importlib.util.find_spec(module) is not None:
         return None
-    reason = f"needs the {extra} extra ({module} is missing): pip install 'roomba-bt[{extra}]'"
-    if in_ci():
-        return "failed", f"CI=true: make test installs every extra, so this fails: {reason}"
-    return "skipped", reason
+    return f"needs the {extra} extra ({module} is missing): pip install 'roomba-bt[{extra}]'"
 
 
-@pytest.hookimpl(tryfirst=True)
-def pytest_runtest_setup(item: pytest.Item) -> None:
-    """A test marked ``@pytest.mark.extra(name)`` (or a ``pytest.param`` of one) needs it."""
-    for mark in item.iter_markers("extra"):
-        if verdict := without_extra(*mark.args):
-            outcome, reason = verdict
-            if outcome == "failed":
-                pytest.fail(reason, pytrace=False)
-            pytest.skip(reason)
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """A test marked ``@pytest.mark.extra(name)`` (or a ``pytest.param`` of one) is skipped
+    where the extra is missing, at the test's own place in the report; under ``CI=true``
+    :func:`pytest_runtest_makereport` fails it, as every skip for a missing package."""
+    for item in items:
+        for mark in item.iter_markers("extra"):
+            if reason := missing_extra(*mark.args):
+                item.add_marker(pytest.mark.skip(reason=reason))
 
 
 @pytest.hookimpl(tryfirst=True)
@@ -124,12 +122,11 @@ def pytest_make_collect_report(collector: pytest.Collector) -> pytest.CollectRep
     conftest imports the extra; the ImportError there was a collection error that stopped
     the whole run."""
     extra = EXTRA_FOLDERS.get(collector.path) if isinstance(collector, pytest.Directory) else None
-    verdict = without_extra(extra) if extra else None
-    if verdict is None:
+    reason = missing_extra(extra) if extra else None
+    if reason is None:
         return None
-    outcome, reason = verdict
-    if outcome == "failed":
-        return pytest.CollectReport(collector.nodeid, "failed", reason, None)
+    if in_ci():
+        return pytest.CollectReport(collector.nodeid, "failed", fails_in_ci(reason), None)
     return pytest.CollectReport(collector.nodeid, "skipped", (str(collector.path), 0, reason), None)
 
 

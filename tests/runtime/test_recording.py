@@ -918,8 +918,14 @@ def test_a_record_names_its_plugins_and_a_replay_that_differs_names_the_one_chan
     assert f"{bad}:1: header field 'plugins' is ['x']; expected " in capsys.readouterr().err
 
 
+@pytest.mark.parametrize(
+    "command", ["replay", pytest.param("monitor", marks=pytest.mark.extra("monitor"))]
+)
 def test_a_replay_whose_recorded_plugin_is_not_installed_says_so_first(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+    command: str,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     """The header names the plugin and its version, yet a replay (the monitor's too) of a
     record whose plugin was uninstalled said only ``unknown node 'far_s29'``, with any
@@ -936,17 +942,16 @@ def test_a_replay_whose_recorded_plugin_is_not_installed_says_so_first(
     assert main(["run", str(mission), "--fast", "--display", "none", "--record", str(record)]) == 0
     capsys.readouterr()
     _plugin(monkeypatch, site, None)  # pip uninstall bt-far-s29
-    for command in ("replay", "monitor"):
-        assert main([command, str(record)]) == 2
-        first, second, *_ = capsys.readouterr().err.splitlines()
-        assert first == (
-            "roomba-bt: this record was made with plugin bt-far-s29 1.0, which is not "
-            "installed (pip install bt-far-s29==1.0)"
-        )
-        assert second.endswith(
-            "unknown node 'far_s29' (perhaps of plugin bt-far-s29 1.0, not installed) "
-            "[tree.sequence[1].selector[0].sequence[0].far_s29]"
-        )
+    assert main([command, str(record)]) == 2
+    first, second, *_ = capsys.readouterr().err.splitlines()
+    assert first == (
+        "roomba-bt: this record was made with plugin bt-far-s29 1.0, which is not "
+        "installed (pip install bt-far-s29==1.0)"
+    )
+    assert second.endswith(
+        "unknown node 'far_s29' (perhaps of plugin bt-far-s29 1.0, not installed) "
+        "[tree.sequence[1].selector[0].sequence[0].far_s29]"
+    )
     header = load_record(record).header
     _plugin(monkeypatch, site, "2.0", far=True)  # another version: said by its version
     [other] = absent_plugins(header)
