@@ -76,6 +76,10 @@ _PLAIN = frozenset({str, int, float, bool, type(None), bytes, complex})
 #: a blackboard value whose text takes longer is shown as it is now, marked so (see
 #: :meth:`RunFeed._text_at_tick`)
 TEXT_BUDGET_S = 0.0002
+#: ... on this many ticks in a row: one text cut short by the machine (the thread
+#: descheduled, a garbage collection), not by the value, kept the cover's map as its object
+#: for the rest of a run on a busy computer, every rewound tick showing the map of now
+SLOW_TEXT_TICKS = 3
 
 
 #: a board's entry naming its keys kept as their text at the tick (a tuple of them): plain
@@ -364,6 +368,8 @@ class RunFeed:
         self._boards_limit = 64
         #: keys whose value's text was too slow to take every tick: kept as the object
         self.live_keys: set[str] = set()
+        #: keys whose text went over its budget on the last ticks: on how many in a row
+        self._slow_texts: dict[str, int] = {}
         self._layout: FrameLayout | None = None
         self._mode: object = None
         self._refused_seen = 0
@@ -502,15 +508,28 @@ class RunFeed:
 
     def _text_at_tick(self, key: str, value: Any) -> str | None:
         """``value``'s text now, or None (kept as the object) for a key whose text took over
-        :data:`TEXT_BUDGET_S` once (the page marks it as current, not at the tick shown):
-        a plugin's object with a slow ``repr`` does not slow every tick."""
+        :data:`TEXT_BUDGET_S` on :data:`SLOW_TEXT_TICKS` ticks in a row (the page marks it as
+        current, not at the tick shown): a plugin's object with a slow ``repr`` does not
+        slow every tick, and a quick one the machine held up once is still kept as text."""
         if key in self.live_keys:
             return None
         began = _perf_counter()
         text = board_text(value)
         if _perf_counter() - began > TEXT_BUDGET_S:
-            self.live_keys.add(key)
+            self._slow_text(key)
+        elif self._slow_texts:  # a quick one again: the row is broken
+            self._slow_texts.pop(key, None)
         return text
+
+    def _slow_text(self, key: str) -> None:
+        """``key``'s text went over its budget this tick: kept as the object from now on if
+        it did on :data:`SLOW_TEXT_TICKS` ticks in a row."""
+        slow = self._slow_texts.get(key, 0) + 1
+        if slow < SLOW_TEXT_TICKS:
+            self._slow_texts[key] = slow
+        else:
+            self._slow_texts.pop(key, None)
+            self.live_keys.add(key)
 
     def _new_board(self, board: Mapping[str, Any]) -> None:
         self._blackboard = board

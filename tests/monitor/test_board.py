@@ -15,7 +15,7 @@ from py_trees.common import Status
 from roomba_bt.behaviours.coverage_map import Bearings, FloorMap
 from roomba_bt.behaviours.docking.common import DockingRun
 from roomba_bt.monitor.board_text import board_text
-from roomba_bt.monitor.feed import RunFeed
+from roomba_bt.monitor.feed import SLOW_TEXT_TICKS, RunFeed
 from roomba_bt.monitor.views import state_view
 from roomba_bt.robot.interface import Odometry
 
@@ -39,6 +39,17 @@ class SlowCounts(Counts):
 
     def __repr__(self) -> str:
         time.sleep(0.002)
+        return super().__repr__()
+
+
+class HeldUpCounts(Counts):
+    """A quick text that the machine holds up now and then (the thread descheduled, a garbage
+    collection) on fewer ticks in a row than :data:`SLOW_TEXT_TICKS`: every tenth tick and
+    the ones after it."""
+
+    def __repr__(self) -> str:
+        if self.ticks % 10 < SLOW_TEXT_TICKS - 1:
+            time.sleep(0.002)
         return super().__repr__()
 
 
@@ -72,6 +83,16 @@ def test_a_rewound_tick_shows_a_changing_object_as_it_was_at_that_tick() -> None
     assert all(text.startswith("<counted ") for text in shown)
     last = state_view(feed, records[-1], [])["blackboard"]["/counts"]
     assert last == repr(py_trees.blackboard.Blackboard.storage["/counts"])
+
+
+def test_a_quick_value_held_up_on_a_tick_or_two_is_still_shown_as_it_was_at_each_tick() -> None:
+    """One text over the budget (a busy computer: the thread descheduled in it) kept the
+    cover's map as its object for the rest of the run, every rewound tick marked as now."""
+    feed = _run(Counter("/held", HeldUpCounts()))
+    assert feed.live_keys == set()
+    records = feed.since(0)[0]
+    shown = [state_view(feed, r, [])["blackboard"]["/held"] for r in records[9:50:10]]
+    assert shown == [f"<counted {tick} ticks>" for tick in range(10, 51, 10)]
 
 
 def test_a_value_too_slow_to_take_each_tick_says_it_is_the_current_one() -> None:
