@@ -50,21 +50,34 @@ def _start_run(
     )  # fmt: skip
 
 
-def _wait_for_driving(record: Path, timeout: float = 10.0) -> None:
-    deadline = time.monotonic() + timeout
+#: The most a run is waited for to start driving, or to end after a signal: the waits end as
+#: soon as it does, so this bounds only a run that never will. A run's start (its imports,
+#: the simulator's answer) took over 10 s on 2 cores under load, and its end may wait out the
+#: safe stop's own last resort (``STOP_WALL_S``, 10 s); 10 s failed such runs.
+RUN_WAIT_S = 60.0
+
+
+def _wait_for_driving(record: Path, proc: subprocess.Popen[str] | None = None) -> None:
+    """Until the run's record has its first Drive, and a little more (it drives on); fails
+    at once with what ``proc`` said if it ended first."""
+    deadline = time.monotonic() + RUN_WAIT_S
     while time.monotonic() < deadline:
         if record.exists() and '"out", "b": "89' in record.read_text():
             time.sleep(0.3)
             return
+        if proc is not None and proc.poll() is not None:
+            out, err = proc.communicate()
+            raise AssertionError(f"the run ended (exit {proc.returncode}) before it drove: "
+                                 f"{out}{err}")  # fmt: skip
         time.sleep(0.05)
-    raise AssertionError("the run never started driving")
+    raise AssertionError(f"the run never started driving in {RUN_WAIT_S:g} s")
 
 
 def _driving(port: str, tmp_path: Path) -> tuple[subprocess.Popen[str], Path]:
     """A run spinning for ever on ``port``, once it drives; its record's path."""
     record = tmp_path / "run.jsonl"
     proc = _start_run(port, write_mission(tmp_path, SPIN), record)
-    _wait_for_driving(record)
+    _wait_for_driving(record, proc)
     return proc, record
 
 
@@ -78,7 +91,7 @@ def test_signal_ends_with_the_safe_stop_and_exit_130(
 ) -> None:
     proc, record = _driving(sim_port, tmp_path)
     proc.send_signal(signum)
-    out, err = proc.communicate(timeout=10)
+    out, err = proc.communicate(timeout=RUN_WAIT_S)
     assert proc.returncode == 130, err
     assert "INTERRUPTED" in out
     assert load_record(record).outbound.endswith(SAFE_END)
@@ -102,11 +115,11 @@ def test_a_run_started_by_nohup_outlives_a_hang_up(sim_port: str, tmp_path: Path
     closed'); SIGTERM still ends it with the safe stop."""
     record = tmp_path / "run.jsonl"
     proc = _start_run(sim_port, write_mission(tmp_path, SPIN), record, ignoring=signal.SIGHUP)
-    _wait_for_driving(record)
+    _wait_for_driving(record, proc)
     proc.send_signal(signal.SIGHUP)
     assert _still_running(proc, record), proc.communicate()
     proc.send_signal(signal.SIGTERM)
-    out, err = proc.communicate(timeout=10)
+    out, err = proc.communicate(timeout=RUN_WAIT_S)
     assert proc.returncode == 130, err
     assert "INTERRUPTED (SIGTERM)" in out and "SIGHUP" not in out + err
     assert load_record(record).outbound.endswith(SAFE_END)
@@ -151,7 +164,7 @@ def test_a_second_ctrl_c_waits_for_the_safe_stop_and_the_summary(
     proc.send_signal(signal.SIGINT)
     time.sleep(gap)  # the second one lands in the unwinding, the stop or the summary
     proc.send_signal(signal.SIGINT)
-    out, err = proc.communicate(timeout=10)
+    out, err = proc.communicate(timeout=RUN_WAIT_S)
     assert proc.returncode == 130, out + err
     assert "outcome      INTERRUPTED (Ctrl-C)" in out
     # a spinning run on the wall clock: drive 0 and motors off went out before the tree's stop

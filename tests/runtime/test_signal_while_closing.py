@@ -70,7 +70,7 @@ def test_a_second_ctrl_c_while_the_run_closes_leaves_the_port_free_and_the_recor
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )  # fmt: skip
     try:
-        _wait_for_driving(record)
+        _wait_for_driving(record, proc)
         proc.send_signal(signal.SIGINT)  # the first Ctrl-C: the safe stop
         out, err = proc.communicate(timeout=30)
     finally:
