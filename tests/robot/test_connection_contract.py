@@ -221,7 +221,7 @@ def test_lost_port_is_reported_at_once_and_close_does_not_hang(link: Link) -> No
     connection.start("safe", PACKETS)
     frames_until(connection, lambda: connection.counters.frames >= 2)
     robot.hang_up()
-    assert robot.closed.wait(2.0)
+    assert robot.closed.wait(30.0), "the robot never saw its cable pulled"  # an event
     with pytest.raises(PortLost, match="the link is lost"):
         for _ in range(100):
             connection.poll(0.02)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import random
 import textwrap
 import threading
+import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -312,7 +313,8 @@ class SlowTerm(Action):
 #: the source of a function a plugin's blocking method calls (the plugin's source ends with
 #: it): the tick waits until the tick guard has stopped the wheels behind its back, at most
 #: 10 s, so that a test of the guard waits for its act, not for a time that depends on the
-#: machine's speed (tests/runtime/test_tick_guard.py, test_stop_on_a_slow_link.py)
+#: machine's speed (tests/runtime/test_tick_guard.py, test_stop_on_a_slow_link.py;
+#: :func:`wait_for_the_guard` in the test's own process)
 WAITS_FOR_THE_GUARD = '''
 
 import time
@@ -327,6 +329,17 @@ def wait_for_the_guard(robot):
             break
         time.sleep(0.002)
 '''
+
+
+def wait_for_the_guard(robot: Any) -> None:
+    """:data:`WAITS_FOR_THE_GUARD`'s wait, for a tick blocked in the test's own process (a
+    plain behaviour, a program's loop over ``stack.ticks()``): until the tick guard has
+    stopped ``robot.connection``'s wheels behind its back, at most 10 s (3 s before, which a
+    guard thread on a loaded machine may need)."""
+    writer = robot.connection.writer
+    deadline = time.monotonic() + 10.0
+    while getattr(writer.last_wheels, "args", None) != (0, 0) and time.monotonic() < deadline:
+        time.sleep(0.002)
 
 
 class Raises(py_trees.behaviour.Behaviour):

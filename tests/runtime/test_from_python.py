@@ -7,7 +7,6 @@ thread (it cut the link under the run: the stop was not delivered)."""
 from __future__ import annotations
 
 import threading
-import time
 
 import py_trees
 import pytest
@@ -21,12 +20,12 @@ from roomba_bt.runtime.summary import DEFAULT_TICK_LIMIT, Outcome, RunSummary
 from roomba_bt.runtime.tick_guard import TickGuard
 from roomba_bt.sim import RealtimeSimLink, SimLink, Simulator, load_world
 
-from .simrun import run_in_a_worker
+from .simrun import run_in_a_worker, wait_for_the_guard
 
 
 class Blocks(py_trees.behaviour.Behaviour):
     """A plain behaviour that blocks its 10th tick until the wheels were stopped behind its
-    back (at most 3 s): waiting on the network, ``input()``, a widget."""
+    back (:func:`wait_for_the_guard`): waiting on the network, ``input()``, a widget."""
 
     def setup(self, **kwargs: object) -> None:
         self.robot = kwargs["robot"]
@@ -35,12 +34,7 @@ class Blocks(py_trees.behaviour.Behaviour):
     def update(self) -> py_trees.common.Status:
         self.ticks += 1
         if self.ticks == 10:
-            writer = self.robot.connection.writer  # type: ignore[attr-defined]
-            deadline = time.monotonic() + 3.0
-            while getattr(writer.last_wheels, "args", None) != (0, 0):
-                if time.monotonic() > deadline:
-                    break
-                time.sleep(0.002)
+            wait_for_the_guard(self.robot)  # type: ignore[attr-defined]
         return py_trees.common.Status.SUCCESS if self.ticks > 20 else py_trees.common.Status.RUNNING
 
 

@@ -13,7 +13,6 @@ import signal
 import subprocess
 import sys
 import textwrap
-import time
 from pathlib import Path
 
 import py_trees
@@ -23,6 +22,8 @@ import roomba_bt
 from roomba_bt import CREATE2, Outcome, RunStack, SimLink, Simulator, TreeMission, load_world
 from roomba_bt.behaviours import DISTANCE, Condition, Param, declare
 from roomba_bt.robot.interface import Snapshot
+
+from .simrun import wait_for_the_guard
 
 TO_THE_WALL = """\
 mission: lab-exp
@@ -200,11 +201,7 @@ def test_the_tick_guard_watches_the_loops_body_on_the_wall_clock() -> None:
     with stack:
         for tick in stack.ticks():
             if tick.number == 40:
-                writer = stack.connection.writer
-                for _ in range(1500):  # until the guard stopped the wheels (3 s at most)
-                    if getattr(writer.last_wheels, "args", None) == (0, 0):
-                        break
-                    time.sleep(0.002)
+                wait_for_the_guard(stack)  # until the guard stopped the wheels
                 break
     assert stack.summary.tick_halts == 1, stack.summary
     assert stack.summary.tick_halt_first.startswith("the program's loop over stack.ticks()")

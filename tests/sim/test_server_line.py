@@ -4,6 +4,7 @@ garbage), and the modem lines that RFC 2217 carries to the BRC pin."""
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable, Iterator
 
 import pytest
@@ -38,10 +39,22 @@ def _rfc(made: list[Served], baud: int, asleep: bool = False) -> Served:
     return one
 
 
-def _mode_reply(port: serial.Serial) -> bytes:
+#: How long an answer the robot's thread gives is waited for: the read ends at its byte, so
+#: this bounds only one that never comes (the port's own 0.3 s is the quiet that shows none)
+ANSWER_S = 10.0
+
+
+def _mode_reply(port: serial.Serial, wait: float = 0.0) -> bytes:
+    """The answer to Start and Query List [35]: read for the port's timeout, and again until
+    ``wait`` has passed (the port's settings untouched: an RFC 2217 client sends them to the
+    server again when its timeout changes)."""
     port.reset_input_buffer()
     port.write(C.start().data + C.query_list([35]).data)
-    return bytes(port.read(1))
+    deadline = time.monotonic() + wait
+    reply = bytes(port.read(1))
+    while not reply and time.monotonic() < deadline:
+        reply = bytes(port.read(1))
+    return reply
 
 
 @pytest.mark.parametrize("robot_baud", [19200, 115200])
@@ -57,7 +70,7 @@ def test_the_pty_answers_only_a_client_at_the_robots_rate(
         assert one.simulator.mode is OIMode.OFF, "nothing reached the robot"
         assert one.simulator.ignored_bytes > 0
         port.baudrate = robot_baud
-        assert _mode_reply(port) == b"\x01"
+        assert _mode_reply(port, ANSWER_S) == b"\x01"
         assert one.simulator.mode is OIMode.PASSIVE  # type: ignore[comparison-overlap]
     finally:
         port.close()
@@ -65,7 +78,7 @@ def test_the_pty_answers_only_a_client_at_the_robots_rate(
 
 def test_a_client_at_another_rate_reads_the_robots_bytes_scrambled(served: list[Served]) -> None:
     one = _pty(served, 19200)
-    port = serial.Serial(one.endpoint.address, 19200, timeout=0.3)
+    port = serial.Serial(one.endpoint.address, 19200, timeout=ANSWER_S)  # 64 bytes each read
     try:
         port.write(C.start().data + C.stream([35]).data)  # frames: [19][2][35][1][checksum]
         assert port.read(64)
@@ -94,11 +107,11 @@ def test_rfc2217_carries_the_rate_and_the_modem_lines_to_brc(served: list[Served
         assert _mode_reply(port) == b"", "asleep: deaf"
         port.rts = True  # BRC low: the falling edge wakes it
         port.rts = False
-        assert _mode_reply(port) == b"\x01"
+        assert _mode_reply(port, ANSWER_S) == b"\x01"
         assert one.simulator.brc_pulses == 1
         port.dtr = True  # DTR drives BRC too (some cables wire that one)
         port.dtr = False
-        assert _mode_reply(port) == b"\x01"
+        assert _mode_reply(port, ANSWER_S) == b"\x01"
         assert one.simulator.brc_pulses == 2
         port.baudrate = 115200
         assert one.endpoint.line_baud() == 115200
@@ -125,7 +138,7 @@ def test_a_pty_hang_up_is_brc_high_and_the_rates_return_the_falling_edge_that_wa
         until(lambda: not one.simulator.brc_low)
         port.baudrate = 115200
         until(lambda: one.simulator.brc_pulses == 1)
-        assert _mode_reply(port) == b"\x01", "woken by the falling edge, into Passive"
+        assert _mode_reply(port, ANSWER_S) == b"\x01", "woken by the falling edge, into Passive"
     finally:
         port.close()
 
@@ -152,6 +165,6 @@ def test_the_sleep_at_fault_is_the_power_saving_sleep_start_does_not_wake_it(
         until(lambda: not sim.brc_low)
         port.baudrate = 115200
         until(lambda: sim.brc_pulses == 1)
-        assert _mode_reply(port) == b"\x01", "woken by the pulse, into Passive"
+        assert _mode_reply(port, ANSWER_S) == b"\x01", "woken by the pulse, into Passive"
     finally:
         port.close()
