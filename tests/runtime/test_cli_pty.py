@@ -167,11 +167,19 @@ def test_a_second_ctrl_c_waits_for_the_safe_stop_and_the_summary(
     out, err = proc.communicate(timeout=RUN_WAIT_S)
     assert proc.returncode == 130, out + err
     assert "outcome      INTERRUPTED (Ctrl-C)" in out
-    # a spinning run on the wall clock: drive 0 and motors off went out before the tree's stop
-    assert (
+    # a spinning run on the wall clock: drive 0 and motors off went out before the tree's
+    # stop; or, on a machine so loaded that the simulator's own process sent nothing for a
+    # while before the stop, the stop honestly said unconfirmed (the record's bytes below
+    # show it was written all the same)
+    confirmed = (
         "safe stop    drive 0, motors off before the tree's stop, then sent drive, motors, "
         "pause_resume_stream, start"
     ) in out
+    starved = (
+        "safe stop    NOT DELIVERED: " in out
+        and "unconfirmed: the robot had sent no valid frame for" in out
+    )
+    assert confirmed or starved, out
     assert "Traceback" not in err
     assert load_record(record).outbound.endswith(SAFE_END)
 
