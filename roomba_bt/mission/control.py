@@ -167,6 +167,15 @@ def _children_as_keys(parser: NodeParser, word: str, strays: list[tuple[str, Loc
         ))  # fmt: skip
 
 
+def _child_as_key(parser: NodeParser, word: str, key: str) -> str:
+    """``retry: {times: 3, drive: {...}}``: the child written as a key beside the options,
+    where the language names a decorator's child ``do:``. The error said only "unknown option
+    'drive'"; now, when the key is a node, also where the child goes."""
+    if key not in parser.ctx.registry and key not in WORDS:
+        return ""
+    return f"; a {word}'s child goes under do:, not beside its options: do: {{{key}: ...}}"
+
+
 def _chosen(ctx: Context, what: str, options: dict[str, Any], children: list[Node],
             places: list[Loc]) -> None:  # fmt: skip
     """The children an option of child names (``parallel.selected``) picks, by place in
@@ -263,7 +272,8 @@ def parse_decorator(parser: NodeParser, kind: NodeKind, at: Written) -> Node | N
         else:
             for k, v, kl, vl in items:
                 if k != "do" and k not in spec:
-                    raise Bad(kl.at(f"{word}: " + unknown("option", k, ["do", *spec], word)))
+                    raise Bad(kl.at(f"{word}: " + unknown("option", k, ["do", *spec], word)
+                                    + _child_as_key(parser, word, k)))  # fmt: skip
                 fields[k] = (v, vl)
             if "do" not in fields:
                 raise Bad(key_loc.at(f"{word} needs a child under do:"))
