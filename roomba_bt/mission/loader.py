@@ -393,7 +393,7 @@ class Loader:
             if self._refused(text, target, iloc, "plugin file", self.permissions.plugin_files):
                 self.ctx.unloaded_plugins.append(text)
                 continue
-            not_a_file = _not_a_plugin_file(text, target)
+            not_a_file = _not_a_plugin_file(path, text, target)
             if not_a_file is not None:
                 self.ctx.unloaded_plugins.append(text)
                 self.ctx.error(iloc.at(not_a_file))
@@ -855,11 +855,9 @@ def _not_a_file(path: Path, text: str, target: Path) -> str:
             f"included file {path_written(text)} not found: an absolute Windows path names a file "
             "on one computer only; write the path relative to the including file, with /"
         )
-    if slashed != text and (path.parent / slashed).is_file():
-        return (
-            f"included file {path_written(text)} not found; did you mean "
-            f"{path_written(slashed)}? (paths are written with /, on Windows too)"
-        )
+    windows_way = _written_with_backslashes("included file", path.parent, text)
+    if windows_way is not None:
+        return windows_way
     meant = _near_path(path.parent, slashed)
     if meant is not None:
         why = ("names are case-sensitive" if meant.lower() == slashed.lower() else
@@ -874,6 +872,20 @@ def _not_a_file(path: Path, text: str, target: Path) -> str:
     return (
         f"included file {path_written(text)} not found ({looked_for}paths are relative to the "
         f"including file; the shipped docking library is {DOCKING_LIBRARY})"
+    )
+
+
+def _written_with_backslashes(what: str, folder: Path, text: str) -> str | None:
+    """``lib\\b.yaml`` naming a file that ``lib/b.yaml`` names, in ``folder``: found on
+    Windows, not here. The message, with the path it meant; None when the path has no
+    backslash or the slashed one names no file either. Said alike of an include and a
+    plugin file: a plugin said only "not found"."""
+    slashed = text.replace("\\", "/")
+    if slashed == text or not (folder / slashed).is_file():
+        return None
+    return (
+        f"{what} {path_written(text)} not found; did you mean {path_written(slashed)}? "
+        "(paths are written with /, on Windows too)"
     )
 
 
@@ -909,10 +921,11 @@ def _near_path(folder: Path, text: str) -> str | None:
     return "/".join(found) if here.is_file() else None
 
 
-def _not_a_plugin_file(text: str, target: Path) -> str | None:
-    """Why ``target``, named ``text`` in ``plugins:``, cannot be imported, or None for a
-    regular file: unreadable, a directory, something else that exists (``/dev/zero``, a
-    pipe: it was "not found"), or nothing there."""
+def _not_a_plugin_file(path: Path, text: str, target: Path) -> str | None:
+    """Why ``target``, named ``text`` in ``plugins:`` of the file ``path``, cannot be
+    imported, or None for a regular file: unreadable, a directory, something else that
+    exists (``/dev/zero``, a pipe: it was "not found"), or nothing there (``sub\\my.py``
+    for ``sub/my.py``, as an include says)."""
     unreadable = _unreadable(target)
     if unreadable is not None:
         return f"cannot read plugin file {path_written(text)}: {unreadable}"
@@ -925,6 +938,9 @@ def _not_a_plugin_file(text: str, target: Path) -> str | None:
             f"plugin file {path_written(text)} is not a regular file (a device or a pipe); name "
             "a .py file"
         )
+    windows_way = _written_with_backslashes("plugin file", path.parent, text)
+    if windows_way is not None:
+        return windows_way
     return f"plugin file {path_written(text)} not found (paths are relative to the file naming it)"
 
 

@@ -392,18 +392,26 @@ def test_a_misspelt_section_beside_the_right_one_is_not_read(tmp_path: Path) -> 
 
 
 @pytest.mark.parametrize(
-    ("allowed", "said"),
-    [(False, "2:11: plugin file 'lib\\moves.py' not loaded: a mission file cannot run code on "
-             "its own; allow its plugin files with permissions=Permissions(plugin_files=True) "
-             "(or install the plugin as a package)"),
-     (True, "2:11: plugin file 'lib\\moves.py' not found (paths are relative to the file "
-            "naming it)")],
+    ("allowed", "there", "said"),
+    [(False, False, "2:11: plugin file 'lib\\moves.py' not loaded: a mission file cannot run "
+                    "code on its own; allow its plugin files with "
+                    "permissions=Permissions(plugin_files=True) (or install the plugin as a "
+                    "package)"),
+     (True, False, "2:11: plugin file 'lib\\moves.py' not found (paths are relative to the file "
+                   "naming it)"),
+     (True, True, "2:11: plugin file 'lib\\moves.py' not found; did you mean 'lib/moves.py'? "
+                  "(paths are written with /, on Windows too)")],
+    ids=["refused", "not found", "lib/moves.py there"],
 )  # fmt: skip
 def test_a_plugin_file_written_the_windows_way_is_quoted_as_written(
-    tmp_path: Path, allowed: bool, said: str
+    tmp_path: Path, allowed: bool, there: bool, said: str
 ) -> None:
     """``'lib\\\\moves.py'``: each backslash doubled by ``repr``, as the includes' messages
-    no longer were; the node it was to provide names the file as written too."""
+    no longer were; the node it was to provide names the file as written too. Where
+    ``lib/moves.py`` is there, the hint an include gives: it said only "not found"."""
+    if there:
+        (tmp_path / "lib").mkdir()
+        (tmp_path / "lib" / "moves.py").write_text("LURCH = 1\n")
     path = _mission(tmp_path, "mission: m\nplugins: ['lib\\moves.py']\ntree: {lurch: {}}\n")
     _, problems = compile_mission(path, permissions=Permissions(plugin_files=allowed))
     assert [f"{p.line}:{p.column}: {p.message}" for p in problems] == [
