@@ -525,7 +525,7 @@ def _run_episode(spec: EpisodeSpec, measured: type[_MeasuredSimulator]) -> Episo
     try:
         mission = _mission(Path(path), spec.params, profile, granted)
     except MissionError as exc:  # the evaluation compiled it before any episode: not here
-        raise _not_compiled(spec, Path(path), exc) from None
+        raise _not_compiled(spec, exc) from None
     world = build_world(spec)
     pose = start_pose(world, spec)
     faults = replace(spec.faults, odometry_error=spec.odometry_error)
@@ -547,17 +547,24 @@ def _run_episode(spec: EpisodeSpec, measured: type[_MeasuredSimulator]) -> Episo
     return _measured(spec, world, pose, simulator, summary, summary.outcome.value, stage)
 
 
-def _not_compiled(spec: EpisodeSpec, path: Path, exc: MissionError) -> MissionNotCompiled:
-    """What the worker's compiler said of the mission at ``path``, each file named as the
+def _not_compiled(spec: EpisodeSpec, exc: MissionError) -> MissionNotCompiled:
+    """What the worker's compiler said of the episode's mission, each file named as the
     evaluation gave it: the bundle's copy (``/tmp/roomba-bt-.../lab.py``) is no file the
     user knows."""
-    said = "\n".join(reported(exc.diagnostics))
-    if spec.sources is not None:
-        depth = len(Path(spec.sources.main).parts) - 1  # folders from the bundle's root
-        copy = path.parents[depth]
-        given = os.path.normpath(os.path.join(Path(spec.mission).parent, *[".."] * depth))
-        said = said.replace(f"{copy}{os.sep}", "" if given == "." else f"{given}{os.sep}")
+    said = _named_as_given(spec, "\n".join(reported(exc.diagnostics)))
     return MissionNotCompiled(spec.mission, f"{socket.gethostname()}:{os.getpid()}", said)
+
+
+def _named_as_given(spec: EpisodeSpec, said: str) -> str:
+    """``said`` with each file of the bundle's copy (``/tmp/roomba-bt-.../lab.py``, on a
+    worker) named by its path as the evaluation was given it (``lab.py``), the file the user
+    knows; as it is where the episode read the files themselves."""
+    if spec.sources is None:
+        return said
+    depth = len(Path(spec.sources.main).parts) - 1  # folders from the bundle's root
+    copy = spec.sources.materialise().parents[depth]
+    given = os.path.normpath(os.path.join(Path(spec.mission).parent, *[".."] * depth))
+    return said.replace(f"{copy}{os.sep}", "" if given == "." else f"{given}{os.sep}")
 
 
 def _measured(
@@ -609,7 +616,7 @@ def _measured(
         worker=f"{socket.gethostname()}:{os.getpid()}",
         coverage=_coverage(simulator, spec.start_area or ""),
         keys=final_values(spec.keys),
-        undeclared=undeclared_writes(),
+        undeclared=tuple((key, _named_as_given(spec, where)) for key, where in undeclared_writes()),
     )
 
 

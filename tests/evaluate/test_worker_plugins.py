@@ -90,3 +90,33 @@ def test_eval_says_a_worker_without_the_plugin_once_and_exits_3(
         "roomba-bt release (exit 3: the run environment failed, not the mission)\n"
     ) in err
     assert "internal error" not in err
+
+
+#: A plugin file that writes a key its mission does not declare (line 11)
+_WRITES_UNDECLARED = '''\
+from py_trees.common import Status
+
+from roomba_bt.behaviours import Action, declare, write_key
+
+
+@declare("lab_ready", kind="action")
+class LabReady(Action):
+    """Writes a key the mission does not declare."""
+
+    def update(self):
+        write_key("secret", 5, self.name)
+        return Status.SUCCESS
+'''
+
+
+def test_an_undeclared_key_written_on_a_worker_names_the_plugin_file_as_given(
+    tmp_path: Path,
+) -> None:
+    """The warning's ``at FILE:LINE`` named the worker's copy of the plugin file
+    (``/tmp/roomba-bt-.../lab.py:11``), where the local engine names the file itself: now
+    the path the evaluation was given, as a mission a worker cannot compile is said."""
+    mission = _mission(tmp_path, _WRITES_UNDECLARED)
+    (spec,) = episode_specs(str(mission), runs=1, timeout_s=2.0,
+                            permissions=Permissions(plugin_files=True))  # fmt: skip
+    result = run_episode(self_contained(spec))
+    assert result.undeclared == (("secret", f" by 'lab_ready' at {tmp_path / 'lab.py'}:11"),)
