@@ -40,8 +40,12 @@ ERRORS = "errors"
 #: and read with the standard library only, so a command reads the project's robot model
 #: without loading the mission compiler
 PROJECT = "project"
+#: below every layer too: what an ImportError says (which package to install or reinstall),
+#: standard library only, so the simulator's plots say a half-installed matplotlib as the
+#: command line says any other
+INSTALLATION = "installation"
 #: what every layer may import, the protocol's included
-STDLIB_ONLY = {LAZY, PRINTABLE, ERRORS, PROJECT}
+STDLIB_ONLY = {LAZY, PRINTABLE, ERRORS, PROJECT, INSTALLATION}
 ALLOWED: dict[str, set[str]] = {
     BOTTOM: {BOTTOM, PRINTABLE},
     "oi": {"oi", *STDLIB_ONLY},  # the protocol stays standard-library only, so no YAML

@@ -19,8 +19,8 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 from roomba_bt import __version__
-from roomba_bt.cli.installation import IncompleteInstallation, missing_from_installation
 from roomba_bt.cli.streams import guard_std_streams, stdout_problem
+from roomba_bt.installation import IncompleteInstallation, missing_from_installation
 
 # Nothing heavier at the top: the process's signal handlers (:func:`_as_the_process`) are set
 # once this module has loaded, and each module imported here delays them. The exit codes'
@@ -109,11 +109,11 @@ def _cannot_run(exc: ImportError, verbose: int) -> int:
     """An installation roomba-bt cannot run on: a py_trees release the tree is not proven
     against (``UnsupportedPyTrees`` says which to install), a dependency missing or
     installed incompletely, a module of roomba-bt missing: what to install or reinstall
-    (:func:`~roomba_bt.cli.installation.import_failure`), exit 2, the traceback with ``-v``.
+    (:func:`~roomba_bt.installation.import_failure`), exit 2, the traceback with ``-v``.
     An ImportError of roomba-bt's own code is its bug: :func:`_internal_error`, exit 70."""
     import traceback
 
-    from roomba_bt.cli.installation import import_failure
+    from roomba_bt.installation import import_failure
     from roomba_bt.runtime.summary import ExitCode
 
     said = import_failure(exc, __version__)

@@ -19,6 +19,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from roomba_bt.installation import optional_import_failure
 from roomba_bt.oi.encode import BAUD_CODES
 from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, PROFILES, RobotProfile
@@ -551,10 +552,9 @@ def plot_file(text: str) -> str:
     try:
         import matplotlib  # noqa: F401  (the package itself: it is the extra)
         from matplotlib.backend_bases import FigureCanvasBase
-    except ImportError:
-        raise argparse.ArgumentTypeError(
-            "--plot needs matplotlib, an optional extra: pip install 'roomba-bt[plot]'"
-        ) from None
+    except ImportError as exc:
+        needs = "--plot needs matplotlib, an optional extra: pip install 'roomba-bt[plot]'"
+        raise argparse.ArgumentTypeError(optional_import_failure(exc, needs)) from None
     formats = sorted(FigureCanvasBase.get_supported_filetypes())
     suffix = Path(text).suffix.lower()
     if suffix[1:] not in formats:

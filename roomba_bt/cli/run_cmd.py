@@ -55,6 +55,7 @@ from roomba_bt.cli.record_header import (
     epoch_problem,
     replayed_include_dirs,
 )
+from roomba_bt.installation import optional_import_failure
 from roomba_bt.oi.errors import BandwidthError
 from roomba_bt.oi.profiles import RobotProfile, get_profile
 from roomba_bt.printable import ANY_CONTROL, duration_said, encodes, escaped
@@ -824,8 +825,9 @@ def _plot(simulator: Any, path: str) -> str:
         return f"--plot: {exc}"
     try:
         plot_run(simulator, path)
-    except ImportError as exc:
-        return f"--plot needs matplotlib (pip install 'roomba-bt[plot]'): {exc}"
+    except ImportError as exc:  # pyplot's PlotUnavailableError is said as it is
+        needs = f"matplotlib is not installed (pip install 'roomba-bt[plot]'): {exc}"
+        return f"--plot: {optional_import_failure(exc, needs)}"
     except OSError as exc:
         return f"--plot {path}: {exc.strerror or exc}"
     return f"trajectory written to {path}"

@@ -43,6 +43,7 @@ from roomba_bt.evaluate.episode import (
     run_episode,
 )
 from roomba_bt.evaluate.parallel import NO_WORKERS, SCHEDULER_LOST
+from roomba_bt.installation import optional_import_failure
 from roomba_bt.runtime.wall_limit import WallLimit, WallLimitReached
 
 
@@ -112,10 +113,9 @@ def within_wall_limit(spec: EpisodeSpec, limit_s: float) -> EpisodeResult:
 def _import_distributed() -> Any:
     try:
         import distributed
-    except ImportError:
-        raise ClusterUnavailableError(
-            "the Dask engine needs the cluster extra: pip install 'roomba-bt[cluster]'"
-        ) from None
+    except ImportError as exc:
+        needs = "the Dask engine needs the cluster extra: pip install 'roomba-bt[cluster]'"
+        raise ClusterUnavailableError(optional_import_failure(exc, needs)) from None
     return distributed
 
 

@@ -13,28 +13,32 @@ import math
 import pathlib
 from typing import Any
 
+from roomba_bt.errors import RoombaBtError
+from roomba_bt.installation import optional_import_failure
 from roomba_bt.sim.coverage import SweptArea
 from roomba_bt.sim.geometry import Polygon
 from roomba_bt.sim.robot import Simulator
 from roomba_bt.sim.world import World
 
 
-class PlotUnavailableError(ImportError):
-    """matplotlib is not installed."""
+class PlotUnavailableError(ImportError, RoombaBtError):
+    """matplotlib is not installed, or installed incompletely: the message says which, and
+    the pip line that repairs it."""
 
 
 def pyplot() -> Any:
     """``matplotlib.pyplot`` on the file-only Agg backend; :class:`PlotUnavailableError` if
-    matplotlib is not installed."""
+    matplotlib is not installed or its import fails (a dependency of its own missing)."""
     try:
         import matplotlib
 
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError as exc:
-        raise PlotUnavailableError(
+        needs = (
             f"plotting needs matplotlib, an optional extra: pip install 'roomba-bt[plot]' ({exc})"
-        ) from None
+        )
+        raise PlotUnavailableError(optional_import_failure(exc, needs)) from None
     return plt
 
 

@@ -4,14 +4,21 @@
 
 from __future__ import annotations
 
+import argparse
 import os
 import subprocess
 import sys
+from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 
 from roomba_bt.cli import main
-from roomba_bt.cli.installation import import_failure
+from roomba_bt.cli.arguments import plot_file
+from roomba_bt.cli.run_cmd import _plot
+from roomba_bt.evaluate.cluster import ClusterUnavailableError, _import_distributed
+from roomba_bt.installation import import_failure
+from roomba_bt.sim.plot import PlotUnavailableError, pyplot
 
 #: a package's import that fails inside it: aiohttp without its yarl, as pip uninstall leaves it
 WITHOUT_YARL = """
@@ -150,3 +157,85 @@ def test_an_import_error_in_roomba_bts_own_code_is_an_internal_error(
     err = capsys.readouterr().err
     assert err.startswith(f"roomba-bt: internal error: ImportError: {CIRCULAR}"), err
     assert "a bug in roomba-bt" in err
+
+
+class _Missing:
+    """A finder of the import system that finds no module ``name`` (as if uninstalled)."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+
+    def find_spec(self, name: str, path: object = None, target: object = None) -> None:
+        if name == self.name:
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+
+
+def _installed_without(
+    monkeypatch: pytest.MonkeyPatch, folder: Path, package: str, dependency: str
+) -> None:
+    """``package`` importable but failing inside its own import, ``dependency`` missing (as
+    ``pip uninstall`` of a dependency leaves it): a stand-in package of that name in
+    ``folder``, first on the path, the real ones out of ``sys.modules`` until the test ends."""
+    (folder / package).mkdir()
+    (folder / package / "__init__.py").write_text(f"import {dependency}\n")
+    for name in [name for name in sys.modules if name.partition(".")[0] in (package, dependency)]:
+        monkeypatch.delitem(sys.modules, name)
+    monkeypatch.setattr(sys, "meta_path", [_Missing(dependency), *sys.meta_path])
+    monkeypatch.syspath_prepend(str(folder))
+
+
+def _plot_file_refusal() -> str:
+    with pytest.raises(argparse.ArgumentTypeError) as refused:
+        plot_file("run.png")
+    return str(refused.value)
+
+
+def _pyplot_refusal() -> str:
+    with pytest.raises(PlotUnavailableError) as refused:
+        pyplot()
+    return str(refused.value)
+
+
+def _run_plot_said() -> str:
+    return _plot(object(), "run.png")
+
+
+def _dask_refusal() -> str:
+    with pytest.raises(ClusterUnavailableError) as refused:
+        _import_distributed()
+    return str(refused.value)
+
+
+PLOT_REINSTALL = (
+    "the plots' drawing library (matplotlib) is installed incompletely: No module named "
+    "'kiwisolver'; reinstall it: pip install --force-reinstall 'roomba-bt[plot]'"
+)
+
+
+@pytest.mark.parametrize(
+    ("package", "dependency", "said", "expected"),
+    [
+        ("matplotlib", "kiwisolver", _plot_file_refusal, PLOT_REINSTALL),
+        ("matplotlib", "kiwisolver", _pyplot_refusal, PLOT_REINSTALL),
+        ("matplotlib", "kiwisolver", _run_plot_said, f"--plot: {PLOT_REINSTALL}"),
+        (
+            "distributed", "tornado", _dask_refusal,
+            "the Dask engine (distributed) is installed incompletely: No module named "
+            "'tornado'; reinstall it: pip install --force-reinstall 'roomba-bt[cluster]'",
+        ),
+    ],
+    ids=["--plot's check", "the plots' pyplot", "run --plot", "eval --engine dask"],
+)  # fmt: skip
+def test_an_extra_installed_incompletely_says_reinstall_it_not_install_it(
+    monkeypatch: pytest.MonkeyPatch,
+    tmp_path: Path,
+    package: str,
+    dependency: str,
+    said: Callable[[], str],
+    expected: str,
+) -> None:
+    """matplotlib without its kiwisolver, distributed without its tornado: each place that
+    imports the extra said "needs matplotlib / the cluster extra: pip install ...", which the
+    user had done. A package not installed at all is still said as before (the plot tests)."""
+    _installed_without(monkeypatch, tmp_path, package, dependency)
+    assert said() == expected

@@ -17,7 +17,14 @@ with ``-v``. An ImportError inside roomba-bt's own code with none of these behin
 circular import, a name that is not there) is roomba-bt's bug: None here, and the command
 line reports it as any internal error (exit 70).
 
-Standard library only: it runs when an import has just failed.
+Where an optional extra is asked for (``--plot``, the Dask engine), the code that imports it
+says what it needs in its own words (``--plot needs matplotlib, an optional extra: pip
+install 'roomba-bt[plot]'``) when the extra is not installed, and these words when it is
+installed incompletely (:func:`optional_import_failure`): "pip install the extra" is no help
+to a user who has it, missing a dependency of its own.
+
+Below every layer, standard library only (the simulator's plots use it, ``tests/test_layers.py``):
+it runs when an import has just failed.
 """
 
 from __future__ import annotations
@@ -80,26 +87,54 @@ def import_failure(exc: ImportError, version: str) -> str | None:
     if isinstance(exc, RoombaBtError):
         return str(exc)
     package = failing_package(exc)
-    missing = isinstance(exc, ModuleNotFoundError) and _top(exc.name) == package
     if package is None:
         if isinstance(exc, ModuleNotFoundError) and exc.name:
             return missing_from_installation(exc.name, version)
         return None
+    missing = _missing(exc, package)
     if package in EXTRAS:
         what, extra = EXTRAS[package]
         if missing:
             return f"{what} ({package}) is not installed: pip install 'roomba-bt[{extra}]'"
-        return (f"{what} ({package}) is installed incompletely: {exc}; reinstall it: "
-                f"pip install --force-reinstall 'roomba-bt[{extra}]'")  # fmt: skip
+        return _incomplete(exc, package)
     if package in DEPENDENCIES:
         state = "not installed" if missing else f"installed incompletely: {exc}"
         return (f"roomba-bt's dependency {DEPENDENCIES[package]} ({package}) is {state}; "
                 "reinstall roomba-bt: pip install --force-reinstall roomba-bt")  # fmt: skip
-    distribution = _distribution(package)
     if missing:
-        return f"{exc}: install it (pip install {distribution}); the traceback with -v"
+        return f"{exc}: install it (pip install {_distribution(package)}); the traceback with -v"
+    return f"{_incomplete(exc, package)} (the traceback with -v)"
+
+
+def optional_import_failure(exc: ImportError, needs: str) -> str:
+    """What to say of ``exc``, raised by the import of an optional extra where it is asked
+    for: ``needs``, the caller's words naming the extra to install, when its package is not
+    installed; when it is, but its own import failed (matplotlib without its kiwisolver,
+    distributed without its tornado), that it is installed incompletely and how to reinstall
+    it. An error of roomba-bt's that already says so is said as it is; a failure no extra's
+    own code raised (an import hook's, a test's stand-in) is ``needs`` too."""
+    if isinstance(exc, RoombaBtError):
+        return str(exc)
+    package = failing_package(exc)
+    if package not in EXTRAS or _missing(exc, package):
+        return needs
+    return _incomplete(exc, package)
+
+
+def _missing(exc: ImportError, package: str) -> bool:
+    """Whether ``exc`` says ``package`` itself is not there (not a module it imports)."""
+    return isinstance(exc, ModuleNotFoundError) and _top(exc.name) == package
+
+
+def _incomplete(exc: ImportError, package: str) -> str:
+    """``package`` is there but its import failed inside it: what it is, why, and the pip
+    line that installs it again (its extra's, for an extra of roomba-bt)."""
+    if package in EXTRAS:
+        what, extra = EXTRAS[package]
+        return (f"{what} ({package}) is installed incompletely: {exc}; reinstall it: "
+                f"pip install --force-reinstall 'roomba-bt[{extra}]'")  # fmt: skip
     return (f"{package} is installed incompletely: {exc}; reinstall it: pip install "
-            f"--force-reinstall {distribution} (the traceback with -v)")  # fmt: skip
+            f"--force-reinstall {_distribution(package)}")  # fmt: skip
 
 
 def _distribution(package: str) -> str:
