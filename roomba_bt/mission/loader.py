@@ -938,10 +938,9 @@ def _not_a_plugin_file(path: Path, text: str, target: Path) -> str | None:
             f"plugin file {path_written(text)} is not a regular file (a device or a pipe); name "
             "a .py file"
         )
-    windows_way = _written_with_backslashes("plugin file", path.parent, text)
-    if windows_way is not None:
-        return windows_way
-    return f"plugin file {path_written(text)} not found (paths are relative to the file naming it)"
+    return _written_with_backslashes("plugin file", path.parent, text) or (
+        f"plugin file {path_written(text)} not found (paths are relative to the file naming it)"
+    )
 
 
 def _unreadable(target: Path) -> str | None:
