@@ -3,8 +3,9 @@
 Each entry names the command's data bytes (fixed arguments with their wire type and range, or
 a variable tail), the OI modes that accept it, the mode it leads to, what else it does to the
 link (its :class:`Effect`: a built-in cycle, stream control, a sensor reply, a baud change, the
-OI going quiet), the robot profiles that have it and the actuator "channel" it drives (two
-commands on one channel in one tick: the last wins). The encoder, the mode model, the
+OI going quiet), the robot profiles that have it, the actuator "channel" it drives and its
+:class:`Delivery`: a state (two on one channel in one tick: the last wins) or an event (each
+one is sent, in order). The encoder, the mode model, the
 connection, the mission validator and the simulator read it; none of them names an opcode by
 number for what it does.
 
@@ -121,6 +122,19 @@ class Effect(enum.Enum):
     POWER_DOWN = "power_down"
 
 
+class Delivery(enum.Enum):
+    """How the per-tick batching (``robot.interface.Outbox``) treats several of a command in
+    one tick. Data of the table, so that the batcher names no opcode."""
+
+    #: The command sets a state of its channel (the wheels' speed, the LEDs, the stream's
+    #: list): a later one in the same tick makes the earlier one moot, so the last one wins.
+    STATE = "state"
+    #: The command is something that happens (a song played, a button pressed, a song
+    #: defined, a mode change, a query): dropping one changes what the robot does, so each
+    #: one is sent, in the order queued.
+    EVENT = "event"
+
+
 #: The actuator channels whose commands set a lasting state (:attr:`CommandSpec.sets_state`).
 STATE_CHANNELS = frozenset({"wheels", "motors", "leds", "scheduling_leds", "digits"})
 
@@ -141,6 +155,9 @@ class CommandSpec:
     doc: str = ""
     tail: TailSpec | None = None
     effect: Effect | None = None
+    #: the batcher's rule for several in one tick (:class:`Delivery`); every STATE command
+    #: has a channel (the one the last one wins on)
+    delivery: Delivery = Delivery.EVENT
 
     @property
     def fixed_data_bytes(self) -> int:
@@ -211,10 +228,16 @@ def _c(
     doc: str = "",
     tail: TailSpec | None = None,
     effect: Effect | None = None,
+    delivery: Delivery | None = None,
 ) -> CommandSpec:
+    """One table row; ``delivery`` is STATE for a command with a channel unless the row says
+    EVENT (Play, Buttons), EVENT for the rest."""
+    if delivery is None:
+        delivery = Delivery.STATE if channel is not None else Delivery.EVENT
     return CommandSpec(
-        opcode, name, title, args, modes, leads_to, profiles, channel, variable, doc, tail, effect
-    )
+        opcode, name, title, args, modes, leads_to, profiles, channel, variable, doc, tail,
+        effect, delivery,
+    )  # fmt: skip
 
 
 def _u8(name: str, lo: int = 0, hi: int = 255, unit: str = "", doc: str = "") -> ArgSpec:
@@ -284,7 +307,8 @@ _COMMAND_LIST: tuple[CommandSpec, ...] = (
        variable="song_length x (note 0-255, duration 0-255 in 1/64 s)",
        doc=f"Defines a song; notes outside {PLAYABLE_NOTES[0]}-{PLAYABLE_NOTES[-1]} are rests.",
        tail=TailSpec("song_length", (NOTE_NUMBER, NOTE_DURATION))),
-    _c(141, "play", "Play", (SONG_NUMBER,), modes=DRIVING_MODES, channel="speaker"),
+    _c(141, "play", "Play", (SONG_NUMBER,), modes=DRIVING_MODES, channel="speaker",
+       delivery=Delivery.EVENT),
     _c(142, "sensors", "Sensors", (_packet_id(),), effect=Effect.QUERY,
        doc="Asks for one packet or group; the reply has no header and no checksum."),
     _c(143, "seek_dock", "Seek Dock", leads_to=OIMode.PASSIVE, channel="wheels",
@@ -321,7 +345,7 @@ _COMMAND_LIST: tuple[CommandSpec, ...] = (
        tuple(_u8(f"digit_{n}_ascii", 32, 126, "ASCII") for n in (3, 2, 1, 0)),
        modes=DRIVING_MODES, channel="digits"),
     _c(165, "buttons", "Buttons", (_u8("button_bits", 0, 255, "bits"),), channel="buttons",
-       doc="Presses buttons; they release after 1/6 s."),
+       delivery=Delivery.EVENT, doc="Presses buttons; they release after 1/6 s."),
     _c(167, "schedule", "Schedule",
        (_u8("day_bits", 0, 127, "bits"), *_SCHEDULE_TIMES)),
     _c(168, "set_day_time", "Set Day/Time",

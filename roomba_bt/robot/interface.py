@@ -31,7 +31,7 @@ from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS, FrameLayout, SensorFra
 from roomba_bt.oi.frames import SLOT_SECONDS as SLOT_SECONDS
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.odometry import MM_PER_COUNT
-from roomba_bt.oi.opcodes import COMMANDS_BY_NAME, Effect
+from roomba_bt.oi.opcodes import COMMANDS_BY_NAME, Delivery, Effect
 from roomba_bt.oi.profiles import DEFAULT_PROFILE, RobotProfile
 
 _new_tuple = tuple.__new__
@@ -255,6 +255,7 @@ class Snapshot(NamedTuple):
 #: Safe drops to Passive at once: harmless, and Start leaves the model where the robot is.
 CYCLE_END: tuple[Command, ...] = (oi.safe(), oi.halt(), oi.motors_off(), oi.start())
 _SEEK_DOCK = COMMANDS_BY_NAME["seek_dock"]
+_STATE = Delivery.STATE
 
 
 def docked_by_seek_dock(cycle: Command | None, frame: SensorFrame | None) -> bool:
@@ -287,10 +288,15 @@ _NOBODY = object()
 class Outbox:
     """Commands produced during one tick, flushed by the runtime after it.
 
-    Per channel (``CommandSpec.channel``, e.g. ``"wheels"``) the last command wins; commands
-    without a channel (mode changes, songs, queries) are all kept, in order. The order of the
-    flush is the order in which each surviving command was first queued in this tick, so a
-    ``safe`` queued before a ``drive`` is written before it.
+    The opcode table says which commands are states and which are events
+    (:class:`~roomba_bt.oi.opcodes.Delivery`, one field of each row, read here and nowhere
+    else): of the states (Drive, Motors, LEDs, the stream...) the last on each channel
+    (``CommandSpec.channel``, e.g. ``"wheels"``) in a tick wins; the events (Play, Buttons,
+    Song definitions, mode changes, queries) are all kept, in order. Two Plays in one tick
+    are both written, back to back: until session 32 the first was dropped (Play was a
+    state of the "speaker"), and ``play: 0`` then ``play: 1`` played only song 1. The
+    order of the flush is the order in which each surviving command was first queued in
+    this tick, so a ``safe`` queued before a ``drive`` is written before it.
 
     A behaviour that ends stops what it set moving with :meth:`send_stop`, which yields to a
     command another behaviour queued on that channel in this tick. A fallback that switches
@@ -326,8 +332,14 @@ class Outbox:
         self.standing: Mapping[str, Command] = self._standing
 
     def send(self, command: Command, sender: object = None) -> None:
-        channel = command.spec.channel
-        key: object = channel if channel is not None else (command.spec.opcode, len(self._queue))
+        """Queue ``command`` for this tick's flush: a state replaces the one queued on its
+        channel, an event is added after the rest under a key of its own (an ``object()``:
+        ``(opcode, len(queue))`` was used until session 32 and could meet a key again after
+        :meth:`end_cycle` deleted one). An event's ``sender`` is kept as its channel's (a
+        refusal of either of two Plays names the later one's sender)."""
+        spec = command.spec
+        channel = spec.channel
+        key: object = channel if spec.delivery is _STATE else object()
         self._queue[key] = command
         if channel is not None:
             self._senders[channel] = sender

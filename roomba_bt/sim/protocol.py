@@ -390,8 +390,16 @@ class OIProtocol(StreamOutput):
         self.songs[number] = tuple((notes[i], notes[i + 1]) for i in range(0, len(notes), 2))
 
     def _on_play(self, args: bytes) -> None:
+        """Play (141): packets 36/37 show the song for its length. A slot never defined is
+        ignored (both specs: "you must add one or more songs ... for the Play command to
+        work"), and so is a Play while a song plays (decided, session 32: the 600 and 500
+        specs are silent, the original Create OI spec says "this command does not work if a
+        song is already playing"; docs/protocol.md), said as event ``refused``."""
         song = self.songs.get(args[0])
         if song is None:
+            return
+        if self.values[37] and self.time < self._song_until:
+            self._event("refused", f"play {args[0]} ignored: song {self.values[36]} still playing")
             return
         self.values[36] = args[0]
         self.values[37] = 1

@@ -1,11 +1,14 @@
-"""The outbox of one tick: last command per channel wins; an ending behaviour's halt yields
-to another behaviour's command on that channel."""
+"""The outbox of one tick: of the states the last command per channel wins, the events are
+all sent in order; an ending behaviour's halt yields to another behaviour's command on that
+channel."""
 
 from __future__ import annotations
 
 import pytest
 
 from roomba_bt.oi import commands
+from roomba_bt.oi.encode import Command
+from roomba_bt.oi.opcodes import COMMANDS, Delivery
 from roomba_bt.robot.interface import CYCLE_END, Outbox
 
 OLD, NEW = object(), object()  # two behaviours
@@ -18,6 +21,42 @@ def test_last_command_per_channel_wins_in_first_queued_order() -> None:
     box.send(commands.drive(200, 0), NEW)
     assert [c.name for c in box.drain()] == ["safe", "drive"]
     assert len(box) == 0
+
+
+EVENTS_IN_ONE_TICK = {
+    "two plays": [commands.play(0), commands.play(1)],
+    "the same play twice": [commands.play(2), commands.play(2)],
+    "two button presses": [commands.buttons(1), commands.buttons(4)],
+    "songs of two slots": [commands.song(0, [(60, 8)]), commands.song(1, [(62, 8)])],
+    "a song, its play, the next song and its play": [
+        commands.song(0, [(60, 8)]), commands.play(0),
+        commands.song(1, [(62, 8)]), commands.play(1),
+    ],
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("sent", EVENTS_IN_ONE_TICK.values(), ids=list(EVENTS_IN_ONE_TICK))
+def test_events_in_one_tick_are_all_written_in_order(sent: list[Command]) -> None:
+    """``play: 0``, a wait that passes at once, ``play: 1``: both Plays in one tick. As the
+    state of a "speaker" channel the first was dropped and song 0 never played."""
+    box = Outbox()
+    box.send(commands.drive(100, 0), OLD)
+    for command in sent:
+        box.send(command, NEW)
+    box.send(commands.drive(200, 0), OLD)
+    assert [c.data for c in box.drain()] == [commands.drive(200, 0).data] + [
+        c.data for c in sent
+    ]
+
+
+def test_every_state_in_the_opcode_table_has_its_channel_and_play_and_buttons_are_events() -> (
+    None
+):
+    """The batcher's one field: a state needs the channel its last command wins on; the
+    commands that happen (Play 141, Buttons 165, Song 140, Start 128) are events."""
+    assert all(c.channel is not None for c in COMMANDS.values() if c.delivery is Delivery.STATE)
+    assert {COMMANDS[op].delivery for op in (128, 140, 141, 165)} == {Delivery.EVENT}
+    assert {COMMANDS[op].delivery for op in (137, 138, 139, 145, 148, 164)} == {Delivery.STATE}
 
 
 def test_a_stop_yields_to_another_senders_command() -> None:

@@ -165,6 +165,29 @@ def test_song_and_play_show_in_packets_36_and_37_for_the_songs_length() -> None:
     assert frames[60][37] == 1 and frames[-1][37] == 0
 
 
+def test_play_while_a_song_plays_is_ignored_and_said() -> None:
+    """Decided in session 32 (docs/protocol.md, "Play while a song plays"): the original
+    Create OI spec says Play "does not work if a song is already playing"; the 600 and 500
+    specs are silent. The simulator replaced the song until then, so a mission that chained
+    songs without waiting sounded right in the simulator only. In one tick too: the second
+    of two Plays written back to back is ignored."""
+    host = make()
+    host.stream([36, 37])
+    host.send(C.song(0, [Note(69, 64)]), C.song(1, [Note(71, 16)]), C.play(0))  # 1 s, 0.25 s
+    host.frames(0.3)
+    host.send(C.play(1))
+    frames = host.frames(0.6)  # song 1 would have ended by 0.55 s
+    assert all(f[36] == 0 and f[37] == 1 for f in frames)
+    refused = [e.detail for e in host.sim.events if e.kind == "refused"]
+    assert refused == ["play 1 ignored: song 0 still playing"]
+    frames = host.frames(0.2)
+    assert frames[-1][37] == 0  # song 0 over at 1 s: now Play works again
+    host.send(C.play(1), C.play(0))
+    frames = host.frames(0.2)
+    assert frames[0][36] == 1 and frames[0][37] == 1 and frames[-1][37] == 1
+    assert len(host.sim.events) and host.sim.events[-1].detail.startswith("play 0 ignored")
+
+
 def test_leds_digits_scheduling_leds_schedule_and_clock_are_kept() -> None:
     host = make()
     host.send(
