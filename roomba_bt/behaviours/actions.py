@@ -57,6 +57,7 @@ from roomba_bt.oi.opcodes import (
     SONG_NUMBER,
     opcodes,
 )
+from roomba_bt.oi.packets import PACKETS_BY_NAME
 from roomba_bt.printable import ANY_CONTROL, duration_said, escaped
 from roomba_bt.robot.hazards import sets_going
 
@@ -661,20 +662,48 @@ class Song(Action):
         return _OK
 
 
+#: how long after its Play a song must show in packet 37 (when streamed): the robot shows it
+#: in the frame after the one the Play went out with; the rest is a real link's slack
+SONG_START_S = 0.25
+_SONG_PLAYING = PACKETS_BY_NAME["song_playing"].id
+
+
 @declare(
     "play",
     kind="action",
-    at_once=True,
     params=(_SONG_SLOT,),
     sends=opcodes("play"),
     primary="number",
 )
 class Play(Action):
-    """Play a defined song (Play 141 ``[141][number]``)."""
+    """Play a defined song (Play 141 ``[141][number]``), SUCCESS once the robot has it:
+    when packet 37 is streamed (the mission reads ``song_playing``), on the first frame that
+    shows a song playing, FAILURE if none does within :data:`SONG_START_S`; else on the tick
+    after the Play, the first frame the robot could show it in. Until session 32 ``play``
+    succeeded on the tick it was sent, so ``play`` then ``wait ... until: {sensor:
+    song_playing == 0}`` passed at once (the frame of that tick was read before the Play)
+    and the next ``play`` went out in the same tick."""
+
+    def start(self) -> None:
+        self._sent_at: float | None = None
 
     def update(self) -> Status:
-        self.send(oi.play(int(self.value("number"))))
-        return _OK
+        snap = self.snapshot
+        if self._sent_at is None:
+            self.send(oi.play(int(self.value("number"))))
+            self._sent_at = snap.time
+            return _RUN
+        frame = snap.frame
+        if _SONG_PLAYING not in frame or frame.song_playing:
+            return _OK
+        if snap.time - self._sent_at < SONG_START_S:
+            return _RUN
+        self.feedback_message = (
+            f"song {self.value('number')} did not start: packet 37 showed no song playing "
+            f"{duration_said(SONG_START_S)} after Play (a slot the robot holds no song in, or "
+            "a song still playing: the robot ignores Play then)"
+        )
+        return _FAIL
 
 
 # --------------------------------------------------------------------------- time, log, data

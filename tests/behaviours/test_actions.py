@@ -35,7 +35,7 @@ from roomba_bt.oi.opcodes import (
     SONG_LENGTH,
     SONG_NUMBER,
 )
-from roomba_bt.robot.interface import Odometry
+from roomba_bt.robot.interface import SLOT_SECONDS, Odometry
 from roomba_bt.robot.testing import StubRobot
 
 
@@ -357,6 +357,41 @@ def test_song_and_play(robot: StubRobot, make: Make) -> None:
     tick(make(a.Song, number=1, notes=((60, 16), (0, 8))))
     tick(make(a.Play, number=1))
     assert data(robot) == [[140, 1, 2, 60, 16, 0, 8], [141, 1]]
+
+
+SAFE = {35: int(OIMode.SAFE)}
+
+
+def test_play_without_packet_37_succeeds_on_the_next_frame(robot: StubRobot, make: Make) -> None:
+    """The first frame the robot could show the song in: a ``wait ... until: {sensor:
+    song_playing == 0}`` after it reads that frame, not the one before the Play."""
+    play = make(a.Play, number=2)
+    assert tick(play) is Status.RUNNING
+    assert data(robot) == [[141, 2]]
+    robot.set_frame(SAFE)
+    assert tick(play) is Status.SUCCESS
+    assert data(robot) == []  # sent once
+
+
+def test_play_with_packet_37_succeeds_once_the_song_shows(robot: StubRobot, make: Make) -> None:
+    play = make(a.Play, number=0)
+    assert tick(play) is Status.RUNNING
+    robot.set_frame({**SAFE, 37: 0})  # the frame written before the robot took the Play
+    assert tick(play) is Status.RUNNING
+    robot.set_frame({**SAFE, 37: 1})
+    assert tick(play) is Status.SUCCESS
+    assert data(robot) == [[141, 0]]
+
+
+def test_play_fails_when_the_song_never_shows(robot: StubRobot, make: Make) -> None:
+    """A slot the robot holds no song in, or a song still playing (the robot ignores Play):
+    said, not a SUCCESS for a song that never played."""
+    play = make(a.Play, number=3)
+    while tick(play) is Status.RUNNING:
+        robot.set_frame({**SAFE, 37: 0})
+    assert play.status is Status.FAILURE  # on the first frame SONG_START_S after the Play
+    assert a.SONG_START_S <= robot.snapshot.time < a.SONG_START_S + SLOT_SECONDS
+    assert play.feedback_message.startswith("song 3 did not start: packet 37 showed no song")
 
 
 def test_notes_parse_names_and_durations() -> None:
