@@ -91,8 +91,41 @@ def _parse_notes(value: object) -> tuple[tuple[int, int], ...]:
     if problems:
         raise ItemErrors("note", len(value), problems)
     if len(notes) > SONG_LENGTH.maximum:
-        raise UnitError(f"a song has at most {SONG_LENGTH.maximum} notes, got {len(notes)}")
+        raise UnitError(_split_the_song(len(notes)))
     return tuple(notes)
+
+
+def _notes_from_to(first: int, last: int) -> str:
+    """``notes 1-16``, ``note 17``: a part of a song said in its error."""
+    return f"note {first}" if first == last else f"notes {first}-{last}"
+
+
+def _split_the_song(count: int) -> str:
+    """The error of a song over the robot's 16 notes, with the way on: its notes in 16s, a
+    slot each (5 slots: 80 notes), played one after the other, each ``play`` followed by a
+    wait for packet 37 to show the song over (a Play while a song plays is ignored)."""
+    most = SONG_LENGTH.maximum
+    slots = -(-count // most)
+    if slots > SONG_NUMBER.maximum + 1:
+        room = (SONG_NUMBER.maximum + 1) * most
+        return (
+            f"a song has at most {most} notes, got {count}: the robot's "
+            f"{SONG_NUMBER.maximum + 1} song slots hold {room} notes in all (define the "
+            "rest when a slot has played)"
+        )
+    parts = [(slot * most + 1, min(count, (slot + 1) * most)) for slot in range(slots)]
+    songs = ", ".join(
+        f"`song: {{number: {slot}, notes: [{_notes_from_to(first, last)}]}}`"
+        for slot, (first, last) in enumerate(parts)
+    )
+    plays = ", ".join(
+        f"`play: {slot}`, `{{wait: 30s, until: {{sensor: song_playing == 0}}}}`"
+        for slot in range(slots)
+    )
+    return (
+        f"a song has at most {most} notes, got {count}: split it into {slots} songs played "
+        f'one after the other: {songs}, then {plays} (docs/missions.md, "Songs")'
+    )
 
 
 #: the note lengths the language takes, in 1/64 s: one step to the table's longest (a note
@@ -676,13 +709,14 @@ _SONG_PLAYING = PACKETS_BY_NAME["song_playing"].id
     primary="number",
 )
 class Play(Action):
-    """Play a defined song (Play 141 ``[141][number]``), SUCCESS once the robot has it:
-    when packet 37 is streamed (the mission reads ``song_playing``), on the first frame that
-    shows a song playing, FAILURE if none does within :data:`SONG_START_S`; else on the tick
-    after the Play, the first frame the robot could show it in. Until session 32 ``play``
-    succeeded on the tick it was sent, so ``play`` then ``wait ... until: {sensor:
-    song_playing == 0}`` passed at once (the frame of that tick was read before the Play)
-    and the next ``play`` went out in the same tick."""
+    """Play a defined song (Play 141 ``[141][number]``): SUCCESS once the robot shows it
+    playing (packet 37, when the mission reads ``song_playing``: FAILURE if no frame shows
+    it within 0.25 s), else on the next frame.
+
+    So ``play`` then ``wait ... until: {sensor: song_playing == 0}`` waits for the song's
+    end. Until session 32 ``play`` succeeded on the tick it was sent: the wait read that
+    tick's frame, from before the Play, passed at once, and the next ``play`` went out in
+    the same tick. :data:`SONG_START_S` is the 0.25 s."""
 
     def start(self) -> None:
         self._sent_at: float | None = None

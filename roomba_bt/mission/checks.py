@@ -786,3 +786,35 @@ def check_stream(
             f"{list(RUNTIME_PACKETS)}) do not fit the stream: {exc}{fix}"
         )
     return None
+
+
+def undefined_songs(root: Node) -> list[Diagnostic]:
+    """Warnings: each ``play`` of a slot no ``song`` of this mission defines (``play: 3``
+    where only slot 0 was written: a typo, most likely). A warning, not an error: the robot
+    keeps the songs it was given earlier, until it is switched off, so the slot may hold
+    one; it may also be empty, and then the robot plays nothing. Said where the number is
+    written; a song or play whose number is a blackboard key is not known here: none said."""
+    songs: set[object] = set()
+    plays: list[Node] = []
+    for node in root.walk():
+        decl = node.decl
+        if decl is not None and decl.name == "song":
+            songs.add(node.params.get("number", 0))
+        elif decl is not None and decl.name == "play":
+            plays.append(node)
+    defined_slots = sorted(number for number in songs if isinstance(number, int))
+    if len(defined_slots) < len(songs):
+        return []
+    warnings: list[Diagnostic] = []
+    for node in plays:
+        number = node.params.get("number", 0)
+        if isinstance(number, int) and number not in songs:
+            defined = ", ".join(map(str, defined_slots)) if songs else "none"
+            loc = node.options.get("loc:number", node.loc)
+            warnings.append(loc.at(
+                f"play: song {number} is not defined by this mission (its song slots: "
+                f"{defined}): the robot plays what an earlier program left in slot "
+                f"{number}, kept until it is switched off, or nothing; add "
+                f"`song: {{number: {number}, notes: [...]}}` before it"
+            ).as_warning())  # fmt: skip
+    return warnings

@@ -38,6 +38,7 @@ from roomba_bt.mission.checks import (
     restarted_limits,
     restarted_runs,
     sensor_ranges,
+    undefined_songs,
 )
 from roomba_bt.mission.diagnostics import Diagnostic, IncludeSite, MissionError
 from roomba_bt.mission.loader import NO_PERMISSIONS, Loader, Permissions
@@ -218,6 +219,7 @@ def _checked(
             *restarted_runs(tree),
             *ignored,
             *sensor_ranges(tree, profile),
+            *undefined_songs(tree),
         ),
     )
     return mission, []

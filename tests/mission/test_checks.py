@@ -704,3 +704,72 @@ def test_the_old_docs_cliff_watcher_is_accepted_and_drives_its_distance_once(
     out = capsys.readouterr().out
     assert code == 0, out
     assert "outcome      SUCCESS" in out and "distance     0.20 m" in out, out
+
+
+# ------------------------------------------------------------------ songs
+
+
+def test_a_play_of_a_slot_no_song_defines_is_a_warning_at_its_number(
+    compile_text: Callable[..., CompiledMission],
+) -> None:
+    """``play: 3`` where only slot 0 is written validated silently (a typo; the robot may
+    hold a song from earlier, or none)."""
+    mission = compile_text(
+        """
+mission: typo
+tree:
+  sequence:
+    - song: {number: 0, notes: [C4 100ms]}
+    - mode: safe
+    - play: 3
+    - play: 0
+"""
+    )
+    assert [(w.line, w.column) for w in mission.warnings] == [(6, 13)]
+    said = mission.warnings[0].message
+    assert said.startswith("play: song 3 is not defined by this mission (its song slots: 0)")
+    assert "kept until it is switched off" in said
+
+
+def test_a_play_of_a_slot_a_blackboard_key_may_define_is_no_warning(
+    compile_text: Callable[..., CompiledMission],
+) -> None:
+    mission = compile_text(
+        """
+mission: by key
+blackboard:
+  slot: {type: int, initial: 1}
+tree:
+  sequence:
+    - song: {number: "@slot", notes: [C4 100ms]}
+    - mode: safe
+    - play: 1
+"""
+    )
+    assert not mission.warnings
+
+
+@pytest.mark.parametrize(
+    ("count", "parts"),
+    [(17, ["[notes 1-16]", "[note 17]"]), (40, ["[notes 1-16]", "[notes 17-32]", "[notes 33-40]"])],
+)
+def test_a_song_over_16_notes_says_how_to_split_it(
+    errors_of: Callable[..., list[str]], count: int, parts: list[str]
+) -> None:
+    notes = ", ".join(["C4 100ms"] * count)
+    errors = errors_of(
+        f"""
+mission: long
+tree:
+  sequence:
+    - mode: safe
+    - song: {{number: 0, notes: [{notes}]}}
+    - play: 0
+"""
+    )
+    assert len(errors) == 1
+    said = f"a song has at most 16 notes, got {count}: split it into {len(parts)} songs"
+    assert said in errors[0]
+    for slot, part in enumerate(parts):
+        assert f"`song: {{number: {slot}, notes: {part}}}`" in errors[0]
+        assert f"`play: {slot}`, `{{wait: 30s, until: {{sensor: song_playing == 0}}}}`" in errors[0]

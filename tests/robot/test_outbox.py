@@ -44,14 +44,10 @@ def test_events_in_one_tick_are_all_written_in_order(sent: list[Command]) -> Non
     for command in sent:
         box.send(command, NEW)
     box.send(commands.drive(200, 0), OLD)
-    assert [c.data for c in box.drain()] == [commands.drive(200, 0).data] + [
-        c.data for c in sent
-    ]
+    assert [c.data for c in box.drain()] == [commands.drive(200, 0).data] + [c.data for c in sent]
 
 
-def test_every_state_in_the_opcode_table_has_its_channel_and_play_and_buttons_are_events() -> (
-    None
-):
+def test_every_state_in_the_opcode_table_has_its_channel_and_play_and_buttons_are_events() -> None:
     """The batcher's one field: a state needs the channel its last command wins on; the
     commands that happen (Play 141, Buttons 165, Song 140, Start 128) are events."""
     assert all(c.channel is not None for c in COMMANDS.values() if c.delivery is Delivery.STATE)
