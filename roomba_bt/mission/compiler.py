@@ -212,17 +212,25 @@ def _checked(
         blackboard_keys={k: d.type for k, d in ctx.keys.items()},
         sends=frozenset(sends),
         plan=tree,
-        warnings=(
-            *ctx.warnings,
-            *blind_in_full(tree, modes),
-            *parallel_wheels(tree),
-            *restarted_runs(tree),
-            *ignored,
-            *sensor_ranges(tree, profile),
-            *undefined_songs(tree),
-        ),
+        warnings=(*ctx.warnings, *_tree_warnings(tree, modes, profile, ignored)),
     )
     return mission, []
+
+
+def _tree_warnings(
+    tree: Node, modes: ModeCheck, profile: RobotProfile, ignored: list[Diagnostic]
+) -> tuple[Diagnostic, ...]:
+    """The checks of a tree that compiled whose findings are warnings (a mission that runs,
+    and may not do what its writer meant), in the order ``validate`` says them; ``ignored``:
+    the commands the profile's firmware ignores (:func:`profile_commands`)."""
+    return (
+        *blind_in_full(tree, modes),
+        *parallel_wheels(tree),
+        *restarted_runs(tree),
+        *ignored,
+        *sensor_ranges(tree, profile),
+        *undefined_songs(tree),
+    )
 
 
 def _what_leaves_use(tree: Node) -> tuple[set[int], set[int], set[OIMode]]:
