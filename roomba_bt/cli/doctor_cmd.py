@@ -41,6 +41,7 @@ from roomba_bt.oi.modes import OI_MODE_PACKET
 from roomba_bt.oi.packets import packet_ids
 from roomba_bt.robot.errors import DEFAULT_WATCHDOG
 from roomba_bt.runtime.summary import DEFAULT_GRACE, INTERNAL_ERROR_SAID, POOR_LINK
+from roomba_bt.transport.link_kind import LinkKind, LinkWords, link_of
 
 if TYPE_CHECKING:
     from roomba_bt.oi.frames import SensorFrame
@@ -56,30 +57,109 @@ STATUS_PACKETS = packet_ids(
 BANNER_LIMIT_S = 6.0
 BANNER_QUIET_S = 0.5
 
-WAKE_FIX = (
+#: a silent robot on the dock, whatever the link: old firmware does not wake by BRC there
+DOCK_WAKE = (
+    "a robot on the dock with firmware older than release-3.8.2 / release-stm32-3.7.7 does "
+    "not wake by BRC there: lift it off the dock or press Clean"
+)
+#: the start of every fix for a silent robot that could not be pulsed
+ASLEEP = (
     "a robot asleep (5 minutes in Passive) answers nothing until a BRC pulse or its Clean "
-    "button: press Clean and run doctor again. To wake it from here, use a cable that wires "
-    "BRC to RTS or DTR (the iRobot Create cable does) or an rfc2217:// bridge (roomba-bt sim "
-    "--rfc2217 serves one)"
-)
-ECHO_FIX = (
-    "this is not a robot's port: loop:// or a test port, a cable or adapter whose transmit and "
-    "receive lines are joined, or the wrong device; give the robot's port (ls /dev/ttyUSB*)"
-)
-SILENT_FIX = (
-    "check that the robot is on (press Clean: its light comes on), that the cable is a 5 V "
-    "TTL serial adapter with TX and RX not swapped, and that no other program holds the "
-    "port; a robot on the dock with firmware older than release-3.8.2 / release-stm32-3.7.7 "
-    "does not wake by BRC there: lift it off the dock or press Clean"
+    "button: press Clean and run doctor again"
 )
 
 
-GARBLED_FIX = (
-    "the robot may be there, but what it sends arrives garbled: check the cable and the "
-    "adapter (noise on a long or loose cable, a bad adapter, a 3.3 V adapter on the 5 V "
-    "line), and the port's serial settings (8N1, no flow control; a robot set to a rate "
-    "other than 115200 or 19200 by Baud (129) answers at neither: power it off and on)"
+@dataclass(frozen=True, slots=True)
+class LinkFixes:
+    """doctor's fixes where they name the line: a cable and its adapter on a device path (the
+    words docs/doctor.md quotes), the bridge at its address, its power, its Wi-Fi and its
+    serial side on a network port. A Wi-Fi bridge's user was told to check a cable there is
+    none of. Chosen once from the port's :class:`~roomba_bt.transport.link_kind.LinkWords`
+    (:attr:`Report.fixes`)."""
+
+    #: silent at every rate, and this port cannot pulse BRC
+    wake: str
+    #: silent at every rate even after a BRC pulse
+    silent: str
+    #: bytes came at the rates tried, none an answer, even after a BRC pulse
+    garbled: str
+    #: the port gives back every byte written to it
+    echo: str
+    #: what to check before running doctor again ("check the cable")
+    recheck: str
+    #: why a robot that answers queries sends no whole stream frame
+    drops: str
+    #: why a status reply cannot be the robot's (garbled or stale bytes)
+    delays: str
+    #: why status replies a moment apart never agree
+    garbles: str
+
+
+CABLE_FIXES = LinkFixes(
+    wake=(
+        f"{ASLEEP}. To wake it from here, use a cable that wires BRC to RTS or DTR (the "
+        "iRobot Create cable does) or an rfc2217:// bridge (roomba-bt sim --rfc2217 serves one)"
+    ),
+    silent=(
+        "check that the robot is on (press Clean: its light comes on), that the cable is a "
+        "5 V TTL serial adapter with TX and RX not swapped, and that no other program holds the "
+        f"port; {DOCK_WAKE}"
+    ),
+    garbled=(
+        "the robot may be there, but what it sends arrives garbled: check the cable and "
+        "the adapter (noise on a long or loose cable, a bad adapter, a 3.3 V adapter on the 5 V "
+        "line), and the port's serial settings (8N1, no flow control; a robot set to a rate "
+        "other than 115200 or 19200 by Baud (129) answers at neither: power it off and on)"
+    ),
+    echo=(
+        "this is not a robot's port: loop:// or a test port, a cable or adapter whose "
+        "transmit and receive lines are joined, or the wrong device; give the robot's port (ls "
+        "/dev/ttyUSB*)"
+    ),
+    recheck="check the cable",
+    drops="a long cable, a bad adapter",
+    delays="a long cable, a bad adapter, a relay",
+    garbles="a loose or long cable, a wrong baud rate",
 )
+
+
+def _network_fixes(bridge: str) -> LinkFixes:
+    """The fixes on a network port (``bridge``: "the bridge at HOST:PORT"). The network
+    itself delivers bytes whole (TCP): what garbles them is the bridge's serial side, its
+    wiring and its rate, which over socket:// doctor's rates do not reach (pyserial sets no
+    rate there: the bridge keeps the one it was set to)."""
+    serial_side = (
+        f"the serial side of {bridge}: wired to the robot's port (TX and RX not swapped; a "
+        "3.3 V bridge wants a level shifter on the robot's 5 V line), at 8N1 with no flow "
+        "control and the robot's rate (over socket:// the bridge keeps the rate it was set "
+        "to: the rates doctor tries do not reach it)"
+    )
+    return LinkFixes(
+        wake=(
+            f"{ASLEEP}. To wake it from here, BRC must cross {bridge}: rfc2217:// to a "
+            "bridge that wires BRC to RTS or DTR (esp-link can; roomba-bt sim --rfc2217 serves "
+            f"one). If the robot is awake and still silent, check {serial_side}"
+        ),
+        silent=(
+            "check that the robot is on (press Clean: its light comes on) and that "
+            f"{bridge} wires BRC to the robot (not every bridge does); check {serial_side}; "
+            f"{DOCK_WAKE}"
+        ),
+        garbled=(
+            "the robot may be there, but what it sends arrives garbled (the network "
+            f"delivers bytes whole): check {serial_side}; a robot set to a rate other than "
+            "115200 or 19200 by Baud (129) answers at neither: power it off and on"
+        ),
+        echo=(
+            f"this is not a robot's port: {bridge} gives back what it is sent (an echo "
+            "service, or its serial side's transmit and receive lines joined), or it is the "
+            "wrong address; give the address of the robot's bridge"
+        ),
+        recheck=f"check {bridge} (its power, its Wi-Fi signal)",
+        drops=f"a weak Wi-Fi signal, {bridge} losing bytes on its serial side",
+        delays=f"a slow or busy Wi-Fi network, {bridge}",
+        garbles=f"the serial side of {bridge}: its wiring to the robot, a wrong baud rate",
+    )
 
 
 def _garbled(probes: Any) -> str:
@@ -145,10 +225,19 @@ class Report:
     ``[FAIL]``; a failure's fix on the next line."""
 
     out: TextIO
+    #: the port's link, whose words every fix takes (a device path's unless told)
+    link: LinkWords = field(default_factory=lambda: link_of(""))
     failed: bool = False
     facts: dict[str, str] = field(default_factory=dict)
     #: the models the profile step found fitting (several when it could not tell which)
     models: tuple[Any, ...] = ()
+
+    @property
+    def fixes(self) -> LinkFixes:
+        """The fixes worded for this port's link: a network bridge's, or a cable's."""
+        if self.link.kind is LinkKind.NETWORK:
+            return _network_fixes(self.link.between)
+        return CABLE_FIXES
 
     def line(self, mark: str, step: str, text: str, fix: str = "", label: str = "fix") -> None:
         print(f"[{mark}]".ljust(7) + f"{step:<10}{text}", file=self.out, flush=True)
@@ -180,8 +269,8 @@ class _Failed(Exception):
 def doctor_command(args: argparse.Namespace) -> int:
     from roomba_bt.transport import SerialTransport, TransportError
 
-    report = Report(sys.stdout)
     url = args.port
+    report = Report(sys.stdout, link_of(url))
     print(f"roomba-bt doctor: {url}", flush=True)
     from roomba_bt.robot.discovery import rates_to_try
 
@@ -207,14 +296,14 @@ def doctor_command(args: argparse.Namespace) -> int:
         print("roomba-bt doctor: interrupted", file=sys.stderr)
         return DoctorExit.INTERRUPTED
     except OSError as exc:
-        report.fail("link", f"the port failed: {exc}", _link_fix(exc))
+        report.fail("link", f"the port failed: {exc}", _link_fix(exc, report.fixes))
         return DoctorExit.UNHEALTHY
     finally:
         _leave_passive(transport)
         transport.close()
 
 
-def _link_fix(exc: OSError) -> str:
+def _link_fix(exc: OSError, fixes: LinkFixes) -> str:
     """What to do about a port that failed while doctor used it: a bridge or simulator that
     turned doctor away (another client holds it) is not a cable to check."""
     from roomba_bt.transport.open_failure import closed_at_once
@@ -224,7 +313,7 @@ def _link_fix(exc: OSError) -> str:
             "end the other client (a run, sensors or doctor on this robot) or wait for it to "
             "end, then run doctor again"
         )
-    return "check the cable and the robot's power, then run doctor again"
+    return f"{fixes.recheck} and the robot's power, then run doctor again"
 
 
 def _leave_passive(transport: Any) -> None:
@@ -258,10 +347,10 @@ def _after_pulse(transport: Any, rates: tuple[int, ...], before: Search, report:
             "baud",
             f"bytes came but none was an answer at any OI rate, even after a BRC pulse "
             f"({garbled}): the line garbles them",
-            GARBLED_FIX,
+            report.fixes.garbled,
         )
     else:
-        report.fail("baud", "silent at every OI rate, even after a BRC pulse", SILENT_FIX)
+        report.fail("baud", "silent at every OI rate, even after a BRC pulse", report.fixes.silent)
     raise _Failed(DoctorExit.SILENT)
 
 
@@ -279,7 +368,7 @@ def _examine(
     found = searched.found
     if found is None and all(probe.echoed for probe in searched.probes):
         report.fail("port", "it gives back every byte written to it: a loopback, no robot",
-                    ECHO_FIX)  # fmt: skip
+                    report.fixes.echo)  # fmt: skip
         raise _Failed(DoctorExit.SILENT)
     if found is None:
         pulse = wake_pulse(transport)
@@ -288,7 +377,7 @@ def _examine(
                 "wake",
                 f"silent at {' and '.join(str(r) for r in rates)}, and this port cannot pulse "
                 f"BRC: {pulse.problem}",
-                WAKE_FIX,
+                report.fixes.wake,
             )
             raise _Failed(DoctorExit.SILENT)
         report.ok("wake", f"silent at every rate: {pulse.how}")
@@ -428,7 +517,7 @@ def _stream(
             "stream",
             text + f"; {sample.received} bytes came, no whole frame",
             "the robot answers queries but does not stream: another program may be talking "
-            "to it, or the line drops bytes (a long cable, a bad adapter)",
+            f"to it, or the line drops bytes ({report.fixes.drops})",
         )
         raise _Failed(DoctorExit.UNHEALTHY)
     if expected and lost >= POOR_LINK * expected:
@@ -436,11 +525,12 @@ def _stream(
             "stream",
             f"{text}; {100 * lost / expected:.0f} % of the frames lost",
             f"the line loses frames (run calls {100 * POOR_LINK:g} % or more a poor link): "
-            "check the cable and its adapter"
+            + report.link.check
             + ("; --listen 10s samples longer" if seconds < LONG_LISTEN_S else ""),
         )
     elif skipped:
-        report.warn("stream", text, "frames are lost or damaged on this line: check the cable")
+        fix = f"frames are lost or damaged on this line: {report.fixes.recheck}"
+        report.warn("stream", text, fix)
     else:
         report.ok("stream", text)
     _timing(sample.arrivals, seconds, report)
@@ -732,13 +822,14 @@ def _agreed_status(transport: Any, profile: Any, plus_one: bool, report: Report)
 
 def _status_failed(report: Report, replies: list[SensorFrame], wrong: str, latency: float) -> None:
     ids = list(STATUS_PACKETS)
+    fixes = report.fixes
     if wrong:
         report.fail(
             "battery",
             f"the reply to Query List {ids} cannot be the robot's: {wrong} (stale stream "
             f"bytes or a garbled line; the line's delay: {latency * 1000:.0f} ms)",
-            "the line garbles or delays bytes (a long cable, a bad adapter, a relay), or "
-            "another program talks to the robot: check the cable and run doctor again",
+            f"the line garbles or delays bytes ({fixes.delays}), or another program talks to "
+            f"the robot: {fixes.recheck} and run doctor again",
         )
         return
     shown = "; ".join(
@@ -748,8 +839,7 @@ def _status_failed(report: Report, replies: list[SensorFrame], wrong: str, laten
     report.fail(
         "battery",
         f"{STATUS_QUERIES} replies to Query List {ids} never agreed twice in a row ({shown})",
-        "the line garbles bytes (a loose or long cable, a wrong baud rate): check the "
-        "cable and run doctor again",
+        f"the line garbles bytes ({fixes.garbles}): {fixes.recheck} and run doctor again",
     )
 
 

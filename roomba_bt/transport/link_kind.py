@@ -37,6 +37,9 @@ class LinkWords:
     where it names the line, worded for the port's kind."""
 
     kind: LinkKind
+    #: what is between this computer and the robot, as a message names it: "the cable", or
+    #: "the bridge at HOST:PORT" (doctor's fixes name the bridge by it)
+    between: str
     #: what a port that failed most likely means
     gone: str
     #: the line, as the last of a silent robot's causes ("switched off, a flat battery, or ...")
@@ -72,6 +75,7 @@ def _network_words(port: str) -> LinkWords:
     bridge = f"the bridge at {where}"
     return LinkWords(
         kind=LinkKind.NETWORK,
+        between=bridge,
         gone="the bridge closed the connection or the network dropped",
         line=f"the network: is {bridge} powered and in Wi-Fi range?",
         froze="the network or the bridge stalled: Wi-Fi?",
@@ -107,6 +111,7 @@ def _cable_words(kind: LinkKind, reopens: bool) -> LinkWords:
     """A serial adapter's link (a device path, a pty, ``loop://``): its cable and adapter."""
     return LinkWords(
         kind=kind,
+        between="the cable",
         gone="the cable was pulled or the adapter reset",
         line="the cable",
         froze="a frozen adapter or cable?",
