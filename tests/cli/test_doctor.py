@@ -20,10 +20,23 @@ import pytest
 from runtime.simrun import BridgeLink  # tests/runtime: a WiFi bridge on the virtual clock
 
 import roomba_bt.transport as transport_package
-from roomba_bt.cli.doctor_cmd import DoctorExit, Report, _examine, doctor_command
-from roomba_bt.oi.profiles import ROOMBA600
-from roomba_bt.sim import Simulator, load_world
+from roomba_bt.cli.doctor_cmd import (
+    CABLE_FIXES,
+    DoctorExit,
+    Report,
+    _examine,
+    _Failed,
+    _link_fix,
+    _status,
+    _status_failed,
+    _stream,
+    doctor_command,
+)
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.profiles import CREATE2, ROOMBA600
+from roomba_bt.sim import Faults, SimLink, Simulator, load_world
 from roomba_bt.transport import SerialTransport, TransportError
+from roomba_bt.transport.link_kind import link_of
 
 #: The acceptance bar: nothing behind the port, the answer comes within 10 s.
 DOCTOR_TIMEOUT_S = 10.0
@@ -506,3 +519,184 @@ def test_doctor_warns_of_a_wifi_link_s_jitter_and_stall_naming_watchdog_and_grac
     assert "--watchdog 0.15 (the default 0.1 s sends drive 0 at every gap longer" in fix
     assert "--grace 3 (a stall longer than the default 2 s ends the run)" in fix
     assert any(line.startswith("[ok]") for line in _step(out, "stream"))  # no frame lost
+
+
+#: a Wi-Fi bridge's raw TCP port, as its user names it, and how doctor's fixes name it
+BRIDGE_PORT = "socket://192.168.4.1:23"
+BRIDGE = "the bridge at 192.168.4.1:23"
+
+
+def _bridge_report() -> Report:
+    """A report on :data:`BRIDGE_PORT`: its fixes worded for the network."""
+    return Report(io.StringIO(), link_of(BRIDGE_PORT))
+
+
+def _fix_of(out: str, step: str) -> str:
+    """The fix under the step's last line."""
+    return out.split(_step(out, step)[-1])[1].splitlines()[1].strip()
+
+
+def test_an_asleep_robot_behind_a_raw_tcp_bridge_is_told_how_brc_crosses_a_bridge(
+    served_sim: Callable[..., Any],
+) -> None:
+    """socket:// carries no modem lines: the fix said to "use a cable that wires BRC"."""
+    sim = served_sim("--tcp", "127.0.0.1:0", "--asleep")
+    done = _doctor(sim.address)
+    assert done.returncode == DoctorExit.SILENT, done.stdout
+    fix = _fix_of(done.stdout, "wake")
+    bridge = "the bridge at " + sim.address.removeprefix("socket://")
+    assert fix.startswith("fix: a robot asleep (5 minutes in Passive) answers nothing"), fix
+    assert f"BRC must cross {bridge}: rfc2217:// to a bridge that wires BRC" in fix
+    assert f"check the serial side of {bridge}: wired to the robot's port" in fix
+    assert "over socket:// the bridge keeps the rate it was set to" in fix
+    assert "cable" not in done.stdout
+
+
+class _Line(SimLink):
+    """A line whose writes never reach the robot: it gives them back (``echoes``), or
+    nothing comes (a robot that does not answer, even after a BRC pulse)."""
+
+    def __init__(self, echoes: bool) -> None:
+        super().__init__(Simulator(load_world("empty-room"), ROOMBA600, seed=1), BRIDGE_PORT)
+        self.echoes = echoes
+        self.given_back = b""
+
+    def write(self, data: bytes) -> None:
+        if self.echoes:
+            self.given_back += data
+
+    def read(self, timeout: float) -> bytes:
+        given_back, self.given_back = self.given_back, b""
+        return given_back or super().read(timeout)
+
+
+def _garbling_link() -> SimLink:
+    sim = Simulator(load_world("empty-room"), ROOMBA600, seed=1, faults=Faults(corrupt_rate=1.0))
+    return SimLink(sim, BRIDGE_PORT)
+
+
+@pytest.mark.parametrize(
+    ("link", "step", "said"),
+    [
+        (
+            lambda: _Line(echoes=True),
+            "port",
+            f"fix: this is not a robot's port: {BRIDGE} gives back what it is sent (an echo "
+            "service, or its serial side's transmit and receive lines joined), or it is the "
+            "wrong address; give the address of the robot's bridge",
+        ),
+        (
+            lambda: _Line(echoes=False),
+            "baud",
+            "fix: check that the robot is on (press Clean: its light comes on) and that "
+            f"{BRIDGE} wires BRC to the robot (not every bridge does); check the serial side "
+            f"of {BRIDGE}: wired to the robot's port (TX and RX not swapped; ",
+        ),
+        (
+            _garbling_link,
+            "baud",
+            "fix: the robot may be there, but what it sends arrives garbled (the network "
+            f"delivers bytes whole): check the serial side of {BRIDGE}: wired to the robot's ",
+        ),
+    ],
+    ids=["echo", "silent-after-the-pulse", "garbled"],
+)
+def test_a_robot_not_found_behind_a_network_bridge_is_told_of_the_bridge_not_a_cable(
+    link: Callable[[], SimLink], step: str, said: str
+) -> None:
+    report = _bridge_report()
+    with pytest.raises(_Failed) as failed:
+        _examine(link(), (115200, 19200), False, report)
+    assert failed.value.code == DoctorExit.SILENT
+    out = report.out.getvalue()
+    assert _fix_of(out, step).startswith(said), out
+    assert "cable" not in out and "adapter" not in out
+
+
+@pytest.mark.parametrize(
+    ("faults", "said"),
+    [
+        (
+            Faults(drop_rate=1.0),
+            "fix: the robot answers queries but does not stream: another program may be talking "
+            f"to it, or the line drops bytes (a weak Wi-Fi signal, {BRIDGE} losing bytes on its "
+            "serial side)",
+        ),
+        (
+            Faults(drop_rate=0.3),
+            "fix: the line loses frames (run calls 5 % or more a poor link): check the network: "
+            f"{BRIDGE}, its power and its Wi-Fi signal; a larger --watchdog and --grace ride a "
+            "Wi-Fi link's gaps through; --listen 10s samples longer",
+        ),
+        (
+            Faults(bit_flip_rate=0.001),
+            f"fix: frames are lost or damaged on this line: check {BRIDGE} (its power, its Wi-Fi "
+            "signal)",
+        ),
+    ],
+    ids=["no-frame", "frames-lost", "bytes-skipped"],
+)
+def test_a_stream_s_trouble_behind_a_network_bridge_names_the_bridge_and_its_wifi(
+    faults: Faults, said: str
+) -> None:
+    link = SimLink(Simulator(load_world("empty-room"), CREATE2, seed=1, faults=faults), BRIDGE_PORT)
+    link.write(oi.start().data)
+    report = _bridge_report()
+    with contextlib.suppress(_Failed):  # no frame ends the doctor
+        _stream(link, 115200, report, 2.0)
+    assert _fix_of(report.out.getvalue(), "stream") == said
+
+
+def test_a_status_reply_garbled_behind_a_network_bridge_names_the_bridge() -> None:
+    """Both of the status step's verdicts: replies that never agree, and agreeing ones that
+    cannot be the robot's."""
+    report = _bridge_report()
+    with pytest.raises(_Failed):
+        _status(_GarbledReplies(4), CREATE2, False, report)
+    _status_failed(report, [], "charging_state 19 (allowed 0..5)", 0.2)
+    disagree, implausible = (
+        line.strip() for line in report.out.getvalue().splitlines() if line.startswith(" ")
+    )
+    assert disagree == (
+        f"fix: the line garbles bytes (the serial side of {BRIDGE}: its wiring to the robot, a "
+        f"wrong baud rate): check {BRIDGE} (its power, its Wi-Fi signal) and run doctor again"
+    )
+    assert implausible == (
+        f"fix: the line garbles or delays bytes (a slow or busy Wi-Fi network, {BRIDGE}), or "
+        f"another program talks to the robot: check {BRIDGE} (its power, its Wi-Fi signal) "
+        "and run doctor again"
+    )
+
+
+class _BridgeThatDrops:
+    """``SerialTransport`` for doctor: the simulator behind the URL, its link cut at 0.3 s (a
+    bridge that lost its Wi-Fi while doctor used it)."""
+
+    @staticmethod
+    def open(url: str, baud: int, brc_high: bool) -> SimLink:
+        faults = Faults(disconnect_at=0.3)
+        return SimLink(Simulator(load_world("empty-room"), CREATE2, seed=1, faults=faults), url)
+
+
+def test_a_network_bridge_lost_while_doctor_used_it_is_checked_not_a_cable(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """doctor_command gives the report the port's link: the fix names the bridge at its URL."""
+    monkeypatch.setattr(transport_package, "SerialTransport", _BridgeThatDrops)
+    args = argparse.Namespace(port=BRIDGE_PORT, baud=None, allow_reset=False, listen=None)
+    assert doctor_command(args) == DoctorExit.UNHEALTHY
+    out = capsys.readouterr().out
+    assert _step(out, "link")[0].startswith("[FAIL] link      the port failed: "), out
+    assert _fix_of(out, "link") == (
+        f"fix: check {BRIDGE} (its power, its Wi-Fi signal) and the robot's power, then run "
+        "doctor again"
+    )
+
+
+def test_a_device_path_keeps_the_cable_s_words() -> None:
+    """The fixes docs/doctor.md quotes, on a device path (a report told no port too)."""
+    for report in (Report(io.StringIO()), Report(io.StringIO(), link_of("/dev/ttyUSB0"))):
+        assert report.fixes is CABLE_FIXES
+        assert _link_fix(OSError("gone"), report.fixes) == (
+            "check the cable and the robot's power, then run doctor again"
+        )
