@@ -41,11 +41,11 @@ from roomba_bt.oi.modes import OI_MODE_PACKET
 from roomba_bt.oi.packets import packet_ids
 from roomba_bt.robot.errors import DEFAULT_WATCHDOG
 from roomba_bt.runtime.summary import DEFAULT_GRACE, INTERNAL_ERROR_SAID, POOR_LINK
-from roomba_bt.transport.link_kind import LinkKind, LinkWords, link_of
 
 if TYPE_CHECKING:
     from roomba_bt.oi.frames import SensorFrame
     from roomba_bt.robot.discovery import Search
+    from roomba_bt.transport.link_kind import LinkWords
 
 #: The battery step's Query List.
 STATUS_PACKETS = packet_ids(
@@ -226,7 +226,7 @@ class Report:
 
     out: TextIO
     #: the port's link, whose words every fix takes (a device path's unless told)
-    link: LinkWords = field(default_factory=lambda: link_of(""))
+    link: LinkWords = field(default_factory=lambda: _words_of(""))
     failed: bool = False
     facts: dict[str, str] = field(default_factory=dict)
     #: the models the profile step found fitting (several when it could not tell which)
@@ -235,6 +235,8 @@ class Report:
     @property
     def fixes(self) -> LinkFixes:
         """The fixes worded for this port's link: a network bridge's, or a cable's."""
+        from roomba_bt.transport.link_kind import LinkKind
+
         if self.link.kind is LinkKind.NETWORK:
             return _network_fixes(self.link.between)
         return CABLE_FIXES
@@ -258,6 +260,14 @@ class Report:
         self.line("FAIL", step, text, fix)
 
 
+def _words_of(port: str) -> LinkWords:
+    """The port's link words, imported when doctor runs: the transport package stays out of
+    every other command's start (tests/cli/test_imports.py)."""
+    from roomba_bt.transport.link_kind import link_of
+
+    return link_of(port)
+
+
 class _Failed(Exception):
     """A step failed (already reported); the exit code to end with."""
 
@@ -270,7 +280,7 @@ def doctor_command(args: argparse.Namespace) -> int:
     from roomba_bt.transport import SerialTransport, TransportError
 
     url = args.port
-    report = Report(sys.stdout, link_of(url))
+    report = Report(sys.stdout, _words_of(url))
     print(f"roomba-bt doctor: {url}", flush=True)
     from roomba_bt.robot.discovery import rates_to_try
 
