@@ -66,7 +66,9 @@ def test_the_packages_example_runs_as_help_shows_it() -> None:
     assert f"```pycon\n{textwrap.dedent(session)}\n```" in docs  # the docs show the same
 
 
-def test_the_packages_example_type_checks_as_a_user_copies_it(tmp_path: Path) -> None:
+def test_the_packages_example_type_checks_as_a_user_copies_it(
+    tmp_path: Path, mypy_cache: Path
+) -> None:
     """The example called ``.label`` on ``summary.final_mode``, which is None when no robot
     answered: a user who copied it into a program got ``mypy --strict``'s union-attr error
     (the package ships ``py.typed``). Its lines, as a file, pass ``mypy --strict``."""
@@ -78,7 +80,7 @@ def test_the_packages_example_type_checks_as_a_user_copies_it(tmp_path: Path) ->
     checkout = INIT.parents[1]  # this roomba_bt, not another one installed in the venv
     env = {"MYPYPATH": str(checkout)} if (checkout / "pyproject.toml").is_file() else {}
     done = subprocess.run(
-        [sys.executable, "-m", "mypy", "--strict", "--cache-dir", str(tmp_path / "cache"),
+        [sys.executable, "-m", "mypy", "--strict", "--cache-dir", str(mypy_cache),
          program.name],
         capture_output=True, text=True, timeout=300, cwd=tmp_path, env={**os.environ, **env},
     )  # fmt: skip

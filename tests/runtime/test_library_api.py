@@ -511,7 +511,7 @@ def test_signatures_show_a_shipped_profile_by_its_name() -> None:
     assert repr(custom).startswith("RobotProfile(name='create2', ") and "300" in repr(custom)
 
 
-def test_the_typed_interrupt_pattern_passes_mypy_strict(tmp_path: Path) -> None:
+def test_the_typed_interrupt_pattern_passes_mypy_strict(tmp_path: Path, mypy_cache: Path) -> None:
     """``interrupt.summary`` is a RunSummary to mypy (a bare KeyboardInterrupt has none), and
     a name the package does not have is an error, not Any (the package's ``__getattr__``
     made every name Any to a type checker)."""
@@ -535,7 +535,8 @@ def test_the_typed_interrupt_pattern_passes_mypy_strict(tmp_path: Path) -> None:
     if not mypy.exists():
         pytest.skip("mypy is not installed beside this Python")
     done = subprocess.run(
-        [str(mypy), "--strict", "--no-incremental", str(program)], capture_output=True, text=True,
+        [str(mypy), "--strict", "--cache-dir", str(mypy_cache), str(program)], capture_output=True,
+        text=True,
         timeout=300, cwd=tmp_path,
         env={**os.environ, "MYPYPATH": str(Path(__file__).resolve().parents[2])},
     )  # fmt: skip
