@@ -432,9 +432,46 @@ class Overcurrent(_Flag):
 @declare("button", kind="condition", params=(Param("name", enum(*_BUTTON), default="any"),),
          reads=packet_ids("buttons"), primary="name")  # fmt: skip
 class Button(_Flag):
-    """A button on the robot is pressed (packet 18)."""
+    """A button on the robot is pressed (packet 18): SUCCESS on every frame it is held, so
+    a press of a finger (several frames; the firmware's Buttons (165) 1/6 s) is seen again
+    and again; ``button_pressed`` is the one frame a press begins."""
 
     choice, flags = "name", _BUTTON
+
+
+@declare("button_pressed", kind="condition",
+         params=(Param("name", enum(*_BUTTON), default="any"),),
+         reads=packet_ids("buttons"), primary="name")  # fmt: skip
+class ButtonPressed(_Flag):
+    """A press of a button on the robot begins (packet 18): SUCCESS on the one frame it is
+    down after a frame it was up, FAILURE while it is held and after. One press, one
+    SUCCESS, however long the finger stays: ``until: {button_pressed: clean}`` in a
+    ``repeat`` beeps once a press (``button`` beeps on each frame it is held). A button
+    already down the first time it is ticked (or after the tree ticked without it) counts
+    as a press beginning: the frame before is not known to it."""
+
+    choice, flags = "name", _BUTTON
+    #: its answer depends on the frame before too: not a function of this frame's packets
+    frame_pure = False
+
+    def __init__(self, name: str, params: Mapping[str, Any] | None = None) -> None:
+        super().__init__(name, params)
+        #: the tick it last read the button on, whether it was down then, and its answer
+        #: then (ticked twice in one tick, as a guard and a child, it answers the same)
+        self._seen_tick: int | None = None
+        self._was_down = False
+        self._answer = False
+
+    def check(self, snapshot: Snapshot) -> bool:
+        tick = snapshot.tick
+        if tick == self._seen_tick:
+            return self._answer
+        previous = snapshot.previous_tick if snapshot.previous_tick is not None else tick - 1
+        held_before = self._was_down and self._seen_tick == previous
+        down = bool(super().check(snapshot))
+        self._seen_tick, self._was_down = tick, down
+        self._answer = down and not held_before
+        return self._answer
 
 
 _COMPARISON = re.compile(
@@ -610,5 +647,6 @@ class CheckKey(Condition):
 
 CONDITIONS: tuple[type[Condition], ...] = (
     Bump, WheelDrop, Cliff, Wall, VirtualWall, LightBumper, InfraRed, Charging, OnHomeBase,
-    Battery, OIModeIs, OdometrySince, StasisIs, Overcurrent, Button, Sensor, CheckKey,
+    Battery, OIModeIs, OdometrySince, StasisIs, Overcurrent, Button, ButtonPressed, Sensor,
+    CheckKey,
 )  # fmt: skip

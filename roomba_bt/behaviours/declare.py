@@ -100,6 +100,7 @@ from roomba_bt.oi.modes import ALL_MODES, DRIVING_MODES, OIMode
 from roomba_bt.oi.odometry import SLOWEST_MOVING_SPEED_MM_S, WHEEL_SPEED_STEP_MM_S
 from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME, Effect
 from roomba_bt.oi.packets import PACKETS
+from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.printable import CONTROL
 from roomba_bt.robot.interface import ModeChange, Odometry, RobotHandle, Snapshot
 from roomba_bt.yamlsource import character_name, quoted
@@ -346,6 +347,10 @@ class Declaration:
     #: it; ``dock_time_limit`` only fails): the static checks read a branch that never
     #: succeeds as one a parallel ticks on every tick. None: it can
     may_succeed: Callable[[Mapping[str, Any]], bool] | None = None
+    #: what the robot must have for it with given parameters, where not every model has it
+    #: (``display`` the digit display, ``press: minute`` a clock panel's button): why the
+    #: chosen profile lacks it, or None. Validate says it at the leaf as an error
+    needs: Callable[[Mapping[str, Any], RobotProfile], str | None] | None = None
 
     @property
     def defaults(self) -> dict[str, Any]:
@@ -680,6 +685,7 @@ def declare(
     sends_by: Callable[[Mapping[str, Any]], tuple[int, ...]] | None = None,
     at_once: bool = False,
     may_succeed: Callable[[Mapping[str, Any]], bool] | None = None,
+    needs: Callable[[Mapping[str, Any], RobotProfile], str | None] | None = None,
 ) -> Callable[[B], B]:
     """Class decorator: attach the :class:`Declaration` as ``cls.declaration``; the doc is
     the class docstring's first paragraph. ``leads_to`` defaults to what the opcode table
@@ -691,7 +697,8 @@ def declare(
     parameters, whether it can succeed by itself at all (a ``drive`` with no end cannot).
     ``writes_keys`` / ``reads_keys`` name the ``STR`` parameters that name blackboard keys
     it writes / reads, alone or with the type of the value (``writes_keys={"key": INT}``):
-    validate holds a typed one to the key's declaration in the mission."""
+    validate holds a typed one to the key's declaration in the mission. ``needs`` says,
+    of the parameters and the chosen robot profile, why that robot cannot do it, or None."""
     after = mode_after_sending(sends) if leads_to is None else leads_to
     writes, written_types = key_roles(writes_keys)
     reads_named, read_types = key_roles(reads_keys)
@@ -703,6 +710,7 @@ def declare(
             constraints=constraints, writes_keys=writes, reads_keys=reads_named,
             key_types=(*written_types, *read_types), halts_only=halts_only,
             compares=compares, sends_by=sends_by, at_once=at_once, may_succeed=may_succeed,
+            needs=needs,
         )  # fmt: skip
         return cls
 
@@ -734,7 +742,7 @@ def declare_like(
     Carried: the kind; the parameters (without ``drop_params``, then ``add_params``, one of
     a parent's name in its place); the packets read (then ``add_reads``, after a parent's
     function's too) and the commands sent (then ``add_sends``); ``leads_to``, ``sends_by``,
-    ``compares``, ``halts_only``; the cross-parameter rules (and ``add_constraints``: both
+    ``compares``, ``halts_only``, ``needs``; the cross-parameter rules (and ``add_constraints``: both
     run, a dropped parameter being not given to the parent's); the key parameters still
     declared (and ``writes_keys`` / ``reads_keys``); ``primary`` unless dropped or given.
     Not carried: ``at_once`` and ``may_succeed``, which say when ``update`` succeeds, what

@@ -794,11 +794,12 @@ def builtin_registry() -> Registry:
     from roomba_bt.behaviours.coverage_map import COVERAGE
     from roomba_bt.behaviours.docking import DOCKING
     from roomba_bt.behaviours.homing import HOMING
+    from roomba_bt.behaviours.panel import PANEL
     from roomba_bt.behaviours.wall import WALL_FOLLOWING
 
     registry = Registry(entry_point_group=None)
     # validated by test_every_builtin_is_registered_with_a_valid_declaration, not each start
-    for cls in (*ACTIONS, *WALL_FOLLOWING, *CONDITIONS, *DOCKING, *CLEANING, *COVERAGE, *HOMING):
+    for cls in (*ACTIONS, *PANEL, *WALL_FOLLOWING, *CONDITIONS, *DOCKING, *CLEANING, *COVERAGE, *HOMING):
         registry.register(cls, "builtin", validated=True)
     return registry
 

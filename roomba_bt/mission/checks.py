@@ -44,7 +44,8 @@
   profile lacks (Reset 7 and Stop 173 on the Roomba 500) is an error at that leaf; one the
   profile has but whose firmware does not honour it (Digit LEDs Raw 163: the 600 spec says
   it does not work on current Create 2 and Roomba 500/600 firmware) is a warning: it is
-  still sent (:func:`profile_commands`).
+  still sent (:func:`profile_commands`). A leaf that needs what the model lacks (``display``
+  on a Create 2, which has no display: the declaration's ``needs``) is an error too.
 """
 
 from __future__ import annotations
@@ -723,31 +724,32 @@ def profile_commands(
 ) -> tuple[list[Diagnostic], list[Diagnostic]]:
     """Errors and warnings (see the module docstring) for each leaf's declared ``sends`` on
     ``profile``: an error where the robot lacks a command (the run would stop with an
-    UnsupportedCommandError after its first commands were written), a warning where the
-    firmware ignores it. A subtree used twice is one place in its file: said once.
-    ``wording``: how the caller chooses another profile (the command line's ``--profile``)."""
+    UnsupportedCommandError after its first commands were written) or the hardware the leaf
+    needs (its declaration's ``needs``: ``display`` on a Create 2, which has no display), a
+    warning where the firmware ignores it. A subtree used twice is one place in its file:
+    said once. ``wording``: how the caller chooses another profile (the command line's
+    ``--profile``)."""
     errors: list[Diagnostic] = []
     warnings: list[Diagnostic] = []
-    seen: set[tuple[str, int, int, int]] = set()
+    seen: set[tuple[str, int, int]] = set()
+    choose = f"(choose the robot's {wording.profile}, or leave this node out)"
     for node in root.walk():
         decl = node.decl
-        if decl is None:
+        where = (str(node.loc.file), node.loc.line, node.loc.column)
+        if decl is None or where in seen:
             continue
+        seen.add(where)
         for opcode in decl.sends:
-            where = (str(node.loc.file), node.loc.line, node.loc.column, opcode)
-            if where in seen:
-                continue
-            seen.add(where)
             problem = profile.command_unavailable(opcode)
             if problem is not None:
-                errors.append(node.loc.at(
-                    f"{decl.name} sends {problem} (choose the robot's {wording.profile}, or "
-                    "leave this node out)"
-                ))  # fmt: skip
+                errors.append(node.loc.at(f"{decl.name} sends {problem} {choose}"))
                 continue
             warning = profile.command_warning(opcode)
             if warning is not None:
                 warnings.append(node.loc.at(f"{decl.name} sends {warning}").as_warning())
+        lacking = None if decl.needs is None else decl.needs(node.params, profile)
+        if lacking is not None:
+            errors.append(node.loc.at(f"{decl.name}: {lacking} {choose}"))
     return errors, warnings
 
 

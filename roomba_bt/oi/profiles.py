@@ -16,6 +16,14 @@ A difference is a field here, never an ``if`` elsewhere. Each decision is explai
   firmware versions" (its Appendix B calls the bug open). The 500 spec describes 163 without
   that note, as the older document would; the newer one names the 500's firmware, so the
   ``roomba500`` profile warns too.
+* ``has_display`` / ``buttons``: what the robot's top carries. Scheduling LEDs (162) and the
+  Digit LEDs (163, 164) light "the Roomba 560 and 570" (both specs' words): the 500 series'
+  clock-and-schedule panel, which the 600 series' scheduling models (650, 660) have too; the
+  Create 2's top has no display and only the Clean, Spot and Dock buttons (packet 18's bits
+  3-7, minute to clock, are the panel's). A mission leaf that needs the display or a panel
+  button is an error at validate on a profile without it (``display_missing``,
+  ``buttons_missing``); a plugin's bytes are still sent (the firmware takes them and shows
+  nothing), and Digit LEDs Raw (163) keeps its warning on every profile.
 * ``reports_mode_plus_one``: some 600-series firmware reports OI mode + 1 in packet 35.
 * ``sleeps_in_passive``: the robot sleeps after 5 minutes in Passive (keep-awake's default).
 * ``slow_baud_how`` / ``slow_baud_until``: how the robot comes to talk at 19200 and what
@@ -33,11 +41,12 @@ A difference is a field here, never an ``if`` elsewhere. Each decision is explai
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, replace
 from dataclasses import fields as dataclass_fields
 from types import MappingProxyType
 
+from roomba_bt.oi.bits import BUTTON_NAMES
 from roomba_bt.oi.encode import BAUD_CODES
 from roomba_bt.oi.errors import UnsupportedCommandError
 from roomba_bt.oi.opcodes import COMMANDS, COMMANDS_BY_NAME, CommandSpec
@@ -105,6 +114,10 @@ class RobotProfile:
     wall_signal_maximum: int
     digit_leds_raw_works: bool
     reports_mode_plus_one: bool
+    #: the four-digit display and the scheduling LEDs (the module docstring)
+    has_display: bool = True
+    #: the buttons on its top, packet 18's names (the module docstring)
+    buttons: tuple[str, ...] = BUTTON_NAMES
     #: Passive sleeps after 5 minutes of inactivity (600 spec, "Passive Mode"); the 500 spec
     #: does not say, and is assumed to (a BRC pulse is harmless): the runtime keeps it awake.
     sleeps_in_passive: bool = True
@@ -193,6 +206,27 @@ class RobotProfile:
             f"it exists on {', '.join(sorted(spec.profiles))}"
         )
 
+    def display_missing(self) -> str | None:
+        """Why this robot shows nothing of Scheduling LEDs (162) and Digit LEDs (164), or
+        None: what validate says at a leaf that needs the display (``Declaration.needs``)."""
+        if self.has_display:
+            return None
+        return (
+            f"the {self.title} ({self.name}) has no digit display or scheduling LEDs: they are "
+            "the clock panel of the Roomba 500 and 600 series (roomba500, roomba600)"
+        )
+
+    def buttons_missing(self, names: Iterable[str]) -> str | None:
+        """Which of ``names`` (packet 18's) this robot's top lacks, said, or None."""
+        missing = [name for name in names if name not in self.buttons]
+        if not missing:
+            return None
+        return (
+            f"the {self.title} ({self.name}) has no {' or '.join(missing)} button: its buttons "
+            f"are {', '.join(self.buttons)}; the others are the clock panel of the Roomba 500 "
+            "and 600 series (roomba500, roomba600)"
+        )
+
     def command_warning(self, command: CommandSpec | int | str) -> str | None:
         """A sentence to log before sending ``command`` to this robot, or ``None``.
 
@@ -206,9 +240,22 @@ class RobotProfile:
                 f"digit_leds_raw (163) does not work on current {self.title} firmware (the "
                 "Roomba 600 / Create 2 OI spec: 'This opcode does not work in current Create 2 "
                 "and Roomba 500/600 firmware versions'; its Appendix B: 'LEDs Raw: open'); the "
-                "display may stay blank. Use digit_leds_ascii (164) instead."
+                f"display may stay blank. {self._digits_instead}"
             )
         return None
+
+    @property
+    def _digits_instead(self) -> str:
+        """What to use instead of Digit LEDs Raw (163), which every profile warns of."""
+        if self.has_display:
+            return (
+                "Use Digit LEDs ASCII (164) instead: the mission behaviour display "
+                '(display: "hi!") sends it'
+            )
+        return (
+            f"The {self.title} has no digit display at all: Digit LEDs ASCII (164), the mission "
+            "behaviour display, lights the Roomba 500 and 600 series' one"
+        )
 
     @property
     def commands(self) -> tuple[CommandSpec, ...]:
@@ -247,10 +294,18 @@ CREATE2 = RobotProfile(
     wall_signal_maximum=1023,
     digit_leds_raw_works=False,
     reports_mode_plus_one=False,
+    has_display=False,
+    buttons=("clean", "spot", "dock"),
 )
-#: The Roomba 600 speaks the Create 2's OI; the one difference is the mode + 1 firmware bug.
+#: The Roomba 600 speaks the Create 2's OI; the differences are the mode + 1 firmware bug and
+#: the clock panel (display, scheduling LEDs, its buttons) of its scheduling models.
 ROOMBA600 = replace(
-    CREATE2, name="roomba600", title="Roomba 600 series", reports_mode_plus_one=True
+    CREATE2,
+    name="roomba600",
+    title="Roomba 600 series",
+    reports_mode_plus_one=True,
+    has_display=True,
+    buttons=BUTTON_NAMES,
 )
 ROOMBA500 = RobotProfile(
     name="roomba500",

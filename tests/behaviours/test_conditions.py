@@ -199,6 +199,34 @@ def test_buttons(robot: StubRobot, make: Make) -> None:
     assert holds(make(c.Button, name="any"))
 
 
+def test_button_pressed_holds_on_the_frame_a_press_begins_only(
+    robot: StubRobot, make: Make
+) -> None:
+    """Held for three frames, released, pressed again: SUCCESS on the first frame of each
+    press; ticked again within a frame (a guard and a child), the same answer."""
+    pressed = make(c.ButtonPressed, name="clean")
+    answers = []
+    for raw in (0, 1, 1, 1, 0, 1, 0b10):
+        robot.set_frame({18: raw})
+        answers.append(holds(pressed))
+    assert answers == [False, True, False, False, False, True, False]
+    robot.set_frame({18: 1})
+    assert holds(pressed) and holds(pressed)  # a press again after spot's frame
+
+
+def test_button_pressed_counts_a_press_it_did_not_see_begin(robot: StubRobot, make: Make) -> None:
+    """The frame before is not known to a condition the tree ticked without: a button
+    found down counts as a press beginning, once."""
+    pressed = make(c.ButtonPressed, name="any")
+    robot.set_frame({18: 0b100})
+    assert holds(pressed)
+    robot.set_frame({18: 0b100})  # a tick of the tree without it
+    robot.set_frame({18: 0b100})
+    assert holds(pressed)
+    robot.set_frame({18: 0b100})
+    assert not holds(pressed)
+
+
 def test_sensor_comparison_by_packet_name(robot: StubRobot, make: Make) -> None:
     test = c.COMPARISON.parse("wall_signal > 100")
     assert test == (27, ">", 100.0)

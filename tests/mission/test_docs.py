@@ -12,6 +12,7 @@ from roomba_bt.behaviours.cleaning import CLEANING
 from roomba_bt.behaviours.conditions import CONDITIONS
 from roomba_bt.behaviours.coverage_map import COVERAGE
 from roomba_bt.behaviours.homing import HOMING
+from roomba_bt.behaviours.panel import PANEL
 from roomba_bt.behaviours.language import MODIFIERS, WORDS, Shape
 from roomba_bt.behaviours.wall import WALL_FOLLOWING
 from roomba_bt.mission.loader import TOP_LEVEL
@@ -25,7 +26,7 @@ def test_every_language_word_is_documented() -> None:
 
 
 def test_every_builtin_behaviour_and_parameter_is_documented() -> None:
-    for cls in (*ACTIONS, *CONDITIONS, *CLEANING, *COVERAGE, *HOMING, *WALL_FOLLOWING):
+    for cls in (*ACTIONS, *PANEL, *CONDITIONS, *CLEANING, *COVERAGE, *HOMING, *WALL_FOLLOWING):
         decl = cls.declaration
         assert f"**`{decl.name}`**" in DOC, decl.name
         for param in decl.params:
@@ -42,7 +43,7 @@ def _param_rows(name: str) -> dict[str, tuple[str, str]]:
 
 @pytest.mark.parametrize(
     "cls",
-    [*ACTIONS, *CONDITIONS, *CLEANING, *COVERAGE, *HOMING, *WALL_FOLLOWING],
+    [*ACTIONS, *PANEL, *CONDITIONS, *CLEANING, *COVERAGE, *HOMING, *WALL_FOLLOWING],
     ids=lambda cls: cls.declaration.name,
 )
 def test_every_parameters_range_and_default_in_the_docs_is_the_declarations(cls: type) -> None:
@@ -129,7 +130,7 @@ def _entry(name: str) -> str:
 
 @pytest.mark.parametrize(
     "cls",
-    [*ACTIONS, *CONDITIONS, *CLEANING, *COVERAGE, *HOMING, *WALL_FOLLOWING],
+    [*ACTIONS, *PANEL, *CONDITIONS, *CLEANING, *COVERAGE, *HOMING, *WALL_FOLLOWING],
     ids=lambda cls: cls.declaration.name,
 )
 def test_every_behaviours_text_in_the_docs_starts_with_its_declaration(cls: type) -> None:
@@ -143,7 +144,7 @@ def test_every_behaviours_text_in_the_docs_starts_with_its_declaration(cls: type
 
 @pytest.mark.parametrize(
     "cls",
-    [*ACTIONS, *CONDITIONS, *CLEANING, *COVERAGE, *HOMING, *WALL_FOLLOWING],
+    [*ACTIONS, *PANEL, *CONDITIONS, *CLEANING, *COVERAGE, *HOMING, *WALL_FOLLOWING],
     ids=lambda cls: cls.declaration.name,
 )
 def test_every_parameters_text_in_the_docs_is_its_declarations(cls: type) -> None:
