@@ -44,7 +44,7 @@ def _display_text(value: object) -> str:
     each in the spec's table. Longer text is refused rather than cut or scrolled: a scroll
     is a choice of speed and of the blank between repeats the mission should make (several
     ``display`` leaves with ``wait`` between them), and a cut text says something else."""
-    text = STR.parse(value)
+    text = str(STR.parse(value))
     for index, char in enumerate(text):
         if ord(char) not in DIGIT_ASCII:
             raise UnitError(
@@ -126,9 +126,9 @@ class Display(Action):
     kind="action",
     at_once=True,
     params=(
-        Param("days", DAYS, default=(), from_blackboard=False,
+        Param("days", DAYS, from_blackboard=False,
               doc=f"the weekday LEDs on: {', '.join(WEEKDAYS)}"),
-        Param("leds", SCHEDULING_LEDS, default=(), from_blackboard=False,
+        Param("leds", SCHEDULING_LEDS, from_blackboard=False,
               doc=f"the scheduling LEDs on: {', '.join(SCHEDULING_LED_NAMES)}"),
     ),
     sends=opcodes("scheduling_leds"),
@@ -139,8 +139,9 @@ class ScheduleLeds(Action):
     Roomba 500/600 only."""
 
     def update(self) -> Status:
-        days = day_bits(*self.value("days"))
-        self.send(oi.scheduling_leds(days, scheduling_led_bits(*self.value("leds"))))
+        days = day_bits(*(self.value("days") or ()))
+        leds = scheduling_led_bits(*(self.value("leds") or ()))
+        self.send(oi.scheduling_leds(days, leds))
         return Status.SUCCESS
 
 

@@ -799,7 +799,8 @@ def builtin_registry() -> Registry:
 
     registry = Registry(entry_point_group=None)
     # validated by test_every_builtin_is_registered_with_a_valid_declaration, not each start
-    for cls in (*ACTIONS, *PANEL, *WALL_FOLLOWING, *CONDITIONS, *DOCKING, *CLEANING, *COVERAGE, *HOMING):
+    builtins = (*ACTIONS, *PANEL, *WALL_FOLLOWING, *CONDITIONS, *DOCKING, *CLEANING, *COVERAGE)
+    for cls in (*builtins, *HOMING):
         registry.register(cls, "builtin", validated=True)
     return registry
 

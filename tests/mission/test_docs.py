@@ -12,8 +12,8 @@ from roomba_bt.behaviours.cleaning import CLEANING
 from roomba_bt.behaviours.conditions import CONDITIONS
 from roomba_bt.behaviours.coverage_map import COVERAGE
 from roomba_bt.behaviours.homing import HOMING
-from roomba_bt.behaviours.panel import PANEL
 from roomba_bt.behaviours.language import MODIFIERS, WORDS, Shape
+from roomba_bt.behaviours.panel import PANEL
 from roomba_bt.behaviours.wall import WALL_FOLLOWING
 from roomba_bt.mission.loader import TOP_LEVEL
 

@@ -39,7 +39,9 @@ def test_the_panel_leaves_validate_on_the_robots_with_a_panel(tmp_path: Path) ->
 
 def test_the_create2_has_no_display_and_three_buttons_said_at_each_leaf(tmp_path: Path) -> None:
     found = validate_files([_mission(tmp_path, *PANEL_LEAVES)], profile=CREATE2)
-    assert [(d.severity, d.line, d.column) for d in found] == [("error", line, 7) for line in (5, 6, 7)]
+    assert [(d.severity, d.line, d.column) for d in found] == [
+        ("error", line, 7) for line in (5, 6, 7)
+    ]
     assert found[0].message.startswith(
         "display: the iRobot Create 2 (create2) has no digit display or scheduling LEDs"
     )
