@@ -742,10 +742,9 @@ def declare_like(
     Carried: the kind; the parameters (without ``drop_params``, then ``add_params``, one of
     a parent's name in its place); the packets read (then ``add_reads``, after a parent's
     function's too) and the commands sent (then ``add_sends``); ``leads_to``, ``sends_by``,
-    ``compares``, ``halts_only``, ``needs``; the cross-parameter rules (and
-    ``add_constraints``: both run, a dropped parameter being not given to the parent's); the
-    key parameters still declared (and ``writes_keys`` / ``reads_keys``); ``primary`` unless
-    dropped or given.
+    ``compares``, ``halts_only``, ``needs``; the cross-parameter rules (``add_constraints``
+    too: both run, a dropped parameter not given to the parent's); the key parameters still
+    declared (and ``writes_keys`` / ``reads_keys``); ``primary`` unless dropped or given.
     Not carried: ``at_once`` and ``may_succeed``, which say when ``update`` succeeds, what
     a subclass changes (the parent's "only with a ``duration``" would say a ``distance``
     subclass never succeeds); the doc, the subclass's docstring. For more: :func:`declare`."""

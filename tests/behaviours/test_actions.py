@@ -550,6 +550,8 @@ _REQUIRED: dict[str, dict[str, Any]] = {
     "log": {"message": "hello"},
     "set": {"key": "k", "value": 1},
     "mark": {"key": "here"},
+    "display": {"text": "hi!"},
+    "press": {"buttons": ("clean",)},
 }
 
 
@@ -557,7 +559,17 @@ def test_what_declares_it_succeeds_at_once_succeeds_on_its_first_tick(make: Make
     """``at_once``: the static checks take what such a leaf does as done within the tick it
     starts (a limit under a reactive fallback, a parallel's writes), so it must be true."""
     declared = [d for d in builtin_registry() if d.at_once]
-    assert {d.name for d in declared} >= {"stop", "set", "log", "mark", "leds", "motors"}
+    assert {d.name for d in declared} >= {
+        "stop",
+        "set",
+        "log",
+        "mark",
+        "leds",
+        "motors",
+        "display",
+        "press",
+        "schedule_leds",
+    }
     for declaration in declared:
         behaviour = make(declaration.cls, **_REQUIRED.get(declaration.name, {}))
         assert tick(behaviour) is Status.SUCCESS, declaration.name
