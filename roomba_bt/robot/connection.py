@@ -57,10 +57,12 @@ from roomba_bt.robot.silence import (
     another_model,
     answers_elsewhere,
     asleep_by_idle,
+    dead_connection,
     explain_silence,
     follow_baud,
     garbled_line,
 )
+from roomba_bt.robot.stall_asks import StallAsks, ask_in_stall
 from roomba_bt.robot.startup import (
     NO_ANSWER_CAUSES,
     STREAM_ASKS_AGAIN,
@@ -227,6 +229,8 @@ class Connection:
         #: how many times the stream was asked for again, no frame having come after its
         #: request (:meth:`_stream_again`): bytes to the robot lost, most likely
         self.stream_asked_again = 0
+        #: the stream asked for again when it went silent mid-run (robot/stall_asks.py)
+        self.stall_asks = StallAsks()
         #: the bytes to the robot this session found lost and put right, by what they were
         #: (``"a Query List"``, ``"the stream request"``, ``"a wheel command"``: the run's
         #: motion watch adds its own): the evidence a fall of unknown cause names the cable
@@ -536,13 +540,19 @@ class Connection:
         now = link.transport.now()
         since = link.silent_since
         if now - since <= grace:
+            if not link.bytes_since_frame:  # a silent line: the stream asked for again
+                ask_in_stall(self, now, grace)
             return
         garbled = link.bytes_read - bytes_before
         cause = (
             garbled_line(self, now - since, grace, garbled, halted=halted)
             if garbled
-            else explain_silence(self, now - since, grace, halted=halted)
+            else dead_connection(self, now - since, grace, halted=halted)
+            or explain_silence(self, now - since, grace, halted=halted)
         )
+        asked = self.stall_asks.said()
+        if asked:
+            cause.also(asked)
         if self.stream_asked_again and link.stream_unanswered:
             cause.also(
                 f"no frame came though the stream was asked for {self.stream_asked_again + 1} "

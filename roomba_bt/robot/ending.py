@@ -317,13 +317,16 @@ class PortReturn:
     connection reaches the same robot), to deliver the stop alone: the mission is not
     carried on (the robot may have moved meanwhile). ``within``: how long (a run's
     ``--grace``); ``heard``: the connection's question after the stop written through it
-    (the stream quiet, a Query List answered); ``said``: what the wait found ("" before one).
+    (the stream quiet, a Query List answered); ``said``: what the wait found ("" before one);
+    ``silent``: the connection did not fail but carried nothing for the grace, and was taken
+    for dead (``silence.dead_connection``): said so.
     """
 
     def __init__(self) -> None:
         self.within = REOPEN_WITHIN_S
         self.heard: Callable[[], bool] | None = None
         self.said = ""
+        self.silent = False
 
     def wait(self, link: StreamLink) -> bool | None:
         """True if the port came back (the link open again, no stream known to run), False
@@ -337,10 +340,18 @@ class PortReturn:
             return False
         took = reopen(self.within)
         port = link_of(link.name).reopened
-        if took is None:
+        if self.silent:
+            self.said = f"{port}, silent, was closed; " + (
+                f"no new one came within {self.within:g} s"
+                if took is None
+                else f"a new one came after {took:.2f} s"
+            )
+        elif took is None:
             self.said = f"{port} did not come back within {self.within:g} s"
+        else:
+            self.said = f"{port} came back after {took:.2f} s"
+        if took is None:
             return False
-        self.said = f"{port} came back after {took:.2f} s"
         link.status = LinkStatus.OPEN
         link.streaming = False
         return True
@@ -420,6 +431,7 @@ class SafeStop:
         self.unheard = None
         self.confirm = None
         self.port_return.said = ""
+        self.port_return.silent = False
 
     def in_flight(self, period: float) -> float:
         """Seconds after a command is written that frames the robot sent before it heard it

@@ -146,6 +146,35 @@ class PortLost(LinkDown):
     """Reading or writing the port raised (cable unplugged, bridge closed, robot reset)."""
 
 
+class ConnectionSilent(PortLost):
+    """A network link (``socket://``, ``rfc2217://``) that carried not a byte for the grace
+    while a stream ran, and did not close: taken for dead (the safe stop closes it and tries
+    a new connection, as after a reset: ``ending.PortReturn``). An ESP8266 bridge that
+    rebooted or left Wi-Fi range leaves such a half-open connection: no reset reaches this
+    computer, writes go on filling its buffer, and TCP gives up on them only after minutes;
+    the watchdog's drive 0 and the stop went into it, and the robot drove on."""
+
+    def __init__(
+        self, port: str, silent_for: float, grace: float, *, watchdog: float, halted: bool
+    ) -> None:
+        # imported here: validate loads this module, and the transport package pyserial
+        from roomba_bt.transport.link_kind import link_of
+
+        self.silent_for = silent_for
+        action = (
+            f"the watchdog's drive 0 after {watchdog * 1000:.0f} ms went into it"
+            if halted
+            else "the robot was not driving"
+        )
+        super().__init__(
+            port,
+            f"the connection went silent: not a byte came through it for {silent_for:.1f} s, "
+            f"and it did not close ({link_of(port).went_silent}); {action}; past the "
+            f"{grace:g} s grace it is taken for dead: closed, and a new connection tried for "
+            "the stop",
+        )
+
+
 class WaitCutShort(RobotError):
     """A read inside a wait bounded in wall time (the safe stop's,
     :meth:`~roomba_bt.robot.link.StreamLink.bounded`) came after the bound: the wait would

@@ -23,11 +23,12 @@ watchdog, where the live run had no trip.
 
 from __future__ import annotations
 
+import contextlib
 import enum
 import logging
 import math
 from collections import deque
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import NamedTuple
 
 import serial
@@ -292,6 +293,22 @@ class StreamLink:
         self._index_at_request = self.index
         self._refused_seen = 0  # the new parser's count
         self.status = LinkStatus.STREAMING if ids else LinkStatus.OPEN
+
+    @contextlib.contextmanager
+    def stall_kept(self) -> Iterator[None]:
+        """The stream asked for again inside the block during a stall (a silent line:
+        :mod:`~roomba_bt.robot.stall_asks`): the request's new parser kept, but the stall
+        goes on as it was, its silence counted from its last frame (the grace's measure:
+        each ask would start it again) and the watchdog tripped until frames come back (a
+        second trip would count a second stall), the last request's frame count as before
+        (the start-up's ask for a stream that never came reads it)."""
+        kept = self._silent_since, self._bytes_at_frame, self._index_at_request
+        try:
+            yield
+        finally:
+            self._silent_since, self._bytes_at_frame, self._index_at_request = kept
+            if self.status is _STREAMING:
+                self.status = _STALLED
 
     def pause_resume(self, resume: bool, now: float) -> None:
         """Pause/Resume Stream (150) was written."""

@@ -41,6 +41,7 @@ from roomba_bt.robot.ending import signals_deferred
 from roomba_bt.robot.errors import (
     BaudChanged,
     ConnectionFailed,
+    ConnectionSilent,
     LinkDown,
     ModeError,
     NoAnswer,
@@ -48,9 +49,9 @@ from roomba_bt.robot.errors import (
     StreamLost,
     idle_said,
 )
-from roomba_bt.robot.link import LINK_ERRORS
+from roomba_bt.robot.link import LINK_ERRORS, LinkStatus
 from roomba_bt.robot.wake import SLEEP_AFTER_S
-from roomba_bt.transport.link_kind import link_of
+from roomba_bt.transport.link_kind import LinkKind, link_of
 
 #: Garbage that must have come since the last valid frame (or the last listen) before other
 #: rates are tried.
@@ -116,6 +117,34 @@ def idle_at(connection: Connection, moment: float) -> float | None:
     if pulse is not None and pulse <= moment:
         before.append(pulse)
     return moment - max(before) if before else None
+
+
+def dead_connection(
+    connection: Connection, silent_for: float, grace: float, *, halted: bool
+) -> ConnectionSilent | None:
+    """Nothing arrived for the grace, not a byte: on a network link the connection is taken
+    for dead (marked lost, so the safe stop closes it and tries a new one, ``PortReturn``);
+    None on any other link, or if a byte came since the last frame.
+
+    Decided (session 32): a network connection that carries not a byte for the grace while a
+    stream runs is dead. A bridge that works carries the robot's frame every 15 ms; the
+    stalls of an ordinary Wi-Fi are what ``--grace`` is set for, and the stream was asked for
+    again twice within it (:mod:`~roomba_bt.robot.stall_asks`); a half-open TCP connection
+    (an ESP8266 that rebooted or left Wi-Fi range: no reset reaches us) takes every byte
+    written to it and fails only after minutes of TCP's resends. Asking the robot a Query
+    List there, as on a cable, would only let it drive on 1.6 s more: the query is asked
+    through the new connection after the stop instead (``PortReturn.heard_stop``), where an
+    answer shows the robot heard it. Not a device path nor a pty: their ports fail by
+    themselves when they go, and a silence there is the robot's or its stream's."""
+    link = connection.link
+    if link.bytes_since_frame or link_of(connection.name).kind is not LinkKind.NETWORK:
+        return None
+    link.status = LinkStatus.LOST
+    link.streaming = False
+    connection.ending.port_return.silent = True
+    return ConnectionSilent(
+        connection.name, silent_for, grace, watchdog=connection.watchdog, halted=halted
+    )
 
 
 def explain_silence(

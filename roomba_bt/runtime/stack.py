@@ -34,6 +34,7 @@ from roomba_bt.mission.build import blackboard_within, set_up_tree
 from roomba_bt.oi.profiles import PROFILES, RobotProfile
 from roomba_bt.robot.connection import Connection, EndMode
 from roomba_bt.robot.errors import DEFAULT_WATCHDOG
+from roomba_bt.robot.stall_asks import STREAM_AGAIN_NOTE
 from roomba_bt.runtime.claimed import ClaimedFile
 from roomba_bt.runtime.clock import mission_time_after
 from roomba_bt.runtime.given import check_arguments, check_given
@@ -667,6 +668,10 @@ def replay_record(
     )
     if trips is not None:  # it trips where the record's did (None: on the record's silence)
         stack.connection.link.replayed_trips = deque(trips)
+    # and asks for a silent stream again where the record's did, nowhere else (robot/stall_asks.py)
+    stack.connection.stall_asks.replayed = deque(
+        t for t, note in record.notes if STREAM_AGAIN_NOTE in note
+    )
     if until is not None:
         gate = WindowEnd(until, gate, transport)
     gate = link_lost_after(record, gate, transport)

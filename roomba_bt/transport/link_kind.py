@@ -56,6 +56,9 @@ class LinkWords:
     reach: str
     #: what comes back when a port that failed is opened again
     reopened: str
+    #: why a connection carried nothing for the grace and did not close (a network's: the
+    #: only kind taken for dead by its silence, ``silence.dead_connection``)
+    went_silent: str
     #: whether a port that failed is opened again for the safe stop: a device path comes
     #: back (a loose connector, an adapter that reset) and a bridge's new connection reaches
     #: the same robot's serial port; a pty's own number, reused, is another program's line
@@ -94,6 +97,10 @@ def _network_words(port: str) -> LinkWords:
         ),
         reach=f"wait for {bridge} to come back (it reset, or the Wi-Fi dropped)",
         reopened="the connection",
+        went_silent=(
+            f"{bridge} rebooted or left Wi-Fi range, and no reset reached this computer; "
+            "or the robot switched off"
+        ),
         reopens=True,
         modem_lines=False if port.lower().startswith("socket://") else None,
         no_modem_lines=(
@@ -124,6 +131,9 @@ def _cable_words(kind: LinkKind, reopens: bool) -> LinkWords:
         ),
         reach="reseat the cable",
         reopened="the port",
+        # never said: a device path's silence is the stream's or the robot's (the port
+        # itself fails when the adapter goes), and a pty's never comes back
+        went_silent="",
         reopens=reopens,
         modem_lines=None,
         no_modem_lines="no modem lines on this port",

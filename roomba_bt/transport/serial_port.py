@@ -21,6 +21,7 @@ import logging
 import os
 import select
 import socket
+import threading
 import time
 import weakref
 from collections.abc import Iterator
@@ -28,6 +29,7 @@ from typing import Any
 
 import serial
 from serial import rfc2217
+from serial.urlhandler import protocol_socket
 
 from roomba_bt.transport.base import TransportError
 from roomba_bt.transport.link_kind import LinkKind, link_of
@@ -78,6 +80,10 @@ RECONNECT_MOST_S = 1.0
 #: still rebooting whose listener takes the connection and resets it, a server that has
 #: another client): a robot's stream would come within a slot; a close comes at once.
 RECONNECT_SETTLE_S = 0.05
+#: The least time one try of a bridge's reconnection waits for its TCP connect, however
+#: little of the wait is left: a loaded machine's connect to a bridge that answers takes
+#: some milliseconds, and a try with no time to connect would only fail.
+CONNECT_LEAST_S = 0.2
 
 
 try:  # a pty whose other side closed while it was being set up: termios.error, no OSError
@@ -186,6 +192,49 @@ def _closed_at_once(port: serial.SerialBase) -> bool:
         return False
     except OSError:  # reset
         return True
+
+
+class _ConnectWithin:
+    """The ``socket`` module as pyserial's ``socket://`` and ``rfc2217://`` handlers see it
+    while a reconnection tries: their TCP connect waits at most ``seconds``, not their own 5 s
+    (``create_connection(..., timeout=5)``, fixed in both, with no setting of their own);
+    every other name is the module's."""
+
+    def __init__(self, seconds: float) -> None:
+        self._seconds = seconds
+
+    def create_connection(
+        self, address: tuple[str, int], timeout: float | None = None, *args: Any, **kwargs: Any
+    ) -> socket.socket:
+        bound = self._seconds if timeout is None else min(timeout, self._seconds)
+        return socket.create_connection(address, bound, *args, **kwargs)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(socket, name)
+
+
+#: one reconnection's bound on the handlers' connect at a time (:func:`_connect_within`)
+_CONNECT_BOUND = threading.Lock()
+#: pyserial's network handlers, whose connect :func:`_connect_within` bounds
+_NETWORK_HANDLERS = (protocol_socket, rfc2217)
+
+
+@contextlib.contextmanager
+def _connect_within(seconds: float) -> Iterator[None]:
+    """pyserial's network handlers connect within ``seconds`` inside the block
+    (:class:`_ConnectWithin`): a bridge that does not answer at all (an ESP8266 still
+    rebooting, out of Wi-Fi range: no refusal, the SYN unanswered) held one try of the safe
+    stop's reconnection 5 s, past a 2 s grace. The handlers' module name is swapped for the
+    block, under a lock; another thread's connect meanwhile is bounded too, and nothing
+    else changes for it."""
+    with _CONNECT_BOUND:
+        for handler in _NETWORK_HANDLERS:
+            handler.socket = _ConnectWithin(seconds)  # type: ignore[attr-defined]
+        try:
+            yield
+        finally:
+            for handler in _NETWORK_HANDLERS:
+                handler.socket = socket  # type: ignore[attr-defined]
 
 
 class SerialTransport:
@@ -493,9 +542,10 @@ class SerialTransport:
         passed: a loose connector that comes back, a USB adapter that reset, a Wi-Fi bridge
         that rebooted or a network that dropped the connection. The seconds it took, or None
         if it did not come back. A device is tried every :data:`REOPEN_EVERY_S`; a bridge
-        with a backoff (:data:`RECONNECT_FIRST_S` doubling to :data:`RECONNECT_MOST_S`). A
-        try's own connect waits up to pyserial's timeout (5 s for a host that does not
-        answer at all), past ``within`` when that is shorter.
+        with a backoff (:data:`RECONNECT_FIRST_S` doubling to :data:`RECONNECT_MOST_S`), each
+        try's TCP connect waiting what is left of ``within`` (:data:`CONNECT_LEAST_S` at
+        least; pyserial's own is 5 s, for a host that does not answer at all). An RFC 2217
+        server that connects may still take pyserial's 3 s to negotiate.
 
         The old port is closed first: while it is held open, Linux keeps the vanished
         device's number taken, and the adapter that comes back gets the next one
@@ -514,7 +564,11 @@ class SerialTransport:
                 port = _device_port(*settings)
                 if isinstance(port, serial.Serial):  # a device, not a URL
                     port.exclusive = True
-                port.open()
+                    port.open()
+                else:
+                    left = within - (time.monotonic() - began)
+                    with _connect_within(max(left, CONNECT_LEAST_S)):
+                        port.open()
                 if _closed_at_once(port):
                     _close_port(port)
                     raise ConnectionResetError("the far end closed the new connection at once")

@@ -11,16 +11,17 @@ import pytest
 from roomba_bt.mission import load_mission
 from roomba_bt.oi import commands as C
 from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.robot.stall_asks import STALL_ASKS, STREAM_AGAIN_NOTE
 from roomba_bt.robot.startup import STREAM_ASKS_AGAIN, stream_zeros
 from roomba_bt.robot.writer import RESYNC_ZEROS
 from roomba_bt.runtime.motion_watch import GIVE_UP_AFTER
 from roomba_bt.runtime.recording import load_record
-from roomba_bt.runtime.stack import replay_record
+from roomba_bt.runtime.stack import RunStack, replay_record
 from roomba_bt.runtime.summary import ExitCode, Outcome
-from roomba_bt.sim import Faults
+from roomba_bt.sim import Faults, Simulator, load_world
 from roomba_bt.sim.faults import HostLine
 
-from .simrun import DRIVE_TO_WALL_AND_BACK_OFF, RunMission
+from .simrun import DRIVE_TO_WALL_AND_BACK_OFF, BridgeLink, RunMission, write_mission
 
 DRIVE_200 = C.drive(200, 0x8000).data  # 89 00 c8 80 00
 STOP = C.halt().data  # 89 00 00 00 00
@@ -305,3 +306,103 @@ def test_a_fall_of_unknown_cause_blames_no_cable_never_seen_to_lose_a_byte(
     assert not any(
         "cable" in r.getMessage() for r in caplog.records if "by itself" in r.getMessage()
     )
+
+
+class ArrivesAs(HostLine):
+    """A line on which the first write equal to ``data`` reaches the robot as ``into``: what
+    a byte lost before a command's data can make of it (a ``96 00`` read as Pause Stream,
+    an ``ad`` as Stop)."""
+
+    def __init__(self, data: bytes, into: bytes) -> None:
+        super().__init__(Faults(), 0)
+        self.data, self.into = data, into
+
+    def passed(self, data: bytes | bytearray) -> tuple[bytes, str]:
+        if bytes(data) != self.data or not self.into:
+            return bytes(data), ""
+        into, self.into = self.into, b""
+        self.dropped += 1
+        return into, "made another command"
+
+
+PAUSE = C.pause_stream().data  # 96 00
+ASKED_AGAIN = stream_zeros(tuple(STREAM[2:])) + STREAM
+
+
+def test_a_stream_paused_mid_run_is_asked_for_again_and_the_run_rides_it_through(
+    run_mission: RunMission, caplog: pytest.LogCaptureFixture
+) -> None:
+    """The robot heard the drive and then a Pause Stream made of lost bytes: nothing came,
+    and the run waited the grace and ended "the sensor stream stopped" (exit 3; 2 dock runs
+    of 100 at 1 % of the bytes lost). Now the stream is asked for again at a third of the
+    grace (the zeros, then the request), it comes back, and the drive ends as a stall ridden
+    through; said once."""
+    run = run_mission(DRIVE_60_CM, host_line=ArrivesAs(DRIVE_200, DRIVE_200 + PAUSE), timeout=10.0)
+    summary = run.summary
+    assert summary.outcome is Outcome.SUCCESS
+    assert (summary.stalls, summary.stalls_ridden) == (1, 1)
+    asks = [(t, data) for t, data in run.link.writes if data.endswith(STREAM)]
+    assert [data for _, data in asks] == [STREAM, ASKED_AGAIN]
+    paused_at = next(t for t, data in run.link.writes if data == DRIVE_200)
+    assert asks[1][0] - paused_at == pytest.approx(2.0 / (STALL_ASKS + 1), abs=0.05)
+    said = [r for r in caplog.records if "asking for it again" in r.getMessage()]
+    assert len(said) == 1 and said[0].levelname == "WARNING"
+    assert "the sensor stream stopped (a byte lost on the way to the robot can make a Pause " in (
+        said[0].getMessage()
+    )
+    sim = run.simulator
+    assert sim.mode.label == "Passive" and sim.requested_left == sim.requested_right == 0
+
+
+def test_a_stream_that_does_not_come_back_ends_the_run_with_the_asks_said(
+    run_mission: RunMission,
+) -> None:
+    """A Stop (173) made of lost bytes leaves the OI Off, which hears no stream request: the
+    stream is asked for again :data:`STALL_ASKS` times, then the grace ends the run as
+    before, exit 3, the asks said beside the cause and the robot left stopped in Passive
+    (the stop's Start)."""
+    stop = C.stop().data
+    run = run_mission(DRIVE_60_CM, host_line=ArrivesAs(DRIVE_200, DRIVE_200 + stop), timeout=10.0)
+    summary = run.summary
+    assert summary.outcome is Outcome.CONNECTION_LOST
+    assert summary.exit_code == ExitCode.CONNECTION
+    assert "the sensor stream stopped: nothing arrived for 2.0 s" in summary.reason
+    assert (
+        f"the stream was asked for again {STALL_ASKS} times within the grace (zeros, then the "
+        "request), and nothing came" in summary.reason
+    )
+    assert sum(data == ASKED_AGAIN for _, data in run.link.writes) == STALL_ASKS
+    sim = run.simulator
+    assert sim.mode.label == "Passive" and sim.requested_left == sim.requested_right == 0
+
+
+def test_a_gap_that_ends_before_a_third_of_the_grace_asks_nothing(tmp_path: Path) -> None:
+    """A stall whose frames come back by themselves before a third of the grace (a Wi-Fi
+    bridge that held every byte 0.5 s) writes nothing more than the watchdog's drive 0 and
+    the wheels' command again."""
+    link = BridgeLink(Simulator(load_world("empty-room"), CREATE2, 0), 0.02, 0.0, (1.0, 0.5))
+    mission = load_mission(write_mission(tmp_path, DRIVE_60_CM))
+    summary = RunStack(mission, link, profile=CREATE2, timeout_s=10.0).run()
+    assert summary.outcome is Outcome.SUCCESS
+    assert (summary.stalls, summary.stalls_ridden) == (1, 1)
+    assert [data for _, data in link.writes if data.endswith(STREAM)] == [STREAM]
+
+
+def test_a_stream_asked_for_again_mid_run_is_replayed_byte_for_byte(
+    run_mission: RunMission, tmp_path: Path
+) -> None:
+    """The ask follows the grace on the run's clock: the record notes it, and a replay,
+    whose reads come at other times, asks where the run did."""
+    record_path = tmp_path / "run.rec"
+    line = ArrivesAs(DRIVE_200, DRIVE_200 + PAUSE)
+    run = run_mission(DRIVE_60_CM, host_line=line, timeout=10.0, record=record_path)
+    assert run.summary.outcome is Outcome.SUCCESS
+    record = load_record(record_path)
+    assert [note[STREAM_AGAIN_NOTE] for _, note in record.notes if STREAM_AGAIN_NOTE in note] == [1]
+    mission = load_mission(tmp_path / "mission.yaml")
+    summary, transport = replay_record(
+        record, mission, profile=CREATE2, packets=record.header["packets"],
+        baud=record.header["baud"], name="run.rec",
+    )  # fmt: skip
+    assert transport.first_difference() is None and transport.written == record.out_bytes
+    assert summary.outcome is Outcome.SUCCESS
