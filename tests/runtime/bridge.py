@@ -3,6 +3,9 @@ that passes bytes both ways until :meth:`ResettingBridge.reset`, which resets bo
 connections (RST, as an ESP8266 that reboots leaves them) and turns new clients away for a
 while (each one taken and reset at once, as the bridge's listener does while it reboots).
 After that, a new client is joined to a new connection to the simulator: the same robot.
+:meth:`ResettingBridge.go_silent` is the other way a bridge goes: its client's connection
+left open and never read nor written again (a half-open connection: the bridge rebooted or
+left Wi-Fi range, and no reset reached the client), the next client served.
 """
 
 from __future__ import annotations
@@ -36,6 +39,8 @@ class ResettingBridge:
         self.url = f"socket://127.0.0.1:{self._listener.getsockname()[1]}"
         self.clients = 0
         self._pair: tuple[socket.socket, socket.socket] | None = None
+        #: the clients' connections left open and silent (:meth:`go_silent`)
+        self._silent: list[socket.socket] = []
         self._down_until = 0.0
         self._lock = threading.Lock()
         self._stop = threading.Event()
@@ -48,11 +53,24 @@ class ResettingBridge:
             self._down_until = time.monotonic() + down_s
             self._drop()
 
+    def go_silent(self) -> None:
+        """The bridge goes silent without closing: nothing passes either way on its client's
+        connection, which stays open; its connection to the robot is gone (the robot's side
+        of a bridge that rebooted), and the next client is served."""
+        with self._lock:
+            assert self._pair is not None
+            client, robot = self._pair
+            robot.close()
+            self._silent.append(client)
+            self._pair = None
+
     def close(self) -> None:
         self._stop.set()
         self._thread.join(timeout=5)
         with self._lock:
             self._drop()
+            for sock in self._silent:
+                sock.close()
         self._listener.close()
 
     def _drop(self) -> None:

@@ -401,6 +401,34 @@ def test_a_bridge_that_stays_down_past_the_grace_is_said_in_the_network_s_words(
     assert "mode Passive, wheels 0/0 mm/s" in said, said
 
 
+def test_a_bridge_that_goes_silent_without_closing_gets_the_stop_through_a_new_connection(
+    bridge: tuple[ResettingBridge, Any], tmp_path: Path
+) -> None:
+    """An ESP8266 bridge drops off the Wi-Fi mid-drive and no reset reaches the run: its
+    connection stays open and carries nothing. The watchdog's drive 0 and the stream asked
+    for again went into it, and the stop was written there and said "unconfirmed", the robot
+    spinning on in Safe. Now, the grace over with not a byte, the connection is taken for
+    dead: closed, and a new one carries the stop to the same robot (docs/robot.md, A network
+    link)."""
+    proxy, sim = bridge
+    proc, _ = _driving(proxy.url, tmp_path)
+    proxy.go_silent()
+    out, err = proc.communicate(timeout=30)
+    assert proc.returncode == 3, err
+    assert "the connection went silent: not a byte came through it for 2.0 s" in out
+    assert re.search(
+        r"safe stop    sent drive, motors, pause_resume_stream, start \(the connection, "
+        r"silent, was closed; a new one came after \d+\.\d\d s: the robot heard the stop "
+        r"written through it\)",
+        out,
+    ), out
+    assert "final mode   Passive" in out
+    assert proxy.clients == 2  # the run's connection, then the stop's
+    _, said = sim.stop(signal.SIGINT)
+    assert "turned a second client away" not in said
+    assert "mode: Safe->Passive (start)" in said and "mode Passive, wheels 0/0 mm/s" in said
+
+
 def test_no_robot_on_the_port_is_exit_3(tmp_path: Path, silent_port: str) -> None:
     result = _run_on(silent_port, tmp_path)
     assert result.returncode == 3

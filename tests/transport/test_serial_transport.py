@@ -10,6 +10,7 @@ import subprocess
 import sys
 import termios
 import threading
+import time
 import tty
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -17,7 +18,13 @@ from pathlib import Path
 
 import pytest
 
-from roomba_bt.transport import SerialTransport, Transport, TransportError, open_transport
+from roomba_bt.transport import (
+    SerialTransport,
+    Transport,
+    TransportError,
+    open_transport,
+    serial_port,
+)
 
 
 @dataclass
@@ -548,3 +555,22 @@ def test_a_bridge_that_stays_down_is_said_not_to_come_back() -> None:
     listener.close()  # nothing listens there any more
     assert transport.reopen(within=0.3) is None
     assert not transport.is_open
+
+
+def test_a_bridge_that_does_not_answer_holds_a_reconnection_no_longer_than_asked() -> None:
+    """A host that answers no SYN (an ESP8266 still rebooting, out of Wi-Fi range) held
+    each try's connect pyserial's 5 s, past the grace the stop waits; a try now connects
+    within what is left of it. The listener's backlog, full, leaves new SYNs unanswered."""
+    listener = socket.create_server(("127.0.0.1", 0), backlog=0)
+    address = listener.getsockname()
+    transport = SerialTransport.open(f"socket://127.0.0.1:{address[1]}")
+    listener.accept()[0].close()
+    filler = socket.create_connection(address)  # the backlog's one place, taken
+    try:
+        began = time.monotonic()
+        assert transport.reopen(within=0.5) is None
+        assert time.monotonic() - began < 2.0  # pyserial's own: 5 s a try
+        assert serial_port.protocol_socket.socket is socket  # as it was, for other opens
+    finally:
+        filler.close()
+        listener.close()
