@@ -57,7 +57,9 @@ stalls replay too, unless the run had another ``--watchdog`` or ``--grace``, or 
 woke late (a loaded machine) took frames the record stamps past the watchdog, where the
 live run did not trip (the replay does: a difference). Before, a replay ran no watchdog, and
 the first stall of a record was its first difference ("expected Drive (137) 89 00 00 00 00,
-sent nothing").
+sent nothing"). A stream asked for again during a silent stall is a note too
+(``{"stream_again": 1, "silent": 0.667}``, at the link time it was written): a replay asks
+where the record did and nowhere else (``robot/stall_asks.py``).
 
 ``t`` is the link's own clock (``transport.now()``) relative to the first byte, so a record
 made on the virtual clock replays identically, and one made on a robot replays with the

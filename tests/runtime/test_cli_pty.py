@@ -342,31 +342,55 @@ def bridge(served_sim: Callable[..., Any]) -> Iterator[tuple[ResettingBridge, An
     proxy.close()
 
 
-def test_a_bridge_that_resets_gets_the_stop_through_a_new_connection(
-    bridge: tuple[ResettingBridge, Any], tmp_path: Path
+@pytest.mark.parametrize(
+    ("fault", "said", "came_back"),
+    [
+        pytest.param(
+            lambda proxy: proxy.reset(down_s=0.3),
+            "the bridge closed the connection or the network dropped",
+            "the connection came back after",
+            id="it resets",
+        ),
+        pytest.param(
+            ResettingBridge.go_silent,
+            "the connection went silent: not a byte came through it for 2.0 s",
+            "the connection, silent, was closed; a new one came after",
+            id="it goes silent without closing",
+        ),
+    ],
+)
+def test_a_bridge_that_drops_the_run_gets_the_stop_through_a_new_connection(
+    bridge: tuple[ResettingBridge, Any],
+    tmp_path: Path,
+    fault: Callable[[ResettingBridge], None],
+    said: str,
+    came_back: str,
 ) -> None:
-    """An ESP8266 bridge reboots mid-drive (both connections reset) and takes clients again
-    0.3 s later. A new connection reaches the same robot, which drove on in Safe: the stop
-    goes through it within the grace, as through a device path that came back, and the
-    mission is not carried on (docs/robot.md, Losing the link). Before, the run exited at
-    once, "reseat the cable", and left the robot driving."""
+    """An ESP8266 bridge reboots mid-drive and takes clients again 0.3 s later: it resets
+    both connections, or (off the Wi-Fi, no reset reaching the run) leaves the run's open
+    and silent, which the run takes for dead once the grace is over with not a byte. A new
+    connection reaches the same robot, which drove on in Safe: the stop goes through it, as
+    through a device path that came back, and the mission is not carried on (docs/robot.md,
+    Losing the link). Before, a reset ended the run at once, "reseat the cable", and a
+    silent bridge had the stop written into it and said "unconfirmed": the robot drove on."""
     proxy, sim = bridge
     proc, _ = _driving(proxy.url, tmp_path)
-    proxy.reset(down_s=0.3)
+    fault(proxy)
     out, err = proc.communicate(timeout=30)
     assert proc.returncode == 3, err
-    assert "the bridge closed the connection or the network dropped" in out
+    assert said in out
     assert re.search(
-        r"safe stop    sent drive, motors, pause_resume_stream, start \(the connection came "
-        r"back after \d+\.\d\d s: the robot heard the stop written through it\)",
+        r"safe stop    sent drive, motors, pause_resume_stream, start \("
+        + re.escape(came_back)
+        + r" \d+\.\d\d s: the robot heard the stop written through it\)",
         out,
     ), out
     assert "final mode   Passive" in out
     assert proxy.clients == 2  # the run's connection, then the stop's
-    _, said = sim.stop(signal.SIGINT)
-    assert "turned a second client away" not in said  # the same robot took the new one
-    assert said.count("mode: Off->Passive") == 1, said  # ... not started again
-    assert "mode: Safe->Passive (start)" in said and "mode Passive, wheels 0/0 mm/s" in said
+    _, logged = sim.stop(signal.SIGINT)
+    assert "turned a second client away" not in logged  # the same robot took the new one
+    assert logged.count("mode: Off->Passive") == 1, logged  # ... not started again
+    assert "mode: Safe->Passive (start)" in logged and "mode Passive, wheels 0/0 mm/s" in logged
 
 
 def test_a_bridge_that_stays_down_past_the_grace_is_said_in_the_network_s_words(
@@ -399,34 +423,6 @@ def test_a_bridge_that_stays_down_past_the_grace_is_said_in_the_network_s_words(
     ), doctor.stdout
     _, said = sim.stop(signal.SIGINT)
     assert "mode Passive, wheels 0/0 mm/s" in said, said
-
-
-def test_a_bridge_that_goes_silent_without_closing_gets_the_stop_through_a_new_connection(
-    bridge: tuple[ResettingBridge, Any], tmp_path: Path
-) -> None:
-    """An ESP8266 bridge drops off the Wi-Fi mid-drive and no reset reaches the run: its
-    connection stays open and carries nothing. The watchdog's drive 0 and the stream asked
-    for again went into it, and the stop was written there and said "unconfirmed", the robot
-    spinning on in Safe. Now, the grace over with not a byte, the connection is taken for
-    dead: closed, and a new one carries the stop to the same robot (docs/robot.md, A network
-    link)."""
-    proxy, sim = bridge
-    proc, _ = _driving(proxy.url, tmp_path)
-    proxy.go_silent()
-    out, err = proc.communicate(timeout=30)
-    assert proc.returncode == 3, err
-    assert "the connection went silent: not a byte came through it for 2.0 s" in out
-    assert re.search(
-        r"safe stop    sent drive, motors, pause_resume_stream, start \(the connection, "
-        r"silent, was closed; a new one came after \d+\.\d\d s: the robot heard the stop "
-        r"written through it\)",
-        out,
-    ), out
-    assert "final mode   Passive" in out
-    assert proxy.clients == 2  # the run's connection, then the stop's
-    _, said = sim.stop(signal.SIGINT)
-    assert "turned a second client away" not in said
-    assert "mode: Safe->Passive (start)" in said and "mode Passive, wheels 0/0 mm/s" in said
 
 
 def test_no_robot_on_the_port_is_exit_3(tmp_path: Path, silent_port: str) -> None:

@@ -21,7 +21,7 @@ from roomba_bt.runtime.summary import ExitCode, Outcome
 from roomba_bt.sim import Faults, Simulator, load_world
 from roomba_bt.sim.faults import HostLine
 
-from .simrun import DRIVE_TO_WALL_AND_BACK_OFF, BridgeLink, RunMission, write_mission
+from .simrun import DRIVE_TO_WALL_AND_BACK_OFF, BridgeLink, Run, RunMission, write_mission
 
 DRIVE_200 = C.drive(200, 0x8000).data  # 89 00 c8 80 00
 STOP = C.halt().data  # 89 00 00 00 00
@@ -52,6 +52,18 @@ tree:
     - mode: safe
     - drive: {velocity: 200 mm/s, distance: 60 cm}
 """
+
+
+def _lost_and_stopped(run: Run, *said: str) -> None:
+    """The run ended as a lost connection (exit 3), its reason saying each of ``said``, and
+    the simulated robot was left stopped in Passive."""
+    summary = run.summary
+    assert summary.outcome is Outcome.CONNECTION_LOST
+    assert summary.exit_code == ExitCode.CONNECTION
+    for words in said:
+        assert words in summary.reason
+    sim = run.simulator
+    assert sim.mode.label == "Passive" and sim.requested_left == sim.requested_right == 0
 
 
 def test_a_drive_whose_byte_was_lost_is_sent_again_and_the_robot_drives(
@@ -98,19 +110,13 @@ def test_a_line_that_keeps_losing_commands_ends_the_run_stopped(run_mission: Run
     run = run_mission(
         mission, world="corridor", host_line=LosesByte(DRIVE_200, 2, times=3), timeout=40.0
     )
-    summary = run.summary
-    assert summary.outcome is Outcome.CONNECTION_LOST
-    assert summary.exit_code == ExitCode.CONNECTION
-    assert summary.unheard_obeyed == GIVE_UP_AFTER
-    assert (
-        f"the robot did not do what it was told {GIVE_UP_AFTER} times within 60 s" in summary.reason
+    _lost_and_stopped(
+        run,
+        f"the robot did not do what it was told {GIVE_UP_AFTER} times within 60 s",
+        "bytes from the computer to the robot are being lost; check the cable",
     )
-    assert "bytes from the computer to the robot are being lost; check the cable" in (
-        summary.reason
-    )
-    assert summary.distance_mm < 3 * 600 + 400  # the third drive ended part of the way
-    sim = run.simulator
-    assert sim.mode.label == "Passive" and sim.requested_left == sim.requested_right == 0
+    assert run.summary.unheard_obeyed == GIVE_UP_AFTER
+    assert run.summary.distance_mm < 3 * 600 + 400  # the third drive ended part of the way
 
 
 def test_a_clean_line_writes_nothing_more(run_mission: RunMission) -> None:
@@ -241,17 +247,13 @@ def test_a_stream_request_lost_every_time_ends_the_run_as_before(run_mission: Ru
     the run cannot read), exit 3, the robot stopped in Passive, with a word of the cable."""
     line = LosesByteOfEvery(*[(STREAM, 5)] * (STREAM_ASKS_AGAIN + 1))
     run = run_mission(DRIVE_60_CM, host_line=line, timeout=10.0)
-    summary = run.summary
-    assert summary.outcome is Outcome.CONNECTION_LOST
-    assert summary.exit_code == ExitCode.CONNECTION
-    assert "the line is garbled" in summary.reason
-    assert (
+    _lost_and_stopped(
+        run,
+        "the line is garbled",
         f"no frame came though the stream was asked for {STREAM_ASKS_AGAIN + 1} times: bytes "
-        "from the computer to the robot may be lost (check the cable" in summary.reason
+        "from the computer to the robot may be lost (check the cable",
     )
     assert sum(data.endswith(STREAM) for _, data in run.link.writes) == STREAM_ASKS_AGAIN + 1
-    sim = run.simulator
-    assert sim.mode.label == "Passive" and sim.requested_left == sim.requested_right == 0
 
 
 def test_a_stream_asked_for_again_is_replayed_byte_for_byte(
@@ -363,17 +365,13 @@ def test_a_stream_that_does_not_come_back_ends_the_run_with_the_asks_said(
     (the stop's Start)."""
     stop = C.stop().data
     run = run_mission(DRIVE_60_CM, host_line=ArrivesAs(DRIVE_200, DRIVE_200 + stop), timeout=10.0)
-    summary = run.summary
-    assert summary.outcome is Outcome.CONNECTION_LOST
-    assert summary.exit_code == ExitCode.CONNECTION
-    assert "the sensor stream stopped: nothing arrived for 2.0 s" in summary.reason
-    assert (
+    _lost_and_stopped(
+        run,
+        "the sensor stream stopped: nothing arrived for 2.0 s",
         f"the stream was asked for again {STALL_ASKS} times within the grace (zeros, then the "
-        "request), and nothing came" in summary.reason
+        "request), and nothing came",
     )
     assert sum(data == ASKED_AGAIN for _, data in run.link.writes) == STALL_ASKS
-    sim = run.simulator
-    assert sim.mode.label == "Passive" and sim.requested_left == sim.requested_right == 0
 
 
 def test_a_gap_that_ends_before_a_third_of_the_grace_asks_nothing(tmp_path: Path) -> None:
