@@ -4,6 +4,7 @@ not do what it was told, sets its parser in step and sends the command again
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -256,24 +257,6 @@ def test_a_stream_request_lost_every_time_ends_the_run_as_before(run_mission: Ru
     assert sum(data.endswith(STREAM) for _, data in run.link.writes) == STREAM_ASKS_AGAIN + 1
 
 
-def test_a_stream_asked_for_again_is_replayed_byte_for_byte(
-    run_mission: RunMission, tmp_path: Path
-) -> None:
-    """The request again follows the watchdog's time: the record notes it as a trip, and a
-    replay asks again where the run did."""
-    record_path = tmp_path / "run.rec"
-    run = run_mission(DRIVE_60_CM, host_line=LosesByte(STREAM, 5), timeout=10.0, record=record_path)
-    assert run.summary.outcome is Outcome.SUCCESS
-    record = load_record(record_path)
-    mission = load_mission(tmp_path / "mission.yaml")
-    summary, transport = replay_record(
-        record, mission, profile=CREATE2, packets=record.header["packets"],
-        baud=record.header["baud"], name="run.rec",
-    )  # fmt: skip
-    assert transport.first_difference() is None and transport.written == record.out_bytes
-    assert summary.outcome is Outcome.SUCCESS
-
-
 def test_a_fall_of_unknown_cause_names_the_cable_where_bytes_were_seen_lost(
     run_mission: RunMission, caplog: pytest.LogCaptureFixture
 ) -> None:
@@ -386,17 +369,28 @@ def test_a_gap_that_ends_before_a_third_of_the_grace_asks_nothing(tmp_path: Path
     assert [data for _, data in link.writes if data.endswith(STREAM)] == [STREAM]
 
 
-def test_a_stream_asked_for_again_mid_run_is_replayed_byte_for_byte(
-    run_mission: RunMission, tmp_path: Path
+@pytest.mark.parametrize(
+    ("line", "asked_mid_run"),
+    [
+        pytest.param(lambda: LosesByte(STREAM, 5), [], id="its request lost a byte"),
+        pytest.param(lambda: ArrivesAs(DRIVE_200, DRIVE_200 + PAUSE), [1], id="paused mid-run"),
+    ],
+)
+def test_a_stream_asked_for_again_is_replayed_byte_for_byte(
+    run_mission: RunMission,
+    tmp_path: Path,
+    line: Callable[[], HostLine],
+    asked_mid_run: list[int],
 ) -> None:
-    """The ask follows the grace on the run's clock: the record notes it, and a replay,
-    whose reads come at other times, asks where the run did."""
+    """A request again at start-up follows the watchdog's time: the record notes it as a
+    trip. One mid-run follows the grace on the run's clock: the record notes it as itself.
+    Either way a replay, whose reads come at other times, asks again where the run did."""
     record_path = tmp_path / "run.rec"
-    line = ArrivesAs(DRIVE_200, DRIVE_200 + PAUSE)
-    run = run_mission(DRIVE_60_CM, host_line=line, timeout=10.0, record=record_path)
+    run = run_mission(DRIVE_60_CM, host_line=line(), timeout=10.0, record=record_path)
     assert run.summary.outcome is Outcome.SUCCESS
     record = load_record(record_path)
-    assert [note[STREAM_AGAIN_NOTE] for _, note in record.notes if STREAM_AGAIN_NOTE in note] == [1]
+    notes = [note[STREAM_AGAIN_NOTE] for _, note in record.notes if STREAM_AGAIN_NOTE in note]
+    assert notes == asked_mid_run
     mission = load_mission(tmp_path / "mission.yaml")
     summary, transport = replay_record(
         record, mission, profile=CREATE2, packets=record.header["packets"],
