@@ -237,18 +237,41 @@ def test_the_oracles_stream_gap_is_ridden_through_the_wheels_stopped_within_150_
     halts = [t for t, b in link.writes if b == oi.halt().data and 3.0 <= t < 3.8]
     assert halts and halts[0] - last_frame <= 0.15
     spin = oi.drive(100, oi.Radius.TURN_COUNTER_CLOCKWISE).data
-    assert any(b == spin for t, b in link.writes if 3.8 <= t < 3.9)  # commanded again
+    back = min(t for t, b in link.reads if b and t > 3.0)  # the stream asked for again at
+    assert 3.6 < back < 3.8  # a third of the grace: the gap ended there, not at 3.8 s
+    assert any(b == spin for t, b in link.writes if back <= t < back + 0.1)  # commanded again
     assert [e.detail for e in simulator.events if e.kind == "fault"] == [
         "stream gap",
         "stream gap end",
     ]
 
 
+class LosesTheAsks(SimLink):
+    """A line that loses every write that begins with zeros: the stream asked for again
+    (robot/stall_asks.py) never reaches the robot."""
+
+    def write(self, data: bytes) -> None:
+        if not data.startswith(b"\x00"):
+            super().write(data)
+
+
+def test_a_robot_that_stopped_streaming_by_itself_streams_again_when_asked(
+    tmp_path: Path,
+) -> None:
+    """The stream asked for again within the grace comes back: the run rides the gap
+    through and ends by its timeout (it ended "the robot still answers a query", exit 3)."""
+    summary, simulator = run(tmp_path, SPIN, Faults(stream_stop_at=3.0), timeout=6.0)
+    assert summary.outcome is Outcome.TIMEOUT, summary.reason
+    assert (summary.stalls, summary.stalls_ridden) == (1, 1)
+    assert summary.stop_delivered and simulator.mode is OIMode.PASSIVE
+
+
 def test_a_robot_that_only_stopped_streaming_is_said_to_still_answer(tmp_path: Path) -> None:
-    summary, simulator = run(tmp_path, SPIN, Faults(stream_stop_at=3.0))
+    summary, simulator = run(tmp_path, SPIN, Faults(stream_stop_at=3.0), LosesTheAsks)
     assert summary.outcome is Outcome.CONNECTION_LOST
     assert "the sensor stream stopped" in summary.reason
     assert "the robot still answers a query (its OI is on)" in summary.reason
+    assert "the stream was asked for again 2 times within the grace" in summary.reason
     assert "asleep" not in summary.reason
     assert simulator.brc_pulses == 1  # keep-awake's first only: it answered, no wake pulse
     assert summary.stop_delivered and simulator.mode is OIMode.PASSIVE
