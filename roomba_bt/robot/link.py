@@ -23,12 +23,11 @@ watchdog, where the live run had no trip.
 
 from __future__ import annotations
 
-import contextlib
 import enum
 import logging
 import math
 from collections import deque
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from typing import NamedTuple
 
 import serial
@@ -501,21 +500,3 @@ def replayed_due(trips: deque[float], now: float) -> float:
     while trips and trips[0] <= now:
         trips.popleft()
     return trips[0] if trips else math.inf
-
-
-@contextlib.contextmanager
-def stall_kept(link: StreamLink) -> Iterator[None]:
-    """The stream asked for again inside the block during a stall (a silent line:
-    :mod:`~roomba_bt.robot.stall_asks`): the request's new parser kept, but the stall goes
-    on as it was, its silence counted from its last frame (the grace's measure: each ask
-    would start it again) and the watchdog tripped until frames come back (a second trip
-    would count a second stall), the last request's frame count as before (the start-up's
-    ask for a stream that never came reads it). Beside the class, which it reaches into: a
-    method off the tick path would take it past its size guide."""
-    kept = link._silent_since, link._bytes_at_frame, link._index_at_request
-    try:
-        yield
-    finally:
-        link._silent_since, link._bytes_at_frame, link._index_at_request = kept
-        if link.status is _STREAMING:
-            link.status = _STALLED

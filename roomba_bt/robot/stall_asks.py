@@ -16,8 +16,9 @@ the request::
 
 Nothing more is written on a clean run (no stall) nor during a stall of garbage or of frames
 that come back before a third of the grace (a Wi-Fi bridge's holds of 100 ms). The stall
-stays the one the watchdog tripped on: its silence counts from its last frame, so the grace
-is not started again by an ask (:func:`~roomba_bt.robot.link.stall_kept`).
+stays the one the watchdog tripped on, its silence counted from its last frame: the request
+is the same stream's, written as its bytes (no new stream to the link, which would start
+the grace again and count a second stall).
 
 Each ask is noted in the run's record (``{"stream_again": 1, "silent": 0.667}``, at the link
 time it was written), and a replay asks where its record did and nowhere else
@@ -33,7 +34,6 @@ from typing import TYPE_CHECKING
 
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
-from roomba_bt.robot.link import stall_kept
 from roomba_bt.robot.startup import stream_zeros
 
 if TYPE_CHECKING:
@@ -113,5 +113,7 @@ def ask_in_stall(connection: Connection, now: float, grace: float) -> None:
         "asking for it again (%d of %d in this stall)", connection.name, now - since,
         asks.in_stall, STALL_ASKS,
     )  # fmt: skip
-    with stall_kept(link):
-        connection.writer.send_many([oi.stream(ids)], prefix=stream_zeros(ids))
+    # the same stream asked for again: its bytes, not a new Stream (148) to the writer, whose
+    # effect would start the link's stream afresh (the silence, the grace's measure, from
+    # now, and the watchdog's trip ended: a second trip, a second stall)
+    connection.writer.send_many((), prefix=stream_zeros(ids) + oi.stream(ids).data)
