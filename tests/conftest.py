@@ -3,7 +3,8 @@
 ``roomba-bt sim`` in a child process; ``child``, any child process, killed if a test leaves it
 running; ``silent_port``, a pty nobody answers on;
 ``usage_error``, a command line that must be refused; ``until``, a wait for another thread;
-``record_held``, a file held by a child as a run holds its ``--record``.
+``record_held``, a file held by a child as a run holds its ``--record``; with
+``ROOMBA_BT_TEST_CPU=FILE`` set, each test's CPU seconds in ``FILE`` (:class:`CpuTimes`).
 
 Outside CI a missing optional package (the peer clients pycreate2 and PyRoombaAdapter,
 jsonschema, the example wall-follow plugin) skips its tests with the install hint; in CI
@@ -128,6 +129,63 @@ def pytest_make_collect_report(collector: pytest.Collector) -> pytest.CollectRep
     if in_ci():
         return pytest.CollectReport(collector.nodeid, "failed", fails_in_ci(reason), None)
     return pytest.CollectReport(collector.nodeid, "skipped", (str(collector.path), 0, reason), None)
+
+
+#: the variable that turns :class:`CpuTimes` on: the file it writes
+CPU_TIMES_VARIABLE = "ROOMBA_BT_TEST_CPU"
+
+
+class CpuTimes:
+    """Each test's CPU seconds, a line ``SECONDS<TAB>NODEID`` appended to a file as the test
+    ends: the suite's budget is on a shared 2-core machine, where a test's wall time is
+    mostly the other jobs' (``--durations`` ranks by it), and its CPU time is what it costs
+    the machine. Counted: user and system time of this process and of the children it has
+    waited for (``os.times()``), over setup, call and teardown; a module-scoped fixture's
+    cost falls on the test that set it up and the one that tore it down. A child's time is
+    counted when it is reaped: the session's browser (tests/monitor), torn down after the
+    last test, is a line of its own, :data:`SESSION_END`, not that test's. Registered only
+    where the variable is set: off, not a hook runs."""
+
+    #: the line for the teardown after the last test (every scope's fixtures still set up)
+    SESSION_END = "(the session's end: fixtures of every scope torn down, their children reaped)"
+
+    def __init__(self, path: Path) -> None:
+        self.out = path.open("a", encoding="utf-8")
+        self.session_end = 0.0
+
+    @staticmethod
+    def spent() -> float:
+        times = os.times()
+        return times.user + times.system + times.children_user + times.children_system
+
+    @pytest.hookimpl(hookwrapper=True)
+    def pytest_runtest_protocol(self, item: pytest.Item) -> Generator[None, object, None]:
+        start = self.spent()
+        yield
+        self.write(self.spent() - start - self.session_end, item.nodeid)
+        if self.session_end:
+            self.write(self.session_end, self.SESSION_END)
+
+    @pytest.hookimpl(hookwrapper=True)
+    def pytest_runtest_teardown(
+        self, item: pytest.Item, nextitem: pytest.Item | None
+    ) -> Generator[None, object, None]:
+        start = self.spent()
+        yield
+        if nextitem is None:
+            self.session_end = self.spent() - start
+
+    def write(self, seconds: float, what: str) -> None:
+        self.out.write(f"{seconds:.3f}\t{what}\n")
+        self.out.flush()
+
+    def pytest_unconfigure(self) -> None:
+        self.out.close()
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    if path := os.environ.get(CPU_TIMES_VARIABLE):
+        config.pluginmanager.register(CpuTimes(Path(path)), "roomba-bt-cpu-times")
 
 
 @pytest.fixture
