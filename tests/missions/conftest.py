@@ -11,10 +11,11 @@ MISSIONS = ROOT / "missions"
 SHIPPED = sorted(MISSIONS.glob("*.yaml"))
 
 
-@pytest.fixture
-def cliff_world(tmp_path: Path) -> str:
-    """A room whose far half is a drop: driving straight ahead from the start finds it."""
-    path = tmp_path / "cliff.yaml"
+@pytest.fixture(scope="module")
+def cliff_world(tmp_path_factory: pytest.TempPathFactory) -> str:
+    """A room whose far half is a drop: driving straight ahead from the start finds it. One
+    file a module (no test writes to it), so a module's shared run can be in it too."""
+    path = tmp_path_factory.mktemp("cliff") / "cliff.yaml"
     path.write_text(
         "name: cliff-room\n"
         "rooms: [[[0, 0], [4, 0], [4, 2], [0, 2]]]\n"

@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import logging
 import re
+from collections.abc import Iterable
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
@@ -110,16 +112,52 @@ def _modes(sim: Simulator) -> list[str]:
     return [e.detail for e in sim.events if e.kind == "mode"]
 
 
+class _Said(logging.Handler):
+    """Every message of the loggers it is added to, at INFO and above."""
+
+    def __init__(self) -> None:
+        super().__init__(logging.INFO)
+        self.messages: list[str] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.messages.append(record.getMessage())
+
+
+@dataclass(frozen=True)
+class _Cleaned:
+    sim: Simulator
+    summary: RunSummary
+    compiled: CompiledMission
+    said: list[str]  # the mission's log messages (INFO and above)
+
+
+@pytest.fixture(scope="module")
+def cleaned_at_a_cliff(cliff_world: str) -> _Cleaned:
+    """clean.yaml for 4 minutes in the cliff room, not going home: one run (230 s of mission
+    time, most of a second of CPU) for the tests that read its modes, its floor, its tree
+    and its words. They only read it."""
+    logger = logging.getLogger("roomba_bt.mission")
+    said, level = _Said(), logger.level
+    logger.setLevel(logging.INFO)
+    logger.addHandler(said)
+    try:
+        sim, summary, compiled = _clean_on_the_simulator(
+            cliff_world, None, {"duration": "4min", "go_home": "false"}, 400.0
+        )
+    finally:
+        logger.removeHandler(said)
+        logger.setLevel(level)
+    return _Cleaned(sim, summary, compiled, said.messages)
+
+
 def test_clean_runs_in_safe_mode_and_cleans_on_after_the_firmware_stops_at_a_cliff(
-    cliff_world: str,
+    cleaned_at_a_cliff: _Cleaned,
 ) -> None:
     """The firmware's own cliff stop stays on (Safe): at the drop it stops the robot and
     falls to Passive (the brushes stop too); the mission enters Safe again, turns the motors
     on and ``cover`` goes on with the map it had, to the whole floor before the drop. In
     Full (until session 25) a host that died mid-lane left it driving down the stairs."""
-    sim, summary, _ = _clean_on_the_simulator(
-        cliff_world, None, {"duration": "4min", "go_home": "false"}, 400.0
-    )
+    sim, summary = cleaned_at_a_cliff.sim, cleaned_at_a_cliff.summary
     assert summary.outcome.value == "success", summary.reason
     modes = _modes(sim)
     assert not any("Full" in m for m in modes), modes
@@ -172,25 +210,24 @@ def test_clean_meets_a_drop_it_knows_far_less_often(tmp_path: Path) -> None:
 
 
 def test_clean_says_why_it_stopped_and_a_retried_cover_shows_no_old_failure(
-    cliff_world: str, caplog: pytest.LogCaptureFixture
+    cleaned_at_a_cliff: _Cleaned,
 ) -> None:
     """At the end of a clean with cliff stops, the tree showed ``cover [✓] -- the robot left
     Safe/Full mode (cliff) and was not brought back within 1 s``, an earlier attempt's
     failure, and nothing said why cleaning stopped."""
-    caplog.set_level(logging.INFO, logger="roomba_bt.mission")
-    sim, summary, compiled = _clean_on_the_simulator(
-        cliff_world, None, {"duration": "4min", "go_home": "false"}, 400.0
-    )
+    sim, summary, compiled = (
+        cleaned_at_a_cliff.sim, cleaned_at_a_cliff.summary, cleaned_at_a_cliff.compiled
+    )  # fmt: skip
     assert summary.outcome.value == "success", summary.reason
     assert any("safety: cliff" in m for m in _modes(sim))  # cover failed and was retried
     cover = next(n for n in compiled.root.iterate() if n.name.startswith("cover("))
     assert cover.status is Status.SUCCESS
     assert re.fullmatch(r"floor done: \d+\.\d m² swept by its own map", cover.feedback_message)
-    assert _stopped(caplog) == ["cleaning stopped: the floor is done"]
+    assert _stopped(cleaned_at_a_cliff.said) == ["cleaning stopped: the floor is done"]
 
 
-def _stopped(caplog: pytest.LogCaptureFixture) -> list[str]:
-    return [r.getMessage() for r in caplog.records if "cleaning stopped" in r.getMessage()]
+def _stopped(messages: Iterable[str]) -> list[str]:
+    return [message for message in messages if "cleaning stopped" in message]
 
 
 def test_clean_says_its_time_is_up_or_its_battery_low(
@@ -198,7 +235,7 @@ def test_clean_says_its_time_is_up_or_its_battery_low(
 ) -> None:
     caplog.set_level(logging.INFO, logger="roomba_bt.mission")
     _clean_on_the_simulator("empty-room", None, {"duration": "5s", "go_home": "false"}, 30.0)
-    assert _stopped(caplog) == ["cleaning stopped: the time is up (5s)"]
+    assert _stopped(caplog.messages) == ["cleaning stopped: the time is up (5s)"]
     caplog.clear()
     low = tmp_path / "low.yaml"
     low.write_text(
@@ -206,7 +243,7 @@ def test_clean_says_its_time_is_up_or_its_battery_low(
         "robot: {start: {at: [1.5, 1.2], heading: 0}, battery: 0.1}\n"
     )
     _clean_on_the_simulator(str(low), None, {}, 2.0)
-    assert _stopped(caplog) == ["cleaning stopped: the battery is below 15%"]
+    assert _stopped(caplog.messages) == ["cleaning stopped: the battery is below 15%"]
 
 
 class _HostDiesLink(SimLink):
