@@ -143,6 +143,12 @@ class Buttons(_ByteView):
 
 Buttons._decode_every_byte(range(8))
 BUTTON_NAMES: tuple[str, ...] = Buttons.flag_names()
+#: how long a press shows in packet 18: Buttons (165) releases them after 1/6 s (the opcode
+#: table's doc); the simulator holds a world's ``press`` event as long
+PRESS_SECONDS = 1.0 / 6.0
+#: the buttons that, pressed in Passive, start the robot's own cycle (Clean, Spot, Seek
+#: Dock), as their commands do ("the same as pressing Roomba's Clean button", docs/simulator.md)
+CYCLE_BUTTONS: tuple[str, ...] = ("clean", "spot", "dock")
 
 
 @dataclass(frozen=True, slots=True)

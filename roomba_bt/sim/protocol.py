@@ -23,7 +23,7 @@ import math
 import random
 from collections.abc import Callable
 
-from roomba_bt.oi.bits import WHEEL_DROP_BITS
+from roomba_bt.oi.bits import PRESS_SECONDS, WHEEL_DROP_BITS, button_bits
 from roomba_bt.oi.encode import BAUD_RATES
 from roomba_bt.oi.identify import parse_firmware
 from roomba_bt.oi.modes import OIMode
@@ -407,12 +407,23 @@ class OIProtocol(StreamOutput):
         self._held_until = min(self._held_until, self._song_until)
 
     def _on_buttons(self, args: bytes) -> None:
+        self._press(args[0])
+
+    def press_button(self, name: str) -> None:
+        """A finger on the button ``name`` (packet 18's), as a world's ``press`` event puts
+        it: pressed as Buttons (165) presses it. A button this robot's top lacks (the clock
+        panel's on a Create 2) is said as event ``refused`` and presses nothing."""
+        if name not in self.profile.buttons:
+            self._event("refused", f"press {name}: the {self.profile.title} has no {name} button")
+            return
+        self._press(button_bits(name))
+
+    def _press(self, pushed: int) -> None:
         """The buttons pushed: packet 18 for 1/6 s (both specs), and in Passive a Clean,
         Spot or Dock button starts its cycle as its command does (:data:`BUTTON_CYCLES`);
         in Safe and Full the robot "does not respond to button presses" (both specs)."""
-        pushed = args[0]
         self.values[18] = pushed
-        self._buttons_until = self.time + 1.0 / 6.0
+        self._buttons_until = self.time + PRESS_SECONDS
         self._held_until = min(self._held_until, self._buttons_until)
         if self.mode is OIMode.PASSIVE:
             cycle = next((name for bit, name in BUTTON_CYCLES if pushed & bit), None)

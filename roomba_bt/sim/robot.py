@@ -313,6 +313,8 @@ class Simulator(OIProtocol):
         """The timeline's events due now: marked, and their effects on the body."""
         for kind, detail in timeline.advance(self.time):
             self._event(kind, detail)
+        for button in timeline.pressed:
+            self.press_button(button)
         effects = timeline.effects()
         if effects != (self._event_bump, self.lifted, self.dock_powered):
             self._event_bump, self.lifted, self.dock_powered = effects

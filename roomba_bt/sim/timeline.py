@@ -2,7 +2,9 @@
 
 ``bump`` holds the bumper pressed on one side or both, ``lift`` picks the robot up (both wheel
 drops, every cliff, no traction), ``charger_step`` takes the dock's power away; each for its
-``duration`` seconds. Every start and end is marked in the run's events.
+``duration`` seconds; ``press`` presses a button for the spec's 1/6 s (the simulator presses
+it as Buttons 165 does: :meth:`~roomba_bt.sim.protocol.OIProtocol.press_button`). Every
+start and end is marked in the run's events.
 
 A component with its own state (the events still to come and those under way): the simulator
 asks it only while it has any, and drops it after the last one ends.
@@ -20,6 +22,9 @@ class Timeline:
     def __init__(self, events: tuple[TimelineEvent, ...]) -> None:
         self.pending: list[TimelineEvent] = list(events)
         self.active: list[TimelineEvent] = []
+        #: the buttons whose ``press`` the last :meth:`advance` started, for the simulator
+        #: to press (a press is a moment, not a state :meth:`effects` holds)
+        self.pressed: list[str] = []
 
     @property
     def over(self) -> bool:
@@ -29,11 +34,16 @@ class Timeline:
         """Start the events due by ``now``, end those past their duration; returns the
         (kind, detail) marks of what started and ended."""
         marks: list[tuple[str, str]] = []
+        self.pressed = []
         pending = self.pending
         while pending and pending[0].time <= now:
             event = pending.pop(0)
             self.active.append(event)
-            marks.append((event.kind, f"{event.side} start"))
+            if event.kind == "press":
+                self.pressed.append(event.button)
+                marks.append((event.kind, f"{event.button} start"))
+            else:
+                marks.append((event.kind, f"{event.side} start"))
         still = []
         for event in self.active:
             if now < event.time + event.duration:

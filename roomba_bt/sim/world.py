@@ -42,6 +42,7 @@ import yaml
 
 from roomba_bt import yamlsource
 from roomba_bt.errors import RoombaBtError
+from roomba_bt.oi.bits import BUTTON_NAMES, PRESS_SECONDS
 from roomba_bt.oi.frames import SLOT_SECONDS
 from roomba_bt.oi.profiles import BODY_RADIUS_MM
 from roomba_bt.sim.geometry import (
@@ -70,7 +71,7 @@ WORLDS_DIR = pathlib.Path(__file__).resolve().parent / "worlds"
 #: finds before the shipped ones (:func:`world_folders`).
 WORLDS_VARIABLE = "ROOMBA_BT_WORLDS"
 
-EVENT_KINDS = ("bump", "lift", "charger_step")
+EVENT_KINDS = ("bump", "lift", "charger_step", "press")
 SIDES = ("left", "right", "both")
 DOCK_FAMILIES = ("drive-on", "discovery")
 
@@ -203,12 +204,14 @@ class TimelineEvent:
 
     ``bump``: the bumper is pressed (``side``); ``lift``: the robot is picked up (both wheel
     drops, cliffs, no traction); ``charger_step``: someone steps on the charger, which loses
-    power for the duration."""
+    power for the duration; ``press``: a finger presses ``button`` (packet 18's name) for the
+    spec's 1/6 s, which in Passive starts the robot's own cycle for Clean, Spot or Dock."""
 
     time: float
     kind: str
     duration: float
     side: str = "both"
+    button: str = ""
 
 
 #: How far from the docked pose a start region may reach (m): the evaluation's ``--within``
@@ -708,16 +711,39 @@ def _start_region(c: _Checker, value: object, path: PathKey) -> StartRegion | No
 
 
 def _event(c: _Checker, value: object, path: PathKey) -> TimelineEvent | None:
-    spec = c.record(value, path, ("at", "kind", "side", "duration"), ("at", "kind"))
+    spec = c.record(value, path, ("at", "kind", "side", "duration", "button"), ("at", "kind"))
     if spec is None:
         return None
     at = c.number(spec["at"], (*path, "at"), 0, 1e6, "s")
     kind = c.choice(spec["kind"], (*path, "kind"), EVENT_KINDS)
+    if kind == "press":
+        return _press(c, spec, path, at)
+    if "button" in spec:
+        c.error((*path, "button"), "a button for a " + str(kind), "button only with kind: press")
     duration = c.number(spec.get("duration", 0.5), (*path, "duration"), SLOT_SECONDS, 1e6, "s")
     side = c.choice(spec.get("side", "both"), (*path, "side"), SIDES)
     if at is None or kind is None or duration is None or side is None:
         return None
     return TimelineEvent(at, kind, duration, side)
+
+
+def _press(
+    c: _Checker, spec: dict[str, Any], path: PathKey, at: float | None
+) -> TimelineEvent | None:
+    """A ``press`` event: a button and a time. It lasts the spec's 1/6 s, as a press by
+    Buttons (165) does, so a ``duration`` (or a bumper ``side``) is refused rather than
+    ignored: the robot's packet 18 shows a press that long whatever the finger did."""
+    only = "at, kind: press, button (a press lasts the spec's 1/6 s)"
+    for key in ("duration", "side"):
+        if key in spec:
+            c.error((*path, key), f"a {key} for a press", only)
+    if "button" not in spec:
+        c.error(path, "no 'button'", f"kind: press with a button: {', '.join(BUTTON_NAMES)}")
+        return None
+    button = c.choice(spec["button"], (*path, "button"), BUTTON_NAMES)
+    if at is None or button is None:
+        return None
+    return TimelineEvent(at, "press", PRESS_SECONDS, button=button)
 
 
 def _areas(c: _Checker, value: object) -> tuple[AreaSpec, ...]:

@@ -4,6 +4,8 @@ SUCCESS on every frame the button is held (a maker's one press beeped 11 times).
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from roomba_bt.oi.encode import decode_command
 from roomba_bt.oi.profiles import ROOMBA600
 from roomba_bt.runtime.summary import Outcome
@@ -77,3 +79,34 @@ def test_button_pressed_is_one_success_a_press_where_button_is_one_a_frame(
 ) -> None:
     assert _plays(run_mission, "button_pressed") == 1
     assert _plays(run_mission, "button") > 5
+
+
+#: the empty room, with a finger on Clean at 2 s (a world's ``press`` event)
+PRESSED_AT_2S = """
+name: pressed
+rooms: [{rect: [0, 0, 4, 4]}]
+robot: {start: {at: [2, 2], heading: 0}}
+events: [{at: 2, kind: press, button: clean}]
+"""
+
+
+def test_a_worlds_press_ends_a_wait_for_the_button_in_safe(
+    run_mission: RunMission, tmp_path: Path
+) -> None:
+    """A simulated run scripts a press in its world: the mission waiting in Safe for
+    ``button_pressed: clean`` goes on at the press, and the robot starts no cycle of its
+    own (Safe does not answer the buttons)."""
+    world = tmp_path / "pressed.yaml"
+    world.write_text(PRESSED_AT_2S)
+    mission = """
+mission: wait-for-clean
+tree:
+  sequence:
+    - mode: safe
+    - wait: 10s
+      until: {button_pressed: clean}
+"""
+    run = run_mission(mission, world=str(world), timeout=20.0)
+    assert run.summary.outcome is Outcome.SUCCESS, run.summary
+    assert 2.0 <= run.simulator.time < 2.2  # ended at the press, not at the 10 s wait's end
+    assert not [e for e in run.simulator.events if e.kind == "builtin"]

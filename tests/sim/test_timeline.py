@@ -4,6 +4,7 @@ overlap, and the simulator lets go of the timeline once the last event has ended
 from __future__ import annotations
 
 from roomba_bt.oi import commands as C
+from roomba_bt.oi.modes import OIMode
 from roomba_bt.sim.timeline import Timeline
 from roomba_bt.sim.world import TimelineEvent
 
@@ -45,3 +46,32 @@ def test_the_simulator_marks_every_start_and_end_and_then_drops_the_timeline() -
     assert marks == [("bump", "right start"), ("bump", "right"), ("bump", "end")]
     assert host.sim._timeline is None
     assert host.sim.values[7] == 0
+
+
+PRESS_CLEAN = BOX + "events: [{at: 0.3, kind: press, button: clean}]\n"
+
+
+def test_a_press_in_passive_starts_the_robots_own_cycle_as_a_finger_does() -> None:
+    host = make(PRESS_CLEAN, mode="passive")
+    host.run(0.45)
+    assert host.sim.values[18] == 1  # packet 18: Clean, held for the spec's 1/6 s
+    assert host.sim.builtin is not None and host.sim.builtin.name == "clean"
+    host.run(0.2)
+    assert host.sim.values[18] == 0
+    marks = [(e.kind, e.detail) for e in host.sim.events if e.kind in ("press", "builtin")]
+    assert marks == [("press", "clean start"), ("builtin", "clean"), ("press", "end")]
+
+
+def test_a_press_in_safe_shows_in_packet_18_only() -> None:
+    host = make(PRESS_CLEAN)
+    host.run(0.45)
+    assert host.sim.values[18] == 1
+    assert host.sim.builtin is None and host.sim.mode is OIMode.SAFE
+
+
+def test_a_press_of_a_button_the_robot_lacks_presses_nothing_and_is_said() -> None:
+    host = make(BOX + "events: [{at: 0.3, kind: press, button: minute}]\n")
+    host.run(0.45)
+    assert host.sim.values[18] == 0
+    refused = [e.detail for e in host.sim.events if e.kind == "refused"]
+    assert refused == ["press minute: the iRobot Create 2 has no minute button"]

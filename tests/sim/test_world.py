@@ -115,8 +115,32 @@ def test_bad_event_kind_suggests_the_right_one() -> None:
     [problem] = problems(
         "rooms: [[[0, 0], [3, 0], [3, 3], [0, 3]]]\nevents: [{at: 1, kind: lifted}]\n"
     )
-    assert "events[0].kind: found 'lifted'; allowed: one of bump, lift, charger_step" in problem
+    assert (
+        "events[0].kind: found 'lifted'; allowed: one of bump, lift, charger_step, press" in problem
+    )
     assert "did you mean 'lift'?" in problem
+
+
+def test_a_press_event_takes_a_button_and_lasts_the_specs_press() -> None:
+    room = "rooms: [[[0, 0], [3, 0], [3, 3], [0, 3]]]\n"
+    [event] = parse_world(room + "events: [{at: 1, kind: press, button: clean}]\n").events
+    assert (event.time, event.kind, event.button, event.duration) == (1.0, "press", "clean", 1 / 6)
+    found = problems(
+        room + "events:\n"
+        "  - {at: 1, kind: press, button: clen}\n"
+        "  - {at: 2, kind: press, duration: 2}\n"
+        "  - {at: 3, kind: bump, button: clean}\n"
+    )
+    assert found == [
+        "w.yaml:3:34: events[0].button: found 'clen'; allowed: one of clean, spot, dock, "
+        "minute, hour, day, schedule, clock (did you mean 'clean'?)",
+        "w.yaml:4:5: events[1]: found no 'button'; allowed: kind: press with a button: clean, "
+        "spot, dock, minute, hour, day, schedule, clock",
+        "w.yaml:4:36: events[1].duration: found a duration for a press; allowed: at, kind: "
+        "press, button (a press lasts the spec's 1/6 s)",
+        "w.yaml:5:33: events[2].button: found a button for a bump; allowed: button only with "
+        "kind: press",
+    ]
 
 
 def test_duplicate_keys_and_yaml_syntax_errors_have_positions() -> None:
