@@ -52,7 +52,7 @@ from roomba_bt.oi.frames import (
 from roomba_bt.oi.ir import REMOTE_BUTTONS, IRCharacter
 from roomba_bt.oi.modes import OI_MODE_PACKET, OIMode
 from roomba_bt.oi.packets import PACKETS, PACKETS_BY_NAME, PacketSpec, packet_ids
-from roomba_bt.oi.profiles import PROFILES
+from roomba_bt.oi.profiles import PROFILES, RobotProfile
 from roomba_bt.robot.interface import Odometry, Snapshot
 from roomba_bt.yamlsource import quoted
 
@@ -429,8 +429,22 @@ class Overcurrent(_Flag):
     choice, flags = "motor", _OVERCURRENT
 
 
+def _button_on_top(params: Mapping[str, Any], profile: RobotProfile) -> str | None:
+    """Why the chosen robot's packet 18 never shows the button named, or None: its top
+    lacks it (the clock panel's ``minute`` on a Create 2). The bit is in the packet all the
+    same, always 0, so the condition runs and never holds: a warning, not an error."""
+    name = params.get("name")
+    if not isinstance(name, str) or name == "any":
+        return None
+    missing = profile.buttons_missing((name,))
+    if missing is None:
+        return None
+    return f"{missing}; packet 18's {name} bit reads 0 there for ever: this never holds"
+
+
 @declare("button", kind="condition", params=(Param("name", enum(*_BUTTON), default="any"),),
-         reads=packet_ids("buttons"), primary="name")  # fmt: skip
+         reads=packet_ids("buttons"), primary="name", needs=_button_on_top,
+         needs_only_warns=True)  # fmt: skip
 class Button(_Flag):
     """A button on the robot is pressed (packet 18): SUCCESS on every frame it is held, so
     a press of a finger (several frames; the firmware's Buttons (165) 1/6 s) is seen again
@@ -441,7 +455,8 @@ class Button(_Flag):
 
 @declare("button_pressed", kind="condition",
          params=(Param("name", enum(*_BUTTON), default="any"),),
-         reads=packet_ids("buttons"), primary="name")  # fmt: skip
+         reads=packet_ids("buttons"), primary="name", needs=_button_on_top,
+         needs_only_warns=True)  # fmt: skip
 class ButtonPressed(_Flag):
     """A press of a button on the robot begins (packet 18): SUCCESS on the one frame it is
     down after a frame it was up, FAILURE while it is held and after. One press, one

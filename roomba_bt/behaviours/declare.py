@@ -351,6 +351,13 @@ class Declaration:
     #: (``display`` the digit display, ``press: minute`` a clock panel's button): why the
     #: chosen profile lacks it, or None. Validate says it at the leaf as an error
     needs: Callable[[Mapping[str, Any], RobotProfile], str | None] | None = None
+    #: whether the leaf runs all the same where ``needs`` finds the robot lacking (``button:
+    #: minute`` on a Create 2 reads a bit that is there, always 0): validate warns, not refuses
+    needs_only_warns: bool = False
+    #: what it does in Passive beyond its commands' bytes, with given parameters (``press:
+    #: clean`` starts the robot's own cleaning cycle, as a finger would), said with the fix;
+    #: None: nothing. Validate warns where the leaf may be reached in Passive
+    in_passive: Callable[[Mapping[str, Any]], str | None] | None = None
 
     @property
     def defaults(self) -> dict[str, Any]:
@@ -686,6 +693,8 @@ def declare(
     at_once: bool = False,
     may_succeed: Callable[[Mapping[str, Any]], bool] | None = None,
     needs: Callable[[Mapping[str, Any], RobotProfile], str | None] | None = None,
+    needs_only_warns: bool = False,
+    in_passive: Callable[[Mapping[str, Any]], str | None] | None = None,
 ) -> Callable[[B], B]:
     """Class decorator: attach the :class:`Declaration` as ``cls.declaration``; the doc is
     the class docstring's first paragraph. ``leads_to`` defaults to what the opcode table
@@ -698,7 +707,10 @@ def declare(
     ``writes_keys`` / ``reads_keys`` name the ``STR`` parameters that name blackboard keys
     it writes / reads, alone or with the type of the value (``writes_keys={"key": INT}``):
     validate holds a typed one to the key's declaration in the mission. ``needs`` says,
-    of the parameters and the chosen robot profile, why that robot cannot do it, or None."""
+    of the parameters and the chosen robot profile, why that robot cannot do it, or None
+    (a warning, not an error, with ``needs_only_warns=True``). ``in_passive`` says, of the
+    parameters, what the leaf does in Passive that the mission may not mean, or None:
+    validate warns where it may be reached in Passive."""
     after = mode_after_sending(sends) if leads_to is None else leads_to
     writes, written_types = key_roles(writes_keys)
     reads_named, read_types = key_roles(reads_keys)
@@ -710,7 +722,7 @@ def declare(
             constraints=constraints, writes_keys=writes, reads_keys=reads_named,
             key_types=(*written_types, *read_types), halts_only=halts_only,
             compares=compares, sends_by=sends_by, at_once=at_once, may_succeed=may_succeed,
-            needs=needs,
+            needs=needs, needs_only_warns=needs_only_warns, in_passive=in_passive,
         )  # fmt: skip
         return cls
 

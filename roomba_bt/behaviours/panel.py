@@ -22,6 +22,7 @@ from roomba_bt.behaviours.units import STR, UnitError, ValueType, closest, descr
 from roomba_bt.oi import commands as oi
 from roomba_bt.oi.bits import (
     BUTTON_NAMES,
+    CYCLE_BUTTONS,
     DIGIT_ASCII,
     SCHEDULING_LED_NAMES,
     WEEKDAYS,
@@ -100,6 +101,20 @@ def _needs_buttons(params: Mapping[str, Any], profile: RobotProfile) -> str | No
     return profile.buttons_missing(params.get("buttons", ()))
 
 
+def _cycle_in_passive(params: Mapping[str, Any]) -> str | None:
+    """What a press of Clean, Spot or Dock does in Passive: the robot's own cycle starts
+    (both specs: in Passive the robot answers its buttons as a finger pressed them), so the
+    robot drives off, vacuuming, while the mission goes on."""
+    starting = [name for name in params.get("buttons", ()) if name in CYCLE_BUTTONS]
+    if not starting:
+        return None
+    return (
+        f"{' and '.join(starting)} pressed in Passive starts the robot's own cycle (it drives "
+        "off as after a finger on the button): put mode: safe before it to show the press in "
+        "packet 18 only, as Safe and Full do not answer the buttons"
+    )
+
+
 @declare(
     "display",
     kind="action",
@@ -157,6 +172,7 @@ class ScheduleLeds(Action):
     sends=opcodes("buttons"),
     primary="buttons",
     needs=_needs_buttons,
+    in_passive=_cycle_in_passive,
 )  # fmt: skip
 class Press(Action):
     """Press the robot's buttons named (Buttons 165), as a finger would for 1/6 s."""

@@ -45,7 +45,12 @@
   profile has but whose firmware does not honour it (Digit LEDs Raw 163: the 600 spec says
   it does not work on current Create 2 and Roomba 500/600 firmware) is a warning: it is
   still sent (:func:`profile_commands`). A leaf that needs what the model lacks (``display``
-  on a Create 2, which has no display: the declaration's ``needs``) is an error too.
+  on a Create 2, which has no display: the declaration's ``needs``) is an error too; one whose
+  leaf runs all the same (``button: minute`` on a Create 2 reads a bit always 0 there:
+  ``needs_only_warns``) a warning.
+* **What Passive adds (a warning).** A leaf that does more in Passive than its bytes say
+  (``press: clean`` starts the robot's own cleaning cycle: the declaration's ``in_passive``)
+  reachable in Passive by the mode pass (:func:`in_passive`).
 """
 
 from __future__ import annotations
@@ -748,9 +753,29 @@ def profile_commands(
             if warning is not None:
                 warnings.append(node.loc.at(f"{decl.name} sends {warning}").as_warning())
         lacking = None if decl.needs is None else decl.needs(node.params, profile)
-        if lacking is not None:
+        if lacking is None:
+            continue
+        if decl.needs_only_warns:
+            warnings.append(node.loc.at(f"{decl.name}: {lacking}").as_warning())
+        else:
             errors.append(node.loc.at(f"{decl.name}: {lacking} {choose}"))
     return errors, warnings
+
+
+def in_passive(root: Node, modes: ModeCheck) -> list[Diagnostic]:
+    """Warnings: each leaf that does more in Passive than its commands say (its
+    declaration's ``in_passive``: ``press: clean`` starts the robot's own cleaning cycle,
+    as a finger on its Clean button does) and that the mode pass found reachable in
+    Passive. A warning: a mission may mean the cycle; most mean the press in packet 18."""
+    warnings: list[Diagnostic] = []
+    for node, entry in modes.entered.values():
+        decl = node.decl
+        if decl is None or decl.in_passive is None or OIMode.PASSIVE not in entry:
+            continue
+        said = decl.in_passive(node.params)
+        if said is not None:
+            warnings.append(node.loc.at(f"{decl.name}: {said}").as_warning())
+    return warnings
 
 
 def sensor_ranges(root: Node, profile: RobotProfile) -> list[Diagnostic]:

@@ -31,6 +31,7 @@ from roomba_bt.mission.checks import (
     ModeCheck,
     blind_in_full,
     check_stream,
+    in_passive,
     key_ranges,
     parallel_wheels,
     profile_commands,
@@ -225,6 +226,7 @@ def _tree_warnings(
     the commands the profile's firmware ignores (:func:`profile_commands`)."""
     return (
         *blind_in_full(tree, modes),
+        *in_passive(tree, modes),
         *parallel_wheels(tree),
         *restarted_runs(tree),
         *ignored,

@@ -84,3 +84,50 @@ def test_every_profile_keeps_the_163_warning_and_names_the_display_behaviour() -
         text = profile.command_warning(163)
         assert text is not None and "mission behaviour display" in text, profile.name
     assert "has no digit display at all" in str(CREATE2.command_warning(163))
+
+
+def _validated(tmp_path: Path, text: str) -> list[tuple[str, int, int, str]]:
+    """What validate says of the mission ``text`` for a Create 2: severity, place, message."""
+    path = tmp_path / "buttons.yaml"
+    path.write_text(text)
+    return [(d.severity, d.line, d.column, d.message)
+            for d in validate_files([path], profile=CREATE2)]  # fmt: skip
+
+
+def test_a_cycle_button_pressed_in_passive_is_warned_with_the_fix(tmp_path: Path) -> None:
+    """In Passive a press of Clean, Spot or Dock starts the robot's own cycle (the simulator
+    does it, as the robot does): a warning where the mode pass finds the press reachable in
+    Passive, with ``mode: safe`` as the fix; after ``mode: safe``, none."""
+    found = _validated(
+        tmp_path,
+        "mission: p\ntree:\n  sequence:\n    - press: [spot, dock]\n"
+        "    - mode: safe\n    - press: clean\n",
+    )
+    [(severity, line, column, message)] = found  # the press in Safe: nothing said
+    assert (severity, line, column) == ("warning", 4, 7)
+    assert message.startswith(
+        "press: spot and dock pressed in Passive starts the robot's own cycle"
+    )
+    assert message.endswith(
+        "put mode: safe before it to show the press in packet 18 only, as Safe and Full do "
+        "not answer the buttons"
+    )
+
+
+@pytest.mark.parametrize("condition", ["button", "button_pressed"])
+@pytest.mark.parametrize("name", ["minute", "hour", "day", "schedule", "clock"])
+def test_a_clock_panel_button_read_on_a_create2_is_warned_at_its_name(
+    tmp_path: Path, condition: str, name: str
+) -> None:
+    """The Create 2's top has Clean, Spot and Dock only: packet 18's other bits read 0 for
+    ever there, so a condition on one never holds. A warning (the bit exists, and the same
+    mission may be meant for a 500 or 600), at the condition's file:line:col."""
+    text = f"mission: b\ntree:\n  sequence:\n    - wait: 1s\n      until: {{{condition}: {name}}}\n"
+    [(severity, line, column, message)] = _validated(tmp_path, text)
+    assert (severity, line, column) == ("warning", 5, 15)
+    assert message.startswith(f"{condition}: the iRobot Create 2 (create2) has no {name} button")
+    assert message.endswith(f"packet 18's {name} bit reads 0 there for ever: this never holds")
+    path = tmp_path / "buttons.yaml"
+    assert validate_files([path], profile=ROOMBA600) == []
+    path.write_text(text.replace(name, "dock"))
+    assert validate_files([path], profile=CREATE2) == []
