@@ -14,6 +14,7 @@ import logging
 import math
 import re
 from collections.abc import Mapping
+from dataclasses import replace
 from typing import Any
 
 from py_trees.common import Status
@@ -35,6 +36,7 @@ from roomba_bt.behaviours.units import (
     RADIUS_WORDS,
     SPEED,
     STR,
+    BareNumber,
     ItemErrors,
     UnitError,
     ValueType,
@@ -43,7 +45,7 @@ from roomba_bt.behaviours.units import (
     parse_quantity,
 )
 from roomba_bt.oi import commands as oi
-from roomba_bt.oi.bits import LED_NAMES, led_bits, motor_bits
+from roomba_bt.oi.bits import LED_NAMES, LED_SPEC_NAMES, led_bits, motor_bits
 from roomba_bt.oi.encode import NOTE_NAMES, Note, Radius, note_name, note_number
 from roomba_bt.oi.frames import CHARGING_SOURCES_PACKETS, ENCODER_PACKETS, SLOT_SECONDS
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
@@ -60,6 +62,7 @@ from roomba_bt.oi.opcodes import (
 from roomba_bt.oi.packets import PACKETS_BY_NAME
 from roomba_bt.printable import ANY_CONTROL, duration_said, escaped
 from roomba_bt.robot.hazards import sets_going
+from roomba_bt.yamlsource import quoted
 
 log = logging.getLogger("roomba_bt.mission")
 
@@ -646,15 +649,45 @@ class Vacuum(Action):
         return _OK
 
 
+def _intensity_byte(percent: float) -> int:
+    """The power LED's intensity byte (LEDs 139: 0 off .. 255 full) of a percent."""
+    return round(percent * 255 / 100)
+
+
+def _led_intensity(value: object) -> float:
+    """A percent, as every ``power_intensity`` is written. A bare number in a byte's range
+    is most likely the spec's byte (0..255) written as it reads: the hint says the percent
+    that sends it, where the usual hint (``write the unit: 128%``) led out of range."""
+    try:
+        return float(PERCENT.parse(value))
+    except BareNumber as exc:
+        number = exc.value
+        said = f"expected a percent 0..100% (0% off, 100% full), got {quoted(value)}"
+        if not (number == int(number) and 0 <= number <= 255):
+            raise UnitError(said) from None
+        percent = round(number * 100 / 255)
+        sent = _intensity_byte(percent)
+        byte = f"{number:g} is {percent}%" + (f" (sent as {sent})" if sent != number else "")
+        percent_too = f"; or {number:g}% if that was meant" if number <= 100 else ""
+        raise UnitError(
+            f"{said}: the spec's byte 0..255 is written as a percent here: {byte}{percent_too}"
+        ) from None
+
+
+LED_INTENSITY = replace(PERCENT, parse=_led_intensity)
+
+
 @declare(
     "leds",
     kind="action",
     at_once=True,
     params=(
-        *(Param(name, BOOL, default=False) for name in LED_NAMES),
+        *(Param(name, BOOL, default=False, spec_name=LED_SPEC_NAMES.get(name, ""))
+          for name in LED_NAMES),
         Param("power_color", INT, default=0, minimum=_LED_COLOR.minimum,
               maximum=_LED_COLOR.maximum, doc="0 green .. 255 red"),
-        Param("power_intensity", PERCENT, default="0%", minimum=0, maximum=100),
+        Param("power_intensity", LED_INTENSITY, default="0%", minimum=0, maximum=100,
+              doc="0% off .. 100% full (the spec's byte 0..255)"),
     ),
     sends=opcodes("leds"),
 )  # fmt: skip
@@ -663,7 +696,7 @@ class Leds(Action):
 
     def update(self) -> Status:
         names = [n for n in LED_NAMES if self.value(n)]
-        intensity = round(float(self.value("power_intensity")) * 255 / 100)
+        intensity = _intensity_byte(float(self.value("power_intensity")))
         self.send(oi.leds(led_bits(*names), int(self.value("power_color")), intensity))
         return _OK
 

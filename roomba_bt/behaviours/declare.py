@@ -213,6 +213,9 @@ class Param:
     #: it. A minimum set for another reason says nothing of standing still: a ``dock_search``
     #: speed of 10 mm/s said so, where 20 mm/s, refused alike, said nothing.
     minimum_why: str = ""
+    #: the spec's name for it where other than ``name`` (the dock LED is the 600 spec's
+    #: "Home"): a mission that writes the spec's word is pointed to ``name``
+    spec_name: str = ""
 
     def check_range(self, value: Any) -> str | None:
         """An error message if ``value`` is outside the range, else None."""

@@ -31,6 +31,17 @@ from roomba_bt.mission.values import (
 )
 
 
+def _unknown_parameter(decl: Declaration, pname: str) -> str:
+    """``unknown parameter 'home'``, with the parameter the spec calls so where one does
+    (``(did you mean 'dock'? the spec's Home LED)``), else the closest name."""
+    pnames = [p.name for p in decl.params]
+    for param in decl.params:
+        if param.spec_name and param.spec_name.lower() == pname.lower():
+            hint = f" (did you mean {param.name!r}? {param.spec_name} is the spec's name for it)"
+            return unknown("parameter", pname, pnames, hint=hint)
+    return unknown("parameter", pname, pnames, decl.name)
+
+
 def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node:
     """The leaf, or with every problem recorded in ``ctx`` an ``unbuilt`` node naming
     ``decl`` (:class:`~roomba_bt.mission.plan.Node`)."""
@@ -43,8 +54,7 @@ def parse_leaf(ctx: Context, decl: Declaration, at: Written) -> Node:
     for pname, pnode, pkloc, pvloc in given:
         param = decl.param(pname)
         if param is None:
-            pnames = [p.name for p in decl.params]
-            ctx.error(pkloc.at(f"{decl.name}: " + unknown("parameter", pname, pnames, decl.name)))
+            ctx.error(pkloc.at(f"{decl.name}: " + _unknown_parameter(decl, pname)))
             ok = False
             continue
         options[f"loc:{pname}"] = pvloc

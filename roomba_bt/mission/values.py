@@ -179,13 +179,17 @@ def _stray_opening(text: str) -> int | None:
     return None
 
 
-def unknown(what: str, name: str, known: list[str], owner: str | None = None) -> str:
+def unknown(
+    what: str, name: str, known: list[str], owner: str | None = None, hint: str | None = None
+) -> str:
     """``unknown parameter 'velocty' (did you mean 'velocity'?); known: ...``; ``owner``:
     the word whose option or parameter it is, for the hints of
     :func:`~roomba_bt.mission.foreign.suggestion` (a modifier inside a value, BT.CPP's
-    ``num_attempts``), which names of the mission's own (keys, fields) never get."""
+    ``num_attempts``), which names of the mission's own (keys, fields) never get; ``hint``:
+    the caller's own, where it knows better than a spelling's likeness."""
     listing = ", ".join(known) if known else "none"
-    hint = closest(name, known) if owner is None else suggestion(name, known, owner)
+    if hint is None:
+        hint = closest(name, known) if owner is None else suggestion(name, known, owner)
     return f"unknown {what} {name!r}{hint}; known: {listing}"
 
 

@@ -239,6 +239,9 @@ def _flags(command: str, argument: str, names: Iterable[str], known: tuple[str, 
 
 
 LED_NAMES: tuple[str, ...] = ("debris", "spot", "dock", "check_robot")
+#: the LEDs a spec names otherwise: the 600 spec's "Home" LED is the dock LED ("Home and
+#: Spot use green LEDs"), so a mission writing ``home`` is pointed to ``dock``
+LED_SPEC_NAMES: dict[str, str] = {"dock": "Home"}
 
 
 def led_bits(*leds: str) -> int:
