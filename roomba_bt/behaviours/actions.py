@@ -732,6 +732,7 @@ class Song(Action):
 #: in the frame after the one the Play went out with; the rest is a real link's slack
 SONG_START_S = 0.25
 _SONG_PLAYING = PACKETS_BY_NAME["song_playing"].id
+_SONG_NUMBER = PACKETS_BY_NAME["song_number"].id
 
 
 @declare(
@@ -743,8 +744,12 @@ _SONG_PLAYING = PACKETS_BY_NAME["song_playing"].id
 )
 class Play(Action):
     """Play a defined song (Play 141 ``[141][number]``): SUCCESS once the robot shows it
-    playing (packet 37, when the mission reads ``song_playing``: FAILURE if no frame shows
-    it within 0.25 s), else on the next frame.
+    playing (packet 37, when the mission reads ``song_playing``, and packet 36 showing its
+    slot, when the mission reads ``song_number``: FAILURE if no frame shows it within
+    0.25 s), else on the next frame.
+
+    Packet 37 alone cannot tell this song from one still playing, which the robot goes on
+    with, ignoring the Play: a mission that reads ``song_number`` too has that told apart.
 
     So ``play`` then ``wait ... until: {sensor: song_playing == 0}`` waits for the song's
     end. Until session 32 ``play`` succeeded on the tick it was sent: the wait read that
@@ -761,15 +766,25 @@ class Play(Action):
             self._sent_at = snap.time
             return _RUN
         frame = snap.frame
-        if _SONG_PLAYING not in frame or frame.song_playing:
+        number = int(self.value("number"))
+        playing = _SONG_PLAYING not in frame or frame.song_playing
+        other = None if _SONG_NUMBER not in frame else frame.song_number
+        if playing and other in (None, number):
             return _OK
         if snap.time - self._sent_at < SONG_START_S:
             return _RUN
-        self.feedback_message = (
-            f"song {self.value('number')} did not start: packet 37 showed no song playing "
-            f"{duration_said(SONG_START_S)} after Play (a slot the robot holds no song in, or "
-            "a song still playing: the robot ignores Play then)"
-        )
+        after = f"{duration_said(SONG_START_S)} after Play"
+        if playing:
+            self.feedback_message = (
+                f"song {number} did not start: packet 36 showed song {other} {after} (a song "
+                "still playing: the robot ignores Play then; wait until song_playing == 0 first)"
+            )
+        else:
+            self.feedback_message = (
+                f"song {number} did not start: packet 37 showed no song playing {after} (a "
+                "slot the robot holds no song in, or a song still playing: the robot ignores "
+                "Play then)"
+            )
         return _FAIL
 
 

@@ -394,6 +394,23 @@ def test_play_fails_when_the_song_never_shows(robot: StubRobot, make: Make) -> N
     assert play.feedback_message.startswith("song 3 did not start: packet 37 showed no song")
 
 
+def test_play_with_packet_36_waits_for_its_own_slot_and_fails_on_another(
+    robot: StubRobot, make: Make
+) -> None:
+    """Packet 37 shows a song playing when the robot ignored the Play for one still playing:
+    with packet 36 streamed, SUCCESS only once it shows the slot played, else FAILURE, said."""
+    play = make(a.Play, number=1)
+    while tick(play) is Status.RUNNING:
+        robot.set_frame({**SAFE, 36: 0, 37: 1})  # song 0 still playing
+    assert play.status is Status.FAILURE
+    assert play.feedback_message.startswith("song 1 did not start: packet 36 showed song 0")
+    assert "wait until song_playing == 0 first" in play.feedback_message
+    play = make(a.Play, number=1)
+    assert tick(play) is Status.RUNNING
+    robot.set_frame({**SAFE, 36: 1, 37: 1})
+    assert tick(play) is Status.SUCCESS
+
+
 def test_notes_parse_names_and_durations() -> None:
     assert a.NOTES.parse(["C4 250ms", "rest 125ms", "A#4 1s"]) == ((60, 16), (0, 8), (70, 64))
     with pytest.raises(a.UnitError, match="unknown note 'H4'"):
