@@ -453,6 +453,12 @@ class Button(_Flag):
     choice, flags = "name", _BUTTON
 
 
+#: how many ticks (15 ms each) a button seen down and down again is taken for one press:
+#: 150 ms, shorter than any release and press again of a finger, and than the 1/6 s a
+#: Buttons (165) command holds one
+SAME_PRESS_TICKS = 10
+
+
 @declare("button_pressed", kind="condition",
          params=(Param("name", enum(*_BUTTON), default="any"),),
          reads=packet_ids("buttons"), primary="name", needs=_button_on_top,
@@ -461,9 +467,12 @@ class ButtonPressed(_Flag):
     """A press of a button on the robot begins (packet 18): SUCCESS on the one frame it is
     down after a frame it was up, FAILURE while it is held and after. One press, one
     SUCCESS, however long the finger stays: ``until: {button_pressed: clean}`` in a
-    ``repeat`` beeps once a press (``button`` beeps on each frame it is held). A button
-    already down the first time it is ticked (or after the tree ticked without it) counts
-    as a press beginning: the frame before is not known to it."""
+    ``repeat`` beeps once a press (``button`` beeps on each frame it is held). A button it
+    saw down at most 150 ms ago (``SAME_PRESS_TICKS``) and finds down still is the same
+    press, though the tree ticked without it between (a ``play`` before it in a ``repeat``
+    takes a frame or two: each round counted the held button again, 6 songs a press); a
+    button already down the first time it is ticked, or after a longer gap, counts as a
+    press beginning: the frames between are not known to it."""
 
     choice, flags = "name", _BUTTON
     #: its answer depends on the frame before too: not a function of this frame's packets
@@ -481,8 +490,11 @@ class ButtonPressed(_Flag):
         tick = snapshot.tick
         if tick == self._seen_tick:
             return self._answer
-        previous = snapshot.previous_tick if snapshot.previous_tick is not None else tick - 1
-        held_before = self._was_down and self._seen_tick == previous
+        held_before = (
+            self._was_down
+            and self._seen_tick is not None
+            and tick - self._seen_tick <= SAME_PRESS_TICKS
+        )
         down = bool(super().check(snapshot))
         self._seen_tick, self._was_down = tick, down
         self._answer = down and not held_before

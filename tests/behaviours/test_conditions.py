@@ -215,13 +215,17 @@ def test_button_pressed_holds_on_the_frame_a_press_begins_only(
 
 
 def test_button_pressed_counts_a_press_it_did_not_see_begin(robot: StubRobot, make: Make) -> None:
-    """The frame before is not known to a condition the tree ticked without: a button
-    found down counts as a press beginning, once."""
+    """A button found down the first time, or after a gap longer than a press, counts as a
+    press beginning, once; found down again after a tick or two the tree ticked without it
+    (a ``play`` before it in a ``repeat``), it is the same press."""
     pressed = make(c.ButtonPressed, name="any")
     robot.set_frame({18: 0b100})
     assert holds(pressed)
     robot.set_frame({18: 0b100})  # a tick of the tree without it
     robot.set_frame({18: 0b100})
+    assert not holds(pressed)
+    for _ in range(c.SAME_PRESS_TICKS + 1):  # longer than any one press
+        robot.set_frame({18: 0b100})
     assert holds(pressed)
     robot.set_frame({18: 0b100})
     assert not holds(pressed)
