@@ -428,7 +428,9 @@ class Drive(Action):
     Sends Drive (137) ``[137][vel hi][vel lo][rad hi][rad lo]`` or Drive Direct (145)
     ``[145][right hi][right lo][left hi][left lo]`` when it starts (and again if the robot fell
     back to Passive and came back), then a halt when it ends. FAILURE if the robot stays out
-    of Safe/Full for more than a second while it drives (see ``Action.stranded``).
+    of Safe/Full for more than a second while it drives (see ``Action.stranded``), and on
+    its second tick out of them when it would start there (the robot fell to Passive
+    before it: see ``Action.wait_for_driving_mode``).
     """
 
     moves = True
@@ -484,17 +486,11 @@ class Drive(Action):
             return _OK
         robot = self.robot
         mode = (robot.snapshot if robot is not None else self.snapshot).mode
-        driving = mode in DRIVING_MODES
-        if self._started_motion:
-            if driving:  # what stranded() does in a driving mode, without its call
-                self._out_of_driving_since = None
-            else:
-                stranded = self.stranded()
-                if stranded is not None:
-                    self._started_motion = False  # the firmware stopped the wheels already
-                    self.feedback_message = stranded
-                    return _FAIL
-        if driving and self._last_mode not in DRIVING_MODES:
+        if mode not in DRIVING_MODES:  # the firmware stopped the wheels if it fell
+            self._last_mode = mode  # (the command is sent again once back)
+            return self.wait_for_driving_mode()
+        self._out_of_driving_since = None  # what stranded() does in Safe/Full, without its call
+        if self._last_mode not in DRIVING_MODES:
             self.send(self.command())
             self._started_motion = True
         self._last_mode = mode
@@ -629,8 +625,7 @@ class Motors(Action):
 
     def update(self) -> Status:
         bits = motor_bits(**{name: bool(self.value(name)) for name in _MOTORS})
-        self.send(oi.motors(bits))
-        return _OK
+        return self.send_going(oi.motors(bits))
 
 
 @declare(
@@ -645,8 +640,7 @@ class Vacuum(Action):
     """Vacuum alone on or off (Motors 138, bit 1)."""
 
     def update(self) -> Status:
-        self.send(oi.motors(motor_bits(vacuum=bool(self.value("on")))))
-        return _OK
+        return self.send_going(oi.motors(motor_bits(vacuum=bool(self.value("on")))))
 
 
 def _intensity_byte(percent: float) -> int:

@@ -21,12 +21,17 @@ from typing import TYPE_CHECKING, Any
 import py_trees
 
 from roomba_bt.behaviours.blackboard import BlackboardRef, KeyRange, UnwrittenKey, read_key
-from roomba_bt.behaviours.driving import cycle_may_run, left_driving_message
+from roomba_bt.behaviours.driving import (
+    cycle_may_run,
+    left_driving_message,
+    needs_mode_message,
+)
 from roomba_bt.behaviours.lean import DirectLeaf, InvalidStatus, behaviour_tick, checked_status
 from roomba_bt.oi.encode import Command, halt, motors_off, turns_wheels
-from roomba_bt.oi.modes import DRIVING_MODES
+from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import COMMANDS, Effect
-from roomba_bt.robot.interface import RobotHandle, Snapshot
+from roomba_bt.robot.hazards import sets_going
+from roomba_bt.robot.interface import Outbox, RobotHandle, Snapshot
 from roomba_bt.yamlsource import quoted
 
 if TYPE_CHECKING:
@@ -257,15 +262,55 @@ class Action(RobotBehaviour):
         return left_driving_message(snap.last_fallback, waited)
 
     def wait_for_driving_mode(self, grace: float | None = None) -> py_trees.common.Status:
-        """Out of Safe/Full, where the mode model would refuse a drive command: RUNNING
-        while it waits for them, FAILURE once :meth:`stranded` (``grace``) after it began
-        to move."""
-        stranded = self.stranded(grace) if self._started_motion else None
-        if stranded is not None:
+        """Out of Safe/Full, where the mode guard would refuse a drive command: an action
+        that set the wheels turning waits for them (RUNNING: the robot stopped when it
+        fell, and something may bring it back), FAILURE once :meth:`stranded` (``grace``);
+        one whose wheels were not turning (it starts there, or fell while it stood) fails
+        on its second tick out of them, saying the mode, the fall and the fix
+        (:meth:`refused_motion`). It waited for ever, sending nothing: nothing but the tree
+        can bring Safe back, and the tree was waiting on it. The first tick is the mode
+        command's that a ``parallel`` may queue beside it in the same tick (in either order):
+        written after that tick, it has the robot in Safe by the next."""
+        if self._started_motion:
+            stranded = self.stranded(grace)
+            if stranded is None:
+                return _RUNNING
             self._started_motion = False
             self.feedback_message = stranded
             return _FAILURE
-        return _RUNNING
+        if self._out_of_driving_since is None:
+            self._out_of_driving_since = self.snapshot.time
+            return _RUNNING
+        self.feedback_message = self.refused_motion()
+        return _FAILURE
+
+    def refused_motion(self, command: Command | None = None) -> str:
+        """Why this action may not set the robot going now, the robot being out of the
+        modes its command (``command``; None: a wheel command) takes: the failure message
+        of :func:`~.driving.needs_mode_message`."""
+        needs = DRIVING_MODES if command is None else command.spec.modes
+        return needs_mode_message(self.declaration.name, needs, self.snapshot)
+
+    def send_going(self, command: Command) -> py_trees.common.Status:
+        """An at-once action's tick: ``command`` queued, SUCCESS; or FAILURE, nothing queued,
+        when it would set something going (a brush, the vacuum, a wheel:
+        :func:`~roomba_bt.robot.hazards.sets_going`) where the guard will refuse it: the
+        robot in a mode that does not take it, and no mode command that does queued before
+        it in this tick (a ``parallel``'s ``mode: safe`` beside it). Its message says the
+        mode, the fall and the fix (:meth:`refused_motion`). The guard refused it after the
+        tick, and the leaf had said SUCCESS for a vacuum that never ran. A halt or motors
+        off is queued as before: out of Safe/Full nothing of them runs."""
+        takes = command.spec.modes
+        robot = self.robot
+        if (
+            self.snapshot.mode not in takes
+            and sets_going(command)
+            and (robot is None or queued_mode(robot.outbox) not in takes)
+        ):
+            self.feedback_message = self.refused_motion(command)
+            return _FAILURE
+        self.send(command)
+        return _SUCCESS
 
     def terminate(self, new_status: py_trees.common.Status) -> None:
         """However the action ends (success, failure, or preempted: INVALID), wheels it
@@ -338,6 +383,15 @@ class Action(RobotBehaviour):
         Action.terminate(self, new_status)
         if driving or cycle:
             _said_left_going(self, after_super, driving)
+
+
+def queued_mode(outbox: Outbox) -> OIMode | None:
+    """The mode the last mode command queued in ``outbox`` this tick leads to (the flush
+    writes each before what was queued after it), or None."""
+    for command in reversed(outbox.pending()):
+        if command.spec.leads_to is not None:
+            return command.spec.leads_to
+    return None
 
 
 #: the classes whose terminate left the wheels turning (or a cycle running) already said

@@ -704,8 +704,10 @@ def declare(
     says of the commands in ``sends`` (:func:`mode_after_sending`): Spot (134) leads to
     Passive, so ``spot`` need not say it. ``halts_only=True`` says that its wheel commands
     only stop the wheels (``stop``): the Full-mode warning passes it by. ``at_once=True``
-    says that it returns SUCCESS on the tick it starts, every time (the static checks rely
-    on it: a test ticks every built-in that says so). ``may_succeed`` says, of the
+    says that it returns SUCCESS on the tick it starts, every time in the modes its commands
+    are taken in (the static checks rely on it: a test ticks every built-in that says so;
+    the robot's own fall to Passive is beyond them, and ``motors`` there fails at once:
+    ``Action.send_going``). ``may_succeed`` says, of the
     parameters, whether it can succeed by itself at all (a ``drive`` with no end cannot).
     ``writes_keys`` / ``reads_keys`` name the ``STR`` parameters that name blackboard keys
     it writes / reads, alone or with the type of the value (``writes_keys={"key": INT}``):

@@ -41,7 +41,13 @@ from roomba_bt.oi.frames import (
 )
 from roomba_bt.oi.modes import DRIVING_MODES, OIMode
 from roomba_bt.oi.opcodes import COMMANDS_BY_NAME
-from roomba_bt.robot.interface import ModeChange, RobotHandle, docked_by_seek_dock, on_home_base
+from roomba_bt.robot.interface import (
+    ModeChange,
+    RobotHandle,
+    Snapshot,
+    docked_by_seek_dock,
+    on_home_base,
+)
 
 if TYPE_CHECKING:  # the leaves' base imports this module: their class for annotations only
     from roomba_bt.behaviours.base import Action
@@ -51,6 +57,7 @@ __all__ = [
     "WHEEL",
     "cycle_may_run",
     "left_driving_message",
+    "needs_mode_message",
     "on_home_base",
     "BACK_GIVE_UP_S",
     "BACK_MM_S",
@@ -100,6 +107,30 @@ def left_driving_message(change: ModeChange | None, waited: str = "") -> str:
     dock), what to do about it; the bare "(charger)" left an owner guessing."""
     cause = f" ({change.cause})" if change is not None else ""
     message = f"the robot left Safe/Full mode{cause}{waited}"
+    if change is not None and change.refused_on_charger:
+        message += f"; {CHARGER_ADVICE}"
+    return message
+
+
+def needs_mode_message(what: str, needs: frozenset[OIMode], snap: Snapshot) -> str:
+    """The failure message of a leaf (``what``: its behaviour's name) that would send a command
+    only ``needs`` take while the robot, as ``snap`` has it, is in another mode: the mode,
+    since when and why when its fall by itself put it there (the run places the fall in
+    mission time), and the fix; on a powered charger that refused Safe, what to do there. A
+    ``turn`` that started after a wheel drop had dropped the robot to Passive sent nothing
+    and waited for ever, its run ending at ``--timeout`` with "ran out in turn", no word of
+    Passive (maker finding 2, session 32): failing lets a ``retry`` or a fallback put the
+    robot back in Safe and go on."""
+    change = snap.last_fallback
+    why = ""
+    if change is not None and change.current is snap.mode:  # the fall put it there
+        since = change.mission_time
+        why = f"{'' if since is None else f' since t={since:.3f}'} ({change.cause})"
+    wanted = " or ".join(mode.label for mode in sorted(needs))
+    message = (
+        f"the robot is in {snap.mode.label}{why}: {what} needs {wanted}; put `mode: safe` "
+        "before it, e.g. in a retry"
+    )
     if change is not None and change.refused_on_charger:
         message += f"; {CHARGER_ADVICE}"
     return message
@@ -186,7 +217,8 @@ def near_ahead(frame: SensorFrame) -> bool:
 def held(action: Action, grace: float | None = None) -> Status | None:
     """Why a driving leaf cannot drive this tick: a wheel drop fails it; out of Safe/Full it
     waits, and fails once stranded there after it began to move (after ``grace`` s, the
-    action's :attr:`~.Action.PASSIVE_GRACE_S` unless given). None: it may drive (back in
+    action's :attr:`~.Action.PASSIVE_GRACE_S` unless given), or at once when its wheels were
+    not turning (:meth:`~.Action.wait_for_driving_mode`). None: it may drive (back in
     Safe/Full, the wait is over: the next time out of them has its own grace)."""
     snap = action.snapshot
     if snap.frame.any_wheel_drop:

@@ -193,6 +193,10 @@ class ModeChange:
     #: when the robot entered ``previous`` (link clock: the command that put it there), if
     #: known; tells a fall right at the Safe command from one met later
     entered: float | None = None
+    #: when the run first saw it, in mission time (``Snapshot.time``; the runtime places it
+    #: so, the tick it shows): what a leaf's message says, "in Passive since t=1.005" (the
+    #: link's clock, ``time``, is no time a mission counts). None: not seen in a run
+    mission_time: float | None = None
 
     @property
     def fall(self) -> bool:

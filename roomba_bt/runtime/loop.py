@@ -31,6 +31,7 @@ import logging
 import time
 import traceback
 from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import replace
 from functools import partial
 from typing import Any, NoReturn, Protocol, cast
 
@@ -602,7 +603,7 @@ class MissionRunner(BaseHandle):
         if fallback is self._fallback_seen:
             frame = self._hazards.frame(frame)
         else:
-            frame = self._fallback_changed(frame, fallback, mission_time)
+            frame, fallback = self._fallback_changed(frame, fallback, mission_time)
         # tuple.__new__: the named tuple's own __new__ is a Python call that binds each
         # field (with keywords, several times the cost of the rest of this method)
         snapshot: Snapshot = _new_tuple(Snapshot, (
@@ -629,17 +630,22 @@ class MissionRunner(BaseHandle):
 
     def _fallback_changed(
         self, frame: SensorFrame, fallback: ModeChange | None, mission_time: float
-    ) -> SensorFrame:
-        """A fall to Passive by itself new since the last frame (or its end): the hazards see
+    ) -> tuple[SensorFrame, ModeChange | None]:
+        """A fall to Passive by itself new since the last frame (or its end): placed in
+        mission time (:attr:`ModeChange.mission_time`, which the leaves' messages say; the
+        mode model keeps the placed change, so the next frame finds it seen), the hazards see
         the frame afresh, the commands of :data:`FALL_STOPS` no longer stand (a stall's
         ride-through and the monitor's resume do not send them again), and the first fall
-        is noted for ``--strict`` (:func:`noted_fall`)."""
-        self._fallback_seen = fallback
+        is noted for ``--strict`` (:func:`noted_fall`). Returns the frame and the change."""
         if fallback is not None:
             self._outbox.robot_stopped(FALL_STOPS)
+            if fallback.mission_time is None and self._modes.last_fallback is fallback:
+                fallback = replace(fallback, mission_time=mission_time)
+                self._modes.last_fallback = fallback
+        self._fallback_seen = fallback
         frame = self._hazards.frame(frame, True)
         noted_fall(self.summary, fallback, mission_time, self.mission.root)
-        return frame
+        return frame, fallback
 
     def _stale(self, batch: Sequence[SensorFrame]) -> None:
         """The frames of a batch before its newest: dropped (counted), their hazards seen."""

@@ -449,7 +449,12 @@ class DockingAction(Action):
         return self.snapshot.mode not in DRIVING_MODES
 
     def fallback_message(self) -> str:
-        return left_driving_message(self.snapshot.last_fallback)
+        """Why the stage fails out of Safe/Full: the robot left them while its wheels
+        turned; else it would start (or go on from a stop) where the guard refuses its
+        wheel commands, said with the mode, the fall and the fix (:meth:`refused_motion`)."""
+        if self._started_motion:
+            return left_driving_message(self.snapshot.last_fallback)
+        return self.refused_motion()
 
     def heading(self) -> float:
         return self.snapshot.odometry.theta_rad

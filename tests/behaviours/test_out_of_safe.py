@@ -1,0 +1,181 @@
+"""Every wheel and motor action that would start out of Safe and Full, where the mode guard
+refuses its commands, fails at once, saying the mode, the robot's fall and the fix.
+
+A ``turn`` started after a wheel drop had dropped the robot to Passive sent nothing and
+waited for ever (maker finding 2, session 32): its run ended at ``--timeout`` with "ran out
+in turn", no word of Passive, and no ``retry`` or fallback of the tree could take it up.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import pytest
+from py_trees.common import Status
+
+from roomba_bt.behaviours import builtin_registry
+from roomba_bt.behaviours.actions import Vacuum
+from roomba_bt.behaviours.declare import Declaration, RobotBehaviour
+from roomba_bt.behaviours.driving import needs_mode_message
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.modes import DRIVING_MODES, OIMode
+from roomba_bt.oi.opcodes import COMMANDS
+from roomba_bt.robot.interface import ModeChange
+from roomba_bt.robot.testing import StubRobot
+
+Make = Callable[..., RobotBehaviour]
+
+#: what each needs to set something going (``motors`` with none given switches all off)
+_PARAMS: dict[str, dict[str, Any]] = {
+    "turn": {"angle": 90.0},
+    "vacuum": {"on": True},
+    "motors": {"main_brush": True},
+    "drive": {"velocity": 100.0},
+}
+#: ``home_by_map`` succeeds at once with no ``cover`` map to go by, sending nothing
+_NOT_STARTED_ALONE = {"home_by_map"}
+
+
+def tick(behaviour: RobotBehaviour) -> Status:
+    behaviour.tick_once()
+    return behaviour.status
+
+
+def _sets_going_in_safe_only(declaration: Declaration) -> bool:
+    """A leaf that sends a wheel or motor command only Safe and Full take, not as a halt."""
+    channels = {
+        COMMANDS[opcode].channel
+        for opcode in declaration.sends
+        if COMMANDS[opcode].modes == DRIVING_MODES
+    }
+    return bool(channels & {"wheels", "motors"}) and not declaration.halts_only
+
+
+MOVERS = sorted(
+    d.name
+    for d in builtin_registry()
+    if _sets_going_in_safe_only(d) and d.name not in _NOT_STARTED_ALONE
+)
+
+
+def test_the_movers_are_the_wheel_and_motor_leaves() -> None:
+    assert set(MOVERS) >= {
+        "drive", "turn", "spiral", "lanes", "cover", "wall_follow", "dock_search",
+        "dock_approach", "dock_drive_on", "motors", "vacuum",
+    }  # fmt: skip
+
+
+def _frame_of(declaration: Declaration, mode: OIMode) -> dict[int, int]:
+    """A frame with every packet the leaf reads, zero, and packet 35 saying ``mode``."""
+    return {**dict.fromkeys(declaration.packets(_PARAMS.get(declaration.name, {})), 0), 35: mode}
+
+
+@pytest.mark.parametrize("name", MOVERS)
+def test_a_mover_started_in_passive_fails_within_a_tick_sending_nothing(
+    make: Make, name: str
+) -> None:
+    """At once (an at-once leaf, a docking stage), or on its second tick: the first is the
+    one a ``parallel``'s ``mode: safe`` beside it may be queued in."""
+    declaration = builtin_registry().get(name)
+    assert declaration is not None
+    robot = StubRobot(mode=OIMode.PASSIVE)
+    behaviour = make(declaration.cls, robot=robot, **_PARAMS.get(name, {}))
+    for _ in range(2):
+        robot.set_frame(_frame_of(declaration, OIMode.PASSIVE))
+        behaviour.tick_once()
+        assert robot.flush() == []  # nothing the guard would refuse
+        if behaviour.status is Status.FAILURE:
+            break
+    assert behaviour.status is Status.FAILURE
+    message = behaviour.feedback_message
+    assert message.endswith(
+        f"the robot is in Passive: {name} needs Safe or Full; put `mode: safe` before it, "
+        "e.g. in a retry"
+    ), message
+
+
+@pytest.mark.parametrize("name", ["drive", "turn", "spiral", "wall_follow"])
+def test_a_mode_command_queued_beside_a_mover_in_its_first_tick_lets_it_drive(
+    make: Make, name: str
+) -> None:
+    """``parallel: [drive, mode: safe]`` built in Python (the validator refuses it in a
+    mission): the Safe queued in the drive's first tick is written after it, and the drive
+    goes on in Safe on the next."""
+    declaration = builtin_registry().get(name)
+    assert declaration is not None
+    robot = StubRobot(mode=OIMode.PASSIVE)
+    behaviour = make(declaration.cls, robot=robot, **_PARAMS.get(name, {}))
+    robot.set_frame(_frame_of(declaration, OIMode.PASSIVE))
+    assert tick(behaviour) is Status.RUNNING
+    robot.outbox.send(oi.safe())
+    assert [c.opcode for c in robot.flush()] == [131]
+    robot.set_frame(_frame_of(declaration, OIMode.SAFE))
+    assert tick(behaviour) is Status.RUNNING
+    assert [c.spec.channel for c in robot.flush()] == ["wheels"]
+
+
+def test_motors_after_a_queued_safe_are_queued(make: Make) -> None:
+    """The same for an at-once leaf, which must end in its tick: a Safe queued before its
+    Motors in this tick is written before it, so the guard takes it."""
+    robot = StubRobot(mode=OIMode.PASSIVE)
+    robot.set_frame({35: OIMode.PASSIVE})
+    robot.outbox.send(oi.safe())
+    assert tick(make(Vacuum, robot=robot, on=True)) is Status.SUCCESS
+    assert [list(c.data) for c in robot.flush()] == [[131], [138, 2]]
+
+
+@pytest.mark.parametrize("name", MOVERS)
+def test_a_mover_in_safe_does_not_fail_on_its_first_tick(make: Make, name: str) -> None:
+    declaration = builtin_registry().get(name)
+    assert declaration is not None
+    robot = StubRobot(mode=OIMode.SAFE)
+    robot.set_frame(_frame_of(declaration, OIMode.SAFE))
+    behaviour = make(declaration.cls, robot=robot, **_PARAMS.get(name, {}))
+    assert tick(behaviour) is not Status.FAILURE, behaviour.feedback_message
+
+
+def test_motors_off_in_passive_is_queued_as_before(make: Make) -> None:
+    """Switching the motors off sets nothing going: out of Safe/Full nothing of them runs,
+    and the leaf succeeds (its command is the guard's to refuse, as before)."""
+    robot = StubRobot(mode=OIMode.PASSIVE)
+    robot.set_frame({35: OIMode.PASSIVE})
+    assert tick(make(Vacuum, robot=robot, on=False)) is Status.SUCCESS
+    assert [list(c.data) for c in robot.flush()] == [[138, 0]]
+
+
+def _fell(cause: str, *, seen_at: float | None, entered: float | None = None) -> ModeChange:
+    return ModeChange(
+        OIMode.SAFE, OIMode.PASSIVE, 10, 12.0, cause, entered=entered, mission_time=seen_at
+    )
+
+
+@pytest.mark.parametrize(
+    ("change", "said"),
+    [
+        (_fell("wheel drop", seen_at=3.015), "the robot is in Passive since t=3.015 (wheel drop)"),
+        (_fell("cliff", seen_at=None), "the robot is in Passive (cliff)"),  # not in a run
+    ],
+)
+def test_the_message_says_the_fall_that_put_the_robot_there(change: ModeChange, said: str) -> None:
+    snap = StubRobot(mode=OIMode.PASSIVE).snapshot._replace(last_fallback=change)
+    assert needs_mode_message("turn", DRIVING_MODES, snap) == (
+        f"{said}: turn needs Safe or Full; put `mode: safe` before it, e.g. in a retry"
+    )
+
+
+def test_a_fall_into_another_mode_than_the_robot_s_is_not_its_cause() -> None:
+    """The last fall was to Passive, but the robot is in Off now (a Stop since): the fall
+    is not why."""
+    snap = StubRobot(mode=OIMode.OFF).snapshot._replace(last_fallback=_fell("cliff", seen_at=1.0))
+    assert needs_mode_message("drive", DRIVING_MODES, snap).startswith(
+        "the robot is in Off: drive needs Safe or Full"
+    )
+
+
+def test_on_a_charger_that_refused_safe_the_message_says_how_to_start_off_it() -> None:
+    change = _fell("charger", seen_at=0.2, entered=11.95)  # 50 ms after Safe
+    snap = StubRobot(mode=OIMode.PASSIVE).snapshot._replace(last_fallback=change)
+    message = needs_mode_message("drive", DRIVING_MODES, snap)
+    assert "(charger): drive needs Safe or Full" in message
+    assert "undock" in message

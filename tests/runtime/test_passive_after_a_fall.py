@@ -1,0 +1,111 @@
+"""A wheel or motor leaf that starts after the robot fell to Passive by itself fails in the
+tick it starts, its reason the mode, when the run saw the fall, its cause and the fix.
+
+Picked up in Safe, the robot falls to Passive (wheel drop; the spec's, and the simulator's).
+A ``turn`` that started afterwards sent nothing and stayed RUNNING for ever: the run ended
+at ``--timeout`` with "ran out in turn" (maker finding 2, session 32).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.bits import motor_bits
+from roomba_bt.runtime.loop import MissionRunner
+from roomba_bt.runtime.summary import Outcome
+
+from .simrun import LEDGE, RunMission
+
+#: picked up (both wheels) at 1 s for half a second
+LIFTED = """\
+name: lifted
+rooms: [{rect: [0, 0, 4, 4]}]
+robot: {start: {at: [2, 2], heading: 0}}
+events: [{at: 1, kind: lift, side: both, duration: 0.5}]
+"""
+
+LIFT_THEN_TURN = """\
+mission: lift then turn
+tree:
+  sequence: [{mode: safe}, {wait: 3s}, {turn: 90deg}]
+"""
+
+FIX = "turn needs Safe or Full; put `mode: safe` before it, e.g. in a retry"
+
+
+def test_a_turn_started_in_passive_after_a_wheel_drop_fails_at_once(
+    run_mission: RunMission, tmp_path: Path
+) -> None:
+    (tmp_path / "lifted.yaml").write_text(LIFTED)
+    seen: list[tuple[float, float | None]] = []
+
+    def observer(runner: MissionRunner) -> None:
+        change = runner.snapshot.last_fallback
+        seen.append((runner.snapshot.time, None if change is None else change.mission_time))
+
+    run = run_mission(
+        LIFT_THEN_TURN, world=str(tmp_path / "lifted.yaml"), timeout=30.0, observer=observer
+    )
+    summary = run.summary
+    assert summary.outcome is Outcome.FAILURE, summary.reason
+    # placed in mission time, on the tick that first showed it
+    fell_at = next(placed for _, placed in seen if placed is not None)
+    assert fell_at == next(t for t, placed in seen if placed is not None)
+    assert 0.9 <= fell_at < 1.1  # mission time begins after the start-up
+    assert summary.reason == (
+        f"turn(90deg): the robot is in Passive since t={fell_at:.3f} (wheel drop and cliff): {FIX}"
+    )
+    assert 3.0 <= summary.mission_time_s < 3.05  # the turn's first tick, not the timeout
+    assert oi.spin(100, clockwise=False).data not in run.link.written
+    assert summary.refused_commands == 0
+
+
+def test_a_retry_with_safe_first_takes_the_robot_back_and_turns(
+    run_mission: RunMission, tmp_path: Path
+) -> None:
+    """The fix the message names: the turn in a retry, Safe again before it: the turn
+    fails in Passive, Safe is entered and the attempt fails, the next attempt turns."""
+    (tmp_path / "lifted.yaml").write_text(LIFTED)
+    mission = """\
+mission: lift then turn, again
+tree:
+  sequence:
+    - mode: safe
+    - wait: 3s
+    - retry:
+        times: 2
+        do:
+          fallback:
+            - turn: 90deg
+            - force_failure: {mode: safe}
+"""
+    run = run_mission(mission, world=str(tmp_path / "lifted.yaml"), timeout=30.0)
+    assert run.summary.outcome is Outcome.SUCCESS, run.summary.reason
+    assert oi.spin(100, clockwise=False).data in run.link.written
+
+
+def test_the_vacuum_switched_on_after_a_fall_fails_and_nothing_is_refused(
+    run_mission: RunMission, tmp_path: Path
+) -> None:
+    """Forward over a ledge (a cliff: Passive by itself, the drive fails a second on),
+    then the vacuum on with no Safe again: the leaf fails naming the mode and the cliff;
+    the guard had refused its Motors and the leaf said SUCCESS for a vacuum that never
+    ran."""
+    (tmp_path / "ledge.yaml").write_text(LEDGE)
+    mission = """\
+mission: vacuum after the edge
+tree:
+  sequence:
+    - mode: safe
+    - fallback:
+        - drive: {velocity: 200 mm/s, distance: 2 m}
+        - vacuum: true
+"""
+    run = run_mission(mission, world=str(tmp_path / "ledge.yaml"))
+    summary = run.summary
+    assert summary.outcome is Outcome.FAILURE, summary.reason
+    assert "the robot is in Passive since t=" in summary.reason
+    assert "(cliff): vacuum needs Safe or Full; put `mode: safe` before it" in summary.reason
+    assert summary.refused_commands == 0
+    assert oi.motors(motor_bits(vacuum=True)).data not in run.link.written
