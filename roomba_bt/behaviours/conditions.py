@@ -36,7 +36,13 @@ from roomba_bt.behaviours.units import (
     enum,
     miswritten,
 )
-from roomba_bt.oi.bits import BUTTON_NAMES, LIGHT_BUMPER_NAMES, ChargingState, Stasis
+from roomba_bt.oi.bits import (
+    BUTTON_NAMES,
+    CYCLE_BUTTONS,
+    LIGHT_BUMPER_NAMES,
+    ChargingState,
+    Stasis,
+)
 from roomba_bt.oi.frames import (
     BUMPS_PACKETS,
     CHARGING_SOURCES_PACKETS,
@@ -442,13 +448,41 @@ def _button_on_top(params: Mapping[str, Any], profile: RobotProfile) -> str | No
     return f"{missing}; packet 18's {name} bit reads 0 there for ever: this never holds"
 
 
+#: what a press of each button of ``CYCLE_BUTTONS`` starts in Passive
+_CYCLE_STARTED = {"clean": "cleaning cycle", "spot": "spot cycle", "dock": "search for its dock"}
+
+
+def _waits_in_passive(params: Mapping[str, Any]) -> str | None:
+    """What waiting in Passive for a button that starts a cycle there (Clean, Spot, Dock, or
+    ``any``) meets: the press starts the robot's own cycle (the OI spec), and the run ends
+    at the press (runtime/long_run.py). A maker's "wait for the Clean button, then dance",
+    with no ``mode: safe`` first, validated clean, and the robot drove off cleaning (maker
+    finding 3, session 32)."""
+    name = params.get("name", "any")
+    if name == "any":
+        starts = "Clean, Spot and Dock buttons each start a cycle of its own"
+    elif name in CYCLE_BUTTONS:
+        starts = f"{name.capitalize()} button starts its own {_CYCLE_STARTED[name]}"
+    else:  # minute, hour...: nothing starts at them
+        return None
+    return (
+        f"in Passive the robot's {starts} (the OI spec; the run ends at the press); put "
+        "`mode: safe` first (Safe and Full start no cycle at a button)"
+    )
+
+
 @declare("button", kind="condition", params=(Param("name", enum(*_BUTTON), default="any"),),
          reads=packet_ids("buttons"), primary="name", needs=_button_on_top,
-         needs_only_warns=True)  # fmt: skip
+         needs_only_warns=True, in_passive=_waits_in_passive)  # fmt: skip
 class Button(_Flag):
     """A button on the robot is pressed (packet 18): SUCCESS on every frame it is held, so
     a press of a finger (several frames; the firmware's Buttons (165) 1/6 s) is seen again
-    and again; ``button_pressed`` is the one frame a press begins."""
+    and again; ``button_pressed`` is the one frame a press begins.
+
+    In Passive a press of Clean, Spot or Dock starts the robot's own cycle (the OI spec):
+    the validator warns of such a ``button`` reachable in Passive (the declaration's
+    ``in_passive``), and the run ends at the press
+    (``runtime.long_run.RobotCycleWatch.pressed``)."""
 
     choice, flags = "name", _BUTTON
 
@@ -462,7 +496,7 @@ SAME_PRESS_TICKS = 10
 @declare("button_pressed", kind="condition",
          params=(Param("name", enum(*_BUTTON), default="any"),),
          reads=packet_ids("buttons"), primary="name", needs=_button_on_top,
-         needs_only_warns=True)  # fmt: skip
+         needs_only_warns=True, in_passive=_waits_in_passive)  # fmt: skip
 class ButtonPressed(_Flag):
     """A press of a button on the robot begins (packet 18): SUCCESS on the one frame it is
     down after a frame it was up, FAILURE while it is held and after. One press, one

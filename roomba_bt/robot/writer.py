@@ -107,6 +107,11 @@ class CommandWriter:
         #: (:meth:`robot_stopped`). The runtime measures from there what the robot drives in
         #: Passive by itself (``runtime/ending.py``, ``RunEnding.robot_cycle``); None: nobody
         self.on_passive: Callable[[], None] | None = None
+        #: told of each command that ends cycles (Safe, Full, Stop, Reset: ``ends_cycle``)
+        #: as it is written, before :attr:`builtin_may_run` and :attr:`robot_cycle` follow
+        #: it: the runtime judges what the robot drove in Passive by itself until then
+        #: (``RobotCycleWatch.leaving_passive``); None: nobody
+        self.on_cycle_end: Callable[[Command], None] | None = None
         #: when the last command was written (link clock)
         self.last_command_at = float("-inf")
         #: when the last few commands were written (link clock): how long the robot had been
@@ -220,6 +225,8 @@ class CommandWriter:
         elif effect is Effect.SILENCES:
             self.link.streaming = False
             self.silenced_by = command
+        if spec.ends_cycle and self.on_cycle_end is not None:
+            self.on_cycle_end(command)
         self.builtin_may_run = spec.cycle_may_run_after(self.builtin_may_run)
         if spec.leads_to is not None:  # a mode command: Safe, Full, Off end any cycle
             if spec.leads_to is not OIMode.PASSIVE:

@@ -75,7 +75,7 @@ class RunEnding:
     cycles: RobotCycleWatch = field(init=False)
 
     def __post_init__(self) -> None:
-        watch = RobotCycleWatch(self.connection, self.summary, self.odometer)
+        watch = RobotCycleWatch(self.connection, self.summary, self.odometer, self.clock)
         object.__setattr__(self, "cycles", watch)  # frozen: set once, as it is made
 
     def end_tree(
@@ -109,7 +109,7 @@ class RunEnding:
         what the run does meanwhile, for a Ctrl-C then."""
         guard.stopping(SAFE_STOP_UNDER_WAY)
         if last is not None:
-            self.cycles.at_end(last.odometry, last.time)
+            self.cycles.at_end(last)
         stop_robot(self.connection, self.summary, first)
         if set_up is not None:
             guard.stopping(SHUTTING_DOWN, during(THE_SHUTDOWN))

@@ -15,18 +15,26 @@ time limit ends the run on the same tick as before.
 The same look watches for a cycle the robot started by itself (its Clean, Spot or Dock button
 pressed, its schedule) while the run has it in Passive (:class:`RobotCycleWatch`): a robot
 driving itself while its mission thinks it idle. It was found at the run's end only, hours
-later on an overnight patrol.
+later on an overnight patrol. When the stream carries the buttons (packet 18: a mission that
+reads them), the look comes every :data:`BUTTON_LOOK_S` too, for the buttons alone: a Clean,
+Spot or Dock button pressed in Passive starts the robot's own cycle (the OI spec), and the
+run ends at the press. A cycle shorter than the looks need to tell it from a hand, ended by
+the tree's own ``mode: safe`` (maker finding 3, session 32: 0.61 m driven, nothing said), is
+judged as the run's Safe, Full or Stop is written (:meth:`RobotCycleWatch.leaving_passive`).
 """
 
 from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Callable
 
 import py_trees
 
 from roomba_bt.behaviours.reasons import running_in
-from roomba_bt.oi.frames import BATTERY_PACKETS, CHARGING_SOURCES_PACKETS, SensorFrame
+from roomba_bt.oi.bits import CYCLE_BUTTONS
+from roomba_bt.oi.encode import Command
+from roomba_bt.oi.frames import BATTERY_PACKETS, CHARGING_SOURCES_PACKETS, FrameLayout, SensorFrame
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.odometry import MM_PER_COUNT, encoder_delta
 from roomba_bt.robot.connection import Connection
@@ -57,6 +65,13 @@ ROBOT_CYCLE_MM = 100.0
 #: At the run's end, the least time since the last look over which the wheels' travel says
 #: whether the robot still drives; shorter, the last look's word stands.
 END_LOOK_S = 0.3
+#: Seconds of mission time between two looks at the buttons (packet 18), when the stream
+#: carries them: the loop looks on the first tick at or after, every fourth (60 ms). The
+#: simulator shows a press for 1/6 s, as the robot does for a short push; a finger holds it
+#: longer.
+BUTTON_LOOK_S = 0.05
+#: the buttons' packet
+BUTTONS_PACKET = 18
 
 
 class MissionTimeChecks:
@@ -77,8 +92,11 @@ class MissionTimeChecks:
         #: the watch for a cycle the robot started by itself (None: not watched)
         self.cycles = cycles
         self.motion = motion
-        #: the mission time at which the loop calls :meth:`look` (its first tick: at once)
+        #: the mission time at which the loop calls :meth:`look` (its first tick: at once):
+        #: the next whole look, or sooner a look at the buttons alone
         self.next_at = 0.0
+        #: the mission time of the next whole look (the time limit's, the charge's...)
+        self._whole_at = 0.0
         #: when the last look was, and whether it found the robot on a powered charger (a
         #: second on the charger is counted from a look that found it there to the next)
         self._looked_at = 0.0
@@ -95,13 +113,25 @@ class MissionTimeChecks:
             self.summary.timed_out(limit, running_in(root))
             return False
         cycles = self.cycles
-        if cycles is not None and cycles.look(snapshot.odometry, mission_time):
-            cycles.end_run(root)
-            return False
+        frame = snapshot.frame
+        if cycles is not None:
+            pressed = cycles.pressed(frame)
+            if pressed is not None:
+                cycles.end_run(root, pressed)
+                return False
+            if mission_time < self._whole_at:  # a look at the buttons alone
+                self.next_at = min(self._whole_at, mission_time + BUTTON_LOOK_S)
+                return True
+            if cycles.look(snapshot.odometry, mission_time):
+                cycles.end_run(root)
+                return False
         if self.motion is not None and not self.motion.look(snapshot):
             return False
-        self.take(mission_time, snapshot.frame)
-        self.next_at = min(mission_time + LOOK_EVERY_S, math.inf if limit is None else limit)
+        self.take(mission_time, frame)
+        self._whole_at = min(mission_time + LOOK_EVERY_S, math.inf if limit is None else limit)
+        self.next_at = self._whole_at
+        if cycles is not None and cycles.watches_buttons(frame):
+            self.next_at = min(self.next_at, mission_time + BUTTON_LOOK_S)
         return True
 
     def take(self, mission_time: float, frame: SensorFrame) -> None:
@@ -125,28 +155,53 @@ class RobotCycleWatch:
     """A cycle the robot started by itself (its Clean, Spot or Dock button, its schedule)
     while the run has it in Passive, where nothing the run may send stops it: found by the
     once-a-second look (:meth:`look`: the robot driving in Passive, with no cycle of the
-    run's that may drive, at :data:`CYCLE_LOOKS` looks running), and at the run's end
-    (:meth:`at_end`). ``connection``'s writer is told (``CommandWriter.robot_cycle``: the
-    safe stop then sends Safe first and ends it, Start alone ending no cycle:
-    docs/protocol.md, "What ends a built-in cycle"), ``summary`` says it, a warning is
-    logged. ``odometer``: the run's, told by the writer each time the robot goes to Passive.
+    run's that may drive, at :data:`CYCLE_LOOKS` looks running), by the look at the buttons
+    when the stream carries them (:meth:`pressed`), as the run's own Safe, Full or Stop
+    ends it (:meth:`leaving_passive`), and at the run's end (:meth:`at_end`).
+    ``connection``'s writer is told (``CommandWriter.robot_cycle``: the safe stop then sends
+    Safe first and ends it, Start alone ending no cycle: docs/protocol.md, "What ends a
+    built-in cycle"), ``summary`` says it, a warning is logged. ``odometer``: the run's,
+    told by the writer each time the robot goes to Passive; ``clock``: the mission time so
+    many seconds after the last tick's frame (``RunEnding.clock``).
 
     Read off the encoders the stream always carries, at the look: what tells a cycle from a
     hand pushing the robot is that a cycle drives on. Packet 35 reads Passive in both, the
     requested velocities (39-42) are the OI's Drive commands', not a cycle's, and the wheel
     motors' currents (54, 55), which a push does not draw, are streamed only for a mission
-    that reads them (asking for them would change every run's stream request)."""
+    that reads them (asking for them would change every run's stream request); the buttons
+    (18) too, which tell it at the press."""
 
-    def __init__(self, connection: Connection, summary: RunSummary, odometer: Odometer) -> None:
+    def __init__(
+        self,
+        connection: Connection,
+        summary: RunSummary,
+        odometer: Odometer,
+        clock: Callable[[float], float | None],
+    ) -> None:
         self.connection = connection
         self.summary = summary
         self.odometer = odometer
-        connection.writer.on_passive = odometer.entered_passive
+        self.clock = clock
+        writer = connection.writer
+        writer.on_passive = self._entered_passive
+        writer.on_cycle_end = self.leaving_passive
+        #: the robot is in a Passive the run's commands or its own fall put it in (the run
+        #: starts there), until a Safe, Full or Stop of the run's is written
+        self._in_passive = True
         #: the encoder counts (left, right) and the mission time of the last look
         self._counts: tuple[int, int] | None = None
         self._looked_at = 0.0
         #: looks running that found the robot driving in Passive by itself
         self.driving_looks = 0
+        #: the last frame layout asked about and whether it carries the buttons
+        self._layout: FrameLayout | None = None
+        self._buttons_at: int | None = None
+
+    def _entered_passive(self) -> None:
+        """The writer's word that the robot went to Passive (a command, its own fall): the
+        path it drives there is measured from here."""
+        self._in_passive = True
+        self.odometer.entered_passive()
 
     def look(self, odometry: Odometry, mission_time: float) -> bool:
         """Whether the robot, as ``odometry`` has it at ``mission_time``, has driven in
@@ -160,6 +215,23 @@ class RobotCycleWatch:
         driving = self._driving(odometry, mission_time)
         self.driving_looks = self.driving_looks + 1 if driving else 0
         return self.driving_looks >= CYCLE_LOOKS
+
+    def watches_buttons(self, frame: SensorFrame) -> bool:
+        """Whether ``frame``'s stream carries the buttons (packet 18), which the loop then
+        looks at every :data:`BUTTON_LOOK_S` (:meth:`pressed`)."""
+        layout = frame.layout
+        if layout is not self._layout:
+            self._layout, self._buttons_at = layout, layout.index.get(BUTTONS_PACKET)
+        return self._buttons_at is not None
+
+    def pressed(self, frame: SensorFrame) -> str | None:
+        """The button of :data:`CYCLE_BUTTONS` that ``frame`` shows pressed while the robot
+        is in Passive with no cycle of the run's (it starts the robot's own cycle there),
+        None for none (or no buttons in the stream)."""
+        if not self.watches_buttons(frame) or not self._unbidden():
+            return None
+        buttons = frame.buttons
+        return next((name for name in CYCLE_BUTTONS if getattr(buttons, name)), None)
 
     def _driving(self, odometry: Odometry, mission_time: float) -> bool:
         """Whether the wheels travelled :data:`DRIVING_MM_S` a second or more since the last
@@ -183,61 +255,117 @@ class RobotCycleWatch:
         connection = self.connection
         return connection.mode is OIMode.PASSIVE and not connection.writer.builtin_may_run
 
-    def end_run(self, root: py_trees.behaviour.Behaviour) -> None:
-        """The look found a cycle of the robot's own: the run ends here, FAILURE (exit 1),
-        its reason saying so and what the tree was doing (``root``'s running leaf). Decided
+    def end_run(self, root: py_trees.behaviour.Behaviour, button: str | None = None) -> None:
+        """A look found a cycle of the robot's own (``button``: the one seen pressed, which
+        starts it; None: the wheels drove on): the run ends here, FAILURE (exit 1), its
+        reason saying so and what the tree was doing (``root``'s running leaf). Decided
         (session 31): the tree took the robot for idle in Passive, where the run can stop no
         cycle (drive 0 is refused there; Safe ends the cycle, but would take the robot from
         under the tree); its safe stop ends it with Safe first."""
         summary = self.summary
         summary.outcome = Outcome.FAILURE
         summary.reason = (
-            f"{self._said(self.odometer.driven_in_passive())} while the tree ran"
-            f"{running_in(root)}; the run ended there, its safe stop ending the cycle with "
+            f"{self._said(self.odometer.driven_in_passive(), button=button)} while the tree "
+            f"ran{running_in(root)}; the run ended there, its safe stop ending the cycle with "
             "Safe first (Start alone ends none)"
         )
+        if button is not None:
+            summary.reason += (
+                "; a mission that waits for a button puts `mode: safe` first (Safe and Full "
+                "start no cycle at a button)"
+            )
 
-    def at_end(self, odometry: Odometry, mission_time: float) -> None:
-        """Before the safe stop, one look more at the time since the last (if
-        :data:`END_LOOK_S` or more; else the last look's word stands): driving at
-        :data:`CYCLE_LOOKS` looks running, a cycle of the robot's own, said as :meth:`look`'s;
-        driving at the last only, with over :data:`ROBOT_CYCLE_MM` driven in Passive since
-        it went there, a cycle or a hand, which the looks had no time to tell apart: said
-        so, and the stop sends Safe first all the same (harmless off the dock; Start alone
-        would leave a cycle driving after the run). A push over before the last look is
-        neither."""
+    def leaving_passive(self, command: Command) -> None:
+        """The writer's word that ``command``, which ends cycles (Safe, Full, Stop, Reset),
+        is being written (the mode model already moved; the writer's cycle state not yet):
+        from a Passive with no cycle of the run's, what the robot drove there by itself
+        since the last look is judged now, as at the run's end (:meth:`_judged`), and said
+        with the command as what ended it. A cycle two seconds long, ended by the mission's
+        own ``mode: safe`` between two looks, was said nowhere (maker finding 3)."""
+        in_passive, self._in_passive = self._in_passive, False
+        writer = self.connection.writer
+        if not in_passive or writer.builtin_may_run or writer.robot_cycle is not None:
+            return
+        mission_time = self.clock(0.0)
+        if mission_time is not None:
+            spec = command.spec
+            ended = f"the run's {spec.title} ({spec.opcode}) at t={mission_time:.3f} ended it"
+            self._judged(self.odometer.odometry, mission_time, ended=ended)
+        self._counts, self.driving_looks = None, 0
+
+    def at_end(self, snapshot: Snapshot) -> None:
+        """Before the safe stop, one look more at the last tick's ``snapshot``: a button
+        that starts a cycle pressed in its frame (a tree that waited for it ends on that
+        tick, before the cycle has moved the robot), else the wheels (:meth:`_judged`)."""
         if self.connection.writer.robot_cycle is not None or not self._unbidden():
             return
+        button = self.pressed(snapshot.frame)
+        if button is not None:
+            self._said(self.odometer.driven_in_passive(), button=button)
+            return
+        self._judged(snapshot.odometry, snapshot.time)
+
+    def _judged(self, odometry: Odometry, mission_time: float, ended: str = "") -> None:
+        """One look more at the time since the last (if :data:`END_LOOK_S` or more; else the
+        last look's word stands): driving at :data:`CYCLE_LOOKS` looks running, a cycle of
+        the robot's own, said as :meth:`look`'s; driving at the last only, with over
+        :data:`ROBOT_CYCLE_MM` driven in Passive since it went there, a cycle or a hand,
+        which the looks had no time to tell apart: said so, and the stop sends Safe first
+        all the same (harmless off the dock; Start alone would leave a cycle driving after
+        the run). A push over before the last look is neither. ``ended``: what ends it, when
+        not the safe stop (the tree's Safe, Full or Stop)."""
         looks = self.driving_looks
         if mission_time - self._looked_at >= END_LOOK_S:
             looks = looks + 1 if self._driving(odometry, mission_time) else 0
         driven = self.odometer.driven_in_passive()
         if looks >= CYCLE_LOOKS:
-            self._said(driven)
+            self._said(driven, ended=ended)
         elif looks and driven > ROBOT_CYCLE_MM:
-            self._said(driven, told_apart=False)
+            self._said(driven, told_apart=False, ended=ended)
 
-    def _said(self, driven_mm: float, *, told_apart: bool = True) -> str:
+    def _said(
+        self,
+        driven_mm: float,
+        *,
+        told_apart: bool = True,
+        button: str | None = None,
+        ended: str = "",
+    ) -> str:
         """The writer told of the robot's cycle, the summary's word on it and the warning
         (``driven_mm``: its path in Passive; ``told_apart``: the looks saw it drive on, a
-        cycle, not a hand); the cycle said, for a run's reason."""
+        cycle, not a hand; ``button``: the one seen pressed; ``ended``: what ends it, when
+        not the safe stop, which the writer is then not told of); the cycle said, for a
+        run's reason."""
         connection = self.connection
         writer = connection.writer
         driven = f"{driven_mm / 1000:.2f} m"
-        said = (
-            "the robot started a cycle by itself (its Clean, Spot or Dock button, or its "
-            f"schedule): it drove {driven} in Passive with no command of the run's"
-            if told_apart
-            else f"the robot was moving in Passive with no command of the run's as the run "
-            f"ended ({driven} since it went there): a cycle it started by itself (its Clean, "
-            "Spot or Dock button, or its schedule), or a hand"
-        )
-        writer.robot_cycle = said
-        ended = (
-            "the safe stop ends it with Safe first"
-            if writer.cycle_may_drive
-            else "it was on its home base at the end (docked: no Safe, which would stop the charge)"
-        )
-        self.summary.robot_cycle = f"{said}; {ended}"
+        if button is not None:
+            said = (
+                f"the robot started a cycle by itself: its {button.capitalize()} button was "
+                "pressed in Passive (packet 18), where it starts the robot's own cycle"
+            )
+        elif told_apart:
+            said = (
+                "the robot started a cycle by itself (its Clean, Spot or Dock button, or its "
+                f"schedule): it drove {driven} in Passive with no command of the run's"
+            )
+        else:
+            said = (
+                "the robot was moving in Passive with no command of the run's as the "
+                f"{'run left Passive' if ended else 'run ended'} ({driven} since it went "
+                "there): a cycle it started by itself (its Clean, Spot or Dock button, or its "
+                "schedule), or a hand"
+            )
+        if ended:
+            said_end = ended
+        else:
+            writer.robot_cycle = said
+            said_end = (
+                "the safe stop ends it with Safe first"
+                if writer.cycle_may_drive
+                else "it was on its home base at the end (docked: no Safe, which would stop "
+                "the charge)"
+            )
+        self.summary.robot_cycle = f"{said}; {said_end}"
         log.warning("%s: %s", connection.name, self.summary.robot_cycle)
         return said

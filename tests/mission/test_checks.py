@@ -773,3 +773,39 @@ tree:
     for slot, part in enumerate(parts):
         assert f"`song: {{number: {slot}, notes: {part}}}`" in errors[0]
         assert f"`play: {slot}`, `{{wait: 30s, until: {{sensor: song_playing == 0}}}}`" in errors[0]
+
+
+BUTTON_IN_PASSIVE = """
+tree:
+  sequence:
+    - {first}
+    - wait: 10s
+      until: {{button: {name}}}
+"""
+_EACH = "each start a cycle of its own"
+_STARTS = "(the OI spec; the run ends at the press); put `mode: safe` first (Safe and Full "
+
+
+@pytest.mark.parametrize(
+    ("first", "name", "warned"),
+    [
+        ("wait: 1s", "clean", "the robot's Clean button starts its own cleaning cycle"),
+        ("wait: 1s", "spot", "the robot's Spot button starts its own spot cycle"),
+        ("wait: 1s", "dock", "the robot's Dock button starts its own search for its dock"),
+        ("wait: 1s", "any", f"the robot's Clean, Spot and Dock buttons {_EACH}"),
+        ("mode: passive", "clean", "the robot's Clean button starts its own cleaning cycle"),
+        ("wait: 1s", "minute", ""),  # starts nothing
+        ("mode: safe", "clean", ""),  # Safe takes no cycle at a button
+        ("mode: full", "any", ""),
+    ],
+)
+def test_a_button_that_starts_a_cycle_waited_for_in_passive_is_a_warning(
+    compile_text: Callable[..., CompiledMission], first: str, name: str, warned: str
+) -> None:
+    """Maker finding 3 (session 32): "wait for the Clean button, then dance", with no
+    ``mode: safe`` first, validated clean; the press started the robot's own cleaning
+    cycle (the OI spec), which drove it off."""
+    mission = compile_text(BUTTON_IN_PASSIVE.format(first=first, name=name))
+    warnings = [f"{w.line}:{w.column}: {w.message}" for w in mission.warnings]
+    expected = f"5:15: button: in Passive {warned} {_STARTS}start no cycle at a button)"
+    assert warnings == ([expected] if warned else [])

@@ -414,3 +414,75 @@ def test_a_drive_before_mode_passive_is_not_taken_for_a_cycle(run_mission: RunMi
         "    - mode: passive\n    - wait: 1s\n"
     )
     assert run.summary.outcome is Outcome.SUCCESS and run.summary.robot_cycle == ""
+
+
+#: waits for the Clean button in Passive (a mission that reads packet 18), then Safe and on
+WAITS_FOR_CLEAN = """\
+mission: waits for clean
+tree:
+  sequence:
+    - wait: 10s
+      until: {button: clean}
+    - wait: 2s
+    - mode: safe
+    - wait: 1s
+"""
+
+
+def test_the_clean_button_pressed_in_passive_ends_the_run_at_the_press(
+    run_mission: RunMission,
+) -> None:
+    """Maker finding 3 (session 32): the mission waited in Passive for the Clean button,
+    which started the robot's own cleaning cycle; it drove 0.61 m during the next ``wait:
+    2s``, the mission's ``mode: safe`` ended it, and the run said nothing. With the buttons
+    in the stream, the press is the cycle's start (the OI spec): the run ends there,
+    FAILURE, said, the cycle ended by the safe stop with Safe first."""
+    pressed: list[float] = []
+    run = run_mission(WAITS_FOR_CLEAN, observer=pressing_at(oi.buttons(1), 1.0, pressed))
+    summary = run.summary
+    assert pressed and summary.outcome is Outcome.FAILURE, summary.reason
+    assert summary.reason.startswith(
+        "the robot started a cycle by itself: its Clean button was pressed in Passive "
+        "(packet 18), where it starts the robot's own cycle"
+    ), summary.reason
+    assert "a mission that waits for a button puts `mode: safe` first" in summary.reason
+    assert summary.mission_time_s <= pressed[0] + 0.1, "at the press"
+    assert summary.distance_mm < 100.0
+    assert summary.robot_cycle.endswith("the safe stop ends it with Safe first")
+    assert run.link.written.endswith(STOP_ENDING_A_CYCLE)
+    assert run.simulator.builtin is None and run.simulator.mode is OIMode.PASSIVE
+
+
+def test_a_tree_that_ends_at_the_press_still_has_the_cycle_said_and_ended(
+    run_mission: RunMission,
+) -> None:
+    """The tree's last leaf waits for the button: it ends SUCCESS on the press's tick, before
+    any look, and before the cycle has moved the robot; the stop's Start alone would have
+    left the cycle driving after the run."""
+    pressed: list[float] = []
+    mission = "mission: last\ntree:\n  wait: 10s\n  until: {button: clean}\n"
+    run = run_mission(mission, observer=pressing_at(oi.buttons(1), 0.5, pressed))
+    assert pressed and run.summary.outcome is Outcome.SUCCESS, run.summary.reason
+    assert run.summary.robot_cycle.startswith("the robot started a cycle by itself: its Clean")
+    assert run.link.written.endswith(STOP_ENDING_A_CYCLE)
+    assert run.simulator.builtin is None
+
+
+def test_a_short_cycle_the_tree_ends_with_safe_is_said(run_mission: RunMission) -> None:
+    """The same press with no buttons in the stream: the cycle drove between two looks
+    (fewer than the three that tell it from a hand), and the mission's own ``mode: safe``
+    ended it. It is judged as the Safe is written, and said: the robot drove in Passive by
+    itself, the run's Safe ended it; the run goes on (the tree has the robot again)."""
+    pressed: list[float] = []
+    mission = "mission: short\ntree:\n  sequence: [{wait: 2.5s}, {mode: safe}, {wait: 1s}]\n"
+    run = run_mission(mission, observer=pressing_at(oi.buttons(1), 1.0, pressed))
+    summary = run.summary
+    assert pressed and summary.outcome is Outcome.SUCCESS, summary.reason
+    assert summary.distance_mm > 200.0, "the cycle drove the robot"
+    said = summary.robot_cycle
+    assert said.startswith("the robot was moving in Passive with no command of the run's as "
+                           "the run left Passive ("), said  # fmt: skip
+    assert said.endswith("or a hand; the run's Safe (131) at t=2.505 ended it"), said
+    assert f"robot cycle  {said}" in str(summary)
+    assert summary.safe_stop.startswith("sent drive, motors"), summary.safe_stop  # no Safe
+    assert run.simulator.builtin is None
