@@ -56,6 +56,7 @@ from roomba_bt.robot.interface import (
     Odometer,
     Snapshot,
 )
+from roomba_bt.robot.modes import ModeModel
 from roomba_bt.robot.safety import (
     InterruptGuard,
     RunAborted,
@@ -631,18 +632,13 @@ class MissionRunner(BaseHandle):
     def _fallback_changed(
         self, frame: SensorFrame, fallback: ModeChange | None, mission_time: float
     ) -> tuple[SensorFrame, ModeChange | None]:
-        """A fall to Passive by itself new since the last frame (or its end): placed in
-        mission time (:attr:`ModeChange.mission_time`, which the leaves' messages say; the
-        mode model keeps the placed change, so the next frame finds it seen), the hazards see
-        the frame afresh, the commands of :data:`FALL_STOPS` no longer stand (a stall's
-        ride-through and the monitor's resume do not send them again), and the first fall
-        is noted for ``--strict`` (:func:`noted_fall`). Returns the frame and the change."""
+        """A fall to Passive by itself new since the last frame (or its end), placed in mission
+        time (:func:`placed`): the hazards see the frame afresh, the commands of
+        :data:`FALL_STOPS` no longer stand (a stall's ride-through and the monitor's resume do
+        not send them again), the first fall is noted for ``--strict`` (:func:`noted_fall`)."""
+        self._fallback_seen = fallback = placed(self._modes, fallback, mission_time)
         if fallback is not None:
             self._outbox.robot_stopped(FALL_STOPS)
-            if fallback.mission_time is None and self._modes.last_fallback is fallback:
-                fallback = replace(fallback, mission_time=mission_time)
-                self._modes.last_fallback = fallback
-        self._fallback_seen = fallback
         frame = self._hazards.frame(frame, True)
         noted_fall(self.summary, fallback, mission_time, self.mission.root)
         return frame, fallback
@@ -742,6 +738,17 @@ def silenced(root: py_trees.behaviour.Behaviour, summary: RunSummary, command: C
         "is off and streams no more sensor frames, the run's clock, so the run ended there (a "
         "leaf that sends Reset or Stop must be the last the tree runs)"
     )
+
+
+def placed(modes: ModeModel, change: ModeChange | None, mission_time: float) -> ModeChange | None:
+    """``change``, the mode model's last fall, with the mission time of the tick that first
+    showed it (:attr:`ModeChange.mission_time`, which the leaves' messages say: "in Passive
+    since t=0.960"); the model keeps the placed change, so the next frame finds it seen. None,
+    a change already placed, or one no longer the model's last, is returned as it is."""
+    if change is None or change.mission_time is not None or modes.last_fallback is not change:
+        return change
+    modes.last_fallback = change = replace(change, mission_time=mission_time)
+    return change
 
 
 def noted_fall(
