@@ -362,6 +362,23 @@ COMMANDS_BY_NAME: Mapping[str, CommandSpec] = MappingProxyType({c.name: c for c 
 MODE_COMMANDS: tuple[CommandSpec, ...] = tuple(c for c in _COMMAND_LIST if c.leads_to is not None)
 
 
+def longest_data_bytes() -> int:
+    """The most data bytes any opcode byte can leave the robot's parser waiting for: a
+    command's fixed arguments and, for a tail, as many items as its count byte can say at
+    most on the wire (255, whatever range the table allows: a lost byte does not respect
+    it). Song (140) of 255 notes waits 512 bytes. Zeros this many end any command a lost or
+    changed byte made the robot start (0 is no opcode: the zeros left over are skipped),
+    however long (``robot/ending.py``'s stop written again)."""
+    longest = 0
+    for spec in _COMMAND_LIST:
+        data = spec.fixed_data_bytes
+        if spec.tail is not None:
+            count = next(a for a in spec.args if a.name == spec.tail.count_arg)
+            data += ((1 << 8 * count.size) - 1) * spec.tail.bytes_per_item
+        longest = max(longest, data)
+    return longest
+
+
 def opcodes(*names: str) -> tuple[int, ...]:
     """The opcodes of the commands named (``opcodes("drive", "drive_direct")`` -> ``(137,
     145)``): for a reader's list of what it sends, without the numbers. A name the table does

@@ -39,7 +39,7 @@ from roomba_bt.oi.encode import STRAIGHT_RADII, Command
 from roomba_bt.oi.frames import SensorFrame
 from roomba_bt.oi.modes import DRIVING_MODES, OI_MODE_PACKET, OIMode
 from roomba_bt.oi.odometry import encoder_delta
-from roomba_bt.oi.opcodes import Effect
+from roomba_bt.oi.opcodes import Effect, longest_data_bytes
 from roomba_bt.oi.packets import packet_ids
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import StreamParser, stream_period
@@ -86,8 +86,16 @@ STOP_WALL_S = 10.0
 #: slowest link the tests run on has 0.5 s of latency (its reply a slot later), past any
 #: bridge that works (Wi-Fi and Bluetooth: 50-300 ms); a slower link is logged, not followed.
 ROUND_TRIP_CAP = 0.6
-#: How many times a stop the stream contradicts is written (the first, and once more).
-STOP_ATTEMPTS = 2
+#: How many times a stop the stream contradicts is written: the first, and twice more, each
+#: after :data:`STOP_RESYNC_ZEROS` (a robot that streams on after the stop may have taken it
+#: as the data of a long command a lost byte made; a second stop alone went the same way).
+STOP_ATTEMPTS = 3
+#: Zeros written before a stop written again: as many as the longest command any byte can
+#: start waits for (:func:`~roomba_bt.oi.opcodes.longest_data_bytes`, a Song (140) of 255
+#: notes: 512), so whatever command a lost byte left the robot's parser in is over before
+#: the stop's first byte. The run's own resends (:data:`~roomba_bt.robot.writer.RESYNC_ZEROS`,
+#: 35) cover only the commands a run sends.
+STOP_RESYNC_ZEROS = bytes(longest_data_bytes())
 #: Reads at most of what waits unread in the port before a stop (each read takes all there
 #: is: one is the rule; the bound is for a line that never runs dry)
 BACKLOG_READS = 16
@@ -423,6 +431,9 @@ class SafeStop:
         self.nothing_set_going = False
         #: the stop being said undelivered found the port gone (:meth:`_port_gone`)
         self._gone = False
+        #: how many times the last stop was written again, after zeros, before the robot
+        #: took it (:meth:`_said_again`); 0: at once, or never
+        self.taken_again = 0
 
     def begin(self) -> None:
         """A session starts (again): nothing has ended."""
@@ -466,6 +477,7 @@ class SafeStop:
             self.safe_stopped = True  # nothing written, nothing to stop; not "unconfirmed"
             return True
         self.written = False
+        self.taken_again = 0
         backlog = read_backlog(link, writer.baud)
         self._unread = None if backlog is None else (backlog.frames, backlog.waited)
         # what the robot was last seen or told to do, before the stop moves the model on;
@@ -487,14 +499,10 @@ class SafeStop:
         if came_back is False or not link.transport.is_open:
             return self._undelivered(self._port_gone())
         unconfirmed = self._unconfirmed_before(link)
-        # checked against the stream on the wall clock only: on a virtual clock (the
-        # simulator's SimLink, a replay) listening would only move the simulated time on,
-        # and no cable can be cut there
-        checked = (
-            link.streaming
-            and link.status is LinkStatus.STREAMING
-            and getattr(link.transport, "wall_clock", True)
-        )
+        # checked against the stream on every clock: on a virtual one (the simulator's
+        # SimLink, a replay) too, where a lost byte can make a long command that takes the
+        # stop as its data as well as on a cable (the run's end waits the listen's frames)
+        checked = link.streaming and link.status is LinkStatus.STREAMING
         failed = self._write_heard(checked)
         if failed is None and came_back and not self.port_return.heard_stop(link.name):
             failed = self._port_gone()
@@ -531,9 +539,11 @@ class SafeStop:
 
     def _write_heard(self, checked: bool) -> str | None:
         """Write the stop; ``checked``: listen after it (:meth:`_contradicted`), and write it
-        once more if the robot streams on. Why it did not reach the robot, or None. A stop
-        the robot streamed on after leaves the model where it was (as the robot is, as far
-        as it was seen), so that a later stop (``close()``) sends it whole again."""
+        again after :data:`STOP_RESYNC_ZEROS` while the robot streams on, up to
+        :data:`STOP_ATTEMPTS` in all (said: :meth:`_said_again`). Why it did not reach the
+        robot, or None. A stop the robot streamed on after leaves the model where it was
+        (as the robot is, as far as it was seen), so that a later stop (``close()``) sends
+        it whole again."""
         writer = self.writer
         saved = (
             writer.modes.snapshot(), writer.last_wheels, writer.builtin_may_run,
@@ -544,13 +554,21 @@ class SafeStop:
             if attempt:  # the robot did not hear it: the model back where it was, again
                 self._restore(saved)
             written_at = writer.link.transport.now()
-            failed = self._write()
+            failed = self._write(STOP_RESYNC_ZEROS if attempt else b"")
             if failed is not None:
                 return failed
             contradiction = self._contradicted(written_at) if checked else None
             if contradiction is None:
                 self._unproven = self._quiet_unproven(written_at) if checked else None
+                if attempt:
+                    self._said_again(attempt)
                 return None
+            if not attempt:
+                log.warning(
+                    "%s: the stop was not taken at first (%s): a lost byte may have started a "
+                    "long command; sending %d zeros and the stop again", writer.link.name,
+                    contradiction, len(STOP_RESYNC_ZEROS),
+                )  # fmt: skip
         self._restore(saved)
         return f"the stop was written {STOP_ATTEMPTS} times but not received: {contradiction}"
 
@@ -566,15 +584,26 @@ class SafeStop:
             writer.modes.force(self._seen, now)
         writer.link.pause_resume(True, now)
 
-    def _write(self) -> str | None:
-        """Write the stop sequence whole, the port at the robot's rate first, whatever a
-        listen at another rate cut short by a signal left it at (``at_robot_rate``: before,
-        every byte of the stop went out at 19200 to a robot at 115200, which drove on); why
-        it could not be, or None."""
+    def _said_again(self, attempt: int) -> None:
+        """A stop heard only when written again (``attempt``: its writes after the first,
+        each after :data:`STOP_RESYNC_ZEROS`): said, for the summary's reader and the log."""
+        zeros = len(STOP_RESYNC_ZEROS)
+        log.warning(
+            "%s: the stop was not taken at first: a lost byte may have started a long "
+            "command; sent %d zeros and the stop again%s: heard", self.writer.link.name, zeros,
+            f" ({attempt} times)" if attempt > 1 else "",
+        )  # fmt: skip
+        self.taken_again = attempt
+
+    def _write(self, prefix: bytes = b"") -> str | None:
+        """Write the stop sequence whole, after ``prefix`` (zeros, in the same write), the
+        port at the robot's rate first, whatever a listen at another rate cut short by a
+        signal left it at (``at_robot_rate``: before, every byte of the stop went out at
+        19200 to a robot at 115200, which drove on); why it could not be, or None."""
         try:
             with signals_deferred():
                 self.writer.at_robot_rate()
-                self.writer.send_many(self.sequence())
+                self.writer.send_many(self.sequence(), prefix=prefix)
         except PortLost:
             return self._port_gone()
         except _RECOVERABLE as exc:

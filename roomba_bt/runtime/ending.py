@@ -21,7 +21,7 @@ import py_trees
 from roomba_bt.oi.encode import Command
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.robot.connection import Connection
-from roomba_bt.robot.ending import SafeStop
+from roomba_bt.robot.ending import STOP_RESYNC_ZEROS, SafeStop
 from roomba_bt.robot.hazards import sets_going
 from roomba_bt.robot.interface import Odometer, Outbox, Snapshot
 from roomba_bt.robot.safety import SAFE_STOP_UNDER_WAY, InterruptGuard
@@ -41,6 +41,12 @@ from roomba_bt.runtime.tick_guard import TickGuardLike
 #: the run's own logger, whose warnings these are (as ``runtime/stall.py``'s)
 log = logging.getLogger("roomba_bt.runtime.loop")
 
+#: what the summary's safe stop adds when the robot streamed on after the stop and took it
+#: only when written again after zeros (``SafeStop.taken_again``)
+STOP_TAKEN_AGAIN = (
+    " (not taken at first: a lost byte may have started a long command; sent {zeros} zeros "
+    "and the stop again, heard at write {times})"
+)
 #: what a Ctrl-C says while the run's tree is stopped (each running node's ``terminate()``),
 #: after what the wheels do meanwhile
 STOPPING_THE_TREE = (
@@ -260,6 +266,9 @@ def stop_robot(connection: Connection, summary: RunSummary, first: bool = False)
             back = getattr(getattr(connection, "ending", None), "port_return", None)
             reopened = back.said if back is not None else ""
             through = f" ({reopened})" if reopened else ""
+            again = getattr(getattr(connection, "ending", None), "taken_again", 0)
+            if again:  # the robot took it only after zeros: a lost byte's long command
+                through += STOP_TAKEN_AGAIN.format(zeros=len(STOP_RESYNC_ZEROS), times=again + 1)
             summary.safe_stop = (
                 before + "sent " + ", ".join(sequence) + through
                 if sequence

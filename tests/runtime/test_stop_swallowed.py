@@ -1,0 +1,99 @@
+"""A stop the robot took as the data of a long command a lost byte made: the run writes zeros
+enough to end any command and the stop again, on the simulator's virtual clock too.
+
+Drive (137) 140 mm/s spinning right is ``89 00 8c ff ff``; its opcode lost, the robot skips
+``00`` (no opcode) and reads ``8c ff ff`` as a Song (140) of 255 notes: it waits for 510 data
+bytes and takes the tree's ``mode: passive`` and the whole safe stop as notes, spinning on.
+"""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+
+import pytest
+
+from roomba_bt.mission import load_mission
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.opcodes import COMMANDS_BY_NAME, longest_data_bytes
+from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.robot.ending import STOP_RESYNC_ZEROS
+from roomba_bt.runtime.stack import RunStack
+from roomba_bt.runtime.summary import Outcome
+from roomba_bt.sim import SimLink, Simulator, load_world
+
+#: the drive whose opcode the line loses: its data bytes then read as a 255-note Song
+SONG_MAKER = oi.drive(140, -1).data
+
+SPIN_THEN_SPIN_BACK = """
+mission: spin-then-spin-back
+tree:
+  sequence:
+    - mode: safe
+    - parallel:
+        policy: one
+        children:
+          - wait: 1s
+          - drive: {velocity: 100 mm/s, radius: spin_left}
+    - parallel:
+        policy: one
+        children:
+          - wait: 1s
+          - drive: {velocity: 140 mm/s, radius: spin_right}
+    - mode: passive
+"""
+
+
+class LosesTheDrivesOpcode(SimLink):
+    """The simulator's link on its virtual clock, losing the first byte of the write of
+    :data:`SONG_MAKER` (the drive's opcode), as a bad cable does."""
+
+    def __init__(self, simulator: Simulator) -> None:
+        super().__init__(simulator)
+        self.lost = False
+        self.written = bytearray()
+
+    def write(self, data: bytes) -> None:
+        if not self.lost and bytes(data) == SONG_MAKER:
+            self.lost = True
+            data = data[1:]
+        self.written += data
+        super().write(data)
+
+
+def test_the_longest_command_is_a_song_of_255_notes() -> None:
+    """The zeros before a stop written again come from the opcode table, not a number: a
+    Song's count byte at its wire maximum (255 notes of 2 bytes, after 2 fixed bytes)."""
+    song = COMMANDS_BY_NAME["song"]
+    assert longest_data_bytes() == song.fixed_data_bytes + 255 * 2 == 512
+    assert STOP_RESYNC_ZEROS == bytes(512)
+
+
+def test_a_stop_taken_as_song_notes_is_written_again_after_zeros(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Before, the run ended SUCCESS, ``safe stop sent ...``, the simulated robot in Safe
+    spinning left at 100 mm/s: on the virtual clock the stop was not listened after."""
+    path = tmp_path / "m.yaml"
+    path.write_text(SPIN_THEN_SPIN_BACK)
+    simulator = Simulator(load_world("empty-room"), CREATE2, 0, trace=False)
+    link = LosesTheDrivesOpcode(simulator)
+    stack = RunStack(load_mission(path, {}, profile=CREATE2), link, profile=CREATE2)
+    with caplog.at_level(logging.WARNING, logger="roomba_bt"):
+        summary = stack.run()
+    stack.close()
+    assert link.lost
+    assert simulator.mode is OIMode.PASSIVE
+    assert simulator.requested_left == simulator.requested_right == 0
+    assert summary.outcome is Outcome.SUCCESS and summary.exit_code == 0
+    # the stop again from the Safe packet 35 showed, after the zeros, in one write
+    again = STOP_RESYNC_ZEROS + oi.halt().data + oi.motors_off().data
+    assert link.written.endswith(again + oi.pause_stream().data + oi.start().data)
+    assert "not taken at first: a lost byte may have started a long command; sent 512 zeros" in (
+        summary.safe_stop
+    ), summary.safe_stop
+    assert (
+        "the stop was not taken at first: a lost byte may have started a long command; sent "
+        "512 zeros and the stop again: heard" in caplog.text
+    )
