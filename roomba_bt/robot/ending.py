@@ -180,6 +180,10 @@ def describe_activity(command: Command | None, stopped_by: str = "") -> str:
     return f"after {spec.name} ({values})"
 
 
+#: :func:`wheels_seen`'s word for encoders that did not move
+WHEELS_STILL = ", the wheels still"
+
+
 def wheels_seen(frames: list[SensorFrame]) -> str:
     """What the wheels did over ``frames`` (two or more) as far as they show it: the
     requested velocities (packets 42, 41) if carried, else the encoders' counts (43, 44)
@@ -192,7 +196,7 @@ def wheels_seen(frames: list[SensorFrame]) -> str:
         return ""
     left, right = (encoder_delta(first[pid], last[pid]) for pid in _ENCODERS)
     if left == right == 0:
-        return ", the wheels still"
+        return WHEELS_STILL
     return f", the wheels turning ({left:+d}/{right:+d} encoder counts, left/right)"
 
 
@@ -643,7 +647,25 @@ class SafeStop:
             return None  # shows nothing (:meth:`_quiet_unproven`, :meth:`stop` say so)
         if clock() - last >= STOP_LISTEN - CLOCK_ROUNDING or len(late) <= PAUSE_SLACK:
             return None  # the stream stopped: it heard Pause Stream
+        if self._stopped_in_passive(late):
+            return None  # Pause Stream lost (a command's data a lost byte left short), Start not
         return self._streamed_on(late, in_flight)
+
+    def _stopped_in_passive(self, late: list[SensorFrame]) -> bool:
+        """Whether the frames that came on after a stop that ends in Passive show it taken
+        all the same: packet 35 reading Passive and the wheels still (their requested
+        velocities 0, or the encoders unmoved over the frames). A lost byte left the last
+        command short, the stop's Pause Stream went to finish it and its Start was heard
+        (docked runs on a bad cable, about one in three): the robot is where the stop puts
+        it, and zeros and the stop again would only say a long command where there is none."""
+        last = late[-1]
+        if self.end_in != "passive" or OI_MODE_PACKET not in last:
+            return False
+        if self.writer.modes.detector.interpret(last[OI_MODE_PACKET]) is not OIMode.PASSIVE:
+            return False
+        if _LEFT_VELOCITY in last and _RIGHT_VELOCITY in last:
+            return last[_LEFT_VELOCITY] == last[_RIGHT_VELOCITY] == 0
+        return wheels_seen(late) == WHEELS_STILL
 
     def _streamed_on(self, late: list[SensorFrame], in_flight: float) -> str:
         """What the frames that came after a stop the robot did not hear showed: how many,

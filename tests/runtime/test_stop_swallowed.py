@@ -18,6 +18,7 @@ from roomba_bt.oi import commands as oi
 from roomba_bt.oi.modes import OIMode
 from roomba_bt.oi.opcodes import COMMANDS_BY_NAME, longest_data_bytes
 from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.robot.connection import Connection
 from roomba_bt.robot.ending import STOP_RESYNC_ZEROS
 from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome
@@ -67,7 +68,7 @@ def test_the_longest_command_is_a_song_of_255_notes() -> None:
     Song's count byte at its wire maximum (255 notes of 2 bytes, after 2 fixed bytes)."""
     song = COMMANDS_BY_NAME["song"]
     assert longest_data_bytes() == song.fixed_data_bytes + 255 * 2 == 512
-    assert STOP_RESYNC_ZEROS == bytes(512)
+    assert len(STOP_RESYNC_ZEROS) == 512 and not any(STOP_RESYNC_ZEROS)
 
 
 def test_a_stop_taken_as_song_notes_is_written_again_after_zeros(
@@ -97,3 +98,39 @@ def test_a_stop_taken_as_song_notes_is_written_again_after_zeros(
         "the stop was not taken at first: a lost byte may have started a long command; sent "
         "512 zeros and the stop again: heard" in caplog.text
     )
+
+
+class LosesThePause(SimLink):
+    """The simulator's link losing the opcode (150) of the first Pause Stream written once
+    ``armed`` (the stop's): the ``00 80`` that reaches the robot is no opcode and Start."""
+
+    def __init__(self, simulator: Simulator) -> None:
+        super().__init__(simulator)
+        self.writes: list[bytes] = []
+        self.lost = False
+        self.armed = False
+
+    def write(self, data: bytes) -> None:
+        self.writes.append(bytes(data))
+        if self.armed and not self.lost and bytes(data).startswith(oi.pause_stream().data):
+            self.lost = True
+            data = data[1:]
+        super().write(data)
+
+
+def test_a_stream_on_in_passive_with_the_wheels_still_confirms_the_stop() -> None:
+    """The stop's Pause Stream lost and its Start heard: the frames that come on read Passive
+    and the wheels still, as the stop leaves the robot; no zeros, no stop again."""
+    simulator = Simulator(load_world("empty-room"), CREATE2, 0, trace=False)
+    link = LosesThePause(simulator)
+    connection = Connection(link, CREATE2)
+    connection.start("passive", (7, 35, 43, 44))
+    while connection.counters.frames < 5:
+        connection.poll(0.05)
+    stop = oi.pause_stream().data + oi.start().data
+    link.armed = True
+    assert connection.safe_stop() is True
+    assert link.lost
+    assert link.writes[-1] == stop and link.writes.count(stop) == 1  # written once
+    assert simulator.mode is OIMode.PASSIVE and simulator.streaming
+    connection.close()
