@@ -45,6 +45,7 @@ from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import StreamParser, stream_period
 from roomba_bt.robot.errors import PortLost, RobotError, WaitCutShort
 from roomba_bt.robot.link import LINK_ERRORS, LinkStatus, StreamLink
+from roomba_bt.robot.modes import OffsetDetector
 from roomba_bt.robot.safety import ENDING_SIGNALS
 from roomba_bt.robot.wake import KeepAwake
 from roomba_bt.robot.wall_bound import WallBound, bounded
@@ -96,6 +97,12 @@ STOP_ATTEMPTS = 3
 #: the stop's first byte. The run's own resends (:data:`~roomba_bt.robot.writer.RESYNC_ZEROS`,
 #: 35) cover only the commands a run sends.
 STOP_RESYNC_ZEROS = bytes(longest_data_bytes())
+#: What a stop heard only when written again after :data:`STOP_RESYNC_ZEROS` says (the
+#: port, the zeros, how many times again if more than once)
+STOP_TAKEN_AGAIN = (
+    "%s: the stop was not taken at first: a lost byte may have started a long command; sent "
+    "%d zeros and the stop again%s: heard"
+)
 #: Reads at most of what waits unread in the port before a stop (each read takes all there
 #: is: one is the rule; the bound is for a line that never runs dry)
 BACKLOG_READS = 16
@@ -182,6 +189,21 @@ def describe_activity(command: Command | None, stopped_by: str = "") -> str:
 
 #: :func:`wheels_seen`'s word for encoders that did not move
 WHEELS_STILL = ", the wheels still"
+
+
+def stopped_in_passive(frames: list[SensorFrame], detector: OffsetDetector) -> bool:
+    """Whether the frames that came on after a stop that ends in Passive show it taken all
+    the same: packet 35 reading Passive (``detector``'s reading) and the wheels still (their
+    requested velocities 0, or the encoders unmoved over the frames). A lost byte left the
+    last command short, the stop's Pause Stream went to finish it and its Start was heard
+    (a third of the dock runs at 1 % lost): the robot is where the stop puts it, and zeros
+    and the stop again would only say a long command where there is none."""
+    last = frames[-1]
+    if OI_MODE_PACKET not in last or detector.interpret(last[OI_MODE_PACKET]) is not OIMode.PASSIVE:
+        return False
+    if _LEFT_VELOCITY in last and _RIGHT_VELOCITY in last:
+        return last[_LEFT_VELOCITY] == last[_RIGHT_VELOCITY] == 0
+    return wheels_seen(frames) == WHEELS_STILL
 
 
 def wheels_seen(frames: list[SensorFrame]) -> str:
@@ -436,7 +458,7 @@ class SafeStop:
         #: the stop being said undelivered found the port gone (:meth:`_port_gone`)
         self._gone = False
         #: how many times the last stop was written again, after zeros, before the robot
-        #: took it (:meth:`_said_again`); 0: at once, or never
+        #: took it (:data:`STOP_TAKEN_AGAIN`); 0: at once, or never
         self.taken_again = 0
 
     def begin(self) -> None:
@@ -544,7 +566,7 @@ class SafeStop:
     def _write_heard(self, checked: bool) -> str | None:
         """Write the stop; ``checked``: listen after it (:meth:`_contradicted`), and write it
         again after :data:`STOP_RESYNC_ZEROS` while the robot streams on, up to
-        :data:`STOP_ATTEMPTS` in all (said: :meth:`_said_again`). Why it did not reach the
+        :data:`STOP_ATTEMPTS` in all (said: :data:`STOP_TAKEN_AGAIN`). Why it did not reach the
         robot, or None. A stop the robot streamed on after leaves the model where it was
         (as the robot is, as far as it was seen), so that a later stop (``close()``) sends
         it whole again."""
@@ -564,8 +586,10 @@ class SafeStop:
             contradiction = self._contradicted(written_at) if checked else None
             if contradiction is None:
                 self._unproven = self._quiet_unproven(written_at) if checked else None
-                if attempt:
-                    self._said_again(attempt)
+                if attempt:  # said, for the summary's reader and the log
+                    self.taken_again = attempt
+                    log.warning(STOP_TAKEN_AGAIN, writer.link.name, len(STOP_RESYNC_ZEROS),
+                                f" ({attempt} times)" if attempt > 1 else "")  # fmt: skip
                 return None
             if not attempt:
                 log.warning(
@@ -587,17 +611,6 @@ class SafeStop:
         if self._seen is not None and self._seen is not writer.modes.mode:
             writer.modes.force(self._seen, now)
         writer.link.pause_resume(True, now)
-
-    def _said_again(self, attempt: int) -> None:
-        """A stop heard only when written again (``attempt``: its writes after the first,
-        each after :data:`STOP_RESYNC_ZEROS`): said, for the summary's reader and the log."""
-        zeros = len(STOP_RESYNC_ZEROS)
-        log.warning(
-            "%s: the stop was not taken at first: a lost byte may have started a long "
-            "command; sent %d zeros and the stop again%s: heard", self.writer.link.name, zeros,
-            f" ({attempt} times)" if attempt > 1 else "",
-        )  # fmt: skip
-        self.taken_again = attempt
 
     def _write(self, prefix: bytes = b"") -> str | None:
         """Write the stop sequence whole, after ``prefix`` (zeros, in the same write), the
@@ -647,25 +660,9 @@ class SafeStop:
             return None  # shows nothing (:meth:`_quiet_unproven`, :meth:`stop` say so)
         if clock() - last >= STOP_LISTEN - CLOCK_ROUNDING or len(late) <= PAUSE_SLACK:
             return None  # the stream stopped: it heard Pause Stream
-        if self._stopped_in_passive(late):
+        if self.end_in == "passive" and stopped_in_passive(late, self.writer.modes.detector):
             return None  # Pause Stream lost (a command's data a lost byte left short), Start not
         return self._streamed_on(late, in_flight)
-
-    def _stopped_in_passive(self, late: list[SensorFrame]) -> bool:
-        """Whether the frames that came on after a stop that ends in Passive show it taken
-        all the same: packet 35 reading Passive and the wheels still (their requested
-        velocities 0, or the encoders unmoved over the frames). A lost byte left the last
-        command short, the stop's Pause Stream went to finish it and its Start was heard
-        (docked runs on a bad cable, about one in three): the robot is where the stop puts
-        it, and zeros and the stop again would only say a long command where there is none."""
-        last = late[-1]
-        if self.end_in != "passive" or OI_MODE_PACKET not in last:
-            return False
-        if self.writer.modes.detector.interpret(last[OI_MODE_PACKET]) is not OIMode.PASSIVE:
-            return False
-        if _LEFT_VELOCITY in last and _RIGHT_VELOCITY in last:
-            return last[_LEFT_VELOCITY] == last[_RIGHT_VELOCITY] == 0
-        return wheels_seen(late) == WHEELS_STILL
 
     def _streamed_on(self, late: list[SensorFrame], in_flight: float) -> str:
         """What the frames that came after a stop the robot did not hear showed: how many,

@@ -43,7 +43,7 @@ log = logging.getLogger("roomba_bt.runtime.loop")
 
 #: what the summary's safe stop adds when the robot streamed on after the stop and took it
 #: only when written again after zeros (``SafeStop.taken_again``)
-STOP_TAKEN_AGAIN = (
+TAKEN_AGAIN_IN_SUMMARY = (
     " (not taken at first: a lost byte may have started a long command; sent {zeros} zeros "
     "and the stop again, heard at write {times})"
 )
@@ -268,7 +268,7 @@ def stop_robot(connection: Connection, summary: RunSummary, first: bool = False)
             through = f" ({reopened})" if reopened else ""
             again = getattr(getattr(connection, "ending", None), "taken_again", 0)
             if again:  # the robot took it only after zeros: a lost byte's long command
-                through += STOP_TAKEN_AGAIN.format(zeros=len(STOP_RESYNC_ZEROS), times=again + 1)
+                through += TAKEN_AGAIN_IN_SUMMARY.format(zeros=len(STOP_RESYNC_ZEROS), times=again + 1)
             summary.safe_stop = (
                 before + "sent " + ", ".join(sequence) + through
                 if sequence
