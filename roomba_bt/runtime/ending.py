@@ -268,7 +268,9 @@ def stop_robot(connection: Connection, summary: RunSummary, first: bool = False)
             through = f" ({reopened})" if reopened else ""
             again = getattr(getattr(connection, "ending", None), "taken_again", 0)
             if again:  # the robot took it only after zeros: a lost byte's long command
-                through += TAKEN_AGAIN_IN_SUMMARY.format(zeros=len(STOP_RESYNC_ZEROS), times=again + 1)
+                through += TAKEN_AGAIN_IN_SUMMARY.format(
+                    zeros=len(STOP_RESYNC_ZEROS), times=again + 1
+                )
             summary.safe_stop = (
                 before + "sent " + ", ".join(sequence) + through
                 if sequence
