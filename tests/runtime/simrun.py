@@ -58,6 +58,19 @@ tree:
 """
 
 
+def spins_then_passive(name: str, *spins: tuple[str, str]) -> str:
+    """A mission that goes to Safe, spins in place for each ``(wait, drive)`` of ``spins`` in
+    turn (``("2s", "velocity: 100 mm/s, radius: spin_left")``: the drive for 2 s), and ends
+    with ``mode: passive``: a run that ends well with the wheels last told to spin, the
+    stop's bytes after its own."""
+    phases = "".join(
+        "    - parallel:\n        policy: one\n        children:\n"
+        f"          - wait: {wait}\n          - drive: {{{drive}}}\n"
+        for wait, drive in spins
+    )
+    return f"mission: {name}\ntree:\n  sequence:\n    - mode: safe\n{phases}    - mode: passive\n"
+
+
 def write_mission(
     folder: Path, text: str, name: str = "mission.yaml", plugins: Mapping[str, str] | None = None
 ) -> Path:

@@ -24,26 +24,16 @@ from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome
 from roomba_bt.sim import SimLink, Simulator, load_world
 
+from .simrun import spins_then_passive
+
 #: the drive whose opcode the line loses: its data bytes then read as a 255-note Song
 SONG_MAKER = oi.drive(140, -1).data
 
-SPIN_THEN_SPIN_BACK = """
-mission: spin-then-spin-back
-tree:
-  sequence:
-    - mode: safe
-    - parallel:
-        policy: one
-        children:
-          - wait: 1s
-          - drive: {velocity: 100 mm/s, radius: spin_left}
-    - parallel:
-        policy: one
-        children:
-          - wait: 1s
-          - drive: {velocity: 140 mm/s, radius: spin_right}
-    - mode: passive
-"""
+SPIN_THEN_SPIN_BACK = spins_then_passive(
+    "spin-then-spin-back",
+    ("1s", "velocity: 100 mm/s, radius: spin_left"),
+    ("1s", "velocity: 140 mm/s, radius: spin_right"),
+)
 
 
 class LosesTheDrivesOpcode(SimLink):

@@ -19,21 +19,12 @@ from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome
 from roomba_bt.sim import SimLink, Simulator, load_world
 
+from .simrun import spins_then_passive
+
 PAUSE_START = oi.pause_stream().data + oi.start().data
 HALT, MOTORS_OFF = oi.halt().data, oi.motors_off().data
 
-SPIN_A_WHILE = """
-mission: spin-a-while
-tree:
-  sequence:
-    - mode: safe
-    - parallel:
-        policy: one
-        children:
-          - wait: 2s
-          - drive: {velocity: 100 mm/s, radius: spin_left}
-    - mode: passive
-"""
+SPIN_A_WHILE = spins_then_passive("spin-a-while", ("2s", "velocity: 100 mm/s, radius: spin_left"))
 
 
 class CutTxAt:
