@@ -661,6 +661,9 @@ class Record:
     ended: bool = False
     #: the time of its last line, seconds of the record's clock
     last_t: float = 0.0
+    #: the time of its last chunk of bytes (the run's end line may come later: a safe stop
+    #: listened after on the virtual clock, nothing read meanwhile): where a replay is done
+    last_chunk_t: float = 0.0
     #: the bytes of the file that were checked (of its text: a compressed record's
     #: decompressed): a line cut short, or lines written after the check (a record still
     #: being written), are not read again
@@ -812,7 +815,7 @@ def load_record(path: str | Path) -> Record:
                 f"{path}:{number}: time {t!r} s; expected a finite time, not before the line "
                 f"before it ({last:g} s)"
             )
-        last = record.last_t = t
+        last = record.last_t = record.last_chunk_t = t
         if item[1] == "out":
             record.out_bytes += len(item[2])
     if not record.ended:
@@ -1141,7 +1144,7 @@ class ReplayTransport:
         self._recorded = record.out_bytes
         self._ended = record.ended
         self._progress = progress
-        self._last_t = record.last_t
+        self._last_t = record.last_chunk_t  # a replay's last read or write is its 100 %
         self._tenths = 0
         # the command being compared starts at byte _start of both sides: each side's bytes
         # from there (the tree's capped past a difference)
