@@ -291,6 +291,8 @@ class RecordingTransport:
         self._inner = inner
         #: the wrapped transport's word on its clock (``Transport``'s note)
         self.wall_clock: bool = getattr(inner, "wall_clock", True)
+        #: the inner line's word on losing bytes to the robot (``SimLink.loses_bytes``)
+        self.loses_bytes: bool = getattr(inner, "loses_bytes", False)
         self.name = inner.name
         self.path = str(path)
         #: written gzip-compressed (the path ends in ``.gz``)

@@ -49,6 +49,14 @@ class SimLink:
         self.baud = simulator.profile.default_baud
 
     @property
+    def loses_bytes(self) -> bool:
+        """Whether bytes to the robot may be lost or changed on this line (the simulator's
+        host-to-robot faults): the safe stop is then listened after on the virtual clock too,
+        as on a cable (a perfect line cannot swallow it)."""
+        faults = self.simulator.faults
+        return faults.host_drop_rate > 0.0 or faults.host_corrupt_rate > 0.0
+
+    @property
     def is_open(self) -> bool:
         return self._open and not self.simulator.disconnected
 

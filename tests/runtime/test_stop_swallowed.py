@@ -45,6 +45,11 @@ class LosesTheDrivesOpcode(SimLink):
         self.lost = False
         self.written = bytearray()
 
+    @property
+    def loses_bytes(self) -> bool:
+        """A line that loses bytes to the robot: the stop is listened after."""
+        return True
+
     def write(self, data: bytes) -> None:
         if not self.lost and bytes(data) == SONG_MAKER:
             self.lost = True
