@@ -401,6 +401,20 @@ class PortReturn:
         return True
 
 
+def listened_after(link: StreamLink) -> bool:
+    """Whether the stop is checked against the stream after it: on the wall clock, and on
+    the simulator's virtual one where its line loses bytes on the way to the robot
+    (``loses_bytes``: a lost byte can make a long command that takes the stop as its data,
+    as on a cable; the run's end waits the listen's frames). A perfect simulated line cannot
+    swallow the stop: its runs end where they did (the golden recordings). Not in a replay
+    (``recorded_reads``), which writes what the recorded run wrote."""
+    transport = link.transport
+    if getattr(transport, "recorded_reads", None) is not None:
+        return False
+    on_a_line = getattr(transport, "wall_clock", True) or getattr(transport, "loses_bytes", False)
+    return bool(on_a_line) and link.streaming and link.status is LinkStatus.STREAMING
+
+
 class SafeStop:
     """The endings of one session: the stop sequence written whole from the mode the model
     holds, whether it reached the robot, and the port closed once.
@@ -525,21 +539,7 @@ class SafeStop:
         if came_back is False or not link.transport.is_open:
             return self._undelivered(self._port_gone())
         unconfirmed = self._unconfirmed_before(link)
-        # checked against the stream on the wall clock, and on the simulator's virtual one
-        # where its line loses bytes on the way to the robot (``loses_bytes``: a lost byte
-        # can make a long command that takes the stop as its data, as on a cable; the run's
-        # end waits the listen's frames). A perfect simulated line cannot swallow the stop:
-        # its runs end where they did (the golden recordings). Not in a replay
-        # (``recorded_reads``), which writes what the recorded run wrote.
-        transport = link.transport
-        replaying = getattr(transport, "recorded_reads", None) is not None
-        on_a_line = getattr(transport, "wall_clock", True) or getattr(
-            transport, "loses_bytes", False
-        )
-        checked = (
-            link.streaming and link.status is LinkStatus.STREAMING and on_a_line and not replaying
-        )
-        failed = self._write_heard(checked)
+        failed = self._write_heard(listened_after(link))
         if failed is None and came_back and not self.port_return.heard_stop(link.name):
             failed = self._port_gone()
         if failed is not None:
