@@ -174,19 +174,35 @@ def is_answer(reply: bytes) -> bool:
     return reply[0] in (int(OIMode.PASSIVE), int(OIMode.PASSIVE) + 1)
 
 
-def probe(transport: Transport, baud: int) -> Probe:
-    """Set the port to ``baud`` and ask: see the module docstring."""
+#: What the probe writes before its query: zeros, Start, the stream paused.
+PROBE_START = RESYNC_ZEROS + oi.start().data + oi.pause_stream().data
+#: Bits a byte takes on the line: a start bit, 8 data bits, a stop bit.
+BITS_PER_BYTE = 10
+
+
+def line_seconds(size: int, baud: int) -> float:
+    """Seconds ``size`` bytes take on the line at ``baud``: what a write at a slow rate
+    (300 baud: 33 ms a byte) takes to reach the robot after the port took it."""
+    return size * BITS_PER_BYTE / baud
+
+
+def probe(transport: Transport, baud: int, before: bytes = PROBE_START) -> Probe:
+    """Set the port to ``baud``, write ``before`` (:data:`PROBE_START`; the safe stop's
+    search for a robot a lost byte moved to another rate writes its stop there,
+    :mod:`~roomba_bt.robot.baud_hunt`) and ask: see the module docstring. The waits grow
+    with the time the bytes take on the line, which at 300 baud is most of them."""
     transport.set_baud(baud)
-    transport.write(RESYNC_ZEROS + oi.start().data + oi.pause_stream().data)
-    noise = drain(transport)
+    transport.write(before)
+    quiet = max(QUIET_S, 3 * line_seconds(1, baud))  # three bytes' time, at a slow rate
+    noise = drain(transport, quiet=quiet, limit=DRAIN_LIMIT_S + line_seconds(len(before), baud))
     transport.write(PROBE_QUERY)
     clock = transport.now
-    deadline = clock() + REPLY_TIMEOUT_S
+    deadline = clock() + REPLY_TIMEOUT_S + line_seconds(len(PROBE_QUERY) + len(PROBE_PACKETS), baud)
     reply = b""
     while len(reply) < len(PROBE_PACKETS) and (remaining := deadline - clock()) > 0:
         reply += transport.read(remaining)
     if reply:
-        reply += transport.read(QUIET_S)  # anything more means it was not our reply
+        reply += transport.read(quiet)  # anything more means it was not our reply
     return Probe(baud, reply, noise, is_answer(reply))
 
 

@@ -43,6 +43,7 @@ from roomba_bt.oi.opcodes import Effect, longest_data_bytes
 from roomba_bt.oi.packets import packet_ids
 from roomba_bt.oi.profiles import RobotProfile
 from roomba_bt.oi.stream import StreamParser, stream_period
+from roomba_bt.robot.baud_hunt import asks_after, found_words, hunt
 from roomba_bt.robot.errors import PortLost, RobotError, WaitCutShort
 from roomba_bt.robot.link import LINK_ERRORS, LinkStatus, StreamLink
 from roomba_bt.robot.modes import OffsetDetector
@@ -102,6 +103,11 @@ STOP_RESYNC_ZEROS = bytes(longest_data_bytes())
 STOP_TAKEN_AGAIN = (
     "%s: the stop was not taken at first: a lost byte may have started a long command; sent "
     "%d zeros and the stop again%s: heard"
+)
+#: What a stop not confirmed says of a robot whose reset banner was read: stopped all the same
+RESET_STOPPED = (
+    "the robot reset (its start-up banner was read): its OI is Off, where its wheels and "
+    "motors are stopped"
 )
 #: Reads at most of what waits unread in the port before a stop (each read takes all there
 #: is: one is the rule; the bound is for a line that never runs dry)
@@ -471,6 +477,11 @@ class SafeStop:
         self.nothing_set_going = False
         #: the stop being said undelivered found the port gone (:meth:`_port_gone`)
         self._gone = False
+        #: the robot answered the stop only at another rate (:func:`~roomba_bt.robot.
+        #: baud_hunt.found_words`), or ""
+        self.found_at = ""
+        #: the robot's reset banner was read before a stop not confirmed: it is Off, stopped
+        self.reset_seen = False
         #: how many times the last stop was written again, after zeros, before the robot
         #: took it (:data:`STOP_TAKEN_AGAIN`); 0: at once, or never
         self.taken_again = 0
@@ -518,6 +529,7 @@ class SafeStop:
             return True
         self.written = False
         self.taken_again = 0
+        self.found_at, self.reset_seen = "", False
         backlog = read_backlog(link, writer.baud)
         self._unread = None if backlog is None else (backlog.frames, backlog.waited)
         # what the robot was last seen or told to do, before the stop moves the model on;
@@ -552,12 +564,45 @@ class SafeStop:
             unconfirmed = "no robot answered"  # answer (its TX line cut)
         if bound.cut is not None:  # a wait given up: nothing it would have shown is known
             unconfirmed = bound.cut
+        if unconfirmed is not None and bound.cut is None:
+            unconfirmed = self._asked_after(link, unconfirmed)
         if unconfirmed is not None:
             return self._undelivered(f"the stop was written but is unconfirmed: {unconfirmed}")
         link.streaming = False
         link.status = LinkStatus.STOPPED
         self.safe_stopped = True
         return True
+
+    def _asked_after(self, link: StreamLink, unconfirmed: str) -> str | None:
+        """A stop not confirmed (``unconfirmed`` says why), asked after: a Query List at the
+        run's rate, and where garbage came, the stop at each other rate
+        (:func:`~roomba_bt.robot.baud_hunt.hunt`). None if the robot answered in Passive
+        (at another rate: :attr:`found_at` said); else why it is unconfirmed, a reset's
+        robot said stopped (:attr:`reset_seen`: the OI is Off after it, its wheels still)."""
+        self.reset_seen = link.banner_seen()
+        if not self.robot_heard or not asks_after(link):
+            return unconfirmed
+        writer = self.writer
+        stop = b"".join(
+            command.data
+            for command in stop_sequence(
+                self.last_seen, builtin_may_run=writer.cycle_may_drive, end_in="passive",
+                profile=writer.profile,
+            )
+        )  # fmt: skip
+        garbled = link.bytes_since_frame > 0 and not self.reset_seen
+        with signals_deferred():
+            found = hunt(link, writer.baud, stop, STOP_RESYNC_ZEROS, garbled=garbled).found
+        if found is None:
+            if self.reset_seen:
+                return f"{unconfirmed}; {RESET_STOPPED}"
+            return unconfirmed
+        if found != writer.baud:
+            self.found_at = found_words(found, writer.baud)
+            log.warning("%s: %s", link.name, self.found_at)
+            writer.baud = found
+        self.answered = True
+        return None
 
     def _unconfirmed_before(self, link: StreamLink) -> str | None:
         """Why a stop written now could not be known to arrive, known before it is written:

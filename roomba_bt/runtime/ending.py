@@ -271,6 +271,9 @@ def stop_robot(connection: Connection, summary: RunSummary, first: bool = False)
                 through += TAKEN_AGAIN_IN_SUMMARY.format(
                     zeros=len(STOP_RESYNC_ZEROS), times=again + 1
                 )
+            found_at = getattr(getattr(connection, "ending", None), "found_at", "")
+            if found_at:  # heard only at another rate: a Baud made of lost bytes
+                through += f" ({found_at})"
             summary.safe_stop = (
                 before + "sent " + ", ".join(sequence) + through
                 if sequence
@@ -285,9 +288,10 @@ def stop_robot(connection: Connection, summary: RunSummary, first: bool = False)
         calm = getattr(getattr(connection, "ending", None), "nothing_set_going", False)
         # a robot the run set nothing going for is not said NOT DELIVERED in capitals: one
         # that never left Passive nor had a wheel command read as an alarm to a hobbyist
-        summary.safe_stop = ("nothing this run set going; " if calm else "NOT DELIVERED: ") + (
-            report or "the stop sequence could not be written"
-        )
+        reset = getattr(getattr(connection, "ending", None), "reset_seen", False)
+        # nor one whose reset was read: its OI is Off, its wheels stopped, whatever the stop did
+        said = "nothing this run set going; " if calm else "" if reset else "NOT DELIVERED: "
+        summary.safe_stop = said + (report or "the stop sequence could not be written")
         summary.stop_delivered = False
         summary.set_nothing_going = calm
         note_undelivered_stop(summary)

@@ -1,0 +1,137 @@
+"""The safe stop's search for a robot it could not confirm stopped: asked at the run's rate,
+then, where the line brought garbage, the stop written at each other rate of the OI's table.
+
+A byte lost on the way to the robot can make a Baud (129) of a command's data (a Drive whose
+opcode byte was lost: its velocity's high byte read as 129, the next as the code): the robot
+then talks and listens at another rate, the run reads garbage, and the stop written at the
+run's rate reaches nothing (the simulator's seed 50 at 1 % lost drove on at 300 baud). A stop
+not confirmed is followed by::
+
+    run's rate     [149][3][35][21][34]          Query List: Passive answered -> heard
+    garbage came:  for each other rate of the table (Baud (129)'s codes, 300 first)
+      rate         [0] x n  the stop  [149]...   zeros (at most HUNT_ZEROS_S of them), the
+                                                 stop from the mode last seen, a Query List
+                   answered Passive -> found: the port stays at that rate (said)
+
+The probe is :func:`~roomba_bt.robot.discovery.probe`'s (the quiet, the query, an answer
+read as Passive): the stop's Start is what makes Passive the answer. Silence alone (a cable,
+a robot switched off) is asked at the run's rate only: a robot a Baud moved streams on at its
+new rate, which reads as garbage.
+
+Decided (session 33): slowest first. A lost opcode's data bytes are most often a speed's or
+a radius' high byte (0, 1, 255), and Baud's codes 0 and 1 are 300 and 600 baud. Zeros are
+capped by time (:data:`HUNT_ZEROS_S`), not the full :data:`~roomba_bt.robot.ending.
+STOP_RESYNC_ZEROS`: 512 zeros take 17 s at 300 baud, a robot driving meanwhile. The search
+is bounded by :func:`hunt_seconds` (some 9 s, most of it at the slow rates).
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from roomba_bt.oi.encode import BAUD_CODES
+from roomba_bt.robot.discovery import (
+    DRAIN_LIMIT_S,
+    PROBE_PACKETS,
+    PROBE_QUERY,
+    QUIET_S,
+    REPLY_TIMEOUT_S,
+    Probe,
+    line_seconds,
+    probe,
+)
+from roomba_bt.robot.link import LINK_ERRORS, StreamLink
+
+#: Seconds of zeros at most before the stop at each rate of the search: all
+#: ``STOP_RESYNC_ZEROS`` from 19200 up, 15 at 300 baud.
+HUNT_ZEROS_S = 0.5
+
+
+def hunt_rates(run_rate: int) -> tuple[int, ...]:
+    """The rates of Baud (129)'s table (``oi.encode.BAUD_CODES``) but the run's, slowest
+    (code 0) first: see the module docstring."""
+    return tuple(rate for rate, _ in sorted(BAUD_CODES.items(), key=lambda item: item[1]) if rate != run_rate)
+
+
+def zeros_at(rate: int, zeros: bytes) -> bytes:
+    """As many of ``zeros`` as take :data:`HUNT_ZEROS_S` at ``rate`` at most."""
+    return zeros[: int(HUNT_ZEROS_S / line_seconds(1, rate))]
+
+
+def probe_seconds(rate: int, written: int) -> float:
+    """The longest a probe at ``rate`` after ``written`` bytes waits on the link's clock:
+    its drain's limit, the reply's wait and the quiet after it."""
+    quiet = max(QUIET_S, 3 * line_seconds(1, rate))
+    reply = REPLY_TIMEOUT_S + line_seconds(len(PROBE_QUERY) + len(PROBE_PACKETS), rate)
+    return DRAIN_LIMIT_S + line_seconds(written, rate) + reply + quiet
+
+
+def hunt_seconds(run_rate: int, stop: bytes, zeros: bytes) -> float:
+    """The search's bound on the link's clock, each rate's probe at its longest (docs/robot.md
+    says it: some 9 s from 115200 with the dock mission's stop)."""
+    asked = probe_seconds(run_rate, 0)
+    return asked + sum(
+        probe_seconds(rate, len(zeros_at(rate, zeros)) + len(stop)) for rate in hunt_rates(run_rate)
+    )
+
+
+@dataclass(frozen=True)
+class Hunt:
+    """What the search found: the probes made, in order; the rate that answered, or None."""
+
+    probes: tuple[Probe, ...]
+
+    @property
+    def found(self) -> int | None:
+        return next((p.baud for p in self.probes if p.answered), None)
+
+
+def hunt(link: StreamLink, run_rate: int, stop: bytes, zeros: bytes, *, garbled: bool) -> Hunt:
+    """Ask at ``run_rate`` whether the robot heard the stop; if not and the line was
+    ``garbled``, write ``stop`` after :func:`zeros_at` at each of :func:`hunt_rates` and ask
+    there, until one answers. The port is left at the rate that answered, else put back at
+    ``run_rate`` (also on a port that fails meanwhile, and on Ctrl-C)."""
+    transport = link.transport
+    probes: list[Probe] = []
+    link.drain_output()  # the stop's bytes leave at the run's rate
+    link.port_rate = None  # the probes set the port's rate themselves: unknown until done
+    found = False
+    try:
+        probes.append(probe(transport, run_rate, b""))
+        rates: Sequence[int] = hunt_rates(run_rate) if garbled else ()
+        for rate in rates:
+            if probes[-1].answered:
+                break
+            probes.append(probe(transport, rate, zeros_at(rate, zeros) + stop))
+        found = probes[-1].answered
+    except LINK_ERRORS:  # the port failed: the next write sets the run's rate again
+        return Hunt(tuple(probes))
+    finally:
+        if not found:
+            with contextlib.suppress(*LINK_ERRORS):
+                link.switch_rate(run_rate)
+    link.port_rate = probes[-1].baud
+    return Hunt(tuple(probes))
+
+
+def asks_after(link: StreamLink) -> bool:
+    """Whether a stop not confirmed is asked after on this link: on the wall clock, and on
+    the simulator's virtual one where its line loses bytes to the robot (as
+    ``ending.listened_after``, whether or not a stream ran); never in a replay, which writes
+    only what the recorded run wrote."""
+    transport = link.transport
+    if getattr(transport, "recorded_reads", None) is not None or not transport.is_open:
+        return False
+    return bool(getattr(transport, "wall_clock", True) or getattr(transport, "loses_bytes", False))
+
+
+def found_words(found: int, run_rate: int) -> str:
+    """What a stop that reached the robot only at ``found`` baud says, in the summary and the
+    log."""
+    return (
+        f"the robot had moved to {found} baud (a Baud (129) made of lost bytes, most likely): "
+        f"stopped there, it answered in Passive at {found}; the port is left at {found} (the "
+        f"robot talks at {found}, not {run_rate}, until it is powered off or sent Baud)"
+    )
