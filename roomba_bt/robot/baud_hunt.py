@@ -22,7 +22,7 @@ Decided (session 33): slowest first. A lost opcode's data bytes are most often a
 a radius' high byte (0, 1, 255), and Baud's codes 0 and 1 are 300 and 600 baud. Zeros are
 capped by time (:data:`HUNT_ZEROS_S`), not the full :data:`~roomba_bt.robot.ending.
 STOP_RESYNC_ZEROS`: 512 zeros take 17 s at 300 baud, a robot driving meanwhile. The search
-is bounded by :func:`hunt_seconds` (some 9 s, most of it at the slow rates).
+is bounded by :func:`hunt_seconds` (12.4 s from 115200, most of it at the slow rates).
 """
 
 from __future__ import annotations
@@ -52,7 +52,9 @@ HUNT_ZEROS_S = 0.5
 def hunt_rates(run_rate: int) -> tuple[int, ...]:
     """The rates of Baud (129)'s table (``oi.encode.BAUD_CODES``) but the run's, slowest
     (code 0) first: see the module docstring."""
-    return tuple(rate for rate, _ in sorted(BAUD_CODES.items(), key=lambda item: item[1]) if rate != run_rate)
+    return tuple(
+        rate for rate, _ in sorted(BAUD_CODES.items(), key=lambda item: item[1]) if rate != run_rate
+    )
 
 
 def zeros_at(rate: int, zeros: bytes) -> bytes:
@@ -70,7 +72,7 @@ def probe_seconds(rate: int, written: int) -> float:
 
 def hunt_seconds(run_rate: int, stop: bytes, zeros: bytes) -> float:
     """The search's bound on the link's clock, each rate's probe at its longest (docs/robot.md
-    says it: some 9 s from 115200 with the dock mission's stop)."""
+    says it: 12.4 s from 115200 with a stop from Safe)."""
     asked = probe_seconds(run_rate, 0)
     return asked + sum(
         probe_seconds(rate, len(zeros_at(rate, zeros)) + len(stop)) for rate in hunt_rates(run_rate)

@@ -1,0 +1,142 @@
+"""A stop the robot did not confirm, asked after: at the run's rate, and where garbage came,
+written at each rate of Baud (129)'s table (``robot/baud_hunt.py``).
+
+Drive (137) 129 mm/s spinning left is ``89 00 81 00 01``; its opcode lost, the robot skips
+``00`` (no opcode) and reads ``81 00`` as Baud (129) code 0: it talks and listens at 300
+baud from then on, spinning, and the run's stop at 115200 reaches nothing.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from roomba_bt.evaluate import episode
+from roomba_bt.evaluate.episode import EpisodeSpec, run_episode
+from roomba_bt.mission import load_mission
+from roomba_bt.oi import commands as oi
+from roomba_bt.oi.modes import OIMode
+from roomba_bt.oi.profiles import CREATE2
+from roomba_bt.robot.baud_hunt import hunt_rates, hunt_seconds
+from roomba_bt.robot.ending import STOP_RESYNC_ZEROS
+from roomba_bt.runtime.stack import RunStack
+from roomba_bt.runtime.summary import RunSummary
+from roomba_bt.sim import SimLink, Simulator, load_world
+from roomba_bt.sim.faults import Faults
+
+from .simrun import spins_then_passive
+
+#: the drive whose opcode the line loses: its data bytes then read as Baud (129) code 0
+BAUD_MAKER = oi.drive(129, 1).data
+
+SPINS = spins_then_passive("spins", ("5s", "velocity: 129 mm/s, radius: spin_left"))
+
+
+class LosesTheDrivesOpcode(SimLink):
+    """The simulator's link on its virtual clock, losing the first byte of the first write of
+    :data:`BAUD_MAKER` (the drive's opcode), as a bad cable does."""
+
+    def __init__(self, simulator: Simulator) -> None:
+        super().__init__(simulator)
+        self.lost = False
+
+    @property
+    def loses_bytes(self) -> bool:
+        """A line that loses bytes to the robot: the stop is listened and asked after."""
+        return True
+
+    def write(self, data: bytes) -> None:
+        if not self.lost and bytes(data) == BAUD_MAKER:
+            self.lost = True
+            data = data[1:]
+        super().write(data)
+
+
+def test_the_hunt_tries_every_rate_of_the_baud_table_but_the_runs() -> None:
+    assert hunt_rates(115200) == (
+        300,
+        600,
+        1200,
+        2400,
+        4800,
+        9600,
+        14400,
+        19200,
+        28800,
+        38400,
+        57600,
+    )
+    # bounded (docs/robot.md): a stop from Safe is 11 bytes (drive 0, motors off, pause, Start)
+    assert 12.0 < hunt_seconds(115200, bytes(11), STOP_RESYNC_ZEROS) < 12.5
+
+
+def test_a_robot_a_lost_byte_put_on_300_baud_is_stopped_there(tmp_path: Path) -> None:
+    """Before, the run said ``NOT DELIVERED: ... the line is garbled`` and the simulated robot
+    spun on at 300 baud."""
+    path = tmp_path / "m.yaml"
+    path.write_text(SPINS)
+    simulator = Simulator(load_world("empty-room"), CREATE2, 0, trace=False)
+    link = LosesTheDrivesOpcode(simulator)
+    stack = RunStack(load_mission(path, {}, profile=CREATE2), link, profile=CREATE2)
+    summary = stack.run()
+    stack.close()
+    assert link.lost and simulator.baud == 300
+    assert simulator.mode is OIMode.PASSIVE
+    assert simulator.requested_left == simulator.requested_right == 0
+    assert summary.stop_delivered, summary.safe_stop
+    assert "the robot had moved to 300 baud" in summary.safe_stop, summary.safe_stop
+    assert "stopped there" in summary.safe_stop
+
+
+def dock_at_one_percent_lost(seed: int, monkeypatch: pytest.MonkeyPatch) -> tuple[Any, RunSummary]:
+    """The dock episode ``seed`` of ``eval dock --host-drop-rate 0.01``: its simulator and
+    the run's summary, kept as the episode measures them."""
+    kept: list[tuple[Any, RunSummary]] = []
+    measured = episode._measured
+
+    def keep(
+        spec: Any, world: Any, pose: Any, simulator: Any, summary: RunSummary, *rest: Any
+    ) -> Any:
+        kept.append((simulator, summary))
+        return measured(spec, world, pose, simulator, summary, *rest)
+
+    monkeypatch.setattr(episode, "_measured", keep)
+    mission = str(Path(__file__).parents[2] / "roomba_bt" / "missions" / "dock.yaml")
+    spec = EpisodeSpec(mission, seed=seed, faults=Faults(host_drop_rate=0.01), trace_every=0)
+    run_episode(spec)
+    return kept[0]
+
+
+def test_seed_50_a_baud_made_of_lost_bytes_ends_stopped_in_passive_at_300(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Before: NOT DELIVERED, the simulated robot in Safe at 300 baud, driving 228/370 mm/s."""
+    simulator, summary = dock_at_one_percent_lost(50, monkeypatch)
+    assert simulator.baud == 300 and simulator.mode is OIMode.PASSIVE
+    assert simulator.requested_left == simulator.requested_right == 0
+    assert "the robot had moved to 300 baud" in summary.safe_stop, summary.safe_stop
+
+
+def test_seed_51_a_reset_made_of_lost_bytes_is_said_stopped(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The robot reset (its banner read) and stays Off, where its wheels are stopped: said so,
+    not NOT DELIVERED in capitals."""
+    simulator, summary = dock_at_one_percent_lost(51, monkeypatch)
+    assert simulator.mode is OIMode.OFF
+    assert simulator.requested_left == simulator.requested_right == 0
+    assert not summary.safe_stop.startswith("NOT DELIVERED"), summary.safe_stop
+    assert "the robot reset (its start-up banner was read): its OI is Off" in summary.safe_stop
+
+
+def test_seed_4_a_stop_after_a_stream_stopped_is_confirmed_by_a_query(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A Power (133) or Stop (173) made of lost bytes stopped the stream; the stop's Start
+    brought the robot to Passive, and the Query List after it shows so. Before: NOT
+    DELIVERED, "the robot answers nothing", the robot in Passive at 0/0."""
+    simulator, summary = dock_at_one_percent_lost(4, monkeypatch)
+    assert simulator.mode is OIMode.PASSIVE
+    assert summary.stop_delivered and summary.safe_stop.startswith("sent "), summary.safe_stop
