@@ -565,44 +565,13 @@ class SafeStop:
         if bound.cut is not None:  # a wait given up: nothing it would have shown is known
             unconfirmed = bound.cut
         if unconfirmed is not None and bound.cut is None:
-            unconfirmed = self._asked_after(link, unconfirmed)
+            unconfirmed = asked_after(self, unconfirmed)
         if unconfirmed is not None:
             return self._undelivered(f"the stop was written but is unconfirmed: {unconfirmed}")
         link.streaming = False
         link.status = LinkStatus.STOPPED
         self.safe_stopped = True
         return True
-
-    def _asked_after(self, link: StreamLink, unconfirmed: str) -> str | None:
-        """A stop not confirmed (``unconfirmed`` says why), asked after: a Query List at the
-        run's rate, and where garbage came, the stop at each other rate
-        (:func:`~roomba_bt.robot.baud_hunt.hunt`). None if the robot answered in Passive
-        (at another rate: :attr:`found_at` said); else why it is unconfirmed, a reset's
-        robot said stopped (:attr:`reset_seen`: the OI is Off after it, its wheels still)."""
-        self.reset_seen = link.banner_seen()
-        if not self.robot_heard or not asks_after(link):
-            return unconfirmed
-        writer = self.writer
-        stop = b"".join(
-            command.data
-            for command in stop_sequence(
-                self.last_seen, builtin_may_run=writer.cycle_may_drive, end_in="passive",
-                profile=writer.profile,
-            )
-        )  # fmt: skip
-        garbled = link.bytes_since_frame > 0 and not self.reset_seen
-        with signals_deferred():
-            found = hunt(link, writer.baud, stop, STOP_RESYNC_ZEROS, garbled=garbled).found
-        if found is None:
-            if self.reset_seen:
-                return f"{unconfirmed}; {RESET_STOPPED}"
-            return unconfirmed
-        if found != writer.baud:
-            self.found_at = found_words(found, writer.baud)
-            log.warning("%s: %s", link.name, self.found_at)
-            writer.baud = found
-        self.answered = True
-        return None
 
     def _unconfirmed_before(self, link: StreamLink) -> str | None:
         """Why a stop written now could not be known to arrive, known before it is written:
@@ -853,3 +822,37 @@ class SafeStop:
         if self.safe_stopped is None:
             self.safe_stopped = stopped
         return stopped
+
+
+def asked_after(ending: SafeStop, unconfirmed: str) -> str | None:
+    """A stop not confirmed (``unconfirmed`` says why), asked after: a Query List at the
+    run's rate, and where garbage came, the stop at each other rate
+    (:func:`~roomba_bt.robot.baud_hunt.hunt`). None if the robot answered in Passive
+    (at another rate: :attr:`SafeStop.found_at` said); else why it is unconfirmed, a reset's
+    robot said stopped (:attr:`SafeStop.reset_seen`: the OI is Off after it, its wheels
+    still). A part of :meth:`SafeStop.stop`, out of the class for its size."""
+    writer = ending.writer
+    link = writer.link
+    ending.reset_seen = link.banner_seen()
+    if not ending.robot_heard or not asks_after(link):
+        return unconfirmed
+    stop = b"".join(
+        command.data
+        for command in stop_sequence(
+            ending.last_seen, builtin_may_run=writer.cycle_may_drive, end_in="passive",
+            profile=writer.profile,
+        )
+    )  # fmt: skip
+    garbled = link.bytes_since_frame > 0 and not ending.reset_seen
+    with signals_deferred():
+        found = hunt(link, writer.baud, stop, STOP_RESYNC_ZEROS, garbled=garbled).found
+    if found is None:
+        if ending.reset_seen:
+            return f"{unconfirmed}; {RESET_STOPPED}"
+        return unconfirmed
+    if found != writer.baud:
+        ending.found_at = found_words(found, writer.baud)
+        log.warning("%s: %s", link.name, ending.found_at)
+        writer.baud = found
+    ending.answered = True
+    return None

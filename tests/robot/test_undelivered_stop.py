@@ -326,8 +326,9 @@ def test_a_stop_after_the_robot_fell_silent_is_unconfirmed() -> None:
 def test_an_unconfirmed_stop_says_what_was_seen_before_it_not_the_stop_itself() -> None:
     """``last seen in Passive stopped``: read off the model after the stop's own Start and
     drive 0 had moved it; the robot was last seen in Safe, spinning."""
-    connection, _, _ = spinning()
+    connection, link, _ = spinning()
     connection.unheard = "the robot answers nothing"
+    link.mute = True  # as it says: the Query List asked after the stop is not answered
     assert connection.safe_stop() is False
     assert connection.stop_report == (
         "last seen in Safe spinning left at 100 mm/s; the stop was written but is "
@@ -341,8 +342,9 @@ def test_the_stop_tried_again_at_close_says_what_was_seen_before_the_first(
     """A flat battery: the run's stop unconfirmed, ``close()`` tries once more and said
     ``last seen in Passive stopped``, the model moved on by the first stop's Start, beside
     the summary's ``last seen in Safe``: one robot, two modes."""
-    connection, _, _ = spinning()
+    connection, link, _ = spinning()
     connection.unheard = "the robot answers nothing"
+    link.mute = True  # as it says: the Query List asked after the stop is not answered
     assert connection.safe_stop() is False
     first = connection.stop_report
     caplog.set_level(logging.ERROR, logger="roomba_bt.robot.ending")
