@@ -423,3 +423,27 @@ def record_run(tmp_path: Path, link: SimLink, mission: str = SPIN, **options: An
     stack.run()
     stack.close()  # the record's end line
     return path
+
+
+class LosesTheOpcodeOf(SimLink):
+    """The simulator's link on its virtual clock, losing the first byte of the first write of
+    ``command`` (its opcode), as a bad cable does: the robot reads its data bytes as commands
+    (a Drive's as a Song of 255 notes, or as Baud). ``written``: what reached the line."""
+
+    def __init__(self, simulator: Simulator, command: bytes) -> None:
+        super().__init__(simulator)
+        self.command = command
+        self.lost = False
+        self.written = bytearray()
+
+    @property
+    def loses_bytes(self) -> bool:
+        """A line that loses bytes to the robot: the stop is listened and asked after."""
+        return True
+
+    def write(self, data: bytes) -> None:
+        if not self.lost and bytes(data) == self.command:
+            self.lost = True
+            data = data[1:]
+        self.written += data
+        super().write(data)

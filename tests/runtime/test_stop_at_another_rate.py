@@ -23,35 +23,15 @@ from roomba_bt.robot.baud_hunt import hunt_rates, hunt_seconds
 from roomba_bt.robot.ending import STOP_RESYNC_ZEROS
 from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import RunSummary
-from roomba_bt.sim import SimLink, Simulator, load_world
+from roomba_bt.sim import Simulator, load_world
 from roomba_bt.sim.faults import Faults
 
-from .simrun import spins_then_passive
+from .simrun import LosesTheOpcodeOf, spins_then_passive
 
 #: the drive whose opcode the line loses: its data bytes then read as Baud (129) code 0
 BAUD_MAKER = oi.drive(129, 1).data
 
 SPINS = spins_then_passive("spins", ("5s", "velocity: 129 mm/s, radius: spin_left"))
-
-
-class LosesTheDrivesOpcode(SimLink):
-    """The simulator's link on its virtual clock, losing the first byte of the first write of
-    :data:`BAUD_MAKER` (the drive's opcode), as a bad cable does."""
-
-    def __init__(self, simulator: Simulator) -> None:
-        super().__init__(simulator)
-        self.lost = False
-
-    @property
-    def loses_bytes(self) -> bool:
-        """A line that loses bytes to the robot: the stop is listened and asked after."""
-        return True
-
-    def write(self, data: bytes) -> None:
-        if not self.lost and bytes(data) == BAUD_MAKER:
-            self.lost = True
-            data = data[1:]
-        super().write(data)
 
 
 def test_the_hunt_tries_every_rate_of_the_baud_table_but_the_runs() -> None:
@@ -78,7 +58,7 @@ def test_a_robot_a_lost_byte_put_on_300_baud_is_stopped_there(tmp_path: Path) ->
     path = tmp_path / "m.yaml"
     path.write_text(SPINS)
     simulator = Simulator(load_world("empty-room"), CREATE2, 0, trace=False)
-    link = LosesTheDrivesOpcode(simulator)
+    link = LosesTheOpcodeOf(simulator, BAUD_MAKER)
     stack = RunStack(load_mission(path, {}, profile=CREATE2), link, profile=CREATE2)
     summary = stack.run()
     stack.close()

@@ -24,7 +24,7 @@ from roomba_bt.runtime.stack import RunStack
 from roomba_bt.runtime.summary import Outcome
 from roomba_bt.sim import SimLink, Simulator, load_world
 
-from .simrun import spins_then_passive
+from .simrun import LosesTheOpcodeOf, spins_then_passive
 
 #: the drive whose opcode the line loses: its data bytes then read as a 255-note Song
 SONG_MAKER = oi.drive(140, -1).data
@@ -34,28 +34,6 @@ SPIN_THEN_SPIN_BACK = spins_then_passive(
     ("1s", "velocity: 100 mm/s, radius: spin_left"),
     ("1s", "velocity: 140 mm/s, radius: spin_right"),
 )
-
-
-class LosesTheDrivesOpcode(SimLink):
-    """The simulator's link on its virtual clock, losing the first byte of the write of
-    :data:`SONG_MAKER` (the drive's opcode), as a bad cable does."""
-
-    def __init__(self, simulator: Simulator) -> None:
-        super().__init__(simulator)
-        self.lost = False
-        self.written = bytearray()
-
-    @property
-    def loses_bytes(self) -> bool:
-        """A line that loses bytes to the robot: the stop is listened after."""
-        return True
-
-    def write(self, data: bytes) -> None:
-        if not self.lost and bytes(data) == SONG_MAKER:
-            self.lost = True
-            data = data[1:]
-        self.written += data
-        super().write(data)
 
 
 def test_the_longest_command_is_a_song_of_255_notes() -> None:
@@ -74,7 +52,7 @@ def test_a_stop_taken_as_song_notes_is_written_again_after_zeros(
     path = tmp_path / "m.yaml"
     path.write_text(SPIN_THEN_SPIN_BACK)
     simulator = Simulator(load_world("empty-room"), CREATE2, 0, trace=False)
-    link = LosesTheDrivesOpcode(simulator)
+    link = LosesTheOpcodeOf(simulator, SONG_MAKER)
     stack = RunStack(load_mission(path, {}, profile=CREATE2), link, profile=CREATE2)
     with caplog.at_level(logging.WARNING, logger="roomba_bt"):
         summary = stack.run()
