@@ -477,11 +477,9 @@ class SafeStop:
         self.nothing_set_going = False
         #: the stop being said undelivered found the port gone (:meth:`_port_gone`)
         self._gone = False
-        #: the robot answered the stop only at another rate (:func:`~roomba_bt.robot.
-        #: baud_hunt.found_words`), or ""
-        self.found_at = ""
-        #: the robot's reset banner was read before a stop not confirmed: it is Off, stopped
-        self.reset_seen = False
+        #: the stop answered only at another rate (``baud_hunt.found_words``), or ""; the
+        #: reset banner read before a stop not confirmed (Off: stopped; :func:`asked_after`)
+        self.found_at, self.reset_seen = "", False
         #: how many times the last stop was written again, after zeros, before the robot
         #: took it (:data:`STOP_TAKEN_AGAIN`); 0: at once, or never
         self.taken_again = 0
@@ -528,8 +526,7 @@ class SafeStop:
             self.safe_stopped = True  # nothing written, nothing to stop; not "unconfirmed"
             return True
         self.written = False
-        self.taken_again = 0
-        self.found_at, self.reset_seen = "", False
+        self.taken_again, self.found_at, self.reset_seen = 0, "", False
         backlog = read_backlog(link, writer.baud)
         self._unread = None if backlog is None else (backlog.frames, backlog.waited)
         # what the robot was last seen or told to do, before the stop moves the model on;
