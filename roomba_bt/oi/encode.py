@@ -22,6 +22,7 @@ from roomba_bt.oi.errors import EncodeError
 from roomba_bt.oi.opcodes import (
     COMMANDS,
     COMMANDS_BY_NAME,
+    NOTE_STEPS_PER_SECOND,
     PLAYABLE_NOTES,  # noqa: F401  (the name's old home: roomba_bt.oi.encode.PLAYABLE_NOTES)
     SONG_LENGTH,
     ArgSpec,
@@ -439,6 +440,14 @@ def song(song_number: int, notes: Sequence[Note | tuple[int, int]]) -> Command:
         else:
             raise EncodeError("song", "note", "a Note or a (number, duration) pair", note)
     return encode(140, song_number, len(notes), tail=tail)
+
+
+def song_seconds(command: Command) -> float:
+    """How long the song a Song (140) command defines plays: its notes' durations (every
+    second byte of the tail, in 1/64 s) summed. ``song_seconds(song(0, [(60, 32)])) == 0.5``."""
+    if command.spec.opcode != 140:
+        raise EncodeError("song_seconds", "command", "a Song (140) command", command)
+    return sum(command.data[4::2]) / NOTE_STEPS_PER_SECOND
 
 
 def play(song_number: int) -> Command:
