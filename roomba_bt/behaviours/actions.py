@@ -826,8 +826,8 @@ class Play(Action):
     slot, when the mission reads ``song_number``: FAILURE if no frame shows it within
     0.25 s), else on the next frame. A song of at most 45 ms that this run defined and no
     frame showed succeeds once its length and a frame have passed: the stream can miss a
-    song that short (:data:`SHORT_SONG_S`). FAILURE at once out of Safe and Full,
-    where the robot refuses Play, nothing sent (it said SUCCESS until session 33).
+    song that short. FAILURE at once out of Safe and Full, where the robot refuses Play,
+    nothing sent (it said SUCCESS until session 33).
 
     Packet 37 alone cannot tell this song from one still playing, which the robot goes on
     with, ignoring the Play: a mission that reads ``song_number`` too has that told apart.
@@ -835,7 +835,7 @@ class Play(Action):
     So ``play`` then ``wait ... until: {sensor: song_playing == 0}`` waits for the song's
     end. Until session 32 ``play`` succeeded on the tick it was sent: the wait read that
     tick's frame, from before the Play, passed at once, and the next ``play`` went out in
-    the same tick. :data:`SONG_START_S` is the 0.25 s."""
+    the same tick. :data:`SONG_START_S` is the 0.25 s; :data:`SHORT_SONG_S` the 45 ms."""
 
     def start(self) -> None:
         self._sent_at: float | None = None
