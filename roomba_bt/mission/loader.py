@@ -549,6 +549,7 @@ class Loader:
             raise Bad(key_loc.at(f"subtree name {name!r} is already a node name"))
         fields = known_fields(node, loc, f"subtree {name!r}", ("parameters", "tree", "doc"))
         params: dict[str, tuple[ValueType, Any, Loc]] = {}
+        default_texts: dict[str, str] = {}
         broken: set[str] = set()
         if "parameters" in fields:
             pnode, _, ploc = fields["parameters"]
@@ -562,14 +563,17 @@ class Loader:
                     broken.add(pname)  # not reported again at its uses and arguments
                     continue
                 params[pname] = (vtype, default if has_default else None, pkloc)
+                if has_default:
+                    default_texts[pname] = _default_text(vtype, pvalue, default)
         if "tree" not in fields:
             self.ctx.error(loc.at(f"subtree {name!r} needs a tree:"))
             body, body_loc = None, loc
         else:
             body, _, body_loc = fields["tree"]
         self.ctx.subtrees[name] = SubtreeDef(
-            name, key_loc, params, body, body_loc, broken=frozenset(broken)
-        )
+            name, key_loc, params, body, body_loc, broken=frozenset(broken),
+            default_texts=default_texts,
+        )  # fmt: skip
 
 
 def bind_parameters(
@@ -606,10 +610,12 @@ def bind_parameters(
                 )
                 env[name] = Bound(vtype, UNKNOWN, "?")  # reported once, not at every use
                 continue
-            # a text's value as its uses insert it: "$$" already one "$"
-            text = default if vtype is STR else _text(value, vloc, default)
             env[name] = Bound(
-                vtype, default, text, default_at=_default_at(value, vloc), wording=wording
+                vtype,
+                default,
+                _default_text(vtype, value, default),
+                default_at=_default_at(value, vloc),
+                wording=wording,
             )
     for name, text in overrides.items():
         if name not in broken:
@@ -1036,8 +1042,13 @@ def _default_at(node: yaml.Node, loc: Loc) -> Loc:
     return loc
 
 
-def _text(node: yaml.Node, loc: Loc, default: Any) -> str:
-    for key, value in getattr(node, "value", []):
+def _default_text(vtype: ValueType, declaration: yaml.Node, default: Any) -> str:
+    """A parameter's default as its declaration writes it (``10min``, not ``600 s``): the
+    text its uses insert and its nodes' names show; a text's default is its value, whose
+    ``$$`` is already one ``$``."""
+    if vtype is STR:
+        return str(default)
+    for key, value in getattr(declaration, "value", []):
         if getattr(key, "value", None) == "default" and isinstance(value, yaml.ScalarNode):
             return str(value.value)
     return str(default)

@@ -246,6 +246,9 @@ class SubtreeDef:
     #: the definition itself was refused (reported there): its uses compile to nothing and
     #: say nothing more, its parameters being unknown
     written_wrongly: bool = False
+    #: each default as the library writes it (``10min``), the text a use that gives none
+    #: names its nodes with
+    default_texts: Mapping[str, str] = field(default_factory=dict)
 
 
 @dataclass
@@ -746,3 +749,25 @@ def shown(vtype: ValueType, value: Any) -> str:
     if vtype.name in CANONICAL and isinstance(value, int | float):
         return format_quantity(vtype.name, value)
     return str(value)
+
+
+def as_written(vtype: ValueType, value: Any, node: yaml.Node, env: Mapping[str, Bound]) -> str:
+    """``value`` as ``node`` writes it, each ``${parameter}`` as that parameter's own text:
+    a subtree's ``time_limit: "${time_limit}"`` passes on the ``2min`` its user wrote, where
+    the canonical ``120 s`` named the node ``dock_time_limit(120 s)`` in ``show``, the live
+    tree and the failure. :func:`shown` where the node is no scalar, the value is a text
+    (its ``$$`` already one ``$``), or the written text does not read back as ``value``
+    (``40`` for an int: YAML's number, which a text is not)."""
+    if vtype is STR or not isinstance(node, yaml.ScalarNode):
+        return shown(vtype, value)
+
+    def text_of(name: str) -> str | None:
+        bound = env.get(name)
+        return None if bound is None or bound.value is UNKNOWN else bound.text
+
+    text = substituted(str(node.value), text_of).strip()
+    try:
+        reads_back = vtype.parse(text) == value
+    except ValueError:  # UnitError: the written text is no value of this type alone
+        reads_back = False
+    return text if reads_back else shown(vtype, value)
