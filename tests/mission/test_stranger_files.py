@@ -418,3 +418,13 @@ def test_a_plugin_file_written_the_windows_way_is_quoted_as_written(
         said,
         "3:8: unknown node 'lurch' (the plugin file 'lib\\moves.py' was not loaded)",
     ]
+
+
+def test_a_windows_path_where_a_value_goes_is_said_as_written(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``wait: 'C:\\missions\\a.yaml'`` (a path pasted in the wrong place) was said
+    ``got 'C:\\\\missions\\\\a.yaml'``: each backslash doubled, no text the file holds."""
+    path = _mission(tmp_path, "tree:\n  wait: 'C:\\missions\\a.yaml'\n")
+    assert main(["validate", str(path)]) == 2
+    assert "got 'C:\\missions\\a.yaml' [tree.wait]" in capsys.readouterr().out
