@@ -556,8 +556,11 @@ def _check_arguments(args: argparse.Namespace) -> str | None:
     found = [(mission, mission_file(mission)) for mission in args.missions]
     args.not_found = list(dict.fromkeys(f[0] for _, f in found if isinstance(f, tuple)))
     named = [(mission, f) for mission, f in found if not isinstance(f, tuple)]
-    if not named:
-        return "; ".join(args.not_found)
+    if not named:  # each on its line, as validate says them: they were joined with "; "
+        if len(args.not_found) == 1:
+            return args.not_found[0]
+        _say_not_found(args.not_found)
+        return _cannot_be_evaluated(len(args.not_found), len(args.not_found))
     args.mission_paths = dict(given_once("eval", named, "evaluated"))
     args.missions = list(args.mission_paths)
     problem = _profile_of_the_missions(args)
@@ -585,6 +588,17 @@ def _check_arguments(args: argparse.Namespace) -> str | None:
         except ValueError as exc:
             return f"--out {exc}"
     return None
+
+
+def _say_not_found(problems: list[str]) -> None:
+    """Each mission not found on its own line, as ``validate`` says each."""
+    for problem in problems:
+        print(f"roomba-bt eval: {problem}", file=sys.stderr)
+
+
+def _cannot_be_evaluated(count: int, given: int) -> str:
+    """The line after the missions that cannot run, each said on its own."""
+    return f"{count} of {given} missions cannot be evaluated (said above); no episode runs"
 
 
 def _profile_of_the_missions(args: argparse.Namespace) -> str | None:
@@ -705,13 +719,11 @@ def _compiled(args: argparse.Namespace, chosen: list[Variant]) -> list[Any] | in
             invalid.append(v.mission)
         missions.append(loaded)
     if invalid or args.not_found:
-        for problem in args.not_found:
-            print(f"roomba-bt eval: {problem}", file=sys.stderr)
+        _say_not_found(args.not_found)
         count, given = len(invalid) + len(args.not_found), len(args.mission_paths)
         if given + len(args.not_found) == 1:
             return ExitCode.INVALID  # its errors are the whole story
-        return _error(f"{count} of {given + len(args.not_found)} missions cannot be evaluated "
-                      "(said above); no episode runs")  # fmt: skip
+        return _error(_cannot_be_evaluated(count, given + len(args.not_found)))
     warned = [(v, m) for v, m in zip(chosen, missions, strict=True) if m.warnings]
     if not (args.strict and warned):
         return missions

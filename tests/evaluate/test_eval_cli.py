@@ -615,6 +615,22 @@ def test_every_mission_that_cannot_run_is_said_before_any_episode(
     ]
 
 
+def test_several_missions_not_found_are_said_one_line_each(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """When no mission was found, their messages were joined with "; " on one line; each
+    has its own now, as ``validate`` says them and as when some were found (exit 2)."""
+    missing = [str(tmp_path / "a.yaml"), str(tmp_path / "b.yaml")]
+    assert main(["eval", *missing, "--runs", "1", "--no-progress"]) == 2
+    lines = capsys.readouterr().err.splitlines()
+    assert [line.split(": no such mission file")[0] for line in lines[:2]] == [
+        f"roomba-bt eval: {path}" for path in missing
+    ]
+    assert lines[2:] == [
+        "roomba-bt eval: 2 of 2 missions cannot be evaluated (said above); no episode runs"
+    ]
+
+
 def test_a_mission_given_twice_is_evaluated_once(capsys: pytest.CaptureFixture[str]) -> None:
     """``eval dock.yaml ./dock.yaml`` ran an A/B of the file against itself, and ``eval dock
     dock`` refused "the same variant twice": each file once now, the other warned about."""
