@@ -554,13 +554,14 @@ def _check_arguments(args: argparse.Namespace) -> str | None:
     message."""
     args.key = list(dict.fromkeys(args.key))  # a key named twice is reported once
     found = [(mission, mission_file(mission)) for mission in args.missions]
-    args.not_found = list(dict.fromkeys(f[0] for _, f in found if isinstance(f, tuple)))
+    not_found: list[str] = list(dict.fromkeys(f[0] for _, f in found if isinstance(f, tuple)))
+    args.not_found = not_found
     named = [(mission, f) for mission, f in found if not isinstance(f, tuple)]
     if not named:  # each on its line, as validate says them: they were joined with "; "
-        if len(args.not_found) == 1:
-            return args.not_found[0]
-        _say_not_found(args.not_found)
-        return _cannot_be_evaluated(len(args.not_found), len(args.not_found))
+        if len(not_found) == 1:
+            return not_found[0]
+        _say_not_found(not_found)
+        return _cannot_be_evaluated(len(not_found), len(not_found))
     args.mission_paths = dict(given_once("eval", named, "evaluated"))
     args.missions = list(args.mission_paths)
     problem = _profile_of_the_missions(args)
