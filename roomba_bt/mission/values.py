@@ -444,7 +444,8 @@ def resolve(
                 return UNKNOWN
         if raw.startswith("@") or (port_remapping(raw) and vtype.name not in ("str", "any")):
             return _reference(ctx, raw, loc, vtype, what, (allow_ref, no_ref))
-    return _check_range(_parsed(vtype, raw, loc, what, param, node), loc, what, param)
+    parsed = _parsed(vtype, raw, loc, what, param, node)
+    return _check_range(parsed, loc, what, param, written=raw if isinstance(raw, str) else "")
 
 
 def number_as_text_problem(node: yaml.Node | None, number: float) -> str | None:
@@ -592,9 +593,11 @@ def _parameters_used(raw: str, loc: Loc, env: Mapping[str, Bound], what: str) ->
     return names
 
 
-def _check_range(value: Any, loc: Loc, what: str, param: Param | None, origin: str = "") -> Any:
+def _check_range(
+    value: Any, loc: Loc, what: str, param: Param | None, origin: str = "", written: str = ""
+) -> Any:
     if param is not None:
-        problem = param.check_range(value)
+        problem = param.check_range(value, written)
         if problem is not None:
             owner = what.rsplit(".", 1)[0] if "." in what else what
             raise Bad(loc.at(f"{owner}: {problem}{origin}"))
