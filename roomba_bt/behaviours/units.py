@@ -228,8 +228,10 @@ def compound_duration(value: str) -> float | None:
     return total
 
 
-#: a unit followed by another number: a duration in several units meant (``1h30``)
-_SEVERAL_PARTS = re.compile(r"[0-9.]\s*[A-Za-z]+\s*[-+]?[0-9.]", re.ASCII)
+#: a unit followed by another number: a duration in several units meant (``1h30``, ``1h .5``);
+#: a point alone after the unit is none (``2 min.``, a sentence's full stop, was said to be
+#: several units)
+_SEVERAL_PARTS = re.compile(r"[0-9.]\s*[A-Za-z]+\s*[-+]?\.?[0-9]", re.ASCII)
 
 
 def _compound_hint(dimension: str, value: str) -> str:
