@@ -64,11 +64,11 @@ from roomba_bt.robot.silence import (
 )
 from roomba_bt.robot.stall_asks import StallAsks, ask_in_stall
 from roomba_bt.robot.startup import (
-    NO_ANSWER_CAUSES,
     STREAM_ASKS_AGAIN,
     ModeName,
     agreed_mode_reply,
     as_mode,
+    no_answer_causes,
     not_a_mode,
     port_not_opened,
     stream_zeros,
@@ -76,10 +76,11 @@ from roomba_bt.robot.startup import (
 from roomba_bt.robot.wake import KeepAwake, keep_awake_for, named_stall
 from roomba_bt.robot.writer import RESYNC_ZEROS, CommandWriter
 from roomba_bt.transport.base import Transport, TransportError
+from roomba_bt.transport.link_kind import link_of
 from roomba_bt.transport.serial_port import DEFAULT_BAUD, SerialTransport
 
 __all__ = [
-    "NO_ANSWER_CAUSES",  # where the CLI has them from
+    "no_answer_causes",  # where the CLI has them from
     "port_not_opened",
     "Connection",
     "EndMode",
@@ -353,8 +354,8 @@ class Connection:
         log.log(
             logging.WARNING if self.stream_asked_again == 1 else logging.INFO,
             "%s: no sensor data came within %.0f ms of asking the robot for it: a byte of "
-            "the request may have been lost on the way to the robot (a loose or noisy "
-            "cable?); asking again (%d of %d)", self.name, self.watchdog * 1000,
+            "the request may have been lost on the way to the robot (%s?); asking again "
+            "(%d of %d)", self.name, self.watchdog * 1000, link_of(self.name).lossy,
             self.stream_asked_again, STREAM_ASKS_AGAIN,
         )  # fmt: skip
         self.writer.send_many([oi.stream(ids)], prefix=stream_zeros(ids))
@@ -556,8 +557,8 @@ class Connection:
         if self.stream_asked_again and link.stream_unanswered:
             cause.also(
                 f"no frame came though the stream was asked for {self.stream_asked_again + 1} "
-                "times: bytes from the computer to the robot may be lost (check the cable and "
-                "its adapter: roomba-bt doctor)"
+                "times: bytes from the computer to the robot may be lost (check "
+                f"{link_of(self.name).byte_check}: roomba-bt doctor)"
             )
         raise cause
 
@@ -590,8 +591,8 @@ class Connection:
         )
         return (
             f"bytes from the computer to the robot were lost in this run ({said}, put right): "
-            "a data byte after a lost one can be read as Start (128), so the cable is a likely "
-            "cause"
+            "a data byte after a lost one can be read as Start (128), so "
+            f"{link_of(self.name).serial_side} is a likely cause"
         )
 
     @property

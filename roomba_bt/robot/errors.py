@@ -282,9 +282,12 @@ class RobotReset(LinkDown):
 
     def __init__(self, port: str, halted: bool, after_write: float | None = None) -> None:
         action = "drive 0 sent" if halted else "it was not driving"
+        # imported here: validate loads this module, and the transport package pyserial
+        from roomba_bt.transport.link_kind import link_of
+
         cable = (
-            f", or a byte of our command {after_write:.2f} s before lost on the line (a bad "
-            "cable: a data byte 7 after it is read as Reset)"
+            f", or a byte of our command {after_write:.2f} s before lost on the line "
+            f"({link_of(port).bad_line}: a data byte 7 after it is read as Reset)"
             if after_write is not None and 0.0 <= after_write <= RESET_AFTER_WRITE_S
             else ""
         )
@@ -390,8 +393,12 @@ class RobotAsleep(LinkDown):
         woken_by: str | None = None,
         profile: RobotProfile = DEFAULT_PROFILE,
     ) -> None:
+        # imported here: validate loads this module, and the transport package pyserial
+        from roomba_bt.transport.link_kind import link_of
+
         self.idle_s = idle_s
         self.woken_by = woken_by
+        words = link_of(port)
         if not keep_awake:
             fix = "leave keep-awake on (drop --no-keep-awake): it pulses BRC once a minute"
         elif not pulses:
@@ -401,11 +408,11 @@ class RobotAsleep(LinkDown):
                 "once a minute" if woken_by is not None else ""
             )  # fmt: skip
             fix = (
-                f"keep-awake cannot pulse BRC on this port (no modem lines{hang_up}): use a "
-                "USB cable with BRC on RTS or DTR, or an rfc2217:// bridge"
+                f"keep-awake cannot pulse BRC on this port (no modem lines{hang_up}): "
+                f"{words.pulse_fix}"
             )
         else:
-            fix = "check that the cable wires BRC to RTS or DTR"
+            fix = f"check that {words.between} wires BRC to RTS or DTR"
         idle = idle_said(idle_s)
         if woken_by is None:
             what = (
