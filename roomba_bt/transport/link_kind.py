@@ -93,6 +93,8 @@ class LinkWords:
     sleep_advice: str
 
 
+# Long on purpose: one phrase a field, a table of the network's words read side by side with
+# the cable's below (a message is worded by reading both)
 def _network_words(port: str) -> LinkWords:
     """A bridge on the network: its address, its power and its Wi-Fi's reach."""
     scheme, _, rest = port.partition("://")
