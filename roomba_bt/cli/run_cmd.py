@@ -270,6 +270,7 @@ def load(
     used that are not here as they were, said first when the mission does not compile
     (its unknown nodes are most likely theirs: no "did you mean" for them)."""
     from roomba_bt.behaviours import default_registry
+    from roomba_bt.cli.mission_cmds import warn_of_broken_plugins
     from roomba_bt.mission import MissionError, Permissions, load_mission, reported
 
     registry = default_registry().expecting(p.short for p in absent) if absent else None
@@ -284,6 +285,8 @@ def load(
         for line in reported(exc.diagnostics):
             print(line, file=sys.stderr)
         return ExitCode.INVALID
+    finally:  # the compile looked for the installed plugins if the mission names one
+        warn_of_broken_plugins("roomba-bt", registry or default_registry())
     for warning in mission.warnings:
         print(str(warning), file=sys.stderr)
     return mission
