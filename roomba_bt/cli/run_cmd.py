@@ -879,11 +879,29 @@ def load_recorded(args: argparse.Namespace) -> Recorded | int:
     )
     mission = load(found, params, profile, baud, granted, absent_plugins(header))
     if isinstance(mission, int):
+        if not args.mission:  # the errors above say what to write; this, where it goes
+            print(_refused_recorded_mission(header, found), file=sys.stderr)
         return mission
     packets = _recorded_packets(args.record, header, mission, found)
     if isinstance(packets, str):
         return _error(packets)
     return Recorded(record, mission, profile, baud, packets)
+
+
+def _refused_recorded_mission(header: dict[str, Any], found: str) -> str:
+    """What ``replay`` adds when the record's own mission no longer compiles (a 0.1.0
+    mission that this release refuses): that the record is not at fault, and how to replay it
+    after fixing the file. The validation errors alone left the upgrader to find
+    ``--mission``, with which such a record replays byte for byte."""
+    from roomba_bt import __version__
+    from roomba_bt.runtime.provenance import UPGRADING, made_by_said
+
+    return (
+        f"replay: the record's mission {found} is refused by roomba-bt {__version__}; the "
+        f"record was made by {made_by_said(header)}: fix a copy as said above (the "
+        f'CHANGELOG\'s "{UPGRADING}" lists the changes) and pass --mission FILE with the '
+        "fixed file to replay this record"
+    )
 
 
 def _recorded_mission(record_path: str, mission_path: object, *, given: bool) -> str | int:
